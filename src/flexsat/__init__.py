@@ -1,0 +1,3 @@
+"""flexsat: integrated structures-and-control design of flexible spacecraft."""
+
+__version__ = "0.1.0"

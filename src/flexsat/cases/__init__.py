@@ -1,0 +1,36 @@
+"""Benchmark library: one module per published system, parameters entered as published."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+from flexsat.cases.tamu import tamu
+
+
+@dataclass(frozen=True)
+class CaseInfo:
+    name: str
+    builder: Callable
+    source: str
+    description: str
+
+
+CASES: dict[str, CaseInfo] = {
+    "tamu": CaseInfo(
+        "tamu",
+        tamu,
+        "seed 000_7bfdb62d2eacc22a.txt, Att. 3 Table 1 (Junkins, Rahman & Bang 1990)",
+        "Texas A&M rigid hub with four flexible appendages and tip masses, single-axis slews",
+    ),
+}
+
+
+def get_case(name: str) -> CaseInfo:
+    try:
+        return CASES[name]
+    except KeyError:
+        raise ValueError(f"case: unknown case {name!r}; known: {sorted(CASES)}") from None
+
+
+__all__ = ["CASES", "CaseInfo", "get_case", "tamu"]

@@ -1,0 +1,52 @@
+"""The one interface every control law implements.
+
+A law is called once per control sample with the time, the measurements and its own internal
+state, and returns the torque command and its next state. Every argument may carry a leading case
+axis: gains and references are arrays of shape (n_cases,) and a batch of maneuvers runs in one
+call (python-control's conventions apply to the linear designs built on top of this).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+
+import numpy as np
+
+
+class Controller(ABC):
+    """Discrete control law ``u_k, state_{k+1} = law(t_k, y_k, state_k)``.
+
+    Measurements ``y`` are a mapping of arrays of shape (n_cases,) with keys ``theta`` (rad),
+    ``theta_dot`` (rad/s) and ``root_torque`` (l0 S0 − M0, N m).
+    """
+
+    #: final hub angle the law drives to, rad (array over cases)
+    target: np.ndarray
+    #: open-loop reference the law tracks, or None
+    reference = None
+
+    @property
+    def n_cases(self) -> int:
+        """Number of cases implied by the law's parameter arrays (1 for scalars)."""
+        return int(np.prod(np.broadcast_shapes(*self._batched())))
+
+    def _batched(self) -> list[tuple[int, ...]]:
+        return [np.shape(self.target)]
+
+    def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
+        return {}
+
+    @abstractmethod
+    def __call__(
+        self, t: float, y: Mapping[str, np.ndarray], state: dict[str, np.ndarray]
+    ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Return the torque command (N m, shape (n_cases,)) and the next internal state."""
+
+    def reference_at(self, t: float):
+        """(θ_ref, θ'_ref, θ''_ref, u_ref) at time t; a step to the target when no reference."""
+        if self.reference is None:
+            z = np.zeros(np.shape(self.target))
+            return np.asarray(self.target, float) + z, z, z, z
+        r = self.reference(t)
+        return r.theta, r.theta_dot, r.theta_ddot, r.u

@@ -1,0 +1,95 @@
+"""Lyapunov maneuver laws of Junkins, Rahman & Bang for a hub with flexible appendages.
+
+Seed 000_7bfdb62d2eacc22a.txt, Att. 3 (notes: ../shared/spec/seed000_part1.md §2.3, §2.5).
+With the error-energy function (Att. 3 Eq. 8, a1 = 1)
+
+    2U = I_hub θ'² + g1 (θ − θ_f)² + (1 + g3/n) · 2 E_beams
+
+the rate is U' = θ' [u + g1 (θ − θ_f) + g3 (l0 S0 − M0)] (Eq. 9), and Control Law I (Eq. 11)
+
+    u = −[g1 (θ − θ_f) + g2 θ' + g3 (l0 S0 − M0)]     ⇒  U' = −g2 θ'²
+
+is globally stabilising for g1 >= 0, g2 >= 0, g3 > −n (n = 4 appendages in the paper; the
+papers print g3 = 4 (a3 − a1)/a1, so a3 > 0 ⇔ g3 > −n). Control Law II (Eq. 17) tracks a
+torque-shaped rigid reference and equals Law I once the reference has ended:
+
+    u = u_ref − [g1 (θ − θ_ref) + g2 (θ' − θ'_ref) + g3 ((l0 S0 − M0) − I_b θ''_ref)]
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexsat.control.base import Controller
+from flexsat.validation import require_finite, require_nonneg
+
+
+def check_lyapunov_gains(g1, g2, g3, n_appendages: int = 4):
+    """Validate the global-stability conditions g1 >= 0, g2 >= 0, g3 > −n (Att. 3 Eq. 11)."""
+    g1 = require_nonneg(g1, "g1")
+    g2 = require_nonneg(g2, "g2")
+    g3 = require_finite(g3, "g3")
+    if np.any(g3 <= -n_appendages):
+        raise ValueError(
+            f"g3: must be > -{n_appendages} (= -n_appendages) for the Lyapunov function to be "
+            f"positive definite (a3 > 0), got {g3.tolist()}"
+        )
+    return g1, g2, g3
+
+
+class LyapunovRegulator(Controller):
+    """Control Law I: constant-gain Lyapunov output feedback (Att. 3 Eq. 11).
+
+    Parameters
+    ----------
+    g1 : N m/rad;  g2 : N m s/rad;  g3 : dimensionless gain on l0 S0 − M0.
+    target : final angle θ_f, rad.
+    """
+
+    def __init__(self, g1, g2, g3=0.0, target=0.0, n_appendages: int = 4):
+        self.g1, self.g2, self.g3 = check_lyapunov_gains(g1, g2, g3, n_appendages)
+        self.target = require_finite(target, "target")
+
+    def _batched(self):
+        return [np.shape(a) for a in (self.g1, self.g2, self.g3, self.target)]
+
+    def __call__(self, t, y, state):
+        u = -(
+            self.g1 * (y["theta"] - self.target)
+            + self.g2 * y["theta_dot"]
+            + self.g3 * y["root_torque"]
+        )
+        return u, state
+
+
+class LyapunovTracker(Controller):
+    """Control Law II: Lyapunov tracking of a torque-shaped rigid reference (Att. 3 Eq. 17).
+
+    Parameters
+    ----------
+    reference : TorqueShape
+        Open-loop rigid reference (e.g. ``SmoothBangBang``); its ``theta_ddot`` is u_ref / I.
+    g1, g2, g3 : gains as for Law I.
+    appendage_inertia : float
+        I_b = ρ (l³ − l0³)/3 + m l² (+ J), kg m², scaling the reference root load
+        (l0 S0 − M0)_ref = I_b θ''_ref (Eq. 17).
+    """
+
+    def __init__(self, reference, g1, g2, g3=0.0, appendage_inertia=0.0, n_appendages: int = 4):
+        self.reference = reference
+        self.g1, self.g2, self.g3 = check_lyapunov_gains(g1, g2, g3, n_appendages)
+        self.appendage_inertia = require_nonneg(appendage_inertia, "appendage_inertia")
+        self.target = np.asarray(reference.theta0 + reference.angle, float)
+
+    def _batched(self):
+        shapes = [np.shape(a) for a in (self.g1, self.g2, self.g3, self.target)]
+        return shapes + [np.shape(self.reference.duration)]
+
+    def __call__(self, t, y, state):
+        th_r, thd_r, thdd_r, u_r = self.reference_at(t)
+        u = u_r - (
+            self.g1 * (y["theta"] - th_r)
+            + self.g2 * (y["theta_dot"] - thd_r)
+            + self.g3 * (y["root_torque"] - self.appendage_inertia * thdd_r)
+        )
+        return u, state

@@ -1,0 +1,59 @@
+"""Proportional-derivative attitude control with rigid-body pole placement.
+
+Seed 001_79dfdfba94ed8e0d.txt (Hailey, Sortun, Agrawal), Eqs. 20-24 and 29:
+
+    T_c = −k (θ_e + τ θ'_e),   θ_e = θ − θ_ref
+    s² + 2 ζ ω_n s + ω_n² = 0  for the rigid plant I θ'' = T_c  ⇒  k = I ω_n²,  k τ = 2 ζ ω_n I
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexsat.control.base import Controller
+from flexsat.validation import require_finite, require_nonneg, require_positive
+
+
+class PD(Controller):
+    """u = u_ref − kp (θ − θ_ref) − kd (θ' − θ'_ref).
+
+    Parameters
+    ----------
+    kp, kd : float or array
+        Position gain (N m/rad) and rate gain (N m s/rad), >= 0.
+    target : float or array
+        Final angle, rad, when no reference is given (a step command, seed 001 Eq. 20).
+    reference : TorqueShape, optional
+        Shaped reference to track (seed 001 Eq. 29); its torque is fed forward when
+        ``feedforward`` is true.
+    """
+
+    def __init__(self, kp, kd, target=0.0, reference=None, feedforward: bool = True):
+        self.kp = require_nonneg(kp, "kp")
+        self.kd = require_nonneg(kd, "kd")
+        self.reference = reference
+        self.feedforward = bool(feedforward)
+        if reference is not None:
+            target = reference.theta0 + reference.angle
+        self.target = require_finite(target, "target")
+
+    @classmethod
+    def from_rigid_poles(cls, inertia, natural_frequency, damping_ratio, **kwargs) -> "PD":
+        """Gains placing the rigid closed-loop poles at ω_n, ζ (seed 001 Eqs. 20-24).
+
+        ``natural_frequency`` is in rad/s.
+        """
+        inertia = require_positive(inertia, "inertia")
+        wn = require_positive(natural_frequency, "natural_frequency")
+        zeta = require_nonneg(damping_ratio, "damping_ratio")
+        return cls(inertia * wn**2, 2 * zeta * wn * inertia, **kwargs)
+
+    def _batched(self):
+        return [np.shape(self.kp), np.shape(self.kd), np.shape(self.target)]
+
+    def __call__(self, t, y, state):
+        th_r, thd_r, _, u_r = self.reference_at(t)
+        u = -self.kp * (y["theta"] - th_r) - self.kd * (y["theta_dot"] - thd_r)
+        if self.feedforward:
+            u = u + u_r
+        return u, state

@@ -1,0 +1,358 @@
+"""Rigid hub with n identical cantilevered appendages, single axis, in hybrid coordinates.
+
+The distributed-parameter system of Junkins, Rahman & Bang (seed 000_7bfdb62d2eacc22a.txt,
+Att. 3 Eqs. 5-7; notes ../shared/spec/seed000_part1.md §2.2):
+
+    I_hub θ'' = u + n (M0 − l0 S0)
+    ρ (y_tt + x θ'') + EI y_xxxx = 0,       l0 < x < l
+    y(l0) = y_x(l0) = 0,   EI y_xx(l) = −J (θ'' + y_xtt(l)),   EI y_xxx(l) = m (l θ'' + y_tt(l))
+
+is discretised by Galerkin's method with k exact tip-mass cantilever modes φ_i (mass normalised
+per beam), y = Σ φ_i q_i, identical for every beam (anti-symmetric deformation). The generalized
+coordinates are (θ, q_1 … q_k) and the state is x = [θ, q, θ', q'] (the ordering of seed 001):
+
+    M = [[I_tot, n dᵀ], [n d, n 1]],   K = diag(0, n ω²),   D = diag(0, 2 n ζ ω),   B = e_θ
+
+with I_tot = I_hub + n I_b, I_b = ρ (l³ − l0³)/3 + m l² + J the rigid inertia of one appendage
+about the hub axis, and d_i = ∫ ρ x φ_i dx + m l φ_i(l) + J φ_i'(l) the rigid-elastic coupling.
+
+Root loads are recovered by force summation (the second line of Att. 3 Eq. 5), which converges
+faster than differentiating the modal sum and makes the discrete energy rate identity
+dE_beams/dt = n θ' (l0 S0 − M0) exact for the truncated model:
+
+    l0 S0 − M0 = I_b θ'' + dᵀ q''
+    S0         = [ρ (l² − l0²)/2 + m l] θ'' + eᵀ q'',   e_i = ∫ ρ φ_i dx + m φ_i(l)
+
+The optional rotational-stiffening term comes from the foreshortening of the rotating beam: the
+kinetic energy gains ½ θ'² qᵀ G q with G = n (M_s − K_g), M_s_ij = ∫ρ φ_i φ_j + m φ_i(l) φ_j(l)
+(spin softening) and K_g_ij = ∫ T(x) φ_i' φ_j' dx, T(x) = ρ (l² − x²)/2 + m l (centrifugal
+tension per unit θ'²).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from flexsat.structures.beam import TipMassCantilever
+from flexsat.validation import require_finite, require_nonneg, require_positive
+
+
+@dataclass(frozen=True)
+class HubAppendageParams:
+    """Physical parameters of the hub + appendage system, SI units.
+
+    Parameters
+    ----------
+    hub_inertia : float
+        Inertia of the rigid hub alone about the rotation axis, kg m².
+    n_appendages : int
+        Number of identical appendages deforming anti-symmetrically (TAMU: 4).
+    hub_radius : float
+        Distance l0 from the hub centre to each appendage root, m.
+    length : float
+        Appendage (beam) length L, so the tip is at l = l0 + L, m.
+    EI : float
+        Bending stiffness, N m².
+    rho : float
+        Mass per unit length, kg/m.
+    tip_mass : float
+        Tip point mass m, kg.
+    tip_inertia : float
+        Rotary inertia J of the tip body about its own centre, kg m².
+    damping : float or sequence of float
+        Modal damping ratios of the cantilever modes (one value for all, or one per mode).
+    """
+
+    hub_inertia: float
+    n_appendages: int
+    hub_radius: float
+    length: float
+    EI: float
+    rho: float
+    tip_mass: float = 0.0
+    tip_inertia: float = 0.0
+    damping: float | tuple[float, ...] = 0.0
+
+    def __post_init__(self):
+        for name in ("hub_inertia", "length", "EI", "rho"):
+            require_positive(getattr(self, name), name)
+        for name in ("hub_radius", "tip_mass", "tip_inertia"):
+            require_nonneg(getattr(self, name), name)
+        if int(self.n_appendages) != self.n_appendages or self.n_appendages < 1:
+            raise ValueError(f"n_appendages: must be a positive integer, got {self.n_appendages!r}")
+        zeta = np.atleast_1d(np.asarray(self.damping, dtype=float))
+        require_finite(zeta, "damping")
+        if np.any(zeta < 0):
+            raise ValueError(f"damping: modal damping ratios must be >= 0, got {self.damping!r}")
+
+    @property
+    def tip_radius(self) -> float:
+        """Distance l from the hub centre to the appendage tip, m."""
+        return self.hub_radius + self.length
+
+    @property
+    def appendage_inertia(self) -> float:
+        """Rigid inertia I_b of one appendage (beam + tip body) about the hub axis, kg m²."""
+        l0, l = self.hub_radius, self.tip_radius
+        return self.rho * (l**3 - l0**3) / 3 + self.tip_mass * l**2 + self.tip_inertia
+
+    @property
+    def total_inertia(self) -> float:
+        """Rigid inertia of the whole vehicle, I_hub + n I_b, kg m²."""
+        return self.hub_inertia + self.n_appendages * self.appendage_inertia
+
+    def beam(self) -> TipMassCantilever:
+        return TipMassCantilever(self.length, self.EI, self.rho, self.tip_mass, self.tip_inertia)
+
+
+@dataclass(frozen=True)
+class HubAppendage:
+    """Assumed-modes hub + appendage model (see module docstring).
+
+    Parameters
+    ----------
+    params : HubAppendageParams
+    n_modes : int
+        Number k of cantilever modes per appendage; the state has 2 (k + 1) entries.
+    stiffening : bool
+        Include the rotational-stiffening (centrifugal) term; the model is then nonlinear and
+        the simulator integrates it with its exponential integrator.
+    """
+
+    params: HubAppendageParams
+    n_modes: int = 10
+    stiffening: bool = False
+    _quad: dict = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        if int(self.n_modes) != self.n_modes or self.n_modes < 1:
+            raise ValueError(f"n_modes: must be a positive integer, got {self.n_modes!r}")
+        zeta = np.atleast_1d(np.asarray(self.params.damping, dtype=float))
+        if zeta.size not in (1, self.n_modes):
+            raise ValueError(
+                f"damping: give one ratio or one per mode ({self.n_modes}), got {zeta.size}"
+            )
+        object.__setattr__(self, "_quad", self._modal_integrals())
+
+    # ----------------------------------------------------------------------------------------
+    # modal integrals
+    def _modal_integrals(self) -> dict:
+        p, k = self.params, self.n_modes
+        modes = p.beam().modes(k)
+        npts = max(200, 24 * k)
+        s, w = np.polynomial.legendre.leggauss(npts)
+        xi = 0.5 * p.length * (s + 1.0)
+        w = 0.5 * p.length * w
+        phi = modes.evaluate(xi, 0)
+        dphi = modes.evaluate(xi, 1)
+        tip = np.array([p.length])
+        phi_l, dphi_l = modes.evaluate(tip, 0)[0], modes.evaluate(tip, 1)[0]
+        x = p.hub_radius + xi
+        l = p.tip_radius
+        coupling = p.rho * (w * x) @ phi + p.tip_mass * l * phi_l + p.tip_inertia * dphi_l
+        shear_coupling = p.rho * w @ phi + p.tip_mass * phi_l
+        spin_mass = p.rho * (phi * w[:, None]).T @ phi + p.tip_mass * np.outer(phi_l, phi_l)
+        tension = p.rho * (l**2 - x**2) / 2 + p.tip_mass * l
+        geometric = (dphi * (w * tension)[:, None]).T @ dphi
+        return dict(
+            modes=modes,
+            omega=modes.omegas,
+            d=coupling,
+            e=shear_coupling,
+            phi_tip=phi_l,
+            G=p.n_appendages * (spin_mass - geometric),
+        )
+
+    # ----------------------------------------------------------------------------------------
+    # second-order model
+    @property
+    def ndof(self) -> int:
+        return self.n_modes + 1
+
+    @property
+    def nx(self) -> int:
+        return 2 * self.ndof
+
+    @property
+    def cantilever_frequencies(self) -> np.ndarray:
+        """Constrained (hub clamped) natural frequencies ω_i, rad/s (exact for these modes)."""
+        return self._quad["omega"]
+
+    @property
+    def coupling(self) -> np.ndarray:
+        """Rigid-elastic coupling d_i of one appendage, kg m (Galerkin integral)."""
+        return self._quad["d"]
+
+    @property
+    def damping_ratios(self) -> np.ndarray:
+        return np.broadcast_to(np.asarray(self.params.damping, float), (self.n_modes,)).copy()
+
+    @cached_property
+    def mass_matrix(self) -> np.ndarray:
+        p, n, k = self.params, self.params.n_appendages, self.n_modes
+        M = np.zeros((k + 1, k + 1))
+        M[0, 0] = p.total_inertia
+        M[0, 1:] = M[1:, 0] = n * self.coupling
+        M[1:, 1:] = n * np.eye(k)
+        return M
+
+    @cached_property
+    def mass_inverse(self) -> np.ndarray:
+        return np.linalg.inv(self.mass_matrix)
+
+    @cached_property
+    def stiffness_matrix(self) -> np.ndarray:
+        n, w = self.params.n_appendages, self.cantilever_frequencies
+        return np.diag(np.concatenate([[0.0], n * w**2]))
+
+    @cached_property
+    def damping_matrix(self) -> np.ndarray:
+        n, w = self.params.n_appendages, self.cantilever_frequencies
+        return np.diag(np.concatenate([[0.0], 2 * n * self.damping_ratios * w]))
+
+    @cached_property
+    def torque_input(self) -> np.ndarray:
+        """Generalized-force direction of a hub torque, e_θ."""
+        b = np.zeros(self.ndof)
+        b[0] = 1.0
+        return b
+
+    @cached_property
+    def state_space(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """First-order matrices (A, B_u, B_f) of x' = A x + B_u u + B_f f.
+
+        u is the hub torque; f (ndof,) is any additional generalized force (friction, stiffening).
+        """
+        Minv = self.mass_inverse
+        k1 = self.ndof
+        A = np.zeros((2 * k1, 2 * k1))
+        A[:k1, k1:] = np.eye(k1)
+        A[k1:, :k1] = -Minv @ self.stiffness_matrix
+        A[k1:, k1:] = -Minv @ self.damping_matrix
+        Bf = np.vstack([np.zeros((k1, k1)), Minv])
+        return A, Bf @ self.torque_input, Bf
+
+    def frequencies(self, constrained: bool = False) -> np.ndarray:
+        """Natural frequencies of the model, rad/s, ascending.
+
+        Unconstrained (hub free): the elastic frequencies of (K, M), the rigid mode dropped.
+        Constrained (hub clamped): the cantilever frequencies.
+        """
+        if constrained:
+            return self.cantilever_frequencies.copy()
+        from scipy.linalg import eigh
+
+        lam = eigh(self.stiffness_matrix, self.mass_matrix, eigvals_only=True)
+        return np.sqrt(np.clip(lam[1:], 0.0, None))
+
+    def to_statespace(self):
+        """python-control StateSpace, input hub torque, outputs θ and θ'."""
+        import control
+
+        A, Bu, _ = self.state_space
+        C = np.zeros((2, self.nx))
+        C[0, 0] = 1.0
+        C[1, self.ndof] = 1.0
+        return control.ss(A, Bu[:, None], C, np.zeros((2, 1)))
+
+    # ----------------------------------------------------------------------------------------
+    # state helpers (x has shape (..., nx))
+    def split(self, x: np.ndarray):
+        k1 = self.ndof
+        return x[..., :k1], x[..., k1:]
+
+    def nonlinear_force(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Generalized force of the rotational-stiffening terms, shape (..., ndof).
+
+        With s = qᵀGq the hub equation gains (I_tot + s) θ'' + 2 θ' qᵀ G q' and the modal
+        equations −θ'² G q. The state-dependent inertia is folded in exactly: θ'' solves
+        θ'' = a0_θ / (1 + s (M⁻¹)_θθ), a0 the acceleration without the s θ'' term.
+        """
+        pos, vel = self.split(x)
+        f = np.zeros(pos.shape)
+        if not self.stiffening:
+            return f
+        G = self._quad["G"]
+        q, qd, thd = pos[..., 1:], vel[..., 1:], vel[..., 0]
+        Gq = q @ G
+        s = np.einsum("...i,...i->...", Gq, q)
+        f[..., 1:] = thd[..., None] ** 2 * Gq
+        f[..., 0] = -2.0 * thd * np.einsum("...i,...i->...", Gq, qd)
+        Minv = self.mass_inverse
+        force = self._linear_force(pos, vel, u) + f
+        a0 = force @ Minv[0]
+        f[..., 0] -= s * a0 / (1.0 + s * Minv[0, 0])
+        return f
+
+    def _linear_force(self, pos, vel, u):
+        return -pos @ self.stiffness_matrix - vel @ self.damping_matrix + np.multiply.outer(
+            np.asarray(u, float), self.torque_input
+        )
+
+    def acceleration(self, x: np.ndarray, u, extra_force=0.0) -> np.ndarray:
+        """Generalized accelerations (θ'', q'') for state x, hub torque u and extra force."""
+        pos, vel = self.split(x)
+        force = self._linear_force(pos, vel, u) + extra_force
+        if self.stiffening:
+            force = force + self.nonlinear_force(x, u)
+        return force @ self.mass_inverse
+
+    def outputs(self, x: np.ndarray, u, extra_force=0.0) -> dict[str, np.ndarray]:
+        """Physical outputs of state x under hub torque u (SI).
+
+        Returns hub angle and rate, root shear S0, root bending moment M0, the Lyapunov-law
+        output ``root_torque`` = l0 S0 − M0 (the moment of the root loads about the hub axis,
+        force summation), and the tip deflection y(l).
+        """
+        p = self.params
+        pos, vel = self.split(x)
+        acc = self.acceleration(x, u, extra_force)
+        thdd, qdd = acc[..., 0], acc[..., 1:]
+        l0, l = p.hub_radius, p.tip_radius
+        moment_term = p.appendage_inertia * thdd + qdd @ self.coupling
+        shear = (p.rho * (l**2 - l0**2) / 2 + p.tip_mass * l) * thdd + qdd @ self._quad["e"]
+        return {
+            "theta": pos[..., 0],
+            "theta_dot": vel[..., 0],
+            "root_shear": shear,
+            "root_moment": l0 * shear - moment_term,
+            "root_torque": moment_term,
+            "tip_deflection": pos[..., 1:] @ self._quad["phi_tip"],
+        }
+
+    # ----------------------------------------------------------------------------------------
+    # energies (Att. 3 Eqs. 7, 8, 18)
+    def energy(self, x: np.ndarray) -> np.ndarray:
+        """Total mechanical energy E (Att. 3 Eq. 7), J; includes the stiffening term if on."""
+        pos, vel = self.split(x)
+        E = 0.5 * np.einsum("...i,ij,...j->...", vel, self.mass_matrix, vel)
+        E = E + 0.5 * np.einsum("...i,ij,...j->...", pos, self.stiffness_matrix, pos)
+        if self.stiffening:
+            q = pos[..., 1:]
+            E = E + 0.5 * vel[..., 0] ** 2 * np.einsum("...i,ij,...j->...", q, self._quad["G"], q)
+        return E
+
+    def vibration_energy(self, x: np.ndarray) -> np.ndarray:
+        """Energy in the elastic modes of the free vehicle, E − h² / (2 I_tot), J.
+
+        h = (M x')_θ is the angular momentum; the rigid mode is M-orthogonal to the elastic ones,
+        so its kinetic energy is exactly h² / (2 I_tot) and the rest is vibration.
+        """
+        _, vel = self.split(x)
+        h = vel @ self.mass_matrix[0]
+        return self.energy(x) - 0.5 * h**2 / self.params.total_inertia
+
+    def lyapunov(self, x: np.ndarray, theta_f, g1, g3) -> np.ndarray:
+        """Error-energy Lyapunov function of Att. 3 Eq. 8 (normalised a1 = 1), J.
+
+        U = ½ I_hub θ'² + ½ g1 (θ − θ_f)² + (1 + g3/n) E_beams, with g1 = a2/a1 and
+        g3 = n (a3 − a1)/a1. For the tracking function (Eq. 18) pass x − x_r and θ_f = 0.
+        """
+        p = self.params
+        pos, vel = self.split(x)
+        hub_ke = 0.5 * p.hub_inertia * vel[..., 0] ** 2
+        beams = self.energy(x) - hub_ke
+        return hub_ke + 0.5 * g1 * (pos[..., 0] - theta_f) ** 2 + (1 + g3 / p.n_appendages) * beams

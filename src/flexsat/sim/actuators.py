@@ -1,0 +1,35 @@
+"""Torque actuator: a DC motor driving a reaction wheel through a current-commanded amplifier."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexsat.validation import require_positive
+
+
+@dataclass(frozen=True)
+class TorqueActuator:
+    """Applied torque = (K_t,actual / K_t,nominal) · sat(command).
+
+    Parameters
+    ----------
+    saturation : float
+        Largest torque magnitude the drive can command, N m (TAMU: 400 oz-in).
+    torque_constant_ratio : float
+        Actual over nominal motor torque constant; the controller converts its torque command to
+        a current with the nominal constant (TAMU: 52.77 oz-in/A), so a mis-known constant
+        scales the applied torque.
+    """
+
+    saturation: float = np.inf
+    torque_constant_ratio: float = 1.0
+
+    def __post_init__(self):
+        if not self.saturation > 0:  # inf (no limit) is allowed, NaN and <= 0 are not
+            raise ValueError(f"saturation: must be > 0 (inf for none), got {self.saturation!r}")
+        require_positive(self.torque_constant_ratio, "torque_constant_ratio")
+
+    def __call__(self, command: np.ndarray) -> np.ndarray:
+        return self.torque_constant_ratio * np.clip(command, -self.saturation, self.saturation)

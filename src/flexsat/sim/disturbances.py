@@ -1,0 +1,80 @@
+"""Disturbance torques on the hub: bearing friction, random torque, impulses."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexsat.validation import require_finite, require_nonneg, require_positive
+
+
+@dataclass(frozen=True)
+class BearingFriction:
+    """τ = −c1 sign(θ') − c2 θ' (seed 000, Att. 3 Eq. 23; c1 ≈ 20 oz-in, c2 ≈ 0.001 oz-in s).
+
+    The sign is regularised as tanh(θ'/ε) so the integrator sees a Lipschitz force; inside
+    |θ'| < ε the bearing acts as a stiff viscous damper c1/ε, which reproduces sticking to within
+    a creep rate of order ε.
+
+    Parameters
+    ----------
+    coulomb : float   c1, N m
+    viscous : float   c2, N m s/rad
+    smoothing : float ε, rad/s
+    """
+
+    coulomb: float = 0.0
+    viscous: float = 0.0
+    smoothing: float = 1e-3
+
+    def __post_init__(self):
+        require_nonneg(self.coulomb, "coulomb")
+        require_nonneg(self.viscous, "viscous")
+        require_positive(self.smoothing, "smoothing")
+
+    @property
+    def active(self) -> bool:
+        return self.coulomb > 0 or self.viscous > 0
+
+    def __call__(self, rate: np.ndarray) -> np.ndarray:
+        return -self.coulomb * np.tanh(rate / self.smoothing) - self.viscous * rate
+
+
+@dataclass(frozen=True)
+class RandomTorque:
+    """Zero-mean Gaussian torque, held over each control period, 1σ = ``std`` N m."""
+
+    std: float = 0.0
+
+    def __post_init__(self):
+        require_nonneg(self.std, "std")
+
+
+@dataclass(frozen=True)
+class Impulses:
+    """Angular impulses (N m s) hitting the hub at given times (s).
+
+    Each is applied as an instantaneous momentum change at the first control sample at or after
+    its time (timing error below one control period).
+    """
+
+    times: tuple[float, ...] = ()
+    impulses: tuple[float, ...] = ()
+
+    def __post_init__(self):
+        if len(self.times) != len(self.impulses):
+            raise ValueError(
+                f"impulses: {len(self.impulses)} values for {len(self.times)} times; give one each"
+            )
+        require_nonneg(np.asarray(self.times, float), "impulses.times")
+        require_finite(np.asarray(self.impulses, float), "impulses.impulses")
+
+    def at_samples(self, n_steps: int, dt: float) -> dict[int, float]:
+        """Impulse per control-sample index."""
+        out: dict[int, float] = {}
+        for t, j in zip(self.times, self.impulses):
+            k = int(np.ceil(t / dt - 1e-9))
+            if k < n_steps:
+                out[k] = out.get(k, 0.0) + j
+        return out

@@ -1,0 +1,67 @@
+"""Closed-loop maneuver metrics, vectorized over the case axis."""
+
+from __future__ import annotations
+
+import numpy as np
+
+METRIC_UNITS = {
+    "settling_time_s": "s",
+    "overshoot_deg": "deg",
+    "peak_torque_Nm": "N m",
+    "residual_energy_J": "J",
+    "residual_energy_at_T_J": "J",
+    "peak_tip_deflection_m": "m",
+    "peak_rate_error_deg_s": "deg/s",
+}
+
+
+def settling_time(t: np.ndarray, error: np.ndarray, band: float) -> np.ndarray:
+    """First time after which |error| stays within ``band``; NaN where it never settles.
+
+    ``error`` has shape (n_cases, n_t). A case that is still outside the band at the last sample
+    has not settled within the run and gets NaN (JSON null), never the run length.
+    """
+    outside = np.abs(error) > band
+    settled = ~outside[:, -1]
+    # index of the last sample outside the band, + 1
+    last_out = np.where(outside.any(axis=1), outside.shape[1] - np.argmax(outside[:, ::-1], axis=1), 0)
+    ts = t[np.minimum(last_out, len(t) - 1)]
+    return np.where(settled, ts, np.nan)
+
+
+def maneuver_metrics(
+    t: np.ndarray,
+    theta: np.ndarray,
+    theta_dot: np.ndarray,
+    theta_dot_ref: np.ndarray,
+    torque: np.ndarray,
+    tip_deflection: np.ndarray,
+    vibration_energy: np.ndarray,
+    theta0: np.ndarray,
+    target: np.ndarray,
+    reference_end: np.ndarray | None,
+    band: float,
+) -> dict[str, np.ndarray]:
+    """Metrics of a batch of maneuvers; every history has shape (n_cases, n_t), SI units.
+
+    overshoot: largest excursion past the target in the direction of the maneuver.
+    residual energy: vibration energy (elastic modes of the free vehicle) at the end of the run
+    and at the end T of the reference (NaN when the law has no reference).
+    """
+    direction = np.sign(target - theta0)
+    direction = np.where(direction == 0, 1.0, direction)
+    past = direction[:, None] * (theta - target[:, None])
+    out = {
+        "settling_time_s": settling_time(t, theta - target[:, None], band),
+        "overshoot_deg": np.degrees(np.maximum(past.max(axis=1), 0.0)),
+        "peak_torque_Nm": np.abs(torque).max(axis=1),
+        "residual_energy_J": vibration_energy[:, -1],
+        "peak_tip_deflection_m": np.abs(tip_deflection).max(axis=1),
+        "peak_rate_error_deg_s": np.degrees(np.abs(theta_dot - theta_dot_ref).max(axis=1)),
+    }
+    if reference_end is None:
+        out["residual_energy_at_T_J"] = np.full(theta.shape[0], np.nan)
+    else:
+        k = np.minimum(np.searchsorted(t, reference_end - 1e-12), len(t) - 1)
+        out["residual_energy_at_T_J"] = vibration_energy[np.arange(theta.shape[0]), k]
+    return out
