@@ -19,7 +19,7 @@ from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
 from flexsat.sim.integrators import ExponentialStepper
 from flexsat.sim.metrics import METRIC_UNITS, maneuver_metrics
 from flexsat.sim.sensors import Sensors, SensorState
-from flexsat.validation import require_positive
+from flexsat.validation import require_finite, require_positive
 
 N_NOISE_CHANNELS = 3  # gyro, strain gauge, random torque — fixed so streams never shift
 
@@ -100,6 +100,7 @@ def simulate(
     n_cases: int | None = None,
     seeds=None,
     theta0=None,
+    initial_state=None,
     record_states: bool = False,
 ) -> SimResult:
     """Run a batch of closed-loop maneuvers.
@@ -118,6 +119,8 @@ def simulate(
         its seed reproduces its batch result.
     theta0 : float or array, optional
         Initial hub angle (at rest, undeformed); default the reference start or 0.
+    initial_state : array (n_x,) or (n_cases, n_x), optional
+        Full initial state [θ, q, θ', q'] instead of rest at ``theta0``.
     record_states : bool
         Also store the full state history (n_cases × n_t × n_x).
     """
@@ -150,6 +153,9 @@ def simulate(
 
     x = np.zeros((nc, plant.nx))
     x[:, 0] = theta0
+    if initial_state is not None:
+        x[:] = require_finite(initial_state, "initial_state")
+        theta0 = x[:, 0].copy()
     noise = _noise_streams(seeds, n + 1)
     sensor_state = SensorState(config.sensors, theta0, dt)
     cstate = controller.initial_state(nc)
