@@ -18,6 +18,18 @@ class UnitError(ValueError):
     """A quantity has the wrong dimensionality or cannot be parsed."""
 
 
+def _cyclic_to_angular(q: pint.Quantity, unit: str) -> pint.Quantity:
+    """pint treats the radian as dimensionless, so it would turn 1 Hz into 1 rad/s. A cyclic
+    frequency asked for in angular units (and back) is converted with its 2π here."""
+    given_cyclic = "hertz" in str(q.units)
+    want_angular = "radian" in str(Q_(1, unit).units) and "hertz" not in str(Q_(1, unit).units)
+    if given_cyclic and want_angular:
+        return Q_(2 * math.pi * q.to("Hz").magnitude, "rad/s")
+    if "radian" in str(q.units) and "hertz" in str(Q_(1, unit).units):
+        return Q_(q.to("rad/s").magnitude / (2 * math.pi), "Hz")
+    return q
+
+
 def to_si(value, unit: str, field: str = "value") -> float:
     """Convert ``value`` to the SI magnitude of ``unit``'s dimension.
 
@@ -42,6 +54,7 @@ def to_si(value, unit: str, field: str = "value") -> float:
             q = Q_(float(q), unit)
         elif q.dimensionless and not Q_(1, unit).dimensionless:
             q = Q_(q.magnitude, unit)
+        q = _cyclic_to_angular(q, unit)
         mag = float(q.to(unit).magnitude)
     except pint.DimensionalityError as exc:
         raise UnitError(f"{field}: incompatible units ({exc.units1} given, {unit} expected)") from exc

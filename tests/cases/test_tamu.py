@@ -50,6 +50,15 @@ def test_overrides_accept_units_and_reject_unknown_names():
         tamu(density="3 kg")
     with pytest.raises(ValueError, match=r"^tip_radius: must exceed hub_radius"):
         tamu(tip_radius="5 in")
+    with pytest.raises(ValueError, match=r"^modulus: must be > 0"):
+        tamu(modulus="-1 psi")
+    with pytest.raises(ValueError, match=r"^n_modes: must be finite"):
+        tamu(n_modes=float("nan"))
+    with pytest.raises(ValueError, match=r"^n_modes: must be a positive integer"):
+        tamu(n_modes=2.5)
+    with pytest.raises(ValueError, match=r"^stiffening: must be true or false"):
+        tamu(stiffening="yes")
+    assert tamu(stiffening="false").stiffening is False
 
 
 def test_case_registry():

@@ -403,7 +403,7 @@ def test_wrong_parameter_count(make, msg):
 
 @pytest.mark.parametrize("inertia", [0.0, -2.0, [1.0, 0.0]])
 def test_inertia_must_be_positive(inertia):
-    with pytest.raises(ValueError, match="inertia must be > 0"):
+    with pytest.raises(ValueError, match="^inertia: must be > 0"):
         BangBang(1.0, inertia, u_max=1.0)
 
 
@@ -420,7 +420,7 @@ def test_inertia_must_be_positive(inertia):
     ],
 )
 def test_non_finite(make, field):
-    with pytest.raises(ValueError, match=f"^{field} must be finite"):
+    with pytest.raises(ValueError, match=f"^{field}: must be finite"):
         make()
 
 
@@ -433,18 +433,18 @@ def test_non_finite(make, field):
     ],
 )
 def test_torque_and_duration_must_be_positive(make, field):
-    with pytest.raises(ValueError, match=f"^{field} must be > 0"):
+    with pytest.raises(ValueError, match=f"^{field}: must be > 0"):
         make()
 
 
 def test_angle_must_be_nonzero():
-    with pytest.raises(ValueError, match="angle must be nonzero"):
+    with pytest.raises(ValueError, match="^angle: must be nonzero"):
         SmoothBangBang([1.0, 0.0], 1.0, duration=3.0, alpha=0.1)
 
 
 @pytest.mark.parametrize("alpha", [-0.01, 0.26, [0.1, 0.3]])
 def test_given_alpha_out_of_range(alpha):
-    msg = r"alpha out of range \(alpha = rise time / duration must lie in \[0, 1/4\]"
+    msg = r"^alpha: out of range \(alpha = rise time / duration must lie in \[0, 1/4\]"
     with pytest.raises(ValueError, match=msg):
         SmoothBangBang(1.0, 1.0, u_max=1.0, alpha=alpha)
 
@@ -455,14 +455,14 @@ def test_solved_alpha_out_of_range(factor):
     T_lo = float(SmoothBangBang(1.0, 1.0, u_max=1.0, alpha=0.0).duration)
     T_hi = float(SmoothBangBang(1.0, 1.0, u_max=1.0, alpha=0.25).duration)
     T = T_lo * factor if factor < 1 else T_hi * factor
-    msg = r"alpha out of range \(alpha solved from \(u_max, duration\) must lie in \[0, 1/4\]"
+    msg = r"^alpha: out of range \(alpha solved from \(u_max, duration\) must lie in \[0, 1/4\]"
     with pytest.raises(ValueError, match=msg):
         SmoothBangBang(1.0, 1.0, u_max=1.0, duration=T)
 
 
 @pytest.mark.parametrize("rise_time", [0.0, -0.5, 2.6])
 def test_given_rise_time_out_of_range(rise_time):
-    msg = r"rise_time out of range \(rise_time must satisfy 0 < rise_time <= duration/4"
+    msg = r"^rise_time: out of range \(rise_time must satisfy 0 < rise_time <= duration/4"
     with pytest.raises(ValueError, match=msg):
         PseudoSquare(1.0, 1.0, duration=10.0, rise_time=rise_time)
 
@@ -472,7 +472,7 @@ def test_rise_time_too_long_for_u_max():
     # S = I|angle|/u_max = 1, t_r = 1 > sqrt(pi/8): P = 2 (c + sqrt(c^2 + 1)), c = 1 - 2/pi
     c = 1 - 2 / np.pi
     P = 2 * (c + np.sqrt(c * c + 1))
-    msg = rf"rise_time out of range.*rise_time/duration = {1 / P:.6g}$"
+    msg = rf"^rise_time: out of range.*rise_time/duration = {1 / P:.6g}$"
     with pytest.raises(ValueError, match=msg):
         PseudoSquare(1.0, 1.0, u_max=1.0, rise_time=1.0)
     PseudoSquare(1.0, 1.0, u_max=1.0, rise_time=np.sqrt(np.pi / 8))  # the limit is admissible
@@ -485,6 +485,6 @@ def test_solved_rise_time_out_of_range(factor):
     T_bb = float(BangBang(1.0, 1.0, u_max=1.0).duration)
     T_sin = float(Sinusoidal(1.0, 1.0, u_max=1.0).duration)
     T = T_bb * factor if factor < 1 else T_sin * factor
-    msg = r"rise_time out of range.*I \|angle\| / u_max must lie in"
+    msg = r"^rise_time: out of range.*I \|angle\| / u_max must lie in"
     with pytest.raises(ValueError, match=msg):
         PseudoSquare(1.0, 1.0, u_max=1.0, duration=T)

@@ -23,6 +23,7 @@ from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.maneuvers import SmoothBangBang
 from flexsat.sim import BearingFriction, RandomTorque, Sensors, SimConfig, TorqueActuator
 from flexsat.units import to_si
+from flexsat.validation import require_finite, require_nonneg, require_positive
 
 SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 3 Table 1 (L1302-L1323) and §V"
 
@@ -149,6 +150,24 @@ class TamuCase:
                                n_appendages=int(self.n_appendages))
 
 
+_MAY_BE_ZERO = ("tip_mass", "tip_inertia", "hub_radius", "damping")
+
+
+def _count(raw, name: str) -> int:
+    value = float(require_finite(raw, name))
+    if value != int(value) or value < 1:
+        raise ValueError(f"{name}: must be a positive integer, got {raw!r}")
+    return int(value)
+
+
+def _flag(raw, name: str) -> bool:
+    if isinstance(raw, bool):
+        return raw
+    if isinstance(raw, str) and raw.strip().lower() in ("true", "false"):
+        return raw.strip().lower() == "true"
+    raise ValueError(f"{name}: must be true or false, got {raw!r}")
+
+
 def tamu(**overrides) -> TamuCase:
     """Build the TAMU case; override any input by name, as a number (SI) or a unit string.
 
@@ -163,15 +182,13 @@ def tamu(**overrides) -> TamuCase:
     for name, (unit, default) in _INPUTS.items():
         raw = overrides.get(name, default)
         if name in ("n_appendages", "n_modes"):
-            if int(raw) != raw or int(raw) < 1:
-                raise ValueError(f"{name}: must be a positive integer, got {raw!r}")
-            values[name] = int(raw)
+            values[name] = _count(raw, name)
         elif name == "stiffening":
-            values[name] = bool(raw)
-        elif unit:
-            values[name] = to_si(raw, unit, name)
+            values[name] = _flag(raw, name)
         else:
-            values[name] = float(raw)
+            value = to_si(raw, unit, name) if unit else float(require_finite(raw, name))
+            check = require_nonneg if name in _MAY_BE_ZERO else require_positive
+            values[name] = float(check(value, name))
     case = TamuCase(**values)
     case.params  # validate now: one clear message at construction
     return case

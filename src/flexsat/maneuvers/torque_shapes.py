@@ -24,6 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexsat.validation import require_finite, require_positive
+
 __all__ = ["BangBang", "PseudoSquare", "Reference", "Sinusoidal", "SmoothBangBang", "TorqueShape"]
 
 _C_SINE = 1.0 - 2.0 / np.pi  # plateau torque-impulse lost per unit rise time by a quarter sine
@@ -40,20 +42,6 @@ class Reference:
     theta: np.ndarray
     theta_dot: np.ndarray
     theta_ddot: np.ndarray
-
-
-def _finite(name, value):
-    a = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return a
-
-
-def _positive(name, value):
-    a = _finite(name, value)
-    if not np.all(a > 0):
-        raise ValueError(f"{name} must be > 0 (smallest value given: {a.min():g})")
-    return a
 
 
 def _exactly(n, **given):
@@ -76,7 +64,7 @@ def _quarter_ratio(name, ratio, why, open_at_zero=False, label=None):
     bad = bad | (ratio > 0.25 + tol)
     if np.any(bad):
         worst = np.asarray(ratio)[bad].flat[0]
-        raise ValueError(f"{name} out of range ({why}); got {label or name} = {worst:.6g}")
+        raise ValueError(f"{name}: out of range ({why}); got {label or name} = {worst:.6g}")
     return np.clip(ratio, 0.0, 0.25)
 
 
@@ -180,10 +168,10 @@ class TorqueShape(ABC):
 
 
 def _slew(angle, inertia, theta0):
-    angle = _finite("angle", angle)
+    angle = require_finite(angle, "angle")
     if np.any(angle == 0):
-        raise ValueError("angle must be nonzero (a rest-to-rest slew of 0 rad has no torque shape)")
-    return angle, _positive("inertia", inertia), _finite("theta0", theta0)
+        raise ValueError("angle: must be nonzero (a rest-to-rest slew of 0 rad has no torque shape)")
+    return angle, require_positive(inertia, "inertia"), require_finite(theta0, "theta0")
 
 
 class BangBang(TorqueShape):
@@ -207,10 +195,10 @@ class BangBang(TorqueShape):
         _exactly(1, u_max=u_max, duration=duration)
         m = inertia * np.abs(angle)
         if duration is None:
-            u_max = _positive("u_max", u_max)
+            u_max = require_positive(u_max, "u_max")
             duration = np.sqrt(4 * m / u_max)
         else:
-            duration = _positive("duration", duration)
+            duration = require_positive(duration, "duration")
             u_max = 4 * m / duration**2
         super().__init__(angle=angle, inertia=inertia, u_max=u_max, duration=duration,
                          theta0=theta0)
@@ -250,21 +238,21 @@ class SmoothBangBang(TorqueShape):
         _exactly(2, u_max=u_max, duration=duration, alpha=alpha)
         m = inertia * np.abs(angle)
         if alpha is None:
-            u_max, duration = _positive("u_max", u_max), _positive("duration", duration)
+            u_max, duration = require_positive(u_max, "u_max"), require_positive(duration, "duration")
             # alpha^2/10 - alpha/2 + 1/4 = q; the other root exceeds 5/2
             alpha = (5 - np.sqrt(15 + 40 * m / (u_max * duration**2))) / 2
             why = ("alpha solved from (u_max, duration) must lie in [0, 1/4]: duration must be "
                    "between the bang-bang time sqrt(4 I |angle| / u_max) and the alpha = 1/4 time "
                    "sqrt(I |angle| / (0.13125 u_max))")
         else:
-            alpha = _finite("alpha", alpha)
+            alpha = require_finite(alpha, "alpha")
             why = "alpha = rise time / duration must lie in [0, 1/4]; alpha = 1/4 leaves no plateau"
         alpha = _quarter_ratio("alpha", alpha, why)
         c = 0.25 - alpha / 2 + alpha**2 / 10
         if duration is None:
-            duration = np.sqrt(m / (_positive("u_max", u_max) * c))
+            duration = np.sqrt(m / (require_positive(u_max, "u_max") * c))
         elif u_max is None:
-            duration = _positive("duration", duration)
+            duration = require_positive(duration, "duration")
             u_max = m / (c * duration**2)
         super().__init__(angle=angle, inertia=inertia, u_max=u_max, duration=duration,
                          theta0=theta0, alpha=alpha)
@@ -307,16 +295,16 @@ class PseudoSquare(TorqueShape):
         why = ("rise_time must satisfy 0 < rise_time <= duration/4 so the quarter-sine rise and "
                "reversal do not overlap (rise_time = duration/4 is the pure sinusoid)")
         if rise_time is None:
-            u_max, duration = _positive("u_max", u_max), _positive("duration", duration)
+            u_max, duration = require_positive(u_max, "u_max"), require_positive(duration, "duration")
             rise_time = (duration**2 / 4 - m / u_max) / (duration * _C_SINE)
             why += ("; with u_max and duration given, I |angle| / u_max must lie in "
                     "[duration^2 / (2 pi), duration^2 / 4)")
         else:
-            rise_time = _finite("rise_time", rise_time)
+            rise_time = require_finite(rise_time, "rise_time")
             if duration is None:
-                s = m / _positive("u_max", u_max)
+                s = m / require_positive(u_max, "u_max")
                 duration = 2 * (rise_time * _C_SINE + np.sqrt((rise_time * _C_SINE) ** 2 + s))
-        duration = _positive("duration", duration)
+        duration = require_positive(duration, "duration")
         rise_time = duration * _quarter_ratio("rise_time", rise_time / duration, why, True,
                                                  "rise_time/duration")
         if u_max is None:
@@ -352,10 +340,10 @@ class Sinusoidal(TorqueShape):
         _exactly(1, u_max=u_max, duration=duration)
         m = 2 * np.pi * inertia * np.abs(angle)
         if duration is None:
-            u_max = _positive("u_max", u_max)
+            u_max = require_positive(u_max, "u_max")
             duration = np.sqrt(m / u_max)
         else:
-            duration = _positive("duration", duration)
+            duration = require_positive(duration, "duration")
             u_max = m / duration**2
         super().__init__(angle=angle, inertia=inertia, u_max=u_max, duration=duration,
                          theta0=theta0)

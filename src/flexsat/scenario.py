@@ -1,0 +1,701 @@
+"""YAML scenarios: schema, validation with field-path messages, and the run loop.
+
+A scenario names a benchmark case (:data:`flexsat.cases.CASES`), the simulation settings and one
+or more closed-loop runs (control law, gains, optional shaped reference)::
+
+    name: TAMU 40 deg slew, Law I vs Law II
+    case: tamu
+    case_overrides: {hub_inertia: "50 ozf*in*s**2"}
+    model: {n_modes: 10, stiffening: false}
+    maneuver: {angle: "40 deg"}
+    simulation: {duration: "15 s", control_rate: "75 Hz", integration_step: "1.667 ms"}
+    actuator: {saturation: "400 ozf*in"}
+    runs:
+      - {label: "Law I", law: lyapunov_regulator, gains: {g1: "600 ozf*in/rad", g2: 5.6}}
+
+Quantities are strings with units (``"400 ozf*in"``, ``"40 deg"``) or bare numbers taken in the
+SI unit of the field (rad, s, Hz, N m, ...). They are converted to SI floats on load, so a loaded
+:class:`Scenario` holds SI numbers only and ``scenario.model_dump()`` is itself a valid scenario.
+Keys left out of ``actuator``, ``sensors``, ``disturbances`` and ``simulation`` take the
+defaults of the runtime classes (:class:`flexsat.sim.SimConfig` and its parts: ideal sensors, no
+saturation, no disturbance).
+
+Validation runs in two stages, both before any simulation, and each collects all its problems
+into one :class:`ScenarioError` whose lines read ``field.path: rule``:
+
+1. :func:`load_scenario` -- YAML syntax, the schema (unknown keys, types, units, finite numbers)
+   and each section's own rules (its runtime object is built to check them);
+2. :func:`prepare_scenario` -- what needs the case: the case model (positive masses, stiffnesses
+   and inertias), the references and the controllers (gain admissibility).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any, Callable, Literal, get_args
+
+import xarray as xr
+import yaml
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    ValidationError,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
+
+from flexsat.cases import get_case
+from flexsat.control import PD, Controller, LyapunovRegulator, LyapunovTracker
+from flexsat.dynamics.hub_appendage import HubAppendage
+from flexsat.maneuvers import BangBang, PseudoSquare, Sinusoidal, SmoothBangBang
+from flexsat.sim import (
+    BearingFriction,
+    Impulses,
+    RandomTorque,
+    Sensors,
+    SimConfig,
+    SimResult,
+    TorqueActuator,
+    simulate,
+)
+from flexsat.units import to_si
+
+DEFAULT_SCENARIO = "tamu_default.yaml"  # package data of flexsat.cases
+
+
+class ScenarioError(ValueError):
+    """An invalid scenario.
+
+    Parameters
+    ----------
+    problems : list of str
+        One ``field.path: rule`` message per problem; the exception message lists them all.
+    """
+
+    def __init__(self, problems):
+        self.problems = list(problems)
+        count = "1 problem" if len(self.problems) == 1 else f"{len(self.problems)} problems"
+        super().__init__(f"invalid scenario ({count}):" + "".join(f"\n  {p}" for p in self.problems))
+
+
+# -- messages ----------------------------------------------------------------------------------
+_HEAD = re.compile(r"^([A-Za-z_][\w.]*): ")
+
+
+def _head(message: str) -> str | None:
+    """The field a ``"field: rule"`` message names, or None."""
+    match = _HEAD.match(message)
+    return match.group(1) if match else None
+
+
+def _locate(path: str, message: str) -> str:
+    """Prefix ``message`` with the field path ``path`` (``""`` is the scenario itself).
+
+    A message that starts with a field name (``"g1: must be >= 0"``) gets the name appended to the
+    path unless the path already ends with it.
+    """
+    head = _head(message)
+    if head is None:
+        return f"{path or 'scenario'}: {message}"
+    if path == head or path.endswith("." + head):
+        return path + message[len(head):]
+    return f"{path}.{message}" if path else message
+
+
+def _item(index: int, label) -> str:
+    """Path element of list item ``index``; runs are named by their label."""
+    return f"[{label!r}]" if isinstance(label, str) else f"[{index}]"
+
+
+def _loc_path(loc: tuple, data) -> str:
+    """Dotted field path of a pydantic error location, runs named by their label in ``data``."""
+    path, node = "", data
+    for key in loc:
+        if isinstance(key, int):
+            node = node[key] if isinstance(node, list) and 0 <= key < len(node) else None
+            path += _item(key, node.get("label") if isinstance(node, dict) else None)
+        else:
+            path = f"{path}.{key}" if path else str(key)
+            node = node.get(key) if isinstance(node, dict) else None
+    return path
+
+
+def _models_in(annotation) -> list[type[BaseModel]]:
+    """The schema models inside a field annotation (``X | None``, ``list[X]``, ...)."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return [annotation]
+    return [m for arg in get_args(annotation) for m in _models_in(arg)]
+
+
+def _allowed_keys(loc: tuple) -> str:
+    """The keys allowed beside the unknown key at ``loc``."""
+    model = Scenario
+    for key in loc[:-1]:
+        if isinstance(key, str):
+            model = _models_in(model.model_fields[key].annotation)[0]
+    return ", ".join(model.model_fields)
+
+
+def _problem(error: dict, data) -> str:
+    """One message line for a pydantic error dict."""
+    cause = error.get("ctx", {}).get("error")
+    if error["type"] == "extra_forbidden":
+        message = f"unknown key (allowed: {_allowed_keys(error['loc'])})"
+    else:
+        message = str(cause) if isinstance(cause, Exception) else error["msg"]
+    return _locate(_loc_path(error["loc"], data), message)
+
+
+# -- quantities --------------------------------------------------------------------------------
+def _converter(unit: str) -> Callable:
+    """Before-validator converting a quantity to SI (None passes through for optional fields)."""
+
+    def convert(value, info: ValidationInfo):
+        if value is None:
+            return None
+        field = info.field_name
+        if isinstance(value, bool):
+            raise ValueError(f"{field}: expected a number or a quantity such as '1 {unit}'")
+        return to_si(value, unit, field)
+
+    return convert
+
+
+def quantity(unit: str, optional: bool = False):
+    """Field type of a quantity in ``unit``, stored as its SI float.
+
+    Parameters
+    ----------
+    unit : str
+        Expected unit; a bare number is taken in it, ``""`` is dimensionless.
+    optional : bool
+        Accept ``None`` (the key left out).
+    """
+    return Annotated[float | None if optional else float, BeforeValidator(_converter(unit))]
+
+
+def _given(section: BaseModel, exclude=()) -> dict[str, Any]:
+    """The fields of ``section`` that were set (not None), as keyword arguments."""
+    return section.model_dump(exclude_none=True, exclude=set(exclude))
+
+
+# -- schema ------------------------------------------------------------------------------------
+class _Section(BaseModel):
+    """Base of every schema model: unknown keys are errors."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
+class _Buildable(_Section):
+    """A section that maps onto a runtime object; building it checks the runtime's own rules."""
+
+    def build(self):
+        raise NotImplementedError
+
+    @model_validator(mode="after")
+    def _buildable(self):
+        self.build()
+        return self
+
+
+class ModelSpec(_Section):
+    """Model options, forwarded to the case builder as overrides."""
+
+    n_modes: int | None = None
+    stiffening: bool | None = None
+
+
+class ManeuverSpec(_Section):
+    """The slew: ``angle`` (rad), from rest at 0."""
+
+    angle: quantity("rad")
+
+
+class SimulationSpec(_Buildable):
+    """Run length and sampling; ``integration_step`` sets the substeps per control period."""
+
+    duration: quantity("s")
+    control_rate: quantity("Hz", optional=True) = None
+    integration_step: quantity("s", optional=True) = None
+    settling_band: quantity("rad", optional=True) = None
+    seed: Annotated[int, Field(ge=0)] | None = None
+
+    def build(self, **components) -> SimConfig:
+        """The :class:`SimConfig`; ``components`` are its actuator, sensors and disturbances."""
+        config = SimConfig(**_given(self, exclude={"integration_step"}), **components)
+        if self.integration_step is None:
+            return config
+        return dataclasses.replace(config, substeps=self._substeps(config.dt))
+
+    def _substeps(self, period: float) -> int:
+        step = self.integration_step
+        if step <= 0:
+            raise ValueError(f"integration_step: must be > 0, got {step:g} s")
+        if step >= period:
+            raise ValueError(
+                f"integration_step: must be smaller than the control period 1/control_rate = "
+                f"{1e3 * period:.4g} ms, got {1e3 * step:.4g} ms"
+            )
+        return math.ceil(period / step - 1e-9)
+
+
+class ActuatorSpec(_Buildable):
+    saturation: quantity("N*m", optional=True) = None
+    torque_constant_ratio: quantity("", optional=True) = None
+
+    def build(self) -> TorqueActuator:
+        return TorqueActuator(**_given(self))
+
+
+class SensorsSpec(_Buildable):
+    encoder_resolution: quantity("rad", optional=True) = None
+    rate: Literal["ideal", "ls_filter", "gyro"] | None = None
+    rate_window: int | None = None
+    rate_order: int | None = None
+    gyro_noise: quantity("rad/s", optional=True) = None
+    strain_noise: quantity("N*m", optional=True) = None
+
+    def build(self) -> Sensors:
+        return Sensors(**_given(self))
+
+
+class FrictionSpec(_Buildable):
+    coulomb: quantity("N*m", optional=True) = None
+    viscous: quantity("N*m*s/rad", optional=True) = None
+    smoothing: quantity("rad/s", optional=True) = None
+
+    def build(self) -> BearingFriction:
+        return BearingFriction(**_given(self))
+
+
+class ImpulseSpec(_Section):
+    time: quantity("s")
+    impulse: quantity("N*m*s")
+
+
+class DisturbancesSpec(_Buildable):
+    """Bearing friction, random torque (1 sigma, N m) and angular impulses on the hub."""
+
+    friction: FrictionSpec = Field(default_factory=FrictionSpec)
+    random_torque: quantity("N*m", optional=True) = None
+    impulses: list[ImpulseSpec] = Field(default_factory=list)
+
+    def build(self) -> dict[str, Any]:
+        """Keyword arguments ``friction``, ``random_torque``, ``impulses`` of :class:`SimConfig`."""
+        try:
+            random = RandomTorque(*(() if self.random_torque is None else (self.random_torque,)))
+        except ValueError as exc:
+            raise ValueError(str(exc).replace("std:", "random_torque:", 1)) from None
+        impulses = Impulses(tuple(i.time for i in self.impulses),
+                            tuple(i.impulse for i in self.impulses))
+        return {"friction": self.friction.build(), "random_torque": random, "impulses": impulses}
+
+
+class GainsSpec(_Section):
+    """Feedback gains: g1, g2, g3 (Lyapunov laws) or kp, kd (PD)."""
+
+    g1: quantity("N*m/rad", optional=True) = None
+    g2: quantity("N*m*s/rad", optional=True) = None
+    g3: quantity("", optional=True) = None
+    kp: quantity("N*m/rad", optional=True) = None
+    kd: quantity("N*m*s/rad", optional=True) = None
+
+
+class PolesSpec(_Section):
+    """Rigid closed-loop poles of a PD law; ``natural_frequency`` in Hz or rad/s (a bare
+    number is rad/s; :func:`flexsat.units.to_si` applies the 2π between the two)."""
+
+    natural_frequency: quantity("rad/s")
+    damping_ratio: quantity("")
+
+
+_SHAPES = {"bang_bang": BangBang, "smooth_bang_bang": SmoothBangBang,
+           "pseudo_square": PseudoSquare, "sinusoidal": Sinusoidal}
+_SHAPE_PARAMETERS = {"smooth_bang_bang": ("alpha",), "pseudo_square": ("rise_time",)}
+
+
+class ReferenceSpec(_Section):
+    """Rigid reference maneuver: a torque shape with any two of u_max, duration and its own
+    parameter (one of u_max, duration for bang_bang and sinusoidal)."""
+
+    shape: Literal[tuple(_SHAPES)]
+    u_max: quantity("N*m", optional=True) = None
+    duration: quantity("s", optional=True) = None
+    alpha: quantity("", optional=True) = None
+    rise_time: quantity("s", optional=True) = None
+
+    @model_validator(mode="after")
+    def _shape_parameters(self):
+        own = _SHAPE_PARAMETERS.get(self.shape, ())
+        for name in ("alpha", "rise_time"):
+            if getattr(self, name) is not None and name not in own:
+                raise ValueError(f"{name}: not a parameter of shape {self.shape!r}")
+        return self
+
+    def build(self, angle: float, inertia: float):
+        """The torque shape slewing ``angle`` (rad) with the rigid ``inertia`` (kg m²)."""
+        return _SHAPES[self.shape](angle, inertia, **_given(self, exclude={"shape"}))
+
+
+@dataclass(frozen=True)
+class _CaseContext:
+    """What the controllers need from the case and the maneuver."""
+
+    angle: float
+    reference_inertia: float
+    appendage_inertia: float
+    n_appendages: int
+
+
+def _regulator(run: "RunSpec", ctx: _CaseContext, reference) -> Controller:
+    return LyapunovRegulator(**_given(run.gains), target=ctx.angle, n_appendages=ctx.n_appendages)
+
+
+def _tracker(run: "RunSpec", ctx: _CaseContext, reference) -> Controller:
+    return LyapunovTracker(reference, **_given(run.gains), appendage_inertia=ctx.appendage_inertia,
+                           n_appendages=ctx.n_appendages)
+
+
+def _pd(run: "RunSpec", ctx: _CaseContext, reference) -> Controller:
+    options = {"target": ctx.angle, "reference": reference}
+    if run.feedforward is not None:
+        options["feedforward"] = run.feedforward
+    if run.poles is None:
+        return PD(**_given(run.gains), **options)
+    return PD.from_rigid_poles(ctx.reference_inertia, run.poles.natural_frequency,
+                               run.poles.damping_ratio, **options)
+
+
+@dataclass(frozen=True)
+class _Law:
+    gains: tuple[str, ...]
+    required: tuple[str, ...]
+    reference: Literal["required", "optional", "forbidden"]
+    build: Callable[["RunSpec", _CaseContext, Any], Controller]
+    pd_options: bool = False
+
+
+_LAWS = {
+    "lyapunov_regulator": _Law(("g1", "g2", "g3"), ("g1", "g2"), "forbidden", _regulator),
+    "lyapunov_tracker": _Law(("g1", "g2", "g3"), ("g1", "g2"), "required", _tracker),
+    "pd": _Law(("kp", "kd"), ("kp", "kd"), "optional", _pd, pd_options=True),
+}
+
+
+class RunSpec(_Section):
+    """One closed-loop run.
+
+    ``law`` is ``lyapunov_regulator`` (gains g1, g2, g3), ``lyapunov_tracker`` (same gains and a
+    ``reference``) or ``pd`` (gains kp, kd or ``poles``; with a ``reference`` it tracks it,
+    feeding its torque forward unless ``feedforward: false``).
+    """
+
+    label: str
+    law: Literal[tuple(_LAWS)]
+    gains: GainsSpec | None = None
+    poles: PolesSpec | None = None
+    reference: ReferenceSpec | None = None
+    feedforward: bool | None = None
+
+    @model_validator(mode="after")
+    def _law_inputs(self):
+        law = _LAWS[self.law]
+        given = _given(self.gains) if self.gains is not None else {}
+        for name in given:
+            if name not in law.gains:
+                raise ValueError(f"gains.{name}: not a gain of law {self.law!r} "
+                                 f"(its gains: {', '.join(law.gains)})")
+        for name in ("poles", "feedforward"):
+            if getattr(self, name) is not None and not law.pd_options:
+                raise ValueError(f"{name}: only for law 'pd'")
+        if self.poles is not None and self.gains is not None:
+            raise ValueError("gains: give gains or poles, not both")
+        missing = [g for g in law.required if g not in given]
+        if self.poles is None and missing:
+            raise ValueError(f"gains.{missing[0]}: required by law {self.law!r}"
+                             + (" (or give poles)" if law.pd_options else ""))
+        if law.reference == "required" and self.reference is None:
+            raise ValueError(f"reference: required by law {self.law!r}")
+        if law.reference == "forbidden" and self.reference is not None:
+            raise ValueError(f"reference: law {self.law!r} tracks no reference "
+                             "(use lyapunov_tracker)")
+        return self
+
+
+class Scenario(_Section):
+    """A validated scenario, quantities in SI (see the module docstring for the schema)."""
+
+    name: str
+    case: str
+    case_overrides: dict[str, bool | int | float | str] = Field(default_factory=dict)
+    model: ModelSpec = Field(default_factory=ModelSpec)
+    maneuver: ManeuverSpec
+    simulation: SimulationSpec
+    actuator: ActuatorSpec = Field(default_factory=ActuatorSpec)
+    sensors: SensorsSpec = Field(default_factory=SensorsSpec)
+    disturbances: DisturbancesSpec = Field(default_factory=DisturbancesSpec)
+    runs: list[RunSpec] = Field(min_length=1)
+    _source: str | None = PrivateAttr(default=None)
+
+    @field_validator("case")
+    @classmethod
+    def _known_case(cls, name: str) -> str:
+        get_case(name)
+        return name
+
+    @field_validator("case_overrides")
+    @classmethod
+    def _finite_overrides(cls, overrides: dict) -> dict:
+        for key, value in overrides.items():
+            if _non_finite(value):
+                raise ValueError(f"{key}: must be a finite number, got {value!r}")
+        return overrides
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        for name in _given(self.model):
+            if name in self.case_overrides:
+                raise ValueError(f"model.{name}: also given in case_overrides; give it once")
+        labels = [run.label for run in self.runs]
+        for label in labels:
+            if labels.count(label) > 1:
+                raise ValueError(f"runs: duplicate label {label!r}; each run needs its own label")
+        return self
+
+    @property
+    def case_parameters(self) -> dict[str, Any]:
+        """Keyword arguments of the case builder: ``case_overrides`` and the ``model`` options."""
+        return {**self.case_overrides, **_given(self.model)}
+
+    def sim_config(self) -> SimConfig:
+        """The :class:`SimConfig` shared by every run."""
+        return self.simulation.build(actuator=self.actuator.build(), sensors=self.sensors.build(),
+                                     **self.disturbances.build())
+
+    @property
+    def yaml_text(self) -> str:
+        """The scenario as YAML: the text it was loaded from, else a dump (SI numbers)."""
+        if self._source is not None:
+            return self._source
+        return yaml.safe_dump(self.model_dump(exclude_none=True), sort_keys=False)
+
+
+def _non_finite(value) -> bool:
+    """True for NaN and infinities, given as numbers or as bare strings ("nan", "inf")."""
+    if isinstance(value, bool):
+        return False
+    try:
+        return not math.isfinite(float(value))
+    except (TypeError, ValueError):
+        return False
+
+
+# -- loading -----------------------------------------------------------------------------------
+def _read(source: str | Path) -> str:
+    """Scenario text from a path (a Path, a ``.yaml``/``.yml`` name or an existing file) or as is."""
+    is_path = isinstance(source, Path) or ("\n" not in source and (
+        source.endswith((".yaml", ".yml")) or Path(source).is_file()))
+    if not is_path:
+        return source
+    try:
+        return Path(source).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ScenarioError([f"scenario: cannot read {str(source)!r} ({exc.strerror})"]) from None
+
+
+def load_scenario(source: str | Path) -> Scenario:
+    """Parse and validate a scenario (stage 1: YAML, schema, units, section rules).
+
+    Parameters
+    ----------
+    source : str or Path
+        A path to a YAML file, or the YAML text itself.
+
+    Raises
+    ------
+    ScenarioError
+        Listing every problem found, each as ``field.path: rule``.
+    """
+    text = _read(source)
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ScenarioError([f"yaml: {exc}"]) from None
+    if not isinstance(data, dict):
+        raise ScenarioError(["scenario: must be a YAML mapping (name, case, simulation, runs, ...)"])
+    try:
+        scenario = Scenario.model_validate(data)
+    except ValidationError as exc:
+        raise ScenarioError([_problem(e, data) for e in exc.errors()]) from None
+    scenario._source = text
+    return scenario
+
+
+def default_scenario() -> Scenario:
+    """The embedded default: the TAMU 40 deg slew, Law I against Law II (``flexsat run``)."""
+    return load_scenario(resources.files("flexsat.cases").joinpath(DEFAULT_SCENARIO).read_text())
+
+
+# -- preparing and running ---------------------------------------------------------------------
+@dataclass(frozen=True)
+class ScenarioPlan:
+    """A fully validated scenario, ready to run.
+
+    Attributes
+    ----------
+    scenario : Scenario
+    case : object
+        The built case (e.g. :class:`flexsat.cases.tamu.TamuCase`).
+    model : HubAppendage
+    config : SimConfig
+    controllers : dict of str to Controller
+        One controller per run, by label, in the scenario's order.
+    """
+
+    scenario: Scenario
+    case: Any
+    model: HubAppendage
+    config: SimConfig
+    controllers: dict[str, Controller]
+
+
+def _build_case(scenario: Scenario):
+    """(case, model); problems are located in ``model`` or ``case_overrides``."""
+    try:
+        case = get_case(scenario.case).builder(**scenario.case_parameters)
+        return case, case.model()
+    except ValueError as exc:
+        message = str(exc)
+        head = _head(message)
+        if head in _given(scenario.model):
+            raise ScenarioError([_locate("model", message)]) from None
+        if head in scenario.case_overrides:
+            raise ScenarioError([_locate("case_overrides", message)]) from None
+        raise ScenarioError([f"case_overrides: {message}"]) from None
+
+
+def _build_controller(index: int, run: RunSpec, ctx: _CaseContext) -> Controller:
+    """The run's controller; problems are located in the run's reference, gains or poles."""
+    path = "runs" + _item(index, run.label)
+    reference = None
+    if run.reference is not None:
+        try:
+            reference = run.reference.build(ctx.angle, ctx.reference_inertia)
+        except ValueError as exc:
+            raise ScenarioError([_locate(path + ".reference", str(exc))]) from None
+    try:
+        return _LAWS[run.law].build(run, ctx, reference)
+    except ValueError as exc:
+        head = _head(str(exc))
+        section = next((name for name, spec in (("gains", GainsSpec), ("poles", PolesSpec))
+                        if head in spec.model_fields), None)
+        raise ScenarioError([_locate(f"{path}.{section}" if section else path, str(exc))]) from None
+
+
+def _collect(problems: list[str], build: Callable, *args):
+    """``build(*args)``, or None with its ScenarioError problems appended to ``problems``."""
+    try:
+        return build(*args)
+    except ScenarioError as exc:
+        problems.extend(exc.problems)
+        return None
+
+
+def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
+    """Validate what needs the case (stage 2) and build the model and the controllers.
+
+    Raises
+    ------
+    ScenarioError
+        Listing every problem: case parameters, references, controller gains.
+    """
+    problems: list[str] = []
+    built = _collect(problems, _build_case, scenario)
+    controllers: dict[str, Controller] = {}
+    if built is not None:
+        case, model = built
+        ctx = _CaseContext(scenario.maneuver.angle, case.reference_inertia,
+                           model.params.appendage_inertia, int(model.params.n_appendages))
+        for index, run in enumerate(scenario.runs):
+            controllers[run.label] = _collect(problems, _build_controller, index, run, ctx)
+    if problems:
+        raise ScenarioError(problems)
+    return ScenarioPlan(scenario, case, model, scenario.sim_config(), controllers)
+
+
+@dataclass(frozen=True)
+class ScenarioResult:
+    """The runs of a scenario.
+
+    Attributes
+    ----------
+    scenario : Scenario
+    labels : tuple of str
+        Run labels, in the scenario's order.
+    results : tuple of SimResult
+        One single-case result per run (every run uses the same noise seed).
+    case_source : str
+        Where the case's data come from (:attr:`flexsat.cases.CaseInfo.source`).
+    """
+
+    scenario: Scenario
+    labels: tuple[str, ...]
+    results: tuple[SimResult, ...]
+    case_source: str
+
+    def metrics_records(self) -> list[dict]:
+        """One JSON-ready dict per run: ``"run"`` (the label) and the metrics (NaN -> None)."""
+        return [row for label, result in zip(self.labels, self.results)
+                for row in result.metrics_records([label])]
+
+    def dataset(self) -> xr.Dataset:
+        """All runs in one dataset, dims (run, time); ``run`` holds the labels.
+
+        Attributes: ``scenario_name``, ``case``, ``case_source``, ``scenario_yaml`` and those of
+        the simulation (``control_rate_Hz``, ``settling_band_rad``).
+        """
+        runs = [r.dataset.isel(case=0, drop=True) for r in self.results]
+        ds = xr.concat(runs, dim="run", data_vars="all", coords="minimal", compat="override",
+                       join="exact", combine_attrs="override")
+        ds = ds.assign_coords(run=("run", list(self.labels)))
+        ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
+                        case_source=self.case_source, scenario_yaml=self.scenario.yaml_text)
+        return ds
+
+
+def run_scenario(scenario: Scenario, progress: Callable[[str], None] | None = None
+                 ) -> ScenarioResult:
+    """Validate the whole scenario, then simulate each run.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    progress : callable, optional
+        Called with each run's label just before it is simulated.
+
+    Raises
+    ------
+    ScenarioError
+        Before any run, if :func:`prepare_scenario` finds problems.
+    """
+    plan = prepare_scenario(scenario)
+    results = []
+    for label, controller in plan.controllers.items():
+        if progress is not None:
+            progress(label)
+        results.append(simulate(plan.model, controller, plan.config))
+    return ScenarioResult(scenario, tuple(plan.controllers), tuple(results),
+                          get_case(scenario.case).source)
+
+
+__all__ = ["Scenario", "ScenarioError", "ScenarioPlan", "ScenarioResult", "default_scenario",
+           "load_scenario", "prepare_scenario", "quantity", "run_scenario"]

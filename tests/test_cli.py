@@ -1,0 +1,103 @@
+"""Command line (flexsat.cli) through typer's CliRunner."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from flexsat.cli import app, parse_settings, parse_value
+from flexsat.scenario import default_scenario
+from flexsat.units import to_si
+
+runner = CliRunner()
+
+
+def write_scenario(path, **simulation) -> str:
+    """A short Law I / Law II scenario file (3 modes, 2 s) with ``simulation`` changes."""
+    data = yaml.safe_load(default_scenario().yaml_text)
+    data["model"]["n_modes"] = 3
+    data["simulation"].update({"duration": "2 s", **simulation})
+    path.write_text(yaml.safe_dump(data))
+    return str(path)
+
+
+def test_cases_lists_tamu_with_its_source():
+    result = runner.invoke(app, ["cases"])
+    assert result.exit_code == 0
+    assert "tamu" in result.stdout
+    assert "Junkins" in result.stdout
+
+
+def test_modes_json():
+    result = runner.invoke(app, ["modes", "tamu", "--modes", "3", "--json",
+                                 "--set", "n_modes=4", "--set", "hub_inertia=30 ozf*in*s**2"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert data["model_modes"] == 4
+    assert len(data["unconstrained_hz"]) == len(data["constrained_hz"]) == 3
+    assert data["unconstrained_hz"] == sorted(data["unconstrained_hz"])
+    # a light hub: each hub-free frequency lies above the clamped one
+    assert all(f > c for f, c in zip(data["unconstrained_hz"], data["constrained_hz"]))
+    budget = data["inertia_budget_kg_m2"]
+    assert budget["hub"] == pytest.approx(to_si("30 ozf*in*s**2", "kg*m**2"))
+    assert budget["total_model"] == pytest.approx(budget["hub"] + budget["beams"]
+                                                  + budget["tip_masses"])
+
+
+def test_modes_table():
+    result = runner.invoke(app, ["modes", "tamu", "-n", "2", "--set", "n_modes=2"])
+    assert result.exit_code == 0, result.output
+    assert "hub clamped" in result.stdout and "published_total" in result.stdout
+
+
+@pytest.mark.parametrize("args, expected", [
+    (["modes", "tamu", "--set", "hub_inertia=-1"], "hub_inertia: must be > 0"),
+    (["modes", "tamu", "--set", "hub_inertia"], "--set: expected NAME=VALUE"),
+    (["modes", "tamu", "-n", "12"], "--modes: the model has 10 modes"),
+    (["modes", "nope"], "case: unknown case 'nope'"),
+])
+def test_modes_errors_exit_2(args, expected):
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2
+    assert expected in result.stderr
+
+
+def test_set_values():
+    assert parse_value("3") == 3 and isinstance(parse_value("3"), int)
+    assert parse_value("1e-3") == 1e-3
+    assert parse_value("False") is False
+    assert parse_value("30 ozf*in*s**2") == "30 ozf*in*s**2"
+    assert parse_settings(["a=1", "b = 2 deg"]) == {"a": 1, "b": "2 deg"}
+
+
+def test_run_writes_the_report(tmp_path):
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["run", write_scenario(tmp_path / "s.yaml"), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "Law II" in result.stdout and "peak_torque_Nm" in result.stdout
+    assert {"metrics.json", "results.nc", "index.html", "hub_angle.png", "torque.png",
+            "hub_rate.png", "tip_deflection.png", "vibration_energy.png"} <= \
+        {p.name for p in out.iterdir()}
+    records = json.loads((out / "metrics.json").read_text())
+    assert [r["run"] for r in records] == ["Law I", "Law II"]
+    assert {"settling_time_s", "overshoot_deg", "peak_torque_Nm", "residual_energy_J"} <= \
+        set(records[0])
+
+
+def test_bad_scenario_exits_2_and_writes_nothing(tmp_path):
+    out = tmp_path / "out"
+    path = write_scenario(tmp_path / "s.yaml", integration_step="20 ms")
+    result = runner.invoke(app, ["run", path, "-o", str(out)])
+    assert result.exit_code == 2
+    assert "simulation.integration_step: must be smaller than the control period" in result.stderr
+    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.yaml"]
+
+
+def test_missing_scenario_file_exits_2(tmp_path):
+    result = runner.invoke(app, ["run", str(tmp_path / "none.yaml"), "-o", str(tmp_path / "o")])
+    assert result.exit_code == 2
+    assert "cannot read" in result.stderr

@@ -1,0 +1,91 @@
+"""Report files of a scenario run (flexsat.report)."""
+
+from __future__ import annotations
+
+import html
+import json
+
+import pytest
+import xarray as xr
+import yaml
+
+import flexsat.report as report
+from flexsat.report import PLOTS, format_metric, metric_rows, write_report
+from flexsat.scenario import default_scenario, load_scenario, run_scenario
+
+METRICS = {"run", "settling_time_s", "overshoot_deg", "peak_torque_Nm", "residual_energy_J",
+           "residual_energy_at_T_J", "peak_tip_deflection_m", "peak_rate_error_deg_s"}
+FILES = {"metrics.json", "results.nc", "index.html"} | {p.file for p in PLOTS}
+
+
+@pytest.fixture(scope="module")
+def result():
+    """Law I and Law II on a 3-mode model for 2 s."""
+    data = yaml.safe_load(default_scenario().yaml_text)
+    data["name"] = "Short <test> & run"
+    data["model"]["n_modes"] = 3
+    data["simulation"]["duration"] = "2 s"
+    return run_scenario(load_scenario(yaml.safe_dump(data)))
+
+
+def test_metrics_json_has_one_object_per_run(result, tmp_path):
+    out = write_report(result, tmp_path / "report")
+    assert {p.name for p in out.iterdir()} == FILES
+    records = json.loads((out / "metrics.json").read_text())
+    assert [r["run"] for r in records] == ["Law I", "Law II"]
+    for record in records:
+        assert set(record) == METRICS
+        assert record["peak_torque_Nm"] > 0
+    assert records[0]["settling_time_s"] is None  # 2 s is too short to settle: null, not NaN
+
+
+def test_results_nc_has_run_and_time_dims(result, tmp_path):
+    out = write_report(result, tmp_path / "report")
+    with xr.open_dataset(out / "results.nc", engine="h5netcdf") as ds:
+        assert ds["theta"].dims == ("run", "time")
+        assert list(ds["run"].values) == ["Law I", "Law II"]
+        assert ds["theta"].attrs["units"] == "rad"
+        assert ds["settling_time_s"].dims == ("run",)
+        assert ds.sizes["time"] == 151  # 2 s at 75 Hz, both ends
+        assert ds.attrs["case"] == "tamu"
+        assert "Law II" in ds.attrs["scenario_yaml"]
+        assert float(ds["time"][-1]) == pytest.approx(2.0)
+
+
+def test_index_html_is_self_contained(result, tmp_path):
+    page = (write_report(result, tmp_path / "report") / "index.html").read_text()
+    assert "Short &lt;test&gt; &amp; run" in page
+    assert html.escape(result.case_source) in page
+    for spec in PLOTS:
+        assert f'<img src="{spec.file}"' in page
+    assert "<th>Law I</th><th>Law II</th>" in page
+    assert "smooth_bang_bang" in page  # the scenario echoed
+    assert "http" not in page
+
+
+def test_rewrite_replaces_report_files_and_keeps_others(result, tmp_path):
+    out = tmp_path / "report"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    (out / "metrics.json").write_text("stale")
+    write_report(result, out)
+    assert (out / "notes.txt").read_text() == "mine"
+    assert json.loads((out / "metrics.json").read_text())[0]["run"] == "Law I"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]  # no temporary folder left
+
+
+def test_failure_leaves_no_partial_report(result, tmp_path, monkeypatch):
+    def broken(*args):
+        raise RuntimeError("plot failed")
+
+    monkeypatch.setattr(report, "_plot", broken)
+    with pytest.raises(RuntimeError):
+        write_report(result, tmp_path / "report")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_metric_formatting():
+    assert format_metric(None) == "n/a"
+    assert format_metric(0.000123456) == "0.0001235"
+    rows = metric_rows([{"run": "a", "x_s": 1.0}, {"run": "b", "x_s": None}])
+    assert rows == [("x_s", ["1", "n/a"])]

@@ -1,0 +1,265 @@
+"""Scenario schema, units and validation messages (flexsat.scenario)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+import flexsat.scenario as scenario_module
+from flexsat.scenario import (
+    ScenarioError,
+    default_scenario,
+    load_scenario,
+    prepare_scenario,
+    run_scenario,
+)
+from flexsat.units import to_si
+
+OZ_IN = to_si("1 ozf*in", "N*m")
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "tamu_40deg.yaml"
+
+
+def small_data() -> dict:
+    """The default scenario as a dict, with a 3-mode model and a 2 s run (fast)."""
+    data = yaml.safe_load(default_scenario().yaml_text)
+    data["model"]["n_modes"] = 3
+    data["simulation"]["duration"] = "2 s"
+    return data
+
+
+def problems_of(mutate) -> str:
+    """The ScenarioError message of the small scenario changed by ``mutate(data)``."""
+    data = small_data()
+    mutate(data)
+    with pytest.raises(ScenarioError) as info:
+        prepare_scenario(load_scenario(yaml.safe_dump(data)))
+    return str(info.value)
+
+
+# -- the default ---------------------------------------------------------------------------------
+def test_default_scenario_loads_in_si():
+    s = default_scenario()
+    assert s.name == "TAMU 40 deg slew, Law I vs Law II"
+    assert s.case == "tamu"
+    assert [r.label for r in s.runs] == ["Law I", "Law II"]
+    assert s.maneuver.angle == pytest.approx(math.radians(40))
+    assert s.actuator.saturation == pytest.approx(400 * OZ_IN)
+    assert s.runs[0].gains.g1 == pytest.approx(600 * OZ_IN)
+    assert s.runs[1].reference.shape == "smooth_bang_bang"
+    config = s.sim_config()
+    assert config.control_rate == 75.0
+    assert config.substeps == 8  # ceil(13.33 ms / 1.667 ms)
+    assert config.friction.coulomb == pytest.approx(20 * OZ_IN)
+    assert config.sensors.rate == "ls_filter"
+
+
+def test_example_file_is_the_packaged_default():
+    assert EXAMPLE.read_text() == default_scenario().yaml_text
+    assert load_scenario(EXAMPLE).model_dump() == default_scenario().model_dump()
+
+
+def test_dump_round_trips_and_bare_numbers_are_si():
+    s = default_scenario()
+    again = load_scenario(yaml.safe_dump(s.model_dump()))
+    assert again.model_dump() == s.model_dump()
+    data = small_data()
+    data["maneuver"]["angle"] = math.radians(40)
+    data["actuator"]["saturation"] = "2.824620725690418"
+    bare = load_scenario(yaml.safe_dump(data))
+    assert bare.maneuver.angle == pytest.approx(s.maneuver.angle)
+    assert bare.actuator.saturation == pytest.approx(s.actuator.saturation)
+
+
+@pytest.mark.parametrize("section, key, text, expected", [
+    ("maneuver", "angle", "0.5 turn", math.pi),
+    ("simulation", "integration_step", "1 ms", 1e-3),
+    ("simulation", "control_rate", "0.1 kHz", 100.0),
+    ("actuator", "saturation", "1 N*m", 1.0),
+    ("sensors", "encoder_resolution", "1 arcmin", math.radians(1 / 60)),
+])
+def test_quantities_convert_to_si(section, key, text, expected):
+    data = small_data()
+    data[section][key] = text
+    assert getattr(getattr(load_scenario(yaml.safe_dump(data)), section), key) == \
+        pytest.approx(expected)
+
+
+def test_prepare_builds_model_config_and_controllers():
+    plan = prepare_scenario(load_scenario(yaml.safe_dump(small_data())))
+    assert plan.model.n_modes == 3
+    assert list(plan.controllers) == ["Law I", "Law II"]
+    assert plan.controllers["Law II"].reference.alpha == pytest.approx(0.2)
+
+
+def test_pd_poles_are_cyclic_and_use_the_reference_inertia():
+    data = small_data()
+    data["runs"].append({"label": "PD", "law": "pd",
+                         "poles": {"natural_frequency": "0.06 Hz", "damping_ratio": 0.9},
+                         "reference": {"shape": "sinusoidal", "duration": "10 s"}})
+    plan = prepare_scenario(load_scenario(yaml.safe_dump(data)))
+    pd = plan.controllers["PD"]
+    wn = 2 * np.pi * 0.06
+    assert float(pd.kp) == pytest.approx(plan.case.reference_inertia * wn**2)
+    assert float(pd.kd) == pytest.approx(2 * 0.9 * wn * plan.case.reference_inertia)
+    assert float(pd.reference.duration) == pytest.approx(10.0)
+
+
+# -- one test per bad-input rule -----------------------------------------------------------------
+def test_unknown_key_is_named_with_its_path():
+    message = problems_of(lambda d: d["sensors"].update(rate_windw=3))
+    assert "sensors.rate_windw: unknown key (allowed: encoder_resolution, rate, rate_window" \
+        in message
+
+
+def test_unknown_keys_at_top_level_and_in_a_run():
+    message = problems_of(lambda d: (d.update(colour=1, size=2),
+                                     d["runs"][1]["reference"].update(beta=1)))
+    assert "colour: unknown key (allowed: name, case, case_overrides, model" in message
+    assert "size: unknown key" in message
+    assert "runs['Law II'].reference.beta: unknown key (allowed: shape, u_max" in message
+    assert "invalid scenario (3 problems)" in message
+
+
+@pytest.mark.parametrize("key, value, expected", [
+    ("hub_inertia", "-5 ozf*in*s**2", "case_overrides.hub_inertia: must be > 0"),
+    ("tip_mass", -1.0, "case_overrides.tip_mass: must be >= 0"),
+    ("density", 0, "case_overrides.density: must be > 0"),
+    ("modulus", "-1 psi", "case_overrides.modulus: must be > 0"),
+])
+def test_non_positive_inertia_mass_stiffness(key, value, expected):
+    assert expected in problems_of(lambda d: d["case_overrides"].update({key: value}))
+
+
+def test_unknown_case_parameter_comes_from_the_builder():
+    message = problems_of(lambda d: d["case_overrides"].update(hub_mass=1))
+    assert "case_overrides: tamu: unknown parameter(s) ['hub_mass']" in message
+
+
+def test_model_options_are_checked_by_the_builder():
+    assert "model.n_modes: must be a positive integer, got 0" in problems_of(
+        lambda d: d["model"].update(n_modes=0))
+
+
+@pytest.mark.parametrize("mutate, expected", [
+    (lambda d: d["simulation"].update(duration="nan"),
+     "simulation.duration: must be a finite number, got 'nan'"),
+    (lambda d: d["simulation"].update(duration=float("inf")),
+     "simulation.duration: must be a finite number, got inf"),
+    (lambda d: d["runs"][0]["gains"].update(g2="inf ozf*in*s/rad"),
+     "runs['Law I'].gains.g2: must be a finite number"),
+    (lambda d: d["case_overrides"].update(n_modes="nan"),
+     "case_overrides.n_modes: must be a finite number, got 'nan'"),
+], ids=["nan-string", "inf-number", "inf-quantity", "nan-override"])
+def test_non_finite_numbers(mutate, expected):
+    assert expected in problems_of(mutate)
+
+
+def test_integration_step_must_be_below_the_control_period():
+    message = problems_of(lambda d: d["simulation"].update(integration_step="20 ms"))
+    assert ("simulation.integration_step: must be smaller than the control period "
+            "1/control_rate = 13.33 ms, got 20 ms") in message
+
+
+@pytest.mark.parametrize("run, gain, value, expected", [
+    (0, "g1", -1.0, "runs['Law I'].gains.g1: must be >= 0"),
+    (1, "g2", "-800 ozf*in*s/rad", "runs['Law II'].gains.g2: must be >= 0"),
+    (1, "g3", -4, "runs['Law II'].gains.g3: must be > -4 (= -n_appendages)"),
+])
+def test_inadmissible_gains(run, gain, value, expected):
+    assert expected in problems_of(lambda d: d["runs"][run]["gains"].update({gain: value}))
+
+
+def test_incompatible_units():
+    message = problems_of(lambda d: d["maneuver"].update(angle="40 kg"))
+    assert "maneuver.angle: incompatible units (kilogram given, rad expected)" in message
+
+
+def test_positive_simulation_settings_come_from_the_runtime():
+    message = problems_of(lambda d: d["simulation"].update(control_rate=-3))
+    assert "simulation.control_rate: must be > 0" in message
+
+
+def test_disturbance_rules():
+    message = problems_of(lambda d: d["disturbances"].update(random_torque="-5 ozf*in"))
+    assert "disturbances.random_torque: must be >= 0" in message
+
+
+@pytest.mark.parametrize("mutate, expected", [
+    (lambda d: d["runs"][0]["gains"].update(kp=1),
+     "runs['Law I'].gains.kp: not a gain of law 'lyapunov_regulator' (its gains: g1, g2, g3)"),
+    (lambda d: d["runs"][1].pop("reference"),
+     "runs['Law II'].reference: required by law 'lyapunov_tracker'"),
+    (lambda d: d["runs"][0].update(reference={"shape": "bang_bang", "u_max": 1}),
+     "runs['Law I'].reference: law 'lyapunov_regulator' tracks no reference"),
+    (lambda d: d["runs"][1]["reference"].update(shape="bang_bang"),
+     "runs['Law II'].reference.alpha: not a parameter of shape 'bang_bang'"),
+    (lambda d: d["runs"][1]["reference"].update(duration="3 s"),
+     "runs['Law II'].reference: give exactly 2 of {u_max, duration, alpha}"),
+    (lambda d: d["runs"][1].update(law="unknown"),
+     "runs['Law II'].law: Input should be 'lyapunov_regulator', 'lyapunov_tracker' or 'pd'"),
+    (lambda d: d["runs"].append({"label": "PD", "law": "pd"}),
+     "runs['PD'].gains.kp: required by law 'pd' (or give poles)"),
+    (lambda d: d["runs"].append({"label": "PD", "law": "pd", "poles": {
+        "natural_frequency": "0.4 kg", "damping_ratio": 0.9}}),
+     "runs['PD'].poles.natural_frequency: incompatible units"),
+    (lambda d: d["runs"].append({"label": "PD", "law": "pd", "poles": {
+        "natural_frequency": "0.06 Hz", "damping_ratio": -0.9}}),
+     "runs['PD'].poles.damping_ratio: must be >= 0"),
+    (lambda d: d["runs"].append(dict(d["runs"][0])),
+     "runs: duplicate label 'Law I'"),
+], ids=["foreign-gain", "missing-reference", "extra-reference", "shape-parameter",
+        "overdetermined-shape", "unknown-law", "pd-without-gains", "poles-in-kg",
+        "negative-damping", "duplicate-label"])
+def test_run_rules(mutate, expected):
+    assert expected in problems_of(mutate)
+
+
+def test_unknown_case():
+    assert "case: unknown case 'nope'; known: ['tamu']" in problems_of(
+        lambda d: d.update(case="nope"))
+
+
+def test_model_option_given_twice():
+    assert "model.n_modes: also given in case_overrides" in problems_of(
+        lambda d: d["case_overrides"].update(n_modes=3))
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("name: [unclosed", "yaml: "),
+    ("- just\n- a list\n", "scenario: must be a YAML mapping"),
+    ("missing.yaml", "scenario: cannot read 'missing.yaml'"),
+])
+def test_unreadable_scenarios(text, expected):
+    with pytest.raises(ScenarioError, match="invalid scenario") as info:
+        load_scenario(text)
+    assert expected in str(info.value)
+
+
+def test_all_problems_are_collected():
+    def mutate(d):
+        d["maneuver"]["angle"] = "40 kg"
+        d["simulation"]["integration_step"] = "1 s"
+        d["runs"][0]["gains"]["g1"] = -1
+
+    message = problems_of(mutate)
+    assert "invalid scenario (2 problems)" in message  # schema stage stops before the gains
+    data = small_data()
+    data["runs"][0]["gains"]["g1"] = -1
+    data["runs"][1]["gains"]["g3"] = -5
+    with pytest.raises(ScenarioError) as info:
+        prepare_scenario(load_scenario(yaml.safe_dump(data)))
+    assert len(info.value.problems) == 2
+
+
+def test_nothing_runs_when_any_run_is_invalid(monkeypatch):
+    calls = []
+    monkeypatch.setattr(scenario_module, "simulate", lambda *a, **k: calls.append(a))
+    data = small_data()
+    data["runs"][1]["gains"]["g1"] = -1
+    with pytest.raises(ScenarioError):
+        run_scenario(load_scenario(yaml.safe_dump(data)))
+    assert calls == []
