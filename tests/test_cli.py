@@ -41,6 +41,9 @@ def test_modes_json():
     assert data["unconstrained_hz"] == sorted(data["unconstrained_hz"])
     # a light hub: each hub-free frequency lies above the clamped one
     assert all(f > c for f, c in zip(data["unconstrained_hz"], data["constrained_hz"]))
+    # the 4-mode model's first frequency is within 0.1 % of the exact one, and above it
+    exact, model = data["exact_unconstrained_hz"][0], data["unconstrained_hz"][0]
+    assert exact <= model < 1.001 * exact
     budget = data["inertia_budget_kg_m2"]
     assert budget["hub"] == pytest.approx(to_si("30 ozf*in*s**2", "kg*m**2"))
     assert budget["total_model"] == pytest.approx(budget["hub"] + budget["beams"]

@@ -19,6 +19,7 @@ from flexsat.cases import CASES, get_case
 from flexsat.cases.tamu import inertia_budget
 from flexsat.report import metric_rows, write_report
 from flexsat.scenario import ScenarioError, default_scenario, load_scenario, run_scenario
+from flexsat.structures.beam import hub_free_frequencies
 from flexsat.units import Q_
 
 app = typer.Typer(
@@ -77,17 +78,21 @@ def cases() -> None:
 
 
 def _modes_data(case_name: str, n: int, overrides: dict) -> dict:
-    """Frequencies (Hz) of the first ``n`` elastic modes and the inertia budget (kg m²)."""
+    """Frequencies (Hz) of the first ``n`` elastic modes, exact (distributed model) and of the
+    assumed-modes model, and the inertia budget (kg m²)."""
     case = get_case(case_name).builder(**overrides)
     model = case.model()
     if n > model.n_modes:
         raise ValueError(f"--modes: the model has {model.n_modes} modes; "
                          f"raise it with --set n_modes={n}")
     hz = 1 / (2 * np.pi)
+    p = model.params
+    exact = hub_free_frequencies(p.beam(), p.hub_radius, p.hub_inertia, p.n_appendages, n)
     return {
         "case": case_name,
         "overrides": overrides,
         "model_modes": model.n_modes,
+        "exact_unconstrained_hz": (hz * exact).tolist(),
         "unconstrained_hz": (hz * model.frequencies()[:n]).tolist(),
         "constrained_hz": (hz * model.frequencies(constrained=True)[:n]).tolist(),
         "inertia_budget_kg_m2": inertia_budget(case),
@@ -96,10 +101,12 @@ def _modes_data(case_name: str, n: int, overrides: dict) -> dict:
 
 def _print_modes(data: dict) -> None:
     modes = Table(title=f"{data['case']}: natural frequencies ({data['model_modes']}-mode model)")
-    for column in ("mode", "unconstrained, hub free (Hz)", "constrained, hub clamped (Hz)"):
+    for column in ("mode", "hub free, exact (Hz)", "hub free, model (Hz)",
+                   "hub clamped, exact = model (Hz)"):
         modes.add_column(column, justify="right")
-    for i, (free, clamped) in enumerate(zip(data["unconstrained_hz"], data["constrained_hz"]), 1):
-        modes.add_row(str(i), f"{free:.5g}", f"{clamped:.5g}")
+    rows = zip(data["exact_unconstrained_hz"], data["unconstrained_hz"], data["constrained_hz"])
+    for i, (exact, free, clamped) in enumerate(rows, 1):
+        modes.add_row(str(i), f"{exact:.6g}", f"{free:.6g}", f"{clamped:.6g}")
     budget = Table(title="inertia budget")
     budget.add_column("part")
     for column in ("kg m²", "oz-in-s²"):

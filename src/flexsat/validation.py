@@ -6,7 +6,15 @@ import numpy as np
 
 
 def require_finite(value, field: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
+    if isinstance(value, (str, bytes)):
+        raise ValueError(
+            f"{field}: must be a number in SI units, got the string {value!r} (quantities with "
+            "units are converted at the boundary: flexsat.units.to_si)"
+        )
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{field}: must be a number, got {value!r}") from None
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{field}: must be finite (no NaN or inf), got {value!r}")
     return arr
@@ -24,3 +32,13 @@ def require_nonneg(value, field: str) -> np.ndarray:
     if np.any(arr < 0):
         raise ValueError(f"{field}: must be >= 0, got {value!r}")
     return arr
+
+
+def require_count(value, field: str) -> int:
+    """A positive integer (bools and fractional numbers refused)."""
+    if isinstance(value, bool):
+        raise ValueError(f"{field}: must be a positive integer, got {value!r}")
+    number = float(require_finite(value, field))
+    if number != int(number) or number < 1:
+        raise ValueError(f"{field}: must be a positive integer, got {value!r}")
+    return int(number)

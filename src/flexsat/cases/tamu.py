@@ -23,7 +23,7 @@ from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.maneuvers import SmoothBangBang
 from flexsat.sim import BearingFriction, RandomTorque, Sensors, SimConfig, TorqueActuator
 from flexsat.units import to_si
-from flexsat.validation import require_finite, require_nonneg, require_positive
+from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
 
 SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 3 Table 1 (L1302-L1323) and §V"
 
@@ -153,13 +153,6 @@ class TamuCase:
 _MAY_BE_ZERO = ("tip_mass", "tip_inertia", "hub_radius", "damping")
 
 
-def _count(raw, name: str) -> int:
-    value = float(require_finite(raw, name))
-    if value != int(value) or value < 1:
-        raise ValueError(f"{name}: must be a positive integer, got {raw!r}")
-    return int(value)
-
-
 def _flag(raw, name: str) -> bool:
     if isinstance(raw, bool):
         return raw
@@ -182,7 +175,7 @@ def tamu(**overrides) -> TamuCase:
     for name, (unit, default) in _INPUTS.items():
         raw = overrides.get(name, default)
         if name in ("n_appendages", "n_modes"):
-            values[name] = _count(raw, name)
+            values[name] = require_count(raw, name)
         elif name == "stiffening":
             values[name] = _flag(raw, name)
         else:

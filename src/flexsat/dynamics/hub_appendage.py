@@ -37,7 +37,7 @@ from functools import cached_property
 import numpy as np
 
 from flexsat.structures.beam import TipMassCantilever
-from flexsat.validation import require_finite, require_nonneg, require_positive
+from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
 
 
 @dataclass(frozen=True)
@@ -81,8 +81,7 @@ class HubAppendageParams:
             require_positive(getattr(self, name), name)
         for name in ("hub_radius", "tip_mass", "tip_inertia"):
             require_nonneg(getattr(self, name), name)
-        if int(self.n_appendages) != self.n_appendages or self.n_appendages < 1:
-            raise ValueError(f"n_appendages: must be a positive integer, got {self.n_appendages!r}")
+        require_count(self.n_appendages, "n_appendages")
         zeta = np.atleast_1d(np.asarray(self.damping, dtype=float))
         require_finite(zeta, "damping")
         if np.any(zeta < 0):
@@ -128,8 +127,7 @@ class HubAppendage:
     _quad: dict = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        if int(self.n_modes) != self.n_modes or self.n_modes < 1:
-            raise ValueError(f"n_modes: must be a positive integer, got {self.n_modes!r}")
+        require_count(self.n_modes, "n_modes")
         zeta = np.atleast_1d(np.asarray(self.params.damping, dtype=float))
         if zeta.size not in (1, self.n_modes):
             raise ValueError(

@@ -19,7 +19,7 @@ from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
 from flexsat.sim.integrators import ExponentialStepper
 from flexsat.sim.metrics import METRIC_UNITS, maneuver_metrics
 from flexsat.sim.sensors import Sensors, SensorState
-from flexsat.validation import require_finite, require_positive
+from flexsat.validation import require_count, require_finite, require_positive
 
 N_NOISE_CHANNELS = 3  # gyro, strain gauge, random torque — fixed so streams never shift
 
@@ -53,8 +53,7 @@ class SimConfig:
         require_positive(self.duration, "duration")
         require_positive(self.control_rate, "control_rate")
         require_positive(self.settling_band, "settling_band")
-        if int(self.substeps) != self.substeps or self.substeps < 1:
-            raise ValueError(f"substeps: must be a positive integer, got {self.substeps!r}")
+        require_count(self.substeps, "substeps")
 
     @property
     def dt(self) -> float:

@@ -87,6 +87,8 @@ from numbers import Integral, Real
 import numpy as np
 from scipy.optimize import brentq
 
+from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+
 __all__ = [
     "CLAMPED_FREE_BETA_L",
     "FREE_FREE_BETA_L",
@@ -109,32 +111,15 @@ _MAX_DEPTH = 8  # refinement levels (interval shrinks by 8**8 ≈ 1.7e7)
 # ------------------------------------------------------------------------------------------------
 # input checks
 def _real(value, field: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (Real, np.floating, np.integer)):
-        raise ValueError(f"{field}: must be a real number, got {value!r}")
-    v = float(value)
-    if not math.isfinite(v):
-        raise ValueError(f"{field}: must be finite, got {value!r}")
-    return v
+    return float(require_finite(value, field))
 
 
 def _positive(value, field: str) -> float:
-    v = _real(value, field)
-    if v <= 0.0:
-        raise ValueError(f"{field}: must be > 0, got {value!r}")
-    return v
+    return float(require_positive(value, field))
 
 
 def _nonneg(value, field: str) -> float:
-    v = _real(value, field)
-    if v < 0.0:
-        raise ValueError(f"{field}: must be >= 0, got {value!r}")
-    return v
-
-
-def _count(value, field: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (Integral, np.integer)) or value < 1:
-        raise ValueError(f"{field}: must be an integer >= 1, got {value!r}")
-    return int(value)
+    return float(require_nonneg(value, field))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -185,7 +170,7 @@ def _hub_matrix(z, mu, iota, r, eta):
 
 # ------------------------------------------------------------------------------------------------
 # Wittrick–Williams root count
-def _clamped_clamped_count(z):
+def _clamped_clampedrequire_count(z):
     """Number of roots of cos z cosh z = 1 in (0, z) (clamped–clamped beam frequencies below).
 
     J0 = i − (1 − (−1)^i sgn(1 − cos z cosh z)) / 2 with i = ⌊z/π⌋; the sign is evaluated as
@@ -231,20 +216,20 @@ def _element_dynamic_stiffness(z):
     return 0.5 * (K + np.swapaxes(K, -1, -2))
 
 
-def _negative_count(K):
+def _negativerequire_count(K):
     return (np.linalg.eigvalsh(K) < 0).sum(-1)
 
 
-def _cantilever_count(z, mu, iota):
+def _cantileverrequire_count(z, mu, iota):
     """Number of tip-mass cantilever frequencies with βL < z (Wittrick–Williams)."""
     z = np.asarray(z, dtype=float)
     K = _element_dynamic_stiffness(z)[..., 2:, 2:].copy()
     K[..., 0, 0] -= mu * z
     K[..., 1, 1] -= iota * z**3
-    return _clamped_clamped_count(z) + _negative_count(K)
+    return _clamped_clampedrequire_count(z) + _negativerequire_count(K)
 
 
-def _hub_count(z, mu, iota, r, eta):
+def _hubrequire_count(z, mu, iota, r, eta):
     """Number of free-hub frequencies with βL < z, rigid-body mode included (Wittrick–Williams).
 
     Degrees of freedom (θ/β, w(L), w'(L)/β); the root is slaved to the hub by
@@ -261,7 +246,7 @@ def _hub_count(z, mu, iota, r, eta):
     T[..., 3, 2] = 1.0
     K3 = np.swapaxes(T, -1, -2) @ K @ T
     K3[..., 0, 0] -= eta * z**3
-    return _clamped_clamped_count(z) + _negative_count(0.5 * (K3 + np.swapaxes(K3, -1, -2)))
+    return _clamped_clampedrequire_count(z) + _negativerequire_count(0.5 * (K3 + np.swapaxes(K3, -1, -2)))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -461,14 +446,14 @@ class TipMassCantilever:
         return self.tip_inertia / (self.rho * self.length**3)
 
     def _beta_L(self, k) -> np.ndarray:
-        k = _count(k, "k")
+        k = require_count(k, "k")
         mu, iota = self._mu, self._iota
         z0 = 1e-3
-        while _cantilever_count(np.array([z0]), mu, iota)[0] > 0 and z0 > 1e-12:
+        while _cantileverrequire_count(np.array([z0]), mu, iota)[0] > 0 and z0 > 1e-12:
             z0 /= 10  # only for extreme tip mass, where β_1 L -> (3/μ)^(1/4)
         return _find_roots(
             lambda z: _cantilever_matrix(z, mu, iota),
-            lambda z: _cantilever_count(z, mu, iota),
+            lambda z: _cantileverrequire_count(z, mu, iota),
             k,
             z0,
         )
@@ -557,14 +542,14 @@ def hub_free_frequencies(
         raise ValueError(f"beam: must be a TipMassCantilever, got {type(beam).__name__}")
     l0 = _nonneg(hub_radius, "hub_radius")
     I_h = _positive(hub_inertia, "hub_inertia")
-    n = _count(n_appendages, "n_appendages")
-    k = _count(k, "k")
+    n = require_count(n_appendages, "n_appendages")
+    k = require_count(k, "k")
     L, rho = beam.length, beam.rho
     mu, iota, r, eta = beam._mu, beam._iota, l0 / L, I_h / (n * rho * L**3)
     z0 = 0.5 * beam._beta_L(1)[0]
 
     def count(z):
-        return _hub_count(z, mu, iota, r, eta) - 1  # the rigid-body mode lies below z0
+        return _hubrequire_count(z, mu, iota, r, eta) - 1  # the rigid-body mode lies below z0
 
     z = _find_roots(lambda z: _hub_matrix(z, mu, iota, r, eta), count, k, z0)
     return (z / L) ** 2 * math.sqrt(beam.EI / rho)
