@@ -52,7 +52,7 @@ def test_default_scenario_loads_in_si():
     assert s.runs[1].reference.shape == "smooth_bang_bang"
     config = s.sim_config()
     assert config.control_rate == 75.0
-    assert config.substeps == 8  # ceil(13.33 ms / 1.667 ms)
+    assert config.substeps == 4  # ceil(13.33 ms / 3.34 ms)
     assert config.friction.coulomb == pytest.approx(20 * OZ_IN)
     assert config.sensors.rate == "ls_filter"
 

@@ -8,7 +8,7 @@ or more closed-loop runs (control law, gains, optional shaped reference)::
     case_overrides: {hub_inertia: "50 ozf*in*s**2"}
     model: {n_modes: 10, stiffening: false}
     maneuver: {angle: "40 deg"}
-    simulation: {duration: "15 s", control_rate: "75 Hz", integration_step: "1.667 ms"}
+    simulation: {duration: "15 s", control_rate: "75 Hz", integration_step: "3.34 ms"}
     actuator: {saturation: "400 ozf*in"}
     runs:
       - {label: "Law I", law: lyapunov_regulator, gains: {g1: "600 ozf*in/rad", g2: 5.6}}

@@ -43,8 +43,23 @@ class Controller(ABC):
     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """Return the torque command (N m, shape (n_cases,)) and the next internal state."""
 
+    def tabulate_reference(self, times: np.ndarray) -> None:
+        """Evaluate the reference once on the sample grid; :meth:`reference_at` then looks the
+        samples up instead of re-evaluating the shape (the simulator calls this before its time
+        loop; the shapes are analytic, so the table holds exactly what a direct call returns)."""
+        self._table = None
+        if self.reference is not None:
+            times = np.asarray(times, float)
+            r = self.reference(times[:, None])
+            self._table = (times, r.theta, r.theta_dot, r.theta_ddot, r.u)
+
     def reference_at(self, t: float):
         """(θ_ref, θ'_ref, θ''_ref, u_ref) at time t; a step to the target when no reference."""
+        table = getattr(self, "_table", None)
+        if table is not None:
+            k = int(np.searchsorted(table[0], t))
+            if k < len(table[0]) and table[0][k] == t:
+                return table[1][k], table[2][k], table[3][k], table[4][k]
         if self.reference is None:
             z = np.zeros(np.shape(self.target))
             return np.asarray(self.target, float) + z, z, z, z

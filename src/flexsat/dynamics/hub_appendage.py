@@ -326,22 +326,25 @@ class HubAppendage:
     def energy(self, x: np.ndarray) -> np.ndarray:
         """Total mechanical energy E (Att. 3 Eq. 7), J; includes the stiffening term if on."""
         pos, vel = self.split(x)
-        E = 0.5 * np.einsum("...i,ij,...j->...", vel, self.mass_matrix, vel)
-        E = E + 0.5 * np.einsum("...i,ij,...j->...", pos, self.stiffness_matrix, pos)
+        # two-operand einsums: the three-operand form is several times slower on batches
+        E = 0.5 * np.einsum("...i,...i->...", vel @ self.mass_matrix, vel)
+        E = E + 0.5 * np.einsum("...i,...i->...", pos @ self.stiffness_matrix, pos)
         if self.stiffening:
             q = pos[..., 1:]
             E = E + 0.5 * vel[..., 0] ** 2 * np.einsum("...i,ij,...j->...", q, self._quad["G"], q)
         return E
 
-    def vibration_energy(self, x: np.ndarray) -> np.ndarray:
+    def vibration_energy(self, x: np.ndarray, energy=None) -> np.ndarray:
         """Energy in the elastic modes of the free vehicle, E − h² / (2 I_tot), J.
 
         h = (M x')_θ is the angular momentum; the rigid mode is M-orthogonal to the elastic ones,
-        so its kinetic energy is exactly h² / (2 I_tot) and the rest is vibration.
+        so its kinetic energy is exactly h² / (2 I_tot) and the rest is vibration. Pass
+        ``energy`` = E(x) when it is already known.
         """
         _, vel = self.split(x)
         h = vel @ self.mass_matrix[0]
-        return self.energy(x) - 0.5 * h**2 / self.params.total_inertia
+        E = self.energy(x) if energy is None else energy
+        return E - 0.5 * h**2 / self.params.total_inertia
 
     def lyapunov(self, x: np.ndarray, theta_f, g1, g3) -> np.ndarray:
         """Error-energy Lyapunov function of Att. 3 Eq. 8 (normalised a1 = 1), J.

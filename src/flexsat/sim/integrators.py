@@ -56,14 +56,15 @@ class ExponentialStepper:
         E, P1, P2 = phi_matrices(np.asarray(A, float), dt / substeps)
         return cls(E.T.copy(), P1 @ Bu, (P1 @ Bf).T.copy(), (P2 @ Bf).T.copy(), substeps)
 
-    def linear(self, x: np.ndarray, w: np.ndarray) -> np.ndarray:
-        """Exact zero-order-hold step of the linear part (one substep)."""
-        return x @ self.Et + np.multiply.outer(w, self.P1u)
-
     def step(self, x: np.ndarray, w: np.ndarray, force=None) -> np.ndarray:
-        """Advance one control period with held input w (n_cases,) and force N(x, w)."""
+        """Advance one control period with held input w (n_cases,) and force N(x, w).
+
+        Each substep is the exact zero-order-hold step of the linear part, plus the ETD2RK
+        correction when a force is given.
+        """
+        drive = np.multiply.outer(w, self.P1u)  # held input: the same for every substep
         for _ in range(self.substeps):
-            base = self.linear(x, w)
+            base = x @ self.Et + drive
             if force is None:
                 x = base
                 continue
