@@ -1,8 +1,6 @@
 """Claims of the sampled-data engine: exact linear propagation, stated nonlinear accuracy,
 batch = per-case, reproducible noise."""
 
-import math
-
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -10,24 +8,10 @@ from scipy.integrate import solve_ivp
 from flexsat.control import PD
 from flexsat.dynamics.hub_appendage import HubAppendage
 from flexsat.sim import BearingFriction, Impulses, SimConfig, simulate
-from flexsat.sim.integrators import phi_matrices
 from flexsat.units import to_si
 
 G1 = to_si("3000 ozf*in/rad", "N*m/rad")
 G2 = to_si("800 ozf*in*s/rad", "N*m*s/rad")
-
-
-def test_phi_matrices_match_their_series():
-    """Van Loan block exponential = (e^{hA}, h φ1, h φ2), checked against the Taylor series."""
-    rng = np.random.default_rng(0)
-    A = rng.standard_normal((5, 5))
-    A[:, 0] = 0.0  # singular, like the rigid-body mode
-    h = 0.1
-    E, P1, P2 = phi_matrices(A, h)
-    S1 = sum(np.linalg.matrix_power(h * A, j) / math.factorial(j + 1) for j in range(25))
-    S2 = sum(np.linalg.matrix_power(h * A, j) / math.factorial(j + 2) for j in range(25))
-    assert np.allclose(P1, h * S1, rtol=1e-13, atol=1e-15)
-    assert np.allclose(P2, h * S2, rtol=1e-13, atol=1e-15)
 
 
 def test_energy_is_conserved_over_60_s(tamu_case):
