@@ -202,3 +202,37 @@ def test_bad_parameters_name_the_field():
             HubAppendageParams(**{**good, field: bad})
     with pytest.raises(ValueError, match="damping: give one ratio or one per mode"):
         HubAppendage(HubAppendageParams(**good, damping=(0.1, 0.2)), n_modes=3)
+
+
+def test_exact_reference_tracking_dissipates_the_tracking_lyapunov_function():
+    """Att. 3 Eqs. 18-20: with (·)_r the exact flexible open-loop response to u_ref, the law
+    u = u_ref − [g1 (θ − θ_r) + g2 (θ' − θ'_r) + g3 Δ(l0 S0 − M0)] gives U' = −g2 (θ' − θ'_r)²
+    for the tracking function U(x − x_r) of Eq. 18 (undamped model, rtol 1e-11 integration)."""
+    from flexsat.maneuvers import SmoothBangBang
+
+    p = HubAppendageParams(0.35, 4, 0.14, 1.16, 23.6, 1.3, 1.7, 0.0, damping=0.0)
+    model = HubAppendage(p, n_modes=5)
+    A, Bu, _ = model.state_space
+    g1, g2, g3 = 6.0, 4.0, 0.8
+    ref = SmoothBangBang(0.7, p.total_inertia, u_max=2.0, alpha=0.2)
+    r_u = model.outputs(np.zeros(model.nx), 1.0)["root_torque"]
+    n = model.nx
+
+    def rhs(t, z):
+        x, xr = z[:n], z[n : 2 * n]
+        u_ref = float(ref(t).u)
+        e = x - xr
+        # Δ(l0 S0 − M0) = r(e, u − u_ref): solve the algebraic loop through the accelerations
+        c = -(g1 * e[0] + g2 * e[model.ndof])
+        du = (c - g3 * model.outputs(e, 0.0)["root_torque"]) / (1 + g3 * r_u)
+        u = u_ref + du
+        return np.concatenate([A @ x + Bu * u, A @ xr + Bu * u_ref, [g2 * e[model.ndof] ** 2]])
+
+    x0 = np.zeros(model.nx)
+    x0[model.ndof] = 0.05  # start off the reference
+    sol = solve_ivp(rhs, (0, 6), np.concatenate([x0, np.zeros(n), [0.0]]), method="DOP853",
+                    rtol=1e-11, atol=1e-13, max_step=0.05)
+    z = sol.y[:, -1]
+    U = lambda e: model.lyapunov(e, 0.0, g1, g3)  # noqa: E731
+    assert U(z[:n] - z[n : 2 * n]) - U(x0) == pytest.approx(-z[-1], rel=1e-7)
+    assert z[-1] > 0.5 * U(x0)
