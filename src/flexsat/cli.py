@@ -16,10 +16,8 @@ from rich.table import Table
 from rich.text import Text
 
 from flexsat.cases import CASES, get_case
-from flexsat.cases.tamu import inertia_budget
 from flexsat.report import metric_rows, write_report
 from flexsat.scenario import ScenarioError, default_scenario, load_scenario, run_scenario
-from flexsat.structures.beam import hub_free_frequencies
 from flexsat.units import Q_
 
 app = typer.Typer(
@@ -78,42 +76,39 @@ def cases() -> None:
 
 
 def _modes_data(case_name: str, n: int, overrides: dict) -> dict:
-    """Frequencies (Hz) of the first ``n`` elastic modes, exact (distributed model) and of the
-    assumed-modes model, and the inertia budget (kg m²)."""
+    """The case's first ``n`` elastic frequencies (Hz), with its mode descriptions and further
+    tables where it has them (see :mod:`flexsat.cases`)."""
     case = get_case(case_name).builder(**overrides)
-    model = case.model()
-    if n > model.n_modes:
-        raise ValueError(f"--modes: the model has {model.n_modes} modes; "
-                         f"raise it with --set n_modes={n}")
-    hz = 1 / (2 * np.pi)
-    p = model.params
-    exact = hub_free_frequencies(p.beam(), p.hub_radius, p.hub_inertia, p.n_appendages, n)
-    return {
-        "case": case_name,
-        "overrides": overrides,
-        "model_modes": model.n_modes,
-        "exact_unconstrained_hz": (hz * exact).tolist(),
-        "unconstrained_hz": (hz * model.frequencies()[:n]).tolist(),
-        "constrained_hz": (hz * model.frequencies(constrained=True)[:n]).tolist(),
-        "inertia_budget_kg_m2": inertia_budget(case),
-    }
+    data = {"case": case_name, "overrides": overrides,
+            "frequencies_hz": np.asarray(case.frequencies_hz(n)).tolist()}
+    if hasattr(case, "mode_descriptions"):
+        data["descriptions"] = list(case.mode_descriptions(n))
+    if hasattr(case, "mode_details"):
+        data.update(case.mode_details(n))
+    return data
 
 
 def _print_modes(data: dict) -> None:
-    modes = Table(title=f"{data['case']}: natural frequencies ({data['model_modes']}-mode model)")
-    for column in ("mode", "hub free, exact (Hz)", "hub free, model (Hz)",
-                   "hub clamped, exact = model (Hz)"):
-        modes.add_column(column, justify="right")
-    rows = zip(data["exact_unconstrained_hz"], data["unconstrained_hz"], data["constrained_hz"])
-    for i, (exact, free, clamped) in enumerate(rows, 1):
-        modes.add_row(str(i), f"{exact:.6g}", f"{free:.6g}", f"{clamped:.6g}")
-    budget = Table(title="inertia budget")
-    budget.add_column("part")
-    for column in ("kg m²", "oz-in-s²"):
-        budget.add_column(column, justify="right")
-    for part, value in data["inertia_budget_kg_m2"].items():
-        budget.add_row(part, f"{value:.5g}", f"{Q_(value, 'kg*m**2').to('ozf*in*s**2').m:.5g}")
-    console.print(modes, budget)
+    columns = {"frequencies_hz": "frequency (Hz)", "exact_unconstrained_hz": "exact, hub free (Hz)",
+               "constrained_hz": "exact, hub clamped (Hz)", "descriptions": "description"}
+    present = [key for key in columns if key in data]
+    modes = Table(title=f"{data['case']}: natural frequencies")
+    modes.add_column("mode", justify="right")
+    for key in present:
+        modes.add_column(columns[key], justify="left" if key == "descriptions" else "right")
+    for i in range(len(data["frequencies_hz"])):
+        cells = [data[k][i] for k in present]
+        modes.add_row(str(i + 1), *(c if isinstance(c, str) else f"{c:.6g}" for c in cells))
+    console.print(modes)
+    if "inertia_budget_kg_m2" in data:
+        budget = Table(title="inertia budget")
+        budget.add_column("part")
+        for column in ("kg m²", "oz-in-s²"):
+            budget.add_column(column, justify="right")
+        for part, value in data["inertia_budget_kg_m2"].items():
+            budget.add_row(part, f"{value:.5g}",
+                           f"{Q_(value, 'kg*m**2').to('ozf*in*s**2').m:.5g}")
+        console.print(budget)
 
 
 @app.command()

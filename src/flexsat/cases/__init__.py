@@ -1,4 +1,9 @@
-"""Benchmark library: one module per published system, parameters entered as published."""
+"""Benchmark library: one module per published system, parameters entered as published.
+
+Every case builder returns an object with ``frequencies_hz(n_modes)`` (the first elastic
+frequencies of its structural model); it may add ``mode_descriptions(n_modes)`` (one phrase
+per mode) and ``mode_details(n_modes)`` (further JSON-ready tables for ``flexsat modes``).
+"""
 
 from __future__ import annotations
 

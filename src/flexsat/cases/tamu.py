@@ -18,9 +18,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from flexsat.control import LyapunovRegulator, LyapunovTracker
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.maneuvers import SmoothBangBang
+from flexsat.structures.beam import hub_free_frequencies
 from flexsat.sim import BearingFriction, RandomTorque, Sensors, SimConfig, TorqueActuator
 from flexsat.units import to_si
 from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
@@ -103,6 +106,27 @@ class TamuCase:
 
     def model(self) -> HubAppendage:
         return HubAppendage(self.params, n_modes=int(self.n_modes), stiffening=bool(self.stiffening))
+
+    # -- the case protocol (flexsat modes) ---------------------------------------------------
+    def frequencies_hz(self, n_modes: int) -> np.ndarray:
+        """First ``n_modes`` elastic frequencies of the hub-free model, Hz."""
+        model = self.model()
+        if n_modes > model.n_modes:
+            raise ValueError(f"n_modes: the model has {model.n_modes} modes; raise n_modes "
+                             f"to at least {n_modes}")
+        return model.frequencies()[:n_modes] / (2 * np.pi)
+
+    def mode_details(self, n_modes: int) -> dict:
+        """Exact (distributed-parameter) hub-free and hub-clamped frequencies (Hz) and the
+        inertia budget (kg m²), for ``flexsat modes``."""
+        p = self.params
+        exact = hub_free_frequencies(p.beam(), p.hub_radius, p.hub_inertia, p.n_appendages,
+                                     n_modes)
+        return {
+            "exact_unconstrained_hz": (exact / (2 * np.pi)).tolist(),
+            "constrained_hz": (p.beam().frequencies(n_modes) / (2 * np.pi)).tolist(),
+            "inertia_budget_kg_m2": inertia_budget(self),
+        }
 
     # -- the experiment ------------------------------------------------------------------------
     @property
