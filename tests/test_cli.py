@@ -24,11 +24,14 @@ def write_scenario(path, **simulation) -> str:
     return str(path)
 
 
-def test_cases_lists_tamu_with_its_source():
-    result = runner.invoke(app, ["cases"])
+def test_cases_lists_every_case_with_its_source():
+    from flexsat.cases import CASES
+
+    result = runner.invoke(app, ["cases"], env={"COLUMNS": "250"})
     assert result.exit_code == 0
-    assert "tamu" in result.stdout
-    assert "Junkins" in result.stdout
+    for info in CASES.values():
+        assert info.name in result.stdout
+        assert info.source[:40] in result.stdout
 
 
 def test_modes_json():

@@ -62,5 +62,5 @@ def test_overrides_accept_units_and_reject_unknown_names():
 
 def test_case_registry():
     assert "tamu" in CASES and "Table 1" in CASES["tamu"].source
-    with pytest.raises(ValueError, match=r"^case: unknown case 'nps'"):
-        get_case("nps")
+    with pytest.raises(ValueError, match=r"^case: unknown case 'hst'"):
+        get_case("hst")

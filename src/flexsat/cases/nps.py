@@ -1,0 +1,438 @@
+"""NPS Flexible Spacecraft Simulator (Hailey, Sortun & Agrawal), pitch axis.
+
+Seed 001_79dfdfba94ed8e0d.txt (curated in ../shared/spec/seed001.md §1–§2): a rigid central body
+(hub) on an air bearing carrying a cantilevered flexible appendage, "a reflector supported by a
+flexible astromast" (L21), planar rotation θ about the vertical z axis. The paper prints only:
+fundamental cantilever frequency 0.14 Hz (L21), six cantilever modes with 0.4 % damping (L181),
+and the rigid-body PD design ω_n = 0.06 Hz, ζ = 0.9 → k = 1.3985 N·m/rad, kτ = 6.6773 N·m·s/rad
+(L208–L220). Its finite-element model (GIFTS), the geometry and the inertias are not published.
+
+Model used here (every dimension a parameter, documented in docs/nps.md):
+
+- the astromast is an equivalent uniform Euler–Bernoulli beam (bending stiffness EI, mass per
+  length ρ) along +x from the attachment point at radius ``attachment_radius`` on the hub; it is
+  axially rigid (the ux dofs are constrained: a straight radial mast's axial motion couples
+  neither with bending nor with pitch, since y_F = 0 in the coupling D_i of Eq. 10);
+- the reflector is a lumped mass with rotary inertia about z at the mast tip;
+- the mast EI is **solved** (Brent's method on the finite-element frequency) so that the first
+  cantilever frequency is the published 0.14 Hz;
+- the hub inertia is solved so that the design inertia implied by the PD gains, k/ω_n² ≈ 9.84
+  kg·m² (notes §1.3), is either the cantilevered inertia I⁰zz = I_zz − Σ D_i² over the six modes
+  (``inertia_convention="cantilevered"``, default, as the issue states and as the paper's rigid
+  profiles Eqs. 25, 28, 30 use I⁰zz) or the total rigid inertia I_zz (``"total"``).
+
+Hybrid coordinates (Eqs. 10, 16–18) about the hub centre (the rotation axis, origin):
+M = [[I_zz, Dᵀ], [D, I]], K = diag(0, ω²), C = diag(0, 2ζω), with the coupling
+D_i = Φ_iᵀ M R_θ computed with the *full* appendage mass matrix (the consistent-mass coupling of
+the clamped attachment node included), so that with every finite-element mode the hybrid model
+is exactly the finite-element model with a free hub.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+from scipy.optimize import brentq
+
+from flexsat.cases.agrawal_bang import cantilevered_modal_model
+from flexsat.control import PD
+from flexsat.structures.beam import TipMassCantilever, hub_free_frequencies
+from flexsat.structures.fem import Structure
+from flexsat.structures.modal_model import ModalModel, hub_appendage_matrices
+from flexsat.structures.sections import Material, Section
+from flexsat.units import to_si
+from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+
+SOURCE = "seed 001_79dfdfba94ed8e0d.txt (Hailey, Sortun & Agrawal, NPS FSS), L21, L181, L208-L220"
+
+#: values printed in seed 001, exactly as printed
+PUBLISHED = {
+    "cantilever_frequency": "0.14 Hz",  # L21 "fundamental cantilever frequency"
+    "n_modes": 6,  # L181 "first six cantilever modes"
+    "damping": "0.4 percent",  # L181 "0.4 percent critical damping", all modes
+    "controller_frequency": "0.06 Hz",  # L212 ω_n
+    "controller_damping": 0.9,  # L208 ξ
+    "position_gain": "1.3985 N*m/rad",  # L218 k
+    "rate_gain": "6.6773 N*m*s/rad",  # L220 kτ
+    "pd_slew_angle": "60 deg",  # L204
+    "sinusoid_period": "10 s",  # L290
+    "lqg_slew_angle": "30 deg",  # L375
+}
+
+#: I = k / ω_n² = 9.84012 and kτ / (2 ζ ω_n) = 9.84005 kg m² (notes §1.3 [DERIVED]); 9.84
+#: reproduces both printed gains to their printed digits.
+DESIGN_INERTIA = "9.84 kg*m**2"
+
+INERTIA_CONVENTIONS = ("cantilevered", "total")
+
+# (field, SI unit, default as written); unit None: a count, a flag or a choice
+_INPUTS = {
+    "cantilever_frequency": ("Hz", PUBLISHED["cantilever_frequency"]),
+    "damping": ("", PUBLISHED["damping"]),
+    "n_modes": (None, PUBLISHED["n_modes"]),
+    "design_inertia": ("kg*m**2", DESIGN_INERTIA),
+    "inertia_convention": (None, "cantilevered"),
+    "hub_inertia": ("kg*m**2", None),  # None: solved from design_inertia and the convention
+    "attachment_radius": ("m", "0.3 m"),
+    "mast_length": ("m", "1.5 m"),
+    "mast_mass_per_length": ("kg/m", "0.25 kg/m"),
+    "mast_bending_stiffness": ("N*m**2", None),  # None: solved for cantilever_frequency
+    "reflector_mass": ("kg", "1.0 kg"),
+    "reflector_inertia": ("kg*m**2", "0.02 kg*m**2"),
+    "n_elements": (None, 20),
+    "controller_frequency": ("Hz", PUBLISHED["controller_frequency"]),
+    "controller_damping": ("", PUBLISHED["controller_damping"]),
+}
+_MAY_BE_ZERO = ("damping", "attachment_radius", "reflector_inertia", "controller_damping")
+_SOLVED = ("hub_inertia", "mast_bending_stiffness")
+
+
+@dataclass(frozen=True)
+class _Solution:
+    """The finite-element solution behind a case (all SI)."""
+
+    EI: float
+    modal: ModalModel  # cantilevered, every finite-element mode, reference = hub centre
+    appendage_inertia: float  # R_θᵀ M R_θ of the whole appendage about the hub axis
+    hub_inertia: float
+
+
+@dataclass(frozen=True)
+class NPSCase:
+    """NPS FSS pitch-axis model (SI); build it with :func:`nps`.
+
+    ``hub_inertia`` and ``mast_bending_stiffness`` are None when solved (see :func:`nps`); the
+    solved values are :attr:`hub_inertia_value` and :attr:`mast_bending_stiffness_value`.
+    """
+
+    cantilever_frequency: float  # Hz
+    damping: float
+    n_modes: int
+    design_inertia: float
+    inertia_convention: str
+    hub_inertia: float | None
+    attachment_radius: float
+    mast_length: float
+    mast_mass_per_length: float
+    mast_bending_stiffness: float | None
+    reflector_mass: float
+    reflector_inertia: float
+    n_elements: int
+    controller_frequency: float  # Hz
+    controller_damping: float
+    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    # -- finite-element model ------------------------------------------------------------------
+    @property
+    def node_ids(self) -> np.ndarray:
+        """Mast nodes 1 (attachment, clamped to the hub) … n_elements + 1 (reflector)."""
+        return np.arange(1, self.n_elements + 2)
+
+    @property
+    def reflector_node(self) -> int:
+        return self.n_elements + 1
+
+    def structure(self, EI: float | None = None, clamped: bool = True) -> Structure:
+        """The appendage: beam2d mast along +x from the attachment point, reflector at the tip.
+
+        ``clamped=False`` leaves the attachment node free (used for the full mass matrix)."""
+        EI = self.mast_bending_stiffness_value if EI is None else EI
+        s = Structure("NPS FSS appendage")
+        x = self.attachment_radius + np.linspace(0.0, self.mast_length, self.n_elements + 1)
+        for node, xi in zip(self.node_ids, x):
+            s.add_node(int(node), (xi, 0.0, 0.0))
+        # equivalent beam: E·Iz = EI and rho·A = mass per length on a unit section
+        mast = Material(E=EI, rho=self.mast_mass_per_length, name="astromast (equivalent)")
+        unit = Section.general(1.0, 1.0, 1.0, 1.0, name="unit section")
+        for a, b in zip(self.node_ids[:-1], self.node_ids[1:]):
+            s.add_beam2d(int(a), int(b), mast, unit, label="mast")
+        s.add_mass(self.reflector_node, self.reflector_mass, inertia=(0.0, 0.0, self.reflector_inertia))
+        s.clamp(self.reflector_node, ("uz", "rx", "ry"))  # planar: out-of-plane dofs of the mass
+        for node in self.node_ids:
+            s.clamp(int(node), ("ux",))  # axially rigid mast
+        if clamped:
+            s.clamp(1)
+        return s
+
+    def _first_frequency(self, EI: float) -> float:
+        return float(self.structure(EI).assemble().modes(1).frequencies_hz[0])
+
+    def _solve_EI(self) -> float:
+        """EI with first cantilever frequency = ``cantilever_frequency`` (Brent's method).
+
+        Start from the Rayleigh estimate of a tip-mass cantilever, 3 EI / L³ = ω² (M + 33/140 ρL),
+        and bracket by factors of 4."""
+        L, w = self.mast_length, 2 * np.pi * self.cantilever_frequency
+        guess = w**2 * L**3 * (self.reflector_mass + 33 / 140 * self.mast_mass_per_length * L) / 3
+        lo, hi = guess / 4, guess * 4
+        target = self.cantilever_frequency
+        f = lambda ei: self._first_frequency(ei) - target  # noqa: E731
+        while f(lo) > 0:
+            lo /= 4
+        while f(hi) < 0:
+            hi *= 4
+        return float(brentq(f, lo, hi, xtol=1e-14 * guess, rtol=4 * np.finfo(float).eps, maxiter=200))
+
+    @property
+    def _solution(self) -> _Solution:
+        if "solution" not in self._cache:
+            self._cache["solution"] = self._solve()
+        return self._cache["solution"]
+
+    def _solve(self) -> _Solution:
+        EI = self.mast_bending_stiffness_value
+        clamped = self.structure(EI).assemble()
+        modes = clamped.modes(clamped.n_dofs)
+        # full appendage mass (attachment node free, moving with the hub): rigid mass about the
+        # hub centre and coupling L = Φᵀ (M_full R) on the clamped model's dofs
+        full = self.structure(EI, clamped=False).assemble()
+        modal = cantilevered_modal_model(modes, full.M, full, self.damping)
+        I_app = float(modal.rigid_mass[5, 5])
+        if self.hub_inertia is not None:
+            hub = self.hub_inertia
+        else:
+            if self.n_modes > modal.n_modes:
+                raise ValueError(f"n_modes: the model has {modal.n_modes} modes; raise n_elements")
+            D = modal.participation[: self.n_modes, 5]
+            appendage_share = I_app - (D @ D if self.inertia_convention == "cantilevered" else 0.0)
+            hub = self.design_inertia - appendage_share
+            if hub <= 0:
+                which = "I0zz" if self.inertia_convention == "cantilevered" else "I_zz"
+                raise ValueError(
+                    f"design_inertia: {self.design_inertia:.6g} kg m² is too small for {which}: the "
+                    f"appendage alone contributes {appendage_share:.6g} kg m², so the hub inertia "
+                    "would not be positive (lighten the appendage or change inertia_convention)"
+                )
+        return _Solution(EI=EI, modal=modal, appendage_inertia=I_app, hub_inertia=float(hub))
+
+    # -- solved values -------------------------------------------------------------------------
+    @property
+    def mast_bending_stiffness_value(self) -> float:
+        """Mast EI, N m² (solved for ``cantilever_frequency`` unless given)."""
+        if self.mast_bending_stiffness is not None:
+            return self.mast_bending_stiffness
+        if "EI" not in self._cache:
+            self._cache["EI"] = self._solve_EI()
+        return self._cache["EI"]
+
+    @property
+    def hub_inertia_value(self) -> float:
+        """Inertia of the hub alone (with the wheel) about z, kg m²."""
+        return self._solution.hub_inertia
+
+    @property
+    def appendage_inertia(self) -> float:
+        """Rigid inertia of the whole appendage about the hub axis, kg m²."""
+        return self._solution.appendage_inertia
+
+    @property
+    def appendage_inertia_exact(self) -> float:
+        """ρ((r+L)³ − r³)/3 + m_R (r+L)² + J_R, kg m² (continuous mast)."""
+        r, L = self.attachment_radius, self.mast_length
+        return (self.mast_mass_per_length * ((r + L) ** 3 - r**3) / 3
+                + self.reflector_mass * (r + L) ** 2 + self.reflector_inertia)
+
+    @property
+    def total_inertia(self) -> float:
+        """I_zz = hub + appendage (Eq. 7), kg m²."""
+        return self.hub_inertia_value + self.appendage_inertia
+
+    def coupling(self, n_modes: int | None = None) -> np.ndarray:
+        """Rigid–elastic coupling D_i = ∫(x φ_iʸ − y φ_iˣ) dm (Eq. 10), kg^½ m, first n modes."""
+        return self.modal_model(n_modes).participation[:, 5].copy()
+
+    def cantilevered_inertia(self, n_modes: int | None = None) -> float:
+        """I⁰zz = I_zz − Σ D_i² over the first ``n_modes`` modes (Eq. 18), kg m²."""
+        D = self.coupling(n_modes)
+        return self.total_inertia - float(D @ D)
+
+    # -- modal model and hybrid matrices -------------------------------------------------------
+    def modal_model(self, n_modes: int | None = None) -> ModalModel:
+        """Cantilevered modal model of the appendage (reference: hub centre, the rotation axis).
+
+        ``n_modes`` defaults to the case's (6); ``"all"`` keeps every finite-element mode."""
+        modal = self._solution.modal
+        if n_modes == "all":
+            return modal
+        n = self.n_modes if n_modes is None else require_count(n_modes, "n_modes")
+        if n > modal.n_modes:
+            raise ValueError(f"n_modes: the finite-element model has {modal.n_modes} modes; raise "
+                             f"n_elements for more than that, got {n}")
+        return modal.truncate(n)
+
+    def hybrid_matrices(self, n_modes: int | None = None):
+        """Second-order model of Eq. 16 in (θ, q_1 … q_n): M = [[I_zz, Dᵀ], [D, I]],
+        K = diag(0, ω²), C = diag(0, 2ζω). Returns (M, C, K)."""
+        modal = self.modal_model(n_modes)
+        M, C, K = hub_appendage_matrices(modal, self.hub_inertia_value, axis="z")
+        return M, C, K
+
+    def statespace_eq18(self, n_modes: int | None = None):
+        """(A, B, C, D) of Eqs. 16–19 exactly as repaired in the notes (§2 [OCR-FIX]).
+
+        X = [θ, q_1..q_n, θ', q'_1..q'_n], U = T_t (total torque on the hub), Y = [θ, θ'];
+        I0 = I_zz − Σ D_i², F_i = D_i ω_i², G_i = ω_i² I0 + D_i F_i, H_i = 2ζ_iω_i D_i,
+        J_i = 2ζ_iω_i I0 + D_i H_i, A = (1/I0)[…]."""
+        modal = self.modal_model(n_modes)
+        n, w, z = modal.n_modes, modal.frequencies, modal.damping
+        D = modal.participation[:, 5]
+        I0 = self.total_inertia - D @ D
+        F = D * w**2
+        G = w**2 * I0 + D * F
+        H = 2 * z * w * D
+        J = 2 * z * w * I0 + D * H
+        N = 2 * n + 2
+        A = np.zeros((N, N))
+        A[: n + 1, n + 1 :] = I0 * np.eye(n + 1)  # the kinematic rows, I0·I inside the 1/I0
+        A[n + 1, 1 : n + 1] = F
+        A[n + 1, n + 2 :] = H
+        for i in range(n):
+            row = n + 2 + i
+            A[row, 1 : n + 1] = -D[i] * F
+            A[row, 1 + i] = -G[i]
+            A[row, n + 2 :] = -D[i] * H
+            A[row, n + 2 + i] = -J[i]
+        A /= I0
+        B = np.zeros((N, 1))
+        B[n + 1, 0] = 1.0
+        B[n + 2 :, 0] = -D
+        B /= I0
+        C = np.zeros((2, N))
+        C[0, 0] = C[1, n + 1] = 1.0
+        return A, B, C, np.zeros((2, 1))
+
+    def statespace_direct(self, n_modes: int | None = None):
+        """(A, B, C, D) from the second-order model: A = [[0, I], [−M⁻¹K, −M⁻¹C]], B = [0; M⁻¹e₁]."""
+        M, Cd, K = self.hybrid_matrices(n_modes)
+        k = M.shape[0]
+        Minv = np.linalg.inv(M)
+        A = np.block([[np.zeros((k, k)), np.eye(k)], [-Minv @ K, -Minv @ Cd]])
+        B = np.vstack([np.zeros((k, 1)), Minv[:, :1]])
+        C = np.zeros((2, 2 * k))
+        C[0, 0] = C[1, k] = 1.0
+        return A, B, C, np.zeros((2, 1))
+
+    def to_statespace(self, n_modes: int | None = None):
+        """python-control StateSpace of Eq. 18 (input T_t, outputs θ and θ')."""
+        import control
+
+        n = self.modal_model(n_modes).n_modes
+        states = (["theta"] + [f"q[{i}]" for i in range(n)] + ["theta_dot"]
+                  + [f"q_dot[{i}]" for i in range(n)])
+        return control.ss(*self.statespace_eq18(n_modes), states=states, inputs=["torque"],
+                          outputs=["theta", "theta_dot"])
+
+    # -- frequencies ---------------------------------------------------------------------------
+    def system_frequencies(self, n_modes: int | None = None) -> np.ndarray:
+        """Hub-free (unconstrained) elastic frequencies of the hybrid model, rad/s (rigid mode
+        removed): generalized eigenvalues of (K, M) of Eq. 16."""
+        M, _, K = self.hybrid_matrices(n_modes)
+        lam = scipy.linalg.eigh(K, M, eigvals_only=True)
+        return np.sqrt(np.clip(np.sort(lam)[1:], 0.0, None))
+
+    def frequencies_hz(self, n_modes: int) -> np.ndarray:
+        """First ``n_modes`` hub-free elastic frequencies of the six-mode hybrid model, Hz."""
+        n = require_count(n_modes, "n_modes")
+        if n > self.n_modes:
+            raise ValueError(f"n_modes: the model has {self.n_modes} modes; raise n_modes to at least {n}")
+        return self.system_frequencies()[:n] / (2 * np.pi)
+
+    def mode_descriptions(self, n_modes: int) -> list[str]:
+        n = min(require_count(n_modes, "n_modes"), self.n_modes)
+        return [f"mast + reflector bending, cantilever mode {i + 1}" for i in range(n)]
+
+    def mode_details(self, n_modes: int) -> dict:
+        """Cantilever (hub clamped) frequencies, finite-element and exact; hub-free frequencies
+        with every finite-element mode and exact (``frequencies_hz`` is the six-mode model's);
+        couplings D_i and the inertia budget (for ``flexsat modes``)."""
+        n = min(require_count(n_modes, "n_modes"), self.n_modes)
+        beam = TipMassCantilever(self.mast_length, self.mast_bending_stiffness_value,
+                                 self.mast_mass_per_length, self.reflector_mass, self.reflector_inertia)
+        exact_free = hub_free_frequencies(beam, self.attachment_radius, self.hub_inertia_value, 1, n)
+        return {
+            "constrained_hz": (beam.frequencies(n) / (2 * np.pi)).tolist(),
+            "constrained_fe_hz": self.modal_model().frequencies_hz[:n].tolist(),
+            "system_all_fe_modes_hz": (self.system_frequencies("all")[:n] / (2 * np.pi)).tolist(),
+            "exact_unconstrained_hz": (exact_free / (2 * np.pi)).tolist(),
+            "coupling_D_sqrt_kg_m": self.coupling()[:n].tolist(),
+            "mast_bending_stiffness_N_m2": self.mast_bending_stiffness_value,
+            "inertia_convention": self.inertia_convention,
+            "inertia_budget_kg_m2": inertia_budget(self),
+        }
+
+    # -- control -------------------------------------------------------------------------------
+    def pd_gains(self, **kwargs) -> PD:
+        """Rigid-body pole placement (Eqs. 20–24): k = I ω_n², kτ = 2ζω_n I with
+        I = ``design_inertia``; keyword arguments go to :class:`~flexsat.control.PD`."""
+        return PD.from_rigid_poles(self.design_inertia, 2 * np.pi * self.controller_frequency,
+                                   self.controller_damping, **kwargs)
+
+    @property
+    def slew_angle(self) -> float:
+        """60°, the PD and torque-shaping slews (L204), rad."""
+        return to_si(PUBLISHED["pd_slew_angle"], "rad")
+
+
+def inertia_budget(case: NPSCase) -> dict[str, float]:
+    """Rigid inertia budget about the hub axis, kg m²."""
+    return {
+        "hub": case.hub_inertia_value,
+        "appendage": case.appendage_inertia,
+        "appendage_continuous": case.appendage_inertia_exact,
+        "I_zz": case.total_inertia,
+        "I0_zz": case.cantilevered_inertia(),
+        "design": case.design_inertia,
+    }
+
+
+def _choice(raw, name: str, choices) -> str:
+    if isinstance(raw, str) and raw.strip().lower() in choices:
+        return raw.strip().lower()
+    raise ValueError(f"{name}: must be one of {list(choices)}, got {raw!r}")
+
+
+def nps(**overrides) -> NPSCase:
+    """Build the NPS FSS case; override any input by name, as a number (SI) or a unit string.
+
+    ``mast_bending_stiffness`` is solved for ``cantilever_frequency`` unless given (then the
+    frequency follows from it and ``cantilever_frequency`` may not be given too);
+    ``hub_inertia`` is solved from ``design_inertia`` and ``inertia_convention`` unless given.
+
+    >>> case = nps(mast_length="2 m", inertia_convention="total")
+    """
+    unknown = set(overrides) - set(_INPUTS)
+    if unknown:
+        raise ValueError(f"nps: unknown parameter(s) {sorted(unknown)}; known: {sorted(_INPUTS)}")
+    if "mast_bending_stiffness" in overrides and "cantilever_frequency" in overrides:
+        raise ValueError("mast_bending_stiffness: give either it or cantilever_frequency (it is "
+                         "solved for that frequency), not both")
+    values = {}
+    for name, (unit, default) in _INPUTS.items():
+        raw = overrides.get(name, default)
+        if name in ("n_modes", "n_elements"):
+            values[name] = require_count(raw, name)
+        elif name == "inertia_convention":
+            values[name] = _choice(raw, name, INERTIA_CONVENTIONS)
+        elif raw is None and name in _SOLVED:
+            values[name] = None
+        else:
+            value = (to_si(raw, unit or "dimensionless", name) if unit or isinstance(raw, str)
+                     else float(require_finite(raw, name)))
+            check = require_nonneg if name in _MAY_BE_ZERO else require_positive
+            values[name] = float(check(value, name))
+    if values["n_elements"] < 2:
+        raise ValueError(f"n_elements: must be >= 2, got {values['n_elements']}")
+    if values["damping"] >= 1:
+        raise ValueError(f"damping: must be < 1 (a ratio of critical damping), got {values['damping']!r}")
+    if 2 * values["n_elements"] < values["n_modes"]:
+        raise ValueError(f"n_modes: the mesh of {values['n_elements']} elements has "
+                         f"{2 * values['n_elements']} modes; raise n_elements")
+    case = NPSCase(**values)
+    case._solution  # solve and validate now: one clear message at construction
+    return case
+
+
+__all__ = ["DESIGN_INERTIA", "INERTIA_CONVENTIONS", "NPSCase", "PUBLISHED", "SOURCE",
+           "inertia_budget", "nps"]

@@ -1,0 +1,391 @@
+r"""The TAMU 5′ × 5′ monolithic aluminium grid (Texas A&M, 1987–1989), hanging in a vertical plane.
+
+Sources (seed ``000_7bfdb62d2eacc22a.txt``; curated in ``shared/spec/seed000_part1.md`` §3.2 and
+``seed000_part2.md`` §1 and §3):
+
+* Att. 4 (Kim & Junkins), Table 1 "Material Properties of Grid Model" (L1648–L1655): EI, GJ,
+  ρA, ρJ, printed in lb-in-s units with an SI column; Fig. 1 caption (L1805): "first natural
+  frequency is .8 Hz, 10 modes have natural frequencies below 30 Hz"; output y_d is the normal
+  displacement of the lower-left corner.
+* Att. 6 (James & Junkins, AAS 89-425), L2405–L2511: 25 structure nodes, nodes 21–25 fixed,
+  36 Paz grid elements, 60 dof; node i+5 directly above node i; three Clifton Precision
+  AS-780D-100 motors with brass reaction wheels at nodes 3, 7 and 9 (masses not given); gravity
+  stiffening by a pendulum model; Table 1 (L2656–L2665): modelled .809, 2.21, 4.48, 5.65,
+  7.76 Hz and experiment .877, 2.19, 4.81, 6.17, 8.18 Hz; Table 2 (L2681–L2705): modelled and
+  measured mode-1 shape, mass normalised with the analytical mass matrix.
+* Att. 8 (Junkins & James, AAS 88-015), L3195: "5′ × 5′ grid, with 12.5″ × 2″ × 1/8″ members",
+  3003-H14; Figure 4 table (L3234–L3246): modelled .90, 2.34, 4.85, 6.05, 7.78, 12.84 Hz (the
+  FE model of Das et al., ref. 8), measured .91, 2.07, 4.76, 5.14, 6.57, 10.86 Hz.
+
+Model (interpretation choices, all documented in docs/structures_benchmarks.md)
+----------------------------------------------------------------------------
+* Plane X-Y is the grid plane, **Y points up**, Z is the out-of-plane normal; gravity acts
+  along −Y.  Paper node k is our node id k: node k sits at column (k − 1) mod 5 and row
+  (k − 1) // 5, i.e. x = s ((k − 1) mod 5), y = s ((k − 1) // 5).  Node 1 (x = y = 0) is the
+  lower-left corner (output y_d of Att. 4) if the paper numbers from the left as seen in its
+  Fig. 1, which the OCR does not show; node 5 is its mirror image, with identical modal
+  amplitudes.  Node 3 (motor, Att. 6) is the bottom-centre node; nodes 7 and 9 the second row,
+  one bay either side of the centre column.  Nodes 21–25 (top row) are clamped.
+* Members: 16 horizontal (rows 1–4) + 20 vertical (4 storeys × 5 columns) = 36 grid elements
+  (``Structure.add_grid``, dofs uz, rx, ry).  The 4 members between the clamped top-row nodes
+  carry no dof and are not modelled, which is how 25 nodes give 36 elements and 20 × 3 = 60 dof.
+* Node spacing ``s`` = **14.5 in** (default), the centre-line pitch of 2″-wide members with
+  12.5″ clear length: 5 × 2″ + 4 × 12.5″ = 60″ = 5′ (Att. 8, L3195).  The 15 in of a naive
+  60″ / 4 bays is available as an override (``spacing="15 in"``).
+* Gravity stiffening: the grid element has no axial dof (``gravity_preload`` gives grid members
+  no force), so the tension of each vertical member is found by statics, as in the paper's
+  pendulum model (Att. 6 Eq. 14, "pendulums connected only in the vertical direction"): each node
+  carries half the mass of every member it touches plus its motor; a vertical member carries
+  the weight of the nodes of its column at or below its lower end.  The tension enters through
+  the consistent geometric stiffness of the member (``set_axial_preload``;
+  ``gravity_model="consistent"``, default) or, as in the paper, as a string stiffness T/L on the
+  z displacements only (``gravity_model="string"``: massless pre-tensioned rods in parallel with
+  the vertical members); the two differ by 0.4 % on mode 1.
+* Motors: masses never published.  ``motor_mass`` (default **0 kg: no motors**) and optional
+  ``motor_inertia`` (about both in-plane axes) are placed at ``motor_nodes`` (default 3, 7, 9).
+  A motor mass also adds to the member tensions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexsat.structures.fem import Structure
+from flexsat.structures.sections import Material
+from flexsat.units import Q_, to_si
+from flexsat.validation import require_count, require_nonneg, require_positive
+
+SOURCE = ("seed 000_7bfdb62d2eacc22a.txt, Att. 4 Table 1 (L1648-L1655), Att. 6 (L2405-L2705), "
+          "Att. 8 Fig. 4 (L3234-L3246)")
+
+#: Published values, exactly as printed ("lb" of the paper is pound-force: lbf in pint)
+PUBLISHED = {
+    # Att. 4 Table 1 (L1648-L1655), US column as used; the SI column as printed
+    "EI": "3255.2 lbf*in**2",
+    "GJ": "4943.0 lbf*in**2",
+    "rho_A": "0.0000648 lbf*s**2/in**2",  # printed "lb·sec²·in²" [OCR]; mass per length
+    "rho_J": "0.0000217 lbf*s**2",
+    "EI_si_printed": "9.34982 N*m**2",  # = 3258.0 lb in²; 3255.2 lb in² is 9.34182 (one digit)
+    "GJ_si_printed": "14.18550 N*m**2",
+    "rho_A_si_printed": "0.44678 kg/m",
+    "rho_J_si_printed": "0.0000965 kg*m",
+    # geometry: Att. 4 caption, Att. 6 L2415/L2495, Att. 8 L3195
+    "size": "5 ft",
+    "member_clear_length": "12.5 in",
+    "member_width": "2 in",
+    "member_thickness": "0.125 in",
+    "nodes": 25,
+    "elements": 36,
+    "dof": 60,
+    # Att. 4 Fig. 1 caption (L1805)
+    "first_frequency": "0.8 Hz",
+    "modes_below_30_hz": 10,
+    # Att. 8 Figure 4 table (L3234-L3246), Hz
+    "att8_modelled_hz": (0.90, 2.34, 4.85, 6.05, 7.78, 12.84),
+    "att8_measured_hz": (0.91, 2.07, 4.76, 5.14, 6.57, 10.86),
+    "att8_identified_hz": (0.92, 2.06, 4.76, 5.58, 7.09, 11.57),
+    # Att. 6 Table 1 (L2656-L2665), Hz (model with motors and gravity correction)
+    "att6_modelled_hz": (0.809, 2.21, 4.48, 5.65, 7.76),
+    "att6_experiment_hz": (0.877, 2.19, 4.81, 6.17, 8.18),
+    "att6_damping_ratio": (0.00603, 0.00489, 0.01105, 0.00596, 0.01293),
+    # Att. 6 Table 2 (L2681-L2705): mode-1 z amplitude at nodes 1-20, mass-normalised (US units)
+    "att6_mode1_modelled": (8.25, 8.35, 8.40, 8.35, 8.25, 5.44, 5.52, 5.55, 5.52, 5.44,
+                            2.85, 2.90, 2.92, 2.90, 2.85, 0.871, 0.897, 0.906, 0.897, 0.871),
+    "att6_mode1_experiment": (7.66, 7.83, 8.18, 7.97, 8.54, 4.99, 5.10, 4.94, 6.17, 6.23,
+                              2.12, 2.78, 3.57, 3.33, 3.95, 1.14, 0.763, 1.26, 1.59, 1.43),
+    # Att. 10 Table 1 (L3599-L3611), a second measurement campaign, Hz
+    "att10_measured_hz": (0.92, 2.32, 4.93, 6.38, 7.27),
+}
+
+# (field, SI unit, default as written)
+_INPUTS = {
+    "EI": ("N*m**2", PUBLISHED["EI"]),
+    "GJ": ("N*m**2", PUBLISHED["GJ"]),
+    "rho_A": ("kg/m", PUBLISHED["rho_A"]),
+    "rho_J": ("kg*m", PUBLISHED["rho_J"]),
+    "spacing": ("m", "14.5 in"),
+    "g": ("m/s**2", "9.80665 m/s**2"),
+    "gravity": ("flag", True),
+    "gravity_model": ("choice", "consistent"),
+    "motor_mass": ("kg", "0 kg"),
+    "motor_inertia": ("kg*m**2", "0 kg*m**2"),
+    "motor_nodes": ("nodes", (3, 7, 9)),
+}
+_MAY_BE_ZERO = ("rho_J", "g", "motor_mass", "motor_inertia")
+
+N_SIDE = 5
+#: "consistent": geometric stiffness of the grid members (default); "string": Att. 6 Eq. 14
+GRAVITY_MODELS = ("consistent", "string")
+CLAMPED_NODES = tuple(range(21, 26))
+LOWER_LEFT_NODE = 1  #: the paper's "lower-left corner" (output y_d of Att. 4), see module doc
+#: (lbf s²/in)^(-1/2) per kg^(-1/2): mass-normalised shapes in the units of Att. 6 Table 2
+_SHAPE_TO_US = float(np.sqrt(Q_(1, "lbf*s**2/in").to("kg").magnitude))
+
+
+def _flag(raw, name: str) -> bool:
+    if isinstance(raw, (bool, np.bool_)):
+        return bool(raw)
+    if isinstance(raw, str) and raw.strip().lower() in ("true", "false"):
+        return raw.strip().lower() == "true"
+    raise ValueError(f"{name}: must be true or false, got {raw!r}")
+
+
+def _nodes(raw, name: str) -> tuple[int, ...]:
+    """Node ids 1..20 (not the clamped top row), from a sequence or "3,7,9"."""
+    if isinstance(raw, str):
+        items = [p for p in raw.replace(";", ",").split(",") if p.strip()]
+    elif isinstance(raw, (int, np.integer)) and not isinstance(raw, bool):
+        items = [raw]
+    else:
+        try:
+            items = list(raw)
+        except TypeError:
+            raise ValueError(f"{name}: must be node ids in 1..20, got {raw!r}") from None
+    out = []
+    for item in items:
+        try:
+            n = require_count(item.strip() if isinstance(item, str) else item, name)
+        except ValueError:
+            try:
+                n = require_count(float(item), name)
+            except (TypeError, ValueError):
+                raise ValueError(f"{name}: must be node ids in 1..20, got {raw!r}") from None
+        if not 1 <= n <= 20:
+            raise ValueError(f"{name}: must be node ids in 1..20 (21-25 are clamped), got {n}")
+        out.append(n)
+    if len(set(out)) != len(out):
+        raise ValueError(f"{name}: node ids must be distinct, got {raw!r}")
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class TamuGridCase:
+    """The TAMU grid (SI); see the module docstring for geometry, numbering and gravity."""
+
+    EI: float
+    GJ: float
+    rho_A: float
+    rho_J: float
+    spacing: float
+    g: float
+    gravity: bool
+    gravity_model: str
+    motor_mass: float
+    motor_inertia: float
+    motor_nodes: tuple
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    # -- geometry -------------------------------------------------------------------------------
+    @staticmethod
+    def node_position(node: int) -> tuple[int, int]:
+        """(column, row) of paper node ``node`` (1..25), both from 0 at the lower left."""
+        return (node - 1) % N_SIDE, (node - 1) // N_SIDE
+
+    @property
+    def members(self) -> list[tuple[int, int]]:
+        """The 36 members (n1, n2): 16 horizontal (rows 1-4), then 20 vertical (lower, upper)."""
+        horizontal = [(5 * r + c + 1, 5 * r + c + 2) for r in range(N_SIDE - 1)
+                      for c in range(N_SIDE - 1)]
+        vertical = [(5 * r + c + 1, 5 * r + c + 6) for r in range(N_SIDE - 1)
+                    for c in range(N_SIDE)]
+        return horizontal + vertical
+
+    def lumped_masses(self) -> dict[int, float]:
+        """Mass carried by each node (kg): half of every member it touches, plus its motor."""
+        m = {n: 0.0 for n in range(1, 26)}
+        for a, b in self.members:
+            m[a] += self.rho_A * self.spacing / 2
+            m[b] += self.rho_A * self.spacing / 2
+        for n in self.motor_nodes:
+            m[n] += self.motor_mass
+        return m
+
+    def member_tensions(self) -> dict[tuple[int, int], float]:
+        """Gravity tension (N) of each vertical member: the weight of its column's nodes at or
+        below its lower end (pendulum-chain statics, Att. 6 Eq. 14)."""
+        m = self.lumped_masses()
+        out = {}
+        for lower, upper in self.members[16:]:
+            column = [n for n in range(lower, 0, -N_SIDE)]
+            out[(lower, upper)] = self.g * sum(m[n] for n in column)
+        return out
+
+    @property
+    def total_mass(self) -> float:
+        """Moving mass (kg): the 36 members and the motors (the clamped tab excluded)."""
+        return 36 * self.rho_A * self.spacing + len(self.motor_nodes) * self.motor_mass
+
+    def structure(self, gravity: bool | None = None) -> Structure:
+        """The 25-node, 36-member grid; ``gravity`` (default: the case's flag) sets the
+        vertical members' tensions."""
+        gravity = self.gravity if gravity is None else bool(gravity)
+        s = Structure("TAMU 5 ft x 5 ft grid")
+        for n in range(1, 26):
+            c, r = self.node_position(n)
+            s.add_node(n, (c * self.spacing, r * self.spacing, 0.0))
+        ids = {}
+        for a, b in self.members:
+            kind = "vertical" if b - a == N_SIDE else "horizontal"
+            ids[(a, b)] = s.add_grid(a, b, self.EI, self.GJ, self.rho_A, self.rho_J,
+                                     label=f"{kind} {a}-{b}")
+        if self.motor_mass > 0 or self.motor_inertia > 0:
+            for n in self.motor_nodes:
+                s.add_mass(n, self.motor_mass,
+                           inertia=(self.motor_inertia, self.motor_inertia, 0.0)
+                           if self.motor_inertia > 0 else None)
+                # a lumped mass touches ux, uy (and rz with an inertia); the grid has no
+                # stiffness there: the motor moves with the plate (uz, rx, ry) only
+                s.clamp(n, ("ux", "uy", "rz") if self.motor_inertia > 0 else ("ux", "uy"))
+        for n in CLAMPED_NODES:
+            s.clamp(n)
+        if gravity and self.g > 0:
+            tensions = self.member_tensions()
+            if self.gravity_model == "consistent":
+                for member, tension in tensions.items():
+                    s.set_axial_preload(ids[member], tension)
+            else:  # Att. 6 Eq. 14: string stiffness T/L on uz only, by massless pre-tensioned rods
+                string = Material(E=1.0, rho=0.0, name="massless string")
+                for (a, b), tension in tensions.items():
+                    s.set_axial_preload(s.add_rod(a, b, string, 1.0, label=f"string {a}-{b}"),
+                                        tension)
+                for n in range(1, 21):
+                    s.clamp(n, ("ux", "uy"))  # the rods' in-plane dofs: not part of the model
+        return s
+
+    def _modes(self, gravity: bool):
+        key = ("modes", bool(gravity))
+        if key not in self._cache:
+            asm = self.structure(gravity).assemble()
+            self._cache[key] = asm.modes(asm.n_dofs)
+        return self._cache[key]
+
+    @property
+    def n_dofs(self) -> int:
+        return self._modes(self.gravity).assembly.n_dofs
+
+    # -- case protocol --------------------------------------------------------------------------
+    def frequencies_hz(self, n_modes: int, gravity: bool | None = None) -> np.ndarray:
+        """First ``n_modes`` natural frequencies, Hz (with gravity stiffening unless the case
+        or ``gravity`` says otherwise)."""
+        n = require_count(n_modes, "n_modes")
+        f = self._modes(self.gravity if gravity is None else gravity).frequencies_hz
+        if n > len(f):
+            raise ValueError(f"n_modes: the grid has {len(f)} modes, got {n}")
+        return f[:n].copy()
+
+    def mode_descriptions(self, n_modes: int) -> list[str]:
+        """Symmetric or antisymmetric about the centre column, and the bottom-edge shape."""
+        n = require_count(n_modes, "n_modes")
+        modes = self._modes(self.gravity)
+        if n > modes.shapes.shape[1]:
+            raise ValueError(f"n_modes: the grid has {modes.shapes.shape[1]} modes, got {n}")
+        uz = modes.at_nodes()[:n, :20, 2].reshape(n, 4, 5)  # rows 1-4 (bottom first), columns
+        out = []
+        for w in uz:
+            mirrored = w[:, ::-1]
+            sym = np.abs(w + mirrored).max() >= np.abs(w - mirrored).max()
+            # height profile: row sums (symmetric) or left-minus-right (antisymmetric)
+            profile = w.sum(axis=1) if sym else (w[:, :2] - w[:, 3:]).sum(axis=1)
+            profile = np.append(profile, 0.0)[::-1]  # from the clamp (0) down to the free edge
+            big = profile[np.abs(profile) > 1e-3 * np.abs(profile).max()]
+            crossings = int(np.sum(np.sign(big[1:]) != np.sign(big[:-1])))
+            row = w[np.argmax(np.abs(w).max(axis=1))]  # the row that moves most
+            row = row[np.abs(row) > 1e-3 * np.abs(row).max()]
+            across = int(np.sum(np.sign(row[1:]) != np.sign(row[:-1])))
+            kind = "bending" if sym else "torsion"
+            out.append(f"{kind} ({'symmetric' if sym else 'antisymmetric'} about the centre "
+                       f"column): {crossings} node line(s) across the height, {across} along "
+                       "the rows")
+        return out
+
+    def mode1_shape_us(self, gravity: bool | None = None) -> np.ndarray:
+        """Mode-1 z amplitude at nodes 1..20, mass normalised, in (lbf s²/in)^(-1/2) as Att. 6
+        Table 2 (sign: positive at node 3)."""
+        modes = self._modes(self.gravity if gravity is None else gravity)
+        w = modes.at_nodes()[0, :20, 2] * _SHAPE_TO_US
+        return w * np.sign(w[2])
+
+    def mode_details(self, n_modes: int) -> dict:
+        """Published vs computed frequencies (with and without gravity), Hz; JSON-ready."""
+        n = require_count(n_modes, "n_modes")
+        f_g = self.frequencies_hz(max(n, 6), gravity=True)
+        f_0 = self.frequencies_hz(max(n, 6), gravity=False)
+        att8 = np.array(PUBLISHED["att8_modelled_hz"])
+        att6 = np.array(PUBLISHED["att6_modelled_hz"])
+        all_g = self._modes(True).frequencies_hz
+        all_0 = self._modes(False).frequencies_hz
+        return {
+            "with_gravity_hz": f_g[:n].tolist(),
+            "without_gravity_hz": f_0[:n].tolist(),
+            "att8_modelled_hz": att8.tolist(),
+            "att8_measured_hz": list(PUBLISHED["att8_measured_hz"]),
+            "rel_error_vs_att8_with_gravity": (f_g[:6] / att8 - 1).tolist(),
+            "rel_error_vs_att8_without_gravity": (f_0[:6] / att8 - 1).tolist(),
+            "att6_modelled_hz": att6.tolist(),
+            "att6_experiment_hz": list(PUBLISHED["att6_experiment_hz"]),
+            "rel_error_vs_att6_with_gravity": (f_g[:5] / att6 - 1).tolist(),
+            "published_first_frequency_hz": to_si(PUBLISHED["first_frequency"], "Hz"),
+            "published_modes_below_30_hz": PUBLISHED["modes_below_30_hz"],
+            "modes_below_30_hz_with_gravity": int(np.sum(all_g < 30.0)),
+            "modes_below_30_hz_without_gravity": int(np.sum(all_0 < 30.0)),
+            "mode1_shape_us": self.mode1_shape_us(True).tolist(),
+            "att6_mode1_modelled_us": list(PUBLISHED["att6_mode1_modelled"]),
+            "vertical_member_tension_n": [t for t in self.member_tensions().values()],
+            "total_mass_kg": self.total_mass,
+            "motors": {"mass_kg": self.motor_mass, "inertia_kg_m2": self.motor_inertia,
+                       "nodes": list(self.motor_nodes)},
+        }
+
+    def modal_model(self, n_modes: int, damping=0.0, gravity: bool | None = None):
+        """:class:`~flexsat.structures.modal_model.ModalModel` of the first ``n_modes`` modes,
+        cantilevered at the centre of the clamped top row (x = 2 s, y = 4 s)."""
+        from flexsat.structures.fem import FEModes
+        from flexsat.structures.modal_model import ModalModel
+
+        n = require_count(n_modes, "n_modes")
+        modes = self._modes(self.gravity if gravity is None else gravity)
+        if n > modes.shapes.shape[1]:
+            raise ValueError(f"n_modes: the grid has {modes.shapes.shape[1]} modes, got {n}")
+        cut = FEModes(modes.omegas[:n], modes.shapes[:, :n], modes.assembly)
+        return ModalModel.from_fe(cut, damping=damping,
+                                  reference=(2 * self.spacing, 4 * self.spacing, 0.0),
+                                  boundary="cantilevered")
+
+
+def tamu_grid(**overrides) -> TamuGridCase:
+    """Build the TAMU grid; override any input by name, as a number (SI) or a unit string.
+
+    Inputs: ``EI``, ``GJ`` (N m²), ``rho_A`` (kg/m), ``rho_J`` (kg m), ``spacing`` (m, default
+    14.5 in), ``g`` (m/s²), ``gravity`` (bool, default True), ``gravity_model`` ("consistent"
+    or "string"), ``motor_mass`` (kg, default 0:
+    no motors), ``motor_inertia`` (kg m², about the in-plane axes), ``motor_nodes`` (default
+    3, 7, 9).
+
+    >>> case = tamu_grid(motor_mass="0.5 kg", spacing="15 in")  # doctest: +SKIP
+    """
+    unknown = set(overrides) - set(_INPUTS)
+    if unknown:
+        raise ValueError(
+            f"tamu_grid: unknown parameter(s) {sorted(unknown)}; known: {sorted(_INPUTS)}"
+        )
+    values = {}
+    for name, (unit, default) in _INPUTS.items():
+        raw = overrides.get(name, default)
+        if unit == "flag":
+            values[name] = _flag(raw, name)
+        elif unit == "choice":
+            if raw not in GRAVITY_MODELS:
+                raise ValueError(f"{name}: must be one of {list(GRAVITY_MODELS)}, got {raw!r}")
+            values[name] = raw
+        elif unit == "nodes":
+            values[name] = _nodes(raw, name)
+        else:
+            check = require_nonneg if name in _MAY_BE_ZERO else require_positive
+            values[name] = float(check(to_si(raw, unit, name), name))
+    return TamuGridCase(**values)
+
+
+__all__ = ["CLAMPED_NODES", "GRAVITY_MODELS", "LOWER_LEFT_NODE", "PUBLISHED", "SOURCE",
+           "TamuGridCase", "tamu_grid"]

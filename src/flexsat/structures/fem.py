@@ -1,0 +1,648 @@
+"""Finite-element structures: nodes, elements, lumped masses, clamps, preloads; assembly; modes.
+
+A :class:`Structure` collects the model; :meth:`Structure.assemble` returns an
+:class:`Assembly` with sparse stiffness and mass matrices on the *active* dofs only (touched by
+an element or a lumped mass, and not clamped); :meth:`Assembly.modes` returns mass-normalized
+:class:`FEModes`.  Element matrices: :mod:`flexsat.structures.elements`; eigen-solver and its
+checks: :mod:`flexsat.structures.modal_solve`.  All SI.
+
+Assembly is batched per element type: the element matrices of all members of a type are built
+as one ``(n, d, d)`` stack, scattered as COO triplets and summed into CSR.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from numbers import Integral
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import splu
+
+from flexsat.structures import elements as el
+from flexsat.structures.modal_solve import SYMMETRY_RTOL, solve_modes
+from flexsat.structures.sections import Material, Section
+from flexsat.validation import require_finite, require_nonneg, require_positive
+
+__all__ = ["DOF_NAMES", "Assembly", "FEModes", "Structure"]
+
+DOF_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
+_SLOT = {name: i for i, name in enumerate(DOF_NAMES)}
+_KIND_SLOTS = {
+    "frame": (0, 1, 2, 3, 4, 5),
+    "beam2d": (0, 1, 5),
+    "grid": (2, 3, 4),
+    "rod": (0, 1, 2),
+}
+_ZERO_LENGTH_RTOL = 1e-10  # a member shorter than this times its end coordinates is zero-length
+_PLANE_RTOL = 1e-9  # |z2 - z1| of a planar member, relative to its length
+
+
+@dataclass
+class _Member:
+    kind: str
+    n1: int  # node indices (not ids)
+    n2: int
+    props: dict
+    label: object = None
+    preload: float = 0.0
+
+
+@dataclass
+class _Lumped:
+    node: int
+    mass: float
+    inertia: np.ndarray | None
+
+
+# ------------------------------------------------------------------------------------------------
+class Structure:
+    """A finite-element model built node by node and member by member.
+
+    Parameters
+    ----------
+    name : str
+        Free label.
+
+    Notes
+    -----
+    Errors are ``ValueError`` with a message starting with the offending field or thing
+    (``"node 7: unknown ..."``, ``"E: must be > 0 ..."``) and stating the rule.
+    """
+
+    def __init__(self, name: str = ""):
+        self.name = name
+        self._index: dict[int, int] = {}
+        self._ids: list[int] = []
+        self._xyz: list[np.ndarray] = []
+        self._members: list[_Member] = []
+        self._masses: list[_Lumped] = []
+        self._clamped: set[tuple[int, int]] = set()
+
+    # -- nodes ------------------------------------------------------------------------------
+    def add_node(self, node_id: int, xyz) -> None:
+        """Add a node with a unique integer id at position ``xyz`` (3,), m."""
+        if isinstance(node_id, bool) or not isinstance(node_id, Integral):
+            raise ValueError(f"node_id: must be an integer, got {node_id!r}")
+        node_id = int(node_id)
+        if node_id in self._index:
+            raise ValueError(f"node {node_id}: duplicate node id")
+        x = require_finite(xyz, f"node {node_id}: xyz")
+        if x.shape != (3,):
+            raise ValueError(f"node {node_id}: xyz must have 3 coordinates, got shape {x.shape}")
+        self._index[node_id] = len(self._ids)
+        self._ids.append(node_id)
+        self._xyz.append(x)
+
+    @property
+    def node_ids(self) -> np.ndarray:
+        """Node ids in insertion order."""
+        return np.array(self._ids, dtype=int)
+
+    @property
+    def coordinates(self) -> np.ndarray:
+        """Node positions (n, 3), m, in the order of :attr:`node_ids`."""
+        return np.array(self._xyz, dtype=float).reshape(-1, 3)
+
+    def _node(self, node_id) -> int:
+        try:
+            return self._index[node_id]
+        except (KeyError, TypeError):
+            raise ValueError(f"node {node_id!r}: unknown node (add it with add_node)") from None
+
+    # -- members ----------------------------------------------------------------------------
+    def _add(self, kind, n1, n2, props, label) -> int:
+        member = _Member(kind, self._node(n1), self._node(n2), props, label)
+        self._members.append(member)
+        return len(self._members) - 1
+
+    def _ends(self, n1, n2, offsets=None):
+        x1, x2 = self._xyz[self._node(n1)], self._xyz[self._node(n2)]
+        if offsets is not None:
+            x1, x2 = x1 + offsets[0], x2 + offsets[1]
+        length = float(np.linalg.norm(x2 - x1))
+        if not length > _ZERO_LENGTH_RTOL * max(np.abs(x1).max(), np.abs(x2).max()):
+            raise ValueError(f"member ({n1}, {n2}): zero length (its ends coincide)")
+        return x1, x2, length
+
+    def _planar(self, n1, n2):
+        x1, x2, length = self._ends(n1, n2)
+        if abs(x2[2] - x1[2]) > _PLANE_RTOL * length:
+            raise ValueError(
+                f"member ({n1}, {n2}): must lie in a plane z = const (global X-Y plane)"
+            )
+        if np.linalg.norm(x2[:2] - x1[:2]) <= _ZERO_LENGTH_RTOL * length:
+            raise ValueError(f"member ({n1}, {n2}): zero length in the X-Y plane")
+
+    def add_frame(self, n1, n2, material: Material, section: Section, orientation=None,
+                  offsets=None, lumped=False, label=None) -> int:
+        """Add a 3-D Euler-Bernoulli frame member (12 dofs); returns its element id.
+
+        Parameters
+        ----------
+        n1, n2 : int
+            End node ids; local x runs from n1 to n2.
+        material : Material
+        section : Section
+            ``Iz`` bends in the local x-y plane, ``Iy`` in the local x-z plane.
+        orientation : array_like (3,), optional
+            Vector v in the local x-y plane (NASTRAN CBAR): z = x × v, y = z × x.  Default:
+            global Z, or global Y for a member parallel to Z.
+        offsets : ((3,), (3,)), optional
+            Rigid offsets from node n1 and node n2 to the member ends, global axes, m.
+        lumped : bool
+            HRZ diagonal mass instead of the consistent mass.
+        label : optional
+            Free label.
+        """
+        _require_type(material, Material, "material")
+        _require_type(section, Section, "section")
+        if offsets is not None:
+            offsets = require_finite(offsets, "offsets")
+            if offsets.shape != (2, 3):
+                raise ValueError(f"offsets: must have shape (2, 3), got {offsets.shape}")
+        x1, x2, _ = self._ends(n1, n2, offsets)
+        if orientation is not None:
+            orientation = require_finite(orientation, "orientation")
+            if orientation.shape != (3,):
+                raise ValueError(f"orientation: must have 3 components, got {orientation.shape}")
+        el.frame_rotation(x1, x2, orientation)  # refuses a vector parallel to the axis
+        props = dict(
+            E=material.E, G=material.shear_modulus, rho=material.rho, A=section.A,
+            Iy=section.Iy, Iz=section.Iz, J=section.J, orientation=orientation,
+            offsets=offsets, lumped=bool(lumped),
+        )
+        return self._add("frame", n1, n2, props, label)
+
+    def add_beam2d(self, n1, n2, material: Material, section: Section, lumped=False,
+                   label=None) -> int:
+        """Add a planar beam in the global X-Y plane (dofs ux, uy, rz; bending with ``Iz``)."""
+        _require_type(material, Material, "material")
+        _require_type(section, Section, "section")
+        self._planar(n1, n2)
+        props = dict(E=material.E, rho=material.rho, A=section.A, Iz=section.Iz,
+                     lumped=bool(lumped))
+        return self._add("beam2d", n1, n2, props, label)
+
+    def add_grid(self, n1, n2, EI, GJ, mass_per_length, torsional_inertia_per_length=0.0,
+                 label=None) -> int:
+        """Add a grid member in the global X-Y plane (dofs uz, rx, ry).
+
+        Parameters
+        ----------
+        EI, GJ : float
+            Transverse bending and Saint-Venant torsion stiffness, N m^2 (> 0).
+        mass_per_length : float
+            kg/m (>= 0).
+        torsional_inertia_per_length : float
+            Polar mass moment of inertia per length, kg m (>= 0; 0 leaves the twist massless).
+        """
+        self._planar(n1, n2)
+        props = dict(
+            EI=float(require_positive(EI, "EI")),
+            GJ=float(require_positive(GJ, "GJ")),
+            m=float(require_nonneg(mass_per_length, "mass_per_length")),
+            It=float(require_nonneg(torsional_inertia_per_length, "torsional_inertia_per_length")),
+        )
+        return self._add("grid", n1, n2, props, label)
+
+    def add_rod(self, n1, n2, material: Material, area, lumped=False, label=None) -> int:
+        """Add a truss rod (axial stiffness only; dofs ux, uy, uz)."""
+        _require_type(material, Material, "material")
+        self._ends(n1, n2)
+        props = dict(E=material.E, rho=material.rho, A=float(require_positive(area, "area")),
+                     lumped=bool(lumped))
+        return self._add("rod", n1, n2, props, label)
+
+    # -- masses, clamps, preloads -----------------------------------------------------------
+    def add_mass(self, node, mass, inertia=None) -> None:
+        """Add a lumped mass (kg) and optionally its inertia about the node (kg m^2).
+
+        ``inertia`` is a 3-vector (principal, global axes) or a symmetric positive
+        semi-definite 3x3 matrix; giving it makes the node's rotations active.
+        """
+        index = self._node(node)
+        m = float(require_nonneg(mass, "mass"))
+        J = None
+        if inertia is not None:
+            J = require_finite(inertia, "inertia")
+            if J.shape == (3,):
+                J = np.diag(J)
+            if J.shape != (3, 3):
+                raise ValueError(f"inertia: must be a 3-vector or 3x3, got shape {J.shape}")
+            scale = np.abs(J).max()
+            if np.abs(J - J.T).max() > SYMMETRY_RTOL * scale:
+                raise ValueError("inertia: must be symmetric")
+            if np.linalg.eigvalsh(J).min() < -SYMMETRY_RTOL * scale:
+                raise ValueError("inertia: must be positive semi-definite")
+        self._masses.append(_Lumped(index, m, J))
+
+    def clamp(self, node, dofs="all") -> None:
+        """Fix dofs of a node: ``"all"`` or an iterable of names from :data:`DOF_NAMES`."""
+        index = self._node(node)
+        names = DOF_NAMES if isinstance(dofs, str) and dofs == "all" else dofs
+        if isinstance(names, str):
+            names = (names,)
+        for name in names:
+            if name not in _SLOT:
+                raise ValueError(f"dofs: unknown dof {name!r} (expected 'all' or {DOF_NAMES})")
+            self._clamped.add((index, _SLOT[name]))
+
+    def set_axial_preload(self, element, force) -> None:
+        """Set the axial force of a member (tension > 0, N); adds its geometric stiffness."""
+        if isinstance(element, bool) or not isinstance(element, Integral) or not (
+            0 <= element < len(self._members)
+        ):
+            raise ValueError(f"element {element!r}: unknown element id")
+        self._members[element].preload = float(require_finite(force, "force"))
+
+    # -- assembly ---------------------------------------------------------------------------
+    def assemble(self) -> Assembly:
+        """Sparse K (elastic + geometric) and M on the active dofs."""
+        return self._assemble(geometric=True, clamped=self._clamped)
+
+    def _assemble(self, geometric: bool, clamped) -> Assembly:
+        n_nodes = len(self._ids)
+        touched = np.zeros((n_nodes, 6), dtype=bool)
+        parts = []
+        for kind in _KIND_SLOTS:
+            members = [m for m in self._members if m.kind == kind]
+            if members:
+                parts.append(_KIND_BUILDERS[kind](members, self.coordinates, geometric))
+                slots = np.array(_KIND_SLOTS[kind])
+                for col in (0, 1):
+                    nodes = np.array([(m.n1, m.n2)[col] for m in members])
+                    touched[nodes[:, None], slots[None, :]] = True
+        if self._masses:
+            parts.append(self._mass_triplets(touched))
+        _check_connected(touched, self._ids)
+        active = touched.copy()
+        for node, slot in clamped:
+            active[node, slot] = False
+        if not active.any():
+            raise ValueError("structure: no active dofs (every dof is clamped)")
+        number = np.full(6 * n_nodes, -1)
+        number[active.ravel()] = np.arange(int(active.sum()))
+        K, M = (_sparse(number, [(p[0], p[i]) for p in parts]) for i in (1, 2))
+        node_idx, slot_idx = np.nonzero(active)
+        dofs = [(self._ids[i], DOF_NAMES[s]) for i, s in zip(node_idx, slot_idx)]
+        return Assembly(K, M, dofs, self.node_ids, self.coordinates,
+                        n_clamped=len(clamped))
+
+    def _mass_triplets(self, touched):
+        """(global dof index blocks, K blocks, M blocks) of the lumped masses (6x6 each)."""
+        idx = np.array([6 * lm.node + np.arange(6) for lm in self._masses])
+        M = np.zeros((len(self._masses), 6, 6))
+        for i, lm in enumerate(self._masses):
+            M[i, :3, :3] = lm.mass * np.eye(3)
+            touched[lm.node, :3] = True
+            if lm.inertia is not None:
+                M[i, 3:, 3:] = lm.inertia
+                touched[lm.node, 3:] = True
+        return idx, np.zeros_like(M), M
+
+    # -- preloads from gravity --------------------------------------------------------------
+    def gravity_preload(self, g=(0.0, 0.0, -9.80665)) -> np.ndarray:
+        """Set every member's axial preload from a linear static solve under gravity.
+
+        The load is ``f = M a`` with ``a`` the uniform acceleration field ``g`` on the
+        translations and M the mass matrix before clamping (consistent or lumped member mass
+        plus the lumped masses), solved on the free dofs with the elastic K (no geometric
+        stiffness).  Each frame, rod and planar beam gets the
+        axial force ``EA/L x̂·(u2 - u1)`` of its ends; grid members carry no axial force (0).
+        Previous preloads are replaced.
+
+        Parameters
+        ----------
+        g : array_like (3,)
+            Gravity acceleration, m/s^2.
+
+        Returns
+        -------
+        ndarray (n_elements,)
+            Axial forces by element id, N (tension > 0).
+        """
+        g = require_finite(g, "g")
+        if g.shape != (3,):
+            raise ValueError(f"g: must have 3 components, got shape {g.shape}")
+        if not self._clamped:
+            raise ValueError(
+                "gravity_preload: the structure must be clamped (a free structure has no static "
+                "equilibrium under gravity)"
+            )
+        free = self._assemble(geometric=False, clamped=())
+        f = free.M @ (free.rigid_body_vectors()[:, :3] @ g)
+        asm = self._assemble(geometric=False, clamped=self._clamped)
+        keys = 6 * free._node_of_dof + free._slot_of_dof  # ascending
+        u = _static_solve(asm.K, f[np.searchsorted(keys, 6 * asm._node_of_dof + asm._slot_of_dof)])
+        displacement = np.zeros((len(self._ids), 6))
+        displacement[asm._node_of_dof, asm._slot_of_dof] = u
+        forces = np.array([_axial_force(m, self.coordinates, displacement) for m in self._members])
+        for member, force in zip(self._members, forces):
+            member.preload = float(force)
+        return forces
+
+
+def _require_type(value, cls, field: str):
+    if not isinstance(value, cls):
+        raise ValueError(f"{field}: must be a {cls.__name__}, got {type(value).__name__}")
+
+
+def _check_connected(touched, ids):
+    loose = np.flatnonzero(~touched.any(axis=1))
+    if loose.size:
+        raise ValueError(f"node {ids[loose[0]]}: not connected to any element or mass")
+
+
+def _sparse(number, blocks) -> sp.csr_matrix:
+    """Sum element blocks (global slot indices (n, d), matrices (n, d, d)) on the active dofs."""
+    rows, cols, vals = [], [], []
+    for idx, mat in blocks:
+        d = idx.shape[1]
+        r = np.broadcast_to(number[idx][:, :, None], (len(idx), d, d)).ravel()
+        c = np.broadcast_to(number[idx][:, None, :], (len(idx), d, d)).ravel()
+        keep = (r >= 0) & (c >= 0) & (mat.ravel() != 0)
+        rows.append(r[keep])
+        cols.append(c[keep])
+        vals.append(mat.ravel()[keep])
+    n = int(number.max()) + 1
+    A = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n, n)).tocsr()
+    return ((A + A.T) * 0.5).tocsr()
+
+
+def _static_solve(K, f) -> np.ndarray:
+    try:
+        u = splu(sp.csc_matrix(K), permc_spec="MMD_AT_PLUS_A").solve(f)
+    except RuntimeError:
+        u = np.full_like(f, np.nan)
+    residual = np.linalg.norm(K @ u - f)
+    if not np.all(np.isfinite(u)) or residual > 1e-8 * max(np.linalg.norm(f), 1e-300):
+        raise ValueError(
+            "gravity_preload: stiffness matrix is singular (a mechanism, or too few clamps)"
+        )
+    return u
+
+
+# ------------------------------------------------------------------------------------------------
+# per-kind batched element matrices: (global slot indices (n, d), K (n, d, d), M (n, d, d))
+def _column(members, key):
+    return np.array([m.props[key] for m in members], dtype=float)
+
+
+def _slot_indices(members, kind):
+    slots = np.array(_KIND_SLOTS[kind])
+    n1 = np.array([m.n1 for m in members])[:, None]
+    n2 = np.array([m.n2 for m in members])[:, None]
+    return np.hstack([6 * n1 + slots, 6 * n2 + slots])
+
+
+def _frame_geometry(members, xyz):
+    """End positions (with offsets), lengths and 12x12 transformations of frame members."""
+    x1 = xyz[[m.n1 for m in members]]
+    x2 = xyz[[m.n2 for m in members]]
+    offsets = np.array([
+        np.zeros((2, 3)) if m.props["offsets"] is None else m.props["offsets"] for m in members
+    ])
+    x1, x2 = x1 + offsets[:, 0], x2 + offsets[:, 1]
+    given = np.array([m.props["orientation"] is not None for m in members])
+    R = el.frame_rotation(x1, x2)
+    if given.any():
+        v = np.array([m.props["orientation"] for m in members if m.props["orientation"] is not None])
+        R[given] = el.frame_rotation(x1[given], x2[given], v)
+    T = el.frame_transformation(R, offsets)
+    return x1, x2, np.linalg.norm(x2 - x1, axis=1), T
+
+
+def _frame_blocks(members, xyz, geometric):
+    c = {k: _column(members, k) for k in ("E", "G", "rho", "A", "Iy", "Iz", "J")}
+    _, _, L, T = _frame_geometry(members, xyz)
+    k = el.frame_local_stiffness(c["E"], c["G"], c["A"], c["Iy"], c["Iz"], c["J"], L)
+    if geometric:
+        k = k + el.frame_local_geometric_stiffness(_preloads(members), L)
+    lumped = np.array([m.props["lumped"] for m in members])
+    m = np.where(
+        lumped[:, None, None],
+        el.frame_local_mass(c["rho"], c["A"], c["Iy"], c["Iz"], L, lumped=True),
+        el.frame_local_mass(c["rho"], c["A"], c["Iy"], c["Iz"], L),
+    )
+    return _slot_indices(members, "frame"), el.to_global(k, T), el.to_global(m, T)
+
+
+def _preloads(members):
+    return np.array([m.preload for m in members], dtype=float)
+
+
+def _ends(members, xyz):
+    return xyz[[m.n1 for m in members]], xyz[[m.n2 for m in members]]
+
+
+def _beam2d_blocks(members, xyz, geometric):
+    c = {k: _column(members, k) for k in ("E", "rho", "A", "Iz")}
+    x1, x2 = _ends(members, xyz)
+    L = np.linalg.norm((x2 - x1)[:, :2], axis=1)
+    T = el.beam2d_transformation(x1, x2)
+    k = el.beam2d_local_stiffness(c["E"], c["A"], c["Iz"], L)
+    if geometric:
+        k = k + el.beam2d_local_geometric_stiffness(_preloads(members), L)
+    lumped = np.array([m.props["lumped"] for m in members])
+    m = np.where(
+        lumped[:, None, None],
+        el.beam2d_local_mass(c["rho"], c["A"], L, lumped=True),
+        el.beam2d_local_mass(c["rho"], c["A"], L),
+    )
+    return _slot_indices(members, "beam2d"), el.to_global(k, T), el.to_global(m, T)
+
+
+def _grid_blocks(members, xyz, geometric):
+    c = {k: _column(members, k) for k in ("EI", "GJ", "m", "It")}
+    x1, x2 = _ends(members, xyz)
+    L = np.linalg.norm((x2 - x1)[:, :2], axis=1)
+    T = el.grid_transformation(x1, x2)
+    k = el.grid_local_stiffness(c["EI"], c["GJ"], L)
+    if geometric:
+        k = k + el.grid_local_geometric_stiffness(_preloads(members), L)
+    m = el.grid_local_mass(c["m"], c["It"], L)
+    return _slot_indices(members, "grid"), el.to_global(k, T), el.to_global(m, T)
+
+
+def _rod_blocks(members, xyz, geometric):
+    c = {k: _column(members, k) for k in ("E", "rho", "A")}
+    x1, x2 = _ends(members, xyz)
+    L = np.linalg.norm(x2 - x1, axis=1)
+    k = el.rod_stiffness(c["E"], c["A"], x1, x2)
+    if geometric:
+        k = k + el.rod_geometric_stiffness(_preloads(members), x1, x2)
+    lumped = np.array([m.props["lumped"] for m in members])
+    m = np.where(
+        lumped[:, None, None],
+        el.rod_mass(c["rho"], c["A"], L, lumped=True),
+        el.rod_mass(c["rho"], c["A"], L),
+    )
+    return _slot_indices(members, "rod"), k, m
+
+
+_KIND_BUILDERS = {
+    "frame": _frame_blocks,
+    "beam2d": _beam2d_blocks,
+    "grid": _grid_blocks,
+    "rod": _rod_blocks,
+}
+
+
+def _axial_force(member, xyz, displacement) -> float:
+    """EA/L x̂·(u_end2 - u_end1) from global node displacements (n_nodes, 6); 0 for grids."""
+    if member.kind == "grid":
+        return 0.0
+    p = member.props
+    u1, u2 = displacement[member.n1], displacement[member.n2]
+    x1, x2 = xyz[member.n1], xyz[member.n2]
+    d1 = d2 = np.zeros(3)
+    if member.kind == "frame" and p["offsets"] is not None:
+        d1, d2 = p["offsets"]
+    if member.kind == "beam2d":
+        x1, x2 = x1 * [1, 1, 0], x2 * [1, 1, 0]
+    e1 = u1[:3] + np.cross(u1[3:], d1)
+    e2 = u2[:3] + np.cross(u2[3:], d2)
+    axis = (x2 + d2) - (x1 + d1)
+    L = np.linalg.norm(axis)
+    return p["E"] * p["A"] / L * float(axis @ (e2 - e1)) / L
+
+
+# ------------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Assembly:
+    """Assembled sparse model on the active dofs.
+
+    Attributes
+    ----------
+    K, M : scipy.sparse.csr_matrix (ndof, ndof)
+        Stiffness (elastic + geometric from the axial preloads) and mass, symmetric.
+    dofs : list of (node_id, dof_name)
+        Meaning of each row.
+    node_ids : ndarray (n_nodes,)
+    coordinates : ndarray (n_nodes, 3)
+    n_clamped : int
+        Number of clamped dofs of the structure (0: free-free).
+    """
+
+    K: sp.csr_matrix
+    M: sp.csr_matrix
+    dofs: list
+    node_ids: np.ndarray
+    coordinates: np.ndarray
+    n_clamped: int = 0
+    _lookup: dict = field(init=False, repr=False)
+    _node_of_dof: np.ndarray = field(init=False, repr=False)
+    _slot_of_dof: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self):
+        row = {int(n): i for i, n in enumerate(self.node_ids)}
+        lookup = {(int(n), d): i for i, (n, d) in enumerate(self.dofs)}
+        object.__setattr__(self, "_lookup", lookup)
+        object.__setattr__(self, "_node_of_dof", np.array([row[int(n)] for n, _ in self.dofs], int))
+        object.__setattr__(self, "_slot_of_dof", np.array([_SLOT[d] for _, d in self.dofs], int))
+
+    @property
+    def n_dofs(self) -> int:
+        """Number of active dofs."""
+        return len(self.dofs)
+
+    def index(self, node_id, dof) -> int:
+        """Row of an active dof, e.g. ``index(12, "uz")``."""
+        try:
+            return self._lookup[(int(node_id), dof)]
+        except (KeyError, TypeError, ValueError):
+            raise ValueError(
+                f"dof ({node_id!r}, {dof!r}): not an active dof (unknown node or dof name, "
+                "clamped, or not touched by any element or mass)"
+            ) from None
+
+    def rigid_body_vectors(self, reference=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """Unit rigid-body motions on the active dofs, shape (ndof, 6).
+
+        Columns: translations along x, y, z (1 m) and rotations about x, y, z (1 rad) about
+        ``reference``: u = t + θ × (x - reference) on translations and θ on rotations.
+        """
+        p = require_finite(reference, "reference")
+        r = self.coordinates - p
+        B = np.zeros((len(r), 6, 6))
+        B[:, :3, :3] = np.eye(3)
+        B[:, 3:, 3:] = np.eye(3)
+        B[:, :3, 3:] = -el._skew(r)
+        return B[self._node_of_dof, self._slot_of_dof]
+
+    def mass_properties(self, reference=(0.0, 0.0, 0.0)) -> dict:
+        """Rigid-body mass properties from ``G = R^T M R`` (R: :meth:`rigid_body_vectors`).
+
+        Needs all three translations represented (a 3-D model).
+
+        Returns
+        -------
+        dict
+            ``total_mass`` (kg), ``center_of_mass`` (3,), m, ``inertia`` (3, 3) about
+            ``reference`` and ``inertia_center_of_mass`` (3, 3) about the centre of mass, kg m^2.
+        """
+        p = require_finite(reference, "reference")
+        G = self.rigid_body_vectors(p).T @ (self.M @ self.rigid_body_vectors(p))
+        m = G[0, 0]
+        if not m > 0 or np.abs(G[:3, :3] - m * np.eye(3)).max() > 1e-9 * m:
+            raise ValueError(
+                "mass_properties: the model must carry the same mass in x, y and z (a 3-D "
+                f"model); translational masses are {np.diag(G)[:3]}"
+            )
+        a = np.array([G[5, 1] - G[4, 2], G[3, 2] - G[5, 0], G[4, 0] - G[3, 1]]) / (2.0 * m)
+        inertia = (G[3:, 3:] + G[3:, 3:].T) / 2.0
+        shift = m * (a @ a * np.eye(3) - np.outer(a, a))
+        return dict(total_mass=m, center_of_mass=p + a, inertia=inertia,
+                    inertia_center_of_mass=inertia - shift)
+
+    def modes(self, n_modes, rigid_body_modes: int | None = None, shift=None) -> FEModes:
+        """Lowest mass-normalized modes (see :func:`flexsat.structures.modal_solve.solve_modes`).
+
+        Parameters
+        ----------
+        n_modes : int
+            Number of modes, rigid-body ones included.
+        rigid_body_modes : int, optional
+            Expected number of near-zero modes (6 for a free 3-D body): checked, then replaced
+            by exact M-orthonormal rigid-body vectors with ω = 0.  With None, a clamped
+            structure must have no near-zero mode (else: mechanism).
+        shift : float, optional
+            Spectral shift, (rad/s)^2; the modes nearest to it are returned.
+        """
+        omegas, shapes = solve_modes(
+            self.K, self.M, n_modes, rigid_body_modes=rigid_body_modes, shift=shift,
+            rigid_vectors=self.rigid_body_vectors(), clamped=self.n_clamped > 0,
+        )
+        return FEModes(omegas, shapes, self)
+
+
+@dataclass(frozen=True, eq=False)
+class FEModes:
+    """Mass-normalized natural modes of an :class:`Assembly`.
+
+    Attributes
+    ----------
+    omegas : ndarray (n_modes,)
+        rad/s, ascending; rigid-body modes (ω = 0) first.
+    shapes : ndarray (ndof, n_modes)
+        ``shapes.T @ M @ shapes = I``.
+    assembly : Assembly
+    """
+
+    omegas: np.ndarray
+    shapes: np.ndarray
+    assembly: Assembly
+
+    @property
+    def frequencies_hz(self) -> np.ndarray:
+        """ω / 2π, Hz."""
+        return self.omegas / (2.0 * np.pi)
+
+    def at_nodes(self) -> np.ndarray:
+        """Mode shapes per node and dof, shape (n_modes, n_nodes, 6), 0 on inactive dofs."""
+        a = self.assembly
+        out = np.zeros((self.shapes.shape[1], len(a.node_ids), 6))
+        out[:, a._node_of_dof, a._slot_of_dof] = self.shapes.T
+        return out

@@ -1,0 +1,245 @@
+r"""NASTRAN modal data (OP2/OP4 written by the NAS2CAM DMAP) as a :class:`ModalModel`.
+
+Reading is done by the optional dependency pyyeti (``pip install 'flexsat[nastran]'``):
+:func:`pyyeti.nastran.op2.rdnas2cam` returns, per superelement, the USET table (grid locations
+and output coordinate systems), the eigenvalues ``lambda``, the g-set mode shapes ``phg`` and the
+mass ``maa`` (a-set) or ``mgg`` (g-set). pyNastran is not used: version 1.4 does not import with
+numpy >= 2.4.
+
+Frames
+------
+``phg`` is in each grid's output (CD) coordinate system. The rigid-body modes of
+:func:`pyyeti.nastran.n2p.rbgeom_uset` about the basic origin read :math:`T_g^T` in the
+translation–translation block of grid g, :math:`T_g` being the rotation from the grid's output
+system to basic at the grid (rectangular, cylindrical or spherical); shapes are rotated to basic
+with it. Scalar and extra points (e.g. the modal coordinates of upstream superelements) and
+q-set grids are generalised coordinates, not nodes: they are not in ``shapes`` but they are in
+the mass partition, so the rigid mass and the participation are exact.
+
+Mass properties
+---------------
+With R the rigid-body modes about ``reference`` on the mass partition (a-set with ``maa``, else
+g-set with ``mgg``) and Φ the shapes on it,
+
+.. math::
+
+    M_{rr} = \tfrac12 (R^T M R + (R^T M R)^T), \qquad L = \Phi^T M R.
+
+Units
+-----
+NASTRAN is unit-free: give the model's consistent units as ``units`` (pint strings for
+``length``, ``mass`` and ``time``; with PARAM,WTMASS the mass unit is that of the scaled mass
+matrix). With :math:`s = \sqrt{m_u}\,(1, 1, 1, \ell_u, \ell_u, \ell_u)` (kg and m per model unit)
+shapes are divided by s, rigid mass and participation multiplied by it on both sides / columns,
+lengths by :math:`\ell_u` and frequencies divided by the seconds per model time unit.
+"""
+
+from __future__ import annotations
+
+import errno
+from pathlib import Path
+
+import numpy as np
+
+from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
+from flexsat.units import to_si
+from flexsat.validation import require_finite, require_nonneg
+
+__all__ = ["SI_UNITS", "read_nastran_modes"]
+
+#: Default model units (SI), also the keys ``units`` must have.
+SI_UNITS = {"length": "m", "mass": "kg", "time": "s"}
+
+_MISSING_PYYETI = "read_nastran_modes needs the optional dependency pyyeti: pip install 'flexsat[nastran]'"
+_RANK_TOL = 1e-6  # relative singular value below which a rigid motion is absent from the model
+
+
+def read_nastran_modes(
+    op2_path,
+    op4_path=None,
+    superelement=0,
+    damping=0.0,
+    reference=(0.0, 0.0, 0.0),
+    units=None,
+    rigid_frequency=RIGID_FREQUENCY,
+) -> ModalModel:
+    r"""Modal model of one superelement of a NAS2CAM OP2/OP4 pair.
+
+    Parameters
+    ----------
+    op2_path : str or path
+        The ``.op2`` file written by NAS2CAM.
+    op4_path : str or path, optional
+        The matching ``.op4`` file; default ``op2_path`` with the suffix ``.op4``.
+    superelement : int
+        Superelement id (0 is the residual).
+    damping : float or array_like (m,)
+        Modal damping ratios ζ (NASTRAN modes carry none).
+    reference : array_like (3,)
+        Point of the rigid-body modes in basic coordinates, in model length units.
+    units : mapping, optional
+        Pint unit strings of the model's ``"length"``, ``"mass"`` and ``"time"``; default SI
+        (:data:`SI_UNITS`).
+    rigid_frequency : float
+        Modes at or below this ω, rad/s, are rigid-body modes; their eigen-solver roundoff
+        (which pyyeti makes positive) is set to 0.
+
+    Returns
+    -------
+    ModalModel
+        In SI. Frequencies :math:`\sqrt{\max(\lambda, 0)}`, the rigid-body modes set to 0;
+        boundary "free" when the number of rigid-body modes equals the number of rigid motions
+        the model has, "cantilevered" when there are none.
+
+    Raises
+    ------
+    ImportError
+        pyyeti is not installed.
+    FileNotFoundError
+        The OP2 or OP4 file does not exist (named in the message).
+    ValueError
+        The superelement is not in the file; eigenvalues, g-set shapes or a mass matrix are
+        missing (named); sizes disagree; the frequencies are not ascending once the rigid-body
+        modes are 0; the model is partially constrained; bad ``units``.
+    """
+    try:
+        from pyyeti.nastran import n2p, op2
+    except ImportError as exc:
+        raise ImportError(_MISSING_PYYETI) from exc
+    op2_file, op4_file = _paths(op2_path, op4_path)
+    length, mass_unit, time = _unit_scales(units)
+    nas = op2.rdnas2cam(str(op2_file), str(op4_file))
+    source = f"{op2_file.name}/{op4_file.name}"
+    _check_modal_data(nas, superelement, source)
+    uset = nas["uset"][superelement]
+    lam, phg = np.ravel(nas["lambda"][superelement]), nas["phg"][superelement]
+    mass, rows = _mass_partition(nas, superelement, n2p.mksetpv(uset, "g", "a"))
+    _check_sizes(lam, phg, uset, mass, rows, source)
+
+    ref = require_finite(reference, "reference")
+    if ref.shape != (3,):
+        raise ValueError(f"reference: must have shape (3,), got {ref.shape}")
+    R = n2p.rbgeom_uset(uset, ref)[rows]
+    ids, xyz, first, T = _grids(uset, n2p.rbgeom_uset(uset))
+    s = np.sqrt(mass_unit) * np.array([1.0, 1.0, 1.0, length, length, length])
+    rigid_mass, participation = _mass_properties(mass, R, phg[rows])
+    frequencies = _frequencies(lam, time, float(require_nonneg(rigid_frequency, "rigid_frequency")))
+    return ModalModel(
+        node_ids=ids,
+        coordinates=xyz * length,
+        frequencies=frequencies,
+        damping=damping,
+        shapes=_basic_shapes(phg, first, T) / s,
+        rigid_mass=rigid_mass * np.outer(s, s),
+        participation=participation * s,
+        reference=ref * length,
+        boundary=_boundary(frequencies, rigid_mass, source),
+    )
+
+
+def _paths(op2_path, op4_path) -> tuple[Path, Path]:
+    """The OP2 and OP4 paths, both existing."""
+    op2_file = Path(op2_path)
+    op4_file = op2_file.with_suffix(".op4") if op4_path is None else Path(op4_path)
+    for kind, path in (("OP2", op2_file), ("OP4", op4_file)):
+        if not path.is_file():
+            raise FileNotFoundError(errno.ENOENT, f"NASTRAN {kind} file not found", str(path))
+    return op2_file, op4_file
+
+
+def _unit_scales(units) -> tuple[float, float, float]:
+    """Metres, kilograms and seconds per model unit of length, mass and time."""
+    given = SI_UNITS if units is None else dict(units)
+    if set(given) != set(SI_UNITS):
+        raise ValueError(
+            f"units: must map exactly 'length', 'mass' and 'time' to unit strings, got {sorted(given)}"
+        )
+    return tuple(to_si(f"1 {given[k]}", SI_UNITS[k], f"units[{k!r}]") for k in ("length", "mass", "time"))
+
+
+def _check_modal_data(nas: dict, se, source: str) -> None:
+    """The superelement exists and has eigenvalues, g-set shapes and a mass matrix."""
+    if se not in nas["uset"]:
+        raise ValueError(f"superelement: {se!r} is not in {source} (superelements {sorted(nas['uset'])})")
+    missing = [label for key, label in (("lambda", "eigenvalues LAMBDA"), ("phg", "g-set mode shapes PHG"))
+               if se not in nas.get(key, {})]
+    if not any(se in nas.get(key, {}) for key in ("maa", "mgg")):
+        missing.append("mass matrix MAA or MGG")
+    if missing:
+        raise ValueError(f"{source}: no modal data for superelement {se}: missing {', '.join(missing)}")
+
+
+def _mass_partition(nas: dict, se, aset: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mass matrix and the g-set rows it acts on: MAA on the a-set if present, else MGG."""
+    if se in nas.get("maa", {}):
+        return nas["maa"][se], aset
+    return nas["mgg"][se], np.ones(aset.size, dtype=bool)
+
+
+def _check_sizes(lam, phg, uset, mass, rows, source: str) -> None:
+    if phg.shape != (len(uset), lam.size):
+        raise ValueError(
+            f"{source}: PHG has shape {phg.shape}, expected (g-set size, modes) = {(len(uset), lam.size)}"
+        )
+    if mass.shape != (rows.sum(),) * 2:
+        raise ValueError(f"{source}: mass matrix has shape {mass.shape}, expected {(rows.sum(),) * 2}")
+
+
+def _grids(uset, rb_basic: np.ndarray):
+    """Grid ids, basic locations, g-set row of their dof 1 and output-to-basic rotations.
+
+    ``rb_basic`` are the rigid-body modes about the basic origin; their translation block at a
+    grid is the transpose of the rotation. Rows where it vanishes (scalar and extra points,
+    q-set grids) are generalised coordinates and skipped.
+    """
+    first = np.flatnonzero(uset.index.get_level_values("dof") == 1)
+    T = np.stack([rb_basic[i : i + 3, :3].T for i in first])
+    grid = np.abs(np.linalg.det(T)) > 0.5
+    first, T = first[grid], T[grid]
+    ids = np.asarray(uset.index.get_level_values("id")[first], dtype=np.int64)
+    return ids, uset.iloc[first][["x", "y", "z"]].to_numpy(dtype=float), first, T
+
+
+def _basic_shapes(phg: np.ndarray, first: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """Shapes (m, n, 6) in basic from the g-set shapes in the grids' output systems."""
+    local = np.stack([phg[i : i + 6] for i in first])  # (n, 6, m)
+    trans = np.einsum("nij,njm->mni", T, local[:, :3])
+    rot = np.einsum("nij,njm->mni", T, local[:, 3:])
+    return np.concatenate([trans, rot], axis=2)
+
+
+def _mass_properties(mass, R, phi) -> tuple[np.ndarray, np.ndarray]:
+    """Symmetrised Rᵀ M R and Φᵀ M R on the mass partition (model units)."""
+    MR = mass @ R
+    rigid = R.T @ MR
+    return 0.5 * (rigid + rigid.T), phi.T @ MR
+
+
+def _frequencies(lam: np.ndarray, time: float, rigid_frequency: float) -> np.ndarray:
+    """ω in rad/s from eigenvalues in model units; rigid-body modes' roundoff set to 0."""
+    w = np.sqrt(np.clip(lam, 0.0, None)) / time
+    w = np.where(w <= rigid_frequency, 0.0, w)
+    if np.any(np.diff(w) < 0):
+        low = ", ".join(f"{x:.3g}" for x in np.sort(w[w > 0])[:3])
+        raise ValueError(
+            f"rigid_frequency: eigenvalues are not ascending once the modes at or below "
+            f"{rigid_frequency:g} rad/s are set to 0 (lowest others {low} rad/s); if those are "
+            "rigid-body modes, raise rigid_frequency"
+        )
+    return w
+
+
+def _boundary(frequencies: np.ndarray, rigid_mass: np.ndarray, source: str) -> str:
+    """Free with one rigid-body mode per rigid motion the model has, cantilevered with none."""
+    n_rigid = int(np.count_nonzero(frequencies == 0.0))
+    if n_rigid == 0:
+        return "cantilevered"
+    d = np.sqrt(np.diag(rigid_mass))
+    d = np.where(d > 0, d, 1.0)
+    motions = np.linalg.matrix_rank(rigid_mass / np.outer(d, d), tol=_RANK_TOL)
+    if n_rigid != motions:
+        raise ValueError(
+            f"{source}: {n_rigid} rigid-body modes for {motions} rigid motions: a partially "
+            "constrained model is neither free nor cantilevered"
+        )
+    return "free"
