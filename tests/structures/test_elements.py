@@ -29,7 +29,8 @@ def rigid_vectors(nodes, reference, rotations=True):
     blocks = []
     for x in nodes:
         top = np.hstack([np.eye(3), -skew(x - reference)])
-        blocks.append(np.vstack([top, np.hstack([np.zeros((3, 3)), np.eye(3)])]) if rotations else top)
+        bottom = np.hstack([np.zeros((3, 3)), np.eye(3)])
+        blocks.append(np.vstack([top, bottom]) if rotations else top)
     return np.vstack(blocks)
 
 
@@ -93,7 +94,8 @@ def test_frame_consistent_mass_reproduces_rigid_body_inertia(trial):
     p = rng.normal(size=3)
     R = rigid_vectors([x1, x2], p)
     m, axis = RHO * A * L, (e2 - e1) / L
-    Ic = m * L**2 / 12 * (np.eye(3) - np.outer(axis, axis)) + RHO * (IY + IZ) * L * np.outer(axis, axis)
+    along = np.outer(axis, axis)
+    Ic = m * L**2 / 12 * (np.eye(3) - along) + RHO * (IY + IZ) * L * along
     expected = rigid_mass_matrix(m, (e1 + e2) / 2, Ic, p)
     assert np.allclose(R.T @ M @ R, expected, rtol=0, atol=RTOL * np.abs(expected).max())
     assert np.abs(M - M.T).max() <= RTOL * np.abs(M).max()
@@ -109,7 +111,8 @@ def test_frame_lumped_mass_hrz():
     T = el.frame_transformation(el.frame_rotation(x1, x2))
     R = rigid_vectors([x1, x2], reference=np.zeros(3))
     m = RHO * A * L
-    Ic = np.diag([RHO * (IY + IZ) * L, m * L**2 / 4 + 2 * m * L**2 / 78, m * L**2 / 4 + 2 * m * L**2 / 78])
+    transverse = m * L**2 / 4 + 2 * m * L**2 / 78
+    Ic = np.diag([RHO * (IY + IZ) * L, transverse, transverse])
     expected = rigid_mass_matrix(m, (x1 + x2) / 2, Ic, np.zeros(3))
     got = R.T @ el.to_global(Ml, T) @ R
     assert np.allclose(got, expected, rtol=0, atol=RTOL * np.abs(expected).max())
@@ -174,7 +177,8 @@ def frame_global(x1, x2, v, N=0.0, lumped=False):
 @pytest.mark.parametrize("lumped", [False, True])
 def test_beam2d_equals_in_plane_block_of_frame(lumped):
     alpha = 0.6
-    x1, x2 = np.array([0.3, -0.2, 1.0]), np.array([0.3 + 2 * np.cos(alpha), -0.2 + 2 * np.sin(alpha), 1.0])
+    x1 = np.array([0.3, -0.2, 1.0])
+    x2 = x1 + 2 * np.array([np.cos(alpha), np.sin(alpha), 0.0])
     v = [-np.sin(alpha), np.cos(alpha), 0.0]  # local z = global Z: Iz bends in the X-Y plane
     K3, M3, G3, L = frame_global(x1, x2, v, N=500.0, lumped=lumped)
     idx = np.ix_([0, 1, 5, 6, 7, 11], [0, 1, 5, 6, 7, 11])

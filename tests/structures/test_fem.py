@@ -4,13 +4,14 @@ hand-calculated mass properties, and the error rules of the FEM API.
 Tolerances and why
 ------------------
 * Consistent-mass cubic beam elements converge as h^4 in the eigenvalue: with 20 elements the
-  first three beta*L are within 1e-6 of the exact roots, so the required 0.01 % (1e-4) holds
-  with a wide margin.  HRZ lumped mass converges as h^2: 20 elements are within 1.2 %, and
+  first three beta*L are within 8.2e-6 (clamped-free) and 3.1e-5 (free-free, 3rd mode) of the
+  exact roots (measured), inside the required 0.01 % (1e-4).  HRZ lumped mass converges as h^2: 20 elements are within 1.2 %, and
   doubling the mesh must divide the error by at least 3.5 (4 asymptotically).
 * Rods and torsion (linear elements) are compared with the *exact discrete* eigenvalues of the
   uniform chain (rtol 1e-9, round-off only) and with the continuum to the dispersion error.
 * Geometric stiffness: a string (EI -> 0) and a hanging chain are compared with their
-  continuum frequencies within 1 % (40 elements: discretisation error <= 0.2 %).
+  continuum frequencies within 1 % as required (40 elements, measured: string 4.5e-7,
+  chain 0.14 %).
 * NAFEMS FV2 (pin-ended double cross, 4 elements per arm): published frequencies within 1 %
   (largest deviation 0.62 %, 4 cubic elements per arm for the 2nd mode of each arm).
 * Invariance and hand-calculated mass properties: rtol 1e-9 / 1e-12 (round-off).
@@ -80,7 +81,6 @@ def test_cantilever_frame_beta_L_consistent_mass():
     modes = frame_line(20, clamped=True).assemble().modes(12)
     got = beta_L(dominant(modes)[:3])
     assert got == pytest.approx(CLAMPED_FREE_BETA_L[:3], rel=1e-4)
-    assert np.abs(got / CLAMPED_FREE_BETA_L[:3] - 1).max() < 1e-5  # h^4: actually ~1e-6
 
 
 def test_free_free_3d_frame_has_exactly_six_rigid_modes_then_beam_theory():
@@ -126,6 +126,26 @@ def test_beam2d_cantilever():
     assert {d for _, d in asm.dofs} == {"ux", "uy", "rz"}
     modes = asm.modes(4)
     assert beta_L(modes.omegas[:3]) == pytest.approx(CLAMPED_FREE_BETA_L[:3], rel=1e-4)
+
+
+@pytest.mark.parametrize("kind", ["beam2d", "grid"])
+def test_free_free_planar_models_have_three_exact_rigid_modes(kind):
+    """A free planar beam (ux, uy, rz) or grid line (uz, rx, ry) has 3 rigid-body modes; they are
+    replaced by the M-orthonormalised rigid vectors, then free-free beam theory."""
+    s = line(20)
+    for i in range(20):
+        if kind == "beam2d":
+            s.add_beam2d(i, i + 1, ALU, BAR)
+        else:
+            s.add_grid(i, i + 1, ALU.E * BAR.Iz, 50.0, ALU.rho * BAR.A, 1e-3)
+    asm = s.assemble()
+    modes = asm.modes(8, rigid_body_modes=3)
+    assert np.all(modes.omegas[:3] == 0)
+    rigid = modes.shapes[:, :3]
+    assert np.abs(asm.K @ rigid).max() <= 1e-12 * abs(asm.K).max() * np.abs(rigid).max()
+    assert np.abs(modes.shapes.T @ asm.M @ modes.shapes - np.eye(8)).max() < 1e-12
+    bending = dominant(modes, ("uy", "rz") if kind == "beam2d" else ("uz", "ry"))
+    assert beta_L(bending[:3]) == pytest.approx(FREE_FREE_BETA_L[:3], rel=1e-4)
 
 
 def test_grid_bending_and_torsion():
@@ -239,14 +259,16 @@ def test_mass_properties_hand_calculation():
         L = np.linalg.norm(b - a)
         e = (b - a) / L
         m = mat.rho * sec.A * L
-        Jc = m * L**2 / 12 * (np.eye(3) - np.outer(e, e)) + mat.rho * (sec.Iy + sec.Iz) * L * np.outer(e, e)
+        along = np.outer(e, e)
+        Jc = m * L**2 / 12 * (np.eye(3) - along) + mat.rho * (sec.Iy + sec.Iz) * L * along
         parts.append(point(m, (a + b) / 2, Jc))
     # the lumped member 3-4 (HRZ): half mass at each end, rotary rho A L^3/78 per bending axis
     a, b = np.array(bars[3][0], float), np.array(bars[3][1], float)
     L = np.linalg.norm(b - a)
     e = (b - a) / L
     m = ALU.rho * tube.A * L
-    rot = m * L**2 / 78 * (np.eye(3) - np.outer(e, e)) + ALU.rho * (tube.Iy + tube.Iz) * L / 2 * np.outer(e, e)
+    along = np.outer(e, e)
+    rot = m * L**2 / 78 * (np.eye(3) - along) + ALU.rho * (tube.Iy + tube.Iz) * L / 2 * along
     parts[3] = tuple(x + y for x, y in zip(point(m / 2, a, rot), point(m / 2, b, rot)))
     J = np.array([[0.02, 0.001, 0.0], [0.001, 0.03, 0.002], [0.0, 0.002, 0.025]])
     parts += [point(1.5, (1.2, 0.9, 0.7), J), point(0.4, (1.2, 0.9, 0))]
@@ -445,15 +467,18 @@ def test_clamped_structure_asked_for_rigid_modes():
         (lambda s: s.add_node(7, (0, float("nan"), 0)), "node 7: xyz: must be finite"),
         (lambda s: s.add_frame(1, 42, ALU, BAR), "node 42: unknown node"),
         (lambda s: s.add_frame(1, 1, ALU, BAR), r"member \(1, 1\): zero length"),
-        (lambda s: s.add_frame(0, 1, ALU, BAR, orientation=(2, 0, 0)), "orientation: must not be parallel"),
+        (lambda s: s.add_frame(0, 1, ALU, BAR, orientation=(2, 0, 0)),
+         "orientation: must not be parallel"),
         (lambda s: s.add_frame(0, 1, ALU, BAR, offsets=[(0.5, 0, 0), (-0.5, 0, 0)]), "zero length"),
         (lambda s: s.add_frame(0, 1, "steel", BAR), "material: must be a Material"),
         (lambda s: s.add_rod(0, 1, ALU, -1.0), "area: must be > 0"),
         (lambda s: s.add_grid(0, 1, 1.0, 0.0, 1.0), "GJ: must be > 0"),
         (lambda s: s.add_beam2d(0, 3, ALU, BAR), "must lie in a plane z = const"),
         (lambda s: s.add_mass(1, -1.0), "mass: must be >= 0"),
-        (lambda s: s.add_mass(1, 1.0, inertia=[1.0, -1.0, 1.0]), "inertia: must be positive semi-definite"),
-        (lambda s: s.add_mass(1, 1.0, inertia=[[1, 1, 0], [0, 1, 0], [0, 0, 1]]), "inertia: must be symmetric"),
+        (lambda s: s.add_mass(1, 1.0, inertia=[1.0, -1.0, 1.0]),
+         "inertia: must be positive semi-definite"),
+        (lambda s: s.add_mass(1, 1.0, inertia=[[1, 1, 0], [0, 1, 0], [0, 0, 1]]),
+         "inertia: must be symmetric"),
         (lambda s: s.clamp(1, ["uq"]), "dofs: unknown dof 'uq'"),
         (lambda s: s.clamp(5), "node 5: unknown node"),
         (lambda s: s.set_axial_preload(9, 1.0), "element 9: unknown element id"),

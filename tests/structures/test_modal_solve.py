@@ -66,8 +66,8 @@ def test_grounded_chain_closed_form():
     n, k, m = 300, 1000.0, 2.0
     omegas, _ = solve_modes(*chain(n, k, m), 5)
     j = np.arange(1, 6)
-    assert omegas == pytest.approx(2 * math.sqrt(k / m) * np.sin((2 * j - 1) * math.pi / (4 * n + 2)),
-                                   rel=1e-9)
+    exact = 2 * math.sqrt(k / m) * np.sin((2 * j - 1) * math.pi / (4 * n + 2))
+    assert omegas == pytest.approx(exact, rel=1e-9)
 
 
 @pytest.mark.parametrize("n", [5, 3 * DENSE_LIMIT])

@@ -190,9 +190,8 @@ class AgrawalBangCase:
         """Cantilevered modal model (reference: the clamped base, the origin); ``n_modes``
         defaults to the case's (3), ``"all"`` keeps every finite-element mode."""
         if "modal" not in self._cache:
-            full = self.structure(clamped=False).assemble()
-            self._cache["modal"] = cantilevered_modal_model(self.fe_modes, full.M, full,
-                                                            self.damping)
+            self._cache["modal"] = ModalModel.from_fe(self.fe_modes, self.damping,
+                                                      boundary="cantilevered")
         modal = self._cache["modal"]
         if n_modes == "all":
             return modal
@@ -281,28 +280,6 @@ class AgrawalBangCase:
             "mass_kg": self.modal_model().total_mass,
             "published_frequencies": "none (seed 004 prints no frequency of its model)",
         }
-
-
-def cantilevered_modal_model(modes, M_full, full_assembly, damping, reference=(0.0, 0.0, 0.0)):
-    r"""Cantilevered :class:`ModalModel` whose rigid mass and coupling use the *full* mass matrix.
-
-    With a consistent mass matrix the clamped (attachment) nodes share element mass with the
-    free ones. In hybrid coordinates the attachment moves with the rigid body, so the rigid
-    mass is :math:`R^T M_{full} R` (the whole structure) and the coupling is
-    :math:`L = \Phi^T (M_{full} R)_{free}`, which includes :math:`M_{fc} R_c`; then with every
-    mode the hybrid model is exactly the free finite-element model. ``ModalModel.from_fe`` uses
-    the clamped-model M only (:math:`R_f^T M_{ff} R_f`), which drops the attachment's share and,
-    for a planar frame, gives unequal x and y masses (axial vs bending consistent mass)."""
-    asm = modes.assembly
-    R = full_assembly.rigid_body_vectors(reference)
-    MR = M_full @ R
-    rows = [full_assembly.index(n, d) for n, d in asm.dofs]
-    rigid = R.T @ MR
-    return ModalModel(
-        node_ids=asm.node_ids, coordinates=asm.coordinates, frequencies=modes.omegas,
-        damping=damping, shapes=modes.at_nodes(), rigid_mass=0.5 * (rigid + rigid.T),
-        participation=modes.shapes.T @ MR[rows], reference=reference, boundary="cantilevered",
-    )
 
 
 def _patches(raw, beam_lengths, patch_length) -> tuple:

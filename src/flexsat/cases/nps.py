@@ -36,7 +36,6 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import brentq
 
-from flexsat.cases.agrawal_bang import cantilevered_modal_model
 from flexsat.control import PD
 from flexsat.structures.beam import TipMassCantilever, hub_free_frequencies
 from flexsat.structures.fem import Structure
@@ -185,10 +184,9 @@ class NPSCase:
         EI = self.mast_bending_stiffness_value
         clamped = self.structure(EI).assemble()
         modes = clamped.modes(clamped.n_dofs)
-        # full appendage mass (attachment node free, moving with the hub): rigid mass about the
-        # hub centre and coupling L = Φᵀ (M_full R) on the clamped model's dofs
-        full = self.structure(EI, clamped=False).assemble()
-        modal = cantilevered_modal_model(modes, full.M, full, self.damping)
+        # hybrid coordinates about the hub centre: from_fe uses the whole appendage's mass
+        # (the attachment node moves with the hub), L = Φᵀ (M_full R) on the clamped dofs
+        modal = ModalModel.from_fe(modes, self.damping, boundary="cantilevered")
         I_app = float(modal.rigid_mass[5, 5])
         if self.hub_inertia is not None:
             hub = self.hub_inertia

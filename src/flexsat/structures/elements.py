@@ -7,16 +7,18 @@ name says otherwise; :func:`to_global` applies a transformation ``T`` as ``T^T k
 Sources
 -------
 * Stiffness, consistent mass and transformation of the 3-D frame: J. S. Przemieniecki,
-  *Theory of Matrix Structural Analysis* (McGraw-Hill 1968; Dover 1985), eqs. 5.116 and 11.41
-  (Euler-Bernoulli, no shear deformation, no rotary inertia of bending).
+  *Theory of Matrix Structural Analysis* (McGraw-Hill 1968; Dover 1985), ch. 5 (stiffness of
+  the uniform beam element), ch. 6 (transformation) and ch. 11 (consistent mass);
+  Euler-Bernoulli: no shear deformation, no rotary inertia of the bending rotations.
 * Consistent geometric stiffness under a constant axial force N (tension > 0): Przemieniecki
-  eq. 15.19 / Cook, Malkus, Plesha & Witt, *Concepts and Applications of Finite Element
-  Analysis*, 4th ed., eq. 18.2-7: ``N/(30 L) [[36, 3L, -36, 3L], [3L, 4L^2, -3L, -L^2], ...]``
-  per bending plane; the bar form ``N/L (I - n n^T)`` for rods (Cook eq. 18.2-4).
-* Lumped masses: HRZ diagonal scaling (Hinton, Rock & Zienkiewicz 1976; Cook §11.3): the
-  translational masses are rho A L / 2 per node and the bending rotary masses rho A L^3 / 78.
-* Rigid end offsets: the node-to-beam-end map u_end = u_node + theta x d (Przemieniecki §6.8,
-  as in NASTRAN CBAR ``WA/WB``).
+  ch. 15; Cook, Malkus, Plesha & Witt, *Concepts and Applications of Finite Element Analysis*,
+  4th ed. (2002), ch. 18: ``N/(30 L) [[36, 3L, -36, 3L], [3L, 4L^2, -3L, -L^2], ...]`` per
+  bending plane (= N ∫ N'^T N' dx of the Hermite cubics), and ``N/L (I - n n^T)`` for rods.
+* Lumped masses: HRZ diagonal scaling (Hinton, Rock & Zienkiewicz, Earthquake Eng. Struct.
+  Dyn. 4, 245-249, 1976; Cook ch. 11): rho A L/2 per translation and rho A L^3/78 per bending
+  rotation.
+* Rigid end offsets: u_end = u_node + theta × d, theta_end = theta_node (rigid link, as the
+  NASTRAN CBAR offsets ``WA``/``WB`` in global axes).
 
 Local conventions
 -----------------
@@ -47,6 +49,7 @@ __all__ = [
     "rod_geometric_stiffness",
     "rod_mass",
     "rod_stiffness",
+    "skew",
     "to_global",
 ]
 
@@ -56,19 +59,16 @@ _PARALLEL_TOL = 1e-9  # |x × v| below this (unit vectors) counts as parallel
 
 # ------------------------------------------------------------------------------------------------
 # one-dimensional building blocks, shapes (..., 2, 2) and (..., 4, 4)
-def _bar(c, L, template):
-    c, L = np.broadcast_arrays(np.asarray(c, float), np.asarray(L, float))
-    return np.asarray(template) * c[..., None, None]
-
-
 def _bar_stiffness(EA, L):
-    """c/L [[1, -1], [-1, 1]]."""
-    return _bar(np.asarray(EA) / L, L, [[1.0, -1.0], [-1.0, 1.0]])
+    """Linear bar stiffness EA/L [[1, -1], [-1, 1]]."""
+    c = np.asarray(EA, float) / np.asarray(L, float)
+    return c[..., None, None] * np.array([[1.0, -1.0], [-1.0, 1.0]])
 
 
 def _bar_mass(m, L):
     """Consistent mass m L/6 [[2, 1], [1, 2]] of a linear bar (m per length)."""
-    return _bar(np.asarray(m) * L / 6.0, L, [[2.0, 1.0], [1.0, 2.0]])
+    c = np.asarray(m, float) * np.asarray(L, float) / 6.0
+    return c[..., None, None] * np.array([[2.0, 1.0], [1.0, 2.0]])
 
 
 def _hermite(c, L, powers, template):
@@ -129,7 +129,7 @@ _F_XY, _F_XZ = [1, 5, 7, 11], [2, 4, 8, 10]
 
 
 def frame_local_stiffness(E, G, A, Iy, Iz, J, L):
-    """Local 12x12 stiffness of a 3-D Euler-Bernoulli frame (Przemieniecki eq. 5.116).
+    """Local 12x12 stiffness of a 3-D Euler-Bernoulli frame (Przemieniecki ch. 5).
 
     Parameters
     ----------
@@ -157,7 +157,7 @@ def frame_local_stiffness(E, G, A, Iy, Iz, J, L):
 
 
 def frame_local_mass(rho, A, Iy, Iz, L, lumped=False):
-    """Local 12x12 mass of a 3-D frame: consistent (Przemieniecki eq. 11.41) or HRZ-lumped.
+    """Local 12x12 mass of a 3-D frame: consistent (Przemieniecki ch. 11) or HRZ-lumped.
 
     The torsional inertia per length is rho (Iy + Iz) (polar moment); rotary inertia of the
     bending rotations is neglected in the consistent matrix (Euler-Bernoulli).
@@ -198,8 +198,8 @@ def frame_local_mass(rho, A, Iy, Iz, L, lumped=False):
 def frame_local_geometric_stiffness(N, L):
     """Local 12x12 consistent geometric stiffness of a frame under axial force N (tension > 0).
 
-    Both bending planes, ``N/(30 L)`` times the cubic Hermite matrix (Przemieniecki eq. 15.19,
-    Cook eq. 18.2-7); the axial and torsional rows are zero.
+    Both bending planes, ``N/(30 L)`` times the cubic Hermite matrix (Przemieniecki ch. 15,
+    Cook ch. 18); the axial and torsional rows are zero.
 
     Returns
     -------
@@ -242,7 +242,7 @@ def frame_rotation(x1, x2, orientation=None):
     return np.stack([ex, np.cross(ez, ex), ez], axis=-2)
 
 
-def _skew(d):
+def skew(d):
     """S(d) with S(d) v = d × v, shape (..., 3, 3)."""
     d = np.asarray(d, float)
     z = np.zeros(d.shape[:-1])
@@ -280,8 +280,8 @@ def frame_transformation(rotation, offsets=None):
     if offsets is not None:
         off = np.broadcast_to(np.eye(12), T.shape).copy()
         d = np.asarray(offsets, float)
-        off[..., 0:3, 3:6] = -_skew(d[..., 0, :])
-        off[..., 6:9, 9:12] = -_skew(d[..., 1, :])
+        off[..., 0:3, 3:6] = -skew(d[..., 0, :])
+        off[..., 6:9, 9:12] = -skew(d[..., 1, :])
         T = T @ off
     return T
 
@@ -328,7 +328,8 @@ def _plane_rotation(x1, x2):
     n = d / np.linalg.norm(d, axis=-1, keepdims=True)
     c, s = n[..., 0], n[..., 1]
     z, o = np.zeros_like(c), np.ones_like(c)
-    return np.stack([np.stack([c, s, z], -1), np.stack([-s, c, z], -1), np.stack([z, z, o], -1)], -2)
+    rows = [np.stack([c, s, z], -1), np.stack([-s, c, z], -1), np.stack([z, z, o], -1)]
+    return np.stack(rows, -2)
 
 
 def _two_blocks(r):

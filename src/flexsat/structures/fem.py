@@ -12,15 +12,15 @@ as one ``(n, d, d)`` stack, scattered as COO triplets and summed into CSR.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from numbers import Integral
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from flexsat.structures import elements as el
-from flexsat.structures.modal_solve import SYMMETRY_RTOL, solve_modes
+from flexsat.structures.modal_solve import SYMMETRY_RTOL, factor_positive_definite, solve_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.validation import require_finite, require_nonneg, require_positive
 
@@ -78,6 +78,7 @@ class Structure:
         self._members: list[_Member] = []
         self._masses: list[_Lumped] = []
         self._clamped: set[tuple[int, int]] = set()
+        self._suppressed: set[tuple[int, int]] = set()  # clamps kept in Assembly.unclamped
 
     # -- nodes ------------------------------------------------------------------------------
     def add_node(self, node_id: int, xyz) -> None:
@@ -103,6 +104,24 @@ class Structure:
     def coordinates(self) -> np.ndarray:
         """Node positions (n, 3), m, in the order of :attr:`node_ids`."""
         return np.array(self._xyz, dtype=float).reshape(-1, 3)
+
+    @property
+    def n_elements(self) -> int:
+        """Number of members (element ids are 0 .. n_elements - 1)."""
+        return len(self._members)
+
+    def element(self, element) -> dict:
+        """Description of a member: ``kind``, ``nodes`` (ids), ``label`` and ``preload`` (N)."""
+        m = self._members[self._element_index(element)]
+        return dict(kind=m.kind, nodes=(self._ids[m.n1], self._ids[m.n2]), label=m.label,
+                    preload=m.preload)
+
+    def _element_index(self, element) -> int:
+        if isinstance(element, bool) or not isinstance(element, Integral) or not (
+            0 <= element < len(self._members)
+        ):
+            raise ValueError(f"element {element!r}: unknown element id")
+        return int(element)
 
     def _node(self, node_id) -> int:
         try:
@@ -237,29 +256,44 @@ class Structure:
                 raise ValueError("inertia: must be positive semi-definite")
         self._masses.append(_Lumped(index, m, J))
 
-    def clamp(self, node, dofs="all") -> None:
-        """Fix dofs of a node: ``"all"`` or an iterable of names from :data:`DOF_NAMES`."""
+    def clamp(self, node, dofs="all", support: bool | None = None) -> None:
+        """Fix dofs of a node: ``"all"`` or an iterable of names from :data:`DOF_NAMES`.
+
+        ``support`` says whether the clamp attaches the structure to its carrier (a hub, a
+        test fixture), as opposed to suppressing dofs the model does not use (out-of-plane dofs
+        of a planar model, an axially rigid member). Supports are released in
+        ``Assembly.unclamped``; default: True for ``"all"``, False for a list of dofs.
+        """
         index = self._node(node)
-        names = DOF_NAMES if isinstance(dofs, str) and dofs == "all" else dofs
+        everything = isinstance(dofs, str) and dofs == "all"
+        names = DOF_NAMES if everything else dofs
         if isinstance(names, str):
             names = (names,)
         for name in names:
             if name not in _SLOT:
                 raise ValueError(f"dofs: unknown dof {name!r} (expected 'all' or {DOF_NAMES})")
             self._clamped.add((index, _SLOT[name]))
+            if not (everything if support is None else support):
+                self._suppressed.add((index, _SLOT[name]))
 
     def set_axial_preload(self, element, force) -> None:
         """Set the axial force of a member (tension > 0, N); adds its geometric stiffness."""
-        if isinstance(element, bool) or not isinstance(element, Integral) or not (
-            0 <= element < len(self._members)
-        ):
-            raise ValueError(f"element {element!r}: unknown element id")
-        self._members[element].preload = float(require_finite(force, "force"))
+        self._members[self._element_index(element)].preload = float(require_finite(force, "force"))
 
     # -- assembly ---------------------------------------------------------------------------
     def assemble(self) -> Assembly:
-        """Sparse K (elastic + geometric) and M on the active dofs."""
-        return self._assemble(geometric=True, clamped=self._clamped)
+        """Sparse K (elastic + geometric) and M on the active dofs.
+
+        A supported structure's assembly also carries ``unclamped``, the assembly with its
+        supports released (see :meth:`clamp`): with consistent mass the attachment dofs share
+        element mass with the free ones, and hybrid-coordinate (cantilevered) modal models need
+        that mass.
+        """
+        assembly = self._assemble(geometric=True, clamped=self._clamped)
+        if self._clamped == self._suppressed:
+            return assembly
+        whole = self._assemble(geometric=False, clamped=self._suppressed)
+        return dataclasses.replace(assembly, unclamped=whole)
 
     def _assemble(self, geometric: bool, clamped) -> Assembly:
         n_nodes = len(self._ids)
@@ -273,8 +307,11 @@ class Structure:
                 for col in (0, 1):
                     nodes = np.array([(m.n1, m.n2)[col] for m in members])
                     touched[nodes[:, None], slots[None, :]] = True
+        for lm in self._masses:
+            touched[lm.node, :3] = True
+            touched[lm.node, 3:] |= lm.inertia is not None
         if self._masses:
-            parts.append(self._mass_triplets(touched))
+            parts.append(self._mass_blocks())
         _check_connected(touched, self._ids)
         active = touched.copy()
         for node, slot in clamped:
@@ -289,16 +326,14 @@ class Structure:
         return Assembly(K, M, dofs, self.node_ids, self.coordinates,
                         n_clamped=len(clamped))
 
-    def _mass_triplets(self, touched):
-        """(global dof index blocks, K blocks, M blocks) of the lumped masses (6x6 each)."""
+    def _mass_blocks(self):
+        """(global slot indices, K blocks, M blocks) of the lumped masses (6x6 each)."""
         idx = np.array([6 * lm.node + np.arange(6) for lm in self._masses])
         M = np.zeros((len(self._masses), 6, 6))
         for i, lm in enumerate(self._masses):
             M[i, :3, :3] = lm.mass * np.eye(3)
-            touched[lm.node, :3] = True
             if lm.inertia is not None:
                 M[i, 3:, 3:] = lm.inertia
-                touched[lm.node, 3:] = True
         return idx, np.zeros_like(M), M
 
     # -- preloads from gravity --------------------------------------------------------------
@@ -372,16 +407,13 @@ def _sparse(number, blocks) -> sp.csr_matrix:
 
 
 def _static_solve(K, f) -> np.ndarray:
+    """u = K^{-1} f for a K that must be positive definite (L D L^T, see modal_solve)."""
     try:
-        u = splu(sp.csc_matrix(K), permc_spec="MMD_AT_PLUS_A").solve(f)
-    except RuntimeError:
-        u = np.full_like(f, np.nan)
-    residual = np.linalg.norm(K @ u - f)
-    if not np.all(np.isfinite(u)) or residual > 1e-8 * max(np.linalg.norm(f), 1e-300):
+        return factor_positive_definite(K).solve(f)
+    except ValueError:
         raise ValueError(
             "gravity_preload: stiffness matrix is singular (a mechanism, or too few clamps)"
-        )
-    return u
+        ) from None
 
 
 # ------------------------------------------------------------------------------------------------
@@ -398,7 +430,7 @@ def _slot_indices(members, kind):
 
 
 def _frame_geometry(members, xyz):
-    """End positions (with offsets), lengths and 12x12 transformations of frame members."""
+    """Lengths (between the offset ends) and 12x12 transformations of frame members."""
     x1 = xyz[[m.n1 for m in members]]
     x2 = xyz[[m.n2 for m in members]]
     offsets = np.array([
@@ -408,15 +440,15 @@ def _frame_geometry(members, xyz):
     given = np.array([m.props["orientation"] is not None for m in members])
     R = el.frame_rotation(x1, x2)
     if given.any():
-        v = np.array([m.props["orientation"] for m in members if m.props["orientation"] is not None])
+        v = np.array([m.props["orientation"] for m, g in zip(members, given) if g])
         R[given] = el.frame_rotation(x1[given], x2[given], v)
     T = el.frame_transformation(R, offsets)
-    return x1, x2, np.linalg.norm(x2 - x1, axis=1), T
+    return np.linalg.norm(x2 - x1, axis=1), T
 
 
 def _frame_blocks(members, xyz, geometric):
     c = {k: _column(members, k) for k in ("E", "G", "rho", "A", "Iy", "Iz", "J")}
-    _, _, L, T = _frame_geometry(members, xyz)
+    L, T = _frame_geometry(members, xyz)
     k = el.frame_local_stiffness(c["E"], c["G"], c["A"], c["Iy"], c["Iz"], c["J"], L)
     if geometric:
         k = k + el.frame_local_geometric_stiffness(_preloads(members), L)
@@ -524,6 +556,8 @@ class Assembly:
     coordinates : ndarray (n_nodes, 3)
     n_clamped : int
         Number of clamped dofs of the structure (0: free-free).
+    unclamped : Assembly or None
+        For a clamped structure, the assembly of the same structure with the clamps released.
     """
 
     K: sp.csr_matrix
@@ -532,6 +566,7 @@ class Assembly:
     node_ids: np.ndarray
     coordinates: np.ndarray
     n_clamped: int = 0
+    unclamped: "Assembly | None" = None
     _lookup: dict = field(init=False, repr=False)
     _node_of_dof: np.ndarray = field(init=False, repr=False)
     _slot_of_dof: np.ndarray = field(init=False, repr=False)
@@ -569,7 +604,7 @@ class Assembly:
         B = np.zeros((len(r), 6, 6))
         B[:, :3, :3] = np.eye(3)
         B[:, 3:, 3:] = np.eye(3)
-        B[:, :3, 3:] = -el._skew(r)
+        B[:, :3, 3:] = -el.skew(r)
         return B[self._node_of_dof, self._slot_of_dof]
 
     def mass_properties(self, reference=(0.0, 0.0, 0.0)) -> dict:

@@ -572,9 +572,11 @@ class ModalModel:
         .. math::
 
             R = \text{assembly.rigid\_body\_vectors}(p), \quad
-            M_{rr} = \tfrac12 (R^T M R + (R^T M R)^T), \quad L = \Phi^T M R,
+            M_{rr} = \tfrac12 (R^T M R + (R^T M R)^T), \quad L = \Phi^T (M R)_a,
 
-        shapes from ``modes.at_nodes()``.
+        with M and R of the whole structure (``assembly.unclamped`` for a clamped one, so the
+        attachment's share of consistent element mass is kept) and a the active rows. Shapes come
+        from ``modes.at_nodes()``.
 
         Parameters
         ----------
@@ -586,16 +588,21 @@ class ModalModel:
         reference : array_like (3,)
             Rigid-motion reference point p, m (the attachment point of a cantilevered model).
         boundary : {"free", "cantilevered"}, optional
-            Default: "free" when the stiffness annihilates the rigid-body vectors,
-            :math:`\|K R\| \le 10^{-9} \|K\| \|R\|` (Frobenius norms), else "cantilevered"
-            (also for a partially constrained structure). Give it explicitly for a free
+            Default: "cantilevered" when the structure has supports (``assembly.unclamped``);
+            otherwise "free" when the stiffness annihilates the rigid-body vectors,
+            :math:`\|K R\| \le 10^{-9} \|K\| \|R\|` (Frobenius norms), else "cantilevered". Give it explicitly for a free
             structure with axial preloads, whose geometric stiffness need not annihilate rigid
             rotations.
         """
         asm = modes.assembly
-        R = asm.rigid_body_vectors(_array(reference, "reference", (3,), "(3,)"))
-        MR = asm.M @ R
+        reference = _array(reference, "reference", (3,), "(3,)")
+        # hybrid coordinates: the attachment moves with the rigid body, so rigid mass and
+        # coupling use the whole structure's mass (L includes M_ac R_c, exact with all modes)
+        whole = asm.unclamped if asm.unclamped is not None else asm
+        R = whole.rigid_body_vectors(reference)
+        MR = whole.M @ R
         rigid = R.T @ MR
+        rows = [whole.index(n, d) for n, d in asm.dofs] if whole is not asm else slice(None)
         return cls(
             node_ids=asm.node_ids,
             coordinates=asm.coordinates,
@@ -603,9 +610,9 @@ class ModalModel:
             damping=damping,
             shapes=modes.at_nodes(),
             rigid_mass=0.5 * (rigid + rigid.T),
-            participation=modes.shapes.T @ MR,
+            participation=modes.shapes.T @ MR[rows],
             reference=reference,
-            boundary=_fe_boundary(asm.K, R) if boundary is None else boundary,
+            boundary=boundary or ("cantilevered" if whole is not asm else _fe_boundary(asm.K, R)),
         )
 
     @classmethod

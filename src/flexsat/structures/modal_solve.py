@@ -2,18 +2,21 @@ r"""Lowest natural modes of K φ = λ M φ (λ = ω²) by shift-invert Lanczos, 
 
 Method
 ------
-The pencil is solved in shift-invert form, (K - σM)^{-1} M φ = ν φ with λ = σ + 1/ν: by
-:func:`scipy.sparse.linalg.eigsh` (ARPACK, implicitly restarted Lanczos, one sparse LU of
-K - σM) or, for at most ``DENSE_LIMIT`` dofs, by a dense generalized symmetric eigensolver on
-the same pencil.  The default shift is negative, σ = -1e-10 λ_s with
-λ_s = max_i K_ii / M_ii (a Rayleigh quotient, so λ_s <= λ_max): K - σM is then positive
-definite even when K is singular (rigid-body modes), with a condition number near 1e10 (six
-orders above round-off), and σ lies below every eigenvalue, so the computed modes are the
-lowest.  A shift closer to zero is not needed; a larger |σ| clusters the shift-inverted
-eigenvalues 1/(λ - σ) of long slender models (a 1000-element beam: 50 s at 1e-6 λ_s, 0.2 s at
-1e-10 λ_s).  The Ritz vectors are refined by a final
-Rayleigh-Ritz step on the computed subspace, so ``Φ^T M Φ = I`` to round-off; each mode is
-signed so that its largest component is positive.
+The pencil is solved in shift-invert form, (K - σM)^{-1} M φ = ν φ with λ = σ + 1/ν, by
+:func:`scipy.sparse.linalg.eigsh` (ARPACK, implicitly restarted Lanczos, one sparse
+factorisation of K - σM with a symmetric minimum-degree ordering), or, when at most
+``DENSE_LIMIT`` = 200 dofs carry mass, by a dense generalized symmetric eigensolver on the same
+pencil after exact static condensation of the massless dofs.  The default shift is negative,
+σ = -1e-10 λ_s with λ_s = max_i K_ii / M_ii (a Rayleigh quotient, so λ_s <= λ_max): K - σM is
+then positive definite even when K is singular (rigid-body modes), with a condition number
+near 1e10 (six orders above round-off), and σ lies below every eigenvalue, so the computed
+modes are the lowest.  A larger |σ| clusters the shift-inverted eigenvalues 1/(λ - σ) of long
+slender models (a 1000-element free beam: 50 s at σ = -1e-6 λ_s, 0.2 s at -1e-10 λ_s).
+K - σM (σ < 0) is factorised as L D L^T without pivoting: a pivot below 1e-13 of its diagonal
+entry means a mechanism that carries no mass, and negative pivots count the eigenvalues below
+σ (Sylvester's law of inertia), i.e. buckling under compressive preloads; both are errors.
+The Ritz vectors are refined by a final Rayleigh-Ritz step on the computed subspace, so
+``Φ^T M Φ = I`` to round-off; each mode is signed so that its largest component is positive.
 
 Near-zero modes
 ---------------
@@ -21,12 +24,11 @@ A computed eigenvalue is *near zero* when |λ| <= 1e-6 λ_e (its frequency is be
 the first elastic frequency), where λ_e is the lowest computed eigenvalue above the round-off
 floor 1e-14 λ_s (rigid-body eigenvalues, as Rayleigh quotients of the computed vectors,
 come out below 1e-16 λ_s; the first elastic eigenvalue of a 1000-element free beam is
-3e-13 λ_s).  When
-``rigid_body_modes = r`` is given, exactly r near-zero modes must be found (one extra mode is
-computed to check this); they are replaced by the M-orthonormalised rigid-body vectors
-(Cholesky of R^T M R, so the first is a pure x translation) when r of those vectors are null
-vectors of K, otherwise kept as computed; their ω is set to 0 and the elastic modes are made
-M-orthogonal to them.
+3e-13 λ_s).  When ``rigid_body_modes = r`` is given, exactly r near-zero modes must be found
+(one extra mode is computed to check this); they are replaced by the M-orthonormalised
+rigid-body vectors (Cholesky of R^T M R, so the first is a pure x translation) when r of those
+vectors are null vectors of K, otherwise kept as computed; their ω is set to 0 and the elastic
+modes are made M-orthogonal to them.
 
 Checks
 ------
@@ -35,8 +37,7 @@ semi-definite: its Jacobi-scaled form D^{-1/2} M D^{-1/2} + 1e-8 I is factorised
 L D L^T (SuperLU without pivoting) and must have only positive pivots (Sylvester's law of
 inertia: a negative pivot means an eigenvalue of the scaled M below -1e-8).  Rows of M with a
 zero diagonal must be entirely zero (massless dofs are allowed; they have infinite frequency).
-A negative eigenvalue of K below the near-zero threshold (buckling under compressive
-preloads) is an error.
+A computed eigenvalue below minus the near-zero threshold (buckling) is an error.
 """
 
 from __future__ import annotations
@@ -48,7 +49,7 @@ from scipy.sparse.linalg import LinearOperator, eigsh, splu
 
 from flexsat.validation import require_count, require_finite
 
-__all__ = ["check_mass_matrix", "solve_modes"]
+__all__ = ["check_mass_matrix", "factor_positive_definite", "solve_modes"]
 
 SYMMETRY_RTOL = 1e-10
 MASS_PSD_DELTA = 1e-8
@@ -117,7 +118,9 @@ def check_mass_matrix(M) -> sp.csr_matrix:
     if not np.any(massive):
         raise ValueError("mass matrix: all zero (no mass anywhere)")
     if abs(M[~massive]).sum() > 0:
-        raise ValueError("mass matrix: indefinite (a row with zero diagonal has off-diagonal terms)")
+        raise ValueError(
+            "mass matrix: indefinite (a row with zero diagonal has off-diagonal terms)"
+        )
     s = sp.diags(1.0 / np.sqrt(d[massive]))
     scaled = s @ M[massive][:, massive] @ s + MASS_PSD_DELTA * sp.eye(int(massive.sum()))
     pivots = _ldl_pivots(scaled)
@@ -137,22 +140,55 @@ def _eigen_scale(K, M) -> float:
 
 
 def _dense_pencil(K, M, k, shift, sigma0):
-    """All finite eigenpairs of the pencil (dense), the k nearest to ``shift`` (None: lowest)."""
-    Kd, Md = K.toarray(), M.toarray()
+    """The k eigenvectors nearest ``shift`` (None: lowest) of the pencil, by a dense solve.
+
+    Massless dofs (zero rows of M) are first eliminated by exact static condensation,
+    K_c = K_mm - K_ms K_ss^{-1} K_sm, and recovered as φ_s = -K_ss^{-1} K_sm φ_m.
+    """
+    massive = M.diagonal() > 0
+    s = ~massive
+    Kmm, Mm = K[massive][:, massive].toarray(), M[massive][:, massive].toarray()
+    back = np.zeros((int(s.sum()), int(massive.sum())))
+    if s.any():
+        Ksm = K[s][:, massive]
+        back = -factor_positive_definite(K[s][:, s]).solve(Ksm.toarray())
+        Kmm = Kmm + Ksm.T @ back
     try:
-        nu, X = scipy.linalg.eigh(Md, Kd - sigma0 * Md)
+        nu, Y = scipy.linalg.eigh(Mm, Kmm - sigma0 * Mm)
     except np.linalg.LinAlgError:  # K - σ0 M not positive definite
-        eig = np.linalg.eigvalsh(Kd - sigma0 * Md)
+        eig = np.linalg.eigvalsh(Kmm - sigma0 * Mm)
         negative = int(np.sum(eig < -SYMMETRY_RTOL * np.abs(eig).max()))
         raise _buckling_error(negative) if negative else _singular_error() from None
     finite = nu > _INFINITE_NU * nu.max()
-    lam, X = sigma0 + 1.0 / nu[finite], X[:, finite]
+    lam, Y = sigma0 + 1.0 / nu[finite], Y[:, finite]
     if lam.size < k:
         raise ValueError(
             f"n_modes: only {lam.size} modes have a finite frequency (the other dofs carry no mass)"
         )
-    order = np.argsort(lam if shift is None else np.abs(lam - shift), kind="stable")[:k]
-    return X[:, order]
+    Y = Y[:, np.argsort(lam if shift is None else np.abs(lam - shift), kind="stable")[:k]]
+    X = np.zeros((K.shape[0], k))
+    X[massive], X[s] = Y, back @ Y
+    return X
+
+
+def factor_positive_definite(A):
+    """SuperLU L D L^T factors of a matrix that must be positive definite (no pivoting).
+
+    A pivot below 1e-13 times its diagonal entry means A is singular (a mechanism without
+    mass); negative pivots count its negative eigenvalues (Sylvester's law of inertia):
+    buckling modes.
+    """
+    try:
+        lu = _symmetric_lu(A, pivoting=False)
+    except RuntimeError:
+        raise _singular_error() from None
+    pivots = lu.U.diagonal()
+    diagonal = A.diagonal()[np.argsort(lu.perm_c)]
+    if np.any(lu.perm_r != lu.perm_c) or np.any(np.abs(pivots) <= _TINY_PIVOT * np.abs(diagonal)):
+        raise _singular_error()
+    if np.any(pivots < 0):
+        raise _buckling_error(int(np.sum(pivots < 0)))
+    return lu
 
 
 def _singular_error():
@@ -173,22 +209,16 @@ def _buckling_error(count, value=None):
 def _sparse_pencil(K, M, k, sigma):
     """k eigenvectors nearest ``sigma`` by shift-invert Lanczos (ARPACK).
 
-    For σ < 0 the factorisation is L D L^T without pivoting: a pivot below 1e-13 times its
-    diagonal entry means K - σM is singular (a mechanism without mass), and negative pivots
-    count the eigenvalues below σ (Sylvester's law of inertia): buckling modes, refused.
+    For σ < 0, K - σM must be positive definite (:func:`factor_positive_definite`); an
+    eigenvalue below σ would be a buckling mode.
     """
-    A = K - sigma * M
-    try:
-        lu = _symmetric_lu(A, pivoting=sigma >= 0)
-    except RuntimeError:
-        raise _singular_error() from None
     if sigma < 0:
-        pivots = lu.U.diagonal()
-        diagonal = A.diagonal()[np.argsort(lu.perm_c)]
-        if np.any(lu.perm_r != lu.perm_c) or np.any(np.abs(pivots) <= _TINY_PIVOT * diagonal):
-            raise _singular_error()
-        if np.any(pivots < 0):
-            raise _buckling_error(int(np.sum(pivots < 0)))
+        lu = factor_positive_definite(K - sigma * M)
+    else:
+        try:
+            lu = _symmetric_lu(K - sigma * M, pivoting=True)
+        except RuntimeError:
+            raise _singular_error() from None
     n = K.shape[0]
     op = LinearOperator((n, n), matvec=lu.solve, dtype=float)
     v0 = lu.solve(M @ np.random.default_rng(0).standard_normal(n))  # in the range of OP
@@ -237,7 +267,9 @@ def _count_check(n_zero, n_computed, rigid_body_modes, clamped):
         if clamped and n_zero:
             raise ValueError(
                 f"mechanism: {found} near-zero mode(s) in a clamped structure (a part can move "
-                "without deforming: add members or clamps)"
+                "without deforming: add members or clamps; or the mesh is so fine that the first "
+                f"eigenvalue is below {ROUNDOFF_RTOL:g} x max(K_ii/M_ii), the resolution of the "
+                "near-zero test)"
             )
     elif n_zero > r:
         raise ValueError(
@@ -299,7 +331,8 @@ def solve_modes(K, M, n_modes, rigid_body_modes=None, shift=None, rigid_vectors=
     scale = _eigen_scale(K, M)
     sigma0 = -SHIFT_RTOL * scale
     k = min(n, n_modes if r is None else max(n_modes, r + 1))
-    if n <= DENSE_LIMIT or k >= n - 1:
+    n_massive = int(np.sum(M.diagonal() > 0))
+    if n_massive <= DENSE_LIMIT or k >= n_massive - 1:
         X = _dense_pencil(K, M, k, shift, sigma0)
     else:
         X = _sparse_pencil(K, M, k, sigma0 if shift is None else shift)
