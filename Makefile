@@ -20,6 +20,7 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_tamu.py
+	$(PY) benchmarks/bench_modal.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

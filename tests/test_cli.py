@@ -27,11 +27,14 @@ def write_scenario(path, **simulation) -> str:
 def test_cases_lists_every_case_with_its_source():
     from flexsat.cases import CASES
 
-    result = runner.invoke(app, ["cases"], env={"COLUMNS": "250"})
+    result = runner.invoke(app, ["cases", "--json"])
     assert result.exit_code == 0
+    listed = {row["case"]: row for row in json.loads(result.stdout)}
+    assert set(listed) == set(CASES)
     for info in CASES.values():
-        assert info.name in result.stdout
-        assert info.source[:40] in result.stdout
+        assert listed[info.name]["source"] == info.source
+    table = runner.invoke(app, ["cases"])
+    assert table.exit_code == 0 and "flexsat cases" in table.stdout
 
 
 def test_modes_json():

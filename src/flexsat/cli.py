@@ -16,6 +16,7 @@ from rich.table import Table
 from rich.text import Text
 
 from flexsat.cases import CASES, get_case
+from flexsat.mode_plot import plot_case_modes
 from flexsat.report import metric_rows, write_report
 from flexsat.scenario import ScenarioError, default_scenario, load_scenario, run_scenario
 from flexsat.units import Q_
@@ -65,8 +66,14 @@ def parse_settings(settings: list[str]) -> dict:
 
 
 @app.command()
-def cases() -> None:
+def cases(
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON to stdout.")] = False,
+) -> None:
     """List the benchmark cases."""
+    if as_json:
+        typer.echo(json.dumps([{"case": i.name, "source": i.source, "description": i.description}
+                               for i in CASES.values()], indent=2))
+        return
     table = Table(title="flexsat cases")
     for column in ("case", "source", "description"):
         table.add_column(column, overflow="fold")
@@ -75,10 +82,9 @@ def cases() -> None:
     console.print(table)
 
 
-def _modes_data(case_name: str, n: int, overrides: dict) -> dict:
-    """The case's first ``n`` elastic frequencies (Hz), with its mode descriptions and further
-    tables where it has them (see :mod:`flexsat.cases`)."""
-    case = get_case(case_name).builder(**overrides)
+def _modes_data(case, case_name: str, n: int, overrides: dict) -> dict:
+    """The case's first ``n`` frequencies (Hz), with its mode descriptions and further tables
+    where it has them (see :mod:`flexsat.cases`)."""
     data = {"case": case_name, "overrides": overrides,
             "frequencies_hz": np.asarray(case.frequencies_hz(n)).tolist()}
     if hasattr(case, "mode_descriptions"):
@@ -89,15 +95,18 @@ def _modes_data(case_name: str, n: int, overrides: dict) -> dict:
 
 
 def _print_modes(data: dict) -> None:
-    columns = {"frequencies_hz": "frequency (Hz)", "exact_unconstrained_hz": "exact, hub free (Hz)",
-               "constrained_hz": "exact, hub clamped (Hz)", "descriptions": "description"}
+    columns = {"paper_mode_number": "paper mode", "frequencies_hz": "frequency (Hz)",
+               "published_hz": "published (Hz)", "ratio_to_published": "ratio",
+               "exact_unconstrained_hz": "exact, hub free (Hz)",
+               "constrained_hz": "exact, hub clamped (Hz)", "descriptions": "description",
+               "published_descriptions": "published description"}
     present = [key for key in columns if key in data]
     modes = Table(title=f"{data['case']}: natural frequencies")
     modes.add_column("mode", justify="right")
     for key in present:
         modes.add_column(columns[key], justify="left" if key == "descriptions" else "right")
     for i in range(len(data["frequencies_hz"])):
-        cells = [data[k][i] for k in present]
+        cells = [data[k][i] if i < len(data[k]) else "" for k in present]
         modes.add_row(str(i + 1), *(c if isinstance(c, str) else f"{c:.6g}" for c in cells))
     console.print(modes)
     if "inertia_budget_kg_m2" in data:
@@ -119,12 +128,21 @@ def modes(
         "--set", help='Override a case parameter: NAME=VALUE, e.g. hub_inertia="30 ozf*in*s**2".'
     )] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON to stdout.")] = False,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Write a PNG of the mode shapes (or the frequencies) to this file.")] = None,
 ) -> None:
-    """Natural frequencies (hub free and hub clamped) and inertia budget of a case."""
+    """Natural frequencies of a case, with mode descriptions and published values where the
+    case has them."""
     try:
-        data = _modes_data(case, n, parse_settings(settings or []))
+        overrides = parse_settings(settings or [])
+        built = get_case(case).builder(**overrides)
+        data = _modes_data(built, case, n, overrides)
+        if plot is not None:
+            plot_case_modes(built, n, plot, f"{case}: first {n} modes")
     except ValueError as exc:
         _fail(str(exc))
+    except OSError as exc:
+        _fail(f"--plot: cannot write {str(plot)!r} ({exc.strerror or exc})")
     if as_json:
         typer.echo(json.dumps(data, indent=2))
     else:

@@ -158,9 +158,8 @@ class AgrawalBangCase:
         s, ids = (m["s1"], m["ids1"]) if beam == 1 else (m["s2"], m["ids2"])
         return int(ids[int(np.argmin(np.abs(s - station)))])
 
-    def structure(self, clamped: bool = True) -> Structure:
-        """The planar beam2d model, clamped at the base of structure 1 (``clamped=False``:
-        the base node free, used for the full mass matrix)."""
+    def structure(self) -> Structure:
+        """The planar beam2d model, clamped at the base of structure 1."""
         m = self._mesh
         s = Structure("Agrawal-Bang L structure")
         ids = m["ids1"] + m["ids2"][1:]
@@ -173,8 +172,7 @@ class AgrawalBangCase:
         if self.tip_mass > 0:
             s.add_mass(self.tip_node, self.tip_mass)
             s.clamp(self.tip_node, ("uz",))  # planar model: the mass's out-of-plane dof
-        if clamped:
-            s.clamp(self.base_node)
+        s.clamp(self.base_node)
         return s
 
     @property

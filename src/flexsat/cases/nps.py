@@ -133,10 +133,9 @@ class NPSCase:
     def reflector_node(self) -> int:
         return self.n_elements + 1
 
-    def structure(self, EI: float | None = None, clamped: bool = True) -> Structure:
-        """The appendage: beam2d mast along +x from the attachment point, reflector at the tip.
-
-        ``clamped=False`` leaves the attachment node free (used for the full mass matrix)."""
+    def structure(self, EI: float | None = None) -> Structure:
+        """The appendage: beam2d mast along +x from the attachment point (clamped: the hub
+        support), reflector at the tip."""
         EI = self.mast_bending_stiffness_value if EI is None else EI
         s = Structure("NPS FSS appendage")
         x = self.attachment_radius + np.linspace(0.0, self.mast_length, self.n_elements + 1)
@@ -151,8 +150,7 @@ class NPSCase:
         s.clamp(self.reflector_node, ("uz", "rx", "ry"))  # planar: out-of-plane dofs of the mass
         for node in self.node_ids:
             s.clamp(int(node), ("ux",))  # axially rigid mast
-        if clamped:
-            s.clamp(1)
+        s.clamp(1)
         return s
 
     def _first_frequency(self, EI: float) -> float:

@@ -1,4 +1,8 @@
-"""Structural models: exact beam modes (beam.py) and a finite-element core (fem.py)."""
+"""Structural models: exact beam modes, a finite-element core, modal models and their import.
+
+The NASTRAN and UFF readers (``io_nastran``, ``io_uff``) need the optional extras
+``flexsat[nastran]`` (pyyeti) and ``flexsat[uff]`` (pyuff); they import them on first use.
+"""
 
 from flexsat.structures.beam import (
     CLAMPED_FREE_BETA_L,
@@ -9,7 +13,16 @@ from flexsat.structures.beam import (
     hub_free_frequencies,
 )
 from flexsat.structures.fem import DOF_NAMES, Assembly, FEModes, Structure
+from flexsat.structures.io_nastran import read_nastran_modes
+from flexsat.structures.io_uff import (
+    modal_model_from_uff,
+    read_uff,
+    read_uff_functions,
+    write_modal_uff,
+)
+from flexsat.structures.modal_model import ModalModel, hub_appendage_matrices
 from flexsat.structures.modal_solve import check_mass_matrix, solve_modes
+from flexsat.structures.mode_description import classify_modes, describe_modes
 from flexsat.structures.sections import Material, Section
 
 __all__ = [
@@ -20,11 +33,20 @@ __all__ = [
     "CantileverModes",
     "FEModes",
     "Material",
+    "ModalModel",
     "Section",
     "Structure",
     "TipMassCantilever",
     "check_mass_matrix",
     "clamped_free_beta_L",
+    "classify_modes",
+    "describe_modes",
+    "hub_appendage_matrices",
     "hub_free_frequencies",
+    "modal_model_from_uff",
+    "read_nastran_modes",
+    "read_uff",
+    "read_uff_functions",
     "solve_modes",
+    "write_modal_uff",
 ]
