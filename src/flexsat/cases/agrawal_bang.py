@@ -30,12 +30,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexsat.cases.inputs import Param, read_inputs
 from flexsat.structures.fem import Structure
 from flexsat.structures.modal_model import ModalModel
 from flexsat.structures.mode_description import classify_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.validation import require_count, require_finite, require_nonneg
 
 SOURCE = "seed 004_680d3fec9e1f8c83.txt (Agrawal & Bang 1996), §4 L205-L303"
 
@@ -52,24 +53,23 @@ PUBLISHED = {
 #: representative patch placement: (structure 1 or 2, start of the patch from that structure's root)
 DEFAULT_PATCHES = ((1, "0 m"), (2, "0 m"), (2, "0.3746 m"))
 
-# (field, SI unit, default as written)
+#: the overridable inputs of the case, defaults as written
 _INPUTS = {
-    "beam1_length": ("m", "1.0 m"),
-    "beam2_length": ("m", "0.8 m"),
-    "width": ("m", "2 in"),  # out of plane
-    "thickness": ("m", "0.125 in"),  # in plane: the bending dimension
-    "modulus": ("Pa", "68.9 GPa"),
-    "density": ("kg/m**3", "2700 kg/m**3"),
-    "tip_mass": ("kg", "0 kg"),
-    "damping": ("", 0.005),
-    "n_modes": (None, PUBLISHED["n_modes"]),
-    "element_length": ("m", "0.025 m"),
-    "patch_length": ("m", "2 in"),
-    "patches": (None, DEFAULT_PATCHES),
-    "actuator_gain": ("", 1.0),
-    "sensor_gain": ("", 1.0),
+    "beam1_length": Param("1.0 m", "m"),
+    "beam2_length": Param("0.8 m", "m"),
+    "width": Param("2 in", "m"),  # out of plane
+    "thickness": Param("0.125 in", "m"),  # in plane: the bending dimension
+    "modulus": Param("68.9 GPa", "Pa"),
+    "density": Param("2700 kg/m**3", "kg/m**3"),
+    "tip_mass": Param("0 kg", "kg", "nonneg"),
+    "damping": Param(0.005, rule="nonneg"),
+    "n_modes": Param(PUBLISHED["n_modes"], rule="count"),
+    "element_length": Param("0.025 m", "m"),
+    "patch_length": Param("2 in", "m"),
+    "patches": Param(DEFAULT_PATCHES, rule="raw"),  # checked against the lengths: _patches
+    "actuator_gain": Param(1.0),
+    "sensor_gain": Param(1.0),
 }
-_MAY_BE_ZERO = ("tip_mass", "damping")
 
 
 @dataclass(frozen=True)
@@ -311,21 +311,7 @@ def agrawal_bang(**overrides) -> AgrawalBangCase:
 
     >>> case = agrawal_bang(beam2_length="0.6 m", patches=[(1, 0), (1, "0.5 m"), (2, 0)])
     """
-    unknown = set(overrides) - set(_INPUTS)
-    if unknown:
-        raise ValueError(f"agrawal_bang: unknown parameter(s) {sorted(unknown)}; known: {sorted(_INPUTS)}")
-    values = {}
-    for name, (unit, default) in _INPUTS.items():
-        raw = overrides.get(name, default)
-        if name == "n_modes":
-            values[name] = require_count(raw, name)
-        elif name == "patches":
-            continue
-        else:
-            value = (to_si(raw, unit or "dimensionless", name) if unit or isinstance(raw, str)
-                     else float(require_finite(raw, name)))
-            check = require_nonneg if name in _MAY_BE_ZERO else require_positive
-            values[name] = float(check(value, name))
+    values = read_inputs("agrawal_bang", _INPUTS, overrides)
     if values["damping"] >= 1:
         raise ValueError(f"damping: must be < 1 (a ratio of critical damping), got {values['damping']!r}")
     for name in ("element_length", "patch_length"):
@@ -333,8 +319,7 @@ def agrawal_bang(**overrides) -> AgrawalBangCase:
         if values[name] > shortest:
             raise ValueError(f"{name}: must not exceed the shorter structure ({shortest} m), "
                              f"got {values[name]} m")
-    values["patches"] = _patches(overrides.get("patches", DEFAULT_PATCHES),
-                                 (values["beam1_length"], values["beam2_length"]),
+    values["patches"] = _patches(values["patches"], (values["beam1_length"], values["beam2_length"]),
                                  values["patch_length"])
     case = AgrawalBangCase(**values)
     case.modal_model()  # assemble and solve now: one clear message at construction

@@ -50,10 +50,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexsat.cases.inputs import Param, read_inputs
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_positive
+from flexsat.validation import require_count
 
 __all__ = [
     "CANTILEVER_BETA_L",
@@ -97,50 +98,25 @@ _FAMILIES = {
 _PLANES = {"flatwise": "flatwise", "xz": "flatwise", "edgewise": "edgewise", "xy": "edgewise"}
 
 
-def _flag(raw, name: str) -> bool:
-    if isinstance(raw, (bool, np.bool_)):
-        return bool(raw)
-    if isinstance(raw, str) and raw.strip().lower() in ("true", "false"):
-        return raw.strip().lower() == "true"
-    raise ValueError(f"{name}: must be true or false, got {raw!r}")
-
-
-def _read(builder: str, inputs: dict, overrides: dict) -> dict:
-    """Overrides by name (numbers in SI or unit strings) → validated SI values."""
-    unknown = set(overrides) - set(inputs)
-    if unknown:
-        raise ValueError(
-            f"{builder}: unknown parameter(s) {sorted(unknown)}; known: {sorted(inputs)}"
-        )
-    values = {}
-    for name, (unit, default) in inputs.items():
-        raw = overrides.get(name, default)
-        if unit == "count":
-            values[name] = require_count(raw, name)
-        elif unit == "flag":
-            values[name] = _flag(raw, name)
-        elif unit == "choice":
-            values[name] = raw
-        elif name == "nu":
-            values[name] = float(to_si(raw, "", name))
-            if not -1.0 < values[name] < 0.5:
-                raise ValueError(f"nu: must satisfy -1 < nu < 0.5, got {raw!r}")
-        else:
-            values[name] = float(require_positive(to_si(raw, unit, name), name))
-    return values
+def _poisson(raw, name: str) -> float:
+    """Poisson's ratio (dimensionless), -1 < nu < 0.5."""
+    nu = to_si(raw, "", name)
+    if not -1.0 < nu < 0.5:
+        raise ValueError(f"{name}: must satisfy -1 < nu < 0.5, got {raw!r}")
+    return nu
 
 
 # ------------------------------------------------------------------------------------------------
 # uniform beams
 _BEAM_INPUTS = {
-    "length": ("m", "1 m"),
-    "E": ("Pa", "70 GPa"),
-    "rho": ("kg/m**3", "2700 kg/m**3"),
-    "nu": ("", 0.33),
-    "width": ("m", "40 mm"),
-    "height": ("m", "10 mm"),
-    "n_elements": ("count", 20),
-    "lumped": ("flag", False),
+    "length": Param("1 m", "m"),
+    "E": Param("70 GPa", "Pa"),
+    "rho": Param("2700 kg/m**3", "kg/m**3"),
+    "nu": Param(0.33, rule=_poisson),
+    "width": Param("40 mm", "m"),
+    "height": Param("10 mm", "m"),
+    "n_elements": Param(20, rule="count"),
+    "lumped": Param(False, rule="flag"),
 }
 
 
@@ -284,7 +260,7 @@ class BeamCase:
 
 
 def _beam(boundary: str, builder: str, overrides: dict) -> BeamCase:
-    return BeamCase(boundary=boundary, **_read(builder, _BEAM_INPUTS, overrides))
+    return BeamCase(boundary=boundary, **read_inputs(builder, _BEAM_INPUTS, overrides))
 
 
 def cantilever_beam(**overrides) -> BeamCase:
@@ -304,17 +280,17 @@ def free_free_beam(**overrides) -> BeamCase:
 
 # ------------------------------------------------------------------------------------------------
 # NAFEMS FV2
-_FV2_INPUTS = {
-    "arm_length": ("m", PUBLISHED["fv2_arm_length"]),
-    "side": ("m", PUBLISHED["fv2_side"]),
-    "E": ("Pa", PUBLISHED["fv2_modulus"]),
-    "rho": ("kg/m**3", PUBLISHED["fv2_density"]),
-    "nu": ("", 0.3),
-    "elements_per_arm": ("count", 4),
-    "lumped": ("flag", False),
-    "plane": ("choice", "in-plane"),
-}
 _FV2_PLANES = ("in-plane", "3d")
+_FV2_INPUTS = {
+    "arm_length": Param(PUBLISHED["fv2_arm_length"], "m"),
+    "side": Param(PUBLISHED["fv2_side"], "m"),
+    "E": Param(PUBLISHED["fv2_modulus"], "Pa"),
+    "rho": Param(PUBLISHED["fv2_density"], "kg/m**3"),
+    "nu": Param(0.3, rule=_poisson),
+    "elements_per_arm": Param(4, rule="count"),
+    "lumped": Param(False, rule="flag"),
+    "plane": Param("in-plane", rule="choice", choices=_FV2_PLANES),
+}
 N_ARMS = 8
 
 
@@ -387,7 +363,4 @@ def nafems_fv2(**overrides) -> Fv2Case:
     """NAFEMS FV2 double cross; override ``arm_length``, ``side``, ``E``, ``rho``, ``nu`` (SI
     numbers or unit strings), ``elements_per_arm``, ``lumped`` and ``plane`` ("in-plane", the
     benchmark, or "3d": frames pinned in x, y, z at the tips)."""
-    values = _read("nafems_fv2", _FV2_INPUTS, overrides)
-    if values["plane"] not in _FV2_PLANES:
-        raise ValueError(f"plane: must be one of {list(_FV2_PLANES)}, got {values['plane']!r}")
-    return Fv2Case(**values)
+    return Fv2Case(**read_inputs("nafems_fv2", _FV2_INPUTS, overrides))

@@ -20,8 +20,9 @@ from functools import cached_property
 import numpy as np
 import scipy.linalg as sla
 
+from flexsat.cases.inputs import Param, read_inputs
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.validation import require_count, require_finite
 
 SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 5 Table 3 (L2156-L2166), Eqs. 50-59, Table 4"
 
@@ -53,19 +54,19 @@ PUBLISHED_GAINS = {
 QUADRATURE_POINTS = 400
 _POINTS_PER_FUNCTION = 40
 
-# field -> (SI unit, check); the default of every field is PUBLISHED[field], n_functions = 10
+#: the overridable inputs of the case: Table 3 as printed, N = 10 functions per beam pair
 _INPUTS = {
-    "hub_radius": ("m", require_nonneg),
-    "hub_inertia": ("kg*m**2", require_positive),
-    "density": ("kg/m", require_positive),
-    "modulus": ("Pa", require_positive),
-    "thickness": ("m", require_positive),
-    "height": ("m", require_positive),
-    "length": ("m", require_positive),
-    "tip_mass": ("kg", require_nonneg),
-    "tip_inertia": ("kg*m**2", require_nonneg),
+    "hub_radius": Param(PUBLISHED["hub_radius"], "m", "nonneg"),
+    "hub_inertia": Param(PUBLISHED["hub_inertia"], "kg*m**2"),
+    "density": Param(PUBLISHED["density"], "kg/m"),
+    "modulus": Param(PUBLISHED["modulus"], "Pa"),
+    "thickness": Param(PUBLISHED["thickness"], "m"),
+    "height": Param(PUBLISHED["height"], "m"),
+    "length": Param(PUBLISHED["length"], "m"),
+    "tip_mass": Param(PUBLISHED["tip_mass"], "kg", "nonneg"),
+    "tip_inertia": Param(PUBLISHED["tip_inertia"], "kg*m**2", "nonneg"),
+    "n_functions": Param(10, rule="count"),
 }
-_DEFAULT_N_FUNCTIONS = 10
 _INPUT_NAMES = ("u1_hub", "u2_tips_1_3", "u3_tips_2_4")
 _OUTPUT_NAMES = ("theta", "rot_tips_1_3", "rot_tips_2_4")
 
@@ -414,16 +415,7 @@ def draper_rpl(**overrides) -> DraperRPLCase:
     --------
     >>> case = draper_rpl(n_functions=20, tip_mass="2.29 kg")
     """
-    known = (*_INPUTS, "n_functions")
-    unknown = set(overrides) - set(known)
-    if unknown:
-        raise ValueError(
-            f"draper_rpl: unknown parameter(s) {sorted(unknown)}; known: {sorted(known)}")
-    values = {name: float(check(to_si(overrides.get(name, PUBLISHED[name]), unit, name), name))
-              for name, (unit, check) in _INPUTS.items()}
-    values["n_functions"] = require_count(overrides.get("n_functions", _DEFAULT_N_FUNCTIONS),
-                                          "n_functions")
-    return DraperRPLCase(**values)
+    return DraperRPLCase(**read_inputs("draper_rpl", _INPUTS, overrides))
 
 
 __all__ = [

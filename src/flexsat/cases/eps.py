@@ -34,10 +34,11 @@ from functools import cached_property
 
 import numpy as np
 
+from flexsat.cases.inputs import Param, read_inputs
 from flexsat.structures.mode_description import classify_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.validation import require_count, require_nonneg
 
 SOURCE = "seed 003_6d17262716e94f5f.txt, L66-L136 (EPS model), L238-L295 (node numbers)"
 
@@ -103,33 +104,39 @@ _ROLE_GEOMETRY = {60: (0, 1.0, 0), 63: (0, 1.0, 90), 66: (0, 1.0, 180), 69: (0, 
 
 BALANCE = "balance"
 
-# (field, SI unit, default as written) — the overridable inputs of the case
+
+def _actuator_mass_input(raw, name: str) -> float | str:
+    """A mass (kg, >= 0) or "balance": the rest of ``total_mass``."""
+    if isinstance(raw, str) and raw.strip().lower() == BALANCE:
+        return BALANCE
+    return float(require_nonneg(to_si(raw, "kg", name), name))
+
+
+#: the overridable inputs of the case, defaults as written
 _INPUTS = {
-    "truss_length": ("m", PUBLISHED["truss_length"]),
-    "truss_width": ("m", PUBLISHED["truss_cross_section"]),
-    "truss_bays": ("", 10),
-    "tube_outer_diameter": ("m", PUBLISHED["tube_outer_diameter"]),
-    "tube_wall": ("m", PUBLISHED["tube_wall"]),
-    "modulus": ("Pa", PUBLISHED["modulus"]),
-    "density": ("kg/m**3", PUBLISHED["density"]),
-    "poisson_ratio": ("", 0.3),
-    "large_antenna_diameter": ("m", PUBLISHED["large_antenna_diameter"]),
-    "small_antenna_diameter": ("m", PUBLISHED["small_antenna_diameter"]),
-    "ribs": ("", PUBLISHED["ribs"]),
-    "rib_elements": ("", 2),
-    "depth_ratio": ("", 1 / 16),
-    "large_support_height": ("m", "3.5 m"),
-    "small_support_height": ("m", "5 m"),
-    "large_antenna_bay": ("", 1),
-    "small_antenna_bay": ("", None),  # None: the last bay
-    "nonstructural_mass": ("kg", PUBLISHED["nonstructural_mass"]),
-    "large_antenna_share": ("", None),  # None: by aperture area
-    "actuator_mass": ("kg", BALANCE),
-    "total_mass": ("kg", PUBLISHED["total_mass"]),
-    "damping": ("", 0.005),
+    "truss_length": Param(PUBLISHED["truss_length"], "m"),
+    "truss_width": Param(PUBLISHED["truss_cross_section"], "m"),
+    "truss_bays": Param(10, rule="count"),
+    "tube_outer_diameter": Param(PUBLISHED["tube_outer_diameter"], "m"),
+    "tube_wall": Param(PUBLISHED["tube_wall"], "m"),
+    "modulus": Param(PUBLISHED["modulus"], "Pa"),
+    "density": Param(PUBLISHED["density"], "kg/m**3"),
+    "poisson_ratio": Param(0.3),
+    "large_antenna_diameter": Param(PUBLISHED["large_antenna_diameter"], "m"),
+    "small_antenna_diameter": Param(PUBLISHED["small_antenna_diameter"], "m"),
+    "ribs": Param(PUBLISHED["ribs"], rule="count"),
+    "rib_elements": Param(2, rule="count"),
+    "depth_ratio": Param(1 / 16, rule="nonneg"),
+    "large_support_height": Param("3.5 m", "m"),
+    "small_support_height": Param("5 m", "m"),
+    "large_antenna_bay": Param(1, rule="count"),
+    "small_antenna_bay": Param(None, rule="count", optional=True),  # None: the last bay
+    "nonstructural_mass": Param(PUBLISHED["nonstructural_mass"], "kg", "nonneg"),
+    "large_antenna_share": Param(None, optional=True),  # None: by aperture area
+    "actuator_mass": Param(BALANCE, rule=_actuator_mass_input),
+    "total_mass": Param(PUBLISHED["total_mass"], "kg"),
+    "damping": Param(0.005, rule="nonneg"),
 }
-_COUNTS = ("truss_bays", "ribs", "rib_elements", "large_antenna_bay", "small_antenna_bay")
-_MAY_BE_ZERO = ("depth_ratio", "nonstructural_mass", "actuator_mass", "damping")
 _CG_OUTSIDE = 0.25  # m: a CG this far outside the truss gets a 4-tube pyramid, else 8 bay corners
 
 
@@ -537,22 +544,7 @@ def eps(**overrides) -> EPSCase:
 
     >>> case = eps(small_support_height="4 m", nonstructural_mass="300 kg")  # doctest: +SKIP
     """
-    unknown = set(overrides) - set(_INPUTS)
-    if unknown:
-        raise ValueError(f"eps: unknown parameter(s) {sorted(unknown)}; known: {sorted(_INPUTS)}")
-    values: dict = {}
-    for name, (unit, default) in _INPUTS.items():
-        raw = overrides.get(name, default)
-        if name in _COUNTS:
-            values[name] = None if raw is None else require_count(raw, name)
-        elif name == "actuator_mass" and isinstance(raw, str) and raw.strip().lower() == BALANCE:
-            values[name] = BALANCE
-        elif name == "large_antenna_share" and raw is None:
-            values[name] = None
-        else:
-            value = to_si(raw, unit, name) if unit else float(require_finite(raw, name))
-            check = require_nonneg if name in _MAY_BE_ZERO else require_positive
-            values[name] = float(check(value, name))
+    values = read_inputs("eps", _INPUTS, overrides)
     nb = values["truss_bays"]
     if values["small_antenna_bay"] is None:
         values["small_antenna_bay"] = nb

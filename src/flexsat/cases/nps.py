@@ -36,13 +36,14 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import brentq
 
+from flexsat.cases.inputs import Param, read_inputs
 from flexsat.control import PD
 from flexsat.structures.beam import TipMassCantilever, hub_free_frequencies
 from flexsat.structures.fem import Structure
 from flexsat.structures.modal_model import ModalModel, hub_appendage_matrices
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.validation import require_count
 
 SOURCE = "seed 001_79dfdfba94ed8e0d.txt (Hailey, Sortun & Agrawal, NPS FSS), L21, L181, L208-L220"
 
@@ -66,26 +67,24 @@ DESIGN_INERTIA = "9.84 kg*m**2"
 
 INERTIA_CONVENTIONS = ("cantilevered", "total")
 
-# (field, SI unit, default as written); unit None: a count, a flag or a choice
+#: the overridable inputs of the case, defaults as written
 _INPUTS = {
-    "cantilever_frequency": ("Hz", PUBLISHED["cantilever_frequency"]),
-    "damping": ("", PUBLISHED["damping"]),
-    "n_modes": (None, PUBLISHED["n_modes"]),
-    "design_inertia": ("kg*m**2", DESIGN_INERTIA),
-    "inertia_convention": (None, "cantilevered"),
-    "hub_inertia": ("kg*m**2", None),  # None: solved from design_inertia and the convention
-    "attachment_radius": ("m", "0.3 m"),
-    "mast_length": ("m", "1.5 m"),
-    "mast_mass_per_length": ("kg/m", "0.25 kg/m"),
-    "mast_bending_stiffness": ("N*m**2", None),  # None: solved for cantilever_frequency
-    "reflector_mass": ("kg", "1.0 kg"),
-    "reflector_inertia": ("kg*m**2", "0.02 kg*m**2"),
-    "n_elements": (None, 20),
-    "controller_frequency": ("Hz", PUBLISHED["controller_frequency"]),
-    "controller_damping": ("", PUBLISHED["controller_damping"]),
+    "cantilever_frequency": Param(PUBLISHED["cantilever_frequency"], "Hz"),
+    "damping": Param(PUBLISHED["damping"], rule="nonneg"),
+    "n_modes": Param(PUBLISHED["n_modes"], rule="count"),
+    "design_inertia": Param(DESIGN_INERTIA, "kg*m**2"),
+    "inertia_convention": Param("cantilevered", rule="choice", choices=INERTIA_CONVENTIONS),
+    "hub_inertia": Param(None, "kg*m**2", optional=True),  # None: solved from design_inertia
+    "attachment_radius": Param("0.3 m", "m", "nonneg"),
+    "mast_length": Param("1.5 m", "m"),
+    "mast_mass_per_length": Param("0.25 kg/m", "kg/m"),
+    "mast_bending_stiffness": Param(None, "N*m**2", optional=True),  # None: solved
+    "reflector_mass": Param("1.0 kg", "kg"),
+    "reflector_inertia": Param("0.02 kg*m**2", "kg*m**2", "nonneg"),
+    "n_elements": Param(20, rule="count"),
+    "controller_frequency": Param(PUBLISHED["controller_frequency"], "Hz"),
+    "controller_damping": Param(PUBLISHED["controller_damping"], rule="nonneg"),
 }
-_MAY_BE_ZERO = ("damping", "attachment_radius", "reflector_inertia", "controller_damping")
-_SOLVED = ("hub_inertia", "mast_bending_stiffness")
 
 
 @dataclass(frozen=True)
@@ -383,12 +382,6 @@ def inertia_budget(case: NPSCase) -> dict[str, float]:
     }
 
 
-def _choice(raw, name: str, choices) -> str:
-    if isinstance(raw, str) and raw.strip().lower() in choices:
-        return raw.strip().lower()
-    raise ValueError(f"{name}: must be one of {list(choices)}, got {raw!r}")
-
-
 def nps(**overrides) -> NPSCase:
     """Build the NPS FSS case; override any input by name, as a number (SI) or a unit string.
 
@@ -398,26 +391,10 @@ def nps(**overrides) -> NPSCase:
 
     >>> case = nps(mast_length="2 m", inertia_convention="total")
     """
-    unknown = set(overrides) - set(_INPUTS)
-    if unknown:
-        raise ValueError(f"nps: unknown parameter(s) {sorted(unknown)}; known: {sorted(_INPUTS)}")
     if "mast_bending_stiffness" in overrides and "cantilever_frequency" in overrides:
         raise ValueError("mast_bending_stiffness: give either it or cantilever_frequency (it is "
                          "solved for that frequency), not both")
-    values = {}
-    for name, (unit, default) in _INPUTS.items():
-        raw = overrides.get(name, default)
-        if name in ("n_modes", "n_elements"):
-            values[name] = require_count(raw, name)
-        elif name == "inertia_convention":
-            values[name] = _choice(raw, name, INERTIA_CONVENTIONS)
-        elif raw is None and name in _SOLVED:
-            values[name] = None
-        else:
-            value = (to_si(raw, unit or "dimensionless", name) if unit or isinstance(raw, str)
-                     else float(require_finite(raw, name)))
-            check = require_nonneg if name in _MAY_BE_ZERO else require_positive
-            values[name] = float(check(value, name))
+    values = read_inputs("nps", _INPUTS, overrides)
     if values["n_elements"] < 2:
         raise ValueError(f"n_elements: must be >= 2, got {values['n_elements']}")
     if values["damping"] >= 1:

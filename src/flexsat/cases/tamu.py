@@ -20,13 +20,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexsat.cases.inputs import Param, read_inputs
 from flexsat.control import LyapunovRegulator, LyapunovTracker
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.maneuvers import SmoothBangBang
 from flexsat.structures.beam import hub_free_frequencies
 from flexsat.sim import BearingFriction, RandomTorque, Sensors, SimConfig, TorqueActuator
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
 
 SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 3 Table 1 (L1302-L1323) and §V"
 
@@ -50,21 +50,21 @@ PUBLISHED = {
     "maneuver_angle": "40 deg",
 }
 
-# (field, SI unit, default as written) — the overridable inputs of the case
+#: the overridable inputs of the case, defaults as written
 _INPUTS = {
-    "hub_inertia": ("kg*m**2", "50 ozf*in*s**2"),
-    "reference_inertia": ("kg*m**2", PUBLISHED["total_inertia"]),
-    "hub_radius": ("m", PUBLISHED["hub_center_to_gage_center"]),
-    "tip_radius": ("m", PUBLISHED["hub_center_to_tip_mass"]),
-    "tip_mass": ("kg", PUBLISHED["tip_mass"]),
-    "tip_inertia": ("kg*m**2", "0 ozf*in*s**2"),
-    "modulus": ("Pa", PUBLISHED["modulus"]),
-    "section_inertia": ("m**4", PUBLISHED["section_inertia"]),
-    "density": ("kg/m", PUBLISHED["density"]),
-    "damping": ("", 0.005),
-    "n_appendages": ("", 4),
-    "n_modes": ("", 10),
-    "stiffening": ("", False),
+    "hub_inertia": Param("50 ozf*in*s**2", "kg*m**2"),
+    "reference_inertia": Param(PUBLISHED["total_inertia"], "kg*m**2"),
+    "hub_radius": Param(PUBLISHED["hub_center_to_gage_center"], "m", "nonneg"),
+    "tip_radius": Param(PUBLISHED["hub_center_to_tip_mass"], "m"),
+    "tip_mass": Param(PUBLISHED["tip_mass"], "kg", "nonneg"),
+    "tip_inertia": Param("0 ozf*in*s**2", "kg*m**2", "nonneg"),
+    "modulus": Param(PUBLISHED["modulus"], "Pa"),
+    "section_inertia": Param(PUBLISHED["section_inertia"], "m**4"),
+    "density": Param(PUBLISHED["density"], "kg/m"),
+    "damping": Param(0.005, rule="nonneg"),
+    "n_appendages": Param(4, rule="count"),
+    "n_modes": Param(10, rule="count"),
+    "stiffening": Param(False, rule="flag"),
 }
 
 
@@ -174,39 +174,12 @@ class TamuCase:
                                n_appendages=int(self.n_appendages))
 
 
-_MAY_BE_ZERO = ("tip_mass", "tip_inertia", "hub_radius", "damping")
-
-
-def _flag(raw, name: str) -> bool:
-    if isinstance(raw, bool):
-        return raw
-    if isinstance(raw, str) and raw.strip().lower() in ("true", "false"):
-        return raw.strip().lower() == "true"
-    raise ValueError(f"{name}: must be true or false, got {raw!r}")
-
-
 def tamu(**overrides) -> TamuCase:
     """Build the TAMU case; override any input by name, as a number (SI) or a unit string.
 
     >>> case = tamu(hub_inertia="30 ozf*in*s**2", n_modes=6)
     """
-    unknown = set(overrides) - set(_INPUTS)
-    if unknown:
-        raise ValueError(
-            f"tamu: unknown parameter(s) {sorted(unknown)}; known: {sorted(_INPUTS)}"
-        )
-    values = {}
-    for name, (unit, default) in _INPUTS.items():
-        raw = overrides.get(name, default)
-        if name in ("n_appendages", "n_modes"):
-            values[name] = require_count(raw, name)
-        elif name == "stiffening":
-            values[name] = _flag(raw, name)
-        else:
-            value = to_si(raw, unit, name) if unit else float(require_finite(raw, name))
-            check = require_nonneg if name in _MAY_BE_ZERO else require_positive
-            values[name] = float(check(value, name))
-    case = TamuCase(**values)
+    case = TamuCase(**read_inputs("tamu", _INPUTS, overrides))
     case.params  # validate now: one clear message at construction
     return case
 

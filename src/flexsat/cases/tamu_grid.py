@@ -52,10 +52,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexsat.cases.inputs import Param, read_inputs
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material
 from flexsat.units import Q_, to_si
-from flexsat.validation import require_count, require_nonneg, require_positive
+from flexsat.validation import require_count
 
 SOURCE = ("seed 000_7bfdb62d2eacc22a.txt, Att. 4 Table 1 (L1648-L1655), Att. 6 (L2405-L2705), "
           "Att. 8 Fig. 4 (L3234-L3246)")
@@ -99,22 +100,6 @@ PUBLISHED = {
     "att10_measured_hz": (0.92, 2.32, 4.93, 6.38, 7.27),
 }
 
-# (field, SI unit, default as written)
-_INPUTS = {
-    "EI": ("N*m**2", PUBLISHED["EI"]),
-    "GJ": ("N*m**2", PUBLISHED["GJ"]),
-    "rho_A": ("kg/m", PUBLISHED["rho_A"]),
-    "rho_J": ("kg*m", PUBLISHED["rho_J"]),
-    "spacing": ("m", "14.5 in"),
-    "g": ("m/s**2", "9.80665 m/s**2"),
-    "gravity": ("flag", True),
-    "gravity_model": ("choice", "consistent"),
-    "motor_mass": ("kg", "0 kg"),
-    "motor_inertia": ("kg*m**2", "0 kg*m**2"),
-    "motor_nodes": ("nodes", (3, 7, 9)),
-}
-_MAY_BE_ZERO = ("rho_J", "g", "motor_mass", "motor_inertia")
-
 N_SIDE = 5
 #: "consistent": geometric stiffness of the grid members (default); "string": Att. 6 Eq. 14
 GRAVITY_MODELS = ("consistent", "string")
@@ -122,14 +107,6 @@ CLAMPED_NODES = tuple(range(21, 26))
 LOWER_LEFT_NODE = 1  #: the paper's "lower-left corner" (output y_d of Att. 4), see module doc
 #: (lbf s²/in)^(-1/2) per kg^(-1/2): mass-normalised shapes in the units of Att. 6 Table 2
 _SHAPE_TO_US = float(np.sqrt(Q_(1, "lbf*s**2/in").to("kg").magnitude))
-
-
-def _flag(raw, name: str) -> bool:
-    if isinstance(raw, (bool, np.bool_)):
-        return bool(raw)
-    if isinstance(raw, str) and raw.strip().lower() in ("true", "false"):
-        return raw.strip().lower() == "true"
-    raise ValueError(f"{name}: must be true or false, got {raw!r}")
 
 
 def _nodes(raw, name: str) -> tuple[int, ...]:
@@ -158,6 +135,22 @@ def _nodes(raw, name: str) -> tuple[int, ...]:
     if len(set(out)) != len(out):
         raise ValueError(f"{name}: node ids must be distinct, got {raw!r}")
     return tuple(out)
+
+
+#: the overridable inputs of the case, defaults as written
+_INPUTS = {
+    "EI": Param(PUBLISHED["EI"], "N*m**2"),
+    "GJ": Param(PUBLISHED["GJ"], "N*m**2"),
+    "rho_A": Param(PUBLISHED["rho_A"], "kg/m"),
+    "rho_J": Param(PUBLISHED["rho_J"], "kg*m", "nonneg"),
+    "spacing": Param("14.5 in", "m"),
+    "g": Param("9.80665 m/s**2", "m/s**2", "nonneg"),
+    "gravity": Param(True, rule="flag"),
+    "gravity_model": Param("consistent", rule="choice", choices=GRAVITY_MODELS),
+    "motor_mass": Param("0 kg", "kg", "nonneg"),
+    "motor_inertia": Param("0 kg*m**2", "kg*m**2", "nonneg"),
+    "motor_nodes": Param((3, 7, 9), rule=_nodes),
+}
 
 
 @dataclass(frozen=True)
@@ -365,26 +358,7 @@ def tamu_grid(**overrides) -> TamuGridCase:
 
     >>> case = tamu_grid(motor_mass="0.5 kg", spacing="15 in")  # doctest: +SKIP
     """
-    unknown = set(overrides) - set(_INPUTS)
-    if unknown:
-        raise ValueError(
-            f"tamu_grid: unknown parameter(s) {sorted(unknown)}; known: {sorted(_INPUTS)}"
-        )
-    values = {}
-    for name, (unit, default) in _INPUTS.items():
-        raw = overrides.get(name, default)
-        if unit == "flag":
-            values[name] = _flag(raw, name)
-        elif unit == "choice":
-            if raw not in GRAVITY_MODELS:
-                raise ValueError(f"{name}: must be one of {list(GRAVITY_MODELS)}, got {raw!r}")
-            values[name] = raw
-        elif unit == "nodes":
-            values[name] = _nodes(raw, name)
-        else:
-            check = require_nonneg if name in _MAY_BE_ZERO else require_positive
-            values[name] = float(check(to_si(raw, unit, name), name))
-    return TamuGridCase(**values)
+    return TamuGridCase(**read_inputs("tamu_grid", _INPUTS, overrides))
 
 
 __all__ = ["CLAMPED_NODES", "GRAVITY_MODELS", "LOWER_LEFT_NODE", "PUBLISHED", "SOURCE",
