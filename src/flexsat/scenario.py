@@ -624,7 +624,7 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
     if built is not None:
         case, model = built
         ctx = _CaseContext(scenario.maneuver.angle, case.reference_inertia,
-                           model.params.appendage_inertia, int(model.params.n_appendages))
+                           model.appendage_inertia, int(model.n_appendages))
         for index, run in enumerate(scenario.runs):
             controllers[run.label] = _collect(problems, _build_controller, index, run, ctx)
     if problems:

@@ -40,6 +40,7 @@ from flexsat.cases.inputs import Param, read_inputs
 from flexsat.control import PD
 from flexsat.structures.beam import TipMassCantilever, hub_free_frequencies
 from flexsat.structures.fem import Structure
+from flexsat.dynamics.hybrid import ModalHybrid
 from flexsat.structures.modal_model import ModalModel, hub_appendage_matrices
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
@@ -256,6 +257,18 @@ class NPSCase:
             raise ValueError(f"n_modes: the finite-element model has {modal.n_modes} modes; raise "
                              f"n_elements for more than that, got {n}")
         return modal.truncate(n)
+
+    def model(self, n_modes: int | None = None) -> ModalHybrid:
+        """The simulator plant: hub + appendage in hybrid coordinates (Eq. 16), with the
+        reflector's transverse displacement as ``tip_deflection``."""
+        return ModalHybrid(self.modal_model(n_modes), self.hub_inertia_value, axis="z",
+                           tip=(self.reflector_node, "y"))
+
+    @property
+    def reference_inertia(self) -> float:
+        """Rigid inertia the shaped references and the PD gains are designed on (the case's
+        ``design_inertia`` = 9.84 kg m², see ``inertia_convention``)."""
+        return self.design_inertia
 
     def hybrid_matrices(self, n_modes: int | None = None):
         """Second-order model of Eq. 16 in (θ, q_1 … q_n): M = [[I_zz, Dᵀ], [D, I]],

@@ -36,6 +36,7 @@ from functools import cached_property
 
 import numpy as np
 
+from flexsat.dynamics.hybrid import HybridPlant
 from flexsat.structures.beam import TipMassCantilever
 from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
 
@@ -108,7 +109,7 @@ class HubAppendageParams:
 
 
 @dataclass(frozen=True)
-class HubAppendage:
+class HubAppendage(HybridPlant):
     """Assumed-modes hub + appendage model (see module docstring).
 
     Parameters
@@ -167,12 +168,12 @@ class HubAppendage:
     # ----------------------------------------------------------------------------------------
     # second-order model
     @property
-    def ndof(self) -> int:
-        return self.n_modes + 1
+    def hub_inertia(self) -> float:
+        return self.params.hub_inertia
 
     @property
-    def nx(self) -> int:
-        return 2 * self.ndof
+    def n_appendages(self) -> int:
+        return self.params.n_appendages
 
     @property
     def cantilever_frequencies(self) -> np.ndarray:
@@ -198,10 +199,6 @@ class HubAppendage:
         return M
 
     @cached_property
-    def mass_inverse(self) -> np.ndarray:
-        return np.linalg.inv(self.mass_matrix)
-
-    @cached_property
     def stiffness_matrix(self) -> np.ndarray:
         n, w = self.params.n_appendages, self.cantilever_frequencies
         return np.diag(np.concatenate([[0.0], n * w**2]))
@@ -211,56 +208,13 @@ class HubAppendage:
         n, w = self.params.n_appendages, self.cantilever_frequencies
         return np.diag(np.concatenate([[0.0], 2 * n * self.damping_ratios * w]))
 
-    @cached_property
-    def torque_input(self) -> np.ndarray:
-        """Generalized-force direction of a hub torque, e_θ."""
-        b = np.zeros(self.ndof)
-        b[0] = 1.0
-        return b
-
-    @cached_property
-    def state_space(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """First-order matrices (A, B_u, B_f) of x' = A x + B_u u + B_f f.
-
-        u is the hub torque; f (ndof,) is any additional generalized force (friction, stiffening).
-        """
-        Minv = self.mass_inverse
-        k1 = self.ndof
-        A = np.zeros((2 * k1, 2 * k1))
-        A[:k1, k1:] = np.eye(k1)
-        A[k1:, :k1] = -Minv @ self.stiffness_matrix
-        A[k1:, k1:] = -Minv @ self.damping_matrix
-        Bf = np.vstack([np.zeros((k1, k1)), Minv])
-        return A, Bf @ self.torque_input, Bf
-
     def frequencies(self, constrained: bool = False) -> np.ndarray:
         """Natural frequencies of the model, rad/s, ascending.
 
         Unconstrained (hub free): the elastic frequencies of (K, M), the rigid mode dropped.
         Constrained (hub clamped): the cantilever frequencies.
         """
-        if constrained:
-            return self.cantilever_frequencies.copy()
-        from scipy.linalg import eigh
-
-        lam = eigh(self.stiffness_matrix, self.mass_matrix, eigvals_only=True)
-        return np.sqrt(np.clip(lam[1:], 0.0, None))
-
-    def to_statespace(self):
-        """python-control StateSpace, input hub torque, outputs θ and θ'."""
-        import control
-
-        A, Bu, _ = self.state_space
-        C = np.zeros((2, self.nx))
-        C[0, 0] = 1.0
-        C[1, self.ndof] = 1.0
-        return control.ss(A, Bu[:, None], C, np.zeros((2, 1)))
-
-    # ----------------------------------------------------------------------------------------
-    # state helpers (x has shape (..., nx))
-    def split(self, x: np.ndarray):
-        k1 = self.ndof
-        return x[..., :k1], x[..., k1:]
+        return self.cantilever_frequencies.copy() if constrained else self.hub_free_frequencies()
 
     def nonlinear_force(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Generalized force of the rotational-stiffening terms, shape (..., ndof).
@@ -284,19 +238,6 @@ class HubAppendage:
         a0 = force @ Minv[0]
         f[..., 0] -= s * a0 / (1.0 + s * Minv[0, 0])
         return f
-
-    def _linear_force(self, pos, vel, u):
-        return -pos @ self.stiffness_matrix - vel @ self.damping_matrix + np.multiply.outer(
-            np.asarray(u, float), self.torque_input
-        )
-
-    def acceleration(self, x: np.ndarray, u, extra_force=0.0) -> np.ndarray:
-        """Generalized accelerations (θ'', q'') for state x, hub torque u and extra force."""
-        pos, vel = self.split(x)
-        force = self._linear_force(pos, vel, u) + extra_force
-        if self.stiffening:
-            force = force + self.nonlinear_force(x, u)
-        return force @ self.mass_inverse
 
     def outputs(self, x: np.ndarray, u, extra_force=0.0) -> dict[str, np.ndarray]:
         """Physical outputs of state x under hub torque u (SI).
@@ -325,35 +266,9 @@ class HubAppendage:
     # energies (Att. 3 Eqs. 7, 8, 18)
     def energy(self, x: np.ndarray) -> np.ndarray:
         """Total mechanical energy E (Att. 3 Eq. 7), J; includes the stiffening term if on."""
-        pos, vel = self.split(x)
-        # two-operand einsums: the three-operand form is several times slower on batches
-        E = 0.5 * np.einsum("...i,...i->...", vel @ self.mass_matrix, vel)
-        E = E + 0.5 * np.einsum("...i,...i->...", pos @ self.stiffness_matrix, pos)
+        E = super().energy(x)
         if self.stiffening:
+            pos, vel = self.split(x)
             q = pos[..., 1:]
             E = E + 0.5 * vel[..., 0] ** 2 * np.einsum("...i,ij,...j->...", q, self._quad["G"], q)
         return E
-
-    def vibration_energy(self, x: np.ndarray, energy=None) -> np.ndarray:
-        """Energy in the elastic modes of the free vehicle, E − h² / (2 I_tot), J.
-
-        h = (M x')_θ is the angular momentum; the rigid mode is M-orthogonal to the elastic ones,
-        so its kinetic energy is exactly h² / (2 I_tot) and the rest is vibration. Pass
-        ``energy`` = E(x) when it is already known.
-        """
-        _, vel = self.split(x)
-        h = vel @ self.mass_matrix[0]
-        E = self.energy(x) if energy is None else energy
-        return E - 0.5 * h**2 / self.params.total_inertia
-
-    def lyapunov(self, x: np.ndarray, theta_f, g1, g3) -> np.ndarray:
-        """Error-energy Lyapunov function of Att. 3 Eq. 8 (normalised a1 = 1), J.
-
-        U = ½ I_hub θ'² + ½ g1 (θ − θ_f)² + (1 + g3/n) E_beams, with g1 = a2/a1 and
-        g3 = n (a3 − a1)/a1. For the tracking function (Eq. 18) pass x − x_r and θ_f = 0.
-        """
-        p = self.params
-        pos, vel = self.split(x)
-        hub_ke = 0.5 * p.hub_inertia * vel[..., 0] ** 2
-        beams = self.energy(x) - hub_ke
-        return hub_ke + 0.5 * g1 * (pos[..., 0] - theta_f) ** 2 + (1 + g3 / p.n_appendages) * beams
