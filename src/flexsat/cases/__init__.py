@@ -13,6 +13,8 @@ from typing import Callable
 
 from flexsat.cases.agrawal_bang import SOURCE as AGRAWAL_BANG_SOURCE
 from flexsat.cases.agrawal_bang import agrawal_bang
+from flexsat.cases.bainum import SOURCE as BAINUM_SOURCE
+from flexsat.cases.bainum import bainum
 from flexsat.cases.beams import SOURCE_BEAMS, SOURCE_FV2, cantilever_beam, free_free_beam, nafems_fv2
 from flexsat.cases.draper_rpl import SOURCE as DRAPER_RPL_SOURCE
 from flexsat.cases.draper_rpl import draper_rpl
@@ -53,6 +55,9 @@ CASES: dict[str, CaseInfo] = {
                  "reflector, hybrid coordinates"),
         CaseInfo("agrawal_bang", agrawal_bang, AGRAWAL_BANG_SOURCE,
                  "Agrawal-Bang two-beam L structure with three collocated piezoelectric pairs"),
+        CaseInfo("bainum", bainum, BAINUM_SOURCE,
+                 "Bainum & Reddy free-free beam in orbit: pitch + bending with gravity gradient, "
+                 "point-force actuators (controllability, decoupling, per-mode LQR)"),
         CaseInfo("cantilever_beam", cantilever_beam, SOURCE_BEAMS,
                  "uniform cantilever, 3-D frame elements, against the exact beta L"),
         CaseInfo("free_free_beam", free_free_beam, SOURCE_BEAMS,
@@ -70,5 +75,5 @@ def get_case(name: str) -> CaseInfo:
         raise ValueError(f"case: unknown case {name!r}; known: {sorted(CASES)}") from None
 
 
-__all__ = ["CASES", "CaseInfo", "agrawal_bang", "cantilever_beam", "draper_rpl", "eps",
+__all__ = ["CASES", "CaseInfo", "agrawal_bang", "bainum", "cantilever_beam", "draper_rpl", "eps",
            "free_free_beam", "get_case", "nafems_fv2", "nps", "tamu", "tamu_grid"]

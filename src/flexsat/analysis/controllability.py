@@ -1,0 +1,415 @@
+"""Controllability and stabilizability of linear systems (python-control conventions).
+
+Every function takes numpy arrays ``A`` (n x n) and ``B`` (n x m, a 1-D ``B`` of length n is one
+input column), as :func:`control.ctrb` does, and refuses bad shapes and non-finite entries with a
+message that starts with the field name.
+
+Tests provided (seed 002, Bainum & Reddy 1979; notes ``shared/spec/seed002.md`` §2.4):
+
+- :func:`controllability_rank`: rank of the Kalman matrix ``[B, AB, ..., A^(n-1) B]`` by SVD;
+- :func:`pbh_test`: the Popov-Belevitch-Hautus test, ``rank [λI - A, B] = n`` at every
+  eigenvalue λ of A, returning the uncontrollable eigenvalues;
+- :func:`repeated_frequency_test`: the block test of Balas (1978) used in Ch. II §3 (seed 002
+  L293-L305, L377-L442) for an undamped modal system ``ẍ + diag(κ) x = B u``: the pair is
+  controllable iff, for every distinct κ, the rows of B of the modes sharing it have rank equal
+  to their number (the multiplicity);
+- :func:`is_stabilizable`: PBH restricted to eigenvalues with Re λ >= 0;
+- :func:`lqr_gain`: the full (2n x 2n) linear regulator of Ch. III / Ch. V (seed 002 L1116),
+  with the checks that make its Riccati equation solvable.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+_EPS = np.finfo(float).eps
+
+
+# -- input checks ------------------------------------------------------------------------------
+def _array(value, field: str) -> np.ndarray:
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{field}: must be a numeric array, got the string {value!r}")
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{field}: must be a numeric array, got {type(value).__name__}") from None
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{field}: must be finite (no NaN or inf), got shape {arr.shape} with "
+                         f"{int(np.sum(~np.isfinite(arr)))} non-finite entries")
+    return arr
+
+
+def _square(value, field: str) -> np.ndarray:
+    arr = _array(value, field)
+    if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.shape[0] == 0:
+        raise ValueError(f"{field}: must be a non-empty square 2-D array, got shape {arr.shape}")
+    return arr
+
+
+def _input_matrix(value, n: int, field: str = "B", other: str = "A") -> np.ndarray:
+    arr = _array(value, field)
+    if arr.ndim == 1:
+        arr = arr.reshape(-1, 1)
+    if arr.ndim != 2 or arr.shape[0] != n or arr.shape[1] == 0:
+        raise ValueError(f"{field}: must have {n} rows ({other} is {n}x{n}) and at least one "
+                         f"column, got shape {np.shape(value)}")
+    return arr
+
+
+def _pair(A, B) -> tuple[np.ndarray, np.ndarray]:
+    A = _square(A, "A")
+    return A, _input_matrix(B, A.shape[0])
+
+
+def _tol(tol, field: str = "tol"):
+    if tol is None:
+        return None
+    value = float(_array(tol, field))
+    if value < 0:
+        raise ValueError(f"{field}: must be >= 0, got {tol!r}")
+    return value
+
+
+def _rank(M: np.ndarray, tol: float | None) -> int:
+    """Number of singular values above ``tol`` (default max(shape)·ε·σ_max, numpy's rule)."""
+    if M.size == 0:
+        return 0
+    s = np.linalg.svd(M, compute_uv=False)
+    if tol is None:
+        tol = max(M.shape) * _EPS * (s[0] if s.size else 0.0)
+    return int(np.sum(s > tol))
+
+
+# -- Kalman rank -------------------------------------------------------------------------------
+def controllability_matrix(A, B) -> np.ndarray:
+    """The Kalman matrix ``[B, AB, A²B, ..., A^(n-1) B]`` (n x nm), as :func:`control.ctrb`.
+
+    Raises
+    ------
+    ValueError
+        ``A`` not square, ``B`` without n rows, non-finite entries.
+    """
+    A, B = _pair(A, B)
+    blocks = [B]
+    for _ in range(A.shape[0] - 1):
+        blocks.append(A @ blocks[-1])
+    return np.hstack(blocks)
+
+
+def controllability_rank(A, B, tol: float | None = None) -> int:
+    """Rank of the Kalman controllability matrix of (A, B).
+
+    The rank is the number of singular values of the column-normalized Kalman matrix above
+    ``tol``. Each column of ``[B, AB, ..., A^(n-1) B]`` is divided by its Euclidean norm first
+    (zero columns dropped): this does not change the rank, and it keeps the powers of a stiff A
+    (Bainum's (ω_n/ω_c)² up to 2.6e5) from swamping the low-frequency columns.
+
+    Parameters
+    ----------
+    A : (n, n) array_like
+    B : (n, m) array_like
+        One input per column; a 1-D array is one column.
+    tol : float, optional
+        Singular-value threshold for the normalized matrix. Default: ``max(n, n m) · ε · σ_max``
+        (numpy's ``matrix_rank`` rule; ε = 2.2e-16, σ_max ≤ √(n m) after normalization).
+
+    Returns
+    -------
+    int
+        The rank; the pair is controllable iff it equals n (Kalman).
+
+    Notes
+    -----
+    The Kalman matrix is badly conditioned for large n or widely spread eigenvalues; prefer
+    :func:`pbh_test` (or :func:`repeated_frequency_test` for modal systems) there. Seed 002 Ch.
+    III (L648-L652) makes the same point by counting the C(36, 12) = 1.25e9 minors a hand
+    search would need.
+
+    Examples
+    --------
+    >>> controllability_rank([[0, 1], [0, 0]], [0, 1])
+    2
+    """
+    tol = _tol(tol)
+    C = controllability_matrix(A, B)
+    norms = np.linalg.norm(C, axis=0)
+    keep = norms > 0
+    if not np.any(keep):
+        return 0
+    return _rank(C[:, keep] / norms[keep], tol)
+
+
+# -- PBH ---------------------------------------------------------------------------------------
+def _scaled(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, float]:
+    """B scaled to the norm of A (the PBH rank is invariant to a scalar factor on B) and the
+    common scale max(‖A‖₂, ‖B‖₂ scaled)."""
+    na, nb = np.linalg.norm(A, 2), np.linalg.norm(B, 2)
+    if nb == 0:
+        return B, max(na, 1.0)
+    if na == 0:
+        return B / nb, 1.0
+    return B * (na / nb), na
+
+
+def _eigen_clusters(A: np.ndarray, scale: float) -> list[complex]:
+    """Distinct eigenvalues of A: values closer than n·√ε·scale merged to their mean (a
+    repeated or defective eigenvalue splits by about √ε·‖A‖ in floating point; the mean of its
+    cluster is accurate to about ε·‖A‖)."""
+    lam = np.linalg.eigvals(A)
+    n = lam.size
+    radius = n * np.sqrt(_EPS) * scale
+    unused = np.ones(n, bool)
+    out = []
+    for i in np.argsort(-lam.imag, kind="stable"):
+        if not unused[i]:
+            continue
+        members = unused & (np.abs(lam - lam[i]) <= radius)
+        unused &= ~members
+        out.append(complex(np.mean(lam[members])))
+    return out
+
+
+def _pbh(A: np.ndarray, B: np.ndarray, tol: float | None) -> np.ndarray:
+    n, m = B.shape
+    Bs, scale = _scaled(A, B)
+    if tol is None:
+        tol = max(n, n + m) * np.sqrt(_EPS) * scale
+    bad = []
+    for lam in _eigen_clusters(A, scale):
+        M = np.hstack([lam * np.eye(n) - A, Bs])
+        if _rank(M, tol) < n:
+            bad.append(lam)
+    return np.array(sorted(bad, key=lambda z: (z.real, z.imag)), dtype=complex)
+
+
+def pbh_test(A, B, tol: float | None = None) -> np.ndarray:
+    """Uncontrollable eigenvalues of (A, B) by the Popov-Belevitch-Hautus test.
+
+    λ (an eigenvalue of A) is uncontrollable iff ``rank [λI - A, B] < n``.
+
+    Parameters
+    ----------
+    A : (n, n) array_like
+    B : (n, m) array_like
+    tol : float, optional
+        Singular-value threshold for ``[λI - A, B̃]``, where ``B̃ = B ‖A‖₂/‖B‖₂`` (the rank does
+        not depend on a scalar factor on B; the scaling puts both blocks on one scale).
+        Default ``max(n, n + m) · √ε · max(‖A‖₂, 1 if A = 0)``: eigenvalues that are repeated
+        or defective are computed only to about √ε·‖A‖, so they are first merged (within
+        ``n √ε ‖A‖₂``) and tested at the cluster mean.
+
+    Returns
+    -------
+    ndarray of complex
+        The distinct uncontrollable eigenvalues, sorted by real then imaginary part; empty iff
+        the pair is controllable.
+
+    Examples
+    --------
+    >>> pbh_test([[-1, 0], [0, -2]], [[1], [0]])
+    array([-2.+0.j])
+    """
+    A, B = _pair(A, B)
+    return _pbh(A, B, _tol(tol))
+
+
+def is_stabilizable(A, B, tol: float | None = None, margin: float | None = None) -> bool:
+    """True iff every uncontrollable eigenvalue of (A, B) has Re λ < 0 (continuous time).
+
+    Parameters
+    ----------
+    A, B, tol
+        As :func:`pbh_test`.
+    margin : float, optional
+        An uncontrollable eigenvalue counts as unstable when ``Re λ >= -margin``. Default
+        ``√ε · max(1, |λ|)``, so an undamped uncontrollable mode (Re λ = 0 up to rounding) makes
+        the pair not stabilizable.
+    """
+    A, B = _pair(A, B)
+    margin = _tol(margin, "margin")
+    for lam in _pbh(A, B, _tol(tol)):
+        m = np.sqrt(_EPS) * max(1.0, abs(lam)) if margin is None else margin
+        if lam.real >= -m:
+            return False
+    return True
+
+
+# -- Balas' block test for repeated frequencies -------------------------------------------------
+@dataclass(frozen=True)
+class FrequencyGroup:
+    """Modes sharing one natural frequency (stiffness entry κ = ω²)."""
+
+    omega_sq: float
+    modes: tuple[int, ...]  # row indices of the modal input matrix
+    rank: int  # rank of those rows of B
+
+    @property
+    def multiplicity(self) -> int:
+        return len(self.modes)
+
+    @property
+    def controllable(self) -> bool:
+        return self.rank == self.multiplicity
+
+
+@dataclass(frozen=True)
+class RepeatedFrequencyResult:
+    """Outcome of :func:`repeated_frequency_test`: one :class:`FrequencyGroup` per distinct κ."""
+
+    groups: tuple[FrequencyGroup, ...]
+
+    @property
+    def controllable(self) -> bool:
+        return all(g.controllable for g in self.groups)
+
+    @property
+    def deficient(self) -> tuple[FrequencyGroup, ...]:
+        """The groups whose rows of B have rank below their multiplicity."""
+        return tuple(g for g in self.groups if not g.controllable)
+
+
+def repeated_frequency_test(stiffness, B, tol: float | None = None,
+                            freq_tol: float | None = None) -> RepeatedFrequencyResult:
+    """Controllability of the undamped modal system ``ẍ + diag(κ) x = B u`` by blocks.
+
+    The theorem (Balas 1978, applied in seed 002 Ch. II §3, L305: "these m subsystems with their
+    corresponding blocks in the B matrix must each be separately controllable"; notes §2.4):
+    group the modes by equal κ_k = ω_k². The 2n-state system ``[[0, I], [-diag(κ), 0]]``,
+    ``[[0], [B]]`` is controllable iff, for every group, the rows of B of its modes have rank
+    equal to the multiplicity. (By PBH: at λ with λ² = -κ_k the rank of
+    ``[λ² I + diag(κ), B]`` must be n.) With distinct frequencies this reduces to "no zero row
+    of B"; κ may be zero (rigid modes) or negative (unstable modes).
+
+    Parameters
+    ----------
+    stiffness : (n,) array_like or (n, n) diagonal array_like
+        κ = ω², in any consistent unit (for Bainum's beam the nondimensional
+        (3, (ω_1/ω_c)², ...)). Only undamped modal (diagonal, unit-mass) systems; use
+        :func:`controllability_rank` or :func:`pbh_test` on the first-order model otherwise
+        (seed 002 Ch. III L564-L566).
+    B : (n, m) array_like
+        Modal input matrix; a 1-D array is one column.
+    tol : float, optional
+        Singular-value threshold for each block of rows. Default: numpy's
+        ``max(shape) · ε · σ_max`` of the block.
+    freq_tol : float, optional
+        Two κ are the same frequency when they differ by at most ``freq_tol``. Default
+        ``1e-9 · max|κ|``.
+
+    Returns
+    -------
+    RepeatedFrequencyResult
+        ``.controllable``, ``.groups`` (κ, mode indices, rank), ``.deficient``.
+
+    Examples
+    --------
+    Seed 002 Ch. II Case 4 with ω_2 = √3 ω_c (pitch and mode 2 share κ = 3):
+
+    >>> r = repeated_frequency_test([3, 3200, 3], [[59.52, -59.52, 0], [20, 20, -12.16],
+    ...                                            [20, -20, 0]])
+    >>> r.controllable, r.deficient[0].modes, r.deficient[0].rank
+    (False, (0, 2), 1)
+    """
+    k = _array(stiffness, "stiffness")
+    if k.ndim == 2:
+        if k.shape[0] != k.shape[1] or np.any(k - np.diag(np.diag(k))):
+            raise ValueError(f"stiffness: must be a 1-D array or a diagonal (modal) matrix, got "
+                             f"a non-diagonal array of shape {k.shape}")
+        k = np.diag(k).copy()
+    if k.ndim != 1 or k.size == 0:
+        raise ValueError(f"stiffness: must be a non-empty 1-D array or a diagonal matrix, got "
+                         f"shape {k.shape}")
+    n = k.size
+    B = _input_matrix(B, n, "B", "stiffness")
+    tol = _tol(tol)
+    ftol = _tol(freq_tol, "freq_tol")
+    if ftol is None:
+        ftol = 1e-9 * float(np.max(np.abs(k)))
+    unused = np.ones(n, bool)
+    groups = []
+    for i in np.argsort(k, kind="stable"):
+        if not unused[i]:
+            continue
+        members = np.flatnonzero(unused & (np.abs(k - k[i]) <= ftol))
+        unused[members] = False
+        groups.append(FrequencyGroup(float(np.mean(k[members])), tuple(int(j) for j in members),
+                                     _rank(B[members], tol)))
+    return RepeatedFrequencyResult(tuple(groups))
+
+
+# -- linear regulator --------------------------------------------------------------------------
+def lqr_gain(A, B, Q, R, tol: float | None = None):
+    """Continuous-time linear regulator ``u = -K x`` minimizing ∫ (xᵀQx + uᵀRu) dt.
+
+    The full 2n x 2n Riccati equation ``AᵀS + SA - S B R⁻¹ Bᵀ S + Q = 0`` (seed 002 Ch. V,
+    L1116, for the case #actuators ≠ #modes), solved with
+    :func:`scipy.linalg.solve_continuous_are` after checks that make a stabilizing solution
+    exist.
+
+    Parameters
+    ----------
+    A : (n, n) array_like
+    B : (n, m) array_like
+    Q : (n, n) array_like
+        Symmetric positive semidefinite.
+    R : (m, m) array_like or float
+        Symmetric positive definite.
+    tol : float, optional
+        PBH tolerance, as :func:`pbh_test`.
+
+    Returns
+    -------
+    K : (m, n) ndarray
+        Gain (python-control convention, ``u = -K x``).
+    S : (n, n) ndarray
+        Stabilizing Riccati solution.
+    E : (n,) ndarray
+        Closed-loop eigenvalues of ``A - B K``.
+
+    Raises
+    ------
+    ValueError
+        ``A``/``B``/``Q``/``R``: bad shape or non-finite; ``R``: not symmetric positive
+        definite; ``Q``: not symmetric positive semidefinite, or an undamped mode of A that Q does
+        not see; ``A, B``: the pair is not stabilizable.
+    """
+    A, B = _pair(A, B)
+    n, m = B.shape
+    Q = _square(Q, "Q")
+    if Q.shape != (n, n):
+        raise ValueError(f"Q: must be {n}x{n} (A is {n}x{n}), got shape {Q.shape}")
+    R = _array(R, "R")
+    R = R.reshape(1, 1) if R.ndim == 0 else R
+    if R.shape != (m, m):
+        raise ValueError(f"R: must be {m}x{m} (B has {m} columns), got shape {R.shape}")
+    for name, M, definite in (("R", R, True), ("Q", Q, False)):
+        scale = max(np.abs(M).max(), 1e-300)
+        if np.abs(M - M.T).max() > 1e-12 * scale:
+            raise ValueError(f"{name}: must be symmetric")
+        w = np.linalg.eigvalsh((M + M.T) / 2)
+        if definite and w.min() <= 0:
+            raise ValueError(f"R: must be positive definite, smallest eigenvalue {w.min():.6g}")
+        if not definite and w.min() < -1e-12 * scale:
+            raise ValueError(f"Q: must be positive semidefinite, smallest eigenvalue "
+                             f"{w.min():.6g}")
+    tol = _tol(tol)
+    bad = [lam for lam in _pbh(A, B, tol) if lam.real >= -np.sqrt(_EPS) * max(1.0, abs(lam))]
+    if bad:
+        raise ValueError(f"A, B: the pair is not stabilizable; uncontrollable eigenvalues with "
+                         f"Re >= 0: {np.round(bad, 10).tolist()}")
+    hidden = [lam for lam in _pbh(A.T, Q, tol)
+              if abs(lam.real) <= np.sqrt(_EPS) * max(1.0, abs(lam))]
+    if hidden:
+        raise ValueError(f"Q: eigenvalues of A on the imaginary axis are not seen by Q "
+                         f"({np.round(hidden, 10).tolist()}): no stabilizing Riccati solution")
+    S = scipy.linalg.solve_continuous_are(A, B, Q, R)
+    K = np.linalg.solve(R, B.T @ S)
+    return K, S, np.linalg.eigvals(A - B @ K)
+
+
+__all__ = ["FrequencyGroup", "RepeatedFrequencyResult", "controllability_matrix",
+           "controllability_rank", "is_stabilizable", "lqr_gain", "pbh_test",
+           "repeated_frequency_test"]
