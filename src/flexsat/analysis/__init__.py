@@ -11,6 +11,31 @@ from flexsat.analysis.controllability import (
     repeated_frequency_test,
 )
 
+from flexsat.analysis.gramians import (
+    finite_horizon_gramian,
+    gawronski_gramians,
+    lyapunov_gramian,
+    modal_controllability_gramian,
+    modal_gramian,
+    modal_observability_gramian,
+)
+from flexsat.analysis.placement import (
+    exchange,
+    exhaustive,
+    gawronski_index,
+    greedy,
+    h2_actuator_ranking,
+    h2_placement,
+    hamdan_nayfeh,
+    kim_junkins_index,
+    modal_controllability,
+    modal_cost,
+)
+
 __all__ = ["FrequencyGroup", "RepeatedFrequencyResult", "controllability_matrix",
-           "controllability_rank", "is_stabilizable", "lqr_gain", "pbh_test",
+           "controllability_rank", "exchange", "exhaustive", "finite_horizon_gramian",
+           "gawronski_gramians", "gawronski_index", "greedy", "h2_actuator_ranking",
+           "h2_placement", "hamdan_nayfeh", "is_stabilizable", "kim_junkins_index", "lqr_gain",
+           "lyapunov_gramian", "modal_controllability", "modal_controllability_gramian",
+           "modal_cost", "modal_gramian", "modal_observability_gramian", "pbh_test",
            "repeated_frequency_test"]
