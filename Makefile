@@ -21,6 +21,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/bench_tamu.py
 	$(PY) benchmarks/bench_modal.py
+	$(PY) benchmarks/bench_lqr.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

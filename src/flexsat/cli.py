@@ -1,4 +1,5 @@
-"""Command line: ``flexsat cases``, ``flexsat modes CASE``, ``flexsat run [SCENARIO]``.
+"""Command line: ``flexsat cases``, ``flexsat modes CASE``, ``flexsat run [SCENARIO]``,
+``flexsat validate``.
 
 Errors in the user's input print in red on stderr and exit with code 2.
 """
@@ -6,15 +7,18 @@ Errors in the user's input print in red on stderr and exit with code 2.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Annotated, NoReturn
 
 import numpy as np
 import typer
+from rich import box
 from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
+from flexsat import checks as published_checks
 from flexsat.cases import CASES, get_case
 from flexsat.mode_plot import plot_case_modes
 from flexsat.report import metric_rows, write_report
@@ -177,6 +181,98 @@ def run(
     except OSError as exc:
         _fail(f"--out: cannot write the report to {str(out)!r} ({exc.strerror or exc})")
     console.print(f"report written to {path / 'index.html'}", markup=False)
+
+
+def _fmt(value, spec: str) -> str:
+    return "–" if value is None else format(value, spec)
+
+
+_SEED_FILE = re.compile(r"seed (\d{3})_[0-9a-f]{16}\.txt")
+
+
+#: below this console width the table stacks each source under its quantity and shows the case
+#: once per group instead of in a column
+_WIDE_TABLE = 140
+_NUMERIC = ("published", "computed", "published\ncomputed", "rel. error", "tolerance")
+
+
+def _validation_table(results, wide: bool) -> tuple[Table, list[str], dict[str, str]]:
+    """The validation table, its numbered notes (errors, deviations, fitted values) and the
+    seed files it abbreviates (``seed 000`` for ``seed 000_7bfdb62d2eacc22a.txt``)."""
+    table = Table(title="flexsat validate: published numbers, computed live", box=box.SIMPLE_HEAD)
+    if wide:
+        columns = [("case", False), ("quantity", True), ("source", True), ("published", False),
+                   ("computed", False), ("unit", True), ("rel. error", False),
+                   ("tolerance", True), ("result", False)]
+    else:  # result first, so that it is never squeezed out; published over computed
+        columns = [("result", False), ("case: quantity (unit), source", True),
+                   ("published\ncomputed", True), ("rel. error", True), ("tolerance", True)]
+    for column, wrap in columns:
+        table.add_column(column, overflow="fold", no_wrap=not wrap,
+                         justify="right" if column in _NUMERIC else "left",
+                         min_width=20 if column.startswith("case:") else None)
+    notes: list[str] = []
+    seeds: dict[str, str] = {}
+    case = None
+    for r in results:
+        c = r.check
+        marks = ""
+        for text in (r.error, c.note):
+            if text:
+                if text not in notes:
+                    notes.append(text)
+                marks += f" [{notes.index(text) + 1}]"
+        for match in _SEED_FILE.finditer(c.source):
+            seeds[f"seed {match.group(1)}"] = match.group(0).removeprefix("seed ")
+        source = _SEED_FILE.sub(r"seed \1", c.source)
+        result = Text(r.status, style="green" if r.passed else "bold red")
+        published, computed = _fmt(c.published, ".10g"), _fmt(r.computed, ".7g")
+        error, tolerance = _fmt(r.relative_error, "+.1e"), Text(c.tolerance)
+        if wide:
+            table.add_row(Text(c.case), Text(c.quantity + marks), Text(source), published, computed,
+                          Text(c.unit), error, tolerance, result)
+            continue
+        if c.case != case:
+            if case is not None:
+                table.add_section()
+            table.add_row("", Text(c.case, style="bold"))
+            case = c.case
+        unit = f" ({c.unit})" if c.unit else ""
+        table.add_row(result, Text.assemble(c.quantity, unit, marks, "\n", (source, "dim")),
+                      f"{published}\n{computed}", error, tolerance)
+    return table, notes, seeds
+
+
+@app.command()
+def validate(
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON to stdout.")] = False,
+    case: Annotated[list[str] | None, typer.Option(
+        "--case", help="Only this case's checks (repeat for several).")] = None,
+) -> None:
+    """Recompute every published number the code base reproduces and compare it with the paper:
+    case, quantity, source, published and computed values, relative error, tolerance, pass/fail.
+    Exits with code 1 if any check fails."""
+    try:
+        selected = published_checks.select_checks(case)
+    except ValueError as exc:
+        _fail(str(exc))
+    results = published_checks.run_checks(checks=selected)
+    failed = [r for r in results if not r.passed]
+    if as_json:
+        typer.echo(json.dumps([r.as_dict() for r in results], indent=2, ensure_ascii=False))
+    else:
+        table, notes, seeds = _validation_table(results, console.width >= _WIDE_TABLE)
+        console.print(table)
+        for i, text in enumerate(notes, 1):
+            console.print(f"[{i}] {text}", markup=False, highlight=False)
+        for short, name in sorted(seeds.items()):
+            console.print(f"{short}: ../shared/seeds/{name}", markup=False, highlight=False)
+        seconds = sum(r.seconds for r in results)
+        console.print(f"{len(results)} checks: {len(results) - len(failed)} passed, "
+                      f"{len(failed)} failed ({seconds:.1f} s)", markup=False, highlight=False,
+                      style="red" if failed else "green")
+    if failed:
+        raise typer.Exit(code=1)
 
 
 __all__ = ["app", "parse_settings", "parse_value"]

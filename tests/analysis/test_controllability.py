@@ -8,10 +8,10 @@ from flexsat.analysis import (
     controllability_matrix,
     controllability_rank,
     is_stabilizable,
-    lqr_gain,
     pbh_test,
     repeated_frequency_test,
 )
+from flexsat.control import lqr
 
 
 def test_double_integrator_is_controllable_from_the_force():
@@ -94,29 +94,31 @@ def test_repeated_frequency_test_matches_pbh_on_the_first_order_model():
     assert not r.controllable and r.deficient[0].modes == (1,)
 
 
-def test_lqr_gain_matches_python_control_and_refuses_unsolvable_problems():
+def test_lqr_refuses_the_problems_bainum_needs_refused():
+    """The seed 002 regulators use flexsat.control.lqr; the Riccati problems without a
+    stabilizing solution are refused with the reason."""
     rng = np.random.default_rng(3)
     A, B = rng.normal(size=(4, 4)), rng.normal(size=(4, 2))
     Q, R = np.diag([1.0, 2.0, 3.0, 4.0]), np.diag([1.0, 0.5])
-    K, S, E = lqr_gain(A, B, Q, R)
+    K, S, E = lqr(A, B, Q, R)
     K_ref, S_ref, E_ref = control.lqr(A, B, Q, R)
     np.testing.assert_allclose(K, K_ref, rtol=1e-8)
     np.testing.assert_allclose(S, S_ref, rtol=1e-8)
     assert np.all(E.real < 0)
-    with pytest.raises(ValueError, match=r"^R: must be positive definite"):
-        lqr_gain(A, B, Q, np.diag([1.0, -1.0]))
+    with pytest.raises(ValueError, match=r"^R: must be symmetric positive definite"):
+        lqr(A, B, Q, np.diag([1.0, -1.0]))
     with pytest.raises(ValueError, match=r"^R: must be symmetric"):
-        lqr_gain(A, B, Q, [[1.0, 0.5], [0.0, 1.0]])
-    with pytest.raises(ValueError, match=r"^Q: must be positive semidefinite"):
-        lqr_gain(A, B, np.diag([1.0, 1.0, 1.0, -1.0]), R)
-    with pytest.raises(ValueError, match=r"^A, B: the pair is not stabilizable"):
-        lqr_gain(np.diag([1.0, 2.0]), [[1.0], [0.0]], np.eye(2), 1.0)
+        lqr(A, B, Q, [[1.0, 0.5], [0.0, 1.0]])
+    with pytest.raises(ValueError, match=r"^Q: must be positive semi-definite"):
+        lqr(A, B, np.diag([1.0, 1.0, 1.0, -1.0]), R)
+    with pytest.raises(ValueError, match=r"^\(A, B\) is not stabilizable"):
+        lqr(np.diag([1.0, 2.0]), [[1.0], [0.0]], np.eye(2), 1.0)
     # stabilizable (the uncontrollable mode is stable): solvable
-    K, _, E = lqr_gain(np.diag([1.0, -2.0]), [[1.0], [0.0]], np.eye(2), 1.0)
+    K, _, E = lqr(np.diag([1.0, -2.0]), [[1.0], [0.0]], np.eye(2), 1.0)
     assert np.all(E.real < 0)
     # an undamped oscillator that Q does not see has no stabilizing solution
-    with pytest.raises(ValueError, match=r"^Q: eigenvalues of A on the imaginary axis"):
-        lqr_gain([[0.0, 1.0], [-1.0, 0.0]], [[0.0], [1.0]], np.zeros((2, 2)), 1.0)
+    with pytest.raises(ValueError, match=r"is not detectable: eigenvalue\(s\) 0\+1j"):
+        lqr([[0.0, 1.0], [-1.0, 0.0]], [[0.0], [1.0]], np.zeros((2, 2)), 1.0)
 
 
 @pytest.mark.parametrize("call,message", [
@@ -133,8 +135,8 @@ def test_lqr_gain_matches_python_control_and_refuses_unsolvable_problems():
      r"^stiffness: must be a 1-D array or a diagonal"),
     (lambda: repeated_frequency_test([1.0, 2.0], np.eye(3)),
      r"^B: must have 2 rows \(stiffness is 2x2\)"),
-    (lambda: lqr_gain(np.eye(2), np.eye(2), np.eye(3), np.eye(2)), r"^Q: must be 2x2"),
-    (lambda: lqr_gain(np.eye(2), np.eye(2), np.eye(2), 1.0), r"^R: must be 2x2"),
+    (lambda: lqr(np.eye(2), np.eye(2), np.eye(3), np.eye(2)), r"^Q: must have shape \(n, n\)"),
+    (lambda: lqr(np.eye(2), np.eye(2), np.eye(2), 1.0), r"^R: must have shape \(m, m\)"),
 ])
 def test_bad_inputs_name_the_field(call, message):
     with pytest.raises(ValueError, match=message):

@@ -6,7 +6,6 @@ from flexsat.analysis.controllability import (
     controllability_matrix,
     controllability_rank,
     is_stabilizable,
-    lqr_gain,
     pbh_test,
     repeated_frequency_test,
 )
@@ -35,7 +34,7 @@ from flexsat.analysis.placement import (
 __all__ = ["FrequencyGroup", "RepeatedFrequencyResult", "controllability_matrix",
            "controllability_rank", "exchange", "exhaustive", "finite_horizon_gramian",
            "gawronski_gramians", "gawronski_index", "greedy", "h2_actuator_ranking",
-           "h2_placement", "hamdan_nayfeh", "is_stabilizable", "kim_junkins_index", "lqr_gain",
+           "h2_placement", "hamdan_nayfeh", "is_stabilizable", "kim_junkins_index",
            "lyapunov_gramian", "modal_controllability", "modal_controllability_gramian",
            "modal_cost", "modal_gramian", "modal_observability_gramian", "pbh_test",
            "repeated_frequency_test"]

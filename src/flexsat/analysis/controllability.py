@@ -13,9 +13,9 @@ Tests provided (seed 002, Bainum & Reddy 1979; notes ``shared/spec/seed002.md`` 
   L293-L305, L377-L442) for an undamped modal system ``ẍ + diag(κ) x = B u``: the pair is
   controllable iff, for every distinct κ, the rows of B of the modes sharing it have rank equal
   to their number (the multiplicity);
-- :func:`is_stabilizable`: PBH restricted to eigenvalues with Re λ >= 0;
-- :func:`lqr_gain`: the full (2n x 2n) linear regulator of Ch. III / Ch. V (seed 002 L1116),
-  with the checks that make its Riccati equation solvable.
+- :func:`is_stabilizable`: PBH restricted to eigenvalues with Re λ >= 0.
+
+The regulators of Ch. III / Ch. V use :func:`flexsat.control.lqr`.
 """
 
 from __future__ import annotations
@@ -340,76 +340,6 @@ def repeated_frequency_test(stiffness, B, tol: float | None = None,
     return RepeatedFrequencyResult(tuple(groups))
 
 
-# -- linear regulator --------------------------------------------------------------------------
-def lqr_gain(A, B, Q, R, tol: float | None = None):
-    """Continuous-time linear regulator ``u = -K x`` minimizing ∫ (xᵀQx + uᵀRu) dt.
-
-    The full 2n x 2n Riccati equation ``AᵀS + SA - S B R⁻¹ Bᵀ S + Q = 0`` (seed 002 Ch. V,
-    L1116, for the case #actuators ≠ #modes), solved with
-    :func:`scipy.linalg.solve_continuous_are` after checks that make a stabilizing solution
-    exist.
-
-    Parameters
-    ----------
-    A : (n, n) array_like
-    B : (n, m) array_like
-    Q : (n, n) array_like
-        Symmetric positive semidefinite.
-    R : (m, m) array_like or float
-        Symmetric positive definite.
-    tol : float, optional
-        PBH tolerance, as :func:`pbh_test`.
-
-    Returns
-    -------
-    K : (m, n) ndarray
-        Gain (python-control convention, ``u = -K x``).
-    S : (n, n) ndarray
-        Stabilizing Riccati solution.
-    E : (n,) ndarray
-        Closed-loop eigenvalues of ``A - B K``.
-
-    Raises
-    ------
-    ValueError
-        ``A``/``B``/``Q``/``R``: bad shape or non-finite; ``R``: not symmetric positive
-        definite; ``Q``: not symmetric positive semidefinite, or an undamped mode of A that Q does
-        not see; ``A, B``: the pair is not stabilizable.
-    """
-    A, B = _pair(A, B)
-    n, m = B.shape
-    Q = _square(Q, "Q")
-    if Q.shape != (n, n):
-        raise ValueError(f"Q: must be {n}x{n} (A is {n}x{n}), got shape {Q.shape}")
-    R = _array(R, "R")
-    R = R.reshape(1, 1) if R.ndim == 0 else R
-    if R.shape != (m, m):
-        raise ValueError(f"R: must be {m}x{m} (B has {m} columns), got shape {R.shape}")
-    for name, M, definite in (("R", R, True), ("Q", Q, False)):
-        scale = max(np.abs(M).max(), 1e-300)
-        if np.abs(M - M.T).max() > 1e-12 * scale:
-            raise ValueError(f"{name}: must be symmetric")
-        w = np.linalg.eigvalsh((M + M.T) / 2)
-        if definite and w.min() <= 0:
-            raise ValueError(f"R: must be positive definite, smallest eigenvalue {w.min():.6g}")
-        if not definite and w.min() < -1e-12 * scale:
-            raise ValueError(f"Q: must be positive semidefinite, smallest eigenvalue "
-                             f"{w.min():.6g}")
-    tol = _tol(tol)
-    bad = [lam for lam in _pbh(A, B, tol) if lam.real >= -np.sqrt(_EPS) * max(1.0, abs(lam))]
-    if bad:
-        raise ValueError(f"A, B: the pair is not stabilizable; uncontrollable eigenvalues with "
-                         f"Re >= 0: {np.round(bad, 10).tolist()}")
-    hidden = [lam for lam in _pbh(A.T, Q, tol)
-              if abs(lam.real) <= np.sqrt(_EPS) * max(1.0, abs(lam))]
-    if hidden:
-        raise ValueError(f"Q: eigenvalues of A on the imaginary axis are not seen by Q "
-                         f"({np.round(hidden, 10).tolist()}): no stabilizing Riccati solution")
-    S = scipy.linalg.solve_continuous_are(A, B, Q, R)
-    K = np.linalg.solve(R, B.T @ S)
-    return K, S, np.linalg.eigvals(A - B @ K)
-
-
 __all__ = ["FrequencyGroup", "RepeatedFrequencyResult", "controllability_matrix",
-           "controllability_rank", "is_stabilizable", "lqr_gain", "pbh_test",
+           "controllability_rank", "is_stabilizable", "pbh_test",
            "repeated_frequency_test"]

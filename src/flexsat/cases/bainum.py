@@ -716,7 +716,7 @@ def modal_lqr_gains(G, stiffness, Q1=1.0, Q2=None, R=1.0, D=0.0,
     ------
     ValueError
         ``G`` not square (#actuators ≠ #coordinates: use the full 2n x 2n regulator,
-        :func:`flexsat.analysis.lqr_gain`, L1116) or singular (σ_min ≤ ``rcond`` σ_max, e.g. the
+        :func:`flexsat.control.lqr`, L1116) or singular (σ_min ≤ ``rcond`` σ_max, e.g. the
         exact-shape symmetric five-actuator layout of Ch. III Case 2, notes §3.3); and the
         errors of :func:`modal_riccati`.
     """

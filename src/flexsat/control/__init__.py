@@ -1,7 +1,41 @@
 """Control laws behind one interface (:class:`Controller`)."""
 
 from flexsat.control.base import Controller
+from flexsat.control.estimation import (
+    RefinedEstimator,
+    dkalman,
+    kalman,
+    refine_estimator,
+    regulator_weighted_process_noise,
+    truncate_gains,
+)
+from flexsat.control.frequency_shaped import (
+    FrequencyShapedController,
+    FrequencyShapedDesign,
+    frequency_shaped_lqr,
+)
+from flexsat.control.lqg import LQGController
+from flexsat.control.lqr import RiccatiSolution, dlqr, lqr
 from flexsat.control.lyapunov import LyapunovRegulator, LyapunovTracker, check_lyapunov_gains
 from flexsat.control.pd import PD
 
-__all__ = ["Controller", "LyapunovRegulator", "LyapunovTracker", "PD", "check_lyapunov_gains"]
+__all__ = [
+    "Controller",
+    "FrequencyShapedController",
+    "FrequencyShapedDesign",
+    "LQGController",
+    "LyapunovRegulator",
+    "LyapunovTracker",
+    "PD",
+    "RefinedEstimator",
+    "RiccatiSolution",
+    "check_lyapunov_gains",
+    "dkalman",
+    "dlqr",
+    "frequency_shaped_lqr",
+    "kalman",
+    "lqr",
+    "refine_estimator",
+    "regulator_weighted_process_noise",
+    "truncate_gains",
+]

@@ -1,0 +1,601 @@
+"""Homotopic nonlinear programming by minimum-norm differential correction.
+
+Source: Junkins & Kim 1990, Appendix of Attachment 5 of seed ``000_7bfdb62d2eacc22a.txt``
+(L2255-L2325; notes ``shared/spec/seed000_part1.md`` §4.6, Eqs. A1-A11), and the same optimizer
+as used by Agrawal & Bang (seed 004 §2 Eqs. 16-28, notes ``shared/spec/seed004.md`` §2-§3).
+
+Problem (A1-A2)::
+
+    minimise J(p)  subject to  f_i(p) = f_oi (i = 1 … m),   g_j(p) >= T_j (j = 1 … q)
+
+Method, as implemented by :func:`homotopy_minimize`:
+
+1. **Active set (A3-A4).** Inequalities that are violated (or within ``active_tol`` of their
+   bound) are held as equalities g_j(p) = T_j. A held inequality is released when its
+   multiplier shows that the correction would move it into the interior (the first-order
+   optimality sign test of gradient projection); at most N rows are kept, in priority order
+   (equalities, then inequalities in their given order), as the paper prescribes.
+2. **Feasibility homotopy (A5-A7).** The targets move from their values at the start to the
+   goal, f_p(γ) = γ f_o + (1 − γ) f(p_start), γ = 0 → 1 (an inequality already satisfied at the
+   start keeps its bound T_j).
+3. **Minimum-norm correction (A8; seed 004 Eqs. 18-20, 25, 28).** For the residual r of the
+   active rows with Jacobian A, Δp = −W⁻¹ Aᵀ (A W⁻¹ Aᵀ)⁺ r, the W-norm-minimal step, computed
+   with a pseudo-inverse (rank-deficient rows give the least-squares step). Each step is
+   damped by a backtracking line search on the sum of squared scaled residuals.
+4. **Adaptive γ.** Each γ is iterated to convergence (at most ``max_corrections``
+   corrections). On success γ advances; on failure the increment is halved and the last
+   converged point restored. The feasibility phase fails when the increment falls below
+   ``min_gamma_step``; the result then reports the active rows and their Jacobian (A8).
+5. **Objective homotopy (A9-A11; seed 004 Eqs. 16-17).** From the feasible point, J is
+   appended as an extra row with target J_o(γ) = γ J_goal + (1 − γ) J(p_feasible), γ reset to 0.
+   The largest γ that still converges gives the constrained minimum (A11); reaching γ = 1
+   means the goal itself was attained. The converged J exceeds the minimum by about
+   ``min_gamma_step · (J_feasible − J_goal)``, so p is accurate to roughly the square root of
+   that (relative).
+
+Gradients are supplied by the user or taken by central finite differences.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+_EPS = np.finfo(float).eps
+
+
+@dataclass(frozen=True)
+class HomotopyStep:
+    """One converged point of the homotopy path.
+
+    Attributes
+    ----------
+    phase : {"feasibility", "objective"}
+    gamma : float
+        Homotopy parameter of the phase (0 … 1).
+    p : (N,) ndarray
+    objective : float
+        J(p).
+    corrections : int
+        Minimum-norm corrections needed to converge at this γ.
+    active : tuple of str
+        Rows held at the last correction: ``"eq[i]"``, ``"ineq[j]"``, ``"objective"``.
+    max_violation : float
+        max over f_i − f_oi (absolute) and T_j − g_j (positive part) at p, against the *final*
+        targets (zero once feasible).
+    """
+
+    phase: str
+    gamma: float
+    p: np.ndarray
+    objective: float
+    corrections: int
+    active: tuple[str, ...]
+    max_violation: float
+
+
+@dataclass(frozen=True)
+class HomotopyResult:
+    """Outcome of :func:`homotopy_minimize`.
+
+    Attributes
+    ----------
+    p : (N,) ndarray
+        Final (last converged) point.
+    objective : float
+        J(p).
+    equality, inequality : ndarray
+        f(p) and g(p) at the final point (empty when there are none).
+    feasible : bool
+        The feasibility homotopy reached γ = 1.
+    success : bool
+        Feasible, and (if optimising) the objective phase ran.
+    goal_reached : bool
+        The objective homotopy reached γ = 1, i.e. J(p) = J_goal.
+    gamma : float
+        Last converged γ of the objective phase (0 if it did not start).
+    message : str
+    path : tuple of HomotopyStep
+        Every converged γ, both phases, in order.
+    p_feasible : (N,) ndarray or None
+        The feasible start of the objective phase.
+    active : tuple of str
+        Active rows at the end (on failure: the rows that could not be satisfied).
+    jacobian : ndarray
+        Jacobian of the active rows at the end (reported to the user on failure, A8).
+    projected_gradient : float
+        |∇J| projected on the null space of the active constraint rows (W metric), relative
+        to |∇J|: a first-order optimality measure (0 at a constrained stationary point).
+    n_evaluations : int
+        Calls of the objective function.
+    """
+
+    p: np.ndarray
+    objective: float
+    equality: np.ndarray
+    inequality: np.ndarray
+    feasible: bool
+    success: bool
+    goal_reached: bool
+    gamma: float
+    message: str
+    path: tuple[HomotopyStep, ...]
+    p_feasible: np.ndarray | None
+    active: tuple[str, ...]
+    jacobian: np.ndarray
+    projected_gradient: float
+    n_evaluations: int = 0
+
+    @property
+    def feasibility_steps(self) -> tuple[HomotopyStep, ...]:
+        return tuple(s for s in self.path if s.phase == "feasibility")
+
+    @property
+    def objective_steps(self) -> tuple[HomotopyStep, ...]:
+        return tuple(s for s in self.path if s.phase == "objective")
+
+
+# -- input checks ------------------------------------------------------------------------------
+def _vector(value, field: str) -> np.ndarray:
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{field}: must be numeric, got the string {value!r}")
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{field}: must be numeric, got {type(value).__name__}") from None
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{field}: must be finite (no NaN or inf), got {value!r}")
+    return arr
+
+
+def _positive(value, field: str, *, integer: bool = False, upper: float | None = None):
+    if isinstance(value, bool):
+        raise ValueError(f"{field}: must be a positive number, got {value!r}")
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{field}: must be a positive number, got {value!r}") from None
+    if not (np.isfinite(number) and number > 0) or (upper is not None and number > upper):
+        rule = f"in (0, {upper}]" if upper is not None else "> 0 and finite"
+        raise ValueError(f"{field}: must be {rule}, got {value!r}")
+    if integer:
+        if number != int(number):
+            raise ValueError(f"{field}: must be an integer, got {value!r}")
+        return int(number)
+    return number
+
+
+def _weight_factor(weight, n: int) -> np.ndarray:
+    """L with W = L Lᵀ (W positive definite, vector = diagonal)."""
+    if weight is None:
+        return np.eye(n)
+    w = _vector(weight, "weight")
+    if w.ndim == 1:
+        if w.shape != (n,) or np.any(w <= 0):
+            raise ValueError(f"weight: a vector weight must have {n} entries > 0, got {weight!r}")
+        return np.diag(np.sqrt(w))
+    if w.shape != (n, n):
+        raise ValueError(f"weight: must be a vector of {n} or an ({n}, {n}) matrix, got shape "
+                         f"{w.shape}")
+    if not np.allclose(w, w.T, rtol=1e-12, atol=0):
+        raise ValueError("weight: the matrix W must be symmetric")
+    try:
+        return np.linalg.cholesky(w)
+    except np.linalg.LinAlgError:
+        raise ValueError("weight: the matrix W must be positive definite") from None
+
+
+class _Failure(Exception):
+    pass
+
+
+@dataclass
+class _Problem:
+    objective: object
+    gradient: object
+    equality: object
+    equality_jacobian: object
+    inequality: object
+    inequality_jacobian: object
+    n: int
+    m: int
+    q: int
+    fd_step: float
+    evaluations: int = 0
+    cache: dict = field(default_factory=dict)
+
+    # values ------------------------------------------------------------------------------------
+    def values(self, p: np.ndarray):
+        key = p.tobytes()
+        if key in self.cache:
+            return self.cache[key]
+        self.evaluations += 1
+        J = float(np.asarray(self.objective(p.copy()), dtype=float))
+        ce = self._call(self.equality, p, self.m, "equality")
+        ci = self._call(self.inequality, p, self.q, "inequality")
+        if not (np.isfinite(J) and np.all(np.isfinite(ce)) and np.all(np.isfinite(ci))):
+            raise _Failure("non-finite function value")
+        if len(self.cache) > 64:
+            self.cache.clear()
+        self.cache[key] = (J, ce, ci)
+        return J, ce, ci
+
+    @staticmethod
+    def _call(fun, p, size, name):
+        if fun is None:
+            return np.zeros(0)
+        out = np.atleast_1d(np.asarray(fun(p.copy()), dtype=float))
+        if out.shape != (size,):
+            raise ValueError(f"{name}: must return {size} values, got shape {out.shape}")
+        return out
+
+    # derivatives -------------------------------------------------------------------------------
+    def _fd(self, p, which):
+        rows = []
+        for k in range(self.n):
+            h = self.fd_step * max(1.0, abs(p[k]))
+            e = np.zeros(self.n)
+            e[k] = h
+            plus, minus = self.values(p + e), self.values(p - e)
+            rows.append((np.atleast_1d(plus[which]) - np.atleast_1d(minus[which])) / (2 * h))
+        return np.array(rows).T  # (rows, n)
+
+    def grad(self, p):
+        if self.gradient is None:
+            return self._fd(p, 0)[0]
+        g = np.asarray(self.gradient(p.copy()), dtype=float).reshape(-1)
+        if g.shape != (self.n,):
+            raise ValueError(f"gradient: must return {self.n} values, got shape {g.shape}")
+        if not np.all(np.isfinite(g)):
+            raise _Failure("non-finite gradient")
+        return g
+
+    def jac(self, p, which: int, fun, size, name):
+        if size == 0:
+            return np.zeros((0, self.n))
+        if fun is None:
+            return self._fd(p, which)
+        jac = np.asarray(fun(p.copy()), dtype=float).reshape(size, -1)
+        if jac.shape != (size, self.n):
+            raise ValueError(f"{name}: must return a ({size}, {self.n}) Jacobian, got shape "
+                             f"{jac.shape}")
+        if not np.all(np.isfinite(jac)):
+            raise _Failure(f"non-finite {name}")
+        return jac
+
+    def jac_eq(self, p):
+        return self.jac(p, 1, self.equality_jacobian, self.m, "equality_jacobian")
+
+    def jac_in(self, p):
+        return self.jac(p, 2, self.inequality_jacobian, self.q, "inequality_jacobian")
+
+
+def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_target=None,
+                      equality_jacobian=None, inequality=None, inequality_bound=None,
+                      inequality_jacobian=None, objective_goal: float = 0.0, weight=None,
+                      minimize: bool = True, gamma_step: float = 0.1,
+                      min_gamma_step: float = 1e-9, max_corrections: int = 8,
+                      tol: float = 1e-10, active_tol: float = 1e-7, max_step: float | None = None,
+                      fd_step: float = 1e-6, max_steps: int = 1000,
+                      max_evaluations: int = 100_000) -> HomotopyResult:
+    """Minimise J(p) with equality and inequality constraints by homotopic minimum-norm
+    differential correction (Att. 5 Appendix Eqs. A1-A11; seed 004 Eqs. 16-28).
+
+    Parameters
+    ----------
+    objective : callable ``J(p) -> float``
+    p0 : (N,) array_like
+        Starting point p_start (need not be feasible).
+    gradient : callable ``∇J(p) -> (N,)``, optional
+        Default: central finite differences with step ``fd_step · max(1, |p_k|)``.
+    equality : callable ``f(p) -> (m,)``, optional
+        Equality constraint functions, with
+    equality_target : (m,) array_like
+        f_o, so that f(p) = f_o.
+    equality_jacobian : callable ``(p) -> (m, N)``, optional
+    inequality : callable ``g(p) -> (q,)``, optional
+        Inequality constraint functions, with
+    inequality_bound : (q,) array_like or float
+        T, so that g(p) >= T.
+    inequality_jacobian : callable ``(p) -> (q, N)``, optional
+    objective_goal : float
+        J_goal of Eq. A11 (default 0, "often 0" in the paper). Must be below J(p_feasible) for
+        the objective phase to do anything.
+    weight : (N,) or (N, N) array_like, optional
+        W of Eq. A8 (positive definite; a vector is a diagonal). Default identity.
+    minimize : bool
+        False stops after the feasibility phase.
+    gamma_step : float
+        Initial (and largest) γ increment, in (0, 1].
+    min_gamma_step : float
+        Smallest γ increment before a phase stops.
+    max_corrections : int
+        Corrections allowed per γ before it counts as not converged.
+    tol : float
+        Convergence: every scaled residual |r_i| / max(1, |target_i|) <= tol.
+    active_tol : float
+        Inequalities within this scaled distance of their bound are candidates for the active
+        set.
+    max_step : float, optional
+        Largest W-norm of one correction; a longer step counts as a failure (default
+        unlimited).
+    fd_step : float
+        Relative finite-difference step for missing derivatives.
+    max_steps : int
+        Largest number of converged γ steps per phase (the objective phase can creep along a
+        flat valley in tiny steps; it then stops here with the best point so far).
+    max_evaluations : int
+        Budget of objective/constraint evaluations.
+
+    Returns
+    -------
+    HomotopyResult
+
+    Raises
+    ------
+    ValueError
+        Bad arguments, or functions returning wrongly shaped or non-finite values at ``p0``.
+
+    Notes
+    -----
+    The method finds local minima only (the paper's caveat). Inequalities are one-sided:
+    g(p) >= T; write an upper bound h(p) <= U as −h(p) >= −U.
+    """
+    p = _vector(p0, "p0").reshape(-1)
+    if p.size == 0:
+        raise ValueError("p0: needs at least one parameter")
+    n = p.size
+    if not callable(objective):
+        raise ValueError("objective: must be callable")
+    for name, fun in (("gradient", gradient), ("equality", equality),
+                      ("equality_jacobian", equality_jacobian), ("inequality", inequality),
+                      ("inequality_jacobian", inequality_jacobian)):
+        if fun is not None and not callable(fun):
+            raise ValueError(f"{name}: must be callable or None")
+    if (equality is None) != (equality_target is None):
+        raise ValueError("equality_target: give it exactly when equality is given")
+    if (inequality is None) != (inequality_bound is None):
+        raise ValueError("inequality_bound: give it exactly when inequality is given")
+    f_o = np.zeros(0) if equality is None else _vector(equality_target,
+                                                       "equality_target").reshape(-1)
+    m = f_o.size
+    if equality is not None and m == 0:
+        raise ValueError("equality_target: must not be empty")
+    if inequality is not None:
+        bound = _vector(inequality_bound, "inequality_bound")
+        q = np.atleast_1d(np.asarray(inequality(p.copy()), dtype=float)).size
+        T = np.broadcast_to(bound, (q,)).astype(float) if bound.ndim == 0 else bound.reshape(-1)
+        if T.size != q:
+            raise ValueError(f"inequality_bound: must have {q} entries (one per inequality), got "
+                             f"{T.size}")
+    else:
+        T = np.zeros(0)
+    q = T.size
+    objective_goal = float(_vector(objective_goal, "objective_goal"))
+    gamma_step = _positive(gamma_step, "gamma_step", upper=1.0)
+    min_gamma_step = _positive(min_gamma_step, "min_gamma_step", upper=gamma_step)
+    max_corrections = _positive(max_corrections, "max_corrections", integer=True)
+    tol = _positive(tol, "tol")
+    active_tol = _positive(active_tol, "active_tol")
+    if max_step is not None:
+        max_step = _positive(max_step, "max_step")
+    fd_step = _positive(fd_step, "fd_step")
+    max_steps = _positive(max_steps, "max_steps", integer=True)
+    max_evaluations = _positive(max_evaluations, "max_evaluations", integer=True)
+    L = _weight_factor(weight, n)
+    Linv_T = np.linalg.inv(L).T  # Δp = L⁻ᵀ y, |Δp|_W = |y|
+
+    prob = _Problem(objective, gradient, equality, equality_jacobian, inequality,
+                    inequality_jacobian, n, m, q, fd_step)
+    try:
+        J0, fe0, gi0 = prob.values(p)
+    except _Failure:
+        raise ValueError("objective: non-finite value at p0") from None
+    # validate user derivatives at the start (shape errors surface here, not mid-run)
+    for name, check in (("gradient", prob.grad), ("equality_jacobian", prob.jac_eq),
+                        ("inequality_jacobian", prob.jac_in)):
+        try:
+            check(p)
+        except _Failure:
+            if name != "gradient":  # a gradient may be undefined at the start only
+                raise ValueError(f"{name}: non-finite value at p0") from None
+
+    se = np.maximum(1.0, np.abs(f_o))
+    sb = np.maximum(1.0, np.abs(T))
+    T_start = np.minimum(gi0, T)
+
+    names = [f"eq[{i}]" for i in range(m)] + [f"ineq[{j}]" for j in range(q)]
+
+    def violation(fe, gi, scaled=False):
+        parts = [np.abs(fe - f_o), np.maximum(0.0, T - gi)]
+        if scaled:
+            parts = [parts[0] / se, parts[1] / sb]
+        return float(max((x.max() for x in parts if x.size), default=0.0))
+
+    def targets(gamma, phase, J_feas):
+        if phase == "feasibility":
+            return (gamma * f_o + (1 - gamma) * fe0, gamma * T + (1 - gamma) * T_start, None)
+        return f_o, T, gamma * objective_goal + (1 - gamma) * J_feas
+
+    def residuals(p, te, tb, Jo):
+        J, fe, gi = prob.values(p)
+        re, ri = (fe - te) / se, (gi - tb) / sb
+        rJ = None if Jo is None else (J - Jo) / max(1.0, abs(Jo))
+        return re, ri, rJ
+
+    def merit(p, te, tb, Jo):
+        try:
+            re, ri, rJ = residuals(p, te, tb, Jo)
+        except (_Failure, ValueError, ArithmeticError, np.linalg.LinAlgError):
+            return np.inf
+        return float(re @ re + np.minimum(ri, 0) @ np.minimum(ri, 0)
+                     + (0.0 if rJ is None else rJ * rJ))
+
+    def step(p, te, tb, Jo):
+        """One damped minimum-norm correction; returns (p_new, active names, jacobian).
+
+        The step is the W-norm-minimal Δp with the equality rows (and the objective row)
+        satisfied to first order and the inequality rows held as equalities on a working set,
+        chosen by a small active-set loop: start from the violated/near-bound rows (A3), add a
+        row whose linearisation the step would violate, release a satisfied row whose
+        multiplier is negative (the step would move it inside), at most ``room`` rows (A4).
+        """
+        re, ri, rJ = residuals(p, te, tb, Jo)
+        rows_eq = prob.jac_eq(p) / se[:, None]
+        rows_all = prob.jac_in(p) / sb[:, None]
+        room = n - (0 if Jo is None else 1)
+        if m > room:
+            raise _Failure("more equality constraints than free parameters")
+        objrow = None
+        if Jo is not None:
+            objrow = prob.grad(p)[None, :] / max(1.0, abs(Jo))
+        work = [int(j) for j in np.flatnonzero(ri <= active_tol)][: room - m]  # priority order
+        seen = set()
+        for _ in range(4 * q + 4):
+            A = np.vstack([rows_eq, rows_all[work]] + ([objrow] if objrow is not None else []))
+            r = np.concatenate([re, ri[work]] + ([[rJ]] if rJ is not None else []))
+            At = A @ Linv_T
+            nu = -np.linalg.pinv(At @ At.T, rcond=1e-13, hermitian=True) @ r
+            y = At.T @ nu
+            dp = Linv_T @ y
+            key = tuple(work)
+            if key in seen:
+                break
+            seen.add(key)
+            # add the inequality whose linearisation the step violates most
+            lin = ri + rows_all @ dp
+            outside = [j for j in range(q) if j not in work and lin[j] < -tol]
+            if outside and len(work) < room - m:
+                worst = min(outside, key=lambda j: lin[j])
+                work = sorted(work + [worst])
+                continue
+            # release a satisfied inequality whose multiplier is negative (ν < 0: move inside)
+            nu_in = nu[m: m + len(work)]
+            cut = -1e-12 * max(1.0, float(np.abs(nu).max()))
+            drop = [k for k, j in enumerate(work) if ri[j] >= 0 and nu_in[k] < cut]
+            if drop:
+                k = min(drop, key=lambda k: nu_in[k])
+                work = work[:k] + work[k + 1:]
+                continue
+            break
+        if max_step is not None and np.linalg.norm(y) > max_step:
+            raise _Failure("correction longer than max_step")
+        m0 = merit(p, te, tb, Jo)
+        alpha = 1.0
+        while alpha >= 1.0 / 64:
+            trial = p + alpha * dp
+            if merit(trial, te, tb, Jo) < (1 - 1e-4 * alpha) * m0:
+                active = tuple([names[i] for i in range(m)] + [names[m + j] for j in work]
+                               + (["objective"] if Jo is not None else []))
+                return trial, active, A
+            alpha /= 2
+        raise _Failure("line search failed")
+
+    def converge(p, gamma, phase, J_feas):
+        te, tb, Jo = targets(gamma, phase, J_feas)
+        active, A = (), np.zeros((0, n))
+        for it in range(max_corrections + 1):
+            if prob.evaluations > max_evaluations:
+                raise _Failure("evaluation budget exhausted")
+            re, ri, rJ = residuals(p, te, tb, Jo)
+            worst = max([np.abs(re).max(initial=0.0), np.maximum(0.0, -ri).max(initial=0.0),
+                         0.0 if rJ is None else abs(rJ)])
+            if worst <= tol:
+                return p, it, active, A
+            if it == max_corrections:
+                break
+            p, active, A = step(p, te, tb, Jo)
+        raise _Failure(f"not converged in {max_corrections} corrections")
+
+    path: list[HomotopyStep] = []
+    last_active, last_A, last_fail = (), np.zeros((0, n)), ""
+
+    def run_phase(p, phase, J_feas):
+        nonlocal last_active, last_A, last_fail
+        gamma, dg, steps = 0.0, gamma_step, 0
+        while gamma < 1.0:
+            if steps >= max_steps:
+                last_fail = f"max_steps = {max_steps} converged steps reached"
+                return p, gamma, False
+            g_try = gamma + dg
+            if g_try > 1.0 - 1e-12:
+                g_try = 1.0
+            try:
+                p_new, its, active, A = converge(p, g_try, phase, J_feas)
+            except (_Failure, ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
+                # a ValueError here comes from the user's functions away from p0 (e.g. a
+                # degenerate eigen-structure): that γ step failed, try a smaller one
+                last_fail = str(exc)
+                if prob.evaluations > max_evaluations:
+                    return p, gamma, False
+                dg /= 2
+                if dg < min_gamma_step:
+                    return p, gamma, False
+                continue
+            p, gamma, steps = p_new, g_try, steps + 1
+            last_active, last_A = active, A
+            J, fe, gi = prob.values(p)
+            path.append(HomotopyStep(phase, gamma, p.copy(), J, its, active, violation(fe, gi)))
+            if its <= 3:
+                dg = min(gamma_step, 2 * dg)
+        return p, gamma, True
+
+    # phase 1: feasibility (A3-A8)
+    if violation(fe0, gi0, scaled=True) <= tol:
+        path.append(HomotopyStep("feasibility", 1.0, p.copy(), J0, 0, (), violation(fe0, gi0)))
+        feasible = True
+    else:
+        p, gamma1, feasible = run_phase(p, "feasibility", None)
+    J, fe, gi = prob.values(p)
+    if not feasible:
+        return HomotopyResult(
+            p, J, fe, gi, False, False, False, 0.0,
+            f"infeasible: the feasibility homotopy stopped at γ = {gamma1:.6g} ({last_fail}); "
+            f"active rows {list(last_active)} with the Jacobian in `jacobian`",
+            tuple(path), None, last_active, last_A, np.nan, prob.evaluations)
+    p_feas, J_feas = p.copy(), J
+    gamma2, goal = 0.0, False
+    if not minimize:
+        message = "feasible point found (minimize=False)"
+    elif objective_goal >= J_feas:
+        message = (f"objective_goal {objective_goal:.6g} is not below J(p_feasible) = "
+                   f"{J_feas:.6g}: nothing to minimise")
+    elif m >= n:
+        message = "the equality constraints leave no freedom: the feasible point is returned"
+    else:
+        p, gamma2, goal = run_phase(p, "objective", J_feas)
+        J, fe, gi = prob.values(p)
+        if goal:
+            message = "objective goal reached"
+        elif last_fail.startswith("max_steps"):
+            message = (f"stopped after max_steps = {max_steps} objective steps at γ = "
+                       f"{gamma2:.9g} (J = {J:.10g}); not yet the constrained minimum")
+        else:
+            message = (f"constrained minimum: the objective homotopy stopped at γ = {gamma2:.9g} "
+                       f"(J = {J:.10g}; next step: {last_fail})")
+    try:
+        pg = _projected_gradient(prob, p, last_active, Linv_T)
+    except _Failure:
+        pg = np.nan
+    return HomotopyResult(p, J, fe, gi, True, True, goal, gamma2, message, tuple(path), p_feas,
+                          last_active, last_A, pg, prob.evaluations)
+
+
+def _projected_gradient(prob, p, active, Linv_T) -> float:
+    g = prob.grad(p)
+    rows = []
+    if prob.m:
+        rows.append(prob.jac_eq(p))
+    idx = [int(a[5:-1]) for a in active if a.startswith("ineq[")]
+    if idx:
+        rows.append(prob.jac_in(p)[idx])
+    gt = Linv_T.T @ g  # gradient in the W-whitened coordinates
+    if rows:
+        At = np.vstack(rows) @ Linv_T
+        gt = gt - At.T @ np.linalg.lstsq(At.T, gt, rcond=None)[0]
+    norm = np.linalg.norm(Linv_T.T @ g)
+    return float(np.linalg.norm(gt) / norm) if norm > 0 else 0.0
+
+
+__all__ = ["HomotopyResult", "HomotopyStep", "homotopy_minimize"]

@@ -1,0 +1,167 @@
+"""The published-number check: one value printed in a source, recomputed live, and a tolerance.
+
+A :class:`Check` names the case, the quantity, the source (seed file and equation, table or
+line, or a published reference), the value as printed (``published``, in ``unit``) and a
+``compute`` callable that recomputes it from the code base each time it is run. Nothing computed
+is stored: :func:`evaluate` calls ``compute`` and compares.
+
+Pass rule (as :func:`numpy.isclose`): ``|computed − published| ≤ atol + rtol·|published|``, with
+a missing tolerance counted as 0. Every check states why its tolerance is what it is, in a
+comment next to it. The rules used across the registry:
+
+- a value the model is meant to reproduce exactly (a formula, a conversion, a solved target):
+  **half a unit in the last printed digit** (``atol``) — the printed precision, nothing more;
+- a value a discretised model approximates: the acceptance criterion of the issue that asked
+  for it (e.g. 0.01 % for 20 beam elements, 1 % for NAFEMS FV2);
+- a value of a reconstructed or unpublished model, or a reading of an experiment: the band the
+  issue set for it, named in the comment (e.g. ±25 % for the EPS modes).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+#: the columns of the validation table, in order (also the keys of :meth:`CheckResult.as_dict`)
+COLUMNS = ("case", "quantity", "source", "published", "computed", "unit", "relative_error",
+           "tolerance", "passed")
+
+
+@dataclass(frozen=True)
+class Check:
+    """One published number and how to recompute it.
+
+    Parameters
+    ----------
+    case : str
+        Case name (``flexsat validate --case NAME`` selects by it).
+    quantity : str
+        What is compared, short (e.g. ``"ω_4, open loop"``).
+    source : str
+        Seed file and equation/table/line, or the published reference.
+    published : float
+        The value as printed, in ``unit``.
+    unit : str
+        Display unit of ``published`` and of what ``compute`` returns (``""`` for a pure number).
+    compute : callable
+        No arguments; recomputes the value live and returns it in ``unit``.
+    rtol, atol : float, optional
+        Relative and absolute (in ``unit``) tolerance; at least one must be given. ``atol=0``
+        alone means exact (counts).
+    note : str
+        Optional remark shown with the result (a documented deviation, a fitted value).
+    """
+
+    case: str
+    quantity: str
+    source: str
+    published: float
+    unit: str
+    compute: Callable[[], float]
+    rtol: float | None = None
+    atol: float | None = None
+    note: str = ""
+
+    def __post_init__(self):
+        for name in ("case", "quantity", "source"):
+            if not isinstance(getattr(self, name), str) or not getattr(self, name).strip():
+                raise ValueError(f"{name}: must be a non-empty string, got {getattr(self, name)!r}")
+        if self.rtol is None and self.atol is None:
+            raise ValueError(f"{self.case} / {self.quantity}: give rtol or atol (or both)")
+        for name in ("rtol", "atol"):
+            value = getattr(self, name)
+            if value is not None and not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name}: must be a finite number >= 0, got {value!r}")
+        if not math.isfinite(self.published):
+            raise ValueError(f"published: must be finite, got {self.published!r}")
+        if not callable(self.compute):
+            raise ValueError("compute: must be callable with no arguments")
+
+    @property
+    def tolerance(self) -> str:
+        """The tolerance as text: ``"±0.01 %"``, ``"±5e-05 s"``, ``"exact"``, or both joined."""
+        parts = []
+        if self.atol is not None and (self.atol > 0 or self.rtol is None):
+            parts.append(f"±{self.atol:.3g} {self.unit}".rstrip() if self.atol > 0 else "exact")
+        if self.rtol is not None:
+            parts.append(f"±{100 * self.rtol:.3g} %")
+        return " + ".join(parts)
+
+    def passes(self, computed: float) -> bool:
+        bound = (self.atol or 0.0) + (self.rtol or 0.0) * abs(self.published)
+        return math.isfinite(computed) and abs(computed - self.published) <= bound
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """The outcome of one :class:`Check`: ``computed`` is None when ``compute`` raised (the
+    message is in ``error``)."""
+
+    check: Check
+    computed: float | None
+    passed: bool
+    error: str | None = None
+    seconds: float = 0.0
+
+    @property
+    def relative_error(self) -> float | None:
+        """(computed − published) / |published|; None without a value or for published 0."""
+        if self.computed is None or self.check.published == 0 or not math.isfinite(self.computed):
+            return None
+        return (self.computed - self.check.published) / abs(self.check.published)
+
+    @property
+    def status(self) -> str:
+        return "pass" if self.passed else ("error" if self.error else "FAIL")
+
+    def as_dict(self) -> dict:
+        """JSON-ready: the table columns, then rtol, atol, status, error, note, seconds."""
+        c = self.check
+        computed = self.computed if self.computed is None or math.isfinite(self.computed) else None
+        return {"case": c.case, "quantity": c.quantity, "source": c.source,
+                "published": c.published, "computed": computed, "unit": c.unit,
+                "relative_error": self.relative_error, "tolerance": c.tolerance,
+                "passed": self.passed, "rtol": c.rtol, "atol": c.atol, "status": self.status,
+                "error": self.error, "note": c.note or None, "seconds": round(self.seconds, 4)}
+
+
+def evaluate(check: Check) -> CheckResult:
+    """Run one check. Any exception raised while computing (or a value that is not a finite
+    real number) makes it fail with the message; it never propagates."""
+    import time
+
+    start = time.perf_counter()
+    try:
+        value = check.compute()
+        try:
+            computed = float(value)
+        except (TypeError, ValueError):
+            raise TypeError(f"compute returned {value!r}, not a number") from None
+    except Exception as exc:  # noqa: BLE001 -- reported in the table, never crashes it
+        return CheckResult(check, None, False, f"{type(exc).__name__}: {exc}",
+                           time.perf_counter() - start)
+    elapsed = time.perf_counter() - start
+    if not math.isfinite(computed):
+        return CheckResult(check, computed, False, f"computed value is not finite: {computed!r}",
+                           elapsed)
+    return CheckResult(check, computed, check.passes(computed), None, elapsed)
+
+
+def series(case: str, quantities, source: str, published, unit: str, values: Callable,
+           *, rtol: float | None = None, atol: float | None = None,
+           notes=None) -> list[Check]:
+    """One check per entry of a table column: ``values()`` returns the whole computed column
+    (cache it with :func:`functools.lru_cache` when it is expensive) and check ``i`` compares
+    ``values()[i]`` with ``published[i]``."""
+    published = list(published)
+    quantities = list(quantities)
+    notes = list(notes) if notes is not None else [""] * len(published)
+    if not len(quantities) == len(published) == len(notes):
+        raise ValueError("series: quantities, published and notes must have the same length")
+    return [Check(case, q, source, float(p), unit, (lambda i=i: values()[i]), rtol, atol, note)
+            for i, (q, p, note) in enumerate(zip(quantities, published, notes))]
+
+
+__all__ = ["COLUMNS", "Check", "CheckResult", "evaluate", "series"]

@@ -1,0 +1,59 @@
+"""Earth Pointing Satellite (issue #3): seed 003_6d17262716e94f5f.txt, L66-L136 (docs/eps.md,
+tests/cases/test_eps.py).
+
+The structure is a reconstruction (Fig. 1 is lost): the checks show how close it comes. Two
+documented deviations fail honestly: the first truss mode (15.4 Hz for "about 7.0 Hz") and the
+deck's element count (219 for 223).
+
+Not checked: the total mass 1028 kg (the torquer mass is balanced to give it) and the other
+published inputs (tube, material, damping).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+from flexsat.checks.core import Check, series
+
+SEED = "seed 003_6d17262716e94f5f.txt"
+#: L100-L125: paper modes 7-20, Hz
+MODES_7_20 = (0.2422, 0.4056, 0.5652, 0.6562, 0.8882, 0.8882, 1.4377, 1.5360, 1.7762, 1.7762,
+              3.0258, 3.0258, 3.1532, 3.1532)
+
+
+@lru_cache(maxsize=1)
+def _case():
+    from flexsat.cases import eps
+
+    return eps()
+
+
+@lru_cache(maxsize=1)
+def _first_truss_mode():
+    return _case().first_truss_mode()
+
+
+# Issue #3: each of paper modes 7-20 within ±25 % of the table (achieved: −6.9 … +3.4 %).
+CHECKS: list[Check] = series(
+    "eps", [f"f, paper mode {i + 7}" for i in range(len(MODES_7_20))], f"{SEED}, L100-L125",
+    MODES_7_20, "Hz", lambda: _case().frequencies_hz(len(MODES_7_20)), rtol=0.25)
+CHECKS += [
+    # "about 7.0 Hz": the same ±25 % as the antenna modes. Not reproduced (docs/eps.md dev. 1)
+    Check("eps", "first truss mode frequency", f"{SEED}, L127-L129", 7.0, "Hz",
+          lambda: _first_truss_mode()[1], rtol=0.25,
+          note="the published 3 m truss of 51 mm tubes is far stiffer (docs/eps.md, deviation 1)"),
+    # counts: exact
+    Check("eps", "first truss mode number (elastic)", f"{SEED}, L128-L129", 50.0, "",
+          lambda: _first_truss_mode()[0], atol=0),
+    Check("eps", "truss beam elements", f"{SEED}, L82", 135.0, "",
+          lambda: _case().element_counts["truss"], atol=0),
+    Check("eps", "NASTRAN deck nodes", f"{SEED}, L130-L131", 95.0, "",
+          lambda: len(_case().assembly.node_ids), atol=0),
+    Check("eps", "NASTRAN deck elements", f"{SEED}, L130-L131", 223.0, "",
+          lambda: _case().n_elements, atol=0,
+          note="4 torquer support tubes, not 8 (docs/eps.md, deviation 3)"),
+    # The truss layout is reconstructed; its tube lengths set the structural mass. The tests' 1 %
+    # band (achieved +0.95 %).
+    Check("eps", "structural mass", f"{SEED}, L72-L73", 548.0, "kg",
+          lambda: _case().mass_budget()["structural"], rtol=0.01),
+]

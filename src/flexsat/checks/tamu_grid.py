@@ -1,0 +1,93 @@
+"""The TAMU 5′ × 5′ grid (issue #3): seed 000_7bfdb62d2eacc22a.txt, Att. 4, 6 and 8
+(docs/structures_benchmarks.md §3, tests/cases/test_tamu_grid.py).
+
+Checked: Att. 4 Table 1's printed SI column against pint's conversion of its US column; the
+model's node, element and dof counts (Att. 6); the modelled frequencies of Att. 8 (Das et al.,
+no motors) and Att. 6 (motors + gravity correction, with the docs' representative 0.5 kg
+motors); the Att. 4 caption's first frequency and mode count.
+
+Not checked: the measured frequencies (Att. 6, 8, 10), which the model is not tuned to and
+which disagree with each other by up to 20 %, and the Att. 6 Table 2 mode-1 amplitudes, which
+depend on the unpublished motor masses (the docs compare their shape only).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+from flexsat.checks.core import Check, series
+
+SEED = "seed 000_7bfdb62d2eacc22a.txt"
+ATT8 = (0.90, 2.34, 4.85, 6.05, 7.78, 12.84)  # Att. 8 Figure 4 table, "Modeled Value", Hz
+ATT6 = (0.809, 2.21, 4.48, 5.65, 7.76)  # Att. 6 Table 1 "Modelled (Hz)"
+
+
+@lru_cache(maxsize=None)
+def _grid(motor_mass: str = "0 kg"):
+    from flexsat.cases import tamu_grid
+
+    return tamu_grid(motor_mass=motor_mass)
+
+
+def _converted(quantity: str, unit: str) -> float:
+    from flexsat.units import to_si
+
+    return to_si(quantity, unit)
+
+
+def _counts() -> dict:
+    grid = _grid()
+    return {"nodes": len(grid.structure().assemble().node_ids), "elements": len(grid.members),
+            "dof": grid.n_dofs}
+
+
+def _modes_below_30_hz() -> int:
+    return _grid().mode_details(1)["modes_below_30_hz_with_gravity"]
+
+
+_TABLE1 = f"{SEED}, Att. 4 Table 1 (L1648-L1655), SI column"
+_TYPO = ("paper typo: 9.34982 N m² is 3258.0 lb in²; the model uses the US column "
+         "(docs/structures_benchmarks.md §3.1)")
+_MOTORS = "0.5 kg motors at nodes 3, 7, 9 (masses unpublished; docs' representative value)"
+
+CHECKS: list[Check] = [
+    # A pure unit conversion of the US column. The paper's conversion factors are not stated and
+    # its last digit is not reliably rounded (GJ: 14.185494 printed 14.18550): one unit in the
+    # last printed digit.
+    Check("tamu_grid", "EI, Table 1 US column in SI", _TABLE1, 9.34982, "N m²",
+          lambda: _converted("3255.2 lbf*in**2", "N*m**2"), atol=1e-5, note=_TYPO),
+    Check("tamu_grid", "GJ, Table 1 US column in SI", _TABLE1, 14.18550, "N m²",
+          lambda: _converted("4943.0 lbf*in**2", "N*m**2"), atol=1e-5),
+    Check("tamu_grid", "ρA, Table 1 US column in SI", _TABLE1, 0.44678, "kg/m",
+          lambda: _converted("0.0000648 lbf*s**2/in**2", "kg/m"), atol=1e-5),
+    Check("tamu_grid", "ρJ, Table 1 US column in SI", _TABLE1, 0.0000965, "kg m",
+          lambda: _converted("0.0000217 lbf*s**2", "kg*m"), atol=1e-7),
+    # counts are exact
+    *(Check("tamu_grid", f"model {name}", f"{SEED}, Att. 6 (L2415-L2511)", float(value), "",
+            lambda name=name: _counts()[name], atol=0)
+      for name, value in (("nodes", 25), ("elements", 36), ("dof", 60))),
+]
+
+# Das et al.'s FE model is unpublished (gravity treatment, mass model, pitch unknown); issue #3
+# asked for the first frequency within 10 % and the same band is used for the other five.
+# Achieved: all six within +4 % (docs §3.6). Default case: no motors, consistent gravity.
+CHECKS += series("tamu_grid", [f"f_{i + 1}, Das et al. model (no motors, gravity)"
+                               for i in range(len(ATT8))],
+                 f"{SEED}, Att. 8 Figure 4 table (L3234-L3246)", ATT8, "Hz",
+                 lambda: _grid().frequencies_hz(len(ATT8)), rtol=0.10)
+# Att. 6's model includes the motors, whose masses are unpublished: same 10 % band.
+CHECKS += series("tamu_grid", [f"f_{i + 1}, Att. 6 model (motors, gravity)"
+                               for i in range(len(ATT6))],
+                 f"{SEED}, Att. 6 Table 1 (L2656-L2665)", ATT6, "Hz",
+                 lambda: _grid("0.5 kg").frequencies_hz(len(ATT6)), rtol=0.10,
+                 notes=[_MOTORS] * len(ATT6))
+CHECKS += [
+    # ".8 Hz" is printed to one digit: half a unit, 0.05 Hz. The hardware carries its motors.
+    Check("tamu_grid", "first frequency of the hardware (with motors)",
+          f"{SEED}, Att. 4 Fig. 1 caption (L1805)", 0.8, "Hz",
+          lambda: _grid("0.5 kg").frequencies_hz(1)[0], atol=0.05, note=_MOTORS),
+    # a count: exact. Not reproduced: 16 modes below 30 Hz with or without motors or gravity
+    Check("tamu_grid", "modes below 30 Hz", f"{SEED}, Att. 4 Fig. 1 caption (L1805)", 10.0, "",
+          _modes_below_30_hz, atol=0,
+          note="not reproduced: a 60-dof plate-like grid model has 16 (docs §3.6)"),
+]

@@ -1,0 +1,312 @@
+r"""LQG compensator behind the :class:`~flexsat.control.base.Controller` interface.
+
+Seed 001 Eqs. 38–45: a regulator :math:`u = -K \hat x` (:func:`~flexsat.control.lqr.lqr`) fed
+by a Kalman estimator (:func:`~flexsat.control.estimation.kalman`)
+
+.. math::
+
+    \dot{\hat x} = A \hat x + B u + L (y - C \hat x)
+
+(the paper's SOBS of Eq. 45, with the full estimated state as output — the paper prints output
+matrix C there, which would only reproduce ŷ; notes seed001.md §2 [AMBIG]).
+
+Discrete-time implementation
+----------------------------
+The law runs at the simulator's control period ``dt`` with the torque held between samples.
+With continuous gains (``gains="continuous"``, the paper's design) the estimator ODE is
+propagated *exactly* over one period for inputs held constant (zero-order hold on both u and
+y):
+
+.. math::
+
+    \hat x_{k+1} = \Phi \hat x_k + \Gamma_u u_k + \Gamma_y y_k, \qquad
+    \begin{bmatrix} \Phi & [\Gamma_u \; \Gamma_y] \\ 0 & I \end{bmatrix}
+    = \exp\left(\begin{bmatrix} A - LC & [B \; L] \\ 0 & 0 \end{bmatrix} dt\right),
+
+and :math:`u_k = -K(\hat x_k - x_{ref,k})`: the compensator is strictly proper, so y_k acts on
+the torque from the next sample on. With discrete gains (``gains="discrete"``, designed by
+:func:`~flexsat.control.lqr.dlqr` / :func:`~flexsat.control.estimation.dkalman` for the ZOH
+plant :math:`(\Phi_p, \Gamma_p)`) it is the predictor estimator
+:math:`\hat x_{k+1} = \Phi_p \hat x_k + \Gamma_p u_k + L (y_k - C \hat x_k)`.
+
+How the slew command enters
+---------------------------
+The estimator runs on the absolute state (it is driven by the measured θ and θ' and by the
+torque actually commanded). The regulator acts on the error state
+:math:`\hat x - x_{ref}` with :math:`x_{ref} = \theta_{ref} e_\theta + \dot\theta_{ref}
+e_{\dot\theta}` (flexible coordinates referenced to zero):
+
+* no reference: a *step* of the reference to ``target`` at t = 0 (:math:`\theta_{ref}` =
+  target, :math:`\dot\theta_{ref}` = 0). For a free hub (no stiffness on θ, so θ is a pure
+  integrator and every rigid rotation is an equilibrium) this is identical to the other
+  reading of the paper's 30° LQG slew, a *regulation offset*: start at −30° and regulate to 0;
+* a shaped reference (``reference``, a torque shape of :mod:`flexsat.maneuvers`): track
+  :math:`(\theta_{ref}, \dot\theta_{ref})` and feed its torque :math:`u_{ref}` forward.
+
+The initial estimate is the minimum-norm state reproducing the first measurement,
+:math:`\hat x_0 = C^+ y_0` (θ̂ and θ̂' measured, flexible states zero), unless an initial
+estimate is given.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+
+from flexsat.control.base import Controller
+from flexsat.control.estimation import dkalman, kalman
+from flexsat.control.lqr import check_matrix, check_square, dlqr, lqr
+from flexsat.validation import require_finite, require_positive
+
+__all__ = ["EstimatorController", "LQGController", "zoh"]
+
+DEFAULT_MEASUREMENTS = ("theta", "theta_dot")
+#: relative tolerance on the spacing of successive calls (the law is built for one period)
+_DT_TOL = 1e-6
+
+
+def zoh(A, B, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    r"""Exact zero-order-hold discretisation: :math:`\Phi = e^{A dt}`,
+    :math:`\Gamma = \int_0^{dt} e^{A s} ds\, B` (one matrix exponential of the block matrix)."""
+    A = np.asarray(A, float)
+    B = np.asarray(B, float)
+    n, m = B.shape
+    blk = np.zeros((n + m, n + m))
+    blk[:n, :n] = A * dt
+    blk[:n, n:] = B * dt
+    E = scipy.linalg.expm(blk)
+    return E[:n, :n], E[:n, n:]
+
+
+def _plant_matrices(plant):
+    """(A, B, C) of a StateSpace, a SecondOrderModel or a tuple (A, B, C[, D])."""
+    if hasattr(plant, "first_order"):
+        A, B, C, _ = plant.first_order()
+    elif isinstance(plant, (tuple, list)):
+        if len(plant) not in (3, 4):
+            raise ValueError(f"plant: give (A, B, C) or (A, B, C, D), got {len(plant)} items")
+        A, B, C = plant[:3]
+    else:
+        dt = getattr(plant, "dt", 0)
+        if dt not in (0, None):
+            raise ValueError(f"plant: must be a continuous-time model, got dt = {dt}")
+        A, B, C = plant.A, plant.B, plant.C
+    return np.asarray(A, float), np.asarray(B, float), np.asarray(C, float)
+
+
+class EstimatorController(Controller):
+    """Shared machinery of the observer-based laws: measurement stacking, the estimator
+    update, the reference state and the sample-period check (see the module docstring)."""
+
+    def _setup(self, A, B, C, L, dt, target, reference, measurements, reference_states,
+               feedforward, gains, initial_estimate):
+        A = check_square(A, "A")
+        n = A.shape[0]
+        B = check_matrix(B, "B", n, None, f"(n, 1) with n = {n}")
+        if B.shape[1] != 1:
+            raise ValueError(f"B: the controller interface commands one torque, so B must have "
+                             f"one column, got {B.shape[1]}")
+        C = check_matrix(C, "C", None, n, f"(p, n) with n = {n}")
+        p = C.shape[0]
+        L = check_matrix(L, "L", n, p, f"(n, p) = ({n}, {p})")
+        self.dt = float(require_positive(dt, "dt"))
+        if isinstance(measurements, str):
+            measurements = (measurements,)
+        measurements = tuple(measurements)
+        if len(measurements) != p or not all(isinstance(k, str) for k in measurements):
+            raise ValueError(f"measurements: give {p} measurement keys (one per row of C), got "
+                             f"{measurements!r}")
+        if reference_states is None:
+            if n % 2:
+                raise ValueError("reference_states: the state has odd size; give the indices "
+                                 "(angle, rate) of θ and θ' in the state")
+            reference_states = (0, n // 2)
+        i, j = (int(v) for v in reference_states)
+        if not (0 <= i < n and 0 <= j < n) or i == j:
+            raise ValueError(f"reference_states: must be two distinct state indices in 0 … "
+                             f"{n - 1}, got {reference_states!r}")
+        if gains not in ("continuous", "discrete"):
+            raise ValueError(f"gains: must be 'continuous' or 'discrete', got {gains!r}")
+        self.A, self.B, self.C, self.L = A, B, C, L
+        self.gains = gains
+        self.measurements = measurements
+        self.reference_states = (i, j)
+        self.reference = reference
+        self.feedforward = bool(feedforward)
+        if reference is not None:
+            target = reference.theta0 + reference.angle
+        self.target = require_finite(target, "target")
+        self.plant_zoh = zoh(A, B, self.dt)
+        if gains == "continuous":
+            Phi, Gam = zoh(A - L @ C, np.hstack([B, L]), self.dt)
+        else:
+            Phi = self.plant_zoh[0] - L @ C
+            Gam = np.hstack([self.plant_zoh[1], L])
+        self.estimator = (Phi, Gam[:, :1], Gam[:, 1:])
+        self._Cpinv = np.linalg.pinv(C)
+        if isinstance(initial_estimate, str):
+            if initial_estimate != "measurement":
+                raise ValueError("initial_estimate: must be 'measurement' or a state array, got "
+                                 f"{initial_estimate!r}")
+            self.initial_estimate = None
+        else:
+            x0 = require_finite(initial_estimate, "initial_estimate")
+            if x0.shape[-1:] != (n,) or x0.ndim > 2:
+                raise ValueError(f"initial_estimate: must have shape (n,) or (n_cases, n) with "
+                                 f"n = {n}, got {x0.shape}")
+            self.initial_estimate = x0
+
+    @property
+    def n_states(self) -> int:
+        return self.A.shape[0]
+
+    def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
+        n = self.n_states
+        state = {"x_hat": np.zeros((n_cases, n)), "started": np.zeros(n_cases, bool),
+                 "t": np.full(n_cases, np.nan)}
+        if self.initial_estimate is not None:
+            state["x_hat"][:] = self.initial_estimate
+            state["started"][:] = True
+        return state
+
+    def _measure(self, y, n_cases: int) -> np.ndarray:
+        try:
+            cols = [np.broadcast_to(np.asarray(y[k], float), (n_cases,)) for k in self.measurements]
+        except KeyError as exc:
+            raise ValueError(f"measurements: key {exc.args[0]!r} not in the measurements "
+                             f"{sorted(y)}") from None
+        return np.stack(cols, axis=-1)
+
+    def _begin(self, t, y, state):
+        """Stacked measurements Y (n_cases, p), estimate x̂ (initialised if new), reference
+        state x_ref and reference torque u_ref for this sample."""
+        x_hat = np.array(state["x_hat"], float)
+        nc = x_hat.shape[0]
+        Y = self._measure(y, nc)
+        started = np.asarray(state["started"], bool)
+        t_prev = np.asarray(state["t"], float)
+        gap = t - t_prev[started]
+        if gap.size and np.any(np.abs(gap - self.dt) > _DT_TOL * self.dt):
+            raise ValueError(f"dt: the law was built for a sample period of {self.dt:g} s but was "
+                             f"called {float(np.max(gap)):g} s after its previous sample (build it "
+                             "with the simulator's 1/control_rate)")
+        if not np.all(started):
+            new = ~started
+            x_hat[new] = Y[new] @ self._Cpinv.T
+        th_r, thd_r, _, u_r = self.reference_at(t)
+        x_ref = np.zeros_like(x_hat)
+        i, j = self.reference_states
+        x_ref[:, i] = th_r
+        x_ref[:, j] = thd_r
+        u_ref = np.broadcast_to(np.asarray(u_r, float), (nc,)) if self.feedforward else 0.0
+        return Y, x_hat, x_ref, u_ref
+
+    def _propagate(self, t, x_hat, u, Y) -> dict[str, np.ndarray]:
+        Phi, Gu, Gy = self.estimator
+        nc = x_hat.shape[0]
+        x_next = x_hat @ Phi.T + np.multiply.outer(u, Gu[:, 0]) + Y @ Gy.T
+        return {"x_hat": x_next, "started": np.ones(nc, bool), "t": np.full(nc, float(t))}
+
+
+class LQGController(EstimatorController):
+    r"""Observer-based LQG compensator (module docstring; seed 001 Eqs. 38–45).
+
+    Parameters
+    ----------
+    A, B, C : array_like
+        Design plant (n, n), (n, 1), (p, n); continuous time. The state must contain θ and θ'
+        at ``reference_states`` (default (0, n/2), the [q, q̇] ordering of every flexsat model).
+    K : array_like (1, n)
+        Regulator gain, u = −K (x̂ − x_ref) (+ u_ref); e.g. ``lqr(A, B, Q, R).gain`` or a
+        reduced gain (:func:`~flexsat.control.estimation.truncate_gains`).
+    L : array_like (n, p)
+        Estimator gain (continuous, or discrete for ``gains="discrete"``).
+    dt : float
+        Control period, s (the simulator's 1 / control_rate).
+    target : float or array
+        Final angle for a step command (no reference), rad.
+    reference : TorqueShape, optional
+        Shaped reference to track; its torque is fed forward when ``feedforward``.
+    measurements : sequence of str
+        Keys of the measurement dict, one per row of C (default ("theta", "theta_dot")).
+    reference_states : (int, int), optional
+        Indices of θ and θ' in the state.
+    gains : {"continuous", "discrete"}
+        Whether K, L are continuous-time gains (exact ZOH implementation) or discrete-time
+        gains for the ZOH plant (predictor estimator).
+    initial_estimate : "measurement" or array (n,) / (n_cases, n)
+        x̂₀ = C⁺ y₀ from the first sample, or the given absolute state.
+    """
+
+    def __init__(self, A, B, C, K, L, dt, target=0.0, reference=None,
+                 measurements=DEFAULT_MEASUREMENTS, reference_states=None, feedforward=True,
+                 gains="continuous", initial_estimate="measurement"):
+        self._setup(A, B, C, L, dt, target, reference, measurements, reference_states,
+                    feedforward, gains, initial_estimate)
+        n = self.n_states
+        self.K = check_matrix(K, "K", 1, n, f"(1, n) = (1, {n})")
+
+    @classmethod
+    def design(cls, plant, Q, R, Qn, Rn, dt, G=None, N=None, Nn=None, gains="continuous",
+               **kwargs) -> LQGController:
+        r"""Design K and L and build the law.
+
+        ``plant`` is a continuous StateSpace, a SecondOrderModel or (A, B, C). Weights Q, R, N
+        and noise intensities Qn (on G w; G defaults to B, the paper's Eq. 43 Q_xx = B Qn Bᵀ),
+        Rn, Nn are continuous-time. With ``gains="discrete"`` the designs use the ZOH plant and
+        the first-order equivalents Q dt, R dt, N dt (cost) and G Qn Gᵀ dt, Rn / dt
+        (covariances), accurate for dt small against the closed-loop time constants.
+        The designs are in ``.regulator`` and ``.filter`` (RiccatiSolution with residuals).
+        """
+        A, B, C = _plant_matrices(plant)
+        G = B if G is None else G
+        if gains == "discrete":
+            Phi, Gam = zoh(A, B, dt)
+            reg = dlqr(Phi, Gam, np.asarray(Q, float) * dt, np.asarray(R, float) * dt,
+                       None if N is None else np.asarray(N, float) * dt)
+            G = check_matrix(G, "G", A.shape[0], None, "(n, g)")
+            W = G @ np.atleast_2d(np.asarray(Qn, float)) @ G.T * dt
+            V = np.atleast_2d(np.asarray(Rn, float)) / dt
+            NW = None if Nn is None else G @ np.atleast_2d(np.asarray(Nn, float))
+            filt = dkalman(Phi, None, C, W, V, NW)
+        else:
+            reg = lqr(A, B, Q, R, N)
+            filt = kalman(A, G, C, Qn, Rn, Nn)
+        law = cls(A, B, C, reg.gain, filt.gain, dt, gains=gains, **kwargs)
+        law.regulator, law.filter = reg, filt
+        return law
+
+    def __call__(self, t, y, state):
+        Y, x_hat, x_ref, u_ref = self._begin(t, y, state)
+        u = u_ref - (x_hat - x_ref) @ self.K[0]
+        return u, self._propagate(t, x_hat, u, Y)
+
+    # ------------------------------------------------------------------------------------------
+    def closed_loop_matrix(self, A=None, B=None, C=None) -> np.ndarray:
+        r"""Sampled-data closed-loop transition matrix of a plant (default the design plant)
+        with this law, state [x, x̂]:
+
+        .. math::
+
+            \begin{bmatrix} x \\ \hat x \end{bmatrix}_{k+1} =
+            \begin{bmatrix} \Phi_p & -\Gamma_p K \\ \Gamma_y C & \Phi - \Gamma_u K \end{bmatrix}
+            \begin{bmatrix} x \\ \hat x \end{bmatrix}_k .
+
+        Stable iff every eigenvalue lies inside the unit circle.
+        """
+        if A is None:
+            Phi_p, Gam_p = self.plant_zoh
+            C = self.C
+        else:
+            Phi_p, Gam_p = zoh(A, B, self.dt)
+        Phi, Gu, Gy = self.estimator
+        K = self.K
+        return np.block([[Phi_p, -Gam_p @ K], [Gy @ C, Phi - Gu @ K]])
+
+    def continuous_closed_loop(self) -> np.ndarray:
+        r"""Closed loop of the continuous design, [[A, −BK], [LC, A − BK − LC]] (separation
+        principle: eigenvalues eig(A − BK) ∪ eig(A − LC)); only for continuous gains."""
+        if self.gains != "continuous":
+            raise ValueError("gains: the continuous closed loop needs continuous gains")
+        A, B, C, K, L = self.A, self.B, self.C, self.K, self.L
+        return np.block([[A, -B @ K], [L @ C, A - B @ K - L @ C]])

@@ -1,0 +1,233 @@
+"""LQR: gains equal python-control's, large lightly damped models solve to a small residual,
+discrete and continuous designs agree for small dt, the NPS sanity value, and one clear error
+per bad-input rule."""
+
+import logging
+import pickle
+
+import control
+import numpy as np
+import pytest
+import scipy.linalg
+
+from flexsat.cases import nps
+from flexsat.control import RiccatiSolution, dlqr, lqr
+from flexsat.control.lqr import care_residual, dare_residual, uncontrollable_modes
+
+
+def random_problem(seed, cross=False):
+    rng = np.random.default_rng(seed)
+    n, m = int(rng.integers(2, 11)), int(rng.integers(1, 4))
+    A = rng.standard_normal((n, n))
+    B = rng.standard_normal((n, m))
+    X = rng.standard_normal((n, n))
+    Q = X @ X.T + np.eye(n)
+    Y = rng.standard_normal((m, m))
+    R = Y @ Y.T + np.eye(m)
+    N = 0.2 * rng.standard_normal((n, m)) if cross else None
+    return A, B, Q, R, N
+
+
+def modal_model(n_modes, zeta=0.002, n_inputs=2, seed=0, top=100.0):
+    """Lightly damped modal model: a rigid-body mode then elastic modes 0.1 … top rad/s."""
+    rng = np.random.default_rng(seed)
+    w = np.concatenate([[0.0], np.geomspace(0.1, top, n_modes - 1)])
+    m = n_modes
+    A = np.block([[np.zeros((m, m)), np.eye(m)], [-np.diag(w**2), -np.diag(2 * zeta * w)]])
+    B = np.vstack([np.zeros((m, n_inputs)), rng.standard_normal((m, n_inputs))])
+    return A, B
+
+
+@pytest.mark.parametrize("seed", range(20))
+@pytest.mark.parametrize("cross", [False, True])
+def test_gains_equal_python_control(seed, cross):
+    A, B, Q, R, N = random_problem(seed, cross)
+    args = (A, B, Q, R) if N is None else (A, B, Q, R, N)
+    K, S, E = lqr(*args)
+    K2, S2, E2 = control.lqr(*args)
+    np.testing.assert_allclose(K, K2, rtol=1e-9, atol=1e-12 * np.abs(K2).max())
+    np.testing.assert_allclose(S, S2, rtol=1e-9, atol=1e-12 * np.abs(S2).max())
+    assert max(np.abs(E2 - e).min() for e in E) < 1e-8 * np.abs(E2).max()
+    assert lqr(*args).residual < 1e-12
+
+
+@pytest.mark.parametrize("seed", range(20))
+@pytest.mark.parametrize("cross", [False, True])
+def test_discrete_gains_equal_python_control(seed, cross):
+    A, B, Q, R, N = random_problem(seed, cross)
+    Ad = scipy.linalg.expm(0.1 * A)
+    args = (Ad, B, Q, R) if N is None else (Ad, B, Q, R, N)
+    K, S, E = dlqr(*args)
+    K2, S2, _ = control.dlqr(*args)
+    np.testing.assert_allclose(K, K2, rtol=1e-8, atol=1e-11 * np.abs(K2).max())
+    np.testing.assert_allclose(S, S2, rtol=1e-8, atol=1e-11 * np.abs(S2).max())
+    assert np.abs(E).max() < 1
+    assert dlqr(*args).residual < 1e-11
+
+
+def test_200_state_lightly_damped_modal_model():
+    """Issue acceptance: relative Riccati residual <= 1e-10 (the term-scaled ρ_c)."""
+    A, B = modal_model(100)
+    sol = lqr(A, B, np.eye(200), np.eye(2))
+    assert sol.residual <= 1e-10
+    assert sol.poles.real.max() < 0
+    rel, rel_q, absolute = care_residual(A, B, np.eye(200), np.eye(2), sol.solution)
+    assert (rel, rel_q, absolute) == (sol.residual, sol.residual_q, sol.absolute_residual)
+
+
+def test_residual_detects_a_wrong_solution():
+    A, B, Q, R, _ = random_problem(1)
+    sol = lqr(A, B, Q, R)
+    assert care_residual(A, B, Q, R, 1.01 * sol.solution)[0] > 1e-4
+    Ad = scipy.linalg.expm(0.1 * A)
+    dsol = dlqr(Ad, B, Q, R)
+    assert dare_residual(Ad, B, Q, R, dsol.solution)[0] < 1e-12
+    assert dare_residual(Ad, B, Q, R, 1.01 * dsol.solution)[0] > 1e-4
+
+
+def test_residual_is_logged(caplog):
+    A, B, Q, R, _ = random_problem(2)
+    with caplog.at_level(logging.DEBUG, logger="flexsat.control.lqr"):
+        lqr(A, B, Q, R)
+        dlqr(scipy.linalg.expm(0.1 * A), B, Q, R)
+    messages = [r.getMessage() for r in caplog.records]
+    assert any(m.startswith("lqr:") and "relative Riccati residual" in m for m in messages)
+    assert any(m.startswith("dlqr:") for m in messages)
+
+
+def test_result_unpacks_like_python_control():
+    A, B, Q, R, _ = random_problem(4)
+    sol = lqr(A, B, Q, R)
+    assert isinstance(sol, RiccatiSolution) and len(sol) == 3
+    K, S, E = sol
+    assert K is sol.gain and S is sol.solution and E is sol.poles
+    assert "residual" in repr(sol)
+    back = pickle.loads(pickle.dumps(sol))
+    np.testing.assert_array_equal(back.gain, sol.gain)
+    assert back.residual == sol.residual and len(back) == 3
+
+
+def test_discrete_design_converges_to_continuous_for_small_dt():
+    """dlqr of the ZOH plant with weights Q dt, R dt → the continuous gain as dt → 0 (O(dt))."""
+    A, B = modal_model(4, zeta=0.01, n_inputs=1, top=3.0)
+    Q, R = np.eye(8), np.eye(1)
+    K = lqr(A, B, Q, R).gain
+    errors = []
+    for dt in (1e-2, 1e-3):
+        n = A.shape[0]
+        E = scipy.linalg.expm(np.block([[A, B], [np.zeros((1, n + 1))]]) * dt)
+        Kd = dlqr(E[:n, :n], E[:n, n:], Q * dt, R * dt).gain
+        errors.append(np.abs(Kd - K).max() / np.abs(K).max())
+    assert errors[1] < 2e-3
+    assert errors[0] / errors[1] > 5  # first order in dt
+
+
+def test_nps_position_gain_sanity_value():
+    """Seed 001 §3: R_xx(1,1) = 1, R_uu = 7 gives the θ gain √(1/7) = 0.378 for any modal data
+    (θ is a pure integrator). Weights of L375: θ, θ' 1; q1, q2 and rates 0.5; others 0.1."""
+    sys = nps().to_statespace()
+    w = np.full(14, 0.1)
+    w[[0, 7]] = 1.0
+    w[[1, 2, 8, 9]] = 0.5
+    sol = lqr(sys.A, sys.B, np.diag(w), 7.0)
+    assert sol.gain[0, 0] == pytest.approx(np.sqrt(1 / 7), rel=1e-9)
+    assert round(sol.gain[0, 0], 3) == 0.378
+    assert sol.poles.real.max() < 0
+    assert sol.residual < 1e-12
+
+
+# ------------------------------------------------------------------------------------------------
+# bad inputs: one test per rule
+A2 = np.array([[0.0, 1.0], [0.0, 0.0]])
+B2 = np.array([[0.0], [1.0]])
+
+
+def test_non_square_A():
+    with pytest.raises(ValueError, match="A: must be a non-empty square matrix"):
+        lqr(np.ones((2, 3)), B2, np.eye(2), 1.0)
+
+
+def test_non_finite_A():
+    with pytest.raises(ValueError, match="A: must be finite"):
+        lqr([[0.0, np.nan], [0.0, 0.0]], B2, np.eye(2), 1.0)
+
+
+def test_mismatched_B():
+    with pytest.raises(ValueError, match=r"B: must have shape \(n, m\) with n = 2"):
+        lqr(A2, np.ones((3, 1)), np.eye(2), 1.0)
+
+
+def test_Q_wrong_shape():
+    with pytest.raises(ValueError, match="Q: must have shape"):
+        lqr(A2, B2, np.eye(3), 1.0)
+
+
+def test_Q_not_symmetric():
+    with pytest.raises(ValueError, match="Q: must be symmetric"):
+        lqr(A2, B2, [[1.0, 0.5], [0.0, 1.0]], 1.0)
+
+
+def test_Q_indefinite():
+    with pytest.raises(ValueError, match="Q: must be positive semi-definite"):
+        lqr(A2, B2, np.diag([1.0, -1.0]), 1.0)
+
+
+def test_R_indefinite():
+    B = np.eye(2)
+    with pytest.raises(ValueError, match="R: must be symmetric positive definite"):
+        lqr(A2, B, np.eye(2), np.diag([1.0, -1.0]))
+
+
+def test_R_singular():
+    with pytest.raises(ValueError, match="R: must be symmetric positive definite"):
+        lqr(A2, np.eye(2), np.eye(2), np.diag([1.0, 0.0]))
+
+
+def test_R_not_symmetric():
+    with pytest.raises(ValueError, match="R: must be symmetric"):
+        lqr(A2, np.eye(2), np.eye(2), [[1.0, 0.5], [0.0, 1.0]])
+
+
+def test_N_wrong_shape():
+    with pytest.raises(ValueError, match="N: must have shape"):
+        lqr(A2, B2, np.eye(2), 1.0, np.ones((2, 2)))
+
+
+def test_joint_weight_indefinite():
+    with pytest.raises(ValueError, match=r"N: the joint weight .* Q − N R⁻¹ Nᵀ"):
+        lqr(A2, B2, np.eye(2), 1.0, [[2.0], [0.0]])
+
+
+def test_unstabilizable_pair():
+    A = np.diag([1.0, -1.0])
+    with pytest.raises(ValueError, match=r"\(A, B\) is not stabilizable: eigenvalue\(s\) 1"):
+        lqr(A, [[0.0], [1.0]], np.eye(2), 1.0)
+    with pytest.raises(ValueError, match=r"\(A, B\) is not stabilizable"):
+        dlqr(np.diag([1.5, 0.5]), [[0.0], [1.0]], np.eye(2), 1.0)
+    assert uncontrollable_modes(A, [[0.0], [1.0]]) == [1.0]
+    assert uncontrollable_modes(A, [[1.0], [0.0]]) == []
+
+
+def test_rigid_mode_uncontrollable():
+    """A double integrator with no input on it: the zero eigenvalue is not stabilizable."""
+    A = np.zeros((4, 4))
+    A[0, 1] = 1.0
+    A[2, 3] = 1.0
+    A[3, 2] = -4.0
+    B = np.array([[0.0], [0.0], [0.0], [1.0]])
+    with pytest.raises(ValueError, match="not stabilizable"):
+        lqr(A, B, np.eye(4), 1.0)
+
+
+def test_undetectable_pair():
+    A = np.diag([1.0, -1.0])
+    with pytest.raises(ValueError, match="not detectable: eigenvalue"):
+        lqr(A, [[1.0], [1.0]], np.diag([0.0, 1.0]), 1.0)
+    # a marginal (rigid) mode the weight does not see has no stabilizing solution either
+    with pytest.raises(ValueError, match="not detectable"):
+        lqr(A2, B2, np.zeros((2, 2)), 1.0)
+
+
+def test_string_input():
+    with pytest.raises(ValueError, match="R: must be a numeric matrix"):
+        lqr(A2, B2, np.eye(2), "7")
