@@ -200,7 +200,7 @@ def test_disturbance_rules():
     (lambda d: d["runs"][1]["reference"].update(duration="3 s"),
      "runs['Law II'].reference: give exactly 2 of {u_max, duration, alpha}"),
     (lambda d: d["runs"][1].update(law="unknown"),
-     "runs['Law II'].law: Input should be 'lyapunov_regulator', 'lyapunov_tracker' or 'pd'"),
+     "runs['Law II'].law: Input should be 'lyapunov_regulator', 'lyapunov_tracker', 'pd' or 'lqg'"),
     (lambda d: d["runs"].append({"label": "PD", "law": "pd"}),
      "runs['PD'].gains.kp: required by law 'pd' (or give poles)"),
     (lambda d: d["runs"].append({"label": "PD", "law": "pd", "poles": {

@@ -39,6 +39,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Callable, Literal, get_args
 
+import numpy as np
 import xarray as xr
 import yaml
 from pydantic import (
@@ -54,7 +55,14 @@ from pydantic import (
 )
 
 from flexsat.cases import get_case
-from flexsat.control import PD, Controller, LyapunovRegulator, LyapunovTracker
+from flexsat.control import (
+    PD,
+    Controller,
+    LQGController,
+    LyapunovRegulator,
+    LyapunovTracker,
+    refine_estimator,
+)
 from flexsat.dynamics.hub_appendage import HubAppendage
 from flexsat.maneuvers import BangBang, PseudoSquare, Sinusoidal, SmoothBangBang
 from flexsat.sim import (
@@ -318,6 +326,34 @@ class PolesSpec(_Section):
     damping_ratio: quantity("")
 
 
+class LQGSpec(_Section):
+    """Weights and noise intensities of an LQG law on the plant's modal state
+    x = [θ, q, θ', q'] with measurements (θ, θ') (seed 001 Eqs. 38-53).
+
+    ``mode_weights`` (one per retained mode, or one for all) weight q_i and q'_i alike;
+    ``process_noise`` is the intensity of a torque disturbance (Q_xx = B·qn·Bᵀ, Eq. 43);
+    ``refine``: "weighted" recomputes the filter with Q_xx = Kᵀ Bᵀ B K (Eq. 52), "truncated"
+    also zeroes the gains of the modes beyond ``keep_modes`` first (Eq. 53).
+    """
+
+    rigid_weight: quantity("") = 1.0
+    mode_weights: list[Annotated[float, BeforeValidator(_converter(""))]] | float = 0.1
+    control_weight: quantity("")
+    sensor_noise: list[Annotated[float, BeforeValidator(_converter(""))]]
+    process_noise: quantity("")
+    refine: Literal["none", "weighted", "truncated"] = "none"
+    keep_modes: Annotated[int, Field(ge=0)] | None = None
+
+    @model_validator(mode="after")
+    def _truncation(self):
+        if self.refine == "truncated" and self.keep_modes is None:
+            raise ValueError("keep_modes: required by refine 'truncated'")
+        if len(self.sensor_noise) != 2:
+            raise ValueError(f"sensor_noise: give the (θ, θ') intensities, got "
+                             f"{len(self.sensor_noise)} values")
+        return self
+
+
 _SHAPES = {"bang_bang": BangBang, "smooth_bang_bang": SmoothBangBang,
            "pseudo_square": PseudoSquare, "sinusoidal": Sinusoidal}
 _SHAPE_PARAMETERS = {"smooth_bang_bang": ("alpha",), "pseudo_square": ("rise_time",)}
@@ -354,6 +390,8 @@ class _CaseContext:
     reference_inertia: float
     appendage_inertia: float
     n_appendages: int
+    plant: Any = None
+    dt: float = 0.0
 
 
 def _regulator(run: "RunSpec", ctx: _CaseContext, reference) -> Controller:
@@ -375,6 +413,32 @@ def _pd(run: "RunSpec", ctx: _CaseContext, reference) -> Controller:
                                run.poles.damping_ratio, **options)
 
 
+def _lqg(run: "RunSpec", ctx: _CaseContext, reference) -> Controller:
+    spec, plant = run.lqg, ctx.plant
+    A, B, _ = plant.state_space
+    n, k = plant.ndof, plant.ndof - 1
+    C = np.zeros((2, 2 * n))
+    C[0, 0] = C[1, n] = 1.0
+    modes = np.broadcast_to(np.asarray(spec.mode_weights, float), (k,)) if np.ndim(
+        spec.mode_weights) == 0 or len(spec.mode_weights) == k else None
+    if modes is None:
+        raise ValueError(f"lqg.mode_weights: give one weight or one per mode ({k}), got "
+                         f"{len(spec.mode_weights)}")
+    per_dof = np.concatenate([[spec.rigid_weight], modes])
+    Q = np.diag(np.concatenate([per_dof, per_dof]))
+    R = np.array([[spec.control_weight]])
+    Rn = np.diag(spec.sensor_noise)
+    options = dict(target=ctx.angle, reference=reference)
+    law = LQGController.design((A, B[:, None], C), Q, R, spec.process_noise, Rn, ctx.dt, **options)
+    if spec.refine == "none":
+        return law
+    keep_modes = k if spec.refine == "weighted" else min(spec.keep_modes, k)
+    kept = np.r_[0, 1:keep_modes + 1, n, n + 1:n + keep_modes + 1]
+    refined = refine_estimator(A, B[:, None], C, law.K, kept, Rn,
+                               truncate=spec.refine == "truncated")
+    return LQGController(A, B[:, None], C, refined.gain, refined.filter.gain, ctx.dt, **options)
+
+
 @dataclass(frozen=True)
 class _Law:
     gains: tuple[str, ...]
@@ -388,6 +452,7 @@ _LAWS = {
     "lyapunov_regulator": _Law(("g1", "g2", "g3"), ("g1", "g2"), "forbidden", _regulator),
     "lyapunov_tracker": _Law(("g1", "g2", "g3"), ("g1", "g2"), "required", _tracker),
     "pd": _Law(("kp", "kd"), ("kp", "kd"), "optional", _pd, pd_options=True),
+    "lqg": _Law((), (), "optional", _lqg),
 }
 
 
@@ -405,6 +470,7 @@ class RunSpec(_Section):
     poles: PolesSpec | None = None
     reference: ReferenceSpec | None = None
     feedforward: bool | None = None
+    lqg: LQGSpec | None = None
 
     @model_validator(mode="after")
     def _law_inputs(self):
@@ -417,6 +483,8 @@ class RunSpec(_Section):
         for name in ("poles", "feedforward"):
             if getattr(self, name) is not None and not law.pd_options:
                 raise ValueError(f"{name}: only for law 'pd'")
+        if (self.lqg is None) != (self.law != "lqg"):
+            raise ValueError("lqg: required by law 'lqg' and only for it")
         if self.poles is not None and self.gains is not None:
             raise ValueError("gains: give gains or poles, not both")
         missing = [g for g in law.required if g not in given]
@@ -624,7 +692,8 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
     if built is not None:
         case, model = built
         ctx = _CaseContext(scenario.maneuver.angle, case.reference_inertia,
-                           model.appendage_inertia, int(model.n_appendages))
+                           model.appendage_inertia, int(model.n_appendages), model,
+                           scenario.sim_config().dt)
         for index, run in enumerate(scenario.runs):
             controllers[run.label] = _collect(problems, _build_controller, index, run, ctx)
     if problems:
