@@ -18,6 +18,7 @@ from flexsat.analysis.gramians import (
     modal_gramian,
     modal_observability_gramian,
 )
+from flexsat.analysis.homotopy import HomotopyResult, HomotopyStep, homotopy_minimize
 from flexsat.analysis.placement import (
     exchange,
     exhaustive,
@@ -30,8 +31,22 @@ from flexsat.analysis.placement import (
     modal_controllability,
     modal_cost,
 )
+from flexsat.analysis.sensitivity import (
+    EigenDerivatives,
+    ModalDerivatives,
+    SVDDerivatives,
+    condition_number_derivatives,
+    eig_derivatives,
+    eigenvector_condition_derivatives,
+    modal_derivatives,
+    svd_derivatives,
+)
 
-__all__ = ["FrequencyGroup", "RepeatedFrequencyResult", "controllability_matrix",
+__all__ = ["EigenDerivatives", "HomotopyResult", "HomotopyStep", "ModalDerivatives",
+           "SVDDerivatives", "condition_number_derivatives", "eig_derivatives",
+           "eigenvector_condition_derivatives", "homotopy_minimize", "modal_derivatives",
+           "svd_derivatives",
+           "FrequencyGroup", "RepeatedFrequencyResult", "controllability_matrix",
            "controllability_rank", "exchange", "exhaustive", "finite_horizon_gramian",
            "gawronski_gramians", "gawronski_index", "greedy", "h2_actuator_ranking",
            "h2_placement", "hamdan_nayfeh", "is_stabilizable", "kim_junkins_index",

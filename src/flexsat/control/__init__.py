@@ -17,10 +17,18 @@ from flexsat.control.frequency_shaped import (
 from flexsat.control.lqg import LQGController
 from flexsat.control.lqr import RiccatiSolution, dlqr, lqr
 from flexsat.control.lyapunov import LyapunovRegulator, LyapunovTracker, check_lyapunov_gains
+from flexsat.control.output_feedback import (
+    FeedbackDesign,
+    SymmetricOutputFeedback,
+    design_minimum_sensitivity,
+)
 from flexsat.control.pd import PD
 
 __all__ = [
     "Controller",
+    "FeedbackDesign",
+    "SymmetricOutputFeedback",
+    "design_minimum_sensitivity",
     "FrequencyShapedController",
     "FrequencyShapedDesign",
     "LQGController",
