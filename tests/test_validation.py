@@ -23,3 +23,16 @@ def test_accepts_good_values():
 def test_refusals_name_the_field_and_the_rule(check, value, rule):
     with pytest.raises(ValueError, match=rf"^mass: {rule}"):
         check(value, "mass")
+
+
+def test_numeric_arrays_refuse_strings_objects_and_nan():
+    from flexsat.validation import require_numeric
+
+    assert require_numeric([[1, 2], [3, 4]], "A").shape == (2, 2)
+    with pytest.raises(ValueError, match=r"^A: must be a numeric matrix, got the string"):
+        require_numeric("eye", "A", "matrix")
+    with pytest.raises(ValueError, match=r"^A: must be a numeric array, got object"):
+        require_numeric(object(), "A")
+    with pytest.raises(ValueError, match=r"^A: must be finite \(no NaN or inf\), got shape \(2,\) "
+                                         r"with 1 non-finite entries"):
+        require_numeric([1.0, np.nan], "A")

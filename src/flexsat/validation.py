@@ -42,3 +42,17 @@ def require_count(value, field: str) -> int:
     if number != int(number) or number < 1:
         raise ValueError(f"{field}: must be a positive integer, got {value!r}")
     return int(number)
+
+
+def require_numeric(value, field: str, noun: str = "array") -> np.ndarray:
+    """A finite numeric array (a copy); strings and non-numbers are refused, naming the field."""
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{field}: must be a numeric {noun}, got the string {value!r}")
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{field}: must be a numeric {noun}, got {type(value).__name__}") from None
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{field}: must be finite (no NaN or inf), got shape {arr.shape} with "
+                         f"{int(np.sum(~np.isfinite(arr)))} non-finite entries")
+    return arr

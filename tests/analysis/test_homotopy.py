@@ -147,7 +147,7 @@ def test_undefined_gradient_ends_the_objective_phase_there():
     (dict(objective=3.0), r"^objective: must be callable"),
     (dict(p0=[]), r"^p0: needs at least one parameter"),
     (dict(p0=[np.nan, 0.0]), r"^p0: must be finite"),
-    (dict(p0="x"), r"^p0: must be numeric"),
+    (dict(p0="x"), r"^p0: must be a numeric vector"),
     (dict(equality=lambda p: [p[0]]), r"^equality_target: give it exactly when"),
     (dict(inequality_bound=1.0), r"^inequality_bound: give it exactly when"),
     (dict(inequality=lambda p: [p[0], p[1]], inequality_bound=[1.0, 2.0, 3.0]),

@@ -25,21 +25,14 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from flexsat.validation import require_numeric
+
 _EPS = np.finfo(float).eps
 
 
 # -- input checks ------------------------------------------------------------------------------
 def _array(value, field: str) -> np.ndarray:
-    if isinstance(value, (str, bytes)):
-        raise ValueError(f"{field}: must be a numeric array, got the string {value!r}")
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{field}: must be a numeric array, got {type(value).__name__}") from None
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{field}: must be finite (no NaN or inf), got shape {arr.shape} with "
-                         f"{int(np.sum(~np.isfinite(arr)))} non-finite entries")
-    return arr
+    return require_numeric(value, field, "array")
 
 
 def _square(value, field: str) -> np.ndarray:

@@ -42,6 +42,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexsat.validation import require_numeric
+
 _EPS = np.finfo(float).eps
 
 
@@ -138,15 +140,7 @@ class HomotopyResult:
 
 # -- input checks ------------------------------------------------------------------------------
 def _vector(value, field: str) -> np.ndarray:
-    if isinstance(value, (str, bytes)):
-        raise ValueError(f"{field}: must be numeric, got the string {value!r}")
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{field}: must be numeric, got {type(value).__name__}") from None
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{field}: must be finite (no NaN or inf), got {value!r}")
-    return arr
+    return require_numeric(value, field, "vector")
 
 
 def _positive(value, field: str, *, integer: bool = False, upper: float | None = None):

@@ -60,6 +60,8 @@ import logging
 import numpy as np
 import scipy.linalg
 
+from flexsat.validation import require_numeric
+
 log = logging.getLogger(__name__)
 
 __all__ = [
@@ -119,15 +121,7 @@ class RiccatiSolution(tuple):
 # ------------------------------------------------------------------------------------------------
 # input checks (shared with flexsat.control.estimation)
 def _finite(value, field: str) -> np.ndarray:
-    if isinstance(value, (str, bytes)):
-        raise ValueError(f"{field}: must be a numeric matrix, got the string {value!r}")
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{field}: must be a numeric matrix, got {type(value).__name__}") from None
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{field}: must be finite (no NaN or inf)")
-    return arr
+    return require_numeric(value, field, "matrix")
 
 
 def check_square(value, field: str) -> np.ndarray:
