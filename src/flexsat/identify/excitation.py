@@ -1,0 +1,241 @@
+r"""Synthetic vibration tests of any :class:`~flexsat.structures.modal_model.ModalModel`.
+
+The modal state space :math:`x = [\eta, \dot\eta]`, :math:`\dot x = A x + B u` is discretised
+exactly for a zero-order-hold input (matrix exponential of the augmented matrix
+:math:`[[A, B], [0, 0]] \, h`) on a fine step :math:`h = \Delta t / \text{oversample}`; each
+excitation is held at its average over every fine step (so pulse areas are kept), and the
+outputs are read every ``oversample`` steps. Sensors:
+
+* displacement / rotation / strain: :math:`y = c^T \eta`;
+* velocity: :math:`y = c^T \dot\eta`;
+* acceleration: :math:`y = c^T \ddot\eta = c^T(-K\eta - D\dot\eta + B u)`.
+
+Noise is white, Gaussian, with standard deviation ``noise`` × the RMS of the clean channel;
+``quantization`` rounds to an ADC step (a number, or the full-scale range / 2^bits via
+``bits``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import expm
+
+from flexsat.identify.measurements import Channel, Measurement
+from flexsat.validation import require_count, require_nonneg, require_positive
+
+__all__ = [
+    "Excitation",
+    "harmonic_shaker",
+    "impulse_hammer",
+    "random_force",
+    "simulate_test",
+    "torque_history",
+]
+
+_KINDS = ("impulse", "harmonic", "random", "history")
+
+
+@dataclass(frozen=True)
+class Excitation:
+    """One input of a test (build it with the helper functions below).
+
+    Parameters
+    ----------
+    kind : {"impulse", "harmonic", "random", "history"}
+    channel : Channel
+        Where and what (force at node/direction or torque about an axis).
+    amplitude : float
+        Peak force/torque (impulse, harmonic) or RMS (random), N or N m.
+    width : float, optional
+        Half-sine pulse duration, s (impulse; default one sample).
+    frequency : float, optional
+        Hz (harmonic).
+    values : array_like, optional
+        Samples at the test sample rate (history), held between samples.
+    """
+
+    kind: str
+    channel: Channel
+    amplitude: float = 1.0
+    width: float | None = None
+    frequency: float | None = None
+    values: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.kind not in _KINDS:
+            raise ValueError(f"kind: must be one of {_KINDS}, got {self.kind!r}")
+        if self.channel.kind not in ("force", "torque"):
+            raise ValueError(
+                f"channel: an excitation is a force or torque, got {self.channel.kind!r}")
+
+    def samples(self, t_fine: np.ndarray, h: float, oversample: int, rng) -> np.ndarray:
+        """Average of the input over each fine step starting at ``t_fine``."""
+        a = float(self.amplitude)
+        if self.kind == "impulse":
+            w = h * oversample if self.width is None else float(self.width)
+            lo, hi = np.clip(t_fine, 0, w), np.clip(t_fine + h, 0, w)
+            return a * w / np.pi * (np.cos(np.pi * lo / w) - np.cos(np.pi * hi / w)) / h
+        if self.kind == "harmonic":
+            om = 2 * np.pi * float(self.frequency)
+            return a * (np.cos(om * t_fine) - np.cos(om * (t_fine + h))) / (om * h)
+        if self.kind == "random":
+            n = -(-t_fine.size // oversample)
+            return np.repeat(a * rng.standard_normal(n), oversample)[: t_fine.size]
+        vals = np.asarray(self.values, dtype=float)
+        n = -(-t_fine.size // oversample)
+        full = np.zeros(n)
+        full[: min(n, vals.size)] = vals[:n]
+        return np.repeat(full, oversample)[: t_fine.size]
+
+
+def _load(load: str, node, direction, name="") -> Channel:
+    if load not in ("force", "torque"):
+        raise ValueError(f"load: must be 'force' or 'torque', got {load!r}")
+    return Channel(load, node, direction, name=name)
+
+
+def impulse_hammer(node, direction, amplitude=1.0, width=None, load="force") -> Excitation:
+    """Half-sine hammer pulse of peak ``amplitude`` (N) and duration ``width`` (s).
+
+    The impulse is :math:`2 F w / \\pi`; the default width is one sample, which makes the
+    sampled input a single discrete pulse (ERA Markov parameters come out exactly).
+    """
+    if width is not None:
+        require_positive(width, "width")
+    return Excitation("impulse", _load(load, node, direction), float(amplitude), width=width)
+
+
+def harmonic_shaker(node, direction, amplitude, frequency, load="force") -> Excitation:
+    """Sine force (or torque) of ``amplitude`` and ``frequency`` (Hz) from t = 0."""
+    require_positive(frequency, "frequency")
+    return Excitation("harmonic", _load(load, node, direction), float(amplitude),
+                      frequency=float(frequency))
+
+
+def random_force(node, direction, rms=1.0, load="force") -> Excitation:
+    """White Gaussian force (or torque) of standard deviation ``rms``, held over each sample."""
+    return Excitation("random", _load(load, node, direction), float(require_nonneg(rms, "rms")))
+
+
+def torque_history(node, axis, values) -> Excitation:
+    """User torque history (e.g. a reaction wheel), N m, one value per sample (zero after)."""
+    vals = np.asarray(values, dtype=float)
+    if vals.ndim != 1 or not np.all(np.isfinite(vals)):
+        raise ValueError("values: must be a finite 1-D array of torque samples")
+    return Excitation("history", _load("torque", node, axis), 1.0, values=vals)
+
+
+def _input_vector(model, chan: Channel) -> np.ndarray:
+    if chan.kind == "force":
+        return model.force_input(chan.node, chan.direction)
+    return model.torque_input(chan.node, chan.direction)
+
+
+def _output_rows(model, chan: Channel) -> np.ndarray:
+    if chan.kind in ("displacement", "velocity", "acceleration"):
+        return model.displacement_output(chan.node, chan.direction)
+    if chan.kind == "rotation":
+        return model.rotation_output(chan.node, chan.direction)
+    if chan.kind == "strain":
+        return model.strain_output(chan.node_a, chan.node, chan.direction)
+    raise ValueError(f"sensors: {chan.kind!r} is not a sensor kind")
+
+
+def sensor_matrices(model, sensors, inputs):
+    """Continuous (A, B, C, D) of the modal model for the given sensors and input channels."""
+    m = model.n_modes
+    w, z = model.frequencies, model.damping
+    K, Dm = np.diag(w**2), np.diag(2 * z * w)
+    A = np.block([[np.zeros((m, m)), np.eye(m)], [-K, -Dm]])
+    B2 = np.column_stack([_input_vector(model, c) for c in inputs]) if inputs else np.zeros((m, 0))
+    B = np.vstack([np.zeros_like(B2), B2])
+    C = np.zeros((len(sensors), 2 * m))
+    D = np.zeros((len(sensors), B2.shape[1]))
+    for i, s in enumerate(sensors):
+        c = _output_rows(model, s)
+        if s.kind == "velocity":
+            C[i, m:] = c
+        elif s.kind == "acceleration":
+            C[i] = np.concatenate([-c @ K, -c @ Dm])
+            D[i] = c @ B2
+        else:
+            C[i, :m] = c
+    return A, B, C, D
+
+
+def simulate_test(modal_model, excitation, sensors, duration, sample_rate, noise=0.0,
+                  quantization=None, seed=None, oversample=1) -> Measurement:
+    """Simulate a vibration test and record it as a :class:`Measurement`.
+
+    Parameters
+    ----------
+    modal_model : ModalModel
+    excitation : Excitation or sequence of Excitation
+        See :func:`impulse_hammer`, :func:`harmonic_shaker`, :func:`random_force`,
+        :func:`torque_history`.
+    sensors : sequence of Channel
+        Displacement, velocity, acceleration, rotation or strain channels.
+    duration : float
+        s; samples at 0, Δt, ... < duration.
+    sample_rate : float
+        Hz.
+    noise : float
+        Noise standard deviation as a fraction of each clean channel's RMS (0.01 = 1 %).
+    quantization : float, optional
+        ADC step in channel units (values rounded to multiples of it).
+    seed : int, optional
+        Random generator seed (random inputs and noise).
+    oversample : int
+        Fine integration steps per sample (for pulses shorter than a sample or smooth inputs).
+
+    Returns
+    -------
+    Measurement
+        ``outputs`` (sensors, N), ``inputs`` (excitations, N: the input sampled at the test rate,
+        averaged over each sample), ``attrs`` with ``noise`` and ``seed``.
+    """
+    excitations = [excitation] if isinstance(excitation, Excitation) else list(excitation)
+    if not excitations or not all(isinstance(e, Excitation) for e in excitations):
+        raise ValueError("excitation: must be an Excitation or a non-empty list of them")
+    sensors = list(sensors)
+    if not sensors or not all(isinstance(s, Channel) for s in sensors):
+        raise ValueError("sensors: must be a non-empty list of Channel")
+    fs = float(require_positive(sample_rate, "sample_rate"))
+    T = float(require_positive(duration, "duration"))
+    noise = float(require_nonneg(noise, "noise"))
+    over = require_count(oversample, "oversample")
+    rng = np.random.default_rng(seed)
+    dt = 1.0 / fs
+    n = int(np.ceil(T * fs - 1e-9))
+    if n < 2:
+        raise ValueError(f"duration: gives {n} sample(s) at {fs} Hz; need at least 2")
+    h = dt / over
+    t_fine = np.arange(n * over) * h
+    U = np.array([e.samples(t_fine, h, over, rng) for e in excitations])  # (r, n*over)
+
+    chans = [e.channel for e in excitations]
+    A, B, C, D = sensor_matrices(modal_model, sensors, chans)
+    ns, r = A.shape[0], B.shape[1]
+    M = np.zeros((ns + r, ns + r))
+    M[:ns, :ns], M[:ns, ns:] = A * h, B * h
+    E = expm(M)
+    Ad, Bd = E[:ns, :ns], E[:ns, ns:]
+    x = np.zeros(ns)
+    X = np.empty((n, ns))
+    for k in range(n * over):
+        if k % over == 0:
+            X[k // over] = x
+        x = Ad @ x + Bd @ U[:, k]
+    u_samples = U[:, ::over] if over == 1 else U.reshape(r, n, over).mean(axis=2)
+    Y = C @ X.T + D @ U[:, ::over]
+    if noise > 0:
+        rms = np.sqrt(np.mean(Y**2, axis=1, keepdims=True))
+        Y = Y + noise * rms * rng.standard_normal(Y.shape)
+    if quantization is not None:
+        q = float(require_positive(quantization, "quantization"))
+        Y = q * np.round(Y / q)
+    return Measurement(np.arange(n) * dt, Y, tuple(sensors), u_samples, tuple(chans), "time",
+                       attrs={"noise": noise, "seed": -1 if seed is None else int(seed),
+                              "oversample": over})

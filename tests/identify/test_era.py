@@ -1,0 +1,147 @@
+"""ERA, ERA/DC and OKID on the TAMU grid (Juang & Pappa 1985; Juang et al. 1993)."""
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from flexsat.cases.tamu_grid import tamu_grid
+from flexsat.identify import (
+    Channel,
+    era,
+    era_dc,
+    impulse_hammer,
+    markov_parameters,
+    noise_damping_sweep,
+    okid,
+    random_force,
+    simulate_test,
+    torque_history,
+)
+from flexsat.identify.excitation import sensor_matrices
+
+NODES = range(1, 21)  # the 20 free nodes (21-25 are clamped)
+DURATION, RATE = 40.0, 50.0
+
+
+@pytest.fixture(scope="module")
+def grid():
+    return tamu_grid().modal_model(6, damping=0.01)
+
+
+@pytest.fixture(scope="module")
+def sensors():
+    return [Channel("displacement", n, "z") for n in NODES]
+
+
+@pytest.fixture(scope="module")
+def true_shapes(grid):
+    return np.array([grid.displacement_output(n, "z") for n in NODES])
+
+
+def _impulse(grid, sensors, noise, seed=0):
+    return simulate_test(grid, impulse_hammer(1, "z", 10.0), sensors, DURATION, RATE,
+                         noise=noise, seed=seed)
+
+
+def _discrete_markov(grid, sensors, inputs, dt, n):
+    A, B, C, D = sensor_matrices(grid, sensors, inputs)
+    ns, r = B.shape
+    M = np.zeros((ns + r, ns + r))
+    M[:ns, :ns], M[:ns, ns:] = A * dt, B * dt
+    E = expm(M)
+    Ad, Bd = E[:ns, :ns], E[:ns, ns:]
+    Y, P = [D], Bd
+    for _ in range(n):
+        Y.append(C @ P)
+        P = Ad @ P
+    return np.array(Y)
+
+
+def test_era_noise_free_exact(grid, sensors, true_shapes):
+    meas = _impulse(grid, sensors, 0.0)
+    Y = markov_parameters(meas)
+    assert Y.shape == (meas.abscissa.size, 20, 1)
+    res = era(Y, dt=meas.dt, reference_shapes=true_shapes)  # order found from the SV drop
+    assert res.order == 12
+    assert np.allclose(res.frequencies, grid.frequencies_hz, rtol=1e-10)
+    assert np.allclose(res.damping, 0.01, rtol=1e-8)
+    assert np.all(res.mac > 1 - 1e-10)
+    assert np.all(res.emac > 0.99) and np.all(res.mpc > 1 - 1e-8)
+    assert np.all(res.msv > 0)
+
+
+def test_era_one_percent_noise(grid, sensors, true_shapes):
+    """Acceptance: 1 % noise, frequencies within 0.1 %, damping within 10 %, MAC > 0.99."""
+    meas = _impulse(grid, sensors, 0.01, seed=3)
+    res = era(markov_parameters(meas), dt=meas.dt, order=12, reference_shapes=true_shapes)
+    assert np.all(np.abs(res.frequencies / grid.frequencies_hz - 1) < 1e-3)
+    assert np.all(np.abs(res.damping / 0.01 - 1) < 0.10)
+    assert np.all(res.mac > 0.99)
+    assert np.all(res.emac > 0.9) and np.all(res.mpc > 0.99)
+    # perturbation uncertainty: positive, and the damping errors lie within 3σ
+    assert np.all(res.frequency_std > 0) and np.all(res.damping_std > 0)
+    assert np.all(np.abs(res.damping - 0.01) < 3 * res.damping_std)
+
+
+def test_era_dc_one_percent_noise(grid, sensors, true_shapes):
+    meas = _impulse(grid, sensors, 0.01, seed=5)
+    res = era_dc(markov_parameters(meas), dt=meas.dt, order=12, reference_shapes=true_shapes)
+    assert res.extra["method"] == "ERA/DC"
+    assert np.all(np.abs(res.frequencies / grid.frequencies_hz - 1) < 1e-3)
+    assert np.all(np.abs(res.damping / 0.01 - 1) < 0.10)
+    assert np.all(res.mac > 0.99)
+
+
+def test_okid_recovers_markov_parameters(grid):
+    """Noise-free random force and reaction-wheel torque: OKID Markov parameters to 1e-8."""
+    out = [Channel("displacement", n, "z") for n in (1, 5, 9, 13)]
+    out.append(Channel("acceleration", 3, "z"))
+    torque = np.random.default_rng(3).standard_normal(500)
+    ex = [random_force(1, "z"), torque_history(7, "x", torque)]
+    meas = simulate_test(grid, ex, out, 10.0, RATE, seed=2)
+    Y = okid(meas.inputs, meas.outputs, 60)
+    ref = _discrete_markov(grid, out, [e.channel for e in ex], meas.dt, 60)
+    assert np.max(np.abs(Y - ref)) < 1e-8 * np.max(np.abs(ref))
+    res = era(Y, dt=meas.dt, order=12)
+    assert np.allclose(res.frequencies, grid.frequencies_hz, rtol=1e-8)
+
+
+def test_markov_from_longer_pulse(grid):
+    """A half-sine hammer spanning two samples is deconvolved by least squares."""
+    out = [Channel("displacement", 1, "z")]
+    meas = simulate_test(grid, impulse_hammer(2, "z", 5.0, width=0.03), out, 4.0, RATE)
+    n = meas.abscissa.size - 1
+    Y = markov_parameters(meas, n_markov=n)
+    ref = _discrete_markov(grid, out, [meas.input_channels[0]], meas.dt, n)
+    assert np.max(np.abs(Y - ref)) < 1e-8 * np.max(np.abs(ref))
+
+
+def test_noise_damping_sweep_trend(grid, sensors):
+    sweep = noise_damping_sweep(grid, [0.001, 0.01, 0.05], sensors, impulse_hammer(1, "z", 10.0),
+                                DURATION, RATE, seeds=(0,))
+    mean = sweep["damping_error"].mean(axis=1)
+    assert sweep["damping_error"].shape == (3, 6)
+    assert np.all(np.diff(mean) > 0)
+
+
+def test_degenerate_inputs(grid, sensors):
+    meas = _impulse(grid, sensors, 0.0)
+    Y = markov_parameters(meas)
+    with pytest.raises(ValueError, match="^order: 30 exceeds the numerical rank 12"):
+        era(Y, dt=meas.dt, order=30)
+    bad = Y.copy()
+    bad[5, 2, 0] = np.nan
+    with pytest.raises(ValueError, match="^markov: must be finite"):
+        era(bad, dt=meas.dt)
+    with pytest.raises(ValueError, match="^markov: must have shape"):
+        era(np.zeros((10, 2)))
+    with pytest.raises(ValueError, match="^rows:"):
+        era(Y, dt=meas.dt, rows=1500, cols=1500)
+    with pytest.raises(ValueError, match="^reference_shapes:"):
+        era(Y, dt=meas.dt, order=12, reference_shapes=np.ones((3, 6)))
+    with pytest.raises(ValueError, match="^y: must have as many samples"):
+        okid(np.zeros((1, 100)), np.zeros((2, 99)), 10)
+    with pytest.raises(ValueError, match="^u: must be finite"):
+        okid([np.nan] * 100, np.zeros(100), 10)
+    with pytest.raises(ValueError, match="^u: the input is zero"):
+        markov_parameters(u=np.zeros(50), y=np.ones(50))
