@@ -1,5 +1,6 @@
 """System identification from vibration tests: test data, synthetic tests, realization (ERA,
-OKID), and Creamer-Junkins structural identification and model update."""
+OKID), Creamer-Junkins structural identification and model update, and stereo triangulation
+(camera model, calibration, dynamic triangulation)."""
 
 from flexsat.identify.era import (
     Realization,
@@ -19,6 +20,15 @@ from flexsat.identify.excitation import (
     torque_history,
 )
 from flexsat.identify.measurements import CHANNEL_KINDS, Channel, Measurement
+from flexsat.identify.photogrammetry import (
+    CalibrationResult,
+    Camera,
+    calibrate,
+    calibration_counts,
+    project,
+    simulate_centroids,
+    triangulate,
+)
 from flexsat.identify.structural import (
     SubstructureModel,
     identify_damping,
@@ -30,11 +40,15 @@ from flexsat.identify.structural import (
 
 __all__ = [
     "CHANNEL_KINDS",
+    "CalibrationResult",
+    "Camera",
     "Channel",
     "Excitation",
     "Measurement",
     "Realization",
     "SubstructureModel",
+    "calibrate",
+    "calibration_counts",
     "era",
     "era_dc",
     "harmonic_shaker",
@@ -46,9 +60,12 @@ __all__ = [
     "modal_energy_distribution",
     "noise_damping_sweep",
     "okid",
+    "project",
     "random_force",
+    "simulate_centroids",
     "simulate_test",
     "substructures_from_builder",
     "torque_history",
+    "triangulate",
     "update_model",
 ]

@@ -1,0 +1,639 @@
+"""Stereo photogrammetry: collinearity camera model, static calibration, dynamic triangulation.
+
+Sources (seed 000, spec part 2 §1.5–1.7 and §3.2–3.3):
+
+* Att. 6 (James & Junkins 1989), eqs. (22)–(29): ``u = u0 + du + f_u (C1.d)/(C3.d)`` with a
+  (1,2,3) Euler matrix ``C = R3(t3) R2(t2) R1(t1)``, separate ``f_u, f_v`` and Brown distortion.
+* Att. 8 (Junkins & James 1988), eq. (1): ``x = x0 - f (C1.d)/(C3.d)`` with the 3-2-1 matrix
+  ``C = R1(psi) R2(theta) R3(phi)``, angles stored in the order ``(phi, theta, psi)``.
+
+Both conventions are supported through ``Camera.euler`` (``"321"`` or ``"123"``) and
+``Camera.focal_sign`` (``-1`` as in Att. 8, ``+1`` as in Att. 6).  ``d = C (p - c)`` is the
+object point in camera axes.
+
+Distortion is Brown's first-order model (spec §1.5: the printed eqs. (25)–(26) are garbled),
+evaluated on the *ideal* centred image coordinates ``ub = s fx d1/d3``, ``vb = s fy d2/d3``:
+
+    du = ub (k1 r^2 + k2 r^4) + p1 (r^2 + 2 ub^2) + 2 p2 ub vb
+    dv = vb (k1 r^2 + k2 r^4) + 2 p1 ub vb + p2 (r^2 + 2 vb^2)
+
+``Camera(distortion="printed")`` switches to the as-printed Att. 6 form.  All image quantities
+(x0, y0, fx, fy, centroids, sigmas) are in one length unit of the focal plane (e.g. metres);
+``simulate_centroids`` converts to pixels only to quantize.
+
+Calibration (resection) follows Att. 8's counting: with the datum of §3.3 (point ``i0`` at the
+origin, point ``i1`` on the X axis, point ``i2`` in the XY plane) the unknowns are
+``3N - 6 + p M`` (``p`` free parameters per camera, ``M`` cameras) against ``2 M N`` image
+equations, i.e. ``4N`` equations and ``3N + 12`` unknowns for two 9-parameter cameras, so
+``N >= 12``.  The scale left free by the datum is fixed by a known distance (``scale``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.sparse import lil_matrix
+
+from flexsat.validation import require_finite, require_numeric, require_positive
+
+__all__ = [
+    "Camera",
+    "CalibrationResult",
+    "CAMERA_PARAMETERS",
+    "DEFAULT_FREE",
+    "FIELD_SIZE_PX",
+    "FIELD_RATE_HZ",
+    "rotation_matrix",
+    "euler_angles",
+    "project",
+    "simulate_centroids",
+    "calibration_counts",
+    "calibrate",
+    "triangulate",
+]
+
+#: Video field of the TAMU sensor (Att. 6/8/10): 320 x 244 pixels at 200 fields per second.
+FIELD_SIZE_PX = (320, 244)
+FIELD_RATE_HZ = 200.0
+
+#: Order of a camera's parameter vector.
+CAMERA_PARAMETERS = ("xc", "yc", "zc", "a1", "a2", "a3", "x0", "y0", "fx", "fy",
+                     "k1", "k2", "p1", "p2")
+#: Att. 8's nine calibration unknowns per camera (``"f"`` ties ``fx = fy``).
+DEFAULT_FREE = ("xc", "yc", "zc", "a1", "a2", "a3", "x0", "y0", "f")
+_FREE_NAMES = set(CAMERA_PARAMETERS) | {"f"}
+
+
+# ----------------------------------------------------------------------------------------------
+# rotations
+# ----------------------------------------------------------------------------------------------
+def _r1(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])
+
+
+def _r2(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+
+
+def _r3(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _check_euler(euler, field_name="euler"):
+    if euler not in ("321", "123"):
+        raise ValueError(f"{field_name}: must be '321' (Att. 8: C = R1(psi) R2(theta) R3(phi), "
+                         f"angles (phi, theta, psi)) or '123' (Att. 6: C = R3(t3) R2(t2) R1(t1), "
+                         f"angles (t1, t2, t3)), got {euler!r}")
+    return euler
+
+
+def rotation_matrix(angles, euler: str = "321") -> np.ndarray:
+    """World-to-camera direction cosine matrix ``C`` (passive rotations, radians).
+
+    ``"321"``: ``angles = (phi, theta, psi)``, ``C = R1(psi) R2(theta) R3(phi)`` (Att. 8).
+    ``"123"``: ``angles = (t1, t2, t3)``, ``C = R3(t3) R2(t2) R1(t1)`` (Att. 6).
+    """
+    _check_euler(euler)
+    a = require_finite(angles, "angles").reshape(-1)
+    if a.size != 3:
+        raise ValueError(f"angles: must hold 3 Euler angles, got {a.size}")
+    if euler == "321":
+        return _r1(a[2]) @ _r2(a[1]) @ _r3(a[0])
+    return _r3(a[2]) @ _r2(a[1]) @ _r1(a[0])
+
+
+def euler_angles(matrix, euler: str = "321") -> np.ndarray:
+    """Inverse of :func:`rotation_matrix` (middle angle in [-pi/2, pi/2])."""
+    _check_euler(euler)
+    c = require_finite(matrix, "matrix")
+    if c.shape != (3, 3):
+        raise ValueError(f"matrix: must be 3x3, got shape {c.shape}")
+    if not np.allclose(c @ c.T, np.eye(3), atol=1e-8) or np.linalg.det(c) <= 0:
+        raise ValueError("matrix: must be a proper rotation (orthonormal, det +1)")
+    if euler == "321":
+        theta = -math.asin(float(np.clip(c[0, 2], -1.0, 1.0)))
+        phi = math.atan2(c[0, 1], c[0, 0])
+        psi = math.atan2(c[1, 2], c[2, 2])
+        return np.array([phi, theta, psi])
+    t2 = math.asin(float(np.clip(c[2, 0], -1.0, 1.0)))
+    t1 = math.atan2(-c[2, 1], c[2, 2])
+    t3 = math.atan2(-c[1, 0], c[0, 0])
+    return np.array([t1, t2, t3])
+
+
+# ----------------------------------------------------------------------------------------------
+# camera
+# ----------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Camera:
+    """Exterior (position, Euler attitude) and interior (x0, y0, fx, fy, Brown k1, k2, p1, p2)
+    orientation of one camera.  Give ``f`` for square pixels or ``fx`` and ``fy``."""
+
+    position: Sequence[float]
+    angles: Sequence[float]
+    f: float | None = None
+    fx: float | None = None
+    fy: float | None = None
+    x0: float = 0.0
+    y0: float = 0.0
+    k1: float = 0.0
+    k2: float = 0.0
+    p1: float = 0.0
+    p2: float = 0.0
+    euler: str = "321"
+    focal_sign: int = -1
+    distortion: str = "brown"
+
+    def __post_init__(self):
+        pos = require_finite(self.position, "position").reshape(-1)
+        if pos.size != 3:
+            raise ValueError(f"position: must hold 3 coordinates, got {pos.size}")
+        ang = require_finite(self.angles, "angles").reshape(-1)
+        if ang.size != 3:
+            raise ValueError(f"angles: must hold 3 Euler angles, got {ang.size}")
+        _check_euler(self.euler)
+        if self.focal_sign not in (1, -1):
+            raise ValueError(f"focal_sign: must be +1 (Att. 6, '+f') or -1 (Att. 8, '-f'), "
+                             f"got {self.focal_sign!r}")
+        if self.distortion not in ("brown", "printed"):
+            raise ValueError(f"distortion: must be 'brown' or 'printed', got {self.distortion!r}")
+        if self.f is not None:
+            if self.fx is not None or self.fy is not None:
+                raise ValueError("f: give either f (square pixels) or fx and fy, not both")
+            f = float(require_positive(self.f, "f"))
+            fx = fy = f
+        else:
+            if self.fx is None or self.fy is None:
+                raise ValueError("f: a focal length is required (f, or both fx and fy)")
+            fx = float(require_positive(self.fx, "fx"))
+            fy = float(require_positive(self.fy, "fy"))
+        object.__setattr__(self, "position", tuple(float(v) for v in pos))
+        object.__setattr__(self, "angles", tuple(float(v) for v in ang))
+        object.__setattr__(self, "f", None)
+        object.__setattr__(self, "fx", fx)
+        object.__setattr__(self, "fy", fy)
+        for name in ("x0", "y0", "k1", "k2", "p1", "p2"):
+            object.__setattr__(self, name, float(require_finite(getattr(self, name), name)))
+
+    @property
+    def matrix(self) -> np.ndarray:
+        return rotation_matrix(self.angles, self.euler)
+
+    def vector(self) -> np.ndarray:
+        """Parameters in the order of :data:`CAMERA_PARAMETERS`."""
+        return np.array([*self.position, *self.angles, self.x0, self.y0, self.fx, self.fy,
+                         self.k1, self.k2, self.p1, self.p2])
+
+    def with_vector(self, vec) -> "Camera":
+        v = np.asarray(vec, dtype=float)
+        return dataclasses.replace(
+            self, position=v[0:3], angles=v[3:6], x0=v[6], y0=v[7], f=None, fx=v[8], fy=v[9],
+            k1=v[10], k2=v[11], p1=v[12], p2=v[13])
+
+
+def _project_vec(vec, euler, sign, form, pts):
+    """Projection from a raw parameter vector (no validation); pts (K, 3) -> (K, 2)."""
+    c = rotation_matrix(vec[3:6], euler)
+    d = (pts - vec[0:3]) @ c.T
+    depth = d[:, 2]
+    ub = sign * vec[8] * d[:, 0] / depth
+    vb = sign * vec[9] * d[:, 1] / depth
+    k1, k2, p1, p2 = vec[10:14]
+    r2 = ub * ub + vb * vb
+    if form == "brown":
+        radial = k1 * r2 + k2 * r2 * r2
+        du = ub * radial + p1 * (r2 + 2 * ub * ub) + 2 * p2 * ub * vb
+        dv = vb * radial + 2 * p1 * ub * vb + p2 * (r2 + 2 * vb * vb)
+    else:  # Att. 6 eqs. (25)-(26) as printed
+        du = ub * k1 * r2 + p1 * (r2 + 2 * ub * ub * vb)
+        dv = vb * k1 * r2 + p1 * (2 * ub * ub * vb) + p2 * (r2 + 2 * vb * vb)
+    return np.stack([vec[6] + ub + du, vec[7] + vb + dv], axis=-1), depth
+
+
+def _check_points(points, field_name="points"):
+    p = require_numeric(points, field_name)
+    if p.ndim == 0 or p.shape[-1] != 3:
+        raise ValueError(f"{field_name}: last axis must hold (x, y, z), got shape {p.shape}")
+    return p
+
+
+def project(camera: Camera, points) -> np.ndarray:
+    """Image coordinates ``(u, v)`` of object points, shape ``(..., 3) -> (..., 2)``."""
+    if not isinstance(camera, Camera):
+        raise ValueError(f"camera: must be a Camera, got {type(camera).__name__}")
+    p = _check_points(points)
+    flat = p.reshape(-1, 3)
+    uv, depth = _project_vec(camera.vector(), camera.euler, camera.focal_sign, camera.distortion,
+                             flat)
+    if np.any(np.abs(depth) < 1e-12):
+        raise ValueError("points: a point lies in the camera's focal plane (zero depth)")
+    return uv.reshape(p.shape[:-1] + (2,))
+
+
+# ----------------------------------------------------------------------------------------------
+# simulation
+# ----------------------------------------------------------------------------------------------
+def simulate_centroids(cameras, points, pixel_size, noise_px: float = 0.0, quantize: bool = True,
+                       seed=None, field_px=FIELD_SIZE_PX) -> np.ndarray:
+    """Simulated image centroids, shape ``(M, ..., 2)`` for ``M`` cameras and points ``(..., 3)``.
+
+    Gaussian noise of ``noise_px`` pixels (standard deviation) is added, then, with
+    ``quantize``, each centroid is snapped to the centre of the pixel it falls in (pixel edges at
+    integer multiples of ``pixel_size`` from the detector centre).  Centroids outside the
+    ``field_px = (width, height)`` detector (default 320 x 244, centred) are NaN; pass
+    ``field_px=None`` for an unbounded detector.  A time history of points ``(T, N, 3)`` sampled
+    at :data:`FIELD_RATE_HZ` gives one field per time step.
+    """
+    cams = _check_cameras(cameras)
+    p = _check_points(points)
+    size = require_positive(pixel_size, "pixel_size").reshape(-1)
+    if size.size not in (1, 2):
+        raise ValueError(f"pixel_size: must be a scalar or (sx, sy), got {size.size} values")
+    size = np.broadcast_to(size, (2,))
+    noise = float(require_finite(noise_px, "noise_px"))
+    if noise < 0:
+        raise ValueError(f"noise_px: must be >= 0, got {noise_px!r}")
+    rng = np.random.default_rng(seed)
+    out = np.stack([project(cam, p) for cam in cams])
+    if noise > 0:
+        out = out + rng.normal(0.0, noise, out.shape) * size
+    if quantize:
+        out = (np.floor(out / size) + 0.5) * size
+    if field_px is not None:
+        fw = require_positive(field_px, "field_px").reshape(-1)
+        if fw.size != 2:
+            raise ValueError(f"field_px: must be (width, height) in pixels, got {field_px!r}")
+        half = 0.5 * fw * size
+        outside = np.any(np.abs(out) > half, axis=-1)
+        out[outside] = np.nan
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# calibration
+# ----------------------------------------------------------------------------------------------
+def _check_cameras(cameras, field_name="cameras", minimum=1):
+    if isinstance(cameras, Camera):
+        cameras = [cameras]
+    cams = list(cameras)
+    if len(cams) < minimum:
+        raise ValueError(f"{field_name}: at least {minimum} cameras are needed, got {len(cams)}")
+    for j, cam in enumerate(cams):
+        if not isinstance(cam, Camera):
+            raise ValueError(f"{field_name}[{j}]: must be a Camera, got {type(cam).__name__}")
+    return cams
+
+
+def calibration_counts(n_points: int, n_cameras: int = 2, params_per_camera: int = 9) -> dict:
+    """Att. 8 counting: ``2 M N`` image equations, ``3N - 6 + p M`` unknowns after the datum.
+
+    For ``M = 2``, ``p = 9``: 4N equations, 3N + 12 unknowns, ``N >= 12``; ``p = 10``
+    (separate fx, fy) gives ``N >= 14``.  The scale constraint is one more equation and is not
+    counted towards the minimum (it removes the scale freedom the datum leaves).
+    """
+    m, p = int(n_cameras), int(params_per_camera)
+    if 2 * m - 3 <= 0:
+        raise ValueError(f"n_cameras: calibration needs at least 2 cameras, got {n_cameras}")
+    n_min = max(3, math.ceil((p * m - 6) / (2 * m - 3)))
+    return {"equations": 2 * m * int(n_points), "unknowns": 3 * int(n_points) - 6 + p * m,
+            "min_points": n_min}
+
+
+@dataclass
+class CalibrationResult:
+    """Output of :func:`calibrate`."""
+
+    cameras: list
+    targets: np.ndarray
+    covariance: np.ndarray          # over the unknowns, ordered as ``names``
+    names: list                     # e.g. "cam0.xc", "target3.y"
+    sigma0_squared: float           # residual variance factor (1 if the weights are right)
+    counts: dict
+    residuals_px: np.ndarray = field(repr=False)  # image residuals, observation units
+    result: object = field(repr=False, default=None)
+
+    def std(self, name: str) -> float:
+        return float(np.sqrt(self.covariance[self.names.index(name)] [self.names.index(name)]))
+
+    def camera_covariance(self, j: int, params: Sequence[str] | None = None) -> np.ndarray:
+        """Covariance block of camera ``j``'s free parameters (``params`` order if given)."""
+        sel = [k for k, n in enumerate(self.names) if n.startswith(f"cam{j}.")]
+        if params is not None:
+            sel = [self.names.index(f"cam{j}.{p}") for p in params]
+        return self.covariance[np.ix_(sel, sel)]
+
+
+def _free_indices(free):
+    free = tuple(free)
+    for name in free:
+        if name not in _FREE_NAMES:
+            raise ValueError(f"free: unknown camera parameter {name!r}; choose from "
+                             f"{sorted(_FREE_NAMES)}")
+    if len(set(free)) != len(free):
+        raise ValueError(f"free: repeated parameter names in {free}")
+    if "f" in free and ("fx" in free or "fy" in free):
+        raise ValueError("free: 'f' ties fx = fy; do not combine it with 'fx' or 'fy'")
+    return free
+
+
+def _collinear(pts, tol=1e-9):
+    centred = pts - pts.mean(axis=0)
+    s = np.linalg.svd(centred, compute_uv=False)
+    return s[0] == 0 or s[1] <= tol * s[0]
+
+
+def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scale=None,
+              sigma: float = 1.0, free=DEFAULT_FREE, target_sigma=None,
+              max_nfev: int | None = None) -> CalibrationResult:
+    """Static calibration (resection) of ``M >= 2`` cameras and ``N`` targets.
+
+    observations: ``(M, N, 2)`` image centroids (all targets seen by all cameras).
+    initial_cameras: ``M`` :class:`Camera` starting values (conventions are kept).
+    target_guess: ``(N, 3)`` starting target positions, already in the datum frame.
+    datum: ``(i0, i1, i2)``: target ``i0`` fixed at the origin, ``i1`` on the X axis
+        (y = z = 0), ``i2`` in the XY plane (z = 0) (Att. 8 §3.3).  The guess must satisfy it.
+    scale: ``(i, j, distance)`` or ``(i, j, distance, sigma_distance)``: a known distance
+        between targets, a weighted equation (default sigma ``1e-6 * distance``).  Required.
+    sigma: standard deviation of each image coordinate (observation units); residuals are
+        weighted by ``1/sigma`` and the covariance is ``s0^2 (J^T J)^-1`` with
+        ``s0^2 = sum(r^2)/(m - n)``.
+    free: calibrated camera parameters (default Att. 8's nine; add "fx", "fy" in place of "f",
+        or "k1", "k2", "p1", "p2"); the others stay at their initial values.
+    target_sigma: optional a-priori standard deviation of the measured target positions
+        (scalar, ``(N,)`` or ``(N, 3)``): ``target_guess`` then enters as weighted measurements
+        (Att. 6 eq. (30)), and ``datum``/``scale`` may be ``None``.
+
+    Note: the counting rule is necessary, not sufficient.  From image data alone two cameras
+    determine only the 7-parameter fundamental matrix plus the structure up to the datum and
+    scale, so with Att. 8's nine free parameters per camera (x0, y0 and f both free) two cameras
+    leave a residual ambiguity (a projective transformation keeps the images; 15 - 7 datum/scale
+    - 2 per metric camera = 4 free directions for M = 2, none only from M = 4); :func:`calibrate`
+    then reports a singular normal matrix.  Add a-priori target positions (``target_sigma``, as
+    Att. 6 does), fix x0, y0 (``free`` without them; the optical axes must then not intersect,
+    or the two focal lengths stay undetermined), or use four or more cameras.
+
+    Solved by :func:`scipy.optimize.least_squares` (trust region, finite differences with the
+    block-sparse ``jac_sparsity`` pattern: camera ``j``'s parameters reach only camera ``j``'s
+    rows, target ``i``'s coordinates only target ``i``'s rows).
+    """
+    cams = _check_cameras(initial_cameras, "initial_cameras", minimum=2)
+    m_cam = len(cams)
+    obs = require_numeric(observations, "observations")
+    targets = require_numeric(target_guess, "target_guess")
+    if targets.ndim != 2 or targets.shape[1] != 3:
+        raise ValueError(f"target_guess: must have shape (N, 3), got {targets.shape}")
+    n_pts = targets.shape[0]
+    if obs.shape != (m_cam, n_pts, 2):
+        raise ValueError(f"observations: must have shape (M, N, 2) = ({m_cam}, {n_pts}, 2) "
+                         f"for {m_cam} cameras and {n_pts} targets, got {obs.shape}")
+    free = _free_indices(free)
+    sig = float(require_positive(sigma, "sigma"))
+
+    counts = calibration_counts(n_pts, m_cam, len(free))
+    if n_pts < counts["min_points"]:
+        raise ValueError(
+            f"target_guess: {n_pts} targets are too few: {m_cam} cameras with {len(free)} free "
+            f"parameters each need N >= {counts['min_points']} ({counts['equations']} equations "
+            f"2MN < {counts['unknowns']} unknowns 3N - 6 + {len(free)}M; Att. 8: 4N vs 3N + 12, "
+            f"N >= 12)")
+    if _collinear(targets):
+        raise ValueError("target_guess: the targets are collinear; calibration needs targets "
+                         "spread in at least a plane (better in depth too)")
+
+    if target_sigma is not None:
+        tsig = require_positive(target_sigma, "target_sigma")
+        try:
+            tsig = np.broadcast_to(tsig.reshape(tsig.shape + (1,) * (tsig.ndim == 1)),
+                                   (n_pts, 3)).copy()
+        except ValueError:
+            raise ValueError(f"target_sigma: must be a scalar, (N,) or (N, 3) with N = {n_pts}, "
+                             f"got shape {np.shape(target_sigma)}") from None
+    else:
+        tsig = None
+    fixed_mask = np.zeros((n_pts, 3), dtype=bool)
+    if datum is None and tsig is None:
+        raise ValueError("datum: required (i0, i1, i2) unless target_sigma gives a-priori "
+                         "target positions that fix the frame")
+    if datum is not None:
+        i0, i1, i2 = _check_datum(datum, targets, n_pts)
+        fixed_mask[i0, :] = True
+        fixed_mask[i1, 1:] = True
+        fixed_mask[i2, 2] = True
+
+    # scale
+    if scale is None and tsig is None:
+        raise ValueError("scale: a known distance (i, j, distance) is required; the datum "
+                         "leaves the overall scale undetermined (spec §3.3)")
+    if scale is not None:
+        si, sj, sd, ssig = _check_scale(scale, n_pts)
+
+    # unknown vector layout
+    tgt_free = np.flatnonzero(~fixed_mask.ravel())
+    
+    base_vecs = [cam.vector() for cam in cams]
+    idx = {n: k for k, n in enumerate(CAMERA_PARAMETERS)}
+    p_cam = len(free)
+    n_unknown = p_cam * m_cam + tgt_free.size
+
+    names = [f"cam{j}.{n}" for j in range(m_cam) for n in free]
+    names += [f"target{k // 3}.{'xyz'[k % 3]}" for k in tgt_free]
+
+    def unpack(x):
+        vecs = []
+        for j in range(m_cam):
+            v = base_vecs[j].copy()
+            for k, n in enumerate(free):
+                val = x[j * p_cam + k]
+                if n == "f":
+                    v[idx["fx"]] = v[idx["fy"]] = val
+                else:
+                    v[idx[n]] = val
+            vecs.append(v)
+        t = targets.ravel().copy()
+        t[tgt_free] = x[p_cam * m_cam:]
+        return vecs, t.reshape(n_pts, 3)
+
+    x0 = np.empty(n_unknown)
+    for j in range(m_cam):
+        for k, n in enumerate(free):
+            x0[j * p_cam + k] = base_vecs[j][idx["fx" if n == "f" else n]]
+    x0[p_cam * m_cam:] = targets.ravel()[tgt_free]
+
+    obs_flat = obs.reshape(-1)
+
+    def residuals(x):
+        vecs, t = unpack(x)
+        pred = np.stack([_project_vec(vecs[j], cams[j].euler, cams[j].focal_sign,
+                                      cams[j].distortion, t)[0] for j in range(m_cam)])
+        parts = [(pred.reshape(-1) - obs_flat) / sig]
+        if scale is not None:
+            parts.append([(np.linalg.norm(t[si] - t[sj]) - sd) / ssig])
+        if tsig is not None:
+            parts.append(((t - targets) / tsig).ravel()[tgt_free])
+        return np.concatenate(parts)
+
+    n_img = 2 * m_cam * n_pts
+    n_res = n_img + (scale is not None) + (tgt_free.size if tsig is not None else 0)
+    sparsity = lil_matrix((n_res, n_unknown), dtype=int)
+    for j in range(m_cam):
+        sparsity[2 * n_pts * j:2 * n_pts * (j + 1), j * p_cam:(j + 1) * p_cam] = 1
+    for col, k in enumerate(tgt_free):
+        i = k // 3
+        for j in range(m_cam):
+            sparsity[2 * n_pts * j + 2 * i:2 * n_pts * j + 2 * i + 2, p_cam * m_cam + col] = 1
+        if scale is not None and i in (si, sj):
+            sparsity[n_img, p_cam * m_cam + col] = 1
+        if tsig is not None:
+            sparsity[n_img + (scale is not None) + col, p_cam * m_cam + col] = 1
+
+    sol = least_squares(residuals, x0, jac="3-point", jac_sparsity=sparsity, method="trf",
+                        x_scale="jac",
+                        tr_options={"atol": 1e-14, "btol": 1e-14, "regularize": False},
+                        xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=max_nfev)
+    jac = sol.jac.toarray() if hasattr(sol.jac, "toarray") else np.asarray(sol.jac)
+    dof = n_res - n_unknown
+    s0sq = float(2.0 * sol.cost / dof) if dof > 0 else float("nan")
+    cov = _inverse_normal(jac, "target_guess") * (s0sq if dof > 0 else 1.0)
+    vecs, t = unpack(sol.x)
+    out_cams = [cams[j].with_vector(vecs[j]) for j in range(m_cam)]
+    pred = np.stack([project(out_cams[j], t) for j in range(m_cam)])
+    return CalibrationResult(cameras=out_cams, targets=t, covariance=cov, names=names,
+                             sigma0_squared=s0sq, counts=counts, residuals_px=pred - obs,
+                             result=sol)
+
+
+def _check_datum(datum, targets, n_pts):
+    try:
+        i0, i1, i2 = (int(v) for v in datum)
+    except (TypeError, ValueError):
+        raise ValueError(f"datum: must be three target indices (i0, i1, i2), "
+                         f"got {datum!r}") from None
+    if len({i0, i1, i2}) != 3 or not all(0 <= i < n_pts for i in (i0, i1, i2)):
+        raise ValueError(f"datum: must be three distinct target indices in [0, {n_pts}), got "
+                         f"{datum!r}")
+    scl = 1e-6 * max(1.0, float(np.max(np.abs(targets))))
+    if (np.any(np.abs(targets[i0]) > scl) or np.any(np.abs(targets[i1, 1:]) > scl)
+            or abs(targets[i2, 2]) > scl):
+        raise ValueError(f"target_guess: must be in the datum frame: target {i0} at the origin, "
+                         f"target {i1} with y = z = 0, target {i2} with z = 0")
+    if _collinear(targets[[i0, i1, i2]]) or abs(targets[i1, 0]) <= scl:
+        raise ValueError(f"datum: targets {i0}, {i1}, {i2} are collinear (or coincide) and "
+                         f"cannot define the X axis and the XY plane")
+    return i0, i1, i2
+
+
+def _check_scale(scale, n_pts):
+    try:
+        si, sj = int(scale[0]), int(scale[1])
+        sd = float(require_positive(scale[2], "scale distance"))
+        ssig = float(require_positive(scale[3], "scale sigma")) if len(scale) > 3 else 1e-6 * sd
+    except (TypeError, IndexError):
+        raise ValueError(f"scale: must be (i, j, distance[, sigma]), got {scale!r}") from None
+    if si == sj or not (0 <= si < n_pts and 0 <= sj < n_pts):
+        raise ValueError(f"scale: needs two distinct target indices in [0, {n_pts}), got "
+                         f"{scale!r}")
+    return si, sj, sd, ssig
+
+
+def _inverse_normal(jac, field_name):
+    """``(J^T J)^-1`` with column equilibration; a clear error when the geometry is singular."""
+    norms = np.linalg.norm(jac, axis=0)
+    if np.any(norms == 0):
+        raise ValueError(f"{field_name}: some unknowns do not affect any observation "
+                         f"(singular geometry)")
+    js = jac / norms
+    s = np.linalg.svd(js, compute_uv=False)
+    if s[-1] <= 1e-10 * s[0]:
+        raise ValueError(f"{field_name}: the normal matrix is singular (condition "
+                         f"{s[0] / max(s[-1], 1e-300):.3g}); the geometry does not determine "
+                         f"the unknowns (collinear targets or too few views?)")
+    inv = np.linalg.inv(js.T @ js)
+    return inv / np.outer(norms, norms)
+
+
+# ----------------------------------------------------------------------------------------------
+# triangulation
+# ----------------------------------------------------------------------------------------------
+def _linear_guess(cams, uv):
+    """Distortion-free linear triangulation; uv (M, K, 2) -> (K, 3)."""
+    k = uv.shape[1]
+    a = np.zeros((k, 3, 3))
+    b = np.zeros((k, 3))
+    for j, cam in enumerate(cams):
+        c = cam.matrix
+        pos = np.asarray(cam.position)
+        s = cam.focal_sign
+        for axis, (f, off) in enumerate(((cam.fx, cam.x0), (cam.fy, cam.y0))):
+            rows = (uv[j, :, axis] - off)[:, None] * c[2] - s * f * c[axis]   # (K, 3)
+            a += rows[:, :, None] * rows[:, None, :]
+            b += rows * (rows @ pos)[:, None]
+    return np.linalg.solve(a, b[..., None])[..., 0]
+
+
+def triangulate(cameras, centroids, pixel_sigma, iterations: int = 10):
+    """Dynamic triangulation with known cameras (Att. 6 §Triangulation, Att. 8: 4 equations,
+    3 unknowns per point for two cameras).
+
+    centroids: ``(M, ..., 2)`` image coordinates from ``M >= 2`` cameras (e.g. ``(M, T, N, 2)``
+    for ``T`` video fields of ``N`` targets).  pixel_sigma: standard deviation of each image
+    coordinate (scalar or one per camera, observation units).
+
+    Returns ``(points (..., 3), covariance (..., 3, 3))``: Gauss-Newton estimates and the
+    linearised covariance ``sigma^2 (J^T W J)^-1`` per point (camera parameters taken as exact).
+    """
+    cams = _check_cameras(cameras, minimum=2)
+    m_cam = len(cams)
+    uv = require_numeric(centroids, "centroids")
+    if uv.ndim < 2 or uv.shape[0] != m_cam or uv.shape[-1] != 2:
+        raise ValueError(f"centroids: must have shape (M, ..., 2) with M = {m_cam} cameras, "
+                         f"got {uv.shape}")
+    sig = require_positive(pixel_sigma, "pixel_sigma").reshape(-1)
+    if sig.size not in (1, m_cam):
+        raise ValueError(f"pixel_sigma: must be a scalar or one value per camera, got {sig.size}")
+    w = 1.0 / np.broadcast_to(sig, (m_cam,)) ** 2
+    lead = uv.shape[1:-1]
+    flat = uv.reshape(m_cam, -1, 2)
+    k = flat.shape[1]
+    pts = _linear_guess(cams, flat)
+    vecs = [(c.vector(), c.euler, c.focal_sign, c.distortion) for c in cams]
+    wrow = np.repeat(w, 2)                                   # (2M,)
+
+    def model(p):
+        return np.concatenate([_project_vec(v, e, s, f, p)[0] for v, e, s, f in vecs], axis=1)
+
+    obs = np.concatenate([flat[j] for j in range(m_cam)], axis=1)   # (K, 2M)
+
+    def jacobian(p):
+        h = 1e-6 * np.maximum(1.0, np.abs(p))
+        cols = []
+        for a in range(3):
+            dp = np.zeros_like(p)
+            dp[:, a] = h[:, a]
+            cols.append((model(p + dp) - model(p - dp)) / (2 * h[:, a:a + 1]))
+        return np.stack(cols, axis=-1)                       # (K, 2M, 3)
+
+    for _ in range(iterations):
+        r = obs - model(pts)
+        jac = jacobian(pts)
+        jw = jac * wrow[None, :, None]
+        normal = np.einsum("kra,krb->kab", jw, jac)
+        step = np.linalg.solve(normal, np.einsum("kra,kr->ka", jw, r)[..., None])[..., 0]
+        pts = pts + step
+        if np.max(np.abs(step)) <= 1e-12 * max(1.0, np.max(np.abs(pts))):
+            break
+    jac = jacobian(pts)
+    normal = np.einsum("kra,krb->kab", jac * wrow[None, :, None], jac)
+    cond = np.linalg.cond(normal)
+    if np.any(cond > 1e14):
+        raise ValueError("centroids: the rays are (nearly) parallel for some points; the "
+                         "triangulation geometry is singular")
+    cov = np.linalg.inv(normal)
+    return pts.reshape(lead + (3,)), cov.reshape(lead + (3, 3))
