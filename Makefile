@@ -23,6 +23,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_tamu.py
 	$(PY) benchmarks/bench_modal.py
 	$(PY) benchmarks/bench_lqr.py
+	$(PY) benchmarks/bench_identify.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache
