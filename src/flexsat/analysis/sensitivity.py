@@ -182,6 +182,18 @@ class EigenDerivatives:
     right_hessian: np.ndarray | None = None
 
 
+def _selection(value, count: int, field: str, what: str) -> np.ndarray:
+    """Indices 0 … count − 1 picked by ``value`` (all of them for None), checked."""
+    if value is None:
+        return np.arange(count)
+    sel = np.atleast_1d(np.asarray(value))
+    if sel.dtype.kind not in "iu" or sel.ndim != 1 or sel.size == 0:
+        raise ValueError(f"{field}: must be {what}, got {value!r}")
+    if np.any(sel < 0) or np.any(sel >= count):
+        raise ValueError(f"{field}: must lie in 0 … {count - 1}, got {value!r}")
+    return sel
+
+
 def eigensolve(A, B=None, *, gap_rtol: float = GAP_RTOL):
     """Eigenvalues and normalised right/left eigenvectors of A φ = λ B φ (Att. 5 Eqs. 40-41).
 
@@ -447,14 +459,7 @@ def modal_derivatives(K, M, dK, dM=None, modes=None, *,
         lam_all, phi_all = sla.eigh(K, M)
     except np.linalg.LinAlgError:
         raise ValueError("M: must be positive definite") from None
-    if modes is None:
-        sel = np.arange(n)
-    else:
-        sel = np.atleast_1d(np.asarray(modes))
-        if sel.dtype.kind not in "iu" or sel.ndim != 1 or sel.size == 0:
-            raise ValueError(f"modes: must be mode numbers (integers), got {modes!r}")
-        if np.any(sel < 0) or np.any(sel >= n):
-            raise ValueError(f"modes: must lie in 0 … {n - 1}, got {modes!r}")
+    sel = _selection(modes, n, "modes", "mode numbers (integers)")
     scale = max(float(np.abs(lam_all).max()), float(np.finfo(float).tiny))
     _check_distinct(lam_all, scale, gap_rtol, "eigenvalues", select=sel)
     lam, phi = lam_all[sel], phi_all[:, sel]
@@ -566,14 +571,7 @@ def svd_derivatives(Phi, dPhi, d2Phi=None, *, order: int = 1, indices=None,
     U, sig, Vh = np.linalg.svd(Phi, full_matrices=True)
     V = Vh.conj().T
     r = sig.size
-    if indices is None:
-        sel = np.arange(r)
-    else:
-        sel = np.atleast_1d(np.asarray(indices))
-        if sel.dtype.kind not in "iu" or sel.ndim != 1 or sel.size == 0:
-            raise ValueError(f"indices: must be integers, got {indices!r}")
-        if np.any(sel < 0) or np.any(sel >= r):
-            raise ValueError(f"indices: must lie in 0 … {r - 1}, got {indices!r}")
+    sel = _selection(indices, r, "indices", "integers")
     big = max(m, n)
     s_pad = np.zeros(big)
     s_pad[:r] = sig
