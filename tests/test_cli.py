@@ -109,3 +109,14 @@ def test_missing_scenario_file_exits_2(tmp_path):
     result = runner.invoke(app, ["run", str(tmp_path / "none.yaml"), "-o", str(tmp_path / "o")])
     assert result.exit_code == 2
     assert "cannot read" in result.stderr
+
+
+def test_run_identification_scenario_prints_modes_and_writes_report(tmp_path,
+                                                                    identification_example):
+    path = tmp_path / "id.yaml"
+    path.write_text(yaml.safe_dump(identification_example(fast=True)))
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["run", str(path), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "identified modes" in result.stdout and "clamp verticals" in result.stdout
+    assert {"index.html", "frf.png", "mac.png", "results.nc"} <= {p.name for p in out.iterdir()}

@@ -118,7 +118,7 @@ def test_unknown_key_is_named_with_its_path():
 def test_unknown_keys_at_top_level_and_in_a_run():
     message = problems_of(lambda d: (d.update(colour=1, size=2),
                                      d["runs"][1]["reference"].update(beta=1)))
-    assert "colour: unknown key (allowed: name, case, case_overrides, model" in message
+    assert "colour: unknown key (allowed: kind, name, case, case_overrides, model" in message
     assert "size: unknown key" in message
     assert "runs['Law II'].reference.beta: unknown key (allowed: shape, u_max" in message
     assert "invalid scenario (3 problems)" in message

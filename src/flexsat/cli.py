@@ -20,6 +20,12 @@ from rich.text import Text
 
 from flexsat import checks as published_checks
 from flexsat.cases import CASES, get_case
+from flexsat.identification_report import write_identification_report
+from flexsat.identification_scenario import (
+    IdentificationScenario,
+    run_identification,
+    summary_table,
+)
 from flexsat.mode_plot import plot_case_modes
 from flexsat.report import metric_rows, write_report
 from flexsat.scenario import ScenarioError, default_scenario, load_scenario, run_scenario
@@ -169,18 +175,42 @@ def run(
         help="Scenario YAML file; the embedded TAMU 40 deg default when left out.")] = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="Report folder.")] = Path("out"),
 ) -> None:
-    """Run a scenario, print its metrics and write the report (metrics, netCDF, plots, HTML)."""
+    """Run a scenario and write its report (metrics or identification tables, netCDF, plots,
+    HTML)."""
+    say = lambda label: console.print(f"running {label} ...", markup=False)  # noqa: E731
     try:
         spec = default_scenario() if scenario is None else load_scenario(scenario)
-        result = run_scenario(spec, progress=lambda label: console.print(f"running {label} ...", markup=False))
+        if isinstance(spec, IdentificationScenario):
+            result = run_identification(spec, progress=say)
+        else:
+            result = run_scenario(spec, progress=say)
     except ScenarioError as exc:
         _fail(str(exc))
-    console.print(_metrics_table(result.metrics_records()))
+    if isinstance(spec, IdentificationScenario):
+        console.print(_identification_table(result))
+        writer = write_identification_report
+    else:
+        console.print(_metrics_table(result.metrics_records()))
+        writer = write_report
     try:
-        path = write_report(result, out)
+        path = writer(result, out)
     except OSError as exc:
         _fail(f"--out: cannot write the report to {str(out)!r} ({exc.strerror or exc})")
     console.print(f"report written to {path / 'index.html'}", markup=False)
+
+
+def _identification_table(result) -> Table:
+    columns, rows = summary_table(result)
+    table = Table(title="identified modes")
+    table.add_column("mode")
+    for name in columns:
+        table.add_column(name, justify="right")
+    for mode, values in rows:
+        table.add_row(mode, *values)
+    for name, v in result.campaign.scalings.items():
+        table.caption = (table.caption or "") + (
+            f"{name}: a priori x{v['a_priori']:.3f}, updated x{v['updated']:.4f} of truth\n")
+    return table
 
 
 def _fmt(value, spec: str) -> str:

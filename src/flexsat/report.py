@@ -25,6 +25,7 @@ import shutil
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -67,6 +68,17 @@ def metric_rows(records: list[dict]) -> list[tuple[str, list[str]]]:
     return [(name, [format_metric(r[name]) for r in records]) for name in names]
 
 
+#: the report pages' style sheet
+STYLE = """<style>
+body { font-family: sans-serif; margin: 2em auto; max-width: 60em; }
+table { border-collapse: collapse; margin-bottom: 1em; }
+th, td { border: 1px solid #bbb; padding: 0.2em 0.6em; text-align: right; }
+td:first-child { text-align: left; font-family: monospace; }
+img { max-width: 100%; }
+pre { background: #f4f4f4; padding: 1em; overflow-x: auto; }
+</style>"""
+
+
 def _plot(ds, spec: _Plot, path: Path) -> None:
     fig = Figure(figsize=(7, 3.6), layout="constrained")
     ax = fig.add_subplot()
@@ -94,14 +106,7 @@ def _html(result: ScenarioResult, records: list[dict]) -> str:
     images = "".join(f'<figure><img src="{p.file}" alt="{esc(p.title)}"></figure>' for p in PLOTS)
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>flexsat report: {name}</title>
-<style>
-body {{ font-family: sans-serif; margin: 2em auto; max-width: 60em; }}
-table {{ border-collapse: collapse; }}
-th, td {{ border: 1px solid #bbb; padding: 0.2em 0.6em; text-align: right; }}
-td:first-child {{ text-align: left; font-family: monospace; }}
-img {{ max-width: 100%; }}
-pre {{ background: #f4f4f4; padding: 1em; overflow-x: auto; }}
-</style></head>
+{STYLE}</head>
 <body>
 <h1>flexsat report</h1>
 <p><b>Scenario:</b> {name}<br><b>Case:</b> {esc(result.scenario.case)}
@@ -137,11 +142,24 @@ def _publish(folder: Path, out_dir: Path) -> None:
         os.replace(path, out_dir / path.name)
 
 
-def write_report(result: ScenarioResult, out_dir) -> Path:
-    """Write the report of ``result`` into ``out_dir``.
+def write_atomically(out_dir, write: Callable[[Path], None]) -> Path:
+    """Run ``write(folder)`` on a temporary sibling folder of ``out_dir``, then move the files
+    into ``out_dir`` (created if needed; earlier files of the same names are replaced), so a
+    failure leaves no partial report."""
+    out_dir = Path(out_dir)
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    folder = out_dir.parent / f".{out_dir.name}.tmp-{uuid.uuid4().hex[:12]}"
+    folder.mkdir()
+    try:
+        write(folder)
+        _publish(folder, out_dir)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    return out_dir
 
-    Everything is written into a temporary sibling folder first and moved into place only when
-    complete, so a failure leaves no partial report.
+
+def write_report(result: ScenarioResult, out_dir) -> Path:
+    """Write the report of ``result`` into ``out_dir`` (atomically: :func:`write_atomically`).
 
     Parameters
     ----------
@@ -154,16 +172,7 @@ def write_report(result: ScenarioResult, out_dir) -> Path:
     Path
         ``out_dir``.
     """
-    out_dir = Path(out_dir)
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    folder = out_dir.parent / f".{out_dir.name}.tmp-{uuid.uuid4().hex[:12]}"
-    folder.mkdir()
-    try:
-        _write_all(result, folder)
-        _publish(folder, out_dir)
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
-    return out_dir
+    return write_atomically(out_dir, lambda folder: _write_all(result, folder))
 
 
-__all__ = ["PLOTS", "format_metric", "metric_rows", "write_report"]
+__all__ = ["PLOTS", "STYLE", "format_metric", "metric_rows", "write_atomically", "write_report"]

@@ -144,20 +144,20 @@ def _models_in(annotation) -> list[type[BaseModel]]:
     return [m for arg in get_args(annotation) for m in _models_in(arg)]
 
 
-def _allowed_keys(loc: tuple) -> str:
-    """The keys allowed beside the unknown key at ``loc``."""
-    model = Scenario
+def _allowed_keys(loc: tuple, root: type[BaseModel]) -> str:
+    """The keys allowed beside the unknown key at ``loc`` of a ``root`` document."""
+    model = root
     for key in loc[:-1]:
         if isinstance(key, str):
             model = _models_in(model.model_fields[key].annotation)[0]
     return ", ".join(model.model_fields)
 
 
-def _problem(error: dict, data) -> str:
-    """One message line for a pydantic error dict."""
+def _problem(error: dict, data, root: type[BaseModel] | None = None) -> str:
+    """One message line for a pydantic error dict of a ``root`` document (default Scenario)."""
     cause = error.get("ctx", {}).get("error")
     if error["type"] == "extra_forbidden":
-        message = f"unknown key (allowed: {_allowed_keys(error['loc'])})"
+        message = f"unknown key (allowed: {_allowed_keys(error['loc'], root or Scenario)})"
     else:
         message = str(cause) if isinstance(cause, Exception) else error["msg"]
     return _locate(_loc_path(error["loc"], data), message)
@@ -502,6 +502,7 @@ class RunSpec(_Section):
 class Scenario(_Section):
     """A validated scenario, quantities in SI (see the module docstring for the schema)."""
 
+    kind: Literal["maneuver"] = "maneuver"
     name: str
     case: str
     case_overrides: dict[str, bool | int | float | str] = Field(default_factory=dict)
@@ -580,8 +581,11 @@ def _read(source: str | Path) -> str:
         raise ScenarioError([f"scenario: cannot read {str(source)!r} ({exc.strerror})"]) from None
 
 
-def load_scenario(source: str | Path) -> Scenario:
+def load_scenario(source: str | Path):
     """Parse and validate a scenario (stage 1: YAML, schema, units, section rules).
+
+    ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: identification`` an
+    :class:`flexsat.identification_scenario.IdentificationScenario`.
 
     Parameters
     ----------
@@ -600,10 +604,17 @@ def load_scenario(source: str | Path) -> Scenario:
         raise ScenarioError([f"yaml: {exc}"]) from None
     if not isinstance(data, dict):
         raise ScenarioError(["scenario: must be a YAML mapping (name, case, simulation, runs, ...)"])
+    kind = data.get("kind", "maneuver")
+    if kind == "identification":
+        from flexsat.identification_scenario import IdentificationScenario as model
+    elif kind == "maneuver":
+        model = Scenario
+    else:
+        raise ScenarioError([f"kind: must be 'maneuver' or 'identification', got {kind!r}"])
     try:
-        scenario = Scenario.model_validate(data)
+        scenario = model.model_validate(data)
     except ValidationError as exc:
-        raise ScenarioError([_problem(e, data) for e in exc.errors()]) from None
+        raise ScenarioError([_problem(e, data, model) for e in exc.errors()]) from None
     scenario._source = text
     return scenario
 

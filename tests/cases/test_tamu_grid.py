@@ -216,3 +216,24 @@ def test_grid_errors_name_the_field():
         tamu_grid(gravity_model="pendulum")
     with pytest.raises(ValueError, match=r"^n_modes: the grid has 60 modes"):
         tamu_grid().frequencies_hz(61)
+
+
+def test_substructure_stiffness_scaling():
+    """Scaling every substructure's EI and GJ by 1.21 without gravity scales every frequency by
+    exactly 1.1 (K -> 1.21 K, M unchanged); the groups partition the 36 members."""
+    import numpy as np
+    import pytest
+
+    from flexsat.cases.tamu_grid import SUBSTRUCTURES, tamu_grid
+
+    case = tamu_grid(gravity=False)
+    groups = [case.substructure_of(m) for m in case.members]
+    assert {g: groups.count(g) for g in SUBSTRUCTURES} == {
+        "clamp verticals": 5, "verticals": 15, "horizontals": 16}
+    base = case.structure().assemble().modes(6).frequencies_hz
+    stiff = case.structure(stiffness_scale={g: 1.21 for g in SUBSTRUCTURES}).assemble()
+    assert np.allclose(stiff.modes(6).frequencies_hz, 1.1 * base, rtol=1e-9)
+    with pytest.raises(ValueError, match="stiffness_scale: unknown substructure 'clamp'"):
+        case.structure(stiffness_scale={"clamp": 1.1})
+    with pytest.raises(ValueError, match="stiffness_scale: 'verticals' must be a finite factor"):
+        case.structure(stiffness_scale={"verticals": 0.0})

@@ -105,6 +105,9 @@ N_SIDE = 5
 GRAVITY_MODELS = ("consistent", "string")
 CLAMPED_NODES = tuple(range(21, 26))
 LOWER_LEFT_NODE = 1  #: the paper's "lower-left corner" (output y_d of Att. 4), see module doc
+#: Stiffness substructures for identification (Att. 6 Eq. 5 scalings γ_k): the vertical members
+#: into the clamped row carry the clamp's compliance, the least certain part of the a-priori model
+SUBSTRUCTURES = ("clamp verticals", "verticals", "horizontals")
 #: (lbf s²/in)^(-1/2) per kg^(-1/2): mass-normalised shapes in the units of Att. 6 Table 2
 _SHAPE_TO_US = float(np.sqrt(Q_(1, "lbf*s**2/in").to("kg").magnitude))
 
@@ -185,6 +188,19 @@ class TamuGridCase:
                     for c in range(N_SIDE)]
         return horizontal + vertical
 
+    @property
+    def substructures(self) -> tuple[str, ...]:
+        """Names of the stiffness substructures (:data:`SUBSTRUCTURES`)."""
+        return SUBSTRUCTURES
+
+    @staticmethod
+    def substructure_of(member: tuple[int, int]) -> str:
+        """The :data:`SUBSTRUCTURES` group of ``member`` (n1, n2)."""
+        a, b = member
+        if b - a != N_SIDE:
+            return "horizontals"
+        return "clamp verticals" if b in CLAMPED_NODES else "verticals"
+
     def lumped_masses(self) -> dict[int, float]:
         """Mass carried by each node (kg): half of every member it touches, plus its motor."""
         m = {n: 0.0 for n in range(1, 26)}
@@ -210,10 +226,19 @@ class TamuGridCase:
         """Moving mass (kg): the 36 members and the motors (the clamped tab excluded)."""
         return 36 * self.rho_A * self.spacing + len(self.motor_nodes) * self.motor_mass
 
-    def structure(self, gravity: bool | None = None) -> Structure:
+    def structure(self, gravity: bool | None = None, stiffness_scale=None) -> Structure:
         """The 25-node, 36-member grid; ``gravity`` (default: the case's flag) sets the
-        vertical members' tensions."""
+        vertical members' tensions; ``stiffness_scale`` maps :data:`SUBSTRUCTURES` names to
+        factors on the members' EI and GJ (default 1)."""
         gravity = self.gravity if gravity is None else bool(gravity)
+        scale = dict(stiffness_scale or {})
+        for name, factor in scale.items():
+            if name not in SUBSTRUCTURES:
+                raise ValueError(f"stiffness_scale: unknown substructure {name!r}; known: "
+                                 f"{', '.join(SUBSTRUCTURES)}")
+            if not (np.isfinite(factor) and factor > 0):
+                raise ValueError(f"stiffness_scale: {name!r} must be a finite factor > 0, "
+                                 f"got {factor!r}")
         s = Structure("TAMU 5 ft x 5 ft grid")
         for n in range(1, 26):
             c, r = self.node_position(n)
@@ -221,7 +246,8 @@ class TamuGridCase:
         ids = {}
         for a, b in self.members:
             kind = "vertical" if b - a == N_SIDE else "horizontal"
-            ids[(a, b)] = s.add_grid(a, b, self.EI, self.GJ, self.rho_A, self.rho_J,
+            k = scale.get(self.substructure_of((a, b)), 1.0)
+            ids[(a, b)] = s.add_grid(a, b, k * self.EI, k * self.GJ, self.rho_A, self.rho_J,
                                      label=f"{kind} {a}-{b}")
         if self.motor_mass > 0 or self.motor_inertia > 0:
             for n in self.motor_nodes:
@@ -362,4 +388,5 @@ def tamu_grid(**overrides) -> TamuGridCase:
 
 
 __all__ = ["CLAMPED_NODES", "GRAVITY_MODELS", "LOWER_LEFT_NODE", "PUBLISHED", "SOURCE",
+           "SUBSTRUCTURES",
            "TamuGridCase", "tamu_grid"]

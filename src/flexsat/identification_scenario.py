@@ -1,0 +1,271 @@
+"""Identification scenarios: test a structure, identify it, update its model (``kind:
+identification``).
+
+A scenario file with ``kind: identification`` runs :func:`flexsat.identify.campaign.run_campaign`
+on a case whose substructure stiffnesses scale (the TAMU grid)::
+
+    kind: identification
+    name: TAMU grid, stiff-clamp a-priori model
+    case: tamu_grid
+    case_overrides: {motor_mass: "0.5 kg"}
+    a_priori: {stiffness_scale: {clamp verticals: 1.15}, damping: 0.006}
+    sensors:
+      noise: 0.01
+      strain_gauges: [[16, 21, x], [18, 23, x]]
+      accelerometers: [[1, z]]
+      targets: [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20]
+    hammer: {node: 1, direction: z, impulse: "0.5 N*s"}
+    video:
+      cameras:
+        - {position: ["-0.6 m", "0.55 m", "2.4 m"], aim: ["0.74 m", "0.55 m", "0 m"]}
+        - {position: ["2.07 m", "0.55 m", "2.4 m"], aim: ["0.74 m", "0.55 m", "0 m"]}
+    wheels: {nodes: [3, 7, 9], axes: [y, x, x], torque_rms: "0.05 N*m"}
+
+Quantities follow :mod:`flexsat.scenario` (unit strings or SI numbers); problems are reported
+as ``field.path: rule`` before anything runs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import BeforeValidator, Field, PrivateAttr, field_validator, model_validator
+
+from flexsat.cases import get_case
+from flexsat.identify.campaign import CameraRig, CampaignConfig, CampaignResult, run_campaign
+from flexsat.scenario import ScenarioError, _head, _locate, _Section, quantity
+from flexsat.units import to_si
+
+__all__ = ["IdentificationResult", "IdentificationScenario", "run_identification"]
+
+
+def _vector(unit: str):
+    """Field type of a 3-vector of quantities in ``unit`` (SI floats)."""
+
+    def convert(value, info):
+        if not isinstance(value, (list, tuple)) or len(value) != 3:
+            raise ValueError(f"{info.field_name}: must be 3 quantities, e.g. ['1 {unit}', 0, 0]")
+        return tuple(to_si(v, unit, info.field_name) for v in value)
+
+    return Annotated[tuple[float, float, float], BeforeValidator(convert)]
+
+
+class TruthSpec(_Section):
+    """The simulated "real" structure: modes kept and modal damping (Att. 6 Table 1 default)."""
+
+    modes: Annotated[int, Field(ge=1)] = 20
+    damping: list[Annotated[float, Field(gt=0, lt=1)]] = Field(
+        default_factory=lambda: [0.00603, 0.00489, 0.01105, 0.00596, 0.01293])
+    other_damping: Annotated[float, Field(gt=0, lt=1)] = 0.01
+
+
+class APrioriSpec(_Section):
+    """The model to update: substructure stiffness factors on the truth, Eq. 15 damping."""
+
+    stiffness_scale: dict[str, Annotated[float, Field(gt=0)]] = Field(default_factory=dict)
+    damping: Annotated[float, Field(gt=0, lt=1)] = 0.006
+
+
+class SensorSpec(_Section):
+    noise: Annotated[float, Field(ge=0)] = 0.01
+    strain_gauges: list[tuple[int, int, Literal["x", "y", "z"]]] = Field(min_length=1)
+    accelerometers: list[tuple[int, Literal["x", "y", "z"]]] = Field(default_factory=list)
+    targets: list[int] = Field(min_length=1)
+
+
+class HammerSpec(_Section):
+    node: int
+    direction: Literal["x", "y", "z"] = "z"
+    impulse: quantity("N*s") = 0.5
+    duration: quantity("s") = 20.0
+    sample_rate: quantity("Hz") = 200.0
+
+
+class CameraSpec(_Section):
+    position: _vector("m")
+    aim: _vector("m")
+
+
+class VideoSpec(_Section):
+    cameras: list[CameraSpec] = Field(min_length=2)
+    impulse: quantity("N*s") = 0.3
+    duration: quantity("s") = 4.5
+    field_rate: quantity("Hz") = 200.0
+    focal_length: quantity("m") = 0.008
+    pixel_size: quantity("m") = 27e-6
+    centroid_noise_px: Annotated[float, Field(gt=0)] = 0.05
+    quantize: bool = False
+    target_sigma: quantity("m") = 1e-3
+    static_fields: Annotated[int, Field(ge=1)] = 50
+
+
+class WheelSpec(_Section):
+    nodes: list[int] = Field(min_length=1)
+    axes: list[Literal["x", "y", "z"]] = Field(min_length=1)
+    torque_rms: quantity("N*m") = 0.05
+    duration: quantity("s") = 300.0
+    sample_rate: quantity("Hz") = 50.0
+    segment: Annotated[int, Field(ge=16)] = 2000
+
+    @model_validator(mode="after")
+    def _one_axis_per_wheel(self):
+        if len(self.axes) != len(self.nodes):
+            raise ValueError(f"axes: one torque axis per wheel node ({len(self.nodes)}), "
+                             f"got {len(self.axes)}")
+        return self
+
+
+class IdentificationSpec(_Section):
+    band: quantity("Hz") = 10.0
+    era_order: Annotated[int, Field(ge=2)] = 40
+
+
+class IdentificationScenario(_Section):
+    """A validated identification scenario (SI; see the module docstring)."""
+
+    kind: Literal["identification"]
+    name: str
+    case: str
+    case_overrides: dict[str, bool | int | float | str] = Field(default_factory=dict)
+    truth: TruthSpec = Field(default_factory=TruthSpec)
+    a_priori: APrioriSpec = Field(default_factory=APrioriSpec)
+    sensors: SensorSpec
+    hammer: HammerSpec
+    video: VideoSpec
+    wheels: WheelSpec
+    identification: IdentificationSpec = Field(default_factory=IdentificationSpec)
+    seed: Annotated[int, Field(ge=0)] = 0
+    _source: str | None = PrivateAttr(default=None)
+
+    @field_validator("case")
+    @classmethod
+    def _known_case(cls, name: str) -> str:
+        get_case(name)
+        return name
+
+    @property
+    def yaml_text(self) -> str:
+        import yaml
+
+        if self._source is not None:
+            return self._source
+        return yaml.safe_dump(self.model_dump(exclude_none=True), sort_keys=False)
+
+    def config(self) -> CampaignConfig:
+        """The :class:`CampaignConfig` of this scenario."""
+        v, w, h, s = self.video, self.wheels, self.hammer, self.sensors
+        rig = CameraRig(tuple(c.position for c in v.cameras), tuple(c.aim for c in v.cameras),
+                        v.focal_length, v.pixel_size, v.centroid_noise_px, v.quantize,
+                        static_fields=v.static_fields)
+        return CampaignConfig(
+            truth_damping=tuple(self.truth.damping), other_damping=self.truth.other_damping,
+            truth_modes=self.truth.modes, a_priori_scale=dict(self.a_priori.stiffness_scale),
+            a_priori_damping=self.a_priori.damping, strain_gauges=tuple(s.strain_gauges),
+            accelerometers=tuple(s.accelerometers), targets=tuple(s.targets),
+            hammer_node=h.node, hammer_direction=h.direction, hammer_impulse=h.impulse,
+            hammer_duration=h.duration, sample_rate=h.sample_rate, noise=s.noise,
+            video_impulse=v.impulse, video_duration=v.duration, field_rate=v.field_rate,
+            target_sigma=v.target_sigma, rig=rig, wheel_nodes=tuple(w.nodes),
+            wheel_axes=tuple(w.axes), wheel_torque_rms=w.torque_rms,
+            wheel_duration=w.duration, wheel_sample_rate=w.sample_rate, frf_segment=w.segment,
+            band=self.identification.band, era_order=self.identification.era_order,
+            seed=self.seed)
+
+
+@dataclass(frozen=True)
+class IdentificationResult:
+    """An identification scenario and its campaign result."""
+
+    scenario: IdentificationScenario
+    campaign: CampaignResult
+    case_source: str
+
+
+def _check_against_case(scenario: IdentificationScenario, case) -> list[str]:
+    """Stage-2 problems that need the built case: substructure names and node ids."""
+    problems = []
+    names = tuple(getattr(case, "substructures", ()))
+    if not names or not hasattr(case, "structure"):
+        return [f"case: {scenario.case!r} has no substructures to update (use tamu_grid)"]
+    for key in scenario.a_priori.stiffness_scale:
+        if key not in names:
+            problems.append(f"a_priori.stiffness_scale: unknown substructure {key!r}; known: "
+                            f"{', '.join(names)}")
+    asm = case.structure().assemble()
+    free = {int(n) for n, _ in asm.dofs}
+    fields = ([("sensors.strain_gauges", g[k]) for g in scenario.sensors.strain_gauges
+               for k in (0, 1)]
+              + [("sensors.accelerometers", a[0]) for a in scenario.sensors.accelerometers]
+              + [("sensors.targets", n) for n in scenario.sensors.targets]
+              + [("hammer.node", scenario.hammer.node)]
+              + [("wheels.nodes", n) for n in scenario.wheels.nodes])
+    known = {int(n) for n in asm.node_ids}
+    for path, node in fields:
+        if node not in known:
+            problems.append(f"{path}: node {node} is not a node of {scenario.case}")
+        elif node not in free and path != "sensors.strain_gauges":
+            problems.append(f"{path}: node {node} is clamped (it does not move)")
+    if len(set(scenario.sensors.targets)) != len(scenario.sensors.targets):
+        problems.append("sensors.targets: node ids must be distinct")
+    return problems
+
+
+def run_identification(scenario: IdentificationScenario, progress=None) -> IdentificationResult:
+    """Validate against the case, then run the campaign.
+
+    Raises
+    ------
+    ScenarioError
+        Unknown substructures, nodes that are not in the case or are clamped, case overrides the
+        case rejects, or a camera rig that does not see every target.
+    """
+    try:
+        case = get_case(scenario.case).builder(**scenario.case_overrides)
+    except ValueError as exc:
+        raise ScenarioError([f"case_overrides: {exc}"]) from None
+    problems = _check_against_case(scenario, case)
+    if problems:
+        raise ScenarioError(problems)
+    if progress is not None:
+        progress("hammer, video and reaction-wheel tests; identification; update")
+    try:
+        result = run_campaign(case, scenario.config())
+    except ValueError as exc:
+        head = _head(str(exc))
+        path = "video" if head == "rig" else ""
+        raise ScenarioError([_locate(path, str(exc))]) from None
+    return IdentificationResult(scenario, result, get_case(scenario.case).source)
+
+
+def _summary_rows(result: IdentificationResult) -> list[tuple[str, list[str]]]:
+    """Frequency table rows for the console: per mode, true / ERA / a priori / updated."""
+    m = result.campaign.modes
+    rows = []
+    for k in range(len(m["era_hz"])):
+        rows.append((str(k + 1), [f"{m['true_hz'][k]:.4f}", f"{m['era_hz'][k]:.4f}",
+                                  f"{m['a_priori_hz'][k]:.4f}", f"{m['updated_hz'][k]:.4f}",
+                                  f"{m['true_damping'][k]:.5f}", f"{m['era_damping'][k]:.5f}"]))
+    return rows
+
+
+SUMMARY_COLUMNS = ("true Hz", "ERA Hz", "a priori Hz", "updated Hz", "true zeta", "ERA zeta")
+
+
+def summary_table(result: IdentificationResult) -> tuple[tuple[str, ...], list]:
+    """(column names, rows) of the console summary."""
+    return SUMMARY_COLUMNS, _summary_rows(result)
+
+
+def as_dict(value: Any) -> Any:
+    """JSON-ready copy (numpy arrays and scalars to lists and floats)."""
+    if isinstance(value, dict):
+        return {k: as_dict(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [as_dict(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return as_dict(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    return value

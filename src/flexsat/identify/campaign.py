@@ -1,0 +1,416 @@
+r"""An end-to-end identification campaign on a substructured finite-element case.
+
+The loop of the Texas A&M grid experiments (seed 000 Att. 6 and 8; spec part 2 §1, §3), run on
+a simulated "true" structure:
+
+1. **Hammer test** (free vibration, Att. 6 Fig. 2): an impulse at one node, recorded by strain
+   gauges and accelerometers with noise; Markov parameters and ERA give frequencies, damping
+   ratios and their uncertainty.
+2. **Video test** (Att. 6 Fig. 3, §1.5–1.7): the structure at rest is imaged by two cameras and
+   the cameras are calibrated from the targets' a-priori positions (Att. 6 Eq. 30; the principal
+   point is held at the detector centre, because images of one plane of targets fix only a
+   homography, 8 numbers, per camera); a second hammer blow is filmed at the field rate, every
+   field is triangulated, and ERA on the target z displacements gives the mode shapes.
+3. **Reaction-wheel test** (Att. 6 L2673): random torques from the wheels, recorded by the strain
+   gauges; the H1 FRFs and an OKID realization (arbitrary inputs).
+4. **Model update** (Att. 7 Eqs. 1–9 and 24): the a-priori model's substructure stiffness
+   scalings from the ERA frequencies (modes paired by the video MAC), then Rayleigh damping
+   scalings from the measured eigenvalue real parts.  The mass matrix is held: frequencies and
+   shapes fix only the stiffness-to-mass ratio (Att. 6 scales its shapes with the analytical
+   mass matrix for the same reason).
+
+The a-priori model starts from Att. 6 Eq. 15 proportional damping ``C = 2 zeta_1 omega_1 M``.
+Everything is seeded: the same configuration gives the same result.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+
+from flexsat.identify.era import Realization, era, mac, markov_parameters, okid
+from flexsat.identify.excitation import impulse_hammer, random_force, simulate_test
+from flexsat.identify.measurements import Channel, Measurement
+from flexsat.identify.photogrammetry import (
+    Camera,
+    calibrate,
+    euler_angles,
+    simulate_centroids,
+    triangulate,
+)
+from flexsat.identify.spectral import estimate_frf, frequency_response
+from flexsat.identify.structural import (
+    SubstructureModel,
+    identify_damping,
+    identify_undamped,
+    substructures_from_builder,
+)
+from flexsat.structures.fem import FEModes
+from flexsat.structures.modal_model import ModalModel
+
+__all__ = ["CameraRig", "CampaignConfig", "CampaignResult", "run_campaign"]
+
+#: camera parameters calibrated in the video test (principal point held; module docstring)
+VIDEO_FREE = ("xc", "yc", "zc", "a1", "a2", "a3", "f")
+
+
+@dataclass(frozen=True)
+class CameraRig:
+    """Two or more cameras aimed at points of the structure (SI).
+
+    ``positions`` and ``aims`` are (M, 3); ``focal_length`` and ``pixel_size`` in m (NAC V-14B:
+    2/3" CCD, 320 × 244 pixels of about 27 µm); ``noise_px`` the centroid noise in pixels;
+    ``position_error`` and ``angle_error`` the standard deviations of the initial camera guess
+    (m, rad); ``static_fields`` the fields averaged for the calibration image.
+    """
+
+    positions: tuple
+    aims: tuple
+    focal_length: float = 0.008
+    pixel_size: float = 27e-6
+    noise_px: float = 0.05
+    quantize: bool = False
+    position_error: float = 0.05
+    angle_error: float = 0.02
+    static_fields: int = 50
+
+    def cameras(self) -> list[Camera]:
+        out = []
+        for pos, aim in zip(self.positions, self.aims):
+            pos = np.asarray(pos, float)
+            axis = pos - np.asarray(aim, float)       # Att. 8 "-f": camera z away from the scene
+            axis /= np.linalg.norm(axis)
+            x = np.cross([0.0, 1.0, 0.0], axis)
+            x /= np.linalg.norm(x)
+            R = np.vstack([x, np.cross(axis, x), axis])
+            out.append(Camera(position=pos, angles=euler_angles(R, "321"),
+                              f=self.focal_length, euler="321", focal_sign=-1))
+        return out
+
+
+@dataclass(frozen=True)
+class CampaignConfig:
+    """What to test and how (SI).  See :func:`run_campaign`."""
+
+    truth_damping: tuple = (0.00603, 0.00489, 0.01105, 0.00596, 0.01293)
+    other_damping: float = 0.01
+    truth_modes: int = 20
+    a_priori_scale: dict = field(default_factory=dict)
+    a_priori_damping: float = 0.006
+    strain_gauges: tuple = ()             # (node_a, node_b, axis)
+    accelerometers: tuple = ()            # (node, direction)
+    targets: tuple = ()                   # node ids
+    hammer_node: int = 1
+    hammer_direction: str = "z"
+    hammer_impulse: float = 0.5           # N s
+    hammer_duration: float = 20.0
+    sample_rate: float = 200.0
+    noise: float = 0.01
+    video_impulse: float = 0.3            # N s
+    video_duration: float = 4.5
+    field_rate: float = 200.0
+    target_sigma: float = 1e-3
+    rig: CameraRig | None = None
+    wheel_nodes: tuple = ()
+    wheel_axes: tuple = ()
+    wheel_torque_rms: float = 0.05
+    wheel_duration: float = 300.0
+    wheel_sample_rate: float = 50.0
+    frf_segment: int = 2000
+    band: float = 10.0
+    era_order: int = 40
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class CampaignResult:
+    """Everything measured, identified and updated (see :func:`run_campaign`).
+
+    Frequencies in Hz.  ``modes`` pairs each identified mode with a model mode (0-based
+    ``model_index``); ``scalings`` gives, per substructure, the a-priori factor on the true
+    stiffness, the identified scaling ``p`` of the a-priori block with its standard deviation,
+    and the updated factor on the truth (``a_priori * p``, 1 = recovered).
+    """
+
+    substructures: tuple
+    modes: dict
+    scalings: dict
+    damping_scalings: np.ndarray
+    mac_a_priori: np.ndarray
+    mac_updated: np.ndarray
+    frf_frequencies: np.ndarray
+    frf_measured: np.ndarray
+    frf_coherence: np.ndarray
+    frf_a_priori: np.ndarray
+    frf_updated: np.ndarray
+    frf_outputs: tuple
+    frf_inputs: tuple
+    video_shapes: np.ndarray
+    target_nodes: tuple
+    calibration: dict
+    triangulation: dict
+    hammer_realization: Realization = field(repr=False)
+    video_realization: Realization = field(repr=False)
+    okid_realization: Realization = field(repr=False)
+
+
+# ------------------------------------------------------------------------------------------------
+def _modal_model(assembly, omegas, shapes, damping) -> ModalModel:
+    return ModalModel.from_fe(FEModes(omegas, shapes, assembly), damping=damping,
+                              boundary="cantilevered")
+
+
+def _blow(node, direction, impulse, rate):
+    """A one-sample half-sine hammer blow of the given impulse (N s): peak pi I / (2 dt)."""
+    return impulse_hammer(node, direction, np.pi * impulse * rate / 2.0)
+
+
+def _truth_damping(cfg: CampaignConfig, n: int) -> np.ndarray:
+    z = np.full(n, float(cfg.other_damping))
+    k = min(n, len(cfg.truth_damping))
+    z[:k] = cfg.truth_damping[:k]
+    return z
+
+
+def _select(real: Realization, band: float, min_mpc: float = 0.5) -> np.ndarray:
+    """Indices of the physical modes in (0, band] Hz: positive damping below 20 %, consistent
+    in time (EMAC) and mono-phase enough (MPC) to be a real normal mode."""
+    f, z = real.frequencies, real.damping
+    ok = (f > 0) & (f <= band) & (z > 0) & (z < 0.2) & (real.emac > 0.5) & (real.mpc > min_mpc)
+    return np.flatnonzero(ok)
+
+
+def _real_shapes(shapes: np.ndarray) -> np.ndarray:
+    """Real normal-mode shapes from complex ERA shapes (each already rotated to its largest
+    component real)."""
+    return shapes.real / np.linalg.norm(shapes.real, axis=0, keepdims=True)
+
+
+def _pair(f_ident, f_model, mac_matrix=None) -> np.ndarray:
+    """Model mode of each identified mode: the best MAC (when given), else the nearest
+    frequency; each model mode used once."""
+    score = -np.abs(np.log(f_ident[:, None] / np.maximum(f_model[None, :], 1e-12)))
+    if mac_matrix is not None:
+        score = mac_matrix + 1e-3 * score
+    out, used = [], set()
+    for i in range(f_ident.size):
+        order = np.argsort(-score[i])
+        j = next(int(k) for k in order if int(k) not in used)
+        used.add(j)
+        out.append(j)
+    return np.array(out, int)
+
+
+def _calibrate_rig(cfg, rig, points0, rng):
+    """Static calibration from averaged fields of the structure at rest (Att. 6 §1.6)."""
+    true_cams = rig.cameras()
+    n_fields = int(rig.static_fields)
+    fields = simulate_centroids(true_cams, np.broadcast_to(points0, (n_fields,) + points0.shape),
+                                rig.pixel_size, rig.noise_px, rig.quantize,
+                                seed=int(rng.integers(2**31)))
+    if np.any(np.isnan(fields)):
+        raise ValueError("rig: some targets fall outside a camera's 320 x 244 field; aim the "
+                         "cameras at the structure or use a shorter focal length")
+    obs = fields.mean(axis=1)
+    sigma = rig.noise_px * rig.pixel_size / np.sqrt(n_fields)
+    start = []
+    for cam in true_cams:
+        v = cam.vector()
+        v[:3] += rng.normal(0.0, rig.position_error, 3)
+        v[3:6] += rng.normal(0.0, rig.angle_error, 3)
+        start.append(cam.with_vector(v))
+    guess = points0 + rng.normal(0.0, cfg.target_sigma, points0.shape)
+    res = calibrate(obs, start, guess, datum=None, scale=None, sigma=sigma, free=VIDEO_FREE,
+                    target_sigma=cfg.target_sigma)
+    idx = [["xc", "yc", "zc", "a1", "a2", "a3", "x0", "y0", "f"].index(p) if p != "f" else 8
+           for p in VIDEO_FREE]
+    z = []
+    for j, (est, tru) in enumerate(zip(res.cameras, true_cams)):
+        err = est.vector()[idx] - tru.vector()[idx]
+        std = np.sqrt(np.diag(res.camera_covariance(j, VIDEO_FREE)))
+        z.append(err / std)
+    z = np.concatenate(z)
+    return res, {"parameters": list(VIDEO_FREE), "n_cameras": len(true_cams),
+                 "normalised_errors": z.tolist(), "max_abs_normalised_error": float(np.abs(z).max()),
+                 "sigma0_squared": float(res.sigma0_squared),
+                 "image_sigma_px": float(rig.noise_px / np.sqrt(n_fields))}
+
+
+def _video_test(cfg, truth, rig, points0, static_xyz, cams, rng):
+    """Filmed free vibration: target z histories by triangulation, then ERA shapes."""
+    z_chan = [Channel("displacement", int(n), "z") for n in cfg.targets]
+    test = simulate_test(truth, _blow(cfg.hammer_node, cfg.hammer_direction,
+                                      cfg.video_impulse, cfg.field_rate),
+                         z_chan, cfg.video_duration, cfg.field_rate, seed=int(rng.integers(2**31)))
+    T = test.abscissa.size
+    moving = np.broadcast_to(points0, (T,) + points0.shape).copy()
+    moving[..., 2] += test.outputs.T
+    uv = simulate_centroids(rig.cameras(), moving, rig.pixel_size, rig.noise_px, rig.quantize,
+                            seed=int(rng.integers(2**31)))
+    if np.any(np.isnan(uv)):
+        raise ValueError("rig: a target leaves a camera's field during the video test; reduce "
+                         "video_impulse or widen the view")
+    pts, cov = triangulate(cams, uv, rig.noise_px * rig.pixel_size)
+    z = (pts[..., 2] - static_xyz[None, :, 2]).T                    # (targets, fields)
+    err = z - test.outputs
+    tri = {"predicted_sigma_z_m": float(np.sqrt(np.mean(cov[..., 2, 2]))),
+           "rms_error_z_m": float(np.sqrt(np.mean(err**2))),
+           "peak_displacement_m": float(np.abs(test.outputs).max()),
+           "fields": int(T)}
+    video = Measurement(test.abscissa, z, z_chan, test.inputs, test.input_channels)
+    return video, tri
+
+
+def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
+    """Test the true structure, identify it and update the a-priori model (module docstring).
+
+    Parameters
+    ----------
+    case : object
+        A case with ``structure(stiffness_scale=...)`` (a :class:`~flexsat.structures.fem.
+        Structure` whose named substructure stiffnesses scale) and ``substructures`` (names),
+        e.g. :func:`flexsat.cases.tamu_grid.tamu_grid`.  The truth is the case as built; the
+        a-priori model has ``cfg.a_priori_scale`` on its substructure stiffnesses.
+    cfg : CampaignConfig
+
+    Returns
+    -------
+    CampaignResult
+    """
+    rng = np.random.default_rng(cfg.seed)
+    names = tuple(case.substructures)
+    truth_asm = case.structure().assemble()
+    modes = truth_asm.modes(min(cfg.truth_modes, truth_asm.n_dofs))
+    truth = _modal_model(truth_asm, modes.omegas, modes.shapes,
+                         _truth_damping(cfg, modes.omegas.size))
+
+    # --- a-priori model and its substructure blocks (Att. 6 Eq. 5) -----------------------------
+    base = {n: float(cfg.a_priori_scale.get(n, 1.0)) for n in names}
+
+    def build(kf, _mf):
+        return case.structure(stiffness_scale={n: base[n] * k for n, k in zip(names, kf)}
+                              ).assemble()
+
+    sub = substructures_from_builder(build, len(names), n_mass=0, names=names)
+    apriori_asm = build(np.ones(len(names)), None)
+    M = sub.M()
+    sub = SubstructureModel(sub.K_blocks, [], [M, sub.K()], sub.K0, M, names=names)
+    w0, phi0 = sub.modes()
+    zeta0 = cfg.a_priori_damping * w0[0] / w0                 # Att. 6 Eq. 15: C = 2 z1 w1 M
+
+    # --- 1. hammer test: strain gauges + accelerometers ----------------------------------------
+    gauges = [Channel("strain", int(b), ax, node_a=int(a)) for a, b, ax in cfg.strain_gauges]
+    accels = [Channel("acceleration", int(n), d) for n, d in cfg.accelerometers]
+    sensors = gauges + accels
+    hammer = simulate_test(truth, _blow(cfg.hammer_node, cfg.hammer_direction,
+                                        cfg.hammer_impulse, cfg.sample_rate),
+                           sensors, cfg.hammer_duration, cfg.sample_rate, noise=cfg.noise,
+                           seed=int(rng.integers(2**31)))
+    # channels in different units: ERA on RMS-normalised channels (eigenvalues unchanged)
+    scale = np.sqrt(np.mean(hammer.outputs**2, axis=1))
+    Y = markov_parameters(hammer) / scale[None, :, None]
+    hammer_real = era(Y, 1.0 / cfg.sample_rate, order=cfg.era_order)
+    sel = _select(hammer_real, cfg.band)
+    f_meas = hammer_real.frequencies[sel]
+    z_meas = hammer_real.damping[sel]
+    f_std = hammer_real.frequency_std[sel]
+    z_std = hammer_real.damping_std[sel]
+
+    # --- 2. video test: calibration, triangulation, ERA shapes ---------------------------------
+    rig = cfg.rig
+    coords = {int(n): xyz for n, xyz in zip(truth_asm.node_ids, truth_asm.coordinates)}
+    points0 = np.array([coords[int(n)] for n in cfg.targets], float)
+    calib, calib_summary = _calibrate_rig(cfg, rig, points0, rng)
+    # the calibrated target positions are the rest reference of the triangulated motion
+    video, tri = _video_test(cfg, truth, rig, points0, calib.targets, calib.cameras, rng)
+    video_real = era(markov_parameters(video), 1.0 / cfg.field_rate, order=cfg.era_order)
+    vsel = _select(video_real, cfg.band, min_mpc=0.3)
+    video_shapes = _real_shapes(video_real.shapes[:, vsel])
+
+    # --- pair modes: video shapes against the a-priori model, then hammer by frequency ---------
+    rows = [apriori_asm.index(int(n), "uz") for n in cfg.targets]
+    mac_video = mac(video_shapes, phi0[rows]) if vsel.size else None
+    video_index = _pair(video_real.frequencies[vsel], w0 / (2 * np.pi), mac_video)
+    hammer_index = _pair(f_meas, w0 / (2 * np.pi))
+    for i, fv in zip(video_index, video_real.frequencies[vsel]):
+        # where a video mode and a hammer mode agree in frequency, the MAC pairing wins
+        k = np.flatnonzero(np.abs(f_meas / fv - 1) < 0.02)
+        if k.size:
+            hammer_index[k[0]] = i
+    if len(set(hammer_index.tolist())) != hammer_index.size:
+        hammer_index = _pair(f_meas, w0 / (2 * np.pi))
+
+    # --- 4. update: stiffness (Att. 7 Eq. 9b), then damping (Eq. 24) ---------------------------
+    und = identify_undamped(sub, 2 * np.pi * f_meas, mode_indices=hammer_index,
+                            frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas))
+    lam = 2 * np.pi * f_meas * (-z_meas + 1j * np.sqrt(1 - z_meas**2))
+    dmp = identify_damping(sub, lam, und.p, None, mode_indices=hammer_index)
+    w1, phi1 = sub.modes(und.p)
+    C1 = sub.C(dmp.r)
+    zeta1 = np.clip(np.einsum("ij,ik,kj->j", phi1, C1, phi1) / (2 * w1), 1e-6, None)
+
+    # --- 3. reaction-wheel test: H1 FRFs and OKID -----------------------------------------------
+    wheels = [random_force(int(n), ax, cfg.wheel_torque_rms, load="torque")
+              for n, ax in zip(cfg.wheel_nodes, cfg.wheel_axes)]
+    wheel_test = simulate_test(truth, wheels, gauges, cfg.wheel_duration, cfg.wheel_sample_rate,
+                               noise=cfg.noise, seed=int(rng.integers(2**31)))
+    frf, coh = estimate_frf(wheel_test, cfg.frf_segment)
+    keep = frf.abscissa <= cfg.band
+    freqs = frf.abscissa[keep]
+    inputs = [w.channel for w in wheels]
+    # model FRFs with the truth's modes only: the sampled tests see the modes above the Nyquist
+    # frequency aliased into the band, and the truth has no modes beyond cfg.truth_modes
+    k = modes.omegas.size
+    a_priori_mm = _modal_model(apriori_asm, w0[:k], phi0[:, :k], zeta0[:k])
+    updated_mm = _modal_model(apriori_asm, w1[:k], phi1[:, :k], zeta1[:k])
+    frf_a = frequency_response(a_priori_mm, gauges, inputs, freqs, cfg.wheel_sample_rate)
+    frf_u = frequency_response(updated_mm, gauges, inputs, freqs, cfg.wheel_sample_rate)
+    gscale = np.sqrt(np.mean(wheel_test.outputs**2, axis=1))
+    n_obs = int(np.ceil(2 * 2 * modes.omegas.size / len(gauges))) + 4
+    Y_okid = okid(wheel_test.inputs, wheel_test.outputs / gscale[:, None], 4 * n_obs, n_obs)
+    okid_real = era(Y_okid, 1.0 / cfg.wheel_sample_rate, order=cfg.era_order)
+    osel = _select(okid_real, cfg.band)
+
+    # --- tables ----------------------------------------------------------------------------------
+    f_true = modes.omegas / (2 * np.pi)
+    z_true = truth.damping
+
+    def nearest(f_list, targets_hz):
+        f_list = np.asarray(f_list)
+        if f_list.size == 0:
+            return [None] * len(targets_hz)
+        out = []
+        for f in targets_hz:
+            k = int(np.argmin(np.abs(f_list - f)))
+            out.append(float(f_list[k]) if abs(f_list[k] / f - 1) < 0.05 else None)
+        return out
+
+    # true mode of each identified mode: nearest true frequency
+    true_index = np.array([int(np.argmin(np.abs(f_true - f))) for f in f_meas], int)
+    modes_table = {
+        "model_index": hammer_index.tolist(),
+        "true_hz": f_true[true_index].tolist(),
+        "true_damping": z_true[true_index].tolist(),
+        "era_hz": f_meas.tolist(), "era_hz_std": f_std.tolist(),
+        "era_damping": z_meas.tolist(), "era_damping_std": z_std.tolist(),
+        "video_hz": nearest(video_real.frequencies[vsel], f_meas),
+        "okid_hz": nearest(okid_real.frequencies[osel], f_meas),
+        "a_priori_hz": (w0[hammer_index] / (2 * np.pi)).tolist(),
+        "a_priori_damping": zeta0[hammer_index].tolist(),
+        "updated_hz": (w1[hammer_index] / (2 * np.pi)).tolist(),
+        "updated_damping": zeta1[hammer_index].tolist(),
+    }
+    std = np.sqrt(np.clip(np.diag(und.covariance)[: len(names)], 0.0, None))
+    scalings = {n: {"a_priori": base[n], "p": float(p), "p_std": float(s),
+                    "updated": float(base[n] * p)} for n, p, s in zip(names, und.p, std)}
+    mac_updated = mac(video_shapes, phi1[rows][:, :max(int(video_index.max()) + 3, 1)]) \
+        if vsel.size else np.zeros((0, 0))
+    mac_apriori = mac(video_shapes, phi0[rows][:, :mac_updated.shape[1]]) \
+        if vsel.size else np.zeros((0, 0))
+    return CampaignResult(
+        names, modes_table, scalings, dmp.r, mac_apriori, mac_updated, freqs,
+        frf.outputs[:, :, keep], coh[:, keep], frf_a, frf_u, tuple(c.name for c in gauges),
+        tuple(c.name for c in inputs), video_shapes, tuple(int(n) for n in cfg.targets),
+        calib_summary, tri, hammer_real, video_real, okid_real)

@@ -1,0 +1,130 @@
+r"""Frequency response functions: estimated from test data (H1) and computed from a model.
+
+H1 estimator for several simultaneous, uncorrelated or correlated inputs (Bendat & Piersol,
+*Random Data*, 4th ed., §7.2): with the cross-spectral densities :math:`G_{yu}(f)` (q × r) and
+:math:`G_{uu}(f)` (r × r) averaged over Welch segments,
+
+.. math::  H_1(f) = G_{yu}(f)\, G_{uu}(f)^{-1},
+
+unbiased by output noise; the multiple coherence of output i is
+:math:`\gamma_i^2 = G_{yu,i} G_{uu}^{-1} G_{uy,i} / G_{yy,ii}` (1 for noise-free linear data).
+
+The model FRF of the modal state space of
+:func:`flexsat.identify.excitation.sensor_matrices` is
+:math:`H(j\omega) = C (j\omega I - A)^{-1} B + D`; for an input held over each sample of
+a test at rate :math:`1/\Delta t` (what :func:`~flexsat.identify.simulate_test` records) the
+sampled data follow the zero-order-hold equivalent
+:math:`H_d = C (e^{j\omega \Delta t} I - A_d)^{-1} B_d + D` with
+:math:`[A_d, B_d] = e^{[A, B; 0, 0] \Delta t}` (Franklin, Powell & Workman, *Digital Control
+of Dynamic Systems*, §4.3), which differs from :math:`H` by about :math:`\omega\Delta t/2` in
+phase.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import signal
+from scipy.linalg import expm
+
+from flexsat.identify.excitation import sensor_matrices
+from flexsat.identify.measurements import Measurement
+from flexsat.validation import require_count, require_finite, require_positive
+
+__all__ = ["estimate_frf", "frequency_response"]
+
+
+def estimate_frf(measurement: Measurement, segment: int, overlap: float = 0.5,
+                 window: str = "hann") -> tuple[Measurement, np.ndarray]:
+    """H1 estimate of the FRFs of a time-domain test with recorded inputs.
+
+    Parameters
+    ----------
+    measurement : Measurement
+        Time domain, with ``inputs`` (r, N) and outputs (q, N).
+    segment : int
+        Welch segment length, samples (frequency resolution ``sample_rate / segment``).
+    overlap : float
+        Fraction of a segment shared with the next, in [0, 1).
+    window : str
+        scipy window name.
+
+    Returns
+    -------
+    frf : Measurement
+        Frequency domain, outputs (q, r, F) from the first non-zero frequency to Nyquist.
+    coherence : ndarray (q, F)
+        Multiple coherence of each output.
+
+    Raises
+    ------
+    ValueError
+        ``measurement`` without inputs or in the frequency domain, ``segment`` longer than the
+        record, ``overlap`` outside [0, 1), input spectra that are singular (inputs fully
+        correlated or absent in a band).
+    """
+    if measurement.domain != "time" or measurement.inputs is None:
+        raise ValueError("measurement: the H1 estimate needs a time-domain test with recorded "
+                         "inputs")
+    n = require_count(segment, "segment")
+    N = measurement.abscissa.size
+    if not 4 <= n <= N:
+        raise ValueError(f"segment: must be between 4 and the record length {N} samples, got {n}")
+    ov = float(require_finite(overlap, "overlap"))
+    if not 0.0 <= ov < 1.0:
+        raise ValueError(f"overlap: must be in [0, 1), got {overlap!r}")
+    fs = measurement.sample_rate
+    u, y = measurement.inputs, measurement.outputs
+    kw = dict(fs=fs, nperseg=n, noverlap=int(ov * n), window=window, detrend=False)
+    f, _ = signal.csd(u[0], u[0], **kw)
+    keep = f > 0
+    f = f[keep]
+    r, q = u.shape[0], y.shape[0]
+    Guu = np.empty((f.size, r, r), complex)
+    Gyu = np.empty((f.size, q, r), complex)
+    Gyy = np.empty((f.size, q))
+    for a in range(r):
+        for b in range(r):
+            Guu[:, a, b] = signal.csd(u[a], u[b], **kw)[1][keep]   # E[U_a* U_b]
+        for i in range(q):
+            Gyu[:, i, a] = signal.csd(u[a], y[i], **kw)[1][keep]   # E[U_a* Y_i]
+    for i in range(q):
+        Gyy[:, i] = signal.welch(y[i], **kw)[1][keep]
+    # csd(x, y) = E[X* Y]: Guu[a, b] = E[U_a* U_b], Gyu[i, a] = E[U_a* Y_i]; Y = H U gives
+    # E[U_a* Y_i] = sum_b H_ib Guu[a, b], i.e. Gyu^T = Guu H^T
+    cond = np.linalg.cond(Guu)
+    if np.any(~np.isfinite(cond)) or np.any(cond > 1e12):
+        raise ValueError("measurement: the input cross-spectral matrix is singular at some "
+                         "frequencies (inputs fully correlated, or no input power there)")
+    H = np.transpose(np.linalg.solve(Guu, np.swapaxes(Gyu, 1, 2)), (2, 1, 0))   # (q, r, F)
+    # E|Y_i|^2 explained by the inputs: sum_ab conj(H_ia) Guu[a, b] H_ib
+    explained = np.einsum("iaf,fab,ibf->fi", H.conj(), Guu, H).real
+    coherence = (explained / np.where(Gyy > 0, Gyy, np.inf)).T
+    frf = Measurement(f, H, measurement.output_channels, None, measurement.input_channels,
+                      "frequency", attrs={"estimator": "H1", "segment": n, "overlap": ov,
+                                          "window": window})
+    return frf, coherence
+
+
+def frequency_response(modal_model, sensors, inputs, frequencies_hz, sample_rate=None
+                       ) -> np.ndarray:
+    """Model FRFs (q, r, F) of a :class:`~flexsat.structures.modal_model.ModalModel`.
+
+    ``sensors`` and ``inputs`` are :class:`~flexsat.identify.measurements.Channel` lists as in
+    :func:`flexsat.identify.simulate_test`; ``frequencies_hz`` a finite vector.  With
+    ``sample_rate`` (Hz): the zero-order-hold equivalent seen by a sampled test with held inputs
+    (module docstring); without: the continuous FRF.
+    """
+    f = require_finite(frequencies_hz, "frequencies_hz").ravel()
+    A, B, C, D = sensor_matrices(modal_model, list(sensors), list(inputs))
+    eye = np.eye(A.shape[0])
+    if sample_rate is None:
+        z, G, Bz = 2j * np.pi * f, A, B
+    else:
+        dt = 1.0 / float(require_positive(sample_rate, "sample_rate"))
+        ns, r = B.shape
+        aug = np.zeros((ns + r, ns + r))
+        aug[:ns, :ns], aug[:ns, ns:] = A * dt, B * dt
+        E = expm(aug)
+        z, G, Bz = np.exp(2j * np.pi * f * dt), E[:ns, :ns], E[:ns, ns:]
+    X = np.linalg.solve(z[:, None, None] * eye - G[None], np.broadcast_to(Bz, (f.size,) + Bz.shape))
+    return np.transpose(C @ X + D, (1, 2, 0))

@@ -1,0 +1,54 @@
+"""Report of an identification scenario (flexsat.identification_report)."""
+
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+
+import flexsat.identification_report as rep
+from flexsat.identification_report import FIGURES, dataset, write_identification_report
+from flexsat.identification_scenario import run_identification
+from flexsat.scenario import load_scenario
+
+
+@pytest.fixture(scope="module")
+def result(identification_example):
+    return run_identification(load_scenario(yaml.safe_dump(identification_example(fast=True))))
+
+
+def test_report_files_tables_and_netcdf_round_trip(result, tmp_path):
+    out = write_identification_report(result, tmp_path / "report")
+    names = {p.name for p in out.iterdir()}
+    assert names == {"identification.json", "results.nc", "index.html"} | {f for f, _ in FIGURES}
+    summary = json.loads((out / "identification.json").read_text())
+    assert summary["scalings"]["clamp verticals"]["a_priori"] == 1.15
+    with xr.open_dataset(out / "results.nc", engine="h5netcdf") as ds:
+        c = result.campaign
+        assert np.array_equal(ds["era_hz"].values, c.modes["era_hz"])
+        assert np.array_equal(ds["frf_measured_re"].values + 1j * ds["frf_measured_im"].values,
+                              c.frf_measured)
+        assert ds["mac_updated"].shape == c.mac_updated.shape
+        assert list(ds["substructure"].values) == list(c.substructures)
+        assert ds["era_hz"].attrs["units"] == "Hz"
+    page = (out / "index.html").read_text()
+    for text in ("Natural frequencies", "Damping ratios", "Substructure stiffness scalings",
+                 "clamp verticals", "frf.png", "mac.png", "kind: identification"):
+        assert text in page
+
+
+def test_dataset_has_one_row_per_identified_mode(result):
+    ds = dataset(result)
+    assert ds.sizes["mode"] == len(result.campaign.modes["era_hz"])
+    assert ds.sizes["frequency"] == result.campaign.frf_frequencies.size
+
+
+def test_failed_report_leaves_nothing(result, tmp_path, monkeypatch):
+    def broken(*_):
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr(rep, "_mac_figure", broken)
+    with pytest.raises(RuntimeError):
+        write_identification_report(result, tmp_path / "report")
+    assert list(tmp_path.iterdir()) == []

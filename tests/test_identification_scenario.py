@@ -1,0 +1,74 @@
+"""Identification scenarios (``kind: identification``): schema, validation, run."""
+
+import pytest
+import yaml
+
+from flexsat.identification_scenario import (
+    SUMMARY_COLUMNS,
+    IdentificationScenario,
+    run_identification,
+    summary_table,
+)
+from flexsat.scenario import ScenarioError, load_scenario
+
+def test_example_loads_with_si_values(identification_example):
+    s = load_scenario(yaml.safe_dump(identification_example()))
+    assert isinstance(s, IdentificationScenario)
+    assert s.video.focal_length == pytest.approx(0.008)
+    assert s.video.pixel_size == pytest.approx(27e-6)
+    assert s.hammer.impulse == 0.5 and s.wheels.torque_rms == 0.05
+    assert s.video.cameras[1].position == pytest.approx((2.0732, 0.5525, 2.4))
+    cfg = s.config()
+    assert cfg.a_priori_scale == {"clamp verticals": 1.15}
+    assert cfg.rig.cameras()[0].fx == pytest.approx(0.008)
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"kind": "survey"}, "kind: must be 'maneuver' or 'identification'"),
+    ({"hammer__force": 3}, "hammer.force: unknown key (allowed: node, direction, impulse"),
+    ({"wheels__axes": ["x"]}, "wheels.axes: one torque axis per wheel node (3), got 1"),
+    ({"video__cameras": [{"position": [0, 0, 1], "aim": [0, 0, 0]}]},
+     "video.cameras: List should have at least 2 items"),
+    ({"video__focal_length": "8 kg"}, "video.focal_length"),
+    ({"video__cameras": [{"position": [0, 0], "aim": [0, 0, 0]}] * 2},
+     "video.cameras[0].position: must be 3 quantities"),
+    ({"truth__damping": [0.01, -0.1]}, "truth.damping[1]"),
+])
+def test_schema_errors_name_the_field(changes, message, identification_example):
+    with pytest.raises(ScenarioError) as exc:
+        load_scenario(yaml.safe_dump(identification_example(**changes)))
+    assert message in str(exc.value)
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"a_priori__stiffness_scale": {"clamp": 1.1}},
+     "a_priori.stiffness_scale: unknown substructure 'clamp'"),
+    ({"sensors__targets": [1, 2, 21]}, "sensors.targets: node 21 is clamped"),
+    ({"hammer__node": 99}, "hammer.node: node 99 is not a node of tamu_grid"),
+    ({"case": "tamu", "case_overrides": {}}, "case: 'tamu' has no substructures to update"),
+    ({"case_overrides": {"EI": -1.0}}, "case_overrides: EI: must be > 0"),
+])
+def test_case_dependent_errors_before_anything_runs(changes, message, identification_example):
+    s = load_scenario(yaml.safe_dump(identification_example(**changes)))
+    with pytest.raises(ScenarioError) as exc:
+        run_identification(s)
+    assert message in str(exc.value)
+
+
+def test_run_recovers_the_clamp_and_summarises(identification_example):
+    s = load_scenario(yaml.safe_dump(identification_example(fast=True)))
+    seen = []
+    result = run_identification(s, progress=seen.append)
+    assert seen and result.case_source
+    assert abs(result.campaign.scalings["clamp verticals"]["updated"] - 1) < 0.01
+    columns, rows = summary_table(result)
+    assert columns == SUMMARY_COLUMNS and len(rows) == 5
+    assert all(len(values) == len(columns) for _, values in rows)
+
+
+def test_blind_camera_is_a_video_error(identification_example):
+    data = identification_example(fast=True)
+    for cam in data["video"]["cameras"]:
+        cam["aim"] = ["20 m", "20 m", "0 m"]
+    with pytest.raises(ScenarioError, match="video.rig: some targets fall outside"):
+        run_identification(load_scenario(yaml.safe_dump(data)))
