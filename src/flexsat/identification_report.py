@@ -184,7 +184,9 @@ and the updated factor on the truth (a priori × p; 1 means recovered).</p>
 a-priori positions; parameters {esc(', '.join(cal['parameters']))}; largest calibration error
 {cal['max_abs_normalised_error']:.2f} σ (σ₀² = {cal['sigma0_squared']:.3f}).
 Triangulated z over {tri['fields']} fields: rms error {1e3 * tri['rms_error_z_m']:.3f} mm against
-a predicted {1e3 * tri['predicted_sigma_z_m']:.3f} mm; peak motion
+a predicted {1e3 * tri['predicted_sigma_z_m']:.3f} mm from centroid noise
+({1e3 * tri['predicted_sigma_z_with_cameras_m']:.3f} mm for an absolute position, with the
+calibration covariance, Att. 6 Eqs. 34–37); peak motion
 {1e3 * tri['peak_displacement_m']:.1f} mm.</p>
 {images}
 <h2>Scenario</h2>

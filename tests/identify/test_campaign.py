@@ -88,6 +88,8 @@ def test_camera_calibration_and_triangulation_are_consistent(campaign):
     tri = campaign.triangulation
     assert 0.7 < tri["rms_error_z_m"] / tri["predicted_sigma_z_m"] < 1.3
     assert tri["peak_displacement_m"] > 20 * tri["predicted_sigma_z_m"]
+    # the calibration uncertainty adds to an absolute position, never subtracts
+    assert tri["predicted_sigma_z_with_cameras_m"] > tri["predicted_sigma_z_m"]
 
 
 def test_campaign_is_reproducible_and_rejects_a_blind_rig():
