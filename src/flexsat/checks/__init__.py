@@ -22,9 +22,9 @@ from collections.abc import Iterable
 
 from flexsat.checks.core import COLUMNS, Check, CheckResult, evaluate, series
 
-#: the topic modules of :mod:`flexsat.checks`, in table order (issues #2, #3, then #4)
+#: the topic modules of :mod:`flexsat.checks`, in table order (issues #2, #3, #4, then #5)
 MODULES = ("tamu", "structures", "tamu_grid", "draper_rpl", "nps", "eps",
-           "output_feedback", "bainum")
+           "output_feedback", "bainum", "identification")
 
 
 def _import_failure(name: str, exc: Exception) -> Check:
