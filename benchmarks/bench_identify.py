@@ -11,7 +11,7 @@ import numpy as np
 from flexsat.cases import tamu_grid
 from flexsat.identify import Channel, calibrate, era, impulse_hammer, markov_parameters
 from flexsat.identify import simulate_centroids, simulate_test
-from flexsat.identify.photogrammetry import Camera, euler_angles
+from flexsat.identify.photogrammetry import Camera, look_at
 
 
 def best_of(fn, repeat=3):
@@ -34,17 +34,9 @@ def era_case():
     return meas.outputs.shape, t, err
 
 
-def look_at(pos, target):
-    z = -(np.asarray(target, float) - pos)
-    z /= np.linalg.norm(z)
-    x = np.cross([0.0, 1.0, 0.0], z)
-    x /= np.linalg.norm(x)
-    return euler_angles(np.vstack([x, np.cross(z, x), z]), "321")
-
-
 def calibration_case(n_targets=50):
     px, f = 1e-5, 0.004
-    cams = [Camera(position=p, angles=look_at(np.asarray(p, float), aim), f=f)
+    cams = [Camera(position=p, angles=look_at(p, aim), f=f)
             for p, aim in (([-1.3, 0.2, 2.0], [0.0, 0.15, 0.0]),
                            ([1.3, -0.2, 2.0], [0.0, -0.15, 0.0]))]
     rng = np.random.default_rng(1)

@@ -31,11 +31,11 @@ from dataclasses import dataclass
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BeforeValidator, Field, PrivateAttr, field_validator, model_validator
+from pydantic import BeforeValidator, Field, field_validator, model_validator
 
 from flexsat.cases import get_case
 from flexsat.identify.campaign import CameraRig, CampaignConfig, CampaignResult, run_campaign
-from flexsat.scenario import ScenarioError, _head, _locate, _Section, quantity
+from flexsat.scenario import ScenarioError, _Document, _head, _locate, _Section, quantity
 from flexsat.units import to_si
 
 __all__ = ["IdentificationResult", "IdentificationScenario", "run_identification"]
@@ -122,7 +122,7 @@ class IdentificationSpec(_Section):
     era_order: Annotated[int, Field(ge=2)] = 40
 
 
-class IdentificationScenario(_Section):
+class IdentificationScenario(_Document):
     """A validated identification scenario (SI; see the module docstring)."""
 
     kind: Literal["identification"]
@@ -137,21 +137,12 @@ class IdentificationScenario(_Section):
     wheels: WheelSpec
     identification: IdentificationSpec = Field(default_factory=IdentificationSpec)
     seed: Annotated[int, Field(ge=0)] = 0
-    _source: str | None = PrivateAttr(default=None)
 
     @field_validator("case")
     @classmethod
     def _known_case(cls, name: str) -> str:
         get_case(name)
         return name
-
-    @property
-    def yaml_text(self) -> str:
-        import yaml
-
-        if self._source is not None:
-            return self._source
-        return yaml.safe_dump(self.model_dump(exclude_none=True), sort_keys=False)
 
     def config(self) -> CampaignConfig:
         """The :class:`CampaignConfig` of this scenario."""

@@ -203,6 +203,19 @@ class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
+class _Document(_Section):
+    """A whole scenario file: remembers the text it was loaded from."""
+
+    _source: str | None = PrivateAttr(default=None)
+
+    @property
+    def yaml_text(self) -> str:
+        """The scenario as YAML: the text it was loaded from, else a dump (SI numbers)."""
+        if self._source is not None:
+            return self._source
+        return yaml.safe_dump(self.model_dump(exclude_none=True), sort_keys=False)
+
+
 class _Buildable(_Section):
     """A section that maps onto a runtime object; building it checks the runtime's own rules."""
 
@@ -499,7 +512,7 @@ class RunSpec(_Section):
         return self
 
 
-class Scenario(_Section):
+class Scenario(_Document):
     """A validated scenario, quantities in SI (see the module docstring for the schema)."""
 
     kind: Literal["maneuver"] = "maneuver"
@@ -513,7 +526,6 @@ class Scenario(_Section):
     sensors: SensorsSpec = Field(default_factory=SensorsSpec)
     disturbances: DisturbancesSpec = Field(default_factory=DisturbancesSpec)
     runs: list[RunSpec] = Field(min_length=1)
-    _source: str | None = PrivateAttr(default=None)
 
     @field_validator("case")
     @classmethod
@@ -550,12 +562,6 @@ class Scenario(_Section):
         return self.simulation.build(actuator=self.actuator.build(), sensors=self.sensors.build(),
                                      **self.disturbances.build())
 
-    @property
-    def yaml_text(self) -> str:
-        """The scenario as YAML: the text it was loaded from, else a dump (SI numbers)."""
-        if self._source is not None:
-            return self._source
-        return yaml.safe_dump(self.model_dump(exclude_none=True), sort_keys=False)
 
 
 def _non_finite(value) -> bool:

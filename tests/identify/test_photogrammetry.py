@@ -9,22 +9,12 @@ from scipy import stats
 from scipy.optimize import least_squares
 
 from flexsat.identify.photogrammetry import (
-    CAMERA_PARAMETERS, DEFAULT_FREE, Camera, calibrate, calibration_counts, euler_angles, project,
+    CAMERA_PARAMETERS, DEFAULT_FREE, Camera, calibrate, calibration_counts, euler_angles, look_at,
+    project,
     rotation_matrix, simulate_centroids, triangulate)
 
 PX = 1e-5      # 10 micrometre pixels
 F = 0.004      # 4 mm lens: the 320 x 244 field spans about +-0.4 x +-0.3 rad
-
-
-def look_at(pos, target, euler="321", sign=-1):
-    pos = np.asarray(pos, float)
-    z = np.asarray(target, float) - pos
-    z /= np.linalg.norm(z)
-    if sign < 0:            # Att. 8: "-f", the camera z axis points away from the scene
-        z = -z
-    x = np.cross([0.0, 1.0, 0.0], z)
-    x /= np.linalg.norm(x)
-    return euler_angles(np.vstack([x, np.cross(z, x), z]), euler)
 
 
 def stereo_pair(euler="321", sign=-1, **kw):
@@ -484,3 +474,16 @@ def test_rectangular_pixels_and_triangulation_match_opencv(euler, sign):
     ours, _ = triangulate(cams, uv, PX)
     assert np.max(np.abs(theirs - pts)) < 1e-10
     assert np.max(np.abs(ours - pts)) < 1e-10
+
+
+def test_look_at_puts_the_target_on_the_optical_axis():
+    """The aimed point projects to the principal point, in both focal-sign conventions."""
+    for euler, sign in (("321", -1), ("123", 1)):
+        cam = Camera(position=[1.0, 0.4, 2.0], angles=look_at([1.0, 0.4, 2.0], [0.1, 0.2, 0.0],
+                                                            euler, sign),
+                     f=F, euler=euler, focal_sign=sign)
+        assert np.allclose(project(cam, [0.1, 0.2, 0.0]), 0.0, atol=1e-15)
+        # a point in front, off axis, projects off the principal point
+        assert np.abs(project(cam, [0.3, 0.2, 0.0])).max() > 1e-4
+    with pytest.raises(ValueError, match="target: the line of sight is along the world Y axis"):
+        look_at([0, 2, 0], [0, 0, 0])

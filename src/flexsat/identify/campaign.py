@@ -36,7 +36,7 @@ from flexsat.identify.measurements import Channel, Measurement
 from flexsat.identify.photogrammetry import (
     Camera,
     calibrate,
-    euler_angles,
+    look_at,
     simulate_centroids,
     triangulate,
 )
@@ -77,17 +77,9 @@ class CameraRig:
     static_fields: int = 50
 
     def cameras(self) -> list[Camera]:
-        out = []
-        for pos, aim in zip(self.positions, self.aims):
-            pos = np.asarray(pos, float)
-            axis = pos - np.asarray(aim, float)       # Att. 8 "-f": camera z away from the scene
-            axis /= np.linalg.norm(axis)
-            x = np.cross([0.0, 1.0, 0.0], axis)
-            x /= np.linalg.norm(x)
-            R = np.vstack([x, np.cross(axis, x), axis])
-            out.append(Camera(position=pos, angles=euler_angles(R, "321"),
-                              f=self.focal_length, euler="321", focal_sign=-1))
-        return out
+        """The cameras (Att. 8 conventions: 3-2-1 Euler angles, "-f"), aimed at ``aims``."""
+        return [Camera(position=pos, angles=look_at(pos, aim), f=self.focal_length)
+                for pos, aim in zip(self.positions, self.aims)]
 
 
 @dataclass(frozen=True)

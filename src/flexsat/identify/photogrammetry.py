@@ -55,6 +55,7 @@ from scipy.sparse import lil_matrix
 from flexsat.validation import require_finite, require_numeric, require_positive
 
 __all__ = [
+    "look_at",
     "Camera",
     "CalibrationResult",
     "CAMERA_PARAMETERS",
@@ -140,6 +141,26 @@ def euler_angles(matrix, euler: str = "321") -> np.ndarray:
     t1 = math.atan2(-c[2, 1], c[2, 2])
     t3 = math.atan2(-c[1, 0], c[0, 0])
     return np.array([t1, t2, t3])
+
+
+def look_at(position, target, euler: str = "321", focal_sign: int = -1) -> np.ndarray:
+    """Euler angles of a camera at ``position`` whose optical axis passes through ``target``,
+    image x axis horizontal (normal to the world Y axis, which must not be the line of sight).
+
+    The camera z axis points at the scene for ``focal_sign = +1`` (Att. 6, "+f") and away from
+    it for ``-1`` (Att. 8, "-f").
+    """
+    pos = require_finite(position, "position").reshape(-1)
+    z = require_finite(target, "target").reshape(-1) - pos
+    if pos.size != 3 or z.size != 3 or np.linalg.norm(z) == 0:
+        raise ValueError("target: position and target must be distinct 3-vectors")
+    z = z / np.linalg.norm(z) * (1 if focal_sign > 0 else -1)
+    x = np.cross([0.0, 1.0, 0.0], z)
+    if np.linalg.norm(x) < 1e-9:
+        raise ValueError("target: the line of sight is along the world Y axis (the image x axis "
+                         "is taken normal to Y); aim the camera off the vertical")
+    x /= np.linalg.norm(x)
+    return euler_angles(np.vstack([x, np.cross(z, x), z]), euler)
 
 
 # ----------------------------------------------------------------------------------------------
