@@ -21,4 +21,4 @@ def test_only_the_inconsistent_mode_2_start_value_fails():
     assert [r.check.quantity for r in failed] == ["ω_ns 2, M × 1.1, K × 0.9"]
     assert failed[0].computed == pytest.approx(1.062 * np.sqrt(0.9 / 1.1), rel=1e-12)
     assert failed[0].check.published == START_RAD_S[1]
-    assert len(results) == 8
+    assert len(results) == 10

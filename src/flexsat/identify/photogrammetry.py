@@ -402,7 +402,7 @@ def _collinear(pts, tol=1e-9):
 
 
 def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scale=None,
-              sigma: float = 1.0, free=DEFAULT_FREE, target_sigma=None,
+              sigma: float = 1.0, free=DEFAULT_FREE, target_sigma=None, camera_sigma=None,
               max_nfev: int | None = None) -> CalibrationResult:
     """Static calibration (resection) of ``M >= 2`` cameras and ``N`` targets.
 
@@ -421,6 +421,12 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
     target_sigma: optional a-priori standard deviation of the measured target positions
         (scalar, ``(N,)`` or ``(N, 3)``): ``target_guess`` then enters as weighted measurements
         (Att. 6 eq. (30)), and ``datum``/``scale`` may be ``None``.
+    camera_sigma: optional a-priori standard deviations of the camera parameters, a mapping
+        ``{parameter: sigma}`` for every camera or a list of such mappings, one per camera
+        (parameters among ``free``): ``initial_cameras`` then enter as weighted measurements
+        too (Att. 6 eq. (30): with 13 free parameters per camera, 20 targets and two cameras,
+        166 measurements for 86 unknowns; ``counts["measurements"]`` and
+        ``counts["unknowns_solved"]`` report them).
 
     Note: the counting rule is necessary, not sufficient.  From image data alone two cameras
     determine only the 7-parameter fundamental matrix plus the structure up to the datum and
@@ -488,6 +494,7 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
 
     # unknown vector layout
     tgt_free = np.flatnonzero(~fixed_mask.ravel())
+    cam_prior = _camera_prior(camera_sigma, free, m_cam)     # (M * p_cam,), inf = no prior
     
     base_vecs = [cam.vector() for cam in cams]
     idx = {n: k for k, n in enumerate(CAMERA_PARAMETERS)}
@@ -529,10 +536,14 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
             parts.append([(np.linalg.norm(t[si] - t[sj]) - sd) / ssig])
         if tsig is not None:
             parts.append(((t - targets) / tsig).ravel()[tgt_free])
+        if prior_rows.size:
+            parts.append((x[prior_rows] - x0[prior_rows]) / cam_prior[prior_rows])
         return np.concatenate(parts)
 
+    prior_rows = np.flatnonzero(np.isfinite(cam_prior))
     n_img = 2 * m_cam * n_pts
-    n_res = n_img + (scale is not None) + (tgt_free.size if tsig is not None else 0)
+    n_tgt = tgt_free.size if tsig is not None else 0
+    n_res = n_img + (scale is not None) + n_tgt + prior_rows.size
     sparsity = lil_matrix((n_res, n_unknown), dtype=int)
     for j in range(m_cam):
         sparsity[2 * n_pts * j:2 * n_pts * (j + 1), j * p_cam:(j + 1) * p_cam] = 1
@@ -544,6 +555,8 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
             sparsity[n_img, p_cam * m_cam + col] = 1
         if tsig is not None:
             sparsity[n_img + (scale is not None) + col, p_cam * m_cam + col] = 1
+    for row, col in enumerate(prior_rows):
+        sparsity[n_img + (scale is not None) + n_tgt + row, col] = 1
 
     sol = least_squares(residuals, x0, jac="3-point", jac_sparsity=sparsity, method="trf",
                         x_scale="jac",
@@ -556,9 +569,28 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
     vecs, t = unpack(sol.x)
     out_cams = [cams[j].with_vector(vecs[j]) for j in range(m_cam)]
     pred = np.stack([project(out_cams[j], t) for j in range(m_cam)])
+    counts = {**counts, "measurements": n_res, "unknowns_solved": n_unknown}
     return CalibrationResult(cameras=out_cams, targets=t, covariance=cov, names=names,
                              sigma0_squared=s0sq, counts=counts, residuals_px=pred - obs,
                              result=sol)
+
+
+def _camera_prior(camera_sigma, free, m_cam) -> np.ndarray:
+    """Per-unknown a-priori standard deviation of the camera parameters (inf: none)."""
+    out = np.full(m_cam * len(free), np.inf)
+    if camera_sigma is None:
+        return out
+    per_camera = [camera_sigma] * m_cam if isinstance(camera_sigma, dict) else list(camera_sigma)
+    if len(per_camera) != m_cam or not all(isinstance(d, dict) for d in per_camera):
+        raise ValueError(f"camera_sigma: must be a mapping {{parameter: sigma}} or one mapping "
+                         f"per camera ({m_cam})")
+    for j, sigmas in enumerate(per_camera):
+        for name, value in sigmas.items():
+            if name not in free:
+                raise ValueError(f"camera_sigma: {name!r} is not a free parameter "
+                                 f"({', '.join(free)})")
+            out[j * len(free) + free.index(name)] = float(require_positive(value, "camera_sigma"))
+    return out
 
 
 def _check_datum(datum, targets, n_pts):
