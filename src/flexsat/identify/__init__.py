@@ -30,6 +30,11 @@ from flexsat.identify.photogrammetry import (
     simulate_centroids,
     triangulate,
 )
+from flexsat.identify.differential_correction import (
+    CorrectionData,
+    DifferentialCorrection,
+    differential_correction,
+)
 from flexsat.identify.structural import (
     SubstructureModel,
     identify_damping,
@@ -44,12 +49,15 @@ __all__ = [
     "CalibrationResult",
     "Camera",
     "Channel",
+    "CorrectionData",
+    "DifferentialCorrection",
     "Excitation",
     "Measurement",
     "Realization",
     "SubstructureModel",
     "calibrate",
     "calibration_counts",
+    "differential_correction",
     "era",
     "era_dc",
     "harmonic_shaker",

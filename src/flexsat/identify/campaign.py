@@ -28,7 +28,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as sla
 
 from flexsat.identify.era import Realization, era, mac, markov_parameters, okid
 from flexsat.identify.excitation import impulse_hammer, random_force, simulate_test

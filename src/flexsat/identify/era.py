@@ -557,7 +557,6 @@ def _perturbation_std(s, n, shape, W, keep, lam, freq, zeta, dt):
 
 def _finish(Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, shape, extra=None):
     q, r = Y.shape[1:]
-    L = Y.shape[0] - 1
     freq, zeta, shapes, msv, mpc, mac_best, lam, bmod, keep, W = _modes(
         A, B, C, dt, cols, reference_shapes)
     # EMAC at lag k = min(rows, cols) - 1: observability block k (modal) vs c λ^k,

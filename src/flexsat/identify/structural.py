@@ -1,4 +1,4 @@
-"""Creamer–Junkins structural identification (Attachment 7): substructure scalings of M, K, C.
+"""Structural identification of substructure scalings of M, K, C: Creamer–Junkins (Att. 7).
 
 The model is parameterised by substructure scalings (Att. 7 Eqs. 8, 23)::
 
@@ -12,14 +12,14 @@ Undamped identification (:func:`identify_undamped`, Att. 7 Eqs. 1–9)
     1. Measured frequencies ``wbar_r`` and mode shapes ``psibar_r`` (measured, or approximated
        by the current model's modes).  The shapes have an unknown scale: ``phi_r =
        sqrt(alpha_r) psibar_r`` (Eq. 4).
-    2. The normalisation factors ``alpha_r`` are fitted by *linear* least squares to a few
-       measured FRF elements (Eqs. 5–6), with a rigid-body term ``a1/w^2`` (free structures) and
-       a constant residual ``a2``; from the second pass on, the current model's prediction of the
+    2. Mass scalings from a few measured FRF elements (Eqs. 5–6 with Eq. 9a): the normalisation
+       factors are written through the mass, ``alpha_r = 1 / psibar_r^T M(q) psibar_r`` (Eq.
+       7a, i = j), and Eq. 5 is fitted in ``q`` by Gauss-Newton, together with the optional
+       rigid-body term ``a1/w^2`` and residual ``a2``; the current model's prediction of the
        unmeasured modes is subtracted from the FRF first (the iteration of L2845).
-    3. Orthogonality ``psibar_i^T M psibar_j = delta_ij/alpha_j`` and ``psibar_i^T K psibar_j =
-       delta_ij wbar_j^2/alpha_j`` (Eq. 7) are linear in ``q`` and ``p`` (Eq. 9), solved by least
-       squares; with the current model's shapes the diagonal rows are exactly the Gauss-Newton
-       step on the eigenvalues, since ``d(lambda_i)/dp_k = phi_i^T K_k phi_i`` and
+    3. Stiffness scalings from Eq. 9b, ``psibar_i^T K psibar_j = delta_ij wbar_j^2/alpha_j``,
+       linear least squares; with the current model's shapes the diagonal rows are exactly the
+       Gauss-Newton step on the eigenvalues, since ``d(lambda_i)/dp_k = phi_i^T K_k phi_i`` and
        ``d(lambda_i)/dq_k = -lambda_i phi_i^T M_k phi_i`` (closed-form sensitivities of
        mass-normalised modes).  The model is re-solved and the steps repeated.
 
@@ -30,10 +30,16 @@ Undamped identification (:func:`identify_undamped`, Att. 7 Eqs. 1–9)
     at their start values (``alpha_i = 1 / psibar_i^T M(q) psibar_i``: the mass is the known
     scale) and only the stiffness scalings are identified.
 
-    Status of the FRF (mass) path: exact for exact shapes and complete modal data (tested);
-    on a 4-mass-group arm with model-predicted shapes the Eq. 9a mass problem proved
-    ill-conditioned (a poorly observed mode's alpha spoils the others) and did not converge,
-    so the Example 1/2 tests use the frequency path with the mass as held scale.
+    Departures from the paper's sequence, both found necessary on the Example 1 arm (model
+    shapes, 4 mass groups): (a) the paper fits each ``alpha_r`` separately (Eq. 6) and then
+    ``q`` from them (Eq. 9a); a weakly participating mode then gets a wrong, even negative,
+    ``alpha_r`` that the mass rows take at full weight, and the iteration diverged.  Fitting
+    ``q`` directly weights each mode by its real share of the FRF.  (b) With model-predicted
+    shapes a mass change also moves the shapes, the unmeasured modes and, through Eq. 9b, the
+    stiffness; the mass step differentiates all of these (Nelson mode derivatives), otherwise
+    it diverged even from 0.01 % off the true model.  ``a2`` is off by default: with the
+    unmeasured modes predicted by the model it only absorbs the scale information of
+    quasi-static FRF points.
 
     Off-diagonal rows of Eq. 9 carry information only when the shapes are measured; with
     model-predicted shapes they are identities of the current model that would wrongly freeze the
@@ -48,6 +54,9 @@ Damping (:func:`identify_damping`, Att. 7 Eqs. 10–24)
     space (no 2n-dimensional eigenproblem).  The blocks ``C_k`` need only the right coupling
     pattern; their magnitudes may be off by orders of magnitude (the scalings absorb them).
 
+The differential correction of Att. 6 (free and forced response together) is in
+:mod:`flexsat.identify.differential_correction`.
+
 All matrices may be dense arrays or scipy sparse matrices; the eigen-solves are dense (models up
 to a few thousand dofs).  Errors are ``ValueError`` naming the field.
 """
@@ -60,6 +69,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from flexsat.analysis.sensitivity import modal_derivatives
 from flexsat.validation import require_numeric
 
 __all__ = [
@@ -356,16 +366,25 @@ def fit_modal_normalization(frf, shapes, omegas, rigid_body=False, residual=True
     return alpha, a1, a2
 
 
-def _model_frf(K, M, items):
-    """Receptance elements of the current model at the FRF points (direct solve)."""
+def _model_frf(K, M, items, K_blocks=(), M_blocks=()):
+    """Receptance elements of a model at the FRF points (direct solve), with gradients.
+
+    ``h = e_j^T Z^-1 e_k`` with ``Z = K - w^2 M``; ``dh/dp_g = -u^T K_g v`` and ``dh/dq_g = w^2
+    u^T M_g v`` with ``u = Z^-1 e_j``, ``v = Z^-1 e_k`` (``dZ^-1 = -Z^-1 dZ Z^-1``).  Returns a
+    list of (values (N,), dh/dp (N, len(K_blocks)), dh/dq (N, len(M_blocks))).
+    """
     out = []
     for j, k, w, _ in items:
         h = np.empty(w.size)
+        hp, hq = np.empty((w.size, len(K_blocks))), np.empty((w.size, len(M_blocks)))
         for i, wi in enumerate(w):
-            e = np.zeros(K.shape[0])
-            e[k] = 1.0
-            h[i] = np.linalg.solve(K - wi**2 * M, e)[j]
-        out.append(h)
+            E = np.zeros((K.shape[0], 2))
+            E[j, 0] = E[k, 1] = 1.0
+            u, v = np.linalg.solve(K - wi**2 * M, E).T
+            h[i] = u[k]
+            hp[i] = [-(u @ Kg @ v) for Kg in K_blocks]
+            hq[i] = [wi**2 * (u @ Mg @ v) for Mg in M_blocks]
+        out.append((h, hp, hq))
     return out
 
 
@@ -429,12 +448,128 @@ def _pair_modes(omega_model, phi_model, measured_w, measured_shapes, mode_indice
     return idx
 
 
+def _eq5(model, p, q, wbar, items, idx, psi_meas, free_p, free_q):
+    """Right side of Eq. 5 for the current model, with its gradients.
+
+    ``known + sum_r psibar_jr psibar_kr / (mu_r (wbar_r^2 - w^2))`` where ``known = h_model -
+    sum_r phi_jr phi_kr / (lambda_r - w^2)`` is the current model's prediction of the unmeasured
+    modes (the iteration of L2845), ``mu_r = psibar_r^T M(q) psibar_r = 1/alpha_r`` (Eq. 7a,
+    i = j) and ``psibar`` the measured shapes (fixed) or the model's ``phi`` (``mu = 1``).
+    The gradient with respect to the free ``(p, q)`` is exact: model FRF gradient (see
+    :func:`_model_frf`) and the measured modes' ``d lambda``, ``d phi`` by Nelson's method.
+
+    Returns, per FRF element: value (N,), gradient (N, Pf + Qf), d value / d wbar (N, m).
+    """
+    K, M = model.K(p), model.M(q)
+    n = model.n_dofs
+    Kb = [model.K_blocks[g] for g in free_p]
+    Mb = [model.M_blocks[g] for g in free_q]
+    zeros = [np.zeros((n, n))]
+    md = modal_derivatives(K, M, np.array(Kb + zeros * len(Mb)), np.array(zeros * len(Kb) + Mb),
+                           modes=idx)
+    lam, phi, dlam, dphi = md.eigenvalues, md.modes, md.eigenvalue_gradient, md.mode_gradient
+    psi = phi if psi_meas is None else psi_meas
+    mu = np.einsum("ij,ik,kj->j", psi, M, psi)
+    E = np.array([np.einsum("ij,ik,kj->j", psi, Mg, psi) for Mg in Mb]).T
+    out = []
+    for i, ((j, k, w, _), (hm, hp, hq)) in enumerate(zip(items, _model_frf(K, M, items, Kb, Mb))):
+        d_meas = wbar[None, :] ** 2 - w[:, None] ** 2
+        if np.any(np.abs(d_meas) < 1e-9 * wbar.max() ** 2):
+            raise ValueError(f"frf[{i}].omegas: a point coincides with a natural frequency")
+        d_model = lam[None, :] - w[:, None] ** 2
+        pp = phi[j] * phi[k]
+        dpp = dphi[:, j, :] * phi[k] + phi[j] * dphi[:, k, :]
+        grad = np.hstack([hp, hq]) - (1.0 / d_model) @ dpp.T + (pp / d_model**2) @ dlam.T
+        qq = psi[j] * psi[k] / mu
+        value = hm - (pp / d_model).sum(axis=1) + (qq / d_meas).sum(axis=1)
+        if psi_meas is None:
+            grad += (1.0 / d_meas) @ dpp.T
+        else:
+            grad[:, len(Kb):] -= (qq / mu / d_meas) @ E
+        out.append((value, grad, -qq * 2.0 * wbar[None, :] / d_meas**2))
+    return out
+
+
+def _mass_step(model, psi, items, rows_eq5, q, free_q, q_prior, prior_sd, frf_sd, pairs_off,
+               rigid_body, residual):
+    """One Gauss-Newton step of the joint Eq. 5-6 / 9a fit of the mass scalings.
+
+    ``rows_eq5`` holds per FRF element the residual of Eq. 5 (see :func:`_eq5`), its gradient
+    with respect to the free mass scalings and that of the residual with respect to ``wbar``;
+    the FRF rows are fitted together with ``a1, a2`` (Eq. 6), the Eq. 9a rows ``i != j``
+    (``pairs_off``) and the prior rows.  Returns the step on ``free_q``; its gains with respect
+    to the data (frequencies, FRF values, prior values); the relative FRF residuals and their
+    degrees of freedom.
+    """
+    Mq = model.M(q)
+    mu = np.einsum("ij,ik,kj->j", psi, Mq, psi)
+    nf, Qf = len(items), free_q.size
+    n_extra = (int(rigid_body) + int(residual)) * nf
+    rows, rhs, sd, r_wbar = [], [], [], []
+    for i, ((_, _, w, h), (r, J, dr_dw)) in enumerate(zip(items, rows_eq5)):
+        extra = np.zeros((w.size, n_extra))
+        if rigid_body:
+            extra[:, i] = 1.0 / w**2
+        if residual:
+            extra[:, (nf if rigid_body else 0) + i] = 1.0
+        rows.append(np.hstack([J, extra]))
+        rhs.append(r)
+        sd.append(frf_sd * np.maximum(np.abs(h), 1e-12 * np.abs(h).max()))
+        r_wbar.append(dr_dw)
+    n_frf = sum(r.size for r in rhs)
+    if pairs_off:
+        # Eq. 9a, i != j, in the normalised form psi_i^T M psi_j sqrt(alpha_i alpha_j) = 0,
+        # counted like a relative FRF error (as Eq. 9b's rows count like relative w^2 errors)
+        s = np.array([1.0 / np.sqrt(mu[i] * mu[j]) for i, j in pairs_off])
+        A_off = np.array([[psi[:, i] @ model.M_blocks[g] @ psi[:, j] for g in free_q]
+                          for i, j in pairs_off]) * s[:, None]
+        rows.append(np.hstack([A_off, np.zeros((len(pairs_off), n_extra))]))
+        rhs.append(-np.array([psi[:, i] @ Mq @ psi[:, j] for i, j in pairs_off]) * s)
+        sd.append(np.full(len(pairs_off), frf_sd))
+    if prior_sd is not None:
+        # Tikhonov rows: the a-priori scalings as pseudo-measurements (Att. 6 Eq. 12, 0_p)
+        rows.append(np.hstack([np.eye(Qf), np.zeros((Qf, n_extra))]))
+        rhs.append(q_prior[free_q] - q[free_q])
+        sd.append(np.full(Qf, prior_sd))
+    A, b, sd = np.vstack(rows), np.concatenate(rhs), np.concatenate(sd)
+    x, cov, res, _ = _solve_ls(A, b, 1.0 / sd, "mass scalings")
+    gain = (cov @ (A.T / sd**2))[:Qf]  # d(step)/d(right side)
+    g_w = gain[:, :n_frf] @ np.vstack(r_wbar)
+    g_prior = gain[:, A.shape[0] - Qf:] if prior_sd is not None else np.zeros((Qf, 0))
+    return (x[:Qf], g_w, gain[:, :n_frf], g_prior, res[:n_frf] * frf_sd,
+            max(n_frf - Qf - n_extra, 0))
+
+
 def identify_undamped(model: SubstructureModel, measured_frequencies, measured_shapes=None,
                       frf=None, p0=None, q0=None, fixed_stiffness=(), fixed_mass=(),
-                      frequency_sigma=None, mode_indices=None, off_diagonal=None,
-                      rigid_body=False, residual=True, n_iter=30, tol=1e-10,
-                      identify_mass=None) -> UndampedIdentification:
+                      frequency_sigma=None, frf_sigma=None, mass_prior_sigma=None,
+                      mode_indices=None, off_diagonal=None, rigid_body=False, residual=False,
+                      n_iter=30, tol=1e-10, identify_mass=None) -> UndampedIdentification:
     """Iterated least-squares identification of the stiffness and mass scalings (Eqs. 1–9).
+
+    What identifies what: frequencies and shapes fix only the stiffness-to-mass ratio, since
+    ``(K, M) -> c (K, M)`` leaves them unchanged; the FRF fixes the absolute scale through the
+    modal normalisation ``alpha_r`` (Eqs. 4–5).  Each pass, with ``psibar`` the measured shapes
+    or the current model's modes:
+
+    1. Mass scalings (Eqs. 5–6 and 9a jointly): one Gauss-Newton step of the FRF fit with
+       ``alpha_r(q) = 1 / psibar_r^T M(q) psibar_r`` (Eq. 7a, i = j, put into Eq. 5), together
+       with ``a1, a2`` and, with measured shapes, the Eq. 9a rows ``i != j``.  A mode counts
+       with its actual share of the FRF; ``alpha`` of a weakly participating mode is never
+       estimated on its own (the separate Eq. 6 fit, :func:`fit_modal_normalization`, can give
+       such a mode a wildly wrong or negative ``alpha``, and Eq. 9a then diverges).  With
+       model-predicted shapes the step also differentiates what a mass change does to the shapes
+       and to the unmeasured modes, along the path on which Eq. 9b re-fits the stiffness to the
+       measured frequencies (``dp/dq`` from the linearised Eq. 9b; the FRF gradient
+       ``dh/dx = -u^T (dZ/dx) v``).  Without that term the iteration is unstable for a mass
+       group the FRF sees mainly through the mode shapes (the Example 1 tip inertia: it
+       diverged even from 0.01 % off the true model).
+    2. Stiffness scalings (Eq. 9b) with ``alpha_r = alpha_r(q)`` of the new mass, i.e.
+       ``psibar_i^T K(p) psibar_i = wbar_i^2 psibar_i^T M(q) psibar_i``.
+
+    Without an FRF the mass scalings are held (the mass is the known scale).  With
+    ``mass_prior_sigma`` the start mass scalings enter as pseudo-measurements (Tikhonov
+    regularisation, Att. 6 Eq. 12 ``0_p``) for mass groups the FRF observes weakly.
 
     Parameters
     ----------
@@ -445,20 +580,28 @@ def identify_undamped(model: SubstructureModel, measured_frequencies, measured_s
         every pass (Att. 7 Examples 1–2).
     frf : (j, k, omegas, values) or list, optional
         Measured receptance elements (real, away from resonance).  Needed to identify the mass
-        scalings (absolute scale, Eqs. 5–6); without it the mass scalings are held.
+        scalings; without it they are held.
     p0, q0 : start scalings (default 1).  fixed_stiffness, fixed_mass : indices held at start.
     frequency_sigma : (m,) or scalar, optional
-        Standard deviation of the measured frequencies (rad/s): weights the rows and scales the
-        covariance; default: covariance from the residual scatter (zero for an exact fit).
+        Standard deviation of the measured frequencies, rad/s.
+    frf_sigma : float, optional
+        Relative standard deviation of the FRF values (e.g. 0.005 for 0.5 %).
+    mass_prior_sigma : float, optional
+        Standard deviation of the mass scalings about ``q0``; needs ``frf_sigma`` (the prior is
+        weighted against it).
     mode_indices : model mode numbers (0-based) of the measured modes; default by order (or by
         MAC with measured shapes).
     off_diagonal : use the i != j rows of Eq. 9 (default: only with measured shapes).
-    rigid_body, residual : FRF fit terms ``a1/w^2`` and ``a2`` (Eq. 5).
+    rigid_body, residual : FRF fit terms ``a1/w^2`` and ``a2`` (Eq. 5); ``a2`` is off by
+        default (see the module notes).
     identify_mass : default: True when an FRF is given.
 
     Returns
     -------
     UndampedIdentification
+        ``covariance`` propagates the frequency, FRF and prior standard deviations linearly
+        through the last pass (shapes counted exact); a standard deviation not given is
+        estimated from the residual scatter (zero covariance for an exact fit).
     """
     P, Q, n = model.n_stiffness, model.n_mass, model.n_dofs
     wbar = require_numeric(measured_frequencies, "measured_frequencies", "vector").ravel()
@@ -483,101 +626,136 @@ def identify_undamped(model: SubstructureModel, measured_frequencies, measured_s
         off_diagonal = psi_meas is not None
     p = model._params(p0, P, "p0").copy()
     q = model._params(q0, Q, "q0").copy()
+    q_prior = q.copy()
     free_p = np.setdiff1d(np.arange(P), np.asarray(fixed_stiffness, int))
     free_q = np.setdiff1d(np.arange(Q), np.asarray(fixed_mass, int)) if identify_mass \
         else np.array([], int)
     if free_p.size == 0 and free_q.size == 0:
         raise ValueError("fixed_stiffness, fixed_mass: every parameter is fixed")
-    if frequency_sigma is None:
-        sig_w = None
-    else:
+    sig_w = None
+    if frequency_sigma is not None:
         sig_w = np.broadcast_to(require_numeric(frequency_sigma, "frequency_sigma"),
                                 (m,)).astype(float)
         if np.any(sig_w <= 0):
             raise ValueError("frequency_sigma: must be > 0")
+    for name, value in (("frf_sigma", frf_sigma), ("mass_prior_sigma", mass_prior_sigma)):
+        if value is not None and (np.ndim(value) != 0 or float(require_numeric(value, name)) <= 0):
+            raise ValueError(f"{name}: must be a scalar > 0")
+    if mass_prior_sigma is not None and frf_sigma is None:
+        raise ValueError("mass_prior_sigma: needs frf_sigma (the prior is weighted against the "
+                         "FRF's standard deviation)")
     pairs = [(i, i) for i in range(m)]
-    if off_diagonal:
-        pairs += [(i, j) for i in range(m) for j in range(i + 1, m)]
+    pairs_off = [(i, j) for i in range(m) for j in range(i + 1, m)] if off_diagonal else []
+    pairs += pairs_off
     n_rows = len(pairs)
-    for name, free in (("stiffness", free_p), ("mass", free_q)):
-        if free.size > n_rows:
+    limits = [("stiffness", free_p.size)]
+    if mass_prior_sigma is None:
+        limits.append(("mass", free_q.size))
+    for name, count in limits:
+        if count > n_rows:
             raise ValueError(
-                f"measured_frequencies: {n_rows} equations for {free.size} {name} parameters: "
+                f"measured_frequencies: {n_rows} equations for {count} {name} parameters: "
                 "more parameters than data (Att. 7 needs m(m+1)/2 > parameters with measured "
                 "shapes, m >= parameters without): measure more modes or fix parameters")
+    ii = np.array([i for i, _ in pairs])
+    jj = np.array([j for _, j in pairs])
+    rel = np.ones(m) if sig_w is None else 2.0 * sig_w / wbar
+    frf_sd = 1.0 if frf_sigma is None else float(frf_sigma)
 
-    history, converged, steps = [(p.copy(), q.copy())], False, []
-    alpha = np.ones(m)
-    cov = np.zeros((P + Q, P + Q))
+    history, converged = [(p.copy(), q.copy())], False
     for it in range(1, n_iter + 1):
-        K, Mq = model.K(p), model.M(q)
+        K = model.K(p)
         w_model, phi_model = model.modes(p, q)
         idx = _pair_modes(w_model, phi_model, wbar, psi_meas, mode_indices)
         psi = psi_meas if psi_meas is not None else phi_model[:, idx]
-        # --- normalisation factors alpha (Eqs. 5-6) -----------------------------------------
-        if identify_mass:
-            # current model's contribution of the unmeasured modes (iteration of L2845)
-            h_model = _model_frf(K, Mq, items)
-            known = []
-            for (j, k, w, _), hm in zip(items, h_model):
-                meas = phi_model[j, idx] * phi_model[k, idx] / (w_model[idx][None, :]**2
-                                                                 - w[:, None]**2)
-                known.append(hm - meas.sum(axis=1))
-            alpha, _, _ = fit_modal_normalization(items, psi, wbar, rigid_body=rigid_body,
-                                                  residual=residual, known_part=known)
-        else:
-            alpha = 1.0 / np.einsum("ij,ik,kj->j", psi, Mq, psi)
-        # --- Eq. 9a: mass scalings -------------------------------------------------------------
-        q_new, p_new = q.copy(), p.copy()
+        mu = np.einsum("ij,ik,kj->j", psi, model.M(q), psi)
+        # --- Eq. 9b system: rows, weights and the gain d(p)/d(right side) -----------------
         # row weights: relative residuals (a low mode counts as much as a high one); with
         # frequency_sigma, 1/SD of the right side (row i=i: wbar^2/alpha, SD 2 wbar sigma/alpha)
-        ii = np.array([i for i, _ in pairs])
-        jj = np.array([j for _, j in pairs])
-        rel = np.ones(m) if sig_w is None else 2.0 * sig_w / wbar
-        weights_k = np.sqrt(alpha[ii] * alpha[jj]) / (wbar[ii] * wbar[jj]) \
+        weights_k = np.sqrt(1.0 / (mu[ii] * mu[jj])) / (wbar[ii] * wbar[jj]) \
             / np.sqrt(rel[ii] * rel[jj])
-        weights_m = np.sqrt(alpha[ii] * alpha[jj])
-        cov = np.zeros((P + Q, P + Q))
-        if free_q.size:
-            A = np.array([[psi[:, i] @ model.M_blocks[g] @ psi[:, j] for g in free_q]
-                          for i, j in pairs])
-            Mfix = Mq - sum((q[g] * model.M_blocks[g] for g in free_q), np.zeros((n, n)))
-            b = np.array([(1.0 / alpha[i] if i == j else 0.0) - psi[:, i] @ Mfix @ psi[:, j]
-                          for i, j in pairs])
-            x, c, res, dof = _solve_ls(A, b, weights_m, "mass scalings")
-            q_new[free_q] = x
-            s2 = (res @ res / dof) if dof > 0 else 0.0
-            cov[np.ix_(P + free_q, P + free_q)] = c * s2
-        # --- Eq. 9b: stiffness scalings --------------------------------------------------------
+        A_k = np.array([[psi[:, i] @ model.K_blocks[g] @ psi[:, j] for g in free_p]
+                        for i, j in pairs]).reshape(n_rows, free_p.size)
+        Kfix = K - sum((p[g] * model.K_blocks[g] for g in free_p), np.zeros((n, n)))
+        kfix = np.array([psi[:, i] @ Kfix @ psi[:, j] for i, j in pairs])
+        gain_k = np.zeros((free_p.size, n_rows))
         if free_p.size:
-            A = np.array([[psi[:, i] @ model.K_blocks[g] @ psi[:, j] for g in free_p]
-                          for i, j in pairs])
-            Kfix = K - sum((p[g] * model.K_blocks[g] for g in free_p), np.zeros((n, n)))
-            b = np.array([(wbar[i] ** 2 / alpha[i] if i == j else 0.0)
-                          - psi[:, i] @ Kfix @ psi[:, j] for i, j in pairs])
-            x, c, res, dof = _solve_ls(A, b, weights_k, "stiffness scalings")
-            p_new[free_p] = x
-            s2 = 1.0 if sig_w is not None else ((res @ res / dof) if dof > 0 else 0.0)
-            cov[np.ix_(free_p, free_p)] = c * s2
+            # (A^T W A)^-1 and the identifiability checks now; the right side needs the new q
+            _, c_k, _, dof_k = _solve_ls(A_k, -kfix, weights_k, "stiffness scalings")
+            gain_k = c_k @ (A_k.T * weights_k**2)
+        db_dw = np.zeros((n_rows, m))  # right side of Eq. 9b: wbar_i^2 mu_i(q) - ...
+        db_dw[np.arange(m), np.arange(m)] = 2.0 * wbar * mu
+        E = np.array([np.einsum("ij,ik,kj->j", psi, model.M_blocks[g], psi)
+                      for g in free_q]).T.reshape(m, free_q.size)
+        db_dq = np.zeros((n_rows, free_q.size))
+        db_dq[:m] = wbar[:, None] ** 2 * E
+        # --- Eqs. 5-6 and 9a jointly: mass scalings ------------------------------------------
+        q_new = q.copy()
+        if free_q.size:
+            # gradients along the path on which Eq. 9b keeps the measured frequencies:
+            # dp = D dq with D = d(p)/d(q) of the linearised Eq. 9b
+            D, G_w = gain_k @ db_dq, gain_k @ db_dw
+            rows_eq5 = [(h - value, grad[:, :free_p.size] @ D + grad[:, free_p.size:],
+                         -d_wbar - grad[:, :free_p.size] @ G_w)
+                        for (*_, h), (value, grad, d_wbar)
+                        in zip(items, _eq5(model, p, q, wbar, items, idx, psi_meas, free_p,
+                                           free_q))]
+            dq, g_qw, g_qh, g_qprior, rel_frf, dof_frf = _mass_step(
+                model, psi, items, rows_eq5, q, free_q, q_prior, mass_prior_sigma, frf_sd,
+                pairs_off, rigid_body, residual)
+            q_new[free_q] += dq
+        # --- Eq. 9b: stiffness scalings, alpha_i = 1 / psibar_i^T M(q_new) psibar_i ---------
+        p_new = p.copy()
+        if free_p.size:
+            b = -kfix + db_dq @ (q_new - q)[free_q] if free_q.size else -kfix.copy()
+            b[:m] += wbar**2 * mu
+            p_new[free_p] = gain_k @ b
+            res_k = (b - A_k @ p_new[free_p]) * weights_k
         # scalings must stay positive (K, M definite): shorten a step that leaves them
-        dp, dq, t = p_new - p, q_new - q, 1.0
-        while t > 1e-6 and (np.any(p + t * dp <= 0) or np.any(q + t * dq <= 0)):
+        dp, dq_all, t = p_new - p, q_new - q, 1.0
+        while t > 1e-6 and (np.any(p + t * dp <= 0) or np.any(q + t * dq_all <= 0)):
             t *= 0.5
         if t <= 1e-6:
             raise ValueError("identification diverged: the least-squares step makes a scaling "
                              f"non-positive (p={p_new}, q={q_new}); fix weakly observed "
                              "parameters (see modal_energy_distribution)")
-        steps.append(t)
-        p_new, q_new = p + t * dp, q + t * dq
+        p_new, q_new = p + t * dp, q + t * dq_all
         step = max(np.abs(p_new - p).max(), np.abs(q_new - q).max() if Q else 0.0)
         p, q = p_new, q_new
         history.append((p.copy(), q.copy()))
         if step < tol:
             converged = True
             break
+
+    # --- covariance: the last pass's estimates as linear functions of the data -------------
+    # data d = (wbar, FRF values, prior values); S = d(p, q)/d(d); cov = S diag(sd_d^2) S^T
+    n_h = sum(h.size for *_, h in items) if free_q.size else 0
+    n_pr = free_q.size if mass_prior_sigma is not None else 0
+    S = np.zeros((P + Q, m + n_h + n_pr))
+    sd = np.zeros(m + n_h + n_pr)
+    if free_q.size:
+        S[np.ix_(P + free_q, np.arange(m))] = g_qw
+        S[np.ix_(P + free_q, m + np.arange(n_h))] = g_qh
+        if n_pr:
+            S[np.ix_(P + free_q, m + n_h + np.arange(n_pr))] = g_qprior
+            sd[m + n_h:] = mass_prior_sigma
+        s_h = frf_sigma if frf_sigma is not None else \
+            (np.sqrt(rel_frf @ rel_frf / dof_frf) if dof_frf > 0 else 0.0)
+        sd[m:m + n_h] = s_h * np.concatenate([np.abs(h) for *_, h in items])
+    if free_p.size:
+        # Eq. 9b's right side depends on wbar directly and through the new q
+        S[np.ix_(free_p, np.arange(m))] = gain_k @ db_dw
+        if free_q.size:
+            S[free_p] += gain_k @ db_dq @ S[P + free_q]
+        if sig_w is not None:
+            sd[:m] = sig_w
+        elif dof_k > 0:
+            # weighted rows are relative eigenvalue errors: SD(w)/w = SD(w^2) / (2 w^2)
+            sd[:m] = 0.5 * wbar * np.sqrt(res_k @ res_k / dof_k)
+    cov = (S * sd**2) @ S.T
     w_final, phi_final = model.modes(p, q)
     idx = _pair_modes(w_final, phi_final, wbar, psi_meas, mode_indices)
-    return UndampedIdentification(p, q, cov, w_final[idx], alpha, it, converged, history)
+    return UndampedIdentification(p, q, cov, w_final[idx], 1.0 / mu, it, converged, history)
 
 
 # ------------------------------------------------------------------------------------------------

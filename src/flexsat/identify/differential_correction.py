@@ -1,0 +1,516 @@
+"""James–Junkins differential correction of substructure scalings (seed 000 Att. 6 Eqs. 3–13;
+spec part 2 §1.3).
+
+Gauss-Newton on all scalings at once, ``P_{i+1} = P_i + (A^T W A)^-1 A^T W dQ``, fitting free
+and forced response together: any of undamped frequencies, mode shapes (subset of dofs,
+each with its own least-squares scale), damping ratios of the damped model, FRF real and
+imaginary parts of ``(K + i w C - w^2 M)^-1`` between dof indices or H rows / B columns, and
+the pseudo-measurements ``0_m, 0_k`` (orthogonality of measured shapes), ``0_n`` (their
+normalisation) and ``0_p`` (the start scalings, a Tikhonov prior).  ``A = dQ/dP`` is
+analytic (:meth:`CorrectionData.predict`); ``(A^T W A)^-1`` is the covariance.  Only the
+a-priori blocks are scaled, so symmetry, sparsity and coupling pattern are kept.
+
+The model is a :class:`~flexsat.identify.structural.SubstructureModel`
+(``K(p) = K0 + sum p_k K_k``, likewise ``M(q)``, ``C(r)``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from flexsat.analysis.sensitivity import modal_derivatives
+from flexsat.identify.structural import SubstructureModel
+from flexsat.validation import require_numeric
+
+__all__ = ["CorrectionData", "DifferentialCorrection", "differential_correction"]
+
+
+def _modes_and_sigma(values, sigma, modes, name, prefix):
+    """A measured modal quantity: finite vector > 0, its SDs (> 0) and the model modes."""
+    v = require_numeric(values, name, "vector").ravel()
+    if v.size == 0 or np.any(v <= 0):
+        raise ValueError(f"{name}: must be a non-empty vector of values > 0")
+    if sigma is None:
+        raise ValueError(f"{prefix}_sigma: give the standard deviations (the weights W, Att. 6 "
+                         "Eq. 10)")
+    s = require_numeric(sigma, f"{prefix}_sigma")
+    if s.ndim > 1 or (s.ndim == 1 and s.size != v.size):
+        raise ValueError(f"{prefix}_sigma: must be a scalar or {v.size} values, got {s.shape}")
+    s = np.broadcast_to(s, v.shape).astype(float)
+    if np.any(s <= 0):
+        raise ValueError(f"{prefix}_sigma: must be > 0")
+    return v, s, _mode_numbers(modes, v.size, f"{prefix}_modes")
+
+
+def _mode_numbers(modes, count, name):
+    if modes is None:
+        return np.arange(count)
+    idx = np.asarray(modes).ravel()
+    if idx.dtype.kind not in "iu" or idx.size != count or np.any(idx < 0) \
+            or np.unique(idx).size != count:
+        raise ValueError(f"{name}: must be {count} distinct mode numbers (0-based integers)")
+    return idx.astype(int)
+
+
+def _dof_or_vector(value, n, name):
+    """An FRF output/input: a dof index or an (n,) vector (a row of H, a column of B)."""
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
+        if not 0 <= value < n:
+            raise ValueError(f"{name}: must be a dof index in [0, {n}), got {value}")
+        e = np.zeros(n)
+        e[value] = 1.0
+        return e
+    v = require_numeric(value, name, "vector")
+    if v.shape != (n,):
+        raise ValueError(f"{name}: must be a dof index or a vector of {n} entries, got shape "
+                         f"{v.shape}")
+    return v
+
+
+@dataclass(frozen=True, eq=False)
+class CorrectionData:
+    """Measurements ``Q`` of the Att. 6 differential correction (Eq. 12), each with its SD.
+
+    Every quantity is optional; the weights are ``W = diag(1/sigma^2)`` (Eq. 10).  Mode numbers
+    are 0-based, ascending undamped frequency of the model.
+
+    Parameters
+    ----------
+    frequencies, frequency_sigma, frequency_modes
+        ``lambda``: undamped natural frequencies, rad/s, of a subset of modes.
+    shapes, shape_sigma, shape_dofs, shape_modes
+        ``psi``: (d, s) measured shape components at ``shape_dofs`` (default all dofs).  Each
+        measured shape has an arbitrary scale: it is compared with ``c_r phi_r`` restricted to
+        the dofs, ``c_r`` the least-squares scale (``phi_r^T psi_r / phi_r^T phi_r``).
+    damping_ratios, damping_sigma, damping_modes
+        ``zeta``: ``-Re(s)/|s|`` of the damped eigenvalue ``s`` nearest (in modulus) to the
+        undamped frequency of each mode.
+    frf : list of (output, input, omegas, values, sigma)
+        ``h^r, h^i`` (and ``R^r, R^i`` near resonance): receptances ``c^T (K + i w C - w^2 M)^-1
+        b``, output and input each a dof index or an (n,) vector (a row of H, a column of B);
+        complex values; ``sigma`` (scalar or per point) the SD of the real and of the
+        imaginary part.
+    orthogonality_sigma : float, optional
+        ``0_m, 0_k``: pseudo-measurements ``psi_i^T M psi_j = 0`` and ``psi_i^T K psi_j = 0``
+        (i < j) of the measured shapes, each divided by the geometric mean of its two diagonal
+        terms in the nominal model (``p = q = 1``); needs shapes on all dofs.
+    normalization_sigma : float, optional
+        ``0_n``: pseudo-measurements ``psi_i^T M psi_i / psi_i^T M(1) psi_i = 1``: the measured
+        shapes keep the normalisation they have with the nominal mass (Att. 6 scales them with
+        the analytical mass, L2646); needs shapes on all dofs.
+    """
+
+    frequencies: object = None
+    frequency_sigma: object = None
+    frequency_modes: object = None
+    shapes: object = None
+    shape_sigma: object = None
+    shape_dofs: object = None
+    shape_modes: object = None
+    damping_ratios: object = None
+    damping_sigma: object = None
+    damping_modes: object = None
+    frf: object = ()
+    orthogonality_sigma: object = None
+    normalization_sigma: object = None
+
+    def __post_init__(self):
+        set_ = object.__setattr__
+        for name, prefix in (("frequencies", "frequency"), ("damping_ratios", "damping")):
+            if getattr(self, name) is None:
+                continue
+            v, s, modes = _modes_and_sigma(getattr(self, name), getattr(self, f"{prefix}_sigma"),
+                                           getattr(self, f"{prefix}_modes"), name, prefix)
+            set_(self, name, v)
+            set_(self, f"{prefix}_sigma", s)
+            set_(self, f"{prefix}_modes", modes)
+        if self.shapes is not None:
+            y = require_numeric(self.shapes, "shapes", "matrix")
+            if y.ndim == 1:
+                y = y[:, None]
+            if y.ndim != 2 or y.size == 0:
+                raise ValueError(f"shapes: must be a (dofs, modes) matrix, got shape {y.shape}")
+            if self.shape_sigma is None:
+                raise ValueError("shape_sigma: give the standard deviations (the weights W)")
+            s = require_numeric(self.shape_sigma, "shape_sigma")
+            try:
+                s = np.broadcast_to(s, y.shape).astype(float)
+            except ValueError:
+                raise ValueError(f"shape_sigma: must be a scalar or shaped like shapes "
+                                 f"{y.shape}, got {s.shape}") from None
+            if np.any(s <= 0):
+                raise ValueError("shape_sigma: must be > 0")
+            if self.shape_dofs is not None:
+                dofs = np.asarray(self.shape_dofs).ravel()
+                if dofs.dtype.kind not in "iu" or dofs.size != y.shape[0] \
+                        or np.unique(dofs).size != dofs.size or np.any(dofs < 0):
+                    raise ValueError(f"shape_dofs: must be {y.shape[0]} distinct dof indices "
+                                     "(one per row of shapes)")
+                set_(self, "shape_dofs", dofs.astype(int))
+            set_(self, "shapes", y)
+            set_(self, "shape_sigma", s)
+            set_(self, "shape_modes", _mode_numbers(self.shape_modes, y.shape[1], "shape_modes"))
+        for name in ("orthogonality_sigma", "normalization_sigma"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            if np.ndim(value) != 0 or float(require_numeric(value, name)) <= 0:
+                raise ValueError(f"{name}: must be a scalar > 0")
+            if self.shapes is None or self.shape_dofs is not None:
+                raise ValueError(f"{name}: needs measured shapes on all dofs (shape_dofs=None)")
+            if name == "orthogonality_sigma" and self.shapes.shape[1] < 2:
+                raise ValueError(f"{name}: needs at least two measured shapes")
+            set_(self, name, float(value))
+        frf = self.frf
+        if isinstance(frf, tuple) and len(frf) == 5 and np.ndim(frf[2]) == 1:
+            frf = [frf]
+        items = []
+        for i, item in enumerate(frf):
+            try:
+                out, inp, w, h, sd = item
+            except (TypeError, ValueError):
+                raise ValueError(f"frf[{i}]: must be (output, input, omegas, values, sigma)") \
+                    from None
+            w = require_numeric(w, f"frf[{i}].omegas", "vector").ravel()
+            h = np.asarray(h)
+            if h.dtype.kind not in "biufc":
+                raise ValueError(f"frf[{i}].values: must be a numeric (complex) vector")
+            h = h.astype(complex).ravel()
+            if not np.all(np.isfinite(h)):
+                raise ValueError(f"frf[{i}].values: must be finite (no NaN or inf), got "
+                                 f"{int(np.sum(~np.isfinite(h)))} non-finite entries")
+            if w.size == 0 or h.shape != w.shape:
+                raise ValueError(f"frf[{i}]: omegas and values must be equal-length non-empty "
+                                 f"vectors, got {w.size} and {h.size}")
+            if np.any(w <= 0):
+                raise ValueError(f"frf[{i}].omegas: must be > 0 rad/s")
+            sd = require_numeric(sd, f"frf[{i}].sigma")
+            if sd.ndim > 1 or (sd.ndim == 1 and sd.size != w.size) or np.any(sd <= 0):
+                raise ValueError(f"frf[{i}].sigma: must be a scalar or {w.size} values, > 0")
+            items.append((out, inp, w, h, np.broadcast_to(sd, w.shape).astype(float)))
+        set_(self, "frf", items)
+        if self.frequencies is None and self.shapes is None and self.damping_ratios is None \
+                and not items:
+            raise ValueError("CorrectionData: give at least one kind of measurement")
+
+    @property
+    def _shape_pairs(self):
+        s = 0 if self.shapes is None else self.shapes.shape[1]
+        return [(i, j) for i in range(s) for j in range(i + 1, s)]
+
+    @property
+    def measured(self) -> np.ndarray:
+        """Measured ``Q`` stacked: lambda, psi (by mode), zeta, FRF (per element real then
+        imaginary), 0_m, 0_k, 0_n."""
+        parts = [self.frequencies, None if self.shapes is None else self.shapes.T.ravel(),
+                 self.damping_ratios]
+        parts += [np.concatenate([h.real, h.imag]) for *_, h, _ in self.frf]
+        if self.orthogonality_sigma is not None:
+            parts.append(np.zeros(2 * len(self._shape_pairs)))
+        if self.normalization_sigma is not None:
+            parts.append(np.ones(self.shapes.shape[1]))
+        return np.concatenate([x for x in parts if x is not None] + [np.zeros(0)])
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """Standard deviations of :attr:`measured`, same order."""
+        parts = [self.frequency_sigma, None if self.shapes is None else self.shape_sigma.T.ravel(),
+                 self.damping_sigma]
+        parts += [np.concatenate([sd, sd]) for *_, sd in self.frf]
+        if self.orthogonality_sigma is not None:
+            parts.append(np.full(2 * len(self._shape_pairs), self.orthogonality_sigma))
+        if self.normalization_sigma is not None:
+            parts.append(np.full(self.shapes.shape[1], self.normalization_sigma))
+        return np.concatenate([x for x in parts if x is not None] + [np.zeros(0)])
+
+    def predict(self, model: SubstructureModel, p=None, q=None, r=None):
+        """Calculated ``Q`` (Att. 6 Eq. 12) and its Jacobian ``A = dQ/dP`` (Eq. 13).
+
+        Analytic derivatives with respect to ``P = (p, q, r)`` (all blocks):
+
+        - frequencies: ``d(w^2)/dx = phi^T (dK - w^2 dM) phi`` (mass-normalised ``phi``);
+        - shapes: Nelson's method (:func:`flexsat.analysis.sensitivity.modal_derivatives`),
+          then the derivative of the least-squares scale ``c``;
+        - damping ratios: ``ds = -x^T (dK + s dC + s^2 dM) x / x^T (C + 2 s M) x`` for the
+          quadratic eigenproblem ``(K + s C + s^2 M) x = 0`` (symmetric: plain transpose);
+        - FRF: ``dh = -u^T dZ v``, ``Z = K + i w C - w^2 M``, ``u = Z^-1 c``, ``v = Z^-1 b``;
+        - 0_m, 0_k, 0_n: linear in ``q`` and ``p``.
+
+        Returns
+        -------
+        values : (N,) in the order of :attr:`measured`; jacobian : (N, P + Q + R).
+        """
+        n, P, Q, R = model.n_dofs, model.n_stiffness, model.n_mass, model.n_damping
+        p, q, r = model._params(p, P, "p"), model._params(q, Q, "q"), model._params(r, R, "r")
+        K, M, C = model.K(p), model.M(q), model.C(r)
+        if self.shapes is not None:
+            if self.shape_dofs is None and self.shapes.shape[0] != n:
+                raise ValueError(f"shapes: without shape_dofs must have one row per dof ({n}), "
+                                 f"got {self.shapes.shape[0]}")
+            if self.shape_dofs is not None and self.shape_dofs.max() >= n:
+                raise ValueError(f"shape_dofs: must be dof indices < {n}")
+        modes_used = np.concatenate([m for m in (self.frequency_modes, self.shape_modes,
+                                                 self.damping_modes) if m is not None]
+                                    + [np.zeros(0, int)]).astype(int)
+        if modes_used.size and modes_used.max() >= n:
+            raise ValueError(f"frequency_modes, shape_modes, damping_modes: must be < {n}")
+        if self.damping_ratios is not None and R == 0:
+            raise ValueError("damping_ratios: the model has no damping blocks (C_blocks)")
+        values, jac = [], []
+        needed = sorted(set(np.concatenate([m for m in (self.frequency_modes, self.shape_modes)
+                                            if m is not None] + [np.zeros(0, int)]).tolist()))
+        if needed:
+            zero = np.zeros((n, n))
+            md = modal_derivatives(K, M, np.array(model.K_blocks + [zero] * Q),
+                                   np.array([zero] * P + model.M_blocks), modes=needed)
+            col = {int(mode): i for i, mode in enumerate(md.indices)}
+        if self.frequencies is not None:
+            c = [col[int(mode)] for mode in self.frequency_modes]
+            if np.any(md.frequencies[c] <= 0):
+                raise ValueError("frequency_modes: a measured mode is a rigid-body mode (w = 0)")
+            values.append(md.frequencies[c])
+            jac.append(np.hstack([md.frequency_gradient[:, c].T, np.zeros((len(c), R))]))
+        if self.shapes is not None:
+            dofs = np.arange(n) if self.shape_dofs is None else self.shape_dofs
+            for s, mode in enumerate(self.shape_modes):
+                f = md.modes[dofs, col[int(mode)]]
+                df = md.mode_gradient[:, dofs, col[int(mode)]]
+                y = self.shapes[:, s]
+                ff = f @ f
+                scale = f @ y / ff
+                d_scale = (df @ y - 2.0 * scale * (df @ f)) / ff
+                values.append(scale * f)
+                jac.append(np.hstack([(np.outer(d_scale, f) + scale * df).T,
+                                      np.zeros((dofs.size, R))]))
+        if self.damping_ratios is not None:
+            values_z, jac_z = _damping_ratios(model, K, M, C, self.damping_modes)
+            values.append(values_z)
+            jac.append(jac_z)
+        for i, (out, inp, w, _, _) in enumerate(self.frf):
+            cvec = _dof_or_vector(out, n, f"frf[{i}].output")
+            bvec = _dof_or_vector(inp, n, f"frf[{i}].input")
+            h = np.empty(w.size, complex)
+            dh = np.empty((w.size, P + Q + R), complex)
+            for k, wk in enumerate(w):
+                Z = K - wk**2 * M + 1j * wk * C
+                try:
+                    u, v = np.linalg.solve(Z, np.column_stack([cvec, bvec])).T
+                except np.linalg.LinAlgError:
+                    raise ValueError(f"frf[{i}].omegas: {wk} rad/s is an undamped resonance of "
+                                     "the model (K - w^2 M + i w C singular)") from None
+                h[k] = cvec @ v
+                dh[k] = ([-(u @ Kg @ v) for Kg in model.K_blocks]
+                         + [wk**2 * (u @ Mg @ v) for Mg in model.M_blocks]
+                         + [-1j * wk * (u @ Cg @ v) for Cg in model.C_blocks])
+            values.append(np.concatenate([h.real, h.imag]))
+            jac.append(np.vstack([dh.real, dh.imag]))
+        if self.orthogonality_sigma is not None or self.normalization_sigma is not None:
+            psi = self.shapes
+            # psi^T B psi of every block, [fixed part, blocks...], for M and K
+            forms_m = [psi.T @ B @ psi for B in [model.M0] + model.M_blocks]
+            forms_k = [psi.T @ B @ psi for B in [model.K0] + model.K_blocks]
+            nominal_m, nominal_k = np.diag(sum(forms_m)), np.diag(sum(forms_k))
+            pairs = self._shape_pairs
+            if self.orthogonality_sigma is not None:
+                for forms, nominal, scalings, offset, count in (
+                        (forms_m, nominal_m, q, P, Q), (forms_k, nominal_k, p, 0, P)):
+                    s = np.array([1.0 / np.sqrt(nominal[i] * nominal[j]) for i, j in pairs])
+                    grad = np.array([[B[i, j] for B in forms[1:]] for i, j in pairs]) \
+                        .reshape(len(pairs), count) * s[:, None]
+                    values.append(np.array([forms[0][i, j] for i, j in pairs]) * s
+                                  + grad @ scalings)
+                    block = np.zeros((len(pairs), P + Q + R))
+                    block[:, offset:offset + count] = grad
+                    jac.append(block)
+            if self.normalization_sigma is not None:
+                grad = np.array([np.diag(B) for B in forms_m[1:]]).T.reshape(-1, Q) \
+                    / nominal_m[:, None]
+                values.append(np.diag(forms_m[0]) / nominal_m + grad @ q)
+                jac.append(np.hstack([np.zeros((grad.shape[0], P)), grad,
+                                      np.zeros((grad.shape[0], R))]))
+        return np.concatenate(values), np.vstack(jac)
+
+
+def _damping_ratios(model, K, M, C, modes):
+    """Damping ratios of the damped modes paired with the undamped ``modes``, and gradients."""
+    n = model.n_dofs
+    w0 = np.sqrt(np.clip(sla.eigh(K, M, eigvals_only=True), 0.0, None))
+    A = np.block([[np.zeros((n, n)), np.eye(n)],
+                  [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
+    s_all, Z = sla.eig(A)
+    # one of each conjugate pair; overdamped (real) roots have no damping ratio below 1
+    cand = np.nonzero(s_all.imag > 0)[0]
+    pick = [int(cand[np.argmin(np.abs(np.abs(s_all[cand]) - w0[mode]))]) for mode in modes]
+    if len(set(pick)) != len(pick):
+        raise ValueError("damping_modes: two modes pair with the same damped eigenvalue (close "
+                         "modes or heavy damping)")
+    values, jac = np.empty(len(pick)), np.empty((len(pick), model.n_stiffness + model.n_mass
+                                                 + model.n_damping))
+    for row, i in enumerate(pick):
+        s, x = s_all[i], Z[:n, i]
+        ds = -np.array([x @ Kg @ x for Kg in model.K_blocks]
+                       + [s**2 * (x @ Mg @ x) for Mg in model.M_blocks]
+                       + [s * (x @ Cg @ x) for Cg in model.C_blocks]) / (x @ (C + 2.0 * s * M) @ x)
+        a = abs(s)
+        da = (s.real * ds.real + s.imag * ds.imag) / a
+        values[row] = -s.real / a
+        jac[row] = -(ds.real * a - s.real * da) / a**2
+    return values, jac
+
+
+@dataclass(frozen=True)
+class DifferentialCorrection:
+    """Result of :func:`differential_correction`.
+
+    Attributes
+    ----------
+    model : SubstructureModel with blocks scaled by the estimates (its nominal is the updated
+        model: same symmetry, sparsity and coupling pattern as the a-priori one).
+    p, q, r : stiffness, mass and damping scalings.
+    covariance : ((P+Q+R), (P+Q+R)) ``(A^T W A)^-1`` at the solution, prior rows included
+        (zeros for held parameters).
+    residual_history : weighted sum of squares ``dQ^T W dQ`` (+ prior rows) of the a-priori
+        model and after each accepted step.
+    residuals : (N,) final ``Q_measured - Q_calculated`` (order of ``CorrectionData.measured``).
+    iterations : Gauss-Newton steps taken; converged : bool.
+    """
+
+    model: SubstructureModel
+    p: np.ndarray
+    q: np.ndarray
+    r: np.ndarray
+    covariance: np.ndarray
+    residual_history: list
+    residuals: np.ndarray
+    iterations: int
+    converged: bool
+
+
+def differential_correction(model: SubstructureModel, data: CorrectionData, p0=None, q0=None,
+                            r0=None, fixed_stiffness=(), fixed_mass=(), fixed_damping=(),
+                            prior_sigma=None, n_iter=50, tol=1e-10,
+                            ) -> DifferentialCorrection:
+    """Att. 6 differential correction of the substructure scalings (Eqs. 3–13).
+
+    Gauss-Newton ``P_{i+1} = P_i + (A^T W A)^-1 A^T W dQ`` (Eqs. 9–11) on ``P = (p, q, r)``
+    (Eqs. 3–5; ``H`` and ``B`` of Eqs. 6–7 are not estimated), ``dQ = Q_measured -
+    Q_calculated`` over whichever measurements ``data`` holds (Eq. 12): undamped frequencies,
+    mode shapes, damping ratios, FRF real and imaginary parts, and the pseudo-measurements
+    ``0_m, 0_k, 0_n``; ``A = dQ/dP`` analytically (Eq. 13, :meth:`CorrectionData.predict`).
+    A step that raises the weighted sum of squares is halved (up to 30 times).
+
+    ``prior_sigma`` adds the pseudo-measurement ``0_p``: the start values as measurements of
+    the free scalings with that SD (Tikhonov regularisation of the change).
+
+    What identifies what: frequencies, shapes and damping ratios are unchanged by scaling
+    ``K, M, C`` together, so free-response data fix ratios only; the FRF (forced response)
+    fixes the scale.  A parameter combination the data do not determine raises ``ValueError``
+    naming it (or give ``prior_sigma``).  Because only the a-priori blocks are scaled, the
+    updated ``K, M, C`` keep their symmetry, sparsity and coupling pattern.
+
+    Parameters
+    ----------
+    model : SubstructureModel
+    data : CorrectionData
+    p0, q0, r0 : start (a-priori) scalings, default 1.
+    fixed_stiffness, fixed_mass, fixed_damping : indices of scalings held at the start value.
+    prior_sigma : scalar or (P+Q+R,), optional
+        SD of the scalings about their start values (``0_p``).
+    n_iter : maximum steps.  tol : convergence when every scaling moves less than ``tol``.
+
+    Returns
+    -------
+    DifferentialCorrection
+    """
+    if not isinstance(data, CorrectionData):
+        raise ValueError("data: must be a CorrectionData")
+    P, Q, R = model.n_stiffness, model.n_mass, model.n_damping
+    x0 = np.concatenate([model._params(p0, P, "p0"), model._params(q0, Q, "q0"),
+                         model._params(r0, R, "r0")])
+    names = [f"p[{k}]" for k in range(P)] + [f"q[{k}]" for k in range(Q)] \
+        + [f"r[{k}]" for k in range(R)]
+    held = []
+    for name, fixed, count, offset in (("fixed_stiffness", fixed_stiffness, P, 0),
+                                       ("fixed_mass", fixed_mass, Q, P),
+                                       ("fixed_damping", fixed_damping, R, P + Q)):
+        idx = np.asarray(fixed).ravel()
+        if idx.size and (idx.dtype.kind not in "iu" or np.any(idx < 0) or np.any(idx >= count)):
+            raise ValueError(f"{name}: must be block indices in [0, {count})")
+        held += (offset + idx.astype(int)).tolist()
+    free = np.setdiff1d(np.arange(P + Q + R), held)
+    if free.size == 0:
+        raise ValueError("fixed_stiffness, fixed_mass, fixed_damping: every parameter is held")
+    sd_prior = None
+    if prior_sigma is not None:
+        s = require_numeric(prior_sigma, "prior_sigma")
+        if s.ndim > 1 or (s.ndim == 1 and s.size != P + Q + R) or np.any(s <= 0):
+            raise ValueError(f"prior_sigma: must be a scalar or {P + Q + R} values, > 0")
+        sd_prior = np.broadcast_to(s, (P + Q + R,))[free]
+    measured, sd = data.measured, data.sigma
+    if sd_prior is None and measured.size < free.size:
+        raise ValueError(f"data: {measured.size} measurements for {free.size} free parameters: "
+                         "more parameters than data; add measurements, hold parameters, or give "
+                         "prior_sigma (0_p)")
+
+    def evaluate(x):
+        calc, A = data.predict(model, x[:P], x[P:P + Q], x[P + Q:])
+        res = (measured - calc) / sd
+        rows = A[:, free] / sd[:, None]
+        if sd_prior is not None:
+            res = np.concatenate([res, (x0 - x)[free] / sd_prior])
+            rows = np.vstack([rows, np.diag(1.0 / sd_prior)])
+        return res, rows, measured - calc
+
+    x = x0.copy()
+    res, rows, dQ = evaluate(x)
+    history, converged, it = [float(res @ res)], False, 0
+    while it < n_iter:
+        # column-normalised SVD: the rank test does not depend on the parameters' units
+        scale = np.linalg.norm(rows, axis=0)
+        if np.any(scale == 0):
+            bad = [names[k] for k in free[scale == 0]]
+            raise ValueError(f"data: {bad} do not affect any measurement; hold them or add data")
+        U, s, Vt = np.linalg.svd(rows / scale, full_matrices=False)
+        if s[-1] < 1e-8 * s[0]:
+            v = Vt[-1] / scale
+            v /= np.abs(v).max()
+            combo = " + ".join(f"{c:.2f} {names[k]}" for c, k in zip(v, free) if abs(c) > 0.05)
+            raise ValueError(f"data: the parameters are not identifiable from these measurements "
+                             f"(condition number {s[0] / max(s[-1], 1e-300):.2g}; changing "
+                             f"{combo} leaves them unchanged); add FRF data (the absolute "
+                             "scale), hold parameters, or give prior_sigma (0_p)")
+        step = (Vt.T @ ((U.T @ res) / s)) / scale
+        if np.abs(step).max() < tol:
+            converged = True
+            break
+        t = 1.0
+        for _ in range(30):
+            trial = x.copy()
+            trial[free] += t * step
+            try:
+                found = evaluate(trial)
+            except ValueError:  # K or M indefinite at the trial point: shorten the step
+                found = None
+            # round-off margin: at the minimum a full step may not lower the cost exactly
+            if found is not None and found[0] @ found[0] <= history[-1] * (1.0 + 1e-12):
+                break
+            t *= 0.5
+        else:
+            # no shorter step lowers the cost: a minimum to round-off if the Gauss-Newton
+            # step is below 1e-3 of its own standard deviation (predicted decrease < 1e-6)
+            converged = float(np.sum((U.T @ res) ** 2)) < 1e-6
+            break
+        x, it = trial, it + 1
+        res, rows, dQ = found
+        history.append(float(res @ res))
+        if t * np.abs(step).max() < tol:
+            converged = True
+            break
+    cov = np.zeros((P + Q + R, P + Q + R))
+    cov[np.ix_(free, free)] = np.linalg.inv(rows.T @ rows)
+    p, q, r = x[:P], x[P:P + Q], x[P + Q:]
+    return DifferentialCorrection(model.scaled(p, q, r), p, q, r, cov, history, dQ, it,
+                                  converged)
