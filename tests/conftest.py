@@ -22,7 +22,7 @@ IDENTIFICATION_EXAMPLE = (Path(__file__).resolve().parents[1] / "examples"
 
 def _identification_example(fast=False, **changes) -> dict:
     """The example identification scenario as a dict; ``a__b=v`` sets ``data[a][b] = v``;
-    ``fast`` shortens it for tests (8 modes, 2 minutes of reaction-wheel data)."""
+    ``fast`` shortens it for tests (2 minutes of reaction-wheel data)."""
     data = yaml.safe_load(IDENTIFICATION_EXAMPLE.read_text())
     for path, value in changes.items():
         node = data
@@ -31,7 +31,6 @@ def _identification_example(fast=False, **changes) -> dict:
             node = node[key]
         node[keys[-1]] = value
     if fast:
-        data["truth"]["modes"] = 8
         data["wheels"].update(duration="120 s", segment=1000)
     return data
 

@@ -154,6 +154,12 @@ def _html(result: IdentificationResult) -> str:
                 f"{v['updated']:.5f}") for n, v in c.scalings.items()]
     cal = c.calibration
     tri = c.triangulation
+    u = c.update
+    upd_text = (("Att. 6 differential correction, frequencies, damping ratios and "
+                 f"{u['frf_points']} FRF points" if u["method"] == "differential_correction"
+                 else "Att. 7 Creamer-Junkins, frequencies then eigenvalue real parts")
+                + f", {u['iterations']} iterations"
+                + ("" if u["converged"] else ", NOT converged"))
     images = "".join(f'<figure><img src="{f}" alt="{esc(t)}"><figcaption>{esc(t)}</figcaption>'
                      "</figure>" for f, t in FIGURES)
     return f"""<!DOCTYPE html>
@@ -172,12 +178,12 @@ the truth).</p>
 {_table(("mode", "truth", "ERA", "video", "OKID", "a priori", "updated"), freq_rows)}
 <h2>Damping ratios</h2>
 <p>A priori: Att. 6 Eq. 15, C = 2 ζ₁ω₁ M. Updated: Rayleigh damping C = r₁ M + r₂ K fitted to
-the ERA eigenvalue real parts (Att. 7 Eq. 24); r = {esc(np.array2string(c.damping_scalings,
-precision=5))}.</p>
+the measured damping; r = {esc(np.array2string(c.damping_scalings, precision=5))}.</p>
 {_table(("mode", "truth", "ERA", "a priori", "updated"), damp_rows)}
 <h2>Substructure stiffness scalings</h2>
-<p>A-priori factor on the true stiffness, the identified scaling p of the a-priori block (± 1σ),
-and the updated factor on the truth (a priori × p; 1 means recovered).</p>
+<p>Update: {esc(upd_text)}. A-priori factor on the true stiffness, the identified scaling p of
+the a-priori block (± 1σ), and the updated factor on the truth (a priori × p; 1 means
+recovered).</p>
 {_table(("substructure", "a priori", "p", "updated"), sc_rows)}
 <h2>Cameras and triangulation</h2>
 <p>{cal['n_cameras']} cameras calibrated from {esc(str(len(c.target_nodes)))} targets with
@@ -198,7 +204,7 @@ calibration covariance, Att. 6 Eqs. 34–37); peak motion
 def _write_all(result: IdentificationResult, folder: Path) -> None:
     c = result.campaign
     summary = {"scenario": result.scenario.name, "case": result.scenario.case,
-               "modes": c.modes, "scalings": c.scalings,
+               "modes": c.modes, "scalings": c.scalings, "update": c.update,
                "damping_scalings": c.damping_scalings, "calibration": c.calibration,
                "triangulation": c.triangulation, "mac_a_priori": c.mac_a_priori,
                "mac_updated": c.mac_updated}

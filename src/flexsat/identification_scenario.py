@@ -53,9 +53,10 @@ def _vector(unit: str):
 
 
 class TruthSpec(_Section):
-    """The simulated "real" structure: modes kept and modal damping (Att. 6 Table 1 default)."""
+    """The simulated "real" structure: modes kept (default all) and modal damping (Att. 6
+    Table 1 default)."""
 
-    modes: Annotated[int, Field(ge=1)] = 20
+    modes: Annotated[int, Field(ge=1)] | None = None
     damping: list[Annotated[float, Field(gt=0, lt=1)]] = Field(
         default_factory=lambda: [0.00603, 0.00489, 0.01105, 0.00596, 0.01293])
     other_damping: Annotated[float, Field(gt=0, lt=1)] = 0.01
@@ -119,7 +120,9 @@ class WheelSpec(_Section):
 
 class IdentificationSpec(_Section):
     band: quantity("Hz") = 10.0
-    era_order: Annotated[int, Field(ge=2)] = 40
+    era_order: Annotated[int, Field(ge=2)] = 80
+    update: Literal["creamer_junkins", "differential_correction"] = "creamer_junkins"
+    anti_alias: Annotated[float, Field(gt=0, lt=0.5)] = 0.4
 
 
 class IdentificationScenario(_Document):
@@ -162,6 +165,7 @@ class IdentificationScenario(_Document):
             wheel_axes=tuple(w.axes), wheel_torque_rms=w.torque_rms,
             wheel_duration=w.duration, wheel_sample_rate=w.sample_rate, frf_segment=w.segment,
             band=self.identification.band, era_order=self.identification.era_order,
+            update=self.identification.update, anti_alias=self.identification.anti_alias,
             seed=self.seed)
 
 

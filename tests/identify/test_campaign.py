@@ -12,7 +12,7 @@ S = 14.5 * 0.0254          # grid spacing, m
 RIG = CameraRig(positions=((-0.6, 1.5 * S, 2.4), (4 * S + 0.6, 1.5 * S, 2.4)),
                 aims=((2 * S, 1.5 * S, 0.0), (2 * S, 1.5 * S, 0.0)))
 CONFIG = CampaignConfig(
-    a_priori_scale={"clamp verticals": 1.15}, truth_modes=14,
+    a_priori_scale={"clamp verticals": 1.15},
     strain_gauges=((16, 21, "x"), (18, 23, "x"), (20, 25, "x"), (11, 16, "x"), (13, 18, "x"),
                    (9, 14, "x")),
     accelerometers=((1, "z"), (5, "z"), (13, "z")), targets=tuple(range(1, 21)), rig=RIG,
@@ -92,11 +92,30 @@ def test_camera_calibration_and_triangulation_are_consistent(campaign):
     assert tri["predicted_sigma_z_with_cameras_m"] > tri["predicted_sigma_z_m"]
 
 
+def test_differential_correction_update_from_free_and_forced_response():
+    """Att. 6 update from frequencies, damping ratios and the H1 FRF points together: the clamp
+    error is recovered within 1 % and the correct substructures stay within 1 %.  Not 0.5 %:
+    the Welch (Hann) smoothing biases H1 by a few 0.1 % near the sharp resonances, coherently
+    over all 18 gauge/wheel pairs, which pulls the fit by up to 0.6 % (docs/identification.md)."""
+    c = run_campaign(tamu_grid(motor_mass="0.5 kg"),
+                     dataclasses.replace(CONFIG, update="differential_correction"))
+    assert c.update["method"] == "differential_correction" and c.update["converged"]
+    assert c.update["frf_points"] > 100
+    for v in c.scalings.values():
+        assert abs(v["updated"] - 1) < 0.01
+    strong = np.median(np.abs(c.frf_updated), axis=2) > 1e-3
+    rel = np.abs(c.frf_measured - c.frf_updated) / np.abs(c.frf_measured)
+    assert np.median(rel[strong]) < 0.05
+
+
 def test_campaign_is_reproducible_and_rejects_a_blind_rig():
-    small = dataclasses.replace(CONFIG, truth_modes=8, wheel_duration=120.0, frf_segment=1000)
+    small = dataclasses.replace(CONFIG, truth_modes=8, era_order=40, wheel_duration=120.0,
+                                frf_segment=1000)
     a = run_campaign(tamu_grid(motor_mass="0.5 kg"), small)
     b = run_campaign(tamu_grid(motor_mass="0.5 kg"), small)
     assert a.modes == b.modes and a.scalings == b.scalings
     away = dataclasses.replace(RIG, aims=((10.0, 10.0, 0.0), (10.0, 10.0, 0.0)))
     with pytest.raises(ValueError, match="rig: some targets fall outside"):
         run_campaign(tamu_grid(), dataclasses.replace(small, rig=away))
+    with pytest.raises(ValueError, match="update: must be one of"):
+        dataclasses.replace(small, update="guess")

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from flexsat.cases import tamu_grid
-from flexsat.identify import Channel, harmonic_shaker, simulate_test
+from flexsat.identify import Channel, harmonic_shaker, random_force, simulate_test
 
 
 @pytest.fixture(scope="module")
@@ -44,3 +44,28 @@ def test_bad_tests_are_refused(grid):
         simulate_test(grid, harmonic_shaker(1, "z", 1.0, 1.0), [], 1.0, 100.0)
     with pytest.raises(ValueError, match=r"^excitation: must be an Excitation"):
         simulate_test(grid, [], [Channel("displacement", 1, "z")], 1.0, 100.0)
+
+
+def test_anti_alias_filters_give_the_continuous_frf_with_all_modes():
+    """Every mode of the grid (up to 335 Hz) under a random torque sampled at 50 Hz: without
+    filters the aliased modes spoil H1 (median error ~40 %); with matched 20 Hz Butterworth
+    filters on the torque and strain channels H1 is the continuous FRF below 10 Hz (median
+    < 2 %: the random error of ~70 averages at 1 % noise plus the Welch bias at resonances)."""
+    from flexsat.cases import get_case
+    from flexsat.identify.spectral import estimate_frf, frequency_response
+
+    case = get_case("tamu_grid").builder()
+    full = case.modal_model(case.n_dofs, damping=0.01)
+    sensors = [Channel("strain", 21, "x", node_a=16), Channel("strain", 14, "x", node_a=9)]
+    wheel = random_force(9, "x", 0.05, load="torque")
+    errors = {}
+    for cut in (None, 20.0):
+        test = simulate_test(full, wheel, sensors, 600.0, 50.0, noise=0.01, seed=1,
+                             anti_alias=cut)
+        frf, _ = estimate_frf(test, 1000)
+        band = (frf.abscissa > 0.3) & (frf.abscissa < 10.0)
+        H = frequency_response(full, sensors, [wheel.channel], frf.abscissa[band])
+        errors[cut] = np.median(np.abs(frf.outputs[:, :, band] - H) / np.abs(H))
+    assert errors[20.0] < 0.02 < 0.2 < errors[None]
+    with pytest.raises(ValueError, match="anti_alias: the cut-off must be below the Nyquist"):
+        simulate_test(full, wheel, sensors, 10.0, 50.0, anti_alias=25.0)

@@ -3,6 +3,11 @@ r"""An end-to-end identification campaign on a substructured finite-element case
 The loop of the Texas A&M grid experiments (seed 000 Att. 6 and 8; spec part 2 §1, §3), run on
 a simulated "true" structure:
 
+The true structure is the case's finite-element model with all its modes; the sampled tests
+have analog anti-aliasing filters on every channel (``anti_alias`` × the sample rate), as a
+real acquisition front end has, so modes above the band do not fold into it and the H1 FRF is
+the continuous one.
+
 1. **Hammer test** (free vibration, Att. 6 Fig. 2): an impulse at one node, recorded by strain
    gauges and accelerometers with noise; Markov parameters and ERA give frequencies, damping
    ratios and their uncertainty.
@@ -13,11 +18,13 @@ a simulated "true" structure:
    field is triangulated, and ERA on the target z displacements gives the mode shapes.
 3. **Reaction-wheel test** (Att. 6 L2673): random torques from the wheels, recorded by the strain
    gauges; the H1 FRFs and an OKID realization (arbitrary inputs).
-4. **Model update** (Att. 7 Eqs. 1–9 and 24): the a-priori model's substructure stiffness
-   scalings from the ERA frequencies (modes paired by the video MAC), then Rayleigh damping
-   scalings from the measured eigenvalue real parts.  The mass matrix is held: frequencies and
-   shapes fix only the stiffness-to-mass ratio (Att. 6 scales its shapes with the analytical
-   mass matrix for the same reason).
+4. **Model update**, ``update`` =
+   ``"creamer_junkins"`` (Att. 7 Eqs. 1–9 and 24): the substructure stiffness scalings from the
+   ERA frequencies (modes paired by the video MAC), then Rayleigh damping scalings from the
+   measured eigenvalue real parts; or ``"differential_correction"`` (Att. 6 Eqs. 3–13): both at
+   once from the frequencies, the damping ratios and the H1 FRF points of the wheel test.  The
+   mass matrix is held: frequencies and shapes fix only the stiffness-to-mass ratio (Att. 6
+   scales its shapes with the analytical mass matrix for the same reason).
 
 The a-priori model starts from Att. 6 Eq. 15 proportional damping ``C = 2 zeta_1 omega_1 M``.
 Everything is seeded: the same configuration gives the same result.
@@ -29,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexsat.identify.differential_correction import CorrectionData, differential_correction
 from flexsat.identify.era import Realization, era, mac, markov_parameters, okid
 from flexsat.identify.excitation import impulse_hammer, random_force, simulate_test
 from flexsat.identify.measurements import Channel, Measurement
@@ -50,6 +58,18 @@ from flexsat.structures.fem import FEModes
 from flexsat.structures.modal_model import ModalModel
 
 __all__ = ["CameraRig", "CampaignConfig", "CampaignResult", "run_campaign"]
+
+#: model-update methods: Att. 6 (free and forced response together) or Att. 7 (frequencies, then
+#: damping from the eigenvalue real parts)
+UPDATE_METHODS = ("differential_correction", "creamer_junkins")
+#: FRF points closer than this (relative) to a resonance are not used: near a resonance the fit
+#: can lock onto a wrong mode (docs/identification.md)
+RESONANCE_CLEARANCE = 0.08
+#: relative misfit allowed to the damping ratios in the Att. 6 fit: two Rayleigh coefficients
+#: cannot follow a measured pattern such as Att. 6 Table 1 (0.006, 0.005, 0.011, 0.006, 0.013),
+#: and with the ERA SDs alone that misfit would be absorbed by the stiffness scalings (the
+#: damping ratio of a Rayleigh model moves with the frequency)
+DAMPING_FORM_ERROR = 0.3
 
 #: camera parameters calibrated in the video test (principal point held; module docstring)
 VIDEO_FREE = ("xc", "yc", "zc", "a1", "a2", "a3", "f")
@@ -87,7 +107,7 @@ class CampaignConfig:
 
     truth_damping: tuple = (0.00603, 0.00489, 0.01105, 0.00596, 0.01293)
     other_damping: float = 0.01
-    truth_modes: int = 20
+    truth_modes: int | None = None
     a_priori_scale: dict = field(default_factory=dict)
     a_priori_damping: float = 0.006
     strain_gauges: tuple = ()             # (node_a, node_b, axis)
@@ -111,8 +131,15 @@ class CampaignConfig:
     wheel_sample_rate: float = 50.0
     frf_segment: int = 2000
     band: float = 10.0
-    era_order: int = 40
+    era_order: int = 80
+    update: str = "creamer_junkins"
+    frf_step: float = 0.2
+    anti_alias: float = 0.4
     seed: int = 0
+
+    def __post_init__(self):
+        if self.update not in UPDATE_METHODS:
+            raise ValueError(f"update: must be one of {UPDATE_METHODS}, got {self.update!r}")
 
 
 @dataclass(frozen=True)
@@ -122,12 +149,14 @@ class CampaignResult:
     Frequencies in Hz.  ``modes`` pairs each identified mode with a model mode (0-based
     ``model_index``); ``scalings`` gives, per substructure, the a-priori factor on the true
     stiffness, the identified scaling ``p`` of the a-priori block with its standard deviation,
-    and the updated factor on the truth (``a_priori * p``, 1 = recovered).
+    and the updated factor on the truth (``a_priori * p``, 1 = recovered).  ``update`` names
+    the method, the FRF points it used, its iterations and whether it converged.
     """
 
     substructures: tuple
     modes: dict
     scalings: dict
+    update: dict
     damping_scalings: np.ndarray
     mac_a_priori: np.ndarray
     mac_updated: np.ndarray
@@ -261,6 +290,52 @@ def _video_test(cfg, truth, rig, points0, calibration, rng):
     return video, tri
 
 
+def _fe_vector(asm, terms) -> np.ndarray:
+    """Vector over the assembly's dofs with ``{(node, dof): weight}`` (clamped dofs dropped)."""
+    v = np.zeros(asm.n_dofs)
+    for (node, dof), weight in terms.items():
+        try:
+            v[asm.index(int(node), dof)] += weight
+        except ValueError:
+            continue  # a clamped end does not rotate
+    return v
+
+
+def _frf_points(frf, coherence, cfg, asm, gauges, inputs, resonances) -> list:
+    """Measured FRF points for the Att. 6 fit: the paper's grid (``frf_step`` Hz from 0.4 Hz
+    to the band), away from every resonance, each with its H1 random error.
+
+    With matched anti-aliasing filters on the torque and strain channels the H1 estimate is the
+    continuous receptance.  The random error of the real and of the imaginary part is
+    ``|H| sqrt(1 - g^2) / (g sqrt(2 n_d))`` (Bendat & Piersol §9.2, ``n_d`` Welch averages);
+    the real part (Att. 6's ``h^r`` away from resonance) adds 0.5 % of ``|H|`` for the Welch
+    bias, the imaginary part 10 % (it carries the damping, whose form the model only assumes).
+    """
+    f = frf.abscissa
+    grid = np.arange(0.4, cfg.band + 1e-9, cfg.frf_step)
+    idx = np.unique([int(np.argmin(np.abs(f - g))) for g in grid])
+    w = 2 * np.pi * f[idx]
+    clear = np.all(np.abs(w[:, None] / resonances[None, :] - 1) > RESONANCE_CLEARANCE, axis=1)
+    n_avg = max(1, int((cfg.wheel_duration * cfg.wheel_sample_rate - cfg.frf_segment)
+                       // (cfg.frf_segment // 2)) + 1)
+    points = []
+    for i, g in enumerate(gauges):
+        axis = "r" + g.direction
+        c = _fe_vector(asm, {(g.node, axis): 1.0, (g.node_a, axis): -1.0})
+        gam = np.clip(coherence[i, idx], 1e-6, 1.0)
+        ok = clear & (gam > 0.9)
+        for a, ch in enumerate(inputs):
+            b = _fe_vector(asm, {(ch.node, "r" + ch.direction): 1.0})
+            H = frf.outputs[i, a, idx]
+            random = np.abs(H) * np.sqrt((1 - gam) / (2 * n_avg * gam))
+            # real part: random error + 0.5 % Welch bias; imaginary part: + 10 % of |H|, since
+            # away from resonance it carries the damping, which the Rayleigh form cannot follow
+            sd = random + 0.02 * np.abs(H) + 1j * (random + 0.1 * np.abs(H))
+            if np.any(ok):
+                points.append((c, b, w[ok], H[ok], sd[ok]))
+    return points
+
+
 def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     """Test the true structure, identify it and update the a-priori model (module docstring).
 
@@ -280,7 +355,8 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     rng = np.random.default_rng(cfg.seed)
     names = tuple(case.substructures)
     truth_asm = case.structure().assemble()
-    modes = truth_asm.modes(min(cfg.truth_modes, truth_asm.n_dofs))
+    modes = truth_asm.modes(truth_asm.n_dofs if cfg.truth_modes is None
+                            else min(cfg.truth_modes, truth_asm.n_dofs))
     truth = _modal_model(truth_asm, modes.omegas, modes.shapes,
                          _truth_damping(cfg, modes.omegas.size))
 
@@ -305,10 +381,13 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     hammer = simulate_test(truth, _blow(cfg.hammer_node, cfg.hammer_direction,
                                         cfg.hammer_impulse, cfg.sample_rate),
                            sensors, cfg.hammer_duration, cfg.sample_rate, noise=cfg.noise,
-                           seed=int(rng.integers(2**31)))
-    # channels in different units: ERA on RMS-normalised channels (eigenvalues unchanged)
+                           seed=int(rng.integers(2**31)),
+                           anti_alias=cfg.anti_alias * cfg.sample_rate)
+    # Markov parameters of structure + anti-aliasing filters from the one-sample blow (its
+    # sample average is impulse / dt); the filters' poles lie above the band and are dropped.
+    # Channels in different units: ERA on RMS-normalised channels (eigenvalues unchanged)
     scale = np.sqrt(np.mean(hammer.outputs**2, axis=1))
-    Y = markov_parameters(hammer) / scale[None, :, None]
+    Y = (hammer.outputs / (scale[:, None] * cfg.hammer_impulse * cfg.sample_rate)).T[:, :, None]
     hammer_real = era(Y, 1.0 / cfg.sample_rate, order=cfg.era_order)
     sel = _select(hammer_real, cfg.band)
     f_meas = hammer_real.frequencies[sel]
@@ -340,36 +419,54 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     if len(set(hammer_index.tolist())) != hammer_index.size:
         hammer_index = _pair(f_meas, w0 / (2 * np.pi))
 
-    # --- 4. update: stiffness (Att. 7 Eq. 9b), then damping (Eq. 24) ---------------------------
-    und = identify_undamped(sub, 2 * np.pi * f_meas, mode_indices=hammer_index,
-                            frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas))
-    lam = 2 * np.pi * f_meas * (-z_meas + 1j * np.sqrt(1 - z_meas**2))
-    dmp = identify_damping(sub, lam, und.p, None, mode_indices=hammer_index)
-    w1, phi1 = sub.modes(und.p)
-    C1 = sub.C(dmp.r)
-    zeta1 = np.clip(np.einsum("ij,ik,kj->j", phi1, C1, phi1) / (2 * w1), 1e-6, None)
-
     # --- 3. reaction-wheel test: H1 FRFs and OKID -----------------------------------------------
     wheels = [random_force(int(n), ax, cfg.wheel_torque_rms, load="torque")
               for n, ax in zip(cfg.wheel_nodes, cfg.wheel_axes)]
-    wheel_test = simulate_test(truth, wheels, gauges, cfg.wheel_duration, cfg.wheel_sample_rate,
-                               noise=cfg.noise, seed=int(rng.integers(2**31)))
-    frf, coh = estimate_frf(wheel_test, cfg.frf_segment)
-    keep = frf.abscissa <= cfg.band
-    freqs = frf.abscissa[keep]
     inputs = [w.channel for w in wheels]
-    # model FRFs with the truth's modes only: the sampled tests see the modes above the Nyquist
-    # frequency aliased into the band, and the truth has no modes beyond cfg.truth_modes
-    k = modes.omegas.size
-    a_priori_mm = _modal_model(apriori_asm, w0[:k], phi0[:, :k], zeta0[:k])
-    updated_mm = _modal_model(apriori_asm, w1[:k], phi1[:, :k], zeta1[:k])
-    frf_a = frequency_response(a_priori_mm, gauges, inputs, freqs, cfg.wheel_sample_rate)
-    frf_u = frequency_response(updated_mm, gauges, inputs, freqs, cfg.wheel_sample_rate)
+    wheel_test = simulate_test(truth, wheels, gauges, cfg.wheel_duration, cfg.wheel_sample_rate,
+                               noise=cfg.noise, seed=int(rng.integers(2**31)),
+                               anti_alias=cfg.anti_alias * cfg.wheel_sample_rate)
+    frf, coh = estimate_frf(wheel_test, cfg.frf_segment)
     gscale = np.sqrt(np.mean(wheel_test.outputs**2, axis=1))
     n_obs = int(np.ceil(2 * 2 * modes.omegas.size / len(gauges))) + 4
     Y_okid = okid(wheel_test.inputs, wheel_test.outputs / gscale[:, None], 4 * n_obs, n_obs)
     okid_real = era(Y_okid, 1.0 / cfg.wheel_sample_rate, order=cfg.era_order)
     osel = _select(okid_real, cfg.band)
+
+    # --- 4. update ------------------------------------------------------------------------------
+    r0 = np.array([2.0 * cfg.a_priori_damping * w0[0], 0.0])        # Eq. 15 in C = r1 M + r2 K
+    if cfg.update == "creamer_junkins":
+        # stiffness from the frequencies (Att. 7 Eq. 9b), then damping (Eq. 24)
+        und = identify_undamped(sub, 2 * np.pi * f_meas, mode_indices=hammer_index,
+                                frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas))
+        lam = 2 * np.pi * f_meas * (-z_meas + 1j * np.sqrt(1 - z_meas**2))
+        p1, r1 = und.p, identify_damping(sub, lam, und.p, None, mode_indices=hammer_index).r
+        p_cov = und.covariance[: len(names), : len(names)]
+        update = {"method": cfg.update, "frf_points": 0, "iterations": int(und.iterations),
+                  "converged": bool(und.converged)}
+    else:
+        # free and forced response together (Att. 6 Eqs. 3-13)
+        points = _frf_points(frf, coh, cfg, apriori_asm, gauges, inputs,
+                             np.concatenate([w0, 2 * np.pi * f_meas]))
+        data = CorrectionData(
+            frequencies=2 * np.pi * f_meas, frequency_modes=hammer_index,
+            frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas),
+            damping_ratios=z_meas, damping_sigma=np.hypot(z_std, DAMPING_FORM_ERROR * z_meas),
+            damping_modes=hammer_index, frf=points)
+        dc = differential_correction(sub, data, r0=r0)
+        p1, r1 = dc.p, dc.r
+        p_cov = dc.covariance[: len(names), : len(names)]
+        update = {"method": cfg.update, "frf_points": int(sum(len(pt[2]) for pt in points)),
+                  "iterations": int(dc.iterations), "converged": bool(dc.converged)}
+    w1, phi1 = sub.modes(p1)
+    C1 = sub.C(r1)
+    zeta1 = np.clip(np.einsum("ij,ik,kj->j", phi1, C1, phi1) / (2 * w1), 1e-6, None)
+
+    # the anti-aliasing filters cancel in H1: the measurement is the continuous FRF
+    keep = frf.abscissa <= cfg.band
+    freqs = frf.abscissa[keep]
+    frf_a = frequency_response(_modal_model(apriori_asm, w0, phi0, zeta0), gauges, inputs, freqs)
+    frf_u = frequency_response(_modal_model(apriori_asm, w1, phi1, zeta1), gauges, inputs, freqs)
 
     # --- tables ----------------------------------------------------------------------------------
     f_true = modes.omegas / (2 * np.pi)
@@ -400,15 +497,15 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
         "updated_hz": (w1[hammer_index] / (2 * np.pi)).tolist(),
         "updated_damping": zeta1[hammer_index].tolist(),
     }
-    std = np.sqrt(np.clip(np.diag(und.covariance)[: len(names)], 0.0, None))
+    std = np.sqrt(np.clip(np.diag(p_cov), 0.0, None))
     scalings = {n: {"a_priori": base[n], "p": float(p), "p_std": float(s),
-                    "updated": float(base[n] * p)} for n, p, s in zip(names, und.p, std)}
+                    "updated": float(base[n] * p)} for n, p, s in zip(names, p1, std)}
     mac_updated = mac(video_shapes, phi1[rows][:, :max(int(video_index.max()) + 3, 1)]) \
         if vsel.size else np.zeros((0, 0))
     mac_apriori = mac(video_shapes, phi0[rows][:, :mac_updated.shape[1]]) \
         if vsel.size else np.zeros((0, 0))
     return CampaignResult(
-        names, modes_table, scalings, dmp.r, mac_apriori, mac_updated, freqs,
+        names, modes_table, scalings, update, r1, mac_apriori, mac_updated, freqs,
         frf.outputs[:, :, keep], coh[:, keep], frf_a, frf_u, tuple(c.name for c in gauges),
         tuple(c.name for c in inputs), video_shapes, tuple(int(n) for n in cfg.targets),
         calib_summary, tri, hammer_real, video_real, okid_real)

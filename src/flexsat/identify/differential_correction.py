@@ -92,7 +92,8 @@ class CorrectionData:
         ``h^r, h^i`` (and ``R^r, R^i`` near resonance): receptances ``c^T (K + i w C - w^2 M)^-1
         b``, output and input each a dof index or an (n,) vector (a row of H, a column of B);
         complex values; ``sigma`` (scalar or per point) the SD of the real and of the
-        imaginary part.
+        imaginary part, or complex ``sd_real + 1j * sd_imag`` to weight them apart (away from
+        resonance the imaginary part carries the damping, whose form a model may not have).
     orthogonality_sigma : float, optional
         ``0_m, 0_k``: pseudo-measurements ``psi_i^T M psi_j = 0`` and ``psi_i^T K psi_j = 0``
         (i < j) of the measured shapes, each divided by the geometric mean of its two diagonal
@@ -187,10 +188,15 @@ class CorrectionData:
                                  f"vectors, got {w.size} and {h.size}")
             if np.any(w <= 0):
                 raise ValueError(f"frf[{i}].omegas: must be > 0 rad/s")
-            sd = require_numeric(sd, f"frf[{i}].sigma")
-            if sd.ndim > 1 or (sd.ndim == 1 and sd.size != w.size) or np.any(sd <= 0):
+            sd = np.asarray(sd)
+            if sd.dtype.kind not in "biufc" or not np.all(np.isfinite(sd)):
+                raise ValueError(f"frf[{i}].sigma: must be finite numbers")
+            if sd.dtype.kind != "c":
+                sd = sd + 1j * sd        # the same SD for the real and the imaginary part
+            if sd.ndim > 1 or (sd.ndim == 1 and sd.size != w.size) or np.any(sd.real <= 0) \
+                    or np.any(sd.imag <= 0):
                 raise ValueError(f"frf[{i}].sigma: must be a scalar or {w.size} values, > 0")
-            items.append((out, inp, w, h, np.broadcast_to(sd, w.shape).astype(float)))
+            items.append((out, inp, w, h, np.broadcast_to(sd, w.shape).astype(complex)))
         set_(self, "frf", items)
         if self.frequencies is None and self.shapes is None and self.damping_ratios is None \
                 and not items:
@@ -219,7 +225,7 @@ class CorrectionData:
         """Standard deviations of :attr:`measured`, same order."""
         parts = [self.frequency_sigma, None if self.shapes is None else self.shape_sigma.T.ravel(),
                  self.damping_sigma]
-        parts += [np.concatenate([sd, sd]) for *_, sd in self.frf]
+        parts += [np.concatenate([sd.real, sd.imag]) for *_, sd in self.frf]
         if self.orthogonality_sigma is not None:
             parts.append(np.full(2 * len(self._shape_pairs), self.orthogonality_sigma))
         if self.normalization_sigma is not None:

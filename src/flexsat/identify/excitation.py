@@ -13,6 +13,14 @@ outputs are read every ``oversample`` steps. Sensors:
 Noise is white, Gaussian, with standard deviation ``noise`` × the RMS of the clean channel;
 ``quantization`` rounds to an ADC step (a number, or the full-scale range / 2^bits via
 ``bits``).
+
+Anti-aliasing: with ``anti_alias`` (a cut-off in Hz) every recorded channel, outputs and inputs
+alike, passes an analog Butterworth low-pass of order :data:`ANTI_ALIAS_ORDER` before it is
+sampled, as a data-acquisition front end does. The filters are continuous states of the
+simulated system, so the exact discretisation covers them. Identical filters on the inputs and
+outputs cancel in an FRF estimate, which then approximates the continuous FRF of the structure
+(no zero-order-hold distortion and no aliased modes), and modes above the cut-off no longer fold
+into the band.
 """
 
 from __future__ import annotations
@@ -20,7 +28,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import expm
+from scipy import signal
+from scipy.linalg import block_diag, expm
 
 from flexsat.identify.measurements import Channel, Measurement
 from flexsat.validation import require_count, require_nonneg, require_positive
@@ -35,6 +44,8 @@ __all__ = [
 ]
 
 _KINDS = ("impulse", "harmonic", "random", "history")
+#: order of the analog Butterworth anti-aliasing filter of :func:`simulate_test`
+ANTI_ALIAS_ORDER = 6
 
 
 @dataclass(frozen=True)
@@ -165,8 +176,29 @@ def sensor_matrices(model, sensors, inputs):
     return A, B, C, D
 
 
+def _with_anti_alias(A, B, C, D, cutoff_hz):
+    """System + one analog low-pass per output and per input channel (module docstring).
+
+    Returns (A, B, C, D) whose outputs are the filtered outputs followed by the filtered
+    inputs."""
+    ns, r = B.shape
+    q = C.shape[0]
+    af, bf, cf, _ = signal.zpk2ss(*signal.butter(ANTI_ALIAS_ORDER, 2 * np.pi * cutoff_hz,
+                                                 analog=True, output="zpk"))
+    k = af.shape[0]
+    Af = block_diag(*([af] * (q + r)))
+    Bf = block_diag(*([bf] * (q + r)))          # (k (q + r), q + r): one input per channel
+    Cf = block_diag(*([cf] * (q + r)))
+    drive_x = np.vstack([C, np.zeros((r, ns))])  # filter inputs: C x + D u, then u
+    drive_u = np.vstack([D, np.eye(r)])
+    A_aug = np.block([[A, np.zeros((ns, k * (q + r)))], [Bf @ drive_x, Af]])
+    B_aug = np.vstack([B, Bf @ drive_u])
+    C_aug = np.hstack([np.zeros((q + r, ns)), Cf])
+    return A_aug, B_aug, C_aug, np.zeros((q + r, r))
+
+
 def simulate_test(modal_model, excitation, sensors, duration, sample_rate, noise=0.0,
-                  quantization=None, seed=None, oversample=1) -> Measurement:
+                  quantization=None, seed=None, oversample=1, anti_alias=None) -> Measurement:
     """Simulate a vibration test and record it as a :class:`Measurement`.
 
     Parameters
@@ -189,6 +221,9 @@ def simulate_test(modal_model, excitation, sensors, duration, sample_rate, noise
         Random generator seed (random inputs and noise).
     oversample : int
         Fine integration steps per sample (for pulses shorter than a sample or smooth inputs).
+    anti_alias : float, optional
+        Cut-off (Hz, below the Nyquist frequency) of the analog anti-aliasing filters on every
+        recorded channel (module docstring); the recorded inputs are then the filtered inputs.
 
     Returns
     -------
@@ -217,6 +252,13 @@ def simulate_test(modal_model, excitation, sensors, duration, sample_rate, noise
 
     chans = [e.channel for e in excitations]
     A, B, C, D = sensor_matrices(modal_model, sensors, chans)
+    n_out = C.shape[0]
+    if anti_alias is not None:
+        cut = float(require_positive(anti_alias, "anti_alias"))
+        if cut >= fs / 2:
+            raise ValueError(f"anti_alias: the cut-off must be below the Nyquist frequency "
+                             f"{fs / 2:g} Hz, got {cut:g} Hz")
+        A, B, C, D = _with_anti_alias(A, B, C, D, cut)
     ns, r = A.shape[0], B.shape[1]
     M = np.zeros((ns + r, ns + r))
     M[:ns, :ns], M[:ns, ns:] = A * h, B * h
@@ -230,6 +272,8 @@ def simulate_test(modal_model, excitation, sensors, duration, sample_rate, noise
         x = Ad @ x + Bd @ U[:, k]
     u_samples = U[:, ::over] if over == 1 else U.reshape(r, n, over).mean(axis=2)
     Y = C @ X.T + D @ U[:, ::over]
+    if anti_alias is not None:
+        Y, u_samples = Y[:n_out], Y[n_out:]
     if noise > 0:
         rms = np.sqrt(np.mean(Y**2, axis=1, keepdims=True))
         Y = Y + noise * rms * rng.standard_normal(Y.shape)
@@ -238,4 +282,5 @@ def simulate_test(modal_model, excitation, sensors, duration, sample_rate, noise
         Y = q * np.round(Y / q)
     return Measurement(np.arange(n) * dt, Y, tuple(sensors), u_samples, tuple(chans), "time",
                        attrs={"noise": noise, "seed": -1 if seed is None else int(seed),
-                              "oversample": over})
+                              "oversample": over,
+                              "anti_alias_hz": -1.0 if anti_alias is None else float(anti_alias)})
