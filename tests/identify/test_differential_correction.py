@@ -195,3 +195,16 @@ def test_differential_correction_errors(frame):
         differential_correction(model, {"frequencies": w[:4]})
     with pytest.raises(ValueError, match=r"fixed_mass: must be block indices in \[0, 3\)"):
         differential_correction(model, data, fixed_mass=[3], prior_sigma=0.1)
+
+
+def test_complex_frf_sigma_weights_real_and_imaginary_parts_apart():
+    """``sd_real + 1j sd_imag``: the SDs of the stacked (real, imaginary) measurement rows."""
+    w = np.array([10.0, 20.0])
+    h = np.array([1.0 + 0.1j, 2.0 - 0.2j])
+    data = CorrectionData(frf=[(0, 1, w, h, np.array([0.01 + 0.5j, 0.02 + 0.6j]))])
+    assert np.allclose(data.measured, [1.0, 2.0, 0.1, -0.2])
+    assert np.allclose(data.sigma, [0.01, 0.02, 0.5, 0.6])
+    same = CorrectionData(frf=[(0, 1, w, h, 0.03)])
+    assert np.allclose(same.sigma, 0.03)
+    with pytest.raises(ValueError, match=r"frf\[0\].sigma: must be a scalar or 2 values, > 0"):
+        CorrectionData(frf=[(0, 1, w, h, 0.01 - 0.5j)])
