@@ -41,6 +41,7 @@ from flexsat.identify.era import Realization, era, mac, markov_parameters, okid
 from flexsat.identify.excitation import impulse_hammer, random_force, simulate_test
 from flexsat.identify.measurements import Channel, Measurement
 from flexsat.identify.photogrammetry import (
+    CAMERA_PARAMETERS,
     Camera,
     calibrate,
     look_at,
@@ -188,6 +189,8 @@ def _blow(node, direction, impulse, rate):
 
 
 def _truth_damping(cfg: CampaignConfig, n: int) -> np.ndarray:
+    """Modal damping of the truth: ``truth_damping`` for the first modes, then
+    ``other_damping``."""
     z = np.full(n, float(cfg.other_damping))
     k = min(n, len(cfg.truth_damping))
     z[:k] = cfg.truth_damping[:k]
@@ -244,8 +247,7 @@ def _calibrate_rig(cfg, rig, points0, rng):
     guess = points0 + rng.normal(0.0, cfg.target_sigma, points0.shape)
     res = calibrate(obs, start, guess, datum=None, scale=None, sigma=sigma, free=VIDEO_FREE,
                     target_sigma=cfg.target_sigma)
-    idx = [["xc", "yc", "zc", "a1", "a2", "a3", "x0", "y0", "f"].index(p) if p != "f" else 8
-           for p in VIDEO_FREE]
+    idx = [CAMERA_PARAMETERS.index("fx" if p == "f" else p) for p in VIDEO_FREE]
     z = []
     for j, (est, tru) in enumerate(zip(res.cameras, true_cams)):
         err = est.vector()[idx] - tru.vector()[idx]
