@@ -538,3 +538,38 @@ def test_camera_priors_resolve_two_view_self_calibration():
         calibrate(obs, cams, pts, scale=(0, 1, d), sigma=0.1 * PX, camera_sigma={"k1": 1.0})
     with pytest.raises(ValueError, match="camera_sigma: must be a mapping"):
         calibrate(obs, cams, pts, scale=(0, 1, d), sigma=0.1 * PX, camera_sigma=[{}])
+
+
+def test_calibration_with_targets_out_of_view():
+    """Targets a camera does not see are NaN: those image rows drop out (4 fewer equations per
+    hidden target and camera), the fit stays within 4 sigma; a target no camera pair sees needs
+    a-priori positions."""
+    rng = np.random.default_rng(11)
+    cams = stereo_pair()
+    pts = targets(rng)
+    obs = simulate_centroids(cams, pts, PX, 0.1, quantize=False, seed=2)
+    obs[0, [5, 6]] = np.nan                       # camera 0 misses targets 5 and 6
+    obs[1, 7] = np.nan                            # camera 1 misses target 7
+    init = [perturbed(c, rng, DEFAULT_FREE) for c in cams]
+    guess = pts + rng.normal(0, 3e-4, pts.shape)
+    res = calibrate(obs, init, guess, datum=None, scale=None, sigma=0.1 * PX,
+                    target_sigma=3e-4)
+    assert res.counts["equations"] == 2 * (2 * 20 - 3)
+    assert np.all(np.isnan(res.residuals_px[0, [5, 6]]))
+    assert np.all(np.isfinite(res.residuals_px[1, 5]))
+    idx = [CAMERA_PARAMETERS.index("fx" if n == "f" else n) for n in DEFAULT_FREE]
+    err = np.concatenate([a.vector()[idx] - b.vector()[idx] for a, b in zip(res.cameras, cams)])
+    assert np.all(np.abs(err) < 4 * np.sqrt(np.diag(res.covariance)[: err.size]))
+    with pytest.raises(ValueError, match=r"observations: targets \[5, 6, 7\] are seen by fewer "
+                                         r"than 2 camera"):
+        d = np.linalg.norm(pts[1])
+        calibrate(obs, cams, pts, scale=(0, 1, d), sigma=0.1 * PX,
+                  free=("xc", "yc", "zc", "a1", "a2", "a3", "f"))
+    half = obs.copy()
+    half[1, 3, 0] = np.nan
+    with pytest.raises(ValueError, match="observations: an unseen target must be NaN in both"):
+        calibrate(half, init, guess, datum=None, scale=None, sigma=0.1 * PX, target_sigma=3e-4)
+    blind = obs.copy()
+    blind[0, :17] = np.nan
+    with pytest.raises(ValueError, match="observations: camera 0 sees 3 targets, too few"):
+        calibrate(blind, init, guess, datum=None, scale=None, sigma=0.1 * PX, target_sigma=3e-4)

@@ -406,7 +406,9 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
               max_nfev: int | None = None) -> CalibrationResult:
     """Static calibration (resection) of ``M >= 2`` cameras and ``N`` targets.
 
-    observations: ``(M, N, 2)`` image centroids (all targets seen by all cameras).
+    observations: ``(M, N, 2)`` image centroids; NaN (both coordinates) where a camera does not
+        see a target (:func:`simulate_centroids` marks targets outside the field so).  Every
+        target must be seen by two cameras (one with ``target_sigma``).
     initial_cameras: ``M`` :class:`Camera` starting values (conventions are kept).
     target_guess: ``(N, 3)`` starting target positions, already in the datum frame.
     datum: ``(i0, i1, i2)``: target ``i0`` fixed at the origin, ``i1`` on the X axis
@@ -443,7 +445,7 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
     """
     cams = _check_cameras(initial_cameras, "initial_cameras", minimum=2)
     m_cam = len(cams)
-    obs = require_numeric(observations, "observations")
+    obs = _observations(observations)
     targets = require_numeric(target_guess, "target_guess")
     if targets.ndim != 2 or targets.shape[1] != 3:
         raise ValueError(f"target_guess: must have shape (N, 3), got {targets.shape}")
@@ -453,6 +455,8 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
                          f"for {m_cam} cameras and {n_pts} targets, got {obs.shape}")
     free = _free_indices(free)
     sig = float(require_positive(sigma, "sigma"))
+    seen = np.isfinite(obs[..., 0])                                # (M, N)
+    _check_visibility(seen, target_sigma is not None, len(free))
 
     counts = calibration_counts(n_pts, m_cam, len(free))
     if n_pts < counts["min_points"]:
@@ -525,13 +529,15 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
             x0[j * p_cam + k] = base_vecs[j][idx["fx" if n == "f" else n]]
     x0[p_cam * m_cam:] = targets.ravel()[tgt_free]
 
-    obs_flat = obs.reshape(-1)
+    # image rows of the targets each camera sees (camera by camera, target by target, u then v)
+    visible = np.repeat(seen.reshape(-1), 2)
+    obs_flat = obs.reshape(-1)[visible]
 
     def residuals(x):
         vecs, t = unpack(x)
         pred = np.stack([_project_vec(vecs[j], cams[j].euler, cams[j].focal_sign,
                                       cams[j].distortion, t)[0] for j in range(m_cam)])
-        parts = [(pred.reshape(-1) - obs_flat) / sig]
+        parts = [(pred.reshape(-1)[visible] - obs_flat) / sig]
         if scale is not None:
             parts.append([(np.linalg.norm(t[si] - t[sj]) - sd) / ssig])
         if tsig is not None:
@@ -541,16 +547,20 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
         return np.concatenate(parts)
 
     prior_rows = np.flatnonzero(np.isfinite(cam_prior))
-    n_img = 2 * m_cam * n_pts
+    n_img = obs_flat.size
     n_tgt = tgt_free.size if tsig is not None else 0
     n_res = n_img + (scale is not None) + n_tgt + prior_rows.size
-    sparsity = lil_matrix((n_res, n_unknown), dtype=int)
+    full = lil_matrix((2 * m_cam * n_pts, n_unknown), dtype=int)   # all image rows
     for j in range(m_cam):
-        sparsity[2 * n_pts * j:2 * n_pts * (j + 1), j * p_cam:(j + 1) * p_cam] = 1
+        full[2 * n_pts * j:2 * n_pts * (j + 1), j * p_cam:(j + 1) * p_cam] = 1
     for col, k in enumerate(tgt_free):
         i = k // 3
         for j in range(m_cam):
-            sparsity[2 * n_pts * j + 2 * i:2 * n_pts * j + 2 * i + 2, p_cam * m_cam + col] = 1
+            full[2 * n_pts * j + 2 * i:2 * n_pts * j + 2 * i + 2, p_cam * m_cam + col] = 1
+    sparsity = lil_matrix((n_res, n_unknown), dtype=int)
+    sparsity[:n_img] = full.tocsr()[np.flatnonzero(visible)]
+    for col, k in enumerate(tgt_free):
+        i = k // 3
         if scale is not None and i in (si, sj):
             sparsity[n_img, p_cam * m_cam + col] = 1
         if tsig is not None:
@@ -569,10 +579,43 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
     vecs, t = unpack(sol.x)
     out_cams = [cams[j].with_vector(vecs[j]) for j in range(m_cam)]
     pred = np.stack([project(out_cams[j], t) for j in range(m_cam)])
-    counts = {**counts, "measurements": n_res, "unknowns_solved": n_unknown}
+    pred[~seen] = np.nan
+    counts = {**counts, "equations": n_img, "measurements": n_res, "unknowns_solved": n_unknown}
     return CalibrationResult(cameras=out_cams, targets=t, covariance=cov, names=names,
                              sigma0_squared=s0sq, counts=counts, residuals_px=pred - obs,
                              result=sol)
+
+
+def _observations(observations) -> np.ndarray:
+    """Image centroids; a target a camera does not see is NaN in both coordinates."""
+    if isinstance(observations, (str, bytes)):
+        raise ValueError("observations: must be a numeric (M, N, 2) array")
+    try:
+        obs = np.array(observations, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("observations: must be a numeric (M, N, 2) array") from None
+    if obs.ndim != 3 or obs.shape[-1] != 2:
+        raise ValueError(f"observations: must have shape (M, N, 2), got {obs.shape}")
+    if np.any(np.isinf(obs)):
+        raise ValueError("observations: must not contain inf (NaN marks an unseen target)")
+    if np.any(np.isnan(obs[..., 0]) != np.isnan(obs[..., 1])):
+        raise ValueError("observations: an unseen target must be NaN in both u and v")
+    return obs
+
+
+def _check_visibility(seen, priors: bool, p_cam: int) -> None:
+    """Every camera must see enough targets for its parameters, every target two cameras (one
+    with a-priori target positions)."""
+    for j, row in enumerate(seen):
+        if 2 * row.sum() < p_cam:
+            raise ValueError(f"observations: camera {j} sees {int(row.sum())} targets, too few "
+                             f"for its {p_cam} free parameters")
+    need = 1 if priors else 2
+    blind = np.flatnonzero(seen.sum(axis=0) < need)
+    if blind.size:
+        raise ValueError(f"observations: targets {blind.tolist()} are seen by fewer than {need} "
+                         "camera(s); their positions are undetermined (drop them or give "
+                         "target_sigma)")
 
 
 def _camera_prior(camera_sigma, free, m_cam) -> np.ndarray:
