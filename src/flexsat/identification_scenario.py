@@ -121,8 +121,9 @@ class WheelSpec(_Section):
 class IdentificationSpec(_Section):
     band: quantity("Hz") = 10.0
     era_order: Annotated[int, Field(ge=2)] = 80
-    update: Literal["creamer_junkins", "differential_correction"] = "creamer_junkins"
+    update: Literal["creamer_junkins", "differential_correction"] = "differential_correction"
     anti_alias: Annotated[float, Field(gt=0, lt=0.5)] = 0.4
+    bootstrap_samples: Annotated[int, Field(ge=0)] = 10
 
 
 class IdentificationScenario(_Document):
@@ -166,6 +167,7 @@ class IdentificationScenario(_Document):
             wheel_duration=w.duration, wheel_sample_rate=w.sample_rate, frf_segment=w.segment,
             band=self.identification.band, era_order=self.identification.era_order,
             update=self.identification.update, anti_alias=self.identification.anti_alias,
+            bootstrap_samples=self.identification.bootstrap_samples,
             seed=self.seed)
 
 

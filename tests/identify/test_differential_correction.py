@@ -38,19 +38,23 @@ FRAME_FRF = dict(omegas=np.array([20.0, 100.0, 200.0, 230.0, 460.0, 500.0]),
                  pairs=((3, 3), (10, 3), (20, 20)))
 
 
-def _frame_data(model, p, q, r, rng=None):
-    """8 frequencies (SD 0.1 %), 8 damping ratios (SD 2 %), 3 x 6 FRF points (SD 1 %)."""
+def _frame_data(model, p, q, r, rng=None, items=None):
+    """8 frequencies (SD 0.1 %), 8 damping ratios (SD 2 %), FRF points (SD 1 %) at the
+    FRAME_FRF omegas: 3 x 6 of the FRAME_FRF pairs, or of ``items`` (output, input, gain,
+    output_gain, input_gain), the receptance times ``gain`` (Att. 6 Eqs. 6-7)."""
+    if items is None:
+        items = [(j, k, 1.0, None, None) for j, k in FRAME_FRF["pairs"]]
     m = 8
     w, _ = model.modes(p, q)
     lam = damped_eigenvalues(model.K(p), model.M(q), model.C(r), n_modes=m)
     zeta = -lam.real / np.abs(lam)
     noise = (lambda size: rng.standard_normal(size)) if rng is not None else np.zeros
     frf = []
-    for j, k in FRAME_FRF["pairs"]:
-        h = _receptance(model, p, q, r, j, k, FRAME_FRF["omegas"])
+    for out, inp, gain, og, ig in items:
+        h = gain * _receptance(model, p, q, r, out, inp, FRAME_FRF["omegas"])
         sd = 0.01 * np.abs(h) / np.sqrt(2)  # complex SD 1 %: real and imaginary parts each
-        frf.append((j, k, FRAME_FRF["omegas"], h + sd * (noise(h.size) + 1j * noise(h.size)),
-                    sd))
+        frf.append((out, inp, FRAME_FRF["omegas"], h + sd * (noise(h.size) + 1j * noise(h.size)),
+                    sd, og, ig))
     return CorrectionData(frequencies=w[:m] * (1 + 1e-3 * noise(m)), frequency_sigma=1e-3 * w[:m],
                           damping_ratios=zeta * (1 + 0.02 * noise(m)), damping_sigma=0.02 * zeta,
                           frf=frf)
@@ -208,3 +212,138 @@ def test_complex_frf_sigma_weights_real_and_imaginary_parts_apart():
     assert np.allclose(same.sigma, 0.03)
     with pytest.raises(ValueError, match=r"frf\[0\].sigma: must be a scalar or 2 values, > 0"):
         CorrectionData(frf=[(0, 1, w, h, 0.01 - 0.5j)])
+
+
+# ------------------------------------------------------------------------------------------------
+# Output and input gains (Att. 6 Eqs. 6-7): two "strain gauges" (H rows: differences of two dofs)
+# with unknown gauge factors mu, a calibrated hammer at dof 3 (no gain) and a "motor" (a B
+# column) with an unknown current-to-torque constant nu, as in the Att. 6 grid test.
+def _gain_items(n, mu, nu):
+    """FRF items (output, input, gain, output_gain, input_gain) for :func:`_frame_data`: both
+    gauges from the hammer and from the motor."""
+    gauges = np.zeros((2, n))
+    gauges[0, [10, 20]] = (1.0, -1.0)
+    gauges[1, [5, 14]] = (1.0, -1.0)
+    torque = np.zeros(n)
+    torque[[3, 5]] = (0.5, 1.0)
+    return [(gauges[g], inp, mu[g] * (1.0 if m is None else nu[m]), g, m)
+            for g in range(2) for inp, m in ((3, None), (torque, 0))]
+
+
+def test_gain_jacobian_matches_central_differences(frame):
+    """dQ/dmu, dQ/dnu (Att. 6 Eqs. 6-7, 13), and the gain-scaled structural columns, against
+    central differences; items with an output gain, an input gain, both, and a shared gain."""
+    model = _damped(frame)
+    n = model.n_dofs
+    # off-nominal P = (p, q, r, mu, nu)
+    x = np.array([0.97, 1.02, 0.99, 1.01, 0.98, 1.03, 1.2, 0.75, 1.1, 0.9, 0.8, 1.3])
+    w, _ = model.modes(x[:3], x[3:6])
+    strain = np.zeros(n)
+    strain[[10, 20]] = (1.0, -1.0)
+    torque = np.zeros(n)
+    torque[[3, 5]] = (0.5, 1.0)
+    data = CorrectionData(
+        frequencies=w[:2], frequency_sigma=1.0,  # rows without gains: zero gain columns
+        frf=[(3, 3, [20.0, 120.0], [1.0, 1.0], 1.0, 0, None),
+             # 0.95 w_4: the flank of resonance 4, as in the test above
+             (strain, torque, [100.0, 0.95 * w[3]], [1.0, 1.0], 1.0, 1, 0),
+             (strain, 3, [60.0], [1.0], 1.0, 1, None),
+             (10, torque, [300.0], [1.0], 1.0, None, 1)])
+    assert (data.n_output_gains, data.n_input_gains) == (2, 2)
+
+    def f(y):
+        return data.predict(model, y[:3], y[3:6], y[6:8], y[8:10], y[10:])[0]
+
+    _, A = data.predict(model, x[:3], x[3:6], x[6:8], x[8:10], x[10:])
+    A_fd = np.empty_like(A)
+    for k in range(x.size):
+        # the fourth-order difference of the test above (frequency rows: eigen-solve
+        # round-off); the FRF is linear in each gain, so its gain columns are exact to ~1e-13
+        e = np.zeros(x.size)
+        e[k] = 1e-3 * x[k]
+        A_fd[:, k] = (8 * (f(x + e) - f(x - e)) - (f(x + 2 * e) - f(x - 2 * e))) / (12 * e[k])
+    scale = np.abs(A_fd).max(axis=1, keepdims=True)
+    assert np.all(scale > 0)
+    assert np.all(np.abs(A - A_fd) < 1e-6 * scale)
+    # each gain column is the FRF over the gain (Eqs. 6-7), zero where the gain is absent
+    assert np.all(A[:2, 8:] == 0)
+    assert np.all(np.abs(A_fd[:, 8:]).max(axis=0) > 0)
+
+
+def test_differential_correction_identifies_gauge_and_motor_gains(frame):
+    """Columns 2-3 stiffness +15 %, motor constant 0.8 and gauge factors (1.1, 0.95) unknown:
+    8 frequencies, 8 damping ratios and 4 x 6 FRF points recover all (Att. 6 Eqs. 6-13).
+
+    Mass held (the absolute scale); noise 0.1 % / 2 % / 1 % as in the stiffness test, 10 seeds.
+    """
+    model = _damped(frame)
+    p_true, mu_true, nu_true = np.array([1.0, 1.0 / 1.15, 1.0]), np.array([1.1, 0.95]), \
+        np.array([0.8])
+    ones = np.ones(3)
+    items = _gain_items(model.n_dofs, mu_true, nu_true)
+    for seed in range(10):
+        data = _frame_data(model, p_true, ones, np.ones(2), np.random.default_rng(seed), items)
+        res = differential_correction(model, data, fixed_mass=[0, 1, 2])
+        assert res.converged
+        sd = np.sqrt(np.diag(res.covariance))
+        # predicted SDs: stiffness 0.32 / 0.08 / 0.18 %, gauges 0.29 / 0.33 %, motor 0.24 %:
+        # 1 % is >= 3 SD of each
+        assert sd.size == 11 and np.all(sd[[0, 1, 2, 8, 9, 10]] < 0.0034)
+        for est, true in ((res.p, p_true), (res.mu, mu_true), (res.nu, nu_true)):
+            assert np.all(np.abs(est / true - 1) < 0.01)
+    # mass free: scaling K, M, C and both gauge factors together leaves every FRF item (all
+    # carry a gauge factor) and the free response unchanged
+    with pytest.raises(ValueError, match=r"not identifiable.*p\[0\].*q\[0\].*r\[0\].*mu\[0\]"
+                                         r".*mu\[1\]") as err:
+        differential_correction(model, data)
+    assert "nu[0]" not in str(err.value)  # the calibrated hammer fixes the motor relative
+    # motor items only: every item carries a gauge factor and the motor constant, so only
+    # their products are determined
+    motor = CorrectionData(frequencies=data.frequencies, frequency_sigma=data.frequency_sigma,
+                           damping_ratios=data.damping_ratios, damping_sigma=data.damping_sigma,
+                           frf=[item for item in data.frf if item[6] is not None])
+    with pytest.raises(ValueError, match=r"not identifiable.*mu\[0\].*mu\[1\].*nu\[0\]"):
+        differential_correction(model, motor, fixed_mass=[0, 1, 2])
+    # a calibrated motor (constant held at its true value) makes them identifiable again
+    res = differential_correction(model, motor, fixed_mass=[0, 1, 2], nu0=nu_true,
+                                  fixed_input_gains=[0])
+    assert res.converged and np.array_equal(res.nu, nu_true)
+    # fewer FRF items: predicted gauge SDs 0.38 / 0.35 %; within 4 of them
+    sd = np.sqrt(np.diag(res.covariance))
+    assert np.all(sd[8:10] < 0.004) and np.all(np.abs(res.mu - mu_true) < 4 * sd[8:10])
+
+
+def test_gain_errors(frame):
+    model = _damped(frame)
+    w, h = [20.0, 30.0], [1e-6 + 1e-7j, 2e-6 + 1e-7j]
+    with pytest.raises(ValueError, match=r"frf\[0\].output_gain: must be None or an index >= 0"):
+        CorrectionData(frf=[(3, 3, w, h, 1e-8, -1, None)])
+    with pytest.raises(ValueError, match=r"frf\[0\].input_gain: must be None or an index >= 0"):
+        CorrectionData(frf=[(3, 3, w, h, 1e-8, None, 1.0)])
+    with pytest.raises(ValueError, match=r"frf\[0\]: must be \(output, input, omegas, values, "
+                                         r"sigma\[, output_gain, input_gain\]\)"):
+        CorrectionData(frf=[(3, 3, w, h, 1e-8, 0)])
+    data = CorrectionData(frf=[(3, 3, w, h, 1e-8, 0, None), (10, 3, w, h, 1e-8, 1, 0)])
+    with pytest.raises(ValueError, match=r"frf\[1\].output_gain: must be < 1 \(the length of mu\), "
+                                         "got 1"):
+        data.predict(model, mu=[1.0])
+    with pytest.raises(ValueError, match=r"mu0: must have 2 entries \(one per output_gain 0..1 of "
+                                         r"data.frf\), got 3"):
+        differential_correction(model, data, mu0=[1.0, 1.0, 1.0])
+    with pytest.raises(ValueError, match=r"mu0: must have 0 entries \(data.frf names no "
+                                         r"output_gain\), got 1"):
+        differential_correction(model, CorrectionData(frf=[(3, 3, w, h, 1e-8)]), mu0=[1.0])
+    with pytest.raises(ValueError, match="nu0: must be > 0"):
+        differential_correction(model, data, nu0=[-0.8])
+    with pytest.raises(ValueError, match=r"fixed_output_gains: must be gain indices in \[0, 2\)"):
+        differential_correction(model, data, fixed_output_gains=[2])
+    with pytest.raises(ValueError, match="prior_sigma: must be a scalar or 11 values"):
+        differential_correction(model, data, prior_sigma=np.ones(8))
+    # gauge 0 wired with the opposite sign: the fit would need mu[0] = -1.1; steps to <= 0 are
+    # refused, and the fit, creeping towards 0, says so instead of returning mu[0] ~ 0
+    ones = np.ones(3)
+    flipped = _frame_data(model, np.array([1.0, 1.0 / 1.15, 1.0]), ones, np.ones(2),
+                          np.random.default_rng(0),
+                          _gain_items(model.n_dofs, np.array([-1.1, 0.95]), np.array([0.8])))
+    with pytest.raises(ValueError, match=r"mu\[0\]: the data want a gain <= 0.*check the sign"):
+        differential_correction(model, flipped, fixed_mass=[0, 1, 2])

@@ -3,6 +3,7 @@ OKID), Creamer-Junkins structural identification and model update, and stereo tr
 (camera model, calibration, dynamic triangulation)."""
 
 from flexsat.identify.era import (
+    bootstrap_uncertainty,
     Realization,
     era,
     era_dc,
@@ -54,6 +55,7 @@ __all__ = [
     "Excitation",
     "Measurement",
     "Realization",
+    "bootstrap_uncertainty",
     "SubstructureModel",
     "calibrate",
     "calibration_counts",

@@ -6,7 +6,9 @@ and forced response together: any of undamped frequencies, mode shapes (subset o
 each with its own least-squares scale), damping ratios of the damped model, FRF real and
 imaginary parts of ``(K + i w C - w^2 M)^-1`` between dof indices or H rows / B columns, and
 the pseudo-measurements ``0_m, 0_k`` (orthogonality of measured shapes), ``0_n`` (their
-normalisation) and ``0_p`` (the start scalings, a Tikhonov prior).  ``A = dQ/dP`` is
+normalisation) and ``0_p`` (the start scalings, a Tikhonov prior).  Output and input gains (Att. 6
+Eqs. 6–7: strain-gauge factors in ``H``, motor current-to-torque constants in ``B``) multiply the
+FRF items that name them and are fitted together with the structural scalings.  ``A = dQ/dP`` is
 analytic (:meth:`CorrectionData.predict`); ``(A^T W A)^-1`` is the covariance.  Only the
 a-priori blocks are scaled, so symmetry, sparsity and coupling pattern are kept.
 
@@ -70,6 +72,31 @@ def _dof_or_vector(value, n, name):
     return v
 
 
+def _gain_index(value, name):
+    """An FRF item's optional gain: None or an index >= 0 into mu (outputs) or nu (inputs)."""
+    if value is None:
+        return None
+    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 0:
+        raise ValueError(f"{name}: must be None or an index >= 0 into the gain vector, got "
+                         f"{value!r}")
+    return int(value)
+
+
+def _start_gains(values, count, name, kind):
+    """Start values of the ``count`` output (``mu0``) or input (``nu0``) gains: default 1, > 0."""
+    if values is None:
+        return np.ones(count)
+    v = require_numeric(values, name, "vector").ravel()
+    if v.size != count:
+        used = f"one per {kind} 0..{count - 1} of data.frf" if count \
+            else f"data.frf names no {kind}"
+        raise ValueError(f"{name}: must have {count} entries ({used}), got {v.size}")
+    if np.any(v <= 0):
+        raise ValueError(f"{name}: must be > 0 (gains relative to the a-priori H rows / B "
+                         "columns)")
+    return v
+
+
 @dataclass(frozen=True, eq=False)
 class CorrectionData:
     """Measurements ``Q`` of the Att. 6 differential correction (Eq. 12), each with its SD.
@@ -88,12 +115,17 @@ class CorrectionData:
     damping_ratios, damping_sigma, damping_modes
         ``zeta``: ``-Re(s)/|s|`` of the damped eigenvalue ``s`` nearest (in modulus) to the
         undamped frequency of each mode.
-    frf : list of (output, input, omegas, values, sigma)
-        ``h^r, h^i`` (and ``R^r, R^i`` near resonance): receptances ``c^T (K + i w C - w^2 M)^-1
-        b``, output and input each a dof index or an (n,) vector (a row of H, a column of B);
-        complex values; ``sigma`` (scalar or per point) the SD of the real and of the
-        imaginary part, or complex ``sd_real + 1j * sd_imag`` to weight them apart (away from
-        resonance the imaginary part carries the damping, whose form a model may not have).
+    frf : list of (output, input, omegas, values, sigma[, output_gain, input_gain])
+        ``h^r, h^i`` (and ``R^r, R^i`` near resonance): receptances ``mu_og nu_ig c^T (K + i w C
+        - w^2 M)^-1 b``, output and input each a dof index or an (n,) vector (a row of H, a
+        column of B); complex values; ``sigma`` (scalar or per point) the SD of the real and of
+        the imaginary part, or complex ``sd_real + 1j * sd_imag`` to weight them apart (away
+        from resonance the imaginary part carries the damping, whose form a model may not
+        have).  ``output_gain``, ``input_gain`` (default None: a calibrated sensor / input,
+        factor 1) index the output gains ``mu`` and input gains ``nu``: Att. 6 Eq. 6 with
+        ``H0 = 0`` and ``H_l`` the a-priori rows of gauge ``l``, Eq. 7 with ``B0 = 0`` and
+        ``B_m`` the a-priori columns of motor ``m``.  Items may share a gain (one gauge, several
+        inputs).
     orthogonality_sigma : float, optional
         ``0_m, 0_k``: pseudo-measurements ``psi_i^T M psi_j = 0`` and ``psi_i^T K psi_j = 0``
         (i < j) of the measured shapes, each divided by the geometric mean of its two diagonal
@@ -166,15 +198,16 @@ class CorrectionData:
                 raise ValueError(f"{name}: needs at least two measured shapes")
             set_(self, name, float(value))
         frf = self.frf
-        if isinstance(frf, tuple) and len(frf) == 5 and np.ndim(frf[2]) == 1:
+        if isinstance(frf, tuple) and len(frf) in (5, 7) and np.ndim(frf[2]) == 1:
             frf = [frf]
         items = []
         for i, item in enumerate(frf):
-            try:
-                out, inp, w, h, sd = item
-            except (TypeError, ValueError):
-                raise ValueError(f"frf[{i}]: must be (output, input, omegas, values, sigma)") \
-                    from None
+            if not isinstance(item, (tuple, list)) or len(item) not in (5, 7):
+                raise ValueError(f"frf[{i}]: must be (output, input, omegas, values, sigma"
+                                 "[, output_gain, input_gain])")
+            out, inp, w, h, sd, og, ig = (*item, None, None)[:7]  # 5-tuples: no gains
+            og = _gain_index(og, f"frf[{i}].output_gain")
+            ig = _gain_index(ig, f"frf[{i}].input_gain")
             w = require_numeric(w, f"frf[{i}].omegas", "vector").ravel()
             h = np.asarray(h)
             if h.dtype.kind not in "biufc":
@@ -196,11 +229,21 @@ class CorrectionData:
             if sd.ndim > 1 or (sd.ndim == 1 and sd.size != w.size) or np.any(sd.real <= 0) \
                     or np.any(sd.imag <= 0):
                 raise ValueError(f"frf[{i}].sigma: must be a scalar or {w.size} values, > 0")
-            items.append((out, inp, w, h, np.broadcast_to(sd, w.shape).astype(complex)))
+            items.append((out, inp, w, h, np.broadcast_to(sd, w.shape).astype(complex), og, ig))
         set_(self, "frf", items)
         if self.frequencies is None and self.shapes is None and self.damping_ratios is None \
                 and not items:
             raise ValueError("CorrectionData: give at least one kind of measurement")
+
+    @property
+    def n_output_gains(self) -> int:
+        """Length of ``mu``: the largest ``output_gain`` of :attr:`frf` + 1 (0 without)."""
+        return 1 + max((item[5] for item in self.frf if item[5] is not None), default=-1)
+
+    @property
+    def n_input_gains(self) -> int:
+        """Length of ``nu``: the largest ``input_gain`` of :attr:`frf` + 1 (0 without)."""
+        return 1 + max((item[6] for item in self.frf if item[6] is not None), default=-1)
 
     @property
     def _shape_pairs(self):
@@ -213,7 +256,7 @@ class CorrectionData:
         imaginary), 0_m, 0_k, 0_n."""
         parts = [self.frequencies, None if self.shapes is None else self.shapes.T.ravel(),
                  self.damping_ratios]
-        parts += [np.concatenate([h.real, h.imag]) for *_, h, _ in self.frf]
+        parts += [np.concatenate([item[3].real, item[3].imag]) for item in self.frf]
         if self.orthogonality_sigma is not None:
             parts.append(np.zeros(2 * len(self._shape_pairs)))
         if self.normalization_sigma is not None:
@@ -225,32 +268,48 @@ class CorrectionData:
         """Standard deviations of :attr:`measured`, same order."""
         parts = [self.frequency_sigma, None if self.shapes is None else self.shape_sigma.T.ravel(),
                  self.damping_sigma]
-        parts += [np.concatenate([sd.real, sd.imag]) for *_, sd in self.frf]
+        parts += [np.concatenate([item[4].real, item[4].imag]) for item in self.frf]
         if self.orthogonality_sigma is not None:
             parts.append(np.full(2 * len(self._shape_pairs), self.orthogonality_sigma))
         if self.normalization_sigma is not None:
             parts.append(np.full(self.shapes.shape[1], self.normalization_sigma))
         return np.concatenate([x for x in parts if x is not None] + [np.zeros(0)])
 
-    def predict(self, model: SubstructureModel, p=None, q=None, r=None):
+    def predict(self, model: SubstructureModel, p=None, q=None, r=None, mu=None, nu=None):
         """Calculated ``Q`` (Att. 6 Eq. 12) and its Jacobian ``A = dQ/dP`` (Eq. 13).
 
-        Analytic derivatives with respect to ``P = (p, q, r)`` (all blocks):
+        ``mu``, ``nu``: output and input gains (Eqs. 6–7), default 1, at least
+        :attr:`n_output_gains` and :attr:`n_input_gains` entries.  Analytic derivatives with
+        respect to ``P = (p, q, r, mu, nu)`` (Eq. 8):
 
         - frequencies: ``d(w^2)/dx = phi^T (dK - w^2 dM) phi`` (mass-normalised ``phi``);
         - shapes: Nelson's method (:func:`flexsat.analysis.sensitivity.modal_derivatives`),
           then the derivative of the least-squares scale ``c``;
         - damping ratios: ``ds = -x^T (dK + s dC + s^2 dM) x / x^T (C + 2 s M) x`` for the
           quadratic eigenproblem ``(K + s C + s^2 M) x = 0`` (symmetric: plain transpose);
-        - FRF: ``dh = -u^T dZ v``, ``Z = K + i w C - w^2 M``, ``u = Z^-1 c``, ``v = Z^-1 b``;
-        - 0_m, 0_k, 0_n: linear in ``q`` and ``p``.
+        - FRF: ``dh = -g u^T dZ v``, ``Z = K + i w C - w^2 M``, ``u = Z^-1 c``, ``v = Z^-1 b``,
+          ``g = mu_og nu_ig``; the FRF is linear in each gain, ``dh/dmu_og = h / mu_og`` (and
+          likewise ``nu_ig``), formed as the product of the other factors (no division);
+        - 0_m, 0_k, 0_n: linear in ``q`` and ``p``; the gains enter the FRF only.
 
         Returns
         -------
-        values : (N,) in the order of :attr:`measured`; jacobian : (N, P + Q + R).
+        values : (N,) in the order of :attr:`measured`; jacobian : (N, P + Q + R + S + T), S and
+        T the lengths of ``mu`` and ``nu``.
         """
         n, P, Q, R = model.n_dofs, model.n_stiffness, model.n_mass, model.n_damping
         p, q, r = model._params(p, P, "p"), model._params(q, Q, "q"), model._params(r, R, "r")
+        gains = []
+        for name, values, kind, pos in (("mu", mu, "output", 5), ("nu", nu, "input", 6)):
+            v = np.ones(getattr(self, f"n_{kind}_gains")) if values is None \
+                else require_numeric(values, name, "vector").reshape(-1)
+            for i, item in enumerate(self.frf):
+                if item[pos] is not None and item[pos] >= v.size:
+                    raise ValueError(f"frf[{i}].{kind}_gain: must be < {v.size} (the length of "
+                                     f"{name}), got {item[pos]}")
+            gains.append(v)
+        mu, nu = gains
+        S, T = mu.size, nu.size
         K, M, C = model.K(p), model.M(q), model.C(r)
         if self.shapes is not None:
             if self.shape_dofs is None and self.shapes.shape[0] != n:
@@ -295,9 +354,11 @@ class CorrectionData:
             values_z, jac_z = _damping_ratios(model, K, M, C, self.damping_modes)
             values.append(values_z)
             jac.append(jac_z)
-        for i, (out, inp, w, _, _) in enumerate(self.frf):
+        for i, (out, inp, w, _, _, og, ig) in enumerate(self.frf):
             cvec = _dof_or_vector(out, n, f"frf[{i}].output")
             bvec = _dof_or_vector(inp, n, f"frf[{i}].input")
+            g_out = 1.0 if og is None else mu[og]
+            g_in = 1.0 if ig is None else nu[ig]
             h = np.empty(w.size, complex)
             dh = np.empty((w.size, P + Q + R), complex)
             for k, wk in enumerate(w):
@@ -311,6 +372,12 @@ class CorrectionData:
                 dh[k] = ([-(u @ Kg @ v) for Kg in model.K_blocks]
                          + [wk**2 * (u @ Mg @ v) for Mg in model.M_blocks]
                          + [-1j * wk * (u @ Cg @ v) for Cg in model.C_blocks])
+            dh = np.hstack([g_out * g_in * dh, np.zeros((w.size, S + T))])
+            if og is not None:
+                dh[:, P + Q + R + og] = g_in * h
+            if ig is not None:
+                dh[:, P + Q + R + S + ig] = g_out * h
+            h = g_out * g_in * h
             values.append(np.concatenate([h.real, h.imag]))
             jac.append(np.vstack([dh.real, dh.imag]))
         if self.orthogonality_sigma is not None or self.normalization_sigma is not None:
@@ -337,7 +404,9 @@ class CorrectionData:
                 values.append(np.diag(forms_m[0]) / nominal_m + grad @ q)
                 jac.append(np.hstack([np.zeros((grad.shape[0], P)), grad,
                                       np.zeros((grad.shape[0], R))]))
-        return np.concatenate(values), np.vstack(jac)
+        # only the FRF rows depend on the gains: the other blocks get zero gain columns
+        return np.concatenate(values), np.vstack(
+            [np.pad(block, ((0, 0), (0, P + Q + R + S + T - block.shape[1]))) for block in jac])
 
 
 def _damping_ratios(model, K, M, C, modes):
@@ -376,8 +445,9 @@ class DifferentialCorrection:
     model : SubstructureModel with blocks scaled by the estimates (its nominal is the updated
         model: same symmetry, sparsity and coupling pattern as the a-priori one).
     p, q, r : stiffness, mass and damping scalings.
-    covariance : ((P+Q+R), (P+Q+R)) ``(A^T W A)^-1`` at the solution, prior rows included
-        (zeros for held parameters).
+    mu, nu : output and input gains (Att. 6 Eqs. 6–7), indexed as in ``CorrectionData.frf``.
+    covariance : (P+Q+R+S+T, P+Q+R+S+T) ``(A^T W A)^-1`` at the solution over ``(p, q, r, mu,
+        nu)``, prior rows included (zeros for held parameters).
     residual_history : weighted sum of squares ``dQ^T W dQ`` (+ prior rows) of the a-priori
         model and after each accepted step.
     residuals : (N,) final ``Q_measured - Q_calculated`` (order of ``CorrectionData.measured``).
@@ -388,6 +458,8 @@ class DifferentialCorrection:
     p: np.ndarray
     q: np.ndarray
     r: np.ndarray
+    mu: np.ndarray
+    nu: np.ndarray
     covariance: np.ndarray
     residual_history: list
     residuals: np.ndarray
@@ -397,25 +469,31 @@ class DifferentialCorrection:
 
 def differential_correction(model: SubstructureModel, data: CorrectionData, p0=None, q0=None,
                             r0=None, fixed_stiffness=(), fixed_mass=(), fixed_damping=(),
-                            prior_sigma=None, n_iter=50, tol=1e-10,
+                            prior_sigma=None, n_iter=50, tol=1e-10, mu0=None, nu0=None,
+                            fixed_output_gains=(), fixed_input_gains=(),
                             ) -> DifferentialCorrection:
-    """Att. 6 differential correction of the substructure scalings (Eqs. 3–13).
+    """Att. 6 differential correction of the substructure scalings and gains (Eqs. 3–13).
 
-    Gauss-Newton ``P_{i+1} = P_i + (A^T W A)^-1 A^T W dQ`` (Eqs. 9–11) on ``P = (p, q, r)``
-    (Eqs. 3–5; ``H`` and ``B`` of Eqs. 6–7 are not estimated), ``dQ = Q_measured -
+    Gauss-Newton ``P_{i+1} = P_i + (A^T W A)^-1 A^T W dQ`` (Eqs. 9–11) on ``P = (p, q, r, mu,
+    nu)`` (Eq. 8): the scalings of ``M, C, K`` (Eqs. 3–5) and the output and input gains of
+    ``H`` and ``B`` (Eqs. 6–7) that the FRF items of ``data`` name; ``dQ = Q_measured -
     Q_calculated`` over whichever measurements ``data`` holds (Eq. 12): undamped frequencies,
     mode shapes, damping ratios, FRF real and imaginary parts, and the pseudo-measurements
     ``0_m, 0_k, 0_n``; ``A = dQ/dP`` analytically (Eq. 13, :meth:`CorrectionData.predict`).
-    A step that raises the weighted sum of squares is halved (up to 30 times).
+    A step that raises the weighted sum of squares, or takes a gain to <= 0, is halved (up to
+    30 times).
 
     ``prior_sigma`` adds the pseudo-measurement ``0_p``: the start values as measurements of
-    the free scalings with that SD (Tikhonov regularisation of the change).
+    the free parameters with that SD (Tikhonov regularisation of the change).
 
     What identifies what: frequencies, shapes and damping ratios are unchanged by scaling
     ``K, M, C`` together, so free-response data fix ratios only; the FRF (forced response)
-    fixes the scale.  A parameter combination the data do not determine raises ``ValueError``
-    naming it (or give ``prior_sigma``).  Because only the a-priori blocks are scaled, the
-    updated ``K, M, C`` keep their symmetry, sparsity and coupling pattern.
+    fixes the scale.  A gain multiplies its FRF items like ``1 / (K, M, C)`` does, so if every
+    FRF item carries a gain the scale needs the mass (or a calibrated item, gains None); if
+    every item carries both an output and an input gain, only their products are determined.
+    A parameter combination the data do not determine raises ``ValueError`` naming it (or give
+    ``prior_sigma``).  Because only the a-priori blocks are scaled, the updated ``K, M, C``
+    keep their symmetry, sparsity and coupling pattern.
 
     Parameters
     ----------
@@ -423,9 +501,13 @@ def differential_correction(model: SubstructureModel, data: CorrectionData, p0=N
     data : CorrectionData
     p0, q0, r0 : start (a-priori) scalings, default 1.
     fixed_stiffness, fixed_mass, fixed_damping : indices of scalings held at the start value.
-    prior_sigma : scalar or (P+Q+R,), optional
-        SD of the scalings about their start values (``0_p``).
-    n_iter : maximum steps.  tol : convergence when every scaling moves less than ``tol``.
+    prior_sigma : scalar or (P+Q+R+S+T,), optional
+        SD of the parameters ``(p, q, r, mu, nu)`` about their start values (``0_p``).
+    n_iter : maximum steps.  tol : convergence when every parameter moves less than ``tol``.
+    mu0, nu0 : start output and input gains (> 0), default 1; exactly
+        ``data.n_output_gains`` and ``data.n_input_gains`` entries.
+    fixed_output_gains, fixed_input_gains : indices of gains held at the start value (e.g. a
+        calibrated gauge or motor).
 
     Returns
     -------
@@ -434,27 +516,36 @@ def differential_correction(model: SubstructureModel, data: CorrectionData, p0=N
     if not isinstance(data, CorrectionData):
         raise ValueError("data: must be a CorrectionData")
     P, Q, R = model.n_stiffness, model.n_mass, model.n_damping
+    S, T = data.n_output_gains, data.n_input_gains
+    G = P + Q + R  # the gains' first column
     x0 = np.concatenate([model._params(p0, P, "p0"), model._params(q0, Q, "q0"),
-                         model._params(r0, R, "r0")])
+                         model._params(r0, R, "r0"), _start_gains(mu0, S, "mu0", "output_gain"),
+                         _start_gains(nu0, T, "nu0", "input_gain")])
     names = [f"p[{k}]" for k in range(P)] + [f"q[{k}]" for k in range(Q)] \
-        + [f"r[{k}]" for k in range(R)]
+        + [f"r[{k}]" for k in range(R)] + [f"mu[{k}]" for k in range(S)] \
+        + [f"nu[{k}]" for k in range(T)]
     held = []
-    for name, fixed, count, offset in (("fixed_stiffness", fixed_stiffness, P, 0),
-                                       ("fixed_mass", fixed_mass, Q, P),
-                                       ("fixed_damping", fixed_damping, R, P + Q)):
+    for name, fixed, count, offset, kind in (
+            ("fixed_stiffness", fixed_stiffness, P, 0, "block"),
+            ("fixed_mass", fixed_mass, Q, P, "block"),
+            ("fixed_damping", fixed_damping, R, P + Q, "block"),
+            ("fixed_output_gains", fixed_output_gains, S, G, "gain"),
+            ("fixed_input_gains", fixed_input_gains, T, G + S, "gain")):
         idx = np.asarray(fixed).ravel()
         if idx.size and (idx.dtype.kind not in "iu" or np.any(idx < 0) or np.any(idx >= count)):
-            raise ValueError(f"{name}: must be block indices in [0, {count})")
+            raise ValueError(f"{name}: must be {kind} indices in [0, {count})")
         held += (offset + idx.astype(int)).tolist()
-    free = np.setdiff1d(np.arange(P + Q + R), held)
+    free = np.setdiff1d(np.arange(x0.size), held)
     if free.size == 0:
-        raise ValueError("fixed_stiffness, fixed_mass, fixed_damping: every parameter is held")
+        raise ValueError("fixed_stiffness, fixed_mass, fixed_damping, fixed_output_gains, "
+                         "fixed_input_gains: every parameter is held")
+    free_gains = free[free >= G]
     sd_prior = None
     if prior_sigma is not None:
         s = require_numeric(prior_sigma, "prior_sigma")
-        if s.ndim > 1 or (s.ndim == 1 and s.size != P + Q + R) or np.any(s <= 0):
-            raise ValueError(f"prior_sigma: must be a scalar or {P + Q + R} values, > 0")
-        sd_prior = np.broadcast_to(s, (P + Q + R,))[free]
+        if s.ndim > 1 or (s.ndim == 1 and s.size != x0.size) or np.any(s <= 0):
+            raise ValueError(f"prior_sigma: must be a scalar or {x0.size} values, > 0")
+        sd_prior = np.broadcast_to(s, x0.shape)[free]
     measured, sd = data.measured, data.sigma
     if sd_prior is None and measured.size < free.size:
         raise ValueError(f"data: {measured.size} measurements for {free.size} free parameters: "
@@ -462,7 +553,7 @@ def differential_correction(model: SubstructureModel, data: CorrectionData, p0=N
                          "prior_sigma (0_p)")
 
     def evaluate(x):
-        calc, A = data.predict(model, x[:P], x[P:P + Q], x[P + Q:])
+        calc, A = data.predict(model, x[:P], x[P:P + Q], x[P + Q:G], x[G:G + S], x[G + S:])
         res = (measured - calc) / sd
         rows = A[:, free] / sd[:, None]
         if sd_prior is not None:
@@ -473,7 +564,9 @@ def differential_correction(model: SubstructureModel, data: CorrectionData, p0=N
     x = x0.copy()
     res, rows, dQ = evaluate(x)
     history, converged, it = [float(res @ res)], False, 0
+    through_zero = []  # gains that the last iteration's refused trials took to <= 0
     while it < n_iter:
+        through_zero = []
         # column-normalised SVD: the rank test does not depend on the parameters' units
         scale = np.linalg.norm(rows, axis=0)
         if np.any(scale == 0):
@@ -487,7 +580,8 @@ def differential_correction(model: SubstructureModel, data: CorrectionData, p0=N
             raise ValueError(f"data: the parameters are not identifiable from these measurements "
                              f"(condition number {s[0] / max(s[-1], 1e-300):.2g}; changing "
                              f"{combo} leaves them unchanged); add FRF data (the absolute "
-                             "scale), hold parameters, or give prior_sigma (0_p)")
+                             "scale; with gains free, items from calibrated sensors or inputs, "
+                             "gain None), hold parameters, or give prior_sigma (0_p)")
         step = (Vt.T @ ((U.T @ res) / s)) / scale
         if np.abs(step).max() < tol:
             converged = True
@@ -496,10 +590,15 @@ def differential_correction(model: SubstructureModel, data: CorrectionData, p0=N
         for _ in range(30):
             trial = x.copy()
             trial[free] += t * step
-            try:
-                found = evaluate(trial)
-            except ValueError:  # K or M indefinite at the trial point: shorten the step
-                found = None
+            found = None
+            if np.any(trial[free_gains] <= 0):
+                # a gain's sign is fixed by its a-priori H row / B column: outside the model
+                through_zero = [names[k] for k in free_gains if trial[k] <= 0]
+            else:
+                try:
+                    found = evaluate(trial)
+                except ValueError:  # K or M indefinite at the trial point: shorten the step
+                    pass
             # round-off margin: at the minimum a full step may not lower the cost exactly
             if found is not None and found[0] @ found[0] <= history[-1] * (1.0 + 1e-12):
                 break
@@ -515,8 +614,14 @@ def differential_correction(model: SubstructureModel, data: CorrectionData, p0=N
         if t * np.abs(step).max() < tol:
             converged = True
             break
-    cov = np.zeros((P + Q + R, P + Q + R))
+    if through_zero:
+        # the last steps were cut short at zero: the fit creeps toward a gain of 0, where the
+        # data want the opposite sign (a near-interior minimum's steps never reach zero)
+        raise ValueError(f"{', '.join(through_zero)}: the data want a gain <= 0 (steps there "
+                         f"refused; {x[names.index(through_zero[0])]:.3g} after {it} steps): check "
+                         "the sign of its H row / B column, or start nearer")
+    cov = np.zeros((x0.size, x0.size))
     cov[np.ix_(free, free)] = np.linalg.inv(rows.T @ rows)
-    p, q, r = x[:P], x[P:P + Q], x[P + Q:]
-    return DifferentialCorrection(model.scaled(p, q, r), p, q, r, cov, history, dQ, it,
-                                  converged)
+    p, q, r = x[:P], x[P:P + Q], x[P + Q:G]
+    return DifferentialCorrection(model.scaled(p, q, r), p, q, r, x[G:G + S], x[G + S:], cov,
+                                  history, dQ, it, converged)
