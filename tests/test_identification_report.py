@@ -34,7 +34,8 @@ def test_report_files_tables_and_netcdf_round_trip(result, tmp_path):
         assert ds["era_hz"].attrs["units"] == "Hz"
     page = (out / "index.html").read_text()
     for text in ("Natural frequencies", "Damping ratios", "Substructure stiffness scalings",
-                 "clamp verticals", "frf.png", "mac.png", "kind: identification"):
+                 "clamp verticals", "frf.png", "mac.png", "kind: identification",
+                 "Reaction-wheel torque constants"):
         assert text in page
 
 

@@ -27,12 +27,16 @@ def test_example_loads_with_si_values(identification_example):
     ({"kind": "survey"}, "kind: must be 'maneuver' or 'identification'"),
     ({"hammer__force": 3}, "hammer.force: unknown key (allowed: node, direction, impulse"),
     ({"wheels__axes": ["x"]}, "wheels.axes: one torque axis per wheel node (3), got 1"),
+    ({"wheels__torque_constants": [1.0]},
+     "wheels.torque_constants: one factor per wheel (3), got 1"),
     ({"video__cameras": [{"position": [0, 0, 1], "aim": [0, 0, 0]}]},
      "video.cameras: List should have at least 2 items"),
     ({"video__focal_length": "8 kg"}, "video.focal_length"),
     ({"video__cameras": [{"position": [0, 0], "aim": [0, 0, 0]}] * 2},
      "video.cameras[0].position: must be 3 quantities"),
     ({"truth__damping": [0.01, -0.1]}, "truth.damping[1]"),
+    ({"identification__update": "creamer_junkins"},
+     "identification.update: wheels.torque_constants are identified from the FRF"),
 ])
 def test_schema_errors_name_the_field(changes, message, identification_example):
     with pytest.raises(ScenarioError) as exc:

@@ -152,6 +152,13 @@ def _html(result: IdentificationResult) -> str:
                  for k in range(len(m["era_hz"]))]
     sc_rows = [(n, f"{v['a_priori']:.4f}", f"{v['p']:.5f} ± {v['p_std']:.1e}",
                 f"{v['updated']:.5f}") for n, v in c.scalings.items()]
+    gain_html = ""
+    if c.wheel_gains:
+        rows = [(n, f"{v['true']:.4f}", f"{v['identified']:.5f} ± {v['std']:.1e}",
+                 _pct(v["identified"], v["true"])) for n, v in c.wheel_gains.items()]
+        gain_html = ("<h2>Reaction-wheel torque constants (Att. 6 Eq. 7)</h2>\n<p>True constant "
+                     "over the nominal one, identified with the structure from the FRFs.</p>\n"
+                     + _table(("wheel", "true", "identified", "error"), rows))
     cal = c.calibration
     tri = c.triangulation
     u = c.update
@@ -185,6 +192,7 @@ the measured damping; r = {esc(np.array2string(c.damping_scalings, precision=5))
 the a-priori block (± 1σ), and the updated factor on the truth (a priori × p; 1 means
 recovered).</p>
 {_table(("substructure", "a priori", "p", "updated"), sc_rows)}
+{gain_html}
 <h2>Cameras and triangulation</h2>
 <p>{cal['n_cameras']} cameras calibrated from {esc(str(len(c.target_nodes)))} targets with
 a-priori positions; parameters {esc(', '.join(cal['parameters']))}; largest calibration error
@@ -205,6 +213,7 @@ def _write_all(result: IdentificationResult, folder: Path) -> None:
     c = result.campaign
     summary = {"scenario": result.scenario.name, "case": result.scenario.case,
                "modes": c.modes, "scalings": c.scalings, "update": c.update,
+               "wheel_gains": c.wheel_gains,
                "damping_scalings": c.damping_scalings, "calibration": c.calibration,
                "triangulation": c.triangulation, "mac_a_priori": c.mac_a_priori,
                "mac_updated": c.mac_updated}

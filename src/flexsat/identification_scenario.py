@@ -106,6 +106,7 @@ class WheelSpec(_Section):
     nodes: list[int] = Field(min_length=1)
     axes: list[Literal["x", "y", "z"]] = Field(min_length=1)
     torque_rms: quantity("N*m") = 0.05
+    torque_constants: list[Annotated[float, Field(gt=0)]] = Field(default_factory=list)
     duration: quantity("s") = 300.0
     sample_rate: quantity("Hz") = 50.0
     segment: Annotated[int, Field(ge=16)] = 2000
@@ -115,6 +116,9 @@ class WheelSpec(_Section):
         if len(self.axes) != len(self.nodes):
             raise ValueError(f"axes: one torque axis per wheel node ({len(self.nodes)}), "
                              f"got {len(self.axes)}")
+        if self.torque_constants and len(self.torque_constants) != len(self.nodes):
+            raise ValueError(f"torque_constants: one factor per wheel ({len(self.nodes)}), got "
+                             f"{len(self.torque_constants)}")
         return self
 
 
@@ -148,6 +152,13 @@ class IdentificationScenario(_Document):
         get_case(name)
         return name
 
+    @model_validator(mode="after")
+    def _gains_need_the_frf(self):
+        if self.wheels.torque_constants and self.identification.update != "differential_correction":
+            raise ValueError("identification.update: wheels.torque_constants are identified from "
+                             "the FRF, which only 'differential_correction' uses")
+        return self
+
     def config(self) -> CampaignConfig:
         """The :class:`CampaignConfig` of this scenario."""
         v, w, h, s = self.video, self.wheels, self.hammer, self.sensors
@@ -164,6 +175,7 @@ class IdentificationScenario(_Document):
             video_impulse=v.impulse, video_duration=v.duration, field_rate=v.field_rate,
             target_sigma=v.target_sigma, rig=rig, wheel_nodes=tuple(w.nodes),
             wheel_axes=tuple(w.axes), wheel_torque_rms=w.torque_rms,
+            wheel_torque_constants=tuple(w.torque_constants),
             wheel_duration=w.duration, wheel_sample_rate=w.sample_rate, frf_segment=w.segment,
             band=self.identification.band, era_order=self.identification.era_order,
             update=self.identification.update, anti_alias=self.identification.anti_alias,
@@ -231,8 +243,10 @@ def run_identification(scenario: IdentificationScenario, progress=None) -> Ident
         result = run_campaign(case, scenario.config())
     except ValueError as exc:
         head = _head(str(exc))
-        path = "video" if head == "rig" else ""
-        raise ScenarioError([_locate(path, str(exc))]) from None
+        path = {"rig": "video", "wheel_torque_constants": "wheels.torque_constants"}.get(head, "")
+        message = str(exc).replace("wheel_torque_constants: ", "") if path.startswith("wheels") \
+            else str(exc)
+        raise ScenarioError([_locate(path, message)]) from None
     return IdentificationResult(scenario, result, get_case(scenario.case).source)
 
 

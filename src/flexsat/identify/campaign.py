@@ -136,6 +136,7 @@ class CampaignConfig:
     wheel_nodes: tuple = ()
     wheel_axes: tuple = ()
     wheel_torque_rms: float = 0.05
+    wheel_torque_constants: tuple = ()    # true / nominal, one per wheel; () = known exactly
     wheel_duration: float = 300.0
     wheel_sample_rate: float = 50.0
     frf_segment: int = 2000
@@ -150,6 +151,13 @@ class CampaignConfig:
     def __post_init__(self):
         if self.update not in UPDATE_METHODS:
             raise ValueError(f"update: must be one of {UPDATE_METHODS}, got {self.update!r}")
+        k = self.wheel_torque_constants
+        if k and (len(k) != len(self.wheel_nodes) or not all(np.isfinite(k)) or min(k) <= 0):
+            raise ValueError(f"wheel_torque_constants: one factor > 0 per wheel "
+                             f"({len(self.wheel_nodes)}), got {k!r}")
+        if k and self.update != "differential_correction":
+            raise ValueError("wheel_torque_constants: identifying the wheels' torque constants "
+                             "needs the FRF, i.e. update 'differential_correction'")
 
 
 @dataclass(frozen=True)
@@ -161,11 +169,15 @@ class CampaignResult:
     stiffness, the identified scaling ``p`` of the a-priori block with its standard deviation,
     and the updated factor on the truth (``a_priori * p``, 1 = recovered).  ``update`` names
     the method, the FRF points it used, its iterations and whether it converged.
+    ``wheel_gains`` (when ``wheel_torque_constants`` are given): per wheel the true torque
+    constant over the nominal one and the identified value with its SD (Att. 6 Eq. 7).
+    ``frf_updated`` is relative to the commanded torque, like the measurement.
     """
 
     substructures: tuple
     modes: dict
     scalings: dict
+    wheel_gains: dict
     update: dict
     damping_scalings: np.ndarray
     mac_a_priori: np.ndarray
@@ -312,7 +324,8 @@ def _fe_vector(asm, terms) -> np.ndarray:
     return v
 
 
-def _frf_points(frf, coherence, cfg, asm, gauges, inputs, resonances) -> list:
+def _frf_points(frf, coherence, cfg, asm, gauges, inputs, resonances, input_gains=False
+                ) -> list:
     """Measured FRF points for the Att. 6 fit: the paper's grid (``frf_step`` Hz from 0.4 Hz
     to the band), away from every resonance, each with its H1 random error.
 
@@ -343,7 +356,9 @@ def _frf_points(frf, coherence, cfg, asm, gauges, inputs, resonances) -> list:
             # away from resonance it carries the damping, which the Rayleigh form cannot follow
             sd = random + 0.02 * np.abs(H) + 1j * (random + 0.1 * np.abs(H))
             if np.any(ok):
-                points.append((c, b, w[ok], H[ok], sd[ok]))
+                item = (c, b, w[ok], H[ok], sd[ok])
+                # with unknown torque constants each wheel's column carries its gain nu[a]
+                points.append(item + (None, a) if input_gains else item)
     return points
 
 
@@ -440,6 +455,13 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     wheel_test = simulate_test(truth, wheels, gauges, cfg.wheel_duration, cfg.wheel_sample_rate,
                                noise=cfg.noise, seed=int(rng.integers(2**31)),
                                anti_alias=cfg.anti_alias * cfg.wheel_sample_rate)
+    gains = np.asarray(cfg.wheel_torque_constants, float)
+    if gains.size:
+        # the wheels deliver k x the commanded torque; the record holds the command (Att. 6
+        # L2525: B carries each motor's current-to-torque constant, not known a priori)
+        wheel_test = Measurement(wheel_test.abscissa, wheel_test.outputs,
+                                 wheel_test.output_channels, wheel_test.inputs / gains[:, None],
+                                 wheel_test.input_channels, attrs=wheel_test.attrs)
     frf, coh = estimate_frf(wheel_test, cfg.frf_segment)
     gscale = np.sqrt(np.mean(wheel_test.outputs**2, axis=1))
     n_obs = int(np.ceil(2 * 2 * modes.omegas.size / len(gauges))) + 4
@@ -448,6 +470,7 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     osel = _select(okid_real, cfg.band)
 
     # --- 4. update ------------------------------------------------------------------------------
+    wheel_gains, nu1 = {}, np.ones(len(inputs))
     r0 = np.array([2.0 * cfg.a_priori_damping * w0[0], 0.0])        # Eq. 15 in C = r1 M + r2 K
     if cfg.update == "creamer_junkins":
         # stiffness from the frequencies (Att. 7 Eq. 9b), then damping (Eq. 24)
@@ -461,7 +484,7 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     else:
         # free and forced response together (Att. 6 Eqs. 3-13)
         points = _frf_points(frf, coh, cfg, apriori_asm, gauges, inputs,
-                             np.concatenate([w0, 2 * np.pi * f_meas]))
+                             np.concatenate([w0, 2 * np.pi * f_meas]), gains.size > 0)
         data = CorrectionData(
             frequencies=2 * np.pi * f_meas, frequency_modes=hammer_index,
             frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas),
@@ -470,6 +493,11 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
         dc = differential_correction(sub, data, r0=r0)
         p1, r1 = dc.p, dc.r
         p_cov = dc.covariance[: len(names), : len(names)]
+        if gains.size:
+            nu_std = np.sqrt(np.clip(np.diag(dc.covariance)[-gains.size:], 0.0, None))
+            wheel_gains = {c.name: {"true": float(k), "identified": float(v), "std": float(sd)}
+                           for c, k, v, sd in zip(inputs, gains, dc.nu, nu_std)}
+            nu1 = dc.nu
         update = {"method": cfg.update, "frf_points": int(sum(len(pt[2]) for pt in points)),
                   "iterations": int(dc.iterations), "converged": bool(dc.converged)}
     w1, phi1 = sub.modes(p1)
@@ -481,6 +509,7 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     freqs = frf.abscissa[keep]
     frf_a = frequency_response(_modal_model(apriori_asm, w0, phi0, zeta0), gauges, inputs, freqs)
     frf_u = frequency_response(_modal_model(apriori_asm, w1, phi1, zeta1), gauges, inputs, freqs)
+    frf_u = frf_u * nu1[None, :, None]                    # relative to the commanded torque
 
     # --- tables ----------------------------------------------------------------------------------
     f_true = modes.omegas / (2 * np.pi)
@@ -519,7 +548,7 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     mac_apriori = mac(video_shapes, phi0[rows][:, :mac_updated.shape[1]]) \
         if vsel.size else np.zeros((0, 0))
     return CampaignResult(
-        names, modes_table, scalings, update, r1, mac_apriori, mac_updated, freqs,
+        names, modes_table, scalings, wheel_gains, update, r1, mac_apriori, mac_updated, freqs,
         frf.outputs[:, :, keep], coh[:, keep], frf_a, frf_u, tuple(c.name for c in gauges),
         tuple(c.name for c in inputs), video_shapes, tuple(int(n) for n in cfg.targets),
         calib_summary, tri, hammer_real, video_real, okid_real)
