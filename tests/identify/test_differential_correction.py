@@ -60,6 +60,18 @@ def _frame_data(model, p, q, r, rng=None, items=None):
                           frf=frf)
 
 
+
+def _fourth_order_jacobian(f, x):
+    """Fourth-order central differences, h = 1e-3 x: truncation ~1e-12; the eigen-solves carry
+    ~1e-11 relative round-off (eigenvalue spread 1e5), i.e. ~1e-8 after / h.  A second-order
+    difference cannot separate the two below ~1e-7."""
+    cols = []
+    for k in range(x.size):
+        e = np.zeros(x.size)
+        e[k] = 1e-3 * x[k]
+        cols.append((8 * (f(x + e) - f(x - e)) - (f(x + 2 * e) - f(x - 2 * e))) / (12 * e[k]))
+    return np.column_stack(cols)
+
 def test_correction_jacobian_matches_central_differences(frame):
     """A = dQ/dP (Att. 6 Eq. 13) of every measurement kind against central differences."""
     model = _damped(frame)
@@ -88,14 +100,7 @@ def test_correction_jacobian_matches_central_differences(frame):
         def f(y):
             return data.predict(model, y[:3], y[3:6], y[6:])[0]
 
-        A_fd = np.empty_like(A)
-        for k in range(x.size):
-            # fourth-order central difference, h = 1e-3 x: truncation ~1e-12; the eigen-solves
-            # carry ~1e-11 relative round-off (eigenvalue spread 1e5), i.e. ~1e-8 after / h.
-            # A second-order difference cannot separate the two below ~1e-7.
-            e = np.zeros(x.size)
-            e[k] = 1e-3 * x[k]
-            A_fd[:, k] = (8 * (f(x + e) - f(x - e)) - (f(x + 2 * e) - f(x - 2 * e))) / (12 * e[k])
+        A_fd = _fourth_order_jacobian(f, x)
         # error relative to each row's largest derivative (entries that vanish, e.g. the
         # frequencies' damping columns, are compared at that scale)
         scale = np.abs(A_fd).max(axis=1, keepdims=True)
@@ -255,13 +260,7 @@ def test_gain_jacobian_matches_central_differences(frame):
         return data.predict(model, y[:3], y[3:6], y[6:8], y[8:10], y[10:])[0]
 
     _, A = data.predict(model, x[:3], x[3:6], x[6:8], x[8:10], x[10:])
-    A_fd = np.empty_like(A)
-    for k in range(x.size):
-        # the fourth-order difference of the test above (frequency rows: eigen-solve
-        # round-off); the FRF is linear in each gain, so its gain columns are exact to ~1e-13
-        e = np.zeros(x.size)
-        e[k] = 1e-3 * x[k]
-        A_fd[:, k] = (8 * (f(x + e) - f(x - e)) - (f(x + 2 * e) - f(x - 2 * e))) / (12 * e[k])
+    A_fd = _fourth_order_jacobian(f, x)   # the FRF is linear in each gain: exact to ~1e-13
     scale = np.abs(A_fd).max(axis=1, keepdims=True)
     assert np.all(scale > 0)
     assert np.all(np.abs(A - A_fd) < 1e-6 * scale)
