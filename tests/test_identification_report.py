@@ -53,3 +53,18 @@ def test_failed_report_leaves_nothing(result, tmp_path, monkeypatch):
     with pytest.raises(RuntimeError):
         write_identification_report(result, tmp_path / "report")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_report_of_measured_data_without_truth(result, tmp_path):
+    """Measured data have no truth: its columns read "–" and the frequency plot compares with
+    the ERA values; the dataset stores NaN."""
+    import dataclasses
+
+    n = len(result.campaign.modes["era_hz"])
+    modes = {**result.campaign.modes, "true_hz": [None] * n, "true_damping": [None] * n}
+    measured = dataclasses.replace(result, campaign=dataclasses.replace(result.campaign,
+                                                                          modes=modes))
+    out = write_identification_report(measured, tmp_path / "report")
+    page = (out / "index.html").read_text()
+    assert "<td>–</td>" in page
+    assert np.all(np.isnan(dataset(measured)["true_hz"].values))

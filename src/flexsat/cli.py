@@ -29,6 +29,7 @@ from flexsat.identification_scenario import (
 from flexsat.mode_plot import plot_case_modes
 from flexsat.report import metric_rows, write_report
 from flexsat.scenario import ScenarioError, default_scenario, load_scenario, run_scenario
+from flexsat.text import format_optional
 from flexsat.units import Q_
 
 app = typer.Typer(
@@ -213,10 +214,6 @@ def _identification_table(result) -> Table:
     return table
 
 
-def _fmt(value, spec: str) -> str:
-    return "–" if value is None else format(value, spec)
-
-
 _SEED_FILE = re.compile(r"seed (\d{3})_[0-9a-f]{16}\.txt")
 
 
@@ -256,8 +253,9 @@ def _validation_table(results, wide: bool) -> tuple[Table, list[str], dict[str, 
             seeds[f"seed {match.group(1)}"] = match.group(0).removeprefix("seed ")
         source = _SEED_FILE.sub(r"seed \1", c.source)
         result = Text(r.status, style="green" if r.passed else "bold red")
-        published, computed = _fmt(c.published, ".10g"), _fmt(r.computed, ".7g")
-        error, tolerance = _fmt(r.relative_error, "+.1e"), Text(c.tolerance)
+        published = format_optional(c.published, ".10g")
+        computed = format_optional(r.computed, ".7g")
+        error, tolerance = format_optional(r.relative_error, "+.1e"), Text(c.tolerance)
         if wide:
             table.add_row(Text(c.case), Text(c.quantity + marks), Text(source), published, computed,
                           Text(c.unit), error, tolerance, result)

@@ -27,6 +27,7 @@ from matplotlib.figure import Figure
 
 from flexsat.identification_scenario import IdentificationResult, as_dict
 from flexsat.report import STYLE, write_atomically
+from flexsat.text import format_optional
 
 __all__ = ["FIGURES", "dataset", "write_identification_report"]
 
@@ -111,13 +112,16 @@ def _mac_figure(c, path: Path) -> None:
 def _frequency_figure(c, path: Path) -> None:
     m = c.modes
     k = np.arange(1, len(m["era_hz"]) + 1)
-    true = np.asarray(m["true_hz"])
+    known = None not in m["true_hz"]        # measured data: compare with the ERA values
+    ref = np.asarray(m["true_hz"] if known else m["era_hz"], float)
     fig = Figure(figsize=(7, 3.4), layout="constrained")
     ax = fig.add_subplot()
     for key, style, label in (("a_priori_hz", "C3s--", "a priori"), ("era_hz", "ko", "ERA"),
                               ("updated_hz", "C0^-", "updated")):
-        ax.plot(k, 100 * (np.asarray(m[key]) / true - 1), style, label=label)
-    ax.set(xlabel="mode", ylabel="error against the truth (%)", xticks=k)
+        if known or key != "era_hz":
+            ax.plot(k, 100 * (np.asarray(m[key]) / ref - 1), style, label=label)
+    ax.set(xlabel="mode", ylabel=f"error against the {'truth' if known else 'ERA'} (%)",
+           xticks=k)
     ax.axhline(0, color="0.6", lw=0.8)
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small")
@@ -133,20 +137,21 @@ def _table(head, rows) -> str:
 
 
 def _pct(a, b) -> str:
-    return f"{100 * (a / b - 1):+.3f} %"
+    return "" if b is None else f"{100 * (a / b - 1):+.3f} %"
+
 
 
 def _html(result: IdentificationResult) -> str:
     c, esc = result.campaign, html.escape
     m = c.modes
-    freq_rows = [(k + 1, f"{m['true_hz'][k]:.5f}",
+    freq_rows = [(k + 1, format_optional(m["true_hz"][k], ".5f"),
                   f"{m['era_hz'][k]:.5f} ± {m['era_hz_std'][k]:.1e}",
-                  "–" if m["video_hz"][k] is None else f"{m['video_hz'][k]:.5f}",
-                  "–" if m["okid_hz"][k] is None else f"{m['okid_hz'][k]:.5f}",
+                  format_optional(m["video_hz"][k], ".5f"),
+                  format_optional(m["okid_hz"][k], ".5f"),
                   f"{m['a_priori_hz'][k]:.5f} ({_pct(m['a_priori_hz'][k], m['true_hz'][k])})",
                   f"{m['updated_hz'][k]:.5f} ({_pct(m['updated_hz'][k], m['true_hz'][k])})")
                  for k in range(len(m["era_hz"]))]
-    damp_rows = [(k + 1, f"{m['true_damping'][k]:.5f}",
+    damp_rows = [(k + 1, format_optional(m["true_damping"][k], ".5f"),
                   f"{m['era_damping'][k]:.5f} ± {m['era_damping_std'][k]:.1e}",
                   f"{m['a_priori_damping'][k]:.5f}", f"{m['updated_damping'][k]:.5f}")
                  for k in range(len(m["era_hz"]))]
@@ -154,7 +159,8 @@ def _html(result: IdentificationResult) -> str:
                 f"{v['updated']:.5f}") for n, v in c.scalings.items()]
     gain_html = ""
     if c.wheel_gains:
-        rows = [(n, f"{v['true']:.4f}", f"{v['identified']:.5f} ± {v['std']:.1e}",
+        rows = [(n, format_optional(v["true"], ".4f"),
+                 f"{v['identified']:.5f} ± {v['std']:.1e}",
                  _pct(v["identified"], v["true"])) for n, v in c.wheel_gains.items()]
         gain_html = ("<h2>Reaction-wheel torque constants (Att. 6 Eq. 7)</h2>\n<p>True constant "
                      "over the nominal one, identified with the structure from the FRFs.</p>\n"

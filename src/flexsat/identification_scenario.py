@@ -36,6 +36,7 @@ from pydantic import BeforeValidator, Field, field_validator, model_validator
 from flexsat.cases import get_case
 from flexsat.identify.campaign import CameraRig, CampaignConfig, CampaignResult, run_campaign
 from flexsat.scenario import ScenarioError, _Document, _head, _locate, _Section, quantity
+from flexsat.text import format_optional
 from flexsat.units import to_si
 
 __all__ = ["IdentificationResult", "IdentificationScenario", "run_identification"]
@@ -255,9 +256,11 @@ def _summary_rows(result: IdentificationResult) -> list[tuple[str, list[str]]]:
     m = result.campaign.modes
     rows = []
     for k in range(len(m["era_hz"])):
-        rows.append((str(k + 1), [f"{m['true_hz'][k]:.4f}", f"{m['era_hz'][k]:.4f}",
+        rows.append((str(k + 1), [format_optional(m["true_hz"][k], ".4f"),
+                                  f"{m['era_hz'][k]:.4f}",
                                   f"{m['a_priori_hz'][k]:.4f}", f"{m['updated_hz'][k]:.4f}",
-                                  f"{m['true_damping'][k]:.5f}", f"{m['era_damping'][k]:.5f}"]))
+                                  format_optional(m["true_damping"][k], ".5f"),
+                                  f"{m['era_damping'][k]:.5f}"]))
     return rows
 
 

@@ -41,7 +41,8 @@ def test_h1_two_uncorrelated_inputs_match_model(grid):
     ins = [random_force(1, "z", 1.0), random_force(7, "x", 1.0, load="torque")]
     test = simulate_test(grid, ins, SENSORS, duration=2000.0, sample_rate=40.0, noise=0.02,
                          seed=3)
-    frf, coh = estimate_frf(test, segment=1600)
+    est = estimate_frf(test, segment=1600)
+    frf, coh = est.frf, est.coherence
     assert np.all(coh <= 1.0 + 1e-9)
     f = frf.abscissa
     model = frequency_response(grid, SENSORS, [e.channel for e in ins], f, sample_rate=40.0)
@@ -64,7 +65,8 @@ def test_h1_exact_for_static_gain_and_one_sample_delay():
     y = np.vstack([2 * u[0] + 3 * u[1], np.r_[0.0, u[0, :-1]]])
     ch = [Channel("displacement", n, "z") for n in (1, 2)]
     m = Measurement(np.arange(20_000) * 0.01, y, ch, u, [Channel("force", n, "z") for n in (1, 2)])
-    frf, coh = estimate_frf(m, 256)
+    est = estimate_frf(m, 256)
+    frf, coh = est.frf, est.coherence
     H = frf.outputs
     assert np.allclose(H[0, 0], 2.0, atol=1e-12) and np.allclose(H[0, 1], 3.0, atol=1e-12)
     delay = np.exp(-2j * np.pi * frf.abscissa * 0.01)
@@ -88,8 +90,35 @@ def test_estimate_frf_bad_input(grid):
         estimate_frf(test, segment=10_000)
     with pytest.raises(ValueError, match="overlap"):
         estimate_frf(test, segment=64, overlap=1.0)
-    frf, _ = estimate_frf(test, segment=64)
+    frf = estimate_frf(test, segment=64).frf
     with pytest.raises(ValueError, match="measurement"):
         estimate_frf(frf, segment=64)
     with pytest.raises(ValueError, match="frequencies_hz"):
         frequency_response(grid, SENSORS, [Channel("force", 1, "z")], [1.0, np.nan])
+
+
+def test_h1_random_error_matches_the_scatter_over_tests(grid):
+    """Over 16 independent random tests the real and imaginary H1 errors scatter as the
+    predicted SD (rms ratio within 0.7-1.4: 16 x ~20 points give ~5 % statistical spread, the
+    rest is the first-order formula), including an element that is zero by symmetry (torque
+    about y at the centre node, strain gauge on the centre column)."""
+    sensors = [Channel("strain", 23, "x", node_a=18), Channel("strain", 21, "x", node_a=16)]
+    ins = [random_force(1, "z", 1.0), random_force(3, "y", 1.0, load="torque")]
+    f_pick = np.array([0.5, 1.5, 3.0, 4.0])
+    ratios = {}
+    errs, preds = [], []
+    for seed in range(16):
+        test = simulate_test(grid, ins, sensors, duration=400.0, sample_rate=20.0, noise=0.05,
+                             seed=seed)
+        est = estimate_frf(test, segment=400)
+        k = [int(np.argmin(np.abs(est.frf.abscissa - f))) for f in f_pick]
+        H = frequency_response(grid, sensors, [e.channel for e in ins], est.frf.abscissa[k],
+                               sample_rate=20.0)
+        errs.append(est.frf.outputs[:, :, k] - H)
+        preds.append(est.std[:, :, k])
+    errs, preds = np.array(errs), np.array(preds)
+    assert np.abs(H[0, 1]).max() < 1e-12 * np.abs(H).max()        # zero by symmetry
+    for part in (np.real, np.imag):
+        rms = np.sqrt(np.mean(part(errs) ** 2, axis=(0, 3)))        # (q, r)
+        ratios = rms / np.sqrt(np.mean(preds**2, axis=(0, 3)))
+        assert np.all((ratios > 0.7) & (ratios < 1.4)), ratios

@@ -66,7 +66,8 @@ from flexsat.identify.structural import (
 from flexsat.structures.fem import FEModes
 from flexsat.structures.modal_model import ModalModel
 
-__all__ = ["CameraRig", "CampaignConfig", "CampaignResult", "run_campaign"]
+__all__ = ["CameraRig", "CampaignConfig", "CampaignResult", "TestRecords", "identify_and_update",
+           "run_campaign", "simulate_records"]
 
 #: model-update methods: Att. 6 (free and forced response together) or Att. 7 (frequencies, then
 #: damping from the eigenvalue real parts)
@@ -194,7 +195,7 @@ class CampaignResult:
     calibration: dict
     triangulation: dict
     hammer_realization: Realization = field(repr=False)
-    video_realization: Realization = field(repr=False)
+    video_realization: Realization | None = field(repr=False)
     okid_realization: Realization = field(repr=False)
 
 
@@ -276,7 +277,8 @@ def _calibrate_rig(cfg, rig, points0, rng):
         z.append(err / std)
     z = np.concatenate(z)
     return res, {"parameters": list(VIDEO_FREE), "n_cameras": len(true_cams),
-                 "normalised_errors": z.tolist(), "max_abs_normalised_error": float(np.abs(z).max()),
+                 "normalised_errors": z.tolist(),
+                 "max_abs_normalised_error": float(np.abs(z).max()),
                  "sigma0_squared": float(res.sigma0_squared),
                  "image_sigma_px": float(rig.noise_px / np.sqrt(n_fields))}
 
@@ -324,24 +326,23 @@ def _fe_vector(asm, terms) -> np.ndarray:
     return v
 
 
-def _frf_points(frf, coherence, cfg, asm, gauges, inputs, resonances, input_gains=False
-                ) -> list:
+def _frf_points(estimate, cfg, asm, gauges, inputs, resonances, input_gains=False) -> list:
     """Measured FRF points for the Att. 6 fit: the paper's grid (``frf_step`` Hz from 0.4 Hz
     to the band), away from every resonance, each with its H1 random error.
 
     With matched anti-aliasing filters on the torque and strain channels the H1 estimate is the
-    continuous receptance.  The random error of the real and of the imaginary part is
-    ``|H| sqrt(1 - g^2) / (g sqrt(2 n_d))`` (Bendat & Piersol §9.2, ``n_d`` Welch averages);
-    the real part (Att. 6's ``h^r`` away from resonance) adds 0.5 % of ``|H|`` for the Welch
-    bias, the imaginary part 10 % (it carries the damping, whose form the model only assumes).
+    continuous receptance.  Each point's SD is its H1 random error
+    (:class:`~flexsat.identify.spectral.FRFEstimate`); the real part (Att. 6's ``h^r`` away
+    from resonance) adds 0.5 % of ``|H|`` for the Welch bias, the imaginary part 10 % (it
+    carries the damping, whose form the model only assumes).  Points where the output's
+    coherence is below 0.9 are left out.
     """
+    frf, coherence = estimate.frf, estimate.coherence
     f = frf.abscissa
     grid = np.arange(0.4, cfg.band + 1e-9, cfg.frf_step)
     idx = np.unique([int(np.argmin(np.abs(f - g))) for g in grid])
     w = 2 * np.pi * f[idx]
     clear = np.all(np.abs(w[:, None] / resonances[None, :] - 1) > RESONANCE_CLEARANCE, axis=1)
-    n_avg = max(1, int((cfg.wheel_duration * cfg.wheel_sample_rate - cfg.frf_segment)
-                       // (cfg.frf_segment // 2)) + 1)
     points = []
     for i, g in enumerate(gauges):
         axis = "r" + g.direction
@@ -351,10 +352,10 @@ def _frf_points(frf, coherence, cfg, asm, gauges, inputs, resonances, input_gain
         for a, ch in enumerate(inputs):
             b = _fe_vector(asm, {(ch.node, "r" + ch.direction): 1.0})
             H = frf.outputs[i, a, idx]
-            random = np.abs(H) * np.sqrt((1 - gam) / (2 * n_avg * gam))
+            random = estimate.std[i, a, idx]
             # real part: random error + 0.5 % Welch bias; imaginary part: + 10 % of |H|, since
             # away from resonance it carries the damping, which the Rayleigh form cannot follow
-            sd = random + 0.02 * np.abs(H) + 1j * (random + 0.1 * np.abs(H))
+            sd = random + 0.005 * np.abs(H) + 1j * (random + 0.1 * np.abs(H))
             if np.any(ok):
                 item = (c, b, w[ok], H[ok], sd[ok])
                 # with unknown torque constants each wheel's column carries its gain nu[a]
@@ -362,29 +363,127 @@ def _frf_points(frf, coherence, cfg, asm, gauges, inputs, resonances, input_gain
     return points
 
 
+@dataclass(frozen=True)
+class TestRecords:
+    """What the tests recorded: the data an identification starts from, simulated by
+    :func:`simulate_records` or read from test files (e.g. :meth:`Measurement.from_uff`).
+
+    Attributes
+    ----------
+    hammer : Measurement
+        Time histories of the hammer test with the blow's force as input.
+    wheels : Measurement
+        Time histories of the reaction-wheel test with the commanded torques as inputs (the
+        output channels: the strain gauges whose FRFs the update fits).
+    video : Measurement or None
+        Target displacements normal to the structure (``z``) with the blow as input.
+    calibration, triangulation : dict
+        Summaries of the camera calibration and the triangulation (empty for recorded data).
+    """
+
+    hammer: Measurement
+    wheels: Measurement
+    video: Measurement | None = None
+    calibration: dict = field(default_factory=dict)
+    triangulation: dict = field(default_factory=dict)
+
+
+def _true_modes(case, cfg: CampaignConfig):
+    """The truth: the case's finite-element model with ``truth_modes`` modes (default all)."""
+    asm = case.structure().assemble()
+    modes = asm.modes(asm.n_dofs if cfg.truth_modes is None
+                      else min(cfg.truth_modes, asm.n_dofs))
+    return asm, _modal_model(asm, modes.omegas, modes.shapes,
+                             _truth_damping(cfg, modes.omegas.size))
+
+
+def simulate_records(case, cfg: CampaignConfig) -> TestRecords:
+    """Run the hammer, video and reaction-wheel tests on the true structure (module docstring).
+
+    The truth is the case as built, with ``cfg.truth_damping``; the strain and accelerometer
+    channels have anti-aliasing filters and noise; the hammer's force is recorded as the
+    one-sample blow it is; the video test is calibrated and triangulated as in Att. 6.
+    """
+    rng = np.random.default_rng(cfg.seed)
+    asm, truth = _true_modes(case, cfg)
+    gauges = [Channel("strain", int(b), ax, node_a=int(a)) for a, b, ax in cfg.strain_gauges]
+    accels = [Channel("acceleration", int(n), d) for n, d in cfg.accelerometers]
+    blow = _blow(cfg.hammer_node, cfg.hammer_direction, cfg.hammer_impulse, cfg.sample_rate)
+    hammer = simulate_test(truth, blow, gauges + accels, cfg.hammer_duration, cfg.sample_rate,
+                           noise=cfg.noise, seed=int(rng.integers(2**31)),
+                           anti_alias=cfg.anti_alias * cfg.sample_rate)
+    # a hammer's force record is its one-sample blow (impulse / dt): the output filters then
+    # belong to the identified system, and their poles lie above the band
+    pulse = np.zeros((1, hammer.abscissa.size))
+    pulse[0, 0] = cfg.hammer_impulse * cfg.sample_rate
+    hammer = Measurement(hammer.abscissa, hammer.outputs, hammer.output_channels, pulse,
+                         hammer.input_channels, attrs=hammer.attrs)
+
+    coords = {int(n): xyz for n, xyz in zip(asm.node_ids, asm.coordinates)}
+    points0 = np.array([coords[int(n)] for n in cfg.targets], float)
+    calib, calib_summary = _calibrate_rig(cfg, cfg.rig, points0, rng)
+    video, tri = _video_test(cfg, truth, cfg.rig, points0, calib, rng)
+
+    wheels = [random_force(int(n), ax, cfg.wheel_torque_rms, load="torque")
+              for n, ax in zip(cfg.wheel_nodes, cfg.wheel_axes)]
+    wheel_test = simulate_test(truth, wheels, gauges, cfg.wheel_duration, cfg.wheel_sample_rate,
+                               noise=cfg.noise, seed=int(rng.integers(2**31)),
+                               anti_alias=cfg.anti_alias * cfg.wheel_sample_rate)
+    gains = np.asarray(cfg.wheel_torque_constants, float)
+    if gains.size:
+        # the wheels deliver k x the commanded torque; the record holds the command (Att. 6
+        # L2525: B carries each motor's current-to-torque constant, not known a priori)
+        wheel_test = Measurement(wheel_test.abscissa, wheel_test.outputs,
+                                 wheel_test.output_channels, wheel_test.inputs / gains[:, None],
+                                 wheel_test.input_channels, attrs=wheel_test.attrs)
+    return TestRecords(hammer, wheel_test, video, calib_summary, tri)
+
+
 def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
-    """Test the true structure, identify it and update the a-priori model (module docstring).
+    """Test the true structure (:func:`simulate_records`), identify it and update the a-priori
+    model (:func:`identify_and_update`), with the truth in the tables."""
+    return identify_and_update(case, cfg, simulate_records(case, cfg),
+                               truth=_true_modes(case, cfg)[1])
+
+
+def _nearest(f_list, targets_hz, tolerance=0.05):
+    """The value of ``f_list`` nearest each target (relative ``tolerance``), else None."""
+    f_list = np.asarray(f_list)
+    out = []
+    for f in targets_hz:
+        k = int(np.argmin(np.abs(f_list - f))) if f_list.size else -1
+        out.append(float(f_list[k]) if k >= 0 and abs(f_list[k] / f - 1) < tolerance else None)
+    return out
+
+
+def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=None
+                        ) -> CampaignResult:
+    """Identify the recorded tests and update the a-priori model (module docstring, 1-4).
 
     Parameters
     ----------
     case : object
         A case with ``structure(stiffness_scale=...)`` (a :class:`~flexsat.structures.fem.
         Structure` whose named substructure stiffnesses scale) and ``substructures`` (names),
-        e.g. :func:`flexsat.cases.tamu_grid.tamu_grid`.  The truth is the case as built; the
-        a-priori model has ``cfg.a_priori_scale`` on its substructure stiffnesses.
+        e.g. :func:`flexsat.cases.tamu_grid.tamu_grid`: the nominal model.  The a-priori model
+        has ``cfg.a_priori_scale`` on its substructure stiffnesses; the scalings are reported
+        as factors on the nominal model.
     cfg : CampaignConfig
+        The identification settings (``band``, ``era_order``, ``bootstrap_samples``,
+        ``update``, ``frf_segment``, ``frf_step``, ``a_priori_*``); the torque constants are
+        identified when ``wheel_torque_constants`` is given (their values, known only in a
+        simulation, fill the ``true`` column).
+    records : TestRecords
+        Channels, nodes and sample rates come from the records.
+    truth : ModalModel, optional
+        The true structure of a simulation, for the ``true_*`` columns (None: measured data).
 
     Returns
     -------
     CampaignResult
     """
-    rng = np.random.default_rng(cfg.seed)
+    rng = np.random.default_rng([cfg.seed, 1])
     names = tuple(case.substructures)
-    truth_asm = case.structure().assemble()
-    modes = truth_asm.modes(truth_asm.n_dofs if cfg.truth_modes is None
-                            else min(cfg.truth_modes, truth_asm.n_dofs))
-    truth = _modal_model(truth_asm, modes.omegas, modes.shapes,
-                         _truth_damping(cfg, modes.omegas.size))
 
     # --- a-priori model and its substructure blocks (Att. 6 Eq. 5) -----------------------------
     base = {n: float(cfg.a_priori_scale.get(n, 1.0)) for n in names}
@@ -400,76 +499,58 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     w0, phi0 = sub.modes()
     zeta0 = cfg.a_priori_damping * w0[0] / w0                 # Att. 6 Eq. 15: C = 2 z1 w1 M
 
-    # --- 1. hammer test: strain gauges + accelerometers ----------------------------------------
-    gauges = [Channel("strain", int(b), ax, node_a=int(a)) for a, b, ax in cfg.strain_gauges]
-    accels = [Channel("acceleration", int(n), d) for n, d in cfg.accelerometers]
-    sensors = gauges + accels
-    hammer = simulate_test(truth, _blow(cfg.hammer_node, cfg.hammer_direction,
-                                        cfg.hammer_impulse, cfg.sample_rate),
-                           sensors, cfg.hammer_duration, cfg.sample_rate, noise=cfg.noise,
-                           seed=int(rng.integers(2**31)),
-                           anti_alias=cfg.anti_alias * cfg.sample_rate)
-    # Markov parameters of structure + anti-aliasing filters from the one-sample blow (its
-    # sample average is impulse / dt); the filters' poles lie above the band and are dropped.
-    # Channels in different units: ERA on RMS-normalised channels (eigenvalues unchanged)
+    # --- 1. hammer test: ERA on RMS-normalised channels (units differ; eigenvalues unchanged) --
+    hammer = records.hammer
     scale = np.sqrt(np.mean(hammer.outputs**2, axis=1))
-    Y = (hammer.outputs / (scale[:, None] * cfg.hammer_impulse * cfg.sample_rate)).T[:, :, None]
-    hammer_real = era(Y, 1.0 / cfg.sample_rate, order=cfg.era_order)
+    Y = markov_parameters(hammer) / scale[None, :, None]
+    hammer_real = era(Y, hammer.dt, order=cfg.era_order)
     if cfg.bootstrap_samples:
         hammer_real = bootstrap_uncertainty(hammer_real, Y, cfg.bootstrap_samples,
                                             seed=int(rng.integers(2**31)))
     sel = _select(hammer_real, cfg.band)
+    if sel.size == 0:
+        raise ValueError(f"records: the hammer test shows no mode below {cfg.band:g} Hz")
     f_meas = hammer_real.frequencies[sel]
     z_meas = hammer_real.damping[sel]
     f_std = hammer_real.frequency_std[sel]
     z_std = hammer_real.damping_std[sel]
 
-    # --- 2. video test: calibration, triangulation, ERA shapes ---------------------------------
-    rig = cfg.rig
-    coords = {int(n): xyz for n, xyz in zip(truth_asm.node_ids, truth_asm.coordinates)}
-    points0 = np.array([coords[int(n)] for n in cfg.targets], float)
-    calib, calib_summary = _calibrate_rig(cfg, rig, points0, rng)
-    # the calibrated target positions are the rest reference of the triangulated motion
-    video, tri = _video_test(cfg, truth, rig, points0, calib, rng)
-    video_real = era(markov_parameters(video), 1.0 / cfg.field_rate, order=cfg.era_order)
-    vsel = _select(video_real, cfg.band, min_mpc=0.3)
-    video_shapes = _real_shapes(video_real.shapes[:, vsel])
+    # --- 2. video test: ERA shapes at the targets ----------------------------------------------
+    video_shapes, video_f, video_index, rows = np.zeros((0, 0)), np.zeros(0), np.zeros(0, int), []
+    video_real = None
+    if records.video is not None:
+        video = records.video
+        video_real = era(markov_parameters(video), video.dt, order=cfg.era_order)
+        vsel = _select(video_real, cfg.band, min_mpc=0.3)
+        video_shapes = _real_shapes(video_real.shapes[:, vsel])
+        video_f = video_real.frequencies[vsel]
+        rows = [apriori_asm.index(c.node, "u" + c.direction) for c in video.output_channels]
 
     # --- pair modes: video shapes against the a-priori model, then hammer by frequency ---------
-    rows = [apriori_asm.index(int(n), "uz") for n in cfg.targets]
-    mac_video = mac(video_shapes, phi0[rows]) if vsel.size else None
-    video_index = _pair(video_real.frequencies[vsel], w0 / (2 * np.pi), mac_video)
     hammer_index = _pair(f_meas, w0 / (2 * np.pi))
-    for i, fv in zip(video_index, video_real.frequencies[vsel]):
-        # where a video mode and a hammer mode agree in frequency, the MAC pairing wins
-        k = np.flatnonzero(np.abs(f_meas / fv - 1) < 0.02)
-        if k.size:
-            hammer_index[k[0]] = i
-    if len(set(hammer_index.tolist())) != hammer_index.size:
-        hammer_index = _pair(f_meas, w0 / (2 * np.pi))
+    if video_f.size:
+        video_index = _pair(video_f, w0 / (2 * np.pi), mac(video_shapes, phi0[rows]))
+        for i, fv in zip(video_index, video_f):
+            # where a video mode and a hammer mode agree in frequency, the MAC pairing wins
+            k = np.flatnonzero(np.abs(f_meas / fv - 1) < 0.02)
+            if k.size:
+                hammer_index[k[0]] = i
+        if len(set(hammer_index.tolist())) != hammer_index.size:
+            hammer_index = _pair(f_meas, w0 / (2 * np.pi))
 
     # --- 3. reaction-wheel test: H1 FRFs and OKID -----------------------------------------------
-    wheels = [random_force(int(n), ax, cfg.wheel_torque_rms, load="torque")
-              for n, ax in zip(cfg.wheel_nodes, cfg.wheel_axes)]
-    inputs = [w.channel for w in wheels]
-    wheel_test = simulate_test(truth, wheels, gauges, cfg.wheel_duration, cfg.wheel_sample_rate,
-                               noise=cfg.noise, seed=int(rng.integers(2**31)),
-                               anti_alias=cfg.anti_alias * cfg.wheel_sample_rate)
-    gains = np.asarray(cfg.wheel_torque_constants, float)
-    if gains.size:
-        # the wheels deliver k x the commanded torque; the record holds the command (Att. 6
-        # L2525: B carries each motor's current-to-torque constant, not known a priori)
-        wheel_test = Measurement(wheel_test.abscissa, wheel_test.outputs,
-                                 wheel_test.output_channels, wheel_test.inputs / gains[:, None],
-                                 wheel_test.input_channels, attrs=wheel_test.attrs)
-    frf, coh = estimate_frf(wheel_test, cfg.frf_segment)
+    wheel_test = records.wheels
+    gauges, inputs = list(wheel_test.output_channels), list(wheel_test.input_channels)
+    estimate = estimate_frf(wheel_test, cfg.frf_segment)
+    frf, coh = estimate.frf, estimate.coherence
     gscale = np.sqrt(np.mean(wheel_test.outputs**2, axis=1))
-    n_obs = int(np.ceil(2 * 2 * modes.omegas.size / len(gauges))) + 4
+    n_obs = int(np.ceil(cfg.era_order / len(gauges))) + 4
     Y_okid = okid(wheel_test.inputs, wheel_test.outputs / gscale[:, None], 4 * n_obs, n_obs)
-    okid_real = era(Y_okid, 1.0 / cfg.wheel_sample_rate, order=cfg.era_order)
+    okid_real = era(Y_okid, wheel_test.dt, order=cfg.era_order)
     osel = _select(okid_real, cfg.band)
 
     # --- 4. update ------------------------------------------------------------------------------
+    true_gains = np.asarray(cfg.wheel_torque_constants, float)
     wheel_gains, nu1 = {}, np.ones(len(inputs))
     r0 = np.array([2.0 * cfg.a_priori_damping * w0[0], 0.0])        # Eq. 15 in C = r1 M + r2 K
     if cfg.update == "creamer_junkins":
@@ -483,8 +564,8 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
                   "converged": bool(und.converged)}
     else:
         # free and forced response together (Att. 6 Eqs. 3-13)
-        points = _frf_points(frf, coh, cfg, apriori_asm, gauges, inputs,
-                             np.concatenate([w0, 2 * np.pi * f_meas]), gains.size > 0)
+        points = _frf_points(estimate, cfg, apriori_asm, gauges, inputs,
+                             np.concatenate([w0, 2 * np.pi * f_meas]), true_gains.size > 0)
         data = CorrectionData(
             frequencies=2 * np.pi * f_meas, frequency_modes=hammer_index,
             frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas),
@@ -493,10 +574,10 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
         dc = differential_correction(sub, data, r0=r0)
         p1, r1 = dc.p, dc.r
         p_cov = dc.covariance[: len(names), : len(names)]
-        if gains.size:
-            nu_std = np.sqrt(np.clip(np.diag(dc.covariance)[-gains.size:], 0.0, None))
+        if true_gains.size:
+            nu_std = np.sqrt(np.clip(np.diag(dc.covariance)[-len(inputs):], 0.0, None))
             wheel_gains = {c.name: {"true": float(k), "identified": float(v), "std": float(sd)}
-                           for c, k, v, sd in zip(inputs, gains, dc.nu, nu_std)}
+                           for c, k, v, sd in zip(inputs, true_gains, dc.nu, nu_std)}
             nu1 = dc.nu
         update = {"method": cfg.update, "frf_points": int(sum(len(pt[2]) for pt in points)),
                   "iterations": int(dc.iterations), "converged": bool(dc.converged)}
@@ -512,29 +593,19 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     frf_u = frf_u * nu1[None, :, None]                    # relative to the commanded torque
 
     # --- tables ----------------------------------------------------------------------------------
-    f_true = modes.omegas / (2 * np.pi)
-    z_true = truth.damping
-
-    def nearest(f_list, targets_hz):
-        f_list = np.asarray(f_list)
-        if f_list.size == 0:
-            return [None] * len(targets_hz)
-        out = []
-        for f in targets_hz:
-            k = int(np.argmin(np.abs(f_list - f)))
-            out.append(float(f_list[k]) if abs(f_list[k] / f - 1) < 0.05 else None)
-        return out
-
-    # true mode of each identified mode: nearest true frequency
-    true_index = np.array([int(np.argmin(np.abs(f_true - f))) for f in f_meas], int)
+    if truth is not None:
+        f_true = truth.frequencies / (2 * np.pi)
+        idx = np.array([int(np.argmin(np.abs(f_true - f))) for f in f_meas], int)
+        true_hz, true_z = f_true[idx].tolist(), truth.damping[idx].tolist()
+    else:
+        true_hz = true_z = [None] * f_meas.size
     modes_table = {
         "model_index": hammer_index.tolist(),
-        "true_hz": f_true[true_index].tolist(),
-        "true_damping": z_true[true_index].tolist(),
+        "true_hz": true_hz, "true_damping": true_z,
         "era_hz": f_meas.tolist(), "era_hz_std": f_std.tolist(),
         "era_damping": z_meas.tolist(), "era_damping_std": z_std.tolist(),
-        "video_hz": nearest(video_real.frequencies[vsel], f_meas),
-        "okid_hz": nearest(okid_real.frequencies[osel], f_meas),
+        "video_hz": _nearest(video_f, f_meas),
+        "okid_hz": _nearest(okid_real.frequencies[osel], f_meas),
         "a_priori_hz": (w0[hammer_index] / (2 * np.pi)).tolist(),
         "a_priori_damping": zeta0[hammer_index].tolist(),
         "updated_hz": (w1[hammer_index] / (2 * np.pi)).tolist(),
@@ -543,12 +614,14 @@ def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
     std = np.sqrt(np.clip(np.diag(p_cov), 0.0, None))
     scalings = {n: {"a_priori": base[n], "p": float(p), "p_std": float(s),
                     "updated": float(base[n] * p)} for n, p, s in zip(names, p1, std)}
-    mac_updated = mac(video_shapes, phi1[rows][:, :max(int(video_index.max()) + 3, 1)]) \
-        if vsel.size else np.zeros((0, 0))
-    mac_apriori = mac(video_shapes, phi0[rows][:, :mac_updated.shape[1]]) \
-        if vsel.size else np.zeros((0, 0))
+    mac_updated = mac_apriori = np.zeros((0, 0))
+    if video_f.size:
+        n_cols = int(video_index.max()) + 3
+        mac_updated = mac(video_shapes, phi1[rows][:, :n_cols])
+        mac_apriori = mac(video_shapes, phi0[rows][:, :n_cols])
+    targets = tuple(c.node for c in records.video.output_channels) if records.video else ()
     return CampaignResult(
         names, modes_table, scalings, wheel_gains, update, r1, mac_apriori, mac_updated, freqs,
         frf.outputs[:, :, keep], coh[:, keep], frf_a, frf_u, tuple(c.name for c in gauges),
-        tuple(c.name for c in inputs), video_shapes, tuple(int(n) for n in cfg.targets),
-        calib_summary, tri, hammer_real, video_real, okid_real)
+        tuple(c.name for c in inputs), video_shapes, targets, records.calibration,
+        records.triangulation, hammer_real, video_real, okid_real)

@@ -7,7 +7,16 @@ H1 estimator for several simultaneous, uncorrelated or correlated inputs (Bendat
 .. math::  H_1(f) = G_{yu}(f)\, G_{uu}(f)^{-1},
 
 unbiased by output noise; the multiple coherence of output i is
-:math:`\gamma_i^2 = G_{yu,i} G_{uu}^{-1} G_{uy,i} / G_{yy,ii}` (1 for noise-free linear data).
+:math:`\gamma_i^2 = G_{yu,i} G_{uu}^{-1} G_{uy,i} / G_{yy,ii}` (1 for noise-free linear data),
+and the random error of each element (Bendat & Piersol §9.3.1, conditioned inputs) has the
+standard deviation
+
+.. math::  \sigma(H_{ia}) = \sqrt{\frac{(1 - \gamma_i^2)\, G_{yy,ii}\, [G_{uu}^{-1}]_{aa}}
+           {2\,(n_d - r)}},
+
+with :math:`n_d` Welch segments and r inputs: the output's unexplained power over input a's
+power conditioned on the others, independent of :math:`|H_{ia}|` (an element that is zero by
+symmetry still has the noise of its output).
 
 The model FRF of the modal state space of
 :func:`flexsat.identify.excitation.sensor_matrices` is
@@ -22,6 +31,8 @@ phase.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy import signal
 from scipy.linalg import expm
@@ -30,11 +41,34 @@ from flexsat.identify.excitation import sensor_matrices
 from flexsat.identify.measurements import Measurement
 from flexsat.validation import require_count, require_finite, require_positive
 
-__all__ = ["estimate_frf", "frequency_response"]
+__all__ = ["FRFEstimate", "estimate_frf", "frequency_response"]
+
+
+@dataclass(frozen=True)
+class FRFEstimate:
+    """An H1 estimate (:func:`estimate_frf`).
+
+    Attributes
+    ----------
+    frf : Measurement
+        Frequency domain, outputs (q, r, F).
+    coherence : ndarray (q, F)
+        Multiple coherence of each output.
+    std : ndarray (q, r, F)
+        Random-error standard deviation of each element (module docstring), for the real and
+        for the imaginary part alike.
+    segments : int
+        Welch segments averaged.
+    """
+
+    frf: Measurement
+    coherence: np.ndarray
+    std: np.ndarray
+    segments: int
 
 
 def estimate_frf(measurement: Measurement, segment: int, overlap: float = 0.5,
-                 window: str = "hann") -> tuple[Measurement, np.ndarray]:
+                 window: str = "hann") -> FRFEstimate:
     """H1 estimate of the FRFs of a time-domain test with recorded inputs.
 
     Parameters
@@ -50,10 +84,9 @@ def estimate_frf(measurement: Measurement, segment: int, overlap: float = 0.5,
 
     Returns
     -------
-    frf : Measurement
-        Frequency domain, outputs (q, r, F) from the first non-zero frequency to Nyquist.
-    coherence : ndarray (q, F)
-        Multiple coherence of each output.
+    FRFEstimate
+        The FRFs (a frequency-domain Measurement from the first non-zero frequency to Nyquist),
+        the multiple coherence and the random error of every element.
 
     Raises
     ------
@@ -99,10 +132,16 @@ def estimate_frf(measurement: Measurement, segment: int, overlap: float = 0.5,
     # E|Y_i|^2 explained by the inputs: sum_ab conj(H_ia) Guu[a, b] H_ib
     explained = np.einsum("iaf,fab,ibf->fi", H.conj(), Guu, H).real
     coherence = (explained / np.where(Gyy > 0, Gyy, np.inf)).T
+    step = n - int(ov * n)
+    segments = (N - n) // step + 1
+    conditioned = np.real(np.diagonal(np.linalg.inv(Guu), axis1=1, axis2=2))   # (F, r)
+    unexplained = np.clip(Gyy - explained, 0.0, None)                           # (F, q)
+    std = np.sqrt(unexplained.T[:, None, :] * conditioned.T[None, :, :]
+                  / (2.0 * max(segments - r, 1)))
     frf = Measurement(f, H, measurement.output_channels, None, measurement.input_channels,
                       "frequency", attrs={"estimator": "H1", "segment": n, "overlap": ov,
                                           "window": window})
-    return frf, coherence
+    return FRFEstimate(frf, coherence, std, segments)
 
 
 def frequency_response(modal_model, sensors, inputs, frequencies_hz, sample_rate=None
