@@ -38,3 +38,31 @@ def _identification_example(fast=False, **changes) -> dict:
 @pytest.fixture(scope="session")
 def identification_example():
     return _identification_example
+
+
+def _recorded_scenario(tmp_path):
+    """A measured-data scenario: the example's tests simulated, written to UFF 58 files next to
+    the scenario file, and a scenario with ``records`` pointing at them."""
+    from flexsat.cases.tamu_grid import tamu_grid
+    from flexsat.identify.campaign import simulate_records
+    from flexsat.scenario import load_scenario
+
+    sim = load_scenario(yaml.safe_dump(_identification_example(fast=True)))
+    records = simulate_records(tamu_grid(motor_mass="0.5 kg"), sim.config())
+    (tmp_path / "data").mkdir()
+    for name in ("hammer", "wheels", "video"):
+        getattr(records, name).to_uff(tmp_path / "data" / f"{name}.uff")
+    data = _identification_example()
+    for name in ("truth", "sensors", "hammer", "video", "wheels"):
+        data.pop(name)
+    data["records"] = {"hammer": "data/hammer.uff", "wheels": "data/wheels.uff",
+                       "video": "data/video.uff", "segment": 1000}
+    data["identification"]["torque_constants"] = True
+    path = tmp_path / "measured.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+@pytest.fixture(scope="session")
+def recorded_scenario():
+    return _recorded_scenario

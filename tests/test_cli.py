@@ -120,3 +120,14 @@ def test_run_identification_scenario_prints_modes_and_writes_report(tmp_path,
     assert result.exit_code == 0, result.output
     assert "identified modes" in result.stdout and "clamp verticals" in result.stdout
     assert {"index.html", "frf.png", "mac.png", "results.nc"} <= {p.name for p in out.iterdir()}
+
+
+def test_run_recorded_identification_scenario(tmp_path, recorded_scenario):
+    """Measured tests (UFF 58) in, report out: the truth columns read "–"."""
+    path = recorded_scenario(tmp_path)
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["run", str(path), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "recorded tests" in result.stdout, result.stdout
+    assert "of nominal" in result.stdout
+    assert "<td>–</td>" in (out / "index.html").read_text()

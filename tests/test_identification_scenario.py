@@ -36,7 +36,7 @@ def test_example_loads_with_si_values(identification_example):
      "video.cameras[0].position: must be 3 quantities"),
     ({"truth__damping": [0.01, -0.1]}, "truth.damping[1]"),
     ({"identification__update": "creamer_junkins"},
-     "identification.update: wheels.torque_constants are identified from the FRF"),
+     "identification.update: the wheels' torque constants are identified from the FRF"),
 ])
 def test_schema_errors_name_the_field(changes, message, identification_example):
     with pytest.raises(ScenarioError) as exc:
@@ -76,3 +76,50 @@ def test_blind_camera_is_a_video_error(identification_example):
         cam["aim"] = ["20 m", "20 m", "0 m"]
     with pytest.raises(ScenarioError, match="video.rig: some targets fall outside"):
         run_identification(load_scenario(yaml.safe_dump(data)))
+
+
+def test_recorded_tests_from_universal_files(tmp_path, recorded_scenario):
+    """``records``: measured tests as UFF 58 files, paths relative to the scenario file; the
+    update recovers the clamp within 1 % and the wheels' torque constants (true 0.9, 1.1, 1.0)
+    within 1 %, with no truth to compare in the tables."""
+    s = load_scenario(recorded_scenario(tmp_path))
+    assert s.recorded and s.folder == tmp_path
+    result = run_identification(s)
+    c = result.campaign
+    assert c.modes["true_hz"] == [None] * len(c.modes["era_hz"])
+    assert abs(c.scalings["clamp verticals"]["updated"] - 1) < 0.01
+    for v, k in zip(c.wheel_gains.values(), (0.9, 1.1, 1.0)):
+        assert v["true"] is None and abs(v["identified"] / k - 1) < 0.01
+    columns, rows = summary_table(result)
+    assert rows[0][1][0] == "–"
+
+
+def test_recorded_tests_without_video(tmp_path, recorded_scenario):
+    """The video record is optional: modes are then paired by frequency and the report says
+    there are no measured shapes."""
+    from flexsat.identification_report import write_identification_report
+
+    path = recorded_scenario(tmp_path)
+    data = yaml.safe_load(path.read_text())
+    del data["records"]["video"]
+    path.write_text(yaml.safe_dump(data))
+    result = run_identification(load_scenario(path))
+    assert result.campaign.mac_updated.size == 0 and result.campaign.video_realization is None
+    assert abs(result.campaign.scalings["clamp verticals"]["updated"] - 1) < 0.01
+    out = write_identification_report(result, tmp_path / "report")
+    assert (out / "mac.png").exists()
+
+
+def test_recorded_scenario_errors(tmp_path, identification_example):
+    data = identification_example()
+    data["records"] = {"hammer": "h.uff", "wheels": "w.uff"}
+    with pytest.raises(ScenarioError, match="sensors: describes a simulated test; with 'records'"):
+        load_scenario(yaml.safe_dump(data))
+    for name in ("truth", "sensors", "hammer", "video", "wheels"):
+        data.pop(name)
+    s = load_scenario(yaml.safe_dump(data))
+    with pytest.raises(ScenarioError, match=r"records.hammer: cannot read .*h.uff"):
+        run_identification(s)
+    data.pop("records")
+    with pytest.raises(ScenarioError, match="sensors: required to simulate the tests"):
+        load_scenario(yaml.safe_dump(data))

@@ -210,7 +210,7 @@ def _identification_table(result) -> Table:
         table.add_row(mode, *values)
     for name, v in result.campaign.scalings.items():
         table.caption = (table.caption or "") + (
-            f"{name}: a priori x{v['a_priori']:.3f}, updated x{v['updated']:.4f} of truth\n")
+            f"{name}: a priori x{v['a_priori']:.3f}, updated x{v['updated']:.4f} of nominal\n")
     return table
 
 

@@ -98,6 +98,10 @@ def _frf_figure(c, path: Path) -> None:
 
 def _mac_figure(c, path: Path) -> None:
     fig = Figure(figsize=(9, 3.6), layout="constrained")
+    if c.mac_updated.size == 0:
+        fig.text(0.5, 0.5, "no video test: no measured mode shapes", ha="center")
+        fig.savefig(path, dpi=100)
+        return
     for ax, mat, title in zip(fig.subplots(1, 2), (c.mac_a_priori, c.mac_updated),
                               ("a-priori model", "updated model")):
         im = ax.imshow(mat, vmin=0, vmax=1, cmap="viridis")
@@ -141,6 +145,23 @@ def _pct(a, b) -> str:
 
 
 
+def _camera_html(c) -> str:
+    """The calibration and triangulation summary of a simulated video test (none for recorded
+    data, whose video arrives already triangulated)."""
+    cal, tri = c.calibration, c.triangulation
+    if not cal or not tri:
+        return ""
+    return f"""<h2>Cameras and triangulation</h2>
+<p>{cal['n_cameras']} cameras calibrated from {len(c.target_nodes)} targets with a-priori
+positions; parameters {html.escape(', '.join(cal['parameters']))}; largest calibration error
+{cal['max_abs_normalised_error']:.2f} σ (σ₀² = {cal['sigma0_squared']:.3f}).
+Triangulated z over {tri['fields']} fields: rms error {1e3 * tri['rms_error_z_m']:.3f} mm against
+a predicted {1e3 * tri['predicted_sigma_z_m']:.3f} mm from centroid noise
+({1e3 * tri['predicted_sigma_z_with_cameras_m']:.3f} mm for an absolute position, with the
+calibration covariance, Att. 6 Eqs. 34–37); peak motion
+{1e3 * tri['peak_displacement_m']:.1f} mm.</p>"""
+
+
 def _html(result: IdentificationResult) -> str:
     c, esc = result.campaign, html.escape
     m = c.modes
@@ -162,11 +183,10 @@ def _html(result: IdentificationResult) -> str:
         rows = [(n, format_optional(v["true"], ".4f"),
                  f"{v['identified']:.5f} ± {v['std']:.1e}",
                  _pct(v["identified"], v["true"])) for n, v in c.wheel_gains.items()]
-        gain_html = ("<h2>Reaction-wheel torque constants (Att. 6 Eq. 7)</h2>\n<p>True constant "
-                     "over the nominal one, identified with the structure from the FRFs.</p>\n"
+        gain_html = ("<h2>Reaction-wheel torque constants (Att. 6 Eq. 7)</h2>\n<p>Delivered over "
+                     "commanded torque: the true value (in a simulation) and the one identified "
+                     "with the structure from the FRFs.</p>\n"
                      + _table(("wheel", "true", "identified", "error"), rows))
-    cal = c.calibration
-    tri = c.triangulation
     u = c.update
     upd_text = (("Att. 6 differential correction, frequencies, damping ratios and "
                  f"{u['frf_points']} FRF points" if u["method"] == "differential_correction"
@@ -194,20 +214,12 @@ the truth).</p>
 the measured damping; r = {esc(np.array2string(c.damping_scalings, precision=5))}.</p>
 {_table(("mode", "truth", "ERA", "a priori", "updated"), damp_rows)}
 <h2>Substructure stiffness scalings</h2>
-<p>Update: {esc(upd_text)}. A-priori factor on the true stiffness, the identified scaling p of
-the a-priori block (± 1σ), and the updated factor on the truth (a priori × p; 1 means
-recovered).</p>
+<p>Update: {esc(upd_text)}. Factors on the case's nominal stiffness (the truth, in a
+simulation): the a-priori one, the identified scaling p of the a-priori block (± 1σ), and the
+updated one (a priori × p; in a simulation, 1 means recovered).</p>
 {_table(("substructure", "a priori", "p", "updated"), sc_rows)}
 {gain_html}
-<h2>Cameras and triangulation</h2>
-<p>{cal['n_cameras']} cameras calibrated from {esc(str(len(c.target_nodes)))} targets with
-a-priori positions; parameters {esc(', '.join(cal['parameters']))}; largest calibration error
-{cal['max_abs_normalised_error']:.2f} σ (σ₀² = {cal['sigma0_squared']:.3f}).
-Triangulated z over {tri['fields']} fields: rms error {1e3 * tri['rms_error_z_m']:.3f} mm against
-a predicted {1e3 * tri['predicted_sigma_z_m']:.3f} mm from centroid noise
-({1e3 * tri['predicted_sigma_z_with_cameras_m']:.3f} mm for an absolute position, with the
-calibration covariance, Att. 6 Eqs. 34–37); peak motion
-{1e3 * tri['peak_displacement_m']:.1f} mm.</p>
+{_camera_html(c)}
 {images}
 <h2>Scenario</h2>
 <pre>{esc(result.scenario.yaml_text)}</pre>

@@ -21,6 +21,13 @@ on a case whose substructure stiffnesses scale (the TAMU grid)::
         - {position: ["2.07 m", "0.55 m", "2.4 m"], aim: ["0.74 m", "0.55 m", "0 m"]}
     wheels: {nodes: [3, 7, 9], axes: [y, x, x], torque_rms: "0.05 N*m"}
 
+Measured tests replace the simulated ones with ``records`` (universal files, dataset 58, paths
+relative to the scenario file; ``truth``, ``sensors``, ``hammer``, ``video`` and ``wheels`` are
+then left out)::
+
+    records: {hammer: data/hammer.uff, wheels: data/wheels.uff, video: data/video.uff}
+    identification: {torque_constants: true}      # identify the wheels' torque constants too
+
 Quantities follow :mod:`flexsat.scenario` (unit strings or SI numbers); problems are reported
 as ``field.path: rule`` before anything runs.
 """
@@ -34,7 +41,15 @@ import numpy as np
 from pydantic import BeforeValidator, Field, field_validator, model_validator
 
 from flexsat.cases import get_case
-from flexsat.identify.campaign import CameraRig, CampaignConfig, CampaignResult, run_campaign
+from flexsat.identify.campaign import (
+    CameraRig,
+    CampaignConfig,
+    CampaignResult,
+    TestRecords,
+    identify_and_update,
+    run_campaign,
+)
+from flexsat.identify.measurements import Measurement
 from flexsat.scenario import ScenarioError, _Document, _head, _locate, _Section, quantity
 from flexsat.text import format_optional
 from flexsat.units import to_si
@@ -123,12 +138,25 @@ class WheelSpec(_Section):
         return self
 
 
+class RecordsSpec(_Section):
+    """Measured tests as universal files (dataset 58, :meth:`Measurement.from_uff`), paths
+    relative to the scenario file: the hammer test (outputs and the hammer's force), the
+    reaction-wheel test (strain gauges and commanded torques) and, optionally, the target
+    displacements normal to the structure with the blow's force."""
+
+    hammer: str
+    wheels: str
+    video: str | None = None
+    segment: Annotated[int, Field(ge=16)] = 2000
+
+
 class IdentificationSpec(_Section):
     band: quantity("Hz") = 10.0
     era_order: Annotated[int, Field(ge=2)] = 80
     update: Literal["creamer_junkins", "differential_correction"] = "differential_correction"
     anti_alias: Annotated[float, Field(gt=0, lt=0.5)] = 0.4
     bootstrap_samples: Annotated[int, Field(ge=0)] = 10
+    torque_constants: bool = False
 
 
 class IdentificationScenario(_Document):
@@ -140,10 +168,11 @@ class IdentificationScenario(_Document):
     case_overrides: dict[str, bool | int | float | str] = Field(default_factory=dict)
     truth: TruthSpec = Field(default_factory=TruthSpec)
     a_priori: APrioriSpec = Field(default_factory=APrioriSpec)
-    sensors: SensorSpec
-    hammer: HammerSpec
-    video: VideoSpec
-    wheels: WheelSpec
+    sensors: SensorSpec | None = None
+    hammer: HammerSpec | None = None
+    video: VideoSpec | None = None
+    wheels: WheelSpec | None = None
+    records: RecordsSpec | None = None
     identification: IdentificationSpec = Field(default_factory=IdentificationSpec)
     seed: Annotated[int, Field(ge=0)] = 0
 
@@ -154,22 +183,49 @@ class IdentificationScenario(_Document):
         return name
 
     @model_validator(mode="after")
-    def _gains_need_the_frf(self):
-        if self.wheels.torque_constants and self.identification.update != "differential_correction":
-            raise ValueError("identification.update: wheels.torque_constants are identified from "
-                             "the FRF, which only 'differential_correction' uses")
+    def _simulated_or_recorded(self):
+        simulated = ("sensors", "hammer", "video", "wheels")
+        if self.records is None:
+            missing = [name for name in simulated if getattr(self, name) is None]
+            if missing:
+                raise ValueError(f"{missing[0]}: required to simulate the tests (or give "
+                                 "'records' with measured data)")
+        else:
+            given = [name for name in simulated + ("truth",)
+                     if name in self.model_fields_set]
+            if given:
+                raise ValueError(f"{given[0]}: describes a simulated test; with 'records' the "
+                                 "tests are measured (leave it out)")
+        gains = self.identification.torque_constants or (
+            self.wheels is not None and self.wheels.torque_constants)
+        if gains and self.identification.update != "differential_correction":
+            raise ValueError("identification.update: the wheels' torque constants are identified "
+                             "from the FRF, which only 'differential_correction' uses")
         return self
+
+    @property
+    def recorded(self) -> bool:
+        """True when the tests are measured data (``records``), not simulated."""
+        return self.records is not None
 
     def config(self) -> CampaignConfig:
         """The :class:`CampaignConfig` of this scenario."""
+        ident = self.identification
+        common = dict(
+            a_priori_scale=dict(self.a_priori.stiffness_scale),
+            a_priori_damping=self.a_priori.damping, band=ident.band,
+            era_order=ident.era_order, update=ident.update, anti_alias=ident.anti_alias,
+            bootstrap_samples=ident.bootstrap_samples,
+            identify_torque_constants=ident.torque_constants, seed=self.seed)
+        if self.recorded:
+            return CampaignConfig(frf_segment=self.records.segment, **common)
         v, w, h, s = self.video, self.wheels, self.hammer, self.sensors
         rig = CameraRig(tuple(c.position for c in v.cameras), tuple(c.aim for c in v.cameras),
                         v.focal_length, v.pixel_size, v.centroid_noise_px, v.quantize,
                         static_fields=v.static_fields)
         return CampaignConfig(
             truth_damping=tuple(self.truth.damping), other_damping=self.truth.other_damping,
-            truth_modes=self.truth.modes, a_priori_scale=dict(self.a_priori.stiffness_scale),
-            a_priori_damping=self.a_priori.damping, strain_gauges=tuple(s.strain_gauges),
+            truth_modes=self.truth.modes, strain_gauges=tuple(s.strain_gauges),
             accelerometers=tuple(s.accelerometers), targets=tuple(s.targets),
             hammer_node=h.node, hammer_direction=h.direction, hammer_impulse=h.impulse,
             hammer_duration=h.duration, sample_rate=h.sample_rate, noise=s.noise,
@@ -178,10 +234,7 @@ class IdentificationScenario(_Document):
             wheel_axes=tuple(w.axes), wheel_torque_rms=w.torque_rms,
             wheel_torque_constants=tuple(w.torque_constants),
             wheel_duration=w.duration, wheel_sample_rate=w.sample_rate, frf_segment=w.segment,
-            band=self.identification.band, era_order=self.identification.era_order,
-            update=self.identification.update, anti_alias=self.identification.anti_alias,
-            bootstrap_samples=self.identification.bootstrap_samples,
-            seed=self.seed)
+            **common)
 
 
 @dataclass(frozen=True)
@@ -193,7 +246,27 @@ class IdentificationResult:
     case_source: str
 
 
-def _check_against_case(scenario: IdentificationScenario, case) -> list[str]:
+def _node_fields(scenario: IdentificationScenario, records: TestRecords | None) -> list:
+    """(field path, node id, may be clamped) of every sensor and input of the scenario."""
+    if records is not None:
+        out = []
+        for name in ("hammer", "wheels", "video"):
+            test = getattr(records, name)
+            for c in () if test is None else test.output_channels + test.input_channels:
+                # a strain gauge's clamped end is legitimate (the gauge sits at the root)
+                out.append((f"records.{name}", c.node, c.kind == "strain"))
+                if c.node_a is not None:
+                    out.append((f"records.{name}", c.node_a, True))
+        return out
+    return ([("sensors.strain_gauges", g[k], True) for g in scenario.sensors.strain_gauges
+             for k in (0, 1)]
+            + [("sensors.accelerometers", a[0], False) for a in scenario.sensors.accelerometers]
+            + [("sensors.targets", n, False) for n in scenario.sensors.targets]
+            + [("hammer.node", scenario.hammer.node, False)]
+            + [("wheels.nodes", n, False) for n in scenario.wheels.nodes])
+
+
+def _check_against_case(scenario: IdentificationScenario, case, records=None) -> list[str]:
     """Stage-2 problems that need the built case: substructure names and node ids."""
     problems = []
     names = tuple(getattr(case, "substructures", ()))
@@ -205,21 +278,38 @@ def _check_against_case(scenario: IdentificationScenario, case) -> list[str]:
                             f"{', '.join(names)}")
     asm = case.structure().assemble()
     free = {int(n) for n, _ in asm.dofs}
-    fields = ([("sensors.strain_gauges", g[k]) for g in scenario.sensors.strain_gauges
-               for k in (0, 1)]
-              + [("sensors.accelerometers", a[0]) for a in scenario.sensors.accelerometers]
-              + [("sensors.targets", n) for n in scenario.sensors.targets]
-              + [("hammer.node", scenario.hammer.node)]
-              + [("wheels.nodes", n) for n in scenario.wheels.nodes])
+    fields = _node_fields(scenario, records)
     known = {int(n) for n in asm.node_ids}
-    for path, node in fields:
+    for path, node, may_be_clamped in fields:
         if node not in known:
             problems.append(f"{path}: node {node} is not a node of {scenario.case}")
-        elif node not in free and path != "sensors.strain_gauges":
+        elif node not in free and not may_be_clamped:
             problems.append(f"{path}: node {node} is clamped (it does not move)")
-    if len(set(scenario.sensors.targets)) != len(scenario.sensors.targets):
+    if records is None and len(set(scenario.sensors.targets)) != len(scenario.sensors.targets):
         problems.append("sensors.targets: node ids must be distinct")
-    return problems
+    return list(dict.fromkeys(problems))
+
+
+def _read_records(scenario: IdentificationScenario) -> TestRecords:
+    """The measured tests of ``records`` (paths relative to the scenario file)."""
+    problems, read = [], {}
+    for name in ("hammer", "wheels", "video"):
+        path = getattr(scenario.records, name)
+        if path is None:
+            continue
+        full = scenario.folder / path
+        try:
+            test = Measurement.from_uff(full)
+        except (OSError, ValueError) as exc:
+            problems.append(f"records.{name}: cannot read {str(full)!r} ({exc})")
+            continue
+        if test.domain != "time" or test.inputs is None:
+            problems.append(f"records.{name}: must hold time histories with the input "
+                            "(force or torque) channels")
+        read[name] = test
+    if problems:
+        raise ScenarioError(problems)
+    return TestRecords(**read)
 
 
 def run_identification(scenario: IdentificationScenario, progress=None) -> IdentificationResult:
@@ -235,16 +325,23 @@ def run_identification(scenario: IdentificationScenario, progress=None) -> Ident
         case = get_case(scenario.case).builder(**scenario.case_overrides)
     except ValueError as exc:
         raise ScenarioError([f"case_overrides: {exc}"]) from None
-    problems = _check_against_case(scenario, case)
+    records = _read_records(scenario) if scenario.recorded else None
+    problems = _check_against_case(scenario, case, records)
     if problems:
         raise ScenarioError(problems)
     if progress is not None:
-        progress("hammer, video and reaction-wheel tests; identification; update")
+        progress("identification and update of the recorded tests" if scenario.recorded else
+                 "hammer, video and reaction-wheel tests; identification; update")
     try:
-        result = run_campaign(case, scenario.config())
+        if records is not None:
+            result = identify_and_update(case, scenario.config(), records)
+        else:
+            result = run_campaign(case, scenario.config())
     except ValueError as exc:
         head = _head(str(exc))
-        path = {"rig": "video", "wheel_torque_constants": "wheels.torque_constants"}.get(head, "")
+        path = {"rig": "video", "wheel_torque_constants": "wheels.torque_constants",
+                "records": "records", "measurement": "records.wheels",
+                "segment": "records.segment"}.get(head, "")
         message = str(exc).replace("wheel_torque_constants: ", "") if path.startswith("wheels") \
             else str(exc)
         raise ScenarioError([_locate(path, message)]) from None

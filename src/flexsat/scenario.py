@@ -207,6 +207,13 @@ class _Document(_Section):
     """A whole scenario file: remembers the text it was loaded from."""
 
     _source: str | None = PrivateAttr(default=None)
+    _folder: Path | None = PrivateAttr(default=None)
+
+    @property
+    def folder(self) -> Path:
+        """The folder of the scenario file (relative paths in it start there), else the
+        working directory."""
+        return self._folder if self._folder is not None else Path.cwd()
 
     @property
     def yaml_text(self) -> str:
@@ -622,6 +629,8 @@ def load_scenario(source: str | Path):
     except ValidationError as exc:
         raise ScenarioError([_problem(e, data, model) for e in exc.errors()]) from None
     scenario._source = text
+    if text is not source:
+        scenario._folder = Path(source).resolve().parent
     return scenario
 
 

@@ -138,6 +138,7 @@ class CampaignConfig:
     wheel_axes: tuple = ()
     wheel_torque_rms: float = 0.05
     wheel_torque_constants: tuple = ()    # true / nominal, one per wheel; () = known exactly
+    identify_torque_constants: bool = False   # also without known true values (measured data)
     wheel_duration: float = 300.0
     wheel_sample_rate: float = 50.0
     frf_segment: int = 2000
@@ -156,7 +157,7 @@ class CampaignConfig:
         if k and (len(k) != len(self.wheel_nodes) or not all(np.isfinite(k)) or min(k) <= 0):
             raise ValueError(f"wheel_torque_constants: one factor > 0 per wheel "
                              f"({len(self.wheel_nodes)}), got {k!r}")
-        if k and self.update != "differential_correction":
+        if (k or self.identify_torque_constants) and self.update != "differential_correction":
             raise ValueError("wheel_torque_constants: identifying the wheels' torque constants "
                              "needs the FRF, i.e. update 'differential_correction'")
 
@@ -166,12 +167,14 @@ class CampaignResult:
     """Everything measured, identified and updated (see :func:`run_campaign`).
 
     Frequencies in Hz.  ``modes`` pairs each identified mode with a model mode (0-based
-    ``model_index``); ``scalings`` gives, per substructure, the a-priori factor on the true
-    stiffness, the identified scaling ``p`` of the a-priori block with its standard deviation,
-    and the updated factor on the truth (``a_priori * p``, 1 = recovered).  ``update`` names
+    ``model_index``); ``scalings`` gives, per substructure, the a-priori factor on the nominal
+    stiffness (the case's; the truth of a simulation), the identified scaling ``p`` of the
+    a-priori block with its standard deviation, and the updated factor on the nominal
+    (``a_priori * p``; in a simulation 1 = recovered).  ``update`` names
     the method, the FRF points it used, its iterations and whether it converged.
-    ``wheel_gains`` (when ``wheel_torque_constants`` are given): per wheel the true torque
-    constant over the nominal one and the identified value with its SD (Att. 6 Eq. 7).
+    ``wheel_gains`` (when the torque constants are identified): per wheel the delivered over
+    the commanded torque, true (a simulation's ``wheel_torque_constants``, else None) and
+    identified with its SD (Att. 6 Eq. 7).
     ``frf_updated`` is relative to the commanded torque, like the measurement.
     """
 
@@ -551,6 +554,10 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
 
     # --- 4. update ------------------------------------------------------------------------------
     true_gains = np.asarray(cfg.wheel_torque_constants, float)
+    fit_gains = bool(true_gains.size) or cfg.identify_torque_constants
+    if true_gains.size and true_gains.size != len(inputs):
+        raise ValueError(f"wheel_torque_constants: one per recorded wheel ({len(inputs)}), got "
+                         f"{true_gains.size}")
     wheel_gains, nu1 = {}, np.ones(len(inputs))
     r0 = np.array([2.0 * cfg.a_priori_damping * w0[0], 0.0])        # Eq. 15 in C = r1 M + r2 K
     if cfg.update == "creamer_junkins":
@@ -565,7 +572,7 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
     else:
         # free and forced response together (Att. 6 Eqs. 3-13)
         points = _frf_points(estimate, cfg, apriori_asm, gauges, inputs,
-                             np.concatenate([w0, 2 * np.pi * f_meas]), true_gains.size > 0)
+                             np.concatenate([w0, 2 * np.pi * f_meas]), fit_gains)
         data = CorrectionData(
             frequencies=2 * np.pi * f_meas, frequency_modes=hammer_index,
             frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas),
@@ -574,10 +581,12 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
         dc = differential_correction(sub, data, r0=r0)
         p1, r1 = dc.p, dc.r
         p_cov = dc.covariance[: len(names), : len(names)]
-        if true_gains.size:
+        if fit_gains:
             nu_std = np.sqrt(np.clip(np.diag(dc.covariance)[-len(inputs):], 0.0, None))
-            wheel_gains = {c.name: {"true": float(k), "identified": float(v), "std": float(sd)}
-                           for c, k, v, sd in zip(inputs, true_gains, dc.nu, nu_std)}
+            truth_k = true_gains if true_gains.size else [None] * len(inputs)
+            wheel_gains = {c.name: {"true": None if k is None else float(k),
+                                    "identified": float(v), "std": float(sd)}
+                           for c, k, v, sd in zip(inputs, truth_k, dc.nu, nu_std)}
             nu1 = dc.nu
         update = {"method": cfg.update, "frf_points": int(sum(len(pt[2]) for pt in points)),
                   "iterations": int(dc.iterations), "converged": bool(dc.converged)}
