@@ -141,6 +141,8 @@ def test_campaign_is_reproducible_and_rejects_a_blind_rig():
         run_campaign(tamu_grid(), dataclasses.replace(small, rig=away))
     with pytest.raises(ValueError, match="update: must be one of"):
         dataclasses.replace(small, update="guess")
+    with pytest.raises(ValueError, match="rig: simulating the tests needs a camera rig"):
+        run_campaign(tamu_grid(), dataclasses.replace(small, rig=None))
 
 
 def test_recorded_data_through_universal_files_give_the_same_update(tmp_path):

@@ -407,6 +407,9 @@ def simulate_records(case, cfg: CampaignConfig) -> TestRecords:
     channels have anti-aliasing filters and noise; the hammer's force is recorded as the
     one-sample blow it is; the video test is calibrated and triangulated as in Att. 6.
     """
+    if cfg.rig is None or not cfg.targets or not cfg.strain_gauges or not cfg.wheel_nodes:
+        raise ValueError("rig: simulating the tests needs a camera rig, targets, strain gauges "
+                         "and reaction wheels")
     rng = np.random.default_rng(cfg.seed)
     asm, truth = _true_modes(case, cfg)
     gauges = [Channel("strain", int(b), ax, node_a=int(a)) for a, b, ax in cfg.strain_gauges]
