@@ -20,6 +20,7 @@ from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
 from flexsat.sim.integrators import ExponentialStepper
 from flexsat.sim.metrics import METRIC_UNITS, maneuver_metrics
 from flexsat.sim.sensors import Sensors, SensorState
+from flexsat import limits
 from flexsat.validation import require_count, require_finite, require_positive
 
 N_NOISE_CHANNELS = 3  # gyro, strain gauge, random torque — fixed so streams never shift
@@ -56,6 +57,15 @@ class SimConfig:
         require_positive(self.control_rate, "control_rate")
         require_positive(self.settling_band, "settling_band")
         require_count(self.substeps, "substeps")
+        seed = float(require_finite(self.seed, "seed"))
+        if isinstance(self.seed, bool) or seed != int(seed) or not 0 <= seed <= limits.MAX_SEED:
+            raise ValueError(f"seed: must be an integer in [0, {limits.MAX_SEED}], got "
+                             f"{self.seed!r}")
+        limits.check_count(self.duration * self.control_rate, limits.MAX_SAMPLES, "duration",
+                           "control samples (duration × control_rate)",
+                           "shorten the run or lower the control rate")
+        limits.check_count(self.substeps, limits.MAX_SUBSTEPS, "substeps",
+                           "integrator substeps per control period")
 
     @property
     def dt(self) -> float:
@@ -100,7 +110,107 @@ def stable_substeps(plant, friction: BearingFriction, dt: float, requested: int)
     if not friction.active:
         return requested
     rate = (friction.coulomb / friction.smoothing + friction.viscous) * plant.mass_inverse[0, 0]
-    return max(requested, math.ceil(dt * rate / FRICTION_STEP_LIMIT))
+    needed = dt * rate / FRICTION_STEP_LIMIT
+    # compared as a float first: a near-zero smoothing makes it too large for an int
+    limits.check_count(needed, limits.MAX_SUBSTEPS, "friction",
+                       f"a stable integration of the friction (damping rate {rate:.3g} 1/s below "
+                       f"the smoothing speed) needs substeps per control period",
+                       "lower coulomb or viscous, raise smoothing or the control rate")
+    return max(requested, math.ceil(needed))
+
+
+#: recorded histories of :func:`simulate`; the memory estimate counts them twice (the loop's
+#: arrays and the dataset's copies) plus the noise streams
+_N_RECORDED = 13
+
+
+def check_resources(plant, config: SimConfig, n_cases: int = 1, record_states: bool = False
+                    ) -> int:
+    """Check that a run fits the limits of :mod:`flexsat.limits` before it starts.
+
+    Parameters
+    ----------
+    plant, config
+        As for :func:`simulate`.
+    n_cases : int
+        Batch size.
+    record_states : bool
+        Whether the full state history is kept.
+
+    Returns
+    -------
+    int
+        The integrator substeps per control period (:func:`stable_substeps`).
+
+    Raises
+    ------
+    ValueError
+        ``"field: ... above the limit ..."`` for too many cases, substeps, integrator steps or
+        too much memory.
+    """
+    limits.check_count(n_cases, limits.MAX_CASES, "n_cases", "cases in one batch",
+                       "split the batch")
+    nonlinear = config.friction.active or plant.stiffening
+    substeps = stable_substeps(plant, config.friction, config.dt, config.substeps) \
+        if nonlinear else 1
+    n = config.n_steps + 1
+    limits.check_count(n * substeps, limits.MAX_INTEGRATOR_STEPS, "duration",
+                       f"integrator steps ({n} control samples × {substeps} substeps)",
+                       "shorten the run or lower the control rate or the substeps")
+    values = 2 * _N_RECORDED + N_NOISE_CHANNELS + (2 * plant.nx if record_states else 0)
+    limits.check_memory(limits.memory_estimate(n, n_cases, values), "duration",
+                        f"a run of {n} samples × {n_cases} cases × {values} values")
+    return substeps
+
+
+#: a state entry (rad, rad/s, modal coordinates) or a torque command (N m) beyond this is taken
+#: as divergence: no slew or modal amplitude comes near it, and it leaves room for the products
+#: (energies, x²) to stay finite
+DIVERGENCE_BOUND = 1e12
+
+
+class SimulationDiverged(ValueError):
+    """A simulation stopped because its state or command became non-finite or unbounded.
+
+    Attributes
+    ----------
+    cases : tuple of int
+        Batch indices of the diverged cases.
+    time : float
+        Time of the sample where it was detected, s.
+    cause : str
+        The likely cause.
+    """
+
+    def __init__(self, message: str, cases: tuple[int, ...], time: float, cause: str):
+        super().__init__(message)
+        self.cases, self.time, self.cause = cases, time, cause
+
+
+def _diverged(x, u_cmd, time: float, k: int, state_prev: float, config: SimConfig
+              ) -> SimulationDiverged:
+    """The exception for a divergence found at sample ``k``: which cases, when, likely why."""
+    bad_state = ~(np.abs(x) <= DIVERGENCE_BOUND).all(axis=1)
+    bad_command = ~(np.abs(u_cmd) <= DIVERGENCE_BOUND)
+    cases = tuple(int(i) for i in np.flatnonzero(bad_state | bad_command))
+    if k == 0:
+        cause = ("the initial state or the first torque command is non-finite or beyond the "
+                 "bound (check the initial state, the gains and the reference)")
+    elif not np.isfinite(u_cmd).all() and np.isfinite(x).all():
+        cause = ("the control law returned a non-finite torque command from a finite state "
+                 "(check its gains and reference)")
+    else:
+        cause = (f"the closed loop is unstable: the feedback gains destabilise it at the "
+                 f"{config.control_rate:g} Hz control rate (a loop bandwidth near or above the "
+                 f"Nyquist frequency {config.control_rate / 2:g} Hz diverges in sampled time); "
+                 f"lower the gains or raise the control rate")
+    growth = "" if k == 0 else (f"; the largest state entry went from {state_prev:.3g} to "
+                                f"{np.abs(x).max():.3g} over the last control period")
+    which = ", ".join(map(str, cases[:10])) + (" ..." if len(cases) > 10 else "")
+    message = (f"simulation diverged at t = {time:.6g} s (sample {k}) in case(s) {which}: a "
+               f"state entry or the torque command is non-finite or beyond "
+               f"{DIVERGENCE_BOUND:g} (SI){growth}. Likely cause: {cause}.")
+    return SimulationDiverged(message, cases, float(time), cause)
 
 
 def _noise_streams(seeds: np.ndarray, n_samples: int) -> np.ndarray:
@@ -141,21 +251,30 @@ def simulate(
         Full initial state [θ, q, θ', q'] instead of rest at ``theta0``.
     record_states : bool
         Also store the full state history (n_cases × n_t × n_x).
+
+    Raises
+    ------
+    ValueError
+        Before the run, for a non-finite ``theta0`` or ``initial_state``, or a run beyond the
+        limits of :mod:`flexsat.limits` (:func:`check_resources`).
+    SimulationDiverged
+        When a state entry or the torque command becomes non-finite or exceeds
+        :data:`DIVERGENCE_BOUND`: no result with NaN is returned.
     """
-    nc = controller.n_cases if n_cases is None else int(n_cases)
+    nc = controller.n_cases if n_cases is None else require_count(n_cases, "n_cases")
     dt, n = config.dt, config.n_steps
+    substeps = check_resources(plant, config, nc, record_states)
     seeds = config.seed + np.arange(nc) if seeds is None else np.asarray(seeds, int).reshape(nc)
     ref = controller.reference
     if theta0 is None:
         theta0 = ref.theta0 if ref is not None else 0.0
-    theta0 = np.broadcast_to(np.asarray(theta0, float), (nc,)).copy()
+    theta0 = np.broadcast_to(require_finite(theta0, "theta0"), (nc,)).copy()
 
     A, Bu, Bf = plant.state_space
     friction = config.friction
     nonlinear = friction.active or plant.stiffening
     # friction alone acts on the hub dof only: a rank-1 force keeps the substeps cheap
     Bf_used = Bf if plant.stiffening else Bf[:, :1]
-    substeps = stable_substeps(plant, friction, dt, config.substeps) if nonlinear else 1
     stepper = ExponentialStepper.build(A, Bu, Bf_used, dt, substeps)
     ndof = plant.ndof
     impulse_velocity = plant.mass_inverse[:, 0]
@@ -189,6 +308,7 @@ def simulate(
     rec = {k: np.empty((n + 1, nc)) for k in names}
     states = np.empty((n + 1, nc, plant.nx)) if record_states else None
     w_prev = np.zeros(nc)
+    state_prev = 0.0
     for k in range(n + 1):
         if k in impulses:
             x[:, ndof:] += impulses[k] * impulse_velocity
@@ -197,6 +317,11 @@ def simulate(
         y = sensor_state.measure(truth, noise[k, :, :2])
         u_cmd, cstate = controller(t[k], y, cstate)
         u_cmd = np.broadcast_to(u_cmd, (nc,))
+        # one reduction per sample (NaN fails the comparison too): a diverging run stops here
+        state_size = np.abs(x).max()
+        if not (state_size <= DIVERGENCE_BOUND and np.abs(u_cmd).max() <= DIVERGENCE_BOUND):
+            raise _diverged(x, u_cmd, t[k], k, state_prev, config)
+        state_prev = state_size
         u = config.actuator(u_cmd)
         w = u + config.random_torque.std * noise[k, :, 2]
         th_r, thd_r, _, _ = controller.reference_at(t[k])

@@ -1,0 +1,100 @@
+"""Resource limits: what one run may ask of the machine, checked before anything runs.
+
+A scenario or an API call that exceeds one of these is refused up front with a message naming
+the field, the limit and why it exists, instead of hanging, running out of memory or
+overflowing. The limits are sized for a workstation (a few GB of memory, one core): a run at
+the limit finishes in minutes. They are module constants so that a user with a bigger machine
+can raise them deliberately (``flexsat.limits.MAX_SAMPLES = ...``); the checks read them at
+call time.
+"""
+
+from __future__ import annotations
+
+#: control samples of one run (duration × control rate): at ~50-100 µs per control step
+#: (docs/performance.md) the limit is a few minutes of simulation
+MAX_SAMPLES = 2_000_000
+
+#: integrator substeps per control period (a stiff friction law asks for more, see
+#: :func:`flexsat.sim.engine.stable_substeps`)
+MAX_SUBSTEPS = 1_000
+
+#: integrator steps of one run (control samples × substeps): minutes on one core
+MAX_INTEGRATOR_STEPS = 20_000_000
+
+#: estimated memory of one run's histories, bytes (samples × cases × recorded values × 8)
+MAX_MEMORY = 2 * 1024**3
+
+#: cases of one batch (an array of gains or a Monte Carlo set)
+MAX_CASES = 100_000
+
+#: runs of one scenario file
+MAX_RUNS = 100
+
+#: degrees of freedom of a simulated plant (hub + appendages × modes): the propagators are
+#: dense matrix exponentials of twice this size
+MAX_DOF = 1_000
+
+#: finite elements of a case's structural mesh
+MAX_ELEMENTS = 20_000
+
+#: largest noise seed (numpy's seeds are unbounded, but seed + case index must stay an int64)
+MAX_SEED = 2**32 - 1
+
+#: scenario documents: size of the text and nesting depth of its mappings and lists, checked
+#: before the YAML parser recurses into them; and the number of values once aliases
+#: (``*anchor``) are expanded, which bounds the work of validating them
+MAX_DOCUMENT_BYTES = 1_000_000
+MAX_NESTING = 32
+MAX_DOCUMENT_NODES = 100_000
+
+
+def _bytes(n: float) -> str:
+    for unit, size in (("GB", 1024**3), ("MB", 1024**2), ("kB", 1024)):
+        if n >= size:
+            return f"{n / size:.3g} {unit}"
+    return f"{n:.0f} B"
+
+
+def check_count(value: int, limit: int, field: str, what: str, hint: str = "") -> None:
+    """Refuse ``value`` above ``limit`` with ``"field: <what> = value exceeds the limit ..."``.
+
+    Parameters
+    ----------
+    value, limit : int
+    field : str
+        The input to blame (message head).
+    what : str
+        What is counted, e.g. ``"the run needs 3e9 control samples (duration × control_rate)"``.
+    hint : str
+        How to stay within the limit.
+
+    Raises
+    ------
+    ValueError
+    """
+    if value > limit:
+        raise ValueError(f"{field}: {what} = {value:.4g}, above the limit {limit:,} "
+                         f"(flexsat.limits){'; ' + hint if hint else ''}")
+
+
+def memory_estimate(n_samples: int, n_cases: int, n_values: int) -> int:
+    """Bytes of ``n_values`` float64 histories of ``n_samples`` × ``n_cases``."""
+    return 8 * int(n_samples) * int(n_cases) * int(n_values)
+
+
+def check_memory(n_bytes: int, field: str, what: str) -> None:
+    """Refuse an estimated memory above :data:`MAX_MEMORY`.
+
+    Raises
+    ------
+    ValueError
+        ``"field: <what> needs about 12 GB of memory, above the limit 2 GB ..."``.
+    """
+    if n_bytes > MAX_MEMORY:
+        raise ValueError(f"{field}: {what} needs about {_bytes(n_bytes)} of memory, above the "
+                         f"limit {_bytes(MAX_MEMORY)} (flexsat.limits.MAX_MEMORY)")
+
+
+__all__ = ["MAX_CASES", "MAX_DOCUMENT_BYTES", "MAX_DOCUMENT_NODES", "MAX_DOF", "MAX_ELEMENTS",
+           "MAX_INTEGRATOR_STEPS", "MAX_MEMORY", "MAX_NESTING", "MAX_RUNS", "MAX_SAMPLES",
+           "MAX_SEED", "MAX_SUBSTEPS", "check_count", "check_memory", "memory_estimate"]
