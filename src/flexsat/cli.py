@@ -1,7 +1,8 @@
 """Command line: ``flexsat cases``, ``flexsat modes CASE``, ``flexsat run [SCENARIO]``,
 ``flexsat validate``.
 
-Errors in the user's input print in red on stderr and exit with code 2.
+Errors in the user's input print in red on stderr and exit with code 2; a simulation that
+diverges prints why and exits with code 1, writing no report.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from flexsat.identification_scenario import (
 from flexsat.mode_plot import plot_case_modes
 from flexsat.report import metric_rows, write_report
 from flexsat.scenario import ScenarioError, default_scenario, load_scenario, run_scenario
+from flexsat.sim import SimulationDiverged
 from flexsat.text import format_optional
 from flexsat.units import Q_
 
@@ -187,6 +189,9 @@ def run(
             result = run_scenario(spec, progress=say)
     except ScenarioError as exc:
         _fail(str(exc))
+    except SimulationDiverged as exc:  # a result, not an input error: exit 1, nothing written
+        errors.print(str(exc), style="red", markup=False, highlight=False)
+        raise typer.Exit(code=1) from None
     if isinstance(spec, IdentificationScenario):
         console.print(_identification_table(result))
         writer = write_identification_report

@@ -4,8 +4,8 @@ A scenario or an API call that exceeds one of these is refused up front with a m
 the field, the limit and why it exists, instead of hanging, running out of memory or
 overflowing. The limits are sized for a workstation (a few GB of memory, one core): a run at
 the limit finishes in minutes. They are module constants so that a user with a bigger machine
-can raise them deliberately (``flexsat.limits.MAX_SAMPLES = ...``); the checks read them at
-call time.
+can raise them deliberately (``flexsat.limits.MAX_SAMPLES = ...``): the checks of a run read
+them at call time (the scenario schema's bounds on counts when flexsat.scenario is imported).
 """
 
 from __future__ import annotations
@@ -30,12 +30,12 @@ MAX_CASES = 100_000
 #: runs of one scenario file
 MAX_RUNS = 100
 
-#: degrees of freedom of a simulated plant (hub + appendages × modes): the propagators are
-#: dense matrix exponentials of twice this size
-MAX_DOF = 1_000
+#: elastic modes of a simulated plant: building the assumed-modes model of the TAMU case takes
+#: ~2 s with 100 modes and grows with the cube (30 s with 200)
+MAX_MODES = 100
 
-#: finite elements of a case's structural mesh
-MAX_ELEMENTS = 20_000
+#: finite elements of a case's structural mesh (dense eigen-solves of 3-6 dofs per node)
+MAX_ELEMENTS = 1_000
 
 #: largest noise seed (numpy's seeds are unbounded, but seed + case index must stay an int64)
 MAX_SEED = 2**32 - 1
@@ -96,6 +96,6 @@ def check_memory(n_bytes: int, field: str, what: str) -> None:
                          f"limit {_bytes(MAX_MEMORY)} (flexsat.limits.MAX_MEMORY)")
 
 
-__all__ = ["MAX_CASES", "MAX_DOCUMENT_BYTES", "MAX_DOCUMENT_NODES", "MAX_DOF", "MAX_ELEMENTS",
+__all__ = ["MAX_CASES", "MAX_DOCUMENT_BYTES", "MAX_DOCUMENT_NODES", "MAX_MODES", "MAX_ELEMENTS",
            "MAX_INTEGRATOR_STEPS", "MAX_MEMORY", "MAX_NESTING", "MAX_RUNS", "MAX_SAMPLES",
            "MAX_SEED", "MAX_SUBSTEPS", "check_count", "check_memory", "memory_estimate"]

@@ -34,6 +34,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import typing
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -55,7 +56,7 @@ from pydantic import (
 )
 
 from flexsat import limits
-from flexsat.cases import get_case
+from flexsat.cases import CASES, get_case
 from flexsat.control import (
     PD,
     Controller,
@@ -65,6 +66,7 @@ from flexsat.control import (
     refine_estimator,
 )
 from flexsat.dynamics.hub_appendage import HubAppendage
+from flexsat.dynamics.hybrid import HybridPlant
 from flexsat.maneuvers import BangBang, PseudoSquare, Sinusoidal, SmoothBangBang
 from flexsat.sim import (
     BearingFriction,
@@ -73,9 +75,11 @@ from flexsat.sim import (
     Sensors,
     SimConfig,
     SimResult,
+    SimulationDiverged,
     TorqueActuator,
     simulate,
 )
+from flexsat.sim.engine import check_resources
 from flexsat.units import to_si
 
 DEFAULT_SCENARIO = "tamu_default.yaml"  # package data of flexsat.cases
@@ -192,6 +196,33 @@ def quantity(unit: str, optional: bool = False):
     return Annotated[float | None if optional else float, BeforeValidator(_converter(unit))]
 
 
+def count(minimum: int = 1, maximum: int | None = None, optional: bool = False):
+    """Field type of an integer in [minimum, maximum]; a float with an integral value (``1e3``)
+    is accepted, bools and fractions are not.
+
+    Parameters
+    ----------
+    minimum, maximum : int
+        Inclusive bounds (``maximum`` None: no upper bound).
+    optional : bool
+        Accept ``None`` (the key left out).
+    """
+    rule = f"an integer in [{minimum}, {maximum}]" if maximum is not None else \
+        f"an integer >= {minimum}"
+
+    def check(value, info: ValidationInfo):
+        if value is None and optional:
+            return None
+        number = value if isinstance(value, (int, float)) and not isinstance(value, bool) \
+            else None
+        if number is None or not math.isfinite(number) or number != int(number) or not (
+                minimum <= number <= (maximum if maximum is not None else number)):
+            raise ValueError(f"{info.field_name}: must be {rule}, got {value!r}")
+        return int(number)
+
+    return Annotated[int | None if optional else int, BeforeValidator(check)]
+
+
 def _given(section: BaseModel, exclude=()) -> dict[str, Any]:
     """The fields of ``section`` that were set (not None), as keyword arguments."""
     return section.model_dump(exclude_none=True, exclude=set(exclude))
@@ -239,7 +270,7 @@ class _Buildable(_Section):
 class ModelSpec(_Section):
     """Model options, forwarded to the case builder as overrides."""
 
-    n_modes: int | None = None
+    n_modes: count(1, limits.MAX_MODES, optional=True) = None
     stiffening: bool | None = None
 
 
@@ -256,7 +287,7 @@ class SimulationSpec(_Buildable):
     control_rate: quantity("Hz", optional=True) = None
     integration_step: quantity("s", optional=True) = None
     settling_band: quantity("rad", optional=True) = None
-    seed: Annotated[int, Field(ge=0)] | None = None
+    seed: count(0, limits.MAX_SEED, optional=True) = None
 
     def build(self, **components) -> SimConfig:
         """The :class:`SimConfig`; ``components`` are its actuator, sensors and disturbances."""
@@ -288,8 +319,8 @@ class ActuatorSpec(_Buildable):
 class SensorsSpec(_Buildable):
     encoder_resolution: quantity("rad", optional=True) = None
     rate: Literal["ideal", "ls_filter", "gyro"] | None = None
-    rate_window: int | None = None
-    rate_order: int | None = None
+    rate_window: count(1, limits.MAX_SAMPLES, optional=True) = None
+    rate_order: count(0, limits.MAX_SAMPLES, optional=True) = None
     gyro_noise: quantity("rad/s", optional=True) = None
     strain_noise: quantity("N*m", optional=True) = None
 
@@ -316,7 +347,7 @@ class DisturbancesSpec(_Buildable):
 
     friction: FrictionSpec = Field(default_factory=FrictionSpec)
     random_torque: quantity("N*m", optional=True) = None
-    impulses: list[ImpulseSpec] = Field(default_factory=list)
+    impulses: list[ImpulseSpec] = Field(default_factory=list, max_length=limits.MAX_SAMPLES)
 
     def build(self) -> dict[str, Any]:
         """Keyword arguments ``friction``, ``random_torque``, ``impulses`` of :class:`SimConfig`."""
@@ -363,7 +394,7 @@ class LQGSpec(_Section):
     sensor_noise: list[Annotated[float, BeforeValidator(_converter(""))]]
     process_noise: quantity("")
     refine: Literal["none", "weighted", "truncated"] = "none"
-    keep_modes: Annotated[int, Field(ge=0)] | None = None
+    keep_modes: count(0, limits.MAX_MODES, optional=True) = None
 
     @model_validator(mode="after")
     def _truncation(self):
@@ -533,12 +564,15 @@ class Scenario(_Document):
     actuator: ActuatorSpec = Field(default_factory=ActuatorSpec)
     sensors: SensorsSpec = Field(default_factory=SensorsSpec)
     disturbances: DisturbancesSpec = Field(default_factory=DisturbancesSpec)
-    runs: list[RunSpec] = Field(min_length=1)
+    runs: list[RunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
 
     @field_validator("case")
     @classmethod
     def _known_case(cls, name: str) -> str:
         get_case(name)
+        if name not in maneuver_cases():
+            raise ValueError(f"case: {name!r} has no maneuver model (a hub plant to slew); "
+                             f"cases with one: {', '.join(maneuver_cases())}")
         return name
 
     @field_validator("case_overrides")
@@ -570,6 +604,19 @@ class Scenario(_Document):
         return self.simulation.build(actuator=self.actuator.build(), sensors=self.sensors.build(),
                                      **self.disturbances.build())
 
+
+
+def maneuver_cases() -> tuple[str, ...]:
+    """The cases a maneuver scenario can simulate: their builder's case has a ``model()`` that
+    gives a hub plant (:class:`flexsat.dynamics.hybrid.HybridPlant`), read from the type hints so
+    that no case is built."""
+    names = []
+    for name, info in CASES.items():
+        model = getattr(typing.get_type_hints(info.builder).get("return"), "model", None)
+        plant = typing.get_type_hints(model).get("return") if callable(model) else None
+        if isinstance(plant, type) and issubclass(plant, HybridPlant):
+            names.append(name)
+    return tuple(names)
 
 
 def _non_finite(value) -> bool:
@@ -815,7 +862,8 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
     Raises
     ------
     ScenarioError
-        Listing every problem: case parameters, references, controller gains.
+        Listing every problem: case parameters, references, controller gains, and a run beyond
+        the limits of :mod:`flexsat.limits` (substeps, integrator steps, memory).
     """
     problems: list[str] = []
     built = _collect(problems, _build_case, scenario)
@@ -827,9 +875,29 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
                            scenario.sim_config().dt)
         for index, run in enumerate(scenario.runs):
             controllers[run.label] = _collect(problems, _build_controller, index, run, ctx)
+    config = scenario.sim_config()
+    if built is not None and not problems:
+        _collect(problems, _check_resources, model, config, controllers)
     if problems:
         raise ScenarioError(problems)
-    return ScenarioPlan(scenario, case, model, scenario.sim_config(), controllers)
+    return ScenarioPlan(scenario, case, model, config, controllers)
+
+
+#: the scenario field a resource message of :func:`flexsat.sim.engine.check_resources` blames
+_RESOURCE_FIELDS = {"friction": "disturbances.friction", "duration": "simulation.duration",
+                    "n_cases": "runs", "substeps": "simulation.integration_step"}
+
+
+def _check_resources(model, config: SimConfig, controllers: dict[str, Controller]) -> None:
+    """Refuse runs beyond :mod:`flexsat.limits`; every run's history is kept until the report
+    is written, so the memory estimate counts the cases of all runs together."""
+    try:
+        check_resources(model, config, sum(c.n_cases for c in controllers.values()))
+    except ValueError as exc:
+        message, head = str(exc), _head(str(exc))
+        located = _RESOURCE_FIELDS[head] + message[len(head):] if head in _RESOURCE_FIELDS \
+            else f"simulation: {message}"
+        raise ScenarioError([located]) from None
 
 
 @dataclass(frozen=True)
@@ -886,13 +954,20 @@ def run_scenario(scenario: Scenario, progress: Callable[[str], None] | None = No
     ------
     ScenarioError
         Before any run, if :func:`prepare_scenario` finds problems.
+    SimulationDiverged
+        If a run diverges (the message starts with the run, ``runs['Law I']: ...``); no result
+        is returned.
     """
     plan = prepare_scenario(scenario)
     results = []
-    for label, controller in plan.controllers.items():
+    for index, (label, controller) in enumerate(plan.controllers.items()):
         if progress is not None:
             progress(label)
-        results.append(simulate(plan.model, controller, plan.config))
+        try:
+            results.append(simulate(plan.model, controller, plan.config))
+        except SimulationDiverged as exc:
+            raise SimulationDiverged(f"runs{_item(index, label)}: {exc}", exc.cases, exc.time,
+                                     exc.cause) from None
     return ScenarioResult(scenario, tuple(plan.controllers), tuple(results),
                           get_case(scenario.case).source)
 

@@ -36,6 +36,7 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import brentq
 
+from flexsat import limits
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.control import PD
 from flexsat.structures.beam import TipMassCantilever, hub_free_frequencies
@@ -410,6 +411,8 @@ def nps(**overrides) -> NPSCase:
     values = read_inputs("nps", _INPUTS, overrides)
     if values["n_elements"] < 2:
         raise ValueError(f"n_elements: must be >= 2, got {values['n_elements']}")
+    limits.check_count(values["n_elements"], limits.MAX_ELEMENTS, "n_elements",
+                       "finite elements of the mast")
     if values["damping"] >= 1:
         raise ValueError(f"damping: must be < 1 (a ratio of critical damping), got {values['damping']!r}")
     if 2 * values["n_elements"] < values["n_modes"]:

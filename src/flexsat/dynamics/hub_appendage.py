@@ -36,6 +36,7 @@ from functools import cached_property
 
 import numpy as np
 
+from flexsat import limits
 from flexsat.dynamics.hybrid import HybridPlant
 from flexsat.structures.beam import TipMassCantilever
 from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
@@ -129,6 +130,7 @@ class HubAppendage(HybridPlant):
 
     def __post_init__(self):
         require_count(self.n_modes, "n_modes")
+        limits.check_count(self.n_modes, limits.MAX_MODES, "n_modes", "modes per appendage")
         zeta = np.atleast_1d(np.asarray(self.params.damping, dtype=float))
         if zeta.size not in (1, self.n_modes):
             raise ValueError(
