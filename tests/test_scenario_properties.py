@@ -1,0 +1,177 @@
+"""Property: any malformed scenario document ends in a ScenarioError (or, if it is still valid,
+runs to finite results or stops with SimulationDiverged), quickly; no other exception escapes.
+
+Documents are the packaged default and the examples, mutated at a random place: wrong types,
+extreme and non-finite numbers, bad units, missing and unknown keys, deep nesting, and, on the
+text, binary bytes, duplicated lines (duplicate keys) and truncation. Deterministic
+(``derandomize``) so that CI is stable.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from flexsat.identification_scenario import IdentificationScenario
+from flexsat.scenario import ScenarioError, default_scenario, load_scenario, run_scenario
+from flexsat.sim import SimulationDiverged
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+#: seconds one document may take from text to outcome (load, prepare and, when short, the run);
+#: the slowest valid one (an NPS LQG design) takes ~0.4 s here
+TIME_BOUND = 5.0
+
+#: a valid document is simulated only when it is this small (control samples × runs × substeps)
+SIMULATED_WORK = 3_000
+
+
+def _small(data: dict) -> dict:
+    """A fast variant of a maneuver document: a 0.2-0.5 s run, 3 modes where the case allows."""
+    data = copy.deepcopy(data)
+    if data.get("kind", "maneuver") == "maneuver":
+        data["simulation"]["duration"] = "0.5 s"
+        if data["case"] == "tamu":
+            data["model"]["n_modes"] = 3
+    return data
+
+
+BASES = {
+    "default": _small(yaml.safe_load(default_scenario().yaml_text)),
+    "nps_pd": _small(yaml.safe_load((EXAMPLES / "nps_pd_slews.yaml").read_text())),
+    "nps_lqg": _small(yaml.safe_load((EXAMPLES / "nps_lqg_30deg.yaml").read_text())),
+    "identification": yaml.safe_load((EXAMPLES / "tamu_grid_identification.yaml").read_text()),
+}
+#: the default is cheap to prepare and comes up most often; the NPS ones build a finite-element
+#: model (~0.3 s each)
+BASE_WEIGHTS = {"default": 6, "nps_pd": 1, "nps_lqg": 1, "identification": 2}
+
+
+def _paths(node, prefix=()) -> list[tuple]:
+    """Every key path of a document (mappings and list items)."""
+    items = node.items() if isinstance(node, dict) else enumerate(node) \
+        if isinstance(node, list) else ()
+    out = []
+    for key, value in items:
+        out.append(prefix + (key,))
+        out.extend(_paths(value, prefix + (key,)))
+    return out
+
+
+NUMBERS = st.sampled_from([0, -1, 1e308, -1e308, 1e-308, 2**70, -(2**70), 1e29, 1.5, 1e12,
+                           math.nan, math.inf, -math.inf])
+BAD_UNITS = st.sampled_from(["1 kg", "15 deg", "100 percent", "nan s", "inf Hz", "1e400 s",
+                             "1e12 s", "-3 N*m", "5 furlong", "ozf*in", "", "  ", "1 1 s"])
+WRONG_TYPES = st.one_of(st.none(), st.booleans(), st.lists(st.integers(), max_size=3),
+                        st.dictionaries(st.sampled_from(["a", "angle", "g1"]), st.integers(),
+                                        max_size=2),
+                        st.text(max_size=20))
+
+
+def _nested(depth: int):
+    value = 1
+    for level in range(depth):
+        value = [value] if level % 2 else {"k": value}
+    return value
+
+
+VALUES = st.one_of(NUMBERS, BAD_UNITS, WRONG_TYPES, st.integers(20, 60).map(_nested))
+
+
+def _set(data, path, value):
+    node = data
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = value
+
+
+def _delete(data, path):
+    node = data
+    for key in path[:-1]:
+        node = node[key]
+    del node[path[-1]]
+
+
+@st.composite
+def documents(draw) -> str | bytes:
+    """A mutated scenario document (YAML text, or bytes after a binary mutation)."""
+    name = draw(st.sampled_from([n for n, w in BASE_WEIGHTS.items() for _ in range(w)]))
+    data = copy.deepcopy(BASES[name])
+    for _ in range(draw(st.integers(1, 3))):
+        paths = _paths(data)
+        kind = draw(st.sampled_from(["set", "set", "set", "delete", "unknown"]))
+        path = draw(st.sampled_from(paths)) if paths else ()
+        if kind == "set" and path:
+            _set(data, path, draw(VALUES))
+        elif kind == "delete" and path:
+            _delete(data, path)
+        else:
+            parent = draw(st.sampled_from([()] + [p for p in paths if isinstance(
+                _get(data, p), dict)]))
+            _get(data, parent)[draw(st.sampled_from(["colour", "seed_", "Runs", "1"]))] = 1
+    text = yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
+    lines = text.splitlines(keepends=True)
+    mutation = draw(st.sampled_from(["none", "none", "bytes", "duplicate", "truncate"]))
+    if mutation == "duplicate":
+        index = draw(st.integers(0, len(lines) - 1))
+        return "".join(lines[:index + 1] + [lines[index]] + lines[index + 1:])
+    if mutation == "truncate":
+        return text[:draw(st.integers(0, len(text)))]
+    if mutation == "bytes":
+        raw = text.encode()
+        at = draw(st.integers(0, len(raw)))
+        return raw[:at] + draw(st.binary(min_size=1, max_size=8)) + raw[at:]
+    return text
+
+
+def _get(data, path):
+    for key in path:
+        data = data[key]
+    return data
+
+
+def _outcome(document) -> str:
+    """'error', 'diverged', 'valid' or 'ran' (finite results); anything else escapes."""
+    try:
+        scenario = load_scenario(document)
+        if isinstance(scenario, IdentificationScenario):
+            return "valid"  # its stage 2 runs the campaign (minutes): load only
+        from flexsat.scenario import prepare_scenario
+
+        plan = prepare_scenario(scenario)
+        work = plan.config.n_steps * len(plan.controllers) * plan.config.substeps
+        if work > SIMULATED_WORK:
+            return "valid"
+        result = run_scenario(scenario)
+    except ScenarioError:
+        return "error"
+    except SimulationDiverged:
+        return "diverged"
+    histories = result.dataset()
+    for name in ("theta", "theta_dot", "torque", "tip_deflection", "energy"):
+        assert np.isfinite(histories[name].values).all(), name
+    return "ran"
+
+
+@settings(max_examples=120, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(documents())
+def test_malformed_documents_end_in_a_scenario_error_quickly(document):
+    start = time.perf_counter()
+    _outcome(document)  # raises anything other than the allowed outcomes
+    assert time.perf_counter() - start < TIME_BOUND
+
+
+@pytest.mark.parametrize("name", sorted(BASES))
+def test_the_unmutated_bases_are_valid(name):
+    # the property is not vacuous: the documents it mutates are valid and the maneuvers run
+    expected = "valid" if name == "identification" else "ran"
+    assert _outcome(yaml.safe_dump(BASES[name], sort_keys=False)) == expected
