@@ -15,12 +15,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
+from flexsat import limits
 from flexsat.sim.actuators import TorqueActuator
 from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
 from flexsat.sim.integrators import ExponentialStepper
 from flexsat.sim.metrics import METRIC_UNITS, maneuver_metrics
 from flexsat.sim.sensors import Sensors, SensorState
-from flexsat import limits
 from flexsat.validation import require_count, require_finite, require_positive
 
 N_NOISE_CHANNELS = 3  # gyro, strain gauge, random torque — fixed so streams never shift
