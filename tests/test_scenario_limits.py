@@ -60,7 +60,12 @@ def changed(section: str, **values) -> dict:
     (changed("model", n_modes=100_000), "model.n_modes: must be an integer in [1, 100], got "
                                         "100000"),
     (changed("sensors", rate_window=True), "sensors.rate_window: must be an integer in "
-                                           "[1, 2000000], got True"),
+                                           "[1, 1000], got True"),
+    (changed("maneuver", angle="1e12 rad"), "maneuver.angle: a slew of at most ten turns "
+                                            "(62.83 rad) either way, got 1e+12 rad"),
+    (changed("actuator", torque_constant_ratio=1e300), "actuator.torque_constant_ratio: actual "
+                                                       "/ nominal torque constant, at most 10, "
+                                                       "got 1e+300"),
 ])
 def test_numbers_beyond_their_bounds_are_refused_at_load(data, expected):
     assert problem(data) == expected
@@ -92,6 +97,13 @@ def test_memory_of_all_runs_together_is_checked(monkeypatch):
     assert problem(small_data()).startswith(
         "simulation.duration: a run of 151 samples × 2 cases × 29 values needs about 68.4 kB of "
         "memory")
+
+
+def test_numerical_failure_of_the_case_model_is_a_scenario_error():
+    data = small_data()
+    data["case_overrides"]["tip_radius"] = 1e300
+    assert problem(data).startswith("case_overrides: the tamu model cannot be built from these "
+                                    "values (OverflowError")
 
 
 def test_too_many_runs_are_refused():

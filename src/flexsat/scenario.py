@@ -274,10 +274,22 @@ class ModelSpec(_Section):
     stiffening: bool | None = None
 
 
+#: largest slew of a maneuver scenario, rad (ten turns)
+MAX_SLEW = 20 * math.pi
+
+
 class ManeuverSpec(_Section):
-    """The slew: ``angle`` (rad), from rest at 0."""
+    """The slew: ``angle`` (rad), from rest at 0, at most ten turns either way."""
 
     angle: quantity("rad")
+
+    @field_validator("angle")
+    @classmethod
+    def _sensible(cls, angle: float) -> float:
+        if abs(angle) > MAX_SLEW:
+            raise ValueError(f"angle: a slew of at most ten turns ({MAX_SLEW:.4g} rad) either "
+                             f"way, got {angle:.4g} rad")
+        return angle
 
 
 class SimulationSpec(_Buildable):
@@ -312,6 +324,15 @@ class ActuatorSpec(_Buildable):
     saturation: quantity("N*m", optional=True) = None
     torque_constant_ratio: quantity("", optional=True) = None
 
+    @field_validator("torque_constant_ratio")
+    @classmethod
+    def _sensible(cls, ratio: float | None) -> float | None:
+        # actual / nominal torque constant: a motor off by more than 10x is a different motor
+        if ratio is not None and ratio > 10:
+            raise ValueError(f"torque_constant_ratio: actual / nominal torque constant, at most "
+                             f"10, got {ratio:g}")
+        return ratio
+
     def build(self) -> TorqueActuator:
         return TorqueActuator(**_given(self))
 
@@ -319,8 +340,9 @@ class ActuatorSpec(_Buildable):
 class SensorsSpec(_Buildable):
     encoder_resolution: quantity("rad", optional=True) = None
     rate: Literal["ideal", "ls_filter", "gyro"] | None = None
-    rate_window: count(1, limits.MAX_SAMPLES, optional=True) = None
-    rate_order: count(0, limits.MAX_SAMPLES, optional=True) = None
+    # a least-squares rate over at most 1,000 samples, a polynomial of at most order 10
+    rate_window: count(1, 1000, optional=True) = None
+    rate_order: count(0, 10, optional=True) = None
     gyro_noise: quantity("rad/s", optional=True) = None
     strain_noise: quantity("N*m", optional=True) = None
 
@@ -827,6 +849,12 @@ def _build_case(scenario: Scenario):
         if head in scenario.case_overrides:
             raise ScenarioError([_locate("case_overrides", message)]) from None
         raise ScenarioError([f"case_overrides: {message}"]) from None
+    except (ArithmeticError, RuntimeError) as exc:
+        # the model's numerics (overflow, root finding) fail on values far outside a physical
+        # range that the case's own rules do not bound
+        raise ScenarioError([f"case_overrides: the {scenario.case} model cannot be built from "
+                             f"these values ({type(exc).__name__}: {exc}); give physically "
+                             "sensible values"]) from None
 
 
 def _build_controller(index: int, run: RunSpec, ctx: _CaseContext) -> Controller:
@@ -845,6 +873,9 @@ def _build_controller(index: int, run: RunSpec, ctx: _CaseContext) -> Controller
         section = next((name for name, spec in (("gains", GainsSpec), ("poles", PolesSpec))
                         if head in spec.model_fields), None)
         raise ScenarioError([_locate(f"{path}.{section}" if section else path, str(exc))]) from None
+    except (ArithmeticError, RuntimeError) as exc:
+        raise ScenarioError([f"{path}: the {run.law} law cannot be designed from these values "
+                             f"({type(exc).__name__}: {exc})"]) from None
 
 
 def _collect(problems: list[str], build: Callable, *args):
