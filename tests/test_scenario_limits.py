@@ -4,7 +4,9 @@ nothing."""
 
 from __future__ import annotations
 
+import copy
 import time
+from pathlib import Path
 
 import pytest
 import yaml
@@ -57,8 +59,8 @@ def changed(section: str, **values) -> dict:
      "simulation.seed: must be an integer in [0, 4294967295], got 1e+29"),
     (changed("simulation", seed=1.5), "simulation.seed: must be an integer in [0, 4294967295], "
                                       "got 1.5"),
-    (changed("model", n_modes=100_000), "model.n_modes: must be an integer in [1, 100], got "
-                                        "100000"),
+    (changed("model", n_modes=100_000), "model.n_modes: modes per appendage = 1e+05, above the "
+                                        "limit 100 (flexsat.limits)"),
     (changed("sensors", rate_window=True), "sensors.rate_window: must be an integer in "
                                            "[1, 1000], got True"),
     (changed("maneuver", angle="1e12 rad"), "maneuver.angle: a slew of at most ten turns "
@@ -195,3 +197,34 @@ def test_case_without_a_maneuver_model_is_refused_at_load():
     assert problem(data) == ("case: 'eps' has no maneuver model (a hub plant to slew); cases "
                              "with one: tamu, nps")
     assert set(maneuver_cases()) == {"tamu", "nps"}
+
+
+# -- identification scenarios ---------------------------------------------------------------------
+IDENTIFICATION = yaml.safe_load(
+    (Path(__file__).resolve().parents[1] / "examples" / "tamu_grid_identification.yaml")
+    .read_text())
+
+
+@pytest.mark.parametrize("section, values, expected", [
+    ("wheels", {"duration": "1e9 s"}, "wheels.duration: samples (duration × sample_rate) = 5e+10, "
+                                      "above the limit 2,000,000 (flexsat.limits); shorten the "
+                                      "test or lower the sample rate"),
+    ("hammer", {"sample_rate": "-200 Hz"}, "hammer.sample_rate: must be > 0, got -200"),
+    ("video", {"field_rate": "1e12 Hz"}, "video.duration: samples (duration × field_rate) = "
+                                         "4.5e+12, above the limit 2,000,000"),
+    ("identification", {"bootstrap_samples": 1e9}, "identification.bootstrap_samples: must be an "
+                                                   "integer in [0, 1000], got 1000000000.0"),
+])
+def test_identification_tests_beyond_the_limits_are_refused_at_load(section, values, expected):
+    data = copy.deepcopy(IDENTIFICATION)
+    data[section].update(values)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(yaml.safe_dump(data))
+    assert len(info.value.problems) == 1 and info.value.problems[0].startswith(expected)
+
+
+def test_identification_seed_is_bounded():
+    data = dict(IDENTIFICATION, seed=1e29)
+    with pytest.raises(ScenarioError, match=r"seed: must be an integer in \[0, 4294967295\], got "
+                                            r"1e\+29"):
+        load_scenario(yaml.safe_dump(data))

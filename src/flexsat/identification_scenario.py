@@ -40,6 +40,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import BeforeValidator, Field, field_validator, model_validator
 
+from flexsat import limits
 from flexsat.cases import get_case
 from flexsat.identify.campaign import (
     CameraRig,
@@ -50,7 +51,7 @@ from flexsat.identify.campaign import (
     run_campaign,
 )
 from flexsat.identify.measurements import Measurement
-from flexsat.scenario import ScenarioError, _Document, _head, _locate, _Section, quantity
+from flexsat.scenario import ScenarioError, _Document, _head, _locate, _Section, count, quantity
 from flexsat.text import format_optional
 from flexsat.units import to_si
 
@@ -66,6 +67,17 @@ def _vector(unit: str):
         return tuple(to_si(v, unit, info.field_name) for v in value)
 
     return Annotated[tuple[float, float, float], BeforeValidator(convert)]
+
+
+def _sampled(spec, duration: str, rate: str) -> None:
+    """A simulated test's length and sample rate: positive, and at most
+    :data:`flexsat.limits.MAX_SAMPLES` samples."""
+    for name in (duration, rate):
+        if not getattr(spec, name) > 0:
+            raise ValueError(f"{name}: must be > 0, got {getattr(spec, name):g}")
+    limits.check_count(getattr(spec, duration) * getattr(spec, rate), limits.MAX_SAMPLES,
+                       duration, f"samples ({duration} × {rate})",
+                       "shorten the test or lower the sample rate")
 
 
 class TruthSpec(_Section):
@@ -99,6 +111,11 @@ class HammerSpec(_Section):
     duration: quantity("s") = 20.0
     sample_rate: quantity("Hz") = 200.0
 
+    @model_validator(mode="after")
+    def _samples(self):
+        _sampled(self, "duration", "sample_rate")
+        return self
+
 
 class CameraSpec(_Section):
     position: _vector("m")
@@ -115,7 +132,12 @@ class VideoSpec(_Section):
     centroid_noise_px: Annotated[float, Field(gt=0)] = 0.05
     quantize: bool = False
     target_sigma: quantity("m") = 1e-3
-    static_fields: Annotated[int, Field(ge=1)] = 50
+    static_fields: count(1, limits.MAX_SAMPLES) = 50
+
+    @model_validator(mode="after")
+    def _samples(self):
+        _sampled(self, "duration", "field_rate")
+        return self
 
 
 class WheelSpec(_Section):
@@ -125,10 +147,11 @@ class WheelSpec(_Section):
     torque_constants: list[Annotated[float, Field(gt=0)]] = Field(default_factory=list)
     duration: quantity("s") = 300.0
     sample_rate: quantity("Hz") = 50.0
-    segment: Annotated[int, Field(ge=16)] = 2000
+    segment: count(16, limits.MAX_SAMPLES) = 2000
 
     @model_validator(mode="after")
     def _one_axis_per_wheel(self):
+        _sampled(self, "duration", "sample_rate")
         if len(self.axes) != len(self.nodes):
             raise ValueError(f"axes: one torque axis per wheel node ({len(self.nodes)}), "
                              f"got {len(self.axes)}")
@@ -147,15 +170,16 @@ class RecordsSpec(_Section):
     hammer: str
     wheels: str
     video: str | None = None
-    segment: Annotated[int, Field(ge=16)] = 2000
+    segment: count(16, limits.MAX_SAMPLES) = 2000
 
 
 class IdentificationSpec(_Section):
     band: quantity("Hz") = 10.0
-    era_order: Annotated[int, Field(ge=2)] = 80
+    # the ERA Hankel matrix and the bootstrap's repeats grow with these: minutes at the bounds
+    era_order: count(2, 1000) = 80
     update: Literal["creamer_junkins", "differential_correction"] = "differential_correction"
     anti_alias: Annotated[float, Field(gt=0, lt=0.5)] = 0.4
-    bootstrap_samples: Annotated[int, Field(ge=0)] = 10
+    bootstrap_samples: count(0, 1000) = 10
     torque_constants: bool = False
 
 
@@ -174,7 +198,7 @@ class IdentificationScenario(_Document):
     wheels: WheelSpec | None = None
     records: RecordsSpec | None = None
     identification: IdentificationSpec = Field(default_factory=IdentificationSpec)
-    seed: Annotated[int, Field(ge=0)] = 0
+    seed: count(0, limits.MAX_SEED) = 0
 
     @field_validator("case")
     @classmethod

@@ -270,7 +270,7 @@ class _Buildable(_Section):
 class ModelSpec(_Section):
     """Model options, forwarded to the case builder as overrides."""
 
-    n_modes: count(1, limits.MAX_MODES, optional=True) = None
+    n_modes: int | None = None  # the builder checks it (positive, at most flexsat.limits.MAX_MODES)
     stiffening: bool | None = None
 
 
@@ -676,7 +676,8 @@ def _read(source: str | bytes | Path) -> str:
             with open(source, "rb") as file:
                 source = file.read(limits.MAX_DOCUMENT_BYTES + 1)
         except OSError as exc:
-            raise ScenarioError([f"{name} cannot be read ({exc.strerror})"]) from None
+            raise ScenarioError([f"scenario: cannot read {str(source)!r} ({exc.strerror})"]
+                                ) from None
     if isinstance(source, bytes):
         try:
             source = source.decode("utf-8")
