@@ -10,6 +10,8 @@ them at call time (the scenario schema's bounds on counts when flexsat.scenario 
 
 from __future__ import annotations
 
+import numpy as np
+
 #: control samples of one run (duration × control rate): at ~50-100 µs per control step
 #: (docs/performance.md) the limit is a few minutes of simulation
 MAX_SAMPLES = 2_000_000
@@ -47,6 +49,17 @@ MAX_SEED = 2**32 - 1
 MAX_DOCUMENT_BYTES = 256_000
 MAX_NESTING = 32
 MAX_DOCUMENT_NODES = 10_000
+
+
+def is_integral(value) -> bool:
+    """True for an int or a float with an integral value (``1e3``); False for bools, NaN,
+    infinities, fractions and non-numbers (compared without a float conversion, so that an
+    int of any size is safe)."""
+    if isinstance(value, (bool, np.bool_)):
+        return False
+    if isinstance(value, (int, np.integer)):
+        return True
+    return isinstance(value, (float, np.floating)) and float(value).is_integer()
 
 
 def _bytes(n: float) -> str:
@@ -98,4 +111,4 @@ def check_memory(n_bytes: int, field: str, what: str) -> None:
 
 __all__ = ["MAX_CASES", "MAX_DOCUMENT_BYTES", "MAX_DOCUMENT_NODES", "MAX_MODES", "MAX_ELEMENTS",
            "MAX_INTEGRATOR_STEPS", "MAX_MEMORY", "MAX_NESTING", "MAX_RUNS", "MAX_SAMPLES",
-           "MAX_SEED", "MAX_SUBSTEPS", "check_count", "check_memory", "memory_estimate"]
+           "MAX_SEED", "MAX_SUBSTEPS", "check_count", "check_memory", "is_integral", "memory_estimate"]

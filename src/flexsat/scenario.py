@@ -57,6 +57,7 @@ from pydantic import (
 
 from flexsat import limits
 from flexsat.cases import CASES, get_case
+from flexsat.limits import is_integral
 from flexsat.control import (
     PD,
     Controller,
@@ -213,12 +214,9 @@ def count(minimum: int = 1, maximum: int | None = None, optional: bool = False):
     def check(value, info: ValidationInfo):
         if value is None and optional:
             return None
-        number = value if isinstance(value, (int, float)) and not isinstance(value, bool) \
-            else None
-        if number is None or not math.isfinite(number) or number != int(number) or not (
-                minimum <= number <= (maximum if maximum is not None else number)):
+        if not is_integral(value) or value < minimum or (maximum is not None and value > maximum):
             raise ValueError(f"{info.field_name}: must be {rule}, got {value!r}")
-        return int(number)
+        return int(value)
 
     return Annotated[int | None if optional else int, BeforeValidator(check)]
 

@@ -57,8 +57,7 @@ class SimConfig:
         require_positive(self.control_rate, "control_rate")
         require_positive(self.settling_band, "settling_band")
         require_count(self.substeps, "substeps")
-        seed = float(require_finite(self.seed, "seed"))
-        if isinstance(self.seed, bool) or seed != int(seed) or not 0 <= seed <= limits.MAX_SEED:
+        if not limits.is_integral(self.seed) or not 0 <= self.seed <= limits.MAX_SEED:
             raise ValueError(f"seed: must be an integer in [0, {limits.MAX_SEED}], got "
                              f"{self.seed!r}")
         limits.check_count(self.duration * self.control_rate, limits.MAX_SAMPLES, "duration",
