@@ -27,6 +27,7 @@ from flexsat.identification_scenario import (
     summary_table,
 )
 from flexsat.mode_plot import plot_case_modes
+from flexsat.publish import check_output_folder
 from flexsat.report import metric_rows, write_report
 from flexsat.scenario import ScenarioError, default_scenario, load_scenario, run_scenario
 from flexsat.text import format_optional
@@ -179,6 +180,10 @@ def run(
     """Run a scenario and write its report (metrics or identification tables, netCDF, plots,
     HTML)."""
     say = lambda label: console.print(f"running {label} ...", markup=False)  # noqa: E731
+    try:  # before any work: a report that cannot be written is known in a second
+        check_output_folder(out)
+    except OSError as exc:
+        _fail(f"--out: {exc}")
     try:
         spec = default_scenario() if scenario is None else load_scenario(scenario)
         if isinstance(spec, IdentificationScenario):
@@ -196,7 +201,7 @@ def run(
     try:
         path = writer(result, out)
     except OSError as exc:
-        _fail(f"--out: cannot write the report to {str(out)!r} ({exc.strerror or exc})")
+        _fail(f"--out: {exc}")
     console.print(f"report written to {path / 'index.html'}", markup=False)
 
 
