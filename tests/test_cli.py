@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import errno
 import json
+import os
 
 import pytest
 import yaml
@@ -131,3 +133,65 @@ def test_run_recorded_identification_scenario(tmp_path, recorded_scenario):
     assert "recorded tests" in result.stdout, result.stdout
     assert "of nominal" in result.stdout
     assert "<td>–</td>" in (out / "index.html").read_text()
+
+
+def unwrapped(text: str) -> str:
+    """``text`` as printed before rich wrapped it to the terminal width (its line breaks fall at
+    a space it keeps, or inside a word too long for a line)."""
+    return text.rstrip("\n").replace("\n", "")
+
+
+def _probe_raises(monkeypatch, code):
+    """Creating the probe file in the output folder's parent raises OSError(code), as on a
+    read-only (EROFS) or full (ENOSPC) file system (tests run as root, whom chmod does not
+    stop)."""
+    real = os.open
+
+    def guarded(path, flags, *args, **kwargs):
+        if ".probe-" in os.fspath(path):
+            raise OSError(code, os.strerror(code), os.fspath(path))
+        return real(path, flags, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", guarded)
+
+
+@pytest.mark.parametrize("code, reason", [
+    (errno.EROFS, "Read-only file system"),
+    (errno.ENOSPC, "No space left on device"),
+    (errno.EDQUOT, "Disk quota exceeded"),
+])
+def test_run_refuses_an_unwritable_out_before_simulating(tmp_path, monkeypatch, code, reason):
+    _probe_raises(monkeypatch, code)
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["run", write_scenario(tmp_path / "s.yaml"), "-o", str(out)])
+    assert result.exit_code == 2, result.output
+    assert unwrapped(result.stderr).startswith(f"--out: cannot write the report to '{out}': {reason}")
+    assert "running" not in result.stdout  # nothing simulated
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.yaml"]
+
+
+def test_run_refuses_a_file_as_out(tmp_path):
+    (tmp_path / "taken").write_text("x")
+    for out in (tmp_path / "taken", tmp_path / "taken" / "out"):
+        result = runner.invoke(app, ["run", "-o", str(out)])
+        assert result.exit_code == 2, result.output
+        assert unwrapped(result.stderr).startswith("--out: ") and "is a file, not a folder" in unwrapped(result.stderr)
+        assert "running" not in result.stdout
+
+
+def test_run_disk_full_while_publishing_exits_2_and_keeps_the_earlier_report(
+        tmp_path, fail_opening):
+    out = tmp_path / "out"
+    path = write_scenario(tmp_path / "s.yaml")
+    assert runner.invoke(app, ["run", path, "-o", str(out)]).exit_code == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    fail_opening("results.nc")
+    result = runner.invoke(app, ["run", write_scenario(tmp_path / "s.yaml", duration="1 s"),
+                                 "-o", str(out)])
+    assert result.exit_code == 2, result.output
+    assert "Law II" in result.stdout  # simulated, then the write failed
+    assert unwrapped(result.stderr).startswith(f"--out: cannot write the report to '{out}': No space left "
+                                    "on device")
+    assert "free some space or choose another folder" in unwrapped(result.stderr)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "s.yaml"]

@@ -8,10 +8,8 @@ to, so a mixture is visible.
 
 from __future__ import annotations
 
-import builtins
 import errno
 import fcntl
-import io
 import json
 import logging
 import os
@@ -70,24 +68,9 @@ def old_report(tmp_path):
     return out
 
 
-def fail_when_opening(monkeypatch, name: str, code=errno.ENOSPC) -> None:
-    """Opening ``name`` for writing inside a temporary report folder raises OSError(code)."""
-    real = io.open
-
-    def guarded(file, mode="r", *args, **kwargs):
-        path = Path(os.fsdecode(file)) if isinstance(file, (str, bytes, os.PathLike)) else None
-        if path is not None and path.name == name and ".tmp-" in path.parent.name \
-                and set(mode) & set("wax+"):
-            raise OSError(code, os.strerror(code), str(path))
-        return real(file, mode, *args, **kwargs)
-
-    monkeypatch.setattr(io, "open", guarded)  # pathlib
-    monkeypatch.setattr(builtins, "open", guarded)  # PIL, matplotlib
-
-
 @pytest.mark.parametrize("name", [*NAMES, MANIFEST])
-def test_failure_at_each_file_keeps_the_old_report(old_report, monkeypatch, name):
-    fail_when_opening(monkeypatch, name)
+def test_failure_at_each_file_keeps_the_old_report(old_report, fail_opening, name):
+    fail_opening(name)
     with pytest.raises(OutputError) as info:
         write_atomically(old_report, writer("new"))
     assert info.value.errno == errno.ENOSPC
@@ -338,8 +321,8 @@ def test_check_creates_nothing(tmp_path):
     (errno.EDQUOT, "Disk quota exceeded", "free some space or choose another folder"),
     (errno.EACCES, "Permission denied", "choose a folder you can write to"),
 ])
-def test_write_errors_say_where_and_why(old_report, monkeypatch, code, reason, hint):
-    fail_when_opening(monkeypatch, "results.nc", code)
+def test_write_errors_say_where_and_why(old_report, fail_opening, code, reason, hint):
+    fail_opening("results.nc", code)
     with pytest.raises(OutputError) as info:
         write_atomically(old_report, writer("new"))
     message = str(info.value)
