@@ -165,7 +165,8 @@ def test_run_refuses_an_unwritable_out_before_simulating(tmp_path, monkeypatch, 
     out = tmp_path / "out"
     result = runner.invoke(app, ["run", write_scenario(tmp_path / "s.yaml"), "-o", str(out)])
     assert result.exit_code == 2, result.output
-    assert unwrapped(result.stderr).startswith(f"--out: cannot write the report to '{out}': {reason}")
+    message = unwrapped(result.stderr)
+    assert message.startswith(f"--out: cannot write the report to '{out}': {reason}")
     assert "running" not in result.stdout  # nothing simulated
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.yaml"]
 
@@ -175,7 +176,8 @@ def test_run_refuses_a_file_as_out(tmp_path):
     for out in (tmp_path / "taken", tmp_path / "taken" / "out"):
         result = runner.invoke(app, ["run", "-o", str(out)])
         assert result.exit_code == 2, result.output
-        assert unwrapped(result.stderr).startswith("--out: ") and "is a file, not a folder" in unwrapped(result.stderr)
+        message = unwrapped(result.stderr)
+        assert message.startswith("--out: ") and "is a file, not a folder" in message
         assert "running" not in result.stdout
 
 
@@ -190,8 +192,9 @@ def test_run_disk_full_while_publishing_exits_2_and_keeps_the_earlier_report(
                                  "-o", str(out)])
     assert result.exit_code == 2, result.output
     assert "Law II" in result.stdout  # simulated, then the write failed
-    assert unwrapped(result.stderr).startswith(f"--out: cannot write the report to '{out}': No space left "
-                                    "on device")
-    assert "free some space or choose another folder" in unwrapped(result.stderr)
+    message = unwrapped(result.stderr)
+    assert message.startswith(f"--out: cannot write the report to '{out}': No space left on "
+                              "device")
+    assert "free some space or choose another folder" in message
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "s.yaml"]

@@ -326,11 +326,12 @@ def test_write_errors_say_where_and_why(old_report, fail_opening, code, reason, 
     with pytest.raises(OutputError) as info:
         write_atomically(old_report, writer("new"))
     message = str(info.value)
-    assert message.startswith(f"cannot write the report to '{old_report}': {reason}")
+    assert message.startswith(f"cannot write the report to '{old_report}': {reason} (writing "
+                              "results.nc)")
     assert hint in message and message.endswith(f"'{old_report}' is unchanged.")
     assert info.value.errno == code
     if code in (errno.ENOSPC, errno.EDQUOT):
-        assert "MB free there" in message
+        assert "MB free there; the earlier report stays until the new one is complete" in message
 
 
 def test_check_probes_the_parent(tmp_path, monkeypatch):

@@ -46,7 +46,7 @@ import secrets
 import shutil
 import stat
 import time
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Callable, Iterator
 
@@ -171,14 +171,22 @@ def _error(exc: OSError, out: Path) -> OutputError:
     """``exc`` (raised while writing the report to ``out``) as a message saying where and why."""
     reason = exc.strerror or str(exc)
     if exc.filename is not None:
-        reason += f": '{exc.filename}'"
+        path = Path(os.fsdecode(exc.filename))
+        temporary = path.parent.name.startswith(f".{out.name}.tmp-")
+        reason += f" (writing {path.name})" if temporary else f": '{path}'"
     message = f"cannot write the report to '{out}': {reason}"
     if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+        notes = []
         try:
             fs = os.statvfs(next(p for p in (out, *out.parents) if p.exists()))
-            message += f" ({fs.f_bavail * fs.f_frsize / 1e6:.1f} MB free there)"
+            notes.append(f"{fs.f_bavail * fs.f_frsize / 1e6:.1f} MB free there")
         except OSError:
             pass
+        if out.exists():
+            notes.append("the earlier report stays until the new one is complete, so both "
+                         "must fit")
+        if notes:
+            message += f" ({'; '.join(notes)})"
     if exc.errno in _HINTS:
         message += f"; {_HINTS[exc.errno]}"
     return OutputError(exc.errno or errno.EIO, message + f". '{out}' is unchanged.")
@@ -218,7 +226,11 @@ def _refuse_foreign(out: Path, written: set[str] | None) -> None:
 def _probe(folder: Path, name: str) -> None:
     """Create, write, flush and remove a small file in ``folder``: raises what writing would."""
     path = folder / f".{name}.probe-{secrets.token_hex(6)}"
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except OSError as exc:
+        exc.filename = str(folder)  # the folder that refuses, not the probe's name
+        raise
     try:
         os.write(fd, bytes(4096))  # one block: fails on a full disk
         os.fsync(fd)
@@ -374,6 +386,7 @@ def write_atomically(out_dir, write: Callable[[Path], None], *,
             _fsync_tree(folder)
             with _locked(out.parent, timeout):
                 previous = _swap(folder, out)
+            with suppress(OSError):  # published already; this only hastens its way to the disk
                 _fsync(out.parent)
         finally:
             os.close(fd)
