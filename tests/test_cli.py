@@ -198,3 +198,13 @@ def test_run_disk_full_while_publishing_exits_2_and_keeps_the_earlier_report(
     assert "free some space or choose another folder" in message
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "s.yaml"]
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux's /proc")
+def test_run_refuses_a_location_where_nothing_can_be_created():
+    """procfs refuses every new file, for root too: a real unwritable location."""
+    result = runner.invoke(app, ["run", "-o", "/proc/flexsat-report"])
+    assert result.exit_code == 2, result.output
+    assert unwrapped(result.stderr).startswith(
+        "--out: cannot write the report to '/proc/flexsat-report': ")
+    assert "running" not in result.stdout

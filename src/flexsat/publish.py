@@ -1,43 +1,46 @@
-"""Publish a report folder whole or not at all.
+"""Publish a report folder whole or not at all (POSIX: Linux, macOS).
 
 A report is written into a temporary sibling of the output folder, ``.<out>.tmp-<id>``, and
-published by one rename of that folder, so a reader sees either the complete previous report or
-the complete new one, never a mixture:
+published by renaming that folder, so ``<out>`` holds the complete previous report or the complete
+new one, never a mixture:
 
-- on Linux with a file system that supports it (ext4, xfs, btrfs, tmpfs, ...), one
-  ``renameat2(RENAME_EXCHANGE)`` swaps the new folder and the previous report atomically; the
-  previous report, now at the temporary name, is then removed;
-- elsewhere (no ``renameat2``, NFS, macOS), two renames: the previous report to ``.<out>.old-<id>``,
-  then the new folder to ``<out>``. A crash between the two leaves no ``<out>``: the next write into
-  the same folder renames the newest ``.<out>.old-<id>`` back first (the complete previous report).
+- on Linux, on the file systems that support it (ext4, xfs, btrfs, tmpfs, ...), one
+  ``renameat2(RENAME_EXCHANGE)`` swaps the new folder and the previous report atomically: there is
+  no instant without ``<out>``; the previous report, now at the temporary name, is then removed;
+- elsewhere (NFS, older kernels or C libraries, macOS), two renames: the previous report to
+  ``.<out>.old-<id>``, then the new folder to ``<out>``; if the second fails the first is undone.
+  A crash between the two leaves no ``<out>``: the next write into it first renames the newest
+  ``.<out>.old-<id>`` back (the complete previous report).
 
-A symbolic link swapped by a rename would also be atomic, but the output folder would become a
-link, which copies, archives and other tools treat differently from the folder users asked for.
+A symbolic link swapped by a rename would also be atomic, but ``<out>`` would become a link, which
+copies, archives and other tools treat differently from the folder users asked for. The previous
+report stays until the new one is complete, so both must fit on the disk for a moment.
 
 Before the swap every file is flushed to the disk (``fsync``), so that a power loss cannot publish
-a folder whose files are still empty. The folder also receives a manifest, ``.flexsat-report.json``,
-listing its files: a folder is replaced only if everything in it belongs to a report (listed in
-its manifest or of the names the new report writes). A folder holding anything else -- the user's
-notes, a project, the current folder -- is refused rather than lost.
+a folder of still-empty files. The folder gets a manifest, ``.flexsat-report.json``, listing its
+files: a folder is replaced only if everything in it belongs to a report (listed in its manifest,
+or among the names the new report writes). A folder holding anything else -- the user's notes, a
+project, the current folder -- is refused rather than lost; so is a mount point (it cannot be
+renamed).
 
-Concurrent writers (two ``flexsat run`` into one folder) never interleave: each holds an advisory
-lock (``flock``) on its own temporary folder while it writes, and the short steps that create a
-temporary folder, remove stale ones and swap take an exclusive lock on the parent folder; a second
-writer waits for that lock up to :data:`LOCK_TIMEOUT_S`, with a message, then gives up. The last
-writer's report is the one published. Temporary folders of earlier runs that were killed are not
-locked by any live process: they are removed by the next write into the same folder. (Where the
-file system has no locks, publishing stays atomic but stale temporary folders are kept, as a live
-run's cannot be told from a dead one's.)
+Concurrent writers never interleave. Each holds an advisory lock (``flock``) on its temporary
+folder while it writes; the short steps that create a temporary folder, remove stale ones and swap
+hold an exclusive lock on the parent folder itself (no lock file is left behind). A second writer
+waits for that lock up to :data:`LOCK_TIMEOUT_S`, with a logged message, then gives up; the last
+writer's report is the one published. Temporary folders of killed runs are locked by no live
+process: the next write into the same folder removes them. (Where the file system has no locks,
+publishing stays atomic but stale temporary folders are kept: a live run's cannot be told from a
+dead one's.)
 
-Write errors (disk full, quota exceeded, read-only file system, permission denied, ...) are
-raised as :class:`OutputError` with a message saying where and why, and leave the previous report
-unchanged.
+Write errors (disk full, quota exceeded, read-only file system, permission denied, ...) raise
+:class:`OutputError`, saying where and why, and leave ``<out>`` unchanged.
 """
 
 from __future__ import annotations
 
 import ctypes
 import errno
+import fcntl
 import json
 import logging
 import os
@@ -49,11 +52,6 @@ import time
 from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Callable, Iterator
-
-try:
-    import fcntl
-except ImportError:  # Windows: no advisory locks (see the module docstring)
-    fcntl = None
 
 log = logging.getLogger(__name__)
 
@@ -114,8 +112,6 @@ def _exchange(a: Path, b: Path) -> bool:
 def _flock(fd: int) -> bool | None:
     """Take an exclusive lock on ``fd`` without waiting: True if taken, False if another open
     file holds it, None where the file system has no locks."""
-    if fcntl is None:
-        return None
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
