@@ -186,6 +186,21 @@ def test_temporary_folder_of_a_live_run_is_kept(old_report):
     assert contents(old_report) == complete("new")
 
 
+def test_without_locks_publishing_stays_whole_and_stale_folders_are_kept(old_report,
+                                                                        monkeypatch):
+    """NFS refuses flock on a folder (EBADF): a killed run's folder cannot be told from a live
+    one's, so it stays; the report is still swapped in whole."""
+    def no_locks(fd, operation):
+        raise OSError(errno.EBADF, os.strerror(errno.EBADF))
+
+    stale = old_report.parent / ".report.tmp-0187d3a1b2c3d4e5f0a1b2c3"
+    stale.mkdir()
+    monkeypatch.setattr(fcntl, "flock", no_locks)
+    write_atomically(old_report, writer("new"))
+    assert contents(old_report) == complete("new")
+    assert leftovers(old_report.parent, old_report) == [stale.name]
+
+
 KILLED_WRITER = """
 import os, sys, time
 from pathlib import Path

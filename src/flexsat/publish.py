@@ -66,8 +66,9 @@ _AT_FDCWD = -100  # Linux: paths relative to the working directory
 _RENAME_EXCHANGE = 2
 #: errors of renameat2 that mean "not supported here" (old kernel, file system, C library)
 _NO_EXCHANGE = {errno.ENOSYS, errno.EINVAL, errno.ENOTSUP, errno.EOPNOTSUPP}
-#: errors of flock that mean the file system has no locks
-_NO_LOCKS = {errno.ENOLCK, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EINVAL}
+#: errors of flock that mean the file system has no locks for a folder (NFS emulates flock with
+#: POSIX locks, whose exclusive kind needs a file open for writing: EBADF)
+_NO_LOCKS = {errno.ENOLCK, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EINVAL, errno.EBADF}
 _HINTS = {errno.ENOSPC: "free some space or choose another folder",
           errno.EDQUOT: "free some space or choose another folder",
           errno.EFBIG: "choose a folder on another file system",
