@@ -25,16 +25,22 @@ def write_scenario(path, **simulation) -> str:
 
 
 def test_cases_lists_every_case_with_its_source():
+    """Sources are cited by authors and year, never by the developers' seed file names."""
     from flexsat.cases import CASES
+    from flexsat.references import cite
 
     result = runner.invoke(app, ["cases", "--json"])
     assert result.exit_code == 0
     listed = {row["case"]: row for row in json.loads(result.stdout)}
     assert set(listed) == set(CASES)
     for info in CASES.values():
-        assert listed[info.name]["source"] == info.source
+        assert listed[info.name]["source"] == cite(info.source)
+        assert ".txt" not in listed[info.name]["source"]
+    assert listed["tamu"]["source"].startswith("Junkins, Pollock & Rahman 1990, Att. 3")
+    assert "Large Angle Maneuvers of Flexible Structures" in listed["tamu"]["references"][0]
     table = runner.invoke(app, ["cases"])
     assert table.exit_code == 0 and "flexsat cases" in table.stdout
+    assert ".txt" not in table.stdout and "Bainum & Reddy 1979:" in table.stdout
 
 
 def test_modes_json():
@@ -119,6 +125,7 @@ def test_run_identification_scenario_prints_modes_and_writes_report(tmp_path,
     result = runner.invoke(app, ["run", str(path), "-o", str(out)])
     assert result.exit_code == 0, result.output
     assert "identified modes" in result.stdout and "clamp verticals" in result.stdout
+    assert "7/7" in result.stderr  # progress: three simulated tests and four identification steps
     assert {"index.html", "frf.png", "mac.png", "results.nc"} <= {p.name for p in out.iterdir()}
 
 
@@ -128,6 +135,8 @@ def test_run_recorded_identification_scenario(tmp_path, recorded_scenario):
     out = tmp_path / "out"
     result = runner.invoke(app, ["run", str(path), "-o", str(out)])
     assert result.exit_code == 0, result.output
-    assert "recorded tests" in result.stdout, result.stdout
+    # progress on stderr (the final state, off a terminal): the campaign's four identification
+    # steps, all announced, and no simulated test (the tests are recorded)
+    assert "done" in result.stderr and "4/4" in result.stderr
     assert "of nominal" in result.stdout
     assert "<td>–</td>" in (out / "index.html").read_text()

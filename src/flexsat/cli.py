@@ -261,7 +261,8 @@ def _progress(steps: int):
             started += 1
 
         yield step
-        bar.update(task, completed=steps, description="done")
+        # the runner's own count: a bar that ends short or over shows a miscounted step list
+        bar.update(task, completed=started, description="done")
 
 
 def _identification_table(result) -> Table:
