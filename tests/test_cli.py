@@ -92,6 +92,7 @@ def test_run_writes_the_report(tmp_path):
     result = runner.invoke(app, ["run", write_scenario(tmp_path / "s.yaml"), "-o", str(out)])
     assert result.exit_code == 0, result.output
     assert "Law II" in result.stdout and "peak_torque_Nm" in result.stdout
+    assert "2/2" in result.stderr  # progress: one step per run, on stderr
     assert {"metrics.json", "results.nc", "index.html", "hub_angle.png", "torque.png",
             "hub_rate.png", "tip_deflection.png", "vibration_energy.png"} <= \
         {p.name for p in out.iterdir()}

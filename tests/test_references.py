@@ -1,8 +1,6 @@
 """Citations that replace the developers' seed file names (flexsat.references)."""
 
-
 from flexsat.references import ATTACHMENTS, SEEDS, cite, references
-
 
 
 def test_cite_replaces_each_seed_file_by_authors_and_year():

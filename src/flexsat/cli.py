@@ -379,3 +379,7 @@ def validate(
 
 
 __all__ = ["app", "parse_settings", "parse_value"]
+
+
+if __name__ == "__main__":  # python -m flexsat.cli (python -m flexsat is the same)
+    app(prog_name="flexsat")
