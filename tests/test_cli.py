@@ -92,7 +92,8 @@ def test_run_writes_the_report(tmp_path):
     result = runner.invoke(app, ["run", write_scenario(tmp_path / "s.yaml"), "-o", str(out)])
     assert result.exit_code == 0, result.output
     assert "Law II" in result.stdout and "peak_torque_Nm" in result.stdout
-    assert "2/2" in result.stderr  # progress: one step per run, on stderr
+    # progress on stderr (a line per step off a terminal): one step per run
+    assert "[2/2] running Law II ..." in result.stderr and "done (2/2 steps)" in result.stderr
     assert {"metrics.json", "results.nc", "index.html", "hub_angle.png", "torque.png",
             "hub_rate.png", "tip_deflection.png", "vibration_energy.png"} <= \
         {p.name for p in out.iterdir()}
@@ -126,7 +127,9 @@ def test_run_identification_scenario_prints_modes_and_writes_report(tmp_path,
     result = runner.invoke(app, ["run", str(path), "-o", str(out)])
     assert result.exit_code == 0, result.output
     assert "identified modes" in result.stdout and "clamp verticals" in result.stdout
-    assert "7/7" in result.stderr  # progress: three simulated tests and four identification steps
+    # progress: three simulated tests, then four identification steps, all announced
+    assert "[1/7] running hammer test ..." in result.stderr
+    assert "[7/7] running model update ..." in result.stderr and "(7/7 steps)" in result.stderr
     assert {"index.html", "frf.png", "mac.png", "results.nc"} <= {p.name for p in out.iterdir()}
 
 
@@ -136,8 +139,9 @@ def test_run_recorded_identification_scenario(tmp_path, recorded_scenario):
     out = tmp_path / "out"
     result = runner.invoke(app, ["run", str(path), "-o", str(out)])
     assert result.exit_code == 0, result.output
-    # progress on stderr (the final state, off a terminal): the campaign's four identification
-    # steps, all announced, and no simulated test (the tests are recorded)
-    assert "done" in result.stderr and "4/4" in result.stderr
+    # progress on stderr: the campaign's four identification steps, all announced, and no
+    # simulated test (the tests are recorded)
+    assert "[1/4] running hammer test: ERA ..." in result.stderr
+    assert "done (4/4 steps)" in result.stderr
     assert "of nominal" in result.stdout
     assert "<td>–</td>" in (out / "index.html").read_text()

@@ -246,12 +246,14 @@ def run(
 
 @contextmanager
 def _progress(steps: int):
-    """A progress bar on stderr over ``steps`` steps. Yields the ``progress(label)`` callback
-    the runners call as each step starts; every step before it is then complete."""
+    """Progress over ``steps`` steps on stderr: a bar on a terminal, one line per step elsewhere
+    (logs, CI). Yields the ``progress(label)`` callback the runners call as each step starts;
+    every step before it is then complete."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+    live = errors.is_terminal
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                  TimeElapsedColumn(), console=errors) as bar:
+                  TimeElapsedColumn(), console=errors, disable=not live) as bar:
         task = bar.add_task("starting", total=steps)
         started = 0
 
@@ -259,10 +261,15 @@ def _progress(steps: int):
             nonlocal started
             bar.update(task, completed=min(started, steps), description=f"running {label}")
             started += 1
+            if not live:
+                errors.print(f"[{started}/{steps}] running {label} ...", markup=False,
+                             highlight=False)
 
         yield step
         # the runner's own count: a bar that ends short or over shows a miscounted step list
         bar.update(task, completed=started, description="done")
+    if not live:
+        errors.print(f"done ({started}/{steps} steps)", markup=False, highlight=False)
 
 
 def _identification_table(result) -> Table:
