@@ -6,9 +6,9 @@ the same launcher for both trees, ``python -c "from flexsat.cli import app; app(
 ``PYTHONPATH=<tree>/src`` and the same Python, so that only the package differs. Output goes to
 /dev/null. Reported: best and median wall time of N runs, the best CPU time (user + system of
 the child: what the wall time would be on an idle machine, since start-up is single-threaded),
-the exit code, and the ratio baseline / current of the best wall times. A bare ``python -c pass`` row gives the interpreter's own
-start-up, which no package change can remove. Targets (issue #9): ≤ 0.5 s for ``--help`` and
-``cases``.
+the exit code, and the ratio baseline / current of the best wall times. A bare
+``python -c pass`` row gives the interpreter's own start-up, which no package change can
+remove. Targets (issue #9): ≤ 0.5 s for ``--help`` and ``cases``.
 
 The baseline is the commit before the issue-9 work, checked out next to the repository::
 
