@@ -21,10 +21,11 @@ import numpy as np
 import scipy.linalg as sla
 
 from flexsat.cases.inputs import Param, read_inputs
+from flexsat.catalog import CASES
 from flexsat.units import to_si
 from flexsat.validation import require_count, require_finite
 
-SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 5 Table 3 (L2156-L2166), Eqs. 50-59, Table 4"
+SOURCE = CASES["draper_rpl"].source
 
 #: Att. 5 Table 3, exactly as printed (L2156-L2166)
 PUBLISHED = {

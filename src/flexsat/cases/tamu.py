@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexsat.cases.inputs import Param, read_inputs
+from flexsat.catalog import CASES
 from flexsat.control import LyapunovRegulator, LyapunovTracker
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.maneuvers import SmoothBangBang
@@ -28,7 +29,7 @@ from flexsat.structures.beam import hub_free_frequencies
 from flexsat.sim import BearingFriction, RandomTorque, Sensors, SimConfig, TorqueActuator
 from flexsat.units import to_si
 
-SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 3 Table 1 (L1302-L1323) and §V"
+SOURCE = CASES["tamu"].source
 
 #: Att. 3 Table 1 and the experiment description, exactly as published
 PUBLISHED = {
