@@ -56,6 +56,14 @@ def require_nonneg(value, field: str, unit: str | None = None) -> np.ndarray:
     return arr
 
 
+def set_si(obj, name: str, check, unit: str, field: str | None = None) -> None:
+    """Replace attribute ``name`` of a frozen dataclass by ``check(value, field, unit)``, its
+    value checked and converted to SI (a float for a scalar), so the object holds SI numbers
+    whatever the caller passed (a number in SI, a pint Quantity or a unit string)."""
+    arr = check(getattr(obj, name), field or name, unit)
+    object.__setattr__(obj, name, float(arr) if arr.ndim == 0 else arr)
+
+
 def require_count(value, field: str) -> int:
     """A positive integer (bools and fractional numbers refused)."""
     if isinstance(value, bool):
