@@ -176,15 +176,15 @@ def to_si_array(value, unit: str, field: str = "value") -> np.ndarray:
 
 
 def _real(magnitude, value, unit: str, field: str) -> np.ndarray:
-    """``magnitude`` as a float array; complex numbers and non-numbers are refused (numpy would
-    drop an imaginary part with only a warning)."""
+    """``magnitude`` as a float array; None, complex numbers and non-numbers are refused (numpy
+    would read None as NaN and drop an imaginary part with only a warning)."""
     try:
-        if not np.iscomplexobj(magnitude):
+        if magnitude is not None and not np.iscomplexobj(magnitude):
             return np.asarray(magnitude, dtype=float)
     except (TypeError, ValueError):
         pass
-    raise UnitError(f"{field}: must be a real number or a quantity in {unit or 'dimensionless'} "
-                    f"units, got {_shown(value)}")
+    raise UnitError(f"{field}: cannot read {_shown(value)} as a real number or a quantity in "
+                    f"{unit or 'dimensionless'} units")
 
 
 def _shown(value) -> str:
