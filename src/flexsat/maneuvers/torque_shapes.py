@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexsat.units import to_si_array
 from flexsat.validation import require_finite, require_positive
 
 __all__ = ["BangBang", "PseudoSquare", "Reference", "Sinusoidal", "SmoothBangBang", "TorqueShape"]
@@ -155,7 +156,7 @@ class TorqueShape(ABC):
         -------
         Reference
         """
-        t = np.asarray(t, dtype=float)
+        t = to_si_array(t, "s", "t")
         T = self.duration
         tc = np.clip(t, 0.0, T)
         late = tc > 0.5 * T
