@@ -80,6 +80,8 @@ def test_arrays_and_lists_convert_element_by_element():
     assert to_si_array("1 Hz", "rad/s") == pytest.approx(2 * math.pi, rel=1e-15)
     with pytest.raises(UnitError, match=r"^t: incompatible units"):
         to_si_array([1.0, "2 m"], "s", "t")
+    with pytest.raises(UnitError, match=r"^t: the items of .* differ in shape"):
+        to_si_array([Q_([1, 2], "s"), "3 s"], "s", "t")
     with pytest.raises(UnitError, match=r"^x: must be a single number"):
         to_si([1.0, 2.0], "s", "x")
     for bad in (None, 1 + 2j, np.array([1 + 1j]), object()):

@@ -157,7 +157,10 @@ def to_si_array(value, unit: str, field: str = "value") -> np.ndarray:
         If the value cannot be read or has an incompatible dimension.
     """
     if isinstance(value, (list, tuple)) and holds_quantity(value, strings=True):
-        return np.array([to_si_array(v, unit, field) for v in value])
+        items = [to_si_array(v, unit, field) for v in value]
+        if any(item.shape != items[0].shape for item in items):
+            raise UnitError(f"{field}: the items of {_shown(value)} differ in shape")
+        return np.array(items)
     q = parse_quantity(value, field) if isinstance(value, str) else value
     if not isinstance(q, pint.Quantity) or q.units == ureg.dimensionless:
         arr = _real(q.magnitude if isinstance(q, pint.Quantity) else q, value, unit, field)
