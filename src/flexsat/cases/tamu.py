@@ -200,7 +200,7 @@ def tamu(**overrides) -> TamuCase:
 
 
 def published_reference_inertia(params: HubAppendageParams) -> float:
-    """Published total inertia 2128 oz-in-s² scaled by ``I_model(params) / I_model(default)``, kg m².
+    """Published total 2128 oz-in-s² scaled by ``I_model(params) / I_model(default)``, kg m².
 
     Exactly the published value for the default inputs; for overridden inputs the same ratio
     of design to model inertia (module docstring).
