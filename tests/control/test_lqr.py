@@ -288,3 +288,34 @@ def test_wide_model_with_an_unweighted_marginal_mode_is_undetectable():
         lqr(A, B, np.diag(q), 1.0)
     q[mode] = 1.0  # weighting its position alone makes it detectable
     assert lqr(A, B, np.diag(q), 1.0).poles.real.max() < 0
+
+
+# ------------------------------------------------------------------------------------------------
+# a solution that does not satisfy its equation is refused
+
+
+@pytest.mark.parametrize("scale", [1e50, 1e150])
+def test_inaccurate_solution_is_an_error(scale):
+    # stable A scaled up: the true S ~ Q/(2‖A‖) underflows in the solver, S = 0 and ρ = 1
+    A = np.array([[-1.0, 2.0], [0.0, -3.0]])
+    with pytest.raises(ValueError, match=r"^A: the Riccati solution is inaccurate: its relative "
+                                         r"residual 1 exceeds √ε = 1.5e-08 \(the data are too "
+                                         r"badly scaled"):
+        lqr(scale * A, [[0.0], [1.0]], np.eye(2), 1.0)
+
+
+def test_badly_scaled_data_are_refused_not_warned():
+    # ‖A‖ = 1e10 against unit B, Q, R: scipy's solution has ρ ~ 0.4 (was only logged)
+    A = 1e10 * np.array([[-1.0, 2.0], [0.0, -3.0]])
+    with pytest.raises(ValueError, match=r"relative residual 0\.\d+ exceeds"):
+        lqr(A, [[0.0], [1.0]], np.eye(2), 1.0)
+    # the same plant in a sensible time unit solves (ρ at roundoff level)
+    assert lqr(A / 1e10, [[0.0], [1.0]], np.eye(2), 1.0).residual < 1e-13
+
+
+def test_kalman_filter_refuses_an_inaccurate_solution():
+    from flexsat.control.estimation import kalman
+
+    A = 1e150 * np.array([[-1.0, 2.0], [0.0, -3.0]])
+    with pytest.raises(ValueError, match=r"^A: the Riccati solution is inaccurate"):
+        kalman(A, np.eye(2), [[1.0, 0.0]], np.eye(2), 1.0)
