@@ -319,3 +319,13 @@ def test_kalman_filter_refuses_an_inaccurate_solution():
     A = 1e150 * np.array([[-1.0, 2.0], [0.0, -3.0]])
     with pytest.raises(ValueError, match=r"^A: the Riccati solution is inaccurate"):
         kalman(A, np.eye(2), [[1.0, 0.0]], np.eye(2), 1.0)
+
+
+@pytest.mark.parametrize("field", ["A", "B", "Q", "R", "N"])
+@pytest.mark.parametrize("design", [lqr, dlqr])
+def test_complex_input_is_refused(design, field):
+    args = dict(A=0.5 * np.eye(2), B=np.array([[0.0], [1.0]]), Q=np.eye(2), R=np.eye(1),
+                N=np.zeros((2, 1)))
+    args[field] = args[field] + 1e-3j
+    with pytest.raises(ValueError, match=rf"^{field}: must be a real matrix, got a complex value"):
+        design(**args)
