@@ -843,16 +843,16 @@ def identify_damping(model: SubstructureModel, measured_eigenvalues, p=None, q=N
             raise ValueError("mode_indices: must give one model mode per measured eigenvalue")
         if np.unique(idx).size != m:
             raise ValueError("mode_indices: each model mode at most once")
-    if np.all(lam.imag == 0):
+    if np.all(lam.imag == 0):  # real parts carry no frequency: paired in order
         idx = np.arange(m) if mode_indices is None else idx
+        if idx.max() >= phi.shape[1]:
+            raise ValueError("mode_indices: must give one model mode per measured eigenvalue")
     elif np.any(lam.imag == 0):
         raise ValueError("measured_eigenvalues: give every eigenvalue as sigma + i w with w != 0 "
                          "(matched to the model frequencies) or every one as its real part "
                          "sigma (paired in order)")
     else:
         idx = _match_modes(w0, np.abs(lam), None if mode_indices is None else idx)
-    if idx.max() >= phi.shape[1]:
-        raise ValueError("mode_indices: must give one model mode per measured eigenvalue")
     phi = phi[:, idx]
     Cfix = model.C(r) - sum((r[g] * model.C_blocks[g] for g in free), np.zeros_like(model.C0))
     A = np.array([[phi[:, i] @ model.C_blocks[g] @ phi[:, i] for g in free] for i in range(m)])
