@@ -360,12 +360,12 @@ def _riccati(A, B, Q, R, N, discrete: bool, labels: dict, kind: str,
     log.debug("%s: n=%d m=%d relative Riccati residual %.3e (rel. to ||Q|| %.3e)",
               kind, n, m, rel, rel_q)
     if not rel <= RESIDUAL_TOL:
+        norms = ", ".join(f"‖{labels[k]}‖ = {np.linalg.norm(v):.3g}"
+                          for k, v in (("A", A), ("B", B), ("Q", Q), ("R", R)))
         raise ValueError(
             f"{labels['A']}: the Riccati solution is inaccurate: its relative residual {rel:.3g} "
             f"exceeds √ε = {RESIDUAL_TOL:.2g} (the data are too badly scaled for the solver: "
-            f"‖{labels['A']}‖ = {np.linalg.norm(A):.3g}, ‖{labels['B']}‖ = {np.linalg.norm(B):.3g}, "
-            f"‖{labels['Q']}‖ = {np.linalg.norm(Q):.3g}, ‖{labels['R']}‖ = {np.linalg.norm(R):.3g};"
-            " rescale the states, inputs or time unit)")
+            f"{norms}; rescale the states, inputs or time unit)")
     return RiccatiSolution(K, S, E, rel, rel_q, absolute, kind)
 
 
