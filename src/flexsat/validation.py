@@ -13,6 +13,24 @@ import numpy as np
 from flexsat.units import UnitError, holds_quantity, to_si_array
 
 
+def _real(value, field: str, noun: str):
+    """``value``, or its real part when it is complex with every imaginary part exactly 0.
+
+    A nonzero imaginary part, which the float conversion would silently drop, is refused.
+    """
+    try:
+        is_complex = np.iscomplexobj(value)
+    except (TypeError, ValueError):
+        return value  # not array-like: the float conversion gives the message
+    if not is_complex:
+        return value
+    imag = np.abs(np.imag(value))
+    if np.any(imag != 0):
+        raise ValueError(f"{field}: must be a real {noun}, got a complex value (largest "
+                         f"|imaginary part| {np.max(imag):.3g}, which would be dropped)")
+    return np.real(value)
+
+
 def _plain_numbers(value, field: str) -> None:
     """Refuse a Quantity where no unit is declared: ``np.asarray`` would drop its unit."""
     if holds_quantity(value):
@@ -33,8 +51,9 @@ def require_finite(value, field: str, unit: str | None = None) -> np.ndarray:
                 f"{field}: must be a number in SI units, got the string {value!r} (quantities with "
                 "units are converted at the boundary: flexsat.units.to_si)"
             )
+        real = _real(value, field, "number")
         try:
-            arr = np.asarray(value, dtype=float)
+            arr = np.asarray(real, dtype=float)
         except (TypeError, ValueError):
             raise ValueError(f"{field}: must be a number, got {value!r}") from None
     if not np.all(np.isfinite(arr)):
@@ -79,8 +98,9 @@ def require_numeric(value, field: str, noun: str = "array") -> np.ndarray:
     _plain_numbers(value, field)
     if isinstance(value, (str, bytes)):
         raise ValueError(f"{field}: must be a numeric {noun}, got the string {value!r}")
+    real = _real(value, field, noun)
     try:
-        arr = np.array(value, dtype=float)
+        arr = np.array(real, dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"{field}: must be a numeric {noun}, got {type(value).__name__}") from None
     if not np.all(np.isfinite(arr)):

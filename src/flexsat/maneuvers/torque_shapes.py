@@ -150,7 +150,10 @@ class TorqueShape(ABC):
         For ``t < 0`` the body rests at ``theta0``; for ``t >= T`` it rests at ``theta0 + angle``
         with ``u = 0`` exactly.  The second half is the mirror image of the first.  Outside
         ``[0, T)`` the clipped time gives ``tau = 0`` where both integrals vanish exactly, so only
-        the torque needs masking (bang-bang has ``f(0) = 1``).
+        the torque needs masking (bang-bang has ``f(0) = 1``).  The second half is the closed
+        interval ``[T/2, T)``: at ``t = T/2`` bang-bang already gives ``-u_max`` (the smooth
+        shapes give 0 there either way), so a zero-order hold sampled with ``T/2`` on a sample
+        applies each sign for the same number of samples and the net impulse is zero.
 
         Returns
         -------
@@ -159,7 +162,7 @@ class TorqueShape(ABC):
         t = to_si_array(t, "s", "t")
         T = self.duration
         tc = np.clip(t, 0.0, T)
-        late = tc > 0.5 * T
+        late = tc >= 0.5 * T
         f, F1, F2 = self._half(np.where(late, T - tc, tc))
         sgn = np.sign(self.angle)
         k = sgn * self.u_max / self.inertia
