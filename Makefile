@@ -24,6 +24,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_modal.py
 	$(PY) benchmarks/bench_lqr.py
 	$(PY) benchmarks/bench_identify.py
+	$(PY) benchmarks/bench_cli.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

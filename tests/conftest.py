@@ -66,3 +66,29 @@ def _recorded_scenario(tmp_path):
 @pytest.fixture(scope="session")
 def recorded_scenario():
     return _recorded_scenario
+
+
+@pytest.fixture
+def fail_opening(monkeypatch):
+    """``fail_opening(name, code)``: from then on, opening a file called ``name`` for writing
+    inside a temporary report folder (``.<out>.tmp-<id>``) raises ``OSError(code)``, as a full
+    disk (ENOSPC), a read-only file system (EROFS), ... would."""
+    import builtins
+    import errno
+    import io
+    import os
+
+    real = io.open
+
+    def fail(name: str, code: int = errno.ENOSPC) -> None:
+        def guarded(file, mode="r", *args, **kwargs):
+            path = Path(os.fsdecode(file)) if isinstance(file, (str, bytes, os.PathLike)) else None
+            if path is not None and path.name == name and ".tmp-" in path.parent.name \
+                    and set(mode) & set("wax+"):
+                raise OSError(code, os.strerror(code), str(path))
+            return real(file, mode, *args, **kwargs)
+
+        monkeypatch.setattr(io, "open", guarded)  # pathlib
+        monkeypatch.setattr(builtins, "open", guarded)  # PIL (matplotlib's PNGs)
+
+    return fail

@@ -152,10 +152,11 @@ def test_cheap_cases_reproduce_their_published_numbers(case):
     assert failed == []
 
 
-def test_documented_deviations_fail_honestly():
+def test_documented_deviations_are_discrepancies_not_passes():
     """The TAMU grid's printed SI EI (a one-digit typo in Att. 4 Table 1) and its caption's
     "10 modes below 30 Hz" (the model has 16) are not reproduced, and the table says so."""
-    failed = {r.check.quantity: r for r in run_checks("tamu_grid") if not r.passed}
-    assert set(failed) == {"EI, Table 1 US column in SI", "modes below 30 Hz"}
-    assert failed["modes below 30 Hz"].computed == 16
-    assert failed["EI, Table 1 US column in SI"].relative_error == pytest.approx(-8.6e-4, abs=1e-5)
+    odd = {r.check.quantity: r for r in run_checks("tamu_grid") if not r.passed}
+    assert set(odd) == {"EI, Table 1 US column in SI", "modes below 30 Hz"}
+    assert {r.status for r in odd.values()} == {"discrepancy"}
+    assert odd["modes below 30 Hz"].computed == 16
+    assert odd["EI, Table 1 US column in SI"].relative_error == pytest.approx(-8.6e-4, abs=1e-5)

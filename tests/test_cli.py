@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import errno
 import json
+import os
 
 import pytest
 import yaml
@@ -25,16 +27,22 @@ def write_scenario(path, **simulation) -> str:
 
 
 def test_cases_lists_every_case_with_its_source():
+    """Sources are cited by authors and year, never by the developers' seed file names."""
     from flexsat.cases import CASES
+    from flexsat.references import cite
 
     result = runner.invoke(app, ["cases", "--json"])
     assert result.exit_code == 0
     listed = {row["case"]: row for row in json.loads(result.stdout)}
     assert set(listed) == set(CASES)
     for info in CASES.values():
-        assert listed[info.name]["source"] == info.source
+        assert listed[info.name]["source"] == cite(info.source)
+        assert ".txt" not in listed[info.name]["source"]
+    assert listed["tamu"]["source"].startswith("Junkins, Pollock & Rahman 1990, Att. 3")
+    assert "Large Angle Maneuvers of Flexible Structures" in listed["tamu"]["references"][0]
     table = runner.invoke(app, ["cases"])
     assert table.exit_code == 0 and "flexsat cases" in table.stdout
+    assert ".txt" not in table.stdout and "Bainum & Reddy 1979:" in table.stdout
 
 
 def test_modes_json():
@@ -86,6 +94,8 @@ def test_run_writes_the_report(tmp_path):
     result = runner.invoke(app, ["run", write_scenario(tmp_path / "s.yaml"), "-o", str(out)])
     assert result.exit_code == 0, result.output
     assert "Law II" in result.stdout and "peak_torque_Nm" in result.stdout
+    # progress on stderr (a line per step off a terminal): one step per run
+    assert "[2/2] running Law II ..." in result.stderr and "done (2/2 steps)" in result.stderr
     assert {"metrics.json", "results.nc", "index.html", "hub_angle.png", "torque.png",
             "hub_rate.png", "tip_deflection.png", "vibration_energy.png"} <= \
         {p.name for p in out.iterdir()}
@@ -119,6 +129,9 @@ def test_run_identification_scenario_prints_modes_and_writes_report(tmp_path,
     result = runner.invoke(app, ["run", str(path), "-o", str(out)])
     assert result.exit_code == 0, result.output
     assert "identified modes" in result.stdout and "clamp verticals" in result.stdout
+    # progress: three simulated tests, then four identification steps, all announced
+    assert "[1/7] running hammer test ..." in result.stderr
+    assert "[7/7] running model update ..." in result.stderr and "(7/7 steps)" in result.stderr
     assert {"index.html", "frf.png", "mac.png", "results.nc"} <= {p.name for p in out.iterdir()}
 
 
@@ -128,6 +141,84 @@ def test_run_recorded_identification_scenario(tmp_path, recorded_scenario):
     out = tmp_path / "out"
     result = runner.invoke(app, ["run", str(path), "-o", str(out)])
     assert result.exit_code == 0, result.output
-    assert "recorded tests" in result.stdout, result.stdout
+    # progress on stderr: the campaign's four identification steps, all announced, and no
+    # simulated test (the tests are recorded)
+    assert "[1/4] running hammer test: ERA ..." in result.stderr
+    assert "done (4/4 steps)" in result.stderr
     assert "of nominal" in result.stdout
     assert "<td>–</td>" in (out / "index.html").read_text()
+
+
+def unwrapped(text: str) -> str:
+    """``text`` as printed before rich wrapped it to the terminal width (its line breaks fall at
+    a space it keeps, or inside a word too long for a line)."""
+    return text.rstrip("\n").replace("\n", "")
+
+
+def _probe_raises(monkeypatch, code):
+    """Creating the probe file in the output folder's parent raises OSError(code), as on a
+    read-only (EROFS) or full (ENOSPC) file system (tests run as root, whom chmod does not
+    stop)."""
+    real = os.open
+
+    def guarded(path, flags, *args, **kwargs):
+        if ".probe-" in os.fspath(path):
+            raise OSError(code, os.strerror(code), os.fspath(path))
+        return real(path, flags, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", guarded)
+
+
+@pytest.mark.parametrize("code, reason", [
+    (errno.EROFS, "Read-only file system"),
+    (errno.ENOSPC, "No space left on device"),
+    (errno.EDQUOT, "Disk quota exceeded"),
+])
+def test_run_refuses_an_unwritable_out_before_simulating(tmp_path, monkeypatch, code, reason):
+    _probe_raises(monkeypatch, code)
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["run", write_scenario(tmp_path / "s.yaml"), "-o", str(out)])
+    assert result.exit_code == 2, result.output
+    message = unwrapped(result.stderr)
+    assert message.startswith(f"--out: cannot write the report to '{out}': {reason}")
+    assert "running" not in result.stdout + result.stderr  # nothing simulated
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.yaml"]
+
+
+def test_run_refuses_a_file_as_out(tmp_path):
+    (tmp_path / "taken").write_text("x")
+    for out in (tmp_path / "taken", tmp_path / "taken" / "out"):
+        result = runner.invoke(app, ["run", "-o", str(out)])
+        assert result.exit_code == 2, result.output
+        message = unwrapped(result.stderr)
+        assert message.startswith("--out: ") and "is a file, not a folder" in message
+        assert "running" not in result.stdout + result.stderr
+
+
+def test_run_disk_full_while_publishing_exits_2_and_keeps_the_earlier_report(
+        tmp_path, fail_opening):
+    out = tmp_path / "out"
+    path = write_scenario(tmp_path / "s.yaml")
+    assert runner.invoke(app, ["run", path, "-o", str(out)]).exit_code == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    fail_opening("results.nc")
+    result = runner.invoke(app, ["run", write_scenario(tmp_path / "s.yaml", duration="1 s"),
+                                 "-o", str(out)])
+    assert result.exit_code == 2, result.output
+    assert "Law II" in result.stdout  # simulated, then the write failed
+    message = unwrapped(result.stderr).split("done (2/2 steps)")[-1]  # after the progress lines
+    assert message.startswith(f"--out: cannot write the report to '{out}': No space left on "
+                              "device")
+    assert "free some space or choose another folder" in message
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "s.yaml"]
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux's /proc")
+def test_run_refuses_a_location_where_nothing_can_be_created():
+    """procfs refuses every new file, for root too: a real unwritable location."""
+    result = runner.invoke(app, ["run", "-o", "/proc/flexsat-report"])
+    assert result.exit_code == 2, result.output
+    assert unwrapped(result.stderr).startswith(
+        "--out: cannot write the report to '/proc/flexsat-report': ")
+    assert "running" not in result.stdout + result.stderr

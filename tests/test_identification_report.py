@@ -10,6 +10,7 @@ import yaml
 import flexsat.identification_report as rep
 from flexsat.identification_report import FIGURES, dataset, write_identification_report
 from flexsat.identification_scenario import run_identification
+from flexsat.publish import MANIFEST
 from flexsat.scenario import load_scenario
 
 
@@ -21,7 +22,8 @@ def result(identification_example):
 def test_report_files_tables_and_netcdf_round_trip(result, tmp_path):
     out = write_identification_report(result, tmp_path / "report")
     names = {p.name for p in out.iterdir()}
-    assert names == {"identification.json", "results.nc", "index.html"} | {f for f, _ in FIGURES}
+    assert names == {"identification.json", "results.nc", "index.html", MANIFEST} | \
+        {f for f, _ in FIGURES}
     summary = json.loads((out / "identification.json").read_text())
     assert summary["scalings"]["clamp verticals"]["a_priori"] == 1.15
     with xr.open_dataset(out / "results.nc", engine="h5netcdf") as ds:

@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import errno
 import html
 import json
+import shutil
 
 import pytest
 import xarray as xr
 import yaml
 
 import flexsat.report as report
+from flexsat.publish import MANIFEST, OutputError, write_atomically
 from flexsat.report import PLOTS, format_metric, metric_rows, write_report
 from flexsat.scenario import default_scenario, load_scenario, run_scenario
 
@@ -18,19 +21,34 @@ METRICS = {"run", "settling_time_s", "overshoot_deg", "peak_torque_Nm", "residua
 FILES = {"metrics.json", "results.nc", "index.html"} | {p.file for p in PLOTS}
 
 
-@pytest.fixture(scope="module")
-def result():
+def short_run(name: str):
     """Law I and Law II on a 3-mode model for 2 s."""
     data = yaml.safe_load(default_scenario().yaml_text)
-    data["name"] = "Short <test> & run"
+    data["name"] = name
     data["model"]["n_modes"] = 3
     data["simulation"]["duration"] = "2 s"
     return run_scenario(load_scenario(yaml.safe_dump(data)))
 
 
+@pytest.fixture(scope="module")
+def result():
+    return short_run("Short <test> & run")
+
+
+@pytest.fixture(scope="module")
+def earlier_report(tmp_path_factory):
+    """The report of another run (another name), to be replaced."""
+    return write_report(short_run("Earlier run"), tmp_path_factory.mktemp("earlier") / "report")
+
+
+def snapshot(folder):
+    return {p.name: p.read_bytes() for p in folder.iterdir()}
+
+
 def test_metrics_json_has_one_object_per_run(result, tmp_path):
     out = write_report(result, tmp_path / "report")
-    assert {p.name for p in out.iterdir()} == FILES
+    assert {p.name for p in out.iterdir()} == FILES | {MANIFEST}
+    assert json.loads((out / MANIFEST).read_text()) == {"files": sorted(FILES)}
     records = json.loads((out / "metrics.json").read_text())
     assert [r["run"] for r in records] == ["Law I", "Law II"]
     for record in records:
@@ -63,15 +81,38 @@ def test_index_html_is_self_contained(result, tmp_path):
     assert "http" not in page
 
 
-def test_rewrite_replaces_report_files_and_keeps_others(result, tmp_path):
+def test_rewrite_replaces_the_whole_report(result, tmp_path):
+    out = write_atomically(tmp_path / "report",
+                           lambda folder: (folder / "identification.json").write_text("{}"))
+    write_report(result, out)
+    assert {p.name for p in out.iterdir()} == FILES | {MANIFEST}  # nothing of the earlier left
+    assert json.loads((out / "metrics.json").read_text())[0]["run"] == "Law I"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]  # no temporary folder left
+
+
+def test_folder_with_other_files_is_refused_untouched(result, tmp_path):
     out = tmp_path / "report"
     out.mkdir()
     (out / "notes.txt").write_text("mine")
     (out / "metrics.json").write_text("stale")
-    write_report(result, out)
-    assert (out / "notes.txt").read_text() == "mine"
-    assert json.loads((out / "metrics.json").read_text())[0]["run"] == "Law I"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]  # no temporary folder left
+    with pytest.raises(OutputError, match="holds notes.txt, not files of a flexsat report"):
+        write_report(result, out)
+    assert snapshot(out) == {"notes.txt": b"mine", "metrics.json": b"stale"}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
+
+
+@pytest.mark.parametrize("name", ["metrics.json", "results.nc", *(p.file for p in PLOTS),
+                                  "index.html", MANIFEST])
+def test_disk_full_at_each_file_keeps_the_complete_earlier_report(result, earlier_report,
+                                                                   tmp_path, fail_opening, name):
+    out = tmp_path / "report"
+    shutil.copytree(earlier_report, out)
+    before = snapshot(out)
+    fail_opening(name, errno.ENOSPC)
+    with pytest.raises(OutputError, match="No space left on device"):
+        write_report(result, out)
+    assert snapshot(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
 
 
 def test_failure_leaves_no_partial_report(result, tmp_path, monkeypatch):

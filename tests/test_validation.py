@@ -1,7 +1,13 @@
 import numpy as np
 import pytest
 
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.validation import (
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_numeric,
+    require_positive,
+)
 
 
 def test_accepts_good_values():
@@ -36,3 +42,17 @@ def test_numeric_arrays_refuse_strings_objects_and_nan():
     with pytest.raises(ValueError, match=r"^A: must be finite \(no NaN or inf\), got shape \(2,\) "
                                          r"with 1 non-finite entries"):
         require_numeric([1.0, np.nan], "A")
+
+
+@pytest.mark.parametrize("value", [1j, [1.0, 2j], np.array([[1.0 + 1e-20j]])])
+def test_complex_is_refused_naming_the_field(value):
+    # the float conversion would drop the imaginary part without a word
+    with pytest.raises(ValueError, match=r"^x: must be a real number, got a complex value"):
+        require_finite(value, "x")
+    with pytest.raises(ValueError, match=r"^x: must be a real matrix, got a complex value"):
+        require_numeric(value, "x", "matrix")
+
+
+def test_complex_with_zero_imaginary_part_is_its_real_part():
+    np.testing.assert_array_equal(require_finite(np.array([1.0 + 0j, 2.0]), "x"), [1.0, 2.0])
+    np.testing.assert_array_equal(require_numeric([3.0 + 0j], "x"), [3.0])

@@ -26,7 +26,8 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from flexsat.identification_scenario import IdentificationResult, as_dict
-from flexsat.report import STYLE, write_atomically
+from flexsat.publish import write_atomically, write_netcdf
+from flexsat.report import STYLE
 from flexsat.text import format_optional
 
 __all__ = ["FIGURES", "dataset", "write_identification_report"]
@@ -237,7 +238,7 @@ def _write_all(result: IdentificationResult, folder: Path) -> None:
                "mac_updated": c.mac_updated}
     (folder / "identification.json").write_text(json.dumps(as_dict(summary), indent=2) + "\n",
                                                 encoding="utf-8")
-    dataset(result).to_netcdf(folder / "results.nc", engine="h5netcdf")
+    write_netcdf(dataset(result), folder / "results.nc")
     _frf_figure(c, folder / "frf.png")
     _mac_figure(c, folder / "mac.png")
     _frequency_figure(c, folder / "frequencies.png")
@@ -245,5 +246,6 @@ def _write_all(result: IdentificationResult, folder: Path) -> None:
 
 
 def write_identification_report(result: IdentificationResult, out_dir) -> Path:
-    """Write the report into ``out_dir`` atomically (no partial report on failure)."""
+    """Write the report as the folder ``out_dir``, whole or not at all (an earlier report there
+    is replaced; see :func:`flexsat.publish.write_atomically`)."""
     return write_atomically(out_dir, lambda folder: _write_all(result, folder))

@@ -46,6 +46,8 @@ from flexsat.identify.campaign import (
     CameraRig,
     CampaignConfig,
     CampaignResult,
+    IDENTIFY_STEPS,
+    SIMULATE_STEPS,
     TestRecords,
     identify_and_update,
     run_campaign,
@@ -55,7 +57,8 @@ from flexsat.scenario import ScenarioError, _Document, _head, _locate, _Section,
 from flexsat.text import format_optional
 from flexsat.units import to_si
 
-__all__ = ["IdentificationResult", "IdentificationScenario", "run_identification"]
+__all__ = ["IdentificationResult", "IdentificationScenario", "identification_steps",
+           "run_identification"]
 
 
 def _vector(unit: str):
@@ -336,8 +339,15 @@ def _read_records(scenario: IdentificationScenario) -> TestRecords:
     return TestRecords(**read)
 
 
+def identification_steps(scenario: IdentificationScenario) -> int:
+    """How many times :func:`run_identification` calls its ``progress``: the campaign's steps,
+    without the simulated tests when the scenario brings its records."""
+    return len(IDENTIFY_STEPS) + (0 if scenario.recorded else len(SIMULATE_STEPS))
+
+
 def run_identification(scenario: IdentificationScenario, progress=None) -> IdentificationResult:
-    """Validate against the case, then run the campaign.
+    """Validate against the case, then run the campaign; ``progress(label)``, if given, is
+    called as each of its :func:`identification_steps` starts.
 
     Raises
     ------
@@ -353,14 +363,11 @@ def run_identification(scenario: IdentificationScenario, progress=None) -> Ident
     problems = _check_against_case(scenario, case, records)
     if problems:
         raise ScenarioError(problems)
-    if progress is not None:
-        progress("identification and update of the recorded tests" if scenario.recorded else
-                 "hammer, video and reaction-wheel tests; identification; update")
     try:
         if records is not None:
-            result = identify_and_update(case, scenario.config(), records)
+            result = identify_and_update(case, scenario.config(), records, progress=progress)
         else:
-            result = run_campaign(case, scenario.config())
+            result = run_campaign(case, scenario.config(), progress=progress)
     except ValueError as exc:
         head = _head(str(exc))
         path = {"rig": "video", "wheel_torque_constants": "wheels.torque_constants",

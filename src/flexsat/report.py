@@ -20,16 +20,12 @@ from __future__ import annotations
 
 import html
 import json
-import os
-import shutil
-import uuid
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
-
 import numpy as np
 from matplotlib.figure import Figure
 
+from flexsat.publish import write_atomically, write_netcdf
 from flexsat.scenario import ScenarioResult
 
 
@@ -126,53 +122,34 @@ def _write_all(result: ScenarioResult, folder: Path) -> None:
     records = result.metrics_records()
     (folder / "metrics.json").write_text(json.dumps(records, indent=2) + "\n", encoding="utf-8")
     ds = result.dataset()
-    ds.to_netcdf(folder / "results.nc", engine="h5netcdf")
+    write_netcdf(ds, folder / "results.nc")
     for spec in PLOTS:
         _plot(ds, spec, folder / spec.file)
     (folder / "index.html").write_text(_html(result, records), encoding="utf-8")
 
 
-def _publish(folder: Path, out_dir: Path) -> None:
-    """Move the finished files into ``out_dir``: one rename if it is new, else file by file
-    (other files already in ``out_dir`` are left alone)."""
-    if not out_dir.exists():
-        folder.rename(out_dir)
-        return
-    for path in folder.iterdir():
-        os.replace(path, out_dir / path.name)
-
-
-def write_atomically(out_dir, write: Callable[[Path], None]) -> Path:
-    """Run ``write(folder)`` on a temporary sibling folder of ``out_dir``, then move the files
-    into ``out_dir`` (created if needed; earlier files of the same names are replaced), so a
-    failure leaves no partial report."""
-    out_dir = Path(out_dir)
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    folder = out_dir.parent / f".{out_dir.name}.tmp-{uuid.uuid4().hex[:12]}"
-    folder.mkdir()
-    try:
-        write(folder)
-        _publish(folder, out_dir)
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
-    return out_dir
-
-
 def write_report(result: ScenarioResult, out_dir) -> Path:
-    """Write the report of ``result`` into ``out_dir`` (atomically: :func:`write_atomically`).
+    """Write the report of ``result`` as the folder ``out_dir``, whole or not at all
+    (:func:`flexsat.publish.write_atomically`).
 
     Parameters
     ----------
     result : ScenarioResult
     out_dir : str or Path
-        Created if needed; files of an earlier report there are replaced.
+        Created if needed; an earlier report there is replaced as a whole (a folder holding
+        other files is refused).
 
     Returns
     -------
     Path
-        ``out_dir``.
+        ``out_dir``, resolved.
+
+    Raises
+    ------
+    flexsat.publish.OutputError
+        When the folder cannot be written (disk full, read-only, ...); ``out_dir`` is unchanged.
     """
     return write_atomically(out_dir, lambda folder: _write_all(result, folder))
 
 
-__all__ = ["PLOTS", "STYLE", "format_metric", "metric_rows", "write_atomically", "write_report"]
+__all__ = ["PLOTS", "STYLE", "format_metric", "metric_rows", "write_report"]

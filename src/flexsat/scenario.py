@@ -32,6 +32,7 @@ into one :class:`ScenarioError` whose lines read ``field.path: rule``:
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import re
 import typing
@@ -626,6 +627,7 @@ class Scenario(_Document):
 
 
 
+@functools.cache
 def maneuver_cases() -> tuple[str, ...]:
     """The cases a maneuver scenario can simulate: their builder's case has a ``model()`` that
     gives a hub plant (:class:`flexsat.dynamics.hybrid.HybridPlant`), read from the type hints so

@@ -1,17 +1,32 @@
 """Unit handling at the boundary: everything inside flexsat is SI.
 
 Published values are entered as published (oz-in-s, lbf, deg) and converted here with pint, so
-the conversion factor is never typed by hand.
+the conversion factor is never typed by hand. Every public input that carries a physical number
+goes through :func:`to_si_array` (arrays) or :func:`to_si` (scalars): a float is taken in the
+field's unit, a pint Quantity or a unit string is converted, and anything else is a
+:class:`UnitError` naming the field.
 """
 
 from __future__ import annotations
 
+import functools
 import math
+from tokenize import NUMBER
 
+import numpy as np
 import pint
+from pint.pint_eval import build_eval_tree, tokenizer
+from pint.util import string_preprocessor
 
 ureg = pint.UnitRegistry()
 Q_ = ureg.Quantity
+
+#: longest unit expression read; published values are short, and the bound keeps the parse (and
+#: every message quoting the text) small
+MAX_EXPRESSION_LENGTH = 200
+#: largest |exponent| of a unit after a power; real units stay below 10, and the bound keeps the
+#: exact (integer) conversion factors pint computes for such powers small
+MAX_UNIT_EXPONENT = 100
 
 
 class UnitError(ValueError):
@@ -30,14 +45,165 @@ def _cyclic_to_angular(q: pint.Quantity, unit: str) -> pint.Quantity:
     return q
 
 
+def _number_or_unit(token):
+    """A leaf of a unit expression: numbers become floats (pint keeps integers as Python ints,
+    whose powers are unbounded: ``10**10**10`` would build a ten-billion-digit number), names
+    become unit quantities."""
+    text = token.string
+    if token.type == NUMBER:
+        return float(text)
+    if text.lower() in ("inf", "infinity", "nan"):
+        return float(text)
+    return Q_(1.0, text)
+
+
+def _bounded_power(base, exponent):
+    """``base ** exponent`` with a finite float exponent and unit exponents kept in bounds."""
+    if isinstance(exponent, pint.Quantity):
+        exponent = exponent.to("").magnitude
+    exponent = float(exponent)
+    if not math.isfinite(exponent):
+        raise ValueError(f"the exponent {exponent} is not finite")
+    if isinstance(base, pint.Quantity):
+        worst = max((abs(p) for _, p in base.unit_items()), default=0) * abs(exponent)
+        if worst > MAX_UNIT_EXPONENT:
+            raise ValueError(f"a unit raised to the power {worst:g}; at most {MAX_UNIT_EXPONENT}")
+    return base**exponent
+
+
+_OPERATORS = {
+    "**": _bounded_power,
+    "*": lambda a, b: a * b,
+    "": lambda a, b: a * b,  # implicit product, "2 m"
+    "/": lambda a, b: a / b,
+    "+": lambda a, b: a + b,
+    "-": lambda a, b: a - b,
+}
+
+
+def parse_quantity(text: str, field: str = "value") -> pint.Quantity:
+    """Read a unit expression such as ``"400 ozf*in"`` with bounded cost.
+
+    pint's own parser evaluates integer literals as Python ints, so ``"10**10**10 s"`` hangs and
+    exhausts memory. Here the text is bounded in length, every number is a float (an out-of-range
+    power overflows at once) and a power may not raise a unit beyond ``MAX_UNIT_EXPONENT``, so
+    every step costs O(1) and the whole parse O(length).
+
+    Raises
+    ------
+    UnitError
+        ``"<field>: ..."`` for text that is empty, too long or not a quantity.
+    """
+    if len(text) > MAX_EXPRESSION_LENGTH:
+        raise UnitError(f"{field}: a quantity must be at most {MAX_EXPRESSION_LENGTH} characters, "
+                        f"got {len(text)}")
+    if not text.strip():
+        raise UnitError(f"{field}: empty string; give a number or a quantity such as '2 m'")
+    try:
+        expression = text
+        for preprocess in ureg.preprocessors:
+            expression = preprocess(expression)
+        tree = build_eval_tree(tokenizer(string_preprocessor(expression)))
+        value = tree.evaluate(_number_or_unit, _OPERATORS)
+        return value if isinstance(value, pint.Quantity) else Q_(value)
+    except Exception as exc:  # noqa: BLE001 - pint's parser raises a version-dependent mix
+        # (TokenError, DefinitionSyntaxError, UndefinedUnitError, ZeroDivisionError,
+        # OverflowError, DimensionalityError, AssertionError, ...) for malformed text
+        raise UnitError(f"{field}: cannot read {text!r} as a quantity "
+                        f"({type(exc).__name__}: {exc})") from None
+
+
+def holds_quantity(value, strings: bool = False) -> bool:
+    """A pint Quantity, or a list or tuple with one anywhere inside (or a string, if
+    ``strings``): a value whose units would be lost by ``np.asarray(value, float)``."""
+    kinds = (pint.Quantity, str) if strings else pint.Quantity
+    if isinstance(value, kinds):
+        return True
+    return isinstance(value, (list, tuple)) and any(holds_quantity(v, strings) for v in value)
+
+
+@functools.lru_cache(maxsize=256)
+def _si_factor(unit: str) -> float:
+    """Factor from ``unit`` to the SI base units of its dimension (1 for an SI unit)."""
+    return float(Q_(1.0, unit).to_base_units().magnitude)
+
+
+def to_si_array(value, unit: str, field: str = "value") -> np.ndarray:
+    """Convert ``value`` to a float array in the SI base units of ``unit``'s dimension.
+
+    Parameters
+    ----------
+    value : float, array_like, str or pint.Quantity
+        A number or an array without units is taken to be in ``unit``; a string such as
+        ``"400 ozf*in"`` (or ``"3"``, a number in ``unit``) or a Quantity (scalar or array) is
+        converted; a list may mix them. A dimensionless quantity with units (``"15 deg"``,
+        ``"100 percent"``) is accepted only where ``unit`` is dimensionless too (rad counts as
+        dimensionless, so ``"40 deg"`` reads as an angle). Cyclic and angular frequencies
+        (Hz, rad/s) convert with their 2π.
+    unit : str
+        The field's unit, e.g. ``"N*m"`` (``""``: dimensionless).
+    field : str
+        Name used in error messages.
+
+    Returns
+    -------
+    ndarray
+        Float array of the shape of ``value``; not checked for finiteness (callers apply their
+        rule, e.g. :func:`flexsat.validation.require_finite`).
+
+    Raises
+    ------
+    UnitError
+        If the value cannot be read or has an incompatible dimension.
+    """
+    if isinstance(value, (list, tuple)) and holds_quantity(value, strings=True):
+        items = [to_si_array(v, unit, field) for v in value]
+        if any(item.shape != items[0].shape for item in items):
+            raise UnitError(f"{field}: the items of {_shown(value)} differ in shape")
+        return np.array(items)
+    q = parse_quantity(value, field) if isinstance(value, str) else value
+    if not isinstance(q, pint.Quantity) or q.units == ureg.dimensionless:
+        arr = _real(q.magnitude if isinstance(q, pint.Quantity) else q, value, unit, field)
+        factor = _si_factor(unit)
+        return arr if factor == 1.0 else arr * factor
+    try:
+        q = _cyclic_to_angular(q, unit)
+        magnitude = q.to(unit).magnitude
+    except pint.DimensionalityError as exc:
+        raise UnitError(f"{field}: incompatible units ({exc.units1} given, "
+                        f"{unit or 'dimensionless'} expected)") from None
+    except (pint.PintError, ValueError, TypeError, AttributeError, ArithmeticError) as exc:
+        raise UnitError(f"{field}: cannot read {_shown(value)} as a quantity in "
+                        f"{unit or 'dimensionless'} ({exc})") from None
+    return _real(magnitude, value, unit, field) * _si_factor(unit)
+
+
+def _real(magnitude, value, unit: str, field: str) -> np.ndarray:
+    """``magnitude`` as a float array; None, complex numbers and non-numbers are refused (numpy
+    would read None as NaN and drop an imaginary part with only a warning)."""
+    try:
+        if magnitude is not None and not np.iscomplexobj(magnitude):
+            return np.asarray(magnitude, dtype=float)
+    except (TypeError, ValueError):
+        pass
+    raise UnitError(f"{field}: cannot read {_shown(value)} as a real number or a quantity in "
+                    f"{unit or 'dimensionless'} units")
+
+
+def _shown(value) -> str:
+    """A short repr for messages (a megabyte of input is not echoed back)."""
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
 def to_si(value, unit: str, field: str = "value") -> float:
-    """Convert ``value`` to the SI magnitude of ``unit``'s dimension.
+    """Convert a scalar ``value`` to the SI magnitude of ``unit``'s dimension.
 
     Parameters
     ----------
     value : float, str or pint.Quantity
-        A bare number is taken to be already in ``unit``; a string such as ``"400 ozf*in"`` or a
-        Quantity is converted.
+        A bare number (or a string holding only one, ``"3"``) is taken to be in ``unit``; a
+        string such as ``"400 ozf*in"`` or a Quantity is converted (see :func:`to_si_array`).
     unit : str
         The expected unit, e.g. ``"N*m"``; the result is in the SI base units of its dimension.
     field : str
@@ -46,21 +212,13 @@ def to_si(value, unit: str, field: str = "value") -> float:
     Raises
     ------
     UnitError
-        If the value cannot be parsed, is not finite or has incompatible dimensions.
+        If the value cannot be parsed, is not a single finite number or has incompatible
+        dimensions.
     """
-    try:
-        q = Q_(value) if isinstance(value, str) else value
-        if not isinstance(q, pint.Quantity):
-            q = Q_(float(q), unit)
-        elif q.dimensionless and not Q_(1, unit).dimensionless:
-            q = Q_(q.magnitude, unit)
-        q = _cyclic_to_angular(q, unit)
-        mag = float(q.to(unit).magnitude)
-    except pint.DimensionalityError as exc:
-        raise UnitError(f"{field}: incompatible units ({exc.units1} given, {unit} expected)") from exc
-    except (pint.UndefinedUnitError, ValueError, TypeError, AttributeError) as exc:
-        raise UnitError(f"{field}: cannot read {value!r} as a quantity in {unit} ({exc})") from exc
-    si = float(Q_(mag, unit).to_base_units().magnitude)
+    arr = to_si_array(value, unit, field)
+    if arr.size != 1:
+        raise UnitError(f"{field}: must be a single number, got {_shown(value)}")
+    si = float(arr.reshape(()))
     if not math.isfinite(si):
-        raise UnitError(f"{field}: must be a finite number, got {value!r}")
+        raise UnitError(f"{field}: must be a finite number, got {_shown(value)}")
     return si

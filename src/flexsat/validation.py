@@ -1,37 +1,86 @@
-"""Input checks shared by every constructor: one clear message naming the field and the rule."""
+"""Input checks shared by every constructor: one clear message naming the field and the rule.
+
+Each check takes the field's SI ``unit`` where the field is a physical quantity: a number is then
+taken in that unit and a pint Quantity or a unit string is converted to it
+(:func:`flexsat.units.to_si_array`); ``""`` declares a dimensionless field. Without a unit only
+plain numbers are accepted: a Quantity is refused rather than stripped of its unit.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
+from flexsat.units import UnitError, holds_quantity, to_si_array
 
-def require_finite(value, field: str) -> np.ndarray:
-    if isinstance(value, (str, bytes)):
-        raise ValueError(
-            f"{field}: must be a number in SI units, got the string {value!r} (quantities with "
-            "units are converted at the boundary: flexsat.units.to_si)"
-        )
+
+def _real(value, field: str, noun: str):
+    """``value``, or its real part when it is complex with every imaginary part exactly 0.
+
+    A nonzero imaginary part, which the float conversion would silently drop, is refused.
+    """
     try:
-        arr = np.asarray(value, dtype=float)
+        is_complex = np.iscomplexobj(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{field}: must be a number, got {value!r}") from None
+        return value  # not array-like: the float conversion gives the message
+    if not is_complex:
+        return value
+    imag = np.abs(np.imag(value))
+    if np.any(imag != 0):
+        raise ValueError(f"{field}: must be a real {noun}, got a complex value (largest "
+                         f"|imaginary part| {np.max(imag):.3g}, which would be dropped)")
+    return np.real(value)
+
+
+def _plain_numbers(value, field: str) -> None:
+    """Refuse a Quantity where no unit is declared: ``np.asarray`` would drop its unit."""
+    if holds_quantity(value):
+        raise UnitError(
+            f"{field}: takes a plain number here (no unit is declared for it), got a quantity "
+            f"with units ({str(value)[:80]}); convert it yourself, its unit is not dropped silently"
+        )
+
+
+def require_finite(value, field: str, unit: str | None = None) -> np.ndarray:
+    """``value`` as a finite float array, in SI when ``unit`` is given (see the module)."""
+    if unit is not None:
+        arr = to_si_array(value, unit, field)
+    else:
+        _plain_numbers(value, field)
+        if isinstance(value, (str, bytes)):
+            raise ValueError(
+                f"{field}: must be a number in SI units, got the string {value!r} (quantities with "
+                "units are converted at the boundary: flexsat.units.to_si)"
+            )
+        real = _real(value, field, "number")
+        try:
+            arr = np.asarray(real, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"{field}: must be a number, got {value!r}") from None
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{field}: must be finite (no NaN or inf), got {value!r}")
     return arr
 
 
-def require_positive(value, field: str) -> np.ndarray:
-    arr = require_finite(value, field)
+def require_positive(value, field: str, unit: str | None = None) -> np.ndarray:
+    arr = require_finite(value, field, unit)
     if np.any(arr <= 0):
         raise ValueError(f"{field}: must be > 0, got {value!r}")
     return arr
 
 
-def require_nonneg(value, field: str) -> np.ndarray:
-    arr = require_finite(value, field)
+def require_nonneg(value, field: str, unit: str | None = None) -> np.ndarray:
+    arr = require_finite(value, field, unit)
     if np.any(arr < 0):
         raise ValueError(f"{field}: must be >= 0, got {value!r}")
     return arr
+
+
+def set_si(obj, name: str, check, unit: str, field: str | None = None) -> None:
+    """Replace attribute ``name`` of a frozen dataclass by ``check(value, field, unit)``, its
+    value checked and converted to SI (a float for a scalar), so the object holds SI numbers
+    whatever the caller passed (a number in SI, a pint Quantity or a unit string)."""
+    arr = check(getattr(obj, name), field or name, unit)
+    object.__setattr__(obj, name, float(arr) if arr.ndim == 0 else arr)
 
 
 def require_count(value, field: str) -> int:
@@ -46,10 +95,12 @@ def require_count(value, field: str) -> int:
 
 def require_numeric(value, field: str, noun: str = "array") -> np.ndarray:
     """A finite numeric array (a copy); strings and non-numbers are refused, naming the field."""
+    _plain_numbers(value, field)
     if isinstance(value, (str, bytes)):
         raise ValueError(f"{field}: must be a numeric {noun}, got the string {value!r}")
+    real = _real(value, field, noun)
     try:
-        arr = np.array(value, dtype=float)
+        arr = np.array(real, dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"{field}: must be a numeric {noun}, got {type(value).__name__}") from None
     if not np.all(np.isfinite(arr)):

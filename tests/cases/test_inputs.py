@@ -40,7 +40,7 @@ def test_quantities_numbers_are_si_and_strings_are_converted():
 def test_dimensionless_numbers_are_checked_and_strings_converted():
     assert read(Param(0.5), 0.25) == 0.25
     assert read(Param("0.4 percent")) == pytest.approx(0.004)
-    with pytest.raises(ValueError, match=r"^x: must be finite \(no NaN or inf\), got nan"):
+    with pytest.raises(ValueError, match=r"^x: must be a finite number, got nan"):
         read(Param(0.5), float("nan"))
     with pytest.raises(ValueError, match=r"^x: incompatible units"):
         read(Param(0.5), "3 m")

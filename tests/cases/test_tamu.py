@@ -64,3 +64,36 @@ def test_case_registry():
     assert "tamu" in CASES and "Table 1" in CASES["tamu"].source
     with pytest.raises(ValueError, match=r"^case: unknown case 'hst'"):
         get_case("hst")
+
+
+@pytest.mark.parametrize("override", [
+    {"tip_mass": "1.5627 ozf*s**2/in"},  # 10× the tip masses: ~8× the inertia
+    {"hub_inertia": "500 ozf*in*s**2"},
+    {"tip_radius": "40 in", "density": "0.00307 ozf*s**2/in**2"},
+    {"n_appendages": 2, "tip_inertia": "10 ozf*in*s**2"},
+])
+def test_inertia_overrides_move_the_reference_design_inertia(override):
+    """The reference is designed on the published total scaled with the vehicle: the same
+    design-to-model ratio 2128 / 2213.6 as the default case (to rounding of one division,
+    1e-14), so the slew time at the same torque and α grows as √I (Eq. 16: T² ∝ I)."""
+    nominal, case = tamu(), tamu(**override)
+    ratio = nominal.reference_inertia / nominal.params.total_inertia
+    assert ratio == pytest.approx(2128 / 2213.6, rel=5e-5)  # budget printed to 5 digits
+    grown = case.params.total_inertia / nominal.params.total_inertia
+    assert abs(grown - 1) > 0.05  # the override does change the vehicle
+    assert case.reference_inertia / case.params.total_inertia == pytest.approx(ratio, rel=1e-14)
+    T, T0 = float(case.reference().end_time), float(nominal.reference().end_time)
+    assert T / T0 == pytest.approx(np.sqrt(grown), rel=1e-14)
+    assert inertia_budget(case)["reference_design"] == case.reference_inertia
+    assert inertia_budget(case)["published_total"] == pytest.approx(2128 * OZ_IN_S2, rel=1e-9)
+
+
+def test_reference_inertia_given_or_untouched_by_non_inertia_overrides():
+    # an explicit reference_inertia is the design inertia, whatever the vehicle
+    c = tamu(tip_mass="1.5627 ozf*s**2/in", reference_inertia="2128 ozf*in*s**2")
+    assert c.reference_inertia == pytest.approx(2128 * OZ_IN_S2, rel=1e-9)
+    # stiffness, damping and the model size leave the rigid inertia and so the published value
+    c = tamu(modulus="100e6 ozf/in**2", damping=0.02, n_modes=4, stiffening=True)
+    assert c.reference_inertia == tamu().reference_inertia
+    with pytest.raises(ValueError, match=r"^reference_inertia: must be > 0"):
+        tamu(reference_inertia=-1.0)

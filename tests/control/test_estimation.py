@@ -197,3 +197,13 @@ def test_kalman_unexcited_unstable_mode():
     A = np.diag([1.0, -1.0])
     with pytest.raises(ValueError, match="process noise does not excite"):
         kalman(A, [[0.0], [1.0]], [[1.0, 1.0]], 1.0, 1.0)
+
+
+@pytest.mark.parametrize("field", ["A", "G", "C", "Qn", "Rn"])
+@pytest.mark.parametrize("design", [kalman, dkalman])
+def test_complex_input_is_refused(design, field):
+    args = dict(A=-0.5 * np.eye(2), G=np.eye(2), C=np.array([[1.0, 0.0]]), Qn=np.eye(2),
+                Rn=np.eye(1))
+    args[field] = args[field] + 1e-3j
+    with pytest.raises(ValueError, match=rf"^{field}: must be a real matrix, got a complex value"):
+        design(**args)

@@ -231,3 +231,101 @@ def test_undetectable_pair():
 def test_string_input():
     with pytest.raises(ValueError, match="R: must be a numeric matrix"):
         lqr(A2, B2, np.eye(2), "7")
+
+
+# ------------------------------------------------------------------------------------------------
+# scale-aware stabilizability / detectability (modes spanning 0.1 … 1,000 rad/s)
+
+
+def wide_modal_model(**kwargs):
+    """200 states: rigid mode + 99 modes 0.1 … 1,000 rad/s, ζ = 0.001, one actuator touching
+    every mode (‖A‖ ~ 1e6 while the low eigenvalues are 0.01 apart)."""
+    return modal_model(100, zeta=0.001, n_inputs=1, top=1000.0, **kwargs)
+
+
+def test_wide_lightly_damped_modal_model_solves():
+    A, B = wide_modal_model()
+    assert uncontrollable_modes(A, B) == []
+    assert uncontrollable_modes(A.T, np.eye(200)) == []
+    K, S, E = sol = lqr(A, B, np.eye(200), 1.0)
+    assert K.shape == (1, 200) and np.all(np.isfinite(S))
+    assert E.real.max() < 0
+    # backward error of the solve: ~n ε per term (module docstring), here a few 1e-12
+    assert sol.residual < 200 * 1e3 * np.finfo(float).eps
+    # controllability does not depend on the input's unit
+    assert uncontrollable_modes(A, 1e-9 * B) == []
+
+
+@pytest.mark.parametrize("mode", [0, 1, 50, 99])
+def test_wide_model_with_an_uncontrollable_marginal_mode_is_refused(mode):
+    """Mode 0 is the rigid mode (λ = 0, defective), the others are made undamped (λ = ±iω, ω =
+    0.1, 10, 1,000 rad/s) and cut from the actuator: not stabilizable, named by its eigenvalue;
+    left damped (ζ = 0.001), the same cut mode is stable and the pair stabilizable."""
+    A, B = wide_modal_model()
+    m = 100
+    w = np.sqrt(-A[m + mode, mode])
+    B[m + mode] = 0.0
+    if mode:
+        assert uncontrollable_modes(A, B) == []  # stable, merely uncontrollable
+        assert lqr(A, B, np.eye(200), 1.0).poles.real.max() < 0
+        A[m + mode, m + mode] = 0.0
+    bad = uncontrollable_modes(A, B)
+    assert len(bad) == 1 and abs(abs(bad[0]) - w) <= 1e-12 * max(w, 1.0)
+    with pytest.raises(ValueError, match=rf"^\(A, B\) is not stabilizable: eigenvalue\(s\) "
+                                         rf"0\+{w:.4g}j of A are not controllable from B$"):
+        lqr(A, B, np.eye(200), 1.0)
+
+
+def test_wide_model_with_an_unweighted_marginal_mode_is_undetectable():
+    # the dual test: Q leaves an undamped mode at ~10 rad/s unseen (its position and rate)
+    A, B = wide_modal_model()
+    m, mode = 100, 50
+    A[m + mode, m + mode] = 0.0
+    q = np.ones(200)
+    q[[mode, m + mode]] = 0.0
+    w = np.sqrt(-A[m + mode, mode])
+    with pytest.raises(ValueError, match=rf"is not detectable: eigenvalue\(s\) 0\+{w:.4g}j are"):
+        lqr(A, B, np.diag(q), 1.0)
+    q[mode] = 1.0  # weighting its position alone makes it detectable
+    assert lqr(A, B, np.diag(q), 1.0).poles.real.max() < 0
+
+
+# ------------------------------------------------------------------------------------------------
+# a solution that does not satisfy its equation is refused
+
+
+@pytest.mark.parametrize("scale", [1e50, 1e150])
+def test_inaccurate_solution_is_an_error(scale):
+    # stable A scaled up: the true S ~ Q/(2‖A‖) underflows in the solver, S = 0 and ρ = 1
+    A = np.array([[-1.0, 2.0], [0.0, -3.0]])
+    with pytest.raises(ValueError, match=r"^A: the Riccati solution is inaccurate: its relative "
+                                         r"residual 1 exceeds √ε = 1.5e-08 \(the data are too "
+                                         r"badly scaled"):
+        lqr(scale * A, [[0.0], [1.0]], np.eye(2), 1.0)
+
+
+def test_badly_scaled_data_are_refused_not_warned():
+    # ‖A‖ = 1e10 against unit B, Q, R: scipy's solution has ρ ~ 0.4 (was only logged)
+    A = 1e10 * np.array([[-1.0, 2.0], [0.0, -3.0]])
+    with pytest.raises(ValueError, match=r"relative residual 0\.\d+ exceeds"):
+        lqr(A, [[0.0], [1.0]], np.eye(2), 1.0)
+    # the same plant in a sensible time unit solves (ρ at roundoff level)
+    assert lqr(A / 1e10, [[0.0], [1.0]], np.eye(2), 1.0).residual < 1e-13
+
+
+def test_kalman_filter_refuses_an_inaccurate_solution():
+    from flexsat.control.estimation import kalman
+
+    A = 1e150 * np.array([[-1.0, 2.0], [0.0, -3.0]])
+    with pytest.raises(ValueError, match=r"^A: the Riccati solution is inaccurate"):
+        kalman(A, np.eye(2), [[1.0, 0.0]], np.eye(2), 1.0)
+
+
+@pytest.mark.parametrize("field", ["A", "B", "Q", "R", "N"])
+@pytest.mark.parametrize("design", [lqr, dlqr])
+def test_complex_input_is_refused(design, field):
+    args = dict(A=0.5 * np.eye(2), B=np.array([[0.0], [1.0]]), Q=np.eye(2), R=np.eye(1),
+                N=np.zeros((2, 1)))
+    args[field] = args[field] + 1e-3j
+    with pytest.raises(ValueError, match=rf"^{field}: must be a real matrix, got a complex value"):
+        design(**args)

@@ -222,3 +222,18 @@ def test_model_is_read_only():
     with pytest.raises(ValueError):
         model.K[0, 0] = 1.0
     assert "n_dof=2" in repr(model)
+
+
+@pytest.mark.parametrize("field", ["M", "D", "K", "B", "Cq", "Cv", "Dff"])
+def test_complex_matrices_are_refused_not_made_real(field):
+    # a complex entry would lose its imaginary part in the float conversion (silently, before)
+    good = {**GOOD, "Cv": np.zeros((2, 2)), "Dff": np.zeros((2, 1))}
+    bad = np.asarray(good[field], dtype=complex)
+    bad.flat[0] += 0.5j
+    with pytest.raises(ValueError, match=rf"^{field}: must be a real number, got a complex "
+                                         r"value \(largest \|imaginary part\| 0\.5, which would "
+                                         r"be dropped\)"):
+        SecondOrderModel(**{**good, field: bad})
+    # a complex array whose imaginary parts are all 0 is the real array it holds
+    exact = SecondOrderModel(**{**good, field: np.asarray(good[field], dtype=complex)})
+    np.testing.assert_array_equal(getattr(exact, field), getattr(SecondOrderModel(**good), field))

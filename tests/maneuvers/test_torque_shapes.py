@@ -488,3 +488,65 @@ def test_solved_rise_time_out_of_range(factor):
     msg = r"^rise_time: out of range.*I \|angle\| / u_max must lie in"
     with pytest.raises(ValueError, match=msg):
         PseudoSquare(1.0, 1.0, u_max=1.0, duration=T)
+
+
+# --------------------------------------------------------------------------- sampled (ZOH) slews
+
+
+def _zoh_slew(s, dt, n):
+    """Rigid body ``I theta'' = u`` driven by ``u(k dt)`` held over each step (exact ZOH
+    propagation), sampled as the simulator does (``t = dt * arange``); returns the net impulse
+    ``sum u_k dt`` [N m s] and the end angle [rad] and rate [rad/s]."""
+    u = s(dt * np.arange(n)).u
+    I = float(s.inertia)
+    theta, rate = float(s.theta0), 0.0
+    for uk in u:
+        theta += rate * dt + 0.5 * uk * dt * dt / I
+        rate += uk * dt / I
+    return float(np.sum(u) * dt), theta, rate
+
+
+ZOH_SHAPES = [
+    lambda T: BangBang(0.7, 3.0, duration=T, theta0=0.2),
+    lambda T: BangBang(-1.3, 2.0, duration=T),
+    lambda T: SmoothBangBang(ANGLE_40, I_TAMU, duration=T, alpha=0.0),
+    lambda T: SmoothBangBang(-0.7, 3.0, duration=T, alpha=0.1, theta0=0.2),
+    lambda T: PseudoSquare(0.7, 3.0, duration=T, rise_time=T / 8),
+    lambda T: Sinusoidal(-1.3, 2.0, duration=T),
+]
+
+
+@pytest.mark.parametrize("rate, k", [(75.0, 289), (64.0, 128), (100.0, 200), (1000.0, 1927)])
+@pytest.mark.parametrize("make", ZOH_SHAPES, ids=lambda m: ids(m(4.0)))
+def test_sampled_slew_has_zero_net_impulse(make, rate, k):
+    # T = 2 k dt puts T/2 = k dt exactly on a sample (doubling is exact), so the 2k samples of
+    # [0, T) split k / k between the halves. The switch belongs to the second half [T/2, T): a
+    # bang-bang sample at T/2 carrying the first-half sign would leave 2 u_max dt of momentum.
+    # Odd symmetry u(T - t) = -u(t) cancels the samples in pairs up to the rounding of T - t_j
+    # against t_(2k-j) (|du| <= eps T sup|u'|, sup|u'| <= 15 u_max / T here) and of the sum:
+    # |impulse| <= 2k * 16 eps u_max dt.
+    dt = 1.0 / rate
+    s = make(2 * (dt * k))
+    assert float(s.duration) / 2 == dt * k
+    n = 2 * k
+    impulse, theta, theta_dot = _zoh_slew(s, dt, n)
+    eps = np.finfo(float).eps
+    u_max, I, angle = float(s.u_max), float(s.inertia), float(s.angle)
+    assert abs(impulse) <= n * 16 * eps * u_max * dt
+    assert abs(theta_dot) <= n * 16 * eps * u_max * dt / I
+    target = float(s.theta0 + s.angle)
+    if isinstance(s, BangBang) or (isinstance(s, SmoothBangBang) and float(s.alpha) == 0):
+        # the held samples reproduce the piecewise-constant torque exactly: rounding only,
+        # n steps each adding O(eps |angle|)
+        assert abs(theta - target) <= 4 * n * eps * (abs(angle) + abs(float(s.theta0)))
+    else:
+        # a hold differs from u by at most dt sup|u'|: angle error <= dt sup|u'| T^2 / (2 I)
+        T = float(s.duration)
+        assert abs(theta - target) <= dt * 15 * u_max / T * T * T / (2 * I)
+
+
+def test_bang_bang_switches_at_half_time():
+    # the documented halves: +u_max on [0, T/2), -u_max on [T/2, T) (sign of angle)
+    for s in (BangBang(0.5, 2.0, duration=4.0), SmoothBangBang(0.5, 2.0, duration=4.0, alpha=0.0)):
+        u = s(np.array([0.0, np.nextafter(2.0, 0.0), 2.0, np.nextafter(4.0, 0.0)])).u
+        np.testing.assert_array_equal(u, float(s.u_max) * np.array([1.0, 1.0, -1.0, -1.0]))

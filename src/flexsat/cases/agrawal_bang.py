@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexsat.cases.inputs import Param, read_inputs
+from flexsat.catalog import CASES
 from flexsat.structures.fem import Structure
 from flexsat.structures.modal_model import ModalModel
 from flexsat.structures.mode_description import classify_modes
@@ -38,7 +39,7 @@ from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
 from flexsat.validation import require_count, require_finite, require_nonneg
 
-SOURCE = "seed 004_680d3fec9e1f8c83.txt (Agrawal & Bang 1996), §4 L205-L303"
+SOURCE = CASES["agrawal_bang"].source
 
 #: what seed 004 prints about the structure and the control problem (no dimension or frequency)
 PUBLISHED = {

@@ -49,10 +49,10 @@ from flexsat.analysis.controllability import (
     repeated_frequency_test,
 )
 from flexsat.cases.inputs import Param, read_inputs
+from flexsat.catalog import CASES
 from flexsat.validation import require_count, require_finite
 
-SOURCE = ("seed 002_c3272b32d7cac32e.txt (Bainum & Reddy, NASA CR-158684, 1979), Ch. II-IV, "
-          "App. A")
+SOURCE = CASES["bainum"].source
 
 #: Earth's gravitational parameter (m³/s²) and equatorial radius (m), for the orbit rate
 EARTH_MU = 3.986004418e14

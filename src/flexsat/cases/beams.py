@@ -51,6 +51,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexsat.cases.inputs import Param, read_inputs
+from flexsat.catalog import CASES
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
@@ -79,8 +80,8 @@ PUBLISHED = {
     "fv2_modulus": "200 GPa",
     "fv2_density": "8000 kg/m**3",
 }
-SOURCE_BEAMS = "Blevins, Formulas for Natural Frequency and Mode Shape (1979), Table 8-1"
-SOURCE_FV2 = "NAFEMS R0015 Selected Benchmarks for Natural Frequency Analysis (1987), test FV2"
+SOURCE_BEAMS = CASES["cantilever_beam"].source
+SOURCE_FV2 = CASES["nafems_fv2"].source
 
 CANTILEVER_BETA_L = np.array(PUBLISHED["cantilever_beta_L"])
 FREE_FREE_BETA_L = np.array(PUBLISHED["free_free_beta_L"])

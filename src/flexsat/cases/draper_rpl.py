@@ -21,10 +21,11 @@ import numpy as np
 import scipy.linalg as sla
 
 from flexsat.cases.inputs import Param, read_inputs
+from flexsat.catalog import CASES
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_finite
+from flexsat.validation import require_count, require_finite, require_positive
 
-SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 5 Table 3 (L2156-L2166), Eqs. 50-59, Table 4"
+SOURCE = CASES["draper_rpl"].source
 
 #: Att. 5 Table 3, exactly as printed (L2156-L2166)
 PUBLISHED = {
@@ -93,9 +94,9 @@ def comparison_functions(z, n: int, length: float, derivative: int = 0) -> np.nd
         Shape ``(len(z), n)``; φ is dimensionless, φ' in 1/m, φ'' in 1/m².
     """
     j = np.arange(1, n + 1)
-    a = j * np.pi / length
+    a = j * np.pi / float(require_positive(length, "length", "m"))
     s = (-1.0) ** (j + 1)
-    az = np.outer(np.atleast_1d(np.asarray(z, dtype=float)), a)
+    az = np.outer(np.atleast_1d(require_finite(z, "z", "m")), a)
     if derivative == 0:
         return 1.0 - np.cos(az) + 0.5 * s * az**2
     if derivative == 1:
@@ -335,7 +336,7 @@ class DraperRPLCase:
         """A, E of E ż = A z for u = −(G1 Bᵀx + G2 Bᵀẋ): A = [[0, M], [−K̄, −C̄]], E = diag(M, M)
         with K̄ = K + B G1 Bᵀ and C̄ = B G2 Bᵀ (Att. 5 Eqs. 34-38, 59)."""
         M, K, B = self._model
-        g1, g2 = _gain(g1, "g1"), _gain(g2, "g2")
+        g1, g2 = _gain(g1, "g1", "N*m/rad"), _gain(g2, "g2", "N*m*s/rad")
         zeros = np.zeros_like(M)
         A = np.block([[zeros, M], [-(K + B @ g1 @ B.T), -(B @ g2 @ B.T)]])
         return A, sla.block_diag(M, M)
@@ -383,8 +384,8 @@ class DraperRPLCase:
         return float(np.linalg.cond(phi / np.sqrt(norm2)))
 
 
-def _gain(value, field: str) -> np.ndarray:
-    g = require_finite(value, field)
+def _gain(value, field: str, unit: str) -> np.ndarray:
+    g = require_finite(value, field, unit)
     if g.shape != (3, 3):
         raise ValueError(f"{field}: must be a 3x3 matrix (one row per input), got shape {g.shape}")
     return g

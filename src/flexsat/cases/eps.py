@@ -35,12 +35,13 @@ from functools import cached_property
 import numpy as np
 
 from flexsat.cases.inputs import Param, read_inputs
+from flexsat.catalog import CASES
 from flexsat.structures.mode_description import classify_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
 from flexsat.validation import require_count, require_nonneg
 
-SOURCE = "seed 003_6d17262716e94f5f.txt, L66-L136 (EPS model), L238-L295 (node numbers)"
+SOURCE = CASES["eps"].source
 
 #: The EPS data exactly as published (L72-L136)
 PUBLISHED = {

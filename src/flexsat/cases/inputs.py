@@ -13,7 +13,7 @@ from typing import Any, Callable
 import numpy as np
 
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.validation import require_count, require_nonneg, require_positive
 
 _QUANTITY_RULES = {"positive": require_positive, "nonneg": require_nonneg}
 _OTHER_RULES = ("count", "flag", "choice", "raw")
@@ -29,8 +29,9 @@ class Param:
         Value used when the input is not overridden, as written (a published string with units,
         a number in SI, a tuple, ...); it goes through the same rule as an override.
     unit : str
-        SI unit of a quantity (``""``: dimensionless). A number is taken in this unit, a string
-        such as ``"2 in"`` or ``"0.4 percent"`` is converted with :func:`flexsat.units.to_si`.
+        SI unit of a quantity (``""``: dimensionless). A number is taken in this unit, a pint
+        Quantity or a string such as ``"2 in"`` or ``"0.4 percent"`` is converted with
+        :func:`flexsat.units.to_si` (a dimensionless unit is refused where a dimension is due).
     rule : str or callable
         ``"positive"`` (> 0) or ``"nonneg"`` (>= 0) for a quantity, returned as float;
         ``"count"`` a positive integer; ``"flag"`` a bool or the string "true"/"false";
@@ -75,11 +76,7 @@ class Param:
             return _flag(raw, name)
         if self.rule == "choice":
             return _choice(raw, name, self.choices)
-        if self.unit or isinstance(raw, str):
-            value = to_si(raw, self.unit, name)
-        else:
-            value = float(require_finite(raw, name))
-        return float(_QUANTITY_RULES[self.rule](value, name))
+        return float(_QUANTITY_RULES[self.rule](to_si(raw, self.unit, name), name))
 
 
 def _flag(raw, name: str) -> bool:

@@ -38,6 +38,7 @@ from scipy.optimize import brentq
 
 from flexsat import limits
 from flexsat.cases.inputs import Param, read_inputs
+from flexsat.catalog import CASES
 from flexsat.control import PD
 from flexsat.structures.beam import TipMassCantilever, hub_free_frequencies
 from flexsat.structures.fem import Structure
@@ -47,7 +48,7 @@ from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
 from flexsat.validation import require_count
 
-SOURCE = "seed 001_79dfdfba94ed8e0d.txt (Hailey, Sortun & Agrawal, NPS FSS), L21, L181, L208-L220"
+SOURCE = CASES["nps"].source
 
 #: values printed in seed 001, exactly as printed
 PUBLISHED = {

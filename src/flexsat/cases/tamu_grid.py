@@ -53,13 +53,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexsat.cases.inputs import Param, read_inputs
+from flexsat.catalog import CASES
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material
 from flexsat.units import Q_, to_si
 from flexsat.validation import require_count
 
-SOURCE = ("seed 000_7bfdb62d2eacc22a.txt, Att. 4 Table 1 (L1648-L1655), Att. 6 (L2405-L2705), "
-          "Att. 8 Fig. 4 (L3234-L3246)")
+SOURCE = CASES["tamu_grid"].source
 
 #: Published values, exactly as printed ("lb" of the paper is pound-force: lbf in pint)
 PUBLISHED = {

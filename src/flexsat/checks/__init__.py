@@ -11,7 +11,9 @@ Adding a check is one entry in a module's ``CHECKS``::
     Check("nps", "PD rate gain kτ", "seed 001_79dfdfba94ed8e0d.txt, L220", 6.6773, "N m s/rad",
           lambda: float(_case().pd_gains().kd), atol=5e-5)   # half a unit in the last digit
 
-or, for a printed column, :func:`series`. A new topic module is one more name in
+or, for a printed column, :func:`series`. A published number that is an erratum, or that the
+model deviates from for a documented reason, carries a :class:`Discrepancy` (the value computed
+instead and a standalone explanation). A new topic module is one more name in
 :data:`MODULES`.
 """
 
@@ -20,7 +22,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Iterable
 
-from flexsat.checks.core import COLUMNS, Check, CheckResult, evaluate, series
+from flexsat.checks.core import COLUMNS, STATUSES, Check, CheckResult, Discrepancy, evaluate, series
 
 #: the topic modules of :mod:`flexsat.checks`, in table order (issues #2, #3, #4, then #5)
 MODULES = ("tamu", "structures", "tamu_grid", "draper_rpl", "nps", "eps",
@@ -95,5 +97,5 @@ def run_checks(select: str | Iterable[str] | None = None,
     return [evaluate(c) for c in select_checks(select, checks)]
 
 
-__all__ = ["COLUMNS", "MODULES", "Check", "CheckResult", "all_checks", "case_names", "evaluate",
-           "run_checks", "select_checks", "series"]
+__all__ = ["COLUMNS", "MODULES", "STATUSES", "Check", "CheckResult", "Discrepancy", "all_checks",
+           "case_names", "evaluate", "run_checks", "select_checks", "series"]

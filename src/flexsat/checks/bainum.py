@@ -39,7 +39,7 @@ def _roots():
 # the roots as corrected in the notes (seed002.md §6, errata for L1091-L1101: the printed ones
 # come from single-precision root finding and the pair's real part is printed 10× too large);
 # the corrected values carry 6 figures (4 for the pair's real part): half a unit in the last
-_ROOTS = f"{SEED}, Ch. IV eq. 16 roots (L1091-L1101), as corrected in notes seed002.md §6"
+_ROOTS = f"{SEED}, Ch. IV eq. 16 roots (L1091-L1101), errata corrected"
 
 CHECKS: list[Check] = [
     # printed to 5 and 6 figures and exact given the printed m, k, c: half a unit
@@ -51,7 +51,9 @@ CHECKS: list[Check] = [
           lambda: _roots()[1].real, atol=5e-10),
     Check("bainum", "complex pair, real part", _ROOTS, -8.654e-5, "",
           lambda: _roots()[3].real, atol=5e-9,
-          note="printed -8.58139e-4 at L1097-L1101, 10× off (erratum, notes §6)"),
+          note="printed -8.58139e-4, ten times this: an erratum; the printed roots come from "
+               "single-precision root finding and are compared as recomputed in double "
+               "precision from the printed gains"),
     Check("bainum", "complex pair, imaginary part", _ROOTS, 2.95733e-2, "",
           lambda: _roots()[3].imag, atol=5e-8),
     Check("bainum", "real root, fast", _ROOTS, -1.671986, "",

@@ -15,6 +15,13 @@ comment next to it. The rules used across the registry:
   for it (e.g. 0.01 % for 20 beam elements, 1 % for NAFEMS FV2);
 - a value of a reconstructed or unpublished model, or a reading of an experiment: the band the
   issue set for it, named in the comment (e.g. ±25 % for the EPS modes).
+
+A published number the code is known not to reproduce, because the paper is wrong (an erratum:
+the printed value contradicts the paper's own inputs) or because the model deviates from it for
+a documented, argued reason, carries a :class:`Discrepancy`: the value the code is expected to
+compute instead and a standalone explanation. Its row is then ``discrepancy``, not ``fail`` —
+as long as the computed value matches the explained one within the check's tolerance, so that a
+regression is still a failure. Statuses: ``pass``, ``discrepancy``, ``fail``, ``error``.
 """
 
 from __future__ import annotations
@@ -24,9 +31,39 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
+from flexsat.references import cite, references
+
 #: the columns of the validation table, in order (also the keys of :meth:`CheckResult.as_dict`)
 COLUMNS = ("case", "quantity", "source", "published", "computed", "unit", "relative_error",
-           "tolerance", "passed")
+           "tolerance", "status", "explanation")
+
+#: the statuses of :attr:`CheckResult.status`; the last two fail ``flexsat validate``
+STATUSES = ("pass", "discrepancy", "fail", "error")
+
+
+@dataclass(frozen=True)
+class Discrepancy:
+    """Why a published number is not reproduced, and what is computed instead.
+
+    Parameters
+    ----------
+    value : float
+        The value the code is expected to compute, in the check's unit: the corrected value of
+        an erratum (derived from the paper's own inputs) or the documented value of a model
+        deviation. The check's tolerance applies to it as to the published value.
+    explanation : str
+        Standalone: it names the paper (the source column cites it) and states the argument,
+        never only a path into the developers' notes, which do not ship.
+    """
+
+    value: float
+    explanation: str
+
+    def __post_init__(self):
+        if not math.isfinite(self.value):
+            raise ValueError(f"discrepancy.value: must be finite, got {self.value!r}")
+        if not isinstance(self.explanation, str) or not self.explanation.strip():
+            raise ValueError("discrepancy.explanation: must be a non-empty string")
 
 
 @dataclass(frozen=True)
@@ -51,7 +88,11 @@ class Check:
         Relative and absolute (in ``unit``) tolerance; at least one must be given. ``atol=0``
         alone means exact (counts).
     note : str
-        Optional remark shown with the result (a documented deviation, a fitted value).
+        Optional remark shown with the result (an assumption, a fitted value).
+    discrepancy : Discrepancy, optional
+        Set when the published value is an established erratum or the model deviates from it
+        for a documented reason: outside the tolerance but at ``discrepancy.value``, the result
+        is ``discrepancy`` rather than ``fail``.
     """
 
     case: str
@@ -63,6 +104,7 @@ class Check:
     rtol: float | None = None
     atol: float | None = None
     note: str = ""
+    discrepancy: Discrepancy | None = None
 
     def __post_init__(self):
         for name in ("case", "quantity", "source"):
@@ -78,6 +120,10 @@ class Check:
             raise ValueError(f"published: must be finite, got {self.published!r}")
         if not callable(self.compute):
             raise ValueError("compute: must be callable with no arguments")
+        if self.discrepancy is not None and self.passes(self.discrepancy.value):
+            raise ValueError(f"{self.case} / {self.quantity}: discrepancy.value "
+                             f"{self.discrepancy.value!r} is within the tolerance of the "
+                             f"published {self.published!r}: not a discrepancy")
 
     @property
     def tolerance(self) -> str:
@@ -90,14 +136,21 @@ class Check:
         return " + ".join(parts)
 
     def passes(self, computed: float) -> bool:
-        bound = (self.atol or 0.0) + (self.rtol or 0.0) * abs(self.published)
-        return math.isfinite(computed) and abs(computed - self.published) <= bound
+        return self._within(computed, self.published)
+
+    def matches_discrepancy(self, computed: float) -> bool:
+        """Whether ``computed`` is the value the documented discrepancy explains."""
+        return self.discrepancy is not None and self._within(computed, self.discrepancy.value)
+
+    def _within(self, computed: float, target: float) -> bool:
+        bound = (self.atol or 0.0) + (self.rtol or 0.0) * abs(target)
+        return math.isfinite(computed) and abs(computed - target) <= bound
 
 
 @dataclass(frozen=True)
 class CheckResult:
     """The outcome of one :class:`Check`: ``computed`` is None when ``compute`` raised (the
-    message is in ``error``)."""
+    message is in ``error``). ``passed``: the computed value agrees with the published one."""
 
     check: Check
     computed: float | None
@@ -114,24 +167,70 @@ class CheckResult:
 
     @property
     def status(self) -> str:
-        return "pass" if self.passed else ("error" if self.error else "FAIL")
+        """``pass``, ``discrepancy`` (outside the tolerance, at the value a documented erratum or
+        deviation explains), ``fail`` (outside the tolerance, unexplained) or ``error``."""
+        if self.passed:
+            return "pass"
+        if self.error:
+            return "error"
+        if self.computed is not None and self.check.matches_discrepancy(self.computed):
+            return "discrepancy"
+        return "fail"
+
+    @property
+    def failed(self) -> bool:
+        """Whether this result fails ``flexsat validate`` (a discrepancy fails it only with
+        ``--strict``)."""
+        return self.status in ("fail", "error")
+
+    @property
+    def stale(self) -> bool:
+        """A documented discrepancy that no longer shows: the published value is now
+        reproduced, and the explanation should go."""
+        return self.passed and self.check.discrepancy is not None
+
+    @property
+    def explanation(self) -> str | None:
+        """Why the row is not a plain pass, standalone; None for a plain pass."""
+        c, d = self.check, self.check.discrepancy
+        status = self.status
+        if status == "error":
+            return f"the computation raised: {self.error}" if self.computed is None else self.error
+        if status == "discrepancy":
+            return d.explanation
+        if status == "fail":
+            text = (f"computed {self.computed:.7g} is outside the tolerance ({c.tolerance}) of "
+                    f"the published {c.published:.10g}")
+            if d is not None:
+                text += (f" and of the {d.value:.7g} that the documented discrepancy explains "
+                         f"({d.explanation})")
+            else:
+                text += "; no erratum or model deviation explains it"
+            return text + (f"; note: {c.note}" if c.note else "")
+        if self.stale:
+            return (f"stale discrepancy note: the published value is now reproduced, but the "
+                    f"check still explains a discrepancy ({d.explanation})")
+        return None
 
     def as_dict(self) -> dict:
-        """JSON-ready: the table columns, then rtol, atol, status, error, note, seconds."""
+        """JSON-ready: the table columns (the source cited by authors and year), then
+        ``references`` (full citations), passed, rtol, atol, error, note, discrepancy_value,
+        stale, seconds."""
         c = self.check
         computed = self.computed if self.computed is None or math.isfinite(self.computed) else None
-        return {"case": c.case, "quantity": c.quantity, "source": c.source,
+        return {"case": c.case, "quantity": c.quantity, "source": cite(c.source),
                 "published": c.published, "computed": computed, "unit": c.unit,
                 "relative_error": self.relative_error, "tolerance": c.tolerance,
-                "passed": self.passed, "rtol": c.rtol, "atol": c.atol, "status": self.status,
-                "error": self.error, "note": c.note or None, "seconds": round(self.seconds, 4)}
+                "status": self.status, "explanation": self.explanation,
+                "references": references([c.source]), "passed": self.passed,
+                "rtol": c.rtol, "atol": c.atol, "error": self.error, "note": c.note or None,
+                "discrepancy_value": c.discrepancy.value if c.discrepancy else None,
+                "stale": self.stale, "seconds": round(self.seconds, 4)}
 
 
 def evaluate(check: Check) -> CheckResult:
     """Run one check. Any exception raised while computing (or a value that is not a finite
     real number) makes it fail with the message; it never propagates."""
-    import time
-
     start = time.perf_counter()
     try:
         value = check.compute()
@@ -151,17 +250,21 @@ def evaluate(check: Check) -> CheckResult:
 
 def series(case: str, quantities, source: str, published, unit: str, values: Callable,
            *, rtol: float | None = None, atol: float | None = None,
-           notes=None) -> list[Check]:
+           notes=None, discrepancies=None) -> list[Check]:
     """One check per entry of a table column: ``values()`` returns the whole computed column
     (cache it with :func:`functools.lru_cache` when it is expensive) and check ``i`` compares
-    ``values()[i]`` with ``published[i]``."""
+    ``values()[i]`` with ``published[i]``; ``notes`` and ``discrepancies`` (a
+    :class:`Discrepancy` or None per entry) are optional, per entry."""
     published = list(published)
     quantities = list(quantities)
     notes = list(notes) if notes is not None else [""] * len(published)
-    if not len(quantities) == len(published) == len(notes):
-        raise ValueError("series: quantities, published and notes must have the same length")
-    return [Check(case, q, source, float(p), unit, (lambda i=i: values()[i]), rtol, atol, note)
-            for i, (q, p, note) in enumerate(zip(quantities, published, notes))]
+    discrepancies = (list(discrepancies) if discrepancies is not None
+                     else [None] * len(published))
+    if not len(quantities) == len(published) == len(notes) == len(discrepancies):
+        raise ValueError("series: quantities, published, notes and discrepancies must have the "
+                         "same length")
+    return [Check(case, q, source, float(p), unit, (lambda i=i: values()[i]), rtol, atol, note, d)
+            for i, (q, p, note, d) in enumerate(zip(quantities, published, notes, discrepancies))]
 
 
-__all__ = ["COLUMNS", "Check", "CheckResult", "evaluate", "series"]
+__all__ = ["COLUMNS", "STATUSES", "Check", "CheckResult", "Discrepancy", "evaluate", "series"]

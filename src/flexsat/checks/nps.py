@@ -18,7 +18,7 @@ from functools import lru_cache
 from flexsat.checks.core import Check
 
 SEED = "seed 001_79dfdfba94ed8e0d.txt"
-_FITTED = "EI solved to give it (docs/nps.md)"
+_FITTED = "fitted: the unpublished EI is solved to give this frequency"
 
 
 @lru_cache(maxsize=1)

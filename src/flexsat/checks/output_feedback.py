@@ -5,14 +5,16 @@
 The plant (M = I, K, D of Example 1) and the gains are the printed inputs; the checks recompute
 the open- and closed-loop eigenvalues and the condition numbers of the modal matrix (plain
 transpose normalisation φᵀBφ = 1, Eqs. 40-41). Two printed ζω do not reproduce: mode 2
-(1.0290 for 1.0189, a typo in the paper according to the notes) and mode 1 (0.7536 for 0.7532).
+(1.0290 for 1.0189) and mode 1 (0.7536 for 0.7532). Both are errata: the paper's own closed-loop
+eigenvalues in the same rows give the computed values (``discrepancy`` rows).
 """
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
-from flexsat.checks.core import Check, series
+from flexsat.checks.core import Check, Discrepancy, series
 
 SEED = "seed 000_7bfdb62d2eacc22a.txt"
 TABLE1 = f"{SEED}, Att. 5 Table 1 (L2131-L2136)"
@@ -56,6 +58,25 @@ def _closed_loop():
     return lam.real, omega, zeta_omega
 
 
+def _zeta_omega(re: float, im: float) -> float:
+    """ζω = Im λ · (−Re λ)/|λ|: ω = Im λ and ζ = −Re λ/|λ| (the paper's Eqs. 47-49)."""
+    return im * -re / math.hypot(re, im)
+
+
+def _printed_eigenvalue_erratum(i: int) -> Discrepancy | None:
+    """The ζω printed in Table 2's row ``i`` against the one its own printed eigenvalue gives:
+    a discrepancy where the two differ by more than the printed eigenvalue's rounding."""
+    implied = _zeta_omega(CLOSED_REAL[i], CLOSED_OMEGA[i])
+    if abs(implied - CLOSED_ZETA_OMEGA[i]) <= 1e-4:  # 5e-5 rounding of each of Re λ, Im λ
+        return None
+    return Discrepancy(implied, (
+        f"Erratum in Junkins & Kim 1990 (Att. 5 of Junkins, Pollock & Rahman 1990), Table 2: "
+        f"the printed ζω = {CLOSED_ZETA_OMEGA[i]} contradicts the paper's own closed-loop "
+        f"eigenvalue in the same row, {CLOSED_REAL[i]} ± {CLOSED_OMEGA[i]}i, which gives "
+        f"ζω = Im λ·(−Re λ)/|λ| = {implied:.4f}, the value computed here from the printed gains; "
+        f"the same formula gives row 3's printed {CLOSED_ZETA_OMEGA[2]} from its eigenvalue."))
+
+
 # Open loop: exact given the plant; 4 printed decimals, half a unit: 5e-5.
 CHECKS: list[Check] = series(
     "output_feedback", [f"ω_{i + 1}, open loop" for i in range(3)], TABLE1, OPEN_OMEGA, "rad/s",
@@ -77,8 +98,7 @@ CHECKS += series(
 CHECKS += series(
     "output_feedback", [f"ζω_{i + 1}, closed loop" for i in range(3)], TABLE2, CLOSED_ZETA_OMEGA,
     "rad/s", lambda: _closed_loop()[2], rtol=_GAIN_RTOL,
-    notes=["notes §4.4: computed 0.7536 (paper 0.7532)",
-           "notes §4.4 [AMBIG]: probably a typo in the paper", ""])
+    discrepancies=[_printed_eigenvalue_erratum(i) for i in range(3)])
 CHECKS += [
     Check("output_feedback", "condition number, closed loop", f"{TABLE2}, Eq. 46",
           CLOSED_CONDITION, "", lambda: _plant().condition_number(*_gains()), rtol=_GAIN_RTOL),

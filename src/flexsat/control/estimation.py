@@ -126,7 +126,8 @@ def kalman(A, G, C, Qn, Rn, Nn=None) -> RiccatiSolution:
     ------
     ValueError
         Bad shapes or values, Qn not PSD, Rn not PD, joint intensity indefinite, (A, C) not
-        detectable, or an unstable / marginal mode the noise does not excite.
+        detectable, an unstable / marginal mode the noise does not excite, or a relative
+        Riccati residual above ``flexsat.control.lqr.RESIDUAL_TOL``.
     """
     return _filter(A, G, C, Qn, Rn, Nn, False)
 

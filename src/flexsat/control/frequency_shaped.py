@@ -64,8 +64,8 @@ __all__ = ["FrequencyShapedController", "FrequencyShapedDesign", "frequency_shap
 def shaping_weights(Q, R, break_frequency, order: int = 2, damping: float = 0.0):
     r"""Augmented weights (Q̂, N̂, R̂) of Eq. 22 (module docstring) for state weight Q (n, n)
     and control weight R (m, m) (the paper's D)."""
-    wb = float(require_positive(break_frequency, "break_frequency"))
-    zb = float(require_nonneg(damping, "damping"))
+    wb = float(require_positive(break_frequency, "break_frequency", "rad/s"))
+    zb = float(require_nonneg(damping, "damping", ""))
     Q = np.atleast_2d(np.asarray(Q, float))
     R = np.atleast_2d(np.asarray(R, float))
     n, m = Q.shape[0], R.shape[0]
@@ -174,8 +174,8 @@ def frequency_shaped_lqr(A, B, Q, R, break_frequency, order: int = 2,
         Plant-state weight (PSD).
     R : array_like (m, m)
         Control weight at low frequency (the paper's D; PD).
-    break_frequency : float
-        ω_B, rad/s: above it the control is penalised as ω⁴/ω_B⁴ (order 2) or ω²/ω_B² (order 1).
+    break_frequency : float, str or pint.Quantity
+        ω_B, rad/s (a Quantity or a string such as ``"2 Hz"`` is converted): above it the control is penalised as ω⁴/ω_B⁴ (order 2) or ω²/ω_B² (order 1).
     order : {1, 2}
         1: augment the control (rate is the new control); 2: control and rate (acceleration
         is the new control, the paper's form).
@@ -198,11 +198,12 @@ def frequency_shaped_lqr(A, B, Q, R, break_frequency, order: int = 2,
     if order not in (1, 2):
         raise ValueError(f"order: must be 1 (control rate) or 2 (rate and acceleration), "
                          f"got {order}")
-    Qa, Na, Ra = shaping_weights(Q, R, break_frequency, order, damping)
+    wb = float(require_positive(break_frequency, "break_frequency", "rad/s"))
+    zb = float(require_nonneg(damping, "damping", ""))
+    Qa, Na, Ra = shaping_weights(Q, R, wb, order, zb)
     Aa, Ba = augment(A, B, order)
     sol = lqr(Aa, Ba, Qa, Ra, Na)
-    return FrequencyShapedDesign(A, B, Aa, Ba, Qa, Na, Ra, sol, float(break_frequency), order,
-                                 float(damping))
+    return FrequencyShapedDesign(A, B, Aa, Ba, Qa, Na, Ra, sol, wb, order, zb)
 
 
 class FrequencyShapedController(EstimatorController):

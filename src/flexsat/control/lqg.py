@@ -56,7 +56,7 @@ import scipy.linalg
 from flexsat.control.base import Controller
 from flexsat.control.estimation import dkalman, kalman
 from flexsat.control.lqr import check_matrix, check_square, dlqr, lqr
-from flexsat.validation import require_finite, require_positive
+from flexsat.validation import require_finite, require_numeric, require_positive
 
 __all__ = ["EstimatorController", "LQGController", "zoh"]
 
@@ -68,8 +68,9 @@ _DT_TOL = 1e-6
 def zoh(A, B, dt: float) -> tuple[np.ndarray, np.ndarray]:
     r"""Exact zero-order-hold discretisation: :math:`\Phi = e^{A dt}`,
     :math:`\Gamma = \int_0^{dt} e^{A s} ds\, B` (one matrix exponential of the block matrix)."""
-    A = np.asarray(A, float)
-    B = np.asarray(B, float)
+    A = require_numeric(A, "A", "matrix")
+    B = require_numeric(B, "B", "matrix")
+    dt = float(require_positive(dt, "dt", "s"))
     n, m = B.shape
     blk = np.zeros((n + m, n + m))
     blk[:n, :n] = A * dt
@@ -109,7 +110,7 @@ class EstimatorController(Controller):
         C = check_matrix(C, "C", None, n, f"(p, n) with n = {n}")
         p = C.shape[0]
         L = check_matrix(L, "L", n, p, f"(n, p) = ({n}, {p})")
-        self.dt = float(require_positive(dt, "dt"))
+        self.dt = float(require_positive(dt, "dt", "s"))
         if isinstance(measurements, str):
             measurements = (measurements,)
         measurements = tuple(measurements)
@@ -135,7 +136,7 @@ class EstimatorController(Controller):
         self.feedforward = bool(feedforward)
         if reference is not None:
             target = reference.theta0 + reference.angle
-        self.target = require_finite(target, "target")
+        self.target = require_finite(target, "target", "rad")
         self.plant_zoh = zoh(A, B, self.dt)
         if gains == "continuous":
             Phi, Gam = zoh(A - L @ C, np.hstack([B, L]), self.dt)
@@ -260,14 +261,15 @@ class LQGController(EstimatorController):
         """
         A, B, C = _plant_matrices(plant)
         G = B if G is None else G
+        dt = float(require_positive(dt, "dt", "s"))
         if gains == "discrete":
             Phi, Gam = zoh(A, B, dt)
-            reg = dlqr(Phi, Gam, np.asarray(Q, float) * dt, np.asarray(R, float) * dt,
-                       None if N is None else np.asarray(N, float) * dt)
+            reg = dlqr(Phi, Gam, require_numeric(Q, "Q") * dt, require_numeric(R, "R") * dt,
+                       None if N is None else require_numeric(N, "N") * dt)
             G = check_matrix(G, "G", A.shape[0], None, "(n, g)")
-            W = G @ np.atleast_2d(np.asarray(Qn, float)) @ G.T * dt
-            V = np.atleast_2d(np.asarray(Rn, float)) / dt
-            NW = None if Nn is None else G @ np.atleast_2d(np.asarray(Nn, float))
+            W = G @ np.atleast_2d(require_numeric(Qn, "Qn")) @ G.T * dt
+            V = np.atleast_2d(require_numeric(Rn, "Rn")) / dt
+            NW = None if Nn is None else G @ np.atleast_2d(require_numeric(Nn, "Nn"))
             filt = dkalman(Phi, None, C, W, V, NW)
         else:
             reg = lqr(A, B, Q, R, N)

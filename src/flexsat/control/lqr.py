@@ -40,7 +40,15 @@ alone gives ~1e-16 · n, independent of how large S is. The residual relative to
 (``residual_q``, also reported) carries the roundoff of the large terms ‖AᵀS‖ ~ ‖A‖‖S‖ and so
 grows with them: for the lightly damped modal models of ``benchmarks/bench_lqr.py`` (rigid mode
 plus modes 0.1–100 rad/s, ζ = 0.005) it is 1e-9 (50 states) to 4e-8 (400 states) while ρ_c is
-3e-13 to 4e-12. A ρ above 1e-8 is logged as a warning.
+3e-13 to 4e-12.
+
+A ρ above ``RESIDUAL_TOL`` = √ε ≈ 1.5e-8 is an error (``ValueError`` naming the residual):
+the computed S then satisfies its own equation to fewer than half the digits of double
+precision, so the gain is not the solution of the stated problem (e.g. ``lqr(1e150·A, ...)``
+with a stable A: S ~ 1/‖A‖ underflows to 0 and ρ = 1; badly scaled data, ‖A‖ = 1e10 against
+unit B, Q, R, give ρ ~ 0.4). A backward-stable solve gives ρ = O(n ε): the measured 4e-12 at
+400 states is 45 n ε, so the tolerance leaves a margin of ~4,000 for worse conditioning before a
+sound solution is refused.
 
 Checks
 ------
@@ -48,9 +56,26 @@ Before solving: A square, B with n rows, Q (n, n) symmetric positive semi-defini
 symmetric positive definite, N (n, m) with :math:`Q - N R^{-1} N^T \succeq 0` (the joint
 weight positive semi-definite), (A, B) stabilizable and
 :math:`(Q - N R^{-1} N^T,\; A - B R^{-1} N^T)` detectable, both by the PBH rank test on the
-eigenvalues with :math:`\mathrm{Re}\,\lambda \ge -\sqrt{\epsilon}\max(1, \|A\|_1)`
-(discrete: :math:`|\lambda| \ge 1 - \sqrt{\epsilon}`). After solving: S finite and the
-closed loop stable. Every failure is a ``ValueError`` naming the field and the rule.
+marginal or unstable eigenvalues. After solving: S finite and the closed loop stable. Every
+failure is a ``ValueError`` naming the field and the rule.
+
+The PBH test is scale-aware, so that a lightly damped modal model with modes from 0.1 to
+1,000 rad/s (‖A‖ ~ ω²_max = 1e6, eigenvalues 0.01 apart at the low end) is not refused: a single
+threshold √ε‖A‖ on σ_min[A − λI, B] = 0.015 exceeds the distance between its low eigenvalues,
+so every low mode looked uncontrollable. Instead, A is balanced (diagonal similarity) and each
+eigenvalue is tested on its own scale:
+
+- marginal means :math:`\mathrm{Re}\,\lambda \ge -\sqrt{\epsilon}|\lambda|` (damping ratio
+  below √ε) or :math:`|\lambda| \le r = \sqrt{\epsilon}\max(1, \|A\|_1)` (numerically zero,
+  where a defective rigid mode's computed pair ±(ε‖A‖)^½ lies); discrete
+  :math:`|\lambda| \ge 1 - \sqrt{\epsilon}`;
+- λ and the eigenvalues within r of it are one cluster; with W an orthonormal basis of its left
+  invariant subspace (reordered complex Schur form) and M = WᴴAW, λ is uncontrollable when
+  :math:`\sigma_k[(M - \lambda I)/s_\lambda,\; W^H B/\|B\|_2] \le \sqrt{\epsilon}`,
+  :math:`s_\lambda = \max(\|M\|_2, \epsilon^{1/4}\|A\|_1)`: the relative distance of λ's
+  own block from uncontrollability, a perturbation of relative size √ε of that block.
+  The left invariant subspace of one cluster is accurate to ~ε‖A‖/gap (balanced ‖A‖), far below
+  √ε for the models here, so an uncontrollable mode still measures ~ε.
 """
 
 from __future__ import annotations
@@ -75,9 +100,9 @@ __all__ = [
 
 #: relative tolerance of the symmetry and semi-definiteness checks of the weights
 WEIGHT_TOL = 1e-10
-#: relative residual above which a solve logs a warning
-RESIDUAL_WARN = 1e-8
 _SQRT_EPS = np.sqrt(np.finfo(float).eps)
+#: relative Riccati residual above which a solve is refused (module docstring)
+RESIDUAL_TOL = _SQRT_EPS
 
 
 class RiccatiSolution(tuple):
@@ -174,40 +199,53 @@ def _norm1(A) -> float:
     return float(np.abs(A).sum(axis=0).max(initial=0.0))
 
 
-def _candidates(A: np.ndarray, discrete: bool) -> np.ndarray:
-    """Eigenvalues of A that are unstable or on (or within roundoff of) the stability
-    boundary, one of each conjugate pair."""
-    lam = scipy.linalg.eigvals(A)
-    scale = max(1.0, _norm1(A))
+def _balanced(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(D⁻¹AD, D⁻¹B) with D the diagonal balancing of A: a modal model's rows scale as ω² and
+    ω, and balancing brings them to ~ω so that its eigenvectors carry errors of ~ε‖A‖/gap with
+    the balanced, not the raw, ‖A‖."""
+    d = scipy.linalg.matrix_balance(A, permute=False, separate=True)[1][0]
+    return A * d[None, :] / d[:, None], B / d[:, None]
+
+
+def _pbh_fails(A: np.ndarray, B: np.ndarray, discrete: bool) -> list[complex]:
+    """Unstable or marginal eigenvalues λ of A at which [A − λI, B] loses rank (PBH), each
+    tested on its own scale on the balanced pair (module docstring, Checks). Returns one λ per
+    failing cluster, its real and imaginary parts below the cluster radius set to 0, one of
+    each conjugate pair.
+    """
+    A, B = _balanced(A, B)
+    n, scale = A.shape[0], max(1.0, _norm1(A))
+    radius = _SQRT_EPS * scale
+    T, Z = scipy.linalg.schur(A.conj().T, output="complex")
+    lam = np.conj(np.diag(T))
     if discrete:
-        bad = np.abs(lam) >= 1.0 - _SQRT_EPS
+        marginal = np.abs(lam) >= 1.0 - _SQRT_EPS
     else:
-        bad = lam.real >= -_SQRT_EPS * scale
-    lam = lam[bad]
-    lam = lam[lam.imag >= -_SQRT_EPS * scale]
-    # merge clusters (a defective eigenvalue, e.g. a rigid mode, comes out as a close pair)
+        marginal = (lam.real >= -_SQRT_EPS * np.abs(lam)) | (np.abs(lam) <= radius)
+    marginal &= lam.imag >= -radius
+    nb = np.linalg.norm(B, 2)
     out: list[complex] = []
-    for lm in sorted(lam, key=lambda z: (z.real, z.imag)):
-        if out and abs(lm - out[-1]) <= _SQRT_EPS * scale:
+    tested = np.zeros(n, dtype=bool)
+    for i in np.flatnonzero(marginal):
+        if tested[i]:
             continue
-        out.append(lm)
-    return np.array([z.real if abs(z.imag) <= _SQRT_EPS * scale else z for z in out])
-
-
-def _pbh_fails(A: np.ndarray, B: np.ndarray, lam: np.ndarray) -> list[complex]:
-    """Eigenvalues λ at which [A − λI, β B] loses rank (β scales ‖βB‖₁ to ‖A‖₁)."""
-    n = A.shape[0]
-    s = max(_norm1(A), 1.0)
-    nb = _norm1(B)
-    Bs = B * (s / nb) if nb > 0 else B
-    out = []
-    for lm in lam:
-        lm = complex(lm)
-        lm = lm.real if lm.imag == 0 else lm  # real arithmetic for a real λ
-        M = np.hstack([A - lm * np.eye(n), Bs])
-        sigma = np.linalg.svd(M, compute_uv=False)
-        if sigma[n - 1] <= _SQRT_EPS * s:
-            out.append(lm)
+        cluster = np.abs(lam - lam[i]) <= radius
+        tested |= cluster
+        lc = complex(np.mean(lam[cluster]))
+        re, im = (0.0 if abs(x) <= radius else x for x in (lc.real, lc.imag))
+        lc = complex(re, im) if im else re
+        if nb == 0:
+            out.append(lc)
+            continue
+        Ts, Zs, *_, info = scipy.linalg.lapack.ztrsen(cluster.astype(np.int32), T, Z, job="N")
+        if info != 0:
+            raise np.linalg.LinAlgError(f"ztrsen: reordering the Schur form failed (info {info})")
+        k = int(cluster.sum())
+        W, M = Zs[:, :k], Ts[:k, :k].conj().T
+        s_lam = max(np.linalg.norm(M, 2), np.finfo(float).eps ** 0.25 * scale)
+        P = np.hstack([(M - lc * np.eye(k)) / s_lam, W.conj().T @ B / nb])
+        if np.linalg.svd(P, compute_uv=False)[k - 1] <= _SQRT_EPS:
+            out.append(lc)
     return out
 
 
@@ -218,7 +256,7 @@ def uncontrollable_modes(A, B, discrete: bool = False) -> list[complex]:
     """
     A = check_square(A, "A")
     B = check_matrix(B, "B", A.shape[0], None, f"(n, m) with n = {A.shape[0]}")
-    return _pbh_fails(A, B, _candidates(A, discrete))
+    return _pbh_fails(A, B, discrete)
 
 
 def _fmt(modes) -> str:
@@ -288,12 +326,12 @@ def _riccati(A, B, Q, R, N, discrete: bool, labels: dict, kind: str,
         At = A - B @ RiN
     else:
         N, Qt, At = None, Q, A
-    bad = _pbh_fails(A, B, _candidates(A, discrete))
+    bad = _pbh_fails(A, B, discrete)
     if bad:
         raise ValueError(labels["stabilizable"].format(_fmt(bad)))
     lam_q = np.linalg.eigvalsh(Qt)
     definite = lam_q.min() > _SQRT_EPS * max(lam_q.max(), np.finfo(float).tiny)
-    bad = [] if definite else _pbh_fails(At.T, Qt, _candidates(At, discrete))
+    bad = [] if definite else _pbh_fails(At.T, Qt, discrete)
     if bad:
         raise ValueError(labels["detectable"].format(_fmt(bad)))
 
@@ -319,9 +357,15 @@ def _riccati(A, B, Q, R, N, discrete: bool, labels: dict, kind: str,
         raise ValueError(f"{labels['A']}: the Riccati solution does not stabilize the closed loop "
                          f"(max {'|λ|' if discrete else 'Re λ'} = "
                          f"{np.max(np.abs(E)) if discrete else np.max(E.real):.3g})")
-    level = logging.WARNING if rel > RESIDUAL_WARN else logging.DEBUG
-    log.log(level, "%s: n=%d m=%d relative Riccati residual %.3e (rel. to ||Q|| %.3e)",
-            kind, n, m, rel, rel_q)
+    log.debug("%s: n=%d m=%d relative Riccati residual %.3e (rel. to ||Q|| %.3e)",
+              kind, n, m, rel, rel_q)
+    if not rel <= RESIDUAL_TOL:
+        norms = ", ".join(f"‖{labels[k]}‖ = {np.linalg.norm(v):.3g}"
+                          for k, v in (("A", A), ("B", B), ("Q", Q), ("R", R)))
+        raise ValueError(
+            f"{labels['A']}: the Riccati solution is inaccurate: its relative residual {rel:.3g} "
+            f"exceeds √ε = {RESIDUAL_TOL:.2g} (the data are too badly scaled for the solver: "
+            f"{norms}; rescale the states, inputs or time unit)")
     return RiccatiSolution(K, S, E, rel, rel_q, absolute, kind)
 
 
@@ -350,8 +394,8 @@ def lqr(A, B, Q, R, N=None) -> RiccatiSolution:
     ------
     ValueError
         Bad shapes, non-finite entries, Q not symmetric PSD, R not symmetric PD, joint weight
-        indefinite, (A, B) not stabilizable, the weighted pair not detectable, or no
-        stabilizing solution.
+        indefinite, (A, B) not stabilizable, the weighted pair not detectable, no
+        stabilizing solution, or a relative residual above ``RESIDUAL_TOL`` (module docstring).
     """
     return _riccati(A, B, Q, R, N, False, _LQR_LABELS, "lqr")
 

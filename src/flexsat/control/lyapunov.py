@@ -26,9 +26,9 @@ from flexsat.validation import require_finite, require_nonneg
 
 def check_lyapunov_gains(g1, g2, g3, n_appendages: int = 4):
     """Validate the global-stability conditions g1 >= 0, g2 >= 0, g3 > −n (Att. 3 Eq. 11)."""
-    g1 = require_nonneg(g1, "g1")
-    g2 = require_nonneg(g2, "g2")
-    g3 = require_finite(g3, "g3")
+    g1 = require_nonneg(g1, "g1", "N*m/rad")
+    g2 = require_nonneg(g2, "g2", "N*m*s/rad")
+    g3 = require_finite(g3, "g3", "")
     if np.any(g3 <= -n_appendages):
         raise ValueError(
             f"g3: must be > -{n_appendages} (= -n_appendages) for the Lyapunov function to be "
@@ -44,11 +44,12 @@ class LyapunovRegulator(Controller):
     ----------
     g1 : N m/rad;  g2 : N m s/rad;  g3 : dimensionless gain on l0 S0 − M0.
     target : final angle θ_f, rad.
+    Each a number in these SI units, a pint Quantity or a unit string (converted).
     """
 
     def __init__(self, g1, g2, g3=0.0, target=0.0, n_appendages: int = 4):
         self.g1, self.g2, self.g3 = check_lyapunov_gains(g1, g2, g3, n_appendages)
-        self.target = require_finite(target, "target")
+        self.target = require_finite(target, "target", "rad")
 
     def _batched(self):
         return [np.shape(a) for a in (self.g1, self.g2, self.g3, self.target)]
@@ -78,7 +79,8 @@ class LyapunovTracker(Controller):
     def __init__(self, reference, g1, g2, g3=0.0, appendage_inertia=0.0, n_appendages: int = 4):
         self.reference = reference
         self.g1, self.g2, self.g3 = check_lyapunov_gains(g1, g2, g3, n_appendages)
-        self.appendage_inertia = require_nonneg(appendage_inertia, "appendage_inertia")
+        self.appendage_inertia = require_nonneg(appendage_inertia, "appendage_inertia",
+                                                "kg*m**2")
         self.target = np.asarray(reference.theta0 + reference.angle, float)
 
     def _batched(self):

@@ -19,9 +19,10 @@ class PD(Controller):
 
     Parameters
     ----------
-    kp, kd : float or array
-        Position gain (N m/rad) and rate gain (N m s/rad), >= 0.
-    target : float or array
+    kp, kd : float, array, str or pint.Quantity
+        Position gain (N m/rad) and rate gain (N m s/rad), >= 0; a number is in these SI
+        units, a Quantity or a string such as ``"3000 ozf*in/rad"`` is converted.
+    target : float, array, str or pint.Quantity
         Final angle, rad, when no reference is given (a step command, seed 001 Eq. 20).
     reference : TorqueShape, optional
         Shaped reference to track (seed 001 Eq. 29); its torque is fed forward when
@@ -29,23 +30,24 @@ class PD(Controller):
     """
 
     def __init__(self, kp, kd, target=0.0, reference=None, feedforward: bool = True):
-        self.kp = require_nonneg(kp, "kp")
-        self.kd = require_nonneg(kd, "kd")
+        self.kp = require_nonneg(kp, "kp", "N*m/rad")
+        self.kd = require_nonneg(kd, "kd", "N*m*s/rad")
         self.reference = reference
         self.feedforward = bool(feedforward)
         if reference is not None:
             target = reference.theta0 + reference.angle
-        self.target = require_finite(target, "target")
+        self.target = require_finite(target, "target", "rad")
 
     @classmethod
     def from_rigid_poles(cls, inertia, natural_frequency, damping_ratio, **kwargs) -> "PD":
         """Gains placing the rigid closed-loop poles at ω_n, ζ (seed 001 Eqs. 20-24).
 
-        ``natural_frequency`` is in rad/s.
+        ``inertia`` in kg m², ``natural_frequency`` in rad/s (``"0.06 Hz"`` converts with its
+        2π), ``damping_ratio`` dimensionless; each a number in SI, a Quantity or a unit string.
         """
-        inertia = require_positive(inertia, "inertia")
-        wn = require_positive(natural_frequency, "natural_frequency")
-        zeta = require_nonneg(damping_ratio, "damping_ratio")
+        inertia = require_positive(inertia, "inertia", "kg*m**2")
+        wn = require_positive(natural_frequency, "natural_frequency", "rad/s")
+        zeta = require_nonneg(damping_ratio, "damping_ratio", "")
         return cls(inertia * wn**2, 2 * zeta * wn * inertia, **kwargs)
 
     def _batched(self):

@@ -39,7 +39,8 @@ import numpy as np
 from flexsat import limits
 from flexsat.dynamics.hybrid import HybridPlant
 from flexsat.structures.beam import TipMassCantilever
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.validation import (require_count, require_finite, require_nonneg, require_positive,
+                                set_si)
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,9 @@ class HubAppendageParams:
         Rotary inertia J of the tip body about its own centre, kg m².
     damping : float or sequence of float
         Modal damping ratios of the cantilever modes (one value for all, or one per mode).
+
+    Each physical field also takes a pint Quantity or a unit string (``length="36 in"``) and is
+    stored in SI.
     """
 
     hub_inertia: float
@@ -79,15 +83,16 @@ class HubAppendageParams:
     damping: float | tuple[float, ...] = 0.0
 
     def __post_init__(self):
-        for name in ("hub_inertia", "length", "EI", "rho"):
-            require_positive(getattr(self, name), name)
-        for name in ("hub_radius", "tip_mass", "tip_inertia"):
-            require_nonneg(getattr(self, name), name)
+        for name, unit in (("hub_inertia", "kg*m**2"), ("length", "m"), ("EI", "N*m**2"),
+                           ("rho", "kg/m")):
+            set_si(self, name, require_positive, unit)
+        for name, unit in (("hub_radius", "m"), ("tip_mass", "kg"), ("tip_inertia", "kg*m**2")):
+            set_si(self, name, require_nonneg, unit)
         require_count(self.n_appendages, "n_appendages")
-        zeta = np.atleast_1d(np.asarray(self.damping, dtype=float))
-        require_finite(zeta, "damping")
+        zeta = require_finite(self.damping, "damping", "")
         if np.any(zeta < 0):
             raise ValueError(f"damping: modal damping ratios must be >= 0, got {self.damping!r}")
+        object.__setattr__(self, "damping", float(zeta) if zeta.ndim == 0 else tuple(zeta.tolist()))
 
     @property
     def tip_radius(self) -> float:

@@ -66,8 +66,14 @@ from flexsat.identify.structural import (
 from flexsat.structures.fem import FEModes
 from flexsat.structures.modal_model import ModalModel
 
-__all__ = ["CameraRig", "CampaignConfig", "CampaignResult", "TestRecords", "identify_and_update",
-           "run_campaign", "simulate_records"]
+__all__ = ["CameraRig", "CampaignConfig", "CampaignResult", "IDENTIFY_STEPS", "SIMULATE_STEPS",
+           "TestRecords", "identify_and_update", "run_campaign", "simulate_records"]
+
+#: the steps :func:`simulate_records` and :func:`identify_and_update` announce to their
+#: ``progress`` callback, in order (a progress bar's length)
+SIMULATE_STEPS = ("hammer test", "camera calibration and video test", "reaction-wheel test")
+IDENTIFY_STEPS = ("hammer test: ERA", "video test: ERA", "reaction-wheel test: FRF and OKID",
+                  "model update")
 
 #: model-update methods: Att. 6 (free and forced response together) or Att. 7 (frequencies, then
 #: damping from the eigenvalue real parts)
@@ -400,13 +406,15 @@ def _true_modes(case, cfg: CampaignConfig):
                              _truth_damping(cfg, modes.omegas.size))
 
 
-def simulate_records(case, cfg: CampaignConfig) -> TestRecords:
+def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
     """Run the hammer, video and reaction-wheel tests on the true structure (module docstring).
 
     The truth is the case as built, with ``cfg.truth_damping``; the strain and accelerometer
     channels have anti-aliasing filters and noise; the hammer's force is recorded as the
     one-sample blow it is; the video test is calibrated and triangulated as in Att. 6.
+    ``progress(label)``, if given, is called as each of :data:`SIMULATE_STEPS` starts.
     """
+    say = progress or (lambda label: None)
     if cfg.rig is None or not cfg.targets or not cfg.strain_gauges or not cfg.wheel_nodes:
         raise ValueError("rig: simulating the tests needs a camera rig, targets, strain gauges "
                          "and reaction wheels")
@@ -415,6 +423,7 @@ def simulate_records(case, cfg: CampaignConfig) -> TestRecords:
     gauges = [Channel("strain", int(b), ax, node_a=int(a)) for a, b, ax in cfg.strain_gauges]
     accels = [Channel("acceleration", int(n), d) for n, d in cfg.accelerometers]
     blow = _blow(cfg.hammer_node, cfg.hammer_direction, cfg.hammer_impulse, cfg.sample_rate)
+    say(SIMULATE_STEPS[0])
     hammer = simulate_test(truth, blow, gauges + accels, cfg.hammer_duration, cfg.sample_rate,
                            noise=cfg.noise, seed=int(rng.integers(2**31)),
                            anti_alias=cfg.anti_alias * cfg.sample_rate)
@@ -427,11 +436,13 @@ def simulate_records(case, cfg: CampaignConfig) -> TestRecords:
 
     coords = {int(n): xyz for n, xyz in zip(asm.node_ids, asm.coordinates)}
     points0 = np.array([coords[int(n)] for n in cfg.targets], float)
+    say(SIMULATE_STEPS[1])
     calib, calib_summary = _calibrate_rig(cfg, cfg.rig, points0, rng)
     video, tri = _video_test(cfg, truth, cfg.rig, points0, calib, rng)
 
     wheels = [random_force(int(n), ax, cfg.wheel_torque_rms, load="torque")
               for n, ax in zip(cfg.wheel_nodes, cfg.wheel_axes)]
+    say(SIMULATE_STEPS[2])
     wheel_test = simulate_test(truth, wheels, gauges, cfg.wheel_duration, cfg.wheel_sample_rate,
                                noise=cfg.noise, seed=int(rng.integers(2**31)),
                                anti_alias=cfg.anti_alias * cfg.wheel_sample_rate)
@@ -445,11 +456,11 @@ def simulate_records(case, cfg: CampaignConfig) -> TestRecords:
     return TestRecords(hammer, wheel_test, video, calib_summary, tri)
 
 
-def run_campaign(case, cfg: CampaignConfig) -> CampaignResult:
+def run_campaign(case, cfg: CampaignConfig, progress=None) -> CampaignResult:
     """Test the true structure (:func:`simulate_records`), identify it and update the a-priori
-    model (:func:`identify_and_update`), with the truth in the tables."""
-    return identify_and_update(case, cfg, simulate_records(case, cfg),
-                               truth=_true_modes(case, cfg)[1])
+    model (:func:`identify_and_update`), with the truth in the tables; ``progress`` as there."""
+    return identify_and_update(case, cfg, simulate_records(case, cfg, progress),
+                               truth=_true_modes(case, cfg)[1], progress=progress)
 
 
 def _nearest(f_list, targets_hz, tolerance=0.05):
@@ -462,8 +473,8 @@ def _nearest(f_list, targets_hz, tolerance=0.05):
     return out
 
 
-def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=None
-                        ) -> CampaignResult:
+def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=None,
+                        progress=None) -> CampaignResult:
     """Identify the recorded tests and update the a-priori model (module docstring, 1-4).
 
     Parameters
@@ -483,11 +494,14 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
         Channels, nodes and sample rates come from the records.
     truth : ModalModel, optional
         The true structure of a simulation, for the ``true_*`` columns (None: measured data).
+    progress : callable, optional
+        ``progress(label)`` is called as each of :data:`IDENTIFY_STEPS` starts.
 
     Returns
     -------
     CampaignResult
     """
+    say = progress or (lambda label: None)
     rng = np.random.default_rng([cfg.seed, 1])
     names = tuple(case.substructures)
 
@@ -506,6 +520,7 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
     zeta0 = cfg.a_priori_damping * w0[0] / w0                 # Att. 6 Eq. 15: C = 2 z1 w1 M
 
     # --- 1. hammer test: ERA on RMS-normalised channels (units differ; eigenvalues unchanged) --
+    say(IDENTIFY_STEPS[0])
     hammer = records.hammer
     scale = np.sqrt(np.mean(hammer.outputs**2, axis=1))
     Y = markov_parameters(hammer) / scale[None, :, None]
@@ -522,6 +537,7 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
     z_std = hammer_real.damping_std[sel]
 
     # --- 2. video test: ERA shapes at the targets ----------------------------------------------
+    say(IDENTIFY_STEPS[1])
     video_shapes, video_f, video_index, rows = np.zeros((0, 0)), np.zeros(0), np.zeros(0, int), []
     video_real = None
     if records.video is not None:
@@ -545,6 +561,7 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
             hammer_index = _pair(f_meas, w0 / (2 * np.pi))
 
     # --- 3. reaction-wheel test: H1 FRFs and OKID -----------------------------------------------
+    say(IDENTIFY_STEPS[2])
     wheel_test = records.wheels
     gauges, inputs = list(wheel_test.output_channels), list(wheel_test.input_channels)
     estimate = estimate_frf(wheel_test, cfg.frf_segment)
@@ -556,6 +573,7 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
     osel = _select(okid_real, cfg.band)
 
     # --- 4. update ------------------------------------------------------------------------------
+    say(IDENTIFY_STEPS[3])
     true_gains = np.asarray(cfg.wheel_torque_constants, float)
     fit_gains = bool(true_gains.size) or cfg.identify_torque_constants
     if true_gains.size and true_gains.size != len(inputs):

@@ -769,12 +769,14 @@ class DampingIdentification:
     predicted_real_parts : (m,) first-order ``-(1/2) phi^T C(r) phi`` of the measured modes.
     eigenvalues : (m,) complex eigenvalues of the identified damped model (exact state-space
         solve, for checking the first-order theory).
+    mode_indices : (m,) model mode paired with each measured eigenvalue.
     """
 
     r: np.ndarray
     covariance: np.ndarray
     predicted_real_parts: np.ndarray
     eigenvalues: np.ndarray
+    mode_indices: np.ndarray
 
 
 def damped_eigenvalues(K, M, C, n_modes=None) -> np.ndarray:
@@ -800,9 +802,16 @@ def identify_damping(model: SubstructureModel, measured_eigenvalues, p=None, q=N
     Parameters
     ----------
     model : SubstructureModel with ``C_blocks``.
-    measured_eigenvalues : (m,) complex (``sigma + i w``) or real parts only (sigma < 0).
+    measured_eigenvalues : (m,) complex (``sigma + i w``, ``w != 0``) or real parts only
+        (sigma < 0). Complex eigenvalues, in any order, are paired with the model modes by
+        natural frequency ``|lambda|``: each with the nearest elastic model mode in
+        ``|ln(|lambda| / w_model)|``, which must be at most half as far as the second nearest
+        (else the pairing is ambiguous: an error), one eigenvalue per mode. Real parts carry
+        no frequency and are paired in order with ``mode_indices``.
     p, q : undamped scalings (e.g. from :func:`identify_undamped`).
-    mode_indices : model modes of the measured eigenvalues (default: the lowest m).
+    mode_indices : model modes of the measured eigenvalues, in their order (default: matched by
+        frequency, or the lowest m for real parts); refused when the frequencies clearly
+        contradict it.
     fixed : damping blocks held at ``r0`` (default 1).
     """
     R = model.n_damping
@@ -828,9 +837,22 @@ def identify_damping(model: SubstructureModel, measured_eigenvalues, p=None, q=N
         raise ValueError(f"measured_eigenvalues: {m} eigenvalues for {free.size} damping "
                          "parameters: more parameters than data (Att. 7 needs m > R)")
     w0, phi = model.modes(p, q)
-    idx = np.arange(m) if mode_indices is None else np.asarray(mode_indices, int)
-    if idx.size != m or idx.max() >= phi.shape[1]:
-        raise ValueError("mode_indices: must give one model mode per measured eigenvalue")
+    if mode_indices is not None:
+        idx = np.asarray(mode_indices, int).ravel()
+        if idx.size != m or idx.min() < 0 or idx.max() >= phi.shape[1]:
+            raise ValueError("mode_indices: must give one model mode per measured eigenvalue")
+        if np.unique(idx).size != m:
+            raise ValueError("mode_indices: each model mode at most once")
+    if np.all(lam.imag == 0):  # real parts carry no frequency: paired in order
+        idx = np.arange(m) if mode_indices is None else idx
+        if idx.max() >= phi.shape[1]:
+            raise ValueError("mode_indices: must give one model mode per measured eigenvalue")
+    elif np.any(lam.imag == 0):
+        raise ValueError("measured_eigenvalues: give every eigenvalue as sigma + i w with w != 0 "
+                         "(matched to the model frequencies) or every one as its real part "
+                         "sigma (paired in order)")
+    else:
+        idx = _match_modes(w0, np.abs(lam), None if mode_indices is None else idx)
     phi = phi[:, idx]
     Cfix = model.C(r) - sum((r[g] * model.C_blocks[g] for g in free), np.zeros_like(model.C0))
     A = np.array([[phi[:, i] @ model.C_blocks[g] @ phi[:, i] for g in free] for i in range(m)])
@@ -844,7 +866,57 @@ def identify_damping(model: SubstructureModel, measured_eigenvalues, p=None, q=N
     eig = damped_eigenvalues(model.K(p), model.M(q), C)
     # pair exact eigenvalues with the undamped modes by frequency
     eig = eig[[int(np.argmin(np.abs(eig.imag - w0[i]))) for i in idx]]
-    return DampingIdentification(r, cov, predicted, eig)
+    return DampingIdentification(r, cov, predicted, eig, idx)
+
+
+def _match_modes(w_model, w_meas, mode_indices=None) -> np.ndarray:
+    """Model mode of each measured natural frequency ``|lambda|`` (rad/s).
+
+    Distances are ``|ln(w_meas / w_model)|`` (relative: spectra span decades) to the elastic
+    model modes. A measured frequency is matched when its nearest model mode is at most half as
+    far as the second nearest; otherwise it lies near the middle between two model modes and
+    the pairing is ambiguous (the model may lack the measured mode). Each model mode takes at
+    most one measured eigenvalue. Given ``mode_indices`` are used as the pairing, refused only
+    where a clear match contradicts them (eigenvalues listed in another order).
+    """
+    elastic = np.flatnonzero(w_model > 0)
+    if elastic.size == 0:
+        raise ValueError("measured_eigenvalues: the model has no elastic mode to match them to")
+    d = np.abs(np.log(w_meas[:, None] / w_model[None, elastic]))
+    order = np.argsort(d, axis=1)
+    near = elastic[order[:, 0]]
+    rows = np.arange(w_meas.size)
+    d1 = d[rows, order[:, 0]]
+    d2 = d[rows, order[:, 1]] if elastic.size > 1 else np.full(w_meas.size, np.inf)
+    clear = d1 <= 0.5 * d2
+    if mode_indices is not None:
+        wrong = np.flatnonzero(clear & (near != mode_indices))
+        if wrong.size:
+            i = wrong[0]
+            raise ValueError(
+                f"mode_indices: measured_eigenvalues[{i}] (natural frequency {w_meas[i]:.6g} "
+                f"rad/s) is nearest model mode {near[i]} ({w_model[near[i]]:.6g} rad/s) but "
+                f"mode_indices pairs it with mode {mode_indices[i]} "
+                f"({w_model[mode_indices[i]]:.6g} rad/s): list the eigenvalues in the order of "
+                "mode_indices")
+        return np.asarray(mode_indices, int)
+    unclear = np.flatnonzero(~clear)
+    if unclear.size:
+        i = unclear[0]
+        a, b = sorted(elastic[order[i, :2]])
+        raise ValueError(
+            f"measured_eigenvalues[{i}]: natural frequency {w_meas[i]:.6g} rad/s has no clearly "
+            f"nearest model mode (modes {a} at {w_model[a]:.6g} and {b} at {w_model[b]:.6g} "
+            "rad/s are comparably close): the model may lack this mode; give mode_indices")
+    k, count = np.unique(near, return_counts=True)
+    if np.any(count > 1):
+        k = k[count > 1][0]
+        i, j = np.flatnonzero(near == k)[:2]
+        raise ValueError(
+            f"measured_eigenvalues[{i}] and [{j}] are both nearest model mode {k} "
+            f"({w_model[k]:.6g} rad/s): one measured eigenvalue per model mode; the model "
+            "may lack a mode, give mode_indices")
+    return near
 
 
 # ------------------------------------------------------------------------------------------------

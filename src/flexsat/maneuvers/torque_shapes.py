@@ -8,7 +8,8 @@ on the first half and mirrored: ``theta(t) = theta0 + angle - [theta(T - t) - th
 
 Parameters are scalars or arrays that broadcast against each other and against ``t`` (a batch of
 cases is a leading axis of shape ``(ncase,)``; a scalar ``t`` then gives ``(ncase,)`` outputs).
-SI units throughout: rad, kg m^2, N m, s.
+SI units throughout: rad, kg m^2, N m, s; a parameter may also be a pint Quantity or a unit string
+(``angle="40 deg"``, ``inertia="2128 ozf*in*s**2"``), converted to SI.
 
 Sources
 -------
@@ -24,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexsat.units import to_si_array
 from flexsat.validation import require_finite, require_positive
 
 __all__ = ["BangBang", "PseudoSquare", "Reference", "Sinusoidal", "SmoothBangBang", "TorqueShape"]
@@ -148,16 +150,19 @@ class TorqueShape(ABC):
         For ``t < 0`` the body rests at ``theta0``; for ``t >= T`` it rests at ``theta0 + angle``
         with ``u = 0`` exactly.  The second half is the mirror image of the first.  Outside
         ``[0, T)`` the clipped time gives ``tau = 0`` where both integrals vanish exactly, so only
-        the torque needs masking (bang-bang has ``f(0) = 1``).
+        the torque needs masking (bang-bang has ``f(0) = 1``).  The second half is the closed
+        interval ``[T/2, T)``: at ``t = T/2`` bang-bang already gives ``-u_max`` (the smooth
+        shapes give 0 there either way), so a zero-order hold sampled with ``T/2`` on a sample
+        applies each sign for the same number of samples and the net impulse is zero.
 
         Returns
         -------
         Reference
         """
-        t = np.asarray(t, dtype=float)
+        t = to_si_array(t, "s", "t")
         T = self.duration
         tc = np.clip(t, 0.0, T)
-        late = tc > 0.5 * T
+        late = tc >= 0.5 * T
         f, F1, F2 = self._half(np.where(late, T - tc, tc))
         sgn = np.sign(self.angle)
         k = sgn * self.u_max / self.inertia
@@ -168,10 +173,11 @@ class TorqueShape(ABC):
 
 
 def _slew(angle, inertia, theta0):
-    angle = require_finite(angle, "angle")
+    angle = require_finite(angle, "angle", "rad")
     if np.any(angle == 0):
         raise ValueError("angle: must be nonzero (a rest-to-rest slew of 0 rad has no torque shape)")
-    return angle, require_positive(inertia, "inertia"), require_finite(theta0, "theta0")
+    return (angle, require_positive(inertia, "inertia", "kg*m**2"),
+            require_finite(theta0, "theta0", "rad"))
 
 
 class BangBang(TorqueShape):
@@ -195,10 +201,10 @@ class BangBang(TorqueShape):
         _exactly(1, u_max=u_max, duration=duration)
         m = inertia * np.abs(angle)
         if duration is None:
-            u_max = require_positive(u_max, "u_max")
+            u_max = require_positive(u_max, "u_max", "N*m")
             duration = np.sqrt(4 * m / u_max)
         else:
-            duration = require_positive(duration, "duration")
+            duration = require_positive(duration, "duration", "s")
             u_max = 4 * m / duration**2
         super().__init__(angle=angle, inertia=inertia, u_max=u_max, duration=duration,
                          theta0=theta0)
@@ -238,21 +244,23 @@ class SmoothBangBang(TorqueShape):
         _exactly(2, u_max=u_max, duration=duration, alpha=alpha)
         m = inertia * np.abs(angle)
         if alpha is None:
-            u_max, duration = require_positive(u_max, "u_max"), require_positive(duration, "duration")
+            u_max = require_positive(u_max, "u_max", "N*m")
+            duration = require_positive(duration, "duration", "s")
             # alpha^2/10 - alpha/2 + 1/4 = q; the other root exceeds 5/2
             alpha = (5 - np.sqrt(15 + 40 * m / (u_max * duration**2))) / 2
             why = ("alpha solved from (u_max, duration) must lie in [0, 1/4]: duration must be "
                    "between the bang-bang time sqrt(4 I |angle| / u_max) and the alpha = 1/4 time "
                    "sqrt(I |angle| / (0.13125 u_max))")
         else:
-            alpha = require_finite(alpha, "alpha")
+            alpha = require_finite(alpha, "alpha", "")
             why = "alpha = rise time / duration must lie in [0, 1/4]; alpha = 1/4 leaves no plateau"
         alpha = _quarter_ratio("alpha", alpha, why)
         c = 0.25 - alpha / 2 + alpha**2 / 10
         if duration is None:
-            duration = np.sqrt(m / (require_positive(u_max, "u_max") * c))
+            u_max = require_positive(u_max, "u_max", "N*m")
+            duration = np.sqrt(m / (u_max * c))
         elif u_max is None:
-            duration = require_positive(duration, "duration")
+            duration = require_positive(duration, "duration", "s")
             u_max = m / (c * duration**2)
         super().__init__(angle=angle, inertia=inertia, u_max=u_max, duration=duration,
                          theta0=theta0, alpha=alpha)
@@ -295,16 +303,18 @@ class PseudoSquare(TorqueShape):
         why = ("rise_time must satisfy 0 < rise_time <= duration/4 so the quarter-sine rise and "
                "reversal do not overlap (rise_time = duration/4 is the pure sinusoid)")
         if rise_time is None:
-            u_max, duration = require_positive(u_max, "u_max"), require_positive(duration, "duration")
+            u_max = require_positive(u_max, "u_max", "N*m")
+            duration = require_positive(duration, "duration", "s")
             rise_time = (duration**2 / 4 - m / u_max) / (duration * _C_SINE)
             why += ("; with u_max and duration given, I |angle| / u_max must lie in "
                     "[duration^2 / (2 pi), duration^2 / 4)")
         else:
-            rise_time = require_finite(rise_time, "rise_time")
+            rise_time = require_finite(rise_time, "rise_time", "s")
             if duration is None:
-                s = m / require_positive(u_max, "u_max")
-                duration = 2 * (rise_time * _C_SINE + np.sqrt((rise_time * _C_SINE) ** 2 + s))
-        duration = require_positive(duration, "duration")
+                u_max = require_positive(u_max, "u_max", "N*m")
+                duration = 2 * (rise_time * _C_SINE + np.sqrt((rise_time * _C_SINE) ** 2
+                                                              + m / u_max))
+        duration = require_positive(duration, "duration", "s")
         rise_time = duration * _quarter_ratio("rise_time", rise_time / duration, why, True,
                                                  "rise_time/duration")
         if u_max is None:
@@ -340,10 +350,10 @@ class Sinusoidal(TorqueShape):
         _exactly(1, u_max=u_max, duration=duration)
         m = 2 * np.pi * inertia * np.abs(angle)
         if duration is None:
-            u_max = require_positive(u_max, "u_max")
+            u_max = require_positive(u_max, "u_max", "N*m")
             duration = np.sqrt(m / u_max)
         else:
-            duration = require_positive(duration, "duration")
+            duration = require_positive(duration, "duration", "s")
             u_max = m / duration**2
         super().__init__(angle=angle, inertia=inertia, u_max=u_max, duration=duration,
                          theta0=theta0)

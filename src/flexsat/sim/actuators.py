@@ -6,7 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.validation import require_positive
+from flexsat.units import to_si_array
+from flexsat.validation import require_positive, set_si
 
 
 @dataclass(frozen=True)
@@ -15,8 +16,9 @@ class TorqueActuator:
 
     Parameters
     ----------
-    saturation : float
-        Largest torque magnitude the drive can command, N m (TAMU: 400 oz-in).
+    saturation : float, str or pint.Quantity
+        Largest torque magnitude the drive can command, N m (TAMU: ``"400 ozf*in"``); inf for
+        no limit.
     torque_constant_ratio : float
         Actual over nominal motor torque constant; the controller converts its torque command to
         a current with the nominal constant (TAMU: 52.77 oz-in/A), so a mis-known constant
@@ -27,9 +29,12 @@ class TorqueActuator:
     torque_constant_ratio: float = 1.0
 
     def __post_init__(self):
-        if not self.saturation > 0:  # inf (no limit) is allowed, NaN and <= 0 are not
+        saturation = to_si_array(self.saturation, "N*m", "saturation")
+        if not np.all(saturation > 0):  # inf (no limit) is allowed, NaN and <= 0 are not
             raise ValueError(f"saturation: must be > 0 (inf for none), got {self.saturation!r}")
-        require_positive(self.torque_constant_ratio, "torque_constant_ratio")
+        object.__setattr__(self, "saturation", float(saturation) if saturation.ndim == 0
+                           else saturation)
+        set_si(self, "torque_constant_ratio", require_positive, "")
 
     def __call__(self, command: np.ndarray) -> np.ndarray:
         return self.torque_constant_ratio * np.clip(command, -self.saturation, self.saturation)

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.validation import require_finite, require_nonneg, require_positive
+from flexsat.validation import require_finite, require_nonneg, require_positive, set_si
 
 
 @dataclass(frozen=True)
@@ -22,6 +22,8 @@ class BearingFriction:
     coulomb : float   c1, N m
     viscous : float   c2, N m s/rad
     smoothing : float ε, rad/s
+
+    Each a number in SI, a pint Quantity or a unit string (``"20 ozf*in"``), stored in SI.
     """
 
     coulomb: float = 0.0
@@ -29,9 +31,9 @@ class BearingFriction:
     smoothing: float = 1e-3
 
     def __post_init__(self):
-        require_nonneg(self.coulomb, "coulomb")
-        require_nonneg(self.viscous, "viscous")
-        require_positive(self.smoothing, "smoothing")
+        set_si(self, "coulomb", require_nonneg, "N*m")
+        set_si(self, "viscous", require_nonneg, "N*m*s/rad")
+        set_si(self, "smoothing", require_positive, "rad/s")
 
     @property
     def active(self) -> bool:
@@ -43,17 +45,19 @@ class BearingFriction:
 
 @dataclass(frozen=True)
 class RandomTorque:
-    """Zero-mean Gaussian torque, held over each control period, 1σ = ``std`` N m."""
+    """Zero-mean Gaussian torque, held over each control period, 1σ = ``std`` N m (a number in
+    SI, a pint Quantity or a unit string)."""
 
     std: float = 0.0
 
     def __post_init__(self):
-        require_nonneg(self.std, "std")
+        set_si(self, "std", require_nonneg, "N*m")
 
 
 @dataclass(frozen=True)
 class Impulses:
-    """Angular impulses (N m s) hitting the hub at given times (s).
+    """Angular impulses (N m s) hitting the hub at given times (s); each sequence may also be a
+    pint Quantity array or a list of unit strings, stored in SI.
 
     Each is applied as an instantaneous momentum change at the first control sample at or after
     its time (timing error below one control period).
@@ -63,12 +67,14 @@ class Impulses:
     impulses: tuple[float, ...] = ()
 
     def __post_init__(self):
-        if len(self.times) != len(self.impulses):
+        times = np.atleast_1d(require_nonneg(self.times, "impulses.times", "s"))
+        impulses = np.atleast_1d(require_finite(self.impulses, "impulses.impulses", "N*m*s"))
+        if times.shape != impulses.shape or times.ndim != 1:
             raise ValueError(
-                f"impulses: {len(self.impulses)} values for {len(self.times)} times; give one each"
+                f"impulses: {impulses.size} values for {times.size} times; give one each"
             )
-        require_nonneg(np.asarray(self.times, float), "impulses.times")
-        require_finite(np.asarray(self.impulses, float), "impulses.impulses")
+        object.__setattr__(self, "times", tuple(times.tolist()))
+        object.__setattr__(self, "impulses", tuple(impulses.tolist()))
 
     def at_samples(self, n_steps: int, dt: float) -> dict[int, float]:
         """Impulse per control-sample index."""

@@ -21,7 +21,7 @@ from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
 from flexsat.sim.integrators import ExponentialStepper
 from flexsat.sim.metrics import METRIC_UNITS, maneuver_metrics
 from flexsat.sim.sensors import Sensors, SensorState
-from flexsat.validation import require_count, require_finite, require_positive
+from flexsat.validation import require_count, require_finite, require_positive, set_si
 
 N_NOISE_CHANNELS = 3  # gyro, strain gauge, random torque — fixed so streams never shift
 
@@ -39,6 +39,9 @@ class SimConfig:
                                  raised where friction needs it (:func:`stable_substeps`)
     settling_band : float        |θ − θ_f| band for the settling time, rad
     seed : int                   base seed; case i uses seed + i unless seeds are given
+
+    ``duration``, ``control_rate`` and ``settling_band`` take a number in SI, a pint Quantity or
+    a unit string (``"15 s"``, ``"75 Hz"``, ``"0.5 deg"``) and are stored in SI.
     """
 
     duration: float
@@ -53,9 +56,9 @@ class SimConfig:
     seed: int = 0
 
     def __post_init__(self):
-        require_positive(self.duration, "duration")
-        require_positive(self.control_rate, "control_rate")
-        require_positive(self.settling_band, "settling_band")
+        set_si(self, "duration", require_positive, "s")
+        set_si(self, "control_rate", require_positive, "Hz")
+        set_si(self, "settling_band", require_positive, "rad")
         require_count(self.substeps, "substeps")
         if not limits.is_integral(self.seed) or not 0 <= self.seed <= limits.MAX_SEED:
             raise ValueError(f"seed: must be an integer in [0, {limits.MAX_SEED}], got "
@@ -267,7 +270,7 @@ def simulate(
     ref = controller.reference
     if theta0 is None:
         theta0 = ref.theta0 if ref is not None else 0.0
-    theta0 = np.broadcast_to(require_finite(theta0, "theta0"), (nc,)).copy()
+    theta0 = np.broadcast_to(require_finite(theta0, "theta0", "rad"), (nc,)).copy()
 
     A, Bu, Bf = plant.state_space
     friction = config.friction

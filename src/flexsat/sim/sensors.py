@@ -8,7 +8,7 @@ from typing import Literal
 
 import numpy as np
 
-from flexsat.validation import require_nonneg
+from flexsat.validation import require_nonneg, set_si
 
 
 def least_squares_derivative_weights(window: int, order: int, dt: float) -> np.ndarray:
@@ -43,6 +43,9 @@ class Sensors:
         Gyro white noise, 1σ rad/s per sample.
     strain_noise : float
         Noise on the measured l0 S0 − M0, 1σ N m per sample.
+
+    The physical fields take a number in SI, a pint Quantity or a unit string
+    (``encoder_resolution="0.01 deg"``), and are stored in SI.
     """
 
     encoder_resolution: float = 0.0
@@ -53,9 +56,9 @@ class Sensors:
     strain_noise: float = 0.0
 
     def __post_init__(self):
-        require_nonneg(self.encoder_resolution, "encoder_resolution")
-        require_nonneg(self.gyro_noise, "gyro_noise")
-        require_nonneg(self.strain_noise, "strain_noise")
+        set_si(self, "encoder_resolution", require_nonneg, "rad")
+        set_si(self, "gyro_noise", require_nonneg, "rad/s")
+        set_si(self, "strain_noise", require_nonneg, "N*m")
         if self.rate not in ("ideal", "ls_filter", "gyro"):
             raise ValueError(f"rate: must be 'ideal', 'ls_filter' or 'gyro', got {self.rate!r}")
         least_squares_derivative_weights(self.rate_window, self.rate_order, 1.0)

@@ -61,6 +61,7 @@ import numpy as np
 from scipy.sparse import issparse
 from scipy.sparse.linalg import norm as sparse_norm
 
+from flexsat.publish import write_netcdf
 from flexsat.validation import require_count, require_finite, require_nonneg
 
 __all__ = [
@@ -553,7 +554,7 @@ class ModalModel:
         block so that each variable has one unit. Attributes: ``flexsat_modal_model_version``,
         ``boundary``.
         """
-        _to_dataset(self).to_netcdf(Path(path), engine="h5netcdf", encoding=_NO_FILL)
+        write_netcdf(_to_dataset(self), path, encoding=_NO_FILL)
 
     @classmethod
     def load(cls, path) -> ModalModel:
