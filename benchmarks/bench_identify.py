@@ -58,8 +58,8 @@ def calibration_case(n_targets=50):
 def campaign_case():
     from pathlib import Path
 
-    from flexsat.identification_scenario import run_identification
-    from flexsat.scenario import load_scenario
+    from flexsat.scenarios import run_identification
+    from flexsat.scenarios import load_scenario
 
     spec = load_scenario(Path(__file__).resolve().parents[1] / "examples"
                          / "tamu_grid_identification.yaml")

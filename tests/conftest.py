@@ -45,7 +45,7 @@ def _recorded_scenario(tmp_path):
     the scenario file, and a scenario with ``records`` pointing at them."""
     from flexsat.cases.tamu_grid import tamu_grid
     from flexsat.identify.campaign import simulate_records
-    from flexsat.scenario import load_scenario
+    from flexsat.scenarios import load_scenario
 
     sim = load_scenario(yaml.safe_dump(_identification_example(fast=True)))
     records = simulate_records(tamu_grid(motor_mass="0.5 kg"), sim.config())

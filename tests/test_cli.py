@@ -11,7 +11,7 @@ import yaml
 from typer.testing import CliRunner
 
 from flexsat.cli import app, parse_settings, parse_value
-from flexsat.scenario import default_scenario
+from flexsat.scenarios import default_scenario
 from flexsat.units import to_si
 
 runner = CliRunner()

@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SRC = Path(flexsat.__file__).resolve().parent
 #: what `--help` and `cases` must not load: the numerical stack that made them take 2.5 s
 HEAVY = ("numpy", "scipy", "matplotlib", "xarray", "pint", "control", "h5py", "flexsat.cases",
-         "flexsat.sim", "flexsat.scenario", "flexsat.checks")
+         "flexsat.sim", "flexsat.scenarios", "flexsat.checks")
 
 
 def _python(*args: str, code: str | None = None) -> subprocess.CompletedProcess:

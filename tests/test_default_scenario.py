@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import yaml
 
-from flexsat.scenario import DEFAULT_SCENARIO, load_scenario, run_scenario
+from flexsat.scenarios import DEFAULT_SCENARIO, load_scenario, run_scenario
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexsat.scenario import load_scenario, prepare_scenario, run_scenario
+from flexsat.scenarios import load_scenario, prepare_scenario, run_scenario
 
 EXAMPLE = Path(__file__).parents[1] / "examples" / "nps_pd_slews.yaml"
 
@@ -72,7 +72,7 @@ def test_every_lqg_slew_reaches_30_degrees(lqg_plan):
 
 
 def test_lqg_section_is_required_by_the_law_and_only_by_it():
-    from flexsat.scenario import ScenarioError
+    from flexsat.scenarios import ScenarioError
 
     text = LQG_EXAMPLE.read_text().replace("law: lqg\n    lqg:", "law: pd\n    lqg:", 1)
     with pytest.raises(ScenarioError, match=r"lqg: required by law 'lqg' and only for it"):

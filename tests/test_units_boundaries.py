@@ -223,7 +223,7 @@ def test_case_inputs_convert_quantities_and_refuse_them_where_no_unit_fits():
     assert params.damping == (0.01, 0.02)
 
 
-# -- scenario files (flexsat.scenario.quantity goes through flexsat.units.to_si) -------------------
+# -- scenario files (flexsat.scenarios.quantity goes through flexsat.units.to_si) -------------------
 def test_scenario_refuses_a_dimensionless_unit_where_a_dimension_is_due():
     assert "simulation.duration: incompatible units (degree given, s expected)" in problems_of(
         lambda d: d["simulation"].update(duration="15 deg"))

@@ -213,20 +213,22 @@ def run(
 ) -> None:
     """Run a scenario and write its report (metrics or identification tables, netCDF, plots,
     HTML)."""
-    from flexsat.publish import check_output_folder
+    from flexsat.report.publish import check_output_folder
 
     try:  # before any work: a report that cannot be written is known in a second
         check_output_folder(out)
     except OSError as exc:
         _fail(f"--out: {exc}")
-    from flexsat.identification_report import write_identification_report
-    from flexsat.identification_scenario import (
+    from flexsat.report import write_identification_report, write_report
+    from flexsat.scenarios import (
         IdentificationScenario,
+        ScenarioError,
+        default_scenario,
         identification_steps,
+        load_scenario,
         run_identification,
+        run_scenario,
     )
-    from flexsat.report import write_report
-    from flexsat.scenario import ScenarioError, default_scenario, load_scenario, run_scenario
     from flexsat.sim import SimulationDiverged
 
     try:
@@ -284,7 +286,7 @@ def _progress(steps: int):
 
 
 def _identification_table(result) -> Table:
-    from flexsat.identification_scenario import summary_table
+    from flexsat.scenarios import summary_table
 
     columns, rows = summary_table(result)
     table = Table(title="identified modes")

@@ -5,7 +5,7 @@ the field, the limit and why it exists, instead of hanging, running out of memor
 overflowing. The limits are sized for a workstation (a few GB of memory, one core): a run at
 the limit finishes in minutes. They are module constants so that a user with a bigger machine
 can raise them deliberately (``flexsat.limits.MAX_SAMPLES = ...``): the checks of a run read
-them at call time (the scenario schema's bounds on counts when flexsat.scenario is imported).
+them at call time (the scenario schema's bounds on counts when flexsat.scenarios is imported).
 """
 
 from __future__ import annotations

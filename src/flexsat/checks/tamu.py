@@ -42,7 +42,7 @@ def _experiment() -> dict:
 
     import yaml
 
-    from flexsat.scenario import DEFAULT_SCENARIO, load_scenario, run_scenario
+    from flexsat.scenarios import DEFAULT_SCENARIO, load_scenario, run_scenario
 
     data = yaml.safe_load(resources.files("flexsat.cases").joinpath(DEFAULT_SCENARIO).read_text())
     data["runs"].append({"label": "Law I, g2 = 0", "law": "lyapunov_regulator",

@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.publish import write_atomically, write_netcdf
-from flexsat.scenario import ScenarioResult
+from flexsat.report.publish import write_atomically, write_netcdf
+from flexsat.scenarios.maneuver import ScenarioResult
 
 
 @dataclass(frozen=True)
@@ -130,7 +130,7 @@ def _write_all(result: ScenarioResult, folder: Path) -> None:
 
 def write_report(result: ScenarioResult, out_dir) -> Path:
     """Write the report of ``result`` as the folder ``out_dir``, whole or not at all
-    (:func:`flexsat.publish.write_atomically`).
+    (:func:`flexsat.report.publish.write_atomically`).
 
     Parameters
     ----------
@@ -146,7 +146,7 @@ def write_report(result: ScenarioResult, out_dir) -> Path:
 
     Raises
     ------
-    flexsat.publish.OutputError
+    flexsat.report.publish.OutputError
         When the folder cannot be written (disk full, read-only, ...); ``out_dir`` is unchanged.
     """
     return write_atomically(out_dir, lambda folder: _write_all(result, folder))

@@ -3,13 +3,13 @@
 import pytest
 import yaml
 
-from flexsat.identification_scenario import (
+from flexsat.scenarios.identification import (
     SUMMARY_COLUMNS,
     IdentificationScenario,
     run_identification,
     summary_table,
 )
-from flexsat.scenario import ScenarioError, load_scenario
+from flexsat.scenarios import ScenarioError, load_scenario
 
 def test_example_loads_with_si_values(identification_example):
     s = load_scenario(yaml.safe_dump(identification_example()))
@@ -97,7 +97,7 @@ def test_recorded_tests_from_universal_files(tmp_path, recorded_scenario):
 def test_recorded_tests_without_video(tmp_path, recorded_scenario):
     """The video record is optional: modes are then paired by frequency and the report says
     there are no measured shapes."""
-    from flexsat.identification_report import write_identification_report
+    from flexsat.report import write_identification_report
 
     path = recorded_scenario(tmp_path)
     data = yaml.safe_load(path.read_text())

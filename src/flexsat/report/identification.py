@@ -25,9 +25,9 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from flexsat.identification_scenario import IdentificationResult, as_dict
-from flexsat.publish import write_atomically, write_netcdf
-from flexsat.report import STYLE
+from flexsat.scenarios.identification import IdentificationResult, as_dict
+from flexsat.report.publish import write_atomically, write_netcdf
+from flexsat.report.maneuver import STYLE
 from flexsat.text import format_optional
 
 __all__ = ["FIGURES", "dataset", "write_identification_report"]
@@ -247,5 +247,5 @@ def _write_all(result: IdentificationResult, folder: Path) -> None:
 
 def write_identification_report(result: IdentificationResult, out_dir) -> Path:
     """Write the report as the folder ``out_dir``, whole or not at all (an earlier report there
-    is replaced; see :func:`flexsat.publish.write_atomically`)."""
+    is replaced; see :func:`flexsat.report.publish.write_atomically`)."""
     return write_atomically(out_dir, lambda folder: _write_all(result, folder))

@@ -1,4 +1,4 @@
-"""Report of an identification scenario (flexsat.identification_report)."""
+"""Report of an identification scenario (flexsat.report.identification)."""
 
 import json
 
@@ -7,11 +7,11 @@ import pytest
 import xarray as xr
 import yaml
 
-import flexsat.identification_report as rep
-from flexsat.identification_report import FIGURES, dataset, write_identification_report
-from flexsat.identification_scenario import run_identification
-from flexsat.publish import MANIFEST
-from flexsat.scenario import load_scenario
+import flexsat.report.identification as rep
+from flexsat.report.identification import FIGURES, dataset, write_identification_report
+from flexsat.scenarios import run_identification
+from flexsat.report import MANIFEST
+from flexsat.scenarios import load_scenario
 
 
 @pytest.fixture(scope="module")

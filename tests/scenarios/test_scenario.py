@@ -1,4 +1,4 @@
-"""Scenario schema, units and validation messages (flexsat.scenario)."""
+"""Scenario schema, units and validation messages (flexsat.scenarios)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import yaml
 
-import flexsat.scenario as scenario_module
-from flexsat.scenario import (
+import flexsat.scenarios.maneuver as scenario_module
+from flexsat.scenarios import (
     ScenarioError,
     default_scenario,
     load_scenario,
@@ -20,7 +20,7 @@ from flexsat.scenario import (
 from flexsat.units import to_si
 
 OZ_IN = to_si("1 ozf*in", "N*m")
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "tamu_40deg.yaml"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "tamu_40deg.yaml"
 
 
 def small_data() -> dict:

@@ -13,7 +13,7 @@ import yaml
 from typer.testing import CliRunner
 
 from flexsat.cli import app
-from flexsat.scenario import (
+from flexsat.scenarios import (
     ScenarioError,
     default_scenario,
     load_scenario,
@@ -201,7 +201,7 @@ def test_case_without_a_maneuver_model_is_refused_at_load():
 
 # -- identification scenarios ---------------------------------------------------------------------
 IDENTIFICATION = yaml.safe_load(
-    (Path(__file__).resolve().parents[1] / "examples" / "tamu_grid_identification.yaml")
+    (Path(__file__).resolve().parents[2] / "examples" / "tamu_grid_identification.yaml")
     .read_text())
 
 

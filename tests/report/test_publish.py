@@ -1,4 +1,4 @@
-"""Publishing a report folder whole or not at all (flexsat.publish).
+"""Publishing a report folder whole or not at all (flexsat.report.publish).
 
 The claim under test: whatever fails or is killed while a report is written, the output folder
 holds the complete previous report or the complete new one, and nothing of a failed attempt stays
@@ -24,8 +24,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-import flexsat.publish as publish
-from flexsat.publish import (
+import flexsat.report.publish as publish
+from flexsat.report.publish import (
     MANIFEST,
     OutputError,
     check_output_folder,
@@ -34,7 +34,7 @@ from flexsat.publish import (
 )
 
 NAMES = ("metrics.json", "results.nc", "plot.png", "index.html")
-SRC = str(Path(publish.__file__).resolve().parents[1])
+SRC = str(Path(publish.__file__).resolve().parents[2])
 
 
 def writer(tag: str):
@@ -204,7 +204,7 @@ def test_without_locks_publishing_stays_whole_and_stale_folders_are_kept(old_rep
 KILLED_WRITER = """
 import os, sys, time
 from pathlib import Path
-from flexsat.publish import write_atomically
+from flexsat.report.publish import write_atomically
 
 def write(folder):
     (folder / "results.nc").write_bytes(b"truncated")
@@ -281,7 +281,7 @@ def test_second_writer_gives_up_after_the_timeout_with_a_message(tmp_path, paren
 def test_second_writer_waits_for_the_first(tmp_path, parent_locked, caplog):
     release = threading.Timer(0.3, fcntl.flock, [parent_locked, fcntl.LOCK_UN])
     release.start()
-    with caplog.at_level(logging.WARNING, logger="flexsat.publish"):
+    with caplog.at_level(logging.WARNING, logger="flexsat.report.publish"):
         write_atomically(tmp_path / "report", writer("new"), timeout=10)
     assert "waiting up to 10 s for another flexsat run" in caplog.text
     assert contents(tmp_path / "report") == complete("new")

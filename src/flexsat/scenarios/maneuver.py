@@ -776,7 +776,7 @@ def load_scenario(source: str | bytes | Path):
     """Parse and validate a scenario (stage 1: YAML, schema, units, section rules).
 
     ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: identification`` an
-    :class:`flexsat.identification_scenario.IdentificationScenario`.
+    :class:`flexsat.scenarios.identification.IdentificationScenario`.
 
     Parameters
     ----------
@@ -794,7 +794,7 @@ def load_scenario(source: str | bytes | Path):
         raise ScenarioError(["scenario: must be a YAML mapping (name, case, simulation, runs, ...)"])
     kind = data.get("kind", "maneuver")
     if kind == "identification":
-        from flexsat.identification_scenario import IdentificationScenario as model
+        from flexsat.scenarios.identification import IdentificationScenario as model
     elif kind == "maneuver":
         model = Scenario
     else:

@@ -28,7 +28,7 @@ then left out)::
     records: {hammer: data/hammer.uff, wheels: data/wheels.uff, video: data/video.uff}
     identification: {torque_constants: true}      # identify the wheels' torque constants too
 
-Quantities follow :mod:`flexsat.scenario` (unit strings or SI numbers); problems are reported
+Quantities follow :mod:`flexsat.scenarios.maneuver` (unit strings or SI numbers); problems are reported
 as ``field.path: rule`` before anything runs.
 """
 
@@ -53,7 +53,7 @@ from flexsat.identify.campaign import (
     run_campaign,
 )
 from flexsat.identify.measurements import Measurement
-from flexsat.scenario import ScenarioError, _Document, _head, _locate, _Section, count, quantity
+from flexsat.scenarios.maneuver import ScenarioError, _Document, _head, _locate, _Section, count, quantity
 from flexsat.text import format_optional
 from flexsat.units import to_si
 

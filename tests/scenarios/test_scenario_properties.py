@@ -20,11 +20,11 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from flexsat.identification_scenario import IdentificationScenario
-from flexsat.scenario import ScenarioError, default_scenario, load_scenario, run_scenario
+from flexsat.scenarios import IdentificationScenario
+from flexsat.scenarios import ScenarioError, default_scenario, load_scenario, run_scenario
 from flexsat.sim import SimulationDiverged
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 #: seconds one document may take from text to outcome (load, prepare and, when short, the run);
 #: the slowest valid one (an NPS LQG design) takes ~0.4 s here
@@ -144,7 +144,7 @@ def _outcome(document) -> str:
         scenario = load_scenario(document)
         if isinstance(scenario, IdentificationScenario):
             return "valid"  # its stage 2 runs the campaign (minutes): load only
-        from flexsat.scenario import prepare_scenario
+        from flexsat.scenarios import prepare_scenario
 
         plan = prepare_scenario(scenario)
         work = plan.config.n_steps * len(plan.controllers) * plan.config.substeps

@@ -1,4 +1,4 @@
-"""Report files of a scenario run (flexsat.report)."""
+"""Report files of a scenario run (flexsat.report.maneuver)."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import pytest
 import xarray as xr
 import yaml
 
-import flexsat.report as report
-from flexsat.publish import MANIFEST, OutputError, write_atomically
+import flexsat.report.maneuver as report
+from flexsat.report import MANIFEST, OutputError, write_atomically
 from flexsat.report import PLOTS, format_metric, metric_rows, write_report
-from flexsat.scenario import default_scenario, load_scenario, run_scenario
+from flexsat.scenarios import default_scenario, load_scenario, run_scenario
 
 METRICS = {"run", "settling_time_s", "overshoot_deg", "peak_torque_Nm", "residual_energy_J",
            "residual_energy_at_T_J", "peak_tip_deflection_m", "peak_rate_error_deg_s"}
