@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import yaml
 
-import flexsat.scenarios.maneuver as scenario_module
+import flexsat.scenarios.runner as scenario_module
 from flexsat.scenarios import (
     ScenarioError,
     default_scenario,

@@ -26,7 +26,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from flexsat.report.publish import write_atomically, write_netcdf
-from flexsat.scenarios.maneuver import ScenarioResult
+from flexsat.scenarios.runner import ScenarioResult
 
 
 @dataclass(frozen=True)

@@ -6,6 +6,13 @@ tests a structure, identifies it and updates its model. :func:`load_scenario` re
 problems are reported as ``field.path: rule`` lines of one :class:`ScenarioError`, before
 anything runs.
 
+Modules: :mod:`~flexsat.scenarios.errors` (the error and its field-path messages),
+:mod:`~flexsat.scenarios.fields` (quantities, counts and base models shared by every kind),
+:mod:`~flexsat.scenarios.documents` (reading a document and dispatching on its ``kind``),
+:mod:`~flexsat.scenarios.maneuver` (the maneuver schema), :mod:`~flexsat.scenarios.laws` (its
+control laws), :mod:`~flexsat.scenarios.runner` (preparing and running a maneuver scenario) and
+:mod:`~flexsat.scenarios.identification`.
+
 The names below are imported from their modules on first use, so ``load_scenario`` does not load
 the identification stack until a scenario of that kind is read.
 """
@@ -13,18 +20,18 @@ the identification stack until a scenario of that kind is read.
 from flexsat.lazy import lazy_exports
 
 _EXPORTS = {
-    "DEFAULT_SCENARIO": "maneuver",
+    "ScenarioError": "errors",
+    "count": "fields",
+    "quantity": "fields",
+    "DEFAULT_SCENARIO": "documents",
+    "default_scenario": "documents",
+    "load_scenario": "documents",
     "Scenario": "maneuver",
-    "ScenarioError": "maneuver",
-    "ScenarioPlan": "maneuver",
-    "ScenarioResult": "maneuver",
-    "count": "maneuver",
-    "default_scenario": "maneuver",
-    "load_scenario": "maneuver",
     "maneuver_cases": "maneuver",
-    "prepare_scenario": "maneuver",
-    "quantity": "maneuver",
-    "run_scenario": "maneuver",
+    "ScenarioPlan": "runner",
+    "ScenarioResult": "runner",
+    "prepare_scenario": "runner",
+    "run_scenario": "runner",
     "IdentificationResult": "identification",
     "IdentificationScenario": "identification",
     "identification_steps": "identification",

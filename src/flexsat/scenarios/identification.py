@@ -28,8 +28,8 @@ then left out)::
     records: {hammer: data/hammer.uff, wheels: data/wheels.uff, video: data/video.uff}
     identification: {torque_constants: true}      # identify the wheels' torque constants too
 
-Quantities follow :mod:`flexsat.scenarios.maneuver` (unit strings or SI numbers); problems are reported
-as ``field.path: rule`` before anything runs.
+Quantities follow :mod:`flexsat.scenarios.fields` (unit strings or SI numbers); problems are
+reported as ``field.path: rule`` before anything runs.
 """
 
 from __future__ import annotations
@@ -53,7 +53,8 @@ from flexsat.identify.campaign import (
     run_campaign,
 )
 from flexsat.identify.measurements import Measurement
-from flexsat.scenarios.maneuver import ScenarioError, _Document, _head, _locate, _Section, count, quantity
+from flexsat.scenarios.errors import ScenarioError, _head, _locate
+from flexsat.scenarios.fields import _Document, _Section, count, quantity
 from flexsat.text import format_optional
 from flexsat.units import to_si
 

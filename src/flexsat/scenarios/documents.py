@@ -1,0 +1,182 @@
+"""Reading a scenario document: the text (a file or a string, UTF-8, bounded in size), the YAML
+(bounded nesting and value count, no duplicate keys or recursive aliases), then the schema of its
+``kind`` (:func:`load_scenario`)."""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+import yaml
+from pydantic import ValidationError
+
+from flexsat import limits
+from flexsat.scenarios.errors import ScenarioError, _problem
+from flexsat.scenarios.maneuver import Scenario
+
+DEFAULT_SCENARIO = "tamu_default.yaml"  # package data of flexsat.cases
+
+
+def _file_of(source) -> Path | None:
+    """The file a source names: a Path, or a one-line string that ends in ``.yaml``/``.yml`` or
+    names an existing file; None for the text itself."""
+    if isinstance(source, Path):
+        return source
+    if not isinstance(source, str) or "\n" in source:
+        return None
+    try:
+        return Path(source) if source.endswith((".yaml", ".yml")) or Path(source).is_file() \
+            else None
+    except (OSError, ValueError):  # too long or otherwise impossible as a file name: text
+        return None
+
+
+def _read(source: str | bytes | Path) -> str:
+    """Scenario text from a file (:func:`_file_of`) or as given (bytes are decoded as UTF-8);
+    at most :data:`flexsat.limits.MAX_DOCUMENT_BYTES`."""
+    name = "scenario: the document"
+    if _file_of(source) is not None:
+        name = f"scenario: {str(source)!r}"
+        try:
+            with open(source, "rb") as file:
+                source = file.read(limits.MAX_DOCUMENT_BYTES + 1)
+        except OSError as exc:
+            raise ScenarioError([f"scenario: cannot read {str(source)!r} ({exc.strerror})"]
+                                ) from None
+    if isinstance(source, bytes):
+        try:
+            source = source.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            if len(source) <= limits.MAX_DOCUMENT_BYTES:
+                raise ScenarioError([f"{name} is not UTF-8 text (byte 0x{source[exc.start]:02x} "
+                                     f"at offset {exc.start}); save it as UTF-8"]) from None
+    if len(source) > limits.MAX_DOCUMENT_BYTES:
+        raise ScenarioError([f"{name} is larger than {limits.MAX_DOCUMENT_BYTES:,} bytes "
+                             "(flexsat.limits.MAX_DOCUMENT_BYTES); a scenario is a few kB"])
+    return source
+
+
+class _Loader(yaml.SafeLoader):
+    """YAML's safe loader, refusing as it composes nesting deeper than
+    :data:`flexsat.limits.MAX_NESTING` (PyYAML recurses once per level) and more than
+    :data:`flexsat.limits.MAX_DOCUMENT_NODES` values."""
+
+    def __init__(self, stream):
+        super().__init__(stream)
+        self._depth = self._nodes = 0
+
+    def compose_node(self, parent, index):
+        self._depth += 1
+        self._nodes += 1
+        try:
+            line = self.peek_event().start_mark.line + 1
+            if self._depth > limits.MAX_NESTING:
+                raise ScenarioError([f"scenario: nested deeper than {limits.MAX_NESTING} levels "
+                                     f"at line {line} (flexsat.limits.MAX_NESTING)"])
+            if self._nodes > limits.MAX_DOCUMENT_NODES:
+                raise ScenarioError([f"scenario: more than {limits.MAX_DOCUMENT_NODES:,} values "
+                                     f"(at line {line}; flexsat.limits.MAX_DOCUMENT_NODES)"])
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
+
+
+_MERGE = "tag:yaml.org,2002:merge"
+
+
+def _check_nodes(node, path: str, loader: _Loader, sizes: dict, open_: set) -> int:
+    """Number of values under ``node`` with aliases expanded; refuses duplicate keys (the last
+    would silently win), recursive aliases and more than MAX_DOCUMENT_NODES values."""
+    if id(node) in sizes:
+        return sizes[id(node)]
+    if id(node) in open_:
+        raise ScenarioError([f"{path or 'scenario'}: an alias refers to the value that "
+                             "contains it (recursive anchor)"])
+    open_.add(id(node))
+    size = 1
+    if isinstance(node, yaml.MappingNode):
+        lines: dict = {}
+        for key_node, value_node in node.value:
+            key = loader.construct_object(key_node) if isinstance(key_node, yaml.ScalarNode) \
+                and key_node.tag != _MERGE else None
+            here = f"{path}.{key}" if path else str(key)
+            line = key_node.start_mark.line + 1
+            if key is not None and key in lines:
+                raise ScenarioError([f"{here}: duplicate key (lines {lines[key]} and {line}); "
+                                     "give it once"])
+            if key is not None:
+                lines[key] = line
+            size += (_check_nodes(key_node, here, loader, sizes, open_)
+                     + _check_nodes(value_node, here, loader, sizes, open_))
+    elif isinstance(node, yaml.SequenceNode):
+        size += sum(_check_nodes(item, f"{path}[{i}]", loader, sizes, open_)
+                    for i, item in enumerate(node.value))
+    open_.discard(id(node))
+    if size > limits.MAX_DOCUMENT_NODES:
+        raise ScenarioError([f"{path or 'scenario'}: more than {limits.MAX_DOCUMENT_NODES:,} "
+                             "values once aliases are expanded (flexsat.limits."
+                             "MAX_DOCUMENT_NODES)"])
+    sizes[id(node)] = size
+    return size
+
+
+def _parse(text: str):
+    """The YAML document, checked for nesting, duplicate keys and expanded size first."""
+    loader = None
+    try:
+        loader = _Loader(text)  # its reader refuses non-printable characters
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        _check_nodes(node, "", loader, {}, set())
+        return loader.construct_document(node)
+    except yaml.YAMLError as exc:
+        raise ScenarioError([f"yaml: {exc}"]) from None
+    finally:
+        if loader is not None:
+            loader.dispose()
+
+
+def load_scenario(source: str | bytes | Path):
+    """Parse and validate a scenario (stage 1: YAML, schema, units, section rules).
+
+    ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: identification`` an
+    :class:`flexsat.scenarios.identification.IdentificationScenario`.
+
+    Parameters
+    ----------
+    source : str, bytes or Path
+        A path to a YAML file, or the YAML text itself (bytes: UTF-8).
+
+    Raises
+    ------
+    ScenarioError
+        Listing every problem found, each as ``field.path: rule``.
+    """
+    text = _read(source)
+    data = _parse(text)
+    if not isinstance(data, dict):
+        raise ScenarioError(["scenario: must be a YAML mapping (name, case, simulation, runs, ...)"])
+    kind = data.get("kind", "maneuver")
+    if kind == "identification":
+        from flexsat.scenarios.identification import IdentificationScenario as model
+    elif kind == "maneuver":
+        model = Scenario
+    else:
+        raise ScenarioError([f"kind: must be 'maneuver' or 'identification', got {kind!r}"])
+    try:
+        scenario = model.model_validate(data)
+    except ValidationError as exc:
+        raise ScenarioError([_problem(e, data, model) for e in exc.errors()]) from None
+    scenario._source = text
+    if _file_of(source) is not None:
+        scenario._folder = Path(source).resolve().parent
+    return scenario
+
+
+def default_scenario() -> Scenario:
+    """The embedded default: the TAMU 40 deg slew, Law I against Law II (``flexsat run``)."""
+    return load_scenario(resources.files("flexsat.cases").joinpath(DEFAULT_SCENARIO).read_text())
+
+
+__all__ = ["DEFAULT_SCENARIO", "default_scenario", "load_scenario"]

@@ -1,0 +1,120 @@
+"""Schema building blocks shared by every scenario kind: quantities with units, bounded
+counts and the base models (unknown keys are errors; a document remembers its text and folder;
+a buildable section checks its runtime object's own rules)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any, Callable
+
+import yaml
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    PrivateAttr,
+    ValidationInfo,
+    model_validator,
+)
+
+from flexsat.limits import is_integral
+from flexsat.units import to_si
+
+
+# -- quantities --------------------------------------------------------------------------------
+def _converter(unit: str) -> Callable:
+    """Before-validator converting a quantity to SI (None passes through for optional fields)."""
+
+    def convert(value, info: ValidationInfo):
+        if value is None:
+            return None
+        field = info.field_name
+        if isinstance(value, bool):
+            raise ValueError(f"{field}: expected a number or a quantity such as '1 {unit}'")
+        return to_si(value, unit, field)
+
+    return convert
+
+
+def quantity(unit: str, optional: bool = False):
+    """Field type of a quantity in ``unit``, stored as its SI float.
+
+    Parameters
+    ----------
+    unit : str
+        Expected unit; a bare number is taken in it, ``""`` is dimensionless.
+    optional : bool
+        Accept ``None`` (the key left out).
+    """
+    return Annotated[float | None if optional else float, BeforeValidator(_converter(unit))]
+
+
+def count(minimum: int = 1, maximum: int | None = None, optional: bool = False):
+    """Field type of an integer in [minimum, maximum]; a float with an integral value (``1e3``)
+    is accepted, bools and fractions are not.
+
+    Parameters
+    ----------
+    minimum, maximum : int
+        Inclusive bounds (``maximum`` None: no upper bound).
+    optional : bool
+        Accept ``None`` (the key left out).
+    """
+    rule = f"an integer in [{minimum}, {maximum}]" if maximum is not None else \
+        f"an integer >= {minimum}"
+
+    def check(value, info: ValidationInfo):
+        if value is None and optional:
+            return None
+        if not is_integral(value) or value < minimum or (maximum is not None and value > maximum):
+            raise ValueError(f"{info.field_name}: must be {rule}, got {value!r}")
+        return int(value)
+
+    return Annotated[int | None if optional else int, BeforeValidator(check)]
+
+
+def _given(section: BaseModel, exclude=()) -> dict[str, Any]:
+    """The fields of ``section`` that were set (not None), as keyword arguments."""
+    return section.model_dump(exclude_none=True, exclude=set(exclude))
+
+
+# -- schema ------------------------------------------------------------------------------------
+class _Section(BaseModel):
+    """Base of every schema model: unknown keys are errors."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
+class _Document(_Section):
+    """A whole scenario file: remembers the text it was loaded from."""
+
+    _source: str | None = PrivateAttr(default=None)
+    _folder: Path | None = PrivateAttr(default=None)
+
+    @property
+    def folder(self) -> Path:
+        """The folder of the scenario file (relative paths in it start there), else the
+        working directory."""
+        return self._folder if self._folder is not None else Path.cwd()
+
+    @property
+    def yaml_text(self) -> str:
+        """The scenario as YAML: the text it was loaded from, else a dump (SI numbers)."""
+        if self._source is not None:
+            return self._source
+        return yaml.safe_dump(self.model_dump(exclude_none=True), sort_keys=False)
+
+
+class _Buildable(_Section):
+    """A section that maps onto a runtime object; building it checks the runtime's own rules."""
+
+    def build(self):
+        raise NotImplementedError
+
+    @model_validator(mode="after")
+    def _buildable(self):
+        self.build()
+        return self
+
+
+__all__ = ["count", "quantity"]
