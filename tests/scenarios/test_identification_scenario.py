@@ -123,3 +123,29 @@ def test_recorded_scenario_errors(tmp_path, identification_example):
     data.pop("records")
     with pytest.raises(ScenarioError, match="sensors: required to simulate the tests"):
         load_scenario(yaml.safe_dump(data))
+
+
+@pytest.mark.parametrize("section, values, expected", [
+    ("wheels", {"duration": "1e9 s"}, "wheels.duration: samples (duration × sample_rate) = 5e+10, "
+                                      "above the limit 2,000,000 (flexsat.limits); shorten the "
+                                      "test or lower the sample rate"),
+    ("hammer", {"sample_rate": "-200 Hz"}, "hammer.sample_rate: must be > 0, got -200"),
+    ("video", {"field_rate": "1e12 Hz"}, "video.duration: samples (duration × field_rate) = "
+                                         "4.5e+12, above the limit 2,000,000"),
+    ("identification", {"bootstrap_samples": 1e9}, "identification.bootstrap_samples: must be an "
+                                                   "integer in [0, 1000], got 1000000000.0"),
+])
+def test_identification_tests_beyond_the_limits_are_refused_at_load(section, values, expected,
+                                                                    identification_example):
+    data = identification_example()
+    data[section].update(values)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(yaml.safe_dump(data))
+    assert len(info.value.problems) == 1 and info.value.problems[0].startswith(expected)
+
+
+def test_identification_seed_is_bounded(identification_example):
+    data = dict(identification_example(), seed=1e29)
+    with pytest.raises(ScenarioError, match=r"seed: must be an integer in \[0, 4294967295\], got "
+                                            r"1e\+29"):
+        load_scenario(yaml.safe_dump(data))

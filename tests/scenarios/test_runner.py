@@ -1,17 +1,18 @@
-"""Claims: every malformed scenario file and every run beyond flexsat.limits ends in one clear
-ScenarioError naming the field, before anything runs; a diverging run exits 1 and writes
-nothing."""
+"""Preparing and running a maneuver scenario (flexsat.scenarios.runner): the case, the
+controllers and the configuration are built, and every problem they raise (case parameters,
+gains, a run beyond flexsat.limits) ends in one ScenarioError naming the field, before anything
+runs; a diverging run is named and exits 1, writing nothing."""
 
 from __future__ import annotations
 
-import copy
 import time
-from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 from typer.testing import CliRunner
 
+import flexsat.scenarios.runner as scenario_module
 from flexsat.cli import app
 from flexsat.scenarios import (
     ScenarioError,
@@ -34,14 +35,27 @@ def small_data() -> dict:
     return data
 
 
-def problem(source) -> str:
-    """The one problem line of the ScenarioError that loading and preparing ``source`` raises
-    (a dict is dumped to YAML first)."""
+def error_of(source) -> ScenarioError:
+    """The ScenarioError that loading and preparing ``source`` raises (a dict is dumped to YAML
+    first)."""
     text = yaml.safe_dump(source) if isinstance(source, dict) else source
     with pytest.raises(ScenarioError) as info:
         prepare_scenario(load_scenario(text))
-    assert len(info.value.problems) == 1, info.value.problems
-    return info.value.problems[0]
+    return info.value
+
+
+def problem(source) -> str:
+    """The one problem line of :func:`error_of` ``source``."""
+    error = error_of(source)
+    assert len(error.problems) == 1, error.problems
+    return error.problems[0]
+
+
+def problems_of(mutate) -> str:
+    """The ScenarioError message of the small scenario changed by ``mutate(data)``."""
+    data = small_data()
+    mutate(data)
+    return str(error_of(data))
 
 
 def changed(section: str, **values) -> dict:
@@ -50,7 +64,83 @@ def changed(section: str, **values) -> dict:
     return data
 
 
-# -- item 3: numbers with bounds -------------------------------------------------------------------
+# -- building the case and the controllers ---------------------------------------------------------
+def test_prepare_builds_model_config_and_controllers():
+    plan = prepare_scenario(load_scenario(yaml.safe_dump(small_data())))
+    assert plan.model.n_modes == 3
+    assert list(plan.controllers) == ["Law I", "Law II"]
+    assert plan.controllers["Law II"].reference.alpha == pytest.approx(0.2)
+
+
+def test_pd_poles_are_cyclic_and_use_the_reference_inertia():
+    data = small_data()
+    data["runs"].append({"label": "PD", "law": "pd",
+                         "poles": {"natural_frequency": "0.06 Hz", "damping_ratio": 0.9},
+                         "reference": {"shape": "sinusoidal", "duration": "10 s"}})
+    plan = prepare_scenario(load_scenario(yaml.safe_dump(data)))
+    pd = plan.controllers["PD"]
+    wn = 2 * np.pi * 0.06
+    assert float(pd.kp) == pytest.approx(plan.case.reference_inertia * wn**2)
+    assert float(pd.kd) == pytest.approx(2 * 0.9 * wn * plan.case.reference_inertia)
+    assert float(pd.reference.duration) == pytest.approx(10.0)
+
+
+@pytest.mark.parametrize("key, value, expected", [
+    ("hub_inertia", "-5 ozf*in*s**2", "case_overrides.hub_inertia: must be > 0"),
+    ("tip_mass", -1.0, "case_overrides.tip_mass: must be >= 0"),
+    ("density", 0, "case_overrides.density: must be > 0"),
+    ("modulus", "-1 psi", "case_overrides.modulus: must be > 0"),
+])
+def test_non_positive_inertia_mass_stiffness(key, value, expected):
+    assert expected in problems_of(lambda d: d["case_overrides"].update({key: value}))
+
+
+def test_unknown_case_parameter_comes_from_the_builder():
+    message = problems_of(lambda d: d["case_overrides"].update(hub_mass=1))
+    assert "case_overrides: tamu: unknown parameter(s) ['hub_mass']" in message
+
+
+def test_model_options_are_checked_by_the_builder():
+    assert "model.n_modes: must be a positive integer, got 0" in problems_of(
+        lambda d: d["model"].update(n_modes=0))
+
+
+@pytest.mark.parametrize("run, gain, value, expected", [
+    (0, "g1", -1.0, "runs['Law I'].gains.g1: must be >= 0"),
+    (1, "g2", "-800 ozf*in*s/rad", "runs['Law II'].gains.g2: must be >= 0"),
+    (1, "g3", -4, "runs['Law II'].gains.g3: must be > -4 (= -n_appendages)"),
+])
+def test_inadmissible_gains(run, gain, value, expected):
+    assert expected in problems_of(lambda d: d["runs"][run]["gains"].update({gain: value}))
+
+
+def test_all_problems_are_collected():
+    def mutate(d):
+        d["maneuver"]["angle"] = "40 kg"
+        d["simulation"]["integration_step"] = "1 s"
+        d["runs"][0]["gains"]["g1"] = -1
+
+    message = problems_of(mutate)
+    assert "invalid scenario (2 problems)" in message  # schema stage stops before the gains
+    data = small_data()
+    data["runs"][0]["gains"]["g1"] = -1
+    data["runs"][1]["gains"]["g3"] = -5
+    with pytest.raises(ScenarioError) as info:
+        prepare_scenario(load_scenario(yaml.safe_dump(data)))
+    assert len(info.value.problems) == 2
+
+
+def test_nothing_runs_when_any_run_is_invalid(monkeypatch):
+    calls = []
+    monkeypatch.setattr(scenario_module, "simulate", lambda *a, **k: calls.append(a))
+    data = small_data()
+    data["runs"][1]["gains"]["g1"] = -1
+    with pytest.raises(ScenarioError):
+        run_scenario(load_scenario(yaml.safe_dump(data)))
+    assert calls == []
+
+
+# -- stage 2 and resources: numbers with bounds ---------------------------------------------------
 @pytest.mark.parametrize("data, expected", [
     (changed("simulation", duration="1e12 s"),
      "simulation.duration: control samples (duration × control_rate) = 7.5e+13, above the limit "
@@ -114,7 +204,7 @@ def test_too_many_runs_are_refused():
     assert problem(data).startswith("runs: List should have at most 100 items")
 
 
-# -- item 4: divergence -----------------------------------------------------------------------------
+# -- divergence -----------------------------------------------------------------------------------
 def unstable_data() -> dict:
     """A PD run whose gains destabilise the sampled loop (kd dt / I ≫ 2), no torque limit."""
     data = small_data()
@@ -142,54 +232,7 @@ def test_cli_run_exits_1_and_writes_nothing_when_a_run_diverges(tmp_path):
     assert not out.exists()
 
 
-# -- item 5: scenario files -------------------------------------------------------------------------
-def test_non_utf8_bytes_are_refused(tmp_path):
-    path = tmp_path / "latin1.yaml"
-    path.write_bytes(default_scenario().yaml_text.encode() + "# café\n".encode("latin-1"))
-    assert problem(path) == (f"scenario: {str(path)!r} is not UTF-8 text (byte 0xe9 at offset "
-                             f"{len(default_scenario().yaml_text.encode()) + 5}); save it as UTF-8")
-
-
-def test_1000_levels_of_nesting_are_refused_before_the_parser_recurses():
-    text = default_scenario().yaml_text + "extra: " + "[" * 1000 + "]" * 1000 + "\n"
-    assert default_scenario().yaml_text.count("\n") == 18  # so the nesting is on line 19
-    assert problem(text) == ("scenario: nested deeper than 32 levels at line 19 "
-                             "(flexsat.limits.MAX_NESTING)")
-
-
-def test_duplicate_keys_are_refused_naming_the_key_and_lines():
-    text = default_scenario().yaml_text.replace("seed: 0}", "seed: 0, seed: 7}")
-    assert problem(text) == "simulation.seed: duplicate key (lines 8 and 8); give it once"
-    assert problem(default_scenario().yaml_text + "\nname: again\n") == (
-        "name: duplicate key (lines 3 and 20); give it once")
-
-
-def test_anchors_and_merge_keys_still_work():
-    text = default_scenario().yaml_text.replace(
-        "gains: {g1: \"600 ozf*in/rad\"", "gains: &law1 {g1: \"600 ozf*in/rad\"")
-    assert load_scenario(text).runs[0].gains.g1 > 0
-    merged = ("base: &b {duration: 2 s, control_rate: 75 Hz}\n"
-              "simulation: {<<: *b, duration: 1 s}\n")
-    assert yaml.safe_load(merged)["simulation"]["duration"] == "1 s"
-    with pytest.raises(ScenarioError) as info:  # other problems, but no duplicate: an
-        load_scenario(merged)                   # override of a merged key is YAML's own rule
-    assert not [p for p in info.value.problems if "duplicate" in p]
-
-
-def test_aliases_expanding_beyond_the_limit_are_refused():
-    text = "a: &a [" + ", ".join(["1"] * 10) + "]\n"
-    for level in "bcde":
-        previous = chr(ord(level) - 1)
-        text += f"{level}: &{level} [" + ", ".join([f"*{previous}"] * 10) + "]\n"
-    assert problem(text) == ("d: more than 10,000 values once aliases are expanded "
-                             "(flexsat.limits.MAX_DOCUMENT_NODES)")
-
-
-def test_oversized_document_is_refused():
-    assert problem("#" * 300_000) == ("scenario: the document is larger than 256,000 bytes "
-                                      "(flexsat.limits.MAX_DOCUMENT_BYTES); a scenario is a few kB")
-
-
+# -- the case -------------------------------------------------------------------------------------
 def test_case_without_a_maneuver_model_is_refused_at_load():
     data = small_data()
     data["case"] = "eps"
@@ -197,34 +240,3 @@ def test_case_without_a_maneuver_model_is_refused_at_load():
     assert problem(data) == ("case: 'eps' has no maneuver model (a hub plant to slew); cases "
                              "with one: tamu, nps")
     assert set(maneuver_cases()) == {"tamu", "nps"}
-
-
-# -- identification scenarios ---------------------------------------------------------------------
-IDENTIFICATION = yaml.safe_load(
-    (Path(__file__).resolve().parents[2] / "examples" / "tamu_grid_identification.yaml")
-    .read_text())
-
-
-@pytest.mark.parametrize("section, values, expected", [
-    ("wheels", {"duration": "1e9 s"}, "wheels.duration: samples (duration × sample_rate) = 5e+10, "
-                                      "above the limit 2,000,000 (flexsat.limits); shorten the "
-                                      "test or lower the sample rate"),
-    ("hammer", {"sample_rate": "-200 Hz"}, "hammer.sample_rate: must be > 0, got -200"),
-    ("video", {"field_rate": "1e12 Hz"}, "video.duration: samples (duration × field_rate) = "
-                                         "4.5e+12, above the limit 2,000,000"),
-    ("identification", {"bootstrap_samples": 1e9}, "identification.bootstrap_samples: must be an "
-                                                   "integer in [0, 1000], got 1000000000.0"),
-])
-def test_identification_tests_beyond_the_limits_are_refused_at_load(section, values, expected):
-    data = copy.deepcopy(IDENTIFICATION)
-    data[section].update(values)
-    with pytest.raises(ScenarioError) as info:
-        load_scenario(yaml.safe_dump(data))
-    assert len(info.value.problems) == 1 and info.value.problems[0].startswith(expected)
-
-
-def test_identification_seed_is_bounded():
-    data = dict(IDENTIFICATION, seed=1e29)
-    with pytest.raises(ScenarioError, match=r"seed: must be an integer in \[0, 4294967295\], got "
-                                            r"1e\+29"):
-        load_scenario(yaml.safe_dump(data))
