@@ -33,7 +33,8 @@ def test_the_error_counts_and_lists_its_problems():
     ("model.n_modes", "modes: bad", "model.n_modes.modes: bad"),
     # a message without a field name is about the path itself
     ("simulation", "must be finite", "simulation: must be finite"),
-    ("runs[0]", "Input should be a valid dictionary", "runs[0]: Input should be a valid dictionary"),
+    ("runs[0]", "Input should be a valid dictionary",
+     "runs[0]: Input should be a valid dictionary"),
     # the empty path is the scenario
     ("", "must be a YAML mapping", "scenario: must be a YAML mapping"),
     ("", "name: required", "name: required"),
