@@ -1,7 +1,8 @@
-"""Preparing and running a maneuver scenario (flexsat.scenarios.runner): the case, the
-controllers and the configuration are built, and every problem they raise (case parameters,
-gains, a run beyond flexsat.limits) ends in one ScenarioError naming the field, before anything
-runs; a diverging run is named and exits 1, writing nothing."""
+"""Preparing and running a maneuver scenario (flexsat.scenarios.runner): every problem of the
+whole validation -- load_scenario, then prepare_scenario building the case, the controllers and
+the configuration (case parameters, gains, numbers and runs beyond flexsat.limits) -- ends in one
+ScenarioError naming the field, before anything runs; a diverging run is named and exits 1,
+writing nothing."""
 
 from __future__ import annotations
 
