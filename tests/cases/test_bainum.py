@@ -197,6 +197,7 @@ def test_pitch_riccati_solution():
     assert S22 == pytest.approx(1.823336, abs=5e-7)
 
 
+@pytest.mark.numerics
 def test_closed_form_riccati_equals_care_and_stays_accurate_for_stiff_modes():
     """Eqs 25-27 against scipy's CARE (with damping, a non-unit R, an unstable and a rigid
     coordinate), and for the stiff modes, where the printed form -F + √(F² + Q1/R) cancels,
@@ -222,6 +223,7 @@ def test_closed_form_riccati_equals_care_and_stays_accurate_for_stiff_modes():
     np.testing.assert_allclose(S22**2 - 2 * S12, F, rtol=1e-13)
 
 
+@pytest.mark.numerics
 def test_chapter3_case2_per_mode_regulator_gains():
     """L873-L880: Q = diag(1, F), R = 1. Recomputed rate columns 6, 7, 8, 10 match the printed
     matrix to 4 significant figures (rtol 2e-4, atol 5e-4) after the errata of columns 8 and

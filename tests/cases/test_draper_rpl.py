@@ -120,6 +120,7 @@ def test_modes_are_mass_normalised_eq_56(case):
     assert np.allclose(phi.T @ K @ phi, np.diag(w**2), rtol=1e-9, atol=1e-8 * w.max() ** 2)
 
 
+@pytest.mark.numerics
 def test_reduced_model_eqs_57_58(case):
     M, K, B = case.matrices()
     Mb, Kb, Db = case.reduced(9)
