@@ -198,7 +198,7 @@ def test_pitch_riccati_solution():
 
 
 @pytest.mark.numerics
-def test_closed_form_riccati_equals_care_and_stays_accurate_for_stiff_modes():
+def test_closed_form_riccati_equals_care_and_stays_accurate_for_stiff_modes(schur_error_bound):
     """Eqs 25-27 against scipy's CARE (with damping, a non-unit R, an unstable and a rigid
     coordinate), and for the stiff modes, where the printed form -F + √(F² + Q1/R) cancels,
     against the notes' S values and the scalar Riccati equations themselves (scipy's CARE loses
@@ -210,7 +210,11 @@ def test_closed_form_riccati_equals_care_and_stays_accurate_for_stiff_modes():
         A = np.array([[0.0, 1.0], [-F, -D]])
         S = scipy.linalg.solve_continuous_are(A, np.array([[0.0], [1.0]]), np.diag([Q1, Q2]),
                                               np.array([[R]]))
-        np.testing.assert_allclose([[S11, S12], [S12, S22]], S, rtol=1e-9, atol=1e-12)
+        # scipy's S carries the Schur method's error (tests/conftest.py), the closed form
+        # rounding only: 2x the bound.  At F = 3200 (κ(U11) = 2e5) that is 3e-5 absolute, 20 %
+        # of S12: scipy cannot check the stiff S12, the scalar equations below do
+        assert np.all(np.abs(np.array([[S11, S12], [S12, S22]]) - S)
+                      <= 2 * schur_error_bound(S) * np.linalg.norm(S, 2))
     F = np.array([3200.0, 28800.0, 93079.5, 255331.4])
     S11, S12, S22 = modal_riccati(F)
     np.testing.assert_allclose(S11, [181019.35, 4.8875221e6, 2.8397562e7, 1.2901979e8], rtol=1e-7)

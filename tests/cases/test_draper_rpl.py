@@ -113,11 +113,16 @@ def test_open_loop_frequencies_reproduce_table_4(case):
     assert case.frequencies().shape == (21,)
 
 
+@pytest.mark.numerics
 def test_modes_are_mass_normalised_eq_56(case):
     M, K, _ = case.matrices()
     phi, w = case.modes(), case.frequencies()
-    assert np.allclose(phi.T @ M @ phi, np.eye(21), atol=1e-10)
-    assert np.allclose(phi.T @ K @ phi, np.diag(w**2), rtol=1e-9, atol=1e-8 * w.max() ** 2)
+    # the product round-off bound of test_reduced_model_eqs_57_58 (measured: 0.07 of it for M,
+    # 0.2 of the largest entry for K; M alone has condition 4e7, so an atol of 1e-10 was at 0.7)
+    gamma = len(M) * np.finfo(float).eps
+    a = np.abs(phi)
+    assert np.all(np.abs(phi.T @ M @ phi - np.eye(21)) <= gamma * a.T @ np.abs(M) @ a)
+    assert np.abs(phi.T @ K @ phi - np.diag(w**2)).max() <= gamma * (a.T @ np.abs(K) @ a).max()
 
 
 @pytest.mark.numerics
