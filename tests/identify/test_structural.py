@@ -160,8 +160,8 @@ def _exact_eigenvalue_enclosure(K, M, X):
     assert np.all(rho[1:] - e[1:] > rho[:-1] + e[:-1]), "residual intervals overlap"
     below = np.r_[-np.inf, (rho + e)[:-1]]
     above = np.r_[(rho - e)[1:], np.inf]
-    # float(Fraction) rounds rho to nearest: widen by one ulp
-    return rho - eps2 / (above - rho) - np.spacing(rho), rho + eps2 / (rho - below) + np.spacing(rho)
+    ulp = np.spacing(rho)  # float(Fraction) rounds rho to nearest: widen by one ulp
+    return rho - eps2 / (above - rho) - ulp, rho + eps2 / (rho - below) + ulp
 
 
 def test_arm_subset_modes_match_the_exact_pencil_to_its_conditioning():

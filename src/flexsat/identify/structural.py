@@ -70,7 +70,6 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from flexsat.analysis.sensitivity import modal_derivatives
-from flexsat.structures.modal_solve import solve_modes
 from flexsat.validation import require_count, require_numeric
 
 __all__ = [
@@ -196,6 +195,8 @@ class SubstructureModel:
         error ~ ``eps max(lambda)``: on the Att. 7 arm (lambda spanning 5e-4 .. 4e7) that is a
         1e-5 relative error on the base-spring mode, which varied with the BLAS kernel.
         """
+        from flexsat.structures.modal_solve import solve_modes  # the FE package: on first use
+
         K, M = self.K(p), self.M(q)
         try:
             np.linalg.cholesky(M)
