@@ -2,7 +2,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test test-numerics bench clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -18,6 +18,14 @@ demo: $(STAMP)
 # one BLAS thread per pytest worker: two workers on two cores, no oversubscription
 test: $(STAMP)
 	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -n 2 -q
+
+# the tests whose tolerances sit near round-off, again on another BLAS kernel (OpenBLAS picks
+# one per CPU: SkylakeX on AVX-512, Haswell on AVX2); a tolerance below the problem's noise
+# floor passes on one kernel and fails on another
+NUMERICS_CORETYPE ?= Sandybridge
+test-numerics: $(STAMP)
+	OPENBLAS_CORETYPE=$(NUMERICS_CORETYPE) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \
+		$(PY) -m pytest -n 2 -q -m numerics
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_tamu.py

@@ -1,5 +1,6 @@
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -92,3 +93,12 @@ def fail_opening(monkeypatch):
         monkeypatch.setattr(builtins, "open", guarded)  # PIL (matplotlib's PNGs)
 
     return fail
+
+
+@pytest.fixture(scope="session")
+def schur_error_bound():
+    """The Schur method's error bound of a Riccati solution (Laub 1979), n ε (κ(U11) + 3):
+    :func:`flexsat.control.lqr.riccati_error_bound`."""
+    from flexsat.control.lqr import riccati_error_bound
+
+    return riccati_error_bound

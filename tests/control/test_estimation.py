@@ -16,6 +16,8 @@ from flexsat.control import (
     truncate_gains,
 )
 
+pytestmark = pytest.mark.numerics  # tolerances near round-off: re-run on other BLAS kernels
+
 
 def random_filter_problem(seed):
     rng = np.random.default_rng(100 + seed)
@@ -51,24 +53,27 @@ def nps_design():
 
 
 @pytest.mark.parametrize("seed", range(20))
-def test_kalman_gain_equals_python_control(seed):
+def test_kalman_gain_equals_python_control(seed, schur_error_bound):
     A, G, C, Qn, Rn = random_filter_problem(seed)
     L, P, E = kalman(A, G, C, Qn, Rn)
     L2, P2, E2 = control.lqe(A, np.eye(len(A)), C, _sym(G @ Qn @ G.T), Rn)
-    np.testing.assert_allclose(L, L2, rtol=1e-9, atol=1e-12 * np.abs(L2).max())
-    np.testing.assert_allclose(P, P2, rtol=1e-9, atol=1e-12 * np.abs(P2).max())
+    # both carry the Schur method's error (tests/control/conftest.py): the difference twice it
+    tol = 2 * schur_error_bound(P)
+    assert np.abs(L - L2).max() <= tol * np.linalg.norm(L, 2)
+    assert np.abs(P - P2).max() <= tol * np.linalg.norm(P, 2)
     assert E.real.max() < 0
-    assert kalman(A, G, C, Qn, Rn).residual < 1e-12
+    assert kalman(A, G, C, Qn, Rn).residual <= schur_error_bound(P)
 
 
 @pytest.mark.parametrize("seed", range(20))
-def test_discrete_kalman_gain_equals_python_control(seed):
+def test_discrete_kalman_gain_equals_python_control(seed, schur_error_bound):
     A, G, C, Qn, Rn = random_filter_problem(seed)
     Ad = scipy.linalg.expm(0.1 * A)
     L, P, E = dkalman(Ad, G, C, Qn, Rn)
     L2, P2, _ = control.dlqe(Ad, np.eye(len(A)), C, _sym(G @ Qn @ G.T), Rn)
-    np.testing.assert_allclose(L, L2, rtol=1e-8, atol=1e-11 * np.abs(L2).max())
-    np.testing.assert_allclose(P, P2, rtol=1e-8, atol=1e-11 * np.abs(P2).max())
+    tol = 2 * schur_error_bound(P)
+    assert np.abs(L - L2).max() <= tol * np.linalg.norm(L, 2)
+    assert np.abs(P - P2).max() <= tol * np.linalg.norm(P, 2)
     assert np.abs(E).max() < 1
 
 

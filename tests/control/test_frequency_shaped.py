@@ -11,6 +11,8 @@ from flexsat.control import FrequencyShapedController, frequency_shaped_lqr, kal
 from flexsat.control.frequency_shaped import augment, shaping_weights
 from flexsat.control.lqg import zoh
 
+pytestmark = pytest.mark.numerics  # tolerances near round-off: re-run on other BLAS kernels
+
 
 @pytest.fixture(scope="module")
 def plant():
@@ -89,10 +91,10 @@ def test_literal_weight_equals_eq_22_for_zero_damping(plant):
     np.testing.assert_array_equal(d.R_aug, W[2:, 2:])
 
 
-def test_cross_term_riccati_eq_28_and_transformed_problem(plant):
+def test_cross_term_riccati_eq_28_and_transformed_problem(plant, schur_error_bound):
     A, B, _, Q, _ = plant
     d = frequency_shaped_lqr(A, B, Q, 7.0, 2.0, damping=1.0)
-    assert d.solution.residual < 1e-11
+    assert d.solution.residual <= schur_error_bound(d.solution.solution)
     Ri = np.linalg.inv(d.R_aug)
     At = d.A_aug - d.B_aug @ Ri @ d.N_aug.T
     Qt = d.Q_aug - d.N_aug @ Ri @ d.N_aug.T

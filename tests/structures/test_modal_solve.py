@@ -18,6 +18,8 @@ import scipy.sparse as sp
 from flexsat.structures import check_mass_matrix, solve_modes
 from flexsat.structures.modal_solve import DENSE_LIMIT
 
+pytestmark = pytest.mark.numerics  # tolerances near round-off: re-run on other BLAS kernels
+
 
 def chain(n, k=1000.0, m=2.0, grounded=True, masses=None):
     """Spring-mass chain: n masses, n (grounded) or n - 1 springs."""

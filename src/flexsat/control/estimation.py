@@ -127,7 +127,7 @@ def kalman(A, G, C, Qn, Rn, Nn=None) -> RiccatiSolution:
     ValueError
         Bad shapes or values, Qn not PSD, Rn not PD, joint intensity indefinite, (A, C) not
         detectable, an unstable / marginal mode the noise does not excite, or a relative
-        Riccati residual above ``flexsat.control.lqr.RESIDUAL_TOL``.
+        Riccati residual above the accepted one (:mod:`flexsat.control.lqr`).
     """
     return _filter(A, G, C, Qn, Rn, Nn, False)
 
