@@ -1,8 +1,8 @@
 """Units at every public boundary: a number is SI, a pint Quantity or a unit string is converted,
 a wrong dimension is a UnitError naming the field, and a Quantity is never stripped of its unit.
 
-For each boundary kind (control laws, simulation settings, maneuvers, case builders, scenario
-files) the tests claim (a) a Quantity gives the same object as its SI number, (b) a unit string
+For each boundary kind (control laws, simulation settings, maneuvers, case builders; scenario
+files in tests/scenarios/test_maneuver.py) the tests claim (a) a Quantity gives the same object as its SI number, (b) a unit string
 does too, (c) a wrong dimension is refused naming the field, (d) a Quantity where no unit is
 declared is refused. Converted values are compared with ``==`` where the SI conversion factor
 is exact in binary or identical on both sides, else to rel=1e-15 (one rounding of pint's factor).
@@ -11,12 +11,9 @@ is exact in binary or identical on both sides, else to rel=1e-15 (one rounding o
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.cases.tamu import tamu
@@ -33,8 +30,6 @@ from flexsat.sim.engine import SimConfig, simulate
 from flexsat.sim.sensors import Sensors
 from flexsat.units import Q_, UnitError, to_si
 
-sys.path.insert(0, str(Path(__file__).parent))
-from test_scenario import problems_of  # noqa: E402  (the scenario tests' own helper)
 
 OZ_IN = 0.028349523125 * 9.80665 * 0.0254  # 1 ozf·in in N·m: ounce (kg) × g0 × inch, all exact
 
@@ -221,20 +216,3 @@ def test_case_inputs_convert_quantities_and_refuse_them_where_no_unit_fits():
                                 length=Q_(46, "in"), EI=1.0, rho=1.0, damping=("1 percent", 0.02))
     assert params.length == pytest.approx(46 * 0.0254, rel=1e-15)
     assert params.damping == (0.01, 0.02)
-
-
-# -- scenario files (flexsat.scenarios.quantity goes through flexsat.units.to_si) -------------------
-def test_scenario_refuses_a_dimensionless_unit_where_a_dimension_is_due():
-    assert "simulation.duration: incompatible units (degree given, s expected)" in problems_of(
-        lambda d: d["simulation"].update(duration="15 deg"))
-    pd_run = {"label": "PD", "law": "pd",
-              "poles": {"natural_frequency": "100 percent", "damping_ratio": 0.9},
-              "reference": {"shape": "sinusoidal", "duration": "10 s"}}
-    assert ("runs['PD'].poles.natural_frequency: incompatible units (percent given, rad/s "
-            "expected)") in problems_of(lambda d: d["runs"].append(pd_run))
-
-
-@pytest.mark.parametrize("text", ["1/0", "(1", "10.0**400", "10**10**10 s"])
-def test_scenario_reports_unreadable_expressions_as_problems(text):
-    assert f"simulation.duration: cannot read {text!r} as a quantity" in problems_of(
-        lambda d: d["simulation"].update(duration=text))

@@ -165,3 +165,18 @@ def test_model_option_given_twice():
         lambda d: d["case_overrides"].update(n_modes=3))
 
 
+# -- scenario files (flexsat.scenarios.quantity goes through flexsat.units.to_si) -------------------
+def test_scenario_refuses_a_dimensionless_unit_where_a_dimension_is_due():
+    assert "simulation.duration: incompatible units (degree given, s expected)" in problems_of(
+        lambda d: d["simulation"].update(duration="15 deg"))
+    pd_run = {"label": "PD", "law": "pd",
+              "poles": {"natural_frequency": "100 percent", "damping_ratio": 0.9},
+              "reference": {"shape": "sinusoidal", "duration": "10 s"}}
+    assert ("runs['PD'].poles.natural_frequency: incompatible units (percent given, rad/s "
+            "expected)") in problems_of(lambda d: d["runs"].append(pd_run))
+
+
+@pytest.mark.parametrize("text", ["1/0", "(1", "10.0**400", "10**10**10 s"])
+def test_scenario_reports_unreadable_expressions_as_problems(text):
+    assert f"simulation.duration: cannot read {text!r} as a quantity" in problems_of(
+        lambda d: d["simulation"].update(duration=text))

@@ -346,7 +346,6 @@ def eig_derivatives(A, dA, B=None, dB=None, d2A=None, d2B=None, *, order: int = 
 
 def _second_order(lam, phi, psi, B, a, b, C, dlam, S, dB, d2A, d2B, denom):
     n = lam.size
-    P = a.shape[0]
     idx = np.arange(n)
     # R[k, l] (see eig_derivatives); Λ as a column scaling: X Λ = X * lam[None, :]
     aC = np.einsum("kij,ljm->klim", a, C)  # a_k C^l

@@ -66,7 +66,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
 from flexsat.analysis.sensitivity import modal_derivatives
