@@ -26,6 +26,7 @@ import io
 import os
 import platform
 import pstats
+import re
 import statistics
 import sys
 import time
@@ -405,6 +406,15 @@ def document(res, mach, argv) -> str:
     return "\n".join(lines)
 
 
+def other_sections(path: Path) -> str:
+    """The sections of ``path`` that other benchmarks wrote (headed "## ... (issue #N)"), kept
+    when this benchmark rewrites its own part at the top."""
+    if not path.exists():
+        return ""
+    match = re.search(r"^## .*\(issue #\d+\)$", path.read_text(), flags=re.MULTILINE)
+    return "" if match is None else "\n" + path.read_text()[match.start():]
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -433,7 +443,7 @@ def main(argv=None) -> int:
           f"{mach['load']})")
     if args.write:
         args.output.parent.mkdir(parents=True, exist_ok=True)
-        args.output.write_text(document(res, mach, argv))
+        args.output.write_text(document(res, mach, argv) + other_sections(args.output))
         print(f"wrote {args.output}")
     return 0
 

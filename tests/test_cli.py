@@ -222,3 +222,10 @@ def test_run_refuses_a_location_where_nothing_can_be_created():
     assert unwrapped(result.stderr).startswith(
         "--out: cannot write the report to '/proc/flexsat-report': ")
     assert "running" not in result.stdout + result.stderr
+
+
+def test_modes_refuses_more_modes_than_the_limit():
+    result = runner.invoke(app, ["modes", "tamu", "--modes", "1000000"])
+    assert result.exit_code == 2
+    assert unwrapped(result.stderr).startswith(
+        "--modes: modes asked for = 1e+06, above the limit 100 (flexsat.limits)")

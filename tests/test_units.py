@@ -21,6 +21,11 @@ def test_cyclic_and_angular_frequencies_carry_their_two_pi():
     assert to_si("0.06 Hz", "rad/s") == pytest.approx(2 * math.pi * 0.06, rel=1e-15)
     assert to_si("1 rad/s", "Hz") == pytest.approx(1 / (2 * math.pi), rel=1e-15)
     assert to_si("60 rpm", "rad/s") == pytest.approx(2 * math.pi, rel=1e-12)
+    # any angular rate asked for in cycles per second: one revolution per second is 1 Hz
+    # (pint alone gives 2π Hz for 60 rpm and 0.0175 Hz for 1 deg/s)
+    assert to_si("60 rpm", "Hz") == pytest.approx(1.0, rel=1e-15)
+    assert to_si("360 deg/s", "Hz") == pytest.approx(1.0, rel=1e-15)
+    assert to_si("60 rpm", "kHz") == pytest.approx(1.0, rel=1e-15)  # SI: the result is in Hz
     assert to_si("75 Hz", "Hz") == 75.0
 
 

@@ -178,6 +178,10 @@ def modes(
     from flexsat.mode_plot import plot_case_modes
 
     try:
+        from flexsat import limits
+
+        limits.check_count(n, limits.MAX_MODES, "--modes", "modes asked for",
+                           "the exact-beam cases solve one transcendental root per mode")
         overrides = parse_settings(settings or [])
         built = get_case(case).builder(**overrides)
         data = _modes_data(built, case, n, overrides)

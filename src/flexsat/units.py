@@ -33,14 +33,22 @@ class UnitError(ValueError):
     """A quantity has the wrong dimensionality or cannot be parsed."""
 
 
+def _angular(q: pint.Quantity) -> bool:
+    """Whether ``q`` is an angle or an angular rate: its root units hold the radian (rad/s, deg/s,
+    rpm = revolution/min, ...)."""
+    return dict(q.to_root_units().unit_items()).get("radian", 0) != 0
+
+
 def _cyclic_to_angular(q: pint.Quantity, unit: str) -> pint.Quantity:
-    """pint treats the radian as dimensionless, so it would turn 1 Hz into 1 rad/s. A cyclic
-    frequency asked for in angular units (and back) is converted with its 2π here."""
+    """pint treats the radian as dimensionless, so it would turn 1 Hz into 1 rad/s, and 60 rpm
+    (2π rad/s) into 2π Hz. A cyclic frequency asked for in angular units, or an angular rate
+    asked for in cyclic ones, is converted with its 2π here."""
+    wanted = Q_(1, unit)
+    want_cyclic = "hertz" in str(wanted.units)
     given_cyclic = "hertz" in str(q.units)
-    want_angular = "radian" in str(Q_(1, unit).units) and "hertz" not in str(Q_(1, unit).units)
-    if given_cyclic and want_angular:
+    if given_cyclic and _angular(wanted):
         return Q_(2 * math.pi * q.to("Hz").magnitude, "rad/s")
-    if "radian" in str(q.units) and "hertz" in str(Q_(1, unit).units):
+    if want_cyclic and _angular(q):
         return Q_(q.to("rad/s").magnitude / (2 * math.pi), "Hz")
     return q
 

@@ -132,3 +132,28 @@ def test_bad_specs_are_refused():
         Param(1.0, rule="positiv")
     with pytest.raises(ValueError, match=r"^choices: a 'choice' input needs"):
         Param("a", rule="choice")
+
+
+def test_a_count_with_a_limit_is_refused_above_it_before_anything_is_built():
+    """A mesh or mode count beyond flexsat.limits is refused naming the input and the limit
+    (n_elements = 1e9 would otherwise allocate the mesh and hang)."""
+    from flexsat import limits
+
+    spec = {"n_elements": Param(20, rule="count", limit="MAX_ELEMENTS")}
+    assert read_inputs("test", spec, {"n_elements": limits.MAX_ELEMENTS})["n_elements"] == \
+        limits.MAX_ELEMENTS
+    with pytest.raises(ValueError, match=r"^n_elements: n_elements = 1e\+09, above the limit "
+                                         r"1,000 \(flexsat.limits\); a larger n_elements takes"):
+        read_inputs("test", spec, {"n_elements": 10**9})
+    with pytest.raises(ValueError, match=r"^limit: must name a flexsat.limits constant"):
+        Param(20, rule="count", limit="MAX_NOTHING")
+
+
+@pytest.mark.parametrize("case, name", [("cantilever_beam", "n_elements"), ("nafems_fv2", "elements_per_arm"),
+                                        ("nps", "n_elements"), ("nps", "n_modes"),
+                                        ("agrawal_bang", "n_modes")])
+def test_case_mesh_and_mode_counts_are_bounded(case, name):
+    from flexsat.cases import get_case
+
+    with pytest.raises(ValueError, match=rf"^{name}: {name} = 1e\+09, above the limit"):
+        get_case(case).builder(**{name: 10**9})

@@ -74,6 +74,8 @@ def test_index_html_is_self_contained(result, tmp_path):
     page = (write_report(result, tmp_path / "report") / "index.html").read_text()
     assert "Short &lt;test&gt; &amp; run" in page
     assert html.escape(result.case_source) in page
+    # the source stands alone (the seed files do not ship): the paper is cited, not a file name
+    assert result.case_source.startswith("Junkins, Pollock & Rahman 1990") and ".txt" not in page
     for spec in PLOTS:
         assert f'<img src="{spec.file}"' in page
     assert "<th>Law I</th><th>Law II</th>" in page

@@ -64,7 +64,7 @@ _INPUTS = {
     "density": Param("2700 kg/m**3", "kg/m**3"),
     "tip_mass": Param("0 kg", "kg", "nonneg"),
     "damping": Param(0.005, rule="nonneg"),
-    "n_modes": Param(PUBLISHED["n_modes"], rule="count"),
+    "n_modes": Param(PUBLISHED["n_modes"], rule="count", limit="MAX_MODES"),
     "element_length": Param("0.025 m", "m"),
     "patch_length": Param("2 in", "m"),
     "patches": Param(DEFAULT_PATCHES, rule="raw"),  # checked against the lengths: _patches

@@ -116,7 +116,7 @@ _BEAM_INPUTS = {
     "nu": Param(0.33, rule=_poisson),
     "width": Param("40 mm", "m"),
     "height": Param("10 mm", "m"),
-    "n_elements": Param(20, rule="count"),
+    "n_elements": Param(20, rule="count", limit="MAX_ELEMENTS"),
     "lumped": Param(False, rule="flag"),
 }
 
@@ -288,7 +288,7 @@ _FV2_INPUTS = {
     "E": Param(PUBLISHED["fv2_modulus"], "Pa"),
     "rho": Param(PUBLISHED["fv2_density"], "kg/m**3"),
     "nu": Param(0.3, rule=_poisson),
-    "elements_per_arm": Param(4, rule="count"),
+    "elements_per_arm": Param(4, rule="count", limit="MAX_ELEMENTS"),
     "lumped": Param(False, rule="flag"),
     "plane": Param("in-plane", rule="choice", choices=_FV2_PLANES),
 }

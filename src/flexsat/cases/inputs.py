@@ -12,6 +12,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from flexsat import limits
 from flexsat.units import to_si
 from flexsat.validation import require_count, require_nonneg, require_positive
 
@@ -42,6 +43,9 @@ class Param:
         The accepted strings of a ``"choice"``.
     optional : bool
         None is accepted (and kept) for an input solved or derived later by the case.
+    limit : str
+        For a ``"count"``: the :mod:`flexsat.limits` constant bounding it (``"MAX_ELEMENTS"``),
+        read when the input is read.
 
     Raises
     ------
@@ -54,11 +58,15 @@ class Param:
     rule: str | Callable[[Any, str], Any] = "positive"
     choices: tuple = ()
     optional: bool = False
+    limit: str = ""
 
     def __post_init__(self):
         if isinstance(self.rule, str) and self.rule not in (*_QUANTITY_RULES, *_OTHER_RULES):
             raise ValueError(f"rule: must be one of {[*_QUANTITY_RULES, *_OTHER_RULES]} or a "
                              f"callable, got {self.rule!r}")
+        if self.limit and not (self.rule == "count" and hasattr(limits, self.limit)):
+            raise ValueError(f"limit: must name a flexsat.limits constant of a 'count', got "
+                             f"{self.limit!r}")
         if self.rule == "choice" and not self.choices:
             raise ValueError("choices: a 'choice' input needs at least one choice")
 
@@ -71,7 +79,12 @@ class Param:
         if self.rule == "raw":
             return raw
         if self.rule == "count":
-            return require_count(raw, name)
+            count = require_count(raw, name)
+            if self.limit:
+                limits.check_count(count, getattr(limits, self.limit), name, name,
+                                   f"a larger {name} takes more time and memory than one run is "
+                                   f"allowed (flexsat.limits.{self.limit})")
+            return count
         if self.rule == "flag":
             return _flag(raw, name)
         if self.rule == "choice":

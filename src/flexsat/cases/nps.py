@@ -36,7 +36,6 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import brentq
 
-from flexsat import limits
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.control import PD
@@ -74,7 +73,7 @@ INERTIA_CONVENTIONS = ("cantilevered", "total")
 _INPUTS = {
     "cantilever_frequency": Param(PUBLISHED["cantilever_frequency"], "Hz"),
     "damping": Param(PUBLISHED["damping"], rule="nonneg"),
-    "n_modes": Param(PUBLISHED["n_modes"], rule="count"),
+    "n_modes": Param(PUBLISHED["n_modes"], rule="count", limit="MAX_MODES"),
     "design_inertia": Param(DESIGN_INERTIA, "kg*m**2"),
     "inertia_convention": Param("cantilevered", rule="choice", choices=INERTIA_CONVENTIONS),
     "hub_inertia": Param(None, "kg*m**2", optional=True),  # None: solved from design_inertia
@@ -84,7 +83,7 @@ _INPUTS = {
     "mast_bending_stiffness": Param(None, "N*m**2", optional=True),  # None: solved
     "reflector_mass": Param("1.0 kg", "kg"),
     "reflector_inertia": Param("0.02 kg*m**2", "kg*m**2", "nonneg"),
-    "n_elements": Param(20, rule="count"),
+    "n_elements": Param(20, rule="count", limit="MAX_ELEMENTS"),
     "controller_frequency": Param(PUBLISHED["controller_frequency"], "Hz"),
     "controller_damping": Param(PUBLISHED["controller_damping"], rule="nonneg"),
 }
@@ -412,8 +411,6 @@ def nps(**overrides) -> NPSCase:
     values = read_inputs("nps", _INPUTS, overrides)
     if values["n_elements"] < 2:
         raise ValueError(f"n_elements: must be >= 2, got {values['n_elements']}")
-    limits.check_count(values["n_elements"], limits.MAX_ELEMENTS, "n_elements",
-                       "finite elements of the mast")
     if values["damping"] >= 1:
         raise ValueError(f"damping: must be < 1 (a ratio of critical damping), got {values['damping']!r}")
     if 2 * values["n_elements"] < values["n_modes"]:

@@ -74,7 +74,7 @@ _INPUTS = {
     "density": Param(PUBLISHED["density"], "kg/m"),
     "damping": Param(0.005, rule="nonneg"),
     "n_appendages": Param(4, rule="count"),
-    "n_modes": Param(10, rule="count"),
+    "n_modes": Param(10, rule="count"),  # at most MAX_MODES: HubAppendageParams checks it
     "stiffening": Param(False, rule="flag"),
 }
 

@@ -42,6 +42,7 @@ from pydantic import BeforeValidator, Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.cases import get_case
+from flexsat.references import cite
 from flexsat.identify.campaign import (
     CameraRig,
     CampaignConfig,
@@ -377,7 +378,7 @@ def run_identification(scenario: IdentificationScenario, progress=None) -> Ident
         message = str(exc).replace("wheel_torque_constants: ", "") if path.startswith("wheels") \
             else str(exc)
         raise ScenarioError([_locate(path, message)]) from None
-    return IdentificationResult(scenario, result, get_case(scenario.case).source)
+    return IdentificationResult(scenario, result, cite(get_case(scenario.case).source))
 
 
 def _summary_rows(result: IdentificationResult) -> list[tuple[str, list[str]]]:

@@ -10,6 +10,7 @@ from typing import Any, Callable
 import xarray as xr
 
 from flexsat.cases import get_case
+from flexsat.references import cite
 from flexsat.control import Controller
 from flexsat.dynamics.hub_appendage import HubAppendage
 from flexsat.scenarios.errors import ScenarioError, _head, _item, _locate
@@ -206,7 +207,7 @@ def run_scenario(scenario: Scenario, progress: Callable[[str], None] | None = No
             raise SimulationDiverged(f"runs{_item(index, label)}: {exc}", exc.cases, exc.time,
                                      exc.cause) from None
     return ScenarioResult(scenario, tuple(plan.controllers), tuple(results),
-                          get_case(scenario.case).source)
+                          cite(get_case(scenario.case).source))
 
 
 __all__ = ["ScenarioPlan", "ScenarioResult", "prepare_scenario", "run_scenario"]
