@@ -141,3 +141,26 @@ def test_lqr_refuses_the_problems_bainum_needs_refused():
 def test_bad_inputs_name_the_field(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+@pytest.mark.numerics
+def test_pbh_judges_each_mode_on_its_own_scale():
+    """A rigid mode plus 99 modes from 0.1 to 1,000 rad/s (ζ = 0.001), one actuator reaching
+    every mode: controllable (every modal row of B is nonzero). A single threshold on the scale
+    of ‖A‖ ~ 1e6 used to call 91 of the low modes uncontrollable; the per-cluster test finds
+    none, and still finds the one mode whose row of B is zeroed, at its frequency."""
+    rng = np.random.default_rng(0)
+    w = np.concatenate([[0.0], np.geomspace(0.1, 1000.0, 99)])
+    A = np.block([[np.zeros((100, 100)), np.eye(100)],
+                  [-np.diag(w**2), -np.diag(2 * 0.001 * w)]])
+    B = np.vstack([np.zeros((100, 1)), rng.standard_normal((100, 1))])
+    assert pbh_test(A, B).size == 0
+    assert is_stabilizable(A, B)
+    for mode in (1, 50, 99):  # 0.1, ~9, 1,000 rad/s
+        Bc = B.copy()
+        Bc[100 + mode] = 0.0
+        lam = pbh_test(A, Bc)
+        expected = -0.001 * w[mode] + 1j * w[mode] * np.sqrt(1 - 0.001**2)
+        # the pair ±λ of that mode, computed to the eigen-solver's ~ε‖A_balanced‖ accuracy
+        np.testing.assert_allclose(sorted(lam, key=np.imag), [np.conj(expected), expected],
+                                   rtol=1e-8)

@@ -89,6 +89,7 @@ import logging
 import numpy as np
 import scipy.linalg
 
+from flexsat.analysis.controllability import pbh_clusters
 from flexsat.validation import require_numeric
 
 log = logging.getLogger(__name__)
@@ -202,58 +203,19 @@ def check_psd(arr: np.ndarray, field: str, strict: bool = False) -> np.ndarray:
     return arr
 
 
-def _norm1(A) -> float:
-    return float(np.abs(A).sum(axis=0).max(initial=0.0))
-
-
-def _balanced(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(D⁻¹AD, D⁻¹B) with D the diagonal balancing of A: a modal model's rows scale as ω² and
-    ω, and balancing brings them to ~ω so that its eigenvectors carry errors of ~ε‖A‖/gap with
-    the balanced, not the raw, ‖A‖."""
-    d = scipy.linalg.matrix_balance(A, permute=False, separate=True)[1][0]
-    return A * d[None, :] / d[:, None], B / d[:, None]
-
-
 def _pbh_fails(A: np.ndarray, B: np.ndarray, discrete: bool) -> list[complex]:
     """Unstable or marginal eigenvalues λ of A at which [A − λI, B] loses rank (PBH), each
-    tested on its own scale on the balanced pair (module docstring, Checks). Returns one λ per
-    failing cluster, its real and imaginary parts below the cluster radius set to 0, one of
-    each conjugate pair.
-    """
-    A, B = _balanced(A, B)
-    n, scale = A.shape[0], max(1.0, _norm1(A))
-    radius = _SQRT_EPS * scale
-    T, Z = scipy.linalg.schur(A.conj().T, output="complex")
-    lam = np.conj(np.diag(T))
-    if discrete:
-        marginal = np.abs(lam) >= 1.0 - _SQRT_EPS
-    else:
-        marginal = (lam.real >= -_SQRT_EPS * np.abs(lam)) | (np.abs(lam) <= radius)
-    marginal &= lam.imag >= -radius
-    nb = np.linalg.norm(B, 2)
-    out: list[complex] = []
-    tested = np.zeros(n, dtype=bool)
-    for i in np.flatnonzero(marginal):
-        if tested[i]:
-            continue
-        cluster = np.abs(lam - lam[i]) <= radius
-        tested |= cluster
-        lc = complex(np.mean(lam[cluster]))
-        re, im = (0.0 if abs(x) <= radius else x for x in (lc.real, lc.imag))
-        lc = complex(re, im) if im else re
-        if nb == 0:
-            out.append(lc)
-            continue
-        Ts, Zs, *_, info = scipy.linalg.lapack.ztrsen(cluster.astype(np.int32), T, Z, job="N")
-        if info != 0:
-            raise np.linalg.LinAlgError(f"ztrsen: reordering the Schur form failed (info {info})")
-        k = int(cluster.sum())
-        W, M = Zs[:, :k], Ts[:k, :k].conj().T
-        s_lam = max(np.linalg.norm(M, 2), np.finfo(float).eps ** 0.25 * scale)
-        P = np.hstack([(M - lc * np.eye(k)) / s_lam, W.conj().T @ B / nb])
-        if np.linalg.svd(P, compute_uv=False)[k - 1] <= _SQRT_EPS:
-            out.append(lc)
-    return out
+    cluster tested on its own scale (:func:`flexsat.analysis.controllability.pbh_clusters`), one
+    of each conjugate pair."""
+
+    def marginal(lam: np.ndarray, radius: float) -> np.ndarray:
+        if discrete:
+            unstable = np.abs(lam) >= 1.0 - _SQRT_EPS
+        else:
+            unstable = (lam.real >= -_SQRT_EPS * np.abs(lam)) | (np.abs(lam) <= radius)
+        return unstable & (lam.imag >= -radius)
+
+    return pbh_clusters(A, B, marginal)
 
 
 def uncontrollable_modes(A, B, discrete: bool = False) -> list[complex]:
