@@ -20,9 +20,7 @@ import threading
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
-import xarray as xr
 
 import flexsat.report.publish as publish
 from flexsat.report.publish import (
@@ -30,7 +28,6 @@ from flexsat.report.publish import (
     OutputError,
     check_output_folder,
     write_atomically,
-    write_netcdf,
 )
 
 NAMES = ("metrics.json", "results.nc", "plot.png", "index.html")
@@ -361,17 +358,3 @@ def test_check_probes_the_parent(tmp_path, monkeypatch):
     with pytest.raises(OutputError, match="Read-only file system") as info:
         check_output_folder(tmp_path / "out")
     assert info.value.errno == errno.EROFS
-
-
-def test_full_device_is_an_os_error(tmp_path):
-    """/dev/full fails every write with ENOSPC, as a full disk does: the netCDF bytes are written
-    with Python's I/O, so this is an OSError (h5py writing there itself crashes the
-    interpreter)."""
-    ds = xr.Dataset({"theta": ("time", np.linspace(0.0, 1.0, 50), {"units": "rad"})})
-    with pytest.raises(OSError) as info:
-        write_netcdf(ds, Path("/dev/full"))
-    assert info.value.errno == errno.ENOSPC
-    write_netcdf(ds, tmp_path / "r.nc")
-    with xr.open_dataset(tmp_path / "r.nc", engine="h5netcdf") as back:
-        assert np.array_equal(back["theta"].values, ds["theta"].values)
-        assert back["theta"].attrs["units"] == "rad"

@@ -17,6 +17,8 @@ Measures
 * :func:`h2_placement`, :func:`h2_actuator_ranking`: the H2 ranking of seed
   ``003_6d17262716e94f5f.txt`` Eqs. (1)–(8) (L188–L235, reconstructed in
   ``shared/spec/seed003.md`` §2.1 [RECON]), made to work with rigid-body modes.
+  The paper's EPS study (its candidates, outputs and published top 5) is
+  :mod:`flexsat.cases.eps_placement`.
 
 Search
 ------
@@ -53,9 +55,6 @@ from flexsat.analysis.gramians import (
 from flexsat.validation import require_count, require_finite, require_positive
 
 __all__ = [
-    "EPS_CANDIDATE_NODES",
-    "EPS_OUTPUT_NODES",
-    "EPS_PUBLISHED_TOP5",
     "MAX_EXHAUSTIVE_SETS",
     "RIGID_TREATMENTS",
     "GawronskiIndex",
@@ -66,8 +65,6 @@ __all__ = [
     "ModalCost",
     "SearchResult",
     "actuator_candidates",
-    "eps_h2_ranking",
-    "eps_h2_setup",
     "exchange",
     "exhaustive",
     "gawronski_index",
@@ -85,11 +82,6 @@ __all__ = [
 MAX_EXHAUSTIVE_SETS = 1_000_000
 #: How :func:`h2_actuator_ranking` treats rigid-body modes.
 RIGID_TREATMENTS = ("project", "keep")
-#: Seed 003 L238–L253: candidate force-actuator nodes (x, y, z each), outputs, published top 5.
-EPS_CANDIDATE_NODES = (69, 66, 63, 60, 52, 95, 94, 88, 78)
-EPS_OUTPUT_NODES = (69, 66, 95)
-EPS_DISTURBANCE_NODE = 95
-EPS_PUBLISHED_TOP5 = ("69X", "66X", "63X", "60X", "88X")
 _FORMS = ("first_order", "second_order")
 
 
@@ -665,7 +657,7 @@ def h2_actuator_ranking(model, actuators, disturbance, outputs, gamma=1.0,
 
 
 # ------------------------------------------------------------------------------------------------
-# candidates and the EPS / TAMU set-ups
+# candidates and their score
 def actuator_candidates(model, nodes, axes=("x", "y", "z"), kind: str = "force",
                         label: Callable | None = None) -> dict:
     """Candidate actuators at ``nodes`` along/about ``axes`` as label -> modal input vector.
@@ -682,48 +674,6 @@ def actuator_candidates(model, nodes, axes=("x", "y", "z"), kind: str = "force",
         for axis in axes:
             out[label(node, axis)] = fn(node, axis)
     return out
-
-
-def eps_h2_setup(case=None, n_modes: int = 20):
-    """The seed 003 placement set-up (L238–L253) on the reconstructed EPS model.
-
-    Candidates: force actuators at nodes 69, 66, 63, 60, 52, 95, 94, 88, 78 along x, y, z
-    (27, labelled "69X" …; the paper's axis letters are taken as ours, an assumption: the
-    paper's frame is lost with Fig. 1). Disturbance: the torquers at the CG node 95 about x, y,
-    z. Outputs: displacements of nodes 69, 66, 95 along x, y, z. Paper nodes are mapped with
-    ``case.node_roles``.
-
-    Returns
-    -------
-    model : ModalModel (6 rigid + ``n_modes`` elastic modes, 0.5 % damping)
-    actuators : dict label -> (n,) ; disturbance : (n, 3) ; outputs : (9, n)
-    """
-    from flexsat.cases import eps
-
-    case = eps() if case is None else case
-    model = case.modal_model(n_modes)
-    roles = case.node_roles
-    actuators = actuator_candidates(
-        model, [roles[p] for p in EPS_CANDIDATE_NODES], ("x", "y", "z"),
-        label=lambda node, axis: f"{_paper(roles, node)}{axis.upper()}")
-    disturbance = model.torque_input(roles[EPS_DISTURBANCE_NODE], ["x", "y", "z"])
-    outputs = np.vstack([model.displacement_output(roles[p], ["x", "y", "z"]).T
-                         for p in EPS_OUTPUT_NODES])
-    return model, actuators, disturbance, outputs
-
-
-def _paper(roles: dict, node: int) -> int:
-    inverse = {v: k for k, v in roles.items()}
-    return inverse.get(node, node)
-
-
-def eps_h2_ranking(case=None, n_modes: int = 20, gamma=1.0, rigid: str = "project",
-                   measure: str = "energy") -> H2Ranking:
-    """:func:`h2_actuator_ranking` on :func:`eps_h2_setup`; compare ``.top(5)`` with
-    ``EPS_PUBLISHED_TOP5`` = 69X, 66X, 63X, 60X, 88X (seed 003 L248–L253)."""
-    model, actuators, disturbance, outputs = eps_h2_setup(case, n_modes)
-    return h2_actuator_ranking(model, actuators, disturbance, outputs, gamma=gamma,
-                               rigid=rigid, measure=measure)
 
 
 def kim_junkins_score(model, actuators: Mapping, Cq=None, Cv=None, Q=None) -> Callable:

@@ -16,7 +16,6 @@ _EXPORTS = {
     "OutputError": "publish",
     "check_output_folder": "publish",
     "write_atomically": "publish",
-    "write_netcdf": "publish",
     "PLOTS": "maneuver",
     "STYLE": "maneuver",
     "format_metric": "maneuver",

@@ -26,7 +26,8 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from flexsat.scenarios.identification import IdentificationResult, as_dict
-from flexsat.report.publish import write_atomically, write_netcdf
+from flexsat.netcdf import write_netcdf
+from flexsat.report.publish import write_atomically
 from flexsat.report.maneuver import STYLE
 from flexsat.text import format_optional
 

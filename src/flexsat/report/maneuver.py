@@ -25,7 +25,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.publish import write_atomically, write_netcdf
+from flexsat.netcdf import write_netcdf
+from flexsat.report.publish import write_atomically
 from flexsat.scenarios.runner import ScenarioResult
 
 

@@ -397,16 +397,4 @@ def write_atomically(out_dir, write: Callable[[Path], None], *,
     return out
 
 
-def write_netcdf(dataset, path, **options) -> None:
-    """Write ``dataset`` (an ``xarray.Dataset``) to ``path`` as netCDF-4 (engine h5netcdf;
-    ``options`` go to ``to_netcdf``, e.g. ``encoding``).
-
-    The file is built in memory and written with Python's file I/O: HDF5 writing to a full disk
-    crashes the interpreter (segmentation fault in h5py 3.16 when it closes the file), whereas a
-    failed Python write raises ``OSError`` (ENOSPC).
-    """
-    Path(path).write_bytes(dataset.to_netcdf(engine="h5netcdf", **options))
-
-
-__all__ = ["LOCK_TIMEOUT_S", "MANIFEST", "OutputError", "check_output_folder", "write_atomically",
-           "write_netcdf"]
+__all__ = ["LOCK_TIMEOUT_S", "MANIFEST", "OutputError", "check_output_folder", "write_atomically"]

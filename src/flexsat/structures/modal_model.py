@@ -61,7 +61,7 @@ import numpy as np
 from scipy.sparse import issparse
 from scipy.sparse.linalg import norm as sparse_norm
 
-from flexsat.report.publish import write_netcdf
+from flexsat.netcdf import write_netcdf
 from flexsat.validation import require_count, require_finite, require_nonneg
 
 __all__ = [
