@@ -104,11 +104,12 @@ def _euler(w, J, Jinv, u):
 def _dexpinv(theta, w):
     """θ̇ of the rotation-vector kinematics (module docstring), vectorised."""
     a2 = np.sum(theta * theta, axis=-1)
-    a = np.sqrt(a2)
-    small = a < _SERIES_ANGLE
-    x = np.where(small, 1.0, a / 2)  # placeholder where the series is used: no 0/0
-    closed = (1 - x / np.tan(x)) / np.where(small, 1.0, a2)
-    c = np.where(small, 1 / 12 + a2 / 720 + a2 * a2 / 30240, closed)[..., None]
+    c = 1 / 12 + a2 / 720 + a2 * a2 / 30240
+    if a2.max(initial=0.0) >= _SERIES_ANGLE ** 2:  # rare: steps of one RK stage are small
+        small = a2 < _SERIES_ANGLE ** 2
+        x = np.where(small, 1.0, np.sqrt(a2) / 2)  # placeholder where the series is used
+        c = np.where(small, c, (1 - x / np.tan(x)) / np.where(small, 1.0, a2))
+    c = c[..., None]
     tw = _cross(theta, w)
     return w + 0.5 * tw + c * _cross(theta, tw)
 
@@ -163,17 +164,13 @@ def propagate(beta0, w0, inertia, t, torque=None) -> tuple[np.ndarray, np.ndarra
     t = require_numeric(t, "t")
     if t.ndim != 1 or t.size < 1 or np.any(np.diff(t) <= 0):
         raise ValueError(f"t: must be a 1-D strictly increasing time grid, got shape {t.shape}")
-    shape = np.broadcast_shapes(b.shape[:-1], w.shape[:-1], J.shape[:-2])
+    u_const = np.zeros(3) if torque is None or callable(torque) else \
+        _last(torque, "torque", (3,))
+    shape = np.broadcast_shapes(b.shape[:-1], w.shape[:-1], J.shape[:-2], u_const.shape[:-1])
     b = np.broadcast_to(b, shape + (4,)).copy()
     w = np.broadcast_to(w, shape + (3,)).copy()
     Jinv = np.linalg.inv(J)
-    if torque is None:
-        u_of = lambda tt, bb, ww: 0.0  # noqa: E731
-    elif callable(torque):
-        u_of = torque
-    else:
-        u_const = _last(torque, "torque", (3,))
-        u_of = lambda tt, bb, ww: u_const  # noqa: E731
+    u_of = torque if callable(torque) else (lambda tt, bb, ww: u_const)
 
     betas = np.empty(shape + (t.size, 4))
     ws = np.empty(shape + (t.size, 3))
@@ -249,7 +246,8 @@ def euler_poinsot_rates(moments, w0, t) -> np.ndarray:
     ----------
     moments : array_like, shape (..., 3)
         Principal moments of inertia (kg·m²), distinct (an axisymmetric body has a circular
-        closed form instead), any order: ``w0`` and the result are along the same axes.
+        closed form instead), in any order along a right-handed frame: ``w0`` and the result
+        are along the same axes.
     w0 : array_like, shape (..., 3)
         Initial body rates along those principal axes (rad/s), not a pure spin about one axis.
     t : array_like, shape (n_t,)
@@ -270,8 +268,12 @@ def euler_poinsot_rates(moments, w0, t) -> np.ndarray:
     if np.any(moments <= 0):
         raise ValueError("moments: principal moments must be > 0")
     order = np.argsort(moments, axis=-1)
+    # ω is a pseudovector: relabelling the axes by an odd permutation (a left-handed frame)
+    # flips its sign, so the sorted frame sees parity·P ω and the result is mapped back alike
+    o0, o1, o2 = order[..., 0], order[..., 1], order[..., 2]
+    parity = np.sign((o1 - o0) * (o2 - o0) * (o2 - o1)).astype(float)[..., None]
     Is = np.take_along_axis(moments, order, -1)
-    ws = np.take_along_axis(w0, order, -1)
+    ws = parity * np.take_along_axis(w0, order, -1)
     if np.any(np.diff(Is, axis=-1) <= 1e-12 * Is[..., 2:]):
         raise ValueError("moments: principal moments must be distinct (asymmetric body)")
     H2 = np.sum((Is * ws) ** 2, -1)
@@ -299,4 +301,4 @@ def euler_poinsot_rates(moments, w0, t) -> np.ndarray:
                          np.where(about_max[..., None], od, on)], -1)
     out = np.empty_like(sorted_w)
     np.put_along_axis(out, np.broadcast_to(order[..., None, :], out.shape), sorted_w, -1)
-    return out
+    return parity[..., None, :] * out
