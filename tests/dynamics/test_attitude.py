@@ -130,7 +130,8 @@ def test_kinematic_rates_equal_finite_differences_along_an_exact_rotation():
     # 1e-8 relative to the rate is a safe bound well below any formula error
     b = {s: exact_rotation(w, beta0, t + s * h) for s in (-1, 0, 1)}
     keep = np.abs(b[0][:, 0]) > 0.2  # Gibbs parameters stay moderate, 1 + β0 > 0 for MRPs
-    for to, rate in ((att.quaternion_to_gibbs, att.gibbs_rate), (att.quaternion_to_mrp, att.mrp_rate)):
+    pairs = ((att.quaternion_to_gibbs, att.gibbs_rate), (att.quaternion_to_mrp, att.mrp_rate))
+    for to, rate in pairs:
         x = {s: to(np.where(b[0][:, :1] < 0, -b[s], b[s])[keep]) for s in b}
         fd = (x[1] - x[-1]) / (2 * h)
         exact = rate(x[0], w[keep])
@@ -157,3 +158,12 @@ def test_kinematic_rates_equal_finite_differences_along_an_exact_rotation():
 def test_bad_input_names_the_field(call, field):
     with pytest.raises(ValueError, match=re.escape(field)):
         call()
+
+
+def test_the_package_re_exports_every_kernel():
+    from flexsat import dynamics
+    from flexsat.dynamics import rigid_body
+
+    kernels = {*att.__all__, *rigid_body.__all__} - {"UNIT_TOL", "SINGULAR_TOL"}
+    assert kernels == set(dynamics.__all__)
+    assert dynamics.dcm_to_quaternion is att.dcm_to_quaternion

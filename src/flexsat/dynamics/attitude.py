@@ -161,9 +161,10 @@ def quaternion_to_dcm(beta) -> np.ndarray:
     """
     b = _quaternion(beta)
     b0, b1, b2, b3 = (b[..., i] for i in range(4))
-    rows = [[b0 * b0 + b1 * b1 - b2 * b2 - b3 * b3, 2 * (b1 * b2 + b0 * b3), 2 * (b1 * b3 - b0 * b2)],
-            [2 * (b1 * b2 - b0 * b3), b0 * b0 - b1 * b1 + b2 * b2 - b3 * b3, 2 * (b2 * b3 + b0 * b1)],
-            [2 * (b1 * b3 + b0 * b2), 2 * (b2 * b3 - b0 * b1), b0 * b0 - b1 * b1 - b2 * b2 + b3 * b3]]
+    s0, s1, s2, s3 = b0 * b0, b1 * b1, b2 * b2, b3 * b3
+    rows = [[s0 + s1 - s2 - s3, 2 * (b1 * b2 + b0 * b3), 2 * (b1 * b3 - b0 * b2)],
+            [2 * (b1 * b2 - b0 * b3), s0 - s1 + s2 - s3, 2 * (b2 * b3 + b0 * b1)],
+            [2 * (b1 * b3 + b0 * b2), 2 * (b2 * b3 - b0 * b1), s0 - s1 - s2 + s3]]
     return np.stack([np.stack(r, -1) for r in rows], -2)
 
 
@@ -218,7 +219,8 @@ def _axis_rotation(angle: np.ndarray, axis: int) -> np.ndarray:
     R[..., axis, axis] = 1.0
     R[..., i, i] = c
     R[..., j, j] = c
-    # R1 = [[1,0,0],[0,c,s],[0,-s,c]], R2 = [[c,0,-s],[0,1,0],[s,0,c]], R3 = [[c,s,0],[-s,c,0],[0,0,1]]
+    # R1 = [[1,0,0],[0,c,s],[0,-s,c]], R2 = [[c,0,-s],[0,1,0],[s,0,c]],
+    # R3 = [[c,s,0],[-s,c,0],[0,0,1]]: the (i, j) entry is -s for R2 only
     sign = 1.0 if axis != 1 else -1.0
     R[..., i, j] = sign * s
     R[..., j, i] = -sign * s
