@@ -103,6 +103,16 @@ def test_gibbs_and_mrp_round_trips_and_the_shadow_set():
     assert np.abs(att.mrp_shadow(shadow) - sigma).max() <= 16 * EPS
 
 
+def test_conversions_work_on_several_leading_axes():
+    beta = random_quaternions(24, seed=10).reshape(2, 3, 4, 4)
+    C = att.quaternion_to_dcm(beta)
+    assert C.shape == (2, 3, 4, 3, 3)
+    flat = att.quaternion_to_dcm(beta.reshape(-1, 4)).reshape(C.shape)
+    assert np.array_equal(C, flat)  # elementwise arithmetic: identical, not just close
+    assert att.dcm_to_euler123(C).shape == (2, 3, 4, 3)
+    assert att.quaternion_to_mrp(np.abs(beta)).shape == (2, 3, 4, 3)
+
+
 def test_omega_and_rate_matrices_agree():
     beta = random_quaternions(seed=6)
     w = np.random.default_rng(7).standard_normal((N, 3))

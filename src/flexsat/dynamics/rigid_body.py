@@ -60,7 +60,7 @@ def _inertia(inertia) -> np.ndarray:
     return J
 
 
-def euler_rates(w, inertia, torque=0.0) -> np.ndarray:
+def euler_rates(w, inertia, torque=None) -> np.ndarray:
     r"""ω̇ from Euler's equations, :math:`\dot\omega = I^{-1}(u - \omega \times I\omega)`
     (seed 003 Eq. 12).
 
@@ -70,8 +70,8 @@ def euler_rates(w, inertia, torque=0.0) -> np.ndarray:
         Body angular velocity (rad/s).
     inertia : array_like, shape (..., 3, 3)
         Inertia about the centre of mass, body axes (kg·m²), symmetric positive definite.
-    torque : array_like, shape (..., 3)
-        External torque, body components (N·m).
+    torque : None or array_like, shape (..., 3)
+        External torque, body components (N·m); None for a torque-free body.
 
     Returns
     -------
@@ -79,8 +79,7 @@ def euler_rates(w, inertia, torque=0.0) -> np.ndarray:
     """
     w = _last(w, "w", (3,))
     J = _inertia(inertia)
-    u = np.broadcast_to(require_numeric(torque, "torque"), w.shape[:-1] + (3,)) \
-        if np.ndim(torque) == 0 else _last(torque, "torque", (3,))
+    u = np.zeros(3) if torque is None else _last(torque, "torque", (3,))
     return _euler(w, J, np.linalg.inv(J), u)
 
 
@@ -154,7 +153,8 @@ def propagate(beta0, w0, inertia, t, torque=None) -> tuple[np.ndarray, np.ndarra
         Strictly increasing times (s); the state at ``t[0]`` is the initial one.
     torque : None, array_like of shape (..., 3), or callable
         External torque in body components (N·m): constant, or ``torque(t, beta, w)``
-        returning (..., 3), called at the RK stages.
+        returning (..., 3), called at the RK stages (and once up front, to check its
+        output).
 
     Returns
     -------
@@ -174,6 +174,13 @@ def propagate(beta0, w0, inertia, t, torque=None) -> tuple[np.ndarray, np.ndarra
     w = np.broadcast_to(w, shape + (3,)).copy()
     Jinv = np.linalg.inv(J)
     u_of = torque if callable(torque) else (lambda tt, bb, ww: u_const)
+    if callable(torque):  # one call up front, so a wrong law fails here, naming itself
+        u0 = _last(torque(t[0], b, w), "torque(t, beta, w)", (3,))
+        try:
+            np.broadcast_shapes(u0.shape, shape + (3,))
+        except ValueError:
+            raise ValueError(f"torque(t, beta, w): must return shape {shape + (3,)} (one torque "
+                             f"per case), got {u0.shape}") from None
 
     betas = np.empty(shape + (t.size, 4))
     ws = np.empty(shape + (t.size, 3))
@@ -184,19 +191,24 @@ def propagate(beta0, w0, inertia, t, torque=None) -> tuple[np.ndarray, np.ndarra
         bb = _mul(_exp(th), b) if callable(torque) else b  # β only read by a torque law
         return _dexpinv(th, ww), _euler(ww, J, Jinv, u_of(tt, bb, ww))
 
-    for n in range(t.size - 1):
-        h, tn = t[n + 1] - t[n], t[n]
-        k1t, k1w = stage(tn, zero, w)
-        k2t, k2w = stage(tn + h / 2, h / 2 * k1t, w + h / 2 * k1w)
-        k3t, k3w = stage(tn + h / 2, h / 2 * k2t, w + h / 2 * k2w)
-        k4t, k4w = stage(tn + h, h * k3t, w + h * k3w)
-        theta = h / 6 * (k1t + 2 * k2t + 2 * k3t + k4t)
-        w = w + h / 6 * (k1w + 2 * k2w + 2 * k3w + k4w)
-        b = _mul(_exp(theta), b)
-        if not (np.all(np.isfinite(w)) and np.all(np.isfinite(b))):
-            raise FloatingPointError(f"propagate: the state diverged (non-finite) at t = "
-                                     f"{t[n + 1]:.6g} s")
-        betas[..., n + 1, :], ws[..., n + 1, :] = b, w
+    # a non-finite state is caught and reported below, naming the cases: no warnings first
+    with np.errstate(over="ignore", invalid="ignore"):
+        for n in range(t.size - 1):
+            h, tn = t[n + 1] - t[n], t[n]
+            k1t, k1w = stage(tn, zero, w)
+            k2t, k2w = stage(tn + h / 2, h / 2 * k1t, w + h / 2 * k1w)
+            k3t, k3w = stage(tn + h / 2, h / 2 * k2t, w + h / 2 * k2w)
+            k4t, k4w = stage(tn + h, h * k3t, w + h * k3w)
+            theta = h / 6 * (k1t + 2 * k2t + 2 * k3t + k4t)
+            w = w + h / 6 * (k1w + 2 * k2w + 2 * k3w + k4w)
+            b = _mul(_exp(theta), b)
+            if not (np.all(np.isfinite(w)) and np.all(np.isfinite(b))):
+                bad = ~(np.isfinite(w).all(-1) & np.isfinite(b).all(-1))
+                cases = [tuple(int(i) for i in c) for c in np.argwhere(np.atleast_1d(bad))][:10]
+                raise ValueError(f"propagate: the state became non-finite at t = {t[n + 1]:.6g} s "
+                                 f"(case index {cases}): a non-finite torque, or rates too large "
+                                 f"for the step {h:.3g} s")
+            betas[..., n + 1, :], ws[..., n + 1, :] = b, w
     return betas, ws
 
 
@@ -298,6 +310,9 @@ def euler_poinsot_rates(moments, w0, t) -> np.ndarray:
                          "(the rates are constant)")
     phi0 = np.arctan2(eps * wb / Ab, wn / An)
     u0 = scipy.special.ellipkinc(phi0, m)
+    if not np.all(np.isfinite(u0)):  # m = 1 and φ0 = ±π/2: at rest on the separatrix
+        raise ValueError("w0: a pure spin about the intermediate axis (an unstable equilibrium "
+                         "on the separatrix H² = 2T·I2) has no elliptic solution")
     sn, cn, dn, _ = scipy.special.ellipj(p[..., None] * t + u0[..., None], m[..., None])
     on, ob, od = An[..., None] * cn, (eps * Ab)[..., None] * sn, (eps * Ad)[..., None] * dn
     sorted_w = np.stack([np.where(about_max[..., None], on, od), ob,
