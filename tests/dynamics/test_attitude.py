@@ -166,6 +166,9 @@ def test_kinematic_rates_equal_finite_differences_along_an_exact_rotation():
     (lambda: att.mrp_shadow([0.0, 0.0, 0.0]), "sigma: the shadow set of σ = 0"),
     (lambda: att.gibbs_rate([0.0, 0.0, 0.0], [np.inf, 0.0, 0.0]), "w: must be finite"),
     (lambda: att.omega_matrix("fast"), "w: must be a numeric array"),
+    (lambda: att.quaternion_multiply(np.ones((2, 4)) / 2, np.ones((3, 4)) / 2),
+     "second, first: leading (case) axes must broadcast"),
+    (lambda: att.mrp_rate(np.zeros((2, 3)), np.zeros((5, 3))), "sigma, w: leading (case) axes"),
 ])
 def test_bad_input_names_the_field(call, field):
     with pytest.raises(ValueError, match=re.escape(field)):

@@ -174,6 +174,8 @@ def test_cases_along_several_leading_axes_are_independent():
     (lambda: rb.propagate([1, 0, 0, 0], [0, np.nan, 1], np.eye(3), [0, 1]), "w0: must be finite"),
     (lambda: rb.propagate([1, 0, 0, 0], [0, 0, 1], np.eye(3), [0, 1], torque=[1, 2]),
      "torque: last axes must have shape (3,)"),
+    (lambda: rb.propagate([1, 0, 0, 0], np.ones((2, 3)), np.ones((3, 1, 1)) * np.eye(3), [0, 1]),
+     "beta0, w0, inertia, torque: leading (case) axes must broadcast"),
     (lambda: rb.euler_poinsot_rates([1, 1, 2], [1, 1, 1], [0, 1]),
      "moments: principal moments must be distinct"),
     (lambda: rb.euler_poinsot_rates([1, 2, 3], [0, 0, 1], [0, 1]), "w0: a pure spin"),

@@ -48,6 +48,16 @@ def _last(value, field: str, shape: tuple[int, ...]) -> np.ndarray:
     return arr
 
 
+def _cases(**fields) -> tuple[int, ...]:
+    """The common leading (case) shape of the named arrays' leading axes, or a clear error."""
+    try:
+        return np.broadcast_shapes(*fields.values())
+    except ValueError:
+        got = ", ".join(f"{name} {shape}" for name, shape in fields.items())
+        raise ValueError(f"{', '.join(fields)}: leading (case) axes must broadcast, got "
+                         f"{got}") from None
+
+
 def _quaternion(beta, field: str = "beta") -> np.ndarray:
     b = _last(beta, field, (4,))
     err = np.abs(np.linalg.norm(b, axis=-1) - 1.0)
@@ -292,6 +302,7 @@ def principal_rotation_to_quaternion(axis, angle) -> np.ndarray:
     if np.any(err > UNIT_TOL):
         raise ValueError(f"axis: must be a unit vector (| ‖l‖ − 1 | <= {UNIT_TOL:g}), largest "
                          f"departure {err.max():.3g}")
+    _cases(axis=ax.shape[:-1], angle=phi.shape)
     half = phi / 2
     return np.concatenate([np.cos(half)[..., None], ax * np.sin(half)[..., None]], -1)
 
@@ -345,6 +356,7 @@ def quaternion_multiply(second, first) -> np.ndarray:
     """
     q = _last(second, "second", (4,))
     p = _last(first, "first", (4,))
+    _cases(second=q.shape[:-1], first=p.shape[:-1])
     q0, q1, q2, q3 = (q[..., i] for i in range(4))
     p0, p1, p2, p3 = (p[..., i] for i in range(4))
     return np.stack([q0 * p0 - q1 * p1 - q2 * p2 - q3 * p3,
@@ -455,6 +467,7 @@ def gibbs_rate(q, w) -> np.ndarray:
     """
     q = _last(q, "q", (3,))
     w = _last(w, "w", (3,))
+    _cases(q=q.shape[:-1], w=w.shape[:-1])
     return 0.5 * (w + np.cross(q, w) + q * np.sum(q * w, axis=-1)[..., None])
 
 
@@ -470,5 +483,6 @@ def mrp_rate(sigma, w) -> np.ndarray:
     """
     s = _last(sigma, "sigma", (3,))
     w = _last(w, "w", (3,))
+    _cases(sigma=s.shape[:-1], w=w.shape[:-1])
     s2 = np.sum(s * s, axis=-1)[..., None]
     return 0.25 * ((1 - s2) * w + 2 * np.cross(s, w) + 2 * s * np.sum(s * w, axis=-1)[..., None])

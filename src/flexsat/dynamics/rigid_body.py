@@ -32,11 +32,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.special
 
-from flexsat.dynamics.attitude import (
-    _last,
-    _quaternion,
-    quaternion_to_dcm,
-)
+from flexsat.dynamics.attitude import _cases, _last, _quaternion, quaternion_to_dcm
 from flexsat.validation import require_numeric
 
 __all__ = ["euler_rates", "propagate", "angular_momentum_inertial", "kinetic_energy",
@@ -169,7 +165,8 @@ def propagate(beta0, w0, inertia, t, torque=None) -> tuple[np.ndarray, np.ndarra
         raise ValueError(f"t: must be a 1-D strictly increasing time grid, got shape {t.shape}")
     u_const = np.zeros(3) if torque is None or callable(torque) else \
         _last(torque, "torque", (3,))
-    shape = np.broadcast_shapes(b.shape[:-1], w.shape[:-1], J.shape[:-2], u_const.shape[:-1])
+    shape = _cases(beta0=b.shape[:-1], w0=w.shape[:-1], inertia=J.shape[:-2],
+                   torque=u_const.shape[:-1])
     b = np.broadcast_to(b, shape + (4,)).copy()
     w = np.broadcast_to(w, shape + (3,)).copy()
     Jinv = np.linalg.inv(J)
@@ -277,7 +274,7 @@ def euler_poinsot_rates(moments, w0, t) -> np.ndarray:
     t = require_numeric(t, "t")
     if t.ndim != 1:
         raise ValueError(f"t: must be a 1-D time grid, got shape {t.shape}")
-    shape = np.broadcast_shapes(moments.shape[:-1], w0.shape[:-1])
+    shape = _cases(moments=moments.shape[:-1], w0=w0.shape[:-1])
     moments = np.broadcast_to(moments, shape + (3,))
     w0 = np.broadcast_to(w0, shape + (3,))
     if np.any(moments <= 0):
