@@ -1,0 +1,25 @@
+"""Plants and their kernels.
+
+:mod:`flexsat.dynamics.attitude` (attitude kinematics: Euler parameters, DCM, 1-2-3 Euler
+angles, Gibbs and modified Rodrigues parameters) and :mod:`flexsat.dynamics.rigid_body`
+(Euler's equations, the norm-preserving propagator, the Euler–Poinsot solution) are plain
+array kernels with a leading case axis; their names are re-exported here and imported from
+their modules on first use, so importing the package loads nothing.
+"""
+
+from flexsat.lazy import lazy_exports
+
+_EXPORTS = {
+    **{name: "attitude" for name in (
+        "cross_matrix", "omega_matrix", "quaternion_rate_matrix", "quaternion_to_dcm",
+        "dcm_to_quaternion", "euler123_to_dcm", "dcm_to_euler123",
+        "principal_rotation_to_quaternion", "quaternion_to_principal_rotation",
+        "quaternion_multiply", "quaternion_exp", "quaternion_to_gibbs", "gibbs_to_quaternion",
+        "quaternion_to_mrp", "mrp_to_quaternion", "mrp_shadow", "gibbs_rate", "mrp_rate")},
+    **{name: "rigid_body" for name in (
+        "euler_rates", "propagate", "angular_momentum_inertial", "kinetic_energy",
+        "euler_poinsot_rates")},
+}
+
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
