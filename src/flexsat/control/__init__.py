@@ -1,5 +1,6 @@
 """Control laws behind one interface (:class:`Controller`)."""
 
+from flexsat.control.attitude_laws import GibbsLyapunovLaw, MRPLaw
 from flexsat.control.base import Controller
 from flexsat.control.estimation import (
     RefinedEstimator,
@@ -31,9 +32,11 @@ __all__ = [
     "design_minimum_sensitivity",
     "FrequencyShapedController",
     "FrequencyShapedDesign",
+    "GibbsLyapunovLaw",
     "LQGController",
     "LyapunovRegulator",
     "LyapunovTracker",
+    "MRPLaw",
     "PD",
     "RefinedEstimator",
     "RiccatiSolution",
