@@ -190,5 +190,10 @@ def test_bad_states_are_named():
         law(0.0, att.principal_rotation_to_quaternion([0.0, 1.0, 0.0], np.pi), W0)
     with pytest.raises(ValueError, match="w: last axes must have shape"):
         law(0.0, TARGET, [1.0, 2.0])
-    with pytest.raises(ValueError, match="beta, w: leading"):
+    with pytest.raises(ValueError, match="beta, w, k, A, beta_target: leading"):
         law(0.0, np.stack([TARGET] * 2), np.zeros((3, 3)))
+    batched = MRPLaw(K=[1.0, 2.0], P=1.0)
+    with pytest.raises(ValueError, match=r"K \(2,\)"):
+        batched(0.0, np.stack([TARGET] * 3), np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="beta, beta_target: leading"):
+        error_quaternion(np.stack([TARGET] * 3), np.stack([TARGET] * 2))

@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flexsat.dynamics.attitude import SINGULAR_TOL, _last, _quaternion
+from flexsat.dynamics.attitude import SINGULAR_TOL, _cases, _last, _quaternion
 from flexsat.dynamics.rigid_body import _inertia
 from flexsat.validation import require_positive, set_si
 
@@ -71,6 +71,7 @@ def error_quaternion(beta, beta_target) -> np.ndarray:
     """
     b = _quaternion(beta)
     r = _quaternion(beta_target, "beta_target")
+    _cases(beta=b.shape[:-1], beta_target=r.shape[:-1])
     return _error(b, r)
 
 
@@ -90,14 +91,13 @@ def _per_axis(value: np.ndarray, name: str) -> np.ndarray:
     return value
 
 
-def _state(beta, w):
+def _state(law, beta, w):
+    """β and ω checked, their case axes and those of the law's gains and target broadcasting."""
     b = _quaternion(beta)
     w = _last(w, "w", (3,))
-    try:
-        np.broadcast_shapes(b.shape[:-1], w.shape[:-1])
-    except ValueError:
-        raise ValueError(f"beta, w: leading (case) axes must broadcast, got {b.shape[:-1]} and "
-                         f"{w.shape[:-1]}") from None
+    gains = {name: np.shape(getattr(law, name)) for name in law.__dataclass_fields__}
+    gains = {name: shape[:-1] if name in law._VECTORS else shape for name, shape in gains.items()}
+    _cases(beta=b.shape[:-1], w=w.shape[:-1], **gains)
     return b, w
 
 
@@ -120,6 +120,8 @@ class GibbsLyapunovLaw:
     k: object
     A: object
     beta_target: object = field(default=_IDENTITY)
+    #: fields whose last axis is not a case axis
+    _VECTORS = ("k", "beta_target")
 
     def __post_init__(self):
         set_si(self, "k", require_positive, "N*m*s/rad")
@@ -137,14 +139,14 @@ class GibbsLyapunovLaw:
 
     def __call__(self, t, beta, w) -> np.ndarray:
         """The torque u (N·m, body components, shape (..., 3)) at attitude β, rate ω."""
-        beta, w = _state(beta, w)
+        beta, w = _state(self, beta, w)
         q = self.gibbs(beta)
         A = np.asarray(self.A)[..., None]
         return -(self.k * w + A * q * (1 + np.sum(q * q, axis=-1))[..., None])
 
     def lyapunov(self, beta, w, inertia) -> np.ndarray:
         r"""U = ½ ωᵀIω + A qᵀq (J), Att. 3 Eq. 2."""
-        beta, w = _state(beta, w)
+        beta, w = _state(self, beta, w)
         J = _inertia(inertia)
         q = self.gibbs(beta)
         return (0.5 * np.einsum("...i,...ij,...j->...", w, J, w)
@@ -176,6 +178,8 @@ class MRPLaw:
     K: object
     P: object
     beta_target: object = field(default=_IDENTITY)
+    #: fields whose last axis is not a case axis
+    _VECTORS = ("P", "beta_target")
 
     def __post_init__(self):
         set_si(self, "K", require_positive, "N*m")
@@ -195,12 +199,12 @@ class MRPLaw:
 
     def __call__(self, t, beta, w) -> np.ndarray:
         """The torque u (N·m, body components, shape (..., 3)) at attitude β, rate ω."""
-        beta, w = _state(beta, w)
+        beta, w = _state(self, beta, w)
         return -(np.asarray(self.K)[..., None] * self.mrp(beta) + self.P * w)
 
     def lyapunov(self, beta, w, inertia) -> np.ndarray:
         r"""V = ½ ωᵀIω + 2K ln(1 + σᵀσ) (J), Schaub & Junkins Ch. 8."""
-        beta, w = _state(beta, w)
+        beta, w = _state(self, beta, w)
         J = _inertia(inertia)
         s = self.mrp(beta)
         return (0.5 * np.einsum("...i,...ij,...j->...", w, J, w)
