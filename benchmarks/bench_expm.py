@@ -68,37 +68,44 @@ def timed(fn, repeat: int):
 
 def fmt(best_median) -> str:
     best, median = best_median
-    return f"{best * 1e3:.1f} ms ({median * 1e3:.1f})"
+    return f"{best * 1e3:.3g} ms ({median * 1e3:.3g})"
+
+
+def compare(n_modes: int, repeat: int) -> list[str]:
+    """Table rows of one TAMU model: the two builds, then the two whole runs."""
+    case = tamu(n_modes=n_modes)
+    model = case.model()
+    A, Bu, Bf = model.state_space
+    cfg = case.sim_config(15.0, friction=False, noise=False)
+    law = case.law_ii(G1, G2)
+    label = f"{n_modes} ({model.nx})"
+    rows = []
+    for what, bf in (("build, linear", None), ("build, friction column", Bf[:, :1])):
+        old = timed(lambda bf=bf: FullBlockStepper.build(A, Bu, bf, cfg.dt), repeat)
+        new = timed(lambda bf=bf: ExponentialStepper.build(A, Bu, bf, cfg.dt), repeat)
+        rows.append(f"| {label} | {what} | {fmt(old[:2])} | {fmt(new[:2])} "
+                    f"| {old[0] / new[0]:.1f}× |")
+    engine.simulate(model, law, cfg)  # warm-up (imports, caches)
+    with engine_stepper(FullBlockStepper):
+        old = timed(lambda: engine.simulate(model, law, cfg), repeat)
+    new = timed(lambda: engine.simulate(model, law, cfg), repeat)
+    th_old = old[2].dataset.theta.values
+    diff = np.abs(new[2].dataset.theta.values - th_old).max() / np.abs(th_old).max()
+    rows.append(f"| {label} | whole `simulate` (linear, 15 s at 75 Hz; hub angle differs by "
+                f"{diff:.1e} relative) | {fmt(old[:2])} | {fmt(new[:2])} "
+                f"| {old[0] / new[0]:.2f}× |")
+    return rows
 
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     args = ap.parse_args(argv)
-
     print("| modes per appendage (states) | set-up | former 3n × 3n: best (median) "
           "| minimal block: best (median) | former / minimal |")
     print("|---|---|---|---|---|")
     for n_modes in (10, 100):
-        case = tamu(n_modes=n_modes)
-        model = case.model()
-        A, Bu, Bf = model.state_space
-        cfg = case.sim_config(15.0, friction=False, noise=False)
-        law = case.law_ii(G1, G2)
-        label = f"{n_modes} ({model.nx})"
-        for what, bf in (("build, linear", None), ("build, friction column", Bf[:, :1])):
-            old = timed(lambda: FullBlockStepper.build(A, Bu, bf, cfg.dt), args.repeat)
-            new = timed(lambda: ExponentialStepper.build(A, Bu, bf, cfg.dt), args.repeat)
-            print(f"| {label} | {what} | {fmt(old[:2])} | {fmt(new[:2])} "
-                  f"| {old[0] / new[0]:.1f}× |")
-        engine.simulate(model, law, cfg)  # warm-up (imports, caches)
-        with engine_stepper(FullBlockStepper):
-            old = timed(lambda: engine.simulate(model, law, cfg), args.repeat)
-        new = timed(lambda: engine.simulate(model, law, cfg), args.repeat)
-        th_old = old[2].dataset.theta.values
-        diff = np.abs(new[2].dataset.theta.values - th_old).max() / np.abs(th_old).max()
-        print(f"| {label} | whole `simulate` (linear, 15 s at 75 Hz; hub angle differs by "
-              f"{diff:.1e} relative) | {fmt(old[:2])} | {fmt(new[:2])} | {old[0] / new[0]:.2f}× |")
+        print("\n".join(compare(n_modes, args.repeat)))
 
 
 if __name__ == "__main__":

@@ -5,8 +5,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
-from flexsat.sim import SimConfig, simulate
-from flexsat.sim import engine
+from flexsat.sim import engine, simulate
 from flexsat.sim.integrators import ExponentialStepper, phi_products
 from flexsat.units import to_si
 

@@ -23,7 +23,7 @@ from scipy.linalg import expm
 
 def phi_products(A: np.ndarray, h: float, B: np.ndarray, n2: int = 0
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(e^{hA}, h φ1(hA) B, h φ2(hA) B₂) by one block exponential, B₂ = the last ``n2`` columns of B.
+    """(e^{hA}, h φ1(hA) B, h φ2(hA) B₂) by one block exponential; B₂ = B's last ``n2`` columns.
 
     Van Loan's construction restricted to the input columns: with k = B's columns and
     J = [0; I_{n2}] (k × n2),
