@@ -275,8 +275,9 @@ def simulate(
     A, Bu, Bf = plant.state_space
     friction = config.friction
     nonlinear = friction.active or plant.stiffening
-    # friction alone acts on the hub dof only: a rank-1 force keeps the substeps cheap
-    Bf_used = Bf if plant.stiffening else Bf[:, :1]
+    # friction alone acts on the hub dof only: a rank-1 force keeps the substeps cheap; a
+    # linear run needs no force columns (the smallest exponential)
+    Bf_used = None if not nonlinear else Bf if plant.stiffening else Bf[:, :1]
     stepper = ExponentialStepper.build(A, Bu, Bf_used, dt, substeps)
     ndof = plant.ndof
     impulse_velocity = plant.mass_inverse[:, 0]
