@@ -19,11 +19,11 @@ A plain script, never collected by pytest:
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 from contextlib import contextmanager
 
 import numpy as np
+
+from bench_tamu import best_of  # the same timing helper as the TAMU benchmark
 
 from flexsat.cases.tamu import tamu
 from flexsat.sim import engine
@@ -56,16 +56,6 @@ def engine_stepper(cls):
         engine.ExponentialStepper = saved
 
 
-def timed(fn, repeat: int):
-    """(best, median) wall time of ``repeat`` calls, and the last result."""
-    times, out = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return min(times), statistics.median(times), out
-
-
 def fmt(best_median) -> str:
     best, median = best_median
     return f"{best * 1e3:.3g} ms ({median * 1e3:.3g})"
@@ -81,14 +71,14 @@ def compare(n_modes: int, repeat: int) -> list[str]:
     label = f"{n_modes} ({model.nx})"
     rows = []
     for what, bf in (("build, linear", None), ("build, friction column", Bf[:, :1])):
-        old = timed(lambda bf=bf: FullBlockStepper.build(A, Bu, bf, cfg.dt), repeat)
-        new = timed(lambda bf=bf: ExponentialStepper.build(A, Bu, bf, cfg.dt), repeat)
+        old = best_of(lambda bf=bf: FullBlockStepper.build(A, Bu, bf, cfg.dt), repeat)
+        new = best_of(lambda bf=bf: ExponentialStepper.build(A, Bu, bf, cfg.dt), repeat)
         rows.append(f"| {label} | {what} | {fmt(old[:2])} | {fmt(new[:2])} "
                     f"| {old[0] / new[0]:.1f}× |")
     engine.simulate(model, law, cfg)  # warm-up (imports, caches)
     with engine_stepper(FullBlockStepper):
-        old = timed(lambda: engine.simulate(model, law, cfg), repeat)
-    new = timed(lambda: engine.simulate(model, law, cfg), repeat)
+        old = best_of(lambda: engine.simulate(model, law, cfg), repeat)
+    new = best_of(lambda: engine.simulate(model, law, cfg), repeat)
     th_old = old[2].dataset.theta.values
     diff = np.abs(new[2].dataset.theta.values - th_old).max() / np.abs(th_old).max()
     rows.append(f"| {label} | whole `simulate` (linear, 15 s at 75 Hz; hub angle differs by "
