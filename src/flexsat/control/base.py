@@ -1,9 +1,15 @@
 """The one interface every control law implements.
 
 A law is called once per control sample with the time, the measurements and its own internal
-state, and returns the torque command and its next state. Every argument may carry a leading case
-axis: gains and references are arrays of shape (n_cases,) and a batch of maneuvers runs in one
-call (python-control's conventions apply to the linear designs built on top of this).
+state, and returns its commands and its next state. It declares the measurement channels it
+``reads`` and the input channels it ``writes`` (names of the plant's
+:class:`~flexsat.dynamics.plant.Channel` s); the simulator checks them against the plant before
+the run. Every argument may carry a leading case axis: gains and references are arrays of shape
+(n_cases,) and a batch of maneuvers runs in one call (python-control's conventions apply to the
+linear designs built on top of this).
+
+A command is returned as a mapping {channel: array}; a law writing one channel may return the
+bare array. A size-1 channel's values have shape (n_cases,), a wider one's (n_cases, size).
 """
 
 from __future__ import annotations
@@ -17,9 +23,15 @@ import numpy as np
 class Controller(ABC):
     """Discrete control law ``u_k, state_{k+1} = law(t_k, y_k, state_k)``.
 
-    Measurements ``y`` are a mapping of arrays of shape (n_cases,) with keys ``theta`` (rad),
-    ``theta_dot`` (rad/s) and ``root_torque`` (l0 S0 − M0, N m).
+    Measurements ``y`` are a mapping of arrays by channel name. The single-axis laws read
+    ``theta`` (rad), ``theta_dot`` (rad/s) and ``root_torque`` (l0 S0 − M0, N m) and write
+    ``torque`` (N m), the defaults below; a law for another plant sets its own.
     """
+
+    #: measurement channels the law reads
+    reads: tuple[str, ...] = ("theta", "theta_dot", "root_torque")
+    #: input channels the law writes
+    writes: tuple[str, ...] = ("torque",)
 
     #: final hub angle the law drives to, rad (array over cases)
     target: np.ndarray

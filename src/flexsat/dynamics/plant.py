@@ -1,0 +1,186 @@
+"""The one plant protocol every simulated system implements.
+
+A plant is a continuous system with a leading case axis,
+
+    x' = A x + B u + B_f f(x, u),        u = [u_1, …, u_m]  (its input channels, concatenated)
+
+split into a linear part (A, B), propagated exactly by matrix exponentials, and a nonlinear
+remainder written as a generalized force f (n_cases, n_f) entering through a constant matrix B_f
+(n_x, n_f): low-rank where the nonlinearity is (a hub bearing, the gyroscopic terms of a few
+coordinates), so the exponential integrator only forms φ-products with those columns
+(:func:`flexsat.sim.integrators.phi_products`). A plant whose state lives on a manifold (a unit
+quaternion) may instead supply its own one-step integrator (:meth:`Plant.step`).
+
+Inputs and outputs are named :class:`Channel` s with SI units. A size-1 channel's values have
+shape (n_cases,), a wider channel's (n_cases, size); every method also accepts extra leading
+axes (time × case) so that outputs and energies are computed after the time loop in large
+array products. A law reads measurement channels by name and writes input channels by name
+(:class:`flexsat.control.base.Controller`); the engine checks both against the plant before the
+run.
+
+How to add a system: subclass :class:`Plant`, give ``inputs``, ``outputs``, ``nx`` and
+:meth:`linear_part`, :meth:`output` (or :meth:`output_matrices` for linear outputs), and, if it
+is nonlinear, ``force_matrix`` and :meth:`nonlinear_force`; docs/design.md ("Adding a system")
+walks through it.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Channel:
+    """A named input or output of a plant.
+
+    Parameters
+    ----------
+    name : str
+        Identifier used by laws, sensors, actuators and the recorded dataset.
+    unit : str
+        SI unit of its values (a pint expression: ``"N*m"``, ``"rad/s"``, ``""``).
+    size : int
+        Width: 1 for a scalar channel (values (..., n_cases)), 3 for a body-axis torque, 4 for
+        a quaternion (values (..., n_cases, size)).
+    description : str
+        One line for reports and error messages.
+    """
+
+    name: str
+    unit: str
+    size: int = 1
+    description: str = ""
+
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name.isidentifier():
+            raise ValueError(f"channel name: must be an identifier, got {self.name!r}")
+        if not isinstance(self.size, int) or self.size < 1:
+            raise ValueError(f"{self.name}: size must be a positive integer, got {self.size!r}")
+
+
+def channel_slices(channels: tuple[Channel, ...]) -> dict[str, slice]:
+    """Where each channel sits in the concatenated vector of ``channels``."""
+    out, start = {}, 0
+    for ch in channels:
+        out[ch.name] = slice(start, start + ch.size)
+        start += ch.size
+    return out
+
+
+def find_channel(channels: tuple[Channel, ...], name: str, role: str, owner: str) -> Channel:
+    """The channel called ``name``, or a ValueError naming it and listing the known ones."""
+    for ch in channels:
+        if ch.name == name:
+            return ch
+    known = ", ".join(c.name for c in channels) or "none"
+    raise ValueError(f"{name}: {owner} has no {role} channel {name!r} (its {role} channels: "
+                     f"{known})")
+
+
+class Plant(ABC):
+    """Continuous plant x' = A x + B u + B_f f(x, u) with named channels (module docstring).
+
+    Subclasses set ``inputs``, ``outputs`` and ``nx`` and implement :meth:`linear_part` and
+    either :meth:`output_matrices` (outputs linear in x, u and f) or :meth:`output`.
+    """
+
+    #: input channels, in the order of the concatenated input vector u
+    inputs: tuple[Channel, ...] = ()
+    #: output channels (what sensors measure and what is recorded)
+    outputs: tuple[Channel, ...] = ()
+    #: outputs recorded by default, in addition to the inputs (names of ``outputs``)
+    recorded: tuple[str, ...] = ()
+    #: channels with a per-case Gaussian noise stream, in stream order (outputs for sensor
+    #: noise, inputs for random disturbances); fixing the order keeps every case's noise
+    #: bit-reproducible from its seed whatever else is measured
+    noise_channels: tuple[str, ...] = ()
+    #: True when f is not identically zero
+    nonlinear: bool = False
+
+    @property
+    @abstractmethod
+    def nx(self) -> int:
+        """Length of the state vector."""
+
+    @property
+    def n_cases(self) -> int:
+        """Number of parameter cases the plant carries (1 unless dispersed)."""
+        return 1
+
+    @cached_property
+    def n_inputs(self) -> int:
+        """Width m of the concatenated input vector."""
+        return sum(ch.size for ch in self.inputs)
+
+    @cached_property
+    def input_slices(self) -> dict[str, slice]:
+        return channel_slices(self.inputs)
+
+    @abstractmethod
+    def linear_part(self) -> tuple[np.ndarray, np.ndarray]:
+        """(A, B): (n_x, n_x) and (n_x, m), or with a leading case axis when dispersed."""
+
+    @property
+    def force_matrix(self) -> np.ndarray | None:
+        """B_f (n_x, n_f) of the nonlinear force, or None for a linear plant."""
+        return None
+
+    def nonlinear_force(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """f(x, u), shape (..., n_f); the plant's own nonlinear terms only (disturbance
+        forces such as bearing friction are added by the engine on their input channel)."""
+        raise NotImplementedError(f"{type(self).__name__} is linear: it has no nonlinear force")
+
+    def force_jacobian(self, x: np.ndarray, u: np.ndarray):
+        """(∂f/∂x, ∂f/∂u) at (x, u), shapes (..., n_f, n_x) and (..., n_f, m); None when the
+        plant gives no analytic Jacobian (callers then difference :meth:`nonlinear_force`)."""
+        return None
+
+    def output_matrices(self, name: str):
+        """(C, D, D_f) with y = C x + D u + D_f f_in for a linear output, where f_in (..., m)
+        is any extra force added on the input channels (friction); None when the output is
+        nonlinear (then :meth:`output` computes it)."""
+        return None
+
+    def output(self, name: str, x: np.ndarray, u: np.ndarray, f_in=None) -> np.ndarray:
+        """Value of output channel ``name`` at states x (..., n_x), inputs u (..., m) and extra
+        input-channel force f_in (..., m) or None; shape (...,) or (..., size)."""
+        mats = self.output_matrices(name)
+        if mats is None:
+            raise NotImplementedError(f"{type(self).__name__}.output: {name!r} has no output "
+                                      "matrices and no output()")
+        C, D, Df = mats
+        y = x @ C.T + u @ D.T
+        if f_in is not None and Df is not None:
+            y = y + f_in @ Df.T
+        return y[..., 0] if self._size(name) == 1 else y
+
+    def _size(self, name: str) -> int:
+        return find_channel(self.outputs, name, "output", type(self).__name__).size
+
+    def initial_state(self, n_cases: int) -> np.ndarray:
+        """Rest state, (n_cases, n_x)."""
+        return np.zeros((n_cases, self.nx))
+
+    def normalize(self, x: np.ndarray) -> np.ndarray:
+        """Project a state back onto its manifold after a step (identity by default)."""
+        return x
+
+    #: set by plants with their own integrator: ``step(x, u, h)`` advances one step h with u
+    #: held; None uses the engine's exponential integrators
+    step = None
+
+    def energy(self, x: np.ndarray) -> np.ndarray | None:
+        """Total mechanical energy, J, shape (...,); None where undefined."""
+        return None
+
+    def momentum(self, x: np.ndarray) -> np.ndarray | None:
+        """Total angular momentum in inertial axes, N m s, shape (..., 3) or (...,) for a
+        planar plant; None where undefined."""
+        return None
+
+
+__all__ = ["Channel", "Plant", "channel_slices", "find_channel"]
