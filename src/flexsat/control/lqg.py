@@ -161,6 +161,11 @@ class EstimatorController(Controller):
     def n_states(self) -> int:
         return self.A.shape[0]
 
+    @property
+    def reads(self) -> tuple[str, ...]:
+        """The measurement channels of the estimator's C rows."""
+        return self.measurements
+
     def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
         n = self.n_states
         state = {"x_hat": np.zeros((n_cases, n)), "started": np.zeros(n_cases, bool),

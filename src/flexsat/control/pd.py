@@ -29,6 +29,9 @@ class PD(Controller):
         ``feedforward`` is true.
     """
 
+    #: the law uses the hub angle and rate only
+    reads = ("theta", "theta_dot")
+
     def __init__(self, kp, kd, target=0.0, reference=None, feedforward: bool = True):
         self.kp = require_nonneg(kp, "kp", "N*m/rad")
         self.kd = require_nonneg(kd, "kd", "N*m*s/rad")

@@ -37,7 +37,8 @@ from functools import cached_property
 import numpy as np
 
 from flexsat import limits
-from flexsat.dynamics.hybrid import HybridPlant
+from flexsat.dynamics.hybrid import HYBRID_OUTPUTS, HybridPlant
+from flexsat.dynamics.plant import Channel
 from flexsat.structures.beam import TipMassCantilever
 from flexsat.validation import (require_count, require_finite, require_nonneg, require_positive,
                                 set_si)
@@ -132,6 +133,11 @@ class HubAppendage(HybridPlant):
     n_modes: int = 10
     stiffening: bool = False
     _quad: dict = field(init=False, repr=False, compare=False)
+
+    output_channels = HYBRID_OUTPUTS + (
+        Channel("root_shear", "N", description="root shear force S0 of one appendage"),
+        Channel("root_moment", "N*m", description="root bending moment M0 of one appendage"),
+    )
 
     def __post_init__(self):
         require_count(self.n_modes, "n_modes")
@@ -246,7 +252,25 @@ class HubAppendage(HybridPlant):
         f[..., 0] -= s * a0 / (1.0 + s * Minv[0, 0])
         return f
 
-    def outputs(self, x: np.ndarray, u, extra_force=0.0) -> dict[str, np.ndarray]:
+    @property
+    def _tip_row(self) -> np.ndarray:
+        return self._quad["phi_tip"]
+
+    def _output_coefficients(self, name: str):
+        """Linear forms of the root loads by force summation (module docstring): ``root_torque``
+        = I_b θ'' + dᵀ q'', S0 = [ρ (l² − l0²)/2 + m l] θ'' + eᵀ q'', M0 = l0 S0 − (l0 S0 − M0).
+        """
+        p, z = self.params, np.zeros(self.ndof)
+        moment = np.concatenate([[p.appendage_inertia], self.coupling])
+        shear = np.concatenate([[p.rho * (p.tip_radius**2 - p.hub_radius**2) / 2
+                                 + p.tip_mass * p.tip_radius], self._quad["e"]])
+        acc = {"root_torque": moment, "root_shear": shear,
+               "root_moment": p.hub_radius * shear - moment}.get(name)
+        if acc is None:
+            return super()._output_coefficients(name)
+        return z, z, acc, 0.0
+
+    def output_values(self, x: np.ndarray, u, extra_force=0.0) -> dict[str, np.ndarray]:
         """Physical outputs of state x under hub torque u (SI).
 
         Returns hub angle and rate, root shear S0, root bending moment M0, the Lyapunov-law

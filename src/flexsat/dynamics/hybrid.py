@@ -4,7 +4,11 @@
 
 (seed 001 Eqs. 15-16; seed 000 Att. 3 Eq. 5 discretised). :class:`HybridPlant` holds what every
 such plant shares — the first-order form, accelerations, energy, vibration energy and the
-error-energy Lyapunov function — and is what :func:`flexsat.sim.simulate` drives.
+error-energy Lyapunov function — and implements the plant protocol
+(:class:`~flexsat.dynamics.plant.Plant`) that :func:`flexsat.sim.simulate` drives: one input
+channel ``torque`` (N m), outputs ``theta``, ``theta_dot``, ``root_torque`` and
+``tip_deflection`` (and the root loads of a beam model), all linear in (x, u, f_in) unless the
+rotational stiffening is on.
 :class:`~flexsat.dynamics.hub_appendage.HubAppendage` (exact beam modes, root loads, rotational
 stiffening) and :class:`ModalHybrid` (any cantilevered :class:`ModalModel`) build on it.
 """
@@ -16,17 +20,58 @@ from functools import cached_property
 import numpy as np
 from scipy.linalg import eigh
 
+from flexsat.dynamics.plant import Channel, Plant
 from flexsat.validation import require_count, require_finite, require_positive
 
 
-class HybridPlant:
+class OutputChannels(tuple):
+    """The output channels of a hybrid plant, callable as its historical ``outputs(x, u,
+    extra_force)`` (every output at once, a dict); the plant protocol reads the tuple."""
+
+    def __new__(cls, channels, evaluate):
+        obj = super().__new__(cls, channels)
+        obj._evaluate = evaluate
+        return obj
+
+    def __call__(self, x, u, extra_force=0.0) -> dict[str, np.ndarray]:
+        return self._evaluate(x, u, extra_force)
+
+
+#: channels every hybrid plant has
+HYBRID_OUTPUTS = (
+    Channel("theta", "rad", description="hub angle θ"),
+    Channel("theta_dot", "rad/s", description="hub rate θ'"),
+    Channel("root_torque", "N*m", description="reaction torque of one appendage on the hub"),
+    Channel("tip_deflection", "m", description="elastic displacement of the tip"),
+)
+
+
+class HybridPlant(Plant):
     """Shared machinery of a hub + flexible-body plant in hybrid coordinates.
 
     Subclasses provide ``mass_matrix``, ``stiffness_matrix``, ``damping_matrix`` (ndof × ndof,
-    coordinate 0 the hub angle), ``hub_inertia`` and ``n_appendages``, and ``outputs``.
+    coordinate 0 the hub angle), ``hub_inertia`` and ``n_appendages``, ``output_values`` (every
+    output as a dict) and ``_output_coefficients`` (the linear form of each output).
     """
 
     stiffening = False
+    inputs = (Channel("torque", "N*m", description="hub torque u"),)
+    output_channels = HYBRID_OUTPUTS
+    recorded = ("theta", "theta_dot", "root_torque", "tip_deflection")
+    #: measured values kept in the result as ``<name>_measured`` (the strain-gauge channel)
+    recorded_measurements = ("root_torque",)
+    # gyro, strain gauge, random torque: the order of today's streams, so each case's noise
+    # is bit-identical whatever the engine measures
+    noise_channels = ("theta_dot", "root_torque", "torque")
+
+    @property
+    def outputs(self) -> OutputChannels:
+        """Output channels (a tuple), callable as ``outputs(x, u, extra_force)`` → dict."""
+        return OutputChannels(self.output_channels, self.output_values)
+
+    @property
+    def nonlinear(self) -> bool:
+        return bool(self.stiffening)
 
     @property
     def ndof(self) -> int:
@@ -72,6 +117,61 @@ class HybridPlant:
         Bf = np.vstack([np.zeros((k1, k1)), Minv])
         return A, Bf @ self.torque_input, Bf
 
+    # -- plant protocol -------------------------------------------------------------------------
+    def linear_part(self) -> tuple[np.ndarray, np.ndarray]:
+        """(A, B) with B = B_u[:, None]: the single input column of the hub torque."""
+        A, Bu, _ = self.state_space
+        return A, Bu[:, None]
+
+    @property
+    def force_matrix(self) -> np.ndarray | None:
+        """B_f = [0; M⁻¹] (all generalized forces) when the stiffening is on, else None."""
+        return self.state_space[2] if self.stiffening else None
+
+    def output_matrices(self, name: str):
+        """(C, D, D_f) of an output linear in the state, the torque and the extra hub force.
+
+        Each output is y = c_p·pos + c_v·vel + c_a·acc + c_u (u + f_in) with the accelerations
+        acc = A[ndof:] x + B[ndof:] (u + f_in) (the second block row of the first-order form);
+        None (nonlinear) for acceleration outputs when the stiffening is on.
+        """
+        c_pos, c_vel, c_acc, c_u = self._output_coefficients(name)
+        if self.stiffening and np.any(c_acc):
+            return None
+        A, B = self.linear_part()
+        k1 = self.ndof
+        C = np.concatenate([c_pos, c_vel]) + c_acc @ A[k1:]
+        D = c_acc @ B[k1:] + c_u
+        return C[None, :], D[None, :], D[None, :].copy()
+
+    def _output_coefficients(self, name: str):
+        """(c_pos, c_vel, c_acc, c_u) of the outputs every hybrid plant has."""
+        k1 = self.ndof
+        z = np.zeros(k1)
+        e0 = self.torque_input
+        if name == "theta":
+            return e0, z, z, 0.0
+        if name == "theta_dot":
+            return z, e0, z, 0.0
+        if name == "root_torque":  # (u + f − I_hub θ'')/n, the hub equation
+            n = self.n_appendages
+            return z, z, -self.hub_inertia * e0 / n, 1.0 / n
+        if name == "tip_deflection":
+            return np.concatenate([[0.0], self._tip_row]), z, z, 0.0
+        raise ValueError(f"{name}: {type(self).__name__} has no output channel {name!r}")
+
+    def output(self, name: str, x: np.ndarray, u: np.ndarray, f_in=None) -> np.ndarray:
+        """Output ``name`` at x (..., n_x), u (..., 1) and extra hub force f_in (..., 1)."""
+        if self.output_matrices(name) is not None:
+            return super().output(name, x, u, f_in)
+        extra = 0.0 if f_in is None else np.multiply.outer(np.asarray(f_in)[..., 0],
+                                                           self.torque_input)
+        return self.output_values(x, np.asarray(u)[..., 0], extra)[name]
+
+    def momentum(self, x: np.ndarray) -> np.ndarray:
+        """Angular momentum about the hub axis, h = (M x')_θ, N m s."""
+        return self.split(x)[1] @ self.mass_matrix[0]
+
     def hub_free_frequencies(self) -> np.ndarray:
         """Elastic natural frequencies of the free vehicle, rad/s (the rigid mode dropped)."""
         lam = eigh(self.stiffness_matrix, self.mass_matrix, eigvals_only=True)
@@ -98,7 +198,7 @@ class HybridPlant:
 
     def _linear_force(self, pos, vel, u):
         return -pos @ self.stiffness_matrix - vel @ self.damping_matrix + np.multiply.outer(
-            np.asarray(u, float), self.torque_input
+            _torque(u, pos), self.torque_input
         )
 
     def acceleration(self, x: np.ndarray, u, extra_force=0.0) -> np.ndarray:
@@ -183,7 +283,11 @@ class ModalHybrid(HybridPlant):
                      else np.asarray(modal.displacement_output(*tip), float))
         require_finite(self._tip, "tip")
 
-    def outputs(self, x: np.ndarray, u, extra_force=0.0) -> dict[str, np.ndarray]:
+    @property
+    def _tip_row(self) -> np.ndarray:
+        return self._tip
+
+    def output_values(self, x: np.ndarray, u, extra_force=0.0) -> dict[str, np.ndarray]:
         """Hub angle and rate, the reaction torque on the hub (``root_torque``) and the
         displacement of the ``tip`` node."""
         pos, vel = self.split(x)
@@ -193,3 +297,10 @@ class ModalHybrid(HybridPlant):
             "root_torque": self.reaction_torque(x, u, extra_force),
             "tip_deflection": pos[..., 1:] @ self._tip,
         }
+
+
+def _torque(u, pos) -> np.ndarray:
+    """The hub torque as (...,): the protocol's (..., 1) input vector or the historical scalar
+    torque per state."""
+    u = np.asarray(u, float)
+    return u[..., 0] if u.ndim and u.shape == pos.shape[:-1] + (1,) else u

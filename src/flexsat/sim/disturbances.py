@@ -39,6 +39,12 @@ class BearingFriction:
     def active(self) -> bool:
         return self.coulomb > 0 or self.viscous > 0
 
+    @property
+    def max_slope(self) -> float:
+        """Largest |dτ/dθ'|, c1/ε + c2 (at θ' = 0), N m s/rad: the stiffness the integrator
+        must resolve (:func:`flexsat.sim.config.stable_substeps`)."""
+        return self.coulomb / self.smoothing + self.viscous
+
     def __call__(self, rate: np.ndarray) -> np.ndarray:
         return -self.coulomb * np.tanh(rate / self.smoothing) - self.viscous * rate
 

@@ -1,172 +1,40 @@
-"""Sampled-data simulation of a hub + appendage plant under a digital control law.
+"""Sampled-data simulation of any plant under a digital control law.
 
-The plant is continuous; the controller runs at a fixed rate and its command is held (zero-order
-hold) until the next sample. Between samples the linear dynamics are propagated exactly by matrix
-exponentials; friction and rotational stiffening go through the ETD2RK exponential integrator
-(:mod:`flexsat.sim.integrators`). Everything carries a leading case axis, so a batch of maneuvers
-(a parameter sweep, a Monte Carlo set) is one call with no per-case Python loop in the time loop.
+The plant (:class:`~flexsat.dynamics.plant.Plant`) is continuous; the law
+(:class:`~flexsat.control.base.Controller`) runs at a fixed rate and its commands are held
+(zero-order hold) until the next sample. Per control sample the engine
+
+1. applies the impulses due at this sample (Δx = B[:, j] J on input j),
+2. evaluates the state-dependent input forces (bearing friction) from their driving outputs,
+3. measures the channels the law reads through their sensors (:mod:`flexsat.sim.channels`),
+4. calls the law, passes its commands through the actuators and adds the random disturbances,
+5. propagates the plant over the period: the linear part exactly by matrix exponentials, the
+   plant's nonlinear force and the input forces by an exponential Runge-Kutta scheme
+   (:mod:`flexsat.sim.integrators`), or by the plant's own ``step`` (a quaternion integrator).
+
+Everything carries a leading case axis, so a batch of maneuvers (a parameter sweep, a Monte
+Carlo set, a dispersed plant) is one call with no per-case Python loop in the time loop. The
+recorded outputs and energies are computed per chunk of samples after the fact
+(:mod:`flexsat.sim.recording`).
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+from collections.abc import Mapping
 
 import numpy as np
-import xarray as xr
 
-from flexsat import limits
-from flexsat.sim.actuators import TorqueActuator
-from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
-from flexsat.sim.integrators import ExponentialStepper
-from flexsat.sim.metrics import METRIC_UNITS, maneuver_metrics
-from flexsat.sim.sensors import Sensors, SensorState
-from flexsat.validation import require_count, require_finite, require_positive, set_si
+from flexsat.dynamics.plant import find_channel
+from flexsat.sim.channels import noise_column, noise_columns, resolve_channels
+from flexsat.sim.config import (FRICTION_STEP_LIMIT, SimConfig, check_resources,
+                                stable_substeps)
+from flexsat.sim.integrators import ExponentialStepper, ExpRK4Stepper, apply
+from flexsat.sim.recording import CHUNK, Recorder, SimResult
+from flexsat.sim.sensors import least_squares_derivative_weights
+from flexsat.validation import require_count, require_finite
 
-N_NOISE_CHANNELS = 3  # gyro, strain gauge, random torque — fixed so streams never shift
-
-
-@dataclass(frozen=True)
-class SimConfig:
-    """Run settings shared by every case of a batch.
-
-    Parameters
-    ----------
-    duration : float             run length, s
-    control_rate : float         controller sample rate, Hz (TAMU: 75 Hz)
-    substeps : int               integrator substeps per control period when the plant has
-                                 nonlinear terms (friction, stiffening); ignored otherwise and
-                                 raised where friction needs it (:func:`stable_substeps`)
-    settling_band : float        |θ − θ_f| band for the settling time, rad
-    seed : int                   base seed; case i uses seed + i unless seeds are given
-
-    ``duration``, ``control_rate`` and ``settling_band`` take a number in SI, a pint Quantity or
-    a unit string (``"15 s"``, ``"75 Hz"``, ``"0.5 deg"``) and are stored in SI.
-    """
-
-    duration: float
-    control_rate: float = 75.0
-    substeps: int = 4
-    actuator: TorqueActuator = field(default_factory=TorqueActuator)
-    sensors: Sensors = field(default_factory=Sensors)
-    friction: BearingFriction = field(default_factory=BearingFriction)
-    random_torque: RandomTorque = field(default_factory=RandomTorque)
-    impulses: Impulses = field(default_factory=Impulses)
-    settling_band: float = np.radians(0.5)
-    seed: int = 0
-
-    def __post_init__(self):
-        set_si(self, "duration", require_positive, "s")
-        set_si(self, "control_rate", require_positive, "Hz")
-        set_si(self, "settling_band", require_positive, "rad")
-        require_count(self.substeps, "substeps")
-        if not limits.is_integral(self.seed) or not 0 <= self.seed <= limits.MAX_SEED:
-            raise ValueError(f"seed: must be an integer in [0, {limits.MAX_SEED}], got "
-                             f"{self.seed!r}")
-        limits.check_count(self.duration * self.control_rate, limits.MAX_SAMPLES, "duration",
-                           "control samples (duration × control_rate)",
-                           "shorten the run or lower the control rate")
-        limits.check_count(self.substeps, limits.MAX_SUBSTEPS, "substeps",
-                           "integrator substeps per control period")
-
-    @property
-    def dt(self) -> float:
-        return 1.0 / self.control_rate
-
-    @property
-    def n_steps(self) -> int:
-        return int(round(self.duration * self.control_rate))
-
-
-@dataclass
-class SimResult:
-    """Time histories (``dataset``, dims case × time) and per-case ``metrics``."""
-
-    dataset: xr.Dataset
-    metrics: dict[str, np.ndarray]
-
-    def metrics_records(self, labels=None) -> list[dict]:
-        """One JSON-ready dict per case (NaN → None)."""
-        n = len(next(iter(self.metrics.values())))
-        rows = []
-        for i in range(n):
-            row = {} if labels is None else {"run": labels[i]}
-            for key, val in self.metrics.items():
-                v = float(val[i])
-                row[key] = None if not np.isfinite(v) else v
-            rows.append(row)
-        return rows
-
-
-#: largest h λ_friction allowed; ETD2RK treats friction explicitly and is stable for h λ <= 2
-FRICTION_STEP_LIMIT = 1.5
-
-
-def stable_substeps(plant, friction: BearingFriction, dt: float, requested: int) -> int:
-    """Substeps per control period: the requested number, raised where needed so that the
-    explicitly integrated friction stays stable.
-
-    Inside |θ'| < ε the regularised friction is a damper of rate λ = (c1/ε + c2) (M⁻¹)_θθ on the
-    hub; the substep h must keep h λ <= FRICTION_STEP_LIMIT.
-    """
-    if not friction.active:
-        return requested
-    rate = (friction.coulomb / friction.smoothing + friction.viscous) * plant.mass_inverse[0, 0]
-    needed = dt * rate / FRICTION_STEP_LIMIT
-    # compared as a float first: a near-zero smoothing makes it too large for an int
-    limits.check_count(needed, limits.MAX_SUBSTEPS, "friction",
-                       f"a stable integration of the friction (damping rate {rate:.3g} 1/s below "
-                       f"the smoothing speed) needs substeps per control period",
-                       "lower coulomb or viscous, raise smoothing or the control rate")
-    return max(requested, math.ceil(needed))
-
-
-#: recorded histories of :func:`simulate`; the memory estimate counts them twice (the loop's
-#: arrays and the dataset's copies) plus the noise streams
-_N_RECORDED = 13
-
-
-def check_resources(plant, config: SimConfig, n_cases: int = 1, record_states: bool = False
-                    ) -> int:
-    """Check that a run fits the limits of :mod:`flexsat.limits` before it starts.
-
-    Parameters
-    ----------
-    plant, config
-        As for :func:`simulate`.
-    n_cases : int
-        Batch size.
-    record_states : bool
-        Whether the full state history is kept.
-
-    Returns
-    -------
-    int
-        The integrator substeps per control period (:func:`stable_substeps`).
-
-    Raises
-    ------
-    ValueError
-        ``"field: ... above the limit ..."`` for too many cases, substeps, integrator steps or
-        too much memory.
-    """
-    limits.check_count(n_cases, limits.MAX_CASES, "n_cases", "cases in one batch",
-                       "split the batch")
-    nonlinear = config.friction.active or plant.stiffening
-    substeps = stable_substeps(plant, config.friction, config.dt, config.substeps) \
-        if nonlinear else 1
-    n = config.n_steps + 1
-    limits.check_count(n * substeps, limits.MAX_INTEGRATOR_STEPS, "duration",
-                       f"integrator steps ({n} control samples × {substeps} substeps)",
-                       "shorten the run or lower the control rate or the substeps")
-    values = 2 * _N_RECORDED + N_NOISE_CHANNELS + (2 * plant.nx if record_states else 0)
-    limits.check_memory(limits.memory_estimate(n, n_cases, values), "duration",
-                        f"a run of {n} samples × {n_cases} cases × {values} values")
-    return substeps
-
-
-#: a state entry (rad, rad/s, modal coordinates) or a torque command (N m) beyond this is taken
-#: as divergence: no slew or modal amplitude comes near it, and it leaves room for the products
+#: a state entry (rad, rad/s, modal coordinates) or a command (SI) beyond this is taken as
+#: divergence: no slew or modal amplitude comes near it, and it leaves room for the products
 #: (energies, x²) to stay finite
 DIVERGENCE_BOUND = 1e12
 
@@ -193,7 +61,7 @@ def _diverged(x, u_cmd, time: float, k: int, state_prev: float, config: SimConfi
               ) -> SimulationDiverged:
     """The exception for a divergence found at sample ``k``: which cases, when, likely why."""
     bad_state = ~(np.abs(x) <= DIVERGENCE_BOUND).all(axis=1)
-    bad_command = ~(np.abs(u_cmd) <= DIVERGENCE_BOUND)
+    bad_command = ~(np.abs(u_cmd) <= DIVERGENCE_BOUND).all(axis=1)
     cases = tuple(int(i) for i in np.flatnonzero(bad_state | bad_command))
     if k == 0:
         cause = ("the initial state or the first torque command is non-finite or beyond the "
@@ -215,12 +83,172 @@ def _diverged(x, u_cmd, time: float, k: int, state_prev: float, config: SimConfi
     return SimulationDiverged(message, cases, float(time), cause)
 
 
-def _noise_streams(seeds: np.ndarray, n_samples: int) -> np.ndarray:
-    """Standard normals (n_samples, n_cases, channels), case i drawn from its own seed."""
-    out = np.empty((n_samples, len(seeds), N_NOISE_CHANNELS))
-    for i, s in enumerate(seeds):
-        out[:, i, :] = np.random.default_rng(int(s)).standard_normal((n_samples, N_NOISE_CHANNELS))
+class _NoiseStreams:
+    """Standard normals per case, drawn chunk by chunk from each case's own generator (the
+    same numbers as one draw of the whole run: the generator fills its output in order)."""
+
+    def __init__(self, seeds, width: int):
+        self.rngs = [np.random.default_rng(int(s)) for s in seeds]
+        self.width = width
+
+    def next(self, rows: int) -> np.ndarray:
+        out = np.empty((rows, len(self.rngs), self.width))
+        for i, rng in enumerate(self.rngs):
+            out[:, i, :] = rng.standard_normal((rows, self.width))
+        return out
+
+
+def check_law(plant, controller) -> None:
+    """Check the law's ``reads`` and ``writes`` against the plant's channels.
+
+    Raises
+    ------
+    ValueError
+        Naming the channel: a measurement the plant does not have, an unknown input channel, a
+        channel written twice.
+    """
+    law = type(controller).__name__
+    reads, writes = tuple(controller.reads), tuple(controller.writes)
+    for name in reads:
+        try:
+            find_channel(plant.outputs, name, "output", type(plant).__name__)
+        except ValueError as exc:
+            raise ValueError(f"{name}: {law} reads a measurement the plant does not have "
+                             f"({exc})") from None
+    for name in writes:
+        try:
+            find_channel(plant.inputs, name, "input", type(plant).__name__)
+        except ValueError as exc:
+            raise ValueError(f"{name}: {law} writes an unknown input channel ({exc})") from None
+    if len(set(writes)) != len(writes) or not writes:
+        raise ValueError(f"writes: {law} must write each input channel once, got {writes!r}")
+
+
+def _commands(cmd, writes, shapes, nc: int, law: str, check: bool) -> list[np.ndarray]:
+    """The law's commands as one array per written channel, shape (n_cases,) or (n_cases, w);
+    on the first sample (``check``) a wrong shape, key or type is a ValueError naming it."""
+    if not isinstance(cmd, Mapping):
+        if len(writes) != 1 and check:
+            raise ValueError(f"{writes[0]}: {law} returned a bare array but writes "
+                             f"{len(writes)} channels {writes!r}; return a dict")
+        cmd = {writes[0]: cmd}
+    elif check and set(cmd) != set(writes):
+        odd = sorted(set(cmd) ^ set(writes))[0]
+        raise ValueError(f"{odd}: {law} returned commands for {sorted(cmd)!r} but writes "
+                         f"{list(writes)!r}")
+    out = []
+    for name, shape in zip(writes, shapes):
+        c = np.asarray(cmd[name], float)
+        if c.shape != shape:
+            try:
+                c = np.broadcast_to(c, shape)
+            except ValueError:
+                raise ValueError(f"{name}: {law} returned a command of shape {c.shape}, "
+                                 f"expected {shape} (n_cases × channel size)") from None
+        out.append(c)
     return out
+
+
+def _initial_state(plant, nc, theta0, initial_state, ref):
+    """(x0, θ0 per case or None): rest at θ0 for a plant with a ``theta`` state coordinate,
+    or the given full state."""
+    x = plant.initial_state(nc)
+    mats = plant.output_matrices("theta") if any(c.name == "theta" for c in plant.outputs) \
+        else None
+    row = None
+    if mats is not None:
+        C = np.asarray(mats[0]).reshape(-1, plant.nx) if np.ndim(mats[0]) == 2 else None
+        if C is not None and C.shape[0] == 1 and np.count_nonzero(C) == 1 and C.max() == 1:
+            row = int(np.argmax(C[0]))
+    if initial_state is not None:
+        x0 = require_finite(initial_state, "initial_state")
+        try:
+            x[:] = x0
+        except ValueError:
+            raise ValueError(f"initial_state: must have shape ({plant.nx},) or ({nc}, "
+                             f"{plant.nx}), got {x0.shape}") from None
+        return x, (x[:, row].copy() if row is not None else None)
+    if theta0 is None:
+        theta0 = ref.theta0 if ref is not None else 0.0
+    theta0 = np.broadcast_to(require_finite(theta0, "theta0", "rad"), (nc,)).copy()
+    if row is None:
+        if np.any(theta0):
+            raise ValueError(f"theta0: {type(plant).__name__} has no hub-angle state "
+                             "coordinate; give initial_state")
+        return x, None
+    x[:, row] = theta0
+    return x, theta0
+
+
+class _Instruments:
+    """The measured channels of a run: true values by output matrices (or the plant's
+    ``output``), then each channel's sensor; derivative sensors after their sources."""
+
+    def __init__(self, plant, names, sensors, columns, dt, nc, batched, forced):
+        self.plant, self.batched = plant, batched
+        derived = [k for k in names if k in sensors and sensors[k].derivative_of is not None]
+        direct = [k for k in names if k not in derived]
+        for k in derived:  # the filtered channel is measured first
+            src = sensors[k].derivative_of
+            if src not in direct:
+                direct.insert(0, src)
+        self.names = tuple(direct + derived)
+        mats = {k: plant.output_matrices(k) for k in direct}
+        self.linear = [k for k in direct if mats[k] is not None]
+        self.nonlinear = [k for k in direct if mats[k] is None]
+        self.CT = self.DT = self.DfT = None
+        self.cols = {}
+        if self.linear:
+            C, D, Df = (np.concatenate([mats[k][i] for k in self.linear], axis=-2)
+                        for i in range(3))
+            self.CT = np.swapaxes(C, -1, -2).copy()
+            self.DT = np.swapaxes(D, -1, -2).copy() if np.any(D) else None
+            self.DfT = np.swapaxes(Df, -1, -2).copy() if forced and np.any(Df) else None
+            col = 0
+            for k in self.linear:
+                size = mats[k][0].shape[-2]
+                self.cols[k] = col if size == 1 else slice(col, col + size)
+                col += size
+        self.plan = []
+        for k in direct:
+            s = sensors.get(k)
+            noisy = s is not None and np.any(s.noise)
+            self.plan.append((k, s, noise_column(columns, k, "its sensor noise", plant)
+                              if noisy else None))
+        self.derived = []
+        for k in derived:
+            s = sensors[k]
+            w = least_squares_derivative_weights(s.window, s.order, dt)
+            noisy = np.any(s.noise)
+            self.derived.append((k, s, s.derivative_of, w, None,
+                                 noise_column(columns, k, "its sensor noise", plant)
+                                 if noisy else None))
+
+    def measure(self, x, w_prev, f_in, noise_k, first: bool) -> dict:
+        """Measurements at state x, held input w_prev and input force f_in."""
+        y = {}
+        if self.CT is not None:
+            Y = apply(x, self.CT, self.batched)
+            if self.DT is not None:
+                Y = Y + apply(w_prev, self.DT, self.batched)
+            if self.DfT is not None and f_in is not None:
+                Y = Y + apply(f_in, self.DfT, self.batched)
+            for k in self.linear:
+                y[k] = Y[:, self.cols[k]]
+        for k in self.nonlinear:
+            y[k] = self.plant.output(k, x, w_prev, f_in)
+        for k, s, col in self.plan:
+            if s is not None:
+                y[k] = s.measure(y[k], None if col is None else noise_k[:, col])
+        for i, (k, s, src, w, hist, col) in enumerate(self.derived):
+            v = y[src]
+            if first:  # the filter starts from rest at the first measured value
+                hist = np.repeat(v[:, None], len(w), axis=1)
+                self.derived[i] = (k, s, src, w, hist, col)
+            hist[:, :-1] = hist[:, 1:]
+            hist[:, -1] = v
+            y[k] = s.measure(hist @ w, None if col is None else noise_k[:, col])
+        return y
 
 
 def simulate(
@@ -237,137 +265,184 @@ def simulate(
 
     Parameters
     ----------
-    plant : HubAppendage
-        Plant model (state x = [θ, q, θ', q']).
+    plant : Plant
+        Any :class:`~flexsat.dynamics.plant.Plant` (a hub + appendage model, a three-axis
+        spacecraft, a dispersed batch of plants from
+        :func:`~flexsat.dynamics.dispersion.stack_plants`).
     controller : Controller
-        Law evaluated at each sample on arrays of shape (n_cases,).
+        Law evaluated at each sample on arrays with a leading case axis; it reads the
+        measurement channels ``controller.reads`` and writes the input channels
+        ``controller.writes``.
     config : SimConfig
     n_cases : int, optional
-        Batch size; by default the size implied by the controller's parameters.
+        Batch size; by default the size implied by the controller's parameters (or the
+        dispersed plant's cases).
     seeds : array of int, optional
         Per-case noise seeds (default ``config.seed + arange(n_cases)``); a case run alone with
         its seed reproduces its batch result.
     theta0 : float or array, optional
-        Initial hub angle (at rest, undeformed); default the reference start or 0.
+        Initial hub angle (at rest, undeformed) of a plant with a ``theta`` state coordinate;
+        default the reference start or 0.
     initial_state : array (n_x,) or (n_cases, n_x), optional
-        Full initial state [θ, q, θ', q'] instead of rest at ``theta0``.
+        Full initial state instead of rest at ``theta0``.
     record_states : bool
         Also store the full state history (n_cases × n_t × n_x).
 
     Raises
     ------
     ValueError
-        Before the run, for a non-finite ``theta0`` or ``initial_state``, or a run beyond the
-        limits of :mod:`flexsat.limits` (:func:`check_resources`).
+        Before the run, naming the channel or field: a law reading a measurement the plant does
+        not have or writing an unknown channel, a command of the wrong shape (first sample), a
+        sensor, actuator or disturbance on a missing channel, a non-finite ``theta0`` or
+        ``initial_state``, a run beyond the limits of :mod:`flexsat.limits`.
     SimulationDiverged
-        When a state entry or the torque command becomes non-finite or exceeds
+        When a state entry or a command becomes non-finite or exceeds
         :data:`DIVERGENCE_BOUND`: no result with NaN is returned.
     """
-    nc = controller.n_cases if n_cases is None else require_count(n_cases, "n_cases")
+    check_law(plant, controller)
+    plant_cases = plant.n_cases
+    if n_cases is None:
+        nc = controller.n_cases if plant_cases == 1 else plant_cases
+    else:
+        nc = require_count(n_cases, "n_cases")
+    if plant_cases != 1 and nc != plant_cases:
+        raise ValueError(f"n_cases: the dispersed plant carries {plant_cases} cases, the batch "
+                         f"has {nc}")
     dt, n = config.dt, config.n_steps
     substeps = check_resources(plant, config, nc, record_states)
+    sensors, actuators, disturbances = resolve_channels(plant, config)
     seeds = config.seed + np.arange(nc) if seeds is None else np.asarray(seeds, int).reshape(nc)
-    ref = controller.reference
-    if theta0 is None:
-        theta0 = ref.theta0 if ref is not None else 0.0
-    theta0 = np.broadcast_to(require_finite(theta0, "theta0", "rad"), (nc,)).copy()
+    x, theta0 = _initial_state(plant, nc, theta0, initial_state, controller.reference)
 
-    A, Bu, Bf = plant.state_space
-    friction = config.friction
-    nonlinear = friction.active or plant.stiffening
-    # friction alone acts on the hub dof only: a rank-1 force keeps the substeps cheap; a
-    # linear run needs no force columns (the smallest exponential)
-    Bf_used = None if not nonlinear else Bf if plant.stiffening else Bf[:, :1]
-    stepper = ExponentialStepper.build(A, Bu, Bf_used, dt, substeps)
-    ndof = plant.ndof
-    impulse_velocity = plant.mass_inverse[:, 0]
+    A, B = plant.linear_part()
+    batched = plant_cases != 1
+    Bt = np.swapaxes(B, -1, -2)
+    m, slices = plant.n_inputs, plant.input_slices
+    columns = noise_columns(plant)
+    forced = {k: d for k, d in disturbances.items() if d.force is not None}
+    writes = tuple(controller.writes)
+    shapes = [(nc,) if slices[k].stop - slices[k].start == 1
+              else (nc, slices[k].stop - slices[k].start) for k in writes]
+    measured = tuple(controller.reads) + tuple(
+        k for k in getattr(plant, "recorded_measurements", ())
+        if k not in controller.reads and any(c.name == k for c in plant.outputs))
+    inst = _Instruments(plant, measured, sensors, columns, dt, nc, batched, bool(forced))
+    drivers = {k: plant.output_matrices(d.force_output) for k, d in forced.items()}
 
-    def friction_torque(x):
-        return friction(x[:, ndof]) if friction.active else np.zeros(x.shape[0])
-
-    def force(x, w):
-        tau = friction_torque(x)
-        if not plant.stiffening:
-            return tau[:, None]
-        f = plant.nonlinear_force(x, w + tau)
-        f[:, 0] += tau
+    def input_force(xs, w):
+        """Input-channel forces f_in (n_cases, m) at states xs: each force of its output."""
+        f = np.zeros((xs.shape[0], m))
+        for k, d in forced.items():
+            mats = drivers[k]
+            y = (apply(xs, np.swapaxes(mats[0], -1, -2), batched)[:, 0] if mats is not None
+                 else plant.output(d.force_output, xs, w, None))
+            f[:, slices[k]] = np.reshape(d.force(y), (xs.shape[0], -1))
         return f
 
-    x = np.zeros((nc, plant.nx))
-    x[:, 0] = theta0
-    if initial_state is not None:
-        x[:] = require_finite(initial_state, "initial_state")
-        theta0 = x[:, 0].copy()
-    noise = _noise_streams(seeds, n + 1)
-    sensor_state = SensorState(config.sensors, theta0, dt)
-    cstate = controller.initial_state(nc)
-    impulses = config.impulses.at_samples(n + 1, dt)
+    forced_cols = [j for k in forced for j in range(slices[k].start, slices[k].stop)]
+    own_step = getattr(plant, "step", None)
+    stepper = force = None
+    if own_step is None:
+        Bf = plant.force_matrix if plant.nonlinear else None
+        cols = [Bf] if Bf is not None else []
+        if forced_cols:
+            cols.append(B[..., :, forced_cols])
+        if batched:  # a dispersed plant: every column block per case
+            cols = [c if c.ndim == 3 else np.broadcast_to(c, (nc,) + c.shape) for c in cols]
+        Bf_all = np.concatenate(cols, axis=-1) if cols else None
+        kind = getattr(plant, "integrator", "etd2rk")
+        cls = ExpRK4Stepper if kind == "exp_rk4" and Bf_all is not None else ExponentialStepper
+        if kind not in ("etd2rk", "exp_rk4"):
+            raise ValueError(f"integrator: {type(plant).__name__}.integrator must be 'etd2rk' "
+                             f"or 'exp_rk4', got {kind!r}")
+        stepper = cls.build(A, B, Bf_all, dt, substeps if Bf_all is not None else 1)
+        if Bf_all is not None:
+            def force(xs, w):
+                f_in = input_force(xs, w) if forced else None
+                parts = []
+                if Bf is not None:
+                    parts.append(plant.nonlinear_force(xs, w if f_in is None else w + f_in))
+                if forced:
+                    parts.append(f_in[:, forced_cols])
+                return parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
+
+    impulses = {}
+    for k, d in disturbances.items():
+        for i, J in d.impulses_at_samples(n + 1, dt).items():
+            impulses.setdefault(i, np.zeros(m))[slices[k]] += J
+    random = [(slices[k], d.random, noise_column(columns, k, "its random disturbance", plant))
+              for k, d in disturbances.items() if np.any(d.random)]
+    acts = [(slices[k], actuators.get(k)) for k in writes]
+    noisy = bool(random) or any(c is not None for _, _, c in inst.plan) or any(
+        d[5] is not None for d in inst.derived)
+    width = sum(s.stop - s.start for s in columns.values())
+    streams = _NoiseStreams(seeds, width) if noisy else None
+
     t = dt * np.arange(n + 1)
     controller.tabulate_reference(t)
-
-    names = ("theta", "theta_dot", "theta_ref", "theta_dot_ref", "torque_command", "torque",
-             "disturbance_torque", "friction_torque", "root_torque", "root_torque_measured",
-             "tip_deflection", "energy", "vibration_energy")
-    rec = {k: np.empty((n + 1, nc)) for k in names}
-    states = np.empty((n + 1, nc, plant.nx)) if record_states else None
-    w_prev = np.zeros(nc)
+    cstate = controller.initial_state(nc)
+    kept = tuple(k for k in measured if k in getattr(plant, "recorded_measurements", ()))
+    rec = Recorder(plant, n + 1, nc, kept, {k: d.force_name for k, d in forced.items()},
+                   record_states, batched)
+    law = type(controller).__name__
+    w_prev = np.zeros((nc, m))
+    f_in = None
+    prev_cmd = [None] * len(acts)  # the last rate-limited commands
     state_prev = 0.0
+    noise = None
     for k in range(n + 1):
+        if noisy and k % CHUNK == 0:
+            noise = streams.next(min(CHUNK, n + 1 - k))
+        noise_k = noise[k % CHUNK] if noisy else None
         if k in impulses:
-            x[:, ndof:] += impulses[k] * impulse_velocity
-        tau_fric = friction_torque(x)
-        truth = plant.outputs(x, w_prev, np.multiply.outer(tau_fric, plant.torque_input))
-        y = sensor_state.measure(truth, noise[k, :, :2])
-        u_cmd, cstate = controller(t[k], y, cstate)
-        u_cmd = np.broadcast_to(u_cmd, (nc,))
+            x = x + impulses[k] @ Bt
+        if forced:
+            f_in = input_force(x, w_prev)
+        y = inst.measure(x, w_prev, f_in, noise_k, k == 0)
+        cmd, cstate = controller(t[k], y, cstate)
+        cmds = _commands(cmd, writes, shapes, nc, law, k == 0)
         # one reduction per sample (NaN fails the comparison too): a diverging run stops here
         state_size = np.abs(x).max()
-        if not (state_size <= DIVERGENCE_BOUND and np.abs(u_cmd).max() <= DIVERGENCE_BOUND):
-            raise _diverged(x, u_cmd, t[k], k, state_prev, config)
+        size = np.abs(cmds[0]).max() if len(cmds) == 1 else max(np.abs(c).max() for c in cmds)
+        if not (state_size <= DIVERGENCE_BOUND and size <= DIVERGENCE_BOUND):
+            raise _diverged(x, np.column_stack(cmds), t[k], k, state_prev, config)
         state_prev = state_size
-        u = config.actuator(u_cmd)
-        w = u + config.random_torque.std * noise[k, :, 2]
-        th_r, thd_r, _, _ = controller.reference_at(t[k])
-        for key, val in (("theta", truth["theta"]), ("theta_dot", truth["theta_dot"]),
-                         ("theta_ref", th_r), ("theta_dot_ref", thd_r), ("torque_command", u_cmd),
-                         ("torque", u), ("disturbance_torque", w - u),
-                         ("friction_torque", tau_fric), ("root_torque", truth["root_torque"]),
-                         ("root_torque_measured", y["root_torque"]),
-                         ("tip_deflection", truth["tip_deflection"])):
-            rec[key][k] = val
-        rec["energy"][k] = plant.energy(x)
-        rec["vibration_energy"][k] = plant.vibration_energy(x, rec["energy"][k])
-        if record_states:
-            states[k] = x
+        single = m == 1  # one written input of size 1: u is the command column itself
+        u = None if single else np.zeros((nc, m))
+        for i, ((sl, act), c) in enumerate(zip(acts, cmds)):
+            rec.commands[k, :, sl] = c if c.ndim == 2 else c[:, None]
+            if act is not None:
+                c, prev_cmd[i] = act.apply(c, prev_cmd[i], dt)
+            if single:
+                u = c[:, None]
+            else:
+                u[:, sl] = c if c.ndim == 2 else c[:, None]
+        w = u
+        for sl, std, col in random:
+            w = w.copy() if w is u else w
+            w[:, sl] += (std * noise_k[:, col])[:, None] if isinstance(col, int) \
+                else std * noise_k[:, col]
+        rec.applied[k] = u
+        rec.disturbed[k] = w
+        if forced:
+            rec.forces[k] = f_in
+        for name in rec.measured:
+            rec.measured[name][k] = y[name]
+        rec.slot(k)[...] = x
+        if (k + 1) % CHUNK == 0 and rec.states is None:
+            rec.flush(k + 1)
         if k < n:
-            x = stepper.step(x, w, force if nonlinear else None)
+            if own_step is not None:
+                h = dt / substeps
+                for _ in range(substeps):
+                    x = plant.normalize(own_step(x, w if f_in is None else w + input_force(
+                        x, w), h))
+            else:
+                x = stepper.step(x, w, force)
         w_prev = w
-
-    result = _package(rec, states, t, controller, theta0, config, nc)
-    result.dataset.attrs["substeps"] = substeps
-    return result
+    rec.flush(n + 1)
+    return rec.dataset(t, controller, theta0, config, substeps)
 
 
-_UNITS = {"theta": "rad", "theta_dot": "rad/s", "theta_ref": "rad", "theta_dot_ref": "rad/s",
-          "torque_command": "N m", "torque": "N m", "disturbance_torque": "N m",
-          "friction_torque": "N m", "root_torque": "N m", "root_torque_measured": "N m",
-          "tip_deflection": "m", "energy": "J", "vibration_energy": "J"}
-
-
-def _package(rec, states, t, controller, theta0, config, nc) -> SimResult:
-    data = {k: (("case", "time"), v.T.copy(), {"units": _UNITS[k]}) for k, v in rec.items()}
-    if states is not None:
-        data["state"] = (("case", "time", "state_index"), states.transpose(1, 0, 2).copy(), {})
-    ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}), "case": np.arange(nc)})
-    target = np.broadcast_to(np.asarray(controller.target, float), (nc,))
-    ref = controller.reference
-    ref_end = None if ref is None else np.broadcast_to(np.asarray(ref.end_time, float), (nc,))
-    metrics = maneuver_metrics(
-        t, rec["theta"].T, rec["theta_dot"].T, rec["theta_dot_ref"].T, rec["torque"].T,
-        rec["tip_deflection"].T, rec["vibration_energy"].T, theta0, target, ref_end,
-        config.settling_band,
-    )
-    for key, val in metrics.items():
-        ds[key] = (("case",), val, {"units": METRIC_UNITS[key]})
-    ds.attrs.update(control_rate_Hz=config.control_rate, settling_band_rad=config.settling_band)
-    return SimResult(ds, metrics)
+__all__ = ["DIVERGENCE_BOUND", "FRICTION_STEP_LIMIT", "SimConfig", "SimResult",
+           "SimulationDiverged", "check_law", "check_resources", "simulate", "stable_substeps"]

@@ -1,0 +1,308 @@
+"""Sensors, actuators and disturbances per plant channel, and the planar presets mapped onto them.
+
+A :class:`ChannelSensor` turns the true value of one output channel into its measurement, a
+:class:`ChannelActuator` turns a law's command on one input channel into the applied input, and a
+:class:`ChannelDisturbance` adds to one input channel: a Gaussian input held over the control
+period, impulses (Δx = B[:, j] J), and a state-dependent force driven by an output (the bearing
+friction τ(θ')), which the integrator treats as an extra force on that input's column of B.
+
+The planar classes (:class:`~flexsat.sim.sensors.Sensors`, ``TorqueActuator``,
+``BearingFriction``, ``RandomTorque``, ``Impulses``) stay the presets of the single-axis plants:
+:func:`resolve_channels` maps them onto channels ``theta``, ``theta_dot``, ``root_torque`` and
+``torque``. Values are in the channel's unit (a number in SI, a pint Quantity or a unit string),
+converted when the piece is bound to its channel.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from flexsat.dynamics.plant import find_channel
+from flexsat.sim.sensors import least_squares_derivative_weights
+from flexsat.units import to_si_array
+from flexsat.validation import require_count
+
+
+def _si(value, unit: str, field: str, nonneg: bool = True) -> np.ndarray | float:
+    v = to_si_array(value, unit, field)
+    if not np.all(np.isfinite(v) | (np.isinf(v) & (v > 0))) or (nonneg and np.any(v < 0)):
+        rule = ">= 0" if nonneg else "finite"
+        raise ValueError(f"{field}: must be {rule}, got {value!r}")
+    return float(v) if v.ndim == 0 else v
+
+
+def _rate_unit(unit: str) -> str:
+    return f"({unit})/s" if unit else "1/s"
+
+
+def _impulse_unit(unit: str) -> str:
+    return f"({unit})*s" if unit else "s"
+
+
+@dataclass(frozen=True)
+class ChannelSensor:
+    """Measurement of one output channel: y = sat(Q(v + bias + noise·n)), n standard normal.
+
+    Parameters
+    ----------
+    noise : float
+        1σ white noise per sample, in the channel's unit (gyro, strain gauge).
+    bias : float
+        Constant offset, channel unit.
+    quantum : float
+        Quantization step (an encoder's resolution), channel unit; 0 for none.
+    range : float
+        Saturation |y| <= range, channel unit; inf for none.
+    derivative_of : str, optional
+        Measure this channel as the least-squares derivative (:func:`~flexsat.sim.sensors.
+        least_squares_derivative_weights`) of the *measured* channel named here over its last
+        ``window`` samples with a polynomial of degree ``order`` (a rate from an encoder).
+    """
+
+    noise: float = 0.0
+    bias: float = 0.0
+    quantum: float = 0.0
+    range: float = np.inf
+    derivative_of: str | None = None
+    window: int = 8
+    order: int = 1
+
+    def __post_init__(self):
+        require_count(self.window, "window")
+        require_count(self.order, "order")
+        least_squares_derivative_weights(self.window, self.order, 1.0)
+
+    def bind(self, name: str, unit: str) -> "ChannelSensor":
+        """A copy with every field in SI of channel ``name``'s ``unit``."""
+        f = f"sensors[{name}]"
+        out = replace(self, noise=_si(self.noise, unit, f"{f}.noise"),
+                      bias=_si(self.bias, unit, f"{f}.bias", nonneg=False),
+                      quantum=_si(self.quantum, unit, f"{f}.quantum"),
+                      range=_si(self.range, unit, f"{f}.range"))
+        if np.any(out.range <= 0):
+            raise ValueError(f"{f}.range: must be > 0 (inf for none), got {self.range!r}")
+        return out
+
+    def measure(self, v: np.ndarray, noise) -> np.ndarray:
+        """Measured value from v (the truth, or the derivative filter's output)."""
+        if np.any(self.bias):
+            v = v + self.bias
+        if np.any(self.noise):
+            v = v + self.noise * noise
+        if self.quantum:
+            v = self.quantum * np.round(v / self.quantum)
+        if np.any(np.isfinite(self.range)):
+            v = np.clip(v, -self.range, self.range)
+        return v
+
+
+@dataclass(frozen=True)
+class ChannelActuator:
+    """Applied input u = scale · sat(rate_limit(command)) + bias on one input channel.
+
+    Parameters
+    ----------
+    saturation : float or array
+        Largest magnitude, channel unit (per case when an array); inf for none.
+    rate_limit : float
+        Largest change per second of the (saturated) command, channel unit / s; inf for none.
+    scale : float
+        Scale factor (actual over nominal gain, e.g. of a motor's torque constant).
+    bias : float
+        Constant offset, channel unit.
+    """
+
+    saturation: float = np.inf
+    rate_limit: float = np.inf
+    scale: float = 1.0
+    bias: float = 0.0
+
+    def bind(self, name: str, unit: str) -> "ChannelActuator":
+        f = f"actuators[{name}]"
+        out = replace(self, saturation=_si(self.saturation, unit, f"{f}.saturation"),
+                      rate_limit=_si(self.rate_limit, _rate_unit(unit), f"{f}.rate_limit"),
+                      scale=_si(self.scale, "", f"{f}.scale"),
+                      bias=_si(self.bias, unit, f"{f}.bias", nonneg=False))
+        for field in ("saturation", "rate_limit", "scale"):
+            if np.any(np.asarray(getattr(out, field)) <= 0):
+                raise ValueError(f"{f}.{field}: must be > 0, got {getattr(self, field)!r}")
+        return out
+
+    def apply(self, command: np.ndarray, previous, dt: float):
+        """(applied input, limited command): ``previous`` is the last limited command (None
+        at the first sample, where the rate limit does not act)."""
+        c = command
+        if previous is not None and np.any(np.isfinite(self.rate_limit)):
+            step = self.rate_limit * dt
+            c = np.clip(c, previous - step, previous + step)
+        if np.any(np.isfinite(self.saturation)):
+            c = np.clip(c, -self.saturation, self.saturation)
+        u = self.scale * c
+        return (u + self.bias if np.any(self.bias) else u), c
+
+
+@dataclass(frozen=True)
+class ChannelDisturbance:
+    """Disturbances on one input channel.
+
+    Parameters
+    ----------
+    random : float
+        1σ of a zero-mean Gaussian input held over each control period, channel unit.
+    impulse_times, impulses : sequences
+        Impulses (channel unit × s) at these times (s), each applied as Δx = B[:, j] J at the
+        first control sample at or after its time.
+    force : callable, optional
+        State-dependent input force f(y) of the output ``force_output`` (e.g.
+        :class:`~flexsat.sim.disturbances.BearingFriction` of θ'), integrated with the plant as
+        an extra force on this input's column; a ``max_slope`` attribute (|∂f/∂y|) lets the
+        engine keep the explicit treatment stable (:func:`flexsat.sim.engine.stable_substeps`).
+    force_output : str, optional
+        Output channel driving ``force``.
+    force_name : str
+        Prefix of its recorded history (``friction`` → ``friction_torque``).
+    """
+
+    random: float = 0.0
+    impulse_times: tuple = ()
+    impulses: tuple = ()
+    force: object = None
+    force_output: str | None = None
+    force_name: str = "friction"
+
+    def __post_init__(self):
+        if (self.force is None) != (self.force_output is None):
+            raise ValueError("force_output: give the output channel driving the force, and "
+                             "only with a force")
+        if self.force is not None and not callable(self.force):
+            raise ValueError(f"force: must be callable f(y), got {self.force!r}")
+
+    def bind(self, name: str, unit: str) -> "ChannelDisturbance":
+        f = f"disturbances[{name}]"
+        times = np.atleast_1d(_si(self.impulse_times, "s", f"{f}.impulse_times")
+                              if len(self.impulse_times) else np.zeros(0))
+        values = np.atleast_1d(_si(self.impulses, _impulse_unit(unit), f"{f}.impulses",
+                                   nonneg=False) if len(self.impulses) else np.zeros(0))
+        if times.shape != values.shape or times.ndim != 1:
+            raise ValueError(f"{f}.impulses: {values.size} values for {times.size} times; give "
+                             "one each")
+        return replace(self, random=_si(self.random, unit, f"{f}.random"),
+                       impulse_times=tuple(times.tolist()), impulses=tuple(values.tolist()))
+
+    def impulses_at_samples(self, n_steps: int, dt: float) -> dict[int, float]:
+        """Impulse per control-sample index (rounded up to the next sample)."""
+        out: dict[int, float] = {}
+        for t, j in zip(self.impulse_times, self.impulses):
+            k = int(np.ceil(t / dt - 1e-9))
+            if k < n_steps:
+                out[k] = out.get(k, 0.0) + j
+        return out
+
+    @property
+    def active(self) -> bool:
+        return bool(np.any(self.random) or self.impulses or self.force is not None)
+
+
+def _planar_presets(config) -> tuple[dict, dict, dict]:
+    """The single-axis presets of ``config`` as per-channel pieces (only those not ideal)."""
+    s, sensors = config.sensors, {}
+    if s.encoder_resolution > 0:
+        sensors["theta"] = ChannelSensor(quantum=s.encoder_resolution)
+    if s.rate == "ls_filter":
+        sensors["theta_dot"] = ChannelSensor(derivative_of="theta", window=s.rate_window,
+                                             order=s.rate_order)
+    elif s.rate == "gyro" and s.gyro_noise > 0:
+        sensors["theta_dot"] = ChannelSensor(noise=s.gyro_noise)
+    if s.strain_noise > 0:
+        sensors["root_torque"] = ChannelSensor(noise=s.strain_noise)
+    a, actuators = config.actuator, {}
+    if np.any(np.isfinite(a.saturation)) or a.torque_constant_ratio != 1.0:
+        actuators["torque"] = ChannelActuator(saturation=a.saturation,
+                                              scale=a.torque_constant_ratio)
+    fr, imp, disturbances = config.friction, config.impulses, {}
+    d = ChannelDisturbance(
+        random=config.random_torque.std, impulse_times=imp.times, impulses=imp.impulses,
+        force=fr if fr.active else None, force_output="theta_dot" if fr.active else None)
+    if d.active:
+        disturbances["torque"] = d
+    return sensors, actuators, disturbances
+
+
+def resolve_channels(plant, config) -> tuple[dict, dict, dict]:
+    """Bound sensors, actuators and disturbances by channel name: the planar presets of
+    ``config`` overridden by its ``channel_sensors``, ``channel_actuators`` and
+    ``channel_disturbances``; each checked against the plant's channels.
+
+    Raises
+    ------
+    ValueError
+        Naming the channel, for a piece on a channel the plant does not have.
+    """
+    owner = type(plant).__name__
+    sensors, actuators, disturbances = _planar_presets(config)
+    preset = {**{k: "sensors" for k in sensors}, **{k: "actuator" for k in actuators},
+              **{k: "friction, random_torque, impulses" for k in disturbances}}
+    explicit = {*config.channel_sensors, *config.channel_actuators,
+                *config.channel_disturbances}
+    sensors.update(config.channel_sensors)
+    actuators.update(config.channel_actuators)
+    disturbances.update(config.channel_disturbances)
+    out = []
+    for pieces, role, kind in ((sensors, "output", ChannelSensor),
+                               (actuators, "input", ChannelActuator),
+                               (disturbances, "input", ChannelDisturbance)):
+        bound = {}
+        for name, piece in pieces.items():
+            if not isinstance(piece, kind):
+                raise ValueError(f"{name}: expected a {kind.__name__}, got {piece!r}")
+            channels = plant.outputs if role == "output" else plant.inputs
+            try:
+                ch = find_channel(channels, name, role, owner)
+            except ValueError as exc:
+                where = preset.get(name)
+                if where is None or name in explicit:
+                    raise
+                raise ValueError(f"{exc} — set by the planar preset config.{where}") from None
+            bound[name] = piece.bind(name, ch.unit)
+        out.append(bound)
+    sensors, actuators, disturbances = out
+    for name, s in sensors.items():
+        if s.derivative_of is not None:
+            src = find_channel(plant.outputs, s.derivative_of, "output", owner)
+            if sensors.get(src.name, ChannelSensor()).derivative_of is not None:
+                raise ValueError(f"{name}: derivative_of {src.name!r} is itself a derivative")
+    for name, d in disturbances.items():
+        if d.force is not None:
+            find_channel(plant.outputs, d.force_output, "output", owner)
+    return sensors, actuators, disturbances
+
+
+def noise_columns(plant) -> dict[str, slice]:
+    """Columns of each noise channel in a case's stream (the plant's ``noise_channels``)."""
+    out, start = {}, 0
+    for name in plant.noise_channels:
+        for channels in (plant.outputs, plant.inputs):
+            ch = next((c for c in channels if c.name == name), None)
+            if ch is not None:
+                break
+        else:
+            raise ValueError(f"{name}: noise_channels names no channel of "
+                             f"{type(plant).__name__}")
+        out[name] = slice(start, start + ch.size)
+        start += ch.size
+    return out
+
+
+def noise_column(columns: dict[str, slice], name: str, what: str, plant):
+    """The stream column(s) of channel ``name``, or a ValueError when it has no stream."""
+    if name not in columns:
+        raise ValueError(f"{name}: {what} needs a noise stream, but {type(plant).__name__}."
+                         f"noise_channels ({', '.join(columns) or 'none'}) has none for it")
+    sl = columns[name]
+    return sl.start if sl.stop - sl.start == 1 else sl
+
+
+__all__ = ["ChannelActuator", "ChannelDisturbance", "ChannelSensor", "noise_column",
+           "noise_columns", "resolve_channels"]

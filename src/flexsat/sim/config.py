@@ -1,0 +1,200 @@
+"""Run settings of a simulation and the resource checks made before a run starts."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexsat import limits
+from flexsat.sim.actuators import TorqueActuator
+from flexsat.sim.channels import (ChannelActuator, ChannelDisturbance, ChannelSensor,
+                                  noise_columns, resolve_channels)
+from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
+from flexsat.sim.recording import CHUNK
+from flexsat.sim.sensors import Sensors
+from flexsat.validation import require_count, require_positive, set_si
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Run settings shared by every case of a batch.
+
+    Parameters
+    ----------
+    duration : float             run length, s
+    control_rate : float         controller sample rate, Hz (TAMU: 75 Hz)
+    substeps : int               integrator substeps per control period when the plant has
+                                 nonlinear terms (friction, stiffening) or its own integrator;
+                                 ignored for a linear run and raised where an input force needs
+                                 it (:func:`stable_substeps`)
+    actuator, sensors, friction, random_torque, impulses
+                                 the single-axis presets (channels ``torque``, ``theta``,
+                                 ``theta_dot``, ``root_torque``; :mod:`flexsat.sim.channels`)
+    channel_sensors, channel_actuators, channel_disturbances : dict
+                                 per-channel pieces by channel name
+                                 (:class:`~flexsat.sim.channels.ChannelSensor`, ...); they
+                                 override a preset on the same channel
+    settling_band : float        |θ − θ_f| band for the settling time, rad
+    seed : int                   base seed; case i uses seed + i unless seeds are given
+
+    ``duration``, ``control_rate`` and ``settling_band`` take a number in SI, a pint Quantity or
+    a unit string (``"15 s"``, ``"75 Hz"``, ``"0.5 deg"``) and are stored in SI.
+    """
+
+    duration: float
+    control_rate: float = 75.0
+    substeps: int = 4
+    actuator: TorqueActuator = field(default_factory=TorqueActuator)
+    sensors: Sensors = field(default_factory=Sensors)
+    friction: BearingFriction = field(default_factory=BearingFriction)
+    random_torque: RandomTorque = field(default_factory=RandomTorque)
+    impulses: Impulses = field(default_factory=Impulses)
+    settling_band: float = np.radians(0.5)
+    seed: int = 0
+    channel_sensors: dict = field(default_factory=dict)
+    channel_actuators: dict = field(default_factory=dict)
+    channel_disturbances: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        set_si(self, "duration", require_positive, "s")
+        set_si(self, "control_rate", require_positive, "Hz")
+        set_si(self, "settling_band", require_positive, "rad")
+        require_count(self.substeps, "substeps")
+        if not limits.is_integral(self.seed) or not 0 <= self.seed <= limits.MAX_SEED:
+            raise ValueError(f"seed: must be an integer in [0, {limits.MAX_SEED}], got "
+                             f"{self.seed!r}")
+        limits.check_count(self.duration * self.control_rate, limits.MAX_SAMPLES, "duration",
+                           "control samples (duration × control_rate)",
+                           "shorten the run or lower the control rate")
+        limits.check_count(self.substeps, limits.MAX_SUBSTEPS, "substeps",
+                           "integrator substeps per control period")
+        for name, kind in (("channel_sensors", ChannelSensor),
+                           ("channel_actuators", ChannelActuator),
+                           ("channel_disturbances", ChannelDisturbance)):
+            pieces = getattr(self, name)
+            if not isinstance(pieces, dict) or not all(
+                    isinstance(k, str) and isinstance(v, kind) for k, v in pieces.items()):
+                raise ValueError(f"{name}: must map channel names to {kind.__name__}, got "
+                                 f"{pieces!r}")
+
+    @property
+    def dt(self) -> float:
+        return 1.0 / self.control_rate
+
+    @property
+    def n_steps(self) -> int:
+        return int(round(self.duration * self.control_rate))
+
+
+#: largest h λ allowed for an explicitly integrated input force (friction); ETD2RK is stable
+#: for h λ <= 2
+FRICTION_STEP_LIMIT = 1.5
+
+
+def force_rates(plant, disturbances: dict) -> list[tuple[str, float]]:
+    """(channel, λ) of each input force with a ``max_slope``: the damping rate
+    λ = max|∂f/∂y| · |C_y B_j| of the force f(y) of output y on input j (for the bearing,
+    (c1/ε + c2) (M⁻¹)_θθ: inside |θ'| < ε the regularised friction is a stiff damper)."""
+    _, B = plant.linear_part()
+    out = []
+    for name, d in disturbances.items():
+        slope = getattr(d.force, "max_slope", None)
+        if d.force is None or slope is None:
+            continue
+        mats = plant.output_matrices(d.force_output)
+        if mats is None:
+            continue
+        C, j = mats[0], plant.input_slices[name].start
+        gain = np.abs(np.einsum("...pi,...i->...p", C, B[..., :, j])).max()
+        out.append((name, float(slope * gain)))
+    return out
+
+
+def stable_substeps(plant, friction, dt: float, requested: int) -> int:
+    """Substeps per control period: the requested number, raised where needed so that the
+    explicitly integrated input forces stay stable (h λ <= FRICTION_STEP_LIMIT, λ from
+    :func:`force_rates`).
+
+    ``friction`` is a :class:`BearingFriction` (the planar preset on ``torque``, driven by
+    ``theta_dot``) or a dict of bound :class:`~flexsat.sim.channels.ChannelDisturbance` s.
+    """
+    if isinstance(friction, BearingFriction):
+        if not friction.active:
+            return requested
+        friction = {"torque": ChannelDisturbance(force=friction, force_output="theta_dot")}
+    substeps = requested
+    for name, rate in force_rates(plant, friction):
+        needed = dt * rate / FRICTION_STEP_LIMIT
+        # compared as a float first: a near-zero smoothing makes it too large for an int
+        limits.check_count(needed, limits.MAX_SUBSTEPS, "friction",
+                           f"a stable integration of the friction (damping rate {rate:.3g} 1/s "
+                           f"below the smoothing speed) needs substeps per control period",
+                           "lower coulomb or viscous, raise smoothing or the control rate")
+        substeps = max(substeps, math.ceil(needed))
+    return substeps
+
+
+def run_substeps(plant, config: SimConfig, disturbances: dict) -> int:
+    """Integrator substeps of a run: 1 for a linear plant without input forces (the exact
+    step), else the requested number raised for stability (:func:`stable_substeps`)."""
+    forced = any(d.force is not None for d in disturbances.values())
+    if getattr(plant, "step", None) is not None:
+        return config.substeps
+    if not (plant.nonlinear or forced):
+        return 1
+    return stable_substeps(plant, disturbances, config.dt, config.substeps)
+
+
+def recorded_values(plant) -> int:
+    """Histories kept per case and sample with the default recording: the recorded outputs,
+    the references θ_ref, θ'_ref (a plant with ``theta``), command, applied input, disturbance
+    and input force per input, the recorded measurements, energy and vibration energy."""
+    width = {c.name: c.size for c in plant.outputs}
+    n = sum(width[k] for k in plant.recorded) + 4 * plant.n_inputs
+    n += 2 * ("theta" in width) + sum(width[k] for k in getattr(plant, "recorded_measurements",
+                                                                  ()) if k in width)
+    return n + 1 + hasattr(plant, "vibration_energy")
+
+
+def check_resources(plant, config: SimConfig, n_cases: int = 1, record_states: bool = False
+                    ) -> int:
+    """Check that a run fits the limits of :mod:`flexsat.limits` before it starts.
+
+    Parameters
+    ----------
+    plant, config
+        As for :func:`simulate`.
+    n_cases : int
+        Batch size.
+    record_states : bool
+        Whether the full state history is kept.
+
+    Returns
+    -------
+    int
+        The integrator substeps per control period (:func:`run_substeps`).
+
+    Raises
+    ------
+    ValueError
+        ``"field: ... above the limit ..."`` for too many cases, substeps, integrator steps or
+        too much memory.
+    """
+    limits.check_count(n_cases, limits.MAX_CASES, "n_cases", "cases in one batch",
+                       "split the batch")
+    _, _, disturbances = resolve_channels(plant, config)
+    substeps = run_substeps(plant, config, disturbances)
+    n = config.n_steps + 1
+    limits.check_count(n * substeps, limits.MAX_INTEGRATOR_STEPS, "duration",
+                       f"integrator steps ({n} control samples × {substeps} substeps)",
+                       "shorten the run or lower the control rate or the substeps")
+    # the histories (kept once: the dataset holds views of the loop's arrays), the states
+    # when recorded, and the loop's chunk of states and noise
+    values = recorded_values(plant) + (plant.nx if record_states else 0)
+    width = sum(s.stop - s.start for s in noise_columns(plant).values())
+    buffer = limits.memory_estimate(min(CHUNK, n), n_cases, plant.nx + width)
+    limits.check_memory(limits.memory_estimate(n, n_cases, values) + buffer, "duration",
+                        f"a run of {n} samples × {n_cases} cases × {values} values")
+    return substeps

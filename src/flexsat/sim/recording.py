@@ -1,0 +1,202 @@
+"""What a run keeps, and the result dataset built from it.
+
+The time loop stores only what it must: the states of the current chunk of :data:`CHUNK`
+samples (or every state when asked), the commands, applied and disturbed inputs, the input
+forces and the recorded measurements. At the end of each chunk the recorded outputs, the
+energy and the vibration energy are computed for the whole chunk in large array products
+(outputs y = C x + D u + D_f f_in of :meth:`~flexsat.dynamics.plant.Plant.output_matrices`),
+so neither a per-sample Python call per output nor the full state history is needed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from flexsat.sim.metrics import METRIC_UNITS, maneuver_metrics
+
+#: samples per chunk of states kept in the loop before its outputs are computed; 64 keeps the
+#: buffer (64 × n_x values per case) small next to the recorded histories
+CHUNK = 64
+
+
+@dataclass
+class SimResult:
+    """Time histories (``dataset``, dims case × time) and per-case ``metrics``."""
+
+    dataset: xr.Dataset
+    metrics: dict[str, np.ndarray]
+
+    def metrics_records(self, labels=None) -> list[dict]:
+        """One JSON-ready dict per case (NaN → None)."""
+        n = self.dataset.sizes["case"]
+        rows = []
+        for i in range(n):
+            row = {} if labels is None else {"run": labels[i]}
+            for key, val in self.metrics.items():
+                v = float(val[i])
+                row[key] = None if not np.isfinite(v) else v
+            rows.append(row)
+        return rows
+
+
+def _unit(unit: str) -> str:
+    return unit.replace("*", " ")
+
+
+def _history(n: int, nc: int, size: int) -> np.ndarray:
+    return np.zeros((n, nc) if size == 1 else (n, nc, size))
+
+
+class Recorder:
+    """Histories of one run (module docstring); arrays are (n_t, n_cases[, size])."""
+
+    def __init__(self, plant, n: int, nc: int, measured: tuple[str, ...], force_names: dict,
+                 record_states: bool, batched: bool):
+        self.plant, self.n, self.nc, self.batched = plant, n, nc, batched
+        m = plant.n_inputs
+        self.commands = np.zeros((n, nc, m))
+        self.applied = np.zeros((n, nc, m))
+        self.disturbed = np.zeros((n, nc, m))  # applied + disturbance: the plant's input
+        self.forces = np.zeros((n, nc, m)) if force_names else None
+        self.force_names = force_names
+        self.measured = {k: _history(n, nc, _size(plant.outputs, k)) for k in measured}
+        self.states = np.empty((n, nc, plant.nx)) if record_states else None
+        self.buffer = self.states if record_states else np.empty((min(CHUNK, n), nc, plant.nx))
+        names = [c for c in plant.recorded]
+        self.outputs = {k: _history(n, nc, _size(plant.outputs, k)) for k in names}
+        mats = [plant.output_matrices(k) for k in names]
+        self.linear = [k for k, mt in zip(names, mats) if mt is not None]
+        self.nonlinear = [k for k, mt in zip(names, mats) if mt is None]
+        if self.linear:
+            C, D, Df = (np.concatenate([mt[i] for mt in mats if mt is not None], axis=-2)
+                        for i in range(3))
+            self.CT, self.DT, self.DfT = (np.swapaxes(M, -1, -2) for M in (C, D, Df))
+        has_vib = hasattr(plant, "vibration_energy")
+        self.energy = np.zeros((n, nc)) if plant.energy(np.zeros((1, plant.nx))) is not None \
+            else None
+        self.vibration = np.zeros((n, nc)) if has_vib and self.energy is not None else None
+        self.done = 0
+
+    def slot(self, k: int) -> np.ndarray:
+        """Where the loop stores the state of sample k."""
+        return self.buffer[k] if self.states is not None else self.buffer[k % len(self.buffer)]
+
+    def flush(self, end: int) -> None:
+        """Compute the recorded outputs and energies of samples [done, end)."""
+        k0, T = self.done, end - self.done
+        if T <= 0:
+            return
+        X = self.buffer[k0:end] if self.states is not None else self.buffer[:T]
+        Wp = np.empty((T, self.nc, self.plant.n_inputs))  # the input held before each sample
+        Wp[1:] = self.disturbed[k0 : end - 1]
+        Wp[0] = self.disturbed[k0 - 1] if k0 > 0 else 0.0
+        F = None if self.forces is None else self.forces[k0:end]
+        if self.linear:
+            Y = self._linear(X, self.CT) + self._linear(Wp, self.DT)
+            if F is not None:
+                Y = Y + self._linear(F, self.DfT)
+            col = 0
+            for k in self.linear:
+                size = self.outputs[k].shape[2] if self.outputs[k].ndim == 3 else 1
+                self.outputs[k][k0:end] = Y[..., col] if size == 1 else Y[..., col : col + size]
+                col += size
+        for k in self.nonlinear:
+            self.outputs[k][k0:end] = self.plant.output(k, X, Wp, F)
+        if self.energy is not None:
+            E = self.plant.energy(X)
+            self.energy[k0:end] = E
+            if self.vibration is not None:
+                self.vibration[k0:end] = self.plant.vibration_energy(X, E)
+        self.done = end
+
+    def _linear(self, X, MT):
+        if not self.batched or MT.ndim == 2:
+            return X @ MT
+        return np.einsum("tci,cip->tcp", X, MT)
+
+    def dataset(self, t, controller, theta0, config, substeps) -> SimResult:
+        """The xarray dataset (case × time; views, no copies) and the maneuver metrics."""
+        plant, nc = self.plant, self.nc
+        data = {}
+
+        def put(name, arr, unit):
+            dims = ("case", "time") if arr.ndim == 2 else ("case", "time", f"{name}_index")
+            data[name] = (dims, np.swapaxes(arr, 0, 1), {"units": _unit(unit)})
+
+        outs = {c.name: c for c in plant.outputs}
+        for k in ("theta", "theta_dot"):
+            if k in self.outputs:
+                put(k, self.outputs[k], outs[k].unit)
+        refs = _references(controller, t, nc) if "theta" in outs else None
+        if refs is not None:
+            put("theta_ref", refs[0], "rad")
+            put("theta_dot_ref", refs[1], "rad/s")
+        self.disturbed -= self.applied  # the loop is over: keep the disturbance alone
+        for ch, sl in plant.input_slices.items():
+            unit = next(c.unit for c in plant.inputs if c.name == ch)
+            one = sl.stop - sl.start == 1
+            pick = (lambda a: a[..., sl.start]) if one else (lambda a: a[..., sl])
+            put(f"{ch}_command", pick(self.commands), unit)
+            put(ch, pick(self.applied), unit)
+            put(f"disturbance_{ch}", pick(self.disturbed), unit)
+            name = f"{self.force_names.get(ch, 'friction')}_{ch}"
+            put(name, pick(self.forces) if self.forces is not None
+                else np.zeros(self.applied.shape[:2]) if one else np.zeros(self.applied.shape),
+                unit)
+        for k, v in self.outputs.items():
+            if k not in data:
+                put(k, v, outs[k].unit)
+            if k in self.measured:
+                put(f"{k}_measured", self.measured[k], outs[k].unit)
+        for k, v in self.measured.items():
+            if f"{k}_measured" not in data:
+                put(f"{k}_measured", v, outs[k].unit)
+        if self.energy is not None:
+            put("energy", self.energy, "J")
+        if self.vibration is not None:
+            put("vibration_energy", self.vibration, "J")
+        if self.states is not None:
+            data["state"] = (("case", "time", "state_index"), np.swapaxes(self.states, 0, 1), {})
+        ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}),
+                                      "case": np.arange(nc)})
+        metrics = _metrics(ds, t, controller, theta0, config, refs, nc)
+        for key, val in metrics.items():
+            ds[key] = (("case",), val, {"units": METRIC_UNITS[key]})
+        ds.attrs.update(control_rate_Hz=config.control_rate, settling_band_rad=config.settling_band,
+                        substeps=substeps)
+        return SimResult(ds, metrics)
+
+
+def _size(channels, name: str) -> int:
+    return next(c.size for c in channels if c.name == name)
+
+
+def _references(controller, t, nc):
+    """(θ_ref, θ'_ref) on the sample grid, (n_t, n_cases), or None for a law without them."""
+    if not hasattr(controller, "reference_at"):
+        return None
+    table = getattr(controller, "_table", None)
+    if table is not None and len(table[0]) == len(t) and np.array_equal(table[0], t):
+        return tuple(np.broadcast_to(np.asarray(a, float).reshape(len(t), -1), (len(t), nc))
+                     for a in table[1:3])
+    th, thd = np.zeros((len(t), nc)), np.zeros((len(t), nc))
+    for k, tk in enumerate(t):
+        th[k], thd[k] = controller.reference_at(tk)[:2]
+    return th, thd
+
+
+def _metrics(ds, t, controller, theta0, config, refs, nc) -> dict:
+    """The single-axis maneuver metrics, for a plant with those histories (else none)."""
+    need = ("theta", "theta_dot", "torque", "tip_deflection", "vibration_energy")
+    if refs is None or theta0 is None or not all(k in ds and ds[k].ndim == 2 for k in need):
+        return {}
+    target = np.broadcast_to(np.asarray(controller.target, float), (nc,))
+    ref = controller.reference
+    ref_end = None if ref is None else np.broadcast_to(np.asarray(ref.end_time, float), (nc,))
+    return maneuver_metrics(
+        t, ds.theta.values, ds.theta_dot.values, refs[1].T, ds.torque.values,
+        ds.tip_deflection.values, ds.vibration_energy.values, theta0, target, ref_end,
+        config.settling_band)
