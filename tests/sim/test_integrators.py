@@ -109,7 +109,7 @@ def test_linear_tamu_run_is_unchanged_from_the_full_construction(tamu_case, monk
         def build(cls, A, Bu, Bf, dt, substeps=1):
             assert Bf is None  # a linear run asks for no force columns
             E, P1, _ = _full_van_loan(A, dt / substeps)
-            return cls(E.T.copy(), P1 @ Bu, None, None, substeps)
+            return cls(E.T.copy(), (P1 @ Bu).T.copy(), None, None, substeps)
 
     monkeypatch.setattr(engine, "ExponentialStepper", FullConstruction)
     old = simulate(model, law, cfg, record_states=True).dataset

@@ -83,17 +83,23 @@ class ChannelSensor:
                       range=_si(self.range, unit, f"{f}.range"))
         if np.any(out.range <= 0):
             raise ValueError(f"{f}.range: must be > 0 (inf for none), got {self.range!r}")
+        # which operations act, decided once: the sample loop skips the others
+        object.__setattr__(out, "_acts", (bool(np.any(out.bias)), bool(np.any(out.noise)),
+                                          bool(np.any(out.quantum)),
+                                          bool(np.any(np.isfinite(out.range)))))
         return out
 
     def measure(self, v: np.ndarray, noise) -> np.ndarray:
-        """Measured value from v (the truth, or the derivative filter's output)."""
-        if np.any(self.bias):
+        """Measured value from v (the truth, or the derivative filter's output); a bound
+        sensor (:meth:`bind`) only."""
+        bias, noisy, quantized, ranged = self._acts
+        if bias:
             v = v + self.bias
-        if np.any(self.noise):
+        if noisy:
             v = v + self.noise * noise
-        if self.quantum:
+        if quantized:
             v = self.quantum * np.round(v / self.quantum)
-        if np.any(np.isfinite(self.range)):
+        if ranged:
             v = np.clip(v, -self.range, self.range)
         return v
 
@@ -128,19 +134,23 @@ class ChannelActuator:
         for field in ("saturation", "rate_limit", "scale"):
             if np.any(np.asarray(getattr(out, field)) <= 0):
                 raise ValueError(f"{f}.{field}: must be > 0, got {getattr(self, field)!r}")
+        object.__setattr__(out, "_acts", (bool(np.any(np.isfinite(out.rate_limit))),
+                                          bool(np.any(np.isfinite(out.saturation))),
+                                          bool(np.any(out.bias))))
         return out
 
     def apply(self, command: np.ndarray, previous, dt: float):
-        """(applied input, limited command): ``previous`` is the last limited command (None
-        at the first sample, where the rate limit does not act)."""
+        """(applied input, limited command) of a bound actuator (:meth:`bind`); ``previous``
+        is the last limited command (None at the first sample: the rate limit starts there)."""
+        limited, saturated, biased = self._acts
         c = command
-        if previous is not None and np.any(np.isfinite(self.rate_limit)):
+        if limited and previous is not None:
             step = self.rate_limit * dt
             c = np.clip(c, previous - step, previous + step)
-        if np.any(np.isfinite(self.saturation)):
+        if saturated:
             c = np.clip(c, -self.saturation, self.saturation)
         u = self.scale * c
-        return (u + self.bias if np.any(self.bias) else u), c
+        return (u + self.bias if biased else u), c
 
 
 @dataclass(frozen=True)

@@ -196,5 +196,6 @@ def check_resources(plant, config: SimConfig, n_cases: int = 1, record_states: b
     width = sum(s.stop - s.start for s in noise_columns(plant).values())
     buffer = limits.memory_estimate(min(CHUNK, n), n_cases, plant.nx + width)
     limits.check_memory(limits.memory_estimate(n, n_cases, values) + buffer, "duration",
-                        f"a run of {n} samples × {n_cases} cases × {values} values")
+                        f"a run of {n} samples × {n_cases} cases × {values} values (and a "
+                        f"{min(CHUNK, n)}-sample buffer of {plant.nx + width})")
     return substeps

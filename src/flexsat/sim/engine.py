@@ -180,6 +180,51 @@ def _initial_state(plant, nc, theta0, initial_state, ref):
     return x, theta0
 
 
+class _InputForces:
+    """State-dependent forces on input channels (bearing friction): each force f(y) of its
+    driving output y, read off the state directly when y is one state coordinate."""
+
+    def __init__(self, plant, forced: dict, batched: bool):
+        self.plant, self.forced, self.batched = plant, forced, batched
+        self.m, slices = plant.n_inputs, plant.input_slices
+        self.cols = [j for k in forced for j in range(slices[k].start, slices[k].stop)]
+        self.drivers = []
+        for k, d in forced.items():
+            mats = plant.output_matrices(d.force_output)
+            if mats is None:
+                self.drivers.append((d, d.force_output, None))
+                continue
+            C = np.asarray(mats[0])
+            if C.ndim == 2 and C.shape[0] == 1 and np.count_nonzero(C) == 1 and C.max() == 1 \
+                    and not np.any(mats[1]):
+                self.drivers.append((d, int(np.argmax(C[0])), None))  # y = x_i exactly
+            else:
+                self.drivers.append((d, None, np.swapaxes(C, -1, -2).copy()))
+
+    def compact(self, xs, w) -> np.ndarray:
+        """The forces on the forced input columns only, (n_cases, n_forced)."""
+        out = []
+        for d, index, CT in self.drivers:
+            if isinstance(index, int):
+                y = xs[:, index]
+            elif CT is not None:
+                y = apply(xs, CT, self.batched)
+                y = y[:, 0] if y.shape[1] == 1 else y
+            else:
+                y = self.plant.output(index, xs, w, None)
+            f = d.force(y)
+            out.append(f[:, None] if f.ndim == 1 else f)
+        return out[0] if len(out) == 1 else np.concatenate(out, axis=1)
+
+    def full(self, compact) -> np.ndarray:
+        """f_in on every input channel, (n_cases, m)."""
+        if len(self.cols) == self.m:
+            return compact
+        f = np.zeros((compact.shape[0], self.m))
+        f[:, self.cols] = compact
+        return f
+
+
 class _Instruments:
     """The measured channels of a run: true values by output matrices (or the plant's
     ``output``), then each channel's sensor; derivative sensors after their sources."""
@@ -327,19 +372,13 @@ def simulate(
         k for k in getattr(plant, "recorded_measurements", ())
         if k not in controller.reads and any(c.name == k for c in plant.outputs))
     inst = _Instruments(plant, measured, sensors, columns, dt, nc, batched, bool(forced))
-    drivers = {k: plant.output_matrices(d.force_output) for k, d in forced.items()}
+    forces = _InputForces(plant, forced, batched)
 
     def input_force(xs, w):
-        """Input-channel forces f_in (n_cases, m) at states xs: each force of its output."""
-        f = np.zeros((xs.shape[0], m))
-        for k, d in forced.items():
-            mats = drivers[k]
-            y = (apply(xs, np.swapaxes(mats[0], -1, -2), batched)[:, 0] if mats is not None
-                 else plant.output(d.force_output, xs, w, None))
-            f[:, slices[k]] = np.reshape(d.force(y), (xs.shape[0], -1))
-        return f
+        """Input-channel forces f_in (n_cases, m) at states xs."""
+        return forces.full(forces.compact(xs, w))
 
-    forced_cols = [j for k in forced for j in range(slices[k].start, slices[k].stop)]
+    forced_cols = forces.cols
     own_step = getattr(plant, "step", None)
     stepper = force = None
     if own_step is None:
@@ -357,14 +396,15 @@ def simulate(
                              f"or 'exp_rk4', got {kind!r}")
         stepper = cls.build(A, B, Bf_all, dt, substeps if Bf_all is not None else 1)
         if Bf_all is not None:
-            def force(xs, w):
-                f_in = input_force(xs, w) if forced else None
-                parts = []
-                if Bf is not None:
-                    parts.append(plant.nonlinear_force(xs, w if f_in is None else w + f_in))
-                if forced:
-                    parts.append(f_in[:, forced_cols])
-                return parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
+            if Bf is None:  # input forces only (the friction of a linear plant): rank-1 columns
+                force = forces.compact
+            else:
+                def force(xs, w):
+                    if not forced:
+                        return plant.nonlinear_force(xs, w)
+                    fc = forces.compact(xs, w)
+                    return np.concatenate([plant.nonlinear_force(xs, w + forces.full(fc)), fc],
+                                          axis=1)
 
     impulses = {}
     for k, d in disturbances.items():

@@ -132,10 +132,9 @@ class ExponentialStepper:
     def drive(self, w: np.ndarray) -> np.ndarray:
         """The held input's contribution h φ1 B_u w, (n_cases, n_x); w (n_cases, m) or
         (n_cases,) for one input."""
-        w = np.asarray(w, float)
         if w.ndim == 1:
             w = w[:, None]
-        return apply(w, self.P1u, self.batched)
+        return w @ self.P1u if not self.batched else apply(w, self.P1u, True)
 
     def step(self, x: np.ndarray, w: np.ndarray, force=None) -> np.ndarray:
         """Advance one control period with held input w and force N(x, w) (n_cases, n_f).
@@ -147,6 +146,16 @@ class ExponentialStepper:
             raise ValueError("force: this stepper was built without force columns (Bf=None)")
         drive = self.drive(w)  # held input: the same for every substep
         b = self.batched
+        if not b:  # shared propagators: plain products (the common, fastest path)
+            Et, P1f, P2f = self.Et, self.P1f, self.P2f
+            for _ in range(self.substeps):
+                if force is None:
+                    x = x @ Et + drive
+                    continue
+                f0 = force(x, w)
+                a = x @ Et + drive + f0 @ P1f
+                x = a + (force(a, w) - f0) @ P2f
+            return x
         for _ in range(self.substeps):
             base = apply(x, self.Et, b) + drive
             if force is None:
