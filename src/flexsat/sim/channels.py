@@ -283,9 +283,15 @@ def resolve_channels(plant, config) -> tuple[dict, dict, dict]:
             src = find_channel(plant.outputs, s.derivative_of, "output", owner)
             if sensors.get(src.name, ChannelSensor()).derivative_of is not None:
                 raise ValueError(f"{name}: derivative_of {src.name!r} is itself a derivative")
+    columns = noise_columns(plant)
     for name, d in disturbances.items():
         if d.force is not None:
             find_channel(plant.outputs, d.force_output, "output", owner)
+        if np.any(d.random):
+            noise_column(columns, name, "its random disturbance", plant)
+    for name, s in sensors.items():
+        if np.any(s.noise):
+            noise_column(columns, name, "its sensor noise", plant)
     return sensors, actuators, disturbances
 
 

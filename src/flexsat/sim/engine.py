@@ -149,17 +149,25 @@ def _commands(cmd, writes, shapes, nc: int, law: str, check: bool) -> list[np.nd
     return out
 
 
+def _unit_row(plant, name: str):
+    """Index i when output ``name`` is the state coordinate x_i for every case, else None."""
+    if not any(c.name == name for c in plant.outputs):
+        return None
+    mats = plant.output_matrices(name)
+    if mats is None or np.any(mats[1]):
+        return None
+    C = np.asarray(mats[0]).reshape(-1, plant.nx)
+    i = int(np.argmax(C[0]))
+    unit = np.zeros(plant.nx)
+    unit[i] = 1.0
+    return i if np.array_equal(C, np.broadcast_to(unit, C.shape)) else None
+
+
 def _initial_state(plant, nc, theta0, initial_state, ref):
     """(x0, θ0 per case or None): rest at θ0 for a plant with a ``theta`` state coordinate,
     or the given full state."""
-    x = plant.initial_state(nc)
-    mats = plant.output_matrices("theta") if any(c.name == "theta" for c in plant.outputs) \
-        else None
-    row = None
-    if mats is not None:
-        C = np.asarray(mats[0]).reshape(-1, plant.nx) if np.ndim(mats[0]) == 2 else None
-        if C is not None and C.shape[0] == 1 and np.count_nonzero(C) == 1 and C.max() == 1:
-            row = int(np.argmax(C[0]))
+    x = np.array(np.broadcast_to(plant.initial_state(nc), (nc, plant.nx)))
+    row = _unit_row(plant, "theta")
     if initial_state is not None:
         x0 = require_finite(initial_state, "initial_state")
         try:
@@ -194,12 +202,11 @@ class _InputForces:
             if mats is None:
                 self.drivers.append((d, d.force_output, None))
                 continue
-            C = np.asarray(mats[0])
-            if C.ndim == 2 and C.shape[0] == 1 and np.count_nonzero(C) == 1 and C.max() == 1 \
-                    and not np.any(mats[1]):
-                self.drivers.append((d, int(np.argmax(C[0])), None))  # y = x_i exactly
+            row = _unit_row(plant, d.force_output)
+            if row is not None:
+                self.drivers.append((d, row, None))  # y = x_i exactly
             else:
-                self.drivers.append((d, None, np.swapaxes(C, -1, -2).copy()))
+                self.drivers.append((d, None, np.swapaxes(mats[0], -1, -2).copy()))
 
     def compact(self, xs, w) -> np.ndarray:
         """The forces on the forced input columns only, (n_cases, n_forced)."""

@@ -75,8 +75,8 @@ class Recorder:
                         for i in range(3))
             self.CT, self.DT, self.DfT = (np.swapaxes(M, -1, -2) for M in (C, D, Df))
         has_vib = hasattr(plant, "vibration_energy")
-        self.energy = np.zeros((n, nc)) if plant.energy(np.zeros((1, plant.nx))) is not None \
-            else None
+        probe = np.zeros((plant.n_cases, plant.nx))  # (cases, n_x): one state per parameter case
+        self.energy = np.zeros((n, nc)) if plant.energy(probe) is not None else None
         self.vibration = np.zeros((n, nc)) if has_vib and self.energy is not None else None
         self.done = 0
 

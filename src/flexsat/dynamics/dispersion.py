@@ -1,0 +1,147 @@
+"""A batch of plants with the same channels and different parameters, one case each.
+
+A Monte Carlo set may vary inertias, stiffnesses and damping per case. :func:`stack_plants`
+builds a :class:`DispersedPlant` from one plant per case: its linear part (A, B) and output
+matrices carry a leading case axis, and the engine propagates each case with its own
+propagators (batched products), so case i of the batch is plant i run alone.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from flexsat.dynamics.plant import Plant
+
+
+class DispersedPlant(Plant):
+    """Plants ``plants[i]`` as the cases of one batch (module docstring).
+
+    Parameters
+    ----------
+    plants : sequence of Plant
+        Same ``inputs``, ``outputs``, ``nx``, ``noise_channels`` and nonlinear structure (force
+        matrix shape); parameters may differ.
+
+    Raises
+    ------
+    ValueError
+        Naming the field that differs between the plants, or a non-finite matrix entry.
+    """
+
+    def __init__(self, plants):
+        plants = tuple(plants)
+        if not plants or not all(isinstance(p, Plant) for p in plants):
+            raise ValueError("plants: give one or more Plant instances")
+        first = plants[0]
+        for i, p in enumerate(plants[1:], 1):
+            for field in ("inputs", "outputs", "nx", "noise_channels", "recorded", "nonlinear"):
+                a, b = getattr(first, field), getattr(p, field)
+                if (tuple(a) if isinstance(a, tuple) else a) != \
+                        (tuple(b) if isinstance(b, tuple) else b):
+                    raise ValueError(f"{field}: plants[{i}] has {field} {_show(b)}, plants[0] "
+                                     f"has {_show(a)}; a dispersed batch needs the same "
+                                     f"channels and state")
+            if (first.force_matrix is None) != (p.force_matrix is None) or (
+                    first.force_matrix is not None
+                    and np.shape(first.force_matrix) != np.shape(p.force_matrix)):
+                raise ValueError(f"force_matrix: plants[{i}] has a different nonlinear force "
+                                 "structure from plants[0]")
+            if getattr(p, "step", None) is not None:
+                raise ValueError(f"step: plants[{i}] has its own integrator; a dispersed batch "
+                                 "is propagated by the exponential integrators")
+        self.plants = plants
+        self.inputs = tuple(first.inputs)
+        self.outputs = tuple(first.outputs)
+        self.recorded = tuple(first.recorded)
+        self.noise_channels = tuple(first.noise_channels)
+        self.nonlinear = bool(first.nonlinear)
+        self.integrator = getattr(first, "integrator", "etd2rk")
+        if hasattr(first, "recorded_measurements"):
+            self.recorded_measurements = tuple(first.recorded_measurements)
+        for name, M in (("A", self._linear[0]), ("B", self._linear[1])):
+            bad = np.argwhere(~np.isfinite(M).reshape(len(plants), -1).all(axis=1))
+            if bad.size:
+                raise ValueError(f"{name}: plants[{int(bad[0, 0])}] has a non-finite entry in "
+                                 f"its linear part; check its dispersed parameters")
+
+    @property
+    def nx(self) -> int:
+        return self.plants[0].nx
+
+    @property
+    def n_cases(self) -> int:
+        return len(self.plants)
+
+    @cached_property
+    def _linear(self):
+        parts = [p.linear_part() for p in self.plants]
+        return np.stack([a for a, _ in parts]), np.stack([b for _, b in parts])
+
+    def linear_part(self):
+        """(A, B) with a leading case axis: (n_cases, n_x, n_x), (n_cases, n_x, m)."""
+        return self._linear
+
+    @cached_property
+    def force_matrix(self):
+        if self.plants[0].force_matrix is None:
+            return None
+        return np.stack([p.force_matrix for p in self.plants])
+
+    def nonlinear_force(self, x, u):
+        """Each case's force from its own plant; x (..., n_cases, n_x)."""
+        return np.stack([p.nonlinear_force(x[..., i, :], u[..., i, :])
+                         for i, p in enumerate(self.plants)], axis=-2)
+
+    def output_matrices(self, name: str):
+        mats = [p.output_matrices(name) for p in self.plants]
+        if any(m is None for m in mats):
+            return None
+        return tuple(np.stack([m[i] for m in mats]) for i in range(3))
+
+    def output(self, name, x, u, f_in=None):
+        """Output ``name`` per case, x (..., n_cases, n_x)."""
+        return np.stack([p.output(name, x[..., i, :], u[..., i, :],
+                                  None if f_in is None else f_in[..., i, :])
+                         for i, p in enumerate(self.plants)], axis=x.ndim - 2)
+
+    def _per_case(self, method: str, x):
+        values = [getattr(p, method)(x[..., i, :]) for i, p in enumerate(self.plants)]
+        if any(v is None for v in values):
+            return None
+        return np.stack(values, axis=x.ndim - 2)
+
+    def energy(self, x):
+        return self._per_case("energy", x)
+
+    def momentum(self, x):
+        return self._per_case("momentum", x)
+
+    def initial_state(self, n_cases: int) -> np.ndarray:
+        return np.stack([p.initial_state(1)[0] for p in self.plants])
+
+    def __getattr__(self, name):
+        # per-case extras of the planar plants (vibration_energy): only when every plant has it
+        if name == "vibration_energy" and all(hasattr(p, name) for p in self.__dict__.get(
+                "plants", ())):
+            def vibration_energy(x, energy=None):
+                return np.stack([p.vibration_energy(x[..., i, :], None if energy is None
+                                                    else energy[..., i])
+                                 for i, p in enumerate(self.plants)], axis=x.ndim - 2)
+            return vibration_energy
+        raise AttributeError(name)
+
+
+def _show(value) -> str:
+    if isinstance(value, tuple) and value and hasattr(value[0], "name"):
+        return "(" + ", ".join(c.name for c in value) + ")"
+    return repr(value)
+
+
+def stack_plants(plants) -> DispersedPlant:
+    """One :class:`DispersedPlant` whose case i is ``plants[i]``."""
+    return DispersedPlant(plants)
+
+
+__all__ = ["DispersedPlant", "stack_plants"]

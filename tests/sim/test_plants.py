@@ -1,0 +1,215 @@
+"""Claims of the generic engine: any Plant under any Controller, the law's channels checked
+before the run, per-channel sensors and actuators, a plant's own integrator, and the linear
+TAMU run reproduced by an independent discrete recursion."""
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from flexsat.control.base import Controller
+from flexsat.dynamics.plant import Channel, Plant
+from flexsat.sim import (ChannelActuator, ChannelDisturbance, ChannelSensor, SimConfig,
+                         simulate)
+from flexsat.units import to_si
+
+
+class TwoCarts(Plant):
+    """Two unit masses joined by a spring k, a force on each: x = [p1, p2, v1, v2]."""
+
+    inputs = (Channel("push", "N", size=2),)
+    outputs = (Channel("position", "m", size=2), Channel("gap", "m"))
+    recorded = ("position", "gap")
+    noise_channels = ("gap",)
+
+    def __init__(self, k=4.0):
+        self.k = k
+
+    @property
+    def nx(self):
+        return 4
+
+    def linear_part(self):
+        k = self.k
+        A = np.zeros((4, 4))
+        A[:2, 2:] = np.eye(2)
+        A[2:, :2] = [[-k, k], [k, -k]]
+        return A, np.vstack([np.zeros((2, 2)), np.eye(2)])
+
+    def output_matrices(self, name):
+        C = {"position": np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0]]),
+             "gap": np.array([[-1.0, 1.0, 0, 0]])}[name]
+        return C, np.zeros((len(C), 2)), np.zeros((len(C), 2))
+
+    def energy(self, x):
+        p, v = x[..., :2], x[..., 2:]
+        return 0.5 * (v**2).sum(-1) + 0.5 * self.k * (p[..., 1] - p[..., 0]) ** 2
+
+
+class GapLaw(Controller):
+    reads = ("gap",)
+    writes = ("push",)
+    target = 0.0
+
+    def __init__(self, gain=1.0, shape=None):
+        self.gain, self.shape = gain, shape
+
+    def __call__(self, t, y, state):
+        u = np.stack([self.gain * y["gap"], -self.gain * y["gap"]], axis=-1)
+        return (u if self.shape is None else np.zeros(self.shape)), state
+
+
+def test_a_two_input_plant_runs_and_records_its_channels():
+    x0 = np.array([0.0, 0.1, 0.0, 0.0])
+    r = simulate(TwoCarts(), GapLaw(0.0), SimConfig(duration=2.0), initial_state=x0)
+    ds = r.dataset
+    assert ds.position.shape == (1, 151, 2) and ds.push.shape == (1, 151, 2)
+    # free oscillation of the gap at ω = sqrt(2k): exact linear propagation
+    t = ds.time.values
+    assert np.allclose(ds.gap.values[0], 0.1 * np.cos(np.sqrt(8.0) * t), rtol=0, atol=1e-12)
+    assert np.ptp(ds.energy.values[0]) < 1e-14
+    assert r.metrics == {}
+
+
+def test_the_law_channels_are_checked_against_the_plant_before_the_run():
+    class ReadsTheta(GapLaw):
+        reads = ("gap", "theta")
+
+    class WritesTorque(GapLaw):
+        writes = ("torque",)
+
+    cfg = SimConfig(duration=1.0)
+    with pytest.raises(ValueError, match=r"^theta: ReadsTheta reads a measurement the plant "
+                                         r"does not have"):
+        simulate(TwoCarts(), ReadsTheta(), cfg)
+    with pytest.raises(ValueError, match=r"^torque: WritesTorque writes an unknown input "
+                                         r"channel"):
+        simulate(TwoCarts(), WritesTorque(), cfg)
+    with pytest.raises(ValueError, match=r"^push: GapLaw returned a command of shape \(1, 3\), "
+                                         r"expected \(1, 2\)"):
+        simulate(TwoCarts(), GapLaw(shape=(1, 3)), cfg)
+
+
+def test_channel_pieces_on_missing_channels_are_refused_naming_them():
+    law = GapLaw()
+    with pytest.raises(ValueError, match=r"^speed: TwoCarts has no output channel 'speed'"):
+        simulate(TwoCarts(), law, SimConfig(duration=1.0,
+                                            channel_sensors={"speed": ChannelSensor()}))
+    with pytest.raises(ValueError, match=r"^torque: TwoCarts has no input channel 'torque'.*"
+                                         r"config.friction, random_torque, impulses"):
+        from flexsat.sim import RandomTorque
+        simulate(TwoCarts(), law, SimConfig(duration=1.0, random_torque=RandomTorque(1.0)))
+    with pytest.raises(ValueError, match=r"^position: its sensor noise needs a noise stream, "
+                                           r"but TwoCarts.noise_channels \(gap\) has none"):
+        simulate(TwoCarts(), law, SimConfig(duration=1.0, channel_sensors={
+            "gap": ChannelSensor(noise=0.1), "position": ChannelSensor(noise=0.1)}))
+
+
+def test_sensor_and_actuator_per_channel():
+    """The gap is measured with bias, a quantum and a range (in mm, converted); the push is
+    saturated, scaled and rate limited."""
+    law = GapLaw(100.0)
+    x0 = np.array([0.0, 0.1, 0.0, 0.0])
+    cfg = SimConfig(duration=1.0, channel_sensors={
+        "gap": ChannelSensor(bias="1 mm", quantum="2 mm", range="50 mm")},
+        channel_actuators={"push": ChannelActuator(saturation=3.0, rate_limit="75 N/s",
+                                                   scale=0.5)})
+    ds = simulate(TwoCarts(), law, cfg, initial_state=x0).dataset
+    measured = np.clip(0.002 * np.round((ds.gap.values[0] + 0.001) / 0.002), -0.05, 0.05)
+    cmd = ds.push_command.values[0]
+    assert np.allclose(cmd[:, 0], 100.0 * measured, rtol=0, atol=1e-12)
+    applied = ds.push.values[0]
+    assert np.abs(applied).max() <= 0.5 * 3.0 + 1e-15
+    assert np.abs(np.diff(applied[:, 0])).max() <= 0.5 * 75.0 / 75.0 + 1e-12
+
+
+def test_impulse_on_an_input_channel_is_b_times_j():
+    cfg = SimConfig(duration=0.5, channel_disturbances={
+        "push": ChannelDisturbance(impulse_times=(0.0,), impulses=(0.0, 2.0))})
+    with pytest.raises(ValueError, match=r"^disturbances\[push\].impulses: 2 values for 1"):
+        simulate(TwoCarts(), GapLaw(0.0), cfg)
+
+
+class Spinner(Plant):
+    """A unit vector turned at the commanded rate: x' = ω J x, stepped by the plant's own RK4
+    and normalised (a stand-in for a quaternion integrator)."""
+
+    inputs = (Channel("rate", "rad/s"),)
+    outputs = (Channel("angle", "rad"),)
+    recorded = ("angle",)
+    nonlinear = True
+
+    @property
+    def nx(self):
+        return 2
+
+    def linear_part(self):
+        return np.zeros((2, 2)), np.zeros((2, 1))
+
+    def output(self, name, x, u, f_in=None):
+        return np.arctan2(x[..., 1], x[..., 0])
+
+    def initial_state(self, n):
+        return np.tile([1.0, 0.0], (n, 1))
+
+    def step(self, x, u, h):
+        def f(x):
+            return u[:, :1] * np.stack([-x[:, 1], x[:, 0]], axis=1)
+
+        k1 = f(x)
+        k2 = f(x + h / 2 * k1)
+        k3 = f(x + h / 2 * k2)
+        k4 = f(x + h * k3)
+        return x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+    def normalize(self, x):
+        return x / np.linalg.norm(x, axis=-1, keepdims=True)
+
+
+class ConstantRate(Controller):
+    reads = ("angle",)
+    writes = ("rate",)
+    target = 0.0
+
+    def __call__(self, t, y, state):
+        return np.full(np.shape(y["angle"]), 0.5), state
+
+
+def test_a_plant_with_its_own_integrator_is_stepped_and_normalised():
+    """θ = 0.5 t exactly (RK4 on a rotation loses only ~h⁵ per step, and the normalisation
+    removes the norm drift); ‖x‖ = 1 to round-off."""
+    r = simulate(Spinner(), ConstantRate(), SimConfig(duration=2.0, substeps=3),
+                 record_states=True)
+    t = r.dataset.time.values
+    assert np.allclose(r.dataset.angle.values[0], 0.5 * t, rtol=0, atol=1e-12)
+    assert np.abs(np.linalg.norm(r.dataset.state.values[0], axis=-1) - 1).max() < 1e-15
+    assert r.dataset.attrs["substeps"] == 3
+
+
+def test_linear_tamu_run_equals_an_independent_discrete_recursion(tamu_case):
+    """Law I on the linear TAMU plant (ideal sensors, no disturbances) is the discrete
+    recursion x_{k+1} = Φ x_k + Γ u_k, u_k = −g1 (θ_k − θ_f) − g2 θ'_k − g3 r_k with the root
+    torque r_k from the plant's acceleration form (``outputs``) at the held input u_{k−1}; Φ, Γ
+    from one exponential of [[A, B], [0, 0]]. Agreement to 1e-10 relative (the issue's bound
+    for linear runs; both are exact, they differ by round-off in different products)."""
+    from flexsat.control import LyapunovRegulator
+
+    model = tamu_case.model()
+    g1, g2, g3 = (to_si("3000 ozf*in/rad", "N*m/rad"), to_si("800 ozf*in*s/rad", "N*m*s/rad"),
+                  0.5)
+    law = LyapunovRegulator(g1, g2, g3, target=0.5)
+    cfg = SimConfig(duration=8.0)
+    ds = simulate(model, law, cfg, record_states=True).dataset
+    A, B, _ = model.state_space
+    n, dt = model.nx, cfg.dt
+    E = expm(dt * np.block([[A, B[:, None]], [np.zeros((1, n + 1))]]))
+    Phi, Gam = E[:n, :n], E[:n, n]
+    x, u_prev, xs, us = np.zeros(n), 0.0, [], []
+    for _ in range(cfg.n_steps + 1):
+        y = model.outputs(x, u_prev)
+        u = -(g1 * (y["theta"] - 0.5) + g2 * y["theta_dot"] + g3 * y["root_torque"])
+        xs.append(x)
+        us.append(u)
+        x, u_prev = Phi @ x + Gam * u, u
+    xs, us = np.array(xs), np.array(us)
+    assert np.abs(ds.state.values[0] - xs).max() <= 1e-10 * np.abs(xs).max()
+    assert np.abs(ds.torque.values[0] - us).max() <= 1e-10 * np.abs(us).max()
