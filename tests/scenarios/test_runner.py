@@ -185,11 +185,12 @@ def test_modes_through_case_overrides_are_refused_before_the_model_is_built():
 def test_memory_of_all_runs_together_is_checked(monkeypatch):
     from flexsat import limits
 
-    # 2 s at 75 Hz = 151 samples, 2 runs of one case, 29 values of 8 B each: 70,064 B
-    monkeypatch.setattr(limits, "MAX_MEMORY", 70_000)
+    # 2 s at 75 Hz = 151 samples, 2 runs of one case, 13 histories and the loop's 32-sample
+    # buffer of 8 states + 3 noise streams, 8 B each: 8 × 2 × (151 × 13 + 32 × 11) = 37,040 B
+    monkeypatch.setattr(limits, "MAX_MEMORY", 37_000)
     assert problem(small_data()).startswith(
-        "simulation.duration: a run of 151 samples × 2 cases × 29 values needs about 68.4 kB of "
-        "memory")
+        "simulation.duration: a run of 151 samples × 2 cases × 13 values (and a 32-sample buffer "
+        "of 11) needs about 36.2 kB of memory")
 
 
 def test_numerical_failure_of_the_case_model_is_a_scenario_error():

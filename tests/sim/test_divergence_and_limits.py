@@ -107,9 +107,9 @@ def test_stiff_friction_is_refused_before_it_hangs(tamu_case, plant):
 def test_memory_estimate_is_checked_before_allocating(tamu_case, plant, monkeypatch):
     law = PD(5.0, 20.0, target=tamu_case.angle)
     # 1 s at 75 Hz = 76 samples; 1,000 cases of 13 histories kept once, plus the loop's
-    # 64-sample buffer of 22 states and 3 noise streams, 8 B each:
-    # 8 × 1000 × (76 × 13 + 64 × 25) = 20,704,000 B = 19.7 MiB, one byte over the patched limit
-    monkeypatch.setattr(limits, "MAX_MEMORY", 8 * 1000 * (76 * 13 + 64 * 25) - 1)
+    # 32-sample buffer of 22 states and 3 noise streams, 8 B each:
+    # 8 × 1000 × (76 × 13 + 32 × 25) = 14,304,000 B = 13.6 MiB, one byte over the patched limit
+    monkeypatch.setattr(limits, "MAX_MEMORY", 8 * 1000 * (76 * 13 + 32 * 25) - 1)
     with pytest.raises(ValueError, match=r"^duration: a run of 76 samples × 1000 cases × 13 "
                                          r"values \(and a 64-sample buffer of 25\) needs about "
                                          r"19.7 MB of memory, above the limit"):

@@ -6,7 +6,7 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
 from flexsat.sim import engine, simulate
-from flexsat.sim.integrators import ExponentialStepper, phi_products
+from flexsat.sim.integrators import ExponentialStepper, ExpRK4Stepper, phi_products
 from flexsat.units import to_si
 
 EPS = np.finfo(float).eps
@@ -159,3 +159,49 @@ def test_substeps_must_be_positive():
     A, Bu, Bf = _system()
     with pytest.raises(ValueError, match=r"^substeps: must be >= 1"):
         ExponentialStepper.build(A, Bu, Bf, 0.1, substeps=0)
+
+
+def test_phi3_product_matches_its_series():
+    """h φ3(hA) B₂ from the order-3 block, against Σ h^j A^{j−3} / j! (j >= 3)."""
+    A, Bu, Bf = _system()
+    h, B = 0.3, np.column_stack([Bu, Bf])
+    E, P1, P2, P3 = phi_products(A, h, B, 2, order=3)
+    series = sum(np.linalg.matrix_power(h * A, j) / math.factorial(j + 3) for j in range(30))
+    assert np.allclose(P3, h * series @ Bf, rtol=0, atol=50 * EPS * np.abs(P3).max())
+    assert np.allclose(P2, phi_products(A, h, B, 2)[2], rtol=0, atol=10 * EPS)
+
+
+def test_exp_rk4_is_exact_for_a_linear_plant_and_a_constant_force():
+    """Krogstad's scheme reduces to the variation-of-constants formula when N is constant:
+    the step equals the zero-order hold of [B_u, B_f] from one exponential to ~10 eps."""
+    A, Bu, Bf = _system()
+    N = np.array([0.3, -0.7])
+    n, h = 5, 0.2
+    stepper = ExpRK4Stepper.build(A, Bu, Bf, h, substeps=1)
+    x0 = np.ones((1, n))
+    x1 = stepper.step(x0, np.array([1.5]), lambda x, w: np.broadcast_to(N, (x.shape[0], 2)))
+    big = np.zeros((n + 1, n + 1))
+    big[:n, :n] = A
+    big[:n, n] = Bu * 1.5 + Bf @ N
+    exact = (expm(h * big) @ np.append(x0[0], 1.0))[:n]
+    assert np.allclose(x1[0], exact, rtol=0, atol=1e-13 * np.abs(exact).max())
+
+
+def test_exp_rk4_converges_at_fourth_order_on_a_known_solution():
+    """Bernoulli's equation x' = −x + x² (A = −1, B_f = 1, N = x²) has the solution
+    x(t) = x0 e^{−t} / (1 − x0 (1 − e^{−t})); the error at t = 1 falls 16× per halving of h
+    (order 4; measured ratios 14.3, 15.2, 15.6 approaching 16), where ETD2RK's falls 4×."""
+    A, Bu, Bf = np.array([[-1.0]]), np.zeros(1), np.array([[1.0]])
+    x0 = 0.5
+    exact = x0 * np.exp(-1.0) / (1 - x0 * (1 - np.exp(-1.0)))
+
+    def force(x, w):
+        return x**2
+
+    errors = []
+    for m in (2, 4, 8, 16):
+        stepper = ExpRK4Stepper.build(A, Bu, Bf, 1.0, substeps=m)
+        errors.append(abs(stepper.step(np.array([[x0]]), np.zeros(1), force)[0, 0] - exact))
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert np.all((ratios > 14.0) & (ratios < 18.0)), ratios
+    assert errors[-1] < 1e-7

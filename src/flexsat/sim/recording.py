@@ -17,9 +17,12 @@ import xarray as xr
 
 from flexsat.sim.metrics import METRIC_UNITS, maneuver_metrics
 
-#: samples per chunk of states kept in the loop before its outputs are computed; 64 keeps the
-#: buffer (64 × n_x values per case) small next to the recorded histories
-CHUNK = 64
+#: samples per chunk of states kept in the loop before its outputs are computed; 32 keeps the
+#: buffer (32 × n_x values per case) small next to the recorded histories
+CHUNK = 32
+#: cases per block of the metrics: their temporaries (a few histories) stay small next to the
+#: recorded histories of a large batch
+METRIC_BLOCK = 32
 
 
 @dataclass
@@ -196,7 +199,11 @@ def _metrics(ds, t, controller, theta0, config, refs, nc) -> dict:
     target = np.broadcast_to(np.asarray(controller.target, float), (nc,))
     ref = controller.reference
     ref_end = None if ref is None else np.broadcast_to(np.asarray(ref.end_time, float), (nc,))
-    return maneuver_metrics(
-        t, ds.theta.values, ds.theta_dot.values, refs[1].T, ds.torque.values,
-        ds.tip_deflection.values, ds.vibration_energy.values, theta0, target, ref_end,
-        config.settling_band)
+    blocks = []
+    for start in range(0, nc, METRIC_BLOCK):
+        c = slice(start, start + METRIC_BLOCK)
+        blocks.append(maneuver_metrics(
+            t, ds.theta.values[c], ds.theta_dot.values[c], refs[1].T[c], ds.torque.values[c],
+            ds.tip_deflection.values[c], ds.vibration_energy.values[c], theta0[c], target[c],
+            None if ref_end is None else ref_end[c], config.settling_band))
+    return {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]}
