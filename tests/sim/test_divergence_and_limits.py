@@ -111,8 +111,8 @@ def test_memory_estimate_is_checked_before_allocating(tamu_case, plant, monkeypa
     # 8 × 1000 × (76 × 13 + 32 × 25) = 14,304,000 B = 13.6 MiB, one byte over the patched limit
     monkeypatch.setattr(limits, "MAX_MEMORY", 8 * 1000 * (76 * 13 + 32 * 25) - 1)
     with pytest.raises(ValueError, match=r"^duration: a run of 76 samples × 1000 cases × 13 "
-                                         r"values \(and a 64-sample buffer of 25\) needs about "
-                                         r"19.7 MB of memory, above the limit"):
+                                         r"values \(and a 32-sample buffer of 25\) needs about "
+                                         r"13.6 MB of memory, above the limit"):
         simulate(plant, law, SimConfig(duration=1.0), n_cases=1000)
     with pytest.raises(ValueError, match=r"^n_cases: cases in one batch = 1e\+05.* above the "
                                          r"limit 100,000"):

@@ -213,3 +213,49 @@ def test_linear_tamu_run_equals_an_independent_discrete_recursion(tamu_case):
     xs, us = np.array(xs), np.array(us)
     assert np.abs(ds.state.values[0] - xs).max() <= 1e-10 * np.abs(xs).max()
     assert np.abs(ds.torque.values[0] - us).max() <= 1e-10 * np.abs(us).max()
+
+
+class Bernoulli(Plant):
+    """x' = −x + x² through the exponential integrators: A = −1, B_f = 1, f = x²."""
+
+    inputs = (Channel("drive", ""),)
+    outputs = (Channel("value", ""),)
+    recorded = ("value",)
+    nonlinear = True
+    force_matrix = np.array([[1.0]])
+
+    def __init__(self, integrator):
+        self.integrator = integrator
+
+    @property
+    def nx(self):
+        return 1
+
+    def linear_part(self):
+        return np.array([[-1.0]]), np.zeros((1, 1))
+
+    def nonlinear_force(self, x, u):
+        return x**2
+
+    def output_matrices(self, name):
+        return np.ones((1, 1)), np.zeros((1, 1)), np.zeros((1, 1))
+
+
+class Idle(Controller):
+    reads = ("value",)
+    writes = ("drive",)
+    target = 0.0
+
+    def __call__(self, t, y, state):
+        return np.zeros(np.shape(y["value"])), state
+
+
+@pytest.mark.parametrize("integrator, tol", [("etd2rk", 1e-6), ("exp_rk4", 1e-11)])
+def test_the_plant_chooses_its_integrator(integrator, tol):
+    """The exact solution x0 e^{−t} / (1 − x0 (1 − e^{−t})) at 75 Hz with 4 substeps: ETD2RK's
+    error ~h² (measured 4.4e-7), Krogstad's ~h⁴ (measured 1.1e-13)."""
+    x0 = 0.5
+    r = simulate(Bernoulli(integrator), Idle(), SimConfig(duration=2.0), initial_state=[x0])
+    t = r.dataset.time.values
+    exact = x0 * np.exp(-t) / (1 - x0 * (1 - np.exp(-t)))
+    assert np.abs(r.dataset.value.values[0] - exact).max() < tol

@@ -163,11 +163,12 @@ class Recorder:
             put("vibration_energy", self.vibration, "J")
         if self.states is not None:
             data["state"] = (("case", "time", "state_index"), np.swapaxes(self.states, 0, 1), {})
+        metrics = _metrics({k: v[1] for k, v in data.items()}, t, controller, theta0, config,
+                           refs, nc)
+        for key, val in metrics.items():  # one Dataset call: each later insertion re-aligns
+            data[key] = (("case",), val, {"units": METRIC_UNITS[key]})
         ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}),
                                       "case": np.arange(nc)})
-        metrics = _metrics(ds, t, controller, theta0, config, refs, nc)
-        for key, val in metrics.items():
-            ds[key] = (("case",), val, {"units": METRIC_UNITS[key]})
         ds.attrs.update(control_rate_Hz=config.control_rate, settling_band_rad=config.settling_band,
                         substeps=substeps)
         return SimResult(ds, metrics)
@@ -191,8 +192,9 @@ def _references(controller, t, nc):
     return th, thd
 
 
-def _metrics(ds, t, controller, theta0, config, refs, nc) -> dict:
-    """The single-axis maneuver metrics, for a plant with those histories (else none)."""
+def _metrics(ds: dict, t, controller, theta0, config, refs, nc) -> dict:
+    """The single-axis maneuver metrics from the (case, time) histories ``ds``, for a plant
+    with those histories (else none)."""
     need = ("theta", "theta_dot", "torque", "tip_deflection", "vibration_energy")
     if refs is None or theta0 is None or not all(k in ds and ds[k].ndim == 2 for k in need):
         return {}
@@ -203,7 +205,7 @@ def _metrics(ds, t, controller, theta0, config, refs, nc) -> dict:
     for start in range(0, nc, METRIC_BLOCK):
         c = slice(start, start + METRIC_BLOCK)
         blocks.append(maneuver_metrics(
-            t, ds.theta.values[c], ds.theta_dot.values[c], refs[1].T[c], ds.torque.values[c],
-            ds.tip_deflection.values[c], ds.vibration_energy.values[c], theta0[c], target[c],
+            t, ds["theta"][c], ds["theta_dot"][c], refs[1].T[c], ds["torque"][c],
+            ds["tip_deflection"][c], ds["vibration_energy"][c], theta0[c], target[c],
             None if ref_end is None else ref_end[c], config.settling_band))
     return {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]}
