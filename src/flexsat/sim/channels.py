@@ -144,11 +144,12 @@ class ChannelActuator:
         is the last limited command (None at the first sample: the rate limit starts there)."""
         limited, saturated, biased = self._acts
         c = command
+        # maximum then minimum: np.clip's result, without its dispatch cost on small arrays
         if limited and previous is not None:
             step = self.rate_limit * dt
-            c = np.clip(c, previous - step, previous + step)
+            c = np.minimum(np.maximum(c, previous - step), previous + step)
         if saturated:
-            c = np.clip(c, -self.saturation, self.saturation)
+            c = np.minimum(np.maximum(c, -self.saturation), self.saturation)
         u = self.scale * c
         return (u + self.bias if biased else u), c
 

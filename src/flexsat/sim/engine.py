@@ -303,15 +303,23 @@ def simulate(
     rec = Recorder(plant, n + 1, nc, kept, {k: d.force_name for k, d in forced.items()},
                    record_states, batched)
     law = type(controller).__name__
+    # views the loop writes into: one history per written channel, the state slot ring
+    cmd_hist = [rec.commands[:, :, sl.start] if sl.stop - sl.start == 1
+                else rec.commands[:, :, sl] for sl, _ in acts]
+    meas_hist = [(rec.measured[k], k) for k in rec.measured]
+    ring = rec.states is None
+    buffer, nbuf = rec.buffer, len(rec.buffer)
+    single = m == 1  # one written input of size 1: u is the command column itself
     w_prev = np.zeros((nc, m))
     f_in = None
     prev_cmd = [None] * len(acts)  # the last rate-limited commands
     state_prev = 0.0
-    noise = None
+    noise = noise_k = None
     for k in range(n + 1):
-        if noisy and k % CHUNK == 0:
-            noise = streams.next(min(CHUNK, n + 1 - k))
-        noise_k = noise[k % CHUNK] if noisy else None
+        if noisy:
+            if k % CHUNK == 0:
+                noise = streams.next(min(CHUNK, n + 1 - k))
+            noise_k = noise[k % CHUNK]
         if k in impulses:
             x = x + impulses[k] @ Bt
         if forced:
@@ -325,10 +333,9 @@ def simulate(
         if not (state_size <= DIVERGENCE_BOUND and size <= DIVERGENCE_BOUND):
             raise _diverged(x, np.column_stack(cmds), t[k], k, state_prev, config)
         state_prev = state_size
-        single = m == 1  # one written input of size 1: u is the command column itself
         u = None if single else np.zeros((nc, m))
         for i, ((sl, act), c) in enumerate(zip(acts, cmds)):
-            rec.commands[k, :, sl] = c if c.ndim == 2 else c[:, None]
+            cmd_hist[i][k] = c
             if act is not None:
                 c, prev_cmd[i] = act.apply(c, prev_cmd[i], dt)
             if single:
@@ -344,11 +351,14 @@ def simulate(
         rec.disturbed[k] = w
         if forced:
             rec.forces[k] = f_in
-        for name in rec.measured:
-            rec.measured[name][k] = y[name]
-        rec.slot(k)[...] = x
-        if (k + 1) % CHUNK == 0 and rec.states is None:
-            rec.flush(k + 1)
+        for hist, name in meas_hist:
+            hist[k] = y[name]
+        if ring:
+            buffer[k % nbuf] = x
+            if (k + 1) % nbuf == 0:
+                rec.flush(k + 1)
+        else:
+            buffer[k] = x
         if k < n:
             if own_step is not None:
                 h = dt / substeps

@@ -109,6 +109,8 @@ class Instruments:
             noisy = s is not None and np.any(s.noise)
             self.plan.append((k, s, noise_column(columns, k, "its sensor noise", plant)
                               if noisy else None))
+        self.plan = [p for p in self.plan if p[1] is not None]  # ideal sensors do nothing
+        self.linear_cols = [(k, self.cols[k]) for k in self.linear]
         self.derived = []
         for k in derived:
             s = sensors[k]
@@ -127,13 +129,12 @@ class Instruments:
                 Y = Y + apply(w_prev, self.DT, self.batched)
             if self.DfT is not None and f_in is not None:
                 Y = Y + apply(f_in, self.DfT, self.batched)
-            for k in self.linear:
-                y[k] = Y[:, self.cols[k]]
+            for k, col in self.linear_cols:
+                y[k] = Y[:, col]
         for k in self.nonlinear:
             y[k] = self.plant.output(k, x, w_prev, f_in)
         for k, s, col in self.plan:
-            if s is not None:
-                y[k] = s.measure(y[k], None if col is None else noise_k[:, col])
+            y[k] = s.measure(y[k], None if col is None else noise_k[:, col])
         for i, (k, s, src, w, hist, col) in enumerate(self.derived):
             v = y[src]
             if first:  # the filter starts from rest at the first measured value

@@ -83,10 +83,6 @@ class Recorder:
         self.vibration = np.zeros((n, nc)) if has_vib and self.energy is not None else None
         self.done = 0
 
-    def slot(self, k: int) -> np.ndarray:
-        """Where the loop stores the state of sample k."""
-        return self.buffer[k] if self.states is not None else self.buffer[k % len(self.buffer)]
-
     def flush(self, end: int) -> None:
         """Compute the recorded outputs and energies of samples [done, end)."""
         k0, T = self.done, end - self.done
