@@ -41,9 +41,10 @@ class FullBlockStepper(ExponentialStepper):
     def build(cls, A, Bu, Bf, dt: float, substeps: int = 1) -> ExponentialStepper:
         n = A.shape[0]
         E, P1, P2 = phi_products(np.asarray(A, float), dt / substeps, np.eye(n), n)
+        P1u = (P1 @ np.asarray(Bu, float).reshape(n, -1)).T.copy()  # (m, n), the stepper's form
         if Bf is None:
-            return cls(E.T.copy(), P1 @ Bu, None, None, substeps)
-        return cls(E.T.copy(), P1 @ Bu, (P1 @ Bf).T.copy(), (P2 @ Bf).T.copy(), substeps)
+            return cls(E.T.copy(), P1u, None, None, substeps)
+        return cls(E.T.copy(), P1u, (P1 @ Bf).T.copy(), (P2 @ Bf).T.copy(), substeps)
 
 
 @contextmanager

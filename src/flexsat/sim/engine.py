@@ -98,6 +98,12 @@ class _NoiseStreams:
         return out
 
 
+def _noise_streams(seeds, n_samples: int, width: int = 3) -> np.ndarray:
+    """Standard normals (n_samples, n_cases, width) of the whole run at once, case i from its
+    seed: the numbers the loop draws chunk by chunk (benchmarks replay them)."""
+    return _NoiseStreams(seeds, width).next(n_samples)
+
+
 def check_law(plant, controller) -> None:
     """Check the law's ``reads`` and ``writes`` against the plant's channels.
 
