@@ -3,8 +3,10 @@
 :mod:`flexsat.dynamics.attitude` (attitude kinematics: Euler parameters, DCM, 1-2-3 Euler
 angles, Gibbs and modified Rodrigues parameters) and :mod:`flexsat.dynamics.rigid_body`
 (Euler's equations, the norm-preserving propagator, the Euler–Poinsot solution) are plain
-array kernels with a leading case axis; their names are re-exported here and imported from
-their modules on first use, so importing the package loads nothing.
+array kernels with a leading case axis. The plants: :mod:`flexsat.dynamics.structural` (any
+M, D, K structure with named force, torque and moment-pair inputs) and
+:mod:`flexsat.dynamics.orbit` (Bainum's beam in orbit). Their names are re-exported here and
+imported from their modules on first use, so importing the package loads nothing.
 """
 
 from flexsat.lazy import lazy_exports
@@ -19,6 +21,8 @@ _EXPORTS = {
     **{name: "rigid_body" for name in (
         "euler_rates", "propagate", "angular_momentum_inertial", "kinetic_energy",
         "euler_poinsot_rates")},
+    **{name: "structural" for name in ("StructuralPlant", "Actuator", "Sensor", "ModalBlocks")},
+    "BeamInOrbit": "orbit",
 }
 
 __all__ = list(_EXPORTS)
