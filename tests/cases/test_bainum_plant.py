@@ -79,3 +79,26 @@ def test_case_simulation_is_the_plant_trajectory():
     states_tau[:, 3:] /= wc
     peak = np.abs(res.states).max(axis=0)
     assert np.all(np.abs(states_tau - res.states).max(axis=0) <= 1e-8 * peak)
+
+
+def test_three_mass_plant_gives_the_checked_numbers():
+    """Ch. IV (L1063-L1101): the three-mass model as a StructuralPlant (M = [[a, b], [b, a]],
+    K = cI) has v'' = -A_r v + B_r F of eq 4 (Cholesky against the closed-form inverse: a few
+    eps), λ1, λ2 of eqs 7-8 as eig(K, M) and, under the coupled rate feedback of eq 13, the
+    roots of eq 16 (eigenvalues against np.roots of the quartic: 1e-12 relative, the roots are
+    simple and well separated). flexsat validate's Bainum rows are computed this way."""
+    from flexsat.cases.bainum import three_mass
+
+    t = three_mass()
+    plant = t.plant(2)
+    A, B = plant.linear_part()
+    A_r, B_r = t.reduced_pair(2)
+    np.testing.assert_allclose(A[2:, :2], -A_r, rtol=8 * EPS)
+    np.testing.assert_allclose(B[2:], B_r, rtol=8 * EPS)
+    assert [c.name for c in plant.inputs] == ["F_v1", "F_v2"]
+    assert [(c.name, c.unit) for c in plant.outputs][2] == ("v1_dot", "(m)/s")
+    np.testing.assert_allclose(t.plant_lambdas(), t.lambdas, rtol=1e-14)
+    eig = np.sort_complex(np.linalg.eigvals(t.coupled_rate_closed_loop(0.4728, 0.4)))
+    np.testing.assert_allclose(eig, t.coupled_rate_poles(0.4728, 0.4), rtol=1e-12)
+    with pytest.raises(ValueError, match=r"^n_actuators: must be 1 or 2"):
+        t.plant(3)

@@ -121,16 +121,16 @@ def test_small_motion_follows_the_linear_part():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(orbit_rate=0.0), r"^orbit_rate: must be > 0"),
-    (dict(frequency_ratios=[3200.0, -1.0]), r"^frequency_ratios: must be a 1-D list"),
-    (dict(actuators={}), r"^actuators: must be a non-empty"),
-    (dict(actuators={"f1": [1.0, 2.0]}), r"^f1: its column of G must have 1 \+ 2 = 3"),
-    (dict(actuators={"f 1": [1.0, 2.0, 3.0]}), r"channel name: must be an identifier"),
-    (dict(stations={"tip": [1.0]}), r"^w_tip: station shape values must have 2"),
-    (dict(length=-1.0), r"^length: must be > 0"),
+    ({"orbit_rate": 0.0}, r"^orbit_rate: must be > 0"),
+    ({"frequency_ratios": [3200.0, -1.0]}, r"^frequency_ratios: must be a 1-D list"),
+    ({"actuators": {}}, r"^actuators: must be a non-empty"),
+    ({"actuators": {"f1": [1.0, 2.0]}}, r"^f1: its column of G must have 1 \+ 2 = 3"),
+    ({"actuators": {"f 1": [1.0, 2.0, 3.0]}}, r"channel name: must be an identifier"),
+    ({"stations": {"tip": [1.0]}}, r"^w_tip: station shape values must have 2"),
+    ({"length": -1.0}, r"^length: must be > 0"),
 ])
 def test_bad_input_names_the_field(kwargs, message):
-    args = dict(orbit_rate=WC, frequency_ratios=F, actuators={"f1": [1.0, 2.0, 3.0]})
+    args = {"orbit_rate": WC, "frequency_ratios": F, "actuators": {"f1": [1.0, 2.0, 3.0]}}
     args.update(kwargs)
     with pytest.raises(ValueError, match=message):
         BeamInOrbit(**args)

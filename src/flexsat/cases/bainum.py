@@ -886,12 +886,34 @@ class ThreeMassBeam:
         A_r, B_r = self.reduced_pair(1)
         return float(np.linalg.det(np.hstack([B_r, -A_r @ B_r])))
 
+    def plant(self, n_actuators: int = 1):
+        """The model as a :class:`~flexsat.dynamics.structural.StructuralPlant`:
+        M = [[a, b], [b, a]], K = c I (so that v'' = -A_r v + B_r F, eq 4, with A_r = c M⁻¹),
+        force inputs ``F_v1`` (and ``F_v2``), N, on the end deflections, outputs ``v1``, ``v2``
+        (m) and their rates ``v1_dot``, ``v2_dot`` (m/s)."""
+        from flexsat.dynamics.second_order import SecondOrderModel
+        from flexsat.dynamics.structural import Actuator, Sensor, StructuralPlant
+
+        if n_actuators not in (1, 2):
+            raise ValueError(f"n_actuators: must be 1 or 2, got {n_actuators!r}")
+        a, b = self.a, self.b
+        model = SecondOrderModel([[a, b], [b, a]], np.zeros((2, 2)), self.c_value * np.eye(2),
+                                 np.zeros((2, 1)), np.zeros((1, 2)))
+        acts = [Actuator(f"F_v{j}", "force", j - 1) for j in range(1, n_actuators + 1)]
+        sensors = [Sensor(f"v{j}", "displacement", j - 1) for j in (1, 2)]
+        sensors += [Sensor(f"v{j}_dot", "displacement", j - 1, rate=True) for j in (1, 2)]
+        return StructuralPlant.from_second_order(model, acts, sensors)
+
+    def plant_lambdas(self) -> np.ndarray:
+        """λ1, λ2 as the squared natural frequencies of :meth:`plant` (eig(K, M); eqs 7-8 give
+        them in closed form, :attr:`lambdas`)."""
+        return self.plant().model.frequencies() ** 2
+
     def _physical_closed_loop(self, gain_q: np.ndarray) -> np.ndarray:
         """v-coordinates closed loop with F_v1 = 2(a + b) u1 and u1 = -gain_q·[q, q'],
-        q = T⁻¹ v, T = [[1, 1], [1, -1]] (v1 = q1 + q2, v2 = q1 - q2)."""
-        A_r, B_r = self.reduced_pair(1)
-        A = np.block([[np.zeros((2, 2)), np.eye(2)], [-A_r, np.zeros((2, 2))]])
-        B = np.vstack([np.zeros((2, 1)), B_r])
+        q = T⁻¹ v, T = [[1, 1], [1, -1]] (v1 = q1 + q2, v2 = q1 - q2), on :meth:`plant`'s
+        linear part."""
+        A, B = self.plant(1).linear_part()
         Tinv = np.array([[0.5, 0.5], [0.5, -0.5]])
         to_q = np.block([[Tinv, np.zeros((2, 2))], [np.zeros((2, 2)), Tinv]])
         return A - 2 * (self.a + self.b) * B @ (gain_q.reshape(1, 4) @ to_q)
