@@ -58,6 +58,11 @@ def test_linear_part_is_the_linearisation_at_rest():
     np.testing.assert_array_equal(Jx, np.zeros((3, 6)))
     assert Ju.shape == (3, 2) and not Ju.any()
     assert plant.force_matrix.shape == (6, 3) and plant.nonlinear
+    # decoupled linear part: its 2x2 blocks are pitch libration √3 ω_c and the modes √F ω_c
+    blocks = plant.modal_blocks
+    np.testing.assert_allclose(blocks.frequencies**2, -np.diag(A[n:, :n]), rtol=2 * EPS)
+    assert blocks.n_rigid == 0 and not blocks.damping.any()
+    assert np.count_nonzero(A[n:, :n] - np.diag(np.diag(A[n:, :n]))) == 0
 
 
 def test_force_jacobian_matches_central_differences():

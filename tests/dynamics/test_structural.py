@@ -269,6 +269,10 @@ def test_fixed_dofs_and_bad_constructor_arguments():
     with pytest.raises(ValueError, match=r"^root: dof \(1, 'rz'\) is fixed"):
         StructuralPlant.from_fe(asm.M, asm.K, [Actuator("root", "torque", (1, "rz"))],
                                 dofs=asm.dofs, fixed=[(1, "rz")])
+    with pytest.raises(ValueError, match=r"^pz: both dofs of the moment_pair are fixed"):
+        StructuralPlant.from_fe(asm.M, asm.K, [Actuator("pz", "moment_pair",
+                                                        ((1, "rz"), (1, "uy")))],
+                                dofs=asm.dofs, fixed=[(1, "rz"), (1, "uy")])
     with pytest.raises(ValueError, match=r"^dofs: 3 labels for 30 coordinates"):
         StructuralPlant.from_fe(asm.M, asm.K, dofs=asm.dofs[:3])
     with pytest.raises(ValueError, match=r"^model: must be a SecondOrderModel"):

@@ -154,6 +154,15 @@ class BeamInOrbit(Plant):
         return self._linear
 
     @cached_property
+    def modal_blocks(self):
+        """The linear part is decoupled: pitch libration ω_c√3 and the bending modes ω_c√F_n,
+        undamped, none rigid (a :class:`~flexsat.dynamics.structural.ModalBlocks`)."""
+        from flexsat.dynamics.structural import ModalBlocks
+
+        n = self.n_coordinates
+        return ModalBlocks(self.orbit_rate * np.sqrt(self.stiffness), np.zeros(n), 0)
+
+    @cached_property
     def force_matrix(self) -> np.ndarray:
         """B_f = [0; I]: the remainder is an acceleration on every coordinate."""
         n = self.n_coordinates

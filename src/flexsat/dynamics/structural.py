@@ -177,6 +177,8 @@ class _Dofs:
                 raise ValueError(f"{name}: a {spec.kind} needs a pair of rotation dofs (a, b), "
                                  f"got {at!r}")
             a, b = self._dof(at[0], name), self._dof(at[1], name)
+            if a is None and b is None:
+                raise ValueError(f"{name}: both dofs of the {spec.kind} are fixed (supports)")
             if a == b:
                 raise ValueError(f"{name}: the two dofs of a {spec.kind} must differ, got "
                                  f"{at[0]!r} and {at[1]!r}")
