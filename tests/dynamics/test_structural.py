@@ -52,7 +52,7 @@ def test_channels_carry_names_units_and_kinds():
     assert [(c.name, c.unit) for c in plant.inputs] == [("push", "N"), ("twist", "N*m"),
                                                          ("piezo", "V")]
     assert [(c.name, c.unit) for c in plant.outputs] == [
-        ("x0", "m"), ("th4", "rad"), ("strain", ""), ("v0", "(m)/s"), ("w4", "(rad)/s")]
+        ("x0", "m"), ("th4", "rad"), ("strain", ""), ("v0", "m/s"), ("w4", "rad/s")]
     assert plant.nx == 10 and plant.n_inputs == 3 and not plant.nonlinear
     np.testing.assert_array_equal(plant.model.B[:, 2], [0, 0, -0.5, 0.5, 0])
     C, Dy, Df = plant.output_matrices("strain")

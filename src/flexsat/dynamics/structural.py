@@ -133,7 +133,10 @@ def _unit(unit: str, field: str) -> str:
 
 
 def _rate_unit(unit: str) -> str:
-    return "1/s" if unit == "" else f"({unit})/s"
+    """Unit of the time derivative: "m" -> "m/s", "N*m" -> "(N*m)/s", "" -> "1/s"."""
+    if unit == "":
+        return "1/s"
+    return f"{unit}/s" if unit.isidentifier() else f"({unit})/s"
 
 
 class _Dofs:
