@@ -37,9 +37,9 @@ import numpy as np
 
 from flexsat.validation import require_finite
 
-__all__ = ["LinearLaw", "absorb_affine", "channel_spec", "per_case", "reference_tables",
-           "run_linear_law", "sample_times", "split_channels", "stack_channels",
-           "static_law"]
+__all__ = ["LinearLaw", "absorb_affine", "cases_of", "channel_spec", "per_case",
+           "reference_tables", "run_controller", "run_linear_law", "sample_times",
+           "split_channels", "stack_channels", "static_law"]
 
 
 def _names(names, field: str) -> tuple[str, ...]:
@@ -208,6 +208,40 @@ def run_linear_law(law: LinearLaw, Y) -> np.ndarray:
     return U
 
 
+def run_controller(law, times, Y) -> np.ndarray:
+    """Commands of any :class:`~flexsat.control.base.Controller` called sample by sample, the
+    Python path the linear form must reproduce.
+
+    Parameters
+    ----------
+    law : Controller
+        Its ``reads``/``writes`` give the channel order; widths from ``read_sizes`` /
+        ``write_sizes`` when it has them, else 1.
+    times : (n_t,) array
+        Sample times, s (the law's reference is tabulated on them first, as the engine does).
+    Y : (n_t, n_cases, p) array
+        Measurements, channels concatenated in ``law.reads`` order.
+
+    Returns
+    -------
+    (n_t, n_cases, m) ndarray
+    """
+    times = np.asarray(times, float)
+    Y = np.asarray(Y, float)
+    nc = Y.shape[1]
+    rs = getattr(law, "read_sizes", (1,) * len(law.reads))
+    ws = getattr(law, "write_sizes", (1,) * len(law.writes))
+    law.tabulate_reference(times)
+    state = law.initial_state(nc)
+    U = np.empty((len(times), nc, sum(ws)))
+    for k, t in enumerate(times):
+        u, state = law(t, split_channels(Y[k], law.reads, rs), state)
+        if not isinstance(u, Mapping):
+            u = {law.writes[0]: u}
+        U[k] = stack_channels(u, law.writes, ws, nc)
+    return U
+
+
 def absorb_affine(A, f, C, g, s0=None):
     r"""Shift an affine recursion into the linear form (module docstring).
 
@@ -249,16 +283,23 @@ def static_law(Dk, y_ref, u_ff, reads, writes, read_sizes=None, write_sizes=None
 def channel_spec(items, field: str):
     """Names, widths and units of a law's channels.
 
-    Each item is a channel name (width 1, values in SI numbers) or a
-    :class:`~flexsat.dynamics.plant.Channel` (its width and unit).
+    ``items`` is a sequence whose entries are a channel name (width 1, values in SI numbers), a
+    pair (name, width), or a :class:`~flexsat.dynamics.plant.Channel` (its width and unit); or a
+    mapping {name: width}.
     """
     if isinstance(items, str) or hasattr(items, "size") and hasattr(items, "name"):
         items = (items,)
+    elif isinstance(items, Mapping):
+        items = tuple(items.items())
     names, sizes, units = [], [], []
     for item in items:
         if isinstance(item, str):
             names.append(item)
             sizes.append(1)
+            units.append(None)
+        elif isinstance(item, tuple) and len(item) == 2 and isinstance(item[0], str):
+            names.append(item[0])
+            sizes.append(item[1])
             units.append(None)
         elif hasattr(item, "name") and hasattr(item, "size") and hasattr(item, "unit"):
             names.append(item.name)
@@ -279,8 +320,8 @@ def stack_channels(y: Mapping, names, sizes, n_cases: int, field: str = "y") -> 
         try:
             v = np.asarray(y[name], float)
         except KeyError:
-            raise ValueError(f"{name}: measurement channel {name!r} not among the "
-                             f"measurements {sorted(y)}") from None
+            raise ValueError(f"{name}: channel {name!r} not among the values given "
+                             f"{sorted(y)}") from None
         shape = (n_cases,) if size == 1 else (n_cases, size)
         try:
             v = np.broadcast_to(v, shape)
@@ -289,6 +330,18 @@ def stack_channels(y: Mapping, names, sizes, n_cases: int, field: str = "y") -> 
                              f"{v.shape}") from None
         cols.append(v.reshape(n_cases, size))
     return np.concatenate(cols, axis=-1)
+
+
+def cases_of(y: Mapping, names, sizes) -> int:
+    """Largest case count among the values of channels ``names`` in ``y`` (1 for scalars);
+    a channel missing from ``y`` is left to :func:`stack_channels` to report."""
+    n = 1
+    for name, size in zip(names, sizes):
+        if name in y:
+            shape = np.shape(y[name])
+            lead = shape[:len(shape) - (size > 1)]
+            n = max(n, lead[0] if lead else 1)
+    return n
 
 
 def split_channels(u: np.ndarray, names, sizes) -> dict[str, np.ndarray]:
