@@ -4,11 +4,11 @@ is its zero-order-hold discretisation at the control period, the linear form is 
 bad systems, periods, channels and references are refused naming the field.
 
 Tolerances: the law and python-control evaluate the same recursion x+ = Φx + Γe, u = Cx + De
-with differently ordered sums, a few ulps of the largest summand per step carried by the
-system's own dynamics (|eig Φ| < 1 here): 4 eps × n_t × (‖C‖|x|max + ‖D‖|e|max), bounded below
-by max|u|·(‖Φ‖ growth) — stated as 4 eps n_t × max|u| × the system's gain scale g = 1 +
-max|C| + max|D| + max|Φ| + max|Γ|. The continuous case adds the difference between two
-evaluations of the same matrix exponential (ours, scipy's in c2d): ‖ΔΦ‖ ≲ 10 eps ‖A dt‖.
+with differently ordered sums: a few ulps per step of the largest summand, carried by the
+system's own dynamics (|eig Φ| < 1 here), so 4 eps × n_t × max|u| × g with the gain scale
+g = 1 + max|Φ| + max|Γ| + max|C| + max|D|. The continuous case compares two evaluations of one
+matrix exponential (ours and scipy's in c2d), equal to ~10 eps |A dt|, which the response
+carries with a factor 1 + max|A|.
 """
 
 import control as ct

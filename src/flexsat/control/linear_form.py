@@ -272,7 +272,7 @@ def absorb_affine(A, f, C, g, s0=None):
 
 def static_law(Dk, y_ref, u_ff, reads, writes, read_sizes=None, write_sizes=None) -> LinearLaw:
     """A law without internal state (nk = 0): u = u_ff + D (y − y_ref); widths default to 1."""
-    T, C, m, p = np.shape(Dk)
+    m, p = np.shape(Dk)[2:]
     empty = np.zeros((1, 1, 0, 0))
     return LinearLaw(empty, np.zeros((1, 1, 0, p)), np.zeros((1, 1, m, 0)), Dk, y_ref, u_ff, None,
                      reads, writes, read_sizes or (1,) * len(reads),
