@@ -119,16 +119,17 @@ def test_reference_loop_is_the_stated_recursion(rng):
 
 
 def test_affine_shift_reproduces_the_affine_recursion(rng):
-    """x_{k+1} = A x + B e + f_k, u = g_k + C x + D e, x_0 = s0: the shifted law gives the same
-    commands (absorb_affine; the module docstring's algebra)."""
+    """x_{k+1} = A x + B e + F v_k, u = g_k + C x + D e, x_0 = s0: the shifted law gives the
+    same commands (absorb_affine; the module docstring's algebra)."""
     n_t, nc, nk = 50, 2, 3
     A = 0.3 * rng.normal(size=(1, 1, nk, nk))
     B, C, D = rng.normal(size=(1, 1, nk, 2)), rng.normal(size=(1, 1, 1, nk)), rng.normal(
         size=(1, 1, 1, 2))
-    f, g, s0 = rng.normal(size=(n_t, nc, nk)), rng.normal(size=(n_t, nc, 1)), rng.normal(
-        size=(nc, nk))
+    F, v = rng.normal(size=(nk, 2)), rng.normal(size=(n_t, nc, 2))
+    f = v @ F.T
+    g, s0 = rng.normal(size=(n_t, nc, 1)), rng.normal(size=(nc, nk))
     Y = rng.normal(size=(n_t, nc, 2))
-    law = LinearLaw(A, B, C, D, np.zeros((n_t, 1, 2)), absorb_affine(A, f, C, g, s0), None,
+    law = LinearLaw(A, B, C, D, np.zeros((n_t, 1, 2)), absorb_affine(A, C, g, F, v, s0), None,
                     ("a", "b"), ("u",), (1, 1), (1,))
     x, expect = s0.copy(), []
     for k in range(n_t):

@@ -276,7 +276,7 @@ class FrequencyShapedController(EstimatorController):
             \qquad u_k = u_{ref,k} + e_1^T z_k,
 
         shifted into the linear form (:mod:`~flexsat.control.linear_form`); z starts at 0."""
-        x_ref, u_ref, Cpinv, s0 = self._linear_pieces(dt, times, n_cases)
+        on_ref, u_ref, Cpinv, s0 = self._linear_pieces(dt, times, n_cases)
         Phi, Gu, Gy = self.estimator
         Pz, Gz = self.chain_zoh
         Kx, Kz = self.design.plant_gain, self.design.chain_gain
@@ -285,14 +285,14 @@ class FrequencyShapedController(EstimatorController):
         A = np.block([[Phi, Gu @ e1], [-Gz @ Kx, Pz - Gz @ Kz]])
         B = np.vstack([Gy, np.zeros((k, Gy.shape[1]))])
         C = np.hstack([np.zeros((1, n)), e1])
-        f_x, f_z = u_ref @ Gu.T, (self.offset + x_ref @ Kx.T) @ Gz.T
-        lead = np.broadcast_shapes(f_x.shape[:-1], f_z.shape[:-1])
-        f = np.concatenate([np.broadcast_to(f_x, lead + (n,)), np.broadcast_to(f_z, lead + (k,))],
-                           axis=-1)
+        # forcing F v_k with v = [u_ref, d_ff + K_x x_ref] and F = diag(Γ_u, G_z)
+        F = np.block([[Gu, np.zeros((n, 1))], [np.zeros((k, 1)), Gz]])
+        a, b = np.broadcast_arrays(u_ref, self.offset + on_ref(Kx))
+        v = np.concatenate([a, b], axis=-1)
         K0 = None if Cpinv is None else np.vstack([Cpinv, np.zeros((k, Cpinv.shape[1]))])
         if s0 is not None:
             s0 = np.concatenate([s0, np.zeros((s0.shape[0], k))], axis=-1)
-        return self._linear_law(A, B, C, f, u_ref, K0, s0)
+        return self._linear_law(A, B, C, u_ref, F, v, K0, s0)
 
     def closed_loop_matrix(self) -> np.ndarray:
         """Sampled-data closed-loop transition matrix of the design plant with this law,

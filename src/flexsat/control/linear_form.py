@@ -242,31 +242,38 @@ def run_controller(law, times, Y) -> np.ndarray:
     return U
 
 
-def absorb_affine(A, f, C, g, s0=None):
+def absorb_affine(A, C, g, F, v, s0=None):
     r"""Shift an affine recursion into the linear form (module docstring).
 
-    For :math:`x_{k+1} = A_k x_k + B_k e_k + f_k`, :math:`u_k = g_k + C_k x_k + D_k e_k` with
+    For :math:`x_{k+1} = A_k x_k + B_k e_k + F v_k`, :math:`u_k = g_k + C_k x_k + D_k e_k` with
     :math:`x_0 = K_0 e_0 + s_0`, returns :math:`u_{ff,k} = g_k + C_k s_k` where
-    :math:`s_{k+1} = A_k s_k + f_k`; the law then runs on ξ = x − s.
+    :math:`s_{k+1} = A_k s_k + F v_k`; the law then runs on ξ = x − s. The forcing is given
+    factored (F constant, v narrow: a reference torque and angle per case) so that no
+    (n_t, n_cases, nk) array is formed.
 
     Parameters
     ----------
-    A : (T, C, nk, nk);  f : (n_t, C, nk);  C : (T, C, m, nk);  g : (n_t, C, m)
+    A : (T, C, nk, nk);  C : (T, C, m, nk);  g : (n_t, C, m);  F : (nk, q);  v : (n_t, C, q)
     s0 : (C, nk) or None (zero)
 
     Returns
     -------
     (n_t, C, m) ndarray
     """
-    n_t = g.shape[0]
-    nc = max(A.shape[1], f.shape[1], C.shape[1], g.shape[1],
+    n_t, nk = g.shape[0], A.shape[-1]
+    nc = max(A.shape[1], C.shape[1], g.shape[1], v.shape[1],
              1 if s0 is None else np.shape(s0)[0])
-    s = np.zeros((nc, A.shape[-1])) if s0 is None else np.broadcast_to(s0, (nc, A.shape[-1]))
+    s = np.zeros((nc, nk)) if s0 is None else np.broadcast_to(s0, (nc, nk))
     u = np.empty((n_t, nc, g.shape[-1]))
+    shared = A.shape[:2] == (1, 1) and C.shape[:2] == (1, 1)
     for k in range(n_t):
-        Ak, Ck = A[min(k, A.shape[0] - 1)], C[min(k, C.shape[0] - 1)]
-        u[k] = g[k] + np.einsum("cij,cj->ci", Ck, s)
-        s = np.einsum("cij,cj->ci", Ak, s) + f[k]
+        if shared:  # one (n_cases, nk) x (nk, nk) product per step
+            u[k] = g[k] + s @ C[0, 0].T
+            s = s @ A[0, 0].T + v[k] @ F.T
+        else:
+            Ak, Ck = A[min(k, A.shape[0] - 1)], C[min(k, C.shape[0] - 1)]
+            u[k] = g[k] + np.einsum("cij,cj->ci", Ck, s)
+            s = np.einsum("cij,cj->ci", Ak, s) + v[k] @ F.T
     return u
 
 
