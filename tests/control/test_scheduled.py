@@ -126,3 +126,7 @@ def test_case_counts_and_feedforward_shapes_are_checked():
         law.linear_form(DT, TIMES, 5)
     with pytest.raises(ValueError, match=r"^feedforward: must have shape \(1,\)"):
         law.linear_form(DT, TIMES, 3)
+    law = ScheduledStateFeedback([0.0, 1.0], np.zeros((2, 1, 2)), ["theta", "theta_dot"],
+                                 state_reference=np.zeros((2, 4, 2)))
+    with pytest.raises(ValueError, match=r"^state_reference: have 4 cases, the run has n_cases"):
+        law.linear_form(DT, TIMES, 3)

@@ -135,9 +135,11 @@ class ScheduledStateFeedback(Controller):
         one-point schedule."""
         _, times = sample_times(dt, times)
         m, n = self.gains.shape[-2:]
-        if self.gains.shape[1] not in (1, n_cases):
-            raise ValueError(f"gains: have {self.gains.shape[1]} cases, the run has n_cases = "
-                             f"{n_cases}")
+        for field, table in (("gains", self.gains), ("state_reference", self.state_reference),
+                             ("feedforward", self.feedforward)):
+            if isinstance(table, np.ndarray) and table.shape[1] not in (1, n_cases):
+                raise ValueError(f"{field}: have {table.shape[1]} cases, the run has n_cases = "
+                                 f"{n_cases}")
         D = -(self.gains if len(self.knots) == 1 else self.gain(times))
         y_ref = self._at(self.state_reference, times, n, "state_reference", n_cases)
         u_ff = self._at(self.feedforward, times, m, "feedforward", n_cases)
