@@ -56,7 +56,7 @@ def test_plant_channels_and_stations():
     np.testing.assert_allclose(C[0, 1:3], 100.0 * np.array([mode_shape(1, 0.0),
                                                              mode_shape(2, 0.0)]), rtol=1e-15)
     plant = beam.plant(POSITIONS, 2, stations={"quarter": 0.25})
-    assert [c.name for c in plant.outputs][-1] == "w_quarter"
+    assert [c.name for c in plant.outputs][-2:] == ["w_quarter", "state"]
     with pytest.raises(ValueError, match=r"^stations\['tip'\]: actuator positions are"):
         beam.plant(POSITIONS, 2, stations={"tip": 0.7})
 

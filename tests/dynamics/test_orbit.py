@@ -89,7 +89,8 @@ def test_force_jacobian_matches_central_differences():
 def test_outputs_and_shapes():
     plant = _beam(length=120.0)
     names = [c.name for c in plant.outputs]
-    assert names == ["pitch", "pitch_rate", "z1", "z2", "z1_rate", "z2_rate", "w_end", "w_mid"]
+    assert names == ["pitch", "pitch_rate", "z1", "z2", "z1_rate", "z2_rate", "w_end", "w_mid",
+                     "state"]
     units = {c.name: c.unit for c in plant.outputs}
     assert (units["pitch_rate"], units["z1"], units["w_end"]) == ("rad/s", "", "m")
     x = np.random.default_rng(0).normal(size=(5, 3, 6))  # time × case × state
@@ -98,9 +99,24 @@ def test_outputs_and_shapes():
     np.testing.assert_array_equal(plant.output("z2_rate", x, u), x[..., 5])
     np.testing.assert_allclose(plant.output("w_mid", x, u), 120.0 * (-1.2156) * x[..., 1],
                                rtol=1e-15)
+    np.testing.assert_array_equal(plant.output("state", x, u), x)
+    assert plant.output("state", x, u).shape == (5, 3, 6)
     assert plant.nonlinear_force(x, u).shape == (5, 3, 3)
     assert plant.derivative(x, u).shape == (5, 3, 6)
     assert plant.n_inputs == 2 and [c.unit for c in plant.inputs] == ["N", "N"]
+
+
+def test_initial_values_by_output_name():
+    """Outputs that read one state coordinate double as initial values."""
+    plant = _beam(length=120.0)
+    assert plant.initial_values == ("state", "pitch", "pitch_rate", "z1", "z2", "z1_rate",
+                                    "z2_rate")
+    x0 = plant.state_from(pitch=0.1, z2_rate=-0.02)
+    np.testing.assert_array_equal(x0, [0.1, 0, 0, 0, 0, -0.02])
+    with pytest.raises(ValueError, match=r"w_mid: not an initial value of BeamInOrbit"):
+        plant.state_from(w_mid=1.0)
+    with pytest.raises(ValueError, match=r"state: must have 6 entries"):
+        plant.state_from(state=[1.0, 2.0])
 
 
 def test_small_motion_follows_the_linear_part():

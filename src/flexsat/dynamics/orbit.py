@@ -113,6 +113,7 @@ class BeamInOrbit(Plant):
                  for i in range(1, n)]
         outs += [Channel(f"z{i}_rate", "1/s") for i in range(1, n)]
         outs += [Channel(name, unit, description="elastic deflection") for name in rows]
+        outs += [Channel("state", "", 2 * n, "[θ, z, θ̇, ż] (what a state-feedback law reads)")]
         names = [c.name for c in outs]
         for name in names:
             if names.count(name) > 1:
@@ -210,6 +211,8 @@ class BeamInOrbit(Plant):
         """(C (1, 2n), 0, None): every output is linear in the state."""
         find_channel(self.outputs, name, "output", type(self).__name__)
         n = self.n_coordinates
+        if name == "state":
+            return np.eye(2 * n), np.zeros((2 * n, self.n_inputs)), None
         C = np.zeros((1, 2 * n))
         if name in self._rows:
             C[0, 1:n] = self._rows[name]

@@ -294,6 +294,8 @@ class StructuralPlant(Plant):
                     raise ValueError(f"{name}: duplicate {role} channel name")
         self.model = model
         self.recorded = tuple(c.name for c in self.outputs)
+        # the whole state as one more output: what a state-feedback law reads
+        self.outputs += (Channel("state", "", model.n_states, "[q, q̇] (SI per coordinate)"),)
 
     # -- constructors --------------------------------------------------------------------------
     @classmethod
@@ -359,6 +361,8 @@ class StructuralPlant(Plant):
     def output_matrices(self, name: str):
         """(C (1, 2n), D = 0 (1, m), None): every output is linear in the state."""
         find_channel(self.outputs, name, "output", type(self).__name__)
+        if name == "state":
+            return np.eye(self.nx), np.zeros((self.nx, self.n_inputs)), None
         i = [c.name for c in self.outputs].index(name)
         return self._first_order[2][i : i + 1], np.zeros((1, self.n_inputs)), None
 
