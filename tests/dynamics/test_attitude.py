@@ -180,5 +180,5 @@ def test_the_package_re_exports_every_kernel():
     from flexsat.dynamics import rigid_body
 
     kernels = {*att.__all__, *rigid_body.__all__} - {"UNIT_TOL", "SINGULAR_TOL"}
-    assert kernels == set(dynamics.__all__)
+    assert kernels <= set(dynamics.__all__)
     assert dynamics.dcm_to_quaternion is att.dcm_to_quaternion
