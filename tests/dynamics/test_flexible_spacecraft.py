@@ -163,8 +163,8 @@ def test_angular_momentum_is_conserved_through_a_large_angle_tumble():
         x0[plant._eta] = [0.05, -0.02, 0.03, 0.01]
         x0[plant._eta_dot] = [0.2, 0.1, -0.3, 0.1]
         u = np.zeros(4)
-        sol = solve_ivp(lambda t, x: plant.rhs(x, u), (0.0, 20.0), x0, method="DOP853",
-                        rtol=1e-12, atol=1e-13, dense_output=True)
+        sol = solve_ivp(lambda t, x, plant=plant, u=u: plant.rhs(x, u), (0.0, 20.0), x0,
+                        method="DOP853", rtol=1e-12, atol=1e-13, dense_output=True)
         assert sol.success
         x = sol.sol(np.linspace(0.0, 20.0, 401)).T
         H = plant.momentum(x)

@@ -107,7 +107,8 @@ def _points(items, field: str, modal: ModalModel) -> list[tuple[int, str]]:
         try:
             node, axis = item
         except (TypeError, ValueError):
-            raise ValueError(f"{field}[{i}]: must be a pair (node, 'x'|'y'|'z'), got {item!r}")
+            raise ValueError(f"{field}[{i}]: must be a pair (node, 'x'|'y'|'z'), "
+                             f"got {item!r}") from None
         if not isinstance(axis, str) or axis.lower() not in _AXES:
             raise ValueError(f"{field}[{i}]: axis must be 'x', 'y' or 'z', got {axis!r}")
         _check_node(modal, node, f"{field}[{i}]")

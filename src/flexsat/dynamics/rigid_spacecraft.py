@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexsat.dynamics.plant import Channel, Plant
 from flexsat.dynamics.attitude import case_shape, require_quaternion, require_shape
+from flexsat.dynamics.plant import Channel, Plant
 from flexsat.dynamics.rigid_body import (
     cross3,
     dexpinv,
