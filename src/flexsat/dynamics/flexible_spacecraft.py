@@ -42,7 +42,10 @@ Lagrange's equations in quasi-coordinates for ω (Meirovitch, *Methods of Analyt
 
 for ideal torquers u at the centre of mass and point forces F_k = F e_a along body axes at the
 nodes (seed 003 F15). Torquers mounted on a node k (``torque_node``, the CG node of a DISCOS
-model) add :math:`\Phi_{r,k}^T u` to the elastic equation. In matrix form, :math:`\mathcal M = [[J, \Delta^T], [\Delta, I]]`,
+model) add :math:`\Phi_{r,k}^T u` to the elastic equation. In matrix form, with
+:math:`\mathcal M = [[J, \Delta^T], [\Delta, I]]`, F the vector of force magnitudes, E the
+matrix of their body-axis directions e_a, G that of their moment arms (r_k − c) × e_a and
+:math:`\Phi_t` that of their modal inputs,
 
 .. math::
 
@@ -230,6 +233,7 @@ class FlexibleSpacecraft(Plant):
         t = 6 if self.translation else 0
         self._eta = slice(7 + t, 7 + t + n)
         self._eta_dot = slice(7 + t + n, 7 + t + 2 * n)
+        self._vel = np.r_[4:7, np.arange(self._eta_dot.start, self._eta_dot.stop)]
         self._linear = self._build_linear()
         self._force_matrix = self._build_force_matrix()
 
@@ -250,7 +254,7 @@ class FlexibleSpacecraft(Plant):
 
     def _velocity_rows(self) -> np.ndarray:
         """Rows of (ω, η̇) in x."""
-        return np.r_[4:7, np.arange(self._eta_dot.start, self._eta_dot.stop)]
+        return self._vel
 
     # -- linear part ---------------------------------------------------------------------------
     def _build_linear(self):
@@ -308,7 +312,7 @@ class FlexibleSpacecraft(Plant):
         f = np.empty(shape + (self.n_f,))
         f[..., :4] = quaternion_kinematics(beta, w)
         f[..., 1:4] -= 0.5 * w
-        f[..., 4:7] = -cross3(w, self._momentum_body(x))
+        f[..., 4:7] = -matvec(skew(w), self._momentum_body(x))
         if self.translation:
             F = np.asarray(u, float)[..., 3:] @ self.force_directions.T  # body axes
             # (Cᵀ − I) F: body-fixed force directions turned into inertial axes

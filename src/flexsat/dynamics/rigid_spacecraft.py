@@ -44,32 +44,46 @@ ATTITUDE_OUTPUTS = (
 )
 
 
+def _tensor(entries, shape):
+    """Constant (3, prod(shape)) with (v @ T).reshape(shape) linear in v as ``entries`` say:
+    (row, col, component, sign) per non-zero entry."""
+    T = np.zeros((3,) + shape)
+    for i, j, k, sign in entries:
+        T[(k, i, j)] = sign
+    return T.reshape(3, -1)
+
+
+# On the tiny arrays of one case a product with a constant matrix is one numpy call where
+# component-wise formulas are a dozen, each ~1 µs of overhead: these make [v×] and Ω(ω) so.
+_SKEW = _tensor([(0, 1, 2, -1), (0, 2, 1, 1), (1, 0, 2, 1), (1, 2, 0, -1), (2, 0, 1, -1),
+                 (2, 1, 0, 1)], (3, 3))
+_OMEGA = _tensor([(0, 1, 0, -0.5), (0, 2, 1, -0.5), (0, 3, 2, -0.5),
+                  (1, 0, 0, 0.5), (1, 2, 2, 0.5), (1, 3, 1, -0.5),
+                  (2, 0, 1, 0.5), (2, 1, 2, -0.5), (2, 3, 0, 0.5),
+                  (3, 0, 2, 0.5), (3, 1, 1, 0.5), (3, 2, 0, -0.5)], (4, 4))
+
+
 def skew(v: np.ndarray) -> np.ndarray:
     """[v×] (..., 3, 3) of vectors (..., 3), unchecked."""
-    out = np.zeros(v.shape + (3,))
-    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
-    return out
+    return (v @ _SKEW).reshape(v.shape[:-1] + (3, 3))
+
+
+def omega(w: np.ndarray) -> np.ndarray:
+    """Ω(ω) (..., 4, 4) of seed 003 Eq. 11, the ½ included
+    (:func:`flexsat.dynamics.attitude.omega_matrix`, unchecked)."""
+    return (w @ _OMEGA).reshape(w.shape[:-1] + (4, 4))
 
 
 def quaternion_kinematics(beta: np.ndarray, w: np.ndarray) -> np.ndarray:
     r""":math:`\dot\beta = \Omega(\omega)\beta = B(\beta)\,\omega` (seed 003 Eq. 11), unchecked."""
-    b0, bv = beta[..., :1], beta[..., 1:]
-    out = np.empty(np.broadcast_shapes(beta.shape, w.shape[:-1] + (4,)))
-    out[..., 0] = -0.5 * np.sum(bv * w, axis=-1)
-    out[..., 1:] = 0.5 * (b0 * w + cross3(bv, w))
-    return out
+    return (omega(w) @ beta[..., None])[..., 0]
 
 
 def kinematics_jacobians(beta: np.ndarray, w: np.ndarray):
     r"""(∂β̇/∂β, ∂β̇/∂ω) = (Ω(ω), B(β)) of :func:`quaternion_kinematics`, (..., 4, 4), (..., 4, 3)
     (:func:`flexsat.dynamics.attitude.omega_matrix`, ``quaternion_rate_matrix``)."""
     shape = np.broadcast_shapes(beta.shape[:-1], w.shape[:-1])
-    Om = np.zeros(shape + (4, 4))
-    Om[..., 0, 1:] = -0.5 * w
-    Om[..., 1:, 0] = 0.5 * w
-    Om[..., 1:, 1:] = -0.5 * skew(w)
+    Om = np.broadcast_to(omega(w), shape + (4, 4))
     Bq = np.empty(shape + (4, 3))
     Bq[..., 0, :] = -0.5 * beta[..., 1:]
     Bq[..., 1:, :] = 0.5 * (beta[..., :1, None] * np.eye(3) + skew(beta[..., 1:]))
