@@ -2,7 +2,8 @@
 and conserves angular momentum and energy of the torque-free body; it follows the analytic
 Euler–Poinsot motion; its linear part plus nonlinear force is the full right-hand side, which a
 tight DOP853 solution agrees with; the analytic force Jacobian matches central differences;
-small sampled loops under the MRP and quaternion PD laws reach their target; inertia and outputs are checked."""
+small sampled loops under the MRP and quaternion PD laws reach their target; inertia and
+outputs are checked."""
 
 import numpy as np
 import pytest
@@ -171,7 +172,8 @@ def test_inertia_accepts_units_and_dispersion():
     (np.diag([1.0, -1.0, 1.0]), "inertia: must be positive definite"),
     (np.diag([1.0, 1.0, 3.0]), "inertia: principal moments .* violate the triangle inequality"),
     (np.diag([1.0, np.nan, 1.0]), "inertia: must be finite"),
-    (np.broadcast_to(np.eye(3), (2, 2, 3, 3)), r"inertia: must have shape \(3, 3\) or \(n_cases, 3, 3\)"),
+    (np.broadcast_to(np.eye(3), (2, 2, 3, 3)),
+     r"inertia: must have shape \(3, 3\) or \(n_cases, 3, 3\)"),
     ("1 kg", "inertia"),
 ])
 def test_bad_inertia_is_named(inertia, message):

@@ -352,7 +352,8 @@ class FlexibleSpacecraft(Plant):
             eye = np.eye(3)
             bF = np.sum(bv * F, axis=-1)[..., None, None]
             dF[..., :, 1:] = (-2 * F[..., :, None] * bv[..., None, :] + 2 * bF * eye
-                              + 2 * bv[..., :, None] * F[..., None, :] - 2 * b0[..., None] * skew(F))
+                              + 2 * bv[..., :, None] * F[..., None, :]
+                              - 2 * b0[..., None] * skew(F))
             Jx[..., 7:10, :4] = dF / self.mass
             Ct = np.swapaxes(dcm(beta), -1, -2)
             Ju[..., 7:10, 3:] = (Ct - eye) @ self.force_directions / self.mass

@@ -41,8 +41,9 @@ from flexsat.dynamics.attitude import (
 from flexsat.units import to_si_array
 from flexsat.validation import require_numeric
 
-__all__ = ["require_inertia", "rkmk4_step", "dexpinv", "cross3", "matvec", "euler_acceleration", "euler_rates", "propagate",
-           "angular_momentum_inertial", "kinetic_energy", "euler_poinsot_rates"]
+__all__ = ["require_inertia", "rkmk4_step", "dexpinv", "cross3", "matvec", "euler_acceleration",
+           "euler_rates", "propagate", "angular_momentum_inertial", "kinetic_energy",
+           "euler_poinsot_rates"]
 
 #: below this rotation angle (rad) the coefficient of θ̃² in the rotation-vector kinematics is
 #: its series 1/12 + θ²/720 + θ⁴/30240: the next term, θ⁶/1209600, is then < 1e-16 of 1/12,
