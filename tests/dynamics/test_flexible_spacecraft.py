@@ -53,6 +53,34 @@ def free_modal():
 FORCES = [(3, "y"), (6, "z"), (9, "x")]
 
 
+def check_linearisation(modal, plant, torque_node, forces):
+    """The plant's linear part against the modal model's state space (see the test below)."""
+    n = plant.n_modes
+    inputs = [modal.torque_input(torque_node, a) for a in "xyz"] + [
+        modal.force_input(node, axis) for node, axis in forces]
+    outputs = [(modal.displacement_output(node, axis), "displacement")
+               for node, axis in plant.displacements]
+    outputs += [(modal.rotation_output(node, axis), "displacement")
+                for node, axis in plant.rotations]
+    ss = modal.to_statespace(inputs=inputs, outputs=outputs)
+    A, B = plant.linear_part()
+    Lr = modal.participation[:6]
+    P = np.zeros((2 * (n + 6), plant.nx))
+    P[:6, 7:10], P[:6, 1:4] = Lr[:, :3], 2 * Lr[:, 3:]
+    P[n + 6:n + 12, 10:13], P[n + 6:n + 12, 4:7] = Lr[:, :3], Lr[:, 3:]
+    P[6:n + 6, plant._eta] = np.eye(n)
+    P[n + 12:, plant._eta_dot] = np.eye(n)
+    assert np.abs(P @ A - ss.A @ P).max() <= 1e-12 * np.abs(ss.A).max()
+    assert np.abs(P @ B - ss.B).max() <= 1e-12 * np.abs(ss.B).max()
+    # the node outputs are the elastic deflection: the modal model's rows on the elastic modes
+    C = np.vstack([plant.output_matrices(ch.name)[0] for ch in plant.outputs[6:]])
+    np.testing.assert_allclose(C[:, plant._eta], ss.C[:, 6:n + 6], rtol=0,
+                               atol=1e-15 * np.abs(ss.C).max())
+    # and the nonlinear force is second order at rest: its Jacobian vanishes there
+    Jx, Ju = plant.force_jacobian(plant.initial_state(1), np.zeros((1, B.shape[1])))
+    assert np.abs(Jx).max() == 0 and np.abs(Ju).max() == 0
+
+
 @pytest.mark.numerics
 def test_linearised_about_rest_it_is_the_free_free_modal_state_space(free_modal):
     # The free-free modal model's state space [η_r, η_e, η̇_r, η̇_e] with inputs torques at the
@@ -60,35 +88,29 @@ def test_linearised_about_rest_it_is_the_free_free_modal_state_space(free_modal)
     # η_r = L_t r + L_θ θ (θ = 2β_v the small rotation, L the rigid modes' participation: the
     # rigid shapes are R M_rr⁻¹ Lᵀ), η̇_r = L_t v + L_θ ω. Both are built from the same modes
     # by a few products, so they agree to round-off of the largest entry (ω_max² ~ 1e9):
-    # 1e-12 relative.
-    # the torquers on the hub node (the CG): a torque there loads the modes by the hub's
-    # rotational shapes, as in the modal model
+    # 1e-12 relative. The torquers sit on the hub node (the CG): a torque there loads the
+    # modes by the hub's rotational shapes, as in the modal model.
     plant = FlexibleSpacecraft(free_modal, forces=FORCES, displacements=[(3, "y"), (9, "z")],
                                rotations=[(6, "z")], torque_node=0, translation=True)
-    n = plant.n_modes
-    assert n == 72 and np.allclose(free_modal.center_of_mass, 0.0, atol=1e-15)
-    inputs = [free_modal.torque_input(0, a) for a in "xyz"] + [
-        free_modal.force_input(node, axis) for node, axis in FORCES]
-    outputs = [(free_modal.displacement_output(3, "y"), "displacement"),
-               (free_modal.displacement_output(9, "z"), "displacement"),
-               (free_modal.rotation_output(6, "z"), "displacement")]
-    ss = free_modal.to_statespace(inputs=inputs, outputs=outputs)
-    A, B = plant.linear_part()
-    Lr = free_modal.participation[:6]
-    P = np.zeros((2 * (n + 6), plant.nx))
-    P[:6, 7:10], P[:6, 1:4] = Lr[:, :3], 2 * Lr[:, 3:]
-    P[n + 6:n + 12, 10:13], P[n + 6:n + 12, 4:7] = Lr[:, :3], Lr[:, 3:]
-    P[6:n + 6, plant._eta] = np.eye(n)
-    P[n + 12:, plant._eta_dot] = np.eye(n)
-    scale = np.abs(ss.A).max()
-    assert np.abs(P @ A - ss.A @ P).max() <= 1e-12 * scale
-    assert np.abs(P @ B - ss.B).max() <= 1e-12 * np.abs(ss.B).max()
-    # the node outputs are the elastic deflection: the modal model's rows on the elastic modes
-    C = np.vstack([plant.output_matrices(ch.name)[0] for ch in plant.outputs[6:]])
-    np.testing.assert_allclose(C[:, plant._eta], ss.C[:, 6:n + 6], rtol=0, atol=1e-15)
-    # and the nonlinear force is second order at rest: its Jacobian vanishes there
-    Jx, Ju = plant.force_jacobian(plant.initial_state(1), np.zeros((1, 6)))
-    assert np.abs(Jx).max() == 0 and np.abs(Ju).max() == 0
+    assert plant.n_modes == 72 and np.allclose(free_modal.center_of_mass, 0.0, atol=1e-15)
+    check_linearisation(free_modal, plant, 0, FORCES)
+
+
+@pytest.mark.numerics
+def test_the_eps_model_linearised_is_its_modal_state_space():
+    # seed 003: the EPS with its first 45 elastic modes (0.5 % damping), torquers at the CG
+    # node and the five point forces of the first actuator set (69X, 66X, 63X, 60X, 88X,
+    # F13); the model's reference is its CG, which node 95 holds (to 1e-13 m)
+    from flexsat.cases.eps import eps
+
+    modal = eps().modal_model(45)
+    forces = [(69, "x"), (66, "x"), (63, "x"), (60, "x"), (88, "x")]
+    plant = FlexibleSpacecraft(modal, forces=forces, displacements=[(69, "x"), (88, "z")],
+                               rotations=[(69, "y")], torque_node=95, translation=True)
+    assert plant.n_modes == 45
+    assert [c.name for c in plant.inputs][1:] == ["force_69X", "force_66X", "force_63X",
+                                                  "force_60X", "force_88X"]
+    check_linearisation(modal, plant, 95, forces)
 
 
 @pytest.mark.numerics
