@@ -134,6 +134,7 @@ class _AttitudeLaw(Controller):
         for name in self.__dataclass_fields__:
             shape = np.shape(getattr(self, name))
             shapes[name] = shape[:-1] if name in self._VECTORS and shape else shape
+        object.__setattr__(self, "_field_cases", shapes)
         object.__setattr__(self, "_case_shape", case_shape(**shapes))
         object.__setattr__(self, "target", self.beta_target)
 
@@ -146,10 +147,7 @@ class _AttitudeLaw(Controller):
         functions of (β, ω); the per-sample call trusts the engine's shapes)."""
         b = require_quaternion(beta)
         w = require_shape(w, "w", (3,))
-        shapes = {name: (np.shape(getattr(self, name))[:-1] if name in self._VECTORS
-                         and np.ndim(getattr(self, name)) else np.shape(getattr(self, name)))
-                  for name in self.__dataclass_fields__}
-        case_shape(beta=b.shape[:-1], w=w.shape[:-1], **shapes)
+        case_shape(beta=b.shape[:-1], w=w.shape[:-1], **self._field_cases)
         return b, w
 
     def __call__(self, t, y, state):
