@@ -1,6 +1,6 @@
 """Control laws behind one interface (:class:`Controller`)."""
 
-from flexsat.control.attitude_laws import GibbsLyapunovLaw, MRPLaw
+from flexsat.control.attitude_laws import GibbsLyapunovLaw, MRPLaw, QuaternionPD
 from flexsat.control.base import Controller
 from flexsat.control.estimation import (
     RefinedEstimator,
@@ -42,6 +42,7 @@ __all__ = [
     "LyapunovTracker",
     "MRPLaw",
     "PD",
+    "QuaternionPD",
     "RefinedEstimator",
     "RiccatiSolution",
     "ScheduledStateFeedback",
