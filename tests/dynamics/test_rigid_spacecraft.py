@@ -179,3 +179,21 @@ def test_inertia_accepts_units_and_dispersion():
 def test_bad_inertia_is_named(inertia, message):
     with pytest.raises(ValueError, match=message):
         RigidSpacecraft(inertia)
+
+
+def test_initial_state_from_euler_angles_and_rate_with_units():
+    """A scenario's ``initial``: 1-2-3 Euler angles (seed 003 Eq. 12 convention) and body rate,
+    in any unit; the quaternion is the one of the DCM of those angles."""
+    from flexsat.dynamics.attitude import dcm_to_euler123, quaternion_to_dcm
+
+    plant = RigidSpacecraft(np.diag([10.0, 20.0, 30.0]))
+    x = plant.state_from(euler123=["30 deg", "-20 deg", "10 deg"], rate=["1 deg/s", 0, 0])
+    np.testing.assert_allclose(dcm_to_euler123(quaternion_to_dcm(x[:4])),
+                               np.radians([30.0, -20.0, 10.0]), atol=1e-15)
+    np.testing.assert_allclose(x[4:], [np.radians(1.0), 0, 0], rtol=1e-15)
+    with pytest.raises(ValueError, match="attitude: give attitude or euler123, not both"):
+        plant.state_from(attitude=[1, 0, 0, 0], euler123=[0, 0, 0])
+    with pytest.raises(ValueError, match="euler123: three finite angles"):
+        plant.state_from(euler123=[0, 0])
+    with pytest.raises(ValueError, match="spin: not an initial value of RigidSpacecraft"):
+        plant.state_from(spin=1.0)

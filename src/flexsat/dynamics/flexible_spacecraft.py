@@ -82,6 +82,7 @@ from flexsat.dynamics.plant import Channel, Plant
 from flexsat.dynamics.rigid_body import cross3, matvec
 from flexsat.dynamics.rigid_spacecraft import (
     ATTITUDE_OUTPUTS,
+    attitude_state_from,
     attitude_output,
     dcm,
     kinematics_jacobians,
@@ -251,6 +252,16 @@ class FlexibleSpacecraft(Plant):
         x = np.zeros((n_cases, self.nx))
         x[:, 0] = 1.0
         return x
+
+    def state_from(self, **values) -> np.ndarray:
+        """Initial state from ``attitude`` or ``euler123``, ``rate`` and ``state``
+        (:func:`~flexsat.dynamics.rigid_spacecraft.attitude_state_from`); undeformed at rest
+        otherwise."""
+        return attitude_state_from(self, values)
+
+    @property
+    def initial_values(self) -> tuple[str, ...]:
+        return ("attitude", "euler123", "rate", "state")
 
     def _velocity_rows(self) -> np.ndarray:
         """Rows of (ω, η̇) in x."""

@@ -33,7 +33,7 @@ from flexsat.dynamics.rigid_body import (
     rkmk4_step,
 )
 
-__all__ = ["RigidSpacecraft", "ATTITUDE_OUTPUTS"]
+__all__ = ["RigidSpacecraft", "ATTITUDE_OUTPUTS", "attitude_state_from"]
 
 #: the attitude outputs every three-axis plant gives
 ATTITUDE_OUTPUTS = (
@@ -42,6 +42,34 @@ ATTITUDE_OUTPUTS = (
     Channel("euler123", "rad", 3, "1-2-3 Euler angles (θ1, θ2, θ3) of β"),
     Channel("mrp", "", 3, "modified Rodrigues parameters of β on its short rotation, |σ| <= 1"),
 )
+
+
+def attitude_state_from(plant: Plant, values: dict) -> np.ndarray:
+    """Initial state of a three-axis plant whose state starts [β, ω]: the attitude as
+    ``attitude`` (unit Euler parameters, scalar first) or ``euler123`` (rad), the body ``rate``
+    (rad/s); other names as :meth:`Plant.state_from` (``state``, outputs reading state
+    coordinates). Each a number in SI, a pint Quantity or a unit string."""
+    from flexsat.dynamics.attitude import dcm_to_quaternion, euler123_to_dcm
+    from flexsat.units import to_si_array
+
+    values = dict(values)
+    if "attitude" in values and "euler123" in values:
+        raise ValueError("attitude: give attitude or euler123, not both")
+    own = {k: values.pop(k) for k in ("attitude", "euler123", "rate") if k in values}
+    x = Plant.state_from(plant, **values)
+    if "attitude" in own:
+        x[:4] = require_quaternion(to_si_array(own["attitude"], "", "attitude"), "attitude")
+    if "euler123" in own:
+        angles = to_si_array(own["euler123"], "rad", "euler123")
+        if angles.shape != (3,) or not np.all(np.isfinite(angles)):
+            raise ValueError(f"euler123: three finite angles, got {own['euler123']!r}")
+        x[:4] = dcm_to_quaternion(euler123_to_dcm(angles))
+    if "rate" in own:
+        w = to_si_array(own["rate"], "rad/s", "rate")
+        if w.shape != (3,) or not np.all(np.isfinite(w)):
+            raise ValueError(f"rate: three finite body rates, got {own['rate']!r}")
+        x[4:7] = w
+    return x
 
 
 def _tensor(entries, shape):
@@ -169,6 +197,15 @@ class RigidSpacecraft(Plant):
         x = np.zeros((n_cases, 7))
         x[:, 0] = 1.0
         return x
+
+    def state_from(self, **values) -> np.ndarray:
+        """Initial [β, ω] from ``attitude`` or ``euler123`` and ``rate``
+        (:func:`attitude_state_from`)."""
+        return attitude_state_from(self, values)
+
+    @property
+    def initial_values(self) -> tuple[str, ...]:
+        return ("attitude", "euler123", "rate", "state")
 
     def state(self, beta, w) -> np.ndarray:
         """The state vector [β, ω] (..., 7) of attitude ``beta`` (unit) and rate ``w``."""
