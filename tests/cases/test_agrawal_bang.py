@@ -137,3 +137,48 @@ def test_overrides_and_bad_input():
         agrawal_bang(damping=2)
     with pytest.raises(ValueError, match=r"^n_modes: the finite-element model has"):
         agrawal_bang().modal_model(10_000)
+
+
+# -- the plant protocol (issue #10) ---------------------------------------------------------------
+def test_plant_channels_are_the_piezo_pairs(case):
+    """Modal plant: inputs u1-u3 (moment pairs a₁V, Eq. 36) and outputs y1-y3 (a₂ × strain,
+    Eq. 37) are piezo_pairs' vectors, so the plant is to_statespace's model exactly; rates
+    y_j_dot read η̇; the modes are exposed as 2×2 blocks."""
+    plant, sys = case.plant(), case.to_statespace()
+    A, B = plant.linear_part()
+    np.testing.assert_array_equal(A, sys.A)
+    np.testing.assert_array_equal(B, sys.B)
+    rows = np.vstack([plant.output_matrices(f"y{j}")[0] for j in (1, 2, 3)])
+    np.testing.assert_array_equal(rows, sys.C)
+    m = case.modal_model().n_modes
+    np.testing.assert_array_equal(plant.output_matrices("y2_dot")[0][0, m:], sys.C[1, :m])
+    assert [(c.name, c.unit) for c in plant.inputs] == [("u1", "V"), ("u2", "V"), ("u3", "V")]
+    blocks = plant.modal_blocks
+    np.testing.assert_array_equal(blocks.frequencies, case.modal_model().frequencies)
+    np.testing.assert_allclose(blocks.damping, case.damping, rtol=1e-15)
+
+
+def test_fe_plant_moment_pairs_project_to_the_modal_ones(case):
+    """The finite-element plant's pair j is the load vector ±a₁ on the patch-end rz dofs (pair 1
+    has its root end on the clamped base: only +a₁ at the other end, seed 004 L349); projected on
+    the mass-normalised FE modes it is the modal plant's input, and the sensors likewise (same
+    vectors, to summation order: 1e-12 relative). Its lowest frequencies are the modal model's
+    to eps·λ_max/λ_1 of the dense generalized eigenproblem (~2e-6)."""
+    fe, modal = case.plant(coordinates="fe"), case.plant()
+    asm, pairs = case.fe_modes.assembly, case.piezo_pairs()
+    assert pairs[0].node_a == case.base_node
+    f = fe.model.B[:, 0]
+    assert np.count_nonzero(f) == 1 and f[asm.index(pairs[0].node_b, "rz")] == case.actuator_gain
+    Phi = case.fe_modes.shapes[:, : case.n_modes]
+    for j in range(3):
+        ref = modal.model.B[:, j]
+        np.testing.assert_allclose(Phi.T @ fe.model.B[:, j], ref, rtol=0,
+                                   atol=1e-12 * np.abs(ref).max())
+        np.testing.assert_allclose(Phi.T @ fe.model.Cq[j], modal.model.Cq[j], rtol=0,
+                                   atol=1e-12 * np.abs(modal.model.Cq[j]).max())
+    w = fe.model.frequencies()
+    np.testing.assert_allclose(w[:3], case.modal_model().frequencies, rtol=2e-6)
+    with pytest.raises(ValueError, match=r"^coordinates: must be 'modal' or 'fe'"):
+        case.plant(coordinates="ritz")
+    with pytest.raises(ValueError, match=r"^n_modes: the finite-element plant keeps"):
+        case.plant(3, coordinates="fe")

@@ -215,3 +215,24 @@ def test_bad_mode_count_is_refused(case):
         case.frequencies_hz(0)
     with pytest.raises(ValueError, match="n_modes: the model has"):
         case.frequencies_hz(10_000)
+
+
+def test_plant_has_the_papers_final_actuators_and_rim_outputs():
+    """Seed 003 L286-L295: torquers at the CG plus 69X, 63X, 66Y, 66Z, 60Y, 60Z, 88X; the goals
+    bound the rim deflections of nodes 66, 69, 85, 88 (§3.2)."""
+    from flexsat.cases.eps import eps
+
+    case = eps()
+    plant = case.plant(n_modes=10)
+    assert [c.name for c in plant.inputs] == ["torque", "force_69X", "force_63X", "force_66Y",
+                                              "force_66Z", "force_60Y", "force_60Z",
+                                              "force_88X"]
+    rims = [c.name for c in plant.outputs if c.name.startswith("displacement_")]
+    assert rims == [f"displacement_{n}{a}" for n in (66, 69, 85, 88) for a in "XYZ"]
+    assert plant.nx == 7 + 2 * 10
+    rigid = case.plant("rigid")
+    np.testing.assert_array_equal(rigid.inertia, case.mass_properties()["inertia_center_of_mass"])
+    with pytest.raises(ValueError, match="forces: 200 is not one of the paper's nodes"):
+        case.plant(n_modes=2, forces=[(200, "x")])
+    with pytest.raises(ValueError, match="model: must be 'flexible' or 'rigid'"):
+        case.plant("floppy")

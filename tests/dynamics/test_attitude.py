@@ -177,8 +177,9 @@ def test_bad_input_names_the_field(call, field):
 
 def test_the_package_re_exports_every_kernel():
     from flexsat import dynamics
-    from flexsat.dynamics import rigid_body
+    from flexsat.dynamics import orbit, rigid_body, structural
 
     kernels = {*att.__all__, *rigid_body.__all__} - {"UNIT_TOL", "SINGULAR_TOL"}
-    assert kernels == set(dynamics.__all__)
+    plants = {*structural.__all__, *orbit.__all__, "RigidSpacecraft", "FlexibleSpacecraft"}
+    assert kernels | plants == set(dynamics.__all__)
     assert dynamics.dcm_to_quaternion is att.dcm_to_quaternion

@@ -237,3 +237,21 @@ def test_complex_matrices_are_refused_not_made_real(field):
     # a complex array whose imaginary parts are all 0 is the real array it holds
     exact = SecondOrderModel(**{**good, field: np.asarray(good[field], dtype=complex)})
     np.testing.assert_array_equal(getattr(exact, field), getattr(SecondOrderModel(**good), field))
+
+
+def test_stiff_model_keeps_its_low_elastic_modes():
+    """A chain with stiffness spread 1e12 (a stiff FE model's λ_max/λ_1): the low elastic
+    modes stay elastic, the rigid mode of the free chain is exactly 0."""
+    n = 6
+    k = np.array([1.0, 1e12, 1e12, 1e12, 1e12])
+    K = np.zeros((n, n))
+    for i, ki in enumerate(k):
+        K[i:i + 2, i:i + 2] += ki * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    model = SecondOrderModel(np.eye(n), np.zeros((n, n)), K, np.ones(n), np.eye(n))
+    w, _ = model.modes()
+    # the soft spring between two masses, the rest nearly rigid: ω₁² ≈ k₁ (1/1 + 1/5); eigh
+    # resolves λ₁ to n·ε·λ_max absolute, so ω₁ to ½ n ε λ_max / λ₁ relative (≈ 2e-3)
+    lam_max = model.frequencies()[-1] ** 2
+    np.testing.assert_allclose(w[1], np.sqrt(1.2), rtol=0.5 * n * np.finfo(float).eps
+                               * lam_max / 1.2)
+    assert w[0] == 0.0

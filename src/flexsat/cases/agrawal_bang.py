@@ -32,6 +32,7 @@ import numpy as np
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
+from flexsat.dynamics.structural import StructuralPlant
 from flexsat.structures.fem import Structure
 from flexsat.structures.modal_model import ModalModel
 from flexsat.structures.mode_description import classify_modes
@@ -230,6 +231,42 @@ class AgrawalBangCase:
                           states=[f"eta[{i}]" for i in range(m)] + [f"eta_dot[{i}]" for i in range(m)],
                           inputs=[f"u{j + 1}" for j in range(len(pairs))],
                           outputs=[f"y{j + 1}" for j in range(len(pairs))])
+
+    def _channel_specs(self, node):
+        """Actuator and sensor specs of the three pairs, at ``node(n)`` (a node, or its rz dof)."""
+        from flexsat.dynamics.structural import Actuator, Sensor
+
+        strain_per_rotation = self.thickness / 2 / self.patch_length
+        acts, sensors, rates = [], [], []
+        for j, (beam, start) in enumerate(self.patches, start=1):
+            ends = (node(self._node_at(beam, start)),
+                    node(self._node_at(beam, start + self.patch_length)))
+            axis = "z" if isinstance(ends[0], (int, np.integer)) else None
+            acts.append(Actuator(f"u{j}", "moment_pair", ends, axis, self.actuator_gain, "V"))
+            gain = self.sensor_gain * strain_per_rotation
+            sensors.append(Sensor(f"y{j}", "strain", ends, axis, gain, unit="V"))
+            rates.append(Sensor(f"y{j}_dot", "strain", ends, axis, gain, rate=True, unit="V/s"))
+        return acts, sensors + rates
+
+    def plant(self, n_modes: int | None = None, coordinates: str = "modal"):
+        """The structure as a :class:`~flexsat.dynamics.structural.StructuralPlant`: inputs
+        ``u1`` … ``u3`` (the pair voltages V_c, moment pairs a_1 V_c, Eq. 36), outputs ``y1`` …
+        ``y3`` (a_2 × patch strain, Eq. 37, the sensors of :meth:`piezo_pairs`) and their rates
+        ``y1_dot`` …. ``coordinates="modal"``: the modal model of :meth:`modal_model`
+        (``n_modes`` modes, modal damping); ``"fe"``: the clamped finite-element model itself
+        (M, K of the assembly, undamped; ``n_modes`` must be None)."""
+        if coordinates == "modal":
+            acts, sensors = self._channel_specs(lambda n: n)
+            return StructuralPlant.from_modal_model(self.modal_model(n_modes), acts, sensors)
+        if coordinates != "fe":
+            raise ValueError(f"coordinates: must be 'modal' or 'fe', got {coordinates!r}")
+        if n_modes is not None:
+            raise ValueError("n_modes: the finite-element plant keeps every dof; use "
+                             "coordinates='modal' to truncate")
+        asm = self.structure().assemble()
+        acts, sensors = self._channel_specs(lambda n: (n, "rz"))
+        return StructuralPlant.from_fe(asm.M, asm.K, acts, sensors, dofs=asm.dofs,
+                                       fixed=[(self.base_node, "rz")])
 
     def tip_outputs(self, n_modes: int | None = None) -> np.ndarray:
         """Rows (4, m) giving ζ_t = [y_1ᵗ, α, y_2ᵗ, β] of Eq. 35 from η (small deflections).

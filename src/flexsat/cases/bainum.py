@@ -242,6 +242,10 @@ def _positions(positions, name: str = "positions") -> np.ndarray:
     return x
 
 
+#: default stations of :meth:`BainumBeam.plant` (ξ/l): the ends and the midpoint
+DEFAULT_STATIONS = {"left": -0.5, "middle": 0.0, "right": 0.5}
+
+
 @dataclass(frozen=True)
 class Response:
     """Closed-loop time history: τ, states [θ, z..., θ', z'...] (columns), forces f_j."""
@@ -307,27 +311,72 @@ class BainumBeam:
         kappa = self.stiffness(n_bending)
         return first_order(kappa, self.actuator_matrix(positions, n_bending))
 
+    # -- the plants (flexsat.dynamics.orbit, flexsat.dynamics.structural) ---------------------
+    def plant(self, positions, n_bending: int, stations=DEFAULT_STATIONS, length=None):
+        """The nonlinear beam in orbit (eqs 1-2) as a :class:`~flexsat.dynamics.orbit.BeamInOrbit`
+        in seconds: point forces ``f1``, ``f2``, ... (N) at ``positions`` (ξ/l, columns of
+        :meth:`actuator_matrix`), outputs pitch, pitch rate, z_n, their rates and the elastic
+        deflection ``w_<station>`` at each named station (ξ/l; w/l, or metres given ``length``)."""
+        from flexsat.dynamics.orbit import BeamInOrbit
+
+        G = self.actuator_matrix(positions, n_bending)
+        k = G.shape[0] - 1
+        shapes = {name: [mode_shape(r, float(_positions(xi, f"stations[{name!r}]")[0]))
+                         for r in range(1, k + 1)] for name, xi in dict(stations).items()}
+        return BeamInOrbit(self.orbit_rate_value, self.ratios(k),
+                           {f"f{j + 1}": G[:, j] for j in range(G.shape[1])}, shapes, length)
+
+    def linear_plant(self, positions, n_bending: int, stations=DEFAULT_STATIONS):
+        """The linear beam (eqs 5-6) as a :class:`~flexsat.dynamics.structural.StructuralPlant`
+        in seconds: M = I, K = ω_c² diag(3, F), inputs ``f1``, ... (N) with influence ω_c² G,
+        outputs ``pitch``, ``z1`` ... and the station deflections w/l, with their ``_rate``
+        s; it is the linear part of :meth:`plant`."""
+        from flexsat.dynamics.second_order import SecondOrderModel
+        from flexsat.dynamics.structural import Actuator, Sensor, StructuralPlant
+
+        G = self.actuator_matrix(positions, n_bending)
+        n = G.shape[0]
+        w2 = self.orbit_rate_value ** 2
+        acts = [Actuator(f"f{j + 1}", "force", w2 * G[:, j]) for j in range(G.shape[1])]
+        rows = {"pitch": ("rotation", np.eye(n)[0])}
+        rows.update({f"z{r}": ("displacement", np.eye(n)[r]) for r in range(1, n)})
+        for name, xi in dict(stations).items():
+            x = float(_positions(xi, f"stations[{name!r}]")[0])
+            rows[f"w_{name}"] = ("displacement",
+                                 np.concatenate([[0.0], [mode_shape(r, x) for r in range(1, n)]]))
+        units = {"rotation": ("rad", "rad/s"), "displacement": ("", "1/s")}  # z = A/l
+        sensors = [Sensor(name, kind, row, unit=units[kind][0]) for name, (kind, row) in rows.items()]
+        sensors += [Sensor(f"{name}_rate", kind, row, rate=True, unit=units[kind][1])
+                    for name, (kind, row) in rows.items()]
+        model = SecondOrderModel(np.eye(n), np.zeros((n, n)), w2 * np.diag(self.stiffness(n - 1)),
+                                 np.zeros((n, 1)), np.zeros((1, n)))
+        return StructuralPlant.from_second_order(model, acts, sensors)
+
     # -- equations of motion (eqs 1-2 and 5-6, nondimensional) --------------------------------
     def accelerations(self, state, u, nonlinear: bool = True) -> np.ndarray:
         """[θ'', z''] for ``state`` = [θ, z, θ', z'] and control accelerations ``u`` = [u_θ, u_z]
-        (= B_act f): eqs 1-2 in τ (``nonlinear``) or eqs 5-6."""
+        (= B_act f): eqs 1-2 in τ (``nonlinear``) or eqs 5-6; the right-hand side of
+        :meth:`plant` (:class:`~flexsat.dynamics.orbit.BeamInOrbit`, in seconds) converted to τ."""
         state = np.asarray(state, dtype=float)
         n = state.size // 2
-        F = self.ratios(n - 1) if n > 1 else np.zeros(0)
-        theta, z, dtheta = state[0], state[1:n], state[n]
-        if nonlinear:
-            acc_theta = -1.5 * np.sin(2 * theta)
-            acc_z = -(F - (3 * np.sin(theta) ** 2 - 1) - (dtheta - 1) ** 2) * z
-        else:
-            acc_theta = -3.0 * theta
-            acc_z = -F * z
-        return np.concatenate([[acc_theta], acc_z]) + np.asarray(u, dtype=float)
+        u = np.asarray(u, dtype=float)
+        return _tau_rhs(self._orbit_plant(np.eye(n)), state, u, nonlinear)[n:]
+
+    def _orbit_plant(self, G: np.ndarray):
+        """The :class:`~flexsat.dynamics.orbit.BeamInOrbit` of these ratios with influence
+        matrix ``G`` ((1 + k) x p: pitch, then k modes) for inputs ``f1`` … ``fp``."""
+        from flexsat.dynamics.orbit import BeamInOrbit
+
+        k = G.shape[0] - 1
+        return BeamInOrbit(self.orbit_rate_value, self.ratios(k) if k else np.zeros(0),
+                           {f"f{j + 1}": G[:, j] for j in range(G.shape[1])})
 
     def simulate(self, G, K_pos, K_rate, x0, tau_end: float, nonlinear: bool = True,
                  n_points: int = 401, rtol: float = 1e-10, atol: float = 1e-13) -> Response:
         """Closed loop f = K_pos x + K_rate x', u = G f, from ``x0`` ([θ, z] positions, rates
-        zero, or a full state) over τ ∈ [0, ``tau_end``] (DOP853). This is what the report's
-        NON-LINEAR program (App. C, L1898-L2116) does, with the full feedback in every
+        zero, or a full state) over τ ∈ [0, ``tau_end``] (DOP853), on the right-hand side of the
+        beam-in-orbit plant (:meth:`plant`, converted from seconds to τ). This is what the
+        report's NON-LINEAR program (App. C, L1898-L2116) does, with the full feedback in every
         equation (its FCT kept only the pitch-rate term in the pitch equation, notes §4.2)."""
         G = require_finite(G, "G")
         G = G.reshape(-1, 1) if G.ndim == 1 else G
@@ -349,9 +398,10 @@ class BainumBeam:
         if not tau_end > 0:
             raise ValueError(f"tau_end: must be > 0, got {tau_end!r}")
         gain = np.hstack([K_pos, K_rate])
+        plant = self._orbit_plant(G)
 
         def rhs(_, y):
-            return np.concatenate([y[n:], self.accelerations(y, G @ (gain @ y), nonlinear)])
+            return _tau_rhs(plant, y, gain @ y, nonlinear)
 
         tau = np.linspace(0.0, float(tau_end), int(n_points))
         sol = solve_ivp(rhs, (0.0, float(tau_end)), x0, method="DOP853", t_eval=tau,
@@ -404,6 +454,15 @@ def bainum(**overrides) -> BainumBeam:
     >>> beam = bainum(frequency_ratios=(3200, 24315.2))
     """
     return BainumBeam(**read_inputs("bainum", _INPUTS, overrides))
+
+
+def _tau_rhs(plant, y, f, nonlinear: bool) -> np.ndarray:
+    """dy/dτ of y = [x, x'] (τ = ω_c t) from a BeamInOrbit's ẋ in seconds at inputs f: the
+    state in seconds is [x, ω_c x'] and d/dτ = (1/ω_c) d/dt, so x'' = ẍ/ω_c²."""
+    n = y.size // 2
+    wc = plant.orbit_rate
+    dx = plant.derivative(np.concatenate([y[:n], wc * y[n:]]), f, nonlinear)
+    return np.concatenate([y[n:], dx[n:] / wc**2])
 
 
 # -- generic second-order helpers --------------------------------------------------------------
@@ -827,12 +886,34 @@ class ThreeMassBeam:
         A_r, B_r = self.reduced_pair(1)
         return float(np.linalg.det(np.hstack([B_r, -A_r @ B_r])))
 
+    def plant(self, n_actuators: int = 1):
+        """The model as a :class:`~flexsat.dynamics.structural.StructuralPlant`:
+        M = [[a, b], [b, a]], K = c I (so that v'' = -A_r v + B_r F, eq 4, with A_r = c M⁻¹),
+        force inputs ``F_v1`` (and ``F_v2``), N, on the end deflections, outputs ``v1``, ``v2``
+        (m) and their rates ``v1_dot``, ``v2_dot`` (m/s)."""
+        from flexsat.dynamics.second_order import SecondOrderModel
+        from flexsat.dynamics.structural import Actuator, Sensor, StructuralPlant
+
+        if n_actuators not in (1, 2):
+            raise ValueError(f"n_actuators: must be 1 or 2, got {n_actuators!r}")
+        a, b = self.a, self.b
+        model = SecondOrderModel([[a, b], [b, a]], np.zeros((2, 2)), self.c_value * np.eye(2),
+                                 np.zeros((2, 1)), np.zeros((1, 2)))
+        acts = [Actuator(f"F_v{j}", "force", j - 1) for j in range(1, n_actuators + 1)]
+        sensors = [Sensor(f"v{j}", "displacement", j - 1) for j in (1, 2)]
+        sensors += [Sensor(f"v{j}_dot", "displacement", j - 1, rate=True) for j in (1, 2)]
+        return StructuralPlant.from_second_order(model, acts, sensors)
+
+    def plant_lambdas(self) -> np.ndarray:
+        """λ1, λ2 as the squared natural frequencies of :meth:`plant` (eig(K, M); eqs 7-8 give
+        them in closed form, :attr:`lambdas`)."""
+        return self.plant().model.frequencies() ** 2
+
     def _physical_closed_loop(self, gain_q: np.ndarray) -> np.ndarray:
         """v-coordinates closed loop with F_v1 = 2(a + b) u1 and u1 = -gain_q·[q, q'],
-        q = T⁻¹ v, T = [[1, 1], [1, -1]] (v1 = q1 + q2, v2 = q1 - q2)."""
-        A_r, B_r = self.reduced_pair(1)
-        A = np.block([[np.zeros((2, 2)), np.eye(2)], [-A_r, np.zeros((2, 2))]])
-        B = np.vstack([np.zeros((2, 1)), B_r])
+        q = T⁻¹ v, T = [[1, 1], [1, -1]] (v1 = q1 + q2, v2 = q1 - q2), on :meth:`plant`'s
+        linear part."""
+        A, B = self.plant(1).linear_part()
         Tinv = np.array([[0.5, 0.5], [0.5, -0.5]])
         to_q = np.block([[Tinv, np.zeros((2, 2))], [np.zeros((2, 2)), Tinv]])
         return A - 2 * (self.a + self.b) * B @ (gain_q.reshape(1, 4) @ to_q)

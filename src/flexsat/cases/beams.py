@@ -165,6 +165,17 @@ class BeamCase:
             s.clamp(0)
         return s
 
+    def plant(self, n_modes: int = 8, damping=0.01):
+        """The beam as a plant: a transverse (z) force ``force`` at the tip, the tip and
+        mid-span displacements ``displacement_<node>`` (m) and their rates, on the modal model
+        of its first ``n_modes`` modes (the six rigid modes of a free beam included) with
+        ``damping`` on each elastic mode (:mod:`flexsat.cases.structure_plants`)."""
+        from flexsat.cases.structure_plants import first_modes, point_force_plant
+
+        n = self.n_elements
+        modes = first_modes(self.structure(), n_modes, self.rigid_body_modes or None)
+        return point_force_plant(modes, n, [n, n // 2], "z", damping)
+
     @property
     def square(self) -> bool:
         """Equal bending stiffness in both planes (then each bending frequency is double)."""
@@ -334,6 +345,21 @@ class Fv2Case:
                 prev = nid
             s.clamp(prev, ("ux", "uy", "uz") if self.plane == "3d" else ("ux", "uy"))
         return s
+
+    def plant(self, n_modes: int = 8, damping=0.01):
+        """The cross as a plant: a force ``force`` at the centre node 0 and the displacements
+        of the centre and of the mid-point of arm 3, along y in the plane of the in-plane
+        model (the benchmark's), on the modal model of its first ``n_modes`` modes with
+        ``damping`` on each."""
+        from flexsat.cases.structure_plants import first_modes, point_force_plant
+
+        if self.plane != "in-plane":
+            # pinned tips with free rotations: no rigid-mass split a ModalModel can carry
+            raise ValueError("plane: the plant is built on the in-plane model (plane "
+                             "'in-plane', the benchmark's)")
+        mid = 300 + self.elements_per_arm // 2
+        return point_force_plant(first_modes(self.structure(), n_modes), 0, [0, mid], "y",
+                                 damping)
 
     def _frequencies(self) -> np.ndarray:
         if "f" not in self._cache:

@@ -331,6 +331,26 @@ class DraperRPLCase:
                           outputs=list(_OUTPUT_NAMES) + [f"{s}_dot" for s in _OUTPUT_NAMES],
                           states=names + [f"{s}_dot" for s in names], name="draper_rpl")
 
+    def plant(self, n_modes: int | None = None):
+        """The model as a :class:`~flexsat.dynamics.structural.StructuralPlant` with the channels
+        of :meth:`to_statespace`: torque inputs ``u1_hub``, ``u2_tips_1_3``, ``u3_tips_2_4``
+        (N m, the columns of B, Eq. 54) and the collocated rotations ``theta``,
+        ``rot_tips_1_3``, ``rot_tips_2_4`` (rad, rows Bᵀ) with their rates (``_dot``, rad/s);
+        undamped (the paper's model). Full Ritz coordinates, or the first ``n_modes`` modes of
+        Eq. 58 (then :attr:`~StructuralPlant.modal_blocks` gives the frequencies)."""
+        from flexsat.dynamics.second_order import SecondOrderModel
+        from flexsat.dynamics.structural import Actuator, Sensor, StructuralPlant
+
+        M, K, B = self._model if n_modes is None else self.reduced(n_modes)
+        if n_modes is not None:  # Φ1ᵀMΦ1 is I to round-off: make it exact (modal blocks)
+            M, K = np.eye(M.shape[0]), np.diag(np.diag(K))
+        acts = [Actuator(name, "torque", B[:, j]) for j, name in enumerate(_INPUT_NAMES)]
+        sensors = [Sensor(name, "rotation", B[:, j]) for j, name in enumerate(_OUTPUT_NAMES)]
+        sensors += [Sensor(f"{name}_dot", "rotation", B[:, j], rate=True)
+                    for j, name in enumerate(_OUTPUT_NAMES)]
+        model = SecondOrderModel(M, np.zeros_like(M), K, B, B.T)
+        return StructuralPlant.from_second_order(model, acts, sensors)
+
     # -- closed loop, Eq. 59 on the full model --------------------------------------------------
     def _closed_loop_pencil(self, g1, g2) -> tuple[np.ndarray, np.ndarray]:
         """A, E of E ż = A z for u = −(G1 Bᵀx + G2 Bᵀẋ): A = [[0, M], [−K̄, −C̄]], E = diag(M, M)

@@ -145,6 +145,12 @@ def _published(key: str, unit: str) -> float:
     return to_si(PUBLISHED[key], unit, key)
 
 
+#: the final point-force actuators of seed 003 (L286-L295): paper node and body axis
+FINAL_FORCES = ((69, "x"), (63, "x"), (66, "y"), (66, "z"), (60, "y"), (60, "z"), (88, "x"))
+#: antenna rim nodes whose deflections the paper's goals bound (seed 003 §3.2)
+RIM_NODES = (66, 69, 85, 88)
+
+
 @dataclass(frozen=True)
 class _Model:
     """The built structure and its bookkeeping."""
@@ -319,6 +325,49 @@ class EPSCase:
         modes = _first(self.modes(n_modes), n_modes + 6)
         zeta = np.r_[np.zeros(6), np.full(n_modes, self.damping)]
         return ModalModel.from_fe(modes, damping=zeta, reference=self._model.cg, boundary="free")
+
+    def plant(self, model: str = "flexible", n_modes: int = 45, forces=FINAL_FORCES,
+              rim_nodes=RIM_NODES):
+        """The spacecraft as a three-axis plant of the simulation core.
+
+        Parameters
+        ----------
+        model : {"flexible", "rigid"}
+            ``"flexible"``: :class:`~flexsat.dynamics.flexible_spacecraft.FlexibleSpacecraft`
+            in hybrid coordinates on the free-free :meth:`modal_model` (``n_modes`` elastic
+            modes), ideal torquers at the CG node (95) loading the modes there, point forces
+            ``force_<node><AXIS>`` at the paper's nodes (default the final set of seed 003
+            L286-L295: 69X, 63X, 66Y, 66Z, 60Y, 60Z, 88X) and the elastic displacements of the
+            antenna rims (nodes 66, 69, 85, 88, three axes each); ``"rigid"``:
+            :class:`~flexsat.dynamics.rigid_spacecraft.RigidSpacecraft` with the model's
+            inertia about its CG (the published inertia set is in :meth:`mass_properties`).
+        n_modes : int
+            Elastic modes of the flexible model (the paper's plant: 45).
+        forces : sequence of (paper node, axis)
+            Point-force actuators.
+        rim_nodes : sequence of int
+            Paper nodes whose displacements are outputs.
+        """
+        if model == "rigid":
+            from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
+
+            return RigidSpacecraft(self.mass_properties()["inertia_center_of_mass"])
+        if model != "flexible":
+            raise ValueError(f"model: must be 'flexible' or 'rigid', got {model!r}")
+        from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
+
+        roles = self.node_roles
+        def node(paper, field):
+            if paper not in roles:
+                raise ValueError(f"{field}: {paper!r} is not one of the paper's nodes "
+                                 f"({min(roles)}-{max(roles)})")
+            return roles[paper]
+
+        points = [(node(int(n), "forces"), str(a).lower()) for n, a in forces]
+        rims = [(node(int(n), "rim_nodes"), a) for n in rim_nodes for a in "xyz"]
+        return FlexibleSpacecraft(self.modal_model(require_count(n_modes, "n_modes")),
+                                  forces=points, displacements=rims,
+                                  torque_node=roles[95])
 
     # -- mass --------------------------------------------------------------------------------
     def mass_budget(self) -> dict[str, float]:

@@ -357,6 +357,14 @@ class TamuGridCase:
                        "nodes": list(self.motor_nodes)},
         }
 
+    def plant(self, n_modes: int = 10, damping=0.01, force_node: int = 21,
+              sensor_nodes=(21, 25)):
+        """The hanging grid as a plant: an out-of-plane (z) force ``force`` at ``force_node``
+        (a shaker), the displacements ``displacement_<node>`` (m) and rates at
+        ``sensor_nodes``, on its first ``n_modes`` modes (gravity as the case sets it) with
+        ``damping`` on each (:mod:`flexsat.cases.structure_plants`)."""
+        return _grid_plant(self, n_modes, damping, force_node, sensor_nodes)
+
     def modal_model(self, n_modes: int, damping=0.0, gravity: bool | None = None):
         """:class:`~flexsat.structures.modal_model.ModalModel` of the first ``n_modes`` modes,
         cantilevered at the centre of the clamped top row (x = 2 s, y = 4 s)."""
@@ -371,6 +379,19 @@ class TamuGridCase:
         return ModalModel.from_fe(cut, damping=damping,
                                   reference=(2 * self.spacing, 4 * self.spacing, 0.0),
                                   boundary="cantilevered")
+
+
+def _grid_plant(case: TamuGridCase, n_modes: int, damping, force_node: int, sensor_nodes):
+    from flexsat.cases.structure_plants import point_force_plant
+    from flexsat.structures.fem import FEModes
+
+    n = require_count(n_modes, "n_modes")
+    modes = case._modes(case.gravity)
+    if n > modes.shapes.shape[1]:
+        raise ValueError(f"n_modes: the grid has {modes.shapes.shape[1]} modes, got {n}")
+    cut = FEModes(modes.omegas[:n], modes.shapes[:, :n], modes.assembly)
+    return point_force_plant(cut, force_node, sensor_nodes, "z", damping,
+                             (2 * case.spacing, 4 * case.spacing, 0.0))
 
 
 def tamu_grid(**overrides) -> TamuGridCase:

@@ -1,6 +1,6 @@
 """Control laws behind one interface (:class:`Controller`)."""
 
-from flexsat.control.attitude_laws import GibbsLyapunovLaw, MRPLaw
+from flexsat.control.attitude_laws import GibbsLyapunovLaw, MRPLaw, QuaternionPD
 from flexsat.control.base import Controller
 from flexsat.control.estimation import (
     RefinedEstimator,
@@ -15,6 +15,7 @@ from flexsat.control.frequency_shaped import (
     FrequencyShapedDesign,
     frequency_shaped_lqr,
 )
+from flexsat.control.linear_form import LinearLaw, run_linear_law
 from flexsat.control.lqg import LQGController
 from flexsat.control.lqr import RiccatiSolution, dlqr, lqr
 from flexsat.control.lyapunov import LyapunovRegulator, LyapunovTracker, check_lyapunov_gains
@@ -24,6 +25,8 @@ from flexsat.control.output_feedback import (
     design_minimum_sensitivity,
 )
 from flexsat.control.pd import PD
+from flexsat.control.scheduled import ScheduledStateFeedback
+from flexsat.control.state_space_compensator import StateSpaceCompensator
 
 __all__ = [
     "Controller",
@@ -34,12 +37,16 @@ __all__ = [
     "FrequencyShapedDesign",
     "GibbsLyapunovLaw",
     "LQGController",
+    "LinearLaw",
     "LyapunovRegulator",
     "LyapunovTracker",
     "MRPLaw",
     "PD",
+    "QuaternionPD",
     "RefinedEstimator",
     "RiccatiSolution",
+    "ScheduledStateFeedback",
+    "StateSpaceCompensator",
     "check_lyapunov_gains",
     "dkalman",
     "dlqr",
@@ -48,5 +55,6 @@ __all__ = [
     "lqr",
     "refine_estimator",
     "regulator_weighted_process_noise",
+    "run_linear_law",
     "truncate_gains",
 ]

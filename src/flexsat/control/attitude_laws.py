@@ -35,8 +35,29 @@ is the inertial body rate, and the closed loop is Euler's equations
   \omega` gives :math:`\tfrac{d}{dt}\ln(1+\sigma^T\sigma) = \tfrac12\sigma^T\omega`. V is
   continuous where σ switches to its shadow set (|σ| = 1 on both sides).
 
-Each law is a callable ``law(t, beta, w)`` returning the body torque, the signature of the
-torque argument of :func:`flexsat.dynamics.rigid_body.propagate`.
+* :class:`QuaternionPD`, the quaternion proportional-derivative law (Wie, Weiss & Arapostathis,
+  J. Guid. Control Dyn. 12(3), 1989; Schaub & Junkins §8.2), on the short rotation
+  (δβ0 >= 0):
+
+  .. math::
+
+      u = -K_p\,\delta\beta_{1:3}\,\mathrm{sign}(\delta\beta_0) - K_d(\omega - \omega_{ref}),
+      \qquad V = \tfrac12\omega^T I\omega + 2K_p(1 - |\delta\beta_0|), \qquad
+      \dot V = -\omega^T K_d\,\omega
+
+  (scalar K_p, ω_ref = 0), because :math:`\delta\dot\beta_0 = -\tfrac12\delta\beta_{1:3}^T
+  \omega`. The sign makes the torque turn the body the short way: δβ and −δβ are the same
+  attitude, and without it the body would unwind a full turn from half the error set.
+
+Every law is a :class:`flexsat.control.base.Controller`: it reads the plant's ``attitude``
+(Euler parameters, (n_cases, 4)) and ``rate`` (body rate, rad/s, (n_cases, 3)) channels and
+writes ``torque`` (body components, N·m, (n_cases, 3)), the channels of
+:class:`flexsat.dynamics.rigid_spacecraft.RigidSpacecraft` and
+:class:`flexsat.dynamics.flexible_spacecraft.FlexibleSpacecraft`. Gains and targets carry
+leading case axes (one per case); they are checked and broadcast once, at construction, and the
+per-sample call does arithmetic only. :meth:`torque` is the same law as a function of (β, ω),
+the torque argument of :func:`flexsat.dynamics.rigid_body.propagate` through
+``lambda t, beta, w: law.torque(beta, w)``.
 """
 
 from __future__ import annotations
@@ -45,11 +66,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flexsat.dynamics.attitude import SINGULAR_TOL, _cases, _last, _quaternion
-from flexsat.dynamics.rigid_body import _inertia
-from flexsat.validation import require_positive, set_si
+from flexsat.control.base import Controller
+from flexsat.dynamics.attitude import (
+    SINGULAR_TOL,
+    case_shape,
+    require_quaternion,
+    require_shape,
+)
+from flexsat.dynamics.rigid_body import require_inertia
+from flexsat.validation import require_finite, require_positive, set_si
 
-__all__ = ["GibbsLyapunovLaw", "MRPLaw", "error_quaternion"]
+__all__ = ["GibbsLyapunovLaw", "MRPLaw", "QuaternionPD", "error_quaternion"]
 
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
 
@@ -69,9 +96,9 @@ def error_quaternion(beta, beta_target) -> np.ndarray:
     ndarray, shape (..., 4)
         Unit, with the sign of ``beta`` (either sign is the same attitude).
     """
-    b = _quaternion(beta)
-    r = _quaternion(beta_target, "beta_target")
-    _cases(beta=b.shape[:-1], beta_target=r.shape[:-1])
+    b = require_quaternion(beta)
+    r = require_quaternion(beta_target, "beta_target")
+    case_shape(beta=b.shape[:-1], beta_target=r.shape[:-1])
     return _error(b, r)
 
 
@@ -84,25 +111,62 @@ def _error(b, r):
     return out
 
 
-def _per_axis(value: np.ndarray, name: str) -> np.ndarray:
+def _per_axis(value, name: str) -> np.ndarray:
+    value = np.asarray(value, float)
     if value.ndim and value.shape[-1] != 3:
         raise ValueError(f"{name}: per-axis gains must be a scalar or have last axis 3 (body "
                          f"axes 1, 2, 3; leading axes are cases), got shape {value.shape}")
     return value
 
 
-def _state(law, beta, w):
-    """β and ω checked, their case axes and those of the law's gains and target broadcasting."""
-    b = _quaternion(beta)
-    w = _last(w, "w", (3,))
-    gains = {name: np.shape(getattr(law, name)) for name in law.__dataclass_fields__}
-    gains = {name: shape[:-1] if name in law._VECTORS else shape for name, shape in gains.items()}
-    _cases(beta=b.shape[:-1], w=w.shape[:-1], **gains)
-    return b, w
+class _AttitudeLaw(Controller):
+    """What the three laws share: channels, the case shape of their parameters (checked once)
+    and the per-sample call on the measured ``attitude`` and ``rate``."""
+
+    reads = ("attitude", "rate")
+    writes = ("torque",)
+    #: fields whose last axis is a body axis or a quaternion component, not a case axis
+    _VECTORS: tuple[str, ...] = ()
+
+    def _finish(self):
+        """Check the case axes of every field against each other; keep the case shape."""
+        shapes = {}
+        for name in self.__dataclass_fields__:
+            shape = np.shape(getattr(self, name))
+            shapes[name] = shape[:-1] if name in self._VECTORS and shape else shape
+        object.__setattr__(self, "_field_cases", shapes)
+        object.__setattr__(self, "_case_shape", case_shape(**shapes))
+        object.__setattr__(self, "target", self.beta_target)
+
+    @property
+    def n_cases(self) -> int:
+        return int(np.prod(self._case_shape))
+
+    def _measured(self, beta, w):
+        """β and ω checked and their case axes checked against the law's (for the public
+        functions of (β, ω); the per-sample call trusts the engine's shapes)."""
+        b = require_quaternion(beta)
+        w = require_shape(w, "w", (3,))
+        case_shape(beta=b.shape[:-1], w=w.shape[:-1], **self._field_cases)
+        return b, w
+
+    def __call__(self, t, y, state):
+        """The torque command (N·m, body components, (n_cases, 3)) from the measured
+        ``attitude`` and ``rate``; the law has no internal state."""
+        return self._torque(np.asarray(y["attitude"], float), np.asarray(y["rate"], float)), state
+
+    def torque(self, beta, w) -> np.ndarray:
+        """The torque u (N·m, body components, shape (..., 3)) at attitude β, rate ω (checked)."""
+        return self._torque(*self._measured(beta, w))
+
+    @staticmethod
+    def _kinetic(w, inertia):
+        J = require_inertia(inertia)
+        return 0.5 * np.einsum("...i,...ij,...j->...", w, J, w)
 
 
 @dataclass(frozen=True)
-class GibbsLyapunovLaw:
+class GibbsLyapunovLaw(_AttitudeLaw):
     r"""The Gibbs-parameter Lyapunov law of Junkins, Att. 3 §II Eq. 4 (module docstring):
     :math:`u_i = -[k_i\omega_i + A q_i(1 + q^Tq)]`, :math:`\dot U = -\sum_i k_i\omega_i^2`.
 
@@ -120,46 +184,43 @@ class GibbsLyapunovLaw:
     k: object
     A: object
     beta_target: object = field(default=_IDENTITY)
-    #: fields whose last axis is not a case axis
     _VECTORS = ("k", "beta_target")
 
     def __post_init__(self):
         set_si(self, "k", require_positive, "N*m*s/rad")
-        _per_axis(np.asarray(self.k), "k")
+        _per_axis(self.k, "k")
         set_si(self, "A", require_positive, "N*m")
-        object.__setattr__(self, "beta_target", _quaternion(self.beta_target, "beta_target"))
+        object.__setattr__(self, "beta_target",
+                           require_quaternion(self.beta_target, "beta_target"))
+        self._finish()
+        object.__setattr__(self, "_A", np.asarray(self.A)[..., None])
 
     def gibbs(self, beta) -> np.ndarray:
         """Gibbs parameters q = l tan(φ/2) of the error (shape (..., 3)); refused at 180°."""
-        e = _error(_quaternion(beta), self.beta_target)
+        e = _error(np.asarray(beta, float), self.beta_target)
         if np.any(np.abs(e[..., 0]) < SINGULAR_TOL):
-            raise ValueError(f"beta: the Gibbs law is singular at a 180° error (|β0| < "
+            raise ValueError(f"attitude: the Gibbs law is singular at a 180° error (|β0| < "
                              f"{SINGULAR_TOL:g}); start below 180°, where U keeps the motion")
         return e[..., 1:] / e[..., :1]
 
-    def __call__(self, t, beta, w) -> np.ndarray:
-        """The torque u (N·m, body components, shape (..., 3)) at attitude β, rate ω."""
-        beta, w = _state(self, beta, w)
+    def _torque(self, beta, w):
         q = self.gibbs(beta)
-        A = np.asarray(self.A)[..., None]
-        return -(self.k * w + A * q * (1 + np.sum(q * q, axis=-1))[..., None])
+        return -(self.k * w + self._A * q * (1 + np.sum(q * q, axis=-1))[..., None])
 
     def lyapunov(self, beta, w, inertia) -> np.ndarray:
         r"""U = ½ ωᵀIω + A qᵀq (J), Att. 3 Eq. 2."""
-        beta, w = _state(self, beta, w)
-        J = _inertia(inertia)
+        beta, w = self._measured(beta, w)
         q = self.gibbs(beta)
-        return (0.5 * np.einsum("...i,...ij,...j->...", w, J, w)
-                + self.A * np.sum(q * q, axis=-1))
+        return self._kinetic(w, inertia) + self.A * np.sum(q * q, axis=-1)
 
     def lyapunov_rate(self, w) -> np.ndarray:
         r""":math:`\dot U = -\sum_i k_i\omega_i^2` (W) along the closed loop, Att. 3 Eq. 4."""
-        w = _last(w, "w", (3,))
+        w = require_shape(w, "w", (3,))
         return -np.sum(self.k * w * w, axis=-1)
 
 
 @dataclass(frozen=True)
-class MRPLaw:
+class MRPLaw(_AttitudeLaw):
     r"""MRP proportional-derivative law (Schaub & Junkins Ch. 8; module docstring):
     :math:`u = -K\sigma - P\omega`, σ the short-rotation MRPs of the error,
     :math:`\dot V = -\omega^T P\omega`.
@@ -178,14 +239,16 @@ class MRPLaw:
     K: object
     P: object
     beta_target: object = field(default=_IDENTITY)
-    #: fields whose last axis is not a case axis
     _VECTORS = ("P", "beta_target")
 
     def __post_init__(self):
         set_si(self, "K", require_positive, "N*m")
         set_si(self, "P", require_positive, "N*m*s/rad")
-        _per_axis(np.asarray(self.P), "P")
-        object.__setattr__(self, "beta_target", _quaternion(self.beta_target, "beta_target"))
+        _per_axis(self.P, "P")
+        object.__setattr__(self, "beta_target",
+                           require_quaternion(self.beta_target, "beta_target"))
+        self._finish()
+        object.__setattr__(self, "_K", np.asarray(self.K)[..., None])
 
     def mrp(self, beta) -> np.ndarray:
         """MRPs σ = l tan(φ/4) of the error on its short rotation, |σ| <= 1 (shape (..., 3)).
@@ -193,24 +256,76 @@ class MRPLaw:
         The error quaternion is taken with β0 >= 0, so 1 + β0 >= 1 and no shadow switch
         or singularity check is needed.
         """
-        e = _error(_quaternion(beta), self.beta_target)
+        e = _error(np.asarray(beta, float), self.beta_target)
         e = np.where(e[..., :1] < 0, -e, e)
         return e[..., 1:] / (1 + e[..., :1])
 
-    def __call__(self, t, beta, w) -> np.ndarray:
-        """The torque u (N·m, body components, shape (..., 3)) at attitude β, rate ω."""
-        beta, w = _state(self, beta, w)
-        return -(np.asarray(self.K)[..., None] * self.mrp(beta) + self.P * w)
+    def _torque(self, beta, w):
+        return -(self._K * self.mrp(beta) + self.P * w)
 
     def lyapunov(self, beta, w, inertia) -> np.ndarray:
         r"""V = ½ ωᵀIω + 2K ln(1 + σᵀσ) (J), Schaub & Junkins Ch. 8."""
-        beta, w = _state(self, beta, w)
-        J = _inertia(inertia)
+        beta, w = self._measured(beta, w)
         s = self.mrp(beta)
-        return (0.5 * np.einsum("...i,...ij,...j->...", w, J, w)
-                + 2 * self.K * np.log1p(np.sum(s * s, axis=-1)))
+        return self._kinetic(w, inertia) + 2 * self.K * np.log1p(np.sum(s * s, axis=-1))
 
     def lyapunov_rate(self, w) -> np.ndarray:
         r""":math:`\dot V = -\omega^T P\omega` (W) along the closed loop."""
-        w = _last(w, "w", (3,))
+        w = require_shape(w, "w", (3,))
         return -np.sum(self.P * w * w, axis=-1)
+
+
+@dataclass(frozen=True)
+class QuaternionPD(_AttitudeLaw):
+    r"""Quaternion PD law on the short rotation (module docstring):
+    :math:`u = -K_p\,\delta\beta_{1:3}\,\mathrm{sign}(\delta\beta_0) - K_d(\omega - \omega_{ref})`.
+
+    Parameters
+    ----------
+    Kp : float, array, str or pint.Quantity
+        Attitude gains > 0 (N·m per unit quaternion error): a scalar or shape (..., 3).
+    Kd : float, array, str or pint.Quantity
+        Rate gains > 0 (N·m·s/rad): a scalar or shape (..., 3).
+    beta_target : array_like, shape (..., 4)
+        Unit Euler parameters of the target frame (default: the inertial frame).
+    w_ref : array_like, shape (..., 3), str or pint.Quantity
+        Reference body rate, rad/s (default 0: regulation to the target).
+    """
+
+    Kp: object
+    Kd: object
+    beta_target: object = field(default=_IDENTITY)
+    w_ref: object = field(default=(0.0, 0.0, 0.0))
+    _VECTORS = ("Kp", "Kd", "beta_target", "w_ref")
+
+    def __post_init__(self):
+        set_si(self, "Kp", require_positive, "N*m")
+        _per_axis(self.Kp, "Kp")
+        set_si(self, "Kd", require_positive, "N*m*s/rad")
+        _per_axis(self.Kd, "Kd")
+        object.__setattr__(self, "beta_target",
+                           require_quaternion(self.beta_target, "beta_target"))
+        w_ref = require_shape(require_finite(self.w_ref, "w_ref", "rad/s"), "w_ref", (3,))
+        object.__setattr__(self, "w_ref", w_ref)
+        self._finish()
+
+    def error(self, beta) -> np.ndarray:
+        """The error quaternion on its short rotation, δβ0 >= 0 (shape (..., 4))."""
+        e = _error(np.asarray(beta, float), self.beta_target)
+        return np.where(e[..., :1] < 0, -e, e)
+
+    def _torque(self, beta, w):
+        return -(self.Kp * self.error(beta)[..., 1:] + self.Kd * (w - self.w_ref))
+
+    def lyapunov(self, beta, w, inertia) -> np.ndarray:
+        r"""V = ½ ωᵀIω + 2K_p(1 − |δβ0|) (J), for a scalar K_p and ω_ref = 0."""
+        if np.ndim(self.Kp) and np.shape(self.Kp)[-1] == 3 or np.any(self.w_ref != 0):
+            raise ValueError("Kp: the Lyapunov function V = ½ωᵀIω + 2Kp(1 − |δβ0|) needs a "
+                             "gain equal on every axis and w_ref = 0")
+        beta, w = self._measured(beta, w)
+        return self._kinetic(w, inertia) + 2 * self.Kp * (1 - self.error(beta)[..., 0])
+
+    def lyapunov_rate(self, w) -> np.ndarray:
+        r""":math:`\dot V = -\omega^T K_d\,\omega` (W) along the closed loop (ω_ref = 0)."""
+        w = require_shape(w, "w", (3,))
+        return -np.sum(self.Kd * w * w, axis=-1)

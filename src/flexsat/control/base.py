@@ -55,6 +55,26 @@ class Controller(ABC):
     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """Return the torque command (N m, shape (n_cases,)) and the next internal state."""
 
+    def linear_form(self, dt: float, times: np.ndarray, n_cases: int):
+        """The law's compiled-loop form for a run, or None when it is not linear.
+
+        Parameters
+        ----------
+        dt : float
+            Control period, s.
+        times : (n_t,) array
+            Sample times, s (references and schedules are tabulated on them).
+        n_cases : int
+            Cases of the run; the law's per-case parameters number 1 or n_cases.
+
+        Returns
+        -------
+        :class:`~flexsat.control.linear_form.LinearLaw` or None
+            None (this default): the law is nonlinear or user-written, and the engine calls it
+            sample by sample in Python.
+        """
+        return None
+
     def tabulate_reference(self, times: np.ndarray) -> None:
         """Evaluate the reference once on the sample grid; :meth:`reference_at` then looks the
         samples up instead of re-evaluating the shape (the simulator calls this before its time

@@ -263,6 +263,37 @@ class FrequencyShapedController(EstimatorController):
         out["chain"] = z @ Pz.T + np.multiply.outer(v, Gz[:, 0])
         return u, out
 
+    def linear_form(self, dt, times, n_cases):
+        r"""State [x̂, z]: with e1 picking δu1 from the chain,
+
+        .. math::
+
+            \begin{bmatrix} \hat x \\ z \end{bmatrix}_{k+1} =
+            \begin{bmatrix} \Phi & \Gamma_u e_1^T \\ -G_z K_x & P_z - G_z K_z \end{bmatrix}
+            \begin{bmatrix} \hat x \\ z \end{bmatrix}_k
+            + \begin{bmatrix} \Gamma_y \\ 0 \end{bmatrix} y_k
+            + \begin{bmatrix} \Gamma_u u_{ref,k} \\ G_z (d_{ff} + K_x x_{ref,k}) \end{bmatrix},
+            \qquad u_k = u_{ref,k} + e_1^T z_k,
+
+        shifted into the linear form (:mod:`~flexsat.control.linear_form`); z starts at 0."""
+        on_ref, u_ref, Cpinv, s0 = self._linear_pieces(dt, times, n_cases)
+        Phi, Gu, Gy = self.estimator
+        Pz, Gz = self.chain_zoh
+        Kx, Kz = self.design.plant_gain, self.design.chain_gain
+        n, k = Phi.shape[0], Pz.shape[0]
+        e1 = np.eye(1, k)
+        A = np.block([[Phi, Gu @ e1], [-Gz @ Kx, Pz - Gz @ Kz]])
+        B = np.vstack([Gy, np.zeros((k, Gy.shape[1]))])
+        C = np.hstack([np.zeros((1, n)), e1])
+        # forcing F v_k with v = [u_ref, d_ff + K_x x_ref] and F = diag(Γ_u, G_z)
+        F = np.block([[Gu, np.zeros((n, 1))], [np.zeros((k, 1)), Gz]])
+        a, b = np.broadcast_arrays(u_ref, self.offset + on_ref(Kx))
+        v = np.concatenate([a, b], axis=-1)
+        K0 = None if Cpinv is None else np.vstack([Cpinv, np.zeros((k, Cpinv.shape[1]))])
+        if s0 is not None:
+            s0 = np.concatenate([s0, np.zeros((s0.shape[0], k))], axis=-1)
+        return self._linear_law(A, B, C, u_ref, F, v, K0, s0)
+
     def closed_loop_matrix(self) -> np.ndarray:
         """Sampled-data closed-loop transition matrix of the design plant with this law,
         state [x, x̂, z]; stable iff every eigenvalue is inside the unit circle."""

@@ -55,6 +55,13 @@ import scipy.linalg
 
 from flexsat.control.base import Controller
 from flexsat.control.estimation import dkalman, kalman
+from flexsat.control.linear_form import (
+    LinearLaw,
+    absorb_affine,
+    per_case,
+    reference_tables,
+    sample_times,
+)
 from flexsat.control.lqr import check_matrix, check_square, dlqr, lqr
 from flexsat.validation import require_finite, require_numeric, require_positive
 
@@ -99,6 +106,8 @@ class EstimatorController(Controller):
     """Shared machinery of the observer-based laws: measurement stacking, the estimator
     update, the reference state and the sample-period check (see the module docstring)."""
 
+    writes = ("torque",)
+
     def _setup(self, A, B, C, L, dt, target, reference, measurements, reference_states,
                feedforward, gains, initial_estimate):
         A = check_square(A, "A")
@@ -131,6 +140,7 @@ class EstimatorController(Controller):
         self.A, self.B, self.C, self.L = A, B, C, L
         self.gains = gains
         self.measurements = measurements
+        self.reads = measurements
         self.reference_states = (i, j)
         self.reference = reference
         self.feedforward = bool(feedforward)
@@ -160,11 +170,6 @@ class EstimatorController(Controller):
     @property
     def n_states(self) -> int:
         return self.A.shape[0]
-
-    @property
-    def reads(self) -> tuple[str, ...]:
-        """The measurement channels of the estimator's C rows."""
-        return self.measurements
 
     def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
         n = self.n_states
@@ -206,6 +211,38 @@ class EstimatorController(Controller):
         x_ref[:, j] = thd_r
         u_ref = np.broadcast_to(np.asarray(u_r, float), (nc,)) if self.feedforward else 0.0
         return Y, x_hat, x_ref, u_ref
+
+    def _linear_pieces(self, dt, times, n_cases):
+        """What every estimator law's linear form shares, tabulated on ``times``: a function
+        giving K x_ref (n_t, C, 1) for a gain row K (x_ref = θ_ref e_θ + θ'_ref e_θ', never
+        formed), u_ref (n_t, C, 1) (zero without feedforward), and the start: K0 = C⁺
+        (x̂₀ = C⁺ y₀) or the given estimate s0 (C, n)."""
+        dt, times = sample_times(dt, times)
+        if abs(dt - self.dt) > _DT_TOL * self.dt:
+            raise ValueError(f"dt: the law was built for a sample period of {self.dt:g} s, the "
+                             f"run samples every {dt:g} s (build it with the simulator's "
+                             "1/control_rate)")
+        th, thd, _, u_r = reference_tables(self, times, n_cases)
+        i, j = self.reference_states
+
+        def gain_on_reference(K):
+            return (K[0, i] * th + K[0, j] * thd)[..., None]
+
+        u_ref = (u_r if self.feedforward else np.zeros((len(times), 1)))[..., None]
+        if self.initial_estimate is None:
+            return gain_on_reference, u_ref, self._Cpinv, None
+        s0 = per_case(self.initial_estimate, n_cases, "initial_estimate", (self.n_states,))
+        return gain_on_reference, u_ref, None, s0
+
+    def _linear_law(self, A, B, C, g, F, v, K0, s0) -> LinearLaw:
+        """The LinearLaw of x̂_{k+1} = A x̂ + B y + F v_k, u = g_k + C x̂ (absolute
+        coordinates, y_ref = 0), shifted by :func:`~flexsat.control.linear_form.absorb_affine`."""
+        A, C = A[None, None], C[None, None]
+        p, m = B.shape[1], C.shape[2]
+        return LinearLaw(A, B[None, None], C, np.zeros((1, 1, m, p)),
+                         np.zeros((g.shape[0], 1, p)), absorb_affine(A, C, g, F, v, s0),
+                         None if K0 is None else K0[None], self.reads, self.writes,
+                         (1,) * p, (1,) * m)
 
     def _propagate(self, t, x_hat, u, Y) -> dict[str, np.ndarray]:
         Phi, Gu, Gy = self.estimator
@@ -287,6 +324,15 @@ class LQGController(EstimatorController):
         Y, x_hat, x_ref, u_ref = self._begin(t, y, state)
         u = u_ref - (x_hat - x_ref) @ self.K[0]
         return u, self._propagate(t, x_hat, u, Y)
+
+    def linear_form(self, dt, times, n_cases):
+        r"""With w_k = u_ref,k + K x_ref,k the law is u_k = w_k − K x̂_k,
+        x̂_{k+1} = (Φ − Γ_u K) x̂_k + Γ_y y_k + Γ_u w_k: an affine recursion in absolute
+        coordinates, shifted into the linear form (:mod:`~flexsat.control.linear_form`)."""
+        on_ref, u_ref, K0, s0 = self._linear_pieces(dt, times, n_cases)
+        Phi, Gu, Gy = self.estimator
+        w = u_ref + on_ref(self.K)
+        return self._linear_law(Phi - Gu @ self.K, Gy, -self.K, w, Gu, w, K0, s0)
 
     # ------------------------------------------------------------------------------------------
     def closed_loop_matrix(self, A=None, B=None, C=None) -> np.ndarray:

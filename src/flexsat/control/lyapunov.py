@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexsat.control.base import Controller
+from flexsat.control.linear_form import per_case, reference_tables, sample_times, static_law
 from flexsat.validation import require_finite, require_nonneg
 
 
@@ -47,6 +48,9 @@ class LyapunovRegulator(Controller):
     Each a number in these SI units, a pint Quantity or a unit string (converted).
     """
 
+    reads = ("theta", "theta_dot", "root_torque")
+    writes = ("torque",)
+
     def __init__(self, g1, g2, g3=0.0, target=0.0, n_appendages: int = 4):
         self.g1, self.g2, self.g3 = check_lyapunov_gains(g1, g2, g3, n_appendages)
         self.target = require_finite(target, "target", "rad")
@@ -62,6 +66,15 @@ class LyapunovRegulator(Controller):
         )
         return u, state
 
+    def linear_form(self, dt, times, n_cases):
+        """No internal state: D = −[g1, g2, g3] on y = (θ, θ', l0 S0 − M0),
+        y_ref = (θ_f, 0, 0), u_ff = 0 (Eq. 11)."""
+        _, times = sample_times(dt, times)
+        th, _, _, _ = reference_tables(self, times, n_cases)
+        z = np.zeros((len(times), 1))
+        y_ref = np.stack(np.broadcast_arrays(th, z, z), axis=-1)
+        return static_law(_gain_row(self, n_cases), y_ref, z[..., None], self.reads, self.writes)
+
 
 class LyapunovTracker(Controller):
     """Control Law II: Lyapunov tracking of a torque-shaped rigid reference (Att. 3 Eq. 17).
@@ -75,6 +88,9 @@ class LyapunovTracker(Controller):
         I_b = ρ (l³ − l0³)/3 + m l² (+ J), kg m², scaling the reference root load
         (l0 S0 − M0)_ref = I_b θ''_ref (Eq. 17).
     """
+
+    reads = ("theta", "theta_dot", "root_torque")
+    writes = ("torque",)
 
     def __init__(self, reference, g1, g2, g3=0.0, appendage_inertia=0.0, n_appendages: int = 4):
         self.reference = reference
@@ -95,3 +111,19 @@ class LyapunovTracker(Controller):
             + self.g3 * (y["root_torque"] - self.appendage_inertia * thdd_r)
         )
         return u, state
+
+    def linear_form(self, dt, times, n_cases):
+        """No internal state: D = −[g1, g2, g3] on y = (θ, θ', l0 S0 − M0),
+        y_ref = (θ_ref, θ'_ref, I_b θ''_ref), u_ff = u_ref (Eq. 17)."""
+        _, times = sample_times(dt, times)
+        th, thd, thdd, u_r = reference_tables(self, times, n_cases)
+        Ib = per_case(self.appendage_inertia, n_cases, "appendage_inertia")
+        y_ref = np.stack(np.broadcast_arrays(th, thd, Ib * thdd), axis=-1)
+        return static_law(_gain_row(self, n_cases), y_ref, u_r[..., None], self.reads,
+                          self.writes)
+
+
+def _gain_row(law, n_cases: int) -> np.ndarray:
+    """D = −[g1, g2, g3], shape (1, C, 1, 3)."""
+    g = [per_case(getattr(law, k), n_cases, k) for k in ("g1", "g2", "g3")]
+    return -np.stack(np.broadcast_arrays(*g), axis=-1)[None, :, None, :]

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexsat.control.base import Controller
+from flexsat.control.linear_form import per_case, reference_tables, sample_times, static_law
 from flexsat.validation import require_finite, require_nonneg, require_positive
 
 
@@ -29,8 +30,8 @@ class PD(Controller):
         ``feedforward`` is true.
     """
 
-    #: the law uses the hub angle and rate only
     reads = ("theta", "theta_dot")
+    writes = ("torque",)
 
     def __init__(self, kp, kd, target=0.0, reference=None, feedforward: bool = True):
         self.kp = require_nonneg(kp, "kp", "N*m/rad")
@@ -62,3 +63,14 @@ class PD(Controller):
         if self.feedforward:
             u = u + u_r
         return u, state
+
+    def linear_form(self, dt, times, n_cases):
+        """No internal state: D = [−kp, −kd] on y = (θ, θ'), y_ref = (θ_ref, θ'_ref) and
+        u_ff = u_ref (zero without ``feedforward``), seed 001 Eqs. 20 and 29."""
+        _, times = sample_times(dt, times)
+        th, thd, _, u_r = reference_tables(self, times, n_cases)
+        kp, kd = per_case(self.kp, n_cases, "kp"), per_case(self.kd, n_cases, "kd")
+        D = np.stack(np.broadcast_arrays(-kp, -kd), axis=-1)
+        y_ref = np.stack(np.broadcast_arrays(th, thd), axis=-1)
+        u_ff = (u_r if self.feedforward else np.zeros((len(times), 1)))[..., None]
+        return static_law(D[None, :, None, :], y_ref, u_ff, self.reads, self.writes)

@@ -3,8 +3,12 @@
 :mod:`flexsat.dynamics.attitude` (attitude kinematics: Euler parameters, DCM, 1-2-3 Euler
 angles, Gibbs and modified Rodrigues parameters) and :mod:`flexsat.dynamics.rigid_body`
 (Euler's equations, the norm-preserving propagator, the Euler–Poinsot solution) are plain
-array kernels with a leading case axis; their names are re-exported here and imported from
-their modules on first use, so importing the package loads nothing.
+array kernels with a leading case axis. The plants: :mod:`flexsat.dynamics.structural` (any
+M, D, K structure with named force, torque and moment-pair inputs),
+:mod:`flexsat.dynamics.orbit` (Bainum's beam in orbit), :class:`RigidSpacecraft` and
+:class:`FlexibleSpacecraft` (three-axis, the latter in hybrid coordinates). Their names are
+re-exported here and imported from their modules on first use, so importing the package loads
+nothing.
 """
 
 from flexsat.lazy import lazy_exports
@@ -17,8 +21,14 @@ _EXPORTS = {
         "quaternion_multiply", "quaternion_exp", "quaternion_to_gibbs", "gibbs_to_quaternion",
         "quaternion_to_mrp", "mrp_to_quaternion", "mrp_shadow", "gibbs_rate", "mrp_rate")},
     **{name: "rigid_body" for name in (
+        "require_inertia", "rkmk4_step", "dexpinv", "cross3", "matvec", "euler_acceleration",
         "euler_rates", "propagate", "angular_momentum_inertial", "kinetic_energy",
         "euler_poinsot_rates")},
+    "require_shape": "attitude", "case_shape": "attitude", "require_quaternion": "attitude",
+    **{name: "structural" for name in ("StructuralPlant", "Actuator", "Sensor", "ModalBlocks")},
+    "BeamInOrbit": "orbit",
+    "RigidSpacecraft": "rigid_spacecraft",
+    "FlexibleSpacecraft": "flexible_spacecraft",
 }
 
 __all__ = list(_EXPORTS)

@@ -23,6 +23,7 @@ import numpy as np
 from flexsat.validation import require_numeric
 
 __all__ = [
+    "require_shape", "case_shape", "require_quaternion",
     "UNIT_TOL", "SINGULAR_TOL", "cross_matrix", "omega_matrix", "quaternion_rate_matrix",
     "quaternion_to_dcm", "dcm_to_quaternion", "euler123_to_dcm", "dcm_to_euler123",
     "principal_rotation_to_quaternion", "quaternion_to_principal_rotation",
@@ -39,7 +40,7 @@ UNIT_TOL = 1e-9
 SINGULAR_TOL = 1e-8
 
 
-def _last(value, field: str, shape: tuple[int, ...]) -> np.ndarray:
+def require_shape(value, field: str, shape: tuple[int, ...]) -> np.ndarray:
     """``value`` as a finite float array whose trailing axes are ``shape``."""
     arr = require_numeric(value, field)
     if arr.ndim < len(shape) or arr.shape[arr.ndim - len(shape):] != shape:
@@ -48,7 +49,7 @@ def _last(value, field: str, shape: tuple[int, ...]) -> np.ndarray:
     return arr
 
 
-def _cases(**fields) -> tuple[int, ...]:
+def case_shape(**fields) -> tuple[int, ...]:
     """The common leading (case) shape of the named arrays' leading axes, or a clear error."""
     try:
         return np.broadcast_shapes(*fields.values())
@@ -58,8 +59,9 @@ def _cases(**fields) -> tuple[int, ...]:
                          f"{got}") from None
 
 
-def _quaternion(beta, field: str = "beta") -> np.ndarray:
-    b = _last(beta, field, (4,))
+def require_quaternion(beta, field: str = "beta") -> np.ndarray:
+    """``beta`` as a float array (..., 4) of unit Euler parameters (to :data:`UNIT_TOL`)."""
+    b = require_shape(beta, field, (4,))
     err = np.abs(np.linalg.norm(b, axis=-1) - 1.0)
     if np.any(err > UNIT_TOL):
         raise ValueError(f"{field}: must be a unit quaternion (| ‖β‖ − 1 | <= {UNIT_TOL:g}), "
@@ -68,7 +70,7 @@ def _quaternion(beta, field: str = "beta") -> np.ndarray:
 
 
 def _dcm(dcm, field: str = "dcm") -> np.ndarray:
-    C = _last(dcm, field, (3, 3))
+    C = require_shape(dcm, field, (3, 3))
     err = np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)).max(axis=(-2, -1), initial=0.0)
     if np.any(err > UNIT_TOL):
         raise ValueError(f"{field}: must be orthonormal (max |C Cᵀ − I| <= {UNIT_TOL:g}), "
@@ -89,7 +91,7 @@ def cross_matrix(v) -> np.ndarray:
     -------
     ndarray, shape (..., 3, 3)
     """
-    v = _last(v, "v", (3,))
+    v = require_shape(v, "v", (3,))
     z = np.zeros(v.shape[:-1])
     x, y, w = v[..., 0], v[..., 1], v[..., 2]
     return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1),
@@ -115,7 +117,7 @@ def omega_matrix(w) -> np.ndarray:
     -------
     ndarray, shape (..., 4, 4)
     """
-    w = _last(w, "w", (3,))
+    w = require_shape(w, "w", (3,))
     z = np.zeros(w.shape[:-1])
     w1, w2, w3 = w[..., 0], w[..., 1], w[..., 2]
     rows = [[z, -w1, -w2, -w3], [w1, z, w3, -w2], [w2, -w3, z, w1], [w3, w2, -w1, z]]
@@ -141,7 +143,7 @@ def quaternion_rate_matrix(beta) -> np.ndarray:
     -------
     ndarray, shape (..., 4, 3)
     """
-    b = _last(beta, "beta", (4,))
+    b = require_shape(beta, "beta", (4,))
     b0, b1, b2, b3 = (b[..., i] for i in range(4))
     rows = [[-b1, -b2, -b3], [b0, -b3, b2], [b3, b0, -b1], [-b2, b1, b0]]
     return 0.5 * np.stack([np.stack(r, -1) for r in rows], -2)
@@ -169,7 +171,7 @@ def quaternion_to_dcm(beta) -> np.ndarray:
     -------
     ndarray, shape (..., 3, 3)
     """
-    b = _quaternion(beta)
+    b = require_quaternion(beta)
     b0, b1, b2, b3 = (b[..., i] for i in range(4))
     s0, s1, s2, s3 = b0 * b0, b1 * b1, b2 * b2, b3 * b3
     rows = [[s0 + s1 - s2 - s3, 2 * (b1 * b2 + b0 * b3), 2 * (b1 * b3 - b0 * b2)],
@@ -250,7 +252,7 @@ def euler123_to_dcm(angles) -> np.ndarray:
     -------
     ndarray, shape (..., 3, 3)
     """
-    th = _last(angles, "angles", (3,))
+    th = require_shape(angles, "angles", (3,))
     return (_axis_rotation(th[..., 2], 2) @ _axis_rotation(th[..., 1], 1)
             @ _axis_rotation(th[..., 0], 0))
 
@@ -296,13 +298,13 @@ def principal_rotation_to_quaternion(axis, angle) -> np.ndarray:
     -------
     ndarray, shape (..., 4)
     """
-    ax = _last(axis, "axis", (3,))
+    ax = require_shape(axis, "axis", (3,))
     phi = require_numeric(angle, "angle")
     err = np.abs(np.linalg.norm(ax, axis=-1) - 1.0)
     if np.any(err > UNIT_TOL):
         raise ValueError(f"axis: must be a unit vector (| ‖l‖ − 1 | <= {UNIT_TOL:g}), largest "
                          f"departure {err.max():.3g}")
-    _cases(axis=ax.shape[:-1], angle=phi.shape)
+    case_shape(axis=ax.shape[:-1], angle=phi.shape)
     half = phi / 2
     return np.concatenate([np.cos(half)[..., None], ax * np.sin(half)[..., None]], -1)
 
@@ -322,7 +324,7 @@ def quaternion_to_principal_rotation(beta) -> tuple[np.ndarray, np.ndarray]:
         Unit axis; [1, 0, 0] for the identity rotation, whose axis is undefined.
     angle : ndarray, shape (...)
     """
-    b = _quaternion(beta)
+    b = require_quaternion(beta)
     s = np.linalg.norm(b[..., 1:], axis=-1)
     angle = 2 * np.arctan2(s, b[..., 0])
     safe = np.where(s > 0, s, 1.0)[..., None]
@@ -354,9 +356,9 @@ def quaternion_multiply(second, first) -> np.ndarray:
     -------
     ndarray, shape (..., 4)
     """
-    q = _last(second, "second", (4,))
-    p = _last(first, "first", (4,))
-    _cases(second=q.shape[:-1], first=p.shape[:-1])
+    q = require_shape(second, "second", (4,))
+    p = require_shape(first, "first", (4,))
+    case_shape(second=q.shape[:-1], first=p.shape[:-1])
     q0, q1, q2, q3 = (q[..., i] for i in range(4))
     p0, p1, p2, p3 = (p[..., i] for i in range(4))
     return np.stack([q0 * p0 - q1 * p1 - q2 * p2 - q3 * p3,
@@ -379,7 +381,7 @@ def quaternion_exp(theta) -> np.ndarray:
     -------
     ndarray, shape (..., 4)
     """
-    th = _last(theta, "theta", (3,))
+    th = require_shape(theta, "theta", (3,))
     n = np.linalg.norm(th, axis=-1)
     # sin(n/2)/n = ½ sinc(n/(2π)) with numpy's normalised sinc
     return np.concatenate([np.cos(n / 2)[..., None],
@@ -395,7 +397,7 @@ def quaternion_to_gibbs(beta) -> np.ndarray:
     ValueError
         At the 180° singularity: |β0| < :data:`SINGULAR_TOL` (|q| > 1e8) is refused.
     """
-    b = _quaternion(beta)
+    b = require_quaternion(beta)
     b0 = b[..., 0]
     if np.any(np.abs(b0) < SINGULAR_TOL):
         raise ValueError(f"beta: the Gibbs vector is singular at a 180° principal rotation "
@@ -407,7 +409,7 @@ def gibbs_to_quaternion(q) -> np.ndarray:
     r"""Euler parameters of Gibbs parameters, β0 > 0 (Schaub & Junkins Eq. 3.113):
     :math:`\beta_0 = 1/\sqrt{1 + q^Tq}`, :math:`\beta_i = q_i/\sqrt{1 + q^Tq}`.
     """
-    q = _last(q, "q", (3,))
+    q = require_shape(q, "q", (3,))
     s = 1 / np.sqrt(1 + np.sum(q * q, axis=-1))[..., None]
     return np.concatenate([s, q * s], -1)
 
@@ -421,7 +423,7 @@ def quaternion_to_mrp(beta) -> np.ndarray:
     ValueError
         At the 360° singularity: 1 + β0 < :data:`SINGULAR_TOL` (pass −β, the same attitude).
     """
-    b = _quaternion(beta)
+    b = require_quaternion(beta)
     den = 1 + b[..., 0]
     if np.any(den < SINGULAR_TOL):
         raise ValueError(f"beta: the MRP vector is singular at β0 = −1 (1 + β0 < "
@@ -434,7 +436,7 @@ def mrp_to_quaternion(sigma) -> np.ndarray:
     :math:`\beta_0 = (1 - \sigma^T\sigma)/(1 + \sigma^T\sigma)`,
     :math:`\beta_i = 2\sigma_i/(1 + \sigma^T\sigma)`.
     """
-    s = _last(sigma, "sigma", (3,))
+    s = require_shape(sigma, "sigma", (3,))
     s2 = np.sum(s * s, axis=-1)[..., None]
     return np.concatenate([(1 - s2) / (1 + s2), 2 * s / (1 + s2)], -1)
 
@@ -448,7 +450,7 @@ def mrp_shadow(sigma) -> np.ndarray:
     ValueError
         For σ = 0 (the identity, whose shadow is at infinity).
     """
-    s = _last(sigma, "sigma", (3,))
+    s = require_shape(sigma, "sigma", (3,))
     s2 = np.sum(s * s, axis=-1)
     if np.any(s2 == 0):
         raise ValueError("sigma: the shadow set of σ = 0 (the identity) is at infinity")
@@ -465,9 +467,9 @@ def gibbs_rate(q, w) -> np.ndarray:
     w : array_like, shape (..., 3)
         Body angular velocity (rad/s), broadcast against ``q``.
     """
-    q = _last(q, "q", (3,))
-    w = _last(w, "w", (3,))
-    _cases(q=q.shape[:-1], w=w.shape[:-1])
+    q = require_shape(q, "q", (3,))
+    w = require_shape(w, "w", (3,))
+    case_shape(q=q.shape[:-1], w=w.shape[:-1])
     return 0.5 * (w + np.cross(q, w) + q * np.sum(q * w, axis=-1)[..., None])
 
 
@@ -481,8 +483,8 @@ def mrp_rate(sigma, w) -> np.ndarray:
     w : array_like, shape (..., 3)
         Body angular velocity (rad/s), broadcast against ``sigma``.
     """
-    s = _last(sigma, "sigma", (3,))
-    w = _last(w, "w", (3,))
-    _cases(sigma=s.shape[:-1], w=w.shape[:-1])
+    s = require_shape(sigma, "sigma", (3,))
+    w = require_shape(w, "w", (3,))
+    case_shape(sigma=s.shape[:-1], w=w.shape[:-1])
     s2 = np.sum(s * s, axis=-1)[..., None]
     return 0.25 * ((1 - s2) * w + 2 * np.cross(s, w) + 2 * s * np.sum(s * w, axis=-1)[..., None])

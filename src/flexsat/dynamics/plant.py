@@ -165,6 +165,58 @@ class Plant(ABC):
         """Rest state, (n_cases, n_x)."""
         return np.zeros((n_cases, self.nx))
 
+    def state_from(self, **values) -> np.ndarray:
+        """Initial state (n_x,) from named initial values (a scenario's ``initial``), SI.
+
+        Every plant takes ``state`` (the whole vector) and any output channel that reads state
+        coordinates directly (rows of C that are unit vectors, no feedthrough: ``pitch``,
+        ``z1_rate``, ...); plants with nonlinear coordinates add their own names (an attitude as
+        1-2-3 Euler angles). Entries not given are at rest.
+
+        Raises
+        ------
+        ValueError
+            Naming an unknown value or a wrong shape.
+        """
+        from flexsat.validation import require_finite
+
+        x = self.initial_state(1)[0].copy()
+        if "state" in values:
+            v = require_finite(values["state"], "state")
+            if v.shape != (self.nx,):
+                raise ValueError(f"state: must have {self.nx} entries, got shape {v.shape}")
+            x = v.copy()
+        for name, value in values.items():
+            if name == "state":
+                continue
+            index = self._state_coordinates(name)
+            if index is None:
+                raise ValueError(f"{name}: not an initial value of {type(self).__name__} (it "
+                                 f"takes: {', '.join(self.initial_values)})")
+            v = np.atleast_1d(require_finite(value, name))
+            if v.shape != index.shape:
+                raise ValueError(f"{name}: must have {index.size} entries, got shape {v.shape}")
+            x[index] = v
+        return x
+
+    def _state_coordinates(self, name: str) -> np.ndarray | None:
+        """Indices of the state entries output ``name`` reads one to one, or None."""
+        if name not in {c.name for c in self.outputs}:
+            return None
+        mats = self.output_matrices(name)
+        if mats is None:
+            return None
+        C, D, _ = mats
+        if np.any(D) or not np.all((C == 0) | (C == 1)) or not np.all(C.sum(axis=1) == 1):
+            return None
+        return np.argmax(C, axis=1)
+
+    @property
+    def initial_values(self) -> tuple[str, ...]:
+        """Names :meth:`state_from` accepts."""
+        return ("state",) + tuple(c.name for c in self.outputs if c.name != "state"
+                                  and self._state_coordinates(c.name) is not None)
+
     def normalize(self, x: np.ndarray) -> np.ndarray:
         """Project a state back onto its manifold after a step (identity by default)."""
         return x

@@ -32,10 +32,17 @@ from __future__ import annotations
 import numpy as np
 import scipy.special
 
-from flexsat.dynamics.attitude import _cases, _last, _quaternion, quaternion_to_dcm
+from flexsat.dynamics.attitude import (
+    case_shape,
+    quaternion_to_dcm,
+    require_quaternion,
+    require_shape,
+)
+from flexsat.units import to_si_array
 from flexsat.validation import require_numeric
 
-__all__ = ["euler_rates", "propagate", "angular_momentum_inertial", "kinetic_energy",
+__all__ = ["require_inertia", "rkmk4_step", "dexpinv", "cross3", "matvec", "euler_acceleration",
+           "euler_rates", "propagate", "angular_momentum_inertial", "kinetic_energy",
            "euler_poinsot_rates"]
 
 #: below this rotation angle (rad) the coefficient of θ̃² in the rotation-vector kinematics is
@@ -44,15 +51,27 @@ __all__ = ["euler_rates", "propagate", "angular_momentum_inertial", "kinetic_ene
 _SERIES_ANGLE = 0.02
 
 
-def _inertia(inertia) -> np.ndarray:
-    J = _last(inertia, "inertia", (3, 3))
+def require_inertia(inertia, field: str = "inertia") -> np.ndarray:
+    r"""``inertia`` as a float array (..., 3, 3) in kg·m² (a pint Quantity or a string with
+    units is converted), checked to be a physical inertia tensor: symmetric
+    (:math:`|I - I^T| \le 10^{-12}\max|I|`), positive definite, and with principal moments
+    satisfying the triangle inequality :math:`I_a + I_b \ge I_c` (a mass distribution has
+    :math:`I_a + I_b - I_c = 2\int r_c^2\,dm \ge 0`), allowed a round-off of
+    :math:`10^{-12} I_c` (the flat-plate limit is an equality)."""
+    J = require_shape(to_si_array(inertia, "kg*m**2", field), field, (3, 3))
     scale = np.abs(J).max(axis=(-2, -1))
     if np.any(np.abs(J - np.swapaxes(J, -1, -2)).max(axis=(-2, -1)) > 1e-12 * scale):
-        raise ValueError("inertia: must be symmetric (|I − Iᵀ| <= 1e-12 max|I|)")
+        raise ValueError(f"{field}: must be symmetric (|I − Iᵀ| <= 1e-12 max|I|)")
     eig = np.linalg.eigvalsh(J)
     if np.any(eig[..., 0] <= 0):
-        raise ValueError(f"inertia: must be positive definite, smallest principal moment "
+        raise ValueError(f"{field}: must be positive definite, smallest principal moment "
                          f"{eig[..., 0].min():.3g} kg·m²")
+    gap = eig[..., 0] + eig[..., 1] - eig[..., 2]
+    if np.any(gap < -1e-12 * eig[..., 2]):
+        k = np.unravel_index(np.argmin(gap / eig[..., 2]), gap.shape)
+        raise ValueError(f"{field}: principal moments {np.round(eig[k], 6).tolist()} kg·m² "
+                         f"violate the triangle inequality I1 + I2 >= I3 (no mass distribution "
+                         f"has them)")
     return J
 
 
@@ -73,16 +92,17 @@ def euler_rates(w, inertia, torque=None) -> np.ndarray:
     -------
     ndarray, shape (..., 3)
     """
-    w = _last(w, "w", (3,))
-    J = _inertia(inertia)
-    u = np.zeros(3) if torque is None else _last(torque, "torque", (3,))
-    return _euler(w, J, np.linalg.inv(J), u)
+    w = require_shape(w, "w", (3,))
+    J = require_inertia(inertia)
+    u = np.zeros(3) if torque is None else require_shape(torque, "torque", (3,))
+    return euler_acceleration(w, J, np.linalg.inv(J), u)
 
 
 # The kernels below run once per RK stage on tiny arrays: no input checks (the public functions
 # check once) and slicing in place of np.cross / np.stack, whose overhead dominates here.
 
-def _cross(a, b):
+def cross3(a, b):
+    """a × b on (..., 3) arrays, unchecked."""
     out = np.empty(np.broadcast_shapes(a.shape, b.shape))
     out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
     out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
@@ -90,15 +110,17 @@ def _cross(a, b):
     return out
 
 
-def _matvec(A, x):
+def matvec(A, x):
+    """A x on (..., n, k) and (..., k) arrays, unchecked."""
     return (A @ x[..., None])[..., 0]
 
 
-def _euler(w, J, Jinv, u):
-    return _matvec(Jinv, u - _cross(w, _matvec(J, w)))
+def euler_acceleration(w, J, Jinv, u):
+    """ω̇ = I⁻¹(u − ω × Iω) (Euler's equations), unchecked."""
+    return matvec(Jinv, u - cross3(w, matvec(J, w)))
 
 
-def _dexpinv(theta, w):
+def dexpinv(theta, w):
     """θ̇ of the rotation-vector kinematics (module docstring), vectorised."""
     a2 = np.sum(theta * theta, axis=-1)
     c = 1 / 12 + a2 / 720 + a2 * a2 / 30240
@@ -107,8 +129,8 @@ def _dexpinv(theta, w):
         x = np.where(small, 1.0, np.sqrt(a2) / 2)  # placeholder where the series is used
         c = np.where(small, c, (1 - x / np.tan(x)) / np.where(small, 1.0, a2))
     c = c[..., None]
-    tw = _cross(theta, w)
-    return w + 0.5 * tw + c * _cross(theta, tw)
+    tw = cross3(theta, w)
+    return w + 0.5 * tw + c * cross3(theta, tw)
 
 
 def _exp(theta):
@@ -125,8 +147,38 @@ def _mul(q, p):
     out = np.empty(np.broadcast_shapes(q.shape, p.shape))
     out[..., 0] = q[..., 0] * p[..., 0] - np.sum(q[..., 1:] * p[..., 1:], axis=-1)
     out[..., 1:] = (q[..., 0:1] * p[..., 1:] + p[..., 0:1] * q[..., 1:]
-                    - _cross(q[..., 1:], p[..., 1:]))
+                    - cross3(q[..., 1:], p[..., 1:]))
     return out
+
+
+def rkmk4_step(beta, w, h, rates, zero=None):
+    r"""One RKMK4 step (module docstring) of (β, ω) over h, unchecked (a kernel: the callers
+    check once).
+
+    Parameters
+    ----------
+    beta, w : ndarray, shapes (..., 4), (..., 3)
+        State at the start of the step.
+    h : float
+        Step, s.
+    rates : callable
+        ``rates(tau, theta, w)`` -> (θ̇, ω̇) at the stage time t_n + τ, rotation vector θ of
+        the stage attitude exp(θ) ⊗ β and rate ω; θ̇ is :func:`dexpinv` (θ, ω).
+    zero : ndarray, optional
+        Zero rotation vector of the case shape (saves an allocation per step).
+
+    Returns
+    -------
+    (beta, w) after the step; β is unit to round-off (exact exponential, one product).
+    """
+    if zero is None:
+        zero = np.zeros(np.shape(w))
+    k1t, k1w = rates(0.0, zero, w)
+    k2t, k2w = rates(h / 2, h / 2 * k1t, w + h / 2 * k1w)
+    k3t, k3w = rates(h / 2, h / 2 * k2t, w + h / 2 * k2w)
+    k4t, k4w = rates(h, h * k3t, w + h * k3w)
+    theta = h / 6 * (k1t + 2 * k2t + 2 * k3t + k4t)
+    return _mul(_exp(theta), beta), w + h / 6 * (k1w + 2 * k2w + 2 * k3w + k4w)
 
 
 def propagate(beta0, w0, inertia, t, torque=None) -> tuple[np.ndarray, np.ndarray]:
@@ -157,22 +209,22 @@ def propagate(beta0, w0, inertia, t, torque=None) -> tuple[np.ndarray, np.ndarra
     beta : ndarray, shape (..., n_t, 4)
     w : ndarray, shape (..., n_t, 3)
     """
-    b = _quaternion(beta0, "beta0")
-    w = _last(w0, "w0", (3,))
-    J = _inertia(inertia)
+    b = require_quaternion(beta0, "beta0")
+    w = require_shape(w0, "w0", (3,))
+    J = require_inertia(inertia)
     t = require_numeric(t, "t")
     if t.ndim != 1 or t.size < 1 or np.any(np.diff(t) <= 0):
         raise ValueError(f"t: must be a 1-D strictly increasing time grid, got shape {t.shape}")
     u_const = np.zeros(3) if torque is None or callable(torque) else \
-        _last(torque, "torque", (3,))
-    shape = _cases(beta0=b.shape[:-1], w0=w.shape[:-1], inertia=J.shape[:-2],
+        require_shape(torque, "torque", (3,))
+    shape = case_shape(beta0=b.shape[:-1], w0=w.shape[:-1], inertia=J.shape[:-2],
                    torque=u_const.shape[:-1])
     b = np.broadcast_to(b, shape + (4,)).copy()
     w = np.broadcast_to(w, shape + (3,)).copy()
     Jinv = np.linalg.inv(J)
     u_of = torque if callable(torque) else (lambda tt, bb, ww: u_const)
     if callable(torque):  # one call up front, so a wrong law fails here, naming itself
-        u0 = _last(torque(t[0], b, w), "torque(t, beta, w)", (3,))
+        u0 = require_shape(torque(t[0], b, w), "torque(t, beta, w)", (3,))
         try:
             np.broadcast_shapes(u0.shape, shape + (3,))
         except ValueError:
@@ -186,19 +238,13 @@ def propagate(beta0, w0, inertia, t, torque=None) -> tuple[np.ndarray, np.ndarra
 
     def stage(tt, th, ww):
         bb = _mul(_exp(th), b) if callable(torque) else b  # β only read by a torque law
-        return _dexpinv(th, ww), _euler(ww, J, Jinv, u_of(tt, bb, ww))
+        return dexpinv(th, ww), euler_acceleration(ww, J, Jinv, u_of(tt, bb, ww))
 
     # a non-finite state is caught and reported below, naming the cases: no warnings first
     with np.errstate(over="ignore", invalid="ignore"):
         for n in range(t.size - 1):
             h, tn = t[n + 1] - t[n], t[n]
-            k1t, k1w = stage(tn, zero, w)
-            k2t, k2w = stage(tn + h / 2, h / 2 * k1t, w + h / 2 * k1w)
-            k3t, k3w = stage(tn + h / 2, h / 2 * k2t, w + h / 2 * k2w)
-            k4t, k4w = stage(tn + h, h * k3t, w + h * k3w)
-            theta = h / 6 * (k1t + 2 * k2t + 2 * k3t + k4t)
-            w = w + h / 6 * (k1w + 2 * k2w + 2 * k3w + k4w)
-            b = _mul(_exp(theta), b)
+            b, w = rkmk4_step(b, w, h, lambda tau, th, ww, tn=tn: stage(tn + tau, th, ww), zero)
             if not (np.all(np.isfinite(w)) and np.all(np.isfinite(b))):
                 bad = ~(np.isfinite(w).all(-1) & np.isfinite(b).all(-1))
                 cases = [tuple(int(i) for i in c) for c in np.argwhere(np.atleast_1d(bad))][:10]
@@ -221,14 +267,14 @@ def angular_momentum_inertial(beta, w, inertia) -> np.ndarray:
         Broadcast against the leading axes of ``beta`` and ``w``.
     """
     C = quaternion_to_dcm(beta)
-    h = np.einsum("...ij,...j->...i", _inertia(inertia), _last(w, "w", (3,)))
+    h = np.einsum("...ij,...j->...i", require_inertia(inertia), require_shape(w, "w", (3,)))
     return np.einsum("...ji,...j->...i", C, h)
 
 
 def kinetic_energy(w, inertia) -> np.ndarray:
     r"""Rotational kinetic energy :math:`T = \tfrac12 \omega^T I \omega` (J)."""
-    w = _last(w, "w", (3,))
-    return 0.5 * np.einsum("...i,...ij,...j->...", w, _inertia(inertia), w)
+    w = require_shape(w, "w", (3,))
+    return 0.5 * np.einsum("...i,...ij,...j->...", w, require_inertia(inertia), w)
 
 
 def euler_poinsot_rates(moments, w0, t) -> np.ndarray:
@@ -269,12 +315,12 @@ def euler_poinsot_rates(moments, w0, t) -> np.ndarray:
     -------
     ndarray, shape (..., n_t, 3)
     """
-    moments = _last(moments, "moments", (3,))
-    w0 = _last(w0, "w0", (3,))
+    moments = require_shape(moments, "moments", (3,))
+    w0 = require_shape(w0, "w0", (3,))
     t = require_numeric(t, "t")
     if t.ndim != 1:
         raise ValueError(f"t: must be a 1-D time grid, got shape {t.shape}")
-    shape = _cases(moments=moments.shape[:-1], w0=w0.shape[:-1])
+    shape = case_shape(moments=moments.shape[:-1], w0=w0.shape[:-1])
     moments = np.broadcast_to(moments, shape + (3,))
     w0 = np.broadcast_to(w0, shape + (3,))
     if np.any(moments <= 0):

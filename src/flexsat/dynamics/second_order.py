@@ -41,6 +41,20 @@ __all__ = ["SecondOrderModel"]
 SYMMETRY_TOL = 1e-9
 
 
+def rigid_eigenvalue_bound(lam: np.ndarray) -> float:
+    """Largest |λ| of eig(K, M) that is round-off of a rigid (λ = 0) mode.
+
+    A backward-stable symmetric-definite solve perturbs each eigenvalue by about
+    n·ε·λ_max (Golub & Van Loan, §8.7); a factor 100 covers the assembly of K and M. A fixed
+    relative threshold (1e-9 λ_max) would take real elastic modes of a stiff finite-element
+    model for rigid ones: the Agrawal–Bang FE model has λ_max = 4.9e11 and modes at 6.6 rad/s
+    (λ = 44 > 1e-9 λ_max = 490 is false).
+    """
+    lam = np.asarray(lam, float)
+    return 100.0 * max(lam.size, 1) * np.finfo(float).eps * max(np.abs(lam).max(initial=0.0),
+                                                                 1e-300)
+
+
 def _matrix(value, field: str, shape: tuple[int | None, int | None], names: str) -> np.ndarray:
     arr = require_finite(value, field)
     if arr.ndim == 1:  # a vector: one column (length n) or one row (length of the columns)
@@ -242,8 +256,7 @@ class SecondOrderModel:
         Signs are fixed so that the largest-magnitude entry of each shape is positive.
         """
         lam, Phi = scipy.linalg.eigh(self.K, self.M)
-        tol = SYMMETRY_TOL * max(np.abs(lam).max(initial=0.0), 1e-300)
-        lam = np.where(np.abs(lam) <= tol, 0.0, lam)
+        lam = np.where(np.abs(lam) <= rigid_eigenvalue_bound(lam), 0.0, lam)
         big = np.argmax(np.abs(Phi), axis=0)
         Phi = Phi * np.sign(Phi[big, np.arange(Phi.shape[1])])
         return np.sqrt(np.clip(lam, 0.0, None)), Phi

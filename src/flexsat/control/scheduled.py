@@ -1,0 +1,158 @@
+r"""Time-varying (gain-scheduled) state feedback.
+
+Seed 003 §2.6 (notes ../shared/spec/seed003.md §2.6, L562–L583; checks F10): the flexible plant
+is linearised at several equally spaced times along the nominal maneuver, a constant-gain LQR is
+designed at each point, and the gains are interpolated in time. With the state measured
+(a plant output holding the full state, or the listed channels),
+
+.. math::
+
+    u(t) = u_{ff}(t) - K(t)\,(x - x_{ref}(t)), \qquad
+    K(t) = (1 - w) K_i + w K_{i+1}, \quad w = \frac{t - t_i}{t_{i+1} - t_i}
+    \text{ for } t_i \le t \le t_{i+1},
+
+held at the end values outside the schedule [t_0, t_last]. The feedforward u_ff and the state
+reference x_ref are tables at the schedule times (interpolated the same way) or functions of t.
+At a knot the interpolation returns the designed gain exactly ((1 − 0)K_i + 0·K_{i+1} = K_i in
+floating point). The law has no internal state, so its compiled-loop form is
+D_k = −K(t_k), y_ref,k = x_ref(t_k), u_ff,k = u_ff(t_k) (:mod:`~flexsat.control.linear_form`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexsat.control.base import Controller
+from flexsat.control.linear_form import (
+    cases_of,
+    channel_spec,
+    per_case,
+    sample_times,
+    split_channels,
+    stack_channels,
+    static_law,
+)
+from flexsat.validation import require_finite
+
+__all__ = ["ScheduledStateFeedback", "interpolate_schedule"]
+
+
+def interpolate_schedule(knots: np.ndarray, table: np.ndarray, t) -> np.ndarray:
+    """Piecewise-linear interpolation of ``table`` (n_knots, ...) at times ``t`` (scalar or
+    (n_t,)), held at the end values outside the knots; shape t.shape + table.shape[1:]."""
+    t = np.asarray(t, float)
+    if len(knots) == 1:
+        return np.broadcast_to(table[0], t.shape + table.shape[1:])
+    i = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, len(knots) - 2)
+    w = np.clip((t - knots[i]) / (knots[i + 1] - knots[i]), 0.0, 1.0)
+    w = w.reshape(w.shape + (1,) * (table.ndim - 1))
+    return (1 - w) * table[i] + w * table[i + 1]
+
+
+class ScheduledStateFeedback(Controller):
+    r"""u = u_ff(t) − K(t)(x − x_ref(t)) with K interpolated linearly between schedule times
+    (module docstring; seed 003 §2.6, F10).
+
+    Parameters
+    ----------
+    times : (n_knots,) array_like, str or pint.Quantity
+        Schedule times, s, strictly increasing (one time: a constant gain).
+    gains : array_like
+        K at the schedule times, (n_knots, m, n) shared by the cases or (n_knots, n_cases, m, n)
+        per case; SI numbers (command unit per state unit).
+    measurements : str or sequence of str / (name, width) / Channel
+        Where the state is read: one name is a channel n wide (a plant output holding the full
+        state); a sequence lists channels whose widths sum to n.
+    commands : str or sequence, default "torque"
+        Channels written; one name is m wide.
+    state_reference : array_like or callable, optional
+        x_ref at the schedule times, (n_knots, n) or (n_knots, n_cases, n), or a function of t
+        returning (n,) or (n_cases, n); default 0. SI numbers.
+    feedforward : array_like or callable, optional
+        u_ff likewise with width m; default 0.
+    """
+
+    def __init__(self, times, gains, measurements, commands="torque", state_reference=None,
+                 feedforward=None):
+        knots = require_finite(times, "times", "s")
+        if knots.ndim != 1 or knots.size < 1 or np.any(np.diff(knots) <= 0):
+            raise ValueError(f"times: must be a 1-D strictly increasing array of schedule times, "
+                             f"got {knots.tolist()}")
+        K = require_finite(gains, "gains")
+        if K.ndim not in (3, 4) or K.shape[0] != knots.size:
+            raise ValueError(f"gains: must have shape (n_knots, m, n) or (n_knots, n_cases, m, n) "
+                             f"with n_knots = {knots.size} schedule times, got {K.shape}")
+        self.knots = knots
+        self.gains = K if K.ndim == 4 else K[:, None]
+        m, n = self.gains.shape[-2:]
+        self.reads, self.read_sizes = _channels(measurements, n, "measurements", "n", "columns")
+        self.writes, self.write_sizes = _channels(commands, m, "commands", "m", "rows")
+        self.state_reference = self._table(state_reference, n, "state_reference")
+        self.feedforward = self._table(feedforward, m, "feedforward")
+
+    def _table(self, value, width: int, field: str):
+        if value is None or callable(value):
+            return value
+        v = require_finite(value, field)
+        if v.ndim not in (2, 3) or v.shape[0] != self.knots.size or v.shape[-1] != width:
+            raise ValueError(f"{field}: must have shape (n_knots, {width}) or (n_knots, n_cases, "
+                             f"{width}) at the {self.knots.size} schedule times, or be a function "
+                             f"of t; got {v.shape}")
+        return v if v.ndim == 3 else v[:, None]
+
+    def _batched(self):
+        shapes = [(self.gains.shape[1],)]
+        for table in (self.state_reference, self.feedforward):
+            if isinstance(table, np.ndarray):
+                shapes.append((table.shape[1],))
+        return shapes
+
+    def gain(self, t) -> np.ndarray:
+        """K(t), shape t.shape + (C, m, n)."""
+        return interpolate_schedule(self.knots, self.gains, t)
+
+    def _at(self, table, t, width: int, field: str, n_cases: int) -> np.ndarray:
+        """x_ref or u_ff at times t (n_t,): (n_t, C, width)."""
+        if table is None:
+            return np.zeros((len(t), 1, width))
+        if isinstance(table, np.ndarray):
+            return interpolate_schedule(self.knots, table, t)
+        return np.stack([per_case(table(tk), n_cases, field, (width,)) for tk in t])
+
+    def __call__(self, t, y, state):
+        m, n = self.gains.shape[-2:]
+        nc = max(self.n_cases, cases_of(y, self.reads, self.read_sizes))
+        x = stack_channels(y, self.reads, self.read_sizes, nc)
+        tt = np.array([t], float)
+        e = x - self._at(self.state_reference, tt, n, "state_reference", nc)[0]
+        u = self._at(self.feedforward, tt, m, "feedforward", nc)[0] - np.einsum(
+            "cij,cj->ci", self.gain(tt)[0], np.broadcast_to(e, (nc, n)))
+        commands = split_channels(u, self.writes, self.write_sizes)
+        return (commands[self.writes[0]] if len(self.writes) == 1 else commands), state
+
+    def linear_form(self, dt, times, n_cases):
+        """D_k = −K(t_k), y_ref = x_ref(t_k), u_ff = u_ff(t_k); D constant (T = 1) for a
+        one-point schedule."""
+        _, times = sample_times(dt, times)
+        m, n = self.gains.shape[-2:]
+        for field, table in (("gains", self.gains), ("state_reference", self.state_reference),
+                             ("feedforward", self.feedforward)):
+            if isinstance(table, np.ndarray) and table.shape[1] not in (1, n_cases):
+                raise ValueError(f"{field}: have {table.shape[1]} cases, the run has n_cases = "
+                                 f"{n_cases}")
+        D = -(self.gains if len(self.knots) == 1 else self.gain(times))
+        y_ref = self._at(self.state_reference, times, n, "state_reference", n_cases)
+        u_ff = self._at(self.feedforward, times, m, "feedforward", n_cases)
+        return static_law(D, y_ref, u_ff, self.reads, self.writes, self.read_sizes,
+                          self.write_sizes)
+
+
+def _channels(spec, width: int, field: str, symbol: str, axis: str):
+    """Names and widths; a single name takes the whole width."""
+    if isinstance(spec, str):
+        return (channel_spec(spec, field)[0], (width,))
+    names, sizes, _ = channel_spec(spec, field)
+    if sum(sizes) != width:
+        raise ValueError(f"{field}: their widths {sizes} sum to {sum(sizes)}, the gains have "
+                         f"{symbol} = {width} {axis}")
+    return names, sizes
