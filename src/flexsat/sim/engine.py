@@ -303,7 +303,8 @@ def simulate(
     streams = _NoiseStreams(seeds, width) if noisy else None
 
     t = dt * np.arange(n + 1)
-    controller.tabulate_reference(t)
+    if getattr(controller, "reference", None) is not None:  # laws without one may be frozen
+        controller.tabulate_reference(t)
     cstate = controller.initial_state(nc)
     kept = tuple(k for k in measured if k in getattr(plant, "recorded_measurements", ()))
     rec = Recorder(plant, n + 1, nc, kept, {k: d.force_name for k, d in forced.items()},

@@ -16,6 +16,21 @@ from flexsat.sim.integrators import apply
 from flexsat.sim.sensors import least_squares_derivative_weights
 
 
+def stacked_output_matrices(mats: list, m: int):
+    """(C, D, D_f) of several linear outputs stacked row-wise; a missing D or D_f (None: the
+    output does not depend on it) is zeros."""
+    def block(M, C):
+        return np.zeros(C.shape[:-1] + (m,)) if M is None else np.asarray(M, float)
+
+    C = [np.asarray(mt[0], float) for mt in mats]
+    if any(c.ndim == 3 for c in C):  # a dispersed plant: every block per case
+        n = max(c.shape[0] for c in C if c.ndim == 3)
+        C = [c if c.ndim == 3 else np.broadcast_to(c, (n,) + c.shape) for c in C]
+    D = [np.broadcast_to(block(mt[1], c), c.shape[:-1] + (m,)) for mt, c in zip(mats, C)]
+    Df = [np.broadcast_to(block(mt[2], c), c.shape[:-1] + (m,)) for mt, c in zip(mats, C)]
+    return tuple(np.concatenate(M, axis=-2) for M in (C, D, Df))
+
+
 def unit_row(plant, name: str):
     """Index i when output ``name`` is the state coordinate x_i for every case, else None."""
     if not any(c.name == name for c in plant.outputs):
@@ -93,8 +108,8 @@ class Instruments:
         self.CT = self.DT = self.DfT = None
         self.cols = {}
         if self.linear:
-            C, D, Df = (np.concatenate([mats[k][i] for k in self.linear], axis=-2)
-                        for i in range(3))
+            C, D, Df = stacked_output_matrices([mats[k] for k in self.linear],
+                                               plant.n_inputs)
             self.CT = np.swapaxes(C, -1, -2).copy()
             self.DT = np.swapaxes(D, -1, -2).copy() if np.any(D) else None
             self.DfT = np.swapaxes(Df, -1, -2).copy() if forced and np.any(Df) else None
@@ -146,4 +161,4 @@ class Instruments:
         return y
 
 
-__all__ = ["InputForces", "Instruments", "unit_row"]
+__all__ = ["InputForces", "Instruments", "stacked_output_matrices", "unit_row"]

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from flexsat.sim.instruments import stacked_output_matrices
 from flexsat.sim.metrics import METRIC_UNITS, maneuver_metrics
 
 #: samples per chunk of states kept in the loop before its outputs are computed; 32 keeps the
@@ -74,8 +75,8 @@ class Recorder:
         self.linear = [k for k, mt in zip(names, mats) if mt is not None]
         self.nonlinear = [k for k, mt in zip(names, mats) if mt is None]
         if self.linear:
-            C, D, Df = (np.concatenate([mt[i] for mt in mats if mt is not None], axis=-2)
-                        for i in range(3))
+            C, D, Df = stacked_output_matrices([mt for mt in mats if mt is not None],
+                                               plant.n_inputs)
             self.CT, self.DT, self.DfT = (np.swapaxes(M, -1, -2) for M in (C, D, Df))
         has_vib = hasattr(plant, "vibration_energy")
         probe = np.zeros((plant.n_cases, plant.nx))  # (cases, n_x): one state per parameter case
