@@ -29,7 +29,7 @@ from flexsat.sim.channels import noise_column, noise_columns, resolve_channels
 from flexsat.sim.instruments import InputForces, Instruments, unit_row
 from flexsat.sim.config import (FRICTION_STEP_LIMIT, SimConfig, check_resources,
                                 stable_substeps)
-from flexsat.sim.integrators import ExponentialStepper, ExpRK4Stepper
+from flexsat.sim import integrators
 from flexsat.sim.recording import CHUNK, Recorder, SimResult
 from flexsat.validation import require_count, require_finite
 
@@ -96,6 +96,21 @@ class _NoiseStreams:
         for i, rng in enumerate(self.rngs):
             out[:, i, :] = rng.standard_normal((rows, self.width))
         return out
+
+
+def build_stepper(kind: str, A, B, Bf, dt: float, substeps: int):
+    """The propagator of a run: Krogstad's ``exp_rk4`` for a plant asking for it with a force,
+    else the exact linear step with ETD2RK for the force columns ``Bf`` (None: linear)."""
+    if kind not in integrators.INTEGRATORS:
+        raise ValueError(f"integrator: must be one of {', '.join(integrators.INTEGRATORS)}, "
+                         f"got {kind!r}")
+    if kind == "exp_rk4" and Bf is not None:
+        return integrators.ExpRK4Stepper.build(A, B, Bf, dt, substeps)
+    return ExponentialStepper.build(A, B, Bf, dt, substeps)
+
+
+#: the linear propagator class (a module name, so a test can swap its construction)
+ExponentialStepper = integrators.ExponentialStepper
 
 
 def _noise_streams(seeds, n_samples: int, width: int = 3) -> np.ndarray:
@@ -274,11 +289,7 @@ def simulate(
             cols = [c if c.ndim == 3 else np.broadcast_to(c, (nc,) + c.shape) for c in cols]
         Bf_all = np.concatenate(cols, axis=-1) if cols else None
         kind = getattr(plant, "integrator", "etd2rk")
-        cls = ExpRK4Stepper if kind == "exp_rk4" and Bf_all is not None else ExponentialStepper
-        if kind not in ("etd2rk", "exp_rk4"):
-            raise ValueError(f"integrator: {type(plant).__name__}.integrator must be 'etd2rk' "
-                             f"or 'exp_rk4', got {kind!r}")
-        stepper = cls.build(A, B, Bf_all, dt, substeps if Bf_all is not None else 1)
+        stepper = build_stepper(kind, A, B, Bf_all, dt, substeps if Bf_all is not None else 1)
         if Bf_all is not None:
             if Bf is None:  # input forces only (the friction of a linear plant): rank-1 columns
                 force = forces.compact

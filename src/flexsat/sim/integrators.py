@@ -225,13 +225,3 @@ class ExpRK4Stepper:
             x = (full + apply(-3.0 * fx + 2.0 * fa + 2.0 * fb - fc, self.P2f, b)
                  + apply(4.0 * (fx - fa - fb + fc), self.P3f, b))
         return x
-
-
-def build_stepper(kind: str, A, Bu, Bf, dt: float, substeps: int):
-    """The stepper of scheme ``kind`` (:data:`INTEGRATORS`); a linear run (``Bf`` None) always
-    takes the exact :class:`ExponentialStepper`."""
-    if kind not in INTEGRATORS:
-        raise ValueError(f"integrator: must be one of {', '.join(INTEGRATORS)}, got {kind!r}")
-    if kind == "exp_rk4" and Bf is not None:
-        return ExpRK4Stepper.build(A, Bu, Bf, dt, substeps)
-    return ExponentialStepper.build(A, Bu, Bf, dt, substeps)
