@@ -58,8 +58,9 @@ class DispersedPlant(Plant):
         self.noise_channels = tuple(first.noise_channels)
         self.nonlinear = bool(first.nonlinear)
         self.integrator = getattr(first, "integrator", "etd2rk")
-        if hasattr(first, "recorded_measurements"):
-            self.recorded_measurements = tuple(first.recorded_measurements)
+        for extra in ("recorded_measurements", "recorded_disturbances"):  # planar plants' extras
+            if hasattr(first, extra):
+                setattr(self, extra, tuple(getattr(first, extra)))
         for name, M in (("A", self._linear[0]), ("B", self._linear[1])):
             bad = np.argwhere(~np.isfinite(M).reshape(len(plants), -1).all(axis=1))
             if bad.size:

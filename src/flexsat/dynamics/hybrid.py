@@ -60,6 +60,8 @@ class HybridPlant(Plant):
     recorded = ("theta", "theta_dot", "root_torque", "tip_deflection")
     #: measured values kept in the result as ``<name>_measured`` (the strain-gauge channel)
     recorded_measurements = ("root_torque",)
+    #: input channels whose disturbance and friction histories are always in the result
+    recorded_disturbances = ("torque",)
     # gyro, strain gauge, random torque: the order of today's streams, so each case's noise
     # is bit-identical whatever the engine measures
     noise_channels = ("theta_dot", "root_torque", "torque")

@@ -148,9 +148,10 @@ def run_substeps(plant, config: SimConfig, disturbances: dict) -> int:
 
 
 def recorded_values(plant) -> int:
-    """Histories kept per case and sample with the default recording: the recorded outputs,
-    the references θ_ref, θ'_ref (a plant with ``theta``), command, applied input, disturbance
-    and input force per input, the recorded measurements, energy and vibration energy."""
+    """Histories kept per case and sample with the default recording (at most): the recorded
+    outputs, the references θ_ref, θ'_ref (a plant with ``theta``), command, applied input,
+    disturbance and input force per input, the recorded measurements, energy and vibration
+    energy."""
     width = {c.name: c.size for c in plant.outputs}
     n = sum(width[k] for k in plant.recorded) + 4 * plant.n_inputs
     n += 2 * ("theta" in width) + sum(width[k] for k in getattr(plant, "recorded_measurements",

@@ -319,7 +319,7 @@ def simulate(
     cstate = controller.initial_state(nc)
     kept = tuple(k for k in measured if k in getattr(plant, "recorded_measurements", ()))
     rec = Recorder(plant, n + 1, nc, kept, {k: d.force_name for k, d in forced.items()},
-                   record_states, batched)
+                   record_states, batched, [k for k, d in disturbances.items() if np.any(d.random)])
     law = type(controller).__name__
     # views the loop writes into: one history per written channel, the state slot ring
     cmd_hist = [rec.commands[:, :, sl.start] if sl.stop - sl.start == 1

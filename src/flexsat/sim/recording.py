@@ -58,7 +58,7 @@ class Recorder:
     """Histories of one run (module docstring); arrays are (n_t, n_cases[, size])."""
 
     def __init__(self, plant, n: int, nc: int, measured: tuple[str, ...], force_names: dict,
-                 record_states: bool, batched: bool):
+                 record_states: bool, batched: bool, random_channels=()):
         self.plant, self.n, self.nc, self.batched = plant, n, nc, batched
         m = plant.n_inputs
         self.commands = np.zeros((n, nc, m))
@@ -66,6 +66,11 @@ class Recorder:
         self.disturbed = np.zeros((n, nc, m))  # applied + disturbance: the plant's input
         self.forces = np.zeros((n, nc, m)) if force_names else None
         self.force_names = force_names
+        # disturbance and force histories: of the channels that have them, and of those the
+        # plant always records (the planar torque: a stable dataset for reports)
+        always = set(getattr(plant, "recorded_disturbances", ()))
+        self.with_disturbance = set(random_channels) | always
+        self.with_force = set(force_names) | always
         self.measured = {k: _history(n, nc, _size(plant.outputs, k)) for k in measured}
         self.states = np.empty((n, nc, plant.nx)) if record_states else None
         self.buffer = self.states if record_states else np.empty((min(CHUNK, n), nc, plant.nx))
@@ -141,11 +146,12 @@ class Recorder:
             pick = (lambda a: a[..., sl.start]) if one else (lambda a: a[..., sl])
             put(f"{ch}_command", pick(self.commands), unit)
             put(ch, pick(self.applied), unit)
-            put(f"disturbance_{ch}", pick(self.disturbed), unit)
-            name = f"{self.force_names.get(ch, 'friction')}_{ch}"
-            put(name, pick(self.forces) if self.forces is not None
-                else np.zeros(self.applied.shape[:2]) if one else np.zeros(self.applied.shape),
-                unit)
+            if ch in self.with_disturbance:
+                put(f"disturbance_{ch}", pick(self.disturbed), unit)
+            if ch in self.with_force:
+                name = f"{self.force_names.get(ch, 'friction')}_{ch}"
+                put(name, pick(self.forces) if ch in self.force_names
+                    else np.broadcast_to(0.0, pick(self.applied).shape), unit)  # no memory
         for k, v in self.outputs.items():
             if k not in data:
                 put(k, v, outs[k].unit)
