@@ -259,3 +259,22 @@ def test_the_plant_chooses_its_integrator(integrator, tol):
     t = r.dataset.time.values
     exact = x0 * np.exp(-t) / (1 - x0 * (1 - np.exp(-t)))
     assert np.abs(r.dataset.value.values[0] - exact).max() < tol
+
+
+def test_a_rigid_spacecraft_slews_under_its_own_integrator():
+    """The three-axis rigid body (its RKMK4 ``step``, 4 substeps per period) under the
+    quaternion PD law, 30° about a skew axis: the engine keeps ‖β‖ = 1 to round-off and the
+    slew settles: the overdamped loop's slow pole is (Kp/2)/Kd = 0.1 1/s, so 0.52 rad decays
+    by about e^{-6} in 60 s, below 2e-3 rad (measured 7e-4)."""
+    from flexsat.control.attitude_laws import QuaternionPD
+    from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
+
+    plant = RigidSpacecraft(np.diag([100.0, 120.0, 80.0]))
+    axis, angle = np.array([1.0, 2.0, 2.0]) / 3, np.radians(30.0)
+    x0 = np.concatenate([[np.cos(angle / 2)], np.sin(angle / 2) * axis, np.zeros(3)])
+    r = simulate(plant, QuaternionPD(Kp=20.0, Kd=100.0), SimConfig(duration=60.0,
+                                                                   control_rate=10.0),
+                 initial_state=x0)
+    beta = r.dataset.attitude.values[0]
+    assert np.abs(np.linalg.norm(beta, axis=-1) - 1).max() < 1e-14
+    assert 2 * np.arccos(min(abs(beta[-1, 0]), 1.0)) < 2e-3
