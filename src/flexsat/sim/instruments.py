@@ -64,6 +64,16 @@ class InputForces:
                 self.drivers.append((d, row, None))  # y = x_i exactly
             else:
                 self.drivers.append((d, None, np.swapaxes(mats[0], -1, -2).copy()))
+        if len(self.drivers) == 1 and isinstance(self.drivers[0][1], int):
+            # one force of one state coordinate (the bearing on θ'): called several times per
+            # substep, so the general path's bookkeeping is skipped
+            force, index = self.drivers[0][0].force, self.drivers[0][1]
+
+            def compact(xs, w):
+                f = force(xs[:, index])
+                return f[:, None] if f.ndim == 1 else f
+
+            self.compact = compact
 
     def compact(self, xs, w) -> np.ndarray:
         """The forces on the forced input columns only, (n_cases, n_forced)."""
