@@ -278,3 +278,15 @@ def test_a_rigid_spacecraft_slews_under_its_own_integrator():
     beta = r.dataset.attitude.values[0]
     assert np.abs(np.linalg.norm(beta, axis=-1) - 1).max() < 1e-14
     assert 2 * np.arccos(min(abs(beta[-1, 0]), 1.0)) < 2e-3
+
+
+def test_non_finite_per_case_channel_parameters_are_refused_naming_the_channel():
+    law = GapLaw()
+    cfg = SimConfig(duration=0.1, channel_actuators={
+        "push": ChannelActuator(saturation=[1.0, float("nan")])})
+    with pytest.raises(ValueError, match=r"^actuators\[push\].saturation: must be >= 0 \(inf for "
+                                         r"none\)"):
+        simulate(TwoCarts(), law, cfg, n_cases=2)
+    cfg = SimConfig(duration=0.1, channel_sensors={"gap": ChannelSensor(bias=float("inf"))})
+    with pytest.raises(ValueError, match=r"^sensors\[gap\].bias: must be finite"):
+        simulate(TwoCarts(), law, cfg)

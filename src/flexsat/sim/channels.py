@@ -25,10 +25,15 @@ from flexsat.units import to_si_array
 from flexsat.validation import require_count
 
 
-def _si(value, unit: str, field: str, nonneg: bool = True) -> np.ndarray | float:
+def _si(value, unit: str, field: str, nonneg: bool = True, inf_ok: bool = False
+        ) -> np.ndarray | float:
+    """``value`` in SI of ``unit``: finite (+inf too where it means "no limit"), >= 0 if
+    ``nonneg``; a number or an array over cases."""
     v = to_si_array(value, unit, field)
-    if not np.all(np.isfinite(v) | (np.isinf(v) & (v > 0))) or (nonneg and np.any(v < 0)):
-        rule = ">= 0" if nonneg else "finite"
+    finite = np.isfinite(v) | (inf_ok & (v == np.inf))
+    if not np.all(finite) or (nonneg and np.any(v < 0)):
+        rule = ("finite" if not nonneg else ">= 0 (inf for none)" if inf_ok else
+                "finite and >= 0")
         raise ValueError(f"{field}: must be {rule}, got {value!r}")
     return float(v) if v.ndim == 0 else v
 
@@ -80,7 +85,7 @@ class ChannelSensor:
         out = replace(self, noise=_si(self.noise, unit, f"{f}.noise"),
                       bias=_si(self.bias, unit, f"{f}.bias", nonneg=False),
                       quantum=_si(self.quantum, unit, f"{f}.quantum"),
-                      range=_si(self.range, unit, f"{f}.range"))
+                      range=_si(self.range, unit, f"{f}.range", inf_ok=True))
         if np.any(out.range <= 0):
             raise ValueError(f"{f}.range: must be > 0 (inf for none), got {self.range!r}")
         # which operations act, decided once: the sample loop skips the others
@@ -127,8 +132,10 @@ class ChannelActuator:
 
     def bind(self, name: str, unit: str) -> "ChannelActuator":
         f = f"actuators[{name}]"
-        out = replace(self, saturation=_si(self.saturation, unit, f"{f}.saturation"),
-                      rate_limit=_si(self.rate_limit, _rate_unit(unit), f"{f}.rate_limit"),
+        out = replace(self, saturation=_si(self.saturation, unit, f"{f}.saturation",
+                                           inf_ok=True),
+                      rate_limit=_si(self.rate_limit, _rate_unit(unit), f"{f}.rate_limit",
+                                     inf_ok=True),
                       scale=_si(self.scale, "", f"{f}.scale"),
                       bias=_si(self.bias, unit, f"{f}.bias", nonneg=False))
         for field in ("saturation", "rate_limit", "scale"):
