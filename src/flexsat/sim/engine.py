@@ -195,6 +195,34 @@ def _initial_state(plant, nc, theta0, initial_state, ref):
     return x, theta0
 
 
+def _propagator(plant, A, B, forces: InputForces, nc: int, batched: bool, dt: float,
+                substeps: int):
+    """(stepper, force) of a plant propagated by the exponential integrators: the force
+    columns are the plant's B_f and the columns of B of the inputs with a force (friction),
+    rank-1 for the bearing; ``force`` is None for a linear run (the exact step alone)."""
+    Bf = plant.force_matrix if plant.nonlinear else None
+    cols = [Bf] if Bf is not None else []
+    if forces.cols:
+        cols.append(B[..., :, forces.cols])
+    if batched:  # a dispersed plant: every column block per case
+        cols = [c if c.ndim == 3 else np.broadcast_to(c, (nc,) + c.shape) for c in cols]
+    Bf_all = np.concatenate(cols, axis=-1) if cols else None
+    kind = getattr(plant, "integrator", "etd2rk")
+    stepper = build_stepper(kind, A, B, Bf_all, dt, substeps if Bf_all is not None else 1)
+    if Bf_all is None:
+        return stepper, None
+    if Bf is None:  # input forces only (the friction of a linear plant)
+        return stepper, forces.compact
+    if not forces.cols:
+        return stepper, plant.nonlinear_force
+
+    def force(xs, w):
+        fc = forces.compact(xs, w)
+        return np.concatenate([plant.nonlinear_force(xs, w + forces.full(fc)), fc], axis=1)
+
+    return stepper, force
+
+
 def simulate(
     plant,
     controller,
@@ -277,29 +305,9 @@ def simulate(
         """Input-channel forces f_in (n_cases, m) at states xs."""
         return forces.full(forces.compact(xs, w))
 
-    forced_cols = forces.cols
     own_step = getattr(plant, "step", None)
-    stepper = force = None
-    if own_step is None:
-        Bf = plant.force_matrix if plant.nonlinear else None
-        cols = [Bf] if Bf is not None else []
-        if forced_cols:
-            cols.append(B[..., :, forced_cols])
-        if batched:  # a dispersed plant: every column block per case
-            cols = [c if c.ndim == 3 else np.broadcast_to(c, (nc,) + c.shape) for c in cols]
-        Bf_all = np.concatenate(cols, axis=-1) if cols else None
-        kind = getattr(plant, "integrator", "etd2rk")
-        stepper = build_stepper(kind, A, B, Bf_all, dt, substeps if Bf_all is not None else 1)
-        if Bf_all is not None:
-            if Bf is None:  # input forces only (the friction of a linear plant): rank-1 columns
-                force = forces.compact
-            else:
-                def force(xs, w):
-                    if not forced:
-                        return plant.nonlinear_force(xs, w)
-                    fc = forces.compact(xs, w)
-                    return np.concatenate([plant.nonlinear_force(xs, w + forces.full(fc)), fc],
-                                          axis=1)
+    stepper, force = (None, None) if own_step is not None else _propagator(
+        plant, A, B, forces, nc, batched, dt, substeps)
 
     impulses = {}
     for k, d in disturbances.items():
