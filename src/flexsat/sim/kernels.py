@@ -293,7 +293,8 @@ def closed_loop_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substep
     """:func:`closed_loop` with the cases spread over threads (same arguments, bit-identical
     results: each case runs the same scalar operations as in the serial loop)."""
     for c in prange(x0.shape[0]):
-        _case(np.int64(c), x0,  # prange indices are unsigned; the case index is signed E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
+        # prange's index is unsigned; the case index must stay a signed integer
+        _case(np.int64(c), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
               imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
               Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
               X, Y, Ucmd, U, D, F, stop)
