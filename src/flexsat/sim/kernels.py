@@ -67,13 +67,13 @@ def _force(x, cr, c1, c2, eps):
 
 @njit(cache=True)
 def _propagate(E, x, out, block_diagonal):
-    """out = E x (dense, or 2×2 block-diagonal: O(n))."""
+    """out = E x: dense (n, n), or 2×2 block-diagonal stored as (n, 2): O(n)."""
     n = x.shape[0]
-    if block_diagonal:
+    if block_diagonal:  # E[i] holds row i's two entries in its own 2×2 block
         for i in range(0, n, 2):
             x0, x1 = x[i], x[i + 1]
-            out[i] = E[i, i] * x0 + E[i, i + 1] * x1
-            out[i + 1] = E[i + 1, i] * x0 + E[i + 1, i + 1] * x1
+            out[i] = E[i, 0] * x0 + E[i, 1] * x1
+            out[i + 1] = E[i + 1, 0] * x0 + E[i + 1, 1] * x1
     else:
         for i in range(n):
             s = 0.0
@@ -252,8 +252,10 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     Parameters
     ----------
     x0 : (C, n)                 initial states
-    E : (Cp, n, n)              e^{hA}, h = dt / substeps (only the 2×2 diagonal blocks are
-                                read when ``block_diagonal``)
+    E : (Cp, n, n) or (Cp, n, 2)
+                                e^{hA}, h = dt / substeps; with ``block_diagonal`` (n even)
+                                row i holds the two entries of its 2×2 diagonal block
+                                (:attr:`flexsat.sim.integrators.ModalPropagator.E`)
     P1u : (Cp, n, m)            h φ1(hA) B (input integral of the held input)
     P1f, P2f, Cr : (Cf, n)      h φ1(hA) b_f, h φ2(hA) b_f and the rate output of the force;
                                 leading length 0 for no force
