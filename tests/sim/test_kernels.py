@@ -15,13 +15,15 @@ import pytest
 from scipy.linalg import expm
 
 from flexsat.sim.integrators import phi_products
-from flexsat.sim.kernels import allocate_records, closed_loop, closed_loop_parallel
+from flexsat.sim.kernels import (
+    ARGUMENTS,
+    RECORDS,
+    allocate_records,
+    closed_loop,
+    closed_loop_parallel,
+)
 from flexsat.sim.sensors import least_squares_derivative_weights
 
-ARG_ORDER = ("x0", "E", "block_diagonal", "P1u", "P1f", "P2f", "Cr", "fric", "substeps",
-             "imp_k", "imp_dx", "Cm", "Dm", "Dmf", "sensor", "sensor_slot", "fir_src",
-             "fir_dst", "fir_w", "Ak", "Bk", "Ck", "Dk", "y_ref", "u_ff", "K0", "act",
-             "dist_std", "dist_slot", "noise", "bound")
 N_SLOTS = 4
 
 
@@ -75,9 +77,9 @@ def make_problem(seed=0, n_cases=3, n=4, m=2, p=3, nk=2, n_t=40, dt=0.05, subste
     dist_std = np.full((Cp, m), 0.1 if disturbance else 0.0)
     dist_slot = np.array([(p + i) % N_SLOTS if disturbance else -1 for i in range(m)],
                          dtype=np.int64)
-    noise_arr = np.empty((n_t, n_cases, N_SLOTS))
+    noise_arr = np.empty((n_cases, n_t, N_SLOTS))
     for c in range(n_cases):  # one stream per case seed
-        noise_arr[:, c, :] = np.random.default_rng(100 + c).standard_normal((n_t, N_SLOTS))
+        noise_arr[c] = np.random.default_rng(100 + c).standard_normal((n_t, N_SLOTS))
     x0 = rng.normal(size=(n_cases, n))
     return dict(x0=x0, E=E, block_diagonal=False, P1u=P1u, P1f=P1f, P2f=P2f, Cr=Cr, fric=fric,
                 substeps=substeps, imp_k=imp_k, imp_dx=imp_dx, Cm=Cm, Dm=Dm, Dmf=Dmf,
@@ -88,12 +90,12 @@ def make_problem(seed=0, n_cases=3, n=4, m=2, p=3, nk=2, n_t=40, dt=0.05, subste
 
 
 def run_kernel(prob, parallel=False, record_states=True):
-    n_t, nc, n = prob["y_ref"].shape[0], *prob["x0"].shape
+    n_t, (nc, n) = prob["y_ref"].shape[0], prob["x0"].shape
     m, p = prob["P1u"].shape[2], prob["Cm"].shape[1]
     rec = allocate_records(n_t, nc, n, m, p, record_states)
     fn = closed_loop_parallel if parallel else closed_loop
-    fn(*(prob[k] for k in ARG_ORDER), *rec)
-    return dict(zip(("X", "Y", "Ucmd", "U", "D", "F", "stop"), rec))
+    fn(*(prob[k] for k in ARGUMENTS), *rec)
+    return dict(zip(RECORDS, rec))
 
 
 def reference_loop(prob):
@@ -110,9 +112,9 @@ def reference_loop(prob):
     def law(a, k, c):
         return pick(pick(a, k), c)
 
-    out = {k: np.full(s, np.nan) for k, s in (("X", (n_t, nc, n)), ("Y", (n_t, nc, p)),
-                                               ("Ucmd", (n_t, nc, m)), ("U", (n_t, nc, m)),
-                                               ("D", (n_t, nc, m)), ("F", (n_t, nc)))}
+    out = {k: np.full(s, np.nan) for k, s in (("X", (nc, n_t, n)), ("Y", (nc, n_t, p)),
+                                               ("Ucmd", (nc, n_t, m)), ("U", (nc, n_t, m)),
+                                               ("D", (nc, n_t, m)), ("F", (nc, n_t)))}
     out["stop"] = np.full(nc, -1)
     for c in range(nc):
         if has_force:
@@ -141,7 +143,7 @@ def reference_loop(prob):
             q = sens[:, 0]
             y = np.where(q > 0, q * np.round(y / np.where(q > 0, q, 1.0)), y)
             slot = P["sensor_slot"]
-            y = y + np.where(slot >= 0, sens[:, 1] * P["noise"][k, c, slot], 0.0)
+            y = y + np.where(slot >= 0, sens[:, 1] * P["noise"][c, k, slot], 0.0)
             y = np.clip(y, -sens[:, 3], sens[:, 3])
             if P["fir_src"] >= 0:
                 src = y[P["fir_src"]]
@@ -154,14 +156,14 @@ def reference_loop(prob):
             u_ff = P["u_ff"][k, 0 if P["u_ff"].shape[1] == 1 else c]
             u_cmd = u_ff + law(P["Ck"], k, c) @ xi + law(P["Dk"], k, c) @ e
             xi = law(P["Ak"], k, c) @ xi + law(P["Bk"], k, c) @ e
-            out["X"][k, c], out["Y"][k, c], out["Ucmd"][k, c], out["F"][k, c] = x, y, u_cmd, f
+            out["X"][c, k], out["Y"][c, k], out["Ucmd"][c, k], out["F"][c, k] = x, y, u_cmd, f
             if not (np.all(np.abs(x) <= P["bound"]) and np.all(np.abs(u_cmd) <= P["bound"])):
                 out["stop"][c] = k
                 break
             u = act[:, 1] * np.clip(u_cmd, -act[:, 0], act[:, 0])
             ds = P["dist_slot"]
-            d = np.where(ds >= 0, dstd * P["noise"][k, c, ds], 0.0)
-            out["U"][k, c], out["D"][k, c] = u, d
+            d = np.where(ds >= 0, dstd * P["noise"][c, k, ds], 0.0)
+            out["U"][c, k], out["D"][c, k] = u, d
             w = u + d
             if k == n_t - 1:
                 break
@@ -233,7 +235,7 @@ def test_exact_zoh_step_of_linear_plant():
     Ed, Pd, _ = phi_products(A, dt, B)
     x = prob["x0"][0]
     for k in range(n_t):
-        np.testing.assert_allclose(got["X"][k, 0], x, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(got["X"][0, k], x, rtol=1e-12, atol=1e-14)
         x = Ed @ x + Pd @ prob["u_ff"][k, 0]
     assert np.allclose(expm(A * dt), Ed, rtol=1e-13)
 
@@ -262,11 +264,9 @@ def test_noise_reproducible_per_case():
     prob = make_problem(seed=5, n_cases=4, per_case=False)
     batch = run_kernel(prob, parallel=True)
     c = 2
-    alone = {k: (v[:, c:c + 1] if (isinstance(v, np.ndarray) and v.ndim >= 2 and k in (
-        "Ak", "Bk", "Ck", "Dk", "y_ref", "u_ff", "noise", "imp_dx")) else v)
-        for k, v in prob.items()}
-    alone["x0"] = prob["x0"][c:c + 1]
-    alone["K0"] = prob["K0"][c:c + 1]
+    alone = {k: (v[:, c:c + 1] if k in ("Ak", "Bk", "Ck", "Dk", "y_ref", "u_ff", "imp_dx")
+                 else v[c:c + 1] if k in ("x0", "K0", "noise") else v)
+             for k, v in prob.items()}
     single = run_kernel(alone)
     for key in ("X", "Y", "Ucmd", "U", "D", "F"):
-        np.testing.assert_array_equal(single[key][:, 0], batch[key][:, c], err_msg=key)
+        np.testing.assert_array_equal(single[key][0], batch[key][c], err_msg=key)

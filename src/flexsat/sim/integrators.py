@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import expm
+from scipy.linalg import eigh, expm
 
 
 def phi_products(A: np.ndarray, h: float, B: np.ndarray, n2: int = 0
@@ -188,71 +188,80 @@ def block_propagators(omega, zeta, h: float) -> tuple[np.ndarray, np.ndarray, np
     return out[0], out[1], out[2]
 
 
-def modal_coordinates(A: np.ndarray, rigid_tol: float = 1e-12
+def modal_coordinates(M, K, C, rigid_tol: float = 1e-12
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Similarity x = T z that makes A (of a second-order system) block-diagonal with
-    companion 2×2 blocks.
+    """Similarity x = T z that makes the first-order form of M q'' + C q' + K q = f
+    block-diagonal with companion 2×2 blocks.
 
-    Returns (T, omega, zeta): T⁻¹ A T = diag([[0, 1], [−ω_i², −2ζ_i ω_i]]). For a free-free
-    structure with non-proportional damping (the hub + appendage plant: its damping is diagonal
-    in cantilever, not in free-free coordinates), the blocks are its damped modes:
+    x = [q; q'], A = [[0, I], [−M⁻¹K, −M⁻¹C]]. Returns (T, omega, zeta) with
+    T⁻¹ A T = diag([[0, 1], [−ω_i², −2ζ_i ω_i]]), rigid blocks (ω = 0) first, then ascending ω.
 
-    - rigid modes (a double zero eigenvalue per null vector of A): z1 along v1 ∈ null(A), z2
-      along v2 with A v2 = v1, block [[0, 1], [0, 0]];
-    - each complex pair λ, λ̄ with eigenvector v: a = |λ|², b = −2 Re λ, columns
-      v2 = Re(−i v / Im λ), v1 = (A + b) v2 (then A v1 = −a v2 by Cayley–Hamilton on the
-      pair's invariant plane), v = [φ; λφ] phased so that the mode shape φ is as real as can
-      be: for proportional damping v1 = [φ; 0], v2 = [0; φ], so z1 is the modal coordinate
-      and z2 its rate and cond(T) is that of the mode shapes.
+    Two stages, because the eigenvectors of A itself are only accurate to eps ‖A‖ / gap
+    (‖A‖ ~ ω_max²: at 100 modes per appendage the low modes lose 8 digits):
 
-    Overdamped (real, non-zero) eigenvalues are rejected: pair them by hand with
-    :func:`block_propagators`.
+    1. the undamped modes of (K, M) (``eigh``, Φᵀ M Φ = I, Φᵀ K Φ = Λ) in the balanced
+       coordinates x̃ = [√Λ η; η'] (q = Φ η; √Λ → 1 for a rigid mode), where
+       Ã = [[0, √Λ], [−√Λ, −ΦᵀCΦ]] has ‖Ã‖ ~ ω_max;
+    2. with non-proportional damping (the hub + appendage plant: its damping is diagonal in
+       cantilever, not in free-free coordinates) the elastic part of Ã is still coupled by
+       ΦᵀCΦ; each complex pair λ, λ̄ of its eigenvalues (eigenvector v = [u; λ w]) gives
+       a = |λ|², b = −2 Re λ and columns v2 = Re(−i v / Im λ), v1 = (Ã + b) v2 (then
+       Ã v1 = −a v2 by Cayley–Hamilton on the pair's invariant plane), v phased so that its
+       position half is as real as can be: for proportional damping v1 = [u; 0],
+       v2 = [0; u], z1 the modal coordinate and z2 its rate.
+
+    A rigid mode (Kφ = 0) must carry no damping (Cφ = 0); overdamped (real) elastic
+    eigenvalues are rejected (pair them by hand with :func:`block_propagators`).
     """
-    A = np.asarray(A, float)
-    n = A.shape[0]
-    half = n // 2
-    if n % 2 or np.any(A[:half, :half]) or np.any(A[:half, half:] != np.eye(half)):
-        raise ValueError("A: must be the first-order form [[0, I], [-M⁻¹K, -M⁻¹C]] of a "
-                         "second-order system (x = [positions, rates])")
-    _, s, Vt = np.linalg.svd(A)
-    n_null = int(np.sum(s <= rigid_tol * s[0]))
-    lam, V = np.linalg.eig(A)
-    # a rigid mode is a 2×2 Jordan block at 0: eig returns it perturbed to ~ sqrt(eps ‖A‖),
-    # which can exceed a low elastic frequency of a stiff model; count rigid modes by the
-    # (well-conditioned) null space of A instead and drop the 2 n_null smallest eigenvalues
-    rigid = np.zeros(n, bool)
-    rigid[np.argsort(np.abs(lam))[:2 * n_null]] = True
-    n_rigid = 2 * n_null
-    real = ~rigid & (np.abs(lam.imag) <= rigid_tol * np.abs(lam))
+    M, K, C = (np.asarray(a, float) for a in (M, K, C))
+    n = M.shape[0]
+    lam, Phi = eigh(K, M)
+    rigid = lam <= rigid_tol * max(lam.max(), 0.0)
+    lam = np.where(rigid, 0.0, lam)
+    s = np.where(rigid, 1.0, np.sqrt(lam))
+    Ct = Phi.T @ C @ Phi
+    if np.abs(Ct[rigid]).max(initial=0.0) > rigid_tol * np.abs(Ct).max(initial=0.0):
+        raise ValueError("C: damps a rigid-body mode (C φ ≠ 0 for K φ = 0); modal_coordinates "
+                         "needs undamped rigid modes")
+    el = np.flatnonzero(~rigid)
+    ne = el.size
+    At = np.zeros((2 * ne, 2 * ne))
+    At[:ne, ne:] = np.diag(s[el])
+    At[ne:, :ne] = -np.diag(s[el])
+    At[ne:, ne:] = -Ct[np.ix_(el, el)]
+    mu, V = np.linalg.eig(At)
+    real = np.abs(mu.imag) <= rigid_tol * np.abs(mu)
     if real.any():
-        raise ValueError(f"A: overdamped (real) eigenvalues {lam[real].real}; modal_coordinates "
-                         "handles rigid and oscillatory modes only")
-    cols, omega, zeta = [], [], []
-    if n_rigid:
-        null = Vt[n - n_null:].T  # null(A): rigid displacements
-        for j in range(null.shape[1]):
-            v1 = null[:, j]
-            v2 = np.linalg.lstsq(A, v1, rcond=None)[0]
-            v2 -= null @ (null.T @ v2)  # the minimal-norm rate direction
-            cols += [v1, v2]
-            omega.append(0.0)
-            zeta.append(0.0)
-    upper = np.flatnonzero(~rigid & (lam.imag > 0))
-    for i in upper[np.argsort(np.abs(lam[upper]))]:
-        lm, v = lam[i], V[:, i]
-        phi = v[:half]  # mode shape (complex under non-proportional damping)
-        v = v * np.exp(-0.5j * np.angle(np.sum(phi**2))) / np.linalg.norm(phi)
+        raise ValueError(f"C: overdamped (real) modes {mu[real].real}; modal_coordinates "
+                         "handles oscillatory modes only")
+    Tt = np.zeros((2 * n, 2 * n))  # columns in x̃ = [√Λ η; η']
+    omega, zeta = [], []
+    col = 0
+    for j in np.flatnonzero(rigid):
+        Tt[j, col] = Tt[n + j, col + 1] = 1.0
+        col += 2
+        omega.append(0.0)
+        zeta.append(0.0)
+    upper = np.flatnonzero(mu.imag > 0)
+    for i in upper[np.argsort(np.abs(mu[upper]))]:
+        lm, v = mu[i], V[:, i]
+        pos = v[:ne]
+        v = v * np.exp(-0.5j * np.angle(np.sum(pos**2))) / np.linalg.norm(pos)
         a, b = abs(lm) ** 2, -2.0 * lm.real
-        v2 = (-1j * v / lm.imag).real  # = [0; φ] for a real φ
-        v1 = A @ v2 + b * v2  # = [φ; 0] for a real φ
-        cols += [v1, v2]
+        v2 = (-1j * v / lm.imag).real
+        v1 = At @ v2 + b * v2
+        Tt[el, col], Tt[n + el, col] = v1[:ne], v1[ne:]
+        Tt[el, col + 1], Tt[n + el, col + 1] = v2[:ne], v2[ne:]
+        col += 2
         w = np.sqrt(a)
         omega.append(w)
         zeta.append(b / (2 * w))
-    T = np.column_stack(cols)
-    if T.shape[1] != n:
-        raise ValueError(f"A: found {T.shape[1]} modal coordinates for {n} states")
-    return T, np.array(omega), np.array(zeta)
+    if col != 2 * n:
+        raise ValueError(f"M, K, C: found {col} modal coordinates for {2 * n} states")
+    S = np.zeros((2 * n, 2 * n))  # x = S x̃
+    S[:n, :n] = Phi / s
+    S[n:, n:] = Phi
+    return S @ Tt, np.array(omega), np.array(zeta)
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ at each sample k (t_k = k dt), for each case c
 3. measurement y = C_m x + D_m w_{k−1} + D_mf f_k (w_{k−1} the input applied over the last
    period, the feedthrough of the acceleration into root loads);
 4. sensor model per element i: v = y_i + bias_i; v = q_i rint(v / q_i) if q_i > 0 (an encoder
-   of quantum q, seed 000 Att. 3: 0.01 deg); v += std_i · noise[k, c, slot_i]; v = clip(v, ±sat_i);
+   of quantum q, seed 000 Att. 3: 0.01 deg); v += std_i · noise[c, k, slot_i]; v = clip(v, ±sat_i);
 5. optional causal FIR-derivative channel: y[dst] = Σ_j c_j v_src(t_{k−L+1+j}), the least-squares
    differentiating filter of :func:`flexsat.sim.sensors.least_squares_derivative_weights`, its
    history started full of the first sensed value (zero initial rate);
@@ -19,7 +19,7 @@ at each sample k (t_k = k dt), for each case c
 7. divergence check: the first sample where |x| or |u_cmd| exceeds ``bound`` or is not finite
    ends the case (``stop[c] = k``; the engine raises SimulationDiverged);
 8. actuator per input element: u = scale · clip(u_cmd, ±sat); random disturbance
-   d = std · noise[k, c, slot]; applied input w = u + d, held over the period;
+   d = std · noise[c, k, slot]; applied input w = u + d, held over the period;
 9. ``substeps`` steps of h = dt / substeps of x' = A x + B w + b_f N(x) with the exponential
    integrator of :mod:`flexsat.sim.integrators` (exact zero-order hold for the linear part,
    ETD2RK of Cox & Matthews 2002 Eq. 22 for the force):
@@ -38,8 +38,10 @@ case: a dispersion); the law arrays carry the (T, C) axes of the linear form.
 
 Each case is computed by the same sequence of scalar operations whether the batch runs
 serially or in parallel (:func:`closed_loop_parallel`, one case per thread, no reductions across
-cases), so the results are bit-identical; the noise enters only through ``noise[:, c, :]``, so a
+cases), so the results are bit-identical; the noise enters only through ``noise[c]``, so a
 case's result depends on its own stream only.
+Records and noise are case-major (C, n_t, ...); the law's arrays keep the (T, C) axes of the
+linear form.
 """
 
 from __future__ import annotations
@@ -47,7 +49,15 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["closed_loop", "closed_loop_parallel", "allocate_records"]
+__all__ = ["ARGUMENTS", "RECORDS", "closed_loop", "closed_loop_parallel", "allocate_records"]
+
+#: input arguments of :func:`closed_loop` in order (the records of :data:`RECORDS` follow)
+ARGUMENTS = ("x0", "E", "block_diagonal", "P1u", "P1f", "P2f", "Cr", "fric", "substeps",
+             "imp_k", "imp_dx", "Cm", "Dm", "Dmf", "sensor", "sensor_slot", "fir_src",
+             "fir_dst", "fir_w", "Ak", "Bk", "Ck", "Dk", "y_ref", "u_ff", "K0", "act",
+             "dist_std", "dist_slot", "noise", "bound")
+#: output arguments of :func:`closed_loop`, as returned by :func:`allocate_records`
+RECORDS = ("X", "Y", "Ucmd", "U", "D", "F", "stop")
 
 
 @njit(cache=True, inline="always")
@@ -91,10 +101,10 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     m = P1u.shape[2]
     p = Cm.shape[1]
     nk = Ak.shape[2]
-    n_t = Y.shape[0]
+    n_t = Y.shape[1]
     L = fir_w.shape[0]
     has_force = P1f.shape[0] > 0
-    rec_x = X.shape[0] > 0
+    rec_x = X.shape[1] > 0
     cp = _ci(E.shape[0], c)
     cu = _ci(P1u.shape[0], c)
     cm = _ci(Cm.shape[0], c)
@@ -145,7 +155,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
             if q > 0.0:
                 s = q * np.rint(s / q)
             if sensor_slot[i] >= 0:
-                s += sensor[cs, i, 1] * noise[k, c, sensor_slot[i]]
+                s += sensor[cs, i, 1] * noise[c, k, sensor_slot[i]]
             sat = sensor[cs, i, 3]
             s = min(max(s, -sat), sat)
             y[i] = s
@@ -188,7 +198,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 s += Ck[tc, cc, i, j] * xi[j]
             for j in range(p):
                 s += Dk[td, cdk, i, j] * e[j]
-            Ucmd[k, c, i] = s
+            Ucmd[c, k, i] = s
             if not abs(s) <= bound:
                 bad = True
         for i in range(nk):
@@ -204,20 +214,20 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
             if not abs(x[j]) <= bound:
                 bad = True
         if rec_x:
-            X[k, c, :] = x
+            X[c, k, :] = x
         for i in range(p):
-            Y[k, c, i] = y[i]
-        F[k, c] = f
+            Y[c, k, i] = y[i]
+        F[c, k] = f
         if bad:
             stop[c] = k
             return
         # 8. actuator and disturbance
         for i in range(m):
             sat = act[ca, i, 0]
-            u = act[ca, i, 1] * min(max(Ucmd[k, c, i], -sat), sat)
-            d = dist_std[cd, i] * noise[k, c, dist_slot[i]] if dist_slot[i] >= 0 else 0.0
-            U[k, c, i] = u
-            D[k, c, i] = d
+            u = act[ca, i, 1] * min(max(Ucmd[c, k, i], -sat), sat)
+            d = dist_std[cd, i] * noise[c, k, dist_slot[i]] if dist_slot[i] >= 0 else 0.0
+            U[c, k, i] = u
+            D[c, k, i] = d
             w[i] = u + d
         if k == n_t - 1:
             break
@@ -272,12 +282,15 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                                 the law's linear form; K0 (C0, nk, p), C0 = 0 for none
     act : (Ca, m, 2)            [saturation, scale] per input
     dist_std : (Cd, m), dist_slot : (m,) int64   random disturbance per input
-    noise : (n_t, C, n_slots)   standard normals
+    noise : (C, n_t, n_slots)   standard normals, case-major (one contiguous stream per case)
     bound : float               divergence bound on |x| and |u_cmd|
-    X : (n_t or 0, C, n)        recorded states (leading length 0: not recorded)
-    Y : (n_t, C, p), Ucmd, U, D : (n_t, C, m), F : (n_t, C)
+    X : (C, n_t or 0, n)        recorded states (time length 0: not recorded)
+    Y : (C, n_t, p), Ucmd, U, D : (C, n_t, m), F : (C, n_t)
                                 recorded measurements, commands, actuator outputs,
-                                disturbances and force at each sample
+                                disturbances and force at each sample; case-major, so a
+                                case's loop writes contiguous memory (the time-major layout
+                                costs a cache miss per record and sample: 3× slower in a
+                                batch of 1,000)
     stop : (C,) int64           written: −1, or the first diverged sample
     """
     for c in range(x0.shape[0]):
@@ -303,9 +316,9 @@ def closed_loop_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substep
 
 
 def allocate_records(n_t: int, n_cases: int, n: int, m: int, p: int, record_states: bool):
-    """Output arrays (X, Y, Ucmd, U, D, F, stop) of the kernels; X has leading length 0 when
-    the states are not recorded."""
-    X = np.empty((n_t if record_states else 0, n_cases, n))
-    return (X, np.empty((n_t, n_cases, p)), np.empty((n_t, n_cases, m)),
-            np.empty((n_t, n_cases, m)), np.empty((n_t, n_cases, m)), np.empty((n_t, n_cases)),
+    """Output arrays (X, Y, Ucmd, U, D, F, stop) of the kernels, case-major; X has time length
+    0 when the states are not recorded."""
+    X = np.empty((n_cases, n_t if record_states else 0, n))
+    return (X, np.empty((n_cases, n_t, p)), np.empty((n_cases, n_t, m)),
+            np.empty((n_cases, n_t, m)), np.empty((n_cases, n_t, m)), np.empty((n_cases, n_t)),
             np.full(n_cases, -1, dtype=np.int64))
