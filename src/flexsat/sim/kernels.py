@@ -111,7 +111,10 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     cs = _ci(sensor.shape[0], c)
     ca = _ci(act.shape[0], c)
     cd = _ci(dist_std.shape[0], c)
-    Ec = E[cp]
+    # per-case views: two-index access in the loop
+    Ec, P1uc, Cmc, Dmc, Dmfc = E[cp], P1u[cu], Cm[cm], Dm[cm], Dmf[cm]
+    sens, actc, dstd = sensor[cs], act[ca], dist_std[cd]
+    noisec, Yc, Ucmdc, Uc, Dc, Fc = noise[c], Y[c], Ucmd[c], U[c], D[c], F[c]
     c1 = c2 = eps = 0.0
     p1f = p2f = cr = np.zeros(n)
     if has_force:
@@ -146,17 +149,17 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         for i in range(p):
             s = 0.0
             for j in range(n):
-                s += Cm[cm, i, j] * x[j]
+                s += Cmc[i, j] * x[j]
             for j in range(m):
-                s += Dm[cm, i, j] * w[j]
-            s += Dmf[cm, i] * f
-            s += sensor[cs, i, 2]
-            q = sensor[cs, i, 0]
+                s += Dmc[i, j] * w[j]
+            s += Dmfc[i] * f
+            s += sens[i, 2]
+            q = sens[i, 0]
             if q > 0.0:
                 s = q * np.rint(s / q)
             if sensor_slot[i] >= 0:
-                s += sensor[cs, i, 1] * noise[c, k, sensor_slot[i]]
-            sat = sensor[cs, i, 3]
+                s += sens[i, 1] * noisec[k, sensor_slot[i]]
+            sat = sens[i, 3]
             s = min(max(s, -sat), sat)
             y[i] = s
         # 5. FIR-derivative channel
@@ -198,7 +201,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 s += Ck[tc, cc, i, j] * xi[j]
             for j in range(p):
                 s += Dk[td, cdk, i, j] * e[j]
-            Ucmd[c, k, i] = s
+            Ucmdc[k, i] = s
             if not abs(s) <= bound:
                 bad = True
         for i in range(nk):
@@ -216,18 +219,18 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         if rec_x:
             X[c, k, :] = x
         for i in range(p):
-            Y[c, k, i] = y[i]
-        F[c, k] = f
+            Yc[k, i] = y[i]
+        Fc[k] = f
         if bad:
             stop[c] = k
             return
         # 8. actuator and disturbance
         for i in range(m):
-            sat = act[ca, i, 0]
-            u = act[ca, i, 1] * min(max(Ucmd[c, k, i], -sat), sat)
-            d = dist_std[cd, i] * noise[c, k, dist_slot[i]] if dist_slot[i] >= 0 else 0.0
-            U[c, k, i] = u
-            D[c, k, i] = d
+            sat = actc[i, 0]
+            u = actc[i, 1] * min(max(Ucmdc[k, i], -sat), sat)
+            d = dstd[i] * noisec[k, dist_slot[i]] if dist_slot[i] >= 0 else 0.0
+            Uc[k, i] = u
+            Dc[k, i] = d
             w[i] = u + d
         if k == n_t - 1:
             break
@@ -235,7 +238,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         for i in range(n):
             s = 0.0
             for j in range(m):
-                s += P1u[cu, i, j] * w[j]
+                s += P1uc[i, j] * w[j]
             drive[i] = s
         for _ in range(substeps):
             _propagate(Ec, x, xa, block_diagonal)
