@@ -137,3 +137,34 @@ def test_kernel_in_modal_coordinates_equals_kernel_in_physical_coordinates():
     # friction makes the loop sensitive: bound by cond(T) eps amplified over the run
     assert rel(mod[0][0] @ T.T, phys[0][0]) < 1e3 * cond * np.finfo(float).eps
     assert rel(mod[2], phys[2]) < 1e3 * cond * np.finfo(float).eps
+
+
+def test_modal_coordinates_reject_damped_rigid_mode_and_overdamped_modes():
+    M, K = np.eye(2), np.diag([0.0, 4.0])
+    with pytest.raises(ValueError, match="C: damps a rigid-body mode"):
+        modal_coordinates(M, K, np.diag([1.0, 0.0]))
+    with pytest.raises(ValueError, match="C: overdamped"):
+        modal_coordinates(M, K, np.diag([0.0, 10.0]))  # ζ = 2.5
+    with pytest.raises(ValueError, match="substeps"):
+        ModalPropagator.build([0.0], [0.0], np.ones((2, 1)), H, substeps=0)
+
+
+def test_proportionally_damped_modes_are_modal_coordinates_and_rates():
+    # C = M Φ diag(2ζω) Φᵀ M: T = [[Φ, 0], [0, Φ]] up to column order, ω and ζ recovered
+    rng = np.random.default_rng(2)
+    R = rng.normal(size=(3, 3))
+    M = R @ R.T + 3 * np.eye(3)
+    L = np.linalg.cholesky(M)
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    Phi = np.linalg.solve(L.T, Q)  # Φᵀ M Φ = I
+    omega, zeta = np.array([1.0, 5.0, 20.0]), np.array([0.01, 0.1, 0.3])
+    Minv_phi = M @ Phi
+    K = Minv_phi @ np.diag(omega**2) @ Minv_phi.T
+    C = Minv_phi @ np.diag(2 * zeta * omega) @ Minv_phi.T
+    T, w, z = modal_coordinates(M, K, C)
+    np.testing.assert_allclose(w, omega, rtol=1e-12)
+    np.testing.assert_allclose(z, zeta, rtol=1e-10)
+    for i in range(3):
+        pos, rate = T[:, 2 * i], T[:, 2 * i + 1]
+        assert np.abs(pos[3:]).max() < 1e-12 * np.abs(pos).max()  # z1: a displacement
+        assert np.abs(rate[:3]).max() < 1e-12 * np.abs(rate).max()  # z2: its rate
