@@ -40,6 +40,8 @@ Each case is computed by the same sequence of scalar operations whether the batc
 serially or in parallel (:func:`closed_loop_parallel`, one case per thread, no reductions across
 cases), so the results are bit-identical; the noise enters only through ``noise[c]``, so a
 case's result depends on its own stream only.
+The kernels use numba's numpy error model: no zero-division checks in the loop (the divisors
+are a positive quantum, a positive smoothing speed and the FIR length, validated upstream).
 Records and noise are case-major (C, n_t, ...); the law's arrays keep the (T, C) axes of the
 linear form.
 """
