@@ -98,11 +98,10 @@ def tamu_problem(n_modes=10, friction=False, noise=False, n_cases=1, modal=False
     C, D, Df = measurement_matrices(plant)
     rate = np.zeros(n)
     rate[ndof] = 1.0
-    T = np.eye(n)
+    T = Tinv = np.eye(n)
     if modal:
-        T, omega, zeta = modal_coordinates(plant.mass_matrix, plant.stiffness_matrix,
-                                           plant.damping_matrix)
-        Tinv = np.linalg.inv(T)
+        T, Tinv, omega, zeta = modal_coordinates(plant.mass_matrix, plant.stiffness_matrix,
+                                                 plant.damping_matrix)
         prop = ModalPropagator.build(omega, zeta, Tinv @ Bu, dt, substeps,
                                      None if bf is None else Tinv @ bf)
         E, P1u = prop.E, prop.P1u
@@ -126,7 +125,7 @@ def tamu_problem(n_modes=10, friction=False, noise=False, n_cases=1, modal=False
     theta_f = case.angle
     x0 = np.zeros((n_cases, n))
     args = dict(
-        x0=x0 @ np.linalg.inv(T).T, E=E[None].copy(), block_diagonal=modal,
+        x0=x0 @ Tinv.T, E=E[None].copy(), block_diagonal=modal,
         P1u=P1u[None].copy(),
         P1f=np.zeros((0, n)) if P1f is None else P1f[None].copy(),
         P2f=np.zeros((0, n)) if P2f is None else P2f[None].copy(),

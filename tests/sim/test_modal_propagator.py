@@ -69,9 +69,8 @@ def test_hub_appendage_in_modal_coordinates_equals_full_expm():
     # free-free modes are complex; the real companion-block form still makes A block-diagonal
     plant = tamu(n_modes=6).model()
     A, Bu, _ = plant.state_space
-    T, omega, zeta = modal_coordinates(plant.mass_matrix, plant.stiffness_matrix,
-                                       plant.damping_matrix)
-    Tinv = np.linalg.inv(T)
+    T, Tinv, omega, zeta = modal_coordinates(plant.mass_matrix, plant.stiffness_matrix,
+                                             plant.damping_matrix)
     cond = np.linalg.cond(T)
     eps = np.finfo(float).eps
     Az = Tinv @ A @ T
@@ -96,9 +95,8 @@ def test_kernel_in_modal_coordinates_equals_kernel_in_physical_coordinates():
     plant = tamu(n_modes=3).model()
     A, Bu, Bf = plant.state_space
     n, ndof = A.shape[0], plant.ndof
-    T, omega, zeta = modal_coordinates(plant.mass_matrix, plant.stiffness_matrix,
-                                       plant.damping_matrix)
-    Tinv = np.linalg.inv(T)
+    T, Tinv, omega, zeta = modal_coordinates(plant.mass_matrix, plant.stiffness_matrix,
+                                             plant.damping_matrix)
     n_t, substeps = 200, 2
     rate = np.zeros(n)
     rate[ndof] = 1.0
@@ -161,7 +159,8 @@ def test_proportionally_damped_modes_are_modal_coordinates_and_rates():
     Minv_phi = M @ Phi
     K = Minv_phi @ np.diag(omega**2) @ Minv_phi.T
     C = Minv_phi @ np.diag(2 * zeta * omega) @ Minv_phi.T
-    T, w, z = modal_coordinates(M, K, C)
+    T, Tinv, w, z = modal_coordinates(M, K, C)
+    np.testing.assert_allclose(Tinv @ T, np.eye(6), atol=1e-12)
     np.testing.assert_allclose(w, omega, rtol=1e-12)
     np.testing.assert_allclose(z, zeta, rtol=1e-10)
     for i in range(3):

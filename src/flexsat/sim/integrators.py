@@ -189,12 +189,13 @@ def block_propagators(omega, zeta, h: float) -> tuple[np.ndarray, np.ndarray, np
 
 
 def modal_coordinates(M, K, C, rigid_tol: float = 1e-12
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Similarity x = T z that makes the first-order form of M q'' + C q' + K q = f
     block-diagonal with companion 2×2 blocks.
 
-    x = [q; q'], A = [[0, I], [−M⁻¹K, −M⁻¹C]]. Returns (T, omega, zeta) with
-    T⁻¹ A T = diag([[0, 1], [−ω_i², −2ζ_i ω_i]]), rigid blocks (ω = 0) first, then ascending ω.
+    x = [q; q'], A = [[0, I], [−M⁻¹K, −M⁻¹C]]. Returns (T, T_inv, omega, zeta) with
+    T⁻¹ A T = diag([[0, 1], [−ω_i², −2ζ_i ω_i]]), rigid blocks (ω = 0) first, then ascending
+    ω; use T_inv (formed from the factors, see below) rather than inverting T.
 
     Two stages, because the eigenvectors of A itself are only accurate to eps ‖A‖ / gap
     (‖A‖ ~ ω_max²: at 100 modes per appendage the low modes lose 8 digits):
@@ -261,7 +262,12 @@ def modal_coordinates(M, K, C, rigid_tol: float = 1e-12
     S = np.zeros((2 * n, 2 * n))  # x = S x̃
     S[:n, :n] = Phi / s
     S[n:, n:] = Phi
-    return S @ Tt, np.array(omega), np.array(zeta)
+    # T⁻¹ = T̃⁻¹ S⁻¹ with S⁻¹ = diag(√Λ Φᵀ M, Φᵀ M) (Φᵀ M Φ = I): inverting T itself would
+    # cost cond(T) ~ ω_max / ω_min digits, inverting T̃ only those of the damped mode shapes
+    Sinv = np.zeros_like(S)
+    Sinv[:n, :n] = (Phi.T @ M) * s[:, None]
+    Sinv[n:, n:] = Phi.T @ M
+    return S @ Tt, np.linalg.solve(Tt, Sinv), np.array(omega), np.array(zeta)
 
 
 @dataclass(frozen=True)
