@@ -9,11 +9,13 @@ at each sample k (t_k = k dt), for each case c
 2. force at the sample, f_k = F(x_k) (the low-rank bearing friction below, 0 if none);
 3. measurement y = C_m x + D_m w_{k−1} + D_mf f_k (w_{k−1} the input applied over the last
    period, the feedthrough of the acceleration into root loads);
-4. sensor model per element i: v = y_i + bias_i; v = q_i rint(v / q_i) if q_i > 0 (an encoder
-   of quantum q, seed 000 Att. 3: 0.01 deg); v += std_i · noise[c, k, slot_i]; v = clip(v, ±sat_i);
-5. optional causal FIR-derivative channel: y[dst] = Σ_j c_j v_src(t_{k−L+1+j}), the least-squares
-   differentiating filter of :func:`flexsat.sim.sensors.least_squares_derivative_weights`, its
-   history started full of the first sensed value (zero initial rate);
+4. sensor model per element i: v = y_i + bias_i; v = q_i rint(v / q_i) if q_i > 0 (an
+   encoder of quantum q, seed 000 Att. 3: 0.01 deg); v += std_i · noise[c, k, slot_i];
+   v = clip(v, ±sat_i);
+5. optional causal FIR-derivative channel: y[dst] = Σ_j c_j v_src(t_{k−L+1+j}), the
+   least-squares differentiating filter of
+   :func:`flexsat.sim.sensors.least_squares_derivative_weights`, its history started full of
+   the first sensed value (zero initial rate); it replaces element dst's sensor model;
 6. law in the compiled-loop linear form (HELPERS.md, issue #10), e = y − y_ref[k]:
    u_cmd = u_ff[k] + C_k ξ + D_k e,  ξ ← A_k ξ + B_k e,  ξ_0 = K0 e_0 (LQG) or 0;
 7. divergence check: the first sample where |x| or |u_cmd| exceeds ``bound`` or is not finite
@@ -36,14 +38,16 @@ Shapes (n_t samples, C cases, n states, m inputs, p measurements, n_k law states
 plant, sensor, actuator and force array has a leading case axis of length 1 (shared) or C (per
 case: a dispersion); the law arrays carry the (T, C) axes of the linear form.
 
+Records and noise are case-major (C, n_t, ...), so each case's loop reads and writes
+contiguous memory; the law's arrays keep the (T, C) axes of the linear form.
+
 Each case is computed by the same sequence of scalar operations whether the batch runs
-serially or in parallel (:func:`closed_loop_parallel`, one case per thread, no reductions across
-cases), so the results are bit-identical; the noise enters only through ``noise[c]``, so a
-case's result depends on its own stream only.
+serially or in parallel (:func:`closed_loop_parallel`, one case per thread, no reductions
+across cases), so the results are bit-identical; the noise enters only through ``noise[c]``,
+so a case's result depends on its own stream only.
+
 The kernels use numba's numpy error model: no zero-division checks in the loop (the divisors
 are a positive quantum, a positive smoothing speed and the FIR length, validated upstream).
-Records and noise are case-major (C, n_t, ...); the law's arrays keep the (T, C) axes of the
-linear form.
 """
 
 from __future__ import annotations
@@ -309,7 +313,8 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                                 case's loop writes contiguous memory (the time-major layout
                                 costs a cache miss per record and sample: 3× slower in a
                                 batch of 1,000)
-    stop : (C,) int64           written: −1, or the first diverged sample
+    stop : (C,) int64           written: −1, or the first diverged sample (its X, Y, Ucmd and
+                                F are recorded; U, D there and every later row are not)
     """
     for c in range(x0.shape[0]):
         _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
