@@ -224,7 +224,10 @@ def bench_batch(repeat, n_cases=1000):
         c0 = time.thread_time()
         run_kernel(linear)
         cpu_lin.append(time.thread_time() - c0)
+    big, _ = tamu_problem(10, n_cases=10 * n_cases, dispersion=0.2, modal=True)
+    t_big, _, _ = best_of(lambda: run_kernel(big, parallel=True), 2)
     return dict(serial=t_ser / (steps * n_cases), parallel=t_par / (steps * n_cases),
+                big=t_big / (steps * 10 * n_cases),
                 serial_cpu=min(cpu) / (steps * n_cases),
                 linear_cpu=min(cpu_lin) / (steps * n_cases),
                 linear_parallel=t_lin_par / (steps * n_cases),
@@ -448,6 +451,9 @@ def report(a, b, c, d, repeat) -> str:
                  f"(CPU {b['linear_cpu'] * us:.3f}), {b['linear_parallel'] * us:.3f} on "
                  f"{b['threads']} threads | engine today 0.5 | "
                  f"{0.5 / (b['linear_parallel'] * us):.1f}× | ≤ 0.1 µs |")
+    lines.append(f"| (b) 10,000 cases, modal, linear | {b['big'] * us:.3f} µs/case-step on "
+                 f"{b['threads']} threads | 1,000 cases: {b['linear_parallel'] * us:.3f} | "
+                 f"{b['big'] / b['linear_parallel']:.2f} | linear scaling |")
     lines.append(f"| (b) 1,000 cases, modal, friction + noise | {b['serial'] * us:.3f} "
                  f"µs/case-step serial (CPU {b['serial_cpu'] * us:.3f}), "
                  f"{b['parallel'] * us:.3f} on {b['threads']} threads | — | — | — |")
