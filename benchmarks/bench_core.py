@@ -244,11 +244,20 @@ def bench_modes(repeat, n_modes=100):
     pc = python_control_loop(info)
     t_pc, _, states = best_of(pc, 3)
     steps = info["n_t"] - 1
+    plant = info["plant"]
+    A, Bu = info["A"], info["Bu"]
+
+    def modal_setup():
+        T, Tinv, omega, zeta = modal_coordinates(plant.mass_matrix, plant.stiffness_matrix,
+                                                 plant.damping_matrix)
+        return ModalPropagator.build(omega, zeta, Tinv @ Bu, info["dt"])
+    t_set_m, _, _ = best_of(modal_setup, 3)
+    t_set_d, _, _ = best_of(lambda: phi_products(A, info["dt"], Bu[:, None]), 3)
     x = rec[0][0] @ info["T"].T
     states = np.asarray(states)
     agree = float(np.abs(x.T - states[:-1]).max() / np.abs(states[:-1]).max())
     return dict(modal=t_m / steps, dense=t_d / steps, pc=t_pc / steps, agree=agree,
-                n=info["plant"].nx, cond=np.linalg.cond(info["T"]))
+                n=info["plant"].nx, setup_modal=t_set_m, setup_dense=t_set_d)
 
 
 # ------------------------------------------------------------------------------------------
@@ -470,7 +479,10 @@ def report(a, b, c, d, repeat) -> str:
               f"Checks in the same run: (a) kernel and `forced_response` states agree to "
               f"{a['agree']:.1e} relative; (b) parallel records bit-identical to serial: "
               f"{b['same']}; (c) modal kernel vs `forced_response` of the physical closed "
-              f"loop: {c['agree']:.1e} relative (cond(T) = {c['cond']:.0f})."
+              f"loop: {c['agree']:.1e} relative over the 1,125 steps. Set-up at 100 modes "
+              f"(excluded above): modal coordinates + block propagators "
+              f"{c['setup_modal'] * 1e3:.0f} ms, the dense exponential "
+              f"{c['setup_dense'] * 1e3:.0f} ms."
               + ("" if d is None else
                  f" (d) Basilisk's σ_BN and the linear model's σ ≈ φ/4 differ by "
                  f"{d['diff']:.1e} of the initial |σ| over the 15 s (linearisation, MRP "
