@@ -487,6 +487,18 @@ def report(a, b, c, d, repeat) -> str:
         lines.append(f"| (d) hub + 4 hinged panels, MRP PD, 75 Hz | {d['kernel'] * us:.2f} µs/step "
                      f"| Basilisk {d['bsk'] * us:.1f} µs/step | {d['bsk'] / d['kernel']:.0f}× "
                      f"| ≥ 5× |")
+    budgets = [("(a) ≤ 5 µs per step", a["kernel"] * us <= 5),
+               ("(a) ≥ 1× python-control", a["pc"] / a["kernel"] >= 1),
+               ("(a) ≤ 10 µs with friction and noise", a["full"] * us <= 10),
+               ("(b) ≤ 0.1 µs per case-step", min(b["linear"], b["linear_parallel"]) * us <= 0.1),
+               ("(b) ≤ 150 kB per case", b["memory"] <= 150e3),
+               ("(c) ≥ 3× python-control", c["pc"] / c["modal"] >= 3)]
+    if d is not None:
+        budgets.append(("(d) ≥ 5× Basilisk", d["bsk"] / d["kernel"] >= 5))
+    met = [name for name, ok in budgets if ok]
+    missed = [name for name, ok in budgets if not ok]
+    lines += ["", "Budgets of the issue met: " + "; ".join(met) + "."
+              + ("" if not missed else " Missed: " + "; ".join(missed) + ".")]
     lines += ["",
               f"Checks in the same run: (a) kernel and `forced_response` states agree to "
               f"{a['agree']:.1e} relative; (b) parallel records bit-identical to serial: "
