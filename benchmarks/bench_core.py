@@ -32,7 +32,12 @@ import textwrap
 import time
 from pathlib import Path
 
-import numpy as np
+# one BLAS thread, set before numpy loads: on a shared 2-core machine OpenBLAS threads spin
+# against the other jobs (the 100-mode modal set-up took 20 s with them, 0.03 s without), and
+# every baseline here works on small matrices, fastest single-threaded
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_tamu import best_of  # noqa: E402  (one timing helper for every benchmark)
@@ -443,7 +448,8 @@ def machine() -> str:
     except OSError:
         pass
     import numba
-    return (f"{cpu}, {os.cpu_count()} cores (shared); Python {platform.python_version()}, "
+    return (f"{cpu}, {os.cpu_count()} cores (shared); OPENBLAS_NUM_THREADS="
+            f"{os.environ.get('OPENBLAS_NUM_THREADS')}; Python {platform.python_version()}, "
             f"numpy {np.__version__}, numba {numba.__version__}, python-control "
             f"{control.__version__}")
 

@@ -203,17 +203,17 @@ def _refined_modes(K: np.ndarray, M: np.ndarray, steps: int = 2
     """
     lam, Phi = eigh(K, M)
     n = K.shape[0]
-    J = np.zeros((n + 1, n + 1))
-    for j in range(n):
-        phi, lj = Phi[:, j].copy(), lam[j]
-        for _ in range(steps):
-            Mphi = M @ phi
-            J[:n, :n] = K - lj * M
-            J[:n, n] = J[n, :n] = -Mphi
-            rhs = np.concatenate([-(K @ phi - lj * Mphi), [0.5 * (phi @ Mphi - 1.0)]])
-            d = np.linalg.solve(J, rhs)
-            phi, lj = phi + d[:n], lj + d[n]
-        Phi[:, j], lam[j] = phi, lj
+    J = np.zeros((n, n + 1, n + 1))  # one bordered system per mode, solved as one batch
+    rhs = np.zeros((n, n + 1))
+    for _ in range(steps):
+        MPhi = M @ Phi
+        J[:, :n, :n] = K[None] - lam[:, None, None] * M[None]
+        J[:, :n, n] = J[:, n, :n] = -MPhi.T
+        rhs[:, :n] = -(K @ Phi - MPhi * lam).T
+        rhs[:, n] = 0.5 * (np.einsum("ij,ij->j", Phi, MPhi) - 1.0)
+        d = np.linalg.solve(J, rhs[..., None])[..., 0]
+        Phi = Phi + d[:, :n].T
+        lam = lam + d[:, n]
     return lam, Phi
 
 
