@@ -223,26 +223,28 @@ def run(
         check_output_folder(out)
     except OSError as exc:
         _fail(f"--out: {exc}")
-    from flexsat.report import write_identification_report, write_report
+    from flexsat.report import (write_identification_report, write_report,
+                                write_simulation_report)
     from flexsat.scenarios import (
         IdentificationScenario,
         ScenarioError,
+        SimulationScenario,
         default_scenario,
         identification_steps,
         load_scenario,
         run_identification,
         run_scenario,
+        run_simulation,
     )
     from flexsat.sim import SimulationDiverged
 
     try:
         spec = default_scenario() if scenario is None else load_scenario(scenario)
         identification = isinstance(spec, IdentificationScenario)
+        runner = (run_identification if identification else run_simulation
+                  if isinstance(spec, SimulationScenario) else run_scenario)
         with _progress(identification_steps(spec) if identification else len(spec.runs)) as say:
-            if identification:
-                result = run_identification(spec, progress=say)
-            else:
-                result = run_scenario(spec, progress=say)
+            result = runner(spec, progress=say)
     except ScenarioError as exc:
         _fail(str(exc))
     except SimulationDiverged as exc:  # a result, not an input error: exit 1, nothing written
@@ -253,7 +255,8 @@ def run(
         writer = write_identification_report
     else:
         console.print(_metrics_table(result.metrics_records()))
-        writer = write_report
+        writer = write_simulation_report if isinstance(spec, SimulationScenario) \
+            else write_report
     try:
         path = writer(result, out)
     except OSError as exc:

@@ -136,7 +136,7 @@ def test_kernel_in_modal_coordinates_equals_kernel_in_physical_coordinates():
 
     x0 = np.zeros((1, n))
     phys = run(x0, dense.Et.T[None].copy(), False,
-               dense.P1u[None, :, None].copy(), dense.P1f.copy(), dense.P2f.copy(), rate[None],
+               dense.P1u.T[None].copy(), dense.P1f.copy(), dense.P2f.copy(), rate[None],
                Cm)
     mod = run(x0 @ Tinv.T, modal.E[None], True, modal.P1u[None], modal.P1f.T.copy(),
               modal.P2f.T.copy(), (rate @ T)[None], Cm @ T)

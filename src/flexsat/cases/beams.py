@@ -347,18 +347,18 @@ class Fv2Case:
         return s
 
     def plant(self, n_modes: int = 8, damping=0.01):
-        """The cross as a plant: a force ``force`` at the centre node 0 and the displacements
-        of the centre and of the mid-point of arm 3, along y in the plane of the in-plane
-        model (the benchmark's), on the modal model of its first ``n_modes`` modes with
-        ``damping`` on each."""
+        """The cross as a plant: a force ``force`` at the mid-point of arm 1 (along x) across
+        the arm (along y, in the plane of the in-plane model, the benchmark's), the
+        displacements there and at the centre node 0, on the modal model of its first
+        ``n_modes`` modes with ``damping`` on each."""
         from flexsat.cases.structure_plants import first_modes, point_force_plant
 
         if self.plane != "in-plane":
             # pinned tips with free rotations: no rigid-mass split a ModalModel can carry
             raise ValueError("plane: the plant is built on the in-plane model (plane "
                              "'in-plane', the benchmark's)")
-        mid = 300 + self.elements_per_arm // 2
-        return point_force_plant(first_modes(self.structure(), n_modes), 0, [0, mid], "y",
+        mid = 100 + self.elements_per_arm // 2
+        return point_force_plant(first_modes(self.structure(), n_modes), mid, [mid, 0], "y",
                                  damping)
 
     def _frequencies(self) -> np.ndarray:

@@ -357,12 +357,14 @@ class TamuGridCase:
                        "nodes": list(self.motor_nodes)},
         }
 
-    def plant(self, n_modes: int = 10, damping=0.01, force_node: int = 21,
-              sensor_nodes=(21, 25)):
+    def plant(self, n_modes: int = 10, damping=0.01, force_node: int = 1,
+              sensor_nodes=(1, 3)):
         """The hanging grid as a plant: an out-of-plane (z) force ``force`` at ``force_node``
-        (a shaker), the displacements ``displacement_<node>`` (m) and rates at
-        ``sensor_nodes``, on its first ``n_modes`` modes (gravity as the case sets it) with
-        ``damping`` on each (:mod:`flexsat.cases.structure_plants`)."""
+        (a shaker; default the free lower-left corner, which drives bending and torsion), the
+        displacements ``displacement_<node>`` (m) and rates at ``sensor_nodes`` (default the
+        corner and the middle of the free bottom edge; paper nodes 1-25 from the lower left,
+        the top row 21-25 clamped), on its first ``n_modes`` modes (gravity as the case sets
+        it) with ``damping`` on each (:mod:`flexsat.cases.structure_plants`)."""
         return _grid_plant(self, n_modes, damping, force_node, sensor_nodes)
 
     def modal_model(self, n_modes: int, damping=0.0, gravity: bool | None = None):

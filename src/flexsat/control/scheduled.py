@@ -87,10 +87,10 @@ class ScheduledStateFeedback(Controller):
         m, n = self.gains.shape[-2:]
         self.reads, self.read_sizes = _channels(measurements, n, "measurements", "n", "columns")
         self.writes, self.write_sizes = _channels(commands, m, "commands", "m", "rows")
-        self.state_reference = self._table(state_reference, n, "state_reference")
-        self.feedforward = self._table(feedforward, m, "feedforward")
+        self.state_reference = self._schedule_table(state_reference, n, "state_reference")
+        self.feedforward = self._schedule_table(feedforward, m, "feedforward")
 
-    def _table(self, value, width: int, field: str):
+    def _schedule_table(self, value, width: int, field: str):
         if value is None or callable(value):
             return value
         v = require_finite(value, field)

@@ -94,10 +94,21 @@ class Plant(ABC):
     outputs: tuple[Channel, ...] = ()
     #: outputs recorded by default, in addition to the inputs (names of ``outputs``)
     recorded: tuple[str, ...] = ()
-    #: channels with a per-case Gaussian noise stream, in stream order (outputs for sensor
-    #: noise, inputs for random disturbances); fixing the order keeps every case's noise
-    #: bit-reproducible from its seed whatever else is measured
-    noise_channels: tuple[str, ...] = ()
+    @property
+    def noise_channels(self) -> tuple[str, ...]:
+        """Channels with a per-case Gaussian noise stream, in stream order (outputs for sensor
+        noise, inputs for random disturbances); fixing the order keeps every case's noise
+        bit-reproducible from its seed whatever else is measured. Default: every output but
+        the whole ``state``, then every input."""
+        given = getattr(self, "_noise_channels", None)
+        if given is not None:
+            return given
+        return tuple(c.name for c in self.outputs if c.name != "state") + tuple(
+            c.name for c in self.inputs)
+
+    @noise_channels.setter
+    def noise_channels(self, names) -> None:
+        self._noise_channels = tuple(names)
     #: True when f is not identically zero
     nonlinear: bool = False
 
@@ -193,7 +204,8 @@ class Plant(ABC):
             if index is None:
                 raise ValueError(f"{name}: not an initial value of {type(self).__name__} (it "
                                  f"takes: {', '.join(self.initial_values)})")
-            v = np.atleast_1d(require_finite(value, name))
+            unit = find_channel(self.outputs, name, "output", type(self).__name__).unit
+            v = np.atleast_1d(require_finite(value, name, unit))
             if v.shape != index.shape:
                 raise ValueError(f"{name}: must have {index.size} entries, got shape {v.shape}")
             x[index] = v

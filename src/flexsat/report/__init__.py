@@ -21,6 +21,8 @@ _EXPORTS = {
     "format_metric": "maneuver",
     "metric_rows": "maneuver",
     "write_report": "maneuver",
+    "MAX_FIGURES": "simulation",
+    "write_simulation_report": "simulation",
     "FIGURES": "identification",
     "write_identification_report": "identification",
 }

@@ -1,8 +1,11 @@
 """Scenario files: YAML documents validated into SI objects, one module per ``kind``.
 
 ``kind: maneuver`` (the default, :mod:`flexsat.scenarios.maneuver`) slews a case's hub under
-one or more control laws; ``kind: identification`` (:mod:`flexsat.scenarios.identification`)
-tests a structure, identifies it and updates its model. :func:`load_scenario` reads either;
+one or more control laws; ``kind: simulation`` (:mod:`flexsat.scenarios.simulation`) runs any
+case's plant (three-axis spacecraft, structures with point actuators, a beam in orbit) under a
+law reading and writing named channels; ``kind: identification``
+(:mod:`flexsat.scenarios.identification`) tests a structure, identifies it and updates its
+model. :func:`load_scenario` reads any of them;
 problems are reported as ``field.path: rule`` lines of one :class:`ScenarioError`, before
 anything runs.
 
@@ -32,6 +35,10 @@ _EXPORTS = {
     "ScenarioResult": "runner",
     "prepare_scenario": "runner",
     "run_scenario": "runner",
+    "SimulationScenario": "simulation",
+    "SimulationResult": "simulation",
+    "run_simulation": "simulation",
+    "simulation_cases": "simulation",
     "IdentificationResult": "identification",
     "IdentificationScenario": "identification",
     "identification_steps": "identification",

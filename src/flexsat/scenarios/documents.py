@@ -140,7 +140,8 @@ def _parse(text: str):
 def load_scenario(source: str | bytes | Path):
     """Parse and validate a scenario (stage 1: YAML, schema, units, section rules).
 
-    ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: identification`` an
+    ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: simulation`` a
+    :class:`flexsat.scenarios.simulation.SimulationScenario`; ``kind: identification`` an
     :class:`flexsat.scenarios.identification.IdentificationScenario`.
 
     Parameters
@@ -160,10 +161,13 @@ def load_scenario(source: str | bytes | Path):
     kind = data.get("kind", "maneuver")
     if kind == "identification":
         from flexsat.scenarios.identification import IdentificationScenario as model
+    elif kind == "simulation":
+        from flexsat.scenarios.simulation import SimulationScenario as model
     elif kind == "maneuver":
         model = Scenario
     else:
-        raise ScenarioError([f"kind: must be 'maneuver' or 'identification', got {kind!r}"])
+        raise ScenarioError([f"kind: must be 'maneuver', 'simulation' or 'identification', got "
+                             f"{kind!r}"])
     try:
         scenario = model.model_validate(data)
     except ValidationError as exc:

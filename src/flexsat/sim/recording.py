@@ -16,7 +16,9 @@ import numpy as np
 import xarray as xr
 
 from flexsat.sim.instruments import stacked_output_matrices
-from flexsat.sim.metrics import METRIC_UNITS, maneuver_metrics
+from flexsat.dynamics.dispersion import DispersedPlant
+from flexsat.dynamics.hybrid import HybridPlant
+from flexsat.sim.metrics import METRIC_UNITS, channel_metrics, maneuver_metrics
 
 #: samples per chunk of states kept in the loop before its outputs are computed; 32 keeps the
 #: buffer (32 × n_x values per case) small next to the recorded histories
@@ -135,7 +137,9 @@ class Recorder:
         for k in ("theta", "theta_dot"):
             if k in self.outputs:
                 put(k, self.outputs[k], outs[k].unit)
-        refs = _references(controller, t, nc) if "theta" in outs else None
+        # the single-axis maneuver's reference histories and metrics belong to a hub plant
+        hub = plant.plants[0] if isinstance(plant, DispersedPlant) else plant
+        refs = _references(controller, t, nc) if isinstance(hub, HybridPlant) else None
         if refs is not None:
             put("theta_ref", refs[0], "rad")
             put("theta_dot_ref", refs[1], "rad/s")
@@ -166,10 +170,18 @@ class Recorder:
             put("vibration_energy", self.vibration, "J")
         if self.states is not None:
             data["state"] = (("case", "time", "state_index"), np.swapaxes(self.states, 0, 1), {})
-        metrics = _metrics({k: v[1] for k, v in data.items()}, t, controller, theta0, config,
-                           refs, nc)
+        histories = {k: v[1] for k, v in data.items()}
+        metrics = _metrics(histories, t, controller, theta0, config, refs, nc)
+        units = METRIC_UNITS
+        if not metrics:  # not a single-axis maneuver: the summary of every channel
+            target = getattr(controller, "beta_target", None)
+            metrics, units = channel_metrics(
+                histories, {c.name: c.unit for c in plant.outputs + plant.inputs},
+                [c.name for c in plant.outputs], [c.name for c in plant.inputs], t,
+                None if target is None else np.broadcast_to(target, (nc, 4)),
+                config.settling_band)
         for key, val in metrics.items():  # one Dataset call: each later insertion re-aligns
-            data[key] = (("case",), val, {"units": METRIC_UNITS[key]})
+            data[key] = (("case",), val, {"units": units[key]})
         ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}),
                                       "case": np.arange(nc)})
         ds.attrs.update(control_rate_Hz=config.control_rate, settling_band_rad=config.settling_band,

@@ -1,0 +1,100 @@
+"""Report of a simulation scenario (``kind: simulation``): ``metrics.json``, ``results.nc``, one
+PNG per recorded channel and ``index.html``.
+
+``results.nc`` holds every recorded channel over ``(run, time)`` or, for a vector channel,
+``(run, time, <channel>_component)``, with its ``units`` attribute (SI), the metrics over
+``run`` and the attributes ``scenario_name``, ``case``, ``case_source`` and ``scenario_yaml``.
+Open it with ``xarray.open_dataset(path, engine="h5netcdf")``.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import re
+from pathlib import Path
+
+from matplotlib.figure import Figure
+
+from flexsat.netcdf import write_netcdf
+from flexsat.report.maneuver import STYLE, metric_rows
+from flexsat.report.publish import write_atomically
+
+#: at most this many time-history figures (a plant with many output channels records them all
+#: in results.nc; the page shows the first ones)
+MAX_FIGURES = 24
+
+
+def _histories(ds) -> list[str]:
+    """Recorded time histories: variables with a time axis, in dataset order."""
+    return [name for name, var in ds.data_vars.items() if "time" in var.dims][:MAX_FIGURES]
+
+
+def _file(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_]+", "_", name) + ".png"
+
+
+def _plot(ds, name: str, path: Path) -> None:
+    var = ds[name]
+    fig = Figure(figsize=(7, 3.4), layout="constrained")
+    ax = fig.add_subplot()
+    t = ds["time"].values
+    extra = [d for d in var.dims if d not in ("run", "time")]
+    for i, label in enumerate(ds["run"].values):
+        values = var.sel(run=label).transpose("time", *extra).values
+        values = values.reshape(len(t), -1)
+        for j in range(values.shape[1]):
+            suffix = f"[{j}]" if values.shape[1] > 1 else ""
+            ax.plot(t, values[:, j], color=f"C{i}", linestyle=("-", "--", ":", "-.")[j % 4],
+                    label=f"{label}{suffix}")
+    unit = var.attrs.get("units", "")
+    ax.set(title=name, xlabel="time (s)", ylabel=f"{name} ({unit})" if unit else name)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small", ncols=2)
+    fig.savefig(path, dpi=100)
+
+
+def _html(result, records: list[dict], names: list[str]) -> str:
+    esc = html.escape
+    head = "".join(f"<th>{esc(r['run'])}</th>" for r in records)
+    rows = "".join(
+        f"<tr><td>{esc(metric)}</td>" + "".join(f"<td>{v}</td>" for v in values) + "</tr>"
+        for metric, values in metric_rows(records)
+    ) if records and len(records[0]) > 1 else ""
+    images = "".join(f'<figure><img src="{_file(n)}" alt="{esc(n)}"></figure>' for n in names)
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>flexsat report: {esc(result.scenario.name)}
+</title>
+{STYLE}</head>
+<body>
+<h1>flexsat report</h1>
+<p><b>Scenario:</b> {esc(result.scenario.name)}<br><b>Case:</b> {esc(result.scenario.case)}
+({esc(result.case_source)})</p>
+<h2>Metrics</h2>
+<table><tr><th>metric</th>{head}</tr>{rows}</table>
+<h2>Time histories</h2>
+{images}
+<h2>Scenario</h2>
+<pre>{esc(result.scenario.yaml_text)}</pre>
+</body></html>
+"""
+
+
+def _write_all(result, folder: Path) -> None:
+    records = result.metrics_records()
+    (folder / "metrics.json").write_text(json.dumps(records, indent=2) + "\n", encoding="utf-8")
+    ds = result.dataset()
+    write_netcdf(ds, folder / "results.nc")
+    names = _histories(ds)
+    for name in names:
+        _plot(ds, name, folder / _file(name))
+    (folder / "index.html").write_text(_html(result, records, names), encoding="utf-8")
+
+
+def write_simulation_report(result, out_dir) -> Path:
+    """Write the report of a :class:`~flexsat.scenarios.simulation.SimulationResult` as the
+    folder ``out_dir``, whole or not at all (:func:`flexsat.report.publish.write_atomically`)."""
+    return write_atomically(out_dir, lambda folder: _write_all(result, folder))
+
+
+__all__ = ["MAX_FIGURES", "write_simulation_report"]

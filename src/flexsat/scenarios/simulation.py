@@ -1,0 +1,380 @@
+"""Simulation scenarios (``kind: simulation``): any case's plant under any law, per channel.
+
+Where a maneuver scenario (:mod:`flexsat.scenarios.maneuver`) slews a single-axis hub, a
+simulation scenario runs whichever plant a case builds (:meth:`plant` of the case object: a
+three-axis spacecraft, a structure with point actuators, a beam in orbit) under a law that reads
+and writes named channels, with sensors, actuators and disturbances given per channel::
+
+    kind: simulation
+    name: EPS rigid-body slew under the Gibbs-parameter Lyapunov law
+    case: eps
+    plant: {model: rigid}
+    initial: {euler123: ["0 deg", "0 deg", "0 deg"]}
+    simulation: {duration: "120 s", control_rate: "10 Hz"}
+    sensors: {rate: {noise: "1e-5 rad/s"}}
+    actuators: {torque: {saturation: "200 N*m"}}
+    runs:
+      - label: Gibbs law
+        law: gibbs_lyapunov
+        gains: {k: "4000 N*m*s/rad", A: "800 N*m"}
+        target: {euler123: ["1 rad", "1 rad", "1 rad"]}
+
+``plant`` holds the keyword arguments of the case's plant builder, ``initial`` the named initial
+values its plant understands (:meth:`~flexsat.dynamics.plant.Plant.state_from`). Channel
+values take the channel's unit (a number in SI, a quantity string, or a list of them for a
+vector channel). Problems are reported, before anything runs, as ``field.path: rule`` lines of
+one :class:`~flexsat.scenarios.ScenarioError`.
+"""
+
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass
+from typing import Any, Callable, Literal, Union
+
+import numpy as np
+import xarray as xr
+from pydantic import Field, field_validator, model_validator
+
+from flexsat import limits
+from flexsat.catalog import CASES, get_case
+from flexsat.scenarios.errors import ScenarioError, _item, _locate
+from flexsat.scenarios.fields import _Document, _given, _Section, count, quantity
+
+#: a value as written in YAML: a number, a quantity string, or a (nested) list of them
+Value = Union[float, int, str, list[Any]]
+
+
+class SimulationSettings(_Section):
+    """Run length, control rate, integrator substeps per control period and the noise seed."""
+
+    duration: quantity("s")
+    control_rate: quantity("Hz")
+    substeps: count(1, limits.MAX_SUBSTEPS, optional=True) = None
+    seed: count(0, limits.MAX_SEED, optional=True) = None
+
+
+class ChannelSensorSpec(_Section):
+    """A sensor on one output channel (values in the channel's unit)."""
+
+    noise: Value | None = None
+    bias: Value | None = None
+    quantum: Value | None = None
+    range: Value | None = None
+
+
+class ChannelActuatorSpec(_Section):
+    """An actuator on one input channel (values in the channel's unit, per second for the rate
+    limit)."""
+
+    saturation: Value | None = None
+    rate_limit: Value | None = None
+    scale: Value | None = None
+    bias: Value | None = None
+
+
+class ImpulseSpec(_Section):
+    time: quantity("s")
+    impulse: Value
+
+
+class ChannelDisturbanceSpec(_Section):
+    """A disturbance on one input channel: Gaussian (1σ, held over each control period) and
+    impulses (the channel's unit × s)."""
+
+    random: Value | None = None
+    impulses: list[ImpulseSpec] = Field(default_factory=list, max_length=limits.MAX_SAMPLES)
+
+
+class SimulationRunSpec(_Section):
+    """One closed-loop run: a law (:data:`SIMULATION_LAWS`), its gains and its target."""
+
+    label: str
+    law: Literal[tuple(sorted(("gibbs_lyapunov", "mrp_pd", "quaternion_pd", "lqr",
+                               "open_loop")))]
+    gains: dict[str, Value] = Field(default_factory=dict)
+    target: dict[str, Value] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _law_inputs(self):
+        law = SIMULATION_LAWS[self.law]
+        for name in self.gains:
+            if name not in law.gains:
+                known = ", ".join(law.gains) or "none"
+                raise ValueError(f"gains.{name}: not a gain of law {self.law!r} (its gains: "
+                                 f"{known})")
+        missing = [g for g in law.required if g not in self.gains]
+        if missing:
+            raise ValueError(f"gains.{missing[0]}: required by law {self.law!r}")
+        if self.target and not law.targets:
+            raise ValueError(f"target: law {self.law!r} takes no target")
+        return self
+
+
+class SimulationScenario(_Document):
+    """A validated simulation scenario (module docstring)."""
+
+    kind: Literal["simulation"]
+    name: str
+    case: str
+    plant: dict[str, Value | bool | dict[str, Any]] = Field(default_factory=dict)
+    initial: dict[str, Value] = Field(default_factory=dict)
+    simulation: SimulationSettings
+    sensors: dict[str, ChannelSensorSpec] = Field(default_factory=dict)
+    actuators: dict[str, ChannelActuatorSpec] = Field(default_factory=dict)
+    disturbances: dict[str, ChannelDisturbanceSpec] = Field(default_factory=dict)
+    runs: list[SimulationRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
+
+    @field_validator("case")
+    @classmethod
+    def _known_case(cls, name: str) -> str:
+        get_case(name)
+        if name not in simulation_cases():
+            raise ValueError(f"case: {name!r} builds no plant to simulate; cases with one: "
+                             f"{', '.join(simulation_cases())}")
+        return name
+
+    @model_validator(mode="after")
+    def _labels(self):
+        labels = [run.label for run in self.runs]
+        for label in labels:
+            if labels.count(label) > 1:
+                raise ValueError(f"runs: duplicate label {label!r}; each run needs its own label")
+        return self
+
+
+def simulation_cases() -> tuple[str, ...]:
+    """Cases whose builder's object has a ``plant`` method (read from the builder's return
+    annotation, so no case is built)."""
+    import typing
+
+    names = []
+    for name, info in CASES.items():
+        kind = typing.get_type_hints(info.builder).get("return")
+        if callable(getattr(kind, "plant", None)):
+            names.append(name)
+    return tuple(names)
+
+
+# -- laws ----------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _SimulationLaw:
+    gains: tuple[str, ...]
+    required: tuple[str, ...]
+    targets: bool
+    build: Callable[..., Any]
+
+
+def _target_quaternion(target: dict) -> np.ndarray | None:
+    from flexsat.dynamics.attitude import euler123_to_dcm, dcm_to_quaternion
+    from flexsat.units import to_si_array
+
+    if not target:
+        return None
+    unknown = set(target) - {"euler123", "attitude"}
+    if unknown:
+        raise ValueError(f"target.{sorted(unknown)[0]}: not a target (give euler123 (rad) or "
+                         "attitude (a unit quaternion, scalar first))")
+    if len(target) > 1:
+        raise ValueError("target: give euler123 or attitude, not both")
+    if "euler123" in target:
+        angles = to_si_array(target["euler123"], "rad", "target.euler123")
+        if angles.shape != (3,):
+            raise ValueError(f"target.euler123: three angles, got shape {angles.shape}")
+        return dcm_to_quaternion(euler123_to_dcm(angles))
+    return to_si_array(target["attitude"], "", "target.attitude")
+
+
+def _attitude_law(cls, names: dict[str, str]):
+    def build(run: SimulationRunSpec, plant, dt: float):
+        beta = _target_quaternion(run.target)
+        extra = {} if beta is None else {"beta_target": beta}
+        return cls(**{names[k]: v for k, v in run.gains.items()}, **extra)
+
+    return build
+
+
+def _lqr(run: SimulationRunSpec, plant, dt: float):
+    """Constant LQR state feedback on the plant's linear part, reading its ``state`` output."""
+    from flexsat.control import ScheduledStateFeedback, lqr
+
+    A, B = plant.linear_part()
+    n, m = B.shape
+    Q = _weights(run.gains["state_weights"], n, "gains.state_weights")
+    R = _weights(run.gains.get("input_weights", 1.0), m, "gains.input_weights")
+    K, _, _ = lqr(A, B, Q, R)
+    return ScheduledStateFeedback([0.0], K[None], "state", [c.name for c in plant.inputs])
+
+
+def _weights(value, size: int, field: str) -> np.ndarray:
+    w = np.atleast_1d(np.asarray(value, float))
+    if w.size == 1:
+        w = np.full(size, float(w[0]))
+    if w.shape != (size,) or not np.all(np.isfinite(w)) or np.any(w < 0):
+        raise ValueError(f"{field}: one weight >= 0 or {size} of them, got {np.shape(value)}")
+    return np.diag(w)
+
+
+def _open_loop(run: SimulationRunSpec, plant, dt: float):
+    from flexsat.control import StateSpaceCompensator
+
+    import control
+
+    m = plant.n_inputs
+    p = plant.outputs[0]
+    system = control.ss([], [], [], np.zeros((m, p.size)))
+    return StateSpaceCompensator(system, [p.name], [c.name for c in plant.inputs], dt=dt)
+
+
+def _laws() -> dict[str, _SimulationLaw]:
+    from flexsat.control import GibbsLyapunovLaw, MRPLaw, QuaternionPD
+
+    return {
+        "gibbs_lyapunov": _SimulationLaw(("k", "A"), ("k", "A"), True,
+                                         _attitude_law(GibbsLyapunovLaw, {"k": "k", "A": "A"})),
+        "mrp_pd": _SimulationLaw(("K", "P"), ("K", "P"), True,
+                                 _attitude_law(MRPLaw, {"K": "K", "P": "P"})),
+        "quaternion_pd": _SimulationLaw(("kp", "kd"), ("kp", "kd"), True,
+                                        _attitude_law(QuaternionPD, {"kp": "kp", "kd": "kd"})),
+        "lqr": _SimulationLaw(("state_weights", "input_weights"), ("state_weights",), False,
+                              _lqr),
+        "open_loop": _SimulationLaw((), (), False, _open_loop),
+    }
+
+
+class _LazyLaws(dict):
+    """The law table, built on first use (it imports the control package)."""
+
+    def __missing__(self, key):
+        self.update(_laws())
+        return dict.__getitem__(self, key)
+
+
+SIMULATION_LAWS: dict[str, _SimulationLaw] = _LazyLaws()
+
+
+# -- running -------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SimulationResult:
+    """The runs of a simulation scenario: one :class:`flexsat.sim.SimResult` per run."""
+
+    scenario: SimulationScenario
+    labels: tuple[str, ...]
+    results: tuple
+    case_source: str
+
+    def metrics_records(self) -> list[dict]:
+        return [row for label, result in zip(self.labels, self.results)
+                for row in result.metrics_records([label])]
+
+    def dataset(self) -> xr.Dataset:
+        """All runs in one dataset, dims (run, time[, component])."""
+        runs = [r.dataset.isel(case=0, drop=True) for r in self.results]
+        ds = xr.concat(runs, dim="run", data_vars="all", coords="minimal", compat="override",
+                       join="exact", combine_attrs="override")
+        ds = ds.assign_coords(run=("run", list(self.labels)))
+        ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
+                        case_source=self.case_source, scenario_yaml=self.scenario.yaml_text)
+        return ds
+
+
+def _located(path: str, exc: Exception) -> ScenarioError:
+    return ScenarioError([_locate(path, str(exc))])
+
+
+def _build_plant(scenario: SimulationScenario):
+    case = get_case(scenario.case).builder()
+    builder = case.plant
+    accepted = inspect.signature(builder).parameters
+    for name in scenario.plant:
+        if name not in accepted:
+            raise ScenarioError([f"plant.{name}: not an option of the {scenario.case} plant "
+                                 f"(its options: {', '.join(accepted) or 'none'})"])
+    try:
+        return builder(**scenario.plant)
+    except (ValueError, TypeError) as exc:
+        raise _located("plant", exc) from None
+
+
+def _config(scenario: SimulationScenario, plant):
+    from flexsat.sim import SimConfig
+    from flexsat.sim.channels import ChannelActuator, ChannelDisturbance, ChannelSensor
+
+    def pieces(section: dict, kind, role: str, channels) -> dict:
+        names = {c.name for c in channels}
+        out = {}
+        for name, spec in section.items():
+            if name not in names:
+                raise ScenarioError([f"{role}.{name}: the {scenario.case} plant has no "
+                                     f"{'output' if role == 'sensors' else 'input'} channel "
+                                     f"{name!r} (its channels: "
+                                     f"{', '.join(c.name for c in channels)})"])
+            values = _given(spec)
+            if "impulses" in values:
+                impulses = values.pop("impulses")
+                values["impulse_times"] = tuple(i["time"] for i in impulses)
+                values["impulses"] = tuple(i["impulse"] for i in impulses)
+            try:
+                out[name] = kind(**values)
+            except ValueError as exc:
+                raise _located(f"{role}.{name}", exc) from None
+        return out
+
+    settings = _given(scenario.simulation)
+    try:
+        return SimConfig(**settings,
+                         channel_sensors=pieces(scenario.sensors, ChannelSensor, "sensors",
+                                                plant.outputs),
+                         channel_actuators=pieces(scenario.actuators, ChannelActuator,
+                                                  "actuators", plant.inputs),
+                         channel_disturbances=pieces(scenario.disturbances, ChannelDisturbance,
+                                                     "disturbances", plant.inputs))
+    except ValueError as exc:
+        raise ScenarioError([f"simulation: {exc}"]) from None
+
+
+def run_simulation(scenario: SimulationScenario, progress: Callable[[str], None] | None = None
+                   ) -> SimulationResult:
+    """Build the plant, the configuration and every run's law, then simulate each run.
+
+    Raises
+    ------
+    ScenarioError
+        Before any run, for a plant option, initial value, channel or gain the case refuses.
+    flexsat.sim.SimulationDiverged
+        If a run diverges (its message starts with the run).
+    """
+    from flexsat.references import cite
+    from flexsat.sim import SimulationDiverged, simulate
+
+    plant = _build_plant(scenario)
+    try:
+        x0 = plant.state_from(**scenario.initial)
+    except ValueError as exc:
+        raise _located("initial", exc) from None
+    config = _config(scenario, plant)
+    laws, problems = {}, []
+    for index, run in enumerate(scenario.runs):
+        try:
+            laws[run.label] = SIMULATION_LAWS[run.law].build(run, plant, config.dt)
+        except ValueError as exc:
+            problems.append(_locate("runs" + _item(index, run.label), str(exc)))
+    if problems:
+        raise ScenarioError(problems)
+    results = []
+    for index, (label, law) in enumerate(laws.items()):
+        if progress is not None:
+            progress(label)
+        try:
+            results.append(simulate(plant, law, config, n_cases=1, initial_state=x0))
+        except SimulationDiverged as exc:
+            raise SimulationDiverged(f"runs{_item(index, label)}: {exc}", exc.cases, exc.time,
+                                     exc.cause) from None
+        except ValueError as exc:
+            raise ScenarioError([f"runs{_item(index, label)}: {exc}"]) from None
+    return SimulationResult(scenario, tuple(laws), tuple(results),
+                            cite(get_case(scenario.case).source))
+
+
+__all__ = ["SIMULATION_LAWS", "SimulationResult", "SimulationScenario", "run_simulation",
+           "simulation_cases"]
