@@ -29,6 +29,7 @@ one :class:`~flexsat.scenarios.ScenarioError`.
 from __future__ import annotations
 
 import inspect
+import re
 from dataclasses import dataclass
 from typing import Any, Callable, Literal, Union
 
@@ -298,7 +299,8 @@ def _build_plant(scenario: SimulationScenario):
 
 def _config(scenario: SimulationScenario, plant):
     from flexsat.sim import SimConfig
-    from flexsat.sim.channels import ChannelActuator, ChannelDisturbance, ChannelSensor
+    from flexsat.sim.channels import (ChannelActuator, ChannelDisturbance, ChannelSensor,
+                                      resolve_channels)
 
     def pieces(section: dict, kind, role: str, channels) -> dict:
         names = {c.name for c in channels}
@@ -322,7 +324,7 @@ def _config(scenario: SimulationScenario, plant):
 
     settings = _given(scenario.simulation)
     try:
-        return SimConfig(**settings,
+        config = SimConfig(**settings,
                          channel_sensors=pieces(scenario.sensors, ChannelSensor, "sensors",
                                                 plant.outputs),
                          channel_actuators=pieces(scenario.actuators, ChannelActuator,
@@ -331,6 +333,12 @@ def _config(scenario: SimulationScenario, plant):
                                                      "disturbances", plant.inputs))
     except ValueError as exc:
         raise ScenarioError([f"simulation: {exc}"]) from None
+    try:  # binding each piece to its channel converts its values to the channel's unit
+        resolve_channels(plant, config)
+    except ValueError as exc:
+        raise ScenarioError([re.sub(r"^(sensors|actuators|disturbances)\[(\w+)\]", r"\1.\2",
+                                    str(exc))]) from None
+    return config
 
 
 def run_simulation(scenario: SimulationScenario, progress: Callable[[str], None] | None = None
