@@ -156,7 +156,7 @@ class FlexibleSpacecraft(Plant):
     nonlinear = True
     #: the engine's fourth-order exponential integrator: the elastic modes exactly, f by RK4
     integrator = "exp_rk4"
-    recorded = ("attitude", "rate")
+    recorded = ("attitude", "euler123", "rate")
 
     def __init__(self, modal, forces=(), displacements=(), rotations=(), torque_node=None,
                  translation=False, n_modes=None, rigid_frequency=RIGID_FREQUENCY):
@@ -225,6 +225,9 @@ class FlexibleSpacecraft(Plant):
                             f"elastic rotation of node {node} about body {axis}")
                     for node, axis in self.rotations]
         self.outputs = tuple(outputs)
+        # the node outputs are what a flexible run is about (the rim deflections of seed 003)
+        self.recorded = type(self).recorded + tuple(c.name for c in self.outputs if c.name
+                                                    .startswith(("displacement_", "rotation_")))
         self._rows = {f"displacement_{tag(node, axis.upper())}": elastic.displacement_output(
             node, axis) for node, axis in self.displacements}
         self._rows.update({f"rotation_{tag(node, axis.upper())}": elastic.rotation_output(

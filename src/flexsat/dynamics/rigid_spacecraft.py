@@ -174,7 +174,7 @@ class RigidSpacecraft(Plant):
 
     inputs = (Channel("torque", "N*m", 3, "torque about the centre of mass, body axes"),)
     outputs = ATTITUDE_OUTPUTS
-    recorded = ("attitude", "rate")
+    recorded = ("attitude", "euler123", "rate")
     nonlinear = True
 
     def __init__(self, inertia):

@@ -14,6 +14,7 @@ import json
 import re
 from pathlib import Path
 
+import numpy as np
 from matplotlib.figure import Figure
 
 from flexsat.netcdf import write_netcdf
@@ -25,9 +26,23 @@ from flexsat.report.publish import write_atomically
 MAX_FIGURES = 24
 
 
-def _histories(ds) -> list[str]:
-    """Recorded time histories: variables with a time axis, in dataset order."""
-    return [name for name, var in ds.data_vars.items() if "time" in var.dims][:MAX_FIGURES]
+def _histories(ds) -> tuple[list[str], list[str]]:
+    """(plotted, idle): the recorded time histories worth a figure, measured and output
+    channels before inputs, a command only where it differs from the applied input (an
+    actuator acted on it); and the channels that are zero throughout every run (idle
+    actuators), named on the page instead of plotted."""
+    timed = [name for name, var in ds.data_vars.items() if "time" in var.dims]
+    commands = [n for n in timed if n.endswith("_command")]
+    inputs = {n[: -len("_command")] for n in commands}
+    idle = [n for n in timed if not np.any(ds[n].values)]
+    plotted = [n for n in timed if n not in idle and n not in commands and n not in inputs]
+    for name in sorted(inputs, key=timed.index):
+        if name not in idle:
+            plotted.append(name)
+            command = f"{name}_command"
+            if not np.array_equal(ds[command].values, ds[name].values):
+                plotted.append(command)
+    return plotted[:MAX_FIGURES], [n for n in idle if not n.endswith("_command")]
 
 
 def _file(name: str) -> str:
@@ -54,13 +69,21 @@ def _plot(ds, name: str, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _html(result, records: list[dict], names: list[str]) -> str:
+def _html(result, records: list[dict], names: list[str], units: dict, idle: list[str]) -> str:
     esc = html.escape
     head = "".join(f"<th>{esc(r['run'])}</th>" for r in records)
+
+    def label(metric):
+        unit = units.get(metric, "")
+        return f"{metric} ({unit})" if unit and not metric.endswith(("_deg", "_s")) else metric
+
     rows = "".join(
-        f"<tr><td>{esc(metric)}</td>" + "".join(f"<td>{v}</td>" for v in values) + "</tr>"
-        for metric, values in metric_rows(records)
+        f"<tr><td>{esc(label(metric))}</td>" + "".join(f"<td>{v}</td>" for v in values)
+        + "</tr>" for metric, values in metric_rows(records)
+        if not any(metric.endswith("_" + n) for n in idle)
     ) if records and len(records[0]) > 1 else ""
+    quiet = ("<p>Zero throughout every run (not plotted): "
+             + ", ".join(f"<code>{esc(n)}</code>" for n in idle) + ".</p>") if idle else ""
     images = "".join(f'<figure><img src="{_file(n)}" alt="{esc(n)}"></figure>' for n in names)
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>flexsat report: {esc(result.scenario.name)}
@@ -73,6 +96,7 @@ def _html(result, records: list[dict], names: list[str]) -> str:
 <h2>Metrics</h2>
 <table><tr><th>metric</th>{head}</tr>{rows}</table>
 <h2>Time histories</h2>
+{quiet}
 {images}
 <h2>Scenario</h2>
 <pre>{esc(result.scenario.yaml_text)}</pre>
@@ -85,10 +109,12 @@ def _write_all(result, folder: Path) -> None:
     (folder / "metrics.json").write_text(json.dumps(records, indent=2) + "\n", encoding="utf-8")
     ds = result.dataset()
     write_netcdf(ds, folder / "results.nc")
-    names = _histories(ds)
+    names, idle = _histories(ds)
     for name in names:
         _plot(ds, name, folder / _file(name))
-    (folder / "index.html").write_text(_html(result, records, names), encoding="utf-8")
+    units = {k: v.attrs.get("units", "") for k, v in ds.data_vars.items() if v.dims == ("run",)}
+    (folder / "index.html").write_text(_html(result, records, names, units, idle),
+                                       encoding="utf-8")
 
 
 def write_simulation_report(result, out_dir) -> Path:
