@@ -117,4 +117,12 @@ class _Buildable(_Section):
         return self
 
 
-__all__ = ["count", "quantity"]
+def check_unique_labels(runs) -> None:
+    """Refuse two runs with one label: reports, datasets and error paths name runs by label."""
+    labels = [run.label for run in runs]
+    for label in labels:
+        if labels.count(label) > 1:
+            raise ValueError(f"runs: duplicate label {label!r}; each run needs its own label")
+
+
+__all__ = ["check_unique_labels", "count", "quantity"]

@@ -51,6 +51,7 @@ from flexsat.scenarios.fields import (
     _Document,
     _given,
     _Section,
+    check_unique_labels,
     count,
     quantity,
 )
@@ -334,10 +335,7 @@ class Scenario(_Document):
         for name in _given(self.model):
             if name in self.case_overrides:
                 raise ValueError(f"model.{name}: also given in case_overrides; give it once")
-        labels = [run.label for run in self.runs]
-        for label in labels:
-            if labels.count(label) > 1:
-                raise ValueError(f"runs: duplicate label {label!r}; each run needs its own label")
+        check_unique_labels(self.runs)
         return self
 
     @property

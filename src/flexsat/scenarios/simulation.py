@@ -34,13 +34,14 @@ from dataclasses import dataclass
 from typing import Any, Callable, Literal, Union
 
 import numpy as np
-import xarray as xr
 from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.catalog import CASES, get_case
 from flexsat.scenarios.errors import ScenarioError, _item, _locate
-from flexsat.scenarios.fields import _Document, _given, _Section, count, quantity
+from flexsat.scenarios.runner import ScenarioResult
+from flexsat.scenarios.fields import (_Document, _given, _Section, check_unique_labels, count,
+                                      quantity)
 
 #: a value as written in YAML: a number, a quantity string, or a (nested) list of them
 Value = Union[float, int, str, list[Any]]
@@ -137,10 +138,7 @@ class SimulationScenario(_Document):
 
     @model_validator(mode="after")
     def _labels(self):
-        labels = [run.label for run in self.runs]
-        for label in labels:
-            if labels.count(label) > 1:
-                raise ValueError(f"runs: duplicate label {label!r}; each run needs its own label")
+        check_unique_labels(self.runs)
         return self
 
 
@@ -255,28 +253,10 @@ SIMULATION_LAWS: dict[str, _SimulationLaw] = _LazyLaws()
 
 
 # -- running -------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class SimulationResult:
-    """The runs of a simulation scenario: one :class:`flexsat.sim.SimResult` per run."""
-
-    scenario: SimulationScenario
-    labels: tuple[str, ...]
-    results: tuple
-    case_source: str
-
-    def metrics_records(self) -> list[dict]:
-        return [row for label, result in zip(self.labels, self.results)
-                for row in result.metrics_records([label])]
-
-    def dataset(self) -> xr.Dataset:
-        """All runs in one dataset, dims (run, time[, component])."""
-        runs = [r.dataset.isel(case=0, drop=True) for r in self.results]
-        ds = xr.concat(runs, dim="run", data_vars="all", coords="minimal", compat="override",
-                       join="exact", combine_attrs="override")
-        ds = ds.assign_coords(run=("run", list(self.labels)))
-        ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
-                        case_source=self.case_source, scenario_yaml=self.scenario.yaml_text)
-        return ds
+class SimulationResult(ScenarioResult):
+    """The runs of a simulation scenario: one :class:`flexsat.sim.SimResult` per run, in one
+    dataset with dims (run, time[, component]) (:class:`~flexsat.scenarios.runner.
+    ScenarioResult`)."""
 
 
 def _located(path: str, exc: Exception) -> ScenarioError:
