@@ -27,7 +27,7 @@ REFERENCES = ("Blevins", "NAFEMS")  # published references outside the seeds
 #: minimum number of checks per case (issues #2, #3 and #4); later issues add cases and checks
 MINIMUM = {"tamu": 7, "exact_beam": 5, "cantilever_beam": 8, "free_free_beam": 6,
            "nafems_fv2": 16, "tamu_grid": 20, "draper_rpl": 28, "nps": 4, "eps": 20,
-           "output_feedback": 14, "bainum": 6}
+           "output_feedback": 14, "bainum": 39}
 
 
 @pytest.fixture(scope="module")
