@@ -17,7 +17,7 @@ import numpy as np
 MAX_SAMPLES = 2_000_000
 
 #: integrator substeps per control period (a stiff friction law asks for more, see
-#: :func:`flexsat.sim.engine.stable_substeps`)
+#: :func:`flexsat.sim.config.stable_substeps`)
 MAX_SUBSTEPS = 1_000
 
 #: integrator steps of one run (control samples × substeps): minutes on one core

@@ -121,7 +121,7 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
     return ScenarioPlan(scenario, case, model, config, controllers)
 
 
-#: the scenario field a resource message of :func:`flexsat.sim.engine.check_resources` blames
+#: the scenario field a resource message of :func:`flexsat.sim.config.check_resources` blames
 _RESOURCE_FIELDS = {"friction": "disturbances.friction", "duration": "simulation.duration",
                     "n_cases": "runs", "substeps": "simulation.integration_step"}
 

@@ -176,7 +176,7 @@ class ChannelDisturbance:
         State-dependent input force f(y) of the output ``force_output`` (e.g.
         :class:`~flexsat.sim.disturbances.BearingFriction` of θ'), integrated with the plant as
         an extra force on this input's column; a ``max_slope`` attribute (|∂f/∂y|) lets the
-        engine keep the explicit treatment stable (:func:`flexsat.sim.engine.stable_substeps`).
+        engine keep the explicit treatment stable (:func:`flexsat.sim.config.stable_substeps`).
     force_output : str, optional
         Output channel driving ``force``.
     force_name : str

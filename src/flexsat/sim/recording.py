@@ -49,7 +49,9 @@ class SimResult:
 
 
 def _unit(unit: str) -> str:
-    return unit.replace("*", " ")
+    """A channel's unit for the dataset: products as spaces (``N m``, as units are written),
+    powers as ``^`` (``kg m/s^2``): both read back by pint."""
+    return unit.replace("**", "^").replace("*", " ")
 
 
 def _history(n: int, nc: int, size: int) -> np.ndarray:
@@ -129,8 +131,11 @@ class Recorder:
         plant, nc = self.plant, self.nc
         data = {}
 
-        def put(name, arr, unit):
-            dims = ("case", "time") if arr.ndim == 2 else ("case", "time", f"{name}_index")
+        def put(name, arr, unit, channel=None):
+            # every history of one channel (command, applied, disturbance, measured) shares
+            # its component axis, so they combine element-wise
+            axis = f"{channel or name}_component"
+            dims = ("case", "time") if arr.ndim == 2 else ("case", "time", axis)
             data[name] = (dims, np.swapaxes(arr, 0, 1), {"units": _unit(unit)})
 
         outs = {c.name: c for c in plant.outputs}
@@ -148,22 +153,22 @@ class Recorder:
             unit = next(c.unit for c in plant.inputs if c.name == ch)
             one = sl.stop - sl.start == 1
             pick = (lambda a: a[..., sl.start]) if one else (lambda a: a[..., sl])
-            put(f"{ch}_command", pick(self.commands), unit)
+            put(f"{ch}_command", pick(self.commands), unit, ch)
             put(ch, pick(self.applied), unit)
             if ch in self.with_disturbance:
-                put(f"disturbance_{ch}", pick(self.disturbed), unit)
+                put(f"disturbance_{ch}", pick(self.disturbed), unit, ch)
             if ch in self.with_force:
                 name = f"{self.force_names.get(ch, 'friction')}_{ch}"
                 put(name, pick(self.forces) if ch in self.force_names
-                    else np.broadcast_to(0.0, pick(self.applied).shape), unit)  # no memory
+                    else np.broadcast_to(0.0, pick(self.applied).shape), unit, ch)  # no memory
         for k, v in self.outputs.items():
             if k not in data:
                 put(k, v, outs[k].unit)
             if k in self.measured:
-                put(f"{k}_measured", self.measured[k], outs[k].unit)
+                put(f"{k}_measured", self.measured[k], outs[k].unit, k)
         for k, v in self.measured.items():
             if f"{k}_measured" not in data:
-                put(f"{k}_measured", v, outs[k].unit)
+                put(f"{k}_measured", v, outs[k].unit, k)
         if self.energy is not None:
             put("energy", self.energy, "J")
         if self.vibration is not None:
