@@ -9,9 +9,9 @@ at each sample k (t_k = k dt), for each case c
 2. force at the sample, f_k = F(x_k) (the low-rank bearing friction below, 0 if none);
 3. measurement y = C_m x + D_m w_{k−1} + D_mf f_k (w_{k−1} the input applied over the last
    period, the feedthrough of the acceleration into root loads);
-4. sensor model per element i: v = y_i + bias_i; v = q_i rint(v / q_i) if q_i > 0 (an
-   encoder of quantum q, seed 000 Att. 3: 0.01 deg); v += std_i · noise[c, k, slot_i];
-   v = clip(v, ±sat_i);
+4. sensor model per element i (that of :class:`flexsat.sim.channels.ChannelSensor`):
+   v = y_i + bias_i + std_i · noise[c, k, slot_i]; v = q_i rint(v / q_i) if q_i > 0 (an
+   encoder of quantum q, seed 000 Att. 3: 0.01 deg); v = clip(v, ±sat_i);
 5. optional causal FIR-derivative channel: y[dst] = Σ_j c_j v_src(t_{k−L+1+j}), the
    least-squares differentiating filter of
    :func:`flexsat.sim.sensors.least_squares_derivative_weights`, its history started full of
@@ -173,11 +173,11 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 s += Dmc[i, j] * w[j]
             s += Dmfc[i] * f
             s += sens[i, 2]
+            if sensor_slot[i] >= 0:
+                s += sens[i, 1] * noisec[k, sensor_slot[i]]
             q = sens[i, 0]
             if q > 0.0:
                 s = q * np.rint(s / q)
-            if sensor_slot[i] >= 0:
-                s += sens[i, 1] * noisec[k, sensor_slot[i]]
             sat = sens[i, 3]
             s = min(max(s, -sat), sat)
             y[i] = s
