@@ -40,6 +40,9 @@ from flexsat.sim.sensors import least_squares_derivative_weights
 #: states and noise of one block of cases, bytes: a few MB keeps them in cache-sized pieces
 #: and small next to the recorded histories of a large batch
 BLOCK_BYTES = 4_000_000
+#: a block's states and noise, per case of the batch, in recorded histories' worth (one
+#: history is n_t values): 1 keeps them below a tenth of the ~13 histories a case records
+BLOCK_SHARE = 1
 #: cases from which a block runs on every core (below, the threads cost more than they save)
 PARALLEL_CASES = 8
 
@@ -131,16 +134,14 @@ def _fill(target: np.ndarray, index: tuple, rows: np.ndarray) -> np.ndarray:
     return target
 
 
-def _pad_law(law, p: int, order: list[int], m: int):
-    """The law's arrays with zero columns for the measured elements it does not read (after
-    the ones it reads) and its rows placed on the plant's inputs ``order``."""
-    pl = sum(law.read_sizes)
-
+def _pad_law(law, p: int, reads: list[int], order: list[int], m: int):
+    """The law's arrays with its columns placed on the measured elements ``reads`` (zero
+    columns for the others) and its rows on the plant's inputs ``order``."""
     def cols(a):
-        if a.shape[-1] == p:
+        if a.shape[-1] == p and reads == list(range(p)):
             return a
         out = np.zeros(a.shape[:-1] + (p,))
-        out[..., :pl] = a
+        out[..., reads] = a
         return out
 
     def rows(a, axis):
@@ -161,7 +162,7 @@ class _Args:
     """The kernel's arguments for a whole batch (each sliced per block by :meth:`block`)."""
 
     def __init__(self, plant, controller, config, nc, x0, sensors, actuators, disturbances,
-                 substeps, measured, law):
+                 substeps, measured, kept, law):
         dt, n_t = config.dt, config.n_steps + 1
         self.nc, self.n_t = nc, n_t
         A, B = plant.linear_part()
@@ -201,10 +202,14 @@ class _Args:
         self.imp_dx = _c(np.stack([np.broadcast_to(imp[i] @ Bt, (B.shape[0] if B.ndim == 3
                                                                   else 1, n)) for i in keys])
                          if keys else np.zeros((0, 1, n)))
-        # measured elements: the law's reads first (its columns), then the other kept ones
+        # measured elements: what the law reads (its columns, in its order: no copy of its
+        # arrays), the sources of a derivative sensor, then the recorded ones it does not
+        # read; the kernel keeps the tail from the first recorded element on
         derived = [k for k in measured if k in sensors and sensors[k].derivative_of is not None]
-        names = list(measured) + [sensors[k].derivative_of for k in derived
-                                  if sensors[k].derivative_of not in measured]
+        names = list(controller.reads)
+        names += [sensors[k].derivative_of for k in derived
+                  if sensors[k].derivative_of not in names]
+        names += [k for k in kept if k not in names]
         self.offsets, off = {}, 0
         for k in names:
             self.offsets[k] = slice(off, off + _width(plant, k))
@@ -249,7 +254,11 @@ class _Args:
             self.fir_w = np.zeros(0)
         # the law, its rows on the plant's inputs
         order = [j for k in controller.writes for j in range(slices[k].start, slices[k].stop)]
-        self.law = [_c(a) for a in _pad_law(law, p, order, m)]
+        reads = [i for k in controller.reads for i in range(self.offsets[k].start,
+                                                                self.offsets[k].stop)]
+        self.law = _pad_law(law, p, reads, order, m)  # read-only: copied block by block
+        self.rec_start = min((self.offsets[k].start for k in kept), default=p)
+        self.p_rec = p - self.rec_start
         act = np.zeros((1, m, 2))
         act[..., 0], act[..., 1] = np.inf, 1.0
         for k in controller.writes:
@@ -283,6 +292,10 @@ class _Args:
             idx[axis] = slice(c0, c1)
             return _c(a[tuple(idx)])
 
+        def law_cases(a):  # the law's (read-only) arrays: a writable copy of the block
+            return np.array(a[:, c0:c1] if a.shape[1] != 1 else a, dtype=np.float64,
+                            order="C")
+
         cb = c1 - c0
         if self.noisy:  # each case's stream from its own seed, as the Python loop draws it
             noise = np.empty((cb, n_t, self.width))
@@ -298,8 +311,9 @@ class _Args:
                cases(self.P2f), cases(self.Cr), cases(self.fric), self.substeps, self.imp_k,
                cases(self.imp_dx, 1), cases(self.Cm), cases(self.Dm), cases(self.Dmf),
                cases(self.sensor), self.sensor_slot, self.fir_src, self.fir_dst, self.fir_w,
-               cases(Ak, 1), cases(Bk, 1), cases(Ck, 1), cases(Dk, 1), cases(y_ref, 1),
-               cases(u_ff, 1), cases(K0), cases(self.act), cases(self.dist_std),
+               law_cases(Ak), law_cases(Bk), law_cases(Ck), law_cases(Dk), law_cases(y_ref),
+               law_cases(u_ff), np.array(K0 if K0.shape[0] <= 1 else K0[c0:c1], order="C"),
+               cases(self.act), cases(self.dist_std),
                self.dist_slot, noise, DIVERGENCE_BOUND, X, Y, Ucmd, U, D, F, stop)
 
 
@@ -308,19 +322,18 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
     """The run of :func:`~flexsat.sim.engine.simulate` on the compiled loop (module
     docstring); same result, same exceptions."""
     a = _Args(plant, controller, config, nc, x0, sensors, actuators, disturbances, substeps,
-              measured, law)
-    n_t, n, m, p = a.n_t, a.n, a.m, a.p
+              measured, kept, law)
+    n_t, n, m = a.n_t, a.n, a.m
     batched = plant.n_cases != 1
     forced = a.forced
     rec = Recorder(plant, n_t, nc, kept, {k: d.force_name for k, d in forced.items()},
                    record_states, batched,
                    [k for k, d in disturbances.items() if np.any(d.random)], allocate=False)
-    Y, Ucmd, U, Dist = (np.empty((nc, n_t, w)) for w in (p, m, m, m))
+    Y, Ucmd, U, Dist = (np.empty((nc, n_t, w)) for w in (a.p_rec, m, m, m))
     F = np.empty((nc, n_t))
     stop = np.full(nc, -1, dtype=np.int64)
     X_all = np.empty((nc, n_t, n)) if record_states else None
-    per_case = max(1, n_t * (n + a.width) * 8)
-    size = max(1, min(nc, BLOCK_BYTES // per_case))
+    size = _block_size(nc, n_t, n + a.width)
     outs = {k: np.empty((nc, n_t) + ((_width(plant, k),) if _width(plant, k) > 1 else ()))
             for k in plant.recorded}
     energy = np.empty((nc, n_t)) if rec.has_energy else None
@@ -347,14 +360,23 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
             rec.forces = np.swapaxes(Ff, 0, 1)
     for k in kept:
         sl = a.offsets[k]
-        rec.measured[k] = np.swapaxes(Y[..., sl.start] if sl.stop - sl.start == 1
-                                      else Y[..., sl], 0, 1)
+        lo, hi = sl.start - a.rec_start, sl.stop - a.rec_start
+        rec.measured[k] = np.swapaxes(Y[..., lo] if hi - lo == 1 else Y[..., lo:hi], 0, 1)
     rec.outputs = {k: np.swapaxes(v, 0, 1) for k, v in outs.items()}
     rec.energy = None if energy is None else energy.T
     rec.vibration = None if vib is None else vib.T
     rec.states = None if X_all is None else np.swapaxes(X_all, 0, 1)
     t = config.dt * np.arange(n_t)
     return rec.dataset(t, controller, theta0, config, substeps, engine="compiled")
+
+
+def _block_size(nc: int, n_t: int, values: int) -> int:
+    """Cases per block: their states and noise (``values`` per sample) within
+    :data:`BLOCK_BYTES` and within :data:`BLOCK_SHARE` of a case's recorded histories per
+    case of the batch (a block's temporaries stay small next to what the run keeps)."""
+    one = n_t * values * 8
+    budget = min(BLOCK_BYTES, BLOCK_SHARE * nc * n_t * 8)
+    return max(1, min(nc, int(budget // one)))
 
 
 def _outputs(rec, plant, a, c0, c1, X, U, Dist, F, outs, energy, vib):
@@ -406,11 +428,11 @@ def _divergence(a, config, seeds, stop, Ucmd):
     from flexsat.sim.engine import _diverged
 
     k = int(stop[stop >= 0].min())
-    nc, n, m, p = a.nc, a.n, a.m, a.p
+    nc, n, m = a.nc, a.n, a.m
     X = np.empty((nc, k + 1, n))
-    rec = [np.empty((nc, k + 1, w)) for w in (p, m, m, m)]
+    rec = [np.empty((nc, k + 1, w)) for w in (a.p_rec, m, m, m)]
     F, st = np.empty((nc, k + 1)), np.full(nc, -1, dtype=np.int64)
-    size = max(1, min(nc, BLOCK_BYTES // max(1, (k + 1) * (n + a.width) * 8)))
+    size = _block_size(nc, k + 1, n + a.width)
     for c0 in range(0, nc, size):
         c1 = min(nc, c0 + size)
         a.block(c0, c1, seeds, k + 1, X[c0:c1], *(r[c0:c1] for r in rec), F[c0:c1],

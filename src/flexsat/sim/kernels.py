@@ -119,6 +119,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     n = x0.shape[1]
     m = P1u.shape[2]
     p = Cm.shape[1]
+    p_rec = Y.shape[2]
     nk = Ak.shape[2]
     n_t = Y.shape[1]
     L = fir_w.shape[0]
@@ -237,8 +238,8 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 bad = True
         if rec_x:
             X[c, k, :] = x
-        for i in range(p):
-            Yc[k, i] = y[i]
+        for i in range(p_rec):
+            Yc[k, i] = y[p - p_rec + i]
         Fc[k] = f
         if bad:
             stop[c] = k
@@ -307,8 +308,9 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     noise : (C, n_t, n_slots)   standard normals, case-major (one contiguous stream per case)
     bound : float               divergence bound on |x| and |u_cmd|
     X : (C, n_t or 0, n)        recorded states (time length 0: not recorded)
-    Y : (C, n_t, p), Ucmd, U, D : (C, n_t, m), F : (C, n_t)
-                                recorded measurements, commands, actuator outputs,
+    Y : (C, n_t, p_rec), Ucmd, U, D : (C, n_t, m), F : (C, n_t)
+                                recorded measurements (the last p_rec <= p of them),
+                                commands, actuator outputs,
                                 disturbances and force at each sample; case-major, so a
                                 case's loop writes contiguous memory (the time-major layout
                                 costs a cache miss per record and sample: 3× slower in a
