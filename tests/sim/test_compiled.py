@@ -152,3 +152,22 @@ def test_divergence_is_reported_the_same_way(tamu_case):
     assert errors[0].cases == errors[1].cases == (1,)
     assert errors[0].time == errors[1].time
     assert str(errors[0]) == str(errors[1])
+
+
+def test_kernels_compile_without_a_writable_cache(monkeypatch):
+    """Where numba finds no writable cache directory it refuses ``cache=True`` at decoration;
+    the kernels' decorator then compiles without the cache, with one warning."""
+    import numba.core.caching as caching
+
+    from flexsat.sim import kernels
+
+    for cls in caching.CacheImpl._locator_classes:
+        monkeypatch.setattr(cls, "from_function", classmethod(lambda cls, f, s: None))
+    monkeypatch.setattr(kernels, "_UNCACHED", [])
+
+    def double(x):
+        return 2.0 * x
+
+    with pytest.warns(RuntimeWarning, match="compiling without the on-disk cache"):
+        compiled = kernels._jit(error_model="numpy")(double)
+    assert compiled(1.5) == 3.0

@@ -52,10 +52,33 @@ are a positive quantum, a positive smoothing speed and the FIR length, validated
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from numba import njit, prange
 
 __all__ = ["ARGUMENTS", "RECORDS", "closed_loop", "closed_loop_parallel", "allocate_records"]
+
+_UNCACHED: list[str] = []
+
+
+def _jit(**options):
+    """``njit(cache=True, **options)``; where numba finds no writable cache directory (a
+    read-only install without a writable home) it refuses to cache at decoration time, and
+    the kernels are compiled in each process instead (a warning says so: a few seconds)."""
+    def wrap(function):
+        try:
+            return njit(cache=True, **options)(function)
+        except RuntimeError as exc:
+            if _UNCACHED:  # one warning for the module
+                return njit(**options)(function)
+            _UNCACHED.append(function.__name__)
+            warnings.warn(f"flexsat.sim.kernels: {exc}; compiling without the on-disk cache "
+                          "(set NUMBA_CACHE_DIR to a writable directory to keep it)",
+                          RuntimeWarning, stacklevel=2)
+            return njit(**options)(function)
+    return wrap
+
 
 #: input arguments of :func:`closed_loop` in order (the records of :data:`RECORDS` follow)
 ARGUMENTS = ("x0", "E", "block_diagonal", "P1u", "P1f", "P2f", "Cr", "fric", "substeps",
@@ -66,13 +89,13 @@ ARGUMENTS = ("x0", "E", "block_diagonal", "P1u", "P1f", "P2f", "Cr", "fric", "su
 RECORDS = ("X", "Y", "Ucmd", "U", "D", "F", "stop")
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@_jit(inline="always", error_model="numpy")
 def _ci(arr_cases, c):
     """Index into a leading case axis of length 1 (shared) or C (per case)."""
     return 0 if arr_cases == 1 else c
 
 
-@njit(cache=True, error_model="numpy")
+@_jit(error_model="numpy")
 def _force(x, cr, c1, c2, eps):
     """N(x) = −c1 tanh(r/ε) − c2 r with r = C_r x.
 
@@ -94,7 +117,7 @@ def _force(x, cr, c1, c2, eps):
     return -c1 * np.tanh(r / eps) - c2 * r
 
 
-@njit(cache=True, error_model="numpy")
+@_jit(error_model="numpy")
 def _propagate(E, x, out, block_diagonal):
     """out = E x: dense (n, n), or 2×2 block-diagonal stored as (n, 2): O(n)."""
     n = x.shape[0]
@@ -111,7 +134,7 @@ def _propagate(E, x, out, block_diagonal):
             out[i] = s
 
 
-@njit(cache=True, error_model="numpy")
+@_jit(error_model="numpy")
 def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
           imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
           Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
@@ -275,7 +298,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     stop[c] = -1
 
 
-@njit(cache=True, error_model="numpy")
+@_jit(error_model="numpy")
 def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
                 Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
@@ -325,7 +348,7 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
               X, Y, Ucmd, U, D, F, stop)
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@_jit(parallel=True, error_model="numpy")
 def closed_loop_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                          imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
                          fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot,
