@@ -74,8 +74,11 @@ def bench_single(repeat):
 
 def bench_batch(repeat, n_cases=1000):
     g1 = G1 * (1 + 0.2 * np.linspace(-1, 1, n_cases))
-    plant, law, cfg = tamu_run(friction=True, noise=True, g1=g1)
+    plant, law, cfg = tamu_run(g1=g1)
     steps = cfg.n_steps * n_cases
+    linear, _ = per_step(plant, law, cfg, repeat)
+    linear_py, _ = per_step(plant, law, cfg, 1, compiled=False)
+    plant, law, cfg = tamu_run(friction=True, noise=True, g1=g1)
     comp, _ = per_step(plant, law, cfg, repeat)
     py, _ = per_step(plant, law, cfg, 1, compiled=False)
     mem = {}
@@ -85,6 +88,7 @@ def bench_batch(repeat, n_cases=1000):
         mem[compiled] = tracemalloc.get_traced_memory()[1] / n_cases
         tracemalloc.stop()
     return dict(compiled=comp * cfg.n_steps / steps, python=py * cfg.n_steps / steps,
+                linear=linear * cfg.n_steps / steps, linear_python=linear_py * cfg.n_steps / steps,
                 mem=mem[True], mem_python=mem[False], n=n_cases)
 
 
@@ -131,6 +135,8 @@ def main(argv=None):
     print(f"    with friction + noise: {a['full'] * US:.2f} µs/step compiled, "
           f"{a['full_python'] * US:.1f} Python loop")
     b = bench_batch(max(2, args.repeat // 10))
+    print(f"(b) {b['n']} cases, linear: {b['linear'] * US:.3f} µs per case-step compiled, "
+          f"{b['linear_python'] * US:.3f} Python loop")
     print(f"(b) {b['n']} cases, friction + noise: {b['compiled'] * US:.3f} µs per case-step "
           f"compiled, {b['python'] * US:.3f} Python loop; peak memory {b['mem'] / 1e3:.0f} kB "
           f"per case compiled, {b['mem_python'] / 1e3:.0f} kB Python loop")
