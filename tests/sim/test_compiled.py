@@ -170,6 +170,32 @@ def test_divergence_is_reported_the_same_way(tamu_case):
     assert str(errors[0]) == str(errors[1])
 
 
+def test_divergence_of_a_modal_batch_is_reported_the_same_way(tamu_case):
+    """20 cases (modal propagation), case 7 destabilised: the Python loop's exception (its
+    bound is on the physical state: the compiled path re-runs a diverged modal batch dense)."""
+    kp, kd = np.full(20, 5.0), np.full(20, 20.0)
+    kp[7], kd[7] = 1e9, 1e7
+    law = PD(kp, kd, target=tamu_case.angle)
+    cfg = SimConfig(duration=15.0, friction=FRICTION)
+    errors = []
+    for compiled in (None, False):
+        with pytest.raises(SimulationDiverged) as info:
+            simulate(tamu_case.model(), law, cfg, compiled=compiled)
+        errors.append(info.value)
+    assert errors[0].cases == (7,)
+    assert str(errors[0]) == str(errors[1])
+
+
+def test_recorded_states_are_the_python_loops(tamu_case):
+    """record_states=True on a modal batch: the states, back in the plant's coordinates."""
+    cfg = SimConfig(duration=15.0, friction=FRICTION)
+    law = PD(np.linspace(5.0, 10.0, 6), 20.0, target=0.5)
+    fast, slow = _both(tamu_case.model(), law, cfg, record_states=True)
+    assert fast.dataset.attrs["propagation"] == "modal"
+    a, b = fast.dataset.state.values, slow.dataset.state.values
+    assert np.abs(a - b).max() <= 1e-10 * np.abs(b).max()
+
+
 def test_kernels_compile_without_a_writable_cache(monkeypatch):
     """Where numba finds no writable cache directory it refuses ``cache=True`` at decoration;
     the kernels' decorator then compiles without the cache, with one warning."""

@@ -204,7 +204,7 @@ class _Args:
     """The kernel's arguments for a whole batch (each sliced per block by :meth:`block`)."""
 
     def __init__(self, plant, controller, config, nc, x0, sensors, actuators, disturbances,
-                 substeps, measured, kept, law):
+                 substeps, measured, kept, law, modal: bool = True):
         dt, n_t = config.dt, config.n_steps + 1
         self.nc, self.n_t = nc, n_t
         A, B = plant.linear_part()
@@ -217,7 +217,7 @@ class _Args:
             j = slices[k].start
             Bf = B[..., :, j:j + 1]
         n = plant.nx
-        modal = modal_form(plant, nc * (n_t - 1) * substeps)
+        modal = modal_form(plant, nc * (n_t - 1) * substeps) if modal else None
         self.T = None if modal is None else modal[0]
         Tinv = None if modal is None else modal[1]
         if modal is not None:
@@ -408,6 +408,14 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
         _outputs(rec, plant, a, c0, c1, X, U[c0:c1], Dist[c0:c1], F[c0:c1], outs, energy,
                  vib)
     if (stop >= 0).any():
+        if a.T is not None:  # the Python loop bounds the physical state: rerun it dense
+            a = _Args(plant, controller, config, nc, x0, sensors, actuators, disturbances,
+                      substeps, measured, kept, law, modal=False)
+            stop[:] = -1
+            for c0 in range(0, nc, size):
+                c1 = min(nc, c0 + size)
+                a.block(c0, c1, seeds, n_t, np.empty((c1 - c0, 0, n)), Y[c0:c1], Ucmd[c0:c1],
+                        U[c0:c1], Dist[c0:c1], F[c0:c1], stop[c0:c1])
         raise _divergence(a, config, seeds, stop, Ucmd)
     Dist += U  # the plant's input u + d, as the Python loop records it
     rec.commands, rec.applied, rec.disturbed = (np.swapaxes(v, 0, 1) for v in (Ucmd, U, Dist))
@@ -499,6 +507,6 @@ def _divergence(a, config, seeds, stop, Ucmd):
         c1 = min(nc, c0 + size)
         a.block(c0, c1, seeds, k + 1, X[c0:c1], *(r[c0:c1] for r in rec), F[c0:c1],
                 st[c0:c1])
-    X = X[:, max(k - 1, 0):] if a.T is None else X[:, max(k - 1, 0):] @ a.T.T
+    X = X[:, max(k - 1, 0):]  # a dense run (run() reruns a modal one dense)
     prev = float(np.abs(X[:, 0]).max()) if k > 0 else 0.0
     return _diverged(X[:, -1], Ucmd[:, k], config.dt * k, k, prev, config)
