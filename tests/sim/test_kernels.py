@@ -140,10 +140,10 @@ def reference_loop(prob):
                     x = x + pick(dx, c)
             f = N(x)
             y = Cm @ x + Dm @ w + Dmf * f + sens[:, 2]
-            q = sens[:, 0]
-            y = np.where(q > 0, q * np.round(y / np.where(q > 0, q, 1.0)), y)
             slot = P["sensor_slot"]
             y = y + np.where(slot >= 0, sens[:, 1] * P["noise"][c, k, slot], 0.0)
+            q = sens[:, 0]
+            y = np.where(q > 0, q * np.round(y / np.where(q > 0, q, 1.0)), y)
             y = np.clip(y, -sens[:, 3], sens[:, 3])
             if P["fir_src"] >= 0:
                 src = y[P["fir_src"]]

@@ -395,10 +395,19 @@ def reference_tables(law, times: np.ndarray, n_cases: int):
         target = per_case(law.target, n_cases, "target")
         z = np.zeros((n_t, target.shape[0]))
         return target + z, z, z, z
-    r = law.reference(times[:, None])
+    table = getattr(law, "_table", None)
+    if table is not None and table[0].shape == times.shape and np.array_equal(table[0], times):
+        # the simulator tabulated the reference on these samples: its arrays, read-only (a
+        # LinearLaw keeps them without a copy: a batch's tables are its largest law arrays)
+        values = [np.asarray(v, float).view() for v in table[1:]]
+        for v in values:
+            v.flags.writeable = False
+    else:
+        r = law.reference(times[:, None])
+        values = [getattr(r, name) for name in ("theta", "theta_dot", "theta_ddot", "u")]
     out = []
-    for name in ("theta", "theta_dot", "theta_ddot", "u"):
-        v = np.asarray(getattr(r, name), float)
+    for v in values:
+        v = np.asarray(v, float)
         v = np.broadcast_to(v, np.broadcast_shapes(v.shape, (n_t, 1)))
         if v.ndim != 2 or v.shape[1] not in (1, n_cases):
             raise ValueError(f"reference: has {v.shape[-1]} cases, the run has n_cases = "

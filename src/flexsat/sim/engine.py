@@ -29,7 +29,7 @@ from flexsat.sim.channels import noise_column, noise_columns, resolve_channels
 from flexsat.sim.instruments import InputForces, Instruments, unit_row
 from flexsat.sim.config import (FRICTION_STEP_LIMIT, SimConfig, check_resources,
                                 stable_substeps)
-from flexsat.sim import integrators
+from flexsat.sim import compiled as compiled_path, integrators
 from flexsat.sim.recording import CHUNK, Recorder, SimResult
 from flexsat.validation import require_count, require_finite
 
@@ -232,6 +232,7 @@ def simulate(
     theta0=None,
     initial_state=None,
     record_states: bool = False,
+    compiled: bool | None = None,
 ) -> SimResult:
     """Run a batch of closed-loop maneuvers.
 
@@ -259,6 +260,13 @@ def simulate(
         Full initial state instead of rest at ``theta0``.
     record_states : bool
         Also store the full state history (n_cases × n_t × n_x).
+    compiled : bool, optional
+        Which loop runs: by default (None) the compiled loop of :mod:`flexsat.sim.compiled`
+        whenever the plant, the law and every sensor, actuator and disturbance have its array
+        form (:func:`flexsat.sim.compiled.unsupported`), else this module's Python loop;
+        False forces the Python loop, True the compiled one (a ValueError saying why when it
+        cannot). Both give the same result to round-off; ``dataset.attrs["engine"]`` says
+        which ran.
 
     Raises
     ------
@@ -300,6 +308,22 @@ def simulate(
         if k not in controller.reads and any(c.name == k for c in plant.outputs))
     inst = Instruments(plant, measured, sensors, columns, dt, nc, batched, bool(forced))
     forces = InputForces(plant, forced, batched)
+    t = dt * np.arange(n + 1)
+    if getattr(controller, "reference", None) is not None:  # laws without one may be frozen
+        controller.tabulate_reference(t)
+    kept = tuple(k for k in measured if k in getattr(plant, "recorded_measurements", ()))
+    if compiled is not False:
+        reason = compiled_path.unsupported(plant, controller, sensors, actuators,
+                                           disturbances, measured)
+        law = None if reason is not None else controller.linear_form(dt, t, nc)
+        if reason is None and law is None:
+            reason = f"{type(controller).__name__} has no linear form"
+        if reason is None:
+            return compiled_path.run(plant, controller, config, nc, seeds, x, theta0, sensors,
+                                     actuators, disturbances, substeps, measured, kept,
+                                     record_states, law)
+        if compiled:
+            raise ValueError(f"compiled: this run cannot take the compiled loop: {reason}")
 
     def input_force(xs, w):
         """Input-channel forces f_in (n_cases, m) at states xs."""
@@ -321,11 +345,7 @@ def simulate(
     width = sum(s.stop - s.start for s in columns.values())
     streams = _NoiseStreams(seeds, width) if noisy else None
 
-    t = dt * np.arange(n + 1)
-    if getattr(controller, "reference", None) is not None:  # laws without one may be frozen
-        controller.tabulate_reference(t)
     cstate = controller.initial_state(nc)
-    kept = tuple(k for k in measured if k in getattr(plant, "recorded_measurements", ()))
     rec = Recorder(plant, n + 1, nc, kept, {k: d.force_name for k, d in forced.items()},
                    record_states, batched, [k for k, d in disturbances.items() if np.any(d.random)])
     law = type(controller).__name__
@@ -395,7 +415,7 @@ def simulate(
                 x = stepper.step(x, w, force)
         w_prev = w
     rec.flush(n + 1)
-    return rec.dataset(t, controller, theta0, config, substeps)
+    return rec.dataset(t, controller, theta0, config, substeps, engine="python")
 
 
 __all__ = ["DIVERGENCE_BOUND", "FRICTION_STEP_LIMIT", "SimConfig", "SimResult",

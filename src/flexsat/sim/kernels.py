@@ -9,9 +9,9 @@ at each sample k (t_k = k dt), for each case c
 2. force at the sample, f_k = F(x_k) (the low-rank bearing friction below, 0 if none);
 3. measurement y = C_m x + D_m w_{k−1} + D_mf f_k (w_{k−1} the input applied over the last
    period, the feedthrough of the acceleration into root loads);
-4. sensor model per element i: v = y_i + bias_i; v = q_i rint(v / q_i) if q_i > 0 (an
-   encoder of quantum q, seed 000 Att. 3: 0.01 deg); v += std_i · noise[c, k, slot_i];
-   v = clip(v, ±sat_i);
+4. sensor model per element i (that of :class:`flexsat.sim.channels.ChannelSensor`):
+   v = y_i + bias_i + std_i · noise[c, k, slot_i]; v = q_i rint(v / q_i) if q_i > 0 (an
+   encoder of quantum q, seed 000 Att. 3: 0.01 deg); v = clip(v, ±sat_i);
 5. optional causal FIR-derivative channel: y[dst] = Σ_j c_j v_src(t_{k−L+1+j}), the
    least-squares differentiating filter of
    :func:`flexsat.sim.sensors.least_squares_derivative_weights`, its history started full of
@@ -52,10 +52,33 @@ are a positive quantum, a positive smoothing speed and the FIR length, validated
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from numba import njit, prange
 
 __all__ = ["ARGUMENTS", "RECORDS", "closed_loop", "closed_loop_parallel", "allocate_records"]
+
+_UNCACHED: list[str] = []
+
+
+def _jit(**options):
+    """``njit(cache=True, **options)``; where numba finds no writable cache directory (a
+    read-only install without a writable home) it refuses to cache at decoration time, and
+    the kernels are compiled in each process instead (a warning says so: a few seconds)."""
+    def wrap(function):
+        try:
+            return njit(cache=True, **options)(function)
+        except RuntimeError as exc:
+            if _UNCACHED:  # one warning for the module
+                return njit(**options)(function)
+            _UNCACHED.append(function.__name__)
+            warnings.warn(f"flexsat.sim.kernels: {exc}; compiling without the on-disk cache "
+                          "(set NUMBA_CACHE_DIR to a writable directory to keep it)",
+                          RuntimeWarning, stacklevel=2)
+            return njit(**options)(function)
+    return wrap
+
 
 #: input arguments of :func:`closed_loop` in order (the records of :data:`RECORDS` follow)
 ARGUMENTS = ("x0", "E", "block_diagonal", "P1u", "P1f", "P2f", "Cr", "fric", "substeps",
@@ -66,13 +89,13 @@ ARGUMENTS = ("x0", "E", "block_diagonal", "P1u", "P1f", "P2f", "Cr", "fric", "su
 RECORDS = ("X", "Y", "Ucmd", "U", "D", "F", "stop")
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@_jit(inline="always", error_model="numpy")
 def _ci(arr_cases, c):
     """Index into a leading case axis of length 1 (shared) or C (per case)."""
     return 0 if arr_cases == 1 else c
 
 
-@njit(cache=True, error_model="numpy")
+@_jit(error_model="numpy")
 def _force(x, cr, c1, c2, eps):
     """N(x) = −c1 tanh(r/ε) − c2 r with r = C_r x.
 
@@ -94,7 +117,7 @@ def _force(x, cr, c1, c2, eps):
     return -c1 * np.tanh(r / eps) - c2 * r
 
 
-@njit(cache=True, error_model="numpy")
+@_jit(error_model="numpy")
 def _propagate(E, x, out, block_diagonal):
     """out = E x: dense (n, n), or 2×2 block-diagonal stored as (n, 2): O(n)."""
     n = x.shape[0]
@@ -111,7 +134,7 @@ def _propagate(E, x, out, block_diagonal):
             out[i] = s
 
 
-@njit(cache=True, error_model="numpy")
+@_jit(error_model="numpy")
 def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
           imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
           Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
@@ -119,6 +142,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     n = x0.shape[1]
     m = P1u.shape[2]
     p = Cm.shape[1]
+    p_rec = Y.shape[2]
     nk = Ak.shape[2]
     n_t = Y.shape[1]
     L = fir_w.shape[0]
@@ -173,11 +197,11 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 s += Dmc[i, j] * w[j]
             s += Dmfc[i] * f
             s += sens[i, 2]
+            if sensor_slot[i] >= 0:
+                s += sens[i, 1] * noisec[k, sensor_slot[i]]
             q = sens[i, 0]
             if q > 0.0:
                 s = q * np.rint(s / q)
-            if sensor_slot[i] >= 0:
-                s += sens[i, 1] * noisec[k, sensor_slot[i]]
             sat = sens[i, 3]
             s = min(max(s, -sat), sat)
             y[i] = s
@@ -237,8 +261,8 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 bad = True
         if rec_x:
             X[c, k, :] = x
-        for i in range(p):
-            Yc[k, i] = y[i]
+        for i in range(p_rec):
+            Yc[k, i] = y[p - p_rec + i]
         Fc[k] = f
         if bad:
             stop[c] = k
@@ -274,7 +298,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     stop[c] = -1
 
 
-@njit(cache=True, error_model="numpy")
+@_jit(error_model="numpy")
 def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
                 Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
@@ -307,8 +331,9 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     noise : (C, n_t, n_slots)   standard normals, case-major (one contiguous stream per case)
     bound : float               divergence bound on |x| and |u_cmd|
     X : (C, n_t or 0, n)        recorded states (time length 0: not recorded)
-    Y : (C, n_t, p), Ucmd, U, D : (C, n_t, m), F : (C, n_t)
-                                recorded measurements, commands, actuator outputs,
+    Y : (C, n_t, p_rec), Ucmd, U, D : (C, n_t, m), F : (C, n_t)
+                                recorded measurements (the last p_rec <= p of them),
+                                commands, actuator outputs,
                                 disturbances and force at each sample; case-major, so a
                                 case's loop writes contiguous memory (the time-major layout
                                 costs a cache miss per record and sample: 3× slower in a
@@ -323,7 +348,7 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
               X, Y, Ucmd, U, D, F, stop)
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@_jit(parallel=True, error_model="numpy")
 def closed_loop_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                          imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
                          fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot,

@@ -62,24 +62,30 @@ class Recorder:
     """Histories of one run (module docstring); arrays are (n_t, n_cases[, size])."""
 
     def __init__(self, plant, n: int, nc: int, measured: tuple[str, ...], force_names: dict,
-                 record_states: bool, batched: bool, random_channels=()):
+                 record_states: bool, batched: bool, random_channels=(), allocate: bool = True):
         self.plant, self.n, self.nc, self.batched = plant, n, nc, batched
         m = plant.n_inputs
-        self.commands = np.zeros((n, nc, m))
-        self.applied = np.zeros((n, nc, m))
-        self.disturbed = np.zeros((n, nc, m))  # applied + disturbance: the plant's input
-        self.forces = np.zeros((n, nc, m)) if force_names else None
+        # the compiled loop (flexsat.sim.compiled) writes its own records and hands views of
+        # them over (allocate=False): the histories are then never allocated twice
+        zeros = np.zeros if allocate else (lambda shape: None)
+        self.commands = zeros((n, nc, m))
+        self.applied = zeros((n, nc, m))
+        self.disturbed = zeros((n, nc, m))  # applied + disturbance: the plant's input
+        self.forces = zeros((n, nc, m)) if force_names else None
         self.force_names = force_names
         # disturbance and force histories: of the channels that have them, and of those the
         # plant always records (the planar torque: a stable dataset for reports)
         always = set(getattr(plant, "recorded_disturbances", ()))
         self.with_disturbance = set(random_channels) | always
         self.with_force = set(force_names) | always
-        self.measured = {k: _history(n, nc, _size(plant.outputs, k)) for k in measured}
-        self.states = np.empty((n, nc, plant.nx)) if record_states else None
-        self.buffer = self.states if record_states else np.empty((min(CHUNK, n), nc, plant.nx))
+        self.measured = {k: _history(n, nc, _size(plant.outputs, k)) if allocate else None
+                         for k in measured}
+        self.states = zeros((n, nc, plant.nx)) if record_states else None
+        self.buffer = self.states if record_states or not allocate else np.empty(
+            (min(CHUNK, n), nc, plant.nx))
         names = [c for c in plant.recorded]
-        self.outputs = {k: _history(n, nc, _size(plant.outputs, k)) for k in names}
+        self.outputs = {k: _history(n, nc, _size(plant.outputs, k)) if allocate else None
+                        for k in names}
         mats = [plant.output_matrices(k) for k in names]
         self.linear = [k for k, mt in zip(names, mats) if mt is not None]
         self.nonlinear = [k for k, mt in zip(names, mats) if mt is None]
@@ -89,8 +95,10 @@ class Recorder:
             self.CT, self.DT, self.DfT = (np.swapaxes(M, -1, -2) for M in (C, D, Df))
         has_vib = hasattr(plant, "vibration_energy")
         probe = np.zeros((plant.n_cases, plant.nx))  # (cases, n_x): one state per parameter case
-        self.energy = np.zeros((n, nc)) if plant.energy(probe) is not None else None
-        self.vibration = np.zeros((n, nc)) if has_vib and self.energy is not None else None
+        self.has_energy = plant.energy(probe) is not None
+        self.has_vibration = has_vib and self.has_energy
+        self.energy = zeros((n, nc)) if self.has_energy else None
+        self.vibration = zeros((n, nc)) if self.has_vibration else None
         self.done = 0
 
     def flush(self, end: int) -> None:
@@ -126,8 +134,10 @@ class Recorder:
             return X @ MT
         return np.einsum("tci,cip->tcp", X, MT)
 
-    def dataset(self, t, controller, theta0, config, substeps) -> SimResult:
-        """The xarray dataset (case × time; views, no copies) and the maneuver metrics."""
+    def dataset(self, t, controller, theta0, config, substeps, engine: str = "python"
+                ) -> SimResult:
+        """The xarray dataset (case × time; views, no copies) and the maneuver metrics;
+        ``engine`` (``"python"`` or ``"compiled"``: which loop ran) goes to its attributes."""
         plant, nc = self.plant, self.nc
         data = {}
 
@@ -190,7 +200,7 @@ class Recorder:
         ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}),
                                       "case": np.arange(nc)})
         ds.attrs.update(control_rate_Hz=config.control_rate, settling_band_rad=config.settling_band,
-                        substeps=substeps)
+                        substeps=substeps, engine=engine)
         return SimResult(ds, metrics)
 
 
