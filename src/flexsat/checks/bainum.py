@@ -33,7 +33,7 @@ they are the published values here, with half a unit of the notes' last digit.
 The engine is sampled-data (zero-order hold of the command over each control period), the
 report's loop continuous. Each run's control rate is chosen so that this sampled-data error
 stays inside the half-unit tolerance, or it is added to the tolerance and said so in the
-comment (the pitch history at 0.5 Hz); tests/checks/test_bainum.py measures every response row
+comment (the pitch history at 0.5 Hz); tests/checks/test_bainum_rows.py measures every response row
 against the continuous loop of the case (``BainumBeam.simulate``, DOP853 at rtol 1e-10) and
 asserts that the error stays inside the allowance. A peak is the largest recorded sample refined
 by the parabola through it and its two neighbours (error O(h³), far below the sampled-data
