@@ -38,7 +38,7 @@ from scipy.integrate import solve_ivp
 
 from flexsat.cases.tamu import tamu
 from flexsat.sim.engine import _noise_streams, simulate
-from flexsat.sim.sensors import SensorState
+from flexsat.sim.sensors import Sensors, least_squares_derivative_weights
 from flexsat.units import to_si
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -75,16 +75,13 @@ def best_of(fn, repeat: int):
 
 # parts of one simulate() call worth naming: (file, function) -> description
 PARTS = {
-    ("base.py", "reference_at"): "reference evaluation `Controller.reference_at` "
-                                 "(law + recording: 2 calls per sample)",
-    ("integrators.py", "step"): "plant propagation `ExponentialStepper.step`",
-    ("engine.py", "friction_force"): "  of which friction force (engine `friction_force`)",
-    ("hub_appendage.py", "outputs"): "plant outputs `HubAppendage.outputs`",
-    ("hub_appendage.py", "energy"): "`HubAppendage.energy` (2 calls per sample: recorded and "
-                                    "inside `vibration_energy`)",
-    ("sensors.py", "measure"): "sensor model `SensorState.measure`",
-    ("integrators.py", "build"): "propagator set-up `ExponentialStepper.build` (expm)",
-    ("engine.py", "_package"): "result packaging `_package` (metrics + xarray)",
+    ("compiled.py", "run"): "compiled path `flexsat.sim.compiled.run` (set-up, loop, outputs)",
+    ("kernels.py", "closed_loop"): "  of which the numba loop `kernels.closed_loop`",
+    ("compiled.py", "_outputs"): "  of which outputs and energies after the loop",
+    ("integrators.py", "phi_products"): "propagator set-up `phi_products` (expm)",
+    ("engine.py", "_propagator"): "Python-loop propagator set-up",
+    ("instruments.py", "measure"): "Python-loop measurements `Instruments.measure`",
+    ("recording.py", "dataset"): "result packaging `Recorder.dataset` (metrics + xarray)",
 }
 
 
@@ -101,6 +98,33 @@ def profile_top(fn, n: int = 15):
     total = max(ct for (f, name), ct in cum.items() if name == "simulate")
     shares = [(desc, cum[key] / total) for key, desc in PARTS.items() if key in cum]
     return buf.getvalue(), shares
+
+
+# ------------------------------------------------------------------------------------------
+# the baseline's sensors
+class SensorState:
+    """The single-axis sensor model written out on its own (encoder history, LS rate filter or
+    gyro, strain gauge): the baseline's sensors, independent of the engine's per-channel ones."""
+
+    def __init__(self, sensors: Sensors, theta0: np.ndarray, dt: float):
+        self.sensors = sensors
+        self.weights = least_squares_derivative_weights(sensors.rate_window, sensors.rate_order, dt)
+        self.history = np.repeat(sensors.quantize(theta0)[:, None], sensors.rate_window, axis=1)
+
+    def measure(self, truth: dict[str, np.ndarray], noise: np.ndarray) -> dict[str, np.ndarray]:
+        """Measurements from true outputs; ``noise`` (n_cases, 2) standard normals [gyro, strain]."""
+        s = self.sensors
+        theta = s.quantize(truth["theta"])
+        self.history[:, :-1] = self.history[:, 1:]
+        self.history[:, -1] = theta
+        if s.rate == "ls_filter":
+            rate = self.history @ self.weights
+        elif s.rate == "gyro":
+            rate = truth["theta_dot"] + s.gyro_noise * noise[:, 0]
+        else:
+            rate = truth["theta_dot"]
+        root = truth["root_torque"] + s.strain_noise * noise[:, 1]
+        return {"theta": theta, "theta_dot": rate, "root_torque": root}
 
 
 # ------------------------------------------------------------------------------------------

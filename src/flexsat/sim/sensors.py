@@ -66,27 +66,3 @@ class Sensors:
     def quantize(self, theta: np.ndarray) -> np.ndarray:
         q = self.encoder_resolution
         return theta if q == 0 else q * np.round(theta / q)
-
-
-class SensorState:
-    """Per-run sensor memory (the encoder history used by the rate filter)."""
-
-    def __init__(self, sensors: Sensors, theta0: np.ndarray, dt: float):
-        self.sensors = sensors
-        self.weights = least_squares_derivative_weights(sensors.rate_window, sensors.rate_order, dt)
-        self.history = np.repeat(sensors.quantize(theta0)[:, None], sensors.rate_window, axis=1)
-
-    def measure(self, truth: dict[str, np.ndarray], noise: np.ndarray) -> dict[str, np.ndarray]:
-        """Measurements from true outputs; ``noise`` (n_cases, 2) standard normals [gyro, strain]."""
-        s = self.sensors
-        theta = s.quantize(truth["theta"])
-        self.history[:, :-1] = self.history[:, 1:]
-        self.history[:, -1] = theta
-        if s.rate == "ls_filter":
-            rate = self.history @ self.weights
-        elif s.rate == "gyro":
-            rate = truth["theta_dot"] + s.gyro_noise * noise[:, 0]
-        else:
-            rate = truth["theta_dot"]
-        root = truth["root_torque"] + s.strain_noise * noise[:, 1]
-        return {"theta": theta, "theta_dot": rate, "root_torque": root}
