@@ -442,7 +442,8 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
     stop = np.full(nc, -1, dtype=np.int64)
     X_all = np.empty((nc, n_t, n)) if record_states else None
     lean = a.lean and not record_states
-    size = _block_size(nc, n_t, (0 if lean else n) + a.width)
+    # a block's temporaries: the states unless lean, the noise streams if any are drawn
+    size = _block_size(nc, n_t, (0 if lean else n) + (a.width if a.noisy else 0))
     if lean:  # the kernel's records: the recorded outputs, h, the energy
         O = np.empty((nc, n_t, a.Co.shape[1]))
         energy = np.empty((nc, n_t)) if a.Q.shape[0] else None
@@ -512,6 +513,8 @@ def _block_size(nc: int, n_t: int, values: int) -> int:
     :data:`BLOCK_BYTES` and within :data:`BLOCK_SHARE` of a case's recorded histories per
     case of the batch (a block's temporaries stay small next to what the run keeps)."""
     one = n_t * values * 8
+    if one == 0:  # nothing kept per case: one block
+        return nc
     budget = min(BLOCK_BYTES, BLOCK_SHARE * nc * n_t * 8)
     return max(1, min(nc, int(budget // one)))
 
