@@ -322,6 +322,9 @@ class _Args:
         reads = [i for k in controller.reads for i in range(self.offsets[k].start,
                                                                 self.offsets[k].stop)]
         self.law = _pad_law(law, p, reads, order, m)  # read-only: copied block by block
+        # per-case values of the law per sample: what a block's copy of it holds per case
+        self.law_values = sum(a.size / a.shape[1] for a in self.law[:6]
+                              if a.shape[1] == nc > 1) / n_t
         self.rec_start = min((self.offsets[k].start for k in kept), default=p)
         self.p_rec = p - self.rec_start
         act = np.zeros((1, m, 2))
@@ -438,12 +441,14 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
                    record_states, batched,
                    [k for k, d in disturbances.items() if np.any(d.random)], allocate=False)
     Y, Ucmd, U, Dist = (np.empty((nc, n_t, w)) for w in (a.p_rec, m, m, m))
-    F = np.empty((nc, n_t))
+    F = np.empty((nc, n_t if forced else 0))  # no force: nothing to record
     stop = np.full(nc, -1, dtype=np.int64)
     X_all = np.empty((nc, n_t, n)) if record_states else None
     lean = a.lean and not record_states
-    # a block's temporaries: the states unless lean, the noise streams if any are drawn
-    size = _block_size(nc, n_t, (0 if lean else n) + (a.width if a.noisy else 0))
+    # a block's temporaries: the states unless lean, the noise streams if any are drawn and
+    # the copy of a per-case law (its arrays are read-only: block.law_cases)
+    size = _block_size(nc, n_t, (0 if lean else n) + (a.width if a.noisy else 0)
+                       + a.law_values)
     if lean:  # the kernel's records: the recorded outputs, h, the energy
         O = np.empty((nc, n_t, a.Co.shape[1]))
         energy = np.empty((nc, n_t)) if a.Q.shape[0] else None
@@ -483,8 +488,12 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
         for k, w in zip(plant.recorded, a.widths):
             outs[k] = O[..., col] if w == 1 else O[..., col:col + w]
             col += w
-        # E − h² / (2 I_tot), HybridPlant.vibration_energy's formula on the recorded h
-        vib = None if a.inertia is None else energy - 0.5 * O[..., col] ** 2 / a.inertia
+        vib = None
+        if a.inertia is not None:  # E − h² / (2 I_tot) (HybridPlant.vibration_energy)
+            vib = O[..., col]  # written over h, in place: no history more
+            np.square(vib, out=vib)
+            vib *= -0.5 / a.inertia
+            vib += energy
     Dist += U  # the plant's input u + d, as the Python loop records it
     rec.commands, rec.applied, rec.disturbed = (np.swapaxes(v, 0, 1) for v in (Ucmd, U, Dist))
     if forced:
@@ -508,8 +517,8 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
     return result
 
 
-def _block_size(nc: int, n_t: int, values: int) -> int:
-    """Cases per block: their states and noise (``values`` per sample) within
+def _block_size(nc: int, n_t: int, values: float) -> int:
+    """Cases per block: their states, noise and law copy (``values`` per sample) within
     :data:`BLOCK_BYTES` and within :data:`BLOCK_SHARE` of a case's recorded histories per
     case of the batch (a block's temporaries stay small next to what the run keeps)."""
     one = n_t * values * 8

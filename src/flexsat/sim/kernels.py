@@ -172,6 +172,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     rec_x = X.shape[1] > 0
     r_out = O.shape[2] if O.shape[1] > 0 else 0
     rec_e = En.shape[1] > 0 and Q.shape[0] > 0
+    rec_f = F.shape[1] > 0
     cp = _ci(E.shape[0], c)
     cu = _ci(P1u.shape[0], c)
     cm = _ci(Cm.shape[0], c)
@@ -311,7 +312,8 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
             En[c, k] = 0.5 * _dot(x, qx)
         for i in range(p_rec):
             Yc[k, i] = y[p - p_rec + i]
-        Fc[k] = f
+        if rec_f:
+            Fc[k] = f
         if bad:
             stop[c] = k
             return
@@ -383,10 +385,11 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     Q : (Cq, n, n)              energy matrix, symmetric (leading length 0: none)
                                 (Co and Cq are 1 or C; read only when O, En have samples)
     X : (C, n_t or 0, n)        recorded states (time length 0: not recorded)
-    Y : (C, n_t, p_rec), Ucmd, U, D : (C, n_t, m), F : (C, n_t)
+    Y : (C, n_t, p_rec), Ucmd, U, D : (C, n_t, m), F : (C, n_t or 0)
                                 recorded measurements (the last p_rec <= p of them),
                                 commands, actuator outputs,
-                                disturbances and force at each sample; case-major, so a
+                                disturbances and force (time length 0: not recorded) at
+                                each sample; case-major, so a
                                 case's loop writes contiguous memory (the time-major layout
                                 costs a cache miss per record and sample: 3× slower in a
                                 batch of 1,000)
