@@ -9,6 +9,8 @@ from flexsat.dynamics.hybrid import ModalHybrid
 from flexsat.sim import Impulses, SimConfig, simulate
 from flexsat.structures.modal_model import ModalModel
 
+EPS = np.finfo(float).eps
+
 
 @pytest.fixture(scope="module")
 def case():
@@ -64,3 +66,29 @@ def test_free_modal_model_is_refused():
     modal = ModalModel.from_fe(asm.modes(8, rigid_body_modes=6))
     with pytest.raises(ValueError, match=r"^modal: hybrid coordinates need a cantilevered"):
         ModalHybrid(modal, 1.0)
+
+
+@pytest.mark.parametrize("plant", [nps().model(), tamu(n_modes=4).model(),
+                                   ModalHybrid(ModalModel.from_hub_appendage(
+                                       tamu(n_modes=4).model()), 0.353, axis="z")],
+                         ids=["nps", "tamu", "modal_hybrid"])
+def test_energy_and_momentum_are_the_plants_quadratic_and_linear_forms(plant):
+    """E = ½ xᵀ Q x with Q = blockdiag(K, M) (Att. 3 Eq. 7) and h = r · x (the compiled loop
+    records these per sample), and the vibration energy E − (r · x)² / (2 I_tot); to 16 eps of
+    the energy scale ½ |x|² ‖Q‖ (two orders of summation of n_x products)."""
+    x = np.random.default_rng(6).standard_normal((5, plant.nx))
+    Q = plant.energy_matrix
+    assert np.array_equal(Q, Q.T)
+    scale = 0.5 * np.abs(Q).max() * (x**2).sum(axis=-1) * plant.nx
+    E = plant.energy(x)
+    assert np.all(np.abs(0.5 * np.einsum("ci,ij,cj->c", x, Q, x) - E) <= 16 * EPS * scale)
+    h = x @ plant.momentum_row
+    np.testing.assert_allclose(h, plant.momentum(x), rtol=16 * EPS)
+    vib = E - 0.5 * h**2 / plant.total_inertia
+    assert np.all(np.abs(vib - plant.vibration_energy(x)) <= 16 * EPS * scale)
+
+
+def test_a_stiffened_plant_has_no_quadratic_energy():
+    """With the stiffening term the energy is quartic (Att. 3 Eq. 7): no energy matrix, so the
+    compiled loop keeps the states for it."""
+    assert tamu(n_modes=4, stiffening=True).model().energy_matrix is None

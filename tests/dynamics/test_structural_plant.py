@@ -283,3 +283,17 @@ def test_fixed_dofs_and_bad_constructor_arguments():
         StructuralPlant(_model3()._replace(B=np.zeros((3, 0)), Cq=np.zeros((0, 3)),
                                            Cv=None, Dff=None), (), ()).output_matrices("x")
     assert Channel("ok", "m").name == "ok"
+
+
+def test_energy_is_the_quadratic_form_of_the_energy_matrix():
+    """E = ½ xᵀ Q x, Q = blockdiag(K, M) (what the compiled loop evaluates per sample); to
+    16 eps of the energy scale ½ |x|² ‖Q‖ n (two orders of summation of n_x products)."""
+    M, D, K = _random_model()
+    plant = StructuralPlant.from_second_order(
+        SecondOrderModel(M, D, K, np.zeros((5, 1)), np.zeros((1, 5))), [Actuator("f", "force", 1)])
+    Q = plant.energy_matrix
+    assert np.array_equal(Q, Q.T)
+    x = np.random.default_rng(2).normal(size=(4, 10))
+    scale = 0.5 * np.abs(Q).max() * (x**2).sum(axis=-1) * 10
+    got = 0.5 * np.einsum("ci,ij,cj->c", x, Q, x)
+    assert np.all(np.abs(got - plant.energy(x)) <= 16 * EPS * scale)

@@ -81,7 +81,13 @@ def make_problem(seed=0, n_cases=3, n=4, m=2, p=3, nk=2, n_t=40, dt=0.05, subste
     for c in range(n_cases):  # one stream per case seed
         noise_arr[c] = np.random.default_rng(100 + c).standard_normal((n_t, N_SLOTS))
     x0 = rng.normal(size=(n_cases, n))
-    return dict(x0=x0, E=E, block_diagonal=False, P1u=P1u, P1f=P1f, P2f=P2f, Cr=Cr, fric=fric,
+    # recorded output rows and a symmetric energy matrix (drawn last: the draws above keep
+    # their values)
+    Co, Do = rng.normal(size=(Cp, 2, n)), rng.normal(size=(Cp, 2, m))
+    Dof = rng.normal(size=(Cp, 2))
+    R = rng.normal(size=(Cp, n, n))
+    Q = R @ np.swapaxes(R, 1, 2)
+    return dict(Co=Co, Do=Do, Dof=Dof, Q=Q, x0=x0, E=E, block_diagonal=False, P1u=P1u, P1f=P1f, P2f=P2f, Cr=Cr, fric=fric,
                 substeps=substeps, imp_k=imp_k, imp_dx=imp_dx, Cm=Cm, Dm=Dm, Dmf=Dmf,
                 sensor=sensor, sensor_slot=sensor_slot, fir_src=0 if fir else -1,
                 fir_dst=1, fir_w=fir_w, Ak=Ak, Bk=Bk, Ck=Ck, Dk=Dk, y_ref=y_ref, u_ff=u_ff,
@@ -92,7 +98,7 @@ def make_problem(seed=0, n_cases=3, n=4, m=2, p=3, nk=2, n_t=40, dt=0.05, subste
 def run_kernel(prob, parallel=False, record_states=True):
     n_t, (nc, n) = prob["y_ref"].shape[0], prob["x0"].shape
     m, p = prob["P1u"].shape[2], prob["Cm"].shape[1]
-    rec = allocate_records(n_t, nc, n, m, p, record_states)
+    rec = allocate_records(n_t, nc, n, m, p, record_states, prob["Co"].shape[1], True)
     fn = closed_loop_parallel if parallel else closed_loop
     fn(*(prob[k] for k in ARGUMENTS), *rec)
     return dict(zip(RECORDS, rec))
@@ -114,7 +120,9 @@ def reference_loop(prob):
 
     out = {k: np.full(s, np.nan) for k, s in (("X", (nc, n_t, n)), ("Y", (nc, n_t, p)),
                                                ("Ucmd", (nc, n_t, m)), ("U", (nc, n_t, m)),
-                                               ("D", (nc, n_t, m)), ("F", (nc, n_t)))}
+                                               ("D", (nc, n_t, m)), ("F", (nc, n_t)),
+                                               ("O", (nc, n_t, P["Co"].shape[1])),
+                                               ("En", (nc, n_t)))}
     out["stop"] = np.full(nc, -1)
     for c in range(nc):
         if has_force:
@@ -157,6 +165,9 @@ def reference_loop(prob):
             u_cmd = u_ff + law(P["Ck"], k, c) @ xi + law(P["Dk"], k, c) @ e
             xi = law(P["Ak"], k, c) @ xi + law(P["Bk"], k, c) @ e
             out["X"][c, k], out["Y"][c, k], out["Ucmd"][c, k], out["F"][c, k] = x, y, u_cmd, f
+            # the recorded outputs (no sensor effects) and the energy ½ xᵀ Q x
+            out["O"][c, k] = pick(P["Co"], c) @ x + pick(P["Do"], c) @ w + pick(P["Dof"], c) * f
+            out["En"][c, k] = 0.5 * x @ pick(P["Q"], c) @ x
             if not (np.all(np.abs(x) <= P["bound"]) and np.all(np.abs(u_cmd) <= P["bound"])):
                 out["stop"][c] = k
                 break
@@ -177,7 +188,7 @@ def reference_loop(prob):
 def assert_matches(prob, rtol=1e-12):
     got, ref = run_kernel(prob), reference_loop(prob)
     np.testing.assert_array_equal(got["stop"], ref["stop"])
-    for key in ("X", "Y", "Ucmd", "U", "D", "F"):
+    for key in ("X", "Y", "Ucmd", "U", "D", "F", "O", "En"):
         scale = max(np.nanmax(np.abs(ref[key])), 1e-300)
         valid = ~np.isnan(ref[key])
         np.testing.assert_allclose(got[key][valid], ref[key][valid], rtol=0,

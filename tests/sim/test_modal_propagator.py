@@ -131,7 +131,8 @@ def test_kernel_in_modal_coordinates_equals_kernel_in_physical_coordinates():
                     c["imp_dx"], Cm_, c["Dm"], c["Dmf"], c["sensor"], c["sensor_slot"],
                     c["fir_src"], c["fir_dst"], c["fir_w"], c["Ak"], c["Bk"], c["Ck"], c["Dk"],
                     c["y_ref"], c["u_ff"], c["K0"], c["act"], c["dist_std"], c["dist_slot"],
-                    c["noise"], c["bound"], *rec)
+                    c["noise"], c["bound"], np.zeros((1, 0, n)), np.zeros((1, 0, 1)),
+                    np.zeros((1, 0)), np.zeros((0, n, n)), *rec)
         return rec
 
     x0 = np.zeros((1, n))

@@ -227,6 +227,19 @@ class HybridPlant(Plant):
         E = 0.5 * np.einsum("...i,...i->...", vel @ self.mass_matrix, vel)
         return E + 0.5 * np.einsum("...i,...i->...", pos @ self.stiffness_matrix, pos)
 
+    @property
+    def energy_matrix(self) -> np.ndarray | None:
+        """Q = blockdiag(K, M) of :meth:`energy` = ½ xᵀ Q x (Att. 3 Eq. 7); None with the
+        stiffening term on (its energy is quartic)."""
+        if self.stiffening:
+            return None
+        return _block_diagonal(self.stiffness_matrix, self.mass_matrix)
+
+    @property
+    def momentum_row(self) -> np.ndarray:
+        """Row r (n_x,) of :meth:`momentum` = r · x: [0, M[0]] (h = (M x')_θ)."""
+        return np.concatenate([np.zeros(self.ndof), self.mass_matrix[0]])
+
     def vibration_energy(self, x: np.ndarray, energy=None) -> np.ndarray:
         """Energy in the elastic modes of the free vehicle, E − h² / (2 I_tot), J.
 
@@ -306,3 +319,11 @@ def _torque(u, pos) -> np.ndarray:
     torque per state."""
     u = np.asarray(u, float)
     return u[..., 0] if u.ndim and u.shape == pos.shape[:-1] + (1,) else u
+
+
+def _block_diagonal(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """blockdiag(a, b) of two square matrices."""
+    n, k = a.shape[0], b.shape[0]
+    out = np.zeros((n + k, n + k))
+    out[:n, :n], out[n:, n:] = a, b
+    return out

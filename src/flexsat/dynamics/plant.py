@@ -241,6 +241,11 @@ class Plant(ABC):
         """Total mechanical energy, J, shape (...,); None where undefined."""
         return None
 
+    #: Q (n_x, n_x), symmetric, with :meth:`energy` E(x) = ½ xᵀ Q x, for a plant whose energy
+    #: is that quadratic form (a linear structure: Q = blockdiag(K, M) for x = [q, q']); None
+    #: otherwise. The compiled loop evaluates it per sample instead of recording the states
+    energy_matrix = None
+
     def momentum(self, x: np.ndarray) -> np.ndarray | None:
         """Total angular momentum in inertial axes, N m s, shape (..., 3) or (...,) for a
         planar plant; None where undefined."""

@@ -379,6 +379,14 @@ class StructuralPlant(Plant):
         return 0.5 * np.einsum("...i,ij,...j->...", v, self.model.M, v) + 0.5 * np.einsum(
             "...i,ij,...j->...", q, self.model.K, q)
 
+    @property
+    def energy_matrix(self) -> np.ndarray:
+        r"""Q = blockdiag(K, M) of :meth:`energy` = :math:`\tfrac12 x^T Q x`, x = [q, q̇]."""
+        n = self.model.n_dof
+        Q = np.zeros((2 * n, 2 * n))
+        Q[:n, :n], Q[n:, n:] = self.model.K, self.model.M
+        return Q
+
     def power(self, x, u) -> np.ndarray:
         r"""Rate of :meth:`energy`, :math:`\dot q^T B u - \dot q^T D \dot q` (the work of the
         inputs less the dissipation), W, (...,)."""

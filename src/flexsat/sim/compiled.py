@@ -19,9 +19,19 @@ noise stream from its own seed (one draw of the whole run: the numbers the Pytho
 chunk by chunk). Only the order of the sums in the matrix products differs, so the two paths
 agree to round-off (a few ulps of the largest term per product, carried by the closed loop).
 
-Cases run in blocks: each block's states are kept for the whole run, then its recorded outputs
-and energies are computed from them in array products (as :class:`~flexsat.sim.recording.
-Recorder` does per chunk of samples), and dropped; a block holds at most :data:`BLOCK_BYTES`.
+On the modal path (:func:`modal_form`) the kernel records what the result needs, at each
+sample: the linear recorded outputs (``output_matrices``, y = C x + D w + D_f f_in, with C T
+in the modal coordinates x = T z) as extra output rows, the energy ½ xᵀ Q x of a plant with an
+``energy_matrix`` Q (Tᵀ Q T in modal coordinates) and, for a plant with ``momentum_row`` and
+``total_inertia`` (the hub plants), the angular momentum h as one more row, whence the
+vibration energy E − h² / (2 I_tot) as :meth:`~flexsat.dynamics.hybrid.HybridPlant.
+vibration_energy` computes it. No state history, no change back from modal coordinates.
+
+Otherwise (dense propagation, states asked for, a nonlinear recorded output, an energy that is
+not a quadratic form: a dispersed plant) cases run in blocks: each block's states are kept for
+the whole run, then its recorded outputs and energies are computed from them in array products
+(as :class:`~flexsat.sim.recording.Recorder` does per chunk of samples), and dropped; a block
+holds at most :data:`BLOCK_BYTES`.
 """
 
 from __future__ import annotations
@@ -312,6 +322,9 @@ class _Args:
         reads = [i for k in controller.reads for i in range(self.offsets[k].start,
                                                                 self.offsets[k].stop)]
         self.law = _pad_law(law, p, reads, order, m)  # read-only: copied block by block
+        # per-case values of the law per sample: what a block's copy of it holds per case
+        self.law_values = sum(a.size / a.shape[1] for a in self.law[:6]
+                              if a.shape[1] == nc > 1) / n_t
         self.rec_start = min((self.offsets[k].start for k in kept), default=p)
         self.p_rec = p - self.rec_start
         act = np.zeros((1, m, 2))
@@ -338,10 +351,46 @@ class _Args:
         if Tinv is not None:
             self.imp_dx = _c(self.imp_dx @ Tinv.T)
         self.p, self.m, self.n = p, m, n
+        self._recorded_rows(plant, forced)
 
-    def block(self, c0: int, c1: int, seeds, n_t: int, X, Y, Ucmd, U, D, F, stop):
+    def _recorded_rows(self, plant, forced):
+        """The kernel's records in place of the states (module docstring): ``lean`` when
+        every recorded output is linear and the energies (if any) are quadratic forms; its
+        output rows (Co, Do, Dof: the recorded outputs, then h) and energy matrix Q."""
+        n, m = self.n, self.m
+        names = list(plant.recorded)
+        mats = [plant.output_matrices(k) for k in names]
+        probe = np.zeros((plant.n_cases, n))
+        energy = plant.energy(probe) is not None
+        vibration = energy and hasattr(plant, "vibration_energy")
+        Q = plant.energy_matrix if energy else None
+        h = (getattr(plant, "momentum_row", None), getattr(plant, "total_inertia", None))
+        self.lean = (all(mt is not None for mt in mats) and (not energy or Q is not None)
+                     and (not vibration or all(v is not None for v in h)))
+        self.Co, self.Do = np.zeros((1, 0, n)), np.zeros((1, 0, m))
+        self.Dof, self.Q = np.zeros((1, 0)), np.zeros((0, n, n))
+        self.widths = [_width(plant, k) for k in names]
+        self.inertia = h[1] if vibration else None
+        if not self.lean:
+            return
+        rows = list(mats) + ([(h[0][None], np.zeros((1, m)), None)]
+                                      if vibration else [])
+        if rows:
+            C, D, Df = stacked_output_matrices(rows, m)
+            lead = (C.shape[0],) if C.ndim == 3 else (1,)
+            C, D = C.reshape(lead + C.shape[-2:]), D.reshape(lead + D.shape[-2:])
+            Dof = (Df[..., self.force_col] if forced else np.zeros(D.shape[:-1]))
+            self.Co = _c(C if self.T is None else C @ self.T)
+            self.Do, self.Dof = _c(D), _c(np.broadcast_to(Dof, D.shape[:-1]))
+        if energy:
+            Q = np.asarray(Q, float)
+            Q = Q if self.T is None else self.T.T @ Q @ self.T
+            self.Q = _c(Q.reshape((-1, n, n)))
+
+    def block(self, c0: int, c1: int, seeds, n_t: int, X, Y, Ucmd, U, D, F, stop, O=None,
+              En=None):
         """Run the kernel on cases [c0, c1) over the first ``n_t`` samples into the given
-        records (case-major views)."""
+        records (case-major views; O, En None: no output rows, no energy)."""
         def cases(a, axis=0):  # a per-case array's block, a shared one as is
             if a.shape[axis] == 1:
                 return a
@@ -364,6 +413,9 @@ class _Args:
         Ak, Bk, Ck, Dk, y_ref, u_ff, K0 = self.law
         kernel = closed_loop_parallel if cb >= PARALLEL_CASES else closed_loop
         from flexsat.sim.engine import DIVERGENCE_BOUND
+        cb_ = c1 - c0
+        O = np.empty((cb_, 0, 0)) if O is None else O
+        En = np.empty((cb_, 0)) if En is None else En
         kernel(self.x0[c0:c1], cases(self.E), self.T is not None, cases(self.P1u),
                cases(self.P1f),
                cases(self.P2f), cases(self.Cr), cases(self.fric), self.substeps, self.imp_k,
@@ -372,7 +424,8 @@ class _Args:
                law_cases(Ak), law_cases(Bk), law_cases(Ck), law_cases(Dk), law_cases(y_ref),
                law_cases(u_ff), np.array(K0 if K0.shape[0] <= 1 else K0[c0:c1], order="C"),
                cases(self.act), cases(self.dist_std),
-               self.dist_slot, noise, DIVERGENCE_BOUND, X, Y, Ucmd, U, D, F, stop)
+               self.dist_slot, noise, DIVERGENCE_BOUND, cases(self.Co), cases(self.Do),
+               cases(self.Dof), cases(self.Q), X, Y, Ucmd, U, D, F, O, En, stop)
 
 
 def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, disturbances,
@@ -388,16 +441,34 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
                    record_states, batched,
                    [k for k, d in disturbances.items() if np.any(d.random)], allocate=False)
     Y, Ucmd, U, Dist = (np.empty((nc, n_t, w)) for w in (a.p_rec, m, m, m))
-    F = np.empty((nc, n_t))
+    F = np.empty((nc, n_t if forced else 0))  # no force: nothing to record
     stop = np.full(nc, -1, dtype=np.int64)
     X_all = np.empty((nc, n_t, n)) if record_states else None
-    size = _block_size(nc, n_t, n + a.width)
-    outs = {k: np.empty((nc, n_t) + ((_width(plant, k),) if _width(plant, k) > 1 else ()))
-            for k in plant.recorded}
-    energy = np.empty((nc, n_t)) if rec.has_energy else None
-    vib = np.empty((nc, n_t)) if rec.has_vibration else None
+    # in-kernel records on the modal path only: there the state record would need the change
+    # back x = T z (an O(n²) product per sample) beside the outputs and energy, while the
+    # kernel's propagation is O(n); on the dense path (O(n²) per substep already) the
+    # post-loop BLAS products are cheaper than the kernel's scalar quadratic form per sample
+    # (202 states, one maneuver: 32.9 against 36.4 µs/step)
+    lean = a.lean and not record_states and a.T is not None
+    # a block's temporaries: the states unless lean, the noise streams if any are drawn and
+    # the copy of a per-case law (its arrays are read-only: block.law_cases)
+    size = _block_size(nc, n_t, (0 if lean else n) + (a.width if a.noisy else 0)
+                       + a.law_values)
+    if lean:  # the kernel's records: the recorded outputs, h, the energy
+        O = np.empty((nc, n_t, a.Co.shape[1]))
+        energy = np.empty((nc, n_t)) if a.Q.shape[0] else None
+    else:
+        outs = {k: np.empty((nc, n_t) + ((w,) if w > 1 else ()))
+                for k, w in zip(plant.recorded, a.widths)}
+        energy = np.empty((nc, n_t)) if rec.has_energy else None
+        vib = np.empty((nc, n_t)) if rec.has_vibration else None
     for c0 in range(0, nc, size):
         c1 = min(nc, c0 + size)
+        if lean:
+            a.block(c0, c1, seeds, n_t, np.empty((c1 - c0, 0, n)), Y[c0:c1], Ucmd[c0:c1],
+                    U[c0:c1], Dist[c0:c1], F[c0:c1], stop[c0:c1], O[c0:c1],
+                    None if energy is None else energy[c0:c1])
+            continue
         X = X_all[c0:c1] if X_all is not None else np.empty((c1 - c0, n_t, n))
         a.block(c0, c1, seeds, n_t, X, Y[c0:c1], Ucmd[c0:c1], U[c0:c1], Dist[c0:c1],
                 F[c0:c1], stop[c0:c1])
@@ -417,6 +488,17 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
                 a.block(c0, c1, seeds, n_t, np.empty((c1 - c0, 0, n)), Y[c0:c1], Ucmd[c0:c1],
                         U[c0:c1], Dist[c0:c1], F[c0:c1], stop[c0:c1])
         raise _divergence(a, config, seeds, stop, Ucmd)
+    if lean:
+        outs, col = {}, 0
+        for k, w in zip(plant.recorded, a.widths):
+            outs[k] = O[..., col] if w == 1 else O[..., col:col + w]
+            col += w
+        vib = None
+        if a.inertia is not None:  # E − h² / (2 I_tot) (HybridPlant.vibration_energy)
+            vib = O[..., col]  # written over h, in place: no history more
+            np.square(vib, out=vib)
+            vib *= -0.5 / a.inertia
+            vib += energy
     Dist += U  # the plant's input u + d, as the Python loop records it
     rec.commands, rec.applied, rec.disturbed = (np.swapaxes(v, 0, 1) for v in (Ucmd, U, Dist))
     if forced:
@@ -440,11 +522,13 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
     return result
 
 
-def _block_size(nc: int, n_t: int, values: int) -> int:
-    """Cases per block: their states and noise (``values`` per sample) within
+def _block_size(nc: int, n_t: int, values: float) -> int:
+    """Cases per block: their states, noise and law copy (``values`` per sample) within
     :data:`BLOCK_BYTES` and within :data:`BLOCK_SHARE` of a case's recorded histories per
     case of the batch (a block's temporaries stay small next to what the run keeps)."""
     one = n_t * values * 8
+    if one == 0:  # nothing kept per case: one block
+        return nc
     budget = min(BLOCK_BYTES, BLOCK_SHARE * nc * n_t * 8)
     return max(1, min(nc, int(budget // one)))
 

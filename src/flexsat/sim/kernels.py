@@ -20,6 +20,10 @@ at each sample k (t_k = k dt), for each case c
    u_cmd = u_ff[k] + C_k ξ + D_k e,  ξ ← A_k ξ + B_k e,  ξ_0 = K0 e_0 (LQG) or 0;
 7. divergence check: the first sample where |x| or |u_cmd| exceeds ``bound`` or is not finite
    ends the case (``stop[c] = k``; the engine raises SimulationDiverged);
+   records at the sample: the state x (when asked), the recorded output rows
+   o = C_o x + D_o w_{k−1} + D_of f_k (like the measurement, without sensor effects) and the
+   energy ½ xᵀ Q x: what a result needs, without the state history (O(n) and O(n²) per
+   sample against O(n²) or O(n) per substep of the propagation);
 8. actuator per input element: u = scale · clip(u_cmd, ±sat); random disturbance
    d = std · noise[c, k, slot]; applied input w = u + d, held over the period;
 9. ``substeps`` steps of h = dt / substeps of x' = A x + B w + b_f N(x) with the exponential
@@ -84,9 +88,9 @@ def _jit(**options):
 ARGUMENTS = ("x0", "E", "block_diagonal", "P1u", "P1f", "P2f", "Cr", "fric", "substeps",
              "imp_k", "imp_dx", "Cm", "Dm", "Dmf", "sensor", "sensor_slot", "fir_src",
              "fir_dst", "fir_w", "Ak", "Bk", "Ck", "Dk", "y_ref", "u_ff", "K0", "act",
-             "dist_std", "dist_slot", "noise", "bound")
+             "dist_std", "dist_slot", "noise", "bound", "Co", "Do", "Dof", "Q")
 #: output arguments of :func:`closed_loop`, as returned by :func:`allocate_records`
-RECORDS = ("X", "Y", "Ucmd", "U", "D", "F", "stop")
+RECORDS = ("X", "Y", "Ucmd", "U", "D", "F", "O", "En", "stop")
 
 
 @_jit(inline="always", error_model="numpy")
@@ -118,6 +122,24 @@ def _force(x, cr, c1, c2, eps):
 
 
 @_jit(error_model="numpy")
+def _dot(a, b):
+    """Σ a_i b_i in four interleaved partial sums (see :func:`_force`)."""
+    n = a.shape[0]
+    s0 = s1 = s2 = s3 = 0.0
+    j = 0
+    while j + 4 <= n:
+        s0 += a[j] * b[j]
+        s1 += a[j + 1] * b[j + 1]
+        s2 += a[j + 2] * b[j + 2]
+        s3 += a[j + 3] * b[j + 3]
+        j += 4
+    while j < n:
+        s0 += a[j] * b[j]
+        j += 1
+    return (s0 + s1) + (s2 + s3)
+
+
+@_jit(error_model="numpy")
 def _propagate(E, x, out, block_diagonal):
     """out = E x: dense (n, n), or 2×2 block-diagonal stored as (n, 2): O(n)."""
     n = x.shape[0]
@@ -138,7 +160,7 @@ def _propagate(E, x, out, block_diagonal):
 def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
           imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
           Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-          X, Y, Ucmd, U, D, F, stop):
+          Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop):
     n = x0.shape[1]
     m = P1u.shape[2]
     p = Cm.shape[1]
@@ -148,6 +170,9 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     L = fir_w.shape[0]
     has_force = P1f.shape[0] > 0
     rec_x = X.shape[1] > 0
+    r_out = O.shape[2] if O.shape[1] > 0 else 0
+    rec_e = En.shape[1] > 0 and Q.shape[0] > 0
+    rec_f = F.shape[1] > 0
     cp = _ci(E.shape[0], c)
     cu = _ci(P1u.shape[0], c)
     cm = _ci(Cm.shape[0], c)
@@ -156,6 +181,13 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     cd = _ci(dist_std.shape[0], c)
     # per-case views: two-index access in the loop
     Ec, P1uc, Cmc, Dmc, Dmfc = E[cp], P1u[cu], Cm[cm], Dm[cm], Dmf[cm]
+    Coc, Doc, Dofc = np.zeros((0, n)), np.zeros((0, m)), np.zeros(0)
+    if r_out > 0:
+        co = _ci(Co.shape[0], c)
+        Coc, Doc, Dofc = Co[co], Do[co], Dof[co]
+    Qc = np.zeros((0, n))
+    if rec_e:
+        Qc = Q[_ci(Q.shape[0], c)]
     sens, actc, dstd = sensor[cs], act[ca], dist_std[cd]
     noisec, Yc, Ucmdc, Uc, Dc, Fc = noise[c], Y[c], Ucmd[c], U[c], D[c], F[c]
     c1 = c2 = eps = 0.0
@@ -168,6 +200,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
 
     x = x0[c].copy()
     xa = np.empty(n)
+    qx = np.empty(n)
     drive = np.empty(n)
     w = np.zeros(m)  # input applied over the previous period (none before the first sample)
     y = np.empty(p)
@@ -261,9 +294,26 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 bad = True
         if rec_x:
             X[c, k, :] = x
+        for i in range(r_out):
+            s = _dot(Coc[i], x) + Dofc[i] * f
+            for j in range(m):
+                s += Doc[i, j] * w[j]
+            O[c, k, i] = s
+        if rec_e:
+            # ½ xᵀ v, v = Q x accumulated column by column (Q symmetric: row j is column
+            # j): independent element-wise updates the compiler vectorises, where n
+            # dot products are each a chain of dependent additions (3× slower at n = 22)
+            for i in range(n):
+                qx[i] = 0.0
+            for j in range(n):
+                xj = x[j]
+                for i in range(n):
+                    qx[i] += Qc[j, i] * xj
+            En[c, k] = 0.5 * _dot(x, qx)
         for i in range(p_rec):
             Yc[k, i] = y[p - p_rec + i]
-        Fc[k] = f
+        if rec_f:
+            Fc[k] = f
         if bad:
             stop[c] = k
             return
@@ -302,7 +352,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
 def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
                 Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-                X, Y, Ucmd, U, D, F, stop):
+                Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop):
     """Run the closed loop for every case, serially (see the module docstring).
 
     Parameters
@@ -330,14 +380,21 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     dist_std : (Cd, m), dist_slot : (m,) int64   random disturbance per input
     noise : (C, n_t, n_slots)   standard normals, case-major (one contiguous stream per case)
     bound : float               divergence bound on |x| and |u_cmd|
+    Co, Do, Dof : (Co, r, n), (Co, r, m), (Co, r)
+                                recorded output rows (no sensor effects)
+    Q : (Cq, n, n)              energy matrix, symmetric (leading length 0: none)
+                                (Co and Cq are 1 or C; read only when O, En have samples)
     X : (C, n_t or 0, n)        recorded states (time length 0: not recorded)
-    Y : (C, n_t, p_rec), Ucmd, U, D : (C, n_t, m), F : (C, n_t)
+    Y : (C, n_t, p_rec), Ucmd, U, D : (C, n_t, m), F : (C, n_t or 0)
                                 recorded measurements (the last p_rec <= p of them),
                                 commands, actuator outputs,
-                                disturbances and force at each sample; case-major, so a
+                                disturbances and force (time length 0: not recorded) at
+                                each sample; case-major, so a
                                 case's loop writes contiguous memory (the time-major layout
                                 costs a cache miss per record and sample: 3× slower in a
                                 batch of 1,000)
+    O : (C, n_t or 0, r)        recorded outputs o (time length 0: none)
+    En : (C, n_t or 0)          energy ½ xᵀ Q x (time length 0: none)
     stop : (C,) int64           written: −1, or the first diverged sample (its X, Y, Ucmd and
                                 F are recorded; U, D there and every later row are not)
     """
@@ -345,14 +402,14 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
               imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
               Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-              X, Y, Ucmd, U, D, F, stop)
+              Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop)
 
 
 @_jit(parallel=True, error_model="numpy")
 def closed_loop_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                          imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
                          fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot,
-                         noise, bound, X, Y, Ucmd, U, D, F, stop):
+                         noise, bound, Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop):
     """:func:`closed_loop` with the cases spread over threads (same arguments, bit-identical
     results: each case runs the same scalar operations as in the serial loop)."""
     for c in prange(x0.shape[0]):
@@ -360,13 +417,16 @@ def closed_loop_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substep
         _case(np.int64(c), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
               imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
               Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-              X, Y, Ucmd, U, D, F, stop)
+              Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop)
 
 
-def allocate_records(n_t: int, n_cases: int, n: int, m: int, p: int, record_states: bool):
-    """Output arrays (X, Y, Ucmd, U, D, F, stop) of the kernels, case-major; X has time length
-    0 when the states are not recorded."""
+def allocate_records(n_t: int, n_cases: int, n: int, m: int, p: int, record_states: bool,
+                     r: int = 0, energy: bool = False):
+    """Output arrays (X, Y, Ucmd, U, D, F, O, En, stop) of the kernels, case-major; X has
+    time length 0 when the states are not recorded, O when there are no output rows (r = 0),
+    En without ``energy``."""
     X = np.empty((n_cases, n_t if record_states else 0, n))
     return (X, np.empty((n_cases, n_t, p)), np.empty((n_cases, n_t, m)),
             np.empty((n_cases, n_t, m)), np.empty((n_cases, n_t, m)), np.empty((n_cases, n_t)),
+            np.empty((n_cases, n_t if r else 0, r)), np.empty((n_cases, n_t if energy else 0)),
             np.full(n_cases, -1, dtype=np.int64))
