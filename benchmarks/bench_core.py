@@ -121,7 +121,7 @@ def tamu_problem(n_modes=10, friction=False, noise=False, n_cases=1, modal=False
         P1f, P2f = (None, None) if bf is None else (prop.P1f[:, 0], prop.P2f[:, 0])
     else:
         st = ExponentialStepper.build(A, Bu, bf, dt, substeps)
-        E, P1u = st.Et.T.copy(), st.P1u[:, None]
+        E, P1u = st.Et.T.copy(), st.P1u.T  # (m, n) stored transposed -> the kernel's (n, m)
         P1f, P2f = (None, None) if bf is None else (st.P1f[0], st.P2f[0])
     s = cfg.sensors
     sensor = np.zeros((1, 3, 4))
