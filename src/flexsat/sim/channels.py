@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from flexsat.dynamics.plant import find_channel
+from flexsat.sim.disturbances import impulses_at_samples
 from flexsat.sim.sensors import least_squares_derivative_weights
 from flexsat.units import to_si_array
 from flexsat.validation import require_count
@@ -210,13 +211,9 @@ class ChannelDisturbance:
                        impulse_times=tuple(times.tolist()), impulses=tuple(values.tolist()))
 
     def impulses_at_samples(self, n_steps: int, dt: float) -> dict[int, float]:
-        """Impulse per control-sample index (rounded up to the next sample)."""
-        out: dict[int, float] = {}
-        for t, j in zip(self.impulse_times, self.impulses):
-            k = int(np.ceil(t / dt - 1e-9))
-            if k < n_steps:
-                out[k] = out.get(k, 0.0) + j
-        return out
+        """Impulse per control-sample index (rounded up to the next sample;
+        :func:`flexsat.sim.disturbances.impulses_at_samples`)."""
+        return impulses_at_samples(self.impulse_times, self.impulses, n_steps, dt)
 
     @property
     def active(self) -> bool:

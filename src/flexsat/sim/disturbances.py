@@ -83,10 +83,17 @@ class Impulses:
         object.__setattr__(self, "impulses", tuple(impulses.tolist()))
 
     def at_samples(self, n_steps: int, dt: float) -> dict[int, float]:
-        """Impulse per control-sample index."""
-        out: dict[int, float] = {}
-        for t, j in zip(self.times, self.impulses):
-            k = int(np.ceil(t / dt - 1e-9))
-            if k < n_steps:
-                out[k] = out.get(k, 0.0) + j
-        return out
+        """Impulse per control-sample index (:func:`impulses_at_samples`)."""
+        return impulses_at_samples(self.times, self.impulses, n_steps, dt)
+
+
+def impulses_at_samples(times, impulses, n_steps: int, dt: float) -> dict[int, float]:
+    """Impulse per control-sample index: each at the first sample at or after its time (a
+    relative 1e-9 of dt absorbs the round-off of a time given as a multiple of dt); impulses
+    on one sample add; those after the last sample are dropped."""
+    out: dict[int, float] = {}
+    for t, j in zip(times, impulses):
+        k = int(np.ceil(t / dt - 1e-9))
+        if k < n_steps:
+            out[k] = out.get(k, 0.0) + j
+    return out
