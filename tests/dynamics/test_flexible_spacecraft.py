@@ -227,6 +227,7 @@ def test_force_jacobian_matches_central_differences():
 
 
 @pytest.mark.numerics
+@pytest.mark.numerics
 def test_rigid_limit_is_eulers_equations(free_modal):
     # With the elastic coordinates at rest and free-free modes (Δ = 0 to round-off) a torque
     # leaves η at round-off and the rotation is the rigid body's (seed 003 F3 validation):
@@ -240,7 +241,10 @@ def test_rigid_limit_is_eulers_equations(free_modal):
     flex = solve_ivp(lambda t, x: plant.rhs(x, np.r_[u]), (0, 10), x0, **opts)
     rig = solve_ivp(lambda t, x: rigid.rhs(x, u), (0, 10), x0[:7], **opts)
     np.testing.assert_allclose(flex.y[:7, -1], rig.y[:, -1], rtol=0, atol=1e-9)
-    assert np.abs(flex.y[plant._eta, -1]).max() <= 1e-12
+    # η's exact value is round-off (Δ ~ ε |J|); what DOP853 returns is its own error, at most
+    # atol per accepted step (the BLAS kernel decides its sign and size: 1.7e-12 measured on
+    # Haswell, 2e-17 on SkylakeX)
+    assert np.abs(flex.y[plant._eta, -1]).max() <= opts["atol"] * flex.t.size
 
 
 def test_channels_and_outputs(free_modal):
