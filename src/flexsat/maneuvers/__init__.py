@@ -1,5 +1,9 @@
-"""Open-loop rigid-body reference maneuvers (torque shapes)."""
+"""Open-loop rigid-body reference maneuvers (torque shapes, frequency-shaped optimal slew)."""
 
+from flexsat.maneuvers.frequency_shaped_slew import (
+    FrequencyShapedSlew,
+    frequency_shaped_slew,
+)
 from flexsat.maneuvers.torque_shapes import (
     BangBang,
     PseudoSquare,
@@ -9,4 +13,13 @@ from flexsat.maneuvers.torque_shapes import (
     TorqueShape,
 )
 
-__all__ = ["BangBang", "PseudoSquare", "Reference", "Sinusoidal", "SmoothBangBang", "TorqueShape"]
+__all__ = [
+    "BangBang",
+    "FrequencyShapedSlew",
+    "PseudoSquare",
+    "Reference",
+    "Sinusoidal",
+    "SmoothBangBang",
+    "TorqueShape",
+    "frequency_shaped_slew",
+]
