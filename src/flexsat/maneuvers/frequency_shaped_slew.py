@@ -39,8 +39,18 @@ Everything is solved in scaled variables (time in units of T, θ in units of Θ,
 balancing of K·T from :func:`scipy.linalg.matrix_balance`, exact powers of two) because the
 raw K holds ω_B⁴ next to 1.
 
+Also propagated in those scaled variables (``FrequencyShapedSlew.z``), from the knot below t.
+
 The spec's observation (§2.3 [VERIFIED]) that with ζ_B = 0, q = 0, T = 10 s, u1 changes sign 5
-times at ω_B = 2.5 rad/s and 13 times at 5 rad/s is reproduced by this formulation (tested).
+times at ω_B = 2.5 rad/s and 13 times at 5 rad/s is reproduced by this formulation (tested);
+with ζ_B = 1 it changes sign once.
+
+Limits (spec §2.5).  ω_B → ∞ with q = 0 gives the minimum-energy torque 6IΘ/T²(1 - 2t/T) only for
+ζ_B > 0: the forced zero torque at the ends costs a boundary layer of width ~1/ω_B and a peak
+deficit O(1/(ω_B T)) (0.4 % at ω_B T = 2000).  With the literal ζ_B = 0 the ringing at ω_B is free
+(zero penalty), so it absorbs the jump of the minimum-energy torque at the ends and keeps its
+amplitude: the peak tends to 2 × 6IΘ/T² (1.995 × at ω_B T = 2000), while the cost still tends
+to the minimum energy.
 """
 
 from __future__ import annotations
@@ -113,7 +123,9 @@ class FrequencyShapedSlew:
     ``knots`` (N+1,) are the segment boundaries [s]; ``z_knots`` (N+1, 8) the state-costate
     vector there; ``method`` is ``"single shooting"`` or ``"multiple shooting"``;
     ``condition`` is cond(Φ_xp) of the single-shot partition of e^{KT} (the reason for the
-    choice); ``n_segments`` = N.
+    choice); ``n_segments`` = N.  ``K`` is the SI Hamiltonian matrix; the solution is propagated
+    with the balanced dimensionless ``K_scaled = T S⁻¹ K S`` on ``z = scale · ζ``
+    (``S = diag(scale)``), which keeps ω_B⁴ away from the matrix exponential.
     """
 
     angle: float
@@ -123,6 +135,8 @@ class FrequencyShapedSlew:
     zeta_b: float
     q: float
     K: np.ndarray
+    scale: np.ndarray
+    K_scaled: np.ndarray
     knots: np.ndarray
     z_knots: np.ndarray
     method: str
@@ -145,8 +159,10 @@ class FrequencyShapedSlew:
                              f"[{t.min():g}, {t.max():g}]")
         flat = np.clip(t.ravel(), 0.0, self.duration)
         k = np.clip(np.searchsorted(self.knots, flat, side="right") - 1, 0, self.n_segments - 1)
-        phi = scipy.linalg.expm(self.K[None] * (flat - self.knots[k])[:, None, None])
-        return np.einsum("nij,nj->ni", phi, self.z_knots[k]).reshape(t.shape + (8,))
+        tau = (flat - self.knots[k]) / self.duration
+        phi = scipy.linalg.expm(self.K_scaled[None] * tau[:, None, None])
+        zeta = np.einsum("nij,nj->ni", phi, self.z_knots[k] / self.scale)
+        return (zeta * self.scale).reshape(t.shape + (8,))
 
     def torque(self, t) -> np.ndarray:
         """Physical torque I u1(t) [N m]."""
@@ -167,11 +183,14 @@ class FrequencyShapedSlew:
         return hamiltonian(z[..., :4], z[..., 4:], u3, self.omega_b, self.zeta_b, self.q)
 
     def boundary_error(self) -> float:
-        """Largest boundary-condition residual, relative to the angle Θ (θ in units of Θ, ω in
-        Θ/T, u1 in Θ/T², u2 in Θ/T³), from the evaluated trajectory at 0 and T."""
+        """Largest boundary-condition residual at 0 and T from the evaluated trajectory, each
+        relative to its natural size: θ to Θ, ω to Θ/T, u1 to Θ/T², and u2 to
+        (Θ/T²)·max(1/T, ω_B), because the shaped torque rises or rings on the time scale 1/ω_B
+        (its rate is ~ω_B T times Θ/T³ when ω_B T is large)."""
         ends = self.z(np.array([0.0, self.duration]))[:, :4]
         target = np.array([[0.0, 0.0, 0.0, 0.0], [self.angle, 0.0, 0.0, 0.0]])
         scale = abs(self.angle) / self.duration ** np.arange(4)
+        scale[3] *= max(1.0, self.omega_b * self.duration)
         return float(np.max(np.abs(ends - target) / scale))
 
 
@@ -241,11 +260,11 @@ def frequency_shaped_slew(angle, inertia, duration, omega_b, zeta_b=0.0, q=0.0,
     # Back to SI: ẑ = D ζ; x = diag(Θ, Θ/T, Θ/T², Θ/T³) x̂ and, since J = (Θ²/T³) Ĵ, the
     # costates ∂J/∂x are [p, λ, μ1, μ2] = diag(Θ/T³, Θ/T², Θ/T, Θ) ĉ (so K = S K̂ S⁻¹ / T).
     powers = np.array([0, 1, 2, 3, 3, 2, 1, 0])
-    si = angle / duration ** powers
-    z_knots = zb * d[None, :] * si[None, :]
+    scale = d * angle / duration ** powers
+    z_knots = zb * scale[None, :]
     return FrequencyShapedSlew(
         angle=angle, inertia=inertia, duration=duration, omega_b=omega_b, zeta_b=zeta_b, q=q,
-        K=hamiltonian_matrix(omega_b, zeta_b, q), knots=tau * duration, z_knots=z_knots,
+        K=hamiltonian_matrix(omega_b, zeta_b, q), scale=scale, K_scaled=kb, knots=tau * duration, z_knots=z_knots,
         method=method, condition=condition,
     )
 
