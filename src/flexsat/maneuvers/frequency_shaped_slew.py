@@ -29,11 +29,13 @@ so ``z = [x, costates]`` obeys the linear Hamiltonian system ``ż = K z`` and
 Solution.  Single shooting partitions ``Φ = e^{KT}`` and solves ``Φ_xp p(0) = x_T - Φ_xx x_0``
 for the initial costates (the "standard partitioned matrix solution", spec §2.5).  With ζ_B > 0
 the Hamiltonian has eigenvalues with real part ±ζ_B ω_B (±ω_B for ζ_B = 1), so Φ_xp grows like
-e^{ζ_B ω_B T} and is ill conditioned once ω_B T ≳ 15 (spec §2.3); when ``cond(Φ_xp)`` exceeds
-``cond_limit`` the problem is solved instead by multiple shooting: the knots ``z_k`` of N equal
-segments, each short enough that ``e^{K h}`` grows by at most e³, are the unknowns of one sparse
-block system ``e^{Kh} z_k - z_{k+1} = 0`` plus the eight boundary conditions.  The result records
-which method was used and the single-shot condition number.
+e^{ζ_B ω_B T} and is ill conditioned once ω_B T ≳ 15 (spec §2.3).  When ``cond(Φ_xp)`` exceeds
+``cond_limit``, or one interval would be too long for an accurate exponential, the problem is
+solved instead by multiple shooting: the knots ``z_k`` of N equal segments are the unknowns of
+one sparse block system ``e^{Kh} z_k - z_{k+1} = 0`` plus the eight boundary conditions, each
+segment short enough that ``e^{Kh}`` grows by at most e³ and turns by at most 30 rad (ω_B h ≤ 30:
+the ringing of ζ_B = 0, which the expm scaling and squaring resolves poorly over many periods).
+The result records which method was used and the single-shot condition number.
 
 Everything is solved in scaled variables (time in units of T, θ in units of Θ, and the diagonal
 balancing of K·T from :func:`scipy.linalg.matrix_balance`, exact powers of two) because the
@@ -264,8 +266,8 @@ def frequency_shaped_slew(angle, inertia, duration, omega_b, zeta_b=0.0, q=0.0,
     z_knots = zb * scale[None, :]
     return FrequencyShapedSlew(
         angle=angle, inertia=inertia, duration=duration, omega_b=omega_b, zeta_b=zeta_b, q=q,
-        K=hamiltonian_matrix(omega_b, zeta_b, q), scale=scale, K_scaled=kb, knots=tau * duration, z_knots=z_knots,
-        method=method, condition=condition,
+        K=hamiltonian_matrix(omega_b, zeta_b, q), scale=scale, K_scaled=kb,
+        knots=tau * duration, z_knots=z_knots, method=method, condition=condition,
     )
 
 
