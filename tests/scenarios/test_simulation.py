@@ -45,6 +45,19 @@ def test_the_rigid_slew_reaches_the_papers_attitude():
         assert row["final_pointing_error_deg"] < 0.01, row
 
 
+@pytest.mark.parametrize("law, gains", [
+    ("gibbs_lyapunov", '{k: "1000 N*m*s/rad", A: "50 N*m"}'),
+    ("quaternion_pd", '{Kp: "100 N*m", Kd: "1000 N*m*s/rad"}'),
+])
+def test_every_attitude_law_builds_from_its_gains(law, gains):
+    """Each attitude law of the table takes the gain names of its class and turns the
+    spacecraft toward the target."""
+    text = BASE.replace('law: mrp_pd, gains: {K: "100 N*m", P: "1000 N*m*s/rad"}',
+                        f"law: {law}, gains: {gains}")
+    result = run_simulation(load_scenario(text))
+    assert result.metrics_records()[0]["final_pointing_error_deg"] < 10.0
+
+
 @pytest.mark.parametrize("change, message", [
     (("plant: {model: rigid}", "plant: {model: rigid, stiffness: 3}"),
      "plant.stiffness: not an option of the eps plant"),

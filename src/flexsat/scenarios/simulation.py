@@ -28,6 +28,7 @@ one :class:`~flexsat.scenarios.ScenarioError`.
 
 from __future__ import annotations
 
+import functools
 import inspect
 import re
 from dataclasses import dataclass
@@ -142,6 +143,7 @@ class SimulationScenario(_Document):
         return self
 
 
+@functools.cache
 def simulation_cases() -> tuple[str, ...]:
     """Cases whose builder's object has a ``plant`` method (read from the builder's return
     annotation, so no case is built)."""
@@ -184,11 +186,13 @@ def _target_quaternion(target: dict) -> np.ndarray | None:
     return to_si_array(target["attitude"], "", "target.attitude")
 
 
-def _attitude_law(cls, names: dict[str, str]):
+def _attitude_law(cls):
+    """Builder of an attitude law from its gains (named as the class's fields) and target."""
+
     def build(run: SimulationRunSpec, plant, dt: float):
         beta = _target_quaternion(run.target)
         extra = {} if beta is None else {"beta_target": beta}
-        return cls(**{names[k]: v for k, v in run.gains.items()}, **extra)
+        return cls(**run.gains, **extra)
 
     return build
 
@@ -230,11 +234,11 @@ def _laws() -> dict[str, _SimulationLaw]:
 
     return {
         "gibbs_lyapunov": _SimulationLaw(("k", "A"), ("k", "A"), True,
-                                         _attitude_law(GibbsLyapunovLaw, {"k": "k", "A": "A"})),
+                                         _attitude_law(GibbsLyapunovLaw)),
         "mrp_pd": _SimulationLaw(("K", "P"), ("K", "P"), True,
-                                 _attitude_law(MRPLaw, {"K": "K", "P": "P"})),
-        "quaternion_pd": _SimulationLaw(("kp", "kd"), ("kp", "kd"), True,
-                                        _attitude_law(QuaternionPD, {"kp": "kp", "kd": "kd"})),
+                                 _attitude_law(MRPLaw)),
+        "quaternion_pd": _SimulationLaw(("Kp", "Kd"), ("Kp", "Kd"), True,
+                                        _attitude_law(QuaternionPD)),
         "lqr": _SimulationLaw(("state_weights", "input_weights"), ("state_weights",), False,
                               _lqr),
         "open_loop": _SimulationLaw((), (), False, _open_loop),
