@@ -129,7 +129,10 @@ class _AttitudeLaw(Controller):
     _VECTORS: tuple[str, ...] = ()
 
     def _finish(self):
-        """Check the case axes of every field against each other; keep the case shape."""
+        """Check the target quaternion and the case axes of every field against each other;
+        keep the case shape."""
+        object.__setattr__(self, "beta_target",
+                           require_quaternion(self.beta_target, "beta_target"))
         shapes = {}
         for name in self.__dataclass_fields__:
             shape = np.shape(getattr(self, name))
@@ -190,8 +193,6 @@ class GibbsLyapunovLaw(_AttitudeLaw):
         set_si(self, "k", require_positive, "N*m*s/rad")
         _per_axis(self.k, "k")
         set_si(self, "A", require_positive, "N*m")
-        object.__setattr__(self, "beta_target",
-                           require_quaternion(self.beta_target, "beta_target"))
         self._finish()
         object.__setattr__(self, "_A", np.asarray(self.A)[..., None])
 
@@ -245,8 +246,6 @@ class MRPLaw(_AttitudeLaw):
         set_si(self, "K", require_positive, "N*m")
         set_si(self, "P", require_positive, "N*m*s/rad")
         _per_axis(self.P, "P")
-        object.__setattr__(self, "beta_target",
-                           require_quaternion(self.beta_target, "beta_target"))
         self._finish()
         object.__setattr__(self, "_K", np.asarray(self.K)[..., None])
 
@@ -303,8 +302,6 @@ class QuaternionPD(_AttitudeLaw):
         _per_axis(self.Kp, "Kp")
         set_si(self, "Kd", require_positive, "N*m*s/rad")
         _per_axis(self.Kd, "Kd")
-        object.__setattr__(self, "beta_target",
-                           require_quaternion(self.beta_target, "beta_target"))
         w_ref = require_shape(require_finite(self.w_ref, "w_ref", "rad/s"), "w_ref", (3,))
         object.__setattr__(self, "w_ref", w_ref)
         self._finish()

@@ -100,30 +100,9 @@ def _ci(arr_cases, c):
 
 
 @_jit(error_model="numpy")
-def _force(x, cr, c1, c2, eps):
-    """N(x) = −c1 tanh(r/ε) − c2 r with r = C_r x.
-
-    r is summed in four interleaved partial sums: a single chain of dependent additions is
-    latency-bound (it was half the cost of a friction substep)."""
-    n = x.shape[0]
-    s0 = s1 = s2 = s3 = 0.0
-    j = 0
-    while j + 4 <= n:
-        s0 += cr[j] * x[j]
-        s1 += cr[j + 1] * x[j + 1]
-        s2 += cr[j + 2] * x[j + 2]
-        s3 += cr[j + 3] * x[j + 3]
-        j += 4
-    while j < n:
-        s0 += cr[j] * x[j]
-        j += 1
-    r = (s0 + s1) + (s2 + s3)
-    return -c1 * np.tanh(r / eps) - c2 * r
-
-
-@_jit(error_model="numpy")
 def _dot(a, b):
-    """Σ a_i b_i in four interleaved partial sums (see :func:`_force`)."""
+    """Σ a_i b_i in four interleaved partial sums: a single chain of dependent additions is
+    latency-bound (it was half the cost of a friction substep)."""
     n = a.shape[0]
     s0 = s1 = s2 = s3 = 0.0
     j = 0
@@ -137,6 +116,13 @@ def _dot(a, b):
         s0 += a[j] * b[j]
         j += 1
     return (s0 + s1) + (s2 + s3)
+
+
+@_jit(error_model="numpy")
+def _force(x, cr, c1, c2, eps):
+    """N(x) = −c1 tanh(r/ε) − c2 r with r = C_r x."""
+    r = _dot(cr, x)
+    return -c1 * np.tanh(r / eps) - c2 * r
 
 
 @_jit(error_model="numpy")
