@@ -224,26 +224,32 @@ def run(
     except OSError as exc:
         _fail(f"--out: {exc}")
     from flexsat.report import (write_identification_report, write_report,
-                                write_simulation_report)
+                                write_simulation_report, write_slew_report)
     from flexsat.scenarios import (
         IdentificationScenario,
         ScenarioError,
         SimulationScenario,
+        SlewScenario,
         default_scenario,
         identification_steps,
         load_scenario,
         run_identification,
         run_scenario,
         run_simulation,
+        run_slew,
     )
     from flexsat.sim import SimulationDiverged
 
     try:
         spec = default_scenario() if scenario is None else load_scenario(scenario)
         identification = isinstance(spec, IdentificationScenario)
+        slew = isinstance(spec, SlewScenario)
         runner = (run_identification if identification else run_simulation
-                  if isinstance(spec, SimulationScenario) else run_scenario)
-        with _progress(identification_steps(spec) if identification else len(spec.runs)) as say:
+                  if isinstance(spec, SimulationScenario) else run_slew if slew
+                  else run_scenario)
+        steps = (identification_steps(spec) if identification
+                 else len(spec.runs) + 2 if slew else len(spec.runs))  # + nominal, open loop
+        with _progress(steps) as say:
             result = runner(spec, progress=say)
     except ScenarioError as exc:
         _fail(str(exc))
@@ -255,8 +261,8 @@ def run(
         writer = write_identification_report
     else:
         console.print(_metrics_table(result.metrics_records()))
-        writer = write_simulation_report if isinstance(spec, SimulationScenario) \
-            else write_report
+        writer = (write_simulation_report if isinstance(spec, SimulationScenario)
+                  else write_slew_report if slew else write_report)
     try:
         path = writer(result, out)
     except OSError as exc:

@@ -23,6 +23,8 @@ _EXPORTS = {
     "write_report": "maneuver",
     "MAX_FIGURES": "simulation",
     "write_simulation_report": "simulation",
+    "GOAL_COLUMNS": "slew",
+    "write_slew_report": "slew",
     "FIGURES": "identification",
     "write_identification_report": "identification",
 }

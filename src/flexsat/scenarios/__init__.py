@@ -3,7 +3,9 @@
 ``kind: maneuver`` (the default, :mod:`flexsat.scenarios.maneuver`) slews a case's hub under
 one or more control laws; ``kind: simulation`` (:mod:`flexsat.scenarios.simulation`) runs any
 case's plant (three-axis spacecraft, structures with point actuators, a beam in orbit) under a
-law reading and writing named channels; ``kind: identification``
+law reading and writing named channels; ``kind: slew`` (:mod:`flexsat.scenarios.slew`) slews a
+flexible spacecraft on a frequency-shaped optimal maneuver with gain-scheduled perturbation
+feedback and judges it against the seed 003 goals; ``kind: identification``
 (:mod:`flexsat.scenarios.identification`) tests a structure, identifies it and updates its
 model. :func:`load_scenario` reads any of them;
 problems are reported as ``field.path: rule`` lines of one :class:`ScenarioError`, before
@@ -39,6 +41,9 @@ _EXPORTS = {
     "SimulationResult": "simulation",
     "run_simulation": "simulation",
     "simulation_cases": "simulation",
+    "SlewScenario": "slew",
+    "SlewResult": "slew",
+    "run_slew": "slew",
     "IdentificationResult": "identification",
     "IdentificationScenario": "identification",
     "identification_steps": "identification",

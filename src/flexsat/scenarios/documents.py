@@ -141,7 +141,8 @@ def load_scenario(source: str | bytes | Path):
     """Parse and validate a scenario (stage 1: YAML, schema, units, section rules).
 
     ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: simulation`` a
-    :class:`flexsat.scenarios.simulation.SimulationScenario`; ``kind: identification`` an
+    :class:`flexsat.scenarios.simulation.SimulationScenario`; ``kind: slew`` a
+    :class:`flexsat.scenarios.slew.SlewScenario`; ``kind: identification`` an
     :class:`flexsat.scenarios.identification.IdentificationScenario`.
 
     Parameters
@@ -163,11 +164,13 @@ def load_scenario(source: str | bytes | Path):
         from flexsat.scenarios.identification import IdentificationScenario as model
     elif kind == "simulation":
         from flexsat.scenarios.simulation import SimulationScenario as model
+    elif kind == "slew":
+        from flexsat.scenarios.slew import SlewScenario as model
     elif kind == "maneuver":
         model = Scenario
     else:
-        raise ScenarioError([f"kind: must be 'maneuver', 'simulation' or 'identification', got "
-                             f"{kind!r}"])
+        raise ScenarioError([f"kind: must be 'maneuver', 'simulation', 'slew' or "
+                             f"'identification', got {kind!r}"])
     try:
         scenario = model.model_validate(data)
     except ValidationError as exc:

@@ -166,7 +166,8 @@ class _SimulationLaw:
     build: Callable[..., Any]
 
 
-def _target_quaternion(target: dict) -> np.ndarray | None:
+def target_quaternion(target: dict) -> np.ndarray | None:
+    """Euler parameters of a target given as ``euler123`` (rad) or ``attitude``; None if empty."""
     from flexsat.dynamics.attitude import euler123_to_dcm, dcm_to_quaternion
     from flexsat.units import to_si_array
 
@@ -190,7 +191,7 @@ def _attitude_law(cls):
     """Builder of an attitude law from its gains (named as the class's fields) and target."""
 
     def build(run: SimulationRunSpec, plant, dt: float):
-        beta = _target_quaternion(run.target)
+        beta = target_quaternion(run.target)
         extra = {} if beta is None else {"beta_target": beta}
         return cls(**run.gains, **extra)
 

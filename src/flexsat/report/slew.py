@@ -1,0 +1,194 @@
+"""Report of a slew scenario (``kind: slew``): ``metrics.json``, ``results.nc``, the figures of
+seed 003 and ``index.html`` with the goals table.
+
+``results.nc`` holds every run (the nominal torque alone first, as ``open loop``) over
+``(run, time[, component])``: the recorded channels of the flexible plant (``attitude``,
+``euler123``, ``rate``, ``torque``, ``force_<node><AXIS>``, ``displacement_<node><AXIS>``), the
+Euler-angle error against the nominal maneuver ``euler123_error``, the rim deflections
+``rim_deflection_<node>`` (norm of the node's displacement), the nominal ``nominal_torque`` and
+``nominal_euler123`` over ``time``, and the goal metrics over ``run``. Global attributes: the
+scenario (``scenario_yaml``), the maneuver time ``duration_s`` and the goals. Open it with
+``xarray.open_dataset(path, engine="h5netcdf")``.
+
+The figures follow the paper's (seed 003 Figs. 3–17): the nominal torques and Euler angles, the
+Euler-angle errors of every run with the goal band at 1.25 T, the rim deflections of the
+antenna nodes open against closed loop, the torque perturbations and the point forces.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from flexsat.netcdf import write_netcdf
+from flexsat.report.maneuver import STYLE, format_metric
+from flexsat.report.publish import write_atomically
+
+#: goal table columns: (metric, heading, verdict metric or None)
+GOAL_COLUMNS = (
+    ("angle_error_mrad", "Euler error at 1.25 T (mrad)", "angle_goal_met"),
+    ("deflection_ratio_after", "rim deflection open/closed after the slew",
+     "deflection_goal_met"),
+    ("deflection_ratio_slew", "rim deflection open/closed during the slew", None),
+    ("peak_rim_deflection_after_m", "peak rim deflection after the slew (m)", None),
+    ("peak_torque_perturbation_Nm", "peak torque perturbation (N m)", None),
+    ("peak_force_N", "peak force (N)", None),
+)
+
+
+def _figure(rows: int, title: str):
+    fig = Figure(figsize=(8, 2.4 * rows + 0.6), layout="constrained")
+    fig.suptitle(title)
+    return fig, fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
+
+
+def _mark(ax, ds) -> None:
+    """The maneuver time T and the evaluation time 1.25 T."""
+    T = ds.attrs["duration_s"]
+    ax.axvline(T, color="0.5", linewidth=0.8)
+    ax.axvline(ds.attrs["goal_evaluation"] * T, color="0.5", linewidth=0.8, linestyle="--")
+    ax.grid(alpha=0.3)
+
+
+def _nominal(ds, path: Path) -> None:
+    fig, (a, b) = _figure(2, "nominal maneuver (open-loop rigid-body optimum)")
+    t = ds["time"].values
+    for j, axis in enumerate("xyz"):
+        a.plot(t, 1e-3 * ds["nominal_torque"].values[:, j], label=f"{axis}")
+        b.plot(t, ds["nominal_euler123"].values[:, j], label=f"θ{j + 1}")
+    a.set(ylabel="torque (kN m)")
+    b.set(ylabel="1-2-3 angle (rad)", xlabel="time (s)")
+    for ax in (a, b):
+        _mark(ax, ds)
+        ax.legend(fontsize="small")
+    fig.savefig(path, dpi=100)
+
+
+def _per_run(ds, variable: str, scale: float, ylabel: str, title: str, path: Path,
+             band: float | None = None) -> None:
+    comps = ds[variable].shape[-1]
+    fig, axes = _figure(comps, title)
+    t = ds["time"].values
+    for j, ax in enumerate(axes):
+        for i, label in enumerate(ds["run"].values):
+            ax.plot(t, scale * ds[variable].sel(run=label).values[:, j], color=f"C{i}",
+                    label=str(label))
+        if band is not None:
+            ax.axhline(band, color="r", linewidth=0.8, linestyle=":")
+            ax.axhline(-band, color="r", linewidth=0.8, linestyle=":")
+        ax.set(ylabel=f"{ylabel} {'xyz'[j] if comps == 3 else j}")
+        _mark(ax, ds)
+    axes[0].legend(fontsize="small", ncols=2)
+    axes[-1].set(xlabel="time (s)")
+    fig.savefig(path, dpi=100)
+
+
+def _rims(ds, path: Path) -> None:
+    nodes = [n for n in ds.data_vars if n.startswith("rim_deflection_")]
+    fig, axes = _figure(len(nodes), "rim deflections, open against closed loop")
+    t = ds["time"].values
+    for ax, name in zip(axes, nodes):
+        for i, label in enumerate(ds["run"].values):
+            ax.plot(t, 1e3 * ds[name].sel(run=label).values, color=f"C{i}", label=str(label))
+        ax.set(ylabel=f"node {name.rsplit('_', 1)[1]} (mm)")
+        _mark(ax, ds)
+    axes[0].legend(fontsize="small", ncols=2)
+    axes[-1].set(xlabel="time (s)")
+    fig.savefig(path, dpi=100)
+
+
+def _forces(ds, path: Path) -> bool:
+    names = [n for n in ds.data_vars if n.startswith("force_") and not n.endswith("_command")]
+    used = [n for n in names if np.any(ds[n].values)]
+    if not used:
+        return False
+    fig, axes = _figure(len(used), "point forces")
+    t = ds["time"].values
+    for ax, name in zip(axes, used):
+        for i, label in enumerate(ds["run"].values):
+            ax.plot(t, ds[name].sel(run=label).values, color=f"C{i}", label=str(label))
+        ax.set(ylabel=f"{name[len('force_'):]} (N)")
+        _mark(ax, ds)
+    axes[0].legend(fontsize="small", ncols=2)
+    axes[-1].set(xlabel="time (s)")
+    fig.savefig(path, dpi=100)
+    return True
+
+
+def _goal_table(records: list[dict]) -> str:
+    esc = html.escape
+    head = "".join(f"<th>{esc(h)}</th>" for _, h, _ in GOAL_COLUMNS)
+    rows = []
+    for r in records:
+        cells = []
+        for metric, _, verdict in GOAL_COLUMNS:
+            value = r.get(metric)
+            text = "–" if value is None else format_metric(value)
+            if verdict is not None and r.get(verdict) is not None:
+                met = bool(r[verdict])
+                text += (' <b style="color:#080">PASS</b>' if met
+                         else ' <b style="color:#b00">FAIL</b>')
+            cells.append(f"<td>{text}</td>")
+        rows.append(f"<tr><td>{esc(r['run'])}</td>{''.join(cells)}</tr>")
+    return f"<table><tr><th>run</th>{head}</tr>{''.join(rows)}</table>"
+
+
+def _html(result, records, figures: list[str]) -> str:
+    esc = html.escape
+    ds_attrs = result.attributes()
+    images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
+    goals = (f"Euler-angle error below {100 * ds_attrs['goal_angle_fraction']:g} % of the "
+             f"commanded angle ({ds_attrs['goal_angle_tolerance_mrad']:g} mrad) at "
+             f"{ds_attrs['goal_evaluation']:g} T; rim deflection after the slew below "
+             f"1/{ds_attrs['goal_deflection_ratio']:g} of the open-loop one (seed 003 "
+             "L792–L801). The open-loop run is the nominal torque alone.")
+    notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>flexsat report: {esc(result.scenario.name)}
+</title>
+{STYLE}</head>
+<body>
+<h1>flexsat report</h1>
+<p><b>Scenario:</b> {esc(result.scenario.name)}<br><b>Case:</b> {esc(result.scenario.case)}
+({esc(result.case_source)})</p>
+<h2>Goals</h2>
+<p>{esc(goals)}</p>
+{_goal_table(records)}
+<ul>{notes}</ul>
+<h2>Figures</h2>
+{images}
+<h2>Scenario</h2>
+<pre>{esc(result.scenario.yaml_text)}</pre>
+</body></html>
+"""
+
+
+def _write_all(result, folder: Path) -> None:
+    records = result.metrics_records()
+    (folder / "metrics.json").write_text(json.dumps(records, indent=2) + "\n", encoding="utf-8")
+    ds = result.dataset()
+    write_netcdf(ds, folder / "results.nc")
+    tol = ds.attrs["goal_angle_tolerance_mrad"]
+    figures = ["nominal.png", "euler_error.png", "rim_deflection.png", "torque_perturbation.png"]
+    _nominal(ds, folder / figures[0])
+    _per_run(ds, "euler123_error", 1e3, "error (mrad)", "Euler-angle error against the nominal",
+             folder / figures[1], band=tol)
+    _rims(ds, folder / figures[2])
+    _per_run(ds, "torque_perturbation", 1e-3, "kN m", "torque minus the nominal torque",
+             folder / figures[3])
+    if _forces(ds, folder / "forces.png"):
+        figures.append("forces.png")
+    (folder / "index.html").write_text(_html(result, records, figures), encoding="utf-8")
+
+
+def write_slew_report(result, out_dir) -> Path:
+    """Write the report of a :class:`~flexsat.scenarios.slew.SlewResult` as the folder
+    ``out_dir``, whole or not at all (:func:`flexsat.report.publish.write_atomically`)."""
+    return write_atomically(out_dir, lambda folder: _write_all(result, folder))
+
+
+__all__ = ["GOAL_COLUMNS", "write_slew_report"]

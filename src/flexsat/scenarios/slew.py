@@ -1,0 +1,309 @@
+"""Slew scenarios (``kind: slew``): a frequency-shaped optimal three-axis slew of a flexible
+spacecraft with gain-scheduled perturbation feedback, judged against the seed 003 goals.
+
+The method of seed 003 (notes ../shared/spec/seed003.md §2.2–§2.8, §3.2): a rigid-body optimal
+nominal maneuver (:func:`~flexsat.maneuvers.three_axis_slew.three_axis_slew`, the TPBVP solved
+by continuation) is applied open loop to the flexible plant, and perturbation feedback designed
+on a reduced flexible model linearised along the nominal (frequency-shaped LQR with cross
+weight, gains interpolated in time, disturbance feedforward, optionally the point forces with
+force/torque decoupling) corrects it::
+
+    kind: slew
+    name: EPS 10 s slew, seed 003 cases A-C
+    case: eps
+    plant: {n_modes: 45}
+    maneuver:
+      target: {euler123: ["1 rad", "1 rad", "1 rad"]}
+      duration: "10 s"
+      break_frequency: "2.5 rad/s"
+    controller: {modes: 10, linearization_points: 21}
+    simulation: {duration: "12.5 s", control_rate: "100 Hz"}
+    runs:
+      - label: "A: torquers only"
+        weights: {attitude: 1000, rate: 1000, modes: 1, torque: 50}
+        break_frequency: "2.5 rad/s"
+
+Every scenario also runs the nominal torque alone (the run ``open loop``): the deflection goal
+compares each run with it. ``plant`` holds the keyword arguments of the case's flexible plant
+(:meth:`plant`, which must build a
+:class:`~flexsat.dynamics.flexible_spacecraft.FlexibleSpacecraft`). Weights are the diagonal
+of Q over [attitude error (rad), rate (rad/s), modal amplitudes, modal rates] and of D over
+[normalized torques (rad/s², the torque divided by the inertia as in the paper), forces (N)],
+SI numbers; one value fills its block.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Literal, Union
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from flexsat import limits
+from flexsat.catalog import get_case
+from flexsat.scenarios.fields import (_Document, _Section, check_unique_labels, count,
+                                      quantity)
+from flexsat.scenarios.simulation import SimulationSettings, target_quaternion
+from flexsat.sim.slew_goals import euler_angle_error
+
+#: one weight, or one per component of its block
+Weights = Union[float, list[float]]
+
+OPEN_LOOP = "open loop"
+
+
+class SlewManeuverSpec(_Section):
+    """The nominal rigid-body maneuver (seed 003 Eqs. 9–21)."""
+
+    target: dict[str, Any]
+    duration: quantity("s")
+    break_frequency: quantity("rad/s")
+    shaping_damping: float = Field(0.0, ge=0.0)
+    rate_weight: float = Field(0.0, ge=0.0)
+
+    @field_validator("target")
+    @classmethod
+    def _rotation(cls, target: dict) -> dict:
+        if not target:
+            raise ValueError("target: give euler123 (three angles) or attitude (a unit "
+                             "quaternion, scalar first)")
+        beta = target_quaternion(target)
+        if beta.shape != (4,) or abs(np.linalg.norm(beta) - 1.0) > 1e-9:
+            raise ValueError(f"target.attitude: must be a unit quaternion (4 values, norm 1 to "
+                             f"1e-9), got {np.round(beta, 12).tolist()}")
+        return target
+
+
+class ControllerSpec(_Section):
+    """The reduced design model and the gain schedule."""
+
+    modes: count(1, 500) = 10
+    linearization_points: count(1, 1000) = 11
+
+
+class GoalsSpec(_Section):
+    """The goals of seed 003 L792–L801 (:class:`~flexsat.sim.slew_goals.SlewGoals`)."""
+
+    angle_fraction: float = Field(0.03, gt=0.0)
+    evaluation: float = Field(1.25, ge=1.0)
+    deflection_ratio: float = Field(10.0, gt=0.0)
+
+
+class SlewWeightsSpec(_Section):
+    """Diagonal weights of the perturbation design (module docstring)."""
+
+    attitude: Weights
+    rate: Weights
+    modes: Weights
+    mode_rates: Weights | None = None
+    torque: Weights
+    force: Weights | None = None
+
+
+class SlewRunSpec(_Section):
+    """One closed-loop run: its weights, shaping, forces and feedforward."""
+
+    label: str
+    weights: SlewWeightsSpec
+    break_frequency: quantity("rad/s")
+    shaping_damping: float = Field(0.0, ge=0.0)
+    forces: Literal["none", "all"] | list[str] = "none"
+    decouple: bool = False
+    feedforward: Literal["none", "constant", "time-varying"] = "constant"
+
+    @field_validator("label")
+    @classmethod
+    def _not_open_loop(cls, label: str) -> str:
+        if label == OPEN_LOOP:
+            raise ValueError(f"label: {OPEN_LOOP!r} names the nominal torque alone, which every "
+                             "slew scenario runs; choose another label")
+        return label
+
+    @model_validator(mode="after")
+    def _force_weights(self):
+        if self.forces != "none" and self.weights.force is None:
+            raise ValueError("weights.force: required when the run uses forces")
+        if self.decouple and self.forces == "none":
+            raise ValueError("decouple: needs forces (decoupling keeps the forces' net moment "
+                             "about the centre of mass zero)")
+        return self
+
+
+class SlewScenario(_Document):
+    """A validated slew scenario (module docstring)."""
+
+    kind: Literal["slew"]
+    name: str
+    case: str
+    plant: dict[str, Any] = Field(default_factory=dict)
+    maneuver: SlewManeuverSpec
+    controller: ControllerSpec = Field(default_factory=ControllerSpec)
+    simulation: SimulationSettings
+    goals: GoalsSpec = Field(default_factory=GoalsSpec)
+    runs: list[SlewRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
+
+    @field_validator("case")
+    @classmethod
+    def _known_case(cls, name: str) -> str:
+        from flexsat.scenarios.simulation import simulation_cases
+
+        get_case(name)
+        if name not in simulation_cases():
+            raise ValueError(f"case: {name!r} builds no plant to slew; cases with one: "
+                             f"{', '.join(simulation_cases())}")
+        return name
+
+    @model_validator(mode="after")
+    def _checks(self):
+        check_unique_labels(self.runs)
+        if self.simulation.duration < self.goals.evaluation * self.maneuver.duration:
+            raise ValueError(f"simulation.duration: must reach {self.goals.evaluation:g} × the "
+                             f"maneuver duration ({self.goals.evaluation * self.maneuver.duration:g}"
+                             f" s) where the goals are evaluated, got "
+                             f"{self.simulation.duration:g} s")
+        return self
+
+
+# -- running -------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SlewResult:
+    """The runs of a slew scenario: the nominal maneuver, the open-loop run (the nominal torque
+    alone) and every closed-loop run, with the goal metrics of each.
+
+    Attributes
+    ----------
+    scenario : SlewScenario
+    labels : tuple of str
+        ``open loop`` then the scenario's runs.
+    results : tuple of flexsat.sim.SimResult
+    nominal : flexsat.maneuvers.three_axis_slew.ThreeAxisSlew
+    goals : dict of str to (n_runs,) arrays
+        :func:`~flexsat.sim.slew_goals.slew_goal_metrics` of every run (units in
+        ``goal_units``).
+    goal_units : dict of str to str
+    case_source : str
+    notes : tuple of str
+        What the reader should know about the runs (design choices the scenario left open).
+    """
+
+    scenario: SlewScenario
+    labels: tuple[str, ...]
+    results: tuple
+    nominal: Any
+    goals: dict
+    goal_units: dict
+    case_source: str
+    notes: tuple[str, ...] = ()
+
+    def attributes(self) -> dict:
+        g = self.scenario.goals
+        return {"duration_s": self.scenario.maneuver.duration,
+                "goal_angle_fraction": g.angle_fraction, "goal_evaluation": g.evaluation,
+                "goal_deflection_ratio": g.deflection_ratio,
+                "goal_angle_tolerance_mrad": float(self.goals["angle_tolerance_mrad"][0])}
+
+    def metrics_records(self) -> list[dict]:
+        """One JSON-ready dict per run: ``"run"`` and the goal metrics (NaN, inf -> None)."""
+        records = []
+        for i, label in enumerate(self.labels):
+            row = {"run": label}
+            for name, values in self.goals.items():
+                v = values[i]
+                row[name] = bool(v) if isinstance(v, (bool, np.bool_)) else (
+                    float(v) if np.isfinite(v) else None)
+            records.append(row)
+        return records
+
+    def dataset(self):
+        """Every run in one dataset (:mod:`flexsat.report.slew` lists its variables)."""
+        import xarray as xr
+
+        runs = [r.dataset.isel(case=0, drop=True) for r in self.results]
+        ds = xr.concat(runs, dim="run", data_vars="all", coords="minimal", compat="override",
+                       join="exact", combine_attrs="override")
+        ds = ds.assign_coords(run=("run", list(self.labels)))
+        t = ds["time"].values
+        nominal_torque, nominal_angles = nominal_histories(self.nominal, t)
+        ds["nominal_torque"] = (("time", "torque_component"), nominal_torque, {"units": "N*m"})
+        ds["nominal_euler123"] = (("time", "euler123_component"), nominal_angles,
+                                  {"units": "rad"})
+        ds["euler123_error"] = (("run", "time", "euler123_component"), euler_angle_error(
+            ds["euler123"].transpose("run", "time", ...).values, nominal_angles),
+            {"units": "rad"})
+        ds["torque_perturbation"] = (("run", "time", "torque_component"), ds["torque"]
+                                     .transpose("run", "time", ...).values - nominal_torque,
+                                     {"units": "N*m"})
+        for node in _rim_nodes(ds):
+            parts = np.stack([ds[f"displacement_{node}{a}"].transpose("run", "time").values
+                              for a in "XYZ"], -1)
+            ds[f"rim_deflection_{node}"] = (("run", "time"), np.linalg.norm(parts, axis=-1),
+                                            {"units": "m"})
+        for name, values in self.goals.items():
+            ds[name] = ("run", np.asarray(values), {"units": self.goal_units.get(name, "")})
+        ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
+                        case_source=self.case_source, scenario_yaml=self.scenario.yaml_text,
+                        **self.attributes())
+        return ds
+
+
+def nominal_histories(nominal, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The nominal torque and 1-2-3 angles at times t: the maneuver over [0, T], then rest at
+    the target (zero torque)."""
+    T = nominal.duration
+    inside = np.clip(t, 0.0, T)
+    torque = np.where((t > T)[:, None], 0.0, nominal.torque(inside))
+    return torque, nominal.euler123(inside)
+
+
+def _rim_nodes(ds) -> list[str]:
+    """Nodes with displacement outputs along all three axes."""
+    names = [n[len("displacement_"):-1] for n in ds.data_vars if n.startswith("displacement_")]
+    return [n for n in dict.fromkeys(names) if all(f"displacement_{n}{a}" in ds for a in "XYZ")]
+
+
+def diagonal(value, size: int, field: str) -> np.ndarray:
+    """A block's diagonal from one weight or ``size`` of them (>= 0, finite)."""
+    w = np.atleast_1d(np.asarray(value, float))
+    if w.size == 1:
+        w = np.full(size, float(w[0]))
+    if w.shape != (size,) or not np.all(np.isfinite(w)) or np.any(w < 0):
+        raise ValueError(f"{field}: one weight >= 0 or {size} of them, got {value!r}")
+    return w
+
+
+__all__ = ["OPEN_LOOP", "SlewScenario", "diagonal"]
+
+
+def _weights(run: SlewRunSpec, index: int, n_modes: int, n_forces: int):
+    """(Q, D) of a run, diagonal, over [δα, δω, δη, δη̇] and [torque/I, forces]."""
+    path = f"runs[{index}].weights"
+    w = run.weights
+    rates = w.modes if w.mode_rates is None else w.mode_rates
+    q = np.concatenate([diagonal(w.attitude, 3, f"{path}.attitude"),
+                        diagonal(w.rate, 3, f"{path}.rate"),
+                        diagonal(w.modes, n_modes, f"{path}.modes"),
+                        diagonal(rates, n_modes, f"{path}.mode_rates")])
+    d = diagonal(w.torque, 3, f"{path}.torque")
+    if n_forces:
+        d = np.concatenate([d, diagonal(w.force, n_forces, f"{path}.force")])
+    if np.any(d <= 0):
+        raise ValueError(f"{path}.torque: control weights must be > 0 (D is inverted)")
+    return np.diag(q), np.diag(d)
+
+
+def _forces(run: SlewRunSpec, index: int, plant) -> list[str]:
+    """The run's force channels, by the plant's names (``69X`` -> ``force_69X``)."""
+    available = [c.name for c in plant.inputs if c.name.startswith("force_")]
+    if run.forces == "none":
+        return []
+    if run.forces == "all":
+        return available
+    names = []
+    for name in run.forces:
+        channel = name if name.startswith("force_") else f"force_{name}"
+        if channel not in available:
+            raise ValueError(f"runs[{index}].forces: {name!r} is not a force of the plant (its "
+                             f"forces: {', '.join(c[len('force_'):] for c in available)})")
+        names.append(channel)
+    return names
