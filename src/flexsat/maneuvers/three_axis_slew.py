@@ -335,7 +335,7 @@ class ThreeAxisSlew:
 # Solver
 
 def three_axis_slew(inertia, target, duration, omega_b, zeta_b=0.0, Q=None, axis=None,
-                    steps=10) -> ThreeAxisSlew:
+                    steps=10, max_newton=_MAX_NEWTON) -> ThreeAxisSlew:
     """Frequency-shaped optimal rest-to-rest slew of a rigid body from the identity attitude to
     ``target`` in time T (module docstring; spec seed003.md §2.2-2.5).
 
@@ -351,7 +351,9 @@ def three_axis_slew(inertia, target, duration, omega_b, zeta_b=0.0, Q=None, axis
     Q : (3, 3) symmetric positive semi-definite weight on ω [1/s²]; default 0.
     axis : selected axis of the single-axis start (0, 1, 2 or "x", "y", "z"); default: the
         largest terminal Euler angle, ties to the larger principal moment.
-    steps : number of equal continuation steps a1 = a2: 0 → 1 (failed steps are halved).
+    steps : number of equal continuation steps a1 = a2: 0 → 1 (failed steps are halved, at
+        most 6 times in a row).
+    max_newton : Newton iterations allowed per continuation step (3-4 are typical).
 
     Returns
     -------
@@ -378,6 +380,7 @@ def three_axis_slew(inertia, target, duration, omega_b, zeta_b=0.0, Q=None, axis
     if np.linalg.eigvalsh(Qm)[0] < -1e-12 * np.abs(Qm).max():
         raise ValueError("Q: must be positive semi-definite")
     steps = require_count(steps, "steps")
+    max_newton = require_count(max_newton, "max_newton")
     angles = _target_angles(target)
     k = _select_axis(axis, angles, J)
 
@@ -404,15 +407,17 @@ def three_axis_slew(inertia, target, duration, omega_b, zeta_b=0.0, Q=None, axis
     while a < 1.0:
         a_new = a + da if a + da < 1.0 - 1e-9 else 1.0  # no sliver step from rounding
         guess = s if prev is None else s + (s - prev[1]) * (a_new - a) / (a - prev[0])
-        result = _newton(problem(a_new), guess)
+        result = _newton(problem(a_new), guess, max_newton)
         if result is None:
             halvings += 1
             da /= 2.0
             if halvings > _MAX_HALVINGS:
-                raise ValueError(f"continuation: Newton failed to converge beyond a1 = a2 = "
-                                 f"{a:.6g} (last converged; step {da * 2:.3g} after "
+                raise ValueError(f"continuation: Newton failed to converge beyond the last "
+                                 f"converged a1 = a2 = {a:.6g} (step {da * 2:.3g} after "
                                  f"{_MAX_HALVINGS} halvings)")
             continue
+        halvings = 0
+        da = min(2.0 * da, 1.0 / steps)  # after a halved step, grow back toward the nominal
         prev = (a, s)
         s, lu, its, res = result
         a = a_new
@@ -567,9 +572,11 @@ class _Problem:
         return A
 
 
-def _newton(prob: _Problem, s):
-    """Newton on the RK4-discretised problem; None if it does not converge."""
-    for it in range(1, _MAX_NEWTON + 1):
+def _newton(prob: _Problem, s, max_newton):
+    """Newton on the RK4-discretised problem; None if it does not converge (non-finite, or
+    not at least halving the residual from the third iteration on: the step is too long)."""
+    last = np.inf
+    for it in range(1, max_newton + 1):
         ends, phi = prob.rk4(s)
         r = prob.residual(s, ends)
         res = float(np.abs(r).max())
@@ -580,7 +587,7 @@ def _newton(prob: _Problem, s):
         if res <= _COARSE_TOL:
             return s, lu, it, res
         if it > 2 and res > 0.5 * last:
-            return None  # not contracting: the step is too long
+            return None
         last = res
     return None
 
