@@ -294,3 +294,22 @@ def test_failed_continuation_names_the_last_converged_parameters():
     the correction), so the continuation stops at its start and says so."""
     with pytest.raises(ValueError, match=r"^continuation: .*last converged a1 = a2 = 0\b"):
         three_axis_slew(**_kwargs(max_newton=1))
+
+
+def test_rate_weight_q():
+    """A symmetric Q on ω (off-diagonal entries scaled by a1 with the products of inertia): the
+    slew still meets its boundary conditions with H constant (1e-9 of its largest term), and
+    the weight lowers ∫ωᵀQω against the Q = 0 slew (what it is for)."""
+    Q = np.array([[2.0, 0.5, 0.0], [0.5, 1.0, 0.3], [0.0, 0.3, 3.0]])
+    slew = three_axis_slew(NOTIONAL, TARGET, T, OMEGA_B, 1.0, Q=Q)
+    assert slew.boundary_error() <= 1e-9
+    t = np.linspace(0.0, T, 2001)
+    h = slew.hamiltonian(t)
+    z = slew.z(t)
+    assert np.abs(h - h[0]).max() <= 1e-9 * np.abs(z[:, 4:7] * z[:, 17:20]).max()
+
+    def rate_cost(s):
+        w = s.omega(t)
+        return np.trapezoid(np.einsum("ni,ij,nj->n", w, Q, w), t)
+
+    assert rate_cost(slew) < rate_cost(_slew("notional", 1.0))
