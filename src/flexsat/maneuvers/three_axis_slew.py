@@ -207,7 +207,8 @@ def state_costate_jacobian(z, inertia, omega_b, zeta_b=0.0, Q=None, inertia_inv=
 @dataclass(frozen=True)
 class ContinuationStep:
     """One converged continuation step: the homotopy parameters, the Newton iterations it took
-    and its final balanced residual (max norm)."""
+    and the balanced residual (max norm) of the RK4-discretised problem at its last iterate
+    (before the last, quadratically smaller, correction)."""
 
     a1: float
     a2: float
