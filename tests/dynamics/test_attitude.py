@@ -183,3 +183,18 @@ def test_the_package_re_exports_every_kernel():
     plants = {*structural.__all__, *orbit.__all__, "RigidSpacecraft", "FlexibleSpacecraft"}
     assert kernels | plants == set(dynamics.__all__)
     assert dynamics.dcm_to_quaternion is att.dcm_to_quaternion
+
+
+def test_euler123_to_quaternion_is_the_rotation_of_euler123_to_dcm_and_continuous():
+    """F4 (seed 003 §1.3): (1, 1, 1) rad gives the printed β_f to half a unit of its 6th digit;
+    for random angles C(β) equals R3 R2 R1 to a few eps (products of unit quaternions); along a
+    path of angles β moves continuously (no sign flip, unlike the β0 >= 0 of Shepperd's
+    method), so a continuation in the angles can follow it."""
+    beta = att.euler123_to_quaternion([1.0, 1.0, 1.0])
+    assert np.abs(beta - [0.565676, 0.570941, 0.167519, 0.570941]).max() <= 0.5e-6 + 1e-15
+    angles = np.random.default_rng(3).uniform(-3.0, 3.0, (50, 3))
+    assert np.abs(att.quaternion_to_dcm(att.euler123_to_quaternion(angles))
+                  - att.euler123_to_dcm(angles)).max() <= 16 * EPS
+    path = np.linspace(0.0, 1.0, 2001)[:, None] * np.array([3.0, 1.2, -3.1])
+    steps = np.abs(np.diff(att.euler123_to_quaternion(path), axis=0)).max()
+    assert steps <= 2 * np.abs(np.diff(path, axis=0)).max()  # |dβ/dθ_k| <= 1/2 per angle

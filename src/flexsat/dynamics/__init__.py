@@ -16,7 +16,7 @@ from flexsat.lazy import lazy_exports
 _EXPORTS = {
     **{name: "attitude" for name in (
         "cross_matrix", "omega_matrix", "quaternion_rate_matrix", "quaternion_to_dcm",
-        "dcm_to_quaternion", "euler123_to_dcm", "dcm_to_euler123",
+        "dcm_to_quaternion", "euler123_to_dcm", "euler123_to_quaternion", "dcm_to_euler123",
         "principal_rotation_to_quaternion", "quaternion_to_principal_rotation",
         "quaternion_multiply", "quaternion_exp", "quaternion_to_gibbs", "gibbs_to_quaternion",
         "quaternion_to_mrp", "mrp_to_quaternion", "mrp_shadow", "gibbs_rate", "mrp_rate")},

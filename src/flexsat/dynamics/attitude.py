@@ -25,7 +25,8 @@ from flexsat.validation import require_numeric
 __all__ = [
     "require_shape", "case_shape", "require_quaternion",
     "UNIT_TOL", "SINGULAR_TOL", "cross_matrix", "omega_matrix", "quaternion_rate_matrix",
-    "quaternion_to_dcm", "dcm_to_quaternion", "euler123_to_dcm", "dcm_to_euler123",
+    "quaternion_to_dcm", "dcm_to_quaternion", "euler123_to_dcm", "euler123_to_quaternion",
+    "dcm_to_euler123",
     "principal_rotation_to_quaternion", "quaternion_to_principal_rotation",
     "quaternion_multiply", "quaternion_exp", "quaternion_to_gibbs", "gibbs_to_quaternion",
     "quaternion_to_mrp", "mrp_to_quaternion", "mrp_shadow", "gibbs_rate", "mrp_rate",
@@ -255,6 +256,34 @@ def euler123_to_dcm(angles) -> np.ndarray:
     th = require_shape(angles, "angles", (3,))
     return (_axis_rotation(th[..., 2], 2) @ _axis_rotation(th[..., 1], 1)
             @ _axis_rotation(th[..., 0], 0))
+
+
+def euler123_to_quaternion(angles) -> np.ndarray:
+    r"""Euler parameters of the 1-2-3 Euler angles as the product of the three elementary
+    rotations, :math:`\beta = \beta_3(\theta_3) \otimes \beta_2(\theta_2) \otimes
+    \beta_1(\theta_1)` with :math:`\beta_k(\theta) = [\cos(\theta/2), \sin(\theta/2)\,e_k]`
+    (the rotation of :func:`euler123_to_dcm`, :math:`C = R_3 R_2 R_1`; Schaub & Junkins Eq. 3.105).
+
+    Unlike ``dcm_to_quaternion(euler123_to_dcm(angles))``, whose sign is fixed by β0 >= 0, this
+    is a smooth function of the angles: a path of angles gives a continuous path of β (what a
+    continuation in the terminal angles needs). For (1, 1, 1) rad it gives
+    [0.565676, 0.570941, 0.167519, 0.570941] (seed 003 §1.3, spec F4).
+
+    Parameters
+    ----------
+    angles : array_like, shape (..., 3)
+        [θ1, θ2, θ3] in rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+    """
+    th = require_shape(angles, "angles", (3,))
+    c, s = np.cos(th / 2), np.sin(th / 2)
+    zero = np.zeros(th.shape[:-1])
+    q1, q2, q3 = (np.stack([c[..., k]] + [s[..., k] if j == k else zero for j in range(3)], -1)
+                  for k in range(3))
+    return quaternion_multiply(q3, quaternion_multiply(q2, q1))
 
 
 def dcm_to_euler123(dcm) -> np.ndarray:
