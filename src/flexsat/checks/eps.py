@@ -30,6 +30,23 @@ def _case():
 
 
 @lru_cache(maxsize=1)
+def _nominal_slew():
+    """The 10 s nominal slew of seed 003 (1 rad about each 1-2-3 axis, ω_B = 2.5 rad/s, the
+    paper's literal shaping weight ζ_B = 0) on the rebuilt model's inertia about its CG."""
+    from flexsat.maneuvers import three_axis_slew
+
+    inertia = _case().mass_properties()["inertia_center_of_mass"]
+    return three_axis_slew(inertia, [1.0, 1.0, 1.0], 10.0, 2.5, zeta_b=0.0)
+
+
+def _peak_torque(axis: int) -> float:
+    import numpy as np
+
+    slew = _nominal_slew()
+    return float(np.abs(slew.torque(np.linspace(0.0, slew.duration, 2001))[:, axis]).max())
+
+
+@lru_cache(maxsize=1)
 def _first_truss_mode():
     return _case().first_truss_mode()
 
@@ -70,4 +87,10 @@ CHECKS += [
     # band (achieved +0.95 %).
     Check("eps", "structural mass", f"{SEED}, L72-L73", 548.0, "kg",
           lambda: _case().mass_budget()["structural"], rtol=0.01),
+    # "peak torque ≈ 12,000 N m about body z" of the 10 s nominal (L814-L831). The paper's
+    # inertia is not published: this is the optimal maneuver on the rebuilt model's inertia
+    # (I_zz 9.1e4 kg m²), an order-of-magnitude comparison; the issue asks for no more. The
+    # band ±50 % (achieved −3 %); with the damped reading ζ_B = 1 the peak is 7.3 kN m.
+    Check("eps", "peak nominal z torque, 10 s slew", f"{SEED}, L814-L831", 12000.0, "N*m",
+          lambda: _peak_torque(2), rtol=0.5),
 ]

@@ -42,7 +42,8 @@ from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.catalog import get_case
-from flexsat.scenarios.fields import (_Document, _Section, check_unique_labels, count,
+from flexsat.scenarios.errors import ScenarioError, _item, _locate
+from flexsat.scenarios.fields import (_Document, _Section, _given, check_unique_labels, count,
                                       quantity)
 from flexsat.scenarios.simulation import SimulationSettings, target_quaternion
 from flexsat.sim.slew_goals import euler_angle_error
@@ -272,7 +273,6 @@ def diagonal(value, size: int, field: str) -> np.ndarray:
     return w
 
 
-__all__ = ["OPEN_LOOP", "SlewScenario", "diagonal"]
 
 
 def _weights(run: SlewRunSpec, index: int, n_modes: int, n_forces: int):
@@ -307,3 +307,121 @@ def _forces(run: SlewRunSpec, index: int, plant) -> list[str]:
                              f"forces: {', '.join(c[len('force_'):] for c in available)})")
         names.append(channel)
     return names
+
+
+def _plants(scenario: SlewScenario):
+    """(truth, design model): the case's flexible plant as given and with the controller's
+    modes."""
+    from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
+    from flexsat.scenarios.simulation import _build_plant
+
+    truth = _build_plant(scenario)
+    if not isinstance(truth, FlexibleSpacecraft):
+        raise ScenarioError([f"plant: the {scenario.case} plant with these options is a "
+                             f"{type(truth).__name__}; a slew needs a flexible spacecraft "
+                             "(model: flexible)"])
+    if scenario.controller.modes > truth.n_modes:
+        raise ScenarioError([f"controller.modes: at most the plant's {truth.n_modes} elastic "
+                             f"modes, got {scenario.controller.modes}"])
+    design = _build_plant(scenario.model_copy(update={"plant": {
+        **scenario.plant, "n_modes": scenario.controller.modes}}))
+    return truth, design
+
+
+def _laws(scenario: SlewScenario, design_plant, nominal, n_modes_plant: int, dt: float) -> dict:
+    """The open-loop law and every run's perturbation law, by label; problems are gathered and
+    located in their run."""
+    from flexsat.control import NominalTorque, perturbation_design
+
+    laws = {OPEN_LOOP: NominalTorque(nominal, dt)}
+    problems = []
+    for index, run in enumerate(scenario.runs):
+        try:
+            forces = _forces(run, index, design_plant)
+            Q, D = _weights(run, index, design_plant.n_modes, len(forces))
+            design = perturbation_design(design_plant, nominal, Q, D, run.break_frequency,
+                                         run.shaping_damping,
+                                         scenario.controller.linearization_points,
+                                         forces=forces, decouple=run.decouple)
+            laws[run.label] = design.controller(dt, run.feedforward, n_modes_plant)
+        except ValueError as exc:
+            message = str(exc)
+            problems.append(message if message.startswith("runs[") else
+                            _locate(f"runs{_item(index, run.label)}", message))
+    if problems:
+        raise ScenarioError(problems)
+    return laws
+
+
+def run_slew(scenario: SlewScenario, progress: Callable[[str], None] | None = None
+             ) -> SlewResult:
+    """Solve the nominal maneuver, design every run's perturbation feedback, then simulate the
+    open loop and each run on the case's flexible plant and evaluate the goals.
+
+    Raises
+    ------
+    ScenarioError
+        Before any simulation, for a plant option, maneuver or run the case or the design
+        refuses (a continuation that does not converge is reported under ``maneuver``).
+    flexsat.sim.SimulationDiverged
+        If a run diverges (its message starts with the run).
+    """
+    from flexsat.dynamics.attitude import dcm_to_euler123, quaternion_to_dcm
+    from flexsat.maneuvers import three_axis_slew
+    from flexsat.references import cite
+    from flexsat.sim import SimConfig, SimulationDiverged, simulate
+    from flexsat.sim.slew_goals import SlewGoals, slew_goal_metrics
+
+    truth, design_plant = _plants(scenario)
+    m = scenario.maneuver
+    if progress is not None:
+        progress("nominal maneuver")
+    try:
+        nominal = three_axis_slew(truth.inertia, target_quaternion(m.target), m.duration,
+                                  m.break_frequency, m.shaping_damping,
+                                  Q=m.rate_weight * np.eye(3))
+    except ValueError as exc:
+        raise ScenarioError([_locate("maneuver", str(exc))]) from None
+    try:
+        config = SimConfig(**_given(scenario.simulation))
+    except ValueError as exc:
+        raise ScenarioError([f"simulation: {exc}"]) from None
+    laws = _laws(scenario, design_plant, nominal, truth.n_modes, config.dt)
+
+    results = []
+    for index, (label, law) in enumerate(laws.items()):
+        if progress is not None:
+            progress(label)
+        try:
+            results.append(simulate(truth, law, config, n_cases=1))
+        except SimulationDiverged as exc:
+            raise SimulationDiverged(f"runs{_item(index - 1, label)}: {exc}", exc.cases,
+                                     exc.time, exc.cause) from None
+
+    def stack(name):
+        return np.stack([r.dataset[name].isel(case=0).values for r in results])
+
+    t = results[0].dataset["time"].values
+    rims = _rim_nodes(results[0].dataset)
+    deflection = np.stack([np.stack([stack(f"displacement_{n}{a}") for a in "XYZ"], -1)
+                           for n in rims], -2)
+    force_names = [c.name for c in truth.inputs if c.name.startswith("force_")]
+    forces = np.stack([stack(n) for n in force_names], -1) if force_names else None
+    g = scenario.goals
+    goals, units = slew_goal_metrics(
+        t, m.duration, stack("euler123"), dcm_to_euler123(quaternion_to_dcm(nominal.target)),
+        deflection, deflection[:1], torque=stack("torque"),
+        torque_nominal=nominal_histories(nominal, t)[0][None], forces=forces,
+        goals=SlewGoals(g.angle_fraction, g.evaluation, g.deflection_ratio))
+    notes = (f"Nominal: three-axis TPBVP by continuation in {len(nominal.history)} steps, "
+             f"boundary error {nominal.boundary_error():.1e}; peak nominal torques "
+             + ", ".join(f"{a} {abs(nominal.torque(t[t <= m.duration])[:, i]).max():,.0f} N m"
+                         for i, a in enumerate("xyz")) + ".",
+             f"Plant: {truth.n_modes} elastic modes; design model: {design_plant.n_modes} "
+             f"modes linearised at {scenario.controller.linearization_points} equally spaced "
+             f"times, gains interpolated in time.")
+    return SlewResult(scenario, tuple(laws), tuple(results), nominal, goals, units,
+                      cite(get_case(scenario.case).source), notes)
+
+
+__all__ = ["OPEN_LOOP", "SlewResult", "SlewScenario", "diagonal", "nominal_histories", "run_slew"]
