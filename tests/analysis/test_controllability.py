@@ -24,6 +24,24 @@ def test_double_integrator_is_controllable_from_the_force():
     np.testing.assert_allclose(pbh_test(A, [[1], [0]]), [0.0])
 
 
+def test_round_off_entries_do_not_upset_the_balanced_pbh_test():
+    """A rigid attitude model linearised at a nominal rate of 1e-28 rad/s (the boundary value
+    ω(0) = 0 of an optimal slew evaluated in floating point) plus a damped mode: the 1e-28
+    couplings are round-off of A's scale. Balancing them up by 1e31 made λ = 0 look
+    uncontrollable; the test judges the model as it is, stabilizable."""
+    A = np.zeros((8, 8))
+    A[:3, 3:6] = np.eye(3)
+    A[6, 7], A[7, 6], A[7, 7] = 1.0, -400.0, -0.2
+    A[1, 2], A[2, 1] = 1.6e-28, -1.6e-28  # -ω_nom × δα
+    B = np.zeros((8, 3))
+    B[3:6] = np.eye(3)
+    B[7] = [0.1, 0.2, 0.3]
+    assert is_stabilizable(A, B)
+    lqr(A, B, np.eye(8), np.eye(3))
+    # still strict: without the rate input on one axis, λ = 0 is uncontrollable
+    assert not is_stabilizable(A, B[:, :2])
+
+
 def test_pbh_failure_finds_the_uncontrollable_mode_and_stabilizability():
     """Diagonal A, input only on the first state: the second eigenvalue is uncontrollable;
     stabilizable iff it is stable."""

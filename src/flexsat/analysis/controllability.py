@@ -142,7 +142,13 @@ _SQRT_EPS = np.sqrt(_EPS)
 def _balanced(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(D⁻¹AD, D⁻¹B) with D the diagonal balancing of A: a modal model's rows scale as ω² and
     ω, and balancing brings them to ~ω so that its eigenvectors carry errors of ~ε‖A‖/gap with
-    the balanced, not the raw, ‖A‖."""
+    the balanced, not the raw, ‖A‖.
+
+    Entries below ε max|A| are set to zero first: they are round-off of A's own scale (a
+    linearisation at a nominal rate of 1e-28 rad/s that is zero in exact arithmetic), and
+    balancing would otherwise scale them up by as much as it scales the entries down (1e31
+    measured), making the balanced matrix meaningless."""
+    A = np.where(np.abs(A) <= np.finfo(float).eps * np.abs(A).max(initial=0.0), 0.0, A)
     d = scipy.linalg.matrix_balance(A, permute=False, separate=True)[1][0]
     return A * d[None, :] / d[:, None], B / d[:, None]
 
