@@ -135,10 +135,10 @@ class PerturbationDesign:
     def n_modes(self) -> int:
         return self.linearization.n_modes
 
-    def controller(self, dt, feedforward: str = "constant", n_modes_plant: int | None = None
-                   ) -> PerturbationFeedback:
+    def controller(self, dt, feedforward: str = "constant", n_modes_plant: int | None = None,
+                   plant=None) -> PerturbationFeedback:
         """The law at control period ``dt`` (:class:`PerturbationFeedback`)."""
-        return PerturbationFeedback(self, dt, feedforward, n_modes_plant)
+        return PerturbationFeedback(self, dt, feedforward, n_modes_plant, plant)
 
 
 def perturbation_design(plant, nominal, Q, D, omega_b, zeta_b=0.0, n_points: int = 11,
@@ -231,6 +231,25 @@ def _check_inputs_act(B, times, inputs) -> None:
                 f"or decouple=True")
 
 
+def _check_same_modes(design_plant, plant) -> None:
+    """The first modes of ``plant`` are the design model's (:class:`PerturbationFeedback`)."""
+    n = design_plant.n_modes
+    if getattr(plant, "n_modes", 0) < n or not hasattr(plant, "modal"):
+        raise ValueError(f"plant: must be a FlexibleSpacecraft with at least the design "
+                         f"model's {n} elastic modes")
+    a, b = design_plant.modal, plant.modal
+    for k in range(n):
+        scale = np.abs(a.shapes[k]).max()
+        if (abs(a.frequencies[k] - b.frequencies[k]) > 1e-9 * a.frequencies[k]
+                or np.abs(a.shapes[k] - b.shapes[k]).max() > 1e-9 * scale):
+            raise ValueError(
+                f"plant: its elastic mode {k + 1} is not the design model's (frequency "
+                f"{b.frequencies[k]:.6g} against {a.frequencies[k]:.6g} rad/s, or another "
+                f"shape: a sign or a rotated repeated pair), so the law would read the wrong "
+                f"coordinates; build the design model from the plant's modal model "
+                f"(FlexibleSpacecraft(plant.modal, ..., n_modes={n}))")
+
+
 class PerturbationFeedback(Controller):
     r"""The gain-scheduled perturbation law of a :class:`PerturbationDesign` (module
     docstring).
@@ -250,13 +269,20 @@ class PerturbationFeedback(Controller):
     feedforward : {"constant", "time-varying", "none"}
     n_modes_plant : int, optional
         Elastic modes of the simulated plant (its ``elastic`` channel is 2·n_modes_plant
-        wide); default the design model's.
+        wide); default the design model's, or ``plant``'s.
+    plant : FlexibleSpacecraft, optional
+        The simulated plant: its mode count is taken and its first n modes are checked to be
+        the design model's (frequencies and shapes to 1e-9 relative). Two eigen-solutions of
+        one structure need not agree: a repeated pair (the EPS's 12-fold symmetric antenna)
+        may come out rotated, a mode with the opposite sign, and the law would then read the
+        wrong coordinates; build the design model from the plant's modal model
+        (``FlexibleSpacecraft(plant.modal, ..., n_modes=n)``).
     """
 
     reads = ("attitude", "rate", "elastic")
 
     def __init__(self, design: PerturbationDesign, dt, feedforward: str = "constant",
-                 n_modes_plant: int | None = None):
+                 n_modes_plant: int | None = None, plant=None):
         if not isinstance(design, PerturbationDesign):
             raise ValueError(f"design: must be a PerturbationDesign, got "
                              f"{type(design).__name__}")
@@ -267,6 +293,9 @@ class PerturbationFeedback(Controller):
         self.dt = h = float(require_positive(dt, "dt", "s"))
         lin = design.linearization
         n = lin.n_modes
+        if plant is not None:
+            _check_same_modes(lin.plant, plant)
+            n_modes_plant = plant.n_modes if n_modes_plant is None else n_modes_plant
         self.n_modes_plant = n if n_modes_plant is None else require_count(n_modes_plant,
                                                                              "n_modes_plant")
         if self.n_modes_plant < n:
