@@ -49,7 +49,10 @@ held over [t_k, t_k + h), the interval means of the continuous commands:
 :math:`\bar\tau_n` the mean of the nominal torque over the interval by Simpson's rule (error
 O(h⁵) per interval). A hold of the sampled value :math:`\tau_n(t_k)` would delay the torque by
 h/2, an O(h) trajectory error; the mean gives each interval the nominal's exact impulse, so
-the trajectory error of the hold is O(h²).
+the trajectory error of the hold is O(h²). (Measured, the nominal torque alone on the 45-mode
+EPS, whose rotation is the rigid body's: peak attitude error during a 1 rad, 10 s slew
+1.2e-6 rad at h = 0.01 s, 4.6e-6 at 0.02 s with the mean; 1.1e-3 and 2.2e-3 with the sampled
+value.)
 """
 
 from __future__ import annotations
