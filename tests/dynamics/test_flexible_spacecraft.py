@@ -73,7 +73,8 @@ def check_linearisation(modal, plant, torque_node, forces):
     assert np.abs(P @ A - ss.A @ P).max() <= 1e-12 * np.abs(ss.A).max()
     assert np.abs(P @ B - ss.B).max() <= 1e-12 * np.abs(ss.B).max()
     # the node outputs are the elastic deflection: the modal model's rows on the elastic modes
-    C = np.vstack([plant.output_matrices(ch.name)[0] for ch in plant.outputs[6:]])
+    C = np.vstack([plant.output_matrices(ch.name)[0] for ch in plant.outputs
+                   if ch.name.startswith(("displacement_", "rotation_"))])
     np.testing.assert_allclose(C[:, plant._eta], ss.C[:, 6:n + 6], rtol=0,
                                atol=1e-15 * np.abs(ss.C).max())
     # and the nonlinear force is second order at rest: its Jacobian vanishes there
@@ -253,7 +254,8 @@ def test_channels_and_outputs(free_modal):
     assert [c.name for c in plant.inputs] == ["torque", "force_3Y", "force_6Z", "force_9X"]
     assert plant.n_inputs == 6 and plant.integrator == "exp_rk4"
     names = [c.name for c in plant.outputs]
-    assert names == ["attitude", "rate", "euler123", "mrp", "displacement_3Y", "rotation_6Z"]
+    assert names == ["attitude", "rate", "euler123", "mrp", "displacement_3Y", "rotation_6Z",
+                     "elastic"]
     x = plant.initial_state(2)
     x[:, :4] = att.dcm_to_quaternion(att.euler123_to_dcm([1.0, 1.0, 1.0]))
     x[:, plant._eta] = np.arange(plant.n_modes) * 1e-3
@@ -264,6 +266,35 @@ def test_channels_and_outputs(free_modal):
     np.testing.assert_allclose(d, plant.modal.shapes[:, 3, 1] @ x[0, plant._eta], rtol=1e-14)
     with pytest.raises(ValueError, match="has no output channel 'tip'"):
         plant.output("tip", x, u)
+
+
+def test_the_elastic_output_is_the_modal_state_and_a_reduced_model_reads_its_first_modes(
+        free_modal):
+    # ``elastic`` = [η, η̇] (2n wide), a linear output (C picks the state rows, no
+    # feedthrough), so the compiled loop and the Python loop read the same numbers; and a
+    # 20-mode plant and a 5-mode plant of one ModalModel share their first 5 modes exactly
+    # (truncation keeps the leading modes), so a law designed on the 5-mode model reads the
+    # first 5 of the 20-mode plant's η and the first 5 of its η̇
+    big = FlexibleSpacecraft(free_modal, forces=FORCES, n_modes=20)
+    small = FlexibleSpacecraft(free_modal, forces=FORCES, n_modes=5)
+    assert dict((c.name, c.size) for c in big.outputs)["elastic"] == 40
+    assert np.array_equal(big.modal.frequencies[:5], small.modal.frequencies)
+    assert np.array_equal(big.modal.shapes[:5], small.modal.shapes)
+    assert np.array_equal(big.torque_modal[:5], small.torque_modal)
+    assert np.array_equal(big.force_modal[:5], small.force_modal)
+    rng = np.random.default_rng(3)
+    x = big.initial_state(2) + rng.standard_normal((2, big.nx)) * 1e-2
+    u = rng.standard_normal((2, big.n_inputs))
+    y = big.output("elastic", x, u)
+    assert y.shape == (2, 40)
+    np.testing.assert_array_equal(y, np.concatenate([x[:, big._eta], x[:, big._eta_dot]], 1))
+    C, D, _ = big.output_matrices("elastic")
+    np.testing.assert_array_equal(x @ C.T + u @ D.T, y)
+    n = small.n_modes
+    np.testing.assert_array_equal(np.concatenate([y[:, :n], y[:, 20:20 + n]], 1),
+                                  small.output("elastic", np.concatenate(
+                                      [x[:, :7], x[:, big._eta][:, :n],
+                                       x[:, big._eta_dot][:, :n]], 1), u[:, :small.n_inputs]))
 
 
 @pytest.mark.parametrize("kwargs, message", [

@@ -10,6 +10,7 @@ from flexsat.control.estimation import (
     regulator_weighted_process_noise,
     truncate_gains,
 )
+from flexsat.control.force_decoupling import decoupled_input_map, moment_free_forces
 from flexsat.control.frequency_shaped import (
     FrequencyShapedController,
     FrequencyShapedDesign,
@@ -25,8 +26,14 @@ from flexsat.control.output_feedback import (
     design_minimum_sensitivity,
 )
 from flexsat.control.pd import PD
+from flexsat.control.perturbation_feedback import (
+    PerturbationDesign,
+    PerturbationFeedback,
+    perturbation_design,
+)
 from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.control.state_space_compensator import StateSpaceCompensator
+from flexsat.control.trajectory_linearization import TrajectoryLinearization, attitude_error
 
 __all__ = [
     "Controller",
@@ -42,17 +49,24 @@ __all__ = [
     "LyapunovTracker",
     "MRPLaw",
     "PD",
+    "PerturbationDesign",
+    "PerturbationFeedback",
     "QuaternionPD",
     "RefinedEstimator",
     "RiccatiSolution",
     "ScheduledStateFeedback",
     "StateSpaceCompensator",
+    "TrajectoryLinearization",
+    "attitude_error",
     "check_lyapunov_gains",
+    "decoupled_input_map",
     "dkalman",
     "dlqr",
     "frequency_shaped_lqr",
     "kalman",
     "lqr",
+    "moment_free_forces",
+    "perturbation_design",
     "refine_estimator",
     "regulator_weighted_process_noise",
     "run_linear_law",

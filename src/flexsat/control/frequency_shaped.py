@@ -141,20 +141,28 @@ class FrequencyShapedDesign:
     def poles(self) -> np.ndarray:
         return self.solution.poles
 
+    @property
+    def disturbance_gain(self) -> np.ndarray:
+        r"""K_d (m, n), the coefficient of a constant plant disturbance d in Eq. 30:
+        :math:`K_d = \hat R^{-1}\hat B^T \hat A_{cl}^{-T} P E` with E = [I; 0] placing d in
+        the augmented state (:math:`\hat d = E d`) and :math:`\hat A_{cl} = \hat A -
+        \hat B\hat K`, so that the feedforward :math:`K_d d = -\hat R^{-1}\hat B^T\xi` with
+        ξ of Eq. 29. Seed 003's "time-varying" feedforward interpolates this gain and
+        multiplies the current d(t) (notes §2.7)."""
+        n = self.A.shape[0]
+        Acl = self.A_aug - self.B_aug @ self.gain
+        return np.linalg.solve(self.R_aug, self.B_aug.T @ np.linalg.solve(
+            Acl.T, self.solution.solution[:, :n]))
+
     def disturbance_feedforward(self, d) -> np.ndarray:
         r"""Constant control term of Eq. 30 for a constant plant disturbance d (n,):
         :math:`\hat R^{-1}\hat B^T \hat A_{cl}^{-T} P \hat d` = :math:`-\hat R^{-1}\hat B^T\xi`
-        with ξ of Eq. 29."""
+        with ξ of Eq. 29 (:attr:`disturbance_gain` times d)."""
         n = self.A.shape[0]
         d = require_finite(d, "d")
         if d.shape != (n,):
             raise ValueError(f"d: must have shape (n,) = ({n},), got {d.shape}")
-        dh = np.zeros(self.A_aug.shape[0])
-        dh[:n] = d
-        P = self.solution.solution
-        Acl = self.A_aug - self.B_aug @ self.gain
-        xi = -np.linalg.solve(Acl.T, P @ dh)
-        return -np.linalg.solve(self.R_aug, self.B_aug.T @ xi)
+        return self.disturbance_gain @ d
 
     def controller(self, C, L, dt, **kwargs) -> FrequencyShapedController:
         """The law with estimator gain L (n, p) on the plant outputs C (p, n); keyword

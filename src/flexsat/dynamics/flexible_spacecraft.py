@@ -126,6 +126,11 @@ def _points(items, field: str, modal: ModalModel) -> list[tuple[int, str]]:
 class FlexibleSpacecraft(Plant):
     r"""Free-free flexible spacecraft in hybrid coordinates (module docstring).
 
+    Outputs: the attitude channels (``attitude``, ``rate``, ``euler123``, ``mrp``), ``position``
+    and ``velocity`` with translation, the node outputs below, and ``elastic`` = [η, η̇]
+    (2 n_modes wide), the elastic state a perturbation law on the first modes reads
+    (:mod:`flexsat.control.perturbation_feedback`).
+
     Parameters
     ----------
     modal : ModalModel
@@ -224,6 +229,9 @@ class FlexibleSpacecraft(Plant):
         outputs += [Channel(f"rotation_{tag(node, axis.upper())}", "rad", 1,
                             f"elastic rotation of node {node} about body {axis}")
                     for node, axis in self.rotations]
+        # last, so the node outputs keep their places (and their noise columns before it)
+        outputs.append(Channel("elastic", "", 2 * n, "elastic coordinates [η, η̇] (modal "
+                               "units: m √kg and m √kg/s)"))
         self.outputs = tuple(outputs)
         # the node outputs are what a flexible run is about (the rim deflections of seed 003)
         self.recorded = type(self).recorded + tuple(c.name for c in self.outputs if c.name
@@ -386,13 +394,18 @@ class FlexibleSpacecraft(Plant):
 
     # -- outputs -----------------------------------------------------------------------------
     def output_matrices(self, name: str):
-        """Linear outputs: the node displacements and rotations (Φ η), position, velocity."""
+        """Linear outputs: the node displacements and rotations (Φ η), position, velocity and
+        the elastic state ``elastic`` = [η, η̇] (what a perturbation law on a reduced model
+        reads: its modes are the first ones of this plant when both come from one
+        :class:`~flexsat.structures.modal_model.ModalModel`)."""
         m = self._linear[1].shape[1]
         if name in self._rows:
             C = np.zeros((1, self.nx))
             C[0, self._eta] = self._rows[name]
         elif name in ("position", "velocity") and self.translation:
             C = np.eye(self.nx)[7:10] if name == "position" else np.eye(self.nx)[10:13]
+        elif name == "elastic":
+            C = np.eye(self.nx)[self._eta.start:self._eta_dot.stop]
         else:
             return None
         return C, np.zeros((C.shape[0], m)), None
@@ -401,6 +414,8 @@ class FlexibleSpacecraft(Plant):
         self._size(name)  # unknown names: a ValueError naming the channel
         if name in self._rows:
             return x[..., self._eta] @ self._rows[name]
+        if name == "elastic":
+            return x[..., self._eta.start:self._eta_dot.stop]
         if name == "position":
             return x[..., 7:10]
         if name == "velocity":
