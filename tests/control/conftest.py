@@ -91,8 +91,4 @@ def eps_truth_plant(eps_case):
 def eps_design_plant(eps_truth_plant):
     """The paper's controller model: the first 10 of the truth model's modes, from the same
     modal model (a separate 10-mode eigen-solution may rotate the repeated antenna pairs)."""
-    p = eps_truth_plant
-    from flexsat.dynamics import FlexibleSpacecraft
-
-    return FlexibleSpacecraft(p.modal, forces=p.forces, displacements=p.displacements,
-                              torque_node=p.torque_node, n_modes=10)
+    return eps_truth_plant.reduced(10)

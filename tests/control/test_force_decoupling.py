@@ -88,15 +88,17 @@ def test_the_full_coordinate_riccati_equation_has_no_stabilising_solution(design
 
 def test_the_reduced_design_is_eq37_on_the_admissible_set(design):
     # Designed on v (δu = S v before augmenting), the law in physical coordinates is
-    # δu₃ = −S K_v [δX; Sᵀδu₁; Sᵀδu₂]; Eq. 37 gives −M_W(B̂ᵀP + Nᵀ)δX with P = TᵀP_vT,
-    # T = blockdiag(I, Sᵀ, Sᵀ). On admissible states (δu_k = S v_k) they agree to round-off
+    # δu₃ = −S K_v [δX; S⁺δu₁; S⁺δu₂]; Eq. 37 gives −M_W(B̂ᵀP + Nᵀ)δX with P = TᵀP_vT,
+    # T = blockdiag(I, S⁺, S⁺) (S⁺ the left inverse: S = [I, 0; 0, Z] L⁻ᵀ is scaled to unit
+    # weights). On admissible states (δu_k = S v_k) they agree to round-off
     # (measured 2.5e-16 of the gain; allowed 1e-12)
     i = 2
     sol = design.designs[i]
     S = design.input_map
     N = design.linearization.n_states
     m, mv = S.shape
-    T = scipy.linalg.block_diag(np.eye(N), S.T, S.T)
+    Sp = np.linalg.pinv(S)
+    T = scipy.linalg.block_diag(np.eye(N), Sp, Sp)
     P = T.T @ sol.solution.solution @ T
     R = D / OMEGA_B**4
     Ri = np.linalg.inv(R)

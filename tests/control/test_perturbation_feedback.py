@@ -9,8 +9,8 @@ import pytest
 import scipy.linalg
 from scipy.integrate import solve_ivp
 
-from flexsat.control.base import Controller
 from flexsat.control.perturbation_feedback import (
+    NominalTorque,
     PerturbationFeedback,
     perturbation_design,
 )
@@ -56,24 +56,6 @@ def coupled(coupled_model, eigenaxis_slew):
     design = perturbation_design(plant, nominal, np.r_[[1000.0] * 6, [100.0] * 4], [50.0] * 3,
                                  OMEGA_B)
     return truth, design
-
-
-class NominalTorque(Controller):
-    """Open loop: the nominal torque alone, its interval mean (Simpson) held per period as the
-    perturbation law holds it."""
-
-    reads = ("attitude",)
-    writes = ("torque",)
-    target = np.zeros(1)
-
-    def __init__(self, linearization, dt):
-        self.dt = dt
-        grid = dt * np.arange(int(np.ceil(linearization.duration / dt)) + 2)
-        tau = [linearization.nominal_at(grid + s * dt)[2] for s in (0.0, 0.5, 1.0)]
-        self.table = (tau[0] + 4 * tau[1] + tau[2]) / 6
-
-    def __call__(self, t, y, state):
-        return self.table[min(int(round(t / self.dt)), len(self.table) - 1)][None], state
 
 
 def attitude_errors(result, nominal):
@@ -169,7 +151,7 @@ def test_the_law_is_its_equations(eps_design, eps_nominal):
     u3 = ff - interpolate_schedule(eps_design.times, eps_design.gains, t) @ X
     mean = state["z1"][0] + DT / 2 * state["z2"][0] + DT**2 / 6 * u3
     tau = [eps_nominal.torque(t + s * DT) for s in (0.0, 0.5, 1.0)]
-    expected = (tau[0] + 4 * tau[1] + tau[2]) / 6 + lin.inertia @ mean
+    expected = (tau[0] + 4 * tau[1] + tau[2]) / 6 + lin.inertia @ (eps_design.input_map @ mean)
     np.testing.assert_allclose(commands["torque"][0], expected, rtol=1e-12,
                                atol=1e-12 * np.abs(expected).max())
     np.testing.assert_allclose(nxt["z2"][0], state["z2"][0] + DT * u3, rtol=1e-12, atol=1e-15)
@@ -245,7 +227,7 @@ def test_closed_loop_tracks_better_than_the_nominal_torque_alone(coupled, feedfo
     truth, design = coupled
     config = SimConfig(duration=2 * T, control_rate=1 / DT, substeps=1)
     nominal = design.linearization.nominal
-    results = {"open": simulate(truth, NominalTorque(design.linearization, DT), config,
+    results = {"open": simulate(truth, NominalTorque(design.linearization.nominal, DT), config,
                                 n_cases=1),
                "closed": simulate(truth, design.controller(DT, feedforward, n_modes_plant=4),
                                   config, n_cases=1)}
@@ -365,3 +347,22 @@ def test_bad_law_input_is_named(eps_design, eps_nominal, coupled):
         law(0.0, y, law.initial_state(1))
     with pytest.raises(ValueError, match="t: PerturbationFeedback runs on its sample grid"):
         law(0.005, {**y, "elastic": np.zeros((1, 90))}, law.initial_state(1))
+
+
+def test_the_open_loop_law_holds_the_interval_means_of_the_nominal_torque(eps_nominal):
+    # Simpson's rule is exact for the cubic part of the torque over each period; after T the
+    # torque is zero (the maneuver is over)
+    law = NominalTorque(eps_nominal, DT)
+    y = {"attitude": np.tile([1.0, 0.0, 0.0, 0.0], (2, 1))}
+    for k in (0, 137, 999):
+        t = k * DT
+        fine = np.linspace(t, t + DT, 2001)
+        mean = np.trapezoid(eps_nominal.torque(fine), fine, axis=0) / DT
+        tau, _ = law(t, y, {})
+        assert tau.shape == (2, 3)
+        np.testing.assert_allclose(tau[1], mean, rtol=0, atol=1e-6 * np.abs(mean).max() + 1e-9)
+    np.testing.assert_array_equal(law(12.0, y, {})[0], 0.0)
+    with pytest.raises(ValueError, match="nominal: must have torque"):
+        NominalTorque(object(), DT)
+    with pytest.raises(ValueError, match="dt"):
+        NominalTorque(eps_nominal, -1.0)

@@ -297,6 +297,24 @@ def test_the_elastic_output_is_the_modal_state_and_a_reduced_model_reads_its_fir
                                        x[:, big._eta_dot][:, :n]], 1), u[:, :small.n_inputs]))
 
 
+def test_the_reduced_plant_is_the_same_spacecraft_on_its_first_modes(free_modal):
+    # a design model for a law on the first modes: same channels, inertia and input maps,
+    # first n modes exactly; more modes than the plant has is refused
+    big = FlexibleSpacecraft(free_modal, forces=FORCES, displacements=[(3, "x")], n_modes=20,
+                             torque_node=int(free_modal.node_ids[0]))
+    small = big.reduced(5)
+    assert small.n_modes == 5
+    assert [c.name for c in small.inputs] == [c.name for c in big.inputs]
+    assert [c.name for c in small.outputs if c.name != "elastic"] == [
+        c.name for c in big.outputs if c.name != "elastic"]
+    np.testing.assert_array_equal(small.inertia, big.inertia)
+    np.testing.assert_array_equal(small.torque_modal, big.torque_modal[:5])
+    np.testing.assert_array_equal(small.force_modal, big.force_modal[:5])
+    np.testing.assert_array_equal(small.modal.shapes, big.modal.shapes[:5])
+    with pytest.raises(ValueError, match="n_modes: at most the plant's 20 elastic modes"):
+        big.reduced(21)
+
+
 @pytest.mark.parametrize("kwargs, message", [
     ({"forces": [(99, "x")]}, r"forces\[0\]: unknown node 99"),
     ({"forces": [(3, "w")]}, r"forces\[0\]: axis must be 'x', 'y' or 'z'"),

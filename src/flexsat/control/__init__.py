@@ -27,6 +27,7 @@ from flexsat.control.output_feedback import (
 )
 from flexsat.control.pd import PD
 from flexsat.control.perturbation_feedback import (
+    NominalTorque,
     PerturbationDesign,
     PerturbationFeedback,
     perturbation_design,
@@ -47,6 +48,7 @@ __all__ = [
     "LinearLaw",
     "LyapunovRegulator",
     "LyapunovTracker",
+    "NominalTorque",
     "MRPLaw",
     "PD",
     "PerturbationDesign",

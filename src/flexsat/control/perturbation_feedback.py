@@ -20,7 +20,8 @@ with :math:`K_{d,i}` the coefficient of the disturbance d (Eq. 29–30,
 d(t) the modal accelerations the nominal torque causes (Eq. 31). With forces and
 ``decouple=True`` the inputs are δu_k = S v_k, S = blockdiag(I₃, Z), Z the moment-free force
 combinations (:mod:`~flexsat.control.force_decoupling`, Eqs. 32–37 as corrected in notes §2.8),
-and the design runs on (A, B S) with weight SᵀDS.
+and the design runs on (A, B S) with weight SᵀDS, in inputs scaled to unit weight
+(S ← S L⁻ᵀ with SᵀDS = LLᵀ: the same optimal law, one scale for the Riccati solver).
 
 Gain scheduling (F10): :math:`K(t)` is interpolated linearly between the :math:`t_i`
 (:func:`~flexsat.control.scheduled.interpolate_schedule`) and held at :math:`K(T)` after T.
@@ -70,7 +71,7 @@ from flexsat.control.trajectory_linearization import TrajectoryLinearization
 from flexsat.dynamics.attitude import quaternion_multiply
 from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
 
-__all__ = ["FEEDFORWARD", "PerturbationDesign", "PerturbationFeedback", "perturbation_design"]
+__all__ = ["FEEDFORWARD", "NominalTorque", "PerturbationDesign", "interval_means", "PerturbationFeedback", "perturbation_design"]
 
 #: the feedforward forms of seed 003 (notes §2.7) and none
 FEEDFORWARD = ("constant", "time-varying", "none")
@@ -101,7 +102,8 @@ class PerturbationDesign:
         Perturbation dynamics and disturbance at t_i (N = 6 + 2n; m = 3 + n_F physical
         inputs [J⁻¹δτ, δF]).
     input_map : (m, m_v) array
-        S: δu = S v (identity, or blockdiag(I₃, Z) with ``decouple``).
+        S: δu = S v (identity, or blockdiag(I₃, Z) with ``decouple``), times L⁻ᵀ so that the
+        design inputs v have unit weight.
     designs : tuple of FrequencyShapedDesign
         The design at each t_i, on (A_i, B_i S).
     gains : (n_p, m_v, N + 2 m_v) array
@@ -201,7 +203,14 @@ def perturbation_design(plant, nominal, Q, D, omega_b, zeta_b=0.0, n_points: int
     times = np.linspace(0.0, lin.duration, n_points)
     A, B = lin.jacobians(times)
     d = lin.disturbance(times)
-    Dv = S.T @ D @ S
+    # Design in inputs of unit weight, w = Lᵀ v with Sᵀ D S = L Lᵀ (so S ← S L⁻ᵀ, D_w = I):
+    # the optimal law is the same (an input change of variables), but the Riccati checks and
+    # solver then see one scale. Forces weighted 1e-7 N⁻² beside normalized torques weighted
+    # 50 (rad/s²)⁻² (seed 003 case B) put 9 decades between the chain states' weights, and the
+    # detectability test judged the forces' shaping chains unseen (refused at t = 0.5 s).
+    L = np.linalg.cholesky(S.T @ D @ S)
+    S = np.linalg.solve(L, S.T).T
+    Dv = np.eye(S.shape[1])
     if zeta_b == 0.0:
         _check_inputs_act(B @ S, times, lin.inputs)
     designs = []
@@ -312,8 +321,7 @@ class PerturbationFeedback(Controller):
         # δq = β ⊗ β_n* is linear in β: δq = β @ E_k with row j of E_k the product e_j ⊗ β_n*
         conj = beta_n * np.array([1.0, -1.0, -1.0, -1.0])
         self._error_maps = np.swapaxes(quaternion_multiply(np.eye(4)[:, None], conj), 0, 1)
-        tau = [lin.nominal_at(grid + s * h)[2] for s in (0.0, 0.5, 1.0)]
-        self._torque = (tau[0] + 4 * tau[1] + tau[2]) / 6
+        self._torque = interval_means(lambda t: lin.nominal_at(t)[2], grid, h)
         m_v = design.input_map.shape[1]
         if feedforward == "constant":
             self._ff = interpolate_schedule(self.knots, design.constant_feedforward, grid)
@@ -356,3 +364,51 @@ class PerturbationFeedback(Controller):
         for i, name in enumerate(self.writes[1:]):
             commands[name] = du[:, 3 + i]
         return commands, {"z1": z1 + h * z2 + (0.5 * h * h) * u3, "z2": z2 + h * u3}
+
+
+def interval_means(signal, grid: np.ndarray, h: float) -> np.ndarray:
+    """Means of ``signal(t)`` over [t_k, t_k + h) for the grid times t_k, by Simpson's rule
+    (error O(h⁵) per interval for a smooth signal): the value a zero-order hold must carry for
+    the held signal to have the exact impulse of each interval (module docstring)."""
+    values = [signal(grid + s * h) for s in (0.0, 0.5, 1.0)]
+    return (values[0] + 4 * values[1] + values[2]) / 6
+
+
+class NominalTorque(Controller):
+    """Open loop: the nominal torque alone, held per control period at its interval mean as
+    :class:`PerturbationFeedback` holds it (the open-loop run the seed 003 goals compare
+    with). Zero after the maneuver.
+
+    Parameters
+    ----------
+    nominal : object
+        ``torque(t)`` (N m, body axes) on [0, ``duration``].
+    dt : float, str or Quantity
+        Control period, s; the law is called on the grid k·dt.
+    """
+
+    reads = ("attitude",)
+    writes = ("torque",)
+
+    def __init__(self, nominal, dt):
+        missing = [a for a in ("torque", "duration") if not hasattr(nominal, a)]
+        if missing:
+            raise ValueError(f"nominal: must have torque(t) and duration; "
+                             f"{type(nominal).__name__} lacks {', '.join(missing)}")
+        T = float(require_positive(nominal.duration, "nominal.duration", "s"))
+        self.dt = h = float(require_positive(dt, "dt", "s"))
+        grid = h * np.arange(int(np.ceil(T / h)) + 2)
+
+        def torque(t):
+            return np.where((t > T)[..., None], 0.0, nominal.torque(np.clip(t, 0.0, T)))
+
+        self._torque = interval_means(torque, grid, h)
+        self.target = np.zeros(1)
+
+    def _batched(self):
+        return [()]
+
+    def __call__(self, t, y, state):
+        k = min(int(round(t / self.dt)), len(self._torque) - 1)
+        n = np.shape(y["attitude"])[0]
+        return np.broadcast_to(self._torque[k], (n, 3)).copy(), state

@@ -249,6 +249,23 @@ class FlexibleSpacecraft(Plant):
         self._linear = self._build_linear()
         self._force_matrix = self._build_force_matrix()
 
+    def reduced(self, n_modes: int) -> "FlexibleSpacecraft":
+        """The same spacecraft on its first ``n_modes`` elastic modes (a controller's design
+        model): the same modal model, forces, outputs and torque node. Use it rather than a
+        separate eigen-solution with fewer modes, whose repeated pairs (the EPS's symmetric
+        antenna) may come out rotated or of opposite sign, so that a law reading the first
+        modes of this plant would read other coordinates."""
+        from flexsat.validation import require_count
+
+        n_modes = require_count(n_modes, "n_modes")
+        if n_modes > self.n_modes:
+            raise ValueError(f"n_modes: at most the plant's {self.n_modes} elastic modes, got "
+                             f"{n_modes}")
+        return FlexibleSpacecraft(self.modal, forces=self.forces,
+                                  displacements=self.displacements, rotations=self.rotations,
+                                  torque_node=self.torque_node, translation=self.translation,
+                                  n_modes=n_modes)
+
     # -- sizes -----------------------------------------------------------------------------
     @property
     def nx(self) -> int:

@@ -310,8 +310,8 @@ def _forces(run: SlewRunSpec, index: int, plant) -> list[str]:
 
 
 def _plants(scenario: SlewScenario):
-    """(truth, design model): the case's flexible plant as given and with the controller's
-    modes."""
+    """(truth, design model): the case's flexible plant as given, and the same plant on the
+    controller's first modes."""
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.scenarios.simulation import _build_plant
 
@@ -323,12 +323,10 @@ def _plants(scenario: SlewScenario):
     if scenario.controller.modes > truth.n_modes:
         raise ScenarioError([f"controller.modes: at most the plant's {truth.n_modes} elastic "
                              f"modes, got {scenario.controller.modes}"])
-    design = _build_plant(scenario.model_copy(update={"plant": {
-        **scenario.plant, "n_modes": scenario.controller.modes}}))
-    return truth, design
+    return truth, truth.reduced(scenario.controller.modes)
 
 
-def _laws(scenario: SlewScenario, design_plant, nominal, n_modes_plant: int, dt: float) -> dict:
+def _laws(scenario: SlewScenario, truth, design_plant, nominal, dt: float) -> dict:
     """The open-loop law and every run's perturbation law, by label; problems are gathered and
     located in their run."""
     from flexsat.control import NominalTorque, perturbation_design
@@ -343,7 +341,7 @@ def _laws(scenario: SlewScenario, design_plant, nominal, n_modes_plant: int, dt:
                                          run.shaping_damping,
                                          scenario.controller.linearization_points,
                                          forces=forces, decouple=run.decouple)
-            laws[run.label] = design.controller(dt, run.feedforward, n_modes_plant)
+            laws[run.label] = design.controller(dt, run.feedforward, plant=truth)
         except ValueError as exc:
             message = str(exc)
             problems.append(message if message.startswith("runs[") else
@@ -386,7 +384,7 @@ def run_slew(scenario: SlewScenario, progress: Callable[[str], None] | None = No
         config = SimConfig(**_given(scenario.simulation))
     except ValueError as exc:
         raise ScenarioError([f"simulation: {exc}"]) from None
-    laws = _laws(scenario, design_plant, nominal, truth.n_modes, config.dt)
+    laws = _laws(scenario, truth, design_plant, nominal, config.dt)
 
     results = []
     for index, (label, law) in enumerate(laws.items()):
