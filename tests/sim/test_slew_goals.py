@@ -33,8 +33,8 @@ def test_the_angle_goal_is_three_percent_of_the_commanded_angle_at_125_percent_o
         assert units["angle_error_mrad"] == "mrad"
 
 
-def test_the_deflection_goal_compares_the_peaks_after_the_slew_with_the_open_loop_ones():
-    # a 0.2422 Hz sinusoid over [10, 12.5] s passes a crest (period 4.13 s, window 2.5 s > T/2),
+def test_the_deflection_goal_compares_the_peaks_from_125_percent_of_T_with_open_loop():
+    # a 0.2422 Hz sinusoid over [12.5, 15] s passes a crest (period 4.13 s, window 2.5 s > T/2),
     # so the window peak is the amplitude to the sampling error 1 - cos(π f dt) ~ 3e-5
     for amplitude, met in ((0.09, True), (0.11, False)):
         angles, closed, opened = _run(0.0, amplitude)

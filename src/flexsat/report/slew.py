@@ -31,10 +31,10 @@ from flexsat.report.publish import write_atomically
 #: goal table columns: (metric, heading, verdict metric or None)
 GOAL_COLUMNS = (
     ("angle_error_mrad", "Euler error at 1.25 T (mrad)", "angle_goal_met"),
-    ("deflection_ratio_after", "rim deflection open/closed after the slew",
+    ("deflection_ratio_after", "rim deflection open/closed from 1.25 T",
      "deflection_goal_met"),
     ("deflection_ratio_slew", "rim deflection open/closed during the slew", None),
-    ("peak_rim_deflection_after_m", "peak rim deflection after the slew (m)", None),
+    ("peak_rim_deflection_after_m", "peak rim deflection from 1.25 T (m)", None),
     ("peak_torque_perturbation_Nm", "peak torque perturbation (N m)", None),
     ("peak_force_N", "peak force (N)", None),
 )
@@ -143,7 +143,7 @@ def _html(result, records, figures: list[str]) -> str:
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
     goals = (f"Euler-angle error below {100 * ds_attrs['goal_angle_fraction']:g} % of the "
              f"commanded angle ({ds_attrs['goal_angle_tolerance_mrad']:g} mrad) at "
-             f"{ds_attrs['goal_evaluation']:g} T; rim deflection after the slew below "
+             f"{ds_attrs['goal_evaluation']:g} T; rim deflection from {ds_attrs['goal_evaluation']:g} T on below "
              f"1/{ds_attrs['goal_deflection_ratio']:g} of the open-loop one (seed 003 "
              "L792–L801). The open-loop run is the nominal torque alone.")
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)

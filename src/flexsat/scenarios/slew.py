@@ -63,6 +63,13 @@ class SlewManeuverSpec(_Section):
     shaping_damping: float = Field(0.0, ge=0.0)
     rate_weight: float = Field(0.0, ge=0.0)
 
+    @field_validator("duration", "break_frequency")
+    @classmethod
+    def _positive(cls, value: float, info) -> float:
+        if not value > 0:
+            raise ValueError(f"{info.field_name}: must be > 0, got {value:g}")
+        return value
+
     @field_validator("target")
     @classmethod
     def _rotation(cls, target: dict) -> dict:
@@ -112,6 +119,13 @@ class SlewRunSpec(_Section):
     forces: Literal["none", "all"] | list[str] = "none"
     decouple: bool = False
     feedforward: Literal["none", "constant", "time-varying"] = "constant"
+
+    @field_validator("break_frequency")
+    @classmethod
+    def _positive(cls, value: float) -> float:
+        if not value > 0:
+            raise ValueError(f"break_frequency: must be > 0, got {value:g}")
+        return value
 
     @field_validator("label")
     @classmethod
@@ -277,7 +291,7 @@ def diagonal(value, size: int, field: str) -> np.ndarray:
 
 def _weights(run: SlewRunSpec, index: int, n_modes: int, n_forces: int):
     """(Q, D) of a run, diagonal, over [δα, δω, δη, δη̇] and [torque/I, forces]."""
-    path = f"runs[{index}].weights"
+    path = "runs" + _item(index, run.label) + ".weights"
     w = run.weights
     rates = w.modes if w.mode_rates is None else w.mode_rates
     q = np.concatenate([diagonal(w.attitude, 3, f"{path}.attitude"),
@@ -303,8 +317,9 @@ def _forces(run: SlewRunSpec, index: int, plant) -> list[str]:
     for name in run.forces:
         channel = name if name.startswith("force_") else f"force_{name}"
         if channel not in available:
-            raise ValueError(f"runs[{index}].forces: {name!r} is not a force of the plant (its "
-                             f"forces: {', '.join(c[len('force_'):] for c in available)})")
+            raise ValueError(f"runs{_item(index, run.label)}.forces: {name!r} is not a force of "
+                             f"the plant (its forces: "
+                             f"{', '.join(c[len('force_'):] for c in available)})")
         names.append(channel)
     return names
 
