@@ -19,14 +19,12 @@ Open it with ``xarray.open_dataset(path, engine="h5netcdf")``.
 from __future__ import annotations
 
 import html
-import json
 from dataclasses import dataclass
 from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.netcdf import write_netcdf
-from flexsat.report.publish import write_atomically
+from flexsat.report.publish import write_atomically, write_metrics_and_results
 from flexsat.scenarios.runner import ScenarioResult
 
 
@@ -120,10 +118,7 @@ def _html(result: ScenarioResult, records: list[dict]) -> str:
 
 
 def _write_all(result: ScenarioResult, folder: Path) -> None:
-    records = result.metrics_records()
-    (folder / "metrics.json").write_text(json.dumps(records, indent=2) + "\n", encoding="utf-8")
-    ds = result.dataset()
-    write_netcdf(ds, folder / "results.nc")
+    records, ds = write_metrics_and_results(result, folder)
     for spec in PLOTS:
         _plot(ds, spec, folder / spec.file)
     (folder / "index.html").write_text(_html(result, records), encoding="utf-8")

@@ -338,6 +338,19 @@ def _swap(new: Path, out: Path) -> Path:
     return old
 
 
+def write_metrics_and_results(result, folder: Path):
+    """The two data files every scenario report starts with: ``metrics.json`` (one record per
+    run, :meth:`metrics_records`) and ``results.nc`` (the :meth:`dataset`, netCDF4 without
+    pickle). Returns (records, dataset) for the page and the figures."""
+    from flexsat.netcdf import write_netcdf
+
+    records = result.metrics_records()
+    (folder / "metrics.json").write_text(json.dumps(records, indent=2) + "\n", encoding="utf-8")
+    ds = result.dataset()
+    write_netcdf(ds, folder / "results.nc")
+    return records, ds
+
+
 def write_atomically(out_dir, write: Callable[[Path], None], *,
                      timeout: float = LOCK_TIMEOUT_S) -> Path:
     """Run ``write(folder)`` on a new temporary folder and publish it as ``out_dir`` whole (see
@@ -397,4 +410,5 @@ def write_atomically(out_dir, write: Callable[[Path], None], *,
     return out
 
 
-__all__ = ["LOCK_TIMEOUT_S", "MANIFEST", "OutputError", "check_output_folder", "write_atomically"]
+__all__ = ["LOCK_TIMEOUT_S", "MANIFEST", "OutputError", "check_output_folder", "write_atomically",
+           "write_metrics_and_results"]

@@ -10,16 +10,14 @@ Open it with ``xarray.open_dataset(path, engine="h5netcdf")``.
 from __future__ import annotations
 
 import html
-import json
 import re
 from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.netcdf import write_netcdf
 from flexsat.report.maneuver import STYLE, metric_rows
-from flexsat.report.publish import write_atomically
+from flexsat.report.publish import write_atomically, write_metrics_and_results
 
 #: at most this many time-history figures (a plant with many output channels records them all
 #: in results.nc; the page shows the first ones)
@@ -105,10 +103,7 @@ def _html(result, records: list[dict], names: list[str], units: dict, idle: list
 
 
 def _write_all(result, folder: Path) -> None:
-    records = result.metrics_records()
-    (folder / "metrics.json").write_text(json.dumps(records, indent=2) + "\n", encoding="utf-8")
-    ds = result.dataset()
-    write_netcdf(ds, folder / "results.nc")
+    records, ds = write_metrics_and_results(result, folder)
     names, idle = _histories(ds)
     for name in names:
         _plot(ds, name, folder / _file(name))

@@ -18,15 +18,13 @@ antenna nodes open against closed loop, the torque perturbations and the point f
 from __future__ import annotations
 
 import html
-import json
 from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.netcdf import write_netcdf
 from flexsat.report.maneuver import STYLE, format_metric
-from flexsat.report.publish import write_atomically
+from flexsat.report.publish import write_atomically, write_metrics_and_results
 
 #: goal table columns: (metric, heading, verdict metric or None)
 GOAL_COLUMNS = (
@@ -68,55 +66,35 @@ def _nominal(ds, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _per_run(ds, variable: str, scale: float, ylabel: str, title: str, path: Path,
-             band: float | None = None) -> None:
-    comps = ds[variable].shape[-1]
-    fig, axes = _figure(comps, title)
+def _runs_plot(ds, title: str, path: Path, panels, band: float | None = None) -> None:
+    """One panel per (ylabel, values of a run) pair, every run in its colour; ``band`` draws
+    ±band (the goal's tolerance)."""
+    fig, axes = _figure(len(panels), title)
     t = ds["time"].values
-    for j, ax in enumerate(axes):
+    for ax, (ylabel, values) in zip(axes, panels):
         for i, label in enumerate(ds["run"].values):
-            ax.plot(t, scale * ds[variable].sel(run=label).values[:, j], color=f"C{i}",
-                    label=str(label))
+            ax.plot(t, values(label), color=f"C{i}", label=str(label))
         if band is not None:
-            ax.axhline(band, color="r", linewidth=0.8, linestyle=":")
-            ax.axhline(-band, color="r", linewidth=0.8, linestyle=":")
-        ax.set(ylabel=f"{ylabel} {'xyz'[j] if comps == 3 else j}")
+            for level in (band, -band):
+                ax.axhline(level, color="r", linewidth=0.8, linestyle=":")
+        ax.set(ylabel=ylabel)
         _mark(ax, ds)
     axes[0].legend(fontsize="small", ncols=2)
     axes[-1].set(xlabel="time (s)")
     fig.savefig(path, dpi=100)
 
 
-def _rims(ds, path: Path) -> None:
-    nodes = [n for n in ds.data_vars if n.startswith("rim_deflection_")]
-    fig, axes = _figure(len(nodes), "rim deflections, open against closed loop")
-    t = ds["time"].values
-    for ax, name in zip(axes, nodes):
-        for i, label in enumerate(ds["run"].values):
-            ax.plot(t, 1e3 * ds[name].sel(run=label).values, color=f"C{i}", label=str(label))
-        ax.set(ylabel=f"node {name.rsplit('_', 1)[1]} (mm)")
-        _mark(ax, ds)
-    axes[0].legend(fontsize="small", ncols=2)
-    axes[-1].set(xlabel="time (s)")
-    fig.savefig(path, dpi=100)
+def _components(ds, variable: str, scale: float, unit: str):
+    """Panels of a vector variable's x, y, z components."""
+    return [(f"{axis} ({unit})",
+             lambda label, j=j: scale * ds[variable].sel(run=label).values[:, j])
+            for j, axis in enumerate("xyz")]
 
 
-def _forces(ds, path: Path) -> bool:
-    names = [n for n in ds.data_vars if n.startswith("force_") and not n.endswith("_command")]
-    used = [n for n in names if np.any(ds[n].values)]
-    if not used:
-        return False
-    fig, axes = _figure(len(used), "point forces")
-    t = ds["time"].values
-    for ax, name in zip(axes, used):
-        for i, label in enumerate(ds["run"].values):
-            ax.plot(t, ds[name].sel(run=label).values, color=f"C{i}", label=str(label))
-        ax.set(ylabel=f"{name[len('force_'):]} (N)")
-        _mark(ax, ds)
-    axes[0].legend(fontsize="small", ncols=2)
-    axes[-1].set(xlabel="time (s)")
-    fig.savefig(path, dpi=100)
-    return True
+def _scalars(ds, names: list[str], prefix: str, scale: float, ylabel: str):
+    """Panels of scalar variables; ``ylabel`` formats each name without ``prefix``."""
+    return [(ylabel.format(name[len(prefix):]),
+             lambda label, name=name: scale * ds[name].sel(run=label).values) for name in names]
 
 
 def _goal_table(records: list[dict]) -> str:
@@ -168,20 +146,23 @@ def _html(result, records, figures: list[str]) -> str:
 
 
 def _write_all(result, folder: Path) -> None:
-    records = result.metrics_records()
-    (folder / "metrics.json").write_text(json.dumps(records, indent=2) + "\n", encoding="utf-8")
-    ds = result.dataset()
-    write_netcdf(ds, folder / "results.nc")
+    records, ds = write_metrics_and_results(result, folder)
     tol = ds.attrs["goal_angle_tolerance_mrad"]
     figures = ["nominal.png", "euler_error.png", "rim_deflection.png", "torque_perturbation.png"]
     _nominal(ds, folder / figures[0])
-    _per_run(ds, "euler123_error", 1e3, "error (mrad)", "Euler-angle error against the nominal",
-             folder / figures[1], band=tol)
-    _rims(ds, folder / figures[2])
-    _per_run(ds, "torque_perturbation", 1e-3, "kN m", "torque minus the nominal torque",
-             folder / figures[3])
-    if _forces(ds, folder / "forces.png"):
+    _runs_plot(ds, "Euler-angle error against the nominal", folder / figures[1],
+               _components(ds, "euler123_error", 1e3, "mrad"), band=tol)
+    rims = [n for n in ds.data_vars if n.startswith("rim_deflection_")]
+    _runs_plot(ds, "rim deflections, open against closed loop", folder / figures[2],
+               _scalars(ds, rims, "rim_deflection_", 1e3, "node {} (mm)"))
+    _runs_plot(ds, "torque minus the nominal torque", folder / figures[3],
+               _components(ds, "torque_perturbation", 1e-3, "kN m"))
+    forces = [n for n in ds.data_vars if n.startswith("force_") and not n.endswith("_command")
+              and np.any(ds[n].values)]
+    if forces:
         figures.append("forces.png")
+        _runs_plot(ds, "point forces", folder / figures[-1],
+                   _scalars(ds, forces, "force_", 1.0, "{} (N)"))
     (folder / "index.html").write_text(_html(result, records, figures), encoding="utf-8")
 
 

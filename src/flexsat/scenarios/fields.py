@@ -22,7 +22,7 @@ from flexsat.units import to_si
 
 
 # -- quantities --------------------------------------------------------------------------------
-def _converter(unit: str) -> Callable:
+def _converter(unit: str, positive: bool = False) -> Callable:
     """Before-validator converting a quantity to SI (None passes through for optional fields)."""
 
     def convert(value, info: ValidationInfo):
@@ -31,12 +31,15 @@ def _converter(unit: str) -> Callable:
         field = info.field_name
         if isinstance(value, bool):
             raise ValueError(f"{field}: expected a number or a quantity such as '1 {unit}'")
-        return to_si(value, unit, field)
+        si = to_si(value, unit, field)
+        if positive and not si > 0:
+            raise ValueError(f"{field}: must be > 0, got {value!r}")
+        return si
 
     return convert
 
 
-def quantity(unit: str, optional: bool = False):
+def quantity(unit: str, optional: bool = False, positive: bool = False):
     """Field type of a quantity in ``unit``, stored as its SI float.
 
     Parameters
@@ -45,8 +48,11 @@ def quantity(unit: str, optional: bool = False):
         Expected unit; a bare number is taken in it, ``""`` is dimensionless.
     optional : bool
         Accept ``None`` (the key left out).
+    positive : bool
+        Refuse zero and negative values.
     """
-    return Annotated[float | None if optional else float, BeforeValidator(_converter(unit))]
+    return Annotated[float | None if optional else float,
+                     BeforeValidator(_converter(unit, positive))]
 
 
 def count(minimum: int = 1, maximum: int | None = None, optional: bool = False):

@@ -58,17 +58,10 @@ class SlewManeuverSpec(_Section):
     """The nominal rigid-body maneuver (seed 003 Eqs. 9–21)."""
 
     target: dict[str, Any]
-    duration: quantity("s")
-    break_frequency: quantity("rad/s")
+    duration: quantity("s", positive=True)
+    break_frequency: quantity("rad/s", positive=True)
     shaping_damping: float = Field(0.0, ge=0.0)
     rate_weight: float = Field(0.0, ge=0.0)
-
-    @field_validator("duration", "break_frequency")
-    @classmethod
-    def _positive(cls, value: float, info) -> float:
-        if not value > 0:
-            raise ValueError(f"{info.field_name}: must be > 0, got {value:g}")
-        return value
 
     @field_validator("target")
     @classmethod
@@ -114,18 +107,11 @@ class SlewRunSpec(_Section):
 
     label: str
     weights: SlewWeightsSpec
-    break_frequency: quantity("rad/s")
+    break_frequency: quantity("rad/s", positive=True)
     shaping_damping: float = Field(0.0, ge=0.0)
     forces: Literal["none", "all"] | list[str] = "none"
     decouple: bool = False
     feedforward: Literal["none", "constant", "time-varying"] = "constant"
-
-    @field_validator("break_frequency")
-    @classmethod
-    def _positive(cls, value: float) -> float:
-        if not value > 0:
-            raise ValueError(f"break_frequency: must be > 0, got {value:g}")
-        return value
 
     @field_validator("label")
     @classmethod
