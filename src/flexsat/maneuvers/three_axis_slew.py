@@ -49,7 +49,7 @@ quadratically on the discretised problem (3-4 iterations per step).  The final a
 solution is then polished by a simplified Newton (the last RK4 Jacobian, factorised once) on
 residuals from DOP853 at rtol 1e-13, whose dense output is the stored trajectory: the
 evaluation methods are accurate to that tolerance at any t, not only at nodes.  Measured
-(benchmarks/bench_three_axis_slew.py, T = 10 s, ω_B = 2.5 rad/s): 0.25-0.3 s for the whole
+(benchmarks/bench_slew.py (a), T = 10 s, ω_B = 2.5 rad/s): 0.25-0.3 s for the whole
 continuation, BC error ~1e-13.  For comparison ``solve_bvp`` with the analytic Jacobians
 (tol 1e-8, same continuation) took 29 s (ζ_B = 1) and 112 s (ζ_B = 0), refining its mesh to
 4,000-9,000 nodes, and agreed with this solver's torque to 2e-12 and 6e-12 of the peak.
