@@ -89,12 +89,100 @@ class ChannelDisturbanceSpec(_Section):
     impulses: list[ImpulseSpec] = Field(default_factory=list, max_length=limits.MAX_SAMPLES)
 
 
+# -- laws ----------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _SimulationLaw:
+    gains: tuple[str, ...]
+    required: tuple[str, ...]
+    targets: bool
+    build: Callable[..., Any]
+
+
+def target_quaternion(target: dict) -> np.ndarray | None:
+    """Euler parameters of a target given as ``euler123`` (rad) or ``attitude``; None if empty."""
+    from flexsat.dynamics.attitude import euler123_to_dcm, dcm_to_quaternion
+    from flexsat.units import to_si_array
+
+    if not target:
+        return None
+    unknown = set(target) - {"euler123", "attitude"}
+    if unknown:
+        raise ValueError(f"target.{sorted(unknown)[0]}: not a target (give euler123 (rad) or "
+                         "attitude (a unit quaternion, scalar first))")
+    if len(target) > 1:
+        raise ValueError("target: give euler123 or attitude, not both")
+    if "euler123" in target:
+        angles = to_si_array(target["euler123"], "rad", "target.euler123")
+        if angles.shape != (3,):
+            raise ValueError(f"target.euler123: three angles, got shape {angles.shape}")
+        return dcm_to_quaternion(euler123_to_dcm(angles))
+    return to_si_array(target["attitude"], "", "target.attitude")
+
+
+def _attitude_law(name: str):
+    """Builder of the attitude law ``flexsat.control.<name>`` from its gains (named as the
+    class's fields) and target; the class is imported when a run is built."""
+
+    def build(run: SimulationRunSpec, plant, dt: float):
+        import flexsat.control
+
+        beta = target_quaternion(run.target)
+        extra = {} if beta is None else {"beta_target": beta}
+        return getattr(flexsat.control, name)(**run.gains, **extra)
+
+    return build
+
+
+def _lqr(run: SimulationRunSpec, plant, dt: float):
+    """Constant LQR state feedback on the plant's linear part, reading its ``state`` output."""
+    from flexsat.control import ScheduledStateFeedback, lqr
+
+    A, B = plant.linear_part()
+    n, m = B.shape
+    Q = _weights(run.gains["state_weights"], n, "gains.state_weights")
+    R = _weights(run.gains.get("input_weights", 1.0), m, "gains.input_weights")
+    K, _, _ = lqr(A, B, Q, R)
+    return ScheduledStateFeedback([0.0], K[None], "state", [c.name for c in plant.inputs])
+
+
+def _weights(value, size: int, field: str) -> np.ndarray:
+    w = np.atleast_1d(np.asarray(value, float))
+    if w.size == 1:
+        w = np.full(size, float(w[0]))
+    if w.shape != (size,) or not np.all(np.isfinite(w)) or np.any(w < 0):
+        raise ValueError(f"{field}: one weight >= 0 or {size} of them, got {np.shape(value)}")
+    return np.diag(w)
+
+
+def _open_loop(run: SimulationRunSpec, plant, dt: float):
+    from flexsat.control import StateSpaceCompensator
+
+    import control
+
+    m = plant.n_inputs
+    p = plant.outputs[0]
+    system = control.ss([], [], [], np.zeros((m, p.size)))
+    return StateSpaceCompensator(system, [p.name], [c.name for c in plant.inputs], dt=dt)
+
+
+#: the laws a simulation run names, with their gains (the builders import the control package
+#: when a run is built, so reading a scenario does not)
+SIMULATION_LAWS: dict[str, _SimulationLaw] = {
+    "gibbs_lyapunov": _SimulationLaw(("k", "A"), ("k", "A"), True,
+                                     _attitude_law("GibbsLyapunovLaw")),
+    "mrp_pd": _SimulationLaw(("K", "P"), ("K", "P"), True, _attitude_law("MRPLaw")),
+    "quaternion_pd": _SimulationLaw(("Kp", "Kd"), ("Kp", "Kd"), True,
+                                    _attitude_law("QuaternionPD")),
+    "lqr": _SimulationLaw(("state_weights", "input_weights"), ("state_weights",), False, _lqr),
+    "open_loop": _SimulationLaw((), (), False, _open_loop),
+}
+
+
 class SimulationRunSpec(_Section):
     """One closed-loop run: a law (:data:`SIMULATION_LAWS`), its gains and its target."""
 
     label: str
-    law: Literal[tuple(sorted(("gibbs_lyapunov", "mrp_pd", "quaternion_pd", "lqr",
-                               "open_loop")))]
+    law: Literal[tuple(sorted(SIMULATION_LAWS))]
     gains: dict[str, Value] = Field(default_factory=dict)
     target: dict[str, Value] = Field(default_factory=dict)
 
@@ -155,106 +243,6 @@ def simulation_cases() -> tuple[str, ...]:
         if callable(getattr(kind, "plant", None)):
             names.append(name)
     return tuple(names)
-
-
-# -- laws ----------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class _SimulationLaw:
-    gains: tuple[str, ...]
-    required: tuple[str, ...]
-    targets: bool
-    build: Callable[..., Any]
-
-
-def target_quaternion(target: dict) -> np.ndarray | None:
-    """Euler parameters of a target given as ``euler123`` (rad) or ``attitude``; None if empty."""
-    from flexsat.dynamics.attitude import euler123_to_dcm, dcm_to_quaternion
-    from flexsat.units import to_si_array
-
-    if not target:
-        return None
-    unknown = set(target) - {"euler123", "attitude"}
-    if unknown:
-        raise ValueError(f"target.{sorted(unknown)[0]}: not a target (give euler123 (rad) or "
-                         "attitude (a unit quaternion, scalar first))")
-    if len(target) > 1:
-        raise ValueError("target: give euler123 or attitude, not both")
-    if "euler123" in target:
-        angles = to_si_array(target["euler123"], "rad", "target.euler123")
-        if angles.shape != (3,):
-            raise ValueError(f"target.euler123: three angles, got shape {angles.shape}")
-        return dcm_to_quaternion(euler123_to_dcm(angles))
-    return to_si_array(target["attitude"], "", "target.attitude")
-
-
-def _attitude_law(cls):
-    """Builder of an attitude law from its gains (named as the class's fields) and target."""
-
-    def build(run: SimulationRunSpec, plant, dt: float):
-        beta = target_quaternion(run.target)
-        extra = {} if beta is None else {"beta_target": beta}
-        return cls(**run.gains, **extra)
-
-    return build
-
-
-def _lqr(run: SimulationRunSpec, plant, dt: float):
-    """Constant LQR state feedback on the plant's linear part, reading its ``state`` output."""
-    from flexsat.control import ScheduledStateFeedback, lqr
-
-    A, B = plant.linear_part()
-    n, m = B.shape
-    Q = _weights(run.gains["state_weights"], n, "gains.state_weights")
-    R = _weights(run.gains.get("input_weights", 1.0), m, "gains.input_weights")
-    K, _, _ = lqr(A, B, Q, R)
-    return ScheduledStateFeedback([0.0], K[None], "state", [c.name for c in plant.inputs])
-
-
-def _weights(value, size: int, field: str) -> np.ndarray:
-    w = np.atleast_1d(np.asarray(value, float))
-    if w.size == 1:
-        w = np.full(size, float(w[0]))
-    if w.shape != (size,) or not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise ValueError(f"{field}: one weight >= 0 or {size} of them, got {np.shape(value)}")
-    return np.diag(w)
-
-
-def _open_loop(run: SimulationRunSpec, plant, dt: float):
-    from flexsat.control import StateSpaceCompensator
-
-    import control
-
-    m = plant.n_inputs
-    p = plant.outputs[0]
-    system = control.ss([], [], [], np.zeros((m, p.size)))
-    return StateSpaceCompensator(system, [p.name], [c.name for c in plant.inputs], dt=dt)
-
-
-def _laws() -> dict[str, _SimulationLaw]:
-    from flexsat.control import GibbsLyapunovLaw, MRPLaw, QuaternionPD
-
-    return {
-        "gibbs_lyapunov": _SimulationLaw(("k", "A"), ("k", "A"), True,
-                                         _attitude_law(GibbsLyapunovLaw)),
-        "mrp_pd": _SimulationLaw(("K", "P"), ("K", "P"), True,
-                                 _attitude_law(MRPLaw)),
-        "quaternion_pd": _SimulationLaw(("Kp", "Kd"), ("Kp", "Kd"), True,
-                                        _attitude_law(QuaternionPD)),
-        "lqr": _SimulationLaw(("state_weights", "input_weights"), ("state_weights",), False,
-                              _lqr),
-        "open_loop": _SimulationLaw((), (), False, _open_loop),
-    }
-
-
-class _LazyLaws(dict):
-    """The law table, built on first use (it imports the control package)."""
-
-    def __missing__(self, key):
-        self.update(_laws())
-        return dict.__getitem__(self, key)
-
-
-SIMULATION_LAWS: dict[str, _SimulationLaw] = _LazyLaws()
 
 
 # -- running -------------------------------------------------------------------------------------
