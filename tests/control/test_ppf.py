@@ -13,11 +13,15 @@ from flexsat.control import (
     PPFModel,
     PPFProblem,
     initial_second_moment,
+    ppf_closed_loop,
+    ppf_cost_gradient,
     ppf_feedback,
+    ppf_stiffness,
 )
 from flexsat.control.lqg import zoh
 from flexsat.sim import simulate
 from flexsat.sim.config import SimConfig
+from flexsat.units import UnitError, ureg
 
 EPS = np.finfo(float).eps
 M = 3  # modes retained (seed 004 L291)
@@ -239,6 +243,23 @@ def test_cost_over_an_initial_condition_distribution(case, model, bank):
     assert tip_problem(case, model, bank, X0=full).cost(g) == J
 
 
+def test_kernels_take_a_leading_case_axis(case, model, bank):
+    """Gains (n_cases, n_g): each case's cost, gradient, Ā and S equal the one-case results
+    (the same operations per case: bitwise for Ā and S, 1e-12 for the Lyapunov solves, which
+    run case by case through the same code)."""
+    pr = tip_problem(case, model, bank)
+    G = np.stack([np.full(9, 100.0), np.linspace(10.0, 2e3, 9)])
+    J, dJ = ppf_cost_gradient(pr.A0, pr.B, pr.E, M, G, pr.Q_s, pr.Q_u, pr.X0)
+    A = ppf_closed_loop(pr.A0, pr.B, ppf_feedback(G, pr.E, M))
+    S = ppf_stiffness(model.omega, model.actuators, model.sensors, pr.E, G)
+    for c, g in enumerate(G):
+        Jc, dJc = pr.cost_and_gradient(g)
+        assert J[c] == pytest.approx(Jc, rel=1e-12)
+        np.testing.assert_allclose(dJ[c], dJc, rtol=1e-12)
+        np.testing.assert_array_equal(A[c], pr.closed_loop_matrix(g))
+        np.testing.assert_array_equal(S[c], pr.stiffness(g))
+
+
 # -- F3: tuning -------------------------------------------------------------------------------
 def test_single_mode_ppf_damps_most_when_tuned(case):
     """One mode (the first, pair 1), one filter, ω_f/ω swept over 0.5–2: the least-damped
@@ -335,7 +356,17 @@ def test_ppf_controller_in_the_simulation_core(case, model, bank):
     assert np.abs(rot[late]).max() < 0.05 * np.abs(rot0[late]).max()
 
 
-# -- bad input ---------------------------------------------------------------------------------
+# -- units and bad input ----------------------------------------------------------------------
+def test_frequencies_and_period_take_units():
+    """ω_f in any frequency unit (Hz → 2π rad/s, one rounding of pint's factor: 1e-15), the
+    control period in any time unit; a wrong dimension is refused naming the field."""
+    bank = PPFBank(np.array([[1.0, 2.0]]) * ureg("Hz"), 0.1)
+    np.testing.assert_allclose(bank.omega_f, [[2 * np.pi, 4 * np.pi]], rtol=1e-15)
+    assert PPFController(bank, [1.0, 2.0], dt="5 ms").dt == pytest.approx(5e-3, rel=1e-15)
+    with pytest.raises(UnitError, match=r"^omega_f: incompatible units"):
+        PPFBank(np.array([[1.0]]) * ureg("m"), 0.1)
+
+
 def test_bad_input_is_named(case, model, bank):
     pr = tip_problem(case, model, bank)
     with pytest.raises(ValueError, match=r"^gains: must have 9 = n_actuators × n_tuned"):

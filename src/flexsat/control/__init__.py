@@ -26,6 +26,12 @@ from flexsat.control.output_feedback import (
     design_minimum_sensitivity,
 )
 from flexsat.control.pd import PD
+from flexsat.control.perturbation_feedback import (
+    NominalTorque,
+    PerturbationDesign,
+    PerturbationFeedback,
+    perturbation_design,
+)
 from flexsat.control.ppf import (
     PPFBank,
     PPFController,
@@ -41,12 +47,6 @@ from flexsat.control.ppf import (
     ppf_stiffness,
     ppf_stiffness_gradient,
     replicate_matrix,
-)
-from flexsat.control.perturbation_feedback import (
-    NominalTorque,
-    PerturbationDesign,
-    PerturbationFeedback,
-    perturbation_design,
 )
 from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.control.state_space_compensator import StateSpaceCompensator
