@@ -377,6 +377,8 @@ def test_bad_input_is_named(case, model, bank):
         PPFController(bank, np.ones(3), dt=0.01)
     with pytest.raises(ValueError, match=r"^zeta_f: must be >= 0"):
         PPFBank.tuned(model, -0.1)
+    with pytest.raises(ValueError, match=r"^n_tuned: must be 1 to 3, got 4"):
+        PPFBank.tuned(model, 0.1, 4)
     with pytest.raises(ValueError, match=r"^omega_f: must be > 0"):
         PPFBank([[1.0, 0.0]], 0.1)
     with pytest.raises(ValueError, match=r"^omega_f: must have shape \(n_actuators, n_tuned\)"):

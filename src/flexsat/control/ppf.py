@@ -66,7 +66,7 @@ import scipy.linalg
 
 from flexsat.control.lqr import check_matrix, check_psd, check_square
 from flexsat.control.state_space_compensator import StateSpaceCompensator
-from flexsat.validation import require_finite, require_nonneg, require_positive
+from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
 
 __all__ = ["PPFBank", "PPFController", "PPFModel", "PPFProblem", "PPFStability",
            "initial_second_moment", "ppf_closed_loop", "ppf_compensator", "ppf_cost_gradient",
@@ -358,8 +358,8 @@ class PPFBank:
     def tuned(cls, model: PPFModel, zeta_f, n_tuned: int | None = None) -> PPFBank:
         """ω_f,ij = ω_j for the first ``n_tuned`` modes (default all), every actuator (seed 004
         L61: efficiency is largest when the filter and structure frequencies match)."""
-        n = model.n_modes if n_tuned is None else int(n_tuned)
-        if not 1 <= n <= model.n_modes:
+        n = model.n_modes if n_tuned is None else require_count(n_tuned, "n_tuned")
+        if n > model.n_modes:
             raise ValueError(f"n_tuned: must be 1 to {model.n_modes}, got {n_tuned!r}")
         return cls(np.tile(model.omega[:n], (model.n_actuators, 1)), zeta_f)
 
