@@ -525,7 +525,9 @@ def tune_slew_weights(evaluation: SlewEvaluation, initial: SlewWeights,
         weights = initial.scaled(multipliers)
         metrics, failure = None, None
         try:
-            metrics = evaluation(weights, omega_b, zeta_b, names, decouple, feedforward)
+            # a diverging trial overflows before the engine stops it: scored, not reported
+            with np.errstate(over="ignore", invalid="ignore"):
+                metrics = evaluation(weights, omega_b, zeta_b, names, decouple, feedforward)
         except ValueError as exc:  # no stabilising Riccati solution, or a diverged run
             failure = str(exc)
         value = slew_objective(metrics, margin, effort_weight, force_scale)
