@@ -331,10 +331,15 @@ class SlewEvaluation:
 
     def __call__(self, weights: SlewWeights, omega_b, zeta_b=0.0, forces=(),
                  decouple: bool = False, feedforward: str = "constant") -> dict:
+        design = self.design(weights, omega_b, zeta_b, forces, decouple)
+        return self.run(design.controller(self.config.dt, feedforward, plant=self.truth))
+
+    def run(self, law) -> dict:
+        """The metrics of any law on the truth plant (``__call__`` for a design's law; e.g. an
+        open-loop :class:`~flexsat.control.perturbation_feedback.NominalTorque` of another
+        torque history, judged against this nominal)."""
         from flexsat.sim import simulate
 
-        design = self.design(weights, omega_b, zeta_b, forces, decouple)
-        law = design.controller(self.config.dt, feedforward, plant=self.truth)
         result = simulate(self.truth, law, self.config, n_cases=1)
         metrics, _ = slew_run_metrics([result], self.nominal, self.goals, self.deflection_open)
         out = {k: (bool(v[0]) if v.dtype == bool else float(v[0])) for k, v in metrics.items()}
