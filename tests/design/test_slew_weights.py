@@ -175,3 +175,32 @@ def test_bad_input_names_the_field(setup):
         SlewEvaluation(truth, truth.reduced(4), nominal, SimConfig(duration=7.0))
     with pytest.raises(ValueError, match=r"^design_plant:"):
         SlewEvaluation(truth.reduced(4), truth, nominal, config)
+
+
+def test_metrics_are_the_slew_scenarios_metrics():
+    """slew_run_metrics is the extraction the slew scenarios do (scenarios/slew.py is to call
+    it): the same numbers, bit for bit, on a small slew scenario."""
+    from flexsat.design.slew_weights import slew_run_metrics
+    from flexsat.scenarios.documents import load_scenario
+    from flexsat.scenarios.slew import run_slew
+
+    scenario = load_scenario("""
+kind: slew
+name: small
+case: eps
+plant: {n_modes: 10}
+maneuver: {target: {euler123: ["1 rad", "1 rad", "1 rad"]}, duration: "6 s",
+           break_frequency: "5 rad/s"}
+controller: {modes: 10, linearization_points: 3}
+simulation: {duration: "7.5 s", control_rate: "50 Hz"}
+runs:
+  - {label: D, weights: {attitude: 1000, rate: 1000, modes: 1, torque: 1000},
+     break_frequency: "5 rad/s"}
+  - {label: forces, weights: {attitude: 1000, rate: 1000, modes: 1, torque: 50, force: 1.0e-3},
+     break_frequency: "5 rad/s", forces: all}
+""")
+    result = run_slew(scenario)
+    metrics, units = slew_run_metrics(result.results, result.nominal)
+    assert metrics.keys() == result.goals.keys() and units == result.goal_units
+    for name, values in result.goals.items():
+        np.testing.assert_array_equal(metrics[name], values, err_msg=name)
