@@ -4,8 +4,9 @@ first design meeting the goals, and its returned weights reproduce its returned 
 input is refused by field.
 
 The real setup is cheap: the EPS on its first 10 modes (truth and design model), the paper's
-1 rad, 6 s three-axis slew at ω_B = 5 rad/s, 50 Hz control and 5 linearisation points (≈ 0.2 s
-an evaluation).
+1 rad, 6 s three-axis slew at ω_B = 5 rad/s, 50 Hz control and 5 linearisation points, run to
+11.5 s (the deflection goal's window runs from 1.25 T = 7.5 s to the end of the record, about a
+period of the first mode, as in examples/eps_slew_6s.yaml).
 """
 
 from __future__ import annotations
@@ -105,7 +106,7 @@ def test_bad_weights_name_the_block(kwargs, field):
 def setup():
     truth = eps().plant(n_modes=10)
     nominal = three_axis_slew(truth.inertia, euler123_to_quaternion(np.ones(3)), 6.0, 5.0)
-    config = SimConfig(duration=7.5, control_rate=50.0)
+    config = SimConfig(duration=11.5, control_rate=50.0)
     evaluation = SlewEvaluation(truth, truth.reduced(10), nominal, config, n_points=5)
     return truth, nominal, config, evaluation
 
@@ -126,13 +127,14 @@ def test_search_improves_on_its_start_and_its_weights_reproduce_its_metrics(setu
 def test_search_stops_at_the_first_design_meeting_the_goals(setup):
     truth, nominal, config, evaluation = setup
     start = evaluation(CASE_D, 5.0)
-    # goals the start misses by 10 % on the ratio only (angle tolerance 30 % of 1 rad)
-    goals = SlewGoals(angle_fraction=0.3, deflection_ratio=1.1 * start["deflection_ratio_after"])
+    # goals the start misses by 10 % on the angle only (of the commanded 1 rad; its deflection
+    # ratio, 8.7, is well above 2)
+    goals = SlewGoals(angle_fraction=0.9e-3 * start["angle_error_mrad"], deflection_ratio=2.0)
     loose = SlewEvaluation(truth, evaluation.design_plant, nominal, config, goals,
                            deflection_open=evaluation.deflection_open, n_points=5)
     result = tune_slew_weights(loose, CASE_D, budget=15, omega_b=5.0)
     met = [slew_objective(h["metrics"], effort_weight=0.0) == 0.0 for h in result.history]
-    assert result.met and met[-1] and not any(met[:-1])
+    assert result.evaluations > 1 and result.met and met[-1] and not any(met[:-1])
     assert result.weights == result.history[-1]["weights"]
 
 
@@ -192,7 +194,7 @@ plant: {n_modes: 10}
 maneuver: {target: {euler123: ["1 rad", "1 rad", "1 rad"]}, duration: "6 s",
            break_frequency: "5 rad/s"}
 controller: {modes: 10, linearization_points: 3}
-simulation: {duration: "7.5 s", control_rate: "50 Hz"}
+simulation: {duration: "11.5 s", control_rate: "50 Hz"}
 runs:
   - {label: D, weights: {attitude: 1000, rate: 1000, modes: 1, torque: 1000},
      break_frequency: "5 rad/s"}
