@@ -83,9 +83,10 @@ class NotionalPPF:
     def gradient(self, g):
         Ab, Gx, Ps, Pu = self._loop(g)
         V = solve_continuous_lyapunov(Ab, -self.X0)
-        # with ∂Ā = −B ∂G_x both terms are −tr[V (P̄ B − G_xᵀ Q_u) ∂G_x], and ∂G_x/∂g_k is
-        # −Eᵀ e_k in the ξ columns: the trace picks row ξ_k of V (P̄ B − G_xᵀ Q_u) against E[k]
-        M = V @ ((Ps + Pu) @ self.B - Gx.T @ self.Qu)
+        # tr[V P_s ∂Ā] with ∂Ā = −B ∂G_x joins the second term: −tr[V (P̄ B − G_xᵀ Q_u) ∂G_x];
+        # ∂G_x/∂g_k is −Eᵀ e_k in the ξ columns, so the trace picks row ξ_k of
+        # V (P̄ B − G_xᵀ Q_u) against row k of E
+        M = V @ (Ps @ self.B + Pu @ self.B - Gx.T @ self.Qu)
         return np.sum(M[self.xi] * self.E, axis=1)
 
     def _stiffness(self, g):
@@ -229,9 +230,14 @@ def test_restoration_from_an_infeasible_step_is_minimum_norm(model, floor):
     assert np.linalg.norm(r.step - exact) <= 1e-2 * np.linalg.norm(exact)
 
 
-def test_feasible_gains_are_left_alone(model):
+def test_feasible_gains_are_left_alone_and_a_failed_restoration_says_so(model):
     r = restore_eigenvalue_constraints(model, G0)
     assert r.restored and r.iterations == 0 and not np.any(r.step)
+    # the two-row case above needs 3 steps: with 1 allowed the gains come back unchanged
+    g_bad = np.full(9, 1.2e4)
+    r = restore_eigenvalue_constraints(model, g_bad, [0.5, 7.0, 20.0], max_iterations=1)
+    assert not r.restored and "not converged in 1 steps" in r.message
+    np.testing.assert_array_equal(r.gains, g_bad)
 
 
 def test_goal_above_the_start_raises_the_cost_like_the_paper(model):
@@ -281,6 +287,11 @@ class _CostOnly:
         return 1.0
 
 
+class _NaNCost(NotionalPPF):
+    def cost(self, g):
+        return np.nan
+
+
 @pytest.mark.parametrize("kwargs, match", [
     ({"g0": np.full((3, 3), 100.0)}, "g0: must be a non-empty vector"),
     ({"g0": np.full(8, 100.0)}, "g0: "),
@@ -298,6 +309,7 @@ class _CostOnly:
     ({"stability_margin": -0.1}, "stability_margin: must be >= 0"),
     ({"weight": -np.ones(9)}, "weight: "),
     ({"problem": _CostOnly()}, "problem: missing method.*gradient, stiffness_eigenvalues"),
+    ({"problem": _NaNCost()}, "g0: problem.cost is not finite at the start"),
 ])
 def test_bad_inputs_name_the_field(model, kwargs, match):
     args = {"problem": model, "g0": G0, "goal_ratio": 0.2, **kwargs}

@@ -451,7 +451,7 @@ def restore_eigenvalue_constraints(problem, g, eigenvalue_floor=None, *, weight=
 
 # -- the homotopy ------------------------------------------------------------------------------
 def optimize_ppf_gains(problem, g0, J_goal=None, goal_ratio=None, gamma_stop=1.0,
-                       eigenvalue_floor=None, stability_margin=0.0, weight=None, *,
+                       eigenvalue_floor=None, weight=None, *, stability_margin=0.0,
                        gamma_step: float = 0.1, min_gamma_step: float = 1e-6,
                        max_corrections: int = 10, max_restorations: int = 20,
                        max_steps: int = 500, rtol: float = 1e-10) -> PPFHomotopyResult:
@@ -481,10 +481,10 @@ def optimize_ppf_gains(problem, g0, J_goal=None, goal_ratio=None, gamma_stop=1.0
     eigenvalue_floor : float or (n,) array_like, optional
         λ_i^c >= 0 of Eq. 22, 1/s², for the i-th smallest eigenvalue of S. Default
         ``DEFAULT_FLOOR_FRACTION`` · λ_i(S(0)) = 1 % of ω_i² (the paper gives none).
-    stability_margin : float
-        Every closed-loop pole must have Re < −stability_margin (1/s, >= 0).
     weight : (n_g,) or (n_g, n_g) array_like, optional
         W of Eqs. 19 and 28 (positive definite; a vector is a diagonal). Default identity.
+    stability_margin : float
+        Every closed-loop pole must have Re < −stability_margin (1/s, >= 0).
     gamma_step : float
         First and largest γ increment, in (0, 1] (0.1: the spec's γ = 0.1 … 1.0).
     min_gamma_step : float
