@@ -70,7 +70,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from flexsat.analysis.homotopy import _weight_factor
+from flexsat.analysis.homotopy import weight_factor
 from flexsat.validation import (
     require_count,
     require_finite,
@@ -371,7 +371,7 @@ def _start(problem, g0, eigenvalue_floor, stability_margin):
 
 def _inverse_weight(weight, n: int) -> np.ndarray:
     """W⁻¹ of Eqs. 19 and 28 (W positive definite; a vector is a diagonal)."""
-    Linv = np.linalg.inv(_weight_factor(weight, n))
+    Linv = np.linalg.inv(weight_factor(weight, n))
     return Linv.T @ Linv
 
 
