@@ -46,8 +46,8 @@ OUTPUT_UNITS = ("m", "m", "rad")
 class PPFSettings(_Section):
     """The problem and optimiser settings shared by every run."""
 
-    zeta_f: float = Field(0.1, ge=0.0)
-    Q_u: float = Field(1e-8, ge=0.0)
+    zeta_f: float = Field(0.1, ge=0.0, allow_inf_nan=False)
+    Q_u: float = Field(1e-8, ge=0.0, allow_inf_nan=False)
     amplitude: quantity("m", positive=True) = 0.01
     initial_gains: Union[float, list[float]] = 100.0
     gamma_stop: float = Field(0.9, gt=0.0, le=1.0)
@@ -81,7 +81,7 @@ class GoalSpec(_Section):
     """J_goal from J_init (module docstring)."""
 
     rule: Literal["paper", "ratio", "offset"]
-    value: float | None = None
+    value: float | None = Field(None, allow_inf_nan=False)
 
     @model_validator(mode="after")
     def _rule(self):
