@@ -18,12 +18,13 @@ layer  units                                        what they are
 4      maneuvers, control, identify                 torque shapes, control laws,
                                                     system identification
 5      sim                                          the simulation engine
-6      cases, catalog                               the published benchmark systems
-7      scenarios                                    scenario files: a case, a plant, a law
-8      report, mode_plot                            report and plot writers
-9      checks                                       ``flexsat validate``: results vs papers
-10     cli                                          the command line
-11     __main__                                     ``python -m flexsat``
+6      design                                       sweeps, Monte Carlo, optimisation
+7      cases, catalog                               the published benchmark systems
+8      scenarios                                    scenario files: a case, a plant, a law
+9      report, mode_plot                            report and plot writers
+10     checks                                       ``flexsat validate``: results vs papers
+11     cli                                          the command line
+12     __main__                                     ``python -m flexsat``
 =====  ===========================================  ========================================
 
 In particular nothing below ``cases`` imports ``cases``, ``catalog``, ``scenarios``,
@@ -53,6 +54,7 @@ LAYERS = (
     ("dynamics",),
     ("maneuvers", "control", "identify"),
     ("sim",),
+    ("design",),
     ("cases", "catalog"),
     ("scenarios",),
     ("report", "mode_plot"),

@@ -160,8 +160,9 @@ def _positive(value, field: str, *, integer: bool = False, upper: float | None =
     return number
 
 
-def _weight_factor(weight, n: int) -> np.ndarray:
-    """L with W = L Lᵀ (W positive definite, vector = diagonal)."""
+def weight_factor(weight, n: int) -> np.ndarray:
+    """L with W = L Lᵀ for the weight W of a minimum-norm step (positive definite; a vector is
+    a diagonal; None the identity), checked and named ``weight`` in errors."""
     if weight is None:
         return np.eye(n)
     w = _vector(weight, "weight")
@@ -377,7 +378,7 @@ def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_t
     fd_step = _positive(fd_step, "fd_step")
     max_steps = _positive(max_steps, "max_steps", integer=True)
     max_evaluations = _positive(max_evaluations, "max_evaluations", integer=True)
-    L = _weight_factor(weight, n)
+    L = weight_factor(weight, n)
     Linv_T = np.linalg.inv(L).T  # Δp = L⁻ᵀ y, |Δp|_W = |y|
 
     prob = _Problem(objective, gradient, equality, equality_jacobian, inequality,
@@ -592,4 +593,4 @@ def _projected_gradient(prob, p, active, Linv_T) -> float:
     return float(np.linalg.norm(gt) / norm) if norm > 0 else 0.0
 
 
-__all__ = ["HomotopyResult", "HomotopyStep", "homotopy_minimize"]
+__all__ = ["HomotopyResult", "HomotopyStep", "homotopy_minimize", "weight_factor"]

@@ -26,6 +26,15 @@ from flexsat.control.output_feedback import (
     design_minimum_sensitivity,
 )
 from flexsat.control.pd import PD
+from flexsat.control.ppf_optimization import (
+    EigenvalueRestoration,
+    PPFHomotopyResult,
+    PPFHomotopyStep,
+    ScipyPPFResult,
+    optimize_ppf_gains,
+    restore_eigenvalue_constraints,
+    scipy_ppf_gains,
+)
 from flexsat.control.perturbation_feedback import (
     NominalTorque,
     PerturbationDesign,
@@ -54,6 +63,13 @@ from flexsat.control.trajectory_linearization import TrajectoryLinearization, at
 
 __all__ = [
     "Controller",
+    "EigenvalueRestoration",
+    "PPFHomotopyResult",
+    "PPFHomotopyStep",
+    "ScipyPPFResult",
+    "optimize_ppf_gains",
+    "restore_eigenvalue_constraints",
+    "scipy_ppf_gains",
     "FeedbackDesign",
     "SymmetricOutputFeedback",
     "design_minimum_sensitivity",

@@ -25,6 +25,7 @@ from matplotlib.figure import Figure
 
 from flexsat.report.maneuver import STYLE, format_metric
 from flexsat.report.publish import write_atomically, write_metrics_and_results
+from flexsat.scenarios.slew import OPEN_LOOP
 
 #: goal table columns: (metric, heading, verdict metric or None)
 GOAL_COLUMNS = (
@@ -106,7 +107,9 @@ def _goal_table(records: list[dict]) -> str:
         for metric, _, verdict in GOAL_COLUMNS:
             value = r.get(metric)
             text = "–" if value is None else format_metric(value)
-            if verdict is not None and r.get(verdict) is not None:
+            if verdict == "deflection_goal_met" and r["run"] == OPEN_LOOP:
+                text += " (reference)"  # the open loop is what the goal compares with
+            elif verdict is not None and r.get(verdict) is not None:
                 met = bool(r[verdict])
                 text += (' <b style="color:#080">PASS</b>' if met
                          else ' <b style="color:#b00">FAIL</b>')

@@ -46,6 +46,8 @@ from flexsat.scenarios.errors import ScenarioError, _item, _locate
 from flexsat.scenarios.fields import (_Document, _Section, _given, check_unique_labels, count,
                                       quantity)
 from flexsat.scenarios.simulation import SimulationSettings, target_quaternion
+from flexsat.design.slew_weights import (SlewWeights, nominal_histories, rim_nodes,
+                                          slew_run_metrics)
 from flexsat.sim.slew_goals import euler_angle_error
 
 #: one weight, or one per component of its block
@@ -235,7 +237,7 @@ class SlewResult:
         ds["torque_perturbation"] = (("run", "time", "torque_component"), ds["torque"]
                                      .transpose("run", "time", ...).values - nominal_torque,
                                      {"units": "N*m"})
-        for node in _rim_nodes(ds):
+        for node in rim_nodes(ds):
             parts = np.stack([ds[f"displacement_{node}{a}"].transpose("run", "time").values
                               for a in "XYZ"], -1)
             ds[f"rim_deflection_{node}"] = (("run", "time"), np.linalg.norm(parts, axis=-1),
@@ -248,47 +250,12 @@ class SlewResult:
         return ds
 
 
-def nominal_histories(nominal, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The nominal torque and 1-2-3 angles at times t: the maneuver over [0, T], then rest at
-    the target (zero torque)."""
-    T = nominal.duration
-    inside = np.clip(t, 0.0, T)
-    torque = np.where((t > T)[:, None], 0.0, nominal.torque(inside))
-    return torque, nominal.euler123(inside)
-
-
-def _rim_nodes(ds) -> list[str]:
-    """Nodes with displacement outputs along all three axes."""
-    names = [n[len("displacement_"):-1] for n in ds.data_vars if n.startswith("displacement_")]
-    return [n for n in dict.fromkeys(names) if all(f"displacement_{n}{a}" in ds for a in "XYZ")]
-
-
-def diagonal(value, size: int, field: str) -> np.ndarray:
-    """A block's diagonal from one weight or ``size`` of them (>= 0, finite)."""
-    w = np.atleast_1d(np.asarray(value, float))
-    if w.size == 1:
-        w = np.full(size, float(w[0]))
-    if w.shape != (size,) or not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise ValueError(f"{field}: one weight >= 0 or {size} of them, got {value!r}")
-    return w
-
-
-
-
 def _weights(run: SlewRunSpec, index: int, n_modes: int, n_forces: int):
     """(Q, D) of a run, diagonal, over [δα, δω, δη, δη̇] and [torque/I, forces]."""
-    path = "runs" + _item(index, run.label) + ".weights"
-    w = run.weights
-    rates = w.modes if w.mode_rates is None else w.mode_rates
-    q = np.concatenate([diagonal(w.attitude, 3, f"{path}.attitude"),
-                        diagonal(w.rate, 3, f"{path}.rate"),
-                        diagonal(w.modes, n_modes, f"{path}.modes"),
-                        diagonal(rates, n_modes, f"{path}.mode_rates")])
-    d = diagonal(w.torque, 3, f"{path}.torque")
-    if n_forces:
-        d = np.concatenate([d, diagonal(w.force, n_forces, f"{path}.force")])
-    if np.any(d <= 0):
-        raise ValueError(f"{path}.torque: control weights must be > 0 (D is inverted)")
+    try:
+        q, d = SlewWeights(**run.weights.model_dump()).diagonals(n_modes, n_forces)
+    except ValueError as exc:
+        raise ValueError(f"runs{_item(index, run.label)}.weights.{exc}") from None
     return np.diag(q), np.diag(d)
 
 
@@ -365,11 +332,10 @@ def run_slew(scenario: SlewScenario, progress: Callable[[str], None] | None = No
     flexsat.sim.SimulationDiverged
         If a run diverges (its message starts with the run).
     """
-    from flexsat.dynamics.attitude import dcm_to_euler123, quaternion_to_dcm
     from flexsat.maneuvers import three_axis_slew
     from flexsat.references import cite
     from flexsat.sim import SimConfig, SimulationDiverged, simulate
-    from flexsat.sim.slew_goals import SlewGoals, slew_goal_metrics
+    from flexsat.sim.slew_goals import SlewGoals
 
     truth, design_plant = _plants(scenario)
     m = scenario.maneuver
@@ -397,21 +363,10 @@ def run_slew(scenario: SlewScenario, progress: Callable[[str], None] | None = No
             raise SimulationDiverged(f"runs{_item(index - 1, label)}: {exc}", exc.cases,
                                      exc.time, exc.cause) from None
 
-    def stack(name):
-        return np.stack([r.dataset[name].isel(case=0).values for r in results])
-
-    t = results[0].dataset["time"].values
-    rims = _rim_nodes(results[0].dataset)
-    deflection = np.stack([np.stack([stack(f"displacement_{n}{a}") for a in "XYZ"], -1)
-                           for n in rims], -2)
-    force_names = [c.name for c in truth.inputs if c.name.startswith("force_")]
-    forces = np.stack([stack(n) for n in force_names], -1) if force_names else None
     g = scenario.goals
-    goals, units = slew_goal_metrics(
-        t, m.duration, stack("euler123"), dcm_to_euler123(quaternion_to_dcm(nominal.target)),
-        deflection, deflection[:1], torque=stack("torque"),
-        torque_nominal=nominal_histories(nominal, t)[0][None], forces=forces,
-        goals=SlewGoals(g.angle_fraction, g.evaluation, g.deflection_ratio))
+    goals, units = slew_run_metrics(results, nominal,
+                                    SlewGoals(g.angle_fraction, g.evaluation, g.deflection_ratio))
+    t = results[0].dataset["time"].values
     notes = (f"Nominal: three-axis TPBVP by continuation in {len(nominal.history)} steps, "
              f"boundary error {nominal.boundary_error():.1e}; peak nominal torques "
              + ", ".join(f"{a} {abs(nominal.torque(t[t <= m.duration])[:, i]).max():,.0f} N m"
@@ -423,4 +378,4 @@ def run_slew(scenario: SlewScenario, progress: Callable[[str], None] | None = No
                       cite(get_case(scenario.case).source), notes)
 
 
-__all__ = ["OPEN_LOOP", "SlewResult", "SlewScenario", "diagonal", "nominal_histories", "run_slew"]
+__all__ = ["OPEN_LOOP", "SlewResult", "SlewScenario", "run_slew"]
