@@ -48,18 +48,29 @@ def _grid(n: int, title: str, height: float = 2.4):
     return fig, axes[:n]
 
 
+def _colour(i: int, n: int):
+    """Run i's colour: the default cycle up to 10 runs, tab20 beyond (distinct up to 20)."""
+    if n <= 10:
+        return f"C{i}"
+    from matplotlib import colormaps
+
+    return colormaps["tab20"](i % 20)
+
+
 def _cost(ds, path: Path) -> None:
     fig = Figure(figsize=(8, 5.2), layout="constrained")
     a, b = fig.subplots(2, 1, sharex=True)
     fig.suptitle("homotopy: cost along γ (J0(γ) = γ J_goal + (1 − γ) J_init, Eq. 16)")
+    n = ds.sizes["run"]
     for i, run in enumerate(ds["run"].values):
         r = ds.sel(run=run)
+        c = _colour(i, n)
         g, J0 = r["gamma_path"].values, float(r["J_init"])
-        a.plot(g, r["cost_path"].values / J0, "o-", color=f"C{i}", markersize=3, label=str(run))
-        a.plot(g, r["target_path"].values / J0, "x", color=f"C{i}", markersize=5)
-        b.plot(g, r["cost_path"].values / J0 - 1.0, "o-", color=f"C{i}", markersize=3)
+        a.plot(g, r["cost_path"].values / J0, "o-", color=c, markersize=3, label=str(run))
+        a.plot(g, r["target_path"].values / J0, "x", color=c, markersize=5)
+        b.plot(g, r["cost_path"].values / J0 - 1.0, "o-", color=c, markersize=3)
     a.set(ylabel="J / J_init (o: reached, x: target)")
-    b.set(ylabel="J / J_init − 1", xlabel="γ", yscale="symlog", )
+    b.set(ylabel="J / J_init − 1", xlabel="γ")
     b.set_yscale("symlog", linthresh=1e-4)
     for ax in (a, b):
         ax.grid(alpha=0.3)
@@ -73,9 +84,10 @@ def _checks(ds, path: Path) -> None:
     fig.suptitle("stability along γ: S of Eq. 6 and the closed-loop poles of Eq. 8")
     for i, run in enumerate(ds["run"].values):
         r = ds.sel(run=run)
-        a.plot(r["gamma_path"].values, r["min_eig_S_path"].values, "o-", color=f"C{i}",
+        c = _colour(i, ds.sizes["run"])
+        a.plot(r["gamma_path"].values, r["min_eig_S_path"].values, "o-", color=c,
                markersize=3, label=str(run))
-        b.plot(r["gamma_path"].values, r["max_re_pole_path"].values, "o-", color=f"C{i}",
+        b.plot(r["gamma_path"].values, r["max_re_pole_path"].values, "o-", color=c,
                markersize=3)
     a.set(ylabel="smallest eigenvalue of S (1/s²)")
     b.set(ylabel="largest Re(pole) (1/s)", xlabel="γ")
@@ -94,7 +106,8 @@ def _poles(ds, path: Path) -> None:
         g = np.repeat(r["gamma_path"].values[:, None], r.sizes["pole"], 1)
         keep = np.isfinite(g) & (r["pole_imag_path"].values >= 0)
         sc = ax.scatter(r["pole_real_path"].values[keep], r["pole_imag_path"].values[keep],
-                        c=g[keep], s=6, cmap="viridis", vmin=0, vmax=1)
+                        c=g[keep], s=6, cmap="viridis", vmin=0,
+                        vmax=ds.attrs["gamma_stop"])
         ax.set_xscale("symlog", linthresh=0.1)
         ax.set(title=str(run), xlabel="Re (1/s)", ylabel="Im (rad/s)")
         ax.title.set_fontsize("small")
