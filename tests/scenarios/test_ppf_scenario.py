@@ -101,6 +101,20 @@ def test_a_small_scenario_loads_by_kind_and_runs():
     assert result.runs[0].responses["time"][-1] == pytest.approx(10.0)
 
 
+def test_flexsat_run_dispatches_kind_ppf(tmp_path):
+    from typer.testing import CliRunner
+
+    from flexsat.cli import app
+
+    path = tmp_path / "ppf.yaml"
+    path.write_text(SMALL)
+    out = tmp_path / "report"
+    result = CliRunner().invoke(app, ["run", str(path), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "J_opt" in result.output  # the metrics table
+    assert (out / "index.html").is_file() and (out / "response_2.png").is_file()
+
+
 @pytest.mark.parametrize("change, message", [
     (("weights: [100, 100]", "weights: [100]"), r"runs\['paper'\].weights: must be the two"),
     (("weights: [100, 500]", "weights: [100, -5]"), r"runs\['reducing'\].weights"),
