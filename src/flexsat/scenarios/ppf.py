@@ -238,7 +238,8 @@ class PPFResult:
             coords={"run": list(self.labels), "response": list(RESPONSES), "time": t,
                     "output": list(OUTPUTS), "actuator": [1, 2, 3], "mode": [1, 2, 3]},
         )
-        ds["tip_response"].attrs["units"] = "m (tip error), rad (rotation)"
+        ds["tip_response"].attrs["units"] = ", ".join(f"{o}: {u}" for o, u in
+                                                      zip(OUTPUTS, OUTPUT_UNITS))
         ds["time"].attrs["units"] = "s"
         for rec in self.metrics_records():
             for key, value in rec.items():
