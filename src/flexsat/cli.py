@@ -223,10 +223,11 @@ def run(
         check_output_folder(out)
     except OSError as exc:
         _fail(f"--out: {exc}")
-    from flexsat.report import (write_identification_report, write_report,
+    from flexsat.report import (write_identification_report, write_ppf_report, write_report,
                                 write_simulation_report, write_slew_report)
     from flexsat.scenarios import (
         IdentificationScenario,
+        PPFScenario,
         ScenarioError,
         SimulationScenario,
         SlewScenario,
@@ -234,6 +235,7 @@ def run(
         identification_steps,
         load_scenario,
         run_identification,
+        run_ppf,
         run_scenario,
         run_simulation,
         run_slew,
@@ -244,9 +246,10 @@ def run(
         spec = default_scenario() if scenario is None else load_scenario(scenario)
         identification = isinstance(spec, IdentificationScenario)
         slew = isinstance(spec, SlewScenario)
+        ppf = isinstance(spec, PPFScenario)
         runner = (run_identification if identification else run_simulation
                   if isinstance(spec, SimulationScenario) else run_slew if slew
-                  else run_scenario)
+                  else run_ppf if ppf else run_scenario)
         steps = (identification_steps(spec) if identification
                  else len(spec.runs) + 2 if slew else len(spec.runs))  # + nominal, open loop
         with _progress(steps) as say:
@@ -262,7 +265,8 @@ def run(
     else:
         console.print(_metrics_table(result.metrics_records()))
         writer = (write_simulation_report if isinstance(spec, SimulationScenario)
-                  else write_slew_report if slew else write_report)
+                  else write_slew_report if slew else write_ppf_report if ppf
+                  else write_report)
     try:
         path = writer(result, out)
     except OSError as exc:

@@ -25,6 +25,7 @@ _EXPORTS = {
     "write_simulation_report": "simulation",
     "GOAL_COLUMNS": "slew",
     "write_slew_report": "slew",
+    "write_ppf_report": "ppf",
     "FIGURES": "identification",
     "write_identification_report": "identification",
 }

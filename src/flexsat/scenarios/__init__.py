@@ -5,7 +5,9 @@ one or more control laws; ``kind: simulation`` (:mod:`flexsat.scenarios.simulati
 case's plant (three-axis spacecraft, structures with point actuators, a beam in orbit) under a
 law reading and writing named channels; ``kind: slew`` (:mod:`flexsat.scenarios.slew`) slews a
 flexible spacecraft on a frequency-shaped optimal maneuver with gain-scheduled perturbation
-feedback and judges it against the seed 003 goals; ``kind: identification``
+feedback and judges it against the seed 003 goals; ``kind: ppf`` (:mod:`flexsat.scenarios.ppf`)
+optimises the PPF gains of the Agrawal–Bang structure (seed 004) and simulates its tip
+responses; ``kind: identification``
 (:mod:`flexsat.scenarios.identification`) tests a structure, identifies it and updates its
 model. :func:`load_scenario` reads any of them;
 problems are reported as ``field.path: rule`` lines of one :class:`ScenarioError`, before
@@ -44,6 +46,9 @@ _EXPORTS = {
     "SlewScenario": "slew",
     "SlewResult": "slew",
     "run_slew": "slew",
+    "PPFScenario": "ppf",
+    "PPFResult": "ppf",
+    "run_ppf": "ppf",
     "IdentificationResult": "identification",
     "IdentificationScenario": "identification",
     "identification_steps": "identification",

@@ -142,7 +142,8 @@ def load_scenario(source: str | bytes | Path):
 
     ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: simulation`` a
     :class:`flexsat.scenarios.simulation.SimulationScenario`; ``kind: slew`` a
-    :class:`flexsat.scenarios.slew.SlewScenario`; ``kind: identification`` an
+    :class:`flexsat.scenarios.slew.SlewScenario`; ``kind: ppf`` a
+    :class:`flexsat.scenarios.ppf.PPFScenario`; ``kind: identification`` an
     :class:`flexsat.scenarios.identification.IdentificationScenario`.
 
     Parameters
@@ -166,10 +167,12 @@ def load_scenario(source: str | bytes | Path):
         from flexsat.scenarios.simulation import SimulationScenario as model
     elif kind == "slew":
         from flexsat.scenarios.slew import SlewScenario as model
+    elif kind == "ppf":
+        from flexsat.scenarios.ppf import PPFScenario as model
     elif kind == "maneuver":
         model = Scenario
     else:
-        raise ScenarioError([f"kind: must be 'maneuver', 'simulation', 'slew' or "
+        raise ScenarioError([f"kind: must be 'maneuver', 'simulation', 'slew', 'ppf' or "
                              f"'identification', got {kind!r}"])
     try:
         scenario = model.model_validate(data)
