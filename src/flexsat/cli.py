@@ -209,6 +209,25 @@ def _metrics_table(records: list[dict]) -> Table:
     return table
 
 
+def _identification_steps(spec) -> int:
+    from flexsat.scenarios import identification_steps
+
+    return identification_steps(spec)
+
+
+#: per scenario ``kind``: its runner (in flexsat.scenarios), its report writer (in
+#: flexsat.report) and the number of progress steps it announces
+_KINDS = {
+    "maneuver": ("run_scenario", "write_report", lambda spec: len(spec.runs)),
+    "simulation": ("run_simulation", "write_simulation_report", lambda spec: len(spec.runs)),
+    # a slew also solves its nominal maneuver and runs the open loop
+    "slew": ("run_slew", "write_slew_report", lambda spec: len(spec.runs) + 2),
+    "ppf": ("run_ppf", "write_ppf_report", lambda spec: len(spec.runs)),
+    "identification": ("run_identification", "write_identification_report",
+                       _identification_steps),
+}
+
+
 @app.command()
 def run(
     scenario: Annotated[Path | None, typer.Argument(
@@ -223,52 +242,25 @@ def run(
         check_output_folder(out)
     except OSError as exc:
         _fail(f"--out: {exc}")
-    from flexsat.report import (write_identification_report, write_ppf_report, write_report,
-                                write_simulation_report, write_slew_report)
-    from flexsat.scenarios import (
-        IdentificationScenario,
-        PPFScenario,
-        ScenarioError,
-        SimulationScenario,
-        SlewScenario,
-        default_scenario,
-        identification_steps,
-        load_scenario,
-        run_identification,
-        run_ppf,
-        run_scenario,
-        run_simulation,
-        run_slew,
-    )
+    import flexsat.report as report
+    import flexsat.scenarios as scenarios
+    from flexsat.scenarios import ScenarioError, default_scenario, load_scenario
     from flexsat.sim import SimulationDiverged
 
     try:
         spec = default_scenario() if scenario is None else load_scenario(scenario)
-        identification = isinstance(spec, IdentificationScenario)
-        slew = isinstance(spec, SlewScenario)
-        ppf = isinstance(spec, PPFScenario)
-        runner = (run_identification if identification else run_simulation
-                  if isinstance(spec, SimulationScenario) else run_slew if slew
-                  else run_ppf if ppf else run_scenario)
-        steps = (identification_steps(spec) if identification
-                 else len(spec.runs) + 2 if slew else len(spec.runs))  # + nominal, open loop
-        with _progress(steps) as say:
-            result = runner(spec, progress=say)
+        runner, writer, steps = _KINDS[spec.kind]
+        with _progress(steps(spec)) as say:
+            result = getattr(scenarios, runner)(spec, progress=say)
     except ScenarioError as exc:
         _fail(str(exc))
     except SimulationDiverged as exc:  # a result, not an input error: exit 1, nothing written
         errors.print(str(exc), style="red", markup=False, highlight=False)
         raise typer.Exit(code=1) from None
-    if isinstance(spec, IdentificationScenario):
-        console.print(_identification_table(result))
-        writer = write_identification_report
-    else:
-        console.print(_metrics_table(result.metrics_records()))
-        writer = (write_simulation_report if isinstance(spec, SimulationScenario)
-                  else write_slew_report if slew else write_ppf_report if ppf
-                  else write_report)
+    console.print(_identification_table(result) if spec.kind == "identification"
+                  else _metrics_table(result.metrics_records()))
     try:
-        path = writer(result, out)
+        path = getattr(report, writer)(result, out)
     except OSError as exc:
         _fail(f"--out: {exc}")
     console.print(f"report written to {path / 'index.html'}", markup=False)
