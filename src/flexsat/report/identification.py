@@ -28,7 +28,7 @@ from matplotlib.figure import Figure
 from flexsat.scenarios.identification import IdentificationResult, as_dict
 from flexsat.netcdf import write_netcdf
 from flexsat.report.publish import write_atomically
-from flexsat.report.maneuver import STYLE
+from flexsat.report.maneuver import report_page
 from flexsat.text import format_optional
 
 __all__ = ["FIGURES", "dataset", "write_identification_report"]
@@ -197,15 +197,7 @@ def _html(result: IdentificationResult) -> str:
                 + ("" if u["converged"] else ", NOT converged"))
     images = "".join(f'<figure><img src="{f}" alt="{esc(t)}"><figcaption>{esc(t)}</figcaption>'
                      "</figure>" for f, t in FIGURES)
-    return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8">
-<title>flexsat identification report: {esc(result.scenario.name)}</title>
-{STYLE}</head>
-<body>
-<h1>flexsat identification report</h1>
-<p><b>Scenario:</b> {esc(result.scenario.name)}<br><b>Case:</b> {esc(result.scenario.case)}
-({esc(result.case_source)})</p>
-<h2>Natural frequencies (Hz)</h2>
+    return report_page(result, f"""<h2>Natural frequencies (Hz)</h2>
 <p>Truth: the simulated structure. ERA: hammer test (strain gauges and accelerometers), ± its
 first-order standard deviation. Video: ERA on triangulated target motion. OKID: reaction-wheel
 random-torque test. A priori and updated: the model before and after the update (error against
@@ -223,10 +215,7 @@ updated one (a priori × p; in a simulation, 1 means recovered).</p>
 {gain_html}
 {_camera_html(c)}
 {images}
-<h2>Scenario</h2>
-<pre>{esc(result.scenario.yaml_text)}</pre>
-</body></html>
-"""
+""", "flexsat identification report")
 
 
 def _write_all(result: IdentificationResult, folder: Path) -> None:

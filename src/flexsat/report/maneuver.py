@@ -74,6 +74,25 @@ pre { background: #f4f4f4; padding: 1em; overflow-x: auto; }
 </style>"""
 
 
+def report_page(result, body: str, title: str = "flexsat report") -> str:
+    """A report's index.html: the heading, the scenario and its case with the case's source,
+    ``body`` (HTML), and the scenario as given."""
+    esc = html.escape
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{esc(title)}: {esc(result.scenario.name)}
+</title>
+{STYLE}</head>
+<body>
+<h1>{esc(title)}</h1>
+<p><b>Scenario:</b> {esc(result.scenario.name)}<br><b>Case:</b> {esc(result.scenario.case)}
+({esc(result.case_source)})</p>
+{body}
+<h2>Scenario</h2>
+<pre>{esc(result.scenario.yaml_text)}</pre>
+</body></html>
+"""
+
+
 def _plot(ds, spec: _Plot, path: Path) -> None:
     fig = Figure(figsize=(7, 3.6), layout="constrained")
     ax = fig.add_subplot()
@@ -92,29 +111,17 @@ def _plot(ds, spec: _Plot, path: Path) -> None:
 
 def _html(result: ScenarioResult, records: list[dict]) -> str:
     esc = html.escape
-    name = esc(result.scenario.name)
     head = "".join(f"<th>{esc(r['run'])}</th>" for r in records)
     rows = "".join(
         f"<tr><td>{esc(metric)}</td>" + "".join(f"<td>{v}</td>" for v in values) + "</tr>"
         for metric, values in metric_rows(records)
     )
     images = "".join(f'<figure><img src="{p.file}" alt="{esc(p.title)}"></figure>' for p in PLOTS)
-    return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>flexsat report: {name}</title>
-{STYLE}</head>
-<body>
-<h1>flexsat report</h1>
-<p><b>Scenario:</b> {name}<br><b>Case:</b> {esc(result.scenario.case)}
-({esc(result.case_source)})</p>
-<h2>Metrics</h2>
+    return report_page(result, f"""<h2>Metrics</h2>
 <p>n/a: not settled within the band, or not applicable.</p>
 <table><tr><th>metric</th>{head}</tr>{rows}</table>
 <h2>Time histories</h2>
-{images}
-<h2>Scenario</h2>
-<pre>{esc(result.scenario.yaml_text)}</pre>
-</body></html>
-"""
+{images}""")
 
 
 def _write_all(result: ScenarioResult, folder: Path) -> None:

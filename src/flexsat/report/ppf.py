@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import STYLE, format_metric
+from flexsat.report.maneuver import report_page, format_metric
 from flexsat.report.publish import write_atomically, write_metrics_and_results
 
 #: results-table columns: (metric, heading)
@@ -204,15 +204,7 @@ def _html(result, records, ds, figures: list[str]) -> str:
     esc = html.escape
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
-    return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>flexsat report: {esc(result.scenario.name)}
-</title>
-{STYLE}</head>
-<body>
-<h1>flexsat report</h1>
-<p><b>Scenario:</b> {esc(result.scenario.name)}<br><b>Case:</b> {esc(result.scenario.case)}
-({esc(result.case_source)})</p>
-<h2>Results (seed 004 Tables 1–3 grid)</h2>
+    return report_page(result, f"""<h2>Results (seed 004 Tables 1–3 grid)</h2>
 <p>J = ½ ∫ (ζ_tᵀ Q̄ ζ_t + uᵀ Q_u u) dt (Eqs. 7, 35) by Lyapunov equations; γ: last converged
 homotopy parameter; min eig S: Eq. 6; stable: the deciding check (S &gt; 0 for positive gains,
 else the poles). Settling: last time the tip error |Eᵗ| or the rotation Φ exceeds 10 % of its
@@ -223,10 +215,7 @@ peak (n/a: not within the simulated time).</p>
 {_gains_tables(result)}
 <h2>Figures</h2>
 {images}
-<h2>Scenario</h2>
-<pre>{esc(result.scenario.yaml_text)}</pre>
-</body></html>
-"""
+""")
 
 
 def _write_all(result, folder: Path) -> None:

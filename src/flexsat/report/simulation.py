@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import STYLE, metric_rows
+from flexsat.report.maneuver import report_page, metric_rows
 from flexsat.report.publish import write_atomically, write_metrics_and_results
 
 #: at most this many time-history figures (a plant with many output channels records them all
@@ -83,23 +83,12 @@ def _html(result, records: list[dict], names: list[str], units: dict, idle: list
     quiet = ("<p>Zero throughout every run (not plotted): "
              + ", ".join(f"<code>{esc(n)}</code>" for n in idle) + ".</p>") if idle else ""
     images = "".join(f'<figure><img src="{_file(n)}" alt="{esc(n)}"></figure>' for n in names)
-    return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>flexsat report: {esc(result.scenario.name)}
-</title>
-{STYLE}</head>
-<body>
-<h1>flexsat report</h1>
-<p><b>Scenario:</b> {esc(result.scenario.name)}<br><b>Case:</b> {esc(result.scenario.case)}
-({esc(result.case_source)})</p>
-<h2>Metrics</h2>
+    return report_page(result, f"""<h2>Metrics</h2>
 <table><tr><th>metric</th>{head}</tr>{rows}</table>
 <h2>Time histories</h2>
 {quiet}
 {images}
-<h2>Scenario</h2>
-<pre>{esc(result.scenario.yaml_text)}</pre>
-</body></html>
-"""
+""")
 
 
 def _write_all(result, folder: Path) -> None:

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import STYLE, format_metric
+from flexsat.report.maneuver import report_page, format_metric
 from flexsat.report.publish import write_atomically, write_metrics_and_results
 from flexsat.scenarios.slew import OPEN_LOOP
 
@@ -128,24 +128,13 @@ def _html(result, records, figures: list[str]) -> str:
              f"1/{ds_attrs['goal_deflection_ratio']:g} of the open-loop one (seed 003 "
              "L792–L801). The open-loop run is the nominal torque alone.")
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
-    return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>flexsat report: {esc(result.scenario.name)}
-</title>
-{STYLE}</head>
-<body>
-<h1>flexsat report</h1>
-<p><b>Scenario:</b> {esc(result.scenario.name)}<br><b>Case:</b> {esc(result.scenario.case)}
-({esc(result.case_source)})</p>
-<h2>Goals</h2>
+    return report_page(result, f"""<h2>Goals</h2>
 <p>{esc(goals)}</p>
 {_goal_table(records)}
 <ul>{notes}</ul>
 <h2>Figures</h2>
 {images}
-<h2>Scenario</h2>
-<pre>{esc(result.scenario.yaml_text)}</pre>
-</body></html>
-"""
+""")
 
 
 def _write_all(result, folder: Path) -> None:
