@@ -85,7 +85,7 @@ def _check_name(name, field_path: str) -> str:
     return name
 
 
-def _check_unit(unit, field_path: str) -> str:
+def require_si_unit(unit, field_path: str) -> str:
     """The parameter's unit must be its SI unit: the table holds SI values under that label."""
     if not isinstance(unit, str):
         raise ValueError(f"{field_path}.unit: must be a unit string such as 'N*m' or '' "
@@ -98,7 +98,7 @@ def _check_unit(unit, field_path: str) -> str:
     return unit
 
 
-def _number(value, unit: str, field_path: str, allow_infinite: bool = False) -> float:
+def si_scalar(value, unit: str, field_path: str, allow_infinite: bool = False) -> float:
     """One SI number from a float in ``unit``, a Quantity or a unit string; finite unless
     ``allow_infinite`` (never NaN)."""
     arr = to_si_array(value, unit, field_path)
@@ -122,7 +122,7 @@ class _Distribution:
         prefix = self.field or _check_name(self.name, "parameter")
         _check_name(self.name, prefix)
         object.__setattr__(self, "field", prefix)
-        _check_unit(self.unit, prefix)
+        require_si_unit(self.unit, prefix)
         return prefix
 
     def _set(self, attr: str, value: float) -> None:
@@ -150,8 +150,8 @@ class Normal(_Distribution):
 
     def __post_init__(self):
         f = self._start()
-        self._set("mean", _number(self.mean, self.unit, f"{f}.mean"))
-        sd = _number(self.sd, self.unit, f"{f}.sd")
+        self._set("mean", si_scalar(self.mean, self.unit, f"{f}.mean"))
+        sd = si_scalar(self.sd, self.unit, f"{f}.sd")
         if sd <= 0:
             raise ValueError(f"{f}.sd: must be > 0 (a standard deviation), got {self.sd!r}")
         self._set("sd", sd)
@@ -175,8 +175,8 @@ class Uniform(_Distribution):
 
     def __post_init__(self):
         f = self._start()
-        low = _number(self.low, self.unit, f"{f}.low")
-        high = _number(self.high, self.unit, f"{f}.high")
+        low = si_scalar(self.low, self.unit, f"{f}.low")
+        high = si_scalar(self.high, self.unit, f"{f}.high")
         if not low < high:
             raise ValueError(f"{f}: low must be < high, got low={self.low!r}, high={self.high!r}")
         self._set("low", low)
@@ -201,11 +201,11 @@ class LogNormal(_Distribution):
 
     def __post_init__(self):
         f = self._start()
-        median = _number(self.median, self.unit, f"{f}.median")
+        median = si_scalar(self.median, self.unit, f"{f}.median")
         if median <= 0:
             raise ValueError(f"{f}.median: must be > 0 (a lognormal variable is positive), "
                              f"got {self.median!r}")
-        gsd = _number(self.gsd, "", f"{f}.gsd")
+        gsd = si_scalar(self.gsd, "", f"{f}.gsd")
         if gsd <= 1:
             raise ValueError(f"{f}.gsd: the geometric standard deviation must be > 1 "
                              f"(dimensionless; 1.1 is a 10 % dispersion), got {self.gsd!r}")
@@ -234,12 +234,12 @@ class TruncatedNormal(_Distribution):
 
     def __post_init__(self):
         f = self._start()
-        mean = _number(self.mean, self.unit, f"{f}.mean")
-        sd = _number(self.sd, self.unit, f"{f}.sd")
+        mean = si_scalar(self.mean, self.unit, f"{f}.mean")
+        sd = si_scalar(self.sd, self.unit, f"{f}.sd")
         if sd <= 0:
             raise ValueError(f"{f}.sd: must be > 0 (a standard deviation), got {self.sd!r}")
-        low = _number(self.low, self.unit, f"{f}.low", allow_infinite=True)
-        high = _number(self.high, self.unit, f"{f}.high", allow_infinite=True)
+        low = si_scalar(self.low, self.unit, f"{f}.low", allow_infinite=True)
+        high = si_scalar(self.high, self.unit, f"{f}.high", allow_infinite=True)
         if not low < high:
             raise ValueError(f"{f}: low must be < high, got low={self.low!r}, high={self.high!r}")
         a, b = (low - mean) / sd, (high - mean) / sd
@@ -318,7 +318,7 @@ class GridAxis:
         f = self.field or _check_name(self.name, "parameter")
         _check_name(self.name, f)
         object.__setattr__(self, "field", f)
-        _check_unit(self.unit, f)
+        require_si_unit(self.unit, f)
         if isinstance(self.values, str):
             raise ValueError(f"{f}.values: must be a list of values, got the string "
                              f"{self.values!r}")
@@ -335,9 +335,9 @@ class GridAxis:
                  field: str | None = None) -> GridAxis:
         """``n`` ≥ 2 evenly spaced values from ``low`` to ``high`` (> ``low``), both included."""
         f = field or _check_name(name, "parameter")
-        _check_unit(unit, f)
-        lo = _number(low, unit, f"{f}.low")
-        hi = _number(high, unit, f"{f}.high")
+        require_si_unit(unit, f)
+        lo = si_scalar(low, unit, f"{f}.low")
+        hi = si_scalar(high, unit, f"{f}.high")
         if not lo < hi:
             raise ValueError(f"{f}: low must be < high, got low={low!r}, high={high!r}")
         count = require_count(n, f"{f}.n")
@@ -576,4 +576,4 @@ def space_from_spec(spec: Mapping, units: Mapping[str, str],
 
 __all__ = ["DISTRIBUTIONS", "GridAxis", "GridSpace", "LogNormal", "Normal", "ParameterSpace",
            "SampleTable", "SobolDesign", "TruncatedNormal", "Uniform",
-           "parameter_from_spec", "space_from_spec"]
+           "parameter_from_spec", "require_si_unit", "si_scalar", "space_from_spec"]
