@@ -569,7 +569,7 @@ def space_from_spec(spec: Mapping, units: Mapping[str, str],
         return GridSpace(items, field_path)
     if not any(grids):
         return ParameterSpace(items, field_path)
-    odd = items[grids.index(False)] if sum(grids) > len(grids) / 2 else items[grids.index(True)]
+    odd = items[grids.index(not grids[0])]
     raise ValueError(f"{odd.field}: grid axes (values, low/high/n) and distributions or bounds "
                      f"cannot be mixed in one space")
 
