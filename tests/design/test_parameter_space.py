@@ -154,6 +154,16 @@ def test_a_case_depends_only_on_seed_name_and_index():
     assert np.all(np.abs(r) < 4 / math.sqrt(5000))
 
 
+def test_noise_seeds_are_per_case_and_apart_from_the_parameters():
+    seeds = ParameterSpace.noise_seeds(100, seed=4)
+    assert seeds.dtype == np.uint64 and np.unique(seeds).size == 100
+    assert np.array_equal(ParameterSpace.noise_seeds(30, seed=4, start=70), seeds[70:])
+    assert not np.array_equal(ParameterSpace.noise_seeds(100, seed=4, name="wind"), seeds)
+    # a parameter named "noise" draws from another stream than the noise seeds
+    raw = ParameterSpace.stream("noise", 4).random_raw(100)
+    assert not np.any(raw == seeds)
+
+
 # -- units and scenario dicts --------------------------------------------------------------------------
 def test_values_are_read_in_their_units():
     assert Uniform("u_max", "100 ozf*in", "600 ozf*in", "N*m").high == pytest.approx(

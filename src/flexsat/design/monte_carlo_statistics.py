@@ -79,7 +79,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from flexsat.design.parameter_space import SampleTable, SobolDesign, require_si_unit, si_scalar
+from flexsat.design.parameter_space import (
+    SampleTable,
+    SobolDesign,
+    require_si_unit,
+    si_scalar,
+)
 from flexsat.validation import require_count
 
 #: the percentiles reported by default

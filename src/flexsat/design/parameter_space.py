@@ -21,7 +21,8 @@ The pieces:
   (:meth:`~ParameterSpace.sample`), Latin hypercube and scrambled Sobol' sequences
   (scipy.stats.qmc), and the Saltelli design of Sobol' indices (SALib,
   :meth:`~ParameterSpace.sobol_design`; a :class:`Uniform` is the "bounds" of a sequence over a
-  box);
+  box), and the per-case seeds of the random processes inside a case
+  (:meth:`~ParameterSpace.noise_seeds`);
 * :class:`SampleTable` — the output: name → (N,) SI array, the units, the index of the first case;
 * :func:`parameter_from_spec` / :func:`space_from_spec` — the same objects from the dicts of a
   YAML scenario, with field-path error messages.
@@ -396,6 +397,12 @@ def _seed(seed, field_path: str) -> int:
     return int(seed)
 
 
+def _start(start) -> int:
+    if isinstance(start, bool) or not isinstance(start, (int, np.integer)) or start < 0:
+        raise ValueError(f"start: must be a non-negative integer, got {start!r}")
+    return int(start)
+
+
 @dataclass(frozen=True)
 class SobolDesign:
     """The Saltelli sample of a Sobol' analysis: ``table`` (``n_base`` (d + 2) cases, or
@@ -441,22 +448,35 @@ class ParameterSpace:
                            self.units, start)
 
     @staticmethod
-    def stream(name: str, seed: int) -> np.random.PCG64:
-        """Parameter ``name``'s PCG64 stream for ``seed`` (see the module)."""
+    def stream(name: str, seed: int, purpose: int = 0) -> np.random.PCG64:
+        """Parameter ``name``'s PCG64 stream for ``seed`` (see the module); ``purpose`` 1 is the
+        stream of the noise seeds (:meth:`noise_seeds`), apart from every parameter's."""
         digest = int.from_bytes(hashlib.sha256(name.encode()).digest()[:16], "little")
-        return np.random.PCG64(np.random.SeedSequence([seed, digest]))
+        words = [seed, digest] if purpose == 0 else [seed, digest, purpose]
+        return np.random.PCG64(np.random.SeedSequence(words))
+
+    @classmethod
+    def noise_seeds(cls, n: int, seed: int, start: int = 0, name: str = "noise") -> np.ndarray:
+        """Per-case seeds (uint64) of the random processes inside a case (sensor noise,
+        disturbances), cases ``start`` to ``start + n``: the ``i``-th 64-bit output of the
+        stream of (seed, ``name``), like a parameter's uniforms, so they too are independent of
+        the chunking; seed a case's generator with ``np.random.default_rng(noise_seeds[i])``.
+        Several processes take several names."""
+        count = require_count(n, "n")
+        bits = cls.stream(name, _seed(seed, "seed"), purpose=1)
+        bits.advance(_start(start))
+        return bits.random_raw(count)
 
     def sample(self, n: int, seed: int, start: int = 0) -> SampleTable:
         """Plain Monte Carlo: cases ``start`` to ``start + n`` of the run seeded by ``seed``, each
         case's values a function of (seed, name, case index) only."""
         count = require_count(n, "n")
         seed = _seed(seed, "seed")
-        if isinstance(start, bool) or not isinstance(start, (int, np.integer)) or start < 0:
-            raise ValueError(f"start: must be a non-negative integer, got {start!r}")
+        start = _start(start)
         columns = []
         for p in self.parameters:
             bits = self.stream(p.name, seed)
-            bits.advance(int(start))
+            bits.advance(start)
             raw = bits.random_raw(count)
             columns.append(((raw >> np.uint64(11)).astype(float) + 0.5) * 2.0**-53)
         return self.from_unit(np.column_stack(columns), int(start))
