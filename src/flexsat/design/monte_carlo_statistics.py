@@ -65,6 +65,13 @@ N' cases are the run of N' cases.
   non-monotone effects, from the same sample (it needs no special design but a few hundred
   cases).
 
+Measured (tests/design/test_monte_carlo_statistics.py): for m = x², x ~ N(1, 0.5²),
+P(m ≤ 1.5) = 0.6735, the 95 % intervals from N = 200 cases covered the true value in 0.956
+(Clopper–Pearson) and 0.944 (Wilson) of 500 seeded repetitions (0.94 for both in the test's 50);
+at a nominal 80 % they cover 0.826 and 0.798. The Ishigami function's Sobol' indices (a = 7,
+b = 0.1) from 4,096 base points (20,480 cases) are within 0.002 of the closed form, against
+bootstrap half-widths of 0.015–0.05.
+
 Sobol' indices need a value in every case: a metric with NaN is refused; analyse the indicator
 of a requirement (``requirement.met(y).astype(float)``) instead, whose Sobol' indices rank the
 parameters by their effect on meeting it. The rank tools use the cases with a value.

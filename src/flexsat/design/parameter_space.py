@@ -45,7 +45,9 @@ it). A case's values therefore depend only on (seed, name, case index): any chun
 range gives the same table, a run extended from N to 2N keeps its first N cases, and adding or
 removing a parameter leaves the others' values unchanged. The Latin hypercube, Sobol' and
 Saltelli designs are joint constructions over all N cases: they are generated whole from the
-seed and a chunk is a slice of that table (:meth:`SampleTable.rows`).
+seed and a chunk is a slice of that table (:meth:`SampleTable.rows`). PCG64's output is stable
+across numpy versions (NEP 19); the sequences' scrambling follows scipy's and SALib's generators,
+so they reproduce for given scipy and SALib versions.
 
 **Faces of the unit cube.** Scrambled sequences use finitely many bits, so a coordinate can be
 exactly 0; :func:`_open_unit` moves such points in by :math:`2^{-53}` so that an unbounded
@@ -305,7 +307,7 @@ class SampleTable:
         return {k: float(v[i]) for k, v in self.values.items()}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class GridAxis:
     """One parameter's grid values (in ``unit``; any order, finite, at least one). Build a
     linspace with :meth:`linspace`."""
