@@ -108,6 +108,8 @@ def test_bad_input_names_the_field(case, model):
         piecewise_polynomial_response(A, B, [[0.0, 2.0, 1.0]], np.zeros((1, 2, 1)), [0.5])
     with pytest.raises(ValueError, match="times: must not precede"):
         piecewise_polynomial_response(A, B, [[1.0, 2.0]], np.zeros((1, 1, 1)), [0.5])
+    with pytest.raises(ValueError, match=r"times: need shape \(n_t,\) or \(n_t, 1\)"):
+        piecewise_polynomial_response(A, B, [[0.0, 2.0]], np.zeros((1, 1, 1)), np.ones((2, 3)))
     with pytest.raises(ValueError, match="coeffs: need"):
         piecewise_polynomial_response(A, B, [[0.0, 2.0]], np.zeros((1, 2, 1)), [0.5])
     spring = np.array([[0.0, 1.0], [0.0, 0.0]])  # a double integrator is a rigid block: fine

@@ -191,8 +191,11 @@ def piecewise_polynomial_response(A, B, breaks, coeffs, times, x0=None) -> np.nd
         raise ValueError("breaks: must be non-decreasing along each case")
     C, P = h.shape
     times = require_finite(times, "times")
-    times = np.broadcast_to(times.reshape(times.shape[0], -1) if times.ndim else
-                            times.reshape(1, 1), (times.shape[0] if times.ndim else 1, C))
+    times = times.reshape(times.shape[0], -1) if times.ndim else times.reshape(1, 1)
+    if times.shape[1] not in (1, C) or times.ndim > 2:
+        raise ValueError(f"times: need shape (n_t,) or (n_t, {C}) (one column per case), got "
+                         f"{times.shape}")
+    times = np.broadcast_to(times, (times.shape[0], C))
     if np.any(times < breaks[:, 0]):
         raise ValueError("times: must not precede the start of the response (breaks[:, 0])")
     modes = _Modes(A, B)
