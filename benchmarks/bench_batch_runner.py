@@ -36,7 +36,7 @@ import numpy as np  # noqa: E402
 
 from flexsat.cases import tamu  # noqa: E402
 from flexsat.design.batch_runner import (HubManeuverBuilder, maneuver_metrics,  # noqa: E402
-                                         run_batch, run_chunk)
+                                         open_results, run_batch, run_chunk)
 from flexsat.units import to_si  # noqa: E402
 
 STEPS = 1125  # 15 s at 75 Hz
@@ -49,6 +49,36 @@ def builder() -> HubManeuverBuilder:
                               case.angle, case.reference_inertia, u_max=case.max_torque,
                               g1=to_si("3000 ozf*in/rad", "N*m/rad"),
                               g2=to_si("800 ozf*in*s/rad", "N*m*s/rad"))
+
+
+class TimedBuilder:
+    """The builder, noting when the chunk's work starts (per worker process: one thread)."""
+
+    def __init__(self, builder):
+        self.builder, self.parameter_names = builder, builder.parameter_names
+
+    def describe(self):
+        return self.builder.describe()
+
+    def __call__(self, parameters, seeds):
+        # the process environment: the one place the builder and the extractor (pickled by
+        # value, each with its own copy of this module's globals) both see
+        os.environ["BENCH_CHUNK_STARTED"] = repr(time.perf_counter())
+        return self.builder(parameters, seeds)
+
+
+def timed_metrics(result):
+    """The maneuver metrics and ``chunk_compute_s``: the chunk's build + simulate + metrics
+    wall time spread over its cases (their sum over the store is the total compute)."""
+    out = maneuver_metrics(result)
+    n = result.dataset.sizes["case"]
+    out["chunk_compute_s"] = np.full(n, (time.perf_counter()
+                                            - float(os.environ["BENCH_CHUNK_STARTED"])) / n)
+    return out
+
+
+def compute_s(store) -> float:
+    return float(open_results(store)["metric_chunk_compute_s"].sum())
 
 
 def table(n: int) -> dict[str, np.ndarray]:
@@ -78,35 +108,37 @@ def main() -> None:
 
     n, chunk = args.cases, args.chunk
     p = table(n)
-    t0 = time.perf_counter()
-    run_chunk(b, maneuver_metrics, {k: v[:chunk] for k, v in p.items()}, 0, 0)
-    compute = (time.perf_counter() - t0) * n / chunk
+    tb = TimedBuilder(b)
     tmp = Path(tempfile.mkdtemp(prefix="bench_batch_"))
     try:
         print(f"1. run_batch in-process, {n} cases in chunks of {chunk}")
         t0 = time.perf_counter()
-        run_batch(b, p, tmp / "inproc.zarr", chunk_size=chunk)
+        run_batch(tb, p, tmp / "inproc.zarr", chunk_size=chunk, extract=timed_metrics)
         wall = time.perf_counter() - t0
-        print(f"   wall {wall:.2f} s, compute {compute:.2f} s (chunk compute × chunks): overhead "
-              f"{(wall - compute) / compute:+.1%} (client start-up included)")
+        compute = compute_s(tmp / "inproc.zarr")
+        print(f"   wall {wall:.2f} s, compute {compute:.2f} s (sum of the chunks' own times): "
+              f"overhead {(wall - compute) / compute:+.1%} (in-process client start-up included)")
 
         from distributed import Client, LocalCluster
 
-        walls = {}
+        walls, computes = {}, {}
         worker_rss = {}
         for workers in (1, 2):
             with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                               dashboard_address=None) as cluster, Client(cluster) as client:
                 client.run(run_chunk, b, maneuver_metrics, table(10), 0, 0)  # warm workers
                 t0 = time.perf_counter()
-                run_batch(b, p, tmp / f"w{workers}.zarr", chunk_size=chunk,
-                          scheduler=cluster.scheduler_address)
+                run_batch(tb, p, tmp / f"w{workers}.zarr", chunk_size=chunk,
+                          scheduler=cluster.scheduler_address, extract=timed_metrics)
                 walls[workers] = time.perf_counter() - t0
+                computes[workers] = compute_s(tmp / f"w{workers}.zarr")
                 worker_rss[workers] = max(client.run(max_rss_mb).values())
         eff = walls[1] / (2 * walls[2])
+        over = {w: (walls[w] - computes[w] / w) / (computes[w] / w) for w in walls}
         print(f"2. local cluster: 1 worker {walls[1]:.2f} s, 2 workers {walls[2]:.2f} s: "
-              f"scaling efficiency {eff:.0%}; overhead on 1 worker "
-              f"{(walls[1] - compute) / compute:+.1%}")
+              f"scaling efficiency {eff:.0%}; overhead (wall against compute / workers) "
+              f"{over[1]:+.1%} on 1 worker, {over[2]:+.1%} on 2; compute per case "
+              f"{computes[1] / n * 1e3:.3f} ms on 1 worker, {computes[2] / n * 1e3:.3f} ms on 2")
         rate2 = n / walls[2]
         print(f"3. peak RSS: client {max_rss_mb():.0f} MB (after the in-process run), worker "
               f"{max(worker_rss.values()):.0f} MB (chunks of {chunk}); load average "

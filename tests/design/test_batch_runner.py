@@ -153,10 +153,24 @@ def test_an_interrupted_run_resumes_to_the_same_store(builder, reference_store, 
                         histories=HISTORIES, progress=progress.append)
     assert (summary.chunks_skipped, summary.chunks_run) == (2, 3)
     assert progress[0].cases_done == 4 and progress[-1].cases_done == 9
+    assert progress[-1].cases_per_s > 0 and progress[-1].eta_s == 0
     _same(_values(path), reference_store)
     # a third run has nothing to do
     assert run_batch(builder, SWEEP, path, base_seed=BASE_SEED, chunk_size=2,
                      histories=HISTORIES).chunks_run == 0
+
+
+def test_a_run_resumes_with_another_chunk_size(builder, reference_store, tmp_path):
+    """The mask is per case: a run stopped in chunks of 2 resumes in chunks of 4 (the chunks
+    not all done are run whole) to the same store."""
+    path = tmp_path / "c.zarr"
+    with pytest.raises(KeyboardInterrupt):
+        run_batch(builder, SWEEP, path, base_seed=BASE_SEED, chunk_size=2, histories=HISTORIES,
+                  progress=_StopAfter(1))
+    summary = run_batch(builder, SWEEP, path, base_seed=BASE_SEED, chunk_size=4,
+                        histories=HISTORIES)
+    assert (summary.chunks_skipped, summary.chunks_run) == (0, 3)
+    _same(_values(path), reference_store)
 
 
 class _DiesOnce:
