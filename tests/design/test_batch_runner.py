@@ -217,8 +217,9 @@ def test_a_scheduler_that_does_not_answer_is_refused_within_10_s(builder, tmp_pa
     assert time.perf_counter() - t0 < 10.0
 
 
-@pytest.mark.parametrize("change", [{"setup_text": "another scenario"}, {"base_seed": 1},
-                                    {"table": {"alpha": SWEEP["alpha"], "u_max": SWEEP["u_max"][::-1]}}])
+@pytest.mark.parametrize("change", [
+    {"setup_text": "another scenario"}, {"base_seed": 1},
+    {"table": {"alpha": SWEEP["alpha"], "u_max": SWEEP["u_max"][::-1]}}])
 def test_a_store_of_another_setup_is_refused(builder, tmp_path, change):
     """A store is resumed only by its own setup: another scenario text, base seed or parameter
     table is refused before anything runs, and the store is left as it was."""
@@ -231,3 +232,8 @@ def test_a_store_of_another_setup_is_refused(builder, tmp_path, change):
     with pytest.raises(ValueError, match="holds the results of a different setup"):
         run_batch(builder, table, path, **kwargs)
     _same(_values(path), before)
+
+
+def test_an_unknown_history_names_the_recorded_ones(builder, tmp_path):
+    with pytest.raises(ValueError, match=r"histories: 'thetaa' is not a recorded variable.*theta"):
+        run_batch(builder, SWEEP, tmp_path / "h.zarr", histories=("thetaa",), retries=0)

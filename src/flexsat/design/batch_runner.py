@@ -261,8 +261,9 @@ def run_chunk(build: Callable, extract: Callable, parameters: Mapping[str, np.nd
         out["metric_" + name] = values
     for name in histories:
         if name not in result.dataset:
+            recorded = [v for v in result.dataset.data_vars if "time" in result.dataset[v].dims]
             raise ValueError(f"histories: {name!r} is not a recorded variable; the run records "
-                             f"{', '.join(v for v in result.dataset.data_vars if 'time' in result.dataset[v].dims)}")
+                             f"{', '.join(recorded)}")
         out["history_" + name] = np.asarray(result.dataset[name].transpose("case", "time").values,
                                             float)
     out["time"] = np.asarray(result.dataset["time"].values, float)
