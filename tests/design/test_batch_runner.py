@@ -207,6 +207,29 @@ def test_unknown_parameter_names_the_name_and_the_known_ones(builder, tmp_path):
     assert not (tmp_path / "x.zarr").exists()
 
 
+@pytest.mark.parametrize("column, values, rule", [
+    ("alpha", [0.1, 0.3], r"alpha: .*\[0, 1/4\]"),
+    ("g3", [0.0, -5.0], r"g3: must be > -4"),
+    ("hub_inertia", [0.3, -1.0], r"hub_inertia: must be > 0")])
+def test_a_bad_value_is_refused_before_anything_runs(builder, tmp_path, column, values, rule):
+    """The builder's rules (Att. 3 Eq. 15's α range, Eq. 11's g3 > −n, a positive inertia)
+    apply to the whole table first: no store is made."""
+    with pytest.raises(ValueError, match=rule):
+        run_batch(builder, {column: np.array(values)}, tmp_path / "x.zarr")
+    assert not (tmp_path / "x.zarr").exists()
+
+
+def test_an_existing_scheduler_gives_the_same_store(builder, reference_store, tmp_path):
+    """``scheduler=`` an already running cluster's address: the same store."""
+    from distributed import LocalCluster
+
+    with LocalCluster(processes=False, n_workers=1, threads_per_worker=1,
+                      dashboard_address=None) as cluster:
+        run_batch(builder, SWEEP, tmp_path / "e.zarr", base_seed=BASE_SEED, chunk_size=4,
+                  histories=HISTORIES, scheduler=cluster.scheduler_address)
+    _same(_values(tmp_path / "e.zarr"), reference_store)
+
+
 def test_a_scheduler_that_does_not_answer_is_refused_within_10_s(builder, tmp_path):
     with socket.socket() as s:  # a free port: nothing listens there
         s.bind(("127.0.0.1", 0))

@@ -10,7 +10,10 @@ is three pieces:
   ``simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=initial_state)`` —
   the plant a :func:`~flexsat.dynamics.dispersion.stack_plants` batch when plant parameters
   vary, the law with per-case parameter arrays. :class:`HubManeuverBuilder` is the one for the
-  hub + appendage maneuvers (the TAMU Law II slew);
+  hub + appendage maneuvers (the TAMU Law II slew). It lives in this layer because it needs
+  only the layers below (plant, torque shape, law, engine); the TAMU numbers (plant, hardware
+  settings, reference inertia, gains) are its arguments, taken from
+  :func:`flexsat.cases.tamu` by the caller — design may not import cases;
 * a **metrics extractor** ``extract(result) -> {name: (n,) array}`` (default: the engine's
   maneuver metrics, :attr:`~flexsat.sim.recording.SimResult.metrics`);
 * a **parameter table**: n_cases rows, named SI columns.
@@ -198,21 +201,26 @@ class HubManeuverBuilder:
         """The builder's settings as text (part of the store's fingerprint)."""
         return repr(self)
 
+    def _inertias(self, table: Mapping[str, np.ndarray], n: int):
+        """(rigid total inertia, appendage inertia I_b) per case, kg m²: the plant parameters
+        of the table in the base parameters (their fields take arrays; their rules apply)."""
+        varied = {k: table[k] for k in PLANT_PARAMETERS if k in table}
+        p = replace(self.params, **varied) if varied else self.params
+        return (np.broadcast_to(p.total_inertia, (n,)),
+                np.broadcast_to(p.appendage_inertia, (n,)))
+
     def _plant(self, table: Mapping[str, np.ndarray], n: int):
         varied = [k for k in PLANT_PARAMETERS if k in table]
         base = _hub_plant(self.params, self.n_modes, self.stiffening)
         if not varied:
-            return base, np.full(n, self.params.total_inertia)
-        plants = [HubAppendage(replace(self.params, **{k: float(table[k][i]) for k in varied}),
-                               n_modes=self.n_modes, stiffening=self.stiffening)
-                  for i in range(n)]
-        return stack_plants(plants), np.array([p.params.total_inertia for p in plants])
+            return base
+        return stack_plants([
+            HubAppendage(replace(self.params, **{k: float(table[k][i]) for k in varied}),
+                         n_modes=self.n_modes, stiffening=self.stiffening) for i in range(n)])
 
-    def __call__(self, parameters: Mapping[str, np.ndarray], seeds: np.ndarray):
-        """(plant, law, config, initial_state) of the chunk ``parameters`` (module docstring)."""
-        n = len(seeds)
-        plant, inertia = self._plant(parameters, n)
-        shape = {k: parameters[k] for k in MANEUVER_PARAMETERS if k in parameters}
+    def _law(self, table: Mapping[str, np.ndarray], n: int) -> LyapunovTracker:
+        inertia, appendage = self._inertias(table, n)
+        shape = {k: table[k] for k in MANEUVER_PARAMETERS if k in table}
         if len(shape) == 3:
             raise ValueError("parameters: give at most two of alpha, u_max, duration (Att. 3 "
                              "Eq. 15 fixes the third)")
@@ -221,12 +229,26 @@ class HubManeuverBuilder:
                 shape[k] = np.full(n, getattr(self, k))
         ref = SmoothBangBang(self.angle, self.reference_inertia * inertia
                              / self.params.total_inertia, **shape)
-        gains = {k: parameters.get(k, np.full(n, getattr(self, k))) for k in GAIN_PARAMETERS}
-        appendage = (inertia - (parameters["hub_inertia"] if "hub_inertia" in parameters
-                                else self.params.hub_inertia)) / self.params.n_appendages
-        law = LyapunovTracker(ref, **gains, appendage_inertia=appendage,
-                              n_appendages=self.params.n_appendages)
-        return plant, law, self.config, None
+        gains = {k: table.get(k, np.full(n, getattr(self, k))) for k in GAIN_PARAMETERS}
+        return LyapunovTracker(ref, **gains, appendage_inertia=appendage,
+                               n_appendages=self.params.n_appendages)
+
+    def check(self, parameters: Mapping[str, np.ndarray]) -> None:
+        """Apply the rules of the plant parameters, the reference (α in [0, 1/4], u_max > 0,
+        T between the bang-bang and the α = 1/4 time) and the gains (g1, g2 ≥ 0, g3 > −n) to
+        the whole table at once, before any chunk runs.
+
+        Raises
+        ------
+        ValueError
+            Naming the parameter and the rule.
+        """
+        self._law(parameters, len(next(iter(parameters.values()))))
+
+    def __call__(self, parameters: Mapping[str, np.ndarray], seeds: np.ndarray):
+        """(plant, law, config, initial_state) of the chunk ``parameters`` (module docstring)."""
+        n = len(seeds)
+        return self._plant(parameters, n), self._law(parameters, n), self.config, None
 
 
 @lru_cache(maxsize=4)
@@ -406,8 +428,9 @@ def run_batch(
     ----------
     build : callable
         The case builder (module docstring); if it has ``parameter_names``, every column of
-        ``parameters`` must be one of them; if it has ``describe()``, its text is part of the
-        fingerprint.
+        ``parameters`` must be one of them; if it has ``check(table)``, it is called on the
+        whole table before anything runs; if it has ``describe()``, its text is part of the
+        fingerprint (a plain function has none: give the setup in ``setup_text``).
     parameters : mapping of str to array_like
         The parameter table: one (n_cases,) column per name, SI.
     store : str or Path
@@ -438,12 +461,15 @@ def run_batch(
     ------
     ValueError
         Naming the field: an unknown parameter name (with the known ones), columns of different
-        lengths or non-finite values, a scheduler that does not answer within
+        lengths or non-finite values, a value the builder's ``check`` refuses, a scheduler that does not answer within
         :data:`CONNECT_TIMEOUT` s, a store that belongs to another setup.
     """
     from distributed import as_completed
 
     table = _table(parameters, getattr(build, "parameter_names", None))
+    check = getattr(build, "check", None)
+    if check is not None:
+        check(table)
     n_cases = len(next(iter(table.values())))
     chunk_size = require_count(chunk_size, "chunk_size")
     histories = tuple(histories)
