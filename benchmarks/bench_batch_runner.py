@@ -13,7 +13,8 @@ over α ∈ [0.02, 0.25] × u_max ∈ [200, 600] oz-in. Measured:
 3. peak resident memory of the client and of each worker, and the extrapolation to
    1,000,000 cases on 2 workers;
 4. compute per chunk (``run_chunk``: build + one batched ``simulate`` + metrics) at 100, 1,000
-   and 10,000 cases, in-process, numba on one thread: cases/s and µs per case-step (per core).
+   and 10,000 cases, in-process, numba on one thread: cases/s and µs per case-step (per core);
+5. the same with hub inertia and tip mass dispersed (a stacked plant of one model per case).
 
 Targets (issue 13): ≈ 0.1 µs per case-step per core, ≥ 80 % scaling, ≤ 5 % overhead,
 ≤ 2 GB peak for 1,000,000 cases (≤ 3 min wall time).
@@ -101,7 +102,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=20_000, help="cases of the whole runs")
     parser.add_argument("--chunk", type=int, default=2_000, help="chunk of the whole runs")
-    parser.add_argument("--sizes", default="100,1000,10000", help="chunk sizes of part 1")
+    parser.add_argument("--sizes", default="100,1000,10000", help="chunk sizes of part 4")
+    parser.add_argument("--dispersed", type=int, default=200, help="cases of part 5")
     args = parser.parse_args()
     b = builder()
     run_chunk(b, maneuver_metrics, table(10), 0, 0)  # numba cache load, base plant built
@@ -157,6 +159,17 @@ def main() -> None:
         per_step = dt / (n * STEPS) * 1e6
         print(f"   {n:>6} cases: {dt:7.2f} s  {n / dt:8.0f} cases/s  {per_step:.3f} µs/case-step"
               f"  (peak RSS so far {max_rss_mb():.0f} MB)")
+
+    n = args.dispersed
+    p = table(n)
+    p["hub_inertia"] = np.linspace(0.9, 1.1, n) * b.params.hub_inertia
+    p["tip_mass"] = np.linspace(0.9, 1.1, n) * b.params.tip_mass
+    t0 = time.perf_counter()
+    run_chunk(b, maneuver_metrics, p, 0, 0)
+    dt = time.perf_counter() - t0
+    print(f"5. dispersed plant (hub inertia and tip mass per case), {n} cases: {dt:.2f} s, "
+          f"{dt / n * 1e3:.2f} ms/case, {dt / (n * STEPS) * 1e6:.2f} µs/case-step (one "
+          f"HubAppendage built per case)")
 
 
 if __name__ == "__main__":
