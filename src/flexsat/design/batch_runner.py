@@ -1,0 +1,541 @@
+r"""Running many cases of one maneuver setup: vectorised chunks, dask scheduling, a zarr store.
+
+Issue 13, "Execution" (trade studies and Monte Carlo at scale; the seed 000 trade surfaces of
+Att. 3 Figs. 5–7 and the robustness sets of seeds 003 and 004 are sweeps of this kind). A run
+is three pieces:
+
+* a **case builder** ``build(parameters, seeds) -> (plant, law, config, initial_state)``: for a
+  chunk of cases (``parameters`` maps each column name of the parameter table to its (n,)
+  slice, SI; ``seeds`` the (n,) noise seeds) one batched core call
+  ``simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=initial_state)`` —
+  the plant a :func:`~flexsat.dynamics.dispersion.stack_plants` batch when plant parameters
+  vary, the law with per-case parameter arrays. :class:`HubManeuverBuilder` is the one for the
+  hub + appendage maneuvers (the TAMU Law II slew). It lives in this layer because it needs
+  only the layers below (plant, torque shape, law, engine); the TAMU numbers (plant, hardware
+  settings, reference inertia, gains) are its arguments, taken from
+  :func:`flexsat.cases.tamu` by the caller — design may not import cases;
+* a **metrics extractor** ``extract(result) -> {name: (n,) array}`` (default: the engine's
+  maneuver metrics, :attr:`~flexsat.sim.recording.SimResult.metrics`);
+* a **parameter table**: n_cases rows, named SI columns.
+
+Seeds. Case i's noise seed comes from the base seed and i alone, the i-th child of
+``numpy.random.SeedSequence(base_seed)`` (its ``spawn_key`` is ``(i,)``, what
+``SeedSequence.spawn`` gives the i-th child; computed directly so a chunk never spawns the
+children before it), folded into the engine's seed range [0, 2⁶³):
+
+.. math::
+
+    s_i = \lfloor \mathrm{SeedSequence}(b, \mathrm{spawn\_key}=(i,))
+          .\mathrm{generate\_state}(1, \mathrm{uint64})_0 / 2 \rfloor .
+
+The engine gives every case its own noise stream from its seed (:func:`flexsat.sim.simulate`,
+``seeds=``) and its batched products treat each case alone, so a case's result does not depend
+on which chunk it is in, how large the chunk is, or which worker runs it: the stores of any
+chunking and worker count are bit-identical (tests/design/test_batch_runner.py).
+
+Scheduling. Every chunk is one task of a :mod:`distributed` client: by default an in-process
+client (``LocalCluster(processes=False)``, one worker thread: the chunk is already vectorised,
+and the one code path — futures, ``retries=``, completion order — is the same as on a cluster;
+dask's synchronous scheduler would have no retries and no futures to stream from); ``workers=N``
+starts a local cluster of N single-threaded worker processes; ``scheduler="tcp://HOST:PORT"``
+uses an existing cluster (no answer within :data:`CONNECT_TIMEOUT` s is a ValueError naming the
+address). A chunk whose task fails or whose worker dies is run again (``retries``).
+
+Store. Results stream to a zarr store (xarray) as chunks finish, written by the client (a single
+writer: no two writers share a zarr chunk, and workers need no access to the store's disk):
+each metric over ``case``, the chosen time histories over (case, time), the parameter table,
+each case's seed and a completion mask ``done`` over ``case``. A chunk's data are written whole
+before its mask is set, so an interrupted run (Ctrl-C, a lost client) leaves at worst a chunk
+written and not marked, which the next run computes again to the same numbers. At most
+``2 × workers`` chunks are in flight, so the memory held is a few chunks' results whatever the
+case count. The store's ``fingerprint`` attribute is the SHA-256 of the setup: the setup text
+(the scenario as given), the builder's description, the parameter table (names, values), the
+base seed and the recorded histories — nothing that depends on the chunking. Running the same
+setup into an existing store resumes it (the chunks not all done are run, the rest skipped); a
+store of a different setup is refused. Nothing is pickled into the store.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import time
+from functools import lru_cache
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+import numpy as np
+import xarray as xr
+
+from flexsat.control.lyapunov import LyapunovTracker
+from flexsat.dynamics.dispersion import stack_plants
+from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
+from flexsat.maneuvers.torque_shapes import SmoothBangBang
+from flexsat.sim import SimConfig, simulate
+from flexsat.sim.recording import SimResult
+from flexsat.validation import require_count, require_finite
+
+#: seconds to wait for an existing scheduler to answer before refusing its address
+CONNECT_TIMEOUT = 5.0
+#: the layout of the store; part of the fingerprint so a store of another layout is refused
+STORE_LAYOUT = "flexsat.design.batch_runner/1"
+
+
+def _nonneg_int(value, name: str) -> int:
+    """An integer >= 0 (bools and fractions refused), naming the field."""
+    if isinstance(value, bool) or not float(require_finite(value, name)).is_integer() \
+            or value < 0:
+        raise ValueError(f"{name}: must be an integer >= 0, got {value!r}")
+    return int(value)
+
+
+# -- seeds -------------------------------------------------------------------------------------
+def case_seeds(base_seed: int, cases) -> np.ndarray:
+    """Noise seeds of the cases with indices ``cases`` (module docstring, s_i), int64.
+
+    Case i's seed depends on ``base_seed`` and i only, never on the chunk it is run in.
+    """
+    base = _nonneg_int(base_seed, "base_seed")
+    idx = np.asarray(cases, dtype=np.int64).reshape(-1)
+    return np.array([int(np.random.SeedSequence(base, spawn_key=(int(i),))
+                         .generate_state(1, np.uint64)[0]) >> 1 for i in idx], dtype=np.int64)
+
+
+# -- the parameter table -----------------------------------------------------------------------
+def _table(parameters: Mapping[str, Any], known: tuple[str, ...] | None) -> dict[str, np.ndarray]:
+    """The parameter table as {name: (n_cases,) float array}; ValueError naming a bad column."""
+    if not parameters:
+        raise ValueError("parameters: give at least one column (name -> one value per case)")
+    table = {}
+    for name, values in parameters.items():
+        if known is not None and name not in known:
+            raise ValueError(f"parameters: unknown parameter {name!r}; the case builder knows "
+                             f"{', '.join(known)}")
+        col = require_finite(values, f"parameters[{name!r}]")
+        if col.ndim != 1:
+            raise ValueError(f"parameters[{name!r}]: must be one value per case (1-D), got "
+                             f"shape {col.shape}")
+        table[name] = np.ascontiguousarray(col, dtype=np.float64)
+    sizes = {name: len(col) for name, col in table.items()}
+    if len(set(sizes.values())) != 1 or not next(iter(sizes.values())):
+        raise ValueError(f"parameters: every column must have the same number (>= 1) of cases, "
+                         f"got {sizes}")
+    return table
+
+
+def fingerprint(setup_text: str, table: Mapping[str, np.ndarray], base_seed: int,
+                histories: tuple[str, ...], builder_text: str = "") -> str:
+    """SHA-256 (hex) of everything that fixes the results and nothing that depends on the
+    chunking: the store layout, the setup text, the builder's description, the parameter table
+    (names in order and the float64 values' bytes), the base seed and the recorded histories."""
+    h = hashlib.sha256()
+    for part in (STORE_LAYOUT, setup_text, builder_text, repr(int(base_seed)),
+                 repr(tuple(histories))):
+        h.update(part.encode())
+        h.update(b"\0")
+    for name, col in table.items():
+        h.update(name.encode())
+        h.update(b"\0")
+        h.update(np.ascontiguousarray(col, dtype="<f8").tobytes())
+    return h.hexdigest()
+
+
+# -- the hub + appendage maneuver builder --------------------------------------------------------
+#: parameters of :class:`HubManeuverBuilder`: the reference maneuver, the Law II gains and the
+#: plant (EI the appendage's bending stiffness, damping the modal damping ratio of every mode)
+MANEUVER_PARAMETERS = ("alpha", "u_max", "duration")
+GAIN_PARAMETERS = ("g1", "g2", "g3")
+PLANT_PARAMETERS = ("hub_inertia", "EI", "damping", "tip_mass", "tip_inertia")
+
+
+@dataclass(frozen=True)
+class HubManeuverBuilder:
+    r"""Control Law II slews of a hub + appendage plant, one batched call per chunk.
+
+    Each case is the slew of Att. 3 §V (seed 000; notes seed000_part1.md §2.3–2.5): the
+    smoothed bang-bang reference (Att. 3 Eqs. 12–16, :class:`~flexsat.maneuvers.SmoothBangBang`)
+    tracked by Law II (Eq. 17, :class:`~flexsat.control.LyapunovTracker`) on
+    :class:`~flexsat.dynamics.hub_appendage.HubAppendage`. Any of :data:`MANEUVER_PARAMETERS`,
+    :data:`GAIN_PARAMETERS` and :data:`PLANT_PARAMETERS` may be a column of the parameter table;
+    the others keep the values given here. Of α, u_max and T exactly two fix the reference
+    (Eq. 15); a column of T with neither α nor u_max a column replaces u_max.
+
+    The reference is designed with the inertia ``reference_inertia`` × I_model / I_base
+    (I the model's rigid total inertia): a case with other plant parameters keeps the base
+    case's design-to-model inertia ratio (the rule of :mod:`flexsat.cases.tamu`).
+
+    Parameters
+    ----------
+    params : HubAppendageParams
+        The base plant.
+    n_modes : int
+    config : SimConfig
+        The run (rate, duration, sensors, actuator, friction, noise); its seed is not used, the
+        per-case seeds are.
+    angle : float
+        Slew angle, rad.
+    reference_inertia : float
+        Inertia the base case's reference is designed with, kg m².
+    u_max, g1, g2, g3, alpha : float
+        The cases' values where the table has no column: the reference's peak torque (N m),
+        the Law II gains (N m/rad, N m s/rad, dimensionless) and the shape's rise fraction α.
+    stiffening : bool
+    """
+
+    params: HubAppendageParams
+    n_modes: int
+    config: SimConfig
+    angle: float
+    reference_inertia: float
+    u_max: float
+    g1: float
+    g2: float
+    g3: float = 0.0
+    alpha: float = 0.2
+    stiffening: bool = False
+    parameter_names: tuple[str, ...] = field(
+        default=MANEUVER_PARAMETERS + GAIN_PARAMETERS + PLANT_PARAMETERS, init=False)
+
+    def describe(self) -> str:
+        """The builder's settings as text (part of the store's fingerprint)."""
+        return repr(self)
+
+    def _inertias(self, table: Mapping[str, np.ndarray], n: int):
+        """(rigid total inertia, appendage inertia I_b) per case, kg m²: the plant parameters
+        of the table in the base parameters (their fields take arrays; their rules apply)."""
+        varied = {k: table[k] for k in PLANT_PARAMETERS if k in table}
+        p = replace(self.params, **varied) if varied else self.params
+        return (np.broadcast_to(p.total_inertia, (n,)),
+                np.broadcast_to(p.appendage_inertia, (n,)))
+
+    def _plant(self, table: Mapping[str, np.ndarray], n: int):
+        varied = [k for k in PLANT_PARAMETERS if k in table]
+        base = _hub_plant(self.params, self.n_modes, self.stiffening)
+        if not varied:
+            return base
+        return stack_plants([
+            HubAppendage(replace(self.params, **{k: float(table[k][i]) for k in varied}),
+                         n_modes=self.n_modes, stiffening=self.stiffening) for i in range(n)])
+
+    def _law(self, table: Mapping[str, np.ndarray], n: int) -> LyapunovTracker:
+        inertia, appendage = self._inertias(table, n)
+        shape = {k: table[k] for k in MANEUVER_PARAMETERS if k in table}
+        if len(shape) == 3:
+            raise ValueError("parameters: give at most two of alpha, u_max, duration (Att. 3 "
+                             "Eq. 15 fixes the third)")
+        for k in ("alpha", "u_max"):
+            if len(shape) < 2 and k not in shape:
+                shape[k] = np.full(n, getattr(self, k))
+        ref = SmoothBangBang(self.angle, self.reference_inertia * inertia
+                             / self.params.total_inertia, **shape)
+        gains = {k: table.get(k, np.full(n, getattr(self, k))) for k in GAIN_PARAMETERS}
+        return LyapunovTracker(ref, **gains, appendage_inertia=appendage,
+                               n_appendages=self.params.n_appendages)
+
+    def check(self, parameters: Mapping[str, np.ndarray]) -> None:
+        """Apply the rules of the plant parameters, the reference (α in [0, 1/4], u_max > 0,
+        T between the bang-bang and the α = 1/4 time) and the gains (g1, g2 ≥ 0, g3 > −n) to
+        the whole table at once, before any chunk runs.
+
+        Raises
+        ------
+        ValueError
+            Naming the parameter and the rule.
+        """
+        self._law(parameters, len(next(iter(parameters.values()))))
+
+    def __call__(self, parameters: Mapping[str, np.ndarray], seeds: np.ndarray):
+        """(plant, law, config, initial_state) of the chunk ``parameters`` (module docstring)."""
+        n = len(seeds)
+        return self._plant(parameters, n), self._law(parameters, n), self.config, None
+
+
+@lru_cache(maxsize=4)
+def _hub_plant(params: HubAppendageParams, n_modes: int, stiffening: bool) -> HubAppendage:
+    """The base plant, built once per process: its modal integrals (a Gauss quadrature) cost
+    0.4 s at 10 modes, as much as the simulation of a 1,000-case chunk."""
+    return HubAppendage(params, n_modes=n_modes, stiffening=stiffening)
+
+
+def maneuver_metrics(result: SimResult) -> dict[str, np.ndarray]:
+    """The engine's maneuver metrics of every case (settling time, overshoot, peak torque,
+    residual energy, ...): the default extractor."""
+    return {k: np.asarray(v, float) for k, v in result.metrics.items()}
+
+
+# -- one chunk ---------------------------------------------------------------------------------
+def run_chunk(build: Callable, extract: Callable, parameters: Mapping[str, np.ndarray],
+              start: int, base_seed: int, histories: tuple[str, ...] = ()
+              ) -> dict[str, np.ndarray]:
+    """Run the cases ``start .. start + n`` (n the length of the ``parameters`` columns) in one
+    batched call: {metric: (n,)} plus {history: (n, n_t)} and ``seed`` (n,)."""
+    n = len(next(iter(parameters.values())))
+    seeds = case_seeds(base_seed, np.arange(start, start + n))
+    plant, law, config, x0 = build(parameters, seeds)
+    result = simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=x0)
+    out = {}
+    for name, values in extract(result).items():
+        values = np.asarray(values, float)
+        if values.shape != (n,):
+            raise ValueError(f"extract: metric {name!r} has shape {values.shape}, expected "
+                             f"({n},) (one value per case)")
+        out["metric_" + name] = values
+    for name in histories:
+        if name not in result.dataset:
+            recorded = [v for v in result.dataset.data_vars if "time" in result.dataset[v].dims]
+            raise ValueError(f"histories: {name!r} is not a recorded variable; the run records "
+                             f"{', '.join(recorded)}")
+        out["history_" + name] = np.asarray(result.dataset[name].transpose("case", "time").values,
+                                            float)
+    out["time"] = np.asarray(result.dataset["time"].values, float)
+    out["seed"] = seeds
+    return out
+
+
+# -- progress ----------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class BatchProgress:
+    """Where a run stands, passed to the progress callback after every finished chunk.
+
+    ``cases_per_s`` counts the cases computed in this call (skipped ones excluded) over the
+    wall time since the first chunk was submitted; ``eta_s`` = remaining / cases_per_s."""
+
+    cases_done: int
+    cases_total: int
+    chunks_done: int
+    chunks_total: int
+    cases_per_s: float
+    eta_s: float
+
+
+# -- scheduling --------------------------------------------------------------------------------
+def _client(workers: int | None, scheduler: str | None):
+    """(client, cluster or None): in-process, a local cluster of ``workers`` processes, or the
+    existing cluster at ``scheduler``."""
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        if workers is not None:
+            raise ValueError("workers: give workers (a local cluster) or scheduler (an existing "
+                             "one), not both")
+        try:
+            return Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s", set_as_default=False), None
+        except (OSError, TimeoutError) as exc:
+            raise ValueError(f"scheduler: no dask scheduler answered at {scheduler!r} within "
+                             f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {exc})") from None
+    if workers is None:
+        cluster = LocalCluster(processes=False, n_workers=1, threads_per_worker=1,
+                               dashboard_address=None)
+    else:
+        cluster = LocalCluster(n_workers=require_count(workers, "workers"), threads_per_worker=1,
+                               processes=True, dashboard_address=None)
+    return Client(cluster, set_as_default=False), cluster
+
+
+# -- the store ---------------------------------------------------------------------------------
+def _open_existing(path: Path, fp: str, n_cases: int) -> np.ndarray | None:
+    """The completion mask of the store at ``path`` (None if there is none); ValueError if it
+    belongs to another setup."""
+    if not path.exists():
+        return None
+    try:
+        ds = xr.open_zarr(path, consolidated=False)
+    except Exception as exc:  # noqa: BLE001 - any unreadable directory is refused the same way
+        raise ValueError(f"store: {str(path)!r} exists and is not a batch store "
+                         f"({type(exc).__name__}: {exc}); give a new path") from None
+    theirs = ds.attrs.get("fingerprint")
+    if theirs != fp or ds.sizes.get("case") != n_cases:
+        raise ValueError(f"store: {str(path)!r} holds the results of a different setup "
+                         f"(fingerprint {theirs!s:.12} ≠ {fp:.12}: another scenario, parameter "
+                         f"table, base seed or history selection); refusing to resume into it, "
+                         f"give a new path")
+    return np.asarray(ds["done"].values, bool)
+
+
+def _create(path: Path, fp: str, setup_text: str, table: Mapping[str, np.ndarray],
+            first: dict[str, np.ndarray], zchunk: int, n_cases: int) -> None:
+    """Lay out the store (metadata and the parameter table; the results are left to fill)."""
+    import dask.array as da
+
+    case = np.arange(n_cases)
+    data = {f"param_{k}": ("case", v) for k, v in table.items()}
+    data["done"] = ("case", np.zeros(n_cases, bool))
+    encoding = {}
+    for name, values in first.items():
+        if name == "time":
+            continue
+        shape = (n_cases,) + values.shape[1:]
+        dims = ("case", "time") if values.ndim == 2 else ("case",)
+        fill = -1 if values.dtype.kind == "i" else np.nan
+        data[name] = (dims, da.full(shape, fill, dtype=values.dtype,
+                                    chunks=(zchunk,) + values.shape[1:]))
+        encoding[name] = {"chunks": (zchunk,) + values.shape[1:]}
+    ds = xr.Dataset(data, coords={"case": case, "time": first["time"]},
+                    attrs={"fingerprint": fp, "setup_text": setup_text,
+                           "layout": STORE_LAYOUT})
+    for name in ("done",) + tuple(f"param_{k}" for k in table):
+        encoding[name] = {"chunks": (zchunk,)}
+    ds.to_zarr(path, mode="w", compute=False, encoding=encoding, consolidated=False)
+    # the parameter table, the mask and the coordinates are small: written now in full
+    ds[[n for n in ds.data_vars if n == "done" or n.startswith("param_")]].to_zarr(
+        path, mode="r+", consolidated=False)
+
+
+def _write(path: Path, start: int, out: dict[str, np.ndarray]) -> None:
+    """Write one chunk's results, then (only then) mark its cases done."""
+    stop = start + len(out["seed"])
+    region = {"case": slice(start, stop)}
+    data = {k: (("case", "time") if v.ndim == 2 else ("case",), v)
+            for k, v in out.items() if k != "time"}
+    xr.Dataset(data).to_zarr(path, region=region, consolidated=False)
+    xr.Dataset({"done": ("case", np.ones(stop - start, bool))}).to_zarr(
+        path, region=region, consolidated=False)
+
+
+# -- the run -----------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class BatchSummary:
+    """What a call did: ``store`` (path), ``n_cases``, ``chunks_run`` and ``chunks_skipped``
+    (finished by an earlier call), ``wall_s`` and the fingerprint."""
+
+    store: Path
+    n_cases: int
+    chunks_run: int
+    chunks_skipped: int
+    wall_s: float
+    fingerprint: str
+
+
+def run_batch(
+    build: Callable,
+    parameters: Mapping[str, Any],
+    store,
+    *,
+    extract: Callable[[SimResult], Mapping[str, np.ndarray]] = maneuver_metrics,
+    base_seed: int = 0,
+    chunk_size: int = 1000,
+    histories: tuple[str, ...] = (),
+    setup_text: str = "",
+    workers: int | None = None,
+    scheduler: str | None = None,
+    retries: int = 2,
+    progress: Callable[[BatchProgress], None] | None = None,
+) -> BatchSummary:
+    """Run every case of the parameter table in chunks on dask, streaming to a zarr store.
+
+    Parameters
+    ----------
+    build : callable
+        The case builder (module docstring); if it has ``parameter_names``, every column of
+        ``parameters`` must be one of them; if it has ``check(table)``, it is called on the
+        whole table before anything runs; if it has ``describe()``, its text is part of the
+        fingerprint (a plain function has none: give the setup in ``setup_text``).
+    parameters : mapping of str to array_like
+        The parameter table: one (n_cases,) column per name, SI.
+    store : str or Path
+        The zarr store (a directory). An existing store of the same setup is resumed.
+    extract : callable
+        ``SimResult -> {metric: (n,) array}``; picklable for process workers.
+    base_seed : int
+        The seed every case's noise seed derives from (:func:`case_seeds`).
+    chunk_size : int
+        Cases per chunk (one batched call, one task); also the zarr chunk along ``case`` of a
+        new store. Does not change any result.
+    histories : tuple of str
+        Recorded time histories to keep over (case, time) (``"theta"``, ``"torque"``, ...).
+    setup_text : str
+        The scenario as given (part of the fingerprint).
+    workers : int, optional
+        Run on a local cluster of this many worker processes.
+    scheduler : str, optional
+        Address of an existing dask scheduler, ``tcp://HOST:PORT``.
+    retries : int
+        Times a chunk whose task failed or whose worker was lost is run again.
+    progress : callable, optional
+        Called with a :class:`BatchProgress` after every finished chunk (and once at the start
+        with the cases already done); an exception it raises (KeyboardInterrupt) stops the run
+        after the chunk is stored, cancelling the others.
+
+    Raises
+    ------
+    ValueError
+        Naming the field: an unknown parameter name (with the known ones), columns of different
+        lengths or non-finite values, a value the builder's ``check`` refuses, a scheduler that does not answer within
+        :data:`CONNECT_TIMEOUT` s, a store that belongs to another setup.
+    """
+    from distributed import as_completed
+
+    table = _table(parameters, getattr(build, "parameter_names", None))
+    check = getattr(build, "check", None)
+    if check is not None:
+        check(table)
+    n_cases = len(next(iter(table.values())))
+    chunk_size = require_count(chunk_size, "chunk_size")
+    histories = tuple(histories)
+    retries = _nonneg_int(retries, "retries")
+    describe = getattr(build, "describe", None)
+    fp = fingerprint(setup_text, table, base_seed, histories, describe() if describe else "")
+    path = Path(store)
+    done = _open_existing(path, fp, n_cases)
+    created = done is not None
+    starts = [s for s in range(0, n_cases, chunk_size)
+              if done is None or not done[s:s + chunk_size].all()]
+    n_chunks = math.ceil(n_cases / chunk_size)
+    cases_done = n_cases - sum(min(chunk_size, n_cases - s) for s in starts)
+    t0 = time.perf_counter()
+    if progress is not None:
+        progress(BatchProgress(cases_done, n_cases, n_chunks - len(starts), n_chunks, 0.0,
+                               math.inf if starts else 0.0))
+    if not starts:
+        return BatchSummary(path, n_cases, 0, n_chunks, time.perf_counter() - t0, fp)
+
+    client, cluster = _client(workers, scheduler)
+    window = 2 * max(1, len(client.scheduler_info().get("workers", {})) or 1)
+    pending = list(reversed(starts))
+    computed = 0
+    try:
+        def submit(start):
+            chunk = {k: v[start:start + chunk_size] for k, v in table.items()}
+            return client.submit(run_chunk, build, extract, chunk, start, base_seed, histories,
+                                 retries=retries, pure=False, key=f"chunk-{fp[:12]}-{start}")
+
+        futures = as_completed([submit(pending.pop()) for _ in range(min(window, len(pending)))],
+                               with_results=False, loop=client.loop)
+        chunks_run = 0
+        for future in futures:
+            out = future.result()
+            start = int(future.key.rsplit("-", 1)[1])
+            future.release()
+            if not created:
+                _create(path, fp, setup_text, table, out, chunk_size, n_cases)
+                created = True
+            _write(path, start, out)
+            n = len(out["seed"])
+            del out
+            computed += n
+            cases_done += n
+            chunks_run += 1
+            if pending:
+                futures.add(submit(pending.pop()))
+            if progress is not None:
+                rate = computed / max(time.perf_counter() - t0, 1e-9)
+                progress(BatchProgress(cases_done, n_cases, n_chunks - len(starts) + chunks_run,
+                                       n_chunks, rate, (n_cases - cases_done) / rate))
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    return BatchSummary(path, n_cases, chunks_run, n_chunks - len(starts),
+                        time.perf_counter() - t0, fp)
+
+
+def open_results(store) -> xr.Dataset:
+    """The store as a lazy dataset (dask arrays): ``metric_*`` over case, ``history_*`` over
+    (case, time), ``param_*``, ``seed`` and ``done``; attrs ``fingerprint``, ``setup_text``."""
+    return xr.open_zarr(store, consolidated=False)
+
+
+__all__ = ["BatchProgress", "BatchSummary", "CONNECT_TIMEOUT", "GAIN_PARAMETERS",
+           "HubManeuverBuilder", "MANEUVER_PARAMETERS", "PLANT_PARAMETERS", "case_seeds",
+           "fingerprint", "maneuver_metrics", "open_results", "run_batch", "run_chunk"]
