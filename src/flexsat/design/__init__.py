@@ -50,6 +50,10 @@ _EXPORTS = {
     "requirement_from_spec": "monte_carlo_statistics",
     "sample_sensitivity": "monte_carlo_statistics",
     "sobol_indices": "monte_carlo_statistics",
+    "maneuver_time_surface": "trade_surfaces",
+    "residual_energy_surface": "trade_surfaces",
+    "tracking_bound": "trade_surfaces",
+    "tracking_bound_surface": "trade_surfaces",
 }
 
 __all__ = list(_EXPORTS)
