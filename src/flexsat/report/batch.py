@@ -10,7 +10,9 @@ per metric the parameters' sensitivity ranking (NaN and inf written as null). ``
 with ``xarray.open_zarr(path)``. Figures: a sweep over two grid axes gets a contour map of every
 metric over them (one axis: a line per metric); a Monte Carlo gets each metric's histogram and
 CDF with the requirement lines, and the convergence of each probability estimate with its
-confidence band against N.
+confidence band against N. A sweep over exactly (α, u_max) also gets the seed 000 trade surfaces
+(Att. 3 Figs. 5-7: T, E(T), μ_max; :func:`~flexsat.scenarios.batch.trade_surfaces`), also in
+``summary.json``.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from matplotlib.figure import Figure
 
 from flexsat.report.maneuver import report_page
 from flexsat.report.publish import write_atomically
+from flexsat.units import to_si
 
 
 def _clean(value):
@@ -78,6 +81,35 @@ def _contours(result, metrics: dict, folder: Path) -> list[str]:
             ax.set(xlabel=f"{xn} ({result.units[xn] or '-'})", ylabel=name)
             ax.grid(alpha=0.3)
         file = f"surface_{name}.png"
+        fig.savefig(folder / file, dpi=100)
+        files.append(file)
+    return files
+
+
+#: the seed 000 trade surfaces (Att. 3 Figs. 5-7): key, title, colour scale
+SURFACES = (("maneuver_time_s", "maneuver time T (s), Att. 3 Eq. 16, Fig. 5", "linear"),
+            ("residual_energy_J", "vibration energy E(T) of the open-loop response (J), Fig. 6",
+             "log"),
+            ("mu_max_deg_s", "Law II tracking bound μ_max (deg/s), Eq. 22, Fig. 7", "linear"))
+
+
+def _trade_surfaces(result, folder: Path) -> list[str]:
+    surfaces = result.surfaces
+    if surfaces is None:
+        return []
+    from matplotlib.colors import LogNorm
+
+    u = surfaces["u_max"] / to_si("1 ozf*in", "N*m")  # the paper's axis, oz-in
+    files = []
+    for key, title, scale in SURFACES:
+        z = surfaces[key]
+        fig = Figure(figsize=(6.5, 4.2), layout="constrained")
+        ax = fig.add_subplot()
+        norm = LogNorm(max(z.min(), z.max() * 1e-8), z.max()) if scale == "log" else None
+        cs = ax.contourf(surfaces["alpha"], u, z.T, levels=14, norm=norm)
+        fig.colorbar(cs, ax=ax)
+        ax.set(xlabel="α (rise fraction Δt/T)", ylabel="u_max (oz-in)", title=title)
+        file = f"trade_{key}.png"
         fig.savefig(folder / file, dpi=100)
         files.append(file)
     return files
@@ -167,11 +199,12 @@ def _write_all(result, folder: Path) -> None:
     metrics = _metrics(ds)
     summary = {"scenario": result.scenario.name, "kind": result.scenario.kind,
                "cases": int(ds.sizes["case"]), "sampling": result.scenario.sampling,
-               "wall_s": result.wall_s, **result.summary, "sensitivity": result.sensitivity}
+               "wall_s": result.wall_s, **result.summary, "sensitivity": result.sensitivity,
+               "trade_surfaces": result.surfaces}
     (folder / "summary.json").write_text(json.dumps(_clean(summary), indent=2) + "\n",
                                          encoding="utf-8")
     shutil.copytree(result.store, folder / "results.zarr")
-    figures = (_contours(result, metrics, folder) + _distributions(result, metrics, folder)
+    figures = (_trade_surfaces(result, folder) + _contours(result, metrics, folder)
                if result.scenario.kind == "sweep" else
                _distributions(result, metrics, folder)) + _convergence(result, folder)
     esc = html.escape

@@ -185,6 +185,7 @@ class BatchResult:
     chunks_run: int
     chunks_skipped: int
     case_source: str
+    surfaces: dict | None = None
 
     def dataset(self):
         from flexsat.design.batch_runner import open_results
@@ -331,9 +332,41 @@ def run_batch_scenario(scenario: BatchScenario,
                 sensitivity[name] = sample_sensitivity(table, values, name).as_dict()
     return BatchResult(scenario, maneuver, table.values, dict(table.units), store, stats,
                        sensitivity, summary.wall_s, summary.chunks_run, summary.chunks_skipped,
-                       cite(get_case(maneuver.case).source))
+                       cite(get_case(maneuver.case).source), trade_surfaces(scenario, build))
+
+
+def trade_surfaces(scenario: BatchScenario, build) -> dict | None:
+    """For a grid over exactly (alpha, u_max): the seed 000 trade surfaces of the run's
+    maneuver, computed exactly (:mod:`flexsat.design.trade_surfaces`): the maneuver time T
+    (Att. 3 Eq. 16, Fig. 5), the vibration energy E(T) of the open-loop flexible response
+    (Fig. 6) and the Law II tracking bound μ_max (Eq. 22, Fig. 7), each (n_alpha, n_u_max) with
+    the axes; None otherwise."""
+    from flexsat.design.parameter_space import GridSpace
+    from flexsat.design.trade_surfaces import (maneuver_time_surface, residual_energy_surface,
+                                               tracking_bound_surface)
+    from flexsat.dynamics.hub_appendage import HubAppendage
+
+    space = _space(scenario.parameters)
+    if not isinstance(space, GridSpace) or sorted(a.name for a in space.axes) != [
+            "alpha", "u_max"]:
+        return None
+    axes = {a.name: np.asarray(a.values, float) for a in space.axes}
+    alpha, u_max = axes["alpha"], axes["u_max"]
+    plant = HubAppendage(build.params, n_modes=build.n_modes)
+    appendage = (build.params.total_inertia - build.params.hub_inertia) / \
+        build.params.n_appendages
+    return {
+        "alpha": alpha, "u_max": u_max,
+        "maneuver_time_s": maneuver_time_surface(build.angle, build.reference_inertia, alpha,
+                                                 u_max),
+        "residual_energy_J": residual_energy_surface(plant, build.angle, build.reference_inertia,
+                                                     alpha, u_max),
+        "mu_max_deg_s": np.degrees(tracking_bound_surface(
+            plant, build.angle, build.reference_inertia, alpha, u_max, build.g1, build.g2,
+            build.g3, appendage)),
+    }
 
 
 __all__ = ["BatchResult", "BatchScenario", "PARAMETER_UNITS", "SAMPLINGS", "builder_of",
-           "case_count",
+           "case_count", "trade_surfaces",
            "default_store", "requirements_of", "run_batch_scenario"]
