@@ -215,6 +215,15 @@ def _identification_steps(spec) -> int:
     return identification_steps(spec)
 
 
+def _batch_steps(spec) -> int:
+    """A batch reports once at its start and once per chunk."""
+    import math
+
+    from flexsat.scenarios.batch import case_count
+
+    return 1 + math.ceil(case_count(spec) / spec.execution.chunk_size)
+
+
 #: per scenario ``kind``: its runner (in flexsat.scenarios), its report writer (in
 #: flexsat.report) and the number of progress steps it announces
 _KINDS = {
@@ -225,6 +234,8 @@ _KINDS = {
     "ppf": ("run_ppf", "write_ppf_report", lambda spec: len(spec.runs)),
     "identification": ("run_identification", "write_identification_report",
                        _identification_steps),
+    "sweep": ("run_batch_scenario", "write_batch_report", _batch_steps),
+    "montecarlo": ("run_batch_scenario", "write_batch_report", _batch_steps),
 }
 
 

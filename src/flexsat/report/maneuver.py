@@ -74,17 +74,19 @@ pre { background: #f4f4f4; padding: 1em; overflow-x: auto; }
 </style>"""
 
 
-def report_page(result, body: str, title: str = "flexsat report") -> str:
-    """A report's index.html: the heading, the scenario and its case with the case's source,
-    ``body`` (HTML), and the scenario as given."""
+def report_page(result, body: str, title: str = "flexsat report", case: str | None = None
+                ) -> str:
+    """A report's index.html: the heading, the scenario and its case (``case``, default the
+    scenario's) with the case's source, ``body`` (HTML), and the scenario as given."""
     esc = html.escape
+    case = result.scenario.case if case is None else case
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{esc(title)}: {esc(result.scenario.name)}
 </title>
 {STYLE}</head>
 <body>
 <h1>{esc(title)}</h1>
-<p><b>Scenario:</b> {esc(result.scenario.name)}<br><b>Case:</b> {esc(result.scenario.case)}
+<p><b>Scenario:</b> {esc(result.scenario.name)}<br><b>Case:</b> {esc(case)}
 ({esc(result.case_source)})</p>
 {body}
 <h2>Scenario</h2>

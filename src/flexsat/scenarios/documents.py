@@ -143,7 +143,8 @@ def load_scenario(source: str | bytes | Path):
     ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: simulation`` a
     :class:`flexsat.scenarios.simulation.SimulationScenario`; ``kind: slew`` a
     :class:`flexsat.scenarios.slew.SlewScenario`; ``kind: ppf`` a
-    :class:`flexsat.scenarios.ppf.PPFScenario`; ``kind: identification`` an
+    :class:`flexsat.scenarios.ppf.PPFScenario`; ``kind: sweep`` and ``kind: montecarlo`` a
+    :class:`flexsat.scenarios.batch.BatchScenario`; ``kind: identification`` an
     :class:`flexsat.scenarios.identification.IdentificationScenario`.
 
     Parameters
@@ -165,6 +166,8 @@ def load_scenario(source: str | bytes | Path):
         from flexsat.scenarios.identification import IdentificationScenario as model
     elif kind == "simulation":
         from flexsat.scenarios.simulation import SimulationScenario as model
+    elif kind in ("sweep", "montecarlo"):
+        from flexsat.scenarios.batch import BatchScenario as model
     elif kind == "slew":
         from flexsat.scenarios.slew import SlewScenario as model
     elif kind == "ppf":
@@ -172,8 +175,8 @@ def load_scenario(source: str | bytes | Path):
     elif kind == "maneuver":
         model = Scenario
     else:
-        raise ScenarioError([f"kind: must be 'maneuver', 'simulation', 'slew', 'ppf' or "
-                             f"'identification', got {kind!r}"])
+        raise ScenarioError([f"kind: must be 'maneuver', 'simulation', 'slew', 'ppf', 'sweep', "
+                             f"'montecarlo' or 'identification', got {kind!r}"])
     try:
         scenario = model.model_validate(data)
     except ValidationError as exc:

@@ -1,0 +1,226 @@
+"""Report of a sweep or Monte Carlo scenario (``kind: sweep`` / ``montecarlo``):
+``summary.json``, the zarr store ``results.zarr`` (a copy of the run's store), figures and
+``index.html``.
+
+``summary.json``: the scenario's name and kind, the case count, per metric its summary
+(mean, sd, min, max, percentiles, NaN count, convergence of the percentiles against N), per
+requirement the probability of meeting it with its confidence interval and its convergence, and
+per metric the parameters' sensitivity ranking (NaN and inf written as null). ``results.zarr``:
+``metric_*`` over ``case``, ``param_*`` (SI), ``seed``, ``done`` and any ``history_*``; open it
+with ``xarray.open_zarr(path)``. Figures: a sweep over two grid axes gets a contour map of every
+metric over them (one axis: a line per metric); a Monte Carlo gets each metric's histogram and
+CDF with the requirement lines, and the convergence of each probability estimate with its
+confidence band against N. A sweep over exactly (α, u_max) also gets the seed 000 trade surfaces
+(Att. 3 Figs. 5-7: T, E(T), μ_max; :func:`~flexsat.scenarios.batch.trade_surfaces`), also in
+``summary.json``.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from flexsat.report.maneuver import report_page
+from flexsat.report.publish import write_atomically
+from flexsat.units import to_si
+
+
+def _clean(value):
+    """JSON-ready: NaN and inf become None, numpy numbers plain."""
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.ndarray):
+        return _clean(value.tolist())
+    return value
+
+
+def _metrics(ds) -> dict:
+    return {k[len("metric_"):]: ds[k].values for k in ds.data_vars if k.startswith("metric_")}
+
+
+def _grid_axes(result) -> list[tuple[str, np.ndarray]]:
+    """The swept parameters of a grid, first axis slowest, with their distinct values."""
+    if result.scenario.sampling != "grid":
+        return []
+    return [(name, np.unique(values)) for name, values in result.table.items()]
+
+
+def _contours(result, metrics: dict, folder: Path) -> list[str]:
+    axes = _grid_axes(result)
+    files = []
+    if len(axes) not in (1, 2):
+        return files
+    for name, values in metrics.items():
+        fig = Figure(figsize=(6.5, 4.2), layout="constrained")
+        ax = fig.add_subplot()
+        if len(axes) == 2:
+            (xn, xv), (yn, yv) = axes
+            z = values.reshape(len(xv), len(yv)).T
+            if np.isfinite(z).sum() >= 4 and np.nanmax(z) > np.nanmin(z):
+                cs = ax.contourf(xv, yv, z, levels=12)
+                fig.colorbar(cs, ax=ax, label=name)
+            else:
+                ax.text(0.5, 0.5, "constant or not finite", ha="center", transform=ax.transAxes)
+            ax.set(xlabel=f"{xn} ({result.units[xn] or '-'})",
+                   ylabel=f"{yn} ({result.units[yn] or '-'})", title=name)
+        else:
+            (xn, xv), = axes
+            ax.plot(xv, values, "o-")
+            ax.set(xlabel=f"{xn} ({result.units[xn] or '-'})", ylabel=name)
+            ax.grid(alpha=0.3)
+        file = f"surface_{name}.png"
+        fig.savefig(folder / file, dpi=100)
+        files.append(file)
+    return files
+
+
+#: the seed 000 trade surfaces (Att. 3 Figs. 5-7): key, title, colour scale
+SURFACES = (("maneuver_time_s", "maneuver time T (s), Att. 3 Eq. 16, Fig. 5", "linear"),
+            ("residual_energy_J", "vibration energy E(T) of the open-loop response (J), Fig. 6",
+             "log"),
+            ("mu_max_deg_s", "Law II tracking bound μ_max (deg/s), Eq. 22, Fig. 7", "linear"))
+
+
+def _trade_surfaces(result, folder: Path) -> list[str]:
+    surfaces = result.surfaces
+    if surfaces is None:
+        return []
+    from matplotlib.colors import LogNorm
+
+    u = surfaces["u_max"] / to_si("1 ozf*in", "N*m")  # the paper's axis, oz-in
+    files = []
+    for key, title, scale in SURFACES:
+        z = surfaces[key]
+        fig = Figure(figsize=(6.5, 4.2), layout="constrained")
+        ax = fig.add_subplot()
+        norm = LogNorm(max(z.min(), z.max() * 1e-8), z.max()) if scale == "log" else None
+        cs = ax.contourf(surfaces["alpha"], u, z.T, levels=14, norm=norm)
+        fig.colorbar(cs, ax=ax)
+        ax.set(xlabel="α (rise fraction Δt/T)", ylabel="u_max (oz-in)", title=title)
+        file = f"trade_{key}.png"
+        fig.savefig(folder / file, dpi=100)
+        files.append(file)
+    return files
+
+
+def _distributions(result, metrics: dict, folder: Path) -> list[str]:
+    lines = {}
+    for r in result.summary["requirements"]:
+        lines.setdefault(r["metric"], []).append(r["threshold"])
+    files = []
+    for name, values in metrics.items():
+        finite = values[np.isfinite(values)]
+        if finite.size == 0:
+            continue
+        fig = Figure(figsize=(8, 3.2), layout="constrained")
+        a, b = fig.subplots(1, 2)
+        a.hist(finite, bins=min(50, max(5, int(np.sqrt(finite.size)))))
+        x = np.sort(finite)
+        b.step(x, np.arange(1, x.size + 1) / values.size, where="post")
+        for threshold in lines.get(name, []):
+            for ax in (a, b):
+                ax.axvline(threshold, color="r", linestyle="--", linewidth=1)
+        a.set(xlabel=name, ylabel="cases")
+        b.set(xlabel=name, ylabel="fraction of cases (CDF)", ylim=(0, 1))
+        for ax in (a, b):
+            ax.grid(alpha=0.3)
+        file = f"distribution_{name}.png"
+        fig.savefig(folder / file, dpi=100)
+        files.append(file)
+    return files
+
+
+def _convergence(result, folder: Path) -> list[str]:
+    reqs = result.summary["requirements"]
+    if not reqs:
+        return []
+    fig = Figure(figsize=(7, 3.4), layout="constrained")
+    ax = fig.add_subplot()
+    for i, r in enumerate(reqs):
+        c = r["convergence"]
+        n = np.asarray(c["n"], float)
+        ax.plot(n, c["estimate"], color=f"C{i}",
+                label=f"P({r['metric']} {r['relation']} {r['threshold']:g})")
+        ax.fill_between(n, c["low"], c["high"], color=f"C{i}", alpha=0.2)
+    ax.set(xscale="log", xlabel="cases N", ylabel="probability", ylim=(0, 1),
+           title="convergence of the estimates (confidence band)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small")
+    fig.savefig(folder / "convergence.png", dpi=100)
+    return ["convergence.png"]
+
+
+def _tables(result) -> str:
+    esc = html.escape
+    rows = "".join(
+        f"<tr><td>{esc(r['metric'])} {esc(r['relation'])} {r['threshold']:g}</td>"
+        f"<td>{r['probability']:.4f}</td><td>[{r['low']:.4f}, {r['high']:.4f}]</td>"
+        f"<td>{r['successes']} / {r['n']}</td></tr>" for r in result.summary["requirements"])
+    req = (f"<h2>Requirements</h2><table><tr><th>requirement</th><th>probability</th>"
+           f"<th>{100 * result.summary['requirements'][0]['confidence']:g} % interval "
+           f"({esc(result.summary['requirements'][0]['method'])})</th><th>met</th></tr>"
+           f"{rows}</table>") if result.summary["requirements"] else ""
+    qs = ("5", "50", "95")
+    mrows = "".join(
+        f"<tr><td>{esc(name)}</td>" + "".join(
+            f"<td>{_fmt(m['percentiles'].get(q))}</td>" for q in qs)
+        + f"<td>{_fmt(m['mean'])}</td><td>{m['n_nan']}</td></tr>"
+        for name, m in result.summary["metrics"].items())
+    met = (f"<h2>Metrics</h2><table><tr><th>metric</th><th>5 %</th><th>median</th><th>95 %</th>"
+           f"<th>mean</th><th>not finite</th></tr>{mrows}</table>")
+    srows = "".join(
+        f"<tr><td>{esc(name)}</td><td>{esc(s['method'])}</td><td>"
+        + ", ".join(f"{esc(p)} ({s['scores'][p]['score']:.3g})" for p in s["ranking"])
+        + "</td></tr>" for name, s in result.sensitivity.items())
+    sens = (f"<h2>Sensitivity</h2><p>Parameters ranked by their effect on each metric.</p>"
+            f"<table><tr><th>metric</th><th>method</th><th>ranking (score)</th></tr>{srows}"
+            f"</table>") if srows else ""
+    return req + met + sens
+
+
+def _fmt(value) -> str:
+    return "n/a" if value is None or not np.isfinite(value) else f"{value:.5g}"
+
+
+def _write_all(result, folder: Path) -> None:
+    ds = result.dataset()
+    metrics = _metrics(ds)
+    summary = {"scenario": result.scenario.name, "kind": result.scenario.kind,
+               "cases": int(ds.sizes["case"]), "sampling": result.scenario.sampling,
+               "wall_s": result.wall_s, **result.summary, "sensitivity": result.sensitivity,
+               "trade_surfaces": result.surfaces}
+    (folder / "summary.json").write_text(json.dumps(_clean(summary), indent=2) + "\n",
+                                         encoding="utf-8")
+    shutil.copytree(result.store, folder / "results.zarr")
+    figures = (_trade_surfaces(result, folder) + _contours(result, metrics, folder)
+               if result.scenario.kind == "sweep" else
+               _distributions(result, metrics, folder)) + _convergence(result, folder)
+    esc = html.escape
+    images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
+    body = (f"<p>{int(ds.sizes['case'])} cases of run <b>{esc(result.scenario.run)}</b> of "
+            f"<code>{esc(result.scenario.scenario)}</code>, sampling "
+            f"{esc(result.scenario.sampling)}; {result.chunks_run} chunks run, "
+            f"{result.chunks_skipped} found done in the store; {result.wall_s:.1f} s.</p>"
+            + _tables(result) + f"<h2>Figures</h2>{images}")
+    (folder / "index.html").write_text(report_page(result, body, case=result.maneuver.case), encoding="utf-8")
+
+
+def write_batch_report(result, out_dir) -> Path:
+    """Write the report of a :class:`~flexsat.scenarios.batch.BatchResult` as the folder
+    ``out_dir``, whole or not at all (:func:`flexsat.report.publish.write_atomically`)."""
+    return write_atomically(out_dir, lambda folder: _write_all(result, folder))
+
+
+__all__ = ["write_batch_report"]

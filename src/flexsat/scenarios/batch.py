@@ -1,0 +1,372 @@
+"""Sweep and Monte Carlo scenarios (``kind: sweep``, ``kind: montecarlo``): many cases of one
+maneuver scenario's Law II run, in chunks on dask, streamed to a zarr store, with statistics.
+
+A batch scenario names a maneuver scenario file and one of its runs (Control Law II,
+``lyapunov_tracker``: the slews of seed 000 Att. 3 that the TAMU trade studies and robustness
+sets are about), the parameters to vary and how::
+
+    kind: montecarlo
+    name: TAMU Law II, dispersed hub inertia and tip mass
+    scenario: tamu_40deg.yaml          # relative to this file
+    run: Law II
+    parameters:
+      hub_inertia: {distribution: normal, mean: "50 ozf*in*s**2", sd: "2 ozf*in*s**2"}
+      tip_mass: {distribution: uniform, low: "0 kg", high: "0.01 kg"}
+    cases: 1000
+    seed: 0
+    requirements:
+      settling_time_s: {max: "8 s"}
+    execution: {chunk_size: 250}
+
+``kind: sweep`` takes grid axes (``{values: [...]}`` or ``{low:, high:, n:}``, full factorial,
+the first axis slowest) or bounds (``{low:, high:}``) with ``sampling: latin_hypercube`` or
+``sobol`` and ``cases``; ``kind: montecarlo`` takes distributions (normal, uniform, lognormal,
+truncated_normal; :mod:`flexsat.design.parameter_space`) sampled per case from the seed. The
+parameters are those of :class:`~flexsat.design.batch_runner.HubManeuverBuilder`
+(:data:`PARAMETER_UNITS`); the others keep the maneuver scenario's values.
+
+Execution (:func:`~flexsat.design.batch_runner.run_batch`): chunks of ``chunk_size`` cases, each
+one batched core call, scheduled on dask in-process, on ``workers`` local processes or on the
+cluster at ``scheduler``; the store is ``store`` (relative to this file) or, by default, a
+directory in the system's temporary folder named after the scenario's text, so running the same
+scenario again resumes it. Metrics are the engine's maneuver metrics; a requirement on a metric
+in degrees (``overshoot_deg``) is compared in degrees.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Literal
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from flexsat import limits
+from flexsat.scenarios.errors import ScenarioError, _locate
+from flexsat.scenarios.fields import _Document, _Section, count
+
+#: the SI unit of every parameter a batch can vary (HubManeuverBuilder's columns)
+PARAMETER_UNITS = {
+    "alpha": "", "u_max": "N*m", "duration": "s",
+    "g1": "N*m/rad", "g2": "N*m*s/rad", "g3": "",
+    "hub_inertia": "kg*m**2", "EI": "N*m**2", "damping": "", "tip_mass": "kg",
+    "tip_inertia": "kg*m**2",
+}
+
+#: sampling of a sweep's bounds or a Monte Carlo's distributions
+SAMPLINGS = ("grid", "random", "latin_hypercube", "sobol")
+
+
+class ExecutionSpec(_Section):
+    """How the chunks run (:func:`~flexsat.design.batch_runner.run_batch`)."""
+
+    chunk_size: count(1, limits.MAX_SAMPLES) = 1000
+    workers: count(1, 256, optional=True) = None
+    scheduler: str | None = None
+    retries: count(0, 100) = 2
+
+    @model_validator(mode="after")
+    def _one_place(self):
+        if self.workers is not None and self.scheduler is not None:
+            raise ValueError("execution: give workers (a local cluster) or scheduler (an "
+                             "existing cluster), not both")
+        return self
+
+
+def _space(parameters: dict):
+    from flexsat.design.parameter_space import space_from_spec
+
+    return space_from_spec(parameters, PARAMETER_UNITS)
+
+
+def _metric_unit(metric: str) -> str:
+    from flexsat.sim.metrics import METRIC_UNITS
+
+    if metric not in METRIC_UNITS:
+        raise ValueError(f"requirements.{metric}: unknown metric; metrics: "
+                         f"{', '.join(METRIC_UNITS)}")
+    return METRIC_UNITS[metric]
+
+
+def requirements_of(spec: dict) -> list:
+    """The :class:`~flexsat.design.monte_carlo_statistics.Requirement` s of a ``requirements:``
+    dict, each in its metric's unit (degrees for the ``_deg`` metrics)."""
+    from flexsat.design.monte_carlo_statistics import Requirement, requirement_from_spec
+    from flexsat.design.parameter_space import si_scalar
+
+    out = []
+    for metric, entry in spec.items():
+        unit = _metric_unit(metric)
+        path = f"requirements.{metric}"
+        if unit.startswith("deg"):  # the metric is in degrees: compare the threshold in degrees
+            if not isinstance(entry, dict) or len(entry) != 1 or next(iter(entry)) not in (
+                    "max", "min"):
+                raise ValueError(f"{path}: give exactly one of max: or min:, got {entry!r}")
+            key, value = next(iter(entry.items()))
+            si = "rad" if unit == "deg" else "rad/s"
+            threshold = float(np.degrees(si_scalar(value, si, f"{path}.{key}")))
+            out.append(Requirement(metric, "<=" if key == "max" else ">=", threshold, ""))
+        else:
+            out.append(requirement_from_spec(metric, entry, unit.replace(" ", "*"), path))
+    return out
+
+
+class BatchScenario(_Document):
+    """A validated sweep or Monte Carlo scenario (module docstring)."""
+
+    kind: Literal["sweep", "montecarlo"]
+    name: str
+    scenario: str
+    run: str
+    parameters: dict[str, dict[str, Any]]
+    sampling: Literal[SAMPLINGS] | None = None
+    cases: count(1, limits.MAX_SAMPLES, optional=True) = None
+    seed: count(0, limits.MAX_SEED) = 0
+    requirements: dict[str, dict[str, Any]] = Field(default_factory=dict)
+    histories: list[str] = Field(default_factory=list, max_length=16)
+    execution: ExecutionSpec = Field(default_factory=ExecutionSpec)
+    store: str | None = None
+
+    @field_validator("parameters")
+    @classmethod
+    def _parameters(cls, parameters: dict) -> dict:
+        _space(parameters)
+        return parameters
+
+    @field_validator("requirements")
+    @classmethod
+    def _requirements(cls, requirements: dict) -> dict:
+        requirements_of(requirements)
+        return requirements
+
+    @model_validator(mode="after")
+    def _design(self):
+        from flexsat.design.parameter_space import GridSpace
+
+        grid = isinstance(_space(self.parameters), GridSpace)
+        sampling = self.sampling or ("grid" if grid else
+                                     "random" if self.kind == "montecarlo" else "latin_hypercube")
+        if grid != (sampling == "grid"):
+            raise ValueError(f"sampling: {sampling!r} needs "
+                             + ("grid axes (values: or low/high/n)" if sampling == "grid" else
+                                "bounds (low/high) or distributions, not grid axes"))
+        if self.kind == "montecarlo" and sampling != "random":
+            raise ValueError(f"sampling: a montecarlo samples its distributions at random, "
+                             f"got {sampling!r} (use kind: sweep for grids and designs)")
+        if sampling != "grid" and self.cases is None:
+            raise ValueError(f"cases: required with sampling {sampling!r}")
+        if sampling == "grid" and self.cases is not None:
+            raise ValueError("cases: a grid has as many cases as its points; leave cases out")
+        self.sampling = sampling
+        if self.requirements and self.kind != "montecarlo":
+            raise ValueError("requirements: belong to a montecarlo (a probability of meeting "
+                             "them)")
+        return self
+
+
+# -- running -------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class BatchResult:
+    """A batch run: the scenario, the parameter table, the store and its dataset, the
+    statistics (``summary``: requirements, metric summaries and convergence; ``sensitivity``:
+    the parameters' ranking per metric)."""
+
+    scenario: BatchScenario
+    maneuver: Any
+    table: dict
+    units: dict
+    store: Path
+    summary: dict
+    sensitivity: dict
+    wall_s: float
+    chunks_run: int
+    chunks_skipped: int
+    case_source: str
+    surfaces: dict | None = None
+
+    def dataset(self):
+        from flexsat.design.batch_runner import open_results
+
+        return open_results(self.store)
+
+    def metrics_records(self) -> list[dict]:
+        """One row per metric (its 5 %, 50 % and 95 % percentiles) and per requirement (the
+        probability of meeting it, between its confidence bounds): the CLI's table."""
+        rows = []
+        for name, m in self.summary["metrics"].items():
+            p = m["percentiles"]
+            rows.append({"run": name, "p5": _finite(p.get("5")), "median": _finite(p.get("50")),
+                         "p95": _finite(p.get("95")), "not_finite": m["n_nan"]})
+        for r in self.summary["requirements"]:
+            rows.append({"run": f"P({r['metric']} {r['relation']} {r['threshold']:g})",
+                         "p5": _finite(r["low"]), "median": _finite(r["probability"]),
+                         "p95": _finite(r["high"]), "not_finite": 0})
+        return rows
+
+
+def _finite(value):
+    """A JSON-ready number: NaN and inf become None."""
+    return None if value is None or not np.isfinite(value) else float(value)
+
+
+def _maneuver(scenario: BatchScenario):
+    from flexsat.scenarios import load_scenario
+    from flexsat.scenarios.maneuver import Scenario
+
+    path = Path(scenario.scenario)
+    path = path if path.is_absolute() else scenario.folder / path
+    try:
+        maneuver = load_scenario(path)
+    except ScenarioError as exc:
+        raise ScenarioError([f"scenario: {p}" for p in exc.problems]) from None
+    if not isinstance(maneuver, Scenario):
+        raise ScenarioError([f"scenario: {str(path)!r} is a {maneuver.kind} scenario; a batch "
+                             "varies a maneuver scenario"])
+    return maneuver
+
+
+def builder_of(scenario: BatchScenario, maneuver):
+    """The :class:`~flexsat.design.batch_runner.HubManeuverBuilder` of the named Law II run."""
+    from flexsat.control import LyapunovTracker
+    from flexsat.design.batch_runner import HubManeuverBuilder
+    from flexsat.scenarios.runner import prepare_scenario
+
+    plan = prepare_scenario(maneuver)
+    if scenario.run not in plan.controllers:
+        raise ScenarioError([f"run: {scenario.run!r} is not a run of the scenario (its runs: "
+                             f"{', '.join(plan.controllers)})"])
+    law = plan.controllers[scenario.run]
+    if not isinstance(law, LyapunovTracker):
+        raise ScenarioError([f"run: {scenario.run!r} uses {type(law).__name__}; a batch varies "
+                             "a Control Law II run (law: lyapunov_tracker)"])
+    ref, model = law.reference, plan.model
+    return HubManeuverBuilder(
+        params=model.params, n_modes=model.n_modes, config=plan.config,
+        angle=float(ref.angle), reference_inertia=float(ref.inertia), u_max=float(ref.u_max),
+        g1=float(law.g1), g2=float(law.g2), g3=float(law.g3), alpha=float(ref.alpha),
+        stiffening=bool(model.stiffening))
+
+
+def _table(scenario: BatchScenario):
+    from flexsat.design.parameter_space import GridSpace
+
+    space = _space(scenario.parameters)
+    if isinstance(space, GridSpace):
+        table = space.table()
+    elif scenario.sampling == "random":
+        table = space.sample(scenario.cases, scenario.seed)
+    elif scenario.sampling == "latin_hypercube":
+        table = space.latin_hypercube(scenario.cases, scenario.seed)
+    else:
+        table = space.sobol_sequence(scenario.cases, scenario.seed)
+    return table
+
+
+def case_count(scenario: BatchScenario) -> int:
+    """The number of cases: the grid's points or ``cases``."""
+    from flexsat.design.parameter_space import GridSpace
+
+    space = _space(scenario.parameters)
+    return space.size if isinstance(space, GridSpace) else scenario.cases
+
+
+def default_store(scenario: BatchScenario, maneuver) -> Path:
+    """A directory in the system's temporary folder named after the two scenarios' texts."""
+    key = hashlib.sha256((scenario.yaml_text + "\0" + maneuver.yaml_text).encode()).hexdigest()
+    return Path(tempfile.gettempdir()) / f"flexsat-batch-{key[:20]}.zarr"
+
+
+def run_batch_scenario(scenario: BatchScenario,
+                       progress: Callable[[str], None] | None = None) -> BatchResult:
+    """Build the Law II case builder from the maneuver scenario, run every case into the store
+    (resuming it), then compute the statistics.
+
+    Raises
+    ------
+    ScenarioError
+        For a maneuver scenario or run that cannot be varied, a sampling the space refuses,
+        a scheduler that does not answer, a store of another scenario.
+    """
+    from flexsat.cases import get_case
+    from flexsat.design.batch_runner import run_batch
+    from flexsat.design.monte_carlo_statistics import monte_carlo_summary, sample_sensitivity
+    from flexsat.references import cite
+
+    maneuver = _maneuver(scenario)
+    build = builder_of(scenario, maneuver)
+    try:
+        table = _table(scenario)
+    except ValueError as exc:
+        raise ScenarioError([_locate("sampling", str(exc))]) from None
+    store = default_store(scenario, maneuver) if scenario.store is None else (
+        Path(scenario.store) if Path(scenario.store).is_absolute()
+        else scenario.folder / scenario.store)
+
+    def report(p):
+        if progress is not None:
+            progress(f"{p.cases_done}/{p.cases_total} cases, {p.cases_per_s:.0f} cases/s, "
+                     f"ETA {p.eta_s:.0f} s")
+
+    e = scenario.execution
+    try:
+        summary = run_batch(build, table.values, store, base_seed=scenario.seed,
+                            chunk_size=e.chunk_size, histories=tuple(scenario.histories),
+                            setup_text=scenario.yaml_text + "\0" + maneuver.yaml_text,
+                            workers=e.workers, scheduler=e.scheduler, retries=e.retries,
+                            progress=report)
+    except ValueError as exc:
+        raise ScenarioError([str(exc)]) from None
+    from flexsat.design.batch_runner import open_results
+
+    ds = open_results(store)
+    metrics = {k[len("metric_"):]: ds[k].values for k in ds.data_vars if k.startswith("metric_")}
+    stats = monte_carlo_summary(metrics, requirements_of(scenario.requirements))
+    sensitivity = {}
+    if len(table.names) > 1 or len(next(iter(table.values.values()))) > 2:
+        for name, values in metrics.items():
+            finite = np.isfinite(values)
+            if finite.sum() > 2 and np.ptp(values[finite]) > 0:
+                sensitivity[name] = sample_sensitivity(table, values, name).as_dict()
+    return BatchResult(scenario, maneuver, table.values, dict(table.units), store, stats,
+                       sensitivity, summary.wall_s, summary.chunks_run, summary.chunks_skipped,
+                       cite(get_case(maneuver.case).source), trade_surfaces(scenario, build))
+
+
+def trade_surfaces(scenario: BatchScenario, build) -> dict | None:
+    """For a grid over exactly (alpha, u_max): the seed 000 trade surfaces of the run's
+    maneuver, computed exactly (:mod:`flexsat.design.trade_surfaces`): the maneuver time T
+    (Att. 3 Eq. 16, Fig. 5), the vibration energy E(T) of the open-loop flexible response
+    (Fig. 6) and the Law II tracking bound μ_max (Eq. 22, Fig. 7), each (n_alpha, n_u_max) with
+    the axes; None otherwise."""
+    from flexsat.design.parameter_space import GridSpace
+    from flexsat.design.trade_surfaces import (maneuver_time_surface, residual_energy_surface,
+                                               tracking_bound_surface)
+    from flexsat.dynamics.hub_appendage import HubAppendage
+
+    space = _space(scenario.parameters)
+    if not isinstance(space, GridSpace) or sorted(a.name for a in space.axes) != [
+            "alpha", "u_max"]:
+        return None
+    axes = {a.name: np.asarray(a.values, float) for a in space.axes}
+    alpha, u_max = axes["alpha"], axes["u_max"]
+    plant = HubAppendage(build.params, n_modes=build.n_modes)
+    appendage = (build.params.total_inertia - build.params.hub_inertia) / \
+        build.params.n_appendages
+    return {
+        "alpha": alpha, "u_max": u_max,
+        "maneuver_time_s": maneuver_time_surface(build.angle, build.reference_inertia, alpha,
+                                                 u_max),
+        "residual_energy_J": residual_energy_surface(plant, build.angle, build.reference_inertia,
+                                                     alpha, u_max),
+        "mu_max_deg_s": np.degrees(tracking_bound_surface(
+            plant, build.angle, build.reference_inertia, alpha, u_max, build.g1, build.g2,
+            build.g3, appendage)),
+    }
+
+
+__all__ = ["BatchResult", "BatchScenario", "PARAMETER_UNITS", "SAMPLINGS", "builder_of",
+           "case_count", "trade_surfaces",
+           "default_store", "requirements_of", "run_batch_scenario"]

@@ -1,0 +1,155 @@
+"""Sweep and Monte Carlo scenarios (kind: sweep / montecarlo): a maneuver scenario's Law II run
+over a grid or a distribution, chunked on dask into a zarr store, with statistics, the seed 000
+trade surfaces and a report; each mistake named before anything runs."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from flexsat.report import write_batch_report
+from flexsat.scenarios import ScenarioError, load_scenario, run_batch_scenario
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+#: a short TAMU Law II slew: 2 modes, 4 s at 50 Hz
+MANEUVER = """
+name: short TAMU slew
+case: tamu
+case_overrides: {hub_inertia: "50 ozf*in*s**2"}
+model: {n_modes: 2, stiffening: false}
+maneuver: {angle: "40 deg"}
+simulation: {duration: "6 s", control_rate: "50 Hz", settling_band: "0.5 deg", seed: 0}
+actuator: {saturation: "400 ozf*in"}
+runs:
+  - {label: "Law I", law: lyapunov_regulator, gains: {g1: "600 ozf*in/rad", g2: "800 ozf*in*s/rad"}}
+  - {label: "Law II", law: lyapunov_tracker, gains: {g1: "3000 ozf*in/rad", g2: "800 ozf*in*s/rad"},
+     reference: {shape: smooth_bang_bang, alpha: 0.2, u_max: "400 ozf*in"}}
+"""
+
+SWEEP = """
+kind: sweep
+name: small trade grid
+scenario: maneuver.yaml
+run: Law II
+parameters:
+  alpha: {values: [0.0, 0.25]}
+  u_max: {values: ["300 ozf*in", "400 ozf*in", "500 ozf*in"]}
+execution: {chunk_size: 4}
+store: store.zarr
+"""
+
+MONTECARLO = """
+kind: montecarlo
+name: small Monte Carlo
+scenario: maneuver.yaml
+run: Law II
+parameters:
+  hub_inertia: {distribution: normal, mean: "50 ozf*in*s**2", sd: "2 ozf*in*s**2"}
+  tip_mass: {distribution: uniform, low: "0 kg", high: "0.01 kg"}
+cases: 24
+seed: 3
+requirements:
+  settling_time_s: {max: "6 s"}
+  overshoot_deg: {max: "2 deg"}
+execution: {chunk_size: 10}
+store: mc.zarr
+"""
+
+
+def _write(folder: Path, name: str, text: str) -> Path:
+    (folder / "maneuver.yaml").write_text(MANEUVER)
+    path = folder / name
+    path.write_text(text)
+    return path
+
+
+def test_a_sweep_runs_every_grid_point_and_maps_the_trade_surfaces(tmp_path):
+    result = run_batch_scenario(load_scenario(_write(tmp_path, "sweep.yaml", SWEEP)))
+    ds = result.dataset()
+    assert ds.sizes["case"] == 6 and bool(ds["done"].all())
+    # the grid in order, first axis slowest; u_max in SI
+    np.testing.assert_array_equal(ds["param_alpha"].values, [0, 0, 0, 0.25, 0.25, 0.25])
+    np.testing.assert_allclose(ds["param_u_max"].values[:3] / 0.0070615518142,
+                               [300, 400, 500], rtol=1e-10)
+    # seed 000 Att. 3 Eq. 16: T falls with u_max and rises with α (the paper's Fig. 5)
+    T = result.surfaces["maneuver_time_s"]
+    assert T.shape == (2, 3) and np.all(np.diff(T, axis=1) < 0) and np.all(T[1] > T[0])
+    assert result.surfaces["residual_energy_J"].shape == (2, 3)
+    assert result.chunks_run == 2 and result.chunks_skipped == 0
+    # the same scenario again resumes: nothing to run, the same numbers
+    again = run_batch_scenario(load_scenario(tmp_path / "sweep.yaml"))
+    assert again.chunks_run == 0 and again.chunks_skipped == 2
+    for name in ds.data_vars:
+        if name.startswith("metric_"):
+            np.testing.assert_array_equal(again.dataset()[name].values, ds[name].values)
+
+
+def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path):
+    result = run_batch_scenario(load_scenario(_write(tmp_path, "mc.yaml", MONTECARLO)))
+    reqs = {r["metric"]: r for r in result.summary["requirements"]}
+    settle = reqs["settling_time_s"]
+    met = np.sum(result.dataset()["metric_settling_time_s"].values <= 6.0)
+    assert settle["successes"] == met and settle["n"] == 24
+    assert settle["low"] <= settle["probability"] <= settle["high"]
+    assert reqs["overshoot_deg"]["threshold"] == pytest.approx(2.0)  # compared in degrees
+    assert set(result.sensitivity) <= {k[len("metric_"):] for k in result.dataset().data_vars
+                                       if k.startswith("metric_")}
+    out = write_batch_report(result, tmp_path / "report")
+    for name in ("index.html", "summary.json", "convergence.png",
+                 "distribution_settling_time_s.png"):
+        assert (out / name).exists(), name
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["cases"] == 24 and summary["kind"] == "montecarlo"
+    with xr.open_zarr(out / "results.zarr", consolidated=False) as saved:
+        assert saved.sizes["case"] == 24
+    assert "settling_time_s &lt;= 6" in (out / "index.html").read_text()
+    rows = result.metrics_records()
+    assert any(r["run"].startswith("P(settling_time_s") for r in rows)
+
+
+@pytest.mark.parametrize("change, message", [
+    (("hub_inertia: {", "spin_rate: {"), r"parameters.spin_rate: unknown parameter; known:"),
+    (('sd: "2 ozf*in*s**2"', 'sd: "-2 ozf*in*s**2"'), r"parameters.hub_inertia.sd"),
+    (("distribution: normal", "distribution: cauchy"), "unknown distribution 'cauchy'"),
+    (('mean: "50 ozf*in*s**2"', 'mean: "50 kg"'), r"parameters.hub_inertia.mean"),
+    (("cases: 24\n", ""), "cases: required with sampling 'random'"),
+    (("settling_time_s: {max", "settling_time: {max"), "requirements.settling_time: unknown metric"),
+    (("execution: {chunk_size: 10}", "execution: {workers: 2, scheduler: 'tcp://x:1'}"),
+     "give workers .* or scheduler .*, not both"),
+    (("kind: montecarlo", "kind: sweep"), r"requirements: belong to a montecarlo"),
+])
+def test_schema_mistakes_are_named(tmp_path, change, message):
+    old, new = change
+    assert old in MONTECARLO
+    path = _write(tmp_path, "mc.yaml", MONTECARLO.replace(old, new))
+    with pytest.raises(ScenarioError, match=message):
+        load_scenario(path)
+
+
+@pytest.mark.parametrize("change, message", [
+    (("run: Law II", "run: Law I"), "uses LyapunovRegulator; a batch varies a Control Law II run"),
+    (("run: Law II", "run: Law III"), r"run: 'Law III' is not a run of the scenario"),
+    (("scenario: maneuver.yaml", "scenario: missing.yaml"), "scenario: cannot read"),
+])
+def test_mistakes_found_before_any_case_runs(tmp_path, change, message):
+    old, new = change
+    path = _write(tmp_path, "sweep.yaml", SWEEP.replace(old, new))
+    with pytest.raises(ScenarioError, match=message):
+        run_batch_scenario(load_scenario(path))
+    assert not (tmp_path / "store.zarr").exists()
+
+
+def test_a_scenario_of_another_kind_is_refused(tmp_path):
+    path = _write(tmp_path, "sweep.yaml", SWEEP.replace(
+        "scenario: maneuver.yaml", f"scenario: {EXAMPLES / 'eps_slew_6s.yaml'}"))
+    with pytest.raises(ScenarioError, match="is a slew scenario; a batch varies a maneuver"):
+        run_batch_scenario(load_scenario(path))
+
+
+def test_the_examples_are_valid():
+    for name in ("tamu_trade_surfaces.yaml", "tamu_montecarlo.yaml"):
+        spec = load_scenario(EXAMPLES / name)
+        assert spec.kind in ("sweep", "montecarlo")
