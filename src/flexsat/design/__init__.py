@@ -2,7 +2,7 @@
 run the lower layers many times; nothing here imports the cases or scenarios).
 
 The names below are imported from their modules on first use (the statistics load SALib, the
-slew searches the simulation engine)."""
+batch runner dask and zarr, the slew searches the simulation engine)."""
 
 from flexsat.lazy import lazy_exports
 
@@ -54,6 +54,19 @@ _EXPORTS = {
     "residual_energy_surface": "trade_surfaces",
     "tracking_bound": "trade_surfaces",
     "tracking_bound_surface": "trade_surfaces",
+    "BatchProgress": "batch_runner",
+    "BatchSummary": "batch_runner",
+    "CONNECT_TIMEOUT": "batch_runner",
+    "GAIN_PARAMETERS": "batch_runner",
+    "HubManeuverBuilder": "batch_runner",
+    "MANEUVER_PARAMETERS": "batch_runner",
+    "PLANT_PARAMETERS": "batch_runner",
+    "case_seeds": "batch_runner",
+    "fingerprint": "batch_runner",
+    "maneuver_metrics": "batch_runner",
+    "open_results": "batch_runner",
+    "run_batch": "batch_runner",
+    "run_chunk": "batch_runner",
 }
 
 __all__ = list(_EXPORTS)
