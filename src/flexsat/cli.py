@@ -215,6 +215,25 @@ def _identification_steps(spec) -> int:
     return identification_steps(spec)
 
 
+def _with_execution(spec, workers, scheduler):
+    """The scenario with ``--workers`` / ``--scheduler`` in place of its ``execution:`` ones;
+    they are refused for a scenario that runs no batch."""
+    from flexsat.scenarios import ScenarioError
+
+    if workers is None and scheduler is None:
+        return spec
+    if spec.kind not in ("sweep", "montecarlo"):
+        raise ScenarioError([f"--workers/--scheduler: a {spec.kind} scenario runs in this "
+                             "process; they apply to kind sweep and montecarlo"])
+    if workers is not None and scheduler is not None:
+        raise ScenarioError(["--workers/--scheduler: give one (a local cluster or an existing "
+                             "one), not both"])
+    execution = spec.execution.model_copy(update={"workers": workers, "scheduler": scheduler})
+    copy = spec.model_copy(update={"execution": execution})
+    copy._source, copy._folder = spec._source, spec._folder
+    return copy
+
+
 def _batch_steps(spec) -> int:
     """A batch reports once at its start and once per chunk."""
     import math
@@ -244,6 +263,12 @@ def run(
     scenario: Annotated[Path | None, typer.Argument(
         help="Scenario YAML file; the embedded TAMU 40 deg default when left out.")] = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="Report folder.")] = Path("out"),
+    workers: Annotated[int | None, typer.Option(
+        "--workers", min=1, help="Sweep or Monte Carlo: run on a local dask cluster of this "
+        "many worker processes.")] = None,
+    scheduler: Annotated[str | None, typer.Option(
+        "--scheduler", help="Sweep or Monte Carlo: run on the dask cluster at this address "
+        "(tcp://HOST:PORT).")] = None,
 ) -> None:
     """Run a scenario and write its report (metrics or identification tables, netCDF, plots,
     HTML)."""
@@ -260,6 +285,7 @@ def run(
 
     try:
         spec = default_scenario() if scenario is None else load_scenario(scenario)
+        spec = _with_execution(spec, workers, scheduler)
         runner, writer, steps = _KINDS[spec.kind]
         with _progress(steps(spec)) as say:
             result = getattr(scenarios, runner)(spec, progress=say)

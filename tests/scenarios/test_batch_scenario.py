@@ -153,3 +153,22 @@ def test_the_examples_are_valid():
     for name in ("tamu_trade_surfaces.yaml", "tamu_montecarlo.yaml"):
         spec = load_scenario(EXAMPLES / name)
         assert spec.kind in ("sweep", "montecarlo")
+
+
+def test_the_command_line_runs_a_sweep_on_two_local_workers_and_refuses_them_elsewhere(tmp_path):
+    from typer.testing import CliRunner
+
+    from flexsat.cli import app
+
+    runner = CliRunner()
+    path = _write(tmp_path, "sweep.yaml", SWEEP)
+    result = runner.invoke(app, ["run", str(path), "-o", str(tmp_path / "out"), "--workers", "2"])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "out" / "results.zarr").exists()
+    # the workers do not change the results: the in-process run finds the store complete
+    again = run_batch_scenario(load_scenario(path))
+    assert again.chunks_run == 0
+    refused = runner.invoke(app, ["run", str(tmp_path / "maneuver.yaml"), "-o",
+                                  str(tmp_path / "out2"), "--workers", "2"])
+    assert refused.exit_code == 2
+    assert "--workers/--scheduler: a maneuver scenario runs in this process" in refused.stderr
