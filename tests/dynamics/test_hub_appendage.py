@@ -236,3 +236,15 @@ def test_exact_reference_tracking_dissipates_the_tracking_lyapunov_function():
     U = lambda e: model.lyapunov(e, 0.0, g1, g3)  # noqa: E731
     assert U(z[:n] - z[n : 2 * n]) - U(x0) == pytest.approx(-z[-1], rel=1e-7)
     assert z[-1] > 0.5 * U(x0)
+
+
+def test_the_quadrature_is_numpys_cached_and_read_only():
+    from flexsat.dynamics.hub_appendage import gauss_legendre
+
+    s, w = gauss_legendre(240)
+    s0, w0 = np.polynomial.legendre.leggauss(240)
+    np.testing.assert_array_equal(s, s0)
+    np.testing.assert_array_equal(w, w0)
+    assert gauss_legendre(240)[0] is s
+    with pytest.raises(ValueError, match="read-only"):
+        w[0] = 0.0

@@ -381,3 +381,18 @@ def test_bad_evaluate_input_names_field():
         md.evaluate([1.5])
     with pytest.raises(ValueError, match="xi"):
         md.evaluate([float("nan")])
+
+
+def test_the_roots_depend_on_the_tip_ratios_alone_and_are_shared_read_only():
+    # βL solves the frequency equation in μ = m/(ρL) and ι = J/(ρL³) only: a stiffer beam with
+    # the same ratios gets the cached roots themselves (the Monte Carlo case), equal to a fresh
+    # search bit for bit, and nobody can overwrite them
+    a = beam_mod.TipMassCantilever(length=1.2, EI=9.3, rho=0.5, tip_mass=0.3, tip_inertia=1e-3)
+    b = beam_mod.TipMassCantilever(length=1.2, EI=2 * 9.3, rho=0.5, tip_mass=0.3,
+                                   tip_inertia=1e-3)
+    assert a._beta_L(6) is b._beta_L(6)
+    fresh = beam_mod._tip_loaded_roots.__wrapped__(a._mu, a._iota, 6)
+    np.testing.assert_array_equal(a._beta_L(6), fresh)
+    with pytest.raises(ValueError, match="read-only"):
+        a._beta_L(6)[0] = 1.0
+    np.testing.assert_allclose(b.frequencies(6), math.sqrt(2) * a.frequencies(6), rtol=1e-15)
