@@ -172,3 +172,23 @@ def test_the_command_line_runs_a_sweep_on_two_local_workers_and_refuses_them_els
                                   str(tmp_path / "out2"), "--workers", "2"])
     assert refused.exit_code == 2
     assert "--workers/--scheduler: a maneuver scenario runs in this process" in refused.stderr
+
+
+def test_a_saltelli_sweep_ranks_the_parameters_by_their_sobol_indices(tmp_path):
+    # the peak torque of a Law II slew follows its reference's peak u_max and hardly α (the
+    # tracking feedback adds little): Sobol' ranks u_max first with the larger total index;
+    # n_base (d + 2) cases ran
+    text = SWEEP.replace('''  alpha: {values: [0.0, 0.25]}
+  u_max: {values: ["300 ozf*in", "400 ozf*in", "500 ozf*in"]}''', '''  alpha: {low: 0.0, high: 0.25}
+  u_max: {low: "300 ozf*in", high: "500 ozf*in"}
+sampling: saltelli
+cases: 8''').replace("execution: {chunk_size: 4}", "execution: {chunk_size: 16}")
+    result = run_batch_scenario(load_scenario(_write(tmp_path, "saltelli.yaml", text)))
+    assert result.dataset().sizes["case"] == 8 * (2 + 2)
+    peak = result.sensitivity["peak_torque_Nm"]
+    assert peak["method"] == "sobol" and peak["ranking"][0] == "u_max"
+    assert peak["indices"]["u_max"]["ST"] > peak["indices"]["alpha"]["ST"]
+    out = write_batch_report(result, tmp_path / "report")
+    assert "S_T" in (out / "index.html").read_text()
+    with pytest.raises(ScenarioError, match="cases: the Saltelli design takes a power of 2"):
+        load_scenario(_write(tmp_path, "bad.yaml", text.replace("cases: 8", "cases: 6")))

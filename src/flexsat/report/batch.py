@@ -182,12 +182,23 @@ def _tables(result) -> str:
            f"<th>mean</th><th>not finite</th></tr>{mrows}</table>")
     srows = "".join(
         f"<tr><td>{esc(name)}</td><td>{esc(s['method'])}</td><td>"
-        + ", ".join(f"{esc(p)} ({s['scores'][p]['score']:.3g})" for p in s["ranking"])
+        + ", ".join(f"{esc(p)} ({_score(s, p)})" for p in s["ranking"])
         + "</td></tr>" for name, s in result.sensitivity.items())
-    sens = (f"<h2>Sensitivity</h2><p>Parameters ranked by their effect on each metric.</p>"
+    sens = (f"<h2>Sensitivity</h2><p>Parameters ranked by their effect on each metric "
+            f"(Sobol' total and first-order indices from a Saltelli design, else the rank "
+            f"correlation of the sample).</p>"
             f"<table><tr><th>metric</th><th>method</th><th>ranking (score)</th></tr>{srows}"
             f"</table>") if srows else ""
     return req + met + sens
+
+
+def _score(ranking: dict, parameter: str) -> str:
+    """A parameter's score in a ranking: Sobol' total and first-order indices, or the sample
+    method's score."""
+    if ranking["method"] == "sobol":
+        i = ranking["indices"][parameter]
+        return f"S_T {i['ST']:.3g} ± {i['ST_conf']:.2g}, S_1 {i['S1']:.3g}"
+    return f"{ranking['scores'][parameter]['score']:.3g}"
 
 
 def _fmt(value) -> str:

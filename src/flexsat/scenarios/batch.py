@@ -20,7 +20,8 @@ sets are about), the parameters to vary and how::
 
 ``kind: sweep`` takes grid axes (``{values: [...]}`` or ``{low:, high:, n:}``, full factorial,
 the first axis slowest) or bounds (``{low:, high:}``) with ``sampling: latin_hypercube`` or
-``sobol`` and ``cases``; ``kind: montecarlo`` takes distributions (normal, uniform, lognormal,
+``sobol`` and ``cases``, or ``sampling: saltelli`` with ``cases`` the base points (a power of
+2; n (d + 2) cases run) for Sobol' first-order and total indices of every metric; ``kind: montecarlo`` takes distributions (normal, uniform, lognormal,
 truncated_normal; :mod:`flexsat.design.parameter_space`) sampled per case from the seed. The
 parameters are those of :class:`~flexsat.design.batch_runner.HubManeuverBuilder`
 (:data:`PARAMETER_UNITS`); the others keep the maneuver scenario's values.
@@ -57,7 +58,7 @@ PARAMETER_UNITS = {
 }
 
 #: sampling of a sweep's bounds or a Monte Carlo's distributions
-SAMPLINGS = ("grid", "random", "latin_hypercube", "sobol")
+SAMPLINGS = ("grid", "random", "latin_hypercube", "sobol", "saltelli")
 
 
 class ExecutionSpec(_Section):
@@ -158,6 +159,9 @@ class BatchScenario(_Document):
                              f"got {sampling!r} (use kind: sweep for grids and designs)")
         if sampling != "grid" and self.cases is None:
             raise ValueError(f"cases: required with sampling {sampling!r}")
+        if sampling == "saltelli" and self.cases & (self.cases - 1):
+            raise ValueError(f"cases: the Saltelli design takes a power of 2 base points, got "
+                             f"{self.cases}")
         if sampling == "grid" and self.cases is not None:
             raise ValueError("cases: a grid has as many cases as its points; leave cases out")
         self.sampling = sampling
@@ -256,6 +260,8 @@ def _table(scenario: BatchScenario):
     space = _space(scenario.parameters)
     if isinstance(space, GridSpace):
         table = space.table()
+    elif scenario.sampling == "saltelli":
+        table = space.sobol_design(scenario.cases, scenario.seed)
     elif scenario.sampling == "random":
         table = space.sample(scenario.cases, scenario.seed)
     elif scenario.sampling == "latin_hypercube":
@@ -270,7 +276,11 @@ def case_count(scenario: BatchScenario) -> int:
     from flexsat.design.parameter_space import GridSpace
 
     space = _space(scenario.parameters)
-    return space.size if isinstance(space, GridSpace) else scenario.cases
+    if isinstance(space, GridSpace):
+        return space.size
+    if scenario.sampling == "saltelli":  # n_base (d + 2) cases for first-order and total
+        return scenario.cases * (len(scenario.parameters) + 2)
+    return scenario.cases
 
 
 def default_store(scenario: BatchScenario, maneuver) -> Path:
@@ -292,7 +302,8 @@ def run_batch_scenario(scenario: BatchScenario,
     """
     from flexsat.cases import get_case
     from flexsat.design.batch_runner import run_batch
-    from flexsat.design.monte_carlo_statistics import monte_carlo_summary, sample_sensitivity
+    from flexsat.design.monte_carlo_statistics import (monte_carlo_summary, sample_sensitivity,
+                                                       sobol_indices)
     from flexsat.references import cite
 
     maneuver = _maneuver(scenario)
@@ -301,6 +312,7 @@ def run_batch_scenario(scenario: BatchScenario,
         table = _table(scenario)
     except ValueError as exc:
         raise ScenarioError([_locate("sampling", str(exc))]) from None
+    design, table = (table, table.table) if scenario.sampling == "saltelli" else (None, table)
     store = default_store(scenario, maneuver) if scenario.store is None else (
         Path(scenario.store) if Path(scenario.store).is_absolute()
         else scenario.folder / scenario.store)
@@ -325,11 +337,16 @@ def run_batch_scenario(scenario: BatchScenario,
     metrics = {k[len("metric_"):]: ds[k].values for k in ds.data_vars if k.startswith("metric_")}
     stats = monte_carlo_summary(metrics, requirements_of(scenario.requirements))
     sensitivity = {}
-    if len(table.names) > 1 or len(next(iter(table.values.values()))) > 2:
-        for name, values in metrics.items():
-            finite = np.isfinite(values)
-            if finite.sum() > 2 and np.ptp(values[finite]) > 0:
-                sensitivity[name] = sample_sensitivity(table, values, name).as_dict()
+    for name, values in metrics.items():
+        finite = np.isfinite(values)
+        if finite.sum() <= 2 or np.ptp(values[finite]) == 0:
+            continue  # constant or undefined: nothing to rank
+        if design is not None:
+            if finite.all():  # Sobol' indices need every case (a NaN is not a value)
+                sensitivity[name] = sobol_indices(design, values, name, seed=scenario.seed
+                                                  ).as_dict()
+        else:
+            sensitivity[name] = sample_sensitivity(table, values, name).as_dict()
     return BatchResult(scenario, maneuver, table.values, dict(table.units), store, stats,
                        sensitivity, summary.wall_s, summary.chunks_run, summary.chunks_skipped,
                        cite(get_case(maneuver.case).source), trade_surfaces(scenario, build))
