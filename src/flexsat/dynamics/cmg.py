@@ -1,0 +1,309 @@
+"""Single-gimbal control moment gyros in a pyramid (Vadali, Oh & Walker, "Preferred Gimbal Angles
+for Single Gimbal CMGs"; /work/shared/spec/seed000_part2.md §8, features F23–F24).
+
+Plain array kernels with a leading case axis: the gimbal angles ``sigma`` have shape
+``(..., n)``; momenta ``(..., 3)``, Jacobians ``(..., 3, n)``. Momenta are in units of one
+rotor's momentum h (the notes' h = 1). Only the axial rotor momentum is modelled (§8.1).
+
+Geometry. Unit i of n sits at azimuth φ_i = 2π(i − 1)/n around the body z axis; its gimbal axis
+is tilted by the skew angle δ from z towards the azimuth, and its rotor momentum turns in the
+plane normal to the gimbal axis::
+
+    g_i = [sinδ cosφ_i, sinδ sinφ_i, cosδ],   a_i = [−sinφ_i, cosφ_i, 0],   b_i = g_i × a_i
+    h_i(σ_i) = cosσ_i a_i + sinσ_i b_i
+
+For n = 4 this is exactly the notes' Eq. (1), and the Jacobian column ∂h_i/∂σ_i =
+−sinσ_i a_i + cosσ_i b_i = g_i × h_i is Eq. (2).
+
+Sign convention. The notes' Eq. (4)–(5) at ω = 0: the spacecraft feels the torque −ḣ, and the
+steering law solves C σ̇ = ḣ_cmd. The kernels here take ``torque``, the torque on the
+spacecraft, so ḣ_cmd = −torque; the paper's "torque demand" T of Eq. (5) is ḣ_cmd itself
+(its "unit +x torque" is ``torque = [-1, 0, 0]`` here).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from flexsat.validation import require_finite
+
+#: the paper's pyramid skew angle, 54.74° (seed000_part2.md §8.1, L4620), in rad
+SKEW = float(np.deg2rad(54.74))
+
+
+def _require_skew(skew) -> float:
+    value = require_finite(skew, "skew", "rad")
+    if value.ndim != 0:
+        raise ValueError(f"skew: must be a scalar angle, got shape {value.shape}")
+    value = float(value)
+    if not 0.0 < value < np.pi / 2:
+        raise ValueError(f"skew: must lie in (0, 90°) (a pyramid), got {np.rad2deg(value):.6g}°")
+    return value
+
+
+def _require_units(n_units) -> int:
+    if isinstance(n_units, bool) or not isinstance(n_units, (int, np.integer)) or n_units < 3:
+        raise ValueError(f"n_units: must be an integer >= 3 (3 units span 3-D), got {n_units!r}")
+    return int(n_units)
+
+
+@lru_cache(maxsize=64)
+def _axes(n_units: int, skew: float):
+    phi = 2.0 * np.pi * np.arange(n_units) / n_units
+    g = np.stack([np.sin(skew) * np.cos(phi), np.sin(skew) * np.sin(phi),
+                  np.full(n_units, np.cos(skew))], axis=-1)
+    a = np.stack([-np.sin(phi), np.cos(phi), np.zeros(n_units)], axis=-1)
+    b = np.cross(g, a)
+    for arr in (g, a, b):
+        arr.flags.writeable = False  # cached: shared by every caller
+    return g, a, b
+
+
+def pyramid_axes(n_units: int = 4, skew=SKEW):
+    """Gimbal axes g, rotor reference directions a (σ = 0) and b = g × a, each ``(n, 3)``.
+
+    Parameters
+    ----------
+    n_units : int
+        Number of units (>= 3), equally spaced in azimuth around the body z axis.
+    skew : float or str
+        Skew angle δ of the gimbal axes from z, in (0, 90°); rad or a string such as
+        ``"54.74 deg"``.
+
+    Returns
+    -------
+    g, a, b : ndarray
+        See the module; for n = 4 they reproduce Eq. (1)–(2) of seed000_part2.md §8.2.
+    """
+    return _axes(_require_units(n_units), _require_skew(skew))
+
+
+def _sigma(sigma, n_units):
+    n = _require_units(n_units)
+    sig = require_finite(sigma, "sigma", "rad")
+    if sig.ndim == 0 or sig.shape[-1] != n:
+        raise ValueError(f"sigma: last axis must hold the {n} gimbal angles, got shape {sig.shape}")
+    return sig, n
+
+
+def momentum(sigma, skew=SKEW, n_units: int = 4) -> np.ndarray:
+    """Cluster momentum h(σ) = Σ_i cosσ_i a_i + sinσ_i b_i (seed000_part2.md §8.2 Eq. 1), in
+    units of one rotor's momentum; shape ``(..., 3)``."""
+    sig, n = _sigma(sigma, n_units)
+    _, a, b = _axes(n, _require_skew(skew))
+    return np.cos(sig) @ a + np.sin(sig) @ b
+
+
+def _unit_momenta(sig, a, b):
+    return np.cos(sig)[..., :, None] * a + np.sin(sig)[..., :, None] * b
+
+
+def jacobian(sigma, skew=SKEW, n_units: int = 4) -> np.ndarray:
+    """C(σ) = ∂h/∂σ, column i = −sinσ_i a_i + cosσ_i b_i = g_i × h_i (Eq. 2); ``(..., 3, n)``."""
+    sig, n = _sigma(sigma, n_units)
+    _, a, b = _axes(n, _require_skew(skew))
+    cols = -np.sin(sig)[..., :, None] * a + np.cos(sig)[..., :, None] * b
+    return np.swapaxes(cols, -1, -2)
+
+
+def gain(sigma, skew=SKEW, n_units: int = 4) -> np.ndarray:
+    """The cluster's gain det(C Cᵀ) (§8.2, after Eq. 7); zero exactly at singular σ."""
+    c = jacobian(sigma, skew, n_units)
+    return np.linalg.det(c @ np.swapaxes(c, -1, -2))
+
+
+def envelope(direction, skew=SKEW, n_units: int = 4):
+    """The momentum envelope along a direction u: max over σ of uᵀh(σ).
+
+    Each unit's momentum turns in the plane normal to its gimbal axis, so uᵀh_i is largest when
+    h_i points along the projection of u onto that plane, P_i u = u − (g_iᵀu) g_i; then
+    uᵀh_i = |P_i u| = √(1 − (g_iᵀu)²). The units are independent, so
+
+        max_σ uᵀh = Σ_i √(1 − (g_iᵀu)²),   reached at h_i = P_i u / |P_i u|.
+
+    This σ is the external (saturation) singularity along u: every Jacobian column g_i × h_i is
+    then normal to u. Along +x with δ = 54.74° it is 2 cosδ + 2 = 3.1545 (§8.3, V2).
+
+    Parameters
+    ----------
+    direction : array_like, ``(..., 3)``
+        Nonzero direction u (normalised here).
+
+    Returns
+    -------
+    value : ndarray ``(...,)``
+        max uᵀh.
+    sigma : ndarray ``(..., n)``
+        Gimbal angles reaching it (rad, in (−π, π]); undefined (0) for a unit whose gimbal axis
+        is along u, where every σ_i gives uᵀh_i = 0.
+    """
+    u = require_finite(direction, "direction")
+    if u.ndim == 0 or u.shape[-1] != 3:
+        raise ValueError(f"direction: last axis must have 3 components, got shape {u.shape}")
+    norm = np.linalg.norm(u, axis=-1, keepdims=True)
+    if np.any(norm == 0):
+        raise ValueError("direction: must be nonzero")
+    u = u / norm
+    g, a, b = _axes(_require_units(n_units), _require_skew(skew))
+    ua, ub = u @ a.T, u @ b.T  # components of P_i u in the unit's (a_i, b_i) plane
+    return np.hypot(ua, ub).sum(axis=-1), np.arctan2(ub, ua)
+
+
+@dataclass(frozen=True)
+class Singularity:
+    """Classification of gimbal sets (see :func:`classify_singularity`); arrays of the case shape.
+
+    ``singular``: det(CCᵀ) below the threshold. ``direction``: the singular direction u (the
+    eigenvector of CCᵀ of least eigenvalue, signed so uᵀh >= 0), ``(..., 3)``. ``signs``: ε_i =
+    sign(uᵀh_i), ``(..., n)``. ``internal``: singular and not external, i.e. uᵀh below the
+    envelope along u. ``margin``: envelope(u) − uᵀh (zero at an external singularity).
+    """
+
+    singular: np.ndarray
+    internal: np.ndarray
+    direction: np.ndarray
+    signs: np.ndarray
+    margin: np.ndarray
+
+
+def classify_singularity(sigma, skew=SKEW, n_units: int = 4, threshold: float = 1e-6):
+    """Singularity detection and classification (§8.2–§8.3, F23).
+
+    At a singular σ every column g_i × h_i of C is normal to the singular direction u, so each
+    h_i = ε_i P_i u/|P_i u| and uᵀh = Σ ε_i |P_i u|. The singularity is external (on the
+    momentum envelope, :func:`envelope`) when all ε_i = +1 (u signed so uᵀh >= 0), internal
+    otherwise: then uᵀh is below the envelope along u by 2 Σ_{ε_i<0} |P_i u|.
+
+    Parameters
+    ----------
+    threshold : float
+        Gain det(CCᵀ) below which σ counts as singular (dimensionless, h = 1).
+    """
+    thr = float(require_finite(threshold, "threshold"))
+    if thr <= 0:
+        raise ValueError(f"threshold: must be > 0, got {threshold!r}")
+    sig, n = _sigma(sigma, n_units)
+    d = _require_skew(skew)
+    c = jacobian(sig, d, n)
+    cct = c @ np.swapaxes(c, -1, -2)
+    _, vecs = np.linalg.eigh(cct)
+    u = vecs[..., :, 0]
+    _, a, b = _axes(n, d)
+    h = np.cos(sig) @ a + np.sin(sig) @ b
+    flip = np.where(np.einsum("...i,...i->...", u, h) < 0, -1.0, 1.0)
+    u = u * flip[..., None]
+    uh_i = np.einsum("...j,...ij->...i", u, _unit_momenta(sig, a, b))
+    signs = np.where(uh_i < 0, -1, 1)
+    env, _ = envelope(u, d, n)
+    margin = env - np.einsum("...i,...i->...", u, h)
+    singular = np.linalg.det(cct) < thr
+    # external iff every ε_i = +1; a unit whose h_i is ~normal to u carries no sign (its |P_i u|
+    # ~ 0 contributes nothing to the envelope), so decide on the margin, which is 2Σ_{ε<0}|P_i u|
+    internal = singular & (margin > np.sqrt(thr))
+    return Singularity(singular, internal, u, signs, margin)
+
+
+def steering_rates(sigma, torque, skew=SKEW, n_units: int = 4, alpha: float = 0.0):
+    """Gimbal rates σ̇ = Cᵀ(CCᵀ + αI)⁻¹ ḣ_cmd with ḣ_cmd = −torque (§8.2 Eq. 7; α > 0 is the
+    singularity-robust inverse of Nakamura & Hanafusa, §8.5 Eq. 17).
+
+    Parameters
+    ----------
+    sigma : array_like ``(..., n)``
+        Gimbal angles (rad or strings with units).
+    torque : array_like ``(..., 3)``
+        Torque on the spacecraft, in units of h per second (h = 1); the cluster's momentum
+        changes by −torque (Eq. 4).
+    alpha : float
+        Singularity-robust weight (>= 0); 0 is the pseudo-inverse, which raises ValueError at an
+        exactly singular σ (CCᵀ not invertible).
+
+    Returns
+    -------
+    ndarray ``(..., n)``
+        Gimbal rates, rad/s.
+    """
+    al = float(require_finite(alpha, "alpha"))
+    if al < 0:
+        raise ValueError(f"alpha: must be >= 0, got {alpha!r}")
+    tq = require_finite(torque, "torque")
+    if tq.ndim == 0 or tq.shape[-1] != 3:
+        raise ValueError(f"torque: last axis must have 3 components, got shape {tq.shape}")
+    c = jacobian(sigma, skew, n_units)
+    ct = np.swapaxes(c, -1, -2)
+    m = c @ ct + al * np.eye(3)
+    lam = np.linalg.eigvalsh(m)
+    # CCᵀ singular to working precision: its solve would return round-off amplified by 1/eps
+    if np.any(lam[..., 0] <= 10 * np.finfo(float).eps * lam[..., -1]):
+        raise ValueError("sigma: singular gimbal set (CCᵀ singular to working precision): the "
+                         "pseudo-inverse has no solution; use alpha > 0 (singularity-robust "
+                         "inverse)")
+    shape = np.broadcast_shapes(m.shape[:-1], tq.shape)
+    y = np.linalg.solve(np.broadcast_to(m, shape + (3,)), -np.broadcast_to(tq, shape)[..., None])
+    return (ct @ y)[..., 0]
+
+
+@dataclass(frozen=True)
+class GimbalRun:
+    """Result of :func:`integrate_gimbals`: times ``t`` (n_t,), angles ``sigma`` (n_t, n),
+    momenta ``h`` (n_t, 3), ``singular`` (the run stopped on det(CCᵀ) = threshold) and the
+    gain there ``gain`` (n_t,)."""
+
+    t: np.ndarray
+    sigma: np.ndarray
+    h: np.ndarray
+    gain: np.ndarray
+    singular: bool
+
+
+def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alpha: float = 0.0,
+                      threshold: float = 1e-6, rtol: float = 1e-10, atol: float = 1e-12,
+                      n_out: int = 201) -> GimbalRun:
+    """Integrate σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque) from σ0 under a constant torque (§8.3), forward
+    (t_final > 0) or backward (t_final < 0: the preferred-angle back integration), stopping
+    when the gain det(CCᵀ) falls to ``threshold`` (a terminal solve_ivp event).
+
+    One case per call (solve_ivp); the torque is in units of h per second.
+
+    Returns
+    -------
+    GimbalRun
+        Sampled at ``n_out`` equally spaced times up to the end, or up to the singular stop.
+    """
+    sig0, n = _sigma(sigma0, n_units)
+    if sig0.ndim != 1:
+        raise ValueError(f"sigma0: one gimbal set (n,) per run, got shape {sig0.shape}")
+    d = _require_skew(skew)
+    tq = require_finite(torque, "torque")
+    if tq.shape != (3,):
+        raise ValueError(f"torque: must have 3 components, got shape {tq.shape}")
+    tf = float(require_finite(t_final, "t_final", "s"))
+    if tf == 0:
+        raise ValueError("t_final: must be nonzero (negative integrates backward)")
+    thr = float(require_finite(threshold, "threshold"))
+    if thr <= 0:
+        raise ValueError(f"threshold: must be > 0, got {threshold!r}")
+    if gain(sig0, d, n) <= thr:
+        raise ValueError("sigma0: starts singular (det CCᵀ <= threshold)")
+
+    def rhs(_t, s):
+        return steering_rates(s, tq, d, n, alpha)
+
+    def event(_t, s):
+        return gain(s, d, n) - thr
+
+    event.terminal = True
+    event.direction = -1
+    sol = solve_ivp(rhs, (0.0, tf), sig0, method="DOP853", events=event, rtol=rtol, atol=atol,
+                    dense_output=True)
+    if sol.status == -1:
+        raise RuntimeError(f"integrate_gimbals: solve_ivp failed: {sol.message}")
+    t_end = sol.t[-1]
+    t = np.linspace(0.0, t_end, n_out)
+    sig = sol.sol(t).T
+    sig[-1] = sol.y[:, -1]  # the event's exact end point
+    return GimbalRun(t, sig, momentum(sig, d, n), gain(sig, d, n), bool(sol.status == 1))

@@ -1,0 +1,170 @@
+"""Single-gimbal CMG pyramid (issue 14, seed000_part2.md §8, §11 V1–V4): the zero-momentum gain
+of the preferred set, saturation along +x on the envelope, the internal singularity met from zero
+gimbals under pseudo-inverse steering, the back integration to the preferred set; the Jacobian
+is ∂h/∂σ; the envelope bounds every reachable momentum; bad input named."""
+
+import numpy as np
+import pytest
+
+from flexsat.dynamics import cmg
+
+DEG = np.deg2rad
+EPS = np.finfo(float).eps
+SKEW = DEG(54.74)
+MAGIC = np.arccos(1.0 / np.sqrt(3.0))  # 54.7356°: the skew at which the paper's sets sum to 0
+# the paper's "unit +x torque" is the torque demand T of Eq. (5), C σ̇ = T = ḣ; the spacecraft
+# feels −ḣ (Eq. 4), and cmg's kernels take the spacecraft torque
+PAPER_X = np.array([-1.0, 0.0, 0.0])
+
+
+def test_v1_preferred_set_has_the_papers_zero_momentum_gain():
+    sigma = DEG([-60.0, 60.0, 120.0, -120.0])
+    # the paper prints 4 digits: 1.1854 ± half a unit of the last
+    assert cmg.gain(sigma) == pytest.approx(1.1854, abs=5e-5)
+    # h_x = √3 cosδ − 1 = −h_y, h_z = 0 in closed form: zero only at the magic angle
+    # arccos(1/√3) = 54.7356°, so 54.74° leaves 1.1e-4 (the notes' "h = 0 to 1e-4")
+    r = np.sqrt(3.0) * np.cos(SKEW) - 1.0
+    np.testing.assert_allclose(cmg.momentum(sigma), [r, -r, 0.0], atol=10 * EPS)
+    assert abs(r) < 1.1e-4
+    np.testing.assert_allclose(cmg.momentum(sigma, MAGIC), 0.0, atol=10 * EPS)
+
+
+def test_v2_saturation_along_x_is_the_envelope():
+    sigma = DEG([-90.0, 180.0, 90.0, 0.0])
+    h_sat = 2.0 * np.cos(SKEW) + 2.0
+    np.testing.assert_allclose(cmg.momentum(sigma), [h_sat, 0.0, 0.0], atol=10 * EPS)
+    assert h_sat == pytest.approx(3.1545, abs=1e-4)  # printed value, 5 digits (3.15458)
+    value, sigma_env = cmg.envelope([1.0, 0.0, 0.0])
+    assert value == pytest.approx(h_sat, rel=10 * EPS)
+    np.testing.assert_allclose(cmg.momentum(sigma_env), [h_sat, 0.0, 0.0], atol=10 * EPS)
+    # saturation is an external singularity: the gain vanishes, all units add along +x
+    sing = cmg.classify_singularity(sigma)
+    assert sing.singular and not sing.internal
+    np.testing.assert_array_equal(sing.signs, [1, 1, 1, 1])
+    assert sing.margin == pytest.approx(0.0, abs=1e-12)
+
+
+def test_v3_pseudo_inverse_from_zero_gimbals_meets_an_internal_singularity():
+    threshold = 1e-6
+    run = cmg.integrate_gimbals(np.zeros(4), PAPER_X, 5.0, threshold=threshold)
+    assert run.singular
+    # the pseudo-inverse tracks ḣ = +x exactly, so |h| = t; the singular point is
+    # h = 2cosδ = 1.1546 (the paper's 1.15h). Near it det(CCᵀ) ∝ (1 − h/h_s), so stopping at
+    # det = 1e-6 leaves h a few 1e-7 short of it
+    h_s = 2.0 * np.cos(SKEW)
+    assert run.t[-1] == pytest.approx(h_s, abs=1e-5)
+    np.testing.assert_allclose(run.h[-1], [run.t[-1], 0.0, 0.0], atol=1e-8)
+    # σ ≈ [−90, 0, 90, 0]°, not the printed [−90, 0, −90, 0] (which gives h = [0, 0, −2 sinδ]);
+    # σ1,3 = ∓asin(h/h_s) approach ±90° as √(1 − h/h_s): 0.04° at this stop
+    np.testing.assert_allclose(np.rad2deg(run.sigma[-1]), [-90.0, 0.0, 90.0, 0.0], atol=0.1)
+    printed = cmg.momentum(DEG([-90.0, 0.0, -90.0, 0.0]))
+    np.testing.assert_allclose(printed, [0.0, 0.0, -2.0 * np.sin(SKEW)], atol=10 * EPS)
+    # internal: below the envelope along x by 2 (rotor 2 points against it), rotors 2 and 4
+    # antiparallel
+    sing = cmg.classify_singularity(run.sigma[-1], threshold=10 * threshold)
+    assert sing.singular and sing.internal
+    np.testing.assert_allclose(abs(sing.direction), [1.0, 0.0, 0.0], atol=1e-6)
+    np.testing.assert_array_equal(sing.signs, [1, -1, 1, 1])
+    assert sing.margin == pytest.approx(2.0, abs=1e-6)
+    _, a, b = cmg.pyramid_axes()
+    h_units = np.cos(run.sigma[-1])[:, None] * a + np.sin(run.sigma[-1])[:, None] * b
+    np.testing.assert_allclose(h_units[1], -h_units[3], atol=1e-12)
+    # a +x torque on the spacecraft drives h to −x: the mirror singularity, h antiparallel to it
+    mirror = cmg.integrate_gimbals(np.zeros(4), -PAPER_X, 5.0, threshold=threshold)
+    assert mirror.singular and mirror.t[-1] == pytest.approx(h_s, abs=1e-5)
+    np.testing.assert_allclose(mirror.h[-1], [-mirror.t[-1], 0.0, 0.0], atol=1e-8)
+    np.testing.assert_allclose(np.rad2deg(mirror.sigma[-1]), [90.0, 0.0, -90.0, 0.0], atol=0.1)
+
+
+def test_v4_back_integration_from_near_saturation_reaches_the_preferred_set():
+    sigma0 = DEG([-89.0, 177.0, 90.0, -1.0])
+    h0 = cmg.momentum(sigma0)
+    # run backward for the time that removes the x momentum at unit rate (3.1530 s)
+    run = cmg.integrate_gimbals(sigma0, PAPER_X, -h0[0])
+    assert not run.singular and run.gain.min() > 1e-3  # no singularity on the way
+    assert run.h[-1, 0] == pytest.approx(0.0, abs=1e-8)
+    # y, z momentum of the perturbation is untouched by an x torque
+    np.testing.assert_allclose(run.h[-1, 1:], h0[1:], atol=1e-8)
+    got = np.rad2deg(run.sigma[-1])
+    np.testing.assert_allclose(got, [-59.6, 60.7, 118.0, -121.0], atol=0.5)  # the paper, ±0.5°
+    # the notes' independent reproduction, printed to 0.01°
+    np.testing.assert_allclose(got, [-59.66, 60.58, 117.98, -121.12], atol=0.01)
+
+
+@pytest.mark.parametrize("n_units, skew", [(3, DEG(30.0)), (4, SKEW), (5, DEG(60.0)),
+                                           (6, DEG(75.0))])
+def test_jacobian_is_the_derivative_of_the_momentum(n_units, skew):
+    rng = np.random.default_rng(14)
+    sigma = rng.uniform(-np.pi, np.pi, (5, n_units))  # a case axis of 5 gimbal sets
+    c = cmg.jacobian(sigma, skew, n_units)
+    assert c.shape == (5, 3, n_units)
+    step = 1e-5  # central differences: truncation step²/6 ≈ 2e-11, round-off eps/step ≈ 2e-11
+    for i in range(n_units):
+        e = np.zeros(n_units)
+        e[i] = step
+        fd = (cmg.momentum(sigma + e, skew, n_units)
+              - cmg.momentum(sigma - e, skew, n_units)) / (2 * step)
+        np.testing.assert_allclose(c[..., i], fd, atol=1e-8)
+    # gain = det(CCᵀ) of the same C
+    np.testing.assert_allclose(cmg.gain(sigma, skew, n_units),
+                               np.linalg.det(c @ np.swapaxes(c, -1, -2)), rtol=1e-12)
+
+
+@pytest.mark.parametrize("n_units", [3, 4, 6])
+def test_envelope_bounds_every_momentum_and_is_reached(n_units):
+    rng = np.random.default_rng(7)
+    u = rng.normal(size=(20, 3))
+    u /= np.linalg.norm(u, axis=-1, keepdims=True)
+    value, sigma = cmg.envelope(u, SKEW, n_units)
+    h_env = cmg.momentum(sigma, SKEW, n_units)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", u, h_env), value, rtol=1e-12)
+    # the envelope point is an external singularity along u
+    sing = cmg.classify_singularity(sigma, SKEW, n_units)
+    assert np.all(sing.singular) and not np.any(sing.internal)
+    samples = cmg.momentum(rng.uniform(-np.pi, np.pi, (2000, n_units)), SKEW, n_units)
+    assert np.all(samples @ u.T <= value + 1e-12)
+
+
+def test_steering_inverts_the_jacobian_and_the_sr_inverse_passes_singularities():
+    rng = np.random.default_rng(3)
+    sigma = rng.uniform(-np.pi, np.pi, (4, 4))
+    torque = rng.normal(size=(4, 3))
+    rates = cmg.steering_rates(sigma, torque)
+    c = cmg.jacobian(sigma)
+    cond = np.linalg.cond(c @ np.swapaxes(c, -1, -2))
+    err = np.abs(np.einsum("...ij,...j->...i", c, rates) + torque).max(axis=-1)
+    assert np.all(err <= 100 * cond * EPS * np.abs(torque).max(axis=-1))  # ḣ = −torque
+    # minimum norm: the rates lie in the row space of C (orthogonal to null motion)
+    null = np.linalg.svd(c)[2][:, 3:]  # (case, n − 3, n): rows spanning the null space of C
+    assert np.abs(np.einsum("ckn,cn->ck", null, rates)).max() < 1e-10
+    saturated = DEG([-90.0, 180.0, 90.0, 0.0])
+    with pytest.raises(ValueError, match="singular"):
+        cmg.steering_rates(saturated, [0.0, 0.0, 1.0])
+    sr = cmg.steering_rates(saturated, PAPER_X, alpha=1e-3)
+    assert np.all(np.isfinite(sr))
+    # along the singular direction the SR inverse gives no rate: Cσ̇ has no x component
+    assert abs((cmg.jacobian(saturated) @ sr)[0]) < 1e-12
+
+
+def test_angles_accept_units():
+    np.testing.assert_allclose(
+        cmg.momentum(["-90 deg", "180 deg", "90 deg", "0 deg"], "54.74 deg"),
+        [2 * np.cos(SKEW) + 2, 0.0, 0.0], atol=1e-12)
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: cmg.gain(np.zeros(4), DEG(90.0)), "skew: must lie in"),
+    (lambda: cmg.gain(np.zeros(4), 0.0), "skew: must lie in"),
+    (lambda: cmg.gain(np.zeros(2), n_units=2), "n_units: must be an integer >= 3"),
+    (lambda: cmg.momentum(np.zeros(3)), "sigma: last axis must hold the 4"),
+    (lambda: cmg.jacobian([0.0, np.nan, 0.0, 0.0]), "sigma: must be finite"),
+    (lambda: cmg.envelope([0.0, 0.0, 0.0]), "direction: must be nonzero"),
+    (lambda: cmg.steering_rates(np.zeros(4), [1.0, 0.0]), "torque: last axis"),
+    (lambda: cmg.steering_rates(np.zeros(4), [1.0, 0.0, 0.0], alpha=-1.0), "alpha: must be"),
+    (lambda: cmg.integrate_gimbals(np.zeros(4), [1.0, 0.0, 0.0], 0.0), "t_final: must be"),
+    (lambda: cmg.integrate_gimbals(DEG([-90.0, 180.0, 90.0, 0.0]), [1.0, 0.0, 0.0], 1.0),
+     "sigma0: starts singular"),
+])
+def test_bad_input_is_named(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()
