@@ -27,6 +27,9 @@ def test_v1_preferred_set_has_the_papers_zero_momentum_gain():
     np.testing.assert_allclose(cmg.momentum(sigma), [r, -r, 0.0], atol=10 * EPS)
     assert abs(r) < 1.1e-4
     np.testing.assert_allclose(cmg.momentum(sigma, MAGIC), 0.0, atol=10 * EPS)
+    # the other zero-momentum sets of the notes (§8.3): 0.5928 and 1.1848, 4 digits
+    assert cmg.gain(DEG([45.0, -45.0, 45.0, -45.0])) == pytest.approx(0.5928, abs=5e-5)
+    assert cmg.gain(np.zeros(4)) == pytest.approx(1.1848, abs=5e-5)
 
 
 def test_v2_saturation_along_x_is_the_envelope():
@@ -89,6 +92,43 @@ def test_v4_back_integration_from_near_saturation_reaches_the_preferred_set():
     np.testing.assert_allclose(got, [-59.6, 60.7, 118.0, -121.0], atol=0.5)  # the paper, ±0.5°
     # the notes' independent reproduction, printed to 0.01°
     np.testing.assert_allclose(got, [-59.66, 60.58, 117.98, -121.12], atol=0.01)
+
+
+PREFERRED = [-60.0, 60.0, 120.0, -120.0]
+PREFERRED_Y = [-120.0, -60.0, 60.0, 120.0]
+ALTERNATE = [45.0, -45.0, 45.0, -45.0]
+ZERO = [0.0, 0.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize("demand, sigma0, internal, h_stop, tol", [
+    # the notes' forward runs (§8.3 [CHECK] table), |h| printed to 3 decimals
+    ([1, 0, 0], PREFERRED, False, 3.155, 1e-3),
+    ([1, 0, 0], ALTERNATE, False, 3.155, 1e-3),
+    ([1, 0, 0], ZERO, True, 1.155, 1e-3),
+    ([0, 1, 0], PREFERRED_Y, False, 3.155, 1e-3),
+    ([0, 1, 0], ALTERNATE, False, 3.155, 1e-3),
+    ([0, 1, 0], ZERO, True, 1.155, 1e-3),
+    ([0, 0, 1], ZERO, False, 3.266, 1e-3),
+    # the pseudo-inverse passes this singularity with finite rates: det(CCᵀ) touches 0 at
+    # |h| = 1.2918 (between solve_ivp's steps); the notes stop at 1.282 on their own threshold
+    ([0, 0, 1], ALTERNATE, True, 1.287, 5e-3),
+    ([1, 1, 1], ZERO, False, 3.165, 1e-3),
+    ([1, 1, 1], ALTERNATE, False, 3.165, 1e-3),
+    ([4, 2, 0], PREFERRED, False, 3.221, 1e-3),
+    ([4, 2, 0], ALTERNATE, False, 3.221, 1e-3),
+    ([2, 4, 0], PREFERRED_Y, False, 3.221, 1e-3),
+    ([2, 4, 0], ALTERNATE, False, 3.221, 1e-3),
+    ([4, 2, 0], ZERO, True, 1.291, 1e-3),
+])
+def test_v5_preferred_sets_reach_saturation_and_zero_gimbals_do_not(demand, sigma0, internal,
+                                                                     h_stop, tol):
+    u = np.asarray(demand, float) / np.linalg.norm(demand)
+    run = cmg.integrate_gimbals(DEG(sigma0), -u, 10.0)  # unit demand ḣ = u: torque −u
+    assert run.singular
+    assert np.linalg.norm(run.h[-1]) == pytest.approx(h_stop, abs=tol)
+    assert cmg.classify_singularity(run.sigma[-1], threshold=1e-5).internal == internal
+    if not internal:  # saturation on the ray: at most the envelope (support) value along u
+        assert np.linalg.norm(run.h[-1]) <= cmg.envelope(u)[0] + 1e-12
 
 
 @pytest.mark.parametrize("n_units, skew", [(3, DEG(30.0)), (4, SKEW), (5, DEG(60.0)),

@@ -3,7 +3,10 @@
 :mod:`flexsat.dynamics.attitude` (attitude kinematics: Euler parameters, DCM, 1-2-3 Euler
 angles, Gibbs and modified Rodrigues parameters) and :mod:`flexsat.dynamics.rigid_body`
 (Euler's equations, the norm-preserving propagator, the Euler–Poinsot solution) are plain
-array kernels with a leading case axis. The plants: :mod:`flexsat.dynamics.structural` (any
+array kernels with a leading case axis; so is :mod:`flexsat.dynamics.cmg` (the single-gimbal
+CMG pyramid: momentum, Jacobian, gain, envelope, singularities, steering), imported as a module
+(``from flexsat.dynamics import cmg``) since its short names (``momentum``, ``gain``) would be
+ambiguous here. The plants: :mod:`flexsat.dynamics.structural` (any
 M, D, K structure with named force, torque and moment-pair inputs),
 :mod:`flexsat.dynamics.orbit` (Bainum's beam in orbit), :class:`RigidSpacecraft` and
 :class:`FlexibleSpacecraft` (three-axis, the latter in hybrid coordinates). Their names are

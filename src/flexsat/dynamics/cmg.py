@@ -28,6 +28,7 @@ from functools import lru_cache
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq, minimize_scalar
 
 from flexsat.validation import require_finite
 
@@ -126,7 +127,10 @@ def envelope(direction, skew=SKEW, n_units: int = 4):
         max_σ uᵀh = Σ_i √(1 − (g_iᵀu)²),   reached at h_i = P_i u / |P_i u|.
 
     This σ is the external (saturation) singularity along u: every Jacobian column g_i × h_i is
-    then normal to u. Along +x with δ = 54.74° it is 2 cosδ + 2 = 3.1545 (§8.3, V2).
+    then normal to u. Along +x with δ = 54.74° it is 2 cosδ + 2 = 3.1545 (§8.3, V2). It is
+    the support function of the reachable set; where h(σ) at that point is not parallel to u
+    (e.g. u = [1, 1, 1]: h·u = 3.1681, |h| on the ray through u only 3.1652, §8.3), a
+    pseudo-inverse run along u saturates short of it.
 
     Parameters
     ----------
@@ -302,8 +306,40 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
                     dense_output=True)
     if sol.status == -1:
         raise RuntimeError(f"integrate_gimbals: solve_ivp failed: {sol.message}")
-    t_end = sol.t[-1]
+    t_end, singular = sol.t[-1], sol.status == 1
+    dip = _first_dip(sol, d, n, thr)
+    if dip is not None and abs(dip) < abs(t_end):
+        t_end, singular = dip, True
     t = np.linspace(0.0, t_end, n_out)
     sig = sol.sol(t).T
-    sig[-1] = sol.y[:, -1]  # the event's exact end point
-    return GimbalRun(t, sig, momentum(sig, d, n), gain(sig, d, n), bool(sol.status == 1))
+    if t_end == sol.t[-1]:
+        sig[-1] = sol.y[:, -1]  # the event's exact end point
+    return GimbalRun(t, sig, momentum(sig, d, n), gain(sig, d, n), bool(singular))
+
+
+def _first_dip(sol, skew, n, thr):
+    """The earliest time the gain touches ``thr`` between solve_ivp's samples, or None.
+
+    The event sees only sign changes at the integrator's steps. Where the commanded ḣ stays
+    normal to the singular direction the pseudo-inverse passes *through* a singularity with
+    finite rates, and det(CCᵀ) (a product of squared singular values) only touches zero: a dip
+    narrower than a step (e.g. a z torque from [45, −45, 45, −45]°, §8.3) that the event misses.
+    So scan the dense output, 8 points a step, and refine every sampled local minimum.
+    """
+    grid = np.concatenate([np.linspace(t0, t1, 9)[:-1] for t0, t1 in zip(sol.t[:-1], sol.t[1:])]
+                          + [sol.t[-1:]])
+
+    def excess(t):
+        return gain(sol.sol(t).T, skew, n) - thr
+
+    vals = excess(grid)
+    for j in range(1, grid.size):
+        if vals[j] <= 0:
+            return brentq(excess, grid[j - 1], grid[j], xtol=1e-14)
+        if j + 1 < grid.size and vals[j] <= vals[j - 1] and vals[j] <= vals[j + 1]:
+            lo, hi = sorted((grid[j - 1], grid[j + 1]))
+            res = minimize_scalar(excess, bounds=(lo, hi), method="bounded",
+                                  options={"xatol": 1e-12 * max(1.0, abs(hi))})
+            if res.fun <= 0:
+                return brentq(excess, grid[j - 1], res.x, xtol=1e-14)
+    return None
