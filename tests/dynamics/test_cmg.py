@@ -1,6 +1,7 @@
 """Single-gimbal CMG pyramid (issue 14, seed000_part2.md §8, §11 V1–V4): the zero-momentum gain
 of the preferred set, saturation along +x on the envelope, the internal singularity met from zero
-gimbals under pseudo-inverse steering, the back integration to the preferred set; the Jacobian
+gimbals under pseudo-inverse steering, the back integration to the preferred set, the preferred-set table (V5), null-motion
+reorientation (V8); the Jacobian
 is ∂h/∂σ; the envelope bounds every reachable momentum; bad input named."""
 
 import numpy as np
@@ -186,6 +187,40 @@ def test_steering_inverts_the_jacobian_and_the_sr_inverse_passes_singularities()
     assert abs((cmg.jacobian(saturated) @ sr)[0]) < 1e-12
 
 
+def test_null_projector_is_a_projector_onto_torque_free_motion():
+    rng = np.random.default_rng(8)
+    sigma = rng.uniform(-np.pi, np.pi, (6, 5))
+    c = cmg.jacobian(sigma, SKEW, 5)
+    tau = cmg.null_projector(sigma, SKEW, 5)
+    # τ² = τ, τᵀ = τ, Cτ = 0 (Eq. 14), to round-off of the solve (cond(CCᵀ) × eps)
+    tol = 100 * np.linalg.cond(c @ np.swapaxes(c, -1, -2)).max() * EPS
+    np.testing.assert_allclose(tau @ tau, tau, atol=tol)
+    np.testing.assert_allclose(tau, np.swapaxes(tau, -1, -2), atol=tol)
+    np.testing.assert_allclose(c @ tau, 0.0, atol=tol)
+    # the SR form (Eq. 17) leaves Cτ = α(CCᵀ + αI)⁻¹C
+    alpha = 1e-3
+    tau_sr = cmg.null_projector(sigma, SKEW, 5, alpha)
+    cct = c @ np.swapaxes(c, -1, -2)
+    np.testing.assert_allclose(c @ tau_sr, alpha * np.linalg.solve(cct + alpha * np.eye(3), c),
+                               atol=tol)
+    with pytest.raises(ValueError, match="singular"):
+        cmg.null_projector(DEG([-90.0, 180.0, 90.0, 0.0]))
+
+
+def test_v8_null_motion_reorients_zero_gimbals_to_the_alternate_set():
+    # σ = s[1, −1, 1, −1] has h ≡ 0 (§8.5 [CHECK]), and d = k(σ_f − σ) lies along that line, so
+    # the law moves s' = k(45° − s): s = 45°(1 − e^{−kt}), exactly, whatever the projector does
+    run = cmg.reorient(np.zeros(4), DEG(ALTERNATE), 10.0, gain_k=1.0, alpha=1e-3, n_out=1001)
+    s = DEG(45.0) * (1.0 - np.exp(-run.t))
+    np.testing.assert_allclose(run.sigma, s[:, None] * [1.0, -1.0, 1.0, -1.0], atol=1e-8)
+    np.testing.assert_allclose(run.h, 0.0, atol=1e-12)  # no torque on the spacecraft
+    # it crosses the singular set s = 30° at t = ln 3 = 1.0986 s (notes: 1.10); the gain there
+    # is exactly 0 at the magic skew arccos(1/√3), 2.3e-8 at the paper's rounded 54.74°
+    line30 = DEG(30.0) * np.array([1.0, -1.0, 1.0, -1.0])
+    assert cmg.gain(line30, MAGIC) < 1e-14 and cmg.gain(line30) < 1e-7
+    assert run.t[np.argmin(run.gain)] == pytest.approx(np.log(3.0), abs=run.t[1])
+
+
 def test_angles_accept_units():
     np.testing.assert_allclose(
         cmg.momentum(["-90 deg", "180 deg", "90 deg", "0 deg"], "54.74 deg"),
@@ -202,6 +237,8 @@ def test_angles_accept_units():
     (lambda: cmg.steering_rates(np.zeros(4), [1.0, 0.0]), "torque: last axis"),
     (lambda: cmg.steering_rates(np.zeros(4), [1.0, 0.0, 0.0], alpha=-1.0), "alpha: must be"),
     (lambda: cmg.integrate_gimbals(np.zeros(4), [1.0, 0.0, 0.0], 0.0), "t_final: must be"),
+    (lambda: cmg.reorient(np.zeros(4), np.ones(4), 1.0, gain_k=0.0), "gain_k: must be > 0"),
+    (lambda: cmg.reorient(np.zeros(4), np.ones(3), 1.0), "sigma: last axis"),
     (lambda: cmg.integrate_gimbals(DEG([-90.0, 180.0, 90.0, 0.0]), [1.0, 0.0, 0.0], 1.0),
      "sigma0: starts singular"),
 ])

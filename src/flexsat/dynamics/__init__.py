@@ -4,7 +4,8 @@
 angles, Gibbs and modified Rodrigues parameters) and :mod:`flexsat.dynamics.rigid_body`
 (Euler's equations, the norm-preserving propagator, the Euler–Poinsot solution) are plain
 array kernels with a leading case axis; so is :mod:`flexsat.dynamics.cmg` (the single-gimbal
-CMG pyramid: momentum, Jacobian, gain, envelope, singularities, steering), imported as a module
+CMG pyramid: momentum, Jacobian, gain, envelope, singularities, steering, null
+motion), imported as a module
 (``from flexsat.dynamics import cmg``) since its short names (``momentum``, ``gain``) would be
 ambiguous here. The plants: :mod:`flexsat.dynamics.structural` (any
 M, D, K structure with named force, torque and moment-pair inputs),

@@ -1,5 +1,5 @@
 """Single-gimbal control moment gyros in a pyramid (Vadali, Oh & Walker, "Preferred Gimbal Angles
-for Single Gimbal CMGs"; /work/shared/spec/seed000_part2.md §8, features F23–F24).
+for Single Gimbal CMGs"; /work/shared/spec/seed000_part2.md §8, features F23–F25).
 
 Plain array kernels with a leading case axis: the gimbal angles ``sigma`` have shape
 ``(..., n)``; momenta ``(..., 3)``, Jacobians ``(..., 3, n)``. Momenta are in units of one
@@ -343,3 +343,56 @@ def _first_dip(sol, skew, n, thr):
             if res.fun <= 0:
                 return brentq(excess, grid[j - 1], res.x, xtol=1e-14)
     return None
+
+
+def null_projector(sigma, skew=SKEW, n_units: int = 4, alpha: float = 0.0) -> np.ndarray:
+    """τ = I − Cᵀ(CCᵀ + αI)⁻¹C (§8.5 Eq. 14; α > 0: Eq. 17, the singularity-robust form).
+
+    With α = 0, τ is the orthogonal projector onto the null space of C (τ² = τ, Cτ = 0): gimbal
+    motion τd changes no momentum. With α > 0 it stays bounded at singular σ, at the price of
+    a residual momentum rate Cτd = α(CCᵀ + αI)⁻¹Cd. Shape ``(..., n, n)``.
+    """
+    al = float(require_finite(alpha, "alpha"))
+    if al < 0:
+        raise ValueError(f"alpha: must be >= 0, got {alpha!r}")
+    c = jacobian(sigma, skew, n_units)
+    ct = np.swapaxes(c, -1, -2)
+    m = c @ ct + al * np.eye(3)
+    if al == 0 and np.any(np.linalg.eigvalsh(m)[..., 0]
+                          <= 10 * np.finfo(float).eps * np.linalg.eigvalsh(m)[..., -1]):
+        raise ValueError("sigma: singular gimbal set (CCᵀ singular to working precision): the "
+                         "projector needs alpha > 0 (singularity-robust inverse)")
+    return np.eye(c.shape[-1]) - ct @ np.linalg.solve(m, c)
+
+
+def reorient(sigma0, sigma_target, t_final, gain_k: float = 1.0, skew=SKEW, n_units: int = 4,
+             alpha: float = 1e-3, rtol: float = 1e-10, atol: float = 1e-12,
+             n_out: int = 201) -> GimbalRun:
+    """Null-motion gimbal reorientation σ̇ = τ d, d = k(σ_f − σ) (§8.5 Eq. 13–17).
+
+    V = ½|σ_f − σ|² falls as V' = −k(σ_f − σ)ᵀτ(σ_f − σ) <= 0 (Eq. 16); α > 0 (the paper's
+    ≈ 0.001) carries the motion through singular sets, where the rates go to zero (§8.5).
+    One case per call; returns the run sampled at ``n_out`` times (``singular`` is False).
+    """
+    sig0, n = _sigma(sigma0, n_units)
+    sigf, _ = _sigma(sigma_target, n_units)
+    if sig0.shape != (n,) or sigf.shape != (n,):
+        raise ValueError("sigma0, sigma_target: one gimbal set (n,) each")
+    d = _require_skew(skew)
+    k = float(require_finite(gain_k, "gain_k", "1/s"))
+    if k <= 0:
+        raise ValueError(f"gain_k: must be > 0, got {gain_k!r}")
+    tf = float(require_finite(t_final, "t_final", "s"))
+    if tf <= 0:
+        raise ValueError(f"t_final: must be > 0, got {t_final!r}")
+
+    def rhs(_t, s):
+        return null_projector(s, d, n, alpha) @ (k * (sigf - s))
+
+    sol = solve_ivp(rhs, (0.0, tf), sig0, method="DOP853", rtol=rtol, atol=atol,
+                    dense_output=True)
+    if sol.status == -1:
+        raise RuntimeError(f"reorient: solve_ivp failed: {sol.message}")
+    t = np.linspace(0.0, tf, n_out)
+    sig = sol.sol(t).T
+    return GimbalRun(t, sig, momentum(sig, d, n), gain(sig, d, n), False)
