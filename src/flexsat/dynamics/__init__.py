@@ -4,11 +4,10 @@
 angles, Gibbs and modified Rodrigues parameters) and :mod:`flexsat.dynamics.rigid_body`
 (Euler's equations, the norm-preserving propagator, the Euler–Poinsot solution) are plain
 array kernels with a leading case axis; so is :mod:`flexsat.dynamics.cmg` (the single-gimbal
-CMG pyramid: momentum, Jacobian, gain, envelope, singularities, steering, null
-motion), imported as a module
-(``from flexsat.dynamics import cmg``) since its short names (``momentum``, ``gain``) would be
-ambiguous here. The plants: :mod:`flexsat.dynamics.structural` (any
-M, D, K structure with named force, torque and moment-pair inputs),
+CMG pyramid: momentum, Jacobian, gain, envelope, singularities, steering, null motion),
+imported as a module (``from flexsat.dynamics import cmg``) since its short names
+(``momentum``, ``gain``) would be ambiguous here. The plants: :mod:`flexsat.dynamics.structural`
+(any M, D, K structure with named force, torque and moment-pair inputs),
 :mod:`flexsat.dynamics.orbit` (Bainum's beam in orbit), :class:`RigidSpacecraft` and
 :class:`FlexibleSpacecraft` (three-axis, the latter in hybrid coordinates). Their names are
 re-exported here and imported from their modules on first use, so importing the package loads

@@ -152,7 +152,7 @@ def envelope(direction, skew=SKEW, n_units: int = 4):
     if np.any(norm == 0):
         raise ValueError("direction: must be nonzero")
     u = u / norm
-    g, a, b = _axes(_require_units(n_units), _require_skew(skew))
+    _, a, b = _axes(_require_units(n_units), _require_skew(skew))
     ua, ub = u @ a.T, u @ b.T  # components of P_i u in the unit's (a_i, b_i) plane
     return np.hypot(ua, ub).sum(axis=-1), np.arctan2(ub, ua)
 
