@@ -1,8 +1,8 @@
 """Single-gimbal CMG pyramid (issue 14, seed000_part2.md §8, §11 V1–V4): the zero-momentum gain
 of the preferred set, saturation along +x on the envelope, the internal singularity met from zero
 gimbals under pseudo-inverse steering, the back integration to the preferred set, the
-preferred-set table (V5), null-motion reorientation (V8); the Jacobian
-is ∂h/∂σ; the envelope bounds every reachable momentum; bad input named."""
+preferred-set table (V5), time-varying torques (Kurokawa V6, Bedrossian V7), null-motion
+reorientation (V8); the Jacobian is ∂h/∂σ; the envelope bounds every reachable momentum; bad input named."""
 
 import numpy as np
 import pytest
@@ -132,6 +132,58 @@ def test_v5_preferred_sets_reach_saturation_and_zero_gimbals_do_not(demand, sigm
         assert np.linalg.norm(run.h[-1]) <= cmg.envelope(u)[0] + 1e-12
 
 
+def kurokawa(t):
+    """V6's demand ḣ = [0.2 sin 4πt, 0.3, 0] (§8.3, L4640), as the spacecraft torque −ḣ."""
+    return -np.array([0.2 * np.sin(4.0 * np.pi * t), 0.3, 0.0])
+
+
+@pytest.mark.parametrize("sigma0", [PREFERRED_Y, ALTERNATE])
+def test_v6_kurokawa_torque_saturates_at_about_ten_seconds_without_internal_singularity(sigma0):
+    run = cmg.integrate_gimbals(DEG(sigma0), kurokawa, 20.0, n_out=401)
+    assert run.singular
+    # the pseudo-inverse tracks the demand exactly: h(t) = h(0) + ∫ḣ, h(0) = 0 for both sets
+    # (to the 1.1e-4 of the rounded skew for PREFERRED_Y, V1)
+    h0 = cmg.momentum(DEG(sigma0))
+    expect = h0 + np.stack([0.2 * (1.0 - np.cos(4.0 * np.pi * run.t)) / (4.0 * np.pi),
+                            0.3 * run.t, 0.0 * run.t], axis=-1)
+    np.testing.assert_allclose(run.h, expect, atol=1e-8)  # solve_ivp rtol 1e-10 on σ, |h| ~ 3
+    # the stop is saturation (external), on the y envelope 3.1546: the x demand averages out
+    sing = cmg.classify_singularity(run.sigma[-1], threshold=1e-5)
+    assert not sing.internal
+    h_env = cmg.envelope([0.0, 1.0, 0.0])[0]
+    assert run.h[-1, 1] == pytest.approx(h_env, abs=1e-3)
+    # so t_sat = (envelope − h_y(0)) / 0.3 = 10.515 s for both sets (the paper's "about ten
+    # seconds"; the notes' 10.51 s, printed to 0.01 s). The gain stop at 1e-6 leaves h_y 1e-5
+    # short of the envelope (measured), i.e. 3e-5 s: well inside 1e-3 s
+    assert run.t[-1] == pytest.approx((h_env - h0[1]) / 0.3, abs=1e-3)
+    assert run.t[-1] == pytest.approx(10.51, abs=0.01)
+    # from zero gimbals the same demand goes internally singular at 3.85 s (the notes' [CHECK])
+    zero = cmg.integrate_gimbals(np.zeros(4), kurokawa, 20.0)
+    assert zero.singular and zero.t[-1] == pytest.approx(3.85, abs=5e-3)
+    assert cmg.classify_singularity(zero.sigma[-1], threshold=1e-5).internal
+
+
+def test_v7_bedrossian_torque_is_singular_from_zero_gimbals_and_not_from_the_alternate_set():
+    torque = -np.array([0.707, 0.707, 0.0])  # |Tx| = |Ty| = 0.707, the notes' (+, +) signs
+    zero = cmg.integrate_gimbals(np.zeros(4), torque, 10.0)
+    assert zero.singular
+    assert cmg.classify_singularity(zero.sigma[-1], threshold=1e-5).internal
+    # the gain reaches 1e-6 at 1.531 s (h = 1.0825 [1, 1, 0]); the paper's "1.5 s" is read off
+    # Fig. 6 (±0.05 s, the figure's resolution). The notes' 1.508 s (h = 1.066) is the same
+    # approach stopped earlier: det(CCᵀ) = 1e-3 there
+    assert zero.t[-1] == pytest.approx(1.5, abs=0.05)
+    np.testing.assert_allclose(zero.h[-1], [1.0825, 1.0825, 0.0], atol=1e-4)
+    early = cmg.integrate_gimbals(np.zeros(4), torque, 10.0, threshold=1e-3)
+    assert early.t[-1] == pytest.approx(1.508, abs=1e-3)  # the notes print 4 digits
+    # from [45, −45, 45, −45]° no internal singularity: it runs to the envelope along [1, 1, 0]
+    alt = cmg.integrate_gimbals(DEG(ALTERNATE), torque, 10.0)
+    assert alt.singular and not cmg.classify_singularity(alt.sigma[-1], threshold=1e-5).internal
+    u = np.array([1.0, 1.0, 0.0]) / np.sqrt(2.0)
+    assert alt.h[-1] @ u == pytest.approx(cmg.envelope(u)[0], abs=1e-3)
+    np.testing.assert_allclose(alt.h[-1], [2.309, 2.309, 0.0], atol=1e-3)  # notes, 3.27 s
+    assert alt.t[-1] == pytest.approx(3.27, abs=5e-3)
+
+
 @pytest.mark.parametrize("n_units, skew", [(3, DEG(30.0)), (4, SKEW), (5, DEG(60.0)),
                                            (6, DEG(75.0))])
 def test_jacobian_is_the_derivative_of_the_momentum(n_units, skew):
@@ -241,6 +293,10 @@ def test_angles_accept_units():
     (lambda: cmg.reorient(np.zeros(4), np.ones(3), 1.0), "sigma: last axis"),
     (lambda: cmg.integrate_gimbals(DEG([-90.0, 180.0, 90.0, 0.0]), [1.0, 0.0, 0.0], 1.0),
      "sigma0: starts singular"),
+    (lambda: cmg.integrate_gimbals(np.zeros(4), lambda t: [1.0, 0.0], 1.0),
+     "torque: the callable must return 3"),
+    (lambda: cmg.integrate_gimbals(np.zeros(4), lambda t: [np.nan, 0.0, 0.0], 1.0),
+     "torque: must be finite"),
 ])
 def test_bad_input_is_named(call, message):
     with pytest.raises(ValueError, match=message):

@@ -267,11 +267,18 @@ class GimbalRun:
 def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alpha: float = 0.0,
                       threshold: float = 1e-6, rtol: float = 1e-10, atol: float = 1e-12,
                       n_out: int = 201) -> GimbalRun:
-    """Integrate σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque) from σ0 under a constant torque (§8.3), forward
-    (t_final > 0) or backward (t_final < 0: the preferred-angle back integration), stopping
-    when the gain det(CCᵀ) falls to ``threshold`` (a terminal solve_ivp event).
+    """Integrate σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque(t)) from σ0 (§8.3), forward (t_final > 0) or
+    backward (t_final < 0: the preferred-angle back integration), stopping when the gain
+    det(CCᵀ) falls to ``threshold`` (a terminal solve_ivp event).
 
     One case per call (solve_ivp); the torque is in units of h per second.
+
+    Parameters
+    ----------
+    torque : array_like ``(3,)`` or callable
+        Torque on the spacecraft: a constant, or a function ``t -> (3,)`` of the time in s (the
+        time-varying demands of §8.3, e.g. Kurokawa's Tx = 0.2 sin 4πt, V6). A callable is
+        checked at t = 0 and wherever the integrator evaluates it.
 
     Returns
     -------
@@ -282,9 +289,15 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
     if sig0.ndim != 1:
         raise ValueError(f"sigma0: one gimbal set (n,) per run, got shape {sig0.shape}")
     d = _require_skew(skew)
-    tq = require_finite(torque, "torque")
-    if tq.shape != (3,):
-        raise ValueError(f"torque: must have 3 components, got shape {tq.shape}")
+    if callable(torque):
+        torque_at = _torque_history(torque)
+    else:
+        tq = require_finite(torque, "torque")
+        if tq.shape != (3,):
+            raise ValueError(f"torque: must have 3 components, got shape {tq.shape}")
+
+        def torque_at(_t):
+            return tq
     tf = float(require_finite(t_final, "t_final", "s"))
     if tf == 0:
         raise ValueError("t_final: must be nonzero (negative integrates backward)")
@@ -294,8 +307,8 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
     if gain(sig0, d, n) <= thr:
         raise ValueError("sigma0: starts singular (det CCᵀ <= threshold)")
 
-    def rhs(_t, s):
-        return steering_rates(s, tq, d, n, alpha)
+    def rhs(t, s):
+        return steering_rates(s, torque_at(t), d, n, alpha)
 
     def event(_t, s):
         return gain(s, d, n) - thr
@@ -315,6 +328,19 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
     if t_end == sol.t[-1]:
         sig[-1] = sol.y[:, -1]  # the event's exact end point
     return GimbalRun(t, sig, momentum(sig, d, n), gain(sig, d, n), bool(singular))
+
+
+def _torque_history(torque):
+    """Wrap a callable torque so every value is checked: finite, shape (3,)."""
+    def torque_at(t):
+        value = require_finite(torque(t), "torque")
+        if value.shape != (3,):
+            raise ValueError(f"torque: the callable must return 3 components, got shape "
+                             f"{value.shape} at t = {t!r} s")
+        return value
+
+    torque_at(0.0)  # a bad callable fails before the integration starts
+    return torque_at
 
 
 def _first_dip(sol, skew, n, thr):
