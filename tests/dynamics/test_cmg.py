@@ -1,7 +1,7 @@
 """Single-gimbal CMG pyramid (issue 14, seed000_part2.md §8, §11 V1–V4): the zero-momentum gain
 of the preferred set, saturation along +x on the envelope, the internal singularity met from zero
 gimbals under pseudo-inverse steering, the back integration to the preferred set, the
-preferred-set table (V5), time-varying torques (Kurokawa V6, Bedrossian V7), null-motion
+preferred-set table (V5), the preferred-angle search (F24), time-varying torques (Kurokawa V6, Bedrossian V7), null-motion
 reorientation (V8); the Jacobian is ∂h/∂σ; the envelope bounds every reachable momentum; bad input named."""
 
 import numpy as np
@@ -184,6 +184,30 @@ def test_v7_bedrossian_torque_is_singular_from_zero_gimbals_and_not_from_the_alt
     assert alt.t[-1] == pytest.approx(3.27, abs=5e-3)
 
 
+def test_preferred_angles_for_x_land_on_the_v4_set():
+    got = np.rad2deg(cmg.preferred_angles([1.0, 0.0, 0.0]))
+    # the paper's [−59.6, 60.7, 118, −121]° (±0.5°) and the notes' 0.01° reproduction (V4)
+    np.testing.assert_allclose(got, [-59.6, 60.7, 118.0, -121.0], atol=0.5)
+    np.testing.assert_allclose(got, [-59.66, 60.58, 117.98, -121.12], atol=0.01)
+
+
+@pytest.mark.parametrize("u", [[1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, -1, 0],
+                               [0, 0, -1]])
+def test_preferred_angles_run_forward_to_the_envelope_without_internal_singularity(u):
+    u = np.asarray(u, float)
+    sigma0 = cmg.preferred_angles(u)
+    assert np.all(np.abs(sigma0) <= np.pi)
+    # near zero momentum: u·h = 0 to the integrator's error; the normal part is the
+    # perturbation's (1–3° offsets from saturation leave |h| < 0.07)
+    h0 = cmg.momentum(sigma0)
+    assert h0 @ u == pytest.approx(0.0, abs=1e-8)
+    assert np.linalg.norm(h0) < 0.07
+    run = cmg.integrate_gimbals(sigma0, -u, 10.0)  # the same unit demand ḣ = u
+    assert run.singular and not cmg.classify_singularity(run.sigma[-1], threshold=1e-5).internal
+    # saturation on the envelope along u, within V5's 1e-3 (the gain stop and the normal part)
+    assert run.h[-1] @ u == pytest.approx(cmg.envelope(u)[0], abs=1e-3)
+
+
 @pytest.mark.parametrize("n_units, skew", [(3, DEG(30.0)), (4, SKEW), (5, DEG(60.0)),
                                            (6, DEG(75.0))])
 def test_jacobian_is_the_derivative_of_the_momentum(n_units, skew):
@@ -293,6 +317,10 @@ def test_angles_accept_units():
     (lambda: cmg.reorient(np.zeros(4), np.ones(3), 1.0), "sigma: last axis"),
     (lambda: cmg.integrate_gimbals(DEG([-90.0, 180.0, 90.0, 0.0]), [1.0, 0.0, 0.0], 1.0),
      "sigma0: starts singular"),
+    (lambda: cmg.preferred_angles([1.0, 0.0, 0.0], n_units=3), "perturbation: required"),
+    (lambda: cmg.preferred_angles([1.0, 0.0, 0.0], perturbation=np.zeros(4)),
+     "perturbation: must be a nonzero"),
+    (lambda: cmg.preferred_angles([0.0, 0.0, 0.0]), "direction: must be nonzero"),
     (lambda: cmg.integrate_gimbals(np.zeros(4), lambda t: [1.0, 0.0], 1.0),
      "torque: the callable must return 3"),
     (lambda: cmg.integrate_gimbals(np.zeros(4), lambda t: [np.nan, 0.0, 0.0], 1.0),

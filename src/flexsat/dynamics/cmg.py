@@ -330,6 +330,67 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
     return GimbalRun(t, sig, momentum(sig, d, n), gain(sig, d, n), bool(singular))
 
 
+#: the paper's offset from the +x saturation set [−90, 180, 90, 0]° to its starting set
+#: [−89, 177, 90, −1]° for the back integration (seed000_part2.md §8.3, V4), in rad
+PAPER_PERTURBATION = np.deg2rad([1.0, -3.0, 0.0, -1.0])
+
+
+def preferred_angles(direction, skew=SKEW, n_units: int = 4, perturbation=None,
+                     threshold: float = 1e-6, rtol: float = 1e-10,
+                     atol: float = 1e-12) -> np.ndarray:
+    """Preferred initial gimbal angles for a momentum demand along u, by back integration from
+    near saturation (Vadali, Oh & Walker; seed000_part2.md §8.3, F24, V4).
+
+    Start at the saturation set along u (:func:`envelope`), moved by ``perturbation`` off that
+    external singularity (where the pseudo-inverse has no solution and the perturbation picks
+    the branch), and integrate the pseudo-inverse steering backward under the unit demand
+    ḣ = u (torque −u) for the time t = uᵀh(σ_start) that removes the momentum along u. The
+    end set holds h ≈ 0 (the perturbation's small momentum normal to u is untouched) and,
+    run forward under the same demand, retraces the path to the envelope along u without an
+    internal singularity.
+
+    Parameters
+    ----------
+    direction : array_like ``(3,)``
+        Nonzero demand direction u (normalised here).
+    perturbation : array_like ``(n,)``, optional
+        Offset from the saturation set, rad or strings with units. Default: the paper's
+        [1, −3, 0, −1]° (V4) for n = 4; required for other n.
+    threshold : float
+        Gain det(CCᵀ) at which the back integration counts as singular (then ValueError).
+
+    Returns
+    -------
+    ndarray ``(n,)``
+        The preferred σ(0), rad, wrapped to (−π, π].
+    """
+    n = _require_units(n_units)
+    d = _require_skew(skew)
+    u = require_finite(direction, "direction")
+    if u.shape != (3,):
+        raise ValueError(f"direction: must have 3 components, got shape {u.shape}")
+    if perturbation is None:
+        if n != 4:
+            raise ValueError(f"perturbation: required for n_units = {n} (the paper's offset "
+                             "is for the 4-unit pyramid)")
+        perturbation = PAPER_PERTURBATION
+    dp = require_finite(perturbation, "perturbation", "rad")
+    if dp.shape != (n,) or not np.any(dp):
+        raise ValueError(f"perturbation: must be a nonzero offset of shape ({n},), got "
+                         f"{np.shape(perturbation)}")
+    _, sig_sat = envelope(u, d, n)  # normalises u and rejects u = 0
+    u = u / np.linalg.norm(u)
+    start = sig_sat + dp
+    t_back = float(u @ momentum(start, d, n))
+    if t_back <= 0:
+        raise ValueError("perturbation: moves the start set off the saturated side (uᵀh <= 0)")
+    run = integrate_gimbals(start, -u, -t_back, d, n, threshold=threshold, rtol=rtol, atol=atol)
+    if run.singular:
+        raise ValueError(f"perturbation: the back integration along {u} met a singularity at "
+                         f"t = {run.t[-1]:.6g} s; try another offset")
+    return np.angle(np.exp(1j * run.sigma[-1]))
+
+
 def _torque_history(torque):
     """Wrap a callable torque so every value is checked: finite, shape (3,)."""
     def torque_at(t):
