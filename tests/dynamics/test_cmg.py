@@ -1,8 +1,9 @@
-"""Single-gimbal CMG pyramid (issue 14, seed000_part2.md §8, §11 V1–V4): the zero-momentum gain
-of the preferred set, saturation along +x on the envelope, the internal singularity met from zero
-gimbals under pseudo-inverse steering, the back integration to the preferred set, the
-preferred-set table (V5), the preferred-angle search (F24), time-varying torques (Kurokawa V6, Bedrossian V7), null-motion
-reorientation (V8); the Jacobian is ∂h/∂σ; the envelope bounds every reachable momentum; bad input named."""
+"""Single-gimbal CMG pyramid (issue 14, seed000_part2.md §8, §11 V1–V8, F24): the zero-momentum
+gain of the preferred set, saturation along +x on the envelope, the internal singularity met from
+zero gimbals under pseudo-inverse steering, the back integration to the preferred set, the
+preferred-set table (V5), the preferred-angle search (F24), time-varying torques (Kurokawa V6,
+Bedrossian V7), null-motion reorientation (V8); the Jacobian is ∂h/∂σ; the envelope bounds every
+reachable momentum; bad input named."""
 
 import numpy as np
 import pytest
