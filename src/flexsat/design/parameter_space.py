@@ -128,6 +128,14 @@ class _Distribution:
         require_si_unit(self.unit, prefix)
         return prefix
 
+    def _mean_sd(self, f: str) -> tuple[float, float]:
+        """(mean, sd) in SI of a normal's parameters: mean finite, sd > 0."""
+        mean = si_scalar(self.mean, self.unit, f"{f}.mean")
+        sd = si_scalar(self.sd, self.unit, f"{f}.sd")
+        if sd <= 0:
+            raise ValueError(f"{f}.sd: must be > 0 (a standard deviation), got {self.sd!r}")
+        return mean, sd
+
     def _set(self, attr: str, value: float) -> None:
         object.__setattr__(self, attr, value)
 
@@ -153,10 +161,8 @@ class Normal(_Distribution):
 
     def __post_init__(self):
         f = self._start()
-        self._set("mean", si_scalar(self.mean, self.unit, f"{f}.mean"))
-        sd = si_scalar(self.sd, self.unit, f"{f}.sd")
-        if sd <= 0:
-            raise ValueError(f"{f}.sd: must be > 0 (a standard deviation), got {self.sd!r}")
+        mean, sd = self._mean_sd(f)
+        self._set("mean", mean)
         self._set("sd", sd)
 
     @property
@@ -237,10 +243,7 @@ class TruncatedNormal(_Distribution):
 
     def __post_init__(self):
         f = self._start()
-        mean = si_scalar(self.mean, self.unit, f"{f}.mean")
-        sd = si_scalar(self.sd, self.unit, f"{f}.sd")
-        if sd <= 0:
-            raise ValueError(f"{f}.sd: must be > 0 (a standard deviation), got {self.sd!r}")
+        mean, sd = self._mean_sd(f)
         low = si_scalar(self.low, self.unit, f"{f}.low", allow_infinite=True)
         high = si_scalar(self.high, self.unit, f"{f}.high", allow_infinite=True)
         if not low < high:
