@@ -257,6 +257,30 @@ def test_concurrent_writers_never_interleave(tmp_path):
     assert leftovers(tmp_path, out) == []
 
 
+def test_a_folder_removed_by_its_writer_while_another_cleans_up_is_skipped(old_report,
+                                                                          monkeypatch):
+    """A writer removes its previous report (now at a temporary name) after it has published,
+    outside the parent's lock; another writer's clean-up may list that folder a moment before it
+    vanishes. Reproduces the race seen once on a loaded machine (ENOENT from a concurrent write)."""
+    parent = old_report.parent
+    vanishing = parent / f".{old_report.name}.tmp-0000000000000001aaaaaaaa"
+    vanishing.mkdir()
+    listing = os.scandir
+
+    def scandir_then_the_other_writer_removes_its_folder(path):
+        if not isinstance(path, (str, Path)) or Path(path) != parent or not vanishing.exists():
+            return listing(path)
+        with listing(path) as found:
+            entries = list(found)
+        vanishing.rmdir()
+        return iter(entries)
+
+    monkeypatch.setattr(publish.os, "scandir", scandir_then_the_other_writer_removes_its_folder)
+    write_atomically(old_report, writer("new"))
+    assert contents(old_report) == complete("new")
+    assert leftovers(parent, old_report) == []
+
+
 @pytest.fixture
 def parent_locked(tmp_path):
     """Another run holding the lock on ``tmp_path`` (the parent of the output folder)."""

@@ -289,7 +289,11 @@ def _recover(out: Path) -> None:
     for entry in sorted(os.scandir(out.parent), key=lambda e: e.name):
         if not (pattern.fullmatch(entry.name) and entry.is_dir(follow_symlinks=False)):
             continue
-        fd = _open_folder(Path(entry.path))
+        try:
+            fd = _open_folder(Path(entry.path))
+        except FileNotFoundError:
+            # its writer removed it after publishing, which it does outside the parent's lock
+            continue
         try:
             if _flock(fd):
                 stale.append(Path(entry.path))
