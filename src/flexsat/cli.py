@@ -294,6 +294,13 @@ def run(
     except SimulationDiverged as exc:  # a result, not an input error: exit 1, nothing written
         errors.print(str(exc), style="red", markup=False, highlight=False)
         raise typer.Exit(code=1) from None
+    except KeyboardInterrupt as exc:  # Ctrl-C: say what is kept, exit as an interrupted program
+        from flexsat.design.batch_runner import BatchInterrupted
+
+        message = (str(exc) if isinstance(exc, BatchInterrupted)
+                   else "interrupted: no report written")
+        errors.print(message, style="red", markup=False, highlight=False)
+        raise typer.Exit(code=130) from None
     console.print(_identification_table(result) if spec.kind == "identification"
                   else _metrics_table(result.metrics_records()))
     try:
