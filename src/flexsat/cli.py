@@ -198,9 +198,19 @@ def modes(
 
 
 def _metrics_table(records: list[dict]) -> Table:
-    from flexsat.report import metric_rows
+    """One column per run and a row per metric; transposed when the runs outnumber the metrics
+    (a batch's table: a row per metric of the cases and per requirement), so that it fits."""
+    from flexsat.report import format_metric, metric_rows
 
     table = Table(title="metrics")
+    names = [key for key in records[0] if key != "run"]
+    if len(records) > len(names):
+        table.add_column("")
+        for name in names:
+            table.add_column(name, justify="right")
+        for record in records:
+            table.add_row(Text(record["run"]), *(format_metric(record[n]) for n in names))
+        return table
     table.add_column("metric")
     for record in records:
         table.add_column(Text(record["run"]), justify="right")  # labels are not markup
