@@ -49,6 +49,7 @@ _EXPORTS = {
     "PPFScenario": "ppf",
     "PPFResult": "ppf",
     "run_ppf": "ppf",
+    "StarTrackerScenario": "star_tracker", "StarTrackerResult": "star_tracker", "run_star_tracker": "star_tracker",
     "BatchScenario": "batch",
     "BatchResult": "batch",
     "run_batch_scenario": "batch",
