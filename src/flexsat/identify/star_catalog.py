@@ -78,10 +78,10 @@ class StarCatalog:
         if vec.ndim != 2 or vec.shape[1] != 3:
             raise ValueError(f"vectors: must have shape (n_stars, 3), got {vec.shape}")
         if not (ids.size == mags.size == vec.shape[0]):
-            raise ValueError(f"catalogue: ids ({ids.size}), magnitudes ({mags.size}) and vectors "
+            raise ValueError(f"catalog: ids ({ids.size}), magnitudes ({mags.size}) and vectors "
                              f"({vec.shape[0]}) must have one entry per star")
         if ids.size < MIN_STARS:
-            raise ValueError(f"catalogue: must hold at least {MIN_STARS} stars (one triangle of "
+            raise ValueError(f"catalog: must hold at least {MIN_STARS} stars (one triangle of "
                              f"inter-star angles), got {ids.size}")
         norms = np.linalg.norm(vec, axis=1)
         if np.any(np.abs(norms - 1) > 1e-6):
@@ -181,7 +181,7 @@ def load_hipparcos(path, magnitude_limit: float | None = None) -> StarCatalog:
             ra.append(values["ra_deg"])
             dec.append(values["dec_deg"])
     if len(ids) < MIN_STARS:
-        raise ValueError(f"catalogue: {p.name} holds {len(ids)} usable stars"
+        raise ValueError(f"catalog: {p.name} holds {len(ids)} usable stars"
                          f"{'' if limit is None else f' brighter than {limit:g}'}; a catalogue "
                          f"needs at least {MIN_STARS} (one triangle of inter-star angles)")
     vec = _directions(np.radians(ra), np.radians(dec))

@@ -50,7 +50,8 @@ def _histograms(ds, path: Path) -> None:
                         label=f"{run} (σ = {np.std(e):.2g}″)")
         ax.set(xlabel=f"error about {axis} (arcsec)", title=f"axis {axis}")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize="xx-small")
+        if ax.get_legend_handles_labels()[0]:  # nothing to label when nothing was accepted
+            ax.legend(fontsize="xx-small")
     axes[0].set(ylabel="attitudes")
     fig.savefig(path, dpi=100)
 
@@ -72,7 +73,8 @@ def _sky(ds, run, path: Path) -> None:
                 ax.scatter(px[sel, 0], px[sel, 1], marker=marker, s=22, label=label, **style)
         ax.set(xlim=(0, n_pix), ylim=(0, n_pix), aspect="equal", title=f"camera {c}",
                xlabel="column (pixel)", ylabel="row (pixel)")
-        ax.legend(fontsize="xx-small", loc="upper right")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize="xx-small", loc="upper right")
     fig.savefig(path, dpi=100)
 
 
