@@ -42,7 +42,7 @@ def test_a_small_scenario_runs_and_identifies_every_attitude():
     assert set(rows) == {"clean", "noisy"}
     for r in rows.values():
         assert r["attitudes"] == 40 and r["wrong_accepted"] == 0
-        assert r["identification_rate"] == 1.0  # 40 of 40 (the 1,000-attitude claim: tests/identify)
+        assert r["identification_rate"] == 1.0  # 40 of 40 (1,000 attitudes: tests/identify)
         for axis in "xyz":
             assert r[f"error_std_{axis}_arcsec"] < 5  # the paper's sub-5″
     assert result.dataset()["error"].shape == (2, 40, 3)
@@ -79,7 +79,8 @@ def test_a_hipparcos_catalogue_is_read_relative_to_the_scenario(tmp_path):
 
 
 @pytest.mark.parametrize("change, message", [
-    (('tolerance: "5 arcsec"', 'tolerance: "1 arcsec"'), r"identification.tolerance: 1″ is below 3√2 σ"),
+    (('tolerance: "5 arcsec"', 'tolerance: "1 arcsec"'),
+     r"identification.tolerance: 1″ is below 3√2 σ"),
     (('tolerance: "5 arcsec"', 'tolerance: "5 s"'), "identification.tolerance"),
     (("min_fields: 2", "min_fields: 3"), "cameras: identification.min_fields = 3"),
     (("min_triplets: 3", "min_triplets: 0"), "identification.min_triplets"),
