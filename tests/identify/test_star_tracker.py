@@ -3,7 +3,8 @@ star-pattern identification, >= 3 triplets within 5″ in each of two fields).
 
 1,000 seeded random attitudes (uniform on SO(3)) of a synthetic sky, two 12° cameras 90° apart
 (4096 px: 10.5″ per pixel), 0.1-pixel centroid noise: a measured direction's noise is
-1.05″ per axis and an inter-star angle's 1.5″, so the paper's 5″ tolerance is 3.4 σ."""
+1.05″ per axis and an inter-star angle's 1.5″, so the paper's 5″ tolerance is 3.4 σ. Then
+200 attitudes each of an 8° and a 20° field of view (tolerance scaled to the pixel)."""
 
 import numpy as np
 import pytest
@@ -53,3 +54,20 @@ def test_random_attitudes_are_rotations():
     np.testing.assert_allclose(np.linalg.det(C), 1.0, atol=1e-14)
     with pytest.raises(ValueError, match="n: must be a positive integer"):
         random_attitudes(0)
+
+
+@pytest.mark.parametrize("fov, n_pixels, magnitude, tolerance", [
+    # 8°: 7″ pixels keep the paper's 5″; a field holds 7.8 stars to m = 6.5, too few, so the
+    # camera and catalogue go to m = 7.5 (24.5 per field)
+    ("8 deg", 4096, 7.5, "5 arcsec"),
+    # 20° on 2048 px: 35″ pixels, σ = 3.5″, so 3√2 σ = 15″ and the tolerance must be 16″
+    ("20 deg", 2048, 6.0, "16 arcsec"),
+])
+def test_other_realistic_fields_of_view(fov, n_pixels, magnitude, tolerance):
+    cams = [StarCamera(field_of_view=fov, n_pixels=n_pixels, magnitude_limit=magnitude,
+                       mounting=m) for m in ((0, 0, 0), (0, "90 deg", 0))]
+    tr = StarTracker(cams, synthetic_sky(magnitude, seed=0), tolerance=tolerance)
+    r = monte_carlo(tr, 200, seed=7, false_stars=2, missing_fraction=0.2)
+    assert r.identification_rate >= 0.995  # 200 attitudes: at most one miss
+    assert r.wrong_accepted.sum() == 0
+    assert np.all(r.error_std < 5 * ARCSEC)
