@@ -143,7 +143,9 @@ def load_scenario(source: str | bytes | Path):
     ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: simulation`` a
     :class:`flexsat.scenarios.simulation.SimulationScenario`; ``kind: slew`` a
     :class:`flexsat.scenarios.slew.SlewScenario`; ``kind: ppf`` a
-    :class:`flexsat.scenarios.ppf.PPFScenario`; ``kind: sweep`` and ``kind: montecarlo`` a
+    :class:`flexsat.scenarios.ppf.PPFScenario`; ``kind: star_tracker`` a
+    :class:`flexsat.scenarios.star_tracker.StarTrackerScenario`; ``kind: sweep`` and
+    ``kind: montecarlo`` a
     :class:`flexsat.scenarios.batch.BatchScenario`; ``kind: identification`` an
     :class:`flexsat.scenarios.identification.IdentificationScenario`.
 
@@ -172,6 +174,8 @@ def load_scenario(source: str | bytes | Path):
         from flexsat.scenarios.slew import SlewScenario as model
     elif kind == "ppf":
         from flexsat.scenarios.ppf import PPFScenario as model
+    elif kind == "star_tracker":
+        from flexsat.scenarios.star_tracker import StarTrackerScenario as model
     elif kind == "maneuver":
         model = Scenario
     else:
