@@ -46,12 +46,16 @@ from flexsat.validation import require_finite, require_positive
 
 __all__ = ["EARTH_MU", "EARTH_RADIUS", "TetherScales", "TetheredSubsatellite", "accelerations",
            "rate_control_accelerations", "integral_of_motion", "integral_of_motion_rate",
-           "require_lengths", "integrate", "ClosedLoopRun", "CONTROLS"]
+           "require_lengths", "integrate", "MIN_LENGTH", "ClosedLoopRun", "CONTROLS"]
 
 #: Earth's gravitational parameter, m³/s² (WGS 84), for the orbit rate of a circular orbit
 EARTH_MU = 3.986004418e14
 #: Earth's equatorial radius, m (WGS 84)
 EARTH_RADIUS = 6378137.0
+#: a nondimensional length below which the tether is taken as collapsed (:func:`integrate`
+#: stops): Eq. 4's λ'/λ terms are singular at λ = 0, and an adaptive integrator approaching it
+#: takes steps ~λ, never arriving; 1e-4 L is 2 m of the paper's 20 km tether
+MIN_LENGTH = 1e-4
 #: the input modes: tension and thrust (Eqs. 4), or length rate and thrust (Eq. 24 with Eq. 4)
 CONTROLS = ("tension", "rate")
 
@@ -373,8 +377,8 @@ def integrate(law, x0, tau, control: str = "tension", rtol: float = 1e-10,
     Raises
     ------
     ValueError
-        For a non-positive length, a bad grid or mode, or when the tether length reaches zero
-        or the integration fails (naming τ).
+        For a non-positive length, a bad grid or mode, or when the tether collapses (λ below
+        :data:`MIN_LENGTH`) or the integration fails (naming τ).
     """
     from scipy.integrate import solve_ivp
 
@@ -415,7 +419,7 @@ def integrate(law, x0, tau, control: str = "tension", rtol: float = 1e-10,
         return d.ravel()
 
     def collapsed(_t, flat):
-        return np.min(flat.reshape(nc, 7)[:, 0])
+        return np.min(flat.reshape(nc, 7)[:, 0]) - MIN_LENGTH
 
     collapsed.terminal = True
     y0 = np.concatenate([x0, np.zeros((nc, 1))], 1)
@@ -423,7 +427,8 @@ def integrate(law, x0, tau, control: str = "tension", rtol: float = 1e-10,
         sol = solve_ivp(rhs, (tau[0], tau[-1]), y0.ravel(), method="DOP853", t_eval=tau,
                         rtol=rtol, atol=atol, events=collapsed)
     if sol.status == 1:
-        raise ValueError(f"tau: the tether length reached zero at τ = {sol.t_events[0][0]:.6g}")
+        raise ValueError(f"tau: the tether length fell to {MIN_LENGTH:g} L (collapsed) at τ = "
+                         f"{sol.t_events[0][0]:.6g}")
     if sol.status != 0:
         raise ValueError(f"tau: integration failed at τ = {sol.t[-1]:.6g}: {sol.message}")
     Y = sol.y.reshape(nc, 7, -1).transpose(0, 2, 1)
