@@ -49,6 +49,7 @@ _EXPORTS = {
     "PPFScenario": "ppf",
     "PPFResult": "ppf",
     "run_ppf": "ppf",
+    "TetherScenario": "tether", "TetherResult": "tether", "run_tether": "tether",
     "BatchScenario": "batch",
     "BatchResult": "batch",
     "run_batch_scenario": "batch",

@@ -143,7 +143,8 @@ def load_scenario(source: str | bytes | Path):
     ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: simulation`` a
     :class:`flexsat.scenarios.simulation.SimulationScenario`; ``kind: slew`` a
     :class:`flexsat.scenarios.slew.SlewScenario`; ``kind: ppf`` a
-    :class:`flexsat.scenarios.ppf.PPFScenario`; ``kind: sweep`` and ``kind: montecarlo`` a
+    :class:`flexsat.scenarios.ppf.PPFScenario`; ``kind: tether`` a
+    :class:`flexsat.scenarios.tether.TetherScenario`; ``kind: sweep`` and ``kind: montecarlo`` a
     :class:`flexsat.scenarios.batch.BatchScenario`; ``kind: identification`` an
     :class:`flexsat.scenarios.identification.IdentificationScenario`.
 
@@ -172,11 +173,13 @@ def load_scenario(source: str | bytes | Path):
         from flexsat.scenarios.slew import SlewScenario as model
     elif kind == "ppf":
         from flexsat.scenarios.ppf import PPFScenario as model
+    elif kind == "tether":
+        from flexsat.scenarios.tether import TetherScenario as model
     elif kind == "maneuver":
         model = Scenario
     else:
-        raise ScenarioError([f"kind: must be 'maneuver', 'simulation', 'slew', 'ppf', 'sweep', "
-                             f"'montecarlo' or 'identification', got {kind!r}"])
+        raise ScenarioError([f"kind: must be 'maneuver', 'simulation', 'slew', 'ppf', 'tether', "
+                             f"'sweep', 'montecarlo' or 'identification', got {kind!r}"])
     try:
         scenario = model.model_validate(data)
     except ValidationError as exc:
