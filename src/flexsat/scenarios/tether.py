@@ -132,6 +132,14 @@ class TetherScenario(_Document):
     @model_validator(mode="after")
     def _checks(self):
         check_unique_labels(self.runs)
+        from flexsat.dynamics.tether import MIN_LENGTH
+
+        for index, run in enumerate(self.runs):
+            if run.final_length <= MIN_LENGTH * self.system.length:
+                raise ValueError(_locate(
+                    f"runs{_item(index, run.label)}.final_length",
+                    f"{run.final_length * 1e3:g} mm is below the collapse threshold "
+                    f"{MIN_LENGTH:g} L = {MIN_LENGTH * self.system.length:g} m of the model"))
         if self.initial.length_rate is not None and any(r.law == "rate" for r in self.runs):
             raise ValueError("initial.length_rate: a rate-law run sets the length rate itself; "
                              "leave it out")
