@@ -34,7 +34,7 @@ def test_v14_integral_of_motion_is_constant_with_the_length_held():
     # V14 (spec §11, L4357-L4363): λ ≡ 1 (rate control, λ' = 0), F̂ = 0, θ = φ = 5° at rest.
     # DOP853 at rtol 1e-12 over two orbits: V1 (~1.1e-2) varies by < 1e-10 absolute.
     tau = np.linspace(0, 4 * np.pi, 801)
-    run = integrate(lambda x: (np.zeros(len(x)), np.zeros(len(x))), X0, tau, control="rate",
+    run = integrate(lambda x: (0 * x[..., 0], 0 * x[..., 0]), X0, tau, control="rate",
                     rtol=1e-12, atol=1e-14)
     V1 = run.integral_of_motion[0]
     assert V1[0] == pytest.approx(0.5 * (3 * np.cos(D5) ** 2 + 4) * np.sin(D5) ** 2, rel=1e-14)
@@ -130,7 +130,7 @@ def test_rk4_step_of_the_plant_matches_the_continuous_integration():
     u = np.array([[3.0, 0.0]])
     for k in range(2000):
         x = plant.step(x, u, tau[1])
-    ref = integrate(lambda x: (3.0 + 0 * x[:, 0], 0 * x[:, 0]), X0, tau[[0, -1]], rtol=1e-12,
+    ref = integrate(lambda x: (3.0 + 0 * x[..., 0], 0 * x[..., 0]), X0, tau[[0, -1]], rtol=1e-12,
                     atol=1e-14)
     np.testing.assert_allclose(x[0], ref.state[0, -1], atol=1e-8)
 
@@ -160,13 +160,13 @@ def test_non_physical_lengths_and_modes_are_refused():
     with pytest.raises(ValueError, match="control: must be one of"):
         TetheredSubsatellite(control="thrust")
     with pytest.raises(ValueError, match=r"x0 \(lambda\): the tether length must be > 0"):
-        integrate(lambda x: (0 * x[:, 0], 0 * x[:, 0]), [0.0, 0, 0, 0, 0, 0], [0, 1])
+        integrate(lambda x: (0 * x[..., 0], 0 * x[..., 0]), [0.0, 0, 0, 0, 0, 0], [0, 1])
     with pytest.raises(ValueError, match="tau: must be a 1-D strictly increasing"):
-        integrate(lambda x: (0 * x[:, 0], 0 * x[:, 0]), X0, [1.0, 0.0])
+        integrate(lambda x: (0 * x[..., 0], 0 * x[..., 0]), X0, [1.0, 0.0])
     # reeling in at λ' = -1 from λ = 3e-4 collapses the tether at τ = 2e-4: reported, not
     # integrated past
     with pytest.raises(ValueError, match=r"fell to 0.0001 L \(collapsed\) at τ = 0.0002"):
-        integrate(lambda x: (-1 + 0 * x[:, 0], 0 * x[:, 0]), [3e-4, D5, D5, 0, 0, 0], [0, 1.0],
+        integrate(lambda x: (-1 + 0 * x[..., 0], 0 * x[..., 0]), [3e-4, D5, D5, 0, 0, 0], [0, 1.0],
                   control="rate")
     x = plant.state_from(length="2 km", pitch="5 deg", roll="-3 deg")
     np.testing.assert_allclose(x, [2000.0, D5, np.radians(-3), 0, 0, 0])

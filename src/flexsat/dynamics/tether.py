@@ -41,7 +41,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.units import to_si_array
 from flexsat.validation import require_finite, require_positive
 
 __all__ = ["EARTH_MU", "EARTH_RADIUS", "TetherScales", "TetheredSubsatellite", "accelerations",
@@ -358,9 +357,10 @@ def integrate(law, x0, tau, control: str = "tension", rtol: float = 1e-10,
     Parameters
     ----------
     law : callable
-        ``law(x)`` with x (n_cases, 6) nondimensional → (u, F̂), each (n_cases,): u the tension
-        T̂ (``control="tension"``) or the length rate λ' (``"rate"``; x[:, 3] is then
-        meaningless and ignored).
+        ``law(x)`` with x (..., n_cases, 6) nondimensional → (u, F̂), each (..., n_cases): u
+        the tension T̂ (``control="tension"``) or the length rate λ' (``"rate"``; x[..., 3] is
+        then meaningless and ignored). It is called with x (n_cases, 6) during the integration
+        and once with (n_t, n_cases, 6) for the recorded commands.
     x0 : array_like (6,) or (n_cases, 6)
         Initial [λ, θ, φ, λ', θ', φ'] (rad, per unit τ); λ > 0.
     tau : array_like (n_t,)
@@ -395,12 +395,6 @@ def integrate(law, x0, tau, control: str = "tension", rtol: float = 1e-10,
     nc = x0.shape[0]
     rate = control == "rate"
 
-    def full(y):
-        x = y[:, :6].copy()
-        if rate:
-            x[:, 3] = law(x)[0]
-        return x
-
     def rhs(_t, flat):
         y = flat.reshape(nc, 7)
         x = y[:, :6].copy()
@@ -431,8 +425,12 @@ def integrate(law, x0, tau, control: str = "tension", rtol: float = 1e-10,
                          f"{sol.t_events[0][0]:.6g}")
     if sol.status != 0:
         raise ValueError(f"tau: integration failed at τ = {sol.t[-1]:.6g}: {sol.message}")
-    Y = sol.y.reshape(nc, 7, -1).transpose(0, 2, 1)
-    X = np.stack([full(Y[:, k]) for k in range(tau.size)], 1)
-    U = np.stack([np.stack(np.broadcast_arrays(*[np.asarray(v, float) for v in law(X[:, k])]),
-                           -1) * np.ones((nc, 1)) for k in range(tau.size)], 1)
+    Y = sol.y.reshape(nc, 7, -1).transpose(2, 0, 1)  # (n_t, n_cases, 7)
+    # the law once on every sample: time leads, so per-case gains (n_cases,) broadcast
+    X = Y[..., :6].copy()
+    u, F = (np.broadcast_to(np.asarray(v, float), X.shape[:-1]) for v in law(X))
+    if rate:
+        X[..., 3] = u
+    U = np.stack([u, F], -1)
+    X, U, Y = (np.swapaxes(a, 0, 1) for a in (X, U, Y))
     return ClosedLoopRun(tau, X, U, Y[..., 6])
