@@ -241,6 +241,15 @@ def test_thrust_index_integrates_the_magnitude():
         thrust_index([0, 1, 2], [1.0, 2.0])
 
 
+def test_final_length_with_units_is_divided_by_the_reference_length():
+    law = CoupledTetherLaw(1.0, 0.0, 3.0, 2.0, "200 m", scales=PAPER)
+    assert law.final_length == pytest.approx(0.01, rel=1e-12)
+    with pytest.raises(ValueError, match="final_length"):
+        CoupledTetherLaw(1.0, 0.0, 3.0, 2.0, "200 kg", scales=PAPER)
+    with pytest.raises(ValueError, match="final_length: must be > 0"):
+        CoupledTetherLaw(1.0, 0.0, 3.0, 2.0, "-2 km", scales=PAPER)
+
+
 @pytest.mark.parametrize("make, message", [
     (lambda: CoupledTetherLaw(0.0, 0, 3, 2, 0.01), "K1: must be > 0"),
     (lambda: CoupledTetherLaw(1.0, -1, 3, 2, 0.01), "K2: must be >= 0"),

@@ -53,6 +53,7 @@ import numpy as np
 
 from flexsat.control.base import Controller
 from flexsat.dynamics.tether import TetherScales, integral_of_motion, require_lengths
+from flexsat.units import holds_quantity
 from flexsat.validation import require_finite, require_nonneg, require_positive
 
 __all__ = ["DecoupledTetherLaw", "CoupledTetherLaw", "TetherRateLaw", "thrust_index",
@@ -117,6 +118,9 @@ class _TetherLaw(Controller):
         if not isinstance(self.scales, TetherScales):
             raise ValueError(f"scales: must be a TetherScales, got {type(scales).__name__}")
         for name, value in gains.items():
+            if name == "final_length" and holds_quantity(value, strings=True):
+                # a length with units ("200 m"): λf = l_f / L
+                value = require_positive(value, name, "m") / self.scales.length
             check = require_positive if name in ("K1", "final_length") else require_nonneg
             setattr(self, name, check(value, name))
         require_lengths(self.final_length, "final_length")
@@ -151,8 +155,9 @@ class DecoupledTetherLaw(_TetherLaw):
         Pitch weight (>= 0); K2 = 0 is the continuous Rupp law.
     K3 : float or array
         Length-rate damping, also the rate gain of y (>= 0).
-    final_length : float or array
-        λ_f, the nondimensional final length (> 0).
+    final_length : float, array, str or Quantity
+        λ_f, the nondimensional final length (> 0), or a length with units (``"200 m"``),
+        divided by the scales' L.
     scales : TetherScales, optional
     printed_sign : bool
         Use L4395's "+K3λφ'" (an erratum: the retrieval diverges) instead of "−".
@@ -187,8 +192,8 @@ class CoupledTetherLaw(_TetherLaw):
         Length stiffness (> 0).
     K2, K3, K4 : float or array
         Libration weight, length-rate damping and roll-rate thrust gain (>= 0).
-    final_length : float or array
-        λ_r (> 0).
+    final_length : float, array, str or Quantity
+        λ_r (> 0), nondimensional or a length with units (divided by L).
     scales : TetherScales, optional
     """
 
@@ -219,8 +224,8 @@ class TetherRateLaw(_TetherLaw):
         Retrieval rate constant (> 0): λ'(0) = −K1(λ0 − λf) from rest.
     K2, K3 : float or array
         Weight of V1 and roll-rate thrust gain (>= 0).
-    final_length : float or array
-        λ_f (> 0).
+    final_length : float, array, str or Quantity
+        λ_f (> 0), nondimensional or a length with units (divided by L).
     scales : TetherScales, optional
     """
 
