@@ -262,6 +262,7 @@ _KINDS = {
     "slew": ("run_slew", "write_slew_report", lambda spec: len(spec.runs) + 2),
     "ppf": ("run_ppf", "write_ppf_report", lambda spec: len(spec.runs)),
     "star_tracker": ("run_star_tracker", "write_star_tracker_report", lambda spec: len(spec.runs)),
+    "tether": ("run_tether", "write_tether_report", lambda spec: len(spec.runs)),
     "identification": ("run_identification", "write_identification_report",
                        _identification_steps),
     "sweep": ("run_batch_scenario", "write_batch_report", _batch_steps),

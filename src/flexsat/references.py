@@ -72,6 +72,8 @@ ATTACHMENTS: dict[int, str] = {
        "Structures\", Journal of Guidance, Control, and Dynamics 11(6), 1988",
     8: "J. L. Junkins and G. H. James, \"A Stereo-Triangulation Approach to Sensing for "
        "Structural Identification\", AAS paper 88-015, 1988",
+    12: "S. R. Vadali and E.-S. Kim, \"Feedback Control of Tethered Satellites Using Liapunov "
+        "Stability Theory\", AIAA paper 90-1197, 1990",
 }
 
 _SEED = re.compile(r"seed (?:file )?(\d{3})_[0-9a-f]{16}\.txt")

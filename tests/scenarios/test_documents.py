@@ -10,6 +10,7 @@ import pytest
 import yaml
 
 from flexsat.scenarios import ScenarioError, default_scenario, load_scenario
+from flexsat.scenarios.documents import SCENARIO_KINDS
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "tamu_40deg.yaml"
 
@@ -57,10 +58,17 @@ def test_a_file_scenario_remembers_its_folder_and_text(tmp_path, monkeypatch):
     assert load_scenario(path.read_text()).folder == tmp_path  # text: the working directory
 
 
-def test_unknown_kind_is_refused():
-    assert problem(default_scenario().yaml_text + "kind: survey\n") == (
-        "kind: must be 'maneuver', 'simulation', 'slew', 'ppf', 'sweep', 'montecarlo' or 'identification', got "
-        "'survey'")
+def test_unknown_kind_is_refused_naming_every_kind():
+    message = problem(default_scenario().yaml_text + "kind: survey\n")
+    assert message.startswith("kind: must be 'maneuver', 'simulation', ")
+    assert message.endswith(" or 'identification', got 'survey'")
+    assert all(f"'{kind}'" in message for kind in SCENARIO_KINDS)
+
+
+@pytest.mark.parametrize("kind", ["survey", "[maneuver]"])
+def test_a_kind_is_one_of_the_names(kind):
+    assert problem(default_scenario().yaml_text.replace("\nname:", f"\nkind: {kind}\nname:", 1)
+                   ).startswith("kind: must be 'maneuver'")
 
 
 # -- the YAML: bounded, unambiguous ----------------------------------------------------------------

@@ -32,6 +32,7 @@ _EXPORTS = {
     "BeamInOrbit": "orbit",
     "RigidSpacecraft": "rigid_spacecraft",
     "FlexibleSpacecraft": "flexible_spacecraft",
+    "TetheredSubsatellite": "tether", "TetherScales": "tether",
 }
 
 __all__ = list(_EXPORTS)

@@ -52,6 +52,7 @@ _EXPORTS = {
     "StarTrackerScenario": "star_tracker",
     "StarTrackerResult": "star_tracker",
     "run_star_tracker": "star_tracker",
+    "TetherScenario": "tether", "TetherResult": "tether", "run_tether": "tether",
     "BatchScenario": "batch",
     "BatchResult": "batch",
     "run_batch_scenario": "batch",

@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import importlib
 from importlib import resources
 from pathlib import Path
 
@@ -13,6 +14,19 @@ from pydantic import ValidationError
 from flexsat import limits
 from flexsat.scenarios.errors import ScenarioError, _problem
 from flexsat.scenarios.maneuver import Scenario
+
+#: per scenario ``kind``: the module and the pydantic model that validate it (imported on use)
+SCENARIO_KINDS = {
+    "maneuver": ("flexsat.scenarios.maneuver", "Scenario"),
+    "simulation": ("flexsat.scenarios.simulation", "SimulationScenario"),
+    "slew": ("flexsat.scenarios.slew", "SlewScenario"),
+    "ppf": ("flexsat.scenarios.ppf", "PPFScenario"),
+    "star_tracker": ("flexsat.scenarios.star_tracker", "StarTrackerScenario"),
+    "tether": ("flexsat.scenarios.tether", "TetherScenario"),
+    "sweep": ("flexsat.scenarios.batch", "BatchScenario"),
+    "montecarlo": ("flexsat.scenarios.batch", "BatchScenario"),
+    "identification": ("flexsat.scenarios.identification", "IdentificationScenario"),
+}
 
 DEFAULT_SCENARIO = "tamu_default.yaml"  # package data of flexsat.cases
 
@@ -140,14 +154,9 @@ def _parse(text: str):
 def load_scenario(source: str | bytes | Path):
     """Parse and validate a scenario (stage 1: YAML, schema, units, section rules).
 
-    ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: simulation`` a
-    :class:`flexsat.scenarios.simulation.SimulationScenario`; ``kind: slew`` a
-    :class:`flexsat.scenarios.slew.SlewScenario`; ``kind: ppf`` a
-    :class:`flexsat.scenarios.ppf.PPFScenario`; ``kind: star_tracker`` a
-    :class:`flexsat.scenarios.star_tracker.StarTrackerScenario`; ``kind: sweep`` and
-    ``kind: montecarlo`` a
-    :class:`flexsat.scenarios.batch.BatchScenario`; ``kind: identification`` an
-    :class:`flexsat.scenarios.identification.IdentificationScenario`.
+    ``kind`` (default ``maneuver``) picks the scenario model, :data:`SCENARIO_KINDS`: a
+    :class:`Scenario` for a maneuver, a :class:`flexsat.scenarios.batch.BatchScenario` for a
+    sweep or a Monte Carlo, ...
 
     Parameters
     ----------
@@ -164,23 +173,12 @@ def load_scenario(source: str | bytes | Path):
     if not isinstance(data, dict):
         raise ScenarioError(["scenario: must be a YAML mapping (name, case, simulation, runs, ...)"])
     kind = data.get("kind", "maneuver")
-    if kind == "identification":
-        from flexsat.scenarios.identification import IdentificationScenario as model
-    elif kind == "simulation":
-        from flexsat.scenarios.simulation import SimulationScenario as model
-    elif kind in ("sweep", "montecarlo"):
-        from flexsat.scenarios.batch import BatchScenario as model
-    elif kind == "slew":
-        from flexsat.scenarios.slew import SlewScenario as model
-    elif kind == "ppf":
-        from flexsat.scenarios.ppf import PPFScenario as model
-    elif kind == "star_tracker":
-        from flexsat.scenarios.star_tracker import StarTrackerScenario as model
-    elif kind == "maneuver":
-        model = Scenario
-    else:
-        raise ScenarioError([f"kind: must be 'maneuver', 'simulation', 'slew', 'ppf', 'sweep', "
-                             f"'montecarlo' or 'identification', got {kind!r}"])
+    if not isinstance(kind, str) or kind not in SCENARIO_KINDS:
+        known = [repr(k) for k in SCENARIO_KINDS]
+        raise ScenarioError([f"kind: must be {', '.join(known[:-1])} or {known[-1]}, got "
+                             f"{kind!r}"])
+    module, name = SCENARIO_KINDS[kind]
+    model = getattr(importlib.import_module(module), name)
     try:
         scenario = model.model_validate(data)
     except ValidationError as exc:
@@ -196,4 +194,4 @@ def default_scenario() -> Scenario:
     return load_scenario(resources.files("flexsat.cases").joinpath(DEFAULT_SCENARIO).read_text())
 
 
-__all__ = ["DEFAULT_SCENARIO", "default_scenario", "load_scenario"]
+__all__ = ["DEFAULT_SCENARIO", "SCENARIO_KINDS", "default_scenario", "load_scenario"]

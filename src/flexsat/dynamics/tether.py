@@ -1,0 +1,436 @@
+r"""Tethered subsatellite: the three-degree-of-freedom libration and length dynamics of a point
+mass on a straight massless tether below (or above) a body in a circular orbit (Vadali & Kim,
+AIAA 90-1197; seed 000, Att. 12, L4319-L4333; spec seed000_part2.md §7.3).
+
+Nondimensional form (seed 000 Eq. 4), τ = Ω t, λ = l/L, T̂ = T/(mΩ²L), F̂ = F/(mΩ²L), ' = d/dτ:
+
+.. math::
+
+    \lambda'' - \lambda[\phi'^2 + \cos^2\phi(1+\theta')^2 - 1 + 3\cos^2\phi\cos^2\theta]
+        &= -\hat T \\
+    \theta'' + 2(\lambda'/\lambda - \phi'\tan\phi)(1+\theta') + 3\cos\theta\sin\theta &= 0 \\
+    \phi'' + 2(\lambda'/\lambda)\phi' + \cos\phi\sin\phi[(1+\theta')^2 + 3\cos^2\theta]
+        &= \hat F/\lambda
+
+θ is the in-plane pitch, φ the out-of-plane roll (the paper calls it "yaw" once, L4325; spec
+§13 flag 20), l the tether length, T the tension, F the out-of-plane thrust on the subsatellite
+of mass m, Ω the orbital rate and L the reference length. With the length rate as the control
+(the tether-rate law, Eq. 24) the first equation is replaced by λ' = u.
+
+The integral of motion (Eq. 8) and its rate (Eq. 9; the thrust term added, spec §7.5):
+
+.. math::
+
+    V_1 = \tfrac12(\theta'^2\cos^2\phi + 3\sin^2\theta\cos^2\phi + \phi'^2 + 4\sin^2\phi),
+    \qquad V_1' = -2\frac{\lambda'}{\lambda}[\theta'(1+\theta')\cos^2\phi + \phi'^2]
+                  + \phi'\hat F/\lambda
+
+so V1 is constant while the length is held and no thrust acts.
+
+:class:`TetheredSubsatellite` is the :class:`~flexsat.dynamics.plant.Plant` of the simulation
+core, in SI (state [l, θ, φ, l̇, θ̇, φ̇] with l̇ the length rate in m/s; rate control drops l̇
+from the state); :class:`TetherScales` converts between the two forms. The kernels
+(:func:`accelerations`, :func:`integral_of_motion`, :func:`integrate`) work on nondimensional
+arrays with a leading case axis.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexsat.dynamics.plant import Channel, Plant
+from flexsat.validation import require_finite, require_positive
+
+__all__ = ["EARTH_MU", "EARTH_RADIUS", "TetherScales", "TetheredSubsatellite", "accelerations",
+           "rate_control_accelerations", "integral_of_motion", "integral_of_motion_rate",
+           "require_lengths", "integrate", "MIN_LENGTH", "ClosedLoopRun", "CONTROLS"]
+
+#: Earth's gravitational parameter, m³/s² (WGS 84), for the orbit rate of a circular orbit
+EARTH_MU = 3.986004418e14
+#: Earth's equatorial radius, m (WGS 84)
+EARTH_RADIUS = 6378137.0
+#: a nondimensional length below which the tether is taken as collapsed (:func:`integrate`
+#: stops): Eq. 4's λ'/λ terms are singular at λ = 0, and an adaptive integrator approaching it
+#: takes steps ~λ, never arriving; 1e-4 L is 2 m of the paper's 20 km tether
+MIN_LENGTH = 1e-4
+#: the input modes: tension and thrust (Eqs. 4), or length rate and thrust (Eq. 24 with Eq. 4)
+CONTROLS = ("tension", "rate")
+
+
+def require_lengths(lam, field: str = "lambda") -> np.ndarray:
+    """``lam`` as a float array of nondimensional tether lengths, each finite and > 0 (Eq. 4
+    divides by λ: a zero or negative length is no tether)."""
+    arr = require_finite(lam, field)
+    if np.any(arr <= 0):
+        raise ValueError(f"{field}: the tether length must be > 0, got min {arr.min():.6g}")
+    return arr
+
+
+def accelerations(x, tension, thrust) -> np.ndarray:
+    r"""(λ'', θ'', φ'') of Eq. 4 at nondimensional states x = [λ, θ, φ, λ', θ', φ'] (..., 6),
+    tension T̂ and thrust F̂ (...,); unchecked (a kernel)."""
+    lam, th, ph, dl, dth, dph = (x[..., i] for i in range(6))
+    c, s, ct, st = np.cos(ph), np.sin(ph), np.cos(th), np.sin(th)
+    w = 1.0 + dth
+    out = np.empty(np.broadcast_shapes(x.shape, np.shape(tension) + (6,))[:-1] + (3,))
+    out[..., 0] = lam * (dph * dph + c * c * w * w - 1.0 + 3.0 * c * c * ct * ct) - tension
+    out[..., 1] = -2.0 * (dl / lam - dph * s / c) * w - 3.0 * ct * st
+    out[..., 2] = -2.0 * (dl / lam) * dph - c * s * (w * w + 3.0 * ct * ct) + thrust / lam
+    return out
+
+
+def rate_control_accelerations(x, length_rate, thrust) -> np.ndarray:
+    r"""(θ'', φ'') of Eq. 4 with the length rate λ' as the control, at nondimensional states
+    x = [λ, θ, φ, θ', φ'] (..., 5); unchecked."""
+    full = np.concatenate([x[..., :3], np.asarray(length_rate, float)[..., None]
+                           + 0 * x[..., :1], x[..., 3:]], -1)
+    return accelerations(full, 0.0, thrust)[..., 1:]
+
+
+def integral_of_motion(theta, phi, theta_rate, phi_rate) -> np.ndarray:
+    r"""V1 of Eq. 8, :math:`\tfrac12(\theta'^2\cos^2\phi + 3\sin^2\theta\cos^2\phi + \phi'^2 +
+    4\sin^2\phi)` (nondimensional rates)."""
+    c2 = np.cos(phi) ** 2
+    return 0.5 * (theta_rate ** 2 * c2 + 3.0 * np.sin(theta) ** 2 * c2 + phi_rate ** 2
+                  + 4.0 * np.sin(phi) ** 2)
+
+
+def integral_of_motion_rate(x, thrust=0.0) -> np.ndarray:
+    r"""V1' of Eq. 9 with the thrust term φ'F̂/λ (spec §7.5) at x = [λ, θ, φ, λ', θ', φ']."""
+    lam, ph, dl, dth, dph = x[..., 0], x[..., 2], x[..., 3], x[..., 4], x[..., 5]
+    return (-2.0 * dl / lam * (dth * (1.0 + dth) * np.cos(ph) ** 2 + dph ** 2)
+            + dph * thrust / lam)
+
+
+@dataclass(frozen=True)
+class TetherScales:
+    """The scales of the nondimensional form: Ω, m and L (seed 000 L4329).
+
+    Parameters
+    ----------
+    orbit_rate : float, str or Quantity, optional
+        Ω, rad/s (> 0). Give it or ``altitude``.
+    altitude : float, str or Quantity, optional
+        Altitude of the circular orbit above the equatorial radius, m (>= 0); Ω = √(μ/(R+h)³).
+    mass : float, str or Quantity
+        Subsatellite mass m, kg (> 0).
+    length : float, str or Quantity
+        Reference tether length L, m (> 0).
+
+    The paper's case (L4397-L4401): 220 km (Ω = 0.07068 rad/min), m = 22.7 kg, L = 20 km, so
+    one unit of T̂ or F̂ is mΩ²L = 0.630 N, of ∫|F̂|dτ mΩL = 534.8 N s, of λ' LΩ = 23.56 m/s.
+    """
+
+    mass: float = 1.0
+    length: float = 1.0
+    orbit_rate: float | None = None
+    altitude: float | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "mass", float(require_positive(self.mass, "mass", "kg")))
+        object.__setattr__(self, "length", float(require_positive(self.length, "length", "m")))
+        if (self.orbit_rate is None) == (self.altitude is None):
+            if self.orbit_rate is None:  # neither: the nondimensional form itself
+                object.__setattr__(self, "orbit_rate", 1.0)
+                return
+            raise ValueError("orbit_rate: give the orbit rate or the altitude, not both")
+        if self.altitude is not None:
+            h = float(require_finite(self.altitude, "altitude", "m"))
+            if h < 0:
+                raise ValueError(f"altitude: must be >= 0 (above the Earth's surface), got {h} m")
+            object.__setattr__(self, "altitude", h)
+            object.__setattr__(self, "orbit_rate", float(np.sqrt(EARTH_MU
+                                                                 / (EARTH_RADIUS + h) ** 3)))
+        else:
+            object.__setattr__(self, "orbit_rate",
+                               float(require_positive(self.orbit_rate, "orbit_rate", "rad/s")))
+
+    @property
+    def force(self) -> float:
+        """mΩ²L, N per unit of T̂ or F̂."""
+        return self.mass * self.orbit_rate ** 2 * self.length
+
+    @property
+    def impulse(self) -> float:
+        """mΩL, N s per unit of ∫|F̂|dτ."""
+        return self.mass * self.orbit_rate * self.length
+
+    @property
+    def speed(self) -> float:
+        """LΩ, m/s per unit of λ'."""
+        return self.length * self.orbit_rate
+
+    @property
+    def period(self) -> float:
+        """Orbital period 2π/Ω, s."""
+        return 2.0 * np.pi / self.orbit_rate
+
+    def state_to_si(self, xhat: np.ndarray) -> np.ndarray:
+        """[λ, θ, φ, (λ'), θ', φ'] → [l, θ, φ, (l̇), θ̇, φ̇] (6 or 5 entries)."""
+        return np.asarray(xhat, float) * self._factors(np.shape(xhat)[-1])
+
+    def state_from_si(self, x: np.ndarray) -> np.ndarray:
+        """[l, θ, φ, (l̇), θ̇, φ̇] → [λ, θ, φ, (λ'), θ', φ']."""
+        return np.asarray(x, float) / self._factors(np.shape(x)[-1])
+
+    def _factors(self, n: int) -> np.ndarray:
+        W, L = self.orbit_rate, self.length
+        if n == 6:
+            return np.array([L, 1.0, 1.0, L * W, W, W])
+        if n == 5:
+            return np.array([L, 1.0, 1.0, W, W])
+        raise ValueError(f"state: must have 6 (tension control) or 5 (rate control) entries, "
+                         f"got {n}")
+
+
+class TetheredSubsatellite(Plant):
+    r"""Eq. 4 in SI as a plant (module docstring).
+
+    Parameters
+    ----------
+    scales : TetherScales, optional
+        Ω, m, L; the default (1 rad/s, 1 kg, 1 m) makes SI and nondimensional values equal.
+    control : {"tension", "rate"}
+        ``tension``: inputs ``tension`` (N) and ``thrust`` (N), state [l, θ, φ, l̇, θ̇, φ̇];
+        ``rate``: inputs ``reel_rate`` (the commanded l̇, m/s) and ``thrust``, state
+        [l, θ, φ, θ̇, φ̇].
+
+    In the protocol's form the kinematics (and, with rate control, l̇ = u) are the linear part;
+    −T/m enters through B; the rest of the accelerations (ΩL²-scaled Eq. 4) is the nonlinear
+    force with B_f selecting the three (two) acceleration rows. :meth:`step` is classical RK4
+    with the inputs held.
+    """
+
+    nonlinear = True
+    recorded = ("length", "pitch", "roll", "length_rate", "integral_of_motion")
+
+    def __init__(self, scales: TetherScales | None = None, control: str = "tension"):
+        if control not in CONTROLS:
+            raise ValueError(f"control: must be one of {CONTROLS}, got {control!r}")
+        self.scales = TetherScales() if scales is None else scales
+        if not isinstance(self.scales, TetherScales):
+            raise ValueError(f"scales: must be a TetherScales, got {type(scales).__name__}")
+        self.control = control
+        first = (Channel("tension", "N", 1, "tether tension T (>= 0 for a tether)")
+                 if control == "tension" else
+                 Channel("reel_rate", "m/s", 1, "commanded tether length rate l̇"))
+        self.inputs = (first, Channel("thrust", "N", 1, "out-of-plane thrust F"))
+        self.outputs = (
+            Channel("length", "m", 1, "tether length l"),
+            Channel("pitch", "rad", 1, "in-plane pitch θ"),
+            Channel("roll", "rad", 1, "out-of-plane roll φ"),
+            Channel("length_rate", "m/s", 1, "tether length rate l̇"),
+            Channel("pitch_rate", "rad/s", 1, "pitch rate θ̇"),
+            Channel("roll_rate", "rad/s", 1, "roll rate φ̇"),
+            Channel("integral_of_motion", "", 1, "V1 of Eq. 8 (nondimensional)"),
+            Channel("state", "", self.nx, "the state vector (SI)"),
+        )
+        self.noise_channels = tuple(c.name for c in self.outputs
+                                    if c.name not in ("state", "integral_of_motion"))
+
+    @property
+    def nx(self) -> int:
+        return 6 if self.control == "tension" else 5
+
+    # -- the protocol's split -----------------------------------------------------------------
+    def linear_part(self):
+        """A: the kinematics (l̇, θ̇, φ̇ rows); B: −1/m on l̈ (tension) or 1 on l̇ (rate)."""
+        n = self.nx
+        A = np.zeros((n, n))
+        B = np.zeros((n, 2))
+        if self.control == "tension":
+            A[0:3, 3:6] = np.eye(3)
+            B[3, 0] = -1.0 / self.scales.mass
+        else:
+            A[1, 3] = A[2, 4] = 1.0
+            B[0, 0] = 1.0
+        return A, B
+
+    @property
+    def force_matrix(self) -> np.ndarray:
+        n = self.nx
+        Bf = np.zeros((n, n - 3))
+        Bf[3:, :] = np.eye(n - 3)
+        return Bf
+
+    def _nondimensional(self, x, u):
+        s = self.scales
+        xhat = x / s._factors(self.nx)
+        return xhat, u[..., 0], u[..., 1] / s.force
+
+    def nonlinear_force(self, x, u) -> np.ndarray:
+        """The accelerations of Eq. 4 in SI less the linear −T/m (module docstring)."""
+        s = self.scales
+        W2 = s.orbit_rate ** 2
+        xhat, u0, Fhat = self._nondimensional(np.asarray(x, float), np.asarray(u, float))
+        if self.control == "tension":
+            acc = accelerations(xhat, 0.0, Fhat)
+            return acc * np.array([s.length * W2, W2, W2])
+        return rate_control_accelerations(xhat, u0 / s.speed, Fhat) * W2
+
+    def rhs(self, x, u) -> np.ndarray:
+        """ẋ = A x + B u + B_f f(x, u), SI."""
+        A, B = self.linear_part()
+        return x @ A.T + u @ B.T + self.nonlinear_force(x, u) @ self.force_matrix.T
+
+    def step(self, x, u, h) -> np.ndarray:
+        """One classical RK4 step h (s) with u held."""
+        u = np.asarray(u, float)
+        k1 = self.rhs(x, u)
+        k2 = self.rhs(x + h / 2 * k1, u)
+        k3 = self.rhs(x + h / 2 * k2, u)
+        k4 = self.rhs(x + h * k3, u)
+        return x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+    # -- outputs ---------------------------------------------------------------------------
+    _ROWS = {"length": 0, "pitch": 1, "roll": 2}
+
+    def output_matrices(self, name: str):
+        n = self.nx
+        rows = dict(self._ROWS)
+        rows.update({"length_rate": 3, "pitch_rate": 4, "roll_rate": 5} if n == 6 else
+                    {"pitch_rate": 3, "roll_rate": 4})
+        if name == "state":
+            return np.eye(n), np.zeros((n, 2)), None
+        if name == "length_rate" and n == 5:  # rate control: the commanded rate itself
+            return np.zeros((1, n)), np.array([[1.0, 0.0]]), None
+        if name in rows:
+            return np.eye(n)[[rows[name]]], np.zeros((1, 2)), None
+        return None
+
+    def output(self, name: str, x, u=None, f_in=None) -> np.ndarray:
+        self._size(name)
+        if name == "integral_of_motion":
+            xhat = np.asarray(x, float) / self.scales._factors(self.nx)
+            k = 3 if self.nx == 6 else 2
+            return integral_of_motion(xhat[..., 1], xhat[..., 2], xhat[..., k + 1],
+                                      xhat[..., k + 2])
+        if u is None:
+            u = np.zeros(np.shape(x)[:-1] + (2,))
+        return super().output(name, x, u, f_in)
+
+    def state_from(self, **values) -> np.ndarray:
+        """Initial state from ``length`` (> 0), ``pitch``, ``roll`` and their rates, SI (a
+        number, a Quantity or a unit string); the length has no default."""
+        x = super().state_from(**values)
+        if "length" not in values and "state" not in values:
+            raise ValueError("length: the initial tether length is required (> 0)")
+        require_lengths(x[0], "length")
+        return x
+
+
+# -- the closed loop in continuous time -------------------------------------------------------
+@dataclass(frozen=True)
+class ClosedLoopRun:
+    """A closed-loop run of :func:`integrate` (nondimensional).
+
+    Attributes
+    ----------
+    tau : (n_t,) array
+        Nondimensional time τ = Ωt.
+    state : (n_cases, n_t, 6) array
+        [λ, θ, φ, λ', θ', φ'] (λ' is the commanded rate under rate control).
+    control : (n_cases, n_t, 2) array
+        (T̂ or λ', F̂) of the law along the run.
+    thrust_index : (n_cases, n_t) array
+        ∫₀^τ |F̂| dτ, integrated with the motion.
+    """
+
+    tau: np.ndarray
+    state: np.ndarray
+    control: np.ndarray
+    thrust_index: np.ndarray
+
+    @property
+    def integral_of_motion(self) -> np.ndarray:
+        """V1 (Eq. 8) along the run, (n_cases, n_t)."""
+        x = self.state
+        return integral_of_motion(x[..., 1], x[..., 2], x[..., 4], x[..., 5])
+
+
+def integrate(law, x0, tau, control: str = "tension", rtol: float = 1e-10,
+              atol: float = 1e-12) -> ClosedLoopRun:
+    r"""Integrate Eq. 4 under a continuous feedback law (no sampling), vectorised over cases.
+
+    Parameters
+    ----------
+    law : callable
+        ``law(x)`` with x (..., n_cases, 6) nondimensional → (u, F̂), each (..., n_cases): u
+        the tension T̂ (``control="tension"``) or the length rate λ' (``"rate"``; x[..., 3] is
+        then meaningless and ignored). It is called with x (n_cases, 6) during the integration
+        and once with (n_t, n_cases, 6) for the recorded commands.
+    x0 : array_like (6,) or (n_cases, 6)
+        Initial [λ, θ, φ, λ', θ', φ'] (rad, per unit τ); λ > 0.
+    tau : array_like (n_t,)
+        Increasing output times, τ[0] the start.
+    control : {"tension", "rate"}
+    rtol, atol : float
+        Of scipy's DOP853 (8th order, adaptive): with the defaults the libration angles are
+        good to ~1e-9 rad over a few orbits.
+
+    Returns
+    -------
+    ClosedLoopRun
+
+    Raises
+    ------
+    ValueError
+        For a non-positive length, a bad grid or mode, or when the tether collapses (λ below
+        :data:`MIN_LENGTH`) or the integration fails (naming τ).
+    """
+    from scipy.integrate import solve_ivp
+
+    if control not in CONTROLS:
+        raise ValueError(f"control: must be one of {CONTROLS}, got {control!r}")
+    x0 = np.atleast_2d(require_finite(x0, "x0")).astype(float)
+    if x0.ndim != 2 or x0.shape[-1] != 6:
+        raise ValueError(f"x0: must have shape (6,) or (n_cases, 6), got {x0.shape}")
+    require_lengths(x0[:, 0], "x0 (lambda)")
+    tau = require_finite(tau, "tau")
+    if tau.ndim != 1 or tau.size < 2 or np.any(np.diff(tau) <= 0):
+        raise ValueError(f"tau: must be a 1-D strictly increasing grid of >= 2 times, got "
+                         f"shape {tau.shape}")
+    nc = x0.shape[0]
+    rate = control == "rate"
+
+    def rhs(_t, flat):
+        y = flat.reshape(nc, 7)
+        x = y[:, :6].copy()
+        u, F = (np.broadcast_to(np.asarray(v, float), (nc,)) for v in law(x))
+        if rate:
+            x[:, 3] = u
+            T = 0.0
+        else:
+            T = u
+        d = np.empty((nc, 7))
+        d[:, 0:3] = x[:, 3:6]
+        d[:, 3:6] = accelerations(x, T, F)
+        if rate:
+            d[:, 3] = 0.0
+        d[:, 6] = np.abs(F)
+        return d.ravel()
+
+    def collapsed(_t, flat):
+        return np.min(flat.reshape(nc, 7)[:, 0]) - MIN_LENGTH
+
+    collapsed.terminal = True
+    y0 = np.concatenate([x0, np.zeros((nc, 1))], 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sol = solve_ivp(rhs, (tau[0], tau[-1]), y0.ravel(), method="DOP853", t_eval=tau,
+                        rtol=rtol, atol=atol, events=collapsed)
+    if sol.status == 1:
+        raise ValueError(f"tau: the tether length fell to {MIN_LENGTH:g} L (collapsed) at τ = "
+                         f"{sol.t_events[0][0]:.6g}")
+    if sol.status != 0:
+        raise ValueError(f"tau: integration failed at τ = {sol.t[-1]:.6g}: {sol.message}")
+    Y = sol.y.reshape(nc, 7, -1).transpose(2, 0, 1)  # (n_t, n_cases, 7)
+    # the law once on every sample: time leads, so per-case gains (n_cases,) broadcast
+    X = Y[..., :6].copy()
+    u, F = (np.broadcast_to(np.asarray(v, float), X.shape[:-1]) for v in law(X))
+    if rate:
+        X[..., 3] = u
+    U = np.stack([u, F], -1)
+    X, U, Y = (np.swapaxes(a, 0, 1) for a in (X, U, Y))
+    return ClosedLoopRun(tau, X, U, Y[..., 6])

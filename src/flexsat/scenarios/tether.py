@@ -1,0 +1,303 @@
+"""Tethered-subsatellite retrieval scenarios (``kind: tether``): Vadali & Kim's Liapunov laws
+(seed 000 Att. 12; :mod:`flexsat.control.tether_laws`) on the three-degree-of-freedom tether
+(:mod:`flexsat.dynamics.tether`), one run per law and gain set (issue 14, F21-F22)::
+
+    kind: tether
+    name: Vadali & Kim retrieval
+    system: {mass: 22.7 kg, length: 20 km, altitude: 220 km}   # or orbit_rate: 0.07068 rad/min
+    initial: {length: 20 km, pitch: 5 deg, roll: 5 deg}
+    simulation: {orbits: 2, samples_per_orbit: 1000, integrator: continuous}
+    runs:
+      - label: controller 2
+        law: coupled                      # decoupled (controller 1), coupled (2) or rate
+        gains: {K1: 1.0, K2: 0.0, K3: 3.0, K4: 2.0}
+        final_length: 200 m
+
+``system.length`` is the reference length L of the nondimensional form (λ = l/L); the initial
+rates default to zero (``length_rate`` is the law's own under rate control and may not be
+given). ``integrator: continuous`` integrates the continuous feedback (DOP853, the paper's
+setting) and samples it ``samples_per_orbit`` times an orbit; ``sampled`` runs the simulation
+core with the commands held between those samples (a digital controller; the zero-order hold
+costs accuracy, docs/tether.md). A decoupled run may set ``printed_sign: true`` to use the
+misprinted sign of Eq. 15 (it diverges).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from flexsat import limits
+from flexsat.scenarios.errors import ScenarioError, _item, _locate
+from flexsat.scenarios.fields import _Document, _Section, check_unique_labels, quantity
+
+#: the gains each law takes (seed 000 Eqs. 14-15, 18 and 20, 24-25)
+LAW_GAINS = {"decoupled": ("K1", "K2", "K3"), "coupled": ("K1", "K2", "K3", "K4"),
+             "rate": ("K1", "K2", "K3")}
+
+
+class TetherSystem(_Section):
+    """Subsatellite mass, reference length L and the orbit (altitude or rate)."""
+
+    mass: quantity("kg", positive=True)
+    length: quantity("m", positive=True)
+    altitude: quantity("m", optional=True) = None
+    orbit_rate: quantity("rad/s", optional=True, positive=True) = None
+
+    @model_validator(mode="after")
+    def _orbit(self):
+        self.scales()
+        return self
+
+    def scales(self):
+        from flexsat.dynamics.tether import TetherScales
+
+        if self.altitude is None and self.orbit_rate is None:
+            raise ValueError("altitude: give the orbit's altitude or its orbit_rate")
+        return TetherScales(mass=self.mass, length=self.length, altitude=self.altitude,
+                            orbit_rate=self.orbit_rate)
+
+
+class TetherInitial(_Section):
+    """Initial length and libration (rates default to rest)."""
+
+    length: quantity("m", positive=True)
+    pitch: quantity("rad") = 0.0
+    roll: quantity("rad") = 0.0
+    length_rate: quantity("m/s", optional=True) = None
+    pitch_rate: quantity("rad/s") = 0.0
+    roll_rate: quantity("rad/s") = 0.0
+
+
+class TetherSimulation(_Section):
+    """Run length in orbits, output (or control) samples per orbit and the integrator."""
+
+    orbits: float = Field(gt=0, allow_inf_nan=False)
+    samples_per_orbit: int = Field(1000, ge=20)
+    integrator: Literal["continuous", "sampled"] = "continuous"
+
+    @model_validator(mode="after")
+    def _samples(self):
+        n = self.orbits * self.samples_per_orbit
+        if n > limits.MAX_SAMPLES:
+            raise ValueError(f"simulation.samples_per_orbit: {n:.3g} samples is more than "
+                             f"{limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)")
+        return self
+
+
+class TetherRunSpec(_Section):
+    """One law with its gains and final length."""
+
+    label: str
+    law: Literal["decoupled", "coupled", "rate"]
+    gains: dict[str, float]
+    final_length: quantity("m", positive=True)
+    printed_sign: bool = False
+
+    @model_validator(mode="after")
+    def _gains(self):
+        need = LAW_GAINS[self.law]
+        missing = [k for k in need if k not in self.gains]
+        extra = [k for k in self.gains if k not in need]
+        if missing or extra:
+            raise ValueError(f"gains: law {self.law!r} takes {', '.join(need)}"
+                             + (f"; missing {', '.join(missing)}" if missing else "")
+                             + (f"; unknown {', '.join(extra)}" if extra else ""))
+        for k, v in self.gains.items():
+            if not np.isfinite(v) or v < 0 or (k == "K1" and v == 0):
+                rule = "> 0" if k == "K1" else ">= 0"
+                raise ValueError(f"gains: {k} must be finite and {rule}, got {v!r}")
+        if self.printed_sign and self.law != "decoupled":
+            raise ValueError("printed_sign: only the decoupled law (Eq. 15) has a printed sign")
+        return self
+
+
+class TetherScenario(_Document):
+    """A validated tether scenario (module docstring)."""
+
+    kind: Literal["tether"]
+    name: str
+    system: TetherSystem
+    initial: TetherInitial
+    simulation: TetherSimulation
+    runs: list[TetherRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
+
+    @property
+    def case(self) -> str:
+        return "Vadali & Kim tethered subsatellite"
+
+    @model_validator(mode="after")
+    def _checks(self):
+        check_unique_labels(self.runs)
+        from flexsat.dynamics.tether import MIN_LENGTH
+
+        for index, run in enumerate(self.runs):
+            if run.final_length <= MIN_LENGTH * self.system.length:
+                raise ValueError(_locate(
+                    f"runs{_item(index, run.label)}.final_length",
+                    f"{run.final_length * 1e3:g} mm is below the collapse threshold "
+                    f"{MIN_LENGTH:g} L = {MIN_LENGTH * self.system.length:g} m of the model"))
+        if self.initial.length_rate is not None and any(r.law == "rate" for r in self.runs):
+            raise ValueError("initial.length_rate: a rate-law run sets the length rate itself; "
+                             "leave it out")
+        return self
+
+
+# -- running -------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class TetherResult:
+    """The runs of a tether scenario.
+
+    Attributes
+    ----------
+    scenario : TetherScenario
+    labels : tuple of str
+    runs : tuple of flexsat.dynamics.tether.ClosedLoopRun
+        Nondimensional (τ, [λ, θ, φ, λ', θ', φ'], (T̂ or λ', F̂), ∫|F̂|dτ).
+    scales : flexsat.dynamics.tether.TetherScales
+    case_source : str
+    notes : tuple of str
+    """
+
+    scenario: TetherScenario
+    labels: tuple[str, ...]
+    runs: tuple
+    scales: object
+    case_source: str
+    notes: tuple[str, ...] = ()
+
+    def metrics_records(self) -> list[dict]:
+        """One JSON-ready dict per run: the paper's measures
+        (:func:`flexsat.cases.tether.measures`)."""
+        from flexsat.cases.tether import measures
+
+        records = []
+        for spec, label, run in zip(self.scenario.runs, self.labels, self.runs):
+            lf = spec.final_length / self.scales.length
+            records.append({"run": label, **measures(run, lf, self.scales, spec.law)})
+        return records
+
+    def dataset(self):
+        """Every run in one dataset over (run, time): time in s and ``orbits``; ``length`` (m),
+        ``pitch``, ``roll`` (rad), ``tension`` (N, NaN under rate control), ``reel_rate`` (m/s,
+        NaN under tension control), ``thrust`` (N), ``integral_of_motion`` (V1),
+        ``thrust_index`` (∫|F̂|dτ), and the metrics per run."""
+        import xarray as xr
+
+        s = self.scales
+        tau = self.runs[0].tau
+        rate = np.array([spec.law == "rate" for spec in self.scenario.runs])
+
+        def stack(f):
+            return np.stack([f(r) for r in self.runs])
+
+        command = stack(lambda r: r.control[0, :, 0])
+        ds = xr.Dataset(
+            {
+                "length": (("run", "time"), stack(lambda r: r.state[0, :, 0]) * s.length,
+                           {"units": "m"}),
+                "pitch": (("run", "time"), stack(lambda r: r.state[0, :, 1]), {"units": "rad"}),
+                "roll": (("run", "time"), stack(lambda r: r.state[0, :, 2]), {"units": "rad"}),
+                "tension": (("run", "time"),
+                            np.where(rate[:, None], np.nan, command * s.force), {"units": "N"}),
+                "reel_rate": (("run", "time"),
+                              np.where(rate[:, None], command * s.speed, np.nan),
+                              {"units": "m/s"}),
+                "thrust": (("run", "time"), stack(lambda r: r.control[0, :, 1]) * s.force,
+                           {"units": "N"}),
+                "integral_of_motion": (("run", "time"),
+                                       stack(lambda r: r.integral_of_motion[0])),
+                "thrust_index": (("run", "time"), stack(lambda r: r.thrust_index[0])),
+            },
+            coords={"run": list(self.labels), "time": tau / s.orbit_rate,
+                    "orbits": ("time", tau / (2 * np.pi))},
+        )
+        ds["time"].attrs["units"] = "s"
+        for rec in self.metrics_records():
+            for key, value in rec.items():
+                if key == "run":
+                    continue
+                if key not in ds:
+                    ds[key] = ("run", np.full(len(self.labels), np.nan))
+                ds[key].loc[rec["run"]] = np.nan if value is None else float(value)
+        ds["law"] = ("run", [spec.law for spec in self.scenario.runs])
+        ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
+                        case_source=self.case_source, scenario_yaml=self.scenario.yaml_text,
+                        orbit_rate_rad_s=s.orbit_rate, mass_kg=s.mass, length_m=s.length,
+                        integrator=self.scenario.simulation.integrator)
+        return ds
+
+
+def _sampled(plant, law, x0, tau, scales):
+    """The run on the simulation core (commands held between samples) as a ClosedLoopRun."""
+    from flexsat.control.tether_laws import thrust_index
+    from flexsat.dynamics.tether import ClosedLoopRun
+    from flexsat.sim.config import SimConfig
+    from flexsat.sim.engine import simulate
+
+    cfg = SimConfig(duration=tau[-1] / scales.orbit_rate,
+                    control_rate=scales.orbit_rate / tau[1], substeps=1)
+    ds = simulate(plant, law, cfg, initial_state=x0, record_states=True).dataset
+    first = "reel_rate" if plant.control == "rate" else "tension"
+    x = scales.state_from_si(ds["state"].values[0])
+    u0 = ds[first].values[0] / (scales.speed if plant.control == "rate" else scales.force)
+    F = ds["thrust"].values[0] / scales.force
+    if plant.control == "rate":
+        x = np.insert(x, 3, u0, axis=-1)
+    # the grid is uniform: each interval's ∫|F̂| from one call, then the running sum
+    pieces = thrust_index(tau[:2], np.stack([F[:-1], F[1:]], -1))
+    index = np.concatenate([[0.0], np.cumsum(pieces)])
+    return ClosedLoopRun(tau, x[None], np.stack([u0, F], -1)[None], index[None])
+
+
+def run_tether(scenario: TetherScenario,
+               progress: Callable[[str], None] | None = None) -> TetherResult:
+    """Run every law of the scenario from its initial state.
+
+    Raises
+    ------
+    ScenarioError
+        For a run whose tether collapses or whose integration fails (named by its label).
+    """
+    from flexsat.cases.tether import SOURCE, make_law
+    from flexsat.dynamics.tether import TetheredSubsatellite, integrate
+    from flexsat.references import cite
+
+    scales = scenario.system.scales()
+    ini, sim = scenario.initial, scenario.simulation
+    tau = np.linspace(0.0, 2 * np.pi * sim.orbits,
+                      int(round(sim.orbits * sim.samples_per_orbit)) + 1)
+    runs = []
+    for index, spec in enumerate(scenario.runs):
+        if progress is not None:
+            progress(spec.label)
+        control = "rate" if spec.law == "rate" else "tension"
+        try:
+            law = make_law(spec.law, spec.gains, spec.final_length / scales.length,
+                           scales=scales, printed_sign=spec.printed_sign)
+            x_si = np.array([ini.length, ini.pitch, ini.roll, ini.length_rate or 0.0,
+                             ini.pitch_rate, ini.roll_rate])
+            if sim.integrator == "continuous":
+                runs.append(integrate(law.nondimensional, scales.state_from_si(x_si), tau,
+                                      control=control))
+            else:
+                plant = TetheredSubsatellite(scales, control=control)
+                x0 = x_si if control == "tension" else np.delete(x_si, 3)
+                runs.append(_sampled(plant, law, x0, tau, scales))
+        except ValueError as exc:
+            raise ScenarioError([_locate(f"runs{_item(index, spec.label)}", str(exc))]) from None
+    notes = (
+        "Straight massless tether, no aerodynamics, circular orbit (the paper's model, "
+        "L4281, L4321). Eq. 15 with the repaired sign −K3λφ' (L4395 prints +, which diverges).",
+        "Thrust index ∫|F̂|dτ over the run; impulse = index × mΩL "
+        f"({scales.impulse:.4g} N s here). Settling: the time after which |θ| <= 5° and λ stays "
+        "within 2 % of its change from the final length.",
+    )
+    return TetherResult(scenario, tuple(r.label for r in scenario.runs), tuple(runs), scales,
+                        cite(SOURCE), notes)
+
+
+__all__ = ["LAW_GAINS", "TetherResult", "TetherScenario", "run_tether"]
