@@ -251,6 +251,8 @@ _KINDS = {
     # a slew also solves its nominal maneuver and runs the open loop
     "slew": ("run_slew", "write_slew_report", lambda spec: len(spec.runs) + 2),
     "ppf": ("run_ppf", "write_ppf_report", lambda spec: len(spec.runs)),
+    "cmg": ("run_cmg", "write_cmg_report", lambda spec: len(spec.runs) + 1),
+    "cmg_station": ("run_cmg_station", "write_cmg_report", lambda spec: len(spec.runs) + 1),
     "identification": ("run_identification", "write_identification_report",
                        _identification_steps),
     "sweep": ("run_batch_scenario", "write_batch_report", _batch_steps),

@@ -267,7 +267,7 @@ class GimbalRun:
 def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alpha: float = 0.0,
                       threshold: float = 1e-6, rtol: float = 1e-10, atol: float = 1e-12,
                       n_out: int = 201, null_target=None, null_gain: float = 1.0,
-                      null_alpha: float = 0.0) -> GimbalRun:
+                      null_alpha: float = 0.0, stop_at_singular: bool = True) -> GimbalRun:
     """Integrate σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque(t)) from σ0 (§8.3), forward (t_final > 0) or
     backward (t_final < 0: the preferred-angle back integration), stopping when the gain
     det(CCᵀ) falls to ``threshold`` (a terminal solve_ivp event).
@@ -284,6 +284,10 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
         Run null motion towards this set beside the torque law
         (:func:`steering_with_null_motion`, gain ``null_gain`` 1/s, projector weight
         ``null_alpha``); None: the torque law alone.
+    stop_at_singular : bool
+        Stop at the gain ``threshold`` (default). False runs to ``t_final`` whatever the gain
+        (for the SR inverse, α > 0, which passes singular sets; ``singular`` then says whether
+        the gain fell to the threshold on the way).
 
     Returns
     -------
@@ -309,8 +313,9 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
     thr = float(require_finite(threshold, "threshold"))
     if thr <= 0:
         raise ValueError(f"threshold: must be > 0, got {threshold!r}")
-    if gain(sig0, d, n) <= thr:
-        raise ValueError("sigma0: starts singular (det CCᵀ <= threshold)")
+    if stop_at_singular and gain(sig0, d, n) <= thr:
+        raise ValueError("sigma0: starts singular (det CCᵀ <= threshold); the pseudo-inverse "
+                         "cannot steer from it (use alpha > 0 and stop_at_singular=False)")
 
     if null_target is None:
         def rhs(t, s):
@@ -329,14 +334,19 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
 
     event.terminal = True
     event.direction = -1
-    sol = solve_ivp(rhs, (0.0, tf), sig0, method="DOP853", events=event, rtol=rtol, atol=atol,
+    sol = solve_ivp(rhs, (0.0, tf), sig0, method="DOP853",
+                    events=event if stop_at_singular else None, rtol=rtol, atol=atol,
                     dense_output=True)
     if sol.status == -1:
         raise RuntimeError(f"integrate_gimbals: solve_ivp failed: {sol.message}")
     t_end, singular = sol.t[-1], sol.status == 1
-    dip = _first_dip(sol, d, n, thr)
-    if dip is not None and abs(dip) < abs(t_end):
-        t_end, singular = dip, True
+    if stop_at_singular:
+        dip = _first_dip(sol, d, n, thr)
+        if dip is not None and abs(dip) < abs(t_end):
+            t_end, singular = dip, True
+    else:  # the gain on the dense output, 8 points a step: did it touch the threshold?
+        grid = np.linspace(sol.t[:-1], sol.t[1:], 9).T.ravel()
+        singular = bool(np.min(gain(sol.sol(grid).T, d, n)) <= thr)
     t = np.linspace(0.0, t_end, n_out)
     sig = sol.sol(t).T
     if t_end == sol.t[-1]:

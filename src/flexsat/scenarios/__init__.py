@@ -49,6 +49,7 @@ _EXPORTS = {
     "PPFScenario": "ppf",
     "PPFResult": "ppf",
     "run_ppf": "ppf",
+    "run_cmg": "cmg", "run_cmg_station": "cmg",
     "BatchScenario": "batch",
     "BatchResult": "batch",
     "run_batch_scenario": "batch",

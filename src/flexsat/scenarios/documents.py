@@ -172,11 +172,15 @@ def load_scenario(source: str | bytes | Path):
         from flexsat.scenarios.slew import SlewScenario as model
     elif kind == "ppf":
         from flexsat.scenarios.ppf import PPFScenario as model
+    elif kind in ("cmg", "cmg_station"):
+        from flexsat.scenarios import cmg
+        model = cmg.CmgScenario if kind == "cmg" else cmg.CmgStationScenario
     elif kind == "maneuver":
         model = Scenario
     else:
         raise ScenarioError([f"kind: must be 'maneuver', 'simulation', 'slew', 'ppf', 'sweep', "
-                             f"'montecarlo' or 'identification', got {kind!r}"])
+                             f"'montecarlo', 'identification', 'cmg' or 'cmg_station', got "
+                             f"{kind!r}"])
     try:
         scenario = model.model_validate(data)
     except ValidationError as exc:
