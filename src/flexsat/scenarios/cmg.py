@@ -295,7 +295,7 @@ def _one_run(run, cluster):
             sigma0, _demand_function(run.demand), run.duration, alpha=alpha,
             threshold=cluster.threshold, stop_at_singular=cluster.steering == "pi",
             null_target=None if null is None else _resolve(null.target, d, cluster),
-            null_gain=1.0 if null is None else null.gain, **kw)
+            null_gain=1.0 if null is None else null.gain, null_alpha=alpha, **kw)
     rates = np.gradient(g.sigma, g.t, axis=0)
     internal = None
     if g.singular:
