@@ -59,8 +59,8 @@ def test_a_file_scenario_remembers_its_folder_and_text(tmp_path, monkeypatch):
 
 def test_unknown_kind_is_refused():
     assert problem(default_scenario().yaml_text + "kind: survey\n") == (
-        "kind: must be 'maneuver', 'simulation', 'slew', 'ppf', 'sweep', 'montecarlo' or 'identification', got "
-        "'survey'")
+        "kind: must be 'maneuver', 'simulation', 'slew', 'ppf', 'sweep', 'montecarlo', "
+        "'identification', 'cmg' or 'cmg_station', got 'survey'")
 
 
 # -- the YAML: bounded, unambiguous ----------------------------------------------------------------
