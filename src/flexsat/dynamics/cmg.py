@@ -237,17 +237,28 @@ def steering_rates(sigma, torque, skew=SKEW, n_units: int = 4, alpha: float = 0.
     tq = require_finite(torque, "torque")
     if tq.ndim == 0 or tq.shape[-1] != 3:
         raise ValueError(f"torque: last axis must have 3 components, got shape {tq.shape}")
-    c = jacobian(sigma, skew, n_units)
+    sig, n = _sigma(sigma, n_units)
+    _, a, b = _axes(n, _require_skew(skew))
+    return steer(sig, tq, a, b, al)
+
+
+def steer(sig, torque, a, b, alpha):
+    """Unchecked kernel of :func:`steering_rates` (for plants that check once): ``sig``
+    (..., n) rad, ``torque`` (..., 3), axes ``a``, ``b`` of :func:`pyramid_axes`, α >= 0."""
+    c = np.swapaxes(-np.sin(sig)[..., :, None] * a + np.cos(sig)[..., :, None] * b, -1, -2)
     ct = np.swapaxes(c, -1, -2)
-    m = c @ ct + al * np.eye(3)
+    m = c @ ct
+    if alpha:
+        m = m + alpha * np.eye(3)
     lam = np.linalg.eigvalsh(m)
     # CCᵀ singular to working precision: its solve would return round-off amplified by 1/eps
     if np.any(lam[..., 0] <= 10 * np.finfo(float).eps * lam[..., -1]):
         raise ValueError("sigma: singular gimbal set (CCᵀ singular to working precision): the "
                          "pseudo-inverse has no solution; use alpha > 0 (singularity-robust "
                          "inverse)")
-    shape = np.broadcast_shapes(m.shape[:-1], tq.shape)
-    y = np.linalg.solve(np.broadcast_to(m, shape + (3,)), -np.broadcast_to(tq, shape)[..., None])
+    shape = np.broadcast_shapes(m.shape[:-1], torque.shape)
+    y = np.linalg.solve(np.broadcast_to(m, shape + (3,)),
+                        -np.broadcast_to(torque, shape)[..., None])
     return (ct @ y)[..., 0]
 
 

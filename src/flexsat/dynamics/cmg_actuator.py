@@ -125,6 +125,7 @@ class CmgSpacecraft(Plant):
                              f"{gimbal_rate_limit!r}")
         self.gimbal_rate_limit = float(limit)
         n = self.n_units
+        _, self._a, self._b = cmg.pyramid_axes(n, self.skew)
         self.outputs = ATTITUDE_OUTPUTS + (
             Channel("gimbal_angles", "rad", n, "gimbal angles σ"),
             Channel("gimbal_rates", "rad/s", n, "gimbal rates σ̇ after the rate limit"),
@@ -161,7 +162,16 @@ class CmgSpacecraft(Plant):
 
     def cmg_momentum(self, x) -> np.ndarray:
         """Cluster momentum h = h_r ĥ(σ), body axes, N m s, (..., 3)."""
-        return self.rotor_momentum * cmg.momentum(x[..., 7:], self.skew, self.n_units)
+        return self._momentum(x[..., 7:])
+
+    # unchecked kernels on the cached axes: they run at every RK stage
+    def _momentum(self, sig):
+        return self.rotor_momentum * (np.cos(sig) @ self._a + np.sin(sig) @ self._b)
+
+    def _hdot(self, sig, sdot):
+        """h_r C(σ) σ̇ = h_r Σ_i σ̇_i (−sinσ_i a_i + cosσ_i b_i)."""
+        return self.rotor_momentum * ((-np.sin(sig) * sdot) @ self._a
+                                      + (np.cos(sig) * sdot) @ self._b)
 
     def gimbal_rates(self, x, u) -> np.ndarray:
         """σ̇ of the steering law for the commanded torque u, after the rate limit (module
@@ -172,11 +182,12 @@ class CmgSpacecraft(Plant):
         ValueError
             With steering "pi" at a singular gimbal set (CCᵀ singular to working precision).
         """
-        w = x[..., 4:7]
-        h = self.cmg_momentum(x)
-        demand = (np.asarray(u, float) + cross3(w, h)) / self.rotor_momentum
+        return self._gimbal_rates(x[..., 4:7], x[..., 7:], np.asarray(u, float))
+
+    def _gimbal_rates(self, w, sig, u):
+        demand = (u + cross3(w, self._momentum(sig))) / self.rotor_momentum
         try:
-            rates = cmg.steering_rates(x[..., 7:], demand, self.skew, self.n_units, self.alpha)
+            rates = cmg.steer(sig, demand, self._a, self._b, self.alpha)
         except ValueError as err:
             raise ValueError(f"torque: the pseudo-inverse steering (steering='pi') cannot "
                              f"deliver it: {err}; configure steering='sr'") from None
@@ -187,13 +198,10 @@ class CmgSpacecraft(Plant):
 
     def _rates(self, w, sig, u):
         """(ω̇, σ̇) at body rate w, gimbals sig and command u."""
-        x = np.concatenate([np.zeros(w.shape[:-1] + (4,)), w, sig], -1)
-        sdot = self.gimbal_rates(x, u)
-        hr = self.rotor_momentum
-        h = hr * cmg.momentum(sig, self.skew, self.n_units)
-        hdot = hr * matvec(cmg.jacobian(sig, self.skew, self.n_units), sdot)
-        wdot = matvec(self.inertia_inverse,
-                      -cross3(w, matvec(self.inertia, w) + h) - hdot)
+        sdot = self._gimbal_rates(w, sig, np.asarray(u, float))
+        wdot = matvec(self.inertia_inverse, -cross3(w, matvec(self.inertia, w)
+                                                    + self._momentum(sig))
+                      - self._hdot(sig, sdot))
         return wdot, sdot
 
     def linear_part(self):
