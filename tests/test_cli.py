@@ -229,3 +229,25 @@ def test_modes_refuses_more_modes_than_the_limit():
     assert result.exit_code == 2
     assert unwrapped(result.stderr).startswith(
         "--modes: modes asked for = 1e+06, above the limit 100 (flexsat.limits)")
+
+
+def test_the_metrics_table_puts_the_longer_list_down_the_rows():
+    """A few runs: a column per run. A batch's many summary rows (a row per metric and per
+    requirement, a few statistics each): a column per statistic, so the table fits a terminal."""
+    from rich.console import Console
+
+    from flexsat.cli import _metrics_table
+
+    def shown(records):
+        console = Console(width=100, record=True)
+        console.print(_metrics_table(records))
+        return console.export_text().splitlines()
+
+    runs = [{"run": "Law I", "overshoot_deg": 1.5, "settling_time_s": 3.0},
+            {"run": "Law II", "overshoot_deg": 0.5, "settling_time_s": 2.0}]
+    header = next(line for line in shown(runs) if "Law II" in line)
+    assert "metric" in header and "Law I" in header
+    batch = [{"run": f"metric_{i}", "p5": 1.0, "median": 2.0, "p95": 3.0} for i in range(5)]
+    lines = shown(batch)
+    assert any("p5" in line and "median" in line and "p95" in line for line in lines)
+    assert sum(line.count("metric_") for line in lines) == 5  # one row each

@@ -198,9 +198,19 @@ def modes(
 
 
 def _metrics_table(records: list[dict]) -> Table:
-    from flexsat.report import metric_rows
+    """One column per run and a row per metric; transposed when the runs outnumber the metrics
+    (a batch's table: a row per metric of the cases and per requirement), so that it fits."""
+    from flexsat.report import format_metric, metric_rows
 
     table = Table(title="metrics")
+    names = [key for key in records[0] if key != "run"]
+    if len(records) > len(names):
+        table.add_column("")
+        for name in names:
+            table.add_column(name, justify="right")
+        for record in records:
+            table.add_row(Text(record["run"]), *(format_metric(record[n]) for n in names))
+        return table
     table.add_column("metric")
     for record in records:
         table.add_column(Text(record["run"]), justify="right")  # labels are not markup
@@ -251,6 +261,7 @@ _KINDS = {
     # a slew also solves its nominal maneuver and runs the open loop
     "slew": ("run_slew", "write_slew_report", lambda spec: len(spec.runs) + 2),
     "ppf": ("run_ppf", "write_ppf_report", lambda spec: len(spec.runs)),
+    "star_tracker": ("run_star_tracker", "write_star_tracker_report", lambda spec: len(spec.runs)),
     "cmg": ("run_cmg", "write_cmg_report", lambda spec: len(spec.runs) + 1),
     "cmg_station": ("run_cmg_station", "write_cmg_report", lambda spec: len(spec.runs) + 1),
     "identification": ("run_identification", "write_identification_report",
@@ -296,6 +307,13 @@ def run(
     except SimulationDiverged as exc:  # a result, not an input error: exit 1, nothing written
         errors.print(str(exc), style="red", markup=False, highlight=False)
         raise typer.Exit(code=1) from None
+    except KeyboardInterrupt as exc:  # Ctrl-C: say what is kept, exit as an interrupted program
+        from flexsat.design.batch_runner import BatchInterrupted
+
+        message = (str(exc) if isinstance(exc, BatchInterrupted)
+                   else "interrupted: no report written")
+        errors.print(message, style="red", markup=False, highlight=False)
+        raise typer.Exit(code=130) from None
     console.print(_identification_table(result) if spec.kind == "identification"
                   else _metrics_table(result.metrics_records()))
     try:

@@ -16,10 +16,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from flexsat.cases import tamu
-from flexsat.design.batch_runner import (HubManeuverBuilder, case_seeds, maneuver_metrics,
-                                         open_results, run_batch)
+from flexsat.design.batch_runner import (BatchInterrupted, HubManeuverBuilder, case_seeds,
+                                         maneuver_metrics, open_results, run_batch)
 from flexsat.sim import simulate
 from flexsat.units import to_si
 
@@ -260,3 +261,39 @@ def test_a_store_of_another_setup_is_refused(builder, tmp_path, change):
 def test_an_unknown_history_names_the_recorded_ones(builder, tmp_path):
     with pytest.raises(ValueError, match=r"histories: 'thetaa' is not a recorded variable.*theta"):
         run_batch(builder, SWEEP, tmp_path / "h.zarr", histories=("thetaa",), retries=0)
+
+
+def test_a_run_killed_while_laying_out_its_store_leaves_none_and_the_next_run_starts_afresh(
+        builder, reference_store, tmp_path, monkeypatch):
+    """The store is laid out in ``.<name>.partial`` and renamed into place when complete. A
+    failure between its two writes (as a kill would leave it) leaves no store, so the same command
+    is not refused as "another setup"; a partial folder left by a killed run is replaced."""
+    path = tmp_path / "s.zarr"
+    writes = xr.Dataset.to_zarr
+
+    def killed_at_the_second_write(self, store, *args, mode=None, **kwargs):
+        if mode == "r+":
+            raise KeyboardInterrupt
+        return writes(self, store, *args, mode=mode, **kwargs)
+
+    with monkeypatch.context() as patch:
+        patch.setattr(xr.Dataset, "to_zarr", killed_at_the_second_write)
+        with pytest.raises(KeyboardInterrupt):
+            run_batch(builder, SWEEP, path, base_seed=BASE_SEED, chunk_size=3,
+                      histories=HISTORIES)
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+    (tmp_path / ".s.zarr.partial").mkdir()  # what a SIGKILL at that moment leaves
+    (tmp_path / ".s.zarr.partial" / "half-written").write_text("")
+    run_batch(builder, SWEEP, path, base_seed=BASE_SEED, chunk_size=3, histories=HISTORIES)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr"]
+    _same(_values(path), reference_store)
+
+
+def test_ctrl_c_says_how_many_cases_the_store_keeps(builder, tmp_path):
+    path = tmp_path / "i.zarr"
+    with pytest.raises(BatchInterrupted) as info:
+        run_batch(builder, SWEEP, path, base_seed=BASE_SEED, chunk_size=2, histories=HISTORIES,
+                  progress=_StopAfter(2))
+    assert (info.value.cases_done, info.value.n_cases) == (4, 9)
+    assert str(info.value) == (f"interrupted: 4 of 9 cases are done and kept in the store "
+                               f"{str(path)!r}; run the same command again to resume")

@@ -60,7 +60,7 @@ def test_a_file_scenario_remembers_its_folder_and_text(tmp_path, monkeypatch):
 def test_unknown_kind_is_refused():
     assert problem(default_scenario().yaml_text + "kind: survey\n") == (
         "kind: must be 'maneuver', 'simulation', 'slew', 'ppf', 'sweep', 'montecarlo', "
-        "'identification', 'cmg' or 'cmg_station', got 'survey'")
+        "'identification', 'star_tracker', 'cmg' or 'cmg_station', got 'survey'")
 
 
 # -- the YAML: bounded, unambiguous ----------------------------------------------------------------

@@ -26,7 +26,7 @@ def test_example_loads_with_si_values(identification_example):
 @pytest.mark.parametrize("changes, message", [
     ({"kind": "survey"},
      "kind: must be 'maneuver', 'simulation', 'slew', 'ppf', 'sweep', 'montecarlo', "
-     "'identification', 'cmg' or 'cmg_station'"),
+     "'identification', 'star_tracker', 'cmg' or 'cmg_station'"),
     ({"hammer__force": 3}, "hammer.force: unknown key (allowed: node, direction, impulse"),
     ({"wheels__axes": ["x"]}, "wheels.axes: one torque axis per wheel node (3), got 1"),
     ({"wheels__torque_constants": [1.0]},

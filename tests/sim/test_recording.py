@@ -10,49 +10,26 @@ import pytest
 import xarray as xr
 
 from flexsat.control.base import Controller
-from flexsat.dynamics.plant import Channel, Plant
+from flexsat.dynamics.plant import Channel
 from flexsat.sim import (BearingFriction, ChannelDisturbance, ChannelSensor, SimConfig,
                          SimResult, simulate)
 
+from cart_plants import TwoCarts
 
-class Carts(Plant):
-    """Two unit masses joined by a spring k: x = [p1, p2, v1, v2]; a 2-wide ``push`` on both
-    and a ``brake`` force on the first; outputs the 2-wide ``position``, the ``gap`` p2 − p1
-    (also kept as measured) and the first cart's ``speed``."""
+
+class Carts(TwoCarts):
+    """The two carts with a ``brake`` force on the first as well; outputs also the first cart's
+    ``speed``, the ``gap`` also kept as measured."""
 
     inputs = (Channel("push", "N", size=2), Channel("brake", "N"))
     outputs = (Channel("position", "m", size=2), Channel("gap", "m"),
                Channel("speed", "m/s"))
-    recorded = ("position", "gap")
     recorded_measurements = ("gap",)
     noise_channels = ("gap", "push")
 
-    def __init__(self, k=4.0):
-        self.k = k
-
-    @property
-    def nx(self):
-        return 4
-
     def linear_part(self):
-        k = self.k
-        A = np.zeros((4, 4))
-        A[:2, 2:] = np.eye(2)
-        A[2:, :2] = [[-k, k], [k, -k]]
-        B = np.zeros((4, 3))
-        B[2:, :2] = np.eye(2)
-        B[2, 2] = 1.0
-        return A, B
-
-    def output_matrices(self, name):
-        C = {"position": np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0]]),
-             "gap": np.array([[-1.0, 1.0, 0, 0]]),
-             "speed": np.array([[0.0, 0, 1.0, 0]])}[name]
-        return C, np.zeros((len(C), 3)), None
-
-    def energy(self, x):
-        p, v = x[..., :2], x[..., 2:]
-        return 0.5 * (v**2).sum(-1) + 0.5 * self.k * (p[..., 1] - p[..., 0]) ** 2
+        A, B = super().linear_part()
+        return A, np.hstack([B, [[0.0], [0.0], [1.0], [0.0]]])
 
 
 class SpreadLaw(Controller):

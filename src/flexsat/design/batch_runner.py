@@ -52,13 +52,18 @@ case count. The store's ``fingerprint`` attribute is the SHA-256 of the setup: t
 (the scenario as given), the builder's description, the parameter table (names, values), the
 base seed and the recorded histories — nothing that depends on the chunking. Running the same
 setup into an existing store resumes it (the chunks not all done are run, the rest skipped); a
-store of a different setup is refused. Nothing is pickled into the store.
+store of a different setup is refused. The store's layout is built in a sibling folder,
+``.<name>.partial``, and renamed into place when complete: a run killed while laying it out
+leaves no store (the next run starts afresh) rather than a half-made one it would refuse. An
+interrupted run (Ctrl-C) raises :class:`BatchInterrupted`, saying how many cases the store keeps.
+Nothing is pickled into the store.
 """
 
 from __future__ import annotations
 
 import hashlib
 import math
+import shutil
 import time
 from functools import lru_cache
 from dataclasses import dataclass, field, replace
@@ -376,10 +381,18 @@ def _create(path: Path, fp: str, setup_text: str, table: Mapping[str, np.ndarray
                            "layout": STORE_LAYOUT})
     for name in ("done",) + tuple(f"param_{k}" for k in table):
         encoding[name] = {"chunks": (zchunk,)}
-    ds.to_zarr(path, mode="w", compute=False, encoding=encoding, consolidated=False)
-    # the parameter table, the mask and the coordinates are small: written now in full
-    ds[[n for n in ds.data_vars if n == "done" or n.startswith("param_")]].to_zarr(
-        path, mode="r+", consolidated=False)
+    partial = path.with_name(f".{path.name}.partial")
+    shutil.rmtree(partial, ignore_errors=True)  # a run killed while laying out its store
+    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        ds.to_zarr(partial, mode="w", compute=False, encoding=encoding, consolidated=False)
+        # the parameter table, the mask and the coordinates are small: written now in full
+        ds[[n for n in ds.data_vars if n == "done" or n.startswith("param_")]].to_zarr(
+            partial, mode="r+", consolidated=False)
+        partial.rename(path)
+    except BaseException:
+        shutil.rmtree(partial, ignore_errors=True)
+        raise
 
 
 def _write(path: Path, start: int, out: dict[str, np.ndarray]) -> None:
@@ -394,6 +407,19 @@ def _write(path: Path, start: int, out: dict[str, np.ndarray]) -> None:
 
 
 # -- the run -----------------------------------------------------------------------------------
+class BatchInterrupted(KeyboardInterrupt):
+    """A run stopped by Ctrl-C (or another KeyboardInterrupt): ``store``, ``cases_done`` (kept in
+    the store) and ``n_cases``; running the same setup again resumes it."""
+
+    def __init__(self, store: Path, cases_done: int, n_cases: int):
+        super().__init__(store, cases_done, n_cases)
+        self.store, self.cases_done, self.n_cases = store, cases_done, n_cases
+
+    def __str__(self) -> str:
+        return (f"interrupted: {self.cases_done} of {self.n_cases} cases are done and kept in "
+                f"the store {str(self.store)!r}; run the same command again to resume")
+
+
 @dataclass(frozen=True)
 class BatchSummary:
     """What a call did: ``store`` (path), ``n_cases``, ``chunks_run`` and ``chunks_skipped``
@@ -522,6 +548,8 @@ def run_batch(
                 rate = computed / max(time.perf_counter() - t0, 1e-9)
                 progress(BatchProgress(cases_done, n_cases, n_chunks - len(starts) + chunks_run,
                                        n_chunks, rate, (n_cases - cases_done) / rate))
+    except KeyboardInterrupt as exc:
+        raise BatchInterrupted(path, cases_done, n_cases) from exc
     finally:
         client.close()
         if cluster is not None:
@@ -536,6 +564,6 @@ def open_results(store) -> xr.Dataset:
     return xr.open_zarr(store, consolidated=False)
 
 
-__all__ = ["BatchProgress", "BatchSummary", "CONNECT_TIMEOUT", "GAIN_PARAMETERS",
-           "HubManeuverBuilder", "MANEUVER_PARAMETERS", "PLANT_PARAMETERS", "case_seeds",
+__all__ = ["BatchInterrupted", "BatchProgress", "BatchSummary", "CONNECT_TIMEOUT",
+           "GAIN_PARAMETERS", "HubManeuverBuilder", "MANEUVER_PARAMETERS", "PLANT_PARAMETERS", "case_seeds",
            "fingerprint", "maneuver_metrics", "open_results", "run_batch", "run_chunk"]

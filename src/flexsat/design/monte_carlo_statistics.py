@@ -410,6 +410,8 @@ def sobol_indices(design: SobolDesign, y, name: str = "metric", confidence: floa
 
 #: the methods of :func:`sample_sensitivity`
 SAMPLE_METHODS = ("spearman", "rbd_fast")
+#: the fewest cases with a value a sample ranking takes: Spearman's interval uses n - 3
+MIN_RANKING_CASES = 4
 
 
 @dataclass(frozen=True)
@@ -459,9 +461,9 @@ def sample_sensitivity(table: SampleTable, y, name: str = "metric", method: str 
     n = int(keep.sum())
     names = table.names
     if method == "spearman":
-        if n < 4:
-            raise ValueError(f"{name}: Spearman's ranking needs 4 cases with a value or more, "
-                             f"got {n}")
+        if n < MIN_RANKING_CASES:
+            raise ValueError(f"{name}: Spearman's ranking needs {MIN_RANKING_CASES} cases with a "
+                             f"value or more, got {n}")
         rho = np.array([stats.spearmanr(x[:, j], yy).statistic for j in range(len(names))])
         z = stats.norm.ppf(0.5 + c / 2) * math.sqrt(1.06 / (n - 3))
         with np.errstate(divide="ignore"):
@@ -503,8 +505,8 @@ def monte_carlo_summary(metrics: Mapping[str, np.ndarray], requirements: Sequenc
     }
 
 
-__all__ = ["DEFAULT_PERCENTILES", "INTERVAL_METHODS", "SAMPLE_METHODS", "Convergence",
-           "MetricSummary", "ProbabilityEstimate", "Requirement", "SensitivityRanking",
+__all__ = ["DEFAULT_PERCENTILES", "INTERVAL_METHODS", "MIN_RANKING_CASES", "SAMPLE_METHODS",
+           "Convergence", "MetricSummary", "ProbabilityEstimate", "Requirement", "SensitivityRanking",
            "SobolIndices", "checkpoints", "metric_summary", "monte_carlo_summary",
            "percentile_convergence", "percentile_interval", "probability_convergence",
            "probability_of_meeting", "proportion_interval", "requirement_from_spec",

@@ -36,7 +36,8 @@ class DispersedPlant(Plant):
             raise ValueError("plants: give one or more Plant instances")
         first = plants[0]
         for i, p in enumerate(plants[1:], 1):
-            for field in ("inputs", "outputs", "nx", "noise_channels", "recorded", "nonlinear"):
+            for field in ("inputs", "outputs", "nx", "noise_channels", "recorded", "nonlinear",
+                          "single_axis_maneuver"):
                 a, b = getattr(first, field), getattr(p, field)
                 if (tuple(a) if isinstance(a, tuple) else a) != \
                         (tuple(b) if isinstance(b, tuple) else b):
@@ -55,6 +56,7 @@ class DispersedPlant(Plant):
         self.inputs = tuple(first.inputs)
         self.outputs = tuple(first.outputs)
         self.recorded = tuple(first.recorded)
+        self.single_axis_maneuver = first.single_axis_maneuver
         self.noise_channels = tuple(first.noise_channels)
         self.nonlinear = bool(first.nonlinear)
         self.integrator = getattr(first, "integrator", "etd2rk")

@@ -58,6 +58,7 @@ class HybridPlant(Plant):
     inputs = (Channel("torque", "N*m", description="hub torque u"),)
     output_channels = HYBRID_OUTPUTS
     recorded = ("theta", "theta_dot", "root_torque", "tip_deflection")
+    single_axis_maneuver = True
     #: measured values kept in the result as ``<name>_measured`` (the strain-gauge channel)
     recorded_measurements = ("root_torque",)
     #: input channels whose disturbance and friction histories are always in the result

@@ -94,6 +94,9 @@ class Plant(ABC):
     outputs: tuple[Channel, ...] = ()
     #: outputs recorded by default, in addition to the inputs (names of ``outputs``)
     recorded: tuple[str, ...] = ()
+    #: a single-axis maneuver plant: its scalar outputs ``theta`` and ``theta_dot`` (the hub
+    #: angle and rate) are read against the law's reference for the maneuver metrics
+    single_axis_maneuver: bool = False
     @property
     def noise_channels(self) -> tuple[str, ...]:
         """Channels with a per-case Gaussian noise stream, in stream order (outputs for sensor

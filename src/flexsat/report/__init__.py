@@ -26,6 +26,7 @@ _EXPORTS = {
     "GOAL_COLUMNS": "slew",
     "write_slew_report": "slew",
     "write_ppf_report": "ppf",
+    "write_star_tracker_report": "star_tracker",
     "write_cmg_report": "cmg",
     "write_batch_report": "batch",
     "FIGURES": "identification",

@@ -302,8 +302,8 @@ def run_batch_scenario(scenario: BatchScenario,
     """
     from flexsat.cases import get_case
     from flexsat.design.batch_runner import run_batch
-    from flexsat.design.monte_carlo_statistics import (monte_carlo_summary, sample_sensitivity,
-                                                       sobol_indices)
+    from flexsat.design.monte_carlo_statistics import (MIN_RANKING_CASES, monte_carlo_summary,
+                                                       sample_sensitivity, sobol_indices)
     from flexsat.references import cite
 
     maneuver = _maneuver(scenario)
@@ -339,8 +339,8 @@ def run_batch_scenario(scenario: BatchScenario,
     sensitivity = {}
     for name, values in metrics.items():
         finite = np.isfinite(values)
-        if finite.sum() <= 2 or np.ptp(values[finite]) == 0:
-            continue  # constant or undefined: nothing to rank
+        if finite.sum() < MIN_RANKING_CASES or np.ptp(values[finite]) == 0:
+            continue  # constant, or too few values (a maneuver that rarely settles): no ranking
         if design is not None:
             if finite.all():  # Sobol' indices need every case (a NaN is not a value)
                 sensitivity[name] = sobol_indices(design, values, name, seed=scenario.seed

@@ -143,7 +143,9 @@ def load_scenario(source: str | bytes | Path):
     ``kind: maneuver`` (the default) gives a :class:`Scenario`; ``kind: simulation`` a
     :class:`flexsat.scenarios.simulation.SimulationScenario`; ``kind: slew`` a
     :class:`flexsat.scenarios.slew.SlewScenario`; ``kind: ppf`` a
-    :class:`flexsat.scenarios.ppf.PPFScenario`; ``kind: sweep`` and ``kind: montecarlo`` a
+    :class:`flexsat.scenarios.ppf.PPFScenario`; ``kind: star_tracker`` a
+    :class:`flexsat.scenarios.star_tracker.StarTrackerScenario`; ``kind: sweep`` and
+    ``kind: montecarlo`` a
     :class:`flexsat.scenarios.batch.BatchScenario`; ``kind: identification`` an
     :class:`flexsat.scenarios.identification.IdentificationScenario`.
 
@@ -172,6 +174,8 @@ def load_scenario(source: str | bytes | Path):
         from flexsat.scenarios.slew import SlewScenario as model
     elif kind == "ppf":
         from flexsat.scenarios.ppf import PPFScenario as model
+    elif kind == "star_tracker":
+        from flexsat.scenarios.star_tracker import StarTrackerScenario as model
     elif kind in ("cmg", "cmg_station"):
         from flexsat.scenarios import cmg
         model = cmg.CmgScenario if kind == "cmg" else cmg.CmgStationScenario
@@ -179,8 +183,8 @@ def load_scenario(source: str | bytes | Path):
         model = Scenario
     else:
         raise ScenarioError([f"kind: must be 'maneuver', 'simulation', 'slew', 'ppf', 'sweep', "
-                             f"'montecarlo', 'identification', 'cmg' or 'cmg_station', got "
-                             f"{kind!r}"])
+                             f"'montecarlo', 'identification', 'star_tracker', 'cmg' or "
+                             f"'cmg_station', got {kind!r}"])
     try:
         scenario = model.model_validate(data)
     except ValidationError as exc:

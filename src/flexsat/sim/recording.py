@@ -16,8 +16,6 @@ import numpy as np
 import xarray as xr
 
 from flexsat.sim.instruments import stacked_output_matrices
-from flexsat.dynamics.dispersion import DispersedPlant
-from flexsat.dynamics.hybrid import HybridPlant
 from flexsat.sim.metrics import METRIC_UNITS, channel_metrics, maneuver_metrics
 
 #: samples per chunk of states kept in the loop before its outputs are computed; 32 keeps the
@@ -152,9 +150,9 @@ class Recorder:
         for k in ("theta", "theta_dot"):
             if k in self.outputs:
                 put(k, self.outputs[k], outs[k].unit)
-        # the single-axis maneuver's reference histories and metrics belong to a hub plant
-        hub = plant.plants[0] if isinstance(plant, DispersedPlant) else plant
-        refs = _references(controller, t, nc) if isinstance(hub, HybridPlant) else None
+        # a single-axis maneuver is read against its law's reference: the reference histories
+        # and the maneuver metrics
+        refs = _references(controller, t, nc) if plant.single_axis_maneuver else None
         if refs is not None:
             put("theta_ref", refs[0], "rad")
             put("theta_dot_ref", refs[1], "rad/s")

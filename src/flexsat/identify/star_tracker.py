@@ -1,0 +1,170 @@
+r"""A star tracker: two or more star cameras fixed to the body, a catalogue and its pair index,
+and the lost-in-space identification (seed 000 §2.3.4; spec part 1 §1.1 L278–L282: "two or
+more star cameras are fixed to the main body of a spacecraft").
+
+:class:`StarTracker` simulates the frames at a true attitude (:meth:`StarTracker.observe`),
+identifies them (:meth:`StarTracker.identify`) and scores the result against the truth
+(:func:`score`); :func:`monte_carlo` runs many seeded random attitudes (uniform on SO(3): unit
+quaternions from normalised 4-D Gaussians, Shoemake 1992) and returns the statistics the
+acceptance tests, the scenario and the validation rows read.
+
+The tolerance must cover the noise of a measured inter-star angle: two stars each with σ per
+axis give an angle error of σ√2 (1σ), so the tolerance is required to be at least 3√2 σ of
+every camera (a true pair then fails with probability < 0.3 %, and a field has many pairs).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexsat.dynamics.attitude import quaternion_to_dcm
+from flexsat.identify.attitude_fit import rotation_error
+from flexsat.identify.pair_index import BruteForceIndex, KVectorIndex
+from flexsat.identify.star_camera import StarCamera
+from flexsat.identify.star_catalog import StarCatalog
+from flexsat.identify.star_id import Identification, identify_frames
+from flexsat.units import to_si_array
+from flexsat.validation import require_count
+
+__all__ = ["StarTracker", "MonteCarloResult", "monte_carlo", "random_attitudes", "score",
+           "ARCSEC", "PAPER_TOLERANCE"]
+
+#: one arcsecond, rad
+ARCSEC = np.pi / 648000.0
+#: the paper's matching tolerance, 5″ (seed 000 L280)
+PAPER_TOLERANCE = 5.0 * ARCSEC
+_INDEXES = {"kvector": KVectorIndex, "brute": BruteForceIndex}
+
+
+def random_attitudes(n: int, seed=0) -> np.ndarray:
+    """n attitudes C_bn (n, 3, 3) uniform on SO(3) (module docstring)."""
+    q = np.random.default_rng(seed).normal(size=(require_count(n, "n"), 4))
+    return quaternion_to_dcm(q / np.linalg.norm(q, axis=1, keepdims=True))
+
+
+class StarTracker:
+    """Star cameras on one body with a catalogue and its pair index.
+
+    Parameters
+    ----------
+    cameras : sequence of StarCamera
+        At least ``min_fields`` cameras (their mountings should point them apart).
+    catalog : StarCatalog
+        The on-board catalogue; stars fainter than the faintest camera limit are dropped.
+    tolerance : float, str or Quantity
+        Inter-star angle match tolerance (default the paper's 5″), at least 3√2 σ of every
+        camera (module docstring).
+    min_triplets, min_fields : int
+        The paper's acceptance: 3 matched triplets in each of 2 fields.
+    index : {"kvector", "brute"}
+        Pair index (the k-vector, or the brute-force scan it is benchmarked against).
+    """
+
+    def __init__(self, cameras, catalog: StarCatalog, tolerance=PAPER_TOLERANCE,
+                 min_triplets: int = 3, min_fields: int = 2, index: str = "kvector"):
+        cams = [cameras] if isinstance(cameras, StarCamera) else list(cameras)
+        for c, cam in enumerate(cams):
+            if not isinstance(cam, StarCamera):
+                raise ValueError(f"cameras[{c}]: must be a StarCamera, got {type(cam).__name__}")
+        self.min_fields = require_count(min_fields, "min_fields")
+        self.min_triplets = require_count(min_triplets, "min_triplets")
+        if len(cams) < self.min_fields:
+            raise ValueError(f"cameras: the identification needs {self.min_fields} fields of view "
+                             f"(min_fields), got {len(cams)} cameras")
+        if not isinstance(catalog, StarCatalog):
+            raise ValueError(f"catalog: must be a StarCatalog, got {type(catalog).__name__}")
+        tol = to_si_array(tolerance, "rad", "tolerance")
+        if tol.ndim != 0 or not np.isfinite(tol) or tol <= 0:
+            raise ValueError(f"tolerance: must be one finite angle > 0, got {tolerance!r}")
+        self.tolerance = float(tol)
+        need = max(3 * np.sqrt(2) * c.direction_sigma for c in cams)
+        if self.tolerance < need:
+            raise ValueError(f"tolerance: {self.tolerance / ARCSEC:.3g}″ is below 3√2 σ = "
+                             f"{need / ARCSEC:.3g}″ of a measured inter-star angle (centroid "
+                             f"noise × pixel angle); true pairs would fail to match")
+        if index not in _INDEXES:
+            raise ValueError(f"index: must be 'kvector' or 'brute', got {index!r}")
+        self.cameras = tuple(cams)
+        self.catalog = catalog.brighter_than(max(c.magnitude_limit for c in cams))
+        max_angle = max(c.max_pair_angle for c in cams) + self.tolerance
+        self.index = _INDEXES[index](self.catalog, max_angle)
+
+    def observe(self, attitude, rng, false_stars: int = 0, missing_fraction: float = 0.0):
+        """One frame per camera at the true attitude C_bn (:meth:`StarCamera.observe`)."""
+        return [cam.observe(attitude, self.catalog, rng, c, false_stars, missing_fraction)
+                for c, cam in enumerate(self.cameras)]
+
+    def identify(self, frames) -> Identification:
+        """Lost-in-space identification of simultaneous frames
+        (:func:`~flexsat.identify.star_id.identify_frames`)."""
+        return identify_frames(frames, self.cameras, self.index, self.tolerance,
+                               self.min_triplets, self.min_fields)
+
+
+def score(ident: Identification, frames) -> tuple[bool, int]:
+    """(correct, wrong stars): an accepted identification is correct when every star it kept
+    is the true one; ``wrong`` counts the kept stars that are not (false stars included)."""
+    if not ident.accepted:
+        return False, 0
+    wrong = sum(int(np.count_nonzero((fm.matches >= 0) & (fm.matches != f.truth)))
+                for fm, f in zip(ident.fields, frames))
+    return wrong == 0, wrong
+
+
+@dataclass(frozen=True)
+class MonteCarloResult:
+    """Per attitude: ``accepted``, ``correct`` (accepted and every kept star right),
+    ``wrong_accepted`` (accepted with a wrong star), ``errors`` (n, 3) body-axis error angles
+    (rad, NaN when rejected), ``sigmas`` (n, 3) QUEST 1σ per axis (rad), ``n_stars`` kept,
+    ``triplets`` (n, n_cameras); the first attitude's frames and identification for plots."""
+
+    attitudes: np.ndarray
+    accepted: np.ndarray
+    correct: np.ndarray
+    wrong_accepted: np.ndarray
+    errors: np.ndarray
+    sigmas: np.ndarray
+    nees: np.ndarray
+    n_stars: np.ndarray
+    triplets: np.ndarray
+    example_frames: list
+    example: Identification
+
+    @property
+    def identification_rate(self) -> float:
+        return float(np.mean(self.correct))
+
+    @property
+    def error_std(self) -> np.ndarray:
+        """1σ of the error angles per body axis over the accepted attitudes, rad."""
+        return np.nanstd(self.errors, axis=0)
+
+
+def monte_carlo(tracker: StarTracker, n: int = 1000, seed=0, false_stars: int = 0,
+                missing_fraction: float = 0.0) -> MonteCarloResult:
+    """Identify ``n`` seeded random attitudes (module docstring). ``nees`` is δθᵀP⁻¹δθ per
+    accepted attitude (χ² with 3 degrees of freedom when the covariance is right)."""
+    rng = np.random.default_rng(seed)
+    att = random_attitudes(n, rng)
+    n_cam = len(tracker.cameras)
+    acc, cor, wrong = np.zeros(n, bool), np.zeros(n, bool), np.zeros(n, bool)
+    err, sig = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
+    nees, nst, trip = np.full(n, np.nan), np.zeros(n, int), np.zeros((n, n_cam), int)
+    example = None
+    for k in range(n):
+        frames = tracker.observe(att[k], rng, false_stars, missing_fraction)
+        ident = tracker.identify(frames)
+        if example is None:
+            example = (frames, ident)
+        ok, bad = score(ident, frames)
+        acc[k], cor[k], wrong[k] = ident.accepted, ok, bad > 0
+        nst[k] = ident.n_stars
+        trip[k] = [fm.triplets for fm in ident.fields]
+        if ident.accepted:
+            e = rotation_error(ident.attitude, att[k])
+            err[k], sig[k] = e, np.sqrt(np.diag(ident.covariance))
+            nees[k] = e @ np.linalg.solve(ident.covariance, e)
+    return MonteCarloResult(att, acc, cor, wrong, err, sig, nees, nst, trip, example[0],
+                            example[1])

@@ -1,0 +1,62 @@
+"""Report of a star-tracker scenario (flexsat.report.star_tracker): files, table, netCDF."""
+
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from flexsat.report import MANIFEST, write_star_tracker_report
+from flexsat.scenarios import load_scenario, run_star_tracker
+
+SMALL = """
+kind: star_tracker
+name: report star tracker
+cameras:
+  - {centroid_noise: 0.1}
+  - {centroid_noise: 0.1, mounting: ["0 deg", "90 deg", "0 deg"]}
+runs:
+  - {label: clean, attitudes: 20, seed: 1}
+  - {label: "false + missing", attitudes: 20, seed: 2, false_stars: 2, missing_fraction: 0.2}
+"""
+
+
+@pytest.fixture(scope="module")
+def result():
+    return run_star_tracker(load_scenario(SMALL))
+
+
+def test_report_files_table_and_netcdf_round_trip(result, tmp_path):
+    out = write_star_tracker_report(result, tmp_path / "report")
+    names = {p.name for p in out.iterdir()}
+    assert names == {"metrics.json", "results.nc", "index.html", "errors.png", "sky_1.png",
+                     "sky_2.png", MANIFEST}
+    records = json.loads((out / "metrics.json").read_text())
+    assert [r["run"] for r in records] == ["clean", "false + missing"]
+    assert all(r["wrong_accepted"] == 0 for r in records)
+    with xr.open_dataset(out / "results.nc", engine="h5netcdf") as ds:
+        r = result.runs[1]
+        np.testing.assert_allclose(ds["error"].values[1] * np.pi / 648000, r.errors)
+        assert ds["error"].attrs["units"] == "arcsec"
+        status = ds["example_status"].values[1]
+        # the example frame's two false stars per camera are shown as such, none matched wrong
+        assert np.sum(status == -1) == 2 * len(result.tracker.cameras)
+        assert not np.any(status == 2)
+        assert ds.attrs["tolerance_arcsec"] == pytest.approx(5.0)
+    page = (out / "index.html").read_text()
+    for text in ("Identification", "wrong accepted", "σ_QUEST", "errors.png", "sky_2.png",
+                 "kind: star_tracker", "false + missing"):
+        assert text in page
+
+
+def test_report_of_a_run_with_nothing_identified(tmp_path):
+    # cameras limited to m = 2 on the synthetic sky (5000·10^-2.25 = 28 stars: a field holds
+    # 0.1 on average): no field gets a triplet, every attitude is rejected, the report still
+    # writes (NaN errors, empty histograms)
+    spec = load_scenario(SMALL.replace("centroid_noise: 0.1", "centroid_noise: 0.1, "
+                                       "magnitude_limit: 2.0"))
+    result = run_star_tracker(spec)
+    rec = result.metrics_records()[0]
+    assert rec["accepted_rate"] == 0.0 and rec["wrong_accepted"] == 0
+    out = write_star_tracker_report(result, tmp_path / "r")
+    assert (out / "errors.png").is_file()
