@@ -135,3 +135,21 @@ def test_an_uncontrollable_filter_choice_is_reported_against_lqr():
     text = STATION.replace("runs:", "lqr: {roll_yaw_filters: [1, 2]}\nruns:")
     with pytest.raises(ScenarioError, match="lqr.*roll_yaw_filters.*not stabilizable"):
         run_cmg_station(load_scenario(text))
+
+
+@pytest.mark.parametrize("change, message", [
+    (("demand: [1, 0, 0], initial: zero", "demand: [1e308, 0, 0], initial: zero"),
+     r"runs\['zero'\].demand: components must be at most 100"),
+    (('duration: "2 s"', 'duration: "1e12 s"'), r"runs\['zero'\].duration: at most 3600 s"),
+    (("demand: [1, 0, 0], initial: zero",
+      "demand: {constant: [0, 1, 0], frequency: 1e9}, initial: zero"), "frequency: must lie in"),
+    (('initial: zero, duration: "2 s"', 'initial: [.nan, 0, 0, 0], duration: "2 s"'),
+     r"runs\['zero'\].initial: angles must be finite"),
+    (('initial: zero, duration: "2 s"', 'initial: ["5 furlong", 0, 0, 0], duration: "2 s"'),
+     r"runs\['zero'\].initial: incompatible units"),
+])
+def test_extreme_values_are_refused_before_anything_runs(change, message):
+    # bounds that keep a run's integrator work finite (|T| × duration) are part of the schema
+    old, new = change
+    with pytest.raises(ScenarioError, match=message):
+        load_scenario(SMALL.replace(old, new))

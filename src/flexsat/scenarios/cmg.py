@@ -73,10 +73,23 @@ def _angles(value, field):
     return out.tolist()
 
 
+#: largest demand component, rotor momenta per second: the whole envelope (~3 h) in 30 ms, far
+#: beyond any gimbal motor; bounds the integrator's work (steps grow with |T| × duration)
+MAX_DEMAND = 100.0
+#: longest steering run, s (a constant unit demand saturates in ~3 s)
+MAX_DURATION = 3600.0
+
+
 def _vector3(value, field):
-    v = np.asarray(value, float) if isinstance(value, list) else None
+    try:
+        v = np.asarray(value, float) if isinstance(value, list) else None
+    except (TypeError, ValueError):
+        v = None
     if v is None or v.shape != (3,) or not np.all(np.isfinite(v)):
         raise ValueError(f"{field}: must be three finite numbers, got {value!r}")
+    if np.abs(v).max() > MAX_DEMAND:
+        raise ValueError(f"{field}: components must be at most {MAX_DEMAND:g} rotor momenta per "
+                         f"second, got {value!r}")
     return v.tolist()
 
 
@@ -105,6 +118,13 @@ class HarmonicDemand(_Section):
     amplitude: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.0])
     frequency: quantity("Hz") = 0.0
 
+    @field_validator("frequency")
+    @classmethod
+    def _frequency(cls, value):
+        if not 0.0 <= value <= 100.0:
+            raise ValueError(f"frequency: must lie in [0, 100] Hz, got {value!r}")
+        return value
+
     @field_validator("constant", "amplitude")
     @classmethod
     def _three(cls, value, info):
@@ -126,6 +146,14 @@ class CmgRunSpec(_Section):
     initial: Union[str, list] = "zero"
     duration: quantity("s", positive=True)
     demand: Union[list[float], HarmonicDemand, None] = None
+
+    @field_validator("duration")
+    @classmethod
+    def _duration(cls, value):
+        if value > MAX_DURATION:
+            raise ValueError(f"duration: at most {MAX_DURATION:g} s, got {value!r}")
+        return value
+
     null_motion: NullMotion | None = None
     reorient_to: Union[str, list, None] = None
 
