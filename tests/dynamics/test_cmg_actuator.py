@@ -126,6 +126,24 @@ def test_pseudo_inverse_refuses_a_singular_set_and_sr_passes_it_and_events_are_r
     assert all(np.isfinite(X).ravel())
 
 
+def test_from_the_preferred_set_the_same_demand_ends_in_an_external_singularity():
+    # the stored +x set (V4) under ḣ = +x at 0.5 N m s/s on the spacecraft: no internal
+    # singularity; the gain falls below 1e-3 only at saturation, (2cosδ + 2)/0.5 = 6.31 s
+    # (the body's small rates, |ω| <= 0.03 rad/s here, add ω × h, which the steering absorbs)
+    sr = CmgSpacecraft(J, 1.0, steering="sr", alpha=1e-3, gimbal_rate_limit=2.0)
+    x0 = sr.state_from(gimbal_angles=cmg.preferred_set([1.0, 0.0, 0.0]))
+    cfg = SimConfig(duration=9.0, control_rate=20.0, substeps=4)
+    run = simulate(sr, ConstantTorque([-0.5, 0.0, 0.0]), cfg, n_cases=1, initial_state=x0,
+                   record_states=True)
+    X, t = run.dataset["state"].values[0], run.dataset.time.values
+    events = sr.singularity_events(t, X, threshold=1e-3)
+    assert len(events) == 1 and not events[0].internal
+    assert events[0].time == pytest.approx((2 * np.cos(cmg.SKEW) + 2) / 0.5, abs=0.1)
+    # the SR inverse holds the momentum on the envelope along x (it cannot give more)
+    assert sr.cmg_momentum(X[-1])[0] == pytest.approx(cmg.envelope([1.0, 0.0, 0.0])[0],
+                                                      abs=1e-3)
+
+
 @pytest.mark.parametrize("kwargs, message", [
     (dict(rotor_momentum=0.0), "rotor_momentum: must be one finite value > 0"),
     (dict(gimbal_rate_limit=0.0), "gimbal_rate_limit: must be > 0"),
