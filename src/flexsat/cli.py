@@ -263,6 +263,8 @@ _KINDS = {
     "ppf": ("run_ppf", "write_ppf_report", lambda spec: len(spec.runs)),
     "star_tracker": ("run_star_tracker", "write_star_tracker_report", lambda spec: len(spec.runs)),
     "tether": ("run_tether", "write_tether_report", lambda spec: len(spec.runs)),
+    "cmg": ("run_cmg", "write_cmg_report", lambda spec: len(spec.runs) + 1),
+    "cmg_station": ("run_cmg_station", "write_cmg_report", lambda spec: len(spec.runs) + 1),
     "identification": ("run_identification", "write_identification_report",
                        _identification_steps),
     "sweep": ("run_batch_scenario", "write_batch_report", _batch_steps),

@@ -209,6 +209,51 @@ def test_preferred_angles_run_forward_to_the_envelope_without_internal_singulari
     assert run.h[-1] @ u == pytest.approx(cmg.envelope(u)[0], abs=1e-3)
 
 
+@pytest.mark.parametrize("direction, stored", cmg.PREFERRED_SETS)
+def test_stored_preferred_sets_are_the_back_integration_and_saturate(direction, stored):
+    # the table is computed data: recomputed here; stored to 0.01°, so ±0.005° of rounding plus
+    # the back integration's error (rtol 1e-10 on σ, far below)
+    u = np.asarray(direction, float) / np.linalg.norm(direction)
+    got = np.rad2deg(cmg.preferred_angles(u))
+    np.testing.assert_allclose(got, stored, atol=0.005 + 1e-6)
+    # the stored set runs forward under the unit demand ḣ = u to the envelope, not internally
+    # singular (within V5's 1e-3 on the momentum along u)
+    run = cmg.integrate_gimbals(DEG(stored), -u, 10.0)
+    assert run.singular and not cmg.classify_singularity(run.sigma[-1], threshold=1e-5).internal
+    assert run.h[-1] @ u == pytest.approx(cmg.envelope(u)[0], abs=1e-3)
+    np.testing.assert_allclose(cmg.preferred_set(2.0 * u), DEG(stored), atol=1e-15)
+
+
+def test_preferred_set_picks_the_nearest_stored_direction():
+    np.testing.assert_allclose(cmg.preferred_set([1.0, 0.1, -0.05]), DEG(cmg.PREFERRED_SETS[0][1]))
+    np.testing.assert_allclose(cmg.preferred_set([0.1, 0.2, 1.0]), DEG(cmg.PREFERRED_SETS[4][1]))
+    with pytest.raises(ValueError, match="direction: must be a nonzero"):
+        cmg.preferred_set([0.0, 0.0, 0.0])
+
+
+def test_null_motion_beside_the_torque_law_avoids_the_v3_singularity():
+    # V3: the pseudo-inverse alone from zero gimbals under ḣ = +x stops at |h| = 1.1546.
+    # With the null motion towards the stored +x set running beside it (k = 1/s, exact
+    # projector), the delivered momentum is unchanged, h(t) = t x (Cτ = 0), and the gimbals
+    # reach saturation on the envelope 2cosδ + 2 instead
+    target = cmg.preferred_set([1.0, 0.0, 0.0])
+    run = cmg.integrate_gimbals(np.zeros(4), PAPER_X, 10.0, null_target=target, null_gain=1.0)
+    assert run.singular and not cmg.classify_singularity(run.sigma[-1], threshold=1e-5).internal
+    h_sat = 2.0 * np.cos(SKEW) + 2.0
+    assert run.t[-1] == pytest.approx(h_sat, abs=1e-3)  # the gain stop, as V5
+    # solve_ivp's rtol 1e-10 on σ (|σ| ~ 3) over ~3 s: momentum error well below 1e-8
+    np.testing.assert_allclose(run.h, run.t[:, None] * [1.0, 0.0, 0.0], atol=1e-8)
+    # the rates are the steering law's plus a null-space term: C σ̇ = −torque exactly
+    sigma = DEG([10.0, -20.0, 30.0, 5.0])
+    rates = cmg.steering_with_null_motion(sigma, [0.3, -0.2, 0.1], target, 2.0)
+    c = cmg.jacobian(sigma)
+    np.testing.assert_allclose(c @ rates, [-0.3, 0.2, -0.1], atol=100 * EPS)
+    with pytest.raises(ValueError, match="gain_k: must be >= 0"):
+        cmg.steering_with_null_motion(sigma, [0.0, 0.0, 0.0], target, -1.0)
+    with pytest.raises(ValueError, match="null_target: one gimbal set"):
+        cmg.integrate_gimbals(np.zeros(4), PAPER_X, 1.0, null_target=np.zeros((2, 4)))
+
+
 @pytest.mark.parametrize("n_units, skew", [(3, DEG(30.0)), (4, SKEW), (5, DEG(60.0)),
                                            (6, DEG(75.0))])
 def test_jacobian_is_the_derivative_of_the_momentum(n_units, skew):
@@ -330,3 +375,16 @@ def test_angles_accept_units():
 def test_bad_input_is_named(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+def test_sr_runs_can_pass_singular_sets_without_stopping():
+    # stop_at_singular=False with α > 0: from the +x saturation set (V2, exactly singular) the
+    # run goes on to t_final and says it met a singular set; the pseudo-inverse refuses to start
+    saturated = DEG([-90.0, 180.0, 90.0, 0.0])
+    run = cmg.integrate_gimbals(saturated, -PAPER_X, 2.0, alpha=1e-3, stop_at_singular=False)
+    assert run.singular and run.t[-1] == 2.0
+    # the demand −x (torque +x) pulls the momentum back inside the envelope, at a reduced rate
+    # while the SR inverse is near the singular set: |h| falls, never rises
+    assert run.h[-1, 0] < run.h[0, 0] and np.all(np.diff(run.h[:, 0]) <= 1e-12)
+    with pytest.raises(ValueError, match="starts singular"):
+        cmg.integrate_gimbals(saturated, -PAPER_X, 2.0)

@@ -26,7 +26,7 @@ from flexsat.checks.core import COLUMNS, STATUSES, Check, CheckResult, Discrepan
 
 #: the topic modules of :mod:`flexsat.checks`, in table order (issues #2, #3, #4, then #5)
 MODULES = ("tamu", "structures", "tamu_grid", "draper_rpl", "nps", "eps",
-           "output_feedback", "bainum", "identification", "star_tracker", "tether")
+           "output_feedback", "bainum", "identification", "star_tracker", "tether", "cmg")
 
 
 def _import_failure(name: str, exc: Exception) -> Check:

@@ -237,17 +237,28 @@ def steering_rates(sigma, torque, skew=SKEW, n_units: int = 4, alpha: float = 0.
     tq = require_finite(torque, "torque")
     if tq.ndim == 0 or tq.shape[-1] != 3:
         raise ValueError(f"torque: last axis must have 3 components, got shape {tq.shape}")
-    c = jacobian(sigma, skew, n_units)
+    sig, n = _sigma(sigma, n_units)
+    _, a, b = _axes(n, _require_skew(skew))
+    return steer(sig, tq, a, b, al)
+
+
+def steer(sig, torque, a, b, alpha):
+    """Unchecked kernel of :func:`steering_rates` (for plants that check once): ``sig``
+    (..., n) rad, ``torque`` (..., 3), axes ``a``, ``b`` of :func:`pyramid_axes`, α >= 0."""
+    c = np.swapaxes(-np.sin(sig)[..., :, None] * a + np.cos(sig)[..., :, None] * b, -1, -2)
     ct = np.swapaxes(c, -1, -2)
-    m = c @ ct + al * np.eye(3)
+    m = c @ ct
+    if alpha:
+        m = m + alpha * np.eye(3)
     lam = np.linalg.eigvalsh(m)
     # CCᵀ singular to working precision: its solve would return round-off amplified by 1/eps
     if np.any(lam[..., 0] <= 10 * np.finfo(float).eps * lam[..., -1]):
         raise ValueError("sigma: singular gimbal set (CCᵀ singular to working precision): the "
                          "pseudo-inverse has no solution; use alpha > 0 (singularity-robust "
                          "inverse)")
-    shape = np.broadcast_shapes(m.shape[:-1], tq.shape)
-    y = np.linalg.solve(np.broadcast_to(m, shape + (3,)), -np.broadcast_to(tq, shape)[..., None])
+    shape = np.broadcast_shapes(m.shape[:-1], torque.shape)
+    y = np.linalg.solve(np.broadcast_to(m, shape + (3,)),
+                        -np.broadcast_to(torque, shape)[..., None])
     return (ct @ y)[..., 0]
 
 
@@ -266,7 +277,8 @@ class GimbalRun:
 
 def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alpha: float = 0.0,
                       threshold: float = 1e-6, rtol: float = 1e-10, atol: float = 1e-12,
-                      n_out: int = 201) -> GimbalRun:
+                      n_out: int = 201, null_target=None, null_gain: float = 1.0,
+                      null_alpha: float = 0.0, stop_at_singular: bool = True) -> GimbalRun:
     """Integrate σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque(t)) from σ0 (§8.3), forward (t_final > 0) or
     backward (t_final < 0: the preferred-angle back integration), stopping when the gain
     det(CCᵀ) falls to ``threshold`` (a terminal solve_ivp event).
@@ -279,6 +291,14 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
         Torque on the spacecraft: a constant, or a function ``t -> (3,)`` of the time in s (the
         time-varying demands of §8.3, e.g. Kurokawa's Tx = 0.2 sin 4πt, V6). A callable is
         checked at t = 0 and wherever the integrator evaluates it.
+    null_target : array_like ``(n,)``, optional
+        Run null motion towards this set beside the torque law
+        (:func:`steering_with_null_motion`, gain ``null_gain`` 1/s, projector weight
+        ``null_alpha``); None: the torque law alone.
+    stop_at_singular : bool
+        Stop at the gain ``threshold`` (default). False runs to ``t_final`` whatever the gain
+        (for the SR inverse, α > 0, which passes singular sets; ``singular`` then says whether
+        the gain fell to the threshold on the way).
 
     Returns
     -------
@@ -304,25 +324,40 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
     thr = float(require_finite(threshold, "threshold"))
     if thr <= 0:
         raise ValueError(f"threshold: must be > 0, got {threshold!r}")
-    if gain(sig0, d, n) <= thr:
-        raise ValueError("sigma0: starts singular (det CCᵀ <= threshold)")
+    if stop_at_singular and gain(sig0, d, n) <= thr:
+        raise ValueError("sigma0: starts singular (det CCᵀ <= threshold); the pseudo-inverse "
+                         "cannot steer from it (use alpha > 0 and stop_at_singular=False)")
 
-    def rhs(t, s):
-        return steering_rates(s, torque_at(t), d, n, alpha)
+    if null_target is None:
+        def rhs(t, s):
+            return steering_rates(s, torque_at(t), d, n, alpha)
+    else:
+        target, _ = _sigma(null_target, n)
+        if target.shape != (n,):
+            raise ValueError(f"null_target: one gimbal set ({n},), got shape {target.shape}")
+
+        def rhs(t, s):
+            return steering_with_null_motion(s, torque_at(t), target, null_gain, d, n, alpha,
+                                             null_alpha)
 
     def event(_t, s):
         return gain(s, d, n) - thr
 
     event.terminal = True
     event.direction = -1
-    sol = solve_ivp(rhs, (0.0, tf), sig0, method="DOP853", events=event, rtol=rtol, atol=atol,
+    sol = solve_ivp(rhs, (0.0, tf), sig0, method="DOP853",
+                    events=event if stop_at_singular else None, rtol=rtol, atol=atol,
                     dense_output=True)
     if sol.status == -1:
         raise RuntimeError(f"integrate_gimbals: solve_ivp failed: {sol.message}")
     t_end, singular = sol.t[-1], sol.status == 1
-    dip = _first_dip(sol, d, n, thr)
-    if dip is not None and abs(dip) < abs(t_end):
-        t_end, singular = dip, True
+    if stop_at_singular:
+        dip = _first_dip(sol, d, n, thr)
+        if dip is not None and abs(dip) < abs(t_end):
+            t_end, singular = dip, True
+    else:  # the gain on the dense output, 8 points a step: did it touch the threshold?
+        grid = np.linspace(sol.t[:-1], sol.t[1:], 9).T.ravel()
+        singular = bool(np.min(gain(sol.sol(grid).T, d, n)) <= thr)
     t = np.linspace(0.0, t_end, n_out)
     sig = sol.sol(t).T
     if t_end == sol.t[-1]:
@@ -389,6 +424,69 @@ def preferred_angles(direction, skew=SKEW, n_units: int = 4, perturbation=None,
         raise ValueError(f"perturbation: the back integration along {u} met a singularity at "
                          f"t = {run.t[-1]:.6g} s; try another offset")
     return np.angle(np.exp(1j * run.sigma[-1]))
+
+
+#: Preferred initial gimbal sets of the paper's pyramid (4 units, δ = 54.74°), in degrees, for
+#: the six axis directions and eight oblique ones: computed data, the output of
+#: :func:`preferred_angles` with the paper's perturbation (back integration, rtol 1e-10),
+#: rounded to 0.01°; ``tests/dynamics/test_cmg.py`` recomputes every row. The paper stores such
+#: sets for use (§8.5, conclusions L4758–L4764: "preferred-set data must be stored"); its
+#: Table 1 lists hand-chosen sets for six demands, of which only the +x row came from the back
+#: integration (V4: [−59.6, 60.7, 118, −121]°). Back integration from the *same* offset lands
+#: elsewhere along other directions (+y: [110.91, −115.22, −52.08, 51.08]°, not Table 1's
+#: [−120, −60, 60, 120]°): any set on the back-integrated path saturates without an internal
+#: singularity, so both are admissible. Directions are as given (normalised when used).
+PREFERRED_SETS = (
+    ((1, 0, 0), (-59.66, 60.58, 117.98, -121.12)),
+    ((-1, 0, 0), (120.34, -119.42, -62.02, 58.88)),
+    ((0, 1, 0), (110.91, -115.22, -52.08, 51.08)),
+    ((0, -1, 0), (-69.09, 64.78, 127.92, -128.92)),
+    ((0, 0, 1), (-128.65, -67.14, 68.23, 129.30)),
+    ((0, 0, -1), (51.35, 112.86, -111.77, -50.70)),
+    ((1, 1, 0), (-56.97, 59.82, 115.86, -118.36)),
+    ((1, -1, 0), (172.01, -5.01, 174.05, -8.10)),
+    ((-1, 1, 0), (-7.99, 174.99, -5.95, 171.90)),
+    ((-1, -1, 0), (123.03, -120.18, -64.14, 61.64)),
+    ((1, 1, 1), (71.24, 137.21, -129.96, -72.07)),
+    ((-1, -1, -1), (-108.76, -42.79, 50.04, 107.93)),
+    ((4, 2, 0), (-49.77, 56.33, 120.44, -117.67)),
+    ((2, 4, 0), (117.74, -126.51, -55.57, 51.63)),
+)
+
+
+def preferred_set(direction) -> np.ndarray:
+    """The stored preferred set (:data:`PREFERRED_SETS`) whose direction is nearest to the
+    demand direction u (largest cosine), rad ``(4,)``; for the paper's pyramid only (other
+    clusters: :func:`preferred_angles`)."""
+    u = require_finite(direction, "direction")
+    if u.shape != (3,) or not np.any(u):
+        raise ValueError(f"direction: must be a nonzero 3-vector, got {direction!r}")
+    dirs = np.array([d for d, _ in PREFERRED_SETS], float)
+    cos = dirs @ u / (np.linalg.norm(dirs, axis=1) * np.linalg.norm(u))
+    return np.deg2rad(np.array(PREFERRED_SETS[int(np.argmax(cos))][1]))
+
+
+def steering_with_null_motion(sigma, torque, sigma_target, gain_k: float = 1.0, skew=SKEW,
+                              n_units: int = 4, alpha: float = 0.0,
+                              null_alpha: float = 0.0) -> np.ndarray:
+    """Torque steering with null motion beside it: σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque) + τ k(σ_f − σ)
+    (§8.2 Eq. 7 plus §8.5 Eq. 13–15; the paper's conclusion that "the reorientation law may
+    need to run alongside the torque law", L4758–L4764).
+
+    τ = I − Cᵀ(CCᵀ + α_n I)⁻¹C (:func:`null_projector`): with ``null_alpha`` = 0 the added
+    motion changes no momentum (Cτ = 0), so the torque delivered is the steering law's alone;
+    α_n > 0 keeps it bounded through singular sets at a residual momentum rate
+    α_n(CCᵀ + α_n I)⁻¹Ck(σ_f − σ). Shapes as :func:`steering_rates`; ``sigma_target`` ``(n,)``
+    or ``(..., n)``, rad.
+    """
+    k = float(require_finite(gain_k, "gain_k", "1/s"))
+    if k < 0:
+        raise ValueError(f"gain_k: must be >= 0, got {gain_k!r}")
+    sig, n = _sigma(sigma, n_units)
+    target, _ = _sigma(sigma_target, n)
+    rates = steering_rates(sig, torque, skew, n, alpha)
+    tau = null_projector(sig, skew, n, null_alpha)
+    return rates + np.einsum("...ij,...j->...i", tau, k * (target - sig))
 
 
 def _torque_history(torque):

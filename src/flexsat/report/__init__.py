@@ -28,6 +28,7 @@ _EXPORTS = {
     "write_ppf_report": "ppf",
     "write_star_tracker_report": "star_tracker",
     "write_tether_report": "tether",
+    "write_cmg_report": "cmg",
     "write_batch_report": "batch",
     "FIGURES": "identification",
     "write_identification_report": "identification",

@@ -53,6 +53,7 @@ _EXPORTS = {
     "StarTrackerResult": "star_tracker",
     "run_star_tracker": "star_tracker",
     "TetherScenario": "tether", "TetherResult": "tether", "run_tether": "tether",
+    "run_cmg": "cmg", "run_cmg_station": "cmg",
     "BatchScenario": "batch",
     "BatchResult": "batch",
     "run_batch_scenario": "batch",

@@ -23,6 +23,8 @@ SCENARIO_KINDS = {
     "ppf": ("flexsat.scenarios.ppf", "PPFScenario"),
     "star_tracker": ("flexsat.scenarios.star_tracker", "StarTrackerScenario"),
     "tether": ("flexsat.scenarios.tether", "TetherScenario"),
+    "cmg": ("flexsat.scenarios.cmg", "CmgScenario"),
+    "cmg_station": ("flexsat.scenarios.cmg", "CmgStationScenario"),
     "sweep": ("flexsat.scenarios.batch", "BatchScenario"),
     "montecarlo": ("flexsat.scenarios.batch", "BatchScenario"),
     "identification": ("flexsat.scenarios.identification", "IdentificationScenario"),

@@ -1,0 +1,201 @@
+r"""Space-station attitude control and CMG momentum management (Vadali, Oh & Walker, space-station
+example; /work/shared/spec/seed000_part2.md §8.4, feature F26, validation row V9).
+
+Three steps, as in the paper:
+
+1. **LQR design** (pitch and roll/yaw separately) on the LVLH model of
+   :mod:`flexsat.dynamics.space_station` with Bryson weights: Q diagonal with
+   :math:`x_i^2 Q_{ii} = 1` at the anticipated maximum x_i of each state, R = I (torque in
+   N m). The paper does not print its maxima; :class:`BrysonMaxima` holds ours (defaults
+   below). The Riccati equation is solved in the coordinates x̃ = D⁻¹x, D = diag(maxima), where
+   Q̃ = I: the same gain K = K̃D⁻¹ (S = D⁻¹S̃D⁻¹), without the 1e13 spread of the raw
+   weights that would otherwise fail the solver's residual check.
+2. **Attitude loop**: the closed loop x' = (A − BK)x + Ew(t) from 1° on each axis (the paper's
+   initial errors), w the design disturbance (Eq. 11) or the AERO1 substitute.
+3. **CMG loop**, separately (the paper's justification: the attitude bandwidth is ~0.01 rad/s):
+   the pseudo-inverse steering :math:`C\dot\sigma = T`,
+   :math:`T = [u_1 + n h_3,\ u_2,\ u_3 - n h_1]/h_r` (L4717–L4720), from a chosen σ(0), stopped
+   at the first singular set (:func:`flexsat.dynamics.cmg.integrate_gimbals`).
+
+Default maxima: attitude 1° (the initial error), rate 0.02 deg/s (the station's rate
+requirement, §8.1), momentum 2000 ft-lb-s and its integral 2000 ft-lb-s × 100 s, filter states
+θ_max/(kn)² and θ_max/(kn) (the filter's response α = θ/(kn)² to a constant θ). They keep the
+momentum inside the four-CMG envelope (3.15 h_r = 11,040 ft-lb-s) for the design disturbance;
+the singularity time from σ(0) = 0 depends on them (docs/cmg.md gives a scan).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from flexsat.control.lqr import lqr
+from flexsat.dynamics import cmg
+from flexsat.dynamics.space_station import (
+    PAPER_STATION,
+    StationData,
+    aero_substitute,
+    design_disturbance,
+    pitch_model,
+    roll_yaw_model,
+)
+from flexsat.units import to_si_array
+
+__all__ = ["BrysonMaxima", "StationDesign", "StationRun", "design", "simulate_attitude",
+           "cmg_loop", "DISTURBANCES"]
+
+#: disturbance models: the design model Eq. (11), or it plus the stated AERO1 substitute
+DISTURBANCES = ("design", "aero_substitute")
+
+
+def _positive(value, name, unit):
+    v = to_si_array(value, unit, name)
+    if v.ndim != 0 or not np.isfinite(v) or v <= 0:
+        raise ValueError(f"{name}: must be one finite value > 0 {unit}, got {value!r}")
+    return float(v)
+
+
+@dataclass(frozen=True)
+class BrysonMaxima:
+    """Anticipated maxima of the LQR states (module docstring), SI after construction."""
+
+    attitude: float = "1 deg"
+    rate: float = "0.02 deg/s"
+    momentum: float = "2000 lbf*ft*s"
+    momentum_integral: float = "2e5 lbf*ft*s**2"
+
+    def __post_init__(self):
+        for name, unit in (("attitude", "rad"), ("rate", "rad/s"), ("momentum", "N*m*s"),
+                           ("momentum_integral", "N*m*s**2")):
+            object.__setattr__(self, name, _positive(getattr(self, name), f"maxima.{name}",
+                                                     unit))
+
+    def scales(self, names, n):
+        """D = the maxima of the states ``names`` of :mod:`flexsat.dynamics.space_station`."""
+        out = []
+        for name in names:
+            if name.startswith("theta") and "filter" in name:
+                k = int(name.split("_filter_")[1].split("n")[0])
+                out.append(self.attitude / (k * n) ** (1 if name.endswith("rate") else 2))
+            elif name.startswith("theta"):
+                out.append(self.rate if name.endswith("rate") else self.attitude)
+            elif name.startswith("omega"):
+                out.append(self.rate)
+            elif name.endswith("integral"):
+                out.append(self.momentum_integral)
+            else:
+                out.append(self.momentum)
+        return np.array(out)
+
+
+@dataclass(frozen=True)
+class StationDesign:
+    """The two LQR designs: (A, B, E, names, K, closed-loop poles) per axis group."""
+
+    data: StationData
+    maxima: BrysonMaxima
+    pitch: tuple
+    roll_yaw: tuple
+
+    @property
+    def poles(self) -> np.ndarray:
+        return np.concatenate([self.pitch[5], self.roll_yaw[5]])
+
+
+def _lqr_bryson(A, B, names, maxima, n, axis):
+    D = maxima.scales(names, n)
+    try:
+        K_s = lqr(A / D[:, None] * D[None, :], B / D[:, None], np.eye(len(D)),
+                  np.eye(B.shape[1]))[0]
+    except ValueError as err:
+        raise ValueError(f"{axis}: {err}") from None
+    K = K_s / D[None, :]
+    return K, np.linalg.eigvals(A - B @ K)
+
+
+def design(data: StationData = PAPER_STATION, maxima: BrysonMaxima | None = None,
+           pitch_filters=(1, 2), roll_yaw_filters=(2,)) -> StationDesign:
+    """LQR gains of the pitch and roll/yaw loops (module docstring, step 1)."""
+    maxima = BrysonMaxima() if maxima is None else maxima
+    n = data.orbit_rate
+    out = []
+    for axis, model, filters in (("pitch_filters", pitch_model, pitch_filters),
+                                 ("roll_yaw_filters", roll_yaw_model, roll_yaw_filters)):
+        A, B, E, names = model(data, filters)
+        K, poles = _lqr_bryson(A, B, names, maxima, n, axis)
+        out.append((A, B, E, names, K, poles))
+    return StationDesign(data, maxima, out[0], out[1])
+
+
+@dataclass(frozen=True)
+class StationRun:
+    """Attitude-loop history: times ``t`` (n_t,); ``attitude`` (roll, pitch, yaw) rad,
+    ``momentum`` h (n_t, 3) N m s, ``torque`` u (n_t, 3) N m, ``disturbance`` w (n_t, 3) N m;
+    ``demand(t)`` the CMG loop's T(t) in units of h_r per second."""
+
+    design: StationDesign
+    t: np.ndarray
+    attitude: np.ndarray
+    momentum: np.ndarray
+    torque: np.ndarray
+    disturbance: np.ndarray
+    solution: object = field(repr=False)
+
+    def _parts(self, z):
+        npitch = self.design.pitch[0].shape[0]
+        xp, xr = z[:npitch], z[npitch:]
+        u2 = -(self.design.pitch[4] @ xp)[0]
+        u1, u3 = -(self.design.roll_yaw[4] @ xr)
+        return (xr[0], xp[0], xr[4]), (xr[2], xp[2], xr[6]), (u1, u2, u3)
+
+    def demand(self, t) -> np.ndarray:
+        """T = [u1 + n h3, u2, u3 − n h1] / h_r at time t (L4717–L4720), (3,)."""
+        _, (h1, h2, h3), (u1, u2, u3) = self._parts(self.solution(t))
+        n = self.design.data.orbit_rate
+        return np.array([u1 + n * h3, u2, u3 - n * h1]) / self.design.data.rotor_momentum
+
+
+def simulate_attitude(station: StationDesign, duration, disturbance: str = "design",
+                      initial_attitude="1 deg", n_out: int = 1001) -> StationRun:
+    """The closed attitude/momentum loop (module docstring, step 2) over ``duration`` s."""
+    if disturbance not in DISTURBANCES:
+        raise ValueError(f"disturbance: must be one of {DISTURBANCES}, got {disturbance!r}")
+    tf = _positive(duration, "duration", "s")
+    th0 = to_si_array(initial_attitude, "rad", "initial_attitude")
+    if th0.ndim != 0 or not np.isfinite(th0):
+        raise ValueError(f"initial_attitude: one finite angle, got {initial_attitude!r}")
+    data = station.data
+    wfun = design_disturbance if disturbance == "design" else aero_substitute
+    Ap, Bp, Ep, _, Kp, _ = station.pitch
+    Ar, Br, Er, _, Kr, _ = station.roll_yaw
+    Acl_p, Acl_r = Ap - Bp @ Kp, Ar - Br @ Kr
+    npitch = Ap.shape[0]
+
+    def rhs(t, z):
+        w = wfun(t, data)
+        return np.concatenate([Acl_p @ z[:npitch] + Ep[:, 0] * w[1],
+                               Acl_r @ z[npitch:] + Er @ w[[0, 2]]])
+
+    z0 = np.zeros(npitch + Ar.shape[0])
+    z0[0] = z0[npitch] = z0[npitch + 4] = float(th0)
+    # the loop is linear and slow (poles <= 0.006 rad/s): rtol 1e-10 leaves the demand T
+    # accurate far beyond what the gimbal integration (rtol 1e-10) resolves
+    sol = solve_ivp(rhs, (0.0, tf), z0, method="DOP853", rtol=1e-10, atol=1e-14,
+                    dense_output=True)
+    if sol.status != 0:
+        raise RuntimeError(f"simulate_attitude: solve_ivp failed: {sol.message}")
+    t = np.linspace(0.0, tf, n_out)
+    run = StationRun(station, t, None, None, None, None, sol.sol)
+    parts = [run._parts(z) for z in sol.sol(t).T]
+    att, h, u = (np.array([p[i] for p in parts]) for i in range(3))
+    return StationRun(station, t, att, h, u, wfun(t, data), sol.sol)
+
+
+def cmg_loop(run: StationRun, sigma0, threshold: float = 1e-6, n_out: int = 1001):
+    """Pseudo-inverse gimbal steering for the run's demand T(t) from σ0 (module docstring,
+    step 3), stopped at the first singular set: a :class:`flexsat.dynamics.cmg.GimbalRun`
+    (gimbal momentum in units of h_r)."""
+    return cmg.integrate_gimbals(sigma0, lambda t: -run.demand(t), run.t[-1],
+                                 threshold=threshold, n_out=n_out)

@@ -1,0 +1,558 @@
+"""CMG scenarios (issue 14): ``kind: cmg``, gimbal steering of the SGCMG pyramid from chosen
+initial sets under torque demands, and ``kind: cmg_station``, the space-station momentum
+management with the CMG loop (Vadali, Oh & Walker; seed000_part2.md §8, V1–V9)::
+
+    kind: cmg
+    name: Preferred gimbal angles, pseudo-inverse steering
+    cluster: {skew: "54.74 deg", n_units: 4, steering: pi}
+    runs:
+      - {label: "x from zero", demand: [1, 0, 0], initial: zero, duration: "5 s"}
+      - {label: "x preferred", demand: [1, 0, 0], initial: preferred, duration: "5 s"}
+      - label: Kurokawa
+        demand: {constant: [0, 0.3, 0], amplitude: [0.2, 0, 0], frequency: "2 Hz"}
+        initial: ["-120 deg", "-60 deg", "60 deg", "120 deg"]
+        duration: "20 s"
+      - {label: reorient, reorient_to: alternate, initial: zero, duration: "10 s"}
+
+A run's ``demand`` is the paper's torque demand T = ḣ of Eq. (5) in rotor momenta per second
+(the spacecraft feels −ḣ): a constant 3-vector, or ``constant + amplitude · sin(2π f t)``.
+``initial`` is ``zero``, ``alternate`` ([45, −45, 45, −45]°), ``preferred`` (the stored set for
+the demand's direction, :data:`flexsat.dynamics.cmg.PREFERRED_SETS`, or the back integration for
+another cluster) or n angles. ``null_motion: {target: ..., gain: "1 1/s"}`` runs the null motion
+beside the torque law; ``reorient_to`` runs the null motion alone (§8.5, V8). ``cluster.steering``
+``pi`` stops a run at the first singular set (and refuses to start on one), ``sr`` (with
+``alpha``) steers through. ``cluster.gimbal_rate_limit`` flags runs whose gimbal rates exceed it.
+
+    kind: cmg_station
+    name: Space station, sigma(0) = 0 against [45, -45, 45, -45]
+    lqr: {attitude: "1 deg", momentum: "2000 lbf*ft*s"}
+    simulation: {orbits: 2, disturbance: aero_substitute}
+    runs: [{label: zero, initial: zero}, {label: alternate, initial: alternate}]
+
+The station defaults are the paper's Table 2; ``lqr`` holds the Bryson maxima and the filters
+(:mod:`flexsat.cases.space_station_cmg`); ``initial: preferred`` there takes the stored set
+nearest to the direction of the attitude loop's peak momentum.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Literal, Union
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from flexsat import limits
+from flexsat.dynamics.space_station import FT_LB as _FT_LB
+from flexsat.scenarios.errors import ScenarioError, _item, _locate
+from flexsat.scenarios.fields import _Document, _Section, check_unique_labels, count, quantity
+
+SOURCE = ("S. R. Vadali, H.-S. Oh, S. R. Walker, 'Preferred Gimbal Angles for Single Gimbal "
+          "Control Moment Gyros', JGCD (accepted); seed 000 Attachment 13, L4533–L4830")
+#: named initial sets
+NAMED_SETS = ("zero", "alternate", "preferred")
+ALTERNATE_DEG = (45.0, -45.0, 45.0, -45.0)
+#: samples stored per run
+N_OUT = 401
+
+
+def _angles(value, field):
+    from flexsat.units import to_si_array
+
+    if isinstance(value, str):
+        if value not in NAMED_SETS:
+            raise ValueError(f"{field}: must be one of {NAMED_SETS} or a list of angles, got "
+                             f"{value!r}")
+        return value
+    if not isinstance(value, list) or not value:
+        raise ValueError(f"{field}: must be one of {NAMED_SETS} or a list of angles, got "
+                         f"{value!r}")
+    out = np.array([float(to_si_array(v, "rad", field)) for v in value])
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"{field}: angles must be finite, got {value!r}")
+    return out.tolist()
+
+
+#: largest demand component, rotor momenta per second: the whole envelope (~3 h) in 30 ms, far
+#: beyond any gimbal motor; bounds the integrator's work (steps grow with |T| × duration)
+MAX_DEMAND = 100.0
+#: longest steering run, s (a constant unit demand saturates in ~3 s)
+MAX_DURATION = 3600.0
+
+
+def _vector3(value, field):
+    try:
+        v = np.asarray(value, float) if isinstance(value, list) else None
+    except (TypeError, ValueError):
+        v = None
+    if v is None or v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise ValueError(f"{field}: must be three finite numbers, got {value!r}")
+    if np.abs(v).max() > MAX_DEMAND:
+        raise ValueError(f"{field}: components must be at most {MAX_DEMAND:g} rotor momenta per "
+                         f"second, got {value!r}")
+    return v.tolist()
+
+
+class Cluster(_Section):
+    """The SGCMG pyramid and its steering."""
+
+    skew: quantity("rad", positive=True) = float(np.deg2rad(54.74))
+    n_units: count(3, 12) = 4
+    steering: Literal["pi", "sr"] = "pi"
+    alpha: float = Field(1e-3, gt=0.0, allow_inf_nan=False)
+    threshold: float = Field(1e-6, gt=0.0, allow_inf_nan=False)
+    gimbal_rate_limit: quantity("rad/s", optional=True, positive=True) = None
+
+    @field_validator("skew")
+    @classmethod
+    def _skew(cls, value):
+        if not value < np.pi / 2:
+            raise ValueError(f"skew: must lie in (0, 90°), got {np.rad2deg(value):.6g}°")
+        return value
+
+
+class HarmonicDemand(_Section):
+    """T(t) = constant + amplitude · sin(2π f t), rotor momenta per second."""
+
+    constant: list[float]
+    amplitude: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.0])
+    frequency: quantity("Hz") = 0.0
+
+    @field_validator("frequency")
+    @classmethod
+    def _frequency(cls, value):
+        if not 0.0 <= value <= 100.0:
+            raise ValueError(f"frequency: must lie in [0, 100] Hz, got {value!r}")
+        return value
+
+    @field_validator("constant", "amplitude")
+    @classmethod
+    def _three(cls, value, info):
+        return _vector3(value, info.field_name)
+
+
+class NullMotion(_Section):
+    target: Union[str, list] = "preferred"
+    gain: quantity("1/s", positive=True) = 1.0
+
+    @field_validator("target")
+    @classmethod
+    def _target(cls, value):
+        return _angles(value, "target")
+
+
+class CmgRunSpec(_Section):
+    label: str
+    initial: Union[str, list] = "zero"
+    duration: quantity("s", positive=True)
+    demand: Union[list[float], HarmonicDemand, None] = None
+
+    @field_validator("duration")
+    @classmethod
+    def _duration(cls, value):
+        if value > MAX_DURATION:
+            raise ValueError(f"duration: at most {MAX_DURATION:g} s, got {value!r}")
+        return value
+
+    null_motion: NullMotion | None = None
+    reorient_to: Union[str, list, None] = None
+
+    @field_validator("initial", "reorient_to")
+    @classmethod
+    def _initial(cls, value, info):
+        return None if value is None else _angles(value, info.field_name)
+
+    @field_validator("demand")
+    @classmethod
+    def _demand(cls, value):
+        return _vector3(value, "demand") if isinstance(value, list) else value
+
+    @model_validator(mode="after")
+    def _one_law(self):
+        if (self.demand is None) == (self.reorient_to is None):
+            raise ValueError("demand: give a torque demand or reorient_to (null motion alone), "
+                             "one of them")
+        if self.reorient_to is not None and self.null_motion is not None:
+            raise ValueError("null_motion: not with reorient_to (that is the null motion)")
+        uses_direction = "preferred" in (self.initial, self.reorient_to) or (
+            self.null_motion is not None and self.null_motion.target == "preferred")
+        if uses_direction and self.demand_direction() is None:
+            raise ValueError("initial: 'preferred' needs a demand with a nonzero mean direction")
+        return self
+
+    def demand_direction(self):
+        if self.demand is None:
+            return None
+        d = np.asarray(self.demand if isinstance(self.demand, list) else self.demand.constant)
+        return None if not np.any(d) else d
+
+
+class CmgScenario(_Document):
+    """A validated ``kind: cmg`` scenario (module docstring)."""
+
+    kind: Literal["cmg"]
+    name: str
+    cluster: Cluster = Field(default_factory=Cluster)
+    runs: list[CmgRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
+
+    @model_validator(mode="after")
+    def _checks(self):
+        check_unique_labels(self.runs)
+        for run in self.runs:
+            for value in (run.initial, run.reorient_to,
+                          None if run.null_motion is None else run.null_motion.target):
+                if isinstance(value, list) and len(value) != self.cluster.n_units:
+                    raise ValueError(f"runs[{run.label!r}]: gimbal sets need "
+                                     f"{self.cluster.n_units} angles (cluster.n_units), got "
+                                     f"{len(value)}")
+            if "alternate" in (run.initial, run.reorient_to) and self.cluster.n_units != 4:
+                raise ValueError(f"runs[{run.label!r}]: 'alternate' is the 4-unit set "
+                                 f"[45, -45, 45, -45] deg")
+        return self
+
+
+class StationSection(_Section):
+    inertia: list = Field(default_factory=lambda: ["5.28e6 slug*ft**2", "10.80e6 slug*ft**2",
+                                                   "58.57e6 slug*ft**2"])
+    orbit_rate: quantity("rad/s", positive=True) = 0.0011
+    rotor_momentum: quantity("N*m*s", positive=True) = 3500.0 * _FT_LB
+
+
+class LqrSection(_Section):
+    attitude: quantity("rad", positive=True) = float(np.deg2rad(1.0))
+    rate: quantity("rad/s", positive=True) = float(np.deg2rad(0.02))
+    momentum: quantity("N*m*s", positive=True) = 2000.0 * _FT_LB
+    momentum_integral: quantity("N*m*s**2", positive=True) = 2e5 * _FT_LB
+    pitch_filters: list[int] = Field(default_factory=lambda: [1, 2])
+    roll_yaw_filters: list[int] = Field(default_factory=lambda: [2])
+
+
+class StationSimulation(_Section):
+    orbits: float = Field(2.0, gt=0.0, le=50.0, allow_inf_nan=False)
+    disturbance: Literal["design", "aero_substitute"] = "aero_substitute"
+    initial_attitude: quantity("rad") = float(np.deg2rad(1.0))
+    threshold: float = Field(1e-6, gt=0.0, allow_inf_nan=False)
+
+
+class StationRunSpec(_Section):
+    label: str
+    initial: Union[str, list] = "zero"
+
+    @field_validator("initial")
+    @classmethod
+    def _initial(cls, value):
+        value = _angles(value, "initial")
+        if isinstance(value, list) and len(value) != 4:
+            raise ValueError(f"initial: the station's pyramid has 4 gimbals, got {len(value)}")
+        return value
+
+
+class CmgStationScenario(_Document):
+    """A validated ``kind: cmg_station`` scenario (module docstring)."""
+
+    kind: Literal["cmg_station"]
+    name: str
+    station: StationSection = Field(default_factory=StationSection)
+    lqr: LqrSection = Field(default_factory=LqrSection)
+    simulation: StationSimulation = Field(default_factory=StationSimulation)
+    runs: list[StationRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
+
+    @model_validator(mode="after")
+    def _checks(self):
+        check_unique_labels(self.runs)
+        self.build_data()
+        return self
+
+    def build_data(self):
+        from flexsat.dynamics.space_station import StationData
+
+        s = self.station
+        return StationData(tuple(s.inertia), s.orbit_rate, s.rotor_momentum)
+
+
+# -- running -------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class CmgRun:
+    """One run: its gimbal history (:class:`flexsat.dynamics.cmg.GimbalRun`), the initial set,
+    the demand direction (None for a reorientation), peak gimbal rate and the outcome."""
+
+    label: str
+    gimbals: object
+    sigma0: np.ndarray
+    direction: np.ndarray | None
+    peak_rate: float
+    outcome: str
+    internal: bool | None
+
+
+def _resolve(value, direction, cluster):
+    from flexsat.dynamics import cmg
+
+    if isinstance(value, list):
+        return np.array(value)
+    if value == "zero":
+        return np.zeros(cluster.n_units)
+    if value == "alternate":
+        return np.deg2rad(ALTERNATE_DEG)
+    paper = cluster.n_units == 4 and abs(cluster.skew - cmg.SKEW) < 1e-12
+    return cmg.preferred_set(direction) if paper else cmg.preferred_angles(
+        direction, cluster.skew, cluster.n_units)
+
+
+def _demand_function(demand):
+    if isinstance(demand, list):
+        c = np.array(demand)
+        return lambda t: -c
+    c, a, f = np.array(demand.constant), np.array(demand.amplitude), demand.frequency
+    return lambda t: -(c + a * np.sin(2.0 * np.pi * f * t))
+
+
+def _one_run(run, cluster):
+    from flexsat.dynamics import cmg
+
+    d = run.demand_direction()
+    sigma0 = _resolve(run.initial, d, cluster)
+    kw = dict(skew=cluster.skew, n_units=cluster.n_units, n_out=N_OUT)
+    alpha = cluster.alpha if cluster.steering == "sr" else 0.0
+    if run.reorient_to is not None:
+        target = _resolve(run.reorient_to, d, cluster)
+        g = cmg.reorient(sigma0, target, run.duration, 1.0, alpha=max(alpha, 1e-3), **kw)
+    else:
+        null = run.null_motion
+        g = cmg.integrate_gimbals(
+            sigma0, _demand_function(run.demand), run.duration, alpha=alpha,
+            threshold=cluster.threshold, stop_at_singular=cluster.steering == "pi",
+            null_target=None if null is None else _resolve(null.target, d, cluster),
+            null_gain=1.0 if null is None else null.gain, null_alpha=alpha, **kw)
+    rates = np.gradient(g.sigma, g.t, axis=0)
+    internal = None
+    if g.singular:
+        k = int(np.argmin(g.gain))
+        internal = bool(cmg.classify_singularity(
+            g.sigma[k], cluster.skew, cluster.n_units,
+            threshold=max(cluster.threshold, g.gain[k] * 1.000001)).internal)
+        outcome = ("internal singularity" if internal else "saturation") + (
+            f" at t = {g.t[-1] if cluster.steering == 'pi' else g.t[k]:.4g} s")
+    else:
+        outcome = "no singularity"
+    return CmgRun(run.label, g, sigma0, d, float(np.abs(rates).max()), outcome, internal)
+
+
+@dataclass(frozen=True)
+class CmgResult:
+    """Runs of a ``kind: cmg`` scenario and the V1–V8 table (:func:`validation_table`)."""
+
+    scenario: CmgScenario
+    runs: tuple
+    table: tuple
+    case_source: str = SOURCE
+    notes: tuple = ()
+
+    def metrics_records(self) -> list[dict]:
+        from flexsat.dynamics import cmg
+
+        c = self.scenario.cluster
+        out = []
+        for r in self.runs:
+            g = r.gimbals
+            rec = {"run": r.label, "singular": bool(g.singular),
+                   "internal": r.internal, "end_time_s": float(g.t[-1]),
+                   "min_gain": float(g.gain.min()), "final_gain": float(g.gain[-1]),
+                   "final_momentum_h": float(np.linalg.norm(g.h[-1])),
+                   "peak_gimbal_rate_rad_s": r.peak_rate}
+            rec["envelope_h"] = rec["final_momentum_along_demand_h"] = None  # reorientation
+            if r.direction is not None:
+                u = r.direction / np.linalg.norm(r.direction)
+                rec["envelope_h"] = float(cmg.envelope(u, c.skew, c.n_units)[0])
+                rec["final_momentum_along_demand_h"] = float(g.h[-1] @ u)
+            if c.gimbal_rate_limit is not None:
+                rec["rate_limit_exceeded"] = bool(r.peak_rate > c.gimbal_rate_limit)
+            out.append(rec)
+        return out
+
+    def dataset(self):
+        import xarray as xr
+
+        n = self.scenario.cluster.n_units
+        ds = xr.Dataset(
+            {"time": (("run", "sample"), np.array([r.gimbals.t for r in self.runs]),
+                      {"units": "s"}),
+             "gimbal_angles": (("run", "sample", "gimbal"),
+                               np.array([r.gimbals.sigma for r in self.runs]), {"units": "rad"}),
+             "momentum": (("run", "sample", "axis"), np.array([r.gimbals.h for r in self.runs]),
+                          {"units": "rotor momenta h"}),
+             "gain": (("run", "sample"), np.array([r.gimbals.gain for r in self.runs])),
+             "initial_angles": (("run", "gimbal"), np.array([r.sigma0 for r in self.runs]),
+                                {"units": "rad"})},
+            coords={"run": [r.label for r in self.runs], "gimbal": np.arange(1, n + 1),
+                    "axis": ["x", "y", "z"]})
+        ds["outcome"] = ("run", [r.outcome for r in self.runs])
+        ds.attrs.update(scenario_name=self.scenario.name, case_source=self.case_source,
+                        scenario_yaml=self.scenario.yaml_text)
+        return ds
+
+
+def validation_table():
+    """V1–V8 computed live: (id, quantity, published, computed, unit) rows (the validate rows of
+    :mod:`flexsat.checks.cmg` share them)."""
+    from flexsat.dynamics import cmg
+
+    D = np.deg2rad
+    x = np.array([-1.0, 0.0, 0.0])  # the paper's +x demand as the spacecraft torque
+    v3 = cmg.integrate_gimbals(np.zeros(4), x, 5.0)
+    v4 = np.rad2deg(cmg.preferred_angles([1.0, 0.0, 0.0]))
+    v5 = cmg.integrate_gimbals(D(ALTERNATE_DEG), [0.0, 0.0, -1.0], 5.0)
+
+    def kurokawa(t):
+        return -np.array([0.2 * np.sin(4.0 * np.pi * t), 0.3, 0.0])
+
+    v6 = cmg.integrate_gimbals(D([-120.0, -60.0, 60.0, 120.0]), kurokawa, 20.0)
+    v7 = cmg.integrate_gimbals(np.zeros(4), [-0.707, -0.707, 0.0], 5.0)
+    v8 = cmg.reorient(np.zeros(4), D(ALTERNATE_DEG), 10.0, 1.0, alpha=1e-3, n_out=1001)
+    return (
+        ("V1", "gain det(CCᵀ) at [−60, 60, 120, −120]°", 1.1854,
+         float(cmg.gain(D([-60.0, 60.0, 120.0, -120.0]))), ""),
+        ("V2", "saturation momentum along +x", 3.1545,
+         float(cmg.momentum(D([-90.0, 180.0, 90.0, 0.0]))[0]), "h"),
+        ("V3", "|h| at the internal singularity from σ = 0, +x demand", 1.15,
+         float(np.linalg.norm(v3.h[-1])), "h"),
+        *(("V4", f"back-integrated σ{i + 1}", p, float(v4[i]), "deg")
+          for i, p in enumerate((-59.6, 60.7, 118.0, -121.0))),
+        ("V5", "|h| at the internal singularity, z demand from [45, −45, 45, −45]°", 1.282,
+         float(np.linalg.norm(v5.h[-1])), "h"),
+        ("V6", "Kurokawa demand: saturation time from [−120, −60, 60, 120]°", 10.0,
+         float(v6.t[-1]), "s"),
+        ("V7", "Bedrossian demand: singular time from σ = 0", 1.5, float(v7.t[-1]), "s"),
+        ("V8", "null-motion gain minimum on the way to [45, −45, 45, −45]° at t", 1.10,
+         float(v8.t[np.argmin(v8.gain)]), "s"),
+    )
+
+
+def run_cmg(scenario: CmgScenario, progress: Callable[[str], None] | None = None) -> CmgResult:
+    """Run every steering run and compute the V1–V8 table.
+
+    Raises
+    ------
+    ScenarioError
+        For a run the steering refuses (a singular initial set under the pseudo-inverse, a
+        preferred-angle search that meets a singularity), named by its label.
+    """
+    runs = []
+    for index, run in enumerate(scenario.runs):
+        if progress is not None:
+            progress(run.label)
+        try:
+            runs.append(_one_run(run, scenario.cluster))
+        except ValueError as exc:
+            raise ScenarioError([_locate(f"runs{_item(index, run.label)}", str(exc))]) from None
+    if progress is not None:
+        progress("V1–V8 table")
+    notes = ("Demands are the paper's T = ḣ (Eq. 5) in rotor momenta per second; the spacecraft "
+             "feels −ḣ. The paper's V3 singular set [−90, 0, −90, 0]° is a misprint for "
+             "[−90, 0, 90, 0]° (spec §13 flag 26).",)
+    return CmgResult(scenario, tuple(runs), validation_table(), SOURCE, notes)
+
+
+@dataclass(frozen=True)
+class StationResult:
+    """The attitude loop (:class:`flexsat.cases.space_station_cmg.StationRun`) and one CMG loop
+    per run."""
+
+    scenario: CmgStationScenario
+    station: object
+    runs: tuple
+    labels: tuple
+    initial: tuple
+    case_source: str = SOURCE
+    notes: tuple = ()
+
+    def metrics_records(self) -> list[dict]:
+        from flexsat.dynamics import cmg
+
+        hr = self.station.design.data.rotor_momentum
+        peak = float(np.linalg.norm(self.station.momentum, axis=1).max())
+        out = []
+        for label, g, s0 in zip(self.labels, self.runs, self.initial):
+            rec = {"run": label, "singular": bool(g.singular),
+                   "singular_time_s": float(g.t[-1]) if g.singular else None,
+                   "internal": bool(cmg.classify_singularity(g.sigma[-1], threshold=1e-5)
+                                    .internal) if g.singular else None,
+                   "min_gain": float(g.gain.min()),
+                   "peak_momentum_ft_lb_s": peak / _FT_LB,
+                   "peak_momentum_h": peak / hr,
+                   "peak_attitude_deg": float(np.rad2deg(np.abs(self.station.attitude).max()))}
+            out.append(rec)
+        return out
+
+    def dataset(self):
+        import xarray as xr
+
+        st = self.station
+        t = st.t
+        n = len(self.runs)
+        sig = np.full((n, t.size, 4), np.nan)
+        gain = np.full((n, t.size), np.nan)
+        for i, g in enumerate(self.runs):
+            keep = t <= g.t[-1] * (1 + 1e-12)
+            for k in range(4):
+                sig[i, keep, k] = np.interp(t[keep], g.t, g.sigma[:, k])
+            gain[i, keep] = np.interp(t[keep], g.t, g.gain)
+        ds = xr.Dataset(
+            {"attitude": (("time", "axis"), st.attitude, {"units": "rad"}),
+             "cmg_momentum": (("time", "axis"), st.momentum, {"units": "N*m*s"}),
+             "torque": (("time", "axis"), st.torque, {"units": "N*m"}),
+             "disturbance": (("time", "axis"), st.disturbance, {"units": "N*m"}),
+             "gimbal_angles": (("run", "time", "gimbal"), sig, {"units": "rad"}),
+             "gain": (("run", "time"), gain),
+             "initial_angles": (("run", "gimbal"), np.array(self.initial), {"units": "rad"})},
+            coords={"time": t, "axis": ["roll", "pitch", "yaw"], "run": list(self.labels),
+                    "gimbal": [1, 2, 3, 4]})
+        ds["time"].attrs["units"] = "s"
+        ds.attrs.update(scenario_name=self.scenario.name, case_source=self.case_source,
+                        scenario_yaml=self.scenario.yaml_text,
+                        rotor_momentum_N_m_s=st.design.data.rotor_momentum)
+        return ds
+
+
+def run_cmg_station(scenario: CmgStationScenario,
+                    progress: Callable[[str], None] | None = None) -> StationResult:
+    """LQR design, attitude loop, then one CMG loop per run (module docstring)."""
+    from flexsat.cases import space_station_cmg as st
+    from flexsat.dynamics import cmg
+
+    if progress is not None:
+        progress("LQR design and attitude loop")
+    q = scenario.lqr
+    data = scenario.build_data()
+    try:
+        maxima = st.BrysonMaxima(q.attitude, q.rate, q.momentum, q.momentum_integral)
+        design = st.design(data, maxima, tuple(q.pitch_filters), tuple(q.roll_yaw_filters))
+    except ValueError as exc:
+        raise ScenarioError([_locate("lqr", str(exc))]) from None
+    sim = scenario.simulation
+    run = st.simulate_attitude(design, sim.orbits * data.period, sim.disturbance,
+                               sim.initial_attitude)
+    peak_dir = run.momentum[np.argmax(np.linalg.norm(run.momentum, axis=1))]
+    loops, initial = [], []
+    for spec in scenario.runs:
+        if progress is not None:
+            progress(spec.label)
+        s0 = (np.zeros(4) if spec.initial == "zero" else np.deg2rad(ALTERNATE_DEG)
+              if spec.initial == "alternate" else cmg.preferred_set(peak_dir)
+              if spec.initial == "preferred" else np.array(spec.initial))
+        initial.append(s0)
+        loops.append(st.cmg_loop(run, s0, sim.threshold))
+    notes = (
+        "The paper's AERO1 disturbance is not given (Geller, private communication): "
+        "'aero_substitute' is Eq. (11) plus 0.5 ft-lb 3n and 4n harmonics on each axis and a "
+        "pitch torque growing by 1 ft-lb per orbit, a stated assumption (docs/cmg.md).",
+        "The paper's Bryson maxima are not given: these are the scenario's 'lqr' section.",
+        "Roll/yaw filters at the orbit rate make the design uncontrollable (three modes at jn, "
+        "two inputs); the default roll/yaw filters are at 2n only.",
+    )
+    return StationResult(scenario, run, tuple(loops), tuple(s.label for s in scenario.runs),
+                         tuple(initial), SOURCE, notes)
+
+
+__all__ = ["CmgResult", "CmgScenario", "CmgStationScenario", "StationResult", "run_cmg",
+           "run_cmg_station", "validation_table"]
