@@ -76,6 +76,15 @@ def test_allowed_keys_are_those_of_the_model_at_the_location(loc, expected):
     assert _allowed_keys(loc, Scenario) == expected
 
 
+def test_allowed_keys_inside_a_mapping_of_channel_sections():
+    """A key under ``disturbances.<channel>`` (a mapping of channel names to sections) is
+    checked against the channel section's fields; found by the load-only property test."""
+    from flexsat.scenarios.simulation import SimulationScenario
+
+    allowed = _allowed_keys(("disturbances", "force", "colour"), SimulationScenario)
+    assert "impulses" in allowed.split(", ")
+
+
 def test_problem_uses_the_validators_own_message_not_pydantics_wrapper():
     data = {"name": "x", "case": "tamu", "maneuver": {"angle": "40 kg"},
             "simulation": {"duration": 1, "rate": 2}, "runs": []}

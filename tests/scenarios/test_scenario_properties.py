@@ -175,3 +175,45 @@ def test_the_unmutated_bases_are_valid(name):
     # the property is not vacuous: the documents it mutates are valid and the maneuvers run
     expected = "valid" if name == "identification" else "ran"
     assert _outcome(yaml.safe_dump(BASES[name], sort_keys=False)) == expected
+
+
+#: every example of every kind, as parsed YAML: the load-only property below mutates these
+EXAMPLE_DOCUMENTS = {p.stem: yaml.safe_load(p.read_text()) for p in sorted(EXAMPLES.glob("*.yaml"))}
+
+
+@st.composite
+def example_documents(draw) -> str:
+    """An example of any kind with one to three values replaced, keys deleted or added."""
+    data = copy.deepcopy(EXAMPLE_DOCUMENTS[draw(st.sampled_from(sorted(EXAMPLE_DOCUMENTS)))])
+    for _ in range(draw(st.integers(1, 3))):
+        paths = _paths(data)
+        path = draw(st.sampled_from(paths)) if paths else ()
+        action = draw(st.sampled_from(["set", "set", "delete", "unknown"]))
+        if action == "set" and path:
+            _set(data, path, draw(VALUES))
+        elif action == "delete" and path:
+            _delete(data, path)
+        else:
+            parent = draw(st.sampled_from([()] + [p for p in paths if isinstance(
+                _get(data, p), dict)]))
+            _get(data, parent)[draw(st.sampled_from(["colour", "Runs", "1"]))] = 1
+    return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
+
+
+@settings(max_examples=400, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(example_documents())
+def test_malformed_documents_of_every_kind_load_or_are_refused_by_name(document):
+    """Stage 1 (YAML, schema, units, section rules) of every kind: a mutated example loads or
+    ends in a ScenarioError, quickly; no other exception escapes."""
+    start = time.perf_counter()
+    try:
+        load_scenario(document)
+    except ScenarioError as exc:
+        assert all(":" in problem for problem in exc.problems)  # each names its field
+    assert time.perf_counter() - start < TIME_BOUND
+
+
+def test_every_example_loads():
+    for name, data in EXAMPLE_DOCUMENTS.items():
+        load_scenario(yaml.safe_dump(data, sort_keys=False))

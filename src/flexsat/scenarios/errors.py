@@ -81,8 +81,11 @@ def _allowed_keys(loc: tuple, root: type[BaseModel]) -> str:
     """The keys allowed beside the unknown key at ``loc`` of a ``root`` document."""
     model = root
     for key in loc[:-1]:
-        if isinstance(key, str):
-            model = _models_in(model.model_fields[key].annotation)[0]
+        # list indices and the keys of a mapping of models (channel names) stay at the model
+        if isinstance(key, str) and key in model.model_fields:
+            inner = _models_in(model.model_fields[key].annotation)
+            if inner:
+                model = inner[0]
     return ", ".join(model.model_fields)
 
 
