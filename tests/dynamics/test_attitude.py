@@ -180,7 +180,8 @@ def test_the_package_re_exports_every_kernel():
     from flexsat.dynamics import orbit, rigid_body, structural
 
     kernels = {*att.__all__, *rigid_body.__all__} - {"UNIT_TOL", "SINGULAR_TOL"}
-    plants = {*structural.__all__, *orbit.__all__, "RigidSpacecraft", "FlexibleSpacecraft"}
+    plants = {*structural.__all__, *orbit.__all__, "RigidSpacecraft", "FlexibleSpacecraft",
+              "CmgSpacecraft", "TetheredSubsatellite", "TetherScales"}
     assert kernels | plants == set(dynamics.__all__)
     assert dynamics.dcm_to_quaternion is att.dcm_to_quaternion
 

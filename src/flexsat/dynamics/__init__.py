@@ -9,7 +9,9 @@ imported as a module (``from flexsat.dynamics import cmg``) since its short name
 (``momentum``, ``gain``) would be ambiguous here. The plants: :mod:`flexsat.dynamics.structural`
 (any M, D, K structure with named force, torque and moment-pair inputs),
 :mod:`flexsat.dynamics.orbit` (Bainum's beam in orbit), :class:`RigidSpacecraft` and
-:class:`FlexibleSpacecraft` (three-axis, the latter in hybrid coordinates). Their names are
+:class:`FlexibleSpacecraft` (three-axis, the latter in hybrid coordinates),
+:class:`CmgSpacecraft` (a rigid body steered by a CMG pyramid), :class:`TetheredSubsatellite`
+(Vadali & Kim's tether, with :class:`TetherScales`). Their names are
 re-exported here and imported from their modules on first use, so importing the package loads
 nothing.
 """
@@ -33,6 +35,7 @@ _EXPORTS = {
     "RigidSpacecraft": "rigid_spacecraft",
     "FlexibleSpacecraft": "flexible_spacecraft",
     "TetheredSubsatellite": "tether", "TetherScales": "tether",
+    "CmgSpacecraft": "cmg_actuator",
 }
 
 __all__ = list(_EXPORTS)
