@@ -61,7 +61,8 @@ import warnings
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["ARGUMENTS", "RECORDS", "closed_loop", "closed_loop_parallel", "allocate_records"]
+__all__ = ["ARGUMENTS", "RECORDS", "REDUCTIONS", "allocate_records", "closed_loop",
+           "closed_loop_parallel", "closed_loop_reduced", "closed_loop_reduced_parallel"]
 
 _UNCACHED: list[str] = []
 
@@ -91,6 +92,10 @@ ARGUMENTS = ("x0", "E", "block_diagonal", "P1u", "P1f", "P2f", "Cr", "fric", "su
              "dist_std", "dist_slot", "noise", "bound", "Co", "Do", "Dof", "Q")
 #: output arguments of :func:`closed_loop`, as returned by :func:`allocate_records`
 RECORDS = ("X", "Y", "Ucmd", "U", "D", "F", "O", "En", "stop")
+#: the arguments of :func:`closed_loop_reduced` after those of :data:`ARGUMENTS` (inputs,
+#: then outputs)
+REDUCTIONS = ("red_c", "red_tab", "red_t", "red_dir", "red_band", "snap_k", "red", "upeak",
+              "snapO", "snapE", "stop")
 
 
 @_jit(inline="always", error_model="numpy")
@@ -142,22 +147,54 @@ def _propagate(E, x, out, block_diagonal):
             out[i] = s
 
 
+@_jit(inline="always", error_model="numpy")
+def _output_row(Coc, Doc, Dofc, i, x, w, f):
+    """o_i = C_o[i] x + D_of[i] f + D_o[i] w (the order of the sums fixes the bits)."""
+    s = _dot(Coc[i], x) + Dofc[i] * f
+    for j in range(w.shape[0]):
+        s += Doc[i, j] * w[j]
+    return s
+
+
+@_jit(inline="always", error_model="numpy")
+def _energy(Qc, x, qx):
+    """½ xᵀ v, v = Q x accumulated column by column (Q symmetric: row j is column j):
+    independent element-wise updates the compiler vectorises, where n dot products are each a
+    chain of dependent additions (3× slower at n = 22)."""
+    n = x.shape[0]
+    for i in range(n):
+        qx[i] = 0.0
+    for j in range(n):
+        xj = x[j]
+        for i in range(n):
+            qx[i] += Qc[j, i] * xj
+    return 0.5 * _dot(x, qx)
+
+
 @_jit(error_model="numpy")
 def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
           imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
           Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-          Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop):
+          Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
+          X, Y, Ucmd, U, D, F, O, En, stop, red, upeak, snapO, snapE):
     n = x0.shape[1]
     m = P1u.shape[2]
     p = Cm.shape[1]
-    p_rec = Y.shape[2]
+    p_rec = Y.shape[2] if Y.shape[1] > 0 else 0
     nk = Ak.shape[2]
-    n_t = Y.shape[1]
+    # samples: those of the records (a divergence rerun stops early), else the law's
+    n_t = Ucmd.shape[1] if Ucmd.shape[1] > 0 else y_ref.shape[0]
     L = fir_w.shape[0]
     has_force = P1f.shape[0] > 0
     rec_x = X.shape[1] > 0
-    r_out = O.shape[2] if O.shape[1] > 0 else 0
+    rec_u = Ucmd.shape[1] > 0  # histories of the inputs (not in the reduced mode)
+    rec_o = O.shape[1] > 0
+    n_red = red.shape[1]  # reduced output rows (the first n_red rows of C_o)
+    n_snap = snapO.shape[1]
+    # output rows computed at each sample: for their history or their reductions
+    r_out = O.shape[2] if rec_o else (Co.shape[1] if n_red > 0 or n_snap > 0 else 0)
     rec_e = En.shape[1] > 0 and Q.shape[0] > 0
+    snap_e = snapE.shape[1] > 0 and Q.shape[0] > 0
     rec_f = F.shape[1] > 0
     cp = _ci(E.shape[0], c)
     cu = _ci(P1u.shape[0], c)
@@ -172,10 +209,10 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         co = _ci(Co.shape[0], c)
         Coc, Doc, Dofc = Co[co], Do[co], Dof[co]
     Qc = np.zeros((0, n))
-    if rec_e:
+    if rec_e or snap_e:
         Qc = Q[_ci(Q.shape[0], c)]
     sens, actc, dstd = sensor[cs], act[ca], dist_std[cd]
-    noisec, Yc, Ucmdc, Uc, Dc, Fc = noise[c], Y[c], Ucmd[c], U[c], D[c], F[c]
+    noisec = noise[c]
     c1 = c2 = eps = 0.0
     p1f = p2f = cr = np.zeros(n)
     if has_force:
@@ -183,14 +220,27 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         cfr = _ci(fric.shape[0], c)
         p1f, p2f, cr = P1f[cf], P2f[cf], Cr[_ci(Cr.shape[0], c)]
         c1, c2, eps = fric[cfr, 0], fric[cfr, 1], fric[cfr, 2]
+    # reductions: s_j = o_j − red_c[c, j] (− red_t[table j] at the sample), j < n_red
+    redc = red_c[_ci(red_c.shape[0], c)] if n_red > 0 else np.zeros(0)
+    rdir = red_dir[_ci(red_dir.shape[0], c)] if n_red > 0 else 0.0
+    ct_ = _ci(red_t.shape[2], c) if red_t.shape[0] > 0 else 0
+    snapc = snap_k[_ci(snap_k.shape[0], c)] if n_snap > 0 else np.zeros(0, np.int64)
+    for j in range(n_red):
+        red[c, j, 0] = 0.0  # max |s|
+        red[c, j, 1] = -np.inf  # max dir · s
+        red[c, j, 2] = 0.0  # last sample with |s| > band, + 1 (0: none)
+    for i in range(upeak.shape[1]):
+        upeak[c, i] = 0.0
 
     x = x0[c].copy()
     xa = np.empty(n)
     qx = np.empty(n)
     drive = np.empty(n)
     w = np.zeros(m)  # input applied over the previous period (none before the first sample)
+    ucmd = np.empty(m)
     y = np.empty(p)
     e = np.empty(p)
+    ov = np.empty(r_out)
     xi = np.zeros(nk)
     xi_new = np.empty(nk)
     hist = np.empty(max(L, 1))
@@ -263,17 +313,20 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 s += Ck[tc, cc, i, j] * xi[j]
             for j in range(p):
                 s += Dk[td, cdk, i, j] * e[j]
-            Ucmdc[k, i] = s
+            ucmd[i] = s
+            if rec_u:
+                Ucmd[c, k, i] = s
             if not abs(s) <= bound:
                 bad = True
-        for i in range(nk):
-            s = 0.0
-            for j in range(nk):
-                s += Ak[tk, ck, i, j] * xi[j]
-            for j in range(p):
-                s += Bk[tb, cb, i, j] * e[j]
-            xi_new[i] = s
-        xi[:] = xi_new
+        if nk > 0:
+            for i in range(nk):
+                s = 0.0
+                for j in range(nk):
+                    s += Ak[tk, ck, i, j] * xi[j]
+                for j in range(p):
+                    s += Bk[tb, cb, i, j] * e[j]
+                xi_new[i] = s
+            xi[:] = xi_new
         # 7. divergence
         for j in range(n):
             if not abs(x[j]) <= bound:
@@ -281,35 +334,47 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         if rec_x:
             X[c, k, :] = x
         for i in range(r_out):
-            s = _dot(Coc[i], x) + Dofc[i] * f
-            for j in range(m):
-                s += Doc[i, j] * w[j]
-            O[c, k, i] = s
+            ov[i] = _output_row(Coc, Doc, Dofc, i, x, w, f)
+            if rec_o:
+                O[c, k, i] = ov[i]
+        for j in range(n_red):
+            s = ov[j] - redc[j]
+            tab = red_tab[j]
+            if tab >= 0:
+                s = s - red_t[tab, _ci(red_t.shape[1], k), ct_]
+            a = abs(s)
+            if a > red[c, j, 0]:
+                red[c, j, 0] = a
+            v = rdir * s
+            if v > red[c, j, 1]:
+                red[c, j, 1] = v
+            if a > red_band[j]:
+                red[c, j, 2] = k + 1
+        for i in range(n_snap):
+            if snapc[i] == k:
+                for j in range(r_out):
+                    snapO[c, i, j] = ov[j]
+                if snap_e:
+                    snapE[c, i] = _energy(Qc, x, qx)
         if rec_e:
-            # ½ xᵀ v, v = Q x accumulated column by column (Q symmetric: row j is column
-            # j): independent element-wise updates the compiler vectorises, where n
-            # dot products are each a chain of dependent additions (3× slower at n = 22)
-            for i in range(n):
-                qx[i] = 0.0
-            for j in range(n):
-                xj = x[j]
-                for i in range(n):
-                    qx[i] += Qc[j, i] * xj
-            En[c, k] = 0.5 * _dot(x, qx)
+            En[c, k] = _energy(Qc, x, qx)
         for i in range(p_rec):
-            Yc[k, i] = y[p - p_rec + i]
+            Y[c, k, i] = y[p - p_rec + i]
         if rec_f:
-            Fc[k] = f
+            F[c, k] = f
         if bad:
             stop[c] = k
             return
         # 8. actuator and disturbance
         for i in range(m):
             sat = actc[i, 0]
-            u = actc[i, 1] * min(max(Ucmdc[k, i], -sat), sat)
+            u = actc[i, 1] * min(max(ucmd[i], -sat), sat)
             d = dstd[i] * noisec[k, dist_slot[i]] if dist_slot[i] >= 0 else 0.0
-            Uc[k, i] = u
-            Dc[k, i] = d
+            if rec_u:
+                U[c, k, i] = u
+                D[c, k, i] = d
+            if i < upeak.shape[1] and abs(u) > upeak[c, i]:
+                upeak[c, i] = abs(u)
             w[i] = u + d
         if k == n_t - 1:
             break
@@ -384,11 +449,14 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     stop : (C,) int64           written: −1, or the first diverged sample (its X, Y, Ucmd and
                                 F are recorded; U, D there and every later row are not)
     """
+    red_c, red_tab, red_t, red_dir, red_band, snap_k, red, upeak, snapO, snapE = \
+        _no_reductions()
     for c in range(x0.shape[0]):
         _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
               imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
               Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-              Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop)
+              Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
+              X, Y, Ucmd, U, D, F, O, En, stop, red, upeak, snapO, snapE)
 
 
 @_jit(parallel=True, error_model="numpy")
@@ -398,12 +466,78 @@ def closed_loop_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substep
                          noise, bound, Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop):
     """:func:`closed_loop` with the cases spread over threads (same arguments, bit-identical
     results: each case runs the same scalar operations as in the serial loop)."""
+    red_c, red_tab, red_t, red_dir, red_band, snap_k, red, upeak, snapO, snapE = \
+        _no_reductions()
     for c in prange(x0.shape[0]):
         # prange's index is unsigned; the case index must stay a signed integer
         _case(np.int64(c), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
               imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
               Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-              Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop)
+              Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
+              X, Y, Ucmd, U, D, F, O, En, stop, red, upeak, snapO, snapE)
+
+
+@_jit(error_model="numpy")
+def _no_reductions():
+    """The reduction arguments and outputs of a run that records histories instead."""
+    return (np.zeros((1, 0)), np.zeros(0, np.int64), np.zeros((0, 1, 1)), np.zeros(1),
+            np.zeros(0), np.zeros((1, 0), np.int64), np.zeros((0, 0, 3)), np.zeros((0, 0)),
+            np.zeros((0, 0, 0)), np.zeros((0, 0)))
+
+
+@_jit(error_model="numpy")
+def closed_loop_reduced(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
+                        imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
+                        fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot,
+                        noise, bound, Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir,
+                        red_band, snap_k, red, upeak, snapO, snapE, stop):
+    """:func:`closed_loop` keeping no history: per case, the reductions of the first
+    R output rows o_j (C_o, D_o, D_of), s_j = o_j − red_c[c, j] − red_t[red_tab[j], k, c]
+    (the table term only where red_tab[j] >= 0), over every sample k:
+
+        red[c, j] = (max_k |s_j|, max_k red_dir[c] · s_j, 1 + the last k with |s_j| >
+                     red_band[j], 0 if none),
+
+    upeak[c, i] = max_k |u_i| (the actuator output of the first upeak.shape[1] inputs), and
+    at the samples snap_k[c] (Cs = 1 or C, S) every output row snapO[c, s] and the energy
+    snapE[c, s] (S = 0 in snapE: none). The step is that of :func:`closed_loop` (the same
+    operations in the same order: the same bits). red_t (n_tab, 1 or n_t, 1 or C)."""
+    n = x0.shape[1]
+    m = P1u.shape[2]
+    nc = x0.shape[0]
+    X = np.zeros((nc, 0, n))
+    Y = np.zeros((nc, 0, 0))
+    Uc, U, D = np.zeros((nc, 0, m)), np.zeros((nc, 0, m)), np.zeros((nc, 0, m))
+    F, O, En = np.zeros((nc, 0)), np.zeros((nc, 0, 0)), np.zeros((nc, 0))
+    for c in range(nc):
+        _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
+              imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
+              Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
+              Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
+              X, Y, Uc, U, D, F, O, En, stop, red, upeak, snapO, snapE)
+
+
+@_jit(parallel=True, error_model="numpy")
+def closed_loop_reduced_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
+                                 imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src,
+                                 fir_dst, fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act,
+                                 dist_std, dist_slot, noise, bound, Co, Do, Dof, Q, red_c,
+                                 red_tab, red_t, red_dir, red_band, snap_k, red, upeak, snapO,
+                                 snapE, stop):
+    """:func:`closed_loop_reduced` with the cases spread over threads (bit-identical)."""
+    n = x0.shape[1]
+    m = P1u.shape[2]
+    nc = x0.shape[0]
+    X = np.zeros((nc, 0, n))
+    Y = np.zeros((nc, 0, 0))
+    Uc, U, D = np.zeros((nc, 0, m)), np.zeros((nc, 0, m)), np.zeros((nc, 0, m))
+    F, O, En = np.zeros((nc, 0)), np.zeros((nc, 0, 0)), np.zeros((nc, 0))
+    for c in prange(nc):
+        _case(np.int64(c), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
+              imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
+              Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
+              Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
+              X, Y, Uc, U, D, F, O, En, stop, red, upeak, snapO, snapE)
 
 
 def allocate_records(n_t: int, n_cases: int, n: int, m: int, p: int, record_states: bool,
