@@ -148,12 +148,22 @@ def _propagate(E, x, out, block_diagonal):
 
 
 @_jit(inline="always", error_model="numpy")
-def _output_row(Coc, Doc, Dofc, i, x, w, f):
-    """o_i = C_o[i] x + D_of[i] f + D_o[i] w (the order of the sums fixes the bits)."""
-    s = _dot(Coc[i], x) + Dofc[i] * f
-    for j in range(w.shape[0]):
-        s += Doc[i, j] * w[j]
-    return s
+def _rows(Mt, x, out):
+    """out = Mtᵀ x, Mt (n, 8 g): eight rows at a time in registers, each summed in order."""
+    for i0 in range(0, Mt.shape[1], 8):
+        s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
+        for j in range(x.shape[0]):
+            xj = x[j]
+            s0 += Mt[j, i0] * xj
+            s1 += Mt[j, i0 + 1] * xj
+            s2 += Mt[j, i0 + 2] * xj
+            s3 += Mt[j, i0 + 3] * xj
+            s4 += Mt[j, i0 + 4] * xj
+            s5 += Mt[j, i0 + 5] * xj
+            s6 += Mt[j, i0 + 6] * xj
+            s7 += Mt[j, i0 + 7] * xj
+        out[i0], out[i0 + 1], out[i0 + 2], out[i0 + 3] = s0, s1, s2, s3
+        out[i0 + 4], out[i0 + 5], out[i0 + 6], out[i0 + 7] = s4, s5, s6, s7
 
 
 @_jit(inline="always", error_model="numpy")
@@ -232,6 +242,21 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     for i in range(upeak.shape[1]):
         upeak[c, i] = 0.0
 
+    # the measurement and output rows side by side, transposed and padded with zero rows to
+    # groups of 8: Mt x accumulated over j = 0 .. n − 1 in eight registers per group (eight
+    # independent chains of additions, where each row's dot product alone is one chain of
+    # dependent additions), each row summed in the order j = 0 .. n − 1
+    R = p + r_out
+    R8 = (R + 7) // 8 * 8
+    Mt = np.zeros((n, R8))
+    for j in range(n):
+        for i in range(p):
+            Mt[j, i] = Cmc[i, j]
+        for i in range(r_out):
+            Mt[j, p + i] = Coc[i, j]
+    acc = np.empty(R8)
+    fused = block_diagonal and not has_force
+
     x = x0[c].copy()
     xa = np.empty(n)
     qx = np.empty(n)
@@ -257,11 +282,10 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
             i_imp += 1
         # 2. force at the sample
         f = _force(x, cr, c1, c2, eps) if has_force else 0.0
-        # 3.-4. measurement and sensors
+        # 3.-4. measurement and sensors; the output rows' state part
+        _rows(Mt, x, acc)
         for i in range(p):
-            s = 0.0
-            for j in range(n):
-                s += Cmc[i, j] * x[j]
+            s = acc[i]
             for j in range(m):
                 s += Dmc[i, j] * w[j]
             s += Dmfc[i] * f
@@ -333,8 +357,11 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 bad = True
         if rec_x:
             X[c, k, :] = x
-        for i in range(r_out):
-            ov[i] = _output_row(Coc, Doc, Dofc, i, x, w, f)
+        for i in range(r_out):  # o_i = C_o[i] x + D_of[i] f + D_o[i] w
+            s = acc[p + i] + Dofc[i] * f
+            for j in range(m):
+                s += Doc[i, j] * w[j]
+            ov[i] = s
             if rec_o:
                 O[c, k, i] = ov[i]
         for j in range(n_red):
@@ -385,6 +412,12 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 s += P1uc[i, j] * w[j]
             drive[i] = s
         for _ in range(substeps):
+            if fused:  # x ← E x + drive in one pass over the 2×2 blocks (same operations)
+                for i in range(0, n, 2):
+                    x0_, x1_ = x[i], x[i + 1]
+                    x[i] = (Ec[i, 0] * x0_ + Ec[i, 1] * x1_) + drive[i]
+                    x[i + 1] = (Ec[i + 1, 0] * x0_ + Ec[i + 1, 1] * x1_) + drive[i + 1]
+                continue
             _propagate(Ec, x, xa, block_diagonal)
             if has_force:
                 f0 = _force(x, cr, c1, c2, eps)
