@@ -260,8 +260,15 @@ def _hub_plant(params: HubAppendageParams, n_modes: int, stiffening: bool) -> Hu
 
 def maneuver_metrics(result: SimResult) -> dict[str, np.ndarray]:
     """The engine's maneuver metrics of every case (settling time, overshoot, peak torque,
-    residual energy, ...): the default extractor."""
+    residual energy, ...): the default extractor. It reads ``result.metrics`` only
+    (``reads_metrics_only``), so a chunk without histories runs with
+    ``simulate(metrics_only=True)``."""
     return {k: np.asarray(v, float) for k, v in result.metrics.items()}
+
+
+#: an extractor with this attribute true reads only ``result.metrics``: :func:`run_chunk` then
+#: asks the engine for the metrics alone (no time history is computed or kept)
+maneuver_metrics.reads_metrics_only = True
 
 
 # -- one chunk ---------------------------------------------------------------------------------
@@ -269,11 +276,18 @@ def run_chunk(build: Callable, extract: Callable, parameters: Mapping[str, np.nd
               start: int, base_seed: int, histories: tuple[str, ...] = ()
               ) -> dict[str, np.ndarray]:
     """Run the cases ``start .. start + n`` (n the length of the ``parameters`` columns) in one
-    batched call: {metric: (n,)} plus {history: (n, n_t)} and ``seed`` (n,)."""
+    batched call: {metric: (n,)} plus {history: (n, n_t)} and ``seed`` (n,).
+
+    Without histories and with an extractor that reads only the metrics
+    (``extract.reads_metrics_only``, as :func:`maneuver_metrics`), the call is
+    ``simulate(..., metrics_only=True)``: the metrics accumulated in the compiled loop, on a
+    path that does not depend on the chunk size (a case alone is a chunk of one)."""
     n = len(next(iter(parameters.values())))
     seeds = case_seeds(base_seed, np.arange(start, start + n))
     plant, law, config, x0 = build(parameters, seeds)
-    result = simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=x0)
+    lean = not histories and getattr(extract, "reads_metrics_only", False)
+    result = simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=x0,
+                      metrics_only=lean)
     out = {}
     for name, values in extract(result).items():
         values = np.asarray(values, float)
