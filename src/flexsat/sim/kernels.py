@@ -518,6 +518,394 @@ def _no_reductions():
             np.zeros((0, 0, 0)), np.zeros((0, 0)))
 
 
+#: cases per group of :func:`closed_loop_reduced`: the lanes of its vector operations
+LANES = 8
+
+
+@_jit(error_model="numpy")
+def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
+           imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
+           Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
+           Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
+           red, upeak, snapO, snapE, stop):
+    """Cases c0 .. c0 + nl − 1 of :func:`closed_loop_reduced` side by side: every per-case
+    quantity is a row of ``nl`` lanes, the innermost loop runs over the lanes (independent
+    cases: vector operations, and no chain of dependent operations from one step to the
+    next holds the loop up), and each lane performs the scalar operations of :func:`_case`
+    in its order, so a case's numbers do not depend on its group or on ``nl``."""
+    n = x0.shape[1]
+    m = P1u.shape[2]
+    p = Cm.shape[1]
+    nk = Ak.shape[2]
+    n_t = y_ref.shape[0]
+    Lf = fir_w.shape[0]
+    has_force = P1f.shape[0] > 0
+    n_red = red.shape[1]
+    n_snap = snapO.shape[1]
+    r = Co.shape[1]
+    snap_e = snapE.shape[1] > 0 and Q.shape[0] > 0
+    R = p + r
+    # per-lane copies of the per-case arrays, lanes last
+    Mt = np.empty((n, R, nl))
+    Ev = np.empty((n, E.shape[2], nl))
+    P1v = np.empty((n, m, nl))
+    Dmv = np.empty((p, m, nl))
+    Dmfv = np.empty((p, nl))
+    sensv = np.empty((p, 4, nl))
+    Dov = np.empty((r, m, nl))
+    Dofv = np.empty((r, nl))
+    actv = np.empty((m, 2, nl))
+    dstdv = np.empty((m, nl))
+    p1f = np.zeros((n, nl))
+    p2f = np.zeros((n, nl))
+    crv = np.zeros((n, nl))
+    c1 = np.zeros(nl)
+    c2 = np.zeros(nl)
+    eps = np.ones(nl)
+    redc = np.zeros((max(n_red, 1), nl))
+    rdir = np.zeros(nl)
+    ct = np.zeros(nl, np.int64)
+    cr_ = np.zeros(nl, np.int64)
+    cf_ = np.zeros(nl, np.int64)
+    ck = np.zeros(nl, np.int64)
+    cb = np.zeros(nl, np.int64)
+    cc = np.zeros(nl, np.int64)
+    cdk = np.zeros(nl, np.int64)
+    ci_imp = np.zeros(nl, np.int64)
+    snapc = np.zeros((max(n_snap, 1), nl), np.int64)
+    Qv = np.zeros((n, n, nl)) if snap_e else np.zeros((0, 0, nl))
+    for l in range(nl):
+        c = c0 + l
+        cp, cu, cm = _ci(E.shape[0], c), _ci(P1u.shape[0], c), _ci(Cm.shape[0], c)
+        for j in range(n):
+            for i in range(p):
+                Mt[j, i, l] = Cm[cm, i, j]
+            for i in range(r):
+                Mt[j, p + i, l] = Co[_ci(Co.shape[0], c), i, j]
+            for q in range(E.shape[2]):
+                Ev[j, q, l] = E[cp, j, q]
+            for i in range(m):
+                P1v[j, i, l] = P1u[cu, j, i]
+        for i in range(p):
+            for j in range(m):
+                Dmv[i, j, l] = Dm[cm, i, j]
+            Dmfv[i, l] = Dmf[cm, i]
+            for q in range(4):
+                sensv[i, q, l] = sensor[_ci(sensor.shape[0], c), i, q]
+        for i in range(r):
+            co = _ci(Co.shape[0], c)
+            for j in range(m):
+                Dov[i, j, l] = Do[co, i, j]
+            Dofv[i, l] = Dof[co, i]
+        for i in range(m):
+            actv[i, 0, l] = act[_ci(act.shape[0], c), i, 0]
+            actv[i, 1, l] = act[_ci(act.shape[0], c), i, 1]
+            dstdv[i, l] = dist_std[_ci(dist_std.shape[0], c), i]
+        if has_force:
+            cf, cfr = _ci(P1f.shape[0], c), _ci(fric.shape[0], c)
+            for j in range(n):
+                p1f[j, l] = P1f[cf, j]
+                p2f[j, l] = P2f[cf, j]
+                crv[j, l] = Cr[_ci(Cr.shape[0], c), j]
+            c1[l], c2[l], eps[l] = fric[cfr, 0], fric[cfr, 1], fric[cfr, 2]
+        if n_red > 0:
+            for j in range(n_red):
+                redc[j, l] = red_c[_ci(red_c.shape[0], c), j]
+            rdir[l] = red_dir[_ci(red_dir.shape[0], c)]
+        if red_t.shape[0] > 0:
+            ct[l] = _ci(red_t.shape[2], c)
+        for i in range(n_snap):
+            snapc[i, l] = snap_k[_ci(snap_k.shape[0], c), i]
+        if snap_e:
+            cq = _ci(Q.shape[0], c)
+            for j in range(n):
+                for i in range(n):
+                    Qv[j, i, l] = Q[cq, j, i]
+        cr_[l], cf_[l] = _ci(y_ref.shape[1], c), _ci(u_ff.shape[1], c)
+        ck[l], cb[l] = _ci(Ak.shape[1], c), _ci(Bk.shape[1], c)
+        cc[l], cdk[l] = _ci(Ck.shape[1], c), _ci(Dk.shape[1], c)
+        ci_imp[l] = _ci(imp_dx.shape[1], c)
+        for j in range(n_red):
+            red[c, j, 0] = 0.0  # max |s|
+            red[c, j, 1] = -np.inf  # max dir · s
+            red[c, j, 2] = 0.0  # last sample with |s| > band, + 1 (0: none)
+        for i in range(upeak.shape[1]):
+            upeak[c, i] = 0.0
+        stop[c] = -1
+
+    x = np.empty((n, nl))
+    for l in range(nl):
+        for j in range(n):
+            x[j, l] = x0[c0 + l, j]
+    xa = np.empty((n, nl))
+    drive = np.empty((n, nl))
+    qx = np.empty((n, nl))
+    w = np.zeros((m, nl))
+    ucmd = np.empty((m, nl))
+    y = np.empty((p, nl))
+    e = np.empty((p, nl))
+    acc = np.empty((R, nl))
+    ov = np.empty((r, nl))
+    f = np.zeros(nl)
+    f0 = np.zeros(nl)
+    df = np.zeros(nl)
+    s = np.empty(nl)
+    d0 = np.empty(nl)
+    d1 = np.empty(nl)
+    d2 = np.empty(nl)
+    d3 = np.empty(nl)
+    xi = np.zeros((nk, nl))
+    xi_new = np.empty((nk, nl))
+    hist = np.empty((max(Lf, 1), nl))
+    bad = np.zeros(nl, np.bool_)
+    alive = np.ones(nl, np.bool_)
+    head = 0
+    i_imp = 0
+    n_imp = imp_k.shape[0]
+    fused = block_diagonal and not has_force
+
+    for k in range(n_t):
+        # 1. impulses
+        while i_imp < n_imp and imp_k[i_imp] == k:
+            for j in range(n):
+                for l in range(nl):
+                    x[j, l] += imp_dx[i_imp, ci_imp[l], j]
+            i_imp += 1
+        # 2. force at the sample (the four partial sums of _dot)
+        if has_force:
+            _force_lanes(x, crv, c1, c2, eps, f, d0, d1, d2, d3)
+        # 3.-4. rows, measurement and sensors
+        for i in range(R):
+            for l in range(nl):
+                acc[i, l] = 0.0
+        for j in range(n):
+            for i in range(R):
+                for l in range(nl):
+                    acc[i, l] += Mt[j, i, l] * x[j, l]
+        for i in range(p):
+            for l in range(nl):
+                s[l] = acc[i, l]
+            for j in range(m):
+                for l in range(nl):
+                    s[l] += Dmv[i, j, l] * w[j, l]
+            slot = sensor_slot[i]
+            for l in range(nl):
+                v = s[l] + Dmfv[i, l] * f[l]
+                v += sensv[i, 2, l]
+                if slot >= 0:
+                    v += sensv[i, 1, l] * noise[c0 + l, k, slot]
+                q = sensv[i, 0, l]
+                if q > 0.0:
+                    v = q * np.rint(v / q)
+                sat = sensv[i, 3, l]
+                y[i, l] = min(max(v, -sat), sat)
+        # 5. FIR-derivative channel (one ring buffer position for every lane)
+        if fir_src >= 0:
+            if k == 0:
+                for j in range(Lf):
+                    for l in range(nl):
+                        hist[j, l] = y[fir_src, l]
+            else:
+                for l in range(nl):
+                    hist[head, l] = y[fir_src, l]
+                head = (head + 1) % Lf
+            for l in range(nl):
+                s[l] = 0.0
+            for j in range(Lf):
+                hj = (head + j) % Lf
+                for l in range(nl):
+                    s[l] += fir_w[j] * hist[hj, l]
+            for l in range(nl):
+                y[fir_dst, l] = s[l]
+        # 6. law
+        tk, tb = _ci(Ak.shape[0], k), _ci(Bk.shape[0], k)
+        tc, td = _ci(Ck.shape[0], k), _ci(Dk.shape[0], k)
+        for i in range(p):
+            for l in range(nl):
+                e[i, l] = y[i, l] - y_ref[k, cr_[l], i]
+        if k == 0 and K0.shape[0] > 0:
+            for i in range(nk):
+                for l in range(nl):
+                    c0k = _ci(K0.shape[0], c0 + l)
+                    v = 0.0
+                    for j in range(p):
+                        v += K0[c0k, i, j] * e[j, l]
+                    xi[i, l] = v
+        for l in range(nl):
+            bad[l] = False
+        for i in range(m):
+            for l in range(nl):
+                v = u_ff[k, cf_[l], i]
+                for j in range(nk):
+                    v += Ck[tc, cc[l], i, j] * xi[j, l]
+                for j in range(p):
+                    v += Dk[td, cdk[l], i, j] * e[j, l]
+                ucmd[i, l] = v
+                if not abs(v) <= bound:
+                    bad[l] = True
+        if nk > 0:
+            for i in range(nk):
+                for l in range(nl):
+                    v = 0.0
+                    for j in range(nk):
+                        v += Ak[tk, ck[l], i, j] * xi[j, l]
+                    for j in range(p):
+                        v += Bk[tb, cb[l], i, j] * e[j, l]
+                    xi_new[i, l] = v
+            for i in range(nk):
+                for l in range(nl):
+                    xi[i, l] = xi_new[i, l]
+        # 7. divergence: a diverged lane is stopped there (its later numbers are not used)
+        for j in range(n):
+            for l in range(nl):
+                if not abs(x[j, l]) <= bound:
+                    bad[l] = True
+        for i in range(r):  # o_i = C_o[i] x + D_of[i] f + D_o[i] w
+            for l in range(nl):
+                v = acc[p + i, l] + Dofv[i, l] * f[l]
+                for j in range(m):
+                    v += Dov[i, j, l] * w[j, l]
+                ov[i, l] = v
+        for j in range(n_red):
+            tab = red_tab[j]
+            band = red_band[j]
+            for l in range(nl):
+                v = ov[j, l] - redc[j, l]
+                if tab >= 0:
+                    v = v - red_t[tab, _ci(red_t.shape[1], k), ct[l]]
+                a = abs(v)
+                c = c0 + l
+                if a > red[c, j, 0]:
+                    red[c, j, 0] = a
+                if rdir[l] * v > red[c, j, 1]:
+                    red[c, j, 1] = rdir[l] * v
+                if a > band:
+                    red[c, j, 2] = k + 1
+        for i in range(n_snap):
+            for l in range(nl):
+                if snapc[i, l] == k:
+                    for j in range(r):
+                        snapO[c0 + l, i, j] = ov[j, l]
+                    if snap_e:
+                        snapE[c0 + l, i] = _energy_lane(Qv, x, qx, l)
+        for l in range(nl):
+            if bad[l] and alive[l]:
+                stop[c0 + l] = k
+                alive[l] = False
+        if not alive.any():
+            return
+        # 8. actuator and disturbance
+        for i in range(m):
+            slot = dist_slot[i]
+            for l in range(nl):
+                sat = actv[i, 0, l]
+                u = actv[i, 1, l] * min(max(ucmd[i, l], -sat), sat)
+                d = dstdv[i, l] * noise[c0 + l, k, slot] if slot >= 0 else 0.0
+                if i < upeak.shape[1] and abs(u) > upeak[c0 + l, i]:
+                    upeak[c0 + l, i] = abs(u)
+                w[i, l] = u + d
+        if k == n_t - 1:
+            break
+        # 9. propagation over the period with the held input
+        for i in range(n):
+            for l in range(nl):
+                drive[i, l] = 0.0
+            for j in range(m):
+                for l in range(nl):
+                    drive[i, l] += P1v[i, j, l] * w[j, l]
+        for _ in range(substeps):
+            if fused:
+                for i in range(0, n, 2):
+                    for l in range(nl):
+                        x0_, x1_ = x[i, l], x[i + 1, l]
+                        x[i, l] = (Ev[i, 0, l] * x0_ + Ev[i, 1, l] * x1_) + drive[i, l]
+                        x[i + 1, l] = ((Ev[i + 1, 0, l] * x0_ + Ev[i + 1, 1, l] * x1_)
+                                       + drive[i + 1, l])
+                continue
+            _propagate_lanes(Ev, x, xa, block_diagonal)
+            if has_force:
+                _force_lanes(x, crv, c1, c2, eps, f0, d0, d1, d2, d3)
+                for i in range(n):
+                    for l in range(nl):
+                        xa[i, l] += drive[i, l] + p1f[i, l] * f0[l]
+                _force_lanes(xa, crv, c1, c2, eps, df, d0, d1, d2, d3)
+                for l in range(nl):
+                    df[l] = df[l] - f0[l]
+                for i in range(n):
+                    for l in range(nl):
+                        x[i, l] = xa[i, l] + p2f[i, l] * df[l]
+            else:
+                for i in range(n):
+                    for l in range(nl):
+                        x[i, l] = xa[i, l] + drive[i, l]
+
+
+@_jit(inline="always", error_model="numpy")
+def _force_lanes(x, crv, c1, c2, eps, out, s0, s1, s2, s3):
+    """out = N(x) per lane, r = C_r x in the four partial sums of :func:`_dot`."""
+    n, nl = x.shape
+    for l in range(nl):
+        s0[l] = s1[l] = s2[l] = s3[l] = 0.0
+    j = 0
+    while j + 4 <= n:
+        for l in range(nl):
+            s0[l] += crv[j, l] * x[j, l]
+            s1[l] += crv[j + 1, l] * x[j + 1, l]
+            s2[l] += crv[j + 2, l] * x[j + 2, l]
+            s3[l] += crv[j + 3, l] * x[j + 3, l]
+        j += 4
+    while j < n:
+        for l in range(nl):
+            s0[l] += crv[j, l] * x[j, l]
+        j += 1
+    for l in range(nl):
+        rr = (s0[l] + s1[l]) + (s2[l] + s3[l])
+        out[l] = -c1[l] * np.tanh(rr / eps[l]) - c2[l] * rr
+
+
+@_jit(inline="always", error_model="numpy")
+def _propagate_lanes(Ev, x, out, block_diagonal):
+    """out = E x per lane (:func:`_propagate`)."""
+    n, nl = x.shape
+    if block_diagonal:
+        for i in range(0, n, 2):
+            for l in range(nl):
+                x0, x1 = x[i, l], x[i + 1, l]
+                out[i, l] = Ev[i, 0, l] * x0 + Ev[i, 1, l] * x1
+                out[i + 1, l] = Ev[i + 1, 0, l] * x0 + Ev[i + 1, 1, l] * x1
+    else:
+        for i in range(n):
+            for l in range(nl):
+                out[i, l] = 0.0
+            for j in range(n):
+                for l in range(nl):
+                    out[i, l] += Ev[i, j, l] * x[j, l]
+
+
+@_jit(inline="always", error_model="numpy")
+def _energy_lane(Qv, x, qx, l):
+    """:func:`_energy` of lane l."""
+    n = x.shape[0]
+    for i in range(n):
+        qx[i, l] = 0.0
+    for j in range(n):
+        xj = x[j, l]
+        for i in range(n):
+            qx[i, l] += Qv[j, i, l] * xj
+    s0 = s1 = s2 = s3 = 0.0
+    j = 0
+    while j + 4 <= n:
+        s0 += x[j, l] * qx[j, l]
+        s1 += x[j + 1, l] * qx[j + 1, l]
+        s2 += x[j + 2, l] * qx[j + 2, l]
+        s3 += x[j + 3, l] * qx[j + 3, l]
+        j += 4
+    while j < n:
+        s0 += x[j, l] * qx[j, l]
+        j += 1
+    return 0.5 * ((s0 + s1) + (s2 + s3))
+
+
 @_jit(error_model="numpy")
 def closed_loop_reduced(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                         imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
@@ -533,21 +921,17 @@ def closed_loop_reduced(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps
 
     upeak[c, i] = max_k |u_i| (the actuator output of the first upeak.shape[1] inputs), and
     at the samples snap_k[c] (Cs = 1 or C, S) every output row snapO[c, s] and the energy
-    snapE[c, s] (S = 0 in snapE: none). The step is that of :func:`closed_loop` (the same
-    operations in the same order: the same bits). red_t (n_tab, 1 or n_t, 1 or C)."""
-    n = x0.shape[1]
-    m = P1u.shape[2]
+    snapE[c, s] (S = 0 in snapE: none); red_t (n_tab, 1 or n_t, 1 or C). The cases run in
+    groups of :data:`LANES` (:func:`_lanes`), each lane the operations of :func:`closed_loop`
+    in the same order: the same bits as its records give, whatever the grouping."""
     nc = x0.shape[0]
-    X = np.zeros((nc, 0, n))
-    Y = np.zeros((nc, 0, 0))
-    Uc, U, D = np.zeros((nc, 0, m)), np.zeros((nc, 0, m)), np.zeros((nc, 0, m))
-    F, O, En = np.zeros((nc, 0)), np.zeros((nc, 0, 0)), np.zeros((nc, 0))
-    for c in range(nc):
-        _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
-              imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
-              Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-              Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
-              X, Y, Uc, U, D, F, O, En, stop, red, upeak, snapO, snapE)
+    for g in range((nc + LANES - 1) // LANES):
+        c0 = g * LANES
+        _lanes(c0, min(LANES, nc - c0), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric,
+               substeps, imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
+               fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
+               Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
+               red, upeak, snapO, snapE, stop)
 
 
 @_jit(parallel=True, error_model="numpy")
@@ -557,20 +941,15 @@ def closed_loop_reduced_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric,
                                  dist_std, dist_slot, noise, bound, Co, Do, Dof, Q, red_c,
                                  red_tab, red_t, red_dir, red_band, snap_k, red, upeak, snapO,
                                  snapE, stop):
-    """:func:`closed_loop_reduced` with the cases spread over threads (bit-identical)."""
-    n = x0.shape[1]
-    m = P1u.shape[2]
+    """:func:`closed_loop_reduced` with the groups spread over threads (bit-identical)."""
     nc = x0.shape[0]
-    X = np.zeros((nc, 0, n))
-    Y = np.zeros((nc, 0, 0))
-    Uc, U, D = np.zeros((nc, 0, m)), np.zeros((nc, 0, m)), np.zeros((nc, 0, m))
-    F, O, En = np.zeros((nc, 0)), np.zeros((nc, 0, 0)), np.zeros((nc, 0))
-    for c in prange(nc):
-        _case(np.int64(c), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
-              imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
-              Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-              Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
-              X, Y, Uc, U, D, F, O, En, stop, red, upeak, snapO, snapE)
+    for g in prange((nc + LANES - 1) // LANES):
+        c0 = np.int64(g) * LANES
+        _lanes(c0, min(LANES, nc - c0), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric,
+               substeps, imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
+               fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
+               Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
+               red, upeak, snapO, snapE, stop)
 
 
 def allocate_records(n_t: int, n_cases: int, n: int, m: int, p: int, record_states: bool,
