@@ -185,26 +185,18 @@ def _energy(Qc, x, qx):
 def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
           imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
           Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-          Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
-          X, Y, Ucmd, U, D, F, O, En, stop, red, upeak, snapO, snapE):
+          Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop):
     n = x0.shape[1]
     m = P1u.shape[2]
     p = Cm.shape[1]
-    p_rec = Y.shape[2] if Y.shape[1] > 0 else 0
+    p_rec = Y.shape[2]
     nk = Ak.shape[2]
-    # samples: those of the records (a divergence rerun stops early), else the law's
-    n_t = Ucmd.shape[1] if Ucmd.shape[1] > 0 else y_ref.shape[0]
+    n_t = Y.shape[1]
     L = fir_w.shape[0]
     has_force = P1f.shape[0] > 0
     rec_x = X.shape[1] > 0
-    rec_u = Ucmd.shape[1] > 0  # histories of the inputs (not in the reduced mode)
-    rec_o = O.shape[1] > 0
-    n_red = red.shape[1]  # reduced output rows (the first n_red rows of C_o)
-    n_snap = snapO.shape[1]
-    # output rows computed at each sample: for their history or their reductions
-    r_out = O.shape[2] if rec_o else (Co.shape[1] if n_red > 0 or n_snap > 0 else 0)
+    r_out = O.shape[2] if O.shape[1] > 0 else 0
     rec_e = En.shape[1] > 0 and Q.shape[0] > 0
-    snap_e = snapE.shape[1] > 0 and Q.shape[0] > 0
     rec_f = F.shape[1] > 0
     cp = _ci(E.shape[0], c)
     cu = _ci(P1u.shape[0], c)
@@ -219,10 +211,10 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         co = _ci(Co.shape[0], c)
         Coc, Doc, Dofc = Co[co], Do[co], Dof[co]
     Qc = np.zeros((0, n))
-    if rec_e or snap_e:
+    if rec_e:
         Qc = Q[_ci(Q.shape[0], c)]
     sens, actc, dstd = sensor[cs], act[ca], dist_std[cd]
-    noisec = noise[c]
+    noisec, Yc = noise[c], Y[c]
     c1 = c2 = eps = 0.0
     p1f = p2f = cr = np.zeros(n)
     if has_force:
@@ -230,17 +222,6 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         cfr = _ci(fric.shape[0], c)
         p1f, p2f, cr = P1f[cf], P2f[cf], Cr[_ci(Cr.shape[0], c)]
         c1, c2, eps = fric[cfr, 0], fric[cfr, 1], fric[cfr, 2]
-    # reductions: s_j = o_j − red_c[c, j] (− red_t[table j] at the sample), j < n_red
-    redc = red_c[_ci(red_c.shape[0], c)] if n_red > 0 else np.zeros(0)
-    rdir = red_dir[_ci(red_dir.shape[0], c)] if n_red > 0 else 0.0
-    ct_ = _ci(red_t.shape[2], c) if red_t.shape[0] > 0 else 0
-    snapc = snap_k[_ci(snap_k.shape[0], c)] if n_snap > 0 else np.zeros(0, np.int64)
-    for j in range(n_red):
-        red[c, j, 0] = 0.0  # max |s|
-        red[c, j, 1] = -np.inf  # max dir · s
-        red[c, j, 2] = 0.0  # last sample with |s| > band, + 1 (0: none)
-    for i in range(upeak.shape[1]):
-        upeak[c, i] = 0.0
 
     # the measurement and output rows side by side, transposed and padded with zero rows to
     # groups of 8: Mt x accumulated over j = 0 .. n − 1 in eight registers per group (eight
@@ -265,7 +246,6 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     ucmd = np.empty(m)
     y = np.empty(p)
     e = np.empty(p)
-    ov = np.empty(r_out)
     xi = np.zeros(nk)
     xi_new = np.empty(nk)
     hist = np.empty(max(L, 1))
@@ -338,8 +318,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
             for j in range(p):
                 s += Dk[td, cdk, i, j] * e[j]
             ucmd[i] = s
-            if rec_u:
-                Ucmd[c, k, i] = s
+            Ucmd[c, k, i] = s
             if not abs(s) <= bound:
                 bad = True
         if nk > 0:
@@ -361,32 +340,11 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
             s = acc[p + i] + Dofc[i] * f
             for j in range(m):
                 s += Doc[i, j] * w[j]
-            ov[i] = s
-            if rec_o:
-                O[c, k, i] = ov[i]
-        for j in range(n_red):
-            s = ov[j] - redc[j]
-            tab = red_tab[j]
-            if tab >= 0:
-                s = s - red_t[tab, _ci(red_t.shape[1], k), ct_]
-            a = abs(s)
-            if a > red[c, j, 0]:
-                red[c, j, 0] = a
-            v = rdir * s
-            if v > red[c, j, 1]:
-                red[c, j, 1] = v
-            if a > red_band[j]:
-                red[c, j, 2] = k + 1
-        for i in range(n_snap):
-            if snapc[i] == k:
-                for j in range(r_out):
-                    snapO[c, i, j] = ov[j]
-                if snap_e:
-                    snapE[c, i] = _energy(Qc, x, qx)
+            O[c, k, i] = s
         if rec_e:
             En[c, k] = _energy(Qc, x, qx)
         for i in range(p_rec):
-            Y[c, k, i] = y[p - p_rec + i]
+            Yc[k, i] = y[p - p_rec + i]
         if rec_f:
             F[c, k] = f
         if bad:
@@ -397,11 +355,8 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
             sat = actc[i, 0]
             u = actc[i, 1] * min(max(ucmd[i], -sat), sat)
             d = dstd[i] * noisec[k, dist_slot[i]] if dist_slot[i] >= 0 else 0.0
-            if rec_u:
-                U[c, k, i] = u
-                D[c, k, i] = d
-            if i < upeak.shape[1] and abs(u) > upeak[c, i]:
-                upeak[c, i] = abs(u)
+            U[c, k, i] = u
+            D[c, k, i] = d
             w[i] = u + d
         if k == n_t - 1:
             break
@@ -482,14 +437,11 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     stop : (C,) int64           written: −1, or the first diverged sample (its X, Y, Ucmd and
                                 F are recorded; U, D there and every later row are not)
     """
-    red_c, red_tab, red_t, red_dir, red_band, snap_k, red, upeak, snapO, snapE = \
-        _no_reductions()
     for c in range(x0.shape[0]):
         _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
               imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
               Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-              Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
-              X, Y, Ucmd, U, D, F, O, En, stop, red, upeak, snapO, snapE)
+              Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop)
 
 
 @_jit(parallel=True, error_model="numpy")
@@ -499,26 +451,16 @@ def closed_loop_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substep
                          noise, bound, Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop):
     """:func:`closed_loop` with the cases spread over threads (same arguments, bit-identical
     results: each case runs the same scalar operations as in the serial loop)."""
-    red_c, red_tab, red_t, red_dir, red_band, snap_k, red, upeak, snapO, snapE = \
-        _no_reductions()
     for c in prange(x0.shape[0]):
         # prange's index is unsigned; the case index must stay a signed integer
         _case(np.int64(c), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
               imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
               Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-              Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
-              X, Y, Ucmd, U, D, F, O, En, stop, red, upeak, snapO, snapE)
+              Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop)
 
 
-@_jit(error_model="numpy")
-def _no_reductions():
-    """The reduction arguments and outputs of a run that records histories instead."""
-    return (np.zeros((1, 0)), np.zeros(0, np.int64), np.zeros((0, 1, 1)), np.zeros(1),
-            np.zeros(0), np.zeros((1, 0), np.int64), np.zeros((0, 0, 3)), np.zeros((0, 0)),
-            np.zeros((0, 0, 0)), np.zeros((0, 0)))
-
-
-#: cases per group of :func:`closed_loop_reduced`: the lanes of its vector operations
+#: cases per group of :func:`closed_loop_reduced`: the lanes of its vector operations (8:
+#: :func:`_rows8` holds one register per lane)
 LANES = 8
 
 
@@ -528,11 +470,11 @@ def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
            Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
            Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
            red, upeak, snapO, snapE, stop):
-    """Cases c0 .. c0 + nl − 1 of :func:`closed_loop_reduced` side by side: every per-case
-    quantity is a row of ``nl`` lanes, the innermost loop runs over the lanes (independent
-    cases: vector operations, and no chain of dependent operations from one step to the
-    next holds the loop up), and each lane performs the scalar operations of :func:`_case`
-    in its order, so a case's numbers do not depend on its group or on ``nl``."""
+    """Cases c0 .. c0 + nl − 1 (nl <= :data:`LANES`) of :func:`closed_loop_reduced` side by
+    side: every per-case quantity is a row of :data:`LANES` lanes, the innermost loops run
+    over the lanes (independent cases; the rows' sums in registers, :func:`_rows8`), and
+    each lane performs the scalar operations of :func:`_case` in its order, so a case's
+    numbers do not depend on its group or on ``nl``."""
     n = x0.shape[1]
     m = P1u.shape[2]
     p = Cm.shape[1]
@@ -545,37 +487,41 @@ def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     r = Co.shape[1]
     snap_e = snapE.shape[1] > 0 and Q.shape[0] > 0
     R = p + r
+    # lanes past the group's nl cases repeat its last case: the same numbers written twice
+    cl = np.empty(LANES, np.int64)
+    for l in range(LANES):
+        cl[l] = c0 + min(l, nl - 1)
     # per-lane copies of the per-case arrays, lanes last
-    Mt = np.empty((n, R, nl))
-    Ev = np.empty((n, E.shape[2], nl))
-    P1v = np.empty((n, m, nl))
-    Dmv = np.empty((p, m, nl))
-    Dmfv = np.empty((p, nl))
-    sensv = np.empty((p, 4, nl))
-    Dov = np.empty((r, m, nl))
-    Dofv = np.empty((r, nl))
-    actv = np.empty((m, 2, nl))
-    dstdv = np.empty((m, nl))
-    p1f = np.zeros((n, nl))
-    p2f = np.zeros((n, nl))
-    crv = np.zeros((n, nl))
-    c1 = np.zeros(nl)
-    c2 = np.zeros(nl)
-    eps = np.ones(nl)
-    redc = np.zeros((max(n_red, 1), nl))
-    rdir = np.zeros(nl)
-    ct = np.zeros(nl, np.int64)
-    cr_ = np.zeros(nl, np.int64)
-    cf_ = np.zeros(nl, np.int64)
-    ck = np.zeros(nl, np.int64)
-    cb = np.zeros(nl, np.int64)
-    cc = np.zeros(nl, np.int64)
-    cdk = np.zeros(nl, np.int64)
-    ci_imp = np.zeros(nl, np.int64)
-    snapc = np.zeros((max(n_snap, 1), nl), np.int64)
-    Qv = np.zeros((n, n, nl)) if snap_e else np.zeros((0, 0, nl))
-    for l in range(nl):
-        c = c0 + l
+    Mt = np.empty((n, R, LANES))
+    Ev = np.empty((n, E.shape[2], LANES))
+    P1v = np.empty((n, m, LANES))
+    Dmv = np.empty((p, m, LANES))
+    Dmfv = np.empty((p, LANES))
+    sensv = np.empty((p, 4, LANES))
+    Dov = np.empty((r, m, LANES))
+    Dofv = np.empty((r, LANES))
+    actv = np.empty((m, 2, LANES))
+    dstdv = np.empty((m, LANES))
+    p1f = np.zeros((n, LANES))
+    p2f = np.zeros((n, LANES))
+    crv = np.zeros((n, LANES))
+    c1 = np.zeros(LANES)
+    c2 = np.zeros(LANES)
+    eps = np.ones(LANES)
+    redc = np.zeros((max(n_red, 1), LANES))
+    rdir = np.zeros(LANES)
+    ct = np.zeros(LANES, np.int64)
+    cr_ = np.zeros(LANES, np.int64)
+    cf_ = np.zeros(LANES, np.int64)
+    ck = np.zeros(LANES, np.int64)
+    cb = np.zeros(LANES, np.int64)
+    cc = np.zeros(LANES, np.int64)
+    cdk = np.zeros(LANES, np.int64)
+    ci_imp = np.zeros(LANES, np.int64)
+    snapc = np.zeros((max(n_snap, 1), LANES), np.int64)
+    Qv = np.zeros((n, n, LANES)) if snap_e else np.zeros((0, 0, LANES))
+    for l in range(LANES):
+        c = cl[l]
         cp, cu, cm = _ci(E.shape[0], c), _ci(P1u.shape[0], c), _ci(Cm.shape[0], c)
         for j in range(n):
             for i in range(p):
@@ -633,32 +579,32 @@ def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
             upeak[c, i] = 0.0
         stop[c] = -1
 
-    x = np.empty((n, nl))
-    for l in range(nl):
+    x = np.empty((n, LANES))
+    for l in range(LANES):
         for j in range(n):
-            x[j, l] = x0[c0 + l, j]
-    xa = np.empty((n, nl))
-    drive = np.empty((n, nl))
-    qx = np.empty((n, nl))
-    w = np.zeros((m, nl))
-    ucmd = np.empty((m, nl))
-    y = np.empty((p, nl))
-    e = np.empty((p, nl))
-    acc = np.empty((R, nl))
-    ov = np.empty((r, nl))
-    f = np.zeros(nl)
-    f0 = np.zeros(nl)
-    df = np.zeros(nl)
-    s = np.empty(nl)
-    d0 = np.empty(nl)
-    d1 = np.empty(nl)
-    d2 = np.empty(nl)
-    d3 = np.empty(nl)
-    xi = np.zeros((nk, nl))
-    xi_new = np.empty((nk, nl))
-    hist = np.empty((max(Lf, 1), nl))
-    bad = np.zeros(nl, np.bool_)
-    alive = np.ones(nl, np.bool_)
+            x[j, l] = x0[cl[l], j]
+    xa = np.empty((n, LANES))
+    drive = np.empty((n, LANES))
+    qx = np.empty((n, LANES))
+    w = np.zeros((m, LANES))
+    ucmd = np.empty((m, LANES))
+    y = np.empty((p, LANES))
+    e = np.empty((p, LANES))
+    acc = np.empty((R, LANES))
+    ov = np.empty((r, LANES))
+    f = np.zeros(LANES)
+    f0 = np.zeros(LANES)
+    df = np.zeros(LANES)
+    s = np.empty(LANES)
+    d0 = np.empty(LANES)
+    d1 = np.empty(LANES)
+    d2 = np.empty(LANES)
+    d3 = np.empty(LANES)
+    xi = np.zeros((nk, LANES))
+    xi_new = np.empty((nk, LANES))
+    hist = np.empty((max(Lf, 1), LANES))
+    bad = np.zeros(LANES, np.bool_)
+    alive = np.ones(LANES, np.bool_)
     head = 0
     i_imp = 0
     n_imp = imp_k.shape[0]
@@ -668,32 +614,26 @@ def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         # 1. impulses
         while i_imp < n_imp and imp_k[i_imp] == k:
             for j in range(n):
-                for l in range(nl):
+                for l in range(LANES):
                     x[j, l] += imp_dx[i_imp, ci_imp[l], j]
             i_imp += 1
         # 2. force at the sample (the four partial sums of _dot)
         if has_force:
             _force_lanes(x, crv, c1, c2, eps, f, d0, d1, d2, d3)
         # 3.-4. rows, measurement and sensors
-        for i in range(R):
-            for l in range(nl):
-                acc[i, l] = 0.0
-        for j in range(n):
-            for i in range(R):
-                for l in range(nl):
-                    acc[i, l] += Mt[j, i, l] * x[j, l]
+        _rows8(Mt, x, acc)
         for i in range(p):
-            for l in range(nl):
+            for l in range(LANES):
                 s[l] = acc[i, l]
             for j in range(m):
-                for l in range(nl):
+                for l in range(LANES):
                     s[l] += Dmv[i, j, l] * w[j, l]
             slot = sensor_slot[i]
-            for l in range(nl):
+            for l in range(LANES):
                 v = s[l] + Dmfv[i, l] * f[l]
                 v += sensv[i, 2, l]
                 if slot >= 0:
-                    v += sensv[i, 1, l] * noise[c0 + l, k, slot]
+                    v += sensv[i, 1, l] * noise[cl[l], k, slot]
                 q = sensv[i, 0, l]
                 if q > 0.0:
                     v = q * np.rint(v / q)
@@ -703,38 +643,38 @@ def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         if fir_src >= 0:
             if k == 0:
                 for j in range(Lf):
-                    for l in range(nl):
+                    for l in range(LANES):
                         hist[j, l] = y[fir_src, l]
             else:
-                for l in range(nl):
+                for l in range(LANES):
                     hist[head, l] = y[fir_src, l]
                 head = (head + 1) % Lf
-            for l in range(nl):
+            for l in range(LANES):
                 s[l] = 0.0
             for j in range(Lf):
                 hj = (head + j) % Lf
-                for l in range(nl):
+                for l in range(LANES):
                     s[l] += fir_w[j] * hist[hj, l]
-            for l in range(nl):
+            for l in range(LANES):
                 y[fir_dst, l] = s[l]
         # 6. law
         tk, tb = _ci(Ak.shape[0], k), _ci(Bk.shape[0], k)
         tc, td = _ci(Ck.shape[0], k), _ci(Dk.shape[0], k)
         for i in range(p):
-            for l in range(nl):
+            for l in range(LANES):
                 e[i, l] = y[i, l] - y_ref[k, cr_[l], i]
         if k == 0 and K0.shape[0] > 0:
             for i in range(nk):
-                for l in range(nl):
-                    c0k = _ci(K0.shape[0], c0 + l)
+                for l in range(LANES):
+                    c0k = _ci(K0.shape[0], cl[l])
                     v = 0.0
                     for j in range(p):
                         v += K0[c0k, i, j] * e[j, l]
                     xi[i, l] = v
-        for l in range(nl):
+        for l in range(LANES):
             bad[l] = False
         for i in range(m):
-            for l in range(nl):
+            for l in range(LANES):
                 v = u_ff[k, cf_[l], i]
                 for j in range(nk):
                     v += Ck[tc, cc[l], i, j] * xi[j, l]
@@ -745,7 +685,7 @@ def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                     bad[l] = True
         if nk > 0:
             for i in range(nk):
-                for l in range(nl):
+                for l in range(LANES):
                     v = 0.0
                     for j in range(nk):
                         v += Ak[tk, ck[l], i, j] * xi[j, l]
@@ -753,15 +693,15 @@ def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                         v += Bk[tb, cb[l], i, j] * e[j, l]
                     xi_new[i, l] = v
             for i in range(nk):
-                for l in range(nl):
+                for l in range(LANES):
                     xi[i, l] = xi_new[i, l]
         # 7. divergence: a diverged lane is stopped there (its later numbers are not used)
         for j in range(n):
-            for l in range(nl):
+            for l in range(LANES):
                 if not abs(x[j, l]) <= bound:
                     bad[l] = True
         for i in range(r):  # o_i = C_o[i] x + D_of[i] f + D_o[i] w
-            for l in range(nl):
+            for l in range(LANES):
                 v = acc[p + i, l] + Dofv[i, l] * f[l]
                 for j in range(m):
                     v += Dov[i, j, l] * w[j, l]
@@ -769,12 +709,12 @@ def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         for j in range(n_red):
             tab = red_tab[j]
             band = red_band[j]
-            for l in range(nl):
+            for l in range(LANES):
                 v = ov[j, l] - redc[j, l]
                 if tab >= 0:
                     v = v - red_t[tab, _ci(red_t.shape[1], k), ct[l]]
                 a = abs(v)
-                c = c0 + l
+                c = cl[l]
                 if a > red[c, j, 0]:
                     red[c, j, 0] = a
                 if rdir[l] * v > red[c, j, 1]:
@@ -782,41 +722,41 @@ def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 if a > band:
                     red[c, j, 2] = k + 1
         for i in range(n_snap):
-            for l in range(nl):
+            for l in range(LANES):
                 if snapc[i, l] == k:
                     for j in range(r):
-                        snapO[c0 + l, i, j] = ov[j, l]
+                        snapO[cl[l], i, j] = ov[j, l]
                     if snap_e:
-                        snapE[c0 + l, i] = _energy_lane(Qv, x, qx, l)
-        for l in range(nl):
+                        snapE[cl[l], i] = _energy_lane(Qv, x, qx, l)
+        for l in range(LANES):
             if bad[l] and alive[l]:
-                stop[c0 + l] = k
+                stop[cl[l]] = k
                 alive[l] = False
         if not alive.any():
             return
         # 8. actuator and disturbance
         for i in range(m):
             slot = dist_slot[i]
-            for l in range(nl):
+            for l in range(LANES):
                 sat = actv[i, 0, l]
                 u = actv[i, 1, l] * min(max(ucmd[i, l], -sat), sat)
-                d = dstdv[i, l] * noise[c0 + l, k, slot] if slot >= 0 else 0.0
-                if i < upeak.shape[1] and abs(u) > upeak[c0 + l, i]:
-                    upeak[c0 + l, i] = abs(u)
+                d = dstdv[i, l] * noise[cl[l], k, slot] if slot >= 0 else 0.0
+                if i < upeak.shape[1] and abs(u) > upeak[cl[l], i]:
+                    upeak[cl[l], i] = abs(u)
                 w[i, l] = u + d
         if k == n_t - 1:
             break
         # 9. propagation over the period with the held input
         for i in range(n):
-            for l in range(nl):
+            for l in range(LANES):
                 drive[i, l] = 0.0
             for j in range(m):
-                for l in range(nl):
+                for l in range(LANES):
                     drive[i, l] += P1v[i, j, l] * w[j, l]
         for _ in range(substeps):
             if fused:
                 for i in range(0, n, 2):
-                    for l in range(nl):
+                    for l in range(LANES):
                         x0_, x1_ = x[i, l], x[i + 1, l]
                         x[i, l] = (Ev[i, 0, l] * x0_ + Ev[i, 1, l] * x1_) + drive[i, l]
                         x[i + 1, l] = ((Ev[i + 1, 0, l] * x0_ + Ev[i + 1, 1, l] * x1_)
@@ -826,18 +766,38 @@ def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
             if has_force:
                 _force_lanes(x, crv, c1, c2, eps, f0, d0, d1, d2, d3)
                 for i in range(n):
-                    for l in range(nl):
+                    for l in range(LANES):
                         xa[i, l] += drive[i, l] + p1f[i, l] * f0[l]
                 _force_lanes(xa, crv, c1, c2, eps, df, d0, d1, d2, d3)
-                for l in range(nl):
+                for l in range(LANES):
                     df[l] = df[l] - f0[l]
                 for i in range(n):
-                    for l in range(nl):
+                    for l in range(LANES):
                         x[i, l] = xa[i, l] + p2f[i, l] * df[l]
             else:
                 for i in range(n):
-                    for l in range(nl):
+                    for l in range(LANES):
                         x[i, l] = xa[i, l] + drive[i, l]
+
+
+@_jit(inline="always", error_model="numpy")
+def _rows8(Mt, x, acc):
+    """acc[i] = Σ_j Mt[j, i] x[j] for the 8 lanes, each lane's sum in order j = 0 .. n − 1 in
+    its own register (eight independent chains of additions)."""
+    n, R = Mt.shape[0], Mt.shape[1]
+    for i in range(R):
+        a0 = a1 = a2 = a3 = a4 = a5 = a6 = a7 = 0.0
+        for j in range(n):
+            a0 += Mt[j, i, 0] * x[j, 0]
+            a1 += Mt[j, i, 1] * x[j, 1]
+            a2 += Mt[j, i, 2] * x[j, 2]
+            a3 += Mt[j, i, 3] * x[j, 3]
+            a4 += Mt[j, i, 4] * x[j, 4]
+            a5 += Mt[j, i, 5] * x[j, 5]
+            a6 += Mt[j, i, 6] * x[j, 6]
+            a7 += Mt[j, i, 7] * x[j, 7]
+        acc[i, 0], acc[i, 1], acc[i, 2], acc[i, 3] = a0, a1, a2, a3
+        acc[i, 4], acc[i, 5], acc[i, 6], acc[i, 7] = a4, a5, a6, a7
 
 
 @_jit(inline="always", error_model="numpy")
