@@ -173,7 +173,7 @@ def main() -> None:
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     print(f"4. compute per chunk, in-process, 1 thread, best of {args.repeat} (wall; CPU)")
-    for n in map(int, args.sizes.split(",")):
+    for n in [int(v) for v in args.sizes.split(",") if v]:
         p = table(n)
         best = {}
         for _ in range(args.repeat):
@@ -192,6 +192,9 @@ def main() -> None:
               f"{max_rss_mb():.0f} MB")
 
     n = args.dispersed
+    if not n:
+        main_full(args, b)
+        return
     p = table(n)
     p["hub_inertia"] = np.linspace(0.9, 1.1, n) * b.params.hub_inertia
     p["tip_mass"] = np.linspace(0.9, 1.1, n) * b.params.tip_mass
@@ -201,7 +204,11 @@ def main() -> None:
     print(f"5. dispersed plant (hub inertia and tip mass per case), {n} cases: {dt:.2f} s, "
           f"{dt / n * 1e3:.2f} ms/case, {dt / (n * STEPS) * 1e6:.2f} µs/case-step (one "
           f"HubAppendage built per case)")
+    main_full(args, b)
 
+
+def main_full(args, b) -> None:
+    """Part 6 (``--full``)."""
     if args.full:
         from distributed import Client, LocalCluster
 

@@ -72,9 +72,10 @@ from flexsat.control.lyapunov import LyapunovTracker
 from flexsat.dynamics.dispersion import stack_plants
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.maneuvers.torque_shapes import SmoothBangBang
+from flexsat import limits
 from flexsat.sim import SimConfig, simulate
 from flexsat.sim.recording import SimResult
-from flexsat.validation import require_count, require_finite
+from flexsat.validation import require_count, require_finite, require_nonneg
 
 #: seconds to wait for an existing scheduler to answer before refusing its address
 CONNECT_TIMEOUT = 5.0
@@ -147,6 +148,9 @@ def fingerprint(setup_text: str, table: Mapping[str, np.ndarray], base_seed: int
 MANEUVER_PARAMETERS = ("alpha", "u_max", "duration")
 GAIN_PARAMETERS = ("g1", "g2", "g3")
 PLANT_PARAMETERS = ("hub_inertia", "EI", "damping", "tip_mass", "tip_inertia")
+#: the bearing friction of the run (Att. 3 Eq. 23): Coulomb c1 (N m) and viscous c2
+#: (N m s/rad), per case
+FRICTION_PARAMETERS = ("friction_coulomb", "friction_viscous")
 
 
 @dataclass(frozen=True)
@@ -157,8 +161,9 @@ class HubManeuverBuilder:
     smoothed bang-bang reference (Att. 3 Eqs. 12–16, :class:`~flexsat.maneuvers.SmoothBangBang`)
     tracked by Law II (Eq. 17, :class:`~flexsat.control.LyapunovTracker`) on
     :class:`~flexsat.dynamics.hub_appendage.HubAppendage`. Any of :data:`MANEUVER_PARAMETERS`,
-    :data:`GAIN_PARAMETERS` and :data:`PLANT_PARAMETERS` may be a column of the parameter table;
-    the others keep the values given here. Of α, u_max and T exactly two fix the reference
+    :data:`GAIN_PARAMETERS`, :data:`PLANT_PARAMETERS` and :data:`FRICTION_PARAMETERS` (the
+    bearing friction of Att. 3 Eq. 23, on top of the config's) may be a column of the parameter
+    table; the others keep the values given here. Of α, u_max and T exactly two fix the reference
     (Eq. 15); a column of T with neither α nor u_max a column replaces u_max.
 
     The reference is designed with the inertia ``reference_inertia`` × I_model / I_base
@@ -195,7 +200,8 @@ class HubManeuverBuilder:
     alpha: float = 0.2
     stiffening: bool = False
     parameter_names: tuple[str, ...] = field(
-        default=MANEUVER_PARAMETERS + GAIN_PARAMETERS + PLANT_PARAMETERS, init=False)
+        default=MANEUVER_PARAMETERS + GAIN_PARAMETERS + PLANT_PARAMETERS + FRICTION_PARAMETERS,
+        init=False)
 
     def describe(self) -> str:
         """The builder's settings as text (part of the store's fingerprint)."""
@@ -233,10 +239,52 @@ class HubManeuverBuilder:
         return LyapunovTracker(ref, **gains, appendage_inertia=appendage,
                                n_appendages=self.params.n_appendages)
 
+    def _friction(self, table: Mapping[str, np.ndarray]):
+        """The run's bearing friction with the table's columns (per case) in place of its
+        Coulomb and viscous coefficients."""
+        f = self.config.friction
+        units = {"friction_coulomb": "N*m", "friction_viscous": "N*m*s/rad"}
+        varied = {k[len("friction_"):]: require_nonneg(table[k], f"parameters[{k!r}]", units[k])
+                  for k in FRICTION_PARAMETERS if k in table}
+        return replace(f, **varied) if varied else f
+
+    def for_table(self, parameters: Mapping[str, np.ndarray]) -> "HubManeuverBuilder":
+        r"""The builder of the whole parameter table, its integrator substeps fixed once
+        before the table is cut into chunks: the engine raises them for the stiffest friction
+        of each call (:func:`flexsat.sim.config.stable_substeps`), so a chunk's step, and its
+        results, would depend on which cases share the chunk.
+
+        The friction's damping rate is λ = (c1/ε + c2) (M⁻¹)_θθ (h λ <= 1.5,
+        :data:`~flexsat.sim.config.FRICTION_STEP_LIMIT`), and (M⁻¹)_θθ <= 1 / I_hub (the
+        Schur complement I_tot − mᵀ M_ee⁻¹ m is the hub inertia plus the least kinetic
+        energy of the appendages at a unit hub rate, >= I_hub): the substeps
+
+        .. math:: \max\left(N_{\rm config},\ \left\lceil \frac{\Delta t}{1.5}
+                  \max_i \frac{c_{1,i}/\varepsilon + c_{2,i}}{I_{{\rm hub},i}}
+                  \right\rceil\right)
+
+        over every case i of the table suffice for every chunk, so the engine keeps them.
+        Without friction the builder is returned as is.
+        """
+        from flexsat.sim.config import FRICTION_STEP_LIMIT
+
+        f = self._friction(parameters)
+        if not f.active:
+            return self
+        hub = parameters.get("hub_inertia", self.params.hub_inertia)
+        rate = float(np.max((f.coulomb / f.smoothing + f.viscous) / np.asarray(hub, float)))
+        needed = self.config.dt * rate / FRICTION_STEP_LIMIT
+        limits.check_count(needed, limits.MAX_SUBSTEPS, "friction",
+                           f"a stable integration of the stiffest friction of the table "
+                           f"(damping rate up to {rate:.3g} 1/s) needs substeps per control "
+                           f"period", "lower friction_coulomb or friction_viscous")
+        substeps = max(self.config.substeps, math.ceil(needed))
+        return replace(self, config=replace(self.config, substeps=substeps))
+
     def check(self, parameters: Mapping[str, np.ndarray]) -> None:
         """Apply the rules of the plant parameters, the reference (α in [0, 1/4], u_max > 0,
-        T between the bang-bang and the α = 1/4 time) and the gains (g1, g2 ≥ 0, g3 > −n) to
-        the whole table at once, before any chunk runs.
+        T between the bang-bang and the α = 1/4 time), the gains (g1, g2 ≥ 0, g3 > −n) and the
+        friction (c1, c2 ≥ 0) to the whole table at once, before any chunk runs.
 
         Raises
         ------
@@ -244,11 +292,15 @@ class HubManeuverBuilder:
             Naming the parameter and the rule.
         """
         self._law(parameters, len(next(iter(parameters.values()))))
+        self._friction(parameters)
 
     def __call__(self, parameters: Mapping[str, np.ndarray], seeds: np.ndarray):
         """(plant, law, config, initial_state) of the chunk ``parameters`` (module docstring)."""
         n = len(seeds)
-        return self._plant(parameters, n), self._law(parameters, n), self.config, None
+        config = self.config
+        if any(k in parameters for k in FRICTION_PARAMETERS):
+            config = replace(config, friction=self._friction(parameters))
+        return self._plant(parameters, n), self._law(parameters, n), config, None
 
 
 @lru_cache(maxsize=4)
@@ -443,7 +495,8 @@ def run_batch(
     build : callable
         The case builder (module docstring); if it has ``parameter_names``, every column of
         ``parameters`` must be one of them; if it has ``check(table)``, it is called on the
-        whole table before anything runs; if it has ``describe()``, its text is part of the
+        whole table before anything runs, then ``for_table(table)`` (if it has it) gives the
+        builder the chunks run with; if it has ``describe()``, its text is part of the
         fingerprint (a plain function has none: give the setup in ``setup_text``).
     parameters : mapping of str to array_like
         The parameter table: one (n_cases,) column per name, SI.
@@ -484,6 +537,9 @@ def run_batch(
     check = getattr(build, "check", None)
     if check is not None:
         check(table)
+    for_table = getattr(build, "for_table", None)
+    if for_table is not None:  # sweep-wide settings, fixed before the table is cut up
+        build = for_table(table)
     n_cases = len(next(iter(table.values())))
     chunk_size = require_count(chunk_size, "chunk_size")
     histories = tuple(histories)
@@ -550,6 +606,7 @@ def open_results(store) -> xr.Dataset:
     return xr.open_zarr(store, consolidated=False)
 
 
-__all__ = ["BatchProgress", "BatchSummary", "CONNECT_TIMEOUT", "GAIN_PARAMETERS",
+__all__ = ["BatchProgress", "BatchSummary", "CONNECT_TIMEOUT", "FRICTION_PARAMETERS",
+           "GAIN_PARAMETERS",
            "HubManeuverBuilder", "MANEUVER_PARAMETERS", "PLANT_PARAMETERS", "case_seeds",
            "fingerprint", "maneuver_metrics", "open_results", "run_batch", "run_chunk"]
