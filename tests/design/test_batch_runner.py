@@ -89,7 +89,8 @@ def test_every_case_of_the_sweep_equals_the_case_run_alone(case, reference_store
 
 def test_plant_gain_and_maneuver_parameters_batch_in_one_call(case, builder, tmp_path):
     """Cases differing in hub inertia, stiffness, damping, tip mass, gains and maneuver time
-    run as one dispersed batch and each equals its own one-case call (exactly)."""
+    run as one dispersed batch and each equals its own one-case call (exactly) with the sweep's
+    settings (``for_table``: the friction substeps of the whole table)."""
     n = 4
     table = {"hub_inertia": case.params.hub_inertia * np.array([0.8, 1.0, 1.2, 1.5]),
              "EI": case.params.EI * np.array([0.9, 1.0, 1.1, 1.2]),
@@ -101,8 +102,8 @@ def test_plant_gain_and_maneuver_parameters_batch_in_one_call(case, builder, tmp
     run_batch(builder, table, tmp_path / "mixed.zarr", base_seed=7, chunk_size=n)
     stored = _values(tmp_path / "mixed.zarr")
     for i in range(n):
-        plant, law, config, _ = builder({k: v[i:i + 1] for k, v in table.items()},
-                                        case_seeds(7, [i]))
+        plant, law, config, _ = builder.for_table(table)(
+            {k: v[i:i + 1] for k, v in table.items()}, case_seeds(7, [i]))
         result = simulate(plant, law, config, n_cases=1, seeds=case_seeds(7, [i]))
         alone = maneuver_metrics(result)
         for name, value in alone.items():
