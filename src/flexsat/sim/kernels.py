@@ -50,6 +50,13 @@ serially or in parallel (:func:`closed_loop_parallel`, one case per thread, no r
 across cases), so the results are bit-identical; the noise enters only through ``noise[c]``,
 so a case's result depends on its own stream only.
 
+:func:`closed_loop_reduced` runs the same step keeping no history: the running reductions of
+the first output rows (a maneuver's peaks and last sample outside a band) and the outputs and
+energy at chosen samples (the metrics of a sweep, issue 13). It takes the cases in groups of
+:data:`LANES` side by side (every per-case quantity a row of lanes, the lanes innermost), each
+lane performing the scalar operations of :func:`closed_loop` in the same order: its numbers
+are those the history loop records, bit for bit, whatever the grouping.
+
 The kernels use numba's numpy error model: no zero-division checks in the loop (the divisors
 are a positive quantum, a positive smoothing speed and the FIR length, validated upstream).
 """
