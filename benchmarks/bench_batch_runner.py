@@ -13,8 +13,14 @@ over α ∈ [0.02, 0.25] × u_max ∈ [200, 600] oz-in. Measured:
 3. peak resident memory of the client and of each worker, and the extrapolation to
    1,000,000 cases on 2 workers;
 4. compute per chunk (``run_chunk``: build + one batched ``simulate`` + metrics) at 100, 1,000
-   and 10,000 cases, in-process, numba on one thread: cases/s and µs per case-step (per core);
-5. the same with hub inertia and tip mass dispersed (a stacked plant of one model per case).
+   and 10,000 cases, in-process, numba on one thread: cases/s and µs per case-step (per core),
+   wall and CPU time (the CPU time of this process: the machine is shared), best of
+   ``--repeat``, side by side for the full path (every history recorded, the metrics computed
+   from them: an extractor that does not declare ``reads_metrics_only``) and the metrics-only
+   path (``simulate(metrics_only=True)``, what a sweep without histories runs);
+5. the same with hub inertia and tip mass dispersed (a stacked plant of one model per case);
+6. with ``--full N``: N cases for real on 2 local workers (wall time, cases/s, peak memory of
+   the client and of each worker).
 
 Targets (issue 13): ≈ 0.1 µs per case-step per core, ≥ 80 % scaling, ≤ 5 % overhead,
 ≤ 2 GB peak for 1,000,000 cases (≤ 3 min wall time).
@@ -78,6 +84,15 @@ def timed_metrics(result):
     return out
 
 
+timed_metrics.reads_metrics_only = True  # it reads result.metrics only (as maneuver_metrics)
+
+
+def full_path_metrics(result):
+    """:func:`maneuver_metrics` without ``reads_metrics_only``: the chunk records every history
+    and computes the metrics from them (the path before the metrics-only one)."""
+    return maneuver_metrics(result)
+
+
 def compute_s(store) -> float:
     return float(open_results(store)["metric_chunk_compute_s"].sum())
 
@@ -104,6 +119,9 @@ def main() -> None:
     parser.add_argument("--chunk", type=int, default=2_000, help="chunk of the whole runs")
     parser.add_argument("--sizes", default="100,1000,10000", help="chunk sizes of part 4")
     parser.add_argument("--dispersed", type=int, default=200, help="cases of part 5")
+    parser.add_argument("--repeat", type=int, default=3, help="best of, in part 4")
+    parser.add_argument("--full", type=int, default=0, help="cases of part 6 (0: skipped)")
+    parser.add_argument("--skip-runs", action="store_true", help="parts 4 and 5 only")
     args = parser.parse_args()
     b = builder()
     run_chunk(b, maneuver_metrics, table(10), 0, 0)  # numba cache load, base plant built
@@ -113,6 +131,8 @@ def main() -> None:
     tb = TimedBuilder(b)
     tmp = Path(tempfile.mkdtemp(prefix="bench_batch_"))
     try:
+        if args.skip_runs:
+            raise _Skip
         print(f"1. run_batch in-process, {n} cases in chunks of {chunk}")
         t0 = time.perf_counter()
         run_batch(tb, p, tmp / "inproc.zarr", chunk_size=chunk, extract=timed_metrics)
@@ -148,19 +168,33 @@ def main() -> None:
         print(f"   1,000,000 cases on 2 workers: {1e6 / rate2:.0f} s "
               f"({1e6 / rate2 / 60:.1f} min) at {rate2:.0f} cases/s; memory does not grow "
               f"with the case count (≤ 4 chunks in flight)")
+    except _Skip:
+        pass
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    print("4. compute per chunk, in-process, 1 thread")
-    for n in map(int, args.sizes.split(",")):
+    print(f"4. compute per chunk, in-process, 1 thread, best of {args.repeat} (wall; CPU)")
+    for n in [int(v) for v in args.sizes.split(",") if v]:
         p = table(n)
-        t0 = time.perf_counter()
-        run_chunk(b, maneuver_metrics, p, 0, 0)
-        dt = time.perf_counter() - t0
-        per_step = dt / (n * STEPS) * 1e6
-        print(f"   {n:>6} cases: {dt:7.2f} s  {n / dt:8.0f} cases/s  {per_step:.3f} µs/case-step"
-              f"  (peak RSS so far {max_rss_mb():.0f} MB)")
+        best = {}
+        for _ in range(args.repeat):
+            for name, extract in (("full", full_path_metrics), ("metrics-only", maneuver_metrics)):
+                c0, t0 = time.process_time(), time.perf_counter()
+                run_chunk(b, extract, p, 0, 0)
+                wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+                w0, u0 = best.get(name, (np.inf, np.inf))
+                best[name] = (min(w0, wall), min(u0, cpu))
+        for name, (wall, cpu) in best.items():
+            print(f"   {n:>6} cases, {name:>12}: {wall:7.2f} s  {n / wall:8.0f} cases/s  "
+                  f"{wall / (n * STEPS) * 1e6:.3f} µs/case-step wall, "
+                  f"{cpu / (n * STEPS) * 1e6:.3f} CPU")
+        ratio = best["full"][1] / best["metrics-only"][1]
+        print(f"   {n:>6} cases: metrics-only {ratio:.1f}× faster (CPU); peak RSS so far "
+              f"{max_rss_mb():.0f} MB")
 
     n = args.dispersed
+    if not n:
+        main_full(args, b)
+        return
     p = table(n)
     p["hub_inertia"] = np.linspace(0.9, 1.1, n) * b.params.hub_inertia
     p["tip_mass"] = np.linspace(0.9, 1.1, n) * b.params.tip_mass
@@ -170,6 +204,36 @@ def main() -> None:
     print(f"5. dispersed plant (hub inertia and tip mass per case), {n} cases: {dt:.2f} s, "
           f"{dt / n * 1e3:.2f} ms/case, {dt / (n * STEPS) * 1e6:.2f} µs/case-step (one "
           f"HubAppendage built per case)")
+    main_full(args, b)
+
+
+def main_full(args, b) -> None:
+    """Part 6 (``--full``)."""
+    if args.full:
+        from distributed import Client, LocalCluster
+
+        n = args.full
+        tmp = Path(tempfile.mkdtemp(prefix="bench_batch_full_"))
+        try:
+            with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                              dashboard_address=None) as cluster, Client(cluster) as client:
+                client.run(run_chunk, b, maneuver_metrics, table(10), 0, 0)  # warm workers
+                t0 = time.perf_counter()
+                run_batch(b, table(n), tmp / "full.zarr", chunk_size=args.chunk,
+                          scheduler=cluster.scheduler_address)
+                wall = time.perf_counter() - t0
+                rss = client.run(max_rss_mb)
+            done = int(open_results(tmp / "full.zarr")["done"].values.sum())
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        print(f"6. {n} cases on 2 workers (chunks of {args.chunk}): {wall:.1f} s "
+              f"({wall / 60:.2f} min), {n / wall:.0f} cases/s, {done} done; peak RSS client "
+              f"{max_rss_mb():.0f} MB, workers {', '.join(f'{v:.0f}' for v in rss.values())} MB; "
+              f"load average {os.getloadavg()[0]:.1f}")
+
+
+class _Skip(Exception):
+    """Skip parts 1-3 (``--skip-runs``)."""
 
 
 if __name__ == "__main__":

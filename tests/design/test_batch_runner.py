@@ -90,7 +90,8 @@ def test_every_case_of_the_sweep_equals_the_case_run_alone(case, reference_store
 
 def test_plant_gain_and_maneuver_parameters_batch_in_one_call(case, builder, tmp_path):
     """Cases differing in hub inertia, stiffness, damping, tip mass, gains and maneuver time
-    run as one dispersed batch and each equals its own one-case call (exactly)."""
+    run as one dispersed batch and each equals its own one-case call (exactly) with the sweep's
+    settings (``for_table``: the friction substeps of the whole table)."""
     n = 4
     table = {"hub_inertia": case.params.hub_inertia * np.array([0.8, 1.0, 1.2, 1.5]),
              "EI": case.params.EI * np.array([0.9, 1.0, 1.1, 1.2]),
@@ -102,8 +103,8 @@ def test_plant_gain_and_maneuver_parameters_batch_in_one_call(case, builder, tmp
     run_batch(builder, table, tmp_path / "mixed.zarr", base_seed=7, chunk_size=n)
     stored = _values(tmp_path / "mixed.zarr")
     for i in range(n):
-        plant, law, config, _ = builder({k: v[i:i + 1] for k, v in table.items()},
-                                        case_seeds(7, [i]))
+        plant, law, config, _ = builder.for_table(table)(
+            {k: v[i:i + 1] for k, v in table.items()}, case_seeds(7, [i]))
         result = simulate(plant, law, config, n_cases=1, seeds=case_seeds(7, [i]))
         alone = maneuver_metrics(result)
         for name, value in alone.items():
@@ -211,10 +212,11 @@ def test_unknown_parameter_names_the_name_and_the_known_ones(builder, tmp_path):
 @pytest.mark.parametrize("column, values, rule", [
     ("alpha", [0.1, 0.3], r"alpha: .*\[0, 1/4\]"),
     ("g3", [0.0, -5.0], r"g3: must be > -4"),
-    ("hub_inertia", [0.3, -1.0], r"hub_inertia: must be > 0")])
+    ("hub_inertia", [0.3, -1.0], r"hub_inertia: must be > 0"),
+    ("friction_coulomb", [0.1, -1.0], r"friction_coulomb.*must be >= 0")])
 def test_a_bad_value_is_refused_before_anything_runs(builder, tmp_path, column, values, rule):
-    """The builder's rules (Att. 3 Eq. 15's α range, Eq. 11's g3 > −n, a positive inertia)
-    apply to the whole table first: no store is made."""
+    """The builder's rules (Att. 3 Eq. 15's α range, Eq. 11's g3 > −n, a positive inertia, a
+    friction coefficient >= 0) apply to the whole table first: no store is made."""
     with pytest.raises(ValueError, match=rule):
         run_batch(builder, {column: np.array(values)}, tmp_path / "x.zarr")
     assert not (tmp_path / "x.zarr").exists()
@@ -297,3 +299,31 @@ def test_ctrl_c_says_how_many_cases_the_store_keeps(builder, tmp_path):
     assert (info.value.cases_done, info.value.n_cases) == (4, 9)
     assert str(info.value) == (f"interrupted: 4 of 9 cases are done and kept in the store "
                                f"{str(path)!r}; run the same command again to resume")
+def test_friction_dispersed_per_case_does_not_depend_on_the_chunking(case, builder, tmp_path):
+    """Bearing friction (Att. 3 Eq. 23) as a per-case parameter: the integrator substeps are
+    fixed from the whole table's stiffest friction before the table is cut into chunks
+    (``for_table``: ceil(Δt/1.5 · max (c1/ε + c2) / I_hub), the bound of the damping rate
+    (c1/ε + c2)(M⁻¹)_θθ), so chunks of 1, 2 and 5 cases give the same store bit for bit; the
+    bound is at least what the engine asks for the stiffest case on the model."""
+    from flexsat.sim.config import stable_substeps
+
+    nominal = builder.config.friction
+    n = 5
+    table = {"alpha": np.full(n, 0.1), "u_max": np.full(n, U_MAX[1]),
+             "friction_coulomb": nominal.coulomb * np.array([0.0, 0.5, 1.0, 2.0, 4.0]),
+             "friction_viscous": nominal.viscous * np.array([1.0, 3.0, 0.0, 1.0, 2.0])}
+    stores = []
+    for chunk in (1, 2, n):
+        run_batch(builder, table, tmp_path / f"f{chunk}.zarr", base_seed=3, chunk_size=chunk)
+        stores.append(_values(tmp_path / f"f{chunk}.zarr"))
+    for other in stores[1:]:
+        _same(other, stores[0])
+    substeps = builder.for_table(table).config.substeps
+    slope = nominal.coulomb * 4.0 / nominal.smoothing + nominal.viscous * 2.0
+    assert substeps == max(builder.config.substeps, int(np.ceil(
+        builder.config.dt / 1.5 * slope / case.params.hub_inertia)))
+    stiffest = type(nominal)(nominal.coulomb * 4.0, nominal.viscous * 2.0, nominal.smoothing)
+    engine = stable_substeps(case.model(), stiffest, builder.config.dt, builder.config.substeps)
+    assert substeps >= engine > builder.config.substeps
+    # the friction decides: the cases differ
+    assert len(np.unique(stores[0]["metric_peak_rate_error_deg_s"])) == n

@@ -550,3 +550,24 @@ def test_bang_bang_switches_at_half_time():
     for s in (BangBang(0.5, 2.0, duration=4.0), SmoothBangBang(0.5, 2.0, duration=4.0, alpha=0.0)):
         u = s(np.array([0.0, np.nextafter(2.0, 0.0), 2.0, np.nextafter(4.0, 0.0)])).u
         np.testing.assert_array_equal(u, float(s.u_max) * np.array([1.0, 1.0, -1.0, -1.0]))
+
+
+@pytest.mark.parametrize("angle", [np.radians(40.0), -np.radians(25.0)])
+def test_smooth_bang_bang_table_is_the_array_expression_bit_for_bit(angle):
+    """A sweep's reference table (samples × cases) comes from a compiled loop
+    (torque_shapes._smooth_table) performing the array expression's operations element by
+    element: every value is the same float, before, during and after the slew, for α from
+    the bang-bang 0 to the plateau-free 1/4 and for a shared (scalar) shape."""
+    rng = np.random.default_rng(13)
+    n = 300
+    alpha = np.r_[0.0, 0.25, rng.uniform(0.0, 0.25, n - 2)]
+    t = np.r_[-0.5, np.arange(1126) / 75.0, 20.0][:, None]
+    for shape in (SmoothBangBang(angle, 3.0, u_max=rng.uniform(1.0, 4.0, n), alpha=alpha,
+                                 theta0=0.1),
+                  SmoothBangBang(angle, 3.0, u_max=2.0, alpha=0.1)):
+        fast = shape(t)
+        slow = TorqueShape.__call__(shape, t)  # the array expression
+        for field in ("u", "theta", "theta_dot", "theta_ddot"):
+            a, b = getattr(fast, field), getattr(slow, field)
+            assert a.shape == b.shape, field
+            assert np.array_equal(a, b), field

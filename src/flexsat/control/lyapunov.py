@@ -119,6 +119,7 @@ class LyapunovTracker(Controller):
         th, thd, thdd, u_r = reference_tables(self, times, n_cases)
         Ib = per_case(self.appendage_inertia, n_cases, "appendage_inertia")
         y_ref = np.stack(np.broadcast_arrays(th, thd, Ib * thdd), axis=-1)
+        y_ref.flags.writeable = False  # ours alone: the LinearLaw keeps it without a copy
         return static_law(_gain_row(self, n_cases), y_ref, u_r[..., None], self.reads,
                           self.writes)
 

@@ -59,6 +59,7 @@ _EXPORTS = {
     "BatchProgress": "batch_runner",
     "BatchSummary": "batch_runner",
     "CONNECT_TIMEOUT": "batch_runner",
+    "FRICTION_PARAMETERS": "batch_runner",
     "GAIN_PARAMETERS": "batch_runner",
     "HubManeuverBuilder": "batch_runner",
     "MANEUVER_PARAMETERS": "batch_runner",

@@ -77,14 +77,15 @@ from flexsat.control.lyapunov import LyapunovTracker
 from flexsat.dynamics.dispersion import stack_plants
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.maneuvers.torque_shapes import SmoothBangBang
+from flexsat import limits
 from flexsat.sim import SimConfig, simulate
 from flexsat.sim.recording import SimResult
-from flexsat.validation import require_count, require_finite
+from flexsat.validation import require_count, require_finite, require_nonneg
 
 #: seconds to wait for an existing scheduler to answer before refusing its address
 CONNECT_TIMEOUT = 5.0
 #: the layout of the store; part of the fingerprint so a store of another layout is refused
-STORE_LAYOUT = "flexsat.design.batch_runner/1"
+STORE_LAYOUT = "flexsat.design.batch_runner/2"
 
 
 def _nonneg_int(value, name: str) -> int:
@@ -152,6 +153,9 @@ def fingerprint(setup_text: str, table: Mapping[str, np.ndarray], base_seed: int
 MANEUVER_PARAMETERS = ("alpha", "u_max", "duration")
 GAIN_PARAMETERS = ("g1", "g2", "g3")
 PLANT_PARAMETERS = ("hub_inertia", "EI", "damping", "tip_mass", "tip_inertia")
+#: the bearing friction of the run (Att. 3 Eq. 23): Coulomb c1 (N m) and viscous c2
+#: (N m s/rad), per case
+FRICTION_PARAMETERS = ("friction_coulomb", "friction_viscous")
 
 
 @dataclass(frozen=True)
@@ -162,8 +166,9 @@ class HubManeuverBuilder:
     smoothed bang-bang reference (Att. 3 Eqs. 12–16, :class:`~flexsat.maneuvers.SmoothBangBang`)
     tracked by Law II (Eq. 17, :class:`~flexsat.control.LyapunovTracker`) on
     :class:`~flexsat.dynamics.hub_appendage.HubAppendage`. Any of :data:`MANEUVER_PARAMETERS`,
-    :data:`GAIN_PARAMETERS` and :data:`PLANT_PARAMETERS` may be a column of the parameter table;
-    the others keep the values given here. Of α, u_max and T exactly two fix the reference
+    :data:`GAIN_PARAMETERS`, :data:`PLANT_PARAMETERS` and :data:`FRICTION_PARAMETERS` (the
+    bearing friction of Att. 3 Eq. 23, on top of the config's) may be a column of the parameter
+    table; the others keep the values given here. Of α, u_max and T exactly two fix the reference
     (Eq. 15); a column of T with neither α nor u_max a column replaces u_max.
 
     The reference is designed with the inertia ``reference_inertia`` × I_model / I_base
@@ -200,7 +205,8 @@ class HubManeuverBuilder:
     alpha: float = 0.2
     stiffening: bool = False
     parameter_names: tuple[str, ...] = field(
-        default=MANEUVER_PARAMETERS + GAIN_PARAMETERS + PLANT_PARAMETERS, init=False)
+        default=MANEUVER_PARAMETERS + GAIN_PARAMETERS + PLANT_PARAMETERS + FRICTION_PARAMETERS,
+        init=False)
 
     def describe(self) -> str:
         """The builder's settings as text (part of the store's fingerprint)."""
@@ -238,10 +244,52 @@ class HubManeuverBuilder:
         return LyapunovTracker(ref, **gains, appendage_inertia=appendage,
                                n_appendages=self.params.n_appendages)
 
+    def _friction(self, table: Mapping[str, np.ndarray]):
+        """The run's bearing friction with the table's columns (per case) in place of its
+        Coulomb and viscous coefficients."""
+        f = self.config.friction
+        units = {"friction_coulomb": "N*m", "friction_viscous": "N*m*s/rad"}
+        varied = {k[len("friction_"):]: require_nonneg(table[k], f"parameters[{k!r}]", units[k])
+                  for k in FRICTION_PARAMETERS if k in table}
+        return replace(f, **varied) if varied else f
+
+    def for_table(self, parameters: Mapping[str, np.ndarray]) -> "HubManeuverBuilder":
+        r"""The builder of the whole parameter table, its integrator substeps fixed once
+        before the table is cut into chunks: the engine raises them for the stiffest friction
+        of each call (:func:`flexsat.sim.config.stable_substeps`), so a chunk's step, and its
+        results, would depend on which cases share the chunk.
+
+        The friction's damping rate is λ = (c1/ε + c2) (M⁻¹)_θθ (h λ <= 1.5,
+        :data:`~flexsat.sim.config.FRICTION_STEP_LIMIT`), and (M⁻¹)_θθ <= 1 / I_hub (the
+        Schur complement I_tot − mᵀ M_ee⁻¹ m is the hub inertia plus the least kinetic
+        energy of the appendages at a unit hub rate, >= I_hub): the substeps
+
+        .. math:: \max\left(N_{\rm config},\ \left\lceil \frac{\Delta t}{1.5}
+                  \max_i \frac{c_{1,i}/\varepsilon + c_{2,i}}{I_{{\rm hub},i}}
+                  \right\rceil\right)
+
+        over every case i of the table suffice for every chunk, so the engine keeps them.
+        Without friction the builder is returned as is.
+        """
+        from flexsat.sim.config import FRICTION_STEP_LIMIT
+
+        f = self._friction(parameters)
+        if not f.active:
+            return self
+        hub = parameters.get("hub_inertia", self.params.hub_inertia)
+        rate = float(np.max((f.coulomb / f.smoothing + f.viscous) / np.asarray(hub, float)))
+        needed = self.config.dt * rate / FRICTION_STEP_LIMIT
+        limits.check_count(needed, limits.MAX_SUBSTEPS, "friction",
+                           f"a stable integration of the stiffest friction of the table "
+                           f"(damping rate up to {rate:.3g} 1/s) needs substeps per control "
+                           f"period", "lower friction_coulomb or friction_viscous")
+        substeps = max(self.config.substeps, math.ceil(needed))
+        return replace(self, config=replace(self.config, substeps=substeps))
+
     def check(self, parameters: Mapping[str, np.ndarray]) -> None:
         """Apply the rules of the plant parameters, the reference (α in [0, 1/4], u_max > 0,
-        T between the bang-bang and the α = 1/4 time) and the gains (g1, g2 ≥ 0, g3 > −n) to
-        the whole table at once, before any chunk runs.
+        T between the bang-bang and the α = 1/4 time), the gains (g1, g2 ≥ 0, g3 > −n) and the
+        friction (c1, c2 ≥ 0) to the whole table at once, before any chunk runs.
 
         Raises
         ------
@@ -249,11 +297,15 @@ class HubManeuverBuilder:
             Naming the parameter and the rule.
         """
         self._law(parameters, len(next(iter(parameters.values()))))
+        self._friction(parameters)
 
     def __call__(self, parameters: Mapping[str, np.ndarray], seeds: np.ndarray):
         """(plant, law, config, initial_state) of the chunk ``parameters`` (module docstring)."""
         n = len(seeds)
-        return self._plant(parameters, n), self._law(parameters, n), self.config, None
+        config = self.config
+        if any(k in parameters for k in FRICTION_PARAMETERS):
+            config = replace(config, friction=self._friction(parameters))
+        return self._plant(parameters, n), self._law(parameters, n), config, None
 
 
 @lru_cache(maxsize=4)
@@ -265,8 +317,15 @@ def _hub_plant(params: HubAppendageParams, n_modes: int, stiffening: bool) -> Hu
 
 def maneuver_metrics(result: SimResult) -> dict[str, np.ndarray]:
     """The engine's maneuver metrics of every case (settling time, overshoot, peak torque,
-    residual energy, ...): the default extractor."""
+    residual energy, ...): the default extractor. It reads ``result.metrics`` only
+    (``reads_metrics_only``), so a chunk without histories runs with
+    ``simulate(metrics_only=True)``."""
     return {k: np.asarray(v, float) for k, v in result.metrics.items()}
+
+
+#: an extractor with this attribute true reads only ``result.metrics``: :func:`run_chunk` then
+#: asks the engine for the metrics alone (no time history is computed or kept)
+maneuver_metrics.reads_metrics_only = True
 
 
 # -- one chunk ---------------------------------------------------------------------------------
@@ -274,11 +333,18 @@ def run_chunk(build: Callable, extract: Callable, parameters: Mapping[str, np.nd
               start: int, base_seed: int, histories: tuple[str, ...] = ()
               ) -> dict[str, np.ndarray]:
     """Run the cases ``start .. start + n`` (n the length of the ``parameters`` columns) in one
-    batched call: {metric: (n,)} plus {history: (n, n_t)} and ``seed`` (n,)."""
+    batched call: {metric: (n,)} plus {history: (n, n_t)} and ``seed`` (n,).
+
+    Without histories and with an extractor that reads only the metrics
+    (``extract.reads_metrics_only``, as :func:`maneuver_metrics`), the call is
+    ``simulate(..., metrics_only=True)``: the metrics accumulated in the compiled loop, on a
+    path that does not depend on the chunk size (a case alone is a chunk of one)."""
     n = len(next(iter(parameters.values())))
     seeds = case_seeds(base_seed, np.arange(start, start + n))
     plant, law, config, x0 = build(parameters, seeds)
-    result = simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=x0)
+    lean = not histories and getattr(extract, "reads_metrics_only", False)
+    result = simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=x0,
+                      metrics_only=lean)
     out = {}
     for name, values in extract(result).items():
         values = np.asarray(values, float)
@@ -455,7 +521,8 @@ def run_batch(
     build : callable
         The case builder (module docstring); if it has ``parameter_names``, every column of
         ``parameters`` must be one of them; if it has ``check(table)``, it is called on the
-        whole table before anything runs; if it has ``describe()``, its text is part of the
+        whole table before anything runs, then ``for_table(table)`` (if it has it) gives the
+        builder the chunks run with; if it has ``describe()``, its text is part of the
         fingerprint (a plain function has none: give the setup in ``setup_text``).
     parameters : mapping of str to array_like
         The parameter table: one (n_cases,) column per name, SI.
@@ -496,6 +563,9 @@ def run_batch(
     check = getattr(build, "check", None)
     if check is not None:
         check(table)
+    for_table = getattr(build, "for_table", None)
+    if for_table is not None:  # sweep-wide settings, fixed before the table is cut up
+        build = for_table(table)
     n_cases = len(next(iter(table.values())))
     chunk_size = require_count(chunk_size, "chunk_size")
     histories = tuple(histories)
@@ -565,5 +635,5 @@ def open_results(store) -> xr.Dataset:
 
 
 __all__ = ["BatchInterrupted", "BatchProgress", "BatchSummary", "CONNECT_TIMEOUT",
-           "GAIN_PARAMETERS", "HubManeuverBuilder", "MANEUVER_PARAMETERS", "PLANT_PARAMETERS", "case_seeds",
-           "fingerprint", "maneuver_metrics", "open_results", "run_batch", "run_chunk"]
+           "FRICTION_PARAMETERS", "GAIN_PARAMETERS", "HubManeuverBuilder", "MANEUVER_PARAMETERS",
+           "PLANT_PARAMETERS", "case_seeds", "fingerprint", "maneuver_metrics", "open_results", "run_batch", "run_chunk"]

@@ -24,6 +24,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from flexsat.units import to_si_array
 from flexsat.validation import require_finite, require_positive
@@ -268,6 +269,73 @@ class SmoothBangBang(TorqueShape):
     def _half(self, tau):
         return _rounded_square(tau, 0.5 * self.duration, self.alpha * self.duration,
                                _smoothstep, _smoothstep_fall)
+
+    def __call__(self, t):
+        """:meth:`TorqueShape.__call__`; a table of samples × cases (``t`` of shape (n_t, 1),
+        the parameters scalars or (n_cases,)) is evaluated by :func:`_smooth_table`, a
+        compiled loop of the same operations (the same bits, without the ~20 temporary
+        (n_t, n_cases) arrays of the array expression: 10× faster on a sweep's table)."""
+        t = to_si_array(t, "s", "t")
+        params = (self.duration, self.alpha, self.angle, self.u_max, self.inertia, self.theta0)
+        if t.ndim != 2 or t.shape[1] != 1 or any(np.ndim(v) > 1 for v in params):
+            return super().__call__(t)
+        nc = max(np.size(v) for v in params)
+        u, th, thd, thdd = _smooth_table(
+            np.ascontiguousarray(t[:, 0]),
+            *(np.ascontiguousarray(np.broadcast_to(v, (nc,)), dtype=float) for v in params))
+        return Reference(u=u, theta=th, theta_dot=thd, theta_ddot=thdd)
+
+
+@njit(cache=True, error_model="numpy")
+def _smooth_table(t, T, alpha, angle, u_max, inertia, theta0):
+    """(u, θ, θ', θ'') of :class:`SmoothBangBang` at every t (n_t,) for every case (C,):
+    :meth:`TorqueShape.__call__` with :func:`_rounded_square`, :func:`_smoothstep` and
+    :func:`_smoothstep_fall`, element by element, each operation as the array expression
+    performs it (no fused multiply-add: the same bits; tests/maneuvers)."""
+    n_t, nc = t.shape[0], T.shape[0]
+    u = np.empty((n_t, nc))
+    th = np.empty((n_t, nc))
+    thd = np.empty((n_t, nc))
+    thdd = np.empty((n_t, nc))
+    for i in range(n_t):  # row by row: the tables are written in memory order
+        ti = t[i]
+        for c in range(nc):
+            Tc = T[c]
+            half = 0.5 * Tc
+            a = alpha[c] * Tc
+            scale = a if a > 0 else 1.0
+            plateau = half - 2 * a
+            sgn = np.sign(angle[c])
+            k = sgn * u_max[c] / inertia[c]
+            tc = min(max(ti, 0.0), Tc)
+            late = tc >= half
+            tau = Tc - tc if late else tc
+            # rise: h(x), x = clip(tau / scale, 0, 1)
+            x = min(max(tau / scale, 0.0), 1.0)
+            x2 = x * x
+            gr = x2 * (3 - 2 * x)
+            r1 = x2 * x - x2 * x2 / 2
+            r2 = x2 * x2 / 4 - x2 * x2 * x / 10
+            # fall: 1 − 2 h(x/2), x = clip((tau − (half − a)) / scale, 0, 1)
+            x = min(max((tau - (half - a)) / scale, 0.0), 1.0)
+            xh = x / 2
+            x2 = xh * xh
+            h = x2 * (3 - 2 * xh)
+            h1 = x2 * xh - x2 * x2 / 2
+            h2 = x2 * x2 / 4 - x2 * x2 * xh / 10
+            gf, f1, f2 = 1 - 2 * h, x - 4 * h1, x * x / 2 - 8 * h2
+            pl = min(max(tau - a, 0.0), plateau)
+            f = gr if tau < a else (1.0 if tau <= half - a else gf)
+            F1 = a * r1 + pl + a * f1
+            F2 = (a * a * r2 + a * 0.5 * max(tau - a, 0.0) + 0.5 * pl * pl
+                  + plateau * max(tau - (half - a), 0.0) + a * a * f2)
+            moving = ti >= 0 and ti < Tc
+            uc = sgn * u_max[c] * (-f if late else f) if moving else 0.0
+            u[i, c] = uc
+            th[i, c] = theta0[c] + angle[c] - k * F2 if late else theta0[c] + k * F2
+            thd[i, c] = k * F1
+            thdd[i, c] = uc / inertia[c]
+    return u, th, thd, thdd
 
 
 class PseudoSquare(TorqueShape):

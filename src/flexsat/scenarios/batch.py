@@ -54,7 +54,7 @@ PARAMETER_UNITS = {
     "alpha": "", "u_max": "N*m", "duration": "s",
     "g1": "N*m/rad", "g2": "N*m*s/rad", "g3": "",
     "hub_inertia": "kg*m**2", "EI": "N*m**2", "damping": "", "tip_mass": "kg",
-    "tip_inertia": "kg*m**2",
+    "tip_inertia": "kg*m**2", "friction_coulomb": "N*m", "friction_viscous": "N*m*s/rad",
 }
 
 #: sampling of a sweep's bounds or a Monte Carlo's distributions

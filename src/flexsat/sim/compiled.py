@@ -37,14 +37,17 @@ holds at most :data:`BLOCK_BYTES`.
 from __future__ import annotations
 
 import numpy as np
+import xarray as xr
 
 from flexsat.dynamics.dispersion import DispersedPlant
 from flexsat.sim.channels import noise_column, noise_columns
 from flexsat.sim.disturbances import BearingFriction
 from flexsat.sim.instruments import stacked_output_matrices
 from flexsat.sim.integrators import ExponentialStepper, ModalPropagator, modal_coordinates
-from flexsat.sim.kernels import closed_loop, closed_loop_parallel
-from flexsat.sim.recording import Recorder
+from flexsat.sim.kernels import (closed_loop, closed_loop_parallel, closed_loop_reduced,
+                                 closed_loop_reduced_parallel)
+from flexsat.sim.metrics import METRIC_UNITS
+from flexsat.sim.recording import Recorder, SimResult
 from flexsat.sim.sensors import least_squares_derivative_weights
 
 #: states and noise of one block of cases, bytes: a few MB keeps them in cache-sized pieces
@@ -214,7 +217,8 @@ class _Args:
     """The kernel's arguments for a whole batch (each sliced per block by :meth:`block`)."""
 
     def __init__(self, plant, controller, config, nc, x0, sensors, actuators, disturbances,
-                 substeps, measured, kept, law, modal: bool = True):
+                 substeps, measured, kept, law, modal: bool = True,
+                 always_modal: bool = False, rows=None):
         dt, n_t = config.dt, config.n_steps + 1
         self.nc, self.n_t = nc, n_t
         A, B = plant.linear_part()
@@ -227,7 +231,8 @@ class _Args:
             j = slices[k].start
             Bf = B[..., :, j:j + 1]
         n = plant.nx
-        modal = modal_form(plant, nc * (n_t - 1) * substeps) if modal else None
+        modal = modal_form(plant, np.inf if always_modal else nc * (n_t - 1) * substeps
+                           ) if modal else None
         self.T = None if modal is None else modal[0]
         Tinv = None if modal is None else modal[1]
         if modal is not None:
@@ -351,14 +356,15 @@ class _Args:
         if Tinv is not None:
             self.imp_dx = _c(self.imp_dx @ Tinv.T)
         self.p, self.m, self.n = p, m, n
-        self._recorded_rows(plant, forced)
+        self._recorded_rows(plant, forced, rows)
 
-    def _recorded_rows(self, plant, forced):
+    def _recorded_rows(self, plant, forced, names=None):
         """The kernel's records in place of the states (module docstring): ``lean`` when
         every recorded output is linear and the energies (if any) are quadratic forms; its
-        output rows (Co, Do, Dof: the recorded outputs, then h) and energy matrix Q."""
+        output rows (Co, Do, Dof: the recorded outputs, or ``names``, then h) and energy
+        matrix Q."""
         n, m = self.n, self.m
-        names = list(plant.recorded)
+        names = list(plant.recorded if names is None else names)
         mats = [plant.output_matrices(k) for k in names]
         probe = np.zeros((plant.n_cases, n))
         energy = plant.energy(probe) is not None
@@ -391,6 +397,15 @@ class _Args:
               En=None):
         """Run the kernel on cases [c0, c1) over the first ``n_t`` samples into the given
         records (case-major views; O, En None: no output rows, no energy)."""
+        kernel = closed_loop_parallel if c1 - c0 >= PARALLEL_CASES else closed_loop
+        cb_ = c1 - c0
+        O = np.empty((cb_, 0, 0)) if O is None else O
+        En = np.empty((cb_, 0)) if En is None else En
+        kernel(*self.inputs(c0, c1, seeds, n_t), X, Y, Ucmd, U, D, F, O, En, stop)
+
+    def inputs(self, c0: int, c1: int, seeds, n_t: int) -> tuple:
+        """The kernel's input arguments (:data:`~flexsat.sim.kernels.ARGUMENTS`) for cases
+        [c0, c1) over ``n_t`` samples: the noise streams drawn, the per-case arrays sliced."""
         def cases(a, axis=0):  # a per-case array's block, a shared one as is
             if a.shape[axis] == 1:
                 return a
@@ -411,12 +426,8 @@ class _Args:
         else:
             noise = np.zeros((cb, 0, 0))
         Ak, Bk, Ck, Dk, y_ref, u_ff, K0 = self.law
-        kernel = closed_loop_parallel if cb >= PARALLEL_CASES else closed_loop
         from flexsat.sim.engine import DIVERGENCE_BOUND
-        cb_ = c1 - c0
-        O = np.empty((cb_, 0, 0)) if O is None else O
-        En = np.empty((cb_, 0)) if En is None else En
-        kernel(self.x0[c0:c1], cases(self.E), self.T is not None, cases(self.P1u),
+        return (self.x0[c0:c1], cases(self.E), self.T is not None, cases(self.P1u),
                cases(self.P1f),
                cases(self.P2f), cases(self.Cr), cases(self.fric), self.substeps, self.imp_k,
                cases(self.imp_dx, 1), cases(self.Cm), cases(self.Dm), cases(self.Dmf),
@@ -425,7 +436,7 @@ class _Args:
                law_cases(u_ff), np.array(K0 if K0.shape[0] <= 1 else K0[c0:c1], order="C"),
                cases(self.act), cases(self.dist_std),
                self.dist_slot, noise, DIVERGENCE_BOUND, cases(self.Co), cases(self.Do),
-               cases(self.Dof), cases(self.Q), X, Y, Ucmd, U, D, F, O, En, stop)
+               cases(self.Dof), cases(self.Q))
 
 
 def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, disturbances,
@@ -520,6 +531,109 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
     result = rec.dataset(t, controller, theta0, config, substeps, engine="compiled")
     result.dataset.attrs["propagation"] = "dense" if a.T is None else "modal"
     return result
+
+
+#: the histories the single-axis maneuver metrics read (:func:`flexsat.sim.metrics.
+#: maneuver_metrics`): the outputs reduced in the loop, in this order, and the input
+REDUCED_OUTPUTS, REDUCED_INPUT = ("theta", "theta_dot", "tip_deflection"), "torque"
+
+
+def run_reduced(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators,
+                disturbances, substeps, measured, kept, law):
+    """The maneuver metrics of :func:`~flexsat.sim.engine.simulate` (``metrics_only``) without
+    any time history, or None where this path does not apply (the caller then runs
+    :func:`run`).
+
+    The single-axis maneuver metrics (:func:`flexsat.sim.metrics.maneuver_metrics`) read
+    the histories of θ, θ', the torque, the tip deflection and the vibration energy; each is a
+    running maximum, the last sample outside the settling band or a value at one sample, so
+    the kernel (:func:`~flexsat.sim.kernels.closed_loop_reduced`) accumulates them in the
+    loop: |θ − θ_f| > band, max d (θ − θ_f) (d the slew direction), max |θ' − θ'_ref|,
+    max |tip|, max |u|, and the energy and angular momentum at the last sample and at the
+    reference's end. The loop is that of :func:`run` (the same operations), its records
+    replaced by these reductions: the metrics equal those of :func:`run` on the same
+    propagation bit for bit. A shared hybrid plant is always propagated in its modal
+    coordinates here (O(n) per substep), whatever the batch size, so that a case's metrics
+    do not depend on the batch it runs in (one case alone takes the same path).
+
+    Applies to a plant whose recorded outputs include those above as linear outputs, with an
+    energy matrix and a vibration energy (:class:`~flexsat.dynamics.hybrid.HybridPlant`),
+    a size-1 torque input, a law with a reference (``reference_at``) and a start angle.
+    A divergence, or the bound met in modal coordinates, returns None: :func:`run` then
+    raises as the Python loop does.
+    """
+    from flexsat.dynamics.hybrid import HybridPlant
+    from flexsat.sim.recording import _references
+
+    names = [c.name for c in plant.outputs]
+    if (not isinstance(plant, HybridPlant) or theta0 is None
+            or not all(k in plant.recorded and k in names and _width(plant, k) == 1
+                       for k in REDUCED_OUTPUTS)
+            or plant.input_slices.get(REDUCED_INPUT, slice(0, 2)).stop
+            - plant.input_slices.get(REDUCED_INPUT, slice(0, 2)).start != 1):
+        return None
+    a = _Args(plant, controller, config, nc, x0, sensors, actuators, disturbances, substeps,
+              measured, kept, law, always_modal=True, rows=REDUCED_OUTPUTS)
+    n_t = a.n_t
+    t = config.dt * np.arange(n_t)
+    refs = _references(controller, t, nc)
+    if not a.lean or a.inertia is None or not a.Q.shape[0] or refs is None:
+        return None
+    target = np.broadcast_to(np.asarray(controller.target, float), (nc,))
+    theta0 = np.broadcast_to(np.asarray(theta0, float), (nc,))
+    direction = np.sign(target - theta0)
+    direction = np.where(direction == 0, 1.0, direction)
+    # θ − θ_f, θ' − θ'_ref (the reference's rate table), the tip deflection
+    red_c = np.zeros((nc, 3))
+    red_c[:, 0] = target
+    red_tab = np.array([-1, 0, -1], dtype=np.int64)
+    red_band = np.array([config.settling_band, np.inf, np.inf])
+    rate_ref = np.ascontiguousarray(refs[1])  # (n_t, nc)
+    ref = controller.reference
+    k_end = np.full(nc, n_t - 1, dtype=np.int64)
+    if ref is not None:
+        ref_end = np.broadcast_to(np.asarray(ref.end_time, float), (nc,))
+        k_end = np.minimum(np.searchsorted(t, ref_end - 1e-12), n_t - 1)
+    snap_k = np.ascontiguousarray(np.column_stack([np.full(nc, n_t - 1), k_end]),
+                                  dtype=np.int64)
+    m_u = plant.input_slices[REDUCED_INPUT].start + 1
+    red = np.empty((nc, 3, 3))
+    upeak = np.empty((nc, m_u))
+    snapO = np.empty((nc, 2, a.Co.shape[1]))
+    snapE = np.empty((nc, 2))
+    stop = np.full(nc, -1, dtype=np.int64)
+    size = _block_size(nc, n_t, (a.width if a.noisy else 0) + a.law_values + 1)
+    for c0 in range(0, nc, size):
+        c1 = min(nc, c0 + size)
+        kernel = (closed_loop_reduced_parallel if c1 - c0 >= PARALLEL_CASES
+                  else closed_loop_reduced)
+        kernel(*a.inputs(c0, c1, seeds, n_t), red_c[c0:c1], red_tab,
+               np.ascontiguousarray(rate_ref[None, :, c0:c1]), direction[c0:c1].copy(),
+               red_band, snap_k[c0:c1], red[c0:c1], upeak[c0:c1], snapO[c0:c1],
+               snapE[c0:c1], stop[c0:c1])
+    if (stop >= 0).any():
+        return None
+    vib = snapO[..., -1]  # E − h² / (2 I_tot), as run() computes it
+    np.square(vib, out=vib)
+    vib *= -0.5 / a.inertia
+    vib += snapE
+    last = red[:, 0, 2].astype(np.int64)  # 1 + the last sample outside the band
+    metrics = {
+        "settling_time_s": np.where(last != n_t, t[np.minimum(last, n_t - 1)], np.nan),
+        "overshoot_deg": np.degrees(np.maximum(red[:, 0, 1], 0.0)),
+        "peak_torque_Nm": upeak[:, m_u - 1].copy(),
+        "residual_energy_J": vib[:, 0].copy(),
+        "peak_tip_deflection_m": red[:, 2, 0].copy(),
+        "peak_rate_error_deg_s": np.degrees(red[:, 1, 0]),
+        "residual_energy_at_T_J": (vib[:, 1].copy() if ref is not None
+                                   else np.full(nc, np.nan)),
+    }
+    data = {k: (("case",), v, {"units": METRIC_UNITS[k]}) for k, v in metrics.items()}
+    ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}), "case": np.arange(nc)})
+    ds.attrs.update(control_rate_Hz=config.control_rate, settling_band_rad=config.settling_band,
+                    substeps=substeps, engine="compiled",
+                    propagation="dense" if a.T is None else "modal", histories="none")
+    return SimResult(ds, metrics)
 
 
 def _block_size(nc: int, n_t: int, values: float) -> int:

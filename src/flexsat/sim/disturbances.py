@@ -23,7 +23,8 @@ class BearingFriction:
     viscous : float   c2, N m s/rad
     smoothing : float ε, rad/s
 
-    Each a number in SI, a pint Quantity or a unit string (``"20 ozf*in"``), stored in SI.
+    Each a number in SI, a pint Quantity or a unit string (``"20 ozf*in"``), stored in SI; or
+    one value per case of the batch, (n_cases,) (a Monte Carlo over the friction).
     """
 
     coulomb: float = 0.0
@@ -37,13 +38,14 @@ class BearingFriction:
 
     @property
     def active(self) -> bool:
-        return self.coulomb > 0 or self.viscous > 0
+        """Whether any case has friction."""
+        return bool(np.any(np.asarray(self.coulomb) > 0) or np.any(np.asarray(self.viscous) > 0))
 
     @property
     def max_slope(self) -> float:
-        """Largest |dτ/dθ'|, c1/ε + c2 (at θ' = 0), N m s/rad: the stiffness the integrator
-        must resolve (:func:`flexsat.sim.config.stable_substeps`)."""
-        return self.coulomb / self.smoothing + self.viscous
+        """Largest |dτ/dθ'|, c1/ε + c2 (at θ' = 0), N m s/rad, the largest over the cases: the
+        stiffness the integrator must resolve (:func:`flexsat.sim.config.stable_substeps`)."""
+        return float(np.max(self.coulomb / self.smoothing + self.viscous))
 
     def __call__(self, rate: np.ndarray) -> np.ndarray:
         return -self.coulomb * np.tanh(rate / self.smoothing) - self.viscous * rate

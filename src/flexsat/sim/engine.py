@@ -233,6 +233,7 @@ def simulate(
     initial_state=None,
     record_states: bool = False,
     compiled: bool | None = None,
+    metrics_only: bool = False,
 ) -> SimResult:
     """Run a batch of closed-loop maneuvers.
 
@@ -267,6 +268,13 @@ def simulate(
         False forces the Python loop, True the compiled one (a ValueError saying why when it
         cannot). Both give the same result to round-off; ``dataset.attrs["engine"]`` says
         which ran.
+    metrics_only : bool
+        Only the single-axis maneuver metrics are wanted (a sweep's cases): where the compiled
+        loop can accumulate them in the loop (:func:`flexsat.sim.compiled.run_reduced`) the
+        result holds them without any time history (``dataset.attrs["histories"] ==
+        "none"``), a hybrid plant is propagated in its modal coordinates whatever the batch
+        size (a case's metrics do not depend on its batch) and no history is allocated;
+        elsewhere (or with ``record_states``) the full result.
 
     Raises
     ------
@@ -318,6 +326,12 @@ def simulate(
         law = None if reason is not None else controller.linear_form(dt, t, nc)
         if reason is None and law is None:
             reason = f"{type(controller).__name__} has no linear form"
+        if reason is None and metrics_only and not record_states:
+            result = compiled_path.run_reduced(plant, controller, config, nc, seeds, x, theta0,
+                                               sensors, actuators, disturbances, substeps,
+                                               measured, kept, law)
+            if result is not None:
+                return result
         if reason is None:
             return compiled_path.run(plant, controller, config, nc, seeds, x, theta0, sensors,
                                      actuators, disturbances, substeps, measured, kept,

@@ -50,6 +50,13 @@ serially or in parallel (:func:`closed_loop_parallel`, one case per thread, no r
 across cases), so the results are bit-identical; the noise enters only through ``noise[c]``,
 so a case's result depends on its own stream only.
 
+:func:`closed_loop_reduced` runs the same step keeping no history: the running reductions of
+the first output rows (a maneuver's peaks and last sample outside a band) and the outputs and
+energy at chosen samples (the metrics of a sweep, issue 13). It takes the cases in groups of
+:data:`LANES` side by side (every per-case quantity a row of lanes, the lanes innermost), each
+lane performing the scalar operations of :func:`closed_loop` in the same order: its numbers
+are those the history loop records, bit for bit, whatever the grouping.
+
 The kernels use numba's numpy error model: no zero-division checks in the loop (the divisors
 are a positive quantum, a positive smoothing speed and the FIR length, validated upstream).
 """
@@ -61,7 +68,8 @@ import warnings
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["ARGUMENTS", "RECORDS", "closed_loop", "closed_loop_parallel", "allocate_records"]
+__all__ = ["ARGUMENTS", "RECORDS", "REDUCTIONS", "allocate_records", "closed_loop",
+           "closed_loop_parallel", "closed_loop_reduced", "closed_loop_reduced_parallel"]
 
 _UNCACHED: list[str] = []
 
@@ -91,6 +99,10 @@ ARGUMENTS = ("x0", "E", "block_diagonal", "P1u", "P1f", "P2f", "Cr", "fric", "su
              "dist_std", "dist_slot", "noise", "bound", "Co", "Do", "Dof", "Q")
 #: output arguments of :func:`closed_loop`, as returned by :func:`allocate_records`
 RECORDS = ("X", "Y", "Ucmd", "U", "D", "F", "O", "En", "stop")
+#: the arguments of :func:`closed_loop_reduced` after those of :data:`ARGUMENTS` (inputs,
+#: then outputs)
+REDUCTIONS = ("red_c", "red_tab", "red_t", "red_dir", "red_band", "snap_k", "red", "upeak",
+              "snapO", "snapE", "stop")
 
 
 @_jit(inline="always", error_model="numpy")
@@ -142,6 +154,40 @@ def _propagate(E, x, out, block_diagonal):
             out[i] = s
 
 
+@_jit(inline="always", error_model="numpy")
+def _rows(Mt, x, out):
+    """out = Mtᵀ x, Mt (n, 8 g): eight rows at a time in registers, each summed in order."""
+    for i0 in range(0, Mt.shape[1], 8):
+        s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
+        for j in range(x.shape[0]):
+            xj = x[j]
+            s0 += Mt[j, i0] * xj
+            s1 += Mt[j, i0 + 1] * xj
+            s2 += Mt[j, i0 + 2] * xj
+            s3 += Mt[j, i0 + 3] * xj
+            s4 += Mt[j, i0 + 4] * xj
+            s5 += Mt[j, i0 + 5] * xj
+            s6 += Mt[j, i0 + 6] * xj
+            s7 += Mt[j, i0 + 7] * xj
+        out[i0], out[i0 + 1], out[i0 + 2], out[i0 + 3] = s0, s1, s2, s3
+        out[i0 + 4], out[i0 + 5], out[i0 + 6], out[i0 + 7] = s4, s5, s6, s7
+
+
+@_jit(inline="always", error_model="numpy")
+def _energy(Qc, x, qx):
+    """½ xᵀ v, v = Q x accumulated column by column (Q symmetric: row j is column j):
+    independent element-wise updates the compiler vectorises, where n dot products are each a
+    chain of dependent additions (3× slower at n = 22)."""
+    n = x.shape[0]
+    for i in range(n):
+        qx[i] = 0.0
+    for j in range(n):
+        xj = x[j]
+        for i in range(n):
+            qx[i] += Qc[j, i] * xj
+    return 0.5 * _dot(x, qx)
+
+
 @_jit(error_model="numpy")
 def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
           imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
@@ -175,7 +221,7 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
     if rec_e:
         Qc = Q[_ci(Q.shape[0], c)]
     sens, actc, dstd = sensor[cs], act[ca], dist_std[cd]
-    noisec, Yc, Ucmdc, Uc, Dc, Fc = noise[c], Y[c], Ucmd[c], U[c], D[c], F[c]
+    noisec, Yc = noise[c], Y[c]
     c1 = c2 = eps = 0.0
     p1f = p2f = cr = np.zeros(n)
     if has_force:
@@ -184,11 +230,27 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
         p1f, p2f, cr = P1f[cf], P2f[cf], Cr[_ci(Cr.shape[0], c)]
         c1, c2, eps = fric[cfr, 0], fric[cfr, 1], fric[cfr, 2]
 
+    # the measurement and output rows side by side, transposed and padded with zero rows to
+    # groups of 8: Mt x accumulated over j = 0 .. n − 1 in eight registers per group (eight
+    # independent chains of additions, where each row's dot product alone is one chain of
+    # dependent additions), each row summed in the order j = 0 .. n − 1
+    R = p + r_out
+    R8 = (R + 7) // 8 * 8
+    Mt = np.zeros((n, R8))
+    for j in range(n):
+        for i in range(p):
+            Mt[j, i] = Cmc[i, j]
+        for i in range(r_out):
+            Mt[j, p + i] = Coc[i, j]
+    acc = np.empty(R8)
+    fused = block_diagonal and not has_force
+
     x = x0[c].copy()
     xa = np.empty(n)
     qx = np.empty(n)
     drive = np.empty(n)
     w = np.zeros(m)  # input applied over the previous period (none before the first sample)
+    ucmd = np.empty(m)
     y = np.empty(p)
     e = np.empty(p)
     xi = np.zeros(nk)
@@ -207,11 +269,10 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
             i_imp += 1
         # 2. force at the sample
         f = _force(x, cr, c1, c2, eps) if has_force else 0.0
-        # 3.-4. measurement and sensors
+        # 3.-4. measurement and sensors; the output rows' state part
+        _rows(Mt, x, acc)
         for i in range(p):
-            s = 0.0
-            for j in range(n):
-                s += Cmc[i, j] * x[j]
+            s = acc[i]
             for j in range(m):
                 s += Dmc[i, j] * w[j]
             s += Dmfc[i] * f
@@ -263,53 +324,46 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 s += Ck[tc, cc, i, j] * xi[j]
             for j in range(p):
                 s += Dk[td, cdk, i, j] * e[j]
-            Ucmdc[k, i] = s
+            ucmd[i] = s
+            Ucmd[c, k, i] = s
             if not abs(s) <= bound:
                 bad = True
-        for i in range(nk):
-            s = 0.0
-            for j in range(nk):
-                s += Ak[tk, ck, i, j] * xi[j]
-            for j in range(p):
-                s += Bk[tb, cb, i, j] * e[j]
-            xi_new[i] = s
-        xi[:] = xi_new
+        if nk > 0:
+            for i in range(nk):
+                s = 0.0
+                for j in range(nk):
+                    s += Ak[tk, ck, i, j] * xi[j]
+                for j in range(p):
+                    s += Bk[tb, cb, i, j] * e[j]
+                xi_new[i] = s
+            xi[:] = xi_new
         # 7. divergence
         for j in range(n):
             if not abs(x[j]) <= bound:
                 bad = True
         if rec_x:
             X[c, k, :] = x
-        for i in range(r_out):
-            s = _dot(Coc[i], x) + Dofc[i] * f
+        for i in range(r_out):  # o_i = C_o[i] x + D_of[i] f + D_o[i] w
+            s = acc[p + i] + Dofc[i] * f
             for j in range(m):
                 s += Doc[i, j] * w[j]
             O[c, k, i] = s
         if rec_e:
-            # ½ xᵀ v, v = Q x accumulated column by column (Q symmetric: row j is column
-            # j): independent element-wise updates the compiler vectorises, where n
-            # dot products are each a chain of dependent additions (3× slower at n = 22)
-            for i in range(n):
-                qx[i] = 0.0
-            for j in range(n):
-                xj = x[j]
-                for i in range(n):
-                    qx[i] += Qc[j, i] * xj
-            En[c, k] = 0.5 * _dot(x, qx)
+            En[c, k] = _energy(Qc, x, qx)
         for i in range(p_rec):
             Yc[k, i] = y[p - p_rec + i]
         if rec_f:
-            Fc[k] = f
+            F[c, k] = f
         if bad:
             stop[c] = k
             return
         # 8. actuator and disturbance
         for i in range(m):
             sat = actc[i, 0]
-            u = actc[i, 1] * min(max(Ucmdc[k, i], -sat), sat)
+            u = actc[i, 1] * min(max(ucmd[i], -sat), sat)
             d = dstd[i] * noisec[k, dist_slot[i]] if dist_slot[i] >= 0 else 0.0
-            Uc[k, i] = u
-            Dc[k, i] = d
+            U[c, k, i] = u
+            D[c, k, i] = d
             w[i] = u + d
         if k == n_t - 1:
             break
@@ -320,6 +374,12 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                 s += P1uc[i, j] * w[j]
             drive[i] = s
         for _ in range(substeps):
+            if fused:  # x ← E x + drive in one pass over the 2×2 blocks (same operations)
+                for i in range(0, n, 2):
+                    x0_, x1_ = x[i], x[i + 1]
+                    x[i] = (Ec[i, 0] * x0_ + Ec[i, 1] * x1_) + drive[i]
+                    x[i + 1] = (Ec[i + 1, 0] * x0_ + Ec[i + 1, 1] * x1_) + drive[i + 1]
+                continue
             _propagate(Ec, x, xa, block_diagonal)
             if has_force:
                 f0 = _force(x, cr, c1, c2, eps)
@@ -404,6 +464,459 @@ def closed_loop_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substep
               imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
               Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
               Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop)
+
+
+#: cases per group of :func:`closed_loop_reduced`: the lanes of its vector operations (8:
+#: :func:`_rows8` holds one register per lane)
+LANES = 8
+
+
+@_jit(error_model="numpy")
+def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
+           imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
+           Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
+           Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
+           red, upeak, snapO, snapE, stop):
+    """Cases c0 .. c0 + nl − 1 (nl <= :data:`LANES`) of :func:`closed_loop_reduced` side by
+    side: every per-case quantity is a row of :data:`LANES` lanes, the innermost loops run
+    over the lanes (independent cases; the rows' sums in registers, :func:`_rows8`), and
+    each lane performs the scalar operations of :func:`_case` in its order, so a case's
+    numbers do not depend on its group or on ``nl``."""
+    n = x0.shape[1]
+    m = P1u.shape[2]
+    p = Cm.shape[1]
+    nk = Ak.shape[2]
+    n_t = y_ref.shape[0]
+    Lf = fir_w.shape[0]
+    has_force = P1f.shape[0] > 0
+    n_red = red.shape[1]
+    n_snap = snapO.shape[1]
+    r = Co.shape[1]
+    snap_e = snapE.shape[1] > 0 and Q.shape[0] > 0
+    R = p + r
+    # lanes past the group's nl cases repeat its last case: the same numbers written twice
+    cl = np.empty(LANES, np.int64)
+    for l in range(LANES):
+        cl[l] = c0 + min(l, nl - 1)
+    # per-lane copies of the per-case arrays, lanes last
+    Mt = np.empty((n, R, LANES))
+    Ev = np.empty((n, E.shape[2], LANES))
+    P1v = np.empty((n, m, LANES))
+    Dmv = np.empty((p, m, LANES))
+    Dmfv = np.empty((p, LANES))
+    sensv = np.empty((p, 4, LANES))
+    Dov = np.empty((r, m, LANES))
+    Dofv = np.empty((r, LANES))
+    actv = np.empty((m, 2, LANES))
+    dstdv = np.empty((m, LANES))
+    p1f = np.zeros((n, LANES))
+    p2f = np.zeros((n, LANES))
+    crv = np.zeros((n, LANES))
+    c1 = np.zeros(LANES)
+    c2 = np.zeros(LANES)
+    eps = np.ones(LANES)
+    redc = np.zeros((max(n_red, 1), LANES))
+    rdir = np.zeros(LANES)
+    ct = np.zeros(LANES, np.int64)
+    cr_ = np.zeros(LANES, np.int64)
+    cf_ = np.zeros(LANES, np.int64)
+    ck = np.zeros(LANES, np.int64)
+    cb = np.zeros(LANES, np.int64)
+    cc = np.zeros(LANES, np.int64)
+    cdk = np.zeros(LANES, np.int64)
+    ci_imp = np.zeros(LANES, np.int64)
+    snapc = np.zeros((max(n_snap, 1), LANES), np.int64)
+    Qv = np.zeros((n, n, LANES)) if snap_e else np.zeros((0, 0, LANES))
+    for l in range(LANES):
+        c = cl[l]
+        cp, cu, cm = _ci(E.shape[0], c), _ci(P1u.shape[0], c), _ci(Cm.shape[0], c)
+        for j in range(n):
+            for i in range(p):
+                Mt[j, i, l] = Cm[cm, i, j]
+            for i in range(r):
+                Mt[j, p + i, l] = Co[_ci(Co.shape[0], c), i, j]
+            for q in range(E.shape[2]):
+                Ev[j, q, l] = E[cp, j, q]
+            for i in range(m):
+                P1v[j, i, l] = P1u[cu, j, i]
+        for i in range(p):
+            for j in range(m):
+                Dmv[i, j, l] = Dm[cm, i, j]
+            Dmfv[i, l] = Dmf[cm, i]
+            for q in range(4):
+                sensv[i, q, l] = sensor[_ci(sensor.shape[0], c), i, q]
+        for i in range(r):
+            co = _ci(Co.shape[0], c)
+            for j in range(m):
+                Dov[i, j, l] = Do[co, i, j]
+            Dofv[i, l] = Dof[co, i]
+        for i in range(m):
+            actv[i, 0, l] = act[_ci(act.shape[0], c), i, 0]
+            actv[i, 1, l] = act[_ci(act.shape[0], c), i, 1]
+            dstdv[i, l] = dist_std[_ci(dist_std.shape[0], c), i]
+        if has_force:
+            cf, cfr = _ci(P1f.shape[0], c), _ci(fric.shape[0], c)
+            for j in range(n):
+                p1f[j, l] = P1f[cf, j]
+                p2f[j, l] = P2f[cf, j]
+                crv[j, l] = Cr[_ci(Cr.shape[0], c), j]
+            c1[l], c2[l], eps[l] = fric[cfr, 0], fric[cfr, 1], fric[cfr, 2]
+        if n_red > 0:
+            for j in range(n_red):
+                redc[j, l] = red_c[_ci(red_c.shape[0], c), j]
+            rdir[l] = red_dir[_ci(red_dir.shape[0], c)]
+        if red_t.shape[0] > 0:
+            ct[l] = _ci(red_t.shape[2], c)
+        for i in range(n_snap):
+            snapc[i, l] = snap_k[_ci(snap_k.shape[0], c), i]
+        if snap_e:
+            cq = _ci(Q.shape[0], c)
+            for j in range(n):
+                for i in range(n):
+                    Qv[j, i, l] = Q[cq, j, i]
+        cr_[l], cf_[l] = _ci(y_ref.shape[1], c), _ci(u_ff.shape[1], c)
+        ck[l], cb[l] = _ci(Ak.shape[1], c), _ci(Bk.shape[1], c)
+        cc[l], cdk[l] = _ci(Ck.shape[1], c), _ci(Dk.shape[1], c)
+        ci_imp[l] = _ci(imp_dx.shape[1], c)
+        for j in range(n_red):
+            red[c, j, 0] = 0.0  # max |s|
+            red[c, j, 1] = -np.inf  # max dir · s
+            red[c, j, 2] = 0.0  # last sample with |s| > band, + 1 (0: none)
+        for i in range(upeak.shape[1]):
+            upeak[c, i] = 0.0
+        stop[c] = -1
+
+    x = np.empty((n, LANES))
+    for l in range(LANES):
+        for j in range(n):
+            x[j, l] = x0[cl[l], j]
+    xa = np.empty((n, LANES))
+    drive = np.empty((n, LANES))
+    qx = np.empty((n, LANES))
+    w = np.zeros((m, LANES))
+    ucmd = np.empty((m, LANES))
+    y = np.empty((p, LANES))
+    e = np.empty((p, LANES))
+    acc = np.empty((R, LANES))
+    ov = np.empty((r, LANES))
+    f = np.zeros(LANES)
+    f0 = np.zeros(LANES)
+    df = np.zeros(LANES)
+    s = np.empty(LANES)
+    d0 = np.empty(LANES)
+    d1 = np.empty(LANES)
+    d2 = np.empty(LANES)
+    d3 = np.empty(LANES)
+    xi = np.zeros((nk, LANES))
+    xi_new = np.empty((nk, LANES))
+    hist = np.empty((max(Lf, 1), LANES))
+    bad = np.zeros(LANES, np.bool_)
+    alive = np.ones(LANES, np.bool_)
+    head = 0
+    i_imp = 0
+    n_imp = imp_k.shape[0]
+    fused = block_diagonal and not has_force
+
+    for k in range(n_t):
+        # 1. impulses
+        while i_imp < n_imp and imp_k[i_imp] == k:
+            for j in range(n):
+                for l in range(LANES):
+                    x[j, l] += imp_dx[i_imp, ci_imp[l], j]
+            i_imp += 1
+        # 2. force at the sample (the four partial sums of _dot)
+        if has_force:
+            _force_lanes(x, crv, c1, c2, eps, f, d0, d1, d2, d3)
+        # 3.-4. rows, measurement and sensors
+        _rows8(Mt, x, acc)
+        for i in range(p):
+            for l in range(LANES):
+                s[l] = acc[i, l]
+            for j in range(m):
+                for l in range(LANES):
+                    s[l] += Dmv[i, j, l] * w[j, l]
+            slot = sensor_slot[i]
+            for l in range(LANES):
+                v = s[l] + Dmfv[i, l] * f[l]
+                v += sensv[i, 2, l]
+                if slot >= 0:
+                    v += sensv[i, 1, l] * noise[cl[l], k, slot]
+                q = sensv[i, 0, l]
+                if q > 0.0:
+                    v = q * np.rint(v / q)
+                sat = sensv[i, 3, l]
+                y[i, l] = min(max(v, -sat), sat)
+        # 5. FIR-derivative channel (one ring buffer position for every lane)
+        if fir_src >= 0:
+            if k == 0:
+                for j in range(Lf):
+                    for l in range(LANES):
+                        hist[j, l] = y[fir_src, l]
+            else:
+                for l in range(LANES):
+                    hist[head, l] = y[fir_src, l]
+                head = (head + 1) % Lf
+            for l in range(LANES):
+                s[l] = 0.0
+            for j in range(Lf):
+                hj = (head + j) % Lf
+                for l in range(LANES):
+                    s[l] += fir_w[j] * hist[hj, l]
+            for l in range(LANES):
+                y[fir_dst, l] = s[l]
+        # 6. law
+        tk, tb = _ci(Ak.shape[0], k), _ci(Bk.shape[0], k)
+        tc, td = _ci(Ck.shape[0], k), _ci(Dk.shape[0], k)
+        for i in range(p):
+            for l in range(LANES):
+                e[i, l] = y[i, l] - y_ref[k, cr_[l], i]
+        if k == 0 and K0.shape[0] > 0:
+            for i in range(nk):
+                for l in range(LANES):
+                    c0k = _ci(K0.shape[0], cl[l])
+                    v = 0.0
+                    for j in range(p):
+                        v += K0[c0k, i, j] * e[j, l]
+                    xi[i, l] = v
+        for l in range(LANES):
+            bad[l] = False
+        for i in range(m):
+            for l in range(LANES):
+                v = u_ff[k, cf_[l], i]
+                for j in range(nk):
+                    v += Ck[tc, cc[l], i, j] * xi[j, l]
+                for j in range(p):
+                    v += Dk[td, cdk[l], i, j] * e[j, l]
+                ucmd[i, l] = v
+                if not abs(v) <= bound:
+                    bad[l] = True
+        if nk > 0:
+            for i in range(nk):
+                for l in range(LANES):
+                    v = 0.0
+                    for j in range(nk):
+                        v += Ak[tk, ck[l], i, j] * xi[j, l]
+                    for j in range(p):
+                        v += Bk[tb, cb[l], i, j] * e[j, l]
+                    xi_new[i, l] = v
+            for i in range(nk):
+                for l in range(LANES):
+                    xi[i, l] = xi_new[i, l]
+        # 7. divergence: a diverged lane is stopped there (its later numbers are not used)
+        for j in range(n):
+            for l in range(LANES):
+                if not abs(x[j, l]) <= bound:
+                    bad[l] = True
+        for i in range(r):  # o_i = C_o[i] x + D_of[i] f + D_o[i] w
+            for l in range(LANES):
+                v = acc[p + i, l] + Dofv[i, l] * f[l]
+                for j in range(m):
+                    v += Dov[i, j, l] * w[j, l]
+                ov[i, l] = v
+        for j in range(n_red):
+            tab = red_tab[j]
+            band = red_band[j]
+            for l in range(LANES):
+                v = ov[j, l] - redc[j, l]
+                if tab >= 0:
+                    v = v - red_t[tab, _ci(red_t.shape[1], k), ct[l]]
+                a = abs(v)
+                c = cl[l]
+                if a > red[c, j, 0]:
+                    red[c, j, 0] = a
+                if rdir[l] * v > red[c, j, 1]:
+                    red[c, j, 1] = rdir[l] * v
+                if a > band:
+                    red[c, j, 2] = k + 1
+        for i in range(n_snap):
+            for l in range(LANES):
+                if snapc[i, l] == k:
+                    for j in range(r):
+                        snapO[cl[l], i, j] = ov[j, l]
+                    if snap_e:
+                        snapE[cl[l], i] = _energy_lane(Qv, x, qx, l)
+        for l in range(LANES):
+            if bad[l] and alive[l]:
+                stop[cl[l]] = k
+                alive[l] = False
+        if not alive.any():
+            return
+        # 8. actuator and disturbance
+        for i in range(m):
+            slot = dist_slot[i]
+            for l in range(LANES):
+                sat = actv[i, 0, l]
+                u = actv[i, 1, l] * min(max(ucmd[i, l], -sat), sat)
+                d = dstdv[i, l] * noise[cl[l], k, slot] if slot >= 0 else 0.0
+                if i < upeak.shape[1] and abs(u) > upeak[cl[l], i]:
+                    upeak[cl[l], i] = abs(u)
+                w[i, l] = u + d
+        if k == n_t - 1:
+            break
+        # 9. propagation over the period with the held input
+        for i in range(n):
+            for l in range(LANES):
+                drive[i, l] = 0.0
+            for j in range(m):
+                for l in range(LANES):
+                    drive[i, l] += P1v[i, j, l] * w[j, l]
+        for _ in range(substeps):
+            if fused:
+                for i in range(0, n, 2):
+                    for l in range(LANES):
+                        x0_, x1_ = x[i, l], x[i + 1, l]
+                        x[i, l] = (Ev[i, 0, l] * x0_ + Ev[i, 1, l] * x1_) + drive[i, l]
+                        x[i + 1, l] = ((Ev[i + 1, 0, l] * x0_ + Ev[i + 1, 1, l] * x1_)
+                                       + drive[i + 1, l])
+                continue
+            _propagate_lanes(Ev, x, xa, block_diagonal)
+            if has_force:
+                _force_lanes(x, crv, c1, c2, eps, f0, d0, d1, d2, d3)
+                for i in range(n):
+                    for l in range(LANES):
+                        xa[i, l] += drive[i, l] + p1f[i, l] * f0[l]
+                _force_lanes(xa, crv, c1, c2, eps, df, d0, d1, d2, d3)
+                for l in range(LANES):
+                    df[l] = df[l] - f0[l]
+                for i in range(n):
+                    for l in range(LANES):
+                        x[i, l] = xa[i, l] + p2f[i, l] * df[l]
+            else:
+                for i in range(n):
+                    for l in range(LANES):
+                        x[i, l] = xa[i, l] + drive[i, l]
+
+
+@_jit(inline="always", error_model="numpy")
+def _rows8(Mt, x, acc):
+    """acc[i] = Σ_j Mt[j, i] x[j] for the 8 lanes, each lane's sum in order j = 0 .. n − 1 in
+    its own register (eight independent chains of additions)."""
+    n, R = Mt.shape[0], Mt.shape[1]
+    for i in range(R):
+        a0 = a1 = a2 = a3 = a4 = a5 = a6 = a7 = 0.0
+        for j in range(n):
+            a0 += Mt[j, i, 0] * x[j, 0]
+            a1 += Mt[j, i, 1] * x[j, 1]
+            a2 += Mt[j, i, 2] * x[j, 2]
+            a3 += Mt[j, i, 3] * x[j, 3]
+            a4 += Mt[j, i, 4] * x[j, 4]
+            a5 += Mt[j, i, 5] * x[j, 5]
+            a6 += Mt[j, i, 6] * x[j, 6]
+            a7 += Mt[j, i, 7] * x[j, 7]
+        acc[i, 0], acc[i, 1], acc[i, 2], acc[i, 3] = a0, a1, a2, a3
+        acc[i, 4], acc[i, 5], acc[i, 6], acc[i, 7] = a4, a5, a6, a7
+
+
+@_jit(inline="always", error_model="numpy")
+def _force_lanes(x, crv, c1, c2, eps, out, s0, s1, s2, s3):
+    """out = N(x) per lane, r = C_r x in the four partial sums of :func:`_dot`."""
+    n, nl = x.shape
+    for l in range(nl):
+        s0[l] = s1[l] = s2[l] = s3[l] = 0.0
+    j = 0
+    while j + 4 <= n:
+        for l in range(nl):
+            s0[l] += crv[j, l] * x[j, l]
+            s1[l] += crv[j + 1, l] * x[j + 1, l]
+            s2[l] += crv[j + 2, l] * x[j + 2, l]
+            s3[l] += crv[j + 3, l] * x[j + 3, l]
+        j += 4
+    while j < n:
+        for l in range(nl):
+            s0[l] += crv[j, l] * x[j, l]
+        j += 1
+    for l in range(nl):
+        rr = (s0[l] + s1[l]) + (s2[l] + s3[l])
+        out[l] = -c1[l] * np.tanh(rr / eps[l]) - c2[l] * rr
+
+
+@_jit(inline="always", error_model="numpy")
+def _propagate_lanes(Ev, x, out, block_diagonal):
+    """out = E x per lane (:func:`_propagate`)."""
+    n, nl = x.shape
+    if block_diagonal:
+        for i in range(0, n, 2):
+            for l in range(nl):
+                x0, x1 = x[i, l], x[i + 1, l]
+                out[i, l] = Ev[i, 0, l] * x0 + Ev[i, 1, l] * x1
+                out[i + 1, l] = Ev[i + 1, 0, l] * x0 + Ev[i + 1, 1, l] * x1
+    else:
+        for i in range(n):
+            for l in range(nl):
+                out[i, l] = 0.0
+            for j in range(n):
+                for l in range(nl):
+                    out[i, l] += Ev[i, j, l] * x[j, l]
+
+
+@_jit(inline="always", error_model="numpy")
+def _energy_lane(Qv, x, qx, l):
+    """:func:`_energy` of lane l."""
+    n = x.shape[0]
+    for i in range(n):
+        qx[i, l] = 0.0
+    for j in range(n):
+        xj = x[j, l]
+        for i in range(n):
+            qx[i, l] += Qv[j, i, l] * xj
+    s0 = s1 = s2 = s3 = 0.0
+    j = 0
+    while j + 4 <= n:
+        s0 += x[j, l] * qx[j, l]
+        s1 += x[j + 1, l] * qx[j + 1, l]
+        s2 += x[j + 2, l] * qx[j + 2, l]
+        s3 += x[j + 3, l] * qx[j + 3, l]
+        j += 4
+    while j < n:
+        s0 += x[j, l] * qx[j, l]
+        j += 1
+    return 0.5 * ((s0 + s1) + (s2 + s3))
+
+
+@_jit(error_model="numpy")
+def closed_loop_reduced(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
+                        imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
+                        fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot,
+                        noise, bound, Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir,
+                        red_band, snap_k, red, upeak, snapO, snapE, stop):
+    """:func:`closed_loop` keeping no history: per case, the reductions of the first
+    R output rows o_j (C_o, D_o, D_of), s_j = o_j − red_c[c, j] − red_t[red_tab[j], k, c]
+    (the table term only where red_tab[j] >= 0), over every sample k:
+
+        red[c, j] = (max_k |s_j|, max_k red_dir[c] · s_j, 1 + the last k with |s_j| >
+                     red_band[j], 0 if none),
+
+    upeak[c, i] = max_k |u_i| (the actuator output of the first upeak.shape[1] inputs), and
+    at the samples snap_k[c] (Cs = 1 or C, S) every output row snapO[c, s] and the energy
+    snapE[c, s] (S = 0 in snapE: none); red_t (n_tab, 1 or n_t, 1 or C). The cases run in
+    groups of :data:`LANES` (:func:`_lanes`), each lane the operations of :func:`closed_loop`
+    in the same order: the same bits as its records give, whatever the grouping."""
+    nc = x0.shape[0]
+    for g in range((nc + LANES - 1) // LANES):
+        c0 = g * LANES
+        _lanes(c0, min(LANES, nc - c0), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric,
+               substeps, imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
+               fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
+               Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
+               red, upeak, snapO, snapE, stop)
+
+
+@_jit(parallel=True, error_model="numpy")
+def closed_loop_reduced_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
+                                 imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src,
+                                 fir_dst, fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act,
+                                 dist_std, dist_slot, noise, bound, Co, Do, Dof, Q, red_c,
+                                 red_tab, red_t, red_dir, red_band, snap_k, red, upeak, snapO,
+                                 snapE, stop):
+    """:func:`closed_loop_reduced` with the groups spread over threads (bit-identical)."""
+    nc = x0.shape[0]
+    for g in prange((nc + LANES - 1) // LANES):
+        c0 = np.int64(g) * LANES
+        _lanes(c0, min(LANES, nc - c0), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric,
+               substeps, imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
+               fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
+               Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
+               red, upeak, snapO, snapE, stop)
 
 
 def allocate_records(n_t: int, n_cases: int, n: int, m: int, p: int, record_states: bool,
