@@ -337,14 +337,15 @@ def run_chunk(build: Callable, extract: Callable, parameters: Mapping[str, np.nd
 
     Without histories and with an extractor that reads only the metrics
     (``extract.reads_metrics_only``, as :func:`maneuver_metrics`), the call is
-    ``simulate(..., metrics_only=True)``: the metrics accumulated in the compiled loop, on a
-    path that does not depend on the chunk size (a case alone is a chunk of one)."""
+    ``simulate(..., metrics_only=True)``: the metrics accumulated in the compiled loop. Either
+    way the propagation does not depend on the chunk size (``batch_independent``): a case
+    alone is a chunk of one, bit for bit."""
     n = len(next(iter(parameters.values())))
     seeds = case_seeds(base_seed, np.arange(start, start + n))
     plant, law, config, x0 = build(parameters, seeds)
     lean = not histories and getattr(extract, "reads_metrics_only", False)
     result = simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=x0,
-                      metrics_only=lean)
+                      metrics_only=lean, batch_independent=True)
     out = {}
     for name, values in extract(result).items():
         values = np.asarray(values, float)

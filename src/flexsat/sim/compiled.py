@@ -440,11 +440,12 @@ class _Args:
 
 
 def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, disturbances,
-        substeps, measured, kept, record_states, law):
+        substeps, measured, kept, record_states, law, always_modal: bool = False):
     """The run of :func:`~flexsat.sim.engine.simulate` on the compiled loop (module
-    docstring); same result, same exceptions."""
+    docstring); same result, same exceptions. ``always_modal``: in modal coordinates whenever
+    the plant has them, whatever the batch size (:func:`modal_form`)."""
     a = _Args(plant, controller, config, nc, x0, sensors, actuators, disturbances, substeps,
-              measured, kept, law)
+              measured, kept, law, always_modal=always_modal)
     n_t, n, m = a.n_t, a.n, a.m
     batched = plant.n_cases != 1
     forced = a.forced
@@ -562,11 +563,10 @@ def run_reduced(plant, controller, config, nc, seeds, x0, theta0, sensors, actua
     A divergence, or the bound met in modal coordinates, returns None: :func:`run` then
     raises as the Python loop does.
     """
-    from flexsat.dynamics.hybrid import HybridPlant
     from flexsat.sim.recording import _references
 
     names = [c.name for c in plant.outputs]
-    if (not isinstance(plant, HybridPlant) or theta0 is None
+    if (not plant.single_axis_maneuver or plant.n_cases != 1 or theta0 is None
             or not all(k in plant.recorded and k in names and _width(plant, k) == 1
                        for k in REDUCED_OUTPUTS)
             or plant.input_slices.get(REDUCED_INPUT, slice(0, 2)).stop

@@ -234,6 +234,7 @@ def simulate(
     record_states: bool = False,
     compiled: bool | None = None,
     metrics_only: bool = False,
+    batch_independent: bool = False,
 ) -> SimResult:
     """Run a batch of closed-loop maneuvers.
 
@@ -275,6 +276,12 @@ def simulate(
         "none"``), a hybrid plant is propagated in its modal coordinates whatever the batch
         size (a case's metrics do not depend on its batch) and no history is allocated;
         elsewhere (or with ``record_states``) the full result.
+    batch_independent : bool
+        Propagate on a path that does not depend on the batch size: the compiled loop uses a
+        plant's modal coordinates whenever it has them (by default only above a number of
+        integrator steps, :func:`flexsat.sim.compiled.modal_form`), so every case's result is
+        bit for bit that of the same case run alone (a sweep's chunks). ``metrics_only``
+        implies it.
 
     Raises
     ------
@@ -335,7 +342,8 @@ def simulate(
         if reason is None:
             return compiled_path.run(plant, controller, config, nc, seeds, x, theta0, sensors,
                                      actuators, disturbances, substeps, measured, kept,
-                                     record_states, law)
+                                     record_states, law,
+                                     always_modal=batch_independent or metrics_only)
         if compiled:
             raise ValueError(f"compiled: this run cannot take the compiled loop: {reason}")
 
