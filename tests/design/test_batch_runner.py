@@ -353,3 +353,16 @@ def test_friction_dispersed_per_case_does_not_depend_on_the_chunking(case, build
     assert substeps >= engine > builder.config.substeps
     # the friction decides: the cases differ
     assert len(np.unique(stores[0]["metric_peak_rate_error_deg_s"])) == n
+
+
+@pytest.mark.parametrize("base", [0, 1, 2026, 2**32, 2**63 - 1, 2**127 + 5])
+def test_case_seeds_are_numpy_s_spawned_seed_sequences(base):
+    """s_i = SeedSequence(b, spawn_key=(i,)).generate_state(1, uint64)[0] >> 1 (the module's
+    definition), computed for all cases at once, equals numpy's per-case objects exactly,
+    including the largest spawn word and a base of four 32-bit words."""
+    idx = np.r_[0:300, 2**31, 2**32 - 1, 123_456_789]
+    expected = [int(np.random.SeedSequence(base, spawn_key=(int(i),))
+                    .generate_state(1, np.uint64)[0]) >> 1 for i in idx]
+    assert case_seeds(base, idx).tolist() == expected
+    assert case_seeds(base, [2**32]).tolist() == [  # beyond one word: numpy's own objects
+        int(np.random.SeedSequence(base, spawn_key=(2**32,)).generate_state(1, np.uint64)[0]) >> 1]
