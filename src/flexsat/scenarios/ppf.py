@@ -33,6 +33,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
+from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import ScenarioError, _item, _locate
 from flexsat.scenarios.fields import _Document, _Section, check_unique_labels, quantity
 
@@ -241,13 +242,7 @@ class PPFResult:
         ds["tip_response"].attrs["units"] = ", ".join(f"{o}: {u}" for o, u in
                                                       zip(OUTPUTS, OUTPUT_UNITS))
         ds["time"].attrs["units"] = "s"
-        for rec in self.metrics_records():
-            for key, value in rec.items():
-                if key == "run":
-                    continue
-                if key not in ds:
-                    ds[key] = ("run", np.full(len(self.labels), np.nan))
-                ds[key].loc[rec["run"]] = np.nan if value is None else float(value)
+        add_run_metrics(ds, self.metrics_records())
         ds["excitation"] = ("run", [r.setup.excitation for r in self.runs])
         ds["goal_rule"] = ("run", [r.goal_label for r in self.runs])
         ds["status"] = ("run", [r.optimization.status for r in self.runs])

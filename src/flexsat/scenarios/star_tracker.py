@@ -30,6 +30,7 @@ from typing import Callable, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import ScenarioError, _item, _locate
 from flexsat.scenarios.fields import (
     _Buildable,
@@ -208,13 +209,7 @@ class StarTrackerResult:
             coords={"run": list(self.labels), "attitude": np.arange(n),
                     "axis": ["x", "y", "z"], "camera": np.arange(n_cam),
                     "star": np.arange(n_star), "pixel_axis": ["column", "row"]})
-        for rec in self.metrics_records():
-            for key, value in rec.items():
-                if key == "run":
-                    continue
-                if key not in ds:
-                    ds[key] = ("run", np.full(len(self.labels), np.nan))
-                ds[key].loc[rec["run"]] = float(value)
+        add_run_metrics(ds, self.metrics_records())
         ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
                         case_source=self.case_source, scenario_yaml=self.scenario.yaml_text,
                         n_pixels=int(self.tracker.cameras[0].n_pixels),

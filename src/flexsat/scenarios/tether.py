@@ -31,6 +31,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from flexsat import limits
+from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import ScenarioError, _item, _locate
 from flexsat.scenarios.fields import _Document, _Section, check_unique_labels, quantity
 
@@ -216,13 +217,7 @@ class TetherResult:
                     "orbits": ("time", tau / (2 * np.pi))},
         )
         ds["time"].attrs["units"] = "s"
-        for rec in self.metrics_records():
-            for key, value in rec.items():
-                if key == "run":
-                    continue
-                if key not in ds:
-                    ds[key] = ("run", np.full(len(self.labels), np.nan))
-                ds[key].loc[rec["run"]] = np.nan if value is None else float(value)
+        add_run_metrics(ds, self.metrics_records())
         ds["law"] = ("run", [spec.law for spec in self.scenario.runs])
         ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
                         case_source=self.case_source, scenario_yaml=self.scenario.yaml_text,
