@@ -55,6 +55,8 @@ PARAMETER_UNITS = {
     "g1": "N*m/rad", "g2": "N*m*s/rad", "g3": "",
     "hub_inertia": "kg*m**2", "EI": "N*m**2", "damping": "", "tip_mass": "kg",
     "tip_inertia": "kg*m**2", "friction_coulomb": "N*m", "friction_viscous": "N*m*s/rad",
+    "saturation": "N*m", "encoder_resolution": "rad", "gyro_noise": "rad/s",
+    "strain_noise": "N*m", "random_torque": "N*m",
 }
 
 #: sampling of a sweep's bounds or a Monte Carlo's distributions
