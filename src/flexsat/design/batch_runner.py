@@ -5,8 +5,8 @@ Att. 3 Figs. 5–7 and the robustness sets of seeds 003 and 004 are sweeps of th
 is three pieces:
 
 * a **case builder** ``build(parameters, seeds) -> (plant, law, config, initial_state)``: for a
-  chunk of cases (``parameters`` maps each column name of the parameter table to its (n,)
-  slice, SI; ``seeds`` the (n,) noise seeds) one batched core call
+  chunk of cases, or a group of it ("Calls" below; ``parameters`` maps each column name of
+  the parameter table to its (n,) slice, SI; ``seeds`` the (n,) noise seeds) one batched call
   ``simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=initial_state)`` —
   the plant a :func:`~flexsat.dynamics.dispersion.stack_plants` batch when plant parameters
   vary, the law with per-case parameter arrays. :class:`HubManeuverBuilder` is the one for the
@@ -17,6 +17,12 @@ is three pieces:
 * a **metrics extractor** ``extract(result) -> {name: (n,) array}`` (default: the engine's
   maneuver metrics, :attr:`~flexsat.sim.recording.SimResult.metrics`);
 * a **parameter table**: n_cases rows, named SI columns.
+
+Calls. A builder may name ``per_run_parameters``: columns one batched call cannot vary
+(:class:`HubManeuverBuilder`: the encoder's resolution). :func:`run_chunk` then splits the
+chunk into groups of cases with equal values in those columns, runs one call per group (each
+case with its own seed) and puts the results back in case order; every other column goes into
+the one call as per-case arrays.
 
 Seeds. Case i's noise seed comes from the base seed and i alone, the i-th child of
 ``numpy.random.SeedSequence(base_seed)`` (its ``spawn_key`` is ``(i,)``, what
@@ -243,9 +249,17 @@ class HubManeuverBuilder:
     smoothed bang-bang reference (Att. 3 Eqs. 12–16, :class:`~flexsat.maneuvers.SmoothBangBang`)
     tracked by Law II (Eq. 17, :class:`~flexsat.control.LyapunovTracker`) on
     :class:`~flexsat.dynamics.hub_appendage.HubAppendage`. Any of :data:`MANEUVER_PARAMETERS`,
-    :data:`GAIN_PARAMETERS`, :data:`PLANT_PARAMETERS` and :data:`FRICTION_PARAMETERS` (the
-    bearing friction of Att. 3 Eq. 23, on top of the config's) may be a column of the parameter
-    table; the others keep the values given here. Of α, u_max and T exactly two fix the reference
+    :data:`GAIN_PARAMETERS`, :data:`PLANT_PARAMETERS`, :data:`FRICTION_PARAMETERS` (the
+    bearing friction of Att. 3 Eq. 23, in place of the config's) and
+    :data:`SENSOR_ACTUATOR_PARAMETERS` (the hardware of Att. 3 §V, in place of the config's:
+    ``saturation`` the actuator's torque limit, ``encoder_resolution`` the encoder's quantum,
+    ``gyro_noise`` and ``strain_noise`` the 1σ noise per sample of the gyro rate (with
+    ``sensors.rate="gyro"`` only) and of the strain-gauge root torque, ``random_torque`` the 1σ
+    random hub torque) may be a column of the parameter table; the others keep the values
+    given here. Each case equals the run alone with its values in the config: all but the
+    encoder's resolution are per case in one batched call (the compiled loop holds a torque
+    limit, a quantum and noise levels per case), and cases of different resolutions run in
+    separate calls (:attr:`per_run_parameters`). Of α, u_max and T exactly two fix the reference
     (Eq. 15); a column of T with neither α nor u_max a column replaces u_max.
 
     The reference is designed with the inertia ``reference_inertia`` × I_model / I_base
@@ -796,4 +810,5 @@ def open_results(store) -> xr.Dataset:
 
 __all__ = ["BatchInterrupted", "BatchProgress", "BatchSummary", "CONNECT_TIMEOUT",
            "FRICTION_PARAMETERS", "GAIN_PARAMETERS", "HubManeuverBuilder", "MANEUVER_PARAMETERS",
-           "PLANT_PARAMETERS", "SENSOR_ACTUATOR_PARAMETERS", "case_seeds", "fingerprint", "maneuver_metrics", "open_results", "run_batch", "run_chunk"]
+           "PLANT_PARAMETERS", "SENSOR_ACTUATOR_PARAMETERS", "case_seeds", "fingerprint",
+           "maneuver_metrics", "open_results", "run_batch", "run_chunk"]
