@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import socket
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ from flexsat.cases import tamu
 from flexsat.design.batch_runner import (BatchInterrupted, HubManeuverBuilder, case_seeds,
                                          maneuver_metrics, open_results, run_batch)
 from flexsat.sim import simulate
+from flexsat.sim.disturbances import RandomTorque
 from flexsat.units import to_si
 
 G1, G2 = to_si("3000 ozf*in/rad", "N*m/rad"), to_si("800 ozf*in*s/rad", "N*m*s/rad")
@@ -239,10 +241,17 @@ def test_unknown_parameter_names_the_name_and_the_known_ones(builder, tmp_path):
     ("alpha", [0.1, 0.3], r"alpha: .*\[0, 1/4\]"),
     ("g3", [0.0, -5.0], r"g3: must be > -4"),
     ("hub_inertia", [0.3, -1.0], r"hub_inertia: must be > 0"),
-    ("friction_coulomb", [0.1, -1.0], r"friction_coulomb.*must be >= 0")])
+    ("friction_coulomb", [0.1, -1.0], r"friction_coulomb.*must be >= 0"),
+    ("saturation", [1.0, 0.0], r"saturation.*must be > 0"),
+    ("encoder_resolution", [1e-4, -1e-4], r"encoder_resolution.*must be >= 0"),
+    ("strain_noise", [0.0, -0.01], r"strain_noise.*must be >= 0"),
+    ("random_torque", [-0.01, 0.0], r"random_torque.*must be >= 0"),
+    # the TAMU rate is the encoder's least-squares derivative: a gyro noise would change nothing
+    ("gyro_noise", [0.0, 0.01], r"gyro_noise.*'ls_filter', not 'gyro'")])
 def test_a_bad_value_is_refused_before_anything_runs(builder, tmp_path, column, values, rule):
     """The builder's rules (Att. 3 Eq. 15's α range, Eq. 11's g3 > −n, a positive inertia, a
-    friction coefficient >= 0) apply to the whole table first: no store is made."""
+    friction coefficient >= 0, a torque limit > 0, a resolution and noise levels >= 0) apply to
+    the whole table first: no store is made."""
     with pytest.raises(ValueError, match=rule):
         run_batch(builder, {column: np.array(values)}, tmp_path / "x.zarr")
     assert not (tmp_path / "x.zarr").exists()
@@ -366,3 +375,41 @@ def test_case_seeds_are_numpy_s_spawned_seed_sequences(base):
     assert case_seeds(base, idx).tolist() == expected
     assert case_seeds(base, [2**32]).tolist() == [  # beyond one word: numpy's own objects
         int(np.random.SeedSequence(base, spawn_key=(2**32,)).generate_state(1, np.uint64)[0]) >> 1]
+
+
+def test_sensor_and_actuator_parameters_give_each_case_its_lone_run(case, builder, tmp_path):
+    """The hardware of Att. 3 §V as sweep parameters: torque limit, encoder resolution, strain
+    gauge noise and random torque. Case i equals, bit for bit, the TAMU Law II run alone with
+    its own hardware in the SimConfig and seed s_i (the limit and the noise levels are per case
+    in one batched call, the resolution splits the chunk into calls: every case is on its own
+    either way). Chunks of 1 and 4 give the same store although the chunk of 4 is split into
+    three calls, one of them over cases 0 and 2."""
+    oz_in = to_si("1 ozf*in", "N*m")
+    res = np.radians(0.01)
+    table = {"saturation": oz_in * np.array([300.0, 350.0, 400.0, 500.0]),
+             "encoder_resolution": np.array([res, 0.0, res, 2 * res]),
+             "strain_noise": np.array([0.0, 0.01, 0.02, 0.0]),
+             "random_torque": oz_in * np.array([0.0, 5.0, 10.0, 2.0])}
+    run_batch(builder, table, tmp_path / "four.zarr", base_seed=BASE_SEED, chunk_size=4,
+              histories=HISTORIES)
+    run_batch(builder, table, tmp_path / "one.zarr", base_seed=BASE_SEED, chunk_size=1,
+              histories=HISTORIES)
+    stored = _values(tmp_path / "four.zarr")
+    _same(stored, _values(tmp_path / "one.zarr"))
+    base = case.sim_config(duration=2.0)
+    seeds = case_seeds(BASE_SEED, np.arange(4))
+    for i in range(4):
+        config = replace(
+            base, actuator=replace(base.actuator, saturation=table["saturation"][i]),
+            sensors=replace(base.sensors, encoder_resolution=table["encoder_resolution"][i],
+                            strain_noise=table["strain_noise"][i]),
+            random_torque=RandomTorque(table["random_torque"][i]))
+        alone = simulate(case.model(), case.law_ii(G1, G2), config, n_cases=1,
+                         seeds=seeds[i:i + 1], batch_independent=True)
+        for name, value in maneuver_metrics(alone).items():
+            assert np.array_equal(stored["metric_" + name][i], value[0], equal_nan=True), name
+        for name in HISTORIES:
+            assert np.array_equal(stored["history_" + name][i], alone.dataset[name].values[0])
+    # the hardware decides: the cases differ, and the 300 oz-in limit is reached
+    assert len(np.unique(stored["history_theta"], axis=0)) == 4
+    assert np.abs(stored["history_torque"][0]).max() == table["saturation"][0]

@@ -87,6 +87,27 @@ def test_a_sweep_runs_every_grid_point_and_maps_the_trade_surfaces(tmp_path):
             np.testing.assert_array_equal(again.dataset()[name].values, ds[name].values)
 
 
+def test_a_sweep_varies_the_actuator_and_sensors_given_in_units(tmp_path):
+    """Sensor/actuator parameters are scenario parameters with units: a sweep over the torque
+    limit (oz-in) and the encoder resolution (deg) stores them in SI, and a lower limit is a
+    lower peak torque (the limit is reached by the 400 oz-in reference)."""
+    text = SWEEP.replace(
+        """  alpha: {values: [0.0, 0.25]}
+  u_max: {values: ["300 ozf*in", "400 ozf*in", "500 ozf*in"]}""",
+        """  saturation: {low: "300 ozf*in", high: "500 ozf*in", n: 3}
+  encoder_resolution: {values: ["0 deg", "0.01 deg"]}""")
+    result = run_batch_scenario(load_scenario(_write(tmp_path, "hardware.yaml", text)))
+    ds = result.dataset()
+    assert ds.sizes["case"] == 6 and bool(ds["done"].all())
+    oz_in = 0.0070615518142  # N m per ozf*in
+    np.testing.assert_allclose(ds["param_saturation"].values / oz_in,
+                               [300, 300, 400, 400, 500, 500], rtol=1e-10)
+    np.testing.assert_allclose(np.degrees(ds["param_encoder_resolution"].values),
+                               [0, 0.01] * 3, rtol=1e-10)
+    peak = ds["metric_peak_torque_Nm"].values
+    assert np.all(np.diff(peak[::2]) > 0) and peak[0] <= ds["param_saturation"].values[0]
+
+
 def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path):
     result = run_batch_scenario(load_scenario(_write(tmp_path, "mc.yaml", MONTECARLO)))
     reqs = {r["metric"]: r for r in result.summary["requirements"]}

@@ -64,6 +64,7 @@ _EXPORTS = {
     "HubManeuverBuilder": "batch_runner",
     "MANEUVER_PARAMETERS": "batch_runner",
     "PLANT_PARAMETERS": "batch_runner",
+    "SENSOR_ACTUATOR_PARAMETERS": "batch_runner",
     "case_seeds": "batch_runner",
     "fingerprint": "batch_runner",
     "maneuver_metrics": "batch_runner",

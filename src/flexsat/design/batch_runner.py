@@ -5,8 +5,8 @@ Att. 3 Figs. 5–7 and the robustness sets of seeds 003 and 004 are sweeps of th
 is three pieces:
 
 * a **case builder** ``build(parameters, seeds) -> (plant, law, config, initial_state)``: for a
-  chunk of cases (``parameters`` maps each column name of the parameter table to its (n,)
-  slice, SI; ``seeds`` the (n,) noise seeds) one batched core call
+  chunk of cases, or a group of it ("Calls" below; ``parameters`` maps each column name of
+  the parameter table to its (n,) slice, SI; ``seeds`` the (n,) noise seeds) one batched call
   ``simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=initial_state)`` —
   the plant a :func:`~flexsat.dynamics.dispersion.stack_plants` batch when plant parameters
   vary, the law with per-case parameter arrays. :class:`HubManeuverBuilder` is the one for the
@@ -17,6 +17,12 @@ is three pieces:
 * a **metrics extractor** ``extract(result) -> {name: (n,) array}`` (default: the engine's
   maneuver metrics, :attr:`~flexsat.sim.recording.SimResult.metrics`);
 * a **parameter table**: n_cases rows, named SI columns.
+
+Calls. A builder may name ``per_run_parameters``: columns one batched call cannot vary
+(:class:`HubManeuverBuilder`: the encoder's resolution). :func:`run_chunk` then splits the
+chunk into groups of cases with equal values in those columns, runs one call per group (each
+case with its own seed) and puts the results back in case order; every other column goes into
+the one call as per-case arrays.
 
 Seeds. Case i's noise seed comes from the base seed and i alone, the i-th child of
 ``numpy.random.SeedSequence(base_seed)`` (its ``spawn_key`` is ``(i,)``, what
@@ -81,7 +87,9 @@ from flexsat.maneuvers.torque_shapes import SmoothBangBang
 from flexsat import limits
 from flexsat.sim import SimConfig, simulate
 from flexsat.sim.recording import SimResult
-from flexsat.validation import require_count, require_finite, require_nonneg
+from flexsat.sim.channels import ChannelSensor
+from flexsat.sim.disturbances import RandomTorque
+from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
 
 #: seconds to wait for an existing scheduler to answer before refusing its address
 CONNECT_TIMEOUT = 5.0
@@ -216,6 +224,21 @@ PLANT_PARAMETERS = ("hub_inertia", "EI", "damping", "tip_mass", "tip_inertia")
 #: the bearing friction of the run (Att. 3 Eq. 23): Coulomb c1 (N m) and viscous c2
 #: (N m s/rad), per case
 FRICTION_PARAMETERS = ("friction_coulomb", "friction_viscous")
+#: the sensors and the actuator of the run (Att. 3 §V's hardware): the torque limit (N m), the
+#: encoder's resolution (rad), the gyro's and the strain gauge's 1σ noise per sample (rad/s,
+#: N m) and the 1σ random hub torque (N m). All but the encoder's resolution are per case in
+#: the batched call; cases differing in the resolution run in separate calls
+#: (:attr:`HubManeuverBuilder.per_run_parameters`, :func:`run_chunk`)
+SENSOR_ACTUATOR_PARAMETERS = ("saturation", "encoder_resolution", "gyro_noise", "strain_noise",
+                              "random_torque")
+#: the SI unit and the rule of each sensor/actuator parameter
+_SENSOR_ACTUATOR_RULES = {"saturation": ("N*m", require_positive),
+                          "encoder_resolution": ("rad", require_nonneg),
+                          "gyro_noise": ("rad/s", require_nonneg),
+                          "strain_noise": ("N*m", require_nonneg),
+                          "random_torque": ("N*m", require_nonneg)}
+#: the measured channel of each sensor noise parameter
+_NOISE_CHANNELS = {"gyro_noise": "theta_dot", "strain_noise": "root_torque"}
 
 
 @dataclass(frozen=True)
@@ -226,9 +249,17 @@ class HubManeuverBuilder:
     smoothed bang-bang reference (Att. 3 Eqs. 12–16, :class:`~flexsat.maneuvers.SmoothBangBang`)
     tracked by Law II (Eq. 17, :class:`~flexsat.control.LyapunovTracker`) on
     :class:`~flexsat.dynamics.hub_appendage.HubAppendage`. Any of :data:`MANEUVER_PARAMETERS`,
-    :data:`GAIN_PARAMETERS`, :data:`PLANT_PARAMETERS` and :data:`FRICTION_PARAMETERS` (the
-    bearing friction of Att. 3 Eq. 23, on top of the config's) may be a column of the parameter
-    table; the others keep the values given here. Of α, u_max and T exactly two fix the reference
+    :data:`GAIN_PARAMETERS`, :data:`PLANT_PARAMETERS`, :data:`FRICTION_PARAMETERS` (the
+    bearing friction of Att. 3 Eq. 23, in place of the config's) and
+    :data:`SENSOR_ACTUATOR_PARAMETERS` (the hardware of Att. 3 §V, in place of the config's:
+    ``saturation`` the actuator's torque limit, ``encoder_resolution`` the encoder's quantum,
+    ``gyro_noise`` and ``strain_noise`` the 1σ noise per sample of the gyro rate (with
+    ``sensors.rate="gyro"`` only) and of the strain-gauge root torque, ``random_torque`` the 1σ
+    random hub torque) may be a column of the parameter table; the others keep the values
+    given here. Each case equals the run alone with its values in the config: all but the
+    encoder's resolution are per case in one batched call (the compiled loop holds a torque
+    limit, a quantum and noise levels per case), and cases of different resolutions run in
+    separate calls (:attr:`per_run_parameters`). Of α, u_max and T exactly two fix the reference
     (Eq. 15); a column of T with neither α nor u_max a column replaces u_max.
 
     The reference is designed with the inertia ``reference_inertia`` × I_model / I_base
@@ -265,8 +296,12 @@ class HubManeuverBuilder:
     alpha: float = 0.2
     stiffening: bool = False
     parameter_names: tuple[str, ...] = field(
-        default=MANEUVER_PARAMETERS + GAIN_PARAMETERS + PLANT_PARAMETERS + FRICTION_PARAMETERS,
-        init=False)
+        default=MANEUVER_PARAMETERS + GAIN_PARAMETERS + PLANT_PARAMETERS + FRICTION_PARAMETERS
+        + SENSOR_ACTUATOR_PARAMETERS, init=False)
+    #: columns one batched call takes one value of (:func:`run_chunk` splits a chunk by them):
+    #: the encoder's resolution, a scalar of the :class:`~flexsat.sim.sensors.Sensors` preset,
+    #: whose quantiser q·round(θ/q) in the engine's Python loop has no per-case "q = 0: exact"
+    per_run_parameters: tuple[str, ...] = field(default=("encoder_resolution",), init=False)
 
     def describe(self) -> str:
         """The builder's settings as text (part of the store's fingerprint)."""
@@ -313,6 +348,50 @@ class HubManeuverBuilder:
                   for k in FRICTION_PARAMETERS if k in table}
         return replace(f, **varied) if varied else f
 
+    def _sensor_actuator(self, table: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The table's sensor/actuator columns in SI, their rules applied (ValueError naming
+        the parameter)."""
+        out = {}
+        for k in SENSOR_ACTUATOR_PARAMETERS:
+            if k in table:
+                unit, rule = _SENSOR_ACTUATOR_RULES[k]
+                out[k] = rule(table[k], f"parameters[{k!r}]", unit)
+        if "gyro_noise" in out and self.config.sensors.rate != "gyro":
+            raise ValueError(f"parameters['gyro_noise']: the run's rate measurement is "
+                             f"{self.config.sensors.rate!r}, not 'gyro'; a gyro noise would "
+                             f"change nothing")
+        return out
+
+    def _config(self, table: Mapping[str, np.ndarray]) -> SimConfig:
+        """The run of the chunk ``table``: the config with the table's friction and sensor/
+        actuator columns. The torque limit and the random torque go in per case (their preset
+        classes take arrays); the gyro and strain-gauge noise as per-case
+        :class:`~flexsat.sim.channels.ChannelSensor` s on ``theta_dot`` and ``root_torque``
+        (what the :class:`~flexsat.sim.sensors.Sensors` preset makes of a scalar noise, or the
+        config's own sensor on that channel, with the noise replaced); the encoder's
+        resolution, one value per call (:attr:`per_run_parameters`), in the preset."""
+        config = self.config
+        if any(k in table for k in FRICTION_PARAMETERS):
+            config = replace(config, friction=self._friction(table))
+        cols = self._sensor_actuator(table)
+        if "saturation" in cols:
+            config = replace(config, actuator=replace(config.actuator,
+                                                      saturation=cols["saturation"]))
+        if "random_torque" in cols:
+            config = replace(config, random_torque=RandomTorque(cols["random_torque"]))
+        if "encoder_resolution" in cols:
+            values = np.unique(cols["encoder_resolution"])
+            if len(values) != 1:
+                raise ValueError("parameters['encoder_resolution']: one value per call; run "
+                                 "the cases through run_chunk, which splits a chunk by it")
+            config = replace(config, sensors=replace(config.sensors,
+                                                     encoder_resolution=float(values[0])))
+        sensors = {ch: replace(config.channel_sensors.get(ch, ChannelSensor()), noise=cols[k])
+                   for k, ch in _NOISE_CHANNELS.items() if k in cols}
+        if sensors:
+            config = replace(config, channel_sensors={**config.channel_sensors, **sensors})
+        return config
+
     def for_table(self, parameters: Mapping[str, np.ndarray]) -> "HubManeuverBuilder":
         r"""The builder of the whole parameter table, its integrator substeps fixed once
         before the table is cut into chunks: the engine raises them for the stiffest friction
@@ -348,8 +427,10 @@ class HubManeuverBuilder:
 
     def check(self, parameters: Mapping[str, np.ndarray]) -> None:
         """Apply the rules of the plant parameters, the reference (α in [0, 1/4], u_max > 0,
-        T between the bang-bang and the α = 1/4 time), the gains (g1, g2 ≥ 0, g3 > −n) and the
-        friction (c1, c2 ≥ 0) to the whole table at once, before any chunk runs.
+        T between the bang-bang and the α = 1/4 time), the gains (g1, g2 ≥ 0, g3 > −n), the
+        friction (c1, c2 ≥ 0) and the sensors/actuator (torque limit > 0; resolution, noise and
+        random torque ≥ 0; a gyro noise only with a gyro rate) to the whole table at once,
+        before any chunk runs.
 
         Raises
         ------
@@ -358,14 +439,13 @@ class HubManeuverBuilder:
         """
         self._law(parameters, len(next(iter(parameters.values()))))
         self._friction(parameters)
+        self._sensor_actuator(parameters)
 
     def __call__(self, parameters: Mapping[str, np.ndarray], seeds: np.ndarray):
         """(plant, law, config, initial_state) of the chunk ``parameters`` (module docstring)."""
         n = len(seeds)
-        config = self.config
-        if any(k in parameters for k in FRICTION_PARAMETERS):
-            config = replace(config, friction=self._friction(parameters))
-        return self._plant(parameters, n), self._law(parameters, n), config, None
+        return (self._plant(parameters, n), self._law(parameters, n), self._config(parameters),
+                None)
 
 
 @lru_cache(maxsize=4)
@@ -399,9 +479,39 @@ def run_chunk(build: Callable, extract: Callable, parameters: Mapping[str, np.nd
     (``extract.reads_metrics_only``, as :func:`maneuver_metrics`), the call is
     ``simulate(..., metrics_only=True)``: the metrics accumulated in the compiled loop. Either
     way the propagation does not depend on the chunk size (``batch_independent``): a case
-    alone is a chunk of one, bit for bit."""
+    alone is a chunk of one, bit for bit.
+
+    A builder whose ``per_run_parameters`` name columns of the chunk (values one call cannot
+    vary) gets one call per group of cases with equal values in those columns, each case with
+    its own seed; the results are put back in case order. The engine treats every case on its
+    own, so a case's numbers do not depend on the group it ran in either."""
     n = len(next(iter(parameters.values())))
     seeds = case_seeds(base_seed, np.arange(start, start + n))
+    keys = [k for k in getattr(build, "per_run_parameters", ()) if k in parameters]
+    if not keys:
+        return _run_cases(build, extract, parameters, seeds, histories)
+    _, group = np.unique(np.stack([parameters[k] for k in keys], axis=1), axis=0,
+                         return_inverse=True)
+    group = group.reshape(-1)
+    out: dict[str, np.ndarray] = {}
+    for g in range(group.max() + 1):
+        idx = np.flatnonzero(group == g)
+        part = _run_cases(build, extract, {k: v[idx] for k, v in parameters.items()},
+                          seeds[idx], histories)
+        for name, values in part.items():
+            if name == "time":
+                out[name] = values
+                continue
+            if name not in out:
+                out[name] = np.empty((n,) + values.shape[1:], dtype=values.dtype)
+            out[name][idx] = values
+    return out
+
+
+def _run_cases(build: Callable, extract: Callable, parameters: Mapping[str, np.ndarray],
+               seeds: np.ndarray, histories: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """One batched call of the cases ``parameters`` with their ``seeds`` (:func:`run_chunk`)."""
+    n = len(seeds)
     plant, law, config, x0 = build(parameters, seeds)
     lean = not histories and getattr(extract, "reads_metrics_only", False)
     result = simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=x0,
@@ -700,4 +810,5 @@ def open_results(store) -> xr.Dataset:
 
 __all__ = ["BatchInterrupted", "BatchProgress", "BatchSummary", "CONNECT_TIMEOUT",
            "FRICTION_PARAMETERS", "GAIN_PARAMETERS", "HubManeuverBuilder", "MANEUVER_PARAMETERS",
-           "PLANT_PARAMETERS", "case_seeds", "fingerprint", "maneuver_metrics", "open_results", "run_batch", "run_chunk"]
+           "PLANT_PARAMETERS", "SENSOR_ACTUATOR_PARAMETERS", "case_seeds", "fingerprint",
+           "maneuver_metrics", "open_results", "run_batch", "run_chunk"]

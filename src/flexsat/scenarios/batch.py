@@ -24,7 +24,13 @@ the first axis slowest) or bounds (``{low:, high:}``) with ``sampling: latin_hyp
 2; n (d + 2) cases run) for Sobol' first-order and total indices of every metric; ``kind: montecarlo`` takes distributions (normal, uniform, lognormal,
 truncated_normal; :mod:`flexsat.design.parameter_space`) sampled per case from the seed. The
 parameters are those of :class:`~flexsat.design.batch_runner.HubManeuverBuilder`
-(:data:`PARAMETER_UNITS`); the others keep the maneuver scenario's values.
+(:data:`PARAMETER_UNITS`): the maneuver (``alpha``, ``u_max``, ``duration``), the Law II gains
+(``g1``, ``g2``, ``g3``), the plant (``hub_inertia``, ``EI``, ``damping``, ``tip_mass``,
+``tip_inertia``), the bearing friction (``friction_coulomb``, ``friction_viscous``) and the
+hardware (``saturation``, the torque limit; ``encoder_resolution``; ``gyro_noise`` and
+``strain_noise``, 1σ per sample; ``random_torque``, 1σ), e.g.
+``saturation: {low: "300 ozf*in", high: "500 ozf*in", n: 3}``; the others keep the maneuver
+scenario's values.
 
 Execution (:func:`~flexsat.design.batch_runner.run_batch`): chunks of ``chunk_size`` cases, each
 one batched core call, scheduled on dask in-process, on ``workers`` local processes or on the
@@ -55,6 +61,8 @@ PARAMETER_UNITS = {
     "g1": "N*m/rad", "g2": "N*m*s/rad", "g3": "",
     "hub_inertia": "kg*m**2", "EI": "N*m**2", "damping": "", "tip_mass": "kg",
     "tip_inertia": "kg*m**2", "friction_coulomb": "N*m", "friction_viscous": "N*m*s/rad",
+    "saturation": "N*m", "encoder_resolution": "rad", "gyro_noise": "rad/s",
+    "strain_noise": "N*m", "random_torque": "N*m",
 }
 
 #: sampling of a sweep's bounds or a Monte Carlo's distributions
