@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import format_metric, report_page
+from flexsat.report.maneuver import format_metric, html_table, report_page
 from flexsat.report.publish import write_atomically, write_metrics_and_results
 
 _FT_LB_S = 1.3558179483314006  # N m s per ft-lb-s: the station's plots are in the paper's units
@@ -89,19 +89,11 @@ def _station_figure(ds, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _table(headings, rows) -> str:
-    esc = html.escape
-    head = "".join(f"<th>{esc(h)}</th>" for h in headings)
-    body = "".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in row) + "</tr>"
-                   for row in rows)
-    return f"<table><tr>{head}</tr>{body}</table>"
-
-
 def _metrics_html(records) -> str:
     keys = [k for k in records[0] if k != "run"]
     rows = [[r["run"]] + [format_metric(r.get(k)) if not isinstance(r.get(k), bool)
                           else ("yes" if r[k] else "no") for k in keys] for r in records]
-    return _table(["run"] + keys, rows)
+    return html_table(["run"] + keys, rows)
 
 
 def _write_cmg(result, folder: Path) -> None:
@@ -115,10 +107,10 @@ def _write_cmg(result, folder: Path) -> None:
     images = "".join(f'<figure><img src="{f}" alt="{f}"></figure>' for f in figures)
     notes = "".join(f"<li>{html.escape(n)}</li>" for n in result.notes)
     body = f"""<h2>Runs</h2>
-{_table(["run", "outcome", "σ(0) (deg)"], outcomes)}
+{html_table(["run", "outcome", "σ(0) (deg)"], outcomes)}
 {_metrics_html(records)}
 <h2>Validation V1–V8 (seed000_part2.md §11), computed live</h2>
-{_table(["id", "quantity", "published", "computed", "unit"], v_rows)}
+{html_table(["id", "quantity", "published", "computed", "unit"], v_rows)}
 <ul>{notes}</ul>
 <h2>Figures</h2>
 {images}

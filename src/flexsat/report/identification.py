@@ -28,7 +28,7 @@ from matplotlib.figure import Figure
 from flexsat.scenarios.identification import IdentificationResult, as_dict
 from flexsat.netcdf import write_netcdf
 from flexsat.report.publish import write_atomically
-from flexsat.report.maneuver import report_page
+from flexsat.report.maneuver import html_table, report_page
 from flexsat.text import format_optional
 
 __all__ = ["FIGURES", "dataset", "write_identification_report"]
@@ -134,14 +134,6 @@ def _frequency_figure(c, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _table(head, rows) -> str:
-    esc = html.escape
-    th = "".join(f"<th>{esc(h)}</th>" for h in head)
-    body = "".join("<tr>" + "".join(f"<td>{esc(str(v))}</td>" for v in row) + "</tr>"
-                   for row in rows)
-    return f"<table><tr>{th}</tr>{body}</table>"
-
-
 def _pct(a, b) -> str:
     return "" if b is None else f"{100 * (a / b - 1):+.3f} %"
 
@@ -188,7 +180,7 @@ def _html(result: IdentificationResult) -> str:
         gain_html = ("<h2>Reaction-wheel torque constants (Att. 6 Eq. 7)</h2>\n<p>Delivered over "
                      "commanded torque: the true value (in a simulation) and the one identified "
                      "with the structure from the FRFs.</p>\n"
-                     + _table(("wheel", "true", "identified", "error"), rows))
+                     + html_table(("wheel", "true", "identified", "error"), rows))
     u = c.update
     upd_text = (("Att. 6 differential correction, frequencies, damping ratios and "
                  f"{u['frf_points']} FRF points" if u["method"] == "differential_correction"
@@ -202,16 +194,16 @@ def _html(result: IdentificationResult) -> str:
 first-order standard deviation. Video: ERA on triangulated target motion. OKID: reaction-wheel
 random-torque test. A priori and updated: the model before and after the update (error against
 the truth).</p>
-{_table(("mode", "truth", "ERA", "video", "OKID", "a priori", "updated"), freq_rows)}
+{html_table(("mode", "truth", "ERA", "video", "OKID", "a priori", "updated"), freq_rows)}
 <h2>Damping ratios</h2>
 <p>A priori: Att. 6 Eq. 15, C = 2 ζ₁ω₁ M. Updated: Rayleigh damping C = r₁ M + r₂ K fitted to
 the measured damping; r = {esc(np.array2string(c.damping_scalings, precision=5))}.</p>
-{_table(("mode", "truth", "ERA", "a priori", "updated"), damp_rows)}
+{html_table(("mode", "truth", "ERA", "a priori", "updated"), damp_rows)}
 <h2>Substructure stiffness scalings</h2>
 <p>Update: {esc(upd_text)}. Factors on the case's nominal stiffness (the truth, in a
 simulation): the a-priori one, the identified scaling p of the a-priori block (± 1σ), and the
 updated one (a priori × p; in a simulation, 1 means recovered).</p>
-{_table(("substructure", "a priori", "p", "updated"), sc_rows)}
+{html_table(("substructure", "a priori", "p", "updated"), sc_rows)}
 {gain_html}
 {_camera_html(c)}
 {images}

@@ -57,6 +57,16 @@ def format_metric(value: float | None) -> str:
     return "n/a" if value is None else f"{value:.4g}"
 
 
+def html_table(headings, rows) -> str:
+    """An HTML table: a heading row, then one row per item of ``rows`` (cells shown with
+    ``str``, every text escaped)."""
+    esc = html.escape
+    head = "".join(f"<th>{esc(str(h))}</th>" for h in headings)
+    body = "".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in row) + "</tr>"
+                   for row in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
 def metric_rows(records: list[dict]) -> list[tuple[str, list[str]]]:
     """Metrics table, one row per metric and one formatted column per run of ``records``."""
     names = [key for key in records[0] if key != "run"]
@@ -157,4 +167,4 @@ def write_report(result: ScenarioResult, out_dir) -> Path:
     return write_atomically(out_dir, lambda folder: _write_all(result, folder))
 
 
-__all__ = ["PLOTS", "STYLE", "format_metric", "metric_rows", "write_report"]
+__all__ = ["PLOTS", "STYLE", "format_metric", "html_table", "metric_rows", "write_report"]
