@@ -56,3 +56,13 @@ def test_complex_is_refused_naming_the_field(value):
 def test_complex_with_zero_imaginary_part_is_its_real_part():
     np.testing.assert_array_equal(require_finite(np.array([1.0 + 0j, 2.0]), "x"), [1.0, 2.0])
     np.testing.assert_array_equal(require_numeric([3.0 + 0j], "x"), [3.0])
+
+
+def test_a_positive_scalar_is_one_finite_number_above_zero_in_si():
+    from flexsat.validation import require_positive_scalar
+
+    assert require_positive_scalar("2 km", "length", "m") == 2000.0
+    for bad, rule in ((0, "must be > 0"), (float("nan"), "must be finite"),
+                      ([1.0, 2.0], "must be one number")):
+        with pytest.raises(ValueError, match=f"^length: {rule}"):
+            require_positive_scalar(bad, "length", "m")

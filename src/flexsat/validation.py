@@ -68,6 +68,14 @@ def require_positive(value, field: str, unit: str | None = None) -> np.ndarray:
     return arr
 
 
+def require_positive_scalar(value, field: str, unit: str | None = None) -> float:
+    """``value`` as one finite number > 0, in SI when ``unit`` is given (see the module)."""
+    arr = require_positive(value, field, unit)
+    if arr.ndim != 0:
+        raise ValueError(f"{field}: must be one number, got shape {arr.shape}")
+    return float(arr)
+
+
 def require_nonneg(value, field: str, unit: str | None = None) -> np.ndarray:
     arr = require_finite(value, field, unit)
     if np.any(arr < 0):

@@ -42,19 +42,13 @@ from flexsat.dynamics.space_station import (
     roll_yaw_model,
 )
 from flexsat.units import to_si_array
+from flexsat.validation import require_positive_scalar
 
 __all__ = ["BrysonMaxima", "StationDesign", "StationRun", "design", "simulate_attitude",
            "cmg_loop", "DISTURBANCES"]
 
 #: disturbance models: the design model Eq. (11), or it plus the stated AERO1 substitute
 DISTURBANCES = ("design", "aero_substitute")
-
-
-def _positive(value, name, unit):
-    v = to_si_array(value, unit, name)
-    if v.ndim != 0 or not np.isfinite(v) or v <= 0:
-        raise ValueError(f"{name}: must be one finite value > 0 {unit}, got {value!r}")
-    return float(v)
 
 
 @dataclass(frozen=True)
@@ -69,8 +63,8 @@ class BrysonMaxima:
     def __post_init__(self):
         for name, unit in (("attitude", "rad"), ("rate", "rad/s"), ("momentum", "N*m*s"),
                            ("momentum_integral", "N*m*s**2")):
-            object.__setattr__(self, name, _positive(getattr(self, name), f"maxima.{name}",
-                                                     unit))
+            object.__setattr__(self, name, require_positive_scalar(getattr(self, name),
+                                                                   f"maxima.{name}", unit))
 
     def scales(self, names, n):
         """D = the maxima of the states ``names`` of :mod:`flexsat.dynamics.space_station`."""
@@ -162,7 +156,7 @@ def simulate_attitude(station: StationDesign, duration, disturbance: str = "desi
     """The closed attitude/momentum loop (module docstring, step 2) over ``duration`` s."""
     if disturbance not in DISTURBANCES:
         raise ValueError(f"disturbance: must be one of {DISTURBANCES}, got {disturbance!r}")
-    tf = _positive(duration, "duration", "s")
+    tf = require_positive_scalar(duration, "duration", "s")
     th0 = to_si_array(initial_attitude, "rad", "initial_attitude")
     if th0.ndim != 0 or not np.isfinite(th0):
         raise ValueError(f"initial_attitude: one finite angle, got {initial_attitude!r}")

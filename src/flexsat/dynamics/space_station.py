@@ -44,20 +44,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexsat.units import to_si_array
-from flexsat.validation import require_finite
+from flexsat.validation import require_finite, require_positive_scalar
 
 __all__ = ["StationData", "PAPER_STATION", "pitch_model", "roll_yaw_model",
            "design_disturbance", "aero_substitute", "FT_LB"]
 
 #: one foot-pound-force in N m (the paper's torque and momentum unit)
 FT_LB = float(to_si_array("1 lbf*ft", "N*m"))
-
-
-def _positive(value, field, unit):
-    v = to_si_array(value, unit, field)
-    if v.ndim != 0 or not np.isfinite(v) or v <= 0:
-        raise ValueError(f"{field}: must be one finite value > 0 {unit}, got {value!r}")
-    return float(v)
 
 
 @dataclass(frozen=True)
@@ -82,12 +75,13 @@ class StationData:
         if len(self.inertia) != 3:
             raise ValueError(f"inertia: three principal moments (roll, pitch, yaw), got "
                              f"{self.inertia!r}")
-        moments = tuple(_positive(v, f"inertia[{i}]", "kg*m**2")
+        moments = tuple(require_positive_scalar(v, f"inertia[{i}]", "kg*m**2")
                         for i, v in enumerate(self.inertia))
         object.__setattr__(self, "inertia", moments)
-        object.__setattr__(self, "orbit_rate", _positive(self.orbit_rate, "orbit_rate", "rad/s"))
+        object.__setattr__(self, "orbit_rate",
+                           require_positive_scalar(self.orbit_rate, "orbit_rate", "rad/s"))
         object.__setattr__(self, "rotor_momentum",
-                           _positive(self.rotor_momentum, "rotor_momentum", "N*m*s"))
+                           require_positive_scalar(self.rotor_momentum, "rotor_momentum", "N*m*s"))
 
     @property
     def period(self) -> float:

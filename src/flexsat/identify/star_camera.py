@@ -31,16 +31,9 @@ import numpy as np
 from flexsat.identify.photogrammetry import Camera, euler_angles, project, rotation_matrix
 from flexsat.identify.star_catalog import StarCatalog
 from flexsat.units import to_si_array
-from flexsat.validation import require_count
+from flexsat.validation import require_count, require_positive_scalar
 
 __all__ = ["StarCamera", "StarFrame"]
-
-
-def _positive(value, unit, name) -> float:
-    v = to_si_array(value, unit, name)
-    if v.ndim != 0 or not np.isfinite(v) or v <= 0:
-        raise ValueError(f"{name}: must be one finite number > 0, got {value!r}")
-    return float(v)
 
 
 @dataclass(frozen=True)
@@ -103,7 +96,7 @@ class StarCamera:
     _matrix: np.ndarray = field(init=False, repr=False, compare=False, default=None)
 
     def __post_init__(self):
-        fov = _positive(self.field_of_view, "rad", "field_of_view")
+        fov = require_positive_scalar(self.field_of_view, "field_of_view", "rad")
         if fov >= np.radians(120):
             raise ValueError(f"field_of_view: a pinhole star camera needs a full angle below "
                              f"120°, got {np.degrees(fov):.4g}°")
@@ -112,7 +105,8 @@ class StarCamera:
         if n < 2:
             raise ValueError(f"n_pixels: must be >= 2, got {n}")
         object.__setattr__(self, "n_pixels", n)
-        object.__setattr__(self, "pixel_pitch", _positive(self.pixel_pitch, "m", "pixel_pitch"))
+        object.__setattr__(self, "pixel_pitch",
+                           require_positive_scalar(self.pixel_pitch, "pixel_pitch", "m"))
         noise = to_si_array(self.centroid_noise, "", "centroid_noise")
         if noise.ndim != 0 or not np.isfinite(noise) or noise < 0:
             raise ValueError(f"centroid_noise: must be one finite number >= 0 (pixels), got "
