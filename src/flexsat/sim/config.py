@@ -159,8 +159,8 @@ def recorded_values(plant) -> int:
     return n + 1 + hasattr(plant, "vibration_energy")
 
 
-def check_resources(plant, config: SimConfig, n_cases: int = 1, record_states: bool = False
-                    ) -> int:
+def check_resources(plant, config: SimConfig, n_cases: int = 1, record_states: bool = False,
+                    disturbances: dict | None = None) -> int:
     """Check that a run fits the limits of :mod:`flexsat.limits` before it starts.
 
     Parameters
@@ -171,6 +171,8 @@ def check_resources(plant, config: SimConfig, n_cases: int = 1, record_states: b
         Batch size.
     record_states : bool
         Whether the full state history is kept.
+    disturbances : dict, optional
+        The channel disturbances already bound (:func:`resolve_channels`); bound here if not.
 
     Returns
     -------
@@ -185,7 +187,8 @@ def check_resources(plant, config: SimConfig, n_cases: int = 1, record_states: b
     """
     limits.check_count(n_cases, limits.MAX_CASES, "n_cases", "cases in one batch",
                        "split the batch")
-    _, _, disturbances = resolve_channels(plant, config)
+    if disturbances is None:
+        _, _, disturbances = resolve_channels(plant, config)
     substeps = run_substeps(plant, config, disturbances)
     n = config.n_steps + 1
     limits.check_count(n * substeps, limits.MAX_INTEGRATOR_STEPS, "duration",

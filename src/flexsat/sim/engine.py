@@ -304,8 +304,8 @@ def simulate(
         raise ValueError(f"n_cases: the dispersed plant carries {plant_cases} cases, the batch "
                          f"has {nc}")
     dt, n = config.dt, config.n_steps
-    substeps = check_resources(plant, config, nc, record_states)
     sensors, actuators, disturbances = resolve_channels(plant, config)
+    substeps = check_resources(plant, config, nc, record_states, disturbances)
     seeds = config.seed + np.arange(nc) if seeds is None else np.asarray(seeds, int).reshape(nc)
     x, theta0 = _initial_state(plant, nc, theta0, initial_state, controller.reference)
 
