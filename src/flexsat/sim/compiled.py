@@ -352,7 +352,8 @@ class _Args:
         self.dist_std, self.dist_slot = _c(dstd), dslot
         self.width = sum(s.stop - s.start for s in columns.values())
         self.noisy = bool((slot >= 0).any() or (dslot >= 0).any())
-        self.x0 = _c(x0 if Tinv is None else x0 @ Tinv.T)
+        # case by case: a case's modal start must not depend on its batch (see Co below)
+        self.x0 = _c(x0 if Tinv is None else np.array([x @ Tinv.T for x in x0]))
         if Tinv is not None:
             self.imp_dx = _c(self.imp_dx @ Tinv.T)
         self.p, self.m, self.n = p, m, n
@@ -386,7 +387,12 @@ class _Args:
             lead = (C.shape[0],) if C.ndim == 3 else (1,)
             C, D = C.reshape(lead + C.shape[-2:]), D.reshape(lead + D.shape[-2:])
             Dof = (Df[..., self.force_col] if forced else np.zeros(D.shape[:-1]))
-            self.Co = _c(C if self.T is None else C @ self.T)
+            if self.T is not None:
+                # row by row: a BLAS product's summation order may depend on the matrix's
+                # shape (OpenBLAS Haswell kernels), and a row must have the same bits whichever
+                # rows are stacked with it, so that run_reduced's rows equal run's
+                C = np.array([[row @ self.T for row in case_rows] for case_rows in C])
+            self.Co = _c(C)
             self.Do, self.Dof = _c(D), _c(np.broadcast_to(Dof, D.shape[:-1]))
         if energy:
             Q = np.asarray(Q, float)
