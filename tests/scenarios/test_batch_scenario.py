@@ -254,3 +254,24 @@ def test_ctrl_c_on_the_command_line_keeps_the_finished_cases_and_the_same_comman
     reference = run_batch_scenario(whole).dataset().load()
     for name in reference.data_vars:
         np.testing.assert_array_equal(resumed[name].values, reference[name].values, name)
+
+
+def test_the_default_store_is_named_after_the_run_s_fingerprint(tmp_path, monkeypatch):
+    """Without ``store:``, the store sits in the temporary folder under the run's fingerprint:
+    the same run resumes it, and the same scenario text run by a flexsat that fills stores
+    differently (here: another store layout) gets a store of its own instead of an error
+    about a store it must refuse (what a fresh clone met with a store left by an older
+    version)."""
+    import tempfile
+
+    import flexsat.design.batch_runner as runner
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    path = _write(tmp_path, "sweep.yaml", SWEEP.replace("store: store.zarr\n", ""))
+    first = run_batch_scenario(load_scenario(path))
+    assert first.store.parent == tmp_path / "tmp" and first.chunks_run == 2
+    assert run_batch_scenario(load_scenario(path)).chunks_run == 0  # resumed: nothing to do
+    monkeypatch.setattr(runner, "STORE_LAYOUT", runner.STORE_LAYOUT + "-next")
+    other = run_batch_scenario(load_scenario(path))
+    assert other.store != first.store and other.chunks_run == 2

@@ -35,14 +35,13 @@ scenario's values.
 Execution (:func:`~flexsat.design.batch_runner.run_batch`): chunks of ``chunk_size`` cases, each
 one batched core call, scheduled on dask in-process, on ``workers`` local processes or on the
 cluster at ``scheduler``; the store is ``store`` (relative to this file) or, by default, a
-directory in the system's temporary folder named after the scenario's text, so running the same
-scenario again resumes it. Metrics are the engine's maneuver metrics; a requirement on a metric
+directory in the system's temporary folder named after the run's fingerprint, so running the
+same scenario again resumes it. Metrics are the engine's maneuver metrics; a requirement on a metric
 in degrees (``overshoot_deg``) is compared in degrees.
 """
 
 from __future__ import annotations
 
-import hashlib
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -291,10 +290,13 @@ def case_count(scenario: BatchScenario) -> int:
     return scenario.cases
 
 
-def default_store(scenario: BatchScenario, maneuver) -> Path:
-    """A directory in the system's temporary folder named after the two scenarios' texts."""
-    key = hashlib.sha256((scenario.yaml_text + "\0" + maneuver.yaml_text).encode()).hexdigest()
-    return Path(tempfile.gettempdir()) / f"flexsat-batch-{key[:20]}.zarr"
+def default_store(fingerprint: str) -> Path:
+    """A directory in the system's temporary folder named after the run's fingerprint
+    (:func:`flexsat.design.batch_runner.fingerprint`: the scenario texts, the parameter table,
+    the seed, the histories, the case builder and the store layout): the same run resumes it,
+    while a changed setup or a flexsat that fills stores differently starts a store of its own
+    instead of meeting a store it must refuse."""
+    return Path(tempfile.gettempdir()) / f"flexsat-batch-{fingerprint[:20]}.zarr"
 
 
 def run_batch_scenario(scenario: BatchScenario,
@@ -309,7 +311,7 @@ def run_batch_scenario(scenario: BatchScenario,
         a scheduler that does not answer, a store of another scenario.
     """
     from flexsat.cases import get_case
-    from flexsat.design.batch_runner import run_batch
+    from flexsat.design.batch_runner import fingerprint, run_batch
     from flexsat.design.monte_carlo_statistics import (MIN_RANKING_CASES, monte_carlo_summary,
                                                        sample_sensitivity, sobol_indices)
     from flexsat.references import cite
@@ -321,9 +323,14 @@ def run_batch_scenario(scenario: BatchScenario,
     except ValueError as exc:
         raise ScenarioError([_locate("sampling", str(exc))]) from None
     design, table = (table, table.table) if scenario.sampling == "saltelli" else (None, table)
-    store = default_store(scenario, maneuver) if scenario.store is None else (
-        Path(scenario.store) if Path(scenario.store).is_absolute()
-        else scenario.folder / scenario.store)
+    setup_text = scenario.yaml_text + "\0" + maneuver.yaml_text
+    histories = tuple(scenario.histories)
+    if scenario.store is None:
+        store = default_store(fingerprint(setup_text, table.values, scenario.seed, histories,
+                                          build.describe()))
+    else:
+        store = Path(scenario.store)
+        store = store if store.is_absolute() else scenario.folder / store
 
     def report(p):
         if progress is not None:
@@ -333,8 +340,7 @@ def run_batch_scenario(scenario: BatchScenario,
     e = scenario.execution
     try:
         summary = run_batch(build, table.values, store, base_seed=scenario.seed,
-                            chunk_size=e.chunk_size, histories=tuple(scenario.histories),
-                            setup_text=scenario.yaml_text + "\0" + maneuver.yaml_text,
+                            chunk_size=e.chunk_size, histories=histories, setup_text=setup_text,
                             workers=e.workers, scheduler=e.scheduler, retries=e.retries,
                             progress=report)
     except ValueError as exc:
