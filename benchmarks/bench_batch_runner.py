@@ -42,8 +42,13 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from flexsat.cases import tamu  # noqa: E402
-from flexsat.design.batch_runner import (HubManeuverBuilder, maneuver_metrics,  # noqa: E402
-                                         open_results, run_batch, run_chunk)
+from flexsat.design.batch_runner import (  # noqa: E402
+    HubManeuverBuilder,
+    maneuver_metrics,
+    open_results,
+    run_batch,
+    run_chunk,
+)
 from flexsat.units import to_si  # noqa: E402
 
 STEPS = 1125  # 15 s at 75 Hz
@@ -51,11 +56,16 @@ STEPS = 1125  # 15 s at 75 Hz
 
 def builder() -> HubManeuverBuilder:
     case = tamu(n_modes=10)
-    return HubManeuverBuilder(case.params, 10,
-                              case.sim_config(duration=15.0, friction=False, noise=False),
-                              case.angle, case.reference_inertia, u_max=case.max_torque,
-                              g1=to_si("3000 ozf*in/rad", "N*m/rad"),
-                              g2=to_si("800 ozf*in*s/rad", "N*m*s/rad"))
+    return HubManeuverBuilder(
+        case.params,
+        10,
+        case.sim_config(duration=15.0, friction=False, noise=False),
+        case.angle,
+        case.reference_inertia,
+        u_max=case.max_torque,
+        g1=to_si("3000 ozf*in/rad", "N*m/rad"),
+        g2=to_si("800 ozf*in*s/rad", "N*m*s/rad"),
+    )
 
 
 class TimedBuilder:
@@ -79,8 +89,9 @@ def timed_metrics(result):
     wall time spread over its cases (their sum over the store is the total compute)."""
     out = maneuver_metrics(result)
     n = result.dataset.sizes["case"]
-    out["chunk_compute_s"] = np.full(n, (time.perf_counter()
-                                            - float(os.environ["BENCH_CHUNK_STARTED"])) / n)
+    out["chunk_compute_s"] = np.full(
+        n, (time.perf_counter() - float(os.environ["BENCH_CHUNK_STARTED"])) / n
+    )
     return out
 
 
@@ -100,8 +111,10 @@ def compute_s(store) -> float:
 def table(n: int) -> dict[str, np.ndarray]:
     """n cases on a near-square (α, u_max) grid."""
     rng = np.random.default_rng(0)
-    return {"alpha": rng.uniform(0.02, 0.25, n),
-            "u_max": rng.uniform(to_si("200 ozf*in", "N*m"), to_si("600 ozf*in", "N*m"), n)}
+    return {
+        "alpha": rng.uniform(0.02, 0.25, n),
+        "u_max": rng.uniform(to_si("200 ozf*in", "N*m"), to_si("600 ozf*in", "N*m"), n),
+    }
 
 
 def max_rss_mb() -> float:
@@ -138,36 +151,54 @@ def main() -> None:
         run_batch(tb, p, tmp / "inproc.zarr", chunk_size=chunk, extract=timed_metrics)
         wall = time.perf_counter() - t0
         compute = compute_s(tmp / "inproc.zarr")
-        print(f"   wall {wall:.2f} s, compute {compute:.2f} s (sum of the chunks' own times): "
-              f"overhead {(wall - compute) / compute:+.1%} (in-process client start-up included)")
+        print(
+            f"   wall {wall:.2f} s, compute {compute:.2f} s (sum of the chunks' own times): "
+            f"overhead {(wall - compute) / compute:+.1%} (in-process client start-up included)"
+        )
 
         from distributed import Client, LocalCluster
 
         walls, computes = {}, {}
         worker_rss = {}
         for workers in (1, 2):
-            with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                              dashboard_address=None) as cluster, Client(cluster) as client:
+            with (
+                LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+                ) as cluster,
+                Client(cluster) as client,
+            ):
                 client.run(run_chunk, b, maneuver_metrics, table(10), 0, 0)  # warm workers
                 t0 = time.perf_counter()
-                run_batch(tb, p, tmp / f"w{workers}.zarr", chunk_size=chunk,
-                          scheduler=cluster.scheduler_address, extract=timed_metrics)
+                run_batch(
+                    tb,
+                    p,
+                    tmp / f"w{workers}.zarr",
+                    chunk_size=chunk,
+                    scheduler=cluster.scheduler_address,
+                    extract=timed_metrics,
+                )
                 walls[workers] = time.perf_counter() - t0
                 computes[workers] = compute_s(tmp / f"w{workers}.zarr")
                 worker_rss[workers] = max(client.run(max_rss_mb).values())
         eff = walls[1] / (2 * walls[2])
         over = {w: (walls[w] - computes[w] / w) / (computes[w] / w) for w in walls}
-        print(f"2. local cluster: 1 worker {walls[1]:.2f} s, 2 workers {walls[2]:.2f} s: "
-              f"scaling efficiency {eff:.0%}; overhead (wall against compute / workers) "
-              f"{over[1]:+.1%} on 1 worker, {over[2]:+.1%} on 2; compute per case "
-              f"{computes[1] / n * 1e3:.3f} ms on 1 worker, {computes[2] / n * 1e3:.3f} ms on 2")
+        print(
+            f"2. local cluster: 1 worker {walls[1]:.2f} s, 2 workers {walls[2]:.2f} s: "
+            f"scaling efficiency {eff:.0%}; overhead (wall against compute / workers) "
+            f"{over[1]:+.1%} on 1 worker, {over[2]:+.1%} on 2; compute per case "
+            f"{computes[1] / n * 1e3:.3f} ms on 1 worker, {computes[2] / n * 1e3:.3f} ms on 2"
+        )
         rate2 = n / walls[2]
-        print(f"3. peak RSS: client {max_rss_mb():.0f} MB (after the in-process run), worker "
-              f"{max(worker_rss.values()):.0f} MB (chunks of {chunk}); load average "
-              f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
-        print(f"   1,000,000 cases on 2 workers: {1e6 / rate2:.0f} s "
-              f"({1e6 / rate2 / 60:.1f} min) at {rate2:.0f} cases/s; memory does not grow "
-              f"with the case count (≤ 4 chunks in flight)")
+        print(
+            f"3. peak RSS: client {max_rss_mb():.0f} MB (after the in-process run), worker "
+            f"{max(worker_rss.values()):.0f} MB (chunks of {chunk}); load average "
+            f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores"
+        )
+        print(
+            f"   1,000,000 cases on 2 workers: {1e6 / rate2:.0f} s "
+            f"({1e6 / rate2 / 60:.1f} min) at {rate2:.0f} cases/s; memory does not grow "
+            f"with the case count (≤ 4 chunks in flight)"
+        )
     except _Skip:
         pass
     finally:
@@ -184,12 +215,16 @@ def main() -> None:
                 w0, u0 = best.get(name, (np.inf, np.inf))
                 best[name] = (min(w0, wall), min(u0, cpu))
         for name, (wall, cpu) in best.items():
-            print(f"   {n:>6} cases, {name:>12}: {wall:7.2f} s  {n / wall:8.0f} cases/s  "
-                  f"{wall / (n * STEPS) * 1e6:.3f} µs/case-step wall, "
-                  f"{cpu / (n * STEPS) * 1e6:.3f} CPU")
+            print(
+                f"   {n:>6} cases, {name:>12}: {wall:7.2f} s  {n / wall:8.0f} cases/s  "
+                f"{wall / (n * STEPS) * 1e6:.3f} µs/case-step wall, "
+                f"{cpu / (n * STEPS) * 1e6:.3f} CPU"
+            )
         ratio = best["full"][1] / best["metrics-only"][1]
-        print(f"   {n:>6} cases: metrics-only {ratio:.1f}× faster (CPU); peak RSS so far "
-              f"{max_rss_mb():.0f} MB")
+        print(
+            f"   {n:>6} cases: metrics-only {ratio:.1f}× faster (CPU); peak RSS so far "
+            f"{max_rss_mb():.0f} MB"
+        )
 
     n = args.dispersed
     if not n:
@@ -201,9 +236,11 @@ def main() -> None:
     t0 = time.perf_counter()
     run_chunk(b, maneuver_metrics, p, 0, 0)
     dt = time.perf_counter() - t0
-    print(f"5. dispersed plant (hub inertia and tip mass per case), {n} cases: {dt:.2f} s, "
-          f"{dt / n * 1e3:.2f} ms/case, {dt / (n * STEPS) * 1e6:.2f} µs/case-step (one "
-          f"HubAppendage built per case)")
+    print(
+        f"5. dispersed plant (hub inertia and tip mass per case), {n} cases: {dt:.2f} s, "
+        f"{dt / n * 1e3:.2f} ms/case, {dt / (n * STEPS) * 1e6:.2f} µs/case-step (one "
+        f"HubAppendage built per case)"
+    )
     main_full(args, b)
 
 
@@ -215,21 +252,32 @@ def main_full(args, b) -> None:
         n = args.full
         tmp = Path(tempfile.mkdtemp(prefix="bench_batch_full_"))
         try:
-            with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                              dashboard_address=None) as cluster, Client(cluster) as client:
+            with (
+                LocalCluster(
+                    n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+                ) as cluster,
+                Client(cluster) as client,
+            ):
                 client.run(run_chunk, b, maneuver_metrics, table(10), 0, 0)  # warm workers
                 t0 = time.perf_counter()
-                run_batch(b, table(n), tmp / "full.zarr", chunk_size=args.chunk,
-                          scheduler=cluster.scheduler_address)
+                run_batch(
+                    b,
+                    table(n),
+                    tmp / "full.zarr",
+                    chunk_size=args.chunk,
+                    scheduler=cluster.scheduler_address,
+                )
                 wall = time.perf_counter() - t0
                 rss = client.run(max_rss_mb)
             done = int(open_results(tmp / "full.zarr")["done"].values.sum())
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
-        print(f"6. {n} cases on 2 workers (chunks of {args.chunk}): {wall:.1f} s "
-              f"({wall / 60:.2f} min), {n / wall:.0f} cases/s, {done} done; peak RSS client "
-              f"{max_rss_mb():.0f} MB, workers {', '.join(f'{v:.0f}' for v in rss.values())} MB; "
-              f"load average {os.getloadavg()[0]:.1f}")
+        print(
+            f"6. {n} cases on 2 workers (chunks of {args.chunk}): {wall:.1f} s "
+            f"({wall / 60:.2f} min), {n / wall:.0f} cases/s, {done} done; peak RSS client "
+            f"{max_rss_mb():.0f} MB, workers {', '.join(f'{v:.0f}' for v in rss.values())} MB; "
+            f"load average {os.getloadavg()[0]:.1f}"
+        )
 
 
 class _Skip(Exception):

@@ -34,8 +34,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 LAUNCHER = "import sys; from flexsat.cli import app; app(sys.argv[1:], prog_name='flexsat')"
 #: (label, arguments, target in s or None); validate is slow enough for fewer repeats
-COMMANDS = (("flexsat --help", ["--help"], 0.5), ("flexsat cases", ["cases"], 0.5),
-            ("flexsat validate", ["validate"], None))
+COMMANDS = (
+    ("flexsat --help", ["--help"], 0.5),
+    ("flexsat cases", ["cases"], 0.5),
+    ("flexsat validate", ["validate"], None),
+)
 
 
 def _children_cpu() -> float:
@@ -43,12 +46,12 @@ def _children_cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def time_command(src: Path | None, args: list[str], repeats: int
-                 ) -> tuple[list[float], list[float], int]:
+def time_command(
+    src: Path | None, args: list[str], repeats: int
+) -> tuple[list[float], list[float], int]:
     """Wall and CPU times of ``repeats`` fresh runs and the last exit code (``src`` None: bare
     interpreter)."""
-    env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-           "COLUMNS": "120"}
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "COLUMNS": "120"}
     if src is None:
         argv = [sys.executable, "-c", "pass"]
     else:
@@ -57,8 +60,9 @@ def time_command(src: Path | None, args: list[str], repeats: int
     times, cpu, code = [], [], 0
     for _ in range(repeats):
         start, cpu0 = time.perf_counter(), _children_cpu()
-        code = subprocess.run(argv, env=env, stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL).returncode
+        code = subprocess.run(
+            argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        ).returncode
         times.append(time.perf_counter() - start)
         cpu.append(_children_cpu() - cpu0)
     return times, cpu, code
@@ -70,8 +74,12 @@ def _fmt(times: list[float], cpu: list[float]) -> str:
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--baseline", type=Path, default=Path("/tmp/flexsat-baseline"),
-                   help="source tree of the baseline (its src/ goes on PYTHONPATH)")
+    p.add_argument(
+        "--baseline",
+        type=Path,
+        default=Path("/tmp/flexsat-baseline"),
+        help="source tree of the baseline (its src/ goes on PYTHONPATH)",
+    )
     p.add_argument("--repeats", type=int, default=7, help="runs per fast command")
     p.add_argument("--validate-repeats", type=int, default=3, help="runs of validate")
     args = p.parse_args()
@@ -80,13 +88,14 @@ def main() -> None:
     if (args.baseline / "src" / "flexsat" / "cli.py").is_file():
         trees = {"baseline": args.baseline / "src", **trees}
     else:
-        print(f"no baseline tree at {args.baseline}: timing the current tree only",
-              file=sys.stderr)
+        print(f"no baseline tree at {args.baseline}: timing the current tree only", file=sys.stderr)
     print(f"- date: {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}")
     print(f"- machine: {platform.machine()}, {os.cpu_count()} logical CPUs ({platform.platform()})")
     print(f"- load average at start: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
-    print(f"- Python {platform.python_version()}; trees: "
-          + ", ".join(f"{k} = {v}" for k, v in trees.items()))
+    print(
+        f"- Python {platform.python_version()}; trees: "
+        + ", ".join(f"{k} = {v}" for k, v in trees.items())
+    )
     print()
     bare, bare_cpu, _ = time_command(None, [], args.repeats)
     header = ["command"] + [f"{k}: wall best (median); CPU best, exit" for k in trees]
@@ -95,9 +104,12 @@ def main() -> None:
     header.append("target")
     print("| " + " | ".join(header) + " |")
     print("|" + "---|" * len(header))
-    print(f"| `python -c pass` (interpreter only) | "
-          + " | ".join(_fmt(bare, bare_cpu) for _ in trees)
-          + (" | – " if "baseline" in trees else " ") + "| – |")
+    print(
+        "| `python -c pass` (interpreter only) | "
+        + " | ".join(_fmt(bare, bare_cpu) for _ in trees)
+        + (" | – " if "baseline" in trees else " ")
+        + "| – |"
+    )
     for label, argv, target in COMMANDS:
         repeats = args.validate_repeats if label.endswith("validate") else args.repeats
         best, best_cpu, cells = {}, {}, []
@@ -111,8 +123,10 @@ def main() -> None:
         if target is None:
             row.append("–")
         else:
-            verdict = {k: "met" if v <= target else "NOT met"
-                       for k, v in (("wall", best["current"]), ("CPU", best_cpu["current"]))}
+            verdict = {
+                k: "met" if v <= target else "NOT met"
+                for k, v in (("wall", best["current"]), ("CPU", best_cpu["current"]))
+            }
             row.append(f"≤ {target} s: wall {verdict['wall']}, CPU {verdict['CPU']}")
         print("| " + " | ".join(row) + " |")
 

@@ -81,29 +81,38 @@ def main():
     rows.append(("station attitude loop (LQR, AERO1 substitute)", f"{t:.2f} s per orbit"))
     alt = np.deg2rad([45.0, -45.0, 45.0, -45.0])
     t, _ = best_of(r, lambda: st.cmg_loop(att, alt))
-    rows.append(("station CMG loop, pseudo-inverse from [45, −45, 45, −45]°",
-                 f"{t:.2f} s per orbit"))
+    rows.append(
+        ("station CMG loop, pseudo-inverse from [45, −45, 45, −45]°", f"{t:.2f} s per orbit")
+    )
 
     # Table 2's moments violate the triangle inequality (5.28 + 10.80 < 58.57 slug ft²: no mass
     # distribution has them, the products of inertia being neglected), which CmgSpacecraft
     # refuses; the flat-plate limit I3 = I1 + I2 stands in for the timing
     i1, i2, _ = design.data.inertia
     inertia = np.diag([i1, i2, i1 + i2])
-    plant = CmgSpacecraft(inertia, design.data.rotor_momentum, steering="sr", alpha=1e-3,
-                          gimbal_rate_limit="1 deg/s")
+    plant = CmgSpacecraft(
+        inertia, design.data.rotor_momentum, steering="sr", alpha=1e-3, gimbal_rate_limit="1 deg/s"
+    )
     x0 = plant.state_from(rate=[1e-4, -2e-4, 1e-4], gimbal_angles=alt)
     cfg = SimConfig(duration=period, control_rate=1.0, substeps=2)
     law = RateDamping(1.0e4)
     for n in (1, 100):
-        t, _ = best_of(r, lambda n=n: simulate(plant, law, cfg, n_cases=n,
-                                               initial_state=np.tile(x0, (n, 1))))
-        rows.append((f"CmgSpacecraft in simulate(), 1 Hz, {n} case(s)",
-                     f"{t:.2f} s per orbit ({1e6 * t / (period * n * 2):.0f} µs per "
-                     f"RKMK4 step per case)"))
+        t, _ = best_of(
+            r, lambda n=n: simulate(plant, law, cfg, n_cases=n, initial_state=np.tile(x0, (n, 1)))
+        )
+        rows.append(
+            (
+                f"CmgSpacecraft in simulate(), 1 Hz, {n} case(s)",
+                f"{t:.2f} s per orbit ({1e6 * t / (period * n * 2):.0f} µs per "
+                f"RKMK4 step per case)",
+            )
+        )
 
     cpu = platform.processor() or platform.machine()
-    print(f"machine: {platform.node()}, {cpu}, {os.cpu_count()} cores, Python "
-          f"{platform.python_version()}, numpy {np.__version__}; best of {r}\n")
+    print(
+        f"machine: {platform.node()}, {cpu}, {os.cpu_count()} cores, Python "
+        f"{platform.python_version()}, numpy {np.__version__}; best of {r}\n"
+    )
     print("| what | time |\n|---|---|")
     for what, value in rows:
         print(f"| {what} | {value} |")

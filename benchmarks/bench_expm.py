@@ -24,7 +24,6 @@ from contextlib import contextmanager
 import numpy as np
 
 from bench_tamu import best_of  # the same timing helper as the TAMU benchmark
-
 from flexsat.cases.tamu import tamu
 from flexsat.sim import engine
 from flexsat.sim.integrators import ExponentialStepper, phi_products
@@ -74,17 +73,20 @@ def compare(n_modes: int, repeat: int) -> list[str]:
     for what, bf in (("build, linear", None), ("build, friction column", Bf[:, :1])):
         old = best_of(lambda bf=bf: FullBlockStepper.build(A, Bu, bf, cfg.dt), repeat)
         new = best_of(lambda bf=bf: ExponentialStepper.build(A, Bu, bf, cfg.dt), repeat)
-        rows.append(f"| {label} | {what} | {fmt(old[:2])} | {fmt(new[:2])} "
-                    f"| {old[0] / new[0]:.1f}× |")
+        rows.append(
+            f"| {label} | {what} | {fmt(old[:2])} | {fmt(new[:2])} | {old[0] / new[0]:.1f}× |"
+        )
     engine.simulate(model, law, cfg)  # warm-up (imports, caches)
     with engine_stepper(FullBlockStepper):
         old = best_of(lambda: engine.simulate(model, law, cfg), repeat)
     new = best_of(lambda: engine.simulate(model, law, cfg), repeat)
     th_old = old[2].dataset.theta.values
     diff = np.abs(new[2].dataset.theta.values - th_old).max() / np.abs(th_old).max()
-    rows.append(f"| {label} | whole `simulate` (linear, 15 s at 75 Hz; hub angle differs by "
-                f"{diff:.1e} relative) | {fmt(old[:2])} | {fmt(new[:2])} "
-                f"| {old[0] / new[0]:.2f}× |")
+    rows.append(
+        f"| {label} | whole `simulate` (linear, 15 s at 75 Hz; hub angle differs by "
+        f"{diff:.1e} relative) | {fmt(old[:2])} | {fmt(new[:2])} "
+        f"| {old[0] / new[0]:.2f}× |"
+    )
     return rows
 
 
@@ -92,8 +94,10 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     args = ap.parse_args(argv)
-    print("| modes per appendage (states) | set-up | former 3n × 3n: best (median) "
-          "| minimal block: best (median) | former / minimal |")
+    print(
+        "| modes per appendage (states) | set-up | former 3n × 3n: best (median) "
+        "| minimal block: best (median) | former / minimal |"
+    )
     print("|---|---|---|---|---|")
     for n_modes in (10, 100):
         print("\n".join(compare(n_modes, args.repeat)))

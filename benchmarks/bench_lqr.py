@@ -42,8 +42,9 @@ def modal_model(n_states: int, zeta: float = 0.005, n_inputs: int = 2, seed: int
     m = n_states // 2
     w = np.concatenate([[0.0], np.geomspace(0.1, 100.0, m - 1)])
     A = np.block([[np.zeros((m, m)), np.eye(m)], [-np.diag(w**2), -np.diag(2 * zeta * w)]])
-    B = np.vstack([np.zeros((m, n_inputs)),
-                   np.random.default_rng(seed).standard_normal((m, n_inputs))])
+    B = np.vstack(
+        [np.zeros((m, n_inputs)), np.random.default_rng(seed).standard_normal((m, n_inputs))]
+    )
     return A, B, np.eye(n_states), np.eye(n_inputs)
 
 
@@ -67,8 +68,10 @@ def solvers(has_slycot: bool):
     def flexsat_solve(A, B, Q, R):
         return lqr(A, B, Q, R).solution
 
-    out = [("scipy solve_continuous_are", scipy_solve),
-           ("python-control lqr (scipy)", control_solve("scipy"))]
+    out = [
+        ("scipy solve_continuous_are", scipy_solve),
+        ("python-control lqr (scipy)", control_solve("scipy")),
+    ]
     if has_slycot:
         out.append(("python-control lqr (slycot)", control_solve("slycot")))
     out.append(("flexsat lqr", flexsat_solve))
@@ -83,12 +86,16 @@ def main() -> None:
     sizes = [int(s) for s in args.sizes.split(",")]
     has_slycot = importlib.util.find_spec("slycot") is not None
 
-    print(f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"Python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}, "
-          f"python-control {control.__version__}, slycot "
-          f"{'installed' if has_slycot else 'NOT installed (slycot rows omitted)'}")
-    print(f"Model: rigid mode + elastic modes 0.1-100 rad/s, zeta = 0.005, 2 inputs, Q = I, R = I; "
-          f"best of {args.repeats}\n")
+    print(
+        f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}, "
+        f"python-control {control.__version__}, slycot "
+        f"{'installed' if has_slycot else 'NOT installed (slycot rows omitted)'}"
+    )
+    print(
+        f"Model: rigid mode + elastic modes 0.1-100 rad/s, zeta = 0.005, 2 inputs, Q = I, R = I; "
+        f"best of {args.repeats}\n"
+    )
     print("| states | solver | time (s) | rel. residual ρ_c | residual / ‖Q‖ |")
     print("|---:|---|---:|---:|---:|")
     for n in sizes:

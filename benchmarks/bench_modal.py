@@ -68,8 +68,10 @@ def main() -> None:
     residual = np.abs(asm.K @ modes.shapes - asm.M @ modes.shapes * modes.omegas**2).max()
     ok = t_asm < TARGET_ASSEMBLE_S and t_solve <= TARGET_SOLVE_S
     print(f"first elastic frequencies (Hz): {np.round(modes.frequencies_hz[6:12], 4)}")
-    print(f"checks: max |Φ^T M Φ - I| = {orth:.1e}, max |KΦ - MΦΩ²| / max|K| = "
-          f"{residual / abs(asm.K).max():.1e}")
+    print(
+        f"checks: max |Φ^T M Φ - I| = {orth:.1e}, max |KΦ - MΦΩ²| / max|K| = "
+        f"{residual / abs(asm.K).max():.1e}"
+    )
     print()
     print("| model | dofs | members | build (s) | assemble (s) | modes | solve (s) | target |")
     print("|---|---|---|---|---|---|---|---|")

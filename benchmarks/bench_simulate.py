@@ -34,7 +34,6 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_core import G1, G2, G3, python_control_loop, tamu_problem  # noqa: E402
 from bench_tamu import best_of  # noqa: E402
-
 from flexsat.cases import eps  # noqa: E402
 from flexsat.cases.tamu import tamu  # noqa: E402
 from flexsat.control import MRPLaw  # noqa: E402
@@ -46,14 +45,16 @@ US = 1e6
 
 def tamu_run(n_modes=10, friction=False, noise=False, g1=G1):
     case = tamu(n_modes=n_modes)
-    return case.model(), case.law_i(g1, G2, G3), case.sim_config(15.0, friction=friction,
-                                                                  noise=noise)
+    return (
+        case.model(),
+        case.law_i(g1, G2, G3),
+        case.sim_config(15.0, friction=friction, noise=noise),
+    )
 
 
 def per_step(plant, law, cfg, repeat, compiled=None, n_cases=None):
     simulate(plant, law, cfg, compiled=compiled, n_cases=n_cases)  # compile / warm up
-    t, _, r = best_of(lambda: simulate(plant, law, cfg, compiled=compiled, n_cases=n_cases),
-                      repeat)
+    t, _, r = best_of(lambda: simulate(plant, law, cfg, compiled=compiled, n_cases=n_cases), repeat)
     return t / cfg.n_steps, r
 
 
@@ -68,8 +69,15 @@ def bench_single(repeat):
     plant, law, cfg = tamu_run(friction=True, noise=True)
     comp_f, _ = per_step(plant, law, cfg, repeat)
     py_f, _ = per_step(plant, law, cfg, max(3, repeat // 5), compiled=False)
-    return dict(compiled=comp, python=py, pc=pc, full=comp_f, full_python=py_f, diff=diff,
-                engine=rc.dataset.attrs["engine"])
+    return dict(
+        compiled=comp,
+        python=py,
+        pc=pc,
+        full=comp_f,
+        full_python=py_f,
+        diff=diff,
+        engine=rc.dataset.attrs["engine"],
+    )
 
 
 def bench_batch(repeat, n_cases=1000):
@@ -87,9 +95,15 @@ def bench_batch(repeat, n_cases=1000):
         simulate(plant, law, cfg, compiled=compiled)
         mem[compiled] = tracemalloc.get_traced_memory()[1] / n_cases
         tracemalloc.stop()
-    return dict(compiled=comp * cfg.n_steps / steps, python=py * cfg.n_steps / steps,
-                linear=linear * cfg.n_steps / steps, linear_python=linear_py * cfg.n_steps / steps,
-                mem=mem[True], mem_python=mem[False], n=n_cases)
+    return dict(
+        compiled=comp * cfg.n_steps / steps,
+        python=py * cfg.n_steps / steps,
+        linear=linear * cfg.n_steps / steps,
+        linear_python=linear_py * cfg.n_steps / steps,
+        mem=mem[True],
+        mem_python=mem[False],
+        n=n_cases,
+    )
 
 
 def bench_modes(repeat, n_modes=100):
@@ -103,10 +117,14 @@ def bench_modes(repeat, n_modes=100):
 def eps_run(n_cases=1):
     plant = eps().plant(n_modes=45)
     target = dcm_to_quaternion(euler123_to_dcm([0.2, 0.2, 0.2]))
-    law = MRPLaw(K="7200 N*m", P=["5400 N*m*s/rad", "32400 N*m*s/rad", "32800 N*m*s/rad"],
-                 beta_target=target)
-    cfg = SimConfig(duration=10.0, control_rate=100.0,
-                    channel_actuators={"torque": ChannelActuator(saturation="2000 N*m")})
+    law = MRPLaw(
+        K="7200 N*m", P=["5400 N*m*s/rad", "32400 N*m*s/rad", "32800 N*m*s/rad"], beta_target=target
+    )
+    cfg = SimConfig(
+        duration=10.0,
+        control_rate=100.0,
+        channel_actuators={"torque": ChannelActuator(saturation="2000 N*m")},
+    )
     return plant, law, cfg
 
 
@@ -116,9 +134,14 @@ def bench_eps(repeat, n_cases):
     t0 = time.perf_counter()
     simulate(plant, law, cfg, n_cases=n_cases)
     batch = time.perf_counter() - t0
-    return dict(single=single * cfg.n_steps, engine=r.dataset.attrs["engine"],
-                integrator=getattr(plant, "integrator", "etd2rk"), nx=plant.nx,
-                batch=batch / (cfg.n_steps * n_cases), n=n_cases)
+    return dict(
+        single=single * cfg.n_steps,
+        engine=r.dataset.attrs["engine"],
+        integrator=getattr(plant, "integrator", "etd2rk"),
+        nx=plant.nx,
+        batch=batch / (cfg.n_steps * n_cases),
+        n=n_cases,
+    )
 
 
 def main(argv=None):
@@ -127,26 +150,38 @@ def main(argv=None):
     ap.add_argument("--eps-cases", type=int, default=100)
     args = ap.parse_args(argv)
     a = bench_single(args.repeat)
-    print(f"(a) TAMU 10 modes, Law I, 1125 steps, engine {a['engine']}: simulate() "
-          f"{a['compiled'] * US:.2f} µs/step compiled, {a['python'] * US:.1f} Python loop, "
-          f"forced_response {a['pc'] * US:.2f} (ratio pc/compiled {a['pc'] / a['compiled']:.2f}"
-          f"×; Python loop {a['python'] / a['compiled']:.0f}× slower); compiled − Python θ "
-          f"{a['diff']:.1e} rad")
-    print(f"    with friction + noise: {a['full'] * US:.2f} µs/step compiled, "
-          f"{a['full_python'] * US:.1f} Python loop")
+    print(
+        f"(a) TAMU 10 modes, Law I, 1125 steps, engine {a['engine']}: simulate() "
+        f"{a['compiled'] * US:.2f} µs/step compiled, {a['python'] * US:.1f} Python loop, "
+        f"forced_response {a['pc'] * US:.2f} (ratio pc/compiled {a['pc'] / a['compiled']:.2f}"
+        f"×; Python loop {a['python'] / a['compiled']:.0f}× slower); compiled − Python θ "
+        f"{a['diff']:.1e} rad"
+    )
+    print(
+        f"    with friction + noise: {a['full'] * US:.2f} µs/step compiled, "
+        f"{a['full_python'] * US:.1f} Python loop"
+    )
     b = bench_batch(max(2, args.repeat // 10))
-    print(f"(b) {b['n']} cases, linear: {b['linear'] * US:.3f} µs per case-step compiled, "
-          f"{b['linear_python'] * US:.3f} Python loop")
-    print(f"(b) {b['n']} cases, friction + noise: {b['compiled'] * US:.3f} µs per case-step "
-          f"compiled, {b['python'] * US:.3f} Python loop; peak memory {b['mem'] / 1e3:.0f} kB "
-          f"per case compiled, {b['mem_python'] / 1e3:.0f} kB Python loop")
+    print(
+        f"(b) {b['n']} cases, linear: {b['linear'] * US:.3f} µs per case-step compiled, "
+        f"{b['linear_python'] * US:.3f} Python loop"
+    )
+    print(
+        f"(b) {b['n']} cases, friction + noise: {b['compiled'] * US:.3f} µs per case-step "
+        f"compiled, {b['python'] * US:.3f} Python loop; peak memory {b['mem'] / 1e3:.0f} kB "
+        f"per case compiled, {b['mem_python'] / 1e3:.0f} kB Python loop"
+    )
     c = bench_modes(args.repeat)
-    print(f"(c) 100 modes per appendage ({c['n']} states): simulate() {c['compiled'] * US:.1f} "
-          f"µs/step, forced_response {c['pc'] * US:.1f} (ratio {c['pc'] / c['compiled']:.2f}×)")
+    print(
+        f"(c) 100 modes per appendage ({c['n']} states): simulate() {c['compiled'] * US:.1f} "
+        f"µs/step, forced_response {c['pc'] * US:.1f} (ratio {c['pc'] / c['compiled']:.2f}×)"
+    )
     d = bench_eps(args.repeat, args.eps_cases)
-    print(f"(d) EPS flexible, 45 modes ({d['nx']} states), MRP PD, 10 s at 100 Hz, engine "
-          f"{d['engine']} ({d['integrator']}): single run {d['single']:.3f} s; batch of "
-          f"{d['n']}: {d['batch'] * US:.2f} µs per case-step")
+    print(
+        f"(d) EPS flexible, 45 modes ({d['nx']} states), MRP PD, 10 s at 100 Hz, engine "
+        f"{d['engine']} ({d['integrator']}): single run {d['single']:.3f} s; batch of "
+        f"{d['n']}: {d['batch'] * US:.2f} µs per case-step"
+    )
 
 
 if __name__ == "__main__":

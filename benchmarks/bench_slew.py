@@ -44,7 +44,6 @@ from scipy.integrate import solve_ivp  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_tamu import best_of  # noqa: E402  (one timing helper for every benchmark)
-
 from flexsat.cases.eps import eps  # noqa: E402
 from flexsat.control import perturbation_design  # noqa: E402
 from flexsat.dynamics.attitude import quaternion_multiply  # noqa: E402
@@ -63,8 +62,7 @@ DURATION, OMEGA_B, RATE = 10.0, 2.5, 100.0  # s, rad/s, Hz (seed 003 case A)
 # per period, the loosest it goes) and RK45 at 1e-7 to the 1-substep run (~1e-13)
 BASELINES = (("RK45", 1e-7), ("RK45", 1e-10), ("DOP853", 1e-6), ("DOP853", 1e-10))
 # (flexsat substeps, solve_ivp run of comparable accuracy) for the printed ratios
-PAIRS = ((4, ("DOP853", 1e-10)), (4, ("RK45", 1e-10)), (1, ("DOP853", 1e-6)),
-         (1, ("RK45", 1e-7)))
+PAIRS = ((4, ("DOP853", 1e-10)), (4, ("RK45", 1e-10)), (1, ("DOP853", 1e-6)), (1, ("RK45", 1e-7)))
 REFERENCE = ("DOP853", 1e-12)
 LADDER = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
 
@@ -73,29 +71,36 @@ LADDER = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
 def bench_tpbvp(repeat: int) -> float:
     """Print the TPBVP table; return the slowest T = 10 s best time."""
     inertias = {"EPS": eps().mass_properties()["inertia_center_of_mass"], "notional": NOTIONAL}
-    print(f"(a) TPBVP, best of {repeat}\n"
-          f"{'inertia':9} {'T':>4} {'ω_B':>4} {'ζ_B':>4} {'best s':>7} {'median s':>8} "
-          f"{'segs':>4} {'Newton':>6} {'BC err':>8} {'H drift':>8} {'peak τ x, y, z [kN m]':>22}")
+    print(
+        f"(a) TPBVP, best of {repeat}\n"
+        f"{'inertia':9} {'T':>4} {'ω_B':>4} {'ζ_B':>4} {'best s':>7} {'median s':>8} "
+        f"{'segs':>4} {'Newton':>6} {'BC err':>8} {'H drift':>8} {'peak τ x, y, z [kN m]':>22}"
+    )
     worst = 0.0
     for name, inertia in inertias.items():
         for T, omega_b in ((10.0, 2.5), (6.0, 5.0)):
             for zeta_b in (0.0, 1.0):
                 best, median, slew = best_of(
-                    lambda: three_axis_slew(inertia, TARGET, T, omega_b, zeta_b), repeat)
+                    lambda: three_axis_slew(inertia, TARGET, T, omega_b, zeta_b), repeat
+                )
                 if T == 10.0:
                     worst = max(worst, best)
                 t = np.linspace(0.0, T, 10001)
                 h = slew.hamiltonian(t)
                 peaks = np.abs(slew.torque(t)).max(0) / 1e3
                 newton = sum(s.iterations for s in slew.history) + slew.polish_iterations
-                print(f"{name:9} {T:4.0f} {omega_b:4.1f} {zeta_b:4.1f} {best:7.3f} {median:8.3f} "
-                      f"{slew.n_segments:4d} {newton:6d} {slew.boundary_error():8.1e} "
-                      f"{np.ptp(h) / np.abs(h).max():8.1e} "
-                      f"{'  '.join(f'{p:6.2f}' for p in peaks):>22}")
+                print(
+                    f"{name:9} {T:4.0f} {omega_b:4.1f} {zeta_b:4.1f} {best:7.3f} {median:8.3f} "
+                    f"{slew.n_segments:4d} {newton:6d} {slew.boundary_error():8.1e} "
+                    f"{np.ptp(h) / np.abs(h).max():8.1e} "
+                    f"{'  '.join(f'{p:6.2f}' for p in peaks):>22}"
+                )
     verdict = "meets" if worst <= TPBVP_TARGET_S else "misses"
-    print(f"slowest T = 10 s case: {worst:.3f} s ({verdict} the <= {TPBVP_TARGET_S:g} s target); "
-          f"H drift relative to max |H| over 10001 samples; Newton = iterations of the "
-          f"continuation plus the polish\n")
+    print(
+        f"slowest T = 10 s case: {worst:.3f} s ({verdict} the <= {TPBVP_TARGET_S:g} s target); "
+        f"H drift relative to max |H| over 10001 samples; Newton = iterations of the "
+        f"continuation plus the polish\n"
+    )
     return worst
 
 
@@ -142,8 +147,7 @@ def solve_ivp_loop(truth, law, method: str, rtol: float):
         for name, c in commands.items():
             u[slices[name]] = c[0]
         if k < n:
-            sol = solve_ivp(rhs, (t[k], t[k + 1]), x, method=method, rtol=rtol,
-                            atol=1e-3 * rtol)
+            sol = solve_ivp(rhs, (t[k], t[k + 1]), x, method=method, rtol=rtol, atol=1e-3 * rtol)
             nfev += sol.nfev
             x = truth.normalize(sol.y[:, -1])
     return X, nfev
@@ -186,9 +190,9 @@ def bench_loop(repeat: int, ladder: bool) -> float:
     for substeps in (4, 1):
         config = SimConfig(duration=DURATION, control_rate=RATE, substeps=substeps)
         simulate(truth, law, config, n_cases=1)  # warm-up (first-call imports and caches)
-        runs[substeps] = (lambda c=config: simulate(truth, law, c, n_cases=1))
+        runs[substeps] = lambda c=config: simulate(truth, law, c, n_cases=1)
     for method, rtol in BASELINES:
-        runs[method, rtol] = (lambda m=method, r=rtol: solve_ivp_loop(truth, law, m, r))
+        runs[method, rtol] = lambda m=method, r=rtol: solve_ivp_loop(truth, law, m, r)
     times = {key: [] for key in runs}
     out = {}
     for _ in range(repeat):
@@ -201,51 +205,79 @@ def bench_loop(repeat: int, ladder: bool) -> float:
     rows = []
     for substeps in (4, 1):
         result = out[substeps]
-        rows.append((f"flexsat simulate, exp_rk4, {substeps} substep{'s' * (substeps > 1)}",
-                     substeps, f"{4 * substeps * round(DURATION * RATE)}",
-                     flexsat_errors(truth, result, X_ref), result.dataset.attrs["engine"]))
+        rows.append(
+            (
+                f"flexsat simulate, exp_rk4, {substeps} substep{'s' * (substeps > 1)}",
+                substeps,
+                f"{4 * substeps * round(DURATION * RATE)}",
+                flexsat_errors(truth, result, X_ref),
+                result.dataset.attrs["engine"],
+            )
+        )
     for method, rtol in BASELINES:
         X, nfev = out[method, rtol]
-        rows.append((f"solve_ivp {method}, rtol {rtol:.0e}", (method, rtol), f"{nfev}",
-                     ivp_errors(truth, X, X_ref), ""))
+        rows.append(
+            (
+                f"solve_ivp {method}, rtol {rtol:.0e}",
+                (method, rtol),
+                f"{nfev}",
+                ivp_errors(truth, X, X_ref),
+                "",
+            )
+        )
     flexsat_best = best[4]
 
     def round_ratio(key, ref):
         return float(np.median(np.divide(times[key], times[ref])))
 
-    print(f"(b) closed-loop slew, EPS 45 modes ({truth.nx} states), 10 s at 100 Hz, case A, "
-          f"best of {repeat} rounds\n"
-          f"design + law (perturbation_design, 21 points; controller): {t_design:.3f} s "
-          f"(median {m_design:.3f}); reference {REFERENCE[0]} rtol {REFERENCE[1]:.0e}: "
-          f"{t_ref:.2f} s, {nfev_ref} f evals; peak rim displacement "
-          f"{rows[0][3][2]:.3f} m")
-    print(f"{'run':42} {'best s':>7} {'median s':>8} {'f evals':>8} {'/ flexsat':>9} "
-          f"{'per round':>9} {'Δ final att. rad':>16} {'Δ rim max m':>11}")
+    print(
+        f"(b) closed-loop slew, EPS 45 modes ({truth.nx} states), 10 s at 100 Hz, case A, "
+        f"best of {repeat} rounds\n"
+        f"design + law (perturbation_design, 21 points; controller): {t_design:.3f} s "
+        f"(median {m_design:.3f}); reference {REFERENCE[0]} rtol {REFERENCE[1]:.0e}: "
+        f"{t_ref:.2f} s, {nfev_ref} f evals; peak rim displacement "
+        f"{rows[0][3][2]:.3f} m"
+    )
+    print(
+        f"{'run':42} {'best s':>7} {'median s':>8} {'f evals':>8} {'/ flexsat':>9} "
+        f"{'per round':>9} {'Δ final att. rad':>16} {'Δ rim max m':>11}"
+    )
     for label, key, nfev, (angle, rim, _), engine in rows:
-        print(f"{label:42} {best[key]:7.3f} {median[key]:8.3f} {nfev:>8} "
-              f"{best[key] / flexsat_best:8.2f}× {round_ratio(key, 4):8.2f}× {angle:16.1e} "
-              f"{rim:11.1e}")
+        print(
+            f"{label:42} {best[key]:7.3f} {median[key]:8.3f} {nfev:>8} "
+            f"{best[key] / flexsat_best:8.2f}× {round_ratio(key, 4):8.2f}× {angle:16.1e} "
+            f"{rim:11.1e}"
+        )
     verdict = "meets" if flexsat_best <= LOOP_TARGET_S else "misses"
-    print(f"flexsat (4 substeps, engine {rows[0][4]}): {flexsat_best:.3f} s ({verdict} the <= "
-          f"{LOOP_TARGET_S:g} s target); '/ flexsat' = best time over flexsat's 4-substep best, "
-          f"'per round' = median over the rounds of the same ratio within a round; f evals: "
-          f"flexsat's are the nonlinear force f(x, u) (4 per substep), solve_ivp's the full "
-          f"right-hand side; atol = 1e-3 rtol")
-    print("at comparable accuracy, solve_ivp / flexsat, ratio of bests (per round): " + "; ".join(
-        f"{m} rtol {r:.0e} / {s} substep{'s' * (s > 1)}: {best[m, r] / best[s]:.2f}× "
-        f"({round_ratio((m, r), s):.2f}×)" for s, (m, r) in PAIRS) + "\n")
+    print(
+        f"flexsat (4 substeps, engine {rows[0][4]}): {flexsat_best:.3f} s ({verdict} the <= "
+        f"{LOOP_TARGET_S:g} s target); '/ flexsat' = best time over flexsat's 4-substep best, "
+        f"'per round' = median over the rounds of the same ratio within a round; f evals: "
+        f"flexsat's are the nonlinear force f(x, u) (4 per substep), solve_ivp's the full "
+        f"right-hand side; atol = 1e-3 rtol"
+    )
+    print(
+        "at comparable accuracy, solve_ivp / flexsat, ratio of bests (per round): "
+        + "; ".join(
+            f"{m} rtol {r:.0e} / {s} substep{'s' * (s > 1)}: {best[m, r] / best[s]:.2f}× "
+            f"({round_ratio((m, r), s):.2f}×)"
+            for s, (m, r) in PAIRS
+        )
+        + "\n"
+    )
     if ladder:
-        print(f"solve_ivp loop over tolerances (one call each; atol = 1e-3 rtol)\n"
-              f"{'method':7} {'rtol':>6} {'s':>6} {'f evals':>8} {'Δ final att. rad':>16} "
-              f"{'Δ rim max m':>11}")
+        print(
+            f"solve_ivp loop over tolerances (one call each; atol = 1e-3 rtol)\n"
+            f"{'method':7} {'rtol':>6} {'s':>6} {'f evals':>8} {'Δ final att. rad':>16} "
+            f"{'Δ rim max m':>11}"
+        )
         for method in ("RK45", "DOP853"):
             for rtol in LADDER:
                 t0 = time.perf_counter()
                 X, nfev = solve_ivp_loop(truth, law, method, rtol)
                 elapsed = time.perf_counter() - t0
                 angle, rim, _ = ivp_errors(truth, X, X_ref)
-                print(f"{method:7} {rtol:6.0e} {elapsed:6.3f} {nfev:8d} {angle:16.1e} "
-                      f"{rim:11.1e}")
+                print(f"{method:7} {rtol:6.0e} {elapsed:6.3f} {nfev:8d} {angle:16.1e} {rim:11.1e}")
         print()
     return flexsat_best
 
@@ -253,8 +285,11 @@ def bench_loop(repeat: int, ladder: bool) -> float:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5, help="timed calls per case (best of)")
-    parser.add_argument("--ladder", action="store_true",
-                        help="also the solve_ivp loop's accuracy and cost over tolerances")
+    parser.add_argument(
+        "--ladder",
+        action="store_true",
+        help="also the solve_ivp loop's accuracy and cost over tolerances",
+    )
     parser.add_argument("--skip-tpbvp", action="store_true", help="only the closed loop (b)")
     args = parser.parse_args(argv)
     print(f"load average at start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}\n")

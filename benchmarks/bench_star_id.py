@@ -16,17 +16,19 @@ import time
 
 import numpy as np
 
-from flexsat.identify.star_camera import StarCamera
-from flexsat.identify.star_catalog import synthetic_sky
-from flexsat.identify.star_tracker import StarTracker, random_attitudes, score
+from flexsat.attitude.star_camera import StarCamera
+from flexsat.attitude.star_catalog import synthetic_sky
+from flexsat.attitude.star_tracker import StarTracker, random_attitudes, score
 
 
 def main(n: int = 200) -> None:
     sky = synthetic_sky(6.5, seed=0)
     cams = (StarCamera(), StarCamera(mounting=(0.0, np.pi / 2, 0.0)))
     t0 = time.perf_counter()
-    trackers = {"k-vector": StarTracker(cams, sky, index="kvector"),
-                "brute force": StarTracker(cams, sky, index="brute")}
+    trackers = {
+        "k-vector": StarTracker(cams, sky, index="kvector"),
+        "brute force": StarTracker(cams, sky, index="brute"),
+    }
     build = time.perf_counter() - t0
     rng = np.random.default_rng(7)
     frames = [trackers["k-vector"].observe(C, rng, 2, 0.2) for C in random_attitudes(n, 7)]
@@ -40,10 +42,12 @@ def main(n: int = 200) -> None:
         correct = sum(score(i, f)[0] for i, f in zip(idents, frames))
         rows[name] = (best, correct)
     load = os.getloadavg()
-    print(f"machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python "
-          f"{sys.version.split()[0]}, NumPy {np.__version__}; load {load[0]:.2f}; "
-          f"{len(sky)} stars, {len(trackers['k-vector'].index)} pairs; both indexes built in "
-          f"{build:.2f} s")
+    print(
+        f"machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python "
+        f"{sys.version.split()[0]}, NumPy {np.__version__}; load {load[0]:.2f}; "
+        f"{len(sky)} stars, {len(trackers['k-vector'].index)} pairs; both indexes built in "
+        f"{build:.2f} s"
+    )
     print("\n| matcher | attitudes | correct | time (s) | identifications / s | ms each |")
     print("|---|---|---|---|---|---|")
     for name, (t, c) in rows.items():

@@ -165,11 +165,14 @@ def solve_ivp_loop(model, law, config, method: str):
         theta[k] = x[0]
         if k < n:
             if friction.active:
+
                 def rhs(_t, x, w=w):
                     return A @ x + Bu * w + bf_hub * friction(x[ndof])
             else:
+
                 def rhs(_t, x, w=w):
                     return A @ x + Bu * w
+
             sol = solve_ivp(rhs, (t, t + dt), x, method=method, rtol=RTOL, atol=ATOL)
             if not sol.success:
                 raise RuntimeError(f"solve_ivp {method} failed at t = {t}: {sol.message}")
@@ -186,8 +189,16 @@ def run(args) -> dict:
     A = model.state_space[0]
     f_max = np.abs(np.linalg.eigvals(A)).max() / (2 * np.pi)
     law = case.law_ii(G1, G2, 0.0, alpha=ALPHA, u_max=U_MAX)
-    res = {"n_modes": model.n_modes, "nx": model.nx, "f_max_hz": f_max, "single": {},
-           "baseline": {}, "batch": {}, "profiles": [], "convergence": None}
+    res = {
+        "n_modes": model.n_modes,
+        "nx": model.nx,
+        "f_max_hz": f_max,
+        "single": {},
+        "baseline": {},
+        "batch": {},
+        "profiles": [],
+        "convergence": None,
+    }
     keys = [k for k in "ab" if k in args.settings]
 
     # 1. single maneuver --------------------------------------------------------------------
@@ -196,10 +207,18 @@ def run(args) -> dict:
         cfg = case.sim_config(DURATION, **kw)
         simulate(model, law, cfg)  # warm-up (imports, caches)
         best, med, out = best_of(lambda: simulate(model, law, cfg), args.repeat)
-        res["single"][key] = dict(label=label, n_steps=cfg.n_steps, best=best, median=med,
-                                  theta=out.dataset["theta"].values[0])
-        print(f"flexsat single {label}: {best * 1e3:.1f} ms (median {med * 1e3:.1f} ms), "
-              f"{best / cfg.n_steps * 1e6:.1f} us/step", flush=True)
+        res["single"][key] = dict(
+            label=label,
+            n_steps=cfg.n_steps,
+            best=best,
+            median=med,
+            theta=out.dataset["theta"].values[0],
+        )
+        print(
+            f"flexsat single {label}: {best * 1e3:.1f} ms (median {med * 1e3:.1f} ms), "
+            f"{best / cfg.n_steps * 1e6:.1f} us/step",
+            flush=True,
+        )
 
     # 2. solve_ivp baseline ------------------------------------------------------------------
     if not args.no_baseline:
@@ -209,11 +228,18 @@ def run(args) -> dict:
             single = res["single"][key]
             for method in args.methods:
                 best, med, (theta, nfev) = best_of(
-                    lambda: solve_ivp_loop(model, law, cfg, method), args.baseline_repeat)
+                    lambda: solve_ivp_loop(model, law, cfg, method), args.baseline_repeat
+                )
                 dtheta = np.degrees(np.abs(theta - single["theta"]).max())
                 res["baseline"][(key, method)] = dict(
-                    best=best, median=med, nfev=nfev, dtheta_deg=dtheta,
-                    ratio=best / single["best"], n_steps=cfg.n_steps, theta=theta)
+                    best=best,
+                    median=med,
+                    nfev=nfev,
+                    dtheta_deg=dtheta,
+                    ratio=best / single["best"],
+                    n_steps=cfg.n_steps,
+                    theta=theta,
+                )
                 if key == "b" and method == "RK45":
                     # the (b) difference is ETD2RK error on the friction (amplified by the
                     # encoder quantum): it shrinks with the substep count
@@ -221,16 +247,20 @@ def run(args) -> dict:
                     th_fine = simulate(model, law, fine).dataset["theta"].values[0]
                     res["convergence"] = dict(
                         substeps=(cfg.substeps, fine.substeps),
-                        dtheta_deg=(dtheta, np.degrees(np.abs(theta - th_fine).max())))
-                print(f"solve_ivp {method:6s} {label}: {best:.2f} s (median {med:.2f} s), "
-                      f"{best / cfg.n_steps * 1e6:.0f} us/step, {nfev} rhs evals, "
-                      f"ratio {best / single['best']:.1f}x, max|dtheta| = {dtheta:.2e} deg",
-                      flush=True)
+                        dtheta_deg=(dtheta, np.degrees(np.abs(theta - th_fine).max())),
+                    )
+                print(
+                    f"solve_ivp {method:6s} {label}: {best:.2f} s (median {med:.2f} s), "
+                    f"{best / cfg.n_steps * 1e6:.0f} us/step, {nfev} rhs evals, "
+                    f"ratio {best / single['best']:.1f}x, max|dtheta| = {dtheta:.2e} deg",
+                    flush=True,
+                )
 
     # 3. batch ----------------------------------------------------------------------------
     if not args.no_batch:
-        alpha, umax = np.meshgrid(np.linspace(0.02, 0.25, 40), np.linspace(200.0, 600.0, 25),
-                                  indexing="ij")
+        alpha, umax = np.meshgrid(
+            np.linspace(0.02, 0.25, 40), np.linspace(200.0, 600.0, 25), indexing="ij"
+        )
         batch_law = case.law_ii(G1, G2, 0.0, alpha=alpha.ravel(), u_max=OZIN * umax.ravel())
         nc = batch_law.n_cases
         for key in keys:
@@ -240,10 +270,20 @@ def run(args) -> dict:
             us = best / (cfg.n_steps * nc) * 1e6
             finite = bool(np.isfinite(out.dataset["theta"].values).all())
             del out
-            res["batch"][key] = dict(label=label, n_cases=nc, n_steps=cfg.n_steps, best=best,
-                                     median=med, us=us, finite=finite)
-            print(f"flexsat batch {nc} cases {label}: {best:.2f} s (median {med:.2f} s), "
-                  f"{us:.2f} us/step/case", flush=True)
+            res["batch"][key] = dict(
+                label=label,
+                n_cases=nc,
+                n_steps=cfg.n_steps,
+                best=best,
+                median=med,
+                us=us,
+                finite=finite,
+            )
+            print(
+                f"flexsat batch {nc} cases {label}: {best:.2f} s (median {med:.2f} s), "
+                f"{us:.2f} us/step/case",
+                flush=True,
+            )
 
     # profiles where a target is missed (or always with --profile) ---------------------------
     for key in keys:
@@ -283,28 +323,41 @@ def machine() -> dict:
 
 
 def table(res) -> str:
-    rows = ["| Benchmark | Setting | Wall, best (median) | µs per control step | Ratio / target |",
-            "|---|---|---|---|---|"]
+    rows = [
+        "| Benchmark | Setting | Wall, best (median) | µs per control step | Ratio / target |",
+        "|---|---|---|---|---|",
+    ]
     for key, s in res["single"].items():
         rk = res["baseline"].get((key, "RK45"))
-        ratio = "" if rk is None else (
-            f"solve_ivp RK45 / flexsat = **{rk['ratio']:.1f}×** (target ≥ {TARGET_RATIO:.0f}×: "
-            f"{'met' if rk['ratio'] >= TARGET_RATIO else 'missed'})")
-        rows.append(f"| flexsat `simulate`, 1 maneuver | {s['label']} | "
-                    f"{s['best'] * 1e3:.0f} ms ({s['median'] * 1e3:.0f} ms) | "
-                    f"{s['best'] / s['n_steps'] * 1e6:.0f} | {ratio} |")
+        ratio = (
+            ""
+            if rk is None
+            else (
+                f"solve_ivp RK45 / flexsat = **{rk['ratio']:.1f}×** (target ≥ {TARGET_RATIO:.0f}×: "
+                f"{'met' if rk['ratio'] >= TARGET_RATIO else 'missed'})"
+            )
+        )
+        rows.append(
+            f"| flexsat `simulate`, 1 maneuver | {s['label']} | "
+            f"{s['best'] * 1e3:.0f} ms ({s['median'] * 1e3:.0f} ms) | "
+            f"{s['best'] / s['n_steps'] * 1e6:.0f} | {ratio} |"
+        )
     for (key, method), b in res["baseline"].items():
         label = res["single"][key]["label"]
-        rows.append(f"| solve_ivp {method} loop, 1 maneuver | {label} | "
-                    f"{b['best']:.2f} s ({b['median']:.2f} s) | "
-                    f"{b['best'] / b['n_steps'] * 1e6:.0f} | "
-                    f"{b['ratio']:.1f}× slower than flexsat; {b['nfev']:,} rhs evals; "
-                    f"max abs Δθ = {b['dtheta_deg']:.1e}° |")
+        rows.append(
+            f"| solve_ivp {method} loop, 1 maneuver | {label} | "
+            f"{b['best']:.2f} s ({b['median']:.2f} s) | "
+            f"{b['best'] / b['n_steps'] * 1e6:.0f} | "
+            f"{b['ratio']:.1f}× slower than flexsat; {b['nfev']:,} rhs evals; "
+            f"max abs Δθ = {b['dtheta_deg']:.1e}° |"
+        )
     for key, b in res["batch"].items():
         ok = "met" if b["us"] <= TARGET_US else "missed"
-        rows.append(f"| flexsat `simulate`, batch of {b['n_cases']:,} | {b['label']} | "
-                    f"{b['best']:.2f} s ({b['median']:.2f} s) | "
-                    f"**{b['us']:.2f}** per case | target ≤ {TARGET_US:.0f} µs/step/case: {ok} |")
+        rows.append(
+            f"| flexsat `simulate`, batch of {b['n_cases']:,} | {b['label']} | "
+            f"{b['best']:.2f} s ({b['median']:.2f} s) | "
+            f"**{b['us']:.2f}** per case | target ≤ {TARGET_US:.0f} µs/step/case: {ok} |"
+        )
     return "\n".join(rows)
 
 
@@ -364,8 +417,11 @@ def document(res, mach, argv) -> str:
         (n1, n2), (d1, d2) = conv["substeps"], conv["dtheta_deg"]
         ivp = [b["theta"] for (k, _), b in res["baseline"].items() if k == "b"]
         spread = max(np.degrees(np.abs(a - ivp[0]).max()) for a in ivp)
-        among = (f" (the {len(ivp)} solve_ivp methods agree among themselves to {spread:.1e}°)"
-                 if len(ivp) > 1 else "")
+        among = (
+            f" (the {len(ivp)} solve_ivp methods agree among themselves to {spread:.1e}°)"
+            if len(ivp) > 1
+            else ""
+        )
         lines += [
             f"In (b) flexsat and the solve_ivp RK45 loop differ by up to {d1:.1e}° in θ{among}. "
             f"This is the error of flexsat's ETD2RK step on the stiff regularised friction with "
@@ -383,32 +439,47 @@ def document(res, mach, argv) -> str:
             b = res["baseline"].get((key, method))
             if b is None:
                 continue
-            target = (f" (target ≥ {TARGET_RATIO:.0f}×: "
-                      f"{'met' if b['ratio'] >= TARGET_RATIO else 'missed'})"
-                      if method == "RK45" else "")
-            lines.append(f"- Single maneuver {s['label']}: flexsat is {b['ratio']:.1f}× faster "
-                         f"than the solve_ivp {method} loop{target}.")
+            target = (
+                f" (target ≥ {TARGET_RATIO:.0f}×: "
+                f"{'met' if b['ratio'] >= TARGET_RATIO else 'missed'})"
+                if method == "RK45"
+                else ""
+            )
+            lines.append(
+                f"- Single maneuver {s['label']}: flexsat is {b['ratio']:.1f}× faster "
+                f"than the solve_ivp {method} loop{target}."
+            )
     for key, b in res["batch"].items():
-        lines.append(f"- Batch {b['label']}: {b['us']:.2f} µs per control step per case "
-                     f"(target ≤ {TARGET_US:.0f} µs: "
-                     f"{'met' if b['us'] <= TARGET_US else 'missed'}); "
-                     f"{b['n_cases'] * b['n_steps'] / b['best'] / 1e6:.2f} M case-steps/s.")
+        lines.append(
+            f"- Batch {b['label']}: {b['us']:.2f} µs per control step per case "
+            f"(target ≤ {TARGET_US:.0f} µs: "
+            f"{'met' if b['us'] <= TARGET_US else 'missed'}); "
+            f"{b['n_cases'] * b['n_steps'] / b['best'] / 1e6:.2f} M case-steps/s."
+        )
         s = single.get(key)
         if s is not None:
-            lines.append(f"  - Batching gain: {s['best'] / s['n_steps'] * 1e6 / b['us']:.0f}× "
-                         f"per case-step over running the cases one by one with flexsat.")
+            lines.append(
+                f"  - Batching gain: {s['best'] / s['n_steps'] * 1e6 / b['us']:.0f}× "
+                f"per case-step over running the cases one by one with flexsat."
+            )
         rk = res["baseline"].get((key, "RK45"))
         if rk is not None:
             est = rk["best"] * b["n_cases"]
-            lines.append(f"  - Running the same 1,000 cases with the solve_ivp RK45 loop would "
-                         f"take ≈ {est / 60:.0f} min (1,000 × the single-case time, "
-                         f"extrapolated, not run): {est / b['best']:.0f}× the flexsat batch.")
+            lines.append(
+                f"  - Running the same 1,000 cases with the solve_ivp RK45 loop would "
+                f"take ≈ {est / 60:.0f} min (1,000 × the single-case time, "
+                f"extrapolated, not run): {est / b['best']:.0f}× the flexsat batch."
+            )
     if res["profiles"]:
-        lines += ["", "## Profiles", "",
-                  "A target was missed (or `--profile` was given); cProfile of one "
-                  "`simulate` call. Shares are of the profiled `simulate` time (profiler "
-                  "overhead inflates the cost of small, often-called functions), followed by "
-                  "the top 15 functions by cumulative time."]
+        lines += [
+            "",
+            "## Profiles",
+            "",
+            "A target was missed (or `--profile` was given); cProfile of one "
+            "`simulate` call. Shares are of the profiled `simulate` time (profiler "
+            "overhead inflates the cost of small, often-called functions), followed by "
+            "the top 15 functions by cumulative time.",
+        ]
         for title, (txt, shares) in res["profiles"]:
             body = "\n".join(l for l in txt.strip().splitlines() if l.strip())
             lines += ["", f"### {title}", ""]
@@ -436,7 +507,7 @@ def other_sections(path: Path) -> str:
     if not path.exists():
         return ""
     match = re.search(r"^## .*\(issue #\d+\)$", path.read_text(), flags=re.MULTILINE)
-    return "" if match is None else "\n" + path.read_text()[match.start():]
+    return "" if match is None else "\n" + path.read_text()[match.start() :]
 
 
 def main(argv=None) -> int:
@@ -445,8 +516,11 @@ def main(argv=None) -> int:
     p.add_argument("--repeat", type=int, default=5, help="repeats of the single flexsat run")
     p.add_argument("--baseline-repeat", type=int, default=3, help="repeats of each solve_ivp run")
     p.add_argument("--batch-repeat", type=int, default=3, help="repeats of each batch run")
-    p.add_argument("--methods", default="RK45,LSODA",
-                   help="comma-separated solve_ivp methods (RK45 is the target's baseline)")
+    p.add_argument(
+        "--methods",
+        default="RK45,LSODA",
+        help="comma-separated solve_ivp methods (RK45 is the target's baseline)",
+    )
     p.add_argument("--settings", default="ab", help="'a' linear, 'b' full default, or 'ab'")
     p.add_argument("--no-baseline", action="store_true", help="skip the solve_ivp loops")
     p.add_argument("--no-batch", action="store_true", help="skip the 1,000-case batch")
@@ -463,8 +537,9 @@ def main(argv=None) -> int:
     res = run(args)
     print()
     print(table(res))
-    print(f"\n(total benchmark time {time.perf_counter() - t0:.0f} s; load at start "
-          f"{mach['load']})")
+    print(
+        f"\n(total benchmark time {time.perf_counter() - t0:.0f} s; load at start {mach['load']})"
+    )
     if args.write:
         args.output.parent.mkdir(parents=True, exist_ok=True)
         args.output.write_text(document(res, mach, argv) + other_sections(args.output))

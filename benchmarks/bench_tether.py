@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 from flexsat.control.tether_laws import CoupledTetherLaw
-from flexsat.dynamics.tether import TetherScales, TetheredSubsatellite, integrate
+from flexsat.dynamics.tether import TetheredSubsatellite, TetherScales, integrate
 from flexsat.sim.config import SimConfig
 from flexsat.sim.engine import simulate
 
@@ -49,20 +49,25 @@ def main() -> None:
     for n in (1, 100):
         law = CoupledTetherLaw(1.0, 0.0, 3.0, np.linspace(1.0, 4.0, n) if n > 1 else 2.0, 0.01)
         t = best(lambda: integrate(law.nondimensional, np.tile(X0, (n, 1)), tau), args.repeat)
-        print(f"{'continuous (DOP853, rtol 1e-10)':<48}{n:>6}{t / ORBITS:>10.3f}"
-              f"{1e3 * t / ORBITS / n:>15.2f}")
+        print(
+            f"{'continuous (DOP853, rtol 1e-10)':<48}{n:>6}{t / ORBITS:>10.3f}"
+            f"{1e3 * t / ORBITS / n:>15.2f}"
+        )
     plant = TetheredSubsatellite(scales)
     x0 = scales.state_to_si(X0)
     for samples in (1000, 2000):
-        cfg = SimConfig(duration=ORBITS * scales.period, control_rate=samples / scales.period,
-                        substeps=1)
+        cfg = SimConfig(
+            duration=ORBITS * scales.period, control_rate=samples / scales.period, substeps=1
+        )
         for n in (1, 100):
-            law = CoupledTetherLaw(1.0, 0.0, 3.0, np.linspace(1.0, 4.0, n) if n > 1 else 2.0,
-                                   0.01, scales=scales)
-            t = best(lambda: simulate(plant, law, cfg, n_cases=n, initial_state=x0),
-                     args.repeat)
-            print(f"{f'simulation core, {samples} samples/orbit':<48}{n:>6}{t / ORBITS:>10.3f}"
-                  f"{1e3 * t / ORBITS / n:>15.2f}")
+            law = CoupledTetherLaw(
+                1.0, 0.0, 3.0, np.linspace(1.0, 4.0, n) if n > 1 else 2.0, 0.01, scales=scales
+            )
+            t = best(lambda: simulate(plant, law, cfg, n_cases=n, initial_state=x0), args.repeat)
+            print(
+                f"{f'simulation core, {samples} samples/orbit':<48}{n:>6}{t / ORBITS:>10.3f}"
+                f"{1e3 * t / ORBITS / n:>15.2f}"
+            )
 
 
 if __name__ == "__main__":

@@ -16,8 +16,9 @@ def tamu_model(tamu_case):
     return tamu_case.model()
 
 
-IDENTIFICATION_EXAMPLE = (Path(__file__).resolve().parents[1] / "examples"
-                          / "tamu_grid_identification.yaml")
+IDENTIFICATION_EXAMPLE = (
+    Path(__file__).resolve().parents[1] / "examples" / "tamu_grid_identification.yaml"
+)
 
 
 def _identification_example(fast=False, **changes) -> dict:
@@ -55,8 +56,12 @@ def _recorded_scenario(tmp_path):
     data = _identification_example()
     for name in ("truth", "sensors", "hammer", "video", "wheels"):
         data.pop(name)
-    data["records"] = {"hammer": "data/hammer.uff", "wheels": "data/wheels.uff",
-                       "video": "data/video.uff", "segment": 1000}
+    data["records"] = {
+        "hammer": "data/hammer.uff",
+        "wheels": "data/wheels.uff",
+        "video": "data/video.uff",
+        "segment": 1000,
+    }
     data["identification"]["torque_constants"] = True
     path = tmp_path / "measured.yaml"
     path.write_text(yaml.safe_dump(data))
@@ -83,8 +88,12 @@ def fail_opening(monkeypatch):
     def fail(name: str, code: int = errno.ENOSPC) -> None:
         def guarded(file, mode="r", *args, **kwargs):
             path = Path(os.fsdecode(file)) if isinstance(file, (str, bytes, os.PathLike)) else None
-            if path is not None and path.name == name and ".tmp-" in path.parent.name \
-                    and set(mode) & set("wax+"):
+            if (
+                path is not None
+                and path.name == name
+                and ".tmp-" in path.parent.name
+                and set(mode) & set("wax+")
+            ):
                 raise OSError(code, os.strerror(code), str(path))
             return real(file, mode, *args, **kwargs)
 

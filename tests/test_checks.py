@@ -21,13 +21,28 @@ from flexsat.checks import (
     series,
 )
 
-SEEDS = {"000_7bfdb62d2eacc22a.txt", "001_79dfdfba94ed8e0d.txt", "002_c3272b32d7cac32e.txt",
-         "003_6d17262716e94f5f.txt", "004_680d3fec9e1f8c83.txt"}
+SEEDS = {
+    "000_7bfdb62d2eacc22a.txt",
+    "001_79dfdfba94ed8e0d.txt",
+    "002_c3272b32d7cac32e.txt",
+    "003_6d17262716e94f5f.txt",
+    "004_680d3fec9e1f8c83.txt",
+}
 REFERENCES = ("Blevins", "NAFEMS")  # published references outside the seeds
 #: minimum number of checks per case (issues #2, #3 and #4); later issues add cases and checks
-MINIMUM = {"tamu": 7, "exact_beam": 5, "cantilever_beam": 8, "free_free_beam": 6,
-           "nafems_fv2": 16, "tamu_grid": 20, "draper_rpl": 28, "nps": 4, "eps": 20,
-           "output_feedback": 14, "bainum": 39}
+MINIMUM = {
+    "tamu": 7,
+    "exact_beam": 5,
+    "cantilever_beam": 8,
+    "free_free_beam": 6,
+    "nafems_fv2": 16,
+    "tamu_grid": 20,
+    "draper_rpl": 28,
+    "nps": 4,
+    "eps": 20,
+    "output_feedback": 14,
+    "bainum": 39,
+}
 
 
 @pytest.fixture(scope="module")
@@ -105,8 +120,7 @@ def test_an_exception_in_a_check_is_a_failed_result_not_a_crash():
 
 def test_values_are_computed_at_every_run_never_stored():
     calls = []
-    c = Check("x", "q", "s", 1.0, "", lambda: calls.append(1) or 1.0 + len(calls) * 1e-3,
-              rtol=1e-2)
+    c = Check("x", "q", "s", 1.0, "", lambda: calls.append(1) or 1.0 + len(calls) * 1e-3, rtol=1e-2)
     first, second = evaluate(c), evaluate(c)
     assert len(calls) == 2 and second.computed > first.computed
 
@@ -117,8 +131,9 @@ def test_result_dict_has_the_table_columns():
     assert list(d)[: len(COLUMNS)] == list(COLUMNS)
     assert d["relative_error"] == pytest.approx(0.025)
     assert (d["passed"], d["status"], d["note"], d["tolerance"]) == (True, "pass", "n", "±5 %")
-    assert evaluate(Check("x", "zero", "s", 0.0, "", lambda: 1e-9, atol=1e-6)).relative_error \
-        is None
+    assert (
+        evaluate(Check("x", "zero", "s", 0.0, "", lambda: 1e-9, atol=1e-6)).relative_error is None
+    )
 
 
 def test_series_maps_a_column():

@@ -46,8 +46,20 @@ def test_cases_lists_every_case_with_its_source():
 
 
 def test_modes_json():
-    result = runner.invoke(app, ["modes", "tamu", "--modes", "3", "--json",
-                                 "--set", "n_modes=4", "--set", "hub_inertia=30 ozf*in*s**2"])
+    result = runner.invoke(
+        app,
+        [
+            "modes",
+            "tamu",
+            "--modes",
+            "3",
+            "--json",
+            "--set",
+            "n_modes=4",
+            "--set",
+            "hub_inertia=30 ozf*in*s**2",
+        ],
+    )
     assert result.exit_code == 0, result.output
     data = json.loads(result.stdout)
     assert len(data["frequencies_hz"]) == len(data["constrained_hz"]) == 3
@@ -59,8 +71,9 @@ def test_modes_json():
     assert exact <= model < 1.001 * exact
     budget = data["inertia_budget_kg_m2"]
     assert budget["hub"] == pytest.approx(to_si("30 ozf*in*s**2", "kg*m**2"))
-    assert budget["total_model"] == pytest.approx(budget["hub"] + budget["beams"]
-                                                  + budget["tip_masses"])
+    assert budget["total_model"] == pytest.approx(
+        budget["hub"] + budget["beams"] + budget["tip_masses"]
+    )
 
 
 def test_modes_table():
@@ -69,12 +82,15 @@ def test_modes_table():
     assert "hub clamped" in result.stdout and "published_total" in result.stdout
 
 
-@pytest.mark.parametrize("args, expected", [
-    (["modes", "tamu", "--set", "hub_inertia=-1"], "hub_inertia: must be > 0"),
-    (["modes", "tamu", "--set", "hub_inertia"], "--set: expected NAME=VALUE"),
-    (["modes", "tamu", "-n", "12"], "n_modes: the model has 10 modes"),
-    (["modes", "nope"], "case: unknown case 'nope'"),
-])
+@pytest.mark.parametrize(
+    "args, expected",
+    [
+        (["modes", "tamu", "--set", "hub_inertia=-1"], "hub_inertia: must be > 0"),
+        (["modes", "tamu", "--set", "hub_inertia"], "--set: expected NAME=VALUE"),
+        (["modes", "tamu", "-n", "12"], "n_modes: the model has 10 modes"),
+        (["modes", "nope"], "case: unknown case 'nope'"),
+    ],
+)
 def test_modes_errors_exit_2(args, expected):
     result = runner.invoke(app, args)
     assert result.exit_code == 2
@@ -96,13 +112,21 @@ def test_run_writes_the_report(tmp_path):
     assert "Law II" in result.stdout and "peak_torque_Nm" in result.stdout
     # progress on stderr (a line per step off a terminal): one step per run
     assert "[2/2] running Law II ..." in result.stderr and "done (2/2 steps)" in result.stderr
-    assert {"metrics.json", "results.nc", "index.html", "hub_angle.png", "torque.png",
-            "hub_rate.png", "tip_deflection.png", "vibration_energy.png"} <= \
-        {p.name for p in out.iterdir()}
+    assert {
+        "metrics.json",
+        "results.nc",
+        "index.html",
+        "hub_angle.png",
+        "torque.png",
+        "hub_rate.png",
+        "tip_deflection.png",
+        "vibration_energy.png",
+    } <= {p.name for p in out.iterdir()}
     records = json.loads((out / "metrics.json").read_text())
     assert [r["run"] for r in records] == ["Law I", "Law II"]
-    assert {"settling_time_s", "overshoot_deg", "peak_torque_Nm", "residual_energy_J"} <= \
-        set(records[0])
+    assert {"settling_time_s", "overshoot_deg", "peak_torque_Nm", "residual_energy_J"} <= set(
+        records[0]
+    )
 
 
 def test_bad_scenario_exits_2_and_writes_nothing(tmp_path):
@@ -121,8 +145,9 @@ def test_missing_scenario_file_exits_2(tmp_path):
     assert "cannot read" in result.stderr
 
 
-def test_run_identification_scenario_prints_modes_and_writes_report(tmp_path,
-                                                                    identification_example):
+def test_run_identification_scenario_prints_modes_and_writes_report(
+    tmp_path, identification_example
+):
     path = tmp_path / "id.yaml"
     path.write_text(yaml.safe_dump(identification_example(fast=True)))
     out = tmp_path / "out"
@@ -169,11 +194,14 @@ def _probe_raises(monkeypatch, code):
     monkeypatch.setattr(os, "open", guarded)
 
 
-@pytest.mark.parametrize("code, reason", [
-    (errno.EROFS, "Read-only file system"),
-    (errno.ENOSPC, "No space left on device"),
-    (errno.EDQUOT, "Disk quota exceeded"),
-])
+@pytest.mark.parametrize(
+    "code, reason",
+    [
+        (errno.EROFS, "Read-only file system"),
+        (errno.ENOSPC, "No space left on device"),
+        (errno.EDQUOT, "Disk quota exceeded"),
+    ],
+)
 def test_run_refuses_an_unwritable_out_before_simulating(tmp_path, monkeypatch, code, reason):
     _probe_raises(monkeypatch, code)
     out = tmp_path / "out"
@@ -196,19 +224,20 @@ def test_run_refuses_a_file_as_out(tmp_path):
 
 
 def test_run_disk_full_while_publishing_exits_2_and_keeps_the_earlier_report(
-        tmp_path, fail_opening):
+    tmp_path, fail_opening
+):
     out = tmp_path / "out"
     path = write_scenario(tmp_path / "s.yaml")
     assert runner.invoke(app, ["run", path, "-o", str(out)]).exit_code == 0
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     fail_opening("results.nc")
-    result = runner.invoke(app, ["run", write_scenario(tmp_path / "s.yaml", duration="1 s"),
-                                 "-o", str(out)])
+    result = runner.invoke(
+        app, ["run", write_scenario(tmp_path / "s.yaml", duration="1 s"), "-o", str(out)]
+    )
     assert result.exit_code == 2, result.output
     assert "Law II" in result.stdout  # simulated, then the write failed
     message = unwrapped(result.stderr).split("done (2/2 steps)")[-1]  # after the progress lines
-    assert message.startswith(f"--out: cannot write the report to '{out}': No space left on "
-                              "device")
+    assert message.startswith(f"--out: cannot write the report to '{out}': No space left on device")
     assert "free some space or choose another folder" in message
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "s.yaml"]
@@ -220,7 +249,8 @@ def test_run_refuses_a_location_where_nothing_can_be_created():
     result = runner.invoke(app, ["run", "-o", "/proc/flexsat-report"])
     assert result.exit_code == 2, result.output
     assert unwrapped(result.stderr).startswith(
-        "--out: cannot write the report to '/proc/flexsat-report': ")
+        "--out: cannot write the report to '/proc/flexsat-report': "
+    )
     assert "running" not in result.stdout + result.stderr
 
 
@@ -228,7 +258,8 @@ def test_modes_refuses_more_modes_than_the_limit():
     result = runner.invoke(app, ["modes", "tamu", "--modes", "1000000"])
     assert result.exit_code == 2
     assert unwrapped(result.stderr).startswith(
-        "--modes: modes asked for = 1e+06, above the limit 100 (flexsat.limits)")
+        "--modes: modes asked for = 1e+06, above the limit 100 (flexsat.limits)"
+    )
 
 
 def test_the_metrics_table_puts_the_longer_list_down_the_rows():
@@ -243,8 +274,10 @@ def test_the_metrics_table_puts_the_longer_list_down_the_rows():
         console.print(_metrics_table(records))
         return console.export_text().splitlines()
 
-    runs = [{"run": "Law I", "overshoot_deg": 1.5, "settling_time_s": 3.0},
-            {"run": "Law II", "overshoot_deg": 0.5, "settling_time_s": 2.0}]
+    runs = [
+        {"run": "Law I", "overshoot_deg": 1.5, "settling_time_s": 3.0},
+        {"run": "Law II", "overshoot_deg": 0.5, "settling_time_s": 2.0},
+    ]
     header = next(line for line in shown(runs) if "Law II" in line)
     assert "metric" in header and "Law I" in header
     batch = [{"run": f"metric_{i}", "p5": 1.0, "median": 2.0, "p95": 3.0} for i in range(5)]

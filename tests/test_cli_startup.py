@@ -16,8 +16,19 @@ import flexsat
 ROOT = Path(__file__).resolve().parents[1]
 SRC = Path(flexsat.__file__).resolve().parent
 #: what `--help` and `cases` must not load: the numerical stack that made them take 2.5 s
-HEAVY = ("numpy", "scipy", "matplotlib", "xarray", "pint", "control", "h5py", "flexsat.cases",
-         "flexsat.sim", "flexsat.scenarios", "flexsat.checks")
+HEAVY = (
+    "numpy",
+    "scipy",
+    "matplotlib",
+    "xarray",
+    "pint",
+    "control",
+    "h5py",
+    "flexsat.cases",
+    "flexsat.sim",
+    "flexsat.scenarios",
+    "flexsat.checks",
+)
 
 
 def _python(*args: str, code: str | None = None) -> subprocess.CompletedProcess:
@@ -30,9 +41,11 @@ def _python(*args: str, code: str | None = None) -> subprocess.CompletedProcess:
 def test_light_commands_import_no_numerical_stack(argv):
     """Measured by the modules loaded, not by a wall-clock limit (benchmarks/bench_cli.py times
     them)."""
-    code = ("import sys\nfrom flexsat.cli import app\n"
-            "try:\n    app(sys.argv[1:], prog_name='flexsat')\nexcept SystemExit:\n    pass\n"
-            f"print(sorted(m for m in {HEAVY!r} if m in sys.modules), file=sys.stderr)")
+    code = (
+        "import sys\nfrom flexsat.cli import app\n"
+        "try:\n    app(sys.argv[1:], prog_name='flexsat')\nexcept SystemExit:\n    pass\n"
+        f"print(sorted(m for m in {HEAVY!r} if m in sys.modules), file=sys.stderr)"
+    )
     done = _python(*argv, code=code)
     assert done.returncode == 0, done.stderr
     assert done.stderr.strip().splitlines()[-1] == "[]", done.stderr

@@ -9,8 +9,8 @@ from rich.console import Console
 from typer.testing import CliRunner
 
 import flexsat.checks as checks_module
-from flexsat.checks import COLUMNS, Check, Discrepancy
 from flexsat import cli
+from flexsat.checks import COLUMNS, Check, Discrepancy
 from flexsat.cli import app
 
 runner = CliRunner()
@@ -21,17 +21,46 @@ def _raise():
 
 
 FAKES = [
-    Check("fake_ok", "a passing number", "seed 000_7bfdb62d2eacc22a.txt, L1", 1.0, "Hz",
-          lambda: 1.0 + 1e-6, rtol=1e-3),
-    Check("fake_bad", "a failing number", "seed 000_7bfdb62d2eacc22a.txt, L2", 1.0, "Hz",
-          lambda: 2.0, rtol=1e-3, note="a documented deviation"),
-    Check("fake_bad", "a crashing number", "seed 000_7bfdb62d2eacc22a.txt, L3", 1.0, "Hz",
-          _raise, rtol=1e-3),
+    Check(
+        "fake_ok",
+        "a passing number",
+        "seed 000_7bfdb62d2eacc22a.txt, L1",
+        1.0,
+        "Hz",
+        lambda: 1.0 + 1e-6,
+        rtol=1e-3,
+    ),
+    Check(
+        "fake_bad",
+        "a failing number",
+        "seed 000_7bfdb62d2eacc22a.txt, L2",
+        1.0,
+        "Hz",
+        lambda: 2.0,
+        rtol=1e-3,
+        note="a documented deviation",
+    ),
+    Check(
+        "fake_bad",
+        "a crashing number",
+        "seed 000_7bfdb62d2eacc22a.txt, L3",
+        1.0,
+        "Hz",
+        _raise,
+        rtol=1e-3,
+    ),
 ]
 #: a printed 1.0 that the paper's own inputs give as 1.5: an erratum, explained
-ERRATUM = Check("fake_erratum", "a misprinted number", "seed 002_c3272b32d7cac32e.txt, L4", 1.0,
-                "Hz", lambda: 1.5, rtol=1e-3,
-                discrepancy=Discrepancy(1.5, "Bainum & Reddy 1979 misprint 1.5 as 1.0"))
+ERRATUM = Check(
+    "fake_erratum",
+    "a misprinted number",
+    "seed 002_c3272b32d7cac32e.txt, L4",
+    1.0,
+    "Hz",
+    lambda: 1.5,
+    rtol=1e-3,
+    discrepancy=Discrepancy(1.5, "Bainum & Reddy 1979 misprint 1.5 as 1.0"),
+)
 
 
 @pytest.fixture

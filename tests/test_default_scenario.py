@@ -14,8 +14,13 @@ from flexsat.scenarios import DEFAULT_SCENARIO, load_scenario, run_scenario
 def runs():
     """The default scenario plus Law I with g2 = 0 (Att. 3 Fig. 9), same hardware and noise."""
     data = yaml.safe_load(resources.files("flexsat.cases").joinpath(DEFAULT_SCENARIO).read_text())
-    data["runs"].append({"label": "Law I, g2 = 0", "law": "lyapunov_regulator",
-                         "gains": {"g1": "600 ozf*in/rad", "g2": 0}})
+    data["runs"].append(
+        {
+            "label": "Law I, g2 = 0",
+            "law": "lyapunov_regulator",
+            "gains": {"g1": "600 ozf*in/rad", "g2": 0},
+        }
+    )
     result = run_scenario(load_scenario(yaml.safe_dump(data)))
     return {row["run"]: row for row in result.metrics_records()}
 

@@ -10,13 +10,14 @@ against this table. A *unit* is a sub-package (``structures``) or a top-level mo
 layer  units                                        what they are
 =====  ===========================================  ========================================
 0      flexsat (the package root), units,           helpers: SI conversion, input checks,
-       validation, limits, lazy, text, references,  resource limits, lazy exports, display
-       netcdf                                       text, the bibliography, netCDF writing
+       input_checks, limits, lazy, text,            resource limits, lazy exports, display
+       references, netcdf, plugins                  text, the bibliography, netCDF writing,
+                                                    entry-point plug-ins
 1      structures                                   FE models, modal models, their files
 2      analysis                                     Gramians, controllability, placement
 3      dynamics                                     plants built from structural models
-4      maneuvers, control, identify                 torque shapes, control laws,
-                                                    system identification
+4      maneuvers, control, identify, attitude       torque shapes, control laws,
+                                                    system identification, star trackers
 5      sim                                          the simulation engine
 6      design                                       sweeps, Monte Carlo, optimisation
 7      cases, catalog                               the published benchmark systems
@@ -48,11 +49,21 @@ import pytest
 SRC = Path(__file__).resolve().parents[1] / "src" / "flexsat"
 
 LAYERS = (
-    ("flexsat", "units", "validation", "limits", "lazy", "text", "references", "netcdf"),
+    (
+        "flexsat",
+        "units",
+        "input_checks",
+        "limits",
+        "lazy",
+        "text",
+        "references",
+        "netcdf",
+        "plugins",
+    ),
     ("structures",),
     ("analysis",),
     ("dynamics",),
-    ("maneuvers", "control", "identify"),
+    ("maneuvers", "control", "identify", "attitude"),
     ("sim",),
     ("design",),
     ("cases", "catalog"),
@@ -99,17 +110,24 @@ def imported_names(tree: ast.AST, module: str, is_package: bool) -> list[tuple[i
                 stem = node.module
             # ``from flexsat import cases`` imports the unit ``cases``: name each alias
             found += [(node.lineno, f"{stem}.{alias.name}") for alias in node.names]
-        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
-              and node.func.attr == "import_module" and node.args
-              and isinstance(node.args[0], ast.Constant) and isinstance(node.args[0].value, str)):
+        elif (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Attribute)
+            and node.func.attr == "import_module"
+            and node.args
+            and isinstance(node.args[0], ast.Constant)
+            and isinstance(node.args[0].value, str)
+        ):
             found.append((node.lineno, node.args[0].value))
-    return [(line, name) for line, name in found
-            if name == "flexsat" or name.startswith("flexsat.")]
+    return [
+        (line, name) for line, name in found if name == "flexsat" or name.startswith("flexsat.")
+    ]
 
 
 def imports_of(path: Path) -> list[tuple[int, str]]:
-    return imported_names(ast.parse(path.read_text(), str(path)), module_name(path),
-                          path.name == "__init__.py")
+    return imported_names(
+        ast.parse(path.read_text(), str(path)), module_name(path), path.name == "__init__.py"
+    )
 
 
 MODULES = sorted(SRC.rglob("*.py"))
@@ -124,18 +142,27 @@ def test_every_unit_is_in_the_table():
 @pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(SRC.parent)))
 def test_no_module_imports_a_higher_layer(path):
     unit = unit_of(module_name(path))
-    upward = [f"line {line}: {name} (layer {RANK[unit_of(name)]})"
-              for line, name in imports_of(path) if RANK[unit_of(name)] > RANK[unit]]
-    assert upward == [], (f"{module_name(path)} (unit {unit}, layer {RANK[unit]}) imports a "
-                          f"higher layer: {upward}; move the code up or the dependency down")
+    upward = [
+        f"line {line}: {name} (layer {RANK[unit_of(name)]})"
+        for line, name in imports_of(path)
+        if RANK[unit_of(name)] > RANK[unit]
+    ]
+    assert upward == [], (
+        f"{module_name(path)} (unit {unit}, layer {RANK[unit]}) imports a "
+        f"higher layer: {upward}; move the code up or the dependency down"
+    )
 
 
 def test_nothing_below_cases_imports_the_top():
     """The issue's rule in its own words: checked on the table itself."""
     below = {unit for unit, rank in RANK.items() if rank < RANK["cases"]}
-    offenders = [(module_name(p), line, name) for p in MODULES
-                 if unit_of(module_name(p)) in below
-                 for line, name in imports_of(p) if unit_of(name) in TOP]
+    offenders = [
+        (module_name(p), line, name)
+        for p in MODULES
+        if unit_of(module_name(p)) in below
+        for line, name in imports_of(p)
+        if unit_of(name) in TOP
+    ]
     assert offenders == []
     assert all(RANK[u] >= RANK["cases"] for u in TOP)
 
@@ -179,5 +206,11 @@ def test_the_scan_sees_every_kind_of_import():
     """)
     found = imported_names(ast.parse(source), "flexsat.structures.fem", is_package=False)
     assert [(line, unit_of(name)) for line, name in found] == [
-        (3, "units"), (4, "cases"), (6, "scenarios"), (7, "report"), (10, "checks"),
-        (11, "structures"), (12, "cli")]
+        (3, "units"),
+        (4, "cases"),
+        (6, "scenarios"),
+        (7, "report"),
+        (10, "checks"),
+        (11, "structures"),
+        (12, "cli"),
+    ]

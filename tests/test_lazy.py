@@ -24,14 +24,17 @@ def package(tmp_path, monkeypatch):
     which counts how often it is executed in ``lazy_probe.LOADS``."""
     root = tmp_path / "lazy_probe"
     root.mkdir()
-    (root / "__init__.py").write_text(textwrap.dedent("""
+    (root / "__init__.py").write_text(
+        textwrap.dedent("""
         from flexsat.lazy import lazy_exports
 
         LOADS = []
         __getattr__, __dir__ = lazy_exports(__name__, {"VALUE": "heavy"})
-    """))
-    (root / "heavy.py").write_text("import lazy_probe\nlazy_probe.LOADS.append(1)\n"
-                                   "VALUE = object()\n")
+    """)
+    )
+    (root / "heavy.py").write_text(
+        "import lazy_probe\nlazy_probe.LOADS.append(1)\nVALUE = object()\n"
+    )
     monkeypatch.syspath_prepend(str(tmp_path))
     yield importlib.import_module("lazy_probe")
     for name in ("lazy_probe", "lazy_probe.heavy"):
@@ -72,7 +75,8 @@ def test_every_export_of_the_flexsat_packages_is_defined_where_the_map_says(name
     package = importlib.import_module(name)
     for export, module in package._EXPORTS.items():
         assert getattr(package, export) is getattr(
-            importlib.import_module(f"{name}.{module}"), export), export
+            importlib.import_module(f"{name}.{module}"), export
+        ), export
     assert set(package.__all__) <= set(dir(package))
 
 
@@ -87,7 +91,12 @@ def test_importing_flexsat_scenarios_loads_only_what_is_used():
         print(sorted(before), "flexsat.scenarios.documents" in sys.modules,
               "flexsat.scenarios.identification" in sys.modules)
     """)
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          env={**os.environ, "PYTHONPATH": str(SRC)}, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(SRC)},
+        timeout=120,
+    )
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["[]", "True", "False"]

@@ -13,14 +13,30 @@ from flexsat import limits
 from flexsat.limits import check_count, check_memory, is_integral, memory_estimate
 
 
-@pytest.mark.parametrize("value", [3, -2, 0, np.int64(7), np.uint8(255), 10**40, 1e3,
-                                   np.float64(2.0), -0.0])
+@pytest.mark.parametrize(
+    "value", [3, -2, 0, np.int64(7), np.uint8(255), 10**40, 1e3, np.float64(2.0), -0.0]
+)
 def test_integral_values(value):
     assert is_integral(value)
 
 
-@pytest.mark.parametrize("value", [True, False, np.bool_(True), 2.5, np.float32(0.5),
-                                   math.nan, math.inf, -math.inf, "3", None, 3 + 0j, [1]])
+@pytest.mark.parametrize(
+    "value",
+    [
+        True,
+        False,
+        np.bool_(True),
+        2.5,
+        np.float32(0.5),
+        math.nan,
+        math.inf,
+        -math.inf,
+        "3",
+        None,
+        3 + 0j,
+        [1],
+    ],
+)
 def test_non_integral_values(value):
     assert not is_integral(value)
 
@@ -28,17 +44,21 @@ def test_non_integral_values(value):
 def test_count_at_the_limit_passes_and_one_above_is_refused():
     check_count(1_000, 1_000, "substeps", "substeps per control period")
     with pytest.raises(ValueError) as info:
-        check_count(1_001, 1_000, "substeps", "substeps per control period",
-                    "raise the integration step")
-    assert str(info.value) == ("substeps: substeps per control period = 1001, above the limit "
-                               "1,000 (flexsat.limits); raise the integration step")
+        check_count(
+            1_001, 1_000, "substeps", "substeps per control period", "raise the integration step"
+        )
+    assert str(info.value) == (
+        "substeps: substeps per control period = 1001, above the limit "
+        "1,000 (flexsat.limits); raise the integration step"
+    )
 
 
 def test_count_message_without_a_hint_ends_at_the_limit():
     with pytest.raises(ValueError) as info:
         check_count(7.5e13, limits.MAX_SAMPLES, "duration", "control samples")
-    assert str(info.value) == ("duration: control samples = 7.5e+13, above the limit 2,000,000 "
-                               "(flexsat.limits)")
+    assert str(info.value) == (
+        "duration: control samples = 7.5e+13, above the limit 2,000,000 (flexsat.limits)"
+    )
 
 
 def test_memory_estimate_is_eight_bytes_per_value_without_overflow():
@@ -52,8 +72,10 @@ def test_memory_at_the_limit_passes_and_above_is_refused_in_readable_units():
     check_memory(limits.MAX_MEMORY, "duration", "a run")
     with pytest.raises(ValueError) as info:
         check_memory(12 * 1024**3, "duration", "a run of 3e9 samples")
-    assert str(info.value) == ("duration: a run of 3e9 samples needs about 12 GB of memory, above "
-                               "the limit 2 GB (flexsat.limits.MAX_MEMORY)")
+    assert str(info.value) == (
+        "duration: a run of 3e9 samples needs about 12 GB of memory, above "
+        "the limit 2 GB (flexsat.limits.MAX_MEMORY)"
+    )
 
 
 def test_memory_limit_is_read_at_call_time(monkeypatch):
@@ -62,8 +84,10 @@ def test_memory_limit_is_read_at_call_time(monkeypatch):
     with pytest.raises(ValueError) as info:
         check_memory(1500, "n_cases", "a batch")
     # 1500 B = 1.46 kB; a limit below 1 kB is shown in bytes
-    assert str(info.value) == ("n_cases: a batch needs about 1.46 kB of memory, above the limit "
-                               "1000 B (flexsat.limits.MAX_MEMORY)")
+    assert str(info.value) == (
+        "n_cases: a batch needs about 1.46 kB of memory, above the limit "
+        "1000 B (flexsat.limits.MAX_MEMORY)"
+    )
     monkeypatch.setattr(limits, "MAX_MEMORY", 3 * 1024**2)
     with pytest.raises(ValueError, match=r"needs about 4 MB of memory, above the limit 3 MB"):
         check_memory(4 * 1024**2, "n_cases", "a batch")

@@ -59,7 +59,7 @@ def test_reduced_regulator_zeroes_the_gains_of_modes_3_to_6(lqg_plan):
     then estimates modes 3-6 open loop (Kalman rows orders of magnitude below the kept ones)."""
     law = lqg_plan.controllers["LQG, reduced regulator (Eq. 53)"]
     n = law.K.shape[1] // 2
-    dropped = np.r_[3:n, n + 3:2 * n]
+    dropped = np.r_[3:n, n + 3 : 2 * n]
     assert np.all(law.K[0, dropped] == 0) and np.all(law.K[0, [0, 1, 2, n, n + 1, n + 2]] != 0)
     rows = np.linalg.norm(law.L, axis=1)
     assert rows[dropped].max() < 1e-2 * rows[[0, n]].min()

@@ -11,8 +11,9 @@ def test_cite_replaces_each_seed_file_by_authors_and_year():
 
 
 def test_references_list_the_full_citation_and_the_attached_papers_named():
-    lines = references(["seed 000_7bfdb62d2eacc22a.txt, Att. 7 Table 2",
-                        "seed 004_680d3fec9e1f8c83.txt, L205"])
+    lines = references(
+        ["seed 000_7bfdb62d2eacc22a.txt, Att. 7 Table 2", "seed 004_680d3fec9e1f8c83.txt, L205"]
+    )
     assert lines[0].startswith("Junkins, Pollock & Rahman 1990: J. L. Junkins, T. C. Pollock")
     assert lines[1] == f"  Att. 7: {ATTACHMENTS[7]}"
     assert "Creamer" in lines[1] and "Acta Astronautica" in lines[2]

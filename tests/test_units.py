@@ -4,8 +4,8 @@ import time
 import numpy as np
 import pytest
 
+from flexsat.input_checks import require_finite, require_nonneg, require_numeric, require_positive
 from flexsat.units import Q_, UnitError, to_si, to_si_array
-from flexsat.validation import require_finite, require_nonneg, require_numeric, require_positive
 
 
 def test_published_imperial_units_convert_to_si():
@@ -41,11 +41,17 @@ def test_bad_quantities_name_the_field():
 def test_a_dimensionless_unit_is_not_relabelled_with_the_expected_one():
     """pint calls deg and percent dimensionless; they are refused where a dimension is due
     (before, "15 deg" read as 15 s), but an angle in degrees still reads where rad is due."""
-    with pytest.raises(UnitError, match=r"^duration: incompatible units \(degree given, s "
-                                         r"expected\)$"):
+    with pytest.raises(
+        UnitError,
+        match=r"^duration: incompatible units \(degree given, s "
+        r"expected\)$",
+    ):
         to_si("15 deg", "s", "duration")
-    with pytest.raises(UnitError, match=r"^natural_frequency: incompatible units \(percent "
-                                         r"given, rad/s expected\)$"):
+    with pytest.raises(
+        UnitError,
+        match=r"^natural_frequency: incompatible units \(percent "
+        r"given, rad/s expected\)$",
+    ):
         to_si("100 percent", "rad/s", "natural_frequency")
     assert to_si("2 deg/s", "rad/s") == pytest.approx(math.radians(2), rel=1e-15)
     assert to_si("100 percent", "") == 1.0
@@ -53,19 +59,22 @@ def test_a_dimensionless_unit_is_not_relabelled_with_the_expected_one():
     assert to_si(" 2.5e-3 ", "kg*m**2") == 2.5e-3
 
 
-@pytest.mark.parametrize("text, reason", [
-    ("1/0", "ZeroDivisionError"),
-    ("(1", "TokenError"),
-    ("10.0**400", "OverflowError"),
-    ("10**10**10 s", "OverflowError"),  # pint alone computes 10**(10**10) with Python ints
-    ("10⁹⁹⁹⁹⁹⁹⁹⁹⁹ s", "OverflowError"),  # the same through pint's superscript preprocessor
-    ("((m**10)**10)**10", "a unit raised to the power 1000"),
-    ("(-8)**0.5 s", "real number"),
-    ("1 m + 1 s", "DimensionalityError"),
-    ("x" * 1_000_000, "at most 200 characters, got 1000000"),
-    ("x" * 201, "at most 200 characters"),
-    ("   ", "empty string"),
-])
+@pytest.mark.parametrize(
+    "text, reason",
+    [
+        ("1/0", "ZeroDivisionError"),
+        ("(1", "TokenError"),
+        ("10.0**400", "OverflowError"),
+        ("10**10**10 s", "OverflowError"),  # pint alone computes 10**(10**10) with Python ints
+        ("10⁹⁹⁹⁹⁹⁹⁹⁹⁹ s", "OverflowError"),  # the same through pint's superscript preprocessor
+        ("((m**10)**10)**10", "a unit raised to the power 1000"),
+        ("(-8)**0.5 s", "real number"),
+        ("1 m + 1 s", "DimensionalityError"),
+        ("x" * 1_000_000, "at most 200 characters, got 1000000"),
+        ("x" * 201, "at most 200 characters"),
+        ("   ", "empty string"),
+    ],
+)
 def test_unreadable_expressions_fail_fast_naming_the_field(text, reason):
     """Every malformed or unbounded expression is a UnitError within milliseconds (measured
     about 0.1 ms each; the bound is generous for a loaded machine, where an unbounded power
@@ -103,8 +112,11 @@ def test_checks_convert_with_a_unit_and_refuse_a_quantity_without_one():
     with pytest.raises(ValueError, match=r"^band: must be finite"):
         require_finite("inf deg", "band", "rad")
     for value in (Q_(3, "m"), Q_(3), [1.0, Q_(2, "m")], Q_(np.eye(2), "N*m")):
-        with pytest.raises(UnitError, match=r"^w: takes a plain number here \(no unit is "
-                                            r"declared for it\)"):
+        with pytest.raises(
+            UnitError,
+            match=r"^w: takes a plain number here \(no unit is "
+            r"declared for it\)",
+        ):
             require_finite(value, "w")
         with pytest.raises(UnitError, match=r"^w: takes a plain number here"):
             require_numeric(value, "w")

@@ -30,7 +30,6 @@ from flexsat.sim.engine import SimConfig, simulate
 from flexsat.sim.sensors import Sensors
 from flexsat.units import Q_, UnitError, to_si
 
-
 OZ_IN = 0.028349523125 * 9.80665 * 0.0254  # 1 ozf·in in N·m: ounce (kg) × g0 × inch, all exact
 
 
@@ -63,8 +62,11 @@ def test_pd_from_rigid_poles_converts_inertia_frequency_and_damping():
     for law in (q, s):
         assert float(law.kp) == pytest.approx(float(si.kp), rel=1e-15)
         assert float(law.kd) == pytest.approx(float(si.kd), rel=1e-15)
-    with pytest.raises(UnitError, match=r"^natural_frequency: incompatible units \(percent given, "
-                                         r"rad/s expected\)"):
+    with pytest.raises(
+        UnitError,
+        match=r"^natural_frequency: incompatible units \(percent given, "
+        r"rad/s expected\)",
+    ):
         PD.from_rigid_poles(inertia, "100 percent", 0.9)
     with pytest.raises(UnitError, match=r"^inertia: incompatible units \(kilogram given"):
         PD.from_rigid_poles("3 kg", wn, 0.9)
@@ -72,8 +74,9 @@ def test_pd_from_rigid_poles_converts_inertia_frequency_and_damping():
 
 def test_lyapunov_gains_and_appendage_inertia_convert():
     si = LyapunovRegulator(600 * OZ_IN, 1200 * OZ_IN, 0.5, target=math.radians(40))
-    q = LyapunovRegulator(Q_(600, "ozf*in/rad"), "1200 ozf*in*s/rad", Q_(50, "percent"),
-                          target="40 deg")
+    q = LyapunovRegulator(
+        Q_(600, "ozf*in/rad"), "1200 ozf*in*s/rad", Q_(50, "percent"), target="40 deg"
+    )
     for name in ("g1", "g2", "g3", "target"):
         assert float(getattr(q, name)) == pytest.approx(float(getattr(si, name)), rel=1e-15)
     ref = BangBang(angle=1.0, inertia=1.0, u_max=1.0)
@@ -104,8 +107,9 @@ def test_lqg_period_and_target_convert_and_weight_matrices_refuse_quantities():
     with pytest.raises(UnitError, match=r"^Q: takes a plain number here \(no unit is declared"):
         lqr(A, B, Q_(np.eye(2), "N*m"), np.eye(1))
     with pytest.raises(UnitError, match=r"^Q: takes a plain number here"):
-        LQGController.design((A, B, C), Q_(np.eye(2), "N*m"), np.eye(1), np.eye(1), np.eye(2),
-                             0.01, gains="discrete")
+        LQGController.design(
+            (A, B, C), Q_(np.eye(2), "N*m"), np.eye(1), np.eye(1), np.eye(2), 0.01, gains="discrete"
+        )
 
 
 def test_frequency_shaped_break_frequency_converts_with_its_two_pi():
@@ -123,10 +127,14 @@ def test_sim_config_converts_duration_rate_and_band_and_stores_si():
     assert c.duration == 30.0 and type(c.duration) is float
     assert c.control_rate == pytest.approx(75.0, rel=1e-15)
     assert c.settling_band == pytest.approx(math.radians(0.5), rel=1e-15)
-    assert SimConfig(duration=1.0, control_rate=Q_(150 * math.pi, "rad/s")).control_rate == \
-        pytest.approx(75.0, rel=1e-15)  # an angular rate reads as cycles: ÷ 2π
-    with pytest.raises(UnitError, match=r"^duration: incompatible units \(degree given, s "
-                                         r"expected\)"):
+    assert SimConfig(
+        duration=1.0, control_rate=Q_(150 * math.pi, "rad/s")
+    ).control_rate == pytest.approx(75.0, rel=1e-15)  # an angular rate reads as cycles: ÷ 2π
+    with pytest.raises(
+        UnitError,
+        match=r"^duration: incompatible units \(degree given, s "
+        r"expected\)",
+    ):
         SimConfig(duration="15 deg")
     with pytest.raises(UnitError, match=r"^substeps: takes a plain number here"):
         SimConfig(duration=1.0, substeps=Q_(4, "s"))
@@ -141,8 +149,9 @@ def test_sensors_actuator_and_disturbances_convert_and_store_si():
     assert a.saturation == pytest.approx(400 * OZ_IN, rel=1e-15)
     assert a.torque_constant_ratio == pytest.approx(1.05, rel=1e-15)
     assert TorqueActuator().saturation == math.inf  # no limit stays allowed
-    f = BearingFriction(coulomb="20 ozf*in", viscous=Q_(0.001, "ozf*in*s/rad"),
-                        smoothing="1e-3 rad/s")
+    f = BearingFriction(
+        coulomb="20 ozf*in", viscous=Q_(0.001, "ozf*in*s/rad"), smoothing="1e-3 rad/s"
+    )
     assert f.coulomb == pytest.approx(20 * OZ_IN, rel=1e-15)
     assert f.viscous == pytest.approx(0.001 * OZ_IN, rel=1e-15)
     assert RandomTorque(std="5 ozf*in").std == pytest.approx(5 * OZ_IN, rel=1e-15)
@@ -153,8 +162,10 @@ def test_sensors_actuator_and_disturbances_convert_and_store_si():
         (lambda: TorqueActuator(saturation="400 ozf"), r"^saturation: incompatible units"),
         (lambda: BearingFriction(coulomb=Q_(2, "N")), r"^coulomb: incompatible units"),
         (lambda: RandomTorque(std="5 percent"), r"^std: incompatible units \(percent given"),
-        (lambda: Impulses(times=["1 s"], impulses=["1 N*m"]),
-         r"^impulses.impulses: incompatible units"),
+        (
+            lambda: Impulses(times=["1 s"], impulses=["1 N*m"]),
+            r"^impulses.impulses: incompatible units",
+        ),
     ]:
         with pytest.raises(UnitError, match=message):
             make()
@@ -175,25 +186,53 @@ def test_simulate_initial_angle_converts():
 
 
 # -- maneuvers ------------------------------------------------------------------------------------
-@pytest.mark.parametrize("shape, extra", [
-    (BangBang, {}), (SmoothBangBang, {"alpha": 0.2}), (PseudoSquare, {"rise_time": 1.0}),
-    (Sinusoidal, {}),
-])
+@pytest.mark.parametrize(
+    "shape, extra",
+    [
+        (BangBang, {}),
+        (SmoothBangBang, {"alpha": 0.2}),
+        (PseudoSquare, {"rise_time": 1.0}),
+        (Sinusoidal, {}),
+    ],
+)
 def test_torque_shapes_convert_every_parameter(shape, extra):
-    si = shape(angle=math.radians(40), inertia=to_si("2128 ozf*in*s**2", "kg*m**2"),
-               u_max=400 * OZ_IN, theta0=math.radians(5), **extra)
-    quantities = {k: Q_(v * 1000, "ms") if k == "rise_time" else Q_(100 * v, "percent")
-                  for k, v in extra.items()}
-    q = shape(angle=Q_(40, "deg"), inertia="2128 ozf*in*s**2", u_max="400 ozf*in",
-              theta0="5 deg", **quantities)
+    si = shape(
+        angle=math.radians(40),
+        inertia=to_si("2128 ozf*in*s**2", "kg*m**2"),
+        u_max=400 * OZ_IN,
+        theta0=math.radians(5),
+        **extra,
+    )
+    quantities = {
+        k: Q_(v * 1000, "ms") if k == "rise_time" else Q_(100 * v, "percent")
+        for k, v in extra.items()
+    }
+    q = shape(
+        angle=Q_(40, "deg"),
+        inertia="2128 ozf*in*s**2",
+        u_max="400 ozf*in",
+        theta0="5 deg",
+        **quantities,
+    )
     for name in ("angle", "inertia", "u_max", "duration", "theta0", *extra):
         assert float(getattr(q, name)) == pytest.approx(float(getattr(si, name)), rel=1e-15), name
     t = float(si.duration) / 3
-    assert q(Q_(t * 1000, "ms")).theta == pytest.approx(si(t).theta, rel=1e-14)  # t: one ms→s rounding
+    assert q(Q_(t * 1000, "ms")).theta == pytest.approx(
+        si(t).theta, rel=1e-14
+    )  # t: one ms→s rounding
     with pytest.raises(UnitError, match=r"^duration: incompatible units \(degree given, s"):
-        shape(angle=1.0, inertia=1.0, duration="15 deg",
-              **({"alpha": 0.1} if shape is SmoothBangBang else
-                 {"rise_time": 1.0} if shape is PseudoSquare else {}))
+        shape(
+            angle=1.0,
+            inertia=1.0,
+            duration="15 deg",
+            **(
+                {"alpha": 0.1}
+                if shape is SmoothBangBang
+                else {"rise_time": 1.0}
+                if shape is PseudoSquare
+                else {}
+            ),
+        )
     with pytest.raises(UnitError, match=r"^inertia: incompatible units \(kilogram given"):
         shape(angle=1.0, inertia="3 kg", u_max=1.0, **extra)
 
@@ -212,7 +251,14 @@ def test_case_inputs_convert_quantities_and_refuse_them_where_no_unit_fits():
         tamu(n_modes=Q_(3, "m"))
     values = read_inputs("demo", {"x": Param(1.0)}, {"x": Q_(25, "percent")})
     assert values["x"] == 0.25
-    params = HubAppendageParams(hub_inertia="50 ozf*in*s**2", n_appendages=4, hub_radius="5 in",
-                                length=Q_(46, "in"), EI=1.0, rho=1.0, damping=("1 percent", 0.02))
+    params = HubAppendageParams(
+        hub_inertia="50 ozf*in*s**2",
+        n_appendages=4,
+        hub_radius="5 in",
+        length=Q_(46, "in"),
+        EI=1.0,
+        rho=1.0,
+        damping=("1 percent", 0.02),
+    )
     assert params.length == pytest.approx(46 * 0.0254, rel=1e-15)
     assert params.damping == (0.01, 0.02)

@@ -50,8 +50,12 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _main(
-    version: Annotated[bool, typer.Option(
-        "--version", callback=_version, is_eager=True, help="Print the version and exit.")] = False,
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_version, is_eager=True, help="Print the version and exit."
+        ),
+    ] = False,
 ) -> None:
     """flexsat: integrated structures-and-control design of flexible spacecraft."""
 
@@ -97,10 +101,20 @@ def cases(
 ) -> None:
     """List the benchmark cases."""
     if as_json:
-        typer.echo(json.dumps([{"case": i.name, "source": cite(i.source),
-                                "references": references([i.source]),
-                                "description": i.description}
-                               for i in CASES.values()], indent=2))
+        typer.echo(
+            json.dumps(
+                [
+                    {
+                        "case": i.name,
+                        "source": cite(i.source),
+                        "references": references([i.source]),
+                        "description": i.description,
+                    }
+                    for i in CASES.values()
+                ],
+                indent=2,
+            )
+        )
         return
     table = Table(title="flexsat cases")
     for column in ("case", "source", "description"):
@@ -125,8 +139,11 @@ def _modes_data(case, case_name: str, n: int, overrides: dict) -> dict:
     where it has them (see :mod:`flexsat.cases`)."""
     import numpy as np
 
-    data = {"case": case_name, "overrides": overrides,
-            "frequencies_hz": np.asarray(case.frequencies_hz(n)).tolist()}
+    data = {
+        "case": case_name,
+        "overrides": overrides,
+        "frequencies_hz": np.asarray(case.frequencies_hz(n)).tolist(),
+    }
     if hasattr(case, "mode_descriptions"):
         data["descriptions"] = list(case.mode_descriptions(n))
     if hasattr(case, "mode_details"):
@@ -137,11 +154,16 @@ def _modes_data(case, case_name: str, n: int, overrides: dict) -> dict:
 def _print_modes(data: dict) -> None:
     from flexsat.units import Q_
 
-    columns = {"paper_mode_number": "paper mode", "frequencies_hz": "frequency (Hz)",
-               "published_hz": "published (Hz)", "ratio_to_published": "ratio",
-               "exact_unconstrained_hz": "exact, hub free (Hz)",
-               "constrained_hz": "exact, hub clamped (Hz)", "descriptions": "description",
-               "published_descriptions": "published description"}
+    columns = {
+        "paper_mode_number": "paper mode",
+        "frequencies_hz": "frequency (Hz)",
+        "published_hz": "published (Hz)",
+        "ratio_to_published": "ratio",
+        "exact_unconstrained_hz": "exact, hub free (Hz)",
+        "constrained_hz": "exact, hub clamped (Hz)",
+        "descriptions": "description",
+        "published_descriptions": "published description",
+    }
     present = [key for key in columns if key in data]
     modes = Table(title=f"{data['case']}: natural frequencies")
     modes.add_column("mode", justify="right")
@@ -157,8 +179,7 @@ def _print_modes(data: dict) -> None:
         for column in ("kg m²", "oz-in-s²"):
             budget.add_column(column, justify="right")
         for part, value in data["inertia_budget_kg_m2"].items():
-            budget.add_row(part, f"{value:.5g}",
-                           f"{Q_(value, 'kg*m**2').to('ozf*in*s**2').m:.5g}")
+            budget.add_row(part, f"{value:.5g}", f"{Q_(value, 'kg*m**2').to('ozf*in*s**2').m:.5g}")
         console.print(budget)
 
 
@@ -166,12 +187,20 @@ def _print_modes(data: dict) -> None:
 def modes(
     case: Annotated[str, typer.Argument(help="Case name (see `flexsat cases`).")],
     n: Annotated[int, typer.Option("--modes", "-n", min=1, help="Number of elastic modes.")] = 5,
-    settings: Annotated[list[str] | None, typer.Option(
-        "--set", help='Override a case parameter: NAME=VALUE, e.g. hub_inertia="30 ozf*in*s**2".'
-    )] = None,
+    settings: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--set",
+            help='Override a case parameter: NAME=VALUE, e.g. hub_inertia="30 ozf*in*s**2".',
+        ),
+    ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON to stdout.")] = False,
-    plot: Annotated[Path | None, typer.Option(
-        "--plot", help="Write a PNG of the mode shapes (or the frequencies) to this file.")] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option(
+            "--plot", help="Write a PNG of the mode shapes (or the frequencies) to this file."
+        ),
+    ] = None,
 ) -> None:
     """Natural frequencies of a case, with mode descriptions and published values where the
     case has them."""
@@ -180,8 +209,13 @@ def modes(
     try:
         from flexsat import limits
 
-        limits.check_count(n, limits.MAX_MODES, "--modes", "modes asked for",
-                           "the exact-beam cases solve one transcendental root per mode")
+        limits.check_count(
+            n,
+            limits.MAX_MODES,
+            "--modes",
+            "modes asked for",
+            "the exact-beam cases solve one transcendental root per mode",
+        )
         overrides = parse_settings(settings or [])
         built = get_case(case).builder(**overrides)
         data = _modes_data(built, case, n, overrides)
@@ -233,11 +267,16 @@ def _with_execution(spec, workers, scheduler):
     if workers is None and scheduler is None:
         return spec
     if spec.kind not in ("sweep", "montecarlo"):
-        raise ScenarioError([f"--workers/--scheduler: a {spec.kind} scenario runs in this "
-                             "process; they apply to kind sweep and montecarlo"])
+        raise ScenarioError(
+            [
+                f"--workers/--scheduler: a {spec.kind} scenario runs in this "
+                "process; they apply to kind sweep and montecarlo"
+            ]
+        )
     if workers is not None and scheduler is not None:
-        raise ScenarioError(["--workers/--scheduler: give one (a local cluster or an existing "
-                             "one), not both"])
+        raise ScenarioError(
+            ["--workers/--scheduler: give one (a local cluster or an existing one), not both"]
+        )
     execution = spec.execution.model_copy(update={"workers": workers, "scheduler": scheduler})
     copy = spec.model_copy(update={"execution": execution})
     copy._source, copy._folder = spec._source, spec._folder
@@ -265,8 +304,7 @@ _KINDS = {
     "tether": ("run_tether", "write_tether_report", lambda spec: len(spec.runs)),
     "cmg": ("run_cmg", "write_cmg_report", lambda spec: len(spec.runs) + 1),
     "cmg_station": ("run_cmg_station", "write_cmg_report", lambda spec: len(spec.runs) + 1),
-    "identification": ("run_identification", "write_identification_report",
-                       _identification_steps),
+    "identification": ("run_identification", "write_identification_report", _identification_steps),
     "sweep": ("run_batch_scenario", "write_batch_report", _batch_steps),
     "montecarlo": ("run_batch_scenario", "write_batch_report", _batch_steps),
 }
@@ -274,15 +312,26 @@ _KINDS = {
 
 @app.command()
 def run(
-    scenario: Annotated[Path | None, typer.Argument(
-        help="Scenario YAML file; the embedded TAMU 40 deg default when left out.")] = None,
+    scenario: Annotated[
+        Path | None,
+        typer.Argument(help="Scenario YAML file; the embedded TAMU 40 deg default when left out."),
+    ] = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="Report folder.")] = Path("out"),
-    workers: Annotated[int | None, typer.Option(
-        "--workers", min=1, help="Sweep or Monte Carlo: run on a local dask cluster of this "
-        "many worker processes.")] = None,
-    scheduler: Annotated[str | None, typer.Option(
-        "--scheduler", help="Sweep or Monte Carlo: run on the dask cluster at this address "
-        "(tcp://HOST:PORT).")] = None,
+    workers: Annotated[
+        int | None,
+        typer.Option(
+            "--workers",
+            min=1,
+            help="Sweep or Monte Carlo: run on a local dask cluster of this many worker processes.",
+        ),
+    ] = None,
+    scheduler: Annotated[
+        str | None,
+        typer.Option(
+            "--scheduler",
+            help="Sweep or Monte Carlo: run on the dask cluster at this address (tcp://HOST:PORT).",
+        ),
+    ] = None,
 ) -> None:
     """Run a scenario and write its report (metrics or identification tables, netCDF, plots,
     HTML)."""
@@ -311,12 +360,16 @@ def run(
     except KeyboardInterrupt as exc:  # Ctrl-C: say what is kept, exit as an interrupted program
         from flexsat.design.batch_runner import BatchInterrupted
 
-        message = (str(exc) if isinstance(exc, BatchInterrupted)
-                   else "interrupted: no report written")
+        message = (
+            str(exc) if isinstance(exc, BatchInterrupted) else "interrupted: no report written"
+        )
         errors.print(message, style="red", markup=False, highlight=False)
         raise typer.Exit(code=130) from None
-    console.print(_identification_table(result) if spec.kind == "identification"
-                  else _metrics_table(result.metrics_records()))
+    console.print(
+        _identification_table(result)
+        if spec.kind == "identification"
+        else _metrics_table(result.metrics_records())
+    )
     try:
         path = getattr(report, writer)(result, out)
     except OSError as exc:
@@ -332,8 +385,14 @@ def _progress(steps: int):
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     live = errors.is_terminal
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                  TimeElapsedColumn(), console=errors, disable=not live) as bar:
+    with Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=errors,
+        disable=not live,
+    ) as bar:
         task = bar.add_task("starting", total=steps)
         started = 0
 
@@ -342,8 +401,9 @@ def _progress(steps: int):
             bar.update(task, completed=min(started, steps), description=f"running {label}")
             started += 1
             if not live:
-                errors.print(f"[{started}/{steps}] running {label} ...", markup=False,
-                             highlight=False)
+                errors.print(
+                    f"[{started}/{steps}] running {label} ...", markup=False, highlight=False
+                )
 
         yield step
         # the runner's own count: a bar that ends short or over shows a miscounted step list
@@ -364,7 +424,8 @@ def _identification_table(result) -> Table:
         table.add_row(mode, *values)
     for name, v in result.campaign.scalings.items():
         table.caption = (table.caption or "") + (
-            f"{name}: a priori x{v['a_priori']:.3f}, updated x{v['updated']:.4f} of nominal\n")
+            f"{name}: a priori x{v['a_priori']:.3f}, updated x{v['updated']:.4f} of nominal\n"
+        )
     return table
 
 
@@ -382,16 +443,33 @@ def _validation_table(results, wide: bool) -> tuple[Table, list[str]]:
 
     table = Table(title="flexsat validate: published numbers, computed live", box=box.SIMPLE_HEAD)
     if wide:
-        columns = [("case", False), ("quantity", True), ("source", True), ("published", False),
-                   ("computed", False), ("unit", True), ("rel. error", False),
-                   ("tolerance", True), ("result", False)]
+        columns = [
+            ("case", False),
+            ("quantity", True),
+            ("source", True),
+            ("published", False),
+            ("computed", False),
+            ("unit", True),
+            ("rel. error", False),
+            ("tolerance", True),
+            ("result", False),
+        ]
     else:  # result first, so that it is never squeezed out; published over computed
-        columns = [("result", False), ("case: quantity (unit), source", True),
-                   ("published\ncomputed", True), ("rel. error", True), ("tolerance", True)]
+        columns = [
+            ("result", False),
+            ("case: quantity (unit), source", True),
+            ("published\ncomputed", True),
+            ("rel. error", True),
+            ("tolerance", True),
+        ]
     for column, wrap in columns:
-        table.add_column(column, overflow="fold", no_wrap=not wrap,
-                         justify="right" if column in _NUMERIC else "left",
-                         min_width=20 if column.startswith("case:") else None)
+        table.add_column(
+            column,
+            overflow="fold",
+            no_wrap=not wrap,
+            justify="right" if column in _NUMERIC else "left",
+            min_width=20 if column.startswith("case:") else None,
+        )
     notes: list[str] = []
     case = None
     for r in results:
@@ -409,8 +487,17 @@ def _validation_table(results, wide: bool) -> tuple[Table, list[str]]:
         computed = format_optional(r.computed, ".7g")
         error, tolerance = format_optional(r.relative_error, "+.1e"), Text(c.tolerance)
         if wide:
-            table.add_row(Text(c.case), Text(c.quantity + marks), Text(source), published, computed,
-                          Text(c.unit), error, tolerance, result)
+            table.add_row(
+                Text(c.case),
+                Text(c.quantity + marks),
+                Text(source),
+                published,
+                computed,
+                Text(c.unit),
+                error,
+                tolerance,
+                result,
+            )
             continue
         if c.case != case:
             if case is not None:
@@ -418,18 +505,26 @@ def _validation_table(results, wide: bool) -> tuple[Table, list[str]]:
             table.add_row("", Text(c.case, style="bold"))
             case = c.case
         unit = f" ({c.unit})" if c.unit else ""
-        table.add_row(result, Text.assemble(c.quantity, unit, marks, "\n", (source, "dim")),
-                      f"{published}\n{computed}", error, tolerance)
+        table.add_row(
+            result,
+            Text.assemble(c.quantity, unit, marks, "\n", (source, "dim")),
+            f"{published}\n{computed}",
+            error,
+            tolerance,
+        )
     return table, notes
 
 
 @app.command()
 def validate(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON to stdout.")] = False,
-    case: Annotated[list[str] | None, typer.Option(
-        "--case", help="Only this case's checks (repeat for several).")] = None,
-    strict: Annotated[bool, typer.Option(
-        "--strict", help="Also exit with code 1 on a documented discrepancy.")] = False,
+    case: Annotated[
+        list[str] | None,
+        typer.Option("--case", help="Only this case's checks (repeat for several)."),
+    ] = None,
+    strict: Annotated[
+        bool, typer.Option("--strict", help="Also exit with code 1 on a documented discrepancy.")
+    ] = False,
 ) -> None:
     """Recompute every published number the code base reproduces and compare it with the paper:
     case, quantity, source, published and computed values, relative error, tolerance, result.
@@ -457,10 +552,13 @@ def validate(
         _print_references([r.check.source for r in results])
         seconds = sum(r.seconds for r in results)
         passed = len(results) - len(failed) - len(explained)
-        console.print(f"{len(results)} checks: {passed} passed, {len(explained)} discrepancies "
-                      f"(explained), {len(failed)} failed ({seconds:.1f} s)", markup=False,
-                      highlight=False,
-                      style="red" if failed else ("yellow" if explained else "green"))
+        console.print(
+            f"{len(results)} checks: {passed} passed, {len(explained)} discrepancies "
+            f"(explained), {len(failed)} failed ({seconds:.1f} s)",
+            markup=False,
+            highlight=False,
+            style="red" if failed else ("yellow" if explained else "green"),
+        )
     if failed or (strict and explained):
         raise typer.Exit(code=1)
 

@@ -87,8 +87,10 @@ def check_count(value: int, limit: int, field: str, what: str, hint: str = "") -
     ValueError
     """
     if value > limit:
-        raise ValueError(f"{field}: {what} = {value:.4g}, above the limit {limit:,} "
-                         f"(flexsat.limits){'; ' + hint if hint else ''}")
+        raise ValueError(
+            f"{field}: {what} = {value:.4g}, above the limit {limit:,} "
+            f"(flexsat.limits){'; ' + hint if hint else ''}"
+        )
 
 
 def memory_estimate(n_samples: int, n_cases: int, n_values: int) -> int:
@@ -105,10 +107,27 @@ def check_memory(n_bytes: int, field: str, what: str) -> None:
         ``"field: <what> needs about 12 GB of memory, above the limit 2 GB ..."``.
     """
     if n_bytes > MAX_MEMORY:
-        raise ValueError(f"{field}: {what} needs about {_bytes(n_bytes)} of memory, above the "
-                         f"limit {_bytes(MAX_MEMORY)} (flexsat.limits.MAX_MEMORY)")
+        raise ValueError(
+            f"{field}: {what} needs about {_bytes(n_bytes)} of memory, above the "
+            f"limit {_bytes(MAX_MEMORY)} (flexsat.limits.MAX_MEMORY)"
+        )
 
 
-__all__ = ["MAX_CASES", "MAX_DOCUMENT_BYTES", "MAX_DOCUMENT_NODES", "MAX_MODES", "MAX_ELEMENTS",
-           "MAX_INTEGRATOR_STEPS", "MAX_MEMORY", "MAX_NESTING", "MAX_RUNS", "MAX_SAMPLES",
-           "MAX_SEED", "MAX_SUBSTEPS", "check_count", "check_memory", "is_integral", "memory_estimate"]
+__all__ = [
+    "MAX_CASES",
+    "MAX_DOCUMENT_BYTES",
+    "MAX_DOCUMENT_NODES",
+    "MAX_MODES",
+    "MAX_ELEMENTS",
+    "MAX_INTEGRATOR_STEPS",
+    "MAX_MEMORY",
+    "MAX_NESTING",
+    "MAX_RUNS",
+    "MAX_SAMPLES",
+    "MAX_SEED",
+    "MAX_SUBSTEPS",
+    "check_count",
+    "check_memory",
+    "is_integral",
+    "memory_estimate",
+]

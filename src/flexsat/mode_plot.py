@@ -23,8 +23,11 @@ def plot_case_modes(case, n_modes: int, path, title: str) -> Path:
     """
     path = Path(path)
     structure = case.structure() if hasattr(case, "structure") else None
-    fig = (_mode_shapes(structure, n_modes, title) if structure is not None
-           else _frequency_chart(case, n_modes, title))
+    fig = (
+        _mode_shapes(structure, n_modes, title)
+        if structure is not None
+        else _frequency_chart(case, n_modes, title)
+    )
     fig.savefig(path, dpi=110)
     return path
 
@@ -35,7 +38,7 @@ def _mode_shapes(structure, n_modes: int, title: str) -> Figure:
     modes = assembly.modes(min(assembly.n_dofs, n_modes + n_rigid_max))
     omegas = modes.omegas
     # near-zero (rigid-body) modes sit many decades below the elastic ones computed with them
-    elastic = np.flatnonzero(omegas > 1e-3 * max(omegas.max(), 1e-300))[:min(n_modes, 6)]
+    elastic = np.flatnonzero(omegas > 1e-3 * max(omegas.max(), 1e-300))[: min(n_modes, 6)]
     xyz, ids = assembly.coordinates, list(assembly.node_ids)
     row = {nid: i for i, nid in enumerate(ids)}
     edges = [(row[a], row[b]) for a, b in _edges(structure)]
@@ -66,8 +69,11 @@ def _frequency_chart(case, n_modes: int, title: str) -> Figure:
     ax = fig.add_subplot()
     y = np.arange(len(f))[::-1]
     ax.barh(y, f, color="C0")
-    ax.set_yticks(y, [f"mode {i + 1}" + (f": {labels[i]}" if labels else "")
-                      for i in range(len(f))], fontsize=8)
+    ax.set_yticks(
+        y,
+        [f"mode {i + 1}" + (f": {labels[i]}" if labels else "") for i in range(len(f))],
+        fontsize=8,
+    )
     ax.set_xlabel("frequency (Hz)")
     ax.set_title(title)
     fig.tight_layout()

@@ -29,67 +29,73 @@ class Reference:
 SEEDS: dict[str, Reference] = {
     "000": Reference(
         "Junkins, Pollock & Rahman 1990",
-        "J. L. Junkins, T. C. Pollock and Z. H. Rahman, \"Analytical and Experimental Research "
-        "on Large Angle Maneuvers of Flexible Structures\", final report, AFOSR contract "
-        "F49620-87-C-0078, Texas A&M University, May 1990 (DTIC AD-A226 679; 14 attached papers)"),
+        'J. L. Junkins, T. C. Pollock and Z. H. Rahman, "Analytical and Experimental Research '
+        'on Large Angle Maneuvers of Flexible Structures", final report, AFOSR contract '
+        "F49620-87-C-0078, Texas A&M University, May 1990 (DTIC AD-A226 679; 14 attached papers)",
+    ),
     "001": Reference(
         "Hailey, Sortun & Agrawal c. 1992",
-        "J. A. Hailey, C. D. Sortun and B. N. Agrawal, \"Experimental Verification of Attitude "
-        "Control Techniques for Slew Maneuvers of Flexible Spacecraft\", conference paper, Naval "
-        "Postgraduate School, Monterey (c. 1992; it cites work of October 1991)"),
+        'J. A. Hailey, C. D. Sortun and B. N. Agrawal, "Experimental Verification of Attitude '
+        'Control Techniques for Slew Maneuvers of Flexible Spacecraft", conference paper, Naval '
+        "Postgraduate School, Monterey (c. 1992; it cites work of October 1991)",
+    ),
     "002": Reference(
         "Bainum & Reddy 1979",
-        "P. M. Bainum and A. S. S. R. Reddy, \"The Dynamics and Control of Large Flexible Space "
-        "Structures - II, Part A: Shape and Orientation Control Using Point Actuators\", final "
-        "report, NASA CR-158684, Howard University, June 1979"),
+        'P. M. Bainum and A. S. S. R. Reddy, "The Dynamics and Control of Large Flexible Space '
+        'Structures - II, Part A: Shape and Orientation Control Using Point Actuators", final '
+        "report, NASA CR-158684, Howard University, June 1979",
+    ),
     "003": Reference(
         "EPS slew study c. 1989",
         "Earth Pointing Satellite slew and integrated structures/control design study for NASA "
         "Langley (report section, title page lost; slew method of Chun, Turner & Juang 1987 "
-        "and Chun & Turner 1988), c. 1989"),
+        "and Chun & Turner 1988), c. 1989",
+    ),
     "004": Reference(
         "Agrawal & Bang 1996",
-        "B. N. Agrawal and H. Bang, \"Adaptive Structures for Large Precision Antennas\", "
-        "Acta Astronautica, 1996 (IAF-94.1.4.202, 45th IAC, Jerusalem, 1994)"),
+        'B. N. Agrawal and H. Bang, "Adaptive Structures for Large Precision Antennas", '
+        "Acta Astronautica, 1996 (IAF-94.1.4.202, 45th IAC, Jerusalem, 1994)",
+    ),
 }
 
 #: the papers attached to the Texas A&M report (seed 000) that the cases and checks cite
 ATTACHMENTS: dict[int, str] = {
-    1: "J. L. Junkins, Z. H. Rahman and H. Bang, \"Near-Minimum-Time Maneuvers of Flexible "
-       "Vehicles: A Liapunov Control Law Design Method\", AIAA paper 90-1222, 1990",
-    2: "J. L. Junkins, Z. H. Rahman and H. Bang, \"Stable Maneuver Control Laws for "
-       "Distributed Parameter Systems\", Int. Conf. Dynamics of Flexible Structures in Space, "
-       "Cranfield, 1990",
-    3: "J. L. Junkins, Z. H. Rahman and H. Bang, \"Near-Minimum-Time Maneuvers of Flexible "
-       "Vehicles: Analytical and Experimental Results\", AIAA Aerospace Sciences Meeting, 1990",
-    4: "Y. Kim and J. L. Junkins, \"A Measure of Controllability for Actuator Placement\", "
-       "AIAA Guidance, Navigation and Control Conference, 1990",
-    5: "J. L. Junkins and Y. Kim, \"First and Second Order Sensitivity of the Singular Value "
-       "Decomposition\", Journal of the Astronautical Sciences 38(1), 1990",
-    6: "G. H. James and J. L. Junkins, \"Novel Sensing and Structural Identification Methods: "
-       "Preliminary Analytical and Experimental Results\", AAS paper 89-425, 1989",
-    7: "N. G. Creamer and J. L. Junkins, \"Identification Method for Lightly Damped "
-       "Structures\", Journal of Guidance, Control, and Dynamics 11(6), 1988",
-    8: "J. L. Junkins and G. H. James, \"A Stereo-Triangulation Approach to Sensing for "
-       "Structural Identification\", AAS paper 88-015, 1988",
-    12: "S. R. Vadali and E.-S. Kim, \"Feedback Control of Tethered Satellites Using Liapunov "
-        "Stability Theory\", AIAA paper 90-1197, 1990",
+    1: 'J. L. Junkins, Z. H. Rahman and H. Bang, "Near-Minimum-Time Maneuvers of Flexible '
+    'Vehicles: A Liapunov Control Law Design Method", AIAA paper 90-1222, 1990',
+    2: 'J. L. Junkins, Z. H. Rahman and H. Bang, "Stable Maneuver Control Laws for '
+    'Distributed Parameter Systems", Int. Conf. Dynamics of Flexible Structures in Space, '
+    "Cranfield, 1990",
+    3: 'J. L. Junkins, Z. H. Rahman and H. Bang, "Near-Minimum-Time Maneuvers of Flexible '
+    'Vehicles: Analytical and Experimental Results", AIAA Aerospace Sciences Meeting, 1990',
+    4: 'Y. Kim and J. L. Junkins, "A Measure of Controllability for Actuator Placement", '
+    "AIAA Guidance, Navigation and Control Conference, 1990",
+    5: 'J. L. Junkins and Y. Kim, "First and Second Order Sensitivity of the Singular Value '
+    'Decomposition", Journal of the Astronautical Sciences 38(1), 1990',
+    6: 'G. H. James and J. L. Junkins, "Novel Sensing and Structural Identification Methods: '
+    'Preliminary Analytical and Experimental Results", AAS paper 89-425, 1989',
+    7: 'N. G. Creamer and J. L. Junkins, "Identification Method for Lightly Damped '
+    'Structures", Journal of Guidance, Control, and Dynamics 11(6), 1988',
+    8: 'J. L. Junkins and G. H. James, "A Stereo-Triangulation Approach to Sensing for '
+    'Structural Identification", AAS paper 88-015, 1988',
+    12: 'S. R. Vadali and E.-S. Kim, "Feedback Control of Tethered Satellites Using Liapunov '
+    'Stability Theory", AIAA paper 90-1197, 1990',
 }
 
 _SEED = re.compile(r"seed (?:file )?(\d{3})_[0-9a-f]{16}\.txt")
 _ATTACHMENT = re.compile(r"Att\. (\d+)")
 
 #: what the ``Lnnn`` line numbers kept in the sources mean
-LINE_NUMBERS = ("Lnnn: line numbers in the developers' OCR transcript of the source, "
-                "kept to locate the passage in the project's notes")
+LINE_NUMBERS = (
+    "Lnnn: line numbers in the developers' OCR transcript of the source, "
+    "kept to locate the passage in the project's notes"
+)
 
 
 def cite(text: str) -> str:
     """``text`` with every seed file name replaced by its short citation
     (``"seed 000_7bfdb62d2eacc22a.txt, Att. 4"`` → ``"Junkins, Pollock & Rahman 1990, Att. 4"``).
     Unknown seed numbers are left as they are."""
-    return _SEED.sub(lambda m: SEEDS[m.group(1)].short if m.group(1) in SEEDS else m.group(0),
-                     text)
+    return _SEED.sub(lambda m: SEEDS[m.group(1)].short if m.group(1) in SEEDS else m.group(0), text)
 
 
 def references(texts: Iterable[str]) -> list[str]:
@@ -97,8 +103,10 @@ def references(texts: Iterable[str]) -> list[str]:
     attached papers of the Texas A&M report the same texts name (``Att. N``)."""
     texts = list(texts)
     seeds = sorted({m.group(1) for t in texts for m in _SEED.finditer(t)} & set(SEEDS))
-    attachments = sorted({int(n) for t in texts if _SEED.search(t) and "000_" in t
-                          for n in _ATTACHMENT.findall(t)} & set(ATTACHMENTS))
+    attachments = sorted(
+        {int(n) for t in texts if _SEED.search(t) and "000_" in t for n in _ATTACHMENT.findall(t)}
+        & set(ATTACHMENTS)
+    )
     lines = []
     for number in seeds:
         ref = SEEDS[number]

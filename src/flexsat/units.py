@@ -103,8 +103,10 @@ def parse_quantity(text: str, field: str = "value") -> pint.Quantity:
         ``"<field>: ..."`` for text that is empty, too long or not a quantity.
     """
     if len(text) > MAX_EXPRESSION_LENGTH:
-        raise UnitError(f"{field}: a quantity must be at most {MAX_EXPRESSION_LENGTH} characters, "
-                        f"got {len(text)}")
+        raise UnitError(
+            f"{field}: a quantity must be at most {MAX_EXPRESSION_LENGTH} characters, "
+            f"got {len(text)}"
+        )
     if not text.strip():
         raise UnitError(f"{field}: empty string; give a number or a quantity such as '2 m'")
     try:
@@ -117,8 +119,9 @@ def parse_quantity(text: str, field: str = "value") -> pint.Quantity:
     except Exception as exc:  # noqa: BLE001 - pint's parser raises a version-dependent mix
         # (TokenError, DefinitionSyntaxError, UndefinedUnitError, ZeroDivisionError,
         # OverflowError, DimensionalityError, AssertionError, ...) for malformed text
-        raise UnitError(f"{field}: cannot read {text!r} as a quantity "
-                        f"({type(exc).__name__}: {exc})") from None
+        raise UnitError(
+            f"{field}: cannot read {text!r} as a quantity ({type(exc).__name__}: {exc})"
+        ) from None
 
 
 def holds_quantity(value, strings: bool = False) -> bool:
@@ -157,7 +160,7 @@ def to_si_array(value, unit: str, field: str = "value") -> np.ndarray:
     -------
     ndarray
         Float array of the shape of ``value``; not checked for finiteness (callers apply their
-        rule, e.g. :func:`flexsat.validation.require_finite`).
+        rule, e.g. :func:`flexsat.input_checks.require_finite`).
 
     Raises
     ------
@@ -178,11 +181,14 @@ def to_si_array(value, unit: str, field: str = "value") -> np.ndarray:
         q = _cyclic_to_angular(q, unit)
         magnitude = q.to(unit).magnitude
     except pint.DimensionalityError as exc:
-        raise UnitError(f"{field}: incompatible units ({exc.units1} given, "
-                        f"{unit or 'dimensionless'} expected)") from None
+        raise UnitError(
+            f"{field}: incompatible units ({exc.units1} given, {unit or 'dimensionless'} expected)"
+        ) from None
     except (pint.PintError, ValueError, TypeError, AttributeError, ArithmeticError) as exc:
-        raise UnitError(f"{field}: cannot read {_shown(value)} as a quantity in "
-                        f"{unit or 'dimensionless'} ({exc})") from None
+        raise UnitError(
+            f"{field}: cannot read {_shown(value)} as a quantity in "
+            f"{unit or 'dimensionless'} ({exc})"
+        ) from None
     return _real(magnitude, value, unit, field) * _si_factor(unit)
 
 
@@ -194,8 +200,10 @@ def _real(magnitude, value, unit: str, field: str) -> np.ndarray:
             return np.asarray(magnitude, dtype=float)
     except (TypeError, ValueError):
         pass
-    raise UnitError(f"{field}: cannot read {_shown(value)} as a real number or a quantity in "
-                    f"{unit or 'dimensionless'} units")
+    raise UnitError(
+        f"{field}: cannot read {_shown(value)} as a real number or a quantity in "
+        f"{unit or 'dimensionless'} units"
+    )
 
 
 def _shown(value) -> str:

@@ -1,9 +1,9 @@
 """Controllability tools (flexsat.analysis.controllability) on textbook cases and bad inputs."""
 
-import control
 import numpy as np
 import pytest
 
+import control
 from flexsat.analysis import (
     controllability_matrix,
     controllability_rank,
@@ -80,8 +80,9 @@ def test_kalman_and_pbh_agree_with_python_control_on_random_systems(seed):
     assert controllability_rank(A, B) == np.linalg.matrix_rank(control.ctrb(A, B)) == n
     assert pbh_test(A, B).size == 0
     # make one mode uncontrollable: block-triangular in a random basis
-    At = np.block([[rng.normal(size=(4, 4)), rng.normal(size=(4, 1))],
-                   [np.zeros((1, 4)), np.array([[0.7]])]])
+    At = np.block(
+        [[rng.normal(size=(4, 4)), rng.normal(size=(4, 1))], [np.zeros((1, 4)), np.array([[0.7]])]]
+    )
     Bt = np.vstack([rng.normal(size=(4, m)), np.zeros((1, m))])
     T = rng.normal(size=(n, n))
     A2, B2 = T @ At @ np.linalg.inv(T), T @ Bt
@@ -139,23 +140,34 @@ def test_lqr_refuses_the_problems_bainum_needs_refused():
         lqr([[0.0, 1.0], [-1.0, 0.0]], [[0.0], [1.0]], np.zeros((2, 2)), 1.0)
 
 
-@pytest.mark.parametrize("call,message", [
-    (lambda: controllability_rank([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]], [1.0, 2.0]),
-     r"^A: must be a non-empty square 2-D array, got shape \(2, 3\)"),
-    (lambda: controllability_rank(np.eye(3), [[1.0], [2.0]]),
-     r"^B: must have 3 rows \(A is 3x3\)"),
-    (lambda: pbh_test([[np.nan, 0.0], [0.0, 1.0]], [1.0, 1.0]), r"^A: must be finite"),
-    (lambda: pbh_test(np.eye(2), [1.0, np.inf]), r"^B: must be finite"),
-    (lambda: pbh_test("eye", [1.0]), r"^A: must be a numeric array"),
-    (lambda: is_stabilizable(np.eye(2), np.zeros((2, 0))), r"^B: must have 2 rows"),
-    (lambda: controllability_rank(np.eye(2), np.eye(2), tol=-1.0), r"^tol: must be >= 0"),
-    (lambda: repeated_frequency_test([[1.0, 0.5], [0.0, 2.0]], np.eye(2)),
-     r"^stiffness: must be a 1-D array or a diagonal"),
-    (lambda: repeated_frequency_test([1.0, 2.0], np.eye(3)),
-     r"^B: must have 2 rows \(stiffness is 2x2\)"),
-    (lambda: lqr(np.eye(2), np.eye(2), np.eye(3), np.eye(2)), r"^Q: must have shape \(n, n\)"),
-    (lambda: lqr(np.eye(2), np.eye(2), np.eye(2), 1.0), r"^R: must have shape \(m, m\)"),
-])
+@pytest.mark.parametrize(
+    "call,message",
+    [
+        (
+            lambda: controllability_rank([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]], [1.0, 2.0]),
+            r"^A: must be a non-empty square 2-D array, got shape \(2, 3\)",
+        ),
+        (
+            lambda: controllability_rank(np.eye(3), [[1.0], [2.0]]),
+            r"^B: must have 3 rows \(A is 3x3\)",
+        ),
+        (lambda: pbh_test([[np.nan, 0.0], [0.0, 1.0]], [1.0, 1.0]), r"^A: must be finite"),
+        (lambda: pbh_test(np.eye(2), [1.0, np.inf]), r"^B: must be finite"),
+        (lambda: pbh_test("eye", [1.0]), r"^A: must be a numeric array"),
+        (lambda: is_stabilizable(np.eye(2), np.zeros((2, 0))), r"^B: must have 2 rows"),
+        (lambda: controllability_rank(np.eye(2), np.eye(2), tol=-1.0), r"^tol: must be >= 0"),
+        (
+            lambda: repeated_frequency_test([[1.0, 0.5], [0.0, 2.0]], np.eye(2)),
+            r"^stiffness: must be a 1-D array or a diagonal",
+        ),
+        (
+            lambda: repeated_frequency_test([1.0, 2.0], np.eye(3)),
+            r"^B: must have 2 rows \(stiffness is 2x2\)",
+        ),
+        (lambda: lqr(np.eye(2), np.eye(2), np.eye(3), np.eye(2)), r"^Q: must have shape \(n, n\)"),
+        (lambda: lqr(np.eye(2), np.eye(2), np.eye(2), 1.0), r"^R: must have shape \(m, m\)"),
+    ],
+)
 def test_bad_inputs_name_the_field(call, message):
     with pytest.raises(ValueError, match=message):
         call()
@@ -169,8 +181,7 @@ def test_pbh_judges_each_mode_on_its_own_scale():
     none, and still finds the one mode whose row of B is zeroed, at its frequency."""
     rng = np.random.default_rng(0)
     w = np.concatenate([[0.0], np.geomspace(0.1, 1000.0, 99)])
-    A = np.block([[np.zeros((100, 100)), np.eye(100)],
-                  [-np.diag(w**2), -np.diag(2 * 0.001 * w)]])
+    A = np.block([[np.zeros((100, 100)), np.eye(100)], [-np.diag(w**2), -np.diag(2 * 0.001 * w)]])
     B = np.vstack([np.zeros((100, 1)), rng.standard_normal((100, 1))])
     assert pbh_test(A, B).size == 0
     assert is_stabilizable(A, B)
@@ -180,5 +191,6 @@ def test_pbh_judges_each_mode_on_its_own_scale():
         lam = pbh_test(A, Bc)
         expected = -0.001 * w[mode] + 1j * w[mode] * np.sqrt(1 - 0.001**2)
         # the pair ±λ of that mode, computed to the eigen-solver's ~ε‖A_balanced‖ accuracy
-        np.testing.assert_allclose(sorted(lam, key=np.imag), [np.conj(expected), expected],
-                                   rtol=1e-8)
+        np.testing.assert_allclose(
+            sorted(lam, key=np.imag), [np.conj(expected), expected], rtol=1e-8
+        )

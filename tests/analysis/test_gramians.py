@@ -114,8 +114,12 @@ def test_observability_matches_lyapunov(modal_system):
 def test_observability_one_mode_closed_form():
     w, z, c = 3.0, 0.02, 1.7
     Y = modal_observability_gramian([w], [z], Cq=[[c]])
-    expected = np.array([[c**2 * (1 + 4 * z**2) / (4 * z * w), c**2 / (2 * w**2)],
-                         [c**2 / (2 * w**2), c**2 / (4 * z * w**3)]])
+    expected = np.array(
+        [
+            [c**2 * (1 + 4 * z**2) / (4 * z * w), c**2 / (2 * w**2)],
+            [c**2 / (2 * w**2), c**2 / (4 * z * w**3)],
+        ]
+    )
     assert np.allclose(Y, expected, rtol=1e-13)
 
 
@@ -150,8 +154,9 @@ def test_gawronski_approximation_for_separated_modes():
     assert np.allclose(np.sort(np.repeat(g.hankel, 2))[::-1], hsv, rtol=0.05)
     # per-mode H2 norm is exact for one mode
     for i in range(4):
-        Ai, Bi, Ci = modal_state_matrices(w[i:i + 1], z[i:i + 1], B[i:i + 1], Cq[:, i:i + 1],
-                                          Cv[:, i:i + 1])
+        Ai, Bi, Ci = modal_state_matrices(
+            w[i : i + 1], z[i : i + 1], B[i : i + 1], Cq[:, i : i + 1], Cv[:, i : i + 1]
+        )
         Xi = lyapunov_gramian(Ai, Bi)
         assert g.h2[i] == pytest.approx(np.sqrt(np.trace(Ci @ Xi @ Ci.T)), rel=1e-10)
 
@@ -222,15 +227,20 @@ def test_finite_horizon_increases_with_T(modal_system):
         (lambda: modal_gramian([1.0], 0.01, np.eye(3)), "Q"),
         (lambda: modal_gramian([1.0], 0.01, np.eye(2), kind="both"), "kind"),
         (lambda: modal_observability_gramian([1.0], 0.01), "Cq, Cv"),
-        (lambda: modal_observability_gramian([1.0, 2.0], 0.01, Cq=[[1.0, 2.0]], Cv=[[1.0, 2.0],
-                                                                                    [0, 1]]),
-         "same number of rows"),
+        (
+            lambda: modal_observability_gramian(
+                [1.0, 2.0], 0.01, Cq=[[1.0, 2.0]], Cv=[[1.0, 2.0], [0, 1]]
+            ),
+            "same number of rows",
+        ),
         (lambda: finite_horizon_gramian(np.eye(2), [1.0, 0.0], 0.0), "horizon"),
         (lambda: finite_horizon_gramian(np.eye(2), [1.0, 0.0, 0.0], 1.0), "B"),
         (lambda: finite_horizon_gramian(np.ones((2, 3)), [1.0, 0.0], 1.0), "A"),
         (lambda: lyapunov_gramian(np.eye(2), [[1.0, 0.0]], "observability"), "not asymptotically"),
-        (lambda: gawronski_gramians([0.0, 1.0], [0.0, 0.01], [1.0, 1.0], Cq=[[1.0, 1.0]]),
-         "rigid-body"),
+        (
+            lambda: gawronski_gramians([0.0, 1.0], [0.0, 0.01], [1.0, 1.0], Cq=[[1.0, 1.0]]),
+            "rigid-body",
+        ),
     ],
 )
 def test_bad_inputs(call, match):

@@ -71,8 +71,7 @@ def test_modal_cost_two_mode_by_hand():
     x11 = 0.5 / (4 * Z2[0] * W2[0] ** 3)
     x22 = 0.5 / (4 * Z2[1] * W2[1] ** 3)
     s = Z2[0] * W2[0] + Z2[1] * W2[1]
-    delta = (W2[0] ** 2 - W2[1] ** 2) ** 2 + 4 * W2[0] * W2[1] * s * (
-        Z2[0] * W2[1] + Z2[1] * W2[0])
+    delta = (W2[0] ** 2 - W2[1] ** 2) ** 2 + 4 * W2[0] * W2[1] * s * (Z2[0] * W2[1] + Z2[1] * W2[0])
     x12 = 2 * s * 0.5 / delta
     V1, V2 = 0.5 * (x11 + x12), 0.5 * (x12 + x22)  # Eq. 27 with Cᵀ C = ½ ones
     assert np.allclose(mc.costs, [V1, V2], rtol=1e-13)
@@ -132,8 +131,16 @@ def test_gawronski_index():
     # σ_ki ∝ |D̄_ik| within a mode; exact single-mode single-actuator H2 norm
     A, Bz, C = modal_state_matrices(w[:1], z[:1], B[:1, :1], Cq[:, :1], Cv[:, :1])
     h2 = np.sqrt(np.trace(C @ lyapunov_gramian(A, Bz) @ C.T))
-    total = np.sqrt(np.sum((np.linalg.norm(B, axis=1) * np.sqrt(
-        np.sum(Cq**2, 0) / w**2 + np.sum(Cv**2, 0)) / (2 * np.sqrt(z * w))) ** 2))
+    total = np.sqrt(
+        np.sum(
+            (
+                np.linalg.norm(B, axis=1)
+                * np.sqrt(np.sum(Cq**2, 0) / w**2 + np.sum(Cv**2, 0))
+                / (2 * np.sqrt(z * w))
+            )
+            ** 2
+        )
+    )
     assert g.sigma[0, 0] == pytest.approx(h2 / total, rel=1e-10)
     hk = gawronski_index(w, z, B, Cq, Cv, norm="hankel")
     assert hk.mode.max() == pytest.approx(1.0) and hk.norm == "hankel"
@@ -235,8 +242,7 @@ def _interaction_score(seed):
 @pytest.mark.parametrize("seed", range(6))
 def test_exchange_improves_on_greedy_and_bounded_by_exhaustive(seed):
     score = _interaction_score(seed)
-    ex, gr, xc = (exhaustive(CANDS, 4, score), greedy(CANDS, 4, score),
-                  exchange(CANDS, 4, score))
+    ex, gr, xc = (exhaustive(CANDS, 4, score), greedy(CANDS, 4, score), exchange(CANDS, 4, score))
     assert gr.score <= xc.score + 1e-12 <= ex.score + 2e-12
     assert xc.best[0][1] == gr.selection  # the exchange starts from greedy
     started = exchange(CANDS, 4, score, start=ex.selection)
@@ -249,8 +255,11 @@ def test_exhaustive_refuses_c36_12_without_enumerating():
 
     cands = [f"a{i}" for i in range(36)]
     assert math.comb(36, 12) == 1_251_677_700
-    with pytest.raises(ValueError, match=r"C\(36, 12\) = 1,251,677,700 .* exceeds max_sets = "
-                                         r"1,000,000.*greedy\(\) or exchange\(\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"C\(36, 12\) = 1,251,677,700 .* exceeds max_sets = "
+        r"1,000,000.*greedy\(\) or exchange\(\)",
+    ):
         exhaustive(cands, 12, never)
     assert MAX_EXHAUSTIVE_SETS == 1_000_000
     # the heuristics handle it: greedy on an additive score is optimal, 354 evaluations

@@ -59,8 +59,11 @@ class Pencil:
         self.p0 = 0.1 * rng.normal(size=P)
 
     def A(self, p):
-        return (self.A0 + np.einsum("k,kij->ij", p, self.Ak)
-                + 0.5 * np.einsum("k,l,klij->ij", p, p, self.Akl))
+        return (
+            self.A0
+            + np.einsum("k,kij->ij", p, self.Ak)
+            + 0.5 * np.einsum("k,l,klij->ij", p, p, self.Akl)
+        )
 
     def dA(self, p):
         return self.Ak + np.einsum("l,klij->kij", p, self.Akl)
@@ -68,8 +71,11 @@ class Pencil:
     def B(self, p):
         if not self.generalized:
             return None
-        return (self.B0 + np.einsum("k,kij->ij", p, self.Bk)
-                + 0.5 * np.einsum("k,l,klij->ij", p, p, self.Bkl))
+        return (
+            self.B0
+            + np.einsum("k,kij->ij", p, self.Bk)
+            + 0.5 * np.einsum("k,l,klij->ij", p, p, self.Bkl)
+        )
 
     def dB(self, p):
         return self.Bk + np.einsum("l,klij->kij", p, self.Bkl) if self.generalized else None
@@ -96,8 +102,12 @@ def _well_conditioned(d):
     assert np.linalg.cond(d.right) < 1e3
 
 
-CASES = [dict(seed=1), dict(seed=2, complex_=True), dict(seed=3, generalized=False),
-         dict(seed=4, n=6, P=2, complex_=True, generalized=False)]
+CASES = [
+    dict(seed=1),
+    dict(seed=2, complex_=True),
+    dict(seed=3, generalized=False),
+    dict(seed=4, n=6, P=2, complex_=True, generalized=False),
+]
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -109,10 +119,13 @@ def test_eigen_first_derivatives_match_central_differences(case):
     def at(p, what):
         new = pen.derivs(p)
         order, sign = _aligned(d, new)
-        return {"lam": new.eigenvalues[order], "phi": new.right[:, order] * sign,
-                "psi": new.left[:, order] * sign,
-                "dlam": new.eigenvalue_gradient[:, order],
-                "dphi": new.right_gradient[:, :, order] * sign}[what]
+        return {
+            "lam": new.eigenvalues[order],
+            "phi": new.right[:, order] * sign,
+            "psi": new.left[:, order] * sign,
+            "dlam": new.eigenvalue_gradient[:, order],
+            "dphi": new.right_gradient[:, :, order] * sign,
+        }[what]
 
     assert rel(d.eigenvalue_gradient, central(lambda p: at(p, "lam"), pen.p0)) < RTOL
     assert rel(d.right_gradient, central(lambda p: at(p, "phi"), pen.p0)) < RTOL
@@ -135,8 +148,9 @@ def test_normalisation_and_biorthogonality_eqs_40_41():
     assert np.allclose(A.T @ psi, B.T @ psi * lam, atol=1e-11)  # left: λ Bᵀψ = Aᵀψ
     # the derivative of the normalisation vanishes
     B_k = pen.dB(pen.p0)
-    dn = (2 * np.einsum("kji,jl,li->ki", d.right_gradient, (B + B.T) / 2, phi)
-          + np.einsum("ji,kjl,li->ki", phi, B_k, phi))
+    dn = 2 * np.einsum("kji,jl,li->ki", d.right_gradient, (B + B.T) / 2, phi) + np.einsum(
+        "ji,kjl,li->ki", phi, B_k, phi
+    )
     assert np.abs(dn).max() < 1e-11
     # ∂Φ/∂p = Φ C^k
     assert np.allclose(np.einsum("ij,kjl->kil", phi, d.coefficients), d.right_gradient)
@@ -197,8 +211,10 @@ def test_nelson_modal_derivatives_match_central_differences(rigid):
     assert rel(d.eigenvalue_gradient, central(lambda p: at(p, "lam"), p0)) < RTOL
     assert rel(d.mode_gradient, central(lambda p: at(p, "phi"), p0)) < RTOL
     flexible = slice(1, None) if rigid else slice(None)
-    assert np.allclose(d.frequency_gradient[:, flexible],
-                       d.eigenvalue_gradient[:, flexible] / (2 * d.frequencies[flexible]))
+    assert np.allclose(
+        d.frequency_gradient[:, flexible],
+        d.eigenvalue_gradient[:, flexible] / (2 * d.frequencies[flexible]),
+    )
     if rigid:
         assert d.frequencies[0] == 0 and np.all(np.isnan(d.frequency_gradient[:, 0]))
         assert np.allclose(d.eigenvalue_gradient[:, 0], 0, atol=1e-12)
@@ -212,10 +228,15 @@ def test_nelson_agrees_with_the_modal_expansion_and_selects_modes():
     for col, mode in enumerate([4, 1]):
         i = int(np.argmin(np.abs(full.eigenvalues - nelson.eigenvalues[col])))
         s = np.sign(full.right[:, i].real @ nelson.modes[:, col])
-        assert np.allclose(full.eigenvalue_gradient[:, i].real,
-                           nelson.eigenvalue_gradient[:, col], rtol=1e-10)
-        assert np.allclose(s * full.right_gradient[:, :, i].real,
-                           nelson.mode_gradient[:, :, col], rtol=1e-8, atol=1e-12)
+        assert np.allclose(
+            full.eigenvalue_gradient[:, i].real, nelson.eigenvalue_gradient[:, col], rtol=1e-10
+        )
+        assert np.allclose(
+            s * full.right_gradient[:, :, i].real,
+            nelson.mode_gradient[:, :, col],
+            rtol=1e-8,
+            atol=1e-12,
+        )
 
 
 # -- SVD, Att. 5 Eqs. 15-27 ----------------------------------------------------------------------
@@ -234,15 +255,23 @@ class MatrixPath:
         self.p0 = 0.1 * rng.normal(size=P)
 
     def F(self, p):
-        return (self.F0 + np.einsum("k,kij->ij", p, self.Fk)
-                + 0.5 * np.einsum("k,l,klij->ij", p, p, self.Fkl))
+        return (
+            self.F0
+            + np.einsum("k,kij->ij", p, self.Fk)
+            + 0.5 * np.einsum("k,l,klij->ij", p, p, self.Fkl)
+        )
 
     def dF(self, p):
         return self.Fk + np.einsum("l,klij->kij", p, self.Fkl)
 
 
-SVD_CASES = [dict(seed=11), dict(seed=12, shape=(6, 4)), dict(seed=13, shape=(3, 5)),
-             dict(seed=14, complex_=False), dict(seed=15, shape=(7, 3), complex_=False)]
+SVD_CASES = [
+    dict(seed=11),
+    dict(seed=12, shape=(6, 4)),
+    dict(seed=13, shape=(3, 5)),
+    dict(seed=14, complex_=False),
+    dict(seed=15, shape=(7, 3), complex_=False),
+]
 
 
 @pytest.mark.parametrize("case", SVD_CASES)
@@ -280,8 +309,9 @@ def test_second_order_singular_values_by_second_differences():
     s = lambda p: np.linalg.svd(path.F(p), compute_uv=False)  # noqa: E731
     e0, e1 = np.array([h, 0, 0]), np.array([0, h, 0])
     fd00 = (s(path.p0 + e0) - 2 * s(path.p0) + s(path.p0 - e0)) / h**2
-    fd01 = (s(path.p0 + e0 + e1) - s(path.p0 + e0 - e1) - s(path.p0 - e0 + e1)
-            + s(path.p0 - e0 - e1)) / (4 * h**2)
+    fd01 = (
+        s(path.p0 + e0 + e1) - s(path.p0 + e0 - e1) - s(path.p0 - e0 + e1) + s(path.p0 - e0 - e1)
+    ) / (4 * h**2)
     assert rel(d.singular_value_hessian[0, 0], fd00) < 1e-6
     assert rel(d.singular_value_hessian[0, 1], fd01) < 1e-6
 
@@ -301,8 +331,9 @@ def test_selected_indices_only_need_to_be_distinct():
 @pytest.mark.parametrize("case", [dict(seed=31), dict(seed=32, shape=(6, 4), complex_=False)])
 def test_condition_number_derivatives_match_central_differences(case):
     path = MatrixPath(**case)
-    kappa, grad, hess = condition_number_derivatives(path.F(path.p0), path.dF(path.p0),
-                                                     path.Fkl, order=2)
+    kappa, grad, hess = condition_number_derivatives(
+        path.F(path.p0), path.dF(path.p0), path.Fkl, order=2
+    )
     assert kappa == pytest.approx(np.linalg.cond(path.F(path.p0)), rel=1e-12)
     fd = central(lambda p: np.array(np.linalg.cond(path.F(p))), path.p0)
     assert rel(grad, fd) < RTOL
@@ -314,12 +345,14 @@ def test_modal_matrix_condition_number_chain():
     """Att. 5 Eq. 46 chain: SVD of the normalised modal matrix ← eigenvector derivatives."""
     pen = Pencil(seed=1)
     kappa, grad, hess, eig = eigenvector_condition_derivatives(
-        pen.A(pen.p0), pen.dA(pen.p0), pen.B(pen.p0), pen.dB(pen.p0), pen.Akl, pen.Bkl, order=2)
+        pen.A(pen.p0), pen.dA(pen.p0), pen.B(pen.p0), pen.dB(pen.p0), pen.Akl, pen.Bkl, order=2
+    )
     cond = lambda p: np.array(np.linalg.cond(eigensolve(pen.A(p), pen.B(p))[1]))  # noqa: E731
     assert kappa == pytest.approx(float(cond(pen.p0)), rel=1e-12)
     assert rel(grad, central(cond, pen.p0)) < RTOL
     g = lambda p: eigenvector_condition_derivatives(  # noqa: E731
-        pen.A(p), pen.dA(p), pen.B(p), pen.dB(p))[1]
+        pen.A(p), pen.dA(p), pen.B(p), pen.dB(p)
+    )[1]
     assert rel(hess, central(g, pen.p0)) < RTOL
     assert eig.right.shape == (5, 5)
 
@@ -346,38 +379,68 @@ def test_degenerate_svd_is_refused():
         condition_number_derivatives(np.ones((3, 1)), np.ones((3, 1)))
 
 
-@pytest.mark.parametrize("call,message", [
-    (lambda: eig_derivatives(np.ones((2, 3)), np.ones((2, 3))), r"^A: must be square"),
-    (lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((3, 3))), r"^dA: must have shape"),
-    (lambda: eig_derivatives([[1.0, np.nan], [0, 2]], np.ones((2, 2))), r"^A: must be finite"),
-    (lambda: eig_derivatives("A", np.ones((2, 2))), r"^A: must be a numeric matrix"),
-    (lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2)), np.zeros((2, 2))),
-     r"^B: must be non-singular"),
-    (lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2)), np.eye(3)),
-     r"^B: must have the shape of A"),
-    (lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2)), dB=np.ones((3, 2, 2))),
-     r"^dB: expected 1 parameters"),
-    (lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2)), order=3),
-     r"^order: must be 1 or 2"),
-    (lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2)), d2A=np.ones((1, 1, 2, 2))),
-     r"^d2A: second derivatives are used only with order=2"),
-    (lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2)), gap_rtol=-1),
-     r"^gap_rtol: must be finite and >= 0"),
-    (lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2, 2)), order=2,
-                             d2A=np.ones((2, 3, 2, 2))),
-     r"^d2A: must have shape|^d2A: the two parameter axes"),
-    (lambda: modal_derivatives([[1.0, 2.0], [0.0, 1.0]], np.eye(2), np.eye(2)),
-     r"^K: must be symmetric"),
-    (lambda: modal_derivatives(np.diag([1.0, 2.0]), -np.eye(2), np.eye(2)),
-     r"^M: must be positive definite"),
-    (lambda: modal_derivatives(np.diag([1.0, 2.0]), np.eye(2), np.eye(2), modes=[5]),
-     r"^modes: must lie in 0"),
-    (lambda: modal_derivatives(np.diag([1.0, 2.0]), np.eye(2), np.eye(2) * 1j),
-     r"^dK: must be real"),
-    (lambda: svd_derivatives(np.diag([2.0, 1.0]), np.ones((2, 2)), indices=[2]),
-     r"^indices: must lie in 0"),
-    (lambda: svd_derivatives(np.zeros((0, 2)), np.ones((2, 2))), r"^Phi: must be a non-empty"),
-])
+@pytest.mark.parametrize(
+    "call,message",
+    [
+        (lambda: eig_derivatives(np.ones((2, 3)), np.ones((2, 3))), r"^A: must be square"),
+        (lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((3, 3))), r"^dA: must have shape"),
+        (lambda: eig_derivatives([[1.0, np.nan], [0, 2]], np.ones((2, 2))), r"^A: must be finite"),
+        (lambda: eig_derivatives("A", np.ones((2, 2))), r"^A: must be a numeric matrix"),
+        (
+            lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2)), np.zeros((2, 2))),
+            r"^B: must be non-singular",
+        ),
+        (
+            lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2)), np.eye(3)),
+            r"^B: must have the shape of A",
+        ),
+        (
+            lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2)), dB=np.ones((3, 2, 2))),
+            r"^dB: expected 1 parameters",
+        ),
+        (
+            lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2)), order=3),
+            r"^order: must be 1 or 2",
+        ),
+        (
+            lambda: eig_derivatives(
+                np.diag([1.0, 2.0]), np.ones((2, 2)), d2A=np.ones((1, 1, 2, 2))
+            ),
+            r"^d2A: second derivatives are used only with order=2",
+        ),
+        (
+            lambda: eig_derivatives(np.diag([1.0, 2.0]), np.ones((2, 2)), gap_rtol=-1),
+            r"^gap_rtol: must be finite and >= 0",
+        ),
+        (
+            lambda: eig_derivatives(
+                np.diag([1.0, 2.0]), np.ones((2, 2, 2)), order=2, d2A=np.ones((2, 3, 2, 2))
+            ),
+            r"^d2A: must have shape|^d2A: the two parameter axes",
+        ),
+        (
+            lambda: modal_derivatives([[1.0, 2.0], [0.0, 1.0]], np.eye(2), np.eye(2)),
+            r"^K: must be symmetric",
+        ),
+        (
+            lambda: modal_derivatives(np.diag([1.0, 2.0]), -np.eye(2), np.eye(2)),
+            r"^M: must be positive definite",
+        ),
+        (
+            lambda: modal_derivatives(np.diag([1.0, 2.0]), np.eye(2), np.eye(2), modes=[5]),
+            r"^modes: must lie in 0",
+        ),
+        (
+            lambda: modal_derivatives(np.diag([1.0, 2.0]), np.eye(2), np.eye(2) * 1j),
+            r"^dK: must be real",
+        ),
+        (
+            lambda: svd_derivatives(np.diag([2.0, 1.0]), np.ones((2, 2)), indices=[2]),
+            r"^indices: must lie in 0",
+        ),
+        (lambda: svd_derivatives(np.zeros((0, 2)), np.ones((2, 2))), r"^Phi: must be a non-empty"),
+    ],
+)
 def test_bad_inputs_name_the_field(call, message):
     with pytest.raises(ValueError, match=message):
         call()

@@ -2,10 +2,10 @@
 
 import json
 
-import control
 import numpy as np
 import pytest
 
+import control
 from flexsat.cases.agrawal_bang import PUBLISHED, agrawal_bang
 
 
@@ -24,8 +24,9 @@ def _undamped_zeros(b, w):
 def test_geometry_mass_and_mesh(case):
     m = case.modal_model()
     A = case.width * case.thickness
-    assert m.total_mass == pytest.approx(case.density * A * (case.beam1_length + case.beam2_length),
-                                         rel=1e-12)
+    assert m.total_mass == pytest.approx(
+        case.density * A * (case.beam1_length + case.beam2_length), rel=1e-12
+    )
     assert m.rigid_mass[0, 0] == pytest.approx(m.rigid_mass[1, 1], rel=1e-12)
     xyz = dict(zip(case.modal_model().node_ids, case.modal_model().coordinates))
     np.testing.assert_allclose(xyz[case.corner_node], [0, case.beam1_length, 0])
@@ -70,8 +71,9 @@ def test_collocated_poles_and_zeros_interlace(case, n):
         assert np.all(w[:-1] < z) and np.all(z < w[1:])
         # the same zeros from python-control's transmission zeros
         A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.diag(w**2), np.zeros((n, n))]])
-        sys = control.ss(A, np.r_[np.zeros(n), p.actuator][:, None],
-                         np.r_[p.sensor, np.zeros(n)][None, :], 0)
+        sys = control.ss(
+            A, np.r_[np.zeros(n), p.actuator][:, None], np.r_[p.sensor, np.zeros(n)][None, :], 0
+        )
         tz = np.sort(np.abs(control.zeros(sys).imag))[::2]
         np.testing.assert_allclose(tz, z, rtol=1e-6)
 
@@ -93,15 +95,17 @@ def test_tip_outputs_and_weight(case):
     y1, alpha, y2, beta = Z
     l2 = case.beam2_length
     np.testing.assert_allclose(y1, m.displacement_output(case.tip_node, "x"), rtol=1e-4)
-    np.testing.assert_allclose(-l2 * alpha - y2, m.displacement_output(case.tip_node, "y"),
-                               atol=1e-4 * np.abs(Z).max())
+    np.testing.assert_allclose(
+        -l2 * alpha - y2, m.displacement_output(case.tip_node, "y"), atol=1e-4 * np.abs(Z).max()
+    )
     np.testing.assert_allclose(alpha + beta, -m.rotation_output(case.tip_node, "z"), rtol=1e-14)
     zeta = np.random.default_rng(1).standard_normal(4)
     w1, w2 = 500.0, 100.0
     Q = case.tip_weight(w1, w2)
     y1, a, y2, b = zeta
-    assert zeta @ Q @ zeta == pytest.approx(y1**2 + w1 * (l2 * a + y2) ** 2 + w2 * (a + b) ** 2,
-                                            rel=1e-13)
+    assert zeta @ Q @ zeta == pytest.approx(
+        y1**2 + w1 * (l2 * a + y2) ** 2 + w2 * (a + b) ** 2, rel=1e-13
+    )
 
 
 def test_case_protocol(case):
@@ -172,10 +176,15 @@ def test_fe_plant_moment_pairs_project_to_the_modal_ones(case):
     Phi = case.fe_modes.shapes[:, : case.n_modes]
     for j in range(3):
         ref = modal.model.B[:, j]
-        np.testing.assert_allclose(Phi.T @ fe.model.B[:, j], ref, rtol=0,
-                                   atol=1e-12 * np.abs(ref).max())
-        np.testing.assert_allclose(Phi.T @ fe.model.Cq[j], modal.model.Cq[j], rtol=0,
-                                   atol=1e-12 * np.abs(modal.model.Cq[j]).max())
+        np.testing.assert_allclose(
+            Phi.T @ fe.model.B[:, j], ref, rtol=0, atol=1e-12 * np.abs(ref).max()
+        )
+        np.testing.assert_allclose(
+            Phi.T @ fe.model.Cq[j],
+            modal.model.Cq[j],
+            rtol=0,
+            atol=1e-12 * np.abs(modal.model.Cq[j]).max(),
+        )
     w = fe.model.frequencies()
     np.testing.assert_allclose(w[:3], case.modal_model().frequencies, rtol=2e-6)
     with pytest.raises(ValueError, match=r"^coordinates: must be 'modal' or 'fe'"):

@@ -70,8 +70,9 @@ def test_three_mode_initial_condition_has_equal_modal_energies_and_random_signs(
 def test_the_state_weight_is_the_tip_weight_of_eq_35(case):
     s = ppf_problem(case, (500, 100), "first")
     T = case.tip_outputs(3)
-    np.testing.assert_allclose(s.problem.Q_s[:3, :3], T.T @ case.tip_weight(500, 100) @ T,
-                               rtol=1e-14)
+    np.testing.assert_allclose(
+        s.problem.Q_s[:3, :3], T.T @ case.tip_weight(500, 100) @ T, rtol=1e-14
+    )
     assert not np.any(s.problem.Q_s[3:, :])  # rates and filter states carry no weight
     np.testing.assert_allclose(s.problem.bank.omega_f, np.tile(s.problem.model.omega, (3, 1)))
     np.testing.assert_allclose(s.problem.Q_u, 1e-8 * np.eye(3))
@@ -156,8 +157,11 @@ def test_gains_grow_with_w2_under_three_mode_excitation(reducing):
     tip-error cost is one mode's decay times a weight-dependent constant, so the ratio goal
     gives the same gains for every (w1, w2) to 1 %: there the weights cannot matter. Raising w1
     lowers the three-mode gains slightly (the paper: raises them)."""
-    base, w2, w1 = (reducing[key(100, 100, "three")].gains, reducing[key(100, 500, "three")].gains,
-                    reducing[key(500, 100, "three")].gains)
+    base, w2, w1 = (
+        reducing[key(100, 100, "three")].gains,
+        reducing[key(100, 500, "three")].gains,
+        reducing[key(500, 100, "three")].gains,
+    )
     moved = np.abs(base - G0) > 1.0
     assert np.all(np.abs(w2 - G0)[moved] > np.abs(base - G0)[moved])
     assert w1[0, 0] < base[0, 0]
@@ -184,25 +188,28 @@ def test_optimised_gains_damp_the_tip_faster(case):
     run = run_ppf_case((100, 100), "first", REDUCING, case=case, duration=40.0, rate=200.0)
     R = run.responses
     late = R["time"] >= 30.0
-    tip = {k: np.abs(R[k][late]).max(axis=0) for k in ("open loop", "initial gains",
-                                                      "optimised gains")}
+    tip = {
+        k: np.abs(R[k][late]).max(axis=0) for k in ("open loop", "initial gains", "optimised gains")
+    }
     assert np.all(tip["optimised gains"] < 0.1 * tip["initial gains"])
     assert np.all(tip["initial gains"] < tip["open loop"])
     # the slowest closed-loop pole moves from −0.074 to −0.30 1/s
-    st0, st = (run.setup.problem.stability(g) for g in (run.initial_gains,
-                                                      run.optimization.gains))
+    st0, st = (run.setup.problem.stability(g) for g in (run.initial_gains, run.optimization.gains))
     assert st.max_real_pole < 3 * st0.max_real_pole
 
 
 # -- bad input ------------------------------------------------------------------------------------
-@pytest.mark.parametrize("kwargs, message", [
-    ({"weights": (100, 100, 1)}, "weights: must be the two numbers"),
-    ({"weights": (-1, 100)}, "weights: must be >= 0"),
-    ({"excitation": "second"}, "excitation: must be 'first'"),
-    ({"Q_u": -1e-8}, "Q_u: must be >= 0"),
-    ({"zeta_f": -0.1}, "zeta_f: must be >= 0"),
-    ({"amplitude": 0.0}, "amplitude: must be > 0"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"weights": (100, 100, 1)}, "weights: must be the two numbers"),
+        ({"weights": (-1, 100)}, "weights: must be >= 0"),
+        ({"excitation": "second"}, "excitation: must be 'first'"),
+        ({"Q_u": -1e-8}, "Q_u: must be >= 0"),
+        ({"zeta_f": -0.1}, "zeta_f: must be >= 0"),
+        ({"amplitude": 0.0}, "amplitude: must be > 0"),
+    ],
+)
 def test_bad_problem_input_is_named(case, kwargs, message):
     with pytest.raises(ValueError, match=message):
         ppf_problem(case, **kwargs)

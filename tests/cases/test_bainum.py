@@ -11,7 +11,6 @@ import scipy.integrate
 import scipy.linalg
 
 from flexsat.analysis import controllability_rank, is_stabilizable, pbh_test
-from flexsat.control import lqr
 from flexsat.cases.bainum import (
     ERRATA,
     PUBLISHED,
@@ -31,19 +30,25 @@ from flexsat.cases.bainum import (
     theory_ratios,
     three_mass,
 )
+from flexsat.control import lqr
 
 
 # -- Appendix A: free-free modes ---------------------------------------------------------------
 def test_free_free_modes_match_appendix_a():
     """Notes §1.5: λl, φ at the quarter points (φ = +2 at the left end), ∫φ² dχ = l, orthogonal."""
-    np.testing.assert_allclose(free_free_lambda_l(5),
-                               [4.730041, 7.853205, 10.995608, 14.137165, 17.278760], atol=5e-7)
+    np.testing.assert_allclose(
+        free_free_lambda_l(5), [4.730041, 7.853205, 10.995608, 14.137165, 17.278760], atol=5e-7
+    )
     lam = free_free_lambda_l(5)
     np.testing.assert_allclose(np.cos(lam) * np.cosh(lam), 1.0, rtol=1e-7)  # cosh λl ~ 1e7
     x = np.array([-0.5, -0.25, 0.0, 0.25, 0.5])
-    table = {1: [2, -0.19839, -1.21564, -0.19839, 2], 2: [2, -1.16950, 0, 1.16950, -2],
-             3: [2, -1.24229, 1.42238, -1.24229, 2], 4: [2, -0.51204, 0, 0.51204, -2],
-             5: [2, 0.55450, -1.41386, 0.55450, 2]}
+    table = {
+        1: [2, -0.19839, -1.21564, -0.19839, 2],
+        2: [2, -1.16950, 0, 1.16950, -2],
+        3: [2, -1.24229, 1.42238, -1.24229, 2],
+        4: [2, -0.51204, 0, 0.51204, -2],
+        5: [2, 0.55450, -1.41386, 0.55450, 2],
+    }
     for r, values in table.items():
         np.testing.assert_allclose(mode_shape(r, x), values, atol=5e-6)
     assert mode_shape(2, 0.0) == 0.0 and mode_shape(4, 0.0) == 0.0  # exact antisymmetry
@@ -56,13 +61,16 @@ def test_free_free_modes_match_appendix_a():
 
 # -- Ch. II: controllability ------------------------------------------------------------------
 @pytest.mark.parametrize("midspan", ["exact", "published"])
-@pytest.mark.parametrize("c,d,rank", [
-    (3200.0, 28800.0, 3),  # generic
-    (3200.0, 3200.0, 3),  # ω1 = ω2: not necessary (a)
-    (3.0, 28800.0, 3),  # ω1 = √3 ω_c: not necessary (b)
-    (3200.0, 3.0, 2),  # ω2 = √3 ω_c: rank lost (c)
-    (3.0, 3.0, 2),  # 3 = c = d (d)
-])
+@pytest.mark.parametrize(
+    "c,d,rank",
+    [
+        (3200.0, 28800.0, 3),  # generic
+        (3200.0, 3200.0, 3),  # ω1 = ω2: not necessary (a)
+        (3.0, 28800.0, 3),  # ω1 = √3 ω_c: not necessary (b)
+        (3200.0, 3.0, 2),  # ω2 = √3 ω_c: rank lost (c)
+        (3.0, 3.0, 2),  # 3 = c = d (d)
+    ],
+)
 def test_case_4_loses_rank_only_when_omega2_is_sqrt3_omegac(c, d, rank, midspan):
     """Acceptance: Ch. II Case 4 (L377-L442), actuators at -l/2, +l/2, 0, pitch + 2 modes.
     Kalman rank of the reduced 3x9 pair, Balas' block test and PBH on the 6-state model agree;
@@ -74,8 +82,7 @@ def test_case_4_loses_rank_only_when_omega2_is_sqrt3_omegac(c, d, rank, midspan)
     if rank == 3:
         assert r.uncontrollable.size == 0
     else:
-        np.testing.assert_allclose(r.uncontrollable, [-1j * np.sqrt(3), 1j * np.sqrt(3)],
-                                   atol=1e-9)
+        np.testing.assert_allclose(r.uncontrollable, [-1j * np.sqrt(3), 1j * np.sqrt(3)], atol=1e-9)
         assert [g.modes for g in r.blocks.deficient] == [(0, 1, 2) if c == 3 else (0, 2)]
 
 
@@ -92,8 +99,7 @@ def test_case_1_determinant_and_conditions():
     for c, d in ((3200.0, 28800.0), (10.0, 50.0), (7.0, 2.0)):
         r = chapter2_case(1, c, d)
         C = np.hstack([r.B, np.diag(r.stiffness) @ r.B, np.diag(r.stiffness) ** 2 @ r.B])
-        assert np.linalg.det(C) == pytest.approx(-a * b * b * (c - d) * (c - 3) * (d - 3),
-                                                 rel=1e-9)
+        assert np.linalg.det(C) == pytest.approx(-a * b * b * (c - d) * (c - 3) * (d - 3), rel=1e-9)
         assert r.controllable
     for c, d in ((3.0, 28800.0), (3200.0, 3.0), (3200.0, 3200.0)):
         assert chapter2_case(1, c, d).kalman_rank == 2
@@ -113,13 +119,22 @@ def test_chapter2_example_closed_loop_poles():
     """Acceptance (L446-L468, errata L462/L466): one actuator, rate gains K = (-0.00577,
     -0.05656, -0.01695); poles printed to 4 decimals, matched to 5e-5."""
     poles = chapter2_example().poles
-    expected = [-0.1717 - 1.7236j, -0.1717 + 1.7236j, -0.5656 - 56.5627j, -0.5656 + 56.5627j,
-                -0.1695 - 169.7039j, -0.1695 + 169.7039j]
+    expected = [
+        -0.1717 - 1.7236j,
+        -0.1717 + 1.7236j,
+        -0.5656 - 56.5627j,
+        -0.5656 + 56.5627j,
+        -0.1695 - 169.7039j,
+        -0.1695 + 169.7039j,
+    ]
     np.testing.assert_allclose(poles.real, np.real(expected), atol=5e-5)
     np.testing.assert_allclose(poles.imag, np.imag(expected), atol=5e-5)
     # the gains are uncoupled ζ ≈ 0.1, 0.01, 0.001 designs (notes §3.1)
-    zeta = -np.array([59.52, 20.0, 20.0]) * PUBLISHED["ch2_gains"] / (
-        2 * np.sqrt([3.0, 3200.0, 28800.0]))
+    zeta = (
+        -np.array([59.52, 20.0, 20.0])
+        * PUBLISHED["ch2_gains"]
+        / (2 * np.sqrt([3.0, 3200.0, 28800.0]))
+    )
     np.testing.assert_allclose(zeta, [0.09914, 0.009998, 0.000999], atol=5e-6)
 
 
@@ -139,23 +154,34 @@ def test_chapter3_case1_decoupling_needs_g13_minus_29_76():
     np.testing.assert_allclose(np.diag(GK), [-3.458, -113.4, -339.40], rtol=5e-4)
     assert np.abs(GK - np.diag(np.diag(GK))).max() < 0.02
     _, K = decoupling_gains(G, F)
-    np.testing.assert_allclose(K, [[-0.0110069, -2.82843, -5.27582],
-                                   [0.0170380, -2.82843, 3.51722],
-                                   [0.0603115, 0.0, -17.5861]], rtol=1e-5, atol=1e-12)
+    np.testing.assert_allclose(
+        K,
+        [
+            [-0.0110069, -2.82843, -5.27582],
+            [0.0170380, -2.82843, 3.51722],
+            [0.0603115, 0.0, -17.5861],
+        ],
+        rtol=1e-5,
+        atol=1e-12,
+    )
     for col in range(3):
         scale = np.abs(K_printed[:, col]).max()
         np.testing.assert_allclose(K[:, col], K_printed[:, col], rtol=0, atol=3e-3 * scale)
     poles = sorted_poles(closed_loop_matrix(F, G, None, K_printed))
-    np.testing.assert_allclose(sorted(poles.real), [-169.70057, -169.70057, -60.55876,
-                                                    -52.84124, -1.72906, -1.72906], atol=5e-5)
+    np.testing.assert_allclose(
+        sorted(poles.real),
+        [-169.70057, -169.70057, -60.55876, -52.84124, -1.72906, -1.72906],
+        atol=5e-5,
+    )
     G_printed = published_matrix("ch3_case1_G", errata=False)
     assert G_printed[0, 2] == 29.76
     unstable = np.linalg.eigvals(closed_loop_matrix(F, G_printed, None, K_printed))
     assert unstable.real.max() == pytest.approx(0.0625, abs=5e-4)
     # the exact decoupled loop: critically damped double roots -√3, -√3200, -√28800
     exact = sorted_poles(closed_loop_matrix(F, G, None, K))
-    np.testing.assert_allclose(sorted(exact.real), np.repeat(-np.sqrt([28800, 3200, 3]), 2),
-                               rtol=1e-5)
+    np.testing.assert_allclose(
+        sorted(exact.real), np.repeat(-np.sqrt([28800, 3200, 3]), 2), rtol=1e-5
+    )
 
 
 def test_chapter3_case2_decoupling_gains_and_k51_erratum():
@@ -203,23 +229,31 @@ def test_closed_form_riccati_equals_care_and_stays_accurate_for_stiff_modes(schu
     coordinate), and for the stiff modes, where the printed form -F + √(F² + Q1/R) cancels,
     against the notes' S values and the scalar Riccati equations themselves (scipy's CARE loses
     5 digits of S12 at F = 255331.4)."""
-    for F, Q1, Q2, R, D in ((3.0, 1.0, 3.0, 1.0, 0.0), (3200.0, 1.0, 3200.0, 1.0, 0.0),
-                            (5.0, 2.0, 0.5, 0.3, 0.7), (-2.0, 1.0, 1.0, 2.0, 0.1),
-                            (0.0, 1.0, 0.0, 1.0, 0.0)):
+    for F, Q1, Q2, R, D in (
+        (3.0, 1.0, 3.0, 1.0, 0.0),
+        (3200.0, 1.0, 3200.0, 1.0, 0.0),
+        (5.0, 2.0, 0.5, 0.3, 0.7),
+        (-2.0, 1.0, 1.0, 2.0, 0.1),
+        (0.0, 1.0, 0.0, 1.0, 0.0),
+    ):
         S11, S12, S22 = modal_riccati(F, Q1, Q2, R, D)
         A = np.array([[0.0, 1.0], [-F, -D]])
-        S = scipy.linalg.solve_continuous_are(A, np.array([[0.0], [1.0]]), np.diag([Q1, Q2]),
-                                              np.array([[R]]))
+        S = scipy.linalg.solve_continuous_are(
+            A, np.array([[0.0], [1.0]]), np.diag([Q1, Q2]), np.array([[R]])
+        )
         # scipy's S carries the Schur method's error (tests/conftest.py), the closed form
         # rounding only: 2x the bound.  At F = 3200 (κ(U11) = 2e5) that is 3e-5 absolute, 20 %
         # of S12: scipy cannot check the stiff S12, the scalar equations below do
-        assert np.all(np.abs(np.array([[S11, S12], [S12, S22]]) - S)
-                      <= 2 * schur_error_bound(S) * np.linalg.norm(S, 2))
+        assert np.all(
+            np.abs(np.array([[S11, S12], [S12, S22]]) - S)
+            <= 2 * schur_error_bound(S) * np.linalg.norm(S, 2)
+        )
     F = np.array([3200.0, 28800.0, 93079.5, 255331.4])
     S11, S12, S22 = modal_riccati(F)
     np.testing.assert_allclose(S11, [181019.35, 4.8875221e6, 2.8397562e7, 1.2901979e8], rtol=1e-7)
-    np.testing.assert_allclose(S12, [1.5625e-4, 1.7361111e-5, 5.3717521e-6, 1.9582394e-6],
-                               rtol=1e-7)
+    np.testing.assert_allclose(
+        S12, [1.5625e-4, 1.7361111e-5, 5.3717521e-6, 1.9582394e-6], rtol=1e-7
+    )
     np.testing.assert_allclose(S22, [56.568545, 169.70563, 305.08933, 505.30328], rtol=1e-7)
     # (1,1), (1,2), (2,2) entries of eq 24 with D = 0, R = 1, Q = diag(1, F)
     np.testing.assert_allclose(2 * F * S12 + S12**2, 1.0, rtol=1e-13)
@@ -248,8 +282,7 @@ def test_chapter3_case2_per_mode_regulator_gains():
     K_full, S, _ = lqr(A, B, Q, R)
     # ‖S‖ ≈ 1e8: the full solve resolves each gain only to the effect of round-off in its data
     # (|δA| <= eps|A|, ..., GᵀG formed to 5 eps |G|ᵀ|G|); 0.1 to 0.2 of that bound is used
-    floor = _gain_roundoff(A, B, Q, R, 5 * np.finfo(float).eps * np.abs(G).T @ np.abs(G), S,
-                           K_full)
+    floor = _gain_roundoff(A, B, Q, R, 5 * np.finfo(float).eps * np.abs(G).T @ np.abs(G), S, K_full)
     assert np.all(np.abs(K_full + np.hstack([K_pos, K_rate])) <= floor)
     # which checks the rate gains and the pitch position gain to 1e-8, while the stiff modes'
     # position gains (~1/(2 F_i) through GᵀG, cond 3.5e6) are below what the full solve resolves
@@ -257,8 +290,7 @@ def test_chapter3_case2_per_mode_regulator_gains():
     assert np.all(floor[:, 0] <= 1e-8 * np.abs(K_pos[:, 0]).max())
     assert floor[:, 4].max() > np.abs(K_pos[:, 4]).max()
     poles = sorted_poles(closed_loop_matrix(F, G, K_pos, K_rate))
-    np.testing.assert_allclose(poles[:2], [-0.911668 - 1.526807j, -0.911668 + 1.526807j],
-                               atol=5e-7)
+    np.testing.assert_allclose(poles[:2], [-0.911668 - 1.526807j, -0.911668 + 1.526807j], atol=5e-7)
     zeta = -poles.real / np.abs(poles)
     np.testing.assert_allclose(zeta[2:], 0.5, atol=1e-6)
 
@@ -273,14 +305,25 @@ def _gain_roundoff(A, B, Q, R, dR, S, K):
     Acl = A - B @ K
     lyap = np.kron(np.eye(n), Acl.T) + np.kron(Acl.T, np.eye(n))  # vec(AclᵀX + XAcl), by column
     bound = np.zeros_like(K)
-    for name, X, size in (("A", A, eps * np.abs(A)), ("B", B, eps * np.abs(B)),
-                          ("Q", Q, eps * np.abs(Q)), ("R", R, dR)):
+    for name, X, size in (
+        ("A", A, eps * np.abs(A)),
+        ("B", B, eps * np.abs(B)),
+        ("Q", Q, eps * np.abs(Q)),
+        ("R", R, dR),
+    ):
         for i, j in zip(*np.nonzero(size)):
-            d = {key: np.zeros_like(value) for key, value in (("A", A), ("B", B), ("Q", Q),
-                                                               ("R", R))}
+            d = {
+                key: np.zeros_like(value) for key, value in (("A", A), ("B", B), ("Q", Q), ("R", R))
+            }
             d[name][i, j] = size[i, j]
-            rhs = (d["A"].T @ S + S @ d["A"] - S @ d["B"] @ K - K.T @ d["B"].T @ S
-                   + K.T @ d["R"] @ K + d["Q"])
+            rhs = (
+                d["A"].T @ S
+                + S @ d["A"]
+                - S @ d["B"] @ K
+                - K.T @ d["B"].T @ S
+                + K.T @ d["R"] @ K
+                + d["Q"]
+            )
             dS = np.linalg.solve(lyap, -rhs.ravel(order="F")).reshape(n, n, order="F")
             bound += np.abs(np.linalg.solve(R, d["B"].T @ S + B.T @ dS - d["R"] @ K))
     return bound
@@ -297,8 +340,10 @@ def test_nonlinear_equations_are_eqs_1_and_2_and_reduce_to_the_linear_ones():
     assert acc[1] == pytest.approx(-k * 0.01, rel=1e-14)
     # at θ = θ' = 0 the orbital terms -(3 sin²θ - 1) - (θ' - 1)² cancel: exactly linear
     flat = np.array([0.0, 0.01, -0.02, 0.0, 0.1, 0.2])
-    np.testing.assert_array_equal(beam.accelerations(flat, [1.0, 2.0, 3.0]),
-                                  beam.accelerations(flat, [1.0, 2.0, 3.0], nonlinear=False))
+    np.testing.assert_array_equal(
+        beam.accelerations(flat, [1.0, 2.0, 3.0]),
+        beam.accelerations(flat, [1.0, 2.0, 3.0], nonlinear=False),
+    )
 
 
 def test_nonlinear_and_linear_agree_for_small_amplitudes():
@@ -311,8 +356,7 @@ def test_nonlinear_and_linear_agree_for_small_amplitudes():
     for amp in (0.01, 0.005):
         lin = beam.simulate(cl.G, None, cl.K_rate, [amp] * 3, 1.0, nonlinear=False, n_points=201)
         non = beam.simulate(cl.G, None, cl.K_rate, [amp] * 3, 1.0, nonlinear=True, n_points=201)
-        errors.append(np.abs(non.states - lin.states).max(axis=0)
-                      / np.abs(lin.states).max(axis=0))
+        errors.append(np.abs(non.states - lin.states).max(axis=0) / np.abs(lin.states).max(axis=0))
     assert errors[0].max() < 2e-3
     assert np.all(errors[1] < 0.55 * errors[0])
 
@@ -343,8 +387,9 @@ def test_three_mass_parameters_and_controllability():
     assert three_mass(c=None).c_value == t.c_formula
     np.testing.assert_allclose(t.lambdas, PUBLISHED["ch4_lambda"], rtol=5e-5)
     assert t.g == pytest.approx(3.0, rel=1e-14)
-    assert t.controllability_det() == pytest.approx(t.b * t.c_value / (t.a**2 - t.b**2) ** 2,
-                                                    rel=1e-12)
+    assert t.controllability_det() == pytest.approx(
+        t.b * t.c_value / (t.a**2 - t.b**2) ** 2, rel=1e-12
+    )
     assert t.controllability_det() == pytest.approx(1.509e-8, rel=5e-4)
     A_r, B_r = t.reduced_pair(1)
     assert controllability_rank(A_r, B_r) == 2
@@ -362,10 +407,14 @@ def test_three_mass_coupled_rate_roots():
     assert roots[2].real == pytest.approx(-8.654e-5, abs=5e-9)
     assert roots[2].real == roots[3].real
     assert sorted(roots[2:].imag) == pytest.approx([-2.95733e-2, 2.95733e-2], abs=5e-8)
-    np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(t.coupled_rate_closed_loop(
-        K1, K2))), roots, rtol=1e-7)
-    np.testing.assert_allclose(t.characteristic_polynomial(K1, K2),
-                               [1, 1.6728, 2.2350264e-3, 1.4630483e-3, 9.366268e-7], rtol=1e-7)
+    np.testing.assert_allclose(
+        np.sort_complex(np.linalg.eigvals(t.coupled_rate_closed_loop(K1, K2))), roots, rtol=1e-7
+    )
+    np.testing.assert_allclose(
+        t.characteristic_polynomial(K1, K2),
+        [1, 1.6728, 2.2350264e-3, 1.4630483e-3, 9.366268e-7],
+        rtol=1e-7,
+    )
     erratum = next(e for e in ERRATA if e.item == "ch4_roots")
     np.testing.assert_allclose(np.sort_complex(np.array(erratum.corrected)), roots, rtol=1e-6)
     printed = np.array(PUBLISHED["ch4_roots"])  # -6.4019e-4, -8.58139e-4 ± ..., -1.670404
@@ -424,34 +473,55 @@ def test_published_matrix_applies_the_errata():
         published_matrix("ch5")
 
 
-@pytest.mark.parametrize("call,message", [
-    (lambda: bainum(frequency_ratio=(1.0,)), r"^bainum: unknown parameter\(s\)"),
-    (lambda: bainum(frequency_ratios=(3200.0, -1.0)), r"^frequency_ratios: must be a non-empty"),
-    (lambda: bainum(frequency_ratios="3200, x"), r"^frequency_ratios: must be a comma-separated"),
-    (lambda: bainum(orbit_altitude="250 kg"), r"^orbit_altitude: incompatible units"),
-    (lambda: bainum(pitch_influence=float("nan")), r"^pitch_influence: must be a finite number"),
-    (lambda: three_mass(total_mass=0.0), r"^total_mass: must be > 0"),
-    (lambda: bainum().actuator_matrix([0.7], 2), r"^positions: actuator positions are"),
-    (lambda: bainum().frequencies_hz(0), r"^n_modes: must be a positive integer"),
-    (lambda: chapter2_case(5), r"^case: must be one of \[1, 2, 3, 4\]"),
-    (lambda: chapter2_case(4, midspan="x"), r"^midspan: must be 'exact' or 'published'"),
-    (lambda: chapter2_example([1.0, 2.0]), r"^gains: must be the three rate gains"),
-    (lambda: modal_riccati(3.0, R=0.0), r"^R: must be > 0"),
-    (lambda: modal_riccati(3.0, R=-1.0), r"^R: must be > 0"),
-    (lambda: modal_riccati(3.0, Q1=-1.0), r"^Q1: must be >= 0"),
-    (lambda: modal_riccati(0.0, Q1=0.0, Q2=1.0), r"^Q1, Q2: no stabilizing solution"),
-    (lambda: modal_lqr_gains(np.ones((3, 2)), [3.0, 3200.0, 28800.0]),
-     r"^G: per-mode regulator needs as many actuators"),
-    (lambda: decoupling_gains(np.ones((2, 2)), [3.0, 3200.0, 28800.0]), r"^G: must have 3 rows"),
-    (lambda: decoupling_gains([[1.0], [1.0]], [3.0, 3200.0]),
-     r"^G: decoupling impossible: rate column 1"),
-    (lambda: decoupling_gains(np.eye(2), [[3.0, 1.0], [0.0, 2.0]]), r"^stiffness: must be"),
-    (lambda: closed_loop_matrix([3.0], [[1.0]], None, [[1.0, 2.0]]), r"^K_rate: must be 1x1"),
-    (lambda: bainum().simulate(np.eye(2), None, np.eye(2), [0.01], 1.0), r"^x0: must have 2"),
-    (lambda: bainum().simulate(np.eye(2), None, np.eye(2), [0.01, 0.0], 0.0),
-     r"^tau_end: must be > 0"),
-    (lambda: three_mass().reduced_pair(3), r"^n_actuators: must be 1 or 2"),
-])
+@pytest.mark.parametrize(
+    "call,message",
+    [
+        (lambda: bainum(frequency_ratio=(1.0,)), r"^bainum: unknown parameter\(s\)"),
+        (
+            lambda: bainum(frequency_ratios=(3200.0, -1.0)),
+            r"^frequency_ratios: must be a non-empty",
+        ),
+        (
+            lambda: bainum(frequency_ratios="3200, x"),
+            r"^frequency_ratios: must be a comma-separated",
+        ),
+        (lambda: bainum(orbit_altitude="250 kg"), r"^orbit_altitude: incompatible units"),
+        (
+            lambda: bainum(pitch_influence=float("nan")),
+            r"^pitch_influence: must be a finite number",
+        ),
+        (lambda: three_mass(total_mass=0.0), r"^total_mass: must be > 0"),
+        (lambda: bainum().actuator_matrix([0.7], 2), r"^positions: actuator positions are"),
+        (lambda: bainum().frequencies_hz(0), r"^n_modes: must be a positive integer"),
+        (lambda: chapter2_case(5), r"^case: must be one of \[1, 2, 3, 4\]"),
+        (lambda: chapter2_case(4, midspan="x"), r"^midspan: must be 'exact' or 'published'"),
+        (lambda: chapter2_example([1.0, 2.0]), r"^gains: must be the three rate gains"),
+        (lambda: modal_riccati(3.0, R=0.0), r"^R: must be > 0"),
+        (lambda: modal_riccati(3.0, R=-1.0), r"^R: must be > 0"),
+        (lambda: modal_riccati(3.0, Q1=-1.0), r"^Q1: must be >= 0"),
+        (lambda: modal_riccati(0.0, Q1=0.0, Q2=1.0), r"^Q1, Q2: no stabilizing solution"),
+        (
+            lambda: modal_lqr_gains(np.ones((3, 2)), [3.0, 3200.0, 28800.0]),
+            r"^G: per-mode regulator needs as many actuators",
+        ),
+        (
+            lambda: decoupling_gains(np.ones((2, 2)), [3.0, 3200.0, 28800.0]),
+            r"^G: must have 3 rows",
+        ),
+        (
+            lambda: decoupling_gains([[1.0], [1.0]], [3.0, 3200.0]),
+            r"^G: decoupling impossible: rate column 1",
+        ),
+        (lambda: decoupling_gains(np.eye(2), [[3.0, 1.0], [0.0, 2.0]]), r"^stiffness: must be"),
+        (lambda: closed_loop_matrix([3.0], [[1.0]], None, [[1.0, 2.0]]), r"^K_rate: must be 1x1"),
+        (lambda: bainum().simulate(np.eye(2), None, np.eye(2), [0.01], 1.0), r"^x0: must have 2"),
+        (
+            lambda: bainum().simulate(np.eye(2), None, np.eye(2), [0.01, 0.0], 0.0),
+            r"^tau_end: must be > 0",
+        ),
+        (lambda: three_mass().reduced_pair(3), r"^n_actuators: must be 1 or 2"),
+    ],
+)
 def test_bad_inputs_name_the_field(call, message):
     with pytest.raises(ValueError, match=message):
         call()

@@ -38,8 +38,9 @@ def test_plant_linear_part_is_linear_model_in_seconds():
         np.testing.assert_allclose(B, B_ref, rtol=4 * EPS, atol=0)
     lin = beam.linear_plant(POSITIONS, 2)
     blocks = lin.modal_blocks
-    np.testing.assert_allclose(blocks.frequencies, wc * np.sqrt([3.0, 3200.0, 28800.0]),
-                               rtol=2 * EPS)
+    np.testing.assert_allclose(
+        blocks.frequencies, wc * np.sqrt([3.0, 3200.0, 28800.0]), rtol=2 * EPS
+    )
     assert blocks.n_rigid == 0 and not blocks.damping.any()
     assert [c.name for c in lin.inputs] == ["f1", "f2", "f3"]
     assert [c.name for c in lin.outputs][:4] == ["pitch", "z1", "z2", "w_left"]
@@ -53,8 +54,9 @@ def test_plant_channels_and_stations():
     np.testing.assert_array_equal(plant.G, beam.actuator_matrix(POSITIONS, 2))
     assert [(c.name, c.unit) for c in plant.inputs] == [("f1", "N"), ("f2", "N"), ("f3", "N")]
     C = plant.output_matrices("w_middle")[0]
-    np.testing.assert_allclose(C[0, 1:3], 100.0 * np.array([mode_shape(1, 0.0),
-                                                             mode_shape(2, 0.0)]), rtol=1e-15)
+    np.testing.assert_allclose(
+        C[0, 1:3], 100.0 * np.array([mode_shape(1, 0.0), mode_shape(2, 0.0)]), rtol=1e-15
+    )
     plant = beam.plant(POSITIONS, 2, stations={"quarter": 0.25})
     assert [c.name for c in plant.outputs][-2:] == ["w_quarter", "state"]
     with pytest.raises(ValueError, match=r"^stations\['tip'\]: actuator positions are"):
@@ -72,9 +74,15 @@ def test_case_simulation_is_the_plant_trajectory():
     res = beam.simulate(G, None, K, [0.01] * 3, 0.0401, n_points=41)
     wc = plant.orbit_rate
     gain_s = np.hstack([np.zeros((3, 3)), K / wc])  # f = K x' = K ẋ/ω_c
-    sol = solve_ivp(lambda t, x: plant.derivative(x, gain_s @ x), (0, res.tau[-1] / wc),
-                    np.concatenate([[0.01] * 3, np.zeros(3)]), method="DOP853", rtol=1e-11,
-                    atol=1e-16, t_eval=res.tau / wc)
+    sol = solve_ivp(
+        lambda t, x: plant.derivative(x, gain_s @ x),
+        (0, res.tau[-1] / wc),
+        np.concatenate([[0.01] * 3, np.zeros(3)]),
+        method="DOP853",
+        rtol=1e-11,
+        atol=1e-16,
+        t_eval=res.tau / wc,
+    )
     states_tau = sol.y.T.copy()
     states_tau[:, 3:] /= wc
     peak = np.abs(res.states).max(axis=0)

@@ -63,7 +63,11 @@ def test_bending_planes_are_distinct_and_labelled(cantilever):
     edge = cantilever.bending_frequencies_hz(3, "edgewise")
     assert edge / flat == pytest.approx(np.full(3, 4.0), rel=1e-9)
     assert cantilever.mode_descriptions(4) == [
-        "flatwise bending 1", "edgewise bending 1", "flatwise bending 2", "flatwise bending 3"]
+        "flatwise bending 1",
+        "edgewise bending 1",
+        "flatwise bending 2",
+        "flatwise bending 3",
+    ]
     # the aliases of the planes
     assert np.array_equal(cantilever.beta_L(2, "xz"), cantilever.beta_L(2, "flatwise"))
     assert np.array_equal(cantilever.beta_L(2, "xy"), cantilever.beta_L(2, "edgewise"))
@@ -101,8 +105,9 @@ def test_lumped_mass_is_less_accurate_and_from_below():
 def test_overrides_with_units_scale_as_the_theory():
     """βL is independent of the data; f scales as h/L² for a flatwise mode."""
     base = cantilever_beam()
-    other = cantilever_beam(length="2000 mm", height="0.5 in", E="10e6 psi", rho="0.1 lb/in**3",
-                            n_elements=40)
+    other = cantilever_beam(
+        length="2000 mm", height="0.5 in", E="10e6 psi", rho="0.1 lb/in**3", n_elements=40
+    )
     assert other.length == pytest.approx(2.0)
     assert other.height == pytest.approx(0.0127)
     assert other.n_elements == 40

@@ -4,10 +4,10 @@ shared/spec/seed000_part1.md §4.5."""
 
 import importlib
 
-import control
 import numpy as np
 import pytest
 
+import control
 from flexsat.cases.draper_rpl import comparison_functions, draper_rpl, published_gains
 from flexsat.units import Q_
 
@@ -16,17 +16,53 @@ module = importlib.import_module("flexsat.cases.draper_rpl")
 
 # Att. 5 Table 4 (L2235-L2248)
 TABLE4_OPEN = [0, 4.3724, 7.9070, 51.4510, 52.8058, 157.5566, 158.3659, 313.7099, 314.3402]
-TABLE4_CLOSED_OMEGA = [0.3000, 4.3726, 7.9071, 52.0041, 53.0653, 158.0285, 158.5273, 308.8039,
-                       311.7689]
-TABLE4_CLOSED_ZETA_OMEGA = [0.2000, 0.2061, 0.2539, 5.3354, 8.0875, 14.0467, 21.4808, 34.8815,
-                            22.6602]
+TABLE4_CLOSED_OMEGA = [
+    0.3000,
+    4.3726,
+    7.9071,
+    52.0041,
+    53.0653,
+    158.0285,
+    158.5273,
+    308.8039,
+    311.7689,
+]
+TABLE4_CLOSED_ZETA_OMEGA = [
+    0.2000,
+    0.2061,
+    0.2539,
+    5.3354,
+    8.0875,
+    14.0467,
+    21.4808,
+    34.8815,
+    22.6602,
+]
 TABLE4_CONDITION = 37210.8
 # notes §4.5 [VERIFIED]: N = 10 per pair, 400 Gauss-Legendre points
 NOTES_OPEN = [0, 4.37236, 7.90697, 51.45101, 52.80582, 157.55669, 158.36598, 313.71000, 314.34030]
-NOTES_CLOSED_OMEGA = [0.29999, 4.37261, 7.90711, 52.00388, 53.06545, 158.02834, 158.52747,
-                      308.80517, 311.76895]
-NOTES_CLOSED_ZETA_OMEGA = [0.20000, 0.20607, 0.25393, 5.33520, 8.08694, 14.04661, 21.47869,
-                           34.87840, 22.65996]
+NOTES_CLOSED_OMEGA = [
+    0.29999,
+    4.37261,
+    7.90711,
+    52.00388,
+    53.06545,
+    158.02834,
+    158.52747,
+    308.80517,
+    311.76895,
+]
+NOTES_CLOSED_ZETA_OMEGA = [
+    0.20000,
+    0.20607,
+    0.25393,
+    5.33520,
+    8.08694,
+    14.04661,
+    21.47869,
+    34.87840,
+    22.65996,
+]
 NOTES_CONDITION = 37828
 
 
@@ -45,7 +81,8 @@ def test_table_3_derived_quantities_via_pint(case):
     """Notes §4.5 [DERIVED]: EI = 74.5985 lb ft², J = 28.1963 slug ft²."""
     assert Q_(case.EI, "N*m**2").to("lbf*ft**2").magnitude == pytest.approx(74.5985, abs=5e-5)
     assert Q_(case.total_inertia, "kg*m**2").to("slug*ft**2").magnitude == pytest.approx(
-        28.1963, abs=5e-5)
+        28.1963, abs=5e-5
+    )
     assert case.matrices()[0][0, 0] == case.total_inertia
     assert case.length == pytest.approx(4 * 0.3048, rel=1e-15)
     assert case.n_functions == 10 and case.n_dof == 21
@@ -90,8 +127,9 @@ def test_closed_form_stiffness_matches_quadrature(case):
     z, w = L * (x + 1) / 2, w * L / 2
     d2 = comparison_functions(z, n, L, 2)
     K = case.matrices()[1]
-    assert np.allclose(K[1 : n + 1, 1 : n + 1], 2 * case.EI * d2.T @ (w[:, None] * d2),
-                       rtol=1e-11, atol=0)
+    assert np.allclose(
+        K[1 : n + 1, 1 : n + 1], 2 * case.EI * d2.T @ (w[:, None] * d2), rtol=1e-11, atol=0
+    )
 
 
 def test_quadrature_points_are_enough(case, monkeypatch):
@@ -137,8 +175,10 @@ def test_reduced_model_eqs_57_58(case):
     gamma = len(M) * np.finfo(float).eps
     a = np.abs(phi)
     assert np.all(np.abs(Mb - np.eye(9)) <= gamma * a.T @ np.abs(M) @ a)
-    assert np.abs(Kb - np.diag(case.frequencies()[:9] ** 2)).max() \
+    assert (
+        np.abs(Kb - np.diag(case.frequencies()[:9] ** 2)).max()
         <= gamma * (a.T @ np.abs(K) @ a).max()
+    )
     assert np.all(np.abs(Db - phi.T @ B) <= 2 * gamma * a.T @ np.abs(B))
 
 
@@ -162,7 +202,8 @@ def test_mode_descriptions(case):
         "2nd bending, pairs 1&3 and 2&4 in phase, hub counter-rotating",
     ]
     assert case.mode_descriptions(9)[8] == (
-        "4th bending, pairs 1&3 and 2&4 in phase, hub counter-rotating")
+        "4th bending, pairs 1&3 and 2&4 in phase, hub counter-rotating"
+    )
 
 
 # -- closed loop, Eq. 59 and Table 4 -------------------------------------------------------------
@@ -187,7 +228,8 @@ def test_closed_loop_condition_number(case, gains):
     assert plain == pytest.approx(NOTES_CONDITION, abs=1)
     assert plain == pytest.approx(TABLE4_CONDITION, rel=0.03)
     assert case.condition_number(*gains, normalisation="hermitian") == pytest.approx(
-        TABLE4_CONDITION, rel=1e-4)
+        TABLE4_CONDITION, rel=1e-4
+    )
 
 
 def test_statespace_feedback_is_eq_59(case, gains):
@@ -221,22 +263,25 @@ def test_overrides_by_name_with_units():
     assert draper_rpl(length=1.2192).length == pytest.approx(draper_rpl().length, rel=1e-12)
 
 
-@pytest.mark.parametrize("field,value,message", [
-    ("length", 0.0, r"^length: must be > 0"),
-    ("length", "-4 ft", r"^length: must be > 0"),
-    ("modulus", 0.0, r"^modulus: must be > 0"),  # EI = E h t³/12
-    ("thickness", "0 in", r"^thickness: must be > 0"),
-    ("height", -0.1, r"^height: must be > 0"),
-    ("density", 0.0, r"^density: must be > 0"),
-    ("hub_inertia", "-8 slug*ft**2", r"^hub_inertia: must be > 0"),
-    ("tip_mass", "-0.1 slug", r"^tip_mass: must be >= 0"),
-    ("tip_inertia", -1e-3, r"^tip_inertia: must be >= 0"),
-    ("hub_radius", "-1 ft", r"^hub_radius: must be >= 0"),
-    ("density", "3 kg", r"^density: incompatible units"),
-    ("n_functions", 0, r"^n_functions: must be a positive integer"),
-    ("n_functions", 2.5, r"^n_functions: must be a positive integer"),
-    ("n_functions", True, r"^n_functions: must be a positive integer"),
-])
+@pytest.mark.parametrize(
+    "field,value,message",
+    [
+        ("length", 0.0, r"^length: must be > 0"),
+        ("length", "-4 ft", r"^length: must be > 0"),
+        ("modulus", 0.0, r"^modulus: must be > 0"),  # EI = E h t³/12
+        ("thickness", "0 in", r"^thickness: must be > 0"),
+        ("height", -0.1, r"^height: must be > 0"),
+        ("density", 0.0, r"^density: must be > 0"),
+        ("hub_inertia", "-8 slug*ft**2", r"^hub_inertia: must be > 0"),
+        ("tip_mass", "-0.1 slug", r"^tip_mass: must be >= 0"),
+        ("tip_inertia", -1e-3, r"^tip_inertia: must be >= 0"),
+        ("hub_radius", "-1 ft", r"^hub_radius: must be >= 0"),
+        ("density", "3 kg", r"^density: incompatible units"),
+        ("n_functions", 0, r"^n_functions: must be a positive integer"),
+        ("n_functions", 2.5, r"^n_functions: must be a positive integer"),
+        ("n_functions", True, r"^n_functions: must be a positive integer"),
+    ],
+)
 def test_bad_input_names_the_field(field, value, message):
     with pytest.raises(ValueError, match=message):
         draper_rpl(**{field: value})
@@ -289,8 +334,10 @@ def test_reduced_plant_exposes_its_modes(case):
     w = case.frequencies()[:5]
     np.testing.assert_allclose(blocks.frequencies[1:], w[1:], rtol=1e-10)
     Mbar, Kbar, _ = case.reduced(5)
-    off = np.abs(Mbar - np.eye(5)).max() + np.abs(Kbar - np.diag(np.diag(Kbar))).max() / np.abs(
-        Kbar).max()
+    off = (
+        np.abs(Mbar - np.eye(5)).max()
+        + np.abs(Kbar - np.diag(np.diag(Kbar))).max() / np.abs(Kbar).max()
+    )
     A, B = plant.linear_part()
     assert np.abs(A - sys.A).max() <= 10 * off * np.abs(sys.A).max()
     assert np.abs(B - sys.B).max() <= 10 * off * np.abs(sys.B).max()

@@ -61,8 +61,13 @@ def test_total_mass_is_1028_kg_from_the_assembled_mass_matrix(case):
     assert props["total_mass"] == pytest.approx(1028.0, abs=1.0)
     b = case.mass_budget()
     assert b["total_assembled"] == pytest.approx(props["total_mass"], rel=1e-12)
-    parts = ("truss", "antenna_1_structure", "antenna_2_structure", "antenna_supports",
-             "actuator_support")
+    parts = (
+        "truss",
+        "antenna_1_structure",
+        "antenna_2_structure",
+        "antenna_supports",
+        "actuator_support",
+    )
     assert sum(b[p] for p in parts) == pytest.approx(b["structural"], rel=1e-12)
     assert b["structural"] + b["nonstructural"] + b["actuators"] == pytest.approx(1028.0, rel=1e-12)
     assert b["nonstructural"] == pytest.approx(329.63, rel=1e-12)
@@ -70,8 +75,9 @@ def test_total_mass_is_1028_kg_from_the_assembled_mass_matrix(case):
     # documented deviations: structural mass within 1 % of 548 kg, actuators balance to 1028
     assert b["structural"] == pytest.approx(548.0, rel=0.01)
     assert b["actuators"] == pytest.approx(150.0, rel=0.04)
-    assert b["truss"] == pytest.approx(0.8021 * (40 * 2.5 + 44 * 3 + 11 * 3 * 2**0.5
-                                                 + 40 * np.hypot(2.5, 3)), rel=1e-4)
+    assert b["truss"] == pytest.approx(
+        0.8021 * (40 * 2.5 + 44 * 3 + 11 * 3 * 2**0.5 + 40 * np.hypot(2.5, 3)), rel=1e-4
+    )
 
 
 def test_torquer_node_is_at_the_centre_of_mass(case):
@@ -140,11 +146,17 @@ def test_node_roles_lie_on_the_right_components(case):
         d = coords[node] - coords[hubs[group]]
         return np.hypot(d[0], d[2])  # in the antenna's x-z plane (boresight y)
 
-    for paper, group, r in ((60, "15 m antenna", 7.5), (63, "15 m antenna", 7.5),
-                            (66, "15 m antenna", 7.5), (69, "15 m antenna", 7.5),
-                            (85, "7.5 m antenna", 3.75), (88, "7.5 m antenna", 3.75),
-                            (94, "7.5 m antenna", 3.75), (52, "15 m antenna", 3.75),
-                            (78, "7.5 m antenna", 1.875)):
+    for paper, group, r in (
+        (60, "15 m antenna", 7.5),
+        (63, "15 m antenna", 7.5),
+        (66, "15 m antenna", 7.5),
+        (69, "15 m antenna", 7.5),
+        (85, "7.5 m antenna", 3.75),
+        (88, "7.5 m antenna", 3.75),
+        (94, "7.5 m antenna", 3.75),
+        (52, "15 m antenna", 3.75),
+        (78, "7.5 m antenna", 1.875),
+    ):
         assert roles[paper] in groups[group]
         assert radius(roles[paper], group) == pytest.approx(r, rel=1e-12)
     assert roles[95] in groups["torquers"]
@@ -192,19 +204,22 @@ def test_overrides_accept_units(case):
     assert coords[ids.index(60), 1] == pytest.approx(coords[ids.index(45), 1])
 
 
-@pytest.mark.parametrize("overrides,message", [
-    ({"hub_inertia": 1}, "eps: unknown parameter"),
-    ({"truss_length": "3 kg"}, "truss_length: incompatible units"),
-    ({"large_support_height": -1}, "large_support_height: must be > 0"),
-    ({"truss_bays": 2.5}, "truss_bays: must be a positive integer"),
-    ({"small_antenna_bay": 11}, "small_antenna_bay: must be a bay number"),
-    ({"small_antenna_bay": 1}, "small_antenna_bay: must differ"),
-    ({"large_antenna_share": 1.5}, "large_antenna_share: must be in"),
-    ({"total_mass": "500 kg"}, "actuator_mass: balancing to total_mass"),
-    ({"tube_wall": "30 mm"}, "tube_wall: must be <="),
-    ({"damping": 1.5}, "damping: must be a modal damping ratio"),
-    ({"ribs": 2}, "ribs: must be >= 3"),
-])
+@pytest.mark.parametrize(
+    "overrides,message",
+    [
+        ({"hub_inertia": 1}, "eps: unknown parameter"),
+        ({"truss_length": "3 kg"}, "truss_length: incompatible units"),
+        ({"large_support_height": -1}, "large_support_height: must be > 0"),
+        ({"truss_bays": 2.5}, "truss_bays: must be a positive integer"),
+        ({"small_antenna_bay": 11}, "small_antenna_bay: must be a bay number"),
+        ({"small_antenna_bay": 1}, "small_antenna_bay: must differ"),
+        ({"large_antenna_share": 1.5}, "large_antenna_share: must be in"),
+        ({"total_mass": "500 kg"}, "actuator_mass: balancing to total_mass"),
+        ({"tube_wall": "30 mm"}, "tube_wall: must be <="),
+        ({"damping": 1.5}, "damping: must be a modal damping ratio"),
+        ({"ribs": 2}, "ribs: must be >= 3"),
+    ],
+)
 def test_bad_inputs_are_refused_by_name(overrides, message):
     with pytest.raises(ValueError, match=message):
         eps(**overrides)
@@ -224,9 +239,16 @@ def test_plant_has_the_papers_final_actuators_and_rim_outputs():
 
     case = eps()
     plant = case.plant(n_modes=10)
-    assert [c.name for c in plant.inputs] == ["torque", "force_69X", "force_63X", "force_66Y",
-                                              "force_66Z", "force_60Y", "force_60Z",
-                                              "force_88X"]
+    assert [c.name for c in plant.inputs] == [
+        "torque",
+        "force_69X",
+        "force_63X",
+        "force_66Y",
+        "force_66Z",
+        "force_60Y",
+        "force_60Z",
+        "force_88X",
+    ]
     rims = [c.name for c in plant.outputs if c.name.startswith("displacement_")]
     assert rims == [f"displacement_{n}{a}" for n in (66, 69, 85, 88) for a in "XYZ"]
     assert plant.nx == 7 + 2 * 10

@@ -42,8 +42,9 @@ def test_eps_published_top5_cannot_stabilise_rigid_motion(eps_setup):
     torquers = [dist[:, k] for k in range(3)]
 
     def solve(labels):
-        A, B, C = modal_state_matrices(w, model.damping,
-                                       np.column_stack([act[k] for k in labels] + torquers), out)
+        A, B, C = modal_state_matrices(
+            w, model.damping, np.column_stack([act[k] for k in labels] + torquers), out
+        )
         _, b, _ = modal_state_matrices(w, model.damping, dist)
         return h2_placement(A, B, b, C)
 

@@ -83,8 +83,9 @@ def test_choice_rule():
     assert read(choice) == "cantilevered"
     assert read(choice, " Total ") == "total"
     for bad in ("hub", 1, None):
-        with pytest.raises(ValueError,
-                           match=r"^x: must be one of \['cantilevered', 'total'\], got"):
+        with pytest.raises(
+            ValueError, match=r"^x: must be one of \['cantilevered', 'total'\], got"
+        ):
             read(choice, bad)
 
 
@@ -140,18 +141,30 @@ def test_a_count_with_a_limit_is_refused_above_it_before_anything_is_built():
     from flexsat import limits
 
     spec = {"n_elements": Param(20, rule="count", limit="MAX_ELEMENTS")}
-    assert read_inputs("test", spec, {"n_elements": limits.MAX_ELEMENTS})["n_elements"] == \
-        limits.MAX_ELEMENTS
-    with pytest.raises(ValueError, match=r"^n_elements: n_elements = 1e\+09, above the limit "
-                                         r"1,000 \(flexsat.limits\); a larger n_elements takes"):
+    assert (
+        read_inputs("test", spec, {"n_elements": limits.MAX_ELEMENTS})["n_elements"]
+        == limits.MAX_ELEMENTS
+    )
+    with pytest.raises(
+        ValueError,
+        match=r"^n_elements: n_elements = 1e\+09, above the limit "
+        r"1,000 \(flexsat.limits\); a larger n_elements takes",
+    ):
         read_inputs("test", spec, {"n_elements": 10**9})
     with pytest.raises(ValueError, match=r"^limit: must name a flexsat.limits constant"):
         Param(20, rule="count", limit="MAX_NOTHING")
 
 
-@pytest.mark.parametrize("case, name", [("cantilever_beam", "n_elements"), ("nafems_fv2", "elements_per_arm"),
-                                        ("nps", "n_elements"), ("nps", "n_modes"),
-                                        ("agrawal_bang", "n_modes")])
+@pytest.mark.parametrize(
+    "case, name",
+    [
+        ("cantilever_beam", "n_elements"),
+        ("nafems_fv2", "elements_per_arm"),
+        ("nps", "n_elements"),
+        ("nps", "n_modes"),
+        ("agrawal_bang", "n_modes"),
+    ],
+)
 def test_case_mesh_and_mode_counts_are_bounded(case, name):
     from flexsat.cases import get_case
 

@@ -23,8 +23,13 @@ def test_first_cantilever_frequency_is_the_published_0_14_hz(case):
     assert f[0] == pytest.approx(0.14, rel=1e-6)
     assert np.all(case.modal_model().damping == 0.004)
     # the distributed-parameter beam with the solved EI agrees (20 cubic elements)
-    beam = TipMassCantilever(case.mast_length, case.mast_bending_stiffness_value,
-                             case.mast_mass_per_length, case.reflector_mass, case.reflector_inertia)
+    beam = TipMassCantilever(
+        case.mast_length,
+        case.mast_bending_stiffness_value,
+        case.mast_mass_per_length,
+        case.reflector_mass,
+        case.reflector_inertia,
+    )
     exact = beam.frequencies(3) / (2 * np.pi)
     assert exact[0] == pytest.approx(0.14, rel=1e-6)
     np.testing.assert_allclose(f[:3], exact, rtol=1e-5)
@@ -119,9 +124,18 @@ def test_hub_free_frequencies(case):
     assert np.all(fs > fc)
     assert np.all(fs[:-1] < fc[1:])
     exact = hub_free_frequencies(
-        TipMassCantilever(case.mast_length, case.mast_bending_stiffness_value,
-                          case.mast_mass_per_length, case.reflector_mass, case.reflector_inertia),
-        case.attachment_radius, case.hub_inertia_value, 1, 3) / (2 * np.pi)
+        TipMassCantilever(
+            case.mast_length,
+            case.mast_bending_stiffness_value,
+            case.mast_mass_per_length,
+            case.reflector_mass,
+            case.reflector_inertia,
+        ),
+        case.attachment_radius,
+        case.hub_inertia_value,
+        1,
+        3,
+    ) / (2 * np.pi)
     full = case.system_frequencies("all")[:3] / (2 * np.pi)
     np.testing.assert_allclose(full, exact, rtol=1e-5)
     assert full[0] == pytest.approx(exact[0], rel=1e-8)

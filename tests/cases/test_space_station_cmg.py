@@ -23,7 +23,7 @@ def test_scaled_design_is_the_bryson_lqr(group):
     D = DESIGN.maxima.scales(names, DATA.orbit_rate)
     # Q = diag(1/x_max²), R = I (python-control's K = R⁻¹BᵀS); scipy's balanced Schur solver
     # copes with the raw weights to ~1e-12 relative (measured), the bound used here is 1e-9
-    S = sl.solve_continuous_are(A, B, np.diag(D ** -2.0), np.eye(B.shape[1]))
+    S = sl.solve_continuous_are(A, B, np.diag(D**-2.0), np.eye(B.shape[1]))
     np.testing.assert_allclose(K, B.T @ S, rtol=0, atol=1e-9 * np.abs(K).max())
     assert np.all(poles.real < 0)
     # attitude-loop bandwidth: the paper's "of the order of .01 r/sec" (L4715); ours is 0.006
@@ -36,9 +36,10 @@ def test_station_settles_at_the_torque_equilibrium_attitude():
     # θ3 = w3/(n²(I2 − I1)) = 8.58° (yaw)
     run = st.simulate_attitude(DESIGN, 12 * DATA.period, n_out=12 * 200 + 1)
     I1, I2, I3 = DATA.inertia
-    n2 = DATA.orbit_rate ** 2
-    tea = ss.FT_LB * np.array([1.0 / (4 * n2 * (I2 - I3)), 4.0 / (3 * n2 * (I1 - I3)),
-                               1.0 / (n2 * (I2 - I1))])
+    n2 = DATA.orbit_rate**2
+    tea = ss.FT_LB * np.array(
+        [1.0 / (4 * n2 * (I2 - I3)), 4.0 / (3 * n2 * (I1 - I3)), 1.0 / (n2 * (I2 - I1))]
+    )
     last = run.attitude[-200:]  # the 12th orbit
     # slowest closed-loop pole |Re| 4.9e-5 1/s: after 11 orbits e^-3 of the ~0.1° transient
     np.testing.assert_allclose(np.rad2deg(last.mean(axis=0)), np.rad2deg(tea), atol=0.005)
@@ -77,13 +78,16 @@ def test_with_the_design_disturbance_alone_zero_gimbals_do_not_go_singular():
     assert not st.cmg_loop(run, np.zeros(4)).singular
 
 
-@pytest.mark.parametrize("call, message", [
-    (lambda: st.BrysonMaxima(attitude="0 deg"), "maxima.attitude: must be"),
-    (lambda: st.BrysonMaxima(rate="1 furlong"), "maxima.rate"),
-    (lambda: st.design(roll_yaw_filters=(1, 2)), "roll_yaw_filters: .*not stabilizable"),
-    (lambda: st.simulate_attitude(DESIGN, 100.0, disturbance="AERO1"), "disturbance: must be"),
-    (lambda: st.simulate_attitude(DESIGN, -1.0), "duration: must be"),
-])
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda: st.BrysonMaxima(attitude="0 deg"), "maxima.attitude: must be"),
+        (lambda: st.BrysonMaxima(rate="1 furlong"), "maxima.rate"),
+        (lambda: st.design(roll_yaw_filters=(1, 2)), "roll_yaw_filters: .*not stabilizable"),
+        (lambda: st.simulate_attitude(DESIGN, 100.0, disturbance="AERO1"), "disturbance: must be"),
+        (lambda: st.simulate_attitude(DESIGN, -1.0), "duration: must be"),
+    ],
+)
 def test_bad_input_is_named(call, message):
     with pytest.raises(ValueError, match=message):
         call()

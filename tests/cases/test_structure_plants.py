@@ -16,8 +16,7 @@ def test_plant_frequencies_are_the_cases_own(case):
     w = plant.modal_blocks.frequencies
     rigid = plant.modal_blocks.n_rigid
     assert rigid == (6 if case is free_free_beam else 0)
-    np.testing.assert_allclose(w[rigid:] / (2 * np.pi), c.frequencies_hz(8)[:8 - rigid],
-                               rtol=1e-9)
+    np.testing.assert_allclose(w[rigid:] / (2 * np.pi), c.frequencies_hz(8)[: 8 - rigid], rtol=1e-9)
     assert [ch.name for ch in plant.inputs] == ["force"]
 
 
@@ -30,7 +29,7 @@ def test_static_tip_deflection_of_the_cantilever_is_pl3_over_3ei():
     A, B = plant.linear_part()
     x_static = -np.linalg.solve(A, B[:, 0])
     C, _, _ = plant.output_matrices(f"displacement_{c.n_elements}")
-    expected = c.length ** 3 / (3 * min(c.E * c.section.Iy, c.E * c.section.Iz))
+    expected = c.length**3 / (3 * min(c.E * c.section.Iy, c.E * c.section.Iz))
     assert abs((C @ x_static)[0] - expected) <= 1e-3 * expected
 
 

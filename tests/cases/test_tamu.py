@@ -66,12 +66,15 @@ def test_case_registry():
         get_case("hst")
 
 
-@pytest.mark.parametrize("override", [
-    {"tip_mass": "1.5627 ozf*s**2/in"},  # 10× the tip masses: ~8× the inertia
-    {"hub_inertia": "500 ozf*in*s**2"},
-    {"tip_radius": "40 in", "density": "0.00307 ozf*s**2/in**2"},
-    {"n_appendages": 2, "tip_inertia": "10 ozf*in*s**2"},
-])
+@pytest.mark.parametrize(
+    "override",
+    [
+        {"tip_mass": "1.5627 ozf*s**2/in"},  # 10× the tip masses: ~8× the inertia
+        {"hub_inertia": "500 ozf*in*s**2"},
+        {"tip_radius": "40 in", "density": "0.00307 ozf*s**2/in**2"},
+        {"n_appendages": 2, "tip_inertia": "10 ozf*in*s**2"},
+    ],
+)
 def test_inertia_overrides_move_the_reference_design_inertia(override):
     """The reference is designed on the published total scaled with the vehicle: the same
     design-to-model ratio 2128 / 2213.6 as the default case (to rounding of one division,

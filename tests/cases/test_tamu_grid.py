@@ -41,8 +41,9 @@ def test_table_1_si_column_and_its_one_digit_typo(grid):
         printed = to_si(PUBLISHED[f"{name}_si_printed"], unit)
         assert getattr(grid, name) == pytest.approx(printed, rel=5e-4)
     assert grid.EI == pytest.approx(9.34182, abs=1e-5)
-    assert to_si(PUBLISHED["EI_si_printed"], "N*m**2") / grid.EI - 1 == pytest.approx(8.6e-4,
-                                                                                    abs=1e-5)
+    assert to_si(PUBLISHED["EI_si_printed"], "N*m**2") / grid.EI - 1 == pytest.approx(
+        8.6e-4, abs=1e-5
+    )
 
 
 def test_table_1_is_a_2_in_by_eighth_in_aluminium_strip():
@@ -53,8 +54,7 @@ def test_table_1_is_a_2_in_by_eighth_in_aluminium_strip():
     rho = to_si(PUBLISHED["rho_A"], "kg/m") / strip.A
     assert E == pytest.approx(to_si("10.0e6 psi", "Pa"), rel=1e-4)
     assert rho == pytest.approx(2770, rel=2e-3)
-    assert rho * (strip.Iy + strip.Iz) == pytest.approx(to_si(PUBLISHED["rho_J"], "kg*m"),
-                                                         rel=1e-3)
+    assert rho * (strip.Iy + strip.Iz) == pytest.approx(to_si(PUBLISHED["rho_J"], "kg*m"), rel=1e-3)
 
 
 def test_25_nodes_36_members_60_dof(grid):
@@ -184,8 +184,9 @@ def test_modal_model(grid):
 
 
 def test_motor_overrides_with_units():
-    c = tamu_grid(motor_mass="1.1023 lb", motor_nodes="3, 7, 9", motor_inertia="1e-4 kg*m**2",
-                  spacing="15 in")
+    c = tamu_grid(
+        motor_mass="1.1023 lb", motor_nodes="3, 7, 9", motor_inertia="1e-4 kg*m**2", spacing="15 in"
+    )
     assert c.motor_mass == pytest.approx(0.5, rel=1e-4)
     assert c.motor_nodes == (3, 7, 9)
     assert c.spacing == pytest.approx(0.381)
@@ -229,7 +230,10 @@ def test_substructure_stiffness_scaling():
     case = tamu_grid(gravity=False)
     groups = [case.substructure_of(m) for m in case.members]
     assert {g: groups.count(g) for g in SUBSTRUCTURES} == {
-        "clamp verticals": 5, "verticals": 15, "horizontals": 16}
+        "clamp verticals": 5,
+        "verticals": 15,
+        "horizontals": 16,
+    }
     base = case.structure().assemble().modes(6).frequencies_hz
     stiff = case.structure(stiffness_scale={g: 1.21 for g in SUBSTRUCTURES}).assemble()
     assert np.allclose(stiff.modes(6).frequencies_hz, 1.1 * base, rtol=1e-9)

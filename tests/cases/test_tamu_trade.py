@@ -14,14 +14,16 @@ from flexsat.units import to_si
 #: the T table of the notes (seed000_part1.md §2.4, "[DERIVED] T in seconds for θ_f − θ_o = 40°,
 #: I = 2128 oz-in-s²"): rows u_max = 100 … 600 oz-in, columns α = 0, 0.05, …, 0.25. The three
 #: values the paper itself prints are 3.8544 (α = 0), 4.2986 (0.1) and 4.9109 (0.2) at 400 oz-in.
-T_TABLE = np.array([
-    [7.7088, 8.1212, 8.5972, 9.1551, 9.8219, 10.6391],
-    [5.4509, 5.7426, 6.0791, 6.4736, 6.9451, 7.5230],
-    [4.4507, 4.6888, 4.9636, 5.2857, 5.6707, 6.1425],
-    [3.8544, 4.0606, 4.2986, 4.5775, 4.9109, 5.3195],
-    [3.4475, 3.6319, 3.8448, 4.0943, 4.3925, 4.7579],
-    [3.1471, 3.3155, 3.5098, 3.7375, 4.0098, 4.3434],
-])
+T_TABLE = np.array(
+    [
+        [7.7088, 8.1212, 8.5972, 9.1551, 9.8219, 10.6391],
+        [5.4509, 5.7426, 6.0791, 6.4736, 6.9451, 7.5230],
+        [4.4507, 4.6888, 4.9636, 5.2857, 5.6707, 6.1425],
+        [3.8544, 4.0606, 4.2986, 4.5775, 4.9109, 5.3195],
+        [3.4475, 3.6319, 3.8448, 4.0943, 4.3925, 4.7579],
+        [3.1471, 3.3155, 3.5098, 3.7375, 4.0098, 4.3434],
+    ]
+)
 
 G1 = to_si(LAW_II_GAINS["g1"], "N*m/rad")
 G2 = to_si(LAW_II_GAINS["g2"], "N*m*s/rad")
@@ -66,8 +68,9 @@ def test_triangular_region_of_negligible_energy(case):
     model = case.model()
     alpha = np.round(np.arange(0.0, 0.2501, 0.01), 2)
     u_oz = np.arange(100, 601, 25)
-    E = residual_energy_surface(model, case.angle, case.reference_inertia, alpha,
-                                [f"{v} ozf*in" for v in u_oz])
+    E = residual_energy_surface(
+        model, case.angle, case.reference_inertia, alpha, [f"{v} ozf*in" for v in u_oz]
+    )
     negligible = E < 1e-4 * E.max()
     # smallest α from which every larger α is negligible, per u_max
     tail = np.flip(np.logical_and.accumulate(np.flip(negligible, 0), 0), 0)

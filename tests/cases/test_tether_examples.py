@@ -10,8 +10,7 @@ from flexsat.control.tether_laws import CoupledTetherLaw, DecoupledTetherLaw, Te
 
 def test_examples_name_their_laws_and_the_paper_start():
     assert INITIAL == (1.0, np.radians(5), np.radians(5), 0.0, 0.0, 0.0)
-    kinds = {"decoupled": DecoupledTetherLaw, "coupled": CoupledTetherLaw,
-             "rate": TetherRateLaw}
+    kinds = {"decoupled": DecoupledTetherLaw, "coupled": CoupledTetherLaw, "rate": TetherRateLaw}
     for e in EXAMPLES.values():
         law = make_law(e.law, e.gains, e.final_length)
         assert isinstance(law, kinds[e.law]), e.key

@@ -18,8 +18,8 @@ from flexsat.cases.bainum import (
     published_matrix,
     sorted_poles,
 )
-from flexsat.checks import run_checks
 from flexsat.checks import bainum as rows
+from flexsat.checks import run_checks
 
 
 @pytest.fixture(scope="module")
@@ -46,17 +46,20 @@ def test_roots_from_the_plants_linear_part_equal_the_cases_closed_loop():
     np.testing.assert_allclose(rows._ch2_roots(), sorted_poles(cl.matrix), rtol=1e-10)
     F, G = chapter3_case(1)
     expected = sorted_poles(closed_loop_matrix(F, G, None, published_matrix("ch3_case1_K")))
-    np.testing.assert_allclose(np.sort_complex(rows._ch3_roots()), np.sort_complex(expected),
-                               rtol=1e-10)
+    np.testing.assert_allclose(
+        np.sort_complex(rows._ch3_roots()), np.sort_complex(expected), rtol=1e-10
+    )
     F, G = chapter3_case(2)
     expected = sorted_poles(closed_loop_matrix(F, G, None, published_matrix("ch3_case2_K")))
-    np.testing.assert_allclose(np.sort_complex(rows._ch3_case2_roots()),
-                               np.sort_complex(expected), rtol=1e-9)
+    np.testing.assert_allclose(
+        np.sort_complex(rows._ch3_case2_roots()), np.sort_complex(expected), rtol=1e-9
+    )
 
 
 def _continuous(G, K, tau_end, n_points, nonlinear):
-    return bainum().simulate(G, None, K, [0.01] * 3, tau_end, nonlinear=nonlinear,
-                             n_points=n_points)
+    return bainum().simulate(
+        G, None, K, [0.01] * 3, tau_end, nonlinear=nonlinear, n_points=n_points
+    )
 
 
 def test_chapter2_sampled_data_error_is_inside_each_rows_allowance():

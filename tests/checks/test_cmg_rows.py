@@ -10,5 +10,7 @@ def test_cmg_rows_pass_or_are_explained_discrepancies():
     assert len(results) == 15
     status = {r.check.quantity: r.status for r in results}
     odd = {q: s for q, s in status.items() if s != "pass"}
-    assert odd == {"σ3 at that singularity (V3)": "discrepancy",
-                   "space station, σ(0) = 0: singular time (V9)": "discrepancy"}
+    assert odd == {
+        "σ3 at that singularity (V3)": "discrepancy",
+        "space station, σ(0) = 0: singular time (V9)": "discrepancy",
+    }

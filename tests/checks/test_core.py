@@ -25,10 +25,13 @@ def test_evaluate_reports_values_and_failures_without_raising():
     assert not bad.passed and bad.status == "error" and "division by zero" in bad.error
 
 
-@pytest.mark.parametrize("kwargs,message", [
-    (dict(), r"give rtol or atol"),
-    (dict(rtol=-1.0), r"^rtol: must be a finite number >= 0"),
-])
+@pytest.mark.parametrize(
+    "kwargs,message",
+    [
+        (dict(), r"give rtol or atol"),
+        (dict(rtol=-1.0), r"^rtol: must be a finite number >= 0"),
+    ],
+)
 def test_bad_checks_are_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
         _check(lambda: 2.0, **kwargs)
@@ -36,8 +39,16 @@ def test_bad_checks_are_refused(kwargs, message):
 
 def _erratum(compute):
     """Printed 2.0; the paper's own inputs give 2.5 (tolerance 0.1 %)."""
-    return Check("demo", "x", "seed 000_7bfdb62d2eacc22a.txt, Eq. 1", 2.0, "s", compute,
-                 rtol=1e-3, discrepancy=Discrepancy(2.5, "the paper misprints 2.5 as 2.0"))
+    return Check(
+        "demo",
+        "x",
+        "seed 000_7bfdb62d2eacc22a.txt, Eq. 1",
+        2.0,
+        "s",
+        compute,
+        rtol=1e-3,
+        discrepancy=Discrepancy(2.5, "the paper misprints 2.5 as 2.0"),
+    )
 
 
 def test_a_discrepancy_holds_only_at_the_explained_value():

@@ -16,9 +16,11 @@ def results():
 def test_rows_pass_or_are_the_documented_discrepancies(results):
     assert len(results) >= 12
     odd = {r.check.quantity: r for r in results if not r.passed}
-    assert set(odd) == {"controller 1: thrust index, 2 orbits",
-                        "controller 1: thrust impulse, 2 orbits",
-                        "rate law: initial retrieval rate"}
+    assert set(odd) == {
+        "controller 1: thrust index, 2 orbits",
+        "controller 1: thrust impulse, 2 orbits",
+        "rate law: initial retrieval rate",
+    }
     assert {r.status for r in odd.values()} == {"discrepancy"}
     for r in odd.values():
         assert abs(r.computed - r.check.discrepancy.value) <= r.check.atol
@@ -26,8 +28,13 @@ def test_rows_pass_or_are_the_documented_discrepancies(results):
 
 def test_rows_cover_v10_to_v13_and_v15(results):
     quantities = " | ".join(r.check.quantity for r in results)
-    for text in ("controller 1: initial tension", "controller 2: max pitch",
-                 "K4 = 3: thrust index", "K1 = 1: final pitch", "K1 = 0.9: max pitch",
-                 "rate law"):
+    for text in (
+        "controller 1: initial tension",
+        "controller 2: max pitch",
+        "K4 = 3: thrust index",
+        "K1 = 1: final pitch",
+        "K1 = 0.9: max pitch",
+        "rate law",
+    ):
         assert text in quantities
     assert all("Att. 12" in r.check.source and "L4" in r.check.source for r in results)

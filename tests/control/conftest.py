@@ -26,9 +26,11 @@ class EigenaxisSlew:
     def _profile(self, t):
         s = np.clip(np.asarray(t, float) / self.duration, 0.0, 1.0)
         T, a = self.duration, self.angle
-        return (a * (35 * s**4 - 84 * s**5 + 70 * s**6 - 20 * s**7),
-                a * (140 * s**3 - 420 * s**4 + 420 * s**5 - 140 * s**6) / T,
-                a * (420 * s**2 - 1680 * s**3 + 2100 * s**4 - 840 * s**5) / T**2)
+        return (
+            a * (35 * s**4 - 84 * s**5 + 70 * s**6 - 20 * s**7),
+            a * (140 * s**3 - 420 * s**4 + 420 * s**5 - 140 * s**6) / T,
+            a * (420 * s**2 - 1680 * s**3 + 2100 * s**4 - 840 * s**5) / T**2,
+        )
 
     def beta(self, t):
         theta = self._profile(t)[0][..., None]
@@ -56,9 +58,15 @@ def coupled_modal(damping=0.005):
     participation = np.zeros((4, 6))
     participation[:, 3:] = [[3.0, 0.5, 0.0], [0.0, 4.0, 1.0], [1.0, 0.0, 5.0], [2.0, 2.0, 2.0]]
     shapes = 0.1 * np.random.default_rng(3).standard_normal((4, 3, 6))
-    return ModalModel(node_ids=[1, 2, 3], coordinates=[[2.0, 0, 0], [0, 3.0, 0], [0, 0, -1.0]],
-                      frequencies=2 * np.pi * np.array([0.4, 0.9, 1.7, 2.3]), damping=damping,
-                      shapes=shapes, rigid_mass=rigid, participation=participation)
+    return ModalModel(
+        node_ids=[1, 2, 3],
+        coordinates=[[2.0, 0, 0], [0, 3.0, 0], [0, 0, -1.0]],
+        frequencies=2 * np.pi * np.array([0.4, 0.9, 1.7, 2.3]),
+        damping=damping,
+        shapes=shapes,
+        rigid_mass=rigid,
+        participation=participation,
+    )
 
 
 @pytest.fixture(scope="session")

@@ -19,13 +19,16 @@ EPS = np.finfo(float).eps
 INERTIA = np.array([[10.0, 0.5, -0.3], [0.5, 15.0, 0.8], [-0.3, 0.8, 20.0]])
 TARGET = att.principal_rotation_to_quaternion([0.0, 0.6, 0.8], 0.7)
 # 170° principal rotation from the target about a skew axis, and a rate of ~0.1 rad/s
-BETA0 = att.quaternion_multiply(att.principal_rotation_to_quaternion([1 / 3, 2 / 3, 2 / 3],
-                                                                     np.deg2rad(170.0)), TARGET)
+BETA0 = att.quaternion_multiply(
+    att.principal_rotation_to_quaternion([1 / 3, 2 / 3, 2 / 3], np.deg2rad(170.0)), TARGET
+)
 W0 = np.array([0.05, -0.1, 0.08])
 # gains placing the linearised closed loop I θ'' + k θ' + (A/2) θ = 0 (q ≈ θ/2) and
 # I θ'' + P θ' + (K/4) θ = 0 (σ ≈ θ/4) at the same poles: slowest decay rate 0.1755 /s
-LAWS = {"gibbs": GibbsLyapunovLaw(k=12.0, A=3.6, beta_target=TARGET),
-        "mrp": MRPLaw(K=7.2, P=12.0, beta_target=TARGET)}
+LAWS = {
+    "gibbs": GibbsLyapunovLaw(k=12.0, A=3.6, beta_target=TARGET),
+    "mrp": MRPLaw(K=7.2, P=12.0, beta_target=TARGET),
+}
 T_END = 60.0
 
 
@@ -137,15 +140,17 @@ def test_converges_to_the_target_from_a_170_degree_rotation(closed_loop):
 def test_batched_laws_equal_their_single_cases():
     t = np.linspace(0.0, 0.5, 11)
     targets = np.stack([TARGET, att.principal_rotation_to_quaternion([1.0, 0.0, 0.0], -1.0)])
-    laws = [GibbsLyapunovLaw(k=[[12.0, 10.0, 8.0], [5.0, 6.0, 7.0]], A=[3.6, 1.0],
-                             beta_target=targets),
-            MRPLaw(K=[7.2, 2.0], P=[[12.0, 10.0, 8.0], [5.0, 6.0, 7.0]], beta_target=targets)]
+    laws = [
+        GibbsLyapunovLaw(k=[[12.0, 10.0, 8.0], [5.0, 6.0, 7.0]], A=[3.6, 1.0], beta_target=targets),
+        MRPLaw(K=[7.2, 2.0], P=[[12.0, 10.0, 8.0], [5.0, 6.0, 7.0]], beta_target=targets),
+    ]
     for law in laws:
         # the propagator takes its case axes from the state: one initial state per case
         beta, w = rb.propagate(np.stack([BETA0] * 2), W0, INERTIA, t, as_torque(law))
         for case in range(2):
-            fields = {name: np.asarray(getattr(law, name))[case] for name in
-                      law.__dataclass_fields__}
+            fields = {
+                name: np.asarray(getattr(law, name))[case] for name in law.__dataclass_fields__
+            }
             b1, w1 = rb.propagate(BETA0, W0, INERTIA, t, as_torque(type(law)(**fields)))
             np.testing.assert_allclose(beta[case], b1, rtol=0, atol=1e-15)
             np.testing.assert_allclose(w[case], w1, rtol=0, atol=1e-14)
@@ -168,23 +173,29 @@ def test_gains_accept_units_and_are_stored_in_si():
     assert law.K == pytest.approx(0.7061552, rel=1e-6)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(k=-1.0, A=1.0), "k: must be > 0"),
-    (dict(k=1.0, A=0.0), "A: must be > 0"),
-    (dict(k=[1.0, 2.0], A=1.0), "k: per-axis gains must be a scalar or have last axis 3"),
-    (dict(k="1 m", A=1.0), "k"),
-    (dict(k=1.0, A=1.0, beta_target=[1.0, 1.0, 0.0, 0.0]), "beta_target: must be a unit"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(k=-1.0, A=1.0), "k: must be > 0"),
+        (dict(k=1.0, A=0.0), "A: must be > 0"),
+        (dict(k=[1.0, 2.0], A=1.0), "k: per-axis gains must be a scalar or have last axis 3"),
+        (dict(k="1 m", A=1.0), "k"),
+        (dict(k=1.0, A=1.0, beta_target=[1.0, 1.0, 0.0, 0.0]), "beta_target: must be a unit"),
+    ],
+)
 def test_bad_gibbs_gains_are_named(kwargs, message):
     with pytest.raises(ValueError, match=message):
         GibbsLyapunovLaw(**kwargs)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(K=float("nan"), P=1.0), "K: must be finite"),
-    (dict(K=1.0, P=[1.0, -2.0, 3.0]), "P: must be > 0"),
-    (dict(K=1.0, P=np.ones(4)), "P: per-axis gains must be a scalar or have last axis 3"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(K=float("nan"), P=1.0), "K: must be finite"),
+        (dict(K=1.0, P=[1.0, -2.0, 3.0]), "P: must be > 0"),
+        (dict(K=1.0, P=np.ones(4)), "P: per-axis gains must be a scalar or have last axis 3"),
+    ],
+)
 def test_bad_mrp_gains_are_named(kwargs, message):
     with pytest.raises(ValueError, match=message):
         MRPLaw(**kwargs)
@@ -230,8 +241,15 @@ def test_gibbs_lyapunov_rate_along_the_continuous_motion_from_170_degrees():
     # U(0) = 470 J and dissipates all of it.
     law = LAWS["gibbs"]
     x0 = np.concatenate([BETA0, W0, [0.0]])
-    sol = solve_ivp(closed_loop_rhs(law), (0.0, T_END), x0, method="DOP853", rtol=1e-12,
-                    atol=1e-12, dense_output=True)
+    sol = solve_ivp(
+        closed_loop_rhs(law),
+        (0.0, T_END),
+        x0,
+        method="DOP853",
+        rtol=1e-12,
+        atol=1e-12,
+        dense_output=True,
+    )
     assert sol.success
     t = np.linspace(0.0, T_END, 2001)
     x = sol.sol(t).T
@@ -259,8 +277,15 @@ def test_laws_are_controllers_reading_attitude_and_rate_and_writing_torque():
 
 def pd_closed_loop(law, beta0, w0, t_end):
     x0 = np.concatenate([beta0, w0, [0.0]])
-    return solve_ivp(closed_loop_rhs(law), (0.0, t_end), x0, method="DOP853", rtol=1e-11,
-                     atol=1e-12, dense_output=True)
+    return solve_ivp(
+        closed_loop_rhs(law),
+        (0.0, t_end),
+        x0,
+        method="DOP853",
+        rtol=1e-11,
+        atol=1e-12,
+        dense_output=True,
+    )
 
 
 @pytest.mark.numerics
@@ -274,7 +299,8 @@ def test_quaternion_pd_converges_and_takes_the_short_way():
     I_max = np.linalg.eigvalsh(INERTIA).max()
     law = QuaternionPD(Kp=2 * I_max * 0.09, Kd=2 * 0.9 * 0.3 * I_max, beta_target=TARGET)
     start = att.quaternion_multiply(
-        att.principal_rotation_to_quaternion([0.0, 0.0, 1.0], np.deg2rad(190.0)), TARGET)
+        att.principal_rotation_to_quaternion([0.0, 0.0, 1.0], np.deg2rad(190.0)), TARGET
+    )
     for sign in (1.0, -1.0):  # either sign of the same attitude: the same motion
         sol = pd_closed_loop(law, sign * start, np.zeros(3), 60.0)
         t = np.linspace(0.0, 60.0, 1201)
@@ -301,13 +327,23 @@ def test_quaternion_pd_lyapunov_function_decreases_at_minus_w_kd_w():
         QuaternionPD(Kp=[1.0, 2.0, 3.0], Kd=1.0).lyapunov(BETA0, W0, INERTIA)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(Kp=0.0, Kd=1.0), "Kp: must be > 0"),
-    (dict(Kp=1.0, Kd=[1.0, 2.0]), "Kd: per-axis gains must be a scalar or have last axis 3"),
-    (dict(Kp=1.0, Kd=1.0, w_ref=[0.0, 1.0]), "w_ref: last axes must have shape"),
-    (dict(Kp=[1.0, 2.0, 3.0], Kd=1.0, beta_target=np.stack([TARGET] * 2),
-          w_ref=np.zeros((3, 3))), "Kp, Kd, beta_target, w_ref: leading"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(Kp=0.0, Kd=1.0), "Kp: must be > 0"),
+        (dict(Kp=1.0, Kd=[1.0, 2.0]), "Kd: per-axis gains must be a scalar or have last axis 3"),
+        (dict(Kp=1.0, Kd=1.0, w_ref=[0.0, 1.0]), "w_ref: last axes must have shape"),
+        (
+            dict(
+                Kp=[1.0, 2.0, 3.0],
+                Kd=1.0,
+                beta_target=np.stack([TARGET] * 2),
+                w_ref=np.zeros((3, 3)),
+            ),
+            "Kp, Kd, beta_target, w_ref: leading",
+        ),
+    ],
+)
 def test_bad_pd_gains_are_named(kwargs, message):
     with pytest.raises(ValueError, match=message):
         QuaternionPD(**kwargs)

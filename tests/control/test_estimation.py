@@ -1,11 +1,11 @@
 """Kalman filters equal python-control's and are the dual regulators; the NPS estimator
 refinement (seed 001 Eqs. 52-53) gives open-loop estimation of the truncated modes."""
 
-import control
 import numpy as np
 import pytest
 import scipy.linalg
 
+import control
 from flexsat.cases import nps
 from flexsat.control import (
     dkalman,
@@ -98,8 +98,9 @@ def test_kalman_is_the_dual_regulator(seed):
 def test_identity_noise_input_by_default():
     A, G, C, Qn, Rn = random_filter_problem(3)
     W = G @ Qn @ G.T
-    np.testing.assert_allclose(kalman(A, None, C, W, Rn).gain, kalman(A, G, C, Qn, Rn).gain,
-                               rtol=1e-10)
+    np.testing.assert_allclose(
+        kalman(A, None, C, W, Rn).gain, kalman(A, G, C, Qn, Rn).gain, rtol=1e-10
+    )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -207,8 +208,9 @@ def test_kalman_unexcited_unstable_mode():
 @pytest.mark.parametrize("field", ["A", "G", "C", "Qn", "Rn"])
 @pytest.mark.parametrize("design", [kalman, dkalman])
 def test_complex_input_is_refused(design, field):
-    args = dict(A=-0.5 * np.eye(2), G=np.eye(2), C=np.array([[1.0, 0.0]]), Qn=np.eye(2),
-                Rn=np.eye(1))
+    args = dict(
+        A=-0.5 * np.eye(2), G=np.eye(2), C=np.array([[1.0, 0.0]]), Qn=np.eye(2), Rn=np.eye(1)
+    )
     args[field] = args[field] + 1e-3j
     with pytest.raises(ValueError, match=rf"^{field}: must be a real matrix, got a complex value"):
         design(**args)

@@ -23,8 +23,9 @@ D = np.diag([50.0] * 3 + [1e-4] * 7)
 def design(eps_design_plant, eigenaxis_slew):
     nominal = eigenaxis_slew(eps_design_plant.inertia, [1.0, 1.0, 1.0], 1.0, 10.0)
     Q = np.r_[[1000.0] * 6, [1.0] * 20]
-    return perturbation_design(eps_design_plant, nominal, Q, D, OMEGA_B, n_points=3,
-                               forces="all", decouple=True)
+    return perturbation_design(
+        eps_design_plant, nominal, Q, D, OMEGA_B, n_points=3, forces="all", decouple=True
+    )
 
 
 def full_W(design):
@@ -121,8 +122,10 @@ def test_the_decoupled_commands_exert_no_net_moment(design):
     v = rng.standard_normal((100, S.shape[1]))
     u = v @ S.T
     assert np.abs(u @ W.T).max() <= 1e-12 * np.abs(W).max() * np.abs(u).max()
-    assert np.abs(W @ S @ design.gains[1]).max() <= 1e-12 * np.abs(W).max() * np.abs(
-        design.gains[1]).max()
+    assert (
+        np.abs(W @ S @ design.gains[1]).max()
+        <= 1e-12 * np.abs(W).max() * np.abs(design.gains[1]).max()
+    )
 
 
 def test_forces_without_a_moment_free_combination_are_refused():

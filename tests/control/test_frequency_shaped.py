@@ -76,8 +76,9 @@ def test_gain_is_independent_of_total_derivative_terms(plant, order, zeta):
     else:
         Qa, Na, Ra = design.Q_aug, np.zeros((n + 1, 1)), design.R_aug
     other = lqr(design.A_aug, design.B_aug, Qa, Ra, Na)
-    np.testing.assert_allclose(other.gain, design.gain, rtol=1e-7,
-                               atol=1e-9 * np.abs(design.gain).max())
+    np.testing.assert_allclose(
+        other.gain, design.gain, rtol=1e-7, atol=1e-9 * np.abs(design.gain).max()
+    )
     assert np.abs(other.solution - design.solution.solution).max() > 1e-6
 
 
@@ -114,7 +115,8 @@ def test_disturbance_feedforward_eqs_29_30(plant):
     Acl = d.A_aug - d.B_aug @ d.gain
     P, Ba, Ra, Na = d.solution.solution, d.B_aug, d.R_aug, d.N_aug
     printed = np.linalg.solve(Ra, Ba.T) @ np.linalg.solve(
-        d.A_aug.T - (P @ Ba + Na) @ np.linalg.solve(Ra, Ba.T), P @ dh)  # Eq. 30, 2nd term
+        d.A_aug.T - (P @ Ba + Na) @ np.linalg.solve(Ra, Ba.T), P @ dh
+    )  # Eq. 30, 2nd term
     np.testing.assert_allclose(v0, printed, rtol=1e-10)
     xi = -np.linalg.solve(Acl.T, P @ dh)  # Eq. 29
     np.testing.assert_allclose(v0, -np.linalg.solve(Ra, Ba.T @ xi), rtol=1e-10)
@@ -184,13 +186,16 @@ def test_sampled_literal_weight_can_lose_stability(plant):
     assert np.abs(np.linalg.eigvals(damped.controller(C, L, 0.05).closed_loop_matrix())).max() < 1
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(order=3), "order: must be 1"),
-    (dict(break_frequency=0.0), "break_frequency: must be > 0"),
-    (dict(damping=-1.0), "damping: must be >= 0"),
-    (dict(B=np.ones((3, 1))), "B: must have shape"),
-    (dict(R=-1.0), "R: must be symmetric positive definite"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(order=3), "order: must be 1"),
+        (dict(break_frequency=0.0), "break_frequency: must be > 0"),
+        (dict(damping=-1.0), "damping: must be >= 0"),
+        (dict(B=np.ones((3, 1))), "B: must have shape"),
+        (dict(R=-1.0), "R: must be symmetric positive definite"),
+    ],
+)
 def test_bad_inputs(plant, kwargs, match):
     A, B, _, Q, _ = plant
     args = dict(A=A, B=B, Q=Q, R=7.0, break_frequency=2.0)

@@ -56,27 +56,38 @@ def plant():
 
 
 def empty_law(n_t=3, nk=1, p=2, m=1, **over):
-    arrays = dict(Ak=np.zeros((1, 1, nk, nk)), Bk=np.zeros((1, 1, nk, p)),
-                  Ck=np.zeros((1, 1, m, nk)), Dk=np.zeros((1, 1, m, p)),
-                  y_ref=np.zeros((n_t, 1, p)), u_ff=np.zeros((n_t, 1, m)), K0=None,
-                  reads=tuple(f"y{i}" for i in range(p)), writes=tuple(f"u{i}" for i in range(m)),
-                  read_sizes=(1,) * p, write_sizes=(1,) * m)
+    arrays = dict(
+        Ak=np.zeros((1, 1, nk, nk)),
+        Bk=np.zeros((1, 1, nk, p)),
+        Ck=np.zeros((1, 1, m, nk)),
+        Dk=np.zeros((1, 1, m, p)),
+        y_ref=np.zeros((n_t, 1, p)),
+        u_ff=np.zeros((n_t, 1, m)),
+        K0=None,
+        reads=tuple(f"y{i}" for i in range(p)),
+        writes=tuple(f"u{i}" for i in range(m)),
+        read_sizes=(1,) * p,
+        write_sizes=(1,) * m,
+    )
     arrays.update(over)
     return LinearLaw(**arrays)
 
 
 # -- the arrays and the reference loop -----------------------------------------------------------
-@pytest.mark.parametrize("field,value,rule", [
-    ("Ak", np.zeros((1, 1, 1, 2)), r"trailing axes must be \(2, 2\)"),
-    ("Bk", np.zeros((1, 1, 1, 3)), r"trailing axes must be \(1, 2\)"),
-    ("Dk", np.zeros((1, 1, 2)), "must have 4 axes"),
-    ("Ck", np.zeros((2, 1, 1, 1)), "time axis must be 1 .* or n_t = 3"),
-    ("u_ff", np.zeros((4, 1, 1)), "time axis must be n_t = 3"),
-    ("y_ref", np.full((3, 1, 2), np.nan), "finite"),
-    ("K0", np.zeros((1, 2, 2)), r"trailing axes must be \(1, 2\)"),
-    ("read_sizes", (1, 0), "positive integers"),
-    ("writes", ("u0", "u0"), "distinct"),
-])
+@pytest.mark.parametrize(
+    "field,value,rule",
+    [
+        ("Ak", np.zeros((1, 1, 1, 2)), r"trailing axes must be \(2, 2\)"),
+        ("Bk", np.zeros((1, 1, 1, 3)), r"trailing axes must be \(1, 2\)"),
+        ("Dk", np.zeros((1, 1, 2)), "must have 4 axes"),
+        ("Ck", np.zeros((2, 1, 1, 1)), "time axis must be 1 .* or n_t = 3"),
+        ("u_ff", np.zeros((4, 1, 1)), "time axis must be n_t = 3"),
+        ("y_ref", np.full((3, 1, 2), np.nan), "finite"),
+        ("K0", np.zeros((1, 2, 2)), r"trailing axes must be \(1, 2\)"),
+        ("read_sizes", (1, 0), "positive integers"),
+        ("writes", ("u0", "u0"), "distinct"),
+    ],
+)
 def test_bad_arrays_name_the_field(field, value, rule):
     with pytest.raises(ValueError, match=rf"^{field}: .*{rule}"):
         empty_law(**{field: value})
@@ -102,10 +113,19 @@ def test_reference_loop_is_the_stated_recursion(rng):
     n_t, nc = 40, 3
     a = np.array([0.5, -0.9, 0.99])
     d = rng.normal(size=n_t)
-    law = LinearLaw(a[None, :, None, None], np.ones((1, 1, 1, 1)), np.full((1, 1, 1, 1), 2.0),
-                    d[:, None, None, None], rng.normal(size=(n_t, 1, 1)),
-                    rng.normal(size=(n_t, nc, 1)), np.full((1, 1, 1), 0.3), ("y",), ("u",),
-                    (1,), (1,))
+    law = LinearLaw(
+        a[None, :, None, None],
+        np.ones((1, 1, 1, 1)),
+        np.full((1, 1, 1, 1), 2.0),
+        d[:, None, None, None],
+        rng.normal(size=(n_t, 1, 1)),
+        rng.normal(size=(n_t, nc, 1)),
+        np.full((1, 1, 1), 0.3),
+        ("y",),
+        ("u",),
+        (1,),
+        (1,),
+    )
     Y = rng.normal(size=(n_t, nc, 1))
     U = run_linear_law(law, Y)
     e = (Y - law.y_ref)[..., 0]
@@ -123,22 +143,37 @@ def test_affine_shift_reproduces_the_affine_recursion(rng):
     same commands (absorb_affine; the module docstring's algebra)."""
     n_t, nc, nk = 50, 2, 3
     A = 0.3 * rng.normal(size=(1, 1, nk, nk))
-    B, C, D = rng.normal(size=(1, 1, nk, 2)), rng.normal(size=(1, 1, 1, nk)), rng.normal(
-        size=(1, 1, 1, 2))
+    B, C, D = (
+        rng.normal(size=(1, 1, nk, 2)),
+        rng.normal(size=(1, 1, 1, nk)),
+        rng.normal(size=(1, 1, 1, 2)),
+    )
     F, v = rng.normal(size=(nk, 2)), rng.normal(size=(n_t, nc, 2))
     f = v @ F.T
     g, s0 = rng.normal(size=(n_t, nc, 1)), rng.normal(size=(nc, nk))
     Y = rng.normal(size=(n_t, nc, 2))
-    law = LinearLaw(A, B, C, D, np.zeros((n_t, 1, 2)), absorb_affine(A, C, g, F, v, s0), None,
-                    ("a", "b"), ("u",), (1, 1), (1,))
+    law = LinearLaw(
+        A,
+        B,
+        C,
+        D,
+        np.zeros((n_t, 1, 2)),
+        absorb_affine(A, C, g, F, v, s0),
+        None,
+        ("a", "b"),
+        ("u",),
+        (1, 1),
+        (1,),
+    )
     x, expect = s0.copy(), []
     for k in range(n_t):
         expect.append(g[k] + x @ C[0, 0].T + Y[k] @ D[0, 0].T)
         x = x @ A[0, 0].T + Y[k] @ B[0, 0].T + f[k]
     # the shift moves |s| (not |x|) into the rounding: bound with the larger of the two sizes
     size = np.abs(expect).max() + np.abs(law.u_ff).max()
-    np.testing.assert_allclose(run_linear_law(law, Y), np.array(expect), rtol=0,
-                               atol=4 * EPS * n_t * size)
+    np.testing.assert_allclose(
+        run_linear_law(law, Y), np.array(expect), rtol=0, atol=4 * EPS * n_t * size
+    )
 
 
 def test_user_law_has_no_linear_form():
@@ -164,8 +199,9 @@ def compare(law, rng, scale_y=1.0, n_cases=NC, state_law=False):
         assert rho < 1  # the round-off is not amplified (module docstring)
         tol = 4 * EPS * NT * (np.abs(slow).max() + np.abs(form.u_ff).max())
     else:
-        terms = np.abs(form.u_ff) + np.einsum("tcij,tcj->tci", np.abs(form.Dk),
-                                              np.abs(Y - form.y_ref))
+        terms = np.abs(form.u_ff) + np.einsum(
+            "tcij,tcj->tci", np.abs(form.Dk), np.abs(Y - form.y_ref)
+        )
         tol = 4 * EPS * terms.max()
     err = np.abs(fast - slow).max()
     assert err <= tol, (err, tol)
@@ -190,20 +226,24 @@ def test_lyapunov_laws(rng, reference):
     reg = LyapunovRegulator(rng.uniform(1, 3, NC), 2.0, rng.uniform(-1, 1, NC), target=0.3)
     assert reg.reads == ("theta", "theta_dot", "root_torque")
     compare(reg, rng)
-    trk = LyapunovTracker(reference, 2.0, rng.uniform(1, 3, NC), 0.5,
-                          appendage_inertia=rng.uniform(0.5, 1, NC))
+    trk = LyapunovTracker(
+        reference, 2.0, rng.uniform(1, 3, NC), 0.5, appendage_inertia=rng.uniform(0.5, 1, NC)
+    )
     form, _ = compare(trk, rng)
     assert trk.reads == ("theta", "theta_dot", "root_torque")
     assert np.abs(form.u_ff).max() > 0  # the reference torque is fed forward
 
 
-@pytest.mark.parametrize("kwargs", [
-    dict(target=np.linspace(0.1, 0.5, NC)),
-    dict(reference="slew"),
-    dict(reference="slew", gains="discrete"),
-    dict(target=0.3, initial_estimate="random"),
-    dict(reference="slew", measurements=("theta", "rate")),
-])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(target=np.linspace(0.1, 0.5, NC)),
+        dict(reference="slew"),
+        dict(reference="slew", gains="discrete"),
+        dict(target=0.3, initial_estimate="random"),
+        dict(reference="slew", measurements=("theta", "rate")),
+    ],
+)
 def test_lqg(rng, reference, plant, kwargs):
     A, B, C, Q = plant
     if kwargs.get("reference") == "slew":
@@ -222,8 +262,14 @@ def test_frequency_shaped(rng, reference, plant, order):
     design = frequency_shaped_lqr(A, B, Q, np.array([[7.0]]), 2.0, order=order, damping=0.7)
     L = kalman(A, B, C, 0.1, RN).gain
     compare(design.controller(C, L, DT, reference=reference), rng, 0.1, state_law=True)
-    law = design.controller(C, L, DT, target=0.3, disturbance=1e-3 * rng.normal(size=14),
-                            initial_estimate=0.1 * rng.normal(size=14))
+    law = design.controller(
+        C,
+        L,
+        DT,
+        target=0.3,
+        disturbance=1e-3 * rng.normal(size=14),
+        initial_estimate=0.1 * rng.normal(size=14),
+    )
     form, _ = compare(law, rng, 0.1, state_law=True)
     assert form.n_states == 14 + order
 

@@ -115,8 +115,9 @@ def test_batched_cases_match_single_runs(nps_plant):
 def test_initial_estimate_from_first_measurement(nps_plant):
     A, B, C, Q = nps_plant
     law = LQGController.design((A, B, C), Q, 7.0, 0.1, RN, dt=0.05)
-    u, state = law(0.0, {"theta": np.array([0.2]), "theta_dot": np.array([0.01])},
-                   law.initial_state(1))
+    u, state = law(
+        0.0, {"theta": np.array([0.2]), "theta_dot": np.array([0.01])}, law.initial_state(1)
+    )
     x0 = np.zeros(14)
     x0[[0, 7]] = [0.2, 0.01]
     np.testing.assert_allclose(u, -law.K[0] @ x0)
@@ -131,19 +132,20 @@ def test_slew_of_the_tamu_plant_through_the_simulator(tamu_case, tamu_model):
     Q = np.eye(n)
     Q[0, 0], Q[k, k] = 100.0, 10.0
     cfg = tamu_case.sim_config(duration=15.0, friction=False, noise=False)
-    step = LQGController.design(som, Q, 1.0, 1.0, np.diag([1e-8, 1e-6]), dt=cfg.dt,
-                                target=tamu_case.angle)
+    step = LQGController.design(
+        som, Q, 1.0, 1.0, np.diag([1e-8, 1e-6]), dt=cfg.dt, target=tamu_case.angle
+    )
     r = simulate(tamu_model, step, cfg)
     assert abs(r.dataset.theta.values[0, -1] - tamu_case.angle) < np.radians(0.05)
     ref = tamu_case.reference()
-    track = LQGController.design(som, Q, 1.0, 1.0, np.diag([1e-8, 1e-6]), dt=cfg.dt,
-                                 reference=ref)
+    track = LQGController.design(som, Q, 1.0, 1.0, np.diag([1e-8, 1e-6]), dt=cfg.dt, reference=ref)
     ds = simulate(tamu_model, track, cfg).dataset
     assert abs(ds.theta.values[0, -1] - tamu_case.angle) < np.radians(0.05)
     assert np.abs(ds.theta.values[0] - ds.theta_ref.values[0]).max() < np.radians(2.0)
     # tracking the shaped reference excites the appendages less than the step
-    assert np.abs(ds.tip_deflection.values[0]).max() < np.abs(
-        r.dataset.tip_deflection.values[0]).max()
+    assert (
+        np.abs(ds.tip_deflection.values[0]).max() < np.abs(r.dataset.tip_deflection.values[0]).max()
+    )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -159,23 +161,25 @@ def test_wrong_sample_period_is_refused(nps_plant):
 
 def test_missing_measurement_key(nps_plant):
     A, B, C, Q = nps_plant
-    law = LQGController.design((A, B, C), Q, 7.0, 0.1, RN, dt=0.05,
-                               measurements=("theta", "gyro"))
+    law = LQGController.design((A, B, C), Q, 7.0, 0.1, RN, dt=0.05, measurements=("theta", "gyro"))
     with pytest.raises(ValueError, match="measurements: key 'gyro'"):
         law(0.0, {"theta": np.zeros(1), "theta_dot": np.zeros(1)}, law.initial_state(1))
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(measurements=("theta",)), "measurements: give 2 measurement keys"),
-    (dict(reference_states=(0, 0)), "reference_states: must be two distinct"),
-    (dict(gains="hybrid"), "gains: must be"),
-    (dict(dt=0.0), "dt: must be > 0"),
-    (dict(initial_estimate=np.zeros(3)), "initial_estimate: must have shape"),
-    (dict(initial_estimate="zero"), "initial_estimate: must be 'measurement'"),
-    (dict(K=np.ones((1, 13))), "K: must have shape"),
-    (dict(L=np.ones((14, 3))), "L: must have shape"),
-    (dict(B=np.ones((14, 2))), "B: the controller interface commands one torque"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(measurements=("theta",)), "measurements: give 2 measurement keys"),
+        (dict(reference_states=(0, 0)), "reference_states: must be two distinct"),
+        (dict(gains="hybrid"), "gains: must be"),
+        (dict(dt=0.0), "dt: must be > 0"),
+        (dict(initial_estimate=np.zeros(3)), "initial_estimate: must have shape"),
+        (dict(initial_estimate="zero"), "initial_estimate: must be 'measurement'"),
+        (dict(K=np.ones((1, 13))), "K: must have shape"),
+        (dict(L=np.ones((14, 3))), "L: must have shape"),
+        (dict(B=np.ones((14, 2))), "B: the controller interface commands one torque"),
+    ],
+)
 def test_bad_construction(nps_plant, kwargs, match):
     A, B, C, Q = nps_plant
     args = dict(A=A, B=B, C=C, K=np.ones((1, 14)), L=np.ones((14, 2)), dt=0.05)

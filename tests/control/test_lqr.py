@@ -5,11 +5,11 @@ per bad-input rule."""
 import logging
 import pickle
 
-import control
 import numpy as np
 import pytest
 import scipy.linalg
 
+import control
 from flexsat.cases import nps
 from flexsat.control import RiccatiSolution, dlqr, lqr
 from flexsat.control.lqr import care_residual, dare_residual, uncontrollable_modes
@@ -276,8 +276,11 @@ def test_wide_model_with_an_uncontrollable_marginal_mode_is_refused(mode):
         A[m + mode, m + mode] = 0.0
     bad = uncontrollable_modes(A, B)
     assert len(bad) == 1 and abs(abs(bad[0]) - w) <= 1e-12 * max(w, 1.0)
-    with pytest.raises(ValueError, match=rf"^\(A, B\) is not stabilizable: eigenvalue\(s\) "
-                                         rf"0\+{w:.4g}j of A are not controllable from B$"):
+    with pytest.raises(
+        ValueError,
+        match=rf"^\(A, B\) is not stabilizable: eigenvalue\(s\) "
+        rf"0\+{w:.4g}j of A are not controllable from B$",
+    ):
         lqr(A, B, np.eye(200), 1.0)
 
 
@@ -303,10 +306,13 @@ def test_wide_model_with_an_unweighted_marginal_mode_is_undetectable():
 def test_inaccurate_solution_is_an_error(scale):
     # stable A scaled up: the true S ~ Q/(2‖A‖) underflows in the solver, S = 0 and ρ = 1
     A = np.array([[-1.0, 2.0], [0.0, -3.0]])
-    with pytest.raises(ValueError, match=r"^A: the Riccati solution is inaccurate: its relative "
-                                         r"residual 1 exceeds the accepted 1.5e-08 \(ten times "
-                                         r"the Schur method's error bound, within \[√ε, 1e-06\]\): "
-                                         r"the data are too badly scaled"):
+    with pytest.raises(
+        ValueError,
+        match=r"^A: the Riccati solution is inaccurate: its relative "
+        r"residual 1 exceeds the accepted 1.5e-08 \(ten times "
+        r"the Schur method's error bound, within \[√ε, 1e-06\]\): "
+        r"the data are too badly scaled",
+    ):
         lqr(scale * A, [[0.0], [1.0]], np.eye(2), 1.0)
 
 
@@ -323,8 +329,9 @@ def test_riccati_error_bound_is_the_conditioning_of_the_schur_basis():
         basis = np.linalg.qr(np.vstack([np.eye(6), S]))[0]
         kappa = np.linalg.cond(basis[:6])
         # both sides are computed to O(κ ε) relative: compared to 1e-6 for κ up to 1e8
-        assert riccati_error_bound(S) == pytest.approx(6 * np.finfo(float).eps * (kappa + 3),
-                                                       rel=1e-6)
+        assert riccati_error_bound(S) == pytest.approx(
+            6 * np.finfo(float).eps * (kappa + 3), rel=1e-6
+        )
 
 
 def test_badly_scaled_data_are_refused_not_warned():
@@ -347,8 +354,9 @@ def test_kalman_filter_refuses_an_inaccurate_solution():
 @pytest.mark.parametrize("field", ["A", "B", "Q", "R", "N"])
 @pytest.mark.parametrize("design", [lqr, dlqr])
 def test_complex_input_is_refused(design, field):
-    args = dict(A=0.5 * np.eye(2), B=np.array([[0.0], [1.0]]), Q=np.eye(2), R=np.eye(1),
-                N=np.zeros((2, 1)))
+    args = dict(
+        A=0.5 * np.eye(2), B=np.array([[0.0], [1.0]]), Q=np.eye(2), R=np.eye(1), N=np.zeros((2, 1))
+    )
     args[field] = args[field] + 1e-3j
     with pytest.raises(ValueError, match=rf"^{field}: must be a real matrix, got a complex value"):
         design(**args)

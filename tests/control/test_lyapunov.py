@@ -10,8 +10,11 @@ pytestmark = pytest.mark.numerics  # tolerances near round-off: re-run on other 
 
 
 def _y(theta, rate, root):
-    return {"theta": np.atleast_1d(theta), "theta_dot": np.atleast_1d(rate),
-            "root_torque": np.atleast_1d(root)}
+    return {
+        "theta": np.atleast_1d(theta),
+        "theta_dot": np.atleast_1d(rate),
+        "root_torque": np.atleast_1d(root),
+    }
 
 
 def test_law_i_is_eq_11():
@@ -31,8 +34,11 @@ def test_law_ii_is_eq_17_and_becomes_law_i_after_the_reference():
     r = ref(t)
     y = _y(0.1, 0.05, 0.4)
     u, _ = law2(t, y, {})
-    expected = float(r.u) - (20.0 * (0.1 - float(r.theta)) + 5.0 * (0.05 - float(r.theta_dot))
-                             + 0.8 * (0.4 - Ib * float(r.theta_ddot)))
+    expected = float(r.u) - (
+        20.0 * (0.1 - float(r.theta))
+        + 5.0 * (0.05 - float(r.theta_dot))
+        + 0.8 * (0.4 - Ib * float(r.theta_ddot))
+    )
     assert u == pytest.approx(expected, rel=1e-14)
     for t in (float(ref.end_time), float(ref.end_time) + 3.0):
         assert law2(t, y, {})[0] == pytest.approx(law1(t, y, {})[0], rel=1e-15, abs=1e-15)
@@ -46,12 +52,15 @@ def test_gains_broadcast_over_a_case_axis():
     assert u.shape == (3,)
 
 
-@pytest.mark.parametrize("kwargs,message", [
-    (dict(g1=-1.0, g2=1.0), r"^g1: must be >= 0"),
-    (dict(g1=1.0, g2=-0.1), r"^g2: must be >= 0"),
-    (dict(g1=1.0, g2=1.0, g3=-4.0), r"^g3: must be > -4"),
-    (dict(g1=float("nan"), g2=1.0), r"^g1: must be finite"),
-])
+@pytest.mark.parametrize(
+    "kwargs,message",
+    [
+        (dict(g1=-1.0, g2=1.0), r"^g1: must be >= 0"),
+        (dict(g1=1.0, g2=-0.1), r"^g2: must be >= 0"),
+        (dict(g1=1.0, g2=1.0, g3=-4.0), r"^g3: must be > -4"),
+        (dict(g1=float("nan"), g2=1.0), r"^g1: must be finite"),
+    ],
+)
 def test_inadmissible_gains_are_refused(kwargs, message):
     """Global stability needs g1 >= 0, g2 >= 0, g3 > −n (Att. 3 Eq. 11, a3 > 0)."""
     with pytest.raises(ValueError, match=message):

@@ -84,6 +84,7 @@ def test_plain_transpose_normalisation_matters(plant, printed):
     """With unit-2-norm columns the condition numbers would be 6.92 and 7.52 (notes §4.4)."""
     A, B = plant.pencil(*printed)
     import scipy.linalg as sla
+
     phi = sla.eig(A, B)[1]
     assert np.linalg.cond(phi / np.linalg.norm(phi, axis=0)) == pytest.approx(7.52, abs=5e-3)
 
@@ -94,8 +95,9 @@ def test_example1_minimum_sensitivity_design(plant, printed):
     gains. The minimum is very flat (the printed gains lie 1.2e-5 above it); G2 is reproduced to
     ~0.02, G1 only to ~0.07."""
     w = plant.undamped_frequencies()
-    design = design_minimum_sensitivity(plant, frequencies={0: w[0], 1: w[1]},
-                                        decay_bounds={0: 0.3, 1: 0.3})
+    design = design_minimum_sensitivity(
+        plant, frequencies={0: w[0], 1: w[1]}, decay_bounds={0: 0.3, 1: 0.3}
+    )
     res = design.result
     assert res.success
     feas = res.feasibility_steps
@@ -203,8 +205,7 @@ def test_draper_rpl_reduced_model_with_the_printed_gains():
     reduced = SymmetricOutputFeedback(*case.reduced(9))
     assert reduced.condition_number(G1, G2) == pytest.approx(362.44, abs=0.01)
     full = SymmetricOutputFeedback(*case.matrices())
-    assert full.condition_number(G1, G2) == pytest.approx(case.condition_number(G1, G2),
-                                                          rel=1e-6)
+    assert full.condition_number(G1, G2) == pytest.approx(case.condition_number(G1, G2), rel=1e-6)
     omega, zeta_omega = full.modes(G1, G2)
     case_omega, case_zw = case.closed_loop_modes(G1, G2)
     assert omega[:9] == pytest.approx(case_omega, rel=1e-9)
@@ -223,8 +224,13 @@ def test_draper_rpl_gain_design_from_identity():
     w = case.frequencies()
     ft_lbf = published_gains()[0][0, 0] / 1.8342  # 1 ft·lbf in N·m
     design = design_minimum_sensitivity(
-        reduced, frequencies={0: 0.3, 1: w[1], 2: w[2]}, decay_bounds={0: 0.2, 1: 0.2, 2: 0.25},
-        start=(ft_lbf * np.eye(3), ft_lbf * np.eye(3)), min_gamma_step=1e-6, max_steps=20)
+        reduced,
+        frequencies={0: 0.3, 1: w[1], 2: w[2]},
+        decay_bounds={0: 0.2, 1: 0.2, 2: 0.25},
+        start=(ft_lbf * np.eye(3), ft_lbf * np.eye(3)),
+        min_gamma_step=1e-6,
+        max_steps=20,
+    )
     assert design.result.feasible and len(design.result.feasibility_steps) < 20
     assert design.omega[:3] == pytest.approx([0.3, 4.3724, 7.9070], abs=5e-5)
     assert np.all(design.zeta_omega[:3] >= np.array([0.2, 0.2, 0.25]) - 1e-9)
@@ -234,29 +240,45 @@ def test_draper_rpl_gain_design_from_identity():
 
 
 # -- bad inputs ----------------------------------------------------------------------------------
-@pytest.mark.parametrize("call,message", [
-    (lambda p: p.pencil([[1.0, 2.0], [0.0, 1.0]], np.eye(2)), r"^G1: must be symmetric"),
-    (lambda p: p.pencil(np.eye(2), -np.eye(2)), r"^G2: must be positive semidefinite"),
-    (lambda p: p.pencil(np.eye(3), np.eye(2)), r"^G1: must be 2x2"),
-    (lambda p: p.pencil(np.eye(2), "I"), r"^G2: must be a number in SI units"),
-    (lambda p: p.parameters(np.diag([1.0, 0.0]), np.eye(2)), r"^G1: must be positive definite"),
-    (lambda p: p.gains(np.ones(5)), r"^p: must have m\(m \+ 1\) = 6 entries"),
-    (lambda p: p.sensitivity([np.nan] * 6), r"^p: must be finite"),
-    (lambda p: SymmetricOutputFeedback(np.eye(3), np.eye(3), np.ones((2, 2))), r"^D: must be"),
-    (lambda p: SymmetricOutputFeedback(np.zeros((3, 3)), np.eye(3), np.ones((3, 1))),
-     r"^M: must be non-singular"),
-    (lambda p: SymmetricOutputFeedback(np.eye(3), np.eye(2), np.ones((3, 1))),
-     r"^K: must be 3x3"),
-    (lambda p: cholesky_gains(np.ones(6), 0), r"^n_inputs: must be a positive integer"),
-    (lambda p: design_minimum_sensitivity("plant"), r"^plant: must be a SymmetricOutputFeedback"),
-    (lambda p: design_minimum_sensitivity(p, frequencies=[1.4]),
-     r"^frequencies: must be a mapping"),
-    (lambda p: design_minimum_sensitivity(p, decay_bounds={-1: 0.3}),
-     r"^decay_bounds: mode numbers must be integers >= 0"),
-    (lambda p: design_minimum_sensitivity(p, frequencies={5: 1.0}),
-     r"^frequencies: the closed loop has only 3 oscillatory modes"),
-    (lambda p: design_minimum_sensitivity(p, start=np.eye(2)), r"^start: must be a pair"),
-])
+@pytest.mark.parametrize(
+    "call,message",
+    [
+        (lambda p: p.pencil([[1.0, 2.0], [0.0, 1.0]], np.eye(2)), r"^G1: must be symmetric"),
+        (lambda p: p.pencil(np.eye(2), -np.eye(2)), r"^G2: must be positive semidefinite"),
+        (lambda p: p.pencil(np.eye(3), np.eye(2)), r"^G1: must be 2x2"),
+        (lambda p: p.pencil(np.eye(2), "I"), r"^G2: must be a number in SI units"),
+        (lambda p: p.parameters(np.diag([1.0, 0.0]), np.eye(2)), r"^G1: must be positive definite"),
+        (lambda p: p.gains(np.ones(5)), r"^p: must have m\(m \+ 1\) = 6 entries"),
+        (lambda p: p.sensitivity([np.nan] * 6), r"^p: must be finite"),
+        (lambda p: SymmetricOutputFeedback(np.eye(3), np.eye(3), np.ones((2, 2))), r"^D: must be"),
+        (
+            lambda p: SymmetricOutputFeedback(np.zeros((3, 3)), np.eye(3), np.ones((3, 1))),
+            r"^M: must be non-singular",
+        ),
+        (
+            lambda p: SymmetricOutputFeedback(np.eye(3), np.eye(2), np.ones((3, 1))),
+            r"^K: must be 3x3",
+        ),
+        (lambda p: cholesky_gains(np.ones(6), 0), r"^n_inputs: must be a positive integer"),
+        (
+            lambda p: design_minimum_sensitivity("plant"),
+            r"^plant: must be a SymmetricOutputFeedback",
+        ),
+        (
+            lambda p: design_minimum_sensitivity(p, frequencies=[1.4]),
+            r"^frequencies: must be a mapping",
+        ),
+        (
+            lambda p: design_minimum_sensitivity(p, decay_bounds={-1: 0.3}),
+            r"^decay_bounds: mode numbers must be integers >= 0",
+        ),
+        (
+            lambda p: design_minimum_sensitivity(p, frequencies={5: 1.0}),
+            r"^frequencies: the closed loop has only 3 oscillatory modes",
+        ),
+        (lambda p: design_minimum_sensitivity(p, start=np.eye(2)), r"^start: must be a pair"),
+    ],
+)
 def test_bad_inputs_name_the_field(plant, call, message):
     with pytest.raises(ValueError, match=message):
         call(plant)

@@ -38,10 +38,13 @@ def test_step_command_uses_raw_rate_and_tracking_uses_rate_error():
     assert u == pytest.approx(float(r.u), rel=1e-14)
 
 
-@pytest.mark.parametrize("field,kwargs,rule", [
-    ("kp", dict(kp=-1.0, kd=1.0), ">= 0"),
-    ("kd", dict(kp=1.0, kd=float("nan")), "finite"),
-])
+@pytest.mark.parametrize(
+    "field,kwargs,rule",
+    [
+        ("kp", dict(kp=-1.0, kd=1.0), ">= 0"),
+        ("kd", dict(kp=1.0, kd=float("nan")), "finite"),
+    ],
+)
 def test_bad_gains(field, kwargs, rule):
     with pytest.raises(ValueError, match=rf"^{field}: .*{rule}"):
         PD(**kwargs)

@@ -48,13 +48,14 @@ def eps_design(eps_design_plant, eps_nominal):
 def coupled(coupled_model, eigenaxis_slew):
     """Truth: the 4-mode coupled model; design: its first 2 modes (a reduced controller model
     as the paper's 10 of 45); modal weight 100 so the feedback damps them."""
-    truth = FlexibleSpacecraft(coupled_model, forces=COUPLED_FORCES,
-                               displacements=COUPLED_OUTPUTS)
-    plant = FlexibleSpacecraft(coupled_model, forces=COUPLED_FORCES,
-                               displacements=COUPLED_OUTPUTS, n_modes=2)
+    truth = FlexibleSpacecraft(coupled_model, forces=COUPLED_FORCES, displacements=COUPLED_OUTPUTS)
+    plant = FlexibleSpacecraft(
+        coupled_model, forces=COUPLED_FORCES, displacements=COUPLED_OUTPUTS, n_modes=2
+    )
     nominal = eigenaxis_slew(plant.inertia, [1.0, 1.0, 1.0], 1.0, T)
-    design = perturbation_design(plant, nominal, np.r_[[1000.0] * 6, [100.0] * 4], [50.0] * 3,
-                                 OMEGA_B)
+    design = perturbation_design(
+        plant, nominal, np.r_[[1000.0] * 6, [100.0] * 4], [50.0] * 3, OMEGA_B
+    )
     return truth, design
 
 
@@ -66,6 +67,7 @@ def attitude_errors(result, nominal):
 
 
 # -- Riccati equation and feedforward -------------------------------------------------------
+
 
 @pytest.mark.numerics
 def test_the_scheduled_riccati_solutions_are_scipys(eps_design):
@@ -101,19 +103,20 @@ def test_the_feedforward_is_the_limit_of_the_backward_sweep(coupled):
     n = A.shape[0]
     Ri = np.linalg.inv(R)
     d_hat = np.zeros(n)
-    d_hat[:x.A.shape[0]] = design.d[i]
+    d_hat[: x.A.shape[0]] = design.d[i]
     assert x.poles.real.max() < -0.6
 
     def backward(s, z):
-        P, xi = z[:n * n].reshape(n, n), z[n * n:]
+        P, xi = z[: n * n].reshape(n, n), z[n * n :]
         PBN = P @ B + N
         dP = P @ A + A.T @ P - PBN @ Ri @ PBN.T + Q
         return np.r_[dP.ravel(), (A - B @ Ri @ PBN.T).T @ xi + P @ d_hat]
 
-    sol = solve_ivp(backward, (0.0, 40.0), np.zeros(n * n + n), method="DOP853", rtol=1e-12,
-                    atol=1e-14)
+    sol = solve_ivp(
+        backward, (0.0, 40.0), np.zeros(n * n + n), method="DOP853", rtol=1e-12, atol=1e-14
+    )
     assert sol.success
-    P_sweep, xi_sweep = sol.y[:n * n, -1].reshape(n, n), sol.y[n * n:, -1]
+    P_sweep, xi_sweep = sol.y[: n * n, -1].reshape(n, n), sol.y[n * n :, -1]
     P = x.solution.solution
     xi = -np.linalg.solve((A - B @ x.gain).T, P @ d_hat)
     ff = design.disturbance_gains[i] @ design.d[i]
@@ -125,6 +128,7 @@ def test_the_feedforward_is_the_limit_of_the_backward_sweep(coupled):
 
 
 # -- the law ----------------------------------------------------------------------------------
+
 
 def test_the_law_is_its_equations(eps_design, eps_nominal):
     # Between two linearisation times, with a perturbed attitude, rate, elastic state and
@@ -138,25 +142,37 @@ def test_the_law_is_its_equations(eps_design, eps_nominal):
     beta_n = eps_nominal.beta(t)
     beta = beta_n + 0.02 * rng.standard_normal(4)
     beta /= np.linalg.norm(beta)
-    y = {"attitude": beta[None], "rate": (eps_nominal.omega(t) + 0.01 * rng.standard_normal(3))[
-        None], "elastic": 0.1 * rng.standard_normal((1, 90))}
+    y = {
+        "attitude": beta[None],
+        "rate": (eps_nominal.omega(t) + 0.01 * rng.standard_normal(3))[None],
+        "elastic": 0.1 * rng.standard_normal((1, 90)),
+    }
     state = {"z1": 0.01 * rng.standard_normal((1, 3)), "z2": 0.01 * rng.standard_normal((1, 3))}
     commands, nxt = law(t, y, state)
     el = y["elastic"][0]
-    X = np.r_[attitude_error(beta, beta_n), y["rate"][0] - eps_nominal.omega(t), el[:10],
-              el[45:55], state["z1"][0], state["z2"][0]]
+    X = np.r_[
+        attitude_error(beta, beta_n),
+        y["rate"][0] - eps_nominal.omega(t),
+        el[:10],
+        el[45:55],
+        state["z1"][0],
+        state["z2"][0],
+    ]
     lin = eps_design.linearization
-    ff = interpolate_schedule(eps_design.times, eps_design.disturbance_gains, t) @ \
-        lin.disturbance(np.array(t))
+    ff = interpolate_schedule(eps_design.times, eps_design.disturbance_gains, t) @ lin.disturbance(
+        np.array(t)
+    )
     u3 = ff - interpolate_schedule(eps_design.times, eps_design.gains, t) @ X
     mean = state["z1"][0] + DT / 2 * state["z2"][0] + DT**2 / 6 * u3
     tau = [eps_nominal.torque(t + s * DT) for s in (0.0, 0.5, 1.0)]
     expected = (tau[0] + 4 * tau[1] + tau[2]) / 6 + lin.inertia @ (eps_design.input_map @ mean)
-    np.testing.assert_allclose(commands["torque"][0], expected, rtol=1e-12,
-                               atol=1e-12 * np.abs(expected).max())
+    np.testing.assert_allclose(
+        commands["torque"][0], expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max()
+    )
     np.testing.assert_allclose(nxt["z2"][0], state["z2"][0] + DT * u3, rtol=1e-12, atol=1e-15)
-    np.testing.assert_allclose(nxt["z1"][0], state["z1"][0] + DT * state["z2"][0]
-                               + DT**2 / 2 * u3, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(
+        nxt["z1"][0], state["z1"][0] + DT * state["z2"][0] + DT**2 / 2 * u3, rtol=1e-12, atol=1e-15
+    )
     assert law.writes == ("torque",) and law.reads == ("attitude", "rate", "elastic")
 
 
@@ -167,8 +183,11 @@ def test_the_three_feedforward_forms(eps_design, eps_nominal):
     # is zero
     def feedforward(kind, t):
         law = eps_design.controller(DT, kind, n_modes_plant=10)
-        y = {"attitude": eps_nominal.beta(t)[None], "rate": eps_nominal.omega(t)[None],
-             "elastic": np.zeros((1, 20))}
+        y = {
+            "attitude": eps_nominal.beta(t)[None],
+            "rate": eps_nominal.omega(t)[None],
+            "elastic": np.zeros((1, 20)),
+        }
         return law(t, y, law.initial_state(1))[1]["z2"][0] / DT
 
     knots = eps_design.constant_feedforward
@@ -177,20 +196,22 @@ def test_the_three_feedforward_forms(eps_design, eps_nominal):
     for i in (3, 4):
         t = eps_design.times[i]
         for kind in ("constant", "time-varying"):
-            np.testing.assert_allclose(feedforward(kind, t), knots[i], rtol=0,
-                                       atol=1e-10 * scale)
+            np.testing.assert_allclose(feedforward(kind, t), knots[i], rtol=0, atol=1e-10 * scale)
     t = 3.5  # between t_3 = 3 and t_4 = 4
-    np.testing.assert_allclose(feedforward("constant", t), 0.5 * (knots[3] + knots[4]), rtol=0,
-                               atol=1e-10 * scale)
-    tv = interpolate_schedule(eps_design.times, eps_design.disturbance_gains, t) @ \
-        eps_design.linearization.disturbance(np.array(t))
+    np.testing.assert_allclose(
+        feedforward("constant", t), 0.5 * (knots[3] + knots[4]), rtol=0, atol=1e-10 * scale
+    )
+    tv = interpolate_schedule(
+        eps_design.times, eps_design.disturbance_gains, t
+    ) @ eps_design.linearization.disturbance(np.array(t))
     np.testing.assert_allclose(feedforward("time-varying", t), tv, rtol=0, atol=1e-10 * scale)
     assert np.abs(tv - 0.5 * (knots[3] + knots[4])).max() > 1e-3 * scale
     assert np.abs(feedforward("none", t)).max() <= 1e-10 * scale  # δX = 0 to round-off
 
 
-def test_the_law_reads_the_design_modes_of_the_plant(eps_case, eps_design, eps_design_plant,
-                                                      eps_truth_plant):
+def test_the_law_reads_the_design_modes_of_the_plant(
+    eps_case, eps_design, eps_design_plant, eps_truth_plant
+):
     # The law reads the first 10 of the 45-mode plant's η, η̇: they are the design model's
     # modes exactly when both come from one modal model (the fixtures); given the plant, the
     # law checks it. A separate 10-mode eigen-solution of the same structure is not: the
@@ -198,14 +219,18 @@ def test_the_law_reads_the_design_modes_of_the_plant(eps_case, eps_design, eps_d
     # other sign (measured: modes 5, 6, 9 flipped when the 10 modes are solved first).
     n = eps_design_plant.n_modes
     for name in ("torque_modal", "force_modal"):
-        np.testing.assert_array_equal(getattr(eps_truth_plant, name)[:n],
-                                      getattr(eps_design_plant, name))
+        np.testing.assert_array_equal(
+            getattr(eps_truth_plant, name)[:n], getattr(eps_design_plant, name)
+        )
     np.testing.assert_array_equal(eps_truth_plant.inertia, eps_design_plant.inertia)
     assert eps_design.controller(DT, plant=eps_truth_plant).n_modes_plant == 45
     a, b = eps_truth_plant.modal, eps_design_plant.modal
-    flipped = b.__class__(**{**{f: getattr(b, f) for f in b.__dataclass_fields__},
-                             "shapes": b.shapes * np.r_[1, 1, 1, 1, -1, 1, 1, 1, 1, 1][:, None,
-                                                                                        None]})
+    flipped = b.__class__(
+        **{
+            **{f: getattr(b, f) for f in b.__dataclass_fields__},
+            "shapes": b.shapes * np.r_[1, 1, 1, 1, -1, 1, 1, 1, 1, 1][:, None, None],
+        }
+    )
     other = FlexibleSpacecraft(flipped, forces=eps_truth_plant.forces)
     with pytest.raises(ValueError, match="plant: its elastic mode 5 is not the design model's"):
         eps_design.controller(DT, plant=other)
@@ -214,6 +239,7 @@ def test_the_law_reads_the_design_modes_of_the_plant(eps_case, eps_design, eps_d
 
 
 # -- closed loop ------------------------------------------------------------------------------
+
 
 @pytest.mark.numerics
 @pytest.mark.parametrize("feedforward", ["constant", "time-varying", "none"])
@@ -227,26 +253,33 @@ def test_closed_loop_tracks_better_than_the_nominal_torque_alone(coupled, feedfo
     truth, design = coupled
     config = SimConfig(duration=2 * T, control_rate=1 / DT, substeps=1)
     nominal = design.linearization.nominal
-    results = {"open": simulate(truth, NominalTorque(design.linearization.nominal, DT), config,
-                                n_cases=1),
-               "closed": simulate(truth, design.controller(DT, feedforward, n_modes_plant=4),
-                                  config, n_cases=1)}
+    results = {
+        "open": simulate(truth, NominalTorque(design.linearization.nominal, DT), config, n_cases=1),
+        "closed": simulate(
+            truth, design.controller(DT, feedforward, n_modes_plant=4), config, n_cases=1
+        ),
+    }
     measured = {}
     for name, result in results.items():
         t = result.dataset.time.values
-        rim = np.stack([result.dataset[f"displacement_{n}{a.upper()}"].values[0]
-                        for n, a in COUPLED_OUTPUTS], -1)
+        rim = np.stack(
+            [result.dataset[f"displacement_{n}{a.upper()}"].values[0] for n, a in COUPLED_OUTPUTS],
+            -1,
+        )
         late = t >= 1.25 * T - 1e-9
-        measured[name] = (attitude_errors(result, nominal)[np.argmax(late)],
-                          np.abs(rim[late]).max())
+        measured[name] = (
+            attitude_errors(result, nominal)[np.argmax(late)],
+            np.abs(rim[late]).max(),
+        )
     assert measured["open"][0] > 1e-3  # the open loop does miss
     assert measured["closed"][0] <= 0.5 * measured["open"][0]
     assert measured["closed"][1] <= 0.5 * measured["open"][1]
 
 
 @pytest.mark.numerics
-def test_the_scheduled_loop_recovers_from_an_attitude_offset(eps_design, eps_truth_plant,
-                                                              eps_nominal):
+def test_the_scheduled_loop_recovers_from_an_attitude_offset(
+    eps_design, eps_truth_plant, eps_nominal
+):
     # Gain-scheduled stability: the EPS (45 modes) under the 10-mode law, started 0.07 rad off
     # the nominal's initial attitude (δα = (0.05, −0.03, 0.04)), converges to the nominal:
     # after 20 s the error is below 2 % of the offset (measured 0.6 %), never above twice the
@@ -256,8 +289,12 @@ def test_the_scheduled_loop_recovers_from_an_attitude_offset(eps_design, eps_tru
     x0 = np.zeros(eps_truth_plant.nx)
     x0[:4] = eps_design.linearization.state(0.0, np.r_[offset, np.zeros(23)])[:4]
     config = SimConfig(duration=20.0, control_rate=1 / DT, substeps=1)
-    result = simulate(eps_truth_plant, eps_design.controller(DT, "constant", n_modes_plant=45),
-                      config, initial_state=x0)
+    result = simulate(
+        eps_truth_plant,
+        eps_design.controller(DT, "constant", n_modes_plant=45),
+        config,
+        initial_state=x0,
+    )
     err = attitude_errors(result, eps_nominal)
     assert err[0] == pytest.approx(np.linalg.norm(offset), rel=1e-12)
     assert err.max() <= 2 * err[0]
@@ -265,8 +302,9 @@ def test_the_scheduled_loop_recovers_from_an_attitude_offset(eps_design, eps_tru
 
 
 @pytest.mark.numerics
-def test_decoupled_forces_exert_no_net_moment_in_closed_loop(eps_design_plant, eps_truth_plant,
-                                                            eps_nominal):
+def test_decoupled_forces_exert_no_net_moment_in_closed_loop(
+    eps_design_plant, eps_truth_plant, eps_nominal
+):
     # F12/F15: torquers plus the final 7 forces on the 45-mode EPS; with decoupling the
     # recorded forces' net moment G F vanishes to 1e-12 of |G||F| (measured 1e-16) while the
     # forces act (peak 59 N; the paper's case B: about 70 N); without it the forces exert a
@@ -281,11 +319,18 @@ def test_decoupled_forces_exert_no_net_moment_in_closed_loop(eps_design_plant, e
     names = [c.name for c in eps_truth_plant.inputs[1:]]
     moment = {}
     for decouple in (True, False):
-        design = perturbation_design(eps_design_plant, eps_nominal, Q, D, OMEGA_B,
-                                     zeta_b=0.0 if decouple else 1.0, n_points=6,
-                                     forces="all", decouple=decouple)
-        result = simulate(eps_truth_plant, design.controller(DT, "none", n_modes_plant=45),
-                          config)
+        design = perturbation_design(
+            eps_design_plant,
+            eps_nominal,
+            Q,
+            D,
+            OMEGA_B,
+            zeta_b=0.0 if decouple else 1.0,
+            n_points=6,
+            forces="all",
+            decouple=decouple,
+        )
+        result = simulate(eps_truth_plant, design.controller(DT, "none", n_modes_plant=45), config)
         F = np.stack([result.dataset[name].values[0] for name in names], -1)
         assert np.abs(F).max() > 1.0
         moment[decouple] = np.abs(F @ G.T).max() / (np.abs(G).max() * np.abs(F).max())
@@ -295,17 +340,21 @@ def test_decoupled_forces_exert_no_net_moment_in_closed_loop(eps_design_plant, e
 
 # -- bad input --------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("change, message", [
-    ({"Q": np.ones(5)}, r"Q: a diagonal must have 26 entries"),
-    ({"Q": -np.eye(26)}, r"Q: must be positive semi-definite"),
-    ({"D": np.zeros(3)}, r"D: must be symmetric positive definite"),
-    ({"D": np.eye(4)}, r"D: must have shape \(3, 3\)"),
-    ({"omega_b": 0.0}, r"omega_b: must be > 0"),
-    ({"zeta_b": -1.0}, r"zeta_b: must be >= 0"),
-    ({"n_points": 0}, r"n_points: must be a positive integer"),
-    ({"forces": ["force_69X", "force_99Z"]}, r"force_99Z: not a force channel"),
-    ({"decouple": True}, r"decouple: needs force channels"),
-])
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"Q": np.ones(5)}, r"Q: a diagonal must have 26 entries"),
+        ({"Q": -np.eye(26)}, r"Q: must be positive semi-definite"),
+        ({"D": np.zeros(3)}, r"D: must be symmetric positive definite"),
+        ({"D": np.eye(4)}, r"D: must have shape \(3, 3\)"),
+        ({"omega_b": 0.0}, r"omega_b: must be > 0"),
+        ({"zeta_b": -1.0}, r"zeta_b: must be >= 0"),
+        ({"n_points": 0}, r"n_points: must be a positive integer"),
+        ({"forces": ["force_69X", "force_99Z"]}, r"force_99Z: not a force channel"),
+        ({"decouple": True}, r"decouple: needs force channels"),
+    ],
+)
 def test_bad_design_input_is_named(eps_design_plant, eps_nominal, change, message):
     Q, D = eps_weights()
     args = {"Q": Q, "D": D, "omega_b": OMEGA_B, **change}
@@ -325,8 +374,9 @@ def test_redundant_inputs_with_the_literal_weight_are_explained(coupled):
     Q, D = np.r_[[1000.0] * 6, [100.0] * 4], [50.0] * 3 + [1e-2] * 5
     with pytest.raises(ValueError, match=r"forces: at t = 0 s some combination .* rank 5 < 8"):
         perturbation_design(plant, nominal, Q, D, OMEGA_B, forces="all")
-    assert perturbation_design(plant, nominal, Q, D, OMEGA_B, zeta_b=1.0, n_points=2,
-                               forces="all").gains.shape == (2, 8, 10 + 16)
+    assert perturbation_design(
+        plant, nominal, Q, D, OMEGA_B, zeta_b=1.0, n_points=2, forces="all"
+    ).gains.shape == (2, 8, 10 + 16)
 
 
 def test_bad_law_input_is_named(eps_design, eps_nominal, coupled):
@@ -341,8 +391,11 @@ def test_bad_law_input_is_named(eps_design, eps_nominal, coupled):
     with pytest.raises(ValueError, match="design: must be a PerturbationDesign"):
         PerturbationFeedback(object(), DT)
     law = eps_design.controller(DT, n_modes_plant=45)
-    y = {"attitude": eps_nominal.beta(0.0)[None], "rate": np.zeros((1, 3)),
-         "elastic": np.zeros((1, 20))}
+    y = {
+        "attitude": eps_nominal.beta(0.0)[None],
+        "rate": np.zeros((1, 3)),
+        "elastic": np.zeros((1, 20)),
+    }
     with pytest.raises(ValueError, match="elastic: expected 2·n_modes_plant = 90 columns"):
         law(0.0, y, law.initial_state(1))
     with pytest.raises(ValueError, match="t: PerturbationFeedback runs on its sample grid"):

@@ -1,11 +1,11 @@
 """Positive position feedback on the Agrawal–Bang L structure (seed 004_680d3fec9e1f8c83.txt;
 clean equations and errata in ../shared/spec/seed004.md §2, features F1–F5, F10)."""
 
-import control as ct
 import numpy as np
 import pytest
 import scipy.linalg as sl
 
+import control as ct
 from flexsat.cases.agrawal_bang import agrawal_bang
 from flexsat.control import (
     PPFBank,
@@ -54,8 +54,9 @@ def first_mode_x0(amplitude=1e-3):
 def tip_problem(case, model, bank, w=(100.0, 100.0), Q_u=1.0, X0=None):
     """Eq. 35 as the state weight: ζ_t = T η, Q_s = Tᵀ Q̄ T on η."""
     X0 = initial_second_moment(first_mode_x0()) if X0 is None else X0
-    return PPFProblem.from_output_weight(model, bank, case.tip_outputs(M), case.tip_weight(*w),
-                                         Q_u, X0)
+    return PPFProblem.from_output_weight(
+        model, bank, case.tip_outputs(M), case.tip_weight(*w), Q_u, X0
+    )
 
 
 def central_difference(f, g, rel):
@@ -92,10 +93,22 @@ def test_tip_weight_is_the_hessian_of_the_integrand(case):
         return y1**2 + w1 * (l2 * a + y2) ** 2 + w2 * (a + b) ** 2
 
     I4 = np.eye(4)
-    H = np.array([[(f(I4[i] + I4[j]) - f(I4[i] - I4[j]) - f(-I4[i] + I4[j]) + f(-I4[i] - I4[j])) / 4
-                   for j in range(4)] for i in range(4)])
-    scale = max(abs(f(s * I4[i] + t * I4[j])) for i in range(4) for j in range(4)
-                for s in (-1, 1) for t in (-1, 1))
+    H = np.array(
+        [
+            [
+                (f(I4[i] + I4[j]) - f(I4[i] - I4[j]) - f(-I4[i] + I4[j]) + f(-I4[i] - I4[j])) / 4
+                for j in range(4)
+            ]
+            for i in range(4)
+        ]
+    )
+    scale = max(
+        abs(f(s * I4[i] + t * I4[j]))
+        for i in range(4)
+        for j in range(4)
+        for s in (-1, 1)
+        for t in (-1, 1)
+    )
     np.testing.assert_allclose(case.tip_weight(w1, w2), H / 2, rtol=0, atol=16 * EPS * scale)
 
 
@@ -116,10 +129,15 @@ def test_closed_loop_is_the_papers_block_matrix_and_the_plant_loop(case, model, 
     Om, D = np.diag(model.omega**2), np.diag(2 * model.zeta * model.omega)
     Wf = np.diag(bank.omega_f.ravel() ** 2)
     Df = np.diag(2 * bank.zeta_f.ravel() * bank.omega_f.ravel())
-    Z, I, Zf, If, Zmf = (np.zeros((M, M)), np.eye(M), np.zeros((9, 9)), np.eye(9),
-                         np.zeros((M, 9)))
-    paper = np.block([[Z, I, Zmf, Zmf], [-Om, -D, a1 * C.T @ G, Zmf],
-                      [Zmf.T, Zmf.T, Zf, If], [Wf @ C, Zmf.T, -Wf, -Df]])
+    Z, I, Zf, If, Zmf = (np.zeros((M, M)), np.eye(M), np.zeros((9, 9)), np.eye(9), np.zeros((M, 9)))
+    paper = np.block(
+        [
+            [Z, I, Zmf, Zmf],
+            [-Om, -D, a1 * C.T @ G, Zmf],
+            [Zmf.T, Zmf.T, Zf, If],
+            [Wf @ C, Zmf.T, -Wf, -Df],
+        ]
+    )
     np.testing.assert_allclose(A, paper, rtol=0, atol=8 * EPS * np.abs(paper).max())
 
     plant = case.to_statespace(M)
@@ -184,7 +202,8 @@ def printed_gradient(pr, g):
 
 
 def test_repaired_gradient_matches_finite_differences_and_the_printed_one_does_not(
-        case, model, bank):
+    case, model, bank
+):
     """Q_u = 1 (acceptance; the paper's 1e-8 hides the control term). Gains ≈ 1e3, where the
     control term is about half of J. Central differences, relative step 1e-3: truncation
     h²J'''/6 and the Lyapunov round-off over h together ≈ 5e-7 here; acceptance 1e-5. The
@@ -232,13 +251,15 @@ def test_cost_over_an_initial_condition_distribution(case, model, bank):
     g = np.full(9, 300.0)
     X0 = initial_second_moment(samples, weights)
     pr = tip_problem(case, model, bank, X0=X0)
-    singles = [tip_problem(case, model, bank, X0=np.outer(x, x)).cost_and_gradient(g)
-               for x in samples]
+    singles = [
+        tip_problem(case, model, bank, X0=np.outer(x, x)).cost_and_gradient(g) for x in samples
+    ]
     p = weights / weights.sum()
     J, dJ = pr.cost_and_gradient(g)
     assert J == pytest.approx(sum(pi * s[0] for pi, s in zip(p, singles)), rel=1e-10)
-    np.testing.assert_allclose(dJ, sum(pi * s[1] for pi, s in zip(p, singles)), rtol=0,
-                               atol=1e-10 * np.abs(dJ).max())
+    np.testing.assert_allclose(
+        dJ, sum(pi * s[1] for pi, s in zip(p, singles)), rtol=0, atol=1e-10 * np.abs(dJ).max()
+    )
     full = sl.block_diag(X0, np.zeros((18, 18)))
     assert tip_problem(case, model, bank, X0=full).cost(g) == J
 
@@ -286,8 +307,10 @@ def test_single_mode_ppf_damps_most_when_tuned(case):
     for frac, lo, hi in ((1e-3, 1.0, 1.01), (1e-2, 0.99, 1.02)):
         d = least_damping(frac)
         best = ratios[np.argmax(d)]
-        print(f"g = {frac:g} × stiffness limit: best ω_f/ω = {best:.4f}, damping "
-              f"{d.max():.4f} (open loop {model.zeta[0]:.4f})")
+        print(
+            f"g = {frac:g} × stiffness limit: best ω_f/ω = {best:.4f}, damping "
+            f"{d.max():.4f} (open loop {model.zeta[0]:.4f})"
+        )
         assert lo <= best <= hi
         assert d.max() > model.zeta[0]
     assert ratios[np.argmax(theory)] == pytest.approx(1 + ZETA_F**2 / 2, abs=0.0025)
@@ -311,8 +334,14 @@ def test_ppf_controller_in_the_simulation_core(case, model, bank):
 
     def run(rate, gains, **kw):
         law = PPFController(bank, gains, dt=1 / rate)
-        res = simulate(plant, law, SimConfig(duration=20.0, control_rate=rate),
-                       initial_state=x0, record_states=True, **kw)
+        res = simulate(
+            plant,
+            law,
+            SimConfig(duration=20.0, control_rate=rate),
+            initial_state=x0,
+            record_states=True,
+            **kw,
+        )
         return law, res.dataset
 
     errors = {}
@@ -337,20 +366,22 @@ def test_ppf_controller_in_the_simulation_core(case, model, bank):
         errors[rate] = err
         if rate == 200.0:
             _, py = run(rate, g, compiled=False)
-            np.testing.assert_allclose(py["state"].values[0], X, rtol=0,
-                                       atol=4 * n_t * EPS * scale)
+            np.testing.assert_allclose(py["state"].values[0], X, rtol=0, atol=4 * n_t * EPS * scale)
             closed = X
             t = ds["time"].values
-    print(f"sampled vs continuous loop: {errors[200.0]:.3g} at 200 Hz, {errors[400.0]:.3g} at "
-          "400 Hz")
+    print(
+        f"sampled vs continuous loop: {errors[200.0]:.3g} at 200 Hz, {errors[400.0]:.3g} at 400 Hz"
+    )
     assert 1.6 < errors[200.0] / errors[400.0] < 2.4
 
     _, ds0 = run(200.0, np.zeros(9))
     rot = (closed[:, :M] @ T.T) @ [0, 1, 0, 1]
     rot0 = (ds0["state"].values[0][:, :M] @ T.T) @ [0, 1, 0, 1]
     late = t >= 15.0
-    print(f"tip rotation envelope over 15–20 s: PPF {np.abs(rot[late]).max():.3g}, open loop "
-          f"{np.abs(rot0[late]).max():.3g} rad")
+    print(
+        f"tip rotation envelope over 15–20 s: PPF {np.abs(rot[late]).max():.3g}, open loop "
+        f"{np.abs(rot0[late]).max():.3g} rad"
+    )
     # open loop: ζ_1 = 0.005 keeps exp(−ζω t) ≈ 0.6 of the start at 15 s; the loop's slowest
     # pole (−0.35 1/s) leaves exp(−5) ≈ 0.007
     assert np.abs(rot[late]).max() < 0.05 * np.abs(rot0[late]).max()
@@ -410,7 +441,9 @@ def test_bad_input_is_named(case, model, bank):
     # a_2 = 0, non-collocated pairs, a pair with a_1 a_2 < 0
     S = model.sensors.copy()
     S[1] = 0
-    with pytest.raises(ValueError, match=r"^sensors\[1\]: pair 2 has a zero sensor row \(a_2 = 0\)"):
+    with pytest.raises(
+        ValueError, match=r"^sensors\[1\]: pair 2 has a zero sensor row \(a_2 = 0\)"
+    ):
         PPFModel(model.omega, model.zeta, model.actuators, S)
     with pytest.raises(ValueError, match=r"^actuators\[:, 0\]: pair 1 is not collocated"):
         PPFModel(model.omega, model.zeta, model.actuators[:, [1, 0, 2]], model.sensors)

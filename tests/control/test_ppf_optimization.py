@@ -52,17 +52,17 @@ class NotionalPPF:
         nf = wf.size
         N = 2 * n + 2 * nf
         A = np.zeros((N, N))
-        A[:n, n:2 * n] = np.eye(n)
-        A[n:2 * n, :n], A[n:2 * n, n:2 * n] = -self.Omega, -np.diag(2 * 0.005 * w)
-        A[2 * n:2 * n + nf, 2 * n + nf:] = np.eye(nf)
-        A[2 * n + nf:, :n] = 1e-3 * np.diag(wf**2) @ self.C  # a2 Ω_f C (the OCR-fixed block)
-        A[2 * n + nf:, 2 * n:2 * n + nf] = -np.diag(wf**2)
-        A[2 * n + nf:, 2 * n + nf:] = -np.diag(2 * 0.3 * wf)
+        A[:n, n : 2 * n] = np.eye(n)
+        A[n : 2 * n, :n], A[n : 2 * n, n : 2 * n] = -self.Omega, -np.diag(2 * 0.005 * w)
+        A[2 * n : 2 * n + nf, 2 * n + nf :] = np.eye(nf)
+        A[2 * n + nf :, :n] = 1e-3 * np.diag(wf**2) @ self.C  # a2 Ω_f C (the OCR-fixed block)
+        A[2 * n + nf :, 2 * n : 2 * n + nf] = -np.diag(wf**2)
+        A[2 * n + nf :, 2 * n + nf :] = -np.diag(2 * 0.3 * wf)
         self.A, self.B = A, np.zeros((N, n_act))
-        self.B[n:2 * n] = 1e-2 * fbar
+        self.B[n : 2 * n] = 1e-2 * fbar
         self.xi = slice(2 * n, 2 * n + nf)
         self.Qs = np.zeros((N, N))
-        self.Qs[:n, :n], self.Qs[n:2 * n, n:2 * n] = self.Omega, np.eye(n)
+        self.Qs[:n, :n], self.Qs[n : 2 * n, n : 2 * n] = self.Omega, np.eye(n)
         self.Qu = q_u * np.eye(n_act)
         x0 = np.zeros(N)
         x0[:n] = [1.0, 0.5, 0.25]
@@ -170,7 +170,8 @@ def test_gamma_stop_reports_the_papers_mix_of_goal_and_start(model):
 
 
 def test_unreachable_goal_stalls_at_the_constrained_minimum_with_the_restoration_nested(
-        model, unreachable):
+    model, unreachable
+):
     # "J_goal may not be feasible … we adopt the solution corresponding to the largest γ for
     # which convergence is achieved as the constrained minimum" (L127): with J_goal = 0 the run
     # reaches the floor of λ_1(S), restores it inside the γ loop (Eq. 28) and stalls there.
@@ -221,11 +222,20 @@ def test_restoration_from_an_infeasible_step_is_minimum_norm(model, floor):
     # kernels, measured 4.5e-13 at |g| ~ 2e3 under Sandybridge)
     np.testing.assert_allclose(r.gains, g_bad + r.step, rtol=2 * np.finfo(float).eps, atol=0)
     # the nearest feasible point, by an independent solver: min |Δ|² s.t. λ(g + Δ) >= λ^c
-    exact = minimize(lambda d: d @ d, np.zeros(9), jac=lambda d: 2 * d, method="SLSQP",
-                     constraints=[{"type": "ineq",
-                                   "fun": lambda d: model.stiffness_eigenvalues(g_bad + d) - lam_c,
-                                   "jac": lambda d: model.stiffness_eigenvalue_gradients(g_bad + d)}],
-                     options={"ftol": 1e-14, "maxiter": 500}).x
+    exact = minimize(
+        lambda d: d @ d,
+        np.zeros(9),
+        jac=lambda d: 2 * d,
+        method="SLSQP",
+        constraints=[
+            {
+                "type": "ineq",
+                "fun": lambda d: model.stiffness_eigenvalues(g_bad + d) - lam_c,
+                "jac": lambda d: model.stiffness_eigenvalue_gradients(g_bad + d),
+            }
+        ],
+        options={"ftol": 1e-14, "maxiter": 500},
+    ).x
     # the Newton min-norm steps stop on the curved boundary a little beside the nearest point:
     # first order in direction (measured 0.3-0.5 %), second order in length (measured 1e-5)
     assert np.linalg.norm(r.step) <= (1 + 1e-4) * np.linalg.norm(exact)
@@ -250,8 +260,9 @@ def test_goal_above_the_start_raises_the_cost_like_the_paper(model):
     r = optimize_ppf_gains(model, G0, goal_ratio=1.5)
     assert r.status == GOAL_REACHED
     gammas = r.gamma_path
-    np.testing.assert_allclose(r.cost_path, r.cost_initial * (1 + 0.5 * gammas),
-                               rtol=TARGET_RTOL, atol=0)
+    np.testing.assert_allclose(
+        r.cost_path, r.cost_initial * (1 + 0.5 * gammas), rtol=TARGET_RTOL, atol=0
+    )
     assert np.all(np.diff(r.cost_path) > 0)
     grad = model.gradient(G0)
     first = r.history[1].gains - G0
@@ -294,25 +305,31 @@ class _NaNCost(NotionalPPF):
         return np.nan
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({"g0": np.full((3, 3), 100.0)}, "g0: must be a non-empty vector"),
-    ({"g0": np.full(8, 100.0)}, "g0: "),
-    ({"g0": [100.0] * 8 + [np.nan]}, "g0: must be finite"),
-    ({"J_goal": np.inf, "goal_ratio": None}, "J_goal: must be finite"),
-    ({"goal_ratio": np.nan}, "goal_ratio: must be finite"),
-    ({"J_goal": 1.0, "goal_ratio": 0.2}, "J_goal: give exactly one"),
-    ({"goal_ratio": None}, "J_goal: give exactly one"),
-    ({"gamma_stop": 0.0}, r"gamma_stop: must be in \(0, 1\]"),
-    ({"gamma_stop": 1.5}, r"gamma_stop: must be in \(0, 1\]"),
-    ({"g0": np.full(9, 1.2e4)}, r"g0: violates the eigenvalue floor: λ_1\(S\) = -0.1858.* < λ_1\^c = 0.01"),
-    ({"g0": np.full(9, -1e3)}, "g0: the closed loop is unstable at the start"),
-    ({"eigenvalue_floor": -1.0}, "eigenvalue_floor: must be >= 0"),
-    ({"eigenvalue_floor": [0.1, 0.2]}, "eigenvalue_floor: must be a number or 3 values"),
-    ({"stability_margin": -0.1}, "stability_margin: must be >= 0"),
-    ({"weight": -np.ones(9)}, "weight: "),
-    ({"problem": _CostOnly()}, "problem: missing method.*gradient, stiffness_eigenvalues"),
-    ({"problem": _NaNCost()}, "g0: problem.cost is not finite at the start"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"g0": np.full((3, 3), 100.0)}, "g0: must be a non-empty vector"),
+        ({"g0": np.full(8, 100.0)}, "g0: "),
+        ({"g0": [100.0] * 8 + [np.nan]}, "g0: must be finite"),
+        ({"J_goal": np.inf, "goal_ratio": None}, "J_goal: must be finite"),
+        ({"goal_ratio": np.nan}, "goal_ratio: must be finite"),
+        ({"J_goal": 1.0, "goal_ratio": 0.2}, "J_goal: give exactly one"),
+        ({"goal_ratio": None}, "J_goal: give exactly one"),
+        ({"gamma_stop": 0.0}, r"gamma_stop: must be in \(0, 1\]"),
+        ({"gamma_stop": 1.5}, r"gamma_stop: must be in \(0, 1\]"),
+        (
+            {"g0": np.full(9, 1.2e4)},
+            r"g0: violates the eigenvalue floor: λ_1\(S\) = -0.1858.* < λ_1\^c = 0.01",
+        ),
+        ({"g0": np.full(9, -1e3)}, "g0: the closed loop is unstable at the start"),
+        ({"eigenvalue_floor": -1.0}, "eigenvalue_floor: must be >= 0"),
+        ({"eigenvalue_floor": [0.1, 0.2]}, "eigenvalue_floor: must be a number or 3 values"),
+        ({"stability_margin": -0.1}, "stability_margin: must be >= 0"),
+        ({"weight": -np.ones(9)}, "weight: "),
+        ({"problem": _CostOnly()}, "problem: missing method.*gradient, stiffness_eigenvalues"),
+        ({"problem": _NaNCost()}, "g0: problem.cost is not finite at the start"),
+    ],
+)
 def test_bad_inputs_name_the_field(model, kwargs, match):
     args = {"problem": model, "g0": G0, "goal_ratio": 0.2, **kwargs}
     with pytest.raises(ValueError, match=match):

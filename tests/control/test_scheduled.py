@@ -28,8 +28,9 @@ def rng():
 
 def test_constant_schedule_is_a_constant_gain(rng):
     K = rng.normal(size=(2, 4))
-    flat = ScheduledStateFeedback(KNOTS, np.broadcast_to(K, (4, 2, 4)), "state",
-                                  commands=("torque", "force"))
+    flat = ScheduledStateFeedback(
+        KNOTS, np.broadcast_to(K, (4, 2, 4)), "state", commands=("torque", "force")
+    )
     one = ScheduledStateFeedback([0.0], K[None], "state", commands=("torque", "force"))
     Y = rng.normal(size=(NT, NC, 4))
     direct = -np.einsum("ij,tcj->tci", K, Y)
@@ -53,8 +54,7 @@ def test_interpolation_exact_at_knots_linear_between_held_outside(rng):
     a, b = interpolate_schedule(KNOTS, gains, [2.5, 3.5])
     mid = interpolate_schedule(KNOTS, gains, 3.0)
     assert np.abs(mid - (a + b) / 2).max() <= 4 * EPS * np.abs(gains).max()
-    np.testing.assert_array_equal(interpolate_schedule(KNOTS, gains, [-1.0, 9.0]),
-                                  gains[[0, -1]])
+    np.testing.assert_array_equal(interpolate_schedule(KNOTS, gains, [-1.0, 9.0]), gains[[0, -1]])
 
 
 def test_command_is_continuous_across_the_knots(rng):
@@ -82,16 +82,20 @@ def test_linear_form_is_the_law_per_case_gains(rng):
     def u_ff(t):
         return np.array([np.sin(t), np.cos(t), t])
 
-    law = ScheduledStateFeedback(KNOTS, gains, ["theta", "theta_dot", ("q", 2)],
-                                 {"torque": 1, "force": 2}, state_reference=x_ref,
-                                 feedforward=u_ff)
+    law = ScheduledStateFeedback(
+        KNOTS,
+        gains,
+        ["theta", "theta_dot", ("q", 2)],
+        {"torque": 1, "force": 2},
+        state_reference=x_ref,
+        feedforward=u_ff,
+    )
     assert law.n_cases == NC and law.write_sizes == (1, 2)
     form = law.linear_form(DT, TIMES, NC)
     assert form.Dk.shape == (NT, NC, m, n)
     Y = rng.normal(size=(NT, NC, n))
     slow, fast = run_controller(law, TIMES, Y), run_linear_law(form, Y)
-    terms = np.abs(form.u_ff) + np.einsum("tcij,tcj->tci", np.abs(form.Dk),
-                                          np.abs(Y - form.y_ref))
+    terms = np.abs(form.u_ff) + np.einsum("tcij,tcj->tci", np.abs(form.Dk), np.abs(Y - form.y_ref))
     assert np.abs(fast - slow).max() <= 4 * EPS * terms.max()
     k = int(np.searchsorted(TIMES, 2.0))  # a knot on the sample grid: the designed gain
     np.testing.assert_array_equal(form.Dk[k], -gains[1])
@@ -102,31 +106,46 @@ def test_times_accept_units():
     np.testing.assert_array_equal(law.knots, [0.0, 0.5, 1.0])
 
 
-@pytest.mark.parametrize("kwargs,field,rule", [
-    (dict(times=[0.0, 1.0, 1.0]), "times", "strictly increasing"),
-    (dict(times=["0 s", "1 m"]), "times", "incompatible units"),
-    (dict(gains=np.zeros((3, 1, 2))), "gains", r"n_knots = 2 schedule times, got \(3, 1, 2\)"),
-    (dict(gains=np.full((2, 1, 2), np.nan)), "gains", "finite"),
-    (dict(measurements=["theta"]), "measurements", "sum to 1, the gains have n = 2 columns"),
-    (dict(commands=["torque", "force"]), "commands", "sum to 2, the gains have m = 1 rows"),
-    (dict(state_reference=np.zeros((2, 3))), "state_reference", r"\(n_knots, 2\)"),
-    (dict(feedforward=np.zeros((3, 1))), "feedforward", r"\(n_knots, 1\)"),
-])
+@pytest.mark.parametrize(
+    "kwargs,field,rule",
+    [
+        (dict(times=[0.0, 1.0, 1.0]), "times", "strictly increasing"),
+        (dict(times=["0 s", "1 m"]), "times", "incompatible units"),
+        (dict(gains=np.zeros((3, 1, 2))), "gains", r"n_knots = 2 schedule times, got \(3, 1, 2\)"),
+        (dict(gains=np.full((2, 1, 2), np.nan)), "gains", "finite"),
+        (dict(measurements=["theta"]), "measurements", "sum to 1, the gains have n = 2 columns"),
+        (dict(commands=["torque", "force"]), "commands", "sum to 2, the gains have m = 1 rows"),
+        (dict(state_reference=np.zeros((2, 3))), "state_reference", r"\(n_knots, 2\)"),
+        (dict(feedforward=np.zeros((3, 1))), "feedforward", r"\(n_knots, 1\)"),
+    ],
+)
 def test_bad_schedules_name_the_field(kwargs, field, rule):
-    args = dict(times=[0.0, 1.0], gains=np.zeros((2, 1, 2)), measurements=["theta", "theta_dot"],
-                commands="torque") | kwargs
+    args = (
+        dict(
+            times=[0.0, 1.0],
+            gains=np.zeros((2, 1, 2)),
+            measurements=["theta", "theta_dot"],
+            commands="torque",
+        )
+        | kwargs
+    )
     with pytest.raises(ValueError, match=rf"^{field}: .*{rule}"):
         ScheduledStateFeedback(**args)
 
 
 def test_case_counts_and_feedforward_shapes_are_checked():
-    law = ScheduledStateFeedback([0.0, 1.0], np.zeros((2, 3, 1, 2)), ["theta", "theta_dot"],
-                                 feedforward=lambda t: np.zeros(2))
+    law = ScheduledStateFeedback(
+        [0.0, 1.0],
+        np.zeros((2, 3, 1, 2)),
+        ["theta", "theta_dot"],
+        feedforward=lambda t: np.zeros(2),
+    )
     with pytest.raises(ValueError, match=r"^gains: have 3 cases, the run has n_cases = 5"):
         law.linear_form(DT, TIMES, 5)
     with pytest.raises(ValueError, match=r"^feedforward: must have shape \(1,\)"):
         law.linear_form(DT, TIMES, 3)
-    law = ScheduledStateFeedback([0.0, 1.0], np.zeros((2, 1, 2)), ["theta", "theta_dot"],
-                                 state_reference=np.zeros((2, 4, 2)))
+    law = ScheduledStateFeedback(
+        [0.0, 1.0], np.zeros((2, 1, 2)), ["theta", "theta_dot"], state_reference=np.zeros((2, 4, 2))
+    )
     with pytest.raises(ValueError, match=r"^state_reference: have 4 cases, the run has n_cases"):
         law.linear_form(DT, TIMES, 3)

@@ -29,8 +29,8 @@ from flexsat.control.tether_laws import (
     thrust_index,
 )
 from flexsat.dynamics.tether import (
-    TetherScales,
     TetheredSubsatellite,
+    TetherScales,
     accelerations,
     integral_of_motion,
     integrate,
@@ -97,8 +97,13 @@ def test_eq15_sign_repair_is_the_solution_of_eq13():
     # at φ = 0 the tension is the in-plane law (7) with λ_f
     x[:, 2] = x[:, 5] = 0
     T, F = DecoupledTetherLaw(K1, K2, K3, lf).nondimensional(x)
-    np.testing.assert_allclose(T, 3 * x[:, 0] + K1 * (x[:, 0] - lf)
-                               - 2 * K2 * x[:, 4] * (1 + x[:, 4]) / x[:, 0] + K3 * x[:, 3])
+    np.testing.assert_allclose(
+        T,
+        3 * x[:, 0]
+        + K1 * (x[:, 0] - lf)
+        - 2 * K2 * x[:, 4] * (1 + x[:, 4]) / x[:, 0]
+        + K3 * x[:, 3],
+    )
     np.testing.assert_allclose(F, 0, atol=1e-15)
 
 
@@ -182,7 +187,7 @@ def test_liapunov_rates_hold_pointwise():
     h = 1e-5
     dV = (law.liapunov(x + h * flow(x)) - law.liapunov(x - h * flow(x))) / (2 * h)
     lam, dl, dph = x[:, 0], x[:, 3], x[:, 5]
-    np.testing.assert_allclose(dV, -3 * dl ** 2 - (0.3 + lam ** 2) * 2 * dph ** 2, atol=1e-8)
+    np.testing.assert_allclose(dV, -3 * dl**2 - (0.3 + lam**2) * 2 * dph**2, atol=1e-8)
     assert np.allclose(law.liapunov(x), liapunov_coupled(x, 1.0, 0.3, 0.01))
 
     rate_law = TetherRateLaw(0.25, 0.5, 1.0, 0.01)
@@ -194,12 +199,14 @@ def test_liapunov_rates_hold_pointwise():
         return np.concatenate([xx[:, 3:], accelerations(xx, 0.0, F)], 1), u
 
     def V(x):
-        return 0.5 * (0.25 * (x[:, 0] - 0.01) ** 2
-                      + 0.5 * integral_of_motion(x[:, 1], x[:, 2], x[:, 4], x[:, 5]))
+        return 0.5 * (
+            0.25 * (x[:, 0] - 0.01) ** 2
+            + 0.5 * integral_of_motion(x[:, 1], x[:, 2], x[:, 4], x[:, 5])
+        )
 
     f, u = rate_flow(x)
     dV = (V(x + h * f) - V(x - h * f)) / (2 * h)
-    np.testing.assert_allclose(dV, -u ** 2 - 0.5 * 0.5 * 1.0 * dph ** 2, atol=1e-8)
+    np.testing.assert_allclose(dV, -(u**2) - 0.5 * 0.5 * 1.0 * dph**2, atol=1e-8)
 
 
 def test_laws_on_the_simulation_core_converge_to_the_continuous_run():
@@ -230,13 +237,12 @@ def test_thrust_index_integrates_the_magnitude():
     # a linear F crossing zero: exact (the crossing is split); |sin| over an orbit: 4 to the
     # trapezoidal rule's (Δτ)²/12 × ∫|F''| = 1.3e-5 at Δτ = 2π/1000
     tau = np.linspace(0, 2, 3)
-    assert thrust_index(tau, tau - 1.3) == pytest.approx(0.5 * 1.3 ** 2 + 0.5 * 0.7 ** 2)
+    assert thrust_index(tau, tau - 1.3) == pytest.approx(0.5 * 1.3**2 + 0.5 * 0.7**2)
     tau = np.linspace(0, ORBIT, 1001)
     assert thrust_index(tau, np.sin(tau)) == pytest.approx(4.0, abs=1.4e-5)
     # and agrees with the quadrature state of the integrator
     r = run(CoupledTetherLaw(1.0, 0.0, 3.0, 2.0, 0.01))
-    assert thrust_index(r.tau, r.control[0, :, 1]) == pytest.approx(r.thrust_index[0, -1],
-                                                                    abs=1e-5)
+    assert thrust_index(r.tau, r.control[0, :, 1]) == pytest.approx(r.thrust_index[0, -1], abs=1e-5)
     with pytest.raises(ValueError, match="tau: must be an increasing grid"):
         thrust_index([0, 1, 2], [1.0, 2.0])
 
@@ -250,15 +256,18 @@ def test_final_length_with_units_is_divided_by_the_reference_length():
         CoupledTetherLaw(1.0, 0.0, 3.0, 2.0, "-2 km", scales=PAPER)
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda: CoupledTetherLaw(0.0, 0, 3, 2, 0.01), "K1: must be > 0"),
-    (lambda: CoupledTetherLaw(1.0, -1, 3, 2, 0.01), "K2: must be >= 0"),
-    (lambda: CoupledTetherLaw(1.0, 0, 3, -2, 0.01), "K4: must be >= 0"),
-    (lambda: DecoupledTetherLaw(1.0, 0, 3, 0.0), "final_length: must be > 0"),
-    (lambda: TetherRateLaw(0.25, 0.01, 1, -0.01), "final_length: must be > 0"),
-    (lambda: TetherRateLaw(0.25, 0.01, np.nan, 0.01), "K3: must be finite"),
-    (lambda: DecoupledTetherLaw(1.0, 0, 3, 0.01, scales="paper"), "scales: must be a Tether"),
-])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: CoupledTetherLaw(0.0, 0, 3, 2, 0.01), "K1: must be > 0"),
+        (lambda: CoupledTetherLaw(1.0, -1, 3, 2, 0.01), "K2: must be >= 0"),
+        (lambda: CoupledTetherLaw(1.0, 0, 3, -2, 0.01), "K4: must be >= 0"),
+        (lambda: DecoupledTetherLaw(1.0, 0, 3, 0.0), "final_length: must be > 0"),
+        (lambda: TetherRateLaw(0.25, 0.01, 1, -0.01), "final_length: must be > 0"),
+        (lambda: TetherRateLaw(0.25, 0.01, np.nan, 0.01), "K3: must be finite"),
+        (lambda: DecoupledTetherLaw(1.0, 0, 3, 0.01, scales="paper"), "scales: must be a Tether"),
+    ],
+)
 def test_bad_gains_are_refused_by_name(make, message):
     with pytest.raises(ValueError, match=message):
         make()

@@ -5,6 +5,7 @@ acceleration, and the four Euler parameters could not be the LQR state."""
 
 import numpy as np
 import pytest
+
 from flexsat.control import lqr
 from flexsat.control.trajectory_linearization import TrajectoryLinearization, attitude_error
 from flexsat.dynamics import FlexibleSpacecraft
@@ -37,8 +38,9 @@ def nominal_for(eigenaxis_slew):
 
 @pytest.mark.numerics
 @pytest.mark.parametrize("which", ["eps", "coupled"])
-def test_analytic_jacobians_equal_central_differences(which, eps_design_plant, coupled_plant,
-                                                      nominal_for):
+def test_analytic_jacobians_equal_central_differences(
+    which, eps_design_plant, coupled_plant, nominal_for
+):
     # F8: the paper differenced DISCOS; here A(t), B(t) come from the plant's analytic
     # force_jacobian plus δα̇ = −ω_n × δα + δω, and are checked against central differences
     # (h = 1e-4 on states of order 1: rad, rad/s, m√kg) of the exact nonlinear perturbation
@@ -59,8 +61,9 @@ def test_analytic_jacobians_equal_central_differences(which, eps_design_plant, c
         assert np.abs(B_fd - B[i]).max() <= 1e-7 * np.abs(B[i]).max()
     # the kinematic rows: −[ω_n ×] and I, nothing else
     w = lin.nominal.omega(times[2])
-    np.testing.assert_array_equal(A[2, :3, :3], [[0, w[2], -w[1]], [-w[2], 0, w[0]],
-                                                 [w[1], -w[0], 0]])
+    np.testing.assert_array_equal(
+        A[2, :3, :3], [[0, w[2], -w[1]], [-w[2], 0, w[0]], [w[1], -w[0], 0]]
+    )
     np.testing.assert_array_equal(A[2, :3, 3:6], np.eye(3))
     assert not np.any(A[2, :3, 6:]) and not np.any(B[:, :3])
 
@@ -76,8 +79,7 @@ def test_the_torque_input_is_normalized_by_the_inertia(eps_design_plant, nominal
 
 
 @pytest.mark.numerics
-def test_the_disturbance_is_eq31s_modal_acceleration(eps_design_plant, coupled_plant,
-                                                     nominal_for):
+def test_the_disturbance_is_eq31s_modal_acceleration(eps_design_plant, coupled_plant, nominal_for):
     # Eq. 31: η̈_d = [0 I] 𝓜⁻¹ [I; σᵀ] τ_n with σ the rotational shapes at the torque node
     # (CG node 95) and 𝓜 the hybrid mass matrix; the EPS's Δ = 0, so the rate rows are zero
     # and the elastic rows are exactly that (agreement to round-off of the few products, 1e-13
@@ -90,8 +92,8 @@ def test_the_disturbance_is_eq31s_modal_acceleration(eps_design_plant, coupled_p
     n = lin.n_modes
     tau = lin.nominal.torque(times)
     eq31 = tau @ (plant.rotation_mass_inverse @ np.vstack([np.eye(3), plant.torque_modal]))[3:].T
-    assert np.abs(d[:, 6 + n:] - eq31).max() <= 1e-13 * np.abs(eq31).max()
-    assert np.abs(d[:, :6 + n]).max() <= 1e-13 * np.abs(eq31).max()
+    assert np.abs(d[:, 6 + n :] - eq31).max() <= 1e-13 * np.abs(eq31).max()
+    assert np.abs(d[:, : 6 + n]).max() <= 1e-13 * np.abs(eq31).max()
     assert np.abs(eq31).max() > 1.0  # the nominal torque does load the modes
 
     plant = coupled_plant
@@ -101,10 +103,11 @@ def test_the_disturbance_is_eq31s_modal_acceleration(eps_design_plant, coupled_p
     load = np.concatenate([tau - np.cross(w, w @ J.T), np.zeros((7, n := plant.n_modes))], 1)
     acc = load @ plant.rotation_mass_inverse.T
     d = lin.disturbance(times)
-    np.testing.assert_allclose(d[:, 3:6], acc[:, :3] - w_dot, rtol=0,
-                               atol=1e-13 * np.abs(acc).max())
-    np.testing.assert_allclose(d[:, 6 + n:], acc[:, 3:], rtol=0, atol=1e-13 * np.abs(acc).max())
-    assert np.abs(d[:, 6 + n:]).max() > 1e-3  # Δ ≠ 0: the rigid acceleration moves the modes
+    np.testing.assert_allclose(
+        d[:, 3:6], acc[:, :3] - w_dot, rtol=0, atol=1e-13 * np.abs(acc).max()
+    )
+    np.testing.assert_allclose(d[:, 6 + n :], acc[:, 3:], rtol=0, atol=1e-13 * np.abs(acc).max())
+    assert np.abs(d[:, 6 + n :]).max() > 1e-3  # Δ ≠ 0: the rigid acceleration moves the modes
 
 
 def test_the_attitude_error_is_the_body_frame_small_rotation():
@@ -114,23 +117,30 @@ def test_the_attitude_error_is_the_body_frame_small_rotation():
     e = np.array([2.0, -1.0, 2.0]) / 3
     phi = 0.05
     beta = quaternion_multiply(principal_rotation_to_quaternion(e, phi), beta_n)
-    np.testing.assert_allclose(attitude_error(beta, beta_n), 2 * np.sin(phi / 2) * e,
-                               rtol=0, atol=1e-16)
-    np.testing.assert_allclose(attitude_error(-beta, beta_n), 2 * np.sin(phi / 2) * e,
-                               rtol=0, atol=1e-16)
+    np.testing.assert_allclose(
+        attitude_error(beta, beta_n), 2 * np.sin(phi / 2) * e, rtol=0, atol=1e-16
+    )
+    np.testing.assert_allclose(
+        attitude_error(-beta, beta_n), 2 * np.sin(phi / 2) * e, rtol=0, atol=1e-16
+    )
 
 
 def test_state_and_attitude_error_are_inverse(coupled_plant, nominal_for):
     lin = TrajectoryLinearization(coupled_plant, nominal_for(coupled_plant))
     dX = np.random.default_rng(1).standard_normal((5, lin.n_states)) * 0.1
     x = lin.state(np.linspace(0, 12, 5), dX)  # past T: held at the end of the nominal
-    np.testing.assert_allclose(attitude_error(x[:, :4], lin.nominal.beta(
-        np.minimum(np.linspace(0, 12, 5), 10.0))), dX[:, :3], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(
+        attitude_error(x[:, :4], lin.nominal.beta(np.minimum(np.linspace(0, 12, 5), 10.0))),
+        dX[:, :3],
+        rtol=0,
+        atol=1e-15,
+    )
     np.testing.assert_allclose(x[:, 7:], dX[:, 6:], rtol=0, atol=0)
 
 
-def test_the_four_euler_parameters_give_no_stabilising_riccati_solution(eps_design_plant,
-                                                                      nominal_for):
+def test_the_four_euler_parameters_give_no_stabilising_riccati_solution(
+    eps_design_plant, nominal_for
+):
     # Why δα and not δβ (module docstring): linearised on [β, ω, η, η̇] (the plant's own
     # coordinates) the norm direction of β is an eigenvalue 0 no input reaches, so the LQR
     # Riccati equation has no stabilising solution; on [δα, δω, δη, δη̇] it has one.
@@ -144,21 +154,24 @@ def test_the_four_euler_parameters_give_no_stabilising_riccati_solution(eps_desi
     assert poles.real.max() < 0
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    ({"forces": ["force_69X", "force_12Q"]}, "force_12Q: not a force channel of the plant"),
-    ({"forces": ["force_69X", "force_69X"]}, "force_69X: given twice"),
-    ({"forces": "some"}, "forces: must be 'all' or a sequence"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"forces": ["force_69X", "force_12Q"]}, "force_12Q: not a force channel of the plant"),
+        ({"forces": ["force_69X", "force_69X"]}, "force_69X: given twice"),
+        ({"forces": "some"}, "forces: must be 'all' or a sequence"),
+    ],
+)
 def test_bad_forces_are_named(eps_design_plant, nominal_for, kwargs, message):
     with pytest.raises(ValueError, match=message):
         TrajectoryLinearization(eps_design_plant, nominal_for(eps_design_plant), **kwargs)
 
 
-def test_bad_plant_and_nominal_are_named(coupled_plant, coupled_model, nominal_for,
-                                         eigenaxis_slew):
+def test_bad_plant_and_nominal_are_named(coupled_plant, coupled_model, nominal_for, eigenaxis_slew):
     with pytest.raises(ValueError, match="plant: must be built without translation"):
-        TrajectoryLinearization(FlexibleSpacecraft(coupled_model, translation=True),
-                                nominal_for(coupled_plant))
+        TrajectoryLinearization(
+            FlexibleSpacecraft(coupled_model, translation=True), nominal_for(coupled_plant)
+        )
     with pytest.raises(ValueError, match="plant: must be a FlexibleSpacecraft"):
         TrajectoryLinearization(object(), nominal_for(coupled_plant))
 

@@ -46,11 +46,15 @@ REQUIREMENT = requirement_from_spec("m", {"max": C}, "")
 @pytest.mark.parametrize("method", ["clopper_pearson", "wilson"])
 def test_probability_interval_covers_the_true_value_at_its_nominal_level(method):
     n, repetitions = 200, 50
-    estimates = [probability_of_meeting(SPACE.sample(n, seed=s).values["x"] ** 2, REQUIREMENT,
-                                        0.95, method) for s in range(repetitions)]
+    estimates = [
+        probability_of_meeting(SPACE.sample(n, seed=s).values["x"] ** 2, REQUIREMENT, 0.95, method)
+        for s in range(repetitions)
+    ]
     coverage = np.mean([e.low <= P_TRUE <= e.high for e in estimates])
-    print(f"{method}: P = {P_TRUE:.4f}, coverage of the 95 % interval in {repetitions} "
-          f"repetitions of N = {n}: {coverage:.2f}")
+    print(
+        f"{method}: P = {P_TRUE:.4f}, coverage of the 95 % interval in {repetitions} "
+        f"repetitions of N = {n}: {coverage:.2f}"
+    )
     assert coverage >= 0.90  # the issue's acceptance level for a nominal 95 % interval
     # and not by being uninformative: the mean width is within 30 % of the large-sample width
     # 2 z sqrt(p (1 - p) / N) (Clopper-Pearson's excess at N = 200 is a few per cent)
@@ -69,7 +73,8 @@ def test_interval_at_zero_and_all_successes_is_the_closed_form(n):
     assert proportion_interval(n, n) == pytest.approx((1 - upper, 1.0), rel=1e-9)
     # Wilson at k = 0: [0, z^2 / (n + z^2)]
     assert proportion_interval(0, n, method="wilson") == pytest.approx(
-        (0.0, Z95**2 / (n + Z95**2)), rel=1e-12, abs=1e-15)
+        (0.0, Z95**2 / (n + Z95**2)), rel=1e-12, abs=1e-15
+    )
 
 
 def test_wilson_is_the_score_interval():
@@ -78,7 +83,8 @@ def test_wilson_is_the_score_interval():
     centre = (p + Z95**2 / (2 * n)) / (1 + Z95**2 / n)
     half = Z95 * math.sqrt(p * (1 - p) / n + Z95**2 / (4 * n * n)) / (1 + Z95**2 / n)
     assert proportion_interval(k, n, method="wilson") == pytest.approx(
-        (centre - half, centre + half), rel=1e-12)
+        (centre - half, centre + half), rel=1e-12
+    )
     # Clopper-Pearson is the wider, exact one
     low, high = proportion_interval(k, n)
     assert low < centre - half and high > centre + half
@@ -86,10 +92,22 @@ def test_wilson_is_the_score_interval():
 
 def test_a_missing_metric_fails_every_requirement():
     settle = np.array([3.0, 7.9, 8.0, 8.1, np.nan, np.inf])
-    assert list(Requirement("settling_time", "<=", "8 s", "s").met(settle)) == \
-        [True, True, True, False, False, False]
-    assert list(Requirement("margin", ">=", 8.0).met(settle)) == \
-        [False, False, True, True, False, True]
+    assert list(Requirement("settling_time", "<=", "8 s", "s").met(settle)) == [
+        True,
+        True,
+        True,
+        False,
+        False,
+        False,
+    ]
+    assert list(Requirement("margin", ">=", 8.0).met(settle)) == [
+        False,
+        False,
+        True,
+        True,
+        False,
+        True,
+    ]
     estimate = probability_of_meeting(settle, Requirement("settling_time", "<=", 8.0, "s"))
     assert (estimate.successes, estimate.n, estimate.probability) == (3, 6, 0.5)
 
@@ -141,8 +159,12 @@ def test_convergence_ends_at_the_full_estimate_and_narrows_as_one_over_sqrt_n():
     assert conv.n[-1] == 2000 and conv.estimate[-1] == full.probability
     assert (conv.low[-1], conv.high[-1]) == (full.low, full.high)
     # the first N' cases are the run of N' cases (the sample is prefix-consistent)
-    assert conv.estimate[2] == probability_of_meeting(
-        SPACE.sample(50, seed=8).values["x"] ** 2, REQUIREMENT).probability
+    assert (
+        conv.estimate[2]
+        == probability_of_meeting(
+            SPACE.sample(50, seed=8).values["x"] ** 2, REQUIREMENT
+        ).probability
+    )
     width = conv.high - conv.low
     # 200 times the cases: the width shrinks by about sqrt(200) = 14; allow a factor 2 for the
     # small-N end, where the exact interval is wider than the large-sample one
@@ -213,8 +235,11 @@ def test_summary_is_plain_numbers():
 def test_bad_input_is_refused_by_field():
     with pytest.raises(ValueError, match=r"requirement 'm'\.relation: must be one of <=, >="):
         Requirement("m", "<", 1.0)
-    with pytest.raises(UnitError, match=r"overshoot\.max: incompatible units \(kilogram given, "
-                                        r"rad expected\)"):
+    with pytest.raises(
+        UnitError,
+        match=r"overshoot\.max: incompatible units \(kilogram given, "
+        r"rad expected\)",
+    ):
         requirement_from_spec("overshoot", {"max": "5 kg"}, "rad")
     with pytest.raises(ValueError, match=r"requirements\.t: give exactly one of max:"):
         requirement_from_spec("t", {"max": 1, "min": 0}, "s", "requirements.t")
@@ -236,8 +261,11 @@ def test_bad_input_is_refused_by_field():
     design = space.sobol_design(8, seed=1)
     y = np.ones(len(design.table))
     y[3] = np.nan
-    with pytest.raises(ValueError, match=r"y: Sobol' indices need a finite value in every case; "
-                                         r"1 are NaN"):
+    with pytest.raises(
+        ValueError,
+        match=r"y: Sobol' indices need a finite value in every case; "
+        r"1 are NaN",
+    ):
         sobol_indices(design, y, "y")
     with pytest.raises(ValueError, match=r"y: has 5 cases, the Sobol' design 32"):
         sobol_indices(design, np.ones(5), "y")

@@ -28,8 +28,9 @@ from flexsat.design.parameter_space import (
 from flexsat.units import Q_, UnitError
 
 #: seed 000's TAMU ranges (spec seed000_part1.md §2.4): α in [0, 0.25], u_max in [100, 600] oz-in
-TAMU_BOX = ParameterSpace([Uniform("alpha", 0.0, 0.25),
-                           Uniform("u_max", "100 ozf*in", "600 ozf*in", "N*m")])
+TAMU_BOX = ParameterSpace(
+    [Uniform("alpha", 0.0, 0.25), Uniform("u_max", "100 ozf*in", "600 ozf*in", "N*m")]
+)
 OZF_IN = Q_(1, "ozf*in").to("N*m").magnitude
 
 
@@ -52,8 +53,11 @@ def test_grid_is_the_full_factorial_with_the_first_axis_slowest():
     # case k sits at grid index unravel_index(k, shape)
     k = 29
     i, j, m = np.unravel_index(k, space.shape)
-    assert table.case(k) == {"alpha": alpha.values[i], "u_max": u_max.values[j],
-                             "modes": mode.values[m]}
+    assert table.case(k) == {
+        "alpha": alpha.values[i],
+        "u_max": u_max.values[j],
+        "modes": mode.values[m],
+    }
 
 
 # -- space-filling sequences ------------------------------------------------------------------------
@@ -91,12 +95,14 @@ def test_saltelli_design_has_n_times_d_plus_2_cases_in_the_bounds():
 
 
 # -- distributions -----------------------------------------------------------------------------------
-DISPERSED = ParameterSpace([
-    Normal("hub_inertia", "1.2 kg*m**2", "0.05 kg*m**2", "kg*m**2"),
-    Uniform("friction", "0.1 N*m", "0.3 N*m", "N*m"),
-    LogNormal("stiffness", "2000 N/m", 1.5, "N/m"),
-    TruncatedNormal("tip_mass", "0.1 kg", "0.05 kg", "0.08 kg", "0.2 kg", "kg"),
-])
+DISPERSED = ParameterSpace(
+    [
+        Normal("hub_inertia", "1.2 kg*m**2", "0.05 kg*m**2", "kg*m**2"),
+        Uniform("friction", "0.1 N*m", "0.3 N*m", "N*m"),
+        LogNormal("stiffness", "2000 N/m", 1.5, "N/m"),
+        TruncatedNormal("tip_mass", "0.1 kg", "0.05 kg", "0.08 kg", "0.2 kg", "kg"),
+    ]
+)
 
 
 def test_every_distribution_samples_its_own_law():
@@ -119,8 +125,10 @@ def test_lognormal_median_and_geometric_sd_are_as_stated():
     assert abs(inside - 0.6827) < 4 * math.sqrt(0.6827 * 0.3173 / x.size)
 
 
-@pytest.mark.parametrize("low, high", [("0.08 kg", "0.2 kg"), ("0.25 kg", "0.26 kg"),
-                                       ("-inf", "0.0 kg"), ("0.1 kg", "inf")])
+@pytest.mark.parametrize(
+    "low, high",
+    [("0.08 kg", "0.2 kg"), ("0.25 kg", "0.26 kg"), ("-inf", "0.0 kg"), ("0.1 kg", "inf")],
+)
 def test_truncated_normal_stays_in_its_bounds(low, high):
     # including a window 3-3.2 sd out in the tail and one-sided truncations
     p = TruncatedNormal("tip_mass", "0.1 kg", "0.05 kg", low, high, "kg")
@@ -133,8 +141,7 @@ def test_truncated_normal_stays_in_its_bounds(low, high):
 @pytest.mark.parametrize("chunk", [1, 7, 100, 300])
 def test_monte_carlo_cases_do_not_depend_on_the_chunking(chunk):
     whole = DISPERSED.sample(300, seed=99)
-    parts = [DISPERSED.sample(min(chunk, 300 - s), seed=99, start=s)
-             for s in range(0, 300, chunk)]
+    parts = [DISPERSED.sample(min(chunk, 300 - s), seed=99, start=s) for s in range(0, 300, chunk)]
     assert np.array_equal(whole.matrix(), np.vstack([p.matrix() for p in parts]))
     assert parts[-1].start == (299 // chunk) * chunk
     assert np.array_equal(whole.rows(100, 107).matrix(), DISPERSED.sample(7, 99, 100).matrix())
@@ -167,64 +174,97 @@ def test_noise_seeds_are_per_case_and_apart_from_the_parameters():
 # -- units and scenario dicts --------------------------------------------------------------------------
 def test_values_are_read_in_their_units():
     assert Uniform("u_max", "100 ozf*in", "600 ozf*in", "N*m").high == pytest.approx(
-        600 * OZF_IN, rel=1e-15)
+        600 * OZF_IN, rel=1e-15
+    )
     assert Normal("alpha", "5 deg", "0.5 deg", "rad").mean == pytest.approx(math.radians(5))
     assert Normal("J", Q_(1.2, "kg*m**2"), 0.05, "kg*m**2").sd == 0.05
 
 
 def test_scenario_dicts_build_the_objects():
     units = {"hub_inertia": "kg*m**2", "alpha": "", "u_max": "N*m"}
-    space = space_from_spec({"hub_inertia": {"distribution": "normal", "mean": "1.2 kg*m**2",
-                                             "sd": "0.05 kg*m**2"},
-                             "alpha": {"low": 0, "high": 0.25}}, units)
+    space = space_from_spec(
+        {
+            "hub_inertia": {"distribution": "normal", "mean": "1.2 kg*m**2", "sd": "0.05 kg*m**2"},
+            "alpha": {"low": 0, "high": 0.25},
+        },
+        units,
+    )
     assert isinstance(space, ParameterSpace)
     assert space.parameters[0] == Normal("hub_inertia", 1.2, 0.05, "kg*m**2")
     assert space.parameters[1] == Uniform("alpha", 0.0, 0.25)
-    grid = space_from_spec({"alpha": {"low": 0, "high": 0.25, "n": 6},
-                            "u_max": {"values": ["100 ozf*in", "600 ozf*in"]}}, units)
+    grid = space_from_spec(
+        {
+            "alpha": {"low": 0, "high": 0.25, "n": 6},
+            "u_max": {"values": ["100 ozf*in", "600 ozf*in"]},
+        },
+        units,
+    )
     assert isinstance(grid, GridSpace) and grid.shape == (6, 2)
-    p = parameter_from_spec("k", {"distribution": "truncated_normal", "mean": 1, "sd": 1,
-                                  "low": 0, "high": "inf"}, "N/m")
+    p = parameter_from_spec(
+        "k",
+        {"distribution": "truncated_normal", "mean": 1, "sd": 1, "low": 0, "high": "inf"},
+        "N/m",
+    )
     assert p == TruncatedNormal("k", 1, 1, 0, math.inf, "N/m")
 
 
 BAD = [
-    ({"x": {"distribution": "gaussian", "mean": 1, "sd": 1}},
-     r"parameters\.x\.distribution: unknown distribution 'gaussian'; known: normal"),
+    (
+        {"x": {"distribution": "gaussian", "mean": 1, "sd": 1}},
+        r"parameters\.x\.distribution: unknown distribution 'gaussian'; known: normal",
+    ),
     ({"x": {"distribution": "normal", "mean": 1, "sd": 0}}, r"parameters\.x\.sd: must be > 0"),
     ({"x": {"distribution": "normal", "mean": 1, "sd": -2}}, r"parameters\.x\.sd: must be > 0"),
-    ({"x": {"distribution": "normal", "mean": "nan", "sd": 1}},
-     r"parameters\.x\.mean: must be finite"),
-    ({"x": {"distribution": "normal", "mean": 1, "sd": "inf"}},
-     r"parameters\.x\.sd: must be finite"),
-    ({"x": {"distribution": "uniform", "low": 2, "high": 2}},
-     r"parameters\.x: low must be < high"),
-    ({"x": {"distribution": "uniform", "low": 3, "high": 2}},
-     r"parameters\.x: low must be < high"),
+    (
+        {"x": {"distribution": "normal", "mean": "nan", "sd": 1}},
+        r"parameters\.x\.mean: must be finite",
+    ),
+    (
+        {"x": {"distribution": "normal", "mean": 1, "sd": "inf"}},
+        r"parameters\.x\.sd: must be finite",
+    ),
+    ({"x": {"distribution": "uniform", "low": 2, "high": 2}}, r"parameters\.x: low must be < high"),
+    ({"x": {"distribution": "uniform", "low": 3, "high": 2}}, r"parameters\.x: low must be < high"),
     ({"x": {"low": 1, "high": 0, "n": 5}}, r"parameters\.x: low must be < high"),
     ({"x": {"low": 0, "high": 1, "n": 1}}, r"parameters\.x\.n: a linspace needs n >= 2"),
     ({"x": {"low": 0, "high": 1, "n": 2.5}}, r"parameters\.x\.n: must be a positive integer"),
     ({"x": {"values": []}}, r"parameters\.x\.values: must be a non-empty list"),
     ({"x": {"values": [1, "inf"]}}, r"parameters\.x\.values: must be finite"),
-    ({"x": {"distribution": "lognormal", "median": 0, "gsd": 1.5}},
-     r"parameters\.x\.median: must be > 0"),
-    ({"x": {"distribution": "lognormal", "median": 1, "gsd": 1.0}},
-     r"parameters\.x\.gsd: the geometric standard deviation must be > 1"),
-    ({"x": {"distribution": "truncated_normal", "mean": 0, "sd": 1, "low": 1, "high": -1}},
-     r"parameters\.x: low must be < high"),
-    ({"x": {"distribution": "truncated_normal", "mean": 0, "sd": 1, "low": 50, "high": 60}},
-     r"parameters\.x: the normal .* puts no probability in \[50, 60\]"),
-    ({"x": {"distribution": "truncated_normal", "mean": 0, "sd": 1, "low": "nan", "high": 1}},
-     r"parameters\.x\.low: must be finite \(no NaN"),
-    ({"x": {"distribution": "normal", "mean": 1}},
-     r"parameters\.x\.sd: missing; a normal distribution takes distribution, mean, sd"),
-    ({"x": {"distribution": "normal", "mean": 1, "sd": 1, "sigma": 1}},
-     r"parameters\.x\.sigma: unknown key; a normal distribution takes"),
+    (
+        {"x": {"distribution": "lognormal", "median": 0, "gsd": 1.5}},
+        r"parameters\.x\.median: must be > 0",
+    ),
+    (
+        {"x": {"distribution": "lognormal", "median": 1, "gsd": 1.0}},
+        r"parameters\.x\.gsd: the geometric standard deviation must be > 1",
+    ),
+    (
+        {"x": {"distribution": "truncated_normal", "mean": 0, "sd": 1, "low": 1, "high": -1}},
+        r"parameters\.x: low must be < high",
+    ),
+    (
+        {"x": {"distribution": "truncated_normal", "mean": 0, "sd": 1, "low": 50, "high": 60}},
+        r"parameters\.x: the normal .* puts no probability in \[50, 60\]",
+    ),
+    (
+        {"x": {"distribution": "truncated_normal", "mean": 0, "sd": 1, "low": "nan", "high": 1}},
+        r"parameters\.x\.low: must be finite \(no NaN",
+    ),
+    (
+        {"x": {"distribution": "normal", "mean": 1}},
+        r"parameters\.x\.sd: missing; a normal distribution takes distribution, mean, sd",
+    ),
+    (
+        {"x": {"distribution": "normal", "mean": 1, "sd": 1, "sigma": 1}},
+        r"parameters\.x\.sigma: unknown key; a normal distribution takes",
+    ),
     ({"x": {"median": 1}}, r"parameters\.x: give a distribution"),
     ({"x": 3.0}, r"parameters\.x: must be a mapping"),
     ({"nope": {"values": [1]}}, r"parameters\.nope: unknown parameter; known: angle, x"),
-    ({"x": {"values": [1, 2]}, "angle": {"distribution": "normal", "mean": 0, "sd": 1}},
-     r"parameters\.angle: grid axes .* cannot be mixed"),
+    (
+        {"x": {"values": [1, 2]}, "angle": {"distribution": "normal", "mean": 0, "sd": 1}},
+        r"parameters\.angle: grid axes .* cannot be mixed",
+    ),
     ({}, r"parameters: must be a non-empty mapping"),
 ]
 
@@ -238,8 +278,11 @@ def test_bad_input_is_refused_naming_the_field_and_the_rule(spec, message):
 @pytest.mark.parametrize("key", ["mean", "sd"])
 def test_a_unit_mismatch_is_refused_naming_the_field(key):
     spec = {"distribution": "normal", "mean": "5 deg", "sd": "1 deg", key: "5 kg"}
-    with pytest.raises(UnitError, match=rf"parameters\.angle\.{key}: incompatible units "
-                                        r"\(kilogram given, rad expected\)"):
+    with pytest.raises(
+        UnitError,
+        match=rf"parameters\.angle\.{key}: incompatible units "
+        r"\(kilogram given, rad expected\)",
+    ):
         space_from_spec({"angle": spec}, {"angle": "rad"})
 
 

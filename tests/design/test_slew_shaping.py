@@ -25,8 +25,9 @@ from flexsat.sim import SimConfig
 def evaluation():
     truth = eps().plant(n_modes=10)
     nominal = three_axis_slew(truth.inertia, euler123_to_quaternion(np.ones(3)), 6.0, 5.0)
-    return SlewEvaluation(truth, truth.reduced(10), nominal,
-                          SimConfig(duration=11.5, control_rate=50.0), n_points=5)
+    return SlewEvaluation(
+        truth, truth.reduced(10), nominal, SimConfig(duration=11.5, control_rate=50.0), n_points=5
+    )
 
 
 def test_the_torquers_alone_can_meet_both_goals_that_case_d_misses(evaluation):
@@ -49,9 +50,12 @@ def test_the_correction_vanishes_at_both_ends_and_after(evaluation):
     v = shaped.correction(np.array([0.0, T, 1.2 * T]))
     assert np.abs(v).max() <= 1e-12 * np.abs(shaped.coefficients).sum()
     t = np.linspace(0.0, T, 7)
-    np.testing.assert_allclose(shaped.torque(t) - evaluation.nominal.torque(t),
-                               shaped.correction(t) @ shaped.inertia.T, rtol=0,
-                               atol=1e-9)  # rounding of torques of 3e4 N m (1e-16 relative)
+    np.testing.assert_allclose(
+        shaped.torque(t) - evaluation.nominal.torque(t),
+        shaped.correction(t) @ shaped.inertia.T,
+        rtol=0,
+        atol=1e-9,
+    )  # rounding of torques of 3e4 N m (1e-16 relative)
 
 
 def test_bad_input(evaluation):

@@ -33,9 +33,14 @@ CASE_D = SlewWeights(attitude=1000, rate=1000, modes=1, torque=1000)
 
 
 def metrics(angle_mrad, ratio, torque=0.0, force=None, tol=30.0, goal=10.0):
-    m = {"angle_error_mrad": angle_mrad, "angle_tolerance_mrad": tol,
-         "deflection_ratio_after": ratio, "deflection_ratio_goal": goal,
-         "peak_torque_perturbation_Nm": torque, "peak_nominal_torque_Nm": 1000.0}
+    m = {
+        "angle_error_mrad": angle_mrad,
+        "angle_tolerance_mrad": tol,
+        "deflection_ratio_after": ratio,
+        "deflection_ratio_goal": goal,
+        "peak_torque_perturbation_Nm": torque,
+        "peak_nominal_torque_Nm": 1000.0,
+    }
     if force is not None:
         m["peak_force_N"] = force
     return m
@@ -72,7 +77,8 @@ def test_effort_ranks_designs_that_meet_the_goals_and_failures_score_the_penalty
     light, heavy = metrics(10.0, 20.0, torque=100.0), metrics(10.0, 20.0, torque=900.0)
     assert 0.0 < slew_objective(light) < slew_objective(heavy)
     assert slew_objective(metrics(10.0, 20.0, force=100.0)) < slew_objective(
-        metrics(10.0, 20.0, force=2800.0))
+        metrics(10.0, 20.0, force=2800.0)
+    )
     assert slew_objective(None) == FAILURE_PENALTY
     assert slew_objective(metrics(96.0, 1.25)) < FAILURE_PENALTY
 
@@ -88,9 +94,16 @@ def test_weights_fill_the_blocks_in_the_design_order():
     assert s.as_dict()["mode_rates"] == [1.5, 2.0] and s.as_dict()["torque"] == 5.0
 
 
-@pytest.mark.parametrize("kwargs, field", [
-    ({"attitude": -1}, "attitude"), ({"torque": 0}, "torque"), ({"modes": np.nan}, "modes"),
-    ({"force": [1, 0]}, "force"), ({"rate": None}, "rate")])
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        ({"attitude": -1}, "attitude"),
+        ({"torque": 0}, "torque"),
+        ({"modes": np.nan}, "modes"),
+        ({"force": [1, 0]}, "force"),
+        ({"rate": None}, "rate"),
+    ],
+)
 def test_bad_weights_name_the_block(kwargs, field):
     base = dict(attitude=1, rate=1, modes=1, torque=1)
     with pytest.raises(ValueError, match=rf"^{field}:"):
@@ -130,8 +143,15 @@ def test_search_stops_at_the_first_design_meeting_the_goals(setup):
     # goals the start misses by 10 % on the angle only (of the commanded 1 rad; its deflection
     # ratio, 8.7, is well above 2)
     goals = SlewGoals(angle_fraction=0.9e-3 * start["angle_error_mrad"], deflection_ratio=2.0)
-    loose = SlewEvaluation(truth, evaluation.design_plant, nominal, config, goals,
-                           deflection_open=evaluation.deflection_open, n_points=5)
+    loose = SlewEvaluation(
+        truth,
+        evaluation.design_plant,
+        nominal,
+        config,
+        goals,
+        deflection_open=evaluation.deflection_open,
+        n_points=5,
+    )
     result = tune_slew_weights(loose, CASE_D, budget=15, omega_b=5.0)
     met = [slew_objective(h["metrics"], effort_weight=0.0) == 0.0 for h in result.history]
     assert result.evaluations > 1 and result.met and met[-1] and not any(met[:-1])

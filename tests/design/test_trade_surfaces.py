@@ -5,8 +5,12 @@ import numpy as np
 import pytest
 
 from flexsat.cases import tamu
-from flexsat.design.trade_surfaces import (maneuver_time_surface, residual_energy_surface,
-                                           tracking_bound, tracking_bound_surface)
+from flexsat.design.trade_surfaces import (
+    maneuver_time_surface,
+    residual_energy_surface,
+    tracking_bound,
+    tracking_bound_surface,
+)
 from flexsat.sim import SimConfig, simulate
 from flexsat.sim.open_loop import open_loop_response
 from flexsat.units import to_si
@@ -46,14 +50,18 @@ def test_residual_energy_converges_to_the_held_torque_simulation(case, model):
     of the one E(T) is computed from."""
     alpha = ALPHA[1:]
     shape = case.reference(alpha=alpha)
-    E_T = residual_energy_surface(model, case.angle, case.reference_inertia, alpha,
-                                  [case.max_torque])[:, 0]
+    E_T = residual_energy_surface(
+        model, case.angle, case.reference_inertia, alpha, [case.max_torque]
+    )[:, 0]
     at_T = open_loop_response(model, shape, shape.duration[None, :])[0]
     assert np.array_equal(E_T, model.vibration_energy(at_T))
     errors = []
     for rate in (300.0, 1200.0):
-        run = simulate(model, case.law_ii(0.0, 0.0, 0.0, alpha=alpha),
-                       SimConfig(duration=6.0, control_rate=rate))
+        run = simulate(
+            model,
+            case.law_ii(0.0, 0.0, 0.0, alpha=alpha),
+            SimConfig(duration=6.0, control_rate=rate),
+        )
         t_end = run.dataset.time.values[-1]
         E = model.vibration_energy(open_loop_response(model, shape, np.array([t_end]))[0])
         errors.append(np.abs(run.dataset.vibration_energy.values[:, -1] / E - 1))
@@ -77,9 +85,20 @@ def test_mu_vanishes_with_the_flexibility(case):
     for modulus in (case.modulus, 1e4 * case.modulus):
         c = tamu(modulus=modulus)
         m = c.model()
-        out.append(tracking_bound_surface(m, c.angle, m.total_inertia, [0.2], [c.max_torque],
-                                          G1, G2, 0.0, c.params.appendage_inertia,
-                                          n_samples=4001)[0, 0])
+        out.append(
+            tracking_bound_surface(
+                m,
+                c.angle,
+                m.total_inertia,
+                [0.2],
+                [c.max_torque],
+                G1,
+                G2,
+                0.0,
+                c.params.appendage_inertia,
+                n_samples=4001,
+            )[0, 0]
+        )
     assert out[1] < 1e-2 * out[0]
 
 
@@ -101,8 +120,17 @@ def test_mu_is_eq_22_of_the_two_open_loop_motions(case, model):
 def test_mu_max_sampling_error_is_within_its_bound(case, model):
     """2001 samples over T ≈ 4.9 s put ≈ 120 samples in a 3.4 Hz period: the sampled maximum
     is within (π/120)²/2 ≈ 3.4e-4 of the maximum found with 4× the samples."""
-    args = (model, case.angle, case.reference_inertia, [0.05, 0.2], [case.max_torque], G1, G2,
-            0.0, case.params.appendage_inertia)
+    args = (
+        model,
+        case.angle,
+        case.reference_inertia,
+        [0.05, 0.2],
+        [case.max_torque],
+        G1,
+        G2,
+        0.0,
+        case.params.appendage_inertia,
+    )
     coarse = tracking_bound_surface(*args, n_samples=2001)
     fine = tracking_bound_surface(*args, n_samples=8001)
     assert np.all(coarse <= fine * (1 + 1e-12))

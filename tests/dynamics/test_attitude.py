@@ -75,8 +75,10 @@ def test_composition_matches_the_dcm_product():
 def test_euler123_round_trip_away_from_gimbal_lock():
     rng = np.random.default_rng(4)
     # θ2 kept 0.1 rad from ±90°: the recovered θ1, θ3 lose ~eps/cos θ2 <= 10 eps
-    angles = np.stack([rng.uniform(-np.pi, np.pi, N), rng.uniform(-1.47, 1.47, N),
-                       rng.uniform(-np.pi, np.pi, N)], -1)
+    angles = np.stack(
+        [rng.uniform(-np.pi, np.pi, N), rng.uniform(-1.47, 1.47, N), rng.uniform(-np.pi, np.pi, N)],
+        -1,
+    )
     assert np.abs(att.dcm_to_euler123(att.euler123_to_dcm(angles)) - angles).max() <= 64 * EPS
     # the definition C = R3 R2 R1, written out for single-axis rotations
     c, s = np.cos(0.3), np.sin(0.3)
@@ -119,8 +121,9 @@ def test_omega_and_rate_matrices_agree():
     lhs = (att.omega_matrix(w) @ beta[..., None])[..., 0]
     rhs = (att.quaternion_rate_matrix(beta) @ w[..., None])[..., 0]
     assert np.abs(lhs - rhs).max() <= 4 * EPS
-    assert np.allclose(att.cross_matrix(w) @ beta[:, 1:, None], np.cross(w, beta[:, 1:])[..., None],
-                       atol=4 * EPS)
+    assert np.allclose(
+        att.cross_matrix(w) @ beta[:, 1:, None], np.cross(w, beta[:, 1:])[..., None], atol=4 * EPS
+    )
 
 
 def exact_rotation(w, beta0, t):
@@ -153,23 +156,34 @@ def test_kinematic_rates_equal_finite_differences_along_an_exact_rotation():
     assert np.abs(fd - exact).max() <= 1e-8
 
 
-@pytest.mark.parametrize("call, field", [
-    (lambda: att.quaternion_to_dcm([1.0, 0.0, 0.0]), "beta: last axes must have shape (4,)"),
-    (lambda: att.quaternion_to_dcm([1.0, np.nan, 0.0, 0.0]), "beta: must be finite"),
-    (lambda: att.quaternion_to_dcm([0.99, 0.0, 0.0, 0.0]), "beta: must be a unit quaternion"),
-    (lambda: att.dcm_to_quaternion(np.eye(3) * 1.01), "dcm: must be orthonormal"),
-    (lambda: att.dcm_to_quaternion(-np.eye(3)), "dcm: must be a proper rotation"),
-    (lambda: att.euler123_to_dcm(np.zeros((2, 2))), "angles: last axes must have shape (3,)"),
-    (lambda: att.principal_rotation_to_quaternion([1.0, 1.0, 0.0], 0.1), "axis: must be a unit"),
-    (lambda: att.quaternion_to_gibbs([0.0, 1.0, 0.0, 0.0]), "beta: the Gibbs vector is singular"),
-    (lambda: att.quaternion_to_mrp([-1.0, 0.0, 0.0, 0.0]), "beta: the MRP vector is singular"),
-    (lambda: att.mrp_shadow([0.0, 0.0, 0.0]), "sigma: the shadow set of σ = 0"),
-    (lambda: att.gibbs_rate([0.0, 0.0, 0.0], [np.inf, 0.0, 0.0]), "w: must be finite"),
-    (lambda: att.omega_matrix("fast"), "w: must be a numeric array"),
-    (lambda: att.quaternion_multiply(np.ones((2, 4)) / 2, np.ones((3, 4)) / 2),
-     "second, first: leading (case) axes must broadcast"),
-    (lambda: att.mrp_rate(np.zeros((2, 3)), np.zeros((5, 3))), "sigma, w: leading (case) axes"),
-])
+@pytest.mark.parametrize(
+    "call, field",
+    [
+        (lambda: att.quaternion_to_dcm([1.0, 0.0, 0.0]), "beta: last axes must have shape (4,)"),
+        (lambda: att.quaternion_to_dcm([1.0, np.nan, 0.0, 0.0]), "beta: must be finite"),
+        (lambda: att.quaternion_to_dcm([0.99, 0.0, 0.0, 0.0]), "beta: must be a unit quaternion"),
+        (lambda: att.dcm_to_quaternion(np.eye(3) * 1.01), "dcm: must be orthonormal"),
+        (lambda: att.dcm_to_quaternion(-np.eye(3)), "dcm: must be a proper rotation"),
+        (lambda: att.euler123_to_dcm(np.zeros((2, 2))), "angles: last axes must have shape (3,)"),
+        (
+            lambda: att.principal_rotation_to_quaternion([1.0, 1.0, 0.0], 0.1),
+            "axis: must be a unit",
+        ),
+        (
+            lambda: att.quaternion_to_gibbs([0.0, 1.0, 0.0, 0.0]),
+            "beta: the Gibbs vector is singular",
+        ),
+        (lambda: att.quaternion_to_mrp([-1.0, 0.0, 0.0, 0.0]), "beta: the MRP vector is singular"),
+        (lambda: att.mrp_shadow([0.0, 0.0, 0.0]), "sigma: the shadow set of σ = 0"),
+        (lambda: att.gibbs_rate([0.0, 0.0, 0.0], [np.inf, 0.0, 0.0]), "w: must be finite"),
+        (lambda: att.omega_matrix("fast"), "w: must be a numeric array"),
+        (
+            lambda: att.quaternion_multiply(np.ones((2, 4)) / 2, np.ones((3, 4)) / 2),
+            "second, first: leading (case) axes must broadcast",
+        ),
+        (lambda: att.mrp_rate(np.zeros((2, 3)), np.zeros((5, 3))), "sigma, w: leading (case) axes"),
+    ],
+)
 def test_bad_input_names_the_field(call, field):
     with pytest.raises(ValueError, match=re.escape(field)):
         call()
@@ -180,8 +194,15 @@ def test_the_package_re_exports_every_kernel():
     from flexsat.dynamics import orbit, rigid_body, structural
 
     kernels = {*att.__all__, *rigid_body.__all__} - {"UNIT_TOL", "SINGULAR_TOL"}
-    plants = {*structural.__all__, *orbit.__all__, "RigidSpacecraft", "FlexibleSpacecraft",
-              "CmgSpacecraft", "TetheredSubsatellite", "TetherScales"}
+    plants = {
+        *structural.__all__,
+        *orbit.__all__,
+        "RigidSpacecraft",
+        "FlexibleSpacecraft",
+        "CmgSpacecraft",
+        "TetheredSubsatellite",
+        "TetherScales",
+    }
     assert kernels | plants == set(dynamics.__all__)
     assert dynamics.dcm_to_quaternion is att.dcm_to_quaternion
 
@@ -194,8 +215,12 @@ def test_euler123_to_quaternion_is_the_rotation_of_euler123_to_dcm_and_continuou
     beta = att.euler123_to_quaternion([1.0, 1.0, 1.0])
     assert np.abs(beta - [0.565676, 0.570941, 0.167519, 0.570941]).max() <= 0.5e-6 + 1e-15
     angles = np.random.default_rng(3).uniform(-3.0, 3.0, (50, 3))
-    assert np.abs(att.quaternion_to_dcm(att.euler123_to_quaternion(angles))
-                  - att.euler123_to_dcm(angles)).max() <= 16 * EPS
+    assert (
+        np.abs(
+            att.quaternion_to_dcm(att.euler123_to_quaternion(angles)) - att.euler123_to_dcm(angles)
+        ).max()
+        <= 16 * EPS
+    )
     path = np.linspace(0.0, 1.0, 2001)[:, None] * np.array([3.0, 1.2, -3.1])
     steps = np.abs(np.diff(att.euler123_to_quaternion(path), axis=0)).max()
     assert steps <= 2 * np.abs(np.diff(path, axis=0)).max()  # |dβ/dθ_k| <= 1/2 per angle

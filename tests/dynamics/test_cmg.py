@@ -102,28 +102,32 @@ ALTERNATE = [45.0, -45.0, 45.0, -45.0]
 ZERO = [0.0, 0.0, 0.0, 0.0]
 
 
-@pytest.mark.parametrize("demand, sigma0, internal, h_stop, tol", [
-    # the notes' forward runs (§8.3 [CHECK] table), |h| printed to 3 decimals
-    ([1, 0, 0], PREFERRED, False, 3.155, 1e-3),
-    ([1, 0, 0], ALTERNATE, False, 3.155, 1e-3),
-    ([1, 0, 0], ZERO, True, 1.155, 1e-3),
-    ([0, 1, 0], PREFERRED_Y, False, 3.155, 1e-3),
-    ([0, 1, 0], ALTERNATE, False, 3.155, 1e-3),
-    ([0, 1, 0], ZERO, True, 1.155, 1e-3),
-    ([0, 0, 1], ZERO, False, 3.266, 1e-3),
-    # the pseudo-inverse passes this singularity with finite rates: det(CCᵀ) touches 0 at
-    # |h| = 1.2918 (between solve_ivp's steps); the notes stop at 1.282 on their own threshold
-    ([0, 0, 1], ALTERNATE, True, 1.287, 5e-3),
-    ([1, 1, 1], ZERO, False, 3.165, 1e-3),
-    ([1, 1, 1], ALTERNATE, False, 3.165, 1e-3),
-    ([4, 2, 0], PREFERRED, False, 3.221, 1e-3),
-    ([4, 2, 0], ALTERNATE, False, 3.221, 1e-3),
-    ([2, 4, 0], PREFERRED_Y, False, 3.221, 1e-3),
-    ([2, 4, 0], ALTERNATE, False, 3.221, 1e-3),
-    ([4, 2, 0], ZERO, True, 1.291, 1e-3),
-])
-def test_v5_preferred_sets_reach_saturation_and_zero_gimbals_do_not(demand, sigma0, internal,
-                                                                     h_stop, tol):
+@pytest.mark.parametrize(
+    "demand, sigma0, internal, h_stop, tol",
+    [
+        # the notes' forward runs (§8.3 [CHECK] table), |h| printed to 3 decimals
+        ([1, 0, 0], PREFERRED, False, 3.155, 1e-3),
+        ([1, 0, 0], ALTERNATE, False, 3.155, 1e-3),
+        ([1, 0, 0], ZERO, True, 1.155, 1e-3),
+        ([0, 1, 0], PREFERRED_Y, False, 3.155, 1e-3),
+        ([0, 1, 0], ALTERNATE, False, 3.155, 1e-3),
+        ([0, 1, 0], ZERO, True, 1.155, 1e-3),
+        ([0, 0, 1], ZERO, False, 3.266, 1e-3),
+        # the pseudo-inverse passes this singularity with finite rates: det(CCᵀ) touches 0 at
+        # |h| = 1.2918 (between solve_ivp's steps); the notes stop at 1.282 on their own threshold
+        ([0, 0, 1], ALTERNATE, True, 1.287, 5e-3),
+        ([1, 1, 1], ZERO, False, 3.165, 1e-3),
+        ([1, 1, 1], ALTERNATE, False, 3.165, 1e-3),
+        ([4, 2, 0], PREFERRED, False, 3.221, 1e-3),
+        ([4, 2, 0], ALTERNATE, False, 3.221, 1e-3),
+        ([2, 4, 0], PREFERRED_Y, False, 3.221, 1e-3),
+        ([2, 4, 0], ALTERNATE, False, 3.221, 1e-3),
+        ([4, 2, 0], ZERO, True, 1.291, 1e-3),
+    ],
+)
+def test_v5_preferred_sets_reach_saturation_and_zero_gimbals_do_not(
+    demand, sigma0, internal, h_stop, tol
+):
     u = np.asarray(demand, float) / np.linalg.norm(demand)
     run = cmg.integrate_gimbals(DEG(sigma0), -u, 10.0)  # unit demand ḣ = u: torque −u
     assert run.singular
@@ -145,8 +149,10 @@ def test_v6_kurokawa_torque_saturates_at_about_ten_seconds_without_internal_sing
     # the pseudo-inverse tracks the demand exactly: h(t) = h(0) + ∫ḣ, h(0) = 0 for both sets
     # (to the 1.1e-4 of the rounded skew for PREFERRED_Y, V1)
     h0 = cmg.momentum(DEG(sigma0))
-    expect = h0 + np.stack([0.2 * (1.0 - np.cos(4.0 * np.pi * run.t)) / (4.0 * np.pi),
-                            0.3 * run.t, 0.0 * run.t], axis=-1)
+    expect = h0 + np.stack(
+        [0.2 * (1.0 - np.cos(4.0 * np.pi * run.t)) / (4.0 * np.pi), 0.3 * run.t, 0.0 * run.t],
+        axis=-1,
+    )
     np.testing.assert_allclose(run.h, expect, atol=1e-8)  # solve_ivp rtol 1e-10 on σ, |h| ~ 3
     # the stop is saturation (external), on the y envelope 3.1546: the x demand averages out
     sing = cmg.classify_singularity(run.sigma[-1], threshold=1e-5)
@@ -192,8 +198,7 @@ def test_preferred_angles_for_x_land_on_the_v4_set():
     np.testing.assert_allclose(got, [-59.66, 60.58, 117.98, -121.12], atol=0.01)
 
 
-@pytest.mark.parametrize("u", [[1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, -1, 0],
-                               [0, 0, -1]])
+@pytest.mark.parametrize("u", [[1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, -1, 0], [0, 0, -1]])
 def test_preferred_angles_run_forward_to_the_envelope_without_internal_singularity(u):
     u = np.asarray(u, float)
     sigma0 = cmg.preferred_angles(u)
@@ -254,8 +259,9 @@ def test_null_motion_beside_the_torque_law_avoids_the_v3_singularity():
         cmg.integrate_gimbals(np.zeros(4), PAPER_X, 1.0, null_target=np.zeros((2, 4)))
 
 
-@pytest.mark.parametrize("n_units, skew", [(3, DEG(30.0)), (4, SKEW), (5, DEG(60.0)),
-                                           (6, DEG(75.0))])
+@pytest.mark.parametrize(
+    "n_units, skew", [(3, DEG(30.0)), (4, SKEW), (5, DEG(60.0)), (6, DEG(75.0))]
+)
 def test_jacobian_is_the_derivative_of_the_momentum(n_units, skew):
     rng = np.random.default_rng(14)
     sigma = rng.uniform(-np.pi, np.pi, (5, n_units))  # a case axis of 5 gimbal sets
@@ -265,12 +271,14 @@ def test_jacobian_is_the_derivative_of_the_momentum(n_units, skew):
     for i in range(n_units):
         e = np.zeros(n_units)
         e[i] = step
-        fd = (cmg.momentum(sigma + e, skew, n_units)
-              - cmg.momentum(sigma - e, skew, n_units)) / (2 * step)
+        fd = (cmg.momentum(sigma + e, skew, n_units) - cmg.momentum(sigma - e, skew, n_units)) / (
+            2 * step
+        )
         np.testing.assert_allclose(c[..., i], fd, atol=1e-8)
     # gain = det(CCᵀ) of the same C
-    np.testing.assert_allclose(cmg.gain(sigma, skew, n_units),
-                               np.linalg.det(c @ np.swapaxes(c, -1, -2)), rtol=1e-12)
+    np.testing.assert_allclose(
+        cmg.gain(sigma, skew, n_units), np.linalg.det(c @ np.swapaxes(c, -1, -2)), rtol=1e-12
+    )
 
 
 @pytest.mark.parametrize("n_units", [3, 4, 6])
@@ -323,8 +331,9 @@ def test_null_projector_is_a_projector_onto_torque_free_motion():
     alpha = 1e-3
     tau_sr = cmg.null_projector(sigma, SKEW, 5, alpha)
     cct = c @ np.swapaxes(c, -1, -2)
-    np.testing.assert_allclose(c @ tau_sr, alpha * np.linalg.solve(cct + alpha * np.eye(3), c),
-                               atol=tol)
+    np.testing.assert_allclose(
+        c @ tau_sr, alpha * np.linalg.solve(cct + alpha * np.eye(3), c), atol=tol
+    )
     with pytest.raises(ValueError, match="singular"):
         cmg.null_projector(DEG([-90.0, 180.0, 90.0, 0.0]))
 
@@ -346,32 +355,45 @@ def test_v8_null_motion_reorients_zero_gimbals_to_the_alternate_set():
 def test_angles_accept_units():
     np.testing.assert_allclose(
         cmg.momentum(["-90 deg", "180 deg", "90 deg", "0 deg"], "54.74 deg"),
-        [2 * np.cos(SKEW) + 2, 0.0, 0.0], atol=1e-12)
+        [2 * np.cos(SKEW) + 2, 0.0, 0.0],
+        atol=1e-12,
+    )
 
 
-@pytest.mark.parametrize("call, message", [
-    (lambda: cmg.gain(np.zeros(4), DEG(90.0)), "skew: must lie in"),
-    (lambda: cmg.gain(np.zeros(4), 0.0), "skew: must lie in"),
-    (lambda: cmg.gain(np.zeros(2), n_units=2), "n_units: must be an integer >= 3"),
-    (lambda: cmg.momentum(np.zeros(3)), "sigma: last axis must hold the 4"),
-    (lambda: cmg.jacobian([0.0, np.nan, 0.0, 0.0]), "sigma: must be finite"),
-    (lambda: cmg.envelope([0.0, 0.0, 0.0]), "direction: must be nonzero"),
-    (lambda: cmg.steering_rates(np.zeros(4), [1.0, 0.0]), "torque: last axis"),
-    (lambda: cmg.steering_rates(np.zeros(4), [1.0, 0.0, 0.0], alpha=-1.0), "alpha: must be"),
-    (lambda: cmg.integrate_gimbals(np.zeros(4), [1.0, 0.0, 0.0], 0.0), "t_final: must be"),
-    (lambda: cmg.reorient(np.zeros(4), np.ones(4), 1.0, gain_k=0.0), "gain_k: must be > 0"),
-    (lambda: cmg.reorient(np.zeros(4), np.ones(3), 1.0), "sigma: last axis"),
-    (lambda: cmg.integrate_gimbals(DEG([-90.0, 180.0, 90.0, 0.0]), [1.0, 0.0, 0.0], 1.0),
-     "sigma0: starts singular"),
-    (lambda: cmg.preferred_angles([1.0, 0.0, 0.0], n_units=3), "perturbation: required"),
-    (lambda: cmg.preferred_angles([1.0, 0.0, 0.0], perturbation=np.zeros(4)),
-     "perturbation: must be a nonzero"),
-    (lambda: cmg.preferred_angles([0.0, 0.0, 0.0]), "direction: must be nonzero"),
-    (lambda: cmg.integrate_gimbals(np.zeros(4), lambda t: [1.0, 0.0], 1.0),
-     "torque: the callable must return 3"),
-    (lambda: cmg.integrate_gimbals(np.zeros(4), lambda t: [np.nan, 0.0, 0.0], 1.0),
-     "torque: must be finite"),
-])
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda: cmg.gain(np.zeros(4), DEG(90.0)), "skew: must lie in"),
+        (lambda: cmg.gain(np.zeros(4), 0.0), "skew: must lie in"),
+        (lambda: cmg.gain(np.zeros(2), n_units=2), "n_units: must be an integer >= 3"),
+        (lambda: cmg.momentum(np.zeros(3)), "sigma: last axis must hold the 4"),
+        (lambda: cmg.jacobian([0.0, np.nan, 0.0, 0.0]), "sigma: must be finite"),
+        (lambda: cmg.envelope([0.0, 0.0, 0.0]), "direction: must be nonzero"),
+        (lambda: cmg.steering_rates(np.zeros(4), [1.0, 0.0]), "torque: last axis"),
+        (lambda: cmg.steering_rates(np.zeros(4), [1.0, 0.0, 0.0], alpha=-1.0), "alpha: must be"),
+        (lambda: cmg.integrate_gimbals(np.zeros(4), [1.0, 0.0, 0.0], 0.0), "t_final: must be"),
+        (lambda: cmg.reorient(np.zeros(4), np.ones(4), 1.0, gain_k=0.0), "gain_k: must be > 0"),
+        (lambda: cmg.reorient(np.zeros(4), np.ones(3), 1.0), "sigma: last axis"),
+        (
+            lambda: cmg.integrate_gimbals(DEG([-90.0, 180.0, 90.0, 0.0]), [1.0, 0.0, 0.0], 1.0),
+            "sigma0: starts singular",
+        ),
+        (lambda: cmg.preferred_angles([1.0, 0.0, 0.0], n_units=3), "perturbation: required"),
+        (
+            lambda: cmg.preferred_angles([1.0, 0.0, 0.0], perturbation=np.zeros(4)),
+            "perturbation: must be a nonzero",
+        ),
+        (lambda: cmg.preferred_angles([0.0, 0.0, 0.0]), "direction: must be nonzero"),
+        (
+            lambda: cmg.integrate_gimbals(np.zeros(4), lambda t: [1.0, 0.0], 1.0),
+            "torque: the callable must return 3",
+        ),
+        (
+            lambda: cmg.integrate_gimbals(np.zeros(4), lambda t: [np.nan, 0.0, 0.0], 1.0),
+            "torque: must be finite",
+        ),
+    ],
+)
 def test_bad_input_is_named(call, message):
     with pytest.raises(ValueError, match=message):
         call()

@@ -42,8 +42,9 @@ class ConstantTorque(Controller):
 
 
 def _state(plant, sigma):
-    return plant.state_from(rate=[0.02, -0.03, 0.015], euler123=[0.1, 0.2, -0.1],
-                            gimbal_angles=sigma)
+    return plant.state_from(
+        rate=[0.02, -0.03, 0.015], euler123=[0.1, 0.2, -0.1], gimbal_angles=sigma
+    )
 
 
 def test_steering_delivers_the_commanded_torque_with_gyroscopic_coupling():
@@ -63,8 +64,10 @@ def test_steering_delivers_the_commanded_torque_with_gyroscopic_coupling():
     # ḣ = h_r C σ̇ is the derivative of h(σ) along σ̇: central differences, step 1e-6
     # (truncation step² |h'''| ~ 1e-12, round-off eps |h| / step ~ 1e-10)
     step = 1e-6
-    fd = (plant.cmg_momentum(np.concatenate([x[:, :7], x[:, 7:] + step * sdot], -1))
-          - plant.cmg_momentum(np.concatenate([x[:, :7], x[:, 7:] - step * sdot], -1))) / (2 * step)
+    fd = (
+        plant.cmg_momentum(np.concatenate([x[:, :7], x[:, 7:] + step * sdot], -1))
+        - plant.cmg_momentum(np.concatenate([x[:, :7], x[:, 7:] - step * sdot], -1))
+    ) / (2 * step)
     hdot = 2.0 * np.einsum("cij,cj->ci", c, sdot)
     np.testing.assert_allclose(fd, hdot, atol=1e-8 * (1 + np.abs(hdot).max()))
     # and the torque on the body is −ḣ − ω × h
@@ -79,8 +82,7 @@ def test_total_angular_momentum_is_conserved_through_the_simulation_core():
     plant = CmgSpacecraft(J, 1.0, steering="pi")
     x0 = _state(plant, cmg.preferred_set([1.0, 1.0, 1.0]))
     cfg = SimConfig(duration=20.0, control_rate=10.0, substeps=5)
-    run = simulate(plant, RateDamping(5.0), cfg, n_cases=1, initial_state=x0,
-                   record_states=True)
+    run = simulate(plant, RateDamping(5.0), cfg, n_cases=1, initial_state=x0, record_states=True)
     X = run.dataset["state"].values[0]
     H = plant.momentum(X)
     assert np.abs(H - H[0]).max() <= 1e-10 * np.linalg.norm(H[0])
@@ -101,8 +103,9 @@ def test_gimbal_rate_limit_scales_the_torque_without_turning_it():
     assert np.abs(r_lim).max() == pytest.approx(limit, rel=1e-12)
     np.testing.assert_allclose(r_lim, r_free * limit / np.abs(r_free).max(), rtol=1e-12)
     # under the limit the command passes unchanged
-    np.testing.assert_allclose(limited.gimbal_rates(x, 1e-3 * u), free.gimbal_rates(x, 1e-3 * u),
-                               rtol=1e-14)
+    np.testing.assert_allclose(
+        limited.gimbal_rates(x, 1e-3 * u), free.gimbal_rates(x, 1e-3 * u), rtol=1e-14
+    )
 
 
 def test_pseudo_inverse_refuses_a_singular_set_and_sr_passes_it_and_events_are_reported():
@@ -115,8 +118,14 @@ def test_pseudo_inverse_refuses_a_singular_set_and_sr_passes_it_and_events_are_r
     # the SR inverse carries the gimbals through it and the passage is reported as internal
     sr = CmgSpacecraft(J, 1.0, steering="sr", alpha=1e-3, gimbal_rate_limit=2.0)
     cfg = SimConfig(duration=4.0, control_rate=20.0, substeps=4)
-    run = simulate(sr, ConstantTorque([-0.5, 0.0, 0.0]), cfg, n_cases=1,
-                   initial_state=sr.initial_state(1)[0], record_states=True)
+    run = simulate(
+        sr,
+        ConstantTorque([-0.5, 0.0, 0.0]),
+        cfg,
+        n_cases=1,
+        initial_state=sr.initial_state(1)[0],
+        record_states=True,
+    )
     X, t = run.dataset["state"].values[0], run.dataset.time.values
     events = sr.singularity_events(t, X, threshold=1e-3)
     assert len(events) == 1 and events[0].internal
@@ -133,26 +142,29 @@ def test_from_the_preferred_set_the_same_demand_ends_in_an_external_singularity(
     sr = CmgSpacecraft(J, 1.0, steering="sr", alpha=1e-3, gimbal_rate_limit=2.0)
     x0 = sr.state_from(gimbal_angles=cmg.preferred_set([1.0, 0.0, 0.0]))
     cfg = SimConfig(duration=9.0, control_rate=20.0, substeps=4)
-    run = simulate(sr, ConstantTorque([-0.5, 0.0, 0.0]), cfg, n_cases=1, initial_state=x0,
-                   record_states=True)
+    run = simulate(
+        sr, ConstantTorque([-0.5, 0.0, 0.0]), cfg, n_cases=1, initial_state=x0, record_states=True
+    )
     X, t = run.dataset["state"].values[0], run.dataset.time.values
     events = sr.singularity_events(t, X, threshold=1e-3)
     assert len(events) == 1 and not events[0].internal
     assert events[0].time == pytest.approx((2 * np.cos(cmg.SKEW) + 2) / 0.5, abs=0.1)
     # the SR inverse holds the momentum on the envelope along x (it cannot give more)
-    assert sr.cmg_momentum(X[-1])[0] == pytest.approx(cmg.envelope([1.0, 0.0, 0.0])[0],
-                                                      abs=1e-3)
+    assert sr.cmg_momentum(X[-1])[0] == pytest.approx(cmg.envelope([1.0, 0.0, 0.0])[0], abs=1e-3)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(rotor_momentum=0.0), "rotor_momentum: must be one finite value > 0"),
-    (dict(gimbal_rate_limit=0.0), "gimbal_rate_limit: must be > 0"),
-    (dict(gimbal_rate_limit="-1 deg/s"), "gimbal_rate_limit: must be > 0"),
-    (dict(steering="newton"), "steering: must be one of"),
-    (dict(steering="sr", alpha=0.0), "alpha: the singularity-robust inverse needs alpha > 0"),
-    (dict(skew="54.74 furlong"), "skew"),
-    (dict(inertia=np.diag([1.0, 1.0, 3.0])), "inertia: principal moments"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(rotor_momentum=0.0), "rotor_momentum: must be one finite value > 0"),
+        (dict(gimbal_rate_limit=0.0), "gimbal_rate_limit: must be > 0"),
+        (dict(gimbal_rate_limit="-1 deg/s"), "gimbal_rate_limit: must be > 0"),
+        (dict(steering="newton"), "steering: must be one of"),
+        (dict(steering="sr", alpha=0.0), "alpha: the singularity-robust inverse needs alpha > 0"),
+        (dict(skew="54.74 furlong"), "skew"),
+        (dict(inertia=np.diag([1.0, 1.0, 3.0])), "inertia: principal moments"),
+    ],
+)
 def test_bad_configuration_is_named(kwargs, message):
     args = dict(inertia=J, rotor_momentum=1.0) | kwargs
     with pytest.raises(ValueError, match=message):

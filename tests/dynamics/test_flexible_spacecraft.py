@@ -57,26 +57,36 @@ def check_linearisation(modal, plant, torque_node, forces):
     """The plant's linear part against the modal model's state space (see the test below)."""
     n = plant.n_modes
     inputs = [modal.torque_input(torque_node, a) for a in "xyz"] + [
-        modal.force_input(node, axis) for node, axis in forces]
-    outputs = [(modal.displacement_output(node, axis), "displacement")
-               for node, axis in plant.displacements]
-    outputs += [(modal.rotation_output(node, axis), "displacement")
-                for node, axis in plant.rotations]
+        modal.force_input(node, axis) for node, axis in forces
+    ]
+    outputs = [
+        (modal.displacement_output(node, axis), "displacement")
+        for node, axis in plant.displacements
+    ]
+    outputs += [
+        (modal.rotation_output(node, axis), "displacement") for node, axis in plant.rotations
+    ]
     ss = modal.to_statespace(inputs=inputs, outputs=outputs)
     A, B = plant.linear_part()
     Lr = modal.participation[:6]
     P = np.zeros((2 * (n + 6), plant.nx))
     P[:6, 7:10], P[:6, 1:4] = Lr[:, :3], 2 * Lr[:, 3:]
-    P[n + 6:n + 12, 10:13], P[n + 6:n + 12, 4:7] = Lr[:, :3], Lr[:, 3:]
-    P[6:n + 6, plant._eta] = np.eye(n)
-    P[n + 12:, plant._eta_dot] = np.eye(n)
+    P[n + 6 : n + 12, 10:13], P[n + 6 : n + 12, 4:7] = Lr[:, :3], Lr[:, 3:]
+    P[6 : n + 6, plant._eta] = np.eye(n)
+    P[n + 12 :, plant._eta_dot] = np.eye(n)
     assert np.abs(P @ A - ss.A @ P).max() <= 1e-12 * np.abs(ss.A).max()
     assert np.abs(P @ B - ss.B).max() <= 1e-12 * np.abs(ss.B).max()
     # the node outputs are the elastic deflection: the modal model's rows on the elastic modes
-    C = np.vstack([plant.output_matrices(ch.name)[0] for ch in plant.outputs
-                   if ch.name.startswith(("displacement_", "rotation_"))])
-    np.testing.assert_allclose(C[:, plant._eta], ss.C[:, 6:n + 6], rtol=0,
-                               atol=1e-15 * np.abs(ss.C).max())
+    C = np.vstack(
+        [
+            plant.output_matrices(ch.name)[0]
+            for ch in plant.outputs
+            if ch.name.startswith(("displacement_", "rotation_"))
+        ]
+    )
+    np.testing.assert_allclose(
+        C[:, plant._eta], ss.C[:, 6 : n + 6], rtol=0, atol=1e-15 * np.abs(ss.C).max()
+    )
     # and the nonlinear force is second order at rest: its Jacobian vanishes there
     Jx, Ju = plant.force_jacobian(plant.initial_state(1), np.zeros((1, B.shape[1])))
     assert np.abs(Jx).max() == 0 and np.abs(Ju).max() == 0
@@ -91,8 +101,14 @@ def test_linearised_about_rest_it_is_the_free_free_modal_state_space(free_modal)
     # by a few products, so they agree to round-off of the largest entry (ω_max² ~ 1e9):
     # 1e-12 relative. The torquers sit on the hub node (the CG): a torque there loads the
     # modes by the hub's rotational shapes, as in the modal model.
-    plant = FlexibleSpacecraft(free_modal, forces=FORCES, displacements=[(3, "y"), (9, "z")],
-                               rotations=[(6, "z")], torque_node=0, translation=True)
+    plant = FlexibleSpacecraft(
+        free_modal,
+        forces=FORCES,
+        displacements=[(3, "y"), (9, "z")],
+        rotations=[(6, "z")],
+        torque_node=0,
+        translation=True,
+    )
     assert plant.n_modes == 72 and np.allclose(free_modal.center_of_mass, 0.0, atol=1e-15)
     check_linearisation(free_modal, plant, 0, FORCES)
 
@@ -106,11 +122,22 @@ def test_the_eps_model_linearised_is_its_modal_state_space():
 
     modal = eps().modal_model(45)
     forces = [(69, "x"), (66, "x"), (63, "x"), (60, "x"), (88, "x")]
-    plant = FlexibleSpacecraft(modal, forces=forces, displacements=[(69, "x"), (88, "z")],
-                               rotations=[(69, "y")], torque_node=95, translation=True)
+    plant = FlexibleSpacecraft(
+        modal,
+        forces=forces,
+        displacements=[(69, "x"), (88, "z")],
+        rotations=[(69, "y")],
+        torque_node=95,
+        translation=True,
+    )
     assert plant.n_modes == 45
-    assert [c.name for c in plant.inputs][1:] == ["force_69X", "force_66X", "force_63X",
-                                                  "force_60X", "force_88X"]
+    assert [c.name for c in plant.inputs][1:] == [
+        "force_69X",
+        "force_66X",
+        "force_63X",
+        "force_60X",
+        "force_88X",
+    ]
     check_linearisation(modal, plant, 95, forces)
 
 
@@ -134,7 +161,7 @@ def test_one_axis_frequencies_equal_the_planar_hybrid_plant_of_the_same_structur
 
     plant = FlexibleSpacecraft(free_modal)
     # restricted to rotation about z: coordinates (θ_z, η), M = [[J_zz, Δ_zᵀ], [Δ_z, I]]
-    keep = np.r_[2, 3:3 + plant.n_modes]
+    keep = np.r_[2, 3 : 3 + plant.n_modes]
     M = plant.rotation_mass[np.ix_(keep, keep)]
     K = np.diag(np.r_[0.0, plant.stiffness])
     lam, vec = eigh(K, M)
@@ -160,9 +187,15 @@ def coupled_modal():
     participation[:, 3:] = [[3.0, 0.5, 0.0], [0.0, 4.0, 1.0], [1.0, 0.0, 5.0], [2.0, 2.0, 2.0]]
     rng = np.random.default_rng(3)
     shapes = 0.1 * rng.standard_normal((4, 3, 6))
-    return ModalModel(node_ids=[1, 2, 3], coordinates=[[2.0, 0, 0], [0, 3.0, 0], [0, 0, -1.0]],
-                      frequencies=w, damping=0.02, shapes=shapes, rigid_mass=rigid,
-                      participation=participation)
+    return ModalModel(
+        node_ids=[1, 2, 3],
+        coordinates=[[2.0, 0, 0], [0, 3.0, 0], [0, 0, -1.0]],
+        frequencies=w,
+        damping=0.02,
+        shapes=shapes,
+        rigid_mass=rigid,
+        participation=participation,
+    )
 
 
 @pytest.mark.numerics
@@ -176,8 +209,9 @@ def test_angular_momentum_is_conserved_through_a_large_angle_tumble():
     for zeta in (0.02, 0.0):
         modal = coupled_modal()
         if zeta == 0.0:
-            modal = ModalModel(**{**{f: getattr(modal, f) for f in modal.__dataclass_fields__},
-                                  "damping": 0.0})
+            modal = ModalModel(
+                **{**{f: getattr(modal, f) for f in modal.__dataclass_fields__}, "damping": 0.0}
+            )
         plant = FlexibleSpacecraft(modal, forces=[(1, "y")], translation=True)
         x0 = plant.initial_state(1)[0]
         x0[:4] = att.principal_rotation_to_quaternion([1.0, 2.0, 2.0] / np.float64(3), 2.5)
@@ -186,13 +220,21 @@ def test_angular_momentum_is_conserved_through_a_large_angle_tumble():
         x0[plant._eta] = [0.05, -0.02, 0.03, 0.01]
         x0[plant._eta_dot] = [0.2, 0.1, -0.3, 0.1]
         u = np.zeros(4)
-        sol = solve_ivp(lambda t, x, plant=plant, u=u: plant.rhs(x, u), (0.0, 20.0), x0,
-                        method="DOP853", rtol=1e-12, atol=1e-13, dense_output=True)
+        sol = solve_ivp(
+            lambda t, x, plant=plant, u=u: plant.rhs(x, u),
+            (0.0, 20.0),
+            x0,
+            method="DOP853",
+            rtol=1e-12,
+            atol=1e-13,
+            dense_output=True,
+        )
         assert sol.success
         x = sol.sol(np.linspace(0.0, 20.0, 401)).T
         H = plant.momentum(x)
-        _, phi = att.quaternion_to_principal_rotation(x[:, :4] / np.linalg.norm(
-            x[:, :4], axis=-1, keepdims=True))
+        _, phi = att.quaternion_to_principal_rotation(
+            x[:, :4] / np.linalg.norm(x[:, :4], axis=-1, keepdims=True)
+        )
         assert np.ptp(np.unwrap(phi)) > 1.0  # a large-angle motion
         assert np.abs(H - H[0]).max() <= 1e-9 * np.linalg.norm(H[0])
         E = plant.energy(x)
@@ -249,13 +291,21 @@ def test_rigid_limit_is_eulers_equations(free_modal):
 
 
 def test_channels_and_outputs(free_modal):
-    plant = FlexibleSpacecraft(free_modal.truncate(20), forces=FORCES,
-                               displacements=[(3, "y")], rotations=[(6, "Z")])
+    plant = FlexibleSpacecraft(
+        free_modal.truncate(20), forces=FORCES, displacements=[(3, "y")], rotations=[(6, "Z")]
+    )
     assert [c.name for c in plant.inputs] == ["torque", "force_3Y", "force_6Z", "force_9X"]
     assert plant.n_inputs == 6 and plant.integrator == "exp_rk4"
     names = [c.name for c in plant.outputs]
-    assert names == ["attitude", "rate", "euler123", "mrp", "displacement_3Y", "rotation_6Z",
-                     "elastic"]
+    assert names == [
+        "attitude",
+        "rate",
+        "euler123",
+        "mrp",
+        "displacement_3Y",
+        "rotation_6Z",
+        "elastic",
+    ]
     x = plant.initial_state(2)
     x[:, :4] = att.dcm_to_quaternion(att.euler123_to_dcm([1.0, 1.0, 1.0]))
     x[:, plant._eta] = np.arange(plant.n_modes) * 1e-3
@@ -269,7 +319,8 @@ def test_channels_and_outputs(free_modal):
 
 
 def test_the_elastic_output_is_the_modal_state_and_a_reduced_model_reads_its_first_modes(
-        free_modal):
+    free_modal,
+):
     # ``elastic`` = [η, η̇] (2n wide), a linear output (C picks the state rows, no
     # feedthrough), so the compiled loop and the Python loop read the same numbers; and a
     # 20-mode plant and a 5-mode plant of one ModalModel share their first 5 modes exactly
@@ -291,22 +342,32 @@ def test_the_elastic_output_is_the_modal_state_and_a_reduced_model_reads_its_fir
     C, D, _ = big.output_matrices("elastic")
     np.testing.assert_array_equal(x @ C.T + u @ D.T, y)
     n = small.n_modes
-    np.testing.assert_array_equal(np.concatenate([y[:, :n], y[:, 20:20 + n]], 1),
-                                  small.output("elastic", np.concatenate(
-                                      [x[:, :7], x[:, big._eta][:, :n],
-                                       x[:, big._eta_dot][:, :n]], 1), u[:, :small.n_inputs]))
+    np.testing.assert_array_equal(
+        np.concatenate([y[:, :n], y[:, 20 : 20 + n]], 1),
+        small.output(
+            "elastic",
+            np.concatenate([x[:, :7], x[:, big._eta][:, :n], x[:, big._eta_dot][:, :n]], 1),
+            u[:, : small.n_inputs],
+        ),
+    )
 
 
 def test_the_reduced_plant_is_the_same_spacecraft_on_its_first_modes(free_modal):
     # a design model for a law on the first modes: same channels, inertia and input maps,
     # first n modes exactly; more modes than the plant has is refused
-    big = FlexibleSpacecraft(free_modal, forces=FORCES, displacements=[(3, "x")], n_modes=20,
-                             torque_node=int(free_modal.node_ids[0]))
+    big = FlexibleSpacecraft(
+        free_modal,
+        forces=FORCES,
+        displacements=[(3, "x")],
+        n_modes=20,
+        torque_node=int(free_modal.node_ids[0]),
+    )
     small = big.reduced(5)
     assert small.n_modes == 5
     assert [c.name for c in small.inputs] == [c.name for c in big.inputs]
     assert [c.name for c in small.outputs if c.name != "elastic"] == [
-        c.name for c in big.outputs if c.name != "elastic"]
+        c.name for c in big.outputs if c.name != "elastic"
+    ]
     np.testing.assert_array_equal(small.inertia, big.inertia)
     np.testing.assert_array_equal(small.torque_modal, big.torque_modal[:5])
     np.testing.assert_array_equal(small.force_modal, big.force_modal[:5])
@@ -315,13 +376,16 @@ def test_the_reduced_plant_is_the_same_spacecraft_on_its_first_modes(free_modal)
         big.reduced(21)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    ({"forces": [(99, "x")]}, r"forces\[0\]: unknown node 99"),
-    ({"forces": [(3, "w")]}, r"forces\[0\]: axis must be 'x', 'y' or 'z'"),
-    ({"forces": [(3, "x"), (3, "X")]}, r"forces\[1\]: \(3, 'x'\) given twice"),
-    ({"displacements": [3]}, r"displacements\[0\]: must be a pair"),
-    ({"torque_node": 99}, r"torque_node: unknown node 99"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"forces": [(99, "x")]}, r"forces\[0\]: unknown node 99"),
+        ({"forces": [(3, "w")]}, r"forces\[0\]: axis must be 'x', 'y' or 'z'"),
+        ({"forces": [(3, "x"), (3, "X")]}, r"forces\[1\]: \(3, 'x'\) given twice"),
+        ({"displacements": [3]}, r"displacements\[0\]: must be a pair"),
+        ({"torque_node": 99}, r"torque_node: unknown node 99"),
+    ],
+)
 def test_bad_input_is_named(free_modal, kwargs, message):
     with pytest.raises(ValueError, match=message):
         FlexibleSpacecraft(free_modal, **kwargs)
@@ -344,8 +408,7 @@ def test_a_pd_slew_settles_and_the_momentum_balance_holds(free_modal):
 
     plant = FlexibleSpacecraft(free_modal, forces=[(3, "y")], torque_node=0, n_modes=4)
     J = plant.inertia
-    target = att.principal_rotation_to_quaternion([1.0, 2.0, 2.0] / np.float64(3),
-                                                  np.pi / 2)
+    target = att.principal_rotation_to_quaternion([1.0, 2.0, 2.0] / np.float64(3), np.pi / 2)
     # critically damped per axis, J θ'' + Kd θ' + (Kp/2) θ = J (θ'' + 2ω_n θ' + ω_n² θ) with
     # δβ ≈ θ/2: from π/2 the error is (1 + ω_n t) e^{−ω_n t} π/2 = 7e-6 rad at 15 s
     wn = 1.0  # rad/s, well below the first elastic mode (35 rad/s)
@@ -356,13 +419,15 @@ def test_a_pd_slew_settles_and_the_momentum_balance_holds(free_modal):
         x = z[:-3]
         u = law(t, {"attitude": x[None, :4], "rate": x[None, 4:7]}, {})[0][0]
         F = 5.0 * np.sin(np.pi * t) ** 2 if t < 1.0 else 0.0  # a smooth 1 s pulse, N
-        moment = np.einsum("ji,j->i", att.quaternion_to_dcm(x[:4] / np.linalg.norm(x[:4])),
-                           u + G * F)
+        moment = np.einsum(
+            "ji,j->i", att.quaternion_to_dcm(x[:4] / np.linalg.norm(x[:4])), u + G * F
+        )
         return np.concatenate([plant.rhs(x, np.r_[u, F]), moment])
 
     z0 = np.concatenate([plant.initial_state(1)[0], np.zeros(3)])
-    sol = solve_ivp(rhs, (0.0, 15.0), z0, method="DOP853", rtol=1e-11, atol=1e-13,
-                    dense_output=True)
+    sol = solve_ivp(
+        rhs, (0.0, 15.0), z0, method="DOP853", rtol=1e-11, atol=1e-13, dense_output=True
+    )
     z = sol.sol(np.linspace(0.0, 15.0, 151)).T
     H = plant.momentum(z[:, :-3])
     assert np.abs(H - H[0] - z[:, -3:]).max() <= 1e-9 * np.abs(H).max()

@@ -82,9 +82,10 @@ def test_energy_is_the_quadratic_form_of_eq7(tamu_model):
     yt = modes.evaluate(xi, 0) @ q_d
     yxx = modes.evaluate(xi, 2) @ q
     yt_tip = modes.evaluate(np.array([p.length]), 0)[0] @ q_d
-    beam = w @ (p.rho * (yt + X * th_d) ** 2 + p.EI * yxx**2) + p.tip_mass * (
-        p.tip_radius * th_d + yt_tip
-    ) ** 2
+    beam = (
+        w @ (p.rho * (yt + X * th_d) ** 2 + p.EI * yxx**2)
+        + p.tip_mass * (p.tip_radius * th_d + yt_tip) ** 2
+    )
     twoE = p.hub_inertia * th_d**2 + p.n_appendages * beam
     assert 2 * m.energy(x) == pytest.approx(twoE, rel=1e-10)
 
@@ -133,8 +134,9 @@ def test_law_i_lyapunov_rate_is_minus_g2_rate_squared(g3):
     def aug(t, z):
         return np.concatenate([rhs(t, z[:-1]), [g2 * z[model.ndof] ** 2]])
 
-    sol = solve_ivp(aug, (0, 10), np.concatenate([x0, [0.0]]), method="DOP853",
-                    rtol=1e-11, atol=1e-13)
+    sol = solve_ivp(
+        aug, (0, 10), np.concatenate([x0, [0.0]]), method="DOP853", rtol=1e-11, atol=1e-13
+    )
     xT, dissipated = sol.y[:-1, -1], sol.y[-1, -1]
     assert U(xT) - U(x0) == pytest.approx(-dissipated, rel=1e-7)
     assert dissipated > 0.1 * U(x0)
@@ -173,8 +175,9 @@ def test_stiffened_model_conserves_energy_to_second_order_accuracy():
     drift = []
     for substeps in (8, 16):
         # 1 N m s on the hub: ~140 deg/s, a very fast slew where stiffening matters
-        cfg = SimConfig(duration=5.0, control_rate=200.0, substeps=substeps,
-                        impulses=Impulses((0.0,), (1.0,)))
+        cfg = SimConfig(
+            duration=5.0, control_rate=200.0, substeps=substeps, impulses=Impulses((0.0,), (1.0,))
+        )
         E = simulate(model, PD(0.0, 0.0), cfg).dataset.energy.values[0]
         drift.append(np.ptp(E[1:]) / E[1])
     assert drift[0] < 1e-4
@@ -194,10 +197,14 @@ def test_stiffening_raises_the_spinning_frequencies():
 
 def test_bad_parameters_name_the_field():
     good = dict(hub_inertia=1.0, n_appendages=4, hub_radius=0.1, length=1.0, EI=1.0, rho=1.0)
-    for field, bad, rule in [("hub_inertia", 0.0, "> 0"), ("EI", -1.0, "> 0"),
-                             ("rho", float("nan"), "finite"), ("tip_mass", -1.0, ">= 0"),
-                             ("n_appendages", 2.5, "positive integer"),
-                             ("damping", -0.1, ">= 0")]:
+    for field, bad, rule in [
+        ("hub_inertia", 0.0, "> 0"),
+        ("EI", -1.0, "> 0"),
+        ("rho", float("nan"), "finite"),
+        ("tip_mass", -1.0, ">= 0"),
+        ("n_appendages", 2.5, "positive integer"),
+        ("damping", -0.1, ">= 0"),
+    ]:
         with pytest.raises(ValueError, match=rf"^{field}: .*{rule}"):
             HubAppendageParams(**{**good, field: bad})
     with pytest.raises(ValueError, match="damping: give one ratio or one per mode"):
@@ -230,8 +237,15 @@ def test_exact_reference_tracking_dissipates_the_tracking_lyapunov_function():
 
     x0 = np.zeros(model.nx)
     x0[model.ndof] = 0.05  # start off the reference
-    sol = solve_ivp(rhs, (0, 6), np.concatenate([x0, np.zeros(n), [0.0]]), method="DOP853",
-                    rtol=1e-11, atol=1e-13, max_step=0.05)
+    sol = solve_ivp(
+        rhs,
+        (0, 6),
+        np.concatenate([x0, np.zeros(n), [0.0]]),
+        method="DOP853",
+        rtol=1e-11,
+        atol=1e-13,
+        max_step=0.05,
+    )
     z = sol.y[:, -1]
     U = lambda e: model.lyapunov(e, 0.0, g1, g3)  # noqa: E731
     assert U(z[:n] - z[n : 2 * n]) - U(x0) == pytest.approx(-z[-1], rel=1e-7)

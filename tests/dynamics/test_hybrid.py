@@ -48,12 +48,13 @@ def test_hub_appendage_through_a_modal_model_gives_the_same_plant():
 
 
 def test_engine_runs_the_modal_plant_and_conserves_momentum(case):
-    plant = ModalHybrid(case.modal_model(), case.hub_inertia_value, axis="z",
-                        tip=(case.reflector_node, "y"))
+    plant = ModalHybrid(
+        case.modal_model(), case.hub_inertia_value, axis="z", tip=(case.reflector_node, "y")
+    )
     cfg = SimConfig(duration=20.0, control_rate=10.0, impulses=Impulses((0.0,), (0.5,)))
     r = simulate(plant, PD(0.0, 0.0), cfg, record_states=True)
     x = r.dataset.state.values[0]
-    h = x[:, plant.ndof:] @ plant.mass_matrix[0]
+    h = x[:, plant.ndof :] @ plant.mass_matrix[0]
     assert np.allclose(h[1:], 0.5, rtol=1e-10)
     assert np.abs(r.dataset.tip_deflection.values[0]).max() > 0
 
@@ -68,10 +69,15 @@ def test_free_modal_model_is_refused():
         ModalHybrid(modal, 1.0)
 
 
-@pytest.mark.parametrize("plant", [nps().model(), tamu(n_modes=4).model(),
-                                   ModalHybrid(ModalModel.from_hub_appendage(
-                                       tamu(n_modes=4).model()), 0.353, axis="z")],
-                         ids=["nps", "tamu", "modal_hybrid"])
+@pytest.mark.parametrize(
+    "plant",
+    [
+        nps().model(),
+        tamu(n_modes=4).model(),
+        ModalHybrid(ModalModel.from_hub_appendage(tamu(n_modes=4).model()), 0.353, axis="z"),
+    ],
+    ids=["nps", "tamu", "modal_hybrid"],
+)
 def test_energy_and_momentum_are_the_plants_quadratic_and_linear_forms(plant):
     """E = ½ xᵀ Q x with Q = blockdiag(K, M) (Att. 3 Eq. 7) and h = r · x (the compiled loop
     records these per sample), and the vibration energy E − (r · x)² / (2 I_tot); to 16 eps of

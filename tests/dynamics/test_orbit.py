@@ -24,9 +24,13 @@ def _eqs_1_2_in_seconds(x, f):
     G = np.array([[59.52, -59.52], [20.0, 20.0], [20.0, -20.0]])
     u = G @ f
     thp = dth / WC  # θ'
-    acc = np.array([-1.5 * np.sin(2 * th) + u[0],
-                    -(F[0] - (3 * np.sin(th) ** 2 - 1) - (thp - 1) ** 2) * z1 + u[1],
-                    -(F[1] - (3 * np.sin(th) ** 2 - 1) - (thp - 1) ** 2) * z2 + u[2]])
+    acc = np.array(
+        [
+            -1.5 * np.sin(2 * th) + u[0],
+            -(F[0] - (3 * np.sin(th) ** 2 - 1) - (thp - 1) ** 2) * z1 + u[1],
+            -(F[1] - (3 * np.sin(th) ** 2 - 1) - (thp - 1) ** 2) * z2 + u[2],
+        ]
+    )
     return np.concatenate([[dth, dz1, dz2], WC**2 * acc])
 
 
@@ -50,7 +54,7 @@ def test_linear_part_is_the_linearisation_at_rest():
     A, B = plant.linear_part()
     n = 3
     np.testing.assert_array_equal(A[:n, n:], np.eye(n))
-    np.testing.assert_allclose(np.diag(A[n:, :n]), -WC**2 * np.array([3.0, *F]), rtol=1e-15)
+    np.testing.assert_allclose(np.diag(A[n:, :n]), -(WC**2) * np.array([3.0, *F]), rtol=1e-15)
     np.testing.assert_allclose(B[n:], WC**2 * plant.G, rtol=1e-15)
     x0 = np.zeros(6)
     np.testing.assert_array_equal(plant.nonlinear_force(x0, np.zeros(2)), np.zeros(3))
@@ -89,16 +93,26 @@ def test_force_jacobian_matches_central_differences():
 def test_outputs_and_shapes():
     plant = _beam(length=120.0)
     names = [c.name for c in plant.outputs]
-    assert names == ["pitch", "pitch_rate", "z1", "z2", "z1_rate", "z2_rate", "w_end", "w_mid",
-                     "state"]
+    assert names == [
+        "pitch",
+        "pitch_rate",
+        "z1",
+        "z2",
+        "z1_rate",
+        "z2_rate",
+        "w_end",
+        "w_mid",
+        "state",
+    ]
     units = {c.name: c.unit for c in plant.outputs}
     assert (units["pitch_rate"], units["z1"], units["w_end"]) == ("rad/s", "", "m")
     x = np.random.default_rng(0).normal(size=(5, 3, 6))  # time × case × state
     u = np.zeros((5, 3, 2))
     np.testing.assert_array_equal(plant.output("pitch_rate", x, u), x[..., 3])
     np.testing.assert_array_equal(plant.output("z2_rate", x, u), x[..., 5])
-    np.testing.assert_allclose(plant.output("w_mid", x, u), 120.0 * (-1.2156) * x[..., 1],
-                               rtol=1e-15)
+    np.testing.assert_allclose(
+        plant.output("w_mid", x, u), 120.0 * (-1.2156) * x[..., 1], rtol=1e-15
+    )
     np.testing.assert_array_equal(plant.output("state", x, u), x)
     assert plant.output("state", x, u).shape == (5, 3, 6)
     assert plant.nonlinear_force(x, u).shape == (5, 3, 3)
@@ -109,8 +123,15 @@ def test_outputs_and_shapes():
 def test_initial_values_by_output_name():
     """Outputs that read one state coordinate double as initial values."""
     plant = _beam(length=120.0)
-    assert plant.initial_values == ("state", "pitch", "pitch_rate", "z1", "z2", "z1_rate",
-                                    "z2_rate")
+    assert plant.initial_values == (
+        "state",
+        "pitch",
+        "pitch_rate",
+        "z1",
+        "z2",
+        "z1_rate",
+        "z2_rate",
+    )
     x0 = plant.state_from(pitch=0.1, z2_rate=-0.02)
     np.testing.assert_array_equal(x0, [0.1, 0, 0, 0, 0, -0.02])
     with pytest.raises(ValueError, match=r"w_mid: not an initial value of BeamInOrbit"):
@@ -134,22 +155,32 @@ def test_small_motion_follows_the_linear_part():
     rel = []
     for amp in (1e-2, 5e-3):
         x0 = np.array([amp, amp, amp, 0, 0, 0])
-        sol = solve_ivp(lambda t, x: plant.derivative(x, np.zeros(2)), (0, T), x0,
-                        method="DOP853", rtol=1e-12, atol=1e-20, t_eval=[T])
+        sol = solve_ivp(
+            lambda t, x: plant.derivative(x, np.zeros(2)),
+            (0, T),
+            x0,
+            method="DOP853",
+            rtol=1e-12,
+            atol=1e-20,
+            t_eval=[T],
+        )
         rel.append(np.abs(sol.y[:3, -1] - (expm(T * A) @ x0)[:3]) / amp)
     assert rel[0].max() < 1e-4
     assert np.all(rel[1] <= 0.55 * rel[0])
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    ({"orbit_rate": 0.0}, r"^orbit_rate: must be > 0"),
-    ({"frequency_ratios": [3200.0, -1.0]}, r"^frequency_ratios: must be a 1-D list"),
-    ({"actuators": {}}, r"^actuators: must be a non-empty"),
-    ({"actuators": {"f1": [1.0, 2.0]}}, r"^f1: its column of G must have 1 \+ 2 = 3"),
-    ({"actuators": {"f 1": [1.0, 2.0, 3.0]}}, r"channel name: must be an identifier"),
-    ({"stations": {"tip": [1.0]}}, r"^w_tip: station shape values must have 2"),
-    ({"length": -1.0}, r"^length: must be > 0"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"orbit_rate": 0.0}, r"^orbit_rate: must be > 0"),
+        ({"frequency_ratios": [3200.0, -1.0]}, r"^frequency_ratios: must be a 1-D list"),
+        ({"actuators": {}}, r"^actuators: must be a non-empty"),
+        ({"actuators": {"f1": [1.0, 2.0]}}, r"^f1: its column of G must have 1 \+ 2 = 3"),
+        ({"actuators": {"f 1": [1.0, 2.0, 3.0]}}, r"channel name: must be an identifier"),
+        ({"stations": {"tip": [1.0]}}, r"^w_tip: station shape values must have 2"),
+        ({"length": -1.0}, r"^length: must be > 0"),
+    ],
+)
 def test_bad_input_names_the_field(kwargs, message):
     args = {"orbit_rate": WC, "frequency_ratios": F, "actuators": {"f1": [1.0, 2.0, 3.0]}}
     args.update(kwargs)

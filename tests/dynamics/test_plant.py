@@ -23,8 +23,7 @@ class _Oscillator(Plant):
 
 def test_channels_are_laid_out_in_order():
     chans = (Channel("torque", "N*m", 3), Channel("force", "N"), Channel("q", "", 4))
-    assert channel_slices(chans) == {"torque": slice(0, 3), "force": slice(3, 4),
-                                     "q": slice(4, 8)}
+    assert channel_slices(chans) == {"torque": slice(0, 3), "force": slice(3, 4), "q": slice(4, 8)}
 
 
 @pytest.mark.parametrize("name, size", [("not an id", 1), ("ok", 0), ("ok", 1.5)])

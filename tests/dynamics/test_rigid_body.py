@@ -56,7 +56,7 @@ def test_rates_equal_the_euler_poinsot_solution(tumble):
     t, _, w = tumble
     analytic = rb.euler_poinsot_rates(MOMENTS, W_PRINCIPAL, t)
     H2 = np.sum((MOMENTS * W_PRINCIPAL) ** 2, -1)
-    T2 = np.sum(MOMENTS * W_PRINCIPAL ** 2, -1)
+    T2 = np.sum(MOMENTS * W_PRINCIPAL**2, -1)
     assert H2[0] > T2[0] * MOMENTS[1] and H2[1] < T2[1] * MOMENTS[1]  # both branches
     assert np.abs(w @ R - analytic).max() <= 1e-8  # issue 10 acceptance; measured ~2e-10
 
@@ -92,8 +92,15 @@ def test_attitude_equals_an_independent_high_accuracy_integration():
         return np.concatenate([att.omega_matrix(w) @ b, inverse @ -np.cross(w, INERTIA @ w)])
 
     t = np.linspace(0.0, 20.0, 2001)
-    ref = solve_ivp(rhs, (0.0, 20.0), np.concatenate([beta0, w0]), method="DOP853",
-                    rtol=1e-13, atol=1e-14, t_eval=t).y.T
+    ref = solve_ivp(
+        rhs,
+        (0.0, 20.0),
+        np.concatenate([beta0, w0]),
+        method="DOP853",
+        rtol=1e-13,
+        atol=1e-14,
+        t_eval=t,
+    ).y.T
     beta, w = rb.propagate(beta0, w0, INERTIA, t)
     assert np.abs(beta - ref[:, :4]).max() <= 2e-9
     assert np.abs(w - ref[:, 4:]).max() <= 2e-9
@@ -123,8 +130,9 @@ def test_constant_principal_torque_from_rest_is_the_single_axis_rotation():
     assert np.abs(w - alpha[:, None, :] * t[:, None]).max() <= 1e-13
     # φ = α t²/2 about the torque axis, after the initial attitude; RK4 is exact here because
     # θ̇ = ω (θ ∥ ω) is a polynomial of degree 1: round-off only
-    exact = att.quaternion_multiply(att.quaternion_exp(alpha[:, None, :] * t[:, None] ** 2 / 2),
-                                    beta0)
+    exact = att.quaternion_multiply(
+        att.quaternion_exp(alpha[:, None, :] * t[:, None] ** 2 / 2), beta0
+    )
     assert np.abs(beta - exact).max() <= 1e-13
 
 
@@ -162,35 +170,78 @@ def test_cases_along_several_leading_axes_are_independent():
         assert np.abs(beta[i, j] - b1).max() <= 1e-14 and np.abs(w[i, j] - w1).max() <= 1e-14
 
 
-@pytest.mark.parametrize("call, field", [
-    (lambda: rb.propagate([1, 0, 0, 0], [0, 0, 1], np.diag([1, -1, 1]), [0, 1]),
-     "inertia: must be positive definite"),
-    (lambda: rb.propagate([1, 0, 0, 0], [0, 0, 1], [[1, 2, 0], [0, 1, 0], [0, 0, 1]], [0, 1]),
-     "inertia: must be symmetric"),
-    (lambda: rb.propagate([1, 0, 0, 0], [0, 0, 1], np.eye(3), [0, 1, 1]),
-     "t: must be a 1-D strictly increasing"),
-    (lambda: rb.propagate([2, 0, 0, 0], [0, 0, 1], np.eye(3), [0, 1]),
-     "beta0: must be a unit quaternion"),
-    (lambda: rb.propagate([1, 0, 0, 0], [0, np.nan, 1], np.eye(3), [0, 1]), "w0: must be finite"),
-    (lambda: rb.propagate([1, 0, 0, 0], [0, 0, 1], np.eye(3), [0, 1], torque=[1, 2]),
-     "torque: last axes must have shape (3,)"),
-    (lambda: rb.propagate([1, 0, 0, 0], np.ones((2, 3)), np.ones((3, 1, 1)) * np.eye(3), [0, 1]),
-     "beta0, w0, inertia, torque: leading (case) axes must broadcast"),
-    (lambda: rb.euler_poinsot_rates([1, 1, 2], [1, 1, 1], [0, 1]),
-     "moments: principal moments must be distinct"),
-    (lambda: rb.euler_poinsot_rates([1, 2, 3], [0, 0, 1], [0, 1]), "w0: a pure spin"),
-    (lambda: rb.euler_poinsot_rates([1, 2, 3], [0, 1, 0], [0, 1]),
-     "w0: a pure spin about the intermediate axis"),
-    (lambda: rb.propagate([1, 0, 0, 0], [0, 0, 1], np.eye(3), [0, 1],
-                          torque=lambda t, b, w: np.zeros(2)),
-     "torque(t, beta, w): last axes must have shape (3,)"),
-    (lambda: rb.propagate([1, 0, 0, 0], np.ones((2, 3)), np.eye(3), [0, 1],
-                          torque=lambda t, b, w: np.zeros((5, 3))),
-     "torque(t, beta, w): must return shape (2, 3)"),
-    (lambda: rb.propagate([1, 0, 0, 0], [0, 0, 1], np.eye(3), [0, 1],
-                          torque=lambda t, b, w: np.full(3, np.inf if t > 0 else 0.0)),
-     "propagate: the state became non-finite at t = 1 s"),
-])
+@pytest.mark.parametrize(
+    "call, field",
+    [
+        (
+            lambda: rb.propagate([1, 0, 0, 0], [0, 0, 1], np.diag([1, -1, 1]), [0, 1]),
+            "inertia: must be positive definite",
+        ),
+        (
+            lambda: rb.propagate(
+                [1, 0, 0, 0], [0, 0, 1], [[1, 2, 0], [0, 1, 0], [0, 0, 1]], [0, 1]
+            ),
+            "inertia: must be symmetric",
+        ),
+        (
+            lambda: rb.propagate([1, 0, 0, 0], [0, 0, 1], np.eye(3), [0, 1, 1]),
+            "t: must be a 1-D strictly increasing",
+        ),
+        (
+            lambda: rb.propagate([2, 0, 0, 0], [0, 0, 1], np.eye(3), [0, 1]),
+            "beta0: must be a unit quaternion",
+        ),
+        (
+            lambda: rb.propagate([1, 0, 0, 0], [0, np.nan, 1], np.eye(3), [0, 1]),
+            "w0: must be finite",
+        ),
+        (
+            lambda: rb.propagate([1, 0, 0, 0], [0, 0, 1], np.eye(3), [0, 1], torque=[1, 2]),
+            "torque: last axes must have shape (3,)",
+        ),
+        (
+            lambda: rb.propagate(
+                [1, 0, 0, 0], np.ones((2, 3)), np.ones((3, 1, 1)) * np.eye(3), [0, 1]
+            ),
+            "beta0, w0, inertia, torque: leading (case) axes must broadcast",
+        ),
+        (
+            lambda: rb.euler_poinsot_rates([1, 1, 2], [1, 1, 1], [0, 1]),
+            "moments: principal moments must be distinct",
+        ),
+        (lambda: rb.euler_poinsot_rates([1, 2, 3], [0, 0, 1], [0, 1]), "w0: a pure spin"),
+        (
+            lambda: rb.euler_poinsot_rates([1, 2, 3], [0, 1, 0], [0, 1]),
+            "w0: a pure spin about the intermediate axis",
+        ),
+        (
+            lambda: rb.propagate(
+                [1, 0, 0, 0], [0, 0, 1], np.eye(3), [0, 1], torque=lambda t, b, w: np.zeros(2)
+            ),
+            "torque(t, beta, w): last axes must have shape (3,)",
+        ),
+        (
+            lambda: rb.propagate(
+                [1, 0, 0, 0],
+                np.ones((2, 3)),
+                np.eye(3),
+                [0, 1],
+                torque=lambda t, b, w: np.zeros((5, 3)),
+            ),
+            "torque(t, beta, w): must return shape (2, 3)",
+        ),
+        (
+            lambda: rb.propagate(
+                [1, 0, 0, 0],
+                [0, 0, 1],
+                np.eye(3),
+                [0, 1],
+                torque=lambda t, b, w: np.full(3, np.inf if t > 0 else 0.0),
+            ),
+            "propagate: the state became non-finite at t = 1 s",
+        ),
+    ],
+)
 def test_bad_input_names_the_field(call, field):
     with pytest.raises(ValueError, match=re.escape(field)):
         call()

@@ -72,14 +72,20 @@ def test_linear_part_and_force_are_the_full_right_hand_side():
     u = rng.standard_normal((5, 3))
     A, B = plant.linear_part()
     xdot = x @ A.T + u @ B.T + plant.nonlinear_force(x, u) @ plant.force_matrix.T
-    expected = np.concatenate([np.einsum("...ij,...j->...i", att.omega_matrix(x[:, 4:]), x[:, :4]),
-                               rb.euler_rates(x[:, 4:], INERTIA, u)], -1)
+    expected = np.concatenate(
+        [
+            np.einsum("...ij,...j->...i", att.omega_matrix(x[:, 4:]), x[:, :4]),
+            rb.euler_rates(x[:, 4:], INERTIA, u),
+        ],
+        -1,
+    )
     np.testing.assert_allclose(xdot, expected, rtol=0, atol=16 * EPS * np.abs(expected).max())
     np.testing.assert_allclose(plant.rhs(x, u), xdot, rtol=0, atol=4 * EPS * np.abs(xdot).max())
     u0 = np.array([0.3, -0.2, 0.1])
     x0 = plant.state(BETA0, [0.5, -0.4, 0.3])
-    sol = solve_ivp(lambda t, z: plant.rhs(z, u0), (0.0, 10.0), x0, method="DOP853",
-                    rtol=1e-12, atol=1e-12)
+    sol = solve_ivp(
+        lambda t, z: plant.rhs(z, u0), (0.0, 10.0), x0, method="DOP853", rtol=1e-12, atol=1e-12
+    )
     xs = run(plant, x0[None], u0[None], 0.01, 1000)[-1, 0]
     np.testing.assert_allclose(xs, sol.y[:, -1], rtol=0, atol=1e-8)
 
@@ -94,15 +100,22 @@ def test_force_jacobian_matches_central_differences():
     x[:4] /= np.linalg.norm(x[:4])
     u = rng.standard_normal(3)
     Jx, Ju = plant.force_jacobian(x, u)
-    fd = np.stack([(plant.nonlinear_force(x + 1e-6 * e, u) - plant.nonlinear_force(
-        x - 1e-6 * e, u)) / 2e-6 for e in np.eye(7)], -1)
+    fd = np.stack(
+        [
+            (plant.nonlinear_force(x + 1e-6 * e, u) - plant.nonlinear_force(x - 1e-6 * e, u)) / 2e-6
+            for e in np.eye(7)
+        ],
+        -1,
+    )
     assert np.abs(Jx - fd).max() <= 1e-8 * np.abs(Jx).max()
     assert not Ju.any()
 
 
 @pytest.mark.numerics
-@pytest.mark.parametrize("law", [MRPLaw(K=7.2, P=12.0, beta_target=TARGET),
-                                 QuaternionPD(Kp=7.2, Kd=12.0, beta_target=TARGET)])
+@pytest.mark.parametrize(
+    "law",
+    [MRPLaw(K=7.2, P=12.0, beta_target=TARGET), QuaternionPD(Kp=7.2, Kd=12.0, beta_target=TARGET)],
+)
 def test_a_sampled_loop_on_the_plant_steps_reaches_the_target_from_170_degrees(law):
     # a 20 Hz zero-order-hold loop written out: the law reads (attitude, rate) and writes the
     # torque held over the sample. Both laws' attitude feedback is bounded (|σ| <= 1,
@@ -114,7 +127,8 @@ def test_a_sampled_loop_on_the_plant_steps_reaches_the_target_from_170_degrees(l
     plant = RigidSpacecraft(INERTIA)
     target = TARGET
     beta0 = att.quaternion_multiply(
-        att.principal_rotation_to_quaternion([1 / 3, 2 / 3, 2 / 3], np.deg2rad(170.0)), target)
+        att.principal_rotation_to_quaternion([1 / 3, 2 / 3, 2 / 3], np.deg2rad(170.0)), target
+    )
     x = plant.state(np.stack([beta0, target]), [[0.05, -0.1, 0.08], [0.0, 0.0, 0.0]])
     for k in range(1200):
         y = {name: plant.output(name, x) for name in law.reads}
@@ -140,8 +154,11 @@ def test_outputs_and_channels():
     C, D, _ = plant.output_matrices("rate")
     np.testing.assert_array_equal(x @ C.T, plant.output("rate", x))
     assert plant.output_matrices("mrp") is None
-    np.testing.assert_allclose(plant.momentum(x)[0], rb.angular_momentum_inertial(
-        beta, [0.1, 0.2, 0.3], INERTIA), rtol=1e-15)
+    np.testing.assert_allclose(
+        plant.momentum(x)[0],
+        rb.angular_momentum_inertial(beta, [0.1, 0.2, 0.3], INERTIA),
+        rtol=1e-15,
+    )
     with pytest.raises(ValueError, match="has no output channel 'theta'"):
         plant.output("theta", x)
 
@@ -166,16 +183,21 @@ def test_inertia_accepts_units_and_dispersion():
     np.testing.assert_allclose(B[1, 4:], np.linalg.inv(2 * INERTIA), rtol=1e-14)
 
 
-@pytest.mark.parametrize("inertia, message", [
-    (np.eye(2), r"inertia: last axes must have shape \(3, 3\)"),
-    ([[1.0, 0.1, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "inertia: must be symmetric"),
-    (np.diag([1.0, -1.0, 1.0]), "inertia: must be positive definite"),
-    (np.diag([1.0, 1.0, 3.0]), "inertia: principal moments .* violate the triangle inequality"),
-    (np.diag([1.0, np.nan, 1.0]), "inertia: must be finite"),
-    (np.broadcast_to(np.eye(3), (2, 2, 3, 3)),
-     r"inertia: must have shape \(3, 3\) or \(n_cases, 3, 3\)"),
-    ("1 kg", "inertia"),
-])
+@pytest.mark.parametrize(
+    "inertia, message",
+    [
+        (np.eye(2), r"inertia: last axes must have shape \(3, 3\)"),
+        ([[1.0, 0.1, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "inertia: must be symmetric"),
+        (np.diag([1.0, -1.0, 1.0]), "inertia: must be positive definite"),
+        (np.diag([1.0, 1.0, 3.0]), "inertia: principal moments .* violate the triangle inequality"),
+        (np.diag([1.0, np.nan, 1.0]), "inertia: must be finite"),
+        (
+            np.broadcast_to(np.eye(3), (2, 2, 3, 3)),
+            r"inertia: must have shape \(3, 3\) or \(n_cases, 3, 3\)",
+        ),
+        ("1 kg", "inertia"),
+    ],
+)
 def test_bad_inertia_is_named(inertia, message):
     with pytest.raises(ValueError, match=message):
         RigidSpacecraft(inertia)
@@ -188,8 +210,9 @@ def test_initial_state_from_euler_angles_and_rate_with_units():
 
     plant = RigidSpacecraft(np.diag([10.0, 20.0, 30.0]))
     x = plant.state_from(euler123=["30 deg", "-20 deg", "10 deg"], rate=["1 deg/s", 0, 0])
-    np.testing.assert_allclose(dcm_to_euler123(quaternion_to_dcm(x[:4])),
-                               np.radians([30.0, -20.0, 10.0]), atol=1e-15)
+    np.testing.assert_allclose(
+        dcm_to_euler123(quaternion_to_dcm(x[:4])), np.radians([30.0, -20.0, 10.0]), atol=1e-15
+    )
     np.testing.assert_allclose(x[4:], [np.radians(1.0), 0, 0], rtol=1e-15)
     with pytest.raises(ValueError, match="attitude: give attitude or euler123, not both"):
         plant.state_from(attitude=[1, 0, 0, 0], euler123=[0, 0, 0])

@@ -34,10 +34,10 @@ def test_pitch_gravity_gradient_diverges_at_its_rate_and_filters_ring_at_kn():
     eig = np.linalg.eigvals(A)
     # block triangular: ±λ, two zeros (h2, ∫h2), filters at ±jn, ±2jn. The zero block is
     # defective (a Jordan chain), so its eigenvalues come out ~sqrt(eps)·‖A‖ ~ 1e-10 off zero
-    np.testing.assert_allclose(np.sort(eig.real), np.sort([-lam, lam, 0, 0, 0, 0, 0, 0]),
-                               atol=1e-9)
-    np.testing.assert_allclose(np.sort(np.abs(eig.imag)), [0, 0, 0, 0, N, N, 2 * N, 2 * N],
-                               atol=1e-9)
+    np.testing.assert_allclose(np.sort(eig.real), np.sort([-lam, lam, 0, 0, 0, 0, 0, 0]), atol=1e-9)
+    np.testing.assert_allclose(
+        np.sort(np.abs(eig.imag)), [0, 0, 0, 0, N, N, 2 * N, 2 * N], atol=1e-9
+    )
     assert B[1, 0] == -1 / I2 and E[1, 0] == 1 / I2 and B[2, 0] == 1
 
 
@@ -47,19 +47,22 @@ def test_roll_yaw_attitude_has_the_coupled_gravity_gradient_characteristic_equat
     A4 = A[np.ix_(att, att)]
     # eliminating ω with Eq. (9): (I1 s² + 4n²(I2 − I3))(I3 s² + n²(I2 − I1))
     # + n²(I1 − I2 + I3)² s² = 0 (Wie et al.'s roll/yaw equations)
-    poly = np.polyadd(np.polymul([I1, 0, 4 * N**2 * (I2 - I3)], [I3, 0, N**2 * (I2 - I1)]),
-                      [N**2 * (I1 - I2 + I3) ** 2, 0, 0])
+    poly = np.polyadd(
+        np.polymul([I1, 0, 4 * N**2 * (I2 - I3)], [I3, 0, N**2 * (I2 - I1)]),
+        [N**2 * (I1 - I2 + I3) ** 2, 0, 0],
+    )
     # coefficient k of det(sI − A) is a sum of k-fold products of A's entries: round-off
     # ~ 100 eps ‖A‖^k on top of the relative 1e-12
     scale = np.linalg.norm(A4) ** np.arange(5)
-    assert np.all(np.abs(np.poly(A4) - poly / (I1 * I3))
-                  <= 1e-12 * np.abs(poly / (I1 * I3)) + 100 * np.finfo(float).eps * scale)
+    assert np.all(
+        np.abs(np.poly(A4) - poly / (I1 * I3))
+        <= 1e-12 * np.abs(poly / (I1 * I3)) + 100 * np.finfo(float).eps * scale
+    )
     # roll is gravity-gradient unstable too (4n²(I2 − I3) < 0): a real root pair
     assert np.max(np.linalg.eigvals(A4).real) > 1e-3
     # the CMG momentum turns with LVLH (Eq. 10): its block has eigenvalues ±jn
     h = [2, 6]
-    np.testing.assert_allclose(_imag_sorted(np.linalg.eigvals(A[np.ix_(h, h)])), [N, N],
-                               rtol=1e-12)
+    np.testing.assert_allclose(_imag_sorted(np.linalg.eigvals(A[np.ix_(h, h)])), [N, N], rtol=1e-12)
 
 
 def test_an_orbit_rate_roll_yaw_filter_is_not_controllable():
@@ -81,20 +84,24 @@ def test_design_disturbance_is_eq_11_and_the_substitute_adds_its_stated_terms():
     np.testing.assert_allclose(quarter, [2.0, 6.0, 2.0], atol=1e-12)
     aero = ss.aero_substitute(t, harmonic="0.5 lbf*ft", secular="1 lbf*ft") / ss.FT_LB
     extra = aero - w
-    np.testing.assert_allclose(extra[:, 0], 0.5 * (np.sin(3 * N * t) + np.sin(4 * N * t)),
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        extra[:, 0], 0.5 * (np.sin(3 * N * t) + np.sin(4 * N * t)), atol=1e-12
+    )
     np.testing.assert_allclose(extra[-1, 1], 1.0, atol=1e-12)  # +1 ft-lb after one orbit
 
 
-@pytest.mark.parametrize("call, message", [
-    (lambda: ss.pitch_model(DATA, filters=(0,)), "filters: multiples of the orbit rate"),
-    (lambda: ss.roll_yaw_model(DATA, filters=(2, 2)), "filters: each frequency once"),
-    (lambda: ss.StationData((1.0, 2.0), 0.001, 1.0), "inertia: three principal moments"),
-    (lambda: ss.StationData((1.0, 2.0, -3.0), 0.001, 1.0), r"inertia\[2\]: must be"),
-    (lambda: ss.StationData((1.0, 2.0, 3.0), 0.0, 1.0), "orbit_rate: must be"),
-    (lambda: ss.aero_substitute(0.0, secular=-1.0), "harmonic, secular"),
-    (lambda: ss.design_disturbance(np.nan), "t: must be finite"),
-])
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda: ss.pitch_model(DATA, filters=(0,)), "filters: multiples of the orbit rate"),
+        (lambda: ss.roll_yaw_model(DATA, filters=(2, 2)), "filters: each frequency once"),
+        (lambda: ss.StationData((1.0, 2.0), 0.001, 1.0), "inertia: three principal moments"),
+        (lambda: ss.StationData((1.0, 2.0, -3.0), 0.001, 1.0), r"inertia\[2\]: must be"),
+        (lambda: ss.StationData((1.0, 2.0, 3.0), 0.0, 1.0), "orbit_rate: must be"),
+        (lambda: ss.aero_substitute(0.0, secular=-1.0), "harmonic, secular"),
+        (lambda: ss.design_disturbance(np.nan), "t: must be finite"),
+    ],
+)
 def test_bad_input_is_named(call, message):
     with pytest.raises(ValueError, match=message):
         call()

@@ -44,15 +44,31 @@ def test_channels_carry_names_units_and_kinds():
     M, D, K = _random_model()
     plant = StructuralPlant.from_second_order(
         SecondOrderModel(M, D, K, np.zeros((5, 1)), np.zeros((1, 5))),
-        [Actuator("push", "force", 0), Actuator("twist", "torque", 4),
-         Actuator("piezo", "moment_pair", (2, 3), gain=0.5, unit="V")],
-        [Sensor("x0", "displacement", 0), Sensor("th4", "rotation", 4),
-         Sensor("strain", "strain", (2, 3), gain=0.1), Sensor("v0", "displacement", 0, rate=True),
-         Sensor("w4", "rotation", 4, rate=True)])
-    assert [(c.name, c.unit) for c in plant.inputs] == [("push", "N"), ("twist", "N*m"),
-                                                         ("piezo", "V")]
+        [
+            Actuator("push", "force", 0),
+            Actuator("twist", "torque", 4),
+            Actuator("piezo", "moment_pair", (2, 3), gain=0.5, unit="V"),
+        ],
+        [
+            Sensor("x0", "displacement", 0),
+            Sensor("th4", "rotation", 4),
+            Sensor("strain", "strain", (2, 3), gain=0.1),
+            Sensor("v0", "displacement", 0, rate=True),
+            Sensor("w4", "rotation", 4, rate=True),
+        ],
+    )
+    assert [(c.name, c.unit) for c in plant.inputs] == [
+        ("push", "N"),
+        ("twist", "N*m"),
+        ("piezo", "V"),
+    ]
     assert [(c.name, c.unit) for c in plant.outputs[:-1]] == [
-        ("x0", "m"), ("th4", "rad"), ("strain", ""), ("v0", "m/s"), ("w4", "rad/s")]
+        ("x0", "m"),
+        ("th4", "rad"),
+        ("strain", ""),
+        ("v0", "m/s"),
+        ("w4", "rad/s"),
+    ]
     assert plant.nx == 10 and plant.n_inputs == 3 and not plant.nonlinear
     np.testing.assert_array_equal(plant.model.B[:, 2], [0, 0, -0.5, 0.5, 0])
     C, Dy, Df = plant.output_matrices("strain")
@@ -81,7 +97,8 @@ def test_linear_part_is_the_second_order_first_order_form():
     plant = StructuralPlant.from_second_order(
         SecondOrderModel(M, D, K, np.zeros((5, 1)), np.zeros((1, 5))),
         [Actuator("f1", "force", 1), Actuator("pair", "moment_pair", (0, 3), gain=2.0)],
-        [Sensor("q2", "displacement", 2), Sensor("v4", "displacement", 4, rate=True)])
+        [Sensor("q2", "displacement", 2), Sensor("v4", "displacement", 4, rate=True)],
+    )
     ref = SecondOrderModel(M, D, K, B, Cq, Cv)
     A_ref, B_ref, C_ref, _ = ref.first_order()
     A, Bx = plant.linear_part()
@@ -109,23 +126,36 @@ def test_modal_model_plant_and_its_2x2_blocks():
     modal = ModalModel.from_fe(asm.modes(6), damping=[0.01, 0.02, 0.005, 0.0, 0.01, 0.03])
     plant = StructuralPlant.from_modal_model(
         modal,
-        [Actuator("tipforce", "force", 11, "y"), Actuator("tiptorque", "torque", 11, "z"),
-         Actuator("patch", "moment_pair", (3, 5), "z", gain=2.5)],
-        [Sensor("tip", "displacement", 11, "y"), Sensor("slope", "rotation", 11, "z"),
-         Sensor("patch_strain", "strain", (3, 5), "z", gain=0.4),
-         Sensor("tip_rate", "displacement", 11, "y", rate=True)])
-    cols = [modal.force_input(11, "y"), modal.torque_input(11, "z"),
-            2.5 * modal.moment_pair(3, 5, "z")]
-    rows = [(modal.displacement_output(11, "y"), "displacement"),
-            (modal.rotation_output(11, "z"), "displacement"),
-            (0.4 * modal.strain_output(3, 5, "z"), "displacement"),
-            (modal.displacement_output(11, "y"), "velocity")]
+        [
+            Actuator("tipforce", "force", 11, "y"),
+            Actuator("tiptorque", "torque", 11, "z"),
+            Actuator("patch", "moment_pair", (3, 5), "z", gain=2.5),
+        ],
+        [
+            Sensor("tip", "displacement", 11, "y"),
+            Sensor("slope", "rotation", 11, "z"),
+            Sensor("patch_strain", "strain", (3, 5), "z", gain=0.4),
+            Sensor("tip_rate", "displacement", 11, "y", rate=True),
+        ],
+    )
+    cols = [
+        modal.force_input(11, "y"),
+        modal.torque_input(11, "z"),
+        2.5 * modal.moment_pair(3, 5, "z"),
+    ]
+    rows = [
+        (modal.displacement_output(11, "y"), "displacement"),
+        (modal.rotation_output(11, "z"), "displacement"),
+        (0.4 * modal.strain_output(3, 5, "z"), "displacement"),
+        (modal.displacement_output(11, "y"), "velocity"),
+    ]
     ss = modal.to_statespace(cols, rows)
     A, B = plant.linear_part()
     np.testing.assert_array_equal(A, ss.A)
     np.testing.assert_array_equal(B, ss.B)
     np.testing.assert_array_equal(
-        np.vstack([plant.output_matrices(c.name)[0] for c in plant.outputs[:-1]]), ss.C)
+        np.vstack([plant.output_matrices(c.name)[0] for c in plant.outputs[:-1]]), ss.C
+    )
     blocks = plant.modal_blocks
     np.testing.assert_array_equal(blocks.frequencies, modal.frequencies)
     np.testing.assert_allclose(blocks.damping, modal.damping, rtol=1e-15)
@@ -149,10 +179,13 @@ def test_moment_pair_is_the_fe_load_vector_and_bends_only_the_patch():
     (K⁻¹ f to cond(K)·eps)."""
     asm = _cantilever()
     a1 = 0.7
-    plant = StructuralPlant.from_fe(asm.M, asm.K, [Actuator("piezo", "moment_pair",
-                                                             ((3, "rz"), (5, "rz")), gain=a1)],
-                                    [Sensor("strain", "strain", ((3, "rz"), (5, "rz")))],
-                                    dofs=asm.dofs)
+    plant = StructuralPlant.from_fe(
+        asm.M,
+        asm.K,
+        [Actuator("piezo", "moment_pair", ((3, "rz"), (5, "rz")), gain=a1)],
+        [Sensor("strain", "strain", ((3, "rz"), (5, "rz")))],
+        dofs=asm.dofs,
+    )
     f = np.zeros(asm.n_dofs)
     f[asm.index(5, "rz")], f[asm.index(3, "rz")] = a1, -a1
     np.testing.assert_array_equal(plant.model.B[:, 0], f)
@@ -160,9 +193,14 @@ def test_moment_pair_is_the_fe_load_vector_and_bends_only_the_patch():
     modes = asm.modes(5)
     modal = ModalModel.from_fe(modes)
     m_plant = StructuralPlant.from_modal_model(
-        modal, [Actuator("piezo", "moment_pair", (3, 5), "z", gain=a1)])
-    np.testing.assert_allclose(m_plant.model.B[:, 0], modes.shapes.T @ f, rtol=0,
-                               atol=1e-12 * np.abs(modes.shapes.T @ f).max())
+        modal, [Actuator("piezo", "moment_pair", (3, 5), "z", gain=a1)]
+    )
+    np.testing.assert_allclose(
+        m_plant.model.B[:, 0],
+        modes.shapes.T @ f,
+        rtol=0,
+        atol=1e-12 * np.abs(modes.shapes.T @ f).max(),
+    )
     Kd = asm.K.toarray()
     q = np.linalg.solve(Kd, f)
     tol = np.linalg.cond(Kd) * EPS * np.abs(q).max()
@@ -183,7 +221,8 @@ def test_energy_rate_is_input_power_less_dissipation():
     D = 0.5 * (D + D.T)  # viscous damping: the dissipation q̇ᵀDq̇
     plant = StructuralPlant.from_second_order(
         SecondOrderModel(M, D, K, np.zeros((5, 1)), np.zeros((1, 5))),
-        [Actuator("f", "force", 1), Actuator("pair", "moment_pair", (2, 4), gain=0.3)])
+        [Actuator("f", "force", 1), Actuator("pair", "moment_pair", (2, 4), gain=0.3)],
+    )
     A, B = plant.linear_part()
     u = np.array([1.5, -2.0])
     aug = np.zeros((11, 11))
@@ -200,8 +239,9 @@ def test_energy_rate_is_input_power_less_dissipation():
     assert abs(dE - work) <= 1e-11 * scale
     assert abs(dE) > 1e-3 * scale  # the check is not vacuous
     # and the right-hand side is the plant's: solve_ivp at rtol 1e-12 lands on xT
-    sol = solve_ivp(lambda t, x: plant.derivative(x, u), (0, T), x0, method="DOP853",
-                    rtol=1e-12, atol=1e-14)
+    sol = solve_ivp(
+        lambda t, x: plant.derivative(x, u), (0, T), x0, method="DOP853", rtol=1e-12, atol=1e-14
+    )
     np.testing.assert_allclose(sol.y[:, -1], xT, rtol=0, atol=1e-10 * np.abs(xT).max())
 
 
@@ -210,39 +250,53 @@ def test_rigid_modes_are_counted():
     K = np.diag([0.0, 4.0, 9.0])
     plant = StructuralPlant.from_second_order(
         SecondOrderModel(M, np.diag([0.0, 0.4, 0.6]), K, np.zeros((3, 1)), np.zeros((1, 3))),
-        [Actuator("f", "force", 0)], [Sensor("x", "displacement", 0)])
+        [Actuator("f", "force", 0)],
+        [Sensor("x", "displacement", 0)],
+    )
     blocks = plant.modal_blocks
     assert blocks.n_rigid == 1
     np.testing.assert_array_equal(blocks.frequencies, [0.0, 2.0, 3.0])
     np.testing.assert_allclose(blocks.damping, [0.0, 0.1, 0.1], rtol=1e-15)
     damped_rigid = StructuralPlant.from_second_order(
-        SecondOrderModel(M, np.diag([0.1, 0.4, 0.6]), K, np.zeros((3, 1)), np.zeros((1, 3))))
+        SecondOrderModel(M, np.diag([0.1, 0.4, 0.6]), K, np.zeros((3, 1)), np.zeros((1, 3)))
+    )
     assert damped_rigid.modal_blocks is None  # ζ undefined at ω = 0
 
 
 def _model3():
-    return SecondOrderModel(np.eye(3), np.zeros((3, 3)), np.eye(3), np.zeros((3, 1)),
-                            np.zeros((1, 3)))
+    return SecondOrderModel(
+        np.eye(3), np.zeros((3, 3)), np.eye(3), np.zeros((3, 1)), np.zeros((1, 3))
+    )
 
 
-@pytest.mark.parametrize("inputs, outputs, message", [
-    ([Actuator("f", "force", 0), Actuator("f", "torque", 1)], [], r"^f: duplicate input"),
-    ([Actuator("f", "pull", 0)], [], r"^f: kind must be one of force, torque, moment_pair"),
-    ([Actuator("f", "force", 3)], [], r"^f: dof 3 out of range"),
-    ([Actuator("pz", "moment_pair", 1)], [], r"^pz: a moment_pair needs a pair of rotation"),
-    ([Actuator("pz", "moment_pair", (1, 1))], [], r"^pz: the two dofs of a moment_pair must"),
-    ([Actuator("f", "force", [1.0, 2.0])], [], r"^f: an influence vector must have shape \(3,\)"),
-    ([Actuator("f", "force", 0, gain=0.0)], [], r"^f: gain must be non-zero"),
-    ([Actuator("f", "force", 0, gain=np.nan)], [], r"^f: gain: must be finite"),
-    ([Actuator("f", "force", 0, unit="furlongs/fortnite")], [], r"^f: unit"),
-    ([Actuator("f", "force", 0, axis="z")], [], r"^f: axis applies to modal coordinates"),
-    ([Actuator("not valid", "force", 0)], [], r"channel name: must be an identifier"),
-    ([], [Sensor("y", "stress", 0)], r"^y: kind must be one of displacement, rotation, strain"),
-    ([], [Sensor("y", "strain", (0, "x"))], r"^y: unknown dof 'x'"),
-    ([], [Sensor("y", "rotation", 0), Sensor("y", "rotation", 1, rate=True)],
-     r"^y: duplicate output"),
-    (["force"], [], r"^inputs\[0\]: must be a Actuator"),
-])
+@pytest.mark.parametrize(
+    "inputs, outputs, message",
+    [
+        ([Actuator("f", "force", 0), Actuator("f", "torque", 1)], [], r"^f: duplicate input"),
+        ([Actuator("f", "pull", 0)], [], r"^f: kind must be one of force, torque, moment_pair"),
+        ([Actuator("f", "force", 3)], [], r"^f: dof 3 out of range"),
+        ([Actuator("pz", "moment_pair", 1)], [], r"^pz: a moment_pair needs a pair of rotation"),
+        ([Actuator("pz", "moment_pair", (1, 1))], [], r"^pz: the two dofs of a moment_pair must"),
+        (
+            [Actuator("f", "force", [1.0, 2.0])],
+            [],
+            r"^f: an influence vector must have shape \(3,\)",
+        ),
+        ([Actuator("f", "force", 0, gain=0.0)], [], r"^f: gain must be non-zero"),
+        ([Actuator("f", "force", 0, gain=np.nan)], [], r"^f: gain: must be finite"),
+        ([Actuator("f", "force", 0, unit="furlongs/fortnite")], [], r"^f: unit"),
+        ([Actuator("f", "force", 0, axis="z")], [], r"^f: axis applies to modal coordinates"),
+        ([Actuator("not valid", "force", 0)], [], r"channel name: must be an identifier"),
+        ([], [Sensor("y", "stress", 0)], r"^y: kind must be one of displacement, rotation, strain"),
+        ([], [Sensor("y", "strain", (0, "x"))], r"^y: unknown dof 'x'"),
+        (
+            [],
+            [Sensor("y", "rotation", 0), Sensor("y", "rotation", 1, rate=True)],
+            r"^y: duplicate output",
+        ),
+        (["force"], [], r"^inputs\[0\]: must be a Actuator"),
+    ],
+)
 def test_bad_channel_specs_name_the_channel(inputs, outputs, message):
     with pytest.raises(ValueError, match=message):
         StructuralPlant.from_second_order(_model3(), inputs, outputs)
@@ -262,17 +316,26 @@ def test_bad_modal_specs_name_the_channel():
 
 def test_fixed_dofs_and_bad_constructor_arguments():
     asm = _cantilever()
-    plant = StructuralPlant.from_fe(asm.M, asm.K, [Actuator("root", "moment_pair",
-                                                            ((1, "rz"), (3, "rz")))],
-                                    dofs=asm.dofs, fixed=[(1, "rz")])
+    plant = StructuralPlant.from_fe(
+        asm.M,
+        asm.K,
+        [Actuator("root", "moment_pair", ((1, "rz"), (3, "rz")))],
+        dofs=asm.dofs,
+        fixed=[(1, "rz")],
+    )
     np.testing.assert_array_equal(plant.model.B[:, 0], np.eye(asm.n_dofs)[asm.index(3, "rz")])
     with pytest.raises(ValueError, match=r"^root: dof \(1, 'rz'\) is fixed"):
-        StructuralPlant.from_fe(asm.M, asm.K, [Actuator("root", "torque", (1, "rz"))],
-                                dofs=asm.dofs, fixed=[(1, "rz")])
+        StructuralPlant.from_fe(
+            asm.M, asm.K, [Actuator("root", "torque", (1, "rz"))], dofs=asm.dofs, fixed=[(1, "rz")]
+        )
     with pytest.raises(ValueError, match=r"^pz: both dofs of the moment_pair are fixed"):
-        StructuralPlant.from_fe(asm.M, asm.K, [Actuator("pz", "moment_pair",
-                                                        ((1, "rz"), (1, "uy")))],
-                                dofs=asm.dofs, fixed=[(1, "rz"), (1, "uy")])
+        StructuralPlant.from_fe(
+            asm.M,
+            asm.K,
+            [Actuator("pz", "moment_pair", ((1, "rz"), (1, "uy")))],
+            dofs=asm.dofs,
+            fixed=[(1, "rz"), (1, "uy")],
+        )
     with pytest.raises(ValueError, match=r"^dofs: 3 labels for 30 coordinates"):
         StructuralPlant.from_fe(asm.M, asm.K, dofs=asm.dofs[:3])
     with pytest.raises(ValueError, match=r"^model: must be a SecondOrderModel"):
@@ -280,8 +343,9 @@ def test_fixed_dofs_and_bad_constructor_arguments():
     with pytest.raises(ValueError, match=r"^inputs: 0 size-1 channels for 1 columns"):
         StructuralPlant(_model3(), (), ())
     with pytest.raises(ValueError, match=r"^x: .*no output channel 'x'"):
-        StructuralPlant(_model3()._replace(B=np.zeros((3, 0)), Cq=np.zeros((0, 3)),
-                                           Cv=None, Dff=None), (), ()).output_matrices("x")
+        StructuralPlant(
+            _model3()._replace(B=np.zeros((3, 0)), Cq=np.zeros((0, 3)), Cv=None, Dff=None), (), ()
+        ).output_matrices("x")
     assert Channel("ok", "m").name == "ok"
 
 
@@ -290,7 +354,8 @@ def test_energy_is_the_quadratic_form_of_the_energy_matrix():
     16 eps of the energy scale ½ |x|² ‖Q‖ n (two orders of summation of n_x products)."""
     M, D, K = _random_model()
     plant = StructuralPlant.from_second_order(
-        SecondOrderModel(M, D, K, np.zeros((5, 1)), np.zeros((1, 5))), [Actuator("f", "force", 1)])
+        SecondOrderModel(M, D, K, np.zeros((5, 1)), np.zeros((1, 5))), [Actuator("f", "force", 1)]
+    )
     Q = plant.energy_matrix
     assert np.array_equal(Q, Q.T)
     x = np.random.default_rng(2).normal(size=(4, 10))

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from flexsat.dynamics.tether import (
-    TetherScales,
     TetheredSubsatellite,
+    TetherScales,
     accelerations,
     integral_of_motion,
     integral_of_motion_rate,
@@ -34,8 +34,9 @@ def test_v14_integral_of_motion_is_constant_with_the_length_held():
     # V14 (spec §11, L4357-L4363): λ ≡ 1 (rate control, λ' = 0), F̂ = 0, θ = φ = 5° at rest.
     # DOP853 at rtol 1e-12 over two orbits: V1 (~1.1e-2) varies by < 1e-10 absolute.
     tau = np.linspace(0, 4 * np.pi, 801)
-    run = integrate(lambda x: (0 * x[..., 0], 0 * x[..., 0]), X0, tau, control="rate",
-                    rtol=1e-12, atol=1e-14)
+    run = integrate(
+        lambda x: (0 * x[..., 0], 0 * x[..., 0]), X0, tau, control="rate", rtol=1e-12, atol=1e-14
+    )
     V1 = run.integral_of_motion[0]
     assert V1[0] == pytest.approx(0.5 * (3 * np.cos(D5) ** 2 + 4) * np.sin(D5) ** 2, rel=1e-14)
     assert np.ptp(V1) < 1e-10
@@ -72,15 +73,17 @@ def test_eq10_decoupled_form_follows_from_eq4():
     c, s = np.cos(ph), np.sin(ph)
     z, y = lam * c, lam * s
     dz, dy = dl * c - lam * s * dph, dl * s + lam * c * dph
-    ddz = ddl * c - 2 * dl * s * dph - lam * c * dph ** 2 - lam * s * ddph
-    ddy = ddl * s + 2 * dl * c * dph - lam * s * dph ** 2 + lam * c * ddph
-    np.testing.assert_allclose(ddz - z * ((1 + dth) ** 2 - 1 + 3 * np.cos(th) ** 2),
-                               -T / lam * z - F / lam * y, atol=1e-12)
+    ddz = ddl * c - 2 * dl * s * dph - lam * c * dph**2 - lam * s * ddph
+    ddy = ddl * s + 2 * dl * c * dph - lam * s * dph**2 + lam * c * ddph
+    np.testing.assert_allclose(
+        ddz - z * ((1 + dth) ** 2 - 1 + 3 * np.cos(th) ** 2), -T / lam * z - F / lam * y, atol=1e-12
+    )
     np.testing.assert_allclose(ddy + y, -T / lam * y + F / lam * z, atol=1e-12)
-    np.testing.assert_allclose(ddth + 2 * dz / z * (1 + dth) + 3 * np.cos(th) * np.sin(th), 0,
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        ddth + 2 * dz / z * (1 + dth) + 3 * np.cos(th) * np.sin(th), 0, atol=1e-12
+    )
     np.testing.assert_allclose(y * dy + z * dz, lam * dl, atol=1e-14)
-    np.testing.assert_allclose(z * dy - y * dz, lam ** 2 * dph, atol=1e-14)
+    np.testing.assert_allclose(z * dy - y * dz, lam**2 * dph, atol=1e-14)
 
 
 def test_paper_scales():
@@ -115,10 +118,14 @@ def test_si_plant_is_eq4_scaled():
     expected5 = s.state_to_si(np.concatenate([xhat[:, [3, 4, 5]], acc], 1))
     np.testing.assert_allclose(xdot5, expected5 * s.orbit_rate, rtol=1e-12, atol=1e-18)
     assert plant.output("length_rate", x).shape == (8,)
-    np.testing.assert_allclose(rplant.output("length_rate", x5, np.stack([rate, 0 * rate], 1)),
-                               rate)
-    np.testing.assert_allclose(plant.output("integral_of_motion", x),
-                               integral_of_motion(*xhat[:, [1, 2, 4, 5]].T), rtol=1e-12)
+    np.testing.assert_allclose(
+        rplant.output("length_rate", x5, np.stack([rate, 0 * rate], 1)), rate
+    )
+    np.testing.assert_allclose(
+        plant.output("integral_of_motion", x),
+        integral_of_motion(*xhat[:, [1, 2, 4, 5]].T),
+        rtol=1e-12,
+    )
 
 
 def test_rk4_step_of_the_plant_matches_the_continuous_integration():
@@ -130,20 +137,24 @@ def test_rk4_step_of_the_plant_matches_the_continuous_integration():
     u = np.array([[3.0, 0.0]])
     for k in range(2000):
         x = plant.step(x, u, tau[1])
-    ref = integrate(lambda x: (3.0 + 0 * x[..., 0], 0 * x[..., 0]), X0, tau[[0, -1]], rtol=1e-12,
-                    atol=1e-14)
+    ref = integrate(
+        lambda x: (3.0 + 0 * x[..., 0], 0 * x[..., 0]), X0, tau[[0, -1]], rtol=1e-12, atol=1e-14
+    )
     np.testing.assert_allclose(x[0], ref.state[0, -1], atol=1e-8)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(mass=0.0), "mass: must be > 0"),
-    (dict(mass="-1 kg"), "mass: must be > 0"),
-    (dict(length="0 km"), "length: must be > 0"),
-    (dict(altitude="-5 km"), "altitude: must be >= 0"),
-    (dict(orbit_rate=0.0), "orbit_rate: must be > 0"),
-    (dict(orbit_rate=1e-3, altitude=1e5), "not both"),
-    (dict(mass="3 m"), "mass"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(mass=0.0), "mass: must be > 0"),
+        (dict(mass="-1 kg"), "mass: must be > 0"),
+        (dict(length="0 km"), "length: must be > 0"),
+        (dict(altitude="-5 km"), "altitude: must be >= 0"),
+        (dict(orbit_rate=0.0), "orbit_rate: must be > 0"),
+        (dict(orbit_rate=1e-3, altitude=1e5), "not both"),
+        (dict(mass="3 m"), "mass"),
+    ],
+)
 def test_bad_scales_are_refused_by_name(kwargs, message):
     with pytest.raises(ValueError, match=message):
         TetherScales(**kwargs)
@@ -166,7 +177,11 @@ def test_non_physical_lengths_and_modes_are_refused():
     # reeling in at λ' = -1 from λ = 3e-4 collapses the tether at τ = 2e-4: reported, not
     # integrated past
     with pytest.raises(ValueError, match=r"fell to 0.0001 L \(collapsed\) at τ = 0.0002"):
-        integrate(lambda x: (-1 + 0 * x[..., 0], 0 * x[..., 0]), [3e-4, D5, D5, 0, 0, 0], [0, 1.0],
-                  control="rate")
+        integrate(
+            lambda x: (-1 + 0 * x[..., 0], 0 * x[..., 0]),
+            [3e-4, D5, D5, 0, 0, 0],
+            [0, 1.0],
+            control="rate",
+        )
     x = plant.state_from(length="2 km", pitch="5 deg", roll="-3 deg")
     np.testing.assert_allclose(x, [2000.0, D5, np.radians(-3), 0, 0, 0])

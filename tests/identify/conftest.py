@@ -47,8 +47,9 @@ def _frame_builder(fk, fm, n_el=2):
 
 @pytest.fixture(scope="session")
 def frame():
-    return substructures_from_builder(_frame_builder, 3,
-                                      names=("left columns", "other columns", "beams"))
+    return substructures_from_builder(
+        _frame_builder, 3, names=("left columns", "other columns", "beams")
+    )
 
 
 @pytest.fixture(scope="session")

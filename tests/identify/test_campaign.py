@@ -8,16 +8,31 @@ import pytest
 from flexsat.cases.tamu_grid import tamu_grid
 from flexsat.identify.campaign import CameraRig, CampaignConfig, run_campaign
 
-S = 14.5 * 0.0254          # grid spacing, m
-RIG = CameraRig(positions=((-0.6, 1.5 * S, 2.4), (4 * S + 0.6, 1.5 * S, 2.4)),
-                aims=((2 * S, 1.5 * S, 0.0), (2 * S, 1.5 * S, 0.0)))
+S = 14.5 * 0.0254  # grid spacing, m
+RIG = CameraRig(
+    positions=((-0.6, 1.5 * S, 2.4), (4 * S + 0.6, 1.5 * S, 2.4)),
+    aims=((2 * S, 1.5 * S, 0.0), (2 * S, 1.5 * S, 0.0)),
+)
 CONFIG = CampaignConfig(
     a_priori_scale={"clamp verticals": 1.15},
-    strain_gauges=((16, 21, "x"), (18, 23, "x"), (20, 25, "x"), (11, 16, "x"), (13, 18, "x"),
-                   (9, 14, "x")),
-    accelerometers=((1, "z"), (5, "z"), (13, "z")), targets=tuple(range(1, 21)), rig=RIG,
-    wheel_nodes=(3, 7, 9), wheel_axes=("y", "x", "x"), wheel_duration=600.0, frf_segment=4000,
-    noise=0.01, seed=2)
+    strain_gauges=(
+        (16, 21, "x"),
+        (18, 23, "x"),
+        (20, 25, "x"),
+        (11, 16, "x"),
+        (13, 18, "x"),
+        (9, 14, "x"),
+    ),
+    accelerometers=((1, "z"), (5, "z"), (13, "z")),
+    targets=tuple(range(1, 21)),
+    rig=RIG,
+    wheel_nodes=(3, 7, 9),
+    wheel_axes=("y", "x", "x"),
+    wheel_duration=600.0,
+    frf_segment=4000,
+    noise=0.01,
+    seed=2,
+)
 
 
 @pytest.fixture(scope="module")
@@ -103,8 +118,10 @@ def test_wheel_torque_constants_identified_with_the_structure():
     """Att. 6 Eq. 7: the wheels deliver 0.9, 1.1 and 1.0 x the commanded torque; the update
     finds the constants within 1 % (measured 0.1-0.3 %, within 2.5 SD: the H1 points' small
     Welch bias near resonances) and still recovers the clamp within 1 %."""
-    c = run_campaign(tamu_grid(motor_mass="0.5 kg"),
-                     dataclasses.replace(CONFIG, wheel_torque_constants=(0.9, 1.1, 1.0)))
+    c = run_campaign(
+        tamu_grid(motor_mass="0.5 kg"),
+        dataclasses.replace(CONFIG, wheel_torque_constants=(0.9, 1.1, 1.0)),
+    )
     assert list(c.wheel_gains) == ["torque 3y", "torque 7x", "torque 9x"]
     for v in c.wheel_gains.values():
         assert abs(v["identified"] / v["true"] - 1) < 0.01 and 0 < v["std"] < 0.01
@@ -113,16 +130,19 @@ def test_wheel_torque_constants_identified_with_the_structure():
     with pytest.raises(ValueError, match="wheel_torque_constants: one factor > 0 per wheel"):
         dataclasses.replace(CONFIG, wheel_torque_constants=(1.0, 1.0))
     with pytest.raises(ValueError, match="wheel_torque_constants: identifying"):
-        dataclasses.replace(CONFIG, wheel_torque_constants=(1.0, 1.0, 1.0),
-                            update="creamer_junkins")
+        dataclasses.replace(
+            CONFIG, wheel_torque_constants=(1.0, 1.0, 1.0), update="creamer_junkins"
+        )
 
 
 def test_creamer_junkins_update_with_first_order_uncertainty():
     """Att. 7 route (frequencies, then eigenvalue real parts) with the first-order ERA SDs: the
     clamp error within 1 %, the correct substructures within 0.5 %; the SDs are pessimistic
     (20-40x the actual ERA scatter), so the reported p SDs cover the error generously."""
-    c = run_campaign(tamu_grid(motor_mass="0.5 kg"),
-                     dataclasses.replace(CONFIG, update="creamer_junkins", bootstrap_samples=0))
+    c = run_campaign(
+        tamu_grid(motor_mass="0.5 kg"),
+        dataclasses.replace(CONFIG, update="creamer_junkins", bootstrap_samples=0),
+    )
     assert c.update["method"] == "creamer_junkins" and c.update["frf_points"] == 0
     assert abs(c.scalings["clamp verticals"]["updated"] - 1) < 0.01
     for name in ("verticals", "horizontals"):
@@ -131,8 +151,9 @@ def test_creamer_junkins_update_with_first_order_uncertainty():
 
 
 def test_campaign_is_reproducible_and_rejects_a_blind_rig():
-    small = dataclasses.replace(CONFIG, truth_modes=8, era_order=40, wheel_duration=120.0,
-                                frf_segment=1000)
+    small = dataclasses.replace(
+        CONFIG, truth_modes=8, era_order=40, wheel_duration=120.0, frf_segment=1000
+    )
     a = run_campaign(tamu_grid(motor_mass="0.5 kg"), small)
     b = run_campaign(tamu_grid(motor_mass="0.5 kg"), small)
     assert a.modes == b.modes and a.scalings == b.scalings
@@ -152,8 +173,7 @@ def test_recorded_data_through_universal_files_give_the_same_update(tmp_path):
     from flexsat.identify import Measurement
     from flexsat.identify.campaign import TestRecords, identify_and_update, simulate_records
 
-    small = dataclasses.replace(CONFIG, wheel_duration=300.0, frf_segment=2000,
-                                bootstrap_samples=0)
+    small = dataclasses.replace(CONFIG, wheel_duration=300.0, frf_segment=2000, bootstrap_samples=0)
     case = tamu_grid(motor_mass="0.5 kg")
     records = simulate_records(case, small)
     read = {}

@@ -15,13 +15,13 @@ from flexsat.identify.structural import SubstructureModel, damped_eigenvalues
 pytestmark = pytest.mark.numerics  # tolerances near round-off: re-run on other BLAS kernels
 
 
-
 # ------------------------------------------------------------------------------------------------
 # Att. 6 differential correction (Eqs. 3-13) on the portal frame with Rayleigh damping blocks
 # 0.5 M + 2e-5 K (damping ratios 0.3-0.6 % in modes 1-8), scalings r ~ 1.
 def _damped(frame):
-    return SubstructureModel(frame.K_blocks, frame.M_blocks, [0.5 * frame.M(), 2e-5 * frame.K()],
-                             names=frame.names)
+    return SubstructureModel(
+        frame.K_blocks, frame.M_blocks, [0.5 * frame.M(), 2e-5 * frame.K()], names=frame.names
+    )
 
 
 def _receptance(model, p, q, r, output, inp, omegas):
@@ -36,8 +36,9 @@ def _receptance(model, p, q, r, output, inp, omegas):
 # frame with columns 2-3 at 1/1.15 stiffness, and of the x 0.905 start model; closer points
 # trapped the mass/stiffness fit from the x 0.905 start in a local minimum (Att. 6 L2489: the
 # start must be good).  Driving points 3 and 20 and one transfer element.
-FRAME_FRF = dict(omegas=np.array([20.0, 100.0, 200.0, 230.0, 460.0, 500.0]),
-                 pairs=((3, 3), (10, 3), (20, 20)))
+FRAME_FRF = dict(
+    omegas=np.array([20.0, 100.0, 200.0, 230.0, 460.0, 500.0]), pairs=((3, 3), (10, 3), (20, 20))
+)
 
 
 def _frame_data(model, p, q, r, rng=None, items=None):
@@ -55,12 +56,24 @@ def _frame_data(model, p, q, r, rng=None, items=None):
     for out, inp, gain, og, ig in items:
         h = gain * _receptance(model, p, q, r, out, inp, FRAME_FRF["omegas"])
         sd = 0.01 * np.abs(h) / np.sqrt(2)  # complex SD 1 %: real and imaginary parts each
-        frf.append((out, inp, FRAME_FRF["omegas"], h + sd * (noise(h.size) + 1j * noise(h.size)),
-                    sd, og, ig))
-    return CorrectionData(frequencies=w[:m] * (1 + 1e-3 * noise(m)), frequency_sigma=1e-3 * w[:m],
-                          damping_ratios=zeta * (1 + 0.02 * noise(m)), damping_sigma=0.02 * zeta,
-                          frf=frf)
-
+        frf.append(
+            (
+                out,
+                inp,
+                FRAME_FRF["omegas"],
+                h + sd * (noise(h.size) + 1j * noise(h.size)),
+                sd,
+                og,
+                ig,
+            )
+        )
+    return CorrectionData(
+        frequencies=w[:m] * (1 + 1e-3 * noise(m)),
+        frequency_sigma=1e-3 * w[:m],
+        damping_ratios=zeta * (1 + 0.02 * noise(m)),
+        damping_sigma=0.02 * zeta,
+        frf=frf,
+    )
 
 
 def _fourth_order_jacobian(f, x):
@@ -74,6 +87,7 @@ def _fourth_order_jacobian(f, x):
         cols.append((8 * (f(x + e) - f(x - e)) - (f(x + 2 * e) - f(x - 2 * e))) / (12 * e[k]))
     return np.column_stack(cols)
 
+
 def test_correction_jacobian_matches_central_differences(frame):
     """A = dQ/dP (Att. 6 Eq. 13) of every measurement kind against central differences."""
     model = _damped(frame)
@@ -86,16 +100,29 @@ def test_correction_jacobian_matches_central_differences(frame):
     torque = np.zeros(n)
     torque[[3, 5]] = (0.5, 1.0)  # an input column of B
     partial = CorrectionData(
-        frequencies=w[[0, 1, 3]], frequency_sigma=1.0, frequency_modes=[0, 1, 3],
-        shapes=phi[[3, 5, 10, 20]][:, [0, 2]] * 2.0, shape_sigma=1.0, shape_dofs=[3, 5, 10, 20],
-        shape_modes=[0, 2], damping_ratios=[0.005, 0.004, 0.004], damping_sigma=1.0,
+        frequencies=w[[0, 1, 3]],
+        frequency_sigma=1.0,
+        frequency_modes=[0, 1, 3],
+        shapes=phi[[3, 5, 10, 20]][:, [0, 2]] * 2.0,
+        shape_sigma=1.0,
+        shape_dofs=[3, 5, 10, 20],
+        shape_modes=[0, 2],
+        damping_ratios=[0.005, 0.004, 0.004],
+        damping_sigma=1.0,
         damping_modes=[0, 1, 4],
         # 0.95 w_4: on the flank of resonance 4 (amplification ~10, Att. 6 R^r, R^i); closer,
         # the FRF's curvature (scale zeta ~ 0.3 %) spoils the differences below
-        frf=[(3, 3, [20.0, 120.0], [1.0, 1.0], 1.0),
-             (strain, torque, [100.0, 0.95 * w[3]], [1.0, 1.0], 1.0)])
-    full = CorrectionData(shapes=phi[:, :3] + 0.01 * rng.standard_normal((n, 3)), shape_sigma=1.0,
-                          orthogonality_sigma=1.0, normalization_sigma=1.0)
+        frf=[
+            (3, 3, [20.0, 120.0], [1.0, 1.0], 1.0),
+            (strain, torque, [100.0, 0.95 * w[3]], [1.0, 1.0], 1.0),
+        ],
+    )
+    full = CorrectionData(
+        shapes=phi[:, :3] + 0.01 * rng.standard_normal((n, 3)),
+        shape_sigma=1.0,
+        orthogonality_sigma=1.0,
+        normalization_sigma=1.0,
+    )
     for data in (partial, full):
         _, A = data.predict(model, x[:3], x[3:6], x[6:])
 
@@ -133,8 +160,11 @@ def test_differential_correction_finds_15_percent_stiffness_error(frame):
         assert np.all(np.abs(res.r - 1) < 4 * sd[6:])
         assert np.all(np.diff(res.residual_history) <= 0)  # halving keeps the cost falling
     # the update only scales the a-priori blocks: symmetry and zero pattern are kept
-    for upd, prior in ((res.model.K(), model.K()), (res.model.M(), model.M()),
-                       (res.model.C(), model.C())):
+    for upd, prior in (
+        (res.model.K(), model.K()),
+        (res.model.M(), model.M()),
+        (res.model.C(), model.C()),
+    ):
         assert np.array_equal(upd, upd.T)
         assert not np.any((upd != 0) & (prior == 0))
 
@@ -159,8 +189,12 @@ def test_forced_response_fixes_the_scale(frame):
     sd = np.sqrt(np.diag(res.covariance))
     # within 4 predicted SDs (mass and stiffness SDs < 0.5 %)
     assert np.all(sd[:6] < 0.005) and np.all(np.abs(np.r_[res.p, res.q, res.r] - 1) < 4 * sd)
-    free = CorrectionData(frequencies=exact.frequencies, frequency_sigma=exact.frequency_sigma,
-                          damping_ratios=exact.damping_ratios, damping_sigma=exact.damping_sigma)
+    free = CorrectionData(
+        frequencies=exact.frequencies,
+        frequency_sigma=exact.frequency_sigma,
+        damping_ratios=exact.damping_ratios,
+        damping_sigma=exact.damping_sigma,
+    )
     with pytest.raises(ValueError, match=r"not identifiable.*p\[0\].*q\[0\].*r\[0\]"):
         differential_correction(model, free, **start)
     # a 0_p prior (SD 5 %) makes it solvable, but the scale is then the prior's: from p0 = 0.9,
@@ -180,15 +214,18 @@ def test_differential_correction_errors(frame):
     with pytest.raises(ValueError, match=r"frf\[0\]: omegas and values must be equal-length"):
         CorrectionData(frf=[(3, 3, [20.0, 30.0], [1e-6], 1e-8)])
     with pytest.raises(ValueError, match="shape_sigma: must be a scalar or shaped like shapes"):
-        CorrectionData(shapes=np.ones((4, 2)), shape_sigma=np.ones((3, 2)),
-                       shape_dofs=[0, 1, 2, 3])
+        CorrectionData(shapes=np.ones((4, 2)), shape_sigma=np.ones((3, 2)), shape_dofs=[0, 1, 2, 3])
     with pytest.raises(ValueError, match="shape_dofs: must be 4 distinct dof indices"):
         CorrectionData(shapes=np.ones((4, 2)), shape_sigma=1.0, shape_dofs=[0, 1, 2])
     with pytest.raises(ValueError, match="shapes: without shape_dofs must have one row per dof"):
         CorrectionData(shapes=np.ones((4, 2)), shape_sigma=1.0).predict(model)
     with pytest.raises(ValueError, match="orthogonality_sigma: needs measured shapes on all"):
-        CorrectionData(shapes=np.ones((4, 2)), shape_sigma=1.0, shape_dofs=[0, 1, 2, 3],
-                       orthogonality_sigma=0.01)
+        CorrectionData(
+            shapes=np.ones((4, 2)),
+            shape_sigma=1.0,
+            shape_dofs=[0, 1, 2, 3],
+            orthogonality_sigma=0.01,
+        )
     with pytest.raises(ValueError, match="CorrectionData: give at least one kind"):
         CorrectionData()
     with pytest.raises(ValueError, match="frequency_sigma: give the standard deviations"):
@@ -233,8 +270,11 @@ def _gain_items(n, mu, nu):
     gauges[1, [5, 14]] = (1.0, -1.0)
     torque = np.zeros(n)
     torque[[3, 5]] = (0.5, 1.0)
-    return [(gauges[g], inp, mu[g] * (1.0 if m is None else nu[m]), g, m)
-            for g in range(2) for inp, m in ((3, None), (torque, 0))]
+    return [
+        (gauges[g], inp, mu[g] * (1.0 if m is None else nu[m]), g, m)
+        for g in range(2)
+        for inp, m in ((3, None), (torque, 0))
+    ]
 
 
 def test_gain_jacobian_matches_central_differences(frame):
@@ -250,19 +290,23 @@ def test_gain_jacobian_matches_central_differences(frame):
     torque = np.zeros(n)
     torque[[3, 5]] = (0.5, 1.0)
     data = CorrectionData(
-        frequencies=w[:2], frequency_sigma=1.0,  # rows without gains: zero gain columns
-        frf=[(3, 3, [20.0, 120.0], [1.0, 1.0], 1.0, 0, None),
-             # 0.95 w_4: the flank of resonance 4, as in the test above
-             (strain, torque, [100.0, 0.95 * w[3]], [1.0, 1.0], 1.0, 1, 0),
-             (strain, 3, [60.0], [1.0], 1.0, 1, None),
-             (10, torque, [300.0], [1.0], 1.0, None, 1)])
+        frequencies=w[:2],
+        frequency_sigma=1.0,  # rows without gains: zero gain columns
+        frf=[
+            (3, 3, [20.0, 120.0], [1.0, 1.0], 1.0, 0, None),
+            # 0.95 w_4: the flank of resonance 4, as in the test above
+            (strain, torque, [100.0, 0.95 * w[3]], [1.0, 1.0], 1.0, 1, 0),
+            (strain, 3, [60.0], [1.0], 1.0, 1, None),
+            (10, torque, [300.0], [1.0], 1.0, None, 1),
+        ],
+    )
     assert (data.n_output_gains, data.n_input_gains) == (2, 2)
 
     def f(y):
         return data.predict(model, y[:3], y[3:6], y[6:8], y[8:10], y[10:])[0]
 
     _, A = data.predict(model, x[:3], x[3:6], x[6:8], x[8:10], x[10:])
-    A_fd = _fourth_order_jacobian(f, x)   # the FRF is linear in each gain: exact to ~1e-13
+    A_fd = _fourth_order_jacobian(f, x)  # the FRF is linear in each gain: exact to ~1e-13
     scale = np.abs(A_fd).max(axis=1, keepdims=True)
     assert np.all(scale > 0)
     assert np.all(np.abs(A - A_fd) < 1e-6 * scale)
@@ -280,8 +324,11 @@ def test_differential_correction_identifies_gauge_and_motor_gains(frame):
     Mass held (the absolute scale); noise 0.1 % / 2 % / 1 % as in the stiffness test, 10 seeds.
     """
     model = _damped(frame)
-    p_true, mu_true, nu_true = np.array([1.0, 1.0 / 1.15, 1.0]), np.array([1.1, 0.95]), \
-        np.array([0.8])
+    p_true, mu_true, nu_true = (
+        np.array([1.0, 1.0 / 1.15, 1.0]),
+        np.array([1.1, 0.95]),
+        np.array([0.8]),
+    )
     ones = np.ones(3)
     items = _gain_items(model.n_dofs, mu_true, nu_true)
     for seed in range(10):
@@ -296,20 +343,28 @@ def test_differential_correction_identifies_gauge_and_motor_gains(frame):
             assert np.all(np.abs(est / true - 1) < 0.01)
     # mass free: scaling K, M, C and both gauge factors together leaves every FRF item (all
     # carry a gauge factor) and the free response unchanged
-    with pytest.raises(ValueError, match=r"not identifiable.*p\[0\].*q\[0\].*r\[0\].*mu\[0\]"
-                                         r".*mu\[1\]") as err:
+    with pytest.raises(
+        ValueError,
+        match=r"not identifiable.*p\[0\].*q\[0\].*r\[0\].*mu\[0\]"
+        r".*mu\[1\]",
+    ) as err:
         differential_correction(model, data)
     assert "nu[0]" not in str(err.value)  # the calibrated hammer fixes the motor relative
     # motor items only: every item carries a gauge factor and the motor constant, so only
     # their products are determined
-    motor = CorrectionData(frequencies=data.frequencies, frequency_sigma=data.frequency_sigma,
-                           damping_ratios=data.damping_ratios, damping_sigma=data.damping_sigma,
-                           frf=[item for item in data.frf if item[6] is not None])
+    motor = CorrectionData(
+        frequencies=data.frequencies,
+        frequency_sigma=data.frequency_sigma,
+        damping_ratios=data.damping_ratios,
+        damping_sigma=data.damping_sigma,
+        frf=[item for item in data.frf if item[6] is not None],
+    )
     with pytest.raises(ValueError, match=r"not identifiable.*mu\[0\].*mu\[1\].*nu\[0\]"):
         differential_correction(model, motor, fixed_mass=[0, 1, 2])
     # a calibrated motor (constant held at its true value) makes them identifiable again
-    res = differential_correction(model, motor, fixed_mass=[0, 1, 2], nu0=nu_true,
-                                  fixed_input_gains=[0])
+    res = differential_correction(
+        model, motor, fixed_mass=[0, 1, 2], nu0=nu_true, fixed_input_gains=[0]
+    )
     assert res.converged and np.array_equal(res.nu, nu_true)
     # fewer FRF items: predicted gauge SDs 0.38 / 0.35 %; within 4 of them
     sd = np.sqrt(np.diag(res.covariance))
@@ -323,18 +378,30 @@ def test_gain_errors(frame):
         CorrectionData(frf=[(3, 3, w, h, 1e-8, -1, None)])
     with pytest.raises(ValueError, match=r"frf\[0\].input_gain: must be None or an index >= 0"):
         CorrectionData(frf=[(3, 3, w, h, 1e-8, None, 1.0)])
-    with pytest.raises(ValueError, match=r"frf\[0\]: must be \(output, input, omegas, values, "
-                                         r"sigma\[, output_gain, input_gain\]\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"frf\[0\]: must be \(output, input, omegas, values, "
+        r"sigma\[, output_gain, input_gain\]\)",
+    ):
         CorrectionData(frf=[(3, 3, w, h, 1e-8, 0)])
     data = CorrectionData(frf=[(3, 3, w, h, 1e-8, 0, None), (10, 3, w, h, 1e-8, 1, 0)])
-    with pytest.raises(ValueError, match=r"frf\[1\].output_gain: must be < 1 \(the length of mu\), "
-                                         "got 1"):
+    with pytest.raises(
+        ValueError,
+        match=r"frf\[1\].output_gain: must be < 1 \(the length of mu\), "
+        "got 1",
+    ):
         data.predict(model, mu=[1.0])
-    with pytest.raises(ValueError, match=r"mu0: must have 2 entries \(one per output_gain 0..1 of "
-                                         r"data.frf\), got 3"):
+    with pytest.raises(
+        ValueError,
+        match=r"mu0: must have 2 entries \(one per output_gain 0..1 of "
+        r"data.frf\), got 3",
+    ):
         differential_correction(model, data, mu0=[1.0, 1.0, 1.0])
-    with pytest.raises(ValueError, match=r"mu0: must have 0 entries \(data.frf names no "
-                                         r"output_gain\), got 1"):
+    with pytest.raises(
+        ValueError,
+        match=r"mu0: must have 0 entries \(data.frf names no "
+        r"output_gain\), got 1",
+    ):
         differential_correction(model, CorrectionData(frf=[(3, 3, w, h, 1e-8)]), mu0=[1.0])
     with pytest.raises(ValueError, match="nu0: must be > 0"):
         differential_correction(model, data, nu0=[-0.8])
@@ -345,8 +412,13 @@ def test_gain_errors(frame):
     # gauge 0 wired with the opposite sign: the fit would need mu[0] = -1.1; steps to <= 0 are
     # refused, and the fit, creeping towards 0, says so instead of returning mu[0] ~ 0
     ones = np.ones(3)
-    flipped = _frame_data(model, np.array([1.0, 1.0 / 1.15, 1.0]), ones, np.ones(2),
-                          np.random.default_rng(0),
-                          _gain_items(model.n_dofs, np.array([-1.1, 0.95]), np.array([0.8])))
+    flipped = _frame_data(
+        model,
+        np.array([1.0, 1.0 / 1.15, 1.0]),
+        ones,
+        np.ones(2),
+        np.random.default_rng(0),
+        _gain_items(model.n_dofs, np.array([-1.1, 0.95]), np.array([0.8])),
+    )
     with pytest.raises(ValueError, match=r"mu\[0\]: the data want a gain <= 0.*check the sign"):
         differential_correction(model, flipped, fixed_mass=[0, 1, 2])

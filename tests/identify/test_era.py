@@ -43,8 +43,9 @@ def true_shapes(grid):
 
 
 def _impulse(grid, sensors, noise, seed=0):
-    return simulate_test(grid, impulse_hammer(1, "z", 10.0), sensors, DURATION, RATE,
-                         noise=noise, seed=seed)
+    return simulate_test(
+        grid, impulse_hammer(1, "z", 10.0), sensors, DURATION, RATE, noise=noise, seed=seed
+    )
 
 
 def _discrete_markov(grid, sensors, inputs, dt, n):
@@ -121,8 +122,9 @@ def test_markov_from_longer_pulse(grid):
 
 
 def test_noise_damping_sweep_trend(grid, sensors):
-    sweep = noise_damping_sweep(grid, [0.001, 0.01, 0.05], sensors, impulse_hammer(1, "z", 10.0),
-                                DURATION, RATE, seeds=(0,))
+    sweep = noise_damping_sweep(
+        grid, [0.001, 0.01, 0.05], sensors, impulse_hammer(1, "z", 10.0), DURATION, RATE, seeds=(0,)
+    )
     mean = sweep["damping_error"].mean(axis=1)
     assert sweep["damping_error"].shape == (3, 6)
     assert np.all(np.diff(mean) > 0)
@@ -152,7 +154,7 @@ def test_degenerate_inputs(grid, sensors):
 
 
 # ------------------------------------------------------------------------------ ERA from FRFs
-FRF_RATE, FRF_PERIOD = 100.0, 400.0   # Nyquist 50 Hz (4 x the 13 Hz top mode); 1/Δf = 400 s
+FRF_RATE, FRF_PERIOD = 100.0, 400.0  # Nyquist 50 Hz (4 x the 13 Hz top mode); 1/Δf = 400 s
 
 
 def _frf_grid(rate, period):
@@ -173,7 +175,7 @@ def _discrete_frf(grid, sensors, inputs, dt, freqs):
     return D[:, :, None] + np.einsum("qi,ir,il->qrl", cv, vb, 1 / (z[None, :] - lam[:, None]))
 
 
-@pytest.mark.filterwarnings("error")       # a well-sampled FRF must not report time aliasing
+@pytest.mark.filterwarnings("error")  # a well-sampled FRF must not report time aliasing
 def test_era_from_exact_discrete_frf(grid, sensors, true_shapes):
     """FRF of the discretized model: the inverse FFT returns its Markov parameters up to the
     time aliasing |λ|^N = exp(-ζ ω_1 T) = 7e-11 (mode 1, T = 400 s; measured 4e-11). ERA is
@@ -222,8 +224,9 @@ def test_era_from_continuous_frf(grid, sensors, true_shapes):
     om = 2 * np.pi * freqs
     w, z = grid.frequencies, grid.damping
     b = grid.force_input(1, "z")
-    H = np.einsum("qi,i,il->ql", true_shapes, b,
-                  1 / (w[:, None] ** 2 - om**2 + 2j * (z * w)[:, None] * om))[:, None, :]
+    H = np.einsum(
+        "qi,i,il->ql", true_shapes, b, 1 / (w[:, None] ** 2 - om**2 + 2j * (z * w)[:, None] * om)
+    )[:, None, :]
     Y, dt = markov_from_frf(freqs, H)
     for method in (era, era_dc):
         res = method(Y, dt=dt, order=12, reference_shapes=true_shapes)
@@ -283,8 +286,10 @@ def test_bootstrap_uncertainty_matches_the_scatter_over_noise_seeds(grid, sensor
     significant = mean > 3 * sem
     assert significant.sum() >= 3
     bias = boot.extra["damping_bias"][order]
-    assert np.all((bias[significant] / mean[significant] > 0.5)
-                  & (bias[significant] / mean[significant] < 2.0))
+    assert np.all(
+        (bias[significant] / mean[significant] > 0.5)
+        & (bias[significant] / mean[significant] < 2.0)
+    )
 
 
 def test_bootstrap_uncertainty_bad_input(grid, sensors):

@@ -20,7 +20,7 @@ def test_harmonic_steady_state_is_the_modal_frf(grid):
     w = 2 * np.pi * f
     sensor = Channel("displacement", 13, "z")
     meas = simulate_test(grid, harmonic_shaker(1, "z", 2.0, f), [sensor], 400.0, 100.0)
-    tail = meas.outputs[0, -int(20 * 100 / f):]  # last 20 periods
+    tail = meas.outputs[0, -int(20 * 100 / f) :]  # last 20 periods
     amplitude = 0.5 * np.ptp(tail)
     phi_i = grid.force_input(1, "z")
     phi_o = grid.displacement_output(13, "z")
@@ -32,8 +32,9 @@ def test_harmonic_steady_state_is_the_modal_frf(grid):
 def test_noise_is_the_stated_fraction_of_the_channel_rms(grid):
     sensor = Channel("displacement", 13, "z")
     clean = simulate_test(grid, harmonic_shaker(1, "z", 2.0, 1.5), [sensor], 60.0, 100.0)
-    noisy = simulate_test(grid, harmonic_shaker(1, "z", 2.0, 1.5), [sensor], 60.0, 100.0,
-                          noise=0.05, seed=3)
+    noisy = simulate_test(
+        grid, harmonic_shaker(1, "z", 2.0, 1.5), [sensor], 60.0, 100.0, noise=0.05, seed=3
+    )
     rms = np.sqrt(np.mean(clean.outputs[0] ** 2))
     # 6000 samples: the sample std is within 5 % of the target with overwhelming probability
     assert np.std(noisy.outputs[0] - clean.outputs[0]) == pytest.approx(0.05 * rms, rel=0.05)
@@ -60,8 +61,7 @@ def test_anti_alias_filters_give_the_continuous_frf_with_all_modes():
     wheel = random_force(9, "x", 0.05, load="torque")
     errors = {}
     for cut in (None, 20.0):
-        test = simulate_test(full, wheel, sensors, 600.0, 50.0, noise=0.01, seed=1,
-                             anti_alias=cut)
+        test = simulate_test(full, wheel, sensors, 600.0, 50.0, noise=0.01, seed=1, anti_alias=cut)
         frf = estimate_frf(test, 1000).frf
         band = (frf.abscissa > 0.3) & (frf.abscissa < 10.0)
         H = frequency_response(full, sensors, [wheel.channel], frf.abscissa[band])

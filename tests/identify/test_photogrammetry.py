@@ -5,30 +5,41 @@ import dataclasses
 import numpy as np
 import pytest
 from scipy import stats
-
 from scipy.optimize import least_squares
 
 from flexsat.identify.photogrammetry import (
-    CAMERA_PARAMETERS, DEFAULT_FREE, Camera, calibrate, calibration_counts, euler_angles, look_at,
+    CAMERA_PARAMETERS,
+    DEFAULT_FREE,
+    Camera,
+    calibrate,
+    calibration_counts,
+    euler_angles,
+    look_at,
     project,
-    rotation_matrix, simulate_centroids, triangulate)
+    rotation_matrix,
+    simulate_centroids,
+    triangulate,
+)
 
-PX = 1e-5      # 10 micrometre pixels
-F = 0.004      # 4 mm lens: the 320 x 244 field spans about +-0.4 x +-0.3 rad
+PX = 1e-5  # 10 micrometre pixels
+F = 0.004  # 4 mm lens: the 320 x 244 field spans about +-0.4 x +-0.3 rad
 
 
 def stereo_pair(euler="321", sign=-1, **kw):
     # the optical axes are skew (aimed at different points): with intersecting axes the two
     # focal lengths are not determined by image data (a classic two-view degeneracy)
-    return [Camera(position=p, angles=look_at(p, aim, euler, sign), f=F, euler=euler,
-                   focal_sign=sign, **kw)
-            for p, aim in (([-1.3, 0.2, 2.0], [0.0, 0.15, 0.0]),
-                           ([1.3, -0.2, 2.0], [0.0, -0.15, 0.0]))]
+    return [
+        Camera(
+            position=p, angles=look_at(p, aim, euler, sign), f=F, euler=euler, focal_sign=sign, **kw
+        )
+        for p, aim in (([-1.3, 0.2, 2.0], [0.0, 0.15, 0.0]), ([1.3, -0.2, 2.0], [0.0, -0.15, 0.0]))
+    ]
 
 
 def targets(rng, n=20):
-    t = np.column_stack([rng.uniform(-0.35, 0.35, n), rng.uniform(-0.3, 0.3, n),
-                         rng.uniform(-0.4, 0.4, n)])
+    t = np.column_stack(
+        [rng.uniform(-0.35, 0.35, n), rng.uniform(-0.3, 0.3, n), rng.uniform(-0.4, 0.4, n)]
+    )
     t[0] = 0.0
     t[1, 1:] = 0.0
     t[2, 2] = 0.0
@@ -58,15 +69,24 @@ def test_projection_hand_case():
     assert np.allclose(project(cam_r, pt), [2 * 2 / 5, 3 * -1 / 5])
     # Brown distortion on the ideal coordinates ub = 0.5, vb = 1.0 (r^2 = 1.25)
     k1, k2, p1, p2 = 0.01, 0.002, 0.003, -0.004
-    camd = Camera(position=[0, 0, 0], angles=[0, 0, 0], f=2.0, focal_sign=1, k1=k1, k2=k2, p1=p1,
-                  p2=p2)
+    camd = Camera(
+        position=[0, 0, 0], angles=[0, 0, 0], f=2.0, focal_sign=1, k1=k1, k2=k2, p1=p1, p2=p2
+    )
     ub, vb, r2 = 0.5, 1.0, 1.25
     du = ub * (k1 * r2 + k2 * r2**2) + p1 * (r2 + 2 * ub**2) + 2 * p2 * ub * vb
     dv = vb * (k1 * r2 + k2 * r2**2) + 2 * p1 * ub * vb + p2 * (r2 + 2 * vb**2)
     assert np.allclose(project(camd, pt), [ub + du, vb + dv])
     # the as-printed Att. 6 form (25)-(26) is a switch
-    camp = Camera(position=[0, 0, 0], angles=[0, 0, 0], f=2.0, focal_sign=1, k1=k1, p1=p1, p2=p2,
-                  distortion="printed")
+    camp = Camera(
+        position=[0, 0, 0],
+        angles=[0, 0, 0],
+        f=2.0,
+        focal_sign=1,
+        k1=k1,
+        p1=p1,
+        p2=p2,
+        distortion="printed",
+    )
     du = ub * k1 * r2 + p1 * (r2 + 2 * ub**2 * vb)
     dv = vb * k1 * r2 + p1 * (2 * ub**2 * vb) + p2 * (r2 + 2 * vb**2)
     assert np.allclose(project(camp, pt), [ub + du, vb + dv])
@@ -83,11 +103,11 @@ def test_euler_conventions_round_trip_and_formulas():
             assert np.allclose(c @ c.T, np.eye(3)) and np.isclose(np.linalg.det(c), 1.0)
             assert np.allclose(euler_angles(c, euler), a)
     phi, th, psi = 0.3, -0.2, 0.7
-    c = rotation_matrix([phi, th, psi], "321")   # Att. 8: R1(psi) R2(theta) R3(phi)
+    c = rotation_matrix([phi, th, psi], "321")  # Att. 8: R1(psi) R2(theta) R3(phi)
     assert np.allclose(c[0], [np.cos(th) * np.cos(phi), np.cos(th) * np.sin(phi), -np.sin(th)])
     assert np.isclose(c[1, 2], np.sin(psi) * np.cos(th))
     t1, t2, t3 = 0.3, -0.2, 0.7
-    c = rotation_matrix([t1, t2, t3], "123")     # Att. 6: R3(t3) R2(t2) R1(t1)
+    c = rotation_matrix([t1, t2, t3], "123")  # Att. 6: R3(t3) R2(t2) R1(t1)
     assert np.allclose(c[2], [np.sin(t2), -np.sin(t1) * np.cos(t2), np.cos(t1) * np.cos(t2)])
     assert not np.allclose(rotation_matrix([t1, t2, t3], "321"), c)
     with pytest.raises(ValueError, match="euler"):
@@ -107,13 +127,13 @@ def test_simulated_centroids_quantized_field_and_shapes():
     uv = simulate_centroids(cams, pts, PX, noise_px=0.3, seed=1)
     assert uv.shape == (2, 20, 2)
     frac = uv / PX - 0.5
-    assert np.allclose(frac, np.round(frac))                     # pixel centres
+    assert np.allclose(frac, np.round(frac))  # pixel centres
     assert np.max(np.abs(uv - np.stack([project(c, pts) for c in cams]))) < 2.5 * PX
     again = simulate_centroids(cams, pts, PX, noise_px=0.3, seed=1)
     assert np.array_equal(uv, again)
-    far = np.array([[5.0, 0.0, 0.0]])                            # outside the 320 x 244 field
+    far = np.array([[5.0, 0.0, 0.0]])  # outside the 320 x 244 field
     assert np.all(np.isnan(simulate_centroids(cams, far, PX, 0.0)))
-    hist = np.broadcast_to(pts, (7, 20, 3))                      # 7 fields (35 ms at 200 Hz)
+    hist = np.broadcast_to(pts, (7, 20, 3))  # 7 fields (35 ms at 200 Hz)
     assert simulate_centroids(cams, hist, PX, 0.1, seed=2).shape == (2, 7, 20, 2)
 
 
@@ -124,7 +144,7 @@ def test_counting_rule_att8():
     for n in (12, 20, 30):
         c = calibration_counts(n, 2, 9)
         assert c["equations"] == 4 * n and c["unknowns"] == 3 * n + 12
-    assert calibration_counts(20, 2, 10)["min_points"] == 14     # separate fx, fy
+    assert calibration_counts(20, 2, 10)["min_points"] == 14  # separate fx, fy
     rng = np.random.default_rng(1)
     cams = stereo_pair()
     pts = targets(rng, 11)
@@ -145,12 +165,20 @@ def _nees_trials(n_trials, free, prior):
         init = [perturbed(c, rng, free) for c in cams]
         if prior:
             guess = pts + rng.normal(0, prior, pts.shape)
-            res = calibrate(obs, init, guess, datum=None, scale=None, sigma=0.1 * PX, free=free,
-                            target_sigma=prior)
+            res = calibrate(
+                obs,
+                init,
+                guess,
+                datum=None,
+                scale=None,
+                sigma=0.1 * PX,
+                free=free,
+                target_sigma=prior,
+            )
         else:
             d = np.linalg.norm(pts[1] - pts[0])
             guess = pts.copy()
-            guess[3:] += rng.normal(0, 0.003, (len(pts) - 3, 3))   # datum points stay exact
+            guess[3:] += rng.normal(0, 0.003, (len(pts) - 3, 3))  # datum points stay exact
             res = calibrate(obs, init, guess, scale=(0, 1, d), sigma=0.1 * PX, free=free)
         est = np.concatenate([c.vector()[idx] for c in res.cameras])
         tru = np.concatenate([c.vector()[idx] for c in cams])
@@ -166,7 +194,7 @@ def _nees_trials(n_trials, free, prior):
 def test_calibration_with_a_priori_targets_within_3_sigma():
     """Att. 6 resection: 2 cameras x 9 parameters, 20 targets with 0.3 mm a-priori positions."""
     z, nees, k = _nees_trials(100, DEFAULT_FREE, prior=3e-4)
-    assert np.mean(np.abs(z) > 3) <= 0.02          # per parameter: 0.27 % expected
+    assert np.mean(np.abs(z) > 3) <= 0.02  # per parameter: 0.27 % expected
     # The joint NEES has a heavier tail than chi2(18): this two-view geometry is weak (x0, f and
     # attitude trade off), so the linearised covariance is curved ("banana") across trials.
     assert np.median(nees) < stats.chi2.ppf(0.99, k)
@@ -205,7 +233,7 @@ def test_calibration_degenerate_inputs():
     with pytest.raises(ValueError, match="datum frame"):
         calibrate(obs, cams, pts + 0.1, scale=(0, 1, 0.1))
     bad = pts.copy()
-    bad[2] = [0.2, 0.0, 0.0]                                     # datum points collinear
+    bad[2] = [0.2, 0.0, 0.0]  # datum points collinear
     with pytest.raises(ValueError, match="^datum"):
         calibrate(obs, cams, bad, scale=(0, 1, 0.1))
     with pytest.raises(ValueError, match="^initial_cameras"):
@@ -243,15 +271,15 @@ def test_dynamic_triangulation_time_history_shape_and_quantization():
     rng = np.random.default_rng(8)
     cams = stereo_pair()
     base = targets(rng, 20)
-    t = np.arange(40) / 200.0                                    # 200 Hz fields
+    t = np.arange(40) / 200.0  # 200 Hz fields
     motion = base + np.outer(0.01 * np.sin(2 * np.pi * 2.0 * t), [0, 0, 1.0])[:, None, :]
     uv = simulate_centroids(cams, motion, PX, 0.0, quantize=True)
-    sigma_q = PX / np.sqrt(12.0)                                 # quantization noise
+    sigma_q = PX / np.sqrt(12.0)  # quantization noise
     est, cov = triangulate(cams, uv, sigma_q)
     assert est.shape == (40, 20, 3) and cov.shape == (40, 20, 3, 3)
     err = (est - motion).reshape(-1, 3)
     nees = np.einsum("ka,kab,kb->k", err, np.linalg.inv(cov.reshape(-1, 3, 3)), err)
-    assert 1.5 < nees.mean() < 4.5                               # about 3: quantization ~ uniform
+    assert 1.5 < nees.mean() < 4.5  # about 3: quantization ~ uniform
 
 
 def test_triangulation_degenerate_inputs():
@@ -266,7 +294,7 @@ def test_triangulation_degenerate_inputs():
         triangulate(cams, np.full_like(uv, np.nan), PX)
     with pytest.raises(ValueError, match="^pixel_sigma"):
         triangulate(cams, uv, -1.0)
-    same = [cams[0], cams[0]]                                    # coincident cameras: parallel rays
+    same = [cams[0], cams[0]]  # coincident cameras: parallel rays
     with pytest.raises(ValueError, match="parallel|singular"):
         triangulate(same, np.stack([uv[0], uv[0]]), PX)
 
@@ -287,8 +315,9 @@ def calibrated_rig():
     obs = simulate_centroids(cams, pts, PX, 0.1, quantize=False, seed=4)
     init = [perturbed(c, rng, RIG_FREE) for c in cams]
     guess = pts + rng.normal(0, 3e-4, pts.shape)
-    return calibrate(obs, init, guess, datum=None, scale=None, sigma=0.1 * PX,
-                     target_sigma=3e-4, free=RIG_FREE)
+    return calibrate(
+        obs, init, guess, datum=None, scale=None, sigma=0.1 * PX, target_sigma=3e-4, free=RIG_FREE
+    )
 
 
 def _sample_cameras(res, rng, scale=1.0):
@@ -296,7 +325,7 @@ def _sample_cameras(res, rng, scale=1.0):
     lam, vec = np.linalg.eigh(res.full_camera_covariance())
     dev = scale * vec @ (np.sqrt(np.clip(lam, 0, None)) * rng.standard_normal(lam.size))
     n = len(CAMERA_PARAMETERS)
-    return [c.with_vector(c.vector() + dev[j * n:(j + 1) * n]) for j, c in enumerate(res.cameras)]
+    return [c.with_vector(c.vector() + dev[j * n : (j + 1) * n]) for j, c in enumerate(res.cameras)]
 
 
 def test_full_camera_covariance_layout(calibrated_rig):
@@ -308,10 +337,9 @@ def test_full_camera_covariance_layout(calibrated_rig):
     for j in range(2):
         var_f = res.covariance[res.names.index(f"cam{j}.f"), res.names.index(f"cam{j}.f")]
         assert full[j * n + fx, j * n + fx] == full[j * n + fx, j * n + fy] == var_f
-        assert not np.any(full[j * n + k1])                          # k1 held fixed
+        assert not np.any(full[j * n + k1])  # k1 held fixed
     xc0, xc1 = CAMERA_PARAMETERS.index("xc"), n + CAMERA_PARAMETERS.index("xc")
-    assert full[xc0, xc1] == res.covariance[res.names.index("cam0.xc"),
-                                            res.names.index("cam1.xc")]
+    assert full[xc0, xc1] == res.covariance[res.names.index("cam0.xc"), res.names.index("cam1.xc")]
 
 
 def test_triangulation_with_camera_covariance_monte_carlo(calibrated_rig):
@@ -331,8 +359,9 @@ def test_triangulation_with_camera_covariance_monte_carlo(calibrated_rig):
     pts = targets(np.random.default_rng(99), k)
     uv = np.empty((2, n_trials, k, 2))
     for t in range(n_trials):
-        uv[:, t] = simulate_centroids(_sample_cameras(res, rng), pts, PX, noise, quantize=False,
-                                      seed=1000 + t, field_px=None)
+        uv[:, t] = simulate_centroids(
+            _sample_cameras(res, rng), pts, PX, noise, quantize=False, seed=1000 + t, field_px=None
+        )
     lo, hi = stats.chi2.ppf([0.005 / k, 1 - 0.005 / k], 3 * n_trials)
     est, cov = triangulate(res.cameras, uv, noise * PX, camera_covariance=res)
     err = est - pts
@@ -360,17 +389,26 @@ def test_eliminated_form_equals_att6_augmented_least_squares(calibrated_rig):
     res = calibrated_rig
     sel = [i for i, n in enumerate(res.names) if n.startswith("cam")]
     names = [res.names[i].split(".") for i in sel]
-    c_meas = np.array([res.cameras[int(cam[3:])].vector()[
-        CAMERA_PARAMETERS.index("fx" if name == "f" else name)] for cam, name in names])
+    c_meas = np.array(
+        [
+            res.cameras[int(cam[3:])].vector()[
+                CAMERA_PARAMETERS.index("fx" if name == "f" else name)
+            ]
+            for cam, name in names
+        ]
+    )
     n_free = len(RIG_FREE)
 
     def cameras_from(c):
         out = []
         for j, cam in enumerate(res.cameras):
             v = cam.vector()
-            for name, val in zip(RIG_FREE, c[j * n_free:(j + 1) * n_free]):
-                v[[CAMERA_PARAMETERS.index("fx"), CAMERA_PARAMETERS.index("fy")]
-                  if name == "f" else CAMERA_PARAMETERS.index(name)] = val
+            for name, val in zip(RIG_FREE, c[j * n_free : (j + 1) * n_free]):
+                v[
+                    [CAMERA_PARAMETERS.index("fx"), CAMERA_PARAMETERS.index("fy")]
+                    if name == "f"
+                    else CAMERA_PARAMETERS.index(name)
+                ] = val
             out.append(cam.with_vector(v))
         return out
 
@@ -378,21 +416,35 @@ def test_eliminated_form_equals_att6_augmented_least_squares(calibrated_rig):
     for scale, tol in ((1.0, 1e-2), (0.01, 1e-4)):
         sigma = 0.05 * PX * scale
         cam_cov = res.covariance[np.ix_(sel, sel)] * scale**2
-        uv = simulate_centroids(_sample_cameras(res, np.random.default_rng(8), scale), pts, PX,
-                                0.05 * scale, quantize=False, seed=2, field_px=None)
-        est, cov = triangulate(res.cameras, uv, sigma,
-                               camera_covariance=res.full_camera_covariance() * scale**2)
+        uv = simulate_centroids(
+            _sample_cameras(res, np.random.default_rng(8), scale),
+            pts,
+            PX,
+            0.05 * scale,
+            quantize=False,
+            seed=2,
+            field_px=None,
+        )
+        est, cov = triangulate(
+            res.cameras, uv, sigma, camera_covariance=res.full_camera_covariance() * scale**2
+        )
         whiten = np.linalg.inv(np.linalg.cholesky(cam_cov))
         for i, p in enumerate(pts):
+
             def residuals(x, obs=uv[:, i]):
                 pred = np.stack([project(c, x[:3]) for c in cameras_from(x[3:])])
                 return np.concatenate([((obs - pred) / sigma).ravel(), whiten @ (x[3:] - c_meas)])
 
-            sol = least_squares(residuals, np.concatenate([p, c_meas]), method="lm",
-                                x_scale=np.concatenate([np.full(3, 1e-3 * scale),
-                                                        np.sqrt(np.diag(cam_cov))]),
-                                xtol=1e-15, ftol=1e-15, gtol=1e-15)
-            aug = np.linalg.inv(sol.jac.T @ sol.jac)[:3, :3]             # eq. (37), p-block
+            sol = least_squares(
+                residuals,
+                np.concatenate([p, c_meas]),
+                method="lm",
+                x_scale=np.concatenate([np.full(3, 1e-3 * scale), np.sqrt(np.diag(cam_cov))]),
+                xtol=1e-15,
+                ftol=1e-15,
+                gtol=1e-15,
+            )
+            aug = np.linalg.inv(sol.jac.T @ sol.jac)[:3, :3]  # eq. (37), p-block
             std = np.sqrt(np.diag(aug))
             assert np.all(np.abs(sol.x[:3] - est[i]) < tol * std), scale
             assert np.max(np.abs(cov[i] - aug)) < tol * np.max(np.outer(std, std)), scale
@@ -426,8 +478,9 @@ def _opencv_camera(cv2, cam):
     """Camera matrix (pixels, principal point at the detector centre), rvec, tvec (mapping in
     the photogrammetry module docstring)."""
     s = cam.focal_sign
-    k = np.array([[s * cam.fx / PX, 0.0, cam.x0 / PX], [0.0, s * cam.fy / PX, cam.y0 / PX],
-                  [0.0, 0.0, 1.0]])
+    k = np.array(
+        [[s * cam.fx / PX, 0.0, cam.x0 / PX], [0.0, s * cam.fy / PX, cam.y0 / PX], [0.0, 0.0, 1.0]]
+    )
     rvec = cv2.Rodrigues(cam.matrix)[0]
     return k, rvec, -cam.matrix @ np.asarray(cam.position)
 
@@ -446,8 +499,7 @@ def test_projection_matches_opencv_with_brown_distortion(euler, sign):
         dist = np.array([cam.k1 * f**2, cam.k2 * f**4, sign * cam.p2 * f, sign * cam.p1 * f, 0.0])
         theirs = cv2.projectPoints(pts, rvec, tvec, k, dist)[0].reshape(-1, 2)
         ours = project(cam, pts) / PX
-        plain = project(dataclasses.replace(cam, f=None, k1=0.0, k2=0.0, p1=0.0, p2=0.0),
-                        pts) / PX
+        plain = project(dataclasses.replace(cam, f=None, k1=0.0, k2=0.0, p1=0.0, p2=0.0), pts) / PX
         assert np.max(np.abs(ours - plain)) > 1.0
         assert np.max(np.abs(theirs - ours)) < 1e-9
 
@@ -460,8 +512,10 @@ def test_rectangular_pixels_and_triangulation_match_opencv(euler, sign):
     held to 1e-10 m (a 1 m scene, SVD roundoff)."""
     cv2 = pytest.importorskip("cv2")
     pts = targets(np.random.default_rng(4), 50)
-    cams = [dataclasses.replace(c, f=None, fx=F, fy=1.1 * F)
-            for c in stereo_pair(euler, sign, x0=2e-5, y0=-1e-5)]
+    cams = [
+        dataclasses.replace(c, f=None, fx=F, fy=1.1 * F)
+        for c in stereo_pair(euler, sign, x0=2e-5, y0=-1e-5)
+    ]
     proj = []
     for cam in cams:
         k, rvec, tvec = _opencv_camera(cv2, cam)
@@ -479,9 +533,13 @@ def test_rectangular_pixels_and_triangulation_match_opencv(euler, sign):
 def test_look_at_puts_the_target_on_the_optical_axis():
     """The aimed point projects to the principal point, in both focal-sign conventions."""
     for euler, sign in (("321", -1), ("123", 1)):
-        cam = Camera(position=[1.0, 0.4, 2.0], angles=look_at([1.0, 0.4, 2.0], [0.1, 0.2, 0.0],
-                                                            euler, sign),
-                     f=F, euler=euler, focal_sign=sign)
+        cam = Camera(
+            position=[1.0, 0.4, 2.0],
+            angles=look_at([1.0, 0.4, 2.0], [0.1, 0.2, 0.0], euler, sign),
+            f=F,
+            euler=euler,
+            focal_sign=sign,
+        )
         assert np.allclose(project(cam, [0.1, 0.2, 0.0]), 0.0, atol=1e-15)
         # a point in front, off axis, projects off the principal point
         assert np.abs(project(cam, [0.3, 0.2, 0.0])).max() > 1e-4
@@ -491,9 +549,21 @@ def test_look_at_puts_the_target_on_the_optical_axis():
 
 ATT6_FREE = ("xc", "yc", "zc", "a1", "a2", "a3", "fx", "fy", "x0", "y0", "k1", "p1", "p2")
 #: a-priori camera uncertainty matching ``perturbed`` (distortion: ~0.1 px at the field edge)
-ATT6_SIGMA = {"xc": 0.02, "yc": 0.02, "zc": 0.02, "a1": 0.01, "a2": 0.01, "a3": 0.01,
-              "fx": 0.01 * F, "fy": 0.01 * F, "x0": 1e-5, "y0": 1e-5, "k1": 1e3, "p1": 0.03,
-              "p2": 0.03}
+ATT6_SIGMA = {
+    "xc": 0.02,
+    "yc": 0.02,
+    "zc": 0.02,
+    "a1": 0.01,
+    "a2": 0.01,
+    "a3": 0.01,
+    "fx": 0.01 * F,
+    "fy": 0.01 * F,
+    "x0": 1e-5,
+    "y0": 1e-5,
+    "k1": 1e3,
+    "p1": 0.03,
+    "p2": 0.03,
+}
 
 
 def _att6_trial(trial):
@@ -503,8 +573,17 @@ def _att6_trial(trial):
     obs = simulate_centroids(cams, pts, PX, 0.1, quantize=False, seed=trial)
     init = [perturbed(c, rng, ATT6_FREE) for c in cams]
     guess = pts + rng.normal(0, 3e-4, pts.shape)
-    res = calibrate(obs, init, guess, datum=None, scale=None, sigma=0.1 * PX, free=ATT6_FREE,
-                    target_sigma=3e-4, camera_sigma=ATT6_SIGMA)
+    res = calibrate(
+        obs,
+        init,
+        guess,
+        datum=None,
+        scale=None,
+        sigma=0.1 * PX,
+        free=ATT6_FREE,
+        target_sigma=3e-4,
+        camera_sigma=ATT6_SIGMA,
+    )
     idx = [CAMERA_PARAMETERS.index(n) for n in ATT6_FREE]
     err = np.concatenate([a.vector()[idx] - b.vector()[idx] for a, b in zip(res.cameras, cams)])
     return res, err / np.sqrt(np.diag(res.covariance)[: err.size])
@@ -548,23 +627,31 @@ def test_calibration_with_targets_out_of_view():
     cams = stereo_pair()
     pts = targets(rng)
     obs = simulate_centroids(cams, pts, PX, 0.1, quantize=False, seed=2)
-    obs[0, [5, 6]] = np.nan                       # camera 0 misses targets 5 and 6
-    obs[1, 7] = np.nan                            # camera 1 misses target 7
+    obs[0, [5, 6]] = np.nan  # camera 0 misses targets 5 and 6
+    obs[1, 7] = np.nan  # camera 1 misses target 7
     init = [perturbed(c, rng, DEFAULT_FREE) for c in cams]
     guess = pts + rng.normal(0, 3e-4, pts.shape)
-    res = calibrate(obs, init, guess, datum=None, scale=None, sigma=0.1 * PX,
-                    target_sigma=3e-4)
+    res = calibrate(obs, init, guess, datum=None, scale=None, sigma=0.1 * PX, target_sigma=3e-4)
     assert res.counts["equations"] == 2 * (2 * 20 - 3)
     assert np.all(np.isnan(res.residuals_px[0, [5, 6]]))
     assert np.all(np.isfinite(res.residuals_px[1, 5]))
     idx = [CAMERA_PARAMETERS.index("fx" if n == "f" else n) for n in DEFAULT_FREE]
     err = np.concatenate([a.vector()[idx] - b.vector()[idx] for a, b in zip(res.cameras, cams)])
     assert np.all(np.abs(err) < 4 * np.sqrt(np.diag(res.covariance)[: err.size]))
-    with pytest.raises(ValueError, match=r"observations: targets \[5, 6, 7\] are seen by fewer "
-                                         r"than 2 camera"):
+    with pytest.raises(
+        ValueError,
+        match=r"observations: targets \[5, 6, 7\] are seen by fewer "
+        r"than 2 camera",
+    ):
         d = np.linalg.norm(pts[1])
-        calibrate(obs, cams, pts, scale=(0, 1, d), sigma=0.1 * PX,
-                  free=("xc", "yc", "zc", "a1", "a2", "a3", "f"))
+        calibrate(
+            obs,
+            cams,
+            pts,
+            scale=(0, 1, d),
+            sigma=0.1 * PX,
+            free=("xc", "yc", "zc", "a1", "a2", "a3", "f"),
+        )
     half = obs.copy()
     half[1, 3, 0] = np.nan
     with pytest.raises(ValueError, match="observations: an unseen target must be NaN in both"):

@@ -28,8 +28,15 @@ def test_model_frf_static_limit_and_resonance(grid):
     static = np.sum(c * b / grid.frequencies**2)
     assert H[0, 0, 0].real == pytest.approx(static, rel=1e-9)
     resonant = c[0] * b[0] / (2j * 0.05 * grid.frequencies[0] ** 2)
-    others = np.sum(c[1:] * b[1:] / (grid.frequencies[1:] ** 2 - grid.frequencies[0] ** 2
-                                     + 2j * 0.05 * grid.frequencies[1:] * grid.frequencies[0]))
+    others = np.sum(
+        c[1:]
+        * b[1:]
+        / (
+            grid.frequencies[1:] ** 2
+            - grid.frequencies[0] ** 2
+            + 2j * 0.05 * grid.frequencies[1:] * grid.frequencies[0]
+        )
+    )
     assert H[0, 0, 1] == pytest.approx(resonant + others, rel=1e-9)
 
 
@@ -39,8 +46,7 @@ def test_h1_two_uncorrelated_inputs_match_model(grid):
     half-power band of the 5 %-damped first mode (Welch bias ~1 % at the peak); the random error
     of ~100 averages is ~1/sqrt(100) x the noise-to-signal ratio."""
     ins = [random_force(1, "z", 1.0), random_force(7, "x", 1.0, load="torque")]
-    test = simulate_test(grid, ins, SENSORS, duration=2000.0, sample_rate=40.0, noise=0.02,
-                         seed=3)
+    test = simulate_test(grid, ins, SENSORS, duration=2000.0, sample_rate=40.0, noise=0.02, seed=3)
     est = estimate_frf(test, segment=1600)
     frf, coh = est.frf, est.coherence
     assert np.all(coh <= 1.0 + 1e-9)
@@ -79,8 +85,11 @@ def test_zoh_frf_tends_to_continuous_as_sampling_gets_fast(grid):
     ins = [Channel("force", 1, "z")]
     f = np.array([0.5, 2.0, 4.0])
     H = frequency_response(grid, SENSORS, ins, f)
-    errs = [np.abs(frequency_response(grid, SENSORS, ins, f, sample_rate=fs) - H).max()
-            / np.abs(H).max() for fs in (1e3, 1e4)]
+    errs = [
+        np.abs(frequency_response(grid, SENSORS, ins, f, sample_rate=fs) - H).max()
+        / np.abs(H).max()
+        for fs in (1e3, 1e4)
+    ]
     assert errs[1] < errs[0] / 8 and errs[1] < 2e-3
 
 
@@ -108,17 +117,19 @@ def test_h1_random_error_matches_the_scatter_over_tests(grid):
     ratios = {}
     errs, preds = [], []
     for seed in range(16):
-        test = simulate_test(grid, ins, sensors, duration=400.0, sample_rate=20.0, noise=0.05,
-                             seed=seed)
+        test = simulate_test(
+            grid, ins, sensors, duration=400.0, sample_rate=20.0, noise=0.05, seed=seed
+        )
         est = estimate_frf(test, segment=400)
         k = [int(np.argmin(np.abs(est.frf.abscissa - f))) for f in f_pick]
-        H = frequency_response(grid, sensors, [e.channel for e in ins], est.frf.abscissa[k],
-                               sample_rate=20.0)
+        H = frequency_response(
+            grid, sensors, [e.channel for e in ins], est.frf.abscissa[k], sample_rate=20.0
+        )
         errs.append(est.frf.outputs[:, :, k] - H)
         preds.append(est.std[:, :, k])
     errs, preds = np.array(errs), np.array(preds)
-    assert np.abs(H[0, 1]).max() < 1e-12 * np.abs(H).max()        # zero by symmetry
+    assert np.abs(H[0, 1]).max() < 1e-12 * np.abs(H).max()  # zero by symmetry
     for part in (np.real, np.imag):
-        rms = np.sqrt(np.mean(part(errs) ** 2, axis=(0, 3)))        # (q, r)
+        rms = np.sqrt(np.mean(part(errs) ** 2, axis=(0, 3)))  # (q, r)
         ratios = rms / np.sqrt(np.mean(preds**2, axis=(0, 3)))
         assert np.all((ratios > 0.7) & (ratios < 1.4)), ratios

@@ -82,8 +82,17 @@ def test_model_update_recovers_15_percent_stiffness_error(frame, noise):
 
 
 # ------------------------------------------------------------------------------------------------
-ARM = dict(L1=5.0, L2=4.0, n_el=4, E=1.45297e11, rho=2700.0, k_base=1.0209, k_joint=18.2436,
-           tip_mass=20.0, tip_inertia=0.5)  # E, k_base, k_joint tuned to modes 1-3 of Table 2
+ARM = dict(
+    L1=5.0,
+    L2=4.0,
+    n_el=4,
+    E=1.45297e11,
+    rho=2700.0,
+    k_base=1.0209,
+    k_joint=18.2436,
+    tip_mass=20.0,
+    tip_inertia=0.5,
+)  # E, k_base, k_joint tuned to modes 1-3 of Table 2
 
 
 def _arm():
@@ -129,8 +138,10 @@ def _eigenvalue_roundoff(K, M, phi):
     a = np.abs(phi)
     kinetic = np.einsum("ij,ij->j", phi, M @ phi)
     strain = np.einsum("ij,ij->j", phi, K @ phi)
-    return EPS * (np.einsum("ij,ij->j", a, np.abs(K) @ a) / strain
-                  + np.einsum("ij,ij->j", a, np.abs(M) @ a) / kinetic)
+    return EPS * (
+        np.einsum("ij,ij->j", a, np.abs(K) @ a) / strain
+        + np.einsum("ij,ij->j", a, np.abs(M) @ a) / kinetic
+    )
 
 
 def _exact_eigenvalue_enclosure(K, M, X):
@@ -204,8 +215,9 @@ def test_example1_arm_recovers_first_five_frequencies():
     assert np.all(np.abs(w_start / w_true / np.sqrt(0.9 / 1.1) - 1) <= floor)
     # no FRF: the (wrong) mass is the held scale; stiffness 4 groups from 5 frequencies
     res = identify_undamped(arm, w_true, p0=p0, q0=q0)
-    paper_err = np.abs(np.array([0.0230, 1.066, 55.55, 91.19, 156.98])
-                       / [0.0230, 1.062, 55.44, 91.12, 156.75] - 1)
+    paper_err = np.abs(
+        np.array([0.0230, 1.066, 55.55, 91.19, 156.98]) / [0.0230, 1.062, 55.44, 91.12, 156.75] - 1
+    )
     err = np.abs(res.frequencies / w_true - 1)
     assert np.all(err <= np.maximum(paper_err, floor))
     # the stiffness scalings solve for the eigenvalues: each identified p then carries the
@@ -246,24 +258,36 @@ def test_example2_damped_truss_table3_pattern():
     truss = substructures_from_builder(_truss_builder, 2, names=("chords", "diagonals"))
     assert np.abs(truss.K0).max() > 0  # verticals: fixed part
     scale = (6.73 / truss.modes(n_modes=1)[0][0]) ** 2  # E calibrated: mode 1 at 6.73 rad/s
-    truss = SubstructureModel([scale * K for K in truss.K_blocks], truss.M_blocks,
-                              K0=scale * truss.K0, M0=truss.M0, names=truss.names)
+    truss = SubstructureModel(
+        [scale * K for K in truss.K_blocks],
+        truss.M_blocks,
+        K0=scale * truss.K0,
+        M0=truss.M0,
+        names=truss.names,
+    )
     K_t, M_t = truss.K(), truss.M()
     a_ext, b_int = 0.175, 1.0e-7  # external (mass-proportional) + internal (stiffness-prop.)
     lam_true = damped_eigenvalues(K_t, M_t, a_ext * M_t + b_int * K_t, n_modes=8)
     assert np.all(np.abs(lam_true.real + 0.09) < 0.01)  # Table 3: real parts ~ -0.09
     rng = np.random.default_rng(3)  # noise model: SD 1 % of each part (Att. 7, L3016)
-    lam_meas = lam_true.real * (1 + 0.01 * rng.standard_normal(8)) \
-        + 1j * lam_true.imag * (1 + 0.01 * rng.standard_normal(8))
+    lam_meas = lam_true.real * (1 + 0.01 * rng.standard_normal(8)) + 1j * lam_true.imag * (
+        1 + 0.01 * rng.standard_normal(8)
+    )
     # a-priori model: mass +10 %, stiffness -10 %, damping blocks with the right coupling but
     # magnitudes off by orders of magnitude
-    model = SubstructureModel(truss.K_blocks, truss.M_blocks,
-                              [50.0 * 1.1 * M_t, 1e-4 * 0.9 * K_t], K0=truss.K0, M0=truss.M0)
+    model = SubstructureModel(
+        truss.K_blocks,
+        truss.M_blocks,
+        [50.0 * 1.1 * M_t, 1e-4 * 0.9 * K_t],
+        K0=truss.K0,
+        M0=truss.M0,
+    )
     p0, q0 = 0.9 * np.ones(2), 1.1 * np.ones(2)
     w0, _ = model.modes(p0, q0, n_modes=8)
     assert np.all(w0 < 0.95 * lam_true.imag)  # like Table 3's lambda_0 column
-    res = update_model(model, lam_meas.imag, lam_meas, p0=p0, q0=q0,
-                       frequency_sigma=0.01 * lam_meas.imag)
+    res = update_model(
+        model, lam_meas.imag, lam_meas, p0=p0, q0=q0, frequency_sigma=0.01 * lam_meas.imag
+    )
     lam_f = res.damping.eigenvalues
     # identified frequencies within the paper's error (Table 3: up to 2.5 % from measured)
     assert np.all(np.abs(lam_f.imag / lam_true.imag - 1) < 0.025)
@@ -320,8 +344,9 @@ def test_fit_modal_normalization_exact_for_complete_modes(frame):
     h = np.array([np.linalg.solve(K - x**2 * M, np.eye(len(K))[3])[5] for x in wf])
     m = 4
     known = (phi[5, m:] * phi[3, m:] / (w[m:][None, :] ** 2 - wf[:, None] ** 2)).sum(1)
-    alpha, a1, a2 = fit_modal_normalization((5, 3, wf, h), 2.0 * phi[:, :m], w[:m],
-                                            known_part=[known])
+    alpha, a1, a2 = fit_modal_normalization(
+        (5, 3, wf, h), 2.0 * phi[:, :m], w[:m], known_part=[known]
+    )
     assert np.allclose(alpha, 0.25, rtol=1e-6) and abs(a2[0]) < 1e-9 * np.abs(h).max()
 
 
@@ -330,8 +355,10 @@ def _arm_frf(arm, pairs, omegas):
     """Receptance elements of the true arm, direct solve of (K - w^2 M) x = e_k."""
     K, M = arm.K(), arm.M()
     eye = np.eye(arm.n_dofs)
-    return [(j, k, omegas, np.array([np.linalg.solve(K - w**2 * M, eye[k])[j] for w in omegas]))
-            for j, k in pairs]
+    return [
+        (j, k, omegas, np.array([np.linalg.solve(K - w**2 * M, eye[k])[j] for w in omegas]))
+        for j, k in pairs
+    ]
 
 
 # FRF points away from the resonances of both the true arm (0.023, 1.06, 55.4, 95.7, 207 rad/s)
@@ -355,22 +382,32 @@ def test_example1_arm_frf_identifies_mass_and_stiffness():
     # eigenvalues' componentwise floor (2e-8 on the base-spring mode, far below tol)
     tol = 1e-6
     assert _eigenvalue_roundoff(arm.K(), arm.M(), arm.modes(n_modes=5)[1]).max() < 0.1 * tol
-    res = identify_undamped(arm, w_true, frf=clean, p0=p0, q0=q0, tol=tol,
-                            frequency_sigma=1e-3 * w_true, frf_sigma=5e-3)
+    res = identify_undamped(
+        arm, w_true, frf=clean, p0=p0, q0=q0, tol=tol, frequency_sigma=1e-3 * w_true, frf_sigma=5e-3
+    )
     assert res.converged
     assert np.abs(res.p - 1).max() < tol and np.abs(res.q - 1).max() < tol
     assert np.allclose(res.alpha, 1.0, rtol=0, atol=tol)  # model shapes: alpha = 1 at the solution
     # measured shapes at 3x the mass-normalised scale: Eq. 4 alpha = 1/9, same scalings
     _, phi = arm.modes(n_modes=5)
-    shaped = identify_undamped(arm, w_true, measured_shapes=3.0 * phi, frf=clean, p0=p0, q0=q0,
-                               tol=tol)
+    shaped = identify_undamped(
+        arm, w_true, measured_shapes=3.0 * phi, frf=clean, p0=p0, q0=q0, tol=tol
+    )
     assert shaped.converged and np.allclose(shaped.alpha, 1 / 9, rtol=tol, atol=0)
     assert np.abs(shaped.p - 1).max() < tol and np.abs(shaped.q - 1).max() < tol
     sd_two = np.sqrt(np.diag(res.covariance))
     # the paper's single element sees the tip inertia (mass III) mainly through the shapes:
     # exact again, but its predicted SD is 3x worse than with the second element
-    one = identify_undamped(arm, w_true, frf=clean[:1], p0=p0, q0=q0, tol=tol,
-                            frequency_sigma=1e-3 * w_true, frf_sigma=5e-3)
+    one = identify_undamped(
+        arm,
+        w_true,
+        frf=clean[:1],
+        p0=p0,
+        q0=q0,
+        tol=tol,
+        frequency_sigma=1e-3 * w_true,
+        frf_sigma=5e-3,
+    )
     assert np.abs(one.p - 1).max() < tol and np.abs(one.q - 1).max() < tol
     sd_one = np.sqrt(np.diag(one.covariance))
     assert sd_one[6] > 2.5 * sd_two[6]
@@ -380,8 +417,16 @@ def test_example1_arm_frf_identifies_mass_and_stiffness():
         rng = np.random.default_rng(seed)
         w_meas = w_true * (1 + 1e-3 * rng.standard_normal(5))
         frf = [(j, k, w, h * (1 + 5e-3 * rng.standard_normal(h.size))) for j, k, w, h in clean]
-        r = identify_undamped(arm, w_meas, frf=frf, p0=p0, q0=q0, tol=1e-6,
-                              frequency_sigma=1e-3 * w_meas, frf_sigma=5e-3)
+        r = identify_undamped(
+            arm,
+            w_meas,
+            frf=frf,
+            p0=p0,
+            q0=q0,
+            tol=1e-6,
+            frequency_sigma=1e-3 * w_meas,
+            frf_sigma=5e-3,
+        )
         assert r.converged
         est.append(np.r_[r.p, r.q])
         sds.append(np.sqrt(np.diag(r.covariance)))
@@ -414,8 +459,9 @@ def test_mass_prior_regularises_toward_start():
     assert sd_reg[6] < 0.02 and sd_reg[6] < 0.5 * sd_free[6]
     # a prior far tighter than the data (1e-6) holds the wrong start mass x 1.1: the frequencies
     # then fix only the K/M ratio, so the stiffness comes out x 1.1 as well
-    held = identify_undamped(arm, w_true, p0=0.9 * np.ones(4), q0=1.1 * np.ones(4),
-                             mass_prior_sigma=1e-6, **kw)
+    held = identify_undamped(
+        arm, w_true, p0=0.9 * np.ones(4), q0=1.1 * np.ones(4), mass_prior_sigma=1e-6, **kw
+    )
     assert np.allclose(held.q, 1.1, rtol=1e-4) and np.allclose(held.p, 1.1, rtol=1e-3)
     with pytest.raises(ValueError, match="mass_prior_sigma: needs frf_sigma"):
         identify_undamped(arm, w_true, frf=frf, mass_prior_sigma=0.02)
@@ -434,8 +480,7 @@ def proportional(frame):
     Proportional damping keeps the undamped modes, so Eq. 24 is exact here: sigma_r =
     -(a + b w_r^2)/2 and the identified r is (a, b) to the eigen-solve's rounding."""
     damped = SubstructureModel(frame.K_blocks, frame.M_blocks, [frame.M(), frame.K()])
-    lam = damped_eigenvalues(frame.K(), frame.M(), 0.3 * frame.M() + 2e-4 * frame.K(),
-                             n_modes=6)
+    lam = damped_eigenvalues(frame.K(), frame.M(), 0.3 * frame.M() + 2e-4 * frame.K(), n_modes=6)
     return damped, lam
 
 
@@ -449,37 +494,48 @@ def test_damping_eigenvalues_in_any_order_are_matched_by_frequency(proportional)
     out = identify_damping(damped, lam[perm])
     np.testing.assert_allclose(out.r, ref.r, rtol=1e-12)
     np.testing.assert_array_equal(out.mode_indices, perm)
-    np.testing.assert_allclose(out.predicted_real_parts, ref.predicted_real_parts[perm],
-                               rtol=1e-12)
+    np.testing.assert_allclose(out.predicted_real_parts, ref.predicted_real_parts[perm], rtol=1e-12)
     np.testing.assert_allclose(out.eigenvalues, lam[perm], rtol=1e-9)
     # given in that order, the pairing stated by mode_indices is the same
-    np.testing.assert_allclose(identify_damping(damped, lam[perm], mode_indices=perm).r, ref.r,
-                               rtol=1e-12)
+    np.testing.assert_allclose(
+        identify_damping(damped, lam[perm], mode_indices=perm).r, ref.r, rtol=1e-12
+    )
     # the conjugates carry the same frequencies
-    np.testing.assert_allclose(identify_damping(damped, np.conj(lam[perm])).r, ref.r,
-                               rtol=1e-12)
+    np.testing.assert_allclose(identify_damping(damped, np.conj(lam[perm])).r, ref.r, rtol=1e-12)
 
 
 def test_damping_eigenvalues_that_do_not_match_the_model_are_refused(proportional):
     damped, lam = proportional
     w, _ = damped.modes()
-    with pytest.raises(ValueError, match=r"^mode_indices: measured_eigenvalues\[0\] \(natural "
-                                         r"frequency 347\.\d+ rad/s\) is nearest model mode 3 "
-                                         r".* but mode_indices pairs it with mode 0"):
+    with pytest.raises(
+        ValueError,
+        match=r"^mode_indices: measured_eigenvalues\[0\] \(natural "
+        r"frequency 347\.\d+ rad/s\) is nearest model mode 3 "
+        r".* but mode_indices pairs it with mode 0",
+    ):
         identify_damping(damped, lam[[3, 0, 5, 1, 4, 2]], mode_indices=range(6))
     # a measured mode between two model modes (geometric mean of modes 1 and 2): missing
     between = lam.copy()
     between[1] = -1.0 + 1j * np.sqrt(w[1] * w[2])
-    with pytest.raises(ValueError, match=r"^measured_eigenvalues\[1\]: natural frequency .* has "
-                                         r"no clearly nearest model mode \(modes 1 at .* and 2 at"):
+    with pytest.raises(
+        ValueError,
+        match=r"^measured_eigenvalues\[1\]: natural frequency .* has "
+        r"no clearly nearest model mode \(modes 1 at .* and 2 at",
+    ):
         identify_damping(damped, between)
     twice = lam.copy()
     twice[2] = lam[1] * 1.01
-    with pytest.raises(ValueError, match=r"^measured_eigenvalues\[1\] and \[2\] are both nearest "
-                                         r"model mode 1 "):
+    with pytest.raises(
+        ValueError,
+        match=r"^measured_eigenvalues\[1\] and \[2\] are both nearest "
+        r"model mode 1 ",
+    ):
         identify_damping(damped, twice)
-    with pytest.raises(ValueError, match=r"^measured_eigenvalues: give every eigenvalue as sigma "
-                                         r"\+ i w with w != 0"):
+    with pytest.raises(
+        ValueError,
+        match=r"^measured_eigenvalues: give every eigenvalue as sigma "
+        r"\+ i w with w != 0",
+    ):
         identify_damping(damped, np.append(lam[:3], -1.0 + 0j))
     with pytest.raises(ValueError, match=r"^mode_indices: each model mode at most once"):
         identify_damping(damped, lam, mode_indices=[0, 1, 2, 3, 4, 4])

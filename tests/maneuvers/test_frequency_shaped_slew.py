@@ -67,11 +67,13 @@ def test_wide_band_limit_is_minimum_energy():
     peak = 6.0 * INERTIA * angle / T**2
     assert abs(np.abs(slew.torque(t)).max() - peak) <= 0.01 * peak
     outside_layers = (t > 0.05 * T) & (t < 0.95 * T)
-    np.testing.assert_allclose(slew.torque(t)[outside_layers], u_me[outside_layers], rtol=0,
-                               atol=0.01 * peak)
+    np.testing.assert_allclose(
+        slew.torque(t)[outside_layers], u_me[outside_layers], rtol=0, atol=0.01 * peak
+    )
     tau = t / T
-    np.testing.assert_allclose(slew.theta(t), angle * (3 * tau**2 - 2 * tau**3), rtol=0,
-                               atol=0.01 * angle)
+    np.testing.assert_allclose(
+        slew.theta(t), angle * (3 * tau**2 - 2 * tau**3), rtol=0, atol=0.01 * angle
+    )
 
 
 @pytest.mark.parametrize("T, omega_b, zeta_b", PAPER)
@@ -118,8 +120,10 @@ def test_costate_equations_are_minus_grad_hamiltonian(zeta_b, q):
         assert np.linalg.norm(-dh_dx[k] - zdot[k, 4:]) <= 1e-7 * scale_c
         assert np.linalg.norm(dh_dc[k] - zdot[k, :4]) <= 1e-7 * scale_x
     step = 1e-3 * np.abs(u3).max()
-    dh_du3 = (hamiltonian(x, c, u3 + step, omega_b, zeta_b, q)
-              - hamiltonian(x, c, u3 - step, omega_b, zeta_b, q)) / (2 * step)
+    dh_du3 = (
+        hamiltonian(x, c, u3 + step, omega_b, zeta_b, q)
+        - hamiltonian(x, c, u3 - step, omega_b, zeta_b, q)
+    ) / (2 * step)
     # ∂H/∂u3 = (u1 + u3/ω_B²)/ω_B² + μ2: two terms of size |μ2| that cancel at Eq. (20).
     assert np.abs(dh_du3).max() <= 1e-7 * np.abs(c[:, 3]).max()
 
@@ -142,26 +146,31 @@ def test_damped_weight_is_one_accelerating_and_one_braking_lobe(omega_b):
 def test_units_at_the_boundary():
     """Degrees, Hz and other units convert to SI at the boundary (same solution, to rounding)."""
     si = frequency_shaped_slew(np.deg2rad(30.0), INERTIA, 10.0, 2.5)
-    units = frequency_shaped_slew("30 deg", f"{INERTIA} kg*m**2", "10000 ms",
-                                  f"{2.5 / (2 * np.pi)} Hz")
+    units = frequency_shaped_slew(
+        "30 deg", f"{INERTIA} kg*m**2", "10000 ms", f"{2.5 / (2 * np.pi)} Hz"
+    )
     assert isinstance(units, FrequencyShapedSlew)
     t = np.linspace(0.0, 10.0, 101)
-    np.testing.assert_allclose(units.torque(t), si.torque(t), rtol=1e-12,
-                               atol=1e-12 * np.abs(si.torque(t)).max())
+    np.testing.assert_allclose(
+        units.torque(t), si.torque(t), rtol=1e-12, atol=1e-12 * np.abs(si.torque(t)).max()
+    )
 
 
-@pytest.mark.parametrize("kwargs, field", [
-    ({"duration": 0.0}, "duration"),
-    ({"duration": -1.0}, "duration"),
-    ({"omega_b": 0.0}, "omega_b"),
-    ({"omega_b": -2.5}, "omega_b"),
-    ({"angle": np.nan}, "angle"),
-    ({"angle": np.inf}, "angle"),
-    ({"angle": 0.0}, "angle"),
-    ({"inertia": 0.0}, "inertia"),
-    ({"zeta_b": -1.0}, "zeta_b"),
-    ({"q": -1.0}, "q"),
-])
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        ({"duration": 0.0}, "duration"),
+        ({"duration": -1.0}, "duration"),
+        ({"omega_b": 0.0}, "omega_b"),
+        ({"omega_b": -2.5}, "omega_b"),
+        ({"angle": np.nan}, "angle"),
+        ({"angle": np.inf}, "angle"),
+        ({"angle": 0.0}, "angle"),
+        ({"inertia": 0.0}, "inertia"),
+        ({"zeta_b": -1.0}, "zeta_b"),
+        ({"q": -1.0}, "q"),
+    ],
+)
 def test_bad_input_names_the_field(kwargs, field):
     args = {"angle": 1.0, "inertia": INERTIA, "duration": 10.0, "omega_b": 2.5} | kwargs
     with pytest.raises(ValueError, match=f"^{field}:"):

@@ -88,8 +88,9 @@ def test_momentum_returns_to_zero_and_torque_vanishes_at_the_ends(which, zeta_b)
         v = f(t)
         assert np.abs(v[[0, -1]]).max() <= 1e-9 * np.abs(v).max()
     assert slew.boundary_error() <= 1e-9
-    np.testing.assert_allclose(slew.euler123(np.array([0.0, T])), [[0, 0, 0], TARGET], rtol=0,
-                               atol=1e-9)
+    np.testing.assert_allclose(
+        slew.euler123(np.array([0.0, T])), [[0, 0, 0], TARGET], rtol=0, atol=1e-9
+    )
 
 
 @pytest.mark.parametrize("which, zeta_b", CASES)
@@ -102,8 +103,17 @@ def test_hamiltonian_and_first_integrals_are_constant(which, zeta_b):
     z = slew.z(t)
     x, c = z[:, :13], z[:, 13:]
     u3 = shaping_control(x, c, OMEGA_B)
-    terms = np.abs(np.concatenate([x[:, 4:7] * c[:, 4:7], x[:, 7:10] * c[:, 4:7],
-                                   x[:, 10:13] * c[:, 7:10], u3 * c[:, 10:13]], 1)).max()
+    terms = np.abs(
+        np.concatenate(
+            [
+                x[:, 4:7] * c[:, 4:7],
+                x[:, 7:10] * c[:, 4:7],
+                x[:, 10:13] * c[:, 7:10],
+                u3 * c[:, 10:13],
+            ],
+            1,
+        )
+    ).max()
     h = slew.hamiltonian(t)
     assert np.abs(h - h[0]).max() <= 1e-9 * terms
     assert np.abs(np.linalg.norm(slew.beta(t), axis=-1) - 1).max() <= 1e-10
@@ -130,13 +140,18 @@ def test_single_axis_problem_is_the_frequency_shaped_slew():
         beta = three.beta(t)
         np.testing.assert_allclose(beta[:, 0], np.cos(z1[:, 0] / 2), rtol=0, atol=1e-9)
         np.testing.assert_allclose(beta[:, 3], np.sin(z1[:, 0] / 2), rtol=0, atol=1e-9)
-        np.testing.assert_allclose(three.omega(t)[:, 2], z1[:, 1], rtol=0,
-                                   atol=1e-9 * np.abs(z1[:, 1]).max())
+        np.testing.assert_allclose(
+            three.omega(t)[:, 2], z1[:, 1], rtol=0, atol=1e-9 * np.abs(z1[:, 1]).max()
+        )
         # costates: γ0 = −2p sin θ/2, γ3 = 2p cos θ/2, λ3, μ13, μ23 directly
         c = three.costate(t)
-        for got, want in ((c[:, 0], -2 * z1[:, 4] * np.sin(z1[:, 0] / 2)),
-                          (c[:, 3], 2 * z1[:, 4] * np.cos(z1[:, 0] / 2)),
-                          (c[:, 6], z1[:, 5]), (c[:, 9], z1[:, 6]), (c[:, 12], z1[:, 7])):
+        for got, want in (
+            (c[:, 0], -2 * z1[:, 4] * np.sin(z1[:, 0] / 2)),
+            (c[:, 3], 2 * z1[:, 4] * np.cos(z1[:, 0] / 2)),
+            (c[:, 6], z1[:, 5]),
+            (c[:, 9], z1[:, 6]),
+            (c[:, 12], z1[:, 7]),
+        ):
             np.testing.assert_allclose(got, want, rtol=0, atol=1e-8 * np.abs(want).max())
 
 
@@ -169,8 +184,9 @@ def test_continuation_history():
     slew = _slew("eps", 1.0)
     assert len(slew.history) == 10
     np.testing.assert_allclose([s.a1 for s in slew.history], np.linspace(0.1, 1.0, 10))
-    assert all(s.a1 == s.a2 and 1 <= s.iterations <= 8 and s.residual <= 1e-10
-               for s in slew.history)
+    assert all(
+        s.a1 == s.a2 and 1 <= s.iterations <= 8 and s.residual <= 1e-10 for s in slew.history
+    )
     assert slew.residual <= 1e-11 and slew.n_segments >= 4
 
 
@@ -202,7 +218,7 @@ def test_costate_equations_are_minus_grad_hamiltonian(zeta_b):
 
         grad = np.empty(26)
         for j in range(26):
-            step = 1e-4 * max(abs(zk[j]), np.abs(zk[13 * (j // 13):13 * (j // 13 + 1)]).max())
+            step = 1e-4 * max(abs(zk[j]), np.abs(zk[13 * (j // 13) : 13 * (j // 13 + 1)]).max())
             e = np.zeros(26)
             e[j] = step
             grad[j] = (h_of(zk + e) - h_of(zk - e)) / (2 * step)
@@ -245,8 +261,7 @@ def test_target_as_euler_parameters_and_units():
     peak = np.abs(ref.torque(t)).max()
     beta_f = euler123_to_quaternion(TARGET)  # to full precision (BETA_F has 6 digits)
     for target in (beta_f, -beta_f):
-        other = three_axis_slew(NOTIONAL, target, "10000 ms", f"{OMEGA_B / (2 * np.pi)} Hz",
-                                1.0)
+        other = three_axis_slew(NOTIONAL, target, "10000 ms", f"{OMEGA_B / (2 * np.pi)} Hz", 1.0)
         assert isinstance(other, ThreeAxisSlew)
         np.testing.assert_allclose(other.torque(t), ref.torque(t), rtol=0, atol=1e-9 * peak)
 
@@ -267,24 +282,27 @@ def _kwargs(**change):
     return {"inertia": NOTIONAL, "target": TARGET, "duration": T, "omega_b": OMEGA_B} | change
 
 
-@pytest.mark.parametrize("change, field", [
-    ({"target": [0.6, 0.6, 0.2, 0.6]}, "target"),  # |β| = 1.06
-    ({"target": [1.0, 1.0]}, "target"),
-    ({"target": [1.0, np.nan, 1.0]}, "target"),
-    ({"target": [0.0, 0.0, 0.0]}, "target"),
-    ({"duration": 0.0}, "duration"),
-    ({"duration": -10.0}, "duration"),
-    ({"omega_b": 0.0}, "omega_b"),
-    ({"omega_b": -2.5}, "omega_b"),
-    ({"zeta_b": -1.0}, "zeta_b"),
-    ({"inertia": NOTIONAL + np.triu(np.ones((3, 3)), 1) * 1e3}, "inertia"),  # not symmetric
-    ({"inertia": np.diag([1.0, 1.0, -1.0])}, "inertia"),  # not positive definite
-    ({"inertia": np.diag([1.0, 1.0, 3.0])}, "inertia"),  # triangle inequality
-    ({"Q": -np.eye(3)}, "Q"),
-    ({"axis": 3}, "axis"),
-    ({"axis": 0, "target": [0.0, 0.0, 1.0]}, "axis"),  # no rotation about the selected axis
-    ({"steps": 0}, "steps"),
-])
+@pytest.mark.parametrize(
+    "change, field",
+    [
+        ({"target": [0.6, 0.6, 0.2, 0.6]}, "target"),  # |β| = 1.06
+        ({"target": [1.0, 1.0]}, "target"),
+        ({"target": [1.0, np.nan, 1.0]}, "target"),
+        ({"target": [0.0, 0.0, 0.0]}, "target"),
+        ({"duration": 0.0}, "duration"),
+        ({"duration": -10.0}, "duration"),
+        ({"omega_b": 0.0}, "omega_b"),
+        ({"omega_b": -2.5}, "omega_b"),
+        ({"zeta_b": -1.0}, "zeta_b"),
+        ({"inertia": NOTIONAL + np.triu(np.ones((3, 3)), 1) * 1e3}, "inertia"),  # not symmetric
+        ({"inertia": np.diag([1.0, 1.0, -1.0])}, "inertia"),  # not positive definite
+        ({"inertia": np.diag([1.0, 1.0, 3.0])}, "inertia"),  # triangle inequality
+        ({"Q": -np.eye(3)}, "Q"),
+        ({"axis": 3}, "axis"),
+        ({"axis": 0, "target": [0.0, 0.0, 1.0]}, "axis"),  # no rotation about the selected axis
+        ({"steps": 0}, "steps"),
+    ],
+)
 def test_bad_input_names_the_field(change, field):
     with pytest.raises(ValueError, match=f"^{field}:"):
         three_axis_slew(**_kwargs(**change))

@@ -562,9 +562,10 @@ def test_smooth_bang_bang_table_is_the_array_expression_bit_for_bit(angle):
     n = 300
     alpha = np.r_[0.0, 0.25, rng.uniform(0.0, 0.25, n - 2)]
     t = np.r_[-0.5, np.arange(1126) / 75.0, 20.0][:, None]
-    for shape in (SmoothBangBang(angle, 3.0, u_max=rng.uniform(1.0, 4.0, n), alpha=alpha,
-                                 theta0=0.1),
-                  SmoothBangBang(angle, 3.0, u_max=2.0, alpha=0.1)):
+    for shape in (
+        SmoothBangBang(angle, 3.0, u_max=rng.uniform(1.0, 4.0, n), alpha=alpha, theta0=0.1),
+        SmoothBangBang(angle, 3.0, u_max=2.0, alpha=0.1),
+    ):
         fast = shape(t)
         slow = TorqueShape.__call__(shape, t)  # the array expression
         for field in ("u", "theta", "theta_dot", "theta_ddot"):

@@ -19,8 +19,7 @@ def reports(tmp_path_factory):
     out = {}
     for name in ("cmg_preferred_angles", "space_station_cmg"):
         folder = tmp_path_factory.mktemp(name) / "report"
-        result = CliRunner().invoke(app, ["run", str(EXAMPLES / f"{name}.yaml"), "-o",
-                                          str(folder)])
+        result = CliRunner().invoke(app, ["run", str(EXAMPLES / f"{name}.yaml"), "-o", str(folder)])
         assert result.exit_code == 0, result.output
         out[name] = (folder, result.output)
     return out

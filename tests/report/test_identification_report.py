@@ -8,10 +8,9 @@ import xarray as xr
 import yaml
 
 import flexsat.report.identification as rep
-from flexsat.report.identification import FIGURES, dataset, write_identification_report
-from flexsat.scenarios import run_identification
 from flexsat.report import MANIFEST
-from flexsat.scenarios import load_scenario
+from flexsat.report.identification import FIGURES, dataset, write_identification_report
+from flexsat.scenarios import load_scenario, run_identification
 
 
 @pytest.fixture(scope="module")
@@ -22,22 +21,31 @@ def result(identification_example):
 def test_report_files_tables_and_netcdf_round_trip(result, tmp_path):
     out = write_identification_report(result, tmp_path / "report")
     names = {p.name for p in out.iterdir()}
-    assert names == {"identification.json", "results.nc", "index.html", MANIFEST} | \
-        {f for f, _ in FIGURES}
+    assert names == {"identification.json", "results.nc", "index.html", MANIFEST} | {
+        f for f, _ in FIGURES
+    }
     summary = json.loads((out / "identification.json").read_text())
     assert summary["scalings"]["clamp verticals"]["a_priori"] == 1.15
     with xr.open_dataset(out / "results.nc", engine="h5netcdf") as ds:
         c = result.campaign
         assert np.array_equal(ds["era_hz"].values, c.modes["era_hz"])
-        assert np.array_equal(ds["frf_measured_re"].values + 1j * ds["frf_measured_im"].values,
-                              c.frf_measured)
+        assert np.array_equal(
+            ds["frf_measured_re"].values + 1j * ds["frf_measured_im"].values, c.frf_measured
+        )
         assert ds["mac_updated"].shape == c.mac_updated.shape
         assert list(ds["substructure"].values) == list(c.substructures)
         assert ds["era_hz"].attrs["units"] == "Hz"
     page = (out / "index.html").read_text()
-    for text in ("Natural frequencies", "Damping ratios", "Substructure stiffness scalings",
-                 "clamp verticals", "frf.png", "mac.png", "kind: identification",
-                 "Reaction-wheel torque constants"):
+    for text in (
+        "Natural frequencies",
+        "Damping ratios",
+        "Substructure stiffness scalings",
+        "clamp verticals",
+        "frf.png",
+        "mac.png",
+        "kind: identification",
+        "Reaction-wheel torque constants",
+    ):
         assert text in page
 
 
@@ -64,8 +72,9 @@ def test_report_of_measured_data_without_truth(result, tmp_path):
 
     n = len(result.campaign.modes["era_hz"])
     modes = {**result.campaign.modes, "true_hz": [None] * n, "true_damping": [None] * n}
-    measured = dataclasses.replace(result, campaign=dataclasses.replace(result.campaign,
-                                                                          modes=modes))
+    measured = dataclasses.replace(
+        result, campaign=dataclasses.replace(result.campaign, modes=modes)
+    )
     out = write_identification_report(measured, tmp_path / "report")
     page = (out / "index.html").read_text()
     assert "<td>–</td>" in page

@@ -12,12 +12,27 @@ import xarray as xr
 import yaml
 
 import flexsat.report.maneuver as report
-from flexsat.report import MANIFEST, OutputError, write_atomically
-from flexsat.report import PLOTS, format_metric, metric_rows, write_report
+from flexsat.report import (
+    MANIFEST,
+    PLOTS,
+    OutputError,
+    format_metric,
+    metric_rows,
+    write_atomically,
+    write_report,
+)
 from flexsat.scenarios import default_scenario, load_scenario, run_scenario
 
-METRICS = {"run", "settling_time_s", "overshoot_deg", "peak_torque_Nm", "residual_energy_J",
-           "residual_energy_at_T_J", "peak_tip_deflection_m", "peak_rate_error_deg_s"}
+METRICS = {
+    "run",
+    "settling_time_s",
+    "overshoot_deg",
+    "peak_torque_Nm",
+    "residual_energy_J",
+    "residual_energy_at_T_J",
+    "peak_tip_deflection_m",
+    "peak_rate_error_deg_s",
+}
 FILES = {"metrics.json", "results.nc", "index.html"} | {p.file for p in PLOTS}
 
 
@@ -84,8 +99,9 @@ def test_index_html_is_self_contained(result, tmp_path):
 
 
 def test_rewrite_replaces_the_whole_report(result, tmp_path):
-    out = write_atomically(tmp_path / "report",
-                           lambda folder: (folder / "identification.json").write_text("{}"))
+    out = write_atomically(
+        tmp_path / "report", lambda folder: (folder / "identification.json").write_text("{}")
+    )
     write_report(result, out)
     assert {p.name for p in out.iterdir()} == FILES | {MANIFEST}  # nothing of the earlier left
     assert json.loads((out / "metrics.json").read_text())[0]["run"] == "Law I"
@@ -103,10 +119,12 @@ def test_folder_with_other_files_is_refused_untouched(result, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
 
 
-@pytest.mark.parametrize("name", ["metrics.json", "results.nc", *(p.file for p in PLOTS),
-                                  "index.html", MANIFEST])
-def test_disk_full_at_each_file_keeps_the_complete_earlier_report(result, earlier_report,
-                                                                   tmp_path, fail_opening, name):
+@pytest.mark.parametrize(
+    "name", ["metrics.json", "results.nc", *(p.file for p in PLOTS), "index.html", MANIFEST]
+)
+def test_disk_full_at_each_file_keeps_the_complete_earlier_report(
+    result, earlier_report, tmp_path, fail_opening, name
+):
     out = tmp_path / "report"
     shutil.copytree(earlier_report, out)
     before = snapshot(out)

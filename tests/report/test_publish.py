@@ -36,9 +36,11 @@ SRC = str(Path(publish.__file__).resolve().parents[2])
 
 def writer(tag: str):
     """A report of the files NAMES, each holding ``tag``."""
+
     def write(folder: Path) -> None:
         for name in NAMES:
             (folder / name).write_text(f"{tag}:{name}")
+
     return write
 
 
@@ -77,6 +79,7 @@ def test_failure_at_each_file_keeps_the_old_report(old_report, fail_opening, nam
 
 def test_failure_at_flushing_keeps_the_old_report(old_report, monkeypatch):
     """Network file systems report a full disk at fsync: nothing is published before it."""
+
     def full(fd):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
@@ -111,7 +114,8 @@ def test_failed_exchange_keeps_the_old_report(old_report, monkeypatch):
 
 @pytest.mark.parametrize("failing", [1, 2])
 def test_two_rename_fallback_keeps_the_old_report_when_either_rename_fails(
-        old_report, monkeypatch, failing):
+    old_report, monkeypatch, failing
+):
     """Without renameat2: rename 1 moves the old report away, rename 2 publishes the new one;
     a failure of rename 2 puts the old report back."""
     monkeypatch.setattr(publish, "_RENAMEAT2", None)
@@ -183,10 +187,10 @@ def test_temporary_folder_of_a_live_run_is_kept(old_report):
     assert contents(old_report) == complete("new")
 
 
-def test_without_locks_publishing_stays_whole_and_stale_folders_are_kept(old_report,
-                                                                        monkeypatch):
+def test_without_locks_publishing_stays_whole_and_stale_folders_are_kept(old_report, monkeypatch):
     """NFS refuses flock on a folder (EBADF): a killed run's folder cannot be told from a live
     one's, so it stays; the report is still swapped in whole."""
+
     def no_locks(fd, operation):
         raise OSError(errno.EBADF, os.strerror(errno.EBADF))
 
@@ -212,11 +216,14 @@ write_atomically(sys.argv[1], write)
 """
 
 
-def test_sigkill_while_writing_keeps_the_old_report_and_the_next_run_cleans_up(old_report,
-                                                                              tmp_path):
+def test_sigkill_while_writing_keeps_the_old_report_and_the_next_run_cleans_up(
+    old_report, tmp_path
+):
     ready = tmp_path / "ready"
-    process = subprocess.Popen([sys.executable, "-c", KILLED_WRITER, str(old_report), str(ready)],
-                               env={**os.environ, "PYTHONPATH": SRC})
+    process = subprocess.Popen(
+        [sys.executable, "-c", KILLED_WRITER, str(old_report), str(ready)],
+        env={**os.environ, "PYTHONPATH": SRC},
+    )
     try:
         deadline = time.monotonic() + 30
         while not ready.exists():
@@ -227,8 +234,9 @@ def test_sigkill_while_writing_keeps_the_old_report_and_the_next_run_cleans_up(o
     finally:
         process.kill()
     assert contents(old_report) == complete("old")
-    assert [p.name.split("-")[0] for p in old_report.parent.iterdir()
-            if p.name.startswith(".")] == [".report.tmp"]
+    assert [
+        p.name.split("-")[0] for p in old_report.parent.iterdir() if p.name.startswith(".")
+    ] == [".report.tmp"]
     write_atomically(old_report, writer("new"))
     assert contents(old_report) == complete("new")
     assert leftovers(old_report.parent, old_report) == ["ready"]
@@ -257,8 +265,7 @@ def test_concurrent_writers_never_interleave(tmp_path):
     assert leftovers(tmp_path, out) == []
 
 
-def test_a_folder_removed_by_its_writer_while_another_cleans_up_is_skipped(old_report,
-                                                                          monkeypatch):
+def test_a_folder_removed_by_its_writer_while_another_cleans_up_is_skipped(old_report, monkeypatch):
     """A writer removes its previous report (now at a temporary name) after it has published,
     outside the parent's lock; another writer's clean-up may list that folder a moment before it
     vanishes. Reproduces the race seen once on a loaded machine (ENOENT from a concurrent write)."""
@@ -313,8 +320,11 @@ def test_folder_with_other_files_is_refused(tmp_path):
     out.mkdir()
     (out / "notes.txt").write_text("mine")
     (out / "metrics.json").write_text("an old report's")
-    with pytest.raises(OutputError, match=r"holds notes.txt, not files of a flexsat report; a "
-                                          r"report folder is replaced as a whole"):
+    with pytest.raises(
+        OutputError,
+        match=r"holds notes.txt, not files of a flexsat report; a "
+        r"report folder is replaced as a whole",
+    ):
         write_atomically(out, writer("new"))
     assert contents(out) == {"notes.txt": "mine", "metrics.json": "an old report's"}
     assert leftovers(tmp_path, out) == []
@@ -351,19 +361,23 @@ def test_check_creates_nothing(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("code, reason, hint", [
-    (errno.EROFS, "Read-only file system", "choose a folder you can write to"),
-    (errno.ENOSPC, "No space left on device", "free some space or choose another folder"),
-    (errno.EDQUOT, "Disk quota exceeded", "free some space or choose another folder"),
-    (errno.EACCES, "Permission denied", "choose a folder you can write to"),
-])
+@pytest.mark.parametrize(
+    "code, reason, hint",
+    [
+        (errno.EROFS, "Read-only file system", "choose a folder you can write to"),
+        (errno.ENOSPC, "No space left on device", "free some space or choose another folder"),
+        (errno.EDQUOT, "Disk quota exceeded", "free some space or choose another folder"),
+        (errno.EACCES, "Permission denied", "choose a folder you can write to"),
+    ],
+)
 def test_write_errors_say_where_and_why(old_report, fail_opening, code, reason, hint):
     fail_opening("results.nc", code)
     with pytest.raises(OutputError) as info:
         write_atomically(old_report, writer("new"))
     message = str(info.value)
-    assert message.startswith(f"cannot write the report to '{old_report}': {reason} (writing "
-                              "results.nc)")
+    assert message.startswith(
+        f"cannot write the report to '{old_report}': {reason} (writing results.nc)"
+    )
     assert hint in message and message.endswith(f"'{old_report}' is unchanged.")
     assert info.value.errno == code
     if code in (errno.ENOSPC, errno.EDQUOT):

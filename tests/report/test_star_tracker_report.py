@@ -29,8 +29,15 @@ def result():
 def test_report_files_table_and_netcdf_round_trip(result, tmp_path):
     out = write_star_tracker_report(result, tmp_path / "report")
     names = {p.name for p in out.iterdir()}
-    assert names == {"metrics.json", "results.nc", "index.html", "errors.png", "sky_1.png",
-                     "sky_2.png", MANIFEST}
+    assert names == {
+        "metrics.json",
+        "results.nc",
+        "index.html",
+        "errors.png",
+        "sky_1.png",
+        "sky_2.png",
+        MANIFEST,
+    }
     records = json.loads((out / "metrics.json").read_text())
     assert [r["run"] for r in records] == ["clean", "false + missing"]
     assert all(r["wrong_accepted"] == 0 for r in records)
@@ -44,8 +51,15 @@ def test_report_files_table_and_netcdf_round_trip(result, tmp_path):
         assert not np.any(status == 2)
         assert ds.attrs["tolerance_arcsec"] == pytest.approx(5.0)
     page = (out / "index.html").read_text()
-    for text in ("Identification", "wrong accepted", "σ_QUEST", "errors.png", "sky_2.png",
-                 "kind: star_tracker", "false + missing"):
+    for text in (
+        "Identification",
+        "wrong accepted",
+        "σ_QUEST",
+        "errors.png",
+        "sky_2.png",
+        "kind: star_tracker",
+        "false + missing",
+    ):
         assert text in page
 
 
@@ -53,8 +67,9 @@ def test_report_of_a_run_with_nothing_identified(tmp_path):
     # cameras limited to m = 2 on the synthetic sky (5000·10^-2.25 = 28 stars: a field holds
     # 0.1 on average): no field gets a triplet, every attitude is rejected, the report still
     # writes (NaN errors, empty histograms)
-    spec = load_scenario(SMALL.replace("centroid_noise: 0.1", "centroid_noise: 0.1, "
-                                       "magnitude_limit: 2.0"))
+    spec = load_scenario(
+        SMALL.replace("centroid_noise: 0.1", "centroid_noise: 0.1, magnitude_limit: 2.0")
+    )
     result = run_star_tracker(spec)
     rec = result.metrics_records()[0]
     assert rec["accepted_rate"] == 0.0 and rec["wrong_accepted"] == 0

@@ -72,8 +72,9 @@ def test_a_sweep_runs_every_grid_point_and_maps_the_trade_surfaces(tmp_path):
     assert ds.sizes["case"] == 6 and bool(ds["done"].all())
     # the grid in order, first axis slowest; u_max in SI
     np.testing.assert_array_equal(ds["param_alpha"].values, [0, 0, 0, 0.25, 0.25, 0.25])
-    np.testing.assert_allclose(ds["param_u_max"].values[:3] / 0.0070615518142,
-                               [300, 400, 500], rtol=1e-10)
+    np.testing.assert_allclose(
+        ds["param_u_max"].values[:3] / 0.0070615518142, [300, 400, 500], rtol=1e-10
+    )
     # seed 000 Att. 3 Eq. 16: T falls with u_max and rises with α (the paper's Fig. 5)
     T = result.surfaces["maneuver_time_s"]
     assert T.shape == (2, 3) and np.all(np.diff(T, axis=1) < 0) and np.all(T[1] > T[0])
@@ -95,15 +96,18 @@ def test_a_sweep_varies_the_actuator_and_sensors_given_in_units(tmp_path):
         """  alpha: {values: [0.0, 0.25]}
   u_max: {values: ["300 ozf*in", "400 ozf*in", "500 ozf*in"]}""",
         """  saturation: {low: "300 ozf*in", high: "500 ozf*in", n: 3}
-  encoder_resolution: {values: ["0 deg", "0.01 deg"]}""")
+  encoder_resolution: {values: ["0 deg", "0.01 deg"]}""",
+    )
     result = run_batch_scenario(load_scenario(_write(tmp_path, "hardware.yaml", text)))
     ds = result.dataset()
     assert ds.sizes["case"] == 6 and bool(ds["done"].all())
     oz_in = 0.0070615518142  # N m per ozf*in
-    np.testing.assert_allclose(ds["param_saturation"].values / oz_in,
-                               [300, 300, 400, 400, 500, 500], rtol=1e-10)
-    np.testing.assert_allclose(np.degrees(ds["param_encoder_resolution"].values),
-                               [0, 0.01] * 3, rtol=1e-10)
+    np.testing.assert_allclose(
+        ds["param_saturation"].values / oz_in, [300, 300, 400, 400, 500, 500], rtol=1e-10
+    )
+    np.testing.assert_allclose(
+        np.degrees(ds["param_encoder_resolution"].values), [0, 0.01] * 3, rtol=1e-10
+    )
     peak = ds["metric_peak_torque_Nm"].values
     assert np.all(np.diff(peak[::2]) > 0) and peak[0] <= ds["param_saturation"].values[0]
 
@@ -116,11 +120,16 @@ def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path
     assert settle["successes"] == met and settle["n"] == 24
     assert settle["low"] <= settle["probability"] <= settle["high"]
     assert reqs["overshoot_deg"]["threshold"] == pytest.approx(2.0)  # compared in degrees
-    assert set(result.sensitivity) <= {k[len("metric_"):] for k in result.dataset().data_vars
-                                       if k.startswith("metric_")}
+    assert set(result.sensitivity) <= {
+        k[len("metric_") :] for k in result.dataset().data_vars if k.startswith("metric_")
+    }
     out = write_batch_report(result, tmp_path / "report")
-    for name in ("index.html", "summary.json", "convergence.png",
-                 "distribution_settling_time_s.png"):
+    for name in (
+        "index.html",
+        "summary.json",
+        "convergence.png",
+        "distribution_settling_time_s.png",
+    ):
         assert (out / name).exists(), name
     summary = json.loads((out / "summary.json").read_text())
     assert summary["cases"] == 24 and summary["kind"] == "montecarlo"
@@ -131,17 +140,25 @@ def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path
     assert any(r["run"].startswith("P(settling_time_s") for r in rows)
 
 
-@pytest.mark.parametrize("change, message", [
-    (("hub_inertia: {", "spin_rate: {"), r"parameters.spin_rate: unknown parameter; known:"),
-    (('sd: "2 ozf*in*s**2"', 'sd: "-2 ozf*in*s**2"'), r"parameters.hub_inertia.sd"),
-    (("distribution: normal", "distribution: cauchy"), "unknown distribution 'cauchy'"),
-    (('mean: "50 ozf*in*s**2"', 'mean: "50 kg"'), r"parameters.hub_inertia.mean"),
-    (("cases: 24\n", ""), "cases: required with sampling 'random'"),
-    (("settling_time_s: {max", "settling_time: {max"), "requirements.settling_time: unknown metric"),
-    (("execution: {chunk_size: 10}", "execution: {workers: 2, scheduler: 'tcp://x:1'}"),
-     "give workers .* or scheduler .*, not both"),
-    (("kind: montecarlo", "kind: sweep"), r"requirements: belong to a montecarlo"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (("hub_inertia: {", "spin_rate: {"), r"parameters.spin_rate: unknown parameter; known:"),
+        (('sd: "2 ozf*in*s**2"', 'sd: "-2 ozf*in*s**2"'), r"parameters.hub_inertia.sd"),
+        (("distribution: normal", "distribution: cauchy"), "unknown distribution 'cauchy'"),
+        (('mean: "50 ozf*in*s**2"', 'mean: "50 kg"'), r"parameters.hub_inertia.mean"),
+        (("cases: 24\n", ""), "cases: required with sampling 'random'"),
+        (
+            ("settling_time_s: {max", "settling_time: {max"),
+            "requirements.settling_time: unknown metric",
+        ),
+        (
+            ("execution: {chunk_size: 10}", "execution: {workers: 2, scheduler: 'tcp://x:1'}"),
+            "give workers .* or scheduler .*, not both",
+        ),
+        (("kind: montecarlo", "kind: sweep"), r"requirements: belong to a montecarlo"),
+    ],
+)
 def test_schema_mistakes_are_named(tmp_path, change, message):
     old, new = change
     assert old in MONTECARLO
@@ -150,11 +167,17 @@ def test_schema_mistakes_are_named(tmp_path, change, message):
         load_scenario(path)
 
 
-@pytest.mark.parametrize("change, message", [
-    (("run: Law II", "run: Law I"), "uses LyapunovRegulator; a batch varies a Control Law II run"),
-    (("run: Law II", "run: Law III"), r"run: 'Law III' is not a run of the scenario"),
-    (("scenario: maneuver.yaml", "scenario: missing.yaml"), "scenario: cannot read"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (
+            ("run: Law II", "run: Law I"),
+            "uses LyapunovRegulator; a batch varies a Control Law II run",
+        ),
+        (("run: Law II", "run: Law III"), r"run: 'Law III' is not a run of the scenario"),
+        (("scenario: maneuver.yaml", "scenario: missing.yaml"), "scenario: cannot read"),
+    ],
+)
 def test_mistakes_found_before_any_case_runs(tmp_path, change, message):
     old, new = change
     path = _write(tmp_path, "sweep.yaml", SWEEP.replace(old, new))
@@ -164,8 +187,11 @@ def test_mistakes_found_before_any_case_runs(tmp_path, change, message):
 
 
 def test_a_scenario_of_another_kind_is_refused(tmp_path):
-    path = _write(tmp_path, "sweep.yaml", SWEEP.replace(
-        "scenario: maneuver.yaml", f"scenario: {EXAMPLES / 'eps_slew_6s.yaml'}"))
+    path = _write(
+        tmp_path,
+        "sweep.yaml",
+        SWEEP.replace("scenario: maneuver.yaml", f"scenario: {EXAMPLES / 'eps_slew_6s.yaml'}"),
+    )
     with pytest.raises(ScenarioError, match="is a slew scenario; a batch varies a maneuver"):
         run_batch_scenario(load_scenario(path))
 
@@ -189,8 +215,10 @@ def test_the_command_line_runs_a_sweep_on_two_local_workers_and_refuses_them_els
     # the workers do not change the results: the in-process run finds the store complete
     again = run_batch_scenario(load_scenario(path))
     assert again.chunks_run == 0
-    refused = runner.invoke(app, ["run", str(tmp_path / "maneuver.yaml"), "-o",
-                                  str(tmp_path / "out2"), "--workers", "2"])
+    refused = runner.invoke(
+        app,
+        ["run", str(tmp_path / "maneuver.yaml"), "-o", str(tmp_path / "out2"), "--workers", "2"],
+    )
     assert refused.exit_code == 2
     assert "--workers/--scheduler: a maneuver scenario runs in this process" in refused.stderr
 
@@ -199,11 +227,14 @@ def test_a_saltelli_sweep_ranks_the_parameters_by_their_sobol_indices(tmp_path):
     # the peak torque of a Law II slew follows its reference's peak u_max and hardly α (the
     # tracking feedback adds little): Sobol' ranks u_max first with the larger total index;
     # n_base (d + 2) cases ran
-    text = SWEEP.replace('''  alpha: {values: [0.0, 0.25]}
-  u_max: {values: ["300 ozf*in", "400 ozf*in", "500 ozf*in"]}''', '''  alpha: {low: 0.0, high: 0.25}
+    text = SWEEP.replace(
+        """  alpha: {values: [0.0, 0.25]}
+  u_max: {values: ["300 ozf*in", "400 ozf*in", "500 ozf*in"]}""",
+        """  alpha: {low: 0.0, high: 0.25}
   u_max: {low: "300 ozf*in", high: "500 ozf*in"}
 sampling: saltelli
-cases: 8''').replace("execution: {chunk_size: 4}", "execution: {chunk_size: 16}")
+cases: 8""",
+    ).replace("execution: {chunk_size: 4}", "execution: {chunk_size: 16}")
     result = run_batch_scenario(load_scenario(_write(tmp_path, "saltelli.yaml", text)))
     assert result.dataset().sizes["case"] == 8 * (2 + 2)
     peak = result.sensitivity["peak_torque_Nm"]
@@ -215,8 +246,7 @@ cases: 8''').replace("execution: {chunk_size: 4}", "execution: {chunk_size: 16}"
         load_scenario(_write(tmp_path, "bad.yaml", text.replace("cases: 8", "cases: 6")))
 
 
-def test_ctrl_c_on_the_command_line_keeps_the_finished_cases_and_the_same_command_resumes(
-        tmp_path):
+def test_ctrl_c_on_the_command_line_keeps_the_finished_cases_and_the_same_command_resumes(tmp_path):
     """SIGINT to the ``flexsat run`` process itself, after some chunks have finished: it exits 130
     saying how many cases the store keeps; the same command then completes the store, which
     equals an uninterrupted run's case for case (nothing missing, nothing twice)."""
@@ -226,12 +256,18 @@ def test_ctrl_c_on_the_command_line_keeps_the_finished_cases_and_the_same_comman
 
     grid = SWEEP.replace("execution: {chunk_size: 4}", "execution: {chunk_size: 1}").replace(
         '["300 ozf*in", "400 ozf*in", "500 ozf*in"]',
-        '["300 ozf*in", "350 ozf*in", "400 ozf*in", "450 ozf*in", "500 ozf*in", "550 ozf*in"]')
+        '["300 ozf*in", "350 ozf*in", "400 ozf*in", "450 ozf*in", "500 ozf*in", "550 ozf*in"]',
+    )
     path = _write(tmp_path, "sweep.yaml", grid)
     command = [sys.executable, "-m", "flexsat.cli", "run", str(path), "-o", str(tmp_path / "out")]
     # a shell or CI runner may start us with SIGINT ignored, which a child would inherit
-    run = subprocess.Popen(command, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
-                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    run = subprocess.Popen(
+        command,
+        stderr=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     for line in run.stderr:  # one progress line per chunk (stderr is not a terminal)
         if line.startswith("[4/"):  # 3 of the 12 one-case chunks are in the store
             run.send_signal(signal.SIGINT)

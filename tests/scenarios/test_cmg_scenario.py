@@ -43,7 +43,8 @@ def test_steering_runs_reproduce_v3_the_preferred_saturation_and_null_motion():
     for label in ("preferred", "with null"):
         assert rows[label]["singular"] and not rows[label]["internal"]
         assert rows[label]["final_momentum_along_demand_h"] == pytest.approx(
-            rows[label]["envelope_h"], abs=1e-3)
+            rows[label]["envelope_h"], abs=1e-3
+        )
     # the null motion runs alone: no momentum, gain back to 0.5928 at [45, −45, 45, −45]°
     assert not rows["reorient"]["singular"]
     assert rows["reorient"]["final_momentum_h"] < 1e-10
@@ -57,7 +58,7 @@ def test_steering_runs_reproduce_v3_the_preferred_saturation_and_null_motion():
 
 def test_a_singular_start_is_refused_by_the_pseudo_inverse_and_passed_by_the_sr_inverse():
     start = 'initial: ["-90 deg", "180 deg", "90 deg", "0 deg"]'  # V2: the +x envelope
-    text = SMALL.replace("initial: zero, duration: \"2 s\"", start + ", duration: \"2 s\"")
+    text = SMALL.replace('initial: zero, duration: "2 s"', start + ', duration: "2 s"')
     with pytest.raises(ScenarioError, match=r"runs\['zero'\].*starts singular.*alpha > 0"):
         run_cmg(load_scenario(text))
     sr = text.replace("steering: pi", "steering: sr, alpha: 1.0e-3")
@@ -76,7 +77,8 @@ def test_the_station_scenario_contrasts_zero_gimbals_with_the_alternate_set():
     # V9 (tests/cases/test_space_station_cmg.py): singular at 494 s from σ(0) = 0, none from
     # [45, −45, 45, −45]° (a quarter orbit here)
     assert rows["zero"]["singular"] and rows["zero"]["singular_time_s"] == pytest.approx(
-        494.3, abs=1.0)
+        494.3, abs=1.0
+    )
     assert rows["zero"]["internal"]
     assert not rows["alternate"]["singular"]
     ds = result.dataset()
@@ -84,30 +86,50 @@ def test_the_station_scenario_contrasts_zero_gimbals_with_the_alternate_set():
     assert np.all(np.isfinite(ds["gain"].sel(run="alternate").values))
 
 
-@pytest.mark.parametrize("change, message", [
-    (('skew: "54.74 deg"', 'skew: "54.74 furlong"'), "cluster.skew"),
-    (('skew: "54.74 deg"', 'skew: "95 deg"'), r"cluster.skew: must lie in \(0, 90°\)"),
-    (('gimbal_rate_limit: "3 rad/s"', 'gimbal_rate_limit: "0 rad/s"'),
-     "cluster.gimbal_rate_limit: must be > 0"),
-    (('gimbal_rate_limit: "3 rad/s"', 'gimbal_rate_limit: "-1 deg/s"'),
-     "cluster.gimbal_rate_limit: must be > 0"),
-    (("steering: pi", "steering: newton"), "cluster.steering"),
-    (("steering: pi", "steering: sr, alpha: 0"), "cluster.alpha"),
-    (("n_units: 4", "n_units: 2"), "cluster.n_units: must be an integer in"),
-    (("initial: zero, duration: \"2 s\"", "initial: random, duration: \"2 s\""),
-     r"runs\['zero'\].initial: must be one of"),
-    (("initial: zero, duration: \"2 s\"", "initial: [1, 2, 3], duration: \"2 s\""),
-     r"runs\['zero'\]: gimbal sets need 4 angles"),
-    (("demand: [1, 0, 0], initial: zero, duration: \"2 s\"", "initial: zero, duration: \"2 s\""),
-     r"runs\['zero'\].*demand: give a torque demand or reorient_to"),
-    (("demand: [1, 0, 0], initial: preferred", "demand: [0, 0, 0], initial: preferred"),
-     r"runs\['preferred'\].*'preferred' needs a demand"),
-    (("demand: [1, 0, 0], initial: zero, duration", "demand: [1, 0], initial: zero, duration"),
-     r"runs\['zero'\].demand"),
-    (('duration: "2 s"', 'duration: "-2 s"'), r"runs\['zero'\].duration"),
-    (("label: preferred", "label: zero"), "runs: duplicate label 'zero'"),
-    (("steering: pi,", "steering: pi, colour: red,"), "cluster.colour: unknown key"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (('skew: "54.74 deg"', 'skew: "54.74 furlong"'), "cluster.skew"),
+        (('skew: "54.74 deg"', 'skew: "95 deg"'), r"cluster.skew: must lie in \(0, 90°\)"),
+        (
+            ('gimbal_rate_limit: "3 rad/s"', 'gimbal_rate_limit: "0 rad/s"'),
+            "cluster.gimbal_rate_limit: must be > 0",
+        ),
+        (
+            ('gimbal_rate_limit: "3 rad/s"', 'gimbal_rate_limit: "-1 deg/s"'),
+            "cluster.gimbal_rate_limit: must be > 0",
+        ),
+        (("steering: pi", "steering: newton"), "cluster.steering"),
+        (("steering: pi", "steering: sr, alpha: 0"), "cluster.alpha"),
+        (("n_units: 4", "n_units: 2"), "cluster.n_units: must be an integer in"),
+        (
+            ('initial: zero, duration: "2 s"', 'initial: random, duration: "2 s"'),
+            r"runs\['zero'\].initial: must be one of",
+        ),
+        (
+            ('initial: zero, duration: "2 s"', 'initial: [1, 2, 3], duration: "2 s"'),
+            r"runs\['zero'\]: gimbal sets need 4 angles",
+        ),
+        (
+            ('demand: [1, 0, 0], initial: zero, duration: "2 s"', 'initial: zero, duration: "2 s"'),
+            r"runs\['zero'\].*demand: give a torque demand or reorient_to",
+        ),
+        (
+            ("demand: [1, 0, 0], initial: preferred", "demand: [0, 0, 0], initial: preferred"),
+            r"runs\['preferred'\].*'preferred' needs a demand",
+        ),
+        (
+            (
+                "demand: [1, 0, 0], initial: zero, duration",
+                "demand: [1, 0], initial: zero, duration",
+            ),
+            r"runs\['zero'\].demand",
+        ),
+        (('duration: "2 s"', 'duration: "-2 s"'), r"runs\['zero'\].duration"),
+        (("label: preferred", "label: zero"), "runs: duplicate label 'zero'"),
+        (("steering: pi,", "steering: pi, colour: red,"), "cluster.colour: unknown key"),
+    ],
+)
 def test_schema_mistakes_are_named(change, message):
     old, new = change
     assert old in SMALL
@@ -115,15 +137,20 @@ def test_schema_mistakes_are_named(change, message):
         load_scenario(SMALL.replace(old, new))
 
 
-@pytest.mark.parametrize("change, message", [
-    (("orbits: 0.25", "orbits: 0"), "simulation.orbits"),
-    (("disturbance: aero_substitute", "disturbance: AERO1"), "simulation.disturbance"),
-    (("initial: alternate", "initial: [1, 2]"), r"runs\['alternate'\].initial: the station"),
-    (("runs:", "station: {rotor_momentum: \"-3500 lbf*ft*s\"}\nruns:"),
-     "station.rotor_momentum: must be > 0"),
-    (("runs:", "station: {inertia: [1, 2]}\nruns:"), "inertia: three principal moments"),
-    (("runs:", "lqr: {attitude: \"0 deg\"}\nruns:"), "lqr.attitude: must be > 0"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (("orbits: 0.25", "orbits: 0"), "simulation.orbits"),
+        (("disturbance: aero_substitute", "disturbance: AERO1"), "simulation.disturbance"),
+        (("initial: alternate", "initial: [1, 2]"), r"runs\['alternate'\].initial: the station"),
+        (
+            ("runs:", 'station: {rotor_momentum: "-3500 lbf*ft*s"}\nruns:'),
+            "station.rotor_momentum: must be > 0",
+        ),
+        (("runs:", "station: {inertia: [1, 2]}\nruns:"), "inertia: three principal moments"),
+        (("runs:", 'lqr: {attitude: "0 deg"}\nruns:'), "lqr.attitude: must be > 0"),
+    ],
+)
 def test_station_schema_mistakes_are_named(change, message):
     old, new = change
     assert old in STATION
@@ -137,17 +164,31 @@ def test_an_uncontrollable_filter_choice_is_reported_against_lqr():
         run_cmg_station(load_scenario(text))
 
 
-@pytest.mark.parametrize("change, message", [
-    (("demand: [1, 0, 0], initial: zero", "demand: [1e308, 0, 0], initial: zero"),
-     r"runs\['zero'\].demand: components must be at most 100"),
-    (('duration: "2 s"', 'duration: "1e12 s"'), r"runs\['zero'\].duration: at most 3600 s"),
-    (("demand: [1, 0, 0], initial: zero",
-      "demand: {constant: [0, 1, 0], frequency: 1e9}, initial: zero"), "frequency: must lie in"),
-    (('initial: zero, duration: "2 s"', 'initial: [.nan, 0, 0, 0], duration: "2 s"'),
-     r"runs\['zero'\].initial: angles must be finite"),
-    (('initial: zero, duration: "2 s"', 'initial: ["5 furlong", 0, 0, 0], duration: "2 s"'),
-     r"runs\['zero'\].initial: incompatible units"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (
+            ("demand: [1, 0, 0], initial: zero", "demand: [1e308, 0, 0], initial: zero"),
+            r"runs\['zero'\].demand: components must be at most 100",
+        ),
+        (('duration: "2 s"', 'duration: "1e12 s"'), r"runs\['zero'\].duration: at most 3600 s"),
+        (
+            (
+                "demand: [1, 0, 0], initial: zero",
+                "demand: {constant: [0, 1, 0], frequency: 1e9}, initial: zero",
+            ),
+            "frequency: must lie in",
+        ),
+        (
+            ('initial: zero, duration: "2 s"', 'initial: [.nan, 0, 0, 0], duration: "2 s"'),
+            r"runs\['zero'\].initial: angles must be finite",
+        ),
+        (
+            ('initial: zero, duration: "2 s"', 'initial: ["5 furlong", 0, 0, 0], duration: "2 s"'),
+            r"runs\['zero'\].initial: incompatible units",
+        ),
+    ],
+)
 def test_extreme_values_are_refused_before_anything_runs(change, message):
     # bounds that keep a run's integrator work finite (|T| × duration) are part of the schema
     old, new = change

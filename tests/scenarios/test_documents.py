@@ -29,11 +29,14 @@ def test_example_file_is_the_packaged_default():
     assert load_scenario(EXAMPLE).model_dump() == default_scenario().model_dump()
 
 
-@pytest.mark.parametrize("text, expected", [
-    ("name: [unclosed", "yaml: "),
-    ("- just\n- a list\n", "scenario: must be a YAML mapping"),
-    ("missing.yaml", "scenario: cannot read 'missing.yaml'"),
-])
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        ("name: [unclosed", "yaml: "),
+        ("- just\n- a list\n", "scenario: must be a YAML mapping"),
+        ("missing.yaml", "scenario: cannot read 'missing.yaml'"),
+    ],
+)
 def test_unreadable_scenarios(text, expected):
     with pytest.raises(ScenarioError, match="invalid scenario") as info:
         load_scenario(text)
@@ -67,41 +70,46 @@ def test_unknown_kind_is_refused_naming_every_kind():
 
 @pytest.mark.parametrize("kind", ["survey", "[maneuver]"])
 def test_a_kind_is_one_of_the_names(kind):
-    assert problem(default_scenario().yaml_text.replace("\nname:", f"\nkind: {kind}\nname:", 1)
-                   ).startswith("kind: must be 'maneuver'")
+    assert problem(
+        default_scenario().yaml_text.replace("\nname:", f"\nkind: {kind}\nname:", 1)
+    ).startswith("kind: must be 'maneuver'")
 
 
 # -- the YAML: bounded, unambiguous ----------------------------------------------------------------
 def test_non_utf8_bytes_are_refused(tmp_path):
     path = tmp_path / "latin1.yaml"
     path.write_bytes(default_scenario().yaml_text.encode() + "# café\n".encode("latin-1"))
-    assert problem(path) == (f"scenario: {str(path)!r} is not UTF-8 text (byte 0xe9 at offset "
-                             f"{len(default_scenario().yaml_text.encode()) + 5}); save it as UTF-8")
+    assert problem(path) == (
+        f"scenario: {str(path)!r} is not UTF-8 text (byte 0xe9 at offset "
+        f"{len(default_scenario().yaml_text.encode()) + 5}); save it as UTF-8"
+    )
 
 
 def test_1000_levels_of_nesting_are_refused_before_the_parser_recurses():
     text = default_scenario().yaml_text + "extra: " + "[" * 1000 + "]" * 1000 + "\n"
     assert default_scenario().yaml_text.count("\n") == 18  # so the nesting is on line 19
-    assert problem(text) == ("scenario: nested deeper than 32 levels at line 19 "
-                             "(flexsat.limits.MAX_NESTING)")
+    assert problem(text) == (
+        "scenario: nested deeper than 32 levels at line 19 (flexsat.limits.MAX_NESTING)"
+    )
 
 
 def test_duplicate_keys_are_refused_naming_the_key_and_lines():
     text = default_scenario().yaml_text.replace("seed: 0}", "seed: 0, seed: 7}")
     assert problem(text) == "simulation.seed: duplicate key (lines 8 and 8); give it once"
     assert problem(default_scenario().yaml_text + "\nname: again\n") == (
-        "name: duplicate key (lines 3 and 20); give it once")
+        "name: duplicate key (lines 3 and 20); give it once"
+    )
 
 
 def test_anchors_and_merge_keys_still_work():
     text = default_scenario().yaml_text.replace(
-        "gains: {g1: \"600 ozf*in/rad\"", "gains: &law1 {g1: \"600 ozf*in/rad\"")
+        'gains: {g1: "600 ozf*in/rad"', 'gains: &law1 {g1: "600 ozf*in/rad"'
+    )
     assert load_scenario(text).runs[0].gains.g1 > 0
-    merged = ("base: &b {duration: 2 s, control_rate: 75 Hz}\n"
-              "simulation: {<<: *b, duration: 1 s}\n")
+    merged = "base: &b {duration: 2 s, control_rate: 75 Hz}\nsimulation: {<<: *b, duration: 1 s}\n"
     assert yaml.safe_load(merged)["simulation"]["duration"] == "1 s"
     with pytest.raises(ScenarioError) as info:  # other problems, but no duplicate: an
-        load_scenario(merged)                   # override of a merged key is YAML's own rule
+        load_scenario(merged)  # override of a merged key is YAML's own rule
     assert not [p for p in info.value.problems if "duplicate" in p]
 
 
@@ -110,10 +118,13 @@ def test_aliases_expanding_beyond_the_limit_are_refused():
     for level in "bcde":
         previous = chr(ord(level) - 1)
         text += f"{level}: &{level} [" + ", ".join([f"*{previous}"] * 10) + "]\n"
-    assert problem(text) == ("d: more than 10,000 values once aliases are expanded "
-                             "(flexsat.limits.MAX_DOCUMENT_NODES)")
+    assert problem(text) == (
+        "d: more than 10,000 values once aliases are expanded (flexsat.limits.MAX_DOCUMENT_NODES)"
+    )
 
 
 def test_oversized_document_is_refused():
-    assert problem("#" * 300_000) == ("scenario: the document is larger than 256,000 bytes "
-                                      "(flexsat.limits.MAX_DOCUMENT_BYTES); a scenario is a few kB")
+    assert problem("#" * 300_000) == (
+        "scenario: the document is larger than 256,000 bytes "
+        "(flexsat.limits.MAX_DOCUMENT_BYTES); a scenario is a few kB"
+    )

@@ -32,12 +32,15 @@ def problem(**values) -> str:
     return str(cause) if cause is not None else errors[0]["msg"]
 
 
-@pytest.mark.parametrize("given, si", [
-    (2.5, 2.5),  # a bare number is in the field's unit
-    ("2.5", 2.5),
-    ("1 ft", 0.3048),
-    ("3 km", 3000.0),
-])
+@pytest.mark.parametrize(
+    "given, si",
+    [
+        (2.5, 2.5),  # a bare number is in the field's unit
+        ("2.5", 2.5),
+        ("1 ft", 0.3048),
+        ("3 km", 3000.0),
+    ],
+)
 def test_quantities_are_stored_in_si(given, si):
     assert Probe(length=given).length == pytest.approx(si, rel=1e-15)  # exact unit factors
 
@@ -49,12 +52,15 @@ def test_frequency_and_dimensionless_quantities():
     assert Probe(length=1, rate=None).rate is None
 
 
-@pytest.mark.parametrize("value, expected", [
-    (True, "length: expected a number or a quantity such as '1 m'"),
-    ("2 kg", "length: incompatible units (kilogram given, m expected)"),
-    (math.nan, "length: must be a finite number"),
-    ("inf m", "length: must be a finite number"),
-])
+@pytest.mark.parametrize(
+    "value, expected",
+    [
+        (True, "length: expected a number or a quantity such as '1 m'"),
+        ("2 kg", "length: incompatible units (kilogram given, m expected)"),
+        (math.nan, "length: must be a finite number"),
+        ("inf m", "length: must be a finite number"),
+    ],
+)
 def test_quantities_refused(value, expected):
     assert problem(length=value).startswith(expected)
 
@@ -71,8 +77,9 @@ def test_counts_take_integers_and_integral_floats(given, stored):
 
 @pytest.mark.parametrize("value", [0, 11, 2.5, True, "3", math.inf, math.nan, 1e300])
 def test_counts_out_of_bounds_or_not_integers_are_refused(value):
-    assert problem(length=1, modes=value) == (f"modes: must be an integer in [1, 10], "
-                                              f"got {value!r}")
+    assert problem(length=1, modes=value) == (
+        f"modes: must be an integer in [1, 10], got {value!r}"
+    )
 
 
 def test_an_unbounded_count_has_a_lower_bound_only():

@@ -3,13 +3,14 @@
 import pytest
 import yaml
 
+from flexsat.scenarios import ScenarioError, load_scenario
 from flexsat.scenarios.identification import (
     SUMMARY_COLUMNS,
     IdentificationScenario,
     run_identification,
     summary_table,
 )
-from flexsat.scenarios import ScenarioError, load_scenario
+
 
 def test_example_loads_with_si_values(identification_example):
     s = load_scenario(yaml.safe_dump(identification_example()))
@@ -23,36 +24,51 @@ def test_example_loads_with_si_values(identification_example):
     assert cfg.rig.cameras()[0].fx == pytest.approx(0.008)
 
 
-@pytest.mark.parametrize("changes, message", [
-    ({"kind": "survey"},
-     "kind: must be 'maneuver', 'simulation', "),
-    ({"hammer__force": 3}, "hammer.force: unknown key (allowed: node, direction, impulse"),
-    ({"wheels__axes": ["x"]}, "wheels.axes: one torque axis per wheel node (3), got 1"),
-    ({"wheels__torque_constants": [1.0]},
-     "wheels.torque_constants: one factor per wheel (3), got 1"),
-    ({"video__cameras": [{"position": [0, 0, 1], "aim": [0, 0, 0]}]},
-     "video.cameras: List should have at least 2 items"),
-    ({"video__focal_length": "8 kg"}, "video.focal_length"),
-    ({"video__cameras": [{"position": [0, 0], "aim": [0, 0, 0]}] * 2},
-     "video.cameras[0].position: must be 3 quantities"),
-    ({"truth__damping": [0.01, -0.1]}, "truth.damping[1]"),
-    ({"identification__update": "creamer_junkins"},
-     "identification.update: the wheels' torque constants are identified from the FRF"),
-])
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        ({"kind": "survey"}, "kind: must be 'maneuver', 'simulation', "),
+        ({"hammer__force": 3}, "hammer.force: unknown key (allowed: node, direction, impulse"),
+        ({"wheels__axes": ["x"]}, "wheels.axes: one torque axis per wheel node (3), got 1"),
+        (
+            {"wheels__torque_constants": [1.0]},
+            "wheels.torque_constants: one factor per wheel (3), got 1",
+        ),
+        (
+            {"video__cameras": [{"position": [0, 0, 1], "aim": [0, 0, 0]}]},
+            "video.cameras: List should have at least 2 items",
+        ),
+        ({"video__focal_length": "8 kg"}, "video.focal_length"),
+        (
+            {"video__cameras": [{"position": [0, 0], "aim": [0, 0, 0]}] * 2},
+            "video.cameras[0].position: must be 3 quantities",
+        ),
+        ({"truth__damping": [0.01, -0.1]}, "truth.damping[1]"),
+        (
+            {"identification__update": "creamer_junkins"},
+            "identification.update: the wheels' torque constants are identified from the FRF",
+        ),
+    ],
+)
 def test_schema_errors_name_the_field(changes, message, identification_example):
     with pytest.raises(ScenarioError) as exc:
         load_scenario(yaml.safe_dump(identification_example(**changes)))
     assert message in str(exc.value)
 
 
-@pytest.mark.parametrize("changes, message", [
-    ({"a_priori__stiffness_scale": {"clamp": 1.1}},
-     "a_priori.stiffness_scale: unknown substructure 'clamp'"),
-    ({"sensors__targets": [1, 2, 21]}, "sensors.targets: node 21 is clamped"),
-    ({"hammer__node": 99}, "hammer.node: node 99 is not a node of tamu_grid"),
-    ({"case": "tamu", "case_overrides": {}}, "case: 'tamu' has no substructures to update"),
-    ({"case_overrides": {"EI": -1.0}}, "case_overrides: EI: must be > 0"),
-])
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        (
+            {"a_priori__stiffness_scale": {"clamp": 1.1}},
+            "a_priori.stiffness_scale: unknown substructure 'clamp'",
+        ),
+        ({"sensors__targets": [1, 2, 21]}, "sensors.targets: node 21 is clamped"),
+        ({"hammer__node": 99}, "hammer.node: node 99 is not a node of tamu_grid"),
+        ({"case": "tamu", "case_overrides": {}}, "case: 'tamu' has no substructures to update"),
+        ({"case_overrides": {"EI": -1.0}}, "case_overrides: EI: must be > 0"),
+    ],
+)
 def test_case_dependent_errors_before_anything_runs(changes, message, identification_example):
     s = load_scenario(yaml.safe_dump(identification_example(**changes)))
     with pytest.raises(ScenarioError) as exc:
@@ -126,18 +142,32 @@ def test_recorded_scenario_errors(tmp_path, identification_example):
         load_scenario(yaml.safe_dump(data))
 
 
-@pytest.mark.parametrize("section, values, expected", [
-    ("wheels", {"duration": "1e9 s"}, "wheels.duration: samples (duration × sample_rate) = 5e+10, "
-                                      "above the limit 2,000,000 (flexsat.limits); shorten the "
-                                      "test or lower the sample rate"),
-    ("hammer", {"sample_rate": "-200 Hz"}, "hammer.sample_rate: must be > 0, got -200"),
-    ("video", {"field_rate": "1e12 Hz"}, "video.duration: samples (duration × field_rate) = "
-                                         "4.5e+12, above the limit 2,000,000"),
-    ("identification", {"bootstrap_samples": 1e9}, "identification.bootstrap_samples: must be an "
-                                                   "integer in [0, 1000], got 1000000000.0"),
-])
-def test_identification_tests_beyond_the_limits_are_refused_at_load(section, values, expected,
-                                                                    identification_example):
+@pytest.mark.parametrize(
+    "section, values, expected",
+    [
+        (
+            "wheels",
+            {"duration": "1e9 s"},
+            "wheels.duration: samples (duration × sample_rate) = 5e+10, "
+            "above the limit 2,000,000 (flexsat.limits); shorten the "
+            "test or lower the sample rate",
+        ),
+        ("hammer", {"sample_rate": "-200 Hz"}, "hammer.sample_rate: must be > 0, got -200"),
+        (
+            "video",
+            {"field_rate": "1e12 Hz"},
+            "video.duration: samples (duration × field_rate) = 4.5e+12, above the limit 2,000,000",
+        ),
+        (
+            "identification",
+            {"bootstrap_samples": 1e9},
+            "identification.bootstrap_samples: must be an integer in [0, 1000], got 1000000000.0",
+        ),
+    ],
+)
+def test_identification_tests_beyond_the_limits_are_refused_at_load(
+    section, values, expected, identification_example
+):
     data = identification_example()
     data[section].update(values)
     with pytest.raises(ScenarioError) as info:
@@ -147,6 +177,9 @@ def test_identification_tests_beyond_the_limits_are_refused_at_load(section, val
 
 def test_identification_seed_is_bounded(identification_example):
     data = dict(identification_example(), seed=1e29)
-    with pytest.raises(ScenarioError, match=r"seed: must be an integer in \[0, 4294967295\], got "
-                                            r"1e\+29"):
+    with pytest.raises(
+        ScenarioError,
+        match=r"seed: must be an integer in \[0, 4294967295\], got "
+        r"1e\+29",
+    ):
         load_scenario(yaml.safe_dump(data))

@@ -14,15 +14,25 @@ import pytest
 from flexsat.scenarios.laws import _LAWS, _CaseContext
 from flexsat.scenarios.maneuver import GainsSpec, ReferenceSpec, RunSpec
 
-LQG = {"rigid_weight": 1, "mode_weights": 0.1, "control_weight": 7,
-       "sensor_noise": [1e-7, 5e-6], "process_noise": 0.1}
+LQG = {
+    "rigid_weight": 1,
+    "mode_weights": 0.1,
+    "control_weight": 7,
+    "sensor_noise": [1e-7, 5e-6],
+    "process_noise": 0.1,
+}
 
 
 @pytest.fixture(scope="module")
 def ctx(tamu_case, tamu_model):
-    return _CaseContext(angle=math.radians(40), reference_inertia=tamu_case.reference_inertia,
-                        appendage_inertia=tamu_model.appendage_inertia,
-                        n_appendages=int(tamu_model.n_appendages), plant=tamu_model, dt=1 / 75)
+    return _CaseContext(
+        angle=math.radians(40),
+        reference_inertia=tamu_case.reference_inertia,
+        appendage_inertia=tamu_model.appendage_inertia,
+        n_appendages=int(tamu_model.n_appendages),
+        plant=tamu_model,
+        dt=1 / 75,
+    )
 
 
 def build(ctx, shape=None, **run):
@@ -44,15 +54,23 @@ def test_regulator_takes_the_slew_and_the_cases_appendage_count(ctx):
     assert float(law.target) == pytest.approx(math.radians(40))
     # g3 > -n_appendages (Att. 3 Eq. 11): -3 is admissible with four appendages, not with two
     with pytest.raises(ValueError, match=r"^g3: must be > -2 \(= -n_appendages\)"):
-        build(dataclasses.replace(ctx, n_appendages=2), law="lyapunov_regulator",
-              gains={"g1": 2.0, "g2": 3.0, "g3": -3.0})
+        build(
+            dataclasses.replace(ctx, n_appendages=2),
+            law="lyapunov_regulator",
+            gains={"g1": 2.0, "g2": 3.0, "g3": -3.0},
+        )
 
 
 def test_tracker_follows_its_reference_with_the_cases_appendage_inertia(ctx):
     spec = ReferenceSpec(shape="smooth_bang_bang", u_max=1.0, alpha=0.2)
     reference = spec.build(ctx.angle, ctx.reference_inertia)
-    law = build(ctx, reference, law="lyapunov_tracker", gains={"g1": 2.0, "g2": 3.0},
-                reference=spec.model_dump(exclude_none=True))
+    law = build(
+        ctx,
+        reference,
+        law="lyapunov_tracker",
+        gains={"g1": 2.0, "g2": 3.0},
+        reference=spec.model_dump(exclude_none=True),
+    )
     assert law.reference is reference
     assert float(law.appendage_inertia) == ctx.appendage_inertia
     assert float(law.target) == pytest.approx(ctx.angle)  # where the reference ends
@@ -60,8 +78,11 @@ def test_tracker_follows_its_reference_with_the_cases_appendage_inertia(ctx):
 
 def test_pd_poles_place_the_rigid_poles_with_the_reference_inertia(ctx):
     inertia = 2.5
-    law = build(dataclasses.replace(ctx, reference_inertia=inertia), law="pd",
-                poles={"natural_frequency": "0.06 Hz", "damping_ratio": 0.9})
+    law = build(
+        dataclasses.replace(ctx, reference_inertia=inertia),
+        law="pd",
+        poles={"natural_frequency": "0.06 Hz", "damping_ratio": 0.9},
+    )
     wn = 2 * np.pi * 0.06
     # I θ'' = -kp θ - kd θ': s² + (kd/I) s + kp/I = s² + 2ζω s + ω²
     assert float(law.kp) == pytest.approx(inertia * wn**2, rel=1e-12)

@@ -60,54 +60,74 @@ def test_dump_round_trips_and_bare_numbers_are_si():
     assert bare.actuator.saturation == pytest.approx(s.actuator.saturation)
 
 
-@pytest.mark.parametrize("section, key, text, expected", [
-    ("maneuver", "angle", "0.5 turn", math.pi),
-    ("simulation", "integration_step", "1 ms", 1e-3),
-    ("simulation", "control_rate", "0.1 kHz", 100.0),
-    ("actuator", "saturation", "1 N*m", 1.0),
-    ("sensors", "encoder_resolution", "1 arcmin", math.radians(1 / 60)),
-])
+@pytest.mark.parametrize(
+    "section, key, text, expected",
+    [
+        ("maneuver", "angle", "0.5 turn", math.pi),
+        ("simulation", "integration_step", "1 ms", 1e-3),
+        ("simulation", "control_rate", "0.1 kHz", 100.0),
+        ("actuator", "saturation", "1 N*m", 1.0),
+        ("sensors", "encoder_resolution", "1 arcmin", math.radians(1 / 60)),
+    ],
+)
 def test_quantities_convert_to_si(section, key, text, expected):
     data = small_data()
     data[section][key] = text
-    assert getattr(getattr(load_scenario(yaml.safe_dump(data)), section), key) == \
-        pytest.approx(expected)
+    assert getattr(getattr(load_scenario(yaml.safe_dump(data)), section), key) == pytest.approx(
+        expected
+    )
 
 
 # -- one test per bad-input rule -----------------------------------------------------------------
 def test_unknown_key_is_named_with_its_path():
     message = problems_of(lambda d: d["sensors"].update(rate_windw=3))
-    assert "sensors.rate_windw: unknown key (allowed: encoder_resolution, rate, rate_window" \
-        in message
+    assert (
+        "sensors.rate_windw: unknown key (allowed: encoder_resolution, rate, rate_window" in message
+    )
 
 
 def test_unknown_keys_at_top_level_and_in_a_run():
-    message = problems_of(lambda d: (d.update(colour=1, size=2),
-                                     d["runs"][1]["reference"].update(beta=1)))
+    message = problems_of(
+        lambda d: (d.update(colour=1, size=2), d["runs"][1]["reference"].update(beta=1))
+    )
     assert "colour: unknown key (allowed: kind, name, case, case_overrides, model" in message
     assert "size: unknown key" in message
     assert "runs['Law II'].reference.beta: unknown key (allowed: shape, u_max" in message
     assert "invalid scenario (3 problems)" in message
 
 
-@pytest.mark.parametrize("mutate, expected", [
-    (lambda d: d["simulation"].update(duration="nan"),
-     "simulation.duration: must be a finite number, got 'nan'"),
-    (lambda d: d["simulation"].update(duration=float("inf")),
-     "simulation.duration: must be a finite number, got inf"),
-    (lambda d: d["runs"][0]["gains"].update(g2="inf ozf*in*s/rad"),
-     "runs['Law I'].gains.g2: must be a finite number"),
-    (lambda d: d["case_overrides"].update(n_modes="nan"),
-     "case_overrides.n_modes: must be a finite number, got 'nan'"),
-], ids=["nan-string", "inf-number", "inf-quantity", "nan-override"])
+@pytest.mark.parametrize(
+    "mutate, expected",
+    [
+        (
+            lambda d: d["simulation"].update(duration="nan"),
+            "simulation.duration: must be a finite number, got 'nan'",
+        ),
+        (
+            lambda d: d["simulation"].update(duration=float("inf")),
+            "simulation.duration: must be a finite number, got inf",
+        ),
+        (
+            lambda d: d["runs"][0]["gains"].update(g2="inf ozf*in*s/rad"),
+            "runs['Law I'].gains.g2: must be a finite number",
+        ),
+        (
+            lambda d: d["case_overrides"].update(n_modes="nan"),
+            "case_overrides.n_modes: must be a finite number, got 'nan'",
+        ),
+    ],
+    ids=["nan-string", "inf-number", "inf-quantity", "nan-override"],
+)
 def test_non_finite_numbers(mutate, expected):
     assert expected in problems_of(mutate)
 
 
 def test_integration_step_must_be_below_the_control_period():
     message = problems_of(lambda d: d["simulation"].update(integration_step="20 ms"))
-    assert ("simulation.integration_step: must be smaller than the control period "
-            "1/control_rate = 13.33 ms, got 20 ms") in message
+    assert (
+        "simulation.integration_step: must be smaller than the control period "
+        "1/control_rate = 13.33 ms, got 20 ms"
+    ) in message
 
 
 def test_incompatible_units():
@@ -125,32 +145,72 @@ def test_disturbance_rules():
     assert "disturbances.random_torque: must be >= 0" in message
 
 
-@pytest.mark.parametrize("mutate, expected", [
-    (lambda d: d["runs"][0]["gains"].update(kp=1),
-     "runs['Law I'].gains.kp: not a gain of law 'lyapunov_regulator' (its gains: g1, g2, g3)"),
-    (lambda d: d["runs"][1].pop("reference"),
-     "runs['Law II'].reference: required by law 'lyapunov_tracker'"),
-    (lambda d: d["runs"][0].update(reference={"shape": "bang_bang", "u_max": 1}),
-     "runs['Law I'].reference: law 'lyapunov_regulator' tracks no reference"),
-    (lambda d: d["runs"][1]["reference"].update(shape="bang_bang"),
-     "runs['Law II'].reference.alpha: not a parameter of shape 'bang_bang'"),
-    (lambda d: d["runs"][1]["reference"].update(duration="3 s"),
-     "runs['Law II'].reference: give exactly 2 of {u_max, duration, alpha}"),
-    (lambda d: d["runs"][1].update(law="unknown"),
-     "runs['Law II'].law: Input should be 'lyapunov_regulator', 'lyapunov_tracker', 'pd' or 'lqg'"),
-    (lambda d: d["runs"].append({"label": "PD", "law": "pd"}),
-     "runs['PD'].gains.kp: required by law 'pd' (or give poles)"),
-    (lambda d: d["runs"].append({"label": "PD", "law": "pd", "poles": {
-        "natural_frequency": "0.4 kg", "damping_ratio": 0.9}}),
-     "runs['PD'].poles.natural_frequency: incompatible units"),
-    (lambda d: d["runs"].append({"label": "PD", "law": "pd", "poles": {
-        "natural_frequency": "0.06 Hz", "damping_ratio": -0.9}}),
-     "runs['PD'].poles.damping_ratio: must be >= 0"),
-    (lambda d: d["runs"].append(dict(d["runs"][0])),
-     "runs: duplicate label 'Law I'"),
-], ids=["foreign-gain", "missing-reference", "extra-reference", "shape-parameter",
-        "overdetermined-shape", "unknown-law", "pd-without-gains", "poles-in-kg",
-        "negative-damping", "duplicate-label"])
+@pytest.mark.parametrize(
+    "mutate, expected",
+    [
+        (
+            lambda d: d["runs"][0]["gains"].update(kp=1),
+            "runs['Law I'].gains.kp: not a gain of law 'lyapunov_regulator' (its gains: g1, g2, g3)",
+        ),
+        (
+            lambda d: d["runs"][1].pop("reference"),
+            "runs['Law II'].reference: required by law 'lyapunov_tracker'",
+        ),
+        (
+            lambda d: d["runs"][0].update(reference={"shape": "bang_bang", "u_max": 1}),
+            "runs['Law I'].reference: law 'lyapunov_regulator' tracks no reference",
+        ),
+        (
+            lambda d: d["runs"][1]["reference"].update(shape="bang_bang"),
+            "runs['Law II'].reference.alpha: not a parameter of shape 'bang_bang'",
+        ),
+        (
+            lambda d: d["runs"][1]["reference"].update(duration="3 s"),
+            "runs['Law II'].reference: give exactly 2 of {u_max, duration, alpha}",
+        ),
+        (
+            lambda d: d["runs"][1].update(law="unknown"),
+            "runs['Law II'].law: Input should be 'lyapunov_regulator', 'lyapunov_tracker', 'pd' or 'lqg'",
+        ),
+        (
+            lambda d: d["runs"].append({"label": "PD", "law": "pd"}),
+            "runs['PD'].gains.kp: required by law 'pd' (or give poles)",
+        ),
+        (
+            lambda d: d["runs"].append(
+                {
+                    "label": "PD",
+                    "law": "pd",
+                    "poles": {"natural_frequency": "0.4 kg", "damping_ratio": 0.9},
+                }
+            ),
+            "runs['PD'].poles.natural_frequency: incompatible units",
+        ),
+        (
+            lambda d: d["runs"].append(
+                {
+                    "label": "PD",
+                    "law": "pd",
+                    "poles": {"natural_frequency": "0.06 Hz", "damping_ratio": -0.9},
+                }
+            ),
+            "runs['PD'].poles.damping_ratio: must be >= 0",
+        ),
+        (lambda d: d["runs"].append(dict(d["runs"][0])), "runs: duplicate label 'Law I'"),
+    ],
+    ids=[
+        "foreign-gain",
+        "missing-reference",
+        "extra-reference",
+        "shape-parameter",
+        "overdetermined-shape",
+        "unknown-law",
+        "pd-without-gains",
+        "poles-in-kg",
+        "negative-damping",
+        "duplicate-label",
+    ],
+)
 def test_run_rules(mutate, expected):
     assert expected in problems_of(mutate)
 
@@ -162,21 +222,28 @@ def test_unknown_case():
 
 def test_model_option_given_twice():
     assert "model.n_modes: also given in case_overrides" in problems_of(
-        lambda d: d["case_overrides"].update(n_modes=3))
+        lambda d: d["case_overrides"].update(n_modes=3)
+    )
 
 
 # -- scenario files (flexsat.scenarios.quantity goes through flexsat.units.to_si) -------------------
 def test_scenario_refuses_a_dimensionless_unit_where_a_dimension_is_due():
     assert "simulation.duration: incompatible units (degree given, s expected)" in problems_of(
-        lambda d: d["simulation"].update(duration="15 deg"))
-    pd_run = {"label": "PD", "law": "pd",
-              "poles": {"natural_frequency": "100 percent", "damping_ratio": 0.9},
-              "reference": {"shape": "sinusoidal", "duration": "10 s"}}
-    assert ("runs['PD'].poles.natural_frequency: incompatible units (percent given, rad/s "
-            "expected)") in problems_of(lambda d: d["runs"].append(pd_run))
+        lambda d: d["simulation"].update(duration="15 deg")
+    )
+    pd_run = {
+        "label": "PD",
+        "law": "pd",
+        "poles": {"natural_frequency": "100 percent", "damping_ratio": 0.9},
+        "reference": {"shape": "sinusoidal", "duration": "10 s"},
+    }
+    assert (
+        "runs['PD'].poles.natural_frequency: incompatible units (percent given, rad/s expected)"
+    ) in problems_of(lambda d: d["runs"].append(pd_run))
 
 
 @pytest.mark.parametrize("text", ["1/0", "(1", "10.0**400", "10**10**10 s"])
 def test_scenario_reports_unreadable_expressions_as_problems(text):
     assert f"simulation.duration: cannot read {text!r} as a quantity" in problems_of(
-        lambda d: d["simulation"].update(duration=text))
+        lambda d: d["simulation"].update(duration=text)
+    )

@@ -58,12 +58,29 @@ def test_the_example_runs_the_grid_with_both_goal_rules(example):
 
 def test_the_report_holds_the_tables_the_histories_and_the_responses(example):
     result, out = example
-    for name in ("index.html", "metrics.json", "results.nc", "cost.png", "stability.png",
-                 "poles.png", "gains.png", *(f"response_{i}.png" for i in range(1, 13))):
+    for name in (
+        "index.html",
+        "metrics.json",
+        "results.nc",
+        "cost.png",
+        "stability.png",
+        "poles.png",
+        "gains.png",
+        *(f"response_{i}.png" for i in range(1, 13)),
+    ):
         assert (out / name).is_file(), name
     page = (out / "index.html").read_text()
-    for text in ("J_init", "J_opt", "min eig S", "max Re pole", "g11", "g33",
-                 "paper act. 1", "92108", "1a 0.2"):
+    for text in (
+        "J_init",
+        "J_opt",
+        "min eig S",
+        "max Re pole",
+        "g11",
+        "g33",
+        "paper act. 1",
+        "92108",
+        "1a 0.2",
+    ):
         assert text in page, text
     records = json.loads((out / "metrics.json").read_text())
     assert [r["run"] for r in records] == list(result.labels)
@@ -75,18 +92,28 @@ def test_the_report_holds_the_tables_the_histories_and_the_responses(example):
         J0 = (r["gamma_path"] * r["J_goal"] + (1 - r["gamma_path"]) * r["J_init"]).values
         np.testing.assert_allclose(r["cost_path"].values[steps], J0[steps], rtol=1e-8)
         assert np.all(r["max_re_pole_path"].values[steps] < 0)
-        np.testing.assert_allclose(r["gains_optimised"].values,
-                                   result.runs[6].gains, rtol=0)
+        np.testing.assert_allclose(r["gains_optimised"].values, result.runs[6].gains, rtol=0)
 
 
 @pytest.mark.skipif(shutil.which("chromium") is None, reason="headless Chromium not installed")
 def test_the_page_renders_in_a_browser(example, tmp_path):
     _, out = example
     shot = tmp_path / "ppf.png"
-    subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu",
-                    f"--user-data-dir={tmp_path / 'profile'}", "--window-size=1200,2400",
-                    f"--screenshot={shot}", (out / "index.html").as_uri()],
-                   check=True, capture_output=True, timeout=120)
+    subprocess.run(
+        [
+            "chromium",
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            f"--user-data-dir={tmp_path / 'profile'}",
+            "--window-size=1200,2400",
+            f"--screenshot={shot}",
+            (out / "index.html").as_uri(),
+        ],
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
     assert shot.stat().st_size > 50_000  # a page of tables and figures, not a blank one
 
 
@@ -115,30 +142,41 @@ def test_flexsat_run_dispatches_kind_ppf(tmp_path):
     assert (out / "index.html").is_file() and (out / "response_2.png").is_file()
 
 
-@pytest.mark.parametrize("change, message", [
-    (("weights: [100, 100]", "weights: [100]"), r"runs\['paper'\].weights: must be the two"),
-    (("weights: [100, 500]", "weights: [100, -5]"), r"runs\['reducing'\].weights"),
-    (("excitation: first", "excitation: second"), r"runs\['paper'\].excitation"),
-    (("Q_u: 1.0e-8", "Q_u: -1"), "ppf.Q_u"),
-    (("zeta_f: 0.1", "zeta_f: -0.1"), "ppf.zeta_f"),
-    (('amplitude: "1 cm"', 'amplitude: "1 s"'), "ppf.amplitude"),
-    (("initial_gains: 100", "initial_gains: [1, 2]"), "ppf.initial_gains: one gain or nine"),
-    (("gamma_stop: 0.9", "gamma_stop: 1.5"), "ppf.gamma_stop"),
-    (("goal: {rule: paper}", "goal: {rule: best}"), r"runs\['paper'\].goal.rule"),
-    (("{rule: ratio, value: 0.2}", "{rule: ratio}"),
-     r"runs\['reducing'\].goal.value: the 'ratio' rule needs a value"),
-    (("{rule: ratio, value: 0.2}", "{rule: ratio, value: -1}"),
-     r"runs\['reducing'\].goal.value: a ratio"),
-    (("goal: {rule: paper}", "goal: {rule: paper, value: 2}"), r"goal.value: the 'paper' rule"),
-    (("weights: [100, 100]\n    excitation: first\n    goal: {rule: paper}",
-      "weights: [200, 100]\n    excitation: first\n    goal: {rule: paper}"),
-     r"runs\['paper'\].weights: the paper's goal is known only"),
-    (('duration: "10 s"', 'duration: "-10 s"'), "simulation.duration"),
-    (('control_rate: "100 Hz"', 'control_rate: "0 Hz"'), "simulation.control_rate"),
-    (("label: reducing", "label: paper"), "runs: duplicate label 'paper'"),
-    (("case: agrawal_bang", "case: eps"), "case"),
-    (("gamma_stop: 0.9}", "gamma_stop: 0.9, colour: red}"), "ppf.colour: unknown key"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (("weights: [100, 100]", "weights: [100]"), r"runs\['paper'\].weights: must be the two"),
+        (("weights: [100, 500]", "weights: [100, -5]"), r"runs\['reducing'\].weights"),
+        (("excitation: first", "excitation: second"), r"runs\['paper'\].excitation"),
+        (("Q_u: 1.0e-8", "Q_u: -1"), "ppf.Q_u"),
+        (("zeta_f: 0.1", "zeta_f: -0.1"), "ppf.zeta_f"),
+        (('amplitude: "1 cm"', 'amplitude: "1 s"'), "ppf.amplitude"),
+        (("initial_gains: 100", "initial_gains: [1, 2]"), "ppf.initial_gains: one gain or nine"),
+        (("gamma_stop: 0.9", "gamma_stop: 1.5"), "ppf.gamma_stop"),
+        (("goal: {rule: paper}", "goal: {rule: best}"), r"runs\['paper'\].goal.rule"),
+        (
+            ("{rule: ratio, value: 0.2}", "{rule: ratio}"),
+            r"runs\['reducing'\].goal.value: the 'ratio' rule needs a value",
+        ),
+        (
+            ("{rule: ratio, value: 0.2}", "{rule: ratio, value: -1}"),
+            r"runs\['reducing'\].goal.value: a ratio",
+        ),
+        (("goal: {rule: paper}", "goal: {rule: paper, value: 2}"), r"goal.value: the 'paper' rule"),
+        (
+            (
+                "weights: [100, 100]\n    excitation: first\n    goal: {rule: paper}",
+                "weights: [200, 100]\n    excitation: first\n    goal: {rule: paper}",
+            ),
+            r"runs\['paper'\].weights: the paper's goal is known only",
+        ),
+        (('duration: "10 s"', 'duration: "-10 s"'), "simulation.duration"),
+        (('control_rate: "100 Hz"', 'control_rate: "0 Hz"'), "simulation.control_rate"),
+        (("label: reducing", "label: paper"), "runs: duplicate label 'paper'"),
+        (("case: agrawal_bang", "case: eps"), "case"),
+        (("gamma_stop: 0.9}", "gamma_stop: 0.9, colour: red}"), "ppf.colour: unknown key"),
+    ],
+)
 def test_schema_mistakes_are_named(change, message):
     old, new = change
     assert old in SMALL

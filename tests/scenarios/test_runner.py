@@ -75,9 +75,14 @@ def test_prepare_builds_model_config_and_controllers():
 
 def test_pd_poles_are_cyclic_and_use_the_reference_inertia():
     data = small_data()
-    data["runs"].append({"label": "PD", "law": "pd",
-                         "poles": {"natural_frequency": "0.06 Hz", "damping_ratio": 0.9},
-                         "reference": {"shape": "sinusoidal", "duration": "10 s"}})
+    data["runs"].append(
+        {
+            "label": "PD",
+            "law": "pd",
+            "poles": {"natural_frequency": "0.06 Hz", "damping_ratio": 0.9},
+            "reference": {"shape": "sinusoidal", "duration": "10 s"},
+        }
+    )
     plan = prepare_scenario(load_scenario(yaml.safe_dump(data)))
     pd = plan.controllers["PD"]
     wn = 2 * np.pi * 0.06
@@ -86,12 +91,15 @@ def test_pd_poles_are_cyclic_and_use_the_reference_inertia():
     assert float(pd.reference.duration) == pytest.approx(10.0)
 
 
-@pytest.mark.parametrize("key, value, expected", [
-    ("hub_inertia", "-5 ozf*in*s**2", "case_overrides.hub_inertia: must be > 0"),
-    ("tip_mass", -1.0, "case_overrides.tip_mass: must be >= 0"),
-    ("density", 0, "case_overrides.density: must be > 0"),
-    ("modulus", "-1 psi", "case_overrides.modulus: must be > 0"),
-])
+@pytest.mark.parametrize(
+    "key, value, expected",
+    [
+        ("hub_inertia", "-5 ozf*in*s**2", "case_overrides.hub_inertia: must be > 0"),
+        ("tip_mass", -1.0, "case_overrides.tip_mass: must be >= 0"),
+        ("density", 0, "case_overrides.density: must be > 0"),
+        ("modulus", "-1 psi", "case_overrides.modulus: must be > 0"),
+    ],
+)
 def test_non_positive_inertia_mass_stiffness(key, value, expected):
     assert expected in problems_of(lambda d: d["case_overrides"].update({key: value}))
 
@@ -103,14 +111,18 @@ def test_unknown_case_parameter_comes_from_the_builder():
 
 def test_model_options_are_checked_by_the_builder():
     assert "model.n_modes: must be a positive integer, got 0" in problems_of(
-        lambda d: d["model"].update(n_modes=0))
+        lambda d: d["model"].update(n_modes=0)
+    )
 
 
-@pytest.mark.parametrize("run, gain, value, expected", [
-    (0, "g1", -1.0, "runs['Law I'].gains.g1: must be >= 0"),
-    (1, "g2", "-800 ozf*in*s/rad", "runs['Law II'].gains.g2: must be >= 0"),
-    (1, "g3", -4, "runs['Law II'].gains.g3: must be > -4 (= -n_appendages)"),
-])
+@pytest.mark.parametrize(
+    "run, gain, value, expected",
+    [
+        (0, "g1", -1.0, "runs['Law I'].gains.g1: must be >= 0"),
+        (1, "g2", "-800 ozf*in*s/rad", "runs['Law II'].gains.g2: must be >= 0"),
+        (1, "g3", -4, "runs['Law II'].gains.g3: must be > -4 (= -n_appendages)"),
+    ],
+)
 def test_inadmissible_gains(run, gain, value, expected):
     assert expected in problems_of(lambda d: d["runs"][run]["gains"].update({gain: value}))
 
@@ -142,24 +154,42 @@ def test_nothing_runs_when_any_run_is_invalid(monkeypatch):
 
 
 # -- stage 2 and resources: numbers with bounds ---------------------------------------------------
-@pytest.mark.parametrize("data, expected", [
-    (changed("simulation", duration="1e12 s"),
-     "simulation.duration: control samples (duration × control_rate) = 7.5e+13, above the limit "
-     "2,000,000 (flexsat.limits); shorten the run or lower the control rate"),
-    (changed("simulation", seed=1e29),
-     "simulation.seed: must be an integer in [0, 4294967295], got 1e+29"),
-    (changed("simulation", seed=1.5), "simulation.seed: must be an integer in [0, 4294967295], "
-                                      "got 1.5"),
-    (changed("model", n_modes=100_000), "model.n_modes: modes per appendage = 1e+05, above the "
-                                        "limit 100 (flexsat.limits)"),
-    (changed("sensors", rate_window=True), "sensors.rate_window: must be an integer in "
-                                           "[1, 1000], got True"),
-    (changed("maneuver", angle="1e12 rad"), "maneuver.angle: a slew of at most ten turns "
-                                            "(62.83 rad) either way, got 1e+12 rad"),
-    (changed("actuator", torque_constant_ratio=1e300), "actuator.torque_constant_ratio: actual "
-                                                       "/ nominal torque constant, at most 10, "
-                                                       "got 1e+300"),
-])
+@pytest.mark.parametrize(
+    "data, expected",
+    [
+        (
+            changed("simulation", duration="1e12 s"),
+            "simulation.duration: control samples (duration × control_rate) = 7.5e+13, above the limit "
+            "2,000,000 (flexsat.limits); shorten the run or lower the control rate",
+        ),
+        (
+            changed("simulation", seed=1e29),
+            "simulation.seed: must be an integer in [0, 4294967295], got 1e+29",
+        ),
+        (
+            changed("simulation", seed=1.5),
+            "simulation.seed: must be an integer in [0, 4294967295], got 1.5",
+        ),
+        (
+            changed("model", n_modes=100_000),
+            "model.n_modes: modes per appendage = 1e+05, above the limit 100 (flexsat.limits)",
+        ),
+        (
+            changed("sensors", rate_window=True),
+            "sensors.rate_window: must be an integer in [1, 1000], got True",
+        ),
+        (
+            changed("maneuver", angle="1e12 rad"),
+            "maneuver.angle: a slew of at most ten turns (62.83 rad) either way, got 1e+12 rad",
+        ),
+        (
+            changed("actuator", torque_constant_ratio=1e300),
+            "actuator.torque_constant_ratio: actual "
+            "/ nominal torque constant, at most 10, "
+            "got 1e+300",
+        ),
+    ],
+)
 def test_numbers_beyond_their_bounds_are_refused_at_load(data, expected):
     assert problem(data) == expected
 
@@ -178,8 +208,9 @@ def test_modes_through_case_overrides_are_refused_before_the_model_is_built():
     data = small_data()
     del data["model"]["n_modes"]
     data["case_overrides"]["n_modes"] = 100_000
-    assert problem(data) == ("case_overrides.n_modes: modes per appendage = 1e+05, above the "
-                             "limit 100 (flexsat.limits)")
+    assert problem(data) == (
+        "case_overrides.n_modes: modes per appendage = 1e+05, above the limit 100 (flexsat.limits)"
+    )
 
 
 def test_memory_of_all_runs_together_is_checked(monkeypatch):
@@ -190,14 +221,16 @@ def test_memory_of_all_runs_together_is_checked(monkeypatch):
     monkeypatch.setattr(limits, "MAX_MEMORY", 37_000)
     assert problem(small_data()).startswith(
         "simulation.duration: a run of 151 samples × 2 cases × 13 values (and a 32-sample buffer "
-        "of 11) needs about 36.2 kB of memory")
+        "of 11) needs about 36.2 kB of memory"
+    )
 
 
 def test_numerical_failure_of_the_case_model_is_a_scenario_error():
     data = small_data()
     data["case_overrides"]["tip_radius"] = 1e300
-    assert problem(data).startswith("case_overrides: the tamu model cannot be built from these "
-                                    "values (OverflowError")
+    assert problem(data).startswith(
+        "case_overrides: the tamu model cannot be built from these values (OverflowError"
+    )
 
 
 def test_too_many_runs_are_refused():
@@ -239,6 +272,7 @@ def test_case_without_a_maneuver_model_is_refused_at_load():
     data = small_data()
     data["case"] = "eps"
     del data["case_overrides"], data["model"]
-    assert problem(data) == ("case: 'eps' has no maneuver model (a hub plant to slew); cases "
-                             "with one: tamu, nps")
+    assert problem(data) == (
+        "case: 'eps' has no maneuver model (a hub plant to slew); cases with one: tamu, nps"
+    )
     assert set(maneuver_cases()) == {"tamu", "nps"}

@@ -20,8 +20,13 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from flexsat.scenarios import IdentificationScenario
-from flexsat.scenarios import ScenarioError, default_scenario, load_scenario, run_scenario
+from flexsat.scenarios import (
+    IdentificationScenario,
+    ScenarioError,
+    default_scenario,
+    load_scenario,
+    run_scenario,
+)
 from flexsat.sim import SimulationDiverged
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
@@ -57,8 +62,13 @@ BASE_WEIGHTS = {"default": 6, "nps_pd": 1, "nps_lqg": 1, "identification": 2}
 
 def _paths(node, prefix=()) -> list[tuple]:
     """Every key path of a document (mappings and list items)."""
-    items = node.items() if isinstance(node, dict) else enumerate(node) \
-        if isinstance(node, list) else ()
+    items = (
+        node.items()
+        if isinstance(node, dict)
+        else enumerate(node)
+        if isinstance(node, list)
+        else ()
+    )
     out = []
     for key, value in items:
         out.append(prefix + (key,))
@@ -66,14 +76,33 @@ def _paths(node, prefix=()) -> list[tuple]:
     return out
 
 
-NUMBERS = st.sampled_from([0, -1, 1e308, -1e308, 1e-308, 2**70, -(2**70), 1e29, 1.5, 1e12,
-                           math.nan, math.inf, -math.inf])
-BAD_UNITS = st.sampled_from(["1 kg", "15 deg", "100 percent", "nan s", "inf Hz", "1e400 s",
-                             "1e12 s", "-3 N*m", "5 furlong", "ozf*in", "", "  ", "1 1 s"])
-WRONG_TYPES = st.one_of(st.none(), st.booleans(), st.lists(st.integers(), max_size=3),
-                        st.dictionaries(st.sampled_from(["a", "angle", "g1"]), st.integers(),
-                                        max_size=2),
-                        st.text(max_size=20))
+NUMBERS = st.sampled_from(
+    [0, -1, 1e308, -1e308, 1e-308, 2**70, -(2**70), 1e29, 1.5, 1e12, math.nan, math.inf, -math.inf]
+)
+BAD_UNITS = st.sampled_from(
+    [
+        "1 kg",
+        "15 deg",
+        "100 percent",
+        "nan s",
+        "inf Hz",
+        "1e400 s",
+        "1e12 s",
+        "-3 N*m",
+        "5 furlong",
+        "ozf*in",
+        "",
+        "  ",
+        "1 1 s",
+    ]
+)
+WRONG_TYPES = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.lists(st.integers(), max_size=3),
+    st.dictionaries(st.sampled_from(["a", "angle", "g1"]), st.integers(), max_size=2),
+    st.text(max_size=20),
+)
 
 
 def _nested(depth: int):
@@ -114,17 +143,18 @@ def documents(draw) -> str | bytes:
         elif kind == "delete" and path:
             _delete(data, path)
         else:
-            parent = draw(st.sampled_from([()] + [p for p in paths if isinstance(
-                _get(data, p), dict)]))
+            parent = draw(
+                st.sampled_from([()] + [p for p in paths if isinstance(_get(data, p), dict)])
+            )
             _get(data, parent)[draw(st.sampled_from(["colour", "seed_", "Runs", "1"]))] = 1
     text = yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
     lines = text.splitlines(keepends=True)
     mutation = draw(st.sampled_from(["none", "none", "bytes", "duplicate", "truncate"]))
     if mutation == "duplicate":
         index = draw(st.integers(0, len(lines) - 1))
-        return "".join(lines[:index + 1] + [lines[index]] + lines[index + 1:])
+        return "".join(lines[: index + 1] + [lines[index]] + lines[index + 1 :])
     if mutation == "truncate":
-        return text[:draw(st.integers(0, len(text)))]
+        return text[: draw(st.integers(0, len(text)))]
     if mutation == "bytes":
         raw = text.encode()
         at = draw(st.integers(0, len(raw)))
@@ -161,8 +191,13 @@ def _outcome(document) -> str:
     return "ran"
 
 
-@settings(max_examples=120, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@settings(
+    max_examples=120,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
 @given(documents())
 def test_malformed_documents_end_in_a_scenario_error_quickly(document):
     start = time.perf_counter()
@@ -194,14 +229,20 @@ def example_documents(draw) -> str:
         elif action == "delete" and path:
             _delete(data, path)
         else:
-            parent = draw(st.sampled_from([()] + [p for p in paths if isinstance(
-                _get(data, p), dict)]))
+            parent = draw(
+                st.sampled_from([()] + [p for p in paths if isinstance(_get(data, p), dict)])
+            )
             _get(data, parent)[draw(st.sampled_from(["colour", "Runs", "1"]))] = 1
     return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
 
 
-@settings(max_examples=400, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@settings(
+    max_examples=400,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
 @given(example_documents())
 def test_malformed_documents_of_every_kind_load_or_are_refused_by_name(document):
     """Stage 1 (YAML, schema, units, section rules) of every kind: a mutated example loads or

@@ -9,8 +9,9 @@ import pytest
 from flexsat.scenarios import ScenarioError, load_scenario, run_simulation, simulation_cases
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
-SIMULATION_EXAMPLES = sorted(p for p in EXAMPLES.glob("*.yaml")
-                             if "kind: simulation" in p.read_text())
+SIMULATION_EXAMPLES = sorted(
+    p for p in EXAMPLES.glob("*.yaml") if "kind: simulation" in p.read_text()
+)
 
 BASE = """
 kind: simulation
@@ -45,41 +46,66 @@ def test_the_rigid_slew_reaches_the_papers_attitude():
         assert row["final_pointing_error_deg"] < 0.01, row
 
 
-@pytest.mark.parametrize("law, gains", [
-    ("gibbs_lyapunov", '{k: "1000 N*m*s/rad", A: "50 N*m"}'),
-    ("quaternion_pd", '{Kp: "100 N*m", Kd: "1000 N*m*s/rad"}'),
-])
+@pytest.mark.parametrize(
+    "law, gains",
+    [
+        ("gibbs_lyapunov", '{k: "1000 N*m*s/rad", A: "50 N*m"}'),
+        ("quaternion_pd", '{Kp: "100 N*m", Kd: "1000 N*m*s/rad"}'),
+    ],
+)
 def test_every_attitude_law_builds_from_its_gains(law, gains):
     """Each attitude law of the table takes the gain names of its class and turns the
     spacecraft toward the target."""
-    text = BASE.replace('law: mrp_pd, gains: {K: "100 N*m", P: "1000 N*m*s/rad"}',
-                        f"law: {law}, gains: {gains}")
+    text = BASE.replace(
+        'law: mrp_pd, gains: {K: "100 N*m", P: "1000 N*m*s/rad"}', f"law: {law}, gains: {gains}"
+    )
     result = run_simulation(load_scenario(text))
     assert result.metrics_records()[0]["final_pointing_error_deg"] < 10.0
 
 
-@pytest.mark.parametrize("change, message", [
-    (("plant: {model: rigid}", "plant: {model: rigid, stiffness: 3}"),
-     "plant.stiffness: not an option of the eps plant"),
-    (("plant: {model: rigid}", "plant: {model: wobbly}"), "plant.model: must be 'flexible'"),
-    (('initial: {euler123: ["10 deg", 0, 0]}', "initial: {spin: 1}"),
-     "initial.spin: not an initial value of RigidSpacecraft"),
-    (('initial: {euler123: ["10 deg", 0, 0]}', 'initial: {euler123: ["10 s", 0, 0]}'),
-     "initial.euler123"),
-    (("runs:", "sensors: {gyro: {noise: 1e-5}}\nruns:"),
-     "sensors.gyro: the eps plant has no output channel 'gyro'"),
-    (("runs:", "actuators: {torque: {saturation: \"-1 N*m\"}}\nruns:"),
-     "actuators.torque.saturation"),
-    (('gains: {K: "100 N*m", P: "1000 N*m*s/rad"}', 'gains: {K: "100 N*m"}'),
-     "gains.P: required by law 'mrp_pd'"),
-    (('gains: {K: "100 N*m", P: "1000 N*m*s/rad"}', 'gains: {K: "100 N*m", kp: 1, P: 1}'),
-     "gains.kp: not a gain of law 'mrp_pd'"),
-    (('gains: {K: "100 N*m", P: "1000 N*m*s/rad"}', 'gains: {K: "100 s", P: 1}'), "K"),
-    (("law: mrp_pd, gains: {K: \"100 N*m\", P: \"1000 N*m*s/rad\"}",
-      "law: lqr, gains: {state_weights: 1}, target: {euler123: [1, 1, 1]}"),
-     "target: law 'lqr' takes no target"),
-    (("case: eps", "case: tamu"), "case: 'tamu' builds no plant to simulate"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (
+            ("plant: {model: rigid}", "plant: {model: rigid, stiffness: 3}"),
+            "plant.stiffness: not an option of the eps plant",
+        ),
+        (("plant: {model: rigid}", "plant: {model: wobbly}"), "plant.model: must be 'flexible'"),
+        (
+            ('initial: {euler123: ["10 deg", 0, 0]}', "initial: {spin: 1}"),
+            "initial.spin: not an initial value of RigidSpacecraft",
+        ),
+        (
+            ('initial: {euler123: ["10 deg", 0, 0]}', 'initial: {euler123: ["10 s", 0, 0]}'),
+            "initial.euler123",
+        ),
+        (
+            ("runs:", "sensors: {gyro: {noise: 1e-5}}\nruns:"),
+            "sensors.gyro: the eps plant has no output channel 'gyro'",
+        ),
+        (
+            ("runs:", 'actuators: {torque: {saturation: "-1 N*m"}}\nruns:'),
+            "actuators.torque.saturation",
+        ),
+        (
+            ('gains: {K: "100 N*m", P: "1000 N*m*s/rad"}', 'gains: {K: "100 N*m"}'),
+            "gains.P: required by law 'mrp_pd'",
+        ),
+        (
+            ('gains: {K: "100 N*m", P: "1000 N*m*s/rad"}', 'gains: {K: "100 N*m", kp: 1, P: 1}'),
+            "gains.kp: not a gain of law 'mrp_pd'",
+        ),
+        (('gains: {K: "100 N*m", P: "1000 N*m*s/rad"}', 'gains: {K: "100 s", P: 1}'), "K"),
+        (
+            (
+                'law: mrp_pd, gains: {K: "100 N*m", P: "1000 N*m*s/rad"}',
+                "law: lqr, gains: {state_weights: 1}, target: {euler123: [1, 1, 1]}",
+            ),
+            "target: law 'lqr' takes no target",
+        ),
+        (("case: eps", "case: tamu"), "case: 'tamu' builds no plant to simulate"),
+    ],
+)
 def test_mistakes_name_the_field(change, message):
     text = BASE.replace(*change)
     assert text != BASE

@@ -62,8 +62,7 @@ def test_the_nominal_alone_reaches_the_target_on_the_flexible_plant(ten_seconds)
     assert ten_seconds.nominal.boundary_error() < 1e-9
 
 
-def test_case_a_meets_the_angle_goal_and_lowers_the_peak_deflection_during_the_slew(
-        ten_seconds):
+def test_case_a_meets_the_angle_goal_and_lowers_the_peak_deflection_during_the_slew(ten_seconds):
     # seed 003 case A (L873-L900): Euler errors within 30 mrad at 12.5 s, peak deformation
     # during the slew reduced against open loop (the paper: 1.5-2×; here 1.08×)
     a = _rows(ten_seconds)["A: torquers"]
@@ -87,8 +86,12 @@ def test_the_10s_torquer_cases_miss_the_deflection_goal(ten_seconds):
     # CG and the published weights this model does not: the vibration left at 12.5 s is
     # reduced 4-5.5×, not 10× (closing note of issue 11)
     rows = _rows(ten_seconds)
-    for label in ("A: torquers", "C: no feedforward", "C: constant feedforward",
-                  "C: time-varying feedforward"):
+    for label in (
+        "A: torquers",
+        "C: no feedforward",
+        "C: constant feedforward",
+        "C: time-varying feedforward",
+    ):
         assert rows[label]["angle_goal_met"], label
         assert not rows[label]["deflection_goal_met"], label
         assert 2.0 < rows[label]["deflection_ratio_after"] < 10.0, label
@@ -115,8 +118,15 @@ def test_a_small_slew_runs_and_writes_its_report(tmp_path):
     result = run_slew(load_scenario(SMALL))
     assert result.labels == ("open loop", "torquers", "decoupled forces")
     ds = result.dataset()
-    for name in ("nominal_torque", "nominal_euler123", "euler123_error", "torque_perturbation",
-                 "rim_deflection_69", "angle_error_mrad", "deflection_ratio_after"):
+    for name in (
+        "nominal_torque",
+        "nominal_euler123",
+        "euler123_error",
+        "torque_perturbation",
+        "rim_deflection_69",
+        "angle_error_mrad",
+        "deflection_ratio_after",
+    ):
         assert name in ds, name
     assert ds["euler123_error"].dims == ("run", "time", "euler123_component")
     # the decoupled forces exert no net moment about the centre of mass: W F = 0 to round-off
@@ -131,8 +141,16 @@ def test_a_small_slew_runs_and_writes_its_report(tmp_path):
     assert np.abs(ds["force_88X"].sel(run="decoupled forces").values).max() == 0.0
     assert truth.runs[1].decouple
     out = write_slew_report(result, tmp_path / "report")
-    for name in ("index.html", "metrics.json", "results.nc", "nominal.png", "euler_error.png",
-                 "rim_deflection.png", "torque_perturbation.png", "forces.png"):
+    for name in (
+        "index.html",
+        "metrics.json",
+        "results.nc",
+        "nominal.png",
+        "euler_error.png",
+        "rim_deflection.png",
+        "torque_perturbation.png",
+        "forces.png",
+    ):
         assert (out / name).is_file(), name
     page = (out / "index.html").read_text()
     assert "PASS" in page or "FAIL" in page
@@ -140,21 +158,41 @@ def test_a_small_slew_runs_and_writes_its_report(tmp_path):
         assert list(saved.run.values) == list(result.labels)
 
 
-@pytest.mark.parametrize("change, message", [
-    (("maneuver:\n  target: {euler123", "maneuver:\n  target: {attitude: [1, 1, 0, 0]}\n"
-      "  dummy: {euler123"), "maneuver.dummy"),
-    (('target: {euler123: ["0.5 rad", "0.5 rad", "0.5 rad"]}', "target: {attitude: [1, 1, 0, 0]}"),
-     "target.attitude: must be a unit quaternion"),
-    (('duration: "6 s"', 'duration: "-6 s"'), "maneuver.duration"),
-    (('  break_frequency: "5 rad/s"\ncontroller', '  break_frequency: "0 rad/s"\ncontroller'),
-     "maneuver.break_frequency"),
-    (('simulation: {duration: "7.5 s"', 'simulation: {duration: "7 s"'),
-     r"simulation.duration: must reach 1.25 × the maneuver duration \(7.5 s\)"),
-    (("label: torquers", "label: open loop"), "label: 'open loop' names the nominal torque"),
-    (("shaping_damping: 1", "shaping_damping: -1"), "shaping_damping"),
-    (("force: 1.0e-5}", "}"), "weights.force: required when the run uses forces"),
-    (("forces: [69X, 63X, 66Y, 66Z, 60Y, 60Z]", "forces: none"), "decouple: needs forces"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (
+            (
+                "maneuver:\n  target: {euler123",
+                "maneuver:\n  target: {attitude: [1, 1, 0, 0]}\n  dummy: {euler123",
+            ),
+            "maneuver.dummy",
+        ),
+        (
+            (
+                'target: {euler123: ["0.5 rad", "0.5 rad", "0.5 rad"]}',
+                "target: {attitude: [1, 1, 0, 0]}",
+            ),
+            "target.attitude: must be a unit quaternion",
+        ),
+        (('duration: "6 s"', 'duration: "-6 s"'), "maneuver.duration"),
+        (
+            (
+                '  break_frequency: "5 rad/s"\ncontroller',
+                '  break_frequency: "0 rad/s"\ncontroller',
+            ),
+            "maneuver.break_frequency",
+        ),
+        (
+            ('simulation: {duration: "7.5 s"', 'simulation: {duration: "7 s"'),
+            r"simulation.duration: must reach 1.25 × the maneuver duration \(7.5 s\)",
+        ),
+        (("label: torquers", "label: open loop"), "label: 'open loop' names the nominal torque"),
+        (("shaping_damping: 1", "shaping_damping: -1"), "shaping_damping"),
+        (("force: 1.0e-5}", "}"), "weights.force: required when the run uses forces"),
+        (("forces: [69X, 63X, 66Y, 66Z, 60Y, 60Z]", "forces: none"), "decouple: needs forces"),
+    ],
+)
 def test_schema_mistakes_are_named(change, message):
     old, new = change
     assert old in SMALL
@@ -162,16 +200,28 @@ def test_schema_mistakes_are_named(change, message):
         load_scenario(SMALL.replace(old, new))
 
 
-@pytest.mark.parametrize("change, message", [
-    (("forces: [69X, 63X", "forces: [99X, 63X"),
-     r"runs\['decoupled forces'\].*'99X' is not a force of the plant"),
-    (("controller: {modes: 4", "controller: {modes: 13"),
-     "controller.modes: at most the plant's 12 elastic modes"),
-    (("plant: {n_modes: 12}", "plant: {n_modes: 12, colour: red}"), "plant.colour: not an option"),
-    (("plant: {n_modes: 12}", "plant: {model: rigid}"), "plant: .* a slew needs a flexible"),
-    (("modes: 1, torque: 50}\n    break", "modes: [1, 2], torque: 50}\n    break"),
-     r"runs\['torquers'\].*weights.modes: one weight or 4 of them"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (
+            ("forces: [69X, 63X", "forces: [99X, 63X"),
+            r"runs\['decoupled forces'\].*'99X' is not a force of the plant",
+        ),
+        (
+            ("controller: {modes: 4", "controller: {modes: 13"),
+            "controller.modes: at most the plant's 12 elastic modes",
+        ),
+        (
+            ("plant: {n_modes: 12}", "plant: {n_modes: 12, colour: red}"),
+            "plant.colour: not an option",
+        ),
+        (("plant: {n_modes: 12}", "plant: {model: rigid}"), "plant: .* a slew needs a flexible"),
+        (
+            ("modes: 1, torque: 50}\n    break", "modes: [1, 2], torque: 50}\n    break"),
+            r"runs\['torquers'\].*weights.modes: one weight or 4 of them",
+        ),
+    ],
+)
 def test_mistakes_found_while_building_are_named_before_any_run(change, message):
     old, new = change
     assert old in SMALL

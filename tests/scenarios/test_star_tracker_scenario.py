@@ -64,12 +64,17 @@ def test_flexsat_run_dispatches_kind_star_tracker(tmp_path):
 
 def test_a_hipparcos_catalogue_is_read_relative_to_the_scenario(tmp_path):
     # three stars 120° apart: the catalogue loads, but no pair fits in a field of view
-    line = "H|{hip:12d}| |00 00 00.00|+00 00 00.0| 1.00| |H|{ra:012.8f}|{de:+012.8f}|" + \
-           "|".join([""] * 68) + "\n"
+    line = (
+        "H|{hip:12d}| |00 00 00.00|+00 00 00.0| 1.00| |H|{ra:012.8f}|{de:+012.8f}|"
+        + "|".join([""] * 68)
+        + "\n"
+    )
     stars = (line.format(hip=i, ra=120.0 * (i - 1), de=0.0) for i in (1, 2, 3))
     (tmp_path / "hip_main.dat").write_text("".join(stars))
-    text = SMALL.replace("{source: synthetic, magnitude_limit: 6.5, seed: 0}",
-                         "{source: hipparcos, path: hip_main.dat}")
+    text = SMALL.replace(
+        "{source: synthetic, magnitude_limit: 6.5, seed: 0}",
+        "{source: hipparcos, path: hip_main.dat}",
+    )
     (tmp_path / "st.yaml").write_text(text)
     with pytest.raises(ScenarioError, match="catalog: no two of its 3 stars"):
         build_tracker(load_scenario(tmp_path / "st.yaml"))
@@ -78,26 +83,37 @@ def test_a_hipparcos_catalogue_is_read_relative_to_the_scenario(tmp_path):
         build_tracker(load_scenario(tmp_path / "st.yaml"))
 
 
-@pytest.mark.parametrize("change, message", [
-    (('tolerance: "5 arcsec"', 'tolerance: "1 arcsec"'),
-     r"identification.tolerance: 1″ is below 3√2 σ"),
-    (('tolerance: "5 arcsec"', 'tolerance: "5 s"'), "identification.tolerance"),
-    (("min_fields: 2", "min_fields: 3"), "cameras: identification.min_fields = 3"),
-    (("min_triplets: 3", "min_triplets: 0"), "identification.min_triplets"),
-    (("attitudes: 40, seed: 1", "attitudes: 0, seed: 1"), r"runs.*attitudes"),
-    (("missing_fraction: 0.2", "missing_fraction: 1.0"), r"runs.*missing_fraction"),
-    (("false_stars: 2", "false_stars: -2"), r"runs.*false_stars"),
-    (("{label: noisy", "{label: clean"), "runs: duplicate label 'clean'"),
-    (("source: synthetic", "source: tycho"), "catalog.source"),
-    (("source: synthetic", "source: hipparcos"), "catalog.path: give the hip_main.dat path"),
-    (('centroid_noise: 0.1}', 'centroid_noise: -0.1}'), r"cameras.*centroid_noise"),
-    (('field_of_view: "12 deg", n_pixels: 4096, pixel_pitch: "5.5 um", centroid_noise: 0.1}',
-      'field_of_view: "150 deg", n_pixels: 4096, pixel_pitch: "5.5 um", centroid_noise: 0.1}'),
-     r"cameras.*below 120°"),
-    (('mounting: ["0 deg", "90 deg", "0 deg"]', 'mounting: ["0 deg", "90 deg"]'),
-     r"cameras.*mounting: must be 3"),
-    (("seed: 0}", "seed: 0, colour: red}"), "catalog.colour"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (
+            ('tolerance: "5 arcsec"', 'tolerance: "1 arcsec"'),
+            r"identification.tolerance: 1″ is below 3√2 σ",
+        ),
+        (('tolerance: "5 arcsec"', 'tolerance: "5 s"'), "identification.tolerance"),
+        (("min_fields: 2", "min_fields: 3"), "cameras: identification.min_fields = 3"),
+        (("min_triplets: 3", "min_triplets: 0"), "identification.min_triplets"),
+        (("attitudes: 40, seed: 1", "attitudes: 0, seed: 1"), r"runs.*attitudes"),
+        (("missing_fraction: 0.2", "missing_fraction: 1.0"), r"runs.*missing_fraction"),
+        (("false_stars: 2", "false_stars: -2"), r"runs.*false_stars"),
+        (("{label: noisy", "{label: clean"), "runs: duplicate label 'clean'"),
+        (("source: synthetic", "source: tycho"), "catalog.source"),
+        (("source: synthetic", "source: hipparcos"), "catalog.path: give the hip_main.dat path"),
+        (("centroid_noise: 0.1}", "centroid_noise: -0.1}"), r"cameras.*centroid_noise"),
+        (
+            (
+                'field_of_view: "12 deg", n_pixels: 4096, pixel_pitch: "5.5 um", centroid_noise: 0.1}',
+                'field_of_view: "150 deg", n_pixels: 4096, pixel_pitch: "5.5 um", centroid_noise: 0.1}',
+            ),
+            r"cameras.*below 120°",
+        ),
+        (
+            ('mounting: ["0 deg", "90 deg", "0 deg"]', 'mounting: ["0 deg", "90 deg"]'),
+            r"cameras.*mounting: must be 3",
+        ),
+        (("seed: 0}", "seed: 0, colour: red}"), "catalog.colour"),
+    ],
+)
 def test_schema_mistakes_are_named(change, message):
     old, new = change
     assert old in SMALL

@@ -38,8 +38,11 @@ def example():
 def test_the_example_reproduces_the_published_retrievals(example):
     rows = {r["run"]: r for r in example.metrics_records()}
     assert len(rows) == 6
-    c1, c2, c2k3 = (rows["controller 1 (Figs. 2-3)"], rows["controller 2, K4 = 2 (Figs. 4-5)"],
-                    rows["controller 2, K4 = 3"])
+    c1, c2, c2k3 = (
+        rows["controller 1 (Figs. 2-3)"],
+        rows["controller 2, K4 = 2 (Figs. 4-5)"],
+        rows["controller 2, K4 = 3"],
+    )
     # V10: T̂(0) = 3.96 ("4"), settled in 1.55 orbits ("nearly two")
     assert c1["initial_tension"] == pytest.approx(4.0, abs=0.05)
     assert 1.4 < c1["settling_orbits"] < 2.0
@@ -50,7 +53,8 @@ def test_the_example_reproduces_the_published_retrievals(example):
     # V13: over the top with K1 = 1, 21.9° with K1 = 0.9
     assert rows["controller 2 to 20 m, K1 = 1.0 (Fig. 6)"]["max_pitch_deg"] > 180
     assert rows["controller 2 to 20 m, K1 = 0.9 (Fig. 7)"]["max_pitch_deg"] == pytest.approx(
-        21.9, abs=0.1)
+        21.9, abs=0.1
+    )
     # V15: 5.83 m/s, not the printed 30
     rate = rows["rate law (Fig. 8)"]
     assert rate["initial_rate_m_s"] == pytest.approx(5.83, abs=0.005)
@@ -66,13 +70,13 @@ def test_sampled_runs_approach_the_continuous_ones():
     continuous = run_tether(spec).metrics_records()
     errors = []
     for n in (500, 2000):
-        sim = spec.simulation.model_copy(update={"integrator": "sampled",
-                                                 "samples_per_orbit": n})
+        sim = spec.simulation.model_copy(update={"integrator": "sampled", "samples_per_orbit": n})
         sampled = run_tether(spec.model_copy(update={"simulation": sim})).metrics_records()
         errors.append(abs(sampled[0]["max_pitch_deg"] - continuous[0]["max_pitch_deg"]))
         # the rate law's commanded rate is exact at the first sample either way
         assert sampled[1]["initial_rate_m_s"] == pytest.approx(
-            continuous[1]["initial_rate_m_s"], rel=1e-12)
+            continuous[1]["initial_rate_m_s"], rel=1e-12
+        )
     assert errors[1] < errors[0] / 4
 
 
@@ -98,36 +102,53 @@ def test_flexsat_run_dispatches_kind_tether(tmp_path):
     assert (out / "index.html").is_file() and (out / "libration.png").is_file()
 
 
-@pytest.mark.parametrize("change, message", [
-    (("mass: 22.7 kg", "mass: 0 kg"), "system.mass: must be > 0"),
-    (("mass: 22.7 kg", "mass: 22.7 m"), "system.mass"),
-    (("length: 20 km, alt", "length: -20 km, alt"), "system.length: must be > 0"),
-    (("altitude: 220 km", "altitude: -220 km"), "system.altitude: must be >= 0"),
-    (("altitude: 220 km", "altitude: 220 km, orbit_rate: 0.001"), "not both"),
-    (("{mass: 22.7 kg, length: 20 km, altitude: 220 km}", "{mass: 22.7 kg, length: 20 km}"),
-     "system.altitude: give the orbit's altitude or its orbit_rate"),
-    (("initial: {length: 20 km", "initial: {length: 0 km"), "initial.length: must be > 0"),
-    (("pitch: 5 deg", "pitch: 5 kg"), "initial.pitch"),
-    (("orbits: 2", "orbits: 0"), "simulation.orbits"),
-    (("samples_per_orbit: 500", "samples_per_orbit: 5"), "simulation.samples_per_orbit"),
-    (("integrator: continuous", "integrator: euler"), "simulation.integrator"),
-    (("law: coupled", "law: fuzzy"), r"runs\['coupled'\].law"),
-    (("K3: 3.0, K4: 2.0", "K3: 3.0"), r"runs\['coupled'\].gains: law 'coupled' takes K1, K2, "
-                                      r"K3, K4; missing K4"),
-    (("{K1: 0.25, K2: 0.01, K3: 1.0}", "{K1: 0.25, K2: 0.01, K3: 1.0, K5: 1}"),
-     r"runs\['rate'\].gains: .*unknown K5"),
-    (("K1: 1.0, K2: 0.0, K3: 3.0, K4", "K1: 0.0, K2: 0.0, K3: 3.0, K4"),
-     r"runs\['coupled'\].gains: K1 must be finite and > 0"),
-    (("K4: 2.0", "K4: -2.0"), r"runs\['coupled'\].gains: K4 must be finite and >= 0"),
-    (("final_length: 200 m", "final_length: -200 m"), r"runs\['coupled'\].final_length: must "
-                                                      r"be > 0"),
-    (("final_length: 0.2 km", "final_length: 0.2 kg"), r"runs\['rate'\].final_length"),
-    (("final_length: 200 m", "final_length: 200 m\n    printed_sign: true"),
-     r"runs\['coupled'\].printed_sign: only the decoupled law"),
-    (("roll: 5 deg}", "roll: 5 deg, length_rate: 1 m/s}"), "initial.length_rate: a rate-law"),
-    (("label: rate", "label: coupled"), "runs: duplicate label 'coupled'"),
-    (("name: small tether", "name: small tether\ncolour: red"), "colour: unknown key"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (("mass: 22.7 kg", "mass: 0 kg"), "system.mass: must be > 0"),
+        (("mass: 22.7 kg", "mass: 22.7 m"), "system.mass"),
+        (("length: 20 km, alt", "length: -20 km, alt"), "system.length: must be > 0"),
+        (("altitude: 220 km", "altitude: -220 km"), "system.altitude: must be >= 0"),
+        (("altitude: 220 km", "altitude: 220 km, orbit_rate: 0.001"), "not both"),
+        (
+            ("{mass: 22.7 kg, length: 20 km, altitude: 220 km}", "{mass: 22.7 kg, length: 20 km}"),
+            "system.altitude: give the orbit's altitude or its orbit_rate",
+        ),
+        (("initial: {length: 20 km", "initial: {length: 0 km"), "initial.length: must be > 0"),
+        (("pitch: 5 deg", "pitch: 5 kg"), "initial.pitch"),
+        (("orbits: 2", "orbits: 0"), "simulation.orbits"),
+        (("samples_per_orbit: 500", "samples_per_orbit: 5"), "simulation.samples_per_orbit"),
+        (("integrator: continuous", "integrator: euler"), "simulation.integrator"),
+        (("law: coupled", "law: fuzzy"), r"runs\['coupled'\].law"),
+        (
+            ("K3: 3.0, K4: 2.0", "K3: 3.0"),
+            r"runs\['coupled'\].gains: law 'coupled' takes K1, K2, "
+            r"K3, K4; missing K4",
+        ),
+        (
+            ("{K1: 0.25, K2: 0.01, K3: 1.0}", "{K1: 0.25, K2: 0.01, K3: 1.0, K5: 1}"),
+            r"runs\['rate'\].gains: .*unknown K5",
+        ),
+        (
+            ("K1: 1.0, K2: 0.0, K3: 3.0, K4", "K1: 0.0, K2: 0.0, K3: 3.0, K4"),
+            r"runs\['coupled'\].gains: K1 must be finite and > 0",
+        ),
+        (("K4: 2.0", "K4: -2.0"), r"runs\['coupled'\].gains: K4 must be finite and >= 0"),
+        (
+            ("final_length: 200 m", "final_length: -200 m"),
+            r"runs\['coupled'\].final_length: must "
+            r"be > 0",
+        ),
+        (("final_length: 0.2 km", "final_length: 0.2 kg"), r"runs\['rate'\].final_length"),
+        (
+            ("final_length: 200 m", "final_length: 200 m\n    printed_sign: true"),
+            r"runs\['coupled'\].printed_sign: only the decoupled law",
+        ),
+        (("roll: 5 deg}", "roll: 5 deg, length_rate: 1 m/s}"), "initial.length_rate: a rate-law"),
+        (("label: rate", "label: coupled"), "runs: duplicate label 'coupled'"),
+        (("name: small tether", "name: small tether\ncolour: red"), "colour: unknown key"),
+    ],
+)
 def test_bad_input_is_reported_by_field(change, message):
     with pytest.raises(ScenarioError, match=message):
         load_scenario(SMALL.replace(*change))
@@ -138,13 +159,20 @@ def test_a_collapsing_tether_is_named_by_its_run():
     # the subsatellite off the centre: thrown inward at 5 km/s (212 LΩ) it reaches 1e-4 L
     # before the law can brake it. (With the orbit's angular momentum the centrifugal barrier
     # stops it first, at λ ~ 1/|λ'|.)
-    text = SMALL[:SMALL.index("  - label: rate")].replace(
+    text = SMALL[: SMALL.index("  - label: rate")].replace(
         "pitch: 5 deg, roll: 5 deg}",
-        "pitch: 0 deg, roll: 0 deg, pitch_rate: -0.070678 rad/min, length_rate: -5 km/s}")
-    with pytest.raises(ScenarioError, match=r"runs\['coupled'\].tau: the tether length fell "
-                                            r"to 0.0001 L \(collapsed\)"):
+        "pitch: 0 deg, roll: 0 deg, pitch_rate: -0.070678 rad/min, length_rate: -5 km/s}",
+    )
+    with pytest.raises(
+        ScenarioError,
+        match=r"runs\['coupled'\].tau: the tether length fell "
+        r"to 0.0001 L \(collapsed\)",
+    ):
         run_tether(load_scenario(text))
     # a final length at or below that threshold is refused before the run
-    with pytest.raises(ScenarioError, match=r"runs\['rate'\].final_length: 1 mm is below the "
-                                            r"collapse threshold"):
+    with pytest.raises(
+        ScenarioError,
+        match=r"runs\['rate'\].final_length: 1 mm is below the "
+        r"collapse threshold",
+    ):
         run_tether(load_scenario(SMALL.replace("final_length: 0.2 km", "final_length: 1 mm")))

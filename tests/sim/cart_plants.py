@@ -29,9 +29,11 @@ class TwoCarts(Plant):
         return A, np.vstack([np.zeros((2, 2)), np.eye(2)])
 
     def output_matrices(self, name):
-        C = {"position": np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0]]),
-             "gap": np.array([[-1.0, 1.0, 0, 0]]),
-             "speed": np.array([[0.0, 0, 1.0, 0]])}[name]
+        C = {
+            "position": np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0]]),
+            "gap": np.array([[-1.0, 1.0, 0, 0]]),
+            "speed": np.array([[0.0, 0, 1.0, 0]]),
+        }[name]
         return C, np.zeros((len(C), self.n_inputs)), None
 
     def energy(self, x):

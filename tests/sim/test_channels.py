@@ -7,8 +7,17 @@ import numpy as np
 import pytest
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.sim import (BearingFriction, ChannelActuator, ChannelDisturbance, ChannelSensor,
-                         Impulses, RandomTorque, SimConfig, Sensors, TorqueActuator)
+from flexsat.sim import (
+    BearingFriction,
+    ChannelActuator,
+    ChannelDisturbance,
+    ChannelSensor,
+    Impulses,
+    RandomTorque,
+    Sensors,
+    SimConfig,
+    TorqueActuator,
+)
 from flexsat.sim.channels import noise_column, noise_columns, resolve_channels
 from flexsat.units import ureg
 
@@ -27,8 +36,10 @@ class Cart(Plant):
         return np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([[0.0], [1.0]])
 
     def output_matrices(self, name):
-        C = {"position": np.array([[1.0, 0.0]]),
-             "trio": np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])}[name]
+        C = {
+            "position": np.array([[1.0, 0.0]]),
+            "trio": np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]),
+        }[name]
         return C, np.zeros((len(C), 1)), None
 
 
@@ -72,8 +83,10 @@ def test_sensor_order_is_bias_and_noise_then_quantum_then_range():
 
 def test_sensor_range_saturates_symmetrically():
     s = ChannelSensor(range="5 mm").bind("position", "m")
-    np.testing.assert_array_equal(s.measure(np.array([-1.0, -0.004, 0.0, 0.004, 1.0]), None),
-                                  [-0.005, -0.004, 0.0, 0.004, 0.005])
+    np.testing.assert_array_equal(
+        s.measure(np.array([-1.0, -0.004, 0.0, 0.004, 1.0]), None),
+        [-0.005, -0.004, 0.0, 0.004, 0.005],
+    )
 
 
 def test_an_ideal_sensor_returns_the_truth():
@@ -83,8 +96,9 @@ def test_an_ideal_sensor_returns_the_truth():
 
 def test_binding_converts_unit_strings_and_quantities_to_the_channel_unit():
     """An encoder of 0.01 deg on a rad channel: quantum π/18000 rad (to rounding, 1 ulp)."""
-    s = ChannelSensor(quantum="0.01 deg", bias=ureg.Quantity(1.0, "mrad"),
-                      range="90 deg").bind("theta", "rad")
+    s = ChannelSensor(quantum="0.01 deg", bias=ureg.Quantity(1.0, "mrad"), range="90 deg").bind(
+        "theta", "rad"
+    )
     np.testing.assert_allclose(s.quantum, np.pi / 18000, rtol=2e-16)
     np.testing.assert_allclose(s.bias, 1e-3, rtol=2e-16)
     np.testing.assert_allclose(s.range, np.pi / 2, rtol=2e-16)
@@ -94,39 +108,62 @@ def test_binding_converts_unit_strings_and_quantities_to_the_channel_unit():
     assert ChannelSensor(quantum=1e-4).bind("theta", "rad").quantum == 1e-4
 
 
-@pytest.mark.parametrize("sensor, message", [
-    (ChannelSensor(quantum="1 m"), r"^sensors\[theta\]\.quantum: incompatible units"),
-    (ChannelSensor(noise="1 N"), r"^sensors\[theta\]\.noise: incompatible units"),
-    (ChannelSensor(noise=-1.0), r"^sensors\[theta\]\.noise: must be finite and >= 0"),
-    (ChannelSensor(quantum=np.nan), r"^sensors\[theta\]\.quantum: must be finite"),
-    (ChannelSensor(range=0.0), r"^sensors\[theta\]\.range: must be > 0 \(inf for none\)"),
-    (ChannelSensor(bias=np.inf), r"^sensors\[theta\]\.bias: must be finite"),
-])
+@pytest.mark.parametrize(
+    "sensor, message",
+    [
+        (ChannelSensor(quantum="1 m"), r"^sensors\[theta\]\.quantum: incompatible units"),
+        (ChannelSensor(noise="1 N"), r"^sensors\[theta\]\.noise: incompatible units"),
+        (ChannelSensor(noise=-1.0), r"^sensors\[theta\]\.noise: must be finite and >= 0"),
+        (ChannelSensor(quantum=np.nan), r"^sensors\[theta\]\.quantum: must be finite"),
+        (ChannelSensor(range=0.0), r"^sensors\[theta\]\.range: must be > 0 \(inf for none\)"),
+        (ChannelSensor(bias=np.inf), r"^sensors\[theta\]\.bias: must be finite"),
+    ],
+)
 def test_binding_refuses_wrong_dimensions_and_values_naming_the_field(sensor, message):
     with pytest.raises(ValueError, match=message):
         sensor.bind("theta", "rad")
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(window=0), r"^window: must be a positive integer"),
-    (dict(order=0), r"^order: must be a positive integer"),
-    (dict(window=2, order=2), r"window >= order \+ 1"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(window=0), r"^window: must be a positive integer"),
+        (dict(order=0), r"^order: must be a positive integer"),
+        (dict(window=2, order=2), r"window >= order \+ 1"),
+    ],
+)
 def test_derivative_filter_settings_are_checked_when_built(kwargs, message):
     with pytest.raises(ValueError, match=message):
         ChannelSensor(derivative_of="theta", **kwargs)
 
 
 def test_derivative_of_an_unknown_or_derived_channel_is_refused(hub):
-    with pytest.raises(ValueError, match=r"^encoder: HubAppendage has no output channel "
-                                         r"'encoder'"):
-        resolve_channels(hub, SimConfig(duration=1.0, channel_sensors={
-            "theta_dot": ChannelSensor(derivative_of="encoder")}))
-    with pytest.raises(ValueError, match=r"^root_torque: derivative_of 'theta_dot' is itself a "
-                                         r"derivative"):
-        resolve_channels(hub, SimConfig(duration=1.0, channel_sensors={
-            "theta_dot": ChannelSensor(derivative_of="theta"),
-            "root_torque": ChannelSensor(derivative_of="theta_dot")}))
+    with pytest.raises(
+        ValueError,
+        match=r"^encoder: HubAppendage has no output channel "
+        r"'encoder'",
+    ):
+        resolve_channels(
+            hub,
+            SimConfig(
+                duration=1.0, channel_sensors={"theta_dot": ChannelSensor(derivative_of="encoder")}
+            ),
+        )
+    with pytest.raises(
+        ValueError,
+        match=r"^root_torque: derivative_of 'theta_dot' is itself a "
+        r"derivative",
+    ):
+        resolve_channels(
+            hub,
+            SimConfig(
+                duration=1.0,
+                channel_sensors={
+                    "theta_dot": ChannelSensor(derivative_of="theta"),
+                    "root_torque": ChannelSensor(derivative_of="theta_dot"),
+                },
+            ),
+        )
 
 
 # -- ChannelActuator --------------------------------------------------------------------------
@@ -164,13 +201,16 @@ def test_actuator_saturation_per_case_and_units():
     np.testing.assert_allclose(u, [0.9, -2.1], rtol=0, atol=1e-15)
 
 
-@pytest.mark.parametrize("actuator, message", [
-    (ChannelActuator(rate_limit="3 N"), r"^actuators\[force\]\.rate_limit: incompatible units"),
-    (ChannelActuator(saturation="1 m"), r"^actuators\[force\]\.saturation: incompatible units"),
-    (ChannelActuator(saturation=0.0), r"^actuators\[force\]\.saturation: must be > 0"),
-    (ChannelActuator(scale=0.0), r"^actuators\[force\]\.scale: must be > 0"),
-    (ChannelActuator(rate_limit=-1.0), r"^actuators\[force\]\.rate_limit: must be >= 0"),
-])
+@pytest.mark.parametrize(
+    "actuator, message",
+    [
+        (ChannelActuator(rate_limit="3 N"), r"^actuators\[force\]\.rate_limit: incompatible units"),
+        (ChannelActuator(saturation="1 m"), r"^actuators\[force\]\.saturation: incompatible units"),
+        (ChannelActuator(saturation=0.0), r"^actuators\[force\]\.saturation: must be > 0"),
+        (ChannelActuator(scale=0.0), r"^actuators\[force\]\.scale: must be > 0"),
+        (ChannelActuator(rate_limit=-1.0), r"^actuators\[force\]\.rate_limit: must be >= 0"),
+    ],
+)
 def test_bad_actuators_are_refused_naming_the_field(actuator, message):
     with pytest.raises(ValueError, match=message):
         actuator.bind("force", "N")
@@ -189,24 +229,35 @@ def test_impulses_land_on_the_first_sample_at_or_after_their_time_and_add_up():
 
 
 def test_disturbance_binding_converts_units():
-    d = ChannelDisturbance(random="10 mN*m", impulse_times=("20 ms", 0.5),
-                           impulses=("1 N*m*s", ureg.Quantity(2.0, "mN*m*s"))
-                           ).bind("torque", "N*m")
+    d = ChannelDisturbance(
+        random="10 mN*m",
+        impulse_times=("20 ms", 0.5),
+        impulses=("1 N*m*s", ureg.Quantity(2.0, "mN*m*s")),
+    ).bind("torque", "N*m")
     np.testing.assert_allclose(d.random, 0.01, rtol=2e-16)
     np.testing.assert_allclose(d.impulse_times, (0.02, 0.5), rtol=2e-16)
     np.testing.assert_allclose(d.impulses, (1.0, 0.002), rtol=2e-16)
     assert d.active and not ChannelDisturbance().bind("torque", "N*m").active
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(impulse_times=(0.0,), impulses=("1 N*m",)),
-     r"^disturbances\[torque\]\.impulses: incompatible units"),
-    (dict(impulse_times=(0.0, 1.0), impulses=(1.0,)),
-     r"^disturbances\[torque\]\.impulses: 1 values for 2 times"),
-    (dict(impulse_times=(-1.0,), impulses=(1.0,)),
-     r"^disturbances\[torque\]\.impulse_times: must be finite and >= 0"),
-    (dict(random="1 N"), r"^disturbances\[torque\]\.random: incompatible units"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (
+            dict(impulse_times=(0.0,), impulses=("1 N*m",)),
+            r"^disturbances\[torque\]\.impulses: incompatible units",
+        ),
+        (
+            dict(impulse_times=(0.0, 1.0), impulses=(1.0,)),
+            r"^disturbances\[torque\]\.impulses: 1 values for 2 times",
+        ),
+        (
+            dict(impulse_times=(-1.0,), impulses=(1.0,)),
+            r"^disturbances\[torque\]\.impulse_times: must be finite and >= 0",
+        ),
+        (dict(random="1 N"), r"^disturbances\[torque\]\.random: incompatible units"),
+    ],
+)
 def test_bad_disturbances_are_refused_naming_the_field(kwargs, message):
     with pytest.raises(ValueError, match=message):
         ChannelDisturbance(**kwargs).bind("torque", "N*m")
@@ -242,12 +293,19 @@ def test_an_ideal_config_binds_nothing(hub):
 
 def test_planar_presets_map_onto_the_hub_channels(hub):
     friction = BearingFriction("20 ozf*in", "0.001 ozf*in*s/rad")
-    cfg = SimConfig(duration=1.0,
-                    sensors=Sensors(encoder_resolution="0.01 deg", rate="gyro",
-                                    gyro_noise="0.1 deg/s", strain_noise="1 mN*m"),
-                    actuator=TorqueActuator(saturation="400 ozf*in", torque_constant_ratio=0.9),
-                    friction=friction, random_torque=RandomTorque(0.02),
-                    impulses=Impulses((0.1, 0.3), (0.5, -0.25)))
+    cfg = SimConfig(
+        duration=1.0,
+        sensors=Sensors(
+            encoder_resolution="0.01 deg",
+            rate="gyro",
+            gyro_noise="0.1 deg/s",
+            strain_noise="1 mN*m",
+        ),
+        actuator=TorqueActuator(saturation="400 ozf*in", torque_constant_ratio=0.9),
+        friction=friction,
+        random_torque=RandomTorque(0.02),
+        impulses=Impulses((0.1, 0.3), (0.5, -0.25)),
+    )
     sensors, actuators, disturbances = resolve_channels(hub, cfg)
     assert set(sensors) == {"theta", "theta_dot", "root_torque"}
     np.testing.assert_allclose(sensors["theta"].quantum, np.radians(0.01), rtol=2e-16)
@@ -255,8 +313,7 @@ def test_planar_presets_map_onto_the_hub_channels(hub):
     np.testing.assert_allclose(sensors["root_torque"].noise, 1e-3, rtol=2e-16)
     a = actuators["torque"]
     # 1 ozf·in = 0.028349523125 kg × 9.80665 m/s² × 0.0254 m (exact definitions)
-    np.testing.assert_allclose(a.saturation, 400 * 0.028349523125 * 9.80665 * 0.0254,
-                               rtol=1e-15)
+    np.testing.assert_allclose(a.saturation, 400 * 0.028349523125 * 9.80665 * 0.0254, rtol=1e-15)
     assert a.scale == 0.9 and a.rate_limit == np.inf and a.bias == 0.0
     d = disturbances["torque"]
     assert d.random == 0.02 and d.impulse_times == (0.1, 0.3) and d.impulses == (0.5, -0.25)
@@ -264,49 +321,74 @@ def test_planar_presets_map_onto_the_hub_channels(hub):
 
 
 def test_rate_from_the_least_squares_filter_is_a_derivative_sensor(hub):
-    cfg = SimConfig(duration=1.0, sensors=Sensors(rate="ls_filter", rate_window=5,
-                                                  rate_order=2))
+    cfg = SimConfig(duration=1.0, sensors=Sensors(rate="ls_filter", rate_window=5, rate_order=2))
     sensors, _, _ = resolve_channels(hub, cfg)
     s = sensors["theta_dot"]
     assert (s.derivative_of, s.window, s.order) == ("theta", 5, 2)
 
 
 def test_a_channel_piece_overrides_the_preset_on_its_channel(hub):
-    cfg = SimConfig(duration=1.0, sensors=Sensors(encoder_resolution="0.01 deg"),
-                    channel_sensors={"theta": ChannelSensor(quantum="0.1 deg", bias="1 deg")})
+    cfg = SimConfig(
+        duration=1.0,
+        sensors=Sensors(encoder_resolution="0.01 deg"),
+        channel_sensors={"theta": ChannelSensor(quantum="0.1 deg", bias="1 deg")},
+    )
     s = resolve_channels(hub, cfg)[0]["theta"]
     np.testing.assert_allclose([s.quantum, s.bias], np.radians([0.1, 1.0]), rtol=2e-16)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(channel_sensors={"pitch": ChannelSensor()}),
-     r"^pitch: HubAppendage has no output channel 'pitch'"),
-    (dict(channel_actuators={"theta": ChannelActuator()}),
-     r"^theta: HubAppendage has no input channel 'theta' \(its input channels: torque\)"),
-    (dict(channel_disturbances={"wheel": ChannelDisturbance(random=1.0)}),
-     r"^wheel: HubAppendage has no input channel 'wheel'"),
-    (dict(channel_disturbances={"torque": ChannelDisturbance(
-        force=BearingFriction(1.0), force_output="speed")}),
-     r"^speed: HubAppendage has no output channel 'speed'"),
-    (dict(channel_sensors={"theta": ChannelSensor(noise=1e-3)}),
-     r"^theta: its sensor noise needs a noise stream, but HubAppendage\.noise_channels "
-     r"\(theta_dot, root_torque, torque\) has none for it"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (
+            dict(channel_sensors={"pitch": ChannelSensor()}),
+            r"^pitch: HubAppendage has no output channel 'pitch'",
+        ),
+        (
+            dict(channel_actuators={"theta": ChannelActuator()}),
+            r"^theta: HubAppendage has no input channel 'theta' \(its input channels: torque\)",
+        ),
+        (
+            dict(channel_disturbances={"wheel": ChannelDisturbance(random=1.0)}),
+            r"^wheel: HubAppendage has no input channel 'wheel'",
+        ),
+        (
+            dict(
+                channel_disturbances={
+                    "torque": ChannelDisturbance(force=BearingFriction(1.0), force_output="speed")
+                }
+            ),
+            r"^speed: HubAppendage has no output channel 'speed'",
+        ),
+        (
+            dict(channel_sensors={"theta": ChannelSensor(noise=1e-3)}),
+            r"^theta: its sensor noise needs a noise stream, but HubAppendage\.noise_channels "
+            r"\(theta_dot, root_torque, torque\) has none for it",
+        ),
+    ],
+)
 def test_a_piece_on_a_channel_the_plant_lacks_is_refused_naming_it(hub, kwargs, message):
     with pytest.raises(ValueError, match=message):
         resolve_channels(hub, SimConfig(duration=1.0, **kwargs))
 
 
-@pytest.mark.parametrize("kwargs, where", [
-    (dict(random_torque=RandomTorque(1.0)), r"config\.friction, random_torque, impulses"),
-    (dict(actuator=TorqueActuator(saturation=1.0)), r"config\.actuator"),
-    (dict(sensors=Sensors(encoder_resolution=1e-3)), r"config\.sensors"),
-])
+@pytest.mark.parametrize(
+    "kwargs, where",
+    [
+        (dict(random_torque=RandomTorque(1.0)), r"config\.friction, random_torque, impulses"),
+        (dict(actuator=TorqueActuator(saturation=1.0)), r"config\.actuator"),
+        (dict(sensors=Sensors(encoder_resolution=1e-3)), r"config\.sensors"),
+    ],
+)
 def test_a_planar_preset_on_another_plant_names_the_preset(kwargs, where):
     channel = {"random_torque": "torque", "actuator": "torque", "sensors": "theta"}[
-        next(iter(kwargs))]
-    with pytest.raises(ValueError, match=rf"^{channel}: Cart has no .* channel '{channel}'.*"
-                                         rf"set by the planar preset {where}$"):
+        next(iter(kwargs))
+    ]
+    with pytest.raises(
+        ValueError,
+        match=rf"^{channel}: Cart has no .* channel '{channel}'.*"
+        rf"set by the planar preset {where}$",
+    ):
         resolve_channels(Cart(), SimConfig(duration=1.0, **kwargs))
 
 
@@ -314,8 +396,11 @@ def test_a_planar_preset_on_another_plant_names_the_preset(kwargs, where):
 def test_noise_columns_follow_the_plants_noise_channels(hub):
     """One column per scalar channel and ``size`` columns per vector channel, in the order of
     ``plant.noise_channels`` (not the order of the outputs)."""
-    assert noise_columns(hub) == {"theta_dot": slice(0, 1), "root_torque": slice(1, 2),
-                                  "torque": slice(2, 3)}
+    assert noise_columns(hub) == {
+        "theta_dot": slice(0, 1),
+        "root_torque": slice(1, 2),
+        "torque": slice(2, 3),
+    }
     assert hub.noise_channels == ("theta_dot", "root_torque", "torque")
     columns = noise_columns(Cart())
     assert columns == {"trio": slice(0, 3), "position": slice(3, 4), "force": slice(4, 5)}

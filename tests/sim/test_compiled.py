@@ -18,23 +18,32 @@ import numpy as np
 import pytest
 
 import flexsat.sim
-
 from flexsat.control import PD
 from flexsat.dynamics.dispersion import stack_plants
 from flexsat.dynamics.hub_appendage import HubAppendage
-from flexsat.scenarios import default_scenario, load_scenario, run_scenario
-from flexsat.scenarios import runner, simulation
-from flexsat.sim import (BearingFriction, ChannelSensor, Impulses, RandomTorque, SimConfig,
-                         Sensors, SimulationDiverged, TorqueActuator, simulate)
+from flexsat.scenarios import default_scenario, load_scenario, run_scenario, runner, simulation
+from flexsat.sim import (
+    BearingFriction,
+    ChannelSensor,
+    Impulses,
+    RandomTorque,
+    Sensors,
+    SimConfig,
+    SimulationDiverged,
+    TorqueActuator,
+    simulate,
+)
 from flexsat.units import to_si
 
 EPS = np.finfo(float).eps
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 #: metrics computed from a history (a difference of its values): (history, unit factor)
-METRIC_SOURCES = {"residual_energy_J": ("energy", 1.0),
-                  "residual_energy_at_T_J": ("energy", 1.0),
-                  "overshoot_deg": ("theta", np.degrees(1.0)),
-                  "peak_rate_error_deg_s": ("theta_dot", np.degrees(1.0))}
+METRIC_SOURCES = {
+    "residual_energy_J": ("energy", 1.0),
+    "residual_energy_at_T_J": ("energy", 1.0),
+    "overshoot_deg": ("theta", np.degrees(1.0)),
+    "peak_rate_error_deg_s": ("theta_dot", np.degrees(1.0)),
+}
 FRICTION = BearingFriction(to_si("20 ozf*in", "N*m"), to_si("0.001 ozf*in*s/rad", "N*m*s/rad"))
 
 
@@ -66,8 +75,7 @@ def assert_same(compiled, python, friction=None):
 
 
 def _both(plant, law, cfg, **kwargs):
-    return simulate(plant, law, cfg, **kwargs), simulate(plant, law, cfg, compiled=False,
-                                                        **kwargs)
+    return simulate(plant, law, cfg, **kwargs), simulate(plant, law, cfg, compiled=False, **kwargs)
 
 
 def test_default_scenario_runs_are_unchanged(monkeypatch):
@@ -85,12 +93,16 @@ def test_pd_with_every_sensor_actuator_and_disturbance(tamu_case, rate):
     """PD slew with encoder quantisation, the LS rate filter or a noisy gyro, strain-gauge
     noise, friction, random torque, two impulses and a saturation that is reached."""
     plant = tamu_case.model()
-    sensors = Sensors(encoder_resolution="0.01 deg", rate=rate, gyro_noise=1e-4,
-                      strain_noise=0.01)
-    cfg = SimConfig(duration=6.0, sensors=sensors, friction=FRICTION,
-                    random_torque=RandomTorque(0.02), actuator=TorqueActuator(saturation=0.5),
-                    impulses=Impulses((1.0, 2.5), (0.05, -0.03)),
-                    channel_sensors={"root_torque": ChannelSensor(noise=0.01, bias=0.002)})
+    sensors = Sensors(encoder_resolution="0.01 deg", rate=rate, gyro_noise=1e-4, strain_noise=0.01)
+    cfg = SimConfig(
+        duration=6.0,
+        sensors=sensors,
+        friction=FRICTION,
+        random_torque=RandomTorque(0.02),
+        actuator=TorqueActuator(saturation=0.5),
+        impulses=Impulses((1.0, 2.5), (0.05, -0.03)),
+        channel_sensors={"root_torque": ChannelSensor(noise=0.01, bias=0.002)},
+    )
     law = PD(20.0, 30.0, target=np.radians(40.0))
     fast, slow = _both(plant, law, cfg)
     assert_same(fast, slow, FRICTION)
@@ -111,9 +123,12 @@ def test_dispersed_batch_is_unchanged(tamu_case):
     """Hub inertia and damping dispersed over 3 cases (per-case A, B in the kernel) with
     friction and random torque."""
     p = tamu_case.model().params
-    plants = [HubAppendage(p.__class__(**{**p.__dict__, "hub_inertia": h * p.hub_inertia,
-                                          "damping": z}), n_modes=4)
-              for h, z in ((1.0, 0.005), (1.3, 0.01), (0.8, 0.02))]
+    plants = [
+        HubAppendage(
+            p.__class__(**{**p.__dict__, "hub_inertia": h * p.hub_inertia, "damping": z}), n_modes=4
+        )
+        for h, z in ((1.0, 0.005), (1.3, 0.01), (0.8, 0.02))
+    ]
     cfg = SimConfig(duration=3.0, friction=FRICTION, random_torque=RandomTorque(0.01))
     fast, slow = _both(stack_plants(plants), PD(5.0, 20.0, target=[0.3, 0.4, 0.5]), cfg)
     assert_same(fast, slow, FRICTION)

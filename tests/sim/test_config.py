@@ -11,11 +11,22 @@ import pytest
 from flexsat import limits
 from flexsat.control import PD
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.sim import (BearingFriction, ChannelActuator, ChannelDisturbance, ChannelSensor,
-                         SimConfig)
-from flexsat.sim.config import (FRICTION_STEP_LIMIT, check_resources, force_rates,
-                                recorded_values, run_substeps, stable_substeps)
+from flexsat.sim import (
+    BearingFriction,
+    ChannelActuator,
+    ChannelDisturbance,
+    ChannelSensor,
+    SimConfig,
+)
 from flexsat.sim.channels import resolve_channels
+from flexsat.sim.config import (
+    FRICTION_STEP_LIMIT,
+    check_resources,
+    force_rates,
+    recorded_values,
+    run_substeps,
+    stable_substeps,
+)
 from flexsat.units import ureg
 
 
@@ -61,28 +72,39 @@ def test_defaults():
     assert cfg.channel_sensors == {} and not cfg.friction.active
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(duration="15 m"), r"^duration: .*"),
-    (dict(duration=0.0), r"^duration: .*"),
-    (dict(duration=-1.0), r"^duration: .*"),
-    (dict(duration=np.nan), r"^duration: .*"),
-    (dict(duration=1.0, control_rate="75 s"), r"^control_rate: .*"),
-    (dict(duration=1.0, control_rate=0.0), r"^control_rate: .*"),
-    (dict(duration=1.0, settling_band="1 m"), r"^settling_band: .*"),
-    (dict(duration=1.0, substeps=0), r"^substeps: must be a positive integer"),
-    (dict(duration=1.0, substeps=2.5), r"^substeps: must be a positive integer"),
-    (dict(duration=1.0, seed=0.5), r"^seed: must be an integer in \[0, 4294967295\]"),
-    (dict(duration=1.0, seed=True), r"^seed: must be an integer"),
-    (dict(duration=1.0, seed=2**32), r"^seed: must be an integer"),
-    (dict(duration=1.0, channel_sensors={"theta": ChannelActuator()}),
-     r"^channel_sensors: must map channel names to ChannelSensor"),
-    (dict(duration=1.0, channel_actuators={"torque": ChannelSensor()}),
-     r"^channel_actuators: must map channel names to ChannelActuator"),
-    (dict(duration=1.0, channel_disturbances={1: ChannelDisturbance()}),
-     r"^channel_disturbances: must map channel names to ChannelDisturbance"),
-    (dict(duration=1.0, channel_sensors=[("theta", ChannelSensor())]),
-     r"^channel_sensors: must map"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(duration="15 m"), r"^duration: .*"),
+        (dict(duration=0.0), r"^duration: .*"),
+        (dict(duration=-1.0), r"^duration: .*"),
+        (dict(duration=np.nan), r"^duration: .*"),
+        (dict(duration=1.0, control_rate="75 s"), r"^control_rate: .*"),
+        (dict(duration=1.0, control_rate=0.0), r"^control_rate: .*"),
+        (dict(duration=1.0, settling_band="1 m"), r"^settling_band: .*"),
+        (dict(duration=1.0, substeps=0), r"^substeps: must be a positive integer"),
+        (dict(duration=1.0, substeps=2.5), r"^substeps: must be a positive integer"),
+        (dict(duration=1.0, seed=0.5), r"^seed: must be an integer in \[0, 4294967295\]"),
+        (dict(duration=1.0, seed=True), r"^seed: must be an integer"),
+        (dict(duration=1.0, seed=2**32), r"^seed: must be an integer"),
+        (
+            dict(duration=1.0, channel_sensors={"theta": ChannelActuator()}),
+            r"^channel_sensors: must map channel names to ChannelSensor",
+        ),
+        (
+            dict(duration=1.0, channel_actuators={"torque": ChannelSensor()}),
+            r"^channel_actuators: must map channel names to ChannelActuator",
+        ),
+        (
+            dict(duration=1.0, channel_disturbances={1: ChannelDisturbance()}),
+            r"^channel_disturbances: must map channel names to ChannelDisturbance",
+        ),
+        (
+            dict(duration=1.0, channel_sensors=[("theta", ChannelSensor())]),
+            r"^channel_sensors: must map",
+        ),
+    ],
+)
 def test_bad_fields_are_refused_naming_them(kwargs, message):
     with pytest.raises(ValueError, match=message):
         SimConfig(**kwargs)
@@ -104,14 +126,16 @@ def _lambda(tamu_model, friction):
     return friction.max_slope * np.linalg.inv(tamu_model.mass_matrix)[0, 0]
 
 
-@pytest.mark.parametrize("coulomb, smoothing, rate, requested", [
-    ("20 ozf*in", 1e-3, 75.0, 4),     # TAMU bearing, default smoothing: 4 substeps are enough
-    ("20 ozf*in", 1e-5, 75.0, 4),     # 100x stiffer: raised
-    ("20 ozf*in", 1e-5, 500.0, 4),    # a faster control rate needs fewer
-    (0.5, 1e-4, 75.0, 1),
-])
-def test_substeps_keep_h_lambda_within_the_limit(tamu_model, coulomb, smoothing, rate,
-                                                 requested):
+@pytest.mark.parametrize(
+    "coulomb, smoothing, rate, requested",
+    [
+        ("20 ozf*in", 1e-3, 75.0, 4),  # TAMU bearing, default smoothing: 4 substeps are enough
+        ("20 ozf*in", 1e-5, 75.0, 4),  # 100x stiffer: raised
+        ("20 ozf*in", 1e-5, 500.0, 4),  # a faster control rate needs fewer
+        (0.5, 1e-4, 75.0, 1),
+    ],
+)
+def test_substeps_keep_h_lambda_within_the_limit(tamu_model, coulomb, smoothing, rate, requested):
     """substeps = max(requested, ceil(dt λ / FRICTION_STEP_LIMIT)): the smallest count with
     h λ <= 1.5 (ETD2RK is stable for h λ <= 2), never below the request."""
     friction = BearingFriction(coulomb, "0.001 ozf*in*s/rad", smoothing)
@@ -130,7 +154,7 @@ def test_force_rate_is_the_bearing_stiffness_over_the_hub_inertia(tamu_model):
     11 × 11 inverse: ~cond(M)·eps, 1e-12)."""
     friction = BearingFriction(0.2, 0.01, 1e-3)
     d = {"torque": ChannelDisturbance(force=friction, force_output="theta_dot")}
-    (name, lam), = force_rates(tamu_model, d)
+    ((name, lam),) = force_rates(tamu_model, d)
     assert name == "torque"
     np.testing.assert_allclose(lam, _lambda(tamu_model, friction), rtol=1e-12)
 
@@ -140,9 +164,12 @@ def test_inactive_friction_keeps_the_requested_substeps(tamu_model):
 
 
 def test_friction_needing_more_substeps_than_the_limit_is_refused(tamu_model):
-    with pytest.raises(ValueError, match=r"^friction: a stable integration of the friction "
-                                         r"\(damping rate .* 1/s below the smoothing speed\).*"
-                                         r"above the limit 1,000 .*raise smoothing"):
+    with pytest.raises(
+        ValueError,
+        match=r"^friction: a stable integration of the friction "
+        r"\(damping rate .* 1/s below the smoothing speed\).*"
+        r"above the limit 1,000 .*raise smoothing",
+    ):
         stable_substeps(tamu_model, BearingFriction(1.0, 0.0, 1e-9), 1 / 75, 4)
 
 
@@ -171,8 +198,11 @@ def test_friction_on_a_generic_plant_channel_raises_the_substeps():
 def test_too_many_cases_are_refused_naming_n_cases(tamu_model):
     cfg = SimConfig(duration=1.0)
     assert check_resources(tamu_model, cfg, limits.MAX_CASES) == 1
-    with pytest.raises(ValueError, match=r"^n_cases: cases in one batch = 1e\+05, above the "
-                                         r"limit 100,000 \(flexsat.limits\); split the batch"):
+    with pytest.raises(
+        ValueError,
+        match=r"^n_cases: cases in one batch = 1e\+05, above the "
+        r"limit 100,000 \(flexsat.limits\); split the batch",
+    ):
         check_resources(tamu_model, cfg, limits.MAX_CASES + 1)
 
 
@@ -181,8 +211,11 @@ def test_too_many_integrator_steps_are_refused_naming_duration(tamu_model, monke
     cfg = SimConfig(duration=1.0, friction=BearingFriction(0.01))
     assert check_resources(tamu_model, cfg) == 4
     monkeypatch.setattr(limits, "MAX_INTEGRATOR_STEPS", 303)
-    with pytest.raises(ValueError, match=r"^duration: integrator steps \(76 control samples × "
-                                         r"4 substeps\) = 304, above the limit 303"):
+    with pytest.raises(
+        ValueError,
+        match=r"^duration: integrator steps \(76 control samples × "
+        r"4 substeps\) = 304, above the limit 303",
+    ):
         check_resources(tamu_model, cfg)
 
 
@@ -196,8 +229,11 @@ def test_memory_counts_the_histories_and_the_states_when_recorded(monkeypatch):
     need = 8 * 10 * (76 * 6 + 32 * 5)
     monkeypatch.setattr(limits, "MAX_MEMORY", need)
     assert check_resources(Cart(), cfg, 10) == 1
-    with pytest.raises(ValueError, match=r"^duration: a run of 76 samples × 10 cases × 8 values "
-                                         r"\(and a 32-sample buffer of 5\) needs about 60 kB"):
+    with pytest.raises(
+        ValueError,
+        match=r"^duration: a run of 76 samples × 10 cases × 8 values "
+        r"\(and a 32-sample buffer of 5\) needs about 60 kB",
+    ):
         check_resources(Cart(), cfg, 10, record_states=True)
     monkeypatch.setattr(limits, "MAX_MEMORY", need - 1)
     with pytest.raises(ValueError, match=r"^duration: .*above the limit .*MAX_MEMORY"):

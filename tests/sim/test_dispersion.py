@@ -17,8 +17,7 @@ def _plants(tamu_case, n_modes=4):
     p = base.params
     out = []
     for hub, zeta in ((1.0, 0.005), (1.3, 0.01), (0.8, 0.02)):
-        params = p.__class__(**{**p.__dict__, "hub_inertia": hub * p.hub_inertia,
-                                "damping": zeta})
+        params = p.__class__(**{**p.__dict__, "hub_inertia": hub * p.hub_inertia, "damping": zeta})
         out.append(HubAppendage(params, n_modes=n_modes))
     return out
 
@@ -31,39 +30,54 @@ def test_case_i_of_a_dispersed_batch_is_plant_i_run_alone(tamu_case):
     than any case needs for the friction, so the batch and the singles take the same steps
     (a batch takes the largest number any of its cases needs)."""
     plants = _plants(tamu_case)
-    friction = BearingFriction(to_si("20 ozf*in", "N*m"), to_si("0.001 ozf*in*s/rad",
-                                                                "N*m*s/rad"))
-    cfg = SimConfig(duration=3.0, friction=friction, random_torque=RandomTorque(0.01),
-                    substeps=8)
+    friction = BearingFriction(to_si("20 ozf*in", "N*m"), to_si("0.001 ozf*in*s/rad", "N*m*s/rad"))
+    cfg = SimConfig(duration=3.0, friction=friction, random_torque=RandomTorque(0.01), substeps=8)
     law = PD(5.0, 20.0, target=[0.3, 0.4, 0.5])
     batch = simulate(stack_plants(plants), law, cfg).dataset
     assert batch.attrs["substeps"] == 8
     for i, plant in enumerate(plants):
         one = simulate(plant, PD(5.0, 20.0, target=law.target[i]), cfg, seeds=[i]).dataset
-        for var in ("theta", "theta_dot", "torque", "friction_torque", "root_torque",
-                    "tip_deflection", "energy", "vibration_energy"):
+        for var in (
+            "theta",
+            "theta_dot",
+            "torque",
+            "friction_torque",
+            "root_torque",
+            "tip_deflection",
+            "energy",
+            "vibration_energy",
+        ):
             a, b = batch[var].values[i], one[var].values[0]
             assert np.abs(a - b).max() <= 1e-12 * np.abs(b).max(), (i, var)
-        assert batch.settling_time_s.values[i] == pytest.approx(one.settling_time_s.values[0],
-                                                                rel=1e-12, nan_ok=True)
+        assert batch.settling_time_s.values[i] == pytest.approx(
+            one.settling_time_s.values[0], rel=1e-12, nan_ok=True
+        )
 
 
 def test_the_batch_size_must_be_the_number_of_plants(tamu_case):
-    with pytest.raises(ValueError, match=r"^n_cases: the dispersed plant carries 3 cases, the "
-                                         r"batch has 2"):
-        simulate(stack_plants(_plants(tamu_case)), PD(1.0, 1.0), SimConfig(duration=0.1),
-                 n_cases=2)
+    with pytest.raises(
+        ValueError,
+        match=r"^n_cases: the dispersed plant carries 3 cases, the "
+        r"batch has 2",
+    ):
+        simulate(stack_plants(_plants(tamu_case)), PD(1.0, 1.0), SimConfig(duration=0.1), n_cases=2)
 
 
 def test_mismatched_plants_are_refused_naming_the_field(tamu_case):
     four, ten = _plants(tamu_case, 4)[0], tamu_case.model()
-    with pytest.raises(ValueError, match=r"^nx: plants\[1\] has nx 22, plants\[0\] has 10; a "
-                                         r"dispersed batch needs the same channels"):
+    with pytest.raises(
+        ValueError,
+        match=r"^nx: plants\[1\] has nx 22, plants\[0\] has 10; a "
+        r"dispersed batch needs the same channels",
+    ):
         stack_plants([four, ten])
     from flexsat.cases import nps
 
-    with pytest.raises(ValueError, match=r"^outputs: plants\[1\] has outputs \(theta, "
-                                         r"theta_dot, root_torque, tip_deflection\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"^outputs: plants\[1\] has outputs \(theta, "
+        r"theta_dot, root_torque, tip_deflection\)",
+    ):
         stack_plants([four, nps().model()])
 
 

@@ -40,8 +40,9 @@ def test_batch_names_only_the_diverging_case(tamu_case, plant):
 
 
 def test_stable_batch_runs_to_finite_results(tamu_case, plant):
-    result = simulate(plant, PD(np.array([5.0, 10.0]), 20.0, target=tamu_case.angle),
-                      SimConfig(duration=2.0))
+    result = simulate(
+        plant, PD(np.array([5.0, 10.0]), 20.0, target=tamu_case.angle), SimConfig(duration=2.0)
+    )
     assert np.isfinite(result.dataset["theta"].values).all()
 
 
@@ -61,8 +62,7 @@ class _NaNCommand:
 
 def test_non_finite_command_from_a_finite_state_blames_the_law(tamu_case, plant):
     with pytest.raises(SimulationDiverged, match="control law returned a non-finite torque"):
-        simulate(plant, _NaNCommand(PD(5.0, 20.0, target=tamu_case.angle)),
-                 SimConfig(duration=1.0))
+        simulate(plant, _NaNCommand(PD(5.0, 20.0, target=tamu_case.angle)), SimConfig(duration=1.0))
 
 
 def test_non_finite_start_is_an_input_error(tamu_case, plant):
@@ -82,14 +82,23 @@ def test_divergence_bound_leaves_room_for_energies(plant):
 
 
 # -- resource limits ------------------------------------------------------------------------------
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(duration=1e12), r"^duration: control samples \(duration × control_rate\) = 7\.5e\+13, "
-                          r"above the limit 2,000,000"),
-    (dict(duration=1.0, seed=1e29), r"^seed: must be an integer in \[0, 4294967295\], got 1e\+29"),
-    (dict(duration=1.0, seed=10**29), r"^seed: must be an integer in \[0, 4294967295\]"),
-    (dict(duration=1.0, seed=-1), r"^seed: must be an integer"),
-    (dict(duration=1.0, substeps=10**6), r"^substeps: .* above the limit 1,000"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (
+            dict(duration=1e12),
+            r"^duration: control samples \(duration × control_rate\) = 7\.5e\+13, "
+            r"above the limit 2,000,000",
+        ),
+        (
+            dict(duration=1.0, seed=1e29),
+            r"^seed: must be an integer in \[0, 4294967295\], got 1e\+29",
+        ),
+        (dict(duration=1.0, seed=10**29), r"^seed: must be an integer in \[0, 4294967295\]"),
+        (dict(duration=1.0, seed=-1), r"^seed: must be an integer"),
+        (dict(duration=1.0, substeps=10**6), r"^substeps: .* above the limit 1,000"),
+    ],
+)
 def test_config_beyond_the_limits_is_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
         SimConfig(**kwargs)
@@ -98,8 +107,11 @@ def test_config_beyond_the_limits_is_refused(kwargs, message):
 def test_stiff_friction_is_refused_before_it_hangs(tamu_case, plant):
     config = dataclasses.replace(tamu_case.sim_config(15.0), friction=BearingFriction(1e30, 0.0))
     start = time.perf_counter()
-    with pytest.raises(ValueError, match=r"^friction: a stable integration of the friction .* "
-                                         r"above the limit 1,000 .*raise smoothing"):
+    with pytest.raises(
+        ValueError,
+        match=r"^friction: a stable integration of the friction .* "
+        r"above the limit 1,000 .*raise smoothing",
+    ):
         simulate(plant, PD(5.0, 20.0, target=tamu_case.angle), config)
     assert time.perf_counter() - start < 5.0  # refused up front (was an unbounded loop)
 
@@ -110,18 +122,27 @@ def test_memory_estimate_is_checked_before_allocating(tamu_case, plant, monkeypa
     # 32-sample buffer of 22 states and 3 noise streams, 8 B each:
     # 8 × 1000 × (76 × 13 + 32 × 25) = 14,304,000 B = 13.6 MiB, one byte over the patched limit
     monkeypatch.setattr(limits, "MAX_MEMORY", 8 * 1000 * (76 * 13 + 32 * 25) - 1)
-    with pytest.raises(ValueError, match=r"^duration: a run of 76 samples × 1000 cases × 13 "
-                                         r"values \(and a 32-sample buffer of 25\) needs about "
-                                         r"13.6 MB of memory, above the limit"):
+    with pytest.raises(
+        ValueError,
+        match=r"^duration: a run of 76 samples × 1000 cases × 13 "
+        r"values \(and a 32-sample buffer of 25\) needs about "
+        r"13.6 MB of memory, above the limit",
+    ):
         simulate(plant, law, SimConfig(duration=1.0), n_cases=1000)
-    with pytest.raises(ValueError, match=r"^n_cases: cases in one batch = 1e\+05.* above the "
-                                         r"limit 100,000"):
+    with pytest.raises(
+        ValueError,
+        match=r"^n_cases: cases in one batch = 1e\+05.* above the "
+        r"limit 100,000",
+    ):
         simulate(plant, law, SimConfig(duration=1.0), n_cases=limits.MAX_CASES + 1)
 
 
 def test_modes_beyond_the_limit_are_refused_before_the_model_is_built(tamu_case):
     from flexsat.cases import tamu
 
-    with pytest.raises(ValueError, match=r"^n_modes: modes per appendage = 1e\+05, above the "
-                                         r"limit 100"):
+    with pytest.raises(
+        ValueError,
+        match=r"^n_modes: modes per appendage = 1e\+05, above the "
+        r"limit 100",
+    ):
         tamu(n_modes=100_000).model()

@@ -39,8 +39,9 @@ def _reference_solution(model, u_of_t, dt, n, friction=None):
                 f[0] = friction(x[model.ndof])
             return A @ x + Bu * u + Bf @ f
 
-        x = solve_ivp(rhs, (k * dt, (k + 1) * dt), x, method="Radau", rtol=1e-11,
-                      atol=1e-14).y[:, -1]
+        x = solve_ivp(rhs, (k * dt, (k + 1) * dt), x, method="Radau", rtol=1e-11, atol=1e-14).y[
+            :, -1
+        ]
         out.append(x)
     return np.array(out)
 
@@ -95,10 +96,13 @@ def test_batch_equals_per_case_runs(tamu_case):
     cfg = tamu_case.sim_config(duration=8.0)
     batch = simulate(model, tamu_case.law_ii(G1, G2, alpha=alpha, u_max=umax), cfg)
     rev = slice(None, None, -1)
-    flipped = simulate(model, tamu_case.law_ii(G1, G2, alpha=alpha[rev], u_max=umax[rev]), cfg,
-                       seeds=np.arange(1000)[rev])
-    for var in ("theta", "theta_dot", "torque", "tip_deflection", "root_torque_measured",
-                "energy"):
+    flipped = simulate(
+        model,
+        tamu_case.law_ii(G1, G2, alpha=alpha[rev], u_max=umax[rev]),
+        cfg,
+        seeds=np.arange(1000)[rev],
+    )
+    for var in ("theta", "theta_dot", "torque", "tip_deflection", "root_torque_measured", "energy"):
         a, b = batch.dataset[var].values, flipped.dataset[var].values[rev]
         scale = np.maximum(np.abs(a).max(axis=1), 1e-300)
         assert (np.abs(a - b).max(axis=1) <= 1e-10 * scale).all(), var
@@ -139,7 +143,7 @@ def test_impulse_changes_angular_momentum_by_its_value(tamu_case):
     cfg = SimConfig(duration=1.0, impulses=Impulses((0.5,), (0.2,)))
     r = simulate(model, PD(0.0, 0.0), cfg, record_states=True)
     x = r.dataset.state.values[0]
-    h = x[:, model.ndof:] @ model.mass_matrix[0]
+    h = x[:, model.ndof :] @ model.mass_matrix[0]
     assert h[0] == 0.0
     assert h[-1] == pytest.approx(0.2, rel=1e-12)
 
@@ -155,7 +159,7 @@ def test_coulomb_friction_stops_a_spinning_vehicle(tamu_case):
     cfg = SimConfig(duration=10.0, friction=BearingFriction(c1, 0.0, 1e-3))
     r = simulate(model, PD(0.0, 0.0), cfg, initial_state=x0, record_states=True)
     x, t = r.dataset.state.values[0], r.dataset.time.values
-    h = x[:, model.ndof:] @ model.mass_matrix[0]
+    h = x[:, model.ndof :] @ model.mass_matrix[0]
     t_stop = I * w0 / c1
     moving = t < 0.8 * t_stop
     assert np.allclose(h[moving], I * w0 - c1 * t[moving], rtol=0, atol=1e-3 * I * w0)

@@ -19,8 +19,11 @@ from flexsat.sim.sensors import least_squares_derivative_weights
 BASE = {
     # name: (C, D, D_f); None where the output does not depend on it
     "p": (np.array([[1.0, 0.0, 0.0]]), None, None),
-    "pair": (np.array([[1.0, 2.0, 0.0], [0.0, -1.0, 3.0]]),
-             np.array([[0.5, 0.0], [0.0, -2.0]]), None),
+    "pair": (
+        np.array([[1.0, 2.0, 0.0], [0.0, -1.0, 3.0]]),
+        np.array([[0.5, 0.0], [0.0, -2.0]]),
+        None,
+    ),
     "load": (np.array([[0.0, 0.0, 1.0]]), np.array([[0.25, 0.0]]), np.array([[1.0, 0.0]])),
     "scaled": (np.array([[0.0, 2.0, 0.0]]), None, None),
     "fed": (np.array([[0.0, 1.0, 0.0]]), np.array([[0.0, 1.0]]), None),
@@ -35,9 +38,15 @@ class Probe(Plant):
     sensor). ``gains`` (n_cases,) makes ``pair`` per case (a dispersed plant)."""
 
     inputs = (Channel("push", "N"), Channel("twist", "N*m"))
-    outputs = (Channel("p", "m"), Channel("pair", "m", size=2), Channel("load", "N"),
-               Channel("scaled", "m"), Channel("fed", "m"), Channel("curve", "m**2"),
-               Channel("rate", "m/s"))
+    outputs = (
+        Channel("p", "m"),
+        Channel("pair", "m", size=2),
+        Channel("load", "N"),
+        Channel("scaled", "m"),
+        Channel("fed", "m"),
+        Channel("curve", "m**2"),
+        Channel("rate", "m/s"),
+    )
     noise_channels = ("p", "pair", "load", "rate", "push")
     nx = 3
 
@@ -102,12 +111,19 @@ def test_a_dispersed_block_makes_every_block_per_case():
         np.testing.assert_array_equal(D[i, 1:], BASE["pair"][1])
 
 
-@pytest.mark.parametrize("name, row", [
-    ("p", 0), ("rate", 1),            # x_0 and x_1 exactly
-    ("pair", None), ("scaled", None),  # not one unit row
-    ("fed", None), ("load", None),     # a feedthrough term
-    ("curve", None), ("nothing", None),  # nonlinear; not an output
-])
+@pytest.mark.parametrize(
+    "name, row",
+    [
+        ("p", 0),
+        ("rate", 1),  # x_0 and x_1 exactly
+        ("pair", None),
+        ("scaled", None),  # not one unit row
+        ("fed", None),
+        ("load", None),  # a feedthrough term
+        ("curve", None),
+        ("nothing", None),  # nonlinear; not an output
+    ],
+)
 def test_unit_row_is_the_state_index_an_output_reads_exactly(name, row):
     assert unit_row(Probe(), name) == row
 
@@ -167,10 +183,14 @@ def test_each_channel_gets_its_own_sensor_and_noise_columns():
     (round(·/q) of the same double: exact)."""
     rng = np.random.default_rng(3)
     nc = 6
-    config = SimConfig(duration=1.0, channel_sensors={
-        "p": ChannelSensor(noise=0.5),
-        "pair": ChannelSensor(noise="250 mm", quantum=0.25),
-        "load": ChannelSensor(bias=1.0, range=3.0)})
+    config = SimConfig(
+        duration=1.0,
+        channel_sensors={
+            "p": ChannelSensor(noise=0.5),
+            "pair": ChannelSensor(noise="250 mm", quantum=0.25),
+            "load": ChannelSensor(bias=1.0, range=3.0),
+        },
+    )
     plant = Probe()
     assert noise_columns(plant)["pair"] == slice(1, 3)
     inst = _instruments(plant, ("p", "pair", "load", "fed"), nc, config)
@@ -179,7 +199,8 @@ def test_each_channel_gets_its_own_sensor_and_noise_columns():
     y = inst.measure(x, u, f, noise, True)
     np.testing.assert_array_equal(y["p"], _truth("p", x, u, f) + 0.5 * noise[:, 0])
     np.testing.assert_array_equal(
-        y["pair"], 0.25 * np.round((_truth("pair", x, u, f) + 0.25 * noise[:, 1:3]) / 0.25))
+        y["pair"], 0.25 * np.round((_truth("pair", x, u, f) + 0.25 * noise[:, 1:3]) / 0.25)
+    )
     np.testing.assert_array_equal(y["load"], np.clip(_truth("load", x, u, f) + 1.0, -3, 3))
     np.testing.assert_array_equal(y["fed"], _truth("fed", x, u, f))
 
@@ -191,9 +212,13 @@ def test_a_derivative_sensor_differentiates_the_measured_source():
     the measured samples allow, and the source is measured even when the law does not read
     it."""
     dt, nc = 0.1, 2
-    config = SimConfig(duration=1.0, channel_sensors={
-        "p": ChannelSensor(quantum=0.125),
-        "rate": ChannelSensor(derivative_of="p", window=4, order=1)})
+    config = SimConfig(
+        duration=1.0,
+        channel_sensors={
+            "p": ChannelSensor(quantum=0.125),
+            "rate": ChannelSensor(derivative_of="p", window=4, order=1),
+        },
+    )
     inst = _instruments(Probe(), ("rate",), nc, config, dt=dt)
     w = least_squares_derivative_weights(4, 1, dt)
     measured, out = [], []
@@ -207,7 +232,7 @@ def test_a_derivative_sensor_differentiates_the_measured_source():
     assert np.all(out[0] == 0.0)
     hist = [measured[0]] * 3 + measured
     for k in range(10):
-        expected = np.stack(hist[k:k + 4], axis=1) @ w
+        expected = np.stack(hist[k : k + 4], axis=1) @ w
         # the filter shifts its history in place; its dot product may sum in another order:
         # a few ulp of the largest term |w_j p_j| (≈ 10 × 1)
         np.testing.assert_allclose(out[k], expected, rtol=0, atol=1e-13)
@@ -218,8 +243,9 @@ def test_a_derivative_sensor_differentiates_the_measured_source():
 def test_a_derivative_of_an_exact_ramp_is_its_slope():
     """Order-1 fit of a line: exact to rounding (cond of the 8-point Vandermonde × eps)."""
     dt = 1 / 75
-    config = SimConfig(duration=1.0, channel_sensors={
-        "rate": ChannelSensor(derivative_of="p", window=8, order=1)})
+    config = SimConfig(
+        duration=1.0, channel_sensors={"rate": ChannelSensor(derivative_of="p", window=8, order=1)}
+    )
     inst = _instruments(Probe(), ("p", "rate"), 1, config, dt=dt)
     for k in range(12):
         x = np.array([[0.3 + 2.5 * k * dt, 0.0, 0.0]])

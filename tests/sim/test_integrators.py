@@ -73,8 +73,11 @@ def test_small_exponentials_equal_the_full_van_loan_construction(plant, n_force,
     error of e^{hA} is at most ~ n ε ‖hA‖₁ relative (the condition number of the exponential
     is at most ‖hA‖ up to a modest factor), hence agreement to n ε max(1, ‖hA‖₁) in the 1-norm
     relative to the reference. (Measured: ≤ 8e-16 on these plants.)"""
-    A, Bu, Bf = {"rigid_and_modes": _rigid_and_modes, "random_stable": _random_stable,
-                 "tamu_10_modes": lambda: tamu_model.state_space}[plant]()
+    A, Bu, Bf = {
+        "rigid_and_modes": _rigid_and_modes,
+        "random_stable": _random_stable,
+        "tamu_10_modes": lambda: tamu_model.state_space,
+    }[plant]()
     Bf = Bf[:, : {0: 0, 1: 1, "all": Bf.shape[1]}[n_force]]
     h, substeps = 1 / 75, 3
     E0, P10, P20 = _full_van_loan(A, h / substeps)
@@ -99,8 +102,9 @@ def test_linear_tamu_run_is_unchanged_from_the_full_construction(tamu_case, monk
     issue's bound for linear runs; the propagators agree to ~1e-16, measured differences of
     the histories ≤ 1e-12)."""
     cfg = tamu_case.sim_config(15.0, friction=False, noise=False)
-    law = tamu_case.law_ii(to_si("3000 ozf*in/rad", "N*m/rad"),
-                           to_si("800 ozf*in*s/rad", "N*m*s/rad"))
+    law = tamu_case.law_ii(
+        to_si("3000 ozf*in/rad", "N*m/rad"), to_si("800 ozf*in*s/rad", "N*m*s/rad")
+    )
     model = tamu_case.model()
     new = simulate(model, law, cfg, record_states=True).dataset
 
@@ -113,8 +117,15 @@ def test_linear_tamu_run_is_unchanged_from_the_full_construction(tamu_case, monk
 
     monkeypatch.setattr(engine, "ExponentialStepper", FullConstruction)
     old = simulate(model, law, cfg, record_states=True).dataset
-    for name in ("state", "theta", "torque", "root_torque", "tip_deflection", "energy",
-                 "vibration_energy"):
+    for name in (
+        "state",
+        "theta",
+        "torque",
+        "root_torque",
+        "tip_deflection",
+        "energy",
+        "vibration_energy",
+    ):
         scale = np.abs(old[name].values).max()
         assert np.abs(new[name].values - old[name].values).max() <= 1e-10 * scale, name
 
@@ -133,8 +144,9 @@ def test_etd2rk_is_exact_for_a_constant_force():
     stepper = ExponentialStepper.build(A, Bu, Bf, 0.2, substeps=3)
     x0 = np.ones((1, 5))
     x1 = stepper.step(x0, np.array([1.5]), lambda x, w: np.broadcast_to(N, (x.shape[0], 2)))
-    exact = solve_ivp(lambda t, x: A @ x + Bu * 1.5 + Bf @ N, (0, 0.2), x0[0],
-                      rtol=1e-12, atol=1e-14).y[:, -1]
+    exact = solve_ivp(
+        lambda t, x: A @ x + Bu * 1.5 + Bf @ N, (0, 0.2), x0[0], rtol=1e-12, atol=1e-14
+    ).y[:, -1]
     assert np.allclose(x1[0], exact, rtol=1e-9, atol=1e-12)
 
 
@@ -145,8 +157,9 @@ def test_etd2rk_converges_at_second_order_for_a_nonlinear_force():
         return np.stack([np.tanh(x[:, 0]), x[:, 1] ** 2], axis=1)
 
     x0 = 0.5 * np.ones(5)
-    exact = solve_ivp(lambda t, x: A @ x + Bf @ force(x[None], 0)[0], (0, 1.0), x0,
-                      rtol=1e-12, atol=1e-14).y[:, -1]
+    exact = solve_ivp(
+        lambda t, x: A @ x + Bf @ force(x[None], 0)[0], (0, 1.0), x0, rtol=1e-12, atol=1e-14
+    ).y[:, -1]
     errors = []
     for m in (8, 16, 32):
         stepper = ExponentialStepper.build(A, Bu, Bf, 1.0, substeps=m)

@@ -27,10 +27,30 @@ from flexsat.sim.sensors import least_squares_derivative_weights
 N_SLOTS = 4
 
 
-def make_problem(seed=0, n_cases=3, n=4, m=2, p=3, nk=2, n_t=40, dt=0.05, substeps=2,
-                 force=True, impulses=True, quantum=True, noise=True, bias=True, saturation=True,
-                 fir=True, law_state=True, k0=True, actuator=True, disturbance=True,
-                 per_case=True, scheduled=True):
+def make_problem(
+    seed=0,
+    n_cases=3,
+    n=4,
+    m=2,
+    p=3,
+    nk=2,
+    n_t=40,
+    dt=0.05,
+    substeps=2,
+    force=True,
+    impulses=True,
+    quantum=True,
+    noise=True,
+    bias=True,
+    saturation=True,
+    fir=True,
+    law_state=True,
+    k0=True,
+    actuator=True,
+    disturbance=True,
+    per_case=True,
+    scheduled=True,
+):
     """Random stable plant (damped oscillators, coupled) and law; every feature switchable."""
     rng = np.random.default_rng(seed)
     Cp = n_cases if per_case else 1
@@ -48,8 +68,9 @@ def make_problem(seed=0, n_cases=3, n=4, m=2, p=3, nk=2, n_t=40, dt=0.05, subste
         if force:
             P1f[c], P2f[c] = P1[:, m], P2[:, 0]
     Cr = rng.normal(size=(Cp if force else 0, n))
-    fric = np.column_stack([rng.uniform(0.2, 0.5, Cp), rng.uniform(0.0, 0.2, Cp),
-                            rng.uniform(0.05, 0.2, Cp)])
+    fric = np.column_stack(
+        [rng.uniform(0.2, 0.5, Cp), rng.uniform(0.0, 0.2, Cp), rng.uniform(0.05, 0.2, Cp)]
+    )
     imp_k = np.array([0, 5, 5, 17] if impulses else [], dtype=np.int64)
     imp_dx = rng.normal(size=(imp_k.size, n_cases, n))
     Cm = rng.normal(size=(Cp, p, n))
@@ -75,8 +96,9 @@ def make_problem(seed=0, n_cases=3, n=4, m=2, p=3, nk=2, n_t=40, dt=0.05, subste
     act[:, :, 0] = 0.8 if actuator else np.inf
     act[:, :, 1] = rng.uniform(0.9, 1.1, (Cp, m)) if actuator else 1.0
     dist_std = np.full((Cp, m), 0.1 if disturbance else 0.0)
-    dist_slot = np.array([(p + i) % N_SLOTS if disturbance else -1 for i in range(m)],
-                         dtype=np.int64)
+    dist_slot = np.array(
+        [(p + i) % N_SLOTS if disturbance else -1 for i in range(m)], dtype=np.int64
+    )
     noise_arr = np.empty((n_cases, n_t, N_SLOTS))
     for c in range(n_cases):  # one stream per case seed
         noise_arr[c] = np.random.default_rng(100 + c).standard_normal((n_t, N_SLOTS))
@@ -87,12 +109,43 @@ def make_problem(seed=0, n_cases=3, n=4, m=2, p=3, nk=2, n_t=40, dt=0.05, subste
     Dof = rng.normal(size=(Cp, 2))
     R = rng.normal(size=(Cp, n, n))
     Q = R @ np.swapaxes(R, 1, 2)
-    return dict(Co=Co, Do=Do, Dof=Dof, Q=Q, x0=x0, E=E, block_diagonal=False, P1u=P1u, P1f=P1f, P2f=P2f, Cr=Cr, fric=fric,
-                substeps=substeps, imp_k=imp_k, imp_dx=imp_dx, Cm=Cm, Dm=Dm, Dmf=Dmf,
-                sensor=sensor, sensor_slot=sensor_slot, fir_src=0 if fir else -1,
-                fir_dst=1, fir_w=fir_w, Ak=Ak, Bk=Bk, Ck=Ck, Dk=Dk, y_ref=y_ref, u_ff=u_ff,
-                K0=K0, act=act, dist_std=dist_std, dist_slot=dist_slot, noise=noise_arr,
-                bound=1e12)
+    return dict(
+        Co=Co,
+        Do=Do,
+        Dof=Dof,
+        Q=Q,
+        x0=x0,
+        E=E,
+        block_diagonal=False,
+        P1u=P1u,
+        P1f=P1f,
+        P2f=P2f,
+        Cr=Cr,
+        fric=fric,
+        substeps=substeps,
+        imp_k=imp_k,
+        imp_dx=imp_dx,
+        Cm=Cm,
+        Dm=Dm,
+        Dmf=Dmf,
+        sensor=sensor,
+        sensor_slot=sensor_slot,
+        fir_src=0 if fir else -1,
+        fir_dst=1,
+        fir_w=fir_w,
+        Ak=Ak,
+        Bk=Bk,
+        Ck=Ck,
+        Dk=Dk,
+        y_ref=y_ref,
+        u_ff=u_ff,
+        K0=K0,
+        act=act,
+        dist_std=dist_std,
+        dist_slot=dist_slot,
+        noise=noise_arr,
+        bound=1e12,
+    )
 
 
 def run_kernel(prob, parallel=False, record_states=True):
@@ -118,11 +171,19 @@ def reference_loop(prob):
     def law(a, k, c):
         return pick(pick(a, k), c)
 
-    out = {k: np.full(s, np.nan) for k, s in (("X", (nc, n_t, n)), ("Y", (nc, n_t, p)),
-                                               ("Ucmd", (nc, n_t, m)), ("U", (nc, n_t, m)),
-                                               ("D", (nc, n_t, m)), ("F", (nc, n_t)),
-                                               ("O", (nc, n_t, P["Co"].shape[1])),
-                                               ("En", (nc, n_t)))}
+    out = {
+        k: np.full(s, np.nan)
+        for k, s in (
+            ("X", (nc, n_t, n)),
+            ("Y", (nc, n_t, p)),
+            ("Ucmd", (nc, n_t, m)),
+            ("U", (nc, n_t, m)),
+            ("D", (nc, n_t, m)),
+            ("F", (nc, n_t)),
+            ("O", (nc, n_t, P["Co"].shape[1])),
+            ("En", (nc, n_t)),
+        )
+    }
     out["stop"] = np.full(nc, -1)
     for c in range(nc):
         if has_force:
@@ -133,8 +194,10 @@ def reference_loop(prob):
                 r = cr @ x
                 return -c1 * np.tanh(r / eps) - c2 * r
         else:
+
             def N(x):
                 return 0.0
+
         E, P1u = pick(P["E"], c), pick(P["P1u"], c)
         Cm, Dm, Dmf, sens = (pick(P[k], c) for k in ("Cm", "Dm", "Dmf", "sensor"))
         act, dstd = pick(P["act"], c), pick(P["dist_std"], c)
@@ -155,8 +218,7 @@ def reference_loop(prob):
             y = np.clip(y, -sens[:, 3], sens[:, 3])
             if P["fir_src"] >= 0:
                 src = y[P["fir_src"]]
-                hist = np.full(P["fir_w"].size, src) if hist is None else \
-                    np.append(hist[1:], src)
+                hist = np.full(P["fir_w"].size, src) if hist is None else np.append(hist[1:], src)
                 y[P["fir_dst"]] = P["fir_w"] @ hist
             e = y - P["y_ref"][k, 0 if P["y_ref"].shape[1] == 1 else c]
             if k == 0 and P["K0"].shape[0] > 0:
@@ -191,8 +253,9 @@ def assert_matches(prob, rtol=1e-12):
     for key in ("X", "Y", "Ucmd", "U", "D", "F", "O", "En"):
         scale = max(np.nanmax(np.abs(ref[key])), 1e-300)
         valid = ~np.isnan(ref[key])
-        np.testing.assert_allclose(got[key][valid], ref[key][valid], rtol=0,
-                                   atol=rtol * scale, err_msg=key)
+        np.testing.assert_allclose(
+            got[key][valid], ref[key][valid], rtol=0, atol=rtol * scale, err_msg=key
+        )
     return got, ref
 
 
@@ -201,8 +264,21 @@ def test_every_feature_on_matches_numpy_reference():
     assert (got["stop"] == -1).all()
 
 
-FEATURES = ("force", "impulses", "quantum", "noise", "bias", "saturation", "fir", "law_state",
-            "k0", "actuator", "disturbance", "per_case", "scheduled")
+FEATURES = (
+    "force",
+    "impulses",
+    "quantum",
+    "noise",
+    "bias",
+    "saturation",
+    "fir",
+    "law_state",
+    "k0",
+    "actuator",
+    "disturbance",
+    "per_case",
+    "scheduled",
+)
 
 
 @pytest.mark.parametrize("feature", FEATURES)
@@ -225,7 +301,7 @@ def test_block_diagonal_propagation_equals_dense_block_matrix():
     Eb = np.zeros_like(E)
     rows = np.empty((n, 2))
     for i in range(0, n, 2):
-        Eb[i:i + 2, i:i + 2] = rows[i:i + 2] = E[i:i + 2, i:i + 2]
+        Eb[i : i + 2, i : i + 2] = rows[i : i + 2] = E[i : i + 2, i : i + 2]
     a = run_kernel(dict(prob, E=Eb[None]))
     b = run_kernel(dict(prob, E=rows[None], block_diagonal=True))
     for key in ("X", "Y", "Ucmd"):
@@ -238,8 +314,9 @@ def test_exact_zoh_step_of_linear_plant():
     n, m, dt, n_t = 3, 1, 0.1, 6
     A = rng.normal(size=(n, n)) - np.eye(n)
     B = rng.normal(size=(n, m))
-    prob = make_problem(n_cases=1, n=n, m=m, p=1, n_t=n_t, dt=dt, substeps=3, **{
-        f: False for f in FEATURES})
+    prob = make_problem(
+        n_cases=1, n=n, m=m, p=1, n_t=n_t, dt=dt, substeps=3, **{f: False for f in FEATURES}
+    )
     E, P1, _ = phi_products(A, dt / 3, B)
     prob.update(E=E[None], P1u=P1[None], Dk=np.zeros((1, 1, m, 1)))
     got = run_kernel(prob)
@@ -275,9 +352,16 @@ def test_noise_reproducible_per_case():
     prob = make_problem(seed=5, n_cases=4, per_case=False)
     batch = run_kernel(prob, parallel=True)
     c = 2
-    alone = {k: (v[:, c:c + 1] if k in ("Ak", "Bk", "Ck", "Dk", "y_ref", "u_ff", "imp_dx")
-                 else v[c:c + 1] if k in ("x0", "K0", "noise") else v)
-             for k, v in prob.items()}
+    alone = {
+        k: (
+            v[:, c : c + 1]
+            if k in ("Ak", "Bk", "Ck", "Dk", "y_ref", "u_ff", "imp_dx")
+            else v[c : c + 1]
+            if k in ("x0", "K0", "noise")
+            else v
+        )
+        for k, v in prob.items()
+    }
     single = run_kernel(alone)
     for key in ("X", "Y", "Ucmd", "U", "D", "F"):
         np.testing.assert_array_equal(single[key][0], batch[key][c], err_msg=key)

@@ -17,9 +17,11 @@ def test_a_batch_maneuver_fits_in_150_kB_per_case(tamu_case):
     references) and the loop's 32-sample buffer of states; measured 147 kB. The estimate of
     check_resources counts the recorded histories and the buffer."""
     model, n = tamu_case.model(), 200
-    law = tamu_case.law_ii(to_si("3000 ozf*in/rad", "N*m/rad"),
-                           to_si("800 ozf*in*s/rad", "N*m*s/rad"),
-                           alpha=np.linspace(0.05, 0.2, n))
+    law = tamu_case.law_ii(
+        to_si("3000 ozf*in/rad", "N*m/rad"),
+        to_si("800 ozf*in*s/rad", "N*m*s/rad"),
+        alpha=np.linspace(0.05, 0.2, n),
+    )
     cfg = tamu_case.sim_config(15.0)
     peaks = {}
     for compiled in (False, True):

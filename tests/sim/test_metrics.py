@@ -38,8 +38,14 @@ def test_channel_metrics_of_a_three_axis_run():
     torque[0, 2, 1] = 4.0
     gap = np.linspace(1.0, -2.0, 11)[None]
     metrics, units = channel_metrics(
-        {"attitude": beta, "torque": torque, "gap": gap}, {"torque": "N*m", "gap": "m"},
-        ["attitude", "gap"], ["torque"], t, np.array([[1.0, 0, 0, 0]]), np.radians(0.5))
+        {"attitude": beta, "torque": torque, "gap": gap},
+        {"torque": "N*m", "gap": "m"},
+        ["attitude", "gap"],
+        ["torque"],
+        t,
+        np.array([[1.0, 0, 0, 0]]),
+        np.radians(0.5),
+    )
     assert metrics["peak_torque"][0] == 5.0 and units["peak_torque"] == "N*m"
     np.testing.assert_allclose(metrics["rms_torque"][0], np.sqrt((11 * 9 + 16) / 11))
     assert metrics["peak_gap"][0] == 2.0 and metrics["final_gap"][0] == -2.0

@@ -56,7 +56,7 @@ def test_a_case_alone_equals_the_case_in_the_batch_bit_for_bit(tamu_case, runs):
     plant, cfg, lean, _ = runs
     for i in (0, N // 2, N - 1):
         law = tamu_case.law_ii(G1, G2, alpha=ALPHA[i], u_max=U_MAX[i])
-        alone = simulate(plant, law, cfg, n_cases=1, seeds=SEEDS[i:i + 1], metrics_only=True)
+        alone = simulate(plant, law, cfg, n_cases=1, seeds=SEEDS[i : i + 1], metrics_only=True)
         assert alone.dataset.attrs["propagation"] == "modal"
         for name, value in lean.metrics.items():
             assert np.array_equal(alone.metrics[name][0], value[i], equal_nan=True), name
@@ -80,11 +80,12 @@ def test_the_fast_path_equals_the_general_dense_path(tamu_case, runs):
     steps = dense.dataset.sizes["time"] * dense.dataset.attrs["substeps"]
     tol = steps * np.linalg.cond(T) * EPS
     assert tol < 1e-8  # the bound is meaningful: far below the metrics' resolution
-    scale = {"overshoot_deg": np.degrees(np.abs(dense.dataset["theta"].values).max()),
-             "peak_rate_error_deg_s": np.degrees(np.abs(dense.dataset["theta_dot"].values)
-                                                 .max()),
-             "residual_energy_J": 2 * np.abs(dense.dataset["energy"].values).max(),
-             "residual_energy_at_T_J": 2 * np.abs(dense.dataset["energy"].values).max()}
+    scale = {
+        "overshoot_deg": np.degrees(np.abs(dense.dataset["theta"].values).max()),
+        "peak_rate_error_deg_s": np.degrees(np.abs(dense.dataset["theta_dot"].values).max()),
+        "residual_energy_J": 2 * np.abs(dense.dataset["energy"].values).max(),
+        "residual_energy_at_T_J": 2 * np.abs(dense.dataset["energy"].values).max(),
+    }
     for name, value in dense.metrics.items():
         if name == "settling_time_s":
             assert np.array_equal(lean.metrics[name], value, equal_nan=True)

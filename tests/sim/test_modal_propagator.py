@@ -31,13 +31,16 @@ def rel(a, b):
 
 
 # underdamped, critically damped (exactly and within 1e-9), overdamped; ω = 0 is rigid
-BLOCKS = [(0.0, 0.0)] + [(w, z) for w in (1e-3, 0.3, 8.0, 75.0, 1000.0)
-                         for z in (0.0, 0.005, 0.5, 1.0, 1 + 1e-9, 1.001, 3.0, 50.0)]
+BLOCKS = [(0.0, 0.0)] + [
+    (w, z)
+    for w in (1e-3, 0.3, 8.0, 75.0, 1000.0)
+    for z in (0.0, 0.005, 0.5, 1.0, 1 + 1e-9, 1.001, 3.0, 50.0)
+]
 
 
 @pytest.mark.parametrize(("omega", "zeta"), BLOCKS)
 def test_block_exponential_and_input_integrals_equal_expm(omega, zeta):
-    A = np.array([[0.0, 1.0], [-omega**2, -2 * zeta * omega]])
+    A = np.array([[0.0, 1.0], [-(omega**2), -2 * zeta * omega]])
     E, P1, P2 = block_propagators([omega], [zeta], H)
     E_ref, P1_ref, P2_ref = phi_products(A, H, np.eye(2), 2)
     assert rel(E[0], E_ref) < 1e-12
@@ -52,7 +55,7 @@ def test_modal_plant_step_equals_full_exponential_with_force():
     n = 2 * omega.size
     A = np.zeros((n, n))
     for i, (w, z) in enumerate(zip(omega, zeta)):
-        A[2 * i:2 * i + 2, 2 * i:2 * i + 2] = [[0, 1], [-w * w, -2 * z * w]]
+        A[2 * i : 2 * i + 2, 2 * i : 2 * i + 2] = [[0, 1], [-w * w, -2 * z * w]]
     B, Bf = rng.normal(size=(n, 1)), rng.normal(size=(n, 1))
     modal = ModalPropagator.build(omega, zeta, B, H, substeps=3, Bf=Bf)
     dense = ExponentialStepper.build(A, B[:, 0], Bf, H, substeps=3)
@@ -95,17 +98,21 @@ def test_hub_appendage_in_modal_coordinates_equals_full_expm(n_modes):
     prop = ModalPropagator.build(omega, zeta, Tinv @ Bu, H)
     rng = np.random.default_rng(1)
     x, w = rng.normal(size=(3, A.shape[0])), rng.normal(size=(3, 1))
-    np.testing.assert_allclose(prop.step(x @ Tinv.T, w) @ T.T,
-                               x @ Phi_modal.T + w @ Gam_modal[None], rtol=1e-12,
-                               atol=1e-12 * np.abs(x @ Phi_modal.T).max())
+    np.testing.assert_allclose(
+        prop.step(x @ Tinv.T, w) @ T.T,
+        x @ Phi_modal.T + w @ Gam_modal[None],
+        rtol=1e-12,
+        atol=1e-12 * np.abs(x @ Phi_modal.T).max(),
+    )
 
 
 def test_kernel_in_modal_coordinates_equals_kernel_in_physical_coordinates():
     plant = tamu(n_modes=3).model()
     A, Bu, Bf = plant.state_space
     n, ndof = A.shape[0], plant.ndof
-    T, Tinv, omega, zeta = modal_coordinates(plant.mass_matrix, plant.stiffness_matrix,
-                                             plant.damping_matrix)
+    T, Tinv, omega, zeta = modal_coordinates(
+        plant.mass_matrix, plant.stiffness_matrix, plant.damping_matrix
+    )
     n_t, substeps = 200, 2
     rate = np.zeros(n)
     rate[ndof] = 1.0
@@ -114,33 +121,95 @@ def test_kernel_in_modal_coordinates_equals_kernel_in_physical_coordinates():
     Cm = np.zeros((1, 2, n))
     Cm[0, 0, 0] = Cm[0, 1, ndof] = 1.0
     common = dict(
-        fric=np.array([[0.1, 0.001, 1e-3]]), substeps=substeps,
-        imp_k=np.zeros(0, np.int64), imp_dx=np.zeros((0, 1, n)), Dm=np.zeros((1, 2, 1)),
-        Dmf=np.zeros((1, 2)), sensor=np.tile([0.0, 0.0, 0.0, np.inf], (1, 2, 1)),
-        sensor_slot=np.array([-1, -1]), fir_src=-1, fir_dst=0, fir_w=np.zeros(0),
-        Ak=np.zeros((1, 1, 0, 0)), Bk=np.zeros((1, 1, 0, 2)), Ck=np.zeros((1, 1, 1, 0)),
-        Dk=np.array([[[[-20.0, -8.0]]]]), y_ref=np.tile([0.7, 0.0], (n_t, 1, 1)),
-        u_ff=np.zeros((n_t, 1, 1)), K0=np.zeros((0, 0, 2)), act=np.array([[[2.8, 1.0]]]),
-        dist_std=np.zeros((1, 1)), dist_slot=np.array([-1]), noise=np.zeros((1, n_t, 1)),
-        bound=1e12)
+        fric=np.array([[0.1, 0.001, 1e-3]]),
+        substeps=substeps,
+        imp_k=np.zeros(0, np.int64),
+        imp_dx=np.zeros((0, 1, n)),
+        Dm=np.zeros((1, 2, 1)),
+        Dmf=np.zeros((1, 2)),
+        sensor=np.tile([0.0, 0.0, 0.0, np.inf], (1, 2, 1)),
+        sensor_slot=np.array([-1, -1]),
+        fir_src=-1,
+        fir_dst=0,
+        fir_w=np.zeros(0),
+        Ak=np.zeros((1, 1, 0, 0)),
+        Bk=np.zeros((1, 1, 0, 2)),
+        Ck=np.zeros((1, 1, 1, 0)),
+        Dk=np.array([[[[-20.0, -8.0]]]]),
+        y_ref=np.tile([0.7, 0.0], (n_t, 1, 1)),
+        u_ff=np.zeros((n_t, 1, 1)),
+        K0=np.zeros((0, 0, 2)),
+        act=np.array([[[2.8, 1.0]]]),
+        dist_std=np.zeros((1, 1)),
+        dist_slot=np.array([-1]),
+        noise=np.zeros((1, n_t, 1)),
+        bound=1e12,
+    )
 
     def run(x0, E, block, P1u, P1f, P2f, Cr, Cm_):
         rec = list(allocate_records(n_t, 1, n, 1, 2, True))
         c = common
-        closed_loop(x0, E, block, P1u, P1f, P2f, Cr, c["fric"], c["substeps"], c["imp_k"],
-                    c["imp_dx"], Cm_, c["Dm"], c["Dmf"], c["sensor"], c["sensor_slot"],
-                    c["fir_src"], c["fir_dst"], c["fir_w"], c["Ak"], c["Bk"], c["Ck"], c["Dk"],
-                    c["y_ref"], c["u_ff"], c["K0"], c["act"], c["dist_std"], c["dist_slot"],
-                    c["noise"], c["bound"], np.zeros((1, 0, n)), np.zeros((1, 0, 1)),
-                    np.zeros((1, 0)), np.zeros((0, n, n)), *rec)
+        closed_loop(
+            x0,
+            E,
+            block,
+            P1u,
+            P1f,
+            P2f,
+            Cr,
+            c["fric"],
+            c["substeps"],
+            c["imp_k"],
+            c["imp_dx"],
+            Cm_,
+            c["Dm"],
+            c["Dmf"],
+            c["sensor"],
+            c["sensor_slot"],
+            c["fir_src"],
+            c["fir_dst"],
+            c["fir_w"],
+            c["Ak"],
+            c["Bk"],
+            c["Ck"],
+            c["Dk"],
+            c["y_ref"],
+            c["u_ff"],
+            c["K0"],
+            c["act"],
+            c["dist_std"],
+            c["dist_slot"],
+            c["noise"],
+            c["bound"],
+            np.zeros((1, 0, n)),
+            np.zeros((1, 0, 1)),
+            np.zeros((1, 0)),
+            np.zeros((0, n, n)),
+            *rec,
+        )
         return rec
 
     x0 = np.zeros((1, n))
-    phys = run(x0, dense.Et.T[None].copy(), False,
-               dense.P1u.T[None].copy(), dense.P1f.copy(), dense.P2f.copy(), rate[None],
-               Cm)
-    mod = run(x0 @ Tinv.T, modal.E[None], True, modal.P1u[None], modal.P1f.T.copy(),
-              modal.P2f.T.copy(), (rate @ T)[None], Cm @ T)
+    phys = run(
+        x0,
+        dense.Et.T[None].copy(),
+        False,
+        dense.P1u.T[None].copy(),
+        dense.P1f.copy(),
+        dense.P2f.copy(),
+        rate[None],
+        Cm,
+    )
+    mod = run(
+        x0 @ Tinv.T,
+        modal.E[None],
+        True,
+        modal.P1u[None],
+        modal.P1f.T.copy(),
+        modal.P2f.T.copy(),
+        (rate @ T)[None],
+        Cm @ T,
+    )
     cond = np.linalg.cond(T)
     # friction makes the loop sensitive: bound by cond(T) eps amplified over the run
     assert rel(mod[0][0] @ T.T, phys[0][0]) < 1e3 * cond * np.finfo(float).eps

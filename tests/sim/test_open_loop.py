@@ -7,8 +7,7 @@ from scipy.linalg import expm
 from flexsat.cases import tamu
 from flexsat.maneuvers import PseudoSquare, SmoothBangBang
 from flexsat.sim import SimConfig, simulate
-from flexsat.sim.open_loop import (open_loop_response, piecewise_polynomial_response,
-                                   torque_pieces)
+from flexsat.sim.open_loop import open_loop_response, piecewise_polynomial_response, torque_pieces
 
 
 @pytest.fixture(scope="module")

@@ -4,15 +4,13 @@ TAMU run reproduced by an independent discrete recursion."""
 
 import numpy as np
 import pytest
+from cart_plants import TwoCarts
 from scipy.linalg import expm
 
 from flexsat.control.base import Controller
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.sim import (ChannelActuator, ChannelDisturbance, ChannelSensor, SimConfig,
-                         simulate)
+from flexsat.sim import ChannelActuator, ChannelDisturbance, ChannelSensor, SimConfig, simulate
 from flexsat.units import to_si
-
-from cart_plants import TwoCarts
 
 
 class GapLaw(Controller):
@@ -50,30 +48,56 @@ def test_the_law_channels_are_checked_against_the_plant_before_the_run():
         writes = ("torque",)
 
     cfg = SimConfig(duration=1.0)
-    with pytest.raises(ValueError, match=r"^theta: ReadsTheta reads a measurement the plant "
-                                         r"does not have"):
+    with pytest.raises(
+        ValueError,
+        match=r"^theta: ReadsTheta reads a measurement the plant "
+        r"does not have",
+    ):
         simulate(TwoCarts(), ReadsTheta(), cfg)
-    with pytest.raises(ValueError, match=r"^torque: WritesTorque writes an unknown input "
-                                         r"channel"):
+    with pytest.raises(
+        ValueError,
+        match=r"^torque: WritesTorque writes an unknown input "
+        r"channel",
+    ):
         simulate(TwoCarts(), WritesTorque(), cfg)
-    with pytest.raises(ValueError, match=r"^push: GapLaw returned a command of shape \(1, 3\), "
-                                         r"expected \(1, 2\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"^push: GapLaw returned a command of shape \(1, 3\), "
+        r"expected \(1, 2\)",
+    ):
         simulate(TwoCarts(), GapLaw(shape=(1, 3)), cfg)
 
 
 def test_channel_pieces_on_missing_channels_are_refused_naming_them():
     law = GapLaw()
     with pytest.raises(ValueError, match=r"^speed: TwoCarts has no output channel 'speed'"):
-        simulate(TwoCarts(), law, SimConfig(duration=1.0,
-                                            channel_sensors={"speed": ChannelSensor()}))
-    with pytest.raises(ValueError, match=r"^torque: TwoCarts has no input channel 'torque'.*"
-                                         r"config.friction, random_torque, impulses"):
+        simulate(
+            TwoCarts(), law, SimConfig(duration=1.0, channel_sensors={"speed": ChannelSensor()})
+        )
+    with pytest.raises(
+        ValueError,
+        match=r"^torque: TwoCarts has no input channel 'torque'.*"
+        r"config.friction, random_torque, impulses",
+    ):
         from flexsat.sim import RandomTorque
+
         simulate(TwoCarts(), law, SimConfig(duration=1.0, random_torque=RandomTorque(1.0)))
-    with pytest.raises(ValueError, match=r"^position: its sensor noise needs a noise stream, "
-                                           r"but TwoCarts.noise_channels \(gap\) has none"):
-        simulate(TwoCarts(), law, SimConfig(duration=1.0, channel_sensors={
-            "gap": ChannelSensor(noise=0.1), "position": ChannelSensor(noise=0.1)}))
+    with pytest.raises(
+        ValueError,
+        match=r"^position: its sensor noise needs a noise stream, "
+        r"but TwoCarts.noise_channels \(gap\) has none",
+    ):
+        simulate(
+            TwoCarts(),
+            law,
+            SimConfig(
+                duration=1.0,
+                channel_sensors={
+                    "gap": ChannelSensor(noise=0.1),
+                    "position": ChannelSensor(noise=0.1),
+                },
+            ),
+        )
 
 
 def test_sensor_and_actuator_per_channel():
@@ -81,10 +105,11 @@ def test_sensor_and_actuator_per_channel():
     saturated, scaled and rate limited."""
     law = GapLaw(100.0)
     x0 = np.array([0.0, 0.1, 0.0, 0.0])
-    cfg = SimConfig(duration=1.0, channel_sensors={
-        "gap": ChannelSensor(bias="1 mm", quantum="2 mm", range="50 mm")},
-        channel_actuators={"push": ChannelActuator(saturation=3.0, rate_limit="75 N/s",
-                                                   scale=0.5)})
+    cfg = SimConfig(
+        duration=1.0,
+        channel_sensors={"gap": ChannelSensor(bias="1 mm", quantum="2 mm", range="50 mm")},
+        channel_actuators={"push": ChannelActuator(saturation=3.0, rate_limit="75 N/s", scale=0.5)},
+    )
     ds = simulate(TwoCarts(), law, cfg, initial_state=x0).dataset
     measured = np.clip(0.002 * np.round((ds.gap.values[0] + 0.001) / 0.002), -0.05, 0.05)
     cmd = ds.push_command.values[0]
@@ -95,8 +120,12 @@ def test_sensor_and_actuator_per_channel():
 
 
 def test_impulse_on_an_input_channel_is_b_times_j():
-    cfg = SimConfig(duration=0.5, channel_disturbances={
-        "push": ChannelDisturbance(impulse_times=(0.0,), impulses=(0.0, 2.0))})
+    cfg = SimConfig(
+        duration=0.5,
+        channel_disturbances={
+            "push": ChannelDisturbance(impulse_times=(0.0,), impulses=(0.0, 2.0))
+        },
+    )
     with pytest.raises(ValueError, match=r"^disturbances\[push\].impulses: 2 values for 1"):
         simulate(TwoCarts(), GapLaw(0.0), cfg)
 
@@ -149,8 +178,7 @@ class ConstantRate(Controller):
 def test_a_plant_with_its_own_integrator_is_stepped_and_normalised():
     """θ = 0.5 t exactly (RK4 on a rotation loses only ~h⁵ per step, and the normalisation
     removes the norm drift); ‖x‖ = 1 to round-off."""
-    r = simulate(Spinner(), ConstantRate(), SimConfig(duration=2.0, substeps=3),
-                 record_states=True)
+    r = simulate(Spinner(), ConstantRate(), SimConfig(duration=2.0, substeps=3), record_states=True)
     t = r.dataset.time.values
     assert np.allclose(r.dataset.angle.values[0], 0.5 * t, rtol=0, atol=1e-12)
     assert np.abs(np.linalg.norm(r.dataset.state.values[0], axis=-1) - 1).max() < 1e-15
@@ -166,8 +194,7 @@ def test_linear_tamu_run_equals_an_independent_discrete_recursion(tamu_case):
     from flexsat.control import LyapunovRegulator
 
     model = tamu_case.model()
-    g1, g2, g3 = (to_si("3000 ozf*in/rad", "N*m/rad"), to_si("800 ozf*in*s/rad", "N*m*s/rad"),
-                  0.5)
+    g1, g2, g3 = (to_si("3000 ozf*in/rad", "N*m/rad"), to_si("800 ozf*in*s/rad", "N*m*s/rad"), 0.5)
     law = LyapunovRegulator(g1, g2, g3, target=0.5)
     cfg = SimConfig(duration=8.0)
     ds = simulate(model, law, cfg, record_states=True).dataset
@@ -244,9 +271,12 @@ def test_a_rigid_spacecraft_slews_under_its_own_integrator():
     plant = RigidSpacecraft(np.diag([100.0, 120.0, 80.0]))
     axis, angle = np.array([1.0, 2.0, 2.0]) / 3, np.radians(30.0)
     x0 = np.concatenate([[np.cos(angle / 2)], np.sin(angle / 2) * axis, np.zeros(3)])
-    r = simulate(plant, QuaternionPD(Kp=20.0, Kd=100.0), SimConfig(duration=60.0,
-                                                                   control_rate=10.0),
-                 initial_state=x0)
+    r = simulate(
+        plant,
+        QuaternionPD(Kp=20.0, Kd=100.0),
+        SimConfig(duration=60.0, control_rate=10.0),
+        initial_state=x0,
+    )
     beta = r.dataset.attitude.values[0]
     assert np.abs(np.linalg.norm(beta, axis=-1) - 1).max() < 1e-14
     assert 2 * np.arccos(min(abs(beta[-1, 0]), 1.0)) < 2e-3
@@ -254,10 +284,14 @@ def test_a_rigid_spacecraft_slews_under_its_own_integrator():
 
 def test_non_finite_per_case_channel_parameters_are_refused_naming_the_channel():
     law = GapLaw()
-    cfg = SimConfig(duration=0.1, channel_actuators={
-        "push": ChannelActuator(saturation=[1.0, float("nan")])})
-    with pytest.raises(ValueError, match=r"^actuators\[push\].saturation: must be >= 0 \(inf for "
-                                         r"none\)"):
+    cfg = SimConfig(
+        duration=0.1, channel_actuators={"push": ChannelActuator(saturation=[1.0, float("nan")])}
+    )
+    with pytest.raises(
+        ValueError,
+        match=r"^actuators\[push\].saturation: must be >= 0 \(inf for "
+        r"none\)",
+    ):
         simulate(TwoCarts(), law, cfg, n_cases=2)
     cfg = SimConfig(duration=0.1, channel_sensors={"gap": ChannelSensor(bias=float("inf"))})
     with pytest.raises(ValueError, match=r"^sensors\[gap\].bias: must be finite"):

@@ -8,13 +8,18 @@ import json
 import numpy as np
 import pytest
 import xarray as xr
+from cart_plants import TwoCarts
 
 from flexsat.control.base import Controller
 from flexsat.dynamics.plant import Channel
-from flexsat.sim import (BearingFriction, ChannelDisturbance, ChannelSensor, SimConfig,
-                         SimResult, simulate)
-
-from cart_plants import TwoCarts
+from flexsat.sim import (
+    BearingFriction,
+    ChannelDisturbance,
+    ChannelSensor,
+    SimConfig,
+    SimResult,
+    simulate,
+)
 
 
 class Carts(TwoCarts):
@@ -22,8 +27,7 @@ class Carts(TwoCarts):
     ``speed``, the ``gap`` also kept as measured."""
 
     inputs = (Channel("push", "N", size=2), Channel("brake", "N"))
-    outputs = (Channel("position", "m", size=2), Channel("gap", "m"),
-               Channel("speed", "m/s"))
+    outputs = (Channel("position", "m", size=2), Channel("gap", "m"), Channel("speed", "m/s"))
     recorded_measurements = ("gap",)
     noise_channels = ("gap", "push")
 
@@ -49,11 +53,17 @@ X0 = np.array([[0.0, 0.1, 0.0, 0.0], [0.0, 0.2, 0.0, 0.0], [0.0, -0.1, 0.3, 0.0]
 
 @pytest.fixture(scope="module")
 def run():
-    cfg = SimConfig(duration="2 s", control_rate="50 Hz", channel_disturbances={
-        "push": ChannelDisturbance(random="10 mN"),
-        "brake": ChannelDisturbance(force=BearingFriction(viscous=0.5), force_output="speed",
-                                    force_name="drag")},
-        channel_sensors={"gap": ChannelSensor(noise="1 mm")})
+    cfg = SimConfig(
+        duration="2 s",
+        control_rate="50 Hz",
+        channel_disturbances={
+            "push": ChannelDisturbance(random="10 mN"),
+            "brake": ChannelDisturbance(
+                force=BearingFriction(viscous=0.5), force_output="speed", force_name="drag"
+            ),
+        },
+        channel_sensors={"gap": ChannelSensor(noise="1 mm")},
+    )
     return simulate(Carts(), SpreadLaw(), cfg, n_cases=3, initial_state=X0, record_states=True)
 
 
@@ -74,9 +84,18 @@ def test_dimensions_are_case_by_time_with_a_component_axis_for_vector_channels(r
 
 def test_every_history_carries_its_channels_unit(run):
     ds = run.dataset
-    expected = {"position": "m", "gap": "m", "gap_measured": "m", "push": "N",
-                "push_command": "N", "disturbance_push": "N", "brake": "N",
-                "brake_command": "N", "drag_brake": "N", "energy": "J"}
+    expected = {
+        "position": "m",
+        "gap": "m",
+        "gap_measured": "m",
+        "push": "N",
+        "push_command": "N",
+        "disturbance_push": "N",
+        "brake": "N",
+        "brake_command": "N",
+        "drag_brake": "N",
+        "energy": "J",
+    }
     for name, unit in expected.items():
         assert ds[name].attrs["units"] == unit, name
     assert ds.time.attrs["units"] == "s"
@@ -122,8 +141,7 @@ def test_commands_applied_inputs_disturbances_and_forces_are_recorded(run):
     np.testing.assert_array_equal(ds.push.values, ds.push_command.values)
     np.testing.assert_array_equal(ds.brake.values, 0.0)
     gm = ds.gap_measured.values
-    np.testing.assert_array_equal(ds.push_command.values,
-                                  np.stack([-0.5 * gm, 0.5 * gm], axis=-1))
+    np.testing.assert_array_equal(ds.push_command.values, np.stack([-0.5 * gm, 0.5 * gm], axis=-1))
     d = ds.disturbance_push.values
     assert abs(d.std() / 0.01 - 1) < 4 / np.sqrt(2 * d.size)
     np.testing.assert_array_equal(ds.drag_brake.values, -0.5 * ds.state.values[..., 2])
@@ -152,12 +170,15 @@ def test_a_long_run_is_recorded_across_chunks_like_a_short_one():
 # -- metrics records ---------------------------------------------------------------------------
 def test_metrics_records_turn_non_finite_values_into_none():
     ds = xr.Dataset(coords={"case": np.arange(3)})
-    r = SimResult(ds, {"settling_time_s": np.array([1.5, np.nan, np.inf]),
-                       "peak": np.array([1.0, 2.0, -3.0])})
+    r = SimResult(
+        ds, {"settling_time_s": np.array([1.5, np.nan, np.inf]), "peak": np.array([1.0, 2.0, -3.0])}
+    )
     rows = r.metrics_records(labels=["a", "b", "c"])
-    assert rows == [{"run": "a", "settling_time_s": 1.5, "peak": 1.0},
-                    {"run": "b", "settling_time_s": None, "peak": 2.0},
-                    {"run": "c", "settling_time_s": None, "peak": -3.0}]
+    assert rows == [
+        {"run": "a", "settling_time_s": 1.5, "peak": 1.0},
+        {"run": "b", "settling_time_s": None, "peak": 2.0},
+        {"run": "c", "settling_time_s": None, "peak": -3.0},
+    ]
     assert all(type(v) is float for v in (rows[0]["settling_time_s"], rows[2]["peak"]))
     assert r.metrics_records()[1] == {"settling_time_s": None, "peak": 2.0}
     json.dumps(rows, allow_nan=False)

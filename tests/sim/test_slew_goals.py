@@ -55,8 +55,9 @@ def test_peak_torques_perturbations_and_forces_are_reported():
     torque[0, 300, 1] = -3000.0
     forces = np.zeros((1, len(t), 7))
     forces[0, 500, 3] = 70.0
-    m, units = slew_goal_metrics(t, T, angles, target, closed, opened, torque=torque,
-                                 torque_nominal=nominal, forces=forces)
+    m, units = slew_goal_metrics(
+        t, T, angles, target, closed, opened, torque=torque, torque_nominal=nominal, forces=forces
+    )
     assert m["peak_torque_z_Nm"][0] == pytest.approx(12000.0, rel=1e-4)
     assert m["peak_torque_y_Nm"][0] == 3000.0
     assert m["peak_torque_perturbation_Nm"][0] == 3000.0
@@ -72,8 +73,7 @@ def test_angle_errors_wrap_around_a_full_turn():
 def test_a_record_too_short_or_a_zero_slew_is_refused():
     angles, closed, opened = _run(0.0, 0.05)
     with pytest.raises(ValueError, match=r"t: the record must span \[0, 12.5\] s"):
-        slew_goal_metrics(t[:1000], T, angles[:, :1000], target, closed[:, :1000],
-                          opened[:, :1000])
+        slew_goal_metrics(t[:1000], T, angles[:, :1000], target, closed[:, :1000], opened[:, :1000])
     with pytest.raises(ValueError, match="target: a slew of zero angle"):
         slew_goal_metrics(t, T, angles, np.zeros(3), closed, opened)
     with pytest.raises(ValueError, match="duration"):

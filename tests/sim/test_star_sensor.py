@@ -4,19 +4,19 @@ attitude's error has the covariance calibrated from the full identification pipe
 import numpy as np
 import pytest
 
+from flexsat.attitude.fit import rotation_error
+from flexsat.attitude.star_camera import StarCamera
+from flexsat.attitude.star_catalog import synthetic_sky
+from flexsat.attitude.star_tracker import ARCSEC, StarTracker, random_attitudes
 from flexsat.control.base import Controller
 from flexsat.dynamics.attitude import dcm_to_quaternion, quaternion_to_dcm
 from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
-from flexsat.identify.attitude_fit import rotation_error
-from flexsat.identify.star_camera import StarCamera
-from flexsat.identify.star_catalog import synthetic_sky
-from flexsat.identify.star_tracker import ARCSEC, StarTracker, random_attitudes
 from flexsat.sim import SimConfig, simulate
 from flexsat.sim.star_sensor import StarTrackerSensor
 
 
 def test_measured_attitude_errors_have_the_stated_covariance():
-    P = np.array([[4.0, 1.0, 0.0], [1.0, 2.0, 0.5], [0.0, 0.5, 9.0]]) * ARCSEC ** 2
+    P = np.array([[4.0, 1.0, 0.0], [1.0, 2.0, 0.5], [0.0, 0.5, 9.0]]) * ARCSEC**2
     s = StarTrackerSensor(covariance=P).bind("attitude", "")
     rng = np.random.default_rng(0)
     C = random_attitudes(20000, seed=1)
@@ -54,8 +54,9 @@ def test_star_tracker_on_the_rigid_body_calibrated_from_the_pipeline():
     plant = RigidSpacecraft(np.diag([100.0, 200.0, 300.0]))
     x0 = plant.state_from(euler123=[0.3, -0.2, 0.1], rate=[0.01, -0.02, 0.005])
     law = Recorder()
-    cfg = SimConfig(duration=20.0, control_rate=10.0, substeps=2,
-                    channel_sensors={"attitude": sensor})
+    cfg = SimConfig(
+        duration=20.0, control_rate=10.0, substeps=2, channel_sensors={"attitude": sensor}
+    )
     r = simulate(plant, law, cfg, n_cases=1, initial_state=x0, record_states=True)
     X = r.dataset["state"].values[0]
     meas = np.concatenate(law.seen)
@@ -65,21 +66,25 @@ def test_star_tracker_on_the_rigid_body_calibrated_from_the_pipeline():
     np.testing.assert_allclose(np.std(err, 0), sig, rtol=0.25)
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(covariance=np.eye(2)), "covariance: give a"),
-    (dict(covariance=[[1, 2, 0], [0, 1, 0], [0, 0, 1]]), "covariance: must be symmetric"),
-    (dict(covariance=-np.eye(3)), "positive semi-definite"),
-    (dict(covariance="-1 arcsec"), "covariance: give a"),
-    (dict(covariance="1 arcsec", identification_rate=0), "identification_rate"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(covariance=np.eye(2)), "covariance: give a"),
+        (dict(covariance=[[1, 2, 0], [0, 1, 0], [0, 0, 1]]), "covariance: must be symmetric"),
+        (dict(covariance=-np.eye(3)), "positive semi-definite"),
+        (dict(covariance="-1 arcsec"), "covariance: give a"),
+        (dict(covariance="1 arcsec", identification_rate=0), "identification_rate"),
+    ],
+)
 def test_bad_star_sensor_input(kwargs, match):
     with pytest.raises(ValueError, match=match):
         StarTrackerSensor(**kwargs)
 
 
 def test_star_sensor_only_on_the_attitude_channel():
-    with pytest.raises(ValueError, match="sensors\\[rate\\]: a star tracker measures the "
-                                         "attitude channel"):
+    with pytest.raises(
+        ValueError, match="sensors\\[rate\\]: a star tracker measures the attitude channel"
+    ):
         StarTrackerSensor(covariance="1 arcsec").bind("rate", "rad/s")
     s = StarTrackerSensor(covariance="1 arcsec")
     np.testing.assert_allclose(np.sqrt(np.diag(s.covariance)), ARCSEC, rtol=1e-12)

@@ -43,8 +43,7 @@ def test_torque_free_rigid_body_conserves_momentum_and_energy_and_is_euler_poins
     assert np.abs(T - T[0]).max() <= 1e-10 * T[0]
     assert np.abs(np.linalg.norm(X[:, :4], axis=1) - 1).max() <= 1e-12
     t = r.dataset.time.values
-    np.testing.assert_allclose(X[:, 4:], euler_poinsot_rates(np.diag(J), w0, t), rtol=0,
-                               atol=1e-8)
+    np.testing.assert_allclose(X[:, 4:], euler_poinsot_rates(np.diag(J), w0, t), rtol=0, atol=1e-8)
 
 
 def test_flexible_tumble_conserves_angular_momentum():
@@ -88,5 +87,9 @@ def test_law_reading_a_channel_the_plant_lacks_is_refused_naming_it():
         reads = ("theta",)
 
     with pytest.raises(ValueError, match="theta"):
-        simulate(RigidSpacecraft(np.diag([1.0, 2.0, 2.5])), ReadsTheta(),
-                 SimConfig(duration=1.0), n_cases=1)
+        simulate(
+            RigidSpacecraft(np.diag([1.0, 2.0, 2.5])),
+            ReadsTheta(),
+            SimConfig(duration=1.0),
+            n_cases=1,
+        )

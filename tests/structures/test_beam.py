@@ -52,21 +52,36 @@ def _root(f, a, b):
 def _cf_roots(k):
     """Roots of 1 + cos z cosh z = 0 as cos z + sech z = 0, one per ((i-1)π, iπ), brentq."""
     f = lambda z: math.cos(z) + 1.0 / math.cosh(z)  # noqa: E731
-    return np.array(
-        [_root(f, (i - 1) * math.pi + 1e-9, i * math.pi) for i in range(1, k + 1)]
-    )
+    return np.array([_root(f, (i - 1) * math.pi + 1e-9, i * math.pi) for i in range(1, k + 1)])
 
 
 def _hermite_fem(L, EI, rho, n_el):
     """Full (unconstrained) Hermite-cubic stiffness and consistent mass, dofs (w_j, w'_j)."""
     h = L / n_el
-    ke = EI / h**3 * np.array(
-        [[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h],
-         [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]]
+    ke = (
+        EI
+        / h**3
+        * np.array(
+            [
+                [12, 6 * h, -12, 6 * h],
+                [6 * h, 4 * h * h, -6 * h, 2 * h * h],
+                [-12, -6 * h, 12, -6 * h],
+                [6 * h, 2 * h * h, -6 * h, 4 * h * h],
+            ]
+        )
     )
-    me = rho * h / 420 * np.array(
-        [[156, 22 * h, 54, -13 * h], [22 * h, 4 * h * h, 13 * h, -3 * h * h],
-         [54, 13 * h, 156, -22 * h], [-13 * h, -3 * h * h, -22 * h, 4 * h * h]]
+    me = (
+        rho
+        * h
+        / 420
+        * np.array(
+            [
+                [156, 22 * h, 54, -13 * h],
+                [22 * h, 4 * h * h, 13 * h, -3 * h * h],
+                [54, 13 * h, 156, -22 * h],
+                [-13 * h, -3 * h * h, -22 * h, 4 * h * h],
+            ]
+        )
     )
     ndof = 2 * (n_el + 1)
     K, M = np.zeros((ndof, ndof)), np.zeros((ndof, ndof))
@@ -259,11 +274,13 @@ def test_modes_satisfy_ode_and_boundary_conditions_high_modes():
     np.testing.assert_allclose(
         (EI0 * d[2][-1] - J0 * w**2 * d[1][-1])
         / (EI0 * beta**2 * scale * (1 + J0 * beta**3 / RHO0)),
-        0, atol=1e-11,
+        0,
+        atol=1e-11,
     )
     np.testing.assert_allclose(
         (EI0 * d[3][-1] + M0 * w**2 * d[0][-1]) / (EI0 * beta**3 * scale * (1 + M0 * beta / RHO0)),
-        0, atol=1e-11,
+        0,
+        atol=1e-11,
     )
     # mass normalisation still holds for the highest modes (quadrature as above)
     s, wq = np.polynomial.legendre.leggauss(400)
@@ -327,8 +344,16 @@ def test_tamu_realistic_numbers():
     assert abs(f[0] - 0.75) < 0.015
     w = hub_free_frequencies(b, TAMU_HUB_RADIUS, TAMU_HUB_INERTIA, 4, 5)
     fem = lambda N: _fem_hub(  # noqa: E731
-        TAMU["length"], TAMU["EI"], TAMU["rho"], TAMU["tip_mass"], 0.0, TAMU_HUB_RADIUS,
-        TAMU_HUB_INERTIA, 4, N, 3,
+        TAMU["length"],
+        TAMU["EI"],
+        TAMU["rho"],
+        TAMU["tip_mass"],
+        0.0,
+        TAMU_HUB_RADIUS,
+        TAMU_HUB_INERTIA,
+        4,
+        N,
+        3,
     )
     # the 3rd hub-free TAMU mode has βL ≈ 11.6, where the extrapolation leaves 2.1e-9 -> 5e-9
     np.testing.assert_allclose(w[:3], _richardson(fem), rtol=5e-9)
@@ -338,9 +363,18 @@ def test_tamu_realistic_numbers():
 # input validation
 @pytest.mark.parametrize(
     "field,value",
-    [("length", 0.0), ("length", -1.0), ("EI", 0.0), ("EI", float("nan")), ("rho", -2.0),
-     ("rho", float("inf")), ("tip_mass", -1e-3), ("tip_mass", float("nan")), ("tip_inertia", -1.0),
-     ("length", "1 m")],
+    [
+        ("length", 0.0),
+        ("length", -1.0),
+        ("EI", 0.0),
+        ("EI", float("nan")),
+        ("rho", -2.0),
+        ("rho", float("inf")),
+        ("tip_mass", -1e-3),
+        ("tip_mass", float("nan")),
+        ("tip_inertia", -1.0),
+        ("length", "1 m"),
+    ],
 )
 def test_bad_beam_input_names_field(field, value):
     kw = dict(length=1.0, EI=1.0, rho=1.0, tip_mass=0.0, tip_inertia=0.0)
@@ -361,9 +395,14 @@ def test_bad_k_names_field(k):
 
 @pytest.mark.parametrize(
     "field,args",
-    [("hub_radius", (-0.1, 1.0, 2)), ("hub_radius", (float("nan"), 1.0, 2)),
-     ("hub_inertia", (0.1, 0.0, 2)), ("hub_inertia", (0.1, -1.0, 2)),
-     ("n_appendages", (0.1, 1.0, 0)), ("n_appendages", (0.1, 1.0, 1.5))],
+    [
+        ("hub_radius", (-0.1, 1.0, 2)),
+        ("hub_radius", (float("nan"), 1.0, 2)),
+        ("hub_inertia", (0.1, 0.0, 2)),
+        ("hub_inertia", (0.1, -1.0, 2)),
+        ("n_appendages", (0.1, 1.0, 0)),
+        ("n_appendages", (0.1, 1.0, 1.5)),
+    ],
 )
 def test_bad_hub_input_names_field(field, args):
     b = TipMassCantilever(1.0, 1.0, 1.0)
@@ -388,8 +427,7 @@ def test_the_roots_depend_on_the_tip_ratios_alone_and_are_shared_read_only():
     # the same ratios gets the cached roots themselves (the Monte Carlo case), equal to a fresh
     # search bit for bit, and nobody can overwrite them
     a = beam_mod.TipMassCantilever(length=1.2, EI=9.3, rho=0.5, tip_mass=0.3, tip_inertia=1e-3)
-    b = beam_mod.TipMassCantilever(length=1.2, EI=2 * 9.3, rho=0.5, tip_mass=0.3,
-                                   tip_inertia=1e-3)
+    b = beam_mod.TipMassCantilever(length=1.2, EI=2 * 9.3, rho=0.5, tip_mass=0.3, tip_inertia=1e-3)
     assert a._beta_L(6) is b._beta_L(6)
     fresh = beam_mod._tip_loaded_roots.__wrapped__(a._mu, a._iota, 6)
     np.testing.assert_array_equal(a._beta_L(6), fresh)

@@ -122,10 +122,25 @@ def test_frame_lumped_mass_hrz():
 # independent derivation of the x-y bending blocks: Gauss quadrature of Hermite cubics
 def hermite(xi, L):
     """Shape functions and their 1st and 2nd x-derivatives, dofs (v1, theta1, v2, theta2)."""
-    N = np.array([1 - 3 * xi**2 + 2 * xi**3, L * (xi - 2 * xi**2 + xi**3), 3 * xi**2 - 2 * xi**3,
-                  L * (-(xi**2) + xi**3)])
-    dN = np.array([-6 * xi + 6 * xi**2, L * (1 - 4 * xi + 3 * xi**2), 6 * xi - 6 * xi**2,
-                   L * (-2 * xi + 3 * xi**2)]) / L
+    N = np.array(
+        [
+            1 - 3 * xi**2 + 2 * xi**3,
+            L * (xi - 2 * xi**2 + xi**3),
+            3 * xi**2 - 2 * xi**3,
+            L * (-(xi**2) + xi**3),
+        ]
+    )
+    dN = (
+        np.array(
+            [
+                -6 * xi + 6 * xi**2,
+                L * (1 - 4 * xi + 3 * xi**2),
+                6 * xi - 6 * xi**2,
+                L * (-2 * xi + 3 * xi**2),
+            ]
+        )
+        / L
+    )
     d2N = np.array([-6 + 12 * xi, L * (-4 + 6 * xi), 6 - 12 * xi, L * (-2 + 6 * xi)]) / L**2
     return N, dN, d2N
 
@@ -183,12 +198,24 @@ def test_beam2d_equals_in_plane_block_of_frame(lumped):
     K3, M3, G3, L = frame_global(x1, x2, v, N=500.0, lumped=lumped)
     idx = np.ix_([0, 1, 5, 6, 7, 11], [0, 1, 5, 6, 7, 11])
     T = el.beam2d_transformation(x1, x2)
-    assert np.allclose(el.to_global(el.beam2d_local_stiffness(E, A, IZ, L), T), K3[idx], rtol=0,
-                       atol=RTOL * np.abs(K3).max())
-    assert np.allclose(el.to_global(el.beam2d_local_mass(RHO, A, L, lumped), T), M3[idx], rtol=0,
-                       atol=RTOL * np.abs(M3).max())
-    assert np.allclose(el.to_global(el.beam2d_local_geometric_stiffness(500.0, L), T), G3[idx],
-                       rtol=0, atol=RTOL * np.abs(G3).max())
+    assert np.allclose(
+        el.to_global(el.beam2d_local_stiffness(E, A, IZ, L), T),
+        K3[idx],
+        rtol=0,
+        atol=RTOL * np.abs(K3).max(),
+    )
+    assert np.allclose(
+        el.to_global(el.beam2d_local_mass(RHO, A, L, lumped), T),
+        M3[idx],
+        rtol=0,
+        atol=RTOL * np.abs(M3).max(),
+    )
+    assert np.allclose(
+        el.to_global(el.beam2d_local_geometric_stiffness(500.0, L), T),
+        G3[idx],
+        rtol=0,
+        atol=RTOL * np.abs(G3).max(),
+    )
 
 
 def test_grid_equals_out_of_plane_block_of_frame():

@@ -98,8 +98,10 @@ def test_free_free_3d_frame_has_exactly_six_rigid_modes_then_beam_theory():
 def test_lumped_mass_converges_as_h_squared(clamped, exact):
     errors = []
     for n in (20, 40):
-        modes = frame_line(n, clamped, lumped=True).assemble().modes(
-            14, rigid_body_modes=None if clamped else 6
+        modes = (
+            frame_line(n, clamped, lumped=True)
+            .assemble()
+            .modes(14, rigid_body_modes=None if clamped else 6)
         )
         errors.append(np.abs(beta_L(dominant(modes)[:3]) / exact[:3] - 1))
     assert errors[0].max() < 0.012
@@ -163,8 +165,9 @@ def test_grid_bending_and_torsion():
     twist = X[:, :, 3] * 0.6 + X[:, :, 4] * 0.8  # rotation about the member axis
     is_torsion = np.abs(X[:, :, 2]).max(1) < 1e-6 * np.abs(twist).max(1)
     bending = modes.omegas[~is_torsion][:3]
-    assert np.sqrt(bending / math.sqrt(EI / m)) * LENGTH == pytest.approx(CLAMPED_FREE_BETA_L[:3],
-                                                                          rel=1e-4)
+    assert np.sqrt(bending / math.sqrt(EI / m)) * LENGTH == pytest.approx(
+        CLAMPED_FREE_BETA_L[:3], rel=1e-4
+    )
     torsion = modes.omegas[is_torsion][:2]
     h, k = LENGTH / n, np.arange(1, 3)
     theta = (2 * k - 1) * math.pi / (2 * n)
@@ -207,8 +210,14 @@ def small_frame(Q=np.eye(3), shift=np.zeros(3), clamped=False):
     tube, rect = Section.tube(0.04, 0.002), Section.rectangle(0.03, 0.05)
     s.add_frame(0, 1, ALU, tube)
     s.add_frame(1, 2, ALU, rect, orientation=Q @ [0.3, 0.2, 1.0])
-    s.add_frame(2, 3, STEEL, rect, orientation=Q @ [1.0, 0.0, 0.1],
-                offsets=[Q @ [0.02, 0.0, 0.01], Q @ [0.0, -0.03, 0.0]])
+    s.add_frame(
+        2,
+        3,
+        STEEL,
+        rect,
+        orientation=Q @ [1.0, 0.0, 0.1],
+        offsets=[Q @ [0.02, 0.0, 0.01], Q @ [0.0, -0.03, 0.0]],
+    )
     s.add_frame(3, 4, ALU, tube, lumped=True)
     s.add_frame(4, 0, ALU, tube)
     J = np.array([[0.02, 0.001, 0.0], [0.001, 0.03, 0.002], [0.0, 0.002, 0.025]])
@@ -359,6 +368,7 @@ def test_hanging_chain():
 def test_compressed_pinned_column_softens_then_buckles():
     """Pinned-pinned column: omega_1^2(P) = omega_1^2(0) (1 - P / P_cr), P_cr = pi^2 EI / L^2
     (the sine mode is exact for both); 10 cubic elements: rtol 1e-4."""
+
     def column(P):
         s = line(10)
         for i in range(10):
@@ -467,18 +477,24 @@ def test_clamped_structure_asked_for_rigid_modes():
         (lambda s: s.add_node(7, (0, float("nan"), 0)), "node 7: xyz: must be finite"),
         (lambda s: s.add_frame(1, 42, ALU, BAR), "node 42: unknown node"),
         (lambda s: s.add_frame(1, 1, ALU, BAR), r"member \(1, 1\): zero length"),
-        (lambda s: s.add_frame(0, 1, ALU, BAR, orientation=(2, 0, 0)),
-         "orientation: must not be parallel"),
+        (
+            lambda s: s.add_frame(0, 1, ALU, BAR, orientation=(2, 0, 0)),
+            "orientation: must not be parallel",
+        ),
         (lambda s: s.add_frame(0, 1, ALU, BAR, offsets=[(0.5, 0, 0), (-0.5, 0, 0)]), "zero length"),
         (lambda s: s.add_frame(0, 1, "steel", BAR), "material: must be a Material"),
         (lambda s: s.add_rod(0, 1, ALU, -1.0), "area: must be > 0"),
         (lambda s: s.add_grid(0, 1, 1.0, 0.0, 1.0), "GJ: must be > 0"),
         (lambda s: s.add_beam2d(0, 3, ALU, BAR), "must lie in a plane z = const"),
         (lambda s: s.add_mass(1, -1.0), "mass: must be >= 0"),
-        (lambda s: s.add_mass(1, 1.0, inertia=[1.0, -1.0, 1.0]),
-         "inertia: must be positive semi-definite"),
-        (lambda s: s.add_mass(1, 1.0, inertia=[[1, 1, 0], [0, 1, 0], [0, 0, 1]]),
-         "inertia: must be symmetric"),
+        (
+            lambda s: s.add_mass(1, 1.0, inertia=[1.0, -1.0, 1.0]),
+            "inertia: must be positive semi-definite",
+        ),
+        (
+            lambda s: s.add_mass(1, 1.0, inertia=[[1, 1, 0], [0, 1, 0], [0, 0, 1]]),
+            "inertia: must be symmetric",
+        ),
         (lambda s: s.clamp(1, ["uq"]), "dofs: unknown dof 'uq'"),
         (lambda s: s.clamp(5), "node 5: unknown node"),
         (lambda s: s.set_axial_preload(9, 1.0), "element 9: unknown element id"),

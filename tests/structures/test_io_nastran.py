@@ -29,16 +29,20 @@ NO_PYYETI = "optional dependency pyyeti (flexsat[nastran]) not installed"
 
 # assemble.out, "O U T P U T   F R O M   W E I G H T   C H E C K", G set, reference point 0
 # (basic origin), units kg, kg mm, kg mm².
-NASTRAN_MO = np.array([
-    [3.345436e00, 1.598721e-13, -1.132427e-12, -1.873559e-10, 5.018153e02, -5.018153e02],
-    [1.622036e-13, 3.345436e00, -1.922240e-12, -5.018153e02, 2.731554e-09, 2.118899e03],
-    [-1.133316e-12, -1.928013e-12, 3.345436e00, 5.018153e02, -2.118899e03, -1.996398e-09],
-    [-1.874909e-10, -5.018153e02, 5.018153e02, 5.433826e05, -3.178349e05, -3.178349e05],
-    [5.018153e02, 2.734168e-09, -2.118899e03, -3.178349e05, 2.441110e06, -7.527230e04],
-    [-5.018153e02, 2.118899e03, -1.992703e-09, -3.178349e05, -7.527230e04, 2.772279e06],
-])
+NASTRAN_MO = np.array(
+    [
+        [3.345436e00, 1.598721e-13, -1.132427e-12, -1.873559e-10, 5.018153e02, -5.018153e02],
+        [1.622036e-13, 3.345436e00, -1.922240e-12, -5.018153e02, 2.731554e-09, 2.118899e03],
+        [-1.133316e-12, -1.928013e-12, 3.345436e00, 5.018153e02, -2.118899e03, -1.996398e-09],
+        [-1.874909e-10, -5.018153e02, 5.018153e02, 5.433826e05, -3.178349e05, -3.178349e05],
+        [5.018153e02, 2.734168e-09, -2.118899e03, -3.178349e05, 2.441110e06, -7.527230e04],
+        [-5.018153e02, 2.118899e03, -1.992703e-09, -3.178349e05, -7.527230e04, 2.772279e06],
+    ]
+)
 # assemble.out, "R E A L   E I G E N V A L U E S", modes 7-12 (rad/s)².
-NASTRAN_EIGENVALUES = np.array([1.139316e02, 1.233310e02, 1.362450e02, 4.616507e02, 1.947847e03, 1.948512e03])
+NASTRAN_EIGENVALUES = np.array(
+    [1.139316e02, 1.233310e02, 1.362450e02, 4.616507e02, 1.947847e03, 1.948512e03]
+)
 
 
 @pytest.fixture(scope="module")
@@ -125,8 +129,12 @@ def test_shapes_in_basic(model, nas):
         row = uset.index.get_loc((gid, 1))
         T = uset.iloc[row + 3 : row + 6][["x", "y", "z"]].to_numpy()
         local = phg[row : row + 6] / np.array([1, 1, 1, 1e-3, 1e-3, 1e-3])[:, None]
-        np.testing.assert_allclose(model.shapes[:, j, :3], (T @ local[:3]).T, rtol=1e-12, atol=1e-14)
-        np.testing.assert_allclose(model.shapes[:, j, 3:], (T @ local[3:]).T, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(
+            model.shapes[:, j, :3], (T @ local[:3]).T, rtol=1e-12, atol=1e-14
+        )
+        np.testing.assert_allclose(
+            model.shapes[:, j, 3:], (T @ local[3:]).T, rtol=1e-12, atol=1e-14
+        )
 
 
 def test_rigid_modes_move_rigidly_in_basic(model):
@@ -230,7 +238,10 @@ def test_missing_files(tmp_path, extseout):
     "name, missing",
     [
         ("no_se_nas2cam", "missing g-set mode shapes PHG, mass matrix MAA or MGG"),
-        ("bigend_nas2cam", "missing eigenvalues LAMBDA, g-set mode shapes PHG, mass matrix MAA or MGG"),
+        (
+            "bigend_nas2cam",
+            "missing eigenvalues LAMBDA, g-set mode shapes PHG, mass matrix MAA or MGG",
+        ),
     ],
 )
 def test_file_without_modal_data(pyyeti_tests, name, missing):
@@ -260,8 +271,16 @@ def test_inconsistent_nastran_mass_is_refused(pyyeti_tests):
 @pytest.mark.parametrize(
     "units, error, match",
     [
-        ({"length": "kg", "mass": "kg", "time": "s"}, UnitError, r"units\['length'\]: incompatible units"),
-        ({"length": "mm", "mass": "kg"}, ValueError, "units: must map exactly 'length', 'mass' and 'time'"),
+        (
+            {"length": "kg", "mass": "kg", "time": "s"},
+            UnitError,
+            r"units\['length'\]: incompatible units",
+        ),
+        (
+            {"length": "mm", "mass": "kg"},
+            ValueError,
+            "units: must map exactly 'length', 'mass' and 'time'",
+        ),
         (
             {"length": "mm", "mass": "furlong_per_ounce", "time": "s"},
             UnitError,

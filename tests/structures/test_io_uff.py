@@ -29,10 +29,14 @@ from flexsat.structures.io_uff import (
 )
 from flexsat.structures.modal_model import ModalModel
 
-pyuff = pytest.importorskip("pyuff", reason="optional dependency pyuff (flexsat[uff]) not installed")
+pyuff = pytest.importorskip(
+    "pyuff", reason="optional dependency pyuff (flexsat[uff]) not installed"
+)
 
 TOL = 1e-5
-XYZ = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.2, 0.0], [0.0, 0.0, 0.8], [1.0, 1.0, 1.0]])
+XYZ = np.array(
+    [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.2, 0.0], [0.0, 0.0, 0.8], [1.0, 1.0, 1.0]]
+)
 MASSES = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
 NODE_IDS = np.array([10, 11, 12, 13, 14])
 
@@ -85,25 +89,44 @@ def _write(path, datasets):
 
 
 def _nodes_15(xyz=XYZ, ids=NODE_IDS, **extra):
-    return pyuff.prepare_15(node_nums=[int(i) for i in ids], x=xyz[:, 0], y=xyz[:, 1], z=xyz[:, 2], **extra)
+    return pyuff.prepare_15(
+        node_nums=[int(i) for i in ids], x=xyz[:, 0], y=xyz[:, 1], z=xyz[:, 2], **extra
+    )
 
 
 def _nodes_2411(xyz=XYZ, ids=NODE_IDS):
     n = len(ids)
     zeros = np.zeros(n, dtype=int)
     return pyuff.prepare_2411(
-        node_nums=np.asarray(ids, dtype=int), def_cs=zeros, disp_cs=zeros, color=zeros,
-        x=xyz[:, 0].copy(), y=xyz[:, 1].copy(), z=xyz[:, 2].copy(),
+        node_nums=np.asarray(ids, dtype=int),
+        def_cs=zeros,
+        disp_cs=zeros,
+        color=zeros,
+        x=xyz[:, 0].copy(),
+        y=xyz[:, 1].copy(),
+        z=xyz[:, 2].copy(),
     )
 
 
 def _mode_55(i, freq_hz, shape, modal_m=1.0, damping=0.0, ids=NODE_IDS):
     """One normal mode, 3 values per node (shape (n, 3))."""
     return pyuff.prepare_55(
-        model_type=1, analysis_type=2, data_ch=2, spec_data_type=8, data_type=2, n_data_per_node=3,
-        r1=shape[:, 0], r2=shape[:, 1], r3=shape[:, 2], node_nums=[int(n) for n in ids],
-        load_case=1, mode_n=i, freq=float(freq_hz), modal_m=float(modal_m),
-        modal_damp_vis=float(damping), modal_damp_his=0.0,
+        model_type=1,
+        analysis_type=2,
+        data_ch=2,
+        spec_data_type=8,
+        data_type=2,
+        n_data_per_node=3,
+        r1=shape[:, 0],
+        r2=shape[:, 1],
+        r3=shape[:, 2],
+        node_nums=[int(n) for n in ids],
+        load_case=1,
+        mode_n=i,
+        freq=float(freq_hz),
+        modal_m=float(modal_m),
+        modal_damp_vis=float(damping),
+        modal_damp_his=0.0,
     )
 
 
@@ -118,9 +141,20 @@ def _modes_55(model, scale=None):
 
 def _function_58(node, direction, x, data, func_type=4, abscissa=18, **labels):
     return pyuff.prepare_58(
-        func_type=func_type, rsp_node=node, rsp_dir=direction, ref_node=1, ref_dir=3, data=data, x=x,
-        id1=f"H {node}:{direction}", rsp_ent_name="TEST", ref_ent_name="TEST", abscissa_spacing=1,
-        abscissa_spec_data_type=abscissa, ordinate_spec_data_type=12, orddenom_spec_data_type=13,
+        func_type=func_type,
+        rsp_node=node,
+        rsp_dir=direction,
+        ref_node=1,
+        ref_dir=3,
+        data=data,
+        x=x,
+        id1=f"H {node}:{direction}",
+        rsp_ent_name="TEST",
+        ref_ent_name="TEST",
+        abscissa_spacing=1,
+        abscissa_spec_data_type=abscissa,
+        ordinate_spec_data_type=12,
+        orddenom_spec_data_type=13,
         **labels,
     )
 
@@ -142,13 +176,24 @@ def _assert_models_close(got, expected):
 # ------------------------------------------------------------------------------------------------
 def test_read_uff_groups_datasets_by_type(tmp_path, free):
     f = np.linspace(0.0, 10.0, 11)
-    path = _write(tmp_path / "all.uff", [
-        pyuff.prepare_164(
-            units_code=1, units_description="SI", temp_mode=1, length=1.0, force=1.0, temp=1.0,
-            temp_offset=273.15,
-        ),
-        _nodes_15(), _nodes_2411(), *_modes_55(free)[:2], _function_58(10, 1, f, f + 1j * f),
-    ])
+    path = _write(
+        tmp_path / "all.uff",
+        [
+            pyuff.prepare_164(
+                units_code=1,
+                units_description="SI",
+                temp_mode=1,
+                length=1.0,
+                force=1.0,
+                temp=1.0,
+                temp_offset=273.15,
+            ),
+            _nodes_15(),
+            _nodes_2411(),
+            *_modes_55(free)[:2],
+            _function_58(10, 1, f, f + 1j * f),
+        ],
+    )
     sets = read_uff(path)
     assert {k: len(v) for k, v in sets.items()} == {164: 1, 15: 1, 2411: 1, 55: 2, 58: 1}
     np.testing.assert_allclose(sets[2411][0]["x"], XYZ[:, 0])
@@ -190,7 +235,9 @@ def test_round_trip_with_rotations(tmp_path):
     mm_kg_s = {"length": "mm", "mass": "kg", "time": "s"}
     model = read_nastran_modes(op2, reference=[600.0, 0.0, 300.0], units=mm_kg_s)
     write_modal_uff(model, tmp_path / "nastran.uff")
-    _assert_models_close(modal_model_from_uff(tmp_path / "nastran.uff", reference=model.reference), model)
+    _assert_models_close(
+        modal_model_from_uff(tmp_path / "nastran.uff", reference=model.reference), model
+    )
 
 
 def test_modal_mass_normalisation_and_file_damping(tmp_path, free):
@@ -198,9 +245,16 @@ def test_modal_mass_normalisation_and_file_damping(tmp_path, free):
     path = _write(tmp_path / "scaled.uff", [_nodes_15(), *_modes_55(free, scale)])
     got = modal_model_from_uff(path)
     _assert_models_close(got, free)
-    as_is = modal_model_from_uff(path, normalisation="as_is", damping=0.01, rigid_mass=free.rigid_mass,
-                                 participation=free.participation)
-    np.testing.assert_allclose(as_is.shapes, free.shapes * scale[:, None, None], rtol=TOL, atol=1e-12)
+    as_is = modal_model_from_uff(
+        path,
+        normalisation="as_is",
+        damping=0.01,
+        rigid_mass=free.rigid_mass,
+        participation=free.participation,
+    )
+    np.testing.assert_allclose(
+        as_is.shapes, free.shapes * scale[:, None, None], rtol=TOL, atol=1e-12
+    )
     np.testing.assert_array_equal(as_is.damping, 0.01)
 
 
@@ -215,15 +269,26 @@ def test_units_dataset_164(tmp_path, free):
     f_length, f_force = 1 / 0.0254, 1 / 4.4482216152605
     mass_unit = f_length / f_force
     s = np.sqrt(mass_unit) * np.array([1, 1, 1, 0.0254, 0.0254, 0.0254])
-    file_model = [_mode_55(i + 1, free.frequencies_hz[i], free.shapes[i, :, :3] * s[:3], 1.0, free.damping[i])
-                  for i in range(free.n_modes)]
-    path = _write(tmp_path / "inch.uff", [
-        pyuff.prepare_164(
-            units_code=7, units_description="IN", temp_mode=1, length=f_length, force=f_force,
-            temp=1.8, temp_offset=459.67,
-        ),
-        _nodes_2411(XYZ * f_length), *file_model,
-    ])
+    file_model = [
+        _mode_55(i + 1, free.frequencies_hz[i], free.shapes[i, :, :3] * s[:3], 1.0, free.damping[i])
+        for i in range(free.n_modes)
+    ]
+    path = _write(
+        tmp_path / "inch.uff",
+        [
+            pyuff.prepare_164(
+                units_code=7,
+                units_description="IN",
+                temp_mode=1,
+                length=f_length,
+                force=f_force,
+                temp=1.8,
+                temp_offset=459.67,
+            ),
+            _nodes_2411(XYZ * f_length),
+            *file_model,
+        ],
+    )
     assert mass_unit == pytest.approx(175.126835, rel=1e-8)
     _assert_models_close(modal_model_from_uff(path), free)
 
@@ -231,11 +296,16 @@ def test_units_dataset_164(tmp_path, free):
 def test_functions_58(tmp_path):
     f = np.linspace(0.0, 50.0, 101)
     h1, h2 = 1.0 / (1.0 + 1j * f), 2.0 / (3.0 - f**2 + 1j * f)
-    labels = dict(ordinate_axis_units_lab="m/s^2", orddenom_axis_units_lab="N", abscissa_axis_units_lab="Hz")
-    path = _write(tmp_path / "frf.uff", [
-        _function_58(10, 3, f, h1, **labels),
-        _function_58(11, -2, f, h2, **labels),
-    ])
+    labels = dict(
+        ordinate_axis_units_lab="m/s^2", orddenom_axis_units_lab="N", abscissa_axis_units_lab="Hz"
+    )
+    path = _write(
+        tmp_path / "frf.uff",
+        [
+            _function_58(10, 3, f, h1, **labels),
+            _function_58(11, -2, f, h2, **labels),
+        ],
+    )
     ds = read_uff_functions(path)
     assert ds["data"].dims == ("function", "frequency")
     np.testing.assert_allclose(ds["frequency"], f)
@@ -252,7 +322,9 @@ def test_functions_58(tmp_path):
 
 def test_time_response_58(tmp_path):
     t = np.linspace(0.0, 1.0, 64)
-    path = _write(tmp_path / "time.uff", [_function_58(12, 1, t, np.sin(5 * t), func_type=1, abscissa=17)])
+    path = _write(
+        tmp_path / "time.uff", [_function_58(12, 1, t, np.sin(5 * t), func_type=1, abscissa=17)]
+    )
     ds = read_uff_functions(path)
     assert ds["data"].dims == ("function", "time")
     assert ds["data"].dtype == float
@@ -327,15 +399,22 @@ def test_one_mass_property_alone(tmp_path, free):
 
 def test_different_abscissae(tmp_path):
     f = np.linspace(0.0, 10.0, 11)
-    path = _write(tmp_path / "mixed.uff", [_function_58(10, 1, f, f), _function_58(11, 1, f[:5], f[:5])])
+    path = _write(
+        tmp_path / "mixed.uff", [_function_58(10, 1, f, f), _function_58(11, 1, f[:5], f[:5])]
+    )
     with pytest.raises(ValueError, match="functions 1 and 2 have different abscissae"):
         read_uff_functions(path)
 
 
-@pytest.mark.parametrize("call", [
-    lambda p: read_uff(p), lambda p: modal_model_from_uff(p), lambda p: read_uff_functions(p),
-    lambda p: write_modal_uff(None, p),
-])
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda p: read_uff(p),
+        lambda p: modal_model_from_uff(p),
+        lambda p: read_uff_functions(p),
+        lambda p: write_modal_uff(None, p),
+    ],
+)
 def test_missing_pyuff_is_explained(monkeypatch, tmp_path, call):
     monkeypatch.setitem(sys.modules, "pyuff", None)
     message = r"needs the optional dependency pyuff: pip install 'flexsat\[uff\]'"

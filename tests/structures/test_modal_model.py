@@ -135,8 +135,17 @@ def synthetic(n_modes=3, boundary="free", seed=0) -> ModalModel:
 
 
 def vars_of(model: ModalModel) -> dict:
-    names = ("node_ids", "coordinates", "frequencies", "damping", "shapes", "rigid_mass",
-             "participation", "reference", "boundary")
+    names = (
+        "node_ids",
+        "coordinates",
+        "frequencies",
+        "damping",
+        "shapes",
+        "rigid_mass",
+        "participation",
+        "reference",
+        "boundary",
+    )
     return {name: getattr(model, name) for name in names}
 
 
@@ -164,15 +173,21 @@ CONSTRUCTION_ERRORS = [
     ("coordinates", dict(coordinates=[[0, 0, 0], [1, np.nan, 0]]), "finite"),
     ("frequencies", dict(frequencies=[1.0, -2.0, 3.0]), ">= 0"),
     ("frequencies", dict(frequencies=[1.0, 3.0, 2.0]), "ascending"),
-    ("frequencies", dict(frequencies=[], shapes=np.zeros((0, 2, 6)),
-                         participation=np.zeros((0, 6))), "at least one"),
+    (
+        "frequencies",
+        dict(frequencies=[], shapes=np.zeros((0, 2, 6)), participation=np.zeros((0, 6))),
+        "at least one",
+    ),
     ("damping", dict(damping=[0.01, -0.01, 0.0]), ">= 0"),
     ("damping", dict(damping=[0.01, 0.02]), "shape"),
     ("shapes", dict(shapes=np.zeros((3, 2, 3))), "shape"),
     ("shapes", dict(shapes=np.full((3, 2, 6), np.inf)), "finite"),
     ("rigid_mass", dict(rigid_mass=np.eye(3)), "shape"),
-    ("rigid_mass", dict(rigid_mass=_bad_rigid(lambda r: _set(r, (3, 4), r[3, 4] + 0.5))),
-     "symmetric"),
+    (
+        "rigid_mass",
+        dict(rigid_mass=_bad_rigid(lambda r: _set(r, (3, 4), r[3, 4] + 0.5))),
+        "symmetric",
+    ),
     ("rigid_mass", dict(rigid_mass=_bad_rigid(lambda r: _set(r, (5, 5), -1.0))), "semi-definite"),
     ("rigid_mass", dict(rigid_mass=_bad_rigid(lambda r: _set(r, (1, 1), 6.0))), "m·I"),
     ("rigid_mass", dict(rigid_mass=np.diag([0, 0, 0, 1.0, 1.0, 1.0])), "total mass"),
@@ -195,8 +210,15 @@ def test_construction_errors_name_the_field_and_rule(field, change, rule):
 def test_arrays_are_read_only_copies():
     shapes = np.ones((3, 2, 6)) * 0.01
     base = synthetic()
-    model = ModalModel(base.node_ids, base.coordinates, base.frequencies, 0.0, shapes,
-                       base.rigid_mass, base.participation)
+    model = ModalModel(
+        base.node_ids,
+        base.coordinates,
+        base.frequencies,
+        0.0,
+        shapes,
+        base.rigid_mass,
+        base.participation,
+    )
     shapes[:] = 5.0
     assert np.all(model.shapes == 0.01)
     with pytest.raises(ValueError):
@@ -233,8 +255,12 @@ def test_parallel_axis_theorem():
         assert np.allclose(I, inertia(np.asarray(about)), rtol=0, atol=RTOL * np.abs(I).max())
         # I_a = I_c + m (|a − c|² I − (a − c)(a − c)ᵀ)
         d = np.asarray(about) - c
-        assert np.allclose(I, model.inertia() + m * (d @ d * np.eye(3) - np.outer(d, d)),
-                           rtol=0, atol=RTOL * np.abs(I).max())
+        assert np.allclose(
+            I,
+            model.inertia() + m * (d @ d * np.eye(3) - np.outer(d, d)),
+            rtol=0,
+            atol=RTOL * np.abs(I).max(),
+        )
     assert np.array_equal(model.inertia(model.reference), model.rigid_mass[3:, 3:])
 
 
@@ -265,8 +291,9 @@ def test_plane_grid_keeps_absent_rigid_motions_at_zero():
         structure.add_grid(a, b, EI=1e3, GJ=5e2, mass_per_length=mu)
     assembly = structure.assemble()
     reference = np.array([1.0, 1.0, 0.0])
-    model = ModalModel.from_fe(assembly.modes(assembly.n_dofs, rigid_body_modes=3),
-                               reference=reference)
+    model = ModalModel.from_fe(
+        assembly.modes(assembly.n_dofs, rigid_body_modes=3), reference=reference
+    )
     about = np.array([-1.0, 2.0, 0.0])
     m, first, P = 0.0, np.zeros(3), np.zeros((3, 3))
     for a, b, mu in members:
@@ -449,8 +476,9 @@ def test_statespace_matches_the_second_order_model():
 # file format
 def test_save_load_round_trip_is_exact(tmp_path):
     modes, _, _ = tower()
-    model = ModalModel.from_fe(modes, damping=np.linspace(0.001, 0.02, 18),
-                               reference=(0.1, 0.2, -0.3))
+    model = ModalModel.from_fe(
+        modes, damping=np.linspace(0.001, 0.02, 18), reference=(0.1, 0.2, -0.3)
+    )
     path = tmp_path / "tower.nc"
     model.save(path)
     back = ModalModel.load(path)
@@ -495,8 +523,15 @@ def test_load_refuses_foreign_files(tmp_path):
 # HubAppendage
 def hub_model(n, tip_inertia=0.0, damping=0.004):
     params = HubAppendageParams(
-        hub_inertia=0.35, n_appendages=n, hub_radius=0.14, length=1.16, EI=23.6, rho=1.3,
-        tip_mass=1.7, tip_inertia=tip_inertia, damping=damping,
+        hub_inertia=0.35,
+        n_appendages=n,
+        hub_radius=0.14,
+        length=1.16,
+        EI=23.6,
+        rho=1.3,
+        tip_mass=1.7,
+        tip_inertia=tip_inertia,
+        damping=damping,
     )
     return HubAppendage(params, n_modes=6)
 

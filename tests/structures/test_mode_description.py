@@ -60,8 +60,9 @@ def test_torsion_of_the_wheel_about_its_own_axis(described):
     I_w = N_RIM * M_RIM * RADIUS**2
     k = Material(E, 0.0).shear_modulus * SHAFT.J / SHAFT_LENGTH
     d = described[6]
-    assert d.frequency_hz == pytest.approx(np.sqrt(k * (1 / I_w + 1 / I_BASE)) / (2 * np.pi),
-                                           rel=1e-3)
+    assert d.frequency_hz == pytest.approx(
+        np.sqrt(k * (1 / I_w + 1 / I_BASE)) / (2 * np.pi), rel=1e-3
+    )
     assert d.component == "wheel" and d.motion == "torsion about its axis"
     assert d.share == pytest.approx(I_BASE / (I_w + I_BASE), rel=1e-6)
     assert d.rigid_fit == pytest.approx(1.0, abs=1e-6)
@@ -81,8 +82,9 @@ def test_axial_mode_is_a_translation_with_the_two_mass_share(described):
     assert len(axial) == 1
     d = axial[0]
     k = E * SHAFT.A / SHAFT_LENGTH
-    assert d.frequency_hz == pytest.approx(np.sqrt(k * (1 / m_w + 1 / M_BASE)) / (2 * np.pi),
-                                           rel=1e-3)
+    assert d.frequency_hz == pytest.approx(
+        np.sqrt(k * (1 / m_w + 1 / M_BASE)) / (2 * np.pi), rel=1e-3
+    )
     assert d.share == pytest.approx(M_BASE / (m_w + M_BASE), rel=1e-6)
 
 
@@ -121,13 +123,16 @@ def test_rigid_fraction_threshold_decides_bending(modes):
             assert (d.motion == "bending/elastic") == (d.rigid_fit < threshold)
 
 
-@pytest.mark.parametrize("groups,message", [
-    ({}, "groups: must be a non-empty dict"),
-    ({"a": []}, "groups: group 'a' is empty"),
-    ({"a": [1, 99]}, "groups: group 'a': node 99 is not in the model"),
-    ({"a": [1, 2], "b": [2, 3]}, "groups: node 2 is in both 'a' and 'b'"),
-    ({"other": [1]}, "groups: names must be"),
-])
+@pytest.mark.parametrize(
+    "groups,message",
+    [
+        ({}, "groups: must be a non-empty dict"),
+        ({"a": []}, "groups: group 'a' is empty"),
+        ({"a": [1, 99]}, "groups: group 'a': node 99 is not in the model"),
+        ({"a": [1, 2], "b": [2, 3]}, "groups: node 2 is in both 'a' and 'b'"),
+        ({"other": [1]}, "groups: names must be"),
+    ],
+)
 def test_bad_groups_are_refused_by_name(modes, groups, message):
     with pytest.raises(ValueError, match=message):
         describe_modes(modes, groups)
@@ -151,8 +156,9 @@ def test_plane_grid_model_with_three_dofs_per_node():
     for i in range(5):
         s.add_node(i + 1, (float(i), 0.0, 0.0))
     for i in range(4):
-        s.add_grid(i + 1, i + 2, EI=1e4, GJ=1e4, mass_per_length=1.0,
-                   torsional_inertia_per_length=0.1)
+        s.add_grid(
+            i + 1, i + 2, EI=1e4, GJ=1e4, mass_per_length=1.0, torsional_inertia_per_length=0.1
+        )
     s.clamp(1)
     d = classify_modes(s.assemble().modes(4), {"root": [1, 2, 3], "tip": [4, 5]})
     assert str(d[0]).startswith("tip (") and d[0].motion == "translation along z"

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from flexsat.validation import require_numeric
+from flexsat.input_checks import require_numeric
 
 _EPS = np.finfo(float).eps
 
@@ -47,8 +47,10 @@ def _input_matrix(value, n: int, field: str = "B", other: str = "A") -> np.ndarr
     if arr.ndim == 1:
         arr = arr.reshape(-1, 1)
     if arr.ndim != 2 or arr.shape[0] != n or arr.shape[1] == 0:
-        raise ValueError(f"{field}: must have {n} rows ({other} is {n}x{n}) and at least one "
-                         f"column, got shape {np.shape(value)}")
+        raise ValueError(
+            f"{field}: must have {n} rows ({other} is {n}x{n}) and at least one "
+            f"column, got shape {np.shape(value)}"
+        )
     return arr
 
 
@@ -153,8 +155,9 @@ def _balanced(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return A * d[None, :] / d[:, None], B / d[:, None]
 
 
-def pbh_clusters(A: np.ndarray, B: np.ndarray, select=None, tol: float | None = None
-                 ) -> list[complex]:
+def pbh_clusters(
+    A: np.ndarray, B: np.ndarray, select=None, tol: float | None = None
+) -> list[complex]:
     """Eigenvalue clusters of A at which ``[λI − A, B]`` loses rank (PBH), each tested on its
     own scale.
 
@@ -208,7 +211,7 @@ def pbh_clusters(A: np.ndarray, B: np.ndarray, select=None, tol: float | None = 
             raise np.linalg.LinAlgError(f"ztrsen: reordering the Schur form failed (info {info})")
         k = int(cluster.sum())
         W, M = Zs[:, :k], Ts[:k, :k].conj().T
-        s_lam = max(np.linalg.norm(M, 2), _EPS ** 0.25 * scale)
+        s_lam = max(np.linalg.norm(M, 2), _EPS**0.25 * scale)
         P = np.hstack([(M - lc * np.eye(k)) / s_lam, W.conj().T @ B / nb])
         if np.linalg.svd(P, compute_uv=False)[k - 1] <= tol:
             out.append(lc)
@@ -304,8 +307,9 @@ class RepeatedFrequencyResult:
         return tuple(g for g in self.groups if not g.controllable)
 
 
-def repeated_frequency_test(stiffness, B, tol: float | None = None,
-                            freq_tol: float | None = None) -> RepeatedFrequencyResult:
+def repeated_frequency_test(
+    stiffness, B, tol: float | None = None, freq_tol: float | None = None
+) -> RepeatedFrequencyResult:
     """Controllability of the undamped modal system ``ẍ + diag(κ) x = B u`` by blocks.
 
     The theorem (Balas 1978, applied in seed 002 Ch. II §3, L305: "these m subsystems with their
@@ -349,12 +353,15 @@ def repeated_frequency_test(stiffness, B, tol: float | None = None,
     k = _array(stiffness, "stiffness")
     if k.ndim == 2:
         if k.shape[0] != k.shape[1] or np.any(k - np.diag(np.diag(k))):
-            raise ValueError(f"stiffness: must be a 1-D array or a diagonal (modal) matrix, got "
-                             f"a non-diagonal array of shape {k.shape}")
+            raise ValueError(
+                f"stiffness: must be a 1-D array or a diagonal (modal) matrix, got "
+                f"a non-diagonal array of shape {k.shape}"
+            )
         k = np.diag(k).copy()
     if k.ndim != 1 or k.size == 0:
-        raise ValueError(f"stiffness: must be a non-empty 1-D array or a diagonal matrix, got "
-                         f"shape {k.shape}")
+        raise ValueError(
+            f"stiffness: must be a non-empty 1-D array or a diagonal matrix, got shape {k.shape}"
+        )
     n = k.size
     B = _input_matrix(B, n, "B", "stiffness")
     tol = _tol(tol)
@@ -368,11 +375,20 @@ def repeated_frequency_test(stiffness, B, tol: float | None = None,
             continue
         members = np.flatnonzero(unused & (np.abs(k - k[i]) <= ftol))
         unused[members] = False
-        groups.append(FrequencyGroup(float(np.mean(k[members])), tuple(int(j) for j in members),
-                                     _rank(B[members], tol)))
+        groups.append(
+            FrequencyGroup(
+                float(np.mean(k[members])), tuple(int(j) for j in members), _rank(B[members], tol)
+            )
+        )
     return RepeatedFrequencyResult(tuple(groups))
 
 
-__all__ = ["FrequencyGroup", "RepeatedFrequencyResult", "controllability_matrix",
-           "controllability_rank", "is_stabilizable", "pbh_test",
-           "repeated_frequency_test"]
+__all__ = [
+    "FrequencyGroup",
+    "RepeatedFrequencyResult",
+    "controllability_matrix",
+    "controllability_rank",
+    "is_stabilizable",
+    "pbh_test",
+    "repeated_frequency_test",
+]

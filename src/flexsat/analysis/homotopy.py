@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flexsat.validation import require_numeric
+from flexsat.input_checks import require_numeric
 
 _EPS = np.finfo(float).eps
 
@@ -171,8 +171,9 @@ def weight_factor(weight, n: int) -> np.ndarray:
             raise ValueError(f"weight: a vector weight must have {n} entries > 0, got {weight!r}")
         return np.diag(np.sqrt(w))
     if w.shape != (n, n):
-        raise ValueError(f"weight: must be a vector of {n} or an ({n}, {n}) matrix, got shape "
-                         f"{w.shape}")
+        raise ValueError(
+            f"weight: must be a vector of {n} or an ({n}, {n}) matrix, got shape {w.shape}"
+        )
     if not np.allclose(w, w.T, rtol=1e-12, atol=0):
         raise ValueError("weight: the matrix W must be symmetric")
     try:
@@ -253,8 +254,9 @@ class _Problem:
             return self._fd(p, which)
         jac = np.asarray(fun(p.copy()), dtype=float).reshape(size, -1)
         if jac.shape != (size, self.n):
-            raise ValueError(f"{name}: must return a ({size}, {self.n}) Jacobian, got shape "
-                             f"{jac.shape}")
+            raise ValueError(
+                f"{name}: must return a ({size}, {self.n}) Jacobian, got shape {jac.shape}"
+            )
         if not np.all(np.isfinite(jac)):
             raise _Failure(f"non-finite {name}")
         return jac
@@ -266,14 +268,30 @@ class _Problem:
         return self.jac(p, 2, self.inequality_jacobian, self.q, "inequality_jacobian")
 
 
-def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_target=None,
-                      equality_jacobian=None, inequality=None, inequality_bound=None,
-                      inequality_jacobian=None, objective_goal: float = 0.0, weight=None,
-                      minimize: bool = True, gamma_step: float = 0.1,
-                      min_gamma_step: float = 1e-9, max_corrections: int = 8,
-                      tol: float = 1e-10, active_tol: float = 1e-7, max_step: float | None = None,
-                      fd_step: float = 1e-6, max_steps: int = 1000,
-                      max_evaluations: int = 100_000) -> HomotopyResult:
+def homotopy_minimize(
+    objective,
+    p0,
+    *,
+    gradient=None,
+    equality=None,
+    equality_target=None,
+    equality_jacobian=None,
+    inequality=None,
+    inequality_bound=None,
+    inequality_jacobian=None,
+    objective_goal: float = 0.0,
+    weight=None,
+    minimize: bool = True,
+    gamma_step: float = 0.1,
+    min_gamma_step: float = 1e-9,
+    max_corrections: int = 8,
+    tol: float = 1e-10,
+    active_tol: float = 1e-7,
+    max_step: float | None = None,
+    fd_step: float = 1e-6,
+    max_steps: int = 1000,
+    max_evaluations: int = 100_000,
+) -> HomotopyResult:
     """Minimise J(p) with equality and inequality constraints by homotopic minimum-norm
     differential correction (Att. 5 Appendix Eqs. A1-A11; seed 004 Eqs. 16-28).
 
@@ -343,17 +361,22 @@ def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_t
     n = p.size
     if not callable(objective):
         raise ValueError("objective: must be callable")
-    for name, fun in (("gradient", gradient), ("equality", equality),
-                      ("equality_jacobian", equality_jacobian), ("inequality", inequality),
-                      ("inequality_jacobian", inequality_jacobian)):
+    for name, fun in (
+        ("gradient", gradient),
+        ("equality", equality),
+        ("equality_jacobian", equality_jacobian),
+        ("inequality", inequality),
+        ("inequality_jacobian", inequality_jacobian),
+    ):
         if fun is not None and not callable(fun):
             raise ValueError(f"{name}: must be callable or None")
     if (equality is None) != (equality_target is None):
         raise ValueError("equality_target: give it exactly when equality is given")
     if (inequality is None) != (inequality_bound is None):
         raise ValueError("inequality_bound: give it exactly when inequality is given")
-    f_o = np.zeros(0) if equality is None else _vector(equality_target,
-                                                       "equality_target").reshape(-1)
+    f_o = (
+        np.zeros(0) if equality is None else _vector(equality_target, "equality_target").reshape(-1)
+    )
     m = f_o.size
     if equality is not None and m == 0:
         raise ValueError("equality_target: must not be empty")
@@ -362,8 +385,9 @@ def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_t
         q = np.atleast_1d(np.asarray(inequality(p.copy()), dtype=float)).size
         T = np.broadcast_to(bound, (q,)).astype(float) if bound.ndim == 0 else bound.reshape(-1)
         if T.size != q:
-            raise ValueError(f"inequality_bound: must have {q} entries (one per inequality), got "
-                             f"{T.size}")
+            raise ValueError(
+                f"inequality_bound: must have {q} entries (one per inequality), got {T.size}"
+            )
     else:
         T = np.zeros(0)
     q = T.size
@@ -381,15 +405,28 @@ def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_t
     L = weight_factor(weight, n)
     Linv_T = np.linalg.inv(L).T  # Δp = L⁻ᵀ y, |Δp|_W = |y|
 
-    prob = _Problem(objective, gradient, equality, equality_jacobian, inequality,
-                    inequality_jacobian, n, m, q, fd_step)
+    prob = _Problem(
+        objective,
+        gradient,
+        equality,
+        equality_jacobian,
+        inequality,
+        inequality_jacobian,
+        n,
+        m,
+        q,
+        fd_step,
+    )
     try:
         J0, fe0, gi0 = prob.values(p)
     except _Failure:
         raise ValueError("objective: non-finite value at p0") from None
     # validate user derivatives at the start (shape errors surface here, not mid-run)
-    for name, check in (("gradient", prob.grad), ("equality_jacobian", prob.jac_eq),
-                        ("inequality_jacobian", prob.jac_in)):
+    for name, check in (
+        ("gradient", prob.grad),
+        ("equality_jacobian", prob.jac_eq),
+        ("inequality_jacobian", prob.jac_in),
+    ):
         try:
             check(p)
         except _Failure:
@@ -424,8 +461,9 @@ def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_t
             re, ri, rJ = residuals(p, te, tb, Jo)
         except (_Failure, ValueError, ArithmeticError, np.linalg.LinAlgError):
             return np.inf
-        return float(re @ re + np.minimum(ri, 0) @ np.minimum(ri, 0)
-                     + (0.0 if rJ is None else rJ * rJ))
+        return float(
+            re @ re + np.minimum(ri, 0) @ np.minimum(ri, 0) + (0.0 if rJ is None else rJ * rJ)
+        )
 
     def step(p, te, tb, Jo):
         """One damped minimum-norm correction; returns (p_new, active names, jacobian).
@@ -466,12 +504,12 @@ def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_t
                 work = sorted(work + [worst])
                 continue
             # release a satisfied inequality whose multiplier is negative (ν < 0: move inside)
-            nu_in = nu[m: m + len(work)]
+            nu_in = nu[m : m + len(work)]
             cut = -1e-12 * max(1.0, float(np.abs(nu).max()))
             drop = [k for k, j in enumerate(work) if ri[j] >= 0 and nu_in[k] < cut]
             if drop:
                 k = min(drop, key=lambda k: nu_in[k])
-                work = work[:k] + work[k + 1:]
+                work = work[:k] + work[k + 1 :]
                 continue
             break
         if max_step is not None and np.linalg.norm(y) > max_step:
@@ -481,8 +519,11 @@ def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_t
         while alpha >= 1.0 / 64:
             trial = p + alpha * dp
             if merit(trial, te, tb, Jo) < (1 - 1e-4 * alpha) * m0:
-                active = tuple([names[i] for i in range(m)] + [names[m + j] for j in work]
-                               + (["objective"] if Jo is not None else []))
+                active = tuple(
+                    [names[i] for i in range(m)]
+                    + [names[m + j] for j in work]
+                    + (["objective"] if Jo is not None else [])
+                )
                 return trial, active, A
             alpha /= 2
         raise _Failure("line search failed")
@@ -494,8 +535,13 @@ def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_t
             if prob.evaluations > max_evaluations:
                 raise _Failure("evaluation budget exhausted")
             re, ri, rJ = residuals(p, te, tb, Jo)
-            worst = max([np.abs(re).max(initial=0.0), np.maximum(0.0, -ri).max(initial=0.0),
-                         0.0 if rJ is None else abs(rJ)])
+            worst = max(
+                [
+                    np.abs(re).max(initial=0.0),
+                    np.maximum(0.0, -ri).max(initial=0.0),
+                    0.0 if rJ is None else abs(rJ),
+                ]
+            )
             if worst <= tol:
                 return p, it, active, A
             if it == max_corrections:
@@ -545,17 +591,32 @@ def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_t
     J, fe, gi = prob.values(p)
     if not feasible:
         return HomotopyResult(
-            p, J, fe, gi, False, False, False, 0.0,
+            p,
+            J,
+            fe,
+            gi,
+            False,
+            False,
+            False,
+            0.0,
             f"infeasible: the feasibility homotopy stopped at γ = {gamma1:.6g} ({last_fail}); "
             f"active rows {list(last_active)} with the Jacobian in `jacobian`",
-            tuple(path), None, last_active, last_A, np.nan, prob.evaluations)
+            tuple(path),
+            None,
+            last_active,
+            last_A,
+            np.nan,
+            prob.evaluations,
+        )
     p_feas, J_feas = p.copy(), J
     gamma2, goal = 0.0, False
     if not minimize:
         message = "feasible point found (minimize=False)"
     elif objective_goal >= J_feas:
-        message = (f"objective_goal {objective_goal:.6g} is not below J(p_feasible) = "
-                   f"{J_feas:.6g}: nothing to minimise")
+        message = (
+            f"objective_goal {objective_goal:.6g} is not below J(p_feasible) = "
+            f"{J_feas:.6g}: nothing to minimise"
+        )
     elif m >= n:
         message = "the equality constraints leave no freedom: the feasible point is returned"
     else:
@@ -564,17 +625,36 @@ def homotopy_minimize(objective, p0, *, gradient=None, equality=None, equality_t
         if goal:
             message = "objective goal reached"
         elif last_fail.startswith("max_steps"):
-            message = (f"stopped after max_steps = {max_steps} objective steps at γ = "
-                       f"{gamma2:.9g} (J = {J:.10g}); not yet the constrained minimum")
+            message = (
+                f"stopped after max_steps = {max_steps} objective steps at γ = "
+                f"{gamma2:.9g} (J = {J:.10g}); not yet the constrained minimum"
+            )
         else:
-            message = (f"constrained minimum: the objective homotopy stopped at γ = {gamma2:.9g} "
-                       f"(J = {J:.10g}; next step: {last_fail})")
+            message = (
+                f"constrained minimum: the objective homotopy stopped at γ = {gamma2:.9g} "
+                f"(J = {J:.10g}; next step: {last_fail})"
+            )
     try:
         pg = _projected_gradient(prob, p, last_active, Linv_T)
     except _Failure:
         pg = np.nan
-    return HomotopyResult(p, J, fe, gi, True, True, goal, gamma2, message, tuple(path), p_feas,
-                          last_active, last_A, pg, prob.evaluations)
+    return HomotopyResult(
+        p,
+        J,
+        fe,
+        gi,
+        True,
+        True,
+        goal,
+        gamma2,
+        message,
+        tuple(path),
+        p_feas,
+        last_active,
+        last_A,
+        pg,
+        prob.evaluations,
+    )
 
 
 def _projected_gradient(prob, p, active, Linv_T) -> float:

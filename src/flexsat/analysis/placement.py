@@ -52,7 +52,7 @@ from flexsat.analysis.gramians import (
     modal_controllability_gramian,
     modal_state_matrices,
 )
-from flexsat.validation import require_count, require_finite, require_positive
+from flexsat.input_checks import require_count, require_finite, require_positive
 
 __all__ = [
     "MAX_EXHAUSTIVE_SETS",
@@ -185,8 +185,9 @@ def hamdan_nayfeh(A, B) -> ModalControllability:
     with np.errstate(invalid="ignore", divide="ignore"):
         cos = proj / (qn[:, None] * bn[None, :])
     cos = np.where(bn[None, :] > 0, cos, 0.0)
-    return ModalControllability(cos_theta=cos, rho=np.linalg.norm(proj, axis=1) / qn,
-                                eigenvalues=lam)
+    return ModalControllability(
+        cos_theta=cos, rho=np.linalg.norm(proj, axis=1) / qn, eigenvalues=lam
+    )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -275,8 +276,13 @@ def modal_cost(omega, zeta, B, Cq=None, Cv=None, Q=None, horizon=None) -> ModalC
     C = np.hstack([Cq, Cv])
     parts = np.einsum("ij,ji->i", X, C.T @ Qw @ C)
     total = float(np.trace(Qw @ C @ X @ C.T))
-    return ModalCost(total=total, costs=parts[:n] + parts[n:], displacement=parts[:n],
-                     velocity=parts[n:], gramian=X)
+    return ModalCost(
+        total=total,
+        costs=parts[:n] + parts[n:],
+        displacement=parts[:n],
+        velocity=parts[n:],
+        gramian=X,
+    )
 
 
 @dataclass(frozen=True)
@@ -348,8 +354,9 @@ class GawronskiIndex:
     norm: str
 
 
-def gawronski_index(omega, zeta, B, Cq=None, Cv=None, weights=None,
-                    norm: str = "h2") -> GawronskiIndex:
+def gawronski_index(
+    omega, zeta, B, Cq=None, Cv=None, weights=None, norm: str = "h2"
+) -> GawronskiIndex:
     r"""Gawronski's H2 (or Hankel) actuator placement index per actuator and mode.
 
     For mode i and actuator k (column k of :math:`\bar D`), with the output vector
@@ -404,8 +411,12 @@ def gawronski_index(omega, zeta, B, Cq=None, Cv=None, weights=None,
             ) from None
         G = G * wts
     sigma = G / total
-    return GawronskiIndex(sigma=sigma, actuator=np.linalg.norm(sigma, axis=0),
-                          mode=np.linalg.norm(sigma, axis=1), norm=norm)
+    return GawronskiIndex(
+        sigma=sigma,
+        actuator=np.linalg.norm(sigma, axis=0),
+        mode=np.linalg.norm(sigma, axis=1),
+        norm=norm,
+    )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -496,8 +507,9 @@ def h2_placement(A, B, b, C, gamma=1.0) -> H2Placement:
     C = C[None, :] if C.ndim == 1 else C
     for name, M, ax in (("B", B, 0), ("b", b, 0), ("C", C, 1)):
         if M.ndim != 2 or M.shape[ax] != N:
-            raise ValueError(f"{name}: must have {N} {'rows' if ax == 0 else 'columns'}, "
-                             f"got shape {M.shape}")
+            raise ValueError(
+                f"{name}: must have {N} {'rows' if ax == 0 else 'columns'}, got shape {M.shape}"
+            )
     g = float(require_positive(gamma, "gamma"))
     try:
         X = sla.solve_continuous_are(A, B, g**2 * C.T @ C, np.eye(B.shape[1]))
@@ -522,11 +534,16 @@ def h2_placement(A, B, b, C, gamma=1.0) -> H2Placement:
     energy = np.einsum("ij,jk,ik->i", F, Wc, F)
     printed = np.einsum("ji,jk,ki->i", B, Wo, B)
     return H2Placement(
-        X=X, F=F, Wc=Wc, Wo=Wo,
+        X=X,
+        F=F,
+        Wc=Wc,
+        Wo=Wo,
         beta2=float(np.trace(b.T @ X @ b)),
         y_norm2=float(np.trace(C @ Wc @ C.T)),
         u_norm2=float(np.trace(F @ Wc @ F.T)),
-        energy=energy, printed=printed, gamma=g,
+        energy=energy,
+        printed=printed,
+        gamma=g,
     )
 
 
@@ -580,9 +597,17 @@ def _vectors(items, n: int, field_name: str) -> tuple[list, np.ndarray]:
     return list(range(arr.shape[1])), arr
 
 
-def h2_actuator_ranking(model, actuators, disturbance, outputs, gamma=1.0,
-                        rigid: str = "project", measure: str = "energy",
-                        velocity_outputs=None, rigid_frequency=None) -> H2Ranking:
+def h2_actuator_ranking(
+    model,
+    actuators,
+    disturbance,
+    outputs,
+    gamma=1.0,
+    rigid: str = "project",
+    measure: str = "energy",
+    velocity_outputs=None,
+    rigid_frequency=None,
+) -> H2Ranking:
     r"""Rank candidate actuators of a :class:`~flexsat.structures.modal_model.ModalModel` by
     seed 003 Eqs. (1)–(8) (:func:`h2_placement` with every candidate in B at once).
 
@@ -651,15 +676,24 @@ def h2_actuator_ranking(model, actuators, disturbance, outputs, gamma=1.0,
     printed = dict(zip(labels, result.printed.tolist()))
     scores = energy if measure == "energy" else printed
     ranking = tuple(sorted(labels, key=lambda k: -scores[k]))
-    return H2Ranking(ranking=ranking, scores=scores, energy=energy, printed=printed,
-                     placement=result, measure=measure, rigid=rigid, n_modes=int(keep.sum()),
-                     n_rigid=int(is_rigid.sum()))
+    return H2Ranking(
+        ranking=ranking,
+        scores=scores,
+        energy=energy,
+        printed=printed,
+        placement=result,
+        measure=measure,
+        rigid=rigid,
+        n_modes=int(keep.sum()),
+        n_rigid=int(is_rigid.sum()),
+    )
 
 
 # ------------------------------------------------------------------------------------------------
 # candidates and their score
-def actuator_candidates(model, nodes, axes=("x", "y", "z"), kind: str = "force",
-                        label: Callable | None = None) -> dict:
+def actuator_candidates(
+    model, nodes, axes=("x", "y", "z"), kind: str = "force", label: Callable | None = None
+) -> dict:
     """Candidate actuators at ``nodes`` along/about ``axes`` as label -> modal input vector.
 
     ``kind`` is "force" (:meth:`ModalModel.force_input`) or "torque"
@@ -762,8 +796,13 @@ class _Scorer:
         return tuple(self.cands[i] for i in sorted(idx))
 
 
-def exhaustive(candidates: Sequence, size: int, score: Callable,
-               max_sets: int = MAX_EXHAUSTIVE_SETS, keep: int = 10) -> SearchResult:
+def exhaustive(
+    candidates: Sequence,
+    size: int,
+    score: Callable,
+    max_sets: int = MAX_EXHAUSTIVE_SETS,
+    keep: int = 10,
+) -> SearchResult:
     """Score every ``size``-subset of ``candidates``; return the best.
 
     Refuses (ValueError, before enumerating anything) when C(len(candidates), size) exceeds
@@ -790,8 +829,13 @@ def exhaustive(candidates: Sequence, size: int, score: Callable,
             heapq.heapreplace(heap, item)
     ranked = sorted(heap, reverse=True)
     best = tuple((s, f.labels(idx)) for s, _, idx in ranked)
-    return SearchResult(selection=best[0][1], score=best[0][0], method="exhaustive",
-                        evaluations=len(f.cache), best=best)
+    return SearchResult(
+        selection=best[0][1],
+        score=best[0][0],
+        method="exhaustive",
+        evaluations=len(f.cache),
+        best=best,
+    )
 
 
 def greedy(candidates: Sequence, size: int, score: Callable, start: Sequence = ()) -> SearchResult:
@@ -805,8 +849,13 @@ def greedy(candidates: Sequence, size: int, score: Callable, start: Sequence = (
     if len(chosen) > k:
         raise ValueError(f"start: has {len(chosen)} candidates, more than size = {k}")
     chosen, path = _greedy(f, len(cands), k, chosen)
-    return SearchResult(selection=f.labels(chosen), score=f(chosen), method="greedy",
-                        evaluations=len(f.cache), best=tuple(path))
+    return SearchResult(
+        selection=f.labels(chosen),
+        score=f(chosen),
+        method="greedy",
+        evaluations=len(f.cache),
+        best=tuple(path),
+    )
 
 
 def _greedy(f: _Scorer, n: int, k: int, chosen: list) -> tuple[list, list]:
@@ -838,8 +887,14 @@ def _positions(cands: list, items, field_name: str) -> list:
     return out
 
 
-def exchange(candidates: Sequence, size: int, score: Callable, start: Sequence | None = None,
-             max_rounds: int = 100, tol: float = 0.0) -> SearchResult:
+def exchange(
+    candidates: Sequence,
+    size: int,
+    score: Callable,
+    start: Sequence | None = None,
+    max_rounds: int = 100,
+    tol: float = 0.0,
+) -> SearchResult:
     """Swap improvement (steepest ascent) from ``start`` (default: the :func:`greedy` set).
 
     Each round scores every swap of one chosen candidate for one unchosen one (k·(n − k)
@@ -864,7 +919,7 @@ def exchange(candidates: Sequence, size: int, score: Callable, start: Sequence |
             for i in range(len(cands)):
                 if i in chosen:
                     continue
-                trial = chosen[:pos] + [i] + chosen[pos + 1:]
+                trial = chosen[:pos] + [i] + chosen[pos + 1 :]
                 s = f(trial)
                 if s > best_s:
                     best_s, best_set = s, trial
@@ -872,5 +927,10 @@ def exchange(candidates: Sequence, size: int, score: Callable, start: Sequence |
             break
         chosen, current = best_set, best_s
         path.append((current, f.labels(chosen)))
-    return SearchResult(selection=f.labels(chosen), score=current, method="exchange",
-                        evaluations=len(f.cache), best=tuple(path))
+    return SearchResult(
+        selection=f.labels(chosen),
+        score=current,
+        method="exchange",
+        evaluations=len(f.cache),
+        best=tuple(path),
+    )

@@ -50,8 +50,7 @@ def _refuse_complex(value, field: str, allow_complex: bool) -> None:
     except (TypeError, ValueError):
         return
     if np.iscomplexobj(probe) and np.any(probe.imag):
-        raise ValueError(f"{field}: must be real (the symmetric modal problem), got complex "
-                         "values")
+        raise ValueError(f"{field}: must be real (the symmetric modal problem), got complex values")
 
 
 def _matrix(value, field: str, *, square: bool = True, allow_complex: bool = True) -> np.ndarray:
@@ -74,8 +73,15 @@ def _matrix(value, field: str, *, square: bool = True, allow_complex: bool = Tru
     return arr
 
 
-def _stack(value, field: str, shape: tuple[int, ...], n_params: int | None = None,
-           *, second: bool = False, allow_complex: bool = True) -> np.ndarray:
+def _stack(
+    value,
+    field: str,
+    shape: tuple[int, ...],
+    n_params: int | None = None,
+    *,
+    second: bool = False,
+    allow_complex: bool = True,
+) -> np.ndarray:
     """A derivative stack of shape (P, *shape), or (P, P, *shape) when ``second``."""
     if isinstance(value, (str, bytes)):
         raise ValueError(f"{field}: must be a numeric array, got the string {value!r}")
@@ -93,8 +99,9 @@ def _stack(value, field: str, shape: tuple[int, ...], n_params: int | None = Non
     if second and arr.shape[0] != arr.shape[1]:
         raise ValueError(f"{field}: the two parameter axes must agree, got shape {arr.shape}")
     if n_params is not None and arr.shape[0] != n_params:
-        raise ValueError(f"{field}: expected {n_params} parameters along the first axis, got "
-                         f"{arr.shape[0]}")
+        raise ValueError(
+            f"{field}: expected {n_params} parameters along the first axis, got {arr.shape[0]}"
+        )
     if arr.shape[0] == 0:
         raise ValueError(f"{field}: needs at least one parameter, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
@@ -120,8 +127,9 @@ def _gap_rtol(value) -> float:
     return value
 
 
-def _check_distinct(values: np.ndarray, scale: float, gap_rtol: float, what: str,
-                    select: np.ndarray | None = None) -> None:
+def _check_distinct(
+    values: np.ndarray, scale: float, gap_rtol: float, what: str, select: np.ndarray | None = None
+) -> None:
     """Raise if two of ``values`` (or one of ``select`` and any other) are within the gap."""
     n = values.size
     diff = np.abs(values[:, None] - values[None, :])
@@ -140,7 +148,8 @@ def _check_distinct(values: np.ndarray, scale: float, gap_rtol: float, what: str
             f"{what}: {what[:-1] if what.endswith('s') else what} {i} and {j} are repeated "
             f"({values[i]:.6g} and {values[j]:.6g}, gap {abs(values[i] - values[j]):.3g} <= "
             f"{tol:.3g} = gap_rtol x scale); their derivatives are undefined (the formulas divide "
-            f"by the gap)")
+            f"by the gap)"
+        )
 
 
 # -- non-symmetric generalized eigenproblem, Att. 5 Eqs. 40-44 ---------------------------------
@@ -243,14 +252,16 @@ def _eigensolve(A, B, gap_rtol):
         i = int(np.flatnonzero(bad)[0])
         raise ValueError(
             f"eigenvalues: eigenvector {i} (λ = {lam[i]:.6g}) has φᵀBφ ≈ 0, so the "
-            "plain-transpose normalisation φᵀBφ = 1 of Att. 5 Eq. 41 is impossible")
+            "plain-transpose normalisation φᵀBφ = 1 of Att. 5 Eq. 41 is impossible"
+        )
     phi = phi / np.sqrt(norm2)
     psi = np.linalg.inv(B @ phi).T  # Ψᵀ B Φ = I
     return lam, phi, psi
 
 
-def eig_derivatives(A, dA, B=None, dB=None, d2A=None, d2B=None, *, order: int = 1,
-                    gap_rtol: float = GAP_RTOL) -> EigenDerivatives:
+def eig_derivatives(
+    A, dA, B=None, dB=None, d2A=None, d2B=None, *, order: int = 1, gap_rtol: float = GAP_RTOL
+) -> EigenDerivatives:
     """Eigenvalue and eigenvector derivatives of A(p) φ = λ B(p) φ (Att. 5 Eqs. 40-44).
 
     Modal expansion with the adjoint eigenvectors (Lim, Junkins & Wang 1987; Att. 5 Eqs. 42-43),
@@ -339,8 +350,7 @@ def eig_derivatives(A, dA, B=None, dB=None, d2A=None, d2B=None, *, order: int = 
 
     hess_lam = hess_phi = None
     if order == 2:
-        hess_lam, hess_phi = _second_order(lam, phi, psi, B, a, b, C, dlam, S, dB, d2A, d2B,
-                                           denom)
+        hess_lam, hess_phi = _second_order(lam, phi, psi, B, a, b, C, dlam, S, dB, d2A, d2B, denom)
     return EigenDerivatives(lam, phi, psi, dlam, C, dphi, Dk, dpsi, hess_lam, hess_phi)
 
 
@@ -408,8 +418,9 @@ class ModalDerivatives:
     indices: np.ndarray
 
 
-def modal_derivatives(K, M, dK, dM=None, modes=None, *,
-                      gap_rtol: float = GAP_RTOL) -> ModalDerivatives:
+def modal_derivatives(
+    K, M, dK, dM=None, modes=None, *, gap_rtol: float = GAP_RTOL
+) -> ModalDerivatives:
     """Natural-frequency and mode-shape derivatives of K(p) φ = ω² M(p) φ, Nelson's method.
 
     For each selected mode (λ = ω², φᵀ M φ = 1) and parameter p_k:
@@ -463,16 +474,14 @@ def modal_derivatives(K, M, dK, dM=None, modes=None, *,
     _check_distinct(lam_all, scale, gap_rtol, "eigenvalues", select=sel)
     lam, phi = lam_all[sel], phi_all[:, sel]
     s = sel.size
-    dlam = np.einsum("ji,pjk,ki->pi", phi, dK, phi) - lam * np.einsum(
-        "ji,pjk,ki->pi", phi, dM, phi)
+    dlam = np.einsum("ji,pjk,ki->pi", phi, dK, phi) - lam * np.einsum("ji,pjk,ki->pi", phi, dM, phi)
     dphi = np.empty((P, n, s))
     for col in range(s):
         f = phi[:, col]
         r = int(np.argmax(np.abs(f)))
         keep = np.delete(np.arange(n), r)
         Z = K - lam[col] * M
-        rhs = -(np.einsum("pjk,k->pj", dK - lam[col] * dM, f)
-                - dlam[:, col, None] * (M @ f))
+        rhs = -(np.einsum("pjk,k->pj", dK - lam[col] * dM, f) - dlam[:, col, None] * (M @ f))
         v = np.zeros((P, n))
         v[:, keep] = np.linalg.solve(Z[np.ix_(keep, keep)], rhs[:, keep].T).T
         c = -(v @ (M @ f)) - 0.5 * np.einsum("j,pjk,k->p", f, dM, f)
@@ -515,8 +524,9 @@ class SVDDerivatives:
     singular_value_hessian: np.ndarray | None = None
 
 
-def svd_derivatives(Phi, dPhi, d2Phi=None, *, order: int = 1, indices=None,
-                    gap_rtol: float = GAP_RTOL) -> SVDDerivatives:
+def svd_derivatives(
+    Phi, dPhi, d2Phi=None, *, order: int = 1, indices=None, gap_rtol: float = GAP_RTOL
+) -> SVDDerivatives:
     """First- and second-order sensitivity of the SVD Φ = U Σ Vᴴ (Att. 5 Eqs. 15-27).
 
     With G^k ≡ Uᴴ (∂Φ/∂p_k) V (so G^k_ji = U_jᴴ Φ_k V_i) and G^{kl} ≡ Uᴴ (∂²Φ/∂p_k∂p_l) V:
@@ -578,8 +588,10 @@ def svd_derivatives(Phi, dPhi, d2Phi=None, *, order: int = 1, indices=None,
     zero = sig[sel] <= gap_rtol * scale
     if np.any(zero):
         i = int(sel[np.flatnonzero(zero)[0]])
-        raise ValueError(f"singular values: σ_{i} = {sig[i]:.3g} is zero (<= gap_rtol x σ_1); "
-                         "its derivatives are undefined")
+        raise ValueError(
+            f"singular values: σ_{i} = {sig[i]:.3g} is zero (<= gap_rtol x σ_1); "
+            "its derivatives are undefined"
+        )
     _check_distinct(s_pad if big > r else sig, scale, gap_rtol, "singular values", select=sel)
 
     G = np.zeros((P, big, big), dtype=complex)
@@ -603,10 +615,10 @@ def svd_derivatives(Phi, dPhi, d2Phi=None, *, order: int = 1, indices=None,
         w = 1.0 / d2
         w[sel, cols] = 0.0
         sj = s_pad[:, None]
-        terms = (sigma_i * (np.einsum("ljc,kjc->kljc", Gcol.conj(), Gcol)
-                            + np.einsum("ljc,kjc->kljc", Grow.conj(), Grow))
-                 + sj * (np.einsum("ljc,kjc->kljc", Grow, Gcol)
-                         + np.einsum("ljc,kjc->kljc", Gcol, Grow)))
+        terms = sigma_i * (
+            np.einsum("ljc,kjc->kljc", Gcol.conj(), Gcol)
+            + np.einsum("ljc,kjc->kljc", Grow.conj(), Grow)
+        ) + sj * (np.einsum("ljc,kjc->kljc", Grow, Gcol) + np.einsum("ljc,kjc->kljc", Gcol, Grow))
         hess = np.einsum("kljc,jc->klc", terms, w).real
         gii = Gcol[:, sel, cols].imag  # (P, s)
         hess += gii[None, :, :] * gii[:, None, :] / sigma_i
@@ -615,8 +627,9 @@ def svd_derivatives(Phi, dPhi, d2Phi=None, *, order: int = 1, indices=None,
     return SVDDerivatives(sig, U, V, sel, dsig, dU, dV, hess)
 
 
-def condition_number_derivatives(Phi, dPhi, d2Phi=None, *, order: int = 1,
-                                 gap_rtol: float = GAP_RTOL):
+def condition_number_derivatives(
+    Phi, dPhi, d2Phi=None, *, order: int = 1, gap_rtol: float = GAP_RTOL
+):
     """2-norm condition number κ = σ_1/σ_r of Φ(p) and its gradient (and Hessian).
 
     From Att. 5 Eq. 15 (and Eq. 27 for ``order=2``) applied to the largest and smallest singular
@@ -637,8 +650,9 @@ def condition_number_derivatives(Phi, dPhi, d2Phi=None, *, order: int = 1,
     Phi = _matrix(Phi, "Phi", square=False)
     last = min(Phi.shape) - 1
     if last == 0:
-        raise ValueError(f"Phi: a condition number needs at least 2 singular values, got shape "
-                         f"{Phi.shape}")
+        raise ValueError(
+            f"Phi: a condition number needs at least 2 singular values, got shape {Phi.shape}"
+        )
     d = svd_derivatives(Phi, dPhi, d2Phi, order=order, indices=[0, last], gap_rtol=gap_rtol)
     return _kappa_from_svd(d, order)
 
@@ -655,8 +669,9 @@ def _kappa_from_svd(d: SVDDerivatives, order: int):
     return kappa, kappa * g, kappa * (np.outer(g, g) + h1 - hr)
 
 
-def eigenvector_condition_derivatives(A, dA, B=None, dB=None, d2A=None, d2B=None, *,
-                                      order: int = 1, gap_rtol: float = GAP_RTOL):
+def eigenvector_condition_derivatives(
+    A, dA, B=None, dB=None, d2A=None, d2B=None, *, order: int = 1, gap_rtol: float = GAP_RTOL
+):
     """Condition number of the normalised modal matrix of A φ = λ B φ and its derivatives.
 
     The performance index of Att. 5 Eq. 46, J = σ_1(Φ)/σ_n(Φ) with φ_iᵀ B φ_i = 1, differentiated
@@ -675,8 +690,14 @@ def eigenvector_condition_derivatives(A, dA, B=None, dB=None, d2A=None, d2B=None
     n = eig.right.shape[0]
     if n < 2:
         raise ValueError("A: a condition number needs n >= 2")
-    svd = svd_derivatives(eig.right, eig.right_gradient, eig.right_hessian, order=order,
-                          indices=[0, n - 1], gap_rtol=gap_rtol)
+    svd = svd_derivatives(
+        eig.right,
+        eig.right_gradient,
+        eig.right_hessian,
+        order=order,
+        indices=[0, n - 1],
+        gap_rtol=gap_rtol,
+    )
     return (*_kappa_from_svd(svd, order), eig)
 
 

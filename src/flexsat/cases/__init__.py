@@ -22,5 +22,18 @@ from flexsat.cases.tamu import tamu
 from flexsat.cases.tamu_grid import tamu_grid
 from flexsat.catalog import CASES, CaseInfo, get_case
 
-__all__ = ["CASES", "CaseInfo", "agrawal_bang", "bainum", "cantilever_beam", "draper_rpl", "eps",
-           "free_free_beam", "get_case", "nafems_fv2", "nps", "tamu", "tamu_grid"]
+__all__ = [
+    "CASES",
+    "CaseInfo",
+    "agrawal_bang",
+    "bainum",
+    "cantilever_beam",
+    "draper_rpl",
+    "eps",
+    "free_free_beam",
+    "get_case",
+    "nafems_fv2",
+    "nps",
+    "tamu",
+    "tamu_grid",
+]

@@ -33,12 +33,12 @@ import numpy as np
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.dynamics.structural import StructuralPlant
+from flexsat.input_checks import require_count, require_finite, require_nonneg
 from flexsat.structures.fem import Structure
 from flexsat.structures.modal_model import ModalModel
 from flexsat.structures.mode_description import classify_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_finite, require_nonneg
 
 SOURCE = CASES["agrawal_bang"].source
 
@@ -129,7 +129,9 @@ class AgrawalBangCase:
         ends = [x for b, s in self.patches if b == beam for x in (s, s + self.patch_length)]
         grid = np.linspace(0.0, L, int(np.ceil(L / self.element_length - 1e-9)) + 1)
         h = L / (grid.size - 1)
-        keep = [x for x in grid if x in (0.0, L) or min((abs(x - e) for e in ends), default=h) > h / 4]
+        keep = [
+            x for x in grid if x in (0.0, L) or min((abs(x - e) for e in ends), default=h) > h / 4
+        ]
         return np.unique(np.concatenate([keep, ends]))
 
     @property
@@ -190,14 +192,17 @@ class AgrawalBangCase:
         """Cantilevered modal model (reference: the clamped base, the origin); ``n_modes``
         defaults to the case's (3), ``"all"`` keeps every finite-element mode."""
         if "modal" not in self._cache:
-            self._cache["modal"] = ModalModel.from_fe(self.fe_modes, self.damping,
-                                                      boundary="cantilevered")
+            self._cache["modal"] = ModalModel.from_fe(
+                self.fe_modes, self.damping, boundary="cantilevered"
+            )
         modal = self._cache["modal"]
         if n_modes == "all":
             return modal
         n = self.n_modes if n_modes is None else require_count(n_modes, "n_modes")
         if n > modal.n_modes:
-            raise ValueError(f"n_modes: the finite-element model has {modal.n_modes} modes, got {n}")
+            raise ValueError(
+                f"n_modes: the finite-element model has {modal.n_modes} modes, got {n}"
+            )
         return modal.truncate(n)
 
     def piezo_pairs(self, n_modes: int | None = None) -> tuple[PiezoPair, ...]:
@@ -208,13 +213,19 @@ class AgrawalBangCase:
         pairs = []
         for j, (beam, start) in enumerate(self.patches):
             a, b = self._node_at(beam, start), self._node_at(beam, start + self.patch_length)
-            pairs.append(PiezoPair(
-                name=f"pair {j + 1}", beam=beam, start=start, end=start + self.patch_length,
-                node_a=a, node_b=b,
-                actuator=self.actuator_gain * modal.moment_pair(a, b, "z"),
-                sensor=self.sensor_gain * strain_per_rotation * modal.strain_output(a, b, "z"),
-                ratio=self.actuator_gain / (self.sensor_gain * strain_per_rotation),
-            ))
+            pairs.append(
+                PiezoPair(
+                    name=f"pair {j + 1}",
+                    beam=beam,
+                    start=start,
+                    end=start + self.patch_length,
+                    node_a=a,
+                    node_b=b,
+                    actuator=self.actuator_gain * modal.moment_pair(a, b, "z"),
+                    sensor=self.sensor_gain * strain_per_rotation * modal.strain_output(a, b, "z"),
+                    ratio=self.actuator_gain / (self.sensor_gain * strain_per_rotation),
+                )
+            )
         return tuple(pairs)
 
     def to_statespace(self, n_modes: int | None = None):
@@ -224,13 +235,19 @@ class AgrawalBangCase:
 
         modal = self.modal_model(n_modes)
         pairs = self.piezo_pairs(n_modes)
-        sys = modal.to_statespace([p.actuator for p in pairs],
-                                  [(p.sensor, "displacement") for p in pairs])
+        sys = modal.to_statespace(
+            [p.actuator for p in pairs], [(p.sensor, "displacement") for p in pairs]
+        )
         m = modal.n_modes
-        return control.ss(sys.A, sys.B, sys.C, sys.D,
-                          states=[f"eta[{i}]" for i in range(m)] + [f"eta_dot[{i}]" for i in range(m)],
-                          inputs=[f"u{j + 1}" for j in range(len(pairs))],
-                          outputs=[f"y{j + 1}" for j in range(len(pairs))])
+        return control.ss(
+            sys.A,
+            sys.B,
+            sys.C,
+            sys.D,
+            states=[f"eta[{i}]" for i in range(m)] + [f"eta_dot[{i}]" for i in range(m)],
+            inputs=[f"u{j + 1}" for j in range(len(pairs))],
+            outputs=[f"y{j + 1}" for j in range(len(pairs))],
+        )
 
     def _channel_specs(self, node):
         """Actuator and sensor specs of the three pairs, at ``node(n)`` (a node, or its rz dof)."""
@@ -239,8 +256,10 @@ class AgrawalBangCase:
         strain_per_rotation = self.thickness / 2 / self.patch_length
         acts, sensors, rates = [], [], []
         for j, (beam, start) in enumerate(self.patches, start=1):
-            ends = (node(self._node_at(beam, start)),
-                    node(self._node_at(beam, start + self.patch_length)))
+            ends = (
+                node(self._node_at(beam, start)),
+                node(self._node_at(beam, start + self.patch_length)),
+            )
             axis = "z" if isinstance(ends[0], (int, np.integer)) else None
             acts.append(Actuator(f"u{j}", "moment_pair", ends, axis, self.actuator_gain, "V"))
             gain = self.sensor_gain * strain_per_rotation
@@ -261,12 +280,15 @@ class AgrawalBangCase:
         if coordinates != "fe":
             raise ValueError(f"coordinates: must be 'modal' or 'fe', got {coordinates!r}")
         if n_modes is not None:
-            raise ValueError("n_modes: the finite-element plant keeps every dof; use "
-                             "coordinates='modal' to truncate")
+            raise ValueError(
+                "n_modes: the finite-element plant keeps every dof; use "
+                "coordinates='modal' to truncate"
+            )
         asm = self.structure().assemble()
         acts, sensors = self._channel_specs(lambda n: (n, "rz"))
-        return StructuralPlant.from_fe(asm.M, asm.K, acts, sensors, dofs=asm.dofs,
-                                       fixed=[(self.base_node, "rz")])
+        return StructuralPlant.from_fe(
+            asm.M, asm.K, acts, sensors, dofs=asm.dofs, fixed=[(self.base_node, "rz")]
+        )
 
     def tip_outputs(self, n_modes: int | None = None) -> np.ndarray:
         """Rows (4, m) giving ζ_t = [y_1ᵗ, α, y_2ᵗ, β] of Eq. 35 from η (small deflections).
@@ -288,8 +310,9 @@ class AgrawalBangCase:
         """Q̄ of Eq. 35 for ζ_t = [y_1ᵗ, α, y_2ᵗ, β] (l_2 = ``beam2_length``)."""
         w1, w2 = float(require_finite(w1, "w1")), float(require_finite(w2, "w2"))
         l2 = self.beam2_length
-        return np.array([[1.0, 0, 0, 0], [0, w1 * l2**2 + w2, w1 * l2, w2],
-                         [0, w1 * l2, w1, 0], [0, w2, 0, w2]])
+        return np.array(
+            [[1.0, 0, 0, 0], [0, w1 * l2**2 + w2, w1 * l2, w2], [0, w1 * l2, w1, 0], [0, w2, 0, w2]]
+        )
 
     # -- the case protocol ---------------------------------------------------------------------
     def frequencies_hz(self, n_modes: int) -> np.ndarray:
@@ -302,17 +325,27 @@ class AgrawalBangCase:
         m = self._mesh
         groups = {"structure 1": m["ids1"], "structure 2": m["ids2"][1:]}
         n = require_count(n_modes, "n_modes")
-        return [f"in-plane bending: structure 1 {d.shares['structure 1']:.0%}, "
-                f"structure 2 {d.shares['structure 2']:.0%} of the kinetic energy"
-                for d in classify_modes(self.fe_modes, groups)[:n]]
+        return [
+            f"in-plane bending: structure 1 {d.shares['structure 1']:.0%}, "
+            f"structure 2 {d.shares['structure 2']:.0%} of the kinetic energy"
+            for d in classify_modes(self.fe_modes, groups)[:n]
+        ]
 
     def mode_details(self, n_modes: int) -> dict:
         """Patch nodes and the modal actuator influence of each pair (a_1 = 1 units)."""
         pairs = self.piezo_pairs(n_modes)
         return {
-            "patches": [{"name": p.name, "structure": p.beam, "start_m": p.start, "end_m": p.end,
-                         "nodes": [p.node_a, p.node_b], "actuator": p.actuator.tolist()}
-                        for p in pairs],
+            "patches": [
+                {
+                    "name": p.name,
+                    "structure": p.beam,
+                    "start_m": p.start,
+                    "end_m": p.end,
+                    "nodes": [p.node_a, p.node_b],
+                    "actuator": p.actuator.tolist(),
+                }
+                for p in pairs
+            ],
             "mass_kg": self.modal_model().total_mass,
             "published_frequencies": "none (seed 004 prints no frequency of its model)",
         }
@@ -332,8 +365,10 @@ def _patches(raw, beam_lengths, patch_length) -> tuple:
         s = float(require_nonneg(to_si(start, "m", f"patches[{j}]"), f"patches[{j}]"))
         L = beam_lengths[beam - 1]
         if s + patch_length > L * (1 + 1e-12):
-            raise ValueError(f"patches[{j}]: the patch [{s}, {s + patch_length}] m runs past the "
-                             f"end of structure {beam} ({L} m)")
+            raise ValueError(
+                f"patches[{j}]: the patch [{s}, {s + patch_length}] m runs past the "
+                f"end of structure {beam} ({L} m)"
+            )
         out.append((int(beam), s))
     for i in range(3):
         for j in range(i):
@@ -351,14 +386,19 @@ def agrawal_bang(**overrides) -> AgrawalBangCase:
     """
     values = read_inputs("agrawal_bang", _INPUTS, overrides)
     if values["damping"] >= 1:
-        raise ValueError(f"damping: must be < 1 (a ratio of critical damping), got {values['damping']!r}")
+        raise ValueError(
+            f"damping: must be < 1 (a ratio of critical damping), got {values['damping']!r}"
+        )
     for name in ("element_length", "patch_length"):
         shortest = min(values["beam1_length"], values["beam2_length"])
         if values[name] > shortest:
-            raise ValueError(f"{name}: must not exceed the shorter structure ({shortest} m), "
-                             f"got {values[name]} m")
-    values["patches"] = _patches(values["patches"], (values["beam1_length"], values["beam2_length"]),
-                                 values["patch_length"])
+            raise ValueError(
+                f"{name}: must not exceed the shorter structure ({shortest} m), "
+                f"got {values[name]} m"
+            )
+    values["patches"] = _patches(
+        values["patches"], (values["beam1_length"], values["beam2_length"]), values["patch_length"]
+    )
     case = AgrawalBangCase(**values)
     case.modal_model()  # assemble and solve now: one clear message at construction
     return case

@@ -41,7 +41,7 @@ import numpy as np
 
 from flexsat.cases.agrawal_bang import PUBLISHED, AgrawalBangCase, agrawal_bang
 from flexsat.control.ppf import PPFBank, PPFController, PPFModel, PPFProblem
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
 
 #: filter damping ratio (not published, spec §1.3; module docstring)
 ZETA_F = 0.1
@@ -66,18 +66,36 @@ PUBLISHED_COSTS = {
 
 #: the published gains (Tables 1–3), mode × actuator, for the report beside ours
 PUBLISHED_GAINS = {
-    ((100, 100), "first"): ((9.2108e4, 1.5109e4, 1.0567e2), (8.8999e4, 1.0013e4, 1.0515e2),
-                            (3.7144e4, 4.1053e2, 1.0188e2)),
-    ((100, 100), "three"): ((9.0695e4, 1.5182e4, 1.0633e2), (9.6529e4, 1.7370e4, 1.1196e2),
-                            (5.6419e4, 6.8916e3, 2.0002e2)),
-    ((500, 100), "first"): ((1.5166e5, 2.1829e4, 1.1040e2), (1.6428e5, 1.1710e4, 1.1176e2),
-                            (8.5035e4, -2.8756e3, 1.0647e2)),
-    ((500, 100), "three"): ((1.4748e5, 2.1694e4, 1.1127e2), (1.6946e5, 2.2177e4, 1.2016e2),
-                            (1.0588e5, 6.5468e3, 2.2375e2)),
-    ((100, 500), "first"): ((2.0822e5, 2.5027e4, 1.776e2), (2.5631e5, 7.0151e3, 1.1813e2),
-                            (1.5904e5, -1.1803e4, 1.0884e2)),
-    ((100, 500), "three"): ((2.0229e5, 2.4333e4, 1.2137e2), (2.6968e5, 2.6487e4, 1.4107e2),
-                            (2.3136e5, 8.3239e3, 5.0462e2)),
+    ((100, 100), "first"): (
+        (9.2108e4, 1.5109e4, 1.0567e2),
+        (8.8999e4, 1.0013e4, 1.0515e2),
+        (3.7144e4, 4.1053e2, 1.0188e2),
+    ),
+    ((100, 100), "three"): (
+        (9.0695e4, 1.5182e4, 1.0633e2),
+        (9.6529e4, 1.7370e4, 1.1196e2),
+        (5.6419e4, 6.8916e3, 2.0002e2),
+    ),
+    ((500, 100), "first"): (
+        (1.5166e5, 2.1829e4, 1.1040e2),
+        (1.6428e5, 1.1710e4, 1.1176e2),
+        (8.5035e4, -2.8756e3, 1.0647e2),
+    ),
+    ((500, 100), "three"): (
+        (1.4748e5, 2.1694e4, 1.1127e2),
+        (1.6946e5, 2.2177e4, 1.2016e2),
+        (1.0588e5, 6.5468e3, 2.2375e2),
+    ),
+    ((100, 500), "first"): (
+        (2.0822e5, 2.5027e4, 1.776e2),
+        (2.5631e5, 7.0151e3, 1.1813e2),
+        (1.5904e5, -1.1803e4, 1.0884e2),
+    ),
+    ((100, 500), "three"): (
+        (2.0229e5, 2.4333e4, 1.2137e2),
+        (2.6968e5, 2.6487e4, 1.4107e2),
+        (2.3136e5, 8.3239e3, 5.0462e2),
+    ),
 }
 
 
@@ -90,8 +108,10 @@ def _weights_key(weights) -> tuple:
 
 def _excitation(excitation) -> str:
     if excitation not in EXCITATIONS:
-        raise ValueError(f"excitation: must be 'first' (the first flexible mode) or 'three' "
-                         f"(all three modes), got {excitation!r}")
+        raise ValueError(
+            f"excitation: must be 'first' (the first flexible mode) or 'three' "
+            f"(all three modes), got {excitation!r}"
+        )
     return excitation
 
 
@@ -106,8 +126,10 @@ def paper_goal_ratio(weights, excitation) -> float:
     """
     key = (_weights_key(weights), _excitation(excitation))
     if key not in PUBLISHED_COSTS:
-        raise ValueError(f"weights: the paper's goal is known only for its own weights "
-                         f"{list(PUBLISHED['weights'])}, got {list(key[0])}")
+        raise ValueError(
+            f"weights: the paper's goal is known only for its own weights "
+            f"{list(PUBLISHED['weights'])}, got {list(key[0])}"
+        )
     J_init, J_opt = PUBLISHED_COSTS[key]
     return (J_opt / J_init - (1 - GAMMA_STOP)) / GAMMA_STOP
 
@@ -126,12 +148,13 @@ class GoalRule:
 
     def __post_init__(self):
         if self.kind not in ("paper", "ratio", "offset"):
-            raise ValueError(f"goal: rule must be 'paper', 'ratio' or 'offset', got "
-                             f"{self.kind!r}")
+            raise ValueError(f"goal: rule must be 'paper', 'ratio' or 'offset', got {self.kind!r}")
         if self.kind == "paper":
             if self.value is not None:
-                raise ValueError("goal.value: the 'paper' rule takes no value (its ratio comes "
-                                 "from the published table)")
+                raise ValueError(
+                    "goal.value: the 'paper' rule takes no value (its ratio comes "
+                    "from the published table)"
+                )
             return
         if self.value is None:
             raise ValueError(f"goal.value: the {self.kind!r} rule needs a value")
@@ -162,8 +185,9 @@ def tip_error_rows(case: AgrawalBangCase, n_modes: int = 3) -> np.ndarray:
     return np.vstack([y1, -case.beam2_length * alpha - y2, alpha + beta])
 
 
-def initial_conditions(case: AgrawalBangCase, excitation: str, amplitude=TIP_AMPLITUDE,
-                       n_modes: int = 3) -> tuple[np.ndarray, np.ndarray]:
+def initial_conditions(
+    case: AgrawalBangCase, excitation: str, amplitude=TIP_AMPLITUDE, n_modes: int = 3
+) -> tuple[np.ndarray, np.ndarray]:
     """(X₀, x₀): the second moment E[x₀ x₀ᵀ] (2m × 2m) over the structural states [η, η̇] and
     the one initial state of the time responses (module docstring). With independent random
     signs s_i the cross terms average out: E[(Σ s_i x_i)(Σ s_i x_i)ᵀ] = Σ x_i x_iᵀ.
@@ -219,9 +243,15 @@ class PPFCaseProblem:
         return self.problem.bank
 
 
-def ppf_problem(case: AgrawalBangCase | None = None, weights=(100.0, 100.0),
-                excitation: str = "first", Q_u=PUBLISHED["control_weight"], zeta_f=ZETA_F,
-                n_modes: int = PUBLISHED["n_modes"], amplitude=TIP_AMPLITUDE) -> PPFCaseProblem:
+def ppf_problem(
+    case: AgrawalBangCase | None = None,
+    weights=(100.0, 100.0),
+    excitation: str = "first",
+    Q_u=PUBLISHED["control_weight"],
+    zeta_f=ZETA_F,
+    n_modes: int = PUBLISHED["n_modes"],
+    amplitude=TIP_AMPLITUDE,
+) -> PPFCaseProblem:
     """The seed 004 problem on the case (module docstring): PPF model from the three pairs and
     ``n_modes`` modes, the bank tuned to the modes with damping ``zeta_f``, Q_s = Tᵀ Q̄(w_1, w_2) T
     (Eq. 35), the control weight ``Q_u`` and X₀ of the excitation.
@@ -242,8 +272,9 @@ def ppf_problem(case: AgrawalBangCase | None = None, weights=(100.0, 100.0),
     model = PPFModel.from_pairs(modal.frequencies, modal.damping, case.piezo_pairs(m))
     bank = PPFBank.tuned(model, zeta_f)
     X0, x0 = initial_conditions(case, excitation, amplitude, m)
-    problem = PPFProblem.from_output_weight(model, bank, case.tip_outputs(m),
-                                            case.tip_weight(*w), Q_u, X0)
+    problem = PPFProblem.from_output_weight(
+        model, bank, case.tip_outputs(m), case.tip_weight(*w), Q_u, X0
+    )
     return PPFCaseProblem(case, w, excitation, problem, x0, tip_error_rows(case, m))
 
 
@@ -297,15 +328,26 @@ class PPFCaseRun:
     def row(self) -> dict:
         """The results-table row: costs, γ, gains g_<actuator><mode>, S and pole checks."""
         st = self.setup.problem.stability(self.optimization.gains)
-        r = {"w1": self.setup.weights[0], "w2": self.setup.weights[1],
-             "excitation": self.setup.excitation, "goal": self.goal_label,
-             "J_init": self.J_init, "J_goal": self.J_goal, "J_opt": self.J_opt,
-             "gamma": self.optimization.gamma, "status": self.optimization.status}
+        r = {
+            "w1": self.setup.weights[0],
+            "w2": self.setup.weights[1],
+            "excitation": self.setup.excitation,
+            "goal": self.goal_label,
+            "J_init": self.J_init,
+            "J_goal": self.J_goal,
+            "J_opt": self.J_opt,
+            "gamma": self.optimization.gamma,
+            "status": self.optimization.status,
+        }
         for i, gi in enumerate(self.gains):
             for j, g in enumerate(gi):
                 r[f"g{i + 1}{j + 1}"] = float(g)
-        r.update(min_eig_S=float(st.stiffness_eigenvalues[0]), max_re_pole=st.max_real_pole,
-                 stable=bool(st.stable), decided_by=st.decided_by)
+        r.update(
+            min_eig_S=float(st.stiffness_eigenvalues[0]),
+            max_re_pole=st.max_real_pole,
+            stable=bool(st.stable),
+            decided_by=st.decided_by,
+        )
         return r
 
 
@@ -328,11 +370,21 @@ def tip_responses(setup: PPFCaseProblem, gains: dict, duration: float, rate: flo
     return out
 
 
-def run_ppf_case(weights=(100.0, 100.0), excitation: str = "first", goal: GoalRule | None = None,
-                 *, case: AgrawalBangCase | None = None, initial_gains=PUBLISHED["initial_gain"],
-                 gamma_stop=GAMMA_STOP, Q_u=PUBLISHED["control_weight"], zeta_f=ZETA_F,
-                 amplitude=TIP_AMPLITUDE, duration=None, rate=200.0,
-                 optimizer_options: dict | None = None) -> PPFCaseRun:
+def run_ppf_case(
+    weights=(100.0, 100.0),
+    excitation: str = "first",
+    goal: GoalRule | None = None,
+    *,
+    case: AgrawalBangCase | None = None,
+    initial_gains=PUBLISHED["initial_gain"],
+    gamma_stop=GAMMA_STOP,
+    Q_u=PUBLISHED["control_weight"],
+    zeta_f=ZETA_F,
+    amplitude=TIP_AMPLITUDE,
+    duration=None,
+    rate=200.0,
+    optimizer_options: dict | None = None,
+) -> PPFCaseRun:
     """Optimise one Tables 1–3 case (F8) and, when ``duration`` (s) is given, simulate the tip
     responses with zero, initial and optimised gains (F9).
 
@@ -357,23 +409,33 @@ def run_ppf_case(weights=(100.0, 100.0), excitation: str = "first", goal: GoalRu
     goal = GoalRule("paper") if goal is None else goal
     n = setup.problem.n_gains
     g0 = require_finite(initial_gains, "initial_gains")
-    g0 = np.full(n, float(g0)) if g0.ndim == 0 else setup.problem.bank.check_gains(
-        g0, "initial_gains")
+    g0 = (
+        np.full(n, float(g0))
+        if g0.ndim == 0
+        else setup.problem.bank.check_gains(g0, "initial_gains")
+    )
     J_init = setup.problem.cost(g0)
-    result = optimize_ppf_gains(setup.problem, g0,
-                                J_goal=goal.goal(J_init, setup.weights, setup.excitation),
-                                gamma_stop=gamma_stop, **(optimizer_options or {}))
+    result = optimize_ppf_gains(
+        setup.problem,
+        g0,
+        J_goal=goal.goal(J_init, setup.weights, setup.excitation),
+        gamma_stop=gamma_stop,
+        **(optimizer_options or {}),
+    )
     responses = None
     if duration is not None:
-        responses = tip_responses(setup, {"open loop": np.zeros(n), "initial gains": g0,
-                                          "optimised gains": result.gains},
-                                  float(require_positive(duration, "duration", "s")),
-                                  float(require_positive(rate, "rate", "Hz")))
+        responses = tip_responses(
+            setup,
+            {"open loop": np.zeros(n), "initial gains": g0, "optimised gains": result.gains},
+            float(require_positive(duration, "duration", "s")),
+            float(require_positive(rate, "rate", "Hz")),
+        )
     return PPFCaseRun(setup, goal, g0, result, responses)
 
 
-def run_ppf_grid(goals=(GoalRule("paper"), GoalRule("ratio", 0.2)), grid=GRID,
-                 **options) -> list[PPFCaseRun]:
+def run_ppf_grid(
+    goals=(GoalRule("paper"), GoalRule("ratio", 0.2)), grid=GRID, **options
+) -> list[PPFCaseRun]:
     """Every (w_1, w_2) × excitation of ``grid`` (the Tables 1–3 grid) under every goal rule,
     in the order goal, then grid; ``options`` as :func:`run_ppf_case`."""
     case = options.pop("case", None) or agrawal_bang()
@@ -392,7 +454,23 @@ def settling_time(t, signal, fraction: float = 0.1) -> float | None:
     return float(t[above[-1] + 1])
 
 
-__all__ = ["EXCITATIONS", "GAMMA_STOP", "GRID", "GoalRule", "PPFCaseProblem", "PPFCaseRun",
-           "PUBLISHED_COSTS", "PUBLISHED_GAINS", "TIP_AMPLITUDE", "ZETA_F", "initial_conditions",
-           "paper_goal_ratio", "ppf_problem", "run_ppf_case", "run_ppf_grid", "settling_time",
-           "tip_error_rows", "tip_responses"]
+__all__ = [
+    "EXCITATIONS",
+    "GAMMA_STOP",
+    "GRID",
+    "GoalRule",
+    "PPFCaseProblem",
+    "PPFCaseRun",
+    "PUBLISHED_COSTS",
+    "PUBLISHED_GAINS",
+    "TIP_AMPLITUDE",
+    "ZETA_F",
+    "initial_conditions",
+    "paper_goal_ratio",
+    "ppf_problem",
+    "run_ppf_case",
+    "run_ppf_grid",
+    "settling_time",
+    "tip_error_rows",
+    "tip_responses",
+]

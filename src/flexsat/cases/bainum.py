@@ -36,7 +36,7 @@ and applied by :func:`published_matrix` (docs/bainum.md).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -50,7 +50,7 @@ from flexsat.analysis.controllability import (
 )
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
-from flexsat.validation import require_count, require_finite
+from flexsat.input_checks import require_count, require_finite
 
 SOURCE = CASES["bainum"].source
 
@@ -70,30 +70,32 @@ PUBLISHED = {
     "initial_position": 0.01,  # every position coordinate, rates zero (L468, L843)
     # Ch. III Case 1 (L800-L804), actuators at (-l/2, +l/2, +l/4)
     "ch3_case1_positions": (-0.5, 0.5, 0.25),
-    "ch3_case1_G": ((59.52, -59.52, 29.76),
-                    (20.0, 20.0, -2.0),
-                    (20.0, -20.0, 9.3)),
-    "ch3_case1_K": ((-0.011, -2.835, -5.2757),
-                    (0.017, -2.835, 3.5171),
-                    (0.0602, 0.0, -17.5855)),
+    "ch3_case1_G": ((59.52, -59.52, 29.76), (20.0, 20.0, -2.0), (20.0, -20.0, 9.3)),
+    "ch3_case1_K": ((-0.011, -2.835, -5.2757), (0.017, -2.835, 3.5171), (0.0602, 0.0, -17.5855)),
     # Ch. III Case 2 (L829-L880), actuators at (-l/2, -l/4, 0, +l/4, +l/2)
     "ch3_case2_positions": (-0.5, -0.25, 0.0, 0.25, 0.5),
-    "ch3_case2_G": ((59.52, 29.76, 0.0, -29.76, -59.52),
-                    (20.0, -1.98, -14.0, -1.99, 20.0),
-                    (20.0, -11.698, 0.0, 11.685, -20.0),
-                    (20.0, -12.437, 14.18, -12.37, 20.0),
-                    (20.0, -5.1266, 0.0, 5.01, -20.0)),
-    "ch3_case2_K": ((-1.199, -1.423, -789.03, -7.578, 3365.27),
-                    (-3.329, 0.0, -2183.39, 0.0, 9392.17),
-                    (-2.443, 4.015, -1620.70, -21.649, 6946.89),
-                    (-3.278, 0.0, -2200.36, 0.0, 9397.81),
-                    (-1.669, -1.423, -780.55, -7.578, 3362.45)),
+    "ch3_case2_G": (
+        (59.52, 29.76, 0.0, -29.76, -59.52),
+        (20.0, -1.98, -14.0, -1.99, 20.0),
+        (20.0, -11.698, 0.0, 11.685, -20.0),
+        (20.0, -12.437, 14.18, -12.37, 20.0),
+        (20.0, -5.1266, 0.0, 5.01, -20.0),
+    ),
+    "ch3_case2_K": (
+        (-1.199, -1.423, -789.03, -7.578, 3365.27),
+        (-3.329, 0.0, -2183.39, 0.0, 9392.17),
+        (-2.443, 4.015, -1620.70, -21.649, 6946.89),
+        (-3.278, 0.0, -2200.36, 0.0, 9397.81),
+        (-1.669, -1.423, -780.55, -7.578, 3362.45),
+    ),
     # 5 x 10: columns 1-5 position gains on (θ, z1..z4), 6-10 rate gains (L875-L880)
-    "ch3_case2_lqr": ((-0.056, 1.258e-6, 0.0, 0.0, 0.0, -0.6312, -0.712, -394.52, -4.348, 1582.6),
-                      (-0.1559, 0.0, 0.0, 0.0, 0.0, -1.7527, 0.0, -109.17, 0.0, 4696.0),
-                      (-0.1144, 3.548e-6, 0.0, 0.0, 0.0, -1.2859, 2.007, -310.35, -6.021, 3473.4),
-                      (-0.1535, 0.0, 0.0, 0.0, 0.0, -1.7255, 0.0, -1100.18, 0.0, 4698.9),
-                      (-0.0545, 0.0, 0.0, 0.0, 0.0, -0.6142, -0.712, 390.27, -4.348, 1531.2)),
+    "ch3_case2_lqr": (
+        (-0.056, 1.258e-6, 0.0, 0.0, 0.0, -0.6312, -0.712, -394.52, -4.348, 1582.6),
+        (-0.1559, 0.0, 0.0, 0.0, 0.0, -1.7527, 0.0, -109.17, 0.0, 4696.0),
+        (-0.1144, 3.548e-6, 0.0, 0.0, 0.0, -1.2859, 2.007, -310.35, -6.021, 3473.4),
+        (-0.1535, 0.0, 0.0, 0.0, 0.0, -1.7255, 0.0, -1100.18, 0.0, 4698.9),
+        (-0.0545, 0.0, 0.0, 0.0, 0.0, -0.6142, -0.712, 390.27, -4.348, 1531.2),
+    ),
     # Ch. IV numerical example (L1063-L1101)
     "ch4_total_mass": "1000 kg",
     "ch4_interior_mass_ratio": 1.0,  # m0/m, m = m0 = M/3
@@ -103,8 +105,12 @@ PUBLISHED = {
     "ch4_lambda": (5.5876e-4, 1.67627e-3),
     "ch4_g": 3.0,
     "ch4_gains": (0.4728, 0.4000),  # K1, K2 of eq (13)
-    "ch4_roots": (-6.4019e-4, complex(-8.58139e-4, 2.952816e-2),
-                  complex(-8.58139e-4, -2.952816e-2), -1.670404),
+    "ch4_roots": (
+        -6.4019e-4,
+        complex(-8.58139e-4, 2.952816e-2),
+        complex(-8.58139e-4, -2.952816e-2),
+        -1.670404,
+    ),
 }
 
 
@@ -122,28 +128,58 @@ class Erratum:
 
 #: the errata applied (notes §6); ``index`` marks those applied by :func:`published_matrix`
 ERRATA = (
-    Erratum("L800", "ch3_case1_G", 29.76, -29.76,
-            "-ξ/(Jω_c²) at ξ = +l/4 is -29.76; only then does -G⁻¹diag(2√F) give the printed K; "
-            "with +29.76 the printed K gives an unstable loop (+0.0625 ± 1.7309j)", (0, 2)),
-    Erratum("L841", "ch3_case2_K", -1.669, -1.167,
-            "-G⁻¹diag(2√F) gives -1.16685; the LQR column ratio -0.6142/0.52635 = -1.1669; with "
-            "-1.669 the loop is unstable (+0.114, +26.34)", (4, 0)),
+    Erratum(
+        "L800",
+        "ch3_case1_G",
+        29.76,
+        -29.76,
+        "-ξ/(Jω_c²) at ξ = +l/4 is -29.76; only then does -G⁻¹diag(2√F) give the printed K; "
+        "with +29.76 the printed K gives an unstable loop (+0.0625 ± 1.7309j)",
+        (0, 2),
+    ),
+    Erratum(
+        "L841",
+        "ch3_case2_K",
+        -1.669,
+        -1.167,
+        "-G⁻¹diag(2√F) gives -1.16685; the LQR column ratio -0.6142/0.52635 = -1.1669; with "
+        "-1.669 the loop is unstable (+0.114, +26.34)",
+        (4, 0),
+    ),
     Erratum("L877", "ch3_case2_lqr", -109.17, -1091.7, "recomputed column 8", (1, 7)),
     Erratum("L878", "ch3_case2_lqr", -310.35, -810.35, "recomputed column 8", (2, 7)),
     Erratum("L880", "ch3_case2_lqr", 390.27, -390.27, "recomputed column 8", (4, 7)),
     Erratum("L876", "ch3_case2_lqr", 1582.6, 1682.6, "recomputed column 10", (0, 9)),
     Erratum("L880", "ch3_case2_lqr", 1531.2, 1681.2, "recomputed column 10", (4, 9)),
-    Erratum("L351, L387", "mode-1 mid-span value", -np.sqrt(2.0), -1.2156445,
-            "Appendix A shape: φ_1(0) = cosh(0)/cosh(h) + 1/cos(h), h = 2.365020; used by "
-            "chapter2_case (midspan='exact'); Ch. III Case 2 prints -14.0 = 10 × (-1.40), kept "
-            "as printed there because the printed gains were computed with it"),
-    Erratum("L1097-L1101", "ch4_roots", PUBLISHED["ch4_roots"],
-            (-6.405150e-4, complex(-8.654170e-5, 2.957334e-2),
-             complex(-8.654170e-5, -2.957334e-2), -1.6719864),
-            "roots of eq (16) with the printed c, K1, K2 (np.roots and eig agree); the printed "
-            "ones are accurate to about 3 figures (single-precision Bairstow)"),
-    Erratum("L462, L466", "Ch. II example equations", "ẍ1 + 3ẋ1; -20K2ẋ1", "ẍ1 + 3x1; -20K1ẋ1",
-            "structure of eqs (16)-(17); chapter2_example builds the equations from them"),
+    Erratum(
+        "L351, L387",
+        "mode-1 mid-span value",
+        -np.sqrt(2.0),
+        -1.2156445,
+        "Appendix A shape: φ_1(0) = cosh(0)/cosh(h) + 1/cos(h), h = 2.365020; used by "
+        "chapter2_case (midspan='exact'); Ch. III Case 2 prints -14.0 = 10 × (-1.40), kept "
+        "as printed there because the printed gains were computed with it",
+    ),
+    Erratum(
+        "L1097-L1101",
+        "ch4_roots",
+        PUBLISHED["ch4_roots"],
+        (
+            -6.405150e-4,
+            complex(-8.654170e-5, 2.957334e-2),
+            complex(-8.654170e-5, -2.957334e-2),
+            -1.6719864,
+        ),
+        "roots of eq (16) with the printed c, K1, K2 (np.roots and eig agree); the printed "
+        "ones are accurate to about 3 figures (single-precision Bairstow)",
+    ),
+    Erratum(
+        "L462, L466",
+        "Ch. II example equations",
+        "ẍ1 + 3ẋ1; -20K2ẋ1",
+        "ẍ1 + 3x1; -20K1ẋ1",
+        "structure of eqs (16)-(17); chapter2_example builds the equations from them",
+    ),
 )
 
 
@@ -164,15 +200,20 @@ def published_matrix(item: str, errata: bool = True) -> np.ndarray:
 
 
 # -- free-free beam modes (Appendix A) ---------------------------------------------------------
-@lru_cache(maxsize=None)
+@cache
 def _half_root(r: int) -> float:
     """h_r = λ_r l / 2 of bending mode r (r = 1, 2, ...): symmetric modes (odd r) solve
     tan h + tanh h = 0, antisymmetric ones (even r) tan h - tanh h = 0; together they are the
     roots of cos λl cosh λl = 1 (eq A-4)."""
     h0 = (2 * r + 1) * np.pi / 4
     sign = 1.0 if r % 2 else -1.0
-    return brentq(lambda h: np.sin(h) + sign * np.cos(h) * np.tanh(h), h0 - np.pi / 8,
-                  h0 + np.pi / 8, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+    return brentq(
+        lambda h: np.sin(h) + sign * np.cos(h) * np.tanh(h),
+        h0 - np.pi / 8,
+        h0 + np.pi / 8,
+        xtol=1e-15,
+        rtol=4 * np.finfo(float).eps,
+    )
 
 
 def free_free_lambda_l(n: int) -> np.ndarray:
@@ -215,8 +256,9 @@ def _ratios(raw, name: str) -> tuple[float, ...]:
         try:
             raw = [float(v) for v in raw.strip().strip("[]()").split(",") if v.strip()]
         except ValueError:
-            raise ValueError(f"{name}: must be a comma-separated list of numbers, got "
-                             f"{raw!r}") from None
+            raise ValueError(
+                f"{name}: must be a comma-separated list of numbers, got {raw!r}"
+            ) from None
     arr = np.atleast_1d(require_finite(raw, name))
     if arr.ndim != 1 or arr.size == 0 or np.any(arr <= 0):
         raise ValueError(f"{name}: must be a non-empty list of (ω_n/ω_c)² > 0, got {raw!r}")
@@ -285,7 +327,7 @@ class BainumBeam:
         given = np.array(self.frequency_ratios)
         if k <= given.size:
             return given[:k].copy()
-        return np.concatenate([given, theory_ratios(k, given[0])[given.size:]])
+        return np.concatenate([given, theory_ratios(k, given[0])[given.size :]])
 
     def stiffness(self, n_bending: int) -> np.ndarray:
         """diag(3, F_1, ..., F_k): the reduced A of eq 17 (pitch libration κ = 3)."""
@@ -321,10 +363,20 @@ class BainumBeam:
 
         G = self.actuator_matrix(positions, n_bending)
         k = G.shape[0] - 1
-        shapes = {name: [mode_shape(r, float(_positions(xi, f"stations[{name!r}]")[0]))
-                         for r in range(1, k + 1)] for name, xi in dict(stations).items()}
-        return BeamInOrbit(self.orbit_rate_value, self.ratios(k),
-                           {f"f{j + 1}": G[:, j] for j in range(G.shape[1])}, shapes, length)
+        shapes = {
+            name: [
+                mode_shape(r, float(_positions(xi, f"stations[{name!r}]")[0]))
+                for r in range(1, k + 1)
+            ]
+            for name, xi in dict(stations).items()
+        }
+        return BeamInOrbit(
+            self.orbit_rate_value,
+            self.ratios(k),
+            {f"f{j + 1}": G[:, j] for j in range(G.shape[1])},
+            shapes,
+            length,
+        )
 
     def linear_plant(self, positions, n_bending: int, stations=DEFAULT_STATIONS):
         """The linear beam (eqs 5-6) as a :class:`~flexsat.dynamics.structural.StructuralPlant`
@@ -336,20 +388,31 @@ class BainumBeam:
 
         G = self.actuator_matrix(positions, n_bending)
         n = G.shape[0]
-        w2 = self.orbit_rate_value ** 2
+        w2 = self.orbit_rate_value**2
         acts = [Actuator(f"f{j + 1}", "force", w2 * G[:, j]) for j in range(G.shape[1])]
         rows = {"pitch": ("rotation", np.eye(n)[0])}
         rows.update({f"z{r}": ("displacement", np.eye(n)[r]) for r in range(1, n)})
         for name, xi in dict(stations).items():
             x = float(_positions(xi, f"stations[{name!r}]")[0])
-            rows[f"w_{name}"] = ("displacement",
-                                 np.concatenate([[0.0], [mode_shape(r, x) for r in range(1, n)]]))
+            rows[f"w_{name}"] = (
+                "displacement",
+                np.concatenate([[0.0], [mode_shape(r, x) for r in range(1, n)]]),
+            )
         units = {"rotation": ("rad", "rad/s"), "displacement": ("", "1/s")}  # z = A/l
-        sensors = [Sensor(name, kind, row, unit=units[kind][0]) for name, (kind, row) in rows.items()]
-        sensors += [Sensor(f"{name}_rate", kind, row, rate=True, unit=units[kind][1])
-                    for name, (kind, row) in rows.items()]
-        model = SecondOrderModel(np.eye(n), np.zeros((n, n)), w2 * np.diag(self.stiffness(n - 1)),
-                                 np.zeros((n, 1)), np.zeros((1, n)))
+        sensors = [
+            Sensor(name, kind, row, unit=units[kind][0]) for name, (kind, row) in rows.items()
+        ]
+        sensors += [
+            Sensor(f"{name}_rate", kind, row, rate=True, unit=units[kind][1])
+            for name, (kind, row) in rows.items()
+        ]
+        model = SecondOrderModel(
+            np.eye(n),
+            np.zeros((n, n)),
+            w2 * np.diag(self.stiffness(n - 1)),
+            np.zeros((n, 1)),
+            np.zeros((1, n)),
+        )
         return StructuralPlant.from_second_order(model, acts, sensors)
 
     # -- equations of motion (eqs 1-2 and 5-6, nondimensional) --------------------------------
@@ -368,11 +431,24 @@ class BainumBeam:
         from flexsat.dynamics.orbit import BeamInOrbit
 
         k = G.shape[0] - 1
-        return BeamInOrbit(self.orbit_rate_value, self.ratios(k) if k else np.zeros(0),
-                           {f"f{j + 1}": G[:, j] for j in range(G.shape[1])})
+        return BeamInOrbit(
+            self.orbit_rate_value,
+            self.ratios(k) if k else np.zeros(0),
+            {f"f{j + 1}": G[:, j] for j in range(G.shape[1])},
+        )
 
-    def simulate(self, G, K_pos, K_rate, x0, tau_end: float, nonlinear: bool = True,
-                 n_points: int = 401, rtol: float = 1e-10, atol: float = 1e-13) -> Response:
+    def simulate(
+        self,
+        G,
+        K_pos,
+        K_rate,
+        x0,
+        tau_end: float,
+        nonlinear: bool = True,
+        n_points: int = 401,
+        rtol: float = 1e-10,
+        atol: float = 1e-13,
+    ) -> Response:
         """Closed loop f = K_pos x + K_rate x', u = G f, from ``x0`` ([θ, z] positions, rates
         zero, or a full state) over τ ∈ [0, ``tau_end``] (DOP853), on the right-hand side of the
         beam-in-orbit plant (:meth:`plant`, converted from seconds to τ). This is what the
@@ -381,15 +457,17 @@ class BainumBeam:
         G = require_finite(G, "G")
         G = G.reshape(-1, 1) if G.ndim == 1 else G
         if G.ndim != 2:
-            raise ValueError(f"G: must be a 2-D (coordinates x actuators) array, got shape "
-                             f"{G.shape}")
+            raise ValueError(
+                f"G: must be a 2-D (coordinates x actuators) array, got shape {G.shape}"
+            )
         n = G.shape[0]
         K_pos = np.zeros((G.shape[1], n)) if K_pos is None else require_finite(K_pos, "K_pos")
         K_rate = require_finite(K_rate, "K_rate")
         for name, K in (("K_pos", K_pos), ("K_rate", K_rate)):
             if K.shape != (G.shape[1], n):
-                raise ValueError(f"{name}: must be {G.shape[1]}x{n} (G is {n}x{G.shape[1]}), "
-                                 f"got shape {K.shape}")
+                raise ValueError(
+                    f"{name}: must be {G.shape[1]}x{n} (G is {n}x{G.shape[1]}), got shape {K.shape}"
+                )
         x0 = require_finite(x0, "x0").ravel()
         if x0.size == n:
             x0 = np.concatenate([x0, np.zeros(n)])
@@ -404,8 +482,9 @@ class BainumBeam:
             return _tau_rhs(plant, y, gain @ y, nonlinear)
 
         tau = np.linspace(0.0, float(tau_end), int(n_points))
-        sol = solve_ivp(rhs, (0.0, float(tau_end)), x0, method="DOP853", t_eval=tau,
-                        rtol=rtol, atol=atol)
+        sol = solve_ivp(
+            rhs, (0.0, float(tau_end)), x0, method="DOP853", t_eval=tau, rtol=rtol, atol=atol
+        )
         if not sol.success:
             raise RuntimeError(f"simulate: integration failed: {sol.message}")
         states = sol.y.T
@@ -438,9 +517,10 @@ class BainumBeam:
             "ratio_sq_used": self.stiffness(k)[:n].tolist(),
             "ratio_sq_theory": [3.0, *theory_ratios(k, self.frequency_ratios[0]).tolist()][:n],
             "lambda_l": free_free_lambda_l(k).tolist(),
-            "shape_at_xi_over_l": {"xi_over_l": x.tolist(),
-                                   **{f"mode_{r}": mode_shape(r, x).tolist()
-                                      for r in range(1, k + 1)}},
+            "shape_at_xi_over_l": {
+                "xi_over_l": x.tolist(),
+                **{f"mode_{r}": mode_shape(r, x).tolist() for r in range(1, k + 1)},
+            },
         }
 
 
@@ -471,8 +551,10 @@ def _stiffness(stiffness, name: str = "stiffness") -> np.ndarray:
     if k.ndim == 2 and k.shape[0] == k.shape[1] and not np.any(k - np.diag(np.diag(k))):
         k = np.diag(k).copy()
     if k.ndim != 1 or k.size == 0:
-        raise ValueError(f"{name}: must be the diagonal (ω/ω_c)² as a 1-D array or a diagonal "
-                         f"matrix, got shape {k.shape}")
+        raise ValueError(
+            f"{name}: must be the diagonal (ω/ω_c)² as a 1-D array or a diagonal "
+            f"matrix, got shape {k.shape}"
+        )
     return k
 
 
@@ -547,8 +629,13 @@ class ControllabilityCase:
         return self.kalman_rank == self.n
 
 
-def chapter2_case(case: int, c: float | None = None, d: float | None = None,
-                  beam: BainumBeam | None = None, midspan: str = "exact") -> ControllabilityCase:
+def chapter2_case(
+    case: int,
+    c: float | None = None,
+    d: float | None = None,
+    beam: BainumBeam | None = None,
+    midspan: str = "exact",
+) -> ControllabilityCase:
     """Ch. II Case 1-4 (L307-L442): reduced pair (A, B) of eq 17 and its controllability.
 
     Parameters
@@ -585,9 +672,15 @@ def chapter2_case(case: int, c: float | None = None, d: float | None = None,
         B[int(pitch), np.asarray(positions) == 0.0] = -np.sqrt(2.0) * beam.modal_influence
     kappa = np.concatenate([[3.0], F]) if pitch else F
     A_full, B_full = first_order(kappa, B)
-    return ControllabilityCase(case, kappa, B, positions,
-                               controllability_rank(np.diag(kappa), B),
-                               repeated_frequency_test(kappa, B), pbh_test(A_full, B_full))
+    return ControllabilityCase(
+        case,
+        kappa,
+        B,
+        positions,
+        controllability_rank(np.diag(kappa), B),
+        repeated_frequency_test(kappa, B),
+        pbh_test(A_full, B_full),
+    )
 
 
 @dataclass(frozen=True)
@@ -606,8 +699,14 @@ def _closed_loop(stiffness, G, K_pos, K_rate) -> ClosedLoop:
     M = closed_loop_matrix(stiffness, G, K_pos, K_rate)
     G = np.asarray(G, dtype=float)
     G = G.reshape(-1, 1) if G.ndim == 1 else G
-    return ClosedLoop(np.asarray(stiffness, float), G, np.asarray(K_pos, float),
-                      np.asarray(K_rate, float), M, sorted_poles(M))
+    return ClosedLoop(
+        np.asarray(stiffness, float),
+        G,
+        np.asarray(K_pos, float),
+        np.asarray(K_rate, float),
+        M,
+        sorted_poles(M),
+    )
 
 
 def chapter2_example(gains=PUBLISHED["ch2_gains"], beam: BainumBeam | None = None) -> ClosedLoop:
@@ -633,8 +732,9 @@ def _svd_rank(M: np.ndarray, rtol: float) -> int:
     return int(np.sum(s > rtol * s[0])) if s.size and s[0] > 0 else 0
 
 
-def decoupling_gains(G, stiffness, damping_ratio=1.0, target_stiffness=None, damping=None,
-                     rtol: float = 1e-8) -> tuple[np.ndarray, np.ndarray]:
+def decoupling_gains(
+    G, stiffness, damping_ratio=1.0, target_stiffness=None, damping=None, rtol: float = 1e-8
+) -> tuple[np.ndarray, np.ndarray]:
     """Decoupling state feedback of Ch. III §2 (eqs 1-13, L539-L654).
 
     For ``x'' + E x' + F x = G f`` (E = ``damping``, default 0; F = diag(``stiffness``)) and
@@ -692,7 +792,8 @@ def decoupling_gains(G, stiffness, damping_ratio=1.0, target_stiffness=None, dam
             if r > rank_G:
                 raise ValueError(
                     f"G: decoupling impossible: {name} column {i + 1} is not in the range of G "
-                    f"(rank G = {rank_G}, rank [G | column] = {r}); move or add actuators")
+                    f"(rank G = {rank_G}, rank [G | column] = {r}); move or add actuators"
+                )
     G_pinv = np.linalg.pinv(G, rcond=rtol)
     return G_pinv @ rhs_pos, G_pinv @ rhs_rate
 
@@ -743,8 +844,9 @@ def modal_riccati(stiffness, Q1=1.0, Q2=None, R=1.0, D=0.0) -> tuple[np.ndarray,
         raise ValueError(f"R: must be > 0 (positive definite control weight), got {R.tolist()}")
     for name, Q in (("Q1", Q1), ("Q2", Q2)):
         if np.any(Q < 0):
-            raise ValueError(f"{name}: must be >= 0 (positive semidefinite weight), got "
-                             f"{Q.tolist()}")
+            raise ValueError(
+                f"{name}: must be >= 0 (positive semidefinite weight), got {Q.tolist()}"
+            )
     F, Q1, Q2, R, D = np.broadcast_arrays(F, Q1, Q2, R, D)
     q = Q1 / R
     root = np.sqrt(F * F + q)
@@ -757,14 +859,17 @@ def modal_riccati(stiffness, Q1=1.0, Q2=None, R=1.0, D=0.0) -> tuple[np.ndarray,
     # closed loop s² + (D + S22/R) s + (F + S12/R): Hurwitz iff both coefficients > 0
     bad = ~((D + S22 / R > 0) & (F + S12 / R > 0))
     if np.any(bad):
-        raise ValueError(f"Q1, Q2: no stabilizing solution for coordinate(s) "
-                         f"{np.flatnonzero(np.atleast_1d(bad)).tolist()} (the weights do not "
-                         f"see an undamped or unstable coordinate, e.g. F = 0 with Q1 = 0)")
+        raise ValueError(
+            f"Q1, Q2: no stabilizing solution for coordinate(s) "
+            f"{np.flatnonzero(np.atleast_1d(bad)).tolist()} (the weights do not "
+            f"see an undamped or unstable coordinate, e.g. F = 0 with Q1 = 0)"
+        )
     return S11, S12, S22
 
 
-def modal_lqr_gains(G, stiffness, Q1=1.0, Q2=None, R=1.0, D=0.0,
-                    rcond: float = 1e-8) -> tuple[np.ndarray, np.ndarray]:
+def modal_lqr_gains(
+    G, stiffness, Q1=1.0, Q2=None, R=1.0, D=0.0, rcond: float = 1e-8
+) -> tuple[np.ndarray, np.ndarray]:
     """Per-mode linear regulator mapped to the actuators (Ch. III eqs 16-28).
 
     x'' + D x' + F x = G f = u' (eq 16-17 with E = G); each coordinate gets
@@ -783,19 +888,24 @@ def modal_lqr_gains(G, stiffness, Q1=1.0, Q2=None, R=1.0, D=0.0,
     n = F.size
     G = _modal_input(G, n)
     if G.shape != (n, n):
-        raise ValueError(f"G: per-mode regulator needs as many actuators as coordinates "
-                         f"(u = E⁻¹u', eq 18), got shape {G.shape}; use the full regulator")
+        raise ValueError(
+            f"G: per-mode regulator needs as many actuators as coordinates "
+            f"(u = E⁻¹u', eq 18), got shape {G.shape}; use the full regulator"
+        )
     s = np.linalg.svd(G, compute_uv=False)
     if s[-1] <= rcond * s[0]:
-        raise ValueError(f"G: singular (σ_min/σ_max = {s[-1] / s[0]:.3g} <= {rcond:g}): these "
-                         f"actuators cannot drive every coordinate independently")
+        raise ValueError(
+            f"G: singular (σ_min/σ_max = {s[-1] / s[0]:.3g} <= {rcond:g}): these "
+            f"actuators cannot drive every coordinate independently"
+        )
     _, S12, S22 = modal_riccati(F, Q1, Q2, R, D)
     R = np.broadcast_to(np.asarray(R, dtype=float), (n,))
     return (np.linalg.solve(G, -np.diag(S12 / R)), np.linalg.solve(G, -np.diag(S22 / R)))
 
 
-def chapter3_case(case: int, beam: BainumBeam | None = None, shapes: str = "published"
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def chapter3_case(
+    case: int, beam: BainumBeam | None = None, shapes: str = "published"
+) -> tuple[np.ndarray, np.ndarray]:
     """(stiffness, G) of Ch. III Case 1 (pitch + 2 modes, actuators -l/2, +l/2, +l/4; L800)
     or Case 2 (pitch + 4 modes, -l/2, -l/4, 0, +l/4, +l/2; L831-L835).
 
@@ -845,7 +955,7 @@ class ThreeMassBeam:
     @property
     def m_star(self) -> float:
         """M* = m²/M̄ (111.11 kg)."""
-        return self.end_mass ** 2 / self.total_mass
+        return self.end_mass**2 / self.total_mass
 
     @property
     def a(self) -> float:
@@ -858,7 +968,7 @@ class ThreeMassBeam:
     @property
     def c_formula(self) -> float:
         """3 ω0² M* (2 + m̄0) + k (eq 1)."""
-        return 3 * self.orbit_rate ** 2 * self.m_star * (2 + self.interior_mass_ratio) + self.spring
+        return 3 * self.orbit_rate**2 * self.m_star * (2 + self.interior_mass_ratio) + self.spring
 
     @property
     def c_value(self) -> float:
@@ -897,8 +1007,13 @@ class ThreeMassBeam:
         if n_actuators not in (1, 2):
             raise ValueError(f"n_actuators: must be 1 or 2, got {n_actuators!r}")
         a, b = self.a, self.b
-        model = SecondOrderModel([[a, b], [b, a]], np.zeros((2, 2)), self.c_value * np.eye(2),
-                                 np.zeros((2, 1)), np.zeros((1, 2)))
+        model = SecondOrderModel(
+            [[a, b], [b, a]],
+            np.zeros((2, 2)),
+            self.c_value * np.eye(2),
+            np.zeros((2, 1)),
+            np.zeros((1, 2)),
+        )
         acts = [Actuator(f"F_v{j}", "force", j - 1) for j in range(1, n_actuators + 1)]
         sensors = [Sensor(f"v{j}", "displacement", j - 1) for j in (1, 2)]
         sensors += [Sensor(f"v{j}_dot", "displacement", j - 1, rate=True) for j in (1, 2)]
@@ -950,9 +1065,30 @@ def three_mass(**overrides) -> ThreeMassBeam:
     return ThreeMassBeam(**read_inputs("three_mass", _THREE_MASS_INPUTS, overrides))
 
 
-__all__ = ["CH2_LAYOUTS", "ERRATA", "PUBLISHED", "SOURCE", "BainumBeam", "ClosedLoop",
-           "ControllabilityCase", "Erratum", "Response", "ThreeMassBeam", "bainum",
-           "chapter2_case", "chapter2_example", "chapter3_case", "closed_loop_matrix",
-           "decoupling_gains", "first_order", "free_free_lambda_l", "modal_lqr_gains",
-           "modal_riccati", "mode_shape", "published_matrix", "sorted_poles", "theory_ratios",
-           "three_mass"]
+__all__ = [
+    "CH2_LAYOUTS",
+    "ERRATA",
+    "PUBLISHED",
+    "SOURCE",
+    "BainumBeam",
+    "ClosedLoop",
+    "ControllabilityCase",
+    "Erratum",
+    "Response",
+    "ThreeMassBeam",
+    "bainum",
+    "chapter2_case",
+    "chapter2_example",
+    "chapter3_case",
+    "closed_loop_matrix",
+    "decoupling_gains",
+    "first_order",
+    "free_free_lambda_l",
+    "modal_lqr_gains",
+    "modal_riccati",
+    "mode_shape",
+    "published_matrix",
+    "sorted_poles",
+    "theory_ratios",
+    "three_mass",
+]

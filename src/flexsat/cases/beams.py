@@ -52,10 +52,10 @@ import numpy as np
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
+from flexsat.input_checks import require_count
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
-from flexsat.validation import require_count
 
 __all__ = [
     "CANTILEVER_BETA_L",
@@ -159,8 +159,15 @@ class BeamCase:
         for i, xi in enumerate(x):
             s.add_node(i, (xi, 0.0, 0.0))
         for i in range(self.n_elements):
-            s.add_frame(i, i + 1, self.material, self.section, orientation=(0.0, 1.0, 0.0),
-                        lumped=self.lumped, label=f"beam {i + 1}")
+            s.add_frame(
+                i,
+                i + 1,
+                self.material,
+                self.section,
+                orientation=(0.0, 1.0, 0.0),
+                lumped=self.lumped,
+                label=f"beam {i + 1}",
+            )
         if self.boundary == "cantilever":
             s.clamp(0)
         return s
@@ -194,15 +201,20 @@ class BeamCase:
             shapes = modes.shapes[:, r:]
             energy = shapes * (asm.M @ shapes)
             names = np.array([d for _, d in asm.dofs])
-            shares = np.stack([energy[np.isin(names, dofs)].sum(axis=0)
-                               for dofs in _FAMILIES.values()], axis=1)
+            shares = np.stack(
+                [energy[np.isin(names, dofs)].sum(axis=0) for dofs in _FAMILIES.values()], axis=1
+            )
             family = np.array(list(_FAMILIES))[np.argmax(shares, axis=1)]
             if self.square:  # degenerate pairs: any mix of the two planes is a mode
                 bending = np.isin(family, ("flatwise", "edgewise"))
-                family[bending] = np.where(np.arange(bending.sum()) % 2 == 0, "flatwise",
-                                           "edgewise")
-            cached = self._cache["modes"] = (modes.omegas[r:] / (2 * np.pi), family,
-                                             k == asm.n_dofs)
+                family[bending] = np.where(
+                    np.arange(bending.sum()) % 2 == 0, "flatwise", "edgewise"
+                )
+            cached = self._cache["modes"] = (
+                modes.omegas[r:] / (2 * np.pi),
+                family,
+                k == asm.n_dofs,
+            )
         return cached
 
     def _family(self, name: str, n: int) -> np.ndarray:
@@ -215,8 +227,10 @@ class BeamCase:
                 break
             m = 2 * len(f)
         if len(own) < n:
-            raise ValueError(f"n_modes: the model has {len(own)} {name} bending modes "
-                             f"with n_elements = {self.n_elements}, got {n}")
+            raise ValueError(
+                f"n_modes: the model has {len(own)} {name} bending modes "
+                f"with n_elements = {self.n_elements}, got {n}"
+            )
         return own[:n].copy()
 
     # -- case protocol --------------------------------------------------------------------------
@@ -355,11 +369,14 @@ class Fv2Case:
 
         if self.plane != "in-plane":
             # pinned tips with free rotations: no rigid-mass split a ModalModel can carry
-            raise ValueError("plane: the plant is built on the in-plane model (plane "
-                             "'in-plane', the benchmark's)")
+            raise ValueError(
+                "plane: the plant is built on the in-plane model (plane "
+                "'in-plane', the benchmark's)"
+            )
         mid = 100 + self.elements_per_arm // 2
-        return point_force_plant(first_modes(self.structure(), n_modes), mid, [mid, 0], "y",
-                                 damping)
+        return point_force_plant(
+            first_modes(self.structure(), n_modes), mid, [mid, 0], "y", damping
+        )
 
     def _frequencies(self) -> np.ndarray:
         if "f" not in self._cache:

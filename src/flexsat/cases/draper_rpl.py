@@ -22,8 +22,8 @@ import scipy.linalg as sla
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
+from flexsat.input_checks import require_count, require_finite, require_positive
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_finite, require_positive
 
 SOURCE = CASES["draper_rpl"].source
 
@@ -44,10 +44,16 @@ PUBLISHED = {
 #: paper gives no unit; its model is in slug-ft-s and Dᵀx is an angle, so G1 is in ft·lbf/rad and
 #: G2 in ft·lbf·s/rad.
 PUBLISHED_GAINS = {
-    "G1": ([[1.8342, 0.2592, 0.2601], [0.2592, 0.0409, 0.0405], [0.2601, 0.0405, 0.0403]],
-           "ft*lbf", "N*m"),
-    "G2": ([[7.4284, 0.4579, 0.8335], [0.4579, 0.2411, 0.0211], [0.8335, 0.0211, 0.3509]],
-           "ft*lbf*s", "N*m*s"),
+    "G1": (
+        [[1.8342, 0.2592, 0.2601], [0.2592, 0.0409, 0.0405], [0.2601, 0.0405, 0.0403]],
+        "ft*lbf",
+        "N*m",
+    ),
+    "G2": (
+        [[7.4284, 0.4579, 0.8335], [0.4579, 0.2411, 0.0211], [0.8335, 0.0211, 0.3509]],
+        "ft*lbf*s",
+        "N*m*s",
+    ),
 }
 
 #: Gauss-Legendre points for the mass integrals of Eq. 54: 400 (as the curated notes), or 40 per
@@ -174,14 +180,19 @@ class DraperRPLCase:
         """[M_θq]_i, [M_qq]_ij by Gauss-Legendre quadrature; [K_qq]_ij in closed form."""
         n, L, r, rho = self.n_functions, self.length, self.hub_radius, self.density
         nodes, weights = np.polynomial.legendre.leggauss(
-            max(QUADRATURE_POINTS, _POINTS_PER_FUNCTION * n))
+            max(QUADRATURE_POINTS, _POINTS_PER_FUNCTION * n)
+        )
         z, w = 0.5 * L * (nodes + 1.0), 0.5 * L * weights
         phi = comparison_functions(z, n, L)
         phi_L, dphi_L = self._tip_values()
-        m_tq = 2.0 * (rho * (w * (z + r)) @ phi + self.tip_mass * (r + L) * phi_L
-                      + self.tip_inertia * dphi_L)
-        m_qq = 2.0 * (rho * phi.T @ (w[:, None] * phi) + self.tip_mass * np.outer(phi_L, phi_L)
-                      + self.tip_inertia * np.outer(dphi_L, dphi_L))
+        m_tq = 2.0 * (
+            rho * (w * (z + r)) @ phi + self.tip_mass * (r + L) * phi_L + self.tip_inertia * dphi_L
+        )
+        m_qq = 2.0 * (
+            rho * phi.T @ (w[:, None] * phi)
+            + self.tip_mass * np.outer(phi_L, phi_L)
+            + self.tip_inertia * np.outer(dphi_L, dphi_L)
+        )
         # φ_i'' φ_j'' = a_i² a_j² (cos a_i z + s_i)(cos a_j z + s_j); ∫cos a z = 0, ∫cos² = L/2
         j = np.arange(1, n + 1)
         a2, s = (j * np.pi / L) ** 2, (-1.0) ** (j + 1)
@@ -327,9 +338,16 @@ class DraperRPLCase:
         A = np.block([[zeros, np.eye(n)], [-np.linalg.solve(M, K), zeros]])
         Bu = np.vstack([np.zeros_like(B), np.linalg.solve(M, B)])
         C = sla.block_diag(B.T, B.T)
-        return control.ss(A, Bu, C, np.zeros((6, 3)), inputs=list(_INPUT_NAMES),
-                          outputs=list(_OUTPUT_NAMES) + [f"{s}_dot" for s in _OUTPUT_NAMES],
-                          states=names + [f"{s}_dot" for s in names], name="draper_rpl")
+        return control.ss(
+            A,
+            Bu,
+            C,
+            np.zeros((6, 3)),
+            inputs=list(_INPUT_NAMES),
+            outputs=list(_OUTPUT_NAMES) + [f"{s}_dot" for s in _OUTPUT_NAMES],
+            states=names + [f"{s}_dot" for s in names],
+            name="draper_rpl",
+        )
 
     def plant(self, n_modes: int | None = None):
         """The model as a :class:`~flexsat.dynamics.structural.StructuralPlant` with the channels
@@ -346,8 +364,10 @@ class DraperRPLCase:
             M, K = np.eye(M.shape[0]), np.diag(np.diag(K))
         acts = [Actuator(name, "torque", B[:, j]) for j, name in enumerate(_INPUT_NAMES)]
         sensors = [Sensor(name, "rotation", B[:, j]) for j, name in enumerate(_OUTPUT_NAMES)]
-        sensors += [Sensor(f"{name}_dot", "rotation", B[:, j], rate=True)
-                    for j, name in enumerate(_OUTPUT_NAMES)]
+        sensors += [
+            Sensor(f"{name}_dot", "rotation", B[:, j], rate=True)
+            for j, name in enumerate(_OUTPUT_NAMES)
+        ]
         model = SecondOrderModel(M, np.zeros_like(M), K, B, B.T)
         return StructuralPlant.from_second_order(model, acts, sensors)
 
@@ -400,7 +420,8 @@ class DraperRPLCase:
             norm2 = np.einsum("ij,ik,kj->j", phi.conj(), E, phi).real
         else:
             raise ValueError(
-                f"normalisation: must be 'plain' or 'hermitian', got {normalisation!r}")
+                f"normalisation: must be 'plain' or 'hermitian', got {normalisation!r}"
+            )
         return float(np.linalg.cond(phi / np.sqrt(norm2)))
 
 
@@ -413,8 +434,10 @@ def _gain(value, field: str, unit: str) -> np.ndarray:
 
 def published_gains() -> tuple[np.ndarray, np.ndarray]:
     """G1 (N m/rad) and G2 (N m s/rad) of Att. 5 Eq. 59 (L2229-L2233), converted from ft·lbf."""
-    return tuple(np.asarray(values) * to_si(f"1 {unit}", si_unit)
-                 for values, unit, si_unit in PUBLISHED_GAINS.values())
+    return tuple(
+        np.asarray(values) * to_si(f"1 {unit}", si_unit)
+        for values, unit, si_unit in PUBLISHED_GAINS.values()
+    )
 
 
 def draper_rpl(**overrides) -> DraperRPLCase:

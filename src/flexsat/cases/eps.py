@@ -36,10 +36,10 @@ import numpy as np
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
+from flexsat.input_checks import require_count, require_nonneg
 from flexsat.structures.mode_description import classify_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_nonneg
 
 SOURCE = CASES["eps"].source
 
@@ -99,9 +99,18 @@ NODE_ROLES = {
     94: "candidate: 7.5 m antenna rim, 270° (-z) [role not stated in the paper]",
 }
 # role -> (antenna index or None for the CG, fraction of the radius, angle in degrees)
-_ROLE_GEOMETRY = {60: (0, 1.0, 0), 63: (0, 1.0, 90), 66: (0, 1.0, 180), 69: (0, 1.0, 270),
-                  85: (1, 1.0, 0), 88: (1, 1.0, 90), 52: (0, 0.5, 120), 78: (1, 0.5, 150),
-                  94: (1, 1.0, 270), 95: (None, 0.0, 0)}
+_ROLE_GEOMETRY = {
+    60: (0, 1.0, 0),
+    63: (0, 1.0, 90),
+    66: (0, 1.0, 180),
+    69: (0, 1.0, 270),
+    85: (1, 1.0, 0),
+    88: (1, 1.0, 90),
+    52: (0, 0.5, 120),
+    78: (1, 0.5, 150),
+    94: (1, 1.0, 270),
+    95: (None, 0.0, 0),
+}
 
 BALANCE = "balance"
 
@@ -246,8 +255,22 @@ class EPSCase:
             ring = int(round(frac * self.rib_elements)) - 1
             ring = min(max(ring, 0), self.rib_elements - 1)
             want = np.radians(angle)
-            best = min(rings[ring], key=lambda n: abs(np.angle(np.exp(1j * (
-                np.arctan2(coords[n][2] - coords[hub][2], coords[n][0] - coords[hub][0]) - want)))))
+            best = min(
+                rings[ring],
+                key=lambda n: abs(
+                    np.angle(
+                        np.exp(
+                            1j
+                            * (
+                                np.arctan2(
+                                    coords[n][2] - coords[hub][2], coords[n][0] - coords[hub][0]
+                                )
+                                - want
+                            )
+                        )
+                    )
+                ),
+            )
             roles[paper] = int(best)
         return roles
 
@@ -274,7 +297,7 @@ class EPSCase:
     def frequencies_hz(self, n_modes: int) -> np.ndarray:
         """First ``n_modes`` elastic frequencies, Hz."""
         n = require_count(n_modes, "n_modes")
-        return np.asarray(self.modes(n).frequencies_hz[6:6 + n])
+        return np.asarray(self.modes(n).frequencies_hz[6 : 6 + n])
 
     def mode_descriptions(self, n_modes: int) -> list[str]:
         """One phrase per elastic mode (``flexsat.structures.mode_description``)."""
@@ -326,8 +349,9 @@ class EPSCase:
         zeta = np.r_[np.zeros(6), np.full(n_modes, self.damping)]
         return ModalModel.from_fe(modes, damping=zeta, reference=self._model.cg, boundary="free")
 
-    def plant(self, model: str = "flexible", n_modes: int = 45, forces=FINAL_FORCES,
-              rim_nodes=RIM_NODES):
+    def plant(
+        self, model: str = "flexible", n_modes: int = 45, forces=FINAL_FORCES, rim_nodes=RIM_NODES
+    ):
         """The spacecraft as a three-axis plant of the simulation core.
 
         Parameters
@@ -357,17 +381,23 @@ class EPSCase:
         from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
 
         roles = self.node_roles
+
         def node(paper, field):
             if paper not in roles:
-                raise ValueError(f"{field}: {paper!r} is not one of the paper's nodes "
-                                 f"({min(roles)}-{max(roles)})")
+                raise ValueError(
+                    f"{field}: {paper!r} is not one of the paper's nodes "
+                    f"({min(roles)}-{max(roles)})"
+                )
             return roles[paper]
 
         points = [(node(int(n), "forces"), str(a).lower()) for n, a in forces]
         rims = [(node(int(n), "rim_nodes"), a) for n in rim_nodes for a in "xyz"]
-        return FlexibleSpacecraft(self.modal_model(require_count(n_modes, "n_modes")),
-                                  forces=points, displacements=rims,
-                                  torque_node=roles[95])
+        return FlexibleSpacecraft(
+            self.modal_model(require_count(n_modes, "n_modes")),
+            forces=points,
+            displacements=rims,
+            torque_node=roles[95],
+        )
 
     # -- mass --------------------------------------------------------------------------------
     def mass_budget(self) -> dict[str, float]:
@@ -432,13 +462,17 @@ def _build(case: EPSCase) -> _Model:
     for k in range(nb + 1):
         for c in range(4):
             elements.append((tid(k, c), tid(k, c + 1), "truss"))
-        elements.append((tid(k, 0), tid(k, 2), "truss") if k % 2 == 0
-                        else (tid(k, 1), tid(k, 3), "truss"))
+        elements.append(
+            (tid(k, 0), tid(k, 2), "truss") if k % 2 == 0 else (tid(k, 1), tid(k, 3), "truss")
+        )
     for k in range(nb):
         for c in range(4):
             elements.append((tid(k, c), tid(k + 1, c), "truss"))
-            elements.append((tid(k, c), tid(k + 1, c + 1), "truss") if (k + c) % 2 == 0
-                            else (tid(k, c + 1), tid(k + 1, c), "truss"))
+            elements.append(
+                (tid(k, c), tid(k + 1, c + 1), "truss")
+                if (k + c) % 2 == 0
+                else (tid(k, c + 1), tid(k + 1, c), "truss")
+            )
     truss_ids = list(nodes)
 
     shares = _antenna_shares(case)
@@ -493,8 +527,9 @@ def _build(case: EPSCase) -> _Model:
 
     base_len = lengths(elements, nodes)
     base_mass = rho_a * base_len.sum() + sum(lumped.values())
-    base_moment = rho_a * sum(L * 0.5 * (nodes[e[0]] + nodes[e[1]])
-                              for L, e in zip(base_len, elements))
+    base_moment = rho_a * sum(
+        L * 0.5 * (nodes[e[0]] + nodes[e[1]]) for L, e in zip(base_len, elements)
+    )
     base_moment = base_moment + sum(m * nodes[n] for n, m in lumped.items())
     p = base_moment / base_mass
     for _ in range(200):
@@ -503,8 +538,9 @@ def _build(case: EPSCase) -> _Model:
         structural = rho_a * (base_len.sum() + sup_len.sum())
         act = _actuator_mass(case, structural)
         mass = base_mass + rho_a * sup_len.sum() + act
-        moment = base_moment + rho_a * sum(L * 0.5 * (nodes[f] + p)
-                                           for L, f in zip(sup_len, support))
+        moment = base_moment + rho_a * sum(
+            L * 0.5 * (nodes[f] + p) for L, f in zip(sup_len, support)
+        )
         moment = moment + act * p
         p_new = moment / mass
         if np.linalg.norm(p_new - p) < 1e-12:
@@ -569,7 +605,8 @@ def _actuator_mass(case: EPSCase, structural: float) -> float:
         raise ValueError(
             f"actuator_mass: balancing to total_mass = {case.total_mass:g} kg gives {act:.2f} kg "
             f"(structural {structural:.2f} kg + non-structural {case.nonstructural_mass:g} kg "
-            "exceed it); give actuator_mass explicitly or raise total_mass")
+            "exceed it); give actuator_mass explicitly or raise total_mass"
+        )
     return act
 
 
@@ -601,10 +638,13 @@ def eps(**overrides) -> EPSCase:
     for name in ("large_antenna_bay", "small_antenna_bay"):
         if values[name] > nb:
             raise ValueError(
-                f"{name}: must be a bay number 1..truss_bays = {nb}, got {values[name]}")
+                f"{name}: must be a bay number 1..truss_bays = {nb}, got {values[name]}"
+            )
     if values["large_antenna_bay"] == values["small_antenna_bay"]:
-        raise ValueError("small_antenna_bay: must differ from large_antenna_bay "
-                         f"(both {values['large_antenna_bay']})")
+        raise ValueError(
+            "small_antenna_bay: must differ from large_antenna_bay "
+            f"(both {values['large_antenna_bay']})"
+        )
     if values["ribs"] < 3:
         raise ValueError(f"ribs: must be >= 3, got {values['ribs']}")
     share = values["large_antenna_share"]
@@ -615,9 +655,11 @@ def eps(**overrides) -> EPSCase:
     if not values["damping"] < 1:
         raise ValueError(f"damping: must be a modal damping ratio < 1, got {values['damping']!r}")
     if values["tube_wall"] > values["tube_outer_diameter"] / 2:
-        raise ValueError(f"tube_wall: must be <= tube_outer_diameter / 2 "
-                         f"= {values['tube_outer_diameter'] / 2:g} m, "
-                         f"got {values['tube_wall']:g} m")
+        raise ValueError(
+            f"tube_wall: must be <= tube_outer_diameter / 2 "
+            f"= {values['tube_outer_diameter'] / 2:g} m, "
+            f"got {values['tube_wall']:g} m"
+        )
     case = EPSCase(**values)
     case._model  # build now: one clear message at construction
     return case

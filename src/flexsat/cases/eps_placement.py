@@ -37,11 +37,15 @@ def eps_h2_setup(case=None, n_modes: int = 20):
     model = case.modal_model(n_modes)
     roles = case.node_roles
     actuators = actuator_candidates(
-        model, [roles[p] for p in EPS_CANDIDATE_NODES], ("x", "y", "z"),
-        label=lambda node, axis: f"{_paper(roles, node)}{axis.upper()}")
+        model,
+        [roles[p] for p in EPS_CANDIDATE_NODES],
+        ("x", "y", "z"),
+        label=lambda node, axis: f"{_paper(roles, node)}{axis.upper()}",
+    )
     disturbance = model.torque_input(roles[EPS_DISTURBANCE_NODE], ["x", "y", "z"])
-    outputs = np.vstack([model.displacement_output(roles[p], ["x", "y", "z"]).T
-                         for p in EPS_OUTPUT_NODES])
+    outputs = np.vstack(
+        [model.displacement_output(roles[p], ["x", "y", "z"]).T for p in EPS_OUTPUT_NODES]
+    )
     return model, actuators, disturbance, outputs
 
 
@@ -50,14 +54,22 @@ def _paper(roles: dict, node: int) -> int:
     return inverse.get(node, node)
 
 
-def eps_h2_ranking(case=None, n_modes: int = 20, gamma=1.0, rigid: str = "project",
-                   measure: str = "energy") -> H2Ranking:
+def eps_h2_ranking(
+    case=None, n_modes: int = 20, gamma=1.0, rigid: str = "project", measure: str = "energy"
+) -> H2Ranking:
     """:func:`~flexsat.analysis.placement.h2_actuator_ranking` on :func:`eps_h2_setup`; compare
     ``.top(5)`` with ``EPS_PUBLISHED_TOP5`` = 69X, 66X, 63X, 60X, 88X (seed 003 L248–L253)."""
     model, actuators, disturbance, outputs = eps_h2_setup(case, n_modes)
-    return h2_actuator_ranking(model, actuators, disturbance, outputs, gamma=gamma,
-                               rigid=rigid, measure=measure)
+    return h2_actuator_ranking(
+        model, actuators, disturbance, outputs, gamma=gamma, rigid=rigid, measure=measure
+    )
 
 
-__all__ = ["EPS_CANDIDATE_NODES", "EPS_DISTURBANCE_NODE", "EPS_OUTPUT_NODES",
-           "EPS_PUBLISHED_TOP5", "eps_h2_ranking", "eps_h2_setup"]
+__all__ = [
+    "EPS_CANDIDATE_NODES",
+    "EPS_DISTURBANCE_NODE",
+    "EPS_OUTPUT_NODES",
+    "EPS_PUBLISHED_TOP5",
+    "eps_h2_ranking",
+    "eps_h2_setup",
+]

@@ -7,14 +7,15 @@ builder. Every message starts with the field name, then the rule it breaks.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
 from flexsat import limits
+from flexsat.input_checks import require_count, require_nonneg, require_positive
 from flexsat.units import to_si
-from flexsat.validation import require_count, require_nonneg, require_positive
 
 _QUANTITY_RULES = {"positive": require_positive, "nonneg": require_nonneg}
 _OTHER_RULES = ("count", "flag", "choice", "raw")
@@ -62,11 +63,14 @@ class Param:
 
     def __post_init__(self):
         if isinstance(self.rule, str) and self.rule not in (*_QUANTITY_RULES, *_OTHER_RULES):
-            raise ValueError(f"rule: must be one of {[*_QUANTITY_RULES, *_OTHER_RULES]} or a "
-                             f"callable, got {self.rule!r}")
+            raise ValueError(
+                f"rule: must be one of {[*_QUANTITY_RULES, *_OTHER_RULES]} or a "
+                f"callable, got {self.rule!r}"
+            )
         if self.limit and not (self.rule == "count" and hasattr(limits, self.limit)):
-            raise ValueError(f"limit: must name a flexsat.limits constant of a 'count', got "
-                             f"{self.limit!r}")
+            raise ValueError(
+                f"limit: must name a flexsat.limits constant of a 'count', got {self.limit!r}"
+            )
         if self.rule == "choice" and not self.choices:
             raise ValueError("choices: a 'choice' input needs at least one choice")
 
@@ -81,9 +85,14 @@ class Param:
         if self.rule == "count":
             count = require_count(raw, name)
             if self.limit:
-                limits.check_count(count, getattr(limits, self.limit), name, name,
-                                   f"a larger {name} takes more time and memory than one run is "
-                                   f"allowed (flexsat.limits.{self.limit})")
+                limits.check_count(
+                    count,
+                    getattr(limits, self.limit),
+                    name,
+                    name,
+                    f"a larger {name} takes more time and memory than one run is "
+                    f"allowed (flexsat.limits.{self.limit})",
+                )
             return count
         if self.rule == "flag":
             return _flag(raw, name)
@@ -139,9 +148,11 @@ def read_inputs(builder: str, params: dict[str, Param], overrides: dict) -> dict
     unknown = set(overrides) - set(params)
     if unknown:
         raise ValueError(
-            f"{builder}: unknown parameter(s) {sorted(unknown)}; known: {sorted(params)}")
-    return {name: param.read(overrides.get(name, param.default), name)
-            for name, param in params.items()}
+            f"{builder}: unknown parameter(s) {sorted(unknown)}; known: {sorted(params)}"
+        )
+    return {
+        name: param.read(overrides.get(name, param.default), name) for name, param in params.items()
+    }
 
 
 __all__ = ["Param", "read_inputs"]

@@ -39,13 +39,13 @@ from scipy.optimize import brentq
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.control import PD
+from flexsat.dynamics.hybrid import ModalHybrid
+from flexsat.input_checks import require_count
 from flexsat.structures.beam import TipMassCantilever, hub_free_frequencies
 from flexsat.structures.fem import Structure
-from flexsat.dynamics.hybrid import ModalHybrid
 from flexsat.structures.modal_model import ModalModel, hub_appendage_matrices
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
-from flexsat.validation import require_count
 
 SOURCE = CASES["nps"].source
 
@@ -147,7 +147,9 @@ class NPSCase:
         unit = Section.general(1.0, 1.0, 1.0, 1.0, name="unit section")
         for a, b in zip(self.node_ids[:-1], self.node_ids[1:]):
             s.add_beam2d(int(a), int(b), mast, unit, label="mast")
-        s.add_mass(self.reflector_node, self.reflector_mass, inertia=(0.0, 0.0, self.reflector_inertia))
+        s.add_mass(
+            self.reflector_node, self.reflector_mass, inertia=(0.0, 0.0, self.reflector_inertia)
+        )
         s.clamp(self.reflector_node, ("uz", "rx", "ry"))  # planar: out-of-plane dofs of the mass
         for node in self.node_ids:
             s.clamp(int(node), ("ux",))  # axially rigid mast
@@ -171,7 +173,9 @@ class NPSCase:
             lo /= 4
         while f(hi) < 0:
             hi *= 4
-        return float(brentq(f, lo, hi, xtol=1e-14 * guess, rtol=4 * np.finfo(float).eps, maxiter=200))
+        return float(
+            brentq(f, lo, hi, xtol=1e-14 * guess, rtol=4 * np.finfo(float).eps, maxiter=200)
+        )
 
     @property
     def _solution(self) -> _Solution:
@@ -228,8 +232,11 @@ class NPSCase:
     def appendage_inertia_exact(self) -> float:
         """ρ((r+L)³ − r³)/3 + m_R (r+L)² + J_R, kg m² (continuous mast)."""
         r, L = self.attachment_radius, self.mast_length
-        return (self.mast_mass_per_length * ((r + L) ** 3 - r**3) / 3
-                + self.reflector_mass * (r + L) ** 2 + self.reflector_inertia)
+        return (
+            self.mast_mass_per_length * ((r + L) ** 3 - r**3) / 3
+            + self.reflector_mass * (r + L) ** 2
+            + self.reflector_inertia
+        )
 
     @property
     def total_inertia(self) -> float:
@@ -255,15 +262,21 @@ class NPSCase:
             return modal
         n = self.n_modes if n_modes is None else require_count(n_modes, "n_modes")
         if n > modal.n_modes:
-            raise ValueError(f"n_modes: the finite-element model has {modal.n_modes} modes; raise "
-                             f"n_elements for more than that, got {n}")
+            raise ValueError(
+                f"n_modes: the finite-element model has {modal.n_modes} modes; raise "
+                f"n_elements for more than that, got {n}"
+            )
         return modal.truncate(n)
 
     def model(self, n_modes: int | None = None) -> ModalHybrid:
         """The simulator plant: hub + appendage in hybrid coordinates (Eq. 16), with the
         reflector's transverse displacement as ``tip_deflection``."""
-        return ModalHybrid(self.modal_model(n_modes), self.hub_inertia_value, axis="z",
-                           tip=(self.reflector_node, "y"))
+        return ModalHybrid(
+            self.modal_model(n_modes),
+            self.hub_inertia_value,
+            axis="z",
+            tip=(self.reflector_node, "y"),
+        )
 
     @property
     def reference_inertia(self) -> float:
@@ -328,10 +341,18 @@ class NPSCase:
         import control
 
         n = self.modal_model(n_modes).n_modes
-        states = (["theta"] + [f"q[{i}]" for i in range(n)] + ["theta_dot"]
-                  + [f"q_dot[{i}]" for i in range(n)])
-        return control.ss(*self.statespace_eq18(n_modes), states=states, inputs=["torque"],
-                          outputs=["theta", "theta_dot"])
+        states = (
+            ["theta"]
+            + [f"q[{i}]" for i in range(n)]
+            + ["theta_dot"]
+            + [f"q_dot[{i}]" for i in range(n)]
+        )
+        return control.ss(
+            *self.statespace_eq18(n_modes),
+            states=states,
+            inputs=["torque"],
+            outputs=["theta", "theta_dot"],
+        )
 
     # -- frequencies ---------------------------------------------------------------------------
     def system_frequencies(self, n_modes: int | None = None) -> np.ndarray:
@@ -345,7 +366,9 @@ class NPSCase:
         """First ``n_modes`` hub-free elastic frequencies of the six-mode hybrid model, Hz."""
         n = require_count(n_modes, "n_modes")
         if n > self.n_modes:
-            raise ValueError(f"n_modes: the model has {self.n_modes} modes; raise n_modes to at least {n}")
+            raise ValueError(
+                f"n_modes: the model has {self.n_modes} modes; raise n_modes to at least {n}"
+            )
         return self.system_frequencies()[:n] / (2 * np.pi)
 
     def mode_descriptions(self, n_modes: int) -> list[str]:
@@ -357,9 +380,16 @@ class NPSCase:
         with every finite-element mode and exact (``frequencies_hz`` is the six-mode model's);
         couplings D_i and the inertia budget (for ``flexsat modes``)."""
         n = min(require_count(n_modes, "n_modes"), self.n_modes)
-        beam = TipMassCantilever(self.mast_length, self.mast_bending_stiffness_value,
-                                 self.mast_mass_per_length, self.reflector_mass, self.reflector_inertia)
-        exact_free = hub_free_frequencies(beam, self.attachment_radius, self.hub_inertia_value, 1, n)
+        beam = TipMassCantilever(
+            self.mast_length,
+            self.mast_bending_stiffness_value,
+            self.mast_mass_per_length,
+            self.reflector_mass,
+            self.reflector_inertia,
+        )
+        exact_free = hub_free_frequencies(
+            beam, self.attachment_radius, self.hub_inertia_value, 1, n
+        )
         return {
             "constrained_hz": (beam.frequencies(n) / (2 * np.pi)).tolist(),
             "constrained_fe_hz": self.modal_model().frequencies_hz[:n].tolist(),
@@ -375,8 +405,12 @@ class NPSCase:
     def pd_gains(self, **kwargs) -> PD:
         """Rigid-body pole placement (Eqs. 20–24): k = I ω_n², kτ = 2ζω_n I with
         I = ``design_inertia``; keyword arguments go to :class:`~flexsat.control.PD`."""
-        return PD.from_rigid_poles(self.design_inertia, 2 * np.pi * self.controller_frequency,
-                                   self.controller_damping, **kwargs)
+        return PD.from_rigid_poles(
+            self.design_inertia,
+            2 * np.pi * self.controller_frequency,
+            self.controller_damping,
+            **kwargs,
+        )
 
     @property
     def slew_angle(self) -> float:
@@ -406,20 +440,33 @@ def nps(**overrides) -> NPSCase:
     >>> case = nps(mast_length="2 m", inertia_convention="total")
     """
     if "mast_bending_stiffness" in overrides and "cantilever_frequency" in overrides:
-        raise ValueError("mast_bending_stiffness: give either it or cantilever_frequency (it is "
-                         "solved for that frequency), not both")
+        raise ValueError(
+            "mast_bending_stiffness: give either it or cantilever_frequency (it is "
+            "solved for that frequency), not both"
+        )
     values = read_inputs("nps", _INPUTS, overrides)
     if values["n_elements"] < 2:
         raise ValueError(f"n_elements: must be >= 2, got {values['n_elements']}")
     if values["damping"] >= 1:
-        raise ValueError(f"damping: must be < 1 (a ratio of critical damping), got {values['damping']!r}")
+        raise ValueError(
+            f"damping: must be < 1 (a ratio of critical damping), got {values['damping']!r}"
+        )
     if 2 * values["n_elements"] < values["n_modes"]:
-        raise ValueError(f"n_modes: the mesh of {values['n_elements']} elements has "
-                         f"{2 * values['n_elements']} modes; raise n_elements")
+        raise ValueError(
+            f"n_modes: the mesh of {values['n_elements']} elements has "
+            f"{2 * values['n_elements']} modes; raise n_elements"
+        )
     case = NPSCase(**values)
     case._solution  # solve and validate now: one clear message at construction
     return case
 
 
-__all__ = ["DESIGN_INERTIA", "INERTIA_CONVENTIONS", "NPSCase", "PUBLISHED", "SOURCE",
-           "inertia_budget", "nps"]
+__all__ = [
+    "DESIGN_INERTIA",
+    "INERTIA_CONVENTIONS",
+    "NPSCase",
+    "PUBLISHED",
+    "SOURCE",
+    "inertia_budget",
+    "nps",
+]

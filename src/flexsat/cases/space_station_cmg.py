@@ -41,11 +41,18 @@ from flexsat.dynamics.space_station import (
     pitch_model,
     roll_yaw_model,
 )
+from flexsat.input_checks import require_positive_scalar
 from flexsat.units import to_si_array
-from flexsat.validation import require_positive_scalar
 
-__all__ = ["BrysonMaxima", "StationDesign", "StationRun", "design", "simulate_attitude",
-           "cmg_loop", "DISTURBANCES"]
+__all__ = [
+    "BrysonMaxima",
+    "StationDesign",
+    "StationRun",
+    "design",
+    "simulate_attitude",
+    "cmg_loop",
+    "DISTURBANCES",
+]
 
 #: disturbance models: the design model Eq. (11), or it plus the stated AERO1 substitute
 DISTURBANCES = ("design", "aero_substitute")
@@ -61,10 +68,15 @@ class BrysonMaxima:
     momentum_integral: float = "2e5 lbf*ft*s**2"
 
     def __post_init__(self):
-        for name, unit in (("attitude", "rad"), ("rate", "rad/s"), ("momentum", "N*m*s"),
-                           ("momentum_integral", "N*m*s**2")):
-            object.__setattr__(self, name, require_positive_scalar(getattr(self, name),
-                                                                   f"maxima.{name}", unit))
+        for name, unit in (
+            ("attitude", "rad"),
+            ("rate", "rad/s"),
+            ("momentum", "N*m*s"),
+            ("momentum_integral", "N*m*s**2"),
+        ):
+            object.__setattr__(
+                self, name, require_positive_scalar(getattr(self, name), f"maxima.{name}", unit)
+            )
 
     def scales(self, names, n):
         """D = the maxima of the states ``names`` of :mod:`flexsat.dynamics.space_station`."""
@@ -101,22 +113,29 @@ class StationDesign:
 def _lqr_bryson(A, B, names, maxima, n, axis):
     D = maxima.scales(names, n)
     try:
-        K_s = lqr(A / D[:, None] * D[None, :], B / D[:, None], np.eye(len(D)),
-                  np.eye(B.shape[1]))[0]
+        K_s = lqr(A / D[:, None] * D[None, :], B / D[:, None], np.eye(len(D)), np.eye(B.shape[1]))[
+            0
+        ]
     except ValueError as err:
         raise ValueError(f"{axis}: {err}") from None
     K = K_s / D[None, :]
     return K, np.linalg.eigvals(A - B @ K)
 
 
-def design(data: StationData = PAPER_STATION, maxima: BrysonMaxima | None = None,
-           pitch_filters=(1, 2), roll_yaw_filters=(2,)) -> StationDesign:
+def design(
+    data: StationData = PAPER_STATION,
+    maxima: BrysonMaxima | None = None,
+    pitch_filters=(1, 2),
+    roll_yaw_filters=(2,),
+) -> StationDesign:
     """LQR gains of the pitch and roll/yaw loops (module docstring, step 1)."""
     maxima = BrysonMaxima() if maxima is None else maxima
     n = data.orbit_rate
     out = []
-    for axis, model, filters in (("pitch_filters", pitch_model, pitch_filters),
-                                 ("roll_yaw_filters", roll_yaw_model, roll_yaw_filters)):
+    for axis, model, filters in (
+        ("pitch_filters", pitch_model, pitch_filters),
+        ("roll_yaw_filters", roll_yaw_model, roll_yaw_filters),
+    ):
         A, B, E, names = model(data, filters)
         K, poles = _lqr_bryson(A, B, names, maxima, n, axis)
         out.append((A, B, E, names, K, poles))
@@ -151,8 +170,13 @@ class StationRun:
         return np.array([u1 + n * h3, u2, u3 - n * h1]) / self.design.data.rotor_momentum
 
 
-def simulate_attitude(station: StationDesign, duration, disturbance: str = "design",
-                      initial_attitude="1 deg", n_out: int = 1001) -> StationRun:
+def simulate_attitude(
+    station: StationDesign,
+    duration,
+    disturbance: str = "design",
+    initial_attitude="1 deg",
+    n_out: int = 1001,
+) -> StationRun:
     """The closed attitude/momentum loop (module docstring, step 2) over ``duration`` s."""
     if disturbance not in DISTURBANCES:
         raise ValueError(f"disturbance: must be one of {DISTURBANCES}, got {disturbance!r}")
@@ -169,15 +193,15 @@ def simulate_attitude(station: StationDesign, duration, disturbance: str = "desi
 
     def rhs(t, z):
         w = wfun(t, data)
-        return np.concatenate([Acl_p @ z[:npitch] + Ep[:, 0] * w[1],
-                               Acl_r @ z[npitch:] + Er @ w[[0, 2]]])
+        return np.concatenate(
+            [Acl_p @ z[:npitch] + Ep[:, 0] * w[1], Acl_r @ z[npitch:] + Er @ w[[0, 2]]]
+        )
 
     z0 = np.zeros(npitch + Ar.shape[0])
     z0[0] = z0[npitch] = z0[npitch + 4] = float(th0)
     # the loop is linear and slow (poles <= 0.006 rad/s): rtol 1e-10 leaves the demand T
     # accurate far beyond what the gimbal integration (rtol 1e-10) resolves
-    sol = solve_ivp(rhs, (0.0, tf), z0, method="DOP853", rtol=1e-10, atol=1e-14,
-                    dense_output=True)
+    sol = solve_ivp(rhs, (0.0, tf), z0, method="DOP853", rtol=1e-10, atol=1e-14, dense_output=True)
     if sol.status != 0:
         raise RuntimeError(f"simulate_attitude: solve_ivp failed: {sol.message}")
     t = np.linspace(0.0, tf, n_out)
@@ -191,5 +215,6 @@ def cmg_loop(run: StationRun, sigma0, threshold: float = 1e-6, n_out: int = 1001
     """Pseudo-inverse gimbal steering for the run's demand T(t) from σ0 (module docstring,
     step 3), stopped at the first singular set: a :class:`flexsat.dynamics.cmg.GimbalRun`
     (gimbal momentum in units of h_r)."""
-    return cmg.integrate_gimbals(sigma0, lambda t: -run.demand(t), run.t[-1],
-                                 threshold=threshold, n_out=n_out)
+    return cmg.integrate_gimbals(
+        sigma0, lambda t: -run.demand(t), run.t[-1], threshold=threshold, n_out=n_out
+    )

@@ -11,14 +11,15 @@ modes (:meth:`flexsat.dynamics.structural.StructuralPlant.from_modal_model`).
 from __future__ import annotations
 
 from flexsat.dynamics.structural import Actuator, Sensor, StructuralPlant
+from flexsat.input_checks import require_count, require_nonneg
 from flexsat.structures.modal_model import ModalModel
-from flexsat.validation import require_count, require_nonneg
 
 _AXES = ("x", "y", "z")
 
 
-def point_force_plant(modes, force_node: int, sensor_nodes, axis: str = "z", damping=0.01,
-                      reference=(0.0, 0.0, 0.0)) -> StructuralPlant:
+def point_force_plant(
+    modes, force_node: int, sensor_nodes, axis: str = "z", damping=0.01, reference=(0.0, 0.0, 0.0)
+) -> StructuralPlant:
     """The plant of a finite-element solution with a point force and displacement sensors.
 
     Parameters
@@ -46,10 +47,12 @@ def point_force_plant(modes, force_node: int, sensor_nodes, axis: str = "z", dam
             if node not in ids:
                 raise ValueError(f"{field}: node {node!r} is not a node of the model")
     sensors = [Sensor(f"displacement_{n}", "displacement", n, axis) for n in sensor_nodes]
-    sensors += [Sensor(f"displacement_{n}_dot", "displacement", n, axis, rate=True)
-                for n in sensor_nodes]
+    sensors += [
+        Sensor(f"displacement_{n}_dot", "displacement", n, axis, rate=True) for n in sensor_nodes
+    ]
     return StructuralPlant.from_modal_model(
-        modal, [Actuator("force", "force", force_node, axis)], sensors)
+        modal, [Actuator("force", "force", force_node, axis)], sensors
+    )
 
 
 def first_modes(structure, n_modes: int, rigid_body_modes: int | None = None):

@@ -34,8 +34,8 @@ from flexsat.catalog import CASES
 from flexsat.control import LyapunovRegulator, LyapunovTracker
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.maneuvers import SmoothBangBang
-from flexsat.structures.beam import hub_free_frequencies
 from flexsat.sim import BearingFriction, RandomTorque, Sensors, SimConfig, TorqueActuator
+from flexsat.structures.beam import hub_free_frequencies
 from flexsat.units import to_si
 
 SOURCE = CASES["tamu"].source
@@ -116,23 +116,25 @@ class TamuCase:
         )
 
     def model(self) -> HubAppendage:
-        return HubAppendage(self.params, n_modes=int(self.n_modes), stiffening=bool(self.stiffening))
+        return HubAppendage(
+            self.params, n_modes=int(self.n_modes), stiffening=bool(self.stiffening)
+        )
 
     # -- the case protocol (flexsat modes) ---------------------------------------------------
     def frequencies_hz(self, n_modes: int) -> np.ndarray:
         """First ``n_modes`` elastic frequencies of the hub-free model, Hz."""
         model = self.model()
         if n_modes > model.n_modes:
-            raise ValueError(f"n_modes: the model has {model.n_modes} modes; raise n_modes "
-                             f"to at least {n_modes}")
+            raise ValueError(
+                f"n_modes: the model has {model.n_modes} modes; raise n_modes to at least {n_modes}"
+            )
         return model.frequencies()[:n_modes] / (2 * np.pi)
 
     def mode_details(self, n_modes: int) -> dict:
         """Exact (distributed-parameter) hub-free and hub-clamped frequencies (Hz) and the
         inertia budget (kg m²), for ``flexsat modes``."""
         p = self.params
-        exact = hub_free_frequencies(p.beam(), p.hub_radius, p.hub_inertia, p.n_appendages,
-                                     n_modes)
+        exact = hub_free_frequencies(p.beam(), p.hub_radius, p.hub_inertia, p.n_appendages, n_modes)
         return {
             "exact_unconstrained_hz": (exact / (2 * np.pi)).tolist(),
             "constrained_hz": (p.beam().frequencies(n_modes) / (2 * np.pi)).tolist(),
@@ -148,8 +150,9 @@ class TamuCase:
     def max_torque(self) -> float:
         return to_si(PUBLISHED["max_torque"], "N*m")
 
-    def sim_config(self, duration: float = 15.0, friction: bool = True, noise: bool = True,
-                   **kwargs) -> SimConfig:
+    def sim_config(
+        self, duration: float = 15.0, friction: bool = True, noise: bool = True, **kwargs
+    ) -> SimConfig:
         """Hardware settings of Att. 3 §V and its appendix: 75 Hz, 400 oz-in, 0.01° encoder,
         least-squares rate, bearing friction and 5 oz-in (1σ) random torque."""
         sensors = Sensors(
@@ -164,25 +167,41 @@ class TamuCase:
             friction=BearingFriction(
                 to_si(PUBLISHED["friction_coulomb"], "N*m"),
                 to_si(PUBLISHED["friction_viscous"], "N*m*s/rad"),
-            ) if friction else BearingFriction(),
+            )
+            if friction
+            else BearingFriction(),
             random_torque=RandomTorque(to_si(PUBLISHED["random_torque"], "N*m") if noise else 0.0),
             **kwargs,
         )
 
     def law_i(self, g1, g2, g3=0.0, target=None) -> LyapunovRegulator:
         """Control Law I to ``target`` (default the 40° maneuver); gains in SI."""
-        return LyapunovRegulator(g1, g2, g3, self.angle if target is None else target,
-                                 n_appendages=int(self.n_appendages))
+        return LyapunovRegulator(
+            g1,
+            g2,
+            g3,
+            self.angle if target is None else target,
+            n_appendages=int(self.n_appendages),
+        )
 
     def reference(self, alpha=0.2, u_max=None, angle=None) -> SmoothBangBang:
-        return SmoothBangBang(self.angle if angle is None else angle, self.reference_inertia,
-                              u_max=self.max_torque if u_max is None else u_max, alpha=alpha)
+        return SmoothBangBang(
+            self.angle if angle is None else angle,
+            self.reference_inertia,
+            u_max=self.max_torque if u_max is None else u_max,
+            alpha=alpha,
+        )
 
     def law_ii(self, g1, g2, g3=0.0, alpha=0.2, u_max=None, angle=None) -> LyapunovTracker:
         """Control Law II tracking the smoothed bang-bang reference; gains in SI."""
-        return LyapunovTracker(self.reference(alpha, u_max, angle), g1, g2, g3,
-                               appendage_inertia=self.params.appendage_inertia,
-                               n_appendages=int(self.n_appendages))
+        return LyapunovTracker(
+            self.reference(alpha, u_max, angle),
+            g1,
+            g2,
+            g3,
+            appendage_inertia=self.params.appendage_inertia,
+            n_appendages=int(self.n_appendages),
+        )
 
 
 def tamu(**overrides) -> TamuCase:
@@ -207,8 +226,9 @@ def published_reference_inertia(params: HubAppendageParams) -> float:
     of design to model inertia (module docstring).
     """
     nominal = TamuCase(**read_inputs("tamu", _INPUTS, {})).params
-    return to_si(PUBLISHED["total_inertia"], "kg*m**2") * (params.total_inertia
-                                                          / nominal.total_inertia)
+    return to_si(PUBLISHED["total_inertia"], "kg*m**2") * (
+        params.total_inertia / nominal.total_inertia
+    )
 
 
 def inertia_budget(case: TamuCase) -> dict[str, float]:
@@ -225,5 +245,11 @@ def inertia_budget(case: TamuCase) -> dict[str, float]:
     }
 
 
-__all__ = ["PUBLISHED", "SOURCE", "TamuCase", "inertia_budget", "published_reference_inertia",
-           "tamu"]
+__all__ = [
+    "PUBLISHED",
+    "SOURCE",
+    "TamuCase",
+    "inertia_budget",
+    "published_reference_inertia",
+    "tamu",
+]

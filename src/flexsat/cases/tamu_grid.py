@@ -54,10 +54,10 @@ import numpy as np
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
+from flexsat.input_checks import require_count
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material
 from flexsat.units import Q_, to_si
-from flexsat.validation import require_count
 
 SOURCE = CASES["tamu_grid"].source
 
@@ -92,10 +92,50 @@ PUBLISHED = {
     "att6_experiment_hz": (0.877, 2.19, 4.81, 6.17, 8.18),
     "att6_damping_ratio": (0.00603, 0.00489, 0.01105, 0.00596, 0.01293),
     # Att. 6 Table 2 (L2681-L2705): mode-1 z amplitude at nodes 1-20, mass-normalised (US units)
-    "att6_mode1_modelled": (8.25, 8.35, 8.40, 8.35, 8.25, 5.44, 5.52, 5.55, 5.52, 5.44,
-                            2.85, 2.90, 2.92, 2.90, 2.85, 0.871, 0.897, 0.906, 0.897, 0.871),
-    "att6_mode1_experiment": (7.66, 7.83, 8.18, 7.97, 8.54, 4.99, 5.10, 4.94, 6.17, 6.23,
-                              2.12, 2.78, 3.57, 3.33, 3.95, 1.14, 0.763, 1.26, 1.59, 1.43),
+    "att6_mode1_modelled": (
+        8.25,
+        8.35,
+        8.40,
+        8.35,
+        8.25,
+        5.44,
+        5.52,
+        5.55,
+        5.52,
+        5.44,
+        2.85,
+        2.90,
+        2.92,
+        2.90,
+        2.85,
+        0.871,
+        0.897,
+        0.906,
+        0.897,
+        0.871,
+    ),
+    "att6_mode1_experiment": (
+        7.66,
+        7.83,
+        8.18,
+        7.97,
+        8.54,
+        4.99,
+        5.10,
+        4.94,
+        6.17,
+        6.23,
+        2.12,
+        2.78,
+        3.57,
+        3.33,
+        3.95,
+        1.14,
+        0.763,
+        1.26,
+        1.59,
+        1.43,
+    ),
     # Att. 10 Table 1 (L3599-L3611), a second measurement campaign, Hz
     "att10_measured_hz": (0.92, 2.32, 4.93, 6.38, 7.27),
 }
@@ -182,10 +222,12 @@ class TamuGridCase:
     @property
     def members(self) -> list[tuple[int, int]]:
         """The 36 members (n1, n2): 16 horizontal (rows 1-4), then 20 vertical (lower, upper)."""
-        horizontal = [(5 * r + c + 1, 5 * r + c + 2) for r in range(N_SIDE - 1)
-                      for c in range(N_SIDE - 1)]
-        vertical = [(5 * r + c + 1, 5 * r + c + 6) for r in range(N_SIDE - 1)
-                    for c in range(N_SIDE)]
+        horizontal = [
+            (5 * r + c + 1, 5 * r + c + 2) for r in range(N_SIDE - 1) for c in range(N_SIDE - 1)
+        ]
+        vertical = [
+            (5 * r + c + 1, 5 * r + c + 6) for r in range(N_SIDE - 1) for c in range(N_SIDE)
+        ]
         return horizontal + vertical
 
     @property
@@ -234,11 +276,14 @@ class TamuGridCase:
         scale = dict(stiffness_scale or {})
         for name, factor in scale.items():
             if name not in SUBSTRUCTURES:
-                raise ValueError(f"stiffness_scale: unknown substructure {name!r}; known: "
-                                 f"{', '.join(SUBSTRUCTURES)}")
+                raise ValueError(
+                    f"stiffness_scale: unknown substructure {name!r}; known: "
+                    f"{', '.join(SUBSTRUCTURES)}"
+                )
             if not (np.isfinite(factor) and factor > 0):
-                raise ValueError(f"stiffness_scale: {name!r} must be a finite factor > 0, "
-                                 f"got {factor!r}")
+                raise ValueError(
+                    f"stiffness_scale: {name!r} must be a finite factor > 0, got {factor!r}"
+                )
         s = Structure("TAMU 5 ft x 5 ft grid")
         for n in range(1, 26):
             c, r = self.node_position(n)
@@ -247,13 +292,18 @@ class TamuGridCase:
         for a, b in self.members:
             kind = "vertical" if b - a == N_SIDE else "horizontal"
             k = scale.get(self.substructure_of((a, b)), 1.0)
-            ids[(a, b)] = s.add_grid(a, b, k * self.EI, k * self.GJ, self.rho_A, self.rho_J,
-                                     label=f"{kind} {a}-{b}")
+            ids[(a, b)] = s.add_grid(
+                a, b, k * self.EI, k * self.GJ, self.rho_A, self.rho_J, label=f"{kind} {a}-{b}"
+            )
         if self.motor_mass > 0 or self.motor_inertia > 0:
             for n in self.motor_nodes:
-                s.add_mass(n, self.motor_mass,
-                           inertia=(self.motor_inertia, self.motor_inertia, 0.0)
-                           if self.motor_inertia > 0 else None)
+                s.add_mass(
+                    n,
+                    self.motor_mass,
+                    inertia=(self.motor_inertia, self.motor_inertia, 0.0)
+                    if self.motor_inertia > 0
+                    else None,
+                )
                 # a lumped mass touches ux, uy (and rz with an inertia); the grid has no
                 # stiffness there: the motor moves with the plate (uz, rx, ry) only
                 s.clamp(n, ("ux", "uy", "rz") if self.motor_inertia > 0 else ("ux", "uy"))
@@ -267,8 +317,9 @@ class TamuGridCase:
             else:  # Att. 6 Eq. 14: string stiffness T/L on uz only, by massless pre-tensioned rods
                 string = Material(E=1.0, rho=0.0, name="massless string")
                 for (a, b), tension in tensions.items():
-                    s.set_axial_preload(s.add_rod(a, b, string, 1.0, label=f"string {a}-{b}"),
-                                        tension)
+                    s.set_axial_preload(
+                        s.add_rod(a, b, string, 1.0, label=f"string {a}-{b}"), tension
+                    )
                 for n in range(1, 21):
                     s.clamp(n, ("ux", "uy"))  # the rods' in-plane dofs: not part of the model
         return s
@@ -314,9 +365,11 @@ class TamuGridCase:
             row = row[np.abs(row) > 1e-3 * np.abs(row).max()]
             across = int(np.sum(np.sign(row[1:]) != np.sign(row[:-1])))
             kind = "bending" if sym else "torsion"
-            out.append(f"{kind} ({'symmetric' if sym else 'antisymmetric'} about the centre "
-                       f"column): {crossings} node line(s) across the height, {across} along "
-                       "the rows")
+            out.append(
+                f"{kind} ({'symmetric' if sym else 'antisymmetric'} about the centre "
+                f"column): {crossings} node line(s) across the height, {across} along "
+                "the rows"
+            )
         return out
 
     def mode1_shape_us(self, gravity: bool | None = None) -> np.ndarray:
@@ -353,12 +406,14 @@ class TamuGridCase:
             "att6_mode1_modelled_us": list(PUBLISHED["att6_mode1_modelled"]),
             "vertical_member_tension_n": [t for t in self.member_tensions().values()],
             "total_mass_kg": self.total_mass,
-            "motors": {"mass_kg": self.motor_mass, "inertia_kg_m2": self.motor_inertia,
-                       "nodes": list(self.motor_nodes)},
+            "motors": {
+                "mass_kg": self.motor_mass,
+                "inertia_kg_m2": self.motor_inertia,
+                "nodes": list(self.motor_nodes),
+            },
         }
 
-    def plant(self, n_modes: int = 10, damping=0.01, force_node: int = 1,
-              sensor_nodes=(1, 3)):
+    def plant(self, n_modes: int = 10, damping=0.01, force_node: int = 1, sensor_nodes=(1, 3)):
         """The hanging grid as a plant: an out-of-plane (z) force ``force`` at ``force_node``
         (a shaker; default the free lower-left corner, which drives bending and torsion), the
         displacements ``displacement_<node>`` (m) and rates at ``sensor_nodes`` (default the
@@ -378,9 +433,12 @@ class TamuGridCase:
         if n > modes.shapes.shape[1]:
             raise ValueError(f"n_modes: the grid has {modes.shapes.shape[1]} modes, got {n}")
         cut = FEModes(modes.omegas[:n], modes.shapes[:, :n], modes.assembly)
-        return ModalModel.from_fe(cut, damping=damping,
-                                  reference=(2 * self.spacing, 4 * self.spacing, 0.0),
-                                  boundary="cantilevered")
+        return ModalModel.from_fe(
+            cut,
+            damping=damping,
+            reference=(2 * self.spacing, 4 * self.spacing, 0.0),
+            boundary="cantilevered",
+        )
 
 
 def _grid_plant(case: TamuGridCase, n_modes: int, damping, force_node: int, sensor_nodes):
@@ -392,8 +450,9 @@ def _grid_plant(case: TamuGridCase, n_modes: int, damping, force_node: int, sens
     if n > modes.shapes.shape[1]:
         raise ValueError(f"n_modes: the grid has {modes.shapes.shape[1]} modes, got {n}")
     cut = FEModes(modes.omegas[:n], modes.shapes[:, :n], modes.assembly)
-    return point_force_plant(cut, force_node, sensor_nodes, "z", damping,
-                             (2 * case.spacing, 4 * case.spacing, 0.0))
+    return point_force_plant(
+        cut, force_node, sensor_nodes, "z", damping, (2 * case.spacing, 4 * case.spacing, 0.0)
+    )
 
 
 def tamu_grid(**overrides) -> TamuGridCase:
@@ -410,6 +469,13 @@ def tamu_grid(**overrides) -> TamuGridCase:
     return TamuGridCase(**read_inputs("tamu_grid", _INPUTS, overrides))
 
 
-__all__ = ["CLAMPED_NODES", "GRAVITY_MODELS", "LOWER_LEFT_NODE", "PUBLISHED", "SOURCE",
-           "SUBSTRUCTURES",
-           "TamuGridCase", "tamu_grid"]
+__all__ = [
+    "CLAMPED_NODES",
+    "GRAVITY_MODELS",
+    "LOWER_LEFT_NODE",
+    "PUBLISHED",
+    "SOURCE",
+    "SUBSTRUCTURES",
+    "TamuGridCase",
+    "tamu_grid",
+]

@@ -15,8 +15,11 @@ import numpy as np
 import xarray as xr
 
 from flexsat.cases.tamu import TamuCase, tamu
-from flexsat.design.trade_surfaces import (maneuver_time_surface, residual_energy_surface,
-                                           tracking_bound_surface)
+from flexsat.design.trade_surfaces import (
+    maneuver_time_surface,
+    residual_energy_surface,
+    tracking_bound_surface,
+)
 from flexsat.units import to_si_array
 
 #: the grid of the notes' T table (§2.4), as published: α and u_max [oz-in]
@@ -26,10 +29,17 @@ U_MAX_GRID = tuple(f"{v} ozf*in" for v in (100, 200, 300, 400, 500, 600))
 LAW_II_GAINS = {"g1": "3000 ozf*in/rad", "g2": "800 ozf*in*s/rad", "g3": 0.0}
 
 
-def tamu_trade_surfaces(case: TamuCase | None = None, alpha=ALPHA_GRID, u_max=U_MAX_GRID,
-                        g1=LAW_II_GAINS["g1"], g2=LAW_II_GAINS["g2"], g3=LAW_II_GAINS["g3"],
-                        reference_inertia=None, n_samples: int = 2001,
-                        horizon: float = 1.0) -> xr.Dataset:
+def tamu_trade_surfaces(
+    case: TamuCase | None = None,
+    alpha=ALPHA_GRID,
+    u_max=U_MAX_GRID,
+    g1=LAW_II_GAINS["g1"],
+    g2=LAW_II_GAINS["g2"],
+    g3=LAW_II_GAINS["g3"],
+    reference_inertia=None,
+    n_samples: int = 2001,
+    horizon: float = 1.0,
+) -> xr.Dataset:
     """T, E(T) and μ_max of the TAMU 40° slew over the (α, u_max) grid.
 
     Parameters
@@ -59,23 +69,55 @@ def tamu_trade_surfaces(case: TamuCase | None = None, alpha=ALPHA_GRID, u_max=U_
     inertia = case.reference_inertia if reference_inertia is None else reference_inertia
     u = to_si_array(u_max, "N*m", "u_max")
     a = np.asarray(alpha, float)
-    g = {k: to_si_array(v, unit, k) for k, v, unit in (("g1", g1, "N*m/rad"),
-                                                       ("g2", g2, "N*m*s/rad"), ("g3", g3, ""))}
+    g = {
+        k: to_si_array(v, unit, k)
+        for k, v, unit in (("g1", g1, "N*m/rad"), ("g2", g2, "N*m*s/rad"), ("g3", g3, ""))
+    }
     T = maneuver_time_surface(case.angle, inertia, a, u)
     E = residual_energy_surface(model, case.angle, inertia, a, u)
-    mu = tracking_bound_surface(model, case.angle, inertia, a, u, g["g1"], g["g2"], g["g3"],
-                                case.params.appendage_inertia, n_samples, horizon)
+    mu = tracking_bound_surface(
+        model,
+        case.angle,
+        inertia,
+        a,
+        u,
+        g["g1"],
+        g["g2"],
+        g["g3"],
+        case.params.appendage_inertia,
+        n_samples,
+        horizon,
+    )
     dims = ("alpha", "u_max")
     return xr.Dataset(
-        {"maneuver_time": (dims, T, {"units": "s", "source": "Att. 3 Eq. 16 (Fig. 5)"}),
-         "residual_energy": (dims, E, {"units": "J", "source": "Att. 3 Fig. 6: vibration "
-                                       "energy of the open-loop flexible response at T"}),
-         "mu_max": (dims, mu, {"units": "rad/s", "source": "Att. 3 Eq. 22 (Fig. 7), max over "
-                               f"[0, {horizon:g} T]"})},
+        {
+            "maneuver_time": (dims, T, {"units": "s", "source": "Att. 3 Eq. 16 (Fig. 5)"}),
+            "residual_energy": (
+                dims,
+                E,
+                {
+                    "units": "J",
+                    "source": "Att. 3 Fig. 6: vibration "
+                    "energy of the open-loop flexible response at T",
+                },
+            ),
+            "mu_max": (
+                dims,
+                mu,
+                {
+                    "units": "rad/s",
+                    "source": f"Att. 3 Eq. 22 (Fig. 7), max over [0, {horizon:g} T]",
+                },
+            ),
+        },
         coords={"alpha": ("alpha", a), "u_max": ("u_max", u, {"units": "N m"})},
-        attrs={"angle_rad": case.angle, "reference_inertia_kg_m2": float(inertia),
-               "model_inertia_kg_m2": model.total_inertia, "n_modes": model.n_modes,
-               **{f"{k}_si": float(v) for k, v in g.items()}},
+        attrs={
+            "angle_rad": case.angle,
+            "reference_inertia_kg_m2": float(inertia),
+            "model_inertia_kg_m2": model.total_inertia,
+            "n_modes": model.n_modes,
+            **{f"{k}_si": float(v) for k, v in g.items()},
+        },
     )
 
 

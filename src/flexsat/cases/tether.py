@@ -9,7 +9,7 @@ L = 20 km, subsatellite 22.7 kg; start λ = 1, θ = φ = 5°, at rest.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -37,33 +37,88 @@ class Example:
 
 
 #: the examples of Figs. 2-8 (spec §11 V10-V13, V15)
-EXAMPLES = {e.key: e for e in (
-    Example("V10", "decoupled", dict(K1=1.0, K2=0.0, K3=3.0), 0.01, 2.0,
-            dict(initial_tension=4.0, initial_tension_N=2.52, thrust_index_2_orbits=0.9,
-                 thrust_impulse_2_orbits_Ns=481.0, settling_orbits=2.0), "L4401"),
-    Example("V11", "coupled", dict(K1=1.0, K2=0.0, K3=3.0, K4=2.0), 0.01, 2.0,
-            dict(thrust_index_2_orbits=0.24, thrust_impulse_2_orbits_Ns=128.4,
-                 max_pitch_deg=29.3), "L4447-L4449"),
-    Example("V12", "coupled", dict(K1=1.0, K2=0.0, K3=3.0, K4=3.0), 0.01, 2.0,
-            dict(thrust_index_2_orbits=0.258), "L4447"),
-    Example("V13 K1=1.0", "coupled", dict(K1=1.0, K2=0.0, K3=3.0, K4=2.0), 0.001, 6.0,
-            dict(final_pitch_deg=180.0), "L4449"),
-    Example("V13 K1=0.9", "coupled", dict(K1=0.9, K2=0.0, K3=3.0, K4=2.0), 0.001, 2.0,
-            dict(max_pitch_deg=21.9), "L4449"),
-    Example("V15", "rate", dict(K1=0.25, K2=0.01, K3=1.0), 0.01, 3.0,
-            dict(initial_rate_m_s=30.0), "L4465"),
-)}
+EXAMPLES = {
+    e.key: e
+    for e in (
+        Example(
+            "V10",
+            "decoupled",
+            dict(K1=1.0, K2=0.0, K3=3.0),
+            0.01,
+            2.0,
+            dict(
+                initial_tension=4.0,
+                initial_tension_N=2.52,
+                thrust_index_2_orbits=0.9,
+                thrust_impulse_2_orbits_Ns=481.0,
+                settling_orbits=2.0,
+            ),
+            "L4401",
+        ),
+        Example(
+            "V11",
+            "coupled",
+            dict(K1=1.0, K2=0.0, K3=3.0, K4=2.0),
+            0.01,
+            2.0,
+            dict(thrust_index_2_orbits=0.24, thrust_impulse_2_orbits_Ns=128.4, max_pitch_deg=29.3),
+            "L4447-L4449",
+        ),
+        Example(
+            "V12",
+            "coupled",
+            dict(K1=1.0, K2=0.0, K3=3.0, K4=3.0),
+            0.01,
+            2.0,
+            dict(thrust_index_2_orbits=0.258),
+            "L4447",
+        ),
+        Example(
+            "V13 K1=1.0",
+            "coupled",
+            dict(K1=1.0, K2=0.0, K3=3.0, K4=2.0),
+            0.001,
+            6.0,
+            dict(final_pitch_deg=180.0),
+            "L4449",
+        ),
+        Example(
+            "V13 K1=0.9",
+            "coupled",
+            dict(K1=0.9, K2=0.0, K3=3.0, K4=2.0),
+            0.001,
+            2.0,
+            dict(max_pitch_deg=21.9),
+            "L4449",
+        ),
+        Example(
+            "V15",
+            "rate",
+            dict(K1=0.25, K2=0.01, K3=1.0),
+            0.01,
+            3.0,
+            dict(initial_rate_m_s=30.0),
+            "L4465",
+        ),
+    )
+}
 
 
-def make_law(law: str, gains: dict, final_length, scales: TetherScales | None = None,
-             printed_sign: bool = False):
+def make_law(
+    law: str,
+    gains: dict,
+    final_length,
+    scales: TetherScales | None = None,
+    printed_sign: bool = False,
+):
     """The law ``decoupled`` (controller 1), ``coupled`` (controller 2) or ``rate`` with
     ``gains`` (K1 ... as the law takes them) and the nondimensional final length."""
     from flexsat.control.tether_laws import CoupledTetherLaw, DecoupledTetherLaw, TetherRateLaw
 
     if law == "decoupled":
-        return DecoupledTetherLaw(final_length=final_length, scales=scales,
-                                  printed_sign=printed_sign, **gains)
+        return DecoupledTetherLaw(
+            final_length=final_length, scales=scales, printed_sign=printed_sign, **gains
+        )
     if law == "coupled":
         return CoupledTetherLaw(final_length=final_length, scales=scales, **gains)
     if law == "rate":
@@ -75,14 +130,15 @@ def paper_scales() -> TetherScales:
     return TetherScales(**PAPER_SCALES)
 
 
-@lru_cache(maxsize=None)
+@cache
 def rerun(key: str, samples_per_orbit: int = 2000) -> ClosedLoopRun:
     """Example ``key`` of :data:`EXAMPLES` rerun under continuous feedback."""
     e = EXAMPLES[key]
     law = make_law(e.law, e.gains, e.final_length)
     tau = np.linspace(0.0, 2 * np.pi * e.orbits, int(samples_per_orbit * e.orbits) + 1)
-    return integrate(law.nondimensional, INITIAL, tau,
-                     control="rate" if e.law == "rate" else "tension")
+    return integrate(
+        law.nondimensional, INITIAL, tau, control="rate" if e.law == "rate" else "tension"
+    )
 
 
 def measures(run: ClosedLoopRun, final_length: float, scales: TetherScales, law: str) -> dict:
@@ -95,26 +151,44 @@ def measures(run: ClosedLoopRun, final_length: float, scales: TetherScales, law:
     x = run.state[0]
     u0 = float(run.control[0, 0, 0])
     rate = law == "rate"  # every record has every key (one metrics table): None is n/a
-    out = {"initial_tension": None if rate else u0,
-           "initial_tension_N": None if rate else u0 * scales.force,
-           "initial_rate_m_s": -u0 * scales.speed if rate else None}
+    out = {
+        "initial_tension": None if rate else u0,
+        "initial_tension_N": None if rate else u0 * scales.force,
+        "initial_rate_m_s": -u0 * scales.speed if rate else None,
+    }
     index = float(run.thrust_index[0, -1])
     settle = settling_time(run.tau, run.state, final_length)[0]
     # the paper's window for the index is two orbits (L4401, L4447)
-    two = (float(np.interp(4 * np.pi, run.tau, run.thrust_index[0]))
-           if run.tau[-1] >= 4 * np.pi * (1 - 1e-12) else None)
+    two = (
+        float(np.interp(4 * np.pi, run.tau, run.thrust_index[0]))
+        if run.tau[-1] >= 4 * np.pi * (1 - 1e-12)
+        else None
+    )
     out.update(
-        thrust_index=index, thrust_impulse_Ns=index * scales.impulse,
+        thrust_index=index,
+        thrust_impulse_Ns=index * scales.impulse,
         thrust_index_2_orbits=two,
         thrust_impulse_2_orbits_Ns=None if two is None else two * scales.impulse,
         max_pitch_deg=float(np.degrees(np.abs(x[:, 1]).max())),
-        final_pitch_deg=float(np.degrees(x[-1, 1])), final_roll_deg=float(np.degrees(x[-1, 2])),
-        final_length=float(x[-1, 0]), final_length_m=float(x[-1, 0] * scales.length),
+        final_pitch_deg=float(np.degrees(x[-1, 1])),
+        final_roll_deg=float(np.degrees(x[-1, 2])),
+        final_length=float(x[-1, 0]),
+        final_length_m=float(x[-1, 0] * scales.length),
         settling_orbits=None if np.isnan(settle) else float(settle / (2 * np.pi)),
         V1_initial=float(run.integral_of_motion[0, 0]),
-        V1_final=float(run.integral_of_motion[0, -1]))
+        V1_final=float(run.integral_of_motion[0, -1]),
+    )
     return out
 
 
-__all__ = ["EXAMPLES", "Example", "INITIAL", "PAPER_SCALES", "SOURCE", "make_law", "measures",
-           "paper_scales", "rerun"]
+__all__ = [
+    "EXAMPLES",
+    "Example",
+    "INITIAL",
+    "PAPER_SCALES",
+    "SOURCE",
+    "make_law",
+    "measures",
+    "paper_scales",
+    "rerun",
+]

@@ -25,8 +25,20 @@ from collections.abc import Iterable
 from flexsat.checks.core import COLUMNS, STATUSES, Check, CheckResult, Discrepancy, evaluate, series
 
 #: the topic modules of :mod:`flexsat.checks`, in table order (issues #2, #3, #4, then #5)
-MODULES = ("tamu", "structures", "tamu_grid", "draper_rpl", "nps", "eps",
-           "output_feedback", "bainum", "identification", "star_tracker", "tether", "cmg")
+MODULES = (
+    "tamu",
+    "structures",
+    "tamu_grid",
+    "draper_rpl",
+    "nps",
+    "eps",
+    "output_feedback",
+    "bainum",
+    "identification",
+    "star_tracker",
+    "tether",
+    "cmg",
+)
 
 
 def _import_failure(name: str, exc: Exception) -> Check:
@@ -55,8 +67,9 @@ def case_names(checks: Iterable[Check] | None = None) -> list[str]:
     return list(dict.fromkeys(c.case for c in (all_checks() if checks is None else checks)))
 
 
-def select_checks(select: str | Iterable[str] | None = None,
-                  checks: Iterable[Check] | None = None) -> list[Check]:
+def select_checks(
+    select: str | Iterable[str] | None = None, checks: Iterable[Check] | None = None
+) -> list[Check]:
     """The checks of the named case(s) (all when ``select`` is None or empty).
 
     Raises
@@ -77,8 +90,9 @@ def select_checks(select: str | Iterable[str] | None = None,
     return [c for c in checks if c.case in names]
 
 
-def run_checks(select: str | Iterable[str] | None = None,
-               checks: Iterable[Check] | None = None) -> list[CheckResult]:
+def run_checks(
+    select: str | Iterable[str] | None = None, checks: Iterable[Check] | None = None
+) -> list[CheckResult]:
     """Compute every selected check live and compare it with its published value.
 
     Parameters
@@ -97,5 +111,17 @@ def run_checks(select: str | Iterable[str] | None = None,
     return [evaluate(c) for c in select_checks(select, checks)]
 
 
-__all__ = ["COLUMNS", "MODULES", "STATUSES", "Check", "CheckResult", "Discrepancy", "all_checks",
-           "case_names", "evaluate", "run_checks", "select_checks", "series"]
+__all__ = [
+    "COLUMNS",
+    "MODULES",
+    "STATUSES",
+    "Check",
+    "CheckResult",
+    "Discrepancy",
+    "all_checks",
+    "case_names",
+    "evaluate",
+    "run_checks",
+    "select_checks",
+    "series",
+]

@@ -56,7 +56,7 @@ errata), compared element-wise against matrices printed to the figures they carr
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache, lru_cache
 
 import numpy as np
 
@@ -91,8 +91,9 @@ def _ch3_plant():
 
     _, G = chapter3_case(1)
     beam = _beam()
-    return BeamInOrbit(beam.orbit_rate_value, beam.ratios(2),
-                       {f"f{j + 1}": G[:, j] for j in range(G.shape[1])})
+    return BeamInOrbit(
+        beam.orbit_rate_value, beam.ratios(2), {f"f{j + 1}": G[:, j] for j in range(G.shape[1])}
+    )
 
 
 def _gains(K_rate) -> np.ndarray:
@@ -149,8 +150,13 @@ def simulate_loop(plant, gains, tau_end: float, samples: int):
     n = plant.nx // 2
     x0 = np.concatenate([np.full(n, _X0), np.zeros(n)])
     duration = tau_end / wc
-    ds = simulate(plant, law, SimConfig(duration=duration, control_rate=samples / duration),
-                  n_cases=1, initial_state=x0).dataset
+    ds = simulate(
+        plant,
+        law,
+        SimConfig(duration=duration, control_rate=samples / duration),
+        n_cases=1,
+        initial_state=x0,
+    ).dataset
     forces = np.column_stack([ds[f"{name}_command"].values[0] for name in writes])
     return ds["time"].values * wc, ds["pitch"].values[0], forces
 
@@ -180,7 +186,7 @@ CH2_LONG_RUN = (10.0, 4500)
 CH3_FORCE_RUN = (0.0075, 1350)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _ch2_run(run):
     return simulate_loop(_ch2_plant(), _ch2_gains(), *run)
 
@@ -223,99 +229,233 @@ def _ch3_case2_roots():
 
     _, G = chapter3_case(2)
     beam = _beam()
-    plant = BeamInOrbit(beam.orbit_rate_value, beam.ratios(4),
-                        {f"f{j + 1}": G[:, j] for j in range(G.shape[1])})
+    plant = BeamInOrbit(
+        beam.orbit_rate_value, beam.ratios(4), {f"f{j + 1}": G[:, j] for j in range(G.shape[1])}
+    )
     return closed_loop_roots(plant, _gains(published_matrix("ch3_case2_K")))
-
 
 
 # Ch. II: the notes print the roots to 6 decimals and ζ to 4 figures: half a unit of the last
 # digit (the roots are eigenvalues of a 6x6 matrix, exact to 1e-13 here)
 _CH2_CHECKS = [
-    Check("bainum", "Ch. II example, pitch pair, real part", _CH2_ROOTS, -0.171737, "",
-          lambda: _ch2_roots()[1].real, atol=5e-7),
-    Check("bainum", "Ch. II example, pitch pair, imaginary part", _CH2_ROOTS, 1.723625, "",
-          lambda: _ch2_roots()[1].imag, atol=5e-7),
-    Check("bainum", "Ch. II example, mode-1 pair, real part", _CH2_ROOTS, -0.565594, "",
-          lambda: _ch2_roots()[3].real, atol=5e-7),
-    Check("bainum", "Ch. II example, mode-1 pair, imaginary part", _CH2_ROOTS, 56.562701, "",
-          lambda: _ch2_roots()[3].imag, atol=5e-7),
-    Check("bainum", "Ch. II example, mode-2 pair, real part", _CH2_ROOTS, -0.169485, "",
-          lambda: _ch2_roots()[5].real, atol=5e-7),
-    Check("bainum", "Ch. II example, mode-2 pair, imaginary part", _CH2_ROOTS, 169.703929, "",
-          lambda: _ch2_roots()[5].imag, atol=5e-7),
+    Check(
+        "bainum",
+        "Ch. II example, pitch pair, real part",
+        _CH2_ROOTS,
+        -0.171737,
+        "",
+        lambda: _ch2_roots()[1].real,
+        atol=5e-7,
+    ),
+    Check(
+        "bainum",
+        "Ch. II example, pitch pair, imaginary part",
+        _CH2_ROOTS,
+        1.723625,
+        "",
+        lambda: _ch2_roots()[1].imag,
+        atol=5e-7,
+    ),
+    Check(
+        "bainum",
+        "Ch. II example, mode-1 pair, real part",
+        _CH2_ROOTS,
+        -0.565594,
+        "",
+        lambda: _ch2_roots()[3].real,
+        atol=5e-7,
+    ),
+    Check(
+        "bainum",
+        "Ch. II example, mode-1 pair, imaginary part",
+        _CH2_ROOTS,
+        56.562701,
+        "",
+        lambda: _ch2_roots()[3].imag,
+        atol=5e-7,
+    ),
+    Check(
+        "bainum",
+        "Ch. II example, mode-2 pair, real part",
+        _CH2_ROOTS,
+        -0.169485,
+        "",
+        lambda: _ch2_roots()[5].real,
+        atol=5e-7,
+    ),
+    Check(
+        "bainum",
+        "Ch. II example, mode-2 pair, imaginary part",
+        _CH2_ROOTS,
+        169.703929,
+        "",
+        lambda: _ch2_roots()[5].imag,
+        atol=5e-7,
+    ),
     # the gains were designed for uncoupled ζ = 0.1, 0.01, 0.001 (notes §3.1); the coupled loop
-    Check("bainum", "Ch. II example, ζ of the pitch pair", _CH2_ROOTS, 0.09915, "",
-          lambda: _damping(_ch2_roots()[1]), atol=5e-6),
-    Check("bainum", "Ch. II example, ζ of the mode-1 pair", _CH2_ROOTS, 0.009999, "",
-          lambda: _damping(_ch2_roots()[3]), atol=5e-7),
-    Check("bainum", "Ch. II example, ζ of the mode-2 pair", _CH2_ROOTS, 0.000999, "",
-          lambda: _damping(_ch2_roots()[5]), atol=5e-7),
+    Check(
+        "bainum",
+        "Ch. II example, ζ of the pitch pair",
+        _CH2_ROOTS,
+        0.09915,
+        "",
+        lambda: _damping(_ch2_roots()[1]),
+        atol=5e-6,
+    ),
+    Check(
+        "bainum",
+        "Ch. II example, ζ of the mode-1 pair",
+        _CH2_ROOTS,
+        0.009999,
+        "",
+        lambda: _damping(_ch2_roots()[3]),
+        atol=5e-7,
+    ),
+    Check(
+        "bainum",
+        "Ch. II example, ζ of the mode-2 pair",
+        _CH2_ROOTS,
+        0.000999,
+        "",
+        lambda: _damping(_ch2_roots()[5]),
+        atol=5e-7,
+    ),
     # responses (linear plant, simulate): half a unit of the printed digit; the sampled-data
     # error at the run's rate is below it (module docstring, the *_RUN constants)
-    Check("bainum", "Ch. II example, max |f|", _CH2_RESP, 0.04563, "",
-          lambda: _ch2_force_peak()[0], atol=5e-6, note=_CORE + "linear plant, 40 Hz"),
-    Check("bainum", "Ch. II example, τ at max |f|", _CH2_RESP, 0.01098, "",
-          lambda: _ch2_force_peak()[1], atol=5e-6, note=_CORE + "linear plant, 40 Hz"),
+    Check(
+        "bainum",
+        "Ch. II example, max |f|",
+        _CH2_RESP,
+        0.04563,
+        "",
+        lambda: _ch2_force_peak()[0],
+        atol=5e-6,
+        note=_CORE + "linear plant, 40 Hz",
+    ),
+    Check(
+        "bainum",
+        "Ch. II example, τ at max |f|",
+        _CH2_RESP,
+        0.01098,
+        "",
+        lambda: _ch2_force_peak()[1],
+        atol=5e-6,
+        note=_CORE + "linear plant, 40 Hz",
+    ),
     # half a unit (5e-6) plus the sampled-data error at 4 Hz (3.1e-6, measured: the continuous
     # loop gives 0.0255161)
-    Check("bainum", "Ch. II example, max |θ|", _CH2_RESP, 0.02552, "rad",
-          lambda: _ch2_pitch_peak()[0], atol=5e-6 + 4e-6,
-          note=_CORE + "linear plant, 4 Hz; tolerance: half a unit + the sampled-data error"),
-    Check("bainum", "Ch. II example, τ at max |θ|", _CH2_RESP, 0.645, "",
-          lambda: _ch2_pitch_peak()[1], atol=5e-4, note=_CORE + "linear plant, 4 Hz"),
+    Check(
+        "bainum",
+        "Ch. II example, max |θ|",
+        _CH2_RESP,
+        0.02552,
+        "rad",
+        lambda: _ch2_pitch_peak()[0],
+        atol=5e-6 + 4e-6,
+        note=_CORE + "linear plant, 4 Hz; tolerance: half a unit + the sampled-data error",
+    ),
+    Check(
+        "bainum",
+        "Ch. II example, τ at max |θ|",
+        _CH2_RESP,
+        0.645,
+        "",
+        lambda: _ch2_pitch_peak()[1],
+        atol=5e-4,
+        note=_CORE + "linear plant, 4 Hz",
+    ),
     # half a unit (5e-6) plus the sampled-data error at 0.5 Hz (2.2e-5, measured: the continuous
     # loop gives -4.81877e-3)
-    Check("bainum", "Ch. II example, θ(τ = 10)", _CH2_RESP, -4.82e-3, "rad",
-          lambda: _ch2_run(CH2_LONG_RUN)[1][-1], atol=5e-6 + 2.5e-5,
-          note=_CORE + "linear plant, 0.5 Hz; tolerance: half a unit + the sampled-data error"),
+    Check(
+        "bainum",
+        "Ch. II example, θ(τ = 10)",
+        _CH2_RESP,
+        -4.82e-3,
+        "rad",
+        lambda: _ch2_run(CH2_LONG_RUN)[1][-1],
+        atol=5e-6 + 2.5e-5,
+        note=_CORE + "linear plant, 0.5 Hz; tolerance: half a unit + the sampled-data error",
+    ),
 ]
 
 # Ch. III Case 1: roots to 5 decimals (half a unit); peak forces printed to 2 decimals: half a
 # unit, 5e-3, with the 200 Hz sampled-data error (<= 1.73e-3) inside it
 _CH3_CHECKS = [
-    *series("bainum", ["Ch. III Case 1, real root (mode 1, faster)",
-                       "Ch. III Case 1, real root (mode 1, slower)",
-                       "Ch. III Case 1, pitch pair, real part",
-                       "Ch. III Case 1, pitch pair, imaginary part",
-                       "Ch. III Case 1, mode-2 pair, real part",
-                       "Ch. III Case 1, mode-2 pair, imaginary part"], _CH3_ROOTS,
-            [-60.55876, -52.84124, -1.72906, 0.10181, -169.70057, 1.30952], "",
-            lambda: [r for root in _ch3_roots()[[0, 1, 3, 5]]
-                     for r in ((root.real,) if root.imag == 0 else (root.real, root.imag))],
-            atol=5e-6),
-    *series("bainum", [f"Ch. III Case 1, max |f{j}|" for j in (1, 2, 3)], _CH3_RESP,
-            [3.69, 1.83, 10.98], "", _ch3_peaks, atol=5e-3,
-            notes=[_CORE + "nonlinear plant (eqs 1-2, printed G), 200 Hz"] * 3),
+    *series(
+        "bainum",
+        [
+            "Ch. III Case 1, real root (mode 1, faster)",
+            "Ch. III Case 1, real root (mode 1, slower)",
+            "Ch. III Case 1, pitch pair, real part",
+            "Ch. III Case 1, pitch pair, imaginary part",
+            "Ch. III Case 1, mode-2 pair, real part",
+            "Ch. III Case 1, mode-2 pair, imaginary part",
+        ],
+        _CH3_ROOTS,
+        [-60.55876, -52.84124, -1.72906, 0.10181, -169.70057, 1.30952],
+        "",
+        lambda: [
+            r
+            for root in _ch3_roots()[[0, 1, 3, 5]]
+            for r in ((root.real,) if root.imag == 0 else (root.real, root.imag))
+        ],
+        atol=5e-6,
+    ),
+    *series(
+        "bainum",
+        [f"Ch. III Case 1, max |f{j}|" for j in (1, 2, 3)],
+        _CH3_RESP,
+        [3.69, 1.83, 10.98],
+        "",
+        _ch3_peaks,
+        atol=5e-3,
+        notes=[_CORE + "nonlinear plant (eqs 1-2, printed G), 200 Hz"] * 3,
+    ),
 ]
 
 # Ch. III Case 2, the printed decoupling gains (K51 = -1.167, erratum L841): roots printed in
 # the notes to 5 decimals (the pitch pair) or 4: half a unit of the last digit
-_CASE2 = (f"{SEED}, Ch. III Case 2 (L829-L841), closed-loop roots recomputed from the printed K "
-          "(K51 = -1.167)")
+_CASE2 = (
+    f"{SEED}, Ch. III Case 2 (L829-L841), closed-loop roots recomputed from the printed K "
+    "(K51 = -1.167)"
+)
 
 
 def _case2_values() -> list[float]:
     """The two real roots, then real and imaginary parts of the pitch, mode-1, -3, -4 pairs."""
     roots = _ch3_case2_roots()
-    return [roots[0].real, roots[1].real,
-            *(v for root in roots[[3, 5, 7, 9]] for v in (root.real, root.imag))]
+    return [
+        roots[0].real,
+        roots[1].real,
+        *(v for root in roots[[3, 5, 7, 9]] for v in (root.real, root.imag)),
+    ]
 
 
 _CH3_CASE2_CHECKS = [
-    Check("bainum", f"Ch. III Case 2, {name}", _CASE2, published, "",
-          lambda i=i: _case2_values()[i], atol=atol)
-    for i, (name, published, atol) in enumerate((
-        ("real root (mode 2, faster)", -173.8567, 5e-5),
-        ("real root (mode 2, slower)", -165.6537, 5e-5),
-        ("pitch pair, real part", -1.71120, 5e-6),
-        ("pitch pair, imaginary part", 0.26795, 5e-6),
-        ("mode-1 pair, real part", -56.5650, 5e-5),
-        ("mode-1 pair, imaginary part", 0.6331, 5e-5),
-        ("mode-3 pair, real part", -305.0514, 5e-5),
-        ("mode-3 pair, imaginary part", 4.8102, 5e-5),
-        ("mode-4 pair, real part", -505.2353, 5e-5),
-        ("mode-4 pair, imaginary part", 8.2884, 5e-5)))]
+    Check(
+        "bainum",
+        f"Ch. III Case 2, {name}",
+        _CASE2,
+        published,
+        "",
+        lambda i=i: _case2_values()[i],
+        atol=atol,
+    )
+    for i, (name, published, atol) in enumerate(
+        (
+            ("real root (mode 2, faster)", -173.8567, 5e-5),
+            ("real root (mode 2, slower)", -165.6537, 5e-5),
+            ("pitch pair, real part", -1.71120, 5e-6),
+            ("pitch pair, imaginary part", 0.26795, 5e-6),
+            ("mode-1 pair, real part", -56.5650, 5e-5),
+            ("mode-1 pair, imaginary part", 0.6331, 5e-5),
+            ("mode-3 pair, real part", -305.0514, 5e-5),
+            ("mode-3 pair, imaginary part", 4.8102, 5e-5),
+            ("mode-4 pair, real part", -505.2353, 5e-5),
+            ("mode-4 pair, imaginary part", 8.2884, 5e-5),
+        )
+    )
+]
 
 
 @lru_cache(maxsize=1)
@@ -338,8 +478,9 @@ def _roots():
     real root, the slow real root, then the complex pair (negative imaginary part first)."""
     import numpy as np
 
-    return np.sort_complex(np.linalg.eigvals(_three_mass().coupled_rate_closed_loop(0.4728,
-                                                                                   0.4000)))
+    return np.sort_complex(
+        np.linalg.eigvals(_three_mass().coupled_rate_closed_loop(0.4728, 0.4000))
+    )
 
 
 # the roots as corrected in the notes (seed002.md §6, errata for L1091-L1101: the printed ones
@@ -349,21 +490,55 @@ _ROOTS = f"{SEED}, Ch. IV eq. 16 roots (L1091-L1101), errata corrected"
 
 _CH4_CHECKS = [
     # printed to 5 and 6 figures and exact given the printed m, k, c: half a unit
-    Check("bainum", "λ1, three-mass model", f"{SEED}, Ch. IV (L1083)", 5.5876e-4, "",
-          lambda: _lambdas()[0], atol=5e-9),
-    Check("bainum", "λ2, three-mass model", f"{SEED}, Ch. IV (L1085)", 1.67627e-3, "",
-          lambda: _lambdas()[1], atol=5e-9),
-    Check("bainum", "real root, slow (K1 = 0.4728, K2 = 0.4)", _ROOTS, -6.40515e-4, "",
-          lambda: _roots()[1].real, atol=5e-10),
-    Check("bainum", "complex pair, real part", _ROOTS, -8.654e-5, "",
-          lambda: _roots()[3].real, atol=5e-9,
-          note="printed -8.58139e-4, ten times this: an erratum; the printed roots come from "
-               "single-precision root finding and are compared as recomputed in double "
-               "precision from the printed gains"),
-    Check("bainum", "complex pair, imaginary part", _ROOTS, 2.95733e-2, "",
-          lambda: _roots()[3].imag, atol=5e-8),
-    Check("bainum", "real root, fast", _ROOTS, -1.671986, "",
-          lambda: _roots()[0].real, atol=5e-7),
+    Check(
+        "bainum",
+        "λ1, three-mass model",
+        f"{SEED}, Ch. IV (L1083)",
+        5.5876e-4,
+        "",
+        lambda: _lambdas()[0],
+        atol=5e-9,
+    ),
+    Check(
+        "bainum",
+        "λ2, three-mass model",
+        f"{SEED}, Ch. IV (L1085)",
+        1.67627e-3,
+        "",
+        lambda: _lambdas()[1],
+        atol=5e-9,
+    ),
+    Check(
+        "bainum",
+        "real root, slow (K1 = 0.4728, K2 = 0.4)",
+        _ROOTS,
+        -6.40515e-4,
+        "",
+        lambda: _roots()[1].real,
+        atol=5e-10,
+    ),
+    Check(
+        "bainum",
+        "complex pair, real part",
+        _ROOTS,
+        -8.654e-5,
+        "",
+        lambda: _roots()[3].real,
+        atol=5e-9,
+        note="printed -8.58139e-4, ten times this: an erratum; the printed roots come from "
+        "single-precision root finding and are compared as recomputed in double "
+        "precision from the printed gains",
+    ),
+    Check(
+        "bainum",
+        "complex pair, imaginary part",
+        _ROOTS,
+        2.95733e-2,
+        "",
+        lambda: _roots()[3].imag,
+        atol=5e-8,
+    ),
+    Check("bainum", "real root, fast", _ROOTS, -1.671986, "", lambda: _roots()[0].real, atol=5e-7),
 ]
 
 CHECKS: list[Check] = [*_CH2_CHECKS, *_CH3_CHECKS, *_CH3_CASE2_CHECKS, *_CH4_CHECKS]

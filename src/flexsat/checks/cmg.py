@@ -50,8 +50,9 @@ def _kurokawa_saturation() -> float:
     def demand(t):
         return -np.array([0.2 * np.sin(4.0 * np.pi * t), 0.3, 0.0])
 
-    return float(cmg.integrate_gimbals(np.deg2rad([-120.0, -60.0, 60.0, 120.0]), demand,
-                                       20.0).t[-1])
+    return float(
+        cmg.integrate_gimbals(np.deg2rad([-120.0, -60.0, 60.0, 120.0]), demand, 20.0).t[-1]
+    )
 
 
 def _bedrossian_singular() -> float:
@@ -79,51 +80,137 @@ def _hx(deg):
     return float(cmg.momentum(np.deg2rad(deg))[0])
 
 
-_BACK = ("the paper stops the back integration 'near zero momentum' at an unstated time; ours "
-         "stops where the momentum along x is zero: ±0.5° (the issue's acceptance)")
+_BACK = (
+    "the paper stops the back integration 'near zero momentum' at an unstated time; ours "
+    "stops where the momentum along x is zero: ±0.5° (the issue's acceptance)"
+)
 
 CHECKS: list[Check] = [
     # printed to 4 digits: half a unit in the last
-    Check("cmg", "gain det(CCᵀ) at σ = [−60, 60, 120, −120]° (V1)", f"{SEED}, L4624", 1.1854,
-          "", lambda: _gain([-60.0, 60.0, 120.0, -120.0]), atol=5e-5),
+    Check(
+        "cmg",
+        "gain det(CCᵀ) at σ = [−60, 60, 120, −120]° (V1)",
+        f"{SEED}, L4624",
+        1.1854,
+        "",
+        lambda: _gain([-60.0, 60.0, 120.0, -120.0]),
+        atol=5e-5,
+    ),
     # 2cosδ + 2 = 3.15458 is printed truncated to 3.1545: one unit in the last digit
-    Check("cmg", "saturation momentum along +x, σ = [−90, 180, 90, 0]° (V2)", f"{SEED}, L4624",
-          3.1545, "h", lambda: _hx([-90.0, 180.0, 90.0, 0.0]), atol=1e-4),
+    Check(
+        "cmg",
+        "saturation momentum along +x, σ = [−90, 180, 90, 0]° (V2)",
+        f"{SEED}, L4624",
+        3.1545,
+        "h",
+        lambda: _hx([-90.0, 180.0, 90.0, 0.0]),
+        atol=1e-4,
+    ),
     # printed to 3 digits: half a unit in the last (the singular point is 2cosδ = 1.1546)
-    Check("cmg", "|h| at the internal singularity from σ = 0, +x demand (V3)", f"{SEED}, L4620",
-          1.15, "h", lambda: float(np.linalg.norm(_v3().h[-1])), atol=5e-3),
-    Check("cmg", "σ3 at that singularity (V3)", f"{SEED}, L4620", -90.0, "deg",
-          lambda: float(np.rad2deg(_v3().sigma[-1, 2])), atol=0.5,
-          discrepancy=Discrepancy(90.0, (
-              "Vadali, Oh & Walker print the singular set as [−90, 0, −90, 0]°, which holds "
-              "h = [0, 0, −2 sin δ] (−1.633 h), not the 1.15 h along +x they describe; the set "
-              "reached along +x is [−90, 0, +90, 0]° (h = [2 cos δ, 0, 0] = 1.1546 h, rotors 2 "
-              "and 4 antiparallel). The integration stops 0.04° short of ±90°."))),
-    *(Check("cmg", f"back-integrated preferred set σ{i + 1} (V4)", f"{SEED}, L4624", p, "deg",
-            lambda i=i: float(_v4()[0][i]), atol=0.5, note=_BACK)
-      for i, p in enumerate((-59.6, 60.7, 118.0, -121.0))),
-    *(Check("cmg", f"momentum h{'xyz'[i]} at the end of the back integration (V4)",
-            f"{SEED}, L4624", p, "h", lambda i=i: float(_v4()[1][i]), atol=5e-3, note=_BACK)
-      for i, p in enumerate((0.003, -0.023, 0.029))),
+    Check(
+        "cmg",
+        "|h| at the internal singularity from σ = 0, +x demand (V3)",
+        f"{SEED}, L4620",
+        1.15,
+        "h",
+        lambda: float(np.linalg.norm(_v3().h[-1])),
+        atol=5e-3,
+    ),
+    Check(
+        "cmg",
+        "σ3 at that singularity (V3)",
+        f"{SEED}, L4620",
+        -90.0,
+        "deg",
+        lambda: float(np.rad2deg(_v3().sigma[-1, 2])),
+        atol=0.5,
+        discrepancy=Discrepancy(
+            90.0,
+            (
+                "Vadali, Oh & Walker print the singular set as [−90, 0, −90, 0]°, which holds "
+                "h = [0, 0, −2 sin δ] (−1.633 h), not the 1.15 h along +x they describe; the set "
+                "reached along +x is [−90, 0, +90, 0]° (h = [2 cos δ, 0, 0] = 1.1546 h, rotors 2 "
+                "and 4 antiparallel). The integration stops 0.04° short of ±90°."
+            ),
+        ),
+    ),
+    *(
+        Check(
+            "cmg",
+            f"back-integrated preferred set σ{i + 1} (V4)",
+            f"{SEED}, L4624",
+            p,
+            "deg",
+            lambda i=i: float(_v4()[0][i]),
+            atol=0.5,
+            note=_BACK,
+        )
+        for i, p in enumerate((-59.6, 60.7, 118.0, -121.0))
+    ),
+    *(
+        Check(
+            "cmg",
+            f"momentum h{'xyz'[i]} at the end of the back integration (V4)",
+            f"{SEED}, L4624",
+            p,
+            "h",
+            lambda i=i: float(_v4()[1][i]),
+            atol=5e-3,
+            note=_BACK,
+        )
+        for i, p in enumerate((0.003, -0.023, 0.029))
+    ),
     # "at about ten seconds" (the computed 10.515 s is the y envelope / 0.3): ±1 s
-    Check("cmg", "Kurokawa demand: saturation time from [−120, −60, 60, 120]° (V6)",
-          f"{SEED}, L4648", 10.0, "s", _kurokawa_saturation, atol=1.0),
+    Check(
+        "cmg",
+        "Kurokawa demand: saturation time from [−120, −60, 60, 120]° (V6)",
+        f"{SEED}, L4648",
+        10.0,
+        "s",
+        _kurokawa_saturation,
+        atol=1.0,
+    ),
     # "a singularity is encountered at 1.5 seconds", read off Fig. 6: ±0.05 s
-    Check("cmg", "Bedrossian demand: singular time from σ = 0 (V7)", f"{SEED}, L4650", 1.5,
-          "s", _bedrossian_singular, atol=0.05,
-          note="signs of Tx, Ty unknown (Fig. 5): (+, +) assumed"),
+    Check(
+        "cmg",
+        "Bedrossian demand: singular time from σ = 0 (V7)",
+        f"{SEED}, L4650",
+        1.5,
+        "s",
+        _bedrossian_singular,
+        atol=0.05,
+        note="signs of Tx, Ty unknown (Fig. 5): (+, +) assumed",
+    ),
     # the law's target, reached as 45(1 − e^{−kt})°: 1e-6° after 20 s with k = 1
-    Check("cmg", "null-motion reorientation 0 → [45, −45, 45, −45]°: final σ1 (V8)",
-          f"{SEED}, L4754-L4756", 45.0, "deg", _reoriented_sigma1, atol=1e-3),
+    Check(
+        "cmg",
+        "null-motion reorientation 0 → [45, −45, 45, −45]°: final σ1 (V8)",
+        f"{SEED}, L4754-L4756",
+        45.0,
+        "deg",
+        _reoriented_sigma1,
+        atol=1e-3,
+    ),
     # "quite early in the first orbit (in about 720 seconds)"
-    Check("cmg", "space station, σ(0) = 0: singular time (V9)", f"{SEED}, L4722", 720.0, "s",
-          lambda: float(_station_zero().t[-1]), atol=60.0,
-          discrepancy=Discrepancy(494.3, (
-              "Vadali, Oh & Walker's station run uses the AERO1 disturbance (not published: "
-              "Geller, private communication) and LQR state maxima they do not print. With "
-              "flexsat's stated substitute (Eq. 11 plus 0.5 ft-lb 3n and 4n harmonics and a "
-              "1 ft-lb/orbit secular pitch torque) and Bryson maxima 1°, 0.02 deg/s, "
-              "2000 ft-lb-s, 2e5 ft-lb-s², σ(0) = 0 meets an internal singularity at 494 s, "
-              "early in the first orbit as in the paper, and [45, −45, 45, −45]° meets none; "
-              "the time depends on the unpublished inputs."))),
+    Check(
+        "cmg",
+        "space station, σ(0) = 0: singular time (V9)",
+        f"{SEED}, L4722",
+        720.0,
+        "s",
+        lambda: float(_station_zero().t[-1]),
+        atol=60.0,
+        discrepancy=Discrepancy(
+            494.3,
+            (
+                "Vadali, Oh & Walker's station run uses the AERO1 disturbance (not published: "
+                "Geller, private communication) and LQR state maxima they do not print. With "
+                "flexsat's stated substitute (Eq. 11 plus 0.5 ft-lb 3n and 4n harmonics and a "
+                "1 ft-lb/orbit secular pitch torque) and Bryson maxima 1°, 0.02 deg/s, "
+                "2000 ft-lb-s, 2e5 ft-lb-s², σ(0) = 0 meets an internal singularity at 494 s, "
+                "early in the first orbit as in the paper, and [45, −45, 45, −45]° meets none; "
+                "the time depends on the unpublished inputs."
+            ),
+        ),
+    ),
 ]

@@ -28,14 +28,24 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from flexsat.references import cite, references
 
 #: the columns of the validation table, in order (also the keys of :meth:`CheckResult.as_dict`)
-COLUMNS = ("case", "quantity", "source", "published", "computed", "unit", "relative_error",
-           "tolerance", "status", "explanation")
+COLUMNS = (
+    "case",
+    "quantity",
+    "source",
+    "published",
+    "computed",
+    "unit",
+    "relative_error",
+    "tolerance",
+    "status",
+    "explanation",
+)
 
 #: the statuses of :attr:`CheckResult.status`; the last two fail ``flexsat validate``
 STATUSES = ("pass", "discrepancy", "fail", "error")
@@ -121,9 +131,11 @@ class Check:
         if not callable(self.compute):
             raise ValueError("compute: must be callable with no arguments")
         if self.discrepancy is not None and self.passes(self.discrepancy.value):
-            raise ValueError(f"{self.case} / {self.quantity}: discrepancy.value "
-                             f"{self.discrepancy.value!r} is within the tolerance of the "
-                             f"published {self.published!r}: not a discrepancy")
+            raise ValueError(
+                f"{self.case} / {self.quantity}: discrepancy.value "
+                f"{self.discrepancy.value!r} is within the tolerance of the "
+                f"published {self.published!r}: not a discrepancy"
+            )
 
     @property
     def tolerance(self) -> str:
@@ -199,17 +211,23 @@ class CheckResult:
         if status == "discrepancy":
             return d.explanation
         if status == "fail":
-            text = (f"computed {self.computed:.7g} is outside the tolerance ({c.tolerance}) of "
-                    f"the published {c.published:.10g}")
+            text = (
+                f"computed {self.computed:.7g} is outside the tolerance ({c.tolerance}) of "
+                f"the published {c.published:.10g}"
+            )
             if d is not None:
-                text += (f" and of the {d.value:.7g} that the documented discrepancy explains "
-                         f"({d.explanation})")
+                text += (
+                    f" and of the {d.value:.7g} that the documented discrepancy explains "
+                    f"({d.explanation})"
+                )
             else:
                 text += "; no erratum or model deviation explains it"
             return text + (f"; note: {c.note}" if c.note else "")
         if self.stale:
-            return (f"stale discrepancy note: the published value is now reproduced, but the "
-                    f"check still explains a discrepancy ({d.explanation})")
+            return (
+                f"stale discrepancy note: the published value is now reproduced, but the "
+                f"check still explains a discrepancy ({d.explanation})"
+            )
         return None
 
     def as_dict(self) -> dict:
@@ -218,14 +236,27 @@ class CheckResult:
         stale, seconds."""
         c = self.check
         computed = self.computed if self.computed is None or math.isfinite(self.computed) else None
-        return {"case": c.case, "quantity": c.quantity, "source": cite(c.source),
-                "published": c.published, "computed": computed, "unit": c.unit,
-                "relative_error": self.relative_error, "tolerance": c.tolerance,
-                "status": self.status, "explanation": self.explanation,
-                "references": references([c.source]), "passed": self.passed,
-                "rtol": c.rtol, "atol": c.atol, "error": self.error, "note": c.note or None,
-                "discrepancy_value": c.discrepancy.value if c.discrepancy else None,
-                "stale": self.stale, "seconds": round(self.seconds, 4)}
+        return {
+            "case": c.case,
+            "quantity": c.quantity,
+            "source": cite(c.source),
+            "published": c.published,
+            "computed": computed,
+            "unit": c.unit,
+            "relative_error": self.relative_error,
+            "tolerance": c.tolerance,
+            "status": self.status,
+            "explanation": self.explanation,
+            "references": references([c.source]),
+            "passed": self.passed,
+            "rtol": c.rtol,
+            "atol": c.atol,
+            "error": self.error,
+            "note": c.note or None,
+            "discrepancy_value": c.discrepancy.value if c.discrepancy else None,
+            "stale": self.stale,
+            "seconds": round(self.seconds, 4),
+        }
 
 
 def evaluate(check: Check) -> CheckResult:
@@ -239,18 +270,30 @@ def evaluate(check: Check) -> CheckResult:
         except (TypeError, ValueError):
             raise TypeError(f"compute returned {value!r}, not a number") from None
     except Exception as exc:  # noqa: BLE001 -- reported in the table, never crashes it
-        return CheckResult(check, None, False, f"{type(exc).__name__}: {exc}",
-                           time.perf_counter() - start)
+        return CheckResult(
+            check, None, False, f"{type(exc).__name__}: {exc}", time.perf_counter() - start
+        )
     elapsed = time.perf_counter() - start
     if not math.isfinite(computed):
-        return CheckResult(check, computed, False, f"computed value is not finite: {computed!r}",
-                           elapsed)
+        return CheckResult(
+            check, computed, False, f"computed value is not finite: {computed!r}", elapsed
+        )
     return CheckResult(check, computed, check.passes(computed), None, elapsed)
 
 
-def series(case: str, quantities, source: str, published, unit: str, values: Callable,
-           *, rtol: float | None = None, atol: float | None = None,
-           notes=None, discrepancies=None) -> list[Check]:
+def series(
+    case: str,
+    quantities,
+    source: str,
+    published,
+    unit: str,
+    values: Callable,
+    *,
+    rtol: float | None = None,
+    atol: float | None = None,
+    notes=None,
+    discrepancies=None,
+) -> list[Check]:
     """One check per entry of a table column: ``values()`` returns the whole computed column
     (cache it with :func:`functools.lru_cache` when it is expensive) and check ``i`` compares
     ``values()[i]`` with ``published[i]``; ``notes`` and ``discrepancies`` (a
@@ -258,13 +301,15 @@ def series(case: str, quantities, source: str, published, unit: str, values: Cal
     published = list(published)
     quantities = list(quantities)
     notes = list(notes) if notes is not None else [""] * len(published)
-    discrepancies = (list(discrepancies) if discrepancies is not None
-                     else [None] * len(published))
+    discrepancies = list(discrepancies) if discrepancies is not None else [None] * len(published)
     if not len(quantities) == len(published) == len(notes) == len(discrepancies):
-        raise ValueError("series: quantities, published, notes and discrepancies must have the "
-                         "same length")
-    return [Check(case, q, source, float(p), unit, (lambda i=i: values()[i]), rtol, atol, note, d)
-            for i, (q, p, note, d) in enumerate(zip(quantities, published, notes, discrepancies))]
+        raise ValueError(
+            "series: quantities, published, notes and discrepancies must have the same length"
+        )
+    return [
+        Check(case, q, source, float(p), unit, (lambda i=i: values()[i]), rtol, atol, note, d)
+        for i, (q, p, note, d) in enumerate(zip(quantities, published, notes, discrepancies))
+    ]
 
 
 __all__ = ["COLUMNS", "STATUSES", "Check", "CheckResult", "Discrepancy", "evaluate", "series"]

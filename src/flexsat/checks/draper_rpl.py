@@ -40,23 +40,46 @@ def _closed_loop():
 # The paper prints 4 decimals and truncates rather than rounds (157.55669 printed 157.5566):
 # one unit in the last printed digit, 1e-4 rad/s.
 CHECKS: list[Check] = series(
-    "draper_rpl", [f"ω_{i + 1}, open loop (N = 10 per pair)" for i in range(len(OPEN))], TABLE4,
-    OPEN, "rad/s", lambda: _case().frequencies(), atol=1e-4)
+    "draper_rpl",
+    [f"ω_{i + 1}, open loop (N = 10 per pair)" for i in range(len(OPEN))],
+    TABLE4,
+    OPEN,
+    "rad/s",
+    lambda: _case().frequencies(),
+    atol=1e-4,
+)
 # Closed loop, full 42-state model: the gains are printed to 4 decimals, and ±5e-5 on them moves
 # these values by up to 3.6e-4 relative (docs/draper_rpl.md); 2e-3 is about 5 times that.
 CHECKS += series(
-    "draper_rpl", [f"ω_{i + 1}, closed loop" for i in range(len(CLOSED_OMEGA))],
-    f"{TABLE4}, gains L2229-L2233", CLOSED_OMEGA, "rad/s", lambda: _closed_loop()[0], rtol=2e-3)
+    "draper_rpl",
+    [f"ω_{i + 1}, closed loop" for i in range(len(CLOSED_OMEGA))],
+    f"{TABLE4}, gains L2229-L2233",
+    CLOSED_OMEGA,
+    "rad/s",
+    lambda: _closed_loop()[0],
+    rtol=2e-3,
+)
 CHECKS += series(
-    "draper_rpl", [f"ζω_{i + 1}, closed loop" for i in range(len(CLOSED_ZETA_OMEGA))],
-    f"{TABLE4}, gains L2229-L2233", CLOSED_ZETA_OMEGA, "rad/s", lambda: _closed_loop()[1],
-    rtol=2e-3)
+    "draper_rpl",
+    [f"ζω_{i + 1}, closed loop" for i in range(len(CLOSED_ZETA_OMEGA))],
+    f"{TABLE4}, gains L2229-L2233",
+    CLOSED_ZETA_OMEGA,
+    "rad/s",
+    lambda: _closed_loop()[1],
+    rtol=2e-3,
+)
 CHECKS += [
     # With unit E-norm eigenvectors (φᴴEφ = 1); gain rounding (±5e-5) spans 37209.8-37211.4,
     # i.e. 4e-5 relative: 1e-4. The project's default "plain" scaling (φᵀEφ = 1, which
     # reproduces Att. 5 Example 1) gives 37 828, +1.7 % (docs/draper_rpl.md).
-    Check("draper_rpl", "condition number, closed-loop modal matrix",
-          f"{TABLE4}, Att. 5 Eq. 46", CONDITION, "",
-          lambda: _case().condition_number(*_gains(), normalisation="hermitian"), rtol=1e-4,
-          note='normalisation="hermitian"'),
+    Check(
+        "draper_rpl",
+        "condition number, closed-loop modal matrix",
+        f"{TABLE4}, Att. 5 Eq. 46",
+        CONDITION,
+        "",
+        lambda: _case().condition_number(*_gains(), normalisation="hermitian"),
+        rtol=1e-4,
+        note='normalisation="hermitian"',
+    ),
 ]

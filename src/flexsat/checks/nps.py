@@ -37,19 +37,54 @@ def _exact_cantilever_hz() -> float:
     from flexsat.structures.beam import TipMassCantilever
 
     c = _case()
-    beam = TipMassCantilever(c.mast_length, c.mast_bending_stiffness_value,
-                             c.mast_mass_per_length, c.reflector_mass, c.reflector_inertia)
+    beam = TipMassCantilever(
+        c.mast_length,
+        c.mast_bending_stiffness_value,
+        c.mast_mass_per_length,
+        c.reflector_mass,
+        c.reflector_inertia,
+    )
     return float(beam.frequencies(1)[0]) / (2 * math.pi)
 
 
 # Every value here is meant to be reproduced exactly: half a unit in the last printed digit.
 CHECKS: list[Check] = [
-    Check("nps", "first cantilever frequency, 20 FE elements", f"{SEED}, L21", 0.14, "Hz",
-          lambda: _case().modal_model().frequencies_hz[0], atol=0.005, note=_FITTED),
-    Check("nps", "first cantilever frequency, exact beam", f"{SEED}, L21", 0.14, "Hz",
-          _exact_cantilever_hz, atol=0.005, note=_FITTED),
-    Check("nps", "PD position gain k (ω_n = 0.06 Hz, ξ = 0.9)", f"{SEED}, L208-L218", 1.3985,
-          "N m/rad", lambda: float(_pd().kp), atol=5e-5),
-    Check("nps", "PD rate gain kτ (ω_n = 0.06 Hz, ξ = 0.9)", f"{SEED}, L208-L220", 6.6773,
-          "N m s/rad", lambda: float(_pd().kd), atol=5e-5),
+    Check(
+        "nps",
+        "first cantilever frequency, 20 FE elements",
+        f"{SEED}, L21",
+        0.14,
+        "Hz",
+        lambda: _case().modal_model().frequencies_hz[0],
+        atol=0.005,
+        note=_FITTED,
+    ),
+    Check(
+        "nps",
+        "first cantilever frequency, exact beam",
+        f"{SEED}, L21",
+        0.14,
+        "Hz",
+        _exact_cantilever_hz,
+        atol=0.005,
+        note=_FITTED,
+    ),
+    Check(
+        "nps",
+        "PD position gain k (ω_n = 0.06 Hz, ξ = 0.9)",
+        f"{SEED}, L208-L218",
+        1.3985,
+        "N m/rad",
+        lambda: float(_pd().kp),
+        atol=5e-5,
+    ),
+    Check(
+        "nps",
+        "PD rate gain kτ (ω_n = 0.06 Hz, ξ = 0.9)",
+        f"{SEED}, L208-L220",
+        6.6773,
+        "N m s/rad",
+        lambda: float(_pd().kd),
+        atol=5e-5,
+    ),
 ]

@@ -69,37 +69,79 @@ def _printed_eigenvalue_erratum(i: int) -> Discrepancy | None:
     implied = _zeta_omega(CLOSED_REAL[i], CLOSED_OMEGA[i])
     if abs(implied - CLOSED_ZETA_OMEGA[i]) <= 1e-4:  # 5e-5 rounding of each of Re λ, Im λ
         return None
-    return Discrepancy(implied, (
-        f"Erratum in Junkins & Kim 1990 (Att. 5 of Junkins, Pollock & Rahman 1990), Table 2: "
-        f"the printed ζω = {CLOSED_ZETA_OMEGA[i]} contradicts the paper's own closed-loop "
-        f"eigenvalue in the same row, {CLOSED_REAL[i]} ± {CLOSED_OMEGA[i]}i, which gives "
-        f"ζω = Im λ·(−Re λ)/|λ| = {implied:.4f}, the value computed here from the printed gains; "
-        f"the same formula gives row 3's printed {CLOSED_ZETA_OMEGA[2]} from its eigenvalue."))
+    return Discrepancy(
+        implied,
+        (
+            f"Erratum in Junkins & Kim 1990 (Att. 5 of Junkins, Pollock & Rahman 1990), Table 2: "
+            f"the printed ζω = {CLOSED_ZETA_OMEGA[i]} contradicts the paper's own closed-loop "
+            f"eigenvalue in the same row, {CLOSED_REAL[i]} ± {CLOSED_OMEGA[i]}i, which gives "
+            f"ζω = Im λ·(−Re λ)/|λ| = {implied:.4f}, the value computed here from the printed gains; "
+            f"the same formula gives row 3's printed {CLOSED_ZETA_OMEGA[2]} from its eigenvalue."
+        ),
+    )
 
 
 # Open loop: exact given the plant; 4 printed decimals, half a unit: 5e-5.
 CHECKS: list[Check] = series(
-    "output_feedback", [f"ω_{i + 1}, open loop" for i in range(3)], TABLE1, OPEN_OMEGA, "rad/s",
-    lambda: _plant().undamped_frequencies(), atol=5e-5)
+    "output_feedback",
+    [f"ω_{i + 1}, open loop" for i in range(3)],
+    TABLE1,
+    OPEN_OMEGA,
+    "rad/s",
+    lambda: _plant().undamped_frequencies(),
+    atol=5e-5,
+)
 CHECKS += [
-    Check("output_feedback", "condition number, open loop", f"{TABLE1}, Eq. 46", OPEN_CONDITION,
-          "", lambda: _plant().condition_number(*_zero_gains()), atol=5e-5),
+    Check(
+        "output_feedback",
+        "condition number, open loop",
+        f"{TABLE1}, Eq. 46",
+        OPEN_CONDITION,
+        "",
+        lambda: _plant().condition_number(*_zero_gains()),
+        atol=5e-5,
+    ),
 ]
 # Closed loop: the gains are printed to 4 decimals; symmetric ±5e-5 perturbations of them move
 # these values by at most 4e-5 relative (measured, 2000 samples). Tolerance 2e-4, 5 times that,
 # the rule of the Draper/RPL checks (docs/draper_rpl.md).
 _GAIN_RTOL = 2e-4
 CHECKS += series(
-    "output_feedback", [f"Re λ_{i + 1}, closed loop" for i in range(3)], TABLE2, CLOSED_REAL,
-    "rad/s", lambda: _closed_loop()[0], rtol=_GAIN_RTOL)
+    "output_feedback",
+    [f"Re λ_{i + 1}, closed loop" for i in range(3)],
+    TABLE2,
+    CLOSED_REAL,
+    "rad/s",
+    lambda: _closed_loop()[0],
+    rtol=_GAIN_RTOL,
+)
 CHECKS += series(
-    "output_feedback", [f"ω_{i + 1}, closed loop" for i in range(3)], TABLE2, CLOSED_OMEGA,
-    "rad/s", lambda: _closed_loop()[1], rtol=_GAIN_RTOL)
+    "output_feedback",
+    [f"ω_{i + 1}, closed loop" for i in range(3)],
+    TABLE2,
+    CLOSED_OMEGA,
+    "rad/s",
+    lambda: _closed_loop()[1],
+    rtol=_GAIN_RTOL,
+)
 CHECKS += series(
-    "output_feedback", [f"ζω_{i + 1}, closed loop" for i in range(3)], TABLE2, CLOSED_ZETA_OMEGA,
-    "rad/s", lambda: _closed_loop()[2], rtol=_GAIN_RTOL,
-    discrepancies=[_printed_eigenvalue_erratum(i) for i in range(3)])
+    "output_feedback",
+    [f"ζω_{i + 1}, closed loop" for i in range(3)],
+    TABLE2,
+    CLOSED_ZETA_OMEGA,
+    "rad/s",
+    lambda: _closed_loop()[2],
+    rtol=_GAIN_RTOL,
+    discrepancies=[_printed_eigenvalue_erratum(i) for i in range(3)],
+)
 CHECKS += [
-    Check("output_feedback", "condition number, closed loop", f"{TABLE2}, Eq. 46",
-          CLOSED_CONDITION, "", lambda: _plant().condition_number(*_gains()), rtol=_GAIN_RTOL),
+    Check(
+        "output_feedback",
+        "condition number, closed loop",
+        f"{TABLE2}, Eq. 46",
+        CLOSED_CONDITION,
+        "",
+        lambda: _plant().condition_number(*_gains()),
+        rtol=_GAIN_RTOL,
+    ),
 ]

@@ -4,7 +4,7 @@ tests/structures/test_beam.py)."""
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache, lru_cache
 
 from flexsat.checks.core import Check, series
 
@@ -28,7 +28,7 @@ def _clamped_free():
     return clamped_free_beta_L(len(CLAMPED_FREE_10))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _beta_L(kind: str, plane: str):
     from flexsat.cases import cantilever_beam, free_free_beam
 
@@ -51,21 +51,46 @@ def _ordinal(i: int) -> str:
 CHECKS: list[Check] = [
     # the exact solver (bounded-basis determinant + Brent) against the tabulated roots; they are
     # printed to 10 significant digits: 1e-9 relative is their own accuracy
-    *series("exact_beam", [f"{_ordinal(i)}, clamped-free, exact solver" for i in range(5)],
-            f"{BLEVINS}, 10 digits", CLAMPED_FREE_10, "",
-            _clamped_free, rtol=1e-9),
+    *series(
+        "exact_beam",
+        [f"{_ordinal(i)}, clamped-free, exact solver" for i in range(5)],
+        f"{BLEVINS}, 10 digits",
+        CLAMPED_FREE_10,
+        "",
+        _clamped_free,
+        rtol=1e-9,
+    ),
 ]
 
 # 20 consistent-mass 3-D frame elements: issue #3 item 4 acceptance, βL within 0.01 %
 for _plane in ("flatwise", "edgewise"):
     CHECKS += series(
-        "cantilever_beam", [f"{_ordinal(i)}, {_plane}, 20 elements" for i in range(4)],
-        BLEVINS, CANTILEVER, "", lambda p=_plane: _beta_L("cantilever", p), rtol=1e-4)
+        "cantilever_beam",
+        [f"{_ordinal(i)}, {_plane}, 20 elements" for i in range(4)],
+        BLEVINS,
+        CANTILEVER,
+        "",
+        lambda p=_plane: _beta_L("cantilever", p),
+        rtol=1e-4,
+    )
 for _plane in ("flatwise", "edgewise"):
     CHECKS += series(
-        "free_free_beam", [f"{_ordinal(i)}, {_plane}, 20 elements" for i in range(3)],
-        BLEVINS, FREE_FREE, "", lambda p=_plane: _beta_L("free_free", p), rtol=1e-4)
+        "free_free_beam",
+        [f"{_ordinal(i)}, {_plane}, 20 elements" for i in range(3)],
+        BLEVINS,
+        FREE_FREE,
+        "",
+        lambda p=_plane: _beta_L("free_free", p),
+        rtol=1e-4,
+    )
 
 # FV2's own acceptance: every frequency within 1 % with the benchmark mesh (4 elements per arm)
-CHECKS += series("nafems_fv2", [f"f_{i + 1}, 4 elements per arm" for i in range(len(FV2))],
-                 NAFEMS, FV2, "Hz", _fv2, rtol=1e-2)
+CHECKS += series(
+    "nafems_fv2",
+    [f"f_{i + 1}, 4 elements per arm" for i in range(len(FV2))],
+    NAFEMS,
+    FV2,
+    "Hz",
+    _fv2,
+    rtol=1e-2,
+)

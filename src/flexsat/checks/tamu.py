@@ -45,8 +45,13 @@ def _experiment() -> dict:
     from flexsat.scenarios import DEFAULT_SCENARIO, load_scenario, run_scenario
 
     data = yaml.safe_load(resources.files("flexsat.cases").joinpath(DEFAULT_SCENARIO).read_text())
-    data["runs"].append({"label": "Law I, g2 = 0", "law": "lyapunov_regulator",
-                         "gains": {"g1": "600 ozf*in/rad", "g2": 0}})
+    data["runs"].append(
+        {
+            "label": "Law I, g2 = 0",
+            "law": "lyapunov_regulator",
+            "gains": {"g1": "600 ozf*in/rad", "g2": 0},
+        }
+    )
     result = run_scenario(load_scenario(yaml.safe_dump(data)))
     return {row["run"]: row for row in result.metrics_records()}
 
@@ -70,23 +75,71 @@ _SCENARIO = "default scenario (flexsat run), 0.5° settling band"
 
 CHECKS: list[Check] = [
     # T is exact given Eq. 16; the table prints 4 decimals: half a unit, 5e-5 s
-    Check("tamu", "maneuver time T, 40°, 400 oz-in, α = 0", _T_SOURCE, 3.8544, "s",
-          lambda: _maneuver_time(0.0), atol=5e-5),
-    Check("tamu", "maneuver time T, 40°, 400 oz-in, α = 0.1", _T_SOURCE, 4.2986, "s",
-          lambda: _maneuver_time(0.1), atol=5e-5),
-    Check("tamu", "maneuver time T, 40°, 400 oz-in, α = 0.2", _T_SOURCE, 4.9109, "s",
-          lambda: _maneuver_time(0.2), atol=5e-5),
-    Check("tamu", "Law II overshoot (α = 0.2, g1 = 3000, g2 = 800)",
-          f"{SEED}, Att. 3 §V (L1226) \"≈ 1.5°\"", 1.5, "deg",
-          lambda: _metric("Law II", "overshoot_deg"), rtol=_EXPERIMENT_RTOL, note=_SCENARIO),
-    Check("tamu", "Law II settling time",
-          f"{SEED}, Att. 3 §V (L1226) \"6 seconds\"", 6.0, "s",
-          lambda: _metric("Law II", "settling_time_s"), rtol=_EXPERIMENT_RTOL, note=_SCENARIO),
-    Check("tamu", "Law I overshoot (g1 = 600, g2 = 800)",
-          f"{SEED}, Att. 2 (L865) \"~10°\", Att. 3 Fig. 10 (L1226)", 10.0, "deg",
-          lambda: _metric("Law I", "overshoot_deg"), rtol=_EXPERIMENT_RTOL, note=_SCENARIO),
-    Check("tamu", "Law I overshoot, g2 = 0",
-          f"{SEED}, Att. 3 Fig. 9 (L1222) \"−34°\"", 34.0, "deg",
-          lambda: _metric("Law I, g2 = 0", "overshoot_deg"), rtol=_EXPERIMENT_RTOL,
-          note=_SCENARIO),
+    Check(
+        "tamu",
+        "maneuver time T, 40°, 400 oz-in, α = 0",
+        _T_SOURCE,
+        3.8544,
+        "s",
+        lambda: _maneuver_time(0.0),
+        atol=5e-5,
+    ),
+    Check(
+        "tamu",
+        "maneuver time T, 40°, 400 oz-in, α = 0.1",
+        _T_SOURCE,
+        4.2986,
+        "s",
+        lambda: _maneuver_time(0.1),
+        atol=5e-5,
+    ),
+    Check(
+        "tamu",
+        "maneuver time T, 40°, 400 oz-in, α = 0.2",
+        _T_SOURCE,
+        4.9109,
+        "s",
+        lambda: _maneuver_time(0.2),
+        atol=5e-5,
+    ),
+    Check(
+        "tamu",
+        "Law II overshoot (α = 0.2, g1 = 3000, g2 = 800)",
+        f'{SEED}, Att. 3 §V (L1226) "≈ 1.5°"',
+        1.5,
+        "deg",
+        lambda: _metric("Law II", "overshoot_deg"),
+        rtol=_EXPERIMENT_RTOL,
+        note=_SCENARIO,
+    ),
+    Check(
+        "tamu",
+        "Law II settling time",
+        f'{SEED}, Att. 3 §V (L1226) "6 seconds"',
+        6.0,
+        "s",
+        lambda: _metric("Law II", "settling_time_s"),
+        rtol=_EXPERIMENT_RTOL,
+        note=_SCENARIO,
+    ),
+    Check(
+        "tamu",
+        "Law I overshoot (g1 = 600, g2 = 800)",
+        f'{SEED}, Att. 2 (L865) "~10°", Att. 3 Fig. 10 (L1226)',
+        10.0,
+        "deg",
+        lambda: _metric("Law I", "overshoot_deg"),
+        rtol=_EXPERIMENT_RTOL,
+        note=_SCENARIO,
+    ),
+    Check(
+        "tamu",
+        "Law I overshoot, g2 = 0",
+        f'{SEED}, Att. 3 Fig. 9 (L1222) "−34°"',
+        34.0,
+        "deg",
+        lambda: _metric("Law I, g2 = 0", "overshoot_deg"),
+        rtol=_EXPERIMENT_RTOL,
+        note=_SCENARIO,
+    ),
 ]

@@ -26,15 +26,6 @@ from flexsat.control.output_feedback import (
     design_minimum_sensitivity,
 )
 from flexsat.control.pd import PD
-from flexsat.control.ppf_optimization import (
-    EigenvalueRestoration,
-    PPFHomotopyResult,
-    PPFHomotopyStep,
-    ScipyPPFResult,
-    optimize_ppf_gains,
-    restore_eigenvalue_constraints,
-    scipy_ppf_gains,
-)
 from flexsat.control.perturbation_feedback import (
     NominalTorque,
     PerturbationDesign,
@@ -56,6 +47,15 @@ from flexsat.control.ppf import (
     ppf_stiffness,
     ppf_stiffness_gradient,
     replicate_matrix,
+)
+from flexsat.control.ppf_optimization import (
+    EigenvalueRestoration,
+    PPFHomotopyResult,
+    PPFHomotopyStep,
+    ScipyPPFResult,
+    optimize_ppf_gains,
+    restore_eigenvalue_constraints,
+    scipy_ppf_gains,
 )
 from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.control.state_space_compensator import StateSpaceCompensator

@@ -62,14 +62,18 @@ __all__ = [
 ]
 
 _KALMAN_LABELS = {
-    "A": "A", "B": "C", "Q": "G Qn Gᵀ", "R": "Rn", "N": "G Nn",
+    "A": "A",
+    "B": "C",
+    "Q": "G Qn Gᵀ",
+    "R": "Rn",
+    "N": "G Nn",
     "stabilizable": "(A, C) is not detectable: eigenvalue(s) {} of A are not observable from "
-                    "the measurements C",
+    "the measurements C",
     "detectable": "(A, G Qn^½) is not stabilizable: the process noise does not excite "
-                  "eigenvalue(s) {} of A (on or outside the stability boundary), so no "
-                  "stabilizing filter exists",
+    "eigenvalue(s) {} of A (on or outside the stability boundary), so no "
+    "stabilizing filter exists",
     "joint": "Nn: the joint noise intensity [[Qn, Nn], [Nnᵀ, Rn]] must be positive "
-             "semi-definite, but Qn − Nn Rn⁻¹ Nnᵀ has smallest eigenvalue {:.3g}",
+    "semi-definite, but Qn − Nn Rn⁻¹ Nnᵀ has smallest eigenvalue {:.3g}",
 }
 
 
@@ -95,8 +99,15 @@ def _filter(A, G, C, Qn, Rn, Nn, discrete: bool) -> RiccatiSolution:
     W = 0.5 * (W + W.T)
     kind = "dkalman" if discrete else "kalman"
     dual = _riccati(A.T, C.T, W, Rn, NG, discrete, _KALMAN_LABELS, kind, checked=True)
-    return RiccatiSolution(dual.gain.T, dual.solution, dual.poles, dual.residual,
-                           dual.residual_q, dual.absolute_residual, kind)
+    return RiccatiSolution(
+        dual.gain.T,
+        dual.solution,
+        dual.poles,
+        dual.residual,
+        dual.residual_q,
+        dual.absolute_residual,
+        kind,
+    )
 
 
 def kalman(A, G, C, Qn, Rn, Nn=None) -> RiccatiSolution:

@@ -41,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from flexsat.validation import require_finite
+from flexsat.input_checks import require_finite
 
 __all__ = ["decoupled_input_map", "moment_free_forces"]
 
@@ -67,9 +67,11 @@ def moment_free_forces(moments) -> np.ndarray:
         raise ValueError(f"moments: must have shape (3, n_F) with n_F >= 1, got {G.shape}")
     Z = scipy.linalg.null_space(G)
     if Z.shape[1] == 0:
-        raise ValueError(f"moments: the {G.shape[1]} forces have no combination with zero net "
-                         f"moment (rank {np.linalg.matrix_rank(G)} = n_F): decoupled forces "
-                         f"would all be zero; add force actuators (pairs with opposite moments)")
+        raise ValueError(
+            f"moments: the {G.shape[1]} forces have no combination with zero net "
+            f"moment (rank {np.linalg.matrix_rank(G)} = n_F): decoupled forces "
+            f"would all be zero; add force actuators (pairs with opposite moments)"
+        )
     return Z
 
 

@@ -55,10 +55,14 @@ import numpy as np
 
 from flexsat.control.lqg import DEFAULT_MEASUREMENTS, EstimatorController, zoh
 from flexsat.control.lqr import RiccatiSolution, check_matrix, check_psd, check_square, lqr
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
 
-__all__ = ["FrequencyShapedController", "FrequencyShapedDesign", "frequency_shaped_lqr",
-           "shaping_weights"]
+__all__ = [
+    "FrequencyShapedController",
+    "FrequencyShapedDesign",
+    "frequency_shaped_lqr",
+    "shaping_weights",
+]
 
 
 def shaping_weights(Q, R, break_frequency, order: int = 2, damping: float = 0.0):
@@ -151,8 +155,9 @@ class FrequencyShapedDesign:
         multiplies the current d(t) (notes §2.7)."""
         n = self.A.shape[0]
         Acl = self.A_aug - self.B_aug @ self.gain
-        return np.linalg.solve(self.R_aug, self.B_aug.T @ np.linalg.solve(
-            Acl.T, self.solution.solution[:, :n]))
+        return np.linalg.solve(
+            self.R_aug, self.B_aug.T @ np.linalg.solve(Acl.T, self.solution.solution[:, :n])
+        )
 
     def disturbance_feedforward(self, d) -> np.ndarray:
         r"""Constant control term of Eq. 30 for a constant plant disturbance d (n,):
@@ -170,8 +175,9 @@ class FrequencyShapedDesign:
         return FrequencyShapedController(self, C, L, dt, **kwargs)
 
 
-def frequency_shaped_lqr(A, B, Q, R, break_frequency, order: int = 2,
-                         damping: float = 0.0) -> FrequencyShapedDesign:
+def frequency_shaped_lqr(
+    A, B, Q, R, break_frequency, order: int = 2, damping: float = 0.0
+) -> FrequencyShapedDesign:
     r"""Frequency-shaped LQR (seed 003 Eqs. 22–28), module docstring.
 
     Parameters
@@ -204,8 +210,9 @@ def frequency_shaped_lqr(A, B, Q, R, break_frequency, order: int = 2,
     R = check_psd(check_matrix(R, "R", m, m, f"(m, m) = ({m}, {m})"), "R", strict=True)
     order = require_count(order, "order")
     if order not in (1, 2):
-        raise ValueError(f"order: must be 1 (control rate) or 2 (rate and acceleration), "
-                         f"got {order}")
+        raise ValueError(
+            f"order: must be 1 (control rate) or 2 (rate and acceleration), got {order}"
+        )
     wb = float(require_positive(break_frequency, "break_frequency", "rad/s"))
     zb = float(require_nonneg(damping, "damping", ""))
     Qa, Na, Ra = shaping_weights(Q, R, wb, order, zb)
@@ -242,19 +249,43 @@ class FrequencyShapedController(EstimatorController):
         Constant plant disturbance d for the Eq. 30 feedforward term (default none).
     """
 
-    def __init__(self, design: FrequencyShapedDesign, C, L, dt, target=0.0, reference=None,
-                 measurements=DEFAULT_MEASUREMENTS, reference_states=None, feedforward=True,
-                 initial_estimate="measurement", disturbance=None):
-        self._setup(design.A, design.B, C, L, dt, target, reference, measurements,
-                    reference_states, feedforward, "continuous", initial_estimate)
+    def __init__(
+        self,
+        design: FrequencyShapedDesign,
+        C,
+        L,
+        dt,
+        target=0.0,
+        reference=None,
+        measurements=DEFAULT_MEASUREMENTS,
+        reference_states=None,
+        feedforward=True,
+        initial_estimate="measurement",
+        disturbance=None,
+    ):
+        self._setup(
+            design.A,
+            design.B,
+            C,
+            L,
+            dt,
+            target,
+            reference,
+            measurements,
+            reference_states,
+            feedforward,
+            "continuous",
+            initial_estimate,
+        )
         self.design = design
         k = design.order
         chain = np.zeros((k, k))
         if k == 2:
             chain[0, 1] = 1.0
         self.chain_zoh = zoh(chain, np.eye(k, 1, -(k - 1)), self.dt)
-        self.offset = 0.0 if disturbance is None else float(
-            design.disturbance_feedforward(disturbance)[0])
+        self.offset = (
+            0.0 if disturbance is None else float(design.disturbance_feedforward(disturbance)[0])
+        )
 
     def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
         state = super().initial_state(n_cases)
@@ -265,7 +296,11 @@ class FrequencyShapedController(EstimatorController):
         Y, x_hat, x_ref, u_ref = self._begin(t, y, state)
         z = np.asarray(state["chain"], float)
         u = u_ref + z[:, 0]
-        v = self.offset - (x_hat - x_ref) @ self.design.plant_gain[0] - z @ self.design.chain_gain[0]
+        v = (
+            self.offset
+            - (x_hat - x_ref) @ self.design.plant_gain[0]
+            - z @ self.design.chain_gain[0]
+        )
         out = self._propagate(t, x_hat, u, Y)
         Pz, Gz = self.chain_zoh
         out["chain"] = z @ Pz.T + np.multiply.outer(v, Gz[:, 0])
@@ -311,8 +346,10 @@ class FrequencyShapedController(EstimatorController):
         Kx, Kz = self.design.plant_gain, self.design.chain_gain
         n, k = Phi_p.shape[0], Pz.shape[0]
         e1 = np.eye(1, k)  # u = z[0]
-        return np.block([
-            [Phi_p, np.zeros((n, n)), Gam_p @ e1],
-            [Gy @ self.C, Phi, Gu @ e1],
-            [np.zeros((k, n)), -Gz @ Kx, Pz - Gz @ Kz],
-        ])
+        return np.block(
+            [
+                [Phi_p, np.zeros((n, n)), Gam_p @ e1],
+                [Gy @ self.C, Phi, Gu @ e1],
+                [np.zeros((k, n)), -Gz @ Kx, Pz - Gz @ Kz],
+            ]
+        )

@@ -35,11 +35,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.validation import require_finite
+from flexsat.input_checks import require_finite
 
-__all__ = ["LinearLaw", "absorb_affine", "cases_of", "channel_spec", "per_case",
-           "reference_tables", "run_controller", "run_linear_law", "sample_times",
-           "split_channels", "stack_channels", "static_law"]
+__all__ = [
+    "LinearLaw",
+    "absorb_affine",
+    "cases_of",
+    "channel_spec",
+    "per_case",
+    "reference_tables",
+    "run_controller",
+    "run_linear_law",
+    "sample_times",
+    "split_channels",
+    "stack_channels",
+    "static_law",
+]
 
 
 def _names(names, field: str) -> tuple[str, ...]:
@@ -121,24 +132,35 @@ class LinearLaw:
             arrays[name] = arr
         nk = arrays["Ak"].shape[-1]
         n_t = arrays["y_ref"].shape[0]
-        tails = {"Ak": (nk, nk), "Bk": (nk, p), "Ck": (m, nk), "Dk": (m, p), "y_ref": (p,),
-                 "u_ff": (m,), "K0": (nk, p)}
+        tails = {
+            "Ak": (nk, nk),
+            "Bk": (nk, p),
+            "Ck": (m, nk),
+            "Dk": (m, p),
+            "y_ref": (p,),
+            "u_ff": (m,),
+            "K0": (nk, p),
+        }
         n_cases = max(arr.shape[-len(tails[k]) - 1] for k, arr in arrays.items())
         for name, arr in arrays.items():
             tail = tails[name]
-            if arr.shape[-len(tail):] != tail:
-                raise ValueError(f"{name}: trailing axes must be {tail} (nk = {nk}, p = {p} from "
-                                 f"reads, m = {m} from writes), got shape {arr.shape}")
+            if arr.shape[-len(tail) :] != tail:
+                raise ValueError(
+                    f"{name}: trailing axes must be {tail} (nk = {nk}, p = {p} from "
+                    f"reads, m = {m} from writes), got shape {arr.shape}"
+                )
             c = arr.shape[-len(tail) - 1]
             if c not in (1, n_cases):
                 raise ValueError(f"{name}: case axis must be 1 or n_cases = {n_cases}, got {c}")
             if name in ("y_ref", "u_ff"):
                 if arr.shape[0] != n_t:
-                    raise ValueError(f"{name}: time axis must be n_t = {n_t} (that of y_ref), "
-                                     f"got {arr.shape[0]}")
+                    raise ValueError(
+                        f"{name}: time axis must be n_t = {n_t} (that of y_ref), got {arr.shape[0]}"
+                    )
             elif name != "K0" and arr.shape[0] not in (1, n_t):
-                raise ValueError(f"{name}: time axis must be 1 (constant) or n_t = {n_t}, got "
-                                 f"{arr.shape[0]}")
+                raise ValueError(
+                    f"{name}: time axis must be 1 (constant) or n_t = {n_t}, got {arr.shape[0]}"
+                )
             if arr.flags.writeable:  # a caller's array: freeze a copy, not theirs
                 arr = arr.copy()
                 arr.flags.writeable = False
@@ -186,8 +208,9 @@ def run_linear_law(law: LinearLaw, Y) -> np.ndarray:
     """
     Y = require_finite(Y, "Y")
     if Y.ndim != 3 or Y.shape[0] != law.n_t or Y.shape[2] != law.p:
-        raise ValueError(f"Y: must have shape (n_t, n_cases, p) = ({law.n_t}, n_cases, {law.p}), "
-                         f"got {Y.shape}")
+        raise ValueError(
+            f"Y: must have shape (n_t, n_cases, p) = ({law.n_t}, n_cases, {law.p}), got {Y.shape}"
+        )
     nc = max(Y.shape[1], law.n_cases)
     if Y.shape[1] not in (1, nc) or law.n_cases not in (1, nc):
         raise ValueError(f"Y: has {Y.shape[1]} cases, the law {law.n_cases}")
@@ -201,10 +224,14 @@ def run_linear_law(law: LinearLaw, Y) -> np.ndarray:
         e = Y[k] - law.y_ref[k]
         if k == 0 and law.K0 is not None:
             xi = np.einsum("cij,cj->ci", law.K0, np.broadcast_to(e, (nc, law.p)))
-        U[k] = (law.u_ff[k] + np.einsum("cij,cj->ci", at(law.Ck, k), xi)
-                + np.einsum("cij,cj->ci", at(law.Dk, k), np.broadcast_to(e, (nc, law.p))))
-        xi = (np.einsum("cij,cj->ci", at(law.Ak, k), xi)
-              + np.einsum("cij,cj->ci", at(law.Bk, k), np.broadcast_to(e, (nc, law.p))))
+        U[k] = (
+            law.u_ff[k]
+            + np.einsum("cij,cj->ci", at(law.Ck, k), xi)
+            + np.einsum("cij,cj->ci", at(law.Dk, k), np.broadcast_to(e, (nc, law.p)))
+        )
+        xi = np.einsum("cij,cj->ci", at(law.Ak, k), xi) + np.einsum(
+            "cij,cj->ci", at(law.Bk, k), np.broadcast_to(e, (nc, law.p))
+        )
     return U
 
 
@@ -261,8 +288,7 @@ def absorb_affine(A, C, g, F, v, s0=None):
     (n_t, C, m) ndarray
     """
     n_t, nk = g.shape[0], A.shape[-1]
-    nc = max(A.shape[1], C.shape[1], g.shape[1], v.shape[1],
-             1 if s0 is None else np.shape(s0)[0])
+    nc = max(A.shape[1], C.shape[1], g.shape[1], v.shape[1], 1 if s0 is None else np.shape(s0)[0])
     s = np.zeros((nc, nk)) if s0 is None else np.broadcast_to(s0, (nc, nk))
     u = np.empty((n_t, nc, g.shape[-1]))
     shared = A.shape[:2] == (1, 1) and C.shape[:2] == (1, 1)
@@ -281,9 +307,19 @@ def static_law(Dk, y_ref, u_ff, reads, writes, read_sizes=None, write_sizes=None
     """A law without internal state (nk = 0): u = u_ff + D (y − y_ref); widths default to 1."""
     m, p = np.shape(Dk)[2:]
     empty = np.zeros((1, 1, 0, 0))
-    return LinearLaw(empty, np.zeros((1, 1, 0, p)), np.zeros((1, 1, m, 0)), Dk, y_ref, u_ff, None,
-                     reads, writes, read_sizes or (1,) * len(reads),
-                     write_sizes or (1,) * len(writes))
+    return LinearLaw(
+        empty,
+        np.zeros((1, 1, 0, p)),
+        np.zeros((1, 1, m, 0)),
+        Dk,
+        y_ref,
+        u_ff,
+        None,
+        reads,
+        writes,
+        read_sizes or (1,) * len(reads),
+        write_sizes or (1,) * len(writes),
+    )
 
 
 # -- channels and case axes shared by the laws ------------------------------------------------
@@ -327,14 +363,16 @@ def stack_channels(y: Mapping, names, sizes, n_cases: int, field: str = "y") -> 
         try:
             v = np.asarray(y[name], float)
         except KeyError:
-            raise ValueError(f"{name}: channel {name!r} not among the values given "
-                             f"{sorted(y)}") from None
+            raise ValueError(
+                f"{name}: channel {name!r} not among the values given {sorted(y)}"
+            ) from None
         shape = (n_cases,) if size == 1 else (n_cases, size)
         try:
             v = np.broadcast_to(v, shape)
         except ValueError:
-            raise ValueError(f"{name}: values must have shape {shape} (n_cases, width), got "
-                             f"{v.shape}") from None
+            raise ValueError(
+                f"{name}: values must have shape {shape} (n_cases, width), got {v.shape}"
+            ) from None
         cols.append(v.reshape(n_cases, size))
     return np.concatenate(cols, axis=-1)
 
@@ -346,7 +384,7 @@ def cases_of(y: Mapping, names, sizes) -> int:
     for name, size in zip(names, sizes):
         if name in y:
             shape = np.shape(y[name])
-            lead = shape[:len(shape) - (size > 1)]
+            lead = shape[: len(shape) - (size > 1)]
             n = max(n, lead[0] if lead else 1)
     return n
 
@@ -355,7 +393,7 @@ def split_channels(u: np.ndarray, names, sizes) -> dict[str, np.ndarray]:
     """Inverse of :func:`stack_channels` on the last axis: {name: (...,) or (..., size)}."""
     out, start = {}, 0
     for name, size in zip(names, sizes):
-        out[name] = u[..., start] if size == 1 else u[..., start:start + size]
+        out[name] = u[..., start] if size == 1 else u[..., start : start + size]
         start += size
     return out
 
@@ -363,10 +401,9 @@ def split_channels(u: np.ndarray, names, sizes) -> dict[str, np.ndarray]:
 def per_case(value, n_cases: int, field: str, tail: tuple[int, ...] = ()) -> np.ndarray:
     """``value`` with one case axis (1 or n_cases) before the trailing axes ``tail``."""
     arr = np.asarray(value, float)
-    lead = arr.shape[:arr.ndim - len(tail)] if tail else arr.shape
-    if arr.shape[arr.ndim - len(tail):] != tail or len(lead) > 1:
-        raise ValueError(f"{field}: must have shape {tail} or (n_cases, *{tail}), got "
-                         f"{arr.shape}")
+    lead = arr.shape[: arr.ndim - len(tail)] if tail else arr.shape
+    if arr.shape[arr.ndim - len(tail) :] != tail or len(lead) > 1:
+        raise ValueError(f"{field}: must have shape {tail} or (n_cases, *{tail}), got {arr.shape}")
     c = lead[0] if lead else 1
     if c not in (1, n_cases):
         raise ValueError(f"{field}: has {c} cases, the run has n_cases = {n_cases}")
@@ -380,8 +417,9 @@ def sample_times(dt, times) -> tuple[float, np.ndarray]:
         raise ValueError(f"dt: must be > 0, got {dt!r}")
     times = require_finite(times, "times", "s")
     if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
-        raise ValueError(f"times: must be a 1-D increasing array of sample times, got shape "
-                         f"{times.shape}")
+        raise ValueError(
+            f"times: must be a 1-D increasing array of sample times, got shape {times.shape}"
+        )
     return dt, times
 
 
@@ -410,7 +448,6 @@ def reference_tables(law, times: np.ndarray, n_cases: int):
         v = np.asarray(v, float)
         v = np.broadcast_to(v, np.broadcast_shapes(v.shape, (n_t, 1)))
         if v.ndim != 2 or v.shape[1] not in (1, n_cases):
-            raise ValueError(f"reference: has {v.shape[-1]} cases, the run has n_cases = "
-                             f"{n_cases}")
+            raise ValueError(f"reference: has {v.shape[-1]} cases, the run has n_cases = {n_cases}")
         out.append(v)
     return tuple(out)

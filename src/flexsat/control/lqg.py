@@ -63,7 +63,7 @@ from flexsat.control.linear_form import (
     sample_times,
 )
 from flexsat.control.lqr import check_matrix, check_square, dlqr, lqr
-from flexsat.validation import require_finite, require_numeric, require_positive
+from flexsat.input_checks import require_finite, require_numeric, require_positive
 
 __all__ = ["EstimatorController", "LQGController", "zoh"]
 
@@ -108,14 +108,29 @@ class EstimatorController(Controller):
 
     writes = ("torque",)
 
-    def _setup(self, A, B, C, L, dt, target, reference, measurements, reference_states,
-               feedforward, gains, initial_estimate):
+    def _setup(
+        self,
+        A,
+        B,
+        C,
+        L,
+        dt,
+        target,
+        reference,
+        measurements,
+        reference_states,
+        feedforward,
+        gains,
+        initial_estimate,
+    ):
         A = check_square(A, "A")
         n = A.shape[0]
         B = check_matrix(B, "B", n, None, f"(n, 1) with n = {n}")
         if B.shape[1] != 1:
-            raise ValueError(f"B: the controller interface commands one torque, so B must have "
-                             f"one column, got {B.shape[1]}")
+            raise ValueError(
+                f"B: the controller interface commands one torque, so B must have "
+                f"one column, got {B.shape[1]}"
+            )
         C = check_matrix(C, "C", None, n, f"(p, n) with n = {n}")
         p = C.shape[0]
         L = check_matrix(L, "L", n, p, f"(n, p) = ({n}, {p})")
@@ -124,17 +139,22 @@ class EstimatorController(Controller):
             measurements = (measurements,)
         measurements = tuple(measurements)
         if len(measurements) != p or not all(isinstance(k, str) for k in measurements):
-            raise ValueError(f"measurements: give {p} measurement keys (one per row of C), got "
-                             f"{measurements!r}")
+            raise ValueError(
+                f"measurements: give {p} measurement keys (one per row of C), got {measurements!r}"
+            )
         if reference_states is None:
             if n % 2:
-                raise ValueError("reference_states: the state has odd size; give the indices "
-                                 "(angle, rate) of θ and θ' in the state")
+                raise ValueError(
+                    "reference_states: the state has odd size; give the indices "
+                    "(angle, rate) of θ and θ' in the state"
+                )
             reference_states = (0, n // 2)
         i, j = (int(v) for v in reference_states)
         if not (0 <= i < n and 0 <= j < n) or i == j:
-            raise ValueError(f"reference_states: must be two distinct state indices in 0 … "
-                             f"{n - 1}, got {reference_states!r}")
+            raise ValueError(
+                f"reference_states: must be two distinct state indices in 0 … "
+                f"{n - 1}, got {reference_states!r}"
+            )
         if gains not in ("continuous", "discrete"):
             raise ValueError(f"gains: must be 'continuous' or 'discrete', got {gains!r}")
         self.A, self.B, self.C, self.L = A, B, C, L
@@ -157,14 +177,18 @@ class EstimatorController(Controller):
         self._Cpinv = np.linalg.pinv(C)
         if isinstance(initial_estimate, str):
             if initial_estimate != "measurement":
-                raise ValueError("initial_estimate: must be 'measurement' or a state array, got "
-                                 f"{initial_estimate!r}")
+                raise ValueError(
+                    "initial_estimate: must be 'measurement' or a state array, got "
+                    f"{initial_estimate!r}"
+                )
             self.initial_estimate = None
         else:
             x0 = require_finite(initial_estimate, "initial_estimate")
             if x0.shape[-1:] != (n,) or x0.ndim > 2:
-                raise ValueError(f"initial_estimate: must have shape (n,) or (n_cases, n) with "
-                                 f"n = {n}, got {x0.shape}")
+                raise ValueError(
+                    f"initial_estimate: must have shape (n,) or (n_cases, n) with "
+                    f"n = {n}, got {x0.shape}"
+                )
             self.initial_estimate = x0
 
     @property
@@ -173,8 +197,11 @@ class EstimatorController(Controller):
 
     def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
         n = self.n_states
-        state = {"x_hat": np.zeros((n_cases, n)), "started": np.zeros(n_cases, bool),
-                 "t": np.full(n_cases, np.nan)}
+        state = {
+            "x_hat": np.zeros((n_cases, n)),
+            "started": np.zeros(n_cases, bool),
+            "t": np.full(n_cases, np.nan),
+        }
         if self.initial_estimate is not None:
             state["x_hat"][:] = self.initial_estimate
             state["started"][:] = True
@@ -184,8 +211,9 @@ class EstimatorController(Controller):
         try:
             cols = [np.broadcast_to(np.asarray(y[k], float), (n_cases,)) for k in self.measurements]
         except KeyError as exc:
-            raise ValueError(f"measurements: key {exc.args[0]!r} not in the measurements "
-                             f"{sorted(y)}") from None
+            raise ValueError(
+                f"measurements: key {exc.args[0]!r} not in the measurements {sorted(y)}"
+            ) from None
         return np.stack(cols, axis=-1)
 
     def _begin(self, t, y, state):
@@ -198,9 +226,11 @@ class EstimatorController(Controller):
         t_prev = np.asarray(state["t"], float)
         gap = t - t_prev[started]
         if gap.size and np.any(np.abs(gap - self.dt) > _DT_TOL * self.dt):
-            raise ValueError(f"dt: the law was built for a sample period of {self.dt:g} s but was "
-                             f"called {float(np.max(gap)):g} s after its previous sample (build it "
-                             "with the simulator's 1/control_rate)")
+            raise ValueError(
+                f"dt: the law was built for a sample period of {self.dt:g} s but was "
+                f"called {float(np.max(gap)):g} s after its previous sample (build it "
+                "with the simulator's 1/control_rate)"
+            )
         if not np.all(started):
             new = ~started
             x_hat[new] = Y[new] @ self._Cpinv.T
@@ -219,9 +249,11 @@ class EstimatorController(Controller):
         (x̂₀ = C⁺ y₀) or the given estimate s0 (C, n)."""
         dt, times = sample_times(dt, times)
         if abs(dt - self.dt) > _DT_TOL * self.dt:
-            raise ValueError(f"dt: the law was built for a sample period of {self.dt:g} s, the "
-                             f"run samples every {dt:g} s (build it with the simulator's "
-                             "1/control_rate)")
+            raise ValueError(
+                f"dt: the law was built for a sample period of {self.dt:g} s, the "
+                f"run samples every {dt:g} s (build it with the simulator's "
+                "1/control_rate)"
+            )
         th, thd, _, u_r = reference_tables(self, times, n_cases)
         i, j = self.reference_states
 
@@ -239,10 +271,19 @@ class EstimatorController(Controller):
         coordinates, y_ref = 0), shifted by :func:`~flexsat.control.linear_form.absorb_affine`."""
         A, C = A[None, None], C[None, None]
         p, m = B.shape[1], C.shape[2]
-        return LinearLaw(A, B[None, None], C, np.zeros((1, 1, m, p)),
-                         np.zeros((g.shape[0], 1, p)), absorb_affine(A, C, g, F, v, s0),
-                         None if K0 is None else K0[None], self.reads, self.writes,
-                         (1,) * p, (1,) * m)
+        return LinearLaw(
+            A,
+            B[None, None],
+            C,
+            np.zeros((1, 1, m, p)),
+            np.zeros((g.shape[0], 1, p)),
+            absorb_affine(A, C, g, F, v, s0),
+            None if K0 is None else K0[None],
+            self.reads,
+            self.writes,
+            (1,) * p,
+            (1,) * m,
+        )
 
     def _propagate(self, t, x_hat, u, Y) -> dict[str, np.ndarray]:
         Phi, Gu, Gy = self.estimator
@@ -281,17 +322,43 @@ class LQGController(EstimatorController):
         x̂₀ = C⁺ y₀ from the first sample, or the given absolute state.
     """
 
-    def __init__(self, A, B, C, K, L, dt, target=0.0, reference=None,
-                 measurements=DEFAULT_MEASUREMENTS, reference_states=None, feedforward=True,
-                 gains="continuous", initial_estimate="measurement"):
-        self._setup(A, B, C, L, dt, target, reference, measurements, reference_states,
-                    feedforward, gains, initial_estimate)
+    def __init__(
+        self,
+        A,
+        B,
+        C,
+        K,
+        L,
+        dt,
+        target=0.0,
+        reference=None,
+        measurements=DEFAULT_MEASUREMENTS,
+        reference_states=None,
+        feedforward=True,
+        gains="continuous",
+        initial_estimate="measurement",
+    ):
+        self._setup(
+            A,
+            B,
+            C,
+            L,
+            dt,
+            target,
+            reference,
+            measurements,
+            reference_states,
+            feedforward,
+            gains,
+            initial_estimate,
+        )
         n = self.n_states
         self.K = check_matrix(K, "K", 1, n, f"(1, n) = (1, {n})")
 
     @classmethod
-    def design(cls, plant, Q, R, Qn, Rn, dt, G=None, N=None, Nn=None, gains="continuous",
-               **kwargs) -> LQGController:
+    def design(
+        cls, plant, Q, R, Qn, Rn, dt, G=None, N=None, Nn=None, gains="continuous", **kwargs
+    ) -> LQGController:
         r"""Design K and L and build the law.
 
         ``plant`` is a continuous StateSpace, a SecondOrderModel or (A, B, C). Weights Q, R, N
@@ -306,8 +373,13 @@ class LQGController(EstimatorController):
         dt = float(require_positive(dt, "dt", "s"))
         if gains == "discrete":
             Phi, Gam = zoh(A, B, dt)
-            reg = dlqr(Phi, Gam, require_numeric(Q, "Q") * dt, require_numeric(R, "R") * dt,
-                       None if N is None else require_numeric(N, "N") * dt)
+            reg = dlqr(
+                Phi,
+                Gam,
+                require_numeric(Q, "Q") * dt,
+                require_numeric(R, "R") * dt,
+                None if N is None else require_numeric(N, "N") * dt,
+            )
             G = check_matrix(G, "G", A.shape[0], None, "(n, g)")
             W = G @ np.atleast_2d(require_numeric(Qn, "Qn")) @ G.T * dt
             V = np.atleast_2d(require_numeric(Rn, "Rn")) / dt

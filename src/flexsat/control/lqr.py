@@ -90,7 +90,7 @@ import numpy as np
 import scipy.linalg
 
 from flexsat.analysis.controllability import pbh_clusters
-from flexsat.validation import require_numeric
+from flexsat.input_checks import require_numeric
 
 log = logging.getLogger(__name__)
 
@@ -143,12 +143,21 @@ class RiccatiSolution(tuple):
         return obj
 
     def __getnewargs__(self):
-        return (self.gain, self.solution, self.poles, self.residual, self.residual_q,
-                self.absolute_residual, self.kind)
+        return (
+            self.gain,
+            self.solution,
+            self.poles,
+            self.residual,
+            self.residual_q,
+            self.absolute_residual,
+            self.kind,
+        )
 
     def __repr__(self) -> str:
-        return (f"RiccatiSolution({self.kind or 'riccati'}: gain {self.gain.shape}, "
-                f"residual {self.residual:.2e}, max Re pole {np.max(np.real(self.poles)):.4g})")
+        return (
+            f"RiccatiSolution({self.kind or 'riccati'}: gain {self.gain.shape}, "
+            f"residual {self.residual:.2e}, max Re pole {np.max(np.real(self.poles)):.4g})"
+        )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -175,8 +184,12 @@ def check_matrix(value, field: str, rows: int | None, cols: int | None, rule: st
         arr = arr.reshape(1, 1)
     elif arr.ndim == 1:
         arr = arr[:, None] if rows is not None and arr.size == rows else arr[None, :]
-    if arr.ndim != 2 or (rows is not None and arr.shape[0] != rows) or (
-            cols is not None and arr.shape[1] != cols) or arr.size == 0:
+    if (
+        arr.ndim != 2
+        or (rows is not None and arr.shape[0] != rows)
+        or (cols is not None and arr.shape[1] != cols)
+        or arr.size == 0
+    ):
         raise ValueError(f"{field}: must have shape {rule}, got {np.shape(value)}")
     return arr
 
@@ -195,11 +208,13 @@ def check_psd(arr: np.ndarray, field: str, strict: bool = False) -> np.ndarray:
     lam = np.linalg.eigvalsh(arr)
     scale = max(np.abs(lam).max(initial=0.0), np.finfo(float).tiny)
     if strict and lam.min() <= arr.shape[0] * np.finfo(float).eps * scale:
-        raise ValueError(f"{field}: must be symmetric positive definite (smallest eigenvalue "
-                         f"{lam.min():.3g})")
+        raise ValueError(
+            f"{field}: must be symmetric positive definite (smallest eigenvalue {lam.min():.3g})"
+        )
     if lam.min() < -WEIGHT_TOL * scale:
-        raise ValueError(f"{field}: must be positive semi-definite (smallest eigenvalue "
-                         f"{lam.min():.3g})")
+        raise ValueError(
+            f"{field}: must be positive semi-definite (smallest eigenvalue {lam.min():.3g})"
+        )
     return arr
 
 
@@ -230,7 +245,8 @@ def uncontrollable_modes(A, B, discrete: bool = False) -> list[complex]:
 
 def _fmt(modes) -> str:
     return ", ".join(f"{m.real:.4g}{m.imag:+.4g}j" for m in modes[:6]) + (
-        " ..." if len(modes) > 6 else "")
+        " ..." if len(modes) > 6 else ""
+    )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -243,8 +259,11 @@ def care_residual(A, B, Q, R, S, N=None) -> tuple[float, float, float]:
     res = AtS + AtS.T - quad + Q
     absolute = np.linalg.norm(res)
     denom = 2 * np.linalg.norm(AtS) + np.linalg.norm(quad) + np.linalg.norm(Q)
-    return (absolute / denom if denom > 0 else absolute,
-            absolute / np.linalg.norm(Q) if np.linalg.norm(Q) > 0 else np.inf, absolute)
+    return (
+        absolute / denom if denom > 0 else absolute,
+        absolute / np.linalg.norm(Q) if np.linalg.norm(Q) > 0 else np.inf,
+        absolute,
+    )
 
 
 def dare_residual(A, B, Q, R, S, N=None) -> tuple[float, float, float]:
@@ -254,25 +273,31 @@ def dare_residual(A, B, Q, R, S, N=None) -> tuple[float, float, float]:
     AtSA = A.T @ S @ A
     res = AtSA - S - quad + Q
     absolute = np.linalg.norm(res)
-    denom = (np.linalg.norm(AtSA) + np.linalg.norm(S) + np.linalg.norm(quad)
-             + np.linalg.norm(Q))
-    return (absolute / denom if denom > 0 else absolute,
-            absolute / np.linalg.norm(Q) if np.linalg.norm(Q) > 0 else np.inf, absolute)
+    denom = np.linalg.norm(AtSA) + np.linalg.norm(S) + np.linalg.norm(quad) + np.linalg.norm(Q)
+    return (
+        absolute / denom if denom > 0 else absolute,
+        absolute / np.linalg.norm(Q) if np.linalg.norm(Q) > 0 else np.inf,
+        absolute,
+    )
 
 
 _LQR_LABELS = {
-    "A": "A", "B": "B", "Q": "Q", "R": "R", "N": "N",
-    "stabilizable": "(A, B) is not stabilizable: eigenvalue(s) {} of A are not controllable "
-                    "from B",
+    "A": "A",
+    "B": "B",
+    "Q": "Q",
+    "R": "R",
+    "N": "N",
+    "stabilizable": "(A, B) is not stabilizable: eigenvalue(s) {} of A are not controllable from B",
     "detectable": "(Q − N R⁻¹ Nᵀ, A − B R⁻¹ Nᵀ) is not detectable: eigenvalue(s) {} are not "
-                  "seen by the state weight (weight those states in Q)",
+    "seen by the state weight (weight those states in Q)",
     "joint": "N: the joint weight [[Q, N], [Nᵀ, R]] must be positive semi-definite, but "
-             "Q − N R⁻¹ Nᵀ has smallest eigenvalue {:.3g}",
+    "Q − N R⁻¹ Nᵀ has smallest eigenvalue {:.3g}",
 }
 
 
-def _riccati(A, B, Q, R, N, discrete: bool, labels: dict, kind: str,
-             checked: bool = False) -> RiccatiSolution:
+def _riccati(
+    A, B, Q, R, N, discrete: bool, labels: dict, kind: str, checked: bool = False
+) -> RiccatiSolution:
     """Validate, solve, verify and log one Riccati design (labels name the fields)."""
     if not checked:
         A = check_square(A, labels["A"])
@@ -280,16 +305,20 @@ def _riccati(A, B, Q, R, N, discrete: bool, labels: dict, kind: str,
         B = check_matrix(B, labels["B"], n, None, f"(n, m) with n = {n} (the states of A)")
         m = B.shape[1]
         Q = check_psd(check_matrix(Q, labels["Q"], n, n, f"(n, n) = ({n}, {n})"), labels["Q"])
-        R = check_psd(check_matrix(R, labels["R"], m, m, f"(m, m) = ({m}, {m})"), labels["R"],
-                      strict=True)
+        R = check_psd(
+            check_matrix(R, labels["R"], m, m, f"(m, m) = ({m}, {m})"), labels["R"], strict=True
+        )
         N = None if N is None else check_matrix(N, labels["N"], n, m, f"(n, m) = ({n}, {m})")
     n, m = B.shape
     if N is not None and np.any(N):
         RiN = np.linalg.solve(R, N.T)
         Qt = 0.5 * ((Q - N @ RiN) + (Q - N @ RiN).T)
         lam = np.linalg.eigvalsh(Qt)
-        scale = max(np.abs(np.linalg.eigvalsh(Q)).max(), np.abs(np.linalg.eigvalsh(N @ RiN)).max(),
-                    np.finfo(float).tiny)
+        scale = max(
+            np.abs(np.linalg.eigvalsh(Q)).max(),
+            np.abs(np.linalg.eigvalsh(N @ RiN)).max(),
+            np.finfo(float).tiny,
+        )
         if lam.min() < -WEIGHT_TOL * scale:
             raise ValueError(labels["joint"].format(lam.min()))
         At = A - B @ RiN
@@ -310,8 +339,10 @@ def _riccati(A, B, Q, R, N, discrete: bool, labels: dict, kind: str,
         with np.errstate(over="ignore", invalid="ignore"):
             S = solver(A, B, Q, R, s=N, balanced=True)
     except (np.linalg.LinAlgError, ValueError) as exc:
-        raise ValueError(f"{labels['A']}: no stabilizing Riccati solution ({exc}); the pair is "
-                         "numerically close to unstabilizable or undetectable") from None
+        raise ValueError(
+            f"{labels['A']}: no stabilizing Riccati solution ({exc}); the pair is "
+            "numerically close to unstabilizable or undetectable"
+        ) from None
     if not np.all(np.isfinite(S)):
         raise ValueError(f"{labels['A']}: the Riccati solution is not finite")
     S = 0.5 * (S + S.T)
@@ -325,20 +356,26 @@ def _riccati(A, B, Q, R, N, discrete: bool, labels: dict, kind: str,
     E = scipy.linalg.eigvals(A - B @ K)
     margin = np.max(np.abs(E)) - 1.0 if discrete else np.max(E.real)
     if margin >= 0:
-        raise ValueError(f"{labels['A']}: the Riccati solution does not stabilize the closed loop "
-                         f"(max {'|λ|' if discrete else 'Re λ'} = "
-                         f"{np.max(np.abs(E)) if discrete else np.max(E.real):.3g})")
-    log.debug("%s: n=%d m=%d relative Riccati residual %.3e (rel. to ||Q|| %.3e)",
-              kind, n, m, rel, rel_q)
+        raise ValueError(
+            f"{labels['A']}: the Riccati solution does not stabilize the closed loop "
+            f"(max {'|λ|' if discrete else 'Re λ'} = "
+            f"{np.max(np.abs(E)) if discrete else np.max(E.real):.3g})"
+        )
+    log.debug(
+        "%s: n=%d m=%d relative Riccati residual %.3e (rel. to ||Q|| %.3e)", kind, n, m, rel, rel_q
+    )
     accepted = min(max(RESIDUAL_TOL, 10 * riccati_error_bound(S)), RESIDUAL_MAX)
     if not rel <= accepted:
-        norms = ", ".join(f"‖{labels[k]}‖ = {np.linalg.norm(v):.3g}"
-                          for k, v in (("A", A), ("B", B), ("Q", Q), ("R", R)))
+        norms = ", ".join(
+            f"‖{labels[k]}‖ = {np.linalg.norm(v):.3g}"
+            for k, v in (("A", A), ("B", B), ("Q", Q), ("R", R))
+        )
         raise ValueError(
             f"{labels['A']}: the Riccati solution is inaccurate: its relative residual {rel:.3g} "
             f"exceeds the accepted {accepted:.2g} (ten times the Schur method's error bound, "
             f"within [√ε, {RESIDUAL_MAX:g}]): the data are too badly scaled for the solver "
-            f"({norms}); rescale the states, inputs or time unit")
+            f"({norms}); rescale the states, inputs or time unit"
+        )
     return RiccatiSolution(K, S, E, rel, rel_q, absolute, kind)
 
 

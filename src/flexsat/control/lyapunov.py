@@ -22,7 +22,7 @@ import numpy as np
 
 from flexsat.control.base import Controller
 from flexsat.control.linear_form import per_case, reference_tables, sample_times, static_law
-from flexsat.validation import require_finite, require_nonneg
+from flexsat.input_checks import require_finite, require_nonneg
 
 
 def check_lyapunov_gains(g1, g2, g3, n_appendages: int = 4):
@@ -95,8 +95,7 @@ class LyapunovTracker(Controller):
     def __init__(self, reference, g1, g2, g3=0.0, appendage_inertia=0.0, n_appendages: int = 4):
         self.reference = reference
         self.g1, self.g2, self.g3 = check_lyapunov_gains(g1, g2, g3, n_appendages)
-        self.appendage_inertia = require_nonneg(appendage_inertia, "appendage_inertia",
-                                                "kg*m**2")
+        self.appendage_inertia = require_nonneg(appendage_inertia, "appendage_inertia", "kg*m**2")
         self.target = np.asarray(reference.theta0 + reference.angle, float)
 
     def _batched(self):
@@ -120,8 +119,7 @@ class LyapunovTracker(Controller):
         Ib = per_case(self.appendage_inertia, n_cases, "appendage_inertia")
         y_ref = np.stack(np.broadcast_arrays(th, thd, Ib * thdd), axis=-1)
         y_ref.flags.writeable = False  # ours alone: the LinearLaw keeps it without a copy
-        return static_law(_gain_row(self, n_cases), y_ref, u_r[..., None], self.reads,
-                          self.writes)
+        return static_law(_gain_row(self, n_cases), y_ref, u_r[..., None], self.reads, self.writes)
 
 
 def _gain_row(law, n_cases: int) -> np.ndarray:

@@ -38,7 +38,7 @@ from flexsat.analysis.sensitivity import (
     eigensolve,
     eigenvector_condition_derivatives,
 )
-from flexsat.validation import require_finite
+from flexsat.input_checks import require_finite
 
 SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 5 Eqs. 28-49 (L2001-L2089), Example 1 (L2081-L2143)"
 
@@ -56,8 +56,11 @@ EXAMPLE1 = {
     # Table 1 (open loop) and Table 2 (closed loop)
     "open_loop_omega": [1.4447, 4.4721, 6.9219],
     "open_loop_condition": 9.4903,
-    "closed_loop_eigenvalues": [complex(-0.8833, 1.4447), complex(-1.0574, 4.4721),
-                                complex(-0.5322, 6.7872)],
+    "closed_loop_eigenvalues": [
+        complex(-0.8833, 1.4447),
+        complex(-1.0574, 4.4721),
+        complex(-0.5322, 6.7872),
+    ],
     "closed_loop_zeta_omega": [0.7532, 1.0189, 0.5306],
     "closed_loop_condition": 8.1291,
     # the design problem: ω_1, ω_2 held at their open-loop values, ω_i ζ_i >= 0.3 (i = 1, 2),
@@ -81,8 +84,9 @@ def n_parameters(n_inputs: int) -> int:
 def _params(p, m: int) -> np.ndarray:
     p = require_finite(p, "p").reshape(-1)
     if p.size != n_parameters(m):
-        raise ValueError(f"p: must have m(m + 1) = {n_parameters(m)} entries for m = {m} inputs, "
-                         f"got {p.size}")
+        raise ValueError(
+            f"p: must have m(m + 1) = {n_parameters(m)} entries for m = {m} inputs, got {p.size}"
+        )
     return p
 
 
@@ -121,8 +125,10 @@ def cholesky_parameters(G1, G2) -> np.ndarray:
         try:
             L = np.linalg.cholesky(G)
         except np.linalg.LinAlgError:
-            raise ValueError(f"{name}: must be positive definite to have a Cholesky factor "
-                             f"(eigenvalues {np.linalg.eigvalsh(G).tolist()})") from None
+            raise ValueError(
+                f"{name}: must be positive definite to have a Cholesky factor "
+                f"(eigenvalues {np.linalg.eigvalsh(G).tolist()})"
+            ) from None
         v = L[rows, cols]
         diag = rows == cols
         v[diag] = np.sqrt(v[diag])
@@ -147,7 +153,7 @@ def cholesky_gain_derivatives(p, n_inputs: int):
     dG = np.zeros((2, P, m, m))
     d2G = np.zeros((2, P, P, m, m))
     for half in (0, 1):
-        q = p[half * h:(half + 1) * h]
+        q = p[half * h : (half + 1) * h]
         L = _factor(q, m)
         dL = np.zeros((h, m, m))
         dL[np.arange(h), rows, cols] = np.where(rows == cols, 2 * q, 1.0)
@@ -181,8 +187,10 @@ def _gain(value, field: str, m: int | None = None) -> np.ndarray:
         raise ValueError(f"{field}: must be symmetric (Att. 5 Eq. 29)")
     low = float(np.linalg.eigvalsh(0.5 * (G + G.T)).min())
     if low < -1e-12 * scale:
-        raise ValueError(f"{field}: must be positive semidefinite (smallest eigenvalue {low:.3g})"
-                         "; the collocated law is guaranteed stable only for G >= 0")
+        raise ValueError(
+            f"{field}: must be positive semidefinite (smallest eigenvalue {low:.3g})"
+            "; the collocated law is guaranteed stable only for G >= 0"
+        )
     return 0.5 * (G + G.T)
 
 
@@ -253,8 +261,9 @@ class SymmetricOutputFeedback:
         if D.ndim == 1:
             D = D[:, None]
         if D.ndim != 2 or D.shape[0] != n:
-            raise ValueError(f"D: must be an ({n}, m) matrix (one column per input), got shape "
-                             f"{D.shape}")
+            raise ValueError(
+                f"D: must be an ({n}, m) matrix (one column per input), got shape {D.shape}"
+            )
         self.D = D
         self.C = np.zeros((n, n)) if C is None else _square(C, "C", n)
         if np.linalg.cond(self.M) > 1e12:
@@ -263,7 +272,7 @@ class SymmetricOutputFeedback:
         self.n_parameters = n_parameters(self.n_inputs)
 
     @classmethod
-    def example1(cls) -> "SymmetricOutputFeedback":
+    def example1(cls) -> SymmetricOutputFeedback:
         """Att. 5 Example 1: M = I3, K = [[20,−10,0],[−10,30,−20],[0,−20,20]], D = [e1 e3],
         C = 0 (L2081-L2143)."""
         return cls(EXAMPLE1["M"], EXAMPLE1["K"], EXAMPLE1["D"], EXAMPLE1["C"])
@@ -336,8 +345,9 @@ class SymmetricOutputFeedback:
         d2A[:, :, n:, n:] = -np.einsum("ia,klab,jb->klij", D, d2G2, D)
         return dA, d2A
 
-    def sensitivity(self, p, *, order: int = 1, gap_rtol: float = GAP_RTOL,
-                    strict: bool = True) -> FeedbackSensitivity:
+    def sensitivity(
+        self, p, *, order: int = 1, gap_rtol: float = GAP_RTOL, strict: bool = True
+    ) -> FeedbackSensitivity:
         """κ and the mode frequencies/decay rates at p with their analytic derivatives.
 
         Chain of Att. 5: ∂A/∂p from Eqs. 30-35, eigenvector derivatives (Eqs. 42-44), then
@@ -368,8 +378,9 @@ class SymmetricOutputFeedback:
         dA, d2A = self.pencil_derivatives(p)
         d2A = d2A if order == 2 else None
         try:
-            out = eigenvector_condition_derivatives(A, dA, B, None, d2A, None, order=order,
-                                                    gap_rtol=gap_rtol)
+            out = eigenvector_condition_derivatives(
+                A, dA, B, None, d2A, None, order=order, gap_rtol=gap_rtol
+            )
             kappa, grad = out[0], out[1]
             hess = out[2] if order == 2 else None
             eig = out[-1]
@@ -429,8 +440,10 @@ def _mode_map(value, field: str) -> dict[int, float]:
     if value is None:
         return {}
     if not isinstance(value, dict):
-        raise ValueError(f"{field}: must be a mapping {{mode number (0-based): value}}, got "
-                         f"{type(value).__name__}")
+        raise ValueError(
+            f"{field}: must be a mapping {{mode number (0-based): value}}, got "
+            f"{type(value).__name__}"
+        )
     out = {}
     for key, val in value.items():
         if isinstance(key, bool) or not isinstance(key, (int, np.integer)) or key < 0:
@@ -439,9 +452,15 @@ def _mode_map(value, field: str) -> dict[int, float]:
     return out
 
 
-def design_minimum_sensitivity(plant: SymmetricOutputFeedback, *, frequencies=None,
-                               decay_bounds=None, start=None, order: int = 1,
-                               **options) -> FeedbackDesign:
+def design_minimum_sensitivity(
+    plant: SymmetricOutputFeedback,
+    *,
+    frequencies=None,
+    decay_bounds=None,
+    start=None,
+    order: int = 1,
+    **options,
+) -> FeedbackDesign:
     """Minimise the closed-loop modal condition number over symmetric gains (Att. 5 Eqs. 46-49).
 
     Objective κ(Φ) (Eq. 46) with analytic gradient; equality constraints ω_i(p) = ω_i0 (Eq. 48)
@@ -492,8 +511,9 @@ def design_minimum_sensitivity(plant: SymmetricOutputFeedback, *, frequencies=No
     if start is None:
         start = (np.eye(m), np.eye(m))
     if not isinstance(start, (tuple, list)) or len(start) != 2:
-        raise ValueError(f"start: must be a pair (G1, G2) of {m}x{m} gains, got "
-                         f"{type(start).__name__}")
+        raise ValueError(
+            f"start: must be a pair (G1, G2) of {m}x{m} gains, got {type(start).__name__}"
+        )
     G1s, G2s = start
     p0 = plant.parameters(G1s, G2s)
     f_modes, f_targets = list(freq), np.array(list(freq.values()))
@@ -508,23 +528,32 @@ def design_minimum_sensitivity(plant: SymmetricOutputFeedback, *, frequencies=No
                 cache.clear()
             s = plant.sensitivity(p, order=order, strict=False)
             if s.omega.size < needed:
-                raise ValueError(f"frequencies: the closed loop has only {s.omega.size} "
-                                 f"oscillatory modes, the constraints need {needed}")
+                raise ValueError(
+                    f"frequencies: the closed loop has only {s.omega.size} "
+                    f"oscillatory modes, the constraints need {needed}"
+                )
             cache[key] = s
         return cache[key]
 
     kw = dict(gradient=lambda p: sens(p).gradient)
     if f_modes:
-        kw.update(equality=lambda p: sens(p).omega[f_modes], equality_target=f_targets,
-                  equality_jacobian=lambda p: sens(p).omega_gradient[f_modes])
+        kw.update(
+            equality=lambda p: sens(p).omega[f_modes],
+            equality_target=f_targets,
+            equality_jacobian=lambda p: sens(p).omega_gradient[f_modes],
+        )
     if d_modes:
-        kw.update(inequality=lambda p: sens(p).zeta_omega[d_modes], inequality_bound=d_bounds,
-                  inequality_jacobian=lambda p: sens(p).zeta_omega_gradient[d_modes])
+        kw.update(
+            inequality=lambda p: sens(p).zeta_omega[d_modes],
+            inequality_bound=d_bounds,
+            inequality_jacobian=lambda p: sens(p).zeta_omega_gradient[d_modes],
+        )
     result = homotopy_minimize(lambda p: sens(p).condition_number, p0, **kw, **options)
     G1, G2 = plant.gains(result.p)
     s = plant.sensitivity(result.p, strict=False)
-    return FeedbackDesign(G1, G2, result.p.copy(), s.condition_number, s.omega, s.zeta_omega,
-                          result)
+    return FeedbackDesign(
+        G1, G2, result.p.copy(), s.condition_number, s.omega, s.zeta_omega, result
+    )
 
 
 __all__ = [

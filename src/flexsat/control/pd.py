@@ -12,7 +12,7 @@ import numpy as np
 
 from flexsat.control.base import Controller
 from flexsat.control.linear_form import per_case, reference_tables, sample_times, static_law
-from flexsat.validation import require_finite, require_nonneg, require_positive
+from flexsat.input_checks import require_finite, require_nonneg, require_positive
 
 
 class PD(Controller):
@@ -43,7 +43,7 @@ class PD(Controller):
         self.target = require_finite(target, "target", "rad")
 
     @classmethod
-    def from_rigid_poles(cls, inertia, natural_frequency, damping_ratio, **kwargs) -> "PD":
+    def from_rigid_poles(cls, inertia, natural_frequency, damping_ratio, **kwargs) -> PD:
         """Gains placing the rigid closed-loop poles at ω_n, ζ (seed 001 Eqs. 20-24).
 
         ``inertia`` in kg m², ``natural_frequency`` in rad/s (``"0.06 Hz"`` converts with its

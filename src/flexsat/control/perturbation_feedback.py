@@ -69,9 +69,16 @@ from flexsat.control.lqr import check_matrix, check_psd
 from flexsat.control.scheduled import interpolate_schedule
 from flexsat.control.trajectory_linearization import TrajectoryLinearization
 from flexsat.dynamics.attitude import quaternion_multiply
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
 
-__all__ = ["FEEDFORWARD", "NominalTorque", "PerturbationDesign", "interval_means", "PerturbationFeedback", "perturbation_design"]
+__all__ = [
+    "FEEDFORWARD",
+    "NominalTorque",
+    "PerturbationDesign",
+    "interval_means",
+    "PerturbationFeedback",
+    "perturbation_design",
+]
 
 #: the feedforward forms of seed 003 (notes §2.7) and none
 FEEDFORWARD = ("constant", "time-varying", "none")
@@ -84,8 +91,11 @@ def _weight(value, size: int, field: str, strict: bool) -> np.ndarray:
         if arr.size != size:
             raise ValueError(f"{field}: a diagonal must have {size} entries, got {arr.size}")
         arr = np.diag(arr)
-    return check_psd(check_matrix(arr, field, size, size, f"({size}, {size}) or ({size},) "
-                                  "for a diagonal"), field, strict=strict)
+    return check_psd(
+        check_matrix(arr, field, size, size, f"({size}, {size}) or ({size},) for a diagonal"),
+        field,
+        strict=strict,
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,14 +150,16 @@ class PerturbationDesign:
     def n_modes(self) -> int:
         return self.linearization.n_modes
 
-    def controller(self, dt, feedforward: str = "constant", n_modes_plant: int | None = None,
-                   plant=None) -> PerturbationFeedback:
+    def controller(
+        self, dt, feedforward: str = "constant", n_modes_plant: int | None = None, plant=None
+    ) -> PerturbationFeedback:
         """The law at control period ``dt`` (:class:`PerturbationFeedback`)."""
         return PerturbationFeedback(self, dt, feedforward, n_modes_plant, plant)
 
 
-def perturbation_design(plant, nominal, Q, D, omega_b, zeta_b=0.0, n_points: int = 11,
-                        forces=(), decouple: bool = False) -> PerturbationDesign:
+def perturbation_design(
+    plant, nominal, Q, D, omega_b, zeta_b=0.0, n_points: int = 11, forces=(), decouple: bool = False
+) -> PerturbationDesign:
     r"""Gain-scheduled frequency-shaped perturbation design (module docstring).
 
     Parameters
@@ -195,8 +207,10 @@ def perturbation_design(plant, nominal, Q, D, omega_b, zeta_b=0.0, n_points: int
     n_points = require_count(n_points, "n_points")
     if decouple:
         if m == 3:
-            raise ValueError("decouple: needs force channels (forces=...); the torquers alone "
-                             "have nothing to decouple")
+            raise ValueError(
+                "decouple: needs force channels (forces=...); the torquers alone "
+                "have nothing to decouple"
+            )
         S = decoupled_input_map(lin.force_moments)
     else:
         S = np.eye(m)
@@ -221,10 +235,22 @@ def perturbation_design(plant, nominal, Q, D, omega_b, zeta_b=0.0, n_points: int
             raise ValueError(f"linearisation point {i} (t = {t:.6g} s): {exc}") from None
     Kd = np.stack([x.disturbance_gain for x in designs])
     return PerturbationDesign(
-        linearization=lin, times=times, A=A, B=B, d=d, input_map=S, designs=tuple(designs),
-        gains=np.stack([x.gain for x in designs]), disturbance_gains=Kd,
-        constant_feedforward=np.einsum("imn,in->im", Kd, d), Q=Q, D=D, omega_b=omega_b,
-        zeta_b=zeta_b, decouple=bool(decouple))
+        linearization=lin,
+        times=times,
+        A=A,
+        B=B,
+        d=d,
+        input_map=S,
+        designs=tuple(designs),
+        gains=np.stack([x.gain for x in designs]),
+        disturbance_gains=Kd,
+        constant_feedforward=np.einsum("imn,in->im", Kd, d),
+        Q=Q,
+        D=D,
+        omega_b=omega_b,
+        zeta_b=zeta_b,
+        decouple=bool(decouple),
+    )
 
 
 def _check_inputs_act(B, times, inputs) -> None:
@@ -240,26 +266,32 @@ def _check_inputs_act(B, times, inputs) -> None:
                 f"With zeta_b = 0 the shaping weight vanishes at ω_B (notes §2.3), so such a "
                 f"combination would ring at ω_B unpenalised and unseen: the Riccati equation "
                 f"has no stabilising solution. Use zeta_b > 0, fewer forces, more design modes "
-                f"or decouple=True")
+                f"or decouple=True"
+            )
 
 
 def _check_same_modes(design_plant, plant) -> None:
     """The first modes of ``plant`` are the design model's (:class:`PerturbationFeedback`)."""
     n = design_plant.n_modes
     if getattr(plant, "n_modes", 0) < n or not hasattr(plant, "modal"):
-        raise ValueError(f"plant: must be a FlexibleSpacecraft with at least the design "
-                         f"model's {n} elastic modes")
+        raise ValueError(
+            f"plant: must be a FlexibleSpacecraft with at least the design "
+            f"model's {n} elastic modes"
+        )
     a, b = design_plant.modal, plant.modal
     for k in range(n):
         scale = np.abs(a.shapes[k]).max()
-        if (abs(a.frequencies[k] - b.frequencies[k]) > 1e-9 * a.frequencies[k]
-                or np.abs(a.shapes[k] - b.shapes[k]).max() > 1e-9 * scale):
+        if (
+            abs(a.frequencies[k] - b.frequencies[k]) > 1e-9 * a.frequencies[k]
+            or np.abs(a.shapes[k] - b.shapes[k]).max() > 1e-9 * scale
+        ):
             raise ValueError(
                 f"plant: its elastic mode {k + 1} is not the design model's (frequency "
                 f"{b.frequencies[k]:.6g} against {a.frequencies[k]:.6g} rad/s, or another "
                 f"shape: a sign or a rotated repeated pair), so the law would read the wrong "
                 f"coordinates; build the design model from the plant's modal model "
-                f"(FlexibleSpacecraft(plant.modal, ..., n_modes={n}))")
+                f"(FlexibleSpacecraft(plant.modal, ..., n_modes={n}))"
+            )
 
 
 class PerturbationFeedback(Controller):
@@ -293,14 +325,20 @@ class PerturbationFeedback(Controller):
 
     reads = ("attitude", "rate", "elastic")
 
-    def __init__(self, design: PerturbationDesign, dt, feedforward: str = "constant",
-                 n_modes_plant: int | None = None, plant=None):
+    def __init__(
+        self,
+        design: PerturbationDesign,
+        dt,
+        feedforward: str = "constant",
+        n_modes_plant: int | None = None,
+        plant=None,
+    ):
         if not isinstance(design, PerturbationDesign):
-            raise ValueError(f"design: must be a PerturbationDesign, got "
-                             f"{type(design).__name__}")
+            raise ValueError(f"design: must be a PerturbationDesign, got {type(design).__name__}")
         if feedforward not in FEEDFORWARD:
-            raise ValueError(f"feedforward: must be one of {', '.join(FEEDFORWARD)}, got "
-                             f"{feedforward!r}")
+            raise ValueError(
+                f"feedforward: must be one of {', '.join(FEEDFORWARD)}, got {feedforward!r}"
+            )
         self.design, self.feedforward = design, feedforward
         self.dt = h = float(require_positive(dt, "dt", "s"))
         lin = design.linearization
@@ -308,11 +346,13 @@ class PerturbationFeedback(Controller):
         if plant is not None:
             _check_same_modes(lin.plant, plant)
             n_modes_plant = plant.n_modes if n_modes_plant is None else n_modes_plant
-        self.n_modes_plant = n if n_modes_plant is None else require_count(n_modes_plant,
-                                                                             "n_modes_plant")
+        self.n_modes_plant = (
+            n if n_modes_plant is None else require_count(n_modes_plant, "n_modes_plant")
+        )
         if self.n_modes_plant < n:
-            raise ValueError(f"n_modes_plant: must be >= the design model's {n} modes, got "
-                             f"{self.n_modes_plant}")
+            raise ValueError(
+                f"n_modes_plant: must be >= the design model's {n} modes, got {self.n_modes_plant}"
+            )
         self.writes = lin.inputs
         self.knots, self.gains = design.times, design.gains
         # the sample grid through T and one beyond (held after it)
@@ -326,8 +366,11 @@ class PerturbationFeedback(Controller):
         if feedforward == "constant":
             self._ff = interpolate_schedule(self.knots, design.constant_feedforward, grid)
         elif feedforward == "time-varying":
-            self._ff = np.einsum("kmn,kn->km", interpolate_schedule(
-                self.knots, design.disturbance_gains, grid), lin.disturbance(grid))
+            self._ff = np.einsum(
+                "kmn,kn->km",
+                interpolate_schedule(self.knots, design.disturbance_gains, grid),
+                lin.disturbance(grid),
+            )
         else:
             self._ff = np.zeros((grid.size, m_v))
         self._inputs_T = design.input_map.T.copy()
@@ -345,19 +388,31 @@ class PerturbationFeedback(Controller):
         h = self.dt
         k = int(round(t / h))
         if k < 0 or abs(t - k * h) > 1e-6 * h:
-            raise ValueError(f"t: {type(self).__name__} runs on its sample grid k·dt with dt = "
-                             f"{h:g} s (the simulator's control period); called at t = {t!r}")
+            raise ValueError(
+                f"t: {type(self).__name__} runs on its sample grid k·dt with dt = "
+                f"{h:g} s (the simulator's control period); called at t = {t!r}"
+            )
         j = min(k, len(self._torque) - 1)
         n, n_p = self.design.n_modes, self.n_modes_plant
         elastic = np.asarray(y["elastic"], float)
         if elastic.shape[-1] != 2 * n_p:
-            raise ValueError(f"elastic: expected 2·n_modes_plant = {2 * n_p} columns, got "
-                             f"{elastic.shape[-1]} (set n_modes_plant to the plant's modes)")
+            raise ValueError(
+                f"elastic: expected 2·n_modes_plant = {2 * n_p} columns, got "
+                f"{elastic.shape[-1]} (set n_modes_plant to the plant's modes)"
+            )
         dq = np.asarray(y["attitude"], float) @ self._error_maps[j]
         z1, z2 = state["z1"], state["z2"]
-        X = np.concatenate([np.where(dq[:, :1] < 0, -2.0, 2.0) * dq[:, 1:],
-                            np.asarray(y["rate"], float) - self._omega[j], elastic[:, :n],
-                            elastic[:, n_p:n_p + n], z1, z2], axis=1)
+        X = np.concatenate(
+            [
+                np.where(dq[:, :1] < 0, -2.0, 2.0) * dq[:, 1:],
+                np.asarray(y["rate"], float) - self._omega[j],
+                elastic[:, :n],
+                elastic[:, n_p : n_p + n],
+                z1,
+                z2,
+            ],
+            axis=1,
+        )
         u3 = self._ff[j] - X @ interpolate_schedule(self.knots, self.gains, t).T
         du = (z1 + (0.5 * h) * z2 + (h * h / 6) * u3) @ self._inputs_T
         commands = {"torque": self._torque[j] + du[:, :3] @ self._inertia_T}
@@ -393,8 +448,10 @@ class NominalTorque(Controller):
     def __init__(self, nominal, dt):
         missing = [a for a in ("torque", "duration") if not hasattr(nominal, a)]
         if missing:
-            raise ValueError(f"nominal: must have torque(t) and duration; "
-                             f"{type(nominal).__name__} lacks {', '.join(missing)}")
+            raise ValueError(
+                f"nominal: must have torque(t) and duration; "
+                f"{type(nominal).__name__} lacks {', '.join(missing)}"
+            )
         T = float(require_positive(nominal.duration, "nominal.duration", "s"))
         self.dt = h = float(require_positive(dt, "dt", "s"))
         grid = h * np.arange(int(np.ceil(T / h)) + 2)

@@ -66,12 +66,24 @@ import scipy.linalg
 
 from flexsat.control.lqr import check_matrix, check_psd, check_square
 from flexsat.control.state_space_compensator import StateSpaceCompensator
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
 
-__all__ = ["PPFBank", "PPFController", "PPFModel", "PPFProblem", "PPFStability",
-           "initial_second_moment", "ppf_closed_loop", "ppf_compensator", "ppf_cost_gradient",
-           "ppf_feedback", "ppf_state_matrices", "ppf_stiffness", "ppf_stiffness_gradient",
-           "replicate_matrix"]
+__all__ = [
+    "PPFBank",
+    "PPFController",
+    "PPFModel",
+    "PPFProblem",
+    "PPFStability",
+    "initial_second_moment",
+    "ppf_closed_loop",
+    "ppf_compensator",
+    "ppf_cost_gradient",
+    "ppf_feedback",
+    "ppf_state_matrices",
+    "ppf_stiffness",
+    "ppf_stiffness_gradient",
+    "replicate_matrix",
+]
 
 #: collocation: |B_a[:, i] − r_i C_s[i]| ≤ COLLOCATION_TOL |B_a[:, i]| (a few hundred ulps of
 #: the vectors: the case's actuator and sensor vectors are one modal difference times two gains)
@@ -115,14 +127,14 @@ def ppf_state_matrices(omega, zeta, B_a, C_s, omega_f, zeta_f, E):
     im, ivm = np.arange(m), m + np.arange(m)
     i_xi, i_xid = 2 * m + np.arange(nf), 2 * m + nf + np.arange(nf)
     A0[im, ivm] = 1.0
-    A0[ivm, im] = -omega**2
+    A0[ivm, im] = -(omega**2)
     A0[ivm, ivm] = -2 * zeta * omega
     A0[i_xi, i_xid] = 1.0
-    A0[2 * m + nf:, :m] = (omega_f**2)[:, None] * (E @ C_s)
-    A0[i_xid, i_xi] = -omega_f**2
+    A0[2 * m + nf :, :m] = (omega_f**2)[:, None] * (E @ C_s)
+    A0[i_xid, i_xi] = -(omega_f**2)
     A0[i_xid, i_xid] = -2 * zeta_f * omega_f
     B = np.zeros((n, B_a.shape[1]))
-    B[m:2 * m] = B_a
+    B[m : 2 * m] = B_a
     return A0, B
 
 
@@ -131,7 +143,7 @@ def ppf_feedback(g, E, n_modes: int) -> np.ndarray:
     g = np.asarray(g, float)
     nf, na = E.shape
     K = np.zeros(g.shape[:-1] + (na, 2 * n_modes + 2 * nf))
-    K[..., 2 * n_modes:2 * n_modes + nf] = np.swapaxes(E * g[..., :, None], -1, -2)
+    K[..., 2 * n_modes : 2 * n_modes + nf] = np.swapaxes(E * g[..., :, None], -1, -2)
     return K
 
 
@@ -233,8 +245,10 @@ def initial_second_moment(x0, weights=None) -> np.ndarray:
     else:
         w = require_nonneg(weights, "weights")
         if w.shape != (x.shape[0],) or w.sum() <= 0:
-            raise ValueError(f"weights: must be {x.shape[0]} non-negative numbers, not all zero, "
-                             f"got shape {w.shape}")
+            raise ValueError(
+                f"weights: must be {x.shape[0]} non-negative numbers, not all zero, "
+                f"got shape {w.shape}"
+            )
         w = w / w.sum()
     return np.einsum("s,si,sj->ij", w, x, x)
 
@@ -274,38 +288,48 @@ class PPFModel:
     def __post_init__(self):
         w = require_positive(self.omega, "omega", "rad/s")
         if w.ndim != 1 or w.size == 0:
-            raise ValueError(f"omega: must be a 1-D array of the m modal frequencies, got shape "
-                             f"{w.shape}")
+            raise ValueError(
+                f"omega: must be a 1-D array of the m modal frequencies, got shape {w.shape}"
+            )
         m = w.size
         z = require_nonneg(self.zeta, "zeta")
         if z.ndim > 1 or z.size not in (1, m):
-            raise ValueError(f"zeta: must be a scalar or one ratio per mode ({m}), got shape "
-                             f"{z.shape}")
+            raise ValueError(
+                f"zeta: must be a scalar or one ratio per mode ({m}), got shape {z.shape}"
+            )
         B_a = check_matrix(self.actuators, "actuators", m, None, f"(m, n_a) = ({m}, n_a)")
         na = B_a.shape[1]
-        C_s = check_matrix(self.sensors, "sensors", na, m, f"(n_a, m) = ({na}, {m}), one row per "
-                           "actuator")
+        C_s = check_matrix(
+            self.sensors, "sensors", na, m, f"(n_a, m) = ({na}, {m}), one row per actuator"
+        )
         ratio = np.empty(na)
         for i in range(na):
             s, b = C_s[i], B_a[:, i]
             if not np.any(s):
                 raise ValueError(f"sensors[{i}]: pair {i + 1} has a zero sensor row (a_2 = 0)")
             if not np.any(b):
-                raise ValueError(f"actuators[:, {i}]: pair {i + 1} has a zero actuator column "
-                                 "(a_1 = 0)")
+                raise ValueError(
+                    f"actuators[:, {i}]: pair {i + 1} has a zero actuator column (a_1 = 0)"
+                )
             r = (b @ s) / (s @ s)
             if r <= 0 or np.linalg.norm(b - r * s) > COLLOCATION_TOL * np.linalg.norm(b):
-                raise ValueError(f"actuators[:, {i}]: pair {i + 1} is not collocated: its actuator "
-                                 f"influence must be a positive multiple of its sensor row "
-                                 f"(a_1/a_2 > 0), residual {np.linalg.norm(b - r * s):.3g} of "
-                                 f"{np.linalg.norm(b):.3g}")
+                raise ValueError(
+                    f"actuators[:, {i}]: pair {i + 1} is not collocated: its actuator "
+                    f"influence must be a positive multiple of its sensor row "
+                    f"(a_1/a_2 > 0), residual {np.linalg.norm(b - r * s):.3g} of "
+                    f"{np.linalg.norm(b):.3g}"
+                )
             ratio[i] = r
-        for name, arr in (("omega", w), ("zeta", np.broadcast_to(z, (m,)).copy()),
-                          ("actuators", B_a), ("sensors", C_s), ("ratio", ratio)):
+        for name, arr in (
+            ("omega", w),
+            ("zeta", np.broadcast_to(z, (m,)).copy()),
+            ("actuators", B_a),
+            ("sensors", C_s),
+            ("ratio", ratio),
+        ):
             arr = np.array(arr, float)
             arr.flags.writeable = False
             object.__setattr__(self, name, arr)
-
 
     @classmethod
     def from_pairs(cls, omega, zeta, pairs) -> PPFModel:
@@ -313,8 +337,12 @@ class PPFModel:
         pairs = tuple(pairs)
         if not pairs:
             raise ValueError("pairs: give at least one actuator/sensor pair")
-        return cls(omega, zeta, np.column_stack([p.actuator for p in pairs]),
-                   np.vstack([p.sensor for p in pairs]))
+        return cls(
+            omega,
+            zeta,
+            np.column_stack([p.actuator for p in pairs]),
+            np.vstack([p.sensor for p in pairs]),
+        )
 
     @property
     def n_modes(self) -> int:
@@ -347,8 +375,9 @@ class PPFBank:
         try:
             z = np.broadcast_to(z, w.shape)
         except ValueError:
-            raise ValueError(f"zeta_f: must be a scalar or have the shape of omega_f {w.shape}, "
-                             f"got {z.shape}") from None
+            raise ValueError(
+                f"zeta_f: must be a scalar or have the shape of omega_f {w.shape}, got {z.shape}"
+            ) from None
         for name, arr in (("omega_f", w), ("zeta_f", z)):
             arr = np.array(arr, float)
             arr.flags.writeable = False
@@ -384,9 +413,11 @@ class PPFBank:
         """g as a float vector of n_f finite values (actuator-major), else a ValueError."""
         g = require_finite(g, field)
         if g.shape != (self.n_filters,):
-            raise ValueError(f"{field}: must have {self.n_filters} = n_actuators × n_tuned = "
-                             f"{self.n_actuators} × {self.n_tuned} values (g[i*n_tuned + j] = "
-                             f"g_ij), got shape {g.shape}")
+            raise ValueError(
+                f"{field}: must have {self.n_filters} = n_actuators × n_tuned = "
+                f"{self.n_actuators} × {self.n_tuned} values (g[i*n_tuned + j] = "
+                f"g_ij), got shape {g.shape}"
+            )
         return g
 
 
@@ -445,8 +476,10 @@ class PPFProblem:
         if not isinstance(bank, PPFBank):
             raise ValueError(f"bank: must be a PPFBank, got {type(bank).__name__}")
         if bank.n_actuators != model.n_actuators:
-            raise ValueError(f"bank: has filters for {bank.n_actuators} actuators, the model has "
-                             f"{model.n_actuators} pairs")
+            raise ValueError(
+                f"bank: has filters for {bank.n_actuators} actuators, the model has "
+                f"{model.n_actuators} pairs"
+            )
         self.model, self.bank = model, bank
         m, nf = model.n_modes, bank.n_filters
         self.n_states = 2 * m + 2 * nf
@@ -454,14 +487,22 @@ class PPFProblem:
         Qu = require_finite(Q_u, "Q_u")
         Qu = Qu * np.eye(model.n_actuators) if Qu.ndim == 0 else check_square(Qu, "Q_u")
         if Qu.shape[0] != model.n_actuators:
-            raise ValueError(f"Q_u: must be {model.n_actuators} × {model.n_actuators} (one row "
-                             f"per actuator), got shape {Qu.shape}")
+            raise ValueError(
+                f"Q_u: must be {model.n_actuators} × {model.n_actuators} (one row "
+                f"per actuator), got shape {Qu.shape}"
+            )
         self.Q_u = check_psd(Qu, "Q_u")
         self.X0 = self._state_matrix(X0, "X0")
         self.E = bank.E
-        self.A0, self.B = ppf_state_matrices(model.omega, model.zeta, model.actuators,
-                                             model.sensors, bank.omega_f.ravel(),
-                                             bank.zeta_f.ravel(), self.E)
+        self.A0, self.B = ppf_state_matrices(
+            model.omega,
+            model.zeta,
+            model.actuators,
+            model.sensors,
+            bank.omega_f.ravel(),
+            bank.zeta_f.ravel(),
+            self.E,
+        )
         self.dS = ppf_stiffness_gradient(model.actuators, model.sensors, self.E)
 
     @classmethod
@@ -472,8 +513,10 @@ class PPFProblem:
         T = check_matrix(outputs, "outputs", None, m, f"(q, m) = (q, {m})")
         Qb = check_psd(check_square(output_weight, "output_weight"), "output_weight")
         if Qb.shape[0] != T.shape[0]:
-            raise ValueError(f"output_weight: must be {T.shape[0]} × {T.shape[0]} (one row per "
-                             f"output), got shape {Qb.shape}")
+            raise ValueError(
+                f"output_weight: must be {T.shape[0]} × {T.shape[0]} (one row per "
+                f"output), got shape {Qb.shape}"
+            )
         Q_s = np.zeros((2 * m, 2 * m))
         Q_s[:m, :m] = T.T @ Qb @ T
         return cls(model, bank, Q_s, Q_u, X0)
@@ -484,8 +527,10 @@ class PPFProblem:
         if M.shape[0] == m2:
             M = scipy.linalg.block_diag(M, np.zeros((n - m2, n - m2)))
         elif M.shape[0] != n:
-            raise ValueError(f"{field}: must be {m2} × {m2} (structure states [η, η̇]) or {n} × {n}"
-                             f" (with the filter states [ξ, ξ̇]), got shape {M.shape}")
+            raise ValueError(
+                f"{field}: must be {m2} × {m2} (structure states [η, η̇]) or {n} × {n}"
+                f" (with the filter states [ξ, ξ̇]), got shape {M.shape}"
+            )
         return M
 
     @property
@@ -537,22 +582,34 @@ class PPFProblem:
         g = self.gains(g)
         max_re = float(np.max(self.closed_loop_poles(g).real))
         if not max_re < 0:
-            raise ValueError(f"gains: the closed loop is unstable (largest real part of its poles "
-                             f"{max_re:.4g} 1/s): the cost of Eq. 7 is infinite")
+            raise ValueError(
+                f"gains: the closed loop is unstable (largest real part of its poles "
+                f"{max_re:.4g} 1/s): the cost of Eq. 7 is infinite"
+            )
         return g
 
     def cost(self, g) -> float:
         """J = ½ tr(P̄ X₀) (Eqs. 10–12); ValueError for an unstable loop (J infinite)."""
         g = self._checked_stable(g)
-        J, _ = ppf_cost_gradient(self.A0, self.B, self.E, self.model.n_modes, g, self.Q_s,
-                                 self.Q_u, self.X0, gradient=False)
+        J, _ = ppf_cost_gradient(
+            self.A0,
+            self.B,
+            self.E,
+            self.model.n_modes,
+            g,
+            self.Q_s,
+            self.Q_u,
+            self.X0,
+            gradient=False,
+        )
         return float(J)
 
     def cost_and_gradient(self, g) -> tuple[float, np.ndarray]:
         """(J, ∂J/∂g) sharing the Lyapunov solve of P̄."""
         g = self._checked_stable(g)
-        J, dJ = ppf_cost_gradient(self.A0, self.B, self.E, self.model.n_modes, g, self.Q_s,
-                                  self.Q_u, self.X0)
+        J, dJ = ppf_cost_gradient(
+            self.A0, self.B, self.E, self.model.n_modes, g, self.Q_s, self.Q_u, self.X0
+        )
         return float(J), dJ
 
     def gradient(self, g) -> np.ndarray:
@@ -596,6 +653,9 @@ class PPFController(StateSpaceCompensator):
         n = bank.n_actuators
         self.bank = bank
         self.gains = bank.check_gains(gains)
-        super().__init__(ppf_compensator(bank, self.gains),
-                         measurements or [f"y{i + 1}" for i in range(n)],
-                         commands or [f"u{i + 1}" for i in range(n)], dt=dt)
+        super().__init__(
+            ppf_compensator(bank, self.gains),
+            measurements or [f"y{i + 1}" for i in range(n)],
+            commands or [f"u{i + 1}" for i in range(n)],
+            dt=dt,
+        )

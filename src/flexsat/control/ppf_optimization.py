@@ -71,7 +71,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from flexsat.analysis.homotopy import weight_factor
-from flexsat.validation import (
+from flexsat.input_checks import (
     require_count,
     require_finite,
     require_nonneg,
@@ -81,8 +81,13 @@ from flexsat.validation import (
 SOURCE = "seed 004_680d3fec9e1f8c83.txt, Eqs. 15-28 (L113-L203); shared/spec/seed004.md §2"
 
 #: the PPF gain-problem interface (duck-typed)
-PROBLEM_METHODS = ("cost", "gradient", "stiffness_eigenvalues", "stiffness_eigenvalue_gradients",
-                   "closed_loop_poles")
+PROBLEM_METHODS = (
+    "cost",
+    "gradient",
+    "stiffness_eigenvalues",
+    "stiffness_eigenvalue_gradients",
+    "closed_loop_poles",
+)
 
 #: default λ_i^c as a fraction of the open-loop stiffness eigenvalues λ_i(S(0)) = ω_i² (the
 #: paper gives no margin, spec §1.3): 1 % keeps every mode's stiffness away from zero.
@@ -260,8 +265,10 @@ class _Checked:
     def __init__(self, problem):
         missing = [name for name in PROBLEM_METHODS if not callable(getattr(problem, name, None))]
         if missing:
-            raise ValueError(f"problem: missing method(s) {', '.join(missing)}; a PPF gain "
-                             f"problem needs {', '.join(PROBLEM_METHODS)}")
+            raise ValueError(
+                f"problem: missing method(s) {', '.join(missing)}; a PPF gain "
+                f"problem needs {', '.join(PROBLEM_METHODS)}"
+            )
         self.problem = problem
         self.n_gains = 0
         self.n_modes = 0
@@ -285,22 +292,27 @@ class _Checked:
     def eigenvalues(self, g) -> np.ndarray:
         out = np.asarray(self.problem.stiffness_eigenvalues(g.copy()), float)
         if out.shape != (self.n_modes,):
-            raise ValueError(f"problem.stiffness_eigenvalues: must return ({self.n_modes},), "
-                             f"got {out.shape}")
+            raise ValueError(
+                f"problem.stiffness_eigenvalues: must return ({self.n_modes},), got {out.shape}"
+            )
         return self._finite(out, "stiffness_eigenvalues")
 
     def eigenvalue_jacobian(self, g) -> np.ndarray:
         out = np.asarray(self.problem.stiffness_eigenvalue_gradients(g.copy()), float)
         if out.shape != (self.n_modes, self.n_gains):
-            raise ValueError(f"problem.stiffness_eigenvalue_gradients: must return "
-                             f"({self.n_modes}, {self.n_gains}), got {out.shape}")
+            raise ValueError(
+                f"problem.stiffness_eigenvalue_gradients: must return "
+                f"({self.n_modes}, {self.n_gains}), got {out.shape}"
+            )
         return self._finite(out, "stiffness_eigenvalue_gradients")
 
     def max_pole_real(self, g) -> float:
         poles = np.asarray(self.problem.closed_loop_poles(g.copy()))
         if poles.ndim != 1 or poles.size == 0:
-            raise ValueError(f"problem.closed_loop_poles: must return a 1-D array of poles, got "
-                             f"shape {poles.shape}")
+            raise ValueError(
+                f"problem.closed_loop_poles: must return a 1-D array of poles, got "
+                f"shape {poles.shape}"
+            )
         return float(self._finite(np.max(poles.real), "closed_loop_poles"))
 
 
@@ -315,11 +327,14 @@ def _setup(problem, g, field: str, eigenvalue_floor):
         lam = np.asarray(problem.stiffness_eigenvalues(g.copy()), float)
         jac = np.asarray(problem.stiffness_eigenvalue_gradients(g.copy()), float)
     except (ValueError, IndexError, TypeError) as exc:
-        raise ValueError(f"{field}: the problem cannot be evaluated at {g.size} gains "
-                         f"({exc})") from None
+        raise ValueError(
+            f"{field}: the problem cannot be evaluated at {g.size} gains ({exc})"
+        ) from None
     if lam.ndim != 1 or jac.shape != (lam.size, g.size):
-        raise ValueError(f"{field}: has {g.size} gains but the problem's eigenvalue sensitivities "
-                         f"have shape {jac.shape} (one column per gain expected)")
+        raise ValueError(
+            f"{field}: has {g.size} gains but the problem's eigenvalue sensitivities "
+            f"have shape {jac.shape} (one column per gain expected)"
+        )
     ev.n_modes = lam.size
     if eigenvalue_floor is None:
         try:
@@ -329,8 +344,10 @@ def _setup(problem, g, field: str, eigenvalue_floor):
     else:
         floor = require_nonneg(eigenvalue_floor, "eigenvalue_floor", "1/s**2")
         if floor.ndim > 1 or floor.size not in (1, lam.size):
-            raise ValueError(f"eigenvalue_floor: must be a number or {lam.size} values (one per "
-                             f"eigenvalue of S, ascending), got shape {floor.shape}")
+            raise ValueError(
+                f"eigenvalue_floor: must be a number or {lam.size} values (one per "
+                f"eigenvalue of S, ascending), got shape {floor.shape}"
+            )
         floor = np.broadcast_to(floor.reshape(-1), lam.shape).astype(float)
     return ev, g, floor
 
@@ -354,13 +371,17 @@ def _start(problem, g0, eigenvalue_floor, stability_margin):
     low = np.flatnonzero(lam < floor)
     if low.size:
         i = int(low[0])
-        raise ValueError(f"g0: violates the eigenvalue floor: λ_{i + 1}(S) = {lam[i]:.6g} < "
-                         f"λ_{i + 1}^c = {floor[i]:.6g} (Eq. 22); make the start feasible first, "
-                         f"e.g. with restore_eigenvalue_constraints")
+        raise ValueError(
+            f"g0: violates the eigenvalue floor: λ_{i + 1}(S) = {lam[i]:.6g} < "
+            f"λ_{i + 1}^c = {floor[i]:.6g} (Eq. 22); make the start feasible first, "
+            f"e.g. with restore_eigenvalue_constraints"
+        )
     if max_re >= -margin:
-        raise ValueError(f"g0: the closed loop is unstable at the start: max Re(pole) = "
-                         f"{max_re:.6g} >= −stability_margin = {-margin:.6g} (S alone does not "
-                         f"guarantee stability for negative gains, spec §2 (6))")
+        raise ValueError(
+            f"g0: the closed loop is unstable at the start: max Re(pole) = "
+            f"{max_re:.6g} >= −stability_margin = {-margin:.6g} (S alone does not "
+            f"guarantee stability for negative gains, spec §2 (6))"
+        )
     try:
         J = ev.cost(g)
         ev.gradient(g)
@@ -395,14 +416,15 @@ def _restore(ev: _Checked, g, target, floor, Winv, max_iterations: int):
             return g, it, rows
         if it == max_iterations:
             j = int(np.argmin(lam - floor))
-            raise _Failure(f"restoration not converged in {max_iterations} steps (λ_{j + 1}(S) = "
-                           f"{lam[j]:.6g} < {floor[j]:.6g})")
+            raise _Failure(
+                f"restoration not converged in {max_iterations} steps (λ_{j + 1}(S) = "
+                f"{lam[j]:.6g} < {floor[j]:.6g})"
+            )
         # the violated set of Eq. 23, with the rows already restored to just below their target
         # held too, so a restored eigenvalue is not pushed back by the next row's step
         work = lam < target
         rows |= work
-        g = g + _minimum_norm_step(ev.eigenvalue_jacobian(g)[work], lam[work] - target[work],
-                                   Winv)
+        g = g + _minimum_norm_step(ev.eigenvalue_jacobian(g)[work], lam[work] - target[work], Winv)
     raise AssertionError("unreachable")  # the loop returns or raises at it == max_iterations
 
 
@@ -411,8 +433,9 @@ def _restoration_target(floor):
     return floor + RESTORATION_MARGIN * np.maximum(floor, np.finfo(float).tiny)
 
 
-def restore_eigenvalue_constraints(problem, g, eigenvalue_floor=None, *, weight=None,
-                                   max_iterations: int = 20) -> EigenvalueRestoration:
+def restore_eigenvalue_constraints(
+    problem, g, eigenvalue_floor=None, *, weight=None, max_iterations: int = 20
+) -> EigenvalueRestoration:
     """Restore λ_i(S(g)) >= λ_i^c by minimum-norm corrections (seed 004 Eqs. 21-28).
 
     Each step takes the violated set {j : λ_j < λ_j^c} (Eq. 23), H_c = λ_j − λ_j^c (Eq. 24)
@@ -440,21 +463,35 @@ def restore_eigenvalue_constraints(problem, g, eigenvalue_floor=None, *, weight=
     max_iterations = require_count(max_iterations, "max_iterations")
     Winv = _inverse_weight(weight, g.size)
     try:
-        g_new, its, _ = _restore(ev, g.copy(), _restoration_target(floor), floor, Winv,
-                                 max_iterations)
+        g_new, its, _ = _restore(
+            ev, g.copy(), _restoration_target(floor), floor, Winv, max_iterations
+        )
     except _Failure as exc:
-        return EigenvalueRestoration(g, np.zeros_like(g), ev.eigenvalues(g), False, max_iterations,
-                                     str(exc))
+        return EigenvalueRestoration(
+            g, np.zeros_like(g), ev.eigenvalues(g), False, max_iterations, str(exc)
+        )
     message = "feasible as given" if its == 0 else f"restored in {its} step(s)"
     return EigenvalueRestoration(g_new, g_new - g, ev.eigenvalues(g_new), True, its, message)
 
 
 # -- the homotopy ------------------------------------------------------------------------------
-def optimize_ppf_gains(problem, g0, J_goal=None, goal_ratio=None, gamma_stop=1.0,
-                       eigenvalue_floor=None, weight=None, *, stability_margin=0.0,
-                       gamma_step: float = 0.1, min_gamma_step: float = 1e-6,
-                       max_corrections: int = 10, max_restorations: int = 20,
-                       max_steps: int = 500, rtol: float = 1e-10) -> PPFHomotopyResult:
+def optimize_ppf_gains(
+    problem,
+    g0,
+    J_goal=None,
+    goal_ratio=None,
+    gamma_stop=1.0,
+    eigenvalue_floor=None,
+    weight=None,
+    *,
+    stability_margin=0.0,
+    gamma_step: float = 0.1,
+    min_gamma_step: float = 1e-6,
+    max_corrections: int = 10,
+    max_restorations: int = 20,
+    max_steps: int = 500,
+    rtol: float = 1e-10,
+) -> PPFHomotopyResult:
     """Optimise PPF gains by the homotopic minimum-norm method of seed 004 (Eqs. 15-28).
 
     At γ = γ_k the cost is driven to J0(γ) = γ J_goal + (1 − γ) J_init (Eqs. 16-17) by
@@ -511,8 +548,9 @@ def optimize_ppf_gains(problem, g0, J_goal=None, goal_ratio=None, gamma_stop=1.0
     """
     ev, g, floor, margin, J_init = _start(problem, g0, eigenvalue_floor, stability_margin)
     if (J_goal is None) == (goal_ratio is None):
-        raise ValueError("J_goal: give exactly one of J_goal and goal_ratio "
-                         "(J_goal = goal_ratio · J_init)")
+        raise ValueError(
+            "J_goal: give exactly one of J_goal and goal_ratio (J_goal = goal_ratio · J_init)"
+        )
     if J_goal is not None:
         J_goal = float(require_finite(J_goal, "J_goal"))
     else:
@@ -525,8 +563,9 @@ def optimize_ppf_gains(problem, g0, J_goal=None, goal_ratio=None, gamma_stop=1.0
         raise ValueError(f"gamma_step: must be in (0, 1], got {gamma_step!r}")
     min_gamma_step = float(require_finite(min_gamma_step, "min_gamma_step"))
     if not 0.0 < min_gamma_step <= gamma_step:
-        raise ValueError(f"min_gamma_step: must be in (0, gamma_step = {gamma_step}], got "
-                         f"{min_gamma_step!r}")
+        raise ValueError(
+            f"min_gamma_step: must be in (0, gamma_step = {gamma_step}], got {min_gamma_step!r}"
+        )
     max_corrections = require_count(max_corrections, "max_corrections")
     max_restorations = require_count(max_restorations, "max_restorations")
     max_steps = require_count(max_steps, "max_steps")
@@ -565,14 +604,23 @@ def optimize_ppf_gains(problem, g0, J_goal=None, goal_ratio=None, gamma_stop=1.0
             active |= restored
             max_re = ev.max_pole_real(g)
             if max_re >= -margin:
-                raise _Failure(f"the correction makes the loop unstable (max Re(pole) = "
-                               f"{max_re:.3g})")
+                raise _Failure(
+                    f"the correction makes the loop unstable (max Re(pole) = {max_re:.3g})"
+                )
         raise AssertionError("unreachable")  # returns or raises at k == max_corrections
 
     def record(gamma, g, J, target, corrections, restorations, active):
-        return PPFHomotopyStep(gamma, J, target, g.copy(), float(ev.eigenvalues(g)[0]),
-                               ev.max_pole_real(g), corrections, restorations,
-                               tuple(int(i) for i in np.flatnonzero(active)))
+        return PPFHomotopyStep(
+            gamma,
+            J,
+            target,
+            g.copy(),
+            float(ev.eigenvalues(g)[0]),
+            ev.max_pole_real(g),
+            corrections,
+            restorations,
+            tuple(int(i) for i in np.flatnonzero(active)),
+        )
 
     history = [record(0.0, g, J_init, J_init, 0, 0, np.zeros(floor.shape, bool))]
     gamma, dgamma, J, last_fail = 0.0, gamma_step, J_init, ""
@@ -601,17 +649,27 @@ def optimize_ppf_gains(problem, g0, J_goal=None, goal_ratio=None, gamma_stop=1.0
         if corrections <= 3:
             dgamma = min(gamma_step, 2 * dgamma)
     if status == STALLED:
-        message = (f"stalled at γ = {gamma:.9g} (J = {J:.10g}): the constrained minimum in the "
-                   f"paper's sense (L127); next step: {last_fail}")
+        message = (
+            f"stalled at γ = {gamma:.9g} (J = {J:.10g}): the constrained minimum in the "
+            f"paper's sense (L127); next step: {last_fail}"
+        )
     else:
         message = f"{status}: γ = {gamma:.9g}, J = {J:.10g}"
-    return PPFHomotopyResult(g, J, gamma, status, message, J_init, J_goal, floor, tuple(history),
-                             ev.evaluations)
+    return PPFHomotopyResult(
+        g, J, gamma, status, message, J_init, J_goal, floor, tuple(history), ev.evaluations
+    )
 
 
 # -- the scipy cross-check ---------------------------------------------------------------------
-def scipy_ppf_gains(problem, g0, eigenvalue_floor=None, stability_margin=0.0, *,
-                    tol: float = 1e-12, max_iterations: int = 1000) -> ScipyPPFResult:
+def scipy_ppf_gains(
+    problem,
+    g0,
+    eigenvalue_floor=None,
+    stability_margin=0.0,
+    *,
+    tol: float = 1e-12,
+    max_iterations: int = 1000,
+) -> ScipyPPFResult:
     """The same problem (Eq. 15 with Eqs. 21-22 and the stability margin) by SLSQP
     (``scipy.optimize.minimize``): an independent check of :func:`optimize_ppf_gains`.
 
@@ -669,15 +727,28 @@ def scipy_ppf_gains(problem, g0, eigenvalue_floor=None, stability_margin=0.0, *,
 
     cons = [{"type": "ineq", "fun": eig_con, "jac": eig_jac}, {"type": "ineq", "fun": stab_con}]
     try:
-        res = minimize(fun, g0 / scale, jac=jac, method="SLSQP", constraints=cons,
-                       options={"ftol": tol, "maxiter": max_iterations})
+        res = minimize(
+            fun,
+            g0 / scale,
+            jac=jac,
+            method="SLSQP",
+            constraints=cons,
+            options={"ftol": tol, "maxiter": max_iterations},
+        )
     except _Failure as exc:
         raise ValueError(f"problem: {exc} during the SLSQP run") from None
     x = res.x
     feasible = bool(np.all(eig_con(x) >= -CONSTRAINT_TOL) and stab_con(x)[0] > 0)
-    return ScipyPPFResult(scale * x, ev.cost(scale * x), bool(res.success) and feasible,
-                          str(res.message), int(res.nit), float(ev.eigenvalues(scale * x)[0]),
-                          ev.max_pole_real(scale * x), ev.evaluations)
+    return ScipyPPFResult(
+        scale * x,
+        ev.cost(scale * x),
+        bool(res.success) and feasible,
+        str(res.message),
+        int(res.nit),
+        float(ev.eigenvalues(scale * x)[0]),
+        ev.max_pole_real(scale * x),
+        ev.evaluations,
+    )
 
 
 __all__ = [

@@ -32,7 +32,7 @@ from flexsat.control.linear_form import (
     stack_channels,
     static_law,
 )
-from flexsat.validation import require_finite
+from flexsat.input_checks import require_finite
 
 __all__ = ["ScheduledStateFeedback", "interpolate_schedule"]
 
@@ -72,16 +72,21 @@ class ScheduledStateFeedback(Controller):
         u_ff likewise with width m; default 0.
     """
 
-    def __init__(self, times, gains, measurements, commands="torque", state_reference=None,
-                 feedforward=None):
+    def __init__(
+        self, times, gains, measurements, commands="torque", state_reference=None, feedforward=None
+    ):
         knots = require_finite(times, "times", "s")
         if knots.ndim != 1 or knots.size < 1 or np.any(np.diff(knots) <= 0):
-            raise ValueError(f"times: must be a 1-D strictly increasing array of schedule times, "
-                             f"got {knots.tolist()}")
+            raise ValueError(
+                f"times: must be a 1-D strictly increasing array of schedule times, "
+                f"got {knots.tolist()}"
+            )
         K = require_finite(gains, "gains")
         if K.ndim not in (3, 4) or K.shape[0] != knots.size:
-            raise ValueError(f"gains: must have shape (n_knots, m, n) or (n_knots, n_cases, m, n) "
-                             f"with n_knots = {knots.size} schedule times, got {K.shape}")
+            raise ValueError(
+                f"gains: must have shape (n_knots, m, n) or (n_knots, n_cases, m, n) "
+                f"with n_knots = {knots.size} schedule times, got {K.shape}"
+            )
         self.knots = knots
         self.gains = K if K.ndim == 4 else K[:, None]
         m, n = self.gains.shape[-2:]
@@ -95,9 +100,11 @@ class ScheduledStateFeedback(Controller):
             return value
         v = require_finite(value, field)
         if v.ndim not in (2, 3) or v.shape[0] != self.knots.size or v.shape[-1] != width:
-            raise ValueError(f"{field}: must have shape (n_knots, {width}) or (n_knots, n_cases, "
-                             f"{width}) at the {self.knots.size} schedule times, or be a function "
-                             f"of t; got {v.shape}")
+            raise ValueError(
+                f"{field}: must have shape (n_knots, {width}) or (n_knots, n_cases, "
+                f"{width}) at the {self.knots.size} schedule times, or be a function "
+                f"of t; got {v.shape}"
+            )
         return v if v.ndim == 3 else v[:, None]
 
     def _batched(self):
@@ -126,7 +133,8 @@ class ScheduledStateFeedback(Controller):
         tt = np.array([t], float)
         e = x - self._at(self.state_reference, tt, n, "state_reference", nc)[0]
         u = self._at(self.feedforward, tt, m, "feedforward", nc)[0] - np.einsum(
-            "cij,cj->ci", self.gain(tt)[0], np.broadcast_to(e, (nc, n)))
+            "cij,cj->ci", self.gain(tt)[0], np.broadcast_to(e, (nc, n))
+        )
         commands = split_channels(u, self.writes, self.write_sizes)
         return (commands[self.writes[0]] if len(self.writes) == 1 else commands), state
 
@@ -135,16 +143,21 @@ class ScheduledStateFeedback(Controller):
         one-point schedule."""
         _, times = sample_times(dt, times)
         m, n = self.gains.shape[-2:]
-        for field, table in (("gains", self.gains), ("state_reference", self.state_reference),
-                             ("feedforward", self.feedforward)):
+        for field, table in (
+            ("gains", self.gains),
+            ("state_reference", self.state_reference),
+            ("feedforward", self.feedforward),
+        ):
             if isinstance(table, np.ndarray) and table.shape[1] not in (1, n_cases):
-                raise ValueError(f"{field}: have {table.shape[1]} cases, the run has n_cases = "
-                                 f"{n_cases}")
+                raise ValueError(
+                    f"{field}: have {table.shape[1]} cases, the run has n_cases = {n_cases}"
+                )
         D = -(self.gains if len(self.knots) == 1 else self.gain(times))
         y_ref = self._at(self.state_reference, times, n, "state_reference", n_cases)
         u_ff = self._at(self.feedforward, times, m, "feedforward", n_cases)
-        return static_law(D, y_ref, u_ff, self.reads, self.writes, self.read_sizes,
-                          self.write_sizes)
+        return static_law(
+            D, y_ref, u_ff, self.reads, self.writes, self.read_sizes, self.write_sizes
+        )
 
 
 def _channels(spec, width: int, field: str, symbol: str, axis: str):
@@ -153,6 +166,8 @@ def _channels(spec, width: int, field: str, symbol: str, axis: str):
         return (channel_spec(spec, field)[0], (width,))
     names, sizes, _ = channel_spec(spec, field)
     if sum(sizes) != width:
-        raise ValueError(f"{field}: their widths {sizes} sum to {sum(sizes)}, the gains have "
-                         f"{symbol} = {width} {axis}")
+        raise ValueError(
+            f"{field}: their widths {sizes} sum to {sum(sizes)}, the gains have "
+            f"{symbol} = {width} {axis}"
+        )
     return names, sizes

@@ -30,7 +30,7 @@ from flexsat.control.linear_form import (
     stack_channels,
 )
 from flexsat.control.lqg import _DT_TOL, zoh
-from flexsat.validation import require_finite, require_positive
+from flexsat.input_checks import require_finite, require_positive
 
 __all__ = ["StateSpaceCompensator"]
 
@@ -43,8 +43,10 @@ def _state_space(system):
     if isinstance(system, ct.TransferFunction):
         system = ct.ss(system)
     if not isinstance(system, ct.StateSpace):
-        raise ValueError(f"system: must be a python-control StateSpace (or TransferFunction), got "
-                         f"{type(system).__name__}")
+        raise ValueError(
+            f"system: must be a python-control StateSpace (or TransferFunction), got "
+            f"{type(system).__name__}"
+        )
     return system
 
 
@@ -53,8 +55,9 @@ def _references(references, names, sizes, units) -> np.ndarray:
     references = {} if references is None else dict(references)
     unknown = sorted(set(references) - set(names))
     if unknown:
-        raise ValueError(f"references: {unknown[0]!r} is not a measurement channel (they are "
-                         f"{list(names)})")
+        raise ValueError(
+            f"references: {unknown[0]!r} is not a measurement channel (they are {list(names)})"
+        )
     cols, n_cases = [], 1
     for name, size, unit in zip(names, sizes, units):
         field = f"references.{name}"
@@ -66,9 +69,11 @@ def _references(references, names, sizes, units) -> np.ndarray:
         elif size > 1 and r.shape[-1:] == (size,) and r.ndim <= 2:
             r = r.reshape(-1, size)
         else:
-            raise ValueError(f"{field}: must be a scalar, or have shape (n_cases,) for a one-wide "
-                             f"channel, (size,) or (n_cases, size) for one {size} wide; got "
-                             f"{r.shape}")
+            raise ValueError(
+                f"{field}: must be a scalar, or have shape (n_cases,) for a one-wide "
+                f"channel, (size,) or (n_cases, size) for one {size} wide; got "
+                f"{r.shape}"
+            )
         if r.shape[0] != 1 and n_cases not in (1, r.shape[0]):
             raise ValueError(f"{field}: has {r.shape[0]} cases, another reference {n_cases}")
         n_cases = max(n_cases, r.shape[0])
@@ -103,33 +108,43 @@ class StateSpaceCompensator(Controller):
         names, sizes, units = channel_spec(measurements, "measurements")
         cnames, csizes, _ = channel_spec(commands, "commands")
         if sum(sizes) != sys.ninputs:
-            raise ValueError(f"measurements: their widths {sizes} sum to {sum(sizes)}, the system "
-                             f"has {sys.ninputs} inputs")
+            raise ValueError(
+                f"measurements: their widths {sizes} sum to {sum(sizes)}, the system "
+                f"has {sys.ninputs} inputs"
+            )
         if sum(csizes) != sys.noutputs:
-            raise ValueError(f"commands: their widths {csizes} sum to {sum(csizes)}, the system "
-                             f"has {sys.noutputs} outputs")
+            raise ValueError(
+                f"commands: their widths {csizes} sum to {sum(csizes)}, the system "
+                f"has {sys.noutputs} outputs"
+            )
         self.reads, self.read_sizes = names, sizes
         self.writes, self.write_sizes = cnames, csizes
         A, B = np.asarray(sys.A, float), np.asarray(sys.B, float)
         C, D = np.asarray(sys.C, float), np.asarray(sys.D, float)
         if sys.dt in (0, None):
             if dt is None:
-                raise ValueError("dt: a continuous system needs the control period to be "
-                                 "discretised (zero-order hold)")
+                raise ValueError(
+                    "dt: a continuous system needs the control period to be "
+                    "discretised (zero-order hold)"
+                )
             self.dt = float(require_positive(dt, "dt", "s"))
             A, B = zoh(A, B, self.dt)
         elif sys.dt is True:
             if dt is None:
-                raise ValueError("dt: the system is discrete with an unspecified sampling time "
-                                 "(dt=True); give the control period")
+                raise ValueError(
+                    "dt: the system is discrete with an unspecified sampling time "
+                    "(dt=True); give the control period"
+                )
             self.dt = float(require_positive(dt, "dt", "s"))
         else:
             self.dt = float(sys.dt)
             if dt is not None:
                 dt = float(require_positive(dt, "dt", "s"))
                 if abs(dt - self.dt) > _DT_TOL * self.dt:
-                    raise ValueError(f"system.dt: the discrete system samples every {self.dt:g} "
-                                     f"s, the control period dt is {dt:g} s")
+                    raise ValueError(
+                        f"system.dt: the discrete system samples every {self.dt:g} "
+                        f"s, the control period dt is {dt:g} s"
+                    )
         self.matrices = (A, B, C, D)
         self.r = _references(references, names, sizes, units)
 
@@ -150,8 +165,10 @@ class StateSpaceCompensator(Controller):
         started = np.isfinite(t_prev)
         gap = t - t_prev[started]
         if gap.size and np.any(np.abs(gap - self.dt) > _DT_TOL * self.dt):
-            raise ValueError(f"dt: the compensator runs at a period of {self.dt:g} s but was "
-                             f"called {float(np.max(gap)):g} s after its previous sample")
+            raise ValueError(
+                f"dt: the compensator runs at a period of {self.dt:g} s but was "
+                f"called {float(np.max(gap)):g} s after its previous sample"
+            )
         e = stack_channels(y, self.reads, self.read_sizes, nc) - self.r
         A, B, C, D = self.matrices
         u = x @ C.T + e @ D.T
@@ -163,13 +180,27 @@ class StateSpaceCompensator(Controller):
         """Constant matrices (Φ, Γ, C, D), y_ref = r, no feedforward, x₀ = 0."""
         dt, times = sample_times(dt, times)
         if abs(dt - self.dt) > _DT_TOL * self.dt:
-            raise ValueError(f"dt: the compensator runs at a period of {self.dt:g} s, the run "
-                             f"samples every {dt:g} s")
+            raise ValueError(
+                f"dt: the compensator runs at a period of {self.dt:g} s, the run "
+                f"samples every {dt:g} s"
+            )
         if self.r.shape[0] not in (1, n_cases):
-            raise ValueError(f"references: have {self.r.shape[0]} cases, the run has n_cases = "
-                             f"{n_cases}")
+            raise ValueError(
+                f"references: have {self.r.shape[0]} cases, the run has n_cases = {n_cases}"
+            )
         A, B, C, D = (M[None, None] for M in self.matrices)
         y_ref = np.broadcast_to(self.r, (len(times),) + self.r.shape)
         u_ff = np.zeros((len(times), 1, C.shape[2]))
-        return LinearLaw(A, B, C, D, y_ref, u_ff, None, self.reads, self.writes,
-                         self.read_sizes, self.write_sizes)
+        return LinearLaw(
+            A,
+            B,
+            C,
+            D,
+            y_ref,
+            u_ff,
+            None,
+            self.reads,
+            self.writes,
+            self.read_sizes,
+            self.write_sizes,
+        )

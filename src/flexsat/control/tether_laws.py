@@ -53,11 +53,18 @@ import numpy as np
 
 from flexsat.control.base import Controller
 from flexsat.dynamics.tether import TetherScales, integral_of_motion, require_lengths
+from flexsat.input_checks import require_finite, require_nonneg, require_positive
 from flexsat.units import holds_quantity
-from flexsat.validation import require_finite, require_nonneg, require_positive
 
-__all__ = ["DecoupledTetherLaw", "CoupledTetherLaw", "TetherRateLaw", "thrust_index",
-           "settling_time", "liapunov_coupled", "MEASUREMENTS"]
+__all__ = [
+    "DecoupledTetherLaw",
+    "CoupledTetherLaw",
+    "TetherRateLaw",
+    "thrust_index",
+    "settling_time",
+    "liapunov_coupled",
+    "MEASUREMENTS",
+]
 
 #: what every tether law reads (the plant's outputs, SI)
 MEASUREMENTS = ("length", "pitch", "roll", "length_rate", "pitch_rate", "roll_rate")
@@ -71,8 +78,10 @@ def thrust_index(tau, thrust) -> np.ndarray:
     tau = require_finite(tau, "tau")
     F = require_finite(thrust, "thrust")
     if tau.ndim != 1 or F.shape[-1] != tau.size or np.any(np.diff(tau) <= 0):
-        raise ValueError(f"tau: must be an increasing grid matching thrust's last axis, got "
-                         f"{tau.shape} and {F.shape}")
+        raise ValueError(
+            f"tau: must be an increasing grid matching thrust's last axis, got "
+            f"{tau.shape} and {F.shape}"
+        )
     a, b, h = F[..., :-1], F[..., 1:], np.diff(tau)
     same = a * b >= 0
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -80,8 +89,9 @@ def thrust_index(tau, thrust) -> np.ndarray:
     return np.sum(np.where(same, 0.5 * (np.abs(a) + np.abs(b)), crossing) * h, axis=-1)
 
 
-def settling_time(tau, state, final_length, pitch_band=np.radians(5.0),
-                  length_band=0.02) -> np.ndarray:
+def settling_time(
+    tau, state, final_length, pitch_band=np.radians(5.0), length_band=0.02
+) -> np.ndarray:
     r"""The τ after which a retrieval stays settled: |θ| <= ``pitch_band`` (rad; default the
     initial 5° of the paper's runs) and |λ − λ_f| <= ``length_band`` |λ(0) − λ_f| (default 2 %
     of the length change), for states (..., n_t, 6) on the grid ``tau``; NaN where it never
@@ -91,7 +101,8 @@ def settling_time(tau, state, final_length, pitch_band=np.radians(5.0),
     lam, theta = x[..., 0], x[..., 1]
     lf = np.asarray(final_length, float)[..., None]
     outside = (np.abs(theta) > pitch_band) | (
-        np.abs(lam - lf) > length_band * np.abs(lam[..., :1] - lf))
+        np.abs(lam - lf) > length_band * np.abs(lam[..., :1] - lf)
+    )
     last = tau.size - 1 - np.argmax(outside[..., ::-1], axis=-1)  # last unsettled sample
     settled_at = np.where(last + 1 < tau.size, tau[np.minimum(last + 1, tau.size - 1)], np.nan)
     return np.where(~outside.any(-1), tau[0], settled_at)
@@ -103,7 +114,7 @@ def liapunov_coupled(x, K1, K2, lambda_r) -> np.ndarray:
     x = np.asarray(x, float)
     V1 = integral_of_motion(x[..., 1], x[..., 2], x[..., 4], x[..., 5])
     lam = x[..., 0]
-    return 0.5 * (x[..., 3] ** 2 + K1 * (lam - lambda_r) ** 2) + (K2 + lam ** 2) * V1
+    return 0.5 * (x[..., 3] ** 2 + K1 * (lam - lambda_r) ** 2) + (K2 + lam**2) * V1
 
 
 class _TetherLaw(Controller):
@@ -131,10 +142,17 @@ class _TetherLaw(Controller):
 
     def _state(self, y: Mapping[str, np.ndarray]) -> np.ndarray:
         s = self.scales
-        return np.stack([np.asarray(y["length"], float) / s.length, y["pitch"], y["roll"],
-                         np.asarray(y["length_rate"], float) / s.speed,
-                         np.asarray(y["pitch_rate"], float) / s.orbit_rate,
-                         np.asarray(y["roll_rate"], float) / s.orbit_rate], -1)
+        return np.stack(
+            [
+                np.asarray(y["length"], float) / s.length,
+                y["pitch"],
+                y["roll"],
+                np.asarray(y["length_rate"], float) / s.speed,
+                np.asarray(y["pitch_rate"], float) / s.orbit_rate,
+                np.asarray(y["roll_rate"], float) / s.orbit_rate,
+            ],
+            -1,
+        )
 
     def __call__(self, t, y, state):
         u, F = self.nondimensional(self._state(y))
@@ -177,8 +195,12 @@ class DecoupledTetherLaw(_TetherLaw):
         pitch = 2 * K2 * dth * (1 + dth) / lam
         T = (3 + K1) * lam * c * c - K1 * lf * c - pitch + K3 * dl
         roll_damping = K3 * lam * dph
-        F = ((3 + K1) * lam * c * s - K1 * lf * s - pitch * s / c
-             + (roll_damping if self.printed_sign else -roll_damping))
+        F = (
+            (3 + K1) * lam * c * s
+            - K1 * lf * s
+            - pitch * s / c
+            + (roll_damping if self.printed_sign else -roll_damping)
+        )
         return T, F
 
 

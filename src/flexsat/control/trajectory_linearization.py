@@ -85,7 +85,7 @@ from flexsat.dynamics.attitude import quaternion_multiply
 from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
 from flexsat.dynamics.rigid_body import cross3, matvec
 from flexsat.dynamics.rigid_spacecraft import quaternion_kinematics, skew
-from flexsat.validation import require_finite, require_positive
+from flexsat.input_checks import require_finite, require_positive
 
 __all__ = ["TrajectoryLinearization", "attitude_error"]
 
@@ -116,11 +116,14 @@ def attitude_error(beta, beta_nominal) -> np.ndarray:
 
 
 def _require_nominal(nominal) -> float:
-    missing = [name for name in ("beta", "omega", "torque", "duration")
-               if not hasattr(nominal, name)]
+    missing = [
+        name for name in ("beta", "omega", "torque", "duration") if not hasattr(nominal, name)
+    ]
     if missing:
-        raise ValueError(f"nominal: must have beta(t), omega(t), torque(t) and duration; "
-                         f"{type(nominal).__name__} lacks {', '.join(missing)}")
+        raise ValueError(
+            f"nominal: must have beta(t), omega(t), torque(t) and duration; "
+            f"{type(nominal).__name__} lacks {', '.join(missing)}"
+        )
     return float(require_positive(nominal.duration, "nominal.duration", "s"))
 
 
@@ -152,22 +155,27 @@ class TrajectoryLinearization:
         if not isinstance(plant, FlexibleSpacecraft):
             raise ValueError(f"plant: must be a FlexibleSpacecraft, got {type(plant).__name__}")
         if plant.translation:
-            raise ValueError("plant: must be built without translation (the perturbation "
-                             "state is attitude, rate and elastic coordinates)")
+            raise ValueError(
+                "plant: must be built without translation (the perturbation "
+                "state is attitude, rate and elastic coordinates)"
+            )
         self.plant = plant
         self.nominal = nominal
         self.duration = _require_nominal(nominal)
         names = [c.name for c in plant.inputs[1:]]
         if isinstance(forces, str):
             if forces != "all":
-                raise ValueError(f"forces: must be 'all' or a sequence of force channel names, "
-                                 f"got {forces!r}")
+                raise ValueError(
+                    f"forces: must be 'all' or a sequence of force channel names, got {forces!r}"
+                )
             forces = names
         chosen = []
         for name in forces:
             if name not in names:
-                raise ValueError(f"{name}: not a force channel of the plant (its force "
-                                 f"channels: {', '.join(names) or 'none'})")
+                raise ValueError(
+                    f"{name}: not a force channel of the plant (its force "
+                    f"channels: {', '.join(names) or 'none'})"
+                )
             if name in chosen:
                 raise ValueError(f"{name}: given twice in forces")
             chosen.append(name)
@@ -192,13 +200,17 @@ class TrajectoryLinearization:
         tau = np.asarray(self.nominal.torque(t), float)
         for field, value, width in (("beta", beta, 4), ("omega", w, 3), ("torque", tau, 3)):
             if value.shape != t.shape + (width,) or not np.all(np.isfinite(value)):
-                raise ValueError(f"nominal.{field}: must return finite values of shape "
-                                 f"{t.shape + (width,)} at times of shape {t.shape}, got "
-                                 f"{value.shape}")
+                raise ValueError(
+                    f"nominal.{field}: must return finite values of shape "
+                    f"{t.shape + (width,)} at times of shape {t.shape}, got "
+                    f"{value.shape}"
+                )
         norm = np.abs(np.linalg.norm(beta, axis=-1) - 1.0)
         if np.any(norm > _UNIT_TOL):
-            raise ValueError(f"nominal.beta: must be unit Euler parameters (largest ||β| − 1| "
-                             f"{norm.max():.3g} > {_UNIT_TOL:g})")
+            raise ValueError(
+                f"nominal.beta: must be unit Euler parameters (largest ||β| − 1| "
+                f"{norm.max():.3g} > {_UNIT_TOL:g})"
+            )
         J = self.inertia
         w_dot = matvec(self._inertia_inverse, tau - cross3(w, matvec(J, w)))
         return beta, w, tau, w_dot
@@ -229,8 +241,9 @@ class TrajectoryLinearization:
     @staticmethod
     def _check_width(value, width: int, field: str) -> None:
         if value.ndim < 1 or value.shape[-1] != width:
-            raise ValueError(f"{field}: last axis must have {width} entries, got shape "
-                             f"{value.shape}")
+            raise ValueError(
+                f"{field}: last axis must have {width} entries, got shape {value.shape}"
+            )
 
     # -- dynamics ----------------------------------------------------------------------------
     def rhs(self, t, dX, du) -> np.ndarray:
@@ -246,8 +259,9 @@ class TrajectoryLinearization:
         beta_n_dot = quaternion_kinematics(beta_n, w_n)
         # δq = β ⊗ β_n*, differentiated as a bilinear product
         dq = quaternion_multiply(x[..., :4], _conjugate(beta_n))
-        dq_dot = (quaternion_multiply(x_dot[..., :4], _conjugate(beta_n))
-                  + quaternion_multiply(x[..., :4], _conjugate(beta_n_dot)))
+        dq_dot = quaternion_multiply(x_dot[..., :4], _conjugate(beta_n)) + quaternion_multiply(
+            x[..., :4], _conjugate(beta_n_dot)
+        )
         out = np.empty(x_dot.shape[:-1] + (self.n_states,))
         out[..., :3] = np.where(dq[..., :1] < 0, -2.0, 2.0) * dq_dot[..., 1:]
         out[..., 3:6] = x_dot[..., 4:7] - w_dot_n
@@ -264,8 +278,9 @@ class TrajectoryLinearization:
         shapes t.shape + (6 + 2n, 6 + 2n) and t.shape + (6 + 2n, 3 + n_F); B's torque columns
         per normalized torque (J applied)."""
         beta_n, w_n, tau_n, _ = self.nominal_at(t)
-        x, u = self._plant_point(beta_n, w_n, tau_n, np.zeros(self.n_states),
-                                 np.zeros(self.n_inputs))
+        x, u = self._plant_point(
+            beta_n, w_n, tau_n, np.zeros(self.n_states), np.zeros(self.n_inputs)
+        )
         A0, B0 = self.plant.linear_part()
         Bf = self.plant.force_matrix
         Jx, Ju = self.plant.force_jacobian(x, u)

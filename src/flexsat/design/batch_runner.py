@@ -71,25 +71,26 @@ import hashlib
 import math
 import shutil
 import time
-from functools import lru_cache
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any
 
 import numpy as np
 import xarray as xr
 import zarr
 
+from flexsat import limits
 from flexsat.control.lyapunov import LyapunovTracker
 from flexsat.dynamics.dispersion import stack_plants
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
+from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
 from flexsat.maneuvers.torque_shapes import SmoothBangBang
-from flexsat import limits
 from flexsat.sim import SimConfig, simulate
-from flexsat.sim.recording import SimResult
 from flexsat.sim.channels import ChannelSensor
 from flexsat.sim.disturbances import RandomTorque
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.sim.recording import SimResult
 
 #: seconds to wait for an existing scheduler to answer before refusing its address
 CONNECT_TIMEOUT = 5.0
@@ -99,8 +100,7 @@ STORE_LAYOUT = "flexsat.design.batch_runner/2"
 
 def _nonneg_int(value, name: str) -> int:
     """An integer >= 0 (bools and fractions refused), naming the field."""
-    if isinstance(value, bool) or not float(require_finite(value, name)).is_integer() \
-            or value < 0:
+    if isinstance(value, bool) or not float(require_finite(value, name)).is_integer() or value < 0:
         raise ValueError(f"{name}: must be an integer >= 0, got {value!r}")
     return int(value)
 
@@ -117,8 +117,14 @@ def case_seeds(base_seed: int, cases) -> np.ndarray:
     idx = np.asarray(cases, dtype=np.int64).reshape(-1)
     if base < 2**128 and (not idx.size or (idx.min() >= 0 and idx.max() < 2**32)):
         return _spawned_seeds(base, idx)
-    return np.array([int(np.random.SeedSequence(base, spawn_key=(int(i),))
-                         .generate_state(1, np.uint64)[0]) >> 1 for i in idx], dtype=np.int64)
+    return np.array(
+        [
+            int(np.random.SeedSequence(base, spawn_key=(int(i),)).generate_state(1, np.uint64)[0])
+            >> 1
+            for i in idx
+        ],
+        dtype=np.int64,
+    )
 
 
 _M32 = 0xFFFFFFFF
@@ -184,28 +190,41 @@ def _table(parameters: Mapping[str, Any], known: tuple[str, ...] | None) -> dict
     table = {}
     for name, values in parameters.items():
         if known is not None and name not in known:
-            raise ValueError(f"parameters: unknown parameter {name!r}; the case builder knows "
-                             f"{', '.join(known)}")
+            raise ValueError(
+                f"parameters: unknown parameter {name!r}; the case builder knows {', '.join(known)}"
+            )
         col = require_finite(values, f"parameters[{name!r}]")
         if col.ndim != 1:
-            raise ValueError(f"parameters[{name!r}]: must be one value per case (1-D), got "
-                             f"shape {col.shape}")
+            raise ValueError(
+                f"parameters[{name!r}]: must be one value per case (1-D), got shape {col.shape}"
+            )
         table[name] = np.ascontiguousarray(col, dtype=np.float64)
     sizes = {name: len(col) for name, col in table.items()}
     if len(set(sizes.values())) != 1 or not next(iter(sizes.values())):
-        raise ValueError(f"parameters: every column must have the same number (>= 1) of cases, "
-                         f"got {sizes}")
+        raise ValueError(
+            f"parameters: every column must have the same number (>= 1) of cases, got {sizes}"
+        )
     return table
 
 
-def fingerprint(setup_text: str, table: Mapping[str, np.ndarray], base_seed: int,
-                histories: tuple[str, ...], builder_text: str = "") -> str:
+def fingerprint(
+    setup_text: str,
+    table: Mapping[str, np.ndarray],
+    base_seed: int,
+    histories: tuple[str, ...],
+    builder_text: str = "",
+) -> str:
     """SHA-256 (hex) of everything that fixes the results and nothing that depends on the
     chunking: the store layout, the setup text, the builder's description, the parameter table
     (names in order and the float64 values' bytes), the base seed and the recorded histories."""
     h = hashlib.sha256()
-    for part in (STORE_LAYOUT, setup_text, builder_text, repr(int(base_seed)),
-                 repr(tuple(histories))):
+    for part in (
+        STORE_LAYOUT,
+        setup_text,
+        builder_text,
+        repr(int(base_seed)),
+        repr(tuple(histories)),
+    ):
         h.update(part.encode())
         h.update(b"\0")
     for name, col in table.items():
@@ -229,14 +248,21 @@ FRICTION_PARAMETERS = ("friction_coulomb", "friction_viscous")
 #: N m) and the 1σ random hub torque (N m). All but the encoder's resolution are per case in
 #: the batched call; cases differing in the resolution run in separate calls
 #: (:attr:`HubManeuverBuilder.per_run_parameters`, :func:`run_chunk`)
-SENSOR_ACTUATOR_PARAMETERS = ("saturation", "encoder_resolution", "gyro_noise", "strain_noise",
-                              "random_torque")
+SENSOR_ACTUATOR_PARAMETERS = (
+    "saturation",
+    "encoder_resolution",
+    "gyro_noise",
+    "strain_noise",
+    "random_torque",
+)
 #: the SI unit and the rule of each sensor/actuator parameter
-_SENSOR_ACTUATOR_RULES = {"saturation": ("N*m", require_positive),
-                          "encoder_resolution": ("rad", require_nonneg),
-                          "gyro_noise": ("rad/s", require_nonneg),
-                          "strain_noise": ("N*m", require_nonneg),
-                          "random_torque": ("N*m", require_nonneg)}
+_SENSOR_ACTUATOR_RULES = {
+    "saturation": ("N*m", require_positive),
+    "encoder_resolution": ("rad", require_nonneg),
+    "gyro_noise": ("rad/s", require_nonneg),
+    "strain_noise": ("N*m", require_nonneg),
+    "random_torque": ("N*m", require_nonneg),
+}
 #: the measured channel of each sensor noise parameter
 _NOISE_CHANNELS = {"gyro_noise": "theta_dot", "strain_noise": "root_torque"}
 
@@ -296,8 +322,13 @@ class HubManeuverBuilder:
     alpha: float = 0.2
     stiffening: bool = False
     parameter_names: tuple[str, ...] = field(
-        default=MANEUVER_PARAMETERS + GAIN_PARAMETERS + PLANT_PARAMETERS + FRICTION_PARAMETERS
-        + SENSOR_ACTUATOR_PARAMETERS, init=False)
+        default=MANEUVER_PARAMETERS
+        + GAIN_PARAMETERS
+        + PLANT_PARAMETERS
+        + FRICTION_PARAMETERS
+        + SENSOR_ACTUATOR_PARAMETERS,
+        init=False,
+    )
     #: columns one batched call takes one value of (:func:`run_chunk` splits a chunk by them):
     #: the encoder's resolution, a scalar of the :class:`~flexsat.sim.sensors.Sensors` preset,
     #: whose quantiser q·round(θ/q) in the engine's Python loop has no per-case "q = 0: exact"
@@ -312,40 +343,53 @@ class HubManeuverBuilder:
         of the table in the base parameters (their fields take arrays; their rules apply)."""
         varied = {k: table[k] for k in PLANT_PARAMETERS if k in table}
         p = replace(self.params, **varied) if varied else self.params
-        return (np.broadcast_to(p.total_inertia, (n,)),
-                np.broadcast_to(p.appendage_inertia, (n,)))
+        return (np.broadcast_to(p.total_inertia, (n,)), np.broadcast_to(p.appendage_inertia, (n,)))
 
     def _plant(self, table: Mapping[str, np.ndarray], n: int):
         varied = [k for k in PLANT_PARAMETERS if k in table]
         base = _hub_plant(self.params, self.n_modes, self.stiffening)
         if not varied:
             return base
-        return stack_plants([
-            HubAppendage(replace(self.params, **{k: float(table[k][i]) for k in varied}),
-                         n_modes=self.n_modes, stiffening=self.stiffening) for i in range(n)])
+        return stack_plants(
+            [
+                HubAppendage(
+                    replace(self.params, **{k: float(table[k][i]) for k in varied}),
+                    n_modes=self.n_modes,
+                    stiffening=self.stiffening,
+                )
+                for i in range(n)
+            ]
+        )
 
     def _law(self, table: Mapping[str, np.ndarray], n: int) -> LyapunovTracker:
         inertia, appendage = self._inertias(table, n)
         shape = {k: table[k] for k in MANEUVER_PARAMETERS if k in table}
         if len(shape) == 3:
-            raise ValueError("parameters: give at most two of alpha, u_max, duration (Att. 3 "
-                             "Eq. 15 fixes the third)")
+            raise ValueError(
+                "parameters: give at most two of alpha, u_max, duration (Att. 3 "
+                "Eq. 15 fixes the third)"
+            )
         for k in ("alpha", "u_max"):
             if len(shape) < 2 and k not in shape:
                 shape[k] = np.full(n, getattr(self, k))
-        ref = SmoothBangBang(self.angle, self.reference_inertia * inertia
-                             / self.params.total_inertia, **shape)
+        ref = SmoothBangBang(
+            self.angle, self.reference_inertia * inertia / self.params.total_inertia, **shape
+        )
         gains = {k: table.get(k, np.full(n, getattr(self, k))) for k in GAIN_PARAMETERS}
-        return LyapunovTracker(ref, **gains, appendage_inertia=appendage,
-                               n_appendages=self.params.n_appendages)
+        return LyapunovTracker(
+            ref, **gains, appendage_inertia=appendage, n_appendages=self.params.n_appendages
+        )
 
     def _friction(self, table: Mapping[str, np.ndarray]):
         """The run's bearing friction with the table's columns (per case) in place of its
         Coulomb and viscous coefficients."""
         f = self.config.friction
         units = {"friction_coulomb": "N*m", "friction_viscous": "N*m*s/rad"}
-        varied = {k[len("friction_"):]: require_nonneg(table[k], f"parameters[{k!r}]", units[k])
-                  for k in FRICTION_PARAMETERS if k in table}
+        varied = {
+            k[len("friction_") :]: require_nonneg(table[k], f"parameters[{k!r}]", units[k])
+            for k in FRICTION_PARAMETERS
+            if k in table
+        }
         return replace(f, **varied) if varied else f
 
     def _sensor_actuator(self, table: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -357,9 +401,11 @@ class HubManeuverBuilder:
                 unit, rule = _SENSOR_ACTUATOR_RULES[k]
                 out[k] = rule(table[k], f"parameters[{k!r}]", unit)
         if "gyro_noise" in out and self.config.sensors.rate != "gyro":
-            raise ValueError(f"parameters['gyro_noise']: the run's rate measurement is "
-                             f"{self.config.sensors.rate!r}, not 'gyro'; a gyro noise would "
-                             f"change nothing")
+            raise ValueError(
+                f"parameters['gyro_noise']: the run's rate measurement is "
+                f"{self.config.sensors.rate!r}, not 'gyro'; a gyro noise would "
+                f"change nothing"
+            )
         return out
 
     def _config(self, table: Mapping[str, np.ndarray]) -> SimConfig:
@@ -375,24 +421,31 @@ class HubManeuverBuilder:
             config = replace(config, friction=self._friction(table))
         cols = self._sensor_actuator(table)
         if "saturation" in cols:
-            config = replace(config, actuator=replace(config.actuator,
-                                                      saturation=cols["saturation"]))
+            config = replace(
+                config, actuator=replace(config.actuator, saturation=cols["saturation"])
+            )
         if "random_torque" in cols:
             config = replace(config, random_torque=RandomTorque(cols["random_torque"]))
         if "encoder_resolution" in cols:
             values = np.unique(cols["encoder_resolution"])
             if len(values) != 1:
-                raise ValueError("parameters['encoder_resolution']: one value per call; run "
-                                 "the cases through run_chunk, which splits a chunk by it")
-            config = replace(config, sensors=replace(config.sensors,
-                                                     encoder_resolution=float(values[0])))
-        sensors = {ch: replace(config.channel_sensors.get(ch, ChannelSensor()), noise=cols[k])
-                   for k, ch in _NOISE_CHANNELS.items() if k in cols}
+                raise ValueError(
+                    "parameters['encoder_resolution']: one value per call; run "
+                    "the cases through run_chunk, which splits a chunk by it"
+                )
+            config = replace(
+                config, sensors=replace(config.sensors, encoder_resolution=float(values[0]))
+            )
+        sensors = {
+            ch: replace(config.channel_sensors.get(ch, ChannelSensor()), noise=cols[k])
+            for k, ch in _NOISE_CHANNELS.items()
+            if k in cols
+        }
         if sensors:
             config = replace(config, channel_sensors={**config.channel_sensors, **sensors})
         return config
 
-    def for_table(self, parameters: Mapping[str, np.ndarray]) -> "HubManeuverBuilder":
+    def for_table(self, parameters: Mapping[str, np.ndarray]) -> HubManeuverBuilder:
         r"""The builder of the whole parameter table, its integrator substeps fixed once
         before the table is cut into chunks: the engine raises them for the stiffest friction
         of each call (:func:`flexsat.sim.config.stable_substeps`), so a chunk's step, and its
@@ -418,10 +471,15 @@ class HubManeuverBuilder:
         hub = parameters.get("hub_inertia", self.params.hub_inertia)
         rate = float(np.max((f.coulomb / f.smoothing + f.viscous) / np.asarray(hub, float)))
         needed = self.config.dt * rate / FRICTION_STEP_LIMIT
-        limits.check_count(needed, limits.MAX_SUBSTEPS, "friction",
-                           f"a stable integration of the stiffest friction of the table "
-                           f"(damping rate up to {rate:.3g} 1/s) needs substeps per control "
-                           f"period", "lower friction_coulomb or friction_viscous")
+        limits.check_count(
+            needed,
+            limits.MAX_SUBSTEPS,
+            "friction",
+            f"a stable integration of the stiffest friction of the table "
+            f"(damping rate up to {rate:.3g} 1/s) needs substeps per control "
+            f"period",
+            "lower friction_coulomb or friction_viscous",
+        )
         substeps = max(self.config.substeps, math.ceil(needed))
         return replace(self, config=replace(self.config, substeps=substeps))
 
@@ -444,8 +502,12 @@ class HubManeuverBuilder:
     def __call__(self, parameters: Mapping[str, np.ndarray], seeds: np.ndarray):
         """(plant, law, config, initial_state) of the chunk ``parameters`` (module docstring)."""
         n = len(seeds)
-        return (self._plant(parameters, n), self._law(parameters, n), self._config(parameters),
-                None)
+        return (
+            self._plant(parameters, n),
+            self._law(parameters, n),
+            self._config(parameters),
+            None,
+        )
 
 
 @lru_cache(maxsize=4)
@@ -469,9 +531,14 @@ maneuver_metrics.reads_metrics_only = True
 
 
 # -- one chunk ---------------------------------------------------------------------------------
-def run_chunk(build: Callable, extract: Callable, parameters: Mapping[str, np.ndarray],
-              start: int, base_seed: int, histories: tuple[str, ...] = ()
-              ) -> dict[str, np.ndarray]:
+def run_chunk(
+    build: Callable,
+    extract: Callable,
+    parameters: Mapping[str, np.ndarray],
+    start: int,
+    base_seed: int,
+    histories: tuple[str, ...] = (),
+) -> dict[str, np.ndarray]:
     """Run the cases ``start .. start + n`` (n the length of the ``parameters`` columns) in one
     batched call: {metric: (n,)} plus {history: (n, n_t)} and ``seed`` (n,).
 
@@ -490,14 +557,16 @@ def run_chunk(build: Callable, extract: Callable, parameters: Mapping[str, np.nd
     keys = [k for k in getattr(build, "per_run_parameters", ()) if k in parameters]
     if not keys:
         return _run_cases(build, extract, parameters, seeds, histories)
-    _, group = np.unique(np.stack([parameters[k] for k in keys], axis=1), axis=0,
-                         return_inverse=True)
+    _, group = np.unique(
+        np.stack([parameters[k] for k in keys], axis=1), axis=0, return_inverse=True
+    )
     group = group.reshape(-1)
     out: dict[str, np.ndarray] = {}
     for g in range(group.max() + 1):
         idx = np.flatnonzero(group == g)
-        part = _run_cases(build, extract, {k: v[idx] for k, v in parameters.items()},
-                          seeds[idx], histories)
+        part = _run_cases(
+            build, extract, {k: v[idx] for k, v in parameters.items()}, seeds[idx], histories
+        )
         for name, values in part.items():
             if name == "time":
                 out[name] = values
@@ -508,28 +577,46 @@ def run_chunk(build: Callable, extract: Callable, parameters: Mapping[str, np.nd
     return out
 
 
-def _run_cases(build: Callable, extract: Callable, parameters: Mapping[str, np.ndarray],
-               seeds: np.ndarray, histories: tuple[str, ...]) -> dict[str, np.ndarray]:
+def _run_cases(
+    build: Callable,
+    extract: Callable,
+    parameters: Mapping[str, np.ndarray],
+    seeds: np.ndarray,
+    histories: tuple[str, ...],
+) -> dict[str, np.ndarray]:
     """One batched call of the cases ``parameters`` with their ``seeds`` (:func:`run_chunk`)."""
     n = len(seeds)
     plant, law, config, x0 = build(parameters, seeds)
     lean = not histories and getattr(extract, "reads_metrics_only", False)
-    result = simulate(plant, law, config, n_cases=n, seeds=seeds, initial_state=x0,
-                      metrics_only=lean, batch_independent=True)
+    result = simulate(
+        plant,
+        law,
+        config,
+        n_cases=n,
+        seeds=seeds,
+        initial_state=x0,
+        metrics_only=lean,
+        batch_independent=True,
+    )
     out = {}
     for name, values in extract(result).items():
         values = np.asarray(values, float)
         if values.shape != (n,):
-            raise ValueError(f"extract: metric {name!r} has shape {values.shape}, expected "
-                             f"({n},) (one value per case)")
+            raise ValueError(
+                f"extract: metric {name!r} has shape {values.shape}, expected "
+                f"({n},) (one value per case)"
+            )
         out["metric_" + name] = values
     for name in histories:
         if name not in result.dataset:
             recorded = [v for v in result.dataset.data_vars if "time" in result.dataset[v].dims]
-            raise ValueError(f"histories: {name!r} is not a recorded variable; the run records "
-                             f"{', '.join(recorded)}")
-        out["history_" + name] = np.asarray(result.dataset[name].transpose("case", "time").values,
-                                            float)
+            raise ValueError(
+                f"histories: {name!r} is not a recorded variable; the run records "
+                f"{', '.join(recorded)}"
+            )
+        out["history_" + name] = np.asarray(
+            result.dataset[name].transpose("case", "time").values, float
+        )
     out["time"] = np.asarray(result.dataset["time"].values, float)
     out["seed"] = seeds
     return out
@@ -559,19 +646,27 @@ def _client(workers: int | None, scheduler: str | None):
 
     if scheduler is not None:
         if workers is not None:
-            raise ValueError("workers: give workers (a local cluster) or scheduler (an existing "
-                             "one), not both")
+            raise ValueError(
+                "workers: give workers (a local cluster) or scheduler (an existing one), not both"
+            )
         try:
             return Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s", set_as_default=False), None
         except (OSError, TimeoutError) as exc:
-            raise ValueError(f"scheduler: no dask scheduler answered at {scheduler!r} within "
-                             f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {exc})") from None
+            raise ValueError(
+                f"scheduler: no dask scheduler answered at {scheduler!r} within "
+                f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {exc})"
+            ) from None
     if workers is None:
-        cluster = LocalCluster(processes=False, n_workers=1, threads_per_worker=1,
-                               dashboard_address=None)
+        cluster = LocalCluster(
+            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
+        )
     else:
-        cluster = LocalCluster(n_workers=require_count(workers, "workers"), threads_per_worker=1,
-                               processes=True, dashboard_address=None)
+        cluster = LocalCluster(
+            n_workers=require_count(workers, "workers"),
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+        )
     return Client(cluster, set_as_default=False), cluster
 
 
@@ -584,19 +679,30 @@ def _open_existing(path: Path, fp: str, n_cases: int) -> np.ndarray | None:
     try:
         ds = xr.open_zarr(path, consolidated=False)
     except Exception as exc:  # noqa: BLE001 - any unreadable directory is refused the same way
-        raise ValueError(f"store: {str(path)!r} exists and is not a batch store "
-                         f"({type(exc).__name__}: {exc}); give a new path") from None
+        raise ValueError(
+            f"store: {str(path)!r} exists and is not a batch store "
+            f"({type(exc).__name__}: {exc}); give a new path"
+        ) from None
     theirs = ds.attrs.get("fingerprint")
     if theirs != fp or ds.sizes.get("case") != n_cases:
-        raise ValueError(f"store: {str(path)!r} holds the results of a different setup "
-                         f"(fingerprint {theirs!s:.12} ≠ {fp:.12}: another scenario, parameter "
-                         f"table, base seed or history selection); refusing to resume into it, "
-                         f"give a new path")
+        raise ValueError(
+            f"store: {str(path)!r} holds the results of a different setup "
+            f"(fingerprint {theirs!s:.12} ≠ {fp:.12}: another scenario, parameter "
+            f"table, base seed or history selection); refusing to resume into it, "
+            f"give a new path"
+        )
     return np.asarray(ds["done"].values, bool)
 
 
-def _create(path: Path, fp: str, setup_text: str, table: Mapping[str, np.ndarray],
-            first: dict[str, np.ndarray], zchunk: int, n_cases: int) -> None:
+def _create(
+    path: Path,
+    fp: str,
+    setup_text: str,
+    table: Mapping[str, np.ndarray],
+    first: dict[str, np.ndarray],
+    zchunk: int,
+    n_cases: int,
+) -> None:
     """Lay out the store (metadata and the parameter table; the results are left to fill)."""
     import dask.array as da
 
@@ -610,12 +716,16 @@ def _create(path: Path, fp: str, setup_text: str, table: Mapping[str, np.ndarray
         shape = (n_cases,) + values.shape[1:]
         dims = ("case", "time") if values.ndim == 2 else ("case",)
         fill = -1 if values.dtype.kind == "i" else np.nan
-        data[name] = (dims, da.full(shape, fill, dtype=values.dtype,
-                                    chunks=(zchunk,) + values.shape[1:]))
+        data[name] = (
+            dims,
+            da.full(shape, fill, dtype=values.dtype, chunks=(zchunk,) + values.shape[1:]),
+        )
         encoding[name] = {"chunks": (zchunk,) + values.shape[1:]}
-    ds = xr.Dataset(data, coords={"case": case, "time": first["time"]},
-                    attrs={"fingerprint": fp, "setup_text": setup_text,
-                           "layout": STORE_LAYOUT})
+    ds = xr.Dataset(
+        data,
+        coords={"case": case, "time": first["time"]},
+        attrs={"fingerprint": fp, "setup_text": setup_text, "layout": STORE_LAYOUT},
+    )
     for name in ("done",) + tuple(f"param_{k}" for k in table):
         encoding[name] = {"chunks": (zchunk,)}
     partial = path.with_name(f".{path.name}.partial")
@@ -625,7 +735,8 @@ def _create(path: Path, fp: str, setup_text: str, table: Mapping[str, np.ndarray
         ds.to_zarr(partial, mode="w", compute=False, encoding=encoding, consolidated=False)
         # the parameter table, the mask and the coordinates are small: written now in full
         ds[[n for n in ds.data_vars if n == "done" or n.startswith("param_")]].to_zarr(
-            partial, mode="r+", consolidated=False)
+            partial, mode="r+", consolidated=False
+        )
         partial.rename(path)
     except BaseException:
         shutil.rmtree(partial, ignore_errors=True)
@@ -654,8 +765,10 @@ class BatchInterrupted(KeyboardInterrupt):
         self.store, self.cases_done, self.n_cases = store, cases_done, n_cases
 
     def __str__(self) -> str:
-        return (f"interrupted: {self.cases_done} of {self.n_cases} cases are done and kept in "
-                f"the store {str(self.store)!r}; run the same command again to resume")
+        return (
+            f"interrupted: {self.cases_done} of {self.n_cases} cases are done and kept in "
+            f"the store {str(self.store)!r}; run the same command again to resume"
+        )
 
 
 @dataclass(frozen=True)
@@ -747,14 +860,25 @@ def run_batch(
     path = Path(store)
     done = _open_existing(path, fp, n_cases)
     created = done is not None
-    starts = [s for s in range(0, n_cases, chunk_size)
-              if done is None or not done[s:s + chunk_size].all()]
+    starts = [
+        s
+        for s in range(0, n_cases, chunk_size)
+        if done is None or not done[s : s + chunk_size].all()
+    ]
     n_chunks = math.ceil(n_cases / chunk_size)
     cases_done = n_cases - sum(min(chunk_size, n_cases - s) for s in starts)
     t0 = time.perf_counter()
     if progress is not None:
-        progress(BatchProgress(cases_done, n_cases, n_chunks - len(starts), n_chunks, 0.0,
-                               math.inf if starts else 0.0))
+        progress(
+            BatchProgress(
+                cases_done,
+                n_cases,
+                n_chunks - len(starts),
+                n_chunks,
+                0.0,
+                math.inf if starts else 0.0,
+            )
+        )
     if not starts:
         return BatchSummary(path, n_cases, 0, n_chunks, time.perf_counter() - t0, fp)
 
@@ -763,13 +887,27 @@ def run_batch(
     pending = list(reversed(starts))
     computed = 0
     try:
-        def submit(start):
-            chunk = {k: v[start:start + chunk_size] for k, v in table.items()}
-            return client.submit(run_chunk, build, extract, chunk, start, base_seed, histories,
-                                 retries=retries, pure=False, key=f"chunk-{fp[:12]}-{start}")
 
-        futures = as_completed([submit(pending.pop()) for _ in range(min(window, len(pending)))],
-                               with_results=False, loop=client.loop)
+        def submit(start):
+            chunk = {k: v[start : start + chunk_size] for k, v in table.items()}
+            return client.submit(
+                run_chunk,
+                build,
+                extract,
+                chunk,
+                start,
+                base_seed,
+                histories,
+                retries=retries,
+                pure=False,
+                key=f"chunk-{fp[:12]}-{start}",
+            )
+
+        futures = as_completed(
+            [submit(pending.pop()) for _ in range(min(window, len(pending)))],
+            with_results=False,
+            loop=client.loop,
+        )
         chunks_run, group = 0, None
         for future in futures:
             out = future.result()
@@ -790,16 +928,25 @@ def run_batch(
                 futures.add(submit(pending.pop()))
             if progress is not None:
                 rate = computed / max(time.perf_counter() - t0, 1e-9)
-                progress(BatchProgress(cases_done, n_cases, n_chunks - len(starts) + chunks_run,
-                                       n_chunks, rate, (n_cases - cases_done) / rate))
+                progress(
+                    BatchProgress(
+                        cases_done,
+                        n_cases,
+                        n_chunks - len(starts) + chunks_run,
+                        n_chunks,
+                        rate,
+                        (n_cases - cases_done) / rate,
+                    )
+                )
     except KeyboardInterrupt as exc:
         raise BatchInterrupted(path, cases_done, n_cases) from exc
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
-    return BatchSummary(path, n_cases, chunks_run, n_chunks - len(starts),
-                        time.perf_counter() - t0, fp)
+    return BatchSummary(
+        path, n_cases, chunks_run, n_chunks - len(starts), time.perf_counter() - t0, fp
+    )
 
 
 def open_results(store) -> xr.Dataset:
@@ -808,7 +955,21 @@ def open_results(store) -> xr.Dataset:
     return xr.open_zarr(store, consolidated=False)
 
 
-__all__ = ["BatchInterrupted", "BatchProgress", "BatchSummary", "CONNECT_TIMEOUT",
-           "FRICTION_PARAMETERS", "GAIN_PARAMETERS", "HubManeuverBuilder", "MANEUVER_PARAMETERS",
-           "PLANT_PARAMETERS", "SENSOR_ACTUATOR_PARAMETERS", "case_seeds", "fingerprint",
-           "maneuver_metrics", "open_results", "run_batch", "run_chunk"]
+__all__ = [
+    "BatchInterrupted",
+    "BatchProgress",
+    "BatchSummary",
+    "CONNECT_TIMEOUT",
+    "FRICTION_PARAMETERS",
+    "GAIN_PARAMETERS",
+    "HubManeuverBuilder",
+    "MANEUVER_PARAMETERS",
+    "PLANT_PARAMETERS",
+    "SENSOR_ACTUATOR_PARAMETERS",
+    "case_seeds",
+    "fingerprint",
+    "maneuver_metrics",
+    "open_results",
+    "run_batch",
+    "run_chunk",
+]

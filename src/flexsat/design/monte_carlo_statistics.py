@@ -92,7 +92,7 @@ from flexsat.design.parameter_space import (
     require_si_unit,
     si_scalar,
 )
-from flexsat.validation import require_count
+from flexsat.input_checks import require_count
 
 #: the percentiles reported by default
 DEFAULT_PERCENTILES = (1.0, 5.0, 50.0, 95.0, 99.0)
@@ -105,8 +105,7 @@ RELATIONS = ("<=", ">=")
 def _confidence(confidence) -> float:
     c = float(confidence) if isinstance(confidence, (int, float)) else math.nan
     if isinstance(confidence, bool) or not 0 < c < 1:
-        raise ValueError(f"confidence: must be a number in (0, 1) such as 0.95, got "
-                         f"{confidence!r}")
+        raise ValueError(f"confidence: must be a number in (0, 1) such as 0.95, got {confidence!r}")
     return c
 
 
@@ -117,11 +116,14 @@ def _metric(values, field_path: str) -> np.ndarray:
     try:
         arr = np.asarray(values, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"{field_path}: must be an array of numbers, got "
-                         f"{type(values).__name__}") from None
+        raise ValueError(
+            f"{field_path}: must be an array of numbers, got {type(values).__name__}"
+        ) from None
     if arr.ndim != 1 or arr.size == 0:
-        raise ValueError(f"{field_path}: must be a 1-D array over the cases with one case or "
-                         f"more, got shape {arr.shape}")
+        raise ValueError(
+            f"{field_path}: must be a 1-D array over the cases with one case or "
+            f"more, got shape {arr.shape}"
+        )
     return arr
 
 
@@ -138,14 +140,17 @@ class Requirement:
     def __post_init__(self):
         f = f"requirement {self.metric!r}"
         if not isinstance(self.metric, str) or not self.metric.strip():
-            raise ValueError(f"requirement.metric: must be a non-empty metric name, got "
-                             f"{self.metric!r}")
+            raise ValueError(
+                f"requirement.metric: must be a non-empty metric name, got {self.metric!r}"
+            )
         if self.relation not in RELATIONS:
-            raise ValueError(f"{f}.relation: must be one of {', '.join(RELATIONS)}, got "
-                             f"{self.relation!r}")
+            raise ValueError(
+                f"{f}.relation: must be one of {', '.join(RELATIONS)}, got {self.relation!r}"
+            )
         require_si_unit(self.unit, f)
-        object.__setattr__(self, "threshold", si_scalar(self.threshold, self.unit,
-                                                      f"{f}.threshold"))
+        object.__setattr__(
+            self, "threshold", si_scalar(self.threshold, self.unit, f"{f}.threshold")
+        )
 
     @property
     def label(self) -> str:
@@ -158,18 +163,22 @@ class Requirement:
             return arr <= self.threshold if self.relation == "<=" else arr >= self.threshold
 
 
-def requirement_from_spec(metric: str, spec: Mapping, unit: str,
-                          field_path: str | None = None) -> Requirement:
+def requirement_from_spec(
+    metric: str, spec: Mapping, unit: str, field_path: str | None = None
+) -> Requirement:
     """A requirement from its scenario dict: ``{max: "8 s"}`` (metric ≤ 8 s) or ``{min: ...}``
     (metric ≥ ...), in the metric's SI ``unit``; errors name ``field_path``."""
     f = field_path or metric
     if not isinstance(spec, Mapping) or len(spec) != 1 or next(iter(spec)) not in ("max", "min"):
-        raise ValueError(f"{f}: give exactly one of max: (metric <= value) or min: "
-                         f"(metric >= value), got {spec!r}")
+        raise ValueError(
+            f"{f}: give exactly one of max: (metric <= value) or min: "
+            f"(metric >= value), got {spec!r}"
+        )
     key, value = next(iter(spec.items()))
     require_si_unit(unit, f)
-    return Requirement(metric, "<=" if key == "max" else ">=",
-                       si_scalar(value, unit, f"{f}.{key}"), unit)
+    return Requirement(
+        metric, "<=" if key == "max" else ">=", si_scalar(value, unit, f"{f}.{key}"), unit
+    )
 
 
 @dataclass(frozen=True)
@@ -189,51 +198,68 @@ class ProbabilityEstimate:
     def as_dict(self) -> dict:
         """Plain numbers and strings (a summary JSON's entry)."""
         r = self.requirement
-        return {"requirement": r.label, "metric": r.metric, "relation": r.relation,
-                "threshold": r.threshold, "unit": r.unit, "successes": self.successes,
-                "n": self.n, "probability": self.probability, "low": self.low,
-                "high": self.high, "confidence": self.confidence, "method": self.method}
+        return {
+            "requirement": r.label,
+            "metric": r.metric,
+            "relation": r.relation,
+            "threshold": r.threshold,
+            "unit": r.unit,
+            "successes": self.successes,
+            "n": self.n,
+            "probability": self.probability,
+            "low": self.low,
+            "high": self.high,
+            "confidence": self.confidence,
+            "method": self.method,
+        }
 
 
-def proportion_interval(successes: int, n: int, confidence: float = 0.95,
-                        method: str = "clopper_pearson") -> tuple[float, float]:
+def proportion_interval(
+    successes: int, n: int, confidence: float = 0.95, method: str = "clopper_pearson"
+) -> tuple[float, float]:
     """The interval of a binomial proportion from ``successes`` of ``n`` (see the module)."""
     if method not in INTERVAL_METHODS:
         raise ValueError(f"method: must be one of {', '.join(INTERVAL_METHODS)}, got {method!r}")
     count = require_count(n, "n")
-    if isinstance(successes, bool) or not float(successes).is_integer() \
-            or not 0 <= successes <= count:
+    if (
+        isinstance(successes, bool)
+        or not float(successes).is_integer()
+        or not 0 <= successes <= count
+    ):
         raise ValueError(f"successes: must be an integer in 0..n = {count}, got {successes!r}")
     ci = stats.binomtest(int(successes), count).proportion_ci(
-        confidence_level=_confidence(confidence), method=INTERVAL_METHODS[method])
+        confidence_level=_confidence(confidence), method=INTERVAL_METHODS[method]
+    )
     return float(ci.low), float(ci.high)
 
 
-def probability_of_meeting(values, requirement: Requirement, confidence: float = 0.95,
-                           method: str = "clopper_pearson") -> ProbabilityEstimate:
+def probability_of_meeting(
+    values, requirement: Requirement, confidence: float = 0.95, method: str = "clopper_pearson"
+) -> ProbabilityEstimate:
     """The probability that a case meets ``requirement``, from the metric over the N cases."""
     if not isinstance(requirement, Requirement):
         raise ValueError(f"requirement: must be a Requirement, got {requirement!r}")
     met = requirement.met(values)
     k, n = int(np.count_nonzero(met)), int(met.size)
     low, high = proportion_interval(k, n, confidence, method)
-    return ProbabilityEstimate(requirement, k, n, k / n, low, high, _confidence(confidence),
-                               method)
+    return ProbabilityEstimate(requirement, k, n, k / n, low, high, _confidence(confidence), method)
 
 
 def _percentile_rule(q, field_path: str = "q") -> np.ndarray:
     try:
         arr = np.atleast_1d(np.asarray(q, dtype=float))
     except (TypeError, ValueError):
-        raise ValueError(f"{field_path}: percentiles must be numbers in [0, 100], "
-                         f"got {q!r}") from None
+        raise ValueError(
+            f"{field_path}: percentiles must be numbers in [0, 100], got {q!r}"
+        ) from None
     if arr.ndim != 1 or arr.size == 0 or not np.all((arr >= 0) & (arr <= 100)):
         raise ValueError(f"{field_path}: percentiles must be numbers in [0, 100], got {q!r}")
     return arr
 
 
-def percentile_interval(values, q: float, confidence: float = 0.95,
-                        field_path: str = "metric") -> tuple[float, float, float]:
+def percentile_interval(
+    values, q: float, confidence: float = 0.95, field_path: str = "metric"
+) -> tuple[float, float, float]:
     """The q-th percentile of the cases with a value and its order-statistic interval (see the
     module): ``(estimate, low, high)``, NaNs if no case has a value."""
     c = _confidence(confidence)
@@ -272,27 +298,43 @@ class MetricSummary:
     percentiles: dict[float, float]
 
     def as_dict(self) -> dict:
-        return {"name": self.name, "n": self.n, "n_nan": self.n_nan, "mean": self.mean,
-                "sd": self.sd, "min": self.minimum, "max": self.maximum,
-                "percentiles": {f"{q:g}": v for q, v in self.percentiles.items()}}
+        return {
+            "name": self.name,
+            "n": self.n,
+            "n_nan": self.n_nan,
+            "mean": self.mean,
+            "sd": self.sd,
+            "min": self.minimum,
+            "max": self.maximum,
+            "percentiles": {f"{q:g}": v for q, v in self.percentiles.items()},
+        }
 
 
-def metric_summary(values, name: str = "metric",
-                   q: Sequence[float] = DEFAULT_PERCENTILES) -> MetricSummary:
+def metric_summary(
+    values, name: str = "metric", q: Sequence[float] = DEFAULT_PERCENTILES
+) -> MetricSummary:
     """Count, NaN count, mean, sd, extremes and percentiles of one metric (NaN-aware)."""
     arr = _metric(values, name)
     qs = _percentile_rule(q)
     x = arr[~np.isnan(arr)]
     if x.size == 0:
         nan = math.nan
-        return MetricSummary(name, arr.size, arr.size, nan, nan, nan, nan,
-                             {float(p): nan for p in qs})
+        return MetricSummary(
+            name, arr.size, arr.size, nan, nan, nan, nan, {float(p): nan for p in qs}
+        )
     with np.errstate(invalid="ignore"):  # inf - inf in the sd of a metric holding inf
         sd = float(np.std(x, ddof=1)) if x.size > 1 else math.nan
     pct = np.percentile(x, qs, method="inverted_cdf")
-    return MetricSummary(name, arr.size, int(arr.size - x.size), float(np.mean(x)), sd,
-                         float(x.min()), float(x.max()),
-                         {float(p): float(v) for p, v in zip(qs, pct)})
+    return MetricSummary(
+        name,
+        arr.size,
+        int(arr.size - x.size),
+        float(np.mean(x)),
+        sd,
+        float(x.min()),
+        float(x.max()),
+        {float(p): float(v) for p, v in zip(qs, pct)},
+    )
 
 
 def checkpoints(n: int, first: int = 10) -> np.ndarray:
@@ -319,32 +361,52 @@ class Convergence:
     confidence: float
 
     def as_dict(self) -> dict:
-        return {"label": self.label, "confidence": self.confidence, "n": self.n.tolist(),
-                "estimate": self.estimate.tolist(), "low": self.low.tolist(),
-                "high": self.high.tolist()}
+        return {
+            "label": self.label,
+            "confidence": self.confidence,
+            "n": self.n.tolist(),
+            "estimate": self.estimate.tolist(),
+            "low": self.low.tolist(),
+            "high": self.high.tolist(),
+        }
 
 
-def probability_convergence(values, requirement: Requirement, confidence: float = 0.95,
-                            method: str = "clopper_pearson",
-                            points: Sequence[int] | None = None) -> Convergence:
+def probability_convergence(
+    values,
+    requirement: Requirement,
+    confidence: float = 0.95,
+    method: str = "clopper_pearson",
+    points: Sequence[int] | None = None,
+) -> Convergence:
     """The probability of meeting ``requirement`` and its interval on the first N' cases, N' in
     ``points`` (default :func:`checkpoints`)."""
     arr = _metric(values, requirement.metric)
     ns = _points(points, arr.size)
     rows = [probability_of_meeting(arr[:m], requirement, confidence, method) for m in ns]
-    return Convergence(f"P({requirement.label})", ns, np.array([r.probability for r in rows]),
-                       np.array([r.low for r in rows]), np.array([r.high for r in rows]),
-                       _confidence(confidence))
+    return Convergence(
+        f"P({requirement.label})",
+        ns,
+        np.array([r.probability for r in rows]),
+        np.array([r.low for r in rows]),
+        np.array([r.high for r in rows]),
+        _confidence(confidence),
+    )
 
 
-def percentile_convergence(values, q: float, name: str = "metric", confidence: float = 0.95,
-                           points: Sequence[int] | None = None) -> Convergence:
+def percentile_convergence(
+    values,
+    q: float,
+    name: str = "metric",
+    confidence: float = 0.95,
+    points: Sequence[int] | None = None,
+) -> Convergence:
     """The q-th percentile and its order-statistic interval on the first N' cases."""
     arr = _metric(values, name)
     ns = _points(points, arr.size)
     rows = np.array([percentile_interval(arr[:m], q, confidence, name) for m in ns])
-    return Convergence(f"{name} p{q:g}", ns, rows[:, 0], rows[:, 1], rows[:, 2],
-                       _confidence(confidence))
+    return Convergence(
+        f"{name} p{q:g}", ns, rows[:, 0], rows[:, 1], rows[:, 2], _confidence(confidence)
+    )
 
 
 def _points(points, n: int) -> np.ndarray:
@@ -376,36 +438,63 @@ class SobolIndices:
         return [self.names[i] for i in np.argsort(-self.total, kind="stable")]
 
     def as_dict(self) -> dict:
-        return {"method": "sobol", "confidence": self.confidence, "n_base": self.n_base,
-                "ranking": self.ranking,
-                "indices": {n: {"S1": float(s1), "S1_conf": float(c1), "ST": float(st),
-                                "ST_conf": float(ct)}
-                            for n, s1, c1, st, ct in zip(self.names, self.first, self.first_conf,
-                                                         self.total, self.total_conf)}}
+        return {
+            "method": "sobol",
+            "confidence": self.confidence,
+            "n_base": self.n_base,
+            "ranking": self.ranking,
+            "indices": {
+                n: {"S1": float(s1), "S1_conf": float(c1), "ST": float(st), "ST_conf": float(ct)}
+                for n, s1, c1, st, ct in zip(
+                    self.names, self.first, self.first_conf, self.total, self.total_conf
+                )
+            },
+        }
 
 
-def sobol_indices(design: SobolDesign, y, name: str = "metric", confidence: float = 0.95,
-                  num_resamples: int = 100, seed: int = 0) -> SobolIndices:
+def sobol_indices(
+    design: SobolDesign,
+    y,
+    name: str = "metric",
+    confidence: float = 0.95,
+    num_resamples: int = 100,
+    seed: int = 0,
+) -> SobolIndices:
     """Sobol' indices of the metric ``y`` over the cases of a Saltelli ``design`` (see the
     module); ``y`` must have a value in every case."""
     if not isinstance(design, SobolDesign):
-        raise ValueError(f"design: must be a SobolDesign (ParameterSpace.sobol_design), got "
-                         f"{type(design).__name__}")
+        raise ValueError(
+            f"design: must be a SobolDesign (ParameterSpace.sobol_design), got "
+            f"{type(design).__name__}"
+        )
     from SALib.analyze import sobol as salib_sobol
 
     arr = _metric(y, name)
     if arr.size != len(design.table):
         raise ValueError(f"{name}: has {arr.size} cases, the Sobol' design {len(design.table)}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name}: Sobol' indices need a finite value in every case; "
-                         f"{int(np.sum(~np.isfinite(arr)))} are NaN or inf (analyse a "
-                         f"requirement's indicator instead)")
-    result = salib_sobol.analyze(design.problem, arr, calc_second_order=design.second_order,
-                                 num_resamples=require_count(num_resamples, "num_resamples"),
-                                 conf_level=_confidence(confidence), seed=seed)
-    return SobolIndices(list(design.problem["names"]), np.asarray(result["S1"]),
-                        np.asarray(result["S1_conf"]), np.asarray(result["ST"]),
-                        np.asarray(result["ST_conf"]), _confidence(confidence), design.n_base)
+        raise ValueError(
+            f"{name}: Sobol' indices need a finite value in every case; "
+            f"{int(np.sum(~np.isfinite(arr)))} are NaN or inf (analyse a "
+            f"requirement's indicator instead)"
+        )
+    result = salib_sobol.analyze(
+        design.problem,
+        arr,
+        calc_second_order=design.second_order,
+        num_resamples=require_count(num_resamples, "num_resamples"),
+        conf_level=_confidence(confidence),
+        seed=seed,
+    )
+    return SobolIndices(
+        list(design.problem["names"]),
+        np.asarray(result["S1"]),
+        np.asarray(result["S1_conf"]),
+        np.asarray(result["ST"]),
+        np.asarray(result["ST_conf"]),
+        _confidence(confidence),
+        design.n_base,
+    )
 
 
 #: the methods of :func:`sample_sensitivity`
@@ -433,14 +522,25 @@ class SensitivityRanking:
         return [self.names[i] for i in np.argsort(-self.scores, kind="stable")]
 
     def as_dict(self) -> dict:
-        return {"method": self.method, "n": self.n, "ranking": self.ranking,
-                "scores": {n: {"score": float(s), "signed": float(g), "conf": float(c)}
-                           for n, s, g, c in zip(self.names, self.scores, self.signed,
-                                                 self.conf)}}
+        return {
+            "method": self.method,
+            "n": self.n,
+            "ranking": self.ranking,
+            "scores": {
+                n: {"score": float(s), "signed": float(g), "conf": float(c)}
+                for n, s, g, c in zip(self.names, self.scores, self.signed, self.conf)
+            },
+        }
 
 
-def sample_sensitivity(table: SampleTable, y, name: str = "metric", method: str = "spearman",
-                       confidence: float = 0.95, seed: int = 0) -> SensitivityRanking:
+def sample_sensitivity(
+    table: SampleTable,
+    y,
+    name: str = "metric",
+    method: str = "spearman",
+    confidence: float = 0.95,
+    seed: int = 0,
+) -> SensitivityRanking:
     """A sensitivity ranking from any sample (see the module), over the cases where ``y`` has a
     value.
 
@@ -462,8 +562,10 @@ def sample_sensitivity(table: SampleTable, y, name: str = "metric", method: str 
     names = table.names
     if method == "spearman":
         if n < MIN_RANKING_CASES:
-            raise ValueError(f"{name}: Spearman's ranking needs {MIN_RANKING_CASES} cases with a "
-                             f"value or more, got {n}")
+            raise ValueError(
+                f"{name}: Spearman's ranking needs {MIN_RANKING_CASES} cases with a "
+                f"value or more, got {n}"
+            )
         rho = np.array([stats.spearmanr(x[:, j], yy).statistic for j in range(len(names))])
         z = stats.norm.ppf(0.5 + c / 2) * math.sqrt(1.06 / (n - 3))
         with np.errstate(divide="ignore"):
@@ -472,42 +574,72 @@ def sample_sensitivity(table: SampleTable, y, name: str = "metric", method: str 
         return SensitivityRanking(names, np.abs(rho), rho, conf, method, n)
     from SALib.analyze import rbd_fast
 
-    problem = {"num_vars": len(names), "names": names,
-               "bounds": [[float(x[:, j].min()), float(x[:, j].max())]
-                          for j in range(len(names))]}
+    problem = {
+        "num_vars": len(names),
+        "names": names,
+        "bounds": [[float(x[:, j].min()), float(x[:, j].max())] for j in range(len(names))],
+    }
     result = rbd_fast.analyze(problem, x, yy, conf_level=c, seed=seed)
     s1 = np.asarray(result["S1"])
     return SensitivityRanking(names, s1, s1, np.asarray(result["S1_conf"]), method, n)
 
 
-def monte_carlo_summary(metrics: Mapping[str, np.ndarray], requirements: Sequence[Requirement],
-                        confidence: float = 0.95, method: str = "clopper_pearson",
-                        q: Sequence[float] = DEFAULT_PERCENTILES) -> dict:
+def monte_carlo_summary(
+    metrics: Mapping[str, np.ndarray],
+    requirements: Sequence[Requirement],
+    confidence: float = 0.95,
+    method: str = "clopper_pearson",
+    q: Sequence[float] = DEFAULT_PERCENTILES,
+) -> dict:
     """The summary of a run as plain numbers (a JSON's content): per requirement its probability
     estimate and convergence, per metric its summary and the convergence of its percentiles."""
     for r in requirements:
         if not isinstance(r, Requirement):
             raise ValueError(f"requirements: must be Requirement objects, got {r!r}")
         if r.metric not in metrics:
-            raise ValueError(f"requirement {r.metric!r}: no such metric; metrics: "
-                             f"{', '.join(metrics)}")
+            raise ValueError(
+                f"requirement {r.metric!r}: no such metric; metrics: {', '.join(metrics)}"
+            )
     return {
         "requirements": [
-            {**probability_of_meeting(metrics[r.metric], r, confidence, method).as_dict(),
-             "convergence": probability_convergence(metrics[r.metric], r, confidence,
-                                                    method).as_dict()}
-            for r in requirements],
+            {
+                **probability_of_meeting(metrics[r.metric], r, confidence, method).as_dict(),
+                "convergence": probability_convergence(
+                    metrics[r.metric], r, confidence, method
+                ).as_dict(),
+            }
+            for r in requirements
+        ],
         "metrics": {
-            k: {**metric_summary(v, k, q).as_dict(),
-                "convergence": [percentile_convergence(v, p, k, confidence).as_dict()
-                                for p in q]}
-            for k, v in metrics.items()},
+            k: {
+                **metric_summary(v, k, q).as_dict(),
+                "convergence": [percentile_convergence(v, p, k, confidence).as_dict() for p in q],
+            }
+            for k, v in metrics.items()
+        },
     }
 
 
-__all__ = ["DEFAULT_PERCENTILES", "INTERVAL_METHODS", "MIN_RANKING_CASES", "SAMPLE_METHODS",
-           "Convergence", "MetricSummary", "ProbabilityEstimate", "Requirement", "SensitivityRanking",
-           "SobolIndices", "checkpoints", "metric_summary", "monte_carlo_summary",
-           "percentile_convergence", "percentile_interval", "probability_convergence",
-           "probability_of_meeting", "proportion_interval", "requirement_from_spec",
-           "sample_sensitivity", "sobol_indices"]
+__all__ = [
+    "DEFAULT_PERCENTILES",
+    "INTERVAL_METHODS",
+    "MIN_RANKING_CASES",
+    "SAMPLE_METHODS",
+    "Convergence",
+    "MetricSummary",
+    "ProbabilityEstimate",
+    "Requirement",
+    "SensitivityRanking",
+    "SobolIndices",
+    "checkpoints",
+    "metric_summary",
+    "monte_carlo_summary",
+    "percentile_convergence",
+    "percentile_interval",
+    "probability_convergence",
+    "probability_of_meeting",
+    "proportion_interval",
+    "requirement_from_spec",
+    "sample_sensitivity",
+    "sobol_indices",
+]

@@ -70,8 +70,8 @@ import numpy as np
 from scipy import stats
 from scipy.stats import qmc
 
+from flexsat.input_checks import require_count
 from flexsat.units import parse_quantity, to_si_array
-from flexsat.validation import require_count
 
 #: the smallest step of a double in [0.5, 1): the margin kept from the faces of the unit cube
 _UNIT_MARGIN = 2.0**-53
@@ -91,13 +91,17 @@ def _check_name(name, field_path: str) -> str:
 def require_si_unit(unit, field_path: str) -> str:
     """The parameter's unit must be its SI unit: the table holds SI values under that label."""
     if not isinstance(unit, str):
-        raise ValueError(f"{field_path}.unit: must be a unit string such as 'N*m' or '' "
-                         f"(dimensionless), got {unit!r}")
+        raise ValueError(
+            f"{field_path}.unit: must be a unit string such as 'N*m' or '' "
+            f"(dimensionless), got {unit!r}"
+        )
     factor = parse_quantity(f"1 {unit}", f"{field_path}.unit").to_base_units().magnitude
     if factor != 1.0:
-        raise ValueError(f"{field_path}.unit: must be an SI unit (the table holds SI values); "
-                         f"1 {unit} is {factor:.6g} of its SI unit; declare the SI unit and give "
-                         f"values as strings such as '5 {unit}'")
+        raise ValueError(
+            f"{field_path}.unit: must be an SI unit (the table holds SI values); "
+            f"1 {unit} is {factor:.6g} of its SI unit; declare the SI unit and give "
+            f"values as strings such as '5 {unit}'"
+        )
     return unit
 
 
@@ -212,12 +216,15 @@ class LogNormal(_Distribution):
         f = self._start()
         median = si_scalar(self.median, self.unit, f"{f}.median")
         if median <= 0:
-            raise ValueError(f"{f}.median: must be > 0 (a lognormal variable is positive), "
-                             f"got {self.median!r}")
+            raise ValueError(
+                f"{f}.median: must be > 0 (a lognormal variable is positive), got {self.median!r}"
+            )
         gsd = si_scalar(self.gsd, "", f"{f}.gsd")
         if gsd <= 1:
-            raise ValueError(f"{f}.gsd: the geometric standard deviation must be > 1 "
-                             f"(dimensionless; 1.1 is a 10 % dispersion), got {self.gsd!r}")
+            raise ValueError(
+                f"{f}.gsd: the geometric standard deviation must be > 1 "
+                f"(dimensionless; 1.1 is a 10 % dispersion), got {self.gsd!r}"
+            )
         self._set("median", median)
         self._set("gsd", gsd)
 
@@ -251,18 +258,27 @@ class TruncatedNormal(_Distribution):
         a, b = (low - mean) / sd, (high - mean) / sd
         # the probability of [a, b] under N(0, 1), from the tail nearer to the interval so that
         # far tails do not cancel to 0 in 1 - Phi
-        mass = (stats.norm.sf(a) - stats.norm.sf(b)) if a > 0 else \
-            (stats.norm.cdf(b) - stats.norm.cdf(a))
+        mass = (
+            (stats.norm.sf(a) - stats.norm.sf(b))
+            if a > 0
+            else (stats.norm.cdf(b) - stats.norm.cdf(a))
+        )
         if not mass > 0:
-            raise ValueError(f"{f}: the normal N({mean:g}, {sd:g}²) puts no probability in "
-                             f"[{low:g}, {high:g}] ({a:.3g} to {b:.3g} sd from the mean)")
+            raise ValueError(
+                f"{f}: the normal N({mean:g}, {sd:g}²) puts no probability in "
+                f"[{low:g}, {high:g}] ({a:.3g} to {b:.3g} sd from the mean)"
+            )
         for attr, v in (("mean", mean), ("sd", sd), ("low", low), ("high", high)):
             self._set(attr, v)
 
     @property
     def frozen(self):
-        return stats.truncnorm((self.low - self.mean) / self.sd, (self.high - self.mean) / self.sd,
-                               loc=self.mean, scale=self.sd)
+        return stats.truncnorm(
+            (self.low - self.mean) / self.sd,
+            (self.high - self.mean) / self.sd,
+            loc=self.mean,
+            scale=self.sd,
+        )
 
     def ppf(self, u) -> np.ndarray:
         # loc + scale z can round one ulp past a bound; the clip keeps the stated support exactly
@@ -302,8 +318,9 @@ class SampleTable:
 
     def rows(self, start: int, stop: int) -> SampleTable:
         """Cases ``start`` to ``stop`` (indices of this table) as a table: a chunk."""
-        return SampleTable({k: v[start:stop] for k, v in self.values.items()}, dict(self.units),
-                           self.start + start)
+        return SampleTable(
+            {k: v[start:stop] for k, v in self.values.items()}, dict(self.units), self.start + start
+        )
 
     def case(self, i: int) -> dict[str, float]:
         """Case ``i`` (index of this table) as name → SI float."""
@@ -326,19 +343,22 @@ class GridAxis:
         object.__setattr__(self, "field", f)
         require_si_unit(self.unit, f)
         if isinstance(self.values, str):
-            raise ValueError(f"{f}.values: must be a list of values, got the string "
-                             f"{self.values!r}")
+            raise ValueError(
+                f"{f}.values: must be a list of values, got the string {self.values!r}"
+            )
         arr = to_si_array(self.values, self.unit, f"{f}.values")
         if arr.ndim != 1 or arr.size == 0:
-            raise ValueError(f"{f}.values: must be a non-empty list of numbers, got shape "
-                             f"{arr.shape}")
+            raise ValueError(
+                f"{f}.values: must be a non-empty list of numbers, got shape {arr.shape}"
+            )
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"{f}.values: must be finite (no NaN or inf), got {self.values!r}")
         object.__setattr__(self, "values", arr)
 
     @classmethod
-    def linspace(cls, name: str, low, high, n: int, unit: str = "",
-                 field: str | None = None) -> GridAxis:
+    def linspace(
+        cls, name: str, low, high, n: int, unit: str = "", field: str | None = None
+    ) -> GridAxis:
         """``n`` ≥ 2 evenly spaced values from ``low`` to ``high`` (> ``low``), both included."""
         f = field or _check_name(name, "parameter")
         require_si_unit(unit, f)
@@ -348,8 +368,9 @@ class GridAxis:
             raise ValueError(f"{f}: low must be < high, got low={low!r}, high={high!r}")
         count = require_count(n, f"{f}.n")
         if count < 2:
-            raise ValueError(f"{f}.n: a linspace needs n >= 2 (give one value as values: [x]), "
-                             f"got {n!r}")
+            raise ValueError(
+                f"{f}.n: a linspace needs n >= 2 (give one value as values: [x]), got {n!r}"
+            )
         return cls(name, np.linspace(lo, hi, count), unit, field=f)
 
 
@@ -392,8 +413,10 @@ class GridSpace:
     def table(self) -> SampleTable:
         """All ``size`` cases; case k is at grid index ``np.unravel_index(k, shape)``."""
         mesh = np.meshgrid(*[a.values for a in self.axes], indexing="ij")
-        return SampleTable({a.name: m.ravel() for a, m in zip(self.axes, mesh)},
-                           {a.name: a.unit for a in self.axes})
+        return SampleTable(
+            {a.name: m.ravel() for a, m in zip(self.axes, mesh)},
+            {a.name: a.unit for a in self.axes},
+        )
 
 
 def _seed(seed, field_path: str) -> int:
@@ -432,8 +455,10 @@ class ParameterSpace:
     def __init__(self, parameters: Sequence[Distribution], field_path: str = "parameters"):
         parameters = list(parameters)
         if not parameters or not all(isinstance(p, _Distribution) for p in parameters):
-            raise ValueError(f"{field_path}: a parameter space needs one distribution or more "
-                             f"(Normal, Uniform, LogNormal, TruncatedNormal), got {parameters!r}")
+            raise ValueError(
+                f"{field_path}: a parameter space needs one distribution or more "
+                f"(Normal, Uniform, LogNormal, TruncatedNormal), got {parameters!r}"
+            )
         _unique_names(parameters, field_path)
         self.parameters = parameters
 
@@ -449,8 +474,9 @@ class ParameterSpace:
         """The table of points ``u`` (N, d) of the unit cube, column j mapped by parameter j's
         inverse CDF."""
         u = _open_unit(np.asarray(u, dtype=float))
-        return SampleTable({p.name: p.ppf(u[:, j]) for j, p in enumerate(self.parameters)},
-                           self.units, start)
+        return SampleTable(
+            {p.name: p.ppf(u[:, j]) for j, p in enumerate(self.parameters)}, self.units, start
+        )
 
     @staticmethod
     def stream(name: str, seed: int, purpose: int = 0) -> np.random.PCG64:
@@ -498,15 +524,20 @@ class ParameterSpace:
         Sobol' sequence (scipy.stats.qmc.Sobol, Owen scrambling)."""
         count = require_count(n, "n")
         if count & (count - 1):
-            raise ValueError(f"n: a Sobol' sequence needs a power of 2 (its balance holds on "
-                             f"2^m points), got {n!r}")
+            raise ValueError(
+                f"n: a Sobol' sequence needs a power of 2 (its balance holds on "
+                f"2^m points), got {n!r}"
+            )
         engine = qmc.Sobol(len(self.parameters), scramble=True, rng=_seed(seed, "seed"))
         return self.from_unit(engine.random_base2(int(math.log2(count))))
 
     def salib_problem(self) -> dict:
         """SALib's problem over the unit cube of this space."""
-        return {"num_vars": len(self.parameters), "names": self.names,
-                "bounds": [[0.0, 1.0]] * len(self.parameters)}
+        return {
+            "num_vars": len(self.parameters),
+            "names": self.names,
+            "bounds": [[0.0, 1.0]] * len(self.parameters),
+        }
 
     def sobol_design(self, n_base: int, seed: int, second_order: bool = False) -> SobolDesign:
         """The Saltelli design for Sobol' indices (SALib.sample.sobol, scrambled): ``n_base`` (a
@@ -518,25 +549,31 @@ class ParameterSpace:
         if count & (count - 1):
             raise ValueError(f"n_base: the Saltelli design needs a power of 2, got {n_base!r}")
         problem = self.salib_problem()
-        u = salib_sobol.sample(problem, count, calc_second_order=bool(second_order),
-                               scramble=True, seed=_seed(seed, "seed"))
+        u = salib_sobol.sample(
+            problem,
+            count,
+            calc_second_order=bool(second_order),
+            scramble=True,
+            seed=_seed(seed, "seed"),
+        )
         return SobolDesign(self.from_unit(u), problem, count, bool(second_order))
 
 
 # -- scenario dicts ----------------------------------------------------------------------------------
-def _keys(spec: Mapping, allowed: tuple[str, ...], required: tuple[str, ...], field_path: str,
-          what: str) -> None:
+def _keys(
+    spec: Mapping, allowed: tuple[str, ...], required: tuple[str, ...], field_path: str, what: str
+) -> None:
     for key in spec:
         if key not in allowed:
-            raise ValueError(f"{field_path}.{key}: unknown key; {what} takes "
-                             f"{', '.join(allowed)}")
+            raise ValueError(f"{field_path}.{key}: unknown key; {what} takes {', '.join(allowed)}")
     for key in required:
         if key not in spec:
             raise ValueError(f"{field_path}.{key}: missing; {what} takes {', '.join(allowed)}")
 
 
-def parameter_from_spec(name: str, spec: Mapping, unit: str,
-                        field_path: str | None = None) -> Distribution | GridAxis:
+def parameter_from_spec(
+    name: str, spec: Mapping, unit: str, field_path: str | None = None
+) -> Distribution | GridAxis:
     """One parameter from its scenario dict, in the SI ``unit`` of the scenario field it sets.
 
     ``{distribution: normal, mean:, sd:}`` (also ``uniform`` low/high, ``lognormal``
@@ -547,14 +584,18 @@ def parameter_from_spec(name: str, spec: Mapping, unit: str,
     """
     f = field_path or name
     if not isinstance(spec, Mapping):
-        raise ValueError(f"{f}: must be a mapping such as {{distribution: normal, mean: ..., "
-                         f"sd: ...}}, {{values: [...]}} or {{low: ..., high: ..., n: ...}}, "
-                         f"got {spec!r}")
+        raise ValueError(
+            f"{f}: must be a mapping such as {{distribution: normal, mean: ..., "
+            f"sd: ...}}, {{values: [...]}} or {{low: ..., high: ..., n: ...}}, "
+            f"got {spec!r}"
+        )
     if "distribution" in spec:
         kind = spec["distribution"]
         if kind not in DISTRIBUTIONS:
-            raise ValueError(f"{f}.distribution: unknown distribution {kind!r}; known: "
-                             f"{', '.join(DISTRIBUTIONS)}")
+            raise ValueError(
+                f"{f}.distribution: unknown distribution {kind!r}; known: "
+                f"{', '.join(DISTRIBUTIONS)}"
+            )
         cls, keys = DISTRIBUTIONS[kind]
         _keys(spec, ("distribution", *keys), keys, f, f"a {kind} distribution")
         return cls(name, *(spec[k] for k in keys), unit=unit, field=f)
@@ -567,12 +608,15 @@ def parameter_from_spec(name: str, spec: Mapping, unit: str,
     if "low" in spec or "high" in spec:
         _keys(spec, ("low", "high"), ("low", "high"), f, "a range (uniform bounds)")
         return Uniform(name, spec["low"], spec["high"], unit, field=f)
-    raise ValueError(f"{f}: give a distribution ({', '.join(DISTRIBUTIONS)}), values: [...], "
-                     f"low/high/n (a linspace) or low/high (bounds); got keys {sorted(spec)}")
+    raise ValueError(
+        f"{f}: give a distribution ({', '.join(DISTRIBUTIONS)}), values: [...], "
+        f"low/high/n (a linspace) or low/high (bounds); got keys {sorted(spec)}"
+    )
 
 
-def space_from_spec(spec: Mapping, units: Mapping[str, str],
-                    field_path: str = "parameters") -> ParameterSpace | GridSpace:
+def space_from_spec(
+    spec: Mapping, units: Mapping[str, str], field_path: str = "parameters"
+) -> ParameterSpace | GridSpace:
     """The space of a scenario's ``parameters:`` dict (name → parameter dict).
 
     ``units`` maps every parameter the scenario can vary to its SI unit; a name outside it is
@@ -580,8 +624,10 @@ def space_from_spec(spec: Mapping, units: Mapping[str, str],
     two do not mix (a grid is a design, a distribution a population).
     """
     if not isinstance(spec, Mapping) or not spec:
-        raise ValueError(f"{field_path}: must be a non-empty mapping of parameter name to its "
-                         f"values or distribution, got {spec!r}")
+        raise ValueError(
+            f"{field_path}: must be a non-empty mapping of parameter name to its "
+            f"values or distribution, got {spec!r}"
+        )
     items = []
     for name, entry in spec.items():
         f = f"{field_path}.{name}"
@@ -595,10 +641,25 @@ def space_from_spec(spec: Mapping, units: Mapping[str, str],
     if not any(grids):
         return ParameterSpace(items, field_path)
     odd = items[grids.index(not grids[0])]
-    raise ValueError(f"{odd.field}: grid axes (values, low/high/n) and distributions or bounds "
-                     f"cannot be mixed in one space")
+    raise ValueError(
+        f"{odd.field}: grid axes (values, low/high/n) and distributions or bounds "
+        f"cannot be mixed in one space"
+    )
 
 
-__all__ = ["DISTRIBUTIONS", "GridAxis", "GridSpace", "LogNormal", "Normal", "ParameterSpace",
-           "SampleTable", "SobolDesign", "TruncatedNormal", "Uniform",
-           "parameter_from_spec", "require_si_unit", "si_scalar", "space_from_spec"]
+__all__ = [
+    "DISTRIBUTIONS",
+    "GridAxis",
+    "GridSpace",
+    "LogNormal",
+    "Normal",
+    "ParameterSpace",
+    "SampleTable",
+    "SobolDesign",
+    "TruncatedNormal",
+    "Uniform",
+    "parameter_from_spec",
+    "require_si_unit",
+    "si_scalar",
+    "space_from_spec",
+]

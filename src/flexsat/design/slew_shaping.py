@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.validation import require_count
+from flexsat.input_checks import require_count
 
 __all__ = ["ShapedSlew", "modal_cancelling_torque"]
 
@@ -112,13 +112,17 @@ def modal_cancelling_torque(evaluation, n_basis: int = 30) -> ShapedSlew:
     T, h = float(nominal.duration), float(config.dt)
     n_steps = int(round(T / h))
     if abs(n_steps * h - T) > 1e-9 * T:
-        raise ValueError(f"evaluation.config: the control period {h:g} s must divide the "
-                         f"maneuver time {T:g} s (the correction is integrated on that grid)")
+        raise ValueError(
+            f"evaluation.config: the control period {h:g} s must divide the "
+            f"maneuver time {T:g} s (the correction is integrated on that grid)"
+        )
     run = simulate(truth, NominalTorque(nominal, h), config, n_cases=1, record_states=True)
     x_T = run.dataset["state"].isel(case=0).values[n_steps]
     elastic = truth.output("elastic", x_T)
     n = design_plant.n_modes
-    target = np.concatenate([np.zeros(6), -elastic[:n], -elastic[truth.n_modes:truth.n_modes + n]])
+    target = np.concatenate(
+        [np.zeros(6), -elastic[:n], -elastic[truth.n_modes : truth.n_modes + n]]
+    )
 
     lin = TrajectoryLinearization(design_plant, nominal)
     times = np.linspace(0.0, T, 2 * n_steps + 1)

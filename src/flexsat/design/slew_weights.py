@@ -81,17 +81,29 @@ window from 1.25 T to the end; ``examples/eps_slew_6s.yaml``), 0.6–0.9 s an ev
 from __future__ import annotations
 
 import time as _time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
+from flexsat.input_checks import require_count, require_nonneg, require_positive
 from flexsat.sim.slew_goals import SlewGoals, slew_goal_metrics
-from flexsat.validation import require_count, require_nonneg, require_positive
 
-__all__ = ["BLOCKS", "FAILURE_PENALTY", "SlewEvaluation", "SlewWeights", "TuningResult",
-           "goal_violations", "nominal_histories", "open_loop_deflection", "rim_nodes",
-           "slew_objective", "slew_run_metrics", "tune_slew_weights"]
+__all__ = [
+    "BLOCKS",
+    "FAILURE_PENALTY",
+    "SlewEvaluation",
+    "SlewWeights",
+    "TuningResult",
+    "goal_violations",
+    "nominal_histories",
+    "open_loop_deflection",
+    "rim_nodes",
+    "slew_objective",
+    "slew_run_metrics",
+    "tune_slew_weights",
+]
 
 #: the diagonal blocks of Q (attitude, rate, modes, mode_rates) and D (torque, force)
 BLOCKS = ("attitude", "rate", "modes", "mode_rates", "torque", "force")
@@ -109,11 +121,15 @@ def _block(value, name: str, positive: bool) -> tuple[float, ...] | None:
     if value is None:
         return None
     w = np.atleast_1d(np.asarray(value, float))
-    if w.ndim != 1 or w.size == 0 or not np.all(np.isfinite(w)) or np.any(w < 0) or (
-            positive and np.any(w <= 0)):
+    if (
+        w.ndim != 1
+        or w.size == 0
+        or not np.all(np.isfinite(w))
+        or np.any(w < 0)
+        or (positive and np.any(w <= 0))
+    ):
         rule = "> 0 (D is inverted)" if positive else ">= 0"
-        raise ValueError(f"{name}: one weight or a list of them, finite and {rule}, got "
-                         f"{value!r}")
+        raise ValueError(f"{name}: one weight or a list of them, finite and {rule}, got {value!r}")
     return tuple(float(x) for x in w)
 
 
@@ -149,10 +165,14 @@ class SlewWeights:
     def diagonals(self, n_modes: int, n_forces: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """(diag Q, diag D) for a design model of ``n_modes`` modes and ``n_forces`` forces."""
         rates = self.modes if self.mode_rates is None else self.mode_rates
-        q = np.concatenate([_diagonal(self.attitude, 3, "attitude"),
-                            _diagonal(self.rate, 3, "rate"),
-                            _diagonal(self.modes, n_modes, "modes"),
-                            _diagonal(rates, n_modes, "mode_rates")])
+        q = np.concatenate(
+            [
+                _diagonal(self.attitude, 3, "attitude"),
+                _diagonal(self.rate, 3, "rate"),
+                _diagonal(self.modes, n_modes, "modes"),
+                _diagonal(rates, n_modes, "mode_rates"),
+            ]
+        )
         d = _diagonal(self.torque, 3, "torque")
         if n_forces:
             if self.force is None:
@@ -199,10 +219,12 @@ def nominal_histories(nominal, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def rim_nodes(dataset) -> list[str]:
     """Nodes of a run's dataset with displacement outputs along all three axes
     (``displacement_66X``, ``…Y``, ``…Z`` -> ``66``), in output order."""
-    names = [n[len("displacement_"):-1] for n in dataset.data_vars
-             if n.startswith("displacement_")]
-    return [n for n in dict.fromkeys(names)
-            if all(f"displacement_{n}{a}" in dataset for a in "XYZ")]
+    names = [
+        n[len("displacement_") : -1] for n in dataset.data_vars if n.startswith("displacement_")
+    ]
+    return [
+        n for n in dict.fromkeys(names) if all(f"displacement_{n}{a}" in dataset for a in "XYZ")
+    ]
 
 
 def _stack(results, name: str) -> np.ndarray:
@@ -213,14 +235,18 @@ def _rim_deflection(results) -> np.ndarray:
     """(n_runs, n_t, n_rim, 3) rim displacements of single-case runs."""
     nodes = rim_nodes(results[0].dataset)
     if not nodes:
-        raise ValueError("results: the plant records no rim displacements (outputs "
-                         "displacement_<node>X/Y/Z), so the deflection goal cannot be judged")
-    return np.stack([np.stack([_stack(results, f"displacement_{n}{a}") for a in "XYZ"], -1)
-                     for n in nodes], -2)
+        raise ValueError(
+            "results: the plant records no rim displacements (outputs "
+            "displacement_<node>X/Y/Z), so the deflection goal cannot be judged"
+        )
+    return np.stack(
+        [np.stack([_stack(results, f"displacement_{n}{a}") for a in "XYZ"], -1) for n in nodes], -2
+    )
 
 
-def slew_run_metrics(results: Sequence, nominal, goals: SlewGoals = SlewGoals(),
-                     deflection_open=None) -> tuple[dict, dict]:
+def slew_run_metrics(
+    results: Sequence, nominal, goals: SlewGoals = SlewGoals(), deflection_open=None
+) -> tuple[dict, dict]:
     """The goal metrics (:func:`~flexsat.sim.slew_goals.slew_goal_metrics`) of single-case
     slew runs on one time grid.
 
@@ -251,16 +277,27 @@ def slew_run_metrics(results: Sequence, nominal, goals: SlewGoals = SlewGoals(),
     if deflection_open is None:
         deflection_open = deflection[:1]
     elif np.shape(deflection_open) != (1,) + deflection.shape[1:]:
-        raise ValueError(f"deflection_open: shape must be (1,) + {deflection.shape[1:]} (the "
-                         f"runs' time grid and rim points), got {np.shape(deflection_open)}")
-    force_names = [n for n in results[0].dataset.data_vars
-                   if n.startswith("force_") and not n.endswith("_command")]
+        raise ValueError(
+            f"deflection_open: shape must be (1,) + {deflection.shape[1:]} (the "
+            f"runs' time grid and rim points), got {np.shape(deflection_open)}"
+        )
+    force_names = [
+        n
+        for n in results[0].dataset.data_vars
+        if n.startswith("force_") and not n.endswith("_command")
+    ]
     return slew_goal_metrics(
-        t, nominal.duration, _stack(results, "euler123"),
-        dcm_to_euler123(quaternion_to_dcm(nominal.target)), deflection, deflection_open,
-        torque=_stack(results, "torque"), torque_nominal=nominal_histories(nominal, t)[0][None],
+        t,
+        nominal.duration,
+        _stack(results, "euler123"),
+        dcm_to_euler123(quaternion_to_dcm(nominal.target)),
+        deflection,
+        deflection_open,
+        torque=_stack(results, "torque"),
+        torque_nominal=nominal_histories(nominal, t)[0][None],
         forces=np.stack([_stack(results, n) for n in force_names], -1) if force_names else None,
-        goals=goals)
+        goals=goals,
+    )
 
 
 def open_loop_deflection(truth, nominal, config) -> np.ndarray:
@@ -270,8 +307,7 @@ def open_loop_deflection(truth, nominal, config) -> np.ndarray:
     from flexsat.control import NominalTorque
     from flexsat.sim import simulate
 
-    return _rim_deflection([simulate(truth, NominalTorque(nominal, config.dt), config,
-                                     n_cases=1)])
+    return _rim_deflection([simulate(truth, NominalTorque(nominal, config.dt), config, n_cases=1)])
 
 
 # -- one evaluation ------------------------------------------------------------------------------
@@ -300,26 +336,40 @@ class SlewEvaluation:
     ``deflection_ratio_goal`` (what :func:`slew_objective` needs).
     """
 
-    def __init__(self, truth, design_plant, nominal, config, goals: SlewGoals = SlewGoals(),
-                 deflection_open=None, n_points: int = 11):
+    def __init__(
+        self,
+        truth,
+        design_plant,
+        nominal,
+        config,
+        goals: SlewGoals = SlewGoals(),
+        deflection_open=None,
+        n_points: int = 11,
+    ):
         for name, plant in (("truth", truth), ("design_plant", design_plant)):
             if not hasattr(plant, "n_modes") or not hasattr(plant, "inputs"):
-                raise ValueError(f"{name}: must be a FlexibleSpacecraft, got "
-                                 f"{type(plant).__name__}")
+                raise ValueError(
+                    f"{name}: must be a FlexibleSpacecraft, got {type(plant).__name__}"
+                )
         if design_plant.n_modes > truth.n_modes:
-            raise ValueError(f"design_plant: at most the truth's {truth.n_modes} modes, got "
-                             f"{design_plant.n_modes}")
-        missing = [a for a in ("duration", "target", "torque", "euler123")
-                   if not hasattr(nominal, a)]
+            raise ValueError(
+                f"design_plant: at most the truth's {truth.n_modes} modes, got "
+                f"{design_plant.n_modes}"
+            )
+        missing = [
+            a for a in ("duration", "target", "torque", "euler123") if not hasattr(nominal, a)
+        ]
         if missing:
             raise ValueError(f"nominal: lacks {', '.join(missing)} (a ThreeAxisSlew has them)")
         if not isinstance(goals, SlewGoals):
             raise ValueError(f"goals: must be a SlewGoals, got {type(goals).__name__}")
         T = float(nominal.duration)
         if config.duration < goals.evaluation * T * (1 - 1e-9):
-            raise ValueError(f"config.duration: must reach {goals.evaluation:g} T = "
-                             f"{goals.evaluation * T:g} s where the goals are evaluated, got "
-                             f"{config.duration:g} s")
+            raise ValueError(
+                f"config.duration: must reach {goals.evaluation:g} T = "
+                f"{goals.evaluation * T:g} s where the goals are evaluated, got "
+                f"{config.duration:g} s"
+            )
         self.truth, self.design_plant, self.nominal = truth, design_plant, nominal
         self.config, self.goals = config, goals
         self.n_points = require_count(n_points, "n_points")
@@ -341,8 +391,10 @@ class SlewEvaluation:
         for name in forces:
             channel = name if name.startswith("force_") else f"force_{name}"
             if channel not in available:
-                raise ValueError(f"forces: {name!r} is not a force of the design plant (its "
-                                 f"forces: {', '.join(c[6:] for c in available) or 'none'})")
+                raise ValueError(
+                    f"forces: {name!r} is not a force of the design plant (its "
+                    f"forces: {', '.join(c[6:] for c in available) or 'none'})"
+                )
             names.append(channel)
         return names
 
@@ -355,11 +407,27 @@ class SlewEvaluation:
             raise ValueError(f"weights: must be SlewWeights, got {type(weights).__name__}")
         names = self.forces(forces)
         q, d = weights.diagonals(self.design_plant.n_modes, len(names))
-        return perturbation_design(self.design_plant, self.nominal, q, d, omega_b, zeta_b,
-                                   self.n_points, forces=names, decouple=decouple)
+        return perturbation_design(
+            self.design_plant,
+            self.nominal,
+            q,
+            d,
+            omega_b,
+            zeta_b,
+            self.n_points,
+            forces=names,
+            decouple=decouple,
+        )
 
-    def __call__(self, weights: SlewWeights, omega_b, zeta_b=0.0, forces=(),
-                 decouple: bool = False, feedforward: str = "constant") -> dict:
+    def __call__(
+        self,
+        weights: SlewWeights,
+        omega_b,
+        zeta_b=0.0,
+        forces=(),
+        decouple: bool = False,
+        feedforward: str = "constant",
+    ) -> dict:
         design = self.design(weights, omega_b, zeta_b, forces, decouple)
         return self.run(design.controller(self.config.dt, feedforward, plant=self.truth))
 
@@ -381,8 +449,12 @@ class SlewEvaluation:
 def goal_violations(metrics: Mapping) -> tuple[float, float]:
     """(v_α, v_r) = (angle error / tolerance − 1, ratio goal / ratio − 1): ≤ 0 where a goal is
     met (module docstring)."""
-    for key in ("angle_error_mrad", "angle_tolerance_mrad", "deflection_ratio_after",
-                "deflection_ratio_goal"):
+    for key in (
+        "angle_error_mrad",
+        "angle_tolerance_mrad",
+        "deflection_ratio_after",
+        "deflection_ratio_goal",
+    ):
         if key not in metrics:
             raise ValueError(f"metrics: lacks {key!r} (the metrics of a SlewEvaluation)")
     ratio = float(metrics["deflection_ratio_after"])
@@ -392,13 +464,18 @@ def goal_violations(metrics: Mapping) -> tuple[float, float]:
 
 
 def _effort(metrics: Mapping, force_scale: float) -> float:
-    effort = (float(metrics.get("peak_torque_perturbation_Nm", 0.0))
-              / float(metrics.get("peak_nominal_torque_Nm", 1.0)))
+    effort = float(metrics.get("peak_torque_perturbation_Nm", 0.0)) / float(
+        metrics.get("peak_nominal_torque_Nm", 1.0)
+    )
     return effort + float(metrics.get("peak_force_N", 0.0)) / force_scale
 
 
-def slew_objective(metrics: Mapping | None, margin: float = 0.05, effort_weight: float = 0.01,
-                   force_scale: float = 1000.0) -> float:
+def slew_objective(
+    metrics: Mapping | None,
+    margin: float = 0.05,
+    effort_weight: float = 0.01,
+    force_scale: float = 1000.0,
+) -> float:
     r"""J = Σ max(0, v_i + μ)² + w_e E (module docstring); ``None`` metrics (a failed design)
     score :data:`FAILURE_PENALTY`.
 
@@ -472,14 +549,25 @@ class _Stop(Exception):
     """Ends the scipy search early (goals met, or the budget spent)."""
 
 
-def tune_slew_weights(evaluation: SlewEvaluation, initial: SlewWeights,
-                      free: Sequence[str] = ("attitude", "rate", "modes", "torque"),
-                      budget: int = 60, *, omega_b, zeta_b=0.0, forces=(),
-                      decouple: bool = False, feedforward: str = "constant",
-                      margin: float = 0.05, effort_weight: float = 0.01,
-                      force_scale: float = 1000.0, step: float = 1.0, bound: float = 4.0,
-                      stop_when_met: bool = True, method: str = "nelder-mead"
-                      ) -> TuningResult:
+def tune_slew_weights(
+    evaluation: SlewEvaluation,
+    initial: SlewWeights,
+    free: Sequence[str] = ("attitude", "rate", "modes", "torque"),
+    budget: int = 60,
+    *,
+    omega_b,
+    zeta_b=0.0,
+    forces=(),
+    decouple: bool = False,
+    feedforward: str = "constant",
+    margin: float = 0.05,
+    effort_weight: float = 0.01,
+    force_scale: float = 1000.0,
+    step: float = 1.0,
+    bound: float = 4.0,
+    stop_when_met: bool = True,
+    method: str = "nelder-mead",
+) -> TuningResult:
     r"""Search block multipliers of ``initial`` that meet the slew goals (module docstring).
 
     The parameters are x_b = log₁₀ m_b, one per free block, the weights ``initial`` with each
@@ -521,8 +609,7 @@ def tune_slew_weights(evaluation: SlewEvaluation, initial: SlewWeights,
     from flexsat.control.perturbation_feedback import FEEDFORWARD
 
     if not isinstance(evaluation, SlewEvaluation):
-        raise ValueError(f"evaluation: must be a SlewEvaluation, got "
-                         f"{type(evaluation).__name__}")
+        raise ValueError(f"evaluation: must be a SlewEvaluation, got {type(evaluation).__name__}")
     if not isinstance(initial, SlewWeights):
         raise ValueError(f"initial: must be SlewWeights, got {type(initial).__name__}")
     free = tuple(free)
@@ -555,7 +642,7 @@ def tune_slew_weights(evaluation: SlewEvaluation, initial: SlewWeights,
             return cache[key]
         if len(history) >= budget:
             raise _Stop
-        multipliers = {b: float(10.0 ** xi) for b, xi in zip(free, x)}
+        multipliers = {b: float(10.0**xi) for b, xi in zip(free, x)}
         weights = initial.scaled(multipliers)
         metrics, failure = None, None
         try:
@@ -565,8 +652,15 @@ def tune_slew_weights(evaluation: SlewEvaluation, initial: SlewWeights,
         except ValueError as exc:  # no stabilising Riccati solution, or a diverged run
             failure = str(exc)
         value = slew_objective(metrics, margin, effort_weight, force_scale)
-        history.append({"multipliers": multipliers, "weights": weights, "metrics": metrics,
-                        "objective": value, "failure": failure})
+        history.append(
+            {
+                "multipliers": multipliers,
+                "weights": weights,
+                "metrics": metrics,
+                "objective": value,
+                "failure": failure,
+            }
+        )
         cache[key] = value
         if stop_when_met and _met(metrics, margin):
             raise _Stop
@@ -577,17 +671,42 @@ def tune_slew_weights(evaluation: SlewEvaluation, initial: SlewWeights,
     try:
         if method == "nelder-mead":
             simplex = np.vstack([np.zeros(n), step * np.eye(n)])
-            minimize(objective, np.zeros(n), method="Nelder-Mead", bounds=bounds,
-                     options={"initial_simplex": simplex, "maxfev": 10 * budget,
-                              "xatol": 1e-2, "fatol": 1e-6})
+            minimize(
+                objective,
+                np.zeros(n),
+                method="Nelder-Mead",
+                bounds=bounds,
+                options={
+                    "initial_simplex": simplex,
+                    "maxfev": 10 * budget,
+                    "xatol": 1e-2,
+                    "fatol": 1e-6,
+                },
+            )
         else:
-            minimize(objective, np.zeros(n), method="Powell", bounds=bounds,
-                     options={"direc": step * np.eye(n), "maxfev": 10 * budget,
-                              "xtol": 1e-2, "ftol": 1e-6})
+            minimize(
+                objective,
+                np.zeros(n),
+                method="Powell",
+                bounds=bounds,
+                options={
+                    "direc": step * np.eye(n),
+                    "maxfev": 10 * budget,
+                    "xtol": 1e-2,
+                    "ftol": 1e-6,
+                },
+            )
     except _Stop:
         pass
     # a design meeting the goals beats one that misses them by less than its effort term
     best = min(history, key=lambda h: (not _met(h["metrics"], margin), h["objective"]))
-    return TuningResult(best["weights"], best["metrics"], best["objective"],
-                        _met(best["metrics"], margin), best["multipliers"], tuple(history),
-                        _time.perf_counter() - start, method)
+    return TuningResult(
+        best["weights"],
+        best["metrics"],
+        best["objective"],
+        _met(best["metrics"], margin),
+        best["multipliers"],
+        tuple(history),
+        _time.perf_counter() - start,
+        method,
+    )

@@ -30,10 +30,10 @@ from __future__ import annotations
 import numpy as np
 
 from flexsat.control.lyapunov import check_lyapunov_gains
+from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
 from flexsat.maneuvers.torque_shapes import SmoothBangBang
 from flexsat.sim.instruments import unit_row
 from flexsat.sim.open_loop import open_loop_response
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
 
 
 def _grid_shape(angle, inertia, alpha, u_max):
@@ -42,8 +42,9 @@ def _grid_shape(angle, inertia, alpha, u_max):
     alpha = require_finite(alpha, "alpha", "")
     u_max = require_positive(u_max, "u_max", "N*m")
     if alpha.ndim != 1 or u_max.ndim != 1:
-        raise ValueError(f"alpha, u_max: give 1-D grids, got shapes {alpha.shape} and "
-                         f"{u_max.shape}")
+        raise ValueError(
+            f"alpha, u_max: give 1-D grids, got shapes {alpha.shape} and {u_max.shape}"
+        )
     a, u = np.meshgrid(alpha, u_max, indexing="ij")
     return SmoothBangBang(angle, inertia, u_max=u.ravel(), alpha=a.ravel()), a.shape
 
@@ -118,8 +119,10 @@ def tracking_bound(plant, shape, times, g1, g2, g3=0.0, appendage_inertia=0.0) -
         raise ValueError("g2: must be > 0 (μ of Eq. 22 is divided by g2)")
     I_b = require_nonneg(appendage_inertia, "appendage_inertia", "kg*m**2")
     if np.ndim(shape.duration) > 1:
-        raise ValueError(f"shape: parameters must be scalars or (C,) arrays, got shape "
-                         f"{np.shape(shape.duration)}")
+        raise ValueError(
+            f"shape: parameters must be scalars or (C,) arrays, got shape "
+            f"{np.shape(shape.duration)}"
+        )
     times = require_finite(times, "times", "s")
     C = int(np.size(shape.duration))
     t = np.broadcast_to(times.reshape(times.shape[0], -1), (times.shape[0], C))
@@ -129,14 +132,27 @@ def tracking_bound(plant, shape, times, g1, g2, g3=0.0, appendage_inertia=0.0) -
     th, thd = unit_row(plant, "theta"), unit_row(plant, "theta_dot")
     if th is None or thd is None:
         raise ValueError("plant: μ needs θ and θ' as state coordinates (a hub plant)")
-    d = (g1 * (x[..., th] - ref.theta) + g2 * (x[..., thd] - ref.theta_dot)
-         + g3 * (R_r - I_b * ref.theta_ddot))
+    d = (
+        g1 * (x[..., th] - ref.theta)
+        + g2 * (x[..., thd] - ref.theta_dot)
+        + g3 * (R_r - I_b * ref.theta_ddot)
+    )
     return np.abs(d) / g2
 
 
-def tracking_bound_surface(plant, angle, inertia, alpha, u_max, g1, g2, g3=0.0,
-                           appendage_inertia=0.0, n_samples: int = 2001,
-                           horizon=1.0) -> np.ndarray:
+def tracking_bound_surface(
+    plant,
+    angle,
+    inertia,
+    alpha,
+    u_max,
+    g1,
+    g2,
+    g3=0.0,
+    appendage_inertia=0.0,
+    n_samples: int = 2001,
+    horizon=1.0,
+) -> np.ndarray:
     """μ_max(α, u_max) = max_t μ(t) over the grid (Att. 3 Fig. 7), rad/s.
 
     μ is sampled at ``n_samples`` equally spaced times over [0, horizon · T] of each maneuver
@@ -168,5 +184,9 @@ def tracking_bound_surface(plant, angle, inertia, alpha, u_max, g1, g2, g3=0.0,
     return mu.max(axis=0).reshape(grid)
 
 
-__all__ = ["maneuver_time_surface", "residual_energy_surface", "tracking_bound",
-           "tracking_bound_surface"]
+__all__ = [
+    "maneuver_time_surface",
+    "residual_energy_surface",
+    "tracking_bound",
+    "tracking_bound_surface",
+]

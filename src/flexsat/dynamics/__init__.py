@@ -19,22 +19,55 @@ nothing.
 from flexsat.lazy import lazy_exports
 
 _EXPORTS = {
-    **{name: "attitude" for name in (
-        "cross_matrix", "omega_matrix", "quaternion_rate_matrix", "quaternion_to_dcm",
-        "dcm_to_quaternion", "euler123_to_dcm", "euler123_to_quaternion", "dcm_to_euler123",
-        "principal_rotation_to_quaternion", "quaternion_to_principal_rotation",
-        "quaternion_multiply", "quaternion_exp", "quaternion_to_gibbs", "gibbs_to_quaternion",
-        "quaternion_to_mrp", "mrp_to_quaternion", "mrp_shadow", "gibbs_rate", "mrp_rate")},
-    **{name: "rigid_body" for name in (
-        "require_inertia", "rkmk4_step", "dexpinv", "cross3", "matvec", "euler_acceleration",
-        "euler_rates", "propagate", "angular_momentum_inertial", "kinetic_energy",
-        "euler_poinsot_rates")},
-    "require_shape": "attitude", "case_shape": "attitude", "require_quaternion": "attitude",
+    **{
+        name: "attitude"
+        for name in (
+            "cross_matrix",
+            "omega_matrix",
+            "quaternion_rate_matrix",
+            "quaternion_to_dcm",
+            "dcm_to_quaternion",
+            "euler123_to_dcm",
+            "euler123_to_quaternion",
+            "dcm_to_euler123",
+            "principal_rotation_to_quaternion",
+            "quaternion_to_principal_rotation",
+            "quaternion_multiply",
+            "quaternion_exp",
+            "quaternion_to_gibbs",
+            "gibbs_to_quaternion",
+            "quaternion_to_mrp",
+            "mrp_to_quaternion",
+            "mrp_shadow",
+            "gibbs_rate",
+            "mrp_rate",
+        )
+    },
+    **{
+        name: "rigid_body"
+        for name in (
+            "require_inertia",
+            "rkmk4_step",
+            "dexpinv",
+            "cross3",
+            "matvec",
+            "euler_acceleration",
+            "euler_rates",
+            "propagate",
+            "angular_momentum_inertial",
+            "kinetic_energy",
+            "euler_poinsot_rates",
+        )
+    },
+    "require_shape": "attitude",
+    "case_shape": "attitude",
+    "require_quaternion": "attitude",
     **{name: "structural" for name in ("StructuralPlant", "Actuator", "Sensor", "ModalBlocks")},
     "BeamInOrbit": "orbit",
     "RigidSpacecraft": "rigid_spacecraft",
     "FlexibleSpacecraft": "flexible_spacecraft",
-    "TetheredSubsatellite": "tether", "TetherScales": "tether",
+    "TetheredSubsatellite": "tether",
+    "TetherScales": "tether",
     "CmgSpacecraft": "cmg_actuator",
 }
 

@@ -20,16 +20,33 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexsat.validation import require_numeric
+from flexsat.input_checks import require_numeric
 
 __all__ = [
-    "require_shape", "case_shape", "require_quaternion",
-    "UNIT_TOL", "SINGULAR_TOL", "cross_matrix", "omega_matrix", "quaternion_rate_matrix",
-    "quaternion_to_dcm", "dcm_to_quaternion", "euler123_to_dcm", "euler123_to_quaternion",
+    "require_shape",
+    "case_shape",
+    "require_quaternion",
+    "UNIT_TOL",
+    "SINGULAR_TOL",
+    "cross_matrix",
+    "omega_matrix",
+    "quaternion_rate_matrix",
+    "quaternion_to_dcm",
+    "dcm_to_quaternion",
+    "euler123_to_dcm",
+    "euler123_to_quaternion",
     "dcm_to_euler123",
-    "principal_rotation_to_quaternion", "quaternion_to_principal_rotation",
-    "quaternion_multiply", "quaternion_exp", "quaternion_to_gibbs", "gibbs_to_quaternion",
-    "quaternion_to_mrp", "mrp_to_quaternion", "mrp_shadow", "gibbs_rate", "mrp_rate",
+    "principal_rotation_to_quaternion",
+    "quaternion_to_principal_rotation",
+    "quaternion_multiply",
+    "quaternion_exp",
+    "quaternion_to_gibbs",
+    "gibbs_to_quaternion",
+    "quaternion_to_mrp",
+    "mrp_to_quaternion",
+    "mrp_shadow",
+    "gibbs_rate",
+    "mrp_rate",
 ]
 
 #: allowed departure of ‖β‖ from 1, of CᵀC from I and of ‖axis‖ from 1: an input computed in
@@ -44,9 +61,11 @@ SINGULAR_TOL = 1e-8
 def require_shape(value, field: str, shape: tuple[int, ...]) -> np.ndarray:
     """``value`` as a finite float array whose trailing axes are ``shape``."""
     arr = require_numeric(value, field)
-    if arr.ndim < len(shape) or arr.shape[arr.ndim - len(shape):] != shape:
-        raise ValueError(f"{field}: last axes must have shape {shape} (leading axes are cases), "
-                         f"got shape {arr.shape}")
+    if arr.ndim < len(shape) or arr.shape[arr.ndim - len(shape) :] != shape:
+        raise ValueError(
+            f"{field}: last axes must have shape {shape} (leading axes are cases), "
+            f"got shape {arr.shape}"
+        )
     return arr
 
 
@@ -56,8 +75,9 @@ def case_shape(**fields) -> tuple[int, ...]:
         return np.broadcast_shapes(*fields.values())
     except ValueError:
         got = ", ".join(f"{name} {shape}" for name, shape in fields.items())
-        raise ValueError(f"{', '.join(fields)}: leading (case) axes must broadcast, got "
-                         f"{got}") from None
+        raise ValueError(
+            f"{', '.join(fields)}: leading (case) axes must broadcast, got {got}"
+        ) from None
 
 
 def require_quaternion(beta, field: str = "beta") -> np.ndarray:
@@ -65,8 +85,10 @@ def require_quaternion(beta, field: str = "beta") -> np.ndarray:
     b = require_shape(beta, field, (4,))
     err = np.abs(np.linalg.norm(b, axis=-1) - 1.0)
     if np.any(err > UNIT_TOL):
-        raise ValueError(f"{field}: must be a unit quaternion (| ‖β‖ − 1 | <= {UNIT_TOL:g}), "
-                         f"largest departure {err.max():.3g}")
+        raise ValueError(
+            f"{field}: must be a unit quaternion (| ‖β‖ − 1 | <= {UNIT_TOL:g}), "
+            f"largest departure {err.max():.3g}"
+        )
     return b
 
 
@@ -74,8 +96,10 @@ def _dcm(dcm, field: str = "dcm") -> np.ndarray:
     C = require_shape(dcm, field, (3, 3))
     err = np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)).max(axis=(-2, -1), initial=0.0)
     if np.any(err > UNIT_TOL):
-        raise ValueError(f"{field}: must be orthonormal (max |C Cᵀ − I| <= {UNIT_TOL:g}), "
-                         f"largest departure {err.max():.3g}")
+        raise ValueError(
+            f"{field}: must be orthonormal (max |C Cᵀ − I| <= {UNIT_TOL:g}), "
+            f"largest departure {err.max():.3g}"
+        )
     if np.any(np.linalg.det(C) < 0):
         raise ValueError(f"{field}: must be a proper rotation (det C = +1), got a reflection")
     return C
@@ -95,8 +119,9 @@ def cross_matrix(v) -> np.ndarray:
     v = require_shape(v, "v", (3,))
     z = np.zeros(v.shape[:-1])
     x, y, w = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1),
-                     np.stack([-y, x, z], -1)], -2)
+    return np.stack(
+        [np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2
+    )
 
 
 def omega_matrix(w) -> np.ndarray:
@@ -175,9 +200,11 @@ def quaternion_to_dcm(beta) -> np.ndarray:
     b = require_quaternion(beta)
     b0, b1, b2, b3 = (b[..., i] for i in range(4))
     s0, s1, s2, s3 = b0 * b0, b1 * b1, b2 * b2, b3 * b3
-    rows = [[s0 + s1 - s2 - s3, 2 * (b1 * b2 + b0 * b3), 2 * (b1 * b3 - b0 * b2)],
-            [2 * (b1 * b2 - b0 * b3), s0 - s1 + s2 - s3, 2 * (b2 * b3 + b0 * b1)],
-            [2 * (b1 * b3 + b0 * b2), 2 * (b2 * b3 - b0 * b1), s0 - s1 - s2 + s3]]
+    rows = [
+        [s0 + s1 - s2 - s3, 2 * (b1 * b2 + b0 * b3), 2 * (b1 * b3 - b0 * b2)],
+        [2 * (b1 * b2 - b0 * b3), s0 - s1 + s2 - s3, 2 * (b2 * b3 + b0 * b1)],
+        [2 * (b1 * b3 + b0 * b2), 2 * (b2 * b3 - b0 * b1), s0 - s1 - s2 + s3],
+    ]
     return np.stack([np.stack(r, -1) for r in rows], -2)
 
 
@@ -207,17 +234,32 @@ def dcm_to_quaternion(dcm) -> np.ndarray:
     C = _dcm(dcm)
     tr = np.trace(C, axis1=-2, axis2=-1)
     d = np.diagonal(C, axis1=-2, axis2=-1)
-    sq = np.stack([1 + tr, 1 + 2 * d[..., 0] - tr, 1 + 2 * d[..., 1] - tr,
-                   1 + 2 * d[..., 2] - tr], -1) / 4
-    p01, p02, p03 = ((C[..., 1, 2] - C[..., 2, 1]) / 4, (C[..., 2, 0] - C[..., 0, 2]) / 4,
-                     (C[..., 0, 1] - C[..., 1, 0]) / 4)
-    p12, p13, p23 = ((C[..., 0, 1] + C[..., 1, 0]) / 4, (C[..., 2, 0] + C[..., 0, 2]) / 4,
-                     (C[..., 1, 2] + C[..., 2, 1]) / 4)
+    sq = (
+        np.stack(
+            [1 + tr, 1 + 2 * d[..., 0] - tr, 1 + 2 * d[..., 1] - tr, 1 + 2 * d[..., 2] - tr], -1
+        )
+        / 4
+    )
+    p01, p02, p03 = (
+        (C[..., 1, 2] - C[..., 2, 1]) / 4,
+        (C[..., 2, 0] - C[..., 0, 2]) / 4,
+        (C[..., 0, 1] - C[..., 1, 0]) / 4,
+    )
+    p12, p13, p23 = (
+        (C[..., 0, 1] + C[..., 1, 0]) / 4,
+        (C[..., 2, 0] + C[..., 0, 2]) / 4,
+        (C[..., 1, 2] + C[..., 2, 1]) / 4,
+    )
     # products[k] holds β_k·[β0, β1, β2, β3]; divide row k by β_k = sqrt(sq_k) for the largest k
-    products = np.stack([np.stack([sq[..., 0], p01, p02, p03], -1),
-                         np.stack([p01, sq[..., 1], p12, p13], -1),
-                         np.stack([p02, p12, sq[..., 2], p23], -1),
-                         np.stack([p03, p13, p23, sq[..., 3]], -1)], -2)
+    products = np.stack(
+        [
+            np.stack([sq[..., 0], p01, p02, p03], -1),
+            np.stack([p01, sq[..., 1], p12, p13], -1),
+            np.stack([p02, p12, sq[..., 2], p23], -1),
+            np.stack([p03, p13, p23, sq[..., 3]], -1),
+        ],
+        -2,
+    )
     k = np.argmax(sq, axis=-1)
     row = np.take_along_axis(products, k[..., None, None], axis=-2)[..., 0, :]
     beta = row / np.sqrt(np.take_along_axis(sq, k[..., None], axis=-1))
@@ -254,8 +296,11 @@ def euler123_to_dcm(angles) -> np.ndarray:
     ndarray, shape (..., 3, 3)
     """
     th = require_shape(angles, "angles", (3,))
-    return (_axis_rotation(th[..., 2], 2) @ _axis_rotation(th[..., 1], 1)
-            @ _axis_rotation(th[..., 0], 0))
+    return (
+        _axis_rotation(th[..., 2], 2)
+        @ _axis_rotation(th[..., 1], 1)
+        @ _axis_rotation(th[..., 0], 0)
+    )
 
 
 def euler123_to_quaternion(angles) -> np.ndarray:
@@ -281,8 +326,10 @@ def euler123_to_quaternion(angles) -> np.ndarray:
     th = require_shape(angles, "angles", (3,))
     c, s = np.cos(th / 2), np.sin(th / 2)
     zero = np.zeros(th.shape[:-1])
-    q1, q2, q3 = (np.stack([c[..., k]] + [s[..., k] if j == k else zero for j in range(3)], -1)
-                  for k in range(3))
+    q1, q2, q3 = (
+        np.stack([c[..., k]] + [s[..., k] if j == k else zero for j in range(3)], -1)
+        for k in range(3)
+    )
     return quaternion_multiply(q3, quaternion_multiply(q2, q1))
 
 
@@ -307,9 +354,14 @@ def dcm_to_euler123(dcm) -> np.ndarray:
         θ1, θ3 in (−π, π], θ2 in [−π/2, π/2].
     """
     C = _dcm(dcm)
-    return np.stack([np.arctan2(-C[..., 2, 1], C[..., 2, 2]),
-                     np.arctan2(C[..., 2, 0], np.hypot(C[..., 0, 0], C[..., 1, 0])),
-                     np.arctan2(-C[..., 1, 0], C[..., 0, 0])], -1)
+    return np.stack(
+        [
+            np.arctan2(-C[..., 2, 1], C[..., 2, 2]),
+            np.arctan2(C[..., 2, 0], np.hypot(C[..., 0, 0], C[..., 1, 0])),
+            np.arctan2(-C[..., 1, 0], C[..., 0, 0]),
+        ],
+        -1,
+    )
 
 
 def principal_rotation_to_quaternion(axis, angle) -> np.ndarray:
@@ -331,8 +383,10 @@ def principal_rotation_to_quaternion(axis, angle) -> np.ndarray:
     phi = require_numeric(angle, "angle")
     err = np.abs(np.linalg.norm(ax, axis=-1) - 1.0)
     if np.any(err > UNIT_TOL):
-        raise ValueError(f"axis: must be a unit vector (| ‖l‖ − 1 | <= {UNIT_TOL:g}), largest "
-                         f"departure {err.max():.3g}")
+        raise ValueError(
+            f"axis: must be a unit vector (| ‖l‖ − 1 | <= {UNIT_TOL:g}), largest "
+            f"departure {err.max():.3g}"
+        )
     case_shape(axis=ax.shape[:-1], angle=phi.shape)
     half = phi / 2
     return np.concatenate([np.cos(half)[..., None], ax * np.sin(half)[..., None]], -1)
@@ -390,10 +444,15 @@ def quaternion_multiply(second, first) -> np.ndarray:
     case_shape(second=q.shape[:-1], first=p.shape[:-1])
     q0, q1, q2, q3 = (q[..., i] for i in range(4))
     p0, p1, p2, p3 = (p[..., i] for i in range(4))
-    return np.stack([q0 * p0 - q1 * p1 - q2 * p2 - q3 * p3,
-                     q1 * p0 + q0 * p1 + q3 * p2 - q2 * p3,
-                     q2 * p0 - q3 * p1 + q0 * p2 + q1 * p3,
-                     q3 * p0 + q2 * p1 - q1 * p2 + q0 * p3], -1)
+    return np.stack(
+        [
+            q0 * p0 - q1 * p1 - q2 * p2 - q3 * p3,
+            q1 * p0 + q0 * p1 + q3 * p2 - q2 * p3,
+            q2 * p0 - q3 * p1 + q0 * p2 + q1 * p3,
+            q3 * p0 + q2 * p1 - q1 * p2 + q0 * p3,
+        ],
+        -1,
+    )
 
 
 def quaternion_exp(theta) -> np.ndarray:
@@ -413,8 +472,9 @@ def quaternion_exp(theta) -> np.ndarray:
     th = require_shape(theta, "theta", (3,))
     n = np.linalg.norm(th, axis=-1)
     # sin(n/2)/n = ½ sinc(n/(2π)) with numpy's normalised sinc
-    return np.concatenate([np.cos(n / 2)[..., None],
-                           th * (0.5 * np.sinc(n / (2 * np.pi)))[..., None]], -1)
+    return np.concatenate(
+        [np.cos(n / 2)[..., None], th * (0.5 * np.sinc(n / (2 * np.pi)))[..., None]], -1
+    )
 
 
 def quaternion_to_gibbs(beta) -> np.ndarray:
@@ -429,8 +489,10 @@ def quaternion_to_gibbs(beta) -> np.ndarray:
     b = require_quaternion(beta)
     b0 = b[..., 0]
     if np.any(np.abs(b0) < SINGULAR_TOL):
-        raise ValueError(f"beta: the Gibbs vector is singular at a 180° principal rotation "
-                         f"(|β0| < {SINGULAR_TOL:g}); use MRPs or Euler parameters there")
+        raise ValueError(
+            f"beta: the Gibbs vector is singular at a 180° principal rotation "
+            f"(|β0| < {SINGULAR_TOL:g}); use MRPs or Euler parameters there"
+        )
     return b[..., 1:] / b0[..., None]
 
 
@@ -455,8 +517,10 @@ def quaternion_to_mrp(beta) -> np.ndarray:
     b = require_quaternion(beta)
     den = 1 + b[..., 0]
     if np.any(den < SINGULAR_TOL):
-        raise ValueError(f"beta: the MRP vector is singular at β0 = −1 (1 + β0 < "
-                         f"{SINGULAR_TOL:g}); pass −beta, the same attitude")
+        raise ValueError(
+            f"beta: the MRP vector is singular at β0 = −1 (1 + β0 < "
+            f"{SINGULAR_TOL:g}); pass −beta, the same attitude"
+        )
     return b[..., 1:] / den[..., None]
 
 

@@ -30,7 +30,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 
-from flexsat.validation import require_finite
+from flexsat.input_checks import require_finite
 
 #: the paper's pyramid skew angle, 54.74° (seed000_part2.md §8.1, L4620), in rad
 SKEW = float(np.deg2rad(54.74))
@@ -55,8 +55,10 @@ def _require_units(n_units) -> int:
 @lru_cache(maxsize=64)
 def _axes(n_units: int, skew: float):
     phi = 2.0 * np.pi * np.arange(n_units) / n_units
-    g = np.stack([np.sin(skew) * np.cos(phi), np.sin(skew) * np.sin(phi),
-                  np.full(n_units, np.cos(skew))], axis=-1)
+    g = np.stack(
+        [np.sin(skew) * np.cos(phi), np.sin(skew) * np.sin(phi), np.full(n_units, np.cos(skew))],
+        axis=-1,
+    )
     a = np.stack([-np.sin(phi), np.cos(phi), np.zeros(n_units)], axis=-1)
     b = np.cross(g, a)
     for arr in (g, a, b):
@@ -253,12 +255,15 @@ def steer(sig, torque, a, b, alpha):
     lam = np.linalg.eigvalsh(m)
     # CCᵀ singular to working precision: its solve would return round-off amplified by 1/eps
     if np.any(lam[..., 0] <= 10 * np.finfo(float).eps * lam[..., -1]):
-        raise ValueError("sigma: singular gimbal set (CCᵀ singular to working precision): the "
-                         "pseudo-inverse has no solution; use alpha > 0 (singularity-robust "
-                         "inverse)")
+        raise ValueError(
+            "sigma: singular gimbal set (CCᵀ singular to working precision): the "
+            "pseudo-inverse has no solution; use alpha > 0 (singularity-robust "
+            "inverse)"
+        )
     shape = np.broadcast_shapes(m.shape[:-1], torque.shape)
-    y = np.linalg.solve(np.broadcast_to(m, shape + (3,)),
-                        -np.broadcast_to(torque, shape)[..., None])
+    y = np.linalg.solve(
+        np.broadcast_to(m, shape + (3,)), -np.broadcast_to(torque, shape)[..., None]
+    )
     return (ct @ y)[..., 0]
 
 
@@ -275,10 +280,22 @@ class GimbalRun:
     singular: bool
 
 
-def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alpha: float = 0.0,
-                      threshold: float = 1e-6, rtol: float = 1e-10, atol: float = 1e-12,
-                      n_out: int = 201, null_target=None, null_gain: float = 1.0,
-                      null_alpha: float = 0.0, stop_at_singular: bool = True) -> GimbalRun:
+def integrate_gimbals(
+    sigma0,
+    torque,
+    t_final,
+    skew=SKEW,
+    n_units: int = 4,
+    alpha: float = 0.0,
+    threshold: float = 1e-6,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    n_out: int = 201,
+    null_target=None,
+    null_gain: float = 1.0,
+    null_alpha: float = 0.0,
+    stop_at_singular: bool = True,
+) -> GimbalRun:
     """Integrate σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque(t)) from σ0 (§8.3), forward (t_final > 0) or
     backward (t_final < 0: the preferred-angle back integration), stopping when the gain
     det(CCᵀ) falls to ``threshold`` (a terminal solve_ivp event).
@@ -318,6 +335,7 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
 
         def torque_at(_t):
             return tq
+
     tf = float(require_finite(t_final, "t_final", "s"))
     if tf == 0:
         raise ValueError("t_final: must be nonzero (negative integrates backward)")
@@ -325,10 +343,13 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
     if thr <= 0:
         raise ValueError(f"threshold: must be > 0, got {threshold!r}")
     if stop_at_singular and gain(sig0, d, n) <= thr:
-        raise ValueError("sigma0: starts singular (det CCᵀ <= threshold); the pseudo-inverse "
-                         "cannot steer from it (use alpha > 0 and stop_at_singular=False)")
+        raise ValueError(
+            "sigma0: starts singular (det CCᵀ <= threshold); the pseudo-inverse "
+            "cannot steer from it (use alpha > 0 and stop_at_singular=False)"
+        )
 
     if null_target is None:
+
         def rhs(t, s):
             return steering_rates(s, torque_at(t), d, n, alpha)
     else:
@@ -337,17 +358,25 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
             raise ValueError(f"null_target: one gimbal set ({n},), got shape {target.shape}")
 
         def rhs(t, s):
-            return steering_with_null_motion(s, torque_at(t), target, null_gain, d, n, alpha,
-                                             null_alpha)
+            return steering_with_null_motion(
+                s, torque_at(t), target, null_gain, d, n, alpha, null_alpha
+            )
 
     def event(_t, s):
         return gain(s, d, n) - thr
 
     event.terminal = True
     event.direction = -1
-    sol = solve_ivp(rhs, (0.0, tf), sig0, method="DOP853",
-                    events=event if stop_at_singular else None, rtol=rtol, atol=atol,
-                    dense_output=True)
+    sol = solve_ivp(
+        rhs,
+        (0.0, tf),
+        sig0,
+        method="DOP853",
+        events=event if stop_at_singular else None,
+        rtol=rtol,
+        atol=atol,
+        dense_output=True,
+    )
     if sol.status == -1:
         raise RuntimeError(f"integrate_gimbals: solve_ivp failed: {sol.message}")
     t_end, singular = sol.t[-1], sol.status == 1
@@ -370,9 +399,15 @@ def integrate_gimbals(sigma0, torque, t_final, skew=SKEW, n_units: int = 4, alph
 PAPER_PERTURBATION = np.deg2rad([1.0, -3.0, 0.0, -1.0])
 
 
-def preferred_angles(direction, skew=SKEW, n_units: int = 4, perturbation=None,
-                     threshold: float = 1e-6, rtol: float = 1e-10,
-                     atol: float = 1e-12) -> np.ndarray:
+def preferred_angles(
+    direction,
+    skew=SKEW,
+    n_units: int = 4,
+    perturbation=None,
+    threshold: float = 1e-6,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+) -> np.ndarray:
     """Preferred initial gimbal angles for a momentum demand along u, by back integration from
     near saturation (Vadali, Oh & Walker; seed000_part2.md §8.3, F24, V4).
 
@@ -406,13 +441,16 @@ def preferred_angles(direction, skew=SKEW, n_units: int = 4, perturbation=None,
         raise ValueError(f"direction: must have 3 components, got shape {u.shape}")
     if perturbation is None:
         if n != 4:
-            raise ValueError(f"perturbation: required for n_units = {n} (the paper's offset "
-                             "is for the 4-unit pyramid)")
+            raise ValueError(
+                f"perturbation: required for n_units = {n} (the paper's offset "
+                "is for the 4-unit pyramid)"
+            )
         perturbation = PAPER_PERTURBATION
     dp = require_finite(perturbation, "perturbation", "rad")
     if dp.shape != (n,) or not np.any(dp):
-        raise ValueError(f"perturbation: must be a nonzero offset of shape ({n},), got "
-                         f"{np.shape(perturbation)}")
+        raise ValueError(
+            f"perturbation: must be a nonzero offset of shape ({n},), got {np.shape(perturbation)}"
+        )
     _, sig_sat = envelope(u, d, n)  # normalises u and rejects u = 0
     u = u / np.linalg.norm(u)
     start = sig_sat + dp
@@ -421,8 +459,10 @@ def preferred_angles(direction, skew=SKEW, n_units: int = 4, perturbation=None,
         raise ValueError("perturbation: moves the start set off the saturated side (uᵀh <= 0)")
     run = integrate_gimbals(start, -u, -t_back, d, n, threshold=threshold, rtol=rtol, atol=atol)
     if run.singular:
-        raise ValueError(f"perturbation: the back integration along {u} met a singularity at "
-                         f"t = {run.t[-1]:.6g} s; try another offset")
+        raise ValueError(
+            f"perturbation: the back integration along {u} met a singularity at "
+            f"t = {run.t[-1]:.6g} s; try another offset"
+        )
     return np.angle(np.exp(1j * run.sigma[-1]))
 
 
@@ -466,9 +506,16 @@ def preferred_set(direction) -> np.ndarray:
     return np.deg2rad(np.array(PREFERRED_SETS[int(np.argmax(cos))][1]))
 
 
-def steering_with_null_motion(sigma, torque, sigma_target, gain_k: float = 1.0, skew=SKEW,
-                              n_units: int = 4, alpha: float = 0.0,
-                              null_alpha: float = 0.0) -> np.ndarray:
+def steering_with_null_motion(
+    sigma,
+    torque,
+    sigma_target,
+    gain_k: float = 1.0,
+    skew=SKEW,
+    n_units: int = 4,
+    alpha: float = 0.0,
+    null_alpha: float = 0.0,
+) -> np.ndarray:
     """Torque steering with null motion beside it: σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque) + τ k(σ_f − σ)
     (§8.2 Eq. 7 plus §8.5 Eq. 13–15; the paper's conclusion that "the reorientation law may
     need to run alongside the torque law", L4758–L4764).
@@ -491,11 +538,14 @@ def steering_with_null_motion(sigma, torque, sigma_target, gain_k: float = 1.0, 
 
 def _torque_history(torque):
     """Wrap a callable torque so every value is checked: finite, shape (3,)."""
+
     def torque_at(t):
         value = require_finite(torque(t), "torque")
         if value.shape != (3,):
-            raise ValueError(f"torque: the callable must return 3 components, got shape "
-                             f"{value.shape} at t = {t!r} s")
+            raise ValueError(
+                f"torque: the callable must return 3 components, got shape "
+                f"{value.shape} at t = {t!r} s"
+            )
         return value
 
     torque_at(0.0)  # a bad callable fails before the integration starts
@@ -511,8 +561,9 @@ def _first_dip(sol, skew, n, thr):
     narrower than a step (e.g. a z torque from [45, −45, 45, −45]°, §8.3) that the event misses.
     So scan the dense output, 8 points a step, and refine every sampled local minimum.
     """
-    grid = np.concatenate([np.linspace(t0, t1, 9)[:-1] for t0, t1 in zip(sol.t[:-1], sol.t[1:])]
-                          + [sol.t[-1:]])
+    grid = np.concatenate(
+        [np.linspace(t0, t1, 9)[:-1] for t0, t1 in zip(sol.t[:-1], sol.t[1:])] + [sol.t[-1:]]
+    )
 
     def excess(t):
         return gain(sol.sol(t).T, skew, n) - thr
@@ -523,8 +574,12 @@ def _first_dip(sol, skew, n, thr):
             return brentq(excess, grid[j - 1], grid[j], xtol=1e-14)
         if j + 1 < grid.size and vals[j] <= vals[j - 1] and vals[j] <= vals[j + 1]:
             lo, hi = sorted((grid[j - 1], grid[j + 1]))
-            res = minimize_scalar(excess, bounds=(lo, hi), method="bounded",
-                                  options={"xatol": 1e-12 * max(1.0, abs(hi))})
+            res = minimize_scalar(
+                excess,
+                bounds=(lo, hi),
+                method="bounded",
+                options={"xatol": 1e-12 * max(1.0, abs(hi))},
+            )
             if res.fun <= 0:
                 return brentq(excess, grid[j - 1], res.x, xtol=1e-14)
     return None
@@ -543,16 +598,28 @@ def null_projector(sigma, skew=SKEW, n_units: int = 4, alpha: float = 0.0) -> np
     c = jacobian(sigma, skew, n_units)
     ct = np.swapaxes(c, -1, -2)
     m = c @ ct + al * np.eye(3)
-    if al == 0 and np.any(np.linalg.eigvalsh(m)[..., 0]
-                          <= 10 * np.finfo(float).eps * np.linalg.eigvalsh(m)[..., -1]):
-        raise ValueError("sigma: singular gimbal set (CCᵀ singular to working precision): the "
-                         "projector needs alpha > 0 (singularity-robust inverse)")
+    if al == 0 and np.any(
+        np.linalg.eigvalsh(m)[..., 0] <= 10 * np.finfo(float).eps * np.linalg.eigvalsh(m)[..., -1]
+    ):
+        raise ValueError(
+            "sigma: singular gimbal set (CCᵀ singular to working precision): the "
+            "projector needs alpha > 0 (singularity-robust inverse)"
+        )
     return np.eye(c.shape[-1]) - ct @ np.linalg.solve(m, c)
 
 
-def reorient(sigma0, sigma_target, t_final, gain_k: float = 1.0, skew=SKEW, n_units: int = 4,
-             alpha: float = 1e-3, rtol: float = 1e-10, atol: float = 1e-12,
-             n_out: int = 201) -> GimbalRun:
+def reorient(
+    sigma0,
+    sigma_target,
+    t_final,
+    gain_k: float = 1.0,
+    skew=SKEW,
+    n_units: int = 4,
+    alpha: float = 1e-3,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    n_out: int = 201,
+) -> GimbalRun:
     """Null-motion gimbal reorientation σ̇ = τ d, d = k(σ_f − σ) (§8.5 Eq. 13–17).
 
     V = ½|σ_f − σ|² falls as V' = −k(σ_f − σ)ᵀτ(σ_f − σ) <= 0 (Eq. 16); α > 0 (the paper's
@@ -574,8 +641,7 @@ def reorient(sigma0, sigma_target, t_final, gain_k: float = 1.0, skew=SKEW, n_un
     def rhs(_t, s):
         return null_projector(s, d, n, alpha) @ (k * (sigf - s))
 
-    sol = solve_ivp(rhs, (0.0, tf), sig0, method="DOP853", rtol=rtol, atol=atol,
-                    dense_output=True)
+    sol = solve_ivp(rhs, (0.0, tf), sig0, method="DOP853", rtol=rtol, atol=atol, dense_output=True)
     if sol.status == -1:
         raise RuntimeError(f"reorient: solve_ivp failed: {sol.message}")
     t = np.linspace(0.0, tf, n_out)

@@ -50,8 +50,8 @@ from flexsat.dynamics.rigid_spacecraft import (
     normalize_quaternion,
     quaternion_kinematics,
 )
+from flexsat.input_checks import require_finite
 from flexsat.units import to_si_array
-from flexsat.validation import require_finite
 
 __all__ = ["CmgSpacecraft", "SingularityEvent", "STEERING_LAWS"]
 
@@ -98,31 +98,45 @@ class CmgSpacecraft(Plant):
     recorded = ("attitude", "euler123", "rate", "gimbal_angles", "cmg_momentum", "gain")
     nonlinear = True
 
-    def __init__(self, inertia, rotor_momentum, skew=cmg.SKEW, n_units: int = 4,
-                 steering: str = "pi", alpha: float = 1e-3, gimbal_rate_limit=np.inf):
+    def __init__(
+        self,
+        inertia,
+        rotor_momentum,
+        skew=cmg.SKEW,
+        n_units: int = 4,
+        steering: str = "pi",
+        alpha: float = 1e-3,
+        gimbal_rate_limit=np.inf,
+    ):
         J = require_inertia(inertia)
         if J.shape != (3, 3):
             raise ValueError(f"inertia: must have shape (3, 3), got {J.shape}")
         self.inertia, self.inertia_inverse = J, np.linalg.inv(J)
         hr = to_si_array(rotor_momentum, "N*m*s", "rotor_momentum")
         if hr.ndim != 0 or not np.isfinite(hr) or hr <= 0:
-            raise ValueError(f"rotor_momentum: must be one finite value > 0 N m s, got "
-                             f"{rotor_momentum!r}")
+            raise ValueError(
+                f"rotor_momentum: must be one finite value > 0 N m s, got {rotor_momentum!r}"
+            )
         self.rotor_momentum = float(hr)
         self.n_units = cmg._require_units(n_units)
         self.skew = cmg._require_skew(skew)
         if steering not in STEERING_LAWS:
-            raise ValueError(f"steering: must be one of {STEERING_LAWS} (pseudo-inverse or "
-                             f"singularity-robust inverse), got {steering!r}")
+            raise ValueError(
+                f"steering: must be one of {STEERING_LAWS} (pseudo-inverse or "
+                f"singularity-robust inverse), got {steering!r}"
+            )
         self.steering = steering
         al = float(require_finite(alpha, "alpha"))
         if steering == "sr" and al <= 0:
-            raise ValueError(f"alpha: the singularity-robust inverse needs alpha > 0, got {alpha!r}")
+            raise ValueError(
+                f"alpha: the singularity-robust inverse needs alpha > 0, got {alpha!r}"
+            )
         self.alpha = al if steering == "sr" else 0.0
         limit = to_si_array(gimbal_rate_limit, "rad/s", "gimbal_rate_limit")
         if limit.ndim != 0 or np.isnan(limit) or limit <= 0:
-            raise ValueError(f"gimbal_rate_limit: must be > 0 rad/s (inf for none), got "
-                             f"{gimbal_rate_limit!r}")
+            raise ValueError(
+                f"gimbal_rate_limit: must be > 0 rad/s (inf for none), got {gimbal_rate_limit!r}"
+            )
         self.gimbal_rate_limit = float(limit)
         n = self.n_units
         _, self._a, self._b = cmg.pyramid_axes(n, self.skew)
@@ -170,8 +184,9 @@ class CmgSpacecraft(Plant):
 
     def _hdot(self, sig, sdot):
         """h_r C(σ) σ̇ = h_r Σ_i σ̇_i (−sinσ_i a_i + cosσ_i b_i)."""
-        return self.rotor_momentum * ((-np.sin(sig) * sdot) @ self._a
-                                      + (np.cos(sig) * sdot) @ self._b)
+        return self.rotor_momentum * (
+            (-np.sin(sig) * sdot) @ self._a + (np.cos(sig) * sdot) @ self._b
+        )
 
     def gimbal_rates(self, x, u) -> np.ndarray:
         """σ̇ of the steering law for the commanded torque u, after the rate limit (module
@@ -189,8 +204,10 @@ class CmgSpacecraft(Plant):
         try:
             rates = cmg.steer(sig, demand, self._a, self._b, self.alpha)
         except ValueError as err:
-            raise ValueError(f"torque: the pseudo-inverse steering (steering='pi') cannot "
-                             f"deliver it: {err}; configure steering='sr'") from None
+            raise ValueError(
+                f"torque: the pseudo-inverse steering (steering='pi') cannot "
+                f"deliver it: {err}; configure steering='sr'"
+            ) from None
         if np.isfinite(self.gimbal_rate_limit):
             peak = np.abs(rates).max(axis=-1, keepdims=True)
             rates = rates * np.minimum(1.0, self.gimbal_rate_limit / np.maximum(peak, 1e-300))
@@ -199,9 +216,10 @@ class CmgSpacecraft(Plant):
     def _rates(self, w, sig, u):
         """(ω̇, σ̇) at body rate w, gimbals sig and command u."""
         sdot = self._gimbal_rates(w, sig, np.asarray(u, float))
-        wdot = matvec(self.inertia_inverse, -cross3(w, matvec(self.inertia, w)
-                                                    + self._momentum(sig))
-                      - self._hdot(sig, sdot))
+        wdot = matvec(
+            self.inertia_inverse,
+            -cross3(w, matvec(self.inertia, w) + self._momentum(sig)) - self._hdot(sig, sdot),
+        )
         return wdot, sdot
 
     def linear_part(self):
@@ -278,8 +296,13 @@ class CmgSpacecraft(Plant):
         edges = np.flatnonzero(np.diff(np.concatenate([[0], below.astype(int), [0]])))
         for start, stop in zip(edges[::2], edges[1::2]):
             k = start + int(np.argmin(g[start:stop]))
-            sing = cmg.classify_singularity(np.asarray(x)[k, 7:], self.skew, self.n_units,
-                                            threshold=max(thr, g[k] * (1 + 1e-12)))
-            events.append(SingularityEvent(float(t[start]), float(g[k]), float(t[k]),
-                                           bool(sing.internal)))
+            sing = cmg.classify_singularity(
+                np.asarray(x)[k, 7:],
+                self.skew,
+                self.n_units,
+                threshold=max(thr, g[k] * (1 + 1e-12)),
+            )
+            events.append(
+                SingularityEvent(float(t[start]), float(g[k]), float(t[k]), bool(sing.internal))
+            )
         return events

@@ -36,22 +36,37 @@ class DispersedPlant(Plant):
             raise ValueError("plants: give one or more Plant instances")
         first = plants[0]
         for i, p in enumerate(plants[1:], 1):
-            for field in ("inputs", "outputs", "nx", "noise_channels", "recorded", "nonlinear",
-                          "single_axis_maneuver"):
+            for field in (
+                "inputs",
+                "outputs",
+                "nx",
+                "noise_channels",
+                "recorded",
+                "nonlinear",
+                "single_axis_maneuver",
+            ):
                 a, b = getattr(first, field), getattr(p, field)
-                if (tuple(a) if isinstance(a, tuple) else a) != \
-                        (tuple(b) if isinstance(b, tuple) else b):
-                    raise ValueError(f"{field}: plants[{i}] has {field} {_show(b)}, plants[0] "
-                                     f"has {_show(a)}; a dispersed batch needs the same "
-                                     f"channels and state")
+                if (tuple(a) if isinstance(a, tuple) else a) != (
+                    tuple(b) if isinstance(b, tuple) else b
+                ):
+                    raise ValueError(
+                        f"{field}: plants[{i}] has {field} {_show(b)}, plants[0] "
+                        f"has {_show(a)}; a dispersed batch needs the same "
+                        f"channels and state"
+                    )
             if (first.force_matrix is None) != (p.force_matrix is None) or (
-                    first.force_matrix is not None
-                    and np.shape(first.force_matrix) != np.shape(p.force_matrix)):
-                raise ValueError(f"force_matrix: plants[{i}] has a different nonlinear force "
-                                 "structure from plants[0]")
+                first.force_matrix is not None
+                and np.shape(first.force_matrix) != np.shape(p.force_matrix)
+            ):
+                raise ValueError(
+                    f"force_matrix: plants[{i}] has a different nonlinear force "
+                    "structure from plants[0]"
+                )
             if getattr(p, "step", None) is not None:
-                raise ValueError(f"step: plants[{i}] has its own integrator; a dispersed batch "
-                                 "is propagated by the exponential integrators")
+                raise ValueError(
+                    f"step: plants[{i}] has its own integrator; a dispersed batch "
+                    "is propagated by the exponential integrators"
+                )
         self.plants = plants
         self.inputs = tuple(first.inputs)
         self.outputs = tuple(first.outputs)
@@ -66,8 +81,10 @@ class DispersedPlant(Plant):
         for name, M in (("A", self._linear[0]), ("B", self._linear[1])):
             bad = np.argwhere(~np.isfinite(M).reshape(len(plants), -1).all(axis=1))
             if bad.size:
-                raise ValueError(f"{name}: plants[{int(bad[0, 0])}] has a non-finite entry in "
-                                 f"its linear part; check its dispersed parameters")
+                raise ValueError(
+                    f"{name}: plants[{int(bad[0, 0])}] has a non-finite entry in "
+                    f"its linear part; check its dispersed parameters"
+                )
 
     @property
     def nx(self) -> int:
@@ -94,8 +111,10 @@ class DispersedPlant(Plant):
 
     def nonlinear_force(self, x, u):
         """Each case's force from its own plant; x (..., n_cases, n_x)."""
-        return np.stack([p.nonlinear_force(x[..., i, :], u[..., i, :])
-                         for i, p in enumerate(self.plants)], axis=-2)
+        return np.stack(
+            [p.nonlinear_force(x[..., i, :], u[..., i, :]) for i, p in enumerate(self.plants)],
+            axis=-2,
+        )
 
     def output_matrices(self, name: str):
         mats = [p.output_matrices(name) for p in self.plants]
@@ -105,9 +124,15 @@ class DispersedPlant(Plant):
 
     def output(self, name, x, u, f_in=None):
         """Output ``name`` per case, x (..., n_cases, n_x)."""
-        return np.stack([p.output(name, x[..., i, :], u[..., i, :],
-                                  None if f_in is None else f_in[..., i, :])
-                         for i, p in enumerate(self.plants)], axis=x.ndim - 2)
+        return np.stack(
+            [
+                p.output(
+                    name, x[..., i, :], u[..., i, :], None if f_in is None else f_in[..., i, :]
+                )
+                for i, p in enumerate(self.plants)
+            ],
+            axis=x.ndim - 2,
+        )
 
     def _per_case(self, method: str, x):
         values = [getattr(p, method)(x[..., i, :]) for i, p in enumerate(self.plants)]
@@ -126,12 +151,19 @@ class DispersedPlant(Plant):
 
     def __getattr__(self, name):
         # per-case extras of the planar plants (vibration_energy): only when every plant has it
-        if name == "vibration_energy" and all(hasattr(p, name) for p in self.__dict__.get(
-                "plants", ())):
+        if name == "vibration_energy" and all(
+            hasattr(p, name) for p in self.__dict__.get("plants", ())
+        ):
+
             def vibration_energy(x, energy=None):
-                return np.stack([p.vibration_energy(x[..., i, :], None if energy is None
-                                                    else energy[..., i])
-                                 for i, p in enumerate(self.plants)], axis=x.ndim - 2)
+                return np.stack(
+                    [
+                        p.vibration_energy(x[..., i, :], None if energy is None else energy[..., i])
+                        for i, p in enumerate(self.plants)
+                    ],
+                    axis=x.ndim - 2,
+                )
+
             return vibration_energy
         raise AttributeError(name)
 

@@ -82,8 +82,8 @@ from flexsat.dynamics.plant import Channel, Plant
 from flexsat.dynamics.rigid_body import cross3, matvec
 from flexsat.dynamics.rigid_spacecraft import (
     ATTITUDE_OUTPUTS,
-    attitude_state_from,
     attitude_output,
+    attitude_state_from,
     dcm,
     kinematics_jacobians,
     normalize_quaternion,
@@ -99,8 +99,9 @@ _AXES = {"x": 0, "y": 1, "z": 2}
 
 def _check_node(modal: ModalModel, node, field: str) -> None:
     if not (isinstance(node, (int, np.integer)) and np.any(modal.node_ids == node)):
-        shown = ", ".join(map(str, modal.node_ids[:8])) + (" ..." if modal.node_ids.size > 8
-                                                          else "")
+        shown = ", ".join(map(str, modal.node_ids[:8])) + (
+            " ..." if modal.node_ids.size > 8 else ""
+        )
         raise ValueError(f"{field}: unknown node {node!r} (nodes: {shown})")
 
 
@@ -111,8 +112,9 @@ def _points(items, field: str, modal: ModalModel) -> list[tuple[int, str]]:
         try:
             node, axis = item
         except (TypeError, ValueError):
-            raise ValueError(f"{field}[{i}]: must be a pair (node, 'x'|'y'|'z'), "
-                             f"got {item!r}") from None
+            raise ValueError(
+                f"{field}[{i}]: must be a pair (node, 'x'|'y'|'z'), got {item!r}"
+            ) from None
         if not isinstance(axis, str) or axis.lower() not in _AXES:
             raise ValueError(f"{field}[{i}]: axis must be 'x', 'y' or 'z', got {axis!r}")
         _check_node(modal, node, f"{field}[{i}]")
@@ -163,14 +165,25 @@ class FlexibleSpacecraft(Plant):
     integrator = "exp_rk4"
     recorded = ("attitude", "euler123", "rate")
 
-    def __init__(self, modal, forces=(), displacements=(), rotations=(), torque_node=None,
-                 translation=False, n_modes=None, rigid_frequency=RIGID_FREQUENCY):
+    def __init__(
+        self,
+        modal,
+        forces=(),
+        displacements=(),
+        rotations=(),
+        torque_node=None,
+        translation=False,
+        n_modes=None,
+        rigid_frequency=RIGID_FREQUENCY,
+    ):
         if not isinstance(modal, ModalModel):
             raise ValueError(f"modal: must be a ModalModel, got {type(modal).__name__}")
         if modal.boundary != "free":
-            raise ValueError(f"modal: must be free-free (boundary 'free'), got "
-                             f"{modal.boundary!r}: hybrid coordinates here carry the rigid "
-                             f"motion of the whole structure")
+            raise ValueError(
+                f"modal: must be free-free (boundary 'free'), got "
+                f"{modal.boundary!r}: hybrid coordinates here carry the rigid "
+                f"motion of the whole structure"
+            )
         elastic = modal.elastic(rigid_frequency)
         if n_modes is not None:
             elastic = elastic.truncate(n_modes)
@@ -186,12 +199,14 @@ class FlexibleSpacecraft(Plant):
         Delta = L[:, 3:] + L[:, :3] @ skew(d)
         Mr = np.block([[J, Delta.T], [Delta, np.eye(n)]])
         if np.linalg.eigvalsh(Mr).min() <= 1e-12 * np.abs(J).max():
-            raise ValueError("modal: the rotational participation exceeds the inertia "
-                             "(J − ΔᵀΔ not positive definite): not a free-free model")
+            raise ValueError(
+                "modal: the rotational participation exceeds the inertia "
+                "(J − ΔᵀΔ not positive definite): not a free-free model"
+            )
         self.inertia, self.coupling = J, Delta
         self.rotation_mass = Mr
         self.rotation_mass_inverse = np.linalg.inv(Mr)
-        self.stiffness = elastic.frequencies ** 2
+        self.stiffness = elastic.frequencies**2
         self.damping = 2 * elastic.damping * elastic.frequencies
 
         self.forces = _points(forces, "forces", elastic)
@@ -214,32 +229,62 @@ class FlexibleSpacecraft(Plant):
             self.torque_modal = elastic.torque_input(torque_node, ["x", "y", "z"])
 
         tag = "{}{}".format
-        self.inputs = (Channel("torque", "N*m", 3, "ideal torquers at the centre of mass, "
-                               "body axes"),) + tuple(
-            Channel(f"force_{tag(node, axis.upper())}", "N", 1,
-                    f"point force at node {node} along body {axis}")
-            for node, axis in self.forces)
+        self.inputs = (
+            Channel("torque", "N*m", 3, "ideal torquers at the centre of mass, body axes"),
+        ) + tuple(
+            Channel(
+                f"force_{tag(node, axis.upper())}",
+                "N",
+                1,
+                f"point force at node {node} along body {axis}",
+            )
+            for node, axis in self.forces
+        )
         outputs = list(ATTITUDE_OUTPUTS)
         if self.translation:
-            outputs += [Channel("position", "m", 3, "centre of mass, inertial axes"),
-                        Channel("velocity", "m/s", 3, "centre of mass, inertial axes")]
-        outputs += [Channel(f"displacement_{tag(node, axis.upper())}", "m", 1,
-                            f"elastic displacement of node {node} along body {axis}")
-                    for node, axis in self.displacements]
-        outputs += [Channel(f"rotation_{tag(node, axis.upper())}", "rad", 1,
-                            f"elastic rotation of node {node} about body {axis}")
-                    for node, axis in self.rotations]
+            outputs += [
+                Channel("position", "m", 3, "centre of mass, inertial axes"),
+                Channel("velocity", "m/s", 3, "centre of mass, inertial axes"),
+            ]
+        outputs += [
+            Channel(
+                f"displacement_{tag(node, axis.upper())}",
+                "m",
+                1,
+                f"elastic displacement of node {node} along body {axis}",
+            )
+            for node, axis in self.displacements
+        ]
+        outputs += [
+            Channel(
+                f"rotation_{tag(node, axis.upper())}",
+                "rad",
+                1,
+                f"elastic rotation of node {node} about body {axis}",
+            )
+            for node, axis in self.rotations
+        ]
         # last, so the node outputs keep their places (and their noise columns before it)
-        outputs.append(Channel("elastic", "", 2 * n, "elastic coordinates [η, η̇] (modal "
-                               "units: m √kg and m √kg/s)"))
+        outputs.append(
+            Channel(
+                "elastic", "", 2 * n, "elastic coordinates [η, η̇] (modal units: m √kg and m √kg/s)"
+            )
+        )
         self.outputs = tuple(outputs)
         # the node outputs are what a flexible run is about (the rim deflections of seed 003)
-        self.recorded = type(self).recorded + tuple(c.name for c in self.outputs if c.name
-                                                    .startswith(("displacement_", "rotation_")))
-        self._rows = {f"displacement_{tag(node, axis.upper())}": elastic.displacement_output(
-            node, axis) for node, axis in self.displacements}
-        self._rows.update({f"rotation_{tag(node, axis.upper())}": elastic.rotation_output(
-            node, axis) for node, axis in self.rotations})
+        self.recorded = type(self).recorded + tuple(
+            c.name for c in self.outputs if c.name.startswith(("displacement_", "rotation_"))
+        )
+        self._rows = {
+            f"displacement_{tag(node, axis.upper())}": elastic.displacement_output(node, axis)
+            for node, axis in self.displacements
+        }
+        self._rows.update(
+            {
+                f"rotation_{tag(node, axis.upper())}": elastic.rotation_output(node, axis)
+                for node, axis in self.rotations
+            }
+        )
 
         # index layout of x
         t = 6 if self.translation else 0
@@ -249,22 +294,28 @@ class FlexibleSpacecraft(Plant):
         self._linear = self._build_linear()
         self._force_matrix = self._build_force_matrix()
 
-    def reduced(self, n_modes: int) -> "FlexibleSpacecraft":
+    def reduced(self, n_modes: int) -> FlexibleSpacecraft:
         """The same spacecraft on its first ``n_modes`` elastic modes (a controller's design
         model): the same modal model, forces, outputs and torque node. Use it rather than a
         separate eigen-solution with fewer modes, whose repeated pairs (the EPS's symmetric
         antenna) may come out rotated or of opposite sign, so that a law reading the first
         modes of this plant would read other coordinates."""
-        from flexsat.validation import require_count
+        from flexsat.input_checks import require_count
 
         n_modes = require_count(n_modes, "n_modes")
         if n_modes > self.n_modes:
-            raise ValueError(f"n_modes: at most the plant's {self.n_modes} elastic modes, got "
-                             f"{n_modes}")
-        return FlexibleSpacecraft(self.modal, forces=self.forces,
-                                  displacements=self.displacements, rotations=self.rotations,
-                                  torque_node=self.torque_node, translation=self.translation,
-                                  n_modes=n_modes)
+            raise ValueError(
+                f"n_modes: at most the plant's {self.n_modes} elastic modes, got {n_modes}"
+            )
+        return FlexibleSpacecraft(
+            self.modal,
+            forces=self.forces,
+            displacements=self.displacements,
+            rotations=self.rotations,
+            torque_node=self.torque_node,
+            translation=self.translation,
+            n_modes=n_modes,
+        )
 
     # -- sizes -----------------------------------------------------------------------------
     @property
@@ -390,9 +441,12 @@ class FlexibleSpacecraft(Plant):
             dF[..., :, 0] = 2 * b0 * F + 2 * cross3(bv, F)
             eye = np.eye(3)
             bF = np.sum(bv * F, axis=-1)[..., None, None]
-            dF[..., :, 1:] = (-2 * F[..., :, None] * bv[..., None, :] + 2 * bF * eye
-                              + 2 * bv[..., :, None] * F[..., None, :]
-                              - 2 * b0[..., None] * skew(F))
+            dF[..., :, 1:] = (
+                -2 * F[..., :, None] * bv[..., None, :]
+                + 2 * bF * eye
+                + 2 * bv[..., :, None] * F[..., None, :]
+                - 2 * b0[..., None] * skew(F)
+            )
             Jx[..., 7:10, :4] = dF / self.mass
             Ct = np.swapaxes(dcm(beta), -1, -2)
             Ju[..., 7:10, 3:] = (Ct - eye) @ self.force_directions / self.mass
@@ -401,8 +455,9 @@ class FlexibleSpacecraft(Plant):
     def rhs(self, x, u) -> np.ndarray:
         """ẋ = A x + B u + B_f f(x, u), the full right-hand side (for reference integrators)."""
         A, B = self._linear
-        return x @ A.T + np.asarray(u, float) @ B.T + self.nonlinear_force(x, u) @ \
-            self._force_matrix.T
+        return (
+            x @ A.T + np.asarray(u, float) @ B.T + self.nonlinear_force(x, u) @ self._force_matrix.T
+        )
 
     def normalize(self, x) -> np.ndarray:
         """β scaled back to unit norm after a step (the exponential integrator does not keep
@@ -422,7 +477,7 @@ class FlexibleSpacecraft(Plant):
         elif name in ("position", "velocity") and self.translation:
             C = np.eye(self.nx)[7:10] if name == "position" else np.eye(self.nx)[10:13]
         elif name == "elastic":
-            C = np.eye(self.nx)[self._eta.start:self._eta_dot.stop]
+            C = np.eye(self.nx)[self._eta.start : self._eta_dot.stop]
         else:
             return None
         return C, np.zeros((C.shape[0], m)), None
@@ -432,7 +487,7 @@ class FlexibleSpacecraft(Plant):
         if name in self._rows:
             return x[..., self._eta] @ self._rows[name]
         if name == "elastic":
-            return x[..., self._eta.start:self._eta_dot.stop]
+            return x[..., self._eta.start : self._eta_dot.stop]
         if name == "position":
             return x[..., 7:10]
         if name == "velocity":
@@ -445,7 +500,8 @@ class FlexibleSpacecraft(Plant):
         p = x[..., self._velocity_rows()]
         eta = x[..., self._eta]
         E = 0.5 * np.sum(p * (p @ self.rotation_mass), -1) + 0.5 * np.sum(
-            self.stiffness * eta * eta, -1)
+            self.stiffness * eta * eta, -1
+        )
         if self.translation:
             E = E + 0.5 * self.mass * np.sum(x[..., 10:13] ** 2, -1)
         return E

@@ -39,9 +39,14 @@ import numpy as np
 from flexsat import limits
 from flexsat.dynamics.hybrid import HYBRID_OUTPUTS, HybridPlant
 from flexsat.dynamics.plant import Channel
+from flexsat.input_checks import (
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+    set_si,
+)
 from flexsat.structures.beam import TipMassCantilever
-from flexsat.validation import (require_count, require_finite, require_nonneg, require_positive,
-                                set_si)
 
 
 @lru_cache(maxsize=16)
@@ -94,8 +99,12 @@ class HubAppendageParams:
     damping: float | tuple[float, ...] = 0.0
 
     def __post_init__(self):
-        for name, unit in (("hub_inertia", "kg*m**2"), ("length", "m"), ("EI", "N*m**2"),
-                           ("rho", "kg/m")):
+        for name, unit in (
+            ("hub_inertia", "kg*m**2"),
+            ("length", "m"),
+            ("EI", "N*m**2"),
+            ("rho", "kg/m"),
+        ):
             set_si(self, name, require_positive, unit)
         for name, unit in (("hub_radius", "m"), ("tip_mass", "kg"), ("tip_inertia", "kg*m**2")):
             set_si(self, name, require_nonneg, unit)
@@ -272,10 +281,17 @@ class HubAppendage(HybridPlant):
         """
         p, z = self.params, np.zeros(self.ndof)
         moment = np.concatenate([[p.appendage_inertia], self.coupling])
-        shear = np.concatenate([[p.rho * (p.tip_radius**2 - p.hub_radius**2) / 2
-                                 + p.tip_mass * p.tip_radius], self._quad["e"]])
-        acc = {"root_torque": moment, "root_shear": shear,
-               "root_moment": p.hub_radius * shear - moment}.get(name)
+        shear = np.concatenate(
+            [
+                [p.rho * (p.tip_radius**2 - p.hub_radius**2) / 2 + p.tip_mass * p.tip_radius],
+                self._quad["e"],
+            ]
+        )
+        acc = {
+            "root_torque": moment,
+            "root_shear": shear,
+            "root_moment": p.hub_radius * shear - moment,
+        }.get(name)
         if acc is None:
             return super()._output_coefficients(name)
         return z, z, acc, 0.0

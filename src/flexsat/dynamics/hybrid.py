@@ -21,7 +21,7 @@ import numpy as np
 from scipy.linalg import eigh
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.validation import require_count, require_finite, require_positive
+from flexsat.input_checks import require_count, require_finite, require_positive
 
 
 class OutputChannels(tuple):
@@ -167,8 +167,9 @@ class HybridPlant(Plant):
         """Output ``name`` at x (..., n_x), u (..., 1) and extra hub force f_in (..., 1)."""
         if self.output_matrices(name) is not None:
             return super().output(name, x, u, f_in)
-        extra = 0.0 if f_in is None else np.multiply.outer(np.asarray(f_in)[..., 0],
-                                                           self.torque_input)
+        extra = (
+            0.0 if f_in is None else np.multiply.outer(np.asarray(f_in)[..., 0], self.torque_input)
+        )
         return self.output_values(x, np.asarray(u)[..., 0], extra)[name]
 
     def momentum(self, x: np.ndarray) -> np.ndarray:
@@ -200,8 +201,10 @@ class HybridPlant(Plant):
         return np.zeros(x.shape[:-1] + (self.ndof,))
 
     def _linear_force(self, pos, vel, u):
-        return -pos @ self.stiffness_matrix - vel @ self.damping_matrix + np.multiply.outer(
-            _torque(u, pos), self.torque_input
+        return (
+            -pos @ self.stiffness_matrix
+            - vel @ self.damping_matrix
+            + np.multiply.outer(_torque(u, pos), self.torque_input)
         )
 
     def acceleration(self, x: np.ndarray, u, extra_force=0.0) -> np.ndarray:
@@ -262,8 +265,11 @@ class HybridPlant(Plant):
         pos, vel = self.split(x)
         hub_ke = 0.5 * self.hub_inertia * vel[..., 0] ** 2
         flexible = self.energy(x) - hub_ke
-        return (hub_ke + 0.5 * g1 * (pos[..., 0] - theta_f) ** 2
-                + (1 + g3 / self.n_appendages) * flexible)
+        return (
+            hub_ke
+            + 0.5 * g1 * (pos[..., 0] - theta_f) ** 2
+            + (1 + g3 / self.n_appendages) * flexible
+        )
 
 
 class ModalHybrid(HybridPlant):
@@ -295,8 +301,11 @@ class ModalHybrid(HybridPlant):
         self.hub_inertia = float(require_positive(hub_inertia, "hub_inertia"))
         M, D, K = hub_appendage_matrices(modal, self.hub_inertia, axis=axis)
         self.mass_matrix, self.damping_matrix, self.stiffness_matrix = M, D, K
-        self._tip = (np.zeros(modal.n_modes) if tip is None
-                     else np.asarray(modal.displacement_output(*tip), float))
+        self._tip = (
+            np.zeros(modal.n_modes)
+            if tip is None
+            else np.asarray(modal.displacement_output(*tip), float)
+        )
         require_finite(self._tip, "tip")
 
     @property

@@ -45,7 +45,7 @@ from functools import cached_property
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant, find_channel
-from flexsat.validation import require_finite, require_positive
+from flexsat.input_checks import require_finite, require_positive
 
 __all__ = ["BeamInOrbit"]
 
@@ -78,8 +78,9 @@ class BeamInOrbit(Plant):
         self.orbit_rate = float(require_positive(orbit_rate, "orbit_rate", "rad/s"))
         F = np.atleast_1d(require_finite(frequency_ratios, "frequency_ratios"))
         if F.ndim != 1 or np.any(F <= 0):
-            raise ValueError(f"frequency_ratios: must be a 1-D list of (ω_n/ω_c)² > 0, got "
-                             f"{frequency_ratios!r}")
+            raise ValueError(
+                f"frequency_ratios: must be a 1-D list of (ω_n/ω_c)² > 0, got {frequency_ratios!r}"
+            )
         self.frequency_ratios = F
         k = F.size
         n = k + 1
@@ -90,13 +91,14 @@ class BeamInOrbit(Plant):
             Channel(name, "N")
             col = require_finite(col, name)
             if col.shape != (n,):
-                raise ValueError(f"{name}: its column of G must have 1 + {k} = {n} entries "
-                                 f"(pitch, then each mode), got shape {col.shape}")
+                raise ValueError(
+                    f"{name}: its column of G must have 1 + {k} = {n} entries "
+                    f"(pitch, then each mode), got shape {col.shape}"
+                )
             cols.append(col.astype(float))
         self.G = np.column_stack(cols)
         self.G.flags.writeable = False
-        self.inputs = tuple(Channel(name, "N", description="point force")
-                            for name in actuators)
+        self.inputs = tuple(Channel(name, "N", description="point force") for name in actuators)
         self.length = None if length is None else float(require_positive(length, "length", "m"))
         unit = "" if self.length is None else "m"
         stations = {} if stations is None else stations
@@ -104,13 +106,18 @@ class BeamInOrbit(Plant):
         for name, values in stations.items():
             values = np.atleast_1d(require_finite(values, f"w_{name}"))
             if values.shape != (k,):
-                raise ValueError(f"w_{name}: station shape values must have {k} entries (one "
-                                 f"per mode), got shape {values.shape}")
+                raise ValueError(
+                    f"w_{name}: station shape values must have {k} entries (one "
+                    f"per mode), got shape {values.shape}"
+                )
             rows[f"w_{name}"] = values * (1.0 if self.length is None else self.length)
-        outs = [Channel("pitch", "rad", description="pitch from the local vertical"),
-                Channel("pitch_rate", "rad/s")]
-        outs += [Channel(f"z{i}", "", description=f"bending amplitude A_{i}/l")
-                 for i in range(1, n)]
+        outs = [
+            Channel("pitch", "rad", description="pitch from the local vertical"),
+            Channel("pitch_rate", "rad/s"),
+        ]
+        outs += [
+            Channel(f"z{i}", "", description=f"bending amplitude A_{i}/l") for i in range(1, n)
+        ]
         outs += [Channel(f"z{i}_rate", "1/s") for i in range(1, n)]
         outs += [Channel(name, unit, description="elastic deflection") for name in rows]
         outs += [Channel("state", "", 2 * n, "[θ, z, θ̇, ż] (what a state-feedback law reads)")]
@@ -221,5 +228,7 @@ class BeamInOrbit(Plant):
         return C, np.zeros((1, self.n_inputs)), None
 
     def __repr__(self) -> str:
-        return (f"BeamInOrbit(orbit_rate={self.orbit_rate:.6g} rad/s, "
-                f"modes={self.n_coordinates - 1}, inputs={[c.name for c in self.inputs]})")
+        return (
+            f"BeamInOrbit(orbit_rate={self.orbit_rate:.6g} rad/s, "
+            f"modes={self.n_coordinates - 1}, inputs={[c.name for c in self.inputs]})"
+        )

@@ -77,8 +77,9 @@ def find_channel(channels: tuple[Channel, ...], name: str, role: str, owner: str
         if ch.name == name:
             return ch
     known = ", ".join(c.name for c in channels) or "none"
-    raise ValueError(f"{name}: {owner} has no {role} channel {name!r} (its {role} channels: "
-                     f"{known})")
+    raise ValueError(
+        f"{name}: {owner} has no {role} channel {name!r} (its {role} channels: {known})"
+    )
 
 
 class Plant(ABC):
@@ -97,6 +98,7 @@ class Plant(ABC):
     #: a single-axis maneuver plant: its scalar outputs ``theta`` and ``theta_dot`` (the hub
     #: angle and rate) are read against the law's reference for the maneuver metrics
     single_axis_maneuver: bool = False
+
     @property
     def noise_channels(self) -> tuple[str, ...]:
         """Channels with a per-case Gaussian noise stream, in stream order (outputs for sensor
@@ -107,11 +109,13 @@ class Plant(ABC):
         if given is not None:
             return given
         return tuple(c.name for c in self.outputs if c.name != "state") + tuple(
-            c.name for c in self.inputs)
+            c.name for c in self.inputs
+        )
 
     @noise_channels.setter
     def noise_channels(self, names) -> None:
         self._noise_channels = tuple(names)
+
     #: True when f is not identically zero
     nonlinear: bool = False
 
@@ -164,8 +168,9 @@ class Plant(ABC):
         input-channel force f_in (..., m) or None; shape (...,) or (..., size)."""
         mats = self.output_matrices(name)
         if mats is None:
-            raise NotImplementedError(f"{type(self).__name__}.output: {name!r} has no output "
-                                      "matrices and no output()")
+            raise NotImplementedError(
+                f"{type(self).__name__}.output: {name!r} has no output matrices and no output()"
+            )
         C, D, Df = mats
         y = x @ C.T + u @ D.T
         if f_in is not None and Df is not None:
@@ -192,7 +197,7 @@ class Plant(ABC):
         ValueError
             Naming an unknown value or a wrong shape.
         """
-        from flexsat.validation import require_finite
+        from flexsat.input_checks import require_finite
 
         x = self.initial_state(1)[0].copy()
         if "state" in values:
@@ -205,8 +210,10 @@ class Plant(ABC):
                 continue
             index = self._state_coordinates(name)
             if index is None:
-                raise ValueError(f"{name}: not an initial value of {type(self).__name__} (it "
-                                 f"takes: {', '.join(self.initial_values)})")
+                raise ValueError(
+                    f"{name}: not an initial value of {type(self).__name__} (it "
+                    f"takes: {', '.join(self.initial_values)})"
+                )
             unit = find_channel(self.outputs, name, "output", type(self).__name__).unit
             v = np.atleast_1d(require_finite(value, name, unit))
             if v.shape != index.shape:
@@ -229,8 +236,11 @@ class Plant(ABC):
     @property
     def initial_values(self) -> tuple[str, ...]:
         """Names :meth:`state_from` accepts."""
-        return ("state",) + tuple(c.name for c in self.outputs if c.name != "state"
-                                  and self._state_coordinates(c.name) is not None)
+        return ("state",) + tuple(
+            c.name
+            for c in self.outputs
+            if c.name != "state" and self._state_coordinates(c.name) is not None
+        )
 
     def normalize(self, x: np.ndarray) -> np.ndarray:
         """Project a state back onto its manifold after a step (identity by default)."""

@@ -38,12 +38,22 @@ from flexsat.dynamics.attitude import (
     require_quaternion,
     require_shape,
 )
+from flexsat.input_checks import require_numeric
 from flexsat.units import to_si_array
-from flexsat.validation import require_numeric
 
-__all__ = ["require_inertia", "rkmk4_step", "dexpinv", "cross3", "matvec", "euler_acceleration",
-           "euler_rates", "propagate", "angular_momentum_inertial", "kinetic_energy",
-           "euler_poinsot_rates"]
+__all__ = [
+    "require_inertia",
+    "rkmk4_step",
+    "dexpinv",
+    "cross3",
+    "matvec",
+    "euler_acceleration",
+    "euler_rates",
+    "propagate",
+    "angular_momentum_inertial",
+    "kinetic_energy",
+    "euler_poinsot_rates",
+]
 
 #: below this rotation angle (rad) the coefficient of θ̃² in the rotation-vector kinematics is
 #: its series 1/12 + θ²/720 + θ⁴/30240: the next term, θ⁶/1209600, is then < 1e-16 of 1/12,
@@ -64,14 +74,18 @@ def require_inertia(inertia, field: str = "inertia") -> np.ndarray:
         raise ValueError(f"{field}: must be symmetric (|I − Iᵀ| <= 1e-12 max|I|)")
     eig = np.linalg.eigvalsh(J)
     if np.any(eig[..., 0] <= 0):
-        raise ValueError(f"{field}: must be positive definite, smallest principal moment "
-                         f"{eig[..., 0].min():.3g} kg·m²")
+        raise ValueError(
+            f"{field}: must be positive definite, smallest principal moment "
+            f"{eig[..., 0].min():.3g} kg·m²"
+        )
     gap = eig[..., 0] + eig[..., 1] - eig[..., 2]
     if np.any(gap < -1e-12 * eig[..., 2]):
         k = np.unravel_index(np.argmin(gap / eig[..., 2]), gap.shape)
-        raise ValueError(f"{field}: principal moments {np.round(eig[k], 6).tolist()} kg·m² "
-                         f"violate the triangle inequality I1 + I2 >= I3 (no mass distribution "
-                         f"has them)")
+        raise ValueError(
+            f"{field}: principal moments {np.round(eig[k], 6).tolist()} kg·m² "
+            f"violate the triangle inequality I1 + I2 >= I3 (no mass distribution "
+            f"has them)"
+        )
     return J
 
 
@@ -101,6 +115,7 @@ def euler_rates(w, inertia, torque=None) -> np.ndarray:
 # The kernels below run once per RK stage on tiny arrays: no input checks (the public functions
 # check once) and slicing in place of np.cross / np.stack, whose overhead dominates here.
 
+
 def cross3(a, b):
     """a × b on (..., 3) arrays, unchecked."""
     out = np.empty(np.broadcast_shapes(a.shape, b.shape))
@@ -124,8 +139,8 @@ def dexpinv(theta, w):
     """θ̇ of the rotation-vector kinematics (module docstring), vectorised."""
     a2 = np.sum(theta * theta, axis=-1)
     c = 1 / 12 + a2 / 720 + a2 * a2 / 30240
-    if a2.max(initial=0.0) >= _SERIES_ANGLE ** 2:  # rare: steps of one RK stage are small
-        small = a2 < _SERIES_ANGLE ** 2
+    if a2.max(initial=0.0) >= _SERIES_ANGLE**2:  # rare: steps of one RK stage are small
+        small = a2 < _SERIES_ANGLE**2
         x = np.where(small, 1.0, np.sqrt(a2) / 2)  # placeholder where the series is used
         c = np.where(small, c, (1 - x / np.tan(x)) / np.where(small, 1.0, a2))
     c = c[..., None]
@@ -146,8 +161,9 @@ def _mul(q, p):
     """Unchecked :func:`~flexsat.dynamics.attitude.quaternion_multiply` (q after p)."""
     out = np.empty(np.broadcast_shapes(q.shape, p.shape))
     out[..., 0] = q[..., 0] * p[..., 0] - np.sum(q[..., 1:] * p[..., 1:], axis=-1)
-    out[..., 1:] = (q[..., 0:1] * p[..., 1:] + p[..., 0:1] * q[..., 1:]
-                    - cross3(q[..., 1:], p[..., 1:]))
+    out[..., 1:] = (
+        q[..., 0:1] * p[..., 1:] + p[..., 0:1] * q[..., 1:] - cross3(q[..., 1:], p[..., 1:])
+    )
     return out
 
 
@@ -215,10 +231,12 @@ def propagate(beta0, w0, inertia, t, torque=None) -> tuple[np.ndarray, np.ndarra
     t = require_numeric(t, "t")
     if t.ndim != 1 or t.size < 1 or np.any(np.diff(t) <= 0):
         raise ValueError(f"t: must be a 1-D strictly increasing time grid, got shape {t.shape}")
-    u_const = np.zeros(3) if torque is None or callable(torque) else \
-        require_shape(torque, "torque", (3,))
-    shape = case_shape(beta0=b.shape[:-1], w0=w.shape[:-1], inertia=J.shape[:-2],
-                   torque=u_const.shape[:-1])
+    u_const = (
+        np.zeros(3) if torque is None or callable(torque) else require_shape(torque, "torque", (3,))
+    )
+    shape = case_shape(
+        beta0=b.shape[:-1], w0=w.shape[:-1], inertia=J.shape[:-2], torque=u_const.shape[:-1]
+    )
     b = np.broadcast_to(b, shape + (4,)).copy()
     w = np.broadcast_to(w, shape + (3,)).copy()
     Jinv = np.linalg.inv(J)
@@ -228,8 +246,10 @@ def propagate(beta0, w0, inertia, t, torque=None) -> tuple[np.ndarray, np.ndarra
         try:
             np.broadcast_shapes(u0.shape, shape + (3,))
         except ValueError:
-            raise ValueError(f"torque(t, beta, w): must return shape {shape + (3,)} (one torque "
-                             f"per case), got {u0.shape}") from None
+            raise ValueError(
+                f"torque(t, beta, w): must return shape {shape + (3,)} (one torque "
+                f"per case), got {u0.shape}"
+            ) from None
 
     betas = np.empty(shape + (t.size, 4))
     ws = np.empty(shape + (t.size, 3))
@@ -248,9 +268,11 @@ def propagate(beta0, w0, inertia, t, torque=None) -> tuple[np.ndarray, np.ndarra
             if not (np.all(np.isfinite(w)) and np.all(np.isfinite(b))):
                 bad = ~(np.isfinite(w).all(-1) & np.isfinite(b).all(-1))
                 cases = [tuple(int(i) for i in c) for c in np.argwhere(np.atleast_1d(bad))][:10]
-                raise ValueError(f"propagate: the state became non-finite at t = {t[n + 1]:.6g} s "
-                                 f"(case index {cases}): a non-finite torque, or rates too large "
-                                 f"for the step {h:.3g} s")
+                raise ValueError(
+                    f"propagate: the state became non-finite at t = {t[n + 1]:.6g} s "
+                    f"(case index {cases}): a non-finite torque, or rates too large "
+                    f"for the step {h:.3g} s"
+                )
             betas[..., n + 1, :], ws[..., n + 1, :] = b, w
     return betas, ws
 
@@ -349,17 +371,22 @@ def euler_poinsot_rates(moments, w0, t) -> np.ndarray:
     p = np.sqrt((Id - Ib) * (H2 - T2 * In) / (In * Ib * Id))
     m = (Ib - In) * (T2 * Id - H2) / ((Id - Ib) * (H2 - T2 * In))
     if np.any(~np.isfinite(m)) or np.any(An == 0):
-        raise ValueError("w0: a pure spin about a principal axis has no elliptic solution "
-                         "(the rates are constant)")
+        raise ValueError(
+            "w0: a pure spin about a principal axis has no elliptic solution "
+            "(the rates are constant)"
+        )
     phi0 = np.arctan2(eps * wb / Ab, wn / An)
     u0 = scipy.special.ellipkinc(phi0, m)
     if not np.all(np.isfinite(u0)):  # m = 1 and φ0 = ±π/2: at rest on the separatrix
-        raise ValueError("w0: a pure spin about the intermediate axis (an unstable equilibrium "
-                         "on the separatrix H² = 2T·I2) has no elliptic solution")
+        raise ValueError(
+            "w0: a pure spin about the intermediate axis (an unstable equilibrium "
+            "on the separatrix H² = 2T·I2) has no elliptic solution"
+        )
     sn, cn, dn, _ = scipy.special.ellipj(p[..., None] * t + u0[..., None], m[..., None])
     on, ob, od = An[..., None] * cn, (eps * Ab)[..., None] * sn, (eps * Ad)[..., None] * dn
-    sorted_w = np.stack([np.where(about_max[..., None], on, od), ob,
-                         np.where(about_max[..., None], od, on)], -1)
+    sorted_w = np.stack(
+        [np.where(about_max[..., None], on, od), ob, np.where(about_max[..., None], od, on)], -1
+    )
     out = np.empty_like(sorted_w)
     np.put_along_axis(out, np.broadcast_to(order[..., None, :], out.shape), sorted_w, -1)
     return parity[..., None, :] * out

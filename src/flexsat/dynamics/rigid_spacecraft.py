@@ -83,12 +83,26 @@ def _tensor(entries, shape):
 
 # On the tiny arrays of one case a product with a constant matrix is one numpy call where
 # component-wise formulas are a dozen, each ~1 µs of overhead: these make [v×] and Ω(ω) so.
-_SKEW = _tensor([(0, 1, 2, -1), (0, 2, 1, 1), (1, 0, 2, 1), (1, 2, 0, -1), (2, 0, 1, -1),
-                 (2, 1, 0, 1)], (3, 3))
-_OMEGA = _tensor([(0, 1, 0, -0.5), (0, 2, 1, -0.5), (0, 3, 2, -0.5),
-                  (1, 0, 0, 0.5), (1, 2, 2, 0.5), (1, 3, 1, -0.5),
-                  (2, 0, 1, 0.5), (2, 1, 2, -0.5), (2, 3, 0, 0.5),
-                  (3, 0, 2, 0.5), (3, 1, 1, 0.5), (3, 2, 0, -0.5)], (4, 4))
+_SKEW = _tensor(
+    [(0, 1, 2, -1), (0, 2, 1, 1), (1, 0, 2, 1), (1, 2, 0, -1), (2, 0, 1, -1), (2, 1, 0, 1)], (3, 3)
+)
+_OMEGA = _tensor(
+    [
+        (0, 1, 0, -0.5),
+        (0, 2, 1, -0.5),
+        (0, 3, 2, -0.5),
+        (1, 0, 0, 0.5),
+        (1, 2, 2, 0.5),
+        (1, 3, 1, -0.5),
+        (2, 0, 1, 0.5),
+        (2, 1, 2, -0.5),
+        (2, 3, 0, 0.5),
+        (3, 0, 2, 0.5),
+        (3, 1, 1, 0.5),
+        (3, 2, 0, -0.5),
+    ],
+    (4, 4),
+)
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -143,9 +157,14 @@ def attitude_output(name: str, beta: np.ndarray, w: np.ndarray) -> np.ndarray:
     if name == "euler123":
         # Schaub & Junkins Table B.1 (as flexsat.dynamics.attitude.dcm_to_euler123)
         C = dcm(beta)
-        return np.stack([np.arctan2(-C[..., 2, 1], C[..., 2, 2]),
-                         np.arctan2(C[..., 2, 0], np.hypot(C[..., 0, 0], C[..., 1, 0])),
-                         np.arctan2(-C[..., 1, 0], C[..., 0, 0])], -1)
+        return np.stack(
+            [
+                np.arctan2(-C[..., 2, 1], C[..., 2, 2]),
+                np.arctan2(C[..., 2, 0], np.hypot(C[..., 0, 0], C[..., 1, 0])),
+                np.arctan2(-C[..., 1, 0], C[..., 0, 0]),
+            ],
+            -1,
+        )
     if name == "mrp":
         # σ = β_v / (1 + β0) with β0 >= 0 (the short rotation): 1 + β0 >= 1, never singular
         b = np.where(beta[..., :1] < 0, -beta, beta)
@@ -212,8 +231,9 @@ class RigidSpacecraft(Plant):
         b = require_quaternion(beta)
         w = require_shape(w, "w", (3,))
         shape = case_shape(beta=b.shape[:-1], w=w.shape[:-1])
-        return np.concatenate([np.broadcast_to(b, shape + (4,)),
-                               np.broadcast_to(w, shape + (3,))], -1)
+        return np.concatenate(
+            [np.broadcast_to(b, shape + (4,)), np.broadcast_to(w, shape + (3,))], -1
+        )
 
     def linear_part(self):
         """A = 0, B = [0; I⁻¹] (7 × 3), with a leading case axis when the inertia has one."""

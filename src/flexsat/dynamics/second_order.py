@@ -31,8 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from flexsat.input_checks import require_count, require_finite, require_positive
 from flexsat.structures.modal_model import hub_appendage_matrices
-from flexsat.validation import require_count, require_finite, require_positive
 
 __all__ = ["SecondOrderModel"]
 
@@ -51,8 +51,9 @@ def rigid_eigenvalue_bound(lam: np.ndarray) -> float:
     (λ = 44 > 1e-9 λ_max = 490 is false).
     """
     lam = np.asarray(lam, float)
-    return 100.0 * max(lam.size, 1) * np.finfo(float).eps * max(np.abs(lam).max(initial=0.0),
-                                                                 1e-300)
+    return (
+        100.0 * max(lam.size, 1) * np.finfo(float).eps * max(np.abs(lam).max(initial=0.0), 1e-300)
+    )
 
 
 def _matrix(value, field: str, shape: tuple[int | None, int | None], names: str) -> np.ndarray:
@@ -71,8 +72,10 @@ def _matrix(value, field: str, shape: tuple[int | None, int | None], names: str)
 def _symmetric(arr: np.ndarray, field: str) -> np.ndarray:
     scale = max(np.abs(arr).max(initial=0.0), np.finfo(float).tiny)
     if np.abs(arr - arr.T).max(initial=0.0) > SYMMETRY_TOL * scale:
-        raise ValueError(f"{field}: must be symmetric (max |{field} − {field}ᵀ| = "
-                         f"{np.abs(arr - arr.T).max():.3g}, max |{field}| = {scale:.3g})")
+        raise ValueError(
+            f"{field}: must be symmetric (max |{field} − {field}ᵀ| = "
+            f"{np.abs(arr - arr.T).max():.3g}, max |{field}| = {scale:.3g})"
+        )
     return 0.5 * (arr + arr.T)
 
 
@@ -124,13 +127,15 @@ class SecondOrderModel:
         except np.linalg.LinAlgError:
             raise ValueError(
                 f"M: must be positive definite (smallest eigenvalue "
-                f"{np.linalg.eigvalsh(M).min():.3g})") from None
+                f"{np.linalg.eigvalsh(M).min():.3g})"
+            ) from None
         D = _matrix(self.D, "D", (n, n), "(n, n)")
         K = _symmetric(_matrix(self.K, "K", (n, n), "(n, n)"), "K")
         lam = np.linalg.eigvalsh(K)
         if lam.min(initial=0.0) < -SYMMETRY_TOL * max(np.abs(lam).max(initial=0.0), 1e-300):
-            raise ValueError(f"K: must be positive semi-definite (smallest eigenvalue "
-                             f"{lam.min():.3g})")
+            raise ValueError(
+                f"K: must be positive semi-definite (smallest eigenvalue {lam.min():.3g})"
+            )
         B = _matrix(self.B, "B", (n, None), "(n, m)")
         Cq = _matrix(self.Cq, "Cq", (None, n), "(p, n)")
         p, m = Cq.shape[0], B.shape[1]
@@ -141,8 +146,10 @@ class SecondOrderModel:
             object.__setattr__(self, name, value)
 
     def __repr__(self) -> str:
-        return (f"SecondOrderModel(n_dof={self.n_dof}, n_inputs={self.n_inputs}, "
-                f"n_outputs={self.n_outputs})")
+        return (
+            f"SecondOrderModel(n_dof={self.n_dof}, n_inputs={self.n_inputs}, "
+            f"n_outputs={self.n_outputs})"
+        )
 
     # ------------------------------------------------------------------------------------------
     @property
@@ -162,8 +169,7 @@ class SecondOrderModel:
         return self.Cq.shape[0]
 
     def _replace(self, **changes) -> SecondOrderModel:
-        fields = dict(M=self.M, D=self.D, K=self.K, B=self.B, Cq=self.Cq, Cv=self.Cv,
-                      Dff=self.Dff)
+        fields = dict(M=self.M, D=self.D, K=self.K, B=self.B, Cq=self.Cq, Cv=self.Cv, Dff=self.Dff)
         fields.update(changes)
         return SecondOrderModel(**fields)
 
@@ -191,8 +197,9 @@ class SecondOrderModel:
         return control.ss(*self.first_order(), states=states)
 
     @classmethod
-    def from_statespace(cls, sys, n_dof: int | None = None, M=None,
-                        tol: float = 1e-10) -> SecondOrderModel:
+    def from_statespace(
+        cls, sys, n_dof: int | None = None, M=None, tol: float = 1e-10
+    ) -> SecondOrderModel:
         r"""Second-order model of a continuous realisation in :math:`[q, \dot q]` form.
 
         The realisation must read :math:`A = [[0, I], [A_{21}, A_{22}]]`,
@@ -220,16 +227,21 @@ class SecondOrderModel:
             raise ValueError(f"n_dof: {n} coordinates need {2 * n} states, sys has {nx}")
         scale = max(np.abs(A).max(initial=0.0), 1.0)
         bscale = max(np.abs(B).max(initial=0.0), 1.0)
-        if (np.abs(A[:n, :n]).max() > tol * scale
-                or np.abs(A[:n, n:] - np.eye(n)).max() > tol * scale
-                or np.abs(B[:n]).max(initial=0.0) > tol * bscale):
-            raise ValueError("sys: not in [q, q̇] form (need A = [[0, I], [·, ·]] and B = [0; ·]); "
-                             "transform the realisation first")
+        if (
+            np.abs(A[:n, :n]).max() > tol * scale
+            or np.abs(A[:n, n:] - np.eye(n)).max() > tol * scale
+            or np.abs(B[:n]).max(initial=0.0) > tol * bscale
+        ):
+            raise ValueError(
+                "sys: not in [q, q̇] form (need A = [[0, I], [·, ·]] and B = [0; ·]); "
+                "transform the realisation first"
+            )
         Mm = np.eye(n) if M is None else _matrix(M, "M", (n, n), "(n_dof, n_dof)")
         K = -Mm @ A[n:, :n]
         if M is None and np.abs(K - K.T).max() > SYMMETRY_TOL * max(np.abs(K).max(), 1e-300):
-            raise ValueError("sys: −A21 is not symmetric; give the mass matrix M "
-                             "(K = −M A21 must be symmetric)")
+            raise ValueError(
+                "sys: −A21 is not symmetric; give the mass matrix M (K = −M A21 must be symmetric)"
+            )
         return cls(Mm, -Mm @ A[n:, n:], K, Mm @ B[n:], C[:, :n], C[:, n:], Dff)
 
     def discretize(self, dt, method: str = "zoh"):
@@ -265,8 +277,11 @@ class SecondOrderModel:
         """True when M = I and K is diagonal with non-decreasing entries (already modal)."""
         n = self.n_dof
         k = np.diag(self.K)
-        return (np.array_equal(self.M, np.eye(n)) and np.count_nonzero(self.K - np.diag(k)) == 0
-                and bool(np.all(np.diff(k) >= 0)))
+        return (
+            np.array_equal(self.M, np.eye(n))
+            and np.count_nonzero(self.K - np.diag(k)) == 0
+            and bool(np.all(np.diff(k) >= 0))
+        )
 
     def modal(self, diagonal_damping: bool = False) -> SecondOrderModel:
         r"""Mass-normalised modal form :math:`\eta` with :math:`q = \Phi \eta`.
@@ -285,8 +300,15 @@ class SecondOrderModel:
         else:
             w, Phi = self.modes()
             Dm = Phi.T @ self.D @ Phi
-            model = SecondOrderModel(np.eye(self.n_dof), Dm, np.diag(w**2), Phi.T @ self.B,
-                                     self.Cq @ Phi, self.Cv @ Phi, self.Dff)
+            model = SecondOrderModel(
+                np.eye(self.n_dof),
+                Dm,
+                np.diag(w**2),
+                Phi.T @ self.B,
+                self.Cq @ Phi,
+                self.Cv @ Phi,
+                self.Dff,
+            )
             return model.modal(diagonal_damping) if diagonal_damping else model
         if diagonal_damping:
             return self._replace(D=np.diag(np.diag(Dm)))
@@ -318,8 +340,15 @@ class SecondOrderModel:
             if np.any(w2 <= 0):
                 raise ValueError("n_modes: residualize cannot drop a rigid (ω = 0) mode")
             Dff = Dff + (modal.Cq[:, k:] / w2) @ modal.B[k:]
-        return SecondOrderModel(modal.M[keep, keep], modal.D[keep, keep], modal.K[keep, keep],
-                                modal.B[keep], modal.Cq[:, keep], modal.Cv[:, keep], Dff)
+        return SecondOrderModel(
+            modal.M[keep, keep],
+            modal.D[keep, keep],
+            modal.K[keep, keep],
+            modal.B[keep],
+            modal.Cq[:, keep],
+            modal.Cv[:, keep],
+            Dff,
+        )
 
     # ------------------------------------------------------------------------------------------
     # constructors from the models of #2 and #3
@@ -334,8 +363,14 @@ class SecondOrderModel:
         n = model.ndof
         Cq, Cv = np.zeros((2, n)), np.zeros((2, n))
         Cq[0, 0] = Cv[1, 0] = 1.0
-        return cls(model.mass_matrix, model.damping_matrix, model.stiffness_matrix,
-                   model.torque_input[:, None], Cq, Cv)
+        return cls(
+            model.mass_matrix,
+            model.damping_matrix,
+            model.stiffness_matrix,
+            model.torque_input[:, None],
+            Cq,
+            Cv,
+        )
 
     @classmethod
     def from_modal_model(cls, modal, inputs=(), outputs=()) -> SecondOrderModel:
@@ -379,8 +414,10 @@ class SecondOrderModel:
                 row, kind = item
                 row = require_finite(row, f"outputs[{i}]")
                 if row.shape != (n,) or kind not in ("displacement", "velocity"):
-                    raise ValueError(f"outputs[{i}]: must be (row of shape ({n},), "
-                                     f"'displacement' or 'velocity'), got {item!r}")
+                    raise ValueError(
+                        f"outputs[{i}]: must be (row of shape ({n},), "
+                        f"'displacement' or 'velocity'), got {item!r}"
+                    )
                 (Cq if kind == "displacement" else Cv)[i] = row
         return cls(M, D, K, B, Cq, Cv)
 

@@ -43,11 +43,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexsat.input_checks import require_finite, require_positive_scalar
 from flexsat.units import to_si_array
-from flexsat.validation import require_finite, require_positive_scalar
 
-__all__ = ["StationData", "PAPER_STATION", "pitch_model", "roll_yaw_model",
-           "design_disturbance", "aero_substitute", "FT_LB"]
+__all__ = [
+    "StationData",
+    "PAPER_STATION",
+    "pitch_model",
+    "roll_yaw_model",
+    "design_disturbance",
+    "aero_substitute",
+    "FT_LB",
+]
 
 #: one foot-pound-force in N m (the paper's torque and momentum unit)
 FT_LB = float(to_si_array("1 lbf*ft", "N*m"))
@@ -73,15 +80,22 @@ class StationData:
 
     def __post_init__(self):
         if len(self.inertia) != 3:
-            raise ValueError(f"inertia: three principal moments (roll, pitch, yaw), got "
-                             f"{self.inertia!r}")
-        moments = tuple(require_positive_scalar(v, f"inertia[{i}]", "kg*m**2")
-                        for i, v in enumerate(self.inertia))
+            raise ValueError(
+                f"inertia: three principal moments (roll, pitch, yaw), got {self.inertia!r}"
+            )
+        moments = tuple(
+            require_positive_scalar(v, f"inertia[{i}]", "kg*m**2")
+            for i, v in enumerate(self.inertia)
+        )
         object.__setattr__(self, "inertia", moments)
-        object.__setattr__(self, "orbit_rate",
-                           require_positive_scalar(self.orbit_rate, "orbit_rate", "rad/s"))
-        object.__setattr__(self, "rotor_momentum",
-                           require_positive_scalar(self.rotor_momentum, "rotor_momentum", "N*m*s"))
+        object.__setattr__(
+            self, "orbit_rate", require_positive_scalar(self.orbit_rate, "orbit_rate", "rad/s")
+        )
+        object.__setattr__(
+            self,
+            "rotor_momentum",
+            require_positive_scalar(self.rotor_momentum, "rotor_momentum", "N*m*s"),
+        )
 
     @property
     def period(self) -> float:
@@ -90,16 +104,18 @@ class StationData:
 
 
 #: Table 2 of the paper (seed000_part2.md §8.4, L4684–L4688)
-PAPER_STATION = StationData(("5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"),
-                            0.0011, "3500 lbf*ft*s")
+PAPER_STATION = StationData(
+    ("5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"), 0.0011, "3500 lbf*ft*s"
+)
 
 
 def _filters(filters, field):
     ks = tuple(filters)
     for k in ks:
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-            raise ValueError(f"{field}: multiples of the orbit rate must be integers >= 1, "
-                             f"got {filters!r}")
+            raise ValueError(
+                f"{field}: multiples of the orbit rate must be integers >= 1, got {filters!r}"
+            )
     if len(set(ks)) != len(ks):
         raise ValueError(f"{field}: each frequency once, got {filters!r}")
     return ks
@@ -113,7 +129,7 @@ def _add_filters(A, attitude_index, ks, n, names, label):
     for j, k in enumerate(ks):
         i = size + 2 * j
         out[i, i + 1] = 1.0
-        out[i + 1, i] = -(k * n) ** 2
+        out[i + 1, i] = -((k * n) ** 2)
         out[i + 1, attitude_index] = 1.0
         names += [f"{label}_filter_{k}n", f"{label}_filter_{k}n_rate"]
     return out
@@ -136,7 +152,7 @@ def pitch_model(data: StationData = PAPER_STATION, filters=(1, 2)):
     n = data.orbit_rate
     A = np.zeros((4, 4))
     A[0, 1] = 1.0
-    A[1, 0] = -3.0 * n * n * (I1 - I3) / I2   # gravity gradient: I3 > I1 makes pitch unstable
+    A[1, 0] = -3.0 * n * n * (I1 - I3) / I2  # gravity gradient: I3 > I1 makes pitch unstable
     A[3, 2] = 1.0
     names = ["theta2", "theta2_rate", "h2", "h2_integral"]
     A = _add_filters(A, 0, ks, n, names, "theta2")
@@ -163,12 +179,12 @@ def roll_yaw_model(data: StationData = PAPER_STATION, filters=(2,)):
     I1, I2, I3 = data.inertia
     n = data.orbit_rate
     A = np.zeros((8, 8))
-    A[0, 1], A[0, 4] = 1.0, n                  # θ̇1 = ω1 + nθ3      (9)
-    A[4, 5], A[4, 0] = 1.0, -n                 # θ̇3 = ω3 − nθ1      (9)
-    A[1, 5] = -n * (I2 - I3) / I1              # (8), roll
-    A[1, 0] = -3.0 * n * n * (I2 - I3) / I1    # gravity gradient, roll
-    A[5, 1] = n * (I2 - I1) / I3               # (8), yaw
-    A[2, 6], A[6, 2] = n, -n                   # ḣ1 = nh3 + u1, ḣ3 = −nh1 + u3   (10)
+    A[0, 1], A[0, 4] = 1.0, n  # θ̇1 = ω1 + nθ3      (9)
+    A[4, 5], A[4, 0] = 1.0, -n  # θ̇3 = ω3 − nθ1      (9)
+    A[1, 5] = -n * (I2 - I3) / I1  # (8), roll
+    A[1, 0] = -3.0 * n * n * (I2 - I3) / I1  # gravity gradient, roll
+    A[5, 1] = n * (I2 - I1) / I3  # (8), yaw
+    A[2, 6], A[6, 2] = n, -n  # ḣ1 = nh3 + u1, ḣ3 = −nh1 + u3   (10)
     A[3, 2], A[7, 6] = 1.0, 1.0
     names = ["theta1", "omega1", "h1", "h1_integral", "theta3", "omega3", "h3", "h3_integral"]
     A = _add_filters(A, 0, ks, n, names, "theta1")
@@ -191,8 +207,9 @@ def design_disturbance(t, data: StationData = PAPER_STATION) -> np.ndarray:
     return FT_LB * np.stack([roll, 4.0 + 2.0 * s1 + 0.5 * s2, roll], axis=-1)
 
 
-def aero_substitute(t, data: StationData = PAPER_STATION, harmonic=0.5 * FT_LB,
-                    secular=1.0 * FT_LB) -> np.ndarray:
+def aero_substitute(
+    t, data: StationData = PAPER_STATION, harmonic=0.5 * FT_LB, secular=1.0 * FT_LB
+) -> np.ndarray:
     """The stated substitute for the paper's AERO1 (module docstring): Eq. (11) plus
     ``harmonic`` × (sin 3nt + sin 4nt) on each axis and a pitch torque growing by ``secular``
     per orbit (N m or unit strings; defaults 0.5 and 1 ft-lb); N m, shape (..., 3)."""
@@ -200,8 +217,9 @@ def aero_substitute(t, data: StationData = PAPER_STATION, harmonic=0.5 * FT_LB,
     a = to_si_array(harmonic, "N*m", "harmonic")
     s = to_si_array(secular, "N*m", "secular")
     if a.ndim or s.ndim or not (np.isfinite(a) and np.isfinite(s)) or a < 0 or s < 0:
-        raise ValueError(f"harmonic, secular: one finite value >= 0 N m each, got {harmonic!r}, "
-                         f"{secular!r}")
+        raise ValueError(
+            f"harmonic, secular: one finite value >= 0 N m each, got {harmonic!r}, {secular!r}"
+        )
     n = data.orbit_rate
     w = design_disturbance(tt, data)
     w = w + float(a) * (np.sin(3.0 * n * tt) + np.sin(4.0 * n * tt))[..., None]

@@ -41,8 +41,8 @@ import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant, find_channel
 from flexsat.dynamics.second_order import SecondOrderModel
+from flexsat.input_checks import require_finite
 from flexsat.units import parse_quantity
-from flexsat.validation import require_finite
 
 __all__ = ["Actuator", "ModalBlocks", "Sensor", "StructuralPlant"]
 
@@ -159,15 +159,18 @@ class _Dofs:
             return None
         if isinstance(at, (int, np.integer)) and not isinstance(at, bool):
             if not 0 <= at < self.n:
-                raise ValueError(f"{name}: dof {at} out of range (the model has {self.n} "
-                                 "coordinates, 0-based)")
+                raise ValueError(
+                    f"{name}: dof {at} out of range (the model has {self.n} coordinates, 0-based)"
+                )
             return int(at)
         key = tuple(at) if isinstance(at, (tuple, list)) else at
         if self.labels is not None and key in self.labels:
             return self.labels.index(key)
-        raise ValueError(f"{name}: unknown dof {at!r} (give a 0-based index"
-                         + (", a dof label such as " + repr(self.labels[0]) if self.labels else "")
-                         + " or an influence vector)")
+        raise ValueError(
+            f"{name}: unknown dof {at!r} (give a 0-based index"
+            + (", a dof label such as " + repr(self.labels[0]) if self.labels else "")
+            + " or an influence vector)"
+        )
 
     def vector(self, spec, pair: bool) -> np.ndarray:
         name = spec.name
@@ -175,16 +178,22 @@ class _Dofs:
             raise ValueError(f"{name}: axis applies to modal coordinates only (give the dof)")
         if pair:
             at = spec.at
-            if not isinstance(at, (tuple, list)) or len(at) != 2 or (
-                    self.labels is not None and tuple(at) in self.labels):
-                raise ValueError(f"{name}: a {spec.kind} needs a pair of rotation dofs (a, b), "
-                                 f"got {at!r}")
+            if (
+                not isinstance(at, (tuple, list))
+                or len(at) != 2
+                or (self.labels is not None and tuple(at) in self.labels)
+            ):
+                raise ValueError(
+                    f"{name}: a {spec.kind} needs a pair of rotation dofs (a, b), got {at!r}"
+                )
             a, b = self._dof(at[0], name), self._dof(at[1], name)
             if a is None and b is None:
                 raise ValueError(f"{name}: both dofs of the {spec.kind} are fixed (supports)")
             if a == b:
-                raise ValueError(f"{name}: the two dofs of a {spec.kind} must differ, got "
-                                 f"{at[0]!r} and {at[1]!r}")
+                raise ValueError(
+                    f"{name}: the two dofs of a {spec.kind} must differ, got "
+                    f"{at[0]!r} and {at[1]!r}"
+                )
             v = np.zeros(self.n)
             for dof, sign in ((b, 1.0), (a, -1.0)):
                 if dof is not None:
@@ -192,18 +201,21 @@ class _Dofs:
             return v
         at = spec.at
         named = isinstance(at, (list, tuple)) and (
-            tuple(at) in self.fixed or (self.labels is not None and tuple(at) in self.labels))
+            tuple(at) in self.fixed or (self.labels is not None and tuple(at) in self.labels)
+        )
         if isinstance(at, np.ndarray) or (isinstance(at, (list, tuple)) and not named):
             v = require_finite(at, f"{name}: at")
             if v.shape != (self.n,):
-                raise ValueError(f"{name}: an influence vector must have shape ({self.n},), "
-                                 f"got {v.shape}")
+                raise ValueError(
+                    f"{name}: an influence vector must have shape ({self.n},), got {v.shape}"
+                )
             return v.astype(float)
         v = np.zeros(self.n)
         dof = self._dof(at, name)
         if dof is None:
-            raise ValueError(f"{name}: dof {at!r} is fixed (a support): a {spec.kind} there "
-                             "does nothing")
+            raise ValueError(
+                f"{name}: dof {at!r} is fixed (a support): a {spec.kind} there does nothing"
+            )
         v[dof] = 1.0
         return v
 
@@ -280,11 +292,13 @@ class StructuralPlant(Plant):
             raise ValueError(f"model: must be a SecondOrderModel, got {type(model).__name__}")
         self.inputs, self.outputs = tuple(inputs), tuple(outputs)
         if len(self.inputs) != model.n_inputs or any(c.size != 1 for c in self.inputs):
-            raise ValueError(f"inputs: {len(self.inputs)} size-1 channels for {model.n_inputs} "
-                             "columns of B")
+            raise ValueError(
+                f"inputs: {len(self.inputs)} size-1 channels for {model.n_inputs} columns of B"
+            )
         if len(self.outputs) != model.n_outputs or any(c.size != 1 for c in self.outputs):
-            raise ValueError(f"outputs: {len(self.outputs)} size-1 channels for "
-                             f"{model.n_outputs} output rows")
+            raise ValueError(
+                f"outputs: {len(self.outputs)} size-1 channels for {model.n_outputs} output rows"
+            )
         if np.any(model.Dff):
             raise ValueError("model: Dff must be zero (outputs read q and q̇ only)")
         for role, chans in (("input", self.inputs), ("output", self.outputs)):
@@ -377,7 +391,8 @@ class StructuralPlant(Plant):
         n = self.model.n_dof
         q, v = x[..., :n], x[..., n:]
         return 0.5 * np.einsum("...i,ij,...j->...", v, self.model.M, v) + 0.5 * np.einsum(
-            "...i,ij,...j->...", q, self.model.K, q)
+            "...i,ij,...j->...", q, self.model.K, q
+        )
 
     @property
     def energy_matrix(self) -> np.ndarray:
@@ -391,9 +406,10 @@ class StructuralPlant(Plant):
         r"""Rate of :meth:`energy`, :math:`\dot q^T B u - \dot q^T D \dot q` (the work of the
         inputs less the dissipation), W, (...,)."""
         x, u = np.asarray(x, dtype=float), np.asarray(u, dtype=float)
-        v = x[..., self.model.n_dof:]
-        return (np.einsum("...i,ij,...j->...", v, self.model.B, u)
-                - np.einsum("...i,ij,...j->...", v, self.model.D, v))
+        v = x[..., self.model.n_dof :]
+        return np.einsum("...i,ij,...j->...", v, self.model.B, u) - np.einsum(
+            "...i,ij,...j->...", v, self.model.D, v
+        )
 
     @cached_property
     def modal_blocks(self) -> ModalBlocks | None:
@@ -403,13 +419,19 @@ class StructuralPlant(Plant):
         m = self.model
         n = m.n_dof
         k, d = np.diag(m.K), np.diag(m.D)
-        if (not np.array_equal(m.M, np.eye(n)) or np.count_nonzero(m.K - np.diag(k))
-                or np.count_nonzero(m.D - np.diag(d)) or np.any(d[k == 0] != 0)):
+        if (
+            not np.array_equal(m.M, np.eye(n))
+            or np.count_nonzero(m.K - np.diag(k))
+            or np.count_nonzero(m.D - np.diag(d))
+            or np.any(d[k == 0] != 0)
+        ):
             return None
         w = np.sqrt(k)
         zeta = np.divide(d, 2 * w, out=np.zeros(n), where=w > 0)
         return ModalBlocks(w, zeta, int(np.count_nonzero(w == 0)))
 
     def __repr__(self) -> str:
-        return (f"StructuralPlant(n_dof={self.model.n_dof}, inputs="
-                f"{[c.name for c in self.inputs]}, outputs={[c.name for c in self.outputs]})")
+        return (
+            f"StructuralPlant(n_dof={self.model.n_dof}, inputs="
+            f"{[c.name for c in self.inputs]}, outputs={[c.name for c in self.outputs]})"
+        )

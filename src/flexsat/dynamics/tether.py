@@ -41,11 +41,23 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.validation import require_finite, require_positive
+from flexsat.input_checks import require_finite, require_positive
 
-__all__ = ["EARTH_MU", "EARTH_RADIUS", "TetherScales", "TetheredSubsatellite", "accelerations",
-           "rate_control_accelerations", "integral_of_motion", "integral_of_motion_rate",
-           "require_lengths", "integrate", "MIN_LENGTH", "ClosedLoopRun", "CONTROLS"]
+__all__ = [
+    "EARTH_MU",
+    "EARTH_RADIUS",
+    "TetherScales",
+    "TetheredSubsatellite",
+    "accelerations",
+    "rate_control_accelerations",
+    "integral_of_motion",
+    "integral_of_motion_rate",
+    "require_lengths",
+    "integrate",
+    "MIN_LENGTH",
+    "ClosedLoopRun",
+    "CONTROLS",
+]
 
 #: Earth's gravitational parameter, m³/s² (WGS 84), for the orbit rate of a circular orbit
 EARTH_MU = 3.986004418e14
@@ -84,8 +96,9 @@ def accelerations(x, tension, thrust) -> np.ndarray:
 def rate_control_accelerations(x, length_rate, thrust) -> np.ndarray:
     r"""(θ'', φ'') of Eq. 4 with the length rate λ' as the control, at nondimensional states
     x = [λ, θ, φ, θ', φ'] (..., 5); unchecked."""
-    full = np.concatenate([x[..., :3], np.asarray(length_rate, float)[..., None]
-                           + 0 * x[..., :1], x[..., 3:]], -1)
+    full = np.concatenate(
+        [x[..., :3], np.asarray(length_rate, float)[..., None] + 0 * x[..., :1], x[..., 3:]], -1
+    )
     return accelerations(full, 0.0, thrust)[..., 1:]
 
 
@@ -93,15 +106,15 @@ def integral_of_motion(theta, phi, theta_rate, phi_rate) -> np.ndarray:
     r"""V1 of Eq. 8, :math:`\tfrac12(\theta'^2\cos^2\phi + 3\sin^2\theta\cos^2\phi + \phi'^2 +
     4\sin^2\phi)` (nondimensional rates)."""
     c2 = np.cos(phi) ** 2
-    return 0.5 * (theta_rate ** 2 * c2 + 3.0 * np.sin(theta) ** 2 * c2 + phi_rate ** 2
-                  + 4.0 * np.sin(phi) ** 2)
+    return 0.5 * (
+        theta_rate**2 * c2 + 3.0 * np.sin(theta) ** 2 * c2 + phi_rate**2 + 4.0 * np.sin(phi) ** 2
+    )
 
 
 def integral_of_motion_rate(x, thrust=0.0) -> np.ndarray:
     r"""V1' of Eq. 9 with the thrust term φ'F̂/λ (spec §7.5) at x = [λ, θ, φ, λ', θ', φ']."""
     lam, ph, dl, dth, dph = x[..., 0], x[..., 2], x[..., 3], x[..., 4], x[..., 5]
-    return (-2.0 * dl / lam * (dth * (1.0 + dth) * np.cos(ph) ** 2 + dph ** 2)
-            + dph * thrust / lam)
+    return -2.0 * dl / lam * (dth * (1.0 + dth) * np.cos(ph) ** 2 + dph**2) + dph * thrust / lam
 
 
 @dataclass(frozen=True)
@@ -141,16 +154,18 @@ class TetherScales:
             if h < 0:
                 raise ValueError(f"altitude: must be >= 0 (above the Earth's surface), got {h} m")
             object.__setattr__(self, "altitude", h)
-            object.__setattr__(self, "orbit_rate", float(np.sqrt(EARTH_MU
-                                                                 / (EARTH_RADIUS + h) ** 3)))
+            object.__setattr__(
+                self, "orbit_rate", float(np.sqrt(EARTH_MU / (EARTH_RADIUS + h) ** 3))
+            )
         else:
-            object.__setattr__(self, "orbit_rate",
-                               float(require_positive(self.orbit_rate, "orbit_rate", "rad/s")))
+            object.__setattr__(
+                self, "orbit_rate", float(require_positive(self.orbit_rate, "orbit_rate", "rad/s"))
+            )
 
     @property
     def force(self) -> float:
         """mΩ²L, N per unit of T̂ or F̂."""
-        return self.mass * self.orbit_rate ** 2 * self.length
+        return self.mass * self.orbit_rate**2 * self.length
 
     @property
     def impulse(self) -> float:
@@ -181,8 +196,9 @@ class TetherScales:
             return np.array([L, 1.0, 1.0, L * W, W, W])
         if n == 5:
             return np.array([L, 1.0, 1.0, W, W])
-        raise ValueError(f"state: must have 6 (tension control) or 5 (rate control) entries, "
-                         f"got {n}")
+        raise ValueError(
+            f"state: must have 6 (tension control) or 5 (rate control) entries, got {n}"
+        )
 
 
 class TetheredSubsatellite(Plant):
@@ -213,9 +229,11 @@ class TetheredSubsatellite(Plant):
         if not isinstance(self.scales, TetherScales):
             raise ValueError(f"scales: must be a TetherScales, got {type(scales).__name__}")
         self.control = control
-        first = (Channel("tension", "N", 1, "tether tension T (>= 0 for a tether)")
-                 if control == "tension" else
-                 Channel("reel_rate", "m/s", 1, "commanded tether length rate l̇"))
+        first = (
+            Channel("tension", "N", 1, "tether tension T (>= 0 for a tether)")
+            if control == "tension"
+            else Channel("reel_rate", "m/s", 1, "commanded tether length rate l̇")
+        )
         self.inputs = (first, Channel("thrust", "N", 1, "out-of-plane thrust F"))
         self.outputs = (
             Channel("length", "m", 1, "tether length l"),
@@ -227,8 +245,9 @@ class TetheredSubsatellite(Plant):
             Channel("integral_of_motion", "", 1, "V1 of Eq. 8 (nondimensional)"),
             Channel("state", "", self.nx, "the state vector (SI)"),
         )
-        self.noise_channels = tuple(c.name for c in self.outputs
-                                    if c.name not in ("state", "integral_of_motion"))
+        self.noise_channels = tuple(
+            c.name for c in self.outputs if c.name not in ("state", "integral_of_motion")
+        )
 
     @property
     def nx(self) -> int:
@@ -263,7 +282,7 @@ class TetheredSubsatellite(Plant):
     def nonlinear_force(self, x, u) -> np.ndarray:
         """The accelerations of Eq. 4 in SI less the linear −T/m (module docstring)."""
         s = self.scales
-        W2 = s.orbit_rate ** 2
+        W2 = s.orbit_rate**2
         xhat, u0, Fhat = self._nondimensional(np.asarray(x, float), np.asarray(u, float))
         if self.control == "tension":
             acc = accelerations(xhat, 0.0, Fhat)
@@ -290,8 +309,11 @@ class TetheredSubsatellite(Plant):
     def output_matrices(self, name: str):
         n = self.nx
         rows = dict(self._ROWS)
-        rows.update({"length_rate": 3, "pitch_rate": 4, "roll_rate": 5} if n == 6 else
-                    {"pitch_rate": 3, "roll_rate": 4})
+        rows.update(
+            {"length_rate": 3, "pitch_rate": 4, "roll_rate": 5}
+            if n == 6
+            else {"pitch_rate": 3, "roll_rate": 4}
+        )
         if name == "state":
             return np.eye(n), np.zeros((n, 2)), None
         if name == "length_rate" and n == 5:  # rate control: the commanded rate itself
@@ -305,8 +327,9 @@ class TetheredSubsatellite(Plant):
         if name == "integral_of_motion":
             xhat = np.asarray(x, float) / self.scales._factors(self.nx)
             k = 3 if self.nx == 6 else 2
-            return integral_of_motion(xhat[..., 1], xhat[..., 2], xhat[..., k + 1],
-                                      xhat[..., k + 2])
+            return integral_of_motion(
+                xhat[..., 1], xhat[..., 2], xhat[..., k + 1], xhat[..., k + 2]
+            )
         if u is None:
             u = np.zeros(np.shape(x)[:-1] + (2,))
         return super().output(name, x, u, f_in)
@@ -350,8 +373,9 @@ class ClosedLoopRun:
         return integral_of_motion(x[..., 1], x[..., 2], x[..., 4], x[..., 5])
 
 
-def integrate(law, x0, tau, control: str = "tension", rtol: float = 1e-10,
-              atol: float = 1e-12) -> ClosedLoopRun:
+def integrate(
+    law, x0, tau, control: str = "tension", rtol: float = 1e-10, atol: float = 1e-12
+) -> ClosedLoopRun:
     r"""Integrate Eq. 4 under a continuous feedback law (no sampling), vectorised over cases.
 
     Parameters
@@ -390,8 +414,9 @@ def integrate(law, x0, tau, control: str = "tension", rtol: float = 1e-10,
     require_lengths(x0[:, 0], "x0 (lambda)")
     tau = require_finite(tau, "tau")
     if tau.ndim != 1 or tau.size < 2 or np.any(np.diff(tau) <= 0):
-        raise ValueError(f"tau: must be a 1-D strictly increasing grid of >= 2 times, got "
-                         f"shape {tau.shape}")
+        raise ValueError(
+            f"tau: must be a 1-D strictly increasing grid of >= 2 times, got shape {tau.shape}"
+        )
     nc = x0.shape[0]
     rate = control == "rate"
 
@@ -418,11 +443,21 @@ def integrate(law, x0, tau, control: str = "tension", rtol: float = 1e-10,
     collapsed.terminal = True
     y0 = np.concatenate([x0, np.zeros((nc, 1))], 1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        sol = solve_ivp(rhs, (tau[0], tau[-1]), y0.ravel(), method="DOP853", t_eval=tau,
-                        rtol=rtol, atol=atol, events=collapsed)
+        sol = solve_ivp(
+            rhs,
+            (tau[0], tau[-1]),
+            y0.ravel(),
+            method="DOP853",
+            t_eval=tau,
+            rtol=rtol,
+            atol=atol,
+            events=collapsed,
+        )
     if sol.status == 1:
-        raise ValueError(f"tau: the tether length fell to {MIN_LENGTH:g} L (collapsed) at τ = "
-                         f"{sol.t_events[0][0]:.6g}")
+        raise ValueError(
+            f"tau: the tether length fell to {MIN_LENGTH:g} L (collapsed) at τ = "
+            f"{sol.t_events[0][0]:.6g}"
+        )
     if sol.status != 0:
         raise ValueError(f"tau: integration failed at τ = {sol.t[-1]:.6g}: {sol.message}")
     Y = sol.y.reshape(nc, 7, -1).transpose(2, 0, 1)  # (n_t, n_cases, 7)

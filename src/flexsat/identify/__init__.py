@@ -1,11 +1,16 @@
 """System identification from vibration tests: test data, synthetic tests, realization (ERA,
 OKID), Creamer-Junkins structural identification and model update, and stereo triangulation
-(camera model, calibration, dynamic triangulation), and star-pattern identification for a star
-tracker (catalogue, pinhole star camera, k-vector, q-method)."""
+(camera model, calibration, dynamic triangulation). Star identification and attitude fitting
+are in :mod:`flexsat.attitude`."""
 
+from flexsat.identify.differential_correction import (
+    CorrectionData,
+    DifferentialCorrection,
+    differential_correction,
+)
 from flexsat.identify.era import (
-    bootstrap_uncertainty,
     Realization,
+    bootstrap_uncertainty,
     era,
     era_dc,
     mac,
@@ -32,17 +37,6 @@ from flexsat.identify.photogrammetry import (
     simulate_centroids,
     triangulate,
 )
-from flexsat.identify.differential_correction import (
-    CorrectionData,
-    DifferentialCorrection,
-    differential_correction,
-)
-from flexsat.identify.attitude_fit import q_method, quest_covariance
-from flexsat.identify.pair_index import BruteForceIndex, KVectorIndex
-from flexsat.identify.star_camera import StarCamera, StarFrame
-from flexsat.identify.star_catalog import StarCatalog, load_hipparcos, synthetic_sky
-from flexsat.identify.star_id import Identification, identify_frames, match_field
-from flexsat.identify.star_tracker import StarTracker, monte_carlo
 from flexsat.identify.structural import (
     SubstructureModel,
     identify_damping,
@@ -53,9 +47,6 @@ from flexsat.identify.structural import (
 )
 
 __all__ = [
-    "BruteForceIndex", "Identification", "KVectorIndex", "StarCamera", "StarCatalog",
-    "StarFrame", "StarTracker", "identify_frames", "load_hipparcos", "match_field",
-    "monte_carlo", "q_method", "quest_covariance", "synthetic_sky",
     "CHANNEL_KINDS",
     "CalibrationResult",
     "Camera",

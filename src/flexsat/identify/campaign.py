@@ -66,14 +66,27 @@ from flexsat.identify.structural import (
 from flexsat.structures.fem import FEModes
 from flexsat.structures.modal_model import ModalModel
 
-__all__ = ["CameraRig", "CampaignConfig", "CampaignResult", "IDENTIFY_STEPS", "SIMULATE_STEPS",
-           "TestRecords", "identify_and_update", "run_campaign", "simulate_records"]
+__all__ = [
+    "CameraRig",
+    "CampaignConfig",
+    "CampaignResult",
+    "IDENTIFY_STEPS",
+    "SIMULATE_STEPS",
+    "TestRecords",
+    "identify_and_update",
+    "run_campaign",
+    "simulate_records",
+]
 
 #: the steps :func:`simulate_records` and :func:`identify_and_update` announce to their
 #: ``progress`` callback, in order (a progress bar's length)
 SIMULATE_STEPS = ("hammer test", "camera calibration and video test", "reaction-wheel test")
-IDENTIFY_STEPS = ("hammer test: ERA", "video test: ERA", "reaction-wheel test: FRF and OKID",
-                  "model update")
+IDENTIFY_STEPS = (
+    "hammer test: ERA",
+    "video test: ERA",
+    "reaction-wheel test: FRF and OKID",
+    "model update",
+)
 
 #: model-update methods: Att. 6 (free and forced response together) or Att. 7 (frequencies, then
 #: damping from the eigenvalue real parts)
@@ -113,8 +126,10 @@ class CameraRig:
 
     def cameras(self) -> list[Camera]:
         """The cameras (Att. 8 conventions: 3-2-1 Euler angles, "-f"), aimed at ``aims``."""
-        return [Camera(position=pos, angles=look_at(pos, aim), f=self.focal_length)
-                for pos, aim in zip(self.positions, self.aims)]
+        return [
+            Camera(position=pos, angles=look_at(pos, aim), f=self.focal_length)
+            for pos, aim in zip(self.positions, self.aims)
+        ]
 
 
 @dataclass(frozen=True)
@@ -126,16 +141,16 @@ class CampaignConfig:
     truth_modes: int | None = None
     a_priori_scale: dict = field(default_factory=dict)
     a_priori_damping: float = 0.006
-    strain_gauges: tuple = ()             # (node_a, node_b, axis)
-    accelerometers: tuple = ()            # (node, direction)
-    targets: tuple = ()                   # node ids
+    strain_gauges: tuple = ()  # (node_a, node_b, axis)
+    accelerometers: tuple = ()  # (node, direction)
+    targets: tuple = ()  # node ids
     hammer_node: int = 1
     hammer_direction: str = "z"
-    hammer_impulse: float = 0.5           # N s
+    hammer_impulse: float = 0.5  # N s
     hammer_duration: float = 20.0
     sample_rate: float = 200.0
     noise: float = 0.01
-    video_impulse: float = 0.3            # N s
+    video_impulse: float = 0.3  # N s
     video_duration: float = 4.5
     field_rate: float = 200.0
     target_sigma: float = 1e-3
@@ -143,8 +158,8 @@ class CampaignConfig:
     wheel_nodes: tuple = ()
     wheel_axes: tuple = ()
     wheel_torque_rms: float = 0.05
-    wheel_torque_constants: tuple = ()    # true / nominal, one per wheel; () = known exactly
-    identify_torque_constants: bool = False   # also without known true values (measured data)
+    wheel_torque_constants: tuple = ()  # true / nominal, one per wheel; () = known exactly
+    identify_torque_constants: bool = False  # also without known true values (measured data)
     wheel_duration: float = 300.0
     wheel_sample_rate: float = 50.0
     frf_segment: int = 2000
@@ -161,11 +176,15 @@ class CampaignConfig:
             raise ValueError(f"update: must be one of {UPDATE_METHODS}, got {self.update!r}")
         k = self.wheel_torque_constants
         if k and (len(k) != len(self.wheel_nodes) or not all(np.isfinite(k)) or min(k) <= 0):
-            raise ValueError(f"wheel_torque_constants: one factor > 0 per wheel "
-                             f"({len(self.wheel_nodes)}), got {k!r}")
+            raise ValueError(
+                f"wheel_torque_constants: one factor > 0 per wheel "
+                f"({len(self.wheel_nodes)}), got {k!r}"
+            )
         if (k or self.identify_torque_constants) and self.update != "differential_correction":
-            raise ValueError("wheel_torque_constants: identifying the wheels' torque constants "
-                             "needs the FRF, i.e. update 'differential_correction'")
+            raise ValueError(
+                "wheel_torque_constants: identifying the wheels' torque constants "
+                "needs the FRF, i.e. update 'differential_correction'"
+            )
 
 
 @dataclass(frozen=True)
@@ -210,8 +229,9 @@ class CampaignResult:
 
 # ------------------------------------------------------------------------------------------------
 def _modal_model(assembly, omegas, shapes, damping) -> ModalModel:
-    return ModalModel.from_fe(FEModes(omegas, shapes, assembly), damping=damping,
-                              boundary="cantilevered")
+    return ModalModel.from_fe(
+        FEModes(omegas, shapes, assembly), damping=damping, boundary="cantilevered"
+    )
 
 
 def _blow(node, direction, impulse, rate):
@@ -261,12 +281,19 @@ def _calibrate_rig(cfg, rig, points0, rng):
     """Static calibration from averaged fields of the structure at rest (Att. 6 §1.6)."""
     true_cams = rig.cameras()
     n_fields = int(rig.static_fields)
-    fields = simulate_centroids(true_cams, np.broadcast_to(points0, (n_fields,) + points0.shape),
-                                rig.pixel_size, rig.noise_px, rig.quantize,
-                                seed=int(rng.integers(2**31)))
+    fields = simulate_centroids(
+        true_cams,
+        np.broadcast_to(points0, (n_fields,) + points0.shape),
+        rig.pixel_size,
+        rig.noise_px,
+        rig.quantize,
+        seed=int(rng.integers(2**31)),
+    )
     if np.any(np.isnan(fields)):
-        raise ValueError("rig: some targets fall outside a camera's 320 x 244 field; aim the "
-                         "cameras at the structure or use a shorter focal length")
+        raise ValueError(
+            "rig: some targets fall outside a camera's 320 x 244 field; aim the "
+            "cameras at the structure or use a shorter focal length"
+        )
     obs = fields.mean(axis=1)
     sigma = rig.noise_px * rig.pixel_size / np.sqrt(n_fields)
     start = []
@@ -276,8 +303,16 @@ def _calibrate_rig(cfg, rig, points0, rng):
         v[3:6] += rng.normal(0.0, rig.angle_error, 3)
         start.append(cam.with_vector(v))
     guess = points0 + rng.normal(0.0, cfg.target_sigma, points0.shape)
-    res = calibrate(obs, start, guess, datum=None, scale=None, sigma=sigma, free=VIDEO_FREE,
-                    target_sigma=cfg.target_sigma)
+    res = calibrate(
+        obs,
+        start,
+        guess,
+        datum=None,
+        scale=None,
+        sigma=sigma,
+        free=VIDEO_FREE,
+        target_sigma=cfg.target_sigma,
+    )
     idx = [CAMERA_PARAMETERS.index("fx" if p == "f" else p) for p in VIDEO_FREE]
     z = []
     for j, (est, tru) in enumerate(zip(res.cameras, true_cams)):
@@ -285,11 +320,14 @@ def _calibrate_rig(cfg, rig, points0, rng):
         std = np.sqrt(np.diag(res.camera_covariance(j, VIDEO_FREE)))
         z.append(err / std)
     z = np.concatenate(z)
-    return res, {"parameters": list(VIDEO_FREE), "n_cameras": len(true_cams),
-                 "normalised_errors": z.tolist(),
-                 "max_abs_normalised_error": float(np.abs(z).max()),
-                 "sigma0_squared": float(res.sigma0_squared),
-                 "image_sigma_px": float(rig.noise_px / np.sqrt(n_fields))}
+    return res, {
+        "parameters": list(VIDEO_FREE),
+        "n_cameras": len(true_cams),
+        "normalised_errors": z.tolist(),
+        "max_abs_normalised_error": float(np.abs(z).max()),
+        "sigma0_squared": float(res.sigma0_squared),
+        "image_sigma_px": float(rig.noise_px / np.sqrt(n_fields)),
+    }
 
 
 def _video_test(cfg, truth, rig, points0, calibration, rng):
@@ -297,29 +335,45 @@ def _video_test(cfg, truth, rig, points0, calibration, rng):
     relative to the calibrated rest positions of the targets."""
     cams, static_xyz = calibration.cameras, calibration.targets
     z_chan = [Channel("displacement", int(n), "z") for n in cfg.targets]
-    test = simulate_test(truth, _blow(cfg.hammer_node, cfg.hammer_direction,
-                                      cfg.video_impulse, cfg.field_rate),
-                         z_chan, cfg.video_duration, cfg.field_rate, seed=int(rng.integers(2**31)))
+    test = simulate_test(
+        truth,
+        _blow(cfg.hammer_node, cfg.hammer_direction, cfg.video_impulse, cfg.field_rate),
+        z_chan,
+        cfg.video_duration,
+        cfg.field_rate,
+        seed=int(rng.integers(2**31)),
+    )
     T = test.abscissa.size
     moving = np.broadcast_to(points0, (T,) + points0.shape).copy()
     moving[..., 2] += test.outputs.T
-    uv = simulate_centroids(rig.cameras(), moving, rig.pixel_size, rig.noise_px, rig.quantize,
-                            seed=int(rng.integers(2**31)))
+    uv = simulate_centroids(
+        rig.cameras(),
+        moving,
+        rig.pixel_size,
+        rig.noise_px,
+        rig.quantize,
+        seed=int(rng.integers(2**31)),
+    )
     if np.any(np.isnan(uv)):
-        raise ValueError("rig: a target leaves a camera's field during the video test; reduce "
-                         "video_impulse or widen the view")
+        raise ValueError(
+            "rig: a target leaves a camera's field during the video test; reduce "
+            "video_impulse or widen the view"
+        )
     pts, cov = triangulate(cams, uv, rig.noise_px * rig.pixel_size)
     # with the calibration covariance (Att. 6 Eqs. 34-37): the absolute position uncertainty;
     # the camera error is common to every field, so it largely cancels in the motion below
-    _, cov_abs = triangulate(cams, uv[:, :1], rig.noise_px * rig.pixel_size,
-                             camera_covariance=calibration)
-    z = (pts[..., 2] - static_xyz[None, :, 2]).T                    # (targets, fields)
+    _, cov_abs = triangulate(
+        cams, uv[:, :1], rig.noise_px * rig.pixel_size, camera_covariance=calibration
+    )
+    z = (pts[..., 2] - static_xyz[None, :, 2]).T  # (targets, fields)
     err = z - test.outputs
-    tri = {"predicted_sigma_z_m": float(np.sqrt(np.mean(cov[..., 2, 2]))),
-           "predicted_sigma_z_with_cameras_m": float(np.sqrt(np.mean(cov_abs[..., 2, 2]))),
-           "rms_error_z_m": float(np.sqrt(np.mean(err**2))),
-           "peak_displacement_m": float(np.abs(test.outputs).max()),
-           "fields": int(T)}
+    tri = {
+        "predicted_sigma_z_m": float(np.sqrt(np.mean(cov[..., 2, 2]))),
+        "predicted_sigma_z_with_cameras_m": float(np.sqrt(np.mean(cov_abs[..., 2, 2]))),
+        "rms_error_z_m": float(np.sqrt(np.mean(err**2))),
+        "peak_displacement_m": float(np.abs(test.outputs).max()),
+        "fields": int(T),
+    }
     video = Measurement(test.abscissa, z, z_chan, test.inputs, test.input_channels)
     return video, tri
 
@@ -400,10 +454,10 @@ class TestRecords:
 def _true_modes(case, cfg: CampaignConfig):
     """The truth: the case's finite-element model with ``truth_modes`` modes (default all)."""
     asm = case.structure().assemble()
-    modes = asm.modes(asm.n_dofs if cfg.truth_modes is None
-                      else min(cfg.truth_modes, asm.n_dofs))
-    return asm, _modal_model(asm, modes.omegas, modes.shapes,
-                             _truth_damping(cfg, modes.omegas.size))
+    modes = asm.modes(asm.n_dofs if cfg.truth_modes is None else min(cfg.truth_modes, asm.n_dofs))
+    return asm, _modal_model(
+        asm, modes.omegas, modes.shapes, _truth_damping(cfg, modes.omegas.size)
+    )
 
 
 def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
@@ -416,23 +470,38 @@ def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
     """
     say = progress or (lambda label: None)
     if cfg.rig is None or not cfg.targets or not cfg.strain_gauges or not cfg.wheel_nodes:
-        raise ValueError("rig: simulating the tests needs a camera rig, targets, strain gauges "
-                         "and reaction wheels")
+        raise ValueError(
+            "rig: simulating the tests needs a camera rig, targets, strain gauges "
+            "and reaction wheels"
+        )
     rng = np.random.default_rng(cfg.seed)
     asm, truth = _true_modes(case, cfg)
     gauges = [Channel("strain", int(b), ax, node_a=int(a)) for a, b, ax in cfg.strain_gauges]
     accels = [Channel("acceleration", int(n), d) for n, d in cfg.accelerometers]
     blow = _blow(cfg.hammer_node, cfg.hammer_direction, cfg.hammer_impulse, cfg.sample_rate)
     say(SIMULATE_STEPS[0])
-    hammer = simulate_test(truth, blow, gauges + accels, cfg.hammer_duration, cfg.sample_rate,
-                           noise=cfg.noise, seed=int(rng.integers(2**31)),
-                           anti_alias=cfg.anti_alias * cfg.sample_rate)
+    hammer = simulate_test(
+        truth,
+        blow,
+        gauges + accels,
+        cfg.hammer_duration,
+        cfg.sample_rate,
+        noise=cfg.noise,
+        seed=int(rng.integers(2**31)),
+        anti_alias=cfg.anti_alias * cfg.sample_rate,
+    )
     # a hammer's force record is its one-sample blow (impulse / dt): the output filters then
     # belong to the identified system, and their poles lie above the band
     pulse = np.zeros((1, hammer.abscissa.size))
     pulse[0, 0] = cfg.hammer_impulse * cfg.sample_rate
-    hammer = Measurement(hammer.abscissa, hammer.outputs, hammer.output_channels, pulse,
-                         hammer.input_channels, attrs=hammer.attrs)
+    hammer = Measurement(
+        hammer.abscissa,
+        hammer.outputs,
+        hammer.output_channels,
+        pulse,
+        hammer.input_channels,
+        attrs=hammer.attrs,
+    )
 
     coords = {int(n): xyz for n, xyz in zip(asm.node_ids, asm.coordinates)}
     points0 = np.array([coords[int(n)] for n in cfg.targets], float)
@@ -440,27 +509,46 @@ def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
     calib, calib_summary = _calibrate_rig(cfg, cfg.rig, points0, rng)
     video, tri = _video_test(cfg, truth, cfg.rig, points0, calib, rng)
 
-    wheels = [random_force(int(n), ax, cfg.wheel_torque_rms, load="torque")
-              for n, ax in zip(cfg.wheel_nodes, cfg.wheel_axes)]
+    wheels = [
+        random_force(int(n), ax, cfg.wheel_torque_rms, load="torque")
+        for n, ax in zip(cfg.wheel_nodes, cfg.wheel_axes)
+    ]
     say(SIMULATE_STEPS[2])
-    wheel_test = simulate_test(truth, wheels, gauges, cfg.wheel_duration, cfg.wheel_sample_rate,
-                               noise=cfg.noise, seed=int(rng.integers(2**31)),
-                               anti_alias=cfg.anti_alias * cfg.wheel_sample_rate)
+    wheel_test = simulate_test(
+        truth,
+        wheels,
+        gauges,
+        cfg.wheel_duration,
+        cfg.wheel_sample_rate,
+        noise=cfg.noise,
+        seed=int(rng.integers(2**31)),
+        anti_alias=cfg.anti_alias * cfg.wheel_sample_rate,
+    )
     gains = np.asarray(cfg.wheel_torque_constants, float)
     if gains.size:
         # the wheels deliver k x the commanded torque; the record holds the command (Att. 6
         # L2525: B carries each motor's current-to-torque constant, not known a priori)
-        wheel_test = Measurement(wheel_test.abscissa, wheel_test.outputs,
-                                 wheel_test.output_channels, wheel_test.inputs / gains[:, None],
-                                 wheel_test.input_channels, attrs=wheel_test.attrs)
+        wheel_test = Measurement(
+            wheel_test.abscissa,
+            wheel_test.outputs,
+            wheel_test.output_channels,
+            wheel_test.inputs / gains[:, None],
+            wheel_test.input_channels,
+            attrs=wheel_test.attrs,
+        )
     return TestRecords(hammer, wheel_test, video, calib_summary, tri)
 
 
 def run_campaign(case, cfg: CampaignConfig, progress=None) -> CampaignResult:
     """Test the true structure (:func:`simulate_records`), identify it and update the a-priori
     model (:func:`identify_and_update`), with the truth in the tables; ``progress`` as there."""
-    return identify_and_update(case, cfg, simulate_records(case, cfg, progress),
-                               truth=_true_modes(case, cfg)[1], progress=progress)
+    return identify_and_update(
+        case,
+        cfg,
+        simulate_records(case, cfg, progress),
+        truth=_true_modes(case, cfg)[1],
+        progress=progress,
+    )
 
 
 def _nearest(f_list, targets_hz, tolerance=0.05):
@@ -473,8 +561,9 @@ def _nearest(f_list, targets_hz, tolerance=0.05):
     return out
 
 
-def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=None,
-                        progress=None) -> CampaignResult:
+def identify_and_update(
+    case, cfg: CampaignConfig, records: TestRecords, truth=None, progress=None
+) -> CampaignResult:
     """Identify the recorded tests and update the a-priori model (module docstring, 1-4).
 
     Parameters
@@ -509,15 +598,16 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
     base = {n: float(cfg.a_priori_scale.get(n, 1.0)) for n in names}
 
     def build(kf, _mf):
-        return case.structure(stiffness_scale={n: base[n] * k for n, k in zip(names, kf)}
-                              ).assemble()
+        return case.structure(
+            stiffness_scale={n: base[n] * k for n, k in zip(names, kf)}
+        ).assemble()
 
     sub = substructures_from_builder(build, len(names), n_mass=0, names=names)
     apriori_asm = build(np.ones(len(names)), None)
     M = sub.M()
     sub = SubstructureModel(sub.K_blocks, [], [M, sub.K()], sub.K0, M, names=names)
     w0, phi0 = sub.modes()
-    zeta0 = cfg.a_priori_damping * w0[0] / w0                 # Att. 6 Eq. 15: C = 2 z1 w1 M
+    zeta0 = cfg.a_priori_damping * w0[0] / w0  # Att. 6 Eq. 15: C = 2 z1 w1 M
 
     # --- 1. hammer test: ERA on RMS-normalised channels (units differ; eigenvalues unchanged) --
     say(IDENTIFY_STEPS[0])
@@ -526,8 +616,9 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
     Y = markov_parameters(hammer) / scale[None, :, None]
     hammer_real = era(Y, hammer.dt, order=cfg.era_order)
     if cfg.bootstrap_samples:
-        hammer_real = bootstrap_uncertainty(hammer_real, Y, cfg.bootstrap_samples,
-                                            seed=int(rng.integers(2**31)))
+        hammer_real = bootstrap_uncertainty(
+            hammer_real, Y, cfg.bootstrap_samples, seed=int(rng.integers(2**31))
+        )
     sel = _select(hammer_real, cfg.band)
     if sel.size == 0:
         raise ValueError(f"records: the hammer test shows no mode below {cfg.band:g} Hz")
@@ -577,40 +668,69 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
     true_gains = np.asarray(cfg.wheel_torque_constants, float)
     fit_gains = bool(true_gains.size) or cfg.identify_torque_constants
     if true_gains.size and true_gains.size != len(inputs):
-        raise ValueError(f"wheel_torque_constants: one per recorded wheel ({len(inputs)}), got "
-                         f"{true_gains.size}")
+        raise ValueError(
+            f"wheel_torque_constants: one per recorded wheel ({len(inputs)}), got {true_gains.size}"
+        )
     wheel_gains, nu1 = {}, np.ones(len(inputs))
-    r0 = np.array([2.0 * cfg.a_priori_damping * w0[0], 0.0])        # Eq. 15 in C = r1 M + r2 K
+    r0 = np.array([2.0 * cfg.a_priori_damping * w0[0], 0.0])  # Eq. 15 in C = r1 M + r2 K
     if cfg.update == "creamer_junkins":
         # stiffness from the frequencies (Att. 7 Eq. 9b), then damping (Eq. 24)
-        und = identify_undamped(sub, 2 * np.pi * f_meas, mode_indices=hammer_index,
-                                frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas))
+        und = identify_undamped(
+            sub,
+            2 * np.pi * f_meas,
+            mode_indices=hammer_index,
+            frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas),
+        )
         lam = 2 * np.pi * f_meas * (-z_meas + 1j * np.sqrt(1 - z_meas**2))
         p1, r1 = und.p, identify_damping(sub, lam, und.p, None, mode_indices=hammer_index).r
         p_cov = und.covariance[: len(names), : len(names)]
-        update = {"method": cfg.update, "frf_points": 0, "iterations": int(und.iterations),
-                  "converged": bool(und.converged)}
+        update = {
+            "method": cfg.update,
+            "frf_points": 0,
+            "iterations": int(und.iterations),
+            "converged": bool(und.converged),
+        }
     else:
         # free and forced response together (Att. 6 Eqs. 3-13)
-        points = _frf_points(estimate, cfg, apriori_asm, gauges, inputs,
-                             np.concatenate([w0, 2 * np.pi * f_meas]), fit_gains)
+        points = _frf_points(
+            estimate,
+            cfg,
+            apriori_asm,
+            gauges,
+            inputs,
+            np.concatenate([w0, 2 * np.pi * f_meas]),
+            fit_gains,
+        )
         data = CorrectionData(
-            frequencies=2 * np.pi * f_meas, frequency_modes=hammer_index,
+            frequencies=2 * np.pi * f_meas,
+            frequency_modes=hammer_index,
             frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas),
-            damping_ratios=z_meas, damping_sigma=np.hypot(z_std, DAMPING_FORM_ERROR * z_meas),
-            damping_modes=hammer_index, frf=points)
+            damping_ratios=z_meas,
+            damping_sigma=np.hypot(z_std, DAMPING_FORM_ERROR * z_meas),
+            damping_modes=hammer_index,
+            frf=points,
+        )
         dc = differential_correction(sub, data, r0=r0)
         p1, r1 = dc.p, dc.r
         p_cov = dc.covariance[: len(names), : len(names)]
         if fit_gains:
-            nu_std = np.sqrt(np.clip(np.diag(dc.covariance)[-len(inputs):], 0.0, None))
+            nu_std = np.sqrt(np.clip(np.diag(dc.covariance)[-len(inputs) :], 0.0, None))
             truth_k = true_gains if true_gains.size else [None] * len(inputs)
-            wheel_gains = {c.name: {"true": None if k is None else float(k),
-                                    "identified": float(v), "std": float(sd)}
-                           for c, k, v, sd in zip(inputs, truth_k, dc.nu, nu_std)}
+            wheel_gains = {
+                c.name: {
+                    "true": None if k is None else float(k),
+                    "identified": float(v),
+                    "std": float(sd),
+                }
+                for c, k, v, sd in zip(inputs, truth_k, dc.nu, nu_std)
+            }
             nu1 = dc.nu
-        update = {"method": cfg.update, "frf_points": int(sum(len(pt[2]) for pt in points)),
-                  "iterations": int(dc.iterations), "converged": bool(dc.converged)}
+        update = {
+            "method": cfg.update,
+            "frf_points": int(sum(len(pt[2]) for pt in points)),
+            "iterations": int(dc.iterations),
+            "converged": bool(dc.converged),
+        }
     w1, phi1 = sub.modes(p1)
     C1 = sub.C(r1)
     zeta1 = np.clip(np.einsum("ij,ik,kj->j", phi1, C1, phi1) / (2 * w1), 1e-6, None)
@@ -620,7 +740,7 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
     freqs = frf.abscissa[keep]
     frf_a = frequency_response(_modal_model(apriori_asm, w0, phi0, zeta0), gauges, inputs, freqs)
     frf_u = frequency_response(_modal_model(apriori_asm, w1, phi1, zeta1), gauges, inputs, freqs)
-    frf_u = frf_u * nu1[None, :, None]                    # relative to the commanded torque
+    frf_u = frf_u * nu1[None, :, None]  # relative to the commanded torque
 
     # --- tables ----------------------------------------------------------------------------------
     if truth is not None:
@@ -631,9 +751,12 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
         true_hz = true_z = [None] * f_meas.size
     modes_table = {
         "model_index": hammer_index.tolist(),
-        "true_hz": true_hz, "true_damping": true_z,
-        "era_hz": f_meas.tolist(), "era_hz_std": f_std.tolist(),
-        "era_damping": z_meas.tolist(), "era_damping_std": z_std.tolist(),
+        "true_hz": true_hz,
+        "true_damping": true_z,
+        "era_hz": f_meas.tolist(),
+        "era_hz_std": f_std.tolist(),
+        "era_damping": z_meas.tolist(),
+        "era_damping_std": z_std.tolist(),
         "video_hz": _nearest(video_f, f_meas),
         "okid_hz": _nearest(okid_real.frequencies[osel], f_meas),
         "a_priori_hz": (w0[hammer_index] / (2 * np.pi)).tolist(),
@@ -642,8 +765,10 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
         "updated_damping": zeta1[hammer_index].tolist(),
     }
     std = np.sqrt(np.clip(np.diag(p_cov), 0.0, None))
-    scalings = {n: {"a_priori": base[n], "p": float(p), "p_std": float(s),
-                    "updated": float(base[n] * p)} for n, p, s in zip(names, p1, std)}
+    scalings = {
+        n: {"a_priori": base[n], "p": float(p), "p_std": float(s), "updated": float(base[n] * p)}
+        for n, p, s in zip(names, p1, std)
+    }
     mac_updated = mac_apriori = np.zeros((0, 0))
     if video_f.size:
         n_cols = int(video_index.max()) + 3
@@ -651,7 +776,26 @@ def identify_and_update(case, cfg: CampaignConfig, records: TestRecords, truth=N
         mac_apriori = mac(video_shapes, phi0[rows][:, :n_cols])
     targets = tuple(c.node for c in records.video.output_channels) if records.video else ()
     return CampaignResult(
-        names, modes_table, scalings, wheel_gains, update, r1, mac_apriori, mac_updated, freqs,
-        frf.outputs[:, :, keep], coh[:, keep], frf_a, frf_u, tuple(c.name for c in gauges),
-        tuple(c.name for c in inputs), video_shapes, targets, records.calibration,
-        records.triangulation, hammer_real, video_real, okid_real)
+        names,
+        modes_table,
+        scalings,
+        wheel_gains,
+        update,
+        r1,
+        mac_apriori,
+        mac_updated,
+        freqs,
+        frf.outputs[:, :, keep],
+        coh[:, keep],
+        frf_a,
+        frf_u,
+        tuple(c.name for c in gauges),
+        tuple(c.name for c in inputs),
+        video_shapes,
+        targets,
+        records.calibration,
+        records.triangulation,
+        hammer_real,
+        video_real,
+        okid_real,
+    )

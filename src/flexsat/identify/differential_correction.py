@@ -25,7 +25,7 @@ import scipy.linalg as sla
 
 from flexsat.analysis.sensitivity import modal_derivatives
 from flexsat.identify.structural import SubstructureModel
-from flexsat.validation import require_numeric
+from flexsat.input_checks import require_numeric
 
 __all__ = ["CorrectionData", "DifferentialCorrection", "differential_correction"]
 
@@ -36,8 +36,9 @@ def _modes_and_sigma(values, sigma, modes, name, prefix):
     if v.size == 0 or np.any(v <= 0):
         raise ValueError(f"{name}: must be a non-empty vector of values > 0")
     if sigma is None:
-        raise ValueError(f"{prefix}_sigma: give the standard deviations (the weights W, Att. 6 "
-                         "Eq. 10)")
+        raise ValueError(
+            f"{prefix}_sigma: give the standard deviations (the weights W, Att. 6 Eq. 10)"
+        )
     s = require_numeric(sigma, f"{prefix}_sigma")
     if s.ndim > 1 or (s.ndim == 1 and s.size != v.size):
         raise ValueError(f"{prefix}_sigma: must be a scalar or {v.size} values, got {s.shape}")
@@ -51,8 +52,12 @@ def _mode_numbers(modes, count, name):
     if modes is None:
         return np.arange(count)
     idx = np.asarray(modes).ravel()
-    if idx.dtype.kind not in "iu" or idx.size != count or np.any(idx < 0) \
-            or np.unique(idx).size != count:
+    if (
+        idx.dtype.kind not in "iu"
+        or idx.size != count
+        or np.any(idx < 0)
+        or np.unique(idx).size != count
+    ):
         raise ValueError(f"{name}: must be {count} distinct mode numbers (0-based integers)")
     return idx.astype(int)
 
@@ -67,8 +72,9 @@ def _dof_or_vector(value, n, name):
         return e
     v = require_numeric(value, name, "vector")
     if v.shape != (n,):
-        raise ValueError(f"{name}: must be a dof index or a vector of {n} entries, got shape "
-                         f"{v.shape}")
+        raise ValueError(
+            f"{name}: must be a dof index or a vector of {n} entries, got shape {v.shape}"
+        )
     return v
 
 
@@ -77,8 +83,9 @@ def _gain_index(value, name):
     if value is None:
         return None
     if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 0:
-        raise ValueError(f"{name}: must be None or an index >= 0 into the gain vector, got "
-                         f"{value!r}")
+        raise ValueError(
+            f"{name}: must be None or an index >= 0 into the gain vector, got {value!r}"
+        )
     return int(value)
 
 
@@ -88,12 +95,12 @@ def _start_gains(values, count, name, kind):
         return np.ones(count)
     v = require_numeric(values, name, "vector").ravel()
     if v.size != count:
-        used = f"one per {kind} 0..{count - 1} of data.frf" if count \
-            else f"data.frf names no {kind}"
+        used = (
+            f"one per {kind} 0..{count - 1} of data.frf" if count else f"data.frf names no {kind}"
+        )
         raise ValueError(f"{name}: must have {count} entries ({used}), got {v.size}")
     if np.any(v <= 0):
-        raise ValueError(f"{name}: must be > 0 (gains relative to the a-priori H rows / B "
-                         "columns)")
+        raise ValueError(f"{name}: must be > 0 (gains relative to the a-priori H rows / B columns)")
     return v
 
 
@@ -155,8 +162,13 @@ class CorrectionData:
         for name, prefix in (("frequencies", "frequency"), ("damping_ratios", "damping")):
             if getattr(self, name) is None:
                 continue
-            v, s, modes = _modes_and_sigma(getattr(self, name), getattr(self, f"{prefix}_sigma"),
-                                           getattr(self, f"{prefix}_modes"), name, prefix)
+            v, s, modes = _modes_and_sigma(
+                getattr(self, name),
+                getattr(self, f"{prefix}_sigma"),
+                getattr(self, f"{prefix}_modes"),
+                name,
+                prefix,
+            )
             set_(self, name, v)
             set_(self, f"{prefix}_sigma", s)
             set_(self, f"{prefix}_modes", modes)
@@ -172,16 +184,23 @@ class CorrectionData:
             try:
                 s = np.broadcast_to(s, y.shape).astype(float)
             except ValueError:
-                raise ValueError(f"shape_sigma: must be a scalar or shaped like shapes "
-                                 f"{y.shape}, got {s.shape}") from None
+                raise ValueError(
+                    f"shape_sigma: must be a scalar or shaped like shapes {y.shape}, got {s.shape}"
+                ) from None
             if np.any(s <= 0):
                 raise ValueError("shape_sigma: must be > 0")
             if self.shape_dofs is not None:
                 dofs = np.asarray(self.shape_dofs).ravel()
-                if dofs.dtype.kind not in "iu" or dofs.size != y.shape[0] \
-                        or np.unique(dofs).size != dofs.size or np.any(dofs < 0):
-                    raise ValueError(f"shape_dofs: must be {y.shape[0]} distinct dof indices "
-                                     "(one per row of shapes)")
+                if (
+                    dofs.dtype.kind not in "iu"
+                    or dofs.size != y.shape[0]
+                    or np.unique(dofs).size != dofs.size
+                    or np.any(dofs < 0)
+                ):
+                    raise ValueError(
+                        f"shape_dofs: must be {y.shape[0]} distinct dof indices "
+                        "(one per row of shapes)"
+                    )
                 set_(self, "shape_dofs", dofs.astype(int))
             set_(self, "shapes", y)
             set_(self, "shape_sigma", s)
@@ -203,8 +222,10 @@ class CorrectionData:
         items = []
         for i, item in enumerate(frf):
             if not isinstance(item, (tuple, list)) or len(item) not in (5, 7):
-                raise ValueError(f"frf[{i}]: must be (output, input, omegas, values, sigma"
-                                 "[, output_gain, input_gain])")
+                raise ValueError(
+                    f"frf[{i}]: must be (output, input, omegas, values, sigma"
+                    "[, output_gain, input_gain])"
+                )
             out, inp, w, h, sd, og, ig = (*item, None, None)[:7]  # 5-tuples: no gains
             og = _gain_index(og, f"frf[{i}].output_gain")
             ig = _gain_index(ig, f"frf[{i}].input_gain")
@@ -214,25 +235,37 @@ class CorrectionData:
                 raise ValueError(f"frf[{i}].values: must be a numeric (complex) vector")
             h = h.astype(complex).ravel()
             if not np.all(np.isfinite(h)):
-                raise ValueError(f"frf[{i}].values: must be finite (no NaN or inf), got "
-                                 f"{int(np.sum(~np.isfinite(h)))} non-finite entries")
+                raise ValueError(
+                    f"frf[{i}].values: must be finite (no NaN or inf), got "
+                    f"{int(np.sum(~np.isfinite(h)))} non-finite entries"
+                )
             if w.size == 0 or h.shape != w.shape:
-                raise ValueError(f"frf[{i}]: omegas and values must be equal-length non-empty "
-                                 f"vectors, got {w.size} and {h.size}")
+                raise ValueError(
+                    f"frf[{i}]: omegas and values must be equal-length non-empty "
+                    f"vectors, got {w.size} and {h.size}"
+                )
             if np.any(w <= 0):
                 raise ValueError(f"frf[{i}].omegas: must be > 0 rad/s")
             sd = np.asarray(sd)
             if sd.dtype.kind not in "biufc" or not np.all(np.isfinite(sd)):
                 raise ValueError(f"frf[{i}].sigma: must be finite numbers")
             if sd.dtype.kind != "c":
-                sd = sd + 1j * sd        # the same SD for the real and the imaginary part
-            if sd.ndim > 1 or (sd.ndim == 1 and sd.size != w.size) or np.any(sd.real <= 0) \
-                    or np.any(sd.imag <= 0):
+                sd = sd + 1j * sd  # the same SD for the real and the imaginary part
+            if (
+                sd.ndim > 1
+                or (sd.ndim == 1 and sd.size != w.size)
+                or np.any(sd.real <= 0)
+                or np.any(sd.imag <= 0)
+            ):
                 raise ValueError(f"frf[{i}].sigma: must be a scalar or {w.size} values, > 0")
             items.append((out, inp, w, h, np.broadcast_to(sd, w.shape).astype(complex), og, ig))
         set_(self, "frf", items)
-        if self.frequencies is None and self.shapes is None and self.damping_ratios is None \
-                and not items:
+        if (
+            self.frequencies is None
+            and self.shapes is None
+            and self.damping_ratios is None
+            and not items
+        ):
             raise ValueError("CorrectionData: give at least one kind of measurement")
 
     @property
@@ -254,8 +287,11 @@ class CorrectionData:
     def measured(self) -> np.ndarray:
         """Measured ``Q`` stacked: lambda, psi (by mode), zeta, FRF (per element real then
         imaginary), 0_m, 0_k, 0_n."""
-        parts = [self.frequencies, None if self.shapes is None else self.shapes.T.ravel(),
-                 self.damping_ratios]
+        parts = [
+            self.frequencies,
+            None if self.shapes is None else self.shapes.T.ravel(),
+            self.damping_ratios,
+        ]
         parts += [np.concatenate([item[3].real, item[3].imag]) for item in self.frf]
         if self.orthogonality_sigma is not None:
             parts.append(np.zeros(2 * len(self._shape_pairs)))
@@ -266,8 +302,11 @@ class CorrectionData:
     @property
     def sigma(self) -> np.ndarray:
         """Standard deviations of :attr:`measured`, same order."""
-        parts = [self.frequency_sigma, None if self.shapes is None else self.shape_sigma.T.ravel(),
-                 self.damping_sigma]
+        parts = [
+            self.frequency_sigma,
+            None if self.shapes is None else self.shape_sigma.T.ravel(),
+            self.damping_sigma,
+        ]
         parts += [np.concatenate([item[4].real, item[4].imag]) for item in self.frf]
         if self.orthogonality_sigma is not None:
             parts.append(np.full(2 * len(self._shape_pairs), self.orthogonality_sigma))
@@ -301,36 +340,59 @@ class CorrectionData:
         p, q, r = model._params(p, P, "p"), model._params(q, Q, "q"), model._params(r, R, "r")
         gains = []
         for name, values, kind, pos in (("mu", mu, "output", 5), ("nu", nu, "input", 6)):
-            v = np.ones(getattr(self, f"n_{kind}_gains")) if values is None \
+            v = (
+                np.ones(getattr(self, f"n_{kind}_gains"))
+                if values is None
                 else require_numeric(values, name, "vector").reshape(-1)
+            )
             for i, item in enumerate(self.frf):
                 if item[pos] is not None and item[pos] >= v.size:
-                    raise ValueError(f"frf[{i}].{kind}_gain: must be < {v.size} (the length of "
-                                     f"{name}), got {item[pos]}")
+                    raise ValueError(
+                        f"frf[{i}].{kind}_gain: must be < {v.size} (the length of "
+                        f"{name}), got {item[pos]}"
+                    )
             gains.append(v)
         mu, nu = gains
         S, T = mu.size, nu.size
         K, M, C = model.K(p), model.M(q), model.C(r)
         if self.shapes is not None:
             if self.shape_dofs is None and self.shapes.shape[0] != n:
-                raise ValueError(f"shapes: without shape_dofs must have one row per dof ({n}), "
-                                 f"got {self.shapes.shape[0]}")
+                raise ValueError(
+                    f"shapes: without shape_dofs must have one row per dof ({n}), "
+                    f"got {self.shapes.shape[0]}"
+                )
             if self.shape_dofs is not None and self.shape_dofs.max() >= n:
                 raise ValueError(f"shape_dofs: must be dof indices < {n}")
-        modes_used = np.concatenate([m for m in (self.frequency_modes, self.shape_modes,
-                                                 self.damping_modes) if m is not None]
-                                    + [np.zeros(0, int)]).astype(int)
+        modes_used = np.concatenate(
+            [
+                m
+                for m in (self.frequency_modes, self.shape_modes, self.damping_modes)
+                if m is not None
+            ]
+            + [np.zeros(0, int)]
+        ).astype(int)
         if modes_used.size and modes_used.max() >= n:
             raise ValueError(f"frequency_modes, shape_modes, damping_modes: must be < {n}")
         if self.damping_ratios is not None and R == 0:
             raise ValueError("damping_ratios: the model has no damping blocks (C_blocks)")
         values, jac = [], []
-        needed = sorted(set(np.concatenate([m for m in (self.frequency_modes, self.shape_modes)
-                                            if m is not None] + [np.zeros(0, int)]).tolist()))
+        needed = sorted(
+            set(
+                np.concatenate(
+                    [m for m in (self.frequency_modes, self.shape_modes) if m is not None]
+                    + [np.zeros(0, int)]
+                ).tolist()
+            )
+        )
         if needed:
             zero = np.zeros((n, n))
-            md = modal_derivatives(K, M, np.array(model.K_blocks + [zero] * Q),
-                                   np.array([zero] * P + model.M_blocks), modes=needed)
+            md = modal_derivatives(
+                K,
+                M,
+                np.array(model.K_blocks + [zero] * Q),
+                np.array([zero] * P + model.M_blocks),
+                modes=needed,
+            )
             col = {int(mode): i for i, mode in enumerate(md.indices)}
         if self.frequencies is not None:
             c = [col[int(mode)] for mode in self.frequency_modes]
@@ -348,8 +410,9 @@ class CorrectionData:
                 scale = f @ y / ff
                 d_scale = (df @ y - 2.0 * scale * (df @ f)) / ff
                 values.append(scale * f)
-                jac.append(np.hstack([(np.outer(d_scale, f) + scale * df).T,
-                                      np.zeros((dofs.size, R))]))
+                jac.append(
+                    np.hstack([(np.outer(d_scale, f) + scale * df).T, np.zeros((dofs.size, R))])
+                )
         if self.damping_ratios is not None:
             values_z, jac_z = _damping_ratios(model, K, M, C, self.damping_modes)
             values.append(values_z)
@@ -366,12 +429,16 @@ class CorrectionData:
                 try:
                     u, v = np.linalg.solve(Z, np.column_stack([cvec, bvec])).T
                 except np.linalg.LinAlgError:
-                    raise ValueError(f"frf[{i}].omegas: {wk} rad/s is an undamped resonance of "
-                                     "the model (K - w^2 M + i w C singular)") from None
+                    raise ValueError(
+                        f"frf[{i}].omegas: {wk} rad/s is an undamped resonance of "
+                        "the model (K - w^2 M + i w C singular)"
+                    ) from None
                 h[k] = cvec @ v
-                dh[k] = ([-(u @ Kg @ v) for Kg in model.K_blocks]
-                         + [wk**2 * (u @ Mg @ v) for Mg in model.M_blocks]
-                         + [-1j * wk * (u @ Cg @ v) for Cg in model.C_blocks])
+                dh[k] = (
+                    [-(u @ Kg @ v) for Kg in model.K_blocks]
+                    + [wk**2 * (u @ Mg @ v) for Mg in model.M_blocks]
+                    + [-1j * wk * (u @ Cg @ v) for Cg in model.C_blocks]
+                )
             dh = np.hstack([g_out * g_in * dh, np.zeros((w.size, S + T))])
             if og is not None:
                 dh[:, P + Q + R + og] = g_in * h
@@ -389,46 +456,62 @@ class CorrectionData:
             pairs = self._shape_pairs
             if self.orthogonality_sigma is not None:
                 for forms, nominal, scalings, offset, count in (
-                        (forms_m, nominal_m, q, P, Q), (forms_k, nominal_k, p, 0, P)):
+                    (forms_m, nominal_m, q, P, Q),
+                    (forms_k, nominal_k, p, 0, P),
+                ):
                     s = np.array([1.0 / np.sqrt(nominal[i] * nominal[j]) for i, j in pairs])
-                    grad = np.array([[B[i, j] for B in forms[1:]] for i, j in pairs]) \
-                        .reshape(len(pairs), count) * s[:, None]
-                    values.append(np.array([forms[0][i, j] for i, j in pairs]) * s
-                                  + grad @ scalings)
+                    grad = (
+                        np.array([[B[i, j] for B in forms[1:]] for i, j in pairs]).reshape(
+                            len(pairs), count
+                        )
+                        * s[:, None]
+                    )
+                    values.append(
+                        np.array([forms[0][i, j] for i, j in pairs]) * s + grad @ scalings
+                    )
                     block = np.zeros((len(pairs), P + Q + R))
-                    block[:, offset:offset + count] = grad
+                    block[:, offset : offset + count] = grad
                     jac.append(block)
             if self.normalization_sigma is not None:
-                grad = np.array([np.diag(B) for B in forms_m[1:]]).T.reshape(-1, Q) \
+                grad = (
+                    np.array([np.diag(B) for B in forms_m[1:]]).T.reshape(-1, Q)
                     / nominal_m[:, None]
+                )
                 values.append(np.diag(forms_m[0]) / nominal_m + grad @ q)
-                jac.append(np.hstack([np.zeros((grad.shape[0], P)), grad,
-                                      np.zeros((grad.shape[0], R))]))
+                jac.append(
+                    np.hstack([np.zeros((grad.shape[0], P)), grad, np.zeros((grad.shape[0], R))])
+                )
         # only the FRF rows depend on the gains: the other blocks get zero gain columns
         return np.concatenate(values), np.vstack(
-            [np.pad(block, ((0, 0), (0, P + Q + R + S + T - block.shape[1]))) for block in jac])
+            [np.pad(block, ((0, 0), (0, P + Q + R + S + T - block.shape[1]))) for block in jac]
+        )
 
 
 def _damping_ratios(model, K, M, C, modes):
     """Damping ratios of the damped modes paired with the undamped ``modes``, and gradients."""
     n = model.n_dofs
     w0 = np.sqrt(np.clip(sla.eigh(K, M, eigvals_only=True), 0.0, None))
-    A = np.block([[np.zeros((n, n)), np.eye(n)],
-                  [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
     s_all, Z = sla.eig(A)
     # one of each conjugate pair; overdamped (real) roots have no damping ratio below 1
     cand = np.nonzero(s_all.imag > 0)[0]
     pick = [int(cand[np.argmin(np.abs(np.abs(s_all[cand]) - w0[mode]))]) for mode in modes]
     if len(set(pick)) != len(pick):
-        raise ValueError("damping_modes: two modes pair with the same damped eigenvalue (close "
-                         "modes or heavy damping)")
-    values, jac = np.empty(len(pick)), np.empty((len(pick), model.n_stiffness + model.n_mass
-                                                 + model.n_damping))
+        raise ValueError(
+            "damping_modes: two modes pair with the same damped eigenvalue (close "
+            "modes or heavy damping)"
+        )
+    values, jac = (
+        np.empty(len(pick)),
+        np.empty((len(pick), model.n_stiffness + model.n_mass + model.n_damping)),
+    )
     for row, i in enumerate(pick):
         s, x = s_all[i], Z[:n, i]
-        ds = -np.array([x @ Kg @ x for Kg in model.K_blocks]
-                       + [s**2 * (x @ Mg @ x) for Mg in model.M_blocks]
-                       + [s * (x @ Cg @ x) for Cg in model.C_blocks]) / (x @ (C + 2.0 * s * M) @ x)
+        ds = -np.array(
+            [x @ Kg @ x for Kg in model.K_blocks]
+            + [s**2 * (x @ Mg @ x) for Mg in model.M_blocks]
+            + [s * (x @ Cg @ x) for Cg in model.C_blocks]
+        ) / (x @ (C + 2.0 * s * M) @ x)
         a = abs(s)
         da = (s.real * ds.real + s.imag * ds.imag) / a
         values[row] = -s.real / a
@@ -467,11 +550,23 @@ class DifferentialCorrection:
     converged: bool
 
 
-def differential_correction(model: SubstructureModel, data: CorrectionData, p0=None, q0=None,
-                            r0=None, fixed_stiffness=(), fixed_mass=(), fixed_damping=(),
-                            prior_sigma=None, n_iter=50, tol=1e-10, mu0=None, nu0=None,
-                            fixed_output_gains=(), fixed_input_gains=(),
-                            ) -> DifferentialCorrection:
+def differential_correction(
+    model: SubstructureModel,
+    data: CorrectionData,
+    p0=None,
+    q0=None,
+    r0=None,
+    fixed_stiffness=(),
+    fixed_mass=(),
+    fixed_damping=(),
+    prior_sigma=None,
+    n_iter=50,
+    tol=1e-10,
+    mu0=None,
+    nu0=None,
+    fixed_output_gains=(),
+    fixed_input_gains=(),
+) -> DifferentialCorrection:
     """Att. 6 differential correction of the substructure scalings and gains (Eqs. 3–13).
 
     Gauss-Newton ``P_{i+1} = P_i + (A^T W A)^-1 A^T W dQ`` (Eqs. 9–11) on ``P = (p, q, r, mu,
@@ -518,27 +613,40 @@ def differential_correction(model: SubstructureModel, data: CorrectionData, p0=N
     P, Q, R = model.n_stiffness, model.n_mass, model.n_damping
     S, T = data.n_output_gains, data.n_input_gains
     G = P + Q + R  # the gains' first column
-    x0 = np.concatenate([model._params(p0, P, "p0"), model._params(q0, Q, "q0"),
-                         model._params(r0, R, "r0"), _start_gains(mu0, S, "mu0", "output_gain"),
-                         _start_gains(nu0, T, "nu0", "input_gain")])
-    names = [f"p[{k}]" for k in range(P)] + [f"q[{k}]" for k in range(Q)] \
-        + [f"r[{k}]" for k in range(R)] + [f"mu[{k}]" for k in range(S)] \
+    x0 = np.concatenate(
+        [
+            model._params(p0, P, "p0"),
+            model._params(q0, Q, "q0"),
+            model._params(r0, R, "r0"),
+            _start_gains(mu0, S, "mu0", "output_gain"),
+            _start_gains(nu0, T, "nu0", "input_gain"),
+        ]
+    )
+    names = (
+        [f"p[{k}]" for k in range(P)]
+        + [f"q[{k}]" for k in range(Q)]
+        + [f"r[{k}]" for k in range(R)]
+        + [f"mu[{k}]" for k in range(S)]
         + [f"nu[{k}]" for k in range(T)]
+    )
     held = []
     for name, fixed, count, offset, kind in (
-            ("fixed_stiffness", fixed_stiffness, P, 0, "block"),
-            ("fixed_mass", fixed_mass, Q, P, "block"),
-            ("fixed_damping", fixed_damping, R, P + Q, "block"),
-            ("fixed_output_gains", fixed_output_gains, S, G, "gain"),
-            ("fixed_input_gains", fixed_input_gains, T, G + S, "gain")):
+        ("fixed_stiffness", fixed_stiffness, P, 0, "block"),
+        ("fixed_mass", fixed_mass, Q, P, "block"),
+        ("fixed_damping", fixed_damping, R, P + Q, "block"),
+        ("fixed_output_gains", fixed_output_gains, S, G, "gain"),
+        ("fixed_input_gains", fixed_input_gains, T, G + S, "gain"),
+    ):
         idx = np.asarray(fixed).ravel()
         if idx.size and (idx.dtype.kind not in "iu" or np.any(idx < 0) or np.any(idx >= count)):
             raise ValueError(f"{name}: must be {kind} indices in [0, {count})")
         held += (offset + idx.astype(int)).tolist()
     free = np.setdiff1d(np.arange(x0.size), held)
     if free.size == 0:
-        raise ValueError("fixed_stiffness, fixed_mass, fixed_damping, fixed_output_gains, "
-                         "fixed_input_gains: every parameter is held")
+        raise ValueError(
+            "fixed_stiffness, fixed_mass, fixed_damping, fixed_output_gains, "
+            "fixed_input_gains: every parameter is held"
+        )
     free_gains = free[free >= G]
     sd_prior = None
     if prior_sigma is not None:
@@ -548,12 +656,14 @@ def differential_correction(model: SubstructureModel, data: CorrectionData, p0=N
         sd_prior = np.broadcast_to(s, x0.shape)[free]
     measured, sd = data.measured, data.sigma
     if sd_prior is None and measured.size < free.size:
-        raise ValueError(f"data: {measured.size} measurements for {free.size} free parameters: "
-                         "more parameters than data; add measurements, hold parameters, or give "
-                         "prior_sigma (0_p)")
+        raise ValueError(
+            f"data: {measured.size} measurements for {free.size} free parameters: "
+            "more parameters than data; add measurements, hold parameters, or give "
+            "prior_sigma (0_p)"
+        )
 
     def evaluate(x):
-        calc, A = data.predict(model, x[:P], x[P:P + Q], x[P + Q:G], x[G:G + S], x[G + S:])
+        calc, A = data.predict(model, x[:P], x[P : P + Q], x[P + Q : G], x[G : G + S], x[G + S :])
         res = (measured - calc) / sd
         rows = A[:, free] / sd[:, None]
         if sd_prior is not None:
@@ -577,11 +687,13 @@ def differential_correction(model: SubstructureModel, data: CorrectionData, p0=N
             v = Vt[-1] / scale
             v /= np.abs(v).max()
             combo = " + ".join(f"{c:.2f} {names[k]}" for c, k in zip(v, free) if abs(c) > 0.05)
-            raise ValueError(f"data: the parameters are not identifiable from these measurements "
-                             f"(condition number {s[0] / max(s[-1], 1e-300):.2g}; changing "
-                             f"{combo} leaves them unchanged); add FRF data (the absolute "
-                             "scale; with gains free, items from calibrated sensors or inputs, "
-                             "gain None), hold parameters, or give prior_sigma (0_p)")
+            raise ValueError(
+                f"data: the parameters are not identifiable from these measurements "
+                f"(condition number {s[0] / max(s[-1], 1e-300):.2g}; changing "
+                f"{combo} leaves them unchanged); add FRF data (the absolute "
+                "scale; with gains free, items from calibrated sensors or inputs, "
+                "gain None), hold parameters, or give prior_sigma (0_p)"
+            )
         step = (Vt.T @ ((U.T @ res) / s)) / scale
         if np.abs(step).max() < tol:
             converged = True
@@ -617,11 +729,14 @@ def differential_correction(model: SubstructureModel, data: CorrectionData, p0=N
     if through_zero:
         # the last steps were cut short at zero: the fit creeps toward a gain of 0, where the
         # data want the opposite sign (a near-interior minimum's steps never reach zero)
-        raise ValueError(f"{', '.join(through_zero)}: the data want a gain <= 0 (steps there "
-                         f"refused; {x[names.index(through_zero[0])]:.3g} after {it} steps): check "
-                         "the sign of its H row / B column, or start nearer")
+        raise ValueError(
+            f"{', '.join(through_zero)}: the data want a gain <= 0 (steps there "
+            f"refused; {x[names.index(through_zero[0])]:.3g} after {it} steps): check "
+            "the sign of its H row / B column, or start nearer"
+        )
     cov = np.zeros((x0.size, x0.size))
     cov[np.ix_(free, free)] = np.linalg.inv(rows.T @ rows)
-    p, q, r = x[:P], x[P:P + Q], x[P + Q:G]
-    return DifferentialCorrection(model.scaled(p, q, r), p, q, r, x[G:G + S], x[G + S:], cov,
-                                  history, dQ, it, converged)
+    p, q, r = x[:P], x[P : P + Q], x[P + Q : G]
+    return DifferentialCorrection(
+        model.scaled(p, q, r), p, q, r, x[G : G + S], x[G + S :], cov, history, dQ, it, converged
+    )

@@ -84,7 +84,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flexsat.validation import require_count, require_finite, require_positive
+from flexsat.input_checks import require_count, require_finite, require_positive
 
 __all__ = [
     "Realization",
@@ -110,8 +110,10 @@ def _markov_array(markov) -> np.ndarray:
     if Y.ndim != 3:
         raise ValueError(f"markov: must have shape (L+1, q, r) (Y_0 first), got {Y.shape}")
     if not np.all(np.isfinite(Y)):
-        raise ValueError(f"markov: must be finite (no NaN or inf), got "
-                         f"{int(np.sum(~np.isfinite(Y)))} non-finite entries")
+        raise ValueError(
+            f"markov: must be finite (no NaN or inf), got "
+            f"{int(np.sum(~np.isfinite(Y)))} non-finite entries"
+        )
     if Y.shape[0] < 4:
         raise ValueError(f"markov: need at least 4 Markov parameters, got {Y.shape[0]}")
     return Y
@@ -129,8 +131,10 @@ def _time_data(u, y):
         if a.ndim != 2:
             raise ValueError(f"{name}: must have shape (channels, samples), got {a.shape}")
         if not np.all(np.isfinite(a)):
-            raise ValueError(f"{name}: must be finite (no NaN or inf), got "
-                             f"{int(np.sum(~np.isfinite(a)))} non-finite entries")
+            raise ValueError(
+                f"{name}: must be finite (no NaN or inf), got "
+                f"{int(np.sum(~np.isfinite(a)))} non-finite entries"
+            )
         arrays.append(a)
     u, y = arrays
     if u.shape[1] != y.shape[1]:
@@ -176,8 +180,9 @@ def markov_parameters(measurement=None, *, u=None, y=None, n_markov=None) -> np.
                 blocks.append(markov_from_frf(m.abscissa, m.outputs, n_markov=n_markov)[0])
                 continue
             if m.inputs is None:
-                raise ValueError(f"measurement[{i}]: needs time histories with recorded inputs "
-                                 "or FRFs")
+                raise ValueError(
+                    f"measurement[{i}]: needs time histories with recorded inputs or FRFs"
+                )
             blocks.append(markov_parameters(u=m.inputs, y=m.outputs, n_markov=n_markov))
         if len({b.shape for b in blocks}) != 1:
             raise ValueError("measurement: tests must have the same outputs and length")
@@ -257,19 +262,24 @@ def markov_from_frf(frequencies, frf, n_markov=None, tail_tolerance=1e-3):
     """
     f = require_finite(frequencies, "frequencies")
     if f.ndim != 1 or f.size < 3:
-        raise ValueError(f"frequencies: must be a 1-D grid of at least 3 values, got shape "
-                         f"{f.shape}")
+        raise ValueError(
+            f"frequencies: must be a 1-D grid of at least 3 values, got shape {f.shape}"
+        )
     df = (f[-1] - f[0]) / (f.size - 1)
     if df <= 0:
         raise ValueError("frequencies: must be ascending")
     # 1e-6 Δf: the same uniformity rule as a Measurement's time axis
     if abs(f[0]) > 1e-6 * df:
-        raise ValueError(f"frequencies: must start at 0 Hz (the inverse FFT needs every line "
-                         f"from DC to Nyquist), got {f[0]:.6g} Hz first")
+        raise ValueError(
+            f"frequencies: must start at 0 Hz (the inverse FFT needs every line "
+            f"from DC to Nyquist), got {f[0]:.6g} Hz first"
+        )
     dev = np.max(np.abs(f - df * np.arange(f.size)))
     if dev > 1e-6 * df:
-        raise ValueError(f"frequencies: must be uniformly spaced (0, Δf, 2Δf, …) for the "
-                         f"inverse FFT; deviation {dev:.3g} Hz from the grid of step {df:.6g} Hz")
+        raise ValueError(
+            f"frequencies: must be uniformly spaced (0, Δf, 2Δf, …) for the "
+            f"inverse FFT; deviation {dev:.3g} Hz from the grid of step {df:.6g} Hz"
+        )
     try:
         H = np.array(frf, dtype=complex)
     except (TypeError, ValueError):
@@ -277,11 +287,14 @@ def markov_from_frf(frequencies, frf, n_markov=None, tail_tolerance=1e-3):
     if H.ndim == 1:
         H = H[None, None, :]
     if H.ndim != 3 or H.shape[2] != f.size:
-        raise ValueError(f"frf: must have shape (outputs, inputs, {f.size}) to match "
-                         f"frequencies, got {H.shape}")
+        raise ValueError(
+            f"frf: must have shape (outputs, inputs, {f.size}) to match frequencies, got {H.shape}"
+        )
     if not np.all(np.isfinite(H)):
-        raise ValueError(f"frf: must be finite (no NaN or inf), got "
-                         f"{int(np.sum(~np.isfinite(H)))} non-finite entries")
+        raise ValueError(
+            f"frf: must be finite (no NaN or inf), got "
+            f"{int(np.sum(~np.isfinite(H)))} non-finite entries"
+        )
     tol = float(require_positive(tail_tolerance, "tail_tolerance"))
     N = 2 * (f.size - 1)
     L = N // 2 if n_markov is None else require_count(n_markov, "n_markov")
@@ -291,12 +304,15 @@ def markov_from_frf(frequencies, frf, n_markov=None, tail_tolerance=1e-3):
     Y = np.fft.irfft(H, n=N, axis=2).transpose(2, 0, 1)
     size = np.sqrt(np.sum(Y**2, axis=(1, 2)))
     peak = np.max(size[1:])
-    tail = np.sqrt(np.mean(size[N - max(1, N // 20):] ** 2))
+    tail = np.sqrt(np.mean(size[N - max(1, N // 20) :] ** 2))
     if tail > tol * peak:
-        warnings.warn(f"frf: the impulse response has not decayed within the period 1/Δf = "
-                      f"{1 / df:.4g} s (tail RMS / peak = {tail / peak:.3g} > tail_tolerance "
-                      f"{tol:g}); the Markov parameters are time-aliased: use a finer "
-                      f"frequency spacing", stacklevel=2)
+        warnings.warn(
+            f"frf: the impulse response has not decayed within the period 1/Δf = "
+            f"{1 / df:.4g} s (tail RMS / peak = {tail / peak:.3g} > tail_tolerance "
+            f"{tol:g}); the Markov parameters are time-aliased: use a finer "
+            f"frequency spacing",
+            stacklevel=2,
+        )
     return Y[: L + 1], 1.0 / (N * df)
 
 
@@ -328,12 +344,17 @@ def okid(u, y, n_markov, n_observer=None) -> np.ndarray:
     r, N = u.shape
     q = y.shape[0]
     L = require_count(n_markov, "n_markov")
-    p = (max(1, min(L, (N - 1) // (r + q + 1) // 2, 200)) if n_observer is None
-         else require_count(n_observer, "n_observer"))
+    p = (
+        max(1, min(L, (N - 1) // (r + q + 1) // 2, 200))
+        if n_observer is None
+        else require_count(n_observer, "n_observer")
+    )
     rows = r + p * (r + q)
     if N - p < rows:
-        raise ValueError(f"n_observer: {rows} regressors need more than the {N - p} equations; "
-                         "use a smaller observer order or a longer record")
+        raise ValueError(
+            f"n_observer: {rows} regressors need more than the {N - p} equations; "
+            "use a smaller observer order or a longer record"
+        )
     v = np.vstack([u, y])
     V = np.zeros((rows, N - p))
     V[:r] = u[:, p:]
@@ -359,8 +380,9 @@ def mac(phi, psi) -> np.ndarray:
     phi = np.atleast_2d(np.asarray(phi))
     psi = np.atleast_2d(np.asarray(psi))
     if phi.shape[0] != psi.shape[0]:
-        raise ValueError(f"reference_shapes: must have {phi.shape[0]} rows (one per output), "
-                         f"got {psi.shape[0]}")
+        raise ValueError(
+            f"reference_shapes: must have {phi.shape[0]} rows (one per output), got {psi.shape[0]}"
+        )
     num = np.abs(phi.conj().T @ psi) ** 2
     den = np.outer(np.sum(np.abs(phi) ** 2, 0), np.sum(np.abs(psi) ** 2, 0))
     return num / np.where(den > 0, den, 1.0)
@@ -450,8 +472,10 @@ def _sizes(L, q, r, order, rows, cols):
         cols = max(1, min(L - rows, max(-(-rows * q // r), 2000 // r)))
     cols = require_count(cols, "cols")
     if rows + cols > L:
-        raise ValueError(f"rows: rows + cols = {rows + cols} needs more than the {L} Markov "
-                         "parameters after Y_0 (H(1) uses Y_1 .. Y_rows+cols)")
+        raise ValueError(
+            f"rows: rows + cols = {rows + cols} needs more than the {L} Markov "
+            "parameters after Y_0 (H(1) uses Y_1 .. Y_rows+cols)"
+        )
     return rows, cols
 
 
@@ -462,14 +486,16 @@ def _order(s, order, field="order"):
         k = min(rank, s.size - 1)
         if k < 1:
             raise ValueError("markov: the Hankel matrix has rank 0 (no response)")
-        gaps = np.log(s[: k]) - np.log(np.maximum(s[1 : k + 1], tol))
+        gaps = np.log(s[:k]) - np.log(np.maximum(s[1 : k + 1], tol))
         order = int(np.argmax(gaps)) + 1
         order += order % 2
         return min(order, rank)
     order = require_count(order, field)
     if order > rank:
-        raise ValueError(f"{field}: {order} exceeds the numerical rank {rank} of the Hankel "
-                         f"matrix ({s.size} singular values); lower the order or give more data")
+        raise ValueError(
+            f"{field}: {order} exceeds the numerical rank {rank} of the Hankel "
+            f"matrix ({s.size} singular values); lower the order or give more data"
+        )
     return order
 
 
@@ -485,8 +511,11 @@ def _modes(A, B, C, dt, cols, reference_shapes):
     bmod = Winv[keep] @ B
     freq = np.abs(s) / (2 * np.pi)
     zeta = -s.real / np.abs(s)
-    msv = np.sqrt(np.linalg.norm(shapes, axis=0) * np.linalg.norm(bmod, axis=1)
-                  * np.array([np.sum(np.abs(z) ** np.arange(cols)) for z in lam_k]))
+    msv = np.sqrt(
+        np.linalg.norm(shapes, axis=0)
+        * np.linalg.norm(bmod, axis=1)
+        * np.array([np.sum(np.abs(z) ** np.arange(cols)) for z in lam_k])
+    )
     mpc = np.array([_mpc(shapes[:, i]) for i in range(keep.size)])
     norm = shapes / np.linalg.norm(shapes, axis=0)
     big = np.argmax(np.abs(norm), axis=0)
@@ -543,8 +572,7 @@ def era(markov, dt=1.0, order=None, rows=None, cols=None, reference_shapes=None)
     L, q, r = Y.shape[0] - 1, Y.shape[1], Y.shape[2]
     rows, cols = _sizes(L, q, r, order, rows, cols)
     A, B, C, s, n, Ob, Co = _realize(Y, dt, order, rows, cols)
-    return _finish(Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes,
-                   (rows * q, cols * r))
+    return _finish(Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, (rows * q, cols * r))
 
 
 def _perturbation_std(s, n, shape, W, keep, lam, freq, zeta, dt):
@@ -566,7 +594,8 @@ def _perturbation_std(s, n, shape, W, keep, lam, freq, zeta, dt):
 def _finish(Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, shape, extra=None):
     q, r = Y.shape[1:]
     freq, zeta, shapes, msv, mpc, mac_best, lam, bmod, keep, W = _modes(
-        A, B, C, dt, cols, reference_shapes)
+        A, B, C, dt, cols, reference_shapes
+    )
     # EMAC at lag k = min(rows, cols) - 1: observability block k (modal) vs c λ^k,
     # controllability block k vs λ^k b (see the module docstring)
     k = min(rows, cols) - 1
@@ -574,19 +603,40 @@ def _finish(Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, shape, e
     obs_k = Ob[k * q : (k + 1) * q] @ W[:, keep]
     con_k = Winv[keep] @ Co[:, k * r : (k + 1) * r]
     raw = C @ W[:, keep]
-    emac = np.array([
-        _coherence(raw[:, i] * lam[i] ** k, obs_k[:, i])
-        * _coherence(bmod[i] * lam[i] ** k, con_k[i])
-        for i in range(keep.size)
-    ])
+    emac = np.array(
+        [
+            _coherence(raw[:, i] * lam[i] ** k, obs_k[:, i])
+            * _coherence(bmod[i] * lam[i] ** k, con_k[i])
+            for i in range(keep.size)
+        ]
+    )
     fstd = zstd = None
     if shape is not None:
         fstd, zstd = _perturbation_std(s, n, shape, W, keep, lam, freq, zeta, dt)
-    return Realization(A, B, C, Y[0], dt, s, freq, zeta, shapes, emac, mpc, msv, mac_best,
-                       fstd, zstd, rows, cols, n, extra or {})
+    return Realization(
+        A,
+        B,
+        C,
+        Y[0],
+        dt,
+        s,
+        freq,
+        zeta,
+        shapes,
+        emac,
+        mpc,
+        msv,
+        mac_best,
+        fstd,
+        zstd,
+        rows,
+        cols,
+        n,
+        extra or {},
+    )
 
 
-def _markov_of(real: "Realization", n: int) -> np.ndarray:
+def _markov_of(real: Realization, n: int) -> np.ndarray:
     """Markov parameters D, CB, CAB, ... (n + 1 of them) of a discrete realization."""
     out, x = [real.D], real.B
     for _ in range(n):
@@ -595,8 +645,9 @@ def _markov_of(real: "Realization", n: int) -> np.ndarray:
     return np.array(out)
 
 
-def bootstrap_uncertainty(realization: "Realization", markov, n_samples: int = 20, seed=None,
-                          match_tolerance: float = 0.05) -> "Realization":
+def bootstrap_uncertainty(
+    realization: Realization, markov, n_samples: int = 20, seed=None, match_tolerance: float = 0.05
+) -> Realization:
     """Standard deviations of the frequencies and damping ratios by parametric bootstrap.
 
     The residual ``markov - Y(realization)`` gives the noise level of each output/input pair
@@ -630,10 +681,15 @@ def bootstrap_uncertainty(realization: "Realization", markov, n_samples: int = 2
     n = require_count(n_samples, "n_samples")
     if n < 2:
         raise ValueError(f"n_samples: at least 2 bootstrap copies are needed, got {n}")
-    if realization.extra.get("method", "era") != "era" or realization.C.shape[0] != Y.shape[1] \
-            or realization.B.shape[1] != Y.shape[2]:
-        raise ValueError("realization: must come from era() on these Markov parameters "
-                         f"({Y.shape[1]} outputs, {Y.shape[2]} inputs)")
+    if (
+        realization.extra.get("method", "era") != "era"
+        or realization.C.shape[0] != Y.shape[1]
+        or realization.B.shape[1] != Y.shape[2]
+    ):
+        raise ValueError(
+            "realization: must come from era() on these Markov parameters "
+            f"({Y.shape[1]} outputs, {Y.shape[2]} inputs)"
+        )
     model = _markov_of(realization, Y.shape[0] - 1)
     sigma = (Y - model)[1:].std(axis=0)
     rng = np.random.default_rng(seed)
@@ -641,8 +697,13 @@ def bootstrap_uncertainty(realization: "Realization", markov, n_samples: int = 2
     f_all = np.full((n, f0.size), np.nan)
     z_all = np.full((n, f0.size), np.nan)
     for b in range(n):
-        copy = era(model + sigma[None] * rng.standard_normal(Y.shape), realization.dt,
-                   order=realization.order, rows=realization.rows, cols=realization.cols)
+        copy = era(
+            model + sigma[None] * rng.standard_normal(Y.shape),
+            realization.dt,
+            order=realization.order,
+            rows=realization.rows,
+            cols=realization.cols,
+        )
         if copy.frequencies.size == 0:
             continue
         for i, f in enumerate(f0):
@@ -652,19 +713,28 @@ def bootstrap_uncertainty(realization: "Realization", markov, n_samples: int = 2
     found = np.sum(np.isfinite(f_all), axis=0)
     ok = found >= max(2, n // 2)
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)   # all-NaN columns of unmatched modes
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns of unmatched modes
         fstd = np.where(ok, np.nanstd(f_all, axis=0, ddof=1), np.nan)
         zstd = np.where(ok, np.nanstd(z_all, axis=0, ddof=1), np.nan)
         fbias = np.where(ok, np.nanmean(f_all, axis=0) - f0, np.nan)
         zbias = np.where(ok, np.nanmean(z_all, axis=0) - realization.damping, np.nan)
-    return dataclasses.replace(realization, frequency_std=fstd, damping_std=zstd,
-                               extra={**realization.extra, "uncertainty": "bootstrap",
-                                      "bootstrap_samples": n, "frequency_bias": fbias,
-                                      "damping_bias": zbias})
+    return dataclasses.replace(
+        realization,
+        frequency_std=fstd,
+        damping_std=zstd,
+        extra={
+            **realization.extra,
+            "uncertainty": "bootstrap",
+            "bootstrap_samples": n,
+            "frequency_bias": fbias,
+            "damping_bias": zbias,
+        },
+    )
 
 
-def era_dc(markov, dt=1.0, order=None, rows=None, cols=None, blocks=2, lag=1,
-           reference_shapes=None):
+def era_dc(
+    markov, dt=1.0, order=None, rows=None, cols=None, blocks=2, lag=1, reference_shapes=None
+):
     """ERA with data correlations (ERA/DC; Juang, Cooper & Wright, *Control Theory Adv. Tech.*
     4(1), 1988), built on ERA (Juang & Pappa 1985).
 
@@ -685,14 +755,20 @@ def era_dc(markov, dt=1.0, order=None, rows=None, cols=None, blocks=2, lag=1,
     if rows is None or cols is None:
         rows, cols = _sizes(L - reach, q, r, order, rows, cols)
     elif rows + cols + reach > L:
-        raise ValueError(f"rows: rows + cols + correlation reach {rows + cols + reach} exceeds "
-                         f"the {L} Markov parameters")
+        raise ValueError(
+            f"rows: rows + cols + correlation reach {rows + cols + reach} exceeds "
+            f"the {L} Markov parameters"
+        )
 
     def build():
         H0 = _hankel(Y, 1, rows, cols)
         R = {k: _hankel(Y, 1 + k, rows, cols) @ H0.T for k in range(reach + 1)}
-        big = lambda k: np.block([[R[k + (i + j) * lag] for j in range(blocks)]  # noqa: E731
-                                  for i in range(blocks)])
+        big = lambda k: np.block(
+            [
+                [R[k + (i + j) * lag] for j in range(blocks)]  # noqa: E731
+                for i in range(blocks)
+            ]
+        )
         U, s, Vt = np.linalg.svd(big(0), full_matrices=False)
         n = _order(s, order)
         Sh = np.sqrt(s[:n])
@@ -702,13 +778,15 @@ def era_dc(markov, dt=1.0, order=None, rows=None, cols=None, blocks=2, lag=1,
         return A, Gam[:, :r], Pn[:q], s, n, Pn, Gam
 
     A, B, C, s, n, Ob, Co = build()
-    return _finish(Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, None,
-                   extra={"method": "ERA/DC"})
+    return _finish(
+        Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, None, extra={"method": "ERA/DC"}
+    )
 
 
 # ------------------------------------------------------------------------------------------------
-def noise_damping_sweep(modal_model, noise_levels, sensors, excitation, duration, sample_rate,
-                        seeds=(0,), **era_kwargs):
+def noise_damping_sweep(
+    modal_model, noise_levels, sensors, excitation, duration, sample_rate, seeds=(0,), **era_kwargs
+):
     """Relative frequency and damping errors of ERA versus measurement noise.
 
     Runs :func:`~flexsat.identify.excitation.simulate_test` with each noise level and seed,
@@ -725,8 +803,9 @@ def noise_damping_sweep(modal_model, noise_levels, sensors, excitation, duration
     for level in noise_levels:
         f_err, z_err = [], []
         for seed in seeds:
-            meas = simulate_test(modal_model, excitation, sensors, duration, sample_rate,
-                                 noise=level, seed=seed)
+            meas = simulate_test(
+                modal_model, excitation, sensors, duration, sample_rate, noise=level, seed=seed
+            )
             Y = markov_parameters(meas)
             kw = dict(order=2 * modal_model.n_modes) | era_kwargs
             res = era(Y, dt=meas.dt, **kw)
@@ -735,5 +814,8 @@ def noise_damping_sweep(modal_model, noise_levels, sensors, excitation, duration
             z_err.append(np.abs(res.damping[idx] / z_true - 1))
         fe.append(np.mean(f_err, axis=0))
         ze.append(np.mean(z_err, axis=0))
-    return {"noise": np.asarray(noise_levels, float), "frequency_error": np.array(fe),
-            "damping_error": np.array(ze)}
+    return {
+        "noise": np.asarray(noise_levels, float),
+        "frequency_error": np.array(fe),
+        "damping_error": np.array(ze),
+    }

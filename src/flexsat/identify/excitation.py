@@ -32,7 +32,7 @@ from scipy import signal
 from scipy.linalg import block_diag, expm
 
 from flexsat.identify.measurements import Channel, Measurement
-from flexsat.validation import require_count, require_nonneg, require_positive
+from flexsat.input_checks import require_count, require_nonneg, require_positive
 
 __all__ = [
     "Excitation",
@@ -79,7 +79,8 @@ class Excitation:
             raise ValueError(f"kind: must be one of {_KINDS}, got {self.kind!r}")
         if self.channel.kind not in ("force", "torque"):
             raise ValueError(
-                f"channel: an excitation is a force or torque, got {self.channel.kind!r}")
+                f"channel: an excitation is a force or torque, got {self.channel.kind!r}"
+            )
 
     def samples(self, t_fine: np.ndarray, h: float, oversample: int, rng) -> np.ndarray:
         """Average of the input over each fine step starting at ``t_fine``."""
@@ -121,8 +122,9 @@ def impulse_hammer(node, direction, amplitude=1.0, width=None, load="force") -> 
 def harmonic_shaker(node, direction, amplitude, frequency, load="force") -> Excitation:
     """Sine force (or torque) of ``amplitude`` and ``frequency`` (Hz) from t = 0."""
     require_positive(frequency, "frequency")
-    return Excitation("harmonic", _load(load, node, direction), float(amplitude),
-                      frequency=float(frequency))
+    return Excitation(
+        "harmonic", _load(load, node, direction), float(amplitude), frequency=float(frequency)
+    )
 
 
 def random_force(node, direction, rms=1.0, load="force") -> Excitation:
@@ -183,11 +185,12 @@ def _with_anti_alias(A, B, C, D, cutoff_hz):
     inputs."""
     ns, r = B.shape
     q = C.shape[0]
-    af, bf, cf, _ = signal.zpk2ss(*signal.butter(ANTI_ALIAS_ORDER, 2 * np.pi * cutoff_hz,
-                                                 analog=True, output="zpk"))
+    af, bf, cf, _ = signal.zpk2ss(
+        *signal.butter(ANTI_ALIAS_ORDER, 2 * np.pi * cutoff_hz, analog=True, output="zpk")
+    )
     k = af.shape[0]
     Af = block_diag(*([af] * (q + r)))
-    Bf = block_diag(*([bf] * (q + r)))          # (k (q + r), q + r): one input per channel
+    Bf = block_diag(*([bf] * (q + r)))  # (k (q + r), q + r): one input per channel
     Cf = block_diag(*([cf] * (q + r)))
     drive_x = np.vstack([C, np.zeros((r, ns))])  # filter inputs: C x + D u, then u
     drive_u = np.vstack([D, np.eye(r)])
@@ -197,8 +200,18 @@ def _with_anti_alias(A, B, C, D, cutoff_hz):
     return A_aug, B_aug, C_aug, np.zeros((q + r, r))
 
 
-def simulate_test(modal_model, excitation, sensors, duration, sample_rate, noise=0.0,
-                  quantization=None, seed=None, oversample=1, anti_alias=None) -> Measurement:
+def simulate_test(
+    modal_model,
+    excitation,
+    sensors,
+    duration,
+    sample_rate,
+    noise=0.0,
+    quantization=None,
+    seed=None,
+    oversample=1,
+    anti_alias=None,
+) -> Measurement:
     """Simulate a vibration test and record it as a :class:`Measurement`.
 
     Parameters
@@ -256,8 +269,10 @@ def simulate_test(modal_model, excitation, sensors, duration, sample_rate, noise
     if anti_alias is not None:
         cut = float(require_positive(anti_alias, "anti_alias"))
         if cut >= fs / 2:
-            raise ValueError(f"anti_alias: the cut-off must be below the Nyquist frequency "
-                             f"{fs / 2:g} Hz, got {cut:g} Hz")
+            raise ValueError(
+                f"anti_alias: the cut-off must be below the Nyquist frequency "
+                f"{fs / 2:g} Hz, got {cut:g} Hz"
+            )
         A, B, C, D = _with_anti_alias(A, B, C, D, cut)
     ns, r = A.shape[0], B.shape[1]
     M = np.zeros((ns + r, ns + r))
@@ -280,7 +295,17 @@ def simulate_test(modal_model, excitation, sensors, duration, sample_rate, noise
     if quantization is not None:
         q = float(require_positive(quantization, "quantization"))
         Y = q * np.round(Y / q)
-    return Measurement(np.arange(n) * dt, Y, tuple(sensors), u_samples, tuple(chans), "time",
-                       attrs={"noise": noise, "seed": -1 if seed is None else int(seed),
-                              "oversample": over,
-                              "anti_alias_hz": -1.0 if anti_alias is None else float(anti_alias)})
+    return Measurement(
+        np.arange(n) * dt,
+        Y,
+        tuple(sensors),
+        u_samples,
+        tuple(chans),
+        "time",
+        attrs={
+            "noise": noise,
+            "seed": -1 if seed is None else int(seed),
+            "oversample": over,
+            "anti_alias_hz": -1.0 if anti_alias is None else float(anti_alias),
+        },
+    )

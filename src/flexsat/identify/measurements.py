@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flexsat.validation import require_finite
+from flexsat.input_checks import require_finite
 
 __all__ = ["CHANNEL_KINDS", "Channel", "Measurement"]
 
@@ -40,11 +40,25 @@ _ROTATIONAL = ("rotation", "strain", "torque")
 _AXES = ("x", "y", "z")
 #: UFF dataset 58 ordinate specific data types (8 displacement, 11 velocity, 12 acceleration,
 #: 3 strain, 13 excitation force); rotation and torque are 8 and 13 on a rotational dof.
-_UFF_SPEC = {"displacement": 8, "velocity": 11, "acceleration": 12, "rotation": 8, "strain": 3,
-             "force": 13, "torque": 13}
-_UFF_KIND = {(8, False): "displacement", (8, True): "rotation", (11, False): "velocity",
-             (12, False): "acceleration", (3, True): "strain", (3, False): "strain",
-             (13, False): "force", (13, True): "torque"}
+_UFF_SPEC = {
+    "displacement": 8,
+    "velocity": 11,
+    "acceleration": 12,
+    "rotation": 8,
+    "strain": 3,
+    "force": 13,
+    "torque": 13,
+}
+_UFF_KIND = {
+    (8, False): "displacement",
+    (8, True): "rotation",
+    (11, False): "velocity",
+    (12, False): "acceleration",
+    (3, True): "strain",
+    (3, False): "strain",
+    (13, False): "force",
+    (13, True): "torque",
+}
 
 
 @dataclass(frozen=True)
@@ -163,21 +177,27 @@ class Measurement:
         if freq:
             want = (len(ochan), len(ichan), n)
             if outs.shape != want:
-                raise ValueError(f"outputs: FRFs must have shape (outputs, inputs, frequencies) "
-                                 f"= {want}, got {outs.shape}")
+                raise ValueError(
+                    f"outputs: FRFs must have shape (outputs, inputs, frequencies) "
+                    f"= {want}, got {outs.shape}"
+                )
             if self.inputs is not None:
                 raise ValueError("inputs: must be None for FRF data (the FRF is per unit input)")
             ins = None
         else:
             if outs.shape != (len(ochan), n):
-                raise ValueError(f"outputs: must have shape (output_channels, samples) = "
-                                 f"{(len(ochan), n)}, got {outs.shape}")
+                raise ValueError(
+                    f"outputs: must have shape (output_channels, samples) = "
+                    f"{(len(ochan), n)}, got {outs.shape}"
+                )
             ins = None
             if self.inputs is not None:
                 ins = _data(self.inputs, "inputs", complex_ok=False)
                 if ins.shape != (len(ichan), n):
-                    raise ValueError(f"inputs: must have shape (input_channels, samples) = "
-                                     f"{(len(ichan), n)}, got {ins.shape}")
+                    raise ValueError(
+                        f"inputs: must have shape (input_channels, samples) = "
+                        f"{(len(ichan), n)}, got {ins.shape}"
+                    )
         object.__setattr__(self, "abscissa", x)
         object.__setattr__(self, "outputs", outs)
         object.__setattr__(self, "inputs", ins)
@@ -196,8 +216,10 @@ class Measurement:
         return 1.0 / self.dt
 
     def __repr__(self) -> str:
-        return (f"Measurement(domain={self.domain!r}, outputs={len(self.output_channels)}, "
-                f"inputs={len(self.input_channels)}, samples={self.abscissa.size})")
+        return (
+            f"Measurement(domain={self.domain!r}, outputs={len(self.output_channels)}, "
+            f"inputs={len(self.input_channels)}, samples={self.abscissa.size})"
+        )
 
     def to_dataset(self):
         """xarray.Dataset: ``outputs`` (and ``inputs``) with per-channel coordinates."""
@@ -209,8 +231,10 @@ class Measurement:
             for attr in ("kind", "node", "direction", "units", "name"):
                 values = [getattr(c, attr) for c in chans]
                 coords[f"{prefix}_{attr}"] = (f"{prefix}_channel", values)
-            coords[f"{prefix}_node_a"] = (f"{prefix}_channel",
-                                          [-1 if c.node_a is None else c.node_a for c in chans])
+            coords[f"{prefix}_node_a"] = (
+                f"{prefix}_channel",
+                [-1 if c.node_a is None else c.node_a for c in chans],
+            )
         if dim == "time":
             data = {"outputs": (("output_channel", dim), self.outputs)}
             if self.inputs is not None:
@@ -232,22 +256,46 @@ class Measurement:
 
         pyuff = _pyuff("Measurement.to_uff")
         x = self.abscissa
-        common = dict(abscissa_spacing=1, abscissa_min=float(x[0]),
-                      abscissa_inc=float((x[-1] - x[0]) / (x.size - 1)), num_pts=x.size,
-                      abscissa_spec_data_type=17 if self.domain == "time" else 18,
-                      abscissa_axis_units_lab="s" if self.domain == "time" else "Hz", x=x,
-                      load_case_id=0, ver_num=0, rsp_ent_name="flexsat", ref_ent_name="flexsat",
-                      z_axis_value=0.0, id3="NONE", id4="NONE", id5="NONE")
+        common = dict(
+            abscissa_spacing=1,
+            abscissa_min=float(x[0]),
+            abscissa_inc=float((x[-1] - x[0]) / (x.size - 1)),
+            num_pts=x.size,
+            abscissa_spec_data_type=17 if self.domain == "time" else 18,
+            abscissa_axis_units_lab="s" if self.domain == "time" else "Hz",
+            x=x,
+            load_case_id=0,
+            ver_num=0,
+            rsp_ent_name="flexsat",
+            ref_ent_name="flexsat",
+            z_axis_value=0.0,
+            id3="NONE",
+            id4="NONE",
+            id5="NONE",
+        )
 
         def one(chan, data, ref, func_type, ord_type):
-            ref_node, ref_dir, den_units, den_spec = (0, 0, "NONE", 0) if ref is None else (
-                ref.node, ref.uff_direction, ref.units, _UFF_SPEC[ref.kind])
+            ref_node, ref_dir, den_units, den_spec = (
+                (0, 0, "NONE", 0)
+                if ref is None
+                else (ref.node, ref.uff_direction, ref.units, _UFF_SPEC[ref.kind])
+            )
             return pyuff.prepare_58(
-                id1=chan.name, id2=f"node_a {chan.node_a}" if chan.node_a is not None else "NONE",
-                func_type=func_type, rsp_node=chan.node, rsp_dir=chan.uff_direction,
-                ref_node=ref_node, ref_dir=ref_dir, ord_data_type=ord_type, data=data,
-                ordinate_spec_data_type=_UFF_SPEC[chan.kind], ordinate_axis_units_lab=chan.units,
-                orddenom_spec_data_type=den_spec, orddenom_axis_units_lab=den_units, **common)
+                id1=chan.name,
+                id2=f"node_a {chan.node_a}" if chan.node_a is not None else "NONE",
+                func_type=func_type,
+                rsp_node=chan.node,
+                rsp_dir=chan.uff_direction,
+                ref_node=ref_node,
+                ref_dir=ref_dir,
+                ord_data_type=ord_type,
+                data=data,
+                ordinate_spec_data_type=_UFF_SPEC[chan.kind],
+                ordinate_axis_units_lab=chan.units,
+                orddenom_spec_data_type=den_spec,
+                orddenom_axis_units_lab=den_units,
+                **common,
+            )
 
         sets = []
         if self.domain == "time":
@@ -301,27 +349,52 @@ class Measurement:
             if kind == "strain" and node_a is None:
                 node_a = int(node)
             units = str(units).strip()
-            return Channel(kind, int(node), _AXES[(code - 1) % 3],
-                           None if units in ("", "NONE") else units, node_a, str(name).strip()
-                           if str(name).strip() not in ("", "NONE") else "")
+            return Channel(
+                kind,
+                int(node),
+                _AXES[(code - 1) % 3],
+                None if units in ("", "NONE") else units,
+                node_a,
+                str(name).strip() if str(name).strip() not in ("", "NONE") else "",
+            )
 
         if not frf:
             outs, ochan, ins, ichan = [], [], [], []
             for f in functions:
-                c = channel(f["rsp_node"], f["rsp_dir"], f.get("ordinate_spec_data_type", 0),
-                            f.get("ordinate_axis_units_lab", ""), f.get("id1", ""),
-                            f.get("id2", ""))
+                c = channel(
+                    f["rsp_node"],
+                    f["rsp_dir"],
+                    f.get("ordinate_spec_data_type", 0),
+                    f.get("ordinate_axis_units_lab", ""),
+                    f.get("id1", ""),
+                    f.get("id2", ""),
+                )
                 (ins if c.kind in ("force", "torque") else outs).append(np.real(f["data"]))
                 (ichan if c.kind in ("force", "torque") else ochan).append(c)
-            return cls(x, np.array(outs).reshape(len(outs), x.size), ochan,
-                       np.array(ins) if ins else None, ichan if ins else (), "time")
+            return cls(
+                x,
+                np.array(outs).reshape(len(outs), x.size),
+                ochan,
+                np.array(ins) if ins else None,
+                ichan if ins else (),
+                "time",
+            )
         ochan, ichan, table = [], [], {}
         for f in functions:
-            c = channel(f["rsp_node"], f["rsp_dir"], f.get("ordinate_spec_data_type", 0),
-                        f.get("ordinate_axis_units_lab", ""), f.get("id1", ""),
-                        f.get("id2", ""))
-            r = channel(f["ref_node"], f["ref_dir"], f.get("orddenom_spec_data_type", 13),
-                        f.get("orddenom_axis_units_lab", ""))
+            c = channel(
+                f["rsp_node"],
+                f["rsp_dir"],
+                f.get("ordinate_spec_data_type", 0),
+                f.get("ordinate_axis_units_lab", ""),
+                f.get("id1", ""),
+                f.get("id2", ""),
+            )
+            r = channel(
+                f["ref_node"],
+                f["ref_dir"],
+                f.get("orddenom_spec_data_type", 13),
+                f.get("orddenom_axis_units_lab", ""),
+            )
             if c not in ochan:
                 ochan.append(c)
             if r not in ichan:

@@ -45,14 +45,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
-from flexsat.validation import require_finite, require_numeric, require_positive
+from flexsat.input_checks import require_finite, require_numeric, require_positive
 
 __all__ = [
     "look_at",
@@ -76,8 +76,22 @@ FIELD_SIZE_PX = (320, 244)
 FIELD_RATE_HZ = 200.0
 
 #: Order of a camera's parameter vector.
-CAMERA_PARAMETERS = ("xc", "yc", "zc", "a1", "a2", "a3", "x0", "y0", "fx", "fy",
-                     "k1", "k2", "p1", "p2")
+CAMERA_PARAMETERS = (
+    "xc",
+    "yc",
+    "zc",
+    "a1",
+    "a2",
+    "a3",
+    "x0",
+    "y0",
+    "fx",
+    "fy",
+    "k1",
+    "k2",
+    "p1",
+    "p2",
+)
 #: Att. 8's nine calibration unknowns per camera (``"f"`` ties ``fx = fy``).
 DEFAULT_FREE = ("xc", "yc", "zc", "a1", "a2", "a3", "x0", "y0", "f")
 _FREE_NAMES = set(CAMERA_PARAMETERS) | {"f"}
@@ -103,9 +117,11 @@ def _r3(a):
 
 def _check_euler(euler, field_name="euler"):
     if euler not in ("321", "123"):
-        raise ValueError(f"{field_name}: must be '321' (Att. 8: C = R1(psi) R2(theta) R3(phi), "
-                         f"angles (phi, theta, psi)) or '123' (Att. 6: C = R3(t3) R2(t2) R1(t1), "
-                         f"angles (t1, t2, t3)), got {euler!r}")
+        raise ValueError(
+            f"{field_name}: must be '321' (Att. 8: C = R1(psi) R2(theta) R3(phi), "
+            f"angles (phi, theta, psi)) or '123' (Att. 6: C = R3(t3) R2(t2) R1(t1), "
+            f"angles (t1, t2, t3)), got {euler!r}"
+        )
     return euler
 
 
@@ -157,8 +173,10 @@ def look_at(position, target, euler: str = "321", focal_sign: int = -1) -> np.nd
     z = z / np.linalg.norm(z) * (1 if focal_sign > 0 else -1)
     x = np.cross([0.0, 1.0, 0.0], z)
     if np.linalg.norm(x) < 1e-9:
-        raise ValueError("target: the line of sight is along the world Y axis (the image x axis "
-                         "is taken normal to Y); aim the camera off the vertical")
+        raise ValueError(
+            "target: the line of sight is along the world Y axis (the image x axis "
+            "is taken normal to Y); aim the camera off the vertical"
+        )
     x /= np.linalg.norm(x)
     return euler_angles(np.vstack([x, np.cross(z, x), z]), euler)
 
@@ -195,8 +213,10 @@ class Camera:
             raise ValueError(f"angles: must hold 3 Euler angles, got {ang.size}")
         _check_euler(self.euler)
         if self.focal_sign not in (1, -1):
-            raise ValueError(f"focal_sign: must be +1 (Att. 6, '+f') or -1 (Att. 8, '-f'), "
-                             f"got {self.focal_sign!r}")
+            raise ValueError(
+                f"focal_sign: must be +1 (Att. 6, '+f') or -1 (Att. 8, '-f'), "
+                f"got {self.focal_sign!r}"
+            )
         if self.distortion not in ("brown", "printed"):
             raise ValueError(f"distortion: must be 'brown' or 'printed', got {self.distortion!r}")
         if self.f is not None:
@@ -223,14 +243,37 @@ class Camera:
 
     def vector(self) -> np.ndarray:
         """Parameters in the order of :data:`CAMERA_PARAMETERS`."""
-        return np.array([*self.position, *self.angles, self.x0, self.y0, self.fx, self.fy,
-                         self.k1, self.k2, self.p1, self.p2])
+        return np.array(
+            [
+                *self.position,
+                *self.angles,
+                self.x0,
+                self.y0,
+                self.fx,
+                self.fy,
+                self.k1,
+                self.k2,
+                self.p1,
+                self.p2,
+            ]
+        )
 
-    def with_vector(self, vec) -> "Camera":
+    def with_vector(self, vec) -> Camera:
         v = np.asarray(vec, dtype=float)
         return dataclasses.replace(
-            self, position=v[0:3], angles=v[3:6], x0=v[6], y0=v[7], f=None, fx=v[8], fy=v[9],
-            k1=v[10], k2=v[11], p1=v[12], p2=v[13])
+            self,
+            position=v[0:3],
+            angles=v[3:6],
+            x0=v[6],
+            y0=v[7],
+            f=None,
+            fx=v[8],
+            fy=v[9],
+            k1=v[10],
+            k2=v[11],
+            p1=v[12],
+            p2=v[13],
+        )
 
 
 def _project_vec(vec, euler, sign, form, pts):
@@ -265,8 +308,9 @@ def project(camera: Camera, points) -> np.ndarray:
         raise ValueError(f"camera: must be a Camera, got {type(camera).__name__}")
     p = _check_points(points)
     flat = p.reshape(-1, 3)
-    uv, depth = _project_vec(camera.vector(), camera.euler, camera.focal_sign, camera.distortion,
-                             flat)
+    uv, depth = _project_vec(
+        camera.vector(), camera.euler, camera.focal_sign, camera.distortion, flat
+    )
     if np.any(np.abs(depth) < 1e-12):
         raise ValueError("points: a point lies in the camera's focal plane (zero depth)")
     return uv.reshape(p.shape[:-1] + (2,))
@@ -275,8 +319,15 @@ def project(camera: Camera, points) -> np.ndarray:
 # ----------------------------------------------------------------------------------------------
 # simulation
 # ----------------------------------------------------------------------------------------------
-def simulate_centroids(cameras, points, pixel_size, noise_px: float = 0.0, quantize: bool = True,
-                       seed=None, field_px=FIELD_SIZE_PX) -> np.ndarray:
+def simulate_centroids(
+    cameras,
+    points,
+    pixel_size,
+    noise_px: float = 0.0,
+    quantize: bool = True,
+    seed=None,
+    field_px=FIELD_SIZE_PX,
+) -> np.ndarray:
     """Simulated image centroids, shape ``(M, ..., 2)`` for ``M`` cameras and points ``(..., 3)``.
 
     Gaussian noise of ``noise_px`` pixels (standard deviation) is added, then, with
@@ -337,8 +388,11 @@ def calibration_counts(n_points: int, n_cameras: int = 2, params_per_camera: int
     if 2 * m - 3 <= 0:
         raise ValueError(f"n_cameras: calibration needs at least 2 cameras, got {n_cameras}")
     n_min = max(3, math.ceil((p * m - 6) / (2 * m - 3)))
-    return {"equations": 2 * m * int(n_points), "unknowns": 3 * int(n_points) - 6 + p * m,
-            "min_points": n_min}
+    return {
+        "equations": 2 * m * int(n_points),
+        "unknowns": 3 * int(n_points) - 6 + p * m,
+        "min_points": n_min,
+    }
 
 
 @dataclass
@@ -347,15 +401,15 @@ class CalibrationResult:
 
     cameras: list
     targets: np.ndarray
-    covariance: np.ndarray          # over the unknowns, ordered as ``names``
-    names: list                     # e.g. "cam0.xc", "target3.y"
-    sigma0_squared: float           # residual variance factor (1 if the weights are right)
+    covariance: np.ndarray  # over the unknowns, ordered as ``names``
+    names: list  # e.g. "cam0.xc", "target3.y"
+    sigma0_squared: float  # residual variance factor (1 if the weights are right)
     counts: dict
     residuals_px: np.ndarray = field(repr=False)  # image residuals, observation units
     result: object = field(repr=False, default=None)
 
     def std(self, name: str) -> float:
-        return float(np.sqrt(self.covariance[self.names.index(name)] [self.names.index(name)]))
+        return float(np.sqrt(self.covariance[self.names.index(name)][self.names.index(name)]))
 
     def camera_covariance(self, j: int, params: Sequence[str] | None = None) -> np.ndarray:
         """Covariance block of camera ``j``'s free parameters (``params`` order if given)."""
@@ -377,7 +431,7 @@ class CalibrationResult:
         tie = np.zeros((n_par * len(self.cameras), len(sel)))
         for col, k in enumerate(sel):
             cam, name = self.names[k].split(".")
-            for target in (("fx", "fy") if name == "f" else (name,)):
+            for target in ("fx", "fy") if name == "f" else (name,):
                 tie[int(cam[3:]) * n_par + CAMERA_PARAMETERS.index(target), col] = 1.0
         return tie @ self.covariance[np.ix_(sel, sel)] @ tie.T
 
@@ -386,8 +440,9 @@ def _free_indices(free):
     free = tuple(free)
     for name in free:
         if name not in _FREE_NAMES:
-            raise ValueError(f"free: unknown camera parameter {name!r}; choose from "
-                             f"{sorted(_FREE_NAMES)}")
+            raise ValueError(
+                f"free: unknown camera parameter {name!r}; choose from {sorted(_FREE_NAMES)}"
+            )
     if len(set(free)) != len(free):
         raise ValueError(f"free: repeated parameter names in {free}")
     if "f" in free and ("fx" in free or "fy" in free):
@@ -401,9 +456,18 @@ def _collinear(pts, tol=1e-9):
     return s[0] == 0 or s[1] <= tol * s[0]
 
 
-def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scale=None,
-              sigma: float = 1.0, free=DEFAULT_FREE, target_sigma=None, camera_sigma=None,
-              max_nfev: int | None = None) -> CalibrationResult:
+def calibrate(
+    observations,
+    initial_cameras,
+    target_guess,
+    datum=(0, 1, 2),
+    scale=None,
+    sigma: float = 1.0,
+    free=DEFAULT_FREE,
+    target_sigma=None,
+    camera_sigma=None,
+    max_nfev: int | None = None,
+) -> CalibrationResult:
     """Static calibration (resection) of ``M >= 2`` cameras and ``N`` targets.
 
     observations: ``(M, N, 2)`` image centroids; NaN (both coordinates) where a camera does not
@@ -451,11 +515,13 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
         raise ValueError(f"target_guess: must have shape (N, 3), got {targets.shape}")
     n_pts = targets.shape[0]
     if obs.shape != (m_cam, n_pts, 2):
-        raise ValueError(f"observations: must have shape (M, N, 2) = ({m_cam}, {n_pts}, 2) "
-                         f"for {m_cam} cameras and {n_pts} targets, got {obs.shape}")
+        raise ValueError(
+            f"observations: must have shape (M, N, 2) = ({m_cam}, {n_pts}, 2) "
+            f"for {m_cam} cameras and {n_pts} targets, got {obs.shape}"
+        )
     free = _free_indices(free)
     sig = float(require_positive(sigma, "sigma"))
-    seen = np.isfinite(obs[..., 0])                                # (M, N)
+    seen = np.isfinite(obs[..., 0])  # (M, N)
     _check_visibility(seen, target_sigma is not None, len(free))
 
     counts = calibration_counts(n_pts, m_cam, len(free))
@@ -464,25 +530,33 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
             f"target_guess: {n_pts} targets are too few: {m_cam} cameras with {len(free)} free "
             f"parameters each need N >= {counts['min_points']} ({counts['equations']} equations "
             f"2MN < {counts['unknowns']} unknowns 3N - 6 + {len(free)}M; Att. 8: 4N vs 3N + 12, "
-            f"N >= 12)")
+            f"N >= 12)"
+        )
     if _collinear(targets):
-        raise ValueError("target_guess: the targets are collinear; calibration needs targets "
-                         "spread in at least a plane (better in depth too)")
+        raise ValueError(
+            "target_guess: the targets are collinear; calibration needs targets "
+            "spread in at least a plane (better in depth too)"
+        )
 
     if target_sigma is not None:
         tsig = require_positive(target_sigma, "target_sigma")
         try:
-            tsig = np.broadcast_to(tsig.reshape(tsig.shape + (1,) * (tsig.ndim == 1)),
-                                   (n_pts, 3)).copy()
+            tsig = np.broadcast_to(
+                tsig.reshape(tsig.shape + (1,) * (tsig.ndim == 1)), (n_pts, 3)
+            ).copy()
         except ValueError:
-            raise ValueError(f"target_sigma: must be a scalar, (N,) or (N, 3) with N = {n_pts}, "
-                             f"got shape {np.shape(target_sigma)}") from None
+            raise ValueError(
+                f"target_sigma: must be a scalar, (N,) or (N, 3) with N = {n_pts}, "
+                f"got shape {np.shape(target_sigma)}"
+            ) from None
     else:
         tsig = None
     fixed_mask = np.zeros((n_pts, 3), dtype=bool)
     if datum is None and tsig is None:
-        raise ValueError("datum: required (i0, i1, i2) unless target_sigma gives a-priori "
-                         "target positions that fix the frame")
+        raise ValueError(
+            "datum: required (i0, i1, i2) unless target_sigma gives a-priori "
+            "target positions that fix the frame"
+        )
     if datum is not None:
         i0, i1, i2 = _check_datum(datum, targets, n_pts)
         fixed_mask[i0, :] = True
@@ -491,15 +565,17 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
 
     # scale
     if scale is None and tsig is None:
-        raise ValueError("scale: a known distance (i, j, distance) is required; the datum "
-                         "leaves the overall scale undetermined (spec §3.3)")
+        raise ValueError(
+            "scale: a known distance (i, j, distance) is required; the datum "
+            "leaves the overall scale undetermined (spec §3.3)"
+        )
     if scale is not None:
         si, sj, sd, ssig = _check_scale(scale, n_pts)
 
     # unknown vector layout
     tgt_free = np.flatnonzero(~fixed_mask.ravel())
-    cam_prior = _camera_prior(camera_sigma, free, m_cam)     # (M * p_cam,), inf = no prior
-    
+    cam_prior = _camera_prior(camera_sigma, free, m_cam)  # (M * p_cam,), inf = no prior
+
     base_vecs = [cam.vector() for cam in cams]
     idx = {n: k for k, n in enumerate(CAMERA_PARAMETERS)}
     p_cam = len(free)
@@ -520,14 +596,14 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
                     v[idx[n]] = val
             vecs.append(v)
         t = targets.ravel().copy()
-        t[tgt_free] = x[p_cam * m_cam:]
+        t[tgt_free] = x[p_cam * m_cam :]
         return vecs, t.reshape(n_pts, 3)
 
     x0 = np.empty(n_unknown)
     for j in range(m_cam):
         for k, n in enumerate(free):
             x0[j * p_cam + k] = base_vecs[j][idx["fx" if n == "f" else n]]
-    x0[p_cam * m_cam:] = targets.ravel()[tgt_free]
+    x0[p_cam * m_cam :] = targets.ravel()[tgt_free]
 
     # image rows of the targets each camera sees (camera by camera, target by target, u then v)
     visible = np.repeat(seen.reshape(-1), 2)
@@ -535,8 +611,12 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
 
     def residuals(x):
         vecs, t = unpack(x)
-        pred = np.stack([_project_vec(vecs[j], cams[j].euler, cams[j].focal_sign,
-                                      cams[j].distortion, t)[0] for j in range(m_cam)])
+        pred = np.stack(
+            [
+                _project_vec(vecs[j], cams[j].euler, cams[j].focal_sign, cams[j].distortion, t)[0]
+                for j in range(m_cam)
+            ]
+        )
         parts = [(pred.reshape(-1)[visible] - obs_flat) / sig]
         if scale is not None:
             parts.append([(np.linalg.norm(t[si] - t[sj]) - sd) / ssig])
@@ -550,13 +630,13 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
     n_img = obs_flat.size
     n_tgt = tgt_free.size if tsig is not None else 0
     n_res = n_img + (scale is not None) + n_tgt + prior_rows.size
-    full = lil_matrix((2 * m_cam * n_pts, n_unknown), dtype=int)   # all image rows
+    full = lil_matrix((2 * m_cam * n_pts, n_unknown), dtype=int)  # all image rows
     for j in range(m_cam):
-        full[2 * n_pts * j:2 * n_pts * (j + 1), j * p_cam:(j + 1) * p_cam] = 1
+        full[2 * n_pts * j : 2 * n_pts * (j + 1), j * p_cam : (j + 1) * p_cam] = 1
     for col, k in enumerate(tgt_free):
         i = k // 3
         for j in range(m_cam):
-            full[2 * n_pts * j + 2 * i:2 * n_pts * j + 2 * i + 2, p_cam * m_cam + col] = 1
+            full[2 * n_pts * j + 2 * i : 2 * n_pts * j + 2 * i + 2, p_cam * m_cam + col] = 1
     sparsity = lil_matrix((n_res, n_unknown), dtype=int)
     sparsity[:n_img] = full.tocsr()[np.flatnonzero(visible)]
     for col, k in enumerate(tgt_free):
@@ -568,10 +648,19 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
     for row, col in enumerate(prior_rows):
         sparsity[n_img + (scale is not None) + n_tgt + row, col] = 1
 
-    sol = least_squares(residuals, x0, jac="3-point", jac_sparsity=sparsity, method="trf",
-                        x_scale="jac",
-                        tr_options={"atol": 1e-14, "btol": 1e-14, "regularize": False},
-                        xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=max_nfev)
+    sol = least_squares(
+        residuals,
+        x0,
+        jac="3-point",
+        jac_sparsity=sparsity,
+        method="trf",
+        x_scale="jac",
+        tr_options={"atol": 1e-14, "btol": 1e-14, "regularize": False},
+        xtol=1e-10,
+        ftol=1e-10,
+        gtol=1e-10,
+        max_nfev=max_nfev,
+    )
     jac = sol.jac.toarray() if hasattr(sol.jac, "toarray") else np.asarray(sol.jac)
     dof = n_res - n_unknown
     s0sq = float(2.0 * sol.cost / dof) if dof > 0 else float("nan")
@@ -581,9 +670,16 @@ def calibrate(observations, initial_cameras, target_guess, datum=(0, 1, 2), scal
     pred = np.stack([project(out_cams[j], t) for j in range(m_cam)])
     pred[~seen] = np.nan
     counts = {**counts, "equations": n_img, "measurements": n_res, "unknowns_solved": n_unknown}
-    return CalibrationResult(cameras=out_cams, targets=t, covariance=cov, names=names,
-                             sigma0_squared=s0sq, counts=counts, residuals_px=pred - obs,
-                             result=sol)
+    return CalibrationResult(
+        cameras=out_cams,
+        targets=t,
+        covariance=cov,
+        names=names,
+        sigma0_squared=s0sq,
+        counts=counts,
+        residuals_px=pred - obs,
+        result=sol,
+    )
 
 
 def _observations(observations) -> np.ndarray:
@@ -608,14 +704,18 @@ def _check_visibility(seen, priors: bool, p_cam: int) -> None:
     with a-priori target positions)."""
     for j, row in enumerate(seen):
         if 2 * row.sum() < p_cam:
-            raise ValueError(f"observations: camera {j} sees {int(row.sum())} targets, too few "
-                             f"for its {p_cam} free parameters")
+            raise ValueError(
+                f"observations: camera {j} sees {int(row.sum())} targets, too few "
+                f"for its {p_cam} free parameters"
+            )
     need = 1 if priors else 2
     blind = np.flatnonzero(seen.sum(axis=0) < need)
     if blind.size:
-        raise ValueError(f"observations: targets {blind.tolist()} are seen by fewer than {need} "
-                         "camera(s); their positions are undetermined (drop them or give "
-                         "target_sigma)")
+        raise ValueError(
+            f"observations: targets {blind.tolist()} are seen by fewer than {need} "
+            "camera(s); their positions are undetermined (drop them or give "
+            "target_sigma)"
+        )
 
 
 def _camera_prior(camera_sigma, free, m_cam) -> np.ndarray:
@@ -625,13 +725,16 @@ def _camera_prior(camera_sigma, free, m_cam) -> np.ndarray:
         return out
     per_camera = [camera_sigma] * m_cam if isinstance(camera_sigma, dict) else list(camera_sigma)
     if len(per_camera) != m_cam or not all(isinstance(d, dict) for d in per_camera):
-        raise ValueError(f"camera_sigma: must be a mapping {{parameter: sigma}} or one mapping "
-                         f"per camera ({m_cam})")
+        raise ValueError(
+            f"camera_sigma: must be a mapping {{parameter: sigma}} or one mapping "
+            f"per camera ({m_cam})"
+        )
     for j, sigmas in enumerate(per_camera):
         for name, value in sigmas.items():
             if name not in free:
-                raise ValueError(f"camera_sigma: {name!r} is not a free parameter "
-                                 f"({', '.join(free)})")
+                raise ValueError(
+                    f"camera_sigma: {name!r} is not a free parameter ({', '.join(free)})"
+                )
             out[j * len(free) + free.index(name)] = float(require_positive(value, "camera_sigma"))
     return out
 
@@ -640,19 +743,28 @@ def _check_datum(datum, targets, n_pts):
     try:
         i0, i1, i2 = (int(v) for v in datum)
     except (TypeError, ValueError):
-        raise ValueError(f"datum: must be three target indices (i0, i1, i2), "
-                         f"got {datum!r}") from None
+        raise ValueError(
+            f"datum: must be three target indices (i0, i1, i2), got {datum!r}"
+        ) from None
     if len({i0, i1, i2}) != 3 or not all(0 <= i < n_pts for i in (i0, i1, i2)):
-        raise ValueError(f"datum: must be three distinct target indices in [0, {n_pts}), got "
-                         f"{datum!r}")
+        raise ValueError(
+            f"datum: must be three distinct target indices in [0, {n_pts}), got {datum!r}"
+        )
     scl = 1e-6 * max(1.0, float(np.max(np.abs(targets))))
-    if (np.any(np.abs(targets[i0]) > scl) or np.any(np.abs(targets[i1, 1:]) > scl)
-            or abs(targets[i2, 2]) > scl):
-        raise ValueError(f"target_guess: must be in the datum frame: target {i0} at the origin, "
-                         f"target {i1} with y = z = 0, target {i2} with z = 0")
+    if (
+        np.any(np.abs(targets[i0]) > scl)
+        or np.any(np.abs(targets[i1, 1:]) > scl)
+        or abs(targets[i2, 2]) > scl
+    ):
+        raise ValueError(
+            f"target_guess: must be in the datum frame: target {i0} at the origin, "
+            f"target {i1} with y = z = 0, target {i2} with z = 0"
+        )
     if _collinear(targets[[i0, i1, i2]]) or abs(targets[i1, 0]) <= scl:
-        raise ValueError(f"datum: targets {i0}, {i1}, {i2} are collinear (or coincide) and "
-                         f"cannot define the X axis and the XY plane")
+        raise ValueError(
+            f"datum: targets {i0}, {i1}, {i2} are collinear (or coincide) and "
+            f"cannot define the X axis and the XY plane"
+        )
     return i0, i1, i2
 
 
@@ -664,8 +776,7 @@ def _check_scale(scale, n_pts):
     except (TypeError, IndexError):
         raise ValueError(f"scale: must be (i, j, distance[, sigma]), got {scale!r}") from None
     if si == sj or not (0 <= si < n_pts and 0 <= sj < n_pts):
-        raise ValueError(f"scale: needs two distinct target indices in [0, {n_pts}), got "
-                         f"{scale!r}")
+        raise ValueError(f"scale: needs two distinct target indices in [0, {n_pts}), got {scale!r}")
     return si, sj, sd, ssig
 
 
@@ -673,14 +784,17 @@ def _inverse_normal(jac, field_name):
     """``(J^T J)^-1`` with column equilibration; a clear error when the geometry is singular."""
     norms = np.linalg.norm(jac, axis=0)
     if np.any(norms == 0):
-        raise ValueError(f"{field_name}: some unknowns do not affect any observation "
-                         f"(singular geometry)")
+        raise ValueError(
+            f"{field_name}: some unknowns do not affect any observation (singular geometry)"
+        )
     js = jac / norms
     s = np.linalg.svd(js, compute_uv=False)
     if s[-1] <= 1e-10 * s[0]:
-        raise ValueError(f"{field_name}: the normal matrix is singular (condition "
-                         f"{s[0] / max(s[-1], 1e-300):.3g}); the geometry does not determine "
-                         f"the unknowns (collinear targets or too few views?)")
+        raise ValueError(
+            f"{field_name}: the normal matrix is singular (condition "
+            f"{s[0] / max(s[-1], 1e-300):.3g}); the geometry does not determine "
+            f"the unknowns (collinear targets or too few views?)"
+        )
     inv = np.linalg.inv(js.T @ js)
     return inv / np.outer(norms, norms)
 
@@ -698,7 +812,7 @@ def _linear_guess(cams, uv):
         pos = np.asarray(cam.position)
         s = cam.focal_sign
         for axis, (f, off) in enumerate(((cam.fx, cam.x0), (cam.fy, cam.y0))):
-            rows = (uv[j, :, axis] - off)[:, None] * c[2] - s * f * c[axis]   # (K, 3)
+            rows = (uv[j, :, axis] - off)[:, None] * c[2] - s * f * c[axis]  # (K, 3)
             a += rows[:, :, None] * rows[:, None, :]
             b += rows * (rows @ pos)[:, None]
     return np.linalg.solve(a, b[..., None])[..., 0]
@@ -713,29 +827,37 @@ def _camera_factor(camera_covariance, m_cam):
     n = len(CAMERA_PARAMETERS) * m_cam
     if isinstance(camera_covariance, CalibrationResult):
         if len(camera_covariance.cameras) != m_cam:
-            raise ValueError(f"camera_covariance: the calibration has "
-                             f"{len(camera_covariance.cameras)} cameras, triangulate got {m_cam}")
+            raise ValueError(
+                f"camera_covariance: the calibration has "
+                f"{len(camera_covariance.cameras)} cameras, triangulate got {m_cam}"
+            )
         cov = camera_covariance.full_camera_covariance()
     else:
         cov = require_numeric(camera_covariance, "camera_covariance")
         if cov.shape != (n, n):
-            raise ValueError(f"camera_covariance: must be a CalibrationResult or a ({n}, {n}) "
-                             f"matrix over CAMERA_PARAMETERS of each of the {m_cam} cameras, got "
-                             f"shape {cov.shape}")
+            raise ValueError(
+                f"camera_covariance: must be a CalibrationResult or a ({n}, {n}) "
+                f"matrix over CAMERA_PARAMETERS of each of the {m_cam} cameras, got "
+                f"shape {cov.shape}"
+            )
     scale = float(np.max(np.abs(cov))) if cov.size else 0.0
     if not np.allclose(cov, cov.T, rtol=0.0, atol=1e-10 * scale):
         raise ValueError("camera_covariance: must be symmetric")
     if np.any(np.diag(cov) < -1e-12 * scale):
-        raise ValueError(f"camera_covariance: must be positive semi-definite (diagonal entry "
-                         f"{np.min(np.diag(cov)):.3g})")
+        raise ValueError(
+            f"camera_covariance: must be positive semi-definite (diagonal entry "
+            f"{np.min(np.diag(cov)):.3g})"
+        )
     std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     live = np.flatnonzero(std > 0)
     corr = cov[np.ix_(live, live)] / np.outer(std[live], std[live])
     lam, vec = np.linalg.eigh(corr)
     # roundoff leaves eigenvalues of order 1e-15 n of either sign on a singular correlation
     if lam.size and lam[0] < -1e-9 * max(lam[-1], 1.0):
-        raise ValueError(f"camera_covariance: must be positive semi-definite (correlation "
-                         f"eigenvalue {lam[0]:.3g})")
+        raise ValueError(
+            f"camera_covariance: must be positive semi-definite (correlation "
+            f"eigenvalue {lam[0]:.3g})"
+        )
     keep = lam > 1e-12 * max(lam[-1], 1.0) if lam.size else np.zeros(0, bool)
     factor = np.zeros((n, int(np.sum(keep))))
     factor[live] = std[live, None] * vec[:, keep] * np.sqrt(lam[keep])
@@ -808,13 +930,14 @@ def triangulate(cameras, centroids, pixel_sigma, iterations: int = 10, camera_co
     m_cam = len(cams)
     uv = require_numeric(centroids, "centroids")
     if uv.ndim < 2 or uv.shape[0] != m_cam or uv.shape[-1] != 2:
-        raise ValueError(f"centroids: must have shape (M, ..., 2) with M = {m_cam} cameras, "
-                         f"got {uv.shape}")
+        raise ValueError(
+            f"centroids: must have shape (M, ..., 2) with M = {m_cam} cameras, got {uv.shape}"
+        )
     sig = require_positive(pixel_sigma, "pixel_sigma").reshape(-1)
     if sig.size not in (1, m_cam):
         raise ValueError(f"pixel_sigma: must be a scalar or one value per camera, got {sig.size}")
     factor = None if camera_covariance is None else _camera_factor(camera_covariance, m_cam)
-    var = np.repeat(np.broadcast_to(sig, (m_cam,)) ** 2, 2)       # (2M,)
+    var = np.repeat(np.broadcast_to(sig, (m_cam,)) ** 2, 2)  # (2M,)
     lead = uv.shape[1:-1]
     flat = uv.reshape(m_cam, -1, 2)
     pts = _linear_guess(cams, flat)
@@ -822,11 +945,17 @@ def triangulate(cameras, centroids, pixel_sigma, iterations: int = 10, camera_co
     base = np.concatenate([c.vector() for c in cams])
 
     def model(p, vec=base):
-        return np.concatenate([_project_vec(vec[j * n_par:(j + 1) * n_par], c.euler,
-                                            c.focal_sign, c.distortion, p)[0]
-                               for j, c in enumerate(cams)], axis=1)
+        return np.concatenate(
+            [
+                _project_vec(
+                    vec[j * n_par : (j + 1) * n_par], c.euler, c.focal_sign, c.distortion, p
+                )[0]
+                for j, c in enumerate(cams)
+            ],
+            axis=1,
+        )
 
-    obs = np.concatenate([flat[j] for j in range(m_cam)], axis=1)   # (K, 2M)
+    obs = np.concatenate([flat[j] for j in range(m_cam)], axis=1)  # (K, 2M)
 
     def jacobian(p):
         h = 1e-6 * np.maximum(1.0, np.abs(p))
@@ -834,8 +963,8 @@ def triangulate(cameras, centroids, pixel_sigma, iterations: int = 10, camera_co
         for a in range(3):
             dp = np.zeros_like(p)
             dp[:, a] = h[:, a]
-            cols.append((model(p + dp) - model(p - dp)) / (2 * h[:, a:a + 1]))
-        return np.stack(cols, axis=-1)                       # (K, 2M, 3)
+            cols.append((model(p + dp) - model(p - dp)) / (2 * h[:, a : a + 1]))
+        return np.stack(cols, axis=-1)  # (K, 2M, 3)
 
     def weighted(p, jac):
         """S^-1 J_p per point (Notes above)."""
@@ -844,8 +973,10 @@ def triangulate(cameras, centroids, pixel_sigma, iterations: int = 10, camera_co
         # a step of 1e-3 standard deviation: the truncation error (~1e-6 of the effect of one
         # standard deviation) and the roundoff (~eps / 1e-3) are both negligible
         h = 1e-3
-        jcl = np.stack([(model(p, base + h * col) - model(p, base - h * col)) / (2 * h)
-                        for col in factor.T], axis=-1)      # (K, 2M, rank)
+        jcl = np.stack(
+            [(model(p, base + h * col) - model(p, base - h * col)) / (2 * h) for col in factor.T],
+            axis=-1,
+        )  # (K, 2M, rank)
         cov = np.einsum("kin,kjn->kij", jcl, jcl) + np.diag(var)
         return np.linalg.solve(cov, jac)
 
@@ -862,7 +993,9 @@ def triangulate(cameras, centroids, pixel_sigma, iterations: int = 10, camera_co
     normal = np.einsum("kra,krb->kab", weighted(pts, jac), jac)
     cond = np.linalg.cond(normal)
     if np.any(cond > 1e14):
-        raise ValueError("centroids: the rays are (nearly) parallel for some points; the "
-                         "triangulation geometry is singular")
+        raise ValueError(
+            "centroids: the rays are (nearly) parallel for some points; the "
+            "triangulation geometry is singular"
+        )
     cov = np.linalg.inv(normal)
     return pts.reshape(lead + (3,)), cov.reshape(lead + (3, 3))

@@ -39,7 +39,7 @@ from scipy.linalg import expm
 
 from flexsat.identify.excitation import sensor_matrices
 from flexsat.identify.measurements import Measurement
-from flexsat.validation import require_count, require_finite, require_positive
+from flexsat.input_checks import require_count, require_finite, require_positive
 
 __all__ = ["FRFEstimate", "estimate_frf", "frequency_response"]
 
@@ -67,8 +67,9 @@ class FRFEstimate:
     segments: int
 
 
-def estimate_frf(measurement: Measurement, segment: int, overlap: float = 0.5,
-                 window: str = "hann") -> FRFEstimate:
+def estimate_frf(
+    measurement: Measurement, segment: int, overlap: float = 0.5, window: str = "hann"
+) -> FRFEstimate:
     """H1 estimate of the FRFs of a time-domain test with recorded inputs.
 
     Parameters
@@ -96,8 +97,9 @@ def estimate_frf(measurement: Measurement, segment: int, overlap: float = 0.5,
         correlated or absent in a band).
     """
     if measurement.domain != "time" or measurement.inputs is None:
-        raise ValueError("measurement: the H1 estimate needs a time-domain test with recorded "
-                         "inputs")
+        raise ValueError(
+            "measurement: the H1 estimate needs a time-domain test with recorded inputs"
+        )
     n = require_count(segment, "segment")
     N = measurement.abscissa.size
     if not 4 <= n <= N:
@@ -117,35 +119,45 @@ def estimate_frf(measurement: Measurement, segment: int, overlap: float = 0.5,
     Gyy = np.empty((f.size, q))
     for a in range(r):
         for b in range(r):
-            Guu[:, a, b] = signal.csd(u[a], u[b], **kw)[1][keep]   # E[U_a* U_b]
+            Guu[:, a, b] = signal.csd(u[a], u[b], **kw)[1][keep]  # E[U_a* U_b]
         for i in range(q):
-            Gyu[:, i, a] = signal.csd(u[a], y[i], **kw)[1][keep]   # E[U_a* Y_i]
+            Gyu[:, i, a] = signal.csd(u[a], y[i], **kw)[1][keep]  # E[U_a* Y_i]
     for i in range(q):
         Gyy[:, i] = signal.welch(y[i], **kw)[1][keep]
     # csd(x, y) = E[X* Y]: Guu[a, b] = E[U_a* U_b], Gyu[i, a] = E[U_a* Y_i]; Y = H U gives
     # E[U_a* Y_i] = sum_b H_ib Guu[a, b], i.e. Gyu^T = Guu H^T
     cond = np.linalg.cond(Guu)
     if np.any(~np.isfinite(cond)) or np.any(cond > 1e12):
-        raise ValueError("measurement: the input cross-spectral matrix is singular at some "
-                         "frequencies (inputs fully correlated, or no input power there)")
-    H = np.transpose(np.linalg.solve(Guu, np.swapaxes(Gyu, 1, 2)), (2, 1, 0))   # (q, r, F)
+        raise ValueError(
+            "measurement: the input cross-spectral matrix is singular at some "
+            "frequencies (inputs fully correlated, or no input power there)"
+        )
+    H = np.transpose(np.linalg.solve(Guu, np.swapaxes(Gyu, 1, 2)), (2, 1, 0))  # (q, r, F)
     # E|Y_i|^2 explained by the inputs: sum_ab conj(H_ia) Guu[a, b] H_ib
     explained = np.einsum("iaf,fab,ibf->fi", H.conj(), Guu, H).real
     coherence = (explained / np.where(Gyy > 0, Gyy, np.inf)).T
     step = n - int(ov * n)
     segments = (N - n) // step + 1
-    conditioned = np.real(np.diagonal(np.linalg.inv(Guu), axis1=1, axis2=2))   # (F, r)
-    unexplained = np.clip(Gyy - explained, 0.0, None)                           # (F, q)
-    std = np.sqrt(unexplained.T[:, None, :] * conditioned.T[None, :, :]
-                  / (2.0 * max(segments - r, 1)))
-    frf = Measurement(f, H, measurement.output_channels, None, measurement.input_channels,
-                      "frequency", attrs={"estimator": "H1", "segment": n, "overlap": ov,
-                                          "window": window})
+    conditioned = np.real(np.diagonal(np.linalg.inv(Guu), axis1=1, axis2=2))  # (F, r)
+    unexplained = np.clip(Gyy - explained, 0.0, None)  # (F, q)
+    std = np.sqrt(
+        unexplained.T[:, None, :] * conditioned.T[None, :, :] / (2.0 * max(segments - r, 1))
+    )
+    frf = Measurement(
+        f,
+        H,
+        measurement.output_channels,
+        None,
+        measurement.input_channels,
+        "frequency",
+        attrs={"estimator": "H1", "segment": n, "overlap": ov, "window": window},
+    )
     return FRFEstimate(frf, coherence, std, segments)
 
 
-def frequency_response(modal_model, sensors, inputs, frequencies_hz, sample_rate=None
-                       ) -> np.ndarray:
+def frequency_response(
+    modal_model, sensors, inputs, frequencies_hz, sample_rate=None
+) -> np.ndarray:
     """Model FRFs (q, r, F) of a :class:`~flexsat.structures.modal_model.ModalModel`.
 
     ``sensors`` and ``inputs`` are :class:`~flexsat.identify.measurements.Channel` lists as in

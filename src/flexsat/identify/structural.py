@@ -69,7 +69,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexsat.analysis.sensitivity import modal_derivatives
-from flexsat.validation import require_count, require_numeric
+from flexsat.input_checks import require_count, require_numeric
 
 __all__ = [
     "SubstructureModel",
@@ -144,8 +144,9 @@ class SubstructureModel:
             raise ValueError("M_blocks: give at least one mass block (or M0)")
         for name in ("K0", "M0", "C0"):
             value = getattr(self, name)
-            object.__setattr__(self, name, np.zeros((n, n)) if value is None
-                               else _dense(value, name, n))
+            object.__setattr__(
+                self, name, np.zeros((n, n)) if value is None else _dense(value, name, n)
+            )
         object.__setattr__(self, "names", tuple(self.names))
 
     @property
@@ -202,23 +203,34 @@ class SubstructureModel:
         except np.linalg.LinAlgError:
             raise ValueError("mass scalings: M(q) is not positive definite") from None
         try:
-            return solve_modes(K, M, self.n_dofs if n_modes is None
-                               else min(require_count(n_modes, "n_modes"), self.n_dofs))
+            return solve_modes(
+                K,
+                M,
+                self.n_dofs
+                if n_modes is None
+                else min(require_count(n_modes, "n_modes"), self.n_dofs),
+            )
         except ValueError as error:
             if str(error).startswith("n_modes"):
                 raise
-            raise ValueError(f"stiffness scalings: K(p) is not positive semi-definite ({error})"
-                             ) from None
+            raise ValueError(
+                f"stiffness scalings: K(p) is not positive semi-definite ({error})"
+            ) from None
 
-    def scaled(self, p=None, q=None, r=None) -> "SubstructureModel":
+    def scaled(self, p=None, q=None, r=None) -> SubstructureModel:
         """The same parameterisation with the blocks multiplied by ``p, q, r`` (new nominal)."""
         p = self._params(p, self.n_stiffness, "p")
         q = self._params(q, self.n_mass, "q")
         r = self._params(r, self.n_damping, "r")
-        return SubstructureModel([a * B for a, B in zip(p, self.K_blocks)],
-                                 [a * B for a, B in zip(q, self.M_blocks)],
-                                 [a * B for a, B in zip(r, self.C_blocks)],
-                                 self.K0, self.M0, self.C0, self.names)
+        return SubstructureModel(
+            [a * B for a, B in zip(p, self.K_blocks)],
+            [a * B for a, B in zip(q, self.M_blocks)],
+            [a * B for a, B in zip(r, self.C_blocks)],
+            self.K0,
+            self.M0,
+            self.C0,
+            self.names,
+        )
 
 
 def substructures_from_builder(build, n_stiffness, n_mass=None, C_blocks=(), names=()):
@@ -316,8 +328,7 @@ def _check_frf(frf, n):
     return out
 
 
-def fit_modal_normalization(frf, shapes, omegas, rigid_body=False, residual=True,
-                            known_part=None):
+def fit_modal_normalization(frf, shapes, omegas, rigid_body=False, residual=True, known_part=None):
     """Linear least-squares fit of the modal normalisation factors (Att. 7 Eqs. 5–6).
 
     ``h_jk(w) ~= a1/w^2 + sum_r alpha_r psi_jr psi_kr / (w_r^2 - w^2) + a2`` (real FRF
@@ -365,17 +376,21 @@ def fit_modal_normalization(frf, shapes, omegas, rigid_body=False, residual=True
         rhs.append(h * wgt)
     A, b = np.vstack(rows), np.concatenate(rhs)
     if A.shape[0] < A.shape[1]:
-        raise ValueError(f"frf: {A.shape[0]} FRF points for {A.shape[1]} unknowns "
-                         "(normalisation factors and rigid/residual terms): need more points")
+        raise ValueError(
+            f"frf: {A.shape[0]} FRF points for {A.shape[1]} unknowns "
+            "(normalisation factors and rigid/residual terms): need more points"
+        )
     scale = np.abs(A).max(axis=0)
     scale[scale == 0] = 1.0
     x = np.linalg.lstsq(A / scale, b, rcond=None)[0] / scale
     alpha = x[:m]
     if np.any(alpha <= 0):
-        raise ValueError("frf: fitted modal normalisation factors must be > 0 (FRF does not "
-                         f"observe a measured mode, or shapes inconsistent): {alpha}")
-    a1 = x[m:m + nf] if rigid_body else np.zeros(nf)
-    a2 = x[m + (nf if rigid_body else 0):] if residual else np.zeros(nf)
+        raise ValueError(
+            "frf: fitted modal normalisation factors must be > 0 (FRF does not "
+            f"observe a measured mode, or shapes inconsistent): {alpha}"
+        )
+    a1 = x[m : m + nf] if rigid_body else np.zeros(nf)
+    a2 = x[m + (nf if rigid_body else 0) :] if residual else np.zeros(nf)
     return alpha, a1, a2
 
 
@@ -427,19 +442,25 @@ class UndampedIdentification:
 
 def _solve_ls(A, b, weights, name):
     if A.shape[0] < A.shape[1]:
-        raise ValueError(f"{name}: {A.shape[0]} equations for {A.shape[1]} parameters: more "
-                         "parameters than data (measure more modes, add FRFs, or fix parameters)")
+        raise ValueError(
+            f"{name}: {A.shape[0]} equations for {A.shape[1]} parameters: more "
+            "parameters than data (measure more modes, add FRFs, or fix parameters)"
+        )
     Aw, bw = A * weights[:, None], b * weights
     scale = np.linalg.norm(Aw, axis=0)
     if np.any(scale == 0):
         bad = np.nonzero(scale == 0)[0].tolist()
-        raise ValueError(f"{name}: parameters {bad} do not affect the measured modes (no modal "
-                         "energy; see modal_energy_distribution): fix them")
+        raise ValueError(
+            f"{name}: parameters {bad} do not affect the measured modes (no modal "
+            "energy; see modal_energy_distribution): fix them"
+        )
     As = Aw / scale
     s = np.linalg.svd(As, compute_uv=False)
     if s[-1] < 1e-10 * s[0]:
-        raise ValueError(f"{name}: parameters not identifiable from the data (condition number "
-                         f"{s[0] / max(s[-1], 1e-300):.3g}); fix some or add data")
+        raise ValueError(
+            f"{name}: parameters not identifiable from the data (condition number "
+            f"{s[0] / max(s[-1], 1e-300):.3g}); fix some or add data"
+        )
     x = np.linalg.lstsq(As, bw, rcond=None)[0]
     res = bw - As @ x
     dof = A.shape[0] - A.shape[1]
@@ -478,8 +499,9 @@ def _eq5(model, p, q, wbar, items, idx, psi_meas, free_p, free_q):
     Kb = [model.K_blocks[g] for g in free_p]
     Mb = [model.M_blocks[g] for g in free_q]
     zeros = [np.zeros((n, n))]
-    md = modal_derivatives(K, M, np.array(Kb + zeros * len(Mb)), np.array(zeros * len(Kb) + Mb),
-                           modes=idx)
+    md = modal_derivatives(
+        K, M, np.array(Kb + zeros * len(Mb)), np.array(zeros * len(Kb) + Mb), modes=idx
+    )
     lam, phi, dlam, dphi = md.eigenvalues, md.modes, md.eigenvalue_gradient, md.mode_gradient
     psi = phi if psi_meas is None else psi_meas
     mu = np.einsum("ij,ik,kj->j", psi, M, psi)
@@ -498,13 +520,25 @@ def _eq5(model, p, q, wbar, items, idx, psi_meas, free_p, free_q):
         if psi_meas is None:
             grad += (1.0 / d_meas) @ dpp.T
         else:
-            grad[:, len(Kb):] -= (qq / mu / d_meas) @ E
+            grad[:, len(Kb) :] -= (qq / mu / d_meas) @ E
         out.append((value, grad, -qq * 2.0 * wbar[None, :] / d_meas**2))
     return out
 
 
-def _mass_step(model, psi, items, rows_eq5, q, free_q, q_prior, prior_sd, frf_sd, pairs_off,
-               rigid_body, residual):
+def _mass_step(
+    model,
+    psi,
+    items,
+    rows_eq5,
+    q,
+    free_q,
+    q_prior,
+    prior_sd,
+    frf_sd,
+    pairs_off,
+    rigid_body,
+    residual,
+):
     """One Gauss-Newton step of the joint Eq. 5-6 / 9a fit of the mass scalings.
 
     ``rows_eq5`` holds per FRF element the residual of Eq. 5 (see :func:`_eq5`), its gradient
@@ -534,8 +568,12 @@ def _mass_step(model, psi, items, rows_eq5, q, free_q, q_prior, prior_sd, frf_sd
         # Eq. 9a, i != j, in the normalised form psi_i^T M psi_j sqrt(alpha_i alpha_j) = 0,
         # counted like a relative FRF error (as Eq. 9b's rows count like relative w^2 errors)
         s = np.array([1.0 / np.sqrt(mu[i] * mu[j]) for i, j in pairs_off])
-        A_off = np.array([[psi[:, i] @ model.M_blocks[g] @ psi[:, j] for g in free_q]
-                          for i, j in pairs_off]) * s[:, None]
+        A_off = (
+            np.array(
+                [[psi[:, i] @ model.M_blocks[g] @ psi[:, j] for g in free_q] for i, j in pairs_off]
+            )
+            * s[:, None]
+        )
         rows.append(np.hstack([A_off, np.zeros((len(pairs_off), n_extra))]))
         rhs.append(-np.array([psi[:, i] @ Mq @ psi[:, j] for i, j in pairs_off]) * s)
         sd.append(np.full(len(pairs_off), frf_sd))
@@ -548,16 +586,37 @@ def _mass_step(model, psi, items, rows_eq5, q, free_q, q_prior, prior_sd, frf_sd
     x, cov, res, _ = _solve_ls(A, b, 1.0 / sd, "mass scalings")
     gain = (cov @ (A.T / sd**2))[:Qf]  # d(step)/d(right side)
     g_w = gain[:, :n_frf] @ np.vstack(r_wbar)
-    g_prior = gain[:, A.shape[0] - Qf:] if prior_sd is not None else np.zeros((Qf, 0))
-    return (x[:Qf], g_w, gain[:, :n_frf], g_prior, res[:n_frf] * frf_sd,
-            max(n_frf - Qf - n_extra, 0))
+    g_prior = gain[:, A.shape[0] - Qf :] if prior_sd is not None else np.zeros((Qf, 0))
+    return (
+        x[:Qf],
+        g_w,
+        gain[:, :n_frf],
+        g_prior,
+        res[:n_frf] * frf_sd,
+        max(n_frf - Qf - n_extra, 0),
+    )
 
 
-def identify_undamped(model: SubstructureModel, measured_frequencies, measured_shapes=None,
-                      frf=None, p0=None, q0=None, fixed_stiffness=(), fixed_mass=(),
-                      frequency_sigma=None, frf_sigma=None, mass_prior_sigma=None,
-                      mode_indices=None, off_diagonal=None, rigid_body=False, residual=False,
-                      n_iter=30, tol=1e-10, identify_mass=None) -> UndampedIdentification:
+def identify_undamped(
+    model: SubstructureModel,
+    measured_frequencies,
+    measured_shapes=None,
+    frf=None,
+    p0=None,
+    q0=None,
+    fixed_stiffness=(),
+    fixed_mass=(),
+    frequency_sigma=None,
+    frf_sigma=None,
+    mass_prior_sigma=None,
+    mode_indices=None,
+    off_diagonal=None,
+    rigid_body=False,
+    residual=False,
+    n_iter=30,
+    tol=1e-10,
+    identify_mass=None,
+) -> UndampedIdentification:
     """Iterated least-squares identification of the stiffness and mass scalings (Eqs. 1–9).
 
     What identifies what: frequencies and shapes fix only the stiffness-to-mass ratio, since
@@ -633,30 +692,38 @@ def identify_undamped(model: SubstructureModel, measured_frequencies, measured_s
     items = _check_frf(frf, n)
     identify_mass = bool(items) if identify_mass is None else bool(identify_mass)
     if identify_mass and not items:
-        raise ValueError("identify_mass: the mass scalings need an FRF (the absolute scale; "
-                         "frequencies and shapes are unchanged by scaling K and M together)")
+        raise ValueError(
+            "identify_mass: the mass scalings need an FRF (the absolute scale; "
+            "frequencies and shapes are unchanged by scaling K and M together)"
+        )
     if off_diagonal is None:
         off_diagonal = psi_meas is not None
     p = model._params(p0, P, "p0").copy()
     q = model._params(q0, Q, "q0").copy()
     q_prior = q.copy()
     free_p = np.setdiff1d(np.arange(P), np.asarray(fixed_stiffness, int))
-    free_q = np.setdiff1d(np.arange(Q), np.asarray(fixed_mass, int)) if identify_mass \
+    free_q = (
+        np.setdiff1d(np.arange(Q), np.asarray(fixed_mass, int))
+        if identify_mass
         else np.array([], int)
+    )
     if free_p.size == 0 and free_q.size == 0:
         raise ValueError("fixed_stiffness, fixed_mass: every parameter is fixed")
     sig_w = None
     if frequency_sigma is not None:
-        sig_w = np.broadcast_to(require_numeric(frequency_sigma, "frequency_sigma"),
-                                (m,)).astype(float)
+        sig_w = np.broadcast_to(require_numeric(frequency_sigma, "frequency_sigma"), (m,)).astype(
+            float
+        )
         if np.any(sig_w <= 0):
             raise ValueError("frequency_sigma: must be > 0")
     for name, value in (("frf_sigma", frf_sigma), ("mass_prior_sigma", mass_prior_sigma)):
         if value is not None and (np.ndim(value) != 0 or float(require_numeric(value, name)) <= 0):
             raise ValueError(f"{name}: must be a scalar > 0")
     if mass_prior_sigma is not None and frf_sigma is None:
-        raise ValueError("mass_prior_sigma: needs frf_sigma (the prior is weighted against the "
-                         "FRF's standard deviation)")
+        raise ValueError(
+            "mass_prior_sigma: needs frf_sigma (the prior is weighted against the "
+            "FRF's standard deviation)"
+        )
     pairs = [(i, i) for i in range(m)]
     pairs_off = [(i, j) for i in range(m) for j in range(i + 1, m)] if off_diagonal else []
     pairs += pairs_off
@@ -669,7 +736,8 @@ def identify_undamped(model: SubstructureModel, measured_frequencies, measured_s
             raise ValueError(
                 f"measured_frequencies: {n_rows} equations for {count} {name} parameters: "
                 "more parameters than data (Att. 7 needs m(m+1)/2 > parameters with measured "
-                "shapes, m >= parameters without): measure more modes or fix parameters")
+                "shapes, m >= parameters without): measure more modes or fix parameters"
+            )
     ii = np.array([i for i, _ in pairs])
     jj = np.array([j for _, j in pairs])
     rel = np.ones(m) if sig_w is None else 2.0 * sig_w / wbar
@@ -685,10 +753,12 @@ def identify_undamped(model: SubstructureModel, measured_frequencies, measured_s
         # --- Eq. 9b system: rows, weights and the gain d(p)/d(right side) -----------------
         # row weights: relative residuals (a low mode counts as much as a high one); with
         # frequency_sigma, 1/SD of the right side (row i=i: wbar^2/alpha, SD 2 wbar sigma/alpha)
-        weights_k = np.sqrt(1.0 / (mu[ii] * mu[jj])) / (wbar[ii] * wbar[jj]) \
-            / np.sqrt(rel[ii] * rel[jj])
-        A_k = np.array([[psi[:, i] @ model.K_blocks[g] @ psi[:, j] for g in free_p]
-                        for i, j in pairs]).reshape(n_rows, free_p.size)
+        weights_k = (
+            np.sqrt(1.0 / (mu[ii] * mu[jj])) / (wbar[ii] * wbar[jj]) / np.sqrt(rel[ii] * rel[jj])
+        )
+        A_k = np.array(
+            [[psi[:, i] @ model.K_blocks[g] @ psi[:, j] for g in free_p] for i, j in pairs]
+        ).reshape(n_rows, free_p.size)
         Kfix = K - sum((p[g] * model.K_blocks[g] for g in free_p), np.zeros((n, n)))
         kfix = np.array([psi[:, i] @ Kfix @ psi[:, j] for i, j in pairs])
         gain_k = np.zeros((free_p.size, n_rows))
@@ -698,8 +768,9 @@ def identify_undamped(model: SubstructureModel, measured_frequencies, measured_s
             gain_k = c_k @ (A_k.T * weights_k**2)
         db_dw = np.zeros((n_rows, m))  # right side of Eq. 9b: wbar_i^2 mu_i(q) - ...
         db_dw[np.arange(m), np.arange(m)] = 2.0 * wbar * mu
-        E = np.array([np.einsum("ij,ik,kj->j", psi, model.M_blocks[g], psi)
-                      for g in free_q]).T.reshape(m, free_q.size)
+        E = np.array(
+            [np.einsum("ij,ik,kj->j", psi, model.M_blocks[g], psi) for g in free_q]
+        ).T.reshape(m, free_q.size)
         db_dq = np.zeros((n_rows, free_q.size))
         db_dq[:m] = wbar[:, None] ** 2 * E
         # --- Eqs. 5-6 and 9a jointly: mass scalings ------------------------------------------
@@ -708,14 +779,30 @@ def identify_undamped(model: SubstructureModel, measured_frequencies, measured_s
             # gradients along the path on which Eq. 9b keeps the measured frequencies:
             # dp = D dq with D = d(p)/d(q) of the linearised Eq. 9b
             D, G_w = gain_k @ db_dq, gain_k @ db_dw
-            rows_eq5 = [(h - value, grad[:, :free_p.size] @ D + grad[:, free_p.size:],
-                         -d_wbar - grad[:, :free_p.size] @ G_w)
-                        for (*_, h), (value, grad, d_wbar)
-                        in zip(items, _eq5(model, p, q, wbar, items, idx, psi_meas, free_p,
-                                           free_q))]
+            rows_eq5 = [
+                (
+                    h - value,
+                    grad[:, : free_p.size] @ D + grad[:, free_p.size :],
+                    -d_wbar - grad[:, : free_p.size] @ G_w,
+                )
+                for (*_, h), (value, grad, d_wbar) in zip(
+                    items, _eq5(model, p, q, wbar, items, idx, psi_meas, free_p, free_q)
+                )
+            ]
             dq, g_qw, g_qh, g_qprior, rel_frf, dof_frf = _mass_step(
-                model, psi, items, rows_eq5, q, free_q, q_prior, mass_prior_sigma, frf_sd,
-                pairs_off, rigid_body, residual)
+                model,
+                psi,
+                items,
+                rows_eq5,
+                q,
+                free_q,
+                q_prior,
+                mass_prior_sigma,
+                frf_sd,
+                pairs_off,
+                rigid_body,
+                residual,
+            )
             q_new[free_q] += dq
         # --- Eq. 9b: stiffness scalings, alpha_i = 1 / psibar_i^T M(q_new) psibar_i ---------
         p_new = p.copy()
@@ -729,9 +816,11 @@ def identify_undamped(model: SubstructureModel, measured_frequencies, measured_s
         while t > 1e-6 and (np.any(p + t * dp <= 0) or np.any(q + t * dq_all <= 0)):
             t *= 0.5
         if t <= 1e-6:
-            raise ValueError("identification diverged: the least-squares step makes a scaling "
-                             f"non-positive (p={p_new}, q={q_new}); fix weakly observed "
-                             "parameters (see modal_energy_distribution)")
+            raise ValueError(
+                "identification diverged: the least-squares step makes a scaling "
+                f"non-positive (p={p_new}, q={q_new}); fix weakly observed "
+                "parameters (see modal_energy_distribution)"
+            )
         p_new, q_new = p + t * dp, q + t * dq_all
         step = max(np.abs(p_new - p).max(), np.abs(q_new - q).max() if Q else 0.0)
         p, q = p_new, q_new
@@ -751,10 +840,13 @@ def identify_undamped(model: SubstructureModel, measured_frequencies, measured_s
         S[np.ix_(P + free_q, m + np.arange(n_h))] = g_qh
         if n_pr:
             S[np.ix_(P + free_q, m + n_h + np.arange(n_pr))] = g_qprior
-            sd[m + n_h:] = mass_prior_sigma
-        s_h = frf_sigma if frf_sigma is not None else \
-            (np.sqrt(rel_frf @ rel_frf / dof_frf) if dof_frf > 0 else 0.0)
-        sd[m:m + n_h] = s_h * np.concatenate([np.abs(h) for *_, h in items])
+            sd[m + n_h :] = mass_prior_sigma
+        s_h = (
+            frf_sigma
+            if frf_sigma is not None
+            else (np.sqrt(rel_frf @ rel_frf / dof_frf) if dof_frf > 0 else 0.0)
+        )
+        sd[m : m + n_h] = s_h * np.concatenate([np.abs(h) for *_, h in items])
     if free_p.size:
         # Eq. 9b's right side depends on wbar directly and through the new q
         S[np.ix_(free_p, np.arange(m))] = gain_k @ db_dw
@@ -804,8 +896,15 @@ def damped_eigenvalues(K, M, C, n_modes=None) -> np.ndarray:
     return lam if n_modes is None else lam[:n_modes]
 
 
-def identify_damping(model: SubstructureModel, measured_eigenvalues, p=None, q=None,
-                     mode_indices=None, fixed=(), r0=None) -> DampingIdentification:
+def identify_damping(
+    model: SubstructureModel,
+    measured_eigenvalues,
+    p=None,
+    q=None,
+    mode_indices=None,
+    fixed=(),
+    r0=None,
+) -> DampingIdentification:
     """Damping scalings from measured eigenvalue real parts by first-order perturbation.
 
     Att. 7 Eq. 24: ``sum_k r_k phi_0r^T C_k phi_0r = -2 sigmabar_r - phi_0r^T C0 phi_0r`` with
@@ -835,20 +934,22 @@ def identify_damping(model: SubstructureModel, measured_eigenvalues, p=None, q=N
         raise ValueError("measured_eigenvalues: must be a numeric (complex) vector")
     lam = lam.ravel().astype(complex)
     if lam.size == 0 or not np.all(np.isfinite(lam)):
-        raise ValueError("measured_eigenvalues: must be a non-empty finite vector "
-                         "(no NaN or inf)")
+        raise ValueError("measured_eigenvalues: must be a non-empty finite vector (no NaN or inf)")
     sigma = lam.real
     if np.any(sigma >= 0):
-        raise ValueError("measured_eigenvalues: real parts must be < 0 (a damped, stable "
-                         "structure)")
+        raise ValueError(
+            "measured_eigenvalues: real parts must be < 0 (a damped, stable structure)"
+        )
     m = sigma.size
     r = model._params(r0, R, "r0").copy()
     free = np.setdiff1d(np.arange(R), np.asarray(fixed, int))
     if free.size == 0:
         raise ValueError("fixed: every damping parameter is fixed")
     if free.size > m:
-        raise ValueError(f"measured_eigenvalues: {m} eigenvalues for {free.size} damping "
-                         "parameters: more parameters than data (Att. 7 needs m > R)")
+        raise ValueError(
+            f"measured_eigenvalues: {m} eigenvalues for {free.size} damping "
+            "parameters: more parameters than data (Att. 7 needs m > R)"
+        )
     w0, phi = model.modes(p, q)
     if mode_indices is not None:
         idx = np.asarray(mode_indices, int).ravel()
@@ -861,9 +962,11 @@ def identify_damping(model: SubstructureModel, measured_eigenvalues, p=None, q=N
         if idx.max() >= phi.shape[1]:
             raise ValueError("mode_indices: must give one model mode per measured eigenvalue")
     elif np.any(lam.imag == 0):
-        raise ValueError("measured_eigenvalues: give every eigenvalue as sigma + i w with w != 0 "
-                         "(matched to the model frequencies) or every one as its real part "
-                         "sigma (paired in order)")
+        raise ValueError(
+            "measured_eigenvalues: give every eigenvalue as sigma + i w with w != 0 "
+            "(matched to the model frequencies) or every one as its real part "
+            "sigma (paired in order)"
+        )
     else:
         idx = _match_modes(w0, np.abs(lam), None if mode_indices is None else idx)
     phi = phi[:, idx]
@@ -911,7 +1014,8 @@ def _match_modes(w_model, w_meas, mode_indices=None) -> np.ndarray:
                 f"rad/s) is nearest model mode {near[i]} ({w_model[near[i]]:.6g} rad/s) but "
                 f"mode_indices pairs it with mode {mode_indices[i]} "
                 f"({w_model[mode_indices[i]]:.6g} rad/s): list the eigenvalues in the order of "
-                "mode_indices")
+                "mode_indices"
+            )
         return np.asarray(mode_indices, int)
     unclear = np.flatnonzero(~clear)
     if unclear.size:
@@ -920,7 +1024,8 @@ def _match_modes(w_model, w_meas, mode_indices=None) -> np.ndarray:
         raise ValueError(
             f"measured_eigenvalues[{i}]: natural frequency {w_meas[i]:.6g} rad/s has no clearly "
             f"nearest model mode (modes {a} at {w_model[a]:.6g} and {b} at {w_model[b]:.6g} "
-            "rad/s are comparably close): the model may lack this mode; give mode_indices")
+            "rad/s are comparably close): the model may lack this mode; give mode_indices"
+        )
     k, count = np.unique(near, return_counts=True)
     if np.any(count > 1):
         k = k[count > 1][0]
@@ -928,7 +1033,8 @@ def _match_modes(w_model, w_meas, mode_indices=None) -> np.ndarray:
         raise ValueError(
             f"measured_eigenvalues[{i}] and [{j}] are both nearest model mode {k} "
             f"({w_model[k]:.6g} rad/s): one measured eigenvalue per model mode; the model "
-            "may lack a mode, give mode_indices")
+            "may lack a mode, give mode_indices"
+        )
     return near
 
 
@@ -955,8 +1061,13 @@ class UpdatedModel:
     damping: DampingIdentification | None
 
 
-def update_model(model: SubstructureModel, measured_frequencies, measured_eigenvalues=None,
-                 damping_kwargs=None, **kwargs) -> UpdatedModel:
+def update_model(
+    model: SubstructureModel,
+    measured_frequencies,
+    measured_eigenvalues=None,
+    damping_kwargs=None,
+    **kwargs,
+) -> UpdatedModel:
     """Identify ``p, q`` (and ``r`` from ``measured_eigenvalues``) and return the scaled model.
 
     ``kwargs`` go to :func:`identify_undamped`, ``damping_kwargs`` to :func:`identify_damping`.
@@ -969,8 +1080,7 @@ def update_model(model: SubstructureModel, measured_frequencies, measured_eigenv
     P_Q = model.n_stiffness + model.n_mass
     cov[:P_Q, :P_Q] = und.covariance
     if measured_eigenvalues is not None:
-        dmp = identify_damping(model, measured_eigenvalues, und.p, und.q,
-                               **(damping_kwargs or {}))
+        dmp = identify_damping(model, measured_eigenvalues, und.p, und.q, **(damping_kwargs or {}))
         r = dmp.r
         cov[P_Q:, P_Q:] = dmp.covariance
     return UpdatedModel(model.scaled(und.p, und.q, r), und.p, und.q, r, cov, und, dmp)

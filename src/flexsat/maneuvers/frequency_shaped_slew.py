@@ -64,7 +64,7 @@ import scipy.linalg
 import scipy.sparse
 import scipy.sparse.linalg
 
-from flexsat.validation import require_finite, require_nonneg, require_positive
+from flexsat.input_checks import require_finite, require_nonneg, require_positive
 
 __all__ = [
     "FrequencyShapedSlew",
@@ -87,12 +87,12 @@ def hamiltonian_matrix(omega_b: float, zeta_b: float = 0.0, q: float = 0.0) -> n
     """
     wb2 = omega_b * omega_b
     k = np.zeros((8, 8))
-    k[0, 1] = 1.0                                   # θ̇ = ω
-    k[1, 2] = 1.0                                   # ω̇ = u1
-    k[2, 3] = 1.0                                   # u̇1 = u2
-    k[3, 2], k[3, 7] = -wb2, -wb2 * wb2             # u̇2 = u3 = -ω_B²(u1 + ω_B² μ2)
-    k[5, 1], k[5, 4] = -q, -1.0                     # λ̇ = -q ω - p
-    k[6, 7], k[6, 5] = wb2, -1.0                    # μ̇1 = ω_B² μ2 - λ
+    k[0, 1] = 1.0  # θ̇ = ω
+    k[1, 2] = 1.0  # ω̇ = u1
+    k[2, 3] = 1.0  # u̇1 = u2
+    k[3, 2], k[3, 7] = -wb2, -wb2 * wb2  # u̇2 = u3 = -ω_B²(u1 + ω_B² μ2)
+    k[5, 1], k[5, 4] = -q, -1.0  # λ̇ = -q ω - p
+    k[6, 7], k[6, 5] = wb2, -1.0  # μ̇1 = ω_B² μ2 - λ
     k[7, 3], k[7, 6] = -4.0 * zeta_b**2 / wb2, -1.0  # μ̇2 = -(4ζ_B²/ω_B²) u2 - μ1
     return k
 
@@ -112,10 +112,16 @@ def hamiltonian(state, costate, u3, omega_b, zeta_b=0.0, q=0.0):
     """
     x, c, u3 = np.asarray(state), np.asarray(costate), np.asarray(u3)
     wb2 = omega_b * omega_b
-    running = (q * x[..., 1] ** 2 + (x[..., 2] + u3 / wb2) ** 2
-               + 4.0 * zeta_b**2 / wb2 * x[..., 3] ** 2)
-    return (0.5 * running + c[..., 0] * x[..., 1] + c[..., 1] * x[..., 2]
-            + c[..., 2] * x[..., 3] + c[..., 3] * u3)
+    running = (
+        q * x[..., 1] ** 2 + (x[..., 2] + u3 / wb2) ** 2 + 4.0 * zeta_b**2 / wb2 * x[..., 3] ** 2
+    )
+    return (
+        0.5 * running
+        + c[..., 0] * x[..., 1]
+        + c[..., 1] * x[..., 2]
+        + c[..., 2] * x[..., 3]
+        + c[..., 3] * u3
+    )
 
 
 @dataclass(frozen=True)
@@ -157,8 +163,10 @@ class FrequencyShapedSlew:
         t = require_finite(t, "t", "s")
         span = 1e-12 * self.duration  # rounding of t = T computed by the caller
         if np.any(t < -span) or np.any(t > self.duration + span):
-            raise ValueError(f"t: must lie in [0, {self.duration:g}] s (the maneuver), got "
-                             f"[{t.min():g}, {t.max():g}]")
+            raise ValueError(
+                f"t: must lie in [0, {self.duration:g}] s (the maneuver), got "
+                f"[{t.min():g}, {t.max():g}]"
+            )
         flat = np.clip(t.ravel(), 0.0, self.duration)
         k = np.clip(np.searchsorted(self.knots, flat, side="right") - 1, 0, self.n_segments - 1)
         tau = (flat - self.knots[k]) / self.duration
@@ -196,8 +204,9 @@ class FrequencyShapedSlew:
         return float(np.max(np.abs(ends - target) / scale))
 
 
-def frequency_shaped_slew(angle, inertia, duration, omega_b, zeta_b=0.0, q=0.0,
-                          cond_limit=1e8) -> FrequencyShapedSlew:
+def frequency_shaped_slew(
+    angle, inertia, duration, omega_b, zeta_b=0.0, q=0.0, cond_limit=1e8
+) -> FrequencyShapedSlew:
     """Optimal frequency-shaped rest-to-rest slew about one principal axis (module docstring).
 
     Parameters
@@ -239,8 +248,9 @@ def frequency_shaped_slew(angle, inertia, duration, omega_b, zeta_b=0.0, q=0.0,
     # at ω_B T = 25, 2e-8 at ω_B T = 500 single shot).
     eig = np.linalg.eigvals(kb)
     growth, radius = float(np.max(eig.real)), float(np.max(np.abs(eig)))
-    n = max(1, int(np.ceil(growth / _GROWTH_PER_SEGMENT)),
-            int(np.ceil(radius / _PHASE_PER_SEGMENT)))
+    n = max(
+        1, int(np.ceil(growth / _GROWTH_PER_SEGMENT)), int(np.ceil(radius / _PHASE_PER_SEGMENT))
+    )
     if growth < _LOG_OVERFLOW:
         phi = scipy.linalg.expm(kb)
         # In balanced variables x_b(1) = Φ_xx x_b(0) + Φ_xp c_b(0).
@@ -262,12 +272,22 @@ def frequency_shaped_slew(angle, inertia, duration, omega_b, zeta_b=0.0, q=0.0,
     # Back to SI: ẑ = D ζ; x = diag(Θ, Θ/T, Θ/T², Θ/T³) x̂ and, since J = (Θ²/T³) Ĵ, the
     # costates ∂J/∂x are [p, λ, μ1, μ2] = diag(Θ/T³, Θ/T², Θ/T, Θ) ĉ (so K = S K̂ S⁻¹ / T).
     powers = np.array([0, 1, 2, 3, 3, 2, 1, 0])
-    scale = d * angle / duration ** powers
+    scale = d * angle / duration**powers
     z_knots = zb * scale[None, :]
     return FrequencyShapedSlew(
-        angle=angle, inertia=inertia, duration=duration, omega_b=omega_b, zeta_b=zeta_b, q=q,
-        K=hamiltonian_matrix(omega_b, zeta_b, q), scale=scale, K_scaled=kb,
-        knots=tau * duration, z_knots=z_knots, method=method, condition=condition,
+        angle=angle,
+        inertia=inertia,
+        duration=duration,
+        omega_b=omega_b,
+        zeta_b=zeta_b,
+        q=q,
+        K=hamiltonian_matrix(omega_b, zeta_b, q),
+        scale=scale,
+        K_scaled=kb,
+        knots=tau * duration,
+        z_knots=z_knots,
+        method=method,
+        condition=condition,
     )
 
 

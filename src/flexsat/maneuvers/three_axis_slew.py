@@ -78,9 +78,9 @@ from flexsat.dynamics.attitude import (
     require_shape,
 )
 from flexsat.dynamics.rigid_body import angular_momentum_inertial, cross3, matvec, require_inertia
+from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
 from flexsat.maneuvers.frequency_shaped_slew import frequency_shaped_slew
 from flexsat.units import to_si_array
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
 
 __all__ = [
     "ContinuationStep",
@@ -114,6 +114,7 @@ _MAX_POLISH = 6
 # ---------------------------------------------------------------------------------------------
 # Kernels: plain functions on arrays (..., 26) with a leading case axis, unchecked.
 
+
 def shaping_control(state, costate, omega_b):
     """Optimal control u3 = −ω_B² (u1 + ω_B² μ2), Eq. (20), on arrays ``(..., 13)``."""
     wb2 = omega_b * omega_b
@@ -132,12 +133,20 @@ def hamiltonian(state, costate, u3, inertia, omega_b, zeta_b=0.0, Q=None):
     x, c, u3 = np.asarray(state), np.asarray(costate), np.asarray(u3)
     wb2 = omega_b * omega_b
     w, u1, u2 = x[..., 4:7], x[..., 7:10], x[..., 10:13]
-    running = (np.einsum("...i,ij,...j->...", w, Q, w) + np.sum((u1 + u3 / wb2) ** 2, -1)
-               + 4.0 * zeta_b**2 / wb2 * np.sum(u2 * u2, -1))
+    running = (
+        np.einsum("...i,ij,...j->...", w, Q, w)
+        + np.sum((u1 + u3 / wb2) ** 2, -1)
+        + 4.0 * zeta_b**2 / wb2 * np.sum(u2 * u2, -1)
+    )
     g = -np.linalg.solve(J, cross3(w, matvec(J, w))[..., None])[..., 0]
     beta_dot = matvec(omega_matrix(w), x[..., 0:4])
-    return (0.5 * running + np.sum(c[..., 0:4] * beta_dot, -1) + np.sum(c[..., 4:7] * (u1 + g), -1)
-            + np.sum(c[..., 7:10] * u2, -1) + np.sum(c[..., 10:13] * u3, -1))
+    return (
+        0.5 * running
+        + np.sum(c[..., 0:4] * beta_dot, -1)
+        + np.sum(c[..., 4:7] * (u1 + g), -1)
+        + np.sum(c[..., 7:10] * u2, -1)
+        + np.sum(c[..., 10:13] * u3, -1)
+    )
 
 
 def state_costate_rhs(z, inertia, omega_b, zeta_b=0.0, Q=None, inertia_inv=None):
@@ -160,9 +169,12 @@ def state_costate_rhs(z, inertia, omega_b, zeta_b=0.0, Q=None, inertia_inv=None)
     out[..., U2] = -wb2 * (u1 + wb2 * mu2)
     out[..., GAMMA] = matvec(om, z[..., GAMMA])
     # −B(β)ᵀγ = B(γ)ᵀβ (both are −∂(γᵀΩ(ω)β)/∂ω); (Iω)~ I⁻¹λ − I ω̃ I⁻¹λ = (Iω)×v − I(ω×v)
-    out[..., LAM] = (-matvec(Q, w) - matvec(np.swapaxes(quaternion_rate_matrix(z[..., BETA]),
-                                                         -1, -2), z[..., GAMMA])
-                     + cross3(jw, v) - matvec(J, cross3(w, v)))
+    out[..., LAM] = (
+        -matvec(Q, w)
+        - matvec(np.swapaxes(quaternion_rate_matrix(z[..., BETA]), -1, -2), z[..., GAMMA])
+        + cross3(jw, v)
+        - matvec(J, cross3(w, v))
+    )
     out[..., MU1] = wb2 * mu2 - lam
     out[..., MU2] = -4.0 * zeta_b**2 / wb2 * u2 - mu1
     return out
@@ -203,6 +215,7 @@ def state_costate_jacobian(z, inertia, omega_b, zeta_b=0.0, Q=None, inertia_inv=
 
 # ---------------------------------------------------------------------------------------------
 # Result
+
 
 @dataclass(frozen=True)
 class ContinuationStep:
@@ -253,8 +266,10 @@ class ThreeAxisSlew:
         t = require_finite(t, "t", "s")
         span = 1e-12 * self.duration  # rounding of t = T computed by the caller
         if np.any(t < -span) or np.any(t > self.duration + span):
-            raise ValueError(f"t: must lie in [0, {self.duration:g}] s (the maneuver), got "
-                             f"[{t.min():g}, {t.max():g}]")
+            raise ValueError(
+                f"t: must lie in [0, {self.duration:g}] s (the maneuver), got "
+                f"[{t.min():g}, {t.max():g}]"
+            )
         n = self.n_segments
         tau = np.clip(t.ravel(), 0.0, self.duration) / self.duration
         seg = np.minimum((tau * n).astype(int), n - 1)
@@ -262,9 +277,9 @@ class ThreeAxisSlew:
         for m in np.unique(seg):
             pick = seg == m
             local = tau[pick] - m / n
-            out[pick] = self.solution(local)[N_Z * m:N_Z * (m + 1)].T
+            out[pick] = self.solution(local)[N_Z * m : N_Z * (m + 1)].T
         z_hat = out * self.scale
-        return (z_hat / self.duration ** _POWERS).reshape(t.shape + (N_Z,))
+        return (z_hat / self.duration**_POWERS).reshape(t.shape + (N_Z,))
 
     def state(self, t) -> np.ndarray:
         """[β, ω, u1, u2] at ``t``: shape ``t.shape + (13,)``."""
@@ -311,8 +326,9 @@ class ThreeAxisSlew:
         """H(t) along the solution [SI: cost per second]; constant (autonomous problem)."""
         z = self.z(t)
         u3 = shaping_control(z[..., :13], z[..., 13:], self.omega_b)
-        return hamiltonian(z[..., :13], z[..., 13:], u3, self.inertia, self.omega_b,
-                           self.zeta_b, self.Q)
+        return hamiltonian(
+            z[..., :13], z[..., 13:], u3, self.inertia, self.omega_b, self.zeta_b, self.Q
+        )
 
     def boundary_error(self) -> float:
         """Largest residual of the boundary conditions (spec §2.4) and of the continuity of the
@@ -323,12 +339,20 @@ class ThreeAxisSlew:
         T, n = self.duration, self.n_segments
         phi = 2.0 * np.arctan2(np.linalg.norm(self.target[1:]), abs(self.target[0]))
         ends = self.z(np.array([0.0, T]))
-        size = np.concatenate([[1.0] * 4, [phi / T] * 3, [phi / T**2] * 3,
-                               [phi / T**3 * max(1.0, self.omega_b * T)] * 3])
-        err = [np.abs(ends[0, BETA] - [1.0, 0.0, 0.0, 0.0]),
-               np.abs(ends[1, 1:4] - self.target[1:]),
-               np.abs(ends[:, 4:13]) / size[4:13],
-               [abs(ends[0, GAMMA] @ ends[0, BETA]) / np.linalg.norm(ends[0, GAMMA])]]
+        size = np.concatenate(
+            [
+                [1.0] * 4,
+                [phi / T] * 3,
+                [phi / T**2] * 3,
+                [phi / T**3 * max(1.0, self.omega_b * T)] * 3,
+            ]
+        )
+        err = [
+            np.abs(ends[0, BETA] - [1.0, 0.0, 0.0, 0.0]),
+            np.abs(ends[1, 1:4] - self.target[1:]),
+            np.abs(ends[:, 4:13]) / size[4:13],
+            [abs(ends[0, GAMMA] @ ends[0, BETA]) / np.linalg.norm(ends[0, GAMMA])],
+        ]
         # Joins: the end of segment m against the start of m+1 (the dense output of each).
         ends_m = self.solution(1.0 / n).reshape(n, N_Z)[:-1]
         starts = self.nodes[1:]
@@ -340,8 +364,18 @@ class ThreeAxisSlew:
 # ---------------------------------------------------------------------------------------------
 # Solver
 
-def three_axis_slew(inertia, target, duration, omega_b, zeta_b=0.0, Q=None, axis=None,
-                    steps=10, max_newton=_MAX_NEWTON) -> ThreeAxisSlew:
+
+def three_axis_slew(
+    inertia,
+    target,
+    duration,
+    omega_b,
+    zeta_b=0.0,
+    Q=None,
+    axis=None,
+    steps=10,
+    max_newton=_MAX_NEWTON,
+) -> ThreeAxisSlew:
     """Frequency-shaped optimal rest-to-rest slew of a rigid body from the identity attitude to
     ``target`` in time T (module docstring; spec seed003.md §2.2-2.5).
 
@@ -377,8 +411,9 @@ def three_axis_slew(inertia, target, duration, omega_b, zeta_b=0.0, Q=None, axis
     duration = float(require_positive(duration, "duration", "s"))
     omega_b = float(require_positive(omega_b, "omega_b", "rad/s"))
     zeta_b = float(require_nonneg(zeta_b, "zeta_b", ""))
-    Qm = np.zeros((3, 3)) if Q is None else require_shape(to_si_array(Q, "1/s**2", "Q"), "Q",
-                                                          (3, 3))
+    Qm = (
+        np.zeros((3, 3)) if Q is None else require_shape(to_si_array(Q, "1/s**2", "Q"), "Q", (3, 3))
+    )
     if Qm.shape != (3, 3):
         raise ValueError(f"Q: must be one (3, 3) matrix, got shape {Qm.shape}")
     if np.abs(Qm - Qm.T).max() > 1e-12 * max(np.abs(Qm).max(), 1e-300):
@@ -418,9 +453,11 @@ def three_axis_slew(inertia, target, duration, omega_b, zeta_b=0.0, Q=None, axis
             halvings += 1
             da /= 2.0
             if halvings > _MAX_HALVINGS:
-                raise ValueError(f"continuation: Newton failed to converge beyond the last "
-                                 f"converged a1 = a2 = {a:.6g} (step {da * 2:.3g} after "
-                                 f"{_MAX_HALVINGS} halvings)")
+                raise ValueError(
+                    f"continuation: Newton failed to converge beyond the last "
+                    f"converged a1 = a2 = {a:.6g} (step {da * 2:.3g} after "
+                    f"{_MAX_HALVINGS} halvings)"
+                )
             continue
         halvings = 0
         da = min(2.0 * da, 1.0 / steps)  # after a halved step, grow back toward the nominal
@@ -433,9 +470,21 @@ def three_axis_slew(inertia, target, duration, omega_b, zeta_b=0.0, Q=None, axis
     s, sol, polish, residual = _polish(final, s, lu)
     beta_f = final.beta_target
     return ThreeAxisSlew(
-        inertia=J, duration=T, omega_b=omega_b, zeta_b=zeta_b, Q=Qm, target=beta_f,
-        target_euler123=angles, axis=k, history=tuple(history), polish_iterations=polish,
-        residual=residual, n_segments=n, nodes=s, scale=scale, solution=sol,
+        inertia=J,
+        duration=T,
+        omega_b=omega_b,
+        zeta_b=zeta_b,
+        Q=Qm,
+        target=beta_f,
+        target_euler123=angles,
+        axis=k,
+        history=tuple(history),
+        polish_iterations=polish,
+        residual=residual,
+        n_segments=n,
+        nodes=s,
+        scale=scale,
+        solution=sol,
     )
 
 
@@ -449,8 +498,10 @@ def _target_angles(target) -> np.ndarray:
     elif arr.shape == (4,):
         angles = dcm_to_euler123(quaternion_to_dcm(require_quaternion(arr, "target")))
     else:
-        raise ValueError(f"target: must be Euler parameters (4,) or 1-2-3 Euler angles (3,), "
-                         f"got shape {arr.shape}")
+        raise ValueError(
+            f"target: must be Euler parameters (4,) or 1-2-3 Euler angles (3,), "
+            f"got shape {arr.shape}"
+        )
     if not np.any(angles):
         raise ValueError("target: the identity attitude (no slew: the optimal torque is 0)")
     return angles
@@ -466,8 +517,10 @@ def _select_axis(axis, angles, J) -> int:
     if isinstance(k, str) or not isinstance(k, (int, np.integer)) or k not in (0, 1, 2):
         raise ValueError(f"axis: must be 0, 1, 2, 'x', 'y' or 'z', got {axis!r}")
     if angles[k] == 0.0:
-        raise ValueError(f"axis: the target angle about axis {k} is 0, so the single-axis "
-                         f"start is trivial; select an axis the target rotates about")
+        raise ValueError(
+            f"axis: the target angle about axis {k} is 0, so the single-axis "
+            f"start is trivial; select an axis the target rotates about"
+        )
     return int(k)
 
 
@@ -489,12 +542,12 @@ def _seed(start, k, tau):
     z[:, 13], z[:, 14 + k] = -2 * p * np.sin(theta / 2), 2 * p * np.cos(theta / 2)
     for block, j in ((W, 1), (U1, 2), (U2, 3), (LAM, 5), (MU1, 6), (MU2, 7)):
         z[:, block.start + k] = z8[:, j]
-    peak = np.abs(z[len(tau):]).reshape(-1, N_Z).max(axis=0)
+    peak = np.abs(z[len(tau) :]).reshape(-1, N_Z).max(axis=0)
     scale = np.ones(N_Z)
     for block in (W, U1, U2, GAMMA, LAM, MU1, MU2):
         size = peak[block].max()
         scale[block] = size if size > 0 else 1.0
-    return z[:len(tau)], scale
+    return z[: len(tau)], scale
 
 
 class _Problem:
@@ -544,23 +597,37 @@ class _Problem:
 
     def dop853(self, s):
         """End values of all segments and the stacked dense output, DOP853 at rtol 1e-13."""
+
         def fun(_, y):
             return self.f(y.reshape(self.n, N_Z)).ravel()
-        out = scipy.integrate.solve_ivp(fun, (0.0, 1.0 / self.n), s.ravel(), method="DOP853",
-                                        rtol=_RTOL, atol=_RTOL, dense_output=True)
+
+        out = scipy.integrate.solve_ivp(
+            fun,
+            (0.0, 1.0 / self.n),
+            s.ravel(),
+            method="DOP853",
+            rtol=_RTOL,
+            atol=_RTOL,
+            dense_output=True,
+        )
         if not out.success:
-            raise ValueError(f"continuation: the final trajectory could not be integrated "
-                             f"({out.message})")
+            raise ValueError(
+                f"continuation: the final trajectory could not be integrated ({out.message})"
+            )
         return out.y[:, -1].reshape(self.n, N_Z), out.sol
 
     def residual(self, s, ends):
         """Boundary conditions and continuity (balanced units, 26 N rows)."""
         sc = self.scale
         b0, g0 = s[0, BETA], s[0, GAMMA] * sc[GAMMA]
-        r = [s[0, BETA] - [1.0, 0.0, 0.0, 0.0], s[0, 4:13],
-             [g0 @ b0 / sc[13]],  # γᵀβ = 0 in units of the γ balance
-             (ends[:-1] - s[1:]).ravel(),
-             ends[-1, 1:4] - self.beta_target[1:], ends[-1, 4:13]]
+        r = [
+            s[0, BETA] - [1.0, 0.0, 0.0, 0.0],
+            s[0, 4:13],
+            [g0 @ b0 / sc[13]],  # γᵀβ = 0 in units of the γ balance
+            (ends[:-1] - s[1:]).ravel(),
+            ends[-1, 1:4] - self.beta_target[1:],
+            ends[-1, 4:13],
+        ]
         return np.concatenate(r)
 
     def jacobian(self, s, phi):
@@ -572,9 +639,9 @@ class _Problem:
         A[13, BETA] = s[0, GAMMA] * sc[GAMMA] / sc[13]
         for j in range(n - 1):
             rows = slice(14 + N_Z * j, 14 + N_Z * (j + 1))
-            A[rows, N_Z * j:N_Z * (j + 1)] = phi[j]
-            A[rows, N_Z * (j + 1):N_Z * (j + 2)] -= np.eye(N_Z)
-        A[m - 12:, N_Z * (n - 1):] = phi[-1][1:13]
+            A[rows, N_Z * j : N_Z * (j + 1)] = phi[j]
+            A[rows, N_Z * (j + 1) : N_Z * (j + 2)] -= np.eye(N_Z)
+        A[m - 12 :, N_Z * (n - 1) :] = phi[-1][1:13]
         return A
 
 
@@ -608,5 +675,7 @@ def _polish(prob: _Problem, s, lu):
         if res <= _FINE_TOL:
             return s, sol, it, res
         s = s - scipy.linalg.lu_solve(lu, r, check_finite=False).reshape(s.shape)
-    raise ValueError(f"continuation: converged at a1 = a2 = 1 on the RK4 grid, but the DOP853 "
-                     f"polish left a residual {res:.3g} > {_FINE_TOL:g}")
+    raise ValueError(
+        f"continuation: converged at a1 = a2 = 1 on the RK4 grid, but the DOP853 "
+        f"polish left a residual {res:.3g} > {_FINE_TOL:g}"
+    )

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from flexsat.input_checks import require_finite, require_positive
 from flexsat.units import to_si_array
-from flexsat.validation import require_finite, require_positive
 
 __all__ = ["BangBang", "PseudoSquare", "Reference", "Sinusoidal", "SmoothBangBang", "TorqueShape"]
 
@@ -91,8 +91,13 @@ def _rounded_square(tau, half, a, rise, fall):
     p = np.clip(tau - a, 0.0, plateau)
     f = np.where(tau < a, gr, np.where(tau <= half - a, 1.0, gf))
     F1 = a * r1 + p + a * f1
-    F2 = (a * a * r2 + a * rise(1.0)[1] * np.maximum(tau - a, 0.0) + 0.5 * p * p
-          + plateau * np.maximum(tau - (half - a), 0.0) + a * a * f2)
+    F2 = (
+        a * a * r2
+        + a * rise(1.0)[1] * np.maximum(tau - a, 0.0)
+        + 0.5 * p * p
+        + plateau * np.maximum(tau - (half - a), 0.0)
+        + a * a * f2
+    )
     return f, F1, F2
 
 
@@ -176,9 +181,14 @@ class TorqueShape(ABC):
 def _slew(angle, inertia, theta0):
     angle = require_finite(angle, "angle", "rad")
     if np.any(angle == 0):
-        raise ValueError("angle: must be nonzero (a rest-to-rest slew of 0 rad has no torque shape)")
-    return (angle, require_positive(inertia, "inertia", "kg*m**2"),
-            require_finite(theta0, "theta0", "rad"))
+        raise ValueError(
+            "angle: must be nonzero (a rest-to-rest slew of 0 rad has no torque shape)"
+        )
+    return (
+        angle,
+        require_positive(inertia, "inertia", "kg*m**2"),
+        require_finite(theta0, "theta0", "rad"),
+    )
 
 
 class BangBang(TorqueShape):
@@ -207,8 +217,9 @@ class BangBang(TorqueShape):
         else:
             duration = require_positive(duration, "duration", "s")
             u_max = 4 * m / duration**2
-        super().__init__(angle=angle, inertia=inertia, u_max=u_max, duration=duration,
-                         theta0=theta0)
+        super().__init__(
+            angle=angle, inertia=inertia, u_max=u_max, duration=duration, theta0=theta0
+        )
 
     def _half(self, tau):
         return np.ones_like(tau), tau, 0.5 * tau * tau
@@ -249,9 +260,11 @@ class SmoothBangBang(TorqueShape):
             duration = require_positive(duration, "duration", "s")
             # alpha^2/10 - alpha/2 + 1/4 = q; the other root exceeds 5/2
             alpha = (5 - np.sqrt(15 + 40 * m / (u_max * duration**2))) / 2
-            why = ("alpha solved from (u_max, duration) must lie in [0, 1/4]: duration must be "
-                   "between the bang-bang time sqrt(4 I |angle| / u_max) and the alpha = 1/4 time "
-                   "sqrt(I |angle| / (0.13125 u_max))")
+            why = (
+                "alpha solved from (u_max, duration) must lie in [0, 1/4]: duration must be "
+                "between the bang-bang time sqrt(4 I |angle| / u_max) and the alpha = 1/4 time "
+                "sqrt(I |angle| / (0.13125 u_max))"
+            )
         else:
             alpha = require_finite(alpha, "alpha", "")
             why = "alpha = rise time / duration must lie in [0, 1/4]; alpha = 1/4 leaves no plateau"
@@ -263,12 +276,14 @@ class SmoothBangBang(TorqueShape):
         elif u_max is None:
             duration = require_positive(duration, "duration", "s")
             u_max = m / (c * duration**2)
-        super().__init__(angle=angle, inertia=inertia, u_max=u_max, duration=duration,
-                         theta0=theta0, alpha=alpha)
+        super().__init__(
+            angle=angle, inertia=inertia, u_max=u_max, duration=duration, theta0=theta0, alpha=alpha
+        )
 
     def _half(self, tau):
-        return _rounded_square(tau, 0.5 * self.duration, self.alpha * self.duration,
-                               _smoothstep, _smoothstep_fall)
+        return _rounded_square(
+            tau, 0.5 * self.duration, self.alpha * self.duration, _smoothstep, _smoothstep_fall
+        )
 
     def __call__(self, t):
         """:meth:`TorqueShape.__call__`; a table of samples × cases (``t`` of shape (n_t, 1),
@@ -282,7 +297,8 @@ class SmoothBangBang(TorqueShape):
         nc = max(np.size(v) for v in params)
         u, th, thd, thdd = _smooth_table(
             np.ascontiguousarray(t[:, 0]),
-            *(np.ascontiguousarray(np.broadcast_to(v, (nc,)), dtype=float) for v in params))
+            *(np.ascontiguousarray(np.broadcast_to(v, (nc,)), dtype=float) for v in params),
+        )
         return Reference(u=u, theta=th, theta_dot=thd, theta_ddot=thdd)
 
 
@@ -327,8 +343,13 @@ def _smooth_table(t, T, alpha, angle, u_max, inertia, theta0):
             pl = min(max(tau - a, 0.0), plateau)
             f = gr if tau < a else (1.0 if tau <= half - a else gf)
             F1 = a * r1 + pl + a * f1
-            F2 = (a * a * r2 + a * 0.5 * max(tau - a, 0.0) + 0.5 * pl * pl
-                  + plateau * max(tau - (half - a), 0.0) + a * a * f2)
+            F2 = (
+                a * a * r2
+                + a * 0.5 * max(tau - a, 0.0)
+                + 0.5 * pl * pl
+                + plateau * max(tau - (half - a), 0.0)
+                + a * a * f2
+            )
             moving = ti >= 0 and ti < Tc
             uc = sgn * u_max[c] * (-f if late else f) if moving else 0.0
             u[i, c] = uc
@@ -368,27 +389,39 @@ class PseudoSquare(TorqueShape):
         angle, inertia, theta0 = _slew(angle, inertia, theta0)
         _exactly(2, u_max=u_max, duration=duration, rise_time=rise_time)
         m = inertia * np.abs(angle)
-        why = ("rise_time must satisfy 0 < rise_time <= duration/4 so the quarter-sine rise and "
-               "reversal do not overlap (rise_time = duration/4 is the pure sinusoid)")
+        why = (
+            "rise_time must satisfy 0 < rise_time <= duration/4 so the quarter-sine rise and "
+            "reversal do not overlap (rise_time = duration/4 is the pure sinusoid)"
+        )
         if rise_time is None:
             u_max = require_positive(u_max, "u_max", "N*m")
             duration = require_positive(duration, "duration", "s")
             rise_time = (duration**2 / 4 - m / u_max) / (duration * _C_SINE)
-            why += ("; with u_max and duration given, I |angle| / u_max must lie in "
-                    "[duration^2 / (2 pi), duration^2 / 4)")
+            why += (
+                "; with u_max and duration given, I |angle| / u_max must lie in "
+                "[duration^2 / (2 pi), duration^2 / 4)"
+            )
         else:
             rise_time = require_finite(rise_time, "rise_time", "s")
             if duration is None:
                 u_max = require_positive(u_max, "u_max", "N*m")
-                duration = 2 * (rise_time * _C_SINE + np.sqrt((rise_time * _C_SINE) ** 2
-                                                              + m / u_max))
+                duration = 2 * (
+                    rise_time * _C_SINE + np.sqrt((rise_time * _C_SINE) ** 2 + m / u_max)
+                )
         duration = require_positive(duration, "duration", "s")
-        rise_time = duration * _quarter_ratio("rise_time", rise_time / duration, why, True,
-                                                 "rise_time/duration")
+        rise_time = duration * _quarter_ratio(
+            "rise_time", rise_time / duration, why, True, "rise_time/duration"
+        )
         if u_max is None:
             u_max = m / (duration**2 / 4 - duration * rise_time * _C_SINE)
-        super().__init__(angle=angle, inertia=inertia, u_max=u_max, duration=duration,
-                         theta0=theta0, rise_time=rise_time)
+        super().__init__(
+            angle=angle,
+            inertia=inertia,
+            u_max=u_max,
+            duration=duration,
+            theta0=theta0,
+            rise_time=rise_time,
+        )
 
     def _half(self, tau):
         return _rounded_square(tau, 0.5 * self.duration, self.rise_time, _sine_rise, _sine_fall)
@@ -423,8 +456,9 @@ class Sinusoidal(TorqueShape):
         else:
             duration = require_positive(duration, "duration", "s")
             u_max = m / duration**2
-        super().__init__(angle=angle, inertia=inertia, u_max=u_max, duration=duration,
-                         theta0=theta0)
+        super().__init__(
+            angle=angle, inertia=inertia, u_max=u_max, duration=duration, theta0=theta0
+        )
 
     def _half(self, tau):
         w = 2 * np.pi / self.duration

@@ -47,7 +47,7 @@ def _clean(value):
 
 
 def _metrics(ds) -> dict:
-    return {k[len("metric_"):]: ds[k].values for k in ds.data_vars if k.startswith("metric_")}
+    return {k[len("metric_") :]: ds[k].values for k in ds.data_vars if k.startswith("metric_")}
 
 
 def _grid_axes(result) -> list[tuple[str, np.ndarray]]:
@@ -73,10 +73,13 @@ def _contours(result, metrics: dict, folder: Path) -> list[str]:
                 fig.colorbar(cs, ax=ax, label=name)
             else:
                 ax.text(0.5, 0.5, "constant or not finite", ha="center", transform=ax.transAxes)
-            ax.set(xlabel=f"{xn} ({result.units[xn] or '-'})",
-                   ylabel=f"{yn} ({result.units[yn] or '-'})", title=name)
+            ax.set(
+                xlabel=f"{xn} ({result.units[xn] or '-'})",
+                ylabel=f"{yn} ({result.units[yn] or '-'})",
+                title=name,
+            )
         else:
-            (xn, xv), = axes
+            ((xn, xv),) = axes
             ax.plot(xv, values, "o-")
             ax.set(xlabel=f"{xn} ({result.units[xn] or '-'})", ylabel=name)
             ax.grid(alpha=0.3)
@@ -87,10 +90,11 @@ def _contours(result, metrics: dict, folder: Path) -> list[str]:
 
 
 #: the seed 000 trade surfaces (Att. 3 Figs. 5-7): key, title, colour scale
-SURFACES = (("maneuver_time_s", "maneuver time T (s), Att. 3 Eq. 16, Fig. 5", "linear"),
-            ("residual_energy_J", "vibration energy E(T) of the open-loop response (J), Fig. 6",
-             "log"),
-            ("mu_max_deg_s", "Law II tracking bound μ_max (deg/s), Eq. 22, Fig. 7", "linear"))
+SURFACES = (
+    ("maneuver_time_s", "maneuver time T (s), Att. 3 Eq. 16, Fig. 5", "linear"),
+    ("residual_energy_J", "vibration energy E(T) of the open-loop response (J), Fig. 6", "log"),
+    ("mu_max_deg_s", "Law II tracking bound μ_max (deg/s), Eq. 22, Fig. 7", "linear"),
+)
 
 
 def _trade_surfaces(result, folder: Path) -> list[str]:
@@ -151,11 +155,20 @@ def _convergence(result, folder: Path) -> list[str]:
     for i, r in enumerate(reqs):
         c = r["convergence"]
         n = np.asarray(c["n"], float)
-        ax.plot(n, c["estimate"], color=f"C{i}",
-                label=f"P({r['metric']} {r['relation']} {r['threshold']:g})")
+        ax.plot(
+            n,
+            c["estimate"],
+            color=f"C{i}",
+            label=f"P({r['metric']} {r['relation']} {r['threshold']:g})",
+        )
         ax.fill_between(n, c["low"], c["high"], color=f"C{i}", alpha=0.2)
-    ax.set(xscale="log", xlabel="cases N", ylabel="probability", ylim=(0, 1),
-           title="convergence of the estimates (confidence band)")
+    ax.set(
+        xscale="log",
+        xlabel="cases N",
+        ylabel="probability",
+        ylim=(0, 1),
+        title="convergence of the estimates (confidence band)",
+    )
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small")
     fig.savefig(folder / "convergence.png", dpi=100)
@@ -167,28 +180,47 @@ def _tables(result) -> str:
     rows = "".join(
         f"<tr><td>{esc(r['metric'])} {esc(r['relation'])} {r['threshold']:g}</td>"
         f"<td>{r['probability']:.4f}</td><td>[{r['low']:.4f}, {r['high']:.4f}]</td>"
-        f"<td>{r['successes']} / {r['n']}</td></tr>" for r in result.summary["requirements"])
-    req = (f"<h2>Requirements</h2><table><tr><th>requirement</th><th>probability</th>"
-           f"<th>{100 * result.summary['requirements'][0]['confidence']:g} % interval "
-           f"({esc(result.summary['requirements'][0]['method'])})</th><th>met</th></tr>"
-           f"{rows}</table>") if result.summary["requirements"] else ""
+        f"<td>{r['successes']} / {r['n']}</td></tr>"
+        for r in result.summary["requirements"]
+    )
+    req = (
+        (
+            f"<h2>Requirements</h2><table><tr><th>requirement</th><th>probability</th>"
+            f"<th>{100 * result.summary['requirements'][0]['confidence']:g} % interval "
+            f"({esc(result.summary['requirements'][0]['method'])})</th><th>met</th></tr>"
+            f"{rows}</table>"
+        )
+        if result.summary["requirements"]
+        else ""
+    )
     qs = ("5", "50", "95")
     mrows = "".join(
-        f"<tr><td>{esc(name)}</td>" + "".join(
-            f"<td>{_fmt(m['percentiles'].get(q))}</td>" for q in qs)
+        f"<tr><td>{esc(name)}</td>"
+        + "".join(f"<td>{_fmt(m['percentiles'].get(q))}</td>" for q in qs)
         + f"<td>{_fmt(m['mean'])}</td><td>{m['n_nan']}</td></tr>"
-        for name, m in result.summary["metrics"].items())
-    met = (f"<h2>Metrics</h2><table><tr><th>metric</th><th>5 %</th><th>median</th><th>95 %</th>"
-           f"<th>mean</th><th>not finite</th></tr>{mrows}</table>")
+        for name, m in result.summary["metrics"].items()
+    )
+    met = (
+        f"<h2>Metrics</h2><table><tr><th>metric</th><th>5 %</th><th>median</th><th>95 %</th>"
+        f"<th>mean</th><th>not finite</th></tr>{mrows}</table>"
+    )
     srows = "".join(
         f"<tr><td>{esc(name)}</td><td>{esc(s['method'])}</td><td>"
         + ", ".join(f"{esc(p)} ({_score(s, p)})" for p in s["ranking"])
-        + "</td></tr>" for name, s in result.sensitivity.items())
-    sens = (f"<h2>Sensitivity</h2><p>Parameters ranked by their effect on each metric "
+        + "</td></tr>"
+        for name, s in result.sensitivity.items()
+    )
+    sens = (
+        (
+            f"<h2>Sensitivity</h2><p>Parameters ranked by their effect on each metric "
             f"(Sobol' total and first-order indices from a Saltelli design, else the rank "
             f"correlation of the sample).</p>"
             f"<table><tr><th>metric</th><th>method</th><th>ranking (score)</th></tr>{srows}"
-            f"</table>") if srows else ""
+            f"</table>"
+        )
+        if srows
+        else ""
+    )
     return req + met + sens
 
 
@@ -208,24 +240,38 @@ def _fmt(value) -> str:
 def _write_all(result, folder: Path) -> None:
     ds = result.dataset()
     metrics = _metrics(ds)
-    summary = {"scenario": result.scenario.name, "kind": result.scenario.kind,
-               "cases": int(ds.sizes["case"]), "sampling": result.scenario.sampling,
-               "wall_s": result.wall_s, **result.summary, "sensitivity": result.sensitivity,
-               "trade_surfaces": result.surfaces}
-    (folder / "summary.json").write_text(json.dumps(_clean(summary), indent=2) + "\n",
-                                         encoding="utf-8")
+    summary = {
+        "scenario": result.scenario.name,
+        "kind": result.scenario.kind,
+        "cases": int(ds.sizes["case"]),
+        "sampling": result.scenario.sampling,
+        "wall_s": result.wall_s,
+        **result.summary,
+        "sensitivity": result.sensitivity,
+        "trade_surfaces": result.surfaces,
+    }
+    (folder / "summary.json").write_text(
+        json.dumps(_clean(summary), indent=2) + "\n", encoding="utf-8"
+    )
     shutil.copytree(result.store, folder / "results.zarr")
-    figures = (_trade_surfaces(result, folder) + _contours(result, metrics, folder)
-               if result.scenario.kind == "sweep" else
-               _distributions(result, metrics, folder)) + _convergence(result, folder)
+    figures = (
+        _trade_surfaces(result, folder) + _contours(result, metrics, folder)
+        if result.scenario.kind == "sweep"
+        else _distributions(result, metrics, folder)
+    ) + _convergence(result, folder)
     esc = html.escape
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
-    body = (f"<p>{int(ds.sizes['case'])} cases of run <b>{esc(result.scenario.run)}</b> of "
-            f"<code>{esc(result.scenario.scenario)}</code>, sampling "
-            f"{esc(result.scenario.sampling)}; {result.chunks_run} chunks run, "
-            f"{result.chunks_skipped} found done in the store; {result.wall_s:.1f} s.</p>"
-            + _tables(result) + f"<h2>Figures</h2>{images}")
-    (folder / "index.html").write_text(report_page(result, body, case=result.maneuver.case), encoding="utf-8")
+    body = (
+        f"<p>{int(ds.sizes['case'])} cases of run <b>{esc(result.scenario.run)}</b> of "
+        f"<code>{esc(result.scenario.scenario)}</code>, sampling "
+        f"{esc(result.scenario.sampling)}; {result.chunks_run} chunks run, "
+        f"{result.chunks_skipped} found done in the store; {result.wall_s:.1f} s.</p>"
+        + _tables(result)
+        + f"<h2>Figures</h2>{images}"
+    )
+    (folder / "index.html").write_text(
+        report_page(result, body, case=result.maneuver.case), encoding="utf-8"
+    )
 
 
 def write_batch_report(result, out_dir) -> Path:

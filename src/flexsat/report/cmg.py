@@ -76,10 +76,14 @@ def _station_figure(ds, path: Path) -> None:
         b.plot(t, ds["cmg_momentum"].values[:, k] / _FT_LB_S, label=str(axis))
         c.plot(t, ds["torque"].values[:, k] / _FT_LB_S, label=f"u {axis}")
     hr = ds.attrs["rotor_momentum_N_m_s"] / _FT_LB_S
-    b.plot(t, np.linalg.norm(ds["cmg_momentum"].values, axis=1) / _FT_LB_S, "k",
-           label="|h|")
-    b.axhline(2 * np.cos(np.deg2rad(54.74)) * hr, color="r", linestyle=":", linewidth=0.8,
-              label="1.155 h_r (internal singular |h| from σ = 0 along x or y)")
+    b.plot(t, np.linalg.norm(ds["cmg_momentum"].values, axis=1) / _FT_LB_S, "k", label="|h|")
+    b.axhline(
+        2 * np.cos(np.deg2rad(54.74)) * hr,
+        color="r",
+        linestyle=":",
+        linewidth=0.8,
+        label="1.155 h_r (internal singular |h| from σ = 0 along x or y)",
+    )
     a.set(ylabel="attitude (deg)")
     b.set(ylabel="CMG momentum (ft-lb-s)")
     c.set(ylabel="torque u (ft-lb)", xlabel="time (s)")
@@ -91,8 +95,14 @@ def _station_figure(ds, path: Path) -> None:
 
 def _metrics_html(records) -> str:
     keys = [k for k in records[0] if k != "run"]
-    rows = [[r["run"]] + [format_metric(r.get(k)) if not isinstance(r.get(k), bool)
-                          else ("yes" if r[k] else "no") for k in keys] for r in records]
+    rows = [
+        [r["run"]]
+        + [
+            format_metric(r.get(k)) if not isinstance(r.get(k), bool) else ("yes" if r[k] else "no")
+            for k in keys
+        ]
+        for r in records
+    ]
     return html_table(["run"] + keys, rows)
 
 
@@ -102,8 +112,10 @@ def _write_cmg(result, folder: Path) -> None:
     _gimbal_figure(ds, folder / figures[0], lambda run: ds["time"].sel(run=run).values)
     _envelope_figure(result, ds, folder / figures[1])
     v_rows = [(v, q, f"{p:g}", f"{c:.5g}", u) for v, q, p, c, u in result.table]
-    outcomes = [(r.label, r.outcome, " ".join(f"{a:.2f}" for a in np.rad2deg(r.sigma0)))
-                for r in result.runs]
+    outcomes = [
+        (r.label, r.outcome, " ".join(f"{a:.2f}" for a in np.rad2deg(r.sigma0)))
+        for r in result.runs
+    ]
     images = "".join(f'<figure><img src="{f}" alt="{f}"></figure>' for f in figures)
     notes = "".join(f"<li>{html.escape(n)}</li>" for n in result.notes)
     body = f"""<h2>Runs</h2>
@@ -115,8 +127,9 @@ def _write_cmg(result, folder: Path) -> None:
 <h2>Figures</h2>
 {images}
 """
-    (folder / "index.html").write_text(report_page(result, body, case="SGCMG pyramid"),
-                                       encoding="utf-8")
+    (folder / "index.html").write_text(
+        report_page(result, body, case="SGCMG pyramid"), encoding="utf-8"
+    )
 
 
 def _write_station(result, folder: Path) -> None:
@@ -137,8 +150,9 @@ from [45, −45, 45, −45]° none, momentum within limits.</p>
 <h2>Figures</h2>
 {images}
 """
-    (folder / "index.html").write_text(report_page(result, body, case="space station (Table 2)"),
-                                       encoding="utf-8")
+    (folder / "index.html").write_text(
+        report_page(result, body, case="space station (Table 2)"), encoding="utf-8"
+    )
 
 
 def write_cmg_report(result, out_dir) -> Path:

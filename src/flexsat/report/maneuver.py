@@ -21,6 +21,7 @@ from __future__ import annotations
 import html
 from dataclasses import dataclass
 from pathlib import Path
+
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -42,13 +43,19 @@ class _Plot:
 
 PLOTS = (
     _Plot("hub_angle.png", "Hub angle", "theta", "angle (deg)", np.degrees(1.0), "theta_ref"),
-    _Plot("hub_rate.png", "Hub rate", "theta_dot", "rate (deg/s)", np.degrees(1.0),
-          "theta_dot_ref"),
+    _Plot(
+        "hub_rate.png", "Hub rate", "theta_dot", "rate (deg/s)", np.degrees(1.0), "theta_dot_ref"
+    ),
     _Plot("torque.png", "Applied hub torque", "torque", "torque (N m)"),
-    _Plot("tip_deflection.png", "Appendage tip deflection", "tip_deflection", "deflection (mm)",
-          1e3),
-    _Plot("vibration_energy.png", "Vibration energy of the appendages", "vibration_energy",
-          "energy (J)"),
+    _Plot(
+        "tip_deflection.png", "Appendage tip deflection", "tip_deflection", "deflection (mm)", 1e3
+    ),
+    _Plot(
+        "vibration_energy.png",
+        "Vibration energy of the appendages",
+        "vibration_energy",
+        "energy (J)",
+    ),
 )
 
 
@@ -62,8 +69,9 @@ def html_table(headings, rows) -> str:
     ``str``, every text escaped)."""
     esc = html.escape
     head = "".join(f"<th>{esc(str(h))}</th>" for h in headings)
-    body = "".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in row) + "</tr>"
-                   for row in rows)
+    body = "".join(
+        "<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in row) + "</tr>" for row in rows
+    )
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
@@ -84,8 +92,7 @@ pre { background: #f4f4f4; padding: 1em; overflow-x: auto; }
 </style>"""
 
 
-def report_page(result, body: str, title: str = "flexsat report", case: str | None = None
-                ) -> str:
+def report_page(result, body: str, title: str = "flexsat report", case: str | None = None) -> str:
     """A report's index.html: the heading, the scenario and its case (``case``, default the
     scenario's) with the case's source, ``body`` (HTML), and the scenario as given."""
     esc = html.escape
@@ -113,8 +120,14 @@ def _plot(ds, spec: _Plot, path: Path) -> None:
         color = f"C{i}"
         ax.plot(t, spec.scale * ds[spec.variable].sel(run=label).values, color=color, label=label)
         if spec.reference is not None:
-            ax.plot(t, spec.scale * ds[spec.reference].sel(run=label).values, color=color,
-                    linestyle="--", linewidth=1, label=f"{label} reference")
+            ax.plot(
+                t,
+                spec.scale * ds[spec.reference].sel(run=label).values,
+                color=color,
+                linestyle="--",
+                linewidth=1,
+                label=f"{label} reference",
+            )
     ax.set(title=spec.title, xlabel="time (s)", ylabel=spec.ylabel)
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small")
@@ -129,11 +142,14 @@ def _html(result: ScenarioResult, records: list[dict]) -> str:
         for metric, values in metric_rows(records)
     )
     images = "".join(f'<figure><img src="{p.file}" alt="{esc(p.title)}"></figure>' for p in PLOTS)
-    return report_page(result, f"""<h2>Metrics</h2>
+    return report_page(
+        result,
+        f"""<h2>Metrics</h2>
 <p>n/a: not settled within the band, or not applicable.</p>
 <table><tr><th>metric</th>{head}</tr>{rows}</table>
 <h2>Time histories</h2>
-{images}""")
+{images}""",
+    )
 
 
 def _write_all(result: ScenarioResult, folder: Path) -> None:

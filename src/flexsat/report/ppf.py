@@ -21,14 +21,21 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import report_page, format_metric
+from flexsat.report.maneuver import format_metric, report_page
 from flexsat.report.publish import write_atomically, write_metrics_and_results
 
 #: results-table columns: (metric, heading)
 RESULT_COLUMNS = (
-    ("w1", "w1"), ("w2", "w2"), ("J_init", "J_init"), ("J_goal", "J_goal"), ("J_opt", "J_opt"),
-    ("gamma", "γ"), ("min_eig_S", "min eig S (1/s²)"), ("max_re_pole", "max Re pole (1/s)"),
-    ("stable", "stable"), ("tip_settling_initial_s", "tip 10 % settling, initial (s)"),
+    ("w1", "w1"),
+    ("w2", "w2"),
+    ("J_init", "J_init"),
+    ("J_goal", "J_goal"),
+    ("J_opt", "J_opt"),
+    ("gamma", "γ"),
+    ("min_eig_S", "min eig S (1/s²)"),
+    ("max_re_pole", "max Re pole (1/s)"),
+    ("stable", "stable"),
+    ("tip_settling_initial_s", "tip 10 % settling, initial (s)"),
     ("tip_settling_optimised_s", "tip 10 % settling, optimised (s)"),
     ("rotation_settling_initial_s", "Φ 10 % settling, initial (s)"),
     ("rotation_settling_optimised_s", "Φ 10 % settling, optimised (s)"),
@@ -85,10 +92,15 @@ def _checks(ds, path: Path) -> None:
     for i, run in enumerate(ds["run"].values):
         r = ds.sel(run=run)
         c = _colour(i, ds.sizes["run"])
-        a.plot(r["gamma_path"].values, r["min_eig_S_path"].values, "o-", color=c,
-               markersize=3, label=str(run))
-        b.plot(r["gamma_path"].values, r["max_re_pole_path"].values, "o-", color=c,
-               markersize=3)
+        a.plot(
+            r["gamma_path"].values,
+            r["min_eig_S_path"].values,
+            "o-",
+            color=c,
+            markersize=3,
+            label=str(run),
+        )
+        b.plot(r["gamma_path"].values, r["max_re_pole_path"].values, "o-", color=c, markersize=3)
     a.set(ylabel="smallest eigenvalue of S (1/s²)")
     b.set(ylabel="largest Re(pole) (1/s)", xlabel="γ")
     for ax in (a, b):
@@ -99,15 +111,24 @@ def _checks(ds, path: Path) -> None:
 
 def _poles(ds, path: Path) -> None:
     runs = ds["run"].values
-    fig, axes = _grid(len(runs), "closed-loop poles along γ (colour: γ; the structure's "
-                      "modes and the 9 filters)", 2.8)
+    fig, axes = _grid(
+        len(runs),
+        "closed-loop poles along γ (colour: γ; the structure's modes and the 9 filters)",
+        2.8,
+    )
     for ax, run in zip(axes, runs):
         r = ds.sel(run=run)
         g = np.repeat(r["gamma_path"].values[:, None], r.sizes["pole"], 1)
         keep = np.isfinite(g) & (r["pole_imag_path"].values >= 0)
-        sc = ax.scatter(r["pole_real_path"].values[keep], r["pole_imag_path"].values[keep],
-                        c=g[keep], s=6, cmap="viridis", vmin=0,
-                        vmax=ds.attrs["gamma_stop"])
+        sc = ax.scatter(
+            r["pole_real_path"].values[keep],
+            r["pole_imag_path"].values[keep],
+            c=g[keep],
+            s=6,
+            cmap="viridis",
+            vmin=0,
+            vmax=ds.attrs["gamma_stop"],
+        )
         ax.set_xscale("symlog", linthresh=0.1)
         ax.set(title=str(run), xlabel="Re (1/s)", ylabel="Im (rad/s)")
         ax.title.set_fontsize("small")
@@ -118,15 +139,21 @@ def _poles(ds, path: Path) -> None:
 
 def _gain_paths(ds, path: Path) -> None:
     runs = ds["run"].values
-    fig, axes = _grid(len(runs), "gains g_ij along γ (i: actuator, j: mode; colour: actuator, "
-                      "line: mode)")
+    fig, axes = _grid(
+        len(runs), "gains g_ij along γ (i: actuator, j: mode; colour: actuator, line: mode)"
+    )
     styles = ("-", "--", ":")
     for ax, run in zip(axes, runs):
         r = ds.sel(run=run)
         for i in range(3):
             for j in range(3):
-                ax.plot(r["gamma_path"].values, r["gain_path"].values[:, i, j],
-                        linestyle=styles[j], color=f"C{i}", label=f"g{i + 1}{j + 1}")
+                ax.plot(
+                    r["gamma_path"].values,
+                    r["gain_path"].values[:, i, j],
+                    linestyle=styles[j],
+                    color=f"C{i}",
+                    label=f"g{i + 1}{j + 1}",
+                )
         ax.set(title=str(run), xlabel="γ", ylabel="gain")
         ax.title.set_fontsize("small")
         ax.grid(alpha=0.3)
@@ -140,12 +167,20 @@ def _responses(ds, run, path: Path) -> None:
     fig.suptitle(f"tip responses: {run}")
     t = ds["time"].values
     r = ds["tip_response"].sel(run=run)
-    scales = ((1e3, "tip error along n̂_1 (mm)"), (1e3, "tip error along n̂_2 (mm)"),
-              (1e3, "tip rotation Φ = α + β (mrad)"))
+    scales = (
+        (1e3, "tip error along n̂_1 (mm)"),
+        (1e3, "tip error along n̂_2 (mm)"),
+        (1e3, "tip rotation Φ = α + β (mrad)"),
+    )
     for k, (ax, (scale, ylabel)) in enumerate(zip(axes, scales)):
         for i, response in enumerate(ds["response"].values):
-            ax.plot(t, scale * r.sel(response=response).values[:, k], color=f"C{i}",
-                    linewidth=0.9, label=str(response))
+            ax.plot(
+                t,
+                scale * r.sel(response=response).values[:, k],
+                color=f"C{i}",
+                linewidth=0.9,
+                label=str(response),
+            )
         ax.set(ylabel=ylabel)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize="small", ncols=3)
@@ -160,18 +195,22 @@ def _results_table(records: list[dict], ds) -> str:
     rows = []
     for r in records:
         run = r["run"]
-        cells = [f"<td>{esc(str(ds['excitation'].sel(run=run).values))}</td>",
-                 f"<td>{esc(str(ds['goal_rule'].sel(run=run).values))}</td>"]
+        cells = [
+            f"<td>{esc(str(ds['excitation'].sel(run=run).values))}</td>",
+            f"<td>{esc(str(ds['goal_rule'].sel(run=run).values))}</td>",
+        ]
         for key, _ in RESULT_COLUMNS:
             v = r.get(key)
-            cells.append(f"<td>{'yes' if v is True else 'NO' if v is False else format_metric(v)}"
-                         "</td>")
-        cells += [f"<td>{format_metric(r[f'g{i}{j}'])}</td>" for i in (1, 2, 3)
-                  for j in (1, 2, 3)]
+            cells.append(
+                f"<td>{'yes' if v is True else 'NO' if v is False else format_metric(v)}</td>"
+            )
+        cells += [f"<td>{format_metric(r[f'g{i}{j}'])}</td>" for i in (1, 2, 3) for j in (1, 2, 3)]
         cells.append(f"<td>{esc(str(ds['status'].sel(run=run).values))}</td>")
         rows.append(f"<tr><td>{esc(run)}</td>{''.join(cells)}</tr>")
-    return (f"<table><tr><th>run</th><th>excitation</th><th>goal</th>{head}{gains}"
-            f"<th>status</th></tr>{''.join(rows)}</table>")
+    return (
+        f"<table><tr><th>run</th><th>excitation</th><th>goal</th>{head}{gains}"
+        f"<th>status</th></tr>{''.join(rows)}</table>"
+    )
 
 
 def _gains_tables(result) -> str:
@@ -182,21 +221,31 @@ def _gains_tables(result) -> str:
     esc = html.escape
     blocks = []
     for label, run in zip(result.labels, result.runs):
-        key = (tuple(int(w) if float(w).is_integer() else w for w in run.setup.weights),
-               run.setup.excitation)
+        key = (
+            tuple(int(w) if float(w).is_integer() else w for w in run.setup.weights),
+            run.setup.excitation,
+        )
         paper = PUBLISHED_GAINS.get(key)
         rows = []
         for j in range(3):
-            cells = "".join(f"<td>{run.initial_gains.reshape(3, 3)[i, j]:.5g} → "
-                            f"<b>{run.gains[i, j]:.5g}</b></td>" for i in range(3))
+            cells = "".join(
+                f"<td>{run.initial_gains.reshape(3, 3)[i, j]:.5g} → "
+                f"<b>{run.gains[i, j]:.5g}</b></td>"
+                for i in range(3)
+            )
             if paper is not None:
                 cells += "".join(f"<td>{paper[j][i]:.5g}</td>" for i in range(3))
             rows.append(f"<tr><td>g{j + 1} (mode {j + 1})</td>{cells}</tr>")
-        published = ("<th>paper act. 1</th><th>paper act. 2</th><th>paper act. 3</th>"
-                     if paper is not None else "")
-        blocks.append(f"<h3>{esc(label)}</h3><table><tr><th></th><th>actuator 1</th>"
-                      f"<th>actuator 2</th><th>actuator 3</th>{published}</tr>"
-                      f"{''.join(rows)}</table>")
+        published = (
+            "<th>paper act. 1</th><th>paper act. 2</th><th>paper act. 3</th>"
+            if paper is not None
+            else ""
+        )
+        blocks.append(
+            f"<h3>{esc(label)}</h3><table><tr><th></th><th>actuator 1</th>"
+            f"<th>actuator 2</th><th>actuator 3</th>{published}</tr>"
+            f"{''.join(rows)}</table>"
+        )
     return "".join(blocks)
 
 
@@ -204,7 +253,9 @@ def _html(result, records, ds, figures: list[str]) -> str:
     esc = html.escape
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
-    return report_page(result, f"""<h2>Results (seed 004 Tables 1–3 grid)</h2>
+    return report_page(
+        result,
+        f"""<h2>Results (seed 004 Tables 1–3 grid)</h2>
 <p>J = ½ ∫ (ζ_tᵀ Q̄ ζ_t + uᵀ Q_u u) dt (Eqs. 7, 35) by Lyapunov equations; γ: last converged
 homotopy parameter; min eig S: Eq. 6; stable: the deciding check (S &gt; 0 for positive gains,
 else the poles). Settling: last time the tip error |Eᵗ| or the rotation Φ exceeds 10 % of its
@@ -215,7 +266,8 @@ peak (n/a: not within the simulated time).</p>
 {_gains_tables(result)}
 <h2>Figures</h2>
 {images}
-""")
+""",
+    )
 
 
 def _write_all(result, folder: Path) -> None:

@@ -49,9 +49,9 @@ import secrets
 import shutil
 import stat
 import time
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
-from typing import Callable, Iterator
 
 log = logging.getLogger(__name__)
 
@@ -69,12 +69,14 @@ _NO_EXCHANGE = {errno.ENOSYS, errno.EINVAL, errno.ENOTSUP, errno.EOPNOTSUPP}
 #: errors of flock that mean the file system has no locks for a folder (NFS emulates flock with
 #: POSIX locks, whose exclusive kind needs a file open for writing: EBADF)
 _NO_LOCKS = {errno.ENOLCK, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EINVAL, errno.EBADF}
-_HINTS = {errno.ENOSPC: "free some space or choose another folder",
-          errno.EDQUOT: "free some space or choose another folder",
-          errno.EFBIG: "choose a folder on another file system",
-          errno.EROFS: "choose a folder you can write to",
-          errno.EACCES: "choose a folder you can write to",
-          errno.EPERM: "choose a folder you can write to"}
+_HINTS = {
+    errno.ENOSPC: "free some space or choose another folder",
+    errno.EDQUOT: "free some space or choose another folder",
+    errno.EFBIG: "choose a folder on another file system",
+    errno.EROFS: "choose a folder you can write to",
+    errno.EACCES: "choose a folder you can write to",
+    errno.EPERM: "choose a folder you can write to",
+}
 
 
 class OutputError(OSError):
@@ -89,8 +91,13 @@ def _load_renameat2():
         function = ctypes.CDLL(None, use_errno=True).renameat2
     except (OSError, AttributeError, TypeError):  # not glibc >= 2.28 / musl, or not Linux
         return None
-    function.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
-                         ctypes.c_uint]
+    function.argtypes = [
+        ctypes.c_int,
+        ctypes.c_char_p,
+        ctypes.c_int,
+        ctypes.c_char_p,
+        ctypes.c_uint,
+    ]
     function.restype = ctypes.c_int
     return function
 
@@ -134,14 +141,21 @@ def _locked(folder: Path, timeout: float) -> Iterator[None]:
     fd = _open_folder(folder)
     try:
         if _flock(fd) is False:
-            log.warning("waiting up to %.0f s for another flexsat run publishing a report in %s",
-                        timeout, folder)
+            log.warning(
+                "waiting up to %.0f s for another flexsat run publishing a report in %s",
+                timeout,
+                folder,
+            )
             deadline = time.monotonic() + timeout
             while _flock(fd) is False:
                 if time.monotonic() > deadline:
-                    raise OutputError(errno.EBUSY, (
-                        f"another flexsat run has been publishing a report in '{folder}' for "
-                        f"{timeout:.0f} s; try again when it has finished"))
+                    raise OutputError(
+                        errno.EBUSY,
+                        (
+                            f"another flexsat run has been publishing a report in '{folder}' for "
+                            f"{timeout:.0f} s; try again when it has finished"
+                        ),
+                    )
                 time.sleep(0.05)
         yield
     finally:
@@ -151,16 +165,21 @@ def _locked(folder: Path, timeout: float) -> Iterator[None]:
 def _resolve(out_dir) -> Path:
     out = Path(os.path.realpath(os.fspath(out_dir)))
     if not out.name:
-        raise OutputError(errno.EINVAL, f"'{out}' is the root folder: a report needs a folder of "
-                                        "its own")
+        raise OutputError(
+            errno.EINVAL, f"'{out}' is the root folder: a report needs a folder of its own"
+        )
     try:
         current = Path.cwd().resolve()
     except OSError:  # the working folder was removed: nothing to protect
         current = None
     if out == current:
-        raise OutputError(errno.EINVAL, (
-            f"'{out}' is the current folder; a report folder is replaced as a whole: run from "
-            "its parent or choose another folder"))
+        raise OutputError(
+            errno.EINVAL,
+            (
+                f"'{out}' is the current folder; a report folder is replaced as a whole: run from "
+                "its parent or choose another folder"
+            ),
+        )
     return out
 
 
@@ -180,8 +199,7 @@ def _error(exc: OSError, out: Path) -> OutputError:
         except OSError:
             pass
         if out.exists():
-            notes.append("the earlier report stays until the new one is complete, so both "
-                         "must fit")
+            notes.append("the earlier report stays until the new one is complete, so both must fit")
         if notes:
             message += f" ({'; '.join(notes)})"
     if exc.errno in _HINTS:
@@ -205,19 +223,28 @@ def _refuse_foreign(out: Path, written: set[str] | None) -> None:
     if not out.is_dir():
         raise OutputError(errno.ENOTDIR, f"'{out}' is a file, not a folder")
     if os.path.ismount(out):
-        raise OutputError(errno.EBUSY, (
-            f"'{out}' is a mount point, which cannot be replaced as a whole; choose a folder "
-            f"inside it, e.g. '{out / 'report'}'"))
+        raise OutputError(
+            errno.EBUSY,
+            (
+                f"'{out}' is a mount point, which cannot be replaced as a whole; choose a folder "
+                f"inside it, e.g. '{out / 'report'}'"
+            ),
+        )
     listed = _listed(out)
     if listed is None and written is None:
         return
     foreign = sorted(set(os.listdir(out)) - (listed or set()) - (written or set()) - {MANIFEST})
     if foreign:
-        shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more" if len(foreign) > 5
-                                          else "")
-        raise OutputError(errno.EEXIST, (
-            f"'{out}' holds {shown}, not files of a flexsat report; a report folder is replaced as "
-            "a whole: move those away or choose another folder"))
+        shown = ", ".join(foreign[:5]) + (
+            f" and {len(foreign) - 5} more" if len(foreign) > 5 else ""
+        )
+        raise OutputError(
+            errno.EEXIST,
+            (
+                f"'{out}' holds {shown}, not files of a flexsat report; a report folder is replaced as "
+                "a whole: move those away or choose another folder"
+            ),
+        )
 
 
 def _probe(folder: Path, name: str) -> None:
@@ -266,8 +293,9 @@ def check_output_folder(out_dir) -> Path:
         while not base.exists():
             base = base.parent
         if not base.is_dir():
-            raise OutputError(errno.ENOTDIR, f"'{base}' is a file, not a folder: cannot create "
-                                             f"'{out}'")
+            raise OutputError(
+                errno.ENOTDIR, f"'{base}' is a file, not a folder: cannot create '{out}'"
+            )
         _probe(base, out.name)
     except OutputError:
         raise
@@ -355,8 +383,9 @@ def write_metrics_and_results(result, folder: Path):
     return records, ds
 
 
-def write_atomically(out_dir, write: Callable[[Path], None], *,
-                     timeout: float = LOCK_TIMEOUT_S) -> Path:
+def write_atomically(
+    out_dir, write: Callable[[Path], None], *, timeout: float = LOCK_TIMEOUT_S
+) -> Path:
     """Run ``write(folder)`` on a new temporary folder and publish it as ``out_dir`` whole (see
     the module docstring): ``out_dir`` holds the complete previous report or the complete new one
     whatever fails or is killed.
@@ -395,8 +424,9 @@ def write_atomically(out_dir, write: Callable[[Path], None], *,
         try:
             write(folder)
             files = sorted(os.listdir(folder))
-            (folder / MANIFEST).write_text(json.dumps({"files": files}, indent=1) + "\n",
-                                           encoding="utf-8")
+            (folder / MANIFEST).write_text(
+                json.dumps({"files": files}, indent=1) + "\n", encoding="utf-8"
+            )
             _fsync_tree(folder)
             with _locked(out.parent, timeout):
                 previous = _swap(folder, out)
@@ -414,5 +444,11 @@ def write_atomically(out_dir, write: Callable[[Path], None], *,
     return out
 
 
-__all__ = ["LOCK_TIMEOUT_S", "MANIFEST", "OutputError", "check_output_folder", "write_atomically",
-           "write_metrics_and_results"]
+__all__ = [
+    "LOCK_TIMEOUT_S",
+    "MANIFEST",
+    "OutputError",
+    "check_output_folder",
+    "write_atomically",
+    "write_metrics_and_results",
+]

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import report_page, metric_rows
+from flexsat.report.maneuver import metric_rows, report_page
 from flexsat.report.publish import write_atomically, write_metrics_and_results
 
 #: at most this many time-history figures (a plant with many output channels records them all
@@ -58,8 +58,13 @@ def _plot(ds, name: str, path: Path) -> None:
         values = values.reshape(len(t), -1)
         for j in range(values.shape[1]):
             suffix = f"[{j}]" if values.shape[1] > 1 else ""
-            ax.plot(t, values[:, j], color=f"C{i}", linestyle=("-", "--", ":", "-.")[j % 4],
-                    label=f"{label}{suffix}")
+            ax.plot(
+                t,
+                values[:, j],
+                color=f"C{i}",
+                linestyle=("-", "--", ":", "-.")[j % 4],
+                label=f"{label}{suffix}",
+            )
     unit = var.attrs.get("units", "")
     ax.set(title=name, xlabel="time (s)", ylabel=f"{name} ({unit})" if unit else name)
     ax.grid(alpha=0.3)
@@ -75,20 +80,36 @@ def _html(result, records: list[dict], names: list[str], units: dict, idle: list
         unit = units.get(metric, "")
         return f"{metric} ({unit})" if unit and not metric.endswith(("_deg", "_s")) else metric
 
-    rows = "".join(
-        f"<tr><td>{esc(label(metric))}</td>" + "".join(f"<td>{v}</td>" for v in values)
-        + "</tr>" for metric, values in metric_rows(records)
-        if not any(metric.endswith("_" + n) for n in idle)
-    ) if records and len(records[0]) > 1 else ""
-    quiet = ("<p>Zero throughout every run (not plotted): "
-             + ", ".join(f"<code>{esc(n)}</code>" for n in idle) + ".</p>") if idle else ""
+    rows = (
+        "".join(
+            f"<tr><td>{esc(label(metric))}</td>"
+            + "".join(f"<td>{v}</td>" for v in values)
+            + "</tr>"
+            for metric, values in metric_rows(records)
+            if not any(metric.endswith("_" + n) for n in idle)
+        )
+        if records and len(records[0]) > 1
+        else ""
+    )
+    quiet = (
+        (
+            "<p>Zero throughout every run (not plotted): "
+            + ", ".join(f"<code>{esc(n)}</code>" for n in idle)
+            + ".</p>"
+        )
+        if idle
+        else ""
+    )
     images = "".join(f'<figure><img src="{_file(n)}" alt="{esc(n)}"></figure>' for n in names)
-    return report_page(result, f"""<h2>Metrics</h2>
+    return report_page(
+        result,
+        f"""<h2>Metrics</h2>
 <table><tr><th>metric</th>{head}</tr>{rows}</table>
 <h2>Time histories</h2>
 {quiet}
 {images}
-""")
+""",
+    )
 
 
 def _write_all(result, folder: Path) -> None:
@@ -97,8 +118,7 @@ def _write_all(result, folder: Path) -> None:
     for name in names:
         _plot(ds, name, folder / _file(name))
     units = {k: v.attrs.get("units", "") for k, v in ds.data_vars.items() if v.dims == ("run",)}
-    (folder / "index.html").write_text(_html(result, records, names, units, idle),
-                                       encoding="utf-8")
+    (folder / "index.html").write_text(_html(result, records, names, units, idle), encoding="utf-8")
 
 
 def write_simulation_report(result, out_dir) -> Path:

@@ -23,15 +23,14 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import report_page, format_metric
+from flexsat.report.maneuver import format_metric, report_page
 from flexsat.report.publish import write_atomically, write_metrics_and_results
 from flexsat.scenarios.slew import OPEN_LOOP
 
 #: goal table columns: (metric, heading, verdict metric or None)
 GOAL_COLUMNS = (
     ("angle_error_mrad", "Euler error at 1.25 T (mrad)", "angle_goal_met"),
-    ("deflection_ratio_after", "rim deflection open/closed from 1.25 T",
-     "deflection_goal_met"),
+    ("deflection_ratio_after", "rim deflection open/closed from 1.25 T", "deflection_goal_met"),
     ("deflection_ratio_slew", "rim deflection open/closed during the slew", None),
     ("peak_rim_deflection_after_m", "peak rim deflection from 1.25 T (m)", None),
     ("peak_torque_perturbation_Nm", "peak torque perturbation (N m)", None),
@@ -87,15 +86,21 @@ def _runs_plot(ds, title: str, path: Path, panels, band: float | None = None) ->
 
 def _components(ds, variable: str, scale: float, unit: str):
     """Panels of a vector variable's x, y, z components."""
-    return [(f"{axis} ({unit})",
-             lambda label, j=j: scale * ds[variable].sel(run=label).values[:, j])
-            for j, axis in enumerate("xyz")]
+    return [
+        (f"{axis} ({unit})", lambda label, j=j: scale * ds[variable].sel(run=label).values[:, j])
+        for j, axis in enumerate("xyz")
+    ]
 
 
 def _scalars(ds, names: list[str], prefix: str, scale: float, ylabel: str):
     """Panels of scalar variables; ``ylabel`` formats each name without ``prefix``."""
-    return [(ylabel.format(name[len(prefix):]),
-             lambda label, name=name: scale * ds[name].sel(run=label).values) for name in names]
+    return [
+        (
+            ylabel.format(name[len(prefix) :]),
+            lambda label, name=name: scale * ds[name].sel(run=label).values,
+        )
+        for name in names
+    ]
 
 
 def _goal_table(records: list[dict]) -> str:
@@ -111,8 +116,9 @@ def _goal_table(records: list[dict]) -> str:
                 text += " (reference)"  # the open loop is what the goal compares with
             elif verdict is not None and r.get(verdict) is not None:
                 met = bool(r[verdict])
-                text += (' <b style="color:#080">PASS</b>' if met
-                         else ' <b style="color:#b00">FAIL</b>')
+                text += (
+                    ' <b style="color:#080">PASS</b>' if met else ' <b style="color:#b00">FAIL</b>'
+                )
             cells.append(f"<td>{text}</td>")
         rows.append(f"<tr><td>{esc(r['run'])}</td>{''.join(cells)}</tr>")
     return f"<table><tr><th>run</th>{head}</tr>{''.join(rows)}</table>"
@@ -122,19 +128,24 @@ def _html(result, records, figures: list[str]) -> str:
     esc = html.escape
     ds_attrs = result.attributes()
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
-    goals = (f"Euler-angle error below {100 * ds_attrs['goal_angle_fraction']:g} % of the "
-             f"commanded angle ({ds_attrs['goal_angle_tolerance_mrad']:g} mrad) at "
-             f"{ds_attrs['goal_evaluation']:g} T; rim deflection from {ds_attrs['goal_evaluation']:g} T on below "
-             f"1/{ds_attrs['goal_deflection_ratio']:g} of the open-loop one (seed 003 "
-             "L792–L801). The open-loop run is the nominal torque alone.")
+    goals = (
+        f"Euler-angle error below {100 * ds_attrs['goal_angle_fraction']:g} % of the "
+        f"commanded angle ({ds_attrs['goal_angle_tolerance_mrad']:g} mrad) at "
+        f"{ds_attrs['goal_evaluation']:g} T; rim deflection from {ds_attrs['goal_evaluation']:g} T on below "
+        f"1/{ds_attrs['goal_deflection_ratio']:g} of the open-loop one (seed 003 "
+        "L792–L801). The open-loop run is the nominal torque alone."
+    )
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
-    return report_page(result, f"""<h2>Goals</h2>
+    return report_page(
+        result,
+        f"""<h2>Goals</h2>
 <p>{esc(goals)}</p>
 {_goal_table(records)}
 <ul>{notes}</ul>
 <h2>Figures</h2>
 {images}
-""")
+""",
+    )
 
 
 def _write_all(result, folder: Path) -> None:
@@ -142,19 +153,36 @@ def _write_all(result, folder: Path) -> None:
     tol = ds.attrs["goal_angle_tolerance_mrad"]
     figures = ["nominal.png", "euler_error.png", "rim_deflection.png", "torque_perturbation.png"]
     _nominal(ds, folder / figures[0])
-    _runs_plot(ds, "Euler-angle error against the nominal", folder / figures[1],
-               _components(ds, "euler123_error", 1e3, "mrad"), band=tol)
+    _runs_plot(
+        ds,
+        "Euler-angle error against the nominal",
+        folder / figures[1],
+        _components(ds, "euler123_error", 1e3, "mrad"),
+        band=tol,
+    )
     rims = [n for n in ds.data_vars if n.startswith("rim_deflection_")]
-    _runs_plot(ds, "rim deflections, open against closed loop", folder / figures[2],
-               _scalars(ds, rims, "rim_deflection_", 1e3, "node {} (mm)"))
-    _runs_plot(ds, "torque minus the nominal torque", folder / figures[3],
-               _components(ds, "torque_perturbation", 1e-3, "kN m"))
-    forces = [n for n in ds.data_vars if n.startswith("force_") and not n.endswith("_command")
-              and np.any(ds[n].values)]
+    _runs_plot(
+        ds,
+        "rim deflections, open against closed loop",
+        folder / figures[2],
+        _scalars(ds, rims, "rim_deflection_", 1e3, "node {} (mm)"),
+    )
+    _runs_plot(
+        ds,
+        "torque minus the nominal torque",
+        folder / figures[3],
+        _components(ds, "torque_perturbation", 1e-3, "kN m"),
+    )
+    forces = [
+        n
+        for n in ds.data_vars
+        if n.startswith("force_") and not n.endswith("_command") and np.any(ds[n].values)
+    ]
     if forces:
         figures.append("forces.png")
-        _runs_plot(ds, "point forces", folder / figures[-1],
-                   _scalars(ds, forces, "force_", 1.0, "{} (N)"))
+        _runs_plot(
+            ds, "point forces", folder / figures[-1], _scalars(ds, forces, "force_", 1.0, "{} (N)")
+        )
     (folder / "index.html").write_text(_html(result, records, figures), encoding="utf-8")
 
 

@@ -21,17 +21,27 @@ from flexsat.report.publish import write_atomically, write_metrics_and_results
 
 #: table columns: (metric, heading)
 COLUMNS = (
-    ("attitudes", "attitudes"), ("identification_rate", "correct"),
-    ("accepted_rate", "accepted"), ("wrong_accepted", "wrong accepted"),
-    ("mean_stars", "stars kept (mean)"), ("min_triplets", "triplets (min)"),
-    ("error_std_x_arcsec", "σ x (″)"), ("error_std_y_arcsec", "σ y (″)"),
-    ("error_std_z_arcsec", "σ z (″)"), ("quest_sigma_x_arcsec", "σ_QUEST x (″)"),
-    ("quest_sigma_y_arcsec", "σ_QUEST y (″)"), ("quest_sigma_z_arcsec", "σ_QUEST z (″)"),
+    ("attitudes", "attitudes"),
+    ("identification_rate", "correct"),
+    ("accepted_rate", "accepted"),
+    ("wrong_accepted", "wrong accepted"),
+    ("mean_stars", "stars kept (mean)"),
+    ("min_triplets", "triplets (min)"),
+    ("error_std_x_arcsec", "σ x (″)"),
+    ("error_std_y_arcsec", "σ y (″)"),
+    ("error_std_z_arcsec", "σ z (″)"),
+    ("quest_sigma_x_arcsec", "σ_QUEST x (″)"),
+    ("quest_sigma_y_arcsec", "σ_QUEST y (″)"),
+    ("quest_sigma_z_arcsec", "σ_QUEST z (″)"),
     ("nees_mean", "mean δθᵀP⁻¹δθ (3 ideal)"),
 )
 #: the sky plot's marker per example_status value: (label, marker, colour)
-_STATUS = {1.0: ("matched", "o", "C2"), 0.0: ("true star, deleted", "s", "0.6"),
-           -1.0: ("false star", "x", "C3"), 2.0: ("wrong match", "D", "k")}
+_STATUS = {
+    1.0: ("matched", "o", "C2"),
+    0.0: ("true star, deleted", "s", "0.6"),
+    -1.0: ("false star", "x", "C3"),
+    2.0: ("wrong match", "D", "k"),
+}
 
 
 def _histograms(ds, path: Path) -> None:
@@ -46,8 +56,13 @@ def _histograms(ds, path: Path) -> None:
             e = err[i, :, k]
             e = e[np.isfinite(e)]
             if e.size:
-                ax.hist(e, bins=bins, histtype="step", color=f"C{i}",
-                        label=f"{run} (σ = {np.std(e):.2g}″)")
+                ax.hist(
+                    e,
+                    bins=bins,
+                    histtype="step",
+                    color=f"C{i}",
+                    label=f"{run} (σ = {np.std(e):.2g}″)",
+                )
         ax.set(xlabel=f"error about {axis} (arcsec)", title=f"axis {axis}")
         ax.grid(alpha=0.3)
         if ax.get_legend_handles_labels()[0]:  # nothing to label when nothing was accepted
@@ -68,11 +83,20 @@ def _sky(ds, run, path: Path) -> None:
         for value, (label, marker, colour) in _STATUS.items():
             sel = st == value
             if sel.any():
-                style = (dict(facecolors="none", edgecolors=colour) if marker in "osD"
-                         else dict(c=colour))  # an 'x' has no face: its colour is c
+                style = (
+                    dict(facecolors="none", edgecolors=colour)
+                    if marker in "osD"
+                    else dict(c=colour)
+                )  # an 'x' has no face: its colour is c
                 ax.scatter(px[sel, 0], px[sel, 1], marker=marker, s=22, label=label, **style)
-        ax.set(xlim=(0, n_pix), ylim=(0, n_pix), aspect="equal", title=f"camera {c}",
-               xlabel="column (pixel)", ylabel="row (pixel)")
+        ax.set(
+            xlim=(0, n_pix),
+            ylim=(0, n_pix),
+            aspect="equal",
+            title=f"camera {c}",
+            xlabel="column (pixel)",
+            ylabel="row (pixel)",
+        )
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize="xx-small", loc="upper right")
     fig.savefig(path, dpi=100)

@@ -24,15 +24,20 @@ from flexsat.report.publish import write_atomically, write_metrics_and_results
 
 #: metrics-table rows: (metric, heading)
 METRIC_COLUMNS = (
-    ("initial_tension", "T̂(0)"), ("initial_tension_N", "T(0) (N)"),
-    ("initial_rate_m_s", "initial retrieval rate (m/s)"), ("thrust_index", "∫|F̂|dτ"),
+    ("initial_tension", "T̂(0)"),
+    ("initial_tension_N", "T(0) (N)"),
+    ("initial_rate_m_s", "initial retrieval rate (m/s)"),
+    ("thrust_index", "∫|F̂|dτ"),
     ("thrust_impulse_Ns", "thrust impulse (N s)"),
     ("thrust_index_2_orbits", "∫|F̂|dτ, 2 orbits"),
     ("thrust_impulse_2_orbits_Ns", "thrust impulse, 2 orbits (N s)"),
     ("max_pitch_deg", "max |θ| (deg)"),
-    ("final_pitch_deg", "final θ (deg)"), ("final_roll_deg", "final φ (deg)"),
-    ("final_length", "final λ"), ("final_length_m", "final length (m)"),
-    ("settling_orbits", "settling (orbits)"), ("V1_initial", "V1 start"),
+    ("final_pitch_deg", "final θ (deg)"),
+    ("final_roll_deg", "final φ (deg)"),
+    ("final_length", "final λ"),
+    ("final_length_m", "final length (m)"),
+    ("settling_orbits", "settling (orbits)"),
+    ("V1_initial", "V1 start"),
     ("V1_final", "V1 end"),
 )
 FIGURES = ("length.png", "libration.png", "controls.png", "integral_of_motion.png")
@@ -46,13 +51,17 @@ def paper_example(spec, scenario):
 
     ini, s = scenario.initial, scenario.system.scales()
     L = s.length
-    start = s.state_from_si([ini.length, ini.pitch, ini.roll, ini.length_rate or 0.0,
-                             ini.pitch_rate, ini.roll_rate])
+    start = s.state_from_si(
+        [ini.length, ini.pitch, ini.roll, ini.length_rate or 0.0, ini.pitch_rate, ini.roll_rate]
+    )
     if spec.printed_sign or not np.allclose(start, INITIAL, rtol=1e-9, atol=1e-12):
         return None
     for e in EXAMPLES.values():
-        if (e.law == spec.law and e.gains == spec.gains
-                and np.isclose(spec.final_length / L, e.final_length, rtol=1e-9)):
+        if (
+            e.law == spec.law
+            and e.gains == spec.gains
+            and np.isclose(spec.final_length / L, e.final_length, rtol=1e-9)
+        ):
             return e
     return None
 
@@ -60,8 +69,9 @@ def paper_example(spec, scenario):
 def _lines(ds, variable, ax, scale=1.0, **style):
     orbits = ds["orbits"].values
     for i, run in enumerate(ds["run"].values):
-        ax.plot(orbits, scale * ds[variable].sel(run=run).values, color=f"C{i}",
-                label=str(run), **style)
+        ax.plot(
+            orbits, scale * ds[variable].sel(run=run).values, color=f"C{i}", label=str(run), **style
+        )
 
 
 def _figure(title, rows):
@@ -120,9 +130,12 @@ def _integral(ds, path):
 def _metrics_table(records) -> str:
     esc = html.escape
     head = "".join(f"<th>{esc(r['run'])}</th>" for r in records)
-    rows = "".join(f"<tr><td>{esc(h)}</td>"
-                   + "".join(f"<td>{format_metric(r.get(k))}</td>" for r in records) + "</tr>"
-                   for k, h in METRIC_COLUMNS)
+    rows = "".join(
+        f"<tr><td>{esc(h)}</td>"
+        + "".join(f"<td>{format_metric(r.get(k))}</td>" for r in records)
+        + "</tr>"
+        for k, h in METRIC_COLUMNS
+    )
     return f"<table><tr><th>metric</th>{head}</tr>{rows}</table>"
 
 
@@ -136,18 +149,22 @@ def _paper_table(result, records) -> str:
             continue
         for key, value in e.published.items():
             heading = dict(METRIC_COLUMNS).get(key, key)
-            rows.append(f"<tr><td>{esc(rec['run'])}</td><td>{esc(e.key)} ({esc(e.lines)})</td>"
-                        f"<td>{esc(heading)}</td><td>{value:.4g}</td>"
-                        f"<td>{format_metric(rec.get(key))}</td></tr>")
+            rows.append(
+                f"<tr><td>{esc(rec['run'])}</td><td>{esc(e.key)} ({esc(e.lines)})</td>"
+                f"<td>{esc(heading)}</td><td>{value:.4g}</td>"
+                f"<td>{format_metric(rec.get(key))}</td></tr>"
+            )
     if not rows:
         return "<p>No run repeats one of the paper's examples.</p>"
-    return ("<table><tr><th>run</th><th>case</th><th>quantity</th><th>published</th>"
-            f"<th>measured</th></tr>{''.join(rows)}</table>"
-            "<p>Known differences (docs/tether.md): controller 1's index is 0.997 for the "
-            "printed 0.9; the rate law's initial rate is 5.83 m/s for the printed 30 m/s "
-            "(K1 = 0.25 gives 0.2475 LΩ); V13 with K1 = 1 ends at θ = 180° only after about "
-            "four orbits (200.7° at two). The run's window is the scenario's, not "
-            "necessarily the paper's two orbits.</p>")
+    return (
+        "<table><tr><th>run</th><th>case</th><th>quantity</th><th>published</th>"
+        f"<th>measured</th></tr>{''.join(rows)}</table>"
+        "<p>Known differences (docs/tether.md): controller 1's index is 0.997 for the "
+        "printed 0.9; the rate law's initial rate is 5.83 m/s for the printed 30 m/s "
+        "(K1 = 0.25 gives 0.2475 LΩ); V13 with K1 = 1 ends at θ = 180° only after about "
+        "four orbits (200.7° at two). The run's window is the scenario's, not "
+        "necessarily the paper's two orbits.</p>"
+    )
 
 
 def _html(result, records, figures) -> str:
@@ -155,7 +172,9 @@ def _html(result, records, figures) -> str:
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
     s = result.scales
-    return report_page(result, f"""<h2>System</h2>
+    return report_page(
+        result,
+        f"""<h2>System</h2>
 <p>m = {s.mass:.4g} kg, L = {s.length:.4g} m, Ω = {s.orbit_rate:.6g} rad/s (period
 {s.period / 3600:.4g} h); one unit of T̂ or F̂ is {s.force:.4g} N, of ∫|F̂|dτ {s.impulse:.4g} N s,
 of λ' {s.speed:.4g} m/s. Integrator: {esc(result.scenario.simulation.integrator)}.</p>
@@ -166,7 +185,9 @@ of λ' {s.speed:.4g} m/s. Integrator: {esc(result.scenario.simulation.integrator
 {_paper_table(result, records)}
 <h2>Figures</h2>
 {images}
-""", title="flexsat tether report")
+""",
+        title="flexsat tether report",
+    )
 
 
 def _write_all(result, folder: Path) -> None:

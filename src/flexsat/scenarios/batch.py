@@ -43,9 +43,10 @@ in degrees (``overshoot_deg``) is compared in degrees.
 from __future__ import annotations
 
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Literal
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -56,12 +57,24 @@ from flexsat.scenarios.fields import _Document, _Section, count
 
 #: the SI unit of every parameter a batch can vary (HubManeuverBuilder's columns)
 PARAMETER_UNITS = {
-    "alpha": "", "u_max": "N*m", "duration": "s",
-    "g1": "N*m/rad", "g2": "N*m*s/rad", "g3": "",
-    "hub_inertia": "kg*m**2", "EI": "N*m**2", "damping": "", "tip_mass": "kg",
-    "tip_inertia": "kg*m**2", "friction_coulomb": "N*m", "friction_viscous": "N*m*s/rad",
-    "saturation": "N*m", "encoder_resolution": "rad", "gyro_noise": "rad/s",
-    "strain_noise": "N*m", "random_torque": "N*m",
+    "alpha": "",
+    "u_max": "N*m",
+    "duration": "s",
+    "g1": "N*m/rad",
+    "g2": "N*m*s/rad",
+    "g3": "",
+    "hub_inertia": "kg*m**2",
+    "EI": "N*m**2",
+    "damping": "",
+    "tip_mass": "kg",
+    "tip_inertia": "kg*m**2",
+    "friction_coulomb": "N*m",
+    "friction_viscous": "N*m*s/rad",
+    "saturation": "N*m",
+    "encoder_resolution": "rad",
+    "gyro_noise": "rad/s",
+    "strain_noise": "N*m",
+    "random_torque": "N*m",
 }
 
 #: sampling of a sweep's bounds or a Monte Carlo's distributions
@@ -79,8 +92,10 @@ class ExecutionSpec(_Section):
     @model_validator(mode="after")
     def _one_place(self):
         if self.workers is not None and self.scheduler is not None:
-            raise ValueError("execution: give workers (a local cluster) or scheduler (an "
-                             "existing cluster), not both")
+            raise ValueError(
+                "execution: give workers (a local cluster) or scheduler (an "
+                "existing cluster), not both"
+            )
         return self
 
 
@@ -94,8 +109,9 @@ def _metric_unit(metric: str) -> str:
     from flexsat.sim.metrics import METRIC_UNITS
 
     if metric not in METRIC_UNITS:
-        raise ValueError(f"requirements.{metric}: unknown metric; metrics: "
-                         f"{', '.join(METRIC_UNITS)}")
+        raise ValueError(
+            f"requirements.{metric}: unknown metric; metrics: {', '.join(METRIC_UNITS)}"
+        )
     return METRIC_UNITS[metric]
 
 
@@ -110,8 +126,11 @@ def requirements_of(spec: dict) -> list:
         unit = _metric_unit(metric)
         path = f"requirements.{metric}"
         if unit.startswith("deg"):  # the metric is in degrees: compare the threshold in degrees
-            if not isinstance(entry, dict) or len(entry) != 1 or next(iter(entry)) not in (
-                    "max", "min"):
+            if (
+                not isinstance(entry, dict)
+                or len(entry) != 1
+                or next(iter(entry)) not in ("max", "min")
+            ):
                 raise ValueError(f"{path}: give exactly one of max: or min:, got {entry!r}")
             key, value = next(iter(entry.items()))
             si = "rad" if unit == "deg" else "rad/s"
@@ -155,26 +174,34 @@ class BatchScenario(_Document):
         from flexsat.design.parameter_space import GridSpace
 
         grid = isinstance(_space(self.parameters), GridSpace)
-        sampling = self.sampling or ("grid" if grid else
-                                     "random" if self.kind == "montecarlo" else "latin_hypercube")
+        sampling = self.sampling or (
+            "grid" if grid else "random" if self.kind == "montecarlo" else "latin_hypercube"
+        )
         if grid != (sampling == "grid"):
-            raise ValueError(f"sampling: {sampling!r} needs "
-                             + ("grid axes (values: or low/high/n)" if sampling == "grid" else
-                                "bounds (low/high) or distributions, not grid axes"))
+            raise ValueError(
+                f"sampling: {sampling!r} needs "
+                + (
+                    "grid axes (values: or low/high/n)"
+                    if sampling == "grid"
+                    else "bounds (low/high) or distributions, not grid axes"
+                )
+            )
         if self.kind == "montecarlo" and sampling != "random":
-            raise ValueError(f"sampling: a montecarlo samples its distributions at random, "
-                             f"got {sampling!r} (use kind: sweep for grids and designs)")
+            raise ValueError(
+                f"sampling: a montecarlo samples its distributions at random, "
+                f"got {sampling!r} (use kind: sweep for grids and designs)"
+            )
         if sampling != "grid" and self.cases is None:
             raise ValueError(f"cases: required with sampling {sampling!r}")
         if sampling == "saltelli" and self.cases & (self.cases - 1):
-            raise ValueError(f"cases: the Saltelli design takes a power of 2 base points, got "
-                             f"{self.cases}")
+            raise ValueError(
+                f"cases: the Saltelli design takes a power of 2 base points, got {self.cases}"
+            )
         if sampling == "grid" and self.cases is not None:
             raise ValueError("cases: a grid has as many cases as its points; leave cases out")
         self.sampling = sampling
         if self.requirements and self.kind != "montecarlo":
-            raise ValueError("requirements: belong to a montecarlo (a probability of meeting "
-                             "them)")
+            raise ValueError("requirements: belong to a montecarlo (a probability of meeting them)")
         return self
 
 
@@ -209,12 +236,25 @@ class BatchResult:
         rows = []
         for name, m in self.summary["metrics"].items():
             p = m["percentiles"]
-            rows.append({"run": name, "p5": _finite(p.get("5")), "median": _finite(p.get("50")),
-                         "p95": _finite(p.get("95")), "not_finite": m["n_nan"]})
+            rows.append(
+                {
+                    "run": name,
+                    "p5": _finite(p.get("5")),
+                    "median": _finite(p.get("50")),
+                    "p95": _finite(p.get("95")),
+                    "not_finite": m["n_nan"],
+                }
+            )
         for r in self.summary["requirements"]:
-            rows.append({"run": f"P({r['metric']} {r['relation']} {r['threshold']:g})",
-                         "p5": _finite(r["low"]), "median": _finite(r["probability"]),
-                         "p95": _finite(r["high"]), "not_finite": 0})
+            rows.append(
+                {
+                    "run": f"P({r['metric']} {r['relation']} {r['threshold']:g})",
+                    "p5": _finite(r["low"]),
+                    "median": _finite(r["probability"]),
+                    "p95": _finite(r["high"]),
+                    "not_finite": 0,
+                }
+            )
         return rows
 
 
@@ -234,8 +274,12 @@ def _maneuver(scenario: BatchScenario):
     except ScenarioError as exc:
         raise ScenarioError([f"scenario: {p}" for p in exc.problems]) from None
     if not isinstance(maneuver, Scenario):
-        raise ScenarioError([f"scenario: {str(path)!r} is a {maneuver.kind} scenario; a batch "
-                             "varies a maneuver scenario"])
+        raise ScenarioError(
+            [
+                f"scenario: {str(path)!r} is a {maneuver.kind} scenario; a batch "
+                "varies a maneuver scenario"
+            ]
+        )
     return maneuver
 
 
@@ -247,18 +291,34 @@ def builder_of(scenario: BatchScenario, maneuver):
 
     plan = prepare_scenario(maneuver)
     if scenario.run not in plan.controllers:
-        raise ScenarioError([f"run: {scenario.run!r} is not a run of the scenario (its runs: "
-                             f"{', '.join(plan.controllers)})"])
+        raise ScenarioError(
+            [
+                f"run: {scenario.run!r} is not a run of the scenario (its runs: "
+                f"{', '.join(plan.controllers)})"
+            ]
+        )
     law = plan.controllers[scenario.run]
     if not isinstance(law, LyapunovTracker):
-        raise ScenarioError([f"run: {scenario.run!r} uses {type(law).__name__}; a batch varies "
-                             "a Control Law II run (law: lyapunov_tracker)"])
+        raise ScenarioError(
+            [
+                f"run: {scenario.run!r} uses {type(law).__name__}; a batch varies "
+                "a Control Law II run (law: lyapunov_tracker)"
+            ]
+        )
     ref, model = law.reference, plan.model
     return HubManeuverBuilder(
-        params=model.params, n_modes=model.n_modes, config=plan.config,
-        angle=float(ref.angle), reference_inertia=float(ref.inertia), u_max=float(ref.u_max),
-        g1=float(law.g1), g2=float(law.g2), g3=float(law.g3), alpha=float(ref.alpha),
-        stiffening=bool(model.stiffening))
+        params=model.params,
+        n_modes=model.n_modes,
+        config=plan.config,
+        angle=float(ref.angle),
+        reference_inertia=float(ref.inertia),
+        u_max=float(ref.u_max),
+        g1=float(law.g1),
+        g2=float(law.g2),
+        g3=float(law.g3),
+        alpha=float(ref.alpha),
+        stiffening=bool(model.stiffening),
+    )
 
 
 def _table(scenario: BatchScenario):
@@ -299,8 +359,9 @@ def default_store(fingerprint: str) -> Path:
     return Path(tempfile.gettempdir()) / f"flexsat-batch-{fingerprint[:20]}.zarr"
 
 
-def run_batch_scenario(scenario: BatchScenario,
-                       progress: Callable[[str], None] | None = None) -> BatchResult:
+def run_batch_scenario(
+    scenario: BatchScenario, progress: Callable[[str], None] | None = None
+) -> BatchResult:
     """Build the Law II case builder from the maneuver scenario, run every case into the store
     (resuming it), then compute the statistics.
 
@@ -312,8 +373,12 @@ def run_batch_scenario(scenario: BatchScenario,
     """
     from flexsat.cases import get_case
     from flexsat.design.batch_runner import fingerprint, run_batch
-    from flexsat.design.monte_carlo_statistics import (MIN_RANKING_CASES, monte_carlo_summary,
-                                                       sample_sensitivity, sobol_indices)
+    from flexsat.design.monte_carlo_statistics import (
+        MIN_RANKING_CASES,
+        monte_carlo_summary,
+        sample_sensitivity,
+        sobol_indices,
+    )
     from flexsat.references import cite
 
     maneuver = _maneuver(scenario)
@@ -326,29 +391,41 @@ def run_batch_scenario(scenario: BatchScenario,
     setup_text = scenario.yaml_text + "\0" + maneuver.yaml_text
     histories = tuple(scenario.histories)
     if scenario.store is None:
-        store = default_store(fingerprint(setup_text, table.values, scenario.seed, histories,
-                                          build.describe()))
+        store = default_store(
+            fingerprint(setup_text, table.values, scenario.seed, histories, build.describe())
+        )
     else:
         store = Path(scenario.store)
         store = store if store.is_absolute() else scenario.folder / store
 
     def report(p):
         if progress is not None:
-            progress(f"{p.cases_done}/{p.cases_total} cases, {p.cases_per_s:.0f} cases/s, "
-                     f"ETA {p.eta_s:.0f} s")
+            progress(
+                f"{p.cases_done}/{p.cases_total} cases, {p.cases_per_s:.0f} cases/s, "
+                f"ETA {p.eta_s:.0f} s"
+            )
 
     e = scenario.execution
     try:
-        summary = run_batch(build, table.values, store, base_seed=scenario.seed,
-                            chunk_size=e.chunk_size, histories=histories, setup_text=setup_text,
-                            workers=e.workers, scheduler=e.scheduler, retries=e.retries,
-                            progress=report)
+        summary = run_batch(
+            build,
+            table.values,
+            store,
+            base_seed=scenario.seed,
+            chunk_size=e.chunk_size,
+            histories=histories,
+            setup_text=setup_text,
+            workers=e.workers,
+            scheduler=e.scheduler,
+            retries=e.retries,
+            progress=report,
+        )
     except ValueError as exc:
         raise ScenarioError([str(exc)]) from None
     from flexsat.design.batch_runner import open_results
 
     ds = open_results(store)
-    metrics = {k[len("metric_"):]: ds[k].values for k in ds.data_vars if k.startswith("metric_")}
+    metrics = {k[len("metric_") :]: ds[k].values for k in ds.data_vars if k.startswith("metric_")}
     stats = monte_carlo_summary(metrics, requirements_of(scenario.requirements))
     sensitivity = {}
     for name, values in metrics.items():
@@ -357,13 +434,25 @@ def run_batch_scenario(scenario: BatchScenario,
             continue  # constant, or too few values (a maneuver that rarely settles): no ranking
         if design is not None:
             if finite.all():  # Sobol' indices need every case (a NaN is not a value)
-                sensitivity[name] = sobol_indices(design, values, name, seed=scenario.seed
-                                                  ).as_dict()
+                sensitivity[name] = sobol_indices(
+                    design, values, name, seed=scenario.seed
+                ).as_dict()
         else:
             sensitivity[name] = sample_sensitivity(table, values, name).as_dict()
-    return BatchResult(scenario, maneuver, table.values, dict(table.units), store, stats,
-                       sensitivity, summary.wall_s, summary.chunks_run, summary.chunks_skipped,
-                       cite(get_case(maneuver.case).source), trade_surfaces(scenario, build))
+    return BatchResult(
+        scenario,
+        maneuver,
+        table.values,
+        dict(table.units),
+        store,
+        stats,
+        sensitivity,
+        summary.wall_s,
+        summary.chunks_run,
+        summary.chunks_skipped,
+        cite(get_case(maneuver.case).source),
+        trade_surfaces(scenario, build),
+    )
 
 
 def trade_surfaces(scenario: BatchScenario, build) -> dict | None:
@@ -373,31 +462,54 @@ def trade_surfaces(scenario: BatchScenario, build) -> dict | None:
     (Fig. 6) and the Law II tracking bound μ_max (Eq. 22, Fig. 7), each (n_alpha, n_u_max) with
     the axes; None otherwise."""
     from flexsat.design.parameter_space import GridSpace
-    from flexsat.design.trade_surfaces import (maneuver_time_surface, residual_energy_surface,
-                                               tracking_bound_surface)
+    from flexsat.design.trade_surfaces import (
+        maneuver_time_surface,
+        residual_energy_surface,
+        tracking_bound_surface,
+    )
     from flexsat.dynamics.hub_appendage import HubAppendage
 
     space = _space(scenario.parameters)
-    if not isinstance(space, GridSpace) or sorted(a.name for a in space.axes) != [
-            "alpha", "u_max"]:
+    if not isinstance(space, GridSpace) or sorted(a.name for a in space.axes) != ["alpha", "u_max"]:
         return None
     axes = {a.name: np.asarray(a.values, float) for a in space.axes}
     alpha, u_max = axes["alpha"], axes["u_max"]
     plant = HubAppendage(build.params, n_modes=build.n_modes)
-    appendage = (build.params.total_inertia - build.params.hub_inertia) / \
-        build.params.n_appendages
+    appendage = (build.params.total_inertia - build.params.hub_inertia) / build.params.n_appendages
     return {
-        "alpha": alpha, "u_max": u_max,
-        "maneuver_time_s": maneuver_time_surface(build.angle, build.reference_inertia, alpha,
-                                                 u_max),
-        "residual_energy_J": residual_energy_surface(plant, build.angle, build.reference_inertia,
-                                                     alpha, u_max),
-        "mu_max_deg_s": np.degrees(tracking_bound_surface(
-            plant, build.angle, build.reference_inertia, alpha, u_max, build.g1, build.g2,
-            build.g3, appendage)),
+        "alpha": alpha,
+        "u_max": u_max,
+        "maneuver_time_s": maneuver_time_surface(
+            build.angle, build.reference_inertia, alpha, u_max
+        ),
+        "residual_energy_J": residual_energy_surface(
+            plant, build.angle, build.reference_inertia, alpha, u_max
+        ),
+        "mu_max_deg_s": np.degrees(
+            tracking_bound_surface(
+                plant,
+                build.angle,
+                build.reference_inertia,
+                alpha,
+                u_max,
+                build.g1,
+                build.g2,
+                build.g3,
+                appendage,
+            )
+        ),
     }
 
 
-__all__ = ["BatchResult", "BatchScenario", "PARAMETER_UNITS", "SAMPLINGS", "builder_of",
-           "case_count", "trade_surfaces",
-           "default_store", "requirements_of", "run_batch_scenario"]
+__all__ = [
+    "BatchResult",
+    "BatchScenario",
+    "PARAMETER_UNITS",
+    "SAMPLINGS",
+    "builder_of",
+    "case_count",
+    "trade_surfaces",
+    "default_store",
+    "requirements_of",
+    "run_batch_scenario",
+]

@@ -36,8 +36,9 @@ nearest to the direction of the attitude loop's peak momentum.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Literal, Union
+from typing import Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -47,8 +48,10 @@ from flexsat.dynamics.space_station import FT_LB as _FT_LB
 from flexsat.scenarios.errors import ScenarioError, _item, _locate
 from flexsat.scenarios.fields import _Document, _Section, check_unique_labels, count, quantity
 
-SOURCE = ("S. R. Vadali, H.-S. Oh, S. R. Walker, 'Preferred Gimbal Angles for Single Gimbal "
-          "Control Moment Gyros', JGCD (accepted); seed 000 Attachment 13, L4533–L4830")
+SOURCE = (
+    "S. R. Vadali, H.-S. Oh, S. R. Walker, 'Preferred Gimbal Angles for Single Gimbal "
+    "Control Moment Gyros', JGCD (accepted); seed 000 Attachment 13, L4533–L4830"
+)
 #: named initial sets
 NAMED_SETS = ("zero", "alternate", "preferred")
 ALTERNATE_DEG = (45.0, -45.0, 45.0, -45.0)
@@ -61,12 +64,12 @@ def _angles(value, field):
 
     if isinstance(value, str):
         if value not in NAMED_SETS:
-            raise ValueError(f"{field}: must be one of {NAMED_SETS} or a list of angles, got "
-                             f"{value!r}")
+            raise ValueError(
+                f"{field}: must be one of {NAMED_SETS} or a list of angles, got {value!r}"
+            )
         return value
     if not isinstance(value, list) or not value:
-        raise ValueError(f"{field}: must be one of {NAMED_SETS} or a list of angles, got "
-                         f"{value!r}")
+        raise ValueError(f"{field}: must be one of {NAMED_SETS} or a list of angles, got {value!r}")
     out = np.array([float(to_si_array(v, "rad", field)) for v in value])
     if not np.all(np.isfinite(out)):
         raise ValueError(f"{field}: angles must be finite, got {value!r}")
@@ -88,8 +91,10 @@ def _vector3(value, field):
     if v is None or v.shape != (3,) or not np.all(np.isfinite(v)):
         raise ValueError(f"{field}: must be three finite numbers, got {value!r}")
     if np.abs(v).max() > MAX_DEMAND:
-        raise ValueError(f"{field}: components must be at most {MAX_DEMAND:g} rotor momenta per "
-                         f"second, got {value!r}")
+        raise ValueError(
+            f"{field}: components must be at most {MAX_DEMAND:g} rotor momenta per "
+            f"second, got {value!r}"
+        )
     return v.tolist()
 
 
@@ -132,7 +137,7 @@ class HarmonicDemand(_Section):
 
 
 class NullMotion(_Section):
-    target: Union[str, list] = "preferred"
+    target: str | list = "preferred"
     gain: quantity("1/s", positive=True) = 1.0
 
     @field_validator("target")
@@ -143,9 +148,9 @@ class NullMotion(_Section):
 
 class CmgRunSpec(_Section):
     label: str
-    initial: Union[str, list] = "zero"
+    initial: str | list = "zero"
     duration: quantity("s", positive=True)
-    demand: Union[list[float], HarmonicDemand, None] = None
+    demand: list[float] | HarmonicDemand | None = None
 
     @field_validator("duration")
     @classmethod
@@ -155,7 +160,7 @@ class CmgRunSpec(_Section):
         return value
 
     null_motion: NullMotion | None = None
-    reorient_to: Union[str, list, None] = None
+    reorient_to: str | list | None = None
 
     @field_validator("initial", "reorient_to")
     @classmethod
@@ -170,12 +175,14 @@ class CmgRunSpec(_Section):
     @model_validator(mode="after")
     def _one_law(self):
         if (self.demand is None) == (self.reorient_to is None):
-            raise ValueError("demand: give a torque demand or reorient_to (null motion alone), "
-                             "one of them")
+            raise ValueError(
+                "demand: give a torque demand or reorient_to (null motion alone), one of them"
+            )
         if self.reorient_to is not None and self.null_motion is not None:
             raise ValueError("null_motion: not with reorient_to (that is the null motion)")
         uses_direction = "preferred" in (self.initial, self.reorient_to) or (
-            self.null_motion is not None and self.null_motion.target == "preferred")
+            self.null_motion is not None and self.null_motion.target == "preferred"
+        )
         if uses_direction and self.demand_direction() is None:
             raise ValueError("initial: 'preferred' needs a demand with a nonzero mean direction")
         return self
@@ -199,21 +206,28 @@ class CmgScenario(_Document):
     def _checks(self):
         check_unique_labels(self.runs)
         for run in self.runs:
-            for value in (run.initial, run.reorient_to,
-                          None if run.null_motion is None else run.null_motion.target):
+            for value in (
+                run.initial,
+                run.reorient_to,
+                None if run.null_motion is None else run.null_motion.target,
+            ):
                 if isinstance(value, list) and len(value) != self.cluster.n_units:
-                    raise ValueError(f"runs[{run.label!r}]: gimbal sets need "
-                                     f"{self.cluster.n_units} angles (cluster.n_units), got "
-                                     f"{len(value)}")
+                    raise ValueError(
+                        f"runs[{run.label!r}]: gimbal sets need "
+                        f"{self.cluster.n_units} angles (cluster.n_units), got "
+                        f"{len(value)}"
+                    )
             if "alternate" in (run.initial, run.reorient_to) and self.cluster.n_units != 4:
-                raise ValueError(f"runs[{run.label!r}]: 'alternate' is the 4-unit set "
-                                 f"[45, -45, 45, -45] deg")
+                raise ValueError(
+                    f"runs[{run.label!r}]: 'alternate' is the 4-unit set [45, -45, 45, -45] deg"
+                )
         return self
 
 
 class StationSection(_Section):
-    inertia: list = Field(default_factory=lambda: ["5.28e6 slug*ft**2", "10.80e6 slug*ft**2",
-                                                   "58.57e6 slug*ft**2"])
+    inertia: list = Field(
+        default_factory=lambda: ["5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"]
+    )
     orbit_rate: quantity("rad/s", positive=True) = 0.0011
     rotor_momentum: quantity("N*m*s", positive=True) = 3500.0 * _FT_LB
 
@@ -236,7 +250,7 @@ class StationSimulation(_Section):
 
 class StationRunSpec(_Section):
     label: str
-    initial: Union[str, list] = "zero"
+    initial: str | list = "zero"
 
     @field_validator("initial")
     @classmethod
@@ -295,8 +309,11 @@ def _resolve(value, direction, cluster):
     if value == "alternate":
         return np.deg2rad(ALTERNATE_DEG)
     paper = cluster.n_units == 4 and abs(cluster.skew - cmg.SKEW) < 1e-12
-    return cmg.preferred_set(direction) if paper else cmg.preferred_angles(
-        direction, cluster.skew, cluster.n_units)
+    return (
+        cmg.preferred_set(direction)
+        if paper
+        else cmg.preferred_angles(direction, cluster.skew, cluster.n_units)
+    )
 
 
 def _demand_function(demand):
@@ -320,19 +337,32 @@ def _one_run(run, cluster):
     else:
         null = run.null_motion
         g = cmg.integrate_gimbals(
-            sigma0, _demand_function(run.demand), run.duration, alpha=alpha,
-            threshold=cluster.threshold, stop_at_singular=cluster.steering == "pi",
+            sigma0,
+            _demand_function(run.demand),
+            run.duration,
+            alpha=alpha,
+            threshold=cluster.threshold,
+            stop_at_singular=cluster.steering == "pi",
             null_target=None if null is None else _resolve(null.target, d, cluster),
-            null_gain=1.0 if null is None else null.gain, null_alpha=alpha, **kw)
+            null_gain=1.0 if null is None else null.gain,
+            null_alpha=alpha,
+            **kw,
+        )
     rates = np.gradient(g.sigma, g.t, axis=0)
     internal = None
     if g.singular:
         k = int(np.argmin(g.gain))
-        internal = bool(cmg.classify_singularity(
-            g.sigma[k], cluster.skew, cluster.n_units,
-            threshold=max(cluster.threshold, g.gain[k] * 1.000001)).internal)
+        internal = bool(
+            cmg.classify_singularity(
+                g.sigma[k],
+                cluster.skew,
+                cluster.n_units,
+                threshold=max(cluster.threshold, g.gain[k] * 1.000001),
+            ).internal
+        )
         outcome = ("internal singularity" if internal else "saturation") + (
-            f" at t = {g.t[-1] if cluster.steering == 'pi' else g.t[k]:.4g} s")
+            f" at t = {g.t[-1] if cluster.steering == 'pi' else g.t[k]:.4g} s"
+        )
     else:
         outcome = "no singularity"
     return CmgRun(run.label, g, sigma0, d, float(np.abs(rates).max()), outcome, internal)
@@ -355,11 +385,16 @@ class CmgResult:
         out = []
         for r in self.runs:
             g = r.gimbals
-            rec = {"run": r.label, "singular": bool(g.singular),
-                   "internal": r.internal, "end_time_s": float(g.t[-1]),
-                   "min_gain": float(g.gain.min()), "final_gain": float(g.gain[-1]),
-                   "final_momentum_h": float(np.linalg.norm(g.h[-1])),
-                   "peak_gimbal_rate_rad_s": r.peak_rate}
+            rec = {
+                "run": r.label,
+                "singular": bool(g.singular),
+                "internal": r.internal,
+                "end_time_s": float(g.t[-1]),
+                "min_gain": float(g.gain.min()),
+                "final_gain": float(g.gain[-1]),
+                "final_momentum_h": float(np.linalg.norm(g.h[-1])),
+                "peak_gimbal_rate_rad_s": r.peak_rate,
+            }
             rec["envelope_h"] = rec["final_momentum_along_demand_h"] = None  # reorientation
             if r.direction is not None:
                 u = r.direction / np.linalg.norm(r.direction)
@@ -375,20 +410,41 @@ class CmgResult:
 
         n = self.scenario.cluster.n_units
         ds = xr.Dataset(
-            {"time": (("run", "sample"), np.array([r.gimbals.t for r in self.runs]),
-                      {"units": "s"}),
-             "gimbal_angles": (("run", "sample", "gimbal"),
-                               np.array([r.gimbals.sigma for r in self.runs]), {"units": "rad"}),
-             "momentum": (("run", "sample", "axis"), np.array([r.gimbals.h for r in self.runs]),
-                          {"units": "rotor momenta h"}),
-             "gain": (("run", "sample"), np.array([r.gimbals.gain for r in self.runs])),
-             "initial_angles": (("run", "gimbal"), np.array([r.sigma0 for r in self.runs]),
-                                {"units": "rad"})},
-            coords={"run": [r.label for r in self.runs], "gimbal": np.arange(1, n + 1),
-                    "axis": ["x", "y", "z"]})
+            {
+                "time": (
+                    ("run", "sample"),
+                    np.array([r.gimbals.t for r in self.runs]),
+                    {"units": "s"},
+                ),
+                "gimbal_angles": (
+                    ("run", "sample", "gimbal"),
+                    np.array([r.gimbals.sigma for r in self.runs]),
+                    {"units": "rad"},
+                ),
+                "momentum": (
+                    ("run", "sample", "axis"),
+                    np.array([r.gimbals.h for r in self.runs]),
+                    {"units": "rotor momenta h"},
+                ),
+                "gain": (("run", "sample"), np.array([r.gimbals.gain for r in self.runs])),
+                "initial_angles": (
+                    ("run", "gimbal"),
+                    np.array([r.sigma0 for r in self.runs]),
+                    {"units": "rad"},
+                ),
+            },
+            coords={
+                "run": [r.label for r in self.runs],
+                "gimbal": np.arange(1, n + 1),
+                "axis": ["x", "y", "z"],
+            },
+        )
         ds["outcome"] = ("run", [r.outcome for r in self.runs])
-        ds.attrs.update(scenario_name=self.scenario.name, case_source=self.case_source,
-                        scenario_yaml=self.scenario.yaml_text)
+        ds.attrs.update(
+            scenario_name=self.scenario.name,
+            case_source=self.case_source,
+            scenario_yaml=self.scenario.yaml_text,
+        )
         return ds
 
 
@@ -410,21 +466,53 @@ def validation_table():
     v7 = cmg.integrate_gimbals(np.zeros(4), [-0.707, -0.707, 0.0], 5.0)
     v8 = cmg.reorient(np.zeros(4), D(ALTERNATE_DEG), 10.0, 1.0, alpha=1e-3, n_out=1001)
     return (
-        ("V1", "gain det(CCᵀ) at [−60, 60, 120, −120]°", 1.1854,
-         float(cmg.gain(D([-60.0, 60.0, 120.0, -120.0]))), ""),
-        ("V2", "saturation momentum along +x", 3.1545,
-         float(cmg.momentum(D([-90.0, 180.0, 90.0, 0.0]))[0]), "h"),
-        ("V3", "|h| at the internal singularity from σ = 0, +x demand", 1.15,
-         float(np.linalg.norm(v3.h[-1])), "h"),
-        *(("V4", f"back-integrated σ{i + 1}", p, float(v4[i]), "deg")
-          for i, p in enumerate((-59.6, 60.7, 118.0, -121.0))),
-        ("V5", "|h| at the internal singularity, z demand from [45, −45, 45, −45]°", 1.282,
-         float(np.linalg.norm(v5.h[-1])), "h"),
-        ("V6", "Kurokawa demand: saturation time from [−120, −60, 60, 120]°", 10.0,
-         float(v6.t[-1]), "s"),
+        (
+            "V1",
+            "gain det(CCᵀ) at [−60, 60, 120, −120]°",
+            1.1854,
+            float(cmg.gain(D([-60.0, 60.0, 120.0, -120.0]))),
+            "",
+        ),
+        (
+            "V2",
+            "saturation momentum along +x",
+            3.1545,
+            float(cmg.momentum(D([-90.0, 180.0, 90.0, 0.0]))[0]),
+            "h",
+        ),
+        (
+            "V3",
+            "|h| at the internal singularity from σ = 0, +x demand",
+            1.15,
+            float(np.linalg.norm(v3.h[-1])),
+            "h",
+        ),
+        *(
+            ("V4", f"back-integrated σ{i + 1}", p, float(v4[i]), "deg")
+            for i, p in enumerate((-59.6, 60.7, 118.0, -121.0))
+        ),
+        (
+            "V5",
+            "|h| at the internal singularity, z demand from [45, −45, 45, −45]°",
+            1.282,
+            float(np.linalg.norm(v5.h[-1])),
+            "h",
+        ),
+        (
+            "V6",
+            "Kurokawa demand: saturation time from [−120, −60, 60, 120]°",
+            10.0,
+            float(v6.t[-1]),
+            "s",
+        ),
         ("V7", "Bedrossian demand: singular time from σ = 0", 1.5, float(v7.t[-1]), "s"),
-        ("V8", "null-motion gain minimum on the way to [45, −45, 45, −45]° at t", 1.10,
-         float(v8.t[np.argmin(v8.gain)]), "s"),
+        (
+            "V8",
+            "null-motion gain minimum on the way to [45, −45, 45, −45]° at t",
+            1.10,
+            float(v8.t[np.argmin(v8.gain)]),
+            "s",
+        ),
     )
 
 
@@ -447,9 +535,11 @@ def run_cmg(scenario: CmgScenario, progress: Callable[[str], None] | None = None
             raise ScenarioError([_locate(f"runs{_item(index, run.label)}", str(exc))]) from None
     if progress is not None:
         progress("V1–V8 table")
-    notes = ("Demands are the paper's T = ḣ (Eq. 5) in rotor momenta per second; the spacecraft "
-             "feels −ḣ. The paper's V3 singular set [−90, 0, −90, 0]° is a misprint for "
-             "[−90, 0, 90, 0]° (spec §13 flag 26).",)
+    notes = (
+        "Demands are the paper's T = ḣ (Eq. 5) in rotor momenta per second; the spacecraft "
+        "feels −ḣ. The paper's V3 singular set [−90, 0, −90, 0]° is a misprint for "
+        "[−90, 0, 90, 0]° (spec §13 flag 26).",
+    )
     return CmgResult(scenario, tuple(runs), validation_table(), SOURCE, notes)
 
 
@@ -473,14 +563,18 @@ class StationResult:
         peak = float(np.linalg.norm(self.station.momentum, axis=1).max())
         out = []
         for label, g, s0 in zip(self.labels, self.runs, self.initial):
-            rec = {"run": label, "singular": bool(g.singular),
-                   "singular_time_s": float(g.t[-1]) if g.singular else None,
-                   "internal": bool(cmg.classify_singularity(g.sigma[-1], threshold=1e-5)
-                                    .internal) if g.singular else None,
-                   "min_gain": float(g.gain.min()),
-                   "peak_momentum_ft_lb_s": peak / _FT_LB,
-                   "peak_momentum_h": peak / hr,
-                   "peak_attitude_deg": float(np.rad2deg(np.abs(self.station.attitude).max()))}
+            rec = {
+                "run": label,
+                "singular": bool(g.singular),
+                "singular_time_s": float(g.t[-1]) if g.singular else None,
+                "internal": bool(cmg.classify_singularity(g.sigma[-1], threshold=1e-5).internal)
+                if g.singular
+                else None,
+                "min_gain": float(g.gain.min()),
+                "peak_momentum_ft_lb_s": peak / _FT_LB,
+                "peak_momentum_h": peak / hr,
+                "peak_attitude_deg": float(np.rad2deg(np.abs(self.station.attitude).max())),
+            }
             out.append(rec)
         return out
 
@@ -498,24 +592,35 @@ class StationResult:
                 sig[i, keep, k] = np.interp(t[keep], g.t, g.sigma[:, k])
             gain[i, keep] = np.interp(t[keep], g.t, g.gain)
         ds = xr.Dataset(
-            {"attitude": (("time", "axis"), st.attitude, {"units": "rad"}),
-             "cmg_momentum": (("time", "axis"), st.momentum, {"units": "N*m*s"}),
-             "torque": (("time", "axis"), st.torque, {"units": "N*m"}),
-             "disturbance": (("time", "axis"), st.disturbance, {"units": "N*m"}),
-             "gimbal_angles": (("run", "time", "gimbal"), sig, {"units": "rad"}),
-             "gain": (("run", "time"), gain),
-             "initial_angles": (("run", "gimbal"), np.array(self.initial), {"units": "rad"})},
-            coords={"time": t, "axis": ["roll", "pitch", "yaw"], "run": list(self.labels),
-                    "gimbal": [1, 2, 3, 4]})
+            {
+                "attitude": (("time", "axis"), st.attitude, {"units": "rad"}),
+                "cmg_momentum": (("time", "axis"), st.momentum, {"units": "N*m*s"}),
+                "torque": (("time", "axis"), st.torque, {"units": "N*m"}),
+                "disturbance": (("time", "axis"), st.disturbance, {"units": "N*m"}),
+                "gimbal_angles": (("run", "time", "gimbal"), sig, {"units": "rad"}),
+                "gain": (("run", "time"), gain),
+                "initial_angles": (("run", "gimbal"), np.array(self.initial), {"units": "rad"}),
+            },
+            coords={
+                "time": t,
+                "axis": ["roll", "pitch", "yaw"],
+                "run": list(self.labels),
+                "gimbal": [1, 2, 3, 4],
+            },
+        )
         ds["time"].attrs["units"] = "s"
-        ds.attrs.update(scenario_name=self.scenario.name, case_source=self.case_source,
-                        scenario_yaml=self.scenario.yaml_text,
-                        rotor_momentum_N_m_s=st.design.data.rotor_momentum)
+        ds.attrs.update(
+            scenario_name=self.scenario.name,
+            case_source=self.case_source,
+            scenario_yaml=self.scenario.yaml_text,
+            rotor_momentum_N_m_s=st.design.data.rotor_momentum,
+        )
         return ds
 
 
-def run_cmg_station(scenario: CmgStationScenario,
-                    progress: Callable[[str], None] | None = None) -> StationResult:
+def run_cmg_station(
+    scenario: CmgStationScenario, progress: Callable[[str], None] | None = None
+) -> StationResult:
     """LQR design, attitude loop, then one CMG loop per run (module docstring)."""
     from flexsat.cases import space_station_cmg as st
     from flexsat.dynamics import cmg
@@ -530,16 +635,23 @@ def run_cmg_station(scenario: CmgStationScenario,
     except ValueError as exc:
         raise ScenarioError([_locate("lqr", str(exc))]) from None
     sim = scenario.simulation
-    run = st.simulate_attitude(design, sim.orbits * data.period, sim.disturbance,
-                               sim.initial_attitude)
+    run = st.simulate_attitude(
+        design, sim.orbits * data.period, sim.disturbance, sim.initial_attitude
+    )
     peak_dir = run.momentum[np.argmax(np.linalg.norm(run.momentum, axis=1))]
     loops, initial = [], []
     for spec in scenario.runs:
         if progress is not None:
             progress(spec.label)
-        s0 = (np.zeros(4) if spec.initial == "zero" else np.deg2rad(ALTERNATE_DEG)
-              if spec.initial == "alternate" else cmg.preferred_set(peak_dir)
-              if spec.initial == "preferred" else np.array(spec.initial))
+        s0 = (
+            np.zeros(4)
+            if spec.initial == "zero"
+            else np.deg2rad(ALTERNATE_DEG)
+            if spec.initial == "alternate"
+            else cmg.preferred_set(peak_dir)
+            if spec.initial == "preferred"
+            else np.array(spec.initial)
+        )
         initial.append(s0)
         loops.append(st.cmg_loop(run, s0, sim.threshold))
     notes = (
@@ -550,9 +662,23 @@ def run_cmg_station(scenario: CmgStationScenario,
         "Roll/yaw filters at the orbit rate make the design uncontrollable (three modes at jn, "
         "two inputs); the default roll/yaw filters are at 2n only.",
     )
-    return StationResult(scenario, run, tuple(loops), tuple(s.label for s in scenario.runs),
-                         tuple(initial), SOURCE, notes)
+    return StationResult(
+        scenario,
+        run,
+        tuple(loops),
+        tuple(s.label for s in scenario.runs),
+        tuple(initial),
+        SOURCE,
+        notes,
+    )
 
 
-__all__ = ["CmgResult", "CmgScenario", "CmgStationScenario", "StationResult", "run_cmg",
-           "run_cmg_station", "validation_table"]
+__all__ = [
+    "CmgResult",
+    "CmgScenario",
+    "CmgStationScenario",
+    "StationResult",
+    "run_cmg",
+    "run_cmg_station",
+    "validation_table",
+]

@@ -41,8 +41,9 @@ def _file_of(source) -> Path | None:
     if not isinstance(source, str) or "\n" in source:
         return None
     try:
-        return Path(source) if source.endswith((".yaml", ".yml")) or Path(source).is_file() \
-            else None
+        return (
+            Path(source) if source.endswith((".yaml", ".yml")) or Path(source).is_file() else None
+        )
     except (OSError, ValueError):  # too long or otherwise impossible as a file name: text
         return None
 
@@ -57,18 +58,27 @@ def _read(source: str | bytes | Path) -> str:
             with open(source, "rb") as file:
                 source = file.read(limits.MAX_DOCUMENT_BYTES + 1)
         except OSError as exc:
-            raise ScenarioError([f"scenario: cannot read {str(source)!r} ({exc.strerror})"]
-                                ) from None
+            raise ScenarioError(
+                [f"scenario: cannot read {str(source)!r} ({exc.strerror})"]
+            ) from None
     if isinstance(source, bytes):
         try:
             source = source.decode("utf-8")
         except UnicodeDecodeError as exc:
             if len(source) <= limits.MAX_DOCUMENT_BYTES:
-                raise ScenarioError([f"{name} is not UTF-8 text (byte 0x{source[exc.start]:02x} "
-                                     f"at offset {exc.start}); save it as UTF-8"]) from None
+                raise ScenarioError(
+                    [
+                        f"{name} is not UTF-8 text (byte 0x{source[exc.start]:02x} "
+                        f"at offset {exc.start}); save it as UTF-8"
+                    ]
+                ) from None
     if len(source) > limits.MAX_DOCUMENT_BYTES:
-        raise ScenarioError([f"{name} is larger than {limits.MAX_DOCUMENT_BYTES:,} bytes "
-                             "(flexsat.limits.MAX_DOCUMENT_BYTES); a scenario is a few kB"])
+        raise ScenarioError(
+            [
+                f"{name} is larger than {limits.MAX_DOCUMENT_BYTES:,} bytes "
+                "(flexsat.limits.MAX_DOCUMENT_BYTES); a scenario is a few kB"
+            ]
+        )
     return source
 
 
@@ -87,11 +97,19 @@ class _Loader(yaml.SafeLoader):
         try:
             line = self.peek_event().start_mark.line + 1
             if self._depth > limits.MAX_NESTING:
-                raise ScenarioError([f"scenario: nested deeper than {limits.MAX_NESTING} levels "
-                                     f"at line {line} (flexsat.limits.MAX_NESTING)"])
+                raise ScenarioError(
+                    [
+                        f"scenario: nested deeper than {limits.MAX_NESTING} levels "
+                        f"at line {line} (flexsat.limits.MAX_NESTING)"
+                    ]
+                )
             if self._nodes > limits.MAX_DOCUMENT_NODES:
-                raise ScenarioError([f"scenario: more than {limits.MAX_DOCUMENT_NODES:,} values "
-                                     f"(at line {line}; flexsat.limits.MAX_DOCUMENT_NODES)"])
+                raise ScenarioError(
+                    [
+                        f"scenario: more than {limits.MAX_DOCUMENT_NODES:,} values "
+                        f"(at line {line}; flexsat.limits.MAX_DOCUMENT_NODES)"
+                    ]
+                )
             return super().compose_node(parent, index)
         finally:
             self._depth -= 1
@@ -106,32 +124,47 @@ def _check_nodes(node, path: str, loader: _Loader, sizes: dict, open_: set) -> i
     if id(node) in sizes:
         return sizes[id(node)]
     if id(node) in open_:
-        raise ScenarioError([f"{path or 'scenario'}: an alias refers to the value that "
-                             "contains it (recursive anchor)"])
+        raise ScenarioError(
+            [
+                f"{path or 'scenario'}: an alias refers to the value that "
+                "contains it (recursive anchor)"
+            ]
+        )
     open_.add(id(node))
     size = 1
     if isinstance(node, yaml.MappingNode):
         lines: dict = {}
         for key_node, value_node in node.value:
-            key = loader.construct_object(key_node) if isinstance(key_node, yaml.ScalarNode) \
-                and key_node.tag != _MERGE else None
+            key = (
+                loader.construct_object(key_node)
+                if isinstance(key_node, yaml.ScalarNode) and key_node.tag != _MERGE
+                else None
+            )
             here = f"{path}.{key}" if path else str(key)
             line = key_node.start_mark.line + 1
             if key is not None and key in lines:
-                raise ScenarioError([f"{here}: duplicate key (lines {lines[key]} and {line}); "
-                                     "give it once"])
+                raise ScenarioError(
+                    [f"{here}: duplicate key (lines {lines[key]} and {line}); give it once"]
+                )
             if key is not None:
                 lines[key] = line
-            size += (_check_nodes(key_node, here, loader, sizes, open_)
-                     + _check_nodes(value_node, here, loader, sizes, open_))
+            size += _check_nodes(key_node, here, loader, sizes, open_) + _check_nodes(
+                value_node, here, loader, sizes, open_
+            )
     elif isinstance(node, yaml.SequenceNode):
-        size += sum(_check_nodes(item, f"{path}[{i}]", loader, sizes, open_)
-                    for i, item in enumerate(node.value))
+        size += sum(
+            _check_nodes(item, f"{path}[{i}]", loader, sizes, open_)
+            for i, item in enumerate(node.value)
+        )
     open_.discard(id(node))
     if size > limits.MAX_DOCUMENT_NODES:
-        raise ScenarioError([f"{path or 'scenario'}: more than {limits.MAX_DOCUMENT_NODES:,} "
-                             "values once aliases are expanded (flexsat.limits."
-                             "MAX_DOCUMENT_NODES)"])
+        raise ScenarioError(
+            [
+                f"{path or 'scenario'}: more than {limits.MAX_DOCUMENT_NODES:,} "
+                "values once aliases are expanded (flexsat.limits."
+                "MAX_DOCUMENT_NODES)"
+            ]
+        )
     sizes[id(node)] = size
     return size
 
@@ -173,12 +206,13 @@ def load_scenario(source: str | bytes | Path):
     text = _read(source)
     data = _parse(text)
     if not isinstance(data, dict):
-        raise ScenarioError(["scenario: must be a YAML mapping (name, case, simulation, runs, ...)"])
+        raise ScenarioError(
+            ["scenario: must be a YAML mapping (name, case, simulation, runs, ...)"]
+        )
     kind = data.get("kind", "maneuver")
     if not isinstance(kind, str) or kind not in SCENARIO_KINDS:
         known = [repr(k) for k in SCENARIO_KINDS]
-        raise ScenarioError([f"kind: must be {', '.join(known[:-1])} or {known[-1]}, got "
-                             f"{kind!r}"])
+        raise ScenarioError([f"kind: must be {', '.join(known[:-1])} or {known[-1]}, got {kind!r}"])
     module, name = SCENARIO_KINDS[kind]
     model = getattr(importlib.import_module(module), name)
     try:

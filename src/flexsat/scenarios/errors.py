@@ -25,7 +25,9 @@ class ScenarioError(ValueError):
     def __init__(self, problems):
         self.problems = list(problems)
         count = "1 problem" if len(self.problems) == 1 else f"{len(self.problems)} problems"
-        super().__init__(f"invalid scenario ({count}):" + "".join(f"\n  {p}" for p in self.problems))
+        super().__init__(
+            f"invalid scenario ({count}):" + "".join(f"\n  {p}" for p in self.problems)
+        )
 
 
 # -- messages ----------------------------------------------------------------------------------
@@ -48,7 +50,7 @@ def _locate(path: str, message: str) -> str:
     if head is None:
         return f"{path or 'scenario'}: {message}"
     if path == head or path.endswith("." + head):
-        return path + message[len(head):]
+        return path + message[len(head) :]
     return f"{path}.{message}" if path else message
 
 

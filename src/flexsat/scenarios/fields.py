@@ -4,8 +4,9 @@ a buildable section checks its runtime object's own rules)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any, Callable
+from typing import Annotated, Any
 
 import yaml
 from pydantic import (
@@ -51,8 +52,9 @@ def quantity(unit: str, optional: bool = False, positive: bool = False):
     positive : bool
         Refuse zero and negative values.
     """
-    return Annotated[float | None if optional else float,
-                     BeforeValidator(_converter(unit, positive))]
+    return Annotated[
+        float | None if optional else float, BeforeValidator(_converter(unit, positive))
+    ]
 
 
 def count(minimum: int = 1, maximum: int | None = None, optional: bool = False):
@@ -66,8 +68,11 @@ def count(minimum: int = 1, maximum: int | None = None, optional: bool = False):
     optional : bool
         Accept ``None`` (the key left out).
     """
-    rule = f"an integer in [{minimum}, {maximum}]" if maximum is not None else \
-        f"an integer >= {minimum}"
+    rule = (
+        f"an integer in [{minimum}, {maximum}]"
+        if maximum is not None
+        else f"an integer >= {minimum}"
+    )
 
     def check(value, info: ValidationInfo):
         if value is None and optional:

@@ -42,25 +42,29 @@ from pydantic import BeforeValidator, Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.cases import get_case
-from flexsat.references import cite
 from flexsat.identify.campaign import (
+    IDENTIFY_STEPS,
+    SIMULATE_STEPS,
     CameraRig,
     CampaignConfig,
     CampaignResult,
-    IDENTIFY_STEPS,
-    SIMULATE_STEPS,
     TestRecords,
     identify_and_update,
     run_campaign,
 )
 from flexsat.identify.measurements import Measurement
+from flexsat.references import cite
 from flexsat.scenarios.errors import ScenarioError, _head, _locate
 from flexsat.scenarios.fields import _Document, _Section, count, quantity
 from flexsat.text import format_optional
 from flexsat.units import to_si
 
-__all__ = ["IdentificationResult", "IdentificationScenario", "identification_steps",
-           "run_identification"]
+__all__ = [
+    "IdentificationResult",
+    "IdentificationScenario",
+    "identification_steps",
+    "run_identification",
+]
 
 
 def _vector(unit: str):
@@ -80,9 +84,13 @@ def _sampled(spec, duration: str, rate: str) -> None:
     for name in (duration, rate):
         if not getattr(spec, name) > 0:
             raise ValueError(f"{name}: must be > 0, got {getattr(spec, name):g}")
-    limits.check_count(getattr(spec, duration) * getattr(spec, rate), limits.MAX_SAMPLES,
-                       duration, f"samples ({duration} × {rate})",
-                       "shorten the test or lower the sample rate")
+    limits.check_count(
+        getattr(spec, duration) * getattr(spec, rate),
+        limits.MAX_SAMPLES,
+        duration,
+        f"samples ({duration} × {rate})",
+        "shorten the test or lower the sample rate",
+    )
 
 
 class TruthSpec(_Section):
@@ -91,7 +99,8 @@ class TruthSpec(_Section):
 
     modes: Annotated[int, Field(ge=1)] | None = None
     damping: list[Annotated[float, Field(gt=0, lt=1)]] = Field(
-        default_factory=lambda: [0.00603, 0.00489, 0.01105, 0.00596, 0.01293])
+        default_factory=lambda: [0.00603, 0.00489, 0.01105, 0.00596, 0.01293]
+    )
     other_damping: Annotated[float, Field(gt=0, lt=1)] = 0.01
 
 
@@ -158,11 +167,14 @@ class WheelSpec(_Section):
     def _one_axis_per_wheel(self):
         _sampled(self, "duration", "sample_rate")
         if len(self.axes) != len(self.nodes):
-            raise ValueError(f"axes: one torque axis per wheel node ({len(self.nodes)}), "
-                             f"got {len(self.axes)}")
+            raise ValueError(
+                f"axes: one torque axis per wheel node ({len(self.nodes)}), got {len(self.axes)}"
+            )
         if self.torque_constants and len(self.torque_constants) != len(self.nodes):
-            raise ValueError(f"torque_constants: one factor per wheel ({len(self.nodes)}), got "
-                             f"{len(self.torque_constants)}")
+            raise ValueError(
+                f"torque_constants: one factor per wheel ({len(self.nodes)}), got "
+                f"{len(self.torque_constants)}"
+            )
         return self
 
 
@@ -217,19 +229,25 @@ class IdentificationScenario(_Document):
         if self.records is None:
             missing = [name for name in simulated if getattr(self, name) is None]
             if missing:
-                raise ValueError(f"{missing[0]}: required to simulate the tests (or give "
-                                 "'records' with measured data)")
+                raise ValueError(
+                    f"{missing[0]}: required to simulate the tests (or give "
+                    "'records' with measured data)"
+                )
         else:
-            given = [name for name in simulated + ("truth",)
-                     if name in self.model_fields_set]
+            given = [name for name in simulated + ("truth",) if name in self.model_fields_set]
             if given:
-                raise ValueError(f"{given[0]}: describes a simulated test; with 'records' the "
-                                 "tests are measured (leave it out)")
+                raise ValueError(
+                    f"{given[0]}: describes a simulated test; with 'records' the "
+                    "tests are measured (leave it out)"
+                )
         gains = self.identification.torque_constants or (
-            self.wheels is not None and self.wheels.torque_constants)
+            self.wheels is not None and self.wheels.torque_constants
+        )
         if gains and self.identification.update != "differential_correction":
-            raise ValueError("identification.update: the wheels' torque constants are identified "
-                             "from the FRF, which only 'differential_correction' uses")
+            raise ValueError(
+                "identification.update: the wheels' torque constants are identified "
+                "from the FRF, which only 'differential_correction' uses"
+            )
         return self
 
     @property
@@ -242,28 +260,54 @@ class IdentificationScenario(_Document):
         ident = self.identification
         common = dict(
             a_priori_scale=dict(self.a_priori.stiffness_scale),
-            a_priori_damping=self.a_priori.damping, band=ident.band,
-            era_order=ident.era_order, update=ident.update, anti_alias=ident.anti_alias,
+            a_priori_damping=self.a_priori.damping,
+            band=ident.band,
+            era_order=ident.era_order,
+            update=ident.update,
+            anti_alias=ident.anti_alias,
             bootstrap_samples=ident.bootstrap_samples,
-            identify_torque_constants=ident.torque_constants, seed=self.seed)
+            identify_torque_constants=ident.torque_constants,
+            seed=self.seed,
+        )
         if self.recorded:
             return CampaignConfig(frf_segment=self.records.segment, **common)
         v, w, h, s = self.video, self.wheels, self.hammer, self.sensors
-        rig = CameraRig(tuple(c.position for c in v.cameras), tuple(c.aim for c in v.cameras),
-                        v.focal_length, v.pixel_size, v.centroid_noise_px, v.quantize,
-                        static_fields=v.static_fields)
+        rig = CameraRig(
+            tuple(c.position for c in v.cameras),
+            tuple(c.aim for c in v.cameras),
+            v.focal_length,
+            v.pixel_size,
+            v.centroid_noise_px,
+            v.quantize,
+            static_fields=v.static_fields,
+        )
         return CampaignConfig(
-            truth_damping=tuple(self.truth.damping), other_damping=self.truth.other_damping,
-            truth_modes=self.truth.modes, strain_gauges=tuple(s.strain_gauges),
-            accelerometers=tuple(s.accelerometers), targets=tuple(s.targets),
-            hammer_node=h.node, hammer_direction=h.direction, hammer_impulse=h.impulse,
-            hammer_duration=h.duration, sample_rate=h.sample_rate, noise=s.noise,
-            video_impulse=v.impulse, video_duration=v.duration, field_rate=v.field_rate,
-            target_sigma=v.target_sigma, rig=rig, wheel_nodes=tuple(w.nodes),
-            wheel_axes=tuple(w.axes), wheel_torque_rms=w.torque_rms,
+            truth_damping=tuple(self.truth.damping),
+            other_damping=self.truth.other_damping,
+            truth_modes=self.truth.modes,
+            strain_gauges=tuple(s.strain_gauges),
+            accelerometers=tuple(s.accelerometers),
+            targets=tuple(s.targets),
+            hammer_node=h.node,
+            hammer_direction=h.direction,
+            hammer_impulse=h.impulse,
+            hammer_duration=h.duration,
+            sample_rate=h.sample_rate,
+            noise=s.noise,
+            video_impulse=v.impulse,
+            video_duration=v.duration,
+            field_rate=v.field_rate,
+            target_sigma=v.target_sigma,
+            rig=rig,
+            wheel_nodes=tuple(w.nodes),
+            wheel_axes=tuple(w.axes),
+            wheel_torque_rms=w.torque_rms,
             wheel_torque_constants=tuple(w.torque_constants),
-            wheel_duration=w.duration, wheel_sample_rate=w.sample_rate, frf_segment=w.segment,
-            **common)
+            wheel_duration=w.duration,
+            wheel_sample_rate=w.sample_rate,
+            frf_segment=w.segment,
+            **common,
+        )
 
 
 @dataclass(frozen=True)
@@ -287,12 +331,17 @@ def _node_fields(scenario: IdentificationScenario, records: TestRecords | None) 
                 if c.node_a is not None:
                     out.append((f"records.{name}", c.node_a, True))
         return out
-    return ([("sensors.strain_gauges", g[k], True) for g in scenario.sensors.strain_gauges
-             for k in (0, 1)]
-            + [("sensors.accelerometers", a[0], False) for a in scenario.sensors.accelerometers]
-            + [("sensors.targets", n, False) for n in scenario.sensors.targets]
-            + [("hammer.node", scenario.hammer.node, False)]
-            + [("wheels.nodes", n, False) for n in scenario.wheels.nodes])
+    return (
+        [
+            ("sensors.strain_gauges", g[k], True)
+            for g in scenario.sensors.strain_gauges
+            for k in (0, 1)
+        ]
+        + [("sensors.accelerometers", a[0], False) for a in scenario.sensors.accelerometers]
+        + [("sensors.targets", n, False) for n in scenario.sensors.targets]
+        + [("hammer.node", scenario.hammer.node, False)]
+        + [("wheels.nodes", n, False) for n in scenario.wheels.nodes]
+    )
 
 
 def _check_against_case(scenario: IdentificationScenario, case, records=None) -> list[str]:
@@ -303,8 +352,9 @@ def _check_against_case(scenario: IdentificationScenario, case, records=None) ->
         return [f"case: {scenario.case!r} has no substructures to update (use tamu_grid)"]
     for key in scenario.a_priori.stiffness_scale:
         if key not in names:
-            problems.append(f"a_priori.stiffness_scale: unknown substructure {key!r}; known: "
-                            f"{', '.join(names)}")
+            problems.append(
+                f"a_priori.stiffness_scale: unknown substructure {key!r}; known: {', '.join(names)}"
+            )
     asm = case.structure().assemble()
     free = {int(n) for n, _ in asm.dofs}
     fields = _node_fields(scenario, records)
@@ -333,8 +383,10 @@ def _read_records(scenario: IdentificationScenario) -> TestRecords:
             problems.append(f"records.{name}: cannot read {str(full)!r} ({exc})")
             continue
         if test.domain != "time" or test.inputs is None:
-            problems.append(f"records.{name}: must hold time histories with the input "
-                            "(force or torque) channels")
+            problems.append(
+                f"records.{name}: must hold time histories with the input "
+                "(force or torque) channels"
+            )
         read[name] = test
     if problems:
         raise ScenarioError(problems)
@@ -372,11 +424,18 @@ def run_identification(scenario: IdentificationScenario, progress=None) -> Ident
             result = run_campaign(case, scenario.config(), progress=progress)
     except ValueError as exc:
         head = _head(str(exc))
-        path = {"rig": "video", "wheel_torque_constants": "wheels.torque_constants",
-                "records": "records", "measurement": "records.wheels",
-                "segment": "records.segment"}.get(head, "")
-        message = str(exc).replace("wheel_torque_constants: ", "") if path.startswith("wheels") \
+        path = {
+            "rig": "video",
+            "wheel_torque_constants": "wheels.torque_constants",
+            "records": "records",
+            "measurement": "records.wheels",
+            "segment": "records.segment",
+        }.get(head, "")
+        message = (
+            str(exc).replace("wheel_torque_constants: ", "")
+            if path.startswith("wheels")
             else str(exc)
+        )
         raise ScenarioError([_locate(path, message)]) from None
     return IdentificationResult(scenario, result, cite(get_case(scenario.case).source))
 
@@ -386,11 +445,19 @@ def _summary_rows(result: IdentificationResult) -> list[tuple[str, list[str]]]:
     m = result.campaign.modes
     rows = []
     for k in range(len(m["era_hz"])):
-        rows.append((str(k + 1), [format_optional(m["true_hz"][k], ".4f"),
-                                  f"{m['era_hz'][k]:.4f}",
-                                  f"{m['a_priori_hz'][k]:.4f}", f"{m['updated_hz'][k]:.4f}",
-                                  format_optional(m["true_damping"][k], ".5f"),
-                                  f"{m['era_damping'][k]:.5f}"]))
+        rows.append(
+            (
+                str(k + 1),
+                [
+                    format_optional(m["true_hz"][k], ".4f"),
+                    f"{m['era_hz'][k]:.4f}",
+                    f"{m['a_priori_hz'][k]:.4f}",
+                    f"{m['updated_hz'][k]:.4f}",
+                    format_optional(m["true_damping"][k], ".5f"),
+                    f"{m['era_damping'][k]:.5f}",
+                ],
+            )
+        )
     return rows
 
 

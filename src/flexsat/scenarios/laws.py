@@ -3,8 +3,9 @@ a reference, and how it builds its controller from the run, the case and the man
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -34,36 +35,45 @@ class _CaseContext:
     dt: float = 0.0
 
 
-def _regulator(run: "RunSpec", ctx: _CaseContext, reference) -> Controller:
+def _regulator(run: RunSpec, ctx: _CaseContext, reference) -> Controller:
     return LyapunovRegulator(**_given(run.gains), target=ctx.angle, n_appendages=ctx.n_appendages)
 
 
-def _tracker(run: "RunSpec", ctx: _CaseContext, reference) -> Controller:
-    return LyapunovTracker(reference, **_given(run.gains), appendage_inertia=ctx.appendage_inertia,
-                           n_appendages=ctx.n_appendages)
+def _tracker(run: RunSpec, ctx: _CaseContext, reference) -> Controller:
+    return LyapunovTracker(
+        reference,
+        **_given(run.gains),
+        appendage_inertia=ctx.appendage_inertia,
+        n_appendages=ctx.n_appendages,
+    )
 
 
-def _pd(run: "RunSpec", ctx: _CaseContext, reference) -> Controller:
+def _pd(run: RunSpec, ctx: _CaseContext, reference) -> Controller:
     options = {"target": ctx.angle, "reference": reference}
     if run.feedforward is not None:
         options["feedforward"] = run.feedforward
     if run.poles is None:
         return PD(**_given(run.gains), **options)
-    return PD.from_rigid_poles(ctx.reference_inertia, run.poles.natural_frequency,
-                               run.poles.damping_ratio, **options)
+    return PD.from_rigid_poles(
+        ctx.reference_inertia, run.poles.natural_frequency, run.poles.damping_ratio, **options
+    )
 
 
-def _lqg(run: "RunSpec", ctx: _CaseContext, reference) -> Controller:
+def _lqg(run: RunSpec, ctx: _CaseContext, reference) -> Controller:
     spec, plant = run.lqg, ctx.plant
     A, B, _ = plant.state_space
     n, k = plant.ndof, plant.ndof - 1
     C = np.zeros((2, 2 * n))
     C[0, 0] = C[1, n] = 1.0
-    modes = np.broadcast_to(np.asarray(spec.mode_weights, float), (k,)) if np.ndim(
-        spec.mode_weights) == 0 or len(spec.mode_weights) == k else None
+    modes = (
+        np.broadcast_to(np.asarray(spec.mode_weights, float), (k,))
+        if np.ndim(spec.mode_weights) == 0 or len(spec.mode_weights) == k
+        else None
+    )
     if modes is None:
-        raise ValueError(f"lqg.mode_weights: give one weight or one per mode ({k}), got "
-                         f"{len(spec.mode_weights)}")
+        raise ValueError(
+            f"lqg.mode_weights: give one weight or one per mode ({k}), got {len(spec.mode_weights)}"
+        )
     per_dof = np.concatenate([[spec.rigid_weight], modes])
     Q = np.diag(np.concatenate([per_dof, per_dof]))
     R = np.array([[spec.control_weight]])
@@ -73,9 +83,10 @@ def _lqg(run: "RunSpec", ctx: _CaseContext, reference) -> Controller:
     if spec.refine == "none":
         return law
     keep_modes = k if spec.refine == "weighted" else min(spec.keep_modes, k)
-    kept = np.r_[0, 1:keep_modes + 1, n, n + 1:n + keep_modes + 1]
-    refined = refine_estimator(A, B[:, None], C, law.K, kept, Rn,
-                               truncate=spec.refine == "truncated")
+    kept = np.r_[0, 1 : keep_modes + 1, n, n + 1 : n + keep_modes + 1]
+    refined = refine_estimator(
+        A, B[:, None], C, law.K, kept, Rn, truncate=spec.refine == "truncated"
+    )
     return LQGController(A, B[:, None], C, refined.gain, refined.filter.gain, ctx.dt, **options)
 
 
@@ -84,7 +95,7 @@ class _Law:
     gains: tuple[str, ...]
     required: tuple[str, ...]
     reference: Literal["required", "optional", "forbidden"]
-    build: Callable[["RunSpec", _CaseContext, Any], Controller]
+    build: Callable[[RunSpec, _CaseContext, Any], Controller]
     pd_options: bool = False
 
 

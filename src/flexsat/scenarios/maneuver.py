@@ -86,8 +86,10 @@ class ManeuverSpec(_Section):
     @classmethod
     def _sensible(cls, angle: float) -> float:
         if abs(angle) > MAX_SLEW:
-            raise ValueError(f"angle: a slew of at most ten turns ({MAX_SLEW:.4g} rad) either "
-                             f"way, got {angle:.4g} rad")
+            raise ValueError(
+                f"angle: a slew of at most ten turns ({MAX_SLEW:.4g} rad) either "
+                f"way, got {angle:.4g} rad"
+            )
         return angle
 
 
@@ -128,8 +130,10 @@ class ActuatorSpec(_Buildable):
     def _sensible(cls, ratio: float | None) -> float | None:
         # actual / nominal torque constant: a motor off by more than 10x is a different motor
         if ratio is not None and ratio > 10:
-            raise ValueError(f"torque_constant_ratio: actual / nominal torque constant, at most "
-                             f"10, got {ratio:g}")
+            raise ValueError(
+                f"torque_constant_ratio: actual / nominal torque constant, at most "
+                f"10, got {ratio:g}"
+            )
         return ratio
 
     def build(self) -> TorqueActuator:
@@ -176,8 +180,9 @@ class DisturbancesSpec(_Buildable):
             random = RandomTorque(*(() if self.random_torque is None else (self.random_torque,)))
         except ValueError as exc:
             raise ValueError(str(exc).replace("std:", "random_torque:", 1)) from None
-        impulses = Impulses(tuple(i.time for i in self.impulses),
-                            tuple(i.impulse for i in self.impulses))
+        impulses = Impulses(
+            tuple(i.time for i in self.impulses), tuple(i.impulse for i in self.impulses)
+        )
         return {"friction": self.friction.build(), "random_torque": random, "impulses": impulses}
 
 
@@ -222,13 +227,18 @@ class LQGSpec(_Section):
         if self.refine == "truncated" and self.keep_modes is None:
             raise ValueError("keep_modes: required by refine 'truncated'")
         if len(self.sensor_noise) != 2:
-            raise ValueError(f"sensor_noise: give the (θ, θ') intensities, got "
-                             f"{len(self.sensor_noise)} values")
+            raise ValueError(
+                f"sensor_noise: give the (θ, θ') intensities, got {len(self.sensor_noise)} values"
+            )
         return self
 
 
-_SHAPES = {"bang_bang": BangBang, "smooth_bang_bang": SmoothBangBang,
-           "pseudo_square": PseudoSquare, "sinusoidal": Sinusoidal}
+_SHAPES = {
+    "bang_bang": BangBang,
+    "smooth_bang_bang": SmoothBangBang,
+    "pseudo_square": PseudoSquare,
+    "sinusoidal": Sinusoidal,
+}
 _SHAPE_PARAMETERS = {"smooth_bang_bang": ("alpha",), "pseudo_square": ("rise_time",)}
 
 
@@ -277,8 +287,10 @@ class RunSpec(_Section):
         given = _given(self.gains) if self.gains is not None else {}
         for name in given:
             if name not in law.gains:
-                raise ValueError(f"gains.{name}: not a gain of law {self.law!r} "
-                                 f"(its gains: {', '.join(law.gains)})")
+                raise ValueError(
+                    f"gains.{name}: not a gain of law {self.law!r} "
+                    f"(its gains: {', '.join(law.gains)})"
+                )
         for name in ("poles", "feedforward"):
             if getattr(self, name) is not None and not law.pd_options:
                 raise ValueError(f"{name}: only for law 'pd'")
@@ -288,13 +300,16 @@ class RunSpec(_Section):
             raise ValueError("gains: give gains or poles, not both")
         missing = [g for g in law.required if g not in given]
         if self.poles is None and missing:
-            raise ValueError(f"gains.{missing[0]}: required by law {self.law!r}"
-                             + (" (or give poles)" if law.pd_options else ""))
+            raise ValueError(
+                f"gains.{missing[0]}: required by law {self.law!r}"
+                + (" (or give poles)" if law.pd_options else "")
+            )
         if law.reference == "required" and self.reference is None:
             raise ValueError(f"reference: required by law {self.law!r}")
         if law.reference == "forbidden" and self.reference is not None:
-            raise ValueError(f"reference: law {self.law!r} tracks no reference "
-                             "(use lyapunov_tracker)")
+            raise ValueError(
+                f"reference: law {self.law!r} tracks no reference (use lyapunov_tracker)"
+            )
         return self
 
 
@@ -318,8 +333,10 @@ class Scenario(_Document):
     def _known_case(cls, name: str) -> str:
         get_case(name)
         if name not in maneuver_cases():
-            raise ValueError(f"case: {name!r} has no maneuver model (a hub plant to slew); "
-                             f"cases with one: {', '.join(maneuver_cases())}")
+            raise ValueError(
+                f"case: {name!r} has no maneuver model (a hub plant to slew); "
+                f"cases with one: {', '.join(maneuver_cases())}"
+            )
         return name
 
     @field_validator("case_overrides")
@@ -345,9 +362,11 @@ class Scenario(_Document):
 
     def sim_config(self) -> SimConfig:
         """The :class:`SimConfig` shared by every run."""
-        return self.simulation.build(actuator=self.actuator.build(), sensors=self.sensors.build(),
-                                     **self.disturbances.build())
-
+        return self.simulation.build(
+            actuator=self.actuator.build(),
+            sensors=self.sensors.build(),
+            **self.disturbances.build(),
+        )
 
 
 @functools.cache

@@ -26,8 +26,9 @@ damping, initial-condition amplitude) are those of :mod:`flexsat.cases.agrawal_b
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Literal, Union
+from typing import Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -50,7 +51,7 @@ class PPFSettings(_Section):
     zeta_f: float = Field(0.1, ge=0.0, allow_inf_nan=False)
     Q_u: float = Field(1e-8, ge=0.0, allow_inf_nan=False)
     amplitude: quantity("m", positive=True) = 0.01
-    initial_gains: Union[float, list[float]] = 100.0
+    initial_gains: float | list[float] = 100.0
     gamma_stop: float = Field(0.9, gt=0.0, le=1.0)
 
     @field_validator("initial_gains")
@@ -58,8 +59,10 @@ class PPFSettings(_Section):
     def _gains(cls, value):
         g = np.atleast_1d(np.asarray(value, float))
         if g.shape not in ((1,), (9,)) or not np.all(np.isfinite(g)):
-            raise ValueError(f"initial_gains: one gain or nine (actuator-major, g11 g12 g13 g21 "
-                             f"...), finite, got {value!r}")
+            raise ValueError(
+                f"initial_gains: one gain or nine (actuator-major, g11 g12 g13 g21 "
+                f"...), finite, got {value!r}"
+            )
         return value
 
 
@@ -73,8 +76,10 @@ class PPFSimulation(_Section):
     def _samples(self):
         n = self.duration * self.control_rate
         if n > limits.MAX_SAMPLES:
-            raise ValueError(f"simulation.duration: {n:.3g} control periods is more than "
-                             f"{limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)")
+            raise ValueError(
+                f"simulation.duration: {n:.3g} control periods is more than "
+                f"{limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)"
+            )
         return self
 
 
@@ -96,8 +101,9 @@ class GoalSpec(_Section):
             return GoalRule(self.rule, self.value)
         except ValueError as exc:
             message = str(exc)
-            raise ValueError(message[len("goal."):] if message.startswith("goal.") else
-                             message) from None
+            raise ValueError(
+                message[len("goal.") :] if message.startswith("goal.") else message
+            ) from None
 
 
 class PPFRunSpec(_Section):
@@ -112,8 +118,9 @@ class PPFRunSpec(_Section):
     @classmethod
     def _weights(cls, value):
         if len(value) != 2 or not all(np.isfinite(value)) or min(value) < 0:
-            raise ValueError(f"weights: must be the two numbers (w1, w2) >= 0 of Eq. 35, got "
-                             f"{value!r}")
+            raise ValueError(
+                f"weights: must be the two numbers (w1, w2) >= 0 of Eq. 35, got {value!r}"
+            )
         return value
 
     @model_validator(mode="after")
@@ -199,11 +206,13 @@ class PPFResult:
 
         def padded(values, shape):
             out = np.full((n_steps,) + shape, np.nan)
-            out[:len(values)] = values
+            out[: len(values)] = values
             return out
 
-        paths = {k: [] for k in ("gamma", "cost", "target", "min_eig", "max_re", "gains",
-                                 "pole_re", "pole_im")}
+        paths = {
+            k: []
+            for k in ("gamma", "cost", "target", "min_eig", "max_re", "gains", "pole_re", "pole_im")
+        }
         for run in self.runs:
             h = run.optimization.history
             pr = run.setup.problem
@@ -224,33 +233,59 @@ class PPFResult:
                 "gamma_path": (("run", "step"), np.array(paths["gamma"])),
                 "cost_path": (("run", "step"), np.array(paths["cost"])),
                 "target_path": (("run", "step"), np.array(paths["target"])),
-                "min_eig_S_path": (("run", "step"), np.array(paths["min_eig"]), {"units": "1/s**2"}),
+                "min_eig_S_path": (
+                    ("run", "step"),
+                    np.array(paths["min_eig"]),
+                    {"units": "1/s**2"},
+                ),
                 "max_re_pole_path": (("run", "step"), np.array(paths["max_re"]), {"units": "1/s"}),
                 "gain_path": (("run", "step", "actuator", "mode"), np.array(paths["gains"])),
-                "pole_real_path": (("run", "step", "pole"), np.array(paths["pole_re"]),
-                                   {"units": "1/s"}),
-                "pole_imag_path": (("run", "step", "pole"), np.array(paths["pole_im"]),
-                                   {"units": "rad/s"}),
-                "gains_initial": (("run", "actuator", "mode"),
-                                  np.array([r.initial_gains.reshape(3, 3) for r in self.runs])),
-                "gains_optimised": (("run", "actuator", "mode"),
-                                    np.array([r.gains for r in self.runs])),
+                "pole_real_path": (
+                    ("run", "step", "pole"),
+                    np.array(paths["pole_re"]),
+                    {"units": "1/s"},
+                ),
+                "pole_imag_path": (
+                    ("run", "step", "pole"),
+                    np.array(paths["pole_im"]),
+                    {"units": "rad/s"},
+                ),
+                "gains_initial": (
+                    ("run", "actuator", "mode"),
+                    np.array([r.initial_gains.reshape(3, 3) for r in self.runs]),
+                ),
+                "gains_optimised": (
+                    ("run", "actuator", "mode"),
+                    np.array([r.gains for r in self.runs]),
+                ),
             },
-            coords={"run": list(self.labels), "response": list(RESPONSES), "time": t,
-                    "output": list(OUTPUTS), "actuator": [1, 2, 3], "mode": [1, 2, 3]},
+            coords={
+                "run": list(self.labels),
+                "response": list(RESPONSES),
+                "time": t,
+                "output": list(OUTPUTS),
+                "actuator": [1, 2, 3],
+                "mode": [1, 2, 3],
+            },
         )
-        ds["tip_response"].attrs["units"] = ", ".join(f"{o}: {u}" for o, u in
-                                                      zip(OUTPUTS, OUTPUT_UNITS))
+        ds["tip_response"].attrs["units"] = ", ".join(
+            f"{o}: {u}" for o, u in zip(OUTPUTS, OUTPUT_UNITS)
+        )
         ds["time"].attrs["units"] = "s"
         add_run_metrics(ds, self.metrics_records())
         ds["excitation"] = ("run", [r.setup.excitation for r in self.runs])
         ds["goal_rule"] = ("run", [r.goal_label for r in self.runs])
         ds["status"] = ("run", [r.optimization.status for r in self.runs])
-        ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
-                        case_source=self.case_source, scenario_yaml=self.scenario.yaml_text,
-                        zeta_f=self.scenario.ppf.zeta_f, Q_u=self.scenario.ppf.Q_u,
-                        amplitude_m=self.scenario.ppf.amplitude,
-                        gamma_stop=self.scenario.ppf.gamma_stop)
+        ds.attrs.update(
+            scenario_name=self.scenario.name,
+            case=self.scenario.case,
+            case_source=self.case_source,
+            scenario_yaml=self.scenario.yaml_text,
+            zeta_f=self.scenario.ppf.zeta_f,
+            Q_u=self.scenario.ppf.Q_u,
+            amplitude_m=self.scenario.ppf.amplitude,
+            gamma_stop=self.scenario.ppf.gamma_stop,
+        )
         return ds
 
 
@@ -275,10 +310,21 @@ def run_ppf(scenario: PPFScenario, progress: Callable[[str], None] | None = None
         if progress is not None:
             progress(run.label)
         try:
-            runs.append(run_ppf_case(run.weights, run.excitation, run.goal.build(), case=case,
-                                     initial_gains=p.initial_gains, gamma_stop=p.gamma_stop,
-                                     Q_u=p.Q_u, zeta_f=p.zeta_f, amplitude=p.amplitude,
-                                     duration=sim.duration, rate=sim.control_rate))
+            runs.append(
+                run_ppf_case(
+                    run.weights,
+                    run.excitation,
+                    run.goal.build(),
+                    case=case,
+                    initial_gains=p.initial_gains,
+                    gamma_stop=p.gamma_stop,
+                    Q_u=p.Q_u,
+                    zeta_f=p.zeta_f,
+                    amplitude=p.amplitude,
+                    duration=sim.duration,
+                    rate=sim.control_rate,
+                )
+            )
         except ValueError as exc:
             raise ScenarioError([_locate(f"runs{_item(index, run.label)}", str(exc))]) from None
     notes = (
@@ -291,8 +337,13 @@ def run_ppf(scenario: PPFScenario, progress: Callable[[str], None] | None = None
         "J. On this model ∂J/∂g < 0 (more PPF gain, more damping), so the gains move down, "
         "barely: the published gains' 10³-fold growth is not reproduced.",
     )
-    return PPFResult(scenario, tuple(r.label for r in scenario.runs), tuple(runs),
-                     cite(get_case(scenario.case).source), notes)
+    return PPFResult(
+        scenario,
+        tuple(r.label for r in scenario.runs),
+        tuple(runs),
+        cite(get_case(scenario.case).source),
+        notes,
+    )
 
 
 __all__ = ["OUTPUTS", "OUTPUT_UNITS", "PPFResult", "PPFScenario", "RESPONSES", "run_ppf"]

@@ -4,15 +4,16 @@ simulate each run."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import xarray as xr
 
 from flexsat.cases import get_case
-from flexsat.references import cite
 from flexsat.control import Controller
 from flexsat.dynamics.hub_appendage import HubAppendage
+from flexsat.references import cite
 from flexsat.scenarios.errors import ScenarioError, _head, _item, _locate
 from flexsat.scenarios.fields import _given
 from flexsat.scenarios.laws import _LAWS, _CaseContext
@@ -59,9 +60,13 @@ def _build_case(scenario: Scenario):
     except (ArithmeticError, RuntimeError) as exc:
         # the model's numerics (overflow, root finding) fail on values far outside a physical
         # range that the case's own rules do not bound
-        raise ScenarioError([f"case_overrides: the {scenario.case} model cannot be built from "
-                             f"these values ({type(exc).__name__}: {exc}); give physically "
-                             "sensible values"]) from None
+        raise ScenarioError(
+            [
+                f"case_overrides: the {scenario.case} model cannot be built from "
+                f"these values ({type(exc).__name__}: {exc}); give physically "
+                "sensible values"
+            ]
+        ) from None
 
 
 def _build_controller(index: int, run: RunSpec, ctx: _CaseContext) -> Controller:
@@ -77,12 +82,22 @@ def _build_controller(index: int, run: RunSpec, ctx: _CaseContext) -> Controller
         return _LAWS[run.law].build(run, ctx, reference)
     except ValueError as exc:
         head = _head(str(exc))
-        section = next((name for name, spec in (("gains", GainsSpec), ("poles", PolesSpec))
-                        if head in spec.model_fields), None)
+        section = next(
+            (
+                name
+                for name, spec in (("gains", GainsSpec), ("poles", PolesSpec))
+                if head in spec.model_fields
+            ),
+            None,
+        )
         raise ScenarioError([_locate(f"{path}.{section}" if section else path, str(exc))]) from None
     except (ArithmeticError, RuntimeError) as exc:
-        raise ScenarioError([f"{path}: the {run.law} law cannot be designed from these values "
-                             f"({type(exc).__name__}: {exc})"]) from None
+        raise ScenarioError(
+            [
+                f"{path}: the {run.law} law cannot be designed from these values "
+                f"({type(exc).__name__}: {exc})"
+            ]
+        ) from None
 
 
 def _collect(problems: list[str], build: Callable, *args):
@@ -108,9 +123,14 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
     controllers: dict[str, Controller] = {}
     if built is not None:
         case, model = built
-        ctx = _CaseContext(scenario.maneuver.angle, case.reference_inertia,
-                           model.appendage_inertia, int(model.n_appendages), model,
-                           scenario.sim_config().dt)
+        ctx = _CaseContext(
+            scenario.maneuver.angle,
+            case.reference_inertia,
+            model.appendage_inertia,
+            int(model.n_appendages),
+            model,
+            scenario.sim_config().dt,
+        )
         for index, run in enumerate(scenario.runs):
             controllers[run.label] = _collect(problems, _build_controller, index, run, ctx)
     config = scenario.sim_config()
@@ -122,8 +142,12 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
 
 
 #: the scenario field a resource message of :func:`flexsat.sim.config.check_resources` blames
-_RESOURCE_FIELDS = {"friction": "disturbances.friction", "duration": "simulation.duration",
-                    "n_cases": "runs", "substeps": "simulation.integration_step"}
+_RESOURCE_FIELDS = {
+    "friction": "disturbances.friction",
+    "duration": "simulation.duration",
+    "n_cases": "runs",
+    "substeps": "simulation.integration_step",
+}
 
 
 def _check_resources(model, config: SimConfig, controllers: dict[str, Controller]) -> None:
@@ -133,8 +157,11 @@ def _check_resources(model, config: SimConfig, controllers: dict[str, Controller
         check_resources(model, config, sum(c.n_cases for c in controllers.values()))
     except ValueError as exc:
         message, head = str(exc), _head(str(exc))
-        located = _RESOURCE_FIELDS[head] + message[len(head):] if head in _RESOURCE_FIELDS \
+        located = (
+            _RESOURCE_FIELDS[head] + message[len(head) :]
+            if head in _RESOURCE_FIELDS
             else f"simulation: {message}"
+        )
         raise ScenarioError([located]) from None
 
 
@@ -160,8 +187,11 @@ class ScenarioResult:
 
     def metrics_records(self) -> list[dict]:
         """One JSON-ready dict per run: ``"run"`` (the label) and the metrics (NaN -> None)."""
-        return [row for label, result in zip(self.labels, self.results)
-                for row in result.metrics_records([label])]
+        return [
+            row
+            for label, result in zip(self.labels, self.results)
+            for row in result.metrics_records([label])
+        ]
 
     def dataset(self) -> xr.Dataset:
         """All runs in one dataset, dims (run, time); ``run`` holds the labels.
@@ -170,16 +200,28 @@ class ScenarioResult:
         the simulation (``control_rate_Hz``, ``settling_band_rad``).
         """
         runs = [r.dataset.isel(case=0, drop=True) for r in self.results]
-        ds = xr.concat(runs, dim="run", data_vars="all", coords="minimal", compat="override",
-                       join="exact", combine_attrs="override")
+        ds = xr.concat(
+            runs,
+            dim="run",
+            data_vars="all",
+            coords="minimal",
+            compat="override",
+            join="exact",
+            combine_attrs="override",
+        )
         ds = ds.assign_coords(run=("run", list(self.labels)))
-        ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
-                        case_source=self.case_source, scenario_yaml=self.scenario.yaml_text)
+        ds.attrs.update(
+            scenario_name=self.scenario.name,
+            case=self.scenario.case,
+            case_source=self.case_source,
+            scenario_yaml=self.scenario.yaml_text,
+        )
         return ds
 
 
-def run_scenario(scenario: Scenario, progress: Callable[[str], None] | None = None
-                 ) -> ScenarioResult:
+def run_scenario(
+    scenario: Scenario, progress: Callable[[str], None] | None = None
+) -> ScenarioResult:
     """Validate the whole scenario, then simulate each run.
 
     Parameters
@@ -204,10 +246,12 @@ def run_scenario(scenario: Scenario, progress: Callable[[str], None] | None = No
         try:
             results.append(simulate(plan.model, controller, plan.config))
         except SimulationDiverged as exc:
-            raise SimulationDiverged(f"runs{_item(index, label)}: {exc}", exc.cases, exc.time,
-                                     exc.cause) from None
-    return ScenarioResult(scenario, tuple(plan.controllers), tuple(results),
-                          cite(get_case(scenario.case).source))
+            raise SimulationDiverged(
+                f"runs{_item(index, label)}: {exc}", exc.cases, exc.time, exc.cause
+            ) from None
+    return ScenarioResult(
+        scenario, tuple(plan.controllers), tuple(results), cite(get_case(scenario.case).source)
+    )
 
 
 __all__ = ["ScenarioPlan", "ScenarioResult", "prepare_scenario", "run_scenario"]

@@ -31,8 +31,9 @@ from __future__ import annotations
 import functools
 import inspect
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable, Literal, Union
+from typing import Any, Literal, Union
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -40,9 +41,15 @@ from pydantic import Field, field_validator, model_validator
 from flexsat import limits
 from flexsat.catalog import CASES, get_case
 from flexsat.scenarios.errors import ScenarioError, _item, _locate
+from flexsat.scenarios.fields import (
+    _Document,
+    _given,
+    _Section,
+    check_unique_labels,
+    count,
+    quantity,
+)
 from flexsat.scenarios.runner import ScenarioResult
-from flexsat.scenarios.fields import (_Document, _given, _Section, check_unique_labels, count,
-                                      quantity)
 
 #: a value as written in YAML: a number, a quantity string, or a (nested) list of them
 Value = Union[float, int, str, list[Any]]
@@ -100,15 +107,17 @@ class _SimulationLaw:
 
 def target_quaternion(target: dict) -> np.ndarray | None:
     """Euler parameters of a target given as ``euler123`` (rad) or ``attitude``; None if empty."""
-    from flexsat.dynamics.attitude import euler123_to_dcm, dcm_to_quaternion
+    from flexsat.dynamics.attitude import dcm_to_quaternion, euler123_to_dcm
     from flexsat.units import to_si_array
 
     if not target:
         return None
     unknown = set(target) - {"euler123", "attitude"}
     if unknown:
-        raise ValueError(f"target.{sorted(unknown)[0]}: not a target (give euler123 (rad) or "
-                         "attitude (a unit quaternion, scalar first))")
+        raise ValueError(
+            f"target.{sorted(unknown)[0]}: not a target (give euler123 (rad) or "
+            "attitude (a unit quaternion, scalar first))"
+        )
     if len(target) > 1:
         raise ValueError("target: give euler123 or attitude, not both")
     if "euler123" in target:
@@ -155,9 +164,8 @@ def _weights(value, size: int, field: str) -> np.ndarray:
 
 
 def _open_loop(run: SimulationRunSpec, plant, dt: float):
-    from flexsat.control import StateSpaceCompensator
-
     import control
+    from flexsat.control import StateSpaceCompensator
 
     m = plant.n_inputs
     p = plant.outputs[0]
@@ -168,11 +176,13 @@ def _open_loop(run: SimulationRunSpec, plant, dt: float):
 #: the laws a simulation run names, with their gains (the builders import the control package
 #: when a run is built, so reading a scenario does not)
 SIMULATION_LAWS: dict[str, _SimulationLaw] = {
-    "gibbs_lyapunov": _SimulationLaw(("k", "A"), ("k", "A"), True,
-                                     _attitude_law("GibbsLyapunovLaw")),
+    "gibbs_lyapunov": _SimulationLaw(
+        ("k", "A"), ("k", "A"), True, _attitude_law("GibbsLyapunovLaw")
+    ),
     "mrp_pd": _SimulationLaw(("K", "P"), ("K", "P"), True, _attitude_law("MRPLaw")),
-    "quaternion_pd": _SimulationLaw(("Kp", "Kd"), ("Kp", "Kd"), True,
-                                    _attitude_law("QuaternionPD")),
+    "quaternion_pd": _SimulationLaw(
+        ("Kp", "Kd"), ("Kp", "Kd"), True, _attitude_law("QuaternionPD")
+    ),
     "lqr": _SimulationLaw(("state_weights", "input_weights"), ("state_weights",), False, _lqr),
     "open_loop": _SimulationLaw((), (), False, _open_loop),
 }
@@ -192,8 +202,9 @@ class SimulationRunSpec(_Section):
         for name in self.gains:
             if name not in law.gains:
                 known = ", ".join(law.gains) or "none"
-                raise ValueError(f"gains.{name}: not a gain of law {self.law!r} (its gains: "
-                                 f"{known})")
+                raise ValueError(
+                    f"gains.{name}: not a gain of law {self.law!r} (its gains: {known})"
+                )
         missing = [g for g in law.required if g not in self.gains]
         if missing:
             raise ValueError(f"gains.{missing[0]}: required by law {self.law!r}")
@@ -221,8 +232,10 @@ class SimulationScenario(_Document):
     def _known_case(cls, name: str) -> str:
         get_case(name)
         if name not in simulation_cases():
-            raise ValueError(f"case: {name!r} builds no plant to simulate; cases with one: "
-                             f"{', '.join(simulation_cases())}")
+            raise ValueError(
+                f"case: {name!r} builds no plant to simulate; cases with one: "
+                f"{', '.join(simulation_cases())}"
+            )
         return name
 
     @model_validator(mode="after")
@@ -262,8 +275,12 @@ def _build_plant(scenario: SimulationScenario):
     accepted = inspect.signature(builder).parameters
     for name in scenario.plant:
         if name not in accepted:
-            raise ScenarioError([f"plant.{name}: not an option of the {scenario.case} plant "
-                                 f"(its options: {', '.join(accepted) or 'none'})"])
+            raise ScenarioError(
+                [
+                    f"plant.{name}: not an option of the {scenario.case} plant "
+                    f"(its options: {', '.join(accepted) or 'none'})"
+                ]
+            )
     try:
         return builder(**scenario.plant)
     except (ValueError, TypeError) as exc:
@@ -272,18 +289,26 @@ def _build_plant(scenario: SimulationScenario):
 
 def _config(scenario: SimulationScenario, plant):
     from flexsat.sim import SimConfig
-    from flexsat.sim.channels import (ChannelActuator, ChannelDisturbance, ChannelSensor,
-                                      resolve_channels)
+    from flexsat.sim.channels import (
+        ChannelActuator,
+        ChannelDisturbance,
+        ChannelSensor,
+        resolve_channels,
+    )
 
     def pieces(section: dict, kind, role: str, channels) -> dict:
         names = {c.name for c in channels}
         out = {}
         for name, spec in section.items():
             if name not in names:
-                raise ScenarioError([f"{role}.{name}: the {scenario.case} plant has no "
-                                     f"{'output' if role == 'sensors' else 'input'} channel "
-                                     f"{name!r} (its channels: "
-                                     f"{', '.join(c.name for c in channels)})"])
+                raise ScenarioError(
+                    [
+                        f"{role}.{name}: the {scenario.case} plant has no "
+                        f"{'output' if role == 'sensors' else 'input'} channel "
+                        f"{name!r} (its channels: "
+                        f"{', '.join(c.name for c in channels)})"
+                    ]
+                )
             values = _given(spec)
             if "impulses" in values:
                 impulses = values.pop("impulses")
@@ -297,25 +322,30 @@ def _config(scenario: SimulationScenario, plant):
 
     settings = _given(scenario.simulation)
     try:
-        config = SimConfig(**settings,
-                         channel_sensors=pieces(scenario.sensors, ChannelSensor, "sensors",
-                                                plant.outputs),
-                         channel_actuators=pieces(scenario.actuators, ChannelActuator,
-                                                  "actuators", plant.inputs),
-                         channel_disturbances=pieces(scenario.disturbances, ChannelDisturbance,
-                                                     "disturbances", plant.inputs))
+        config = SimConfig(
+            **settings,
+            channel_sensors=pieces(scenario.sensors, ChannelSensor, "sensors", plant.outputs),
+            channel_actuators=pieces(
+                scenario.actuators, ChannelActuator, "actuators", plant.inputs
+            ),
+            channel_disturbances=pieces(
+                scenario.disturbances, ChannelDisturbance, "disturbances", plant.inputs
+            ),
+        )
     except ValueError as exc:
         raise ScenarioError([f"simulation: {exc}"]) from None
     try:  # binding each piece to its channel converts its values to the channel's unit
         resolve_channels(plant, config)
     except ValueError as exc:
-        raise ScenarioError([re.sub(r"^(sensors|actuators|disturbances)\[(\w+)\]", r"\1.\2",
-                                    str(exc))]) from None
+        raise ScenarioError(
+            [re.sub(r"^(sensors|actuators|disturbances)\[(\w+)\]", r"\1.\2", str(exc))]
+        ) from None
     return config
 
 
-def run_simulation(scenario: SimulationScenario, progress: Callable[[str], None] | None = None
-                   ) -> SimulationResult:
+def run_simulation(
+    scenario: SimulationScenario, progress: Callable[[str], None] | None = None
+) -> SimulationResult:
     """Build the plant, the configuration and every run's law, then simulate each run.
 
     Raises
@@ -349,13 +379,20 @@ def run_simulation(scenario: SimulationScenario, progress: Callable[[str], None]
         try:
             results.append(simulate(plant, law, config, n_cases=1, initial_state=x0))
         except SimulationDiverged as exc:
-            raise SimulationDiverged(f"runs{_item(index, label)}: {exc}", exc.cases, exc.time,
-                                     exc.cause) from None
+            raise SimulationDiverged(
+                f"runs{_item(index, label)}: {exc}", exc.cases, exc.time, exc.cause
+            ) from None
         except ValueError as exc:
             raise ScenarioError([f"runs{_item(index, label)}: {exc}"]) from None
-    return SimulationResult(scenario, tuple(laws), tuple(results),
-                            cite(get_case(scenario.case).source))
+    return SimulationResult(
+        scenario, tuple(laws), tuple(results), cite(get_case(scenario.case).source)
+    )
 
 
-__all__ = ["SIMULATION_LAWS", "SimulationResult", "SimulationScenario", "run_simulation",
-           "simulation_cases"]
+__all__ = [
+    "SIMULATION_LAWS",
+    "SimulationResult",
+    "SimulationScenario",
+    "run_simulation",
+    "simulation_cases",
+]

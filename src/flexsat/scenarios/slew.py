@@ -34,20 +34,26 @@ SI numbers; one value fills its block.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable, Literal, Union
+from typing import Any, Literal, Union
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.catalog import get_case
+from flexsat.design.slew_weights import SlewWeights, nominal_histories, rim_nodes, slew_run_metrics
 from flexsat.scenarios.errors import ScenarioError, _item, _locate
-from flexsat.scenarios.fields import (_Document, _Section, _given, check_unique_labels, count,
-                                      quantity)
+from flexsat.scenarios.fields import (
+    _Document,
+    _given,
+    _Section,
+    check_unique_labels,
+    count,
+    quantity,
+)
 from flexsat.scenarios.simulation import SimulationSettings, target_quaternion
-from flexsat.design.slew_weights import (SlewWeights, nominal_histories, rim_nodes,
-                                          slew_run_metrics)
 from flexsat.sim.slew_goals import euler_angle_error
 
 #: one weight, or one per component of its block
@@ -69,12 +75,15 @@ class SlewManeuverSpec(_Section):
     @classmethod
     def _rotation(cls, target: dict) -> dict:
         if not target:
-            raise ValueError("target: give euler123 (three angles) or attitude (a unit "
-                             "quaternion, scalar first)")
+            raise ValueError(
+                "target: give euler123 (three angles) or attitude (a unit quaternion, scalar first)"
+            )
         beta = target_quaternion(target)
         if beta.shape != (4,) or abs(np.linalg.norm(beta) - 1.0) > 1e-9:
-            raise ValueError(f"target.attitude: must be a unit quaternion (4 values, norm 1 to "
-                             f"1e-9), got {np.round(beta, 12).tolist()}")
+            raise ValueError(
+                f"target.attitude: must be a unit quaternion (4 values, norm 1 to "
+                f"1e-9), got {np.round(beta, 12).tolist()}"
+            )
         return target
 
 
@@ -119,8 +128,10 @@ class SlewRunSpec(_Section):
     @classmethod
     def _not_open_loop(cls, label: str) -> str:
         if label == OPEN_LOOP:
-            raise ValueError(f"label: {OPEN_LOOP!r} names the nominal torque alone, which every "
-                             "slew scenario runs; choose another label")
+            raise ValueError(
+                f"label: {OPEN_LOOP!r} names the nominal torque alone, which every "
+                "slew scenario runs; choose another label"
+            )
         return label
 
     @model_validator(mode="after")
@@ -128,8 +139,10 @@ class SlewRunSpec(_Section):
         if self.forces != "none" and self.weights.force is None:
             raise ValueError("weights.force: required when the run uses forces")
         if self.decouple and self.forces == "none":
-            raise ValueError("decouple: needs forces (decoupling keeps the forces' net moment "
-                             "about the centre of mass zero)")
+            raise ValueError(
+                "decouple: needs forces (decoupling keeps the forces' net moment "
+                "about the centre of mass zero)"
+            )
         return self
 
 
@@ -153,18 +166,22 @@ class SlewScenario(_Document):
 
         get_case(name)
         if name not in simulation_cases():
-            raise ValueError(f"case: {name!r} builds no plant to slew; cases with one: "
-                             f"{', '.join(simulation_cases())}")
+            raise ValueError(
+                f"case: {name!r} builds no plant to slew; cases with one: "
+                f"{', '.join(simulation_cases())}"
+            )
         return name
 
     @model_validator(mode="after")
     def _checks(self):
         check_unique_labels(self.runs)
         if self.simulation.duration < self.goals.evaluation * self.maneuver.duration:
-            raise ValueError(f"simulation.duration: must reach {self.goals.evaluation:g} × the "
-                             f"maneuver duration ({self.goals.evaluation * self.maneuver.duration:g}"
-                             f" s) where the goals are evaluated, got "
-                             f"{self.simulation.duration:g} s")
+            raise ValueError(
+                f"simulation.duration: must reach {self.goals.evaluation:g} × the "
+                f"maneuver duration ({self.goals.evaluation * self.maneuver.duration:g}"
+                f" s) where the goals are evaluated, got "
+                f"{self.simulation.duration:g} s"
+            )
         return self
 
 
@@ -201,10 +218,13 @@ class SlewResult:
 
     def attributes(self) -> dict:
         g = self.scenario.goals
-        return {"duration_s": self.scenario.maneuver.duration,
-                "goal_angle_fraction": g.angle_fraction, "goal_evaluation": g.evaluation,
-                "goal_deflection_ratio": g.deflection_ratio,
-                "goal_angle_tolerance_mrad": float(self.goals["angle_tolerance_mrad"][0])}
+        return {
+            "duration_s": self.scenario.maneuver.duration,
+            "goal_angle_fraction": g.angle_fraction,
+            "goal_evaluation": g.evaluation,
+            "goal_deflection_ratio": g.deflection_ratio,
+            "goal_angle_tolerance_mrad": float(self.goals["angle_tolerance_mrad"][0]),
+        }
 
     def metrics_records(self) -> list[dict]:
         """One JSON-ready dict per run: ``"run"`` and the goal metrics (NaN, inf -> None)."""
@@ -213,8 +233,11 @@ class SlewResult:
             row = {"run": label}
             for name, values in self.goals.items():
                 v = values[i]
-                row[name] = bool(v) if isinstance(v, (bool, np.bool_)) else (
-                    float(v) if np.isfinite(v) else None)
+                row[name] = (
+                    bool(v)
+                    if isinstance(v, (bool, np.bool_))
+                    else (float(v) if np.isfinite(v) else None)
+                )
             records.append(row)
         return records
 
@@ -223,30 +246,48 @@ class SlewResult:
         import xarray as xr
 
         runs = [r.dataset.isel(case=0, drop=True) for r in self.results]
-        ds = xr.concat(runs, dim="run", data_vars="all", coords="minimal", compat="override",
-                       join="exact", combine_attrs="override")
+        ds = xr.concat(
+            runs,
+            dim="run",
+            data_vars="all",
+            coords="minimal",
+            compat="override",
+            join="exact",
+            combine_attrs="override",
+        )
         ds = ds.assign_coords(run=("run", list(self.labels)))
         t = ds["time"].values
         nominal_torque, nominal_angles = nominal_histories(self.nominal, t)
         ds["nominal_torque"] = (("time", "torque_component"), nominal_torque, {"units": "N*m"})
-        ds["nominal_euler123"] = (("time", "euler123_component"), nominal_angles,
-                                  {"units": "rad"})
-        ds["euler123_error"] = (("run", "time", "euler123_component"), euler_angle_error(
-            ds["euler123"].transpose("run", "time", ...).values, nominal_angles),
-            {"units": "rad"})
-        ds["torque_perturbation"] = (("run", "time", "torque_component"), ds["torque"]
-                                     .transpose("run", "time", ...).values - nominal_torque,
-                                     {"units": "N*m"})
+        ds["nominal_euler123"] = (("time", "euler123_component"), nominal_angles, {"units": "rad"})
+        ds["euler123_error"] = (
+            ("run", "time", "euler123_component"),
+            euler_angle_error(ds["euler123"].transpose("run", "time", ...).values, nominal_angles),
+            {"units": "rad"},
+        )
+        ds["torque_perturbation"] = (
+            ("run", "time", "torque_component"),
+            ds["torque"].transpose("run", "time", ...).values - nominal_torque,
+            {"units": "N*m"},
+        )
         for node in rim_nodes(ds):
-            parts = np.stack([ds[f"displacement_{node}{a}"].transpose("run", "time").values
-                              for a in "XYZ"], -1)
-            ds[f"rim_deflection_{node}"] = (("run", "time"), np.linalg.norm(parts, axis=-1),
-                                            {"units": "m"})
+            parts = np.stack(
+                [ds[f"displacement_{node}{a}"].transpose("run", "time").values for a in "XYZ"], -1
+            )
+            ds[f"rim_deflection_{node}"] = (
+                ("run", "time"),
+                np.linalg.norm(parts, axis=-1),
+                {"units": "m"},
+            )
         for name, values in self.goals.items():
             ds[name] = ("run", np.asarray(values), {"units": self.goal_units.get(name, "")})
-        ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
-                        case_source=self.case_source, scenario_yaml=self.scenario.yaml_text,
-                        **self.attributes())
+        ds.attrs.update(
+            scenario_name=self.scenario.name,
+            case=self.scenario.case,
+            case_source=self.case_source,
+            scenario_yaml=self.scenario.yaml_text,
+            **self.attributes(),
+        )
         return ds
 
 
@@ -270,9 +311,11 @@ def _forces(run: SlewRunSpec, index: int, plant) -> list[str]:
     for name in run.forces:
         channel = name if name.startswith("force_") else f"force_{name}"
         if channel not in available:
-            raise ValueError(f"runs{_item(index, run.label)}.forces: {name!r} is not a force of "
-                             f"the plant (its forces: "
-                             f"{', '.join(c[len('force_'):] for c in available)})")
+            raise ValueError(
+                f"runs{_item(index, run.label)}.forces: {name!r} is not a force of "
+                f"the plant (its forces: "
+                f"{', '.join(c[len('force_') :] for c in available)})"
+            )
         names.append(channel)
     return names
 
@@ -285,12 +328,20 @@ def _plants(scenario: SlewScenario):
 
     truth = _build_plant(scenario)
     if not isinstance(truth, FlexibleSpacecraft):
-        raise ScenarioError([f"plant: the {scenario.case} plant with these options is a "
-                             f"{type(truth).__name__}; a slew needs a flexible spacecraft "
-                             "(model: flexible)"])
+        raise ScenarioError(
+            [
+                f"plant: the {scenario.case} plant with these options is a "
+                f"{type(truth).__name__}; a slew needs a flexible spacecraft "
+                "(model: flexible)"
+            ]
+        )
     if scenario.controller.modes > truth.n_modes:
-        raise ScenarioError([f"controller.modes: at most the plant's {truth.n_modes} elastic "
-                             f"modes, got {scenario.controller.modes}"])
+        raise ScenarioError(
+            [
+                f"controller.modes: at most the plant's {truth.n_modes} elastic "
+                f"modes, got {scenario.controller.modes}"
+            ]
+        )
     return truth, truth.reduced(scenario.controller.modes)
 
 
@@ -305,22 +356,31 @@ def _laws(scenario: SlewScenario, truth, design_plant, nominal, dt: float) -> di
         try:
             forces = _forces(run, index, design_plant)
             Q, D = _weights(run, index, design_plant.n_modes, len(forces))
-            design = perturbation_design(design_plant, nominal, Q, D, run.break_frequency,
-                                         run.shaping_damping,
-                                         scenario.controller.linearization_points,
-                                         forces=forces, decouple=run.decouple)
+            design = perturbation_design(
+                design_plant,
+                nominal,
+                Q,
+                D,
+                run.break_frequency,
+                run.shaping_damping,
+                scenario.controller.linearization_points,
+                forces=forces,
+                decouple=run.decouple,
+            )
             laws[run.label] = design.controller(dt, run.feedforward, plant=truth)
         except ValueError as exc:
             message = str(exc)
-            problems.append(message if message.startswith("runs[") else
-                            _locate(f"runs{_item(index, run.label)}", message))
+            problems.append(
+                message
+                if message.startswith("runs[")
+                else _locate(f"runs{_item(index, run.label)}", message)
+            )
     if problems:
         raise ScenarioError(problems)
     return laws
 
 
-def run_slew(scenario: SlewScenario, progress: Callable[[str], None] | None = None
-             ) -> SlewResult:
+def run_slew(scenario: SlewScenario, progress: Callable[[str], None] | None = None) -> SlewResult:
     """Solve the nominal maneuver, design every run's perturbation feedback, then simulate the
     open loop and each run on the case's flexible plant and evaluate the goals.
 
@@ -342,9 +402,14 @@ def run_slew(scenario: SlewScenario, progress: Callable[[str], None] | None = No
     if progress is not None:
         progress("nominal maneuver")
     try:
-        nominal = three_axis_slew(truth.inertia, target_quaternion(m.target), m.duration,
-                                  m.break_frequency, m.shaping_damping,
-                                  Q=m.rate_weight * np.eye(3))
+        nominal = three_axis_slew(
+            truth.inertia,
+            target_quaternion(m.target),
+            m.duration,
+            m.break_frequency,
+            m.shaping_damping,
+            Q=m.rate_weight * np.eye(3),
+        )
     except ValueError as exc:
         raise ScenarioError([_locate("maneuver", str(exc))]) from None
     try:
@@ -360,22 +425,37 @@ def run_slew(scenario: SlewScenario, progress: Callable[[str], None] | None = No
         try:
             results.append(simulate(truth, law, config, n_cases=1))
         except SimulationDiverged as exc:
-            raise SimulationDiverged(f"runs{_item(index - 1, label)}: {exc}", exc.cases,
-                                     exc.time, exc.cause) from None
+            raise SimulationDiverged(
+                f"runs{_item(index - 1, label)}: {exc}", exc.cases, exc.time, exc.cause
+            ) from None
 
     g = scenario.goals
-    goals, units = slew_run_metrics(results, nominal,
-                                    SlewGoals(g.angle_fraction, g.evaluation, g.deflection_ratio))
+    goals, units = slew_run_metrics(
+        results, nominal, SlewGoals(g.angle_fraction, g.evaluation, g.deflection_ratio)
+    )
     t = results[0].dataset["time"].values
-    notes = (f"Nominal: three-axis TPBVP by continuation in {len(nominal.history)} steps, "
-             f"boundary error {nominal.boundary_error():.1e}; peak nominal torques "
-             + ", ".join(f"{a} {abs(nominal.torque(t[t <= m.duration])[:, i]).max():,.0f} N m"
-                         for i, a in enumerate("xyz")) + ".",
-             f"Plant: {truth.n_modes} elastic modes; design model: {design_plant.n_modes} "
-             f"modes linearised at {scenario.controller.linearization_points} equally spaced "
-             f"times, gains interpolated in time.")
-    return SlewResult(scenario, tuple(laws), tuple(results), nominal, goals, units,
-                      cite(get_case(scenario.case).source), notes)
+    notes = (
+        f"Nominal: three-axis TPBVP by continuation in {len(nominal.history)} steps, "
+        f"boundary error {nominal.boundary_error():.1e}; peak nominal torques "
+        + ", ".join(
+            f"{a} {abs(nominal.torque(t[t <= m.duration])[:, i]).max():,.0f} N m"
+            for i, a in enumerate("xyz")
+        )
+        + ".",
+        f"Plant: {truth.n_modes} elastic modes; design model: {design_plant.n_modes} "
+        f"modes linearised at {scenario.controller.linearization_points} equally spaced "
+        f"times, gains interpolated in time.",
+    )
+    return SlewResult(
+        scenario,
+        tuple(laws),
+        tuple(results),
+        nominal,
+        goals,
+        units,
+        cite(get_case(scenario.case).source),
+        notes,
+    )
 
 
 __all__ = ["OPEN_LOOP", "SlewResult", "SlewScenario", "run_slew"]

@@ -14,18 +14,19 @@ on seeded random attitudes (seed 000 §2.3.4; issue 14 part 4)::
       - {label: 2 false + 20 % missing, attitudes: 1000, seed: 2, false_stars: 2,
          missing_fraction: 0.2}
 
-``catalog.source`` is ``synthetic`` (:func:`flexsat.identify.star_catalog.synthetic_sky`) or
+``catalog.source`` is ``synthetic`` (:func:`flexsat.attitude.star_catalog.synthetic_sky`) or
 ``hipparcos`` with ``path`` to a user-supplied ``hip_main.dat`` (relative to the scenario
 file). Each run identifies ``attitudes`` random attitudes
-(:func:`flexsat.identify.star_tracker.monte_carlo`) with ``false_stars`` spurious centroids and
+(:func:`flexsat.attitude.star_tracker.monte_carlo`) with ``false_stars`` spurious centroids and
 a ``missing_fraction`` of the visible stars dropped per frame.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Literal
+from typing import Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -42,8 +43,10 @@ from flexsat.scenarios.fields import (
 )
 
 #: the paper this kind reproduces
-SOURCE = ("seed 000 §2.3.4 (Anderson, Pollock & Junkins 1990, 'A testbed for autonomous star "
-          "pattern recognition and attitude determination'; Junkins, White & Turner 1977)")
+SOURCE = (
+    "seed 000 §2.3.4 (Anderson, Pollock & Junkins 1990, 'A testbed for autonomous star "
+    "pattern recognition and attitude determination'; Junkins, White & Turner 1977)"
+)
 #: most attitudes one run may identify (a run costs ~5 ms per attitude)
 MAX_ATTITUDES = 100_000
 
@@ -59,22 +62,22 @@ class CatalogSpec(_Section):
     @model_validator(mode="after")
     def _path(self):
         if (self.source == "hipparcos") != (self.path is not None):
-            raise ValueError("path: give the hip_main.dat path with source: hipparcos, and only "
-                             "then")
+            raise ValueError(
+                "path: give the hip_main.dat path with source: hipparcos, and only then"
+            )
         return self
 
     def build(self, folder: Path):
-        from flexsat.identify.star_catalog import load_hipparcos, synthetic_sky
+        from flexsat.attitude.star_catalog import load_hipparcos, synthetic_sky
 
         if self.source == "synthetic":
             return synthetic_sky(self.magnitude_limit, self.seed)
         path = Path(self.path)
-        return load_hipparcos(path if path.is_absolute() else folder / path,
-                              self.magnitude_limit)
+        return load_hipparcos(path if path.is_absolute() else folder / path, self.magnitude_limit)
 
 
 class CameraSpec(_Buildable):
-    """One star camera (:class:`flexsat.identify.star_camera.StarCamera`)."""
+    """One star camera (:class:`flexsat.attitude.star_camera.StarCamera`)."""
 
     field_of_view: quantity("rad", positive=True) = float(np.radians(12.0))
     n_pixels: count(2) = 4096
@@ -84,11 +87,16 @@ class CameraSpec(_Buildable):
     mounting: list[quantity("rad")] = Field(default_factory=lambda: [0.0, 0.0, 0.0])
 
     def build(self):
-        from flexsat.identify.star_camera import StarCamera
+        from flexsat.attitude.star_camera import StarCamera
 
-        return StarCamera(field_of_view=self.field_of_view, n_pixels=self.n_pixels,
-                          pixel_pitch=self.pixel_pitch, centroid_noise=self.centroid_noise,
-                          magnitude_limit=self.magnitude_limit, mounting=tuple(self.mounting))
+        return StarCamera(
+            field_of_view=self.field_of_view,
+            n_pixels=self.n_pixels,
+            pixel_pitch=self.pixel_pitch,
+            centroid_noise=self.centroid_noise,
+            magnitude_limit=self.magnitude_limit,
+            mounting=tuple(self.mounting),
+        )
 
 
 class IdentificationSpec(_Section):
@@ -123,9 +131,11 @@ class StarTrackerScenario(_Document):
     def _checks(self):
         check_unique_labels(self.runs)
         if len(self.cameras) < self.identification.min_fields:
-            raise ValueError(f"cameras: identification.min_fields = "
-                             f"{self.identification.min_fields} needs as many cameras, got "
-                             f"{len(self.cameras)}")
+            raise ValueError(
+                f"cameras: identification.min_fields = "
+                f"{self.identification.min_fields} needs as many cameras, got "
+                f"{len(self.cameras)}"
+            )
         return self
 
     @property
@@ -136,7 +146,7 @@ class StarTrackerScenario(_Document):
 @dataclass(frozen=True)
 class StarTrackerResult:
     """The runs of a star-tracker scenario: one
-    :class:`~flexsat.identify.star_tracker.MonteCarloResult` per run label."""
+    :class:`~flexsat.attitude.star_tracker.MonteCarloResult` per run label."""
 
     scenario: StarTrackerScenario
     labels: tuple[str, ...]
@@ -147,20 +157,23 @@ class StarTrackerResult:
 
     def metrics_records(self) -> list[dict]:
         """One JSON-ready dict per run (arcseconds for angles)."""
-        from flexsat.identify.star_tracker import ARCSEC
+        from flexsat.attitude.star_tracker import ARCSEC
 
         out = []
         for label, r in zip(self.labels, self.runs):
             acc = r.accepted
             std = r.error_std / ARCSEC if acc.any() else np.full(3, np.nan)
             sig = np.nanmean(r.sigmas, 0) / ARCSEC if acc.any() else np.full(3, np.nan)
-            rec = {"run": label, "attitudes": int(acc.size),
-                   "identification_rate": float(r.identification_rate),
-                   "accepted_rate": float(acc.mean()),
-                   "wrong_accepted": int(r.wrong_accepted.sum()),
-                   "mean_stars": float(r.n_stars[acc].mean()) if acc.any() else float("nan"),
-                   "min_triplets": int(r.triplets[acc].min()) if acc.any() else 0,
-                   "nees_mean": float(np.nanmean(r.nees)) if acc.any() else float("nan")}
+            rec = {
+                "run": label,
+                "attitudes": int(acc.size),
+                "identification_rate": float(r.identification_rate),
+                "accepted_rate": float(acc.mean()),
+                "wrong_accepted": int(r.wrong_accepted.sum()),
+                "mean_stars": float(r.n_stars[acc].mean()) if acc.any() else float("nan"),
+                "min_triplets": int(r.triplets[acc].min()) if acc.any() else 0,
+                "nees_mean": float(np.nanmean(r.nees)) if acc.any() else float("nan"),
+            }
             for k, axis in enumerate("xyz"):
                 rec[f"error_std_{axis}_arcsec"] = float(std[k])
                 rec[f"quest_sigma_{axis}_arcsec"] = float(sig[k])
@@ -172,7 +185,7 @@ class StarTrackerResult:
         ``n_stars``; the first attitude's frames (pixels, match status) for the sky plot."""
         import xarray as xr
 
-        from flexsat.identify.star_tracker import ARCSEC
+        from flexsat.attitude.star_tracker import ARCSEC
 
         n = max(r.accepted.size for r in self.runs)
         n_cam = len(self.tracker.cameras)
@@ -191,43 +204,56 @@ class StarTrackerResult:
         status = np.full((len(self.runs), n_cam, n_star), np.nan)
         for i, r in enumerate(self.runs):
             for c, (f, fm) in enumerate(zip(r.example_frames, r.example.fields)):
-                px[i, c, :len(f)] = f.pixels
+                px[i, c, : len(f)] = f.pixels
                 # 1: matched to its true star, 0: true star deleted, -1: false star, 2: wrong
                 s = np.where(f.truth < 0, -1.0, np.where(fm.matches < 0, 0.0, 1.0))
                 s[(fm.matches >= 0) & (fm.matches != f.truth)] = 2.0
-                status[i, c, :len(f)] = s
+                status[i, c, : len(f)] = s
         ds = xr.Dataset(
-            {"error": (("run", "attitude", "axis"), err, {"units": "arcsec"}),
-             "accepted": (("run", "attitude"), acc),
-             "correct": (("run", "attitude"), cor),
-             "n_stars": (("run", "attitude"), nst),
-             "example_pixels": (("run", "camera", "star", "pixel_axis"), px,
-                                {"units": "pixel"}),
-             "example_status": (("run", "camera", "star"), status,
-                                {"meaning": "1 matched, 0 deleted true star, -1 false star, "
-                                            "2 wrong match"})},
-            coords={"run": list(self.labels), "attitude": np.arange(n),
-                    "axis": ["x", "y", "z"], "camera": np.arange(n_cam),
-                    "star": np.arange(n_star), "pixel_axis": ["column", "row"]})
+            {
+                "error": (("run", "attitude", "axis"), err, {"units": "arcsec"}),
+                "accepted": (("run", "attitude"), acc),
+                "correct": (("run", "attitude"), cor),
+                "n_stars": (("run", "attitude"), nst),
+                "example_pixels": (("run", "camera", "star", "pixel_axis"), px, {"units": "pixel"}),
+                "example_status": (
+                    ("run", "camera", "star"),
+                    status,
+                    {"meaning": "1 matched, 0 deleted true star, -1 false star, 2 wrong match"},
+                ),
+            },
+            coords={
+                "run": list(self.labels),
+                "attitude": np.arange(n),
+                "axis": ["x", "y", "z"],
+                "camera": np.arange(n_cam),
+                "star": np.arange(n_star),
+                "pixel_axis": ["column", "row"],
+            },
+        )
         add_run_metrics(ds, self.metrics_records())
-        ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
-                        case_source=self.case_source, scenario_yaml=self.scenario.yaml_text,
-                        n_pixels=int(self.tracker.cameras[0].n_pixels),
-                        tolerance_arcsec=self.tracker.tolerance / ARCSEC,
-                        catalog_stars=len(self.tracker.catalog),
-                        catalog_pairs=len(self.tracker.index))
+        ds.attrs.update(
+            scenario_name=self.scenario.name,
+            case=self.scenario.case,
+            case_source=self.case_source,
+            scenario_yaml=self.scenario.yaml_text,
+            n_pixels=int(self.tracker.cameras[0].n_pixels),
+            tolerance_arcsec=self.tracker.tolerance / ARCSEC,
+            catalog_stars=len(self.tracker.catalog),
+            catalog_pairs=len(self.tracker.index),
+        )
         return ds
 
 
 def build_tracker(scenario: StarTrackerScenario):
-    """The :class:`~flexsat.identify.star_tracker.StarTracker` of a scenario.
+    """The :class:`~flexsat.attitude.star_tracker.StarTracker` of a scenario.
 
     Raises
     ------
     ScenarioError
         For a catalogue or tracker the runtime refuses (naming the section).
     """
-    from flexsat.identify.star_tracker import StarTracker
+    from flexsat.attitude.star_tracker import StarTracker
 
     try:
         catalog = scenario.catalog.build(scenario.folder)
@@ -235,17 +261,23 @@ def build_tracker(scenario: StarTrackerScenario):
         raise ScenarioError([_locate("catalog", str(exc))]) from None
     idn = scenario.identification
     try:
-        return StarTracker([c.build() for c in scenario.cameras], catalog, idn.tolerance,
-                           idn.min_triplets, idn.min_fields)
+        return StarTracker(
+            [c.build() for c in scenario.cameras],
+            catalog,
+            idn.tolerance,
+            idn.min_triplets,
+            idn.min_fields,
+        )
     except ValueError as exc:
         where = "cameras" if str(exc).startswith("cameras") else "identification"
         raise ScenarioError([_locate(where, str(exc))]) from None
 
 
-def run_star_tracker(scenario: StarTrackerScenario,
-                     progress: Callable[[str], None] | None = None) -> StarTrackerResult:
+def run_star_tracker(
+    scenario: StarTrackerScenario, progress: Callable[[str], None] | None = None
+) -> StarTrackerResult:
     """Build the tracker once (catalogue, k-vector index) and identify every run's attitudes."""
-    from flexsat.identify.star_tracker import monte_carlo
+    from flexsat.attitude.star_tracker import monte_carlo
 
     tracker = build_tracker(scenario)
     runs = []
@@ -253,8 +285,9 @@ def run_star_tracker(scenario: StarTrackerScenario,
         if progress is not None:
             progress(run.label)
         try:
-            runs.append(monte_carlo(tracker, run.attitudes, run.seed, run.false_stars,
-                                    run.missing_fraction))
+            runs.append(
+                monte_carlo(tracker, run.attitudes, run.seed, run.false_stars, run.missing_fraction)
+            )
         except ValueError as exc:
             raise ScenarioError([_locate(f"runs{_item(index, run.label)}", str(exc))]) from None
     notes = (
@@ -268,8 +301,9 @@ def run_star_tracker(scenario: StarTrackerScenario,
         "Error: body-axis rotation from the true to the estimated attitude; σ_QUEST: the "
         "covariance of the q-method fit (Shuster & Oh 1981).",
     )
-    return StarTrackerResult(scenario, tuple(r.label for r in scenario.runs), tuple(runs),
-                             tracker, SOURCE, notes)
+    return StarTrackerResult(
+        scenario, tuple(r.label for r in scenario.runs), tuple(runs), tracker, SOURCE, notes
+    )
 
 
 __all__ = ["StarTrackerResult", "StarTrackerScenario", "build_tracker", "run_star_tracker"]

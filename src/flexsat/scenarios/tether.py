@@ -24,8 +24,9 @@ misprinted sign of Eq. 15 (it diverges).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Literal
+from typing import Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -36,8 +37,11 @@ from flexsat.scenarios.errors import ScenarioError, _item, _locate
 from flexsat.scenarios.fields import _Document, _Section, check_unique_labels, quantity
 
 #: the gains each law takes (seed 000 Eqs. 14-15, 18 and 20, 24-25)
-LAW_GAINS = {"decoupled": ("K1", "K2", "K3"), "coupled": ("K1", "K2", "K3", "K4"),
-             "rate": ("K1", "K2", "K3")}
+LAW_GAINS = {
+    "decoupled": ("K1", "K2", "K3"),
+    "coupled": ("K1", "K2", "K3", "K4"),
+    "rate": ("K1", "K2", "K3"),
+}
 
 
 class TetherSystem(_Section):
@@ -58,8 +62,9 @@ class TetherSystem(_Section):
 
         if self.altitude is None and self.orbit_rate is None:
             raise ValueError("altitude: give the orbit's altitude or its orbit_rate")
-        return TetherScales(mass=self.mass, length=self.length, altitude=self.altitude,
-                            orbit_rate=self.orbit_rate)
+        return TetherScales(
+            mass=self.mass, length=self.length, altitude=self.altitude, orbit_rate=self.orbit_rate
+        )
 
 
 class TetherInitial(_Section):
@@ -84,8 +89,10 @@ class TetherSimulation(_Section):
     def _samples(self):
         n = self.orbits * self.samples_per_orbit
         if n > limits.MAX_SAMPLES:
-            raise ValueError(f"simulation.samples_per_orbit: {n:.3g} samples is more than "
-                             f"{limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)")
+            raise ValueError(
+                f"simulation.samples_per_orbit: {n:.3g} samples is more than "
+                f"{limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)"
+            )
         return self
 
 
@@ -104,9 +111,11 @@ class TetherRunSpec(_Section):
         missing = [k for k in need if k not in self.gains]
         extra = [k for k in self.gains if k not in need]
         if missing or extra:
-            raise ValueError(f"gains: law {self.law!r} takes {', '.join(need)}"
-                             + (f"; missing {', '.join(missing)}" if missing else "")
-                             + (f"; unknown {', '.join(extra)}" if extra else ""))
+            raise ValueError(
+                f"gains: law {self.law!r} takes {', '.join(need)}"
+                + (f"; missing {', '.join(missing)}" if missing else "")
+                + (f"; unknown {', '.join(extra)}" if extra else "")
+            )
         for k, v in self.gains.items():
             if not np.isfinite(v) or v < 0 or (k == "K1" and v == 0):
                 rule = "> 0" if k == "K1" else ">= 0"
@@ -137,13 +146,17 @@ class TetherScenario(_Document):
 
         for index, run in enumerate(self.runs):
             if run.final_length <= MIN_LENGTH * self.system.length:
-                raise ValueError(_locate(
-                    f"runs{_item(index, run.label)}.final_length",
-                    f"{run.final_length * 1e3:g} mm is below the collapse threshold "
-                    f"{MIN_LENGTH:g} L = {MIN_LENGTH * self.system.length:g} m of the model"))
+                raise ValueError(
+                    _locate(
+                        f"runs{_item(index, run.label)}.final_length",
+                        f"{run.final_length * 1e3:g} mm is below the collapse threshold "
+                        f"{MIN_LENGTH:g} L = {MIN_LENGTH * self.system.length:g} m of the model",
+                    )
+                )
         if self.initial.length_rate is not None and any(r.law == "rate" for r in self.runs):
-            raise ValueError("initial.length_rate: a rate-law run sets the length rate itself; "
-                             "leave it out")
+            raise ValueError(
+                "initial.length_rate: a rate-law run sets the length rate itself; leave it out"
+            )
         return self
 
 
@@ -198,31 +211,50 @@ class TetherResult:
         command = stack(lambda r: r.control[0, :, 0])
         ds = xr.Dataset(
             {
-                "length": (("run", "time"), stack(lambda r: r.state[0, :, 0]) * s.length,
-                           {"units": "m"}),
+                "length": (
+                    ("run", "time"),
+                    stack(lambda r: r.state[0, :, 0]) * s.length,
+                    {"units": "m"},
+                ),
                 "pitch": (("run", "time"), stack(lambda r: r.state[0, :, 1]), {"units": "rad"}),
                 "roll": (("run", "time"), stack(lambda r: r.state[0, :, 2]), {"units": "rad"}),
-                "tension": (("run", "time"),
-                            np.where(rate[:, None], np.nan, command * s.force), {"units": "N"}),
-                "reel_rate": (("run", "time"),
-                              np.where(rate[:, None], command * s.speed, np.nan),
-                              {"units": "m/s"}),
-                "thrust": (("run", "time"), stack(lambda r: r.control[0, :, 1]) * s.force,
-                           {"units": "N"}),
-                "integral_of_motion": (("run", "time"),
-                                       stack(lambda r: r.integral_of_motion[0])),
+                "tension": (
+                    ("run", "time"),
+                    np.where(rate[:, None], np.nan, command * s.force),
+                    {"units": "N"},
+                ),
+                "reel_rate": (
+                    ("run", "time"),
+                    np.where(rate[:, None], command * s.speed, np.nan),
+                    {"units": "m/s"},
+                ),
+                "thrust": (
+                    ("run", "time"),
+                    stack(lambda r: r.control[0, :, 1]) * s.force,
+                    {"units": "N"},
+                ),
+                "integral_of_motion": (("run", "time"), stack(lambda r: r.integral_of_motion[0])),
                 "thrust_index": (("run", "time"), stack(lambda r: r.thrust_index[0])),
             },
-            coords={"run": list(self.labels), "time": tau / s.orbit_rate,
-                    "orbits": ("time", tau / (2 * np.pi))},
+            coords={
+                "run": list(self.labels),
+                "time": tau / s.orbit_rate,
+                "orbits": ("time", tau / (2 * np.pi)),
+            },
         )
         ds["time"].attrs["units"] = "s"
         add_run_metrics(ds, self.metrics_records())
         ds["law"] = ("run", [spec.law for spec in self.scenario.runs])
-        ds.attrs.update(scenario_name=self.scenario.name, case=self.scenario.case,
-                        case_source=self.case_source, scenario_yaml=self.scenario.yaml_text,
-                        orbit_rate_rad_s=s.orbit_rate, mass_kg=s.mass, length_m=s.length,
-                        integrator=self.scenario.simulation.integrator)
+        ds.attrs.update(
+            scenario_name=self.scenario.name,
+            case=self.scenario.case,
+            case_source=self.case_source,
+            scenario_yaml=self.scenario.yaml_text,
+            orbit_rate_rad_s=s.orbit_rate,
+            mass_kg=s.mass,
+            length_m=s.length,
+            integrator=self.scenario.simulation.integrator,
+        )
         return ds
 
 
@@ -233,8 +265,9 @@ def _sampled(plant, law, x0, tau, scales):
     from flexsat.sim.config import SimConfig
     from flexsat.sim.engine import simulate
 
-    cfg = SimConfig(duration=tau[-1] / scales.orbit_rate,
-                    control_rate=scales.orbit_rate / tau[1], substeps=1)
+    cfg = SimConfig(
+        duration=tau[-1] / scales.orbit_rate, control_rate=scales.orbit_rate / tau[1], substeps=1
+    )
     ds = simulate(plant, law, cfg, initial_state=x0, record_states=True).dataset
     first = "reel_rate" if plant.control == "rate" else "tension"
     x = scales.state_from_si(ds["state"].values[0])
@@ -248,8 +281,9 @@ def _sampled(plant, law, x0, tau, scales):
     return ClosedLoopRun(tau, x[None], np.stack([u0, F], -1)[None], index[None])
 
 
-def run_tether(scenario: TetherScenario,
-               progress: Callable[[str], None] | None = None) -> TetherResult:
+def run_tether(
+    scenario: TetherScenario, progress: Callable[[str], None] | None = None
+) -> TetherResult:
     """Run every law of the scenario from its initial state.
 
     Raises
@@ -263,21 +297,36 @@ def run_tether(scenario: TetherScenario,
 
     scales = scenario.system.scales()
     ini, sim = scenario.initial, scenario.simulation
-    tau = np.linspace(0.0, 2 * np.pi * sim.orbits,
-                      int(round(sim.orbits * sim.samples_per_orbit)) + 1)
+    tau = np.linspace(
+        0.0, 2 * np.pi * sim.orbits, int(round(sim.orbits * sim.samples_per_orbit)) + 1
+    )
     runs = []
     for index, spec in enumerate(scenario.runs):
         if progress is not None:
             progress(spec.label)
         control = "rate" if spec.law == "rate" else "tension"
         try:
-            law = make_law(spec.law, spec.gains, spec.final_length / scales.length,
-                           scales=scales, printed_sign=spec.printed_sign)
-            x_si = np.array([ini.length, ini.pitch, ini.roll, ini.length_rate or 0.0,
-                             ini.pitch_rate, ini.roll_rate])
+            law = make_law(
+                spec.law,
+                spec.gains,
+                spec.final_length / scales.length,
+                scales=scales,
+                printed_sign=spec.printed_sign,
+            )
+            x_si = np.array(
+                [
+                    ini.length,
+                    ini.pitch,
+                    ini.roll,
+                    ini.length_rate or 0.0,
+                    ini.pitch_rate,
+                    ini.roll_rate,
+                ]
+            )
             if sim.integrator == "continuous":
-                runs.append(integrate(law.nondimensional, scales.state_from_si(x_si), tau,
-                                      control=control))
+                runs.append(
+                    integrate(law.nondimensional, scales.state_from_si(x_si), tau, control=control)
+                )
             else:
                 plant = TetheredSubsatellite(scales, control=control)
                 x0 = x_si if control == "tension" else np.delete(x_si, 3)
@@ -291,8 +340,9 @@ def run_tether(scenario: TetherScenario,
         f"({scales.impulse:.4g} N s here). Settling: the time after which |θ| <= 5° and λ stays "
         "within 2 % of its change from the final length.",
     )
-    return TetherResult(scenario, tuple(r.label for r in scenario.runs), tuple(runs), scales,
-                        cite(SOURCE), notes)
+    return TetherResult(
+        scenario, tuple(r.label for r in scenario.runs), tuple(runs), scales, cite(SOURCE), notes
+    )
 
 
 __all__ = ["LAW_GAINS", "TetherResult", "TetherScenario", "run_tether"]

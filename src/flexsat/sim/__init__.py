@@ -7,6 +7,17 @@ from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
 from flexsat.sim.engine import SimConfig, SimResult, SimulationDiverged, simulate
 from flexsat.sim.sensors import Sensors
 
-__all__ = ["BearingFriction", "ChannelActuator", "ChannelDisturbance", "ChannelSensor",
-           "Impulses", "RandomTorque", "SimConfig", "SimResult", "SimulationDiverged", "Sensors",
-           "TorqueActuator", "simulate"]
+__all__ = [
+    "BearingFriction",
+    "ChannelActuator",
+    "ChannelDisturbance",
+    "ChannelSensor",
+    "Impulses",
+    "RandomTorque",
+    "SimConfig",
+    "SimResult",
+    "SimulationDiverged",
+    "Sensors",
+    "TorqueActuator",
+    "simulate",
+]

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexsat.input_checks import require_positive, set_si
 from flexsat.units import to_si_array
-from flexsat.validation import require_positive, set_si
 
 
 @dataclass(frozen=True)
@@ -32,8 +32,9 @@ class TorqueActuator:
         saturation = to_si_array(self.saturation, "N*m", "saturation")
         if not np.all(saturation > 0):  # inf (no limit) is allowed, NaN and <= 0 are not
             raise ValueError(f"saturation: must be > 0 (inf for none), got {self.saturation!r}")
-        object.__setattr__(self, "saturation", float(saturation) if saturation.ndim == 0
-                           else saturation)
+        object.__setattr__(
+            self, "saturation", float(saturation) if saturation.ndim == 0 else saturation
+        )
         set_si(self, "torque_constant_ratio", require_positive, "")
 
     def __call__(self, command: np.ndarray) -> np.ndarray:

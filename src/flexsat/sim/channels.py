@@ -20,21 +20,21 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from flexsat.dynamics.plant import find_channel
+from flexsat.input_checks import require_count
 from flexsat.sim.disturbances import impulses_at_samples
 from flexsat.sim.sensors import least_squares_derivative_weights
 from flexsat.units import to_si_array
-from flexsat.validation import require_count
 
 
-def _si(value, unit: str, field: str, nonneg: bool = True, inf_ok: bool = False
-        ) -> np.ndarray | float:
+def _si(
+    value, unit: str, field: str, nonneg: bool = True, inf_ok: bool = False
+) -> np.ndarray | float:
     """``value`` in SI of ``unit``: finite (+inf too where it means "no limit"), >= 0 if
     ``nonneg``; a number or an array over cases."""
     v = to_si_array(value, unit, field)
     finite = np.isfinite(v) | (inf_ok & (v == np.inf))
     if not np.all(finite) or (nonneg and np.any(v < 0)):
-        rule = ("finite" if not nonneg else ">= 0 (inf for none)" if inf_ok else
-                "finite and >= 0")
+        rule = "finite" if not nonneg else ">= 0 (inf for none)" if inf_ok else "finite and >= 0"
         raise ValueError(f"{field}: must be {rule}, got {value!r}")
     return float(v) if v.ndim == 0 else v
 
@@ -80,19 +80,29 @@ class ChannelSensor:
         require_count(self.order, "order")
         least_squares_derivative_weights(self.window, self.order, 1.0)
 
-    def bind(self, name: str, unit: str) -> "ChannelSensor":
+    def bind(self, name: str, unit: str) -> ChannelSensor:
         """A copy with every field in SI of channel ``name``'s ``unit``."""
         f = f"sensors[{name}]"
-        out = replace(self, noise=_si(self.noise, unit, f"{f}.noise"),
-                      bias=_si(self.bias, unit, f"{f}.bias", nonneg=False),
-                      quantum=_si(self.quantum, unit, f"{f}.quantum"),
-                      range=_si(self.range, unit, f"{f}.range", inf_ok=True))
+        out = replace(
+            self,
+            noise=_si(self.noise, unit, f"{f}.noise"),
+            bias=_si(self.bias, unit, f"{f}.bias", nonneg=False),
+            quantum=_si(self.quantum, unit, f"{f}.quantum"),
+            range=_si(self.range, unit, f"{f}.range", inf_ok=True),
+        )
         if np.any(out.range <= 0):
             raise ValueError(f"{f}.range: must be > 0 (inf for none), got {self.range!r}")
         # which operations act, decided once: the sample loop skips the others
-        object.__setattr__(out, "_acts", (bool(np.any(out.bias)), bool(np.any(out.noise)),
-                                          bool(np.any(out.quantum)),
-                                          bool(np.any(np.isfinite(out.range)))))
+        object.__setattr__(
+            out,
+            "_acts",
+            (
+                bool(np.any(out.bias)),
+                bool(np.any(out.noise)),
+                bool(np.any(out.quantum)),
+                bool(np.any(np.isfinite(out.range))),
+            ),
+        )
         return out
 
     def measure(self, v: np.ndarray, noise) -> np.ndarray:
@@ -131,20 +141,27 @@ class ChannelActuator:
     scale: float = 1.0
     bias: float = 0.0
 
-    def bind(self, name: str, unit: str) -> "ChannelActuator":
+    def bind(self, name: str, unit: str) -> ChannelActuator:
         f = f"actuators[{name}]"
-        out = replace(self, saturation=_si(self.saturation, unit, f"{f}.saturation",
-                                           inf_ok=True),
-                      rate_limit=_si(self.rate_limit, _rate_unit(unit), f"{f}.rate_limit",
-                                     inf_ok=True),
-                      scale=_si(self.scale, "", f"{f}.scale"),
-                      bias=_si(self.bias, unit, f"{f}.bias", nonneg=False))
+        out = replace(
+            self,
+            saturation=_si(self.saturation, unit, f"{f}.saturation", inf_ok=True),
+            rate_limit=_si(self.rate_limit, _rate_unit(unit), f"{f}.rate_limit", inf_ok=True),
+            scale=_si(self.scale, "", f"{f}.scale"),
+            bias=_si(self.bias, unit, f"{f}.bias", nonneg=False),
+        )
         for field in ("saturation", "rate_limit", "scale"):
             if np.any(np.asarray(getattr(out, field)) <= 0):
                 raise ValueError(f"{f}.{field}: must be > 0, got {getattr(self, field)!r}")
-        object.__setattr__(out, "_acts", (bool(np.any(np.isfinite(out.rate_limit))),
-                                          bool(np.any(np.isfinite(out.saturation))),
-                                          bool(np.any(out.bias))))
+        object.__setattr__(
+            out,
+            "_acts",
+            (
+                bool(np.any(np.isfinite(out.rate_limit))),
+                bool(np.any(np.isfinite(out.saturation))),
+                bool(np.any(out.bias)),
+            ),
+        )
         return out
 
     def apply(self, command: np.ndarray, previous, dt: float):
@@ -193,22 +210,34 @@ class ChannelDisturbance:
 
     def __post_init__(self):
         if (self.force is None) != (self.force_output is None):
-            raise ValueError("force_output: give the output channel driving the force, and "
-                             "only with a force")
+            raise ValueError(
+                "force_output: give the output channel driving the force, and only with a force"
+            )
         if self.force is not None and not callable(self.force):
             raise ValueError(f"force: must be callable f(y), got {self.force!r}")
 
-    def bind(self, name: str, unit: str) -> "ChannelDisturbance":
+    def bind(self, name: str, unit: str) -> ChannelDisturbance:
         f = f"disturbances[{name}]"
-        times = np.atleast_1d(_si(self.impulse_times, "s", f"{f}.impulse_times")
-                              if len(self.impulse_times) else np.zeros(0))
-        values = np.atleast_1d(_si(self.impulses, _impulse_unit(unit), f"{f}.impulses",
-                                   nonneg=False) if len(self.impulses) else np.zeros(0))
+        times = np.atleast_1d(
+            _si(self.impulse_times, "s", f"{f}.impulse_times")
+            if len(self.impulse_times)
+            else np.zeros(0)
+        )
+        values = np.atleast_1d(
+            _si(self.impulses, _impulse_unit(unit), f"{f}.impulses", nonneg=False)
+            if len(self.impulses)
+            else np.zeros(0)
+        )
         if times.shape != values.shape or times.ndim != 1:
-            raise ValueError(f"{f}.impulses: {values.size} values for {times.size} times; give "
-                             "one each")
-        return replace(self, random=_si(self.random, unit, f"{f}.random"),
-                       impulse_times=tuple(times.tolist()), impulses=tuple(values.tolist()))
+            raise ValueError(
+                f"{f}.impulses: {values.size} values for {times.size} times; give one each"
+            )
+        return replace(
+            self,
+            random=_si(self.random, unit, f"{f}.random"),
+            impulse_times=tuple(times.tolist()),
+            impulses=tuple(values.tolist()),
+        )
 
     def impulses_at_samples(self, n_steps: int, dt: float) -> dict[int, float]:
         """Impulse per control-sample index (rounded up to the next sample;
@@ -226,20 +255,26 @@ def _planar_presets(config) -> tuple[dict, dict, dict]:
     if s.encoder_resolution > 0:
         sensors["theta"] = ChannelSensor(quantum=s.encoder_resolution)
     if s.rate == "ls_filter":
-        sensors["theta_dot"] = ChannelSensor(derivative_of="theta", window=s.rate_window,
-                                             order=s.rate_order)
+        sensors["theta_dot"] = ChannelSensor(
+            derivative_of="theta", window=s.rate_window, order=s.rate_order
+        )
     elif s.rate == "gyro" and s.gyro_noise > 0:
         sensors["theta_dot"] = ChannelSensor(noise=s.gyro_noise)
     if s.strain_noise > 0:
         sensors["root_torque"] = ChannelSensor(noise=s.strain_noise)
     a, actuators = config.actuator, {}
     if np.any(np.isfinite(a.saturation)) or a.torque_constant_ratio != 1.0:
-        actuators["torque"] = ChannelActuator(saturation=a.saturation,
-                                              scale=a.torque_constant_ratio)
+        actuators["torque"] = ChannelActuator(
+            saturation=a.saturation, scale=a.torque_constant_ratio
+        )
     fr, imp, disturbances = config.friction, config.impulses, {}
     d = ChannelDisturbance(
-        random=config.random_torque.std, impulse_times=imp.times, impulses=imp.impulses,
-        force=fr if fr.active else None, force_output="theta_dot" if fr.active else None)
+        random=config.random_torque.std,
+        impulse_times=imp.times,
+        impulses=imp.impulses,
+        force=fr if fr.active else None,
+        force_output="theta_dot" if fr.active else None,
+    )
     if d.active:
         disturbances["torque"] = d
     return sensors, actuators, disturbances
@@ -257,17 +292,21 @@ def resolve_channels(plant, config) -> tuple[dict, dict, dict]:
     """
     owner = type(plant).__name__
     sensors, actuators, disturbances = _planar_presets(config)
-    preset = {**{k: "sensors" for k in sensors}, **{k: "actuator" for k in actuators},
-              **{k: "friction, random_torque, impulses" for k in disturbances}}
-    explicit = {*config.channel_sensors, *config.channel_actuators,
-                *config.channel_disturbances}
+    preset = {
+        **{k: "sensors" for k in sensors},
+        **{k: "actuator" for k in actuators},
+        **{k: "friction, random_torque, impulses" for k in disturbances},
+    }
+    explicit = {*config.channel_sensors, *config.channel_actuators, *config.channel_disturbances}
     sensors.update(config.channel_sensors)
     actuators.update(config.channel_actuators)
     disturbances.update(config.channel_disturbances)
     out = []
-    for pieces, role, kind in ((sensors, "output", ChannelSensor),
-                               (actuators, "input", ChannelActuator),
-                               (disturbances, "input", ChannelDisturbance)):
+    for pieces, role, kind in (
+        (sensors, "output", ChannelSensor),
+        (actuators, "input", ChannelActuator),
+        (disturbances, "input", ChannelDisturbance),
+    ):
         bound = {}
         for name, piece in pieces.items():
             if not isinstance(piece, kind):
@@ -309,8 +348,7 @@ def noise_columns(plant) -> dict[str, slice]:
             if ch is not None:
                 break
         else:
-            raise ValueError(f"{name}: noise_channels names no channel of "
-                             f"{type(plant).__name__}")
+            raise ValueError(f"{name}: noise_channels names no channel of {type(plant).__name__}")
         out[name] = slice(start, start + ch.size)
         start += ch.size
     return out
@@ -319,11 +357,19 @@ def noise_columns(plant) -> dict[str, slice]:
 def noise_column(columns: dict[str, slice], name: str, what: str, plant):
     """The stream column(s) of channel ``name``, or a ValueError when it has no stream."""
     if name not in columns:
-        raise ValueError(f"{name}: {what} needs a noise stream, but {type(plant).__name__}."
-                         f"noise_channels ({', '.join(columns) or 'none'}) has none for it")
+        raise ValueError(
+            f"{name}: {what} needs a noise stream, but {type(plant).__name__}."
+            f"noise_channels ({', '.join(columns) or 'none'}) has none for it"
+        )
     sl = columns[name]
     return sl.start if sl.stop - sl.start == 1 else sl
 
 
-__all__ = ["ChannelActuator", "ChannelDisturbance", "ChannelSensor", "noise_column",
-           "noise_columns", "resolve_channels"]
+__all__ = [
+    "ChannelActuator",
+    "ChannelDisturbance",
+    "ChannelSensor",
+    "noise_column",
+    "noise_columns",
+    "resolve_channels",
+]

@@ -44,8 +44,12 @@ from flexsat.sim.channels import noise_column, noise_columns
 from flexsat.sim.disturbances import BearingFriction
 from flexsat.sim.instruments import stacked_output_matrices
 from flexsat.sim.integrators import ExponentialStepper, ModalPropagator, modal_coordinates
-from flexsat.sim.kernels import (closed_loop, closed_loop_parallel, closed_loop_reduced,
-                                 closed_loop_reduced_parallel)
+from flexsat.sim.kernels import (
+    closed_loop,
+    closed_loop_parallel,
+    closed_loop_reduced,
+    closed_loop_reduced_parallel,
+)
 from flexsat.sim.metrics import METRIC_UNITS
 from flexsat.sim.recording import Recorder, SimResult
 from flexsat.sim.sensors import least_squares_derivative_weights
@@ -71,8 +75,9 @@ PARALLEL_CASES = 8
 
 
 def _ideal(s) -> bool:
-    return not (np.any(s.noise) or np.any(s.bias) or np.any(s.quantum)
-                or np.any(np.isfinite(s.range)))
+    return not (
+        np.any(s.noise) or np.any(s.bias) or np.any(s.quantum) or np.any(np.isfinite(s.range))
+    )
 
 
 def unsupported(plant, controller, sensors, actuators, disturbances, measured) -> str | None:
@@ -112,8 +117,9 @@ def unsupported(plant, controller, sensors, actuators, disturbances, measured) -
         a = actuators.get(k)
         if a is not None and (np.any(np.isfinite(a.rate_limit)) or np.any(a.bias)):
             return f"{k}: actuator rate limit or bias"
-    if isinstance(plant, DispersedPlant) and any(plant.output_matrices(k) is None
-                                                 for k in plant.recorded):
+    if isinstance(plant, DispersedPlant) and any(
+        plant.output_matrices(k) is None for k in plant.recorded
+    ):
         return "a dispersed plant with a nonlinear recorded output"
     return None
 
@@ -122,6 +128,7 @@ def _own_linear_form(cls) -> bool:
     """Whether ``cls`` defines its linear form no higher in its hierarchy than its
     ``__call__``: a subclass changing the commands, or a wrapper forwarding attributes to a
     law, does not inherit a linear form that no longer describes them."""
+
     def owner(name):
         return next((i for i, k in enumerate(cls.__mro__) if name in vars(k)), None)
 
@@ -160,6 +167,7 @@ def _fill(target: np.ndarray, index: tuple, rows: np.ndarray) -> np.ndarray:
 def _pad_law(law, p: int, reads: list[int], order: list[int], m: int):
     """The law's arrays with its columns placed on the measured elements ``reads`` (zero
     columns for the others) and its rows on the plant's inputs ``order``."""
+
     def cols(a):
         if a.shape[-1] == p and reads == list(range(p)):
             return a
@@ -170,15 +178,22 @@ def _pad_law(law, p: int, reads: list[int], order: list[int], m: int):
     def rows(a, axis):
         if len(order) == m and order == list(range(m)):
             return a
-        out = np.zeros(a.shape[:axis] + (m,) + a.shape[axis + 1:])
+        out = np.zeros(a.shape[:axis] + (m,) + a.shape[axis + 1 :])
         idx = [slice(None)] * a.ndim
         idx[axis] = order
         out[tuple(idx)] = a
         return out
 
     K0 = np.zeros((0, law.Ak.shape[-1], p)) if law.K0 is None else cols(law.K0)
-    return (law.Ak, cols(law.Bk), rows(law.Ck, 2), rows(cols(law.Dk), 2), cols(law.y_ref),
-            rows(law.u_ff, 2), K0)
+    return (
+        law.Ak,
+        cols(law.Bk),
+        rows(law.Ck, 2),
+        rows(cols(law.Dk), 2),
+        cols(law.y_ref),
+        rows(law.u_ff, 2),
+        K0,
+    )
 
 
 def modal_form(plant, steps: int):
@@ -203,12 +218,11 @@ def modal_form(plant, steps: int):
         T[k + np.arange(k), 2 * np.arange(k) + 1] = 1.0
         return T, T.T.copy(), blocks.frequencies, blocks.damping
     if steps < (MODAL_STEPS_LARGE if plant.nx > MODAL_STATES else MODAL_STEPS) or not all(
-            hasattr(plant, k) for k in (
-            "mass_matrix", "stiffness_matrix", "damping_matrix")):
+        hasattr(plant, k) for k in ("mass_matrix", "stiffness_matrix", "damping_matrix")
+    ):
         return None
     try:
-        return modal_coordinates(plant.mass_matrix, plant.stiffness_matrix,
-                                 plant.damping_matrix)
+        return modal_coordinates(plant.mass_matrix, plant.stiffness_matrix, plant.damping_matrix)
     except (ValueError, np.linalg.LinAlgError):  # overdamped or damped rigid modes: dense
         return None
 
@@ -216,9 +230,24 @@ def modal_form(plant, steps: int):
 class _Args:
     """The kernel's arguments for a whole batch (each sliced per block by :meth:`block`)."""
 
-    def __init__(self, plant, controller, config, nc, x0, sensors, actuators, disturbances,
-                 substeps, measured, kept, law, modal: bool = True,
-                 always_modal: bool = False, rows=None):
+    def __init__(
+        self,
+        plant,
+        controller,
+        config,
+        nc,
+        x0,
+        sensors,
+        actuators,
+        disturbances,
+        substeps,
+        measured,
+        kept,
+        law,
+        modal: bool = True,
+        always_modal: bool = False,
+        rows=None,
+    ):
         dt, n_t = config.dt, config.n_steps + 1
         self.nc, self.n_t = nc, n_t
         A, B = plant.linear_part()
@@ -227,17 +256,21 @@ class _Args:
         self.forced = forced
         Bf = None
         if forced:
-            (k, d), = forced.items()
+            ((k, d),) = forced.items()
             j = slices[k].start
-            Bf = B[..., :, j:j + 1]
+            Bf = B[..., :, j : j + 1]
         n = plant.nx
-        modal = modal_form(plant, np.inf if always_modal else nc * (n_t - 1) * substeps
-                           ) if modal else None
+        modal = (
+            modal_form(plant, np.inf if always_modal else nc * (n_t - 1) * substeps)
+            if modal
+            else None
+        )
         self.T = None if modal is None else modal[0]
         Tinv = None if modal is None else modal[1]
         if modal is not None:
-            st = ModalPropagator.build(modal[2], modal[3], Tinv @ B, dt, substeps,
-                                       None if Bf is None else Tinv @ Bf)
+            st = ModalPropagator.build(
+                modal[2], modal[3], Tinv @ B, dt, substeps, None if Bf is None else Tinv @ Bf
+            )
             self.E, self.P1u = _c(st.E[None]), _c(st.P1u[None])
             if forced:
                 self.P1f, self.P2f = _c(st.P1f.T), _c(st.P2f.T)
@@ -252,8 +285,11 @@ class _Args:
             Cr = np.asarray(plant.output_matrices(d.force_output)[0]).reshape(-1, n)
             self.Cr = _c(Cr if self.T is None else Cr @ self.T)
             f = d.force
-            self.fric = _c(np.array(np.broadcast_arrays(f.coulomb, f.viscous, f.smoothing),
-                                    float).T.reshape(-1, 3))
+            self.fric = _c(
+                np.array(np.broadcast_arrays(f.coulomb, f.viscous, f.smoothing), float).T.reshape(
+                    -1, 3
+                )
+            )
             self.force_col = j
         else:
             self.P1f = self.P2f = self.Cr = np.zeros((0, n))
@@ -268,16 +304,21 @@ class _Args:
                 imp.setdefault(i, np.zeros(m))[slices[k]] += J
         keys = sorted(imp)
         self.imp_k = np.array(keys, dtype=np.int64)
-        self.imp_dx = _c(np.stack([np.broadcast_to(imp[i] @ Bt, (B.shape[0] if B.ndim == 3
-                                                                  else 1, n)) for i in keys])
-                         if keys else np.zeros((0, 1, n)))
+        self.imp_dx = _c(
+            np.stack(
+                [np.broadcast_to(imp[i] @ Bt, (B.shape[0] if B.ndim == 3 else 1, n)) for i in keys]
+            )
+            if keys
+            else np.zeros((0, 1, n))
+        )
         # measured elements: what the law reads (its columns, in its order: no copy of its
         # arrays), the sources of a derivative sensor, then the recorded ones it does not
         # read; the kernel keeps the tail from the first recorded element on
         derived = [k for k in measured if k in sensors and sensors[k].derivative_of is not None]
         names = list(controller.reads)
-        names += [sensors[k].derivative_of for k in derived
-                  if sensors[k].derivative_of not in names]
+        names += [
+            sensors[k].derivative_of for k in derived if sensors[k].derivative_of not in names
+        ]
         names += [k for k in kept if k not in names]
         self.offsets, off = {}, 0
         for k in names:
@@ -292,10 +333,10 @@ class _Args:
         row = 0
         for k in direct:
             sl, w = self.offsets[k], _width(plant, k)
-            Cm[:, sl] = C[..., row:row + w, :]
-            Dm[:, sl] = D[..., row:row + w, :]
+            Cm[:, sl] = C[..., row : row + w, :]
+            Dm[:, sl] = D[..., row : row + w, :]
             if forced:
-                Dmf[:, sl] = Df[..., row:row + w, self.force_col]
+                Dmf[:, sl] = Df[..., row : row + w, self.force_col]
             row += w
         self.Cm = _c(Cm if self.T is None else Cm @ self.T)
         self.Dm, self.Dmf = _c(Dm), _c(Dmf)
@@ -324,12 +365,14 @@ class _Args:
             self.fir_w = np.zeros(0)
         # the law, its rows on the plant's inputs
         order = [j for k in controller.writes for j in range(slices[k].start, slices[k].stop)]
-        reads = [i for k in controller.reads for i in range(self.offsets[k].start,
-                                                                self.offsets[k].stop)]
+        reads = [
+            i for k in controller.reads for i in range(self.offsets[k].start, self.offsets[k].stop)
+        ]
         self.law = _pad_law(law, p, reads, order, m)  # read-only: copied block by block
         # per-case values of the law per sample: what a block's copy of it holds per case
-        self.law_values = sum(a.size / a.shape[1] for a in self.law[:6]
-                              if a.shape[1] == nc > 1) / n_t
+        self.law_values = (
+            sum(a.size / a.shape[1] for a in self.law[:6] if a.shape[1] == nc > 1) / n_t
+        )
         self.rec_start = min((self.offsets[k].start for k in kept), default=p)
         self.p_rec = p - self.rec_start
         act = np.zeros((1, m, 2))
@@ -372,21 +415,23 @@ class _Args:
         vibration = energy and hasattr(plant, "vibration_energy")
         Q = plant.energy_matrix if energy else None
         h = (getattr(plant, "momentum_row", None), getattr(plant, "total_inertia", None))
-        self.lean = (all(mt is not None for mt in mats) and (not energy or Q is not None)
-                     and (not vibration or all(v is not None for v in h)))
+        self.lean = (
+            all(mt is not None for mt in mats)
+            and (not energy or Q is not None)
+            and (not vibration or all(v is not None for v in h))
+        )
         self.Co, self.Do = np.zeros((1, 0, n)), np.zeros((1, 0, m))
         self.Dof, self.Q = np.zeros((1, 0)), np.zeros((0, n, n))
         self.widths = [_width(plant, k) for k in names]
         self.inertia = h[1] if vibration else None
         if not self.lean:
             return
-        rows = list(mats) + ([(h[0][None], np.zeros((1, m)), None)]
-                                      if vibration else [])
+        rows = list(mats) + ([(h[0][None], np.zeros((1, m)), None)] if vibration else [])
         if rows:
             C, D, Df = stacked_output_matrices(rows, m)
             lead = (C.shape[0],) if C.ndim == 3 else (1,)
             C, D = C.reshape(lead + C.shape[-2:]), D.reshape(lead + D.shape[-2:])
-            Dof = (Df[..., self.force_col] if forced else np.zeros(D.shape[:-1]))
+            Dof = Df[..., self.force_col] if forced else np.zeros(D.shape[:-1])
             if self.T is not None:
                 # row by row: a BLAS product's summation order may depend on the matrix's
                 # shape (OpenBLAS Haswell kernels), and a row must have the same bits whichever
@@ -399,8 +444,7 @@ class _Args:
             Q = Q if self.T is None else self.T.T @ Q @ self.T
             self.Q = _c(Q.reshape((-1, n, n)))
 
-    def block(self, c0: int, c1: int, seeds, n_t: int, X, Y, Ucmd, U, D, F, stop, O=None,
-              En=None):
+    def block(self, c0: int, c1: int, seeds, n_t: int, X, Y, Ucmd, U, D, F, stop, O=None, En=None):
         """Run the kernel on cases [c0, c1) over the first ``n_t`` samples into the given
         records (case-major views; O, En None: no output rows, no energy)."""
         kernel = closed_loop_parallel if c1 - c0 >= PARALLEL_CASES else closed_loop
@@ -412,6 +456,7 @@ class _Args:
     def inputs(self, c0: int, c1: int, seeds, n_t: int) -> tuple:
         """The kernel's input arguments (:data:`~flexsat.sim.kernels.ARGUMENTS`) for cases
         [c0, c1) over ``n_t`` samples: the noise streams drawn, the per-case arrays sliced."""
+
         def cases(a, axis=0):  # a per-case array's block, a shared one as is
             if a.shape[axis] == 1:
                 return a
@@ -420,44 +465,109 @@ class _Args:
             return _c(a[tuple(idx)])
 
         def law_cases(a):  # the law's (read-only) arrays: a writable copy of the block
-            return np.array(a[:, c0:c1] if a.shape[1] != 1 else a, dtype=np.float64,
-                            order="C")
+            return np.array(a[:, c0:c1] if a.shape[1] != 1 else a, dtype=np.float64, order="C")
 
         cb = c1 - c0
         if self.noisy:  # each case's stream from its own seed, as the Python loop draws it
             noise = np.empty((cb, n_t, self.width))
             for i in range(cb):
                 noise[i] = np.random.default_rng(int(seeds[c0 + i])).standard_normal(
-                    (n_t, self.width))
+                    (n_t, self.width)
+                )
         else:
             noise = np.zeros((cb, 0, 0))
         Ak, Bk, Ck, Dk, y_ref, u_ff, K0 = self.law
         from flexsat.sim.engine import DIVERGENCE_BOUND
-        return (self.x0[c0:c1], cases(self.E), self.T is not None, cases(self.P1u),
-               cases(self.P1f),
-               cases(self.P2f), cases(self.Cr), cases(self.fric), self.substeps, self.imp_k,
-               cases(self.imp_dx, 1), cases(self.Cm), cases(self.Dm), cases(self.Dmf),
-               cases(self.sensor), self.sensor_slot, self.fir_src, self.fir_dst, self.fir_w,
-               law_cases(Ak), law_cases(Bk), law_cases(Ck), law_cases(Dk), law_cases(y_ref),
-               law_cases(u_ff), np.array(K0 if K0.shape[0] <= 1 else K0[c0:c1], order="C"),
-               cases(self.act), cases(self.dist_std),
-               self.dist_slot, noise, DIVERGENCE_BOUND, cases(self.Co), cases(self.Do),
-               cases(self.Dof), cases(self.Q))
+
+        return (
+            self.x0[c0:c1],
+            cases(self.E),
+            self.T is not None,
+            cases(self.P1u),
+            cases(self.P1f),
+            cases(self.P2f),
+            cases(self.Cr),
+            cases(self.fric),
+            self.substeps,
+            self.imp_k,
+            cases(self.imp_dx, 1),
+            cases(self.Cm),
+            cases(self.Dm),
+            cases(self.Dmf),
+            cases(self.sensor),
+            self.sensor_slot,
+            self.fir_src,
+            self.fir_dst,
+            self.fir_w,
+            law_cases(Ak),
+            law_cases(Bk),
+            law_cases(Ck),
+            law_cases(Dk),
+            law_cases(y_ref),
+            law_cases(u_ff),
+            np.array(K0 if K0.shape[0] <= 1 else K0[c0:c1], order="C"),
+            cases(self.act),
+            cases(self.dist_std),
+            self.dist_slot,
+            noise,
+            DIVERGENCE_BOUND,
+            cases(self.Co),
+            cases(self.Do),
+            cases(self.Dof),
+            cases(self.Q),
+        )
 
 
-def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, disturbances,
-        substeps, measured, kept, record_states, law, always_modal: bool = False):
+def run(
+    plant,
+    controller,
+    config,
+    nc,
+    seeds,
+    x0,
+    theta0,
+    sensors,
+    actuators,
+    disturbances,
+    substeps,
+    measured,
+    kept,
+    record_states,
+    law,
+    always_modal: bool = False,
+):
     """The run of :func:`~flexsat.sim.engine.simulate` on the compiled loop (module
     docstring); same result, same exceptions. ``always_modal``: in modal coordinates whenever
     the plant has them, whatever the batch size (:func:`modal_form`)."""
-    a = _Args(plant, controller, config, nc, x0, sensors, actuators, disturbances, substeps,
-              measured, kept, law, always_modal=always_modal)
+    a = _Args(
+        plant,
+        controller,
+        config,
+        nc,
+        x0,
+        sensors,
+        actuators,
+        disturbances,
+        substeps,
+        measured,
+        kept,
+        law,
+        always_modal=always_modal,
+    )
     n_t, n, m = a.n_t, a.n, a.m
     batched = plant.n_cases != 1
     forced = a.forced
-    rec = Recorder(plant, n_t, nc, kept, {k: d.force_name for k, d in forced.items()},
-                   record_states, batched,
-                   [k for k, d in disturbances.items() if np.any(d.random)], allocate=False)
+    rec = Recorder(
+        plant,
+        n_t,
+        nc,
+        kept,
+        {k: d.force_name for k, d in forced.items()},
+        record_states,
+        batched,
+        [k for k, d in disturbances.items() if np.any(d.random)],
+        allocate=False,
+    )
     Y, Ucmd, U, Dist = (np.empty((nc, n_t, w)) for w in (a.p_rec, m, m, m))
     F = np.empty((nc, n_t if forced else 0))  # no force: nothing to record
     stop = np.full(nc, -1, dtype=np.int64)
@@ -470,46 +580,93 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
     lean = a.lean and not record_states and a.T is not None
     # a block's temporaries: the states unless lean, the noise streams if any are drawn and
     # the copy of a per-case law (its arrays are read-only: block.law_cases)
-    size = _block_size(nc, n_t, (0 if lean else n) + (a.width if a.noisy else 0)
-                       + a.law_values)
+    size = _block_size(nc, n_t, (0 if lean else n) + (a.width if a.noisy else 0) + a.law_values)
     if lean:  # the kernel's records: the recorded outputs, h, the energy
         O = np.empty((nc, n_t, a.Co.shape[1]))
         energy = np.empty((nc, n_t)) if a.Q.shape[0] else None
     else:
-        outs = {k: np.empty((nc, n_t) + ((w,) if w > 1 else ()))
-                for k, w in zip(plant.recorded, a.widths)}
+        outs = {
+            k: np.empty((nc, n_t) + ((w,) if w > 1 else ()))
+            for k, w in zip(plant.recorded, a.widths)
+        }
         energy = np.empty((nc, n_t)) if rec.has_energy else None
         vib = np.empty((nc, n_t)) if rec.has_vibration else None
     for c0 in range(0, nc, size):
         c1 = min(nc, c0 + size)
         if lean:
-            a.block(c0, c1, seeds, n_t, np.empty((c1 - c0, 0, n)), Y[c0:c1], Ucmd[c0:c1],
-                    U[c0:c1], Dist[c0:c1], F[c0:c1], stop[c0:c1], O[c0:c1],
-                    None if energy is None else energy[c0:c1])
+            a.block(
+                c0,
+                c1,
+                seeds,
+                n_t,
+                np.empty((c1 - c0, 0, n)),
+                Y[c0:c1],
+                Ucmd[c0:c1],
+                U[c0:c1],
+                Dist[c0:c1],
+                F[c0:c1],
+                stop[c0:c1],
+                O[c0:c1],
+                None if energy is None else energy[c0:c1],
+            )
             continue
         X = X_all[c0:c1] if X_all is not None else np.empty((c1 - c0, n_t, n))
-        a.block(c0, c1, seeds, n_t, X, Y[c0:c1], Ucmd[c0:c1], U[c0:c1], Dist[c0:c1],
-                F[c0:c1], stop[c0:c1])
+        a.block(
+            c0,
+            c1,
+            seeds,
+            n_t,
+            X,
+            Y[c0:c1],
+            Ucmd[c0:c1],
+            U[c0:c1],
+            Dist[c0:c1],
+            F[c0:c1],
+            stop[c0:c1],
+        )
         if (stop[c0:c1] >= 0).any():
             continue
         if a.T is not None:  # back to the plant's coordinates, x = T z
             X[...] = X @ a.T.T
-        _outputs(rec, plant, a, c0, c1, X, U[c0:c1], Dist[c0:c1], F[c0:c1], outs, energy,
-                 vib)
+        _outputs(rec, plant, a, c0, c1, X, U[c0:c1], Dist[c0:c1], F[c0:c1], outs, energy, vib)
     if (stop >= 0).any():
         if a.T is not None:  # the Python loop bounds the physical state: rerun it dense
-            a = _Args(plant, controller, config, nc, x0, sensors, actuators, disturbances,
-                      substeps, measured, kept, law, modal=False)
+            a = _Args(
+                plant,
+                controller,
+                config,
+                nc,
+                x0,
+                sensors,
+                actuators,
+                disturbances,
+                substeps,
+                measured,
+                kept,
+                law,
+                modal=False,
+            )
             stop[:] = -1
             for c0 in range(0, nc, size):
                 c1 = min(nc, c0 + size)
-                a.block(c0, c1, seeds, n_t, np.empty((c1 - c0, 0, n)), Y[c0:c1], Ucmd[c0:c1],
-                        U[c0:c1], Dist[c0:c1], F[c0:c1], stop[c0:c1])
+                a.block(
+                    c0,
+                    c1,
+                    seeds,
+                    n_t,
+                    np.empty((c1 - c0, 0, n)),
+                    Y[c0:c1],
+                    Ucmd[c0:c1],
+                    U[c0:c1],
+                    Dist[c0:c1],
+                    F[c0:c1],
+                    stop[c0:c1],
+                )
         raise _divergence(a, config, seeds, stop, Ucmd)
     if lean:
         outs, col = {}, 0
         for k, w in zip(plant.recorded, a.widths):
-            outs[k] = O[..., col] if w == 1 else O[..., col:col + w]
+            outs[k] = O[..., col] if w == 1 else O[..., col : col + w]
             col += w
         vib = None
         if a.inertia is not None:  # E − h² / (2 I_tot) (HybridPlant.vibration_energy)
@@ -545,8 +702,22 @@ def run(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators, di
 REDUCED_OUTPUTS, REDUCED_INPUT = ("theta", "theta_dot", "tip_deflection"), "torque"
 
 
-def run_reduced(plant, controller, config, nc, seeds, x0, theta0, sensors, actuators,
-                disturbances, substeps, measured, kept, law):
+def run_reduced(
+    plant,
+    controller,
+    config,
+    nc,
+    seeds,
+    x0,
+    theta0,
+    sensors,
+    actuators,
+    disturbances,
+    substeps,
+    measured,
+    kept,
+    law,
+):
     """The maneuver metrics of :func:`~flexsat.sim.engine.simulate` (``metrics_only``) without
     any time history, or None where this path does not apply (the caller then runs
     :func:`run`).
@@ -572,14 +743,34 @@ def run_reduced(plant, controller, config, nc, seeds, x0, theta0, sensors, actua
     from flexsat.sim.recording import _references
 
     names = [c.name for c in plant.outputs]
-    if (not plant.single_axis_maneuver or plant.n_cases != 1 or theta0 is None
-            or not all(k in plant.recorded and k in names and _width(plant, k) == 1
-                       for k in REDUCED_OUTPUTS)
-            or plant.input_slices.get(REDUCED_INPUT, slice(0, 2)).stop
-            - plant.input_slices.get(REDUCED_INPUT, slice(0, 2)).start != 1):
+    if (
+        not plant.single_axis_maneuver
+        or plant.n_cases != 1
+        or theta0 is None
+        or not all(
+            k in plant.recorded and k in names and _width(plant, k) == 1 for k in REDUCED_OUTPUTS
+        )
+        or plant.input_slices.get(REDUCED_INPUT, slice(0, 2)).stop
+        - plant.input_slices.get(REDUCED_INPUT, slice(0, 2)).start
+        != 1
+    ):
         return None
-    a = _Args(plant, controller, config, nc, x0, sensors, actuators, disturbances, substeps,
-              measured, kept, law, always_modal=True, rows=REDUCED_OUTPUTS)
+    a = _Args(
+        plant,
+        controller,
+        config,
+        nc,
+        x0,
+        sensors,
+        actuators,
+        disturbances,
+        substeps,
+        measured,
+        kept,
+        law,
+        always_modal=True,
+        rows=REDUCED_OUTPUTS,
+    )
     n_t = a.n_t
     t = config.dt * np.arange(n_t)
     refs = _references(controller, t, nc)
@@ -600,8 +791,7 @@ def run_reduced(plant, controller, config, nc, seeds, x0, theta0, sensors, actua
     if ref is not None:
         ref_end = np.broadcast_to(np.asarray(ref.end_time, float), (nc,))
         k_end = np.minimum(np.searchsorted(t, ref_end - 1e-12), n_t - 1)
-    snap_k = np.ascontiguousarray(np.column_stack([np.full(nc, n_t - 1), k_end]),
-                                  dtype=np.int64)
+    snap_k = np.ascontiguousarray(np.column_stack([np.full(nc, n_t - 1), k_end]), dtype=np.int64)
     m_u = plant.input_slices[REDUCED_INPUT].start + 1
     red = np.empty((nc, 3, 3))
     upeak = np.empty((nc, m_u))
@@ -611,12 +801,21 @@ def run_reduced(plant, controller, config, nc, seeds, x0, theta0, sensors, actua
     size = _block_size(nc, n_t, (a.width if a.noisy else 0) + a.law_values + 1)
     for c0 in range(0, nc, size):
         c1 = min(nc, c0 + size)
-        kernel = (closed_loop_reduced_parallel if c1 - c0 >= PARALLEL_CASES
-                  else closed_loop_reduced)
-        kernel(*a.inputs(c0, c1, seeds, n_t), red_c[c0:c1], red_tab,
-               np.ascontiguousarray(rate_ref[None, :, c0:c1]), direction[c0:c1].copy(),
-               red_band, snap_k[c0:c1], red[c0:c1], upeak[c0:c1], snapO[c0:c1],
-               snapE[c0:c1], stop[c0:c1])
+        kernel = closed_loop_reduced_parallel if c1 - c0 >= PARALLEL_CASES else closed_loop_reduced
+        kernel(
+            *a.inputs(c0, c1, seeds, n_t),
+            red_c[c0:c1],
+            red_tab,
+            np.ascontiguousarray(rate_ref[None, :, c0:c1]),
+            direction[c0:c1].copy(),
+            red_band,
+            snap_k[c0:c1],
+            red[c0:c1],
+            upeak[c0:c1],
+            snapO[c0:c1],
+            snapE[c0:c1],
+            stop[c0:c1],
+        )
     if (stop >= 0).any():
         return None
     vib = snapO[..., -1]  # E − h² / (2 I_tot), as run() computes it
@@ -631,14 +830,18 @@ def run_reduced(plant, controller, config, nc, seeds, x0, theta0, sensors, actua
         "residual_energy_J": vib[:, 0].copy(),
         "peak_tip_deflection_m": red[:, 2, 0].copy(),
         "peak_rate_error_deg_s": np.degrees(red[:, 1, 0]),
-        "residual_energy_at_T_J": (vib[:, 1].copy() if ref is not None
-                                   else np.full(nc, np.nan)),
+        "residual_energy_at_T_J": (vib[:, 1].copy() if ref is not None else np.full(nc, np.nan)),
     }
     data = {k: (("case",), v, {"units": METRIC_UNITS[k]}) for k, v in metrics.items()}
     ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}), "case": np.arange(nc)})
-    ds.attrs.update(control_rate_Hz=config.control_rate, settling_band_rad=config.settling_band,
-                    substeps=substeps, engine="compiled",
-                    propagation="dense" if a.T is None else "modal", histories="none")
+    ds.attrs.update(
+        control_rate_Hz=config.control_rate,
+        settling_band_rad=config.settling_band,
+        substeps=substeps,
+        engine="compiled",
+        propagation="dense" if a.T is None else "modal",
+        histories="none",
+    )
     return SimResult(ds, metrics)
 
 
@@ -677,7 +880,7 @@ def _outputs(rec, plant, a, c0, c1, X, U, Dist, F, outs, energy, vib):
         col = 0
         for k in rec.linear:
             w = _width(plant, k)
-            outs[k][c0:c1] = Yo[..., col] if w == 1 else Yo[..., col:col + w]
+            outs[k][c0:c1] = Yo[..., col] if w == 1 else Yo[..., col : col + w]
             col += w
     for k in rec.nonlinear:  # a shared plant (unsupported() keeps dispersed ones out)
         outs[k][c0:c1] = plant.output(k, X, Wp, Ff)
@@ -709,8 +912,7 @@ def _divergence(a, config, seeds, stop, Ucmd):
     size = _block_size(nc, k + 1, n + a.width)
     for c0 in range(0, nc, size):
         c1 = min(nc, c0 + size)
-        a.block(c0, c1, seeds, k + 1, X[c0:c1], *(r[c0:c1] for r in rec), F[c0:c1],
-                st[c0:c1])
-    X = X[:, max(k - 1, 0):]  # a dense run (run() reruns a modal one dense)
+        a.block(c0, c1, seeds, k + 1, X[c0:c1], *(r[c0:c1] for r in rec), F[c0:c1], st[c0:c1])
+    X = X[:, max(k - 1, 0) :]  # a dense run (run() reruns a modal one dense)
     prev = float(np.abs(X[:, 0]).max()) if k > 0 else 0.0
     return _diverged(X[:, -1], Ucmd[:, k], config.dt * k, k, prev, config)

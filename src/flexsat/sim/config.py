@@ -8,13 +8,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexsat import limits
+from flexsat.input_checks import require_count, require_positive, set_si
 from flexsat.sim.actuators import TorqueActuator
-from flexsat.sim.channels import (ChannelActuator, ChannelDisturbance, ChannelSensor,
-                                  noise_columns, resolve_channels)
+from flexsat.sim.channels import (
+    ChannelActuator,
+    ChannelDisturbance,
+    ChannelSensor,
+    noise_columns,
+    resolve_channels,
+)
 from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
 from flexsat.sim.recording import CHUNK
 from flexsat.sim.sensors import Sensors
-from flexsat.validation import require_count, require_positive, set_si
 
 
 @dataclass(frozen=True)
@@ -63,21 +68,31 @@ class SimConfig:
         set_si(self, "settling_band", require_positive, "rad")
         require_count(self.substeps, "substeps")
         if not limits.is_integral(self.seed) or not 0 <= self.seed <= limits.MAX_SEED:
-            raise ValueError(f"seed: must be an integer in [0, {limits.MAX_SEED}], got "
-                             f"{self.seed!r}")
-        limits.check_count(self.duration * self.control_rate, limits.MAX_SAMPLES, "duration",
-                           "control samples (duration × control_rate)",
-                           "shorten the run or lower the control rate")
-        limits.check_count(self.substeps, limits.MAX_SUBSTEPS, "substeps",
-                           "integrator substeps per control period")
-        for name, kind in (("channel_sensors", ChannelSensor),
-                           ("channel_actuators", ChannelActuator),
-                           ("channel_disturbances", ChannelDisturbance)):
+            raise ValueError(
+                f"seed: must be an integer in [0, {limits.MAX_SEED}], got {self.seed!r}"
+            )
+        limits.check_count(
+            self.duration * self.control_rate,
+            limits.MAX_SAMPLES,
+            "duration",
+            "control samples (duration × control_rate)",
+            "shorten the run or lower the control rate",
+        )
+        limits.check_count(
+            self.substeps, limits.MAX_SUBSTEPS, "substeps", "integrator substeps per control period"
+        )
+        for name, kind in (
+            ("channel_sensors", ChannelSensor),
+            ("channel_actuators", ChannelActuator),
+            ("channel_disturbances", ChannelDisturbance),
+        ):
             pieces = getattr(self, name)
             if not isinstance(pieces, dict) or not all(
-                    isinstance(k, str) and isinstance(v, kind) for k, v in pieces.items()):
-                raise ValueError(f"{name}: must map channel names to {kind.__name__}, got "
-                                 f"{pieces!r}")
+                isinstance(k, str) and isinstance(v, kind) for k, v in pieces.items()
+            ):
+                raise ValueError(
+                    f"{name}: must map channel names to {kind.__name__}, got {pieces!r}"
+                )
 
     @property
     def dt(self) -> float:
@@ -128,10 +143,14 @@ def stable_substeps(plant, friction, dt: float, requested: int) -> int:
     for name, rate in force_rates(plant, friction):
         needed = dt * rate / FRICTION_STEP_LIMIT
         # compared as a float first: a near-zero smoothing makes it too large for an int
-        limits.check_count(needed, limits.MAX_SUBSTEPS, "friction",
-                           f"a stable integration of the friction (damping rate {rate:.3g} 1/s "
-                           f"below the smoothing speed) needs substeps per control period",
-                           "lower coulomb or viscous, raise smoothing or the control rate")
+        limits.check_count(
+            needed,
+            limits.MAX_SUBSTEPS,
+            "friction",
+            f"a stable integration of the friction (damping rate {rate:.3g} 1/s "
+            f"below the smoothing speed) needs substeps per control period",
+            "lower coulomb or viscous, raise smoothing or the control rate",
+        )
         substeps = max(substeps, math.ceil(needed))
     return substeps
 
@@ -154,13 +173,19 @@ def recorded_values(plant) -> int:
     energy."""
     width = {c.name: c.size for c in plant.outputs}
     n = sum(width[k] for k in plant.recorded) + 4 * plant.n_inputs
-    n += 2 * ("theta" in width) + sum(width[k] for k in getattr(plant, "recorded_measurements",
-                                                                  ()) if k in width)
+    n += 2 * ("theta" in width) + sum(
+        width[k] for k in getattr(plant, "recorded_measurements", ()) if k in width
+    )
     return n + 1 + hasattr(plant, "vibration_energy")
 
 
-def check_resources(plant, config: SimConfig, n_cases: int = 1, record_states: bool = False,
-                    disturbances: dict | None = None) -> int:
+def check_resources(
+    plant,
+    config: SimConfig,
+    n_cases: int = 1,
+    record_states: bool = False,
+    disturbances: dict | None = None,
+) -> int:
     """Check that a run fits the limits of :mod:`flexsat.limits` before it starts.
 
     Parameters
@@ -185,21 +210,29 @@ def check_resources(plant, config: SimConfig, n_cases: int = 1, record_states: b
         ``"field: ... above the limit ..."`` for too many cases, substeps, integrator steps or
         too much memory.
     """
-    limits.check_count(n_cases, limits.MAX_CASES, "n_cases", "cases in one batch",
-                       "split the batch")
+    limits.check_count(
+        n_cases, limits.MAX_CASES, "n_cases", "cases in one batch", "split the batch"
+    )
     if disturbances is None:
         _, _, disturbances = resolve_channels(plant, config)
     substeps = run_substeps(plant, config, disturbances)
     n = config.n_steps + 1
-    limits.check_count(n * substeps, limits.MAX_INTEGRATOR_STEPS, "duration",
-                       f"integrator steps ({n} control samples × {substeps} substeps)",
-                       "shorten the run or lower the control rate or the substeps")
+    limits.check_count(
+        n * substeps,
+        limits.MAX_INTEGRATOR_STEPS,
+        "duration",
+        f"integrator steps ({n} control samples × {substeps} substeps)",
+        "shorten the run or lower the control rate or the substeps",
+    )
     # the histories (kept once: the dataset holds views of the loop's arrays), the states
     # when recorded, and the loop's chunk of states and noise
     values = recorded_values(plant) + (plant.nx if record_states else 0)
     width = sum(s.stop - s.start for s in noise_columns(plant).values())
     buffer = limits.memory_estimate(min(CHUNK, n), n_cases, plant.nx + width)
-    limits.check_memory(limits.memory_estimate(n, n_cases, values) + buffer, "duration",
-                        f"a run of {n} samples × {n_cases} cases × {values} values (and a "
-                        f"{min(CHUNK, n)}-sample buffer of {plant.nx + width})")
+    limits.check_memory(
+        limits.memory_estimate(n, n_cases, values) + buffer,
+        "duration",
+        f"a run of {n} samples × {n_cases} cases × {values} values (and a "
+        f"{min(CHUNK, n)}-sample buffer of {plant.nx + width})",
+    )
     return substeps

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.validation import require_finite, require_nonneg, require_positive, set_si
+from flexsat.input_checks import require_finite, require_nonneg, require_positive, set_si
 
 
 @dataclass(frozen=True)

@@ -25,13 +25,13 @@ from collections.abc import Mapping
 import numpy as np
 
 from flexsat.dynamics.plant import find_channel
+from flexsat.input_checks import require_count, require_finite
+from flexsat.sim import compiled as compiled_path
+from flexsat.sim import integrators
 from flexsat.sim.channels import noise_column, noise_columns, resolve_channels
+from flexsat.sim.config import FRICTION_STEP_LIMIT, SimConfig, check_resources, stable_substeps
 from flexsat.sim.instruments import InputForces, Instruments, unit_row
-from flexsat.sim.config import (FRICTION_STEP_LIMIT, SimConfig, check_resources,
-                                stable_substeps)
-from flexsat.sim import compiled as compiled_path, integrators
 from flexsat.sim.recording import CHUNK, Recorder, SimResult
-from flexsat.validation import require_count, require_finite
 
 #: a state entry (rad, rad/s, modal coordinates) or a command (SI) beyond this is taken as
 #: divergence: no slew or modal amplitude comes near it, and it leaves room for the products
@@ -57,29 +57,44 @@ class SimulationDiverged(ValueError):
         self.cases, self.time, self.cause = cases, time, cause
 
 
-def _diverged(x, u_cmd, time: float, k: int, state_prev: float, config: SimConfig
-              ) -> SimulationDiverged:
+def _diverged(
+    x, u_cmd, time: float, k: int, state_prev: float, config: SimConfig
+) -> SimulationDiverged:
     """The exception for a divergence found at sample ``k``: which cases, when, likely why."""
     bad_state = ~(np.abs(x) <= DIVERGENCE_BOUND).all(axis=1)
     bad_command = ~(np.abs(u_cmd) <= DIVERGENCE_BOUND).all(axis=1)
     cases = tuple(int(i) for i in np.flatnonzero(bad_state | bad_command))
     if k == 0:
-        cause = ("the initial state or the first torque command is non-finite or beyond the "
-                 "bound (check the initial state, the gains and the reference)")
+        cause = (
+            "the initial state or the first torque command is non-finite or beyond the "
+            "bound (check the initial state, the gains and the reference)"
+        )
     elif not np.isfinite(u_cmd).all() and np.isfinite(x).all():
-        cause = ("the control law returned a non-finite torque command from a finite state "
-                 "(check its gains and reference)")
+        cause = (
+            "the control law returned a non-finite torque command from a finite state "
+            "(check its gains and reference)"
+        )
     else:
-        cause = (f"the closed loop is unstable: the feedback gains destabilise it at the "
-                 f"{config.control_rate:g} Hz control rate (a loop bandwidth near or above the "
-                 f"Nyquist frequency {config.control_rate / 2:g} Hz diverges in sampled time); "
-                 f"lower the gains or raise the control rate")
-    growth = "" if k == 0 else (f"; the largest state entry went from {state_prev:.3g} to "
-                                f"{np.abs(x).max():.3g} over the last control period")
+        cause = (
+            f"the closed loop is unstable: the feedback gains destabilise it at the "
+            f"{config.control_rate:g} Hz control rate (a loop bandwidth near or above the "
+            f"Nyquist frequency {config.control_rate / 2:g} Hz diverges in sampled time); "
+            f"lower the gains or raise the control rate"
+        )
+    growth = (
+        ""
+        if k == 0
+        else (
+            f"; the largest state entry went from {state_prev:.3g} to "
+            f"{np.abs(x).max():.3g} over the last control period"
+        )
+    )
     which = ", ".join(map(str, cases[:10])) + (" ..." if len(cases) > 10 else "")
-    message = (f"simulation diverged at t = {time:.6g} s (sample {k}) in case(s) {which}: a "
-               f"state entry or the torque command is non-finite or beyond "
-               f"{DIVERGENCE_BOUND:g} (SI){growth}. Likely cause: {cause}.")
+    message = (
+        f"simulation diverged at t = {time:.6g} s (sample {k}) in case(s) {which}: a "
+        f"state entry or the torque command is non-finite or beyond "
+        f"{DIVERGENCE_BOUND:g} (SI){growth}. Likely cause: {cause}."
+    )
     return SimulationDiverged(message, cases, float(time), cause)
 
 
@@ -102,8 +117,9 @@ def build_stepper(kind: str, A, B, Bf, dt: float, substeps: int):
     """The propagator of a run: Krogstad's ``exp_rk4`` for a plant asking for it with a force,
     else the exact linear step with ETD2RK for the force columns ``Bf`` (None: linear)."""
     if kind not in integrators.INTEGRATORS:
-        raise ValueError(f"integrator: must be one of {', '.join(integrators.INTEGRATORS)}, "
-                         f"got {kind!r}")
+        raise ValueError(
+            f"integrator: must be one of {', '.join(integrators.INTEGRATORS)}, got {kind!r}"
+        )
     if kind == "exp_rk4" and Bf is not None:
         return integrators.ExpRK4Stepper.build(A, B, Bf, dt, substeps)
     return ExponentialStepper.build(A, B, Bf, dt, substeps)
@@ -134,8 +150,9 @@ def check_law(plant, controller) -> None:
         try:
             find_channel(plant.outputs, name, "output", type(plant).__name__)
         except ValueError as exc:
-            raise ValueError(f"{name}: {law} reads a measurement the plant does not have "
-                             f"({exc})") from None
+            raise ValueError(
+                f"{name}: {law} reads a measurement the plant does not have ({exc})"
+            ) from None
     for name in writes:
         try:
             find_channel(plant.inputs, name, "input", type(plant).__name__)
@@ -150,13 +167,16 @@ def _commands(cmd, writes, shapes, nc: int, law: str, check: bool) -> list[np.nd
     on the first sample (``check``) a wrong shape, key or type is a ValueError naming it."""
     if not isinstance(cmd, Mapping):
         if len(writes) != 1 and check:
-            raise ValueError(f"{writes[0]}: {law} returned a bare array but writes "
-                             f"{len(writes)} channels {writes!r}; return a dict")
+            raise ValueError(
+                f"{writes[0]}: {law} returned a bare array but writes "
+                f"{len(writes)} channels {writes!r}; return a dict"
+            )
         cmd = {writes[0]: cmd}
     elif check and set(cmd) != set(writes):
         odd = sorted(set(cmd) ^ set(writes))[0]
-        raise ValueError(f"{odd}: {law} returned commands for {sorted(cmd)!r} but writes "
-                         f"{list(writes)!r}")
+        raise ValueError(
+            f"{odd}: {law} returned commands for {sorted(cmd)!r} but writes {list(writes)!r}"
+        )
     out = []
     for name, shape in zip(writes, shapes):
         c = np.asarray(cmd[name], float)
@@ -164,8 +184,10 @@ def _commands(cmd, writes, shapes, nc: int, law: str, check: bool) -> list[np.nd
             try:
                 c = np.broadcast_to(c, shape)
             except ValueError:
-                raise ValueError(f"{name}: {law} returned a command of shape {c.shape}, "
-                                 f"expected {shape} (n_cases × channel size)") from None
+                raise ValueError(
+                    f"{name}: {law} returned a command of shape {c.shape}, "
+                    f"expected {shape} (n_cases × channel size)"
+                ) from None
         out.append(c)
     return out
 
@@ -180,23 +202,26 @@ def _initial_state(plant, nc, theta0, initial_state, ref):
         try:
             x[:] = x0
         except ValueError:
-            raise ValueError(f"initial_state: must have shape ({plant.nx},) or ({nc}, "
-                             f"{plant.nx}), got {x0.shape}") from None
+            raise ValueError(
+                f"initial_state: must have shape ({plant.nx},) or ({nc}, "
+                f"{plant.nx}), got {x0.shape}"
+            ) from None
         return x, (x[:, row].copy() if row is not None else None)
     if theta0 is None:
         theta0 = ref.theta0 if ref is not None else 0.0
     theta0 = np.broadcast_to(require_finite(theta0, "theta0", "rad"), (nc,)).copy()
     if row is None:
         if np.any(theta0):
-            raise ValueError(f"theta0: {type(plant).__name__} has no hub-angle state "
-                             "coordinate; give initial_state")
+            raise ValueError(
+                f"theta0: {type(plant).__name__} has no hub-angle state "
+                "coordinate; give initial_state"
+            )
         return x, None
     x[:, row] = theta0
     return x, theta0
 
 
-def _propagator(plant, A, B, forces: InputForces, nc: int, batched: bool, dt: float,
-                substeps: int):
+def _propagator(plant, A, B, forces: InputForces, nc: int, batched: bool, dt: float, substeps: int):
     """(stepper, force) of a plant propagated by the exponential integrators: the force
     columns are the plant's B_f and the columns of B of the inputs with a force (friction),
     rank-1 for the bearing; ``force`` is None for a linear run (the exact step alone)."""
@@ -301,8 +326,9 @@ def simulate(
     else:
         nc = require_count(n_cases, "n_cases")
     if plant_cases != 1 and nc != plant_cases:
-        raise ValueError(f"n_cases: the dispersed plant carries {plant_cases} cases, the batch "
-                         f"has {nc}")
+        raise ValueError(
+            f"n_cases: the dispersed plant carries {plant_cases} cases, the batch has {nc}"
+        )
     dt, n = config.dt, config.n_steps
     sensors, actuators, disturbances = resolve_channels(plant, config)
     substeps = check_resources(plant, config, nc, record_states, disturbances)
@@ -316,11 +342,15 @@ def simulate(
     columns = noise_columns(plant)
     forced = {k: d for k, d in disturbances.items() if d.force is not None}
     writes = tuple(controller.writes)
-    shapes = [(nc,) if slices[k].stop - slices[k].start == 1
-              else (nc, slices[k].stop - slices[k].start) for k in writes]
+    shapes = [
+        (nc,) if slices[k].stop - slices[k].start == 1 else (nc, slices[k].stop - slices[k].start)
+        for k in writes
+    ]
     measured = tuple(controller.reads) + tuple(
-        k for k in getattr(plant, "recorded_measurements", ())
-        if k not in controller.reads and any(c.name == k for c in plant.outputs))
+        k
+        for k in getattr(plant, "recorded_measurements", ())
+        if k not in controller.reads and any(c.name == k for c in plant.outputs)
+    )
     inst = Instruments(plant, measured, sensors, columns, dt, nc, batched, bool(forced))
     forces = InputForces(plant, forced, batched)
     t = dt * np.arange(n + 1)
@@ -328,22 +358,50 @@ def simulate(
         controller.tabulate_reference(t)
     kept = tuple(k for k in measured if k in getattr(plant, "recorded_measurements", ()))
     if compiled is not False:
-        reason = compiled_path.unsupported(plant, controller, sensors, actuators,
-                                           disturbances, measured)
+        reason = compiled_path.unsupported(
+            plant, controller, sensors, actuators, disturbances, measured
+        )
         law = None if reason is not None else controller.linear_form(dt, t, nc)
         if reason is None and law is None:
             reason = f"{type(controller).__name__} has no linear form"
         if reason is None and metrics_only and not record_states:
-            result = compiled_path.run_reduced(plant, controller, config, nc, seeds, x, theta0,
-                                               sensors, actuators, disturbances, substeps,
-                                               measured, kept, law)
+            result = compiled_path.run_reduced(
+                plant,
+                controller,
+                config,
+                nc,
+                seeds,
+                x,
+                theta0,
+                sensors,
+                actuators,
+                disturbances,
+                substeps,
+                measured,
+                kept,
+                law,
+            )
             if result is not None:
                 return result
         if reason is None:
-            return compiled_path.run(plant, controller, config, nc, seeds, x, theta0, sensors,
-                                     actuators, disturbances, substeps, measured, kept,
-                                     record_states, law,
-                                     always_modal=batch_independent or metrics_only)
+            return compiled_path.run(
+                plant,
+                controller,
+                config,
+                nc,
+                seeds,
+                x,
+                theta0,
+                sensors,
+                actuators,
+                disturbances,
+                substeps,
+                measured,
+                kept,
+                record_states,
+                law,
+                always_modal=batch_independent or metrics_only,
+            )
         if compiled:
             raise ValueError(f"compiled: this run cannot take the compiled loop: {reason}")
 
@@ -352,28 +410,47 @@ def simulate(
         return forces.full(forces.compact(xs, w))
 
     own_step = getattr(plant, "step", None)
-    stepper, force = (None, None) if own_step is not None else _propagator(
-        plant, A, B, forces, nc, batched, dt, substeps)
+    stepper, force = (
+        (None, None)
+        if own_step is not None
+        else _propagator(plant, A, B, forces, nc, batched, dt, substeps)
+    )
 
     impulses = {}
     for k, d in disturbances.items():
         for i, J in d.impulses_at_samples(n + 1, dt).items():
             impulses.setdefault(i, np.zeros(m))[slices[k]] += J
-    random = [(slices[k], d.random, noise_column(columns, k, "its random disturbance", plant))
-              for k, d in disturbances.items() if np.any(d.random)]
+    random = [
+        (slices[k], d.random, noise_column(columns, k, "its random disturbance", plant))
+        for k, d in disturbances.items()
+        if np.any(d.random)
+    ]
     acts = [(slices[k], actuators.get(k)) for k in writes]
-    noisy = bool(random) or any(c is not None for _, _, c in inst.plan) or any(
-        d[5] is not None for d in inst.derived)
+    noisy = (
+        bool(random)
+        or any(c is not None for _, _, c in inst.plan)
+        or any(d[5] is not None for d in inst.derived)
+    )
     width = sum(s.stop - s.start for s in columns.values())
     streams = _NoiseStreams(seeds, width) if noisy else None
 
     cstate = controller.initial_state(nc)
-    rec = Recorder(plant, n + 1, nc, kept, {k: d.force_name for k, d in forced.items()},
-                   record_states, batched, [k for k, d in disturbances.items() if np.any(d.random)])
+    rec = Recorder(
+        plant,
+        n + 1,
+        nc,
+        kept,
+        {k: d.force_name for k, d in forced.items()},
+        record_states,
+        batched,
+        [k for k, d in disturbances.items() if np.any(d.random)],
+    )
     law = type(controller).__name__
     # views the loop writes into: one history per written channel, the state slot ring
-    cmd_hist = [rec.commands[:, :, sl.start] if sl.stop - sl.start == 1
-                else rec.commands[:, :, sl] for sl, _ in acts]
+    cmd_hist = [
+        rec.commands[:, :, sl.start] if sl.stop - sl.start == 1 else rec.commands[:, :, sl]
+        for sl, _ in acts
+    ]
     meas_hist = [(rec.measured[k], k) for k in rec.measured]
     ring = rec.states is None
     buffer, nbuf = rec.buffer, len(rec.buffer)
@@ -413,8 +490,9 @@ def simulate(
         w = u
         for sl, std, col in random:
             w = w.copy() if w is u else w
-            w[:, sl] += (std * noise_k[:, col])[:, None] if isinstance(col, int) \
-                else std * noise_k[:, col]
+            w[:, sl] += (
+                (std * noise_k[:, col])[:, None] if isinstance(col, int) else std * noise_k[:, col]
+            )
         rec.applied[k] = u
         rec.disturbed[k] = w
         if forced:
@@ -431,8 +509,9 @@ def simulate(
             if own_step is not None:
                 h = dt / substeps
                 for _ in range(substeps):
-                    x = plant.normalize(own_step(x, w if f_in is None else w + input_force(
-                        x, w), h))
+                    x = plant.normalize(
+                        own_step(x, w if f_in is None else w + input_force(x, w), h)
+                    )
             else:
                 x = stepper.step(x, w, force)
         w_prev = w
@@ -440,5 +519,14 @@ def simulate(
     return rec.dataset(t, controller, theta0, config, substeps, engine="python")
 
 
-__all__ = ["DIVERGENCE_BOUND", "FRICTION_STEP_LIMIT", "SimConfig", "SimResult",
-           "SimulationDiverged", "check_law", "check_resources", "simulate", "stable_substeps"]
+__all__ = [
+    "DIVERGENCE_BOUND",
+    "FRICTION_STEP_LIMIT",
+    "SimConfig",
+    "SimResult",
+    "SimulationDiverged",
+    "check_law",
+    "check_resources",
+    "simulate",
+    "stable_substeps",
+]

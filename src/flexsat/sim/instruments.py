@@ -19,6 +19,7 @@ from flexsat.sim.sensors import least_squares_derivative_weights
 def stacked_output_matrices(mats: list, m: int):
     """(C, D, D_f) of several linear outputs stacked row-wise; a missing D or D_f (None: the
     output does not depend on it) is zeros."""
+
     def block(M, C):
         return np.zeros(C.shape[:-1] + (m,)) if M is None else np.asarray(M, float)
 
@@ -118,8 +119,7 @@ class Instruments:
         self.CT = self.DT = self.DfT = None
         self.cols = {}
         if self.linear:
-            C, D, Df = stacked_output_matrices([mats[k] for k in self.linear],
-                                               plant.n_inputs)
+            C, D, Df = stacked_output_matrices([mats[k] for k in self.linear], plant.n_inputs)
             self.CT = np.swapaxes(C, -1, -2).copy()
             self.DT = np.swapaxes(D, -1, -2).copy() if np.any(D) else None
             self.DfT = np.swapaxes(Df, -1, -2).copy() if forced and np.any(Df) else None
@@ -132,8 +132,9 @@ class Instruments:
         for k in direct:
             s = sensors.get(k)
             noisy = s is not None and np.any(s.noise)
-            self.plan.append((k, s, noise_column(columns, k, "its sensor noise", plant)
-                              if noisy else None))
+            self.plan.append(
+                (k, s, noise_column(columns, k, "its sensor noise", plant) if noisy else None)
+            )
         self.plan = [p for p in self.plan if p[1] is not None]  # ideal sensors do nothing
         self.linear_cols = [(k, self.cols[k]) for k in self.linear]
         self.derived = []
@@ -141,9 +142,16 @@ class Instruments:
             s = sensors[k]
             w = least_squares_derivative_weights(s.window, s.order, dt)
             noisy = np.any(s.noise)
-            self.derived.append((k, s, s.derivative_of, w, None,
-                                 noise_column(columns, k, "its sensor noise", plant)
-                                 if noisy else None))
+            self.derived.append(
+                (
+                    k,
+                    s,
+                    s.derivative_of,
+                    w,
+                    None,
+                    noise_column(columns, k, "its sensor noise", plant) if noisy else None,
+                )
+            )
 
     def measure(self, x, w_prev, f_in, noise_k, first: bool) -> dict:
         """Measurements at state x, held input w_prev and input force f_in."""

@@ -74,8 +74,9 @@ def _per_case(fn, A, Bu, Bf):
     if A.ndim == 2 and Bu.ndim == 2 and (Bf is None or Bf.ndim == 2):
         return fn(A, Bu, Bf), False
     n = max(a.shape[0] for a in (A, Bu, Bf) if a is not None and a.ndim == 3)
-    pick = [None if a is None else (a if a.ndim == 2 else a[i]) for i in range(n)
-            for a in (A, Bu, Bf)]
+    pick = [
+        None if a is None else (a if a.ndim == 2 else a[i]) for i in range(n) for a in (A, Bu, Bf)
+    ]
     parts = [fn(*pick[3 * i : 3 * i + 3]) for i in range(n)]
     return tuple(None if p[0] is None else np.stack(p) for p in zip(*parts)), True
 
@@ -107,7 +108,7 @@ class ExponentialStepper:
     batched: bool = False
 
     @classmethod
-    def build(cls, A, Bu, Bf, dt: float, substeps: int = 1) -> "ExponentialStepper":
+    def build(cls, A, Bu, Bf, dt: float, substeps: int = 1) -> ExponentialStepper:
         """Propagators of x' = A x + B_u w + B_f N(x); ``Bf=None`` for a linear run.
 
         Only the products of φ1, φ2 with the input columns are formed (:func:`phi_products`):
@@ -186,7 +187,7 @@ class ExpRK4Stepper:
     batched: bool = False
 
     @classmethod
-    def build(cls, A, Bu, Bf, dt: float, substeps: int = 1) -> "ExpRK4Stepper":
+    def build(cls, A, Bu, Bf, dt: float, substeps: int = 1) -> ExpRK4Stepper:
         """Propagators of x' = A x + B_u w + B_f N(x) with the φ-products at h/2 and h."""
         if substeps < 1:
             raise ValueError(f"substeps: must be >= 1, got {substeps}")
@@ -202,8 +203,7 @@ class ExpRK4Stepper:
             t = [E2, E, R1[:, :m], P1[:, :m], R1[:, m:], 2 * R2, P1[:, m:], P2, P3]
             return tuple(M.T.copy() for M in t)
 
-        mats, batched = _per_case(one, np.asarray(A, float), _inputs(Bu),
-                                  np.asarray(Bf, float))
+        mats, batched = _per_case(one, np.asarray(A, float), _inputs(Bu), np.asarray(Bf, float))
         return cls(*mats, substeps, batched)
 
     def step(self, x: np.ndarray, w: np.ndarray, force) -> np.ndarray:
@@ -222,8 +222,11 @@ class ExpRK4Stepper:
             full = apply(x, self.Et, b) + drive + apply(fx, self.P1f, b)
             c = full + apply(2.0 * (fb - fx), self.P2f, b)
             fc = force(c, w)
-            x = (full + apply(-3.0 * fx + 2.0 * fa + 2.0 * fb - fc, self.P2f, b)
-                 + apply(4.0 * (fx - fa - fb + fc), self.P3f, b))
+            x = (
+                full
+                + apply(-3.0 * fx + 2.0 * fa + 2.0 * fb - fc, self.P2f, b)
+                + apply(4.0 * (fx - fa - fb + fc), self.P3f, b)
+            )
         return x
 
 
@@ -322,8 +325,7 @@ def block_propagators(omega, zeta, h: float) -> tuple[np.ndarray, np.ndarray, np
     return out[0], out[1], out[2]
 
 
-def _refined_modes(K: np.ndarray, M: np.ndarray, steps: int = 2
-                   ) -> tuple[np.ndarray, np.ndarray]:
+def _refined_modes(K: np.ndarray, M: np.ndarray, steps: int = 2) -> tuple[np.ndarray, np.ndarray]:
     """Undamped modes K φ = λ M φ (Φᵀ M Φ = I), each refined by Newton steps.
 
     ``eigh`` leaves errors ~ eps ‖K‖ / gap in a low mode: with the stiff modes of a fine model
@@ -351,8 +353,9 @@ def _refined_modes(K: np.ndarray, M: np.ndarray, steps: int = 2
     return lam, Phi
 
 
-def modal_coordinates(M, K, C, rigid_tol: float = 1e-12
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def modal_coordinates(
+    M, K, C, rigid_tol: float = 1e-12
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Similarity x = T z that makes the first-order form of M q'' + C q' + K q = f
     block-diagonal with companion 2×2 blocks.
 
@@ -386,8 +389,10 @@ def modal_coordinates(M, K, C, rigid_tol: float = 1e-12
     s = np.where(rigid, 1.0, np.sqrt(lam))
     Ct = Phi.T @ C @ Phi
     if np.abs(Ct[rigid]).max(initial=0.0) > rigid_tol * np.abs(Ct).max(initial=0.0):
-        raise ValueError("C: damps a rigid-body mode (C φ ≠ 0 for K φ = 0); modal_coordinates "
-                         "needs undamped rigid modes")
+        raise ValueError(
+            "C: damps a rigid-body mode (C φ ≠ 0 for K φ = 0); modal_coordinates "
+            "needs undamped rigid modes"
+        )
     el = np.flatnonzero(~rigid)
     ne = el.size
     At = np.zeros((2 * ne, 2 * ne))
@@ -397,8 +402,10 @@ def modal_coordinates(M, K, C, rigid_tol: float = 1e-12
     mu, V = np.linalg.eig(At)
     real = np.abs(mu.imag) <= rigid_tol * np.abs(mu)
     if real.any():
-        raise ValueError(f"C: overdamped (real) modes {mu[real].real}; modal_coordinates "
-                         "handles oscillatory modes only")
+        raise ValueError(
+            f"C: overdamped (real) modes {mu[real].real}; modal_coordinates "
+            "handles oscillatory modes only"
+        )
     Tt = np.zeros((2 * n, 2 * n))  # columns in x̃ = [√Λ η; η']
     omega, zeta = [], []
     col = 0
@@ -459,7 +466,7 @@ class ModalPropagator:
     substeps: int
 
     @classmethod
-    def build(cls, omega, zeta, B, dt: float, substeps: int = 1, Bf=None) -> "ModalPropagator":
+    def build(cls, omega, zeta, B, dt: float, substeps: int = 1, Bf=None) -> ModalPropagator:
         """Propagators of the modal plant with block frequencies ``omega`` (rad/s), damping
         ratios ``zeta``, input columns ``B`` (n, m) and force columns ``Bf`` (n, n_f)."""
         if substeps < 1:

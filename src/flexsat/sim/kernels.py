@@ -68,8 +68,16 @@ import warnings
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["ARGUMENTS", "RECORDS", "REDUCTIONS", "allocate_records", "closed_loop",
-           "closed_loop_parallel", "closed_loop_reduced", "closed_loop_reduced_parallel"]
+__all__ = [
+    "ARGUMENTS",
+    "RECORDS",
+    "REDUCTIONS",
+    "allocate_records",
+    "closed_loop",
+    "closed_loop_parallel",
+    "closed_loop_reduced",
+    "closed_loop_reduced_parallel",
+]
 
 _UNCACHED: list[str] = []
 
@@ -78,6 +86,7 @@ def _jit(**options):
     """``njit(cache=True, **options)``; where numba finds no writable cache directory (a
     read-only install without a writable home) it refuses to cache at decoration time, and
     the kernels are compiled in each process instead (a warning says so: a few seconds)."""
+
     def wrap(function):
         try:
             return njit(cache=True, **options)(function)
@@ -85,24 +94,72 @@ def _jit(**options):
             if _UNCACHED:  # one warning for the module
                 return njit(**options)(function)
             _UNCACHED.append(function.__name__)
-            warnings.warn(f"flexsat.sim.kernels: {exc}; compiling without the on-disk cache "
-                          "(set NUMBA_CACHE_DIR to a writable directory to keep it)",
-                          RuntimeWarning, stacklevel=2)
+            warnings.warn(
+                f"flexsat.sim.kernels: {exc}; compiling without the on-disk cache "
+                "(set NUMBA_CACHE_DIR to a writable directory to keep it)",
+                RuntimeWarning,
+                stacklevel=2,
+            )
             return njit(**options)(function)
+
     return wrap
 
 
 #: input arguments of :func:`closed_loop` in order (the records of :data:`RECORDS` follow)
-ARGUMENTS = ("x0", "E", "block_diagonal", "P1u", "P1f", "P2f", "Cr", "fric", "substeps",
-             "imp_k", "imp_dx", "Cm", "Dm", "Dmf", "sensor", "sensor_slot", "fir_src",
-             "fir_dst", "fir_w", "Ak", "Bk", "Ck", "Dk", "y_ref", "u_ff", "K0", "act",
-             "dist_std", "dist_slot", "noise", "bound", "Co", "Do", "Dof", "Q")
+ARGUMENTS = (
+    "x0",
+    "E",
+    "block_diagonal",
+    "P1u",
+    "P1f",
+    "P2f",
+    "Cr",
+    "fric",
+    "substeps",
+    "imp_k",
+    "imp_dx",
+    "Cm",
+    "Dm",
+    "Dmf",
+    "sensor",
+    "sensor_slot",
+    "fir_src",
+    "fir_dst",
+    "fir_w",
+    "Ak",
+    "Bk",
+    "Ck",
+    "Dk",
+    "y_ref",
+    "u_ff",
+    "K0",
+    "act",
+    "dist_std",
+    "dist_slot",
+    "noise",
+    "bound",
+    "Co",
+    "Do",
+    "Dof",
+    "Q",
+)
 #: output arguments of :func:`closed_loop`, as returned by :func:`allocate_records`
 RECORDS = ("X", "Y", "Ucmd", "U", "D", "F", "O", "En", "stop")
 #: the arguments of :func:`closed_loop_reduced` after those of :data:`ARGUMENTS` (inputs,
 #: then outputs)
-REDUCTIONS = ("red_c", "red_tab", "red_t", "red_dir", "red_band", "snap_k", "red", "upeak",
-              "snapO", "snapE", "stop")
+REDUCTIONS = (
+    "red_c",
+    "red_tab",
+    "red_t",
+    "red_dir",
+    "red_band",
+    "snap_k",
+    "red",
+    "upeak",
+    "snapO",
+    "snapE",
+    "stop",
+)
 
 
 @_jit(inline="always", error_model="numpy")
@@ -189,10 +246,53 @@ def _energy(Qc, x, qx):
 
 
 @_jit(error_model="numpy")
-def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
-          imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
-          Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-          Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop):
+def _case(
+    c,
+    x0,
+    E,
+    block_diagonal,
+    P1u,
+    P1f,
+    P2f,
+    Cr,
+    fric,
+    substeps,
+    imp_k,
+    imp_dx,
+    Cm,
+    Dm,
+    Dmf,
+    sensor,
+    sensor_slot,
+    fir_src,
+    fir_dst,
+    fir_w,
+    Ak,
+    Bk,
+    Ck,
+    Dk,
+    y_ref,
+    u_ff,
+    K0,
+    act,
+    dist_std,
+    dist_slot,
+    noise,
+    bound,
+    Co,
+    Do,
+    Dof,
+    Q,
+    X,
+    Y,
+    Ucmd,
+    U,
+    D,
+    F,
+    O,
+    En,
+    stop,
+):
     n = x0.shape[1]
     m = P1u.shape[2]
     p = Cm.shape[1]
@@ -395,10 +495,52 @@ def _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
 
 
 @_jit(error_model="numpy")
-def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
-                imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
-                Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-                Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop):
+def closed_loop(
+    x0,
+    E,
+    block_diagonal,
+    P1u,
+    P1f,
+    P2f,
+    Cr,
+    fric,
+    substeps,
+    imp_k,
+    imp_dx,
+    Cm,
+    Dm,
+    Dmf,
+    sensor,
+    sensor_slot,
+    fir_src,
+    fir_dst,
+    fir_w,
+    Ak,
+    Bk,
+    Ck,
+    Dk,
+    y_ref,
+    u_ff,
+    K0,
+    act,
+    dist_std,
+    dist_slot,
+    noise,
+    bound,
+    Co,
+    Do,
+    Dof,
+    Q,
+    X,
+    Y,
+    Ucmd,
+    U,
+    D,
+    F,
+    O,
+    En,
+    stop,
+):
     """Run the closed loop for every case, serially (see the module docstring).
 
     Parameters
@@ -445,25 +587,153 @@ def closed_loop(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                                 F are recorded; U, D there and every later row are not)
     """
     for c in range(x0.shape[0]):
-        _case(c, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
-              imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
-              Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-              Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop)
+        _case(
+            c,
+            x0,
+            E,
+            block_diagonal,
+            P1u,
+            P1f,
+            P2f,
+            Cr,
+            fric,
+            substeps,
+            imp_k,
+            imp_dx,
+            Cm,
+            Dm,
+            Dmf,
+            sensor,
+            sensor_slot,
+            fir_src,
+            fir_dst,
+            fir_w,
+            Ak,
+            Bk,
+            Ck,
+            Dk,
+            y_ref,
+            u_ff,
+            K0,
+            act,
+            dist_std,
+            dist_slot,
+            noise,
+            bound,
+            Co,
+            Do,
+            Dof,
+            Q,
+            X,
+            Y,
+            Ucmd,
+            U,
+            D,
+            F,
+            O,
+            En,
+            stop,
+        )
 
 
 @_jit(parallel=True, error_model="numpy")
-def closed_loop_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
-                         imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
-                         fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot,
-                         noise, bound, Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop):
+def closed_loop_parallel(
+    x0,
+    E,
+    block_diagonal,
+    P1u,
+    P1f,
+    P2f,
+    Cr,
+    fric,
+    substeps,
+    imp_k,
+    imp_dx,
+    Cm,
+    Dm,
+    Dmf,
+    sensor,
+    sensor_slot,
+    fir_src,
+    fir_dst,
+    fir_w,
+    Ak,
+    Bk,
+    Ck,
+    Dk,
+    y_ref,
+    u_ff,
+    K0,
+    act,
+    dist_std,
+    dist_slot,
+    noise,
+    bound,
+    Co,
+    Do,
+    Dof,
+    Q,
+    X,
+    Y,
+    Ucmd,
+    U,
+    D,
+    F,
+    O,
+    En,
+    stop,
+):
     """:func:`closed_loop` with the cases spread over threads (same arguments, bit-identical
     results: each case runs the same scalar operations as in the serial loop)."""
     for c in prange(x0.shape[0]):
         # prange's index is unsigned; the case index must stay a signed integer
-        _case(np.int64(c), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
-              imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
-              Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-              Co, Do, Dof, Q, X, Y, Ucmd, U, D, F, O, En, stop)
+        _case(
+            np.int64(c),
+            x0,
+            E,
+            block_diagonal,
+            P1u,
+            P1f,
+            P2f,
+            Cr,
+            fric,
+            substeps,
+            imp_k,
+            imp_dx,
+            Cm,
+            Dm,
+            Dmf,
+            sensor,
+            sensor_slot,
+            fir_src,
+            fir_dst,
+            fir_w,
+            Ak,
+            Bk,
+            Ck,
+            Dk,
+            y_ref,
+            u_ff,
+            K0,
+            act,
+            dist_std,
+            dist_slot,
+            noise,
+            bound,
+            Co,
+            Do,
+            Dof,
+            Q,
+            X,
+            Y,
+            Ucmd,
+            U,
+            D,
+            F,
+            O,
+            En,
+            stop,
+        )
 
 
 #: cases per group of :func:`closed_loop_reduced`: the lanes of its vector operations (8:
@@ -472,11 +742,56 @@ LANES = 8
 
 
 @_jit(error_model="numpy")
-def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
-           imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst, fir_w,
-           Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-           Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
-           red, upeak, snapO, snapE, stop):
+def _lanes(
+    c0,
+    nl,
+    x0,
+    E,
+    block_diagonal,
+    P1u,
+    P1f,
+    P2f,
+    Cr,
+    fric,
+    substeps,
+    imp_k,
+    imp_dx,
+    Cm,
+    Dm,
+    Dmf,
+    sensor,
+    sensor_slot,
+    fir_src,
+    fir_dst,
+    fir_w,
+    Ak,
+    Bk,
+    Ck,
+    Dk,
+    y_ref,
+    u_ff,
+    K0,
+    act,
+    dist_std,
+    dist_slot,
+    noise,
+    bound,
+    Co,
+    Do,
+    Dof,
+    Q,
+    red_c,
+    red_tab,
+    red_t,
+    red_dir,
+    red_band,
+    snap_k,
+    red,
+    upeak,
+    snapO,
+    snapE,
+    stop,
+):
     """Cases c0 .. c0 + nl − 1 (nl <= :data:`LANES`) of :func:`closed_loop_reduced` side by
     side: every per-case quantity is a row of :data:`LANES` lanes, the innermost loops run
     over the lanes (independent cases; the rows' sums in registers, :func:`_rows8`), and
@@ -766,8 +1081,9 @@ def _lanes(c0, nl, x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
                     for l in range(LANES):
                         x0_, x1_ = x[i, l], x[i + 1, l]
                         x[i, l] = (Ev[i, 0, l] * x0_ + Ev[i, 1, l] * x1_) + drive[i, l]
-                        x[i + 1, l] = ((Ev[i + 1, 0, l] * x0_ + Ev[i + 1, 1, l] * x1_)
-                                       + drive[i + 1, l])
+                        x[i + 1, l] = (Ev[i + 1, 0, l] * x0_ + Ev[i + 1, 1, l] * x1_) + drive[
+                            i + 1, l
+                        ]
                 continue
             _propagate_lanes(Ev, x, xa, block_diagonal)
             if has_force:
@@ -874,11 +1190,54 @@ def _energy_lane(Qv, x, qx, l):
 
 
 @_jit(error_model="numpy")
-def closed_loop_reduced(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
-                        imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
-                        fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot,
-                        noise, bound, Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir,
-                        red_band, snap_k, red, upeak, snapO, snapE, stop):
+def closed_loop_reduced(
+    x0,
+    E,
+    block_diagonal,
+    P1u,
+    P1f,
+    P2f,
+    Cr,
+    fric,
+    substeps,
+    imp_k,
+    imp_dx,
+    Cm,
+    Dm,
+    Dmf,
+    sensor,
+    sensor_slot,
+    fir_src,
+    fir_dst,
+    fir_w,
+    Ak,
+    Bk,
+    Ck,
+    Dk,
+    y_ref,
+    u_ff,
+    K0,
+    act,
+    dist_std,
+    dist_slot,
+    noise,
+    bound,
+    Co,
+    Do,
+    Dof,
+    Q,
+    red_c,
+    red_tab,
+    red_t,
+    red_dir,
+    red_band,
+    snap_k,
+    red,
+    upeak,
+    snapO,
+    snapE,
+    stop,
+):
     """:func:`closed_loop` keeping no history: per case, the reductions of the first
     R output rows o_j (C_o, D_o, D_of), s_j = o_j − red_c[c, j] − red_t[red_tab[j], k, c]
     (the table term only where red_tab[j] >= 0), over every sample k:
@@ -894,38 +1253,185 @@ def closed_loop_reduced(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps
     nc = x0.shape[0]
     for g in range((nc + LANES - 1) // LANES):
         c0 = g * LANES
-        _lanes(c0, min(LANES, nc - c0), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric,
-               substeps, imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
-               fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-               Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
-               red, upeak, snapO, snapE, stop)
+        _lanes(
+            c0,
+            min(LANES, nc - c0),
+            x0,
+            E,
+            block_diagonal,
+            P1u,
+            P1f,
+            P2f,
+            Cr,
+            fric,
+            substeps,
+            imp_k,
+            imp_dx,
+            Cm,
+            Dm,
+            Dmf,
+            sensor,
+            sensor_slot,
+            fir_src,
+            fir_dst,
+            fir_w,
+            Ak,
+            Bk,
+            Ck,
+            Dk,
+            y_ref,
+            u_ff,
+            K0,
+            act,
+            dist_std,
+            dist_slot,
+            noise,
+            bound,
+            Co,
+            Do,
+            Dof,
+            Q,
+            red_c,
+            red_tab,
+            red_t,
+            red_dir,
+            red_band,
+            snap_k,
+            red,
+            upeak,
+            snapO,
+            snapE,
+            stop,
+        )
 
 
 @_jit(parallel=True, error_model="numpy")
-def closed_loop_reduced_parallel(x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric, substeps,
-                                 imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src,
-                                 fir_dst, fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act,
-                                 dist_std, dist_slot, noise, bound, Co, Do, Dof, Q, red_c,
-                                 red_tab, red_t, red_dir, red_band, snap_k, red, upeak, snapO,
-                                 snapE, stop):
+def closed_loop_reduced_parallel(
+    x0,
+    E,
+    block_diagonal,
+    P1u,
+    P1f,
+    P2f,
+    Cr,
+    fric,
+    substeps,
+    imp_k,
+    imp_dx,
+    Cm,
+    Dm,
+    Dmf,
+    sensor,
+    sensor_slot,
+    fir_src,
+    fir_dst,
+    fir_w,
+    Ak,
+    Bk,
+    Ck,
+    Dk,
+    y_ref,
+    u_ff,
+    K0,
+    act,
+    dist_std,
+    dist_slot,
+    noise,
+    bound,
+    Co,
+    Do,
+    Dof,
+    Q,
+    red_c,
+    red_tab,
+    red_t,
+    red_dir,
+    red_band,
+    snap_k,
+    red,
+    upeak,
+    snapO,
+    snapE,
+    stop,
+):
     """:func:`closed_loop_reduced` with the groups spread over threads (bit-identical)."""
     nc = x0.shape[0]
     for g in prange((nc + LANES - 1) // LANES):
         c0 = np.int64(g) * LANES
-        _lanes(c0, min(LANES, nc - c0), x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric,
-               substeps, imp_k, imp_dx, Cm, Dm, Dmf, sensor, sensor_slot, fir_src, fir_dst,
-               fir_w, Ak, Bk, Ck, Dk, y_ref, u_ff, K0, act, dist_std, dist_slot, noise, bound,
-               Co, Do, Dof, Q, red_c, red_tab, red_t, red_dir, red_band, snap_k,
-               red, upeak, snapO, snapE, stop)
+        _lanes(
+            c0,
+            min(LANES, nc - c0),
+            x0,
+            E,
+            block_diagonal,
+            P1u,
+            P1f,
+            P2f,
+            Cr,
+            fric,
+            substeps,
+            imp_k,
+            imp_dx,
+            Cm,
+            Dm,
+            Dmf,
+            sensor,
+            sensor_slot,
+            fir_src,
+            fir_dst,
+            fir_w,
+            Ak,
+            Bk,
+            Ck,
+            Dk,
+            y_ref,
+            u_ff,
+            K0,
+            act,
+            dist_std,
+            dist_slot,
+            noise,
+            bound,
+            Co,
+            Do,
+            Dof,
+            Q,
+            red_c,
+            red_tab,
+            red_t,
+            red_dir,
+            red_band,
+            snap_k,
+            red,
+            upeak,
+            snapO,
+            snapE,
+            stop,
+        )
 
 
-def allocate_records(n_t: int, n_cases: int, n: int, m: int, p: int, record_states: bool,
-                     r: int = 0, energy: bool = False):
+def allocate_records(
+    n_t: int,
+    n_cases: int,
+    n: int,
+    m: int,
+    p: int,
+    record_states: bool,
+    r: int = 0,
+    energy: bool = False,
+):
     """Output arrays (X, Y, Ucmd, U, D, F, O, En, stop) of the kernels, case-major; X has
     time length 0 when the states are not recorded, O when there are no output rows (r = 0),
     En without ``energy``."""
     X = np.empty((n_cases, n_t if record_states else 0, n))
-    return (X, np.empty((n_cases, n_t, p)), np.empty((n_cases, n_t, m)),
-            np.empty((n_cases, n_t, m)), np.empty((n_cases, n_t, m)), np.empty((n_cases, n_t)),
-            np.empty((n_cases, n_t if r else 0, r)), np.empty((n_cases, n_t if energy else 0)),
-            np.full(n_cases, -1, dtype=np.int64))
+    return (
+        X,
+        np.empty((n_cases, n_t, p)),
+        np.empty((n_cases, n_t, m)),
+        np.empty((n_cases, n_t, m)),
+        np.empty((n_cases, n_t, m)),
+        np.empty((n_cases, n_t)),
+        np.empty((n_cases, n_t if r else 0, r)),
+        np.empty((n_cases, n_t if energy else 0)),
+        np.full(n_cases, -1, dtype=np.int64),
+    )

@@ -24,7 +24,9 @@ def settling_time(t: np.ndarray, error: np.ndarray, band: float) -> np.ndarray:
     outside = np.abs(error) > band
     settled = ~outside[:, -1]
     # index of the last sample outside the band, + 1
-    last_out = np.where(outside.any(axis=1), outside.shape[1] - np.argmax(outside[:, ::-1], axis=1), 0)
+    last_out = np.where(
+        outside.any(axis=1), outside.shape[1] - np.argmax(outside[:, ::-1], axis=1), 0
+    )
     ts = t[np.minimum(last_out, len(t) - 1)]
     return np.where(settled, ts, np.nan)
 
@@ -67,9 +69,15 @@ def maneuver_metrics(
     return out
 
 
-def channel_metrics(histories: dict, units: dict, outputs, inputs, t: np.ndarray,
-                    attitude_target=None, band: float | None = None
-                    ) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+def channel_metrics(
+    histories: dict,
+    units: dict,
+    outputs,
+    inputs,
+    t: np.ndarray,
+    attitude_target=None,
+    band: float | None = None,
+) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     """Summary metrics of any plant's run, from its recorded (case, time[, component]) histories.
 
     For each recorded output channel: ``peak_<name>`` (largest magnitude, the Euclidean norm of
@@ -104,7 +112,7 @@ def channel_metrics(histories: dict, units: dict, outputs, inputs, t: np.ndarray
             continue
         mag = norm(histories[name])
         metrics[f"peak_{name}"] = mag.max(axis=1)
-        metrics[f"rms_{name}"] = np.sqrt(np.mean(mag ** 2, axis=1))
+        metrics[f"rms_{name}"] = np.sqrt(np.mean(mag**2, axis=1))
         metric_units[f"peak_{name}"] = metric_units[f"rms_{name}"] = units.get(name, "")
     if attitude_target is not None and "attitude" in histories:
         beta = histories["attitude"]

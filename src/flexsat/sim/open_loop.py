@@ -30,9 +30,9 @@ import math
 
 import numpy as np
 
+from flexsat.input_checks import require_finite
 from flexsat.maneuvers.torque_shapes import BangBang, SmoothBangBang
 from flexsat.sim.instruments import unit_row
-from flexsat.validation import require_finite
 
 #: |z| below which φ_m(z) is summed as its Taylor series (the recurrence
 #: φ_{m+1} = (φ_m − 1/m!)/z cancels for small |z|); 30 terms leave 2^30/30! ≈ 4e-24
@@ -40,11 +40,15 @@ _SERIES_RADIUS, _SERIES_TERMS = 2.0, 30
 
 #: Eq. 12 pieces of the smoothed bang-bang in σ on each piece: rise h(σ) = 3σ² − 2σ³ over Δt,
 #: plateau 1, reversal 1 − 2 h(σ) over 2Δt, plateau −1, return −1 + h(σ) over Δt
-_SMOOTH_PIECES = np.array([[0.0, 0.0, 3.0, -2.0],
-                           [1.0, 0.0, 0.0, 0.0],
-                           [1.0, 0.0, -6.0, 4.0],
-                           [-1.0, 0.0, 0.0, 0.0],
-                           [-1.0, 0.0, 3.0, -2.0]])
+_SMOOTH_PIECES = np.array(
+    [
+        [0.0, 0.0, 3.0, -2.0],
+        [1.0, 0.0, 0.0, 0.0],
+        [1.0, 0.0, -6.0, 4.0],
+        [-1.0, 0.0, 0.0, 0.0],
+        [-1.0, 0.0, 3.0, -2.0],
+    ]
+)
 
 
 def torque_pieces(shape) -> tuple[np.ndarray, np.ndarray]:
@@ -71,10 +75,11 @@ def torque_pieces(shape) -> tuple[np.ndarray, np.ndarray]:
     elif isinstance(shape, BangBang):
         alpha = np.zeros_like(shape.duration)
     else:
-        raise ValueError(f"shape: the exact response needs a piecewise-polynomial torque "
-                         f"(SmoothBangBang or BangBang), got {type(shape).__name__}")
-    T, a, peak = np.broadcast_arrays(shape.duration, alpha,
-                                     np.sign(shape.angle) * shape.u_max)
+        raise ValueError(
+            f"shape: the exact response needs a piecewise-polynomial torque "
+            f"(SmoothBangBang or BangBang), got {type(shape).__name__}"
+        )
+    T, a, peak = np.broadcast_arrays(shape.duration, alpha, np.sign(shape.angle) * shape.u_max)
     T, dt, peak = T.reshape(-1), (a * T).reshape(-1), peak.reshape(-1)
     breaks = np.stack([0 * T, dt, T / 2 - dt, T / 2 + dt, T - dt, T], axis=1)
     return breaks, peak[:, None, None] * _SMOOTH_PIECES
@@ -98,8 +103,10 @@ def _phi(z: np.ndarray, m_max: int) -> list[np.ndarray]:
     return out
 
 
-_NOT_MODAL = ("A: the zero eigenvalues of the plant must form a rigid-body (nilpotent, "
-              "A_r² = 0) block and the others be distinct; the exact response does not apply")
+_NOT_MODAL = (
+    "A: the zero eigenvalues of the plant must form a rigid-body (nilpotent, "
+    "A_r² = 0) block and the others be distinct; the exact response does not apply"
+)
 
 
 def _nullity(s: np.ndarray) -> int:
@@ -120,7 +127,7 @@ class _Modes:
         lam, vec = np.linalg.eig(A)
         keep = np.argsort(np.abs(lam))[r:]
         self.lam = lam[keep]
-        V = np.concatenate([vh[n - r:].T.astype(complex), vec[:, keep]], axis=1)
+        V = np.concatenate([vh[n - r :].T.astype(complex), vec[:, keep]], axis=1)
         self.V = V
         self.r = r
         # a longer Jordan chain of 0 (or a defective elastic eigenvalue) leaves V singular
@@ -180,12 +187,18 @@ def piecewise_polynomial_response(A, B, breaks, coeffs, times, x0=None) -> np.nd
     coeffs = require_finite(coeffs, "coeffs")
     n = A.shape[0]
     if A.shape != (n, n) or B.shape != (n,):
-        raise ValueError(f"A, B: need A (n_x, n_x) and one input column B (n_x,), got "
-                         f"{A.shape} and {B.shape}")
-    if breaks.ndim != 2 or coeffs.ndim != 3 or coeffs.shape[:2] != (breaks.shape[0],
-                                                                    breaks.shape[1] - 1):
-        raise ValueError(f"coeffs: need breaks (C, P+1) and coeffs (C, P, d+1), got "
-                         f"{breaks.shape} and {coeffs.shape}")
+        raise ValueError(
+            f"A, B: need A (n_x, n_x) and one input column B (n_x,), got {A.shape} and {B.shape}"
+        )
+    if (
+        breaks.ndim != 2
+        or coeffs.ndim != 3
+        or coeffs.shape[:2] != (breaks.shape[0], breaks.shape[1] - 1)
+    ):
+        raise ValueError(
+            f"coeffs: need breaks (C, P+1) and coeffs (C, P, d+1), got "
+            f"{breaks.shape} and {coeffs.shape}"
+        )
     h = np.diff(breaks, axis=1)
     if np.any(h < 0):
         raise ValueError("breaks: must be non-decreasing along each case")
@@ -193,8 +206,9 @@ def piecewise_polynomial_response(A, B, breaks, coeffs, times, x0=None) -> np.nd
     times = require_finite(times, "times")
     times = times.reshape(times.shape[0], -1) if times.ndim else times.reshape(1, 1)
     if times.shape[1] not in (1, C) or times.ndim > 2:
-        raise ValueError(f"times: need shape (n_t,) or (n_t, {C}) (one column per case), got "
-                         f"{times.shape}")
+        raise ValueError(
+            f"times: need shape (n_t,) or (n_t, {C}) (one column per case), got {times.shape}"
+        )
     times = np.broadcast_to(times, (times.shape[0], C))
     if np.any(times < breaks[:, 0]):
         raise ValueError("times: must not precede the start of the response (breaks[:, 0])")
@@ -208,8 +222,9 @@ def piecewise_polynomial_response(A, B, breaks, coeffs, times, x0=None) -> np.nd
         at_breaks.append(xi)
     at_breaks = np.stack(at_breaks, axis=1)  # (C, P+1, n)
     # piece of each time: the last break <= t (P: after the end, the free response)
-    j = np.stack([np.searchsorted(breaks[c], times[:, c], side="right") - 1
-                  for c in range(C)], axis=1)
+    j = np.stack(
+        [np.searchsorted(breaks[c], times[:, c], side="right") - 1 for c in range(C)], axis=1
+    )
     j = np.clip(j, 0, P)
     cases = np.arange(C)[None, :]
     start = breaks[cases, j]
@@ -230,8 +245,10 @@ def open_loop_response(plant, shape, times) -> np.ndarray:
     Returns the states, (n_t, C, n_x) (C: the shape's number of elements).
     """
     if plant.nonlinear or plant.n_inputs != 1:
-        raise ValueError("plant: the exact open-loop response needs a linear plant with one "
-                         "input channel (turn the rotational stiffening off)")
+        raise ValueError(
+            "plant: the exact open-loop response needs a linear plant with one "
+            "input channel (turn the rotational stiffening off)"
+        )
     A, B = plant.linear_part()
     breaks, coeffs = torque_pieces(shape)
     x0 = np.zeros((breaks.shape[0], plant.nx))

@@ -59,8 +59,18 @@ def _history(n: int, nc: int, size: int) -> np.ndarray:
 class Recorder:
     """Histories of one run (module docstring); arrays are (n_t, n_cases[, size])."""
 
-    def __init__(self, plant, n: int, nc: int, measured: tuple[str, ...], force_names: dict,
-                 record_states: bool, batched: bool, random_channels=(), allocate: bool = True):
+    def __init__(
+        self,
+        plant,
+        n: int,
+        nc: int,
+        measured: tuple[str, ...],
+        force_names: dict,
+        record_states: bool,
+        batched: bool,
+        random_channels=(),
+        allocate: bool = True,
+    ):
         self.plant, self.n, self.nc, self.batched = plant, n, nc, batched
         m = plant.n_inputs
         # the compiled loop (flexsat.sim.compiled) writes its own records and hands views of
@@ -76,20 +86,26 @@ class Recorder:
         always = set(getattr(plant, "recorded_disturbances", ()))
         self.with_disturbance = set(random_channels) | always
         self.with_force = set(force_names) | always
-        self.measured = {k: _history(n, nc, _size(plant.outputs, k)) if allocate else None
-                         for k in measured}
+        self.measured = {
+            k: _history(n, nc, _size(plant.outputs, k)) if allocate else None for k in measured
+        }
         self.states = zeros((n, nc, plant.nx)) if record_states else None
-        self.buffer = self.states if record_states or not allocate else np.empty(
-            (min(CHUNK, n), nc, plant.nx))
+        self.buffer = (
+            self.states
+            if record_states or not allocate
+            else np.empty((min(CHUNK, n), nc, plant.nx))
+        )
         names = [c for c in plant.recorded]
-        self.outputs = {k: _history(n, nc, _size(plant.outputs, k)) if allocate else None
-                        for k in names}
+        self.outputs = {
+            k: _history(n, nc, _size(plant.outputs, k)) if allocate else None for k in names
+        }
         mats = [plant.output_matrices(k) for k in names]
         self.linear = [k for k, mt in zip(names, mats) if mt is not None]
         self.nonlinear = [k for k, mt in zip(names, mats) if mt is None]
         if self.linear:
-            C, D, Df = stacked_output_matrices([mt for mt in mats if mt is not None],
-                                               plant.n_inputs)
+            C, D, Df = stacked_output_matrices(
+                [mt for mt in mats if mt is not None], plant.n_inputs
+            )
             self.CT, self.DT, self.DfT = (np.swapaxes(M, -1, -2) for M in (C, D, Df))
         has_vib = hasattr(plant, "vibration_energy")
         probe = np.zeros((plant.n_cases, plant.nx))  # (cases, n_x): one state per parameter case
@@ -132,8 +148,7 @@ class Recorder:
             return X @ MT
         return np.einsum("tci,cip->tcp", X, MT)
 
-    def dataset(self, t, controller, theta0, config, substeps, engine: str = "python"
-                ) -> SimResult:
+    def dataset(self, t, controller, theta0, config, substeps, engine: str = "python") -> SimResult:
         """The xarray dataset (case × time; views, no copies) and the maneuver metrics;
         ``engine`` (``"python"`` or ``"compiled"``: which loop ran) goes to its attributes."""
         plant, nc = self.plant, self.nc
@@ -167,8 +182,14 @@ class Recorder:
                 put(f"disturbance_{ch}", pick(self.disturbed), unit, ch)
             if ch in self.with_force:
                 name = f"{self.force_names.get(ch, 'friction')}_{ch}"
-                put(name, pick(self.forces) if ch in self.force_names
-                    else np.broadcast_to(0.0, pick(self.applied).shape), unit, ch)  # no memory
+                put(
+                    name,
+                    pick(self.forces)
+                    if ch in self.force_names
+                    else np.broadcast_to(0.0, pick(self.applied).shape),
+                    unit,
+                    ch,
+                )  # no memory
         for k, v in self.outputs.items():
             if k not in data:
                 put(k, v, outs[k].unit)
@@ -189,16 +210,23 @@ class Recorder:
         if not metrics:  # not a single-axis maneuver: the summary of every channel
             target = getattr(controller, "beta_target", None)
             metrics, units = channel_metrics(
-                histories, {c.name: c.unit for c in plant.outputs + plant.inputs},
-                [c.name for c in plant.outputs], [c.name for c in plant.inputs], t,
+                histories,
+                {c.name: c.unit for c in plant.outputs + plant.inputs},
+                [c.name for c in plant.outputs],
+                [c.name for c in plant.inputs],
+                t,
                 None if target is None else np.broadcast_to(target, (nc, 4)),
-                config.settling_band)
+                config.settling_band,
+            )
         for key, val in metrics.items():  # one Dataset call: each later insertion re-aligns
             data[key] = (("case",), val, {"units": units[key]})
-        ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}),
-                                      "case": np.arange(nc)})
-        ds.attrs.update(control_rate_Hz=config.control_rate, settling_band_rad=config.settling_band,
-                        substeps=substeps, engine=engine)
+        ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}), "case": np.arange(nc)})
+        ds.attrs.update(
+            control_rate_Hz=config.control_rate,
+            settling_band_rad=config.settling_band,
+            substeps=substeps,
+            engine=engine,
+        )
         return SimResult(ds, metrics)
 
 
@@ -212,8 +240,10 @@ def _references(controller, t, nc):
         return None
     table = getattr(controller, "_table", None)
     if table is not None and len(table[0]) == len(t) and np.array_equal(table[0], t):
-        return tuple(np.broadcast_to(np.asarray(a, float).reshape(len(t), -1), (len(t), nc))
-                     for a in table[1:3])
+        return tuple(
+            np.broadcast_to(np.asarray(a, float).reshape(len(t), -1), (len(t), nc))
+            for a in table[1:3]
+        )
     th, thd = np.zeros((len(t), nc)), np.zeros((len(t), nc))
     for k, tk in enumerate(t):
         th[k], thd[k] = controller.reference_at(tk)[:2]
@@ -232,8 +262,19 @@ def _metrics(ds: dict, t, controller, theta0, config, refs, nc) -> dict:
     blocks = []
     for start in range(0, nc, METRIC_BLOCK):
         c = slice(start, start + METRIC_BLOCK)
-        blocks.append(maneuver_metrics(
-            t, ds["theta"][c], ds["theta_dot"][c], refs[1].T[c], ds["torque"][c],
-            ds["tip_deflection"][c], ds["vibration_energy"][c], theta0[c], target[c],
-            None if ref_end is None else ref_end[c], config.settling_band))
+        blocks.append(
+            maneuver_metrics(
+                t,
+                ds["theta"][c],
+                ds["theta_dot"][c],
+                refs[1].T[c],
+                ds["torque"][c],
+                ds["tip_deflection"][c],
+                ds["vibration_energy"][c],
+                theta0[c],
+                target[c],
+                None if ref_end is None else ref_end[c],
+                config.settling_band,
+            )
+        )
     return {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]}

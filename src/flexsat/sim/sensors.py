@@ -8,7 +8,7 @@ from typing import Literal
 
 import numpy as np
 
-from flexsat.validation import require_nonneg, set_si
+from flexsat.input_checks import require_nonneg, set_si
 
 
 def least_squares_derivative_weights(window: int, order: int, dt: float) -> np.ndarray:

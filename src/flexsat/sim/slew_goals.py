@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.validation import require_finite, require_positive
+from flexsat.input_checks import require_finite, require_positive
 
 __all__ = ["SlewGoals", "euler_angle_error", "slew_goal_metrics"]
 
@@ -48,8 +48,10 @@ class SlewGoals:
         for name in ("angle_fraction", "deflection_ratio"):
             require_positive(getattr(self, name), name)
         if not float(require_finite(self.evaluation, "evaluation")) >= 1.0:
-            raise ValueError(f"evaluation: must be >= 1 (a multiple of the maneuver time T), "
-                             f"got {self.evaluation}")
+            raise ValueError(
+                f"evaluation: must be >= 1 (a multiple of the maneuver time T), "
+                f"got {self.evaluation}"
+            )
 
 
 def euler_angle_error(angles, target) -> np.ndarray:
@@ -73,9 +75,18 @@ def _peak(t: np.ndarray, deflection: np.ndarray, start: float, stop: float) -> n
     return np.linalg.norm(deflection[:, inside], axis=-1).max(axis=(1, 2))
 
 
-def slew_goal_metrics(t, duration, euler123, target, deflection, deflection_open,
-                      torque=None, torque_nominal=None, forces=None,
-                      goals: SlewGoals = SlewGoals()) -> tuple[dict, dict]:
+def slew_goal_metrics(
+    t,
+    duration,
+    euler123,
+    target,
+    deflection,
+    deflection_open,
+    torque=None,
+    torque_nominal=None,
+    forces=None,
+    goals: SlewGoals = SlewGoals(),
+) -> tuple[dict, dict]:
     """The goals of a batch of slews (module docstring).
 
     Parameters
@@ -107,8 +118,10 @@ def slew_goal_metrics(t, duration, euler123, target, deflection, deflection_open
     T = float(require_positive(duration, "duration", "s"))
     t_eval = goals.evaluation * T
     if t.ndim != 1 or len(t) < 2 or t[0] > 0.0 or t[-1] < t_eval * (1 - 1e-9):
-        raise ValueError(f"t: the record must span [0, {t_eval:g}] s ({goals.evaluation:g} T) "
-                         f"to evaluate the goals, got [{t[0]:g}, {t[-1]:g}] s")
+        raise ValueError(
+            f"t: the record must span [0, {t_eval:g}] s ({goals.evaluation:g} T) "
+            f"to evaluate the goals, got [{t[0]:g}, {t[-1]:g}] s"
+        )
     angles = np.asarray(euler123, float)
     target = np.asarray(target, float)
     defl = np.asarray(deflection, float)

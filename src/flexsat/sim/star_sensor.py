@@ -10,11 +10,11 @@ The measured attitude is the true one turned by a small body-axis error,
 
 with n the first three standard-normal columns of the channel's noise stream and
 :math:`L L^T = P` the error covariance (rad², body axes): the convention of
-:func:`flexsat.identify.attitude_fit.rotation_error`.
+:func:`flexsat.attitude.fit.rotation_error`.
 
 This is the fast statistical model of the full pipeline (pinhole cameras, lost-in-space
 identification, q-method): :meth:`StarTrackerSensor.from_tracker` runs
-:func:`flexsat.identify.star_tracker.monte_carlo` on seeded random attitudes and takes P as the
+:func:`flexsat.attitude.star_tracker.monte_carlo` on seeded random attitudes and takes P as the
 sample covariance of the errors of the accepted identifications (the per-frame QUEST covariance
 agrees with it: tests/identify/test_star_tracker.py). A rejected identification is not modelled
 (the default tracker identifies ≥ 99.9 % of frames; the rate is kept in
@@ -62,24 +62,35 @@ class StarTrackerSensor(ChannelSensor):
             cov = given
         else:
             sig = to_si_array(self.covariance, "rad", "covariance")
-            if sig.ndim > 1 or sig.size not in (1, 3) or not np.all(np.isfinite(sig)) \
-                    or np.any(sig < 0):
-                raise ValueError(f"covariance: give a (3, 3) matrix in rad² or per-axis sigmas "
-                                 f"(1 or 3 finite angles >= 0), got {self.covariance!r}")
+            if (
+                sig.ndim > 1
+                or sig.size not in (1, 3)
+                or not np.all(np.isfinite(sig))
+                or np.any(sig < 0)
+            ):
+                raise ValueError(
+                    f"covariance: give a (3, 3) matrix in rad² or per-axis sigmas "
+                    f"(1 or 3 finite angles >= 0), got {self.covariance!r}"
+                )
             cov = np.diag(np.broadcast_to(sig, (3,)) ** 2)
         if cov.shape != (3, 3) or not np.all(np.isfinite(cov)):
-            raise ValueError(f"covariance: must be a finite (3, 3) matrix in rad² or 3 per-axis "
-                             f"sigmas, got shape {cov.shape}")
+            raise ValueError(
+                f"covariance: must be a finite (3, 3) matrix in rad² or 3 per-axis "
+                f"sigmas, got shape {cov.shape}"
+            )
         if np.max(np.abs(cov - cov.T)) > 1e-12 * max(np.max(np.abs(cov)), 1e-300):
             raise ValueError("covariance: must be symmetric")
         vals, vecs = np.linalg.eigh(cov)
         if vals[0] < -1e-12 * max(vals[-1], 1e-300):
-            raise ValueError(f"covariance: must be positive semi-definite, smallest eigenvalue "
-                             f"{vals[0]:.3g} rad²")
+            raise ValueError(
+                f"covariance: must be positive semi-definite, smallest eigenvalue "
+                f"{vals[0]:.3g} rad²"
+            )
         rate = float(self.identification_rate)
         if not 0 < rate <= 1:
-            raise ValueError(f"identification_rate: must lie in (0, 1], got "
-                             f"{self.identification_rate!r}")
+            raise ValueError(
+                f"identification_rate: must lie in (0, 1], got {self.identification_rate!r}"
+            )
         if self.derivative_of is not None:
             raise ValueError("derivative_of: a star tracker measures the attitude itself")
         object.__setattr__(self, "covariance", cov)
@@ -89,8 +100,9 @@ class StarTrackerSensor(ChannelSensor):
         object.__setattr__(self, "noise", float(np.sqrt(max(vals[-1], 0.0))))
 
     @classmethod
-    def from_tracker(cls, tracker, n: int = 300, seed=0, false_stars: int = 0,
-                     missing_fraction: float = 0.0) -> "StarTrackerSensor":
+    def from_tracker(
+        cls, tracker, n: int = 300, seed=0, false_stars: int = 0, missing_fraction: float = 0.0
+    ) -> StarTrackerSensor:
         """Calibrated from the full pipeline (module docstring) on ``n`` random attitudes.
 
         Raises
@@ -98,20 +110,23 @@ class StarTrackerSensor(ChannelSensor):
         ValueError
             When fewer than 10 identifications are accepted (no covariance to estimate).
         """
-        from flexsat.identify.star_tracker import monte_carlo
+        from flexsat.attitude.star_tracker import monte_carlo
 
         r = monte_carlo(tracker, n, seed, false_stars, missing_fraction)
         ok = r.errors[r.accepted]
         if ok.shape[0] < 10:
-            raise ValueError(f"tracker: only {ok.shape[0]} of {n} frames identified; the "
-                             f"sensor's covariance needs at least 10")
-        return cls(covariance=np.cov(ok, rowvar=False),
-                   identification_rate=r.identification_rate)
+            raise ValueError(
+                f"tracker: only {ok.shape[0]} of {n} frames identified; the "
+                f"sensor's covariance needs at least 10"
+            )
+        return cls(covariance=np.cov(ok, rowvar=False), identification_rate=r.identification_rate)
 
-    def bind(self, name: str, unit: str) -> "StarTrackerSensor":
+    def bind(self, name: str, unit: str) -> StarTrackerSensor:
         if unit != "":
-            raise ValueError(f"sensors[{name}]: a star tracker measures the attitude channel "
-                             f"(unit Euler parameters), not a channel in {unit!r}")
+            raise ValueError(
+                f"sensors[{name}]: a star tracker measures the attitude channel "
+                f"(unit Euler parameters), not a channel in {unit!r}"
+            )
         out = replace(self)
         object.__setattr__(out, "_acts", (False, True, False, False))
         return out
@@ -120,8 +135,9 @@ class StarTrackerSensor(ChannelSensor):
         """β_m = δβ(L n) ⊗ β for true attitudes v (n_cases, 4) and noise (n_cases, 4)."""
         v = np.asarray(v, float)
         if v.shape[-1] != 4:
-            raise ValueError(f"attitude: a star tracker needs the 4 Euler parameters, got "
-                             f"shape {v.shape}")
+            raise ValueError(
+                f"attitude: a star tracker needs the 4 Euler parameters, got shape {v.shape}"
+            )
         dtheta = np.asarray(noise, float)[..., :3] @ self._factor.T
         # exp(θ) of the plant's convention rotates the body by θ: C(exp θ) = exp(−[θ×])
         return quaternion_multiply(quaternion_exp(dtheta), v)

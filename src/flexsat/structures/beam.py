@@ -88,7 +88,7 @@ from numbers import Integral
 import numpy as np
 from scipy.optimize import brentq
 
-from flexsat.validation import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
 
 __all__ = [
     "CLAMPED_FREE_BETA_L",
@@ -247,7 +247,9 @@ def _hubrequire_count(z, mu, iota, r, eta):
     T[..., 3, 2] = 1.0
     K3 = np.swapaxes(T, -1, -2) @ K @ T
     K3[..., 0, 0] -= eta * z**3
-    return _clamped_clampedrequire_count(z) + _negativerequire_count(0.5 * (K3 + np.swapaxes(K3, -1, -2)))
+    return _clamped_clampedrequire_count(z) + _negativerequire_count(
+        0.5 * (K3 + np.swapaxes(K3, -1, -2))
+    )
 
 
 # ------------------------------------------------------------------------------------------------

@@ -19,10 +19,10 @@ from numbers import Integral
 import numpy as np
 import scipy.sparse as sp
 
+from flexsat.input_checks import require_finite, require_nonneg, require_positive
 from flexsat.structures import elements as el
 from flexsat.structures.modal_solve import SYMMETRY_RTOL, factor_positive_definite, solve_modes
 from flexsat.structures.sections import Material, Section
-from flexsat.validation import require_finite, require_nonneg, require_positive
 
 __all__ = ["DOF_NAMES", "Assembly", "FEModes", "Structure"]
 
@@ -113,12 +113,15 @@ class Structure:
     def element(self, element) -> dict:
         """Description of a member: ``kind``, ``nodes`` (ids), ``label`` and ``preload`` (N)."""
         m = self._members[self._element_index(element)]
-        return dict(kind=m.kind, nodes=(self._ids[m.n1], self._ids[m.n2]), label=m.label,
-                    preload=m.preload)
+        return dict(
+            kind=m.kind, nodes=(self._ids[m.n1], self._ids[m.n2]), label=m.label, preload=m.preload
+        )
 
     def _element_index(self, element) -> int:
-        if isinstance(element, bool) or not isinstance(element, Integral) or not (
-            0 <= element < len(self._members)
+        if (
+            isinstance(element, bool)
+            or not isinstance(element, Integral)
+            or not (0 <= element < len(self._members))
         ):
             raise ValueError(f"element {element!r}: unknown element id")
         return int(element)
@@ -153,8 +156,17 @@ class Structure:
         if np.linalg.norm(x2[:2] - x1[:2]) <= _ZERO_LENGTH_RTOL * length:
             raise ValueError(f"member ({n1}, {n2}): zero length in the X-Y plane")
 
-    def add_frame(self, n1, n2, material: Material, section: Section, orientation=None,
-                  offsets=None, lumped=False, label=None) -> int:
+    def add_frame(
+        self,
+        n1,
+        n2,
+        material: Material,
+        section: Section,
+        orientation=None,
+        offsets=None,
+        lumped=False,
+        label=None,
+    ) -> int:
         """Add a 3-D Euler-Bernoulli frame member (12 dofs); returns its element id.
 
         Parameters
@@ -187,24 +199,34 @@ class Structure:
                 raise ValueError(f"orientation: must have 3 components, got {orientation.shape}")
         el.frame_rotation(x1, x2, orientation)  # refuses a vector parallel to the axis
         props = dict(
-            E=material.E, G=material.shear_modulus, rho=material.rho, A=section.A,
-            Iy=section.Iy, Iz=section.Iz, J=section.J, orientation=orientation,
-            offsets=offsets, lumped=bool(lumped),
+            E=material.E,
+            G=material.shear_modulus,
+            rho=material.rho,
+            A=section.A,
+            Iy=section.Iy,
+            Iz=section.Iz,
+            J=section.J,
+            orientation=orientation,
+            offsets=offsets,
+            lumped=bool(lumped),
         )
         return self._add("frame", n1, n2, props, label)
 
-    def add_beam2d(self, n1, n2, material: Material, section: Section, lumped=False,
-                   label=None) -> int:
+    def add_beam2d(
+        self, n1, n2, material: Material, section: Section, lumped=False, label=None
+    ) -> int:
         """Add a planar beam in the global X-Y plane (dofs ux, uy, rz; bending with ``Iz``)."""
         _require_type(material, Material, "material")
         _require_type(section, Section, "section")
         self._planar(n1, n2)
-        props = dict(E=material.E, rho=material.rho, A=section.A, Iz=section.Iz,
-                     lumped=bool(lumped))
+        props = dict(
+            E=material.E, rho=material.rho, A=section.A, Iz=section.Iz, lumped=bool(lumped)
+        )
         return self._add("beam2d", n1, n2, props, label)
 
-    def add_grid(self, n1, n2, EI, GJ, mass_per_length, torsional_inertia_per_length=0.0,
-                 label=None) -> int:
+    def add_grid(
+        self, n1, n2, EI, GJ, mass_per_length, torsional_inertia_per_length=0.0, label=None
+    ) -> int:
         """Add a grid member in the global X-Y plane (dofs uz, rx, ry).
 
         Parameters
@@ -229,8 +251,12 @@ class Structure:
         """Add a truss rod (axial stiffness only; dofs ux, uy, uz)."""
         _require_type(material, Material, "material")
         self._ends(n1, n2)
-        props = dict(E=material.E, rho=material.rho, A=float(require_positive(area, "area")),
-                     lumped=bool(lumped))
+        props = dict(
+            E=material.E,
+            rho=material.rho,
+            A=float(require_positive(area, "area")),
+            lumped=bool(lumped),
+        )
         return self._add("rod", n1, n2, props, label)
 
     # -- masses, clamps, preloads -----------------------------------------------------------
@@ -323,8 +349,7 @@ class Structure:
         K, M = (_sparse(number, [(p[0], p[i]) for p in parts]) for i in (1, 2))
         node_idx, slot_idx = np.nonzero(active)
         dofs = [(self._ids[i], DOF_NAMES[s]) for i, s in zip(node_idx, slot_idx)]
-        return Assembly(K, M, dofs, self.node_ids, self.coordinates,
-                        n_clamped=len(clamped))
+        return Assembly(K, M, dofs, self.node_ids, self.coordinates, n_clamped=len(clamped))
 
     def _mass_blocks(self):
         """(global slot indices, K blocks, M blocks) of the lumped masses (6x6 each)."""
@@ -401,8 +426,9 @@ def _sparse(number, blocks) -> sp.csr_matrix:
         cols.append(c[keep])
         vals.append(mat.ravel()[keep])
     n = int(number.max()) + 1
-    A = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                      shape=(n, n)).tocsr()
+    A = sp.coo_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)
+    ).tocsr()
     return ((A + A.T) * 0.5).tocsr()
 
 
@@ -433,9 +459,9 @@ def _frame_geometry(members, xyz):
     """Lengths (between the offset ends) and 12x12 transformations of frame members."""
     x1 = xyz[[m.n1 for m in members]]
     x2 = xyz[[m.n2 for m in members]]
-    offsets = np.array([
-        np.zeros((2, 3)) if m.props["offsets"] is None else m.props["offsets"] for m in members
-    ])
+    offsets = np.array(
+        [np.zeros((2, 3)) if m.props["offsets"] is None else m.props["offsets"] for m in members]
+    )
     x1, x2 = x1 + offsets[:, 0], x2 + offsets[:, 1]
     given = np.array([m.props["orientation"] is not None for m in members])
     R = el.frame_rotation(x1, x2)
@@ -566,7 +592,7 @@ class Assembly:
     node_ids: np.ndarray
     coordinates: np.ndarray
     n_clamped: int = 0
-    unclamped: "Assembly | None" = None
+    unclamped: Assembly | None = None
     _lookup: dict = field(init=False, repr=False)
     _node_of_dof: np.ndarray = field(init=False, repr=False)
     _slot_of_dof: np.ndarray = field(init=False, repr=False)
@@ -629,8 +655,12 @@ class Assembly:
         a = np.array([G[5, 1] - G[4, 2], G[3, 2] - G[5, 0], G[4, 0] - G[3, 1]]) / (2.0 * m)
         inertia = (G[3:, 3:] + G[3:, 3:].T) / 2.0
         shift = m * (a @ a * np.eye(3) - np.outer(a, a))
-        return dict(total_mass=m, center_of_mass=p + a, inertia=inertia,
-                    inertia_center_of_mass=inertia - shift)
+        return dict(
+            total_mass=m,
+            center_of_mass=p + a,
+            inertia=inertia,
+            inertia_center_of_mass=inertia - shift,
+        )
 
     def modes(self, n_modes, rigid_body_modes: int | None = None, shift=None) -> FEModes:
         """Lowest mass-normalized modes (see :func:`flexsat.structures.modal_solve.solve_modes`).
@@ -647,8 +677,13 @@ class Assembly:
             Spectral shift, (rad/s)^2; the modes nearest to it are returned.
         """
         omegas, shapes = solve_modes(
-            self.K, self.M, n_modes, rigid_body_modes=rigid_body_modes, shift=shift,
-            rigid_vectors=self.rigid_body_vectors(), clamped=self.n_clamped > 0,
+            self.K,
+            self.M,
+            n_modes,
+            rigid_body_modes=rigid_body_modes,
+            shift=shift,
+            rigid_vectors=self.rigid_body_vectors(),
+            clamped=self.n_clamped > 0,
         )
         return FEModes(omegas, shapes, self)
 

@@ -41,16 +41,18 @@ from pathlib import Path
 
 import numpy as np
 
+from flexsat.input_checks import require_finite, require_nonneg
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
 from flexsat.units import to_si
-from flexsat.validation import require_finite, require_nonneg
 
 __all__ = ["SI_UNITS", "read_nastran_modes"]
 
 #: Default model units (SI), also the keys ``units`` must have.
 SI_UNITS = {"length": "m", "mass": "kg", "time": "s"}
 
-_MISSING_PYYETI = "read_nastran_modes needs the optional dependency pyyeti: pip install 'flexsat[nastran]'"
+_MISSING_PYYETI = (
+    "read_nastran_modes needs the optional dependency pyyeti: pip install 'flexsat[nastran]'"
+)
 _RANK_TOL = 1e-6  # relative singular value below which a rigid motion is absent from the model
 
 
@@ -154,19 +156,28 @@ def _unit_scales(units) -> tuple[float, float, float]:
         raise ValueError(
             f"units: must map exactly 'length', 'mass' and 'time' to unit strings, got {sorted(given)}"
         )
-    return tuple(to_si(f"1 {given[k]}", SI_UNITS[k], f"units[{k!r}]") for k in ("length", "mass", "time"))
+    return tuple(
+        to_si(f"1 {given[k]}", SI_UNITS[k], f"units[{k!r}]") for k in ("length", "mass", "time")
+    )
 
 
 def _check_modal_data(nas: dict, se, source: str) -> None:
     """The superelement exists and has eigenvalues, g-set shapes and a mass matrix."""
     if se not in nas["uset"]:
-        raise ValueError(f"superelement: {se!r} is not in {source} (superelements {sorted(nas['uset'])})")
-    missing = [label for key, label in (("lambda", "eigenvalues LAMBDA"), ("phg", "g-set mode shapes PHG"))
-               if se not in nas.get(key, {})]
+        raise ValueError(
+            f"superelement: {se!r} is not in {source} (superelements {sorted(nas['uset'])})"
+        )
+    missing = [
+        label
+        for key, label in (("lambda", "eigenvalues LAMBDA"), ("phg", "g-set mode shapes PHG"))
+        if se not in nas.get(key, {})
+    ]
     if not any(se in nas.get(key, {}) for key in ("maa", "mgg")):
         missing.append("mass matrix MAA or MGG")
     if missing:
-        raise ValueError(f"{source}: no modal data for superelement {se}: missing {', '.join(missing)}")
+        raise ValueError(
+            f"{source}: no modal data for superelement {se}: missing {', '.join(missing)}"
+        )
 
 
 def _mass_partition(nas: dict, se, aset: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -182,7 +193,9 @@ def _check_sizes(lam, phg, uset, mass, rows, source: str) -> None:
             f"{source}: PHG has shape {phg.shape}, expected (g-set size, modes) = {(len(uset), lam.size)}"
         )
     if mass.shape != (rows.sum(),) * 2:
-        raise ValueError(f"{source}: mass matrix has shape {mass.shape}, expected {(rows.sum(),) * 2}")
+        raise ValueError(
+            f"{source}: mass matrix has shape {mass.shape}, expected {(rows.sum(),) * 2}"
+        )
 
 
 def _grids(uset, rb_basic: np.ndarray):

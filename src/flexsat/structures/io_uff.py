@@ -35,8 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
+from flexsat.input_checks import require_finite, require_nonneg
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
-from flexsat.validation import require_finite, require_nonneg
 
 __all__ = [
     "NORMALISATIONS",
@@ -158,7 +158,9 @@ def _shapes(modes: list[dict], node_ids: np.ndarray, path: Path) -> np.ndarray:
     return shapes
 
 
-def _normalised(shapes: np.ndarray, modes: list[dict], normalisation: str, path: Path) -> np.ndarray:
+def _normalised(
+    shapes: np.ndarray, modes: list[dict], normalisation: str, path: Path
+) -> np.ndarray:
     if normalisation not in NORMALISATIONS:
         raise ValueError(f"normalisation: must be one of {NORMALISATIONS}, got {normalisation!r}")
     if normalisation == "as_is":
@@ -363,10 +365,15 @@ def read_uff_functions(path):
     coords[dim] = (
         dim,
         x,
-        {"units": _label(first["abscissa_axis_units_lab"]), "long_name": _label(first["abscissa_axis_lab"])},
+        {
+            "units": _label(first["abscissa_axis_units_lab"]),
+            "long_name": _label(first["abscissa_axis_lab"]),
+        },
     )
     data = np.stack([np.asarray(d["data"]) for d in functions])
-    return xr.Dataset({"data": (("function", dim), data)}, coords=coords, attrs={"source": str(path)})
+    return xr.Dataset(
+        {"data": (("function", dim), data)}, coords=coords, attrs={"source": str(path)}
+    )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -395,7 +402,12 @@ def write_modal_uff(model: ModalModel, path) -> None:
     nodes, xyz = [int(n) for n in model.node_ids], model.coordinates
     datasets = [
         pyuff.prepare_164(
-            units_code=1, units_description="SI", temp_mode=1, length=1.0, force=1.0, temp=1.0,
+            units_code=1,
+            units_description="SI",
+            temp_mode=1,
+            length=1.0,
+            force=1.0,
+            temp=1.0,
             temp_offset=273.15,
         ),
         pyuff.prepare_15(node_nums=nodes, x=xyz[:, 0], y=xyz[:, 1], z=xyz[:, 2]),
@@ -404,11 +416,25 @@ def write_modal_uff(model: ModalModel, path) -> None:
         values = {f"r{k + 1}": model.shapes[i, :, k] for k in range(6)}
         datasets.append(
             pyuff.prepare_55(
-                id1="flexsat modal model", id2=f"boundary {model.boundary}", id3="NONE",
-                id4=f"Mode {i + 1}", id5="NONE", model_type=1, analysis_type=2, data_ch=3,
-                spec_data_type=8, data_type=2, n_data_per_node=6, node_nums=nodes, load_case=1,
-                mode_n=i + 1, freq=float(model.frequencies_hz[i]), modal_m=1.0,
-                modal_damp_vis=float(model.damping[i]), modal_damp_his=0.0, **values,
+                id1="flexsat modal model",
+                id2=f"boundary {model.boundary}",
+                id3="NONE",
+                id4=f"Mode {i + 1}",
+                id5="NONE",
+                model_type=1,
+                analysis_type=2,
+                data_ch=3,
+                spec_data_type=8,
+                data_type=2,
+                n_data_per_node=6,
+                node_nums=nodes,
+                load_case=1,
+                mode_n=i + 1,
+                freq=float(model.frequencies_hz[i]),
+                modal_m=1.0,
+                modal_damp_vis=float(model.damping[i]),
+                modal_damp_his=0.0,
+                **values,
             )
         )
     pyuff.UFF(str(Path(path))).write_sets(datasets, mode="overwrite")

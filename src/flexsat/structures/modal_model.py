@@ -61,8 +61,8 @@ import numpy as np
 from scipy.sparse import issparse
 from scipy.sparse.linalg import norm as sparse_norm
 
+from flexsat.input_checks import require_count, require_finite, require_nonneg
 from flexsat.netcdf import write_netcdf
-from flexsat.validation import require_count, require_finite, require_nonneg
 
 __all__ = [
     "BOUNDARIES",
@@ -538,8 +538,9 @@ class ModalModel:
         A = np.block([[np.zeros((m, m)), np.eye(m)], [-K, -D]])
         states = [f"eta[{i}]" for i in range(m)] + [f"eta_dot[{i}]" for i in range(m)]
         Bx = np.vstack([np.zeros_like(B), B])
-        return control.ss(A, Bx, np.hstack([Cq, Cv]), np.zeros((Cq.shape[0], B.shape[1])),
-                          states=states)
+        return control.ss(
+            A, Bx, np.hstack([Cq, Cv]), np.zeros((Cq.shape[0], B.shape[1])), states=states
+        )
 
     # --------------------------------------------------------------------------------------------
     # file format
@@ -727,8 +728,7 @@ def hub_appendage_matrices(modal: ModalModel, hub_inertia: float, axis=2):
     """
     if modal.boundary != "cantilevered":
         raise ValueError(
-            "modal: hybrid coordinates need a cantilevered model, "
-            f"got boundary {modal.boundary!r}"
+            f"modal: hybrid coordinates need a cantilevered model, got boundary {modal.boundary!r}"
         )
     j = 3 + _axis_index(axis)
     L = modal.participation[:, j]

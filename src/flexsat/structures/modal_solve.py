@@ -47,7 +47,7 @@ import scipy.linalg
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator, eigsh, splu
 
-from flexsat.validation import require_count, require_finite
+from flexsat.input_checks import require_count, require_finite
 
 __all__ = ["check_mass_matrix", "factor_positive_definite", "solve_modes"]
 
@@ -299,8 +299,9 @@ def _signed(X):
     return X * np.where(X[idx, np.arange(X.shape[1])] < 0, -1.0, 1.0)
 
 
-def solve_modes(K, M, n_modes, rigid_body_modes=None, shift=None, rigid_vectors=None,
-                clamped=False):
+def solve_modes(
+    K, M, n_modes, rigid_body_modes=None, shift=None, rigid_vectors=None, clamped=False
+):
     """Lowest (or nearest to ``shift``) mass-normalized modes of K φ = ω² M φ.
 
     Parameters

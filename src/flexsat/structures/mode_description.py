@@ -79,7 +79,8 @@ def _check_groups(groups, node_ids) -> dict[str, np.ndarray]:
     for name, ids in groups.items():
         if not isinstance(name, str) or not name or name == "other":
             raise ValueError(
-                f"groups: names must be non-empty strings other than 'other', got {name!r}")
+                f"groups: names must be non-empty strings other than 'other', got {name!r}"
+            )
         arr = np.unique(np.asarray(list(ids), dtype=int))
         if arr.size == 0:
             raise ValueError(f"groups: group {name!r} is empty")
@@ -165,7 +166,8 @@ class _Component:
             a = np.asarray(axis, dtype=float)
             if a.shape != (3,) or not np.all(np.isfinite(a)) or np.linalg.norm(a) == 0:
                 raise ValueError(
-                    f"axes: the axis of {name!r} must be a non-zero 3-vector, got {axis!r}")
+                    f"axes: the axis of {name!r} must be a non-zero 3-vector, got {axis!r}"
+                )
             self.axis = a / np.linalg.norm(a)
         elif np.all(np.diag(self.A)[3:] > 0) and np.all(np.diag(self.A)[:3] > 0):
             self.axis = _symmetry_axis(self.A[3:, 3:])
@@ -193,9 +195,14 @@ class _Component:
         return f"{_closest_axis(a)}-rotation", fit
 
 
-def classify_modes(modes, groups: dict, rigid_tol: float = RIGID_TOL_HZ,
-                   rigid_fraction: float = 0.5, torsion_angle_deg: float = 30.0,
-                   axes: dict | None = None) -> list[ModeDescription]:
+def classify_modes(
+    modes,
+    groups: dict,
+    rigid_tol: float = RIGID_TOL_HZ,
+    rigid_fraction: float = 0.5,
+    torsion_angle_deg: float = 30.0,
+    axes: dict | None = None,
+) -> list[ModeDescription]:
     """Describe every mode of ``modes`` (an ``FEModes``: ``omegas``, mass-normalised ``shapes``
     and its ``assembly`` with ``M``, ``dofs``, ``node_ids``, ``coordinates``).
 
@@ -221,8 +228,9 @@ def classify_modes(modes, groups: dict, rigid_tol: float = RIGID_TOL_HZ,
         raise ValueError(f"torsion_angle_deg: must be in [0, 90], got {torsion_angle_deg!r}")
     asm = modes.assembly
     node_ids = np.asarray(asm.node_ids, dtype=int)
-    coords_by_node = {int(n): np.asarray(c, dtype=float)
-                      for n, c in zip(node_ids, np.asarray(asm.coordinates))}
+    coords_by_node = {
+        int(n): np.asarray(c, dtype=float) for n, c in zip(node_ids, np.asarray(asm.coordinates))
+    }
     checked = _check_groups(groups, node_ids)
     axes = dict(axes or {})
     unknown = set(axes) - set(checked)
@@ -237,9 +245,13 @@ def classify_modes(modes, groups: dict, rigid_tol: float = RIGID_TOL_HZ,
         rows_of[node_group.get(n, "other")].append(row)
     if not rows_of["other"]:
         del rows_of["other"]
-    components = {name: _Component(name, np.asarray(rows_of[name], dtype=int), dofs, M,
-                                   coords_by_node, axes.get(name))
-                  for name in checked if rows_of[name]}
+    components = {
+        name: _Component(
+            name, np.asarray(rows_of[name], dtype=int), dofs, M, coords_by_node, axes.get(name)
+        )
+        for name in checked
+        if rows_of[name]
+    }
 
     shapes = np.asarray(modes.shapes, dtype=float)
     freqs = np.asarray(modes.omegas, dtype=float) / (2 * np.pi)
@@ -249,8 +261,10 @@ def classify_modes(modes, groups: dict, rigid_tol: float = RIGID_TOL_HZ,
         phi = shapes[:, j]
         e = phi * (M @ phi)
         total = float(e.sum())
-        shares = {name: float(e[rows].sum()) / total if total > 0 else 0.0
-                  for name, rows in rows_of.items()}
+        shares = {
+            name: float(e[rows].sum()) / total if total > 0 else 0.0
+            for name, rows in rows_of.items()
+        }
         if abs(freqs[j]) < rigid_tol:
             out.append(ModeDescription(j, float(freqs[j]), None, 1.0, "rigid body", 1.0, shares))
             continue

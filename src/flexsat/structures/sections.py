@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.validation import require_finite, require_nonneg, require_positive
+from flexsat.input_checks import require_finite, require_nonneg, require_positive
 
 __all__ = ["Material", "Section"]
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from flexsat.identify.star_catalog import StarCatalog
+from flexsat.attitude.star_catalog import StarCatalog
 
 __all__ = ["catalog_pairs", "KVectorIndex", "BruteForceIndex", "pair_angles"]
 
@@ -52,9 +52,11 @@ def catalog_pairs(catalog: StarCatalog, max_angle: float):
     tree = cKDTree(catalog.vectors)
     pairs = tree.query_pairs(2.0 * np.sin(0.5 * ang), output_type="ndarray")
     if pairs.shape[0] == 0:
-        raise ValueError(f"catalog: no two of its {len(catalog)} stars lie within "
-                         f"{np.degrees(ang):.3g}° of each other; the index needs at least one "
-                         f"pair in a field of view")
+        raise ValueError(
+            f"catalog: no two of its {len(catalog)} stars lie within "
+            f"{np.degrees(ang):.3g}° of each other; the index needs at least one "
+            f"pair in a field of view"
+        )
     theta = pair_angles(catalog.vectors[pairs[:, 0]], catalog.vectors[pairs[:, 1]])
     return pairs[:, 0].astype(np.int64), pairs[:, 1].astype(np.int64), theta
 

@@ -19,17 +19,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexsat.attitude.fit import rotation_error
+from flexsat.attitude.pair_index import BruteForceIndex, KVectorIndex
+from flexsat.attitude.star_camera import StarCamera
+from flexsat.attitude.star_catalog import StarCatalog
+from flexsat.attitude.star_id import Identification, identify_frames
 from flexsat.dynamics.attitude import quaternion_to_dcm
-from flexsat.identify.attitude_fit import rotation_error
-from flexsat.identify.pair_index import BruteForceIndex, KVectorIndex
-from flexsat.identify.star_camera import StarCamera
-from flexsat.identify.star_catalog import StarCatalog
-from flexsat.identify.star_id import Identification, identify_frames
+from flexsat.input_checks import require_count
 from flexsat.units import to_si_array
-from flexsat.validation import require_count
 
-__all__ = ["StarTracker", "MonteCarloResult", "monte_carlo", "random_attitudes", "score",
-           "ARCSEC", "PAPER_TOLERANCE"]
+__all__ = [
+    "StarTracker",
+    "MonteCarloResult",
+    "monte_carlo",
+    "random_attitudes",
+    "score",
+    "ARCSEC",
+    "PAPER_TOLERANCE",
+]
 
 #: one arcsecond, rad
 ARCSEC = np.pi / 648000.0
@@ -62,8 +69,15 @@ class StarTracker:
         Pair index (the k-vector, or the brute-force scan it is benchmarked against).
     """
 
-    def __init__(self, cameras, catalog: StarCatalog, tolerance=PAPER_TOLERANCE,
-                 min_triplets: int = 3, min_fields: int = 2, index: str = "kvector"):
+    def __init__(
+        self,
+        cameras,
+        catalog: StarCatalog,
+        tolerance=PAPER_TOLERANCE,
+        min_triplets: int = 3,
+        min_fields: int = 2,
+        index: str = "kvector",
+    ):
         cams = [cameras] if isinstance(cameras, StarCamera) else list(cameras)
         for c, cam in enumerate(cams):
             if not isinstance(cam, StarCamera):
@@ -71,8 +85,10 @@ class StarTracker:
         self.min_fields = require_count(min_fields, "min_fields")
         self.min_triplets = require_count(min_triplets, "min_triplets")
         if len(cams) < self.min_fields:
-            raise ValueError(f"cameras: the identification needs {self.min_fields} fields of view "
-                             f"(min_fields), got {len(cams)} cameras")
+            raise ValueError(
+                f"cameras: the identification needs {self.min_fields} fields of view "
+                f"(min_fields), got {len(cams)} cameras"
+            )
         if not isinstance(catalog, StarCatalog):
             raise ValueError(f"catalog: must be a StarCatalog, got {type(catalog).__name__}")
         tol = to_si_array(tolerance, "rad", "tolerance")
@@ -81,9 +97,11 @@ class StarTracker:
         self.tolerance = float(tol)
         need = max(3 * np.sqrt(2) * c.direction_sigma for c in cams)
         if self.tolerance < need:
-            raise ValueError(f"tolerance: {self.tolerance / ARCSEC:.3g}″ is below 3√2 σ = "
-                             f"{need / ARCSEC:.3g}″ of a measured inter-star angle (centroid "
-                             f"noise × pixel angle); true pairs would fail to match")
+            raise ValueError(
+                f"tolerance: {self.tolerance / ARCSEC:.3g}″ is below 3√2 σ = "
+                f"{need / ARCSEC:.3g}″ of a measured inter-star angle (centroid "
+                f"noise × pixel angle); true pairs would fail to match"
+            )
         if index not in _INDEXES:
             raise ValueError(f"index: must be 'kvector' or 'brute', got {index!r}")
         self.cameras = tuple(cams)
@@ -93,14 +111,17 @@ class StarTracker:
 
     def observe(self, attitude, rng, false_stars: int = 0, missing_fraction: float = 0.0):
         """One frame per camera at the true attitude C_bn (:meth:`StarCamera.observe`)."""
-        return [cam.observe(attitude, self.catalog, rng, c, false_stars, missing_fraction)
-                for c, cam in enumerate(self.cameras)]
+        return [
+            cam.observe(attitude, self.catalog, rng, c, false_stars, missing_fraction)
+            for c, cam in enumerate(self.cameras)
+        ]
 
     def identify(self, frames) -> Identification:
         """Lost-in-space identification of simultaneous frames
-        (:func:`~flexsat.identify.star_id.identify_frames`)."""
-        return identify_frames(frames, self.cameras, self.index, self.tolerance,
-                               self.min_triplets, self.min_fields)
+        (:func:`~flexsat.attitude.star_id.identify_frames`)."""
+        return identify_frames(
+            frames, self.cameras, self.index, self.tolerance, self.min_triplets, self.min_fields
+        )
 
 
 def score(ident: Identification, frames) -> tuple[bool, int]:
@@ -108,8 +129,10 @@ def score(ident: Identification, frames) -> tuple[bool, int]:
     is the true one; ``wrong`` counts the kept stars that are not (false stars included)."""
     if not ident.accepted:
         return False, 0
-    wrong = sum(int(np.count_nonzero((fm.matches >= 0) & (fm.matches != f.truth)))
-                for fm, f in zip(ident.fields, frames))
+    wrong = sum(
+        int(np.count_nonzero((fm.matches >= 0) & (fm.matches != f.truth)))
+        for fm, f in zip(ident.fields, frames)
+    )
     return wrong == 0, wrong
 
 
@@ -142,8 +165,9 @@ class MonteCarloResult:
         return np.nanstd(self.errors, axis=0)
 
 
-def monte_carlo(tracker: StarTracker, n: int = 1000, seed=0, false_stars: int = 0,
-                missing_fraction: float = 0.0) -> MonteCarloResult:
+def monte_carlo(
+    tracker: StarTracker, n: int = 1000, seed=0, false_stars: int = 0, missing_fraction: float = 0.0
+) -> MonteCarloResult:
     """Identify ``n`` seeded random attitudes (module docstring). ``nees`` is δθᵀP⁻¹δθ per
     accepted attitude (χ² with 3 degrees of freedom when the covariance is right)."""
     rng = np.random.default_rng(seed)
@@ -166,5 +190,4 @@ def monte_carlo(tracker: StarTracker, n: int = 1000, seed=0, false_stars: int = 
             e = rotation_error(ident.attitude, att[k])
             err[k], sig[k] = e, np.sqrt(np.diag(ident.covariance))
             nees[k] = e @ np.linalg.solve(ident.covariance, e)
-    return MonteCarloResult(att, acc, cor, wrong, err, sig, nees, nst, trip, example[0],
-                            example[1])
+    return MonteCarloResult(att, acc, cor, wrong, err, sig, nees, nst, trip, example[0], example[1])

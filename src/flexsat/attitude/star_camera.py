@@ -28,10 +28,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexsat.attitude.star_catalog import StarCatalog
 from flexsat.identify.photogrammetry import Camera, euler_angles, project, rotation_matrix
-from flexsat.identify.star_catalog import StarCatalog
+from flexsat.input_checks import require_count, require_positive_scalar
 from flexsat.units import to_si_array
-from flexsat.validation import require_count, require_positive_scalar
 
 __all__ = ["StarCamera", "StarFrame"]
 
@@ -98,29 +98,36 @@ class StarCamera:
     def __post_init__(self):
         fov = require_positive_scalar(self.field_of_view, "field_of_view", "rad")
         if fov >= np.radians(120):
-            raise ValueError(f"field_of_view: a pinhole star camera needs a full angle below "
-                             f"120°, got {np.degrees(fov):.4g}°")
+            raise ValueError(
+                f"field_of_view: a pinhole star camera needs a full angle below "
+                f"120°, got {np.degrees(fov):.4g}°"
+            )
         object.__setattr__(self, "field_of_view", fov)
         n = require_count(self.n_pixels, "n_pixels")
         if n < 2:
             raise ValueError(f"n_pixels: must be >= 2, got {n}")
         object.__setattr__(self, "n_pixels", n)
-        object.__setattr__(self, "pixel_pitch",
-                           require_positive_scalar(self.pixel_pitch, "pixel_pitch", "m"))
+        object.__setattr__(
+            self, "pixel_pitch", require_positive_scalar(self.pixel_pitch, "pixel_pitch", "m")
+        )
         noise = to_si_array(self.centroid_noise, "", "centroid_noise")
         if noise.ndim != 0 or not np.isfinite(noise) or noise < 0:
-            raise ValueError(f"centroid_noise: must be one finite number >= 0 (pixels), got "
-                             f"{self.centroid_noise!r}")
+            raise ValueError(
+                f"centroid_noise: must be one finite number >= 0 (pixels), got "
+                f"{self.centroid_noise!r}"
+            )
         object.__setattr__(self, "centroid_noise", float(noise))
         lim = to_si_array(self.magnitude_limit, "", "magnitude_limit")
         if lim.ndim != 0 or not np.isfinite(lim):
-            raise ValueError(f"magnitude_limit: must be one finite number, got "
-                             f"{self.magnitude_limit!r}")
+            raise ValueError(
+                f"magnitude_limit: must be one finite number, got {self.magnitude_limit!r}"
+            )
         object.__setattr__(self, "magnitude_limit", float(lim))
         ang = to_si_array(self.mounting, "rad", "mounting").reshape(-1)
         if ang.size != 3 or not np.all(np.isfinite(ang)):
-            raise ValueError(f"mounting: must be 3 finite 3-2-1 Euler angles, got "
-                             f"{self.mounting!r}")
+            raise ValueError(
+                f"mounting: must be 3 finite 3-2-1 Euler angles, got {self.mounting!r}"
+            )
         object.__setattr__(self, "mounting", tuple(float(a) for a in ang))
         object.__setattr__(self, "_matrix", rotation_matrix(ang, "321"))
 
@@ -158,8 +165,12 @@ class StarCamera:
         """The photogrammetry :class:`~flexsat.identify.photogrammetry.Camera` at the origin
         with C_cn = C_cb C_bn, square pixels f, "+f" sign (module docstring)."""
         c_cn = self._matrix @ np.asarray(attitude, float)
-        return Camera(position=(0.0, 0.0, 0.0), angles=euler_angles(c_cn, "321"),
-                      f=self.focal_length, focal_sign=1)
+        return Camera(
+            position=(0.0, 0.0, 0.0),
+            angles=euler_angles(c_cn, "321"),
+            f=self.focal_length,
+            focal_sign=1,
+        )
 
     def directions(self, pixels) -> np.ndarray:
         """Unit directions in camera axes of centroids (k, 2) in pixels (inverse pinhole)."""
@@ -168,8 +179,15 @@ class StarCamera:
         d = np.concatenate([uv, np.full(p.shape[:-1] + (1,), self.focal_length)], -1)
         return d / np.linalg.norm(d, axis=-1, keepdims=True)
 
-    def observe(self, attitude, catalog: StarCatalog, rng, index: int = 0,
-                false_stars: int = 0, missing_fraction: float = 0.0) -> StarFrame:
+    def observe(
+        self,
+        attitude,
+        catalog: StarCatalog,
+        rng,
+        index: int = 0,
+        false_stars: int = 0,
+        missing_fraction: float = 0.0,
+    ) -> StarFrame:
         """The stars this camera measures at attitude C_bn (3, 3), inertial to body.
 
         Parameters

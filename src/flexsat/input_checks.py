@@ -26,8 +26,10 @@ def _real(value, field: str, noun: str):
         return value
     imag = np.abs(np.imag(value))
     if np.any(imag != 0):
-        raise ValueError(f"{field}: must be a real {noun}, got a complex value (largest "
-                         f"|imaginary part| {np.max(imag):.3g}, which would be dropped)")
+        raise ValueError(
+            f"{field}: must be a real {noun}, got a complex value (largest "
+            f"|imaginary part| {np.max(imag):.3g}, which would be dropped)"
+        )
     return np.real(value)
 
 
@@ -112,6 +114,8 @@ def require_numeric(value, field: str, noun: str = "array") -> np.ndarray:
     except (TypeError, ValueError):
         raise ValueError(f"{field}: must be a numeric {noun}, got {type(value).__name__}") from None
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{field}: must be finite (no NaN or inf), got shape {arr.shape} with "
-                         f"{int(np.sum(~np.isfinite(arr)))} non-finite entries")
+        raise ValueError(
+            f"{field}: must be finite (no NaN or inf), got shape {arr.shape} with "
+            f"{int(np.sum(~np.isfinite(arr)))} non-finite entries"
+        )
     return arr

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from flexsat.identify.attitude_fit import q_method, quest_covariance, rotation_error
-from flexsat.identify.star_tracker import ARCSEC, random_attitudes
+from flexsat.attitude.fit import q_method, quest_covariance, rotation_error
+from flexsat.attitude.star_tracker import ARCSEC, random_attitudes
 
 
 def _stars(n, seed):
@@ -33,7 +33,7 @@ def test_q_method_agrees_with_scipy_align_vectors():
         b = r @ C.T + rng.normal(0, 1, r.shape) * sigma[:, None]
         b /= np.linalg.norm(b, axis=1, keepdims=True)
         C_est, _, _ = q_method(b, r, sigma)
-        R, _ = Rotation.align_vectors(b, r, weights=1 / sigma ** 2)
+        R, _ = Rotation.align_vectors(b, r, weights=1 / sigma**2)
         # both minimise the same Wahba loss; they differ by the solvers' round-off
         assert np.max(np.abs(rotation_error(C_est, R.as_matrix()))) < 1e-10
 
@@ -56,7 +56,8 @@ def test_quest_covariance_predicts_the_errors():
     # 3000 samples: a variance's sampling sd is sqrt(2/3000) = 2.6 %, so 12 % is > 4 sd
     np.testing.assert_allclose(np.var(err, 0), np.diag(P), rtol=0.12)
     assert np.mean(np.einsum("ni,ij,nj->n", err, np.linalg.inv(P), err)) == pytest.approx(
-        3.0, abs=4 * np.sqrt(6 / 3000))
+        3.0, abs=4 * np.sqrt(6 / 3000)
+    )
 
 
 def test_bad_attitude_input():

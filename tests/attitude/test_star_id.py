@@ -7,10 +7,10 @@ from math import comb
 import numpy as np
 import pytest
 
-from flexsat.identify.star_camera import StarCamera, StarFrame
-from flexsat.identify.star_catalog import StarCatalog, synthetic_sky
-from flexsat.identify.star_id import match_field
-from flexsat.identify.star_tracker import ARCSEC, StarTracker, random_attitudes, score
+from flexsat.attitude.star_camera import StarCamera, StarFrame
+from flexsat.attitude.star_catalog import StarCatalog, synthetic_sky
+from flexsat.attitude.star_id import match_field
+from flexsat.attitude.star_tracker import ARCSEC, StarTracker, random_attitudes, score
 
 CAMERAS = (StarCamera(), StarCamera(mounting=(0, "90 deg", 0)))
 
@@ -56,9 +56,11 @@ def test_an_ambiguous_sky_is_not_identified(sky):
     C = random_attitudes(1, seed=13)[0]
     seen = CAMERAS[0].observe(C, sky, np.random.default_rng(0)).truth
     twin = sky.vectors[seen] @ random_attitudes(1, seed=14)[0].T
-    doubled = StarCatalog(np.concatenate([sky.ids, 10 ** 6 + sky.ids[seen]]),
-                          np.concatenate([sky.magnitudes, sky.magnitudes[seen]]),
-                          np.vstack([sky.vectors, twin]))
+    doubled = StarCatalog(
+        np.concatenate([sky.ids, 10**6 + sky.ids[seen]]),
+        np.concatenate([sky.magnitudes, sky.magnitudes[seen]]),
+        np.vstack([sky.vectors, twin]),
+    )
     tr = StarTracker(CAMERAS, doubled)
     frames = tr.observe(C, np.random.default_rng(0))
     ident = tr.identify(frames)

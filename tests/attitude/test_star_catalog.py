@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from flexsat.identify.star_catalog import (
+from flexsat.attitude.star_catalog import (
     MIN_STARS,
     STARS_BRIGHTER_THAN_6_5,
     StarCatalog,
@@ -32,7 +32,7 @@ def test_star_counts_grow_about_threefold_per_magnitude(sky):
         frac = np.mean(sky.magnitudes <= m)
         assert abs(frac - p) <= 4 * np.sqrt(p * (1 - p) / len(sky))
     # a deeper sky is 10^0.5 times larger per magnitude
-    assert len(synthetic_sky(7.5, seed=0)) == round(5000 * 10 ** 0.5)
+    assert len(synthetic_sky(7.5, seed=0)) == round(5000 * 10**0.5)
 
 
 def test_synthetic_sky_is_uniform_on_the_sphere(sky):
@@ -63,16 +63,22 @@ def _hip_line(hip, vmag, ra, dec):
 
 
 # Sirius, Canopus, Arcturus, Vega as in hip_main.dat (V, RA, Dec in degrees)
-STARS = [(32349, -1.44, 101.28854105, -16.71314306), (30438, -0.62, 95.98787763, -52.69571799),
-         (69673, -0.05, 213.91811403, 19.18726997), (91262, 0.03, 279.23410832, 38.78299311)]
+STARS = [
+    (32349, -1.44, 101.28854105, -16.71314306),
+    (30438, -0.62, 95.98787763, -52.69571799),
+    (69673, -0.05, 213.91811403, 19.18726997),
+    (91262, 0.03, 279.23410832, 38.78299311),
+]
 
 
 @pytest.fixture
 def hip_file(tmp_path):
     p = tmp_path / "hip_main.dat"
-    p.write_text("".join(_hip_line(*s) for s in STARS)
-                 + _hip_line(55203, None, None, None)  # no astrometric solution: skipped
-                 + _hip_line(1, 9.10, 0.00091185, 1.08901332))
+    p.write_text(
+        "".join(_hip_line(*s) for s in STARS)
+        + _hip_line(55203, None, None, None)  # no astrometric solution: skipped
+        + _hip_line(1, 9.10, 0.00091185, 1.08901332)
+    )
     return p
 
 

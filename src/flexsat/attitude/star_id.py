@@ -8,7 +8,7 @@ stars are identified "with essentially probability 1"; measured and catalogued s
 not match are deleted. Here, per field of view (:func:`match_field`):
 
 1. **Pairs.** Every measured pair (i, j) with angle θ_ij is looked up in the pair index
-   (:mod:`flexsat.identify.pair_index`): the catalogue pairs (a, b) with
+   (:mod:`flexsat.attitude.pair_index`): the catalogue pairs (a, b) with
    |θ_ab − θ_ij| <= tolerance.
 2. **Hypotheses.** Each such pair votes for a ∈ {i, j} and b ∈ {i, j}; a measured star's
    hypothesis is its most voted catalogue star, kept when it has at least ``min_votes`` votes
@@ -25,7 +25,7 @@ not match are deleted. Here, per field of view (:func:`match_field`):
 Across fields (:func:`identify_frames`): a field is identified with at least ``min_triplets``
 matched triplets (3, i.e. 4 mutually consistent stars), and the identification is accepted when
 at least ``min_fields`` (2) fields are. The attitude is then fitted to every matched star of the
-accepted fields by the q-method (:mod:`flexsat.identify.attitude_fit`) using the known camera
+accepted fields by the q-method (:mod:`flexsat.attitude.fit`) using the known camera
 mountings; a star whose residual exceeds the tolerance is deleted and the fit repeated. Angles
 alone cannot tell a pattern from its mirror image, nor check one field against another: a single
 rotation fitting all fields within the tolerance does both, and a field left below
@@ -39,8 +39,8 @@ from math import comb
 
 import numpy as np
 
-from flexsat.identify.attitude_fit import q_method
-from flexsat.identify.pair_index import pair_angles
+from flexsat.attitude.fit import q_method
+from flexsat.attitude.pair_index import pair_angles
 
 __all__ = ["FieldMatch", "Identification", "match_field", "identify_frames"]
 
@@ -96,8 +96,9 @@ class Identification:
         return sum(f.n_matched for f in self.fields)
 
 
-def match_field(vectors, index, tolerance: float, camera: int = 0,
-                min_votes: int = 2) -> FieldMatch:
+def match_field(
+    vectors, index, tolerance: float, camera: int = 0, min_votes: int = 2
+) -> FieldMatch:
     """Identify the stars of one field of view from their unit directions (module docstring,
     steps 1–3).
 
@@ -123,8 +124,10 @@ def match_field(vectors, index, tolerance: float, camera: int = 0,
         return FieldMatch(camera, matches, 0)
     a, b = index.first[rows], index.second[rows]
     i, j = I[qid], J[qid]
-    votes = np.bincount(np.concatenate([i * n_cat + a, i * n_cat + b, j * n_cat + a,
-                                        j * n_cat + b]), minlength=k * n_cat).reshape(k, n_cat)
+    votes = np.bincount(
+        np.concatenate([i * n_cat + a, i * n_cat + b, j * n_cat + a, j * n_cat + b]),
+        minlength=k * n_cat,
+    ).reshape(k, n_cat)
     best = np.argmax(votes, axis=1)
     count = votes[np.arange(k), best]
     votes[np.arange(k), best] = 0
@@ -161,8 +164,15 @@ def _triplets(matches: np.ndarray) -> int:
     return comb(m, 3) if m >= 3 else 0
 
 
-def identify_frames(frames, cameras, index, tolerance: float, min_triplets: int = 3,
-                    min_fields: int = 2, max_refits: int = 3) -> Identification:
+def identify_frames(
+    frames,
+    cameras,
+    index,
+    tolerance: float,
+    min_triplets: int = 3,
+    min_fields: int = 2,
+    max_refits: int = 3,
+) -> Identification:
     """Lost-in-space identification of one set of simultaneous frames (module docstring).
 
     Parameters
@@ -181,11 +191,15 @@ def identify_frames(frames, cameras, index, tolerance: float, min_triplets: int 
     fields = [match_field(f.vectors, index, tolerance, f.camera) for f in frames]
     good = [fm.triplets >= min_triplets for fm in fields]
     if sum(good) < min_fields:
-        return Identification(False, f"{sum(good)} of {len(fields)} fields of view have >= "
-                              f"{min_triplets} matched triplets; {min_fields} needed",
-                              tuple(fields))
-    matches = [fm.matches.copy() if ok else np.full(fm.matches.size, -1)
-               for fm, ok in zip(fields, good)]
+        return Identification(
+            False,
+            f"{sum(good)} of {len(fields)} fields of view have >= "
+            f"{min_triplets} matched triplets; {min_fields} needed",
+            tuple(fields),
+        )
+    matches = [
+        fm.matches.copy() if ok else np.full(fm.matches.size, -1) for fm, ok in zip(fields, good)
+    ]
     for _ in range(max_refits + 1):
         body, ref, sig, where = [], [], [], []
         for f, mt in zip(frames, matches):
@@ -198,26 +212,35 @@ def identify_frames(frames, cameras, index, tolerance: float, min_triplets: int 
             where.append(used)
         body, ref, sig = np.vstack(body), np.vstack(ref), np.concatenate(sig)
         if body.shape[0] < 3:
-            return Identification(False, "fewer than 3 stars left for the attitude fit",
-                                  tuple(_final(fields, matches)))
+            return Identification(
+                False,
+                "fewer than 3 stars left for the attitude fit",
+                tuple(_final(fields, matches)),
+            )
         C, beta, P = q_method(body, ref, sig)
         resid = pair_angles(body, ref @ C.T)
         if np.all(resid <= tolerance):
             break
         start = 0
         for c, used in enumerate(where):
-            out = resid[start:start + used.size] > tolerance
+            out = resid[start : start + used.size] > tolerance
             matches[c][used[out]] = -1
             start += used.size
     else:
-        return Identification(False, "the attitude fit kept deleting stars whose residual "
-                              "exceeds the tolerance", tuple(_final(fields, matches)))
+        return Identification(
+            False,
+            "the attitude fit kept deleting stars whose residual exceeds the tolerance",
+            tuple(_final(fields, matches)),
+        )
     final = _final(fields, matches)
     n_ok = sum(fm.triplets >= min_triplets for fm in final)
     if n_ok < min_fields:
-        return Identification(False, f"after deleting stars off the fitted attitude, {n_ok} "
-                              f"fields keep >= {min_triplets} triplets; {min_fields} needed",
-                              tuple(final))
+        return Identification(
+            False,
+            f"after deleting stars off the fitted attitude, {n_ok} "
+            f"fields keep >= {min_triplets} triplets; {min_fields} needed",
+            tuple(final),
+        )
     return Identification(True, "", tuple(final), C, beta, P, resid)
 
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from flexsat.identify.pair_index import BruteForceIndex, KVectorIndex, catalog_pairs
-from flexsat.identify.star_catalog import StarCatalog, synthetic_sky
+from flexsat.attitude.pair_index import BruteForceIndex, KVectorIndex, catalog_pairs
+from flexsat.attitude.star_catalog import StarCatalog, synthetic_sky
 
 
 @pytest.fixture(scope="module")
@@ -27,9 +27,13 @@ def test_kvector_query_equals_the_brute_force_scan(sky):
     kv = KVectorIndex(sky, np.radians(17))
     bf = BruteForceIndex(sky, np.radians(17))
     rng = np.random.default_rng(0)
-    centre = np.concatenate([rng.uniform(0, np.radians(18), 300),
-                             kv.angles[rng.integers(0, len(kv), 100)],  # bounds on stored values
-                             [-1.0, 0.0, np.radians(17), 1.0]])          # outside the range
+    centre = np.concatenate(
+        [
+            rng.uniform(0, np.radians(18), 300),
+            kv.angles[rng.integers(0, len(kv), 100)],  # bounds on stored values
+            [-1.0, 0.0, np.radians(17), 1.0],
+        ]
+    )  # outside the range
     half = np.concatenate([rng.uniform(0, 1e-4, 400), [1e-5, 1e-5, 1e-5, 1e-5]])
     half[300:400:2] = 0.0  # a zero-width query hits exactly the stored angle
     qk, rk = kv.query(centre - half, centre + half)

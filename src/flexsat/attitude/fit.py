@@ -37,11 +37,14 @@ def _check_vectors(body, reference, sigma):
     b = np.asarray(body, float)
     r = np.asarray(reference, float)
     if b.ndim != 2 or b.shape[1] != 3 or r.shape != b.shape:
-        raise ValueError(f"body: body and reference directions must both have shape (n, 3), got "
-                         f"{b.shape} and {r.shape}")
+        raise ValueError(
+            f"body: body and reference directions must both have shape (n, 3), got "
+            f"{b.shape} and {r.shape}"
+        )
     if b.shape[0] < 2:
-        raise ValueError(f"body: an attitude needs at least 2 non-parallel directions, got "
-                         f"{b.shape[0]}")
+        raise ValueError(
+            f"body: an attitude needs at least 2 non-parallel directions, got {b.shape[0]}"
+        )
     if not (np.all(np.isfinite(b)) and np.all(np.isfinite(r))):
         raise ValueError("body: directions must be finite")
     s = np.broadcast_to(np.asarray(sigma, float), (b.shape[0],))
@@ -61,11 +64,13 @@ def quest_covariance(body, sigma) -> np.ndarray:
         When the directions are all parallel (the rotation about them is unobservable).
     """
     b, _, s = _check_vectors(body, body, sigma)
-    w = 1.0 / s ** 2
+    w = 1.0 / s**2
     info = np.sum(w) * np.eye(3) - np.einsum("i,ij,ik->jk", w, b, b)
     if np.linalg.cond(info) > 1e12:
-        raise ValueError("body: the directions are parallel; the rotation about them is "
-                         "unobservable (information matrix singular)")
+        raise ValueError(
+            "body: the directions are parallel; the rotation about them is "
+            "unobservable (information matrix singular)"
+        )
     return np.linalg.inv(info)
 
 
@@ -81,7 +86,7 @@ def q_method(body, reference, sigma=1.0):
         1σ direction noise per axis of each measurement, rad (weights 1/σ²).
     """
     b, r, s = _check_vectors(body, reference, sigma)
-    w = 1.0 / s ** 2
+    w = 1.0 / s**2
     B = np.einsum("i,ij,ik->jk", w, b, r)
     S = B + B.T
     tr = np.trace(B)
@@ -99,8 +104,9 @@ def rotation_error(estimate, truth) -> np.ndarray:
     vector of C_true C_estᵀ (exact, not only to first order)."""
     E = np.asarray(truth, float) @ np.swapaxes(np.asarray(estimate, float), -1, -2)
     # the rotation vector of E: axis from the skew part, angle from the trace
-    v = 0.5 * np.stack([E[..., 1, 2] - E[..., 2, 1], E[..., 2, 0] - E[..., 0, 2],
-                        E[..., 0, 1] - E[..., 1, 0]], -1)
+    v = 0.5 * np.stack(
+        [E[..., 1, 2] - E[..., 2, 1], E[..., 2, 0] - E[..., 0, 2], E[..., 0, 1] - E[..., 1, 0]], -1
+    )
     s = np.linalg.norm(v, axis=-1)
     c = 0.5 * (np.trace(E, axis1=-2, axis2=-1) - 1.0)
     angle = np.arctan2(s, c)

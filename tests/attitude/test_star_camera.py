@@ -4,10 +4,10 @@ pinhole, centroid noise, star counts per field, dropped and false stars."""
 import numpy as np
 import pytest
 
+from flexsat.attitude.star_camera import StarCamera
+from flexsat.attitude.star_catalog import StarCatalog, synthetic_sky
+from flexsat.attitude.star_tracker import ARCSEC, random_attitudes
 from flexsat.identify.photogrammetry import rotation_matrix
-from flexsat.identify.star_camera import StarCamera
-from flexsat.identify.star_catalog import StarCatalog, synthetic_sky
-from flexsat.identify.star_tracker import ARCSEC, random_attitudes
 
 
 @pytest.fixture(scope="module")
@@ -21,8 +21,9 @@ def test_focal_length_and_pixel_scale():
     # 12° over 4096 px is 10.55″ per pixel at the boresight (to the tan's 0.4 % at 6°)
     assert cam.pixel_angle / ARCSEC == pytest.approx(12 * 3600 / 4096, rel=5e-3)
     assert cam.direction_sigma == pytest.approx(0.1 * cam.pixel_angle)
-    np.testing.assert_allclose(StarCamera(mounting=(0, "90 deg", 0)).boresight, [1, 0, 0],
-                               atol=1e-15)
+    np.testing.assert_allclose(
+        StarCamera(mounting=(0, "90 deg", 0)).boresight, [1, 0, 0], atol=1e-15
+    )
 
 
 def test_gnomonic_projection_of_known_directions():
@@ -33,8 +34,9 @@ def test_gnomonic_projection_of_known_directions():
     cat = StarCatalog(np.arange(4), np.zeros(4), r)
     frame = cam.observe(np.eye(3), cat, np.random.default_rng(0))
     px = frame.pixels[np.argsort(frame.truth)]
-    np.testing.assert_allclose(px[:, 0], 2048 + cam.focal_length * np.tan(a) / cam.pixel_pitch,
-                               rtol=1e-13)
+    np.testing.assert_allclose(
+        px[:, 0], 2048 + cam.focal_length * np.tan(a) / cam.pixel_pitch, rtol=1e-13
+    )
     np.testing.assert_allclose(px[:, 1], 2048, atol=1e-9)
 
 
@@ -81,15 +83,18 @@ def test_dropped_and_false_stars(sky):
     assert np.all((f.pixels >= 0) & (f.pixels < cam.n_pixels))
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(field_of_view=0), "field_of_view: must be > 0"),
-    (dict(field_of_view="150 deg"), "below 120°"),
-    (dict(n_pixels=1), "n_pixels: must be >= 2"),
-    (dict(pixel_pitch=-1e-6), "pixel_pitch"),
-    (dict(centroid_noise=-0.1), "centroid_noise: must be one finite number >= 0"),
-    (dict(magnitude_limit=np.nan), "magnitude_limit"),
-    (dict(mounting=(0, 0)), "mounting: must be 3"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(field_of_view=0), "field_of_view: must be > 0"),
+        (dict(field_of_view="150 deg"), "below 120°"),
+        (dict(n_pixels=1), "n_pixels: must be >= 2"),
+        (dict(pixel_pitch=-1e-6), "pixel_pitch"),
+        (dict(centroid_noise=-0.1), "centroid_noise: must be one finite number >= 0"),
+        (dict(magnitude_limit=np.nan), "magnitude_limit"),
+        (dict(mounting=(0, 0)), "mounting: must be 3"),
+    ],
+)
 def test_bad_camera_parameters(kwargs, match):
     with pytest.raises(ValueError, match=match):
         StarCamera(**kwargs)

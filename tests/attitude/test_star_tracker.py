@@ -9,17 +9,19 @@ star-pattern identification, >= 3 triplets within 5″ in each of two fields).
 import numpy as np
 import pytest
 
-from flexsat.identify.star_camera import StarCamera
-from flexsat.identify.star_catalog import synthetic_sky
-from flexsat.identify.star_tracker import ARCSEC, StarTracker, monte_carlo, random_attitudes
+from flexsat.attitude.star_camera import StarCamera
+from flexsat.attitude.star_catalog import synthetic_sky
+from flexsat.attitude.star_tracker import ARCSEC, StarTracker, monte_carlo, random_attitudes
 
 N = 1000
 
 
 @pytest.fixture(scope="module")
 def tracker():
-    cams = (StarCamera(centroid_noise=0.1), StarCamera(centroid_noise=0.1,
-                                                       mounting=(0, "90 deg", 0)))
+    cams = (
+        StarCamera(centroid_noise=0.1),
+        StarCamera(centroid_noise=0.1, mounting=(0, "90 deg", 0)),
+    )
     return StarTracker(cams, synthetic_sky(6.5, seed=0))
 
 
@@ -49,23 +51,29 @@ def test_robust_to_two_false_stars_and_20_percent_missing(tracker):
 
 def test_random_attitudes_are_rotations():
     C = random_attitudes(100, seed=0)
-    np.testing.assert_allclose(C @ np.swapaxes(C, 1, 2), np.broadcast_to(np.eye(3), C.shape),
-                               atol=1e-14)
+    np.testing.assert_allclose(
+        C @ np.swapaxes(C, 1, 2), np.broadcast_to(np.eye(3), C.shape), atol=1e-14
+    )
     np.testing.assert_allclose(np.linalg.det(C), 1.0, atol=1e-14)
     with pytest.raises(ValueError, match="n: must be a positive integer"):
         random_attitudes(0)
 
 
-@pytest.mark.parametrize("fov, n_pixels, magnitude, tolerance", [
-    # 8°: 7″ pixels keep the paper's 5″; a field holds 7.8 stars to m = 6.5, too few, so the
-    # camera and catalogue go to m = 7.5 (24.5 per field)
-    ("8 deg", 4096, 7.5, "5 arcsec"),
-    # 20° on 2048 px: 35″ pixels, σ = 3.5″, so 3√2 σ = 15″ and the tolerance must be 16″
-    ("20 deg", 2048, 6.0, "16 arcsec"),
-])
+@pytest.mark.parametrize(
+    "fov, n_pixels, magnitude, tolerance",
+    [
+        # 8°: 7″ pixels keep the paper's 5″; a field holds 7.8 stars to m = 6.5, too few, so the
+        # camera and catalogue go to m = 7.5 (24.5 per field)
+        ("8 deg", 4096, 7.5, "5 arcsec"),
+        # 20° on 2048 px: 35″ pixels, σ = 3.5″, so 3√2 σ = 15″ and the tolerance must be 16″
+        ("20 deg", 2048, 6.0, "16 arcsec"),
+    ],
+)
 def test_other_realistic_fields_of_view(fov, n_pixels, magnitude, tolerance):
-    cams = [StarCamera(field_of_view=fov, n_pixels=n_pixels, magnitude_limit=magnitude,
-                       mounting=m) for m in ((0, 0, 0), (0, "90 deg", 0))]
+    cams = [
+        StarCamera(field_of_view=fov, n_pixels=n_pixels, magnitude_limit=magnitude, mounting=m)
+        for m in ((0, 0, 0), (0, "90 deg", 0))
+    ]
     tr = StarTracker(cams, synthetic_sky(magnitude, seed=0), tolerance=tolerance)
     r = monte_carlo(tr, 200, seed=7, false_stars=2, missing_fraction=0.2)
     assert r.identification_rate >= 0.995  # 200 attitudes: at most one miss

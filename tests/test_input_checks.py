@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from flexsat.validation import (
+from flexsat.input_checks import (
     require_count,
     require_finite,
     require_nonneg,
@@ -16,31 +16,37 @@ def test_accepts_good_values():
     assert require_count(3.0, "n") == 3
 
 
-@pytest.mark.parametrize("check,value,rule", [
-    (require_finite, float("nan"), "must be finite"),
-    (require_finite, "3 m", "must be a number in SI units, got the string"),
-    (require_finite, object(), "must be a number"),
-    (require_positive, 0.0, "must be > 0"),
-    (require_nonneg, -1e-9, "must be >= 0"),
-    (require_count, 2.5, "must be a positive integer"),
-    (require_count, True, "must be a positive integer"),
-    (require_count, 0, "must be a positive integer"),
-])
+@pytest.mark.parametrize(
+    "check,value,rule",
+    [
+        (require_finite, float("nan"), "must be finite"),
+        (require_finite, "3 m", "must be a number in SI units, got the string"),
+        (require_finite, object(), "must be a number"),
+        (require_positive, 0.0, "must be > 0"),
+        (require_nonneg, -1e-9, "must be >= 0"),
+        (require_count, 2.5, "must be a positive integer"),
+        (require_count, True, "must be a positive integer"),
+        (require_count, 0, "must be a positive integer"),
+    ],
+)
 def test_refusals_name_the_field_and_the_rule(check, value, rule):
     with pytest.raises(ValueError, match=rf"^mass: {rule}"):
         check(value, "mass")
 
 
 def test_numeric_arrays_refuse_strings_objects_and_nan():
-    from flexsat.validation import require_numeric
+    from flexsat.input_checks import require_numeric
 
     assert require_numeric([[1, 2], [3, 4]], "A").shape == (2, 2)
     with pytest.raises(ValueError, match=r"^A: must be a numeric matrix, got the string"):
         require_numeric("eye", "A", "matrix")
     with pytest.raises(ValueError, match=r"^A: must be a numeric array, got object"):
         require_numeric(object(), "A")
-    with pytest.raises(ValueError, match=r"^A: must be finite \(no NaN or inf\), got shape \(2,\) "
-                                         r"with 1 non-finite entries"):
+    with pytest.raises(
+        ValueError,
+        match=r"^A: must be finite \(no NaN or inf\), got shape \(2,\) "
+        r"with 1 non-finite entries",
+    ):
         require_numeric([1.0, np.nan], "A")
 
 
@@ -59,10 +65,13 @@ def test_complex_with_zero_imaginary_part_is_its_real_part():
 
 
 def test_a_positive_scalar_is_one_finite_number_above_zero_in_si():
-    from flexsat.validation import require_positive_scalar
+    from flexsat.input_checks import require_positive_scalar
 
     assert require_positive_scalar("2 km", "length", "m") == 2000.0
-    for bad, rule in ((0, "must be > 0"), (float("nan"), "must be finite"),
-                      ([1.0, 2.0], "must be one number")):
+    for bad, rule in (
+        (0, "must be > 0"),
+        (float("nan"), "must be finite"),
+        ([1.0, 2.0], "must be one number"),
+    ):
         with pytest.raises(ValueError, match=f"^length: {rule}"):
             require_positive_scalar(bad, "length", "m")

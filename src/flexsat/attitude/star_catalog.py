@@ -34,10 +34,17 @@ from pathlib import Path
 
 import numpy as np
 
-from flexsat.validation import require_finite
+from flexsat.input_checks import require_finite
 
-__all__ = ["StarCatalog", "synthetic_sky", "load_hipparcos", "STARS_BRIGHTER_THAN_6_5",
-           "BRIGHTEST_MAGNITUDE", "MIN_STARS", "HIPPARCOS_FIELDS"]
+__all__ = [
+    "StarCatalog",
+    "synthetic_sky",
+    "load_hipparcos",
+    "STARS_BRIGHTER_THAN_6_5",
+    "BRIGHTEST_MAGNITUDE",
+    "MIN_STARS",
+    "HIPPARCOS_FIELDS",
+]
 
 #: naked-eye star count the synthetic sky is calibrated to (module docstring)
 STARS_BRIGHTER_THAN_6_5 = 5000
@@ -78,11 +85,15 @@ class StarCatalog:
         if vec.ndim != 2 or vec.shape[1] != 3:
             raise ValueError(f"vectors: must have shape (n_stars, 3), got {vec.shape}")
         if not (ids.size == mags.size == vec.shape[0]):
-            raise ValueError(f"catalog: ids ({ids.size}), magnitudes ({mags.size}) and vectors "
-                             f"({vec.shape[0]}) must have one entry per star")
+            raise ValueError(
+                f"catalog: ids ({ids.size}), magnitudes ({mags.size}) and vectors "
+                f"({vec.shape[0]}) must have one entry per star"
+            )
         if ids.size < MIN_STARS:
-            raise ValueError(f"catalog: must hold at least {MIN_STARS} stars (one triangle of "
-                             f"inter-star angles), got {ids.size}")
+            raise ValueError(
+                f"catalog: must hold at least {MIN_STARS} stars (one triangle of "
+                f"inter-star angles), got {ids.size}"
+            )
         norms = np.linalg.norm(vec, axis=1)
         if np.any(np.abs(norms - 1) > 1e-6):
             raise ValueError("vectors: must be unit directions (|r| = 1 to 1e-6)")
@@ -93,7 +104,7 @@ class StarCatalog:
     def __len__(self) -> int:
         return self.ids.size
 
-    def brighter_than(self, magnitude_limit: float) -> "StarCatalog":
+    def brighter_than(self, magnitude_limit: float) -> StarCatalog:
         """The stars with m <= ``magnitude_limit`` (the camera's limit).
 
         Raises
@@ -104,14 +115,18 @@ class StarCatalog:
         limit = float(require_finite(magnitude_limit, "magnitude_limit"))
         keep = self.magnitudes <= limit
         if keep.sum() < MIN_STARS:
-            raise ValueError(f"magnitude_limit: only {int(keep.sum())} stars are brighter than "
-                             f"{limit:g}; a catalogue needs at least {MIN_STARS}")
-        return StarCatalog(self.ids[keep], self.magnitudes[keep], self.vectors[keep],
-                           self.source)
+            raise ValueError(
+                f"magnitude_limit: only {int(keep.sum())} stars are brighter than "
+                f"{limit:g}; a catalogue needs at least {MIN_STARS}"
+            )
+        return StarCatalog(self.ids[keep], self.magnitudes[keep], self.vectors[keep], self.source)
 
 
-def synthetic_sky(magnitude_limit: float = 6.5, seed: int = 0,
-                  stars_brighter_than_6_5: int = STARS_BRIGHTER_THAN_6_5) -> StarCatalog:
+def synthetic_sky(
+    magnitude_limit: float = 6.5,
+    seed: int = 0,
+    stars_brighter_than_6_5: int = STARS_BRIGHTER_THAN_6_5,
+) -> StarCatalog:
     r"""Seeded synthetic sky to ``magnitude_limit`` (module docstring): ``N(<m_lim) =
     N_6.5 · 10^{0.5 (m_lim − 6.5)}`` stars, uniform on the sphere.
 
@@ -126,15 +141,21 @@ def synthetic_sky(magnitude_limit: float = 6.5, seed: int = 0,
         raise ValueError(f"stars_brighter_than_6_5: must be > 0, got {stars_brighter_than_6_5!r}")
     n = int(round(n65 * 10 ** (0.5 * (limit - 6.5))))
     if n < MIN_STARS or limit <= BRIGHTEST_MAGNITUDE:
-        raise ValueError(f"magnitude_limit: {limit:g} gives {n} synthetic stars; a catalogue "
-                         f"needs at least {MIN_STARS}")
+        raise ValueError(
+            f"magnitude_limit: {limit:g} gives {n} synthetic stars; a catalogue "
+            f"needs at least {MIN_STARS}"
+        )
     rng = np.random.default_rng(seed)
     z = rng.uniform(-1.0, 1.0, n)
     ra = rng.uniform(0.0, 2 * np.pi, n)
     u = 1.0 - rng.uniform(0.0, 1.0, n)  # (0, 1]: log10 finite
     mags = np.maximum(limit + 2.0 * np.log10(u), BRIGHTEST_MAGNITUDE)
-    return StarCatalog(np.arange(1, n + 1), mags, _directions(ra, np.arcsin(z)),
-                       f"synthetic sky (seed {seed}, m <= {limit:g})")
+    return StarCatalog(
+        np.arange(1, n + 1),
+        mags,
+        _directions(ra, np.arcsin(z)),
+        f"synthetic sky (seed {seed}, m <= {limit:g})",
+    )
 
 
 def load_hipparcos(path, magnitude_limit: float | None = None) -> StarCatalog:
@@ -150,8 +171,11 @@ def load_hipparcos(path, magnitude_limit: float | None = None) -> StarCatalog:
     p = Path(path)
     if not p.is_file():
         raise ValueError(f"path: no Hipparcos catalogue file at {str(p)!r}")
-    limit = None if magnitude_limit is None else float(require_finite(magnitude_limit,
-                                                                      "magnitude_limit"))
+    limit = (
+        None
+        if magnitude_limit is None
+        else float(require_finite(magnitude_limit, "magnitude_limit"))
+    )
     ids, mags, ra, dec = [], [], [], []
     need = max(HIPPARCOS_FIELDS.values()) + 1
     with p.open(encoding="ascii", errors="replace") as fh:
@@ -160,20 +184,25 @@ def load_hipparcos(path, magnitude_limit: float | None = None) -> StarCatalog:
                 continue
             f = line.split("|")
             if len(f) < need:
-                raise ValueError(f"{p.name}:{lineno}: a hip_main.dat line has at least {need} "
-                                 f"'|'-separated fields (HIP, Vmag, RAdeg, DEdeg at 1, 5, 8, 9), "
-                                 f"got {len(f)}")
+                raise ValueError(
+                    f"{p.name}:{lineno}: a hip_main.dat line has at least {need} "
+                    f"'|'-separated fields (HIP, Vmag, RAdeg, DEdeg at 1, 5, 8, 9), "
+                    f"got {len(f)}"
+                )
             raw = {k: f[i].strip() for k, i in HIPPARCOS_FIELDS.items()}
             if not (raw["vmag"] and raw["ra_deg"] and raw["dec_deg"]):
                 continue  # no astrometric solution or no magnitude: not a usable star
             try:
                 values = {k: float(v) for k, v in raw.items()}
             except ValueError:
-                raise ValueError(f"{p.name}:{lineno}: HIP, Vmag, RAdeg and DEdeg must be "
-                                 f"numbers, got {raw}") from None
+                raise ValueError(
+                    f"{p.name}:{lineno}: HIP, Vmag, RAdeg and DEdeg must be numbers, got {raw}"
+                ) from None
             if not (0 <= values["ra_deg"] < 360 + 1e-9 and abs(values["dec_deg"]) <= 90):
-                raise ValueError(f"{p.name}:{lineno}: RAdeg must lie in [0, 360) and DEdeg in "
-                                 f"[-90, 90], got {values['ra_deg']}, {values['dec_deg']}")
+                raise ValueError(
+                    f"{p.name}:{lineno}: RAdeg must lie in [0, 360) and DEdeg in "
+                    f"[-90, 90], got {values['ra_deg']}, {values['dec_deg']}"
+                )
             if limit is not None and values["vmag"] > limit:
                 continue
             ids.append(int(values["hip"]))
@@ -181,8 +210,10 @@ def load_hipparcos(path, magnitude_limit: float | None = None) -> StarCatalog:
             ra.append(values["ra_deg"])
             dec.append(values["dec_deg"])
     if len(ids) < MIN_STARS:
-        raise ValueError(f"catalog: {p.name} holds {len(ids)} usable stars"
-                         f"{'' if limit is None else f' brighter than {limit:g}'}; a catalogue "
-                         f"needs at least {MIN_STARS} (one triangle of inter-star angles)")
+        raise ValueError(
+            f"catalog: {p.name} holds {len(ids)} usable stars"
+            f"{'' if limit is None else f' brighter than {limit:g}'}; a catalogue "
+            f"needs at least {MIN_STARS} (one triangle of inter-star angles)"
+        )
     vec = _directions(np.radians(ra), np.radians(dec))
     return StarCatalog(np.array(ids), np.array(mags), vec, f"Hipparcos ({p.name})")
