@@ -202,7 +202,8 @@ class NPSCase:
             if hub <= 0:
                 which = "I0zz" if self.inertia_convention == "cantilevered" else "I_zz"
                 raise ValueError(
-                    f"design_inertia: {self.design_inertia:.6g} kg m² is too small for {which}: the "
+                    f"design_inertia: {self.design_inertia:.6g} kg m² is too small for {which}: "
+                    "the "
                     f"appendage alone contributes {appendage_share:.6g} kg m², so the hub inertia "
                     "would not be positive (lighten the appendage or change inertia_convention)"
                 )
@@ -326,7 +327,8 @@ class NPSCase:
         return A, B, C, np.zeros((2, 1))
 
     def statespace_direct(self, n_modes: int | None = None):
-        """(A, B, C, D) from the second-order model: A = [[0, I], [−M⁻¹K, −M⁻¹C]], B = [0; M⁻¹e₁]."""
+        """(A, B, C, D) from the second-order model: A = [[0, I], [−M⁻¹K, −M⁻¹C]],
+        B = [0; M⁻¹e₁]."""
         M, Cd, K = self.hybrid_matrices(n_modes)
         k = M.shape[0]
         Minv = np.linalg.inv(M)
@@ -457,7 +459,7 @@ def nps(**overrides) -> NPSCase:
             f"{2 * values['n_elements']} modes; raise n_elements"
         )
     case = NPSCase(**values)
-    case._solution  # solve and validate now: one clear message at construction
+    case._solution  # noqa: B018 -- solve and validate now: one clear message at construction
     return case
 
 

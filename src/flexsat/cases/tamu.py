@@ -215,7 +215,7 @@ def tamu(**overrides) -> TamuCase:
     case = TamuCase(**read_inputs("tamu", _INPUTS, overrides))
     if case.reference_inertia is None:
         case = replace(case, reference_inertia=published_reference_inertia(case.params))
-    case.params  # validate now: one clear message at construction
+    case.params  # noqa: B018 -- validate now: one clear message at construction
     return case
 
 
