@@ -76,11 +76,13 @@ def validate_section(
     if not isinstance(values, Mapping):
         raise ValueError(f"{section}: a mapping of {noun}s, got {values!r}")
     known = list(model.model_fields)
+    article = "an" if noun[0] in "aeiou" else "a"
     if model.model_config.get("extra") != "allow":
         for key in values:
             if key not in known:
                 raise ValueError(
-                    f"{key}: not a {noun} of {owner} (its {noun}s: {', '.join(known) or 'none'})"
+                    f"{key}: not {article} {noun} of {owner} (its {noun}s: "
+                    f"{', '.join(known) or 'none'})"
                 )
     for key, field in model.model_fields.items():
         if field.is_required() and key not in values:

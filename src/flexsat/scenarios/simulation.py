@@ -46,7 +46,7 @@ from pydantic import (
 
 from flexsat import limits
 from flexsat.catalog import get_case
-from flexsat.scenarios.errors import ScenarioError, _item, _locate
+from flexsat.scenarios.errors import ScenarioError, _head, _item, _locate
 from flexsat.scenarios.fields import (
     _Document,
     _given,
@@ -340,7 +340,9 @@ def run_simulation(
         try:
             laws[run.label] = simulation_laws()[run.law].from_scenario(run.gains, context)
         except ValueError as exc:
-            problems.append(_locate(path, str(exc)))
+            # a law names its own parameters ("pulse_width: ..."): they sit in the run's gains
+            gain = _head(str(exc)) in type(run.gains).model_fields
+            problems.append(_locate(path + ".gains" if gain else path, str(exc)))
             continue
         if not isinstance(laws[run.label], Controller):
             problems.append(

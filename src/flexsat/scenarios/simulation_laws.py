@@ -180,12 +180,10 @@ class OpenLoop:
         from flexsat.control import StateSpaceCompensator
 
         plant = context.plant
-        m = plant.n_inputs
-        p = plant.outputs[0]
-        system = control.ss([], [], [], np.zeros((m, p.size)))
-        return StateSpaceCompensator(
-            system, [p.name], [c.name for c in plant.inputs], dt=context.dt
-        )
+        first = plant.outputs[0]
+        # the channels themselves, not their names: a name alone counts as one wide
+        system = control.ss([], [], [], np.zeros((plant.n_inputs, first.size)))
+        return StateSpaceCompensator(system, [first], list(plant.inputs), dt=context.dt)
 
 
 #: the built-in laws of a simulation run, by name
