@@ -17,8 +17,10 @@ Modules: :mod:`~flexsat.scenarios.errors` (the error and its field-path messages
 :mod:`~flexsat.scenarios.fields` (quantities, counts and base models shared by every kind),
 :mod:`~flexsat.scenarios.documents` (reading a document and dispatching on its ``kind``),
 :mod:`~flexsat.scenarios.maneuver` (the maneuver schema), :mod:`~flexsat.scenarios.laws` (its
-control laws), :mod:`~flexsat.scenarios.runner` (preparing and running a maneuver scenario) and
-:mod:`~flexsat.scenarios.identification`.
+control laws), :mod:`~flexsat.scenarios.runner` (preparing and running a maneuver scenario),
+:mod:`~flexsat.scenarios.simulation_laws` and :mod:`~flexsat.scenarios.simulation_plants` (the
+laws and plants a simulation scenario names, built-in or plug-in, through the protocol of
+:mod:`~flexsat.scenarios.registry`) and :mod:`~flexsat.scenarios.identification`.
 
 The names below are imported from their modules on first use, so ``load_scenario`` does not load
 the identification stack until a scenario of that kind is read.
@@ -43,6 +45,10 @@ _EXPORTS = {
     "SimulationResult": "simulation",
     "run_simulation": "simulation",
     "simulation_cases": "simulation",
+    "LawContext": "simulation_laws",
+    "simulation_laws": "simulation_laws",
+    "PlantContext": "simulation_plants",
+    "simulation_plants": "simulation_plants",
     "SlewScenario": "slew",
     "SlewResult": "slew",
     "run_slew": "slew",
