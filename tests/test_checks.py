@@ -64,7 +64,7 @@ def test_counts_per_case(registry):
 
 
 def test_every_check_cites_a_seed_file_or_a_reference():
-    for c in builtin_checks():  # a plug-in cites its own sources (tests/test_plugins.py)
+    for c in builtin_checks():  # a plug-in cites its own sources (tests/test_example_plugin.py)
         seeds = re.findall(r"seed (\d{3}_[0-9a-f]{16}\.txt)", c.source)
         assert seeds or any(ref in c.source for ref in REFERENCES), c
         assert set(seeds) <= SEEDS, c

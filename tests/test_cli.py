@@ -28,7 +28,7 @@ def write_scenario(path, **simulation) -> str:
 
 def test_cases_lists_every_case_with_its_source():
     """Sources are cited by authors and year, never by the developers' seed file names; the
-    built-in cases come first, then the plug-ins' (tests/test_plugins.py)."""
+    built-in cases come first, then the plug-ins' (tests/test_example_plugin.py)."""
     from flexsat.cases import CASES
     from flexsat.catalog import all_cases
     from flexsat.references import cite

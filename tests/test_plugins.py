@@ -55,6 +55,18 @@ def test_good_plugins_load_and_broken_ones_are_reported_by_name(fake_points):
     assert "'missing_module'" in text and "flexsat.laws" in text and "no_such_module_here" in text
 
 
+def test_a_builtin_name_is_refused_naming_both(fake_points):
+    """A plug-in never replaces a built-in silently: its entry point is reported, naming the
+    built-in it would have shadowed."""
+    reserved = {"good": "the built-in law 'good' (flexsat.somewhere:Good)"}
+    assert "good" not in plugins.entry_point_objects("flexsat.laws", reserved=reserved)
+    broken = {b.name: b for b in plugins.broken_plugins()}
+    assert str(broken["good"]) == (
+        "plug-in 'good' (flexsat.laws = 'fake_plugin_module:Good') was not loaded: its name is "
+        "taken by the built-in law 'good' (flexsat.somewhere:Good); rename the entry point"
+    )
+
+
 def test_a_group_is_loaded_once_per_process(fake_points, monkeypatch):
     first = plugins.entry_point_objects("flexsat.laws")
     monkeypatch.setattr(plugins, "entry_points", lambda group: [])
