@@ -186,10 +186,11 @@ class SimulationScenario(_Document):
     @model_validator(mode="after")
     def _plant_and_labels(self):
         if isinstance(self.plant, dict):
+            named = sorted(set(simulation_plants()) - set(simulation_cases()))
             raise ValueError(
                 f"case: {self.case!r} builds no plant to simulate; cases with one: "
-                f"{', '.join(simulation_cases())}; or name a plant (plant.name: one of "
-                f"{', '.join(sorted(set(simulation_plants()) - set(simulation_cases())))})"
+                f"{', '.join(simulation_cases())}"
+                + (f"; or name a plant (plant.name: one of {', '.join(named)})" if named else "")
             )
         check_unique_labels(self.runs)
         return self
@@ -245,7 +246,7 @@ def _build_plant(scenario: SimulationScenario):
             else scenario.plant
         )
         plant = simulation_plants()[name].from_scenario(parameters, PlantContext(scenario.case))
-    except ValueError as exc:
+    except (ValueError, TypeError) as exc:  # a builder's TypeError: an argument it refuses
         raise _located("plant", exc) from None
     if not isinstance(plant, Plant):
         raise ScenarioError(
@@ -322,6 +323,7 @@ def run_simulation(
     flexsat.sim.SimulationDiverged
         If a run diverges (its message starts with the run).
     """
+    from flexsat.control import Controller
     from flexsat.references import cite
     from flexsat.sim import SimulationDiverged, simulate
 
@@ -331,8 +333,6 @@ def run_simulation(
     except ValueError as exc:
         raise _located("initial", exc) from None
     config = _config(scenario, plant)
-    from flexsat.control import Controller
-
     laws, problems = {}, []
     for index, run in enumerate(scenario.runs):
         path = "runs" + _item(index, run.label)

@@ -60,10 +60,7 @@ class CasePlant:
                     f"{name}: not an option of the {self.case} plant "
                     f"(its options: {', '.join(accepted) or 'none'})"
                 )
-        try:
-            return builder(**options)
-        except TypeError as exc:
-            raise ValueError(str(exc)) from None
+        return builder(**options)
 
 
 @functools.cache
