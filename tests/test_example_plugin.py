@@ -113,6 +113,26 @@ def test_the_plugin_law_and_plant_run_by_name_from_a_scenario_file(example_plugi
     assert amplitude > 0.05  # the mistuned run does vibrate: the test tells them apart
 
 
+def test_the_plugin_law_batches_over_a_leading_case_axis(example_plugin):
+    """Three forces in one call: three rest-to-rest moves d = F t1 (t1 + tc) / (m1 + m2) (the
+    same analytic result and round-off bound as the scenario above)."""
+    from flexsat_example_plugin.law import BangOffBang
+    from flexsat_example_plugin.plant import TwoMassSpring
+
+    from flexsat.sim import SimConfig, simulate
+
+    plant = TwoMassSpring(1.0, 1.0, 2 * math.pi**2)
+    config = SimConfig(duration=3.0, control_rate=100.0)
+    forces = np.array([0.5, 1.0, -2.0])
+    law = BangOffBang(forces, 1.0, 0.5, dt=config.dt)
+    assert law.n_cases == 3
+    ds = simulate(plant, law, config).dataset
+    end = ds.isel(time=-1)
+    np.testing.assert_allclose(end["x1"].values, forces * 1.0 * 1.5 / 2, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(end["x2"].values, forces * 1.0 * 1.5 / 2, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(end["v1"].values, 0.0, rtol=0, atol=1e-9)
+
+
 def test_plugin_parameters_are_checked_with_field_paths(example_plugin):
     from flexsat.scenarios import ScenarioError, load_scenario, run_simulation
 

@@ -100,7 +100,10 @@ def entry_point_objects(
         if name in reserved:
             rule = f"its name is taken by {reserved[name]}; rename the entry point"
         else:
-            rule = accept(name, obj) if accept is not None else None
+            try:
+                rule = accept(name, obj) if accept is not None else None
+            except Exception as exc:  # noqa: BLE001 -- an object that breaks the rule's checks
+                rule = f"{type(exc).__name__}: {exc}"
         if rule is None:
             objects[name] = obj
         else:
