@@ -45,10 +45,9 @@ _EXPORTS = {
     "SimulationResult": "simulation",
     "run_simulation": "simulation",
     "simulation_cases": "simulation",
+    # the registries themselves are the functions of the same name in those modules
     "LawContext": "simulation_laws",
-    "simulation_laws": "simulation_laws",
     "PlantContext": "simulation_plants",
-    "simulation_plants": "simulation_plants",
     "SlewScenario": "slew",
     "SlewResult": "slew",
     "run_slew": "slew",
