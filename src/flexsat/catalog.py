@@ -11,6 +11,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -26,9 +27,12 @@ class CaseInfo:
     description: str
 
     @property
-    def builder(self) -> Callable:
+    def builder(self) -> Callable[..., Any]:
         """The builder, imported on first use (with its numerical dependencies)."""
-        return getattr(importlib.import_module(f"flexsat.cases.{self.module}"), self.function)
+        builder: Callable[..., Any] = getattr(
+            importlib.import_module(f"flexsat.cases.{self.module}"), self.function
+        )
+        return builder
 
 
 _BEAMS = "Blevins, Formulas for Natural Frequency and Mode Shape (1979), Table 8-1"
