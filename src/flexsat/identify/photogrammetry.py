@@ -53,6 +53,7 @@ from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
 from flexsat.input_checks import require_finite, require_numeric, require_positive
+from flexsat.units import FloatArray
 
 __all__ = [
     "look_at",
@@ -189,8 +190,8 @@ class Camera:
     """Exterior (position, Euler attitude) and interior (x0, y0, fx, fy, Brown k1, k2, p1, p2)
     orientation of one camera.  Give ``f`` for square pixels or ``fx`` and ``fy``."""
 
-    position: Sequence[float]
-    angles: Sequence[float]
+    position: Sequence[float] | FloatArray  # stored as a tuple of 3 floats
+    angles: Sequence[float] | FloatArray  # stored as a tuple of 3 floats
     f: float | None = None
     fx: float | None = None
     fy: float | None = None
