@@ -32,6 +32,9 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "flexsat"
 # packages (a directory under src/flexsat) and single modules (a path relative to src/flexsat)
 # whose every public parameter and return is annotated
 COMPLETE = (
+    "identify/differential_correction.py",
+    "identify/spectral.py",
+    "identify/photogrammetry.py",
     "attitude",
     "maneuvers",
     "structures",
