@@ -32,6 +32,10 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "flexsat"
 # packages (a directory under src/flexsat) and single modules (a path relative to src/flexsat)
 # whose every public parameter and return is annotated
 COMPLETE = (
+    "analysis/controllability.py",
+    "analysis/gramians.py",
+    "analysis/homotopy.py",
+    "analysis/sensitivity.py",
     "identify/differential_correction.py",
     "identify/spectral.py",
     "identify/photogrammetry.py",

@@ -38,11 +38,15 @@ Gradients are supplied by the user or taken by central finite differences.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.input_checks import require_numeric
+from flexsat.units import FloatArray
 
 _EPS = np.finfo(float).eps
 
@@ -70,7 +74,7 @@ class HomotopyStep:
 
     phase: str
     gamma: float
-    p: np.ndarray
+    p: FloatArray
     objective: float
     corrections: int
     active: tuple[str, ...]
@@ -113,19 +117,19 @@ class HomotopyResult:
         Calls of the objective function.
     """
 
-    p: np.ndarray
+    p: FloatArray
     objective: float
-    equality: np.ndarray
-    inequality: np.ndarray
+    equality: FloatArray
+    inequality: FloatArray
     feasible: bool
     success: bool
     goal_reached: bool
     gamma: float
     message: str
     path: tuple[HomotopyStep, ...]
-    p_feasible: np.ndarray | None
+    p_feasible: FloatArray | None
     active: tuple[str, ...]
-    jacobian: np.ndarray
+    jacobian: FloatArray
     projected_gradient: float
     n_evaluations: int = 0
 
@@ -139,7 +143,7 @@ class HomotopyResult:
 
 
 # -- input checks ------------------------------------------------------------------------------
-def _vector(value, field: str) -> np.ndarray:
+def _vector(value, field: str) -> FloatArray:
     return require_numeric(value, field, "vector")
 
 
@@ -160,7 +164,7 @@ def _positive(value, field: str, *, integer: bool = False, upper: float | None =
     return number
 
 
-def weight_factor(weight, n: int) -> np.ndarray:
+def weight_factor(weight: npt.ArrayLike | None, n: int) -> npt.NDArray[np.floating[Any]]:
     """L with W = L Lᵀ for the weight W of a minimum-norm step (positive definite; a vector is
     a diagonal; None the identity), checked and named ``weight`` in errors."""
     if weight is None:
@@ -182,27 +186,33 @@ def weight_factor(weight, n: int) -> np.ndarray:
         raise ValueError("weight: the matrix W must be positive definite") from None
 
 
+#: ``J(p) -> float``
+ScalarFunction = Callable[[FloatArray], float]
+#: ``f(p) -> array``: a gradient, constraint values or a Jacobian
+VectorFunction = Callable[[FloatArray], npt.ArrayLike]
+
+
 class _Failure(Exception):
     pass
 
 
 @dataclass
 class _Problem:
-    objective: object
-    gradient: object
-    equality: object
-    equality_jacobian: object
-    inequality: object
-    inequality_jacobian: object
+    objective: ScalarFunction
+    gradient: VectorFunction | None
+    equality: VectorFunction | None
+    equality_jacobian: VectorFunction | None
+    inequality: VectorFunction | None
+    inequality_jacobian: VectorFunction | None
     n: int
     m: int
     q: int
     fd_step: float
     evaluations: int = 0
-    cache: dict = field(default_factory=dict)
+    cache: dict[bytes, tuple[float, FloatArray, FloatArray]] = field(default_factory=dict)
 
     # values ------------------------------------------------------------------------------------
-    def values(self, p: np.ndarray):
+    def values(self, p: FloatArray) -> tuple[float, FloatArray, FloatArray]:
         key = p.tobytes()
         if key in self.cache:
             return self.cache[key]
@@ -269,18 +279,18 @@ class _Problem:
 
 
 def homotopy_minimize(
-    objective,
-    p0,
+    objective: ScalarFunction,
+    p0: npt.ArrayLike,
     *,
-    gradient=None,
-    equality=None,
-    equality_target=None,
-    equality_jacobian=None,
-    inequality=None,
-    inequality_bound=None,
-    inequality_jacobian=None,
+    gradient: VectorFunction | None = None,
+    equality: VectorFunction | None = None,
+    equality_target: npt.ArrayLike | None = None,
+    equality_jacobian: VectorFunction | None = None,
+    inequality: VectorFunction | None = None,
+    inequality_bound: npt.ArrayLike | None = None,
+    inequality_jacobian: VectorFunction | None = None,
     objective_goal: float = 0.0,
-    weight=None,
+    weight: npt.ArrayLike | None = None,
     minimize: bool = True,
     gamma_step: float = 0.1,
     min_gamma_step: float = 1e-9,
