@@ -32,6 +32,11 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "flexsat"
 # packages (a directory under src/flexsat) and single modules (a path relative to src/flexsat)
 # whose every public parameter and return is annotated
 COMPLETE = (
+    "design/parameter_space.py",
+    "design/monte_carlo_statistics.py",
+    "design/slew_shaping.py",
+    "design/slew_weights.py",
+    "design/trade_surfaces.py",
     "analysis/controllability.py",
     "analysis/gramians.py",
     "analysis/homotopy.py",
