@@ -32,6 +32,19 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "flexsat"
 # packages (a directory under src/flexsat) and single modules (a path relative to src/flexsat)
 # whose every public parameter and return is annotated
 COMPLETE = (
+    "cases/__init__.py",
+    "cases/agrawal_bang.py",
+    "cases/agrawal_bang_ppf.py",
+    "cases/bainum.py",
+    "cases/beams.py",
+    "cases/draper_rpl.py",
+    "cases/eps.py",
+    "cases/eps_placement.py",
+    "cases/nps.py",
+    "cases/structure_plants.py",
+    "cases/tamu.py",
+    "cases/tamu_grid.py",
+    "cases/tamu_trade.py",
     "design/parameter_space.py",
     "design/monte_carlo_statistics.py",
     "design/slew_shaping.py",
