@@ -7,13 +7,17 @@ supplies the EPS candidates, disturbance and outputs of the paper and its publis
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import numpy.typing as npt
 
 from flexsat.analysis.placement import H2Ranking, actuator_candidates, h2_actuator_ranking
 from flexsat.cases.eps import EPSCase, eps
-from flexsat.structures.modal_model import ModalModel
 from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    from flexsat.structures.modal_model import ModalModel
 
 #: Seed 003 L238–L253: candidate force-actuator nodes (x, y, z each), outputs, published top 5.
 EPS_CANDIDATE_NODES = (69, 66, 63, 60, 52, 95, 94, 88, 78)

@@ -11,13 +11,16 @@ modes (:meth:`flexsat.dynamics.structural.StructuralPlant.from_modal_model`).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy.typing as npt
 
 from flexsat.dynamics.structural import Actuator, Sensor, StructuralPlant
 from flexsat.input_checks import require_count, require_nonneg
-from flexsat.structures.fem import FEModes, Structure
 from flexsat.structures.modal_model import ModalModel
+
+if TYPE_CHECKING:
+    from flexsat.structures.fem import FEModes, Structure
 
 _AXES = ("x", "y", "z")
 

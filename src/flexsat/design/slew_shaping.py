@@ -48,11 +48,11 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat.input_checks import require_count
-from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
     from flexsat.design.slew_weights import SlewEvaluation
+    from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
 
 __all__ = ["ShapedSlew", "modal_cancelling_torque"]
 

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -42,8 +43,10 @@ from scipy.linalg import expm
 from flexsat.identify.excitation import sensor_matrices
 from flexsat.identify.measurements import Channel, Measurement
 from flexsat.input_checks import require_count, require_finite, require_positive
-from flexsat.structures.modal_model import ModalModel
 from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    from flexsat.structures.modal_model import ModalModel
 
 __all__ = ["FRFEstimate", "estimate_frf", "frequency_response"]
 

@@ -66,7 +66,6 @@ from scipy.sparse.linalg import norm as sparse_norm
 
 from flexsat.input_checks import require_count, require_finite, require_nonneg
 from flexsat.netcdf import write_netcdf
-from flexsat.structures.beam import TipMassCantilever
 from flexsat.units import FloatArray
 
 __all__ = [
@@ -92,6 +91,7 @@ if TYPE_CHECKING:
     import xarray
 
     import control
+    from flexsat.structures.beam import TipMassCantilever
     from flexsat.structures.fem import FEModes
 
 #: a direction: ``"x"``, ``"y"``, ``"z"`` or a 3-vector, or a list of them / a (k, 3) array

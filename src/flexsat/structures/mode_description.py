@@ -42,14 +42,16 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
 
-from flexsat.structures.fem import FEModes
 from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    from flexsat.structures.fem import FEModes
 
 DOF_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
 _AXES = "xyz"
