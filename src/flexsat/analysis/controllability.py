@@ -34,18 +34,18 @@ _EPS = np.finfo(float).eps
 
 
 # -- input checks ------------------------------------------------------------------------------
-def _array(value, field: str) -> FloatArray:
+def _array(value: npt.ArrayLike, field: str) -> FloatArray:
     return require_numeric(value, field, "array")
 
 
-def _square(value, field: str) -> FloatArray:
+def _square(value: npt.ArrayLike, field: str) -> FloatArray:
     arr = _array(value, field)
     if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.shape[0] == 0:
         raise ValueError(f"{field}: must be a non-empty square 2-D array, got shape {arr.shape}")
     return arr
 
 
-def _input_matrix(value, n: int, field: str = "B", other: str = "A") -> FloatArray:
+def _input_matrix(value: npt.ArrayLike, n: int, field: str = "B", other: str = "A") -> FloatArray:
     arr = _array(value, field)
     if arr.ndim == 1:
         arr = arr.reshape(-1, 1)
@@ -57,12 +57,12 @@ def _input_matrix(value, n: int, field: str = "B", other: str = "A") -> FloatArr
     return arr
 
 
-def _pair(A, B) -> tuple[FloatArray, FloatArray]:
+def _pair(A: npt.ArrayLike, B: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
     A = _square(A, "A")
     return A, _input_matrix(B, A.shape[0])
 
 
-def _tol(tol, field: str = "tol"):
+def _tol(tol: float | None, field: str = "tol") -> float | None:
     if tol is None:
         return None
     value = float(_array(tol, field))

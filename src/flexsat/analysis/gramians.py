@@ -75,7 +75,7 @@ _UNDAMPED_TOL = 1e-12
 
 # ------------------------------------------------------------------------------------------------
 # input checks
-def _modal_parameters(omega, zeta) -> tuple[FloatArray, FloatArray]:
+def _modal_parameters(omega: npt.ArrayLike, zeta: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
     w = require_nonneg(omega, "omega")
     if w.ndim != 1 or w.size == 0:
         raise ValueError(f"omega: must be a non-empty 1-D array of rad/s, got shape {w.shape}")
@@ -87,7 +87,9 @@ def _modal_parameters(omega, zeta) -> tuple[FloatArray, FloatArray]:
     return w, z
 
 
-def _matrix(value, field: str, rows: int | None = None, cols: int | None = None) -> FloatArray:
+def _matrix(
+    value: npt.ArrayLike, field: str, rows: int | None = None, cols: int | None = None
+) -> FloatArray:
     arr = require_finite(value, field)
     if arr.ndim == 1:
         arr = arr[:, None] if rows is not None and arr.size == rows else arr[None, :]
@@ -100,7 +102,7 @@ def _matrix(value, field: str, rows: int | None = None, cols: int | None = None)
     return arr
 
 
-def _modal_inputs(B, n: int, field: str = "B") -> FloatArray:
+def _modal_inputs(B: npt.ArrayLike, n: int, field: str = "B") -> FloatArray:
     """Modal input matrix (n, m); a 1-D array of length n is one input."""
     arr = require_finite(B, field)
     if arr.ndim == 1:
@@ -110,7 +112,9 @@ def _modal_inputs(B, n: int, field: str = "B") -> FloatArray:
     return arr
 
 
-def _modal_outputs(Cq, Cv, n: int) -> tuple[FloatArray, FloatArray]:
+def _modal_outputs(
+    Cq: npt.ArrayLike | None, Cv: npt.ArrayLike | None, n: int
+) -> tuple[FloatArray, FloatArray]:
     """Output rows (p, n) on η and η̇; a missing one reads zero, both missing is an error."""
     if Cq is None and Cv is None:
         raise ValueError("Cq, Cv: give at least one output matrix (rows on η or on η̇)")
@@ -136,7 +140,7 @@ def _modal_outputs(Cq, Cv, n: int) -> tuple[FloatArray, FloatArray]:
     return rows[0], rows[1]
 
 
-def _require_damped(w, z, caller: str) -> None:
+def _require_damped(w: FloatArray, z: FloatArray, caller: str) -> None:
     decay = z * w
     scale = max(float(w.max()), 1.0)
     bad = np.flatnonzero(decay <= _UNDAMPED_TOL * scale)
@@ -247,7 +251,7 @@ def modal_controllability_gramian(
     return np.block([[Xqq, Xqv], [Xqv.T, Xvv]])
 
 
-def _pair_systems(w, z, kind: str) -> FloatArray:
+def _pair_systems(w: FloatArray, z: FloatArray, kind: str) -> FloatArray:
     r"""The 4 × 4 matrix of the (i, j) block equation, for every pair: shape (n, n, 4, 4).
 
     Unknown block :math:`X^{ij} = [[a, b], [c, d]]` (a = ηη, b = ηη̇, c = η̇η, d = η̇η̇); per mode
@@ -417,7 +421,7 @@ def gawronski_gramians(
 
 
 # ------------------------------------------------------------------------------------------------
-def _system(A, M, kind: str) -> tuple[FloatArray, FloatArray]:
+def _system(A: npt.ArrayLike, M: npt.ArrayLike, kind: str) -> tuple[FloatArray, FloatArray]:
     """(A, Q) with Q = B Bᵀ (controllability, B (n, m)) or Cᵀ C (observability, C (p, n))."""
     A = require_finite(A, "A")
     if A.ndim != 2 or A.shape[0] != A.shape[1] or A.shape[0] == 0:

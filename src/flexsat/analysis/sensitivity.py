@@ -54,7 +54,7 @@ ConditionDerivatives = tuple[float, FloatArray] | tuple[float, FloatArray, Float
 
 
 # -- input checks ------------------------------------------------------------------------------
-def _refuse_complex(value, field: str, allow_complex: bool) -> None:
+def _refuse_complex(value: npt.ArrayLike, field: str, allow_complex: bool) -> None:
     if allow_complex:
         return
     try:
@@ -66,7 +66,7 @@ def _refuse_complex(value, field: str, allow_complex: bool) -> None:
 
 
 def _matrix(
-    value, field: str, *, square: bool = True, allow_complex: bool = True
+    value: npt.ArrayLike, field: str, *, square: bool = True, allow_complex: bool = True
 ) -> npt.NDArray[Any]:
     if isinstance(value, (str, bytes)):
         raise ValueError(f"{field}: must be a numeric matrix, got the string {value!r}")
@@ -88,7 +88,7 @@ def _matrix(
 
 
 def _stack(
-    value,
+    value: npt.ArrayLike,
     field: str,
     shape: tuple[int, ...],
     n_params: int | None = None,
@@ -125,13 +125,13 @@ def _stack(
     return arr
 
 
-def _order(order) -> int:
+def _order(order: object) -> int:
     if isinstance(order, bool) or order not in (1, 2):
         raise ValueError(f"order: must be 1 or 2, got {order!r}")
     return int(order)
 
 
-def _gap_rtol(value) -> float:
+def _gap_rtol(value: Any) -> float:
     try:
         value = float(value)
     except (TypeError, ValueError):
@@ -209,7 +209,7 @@ class EigenDerivatives:
     right_hessian: ComplexArray | None = None
 
 
-def _selection(value, count: int, field: str, what: str) -> npt.NDArray[Any]:
+def _selection(value: npt.ArrayLike | None, count: int, field: str, what: str) -> npt.NDArray[Any]:
     """Indices 0 … count − 1 picked by ``value`` (all of them for None), checked."""
     if value is None:
         return np.arange(count)
@@ -258,7 +258,9 @@ def eigensolve(
     return _eigensolve(A, B, _gap_rtol(gap_rtol))
 
 
-def _eigensolve(A, B, gap_rtol):
+def _eigensolve(
+    A: npt.NDArray[Any], B: npt.NDArray[Any], gap_rtol: float
+) -> tuple[ComplexArray, ComplexArray, ComplexArray]:
     n = A.shape[0]
     if np.linalg.cond(B) > 1.0 / (n * _EPS):
         raise ValueError("B: must be non-singular (a singular B gives infinite eigenvalues)")
@@ -382,7 +384,21 @@ def eig_derivatives(
     return EigenDerivatives(lam, phi, psi, dlam, C, dphi, Dk, dpsi, hess_lam, hess_phi)
 
 
-def _second_order(lam, phi, psi, B, a, b, C, dlam, S, dB, d2A, d2B, denom):
+def _second_order(
+    lam: ComplexArray,
+    phi: ComplexArray,
+    psi: ComplexArray,
+    B: npt.NDArray[Any],
+    a: npt.NDArray[Any],
+    b: npt.NDArray[Any] | None,
+    C: ComplexArray,
+    dlam: ComplexArray,
+    S: npt.NDArray[Any],
+    dB: npt.NDArray[Any] | None,
+    d2A: npt.NDArray[Any] | None,
+    d2B: npt.NDArray[Any] | None,
+    denom: npt.NDArray[Any],
+) -> tuple[ComplexArray, ComplexArray]:
     n = lam.size
     idx = np.arange(n)
     # R[k, l] (see eig_derivatives); Λ as a column scaling: X Λ = X * lam[None, :]
