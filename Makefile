@@ -30,6 +30,14 @@ test-numerics: $(STAMP)
 	OPENBLAS_CORETYPE=$(NUMERICS_CORETYPE) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \
 		$(PY) -m pytest -n 2 -q -m numerics
 
+# static checks, the same for developers and CI (.ci/run): ruff lint and format on the Python
+# sources, mypy on src/flexsat (configuration in pyproject.toml, [tool.ruff] and [tool.mypy])
+.PHONY: lint
+lint: $(STAMP)
+	$(VENV)/bin/ruff check src tests benchmarks
+	$(VENV)/bin/ruff format --check src tests benchmarks
+	$(VENV)/bin/mypy
+
 bench: $(STAMP)
 	$(PY) benchmarks/bench_tamu.py
 	$(PY) benchmarks/bench_modal.py

@@ -16,6 +16,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -31,9 +32,10 @@ class CaseInfo:
     description: str
 
     @property
-    def builder(self) -> Callable:
+    def builder(self) -> Callable[..., Any]:
         """The builder, imported on first use (with its numerical dependencies)."""
-        return getattr(importlib.import_module(self.module), self.function)
+        builder: Callable[..., Any] = getattr(importlib.import_module(self.module), self.function)
+        return builder
 
 
 _BEAMS = "Blevins, Formulas for Natural Frequency and Mode Shape (1979), Table 8-1"
@@ -119,7 +121,7 @@ CASES: dict[str, CaseInfo] = {
 }
 
 
-def _case_plugin_rule(name: str, obj) -> str | None:
+def _case_plugin_rule(name: str, obj: Any) -> str | None:
     """Why a ``flexsat.cases`` entry point is not a case, or None."""
     module = importlib.import_module(getattr(obj, "__module__", None) or "builtins")
     if not callable(obj) or getattr(module, getattr(obj, "__qualname__", ""), None) is not obj:
@@ -128,7 +130,7 @@ def _case_plugin_rule(name: str, obj) -> str | None:
         text = getattr(obj, field, None)
         if not isinstance(text, str) or not text.strip():
             return f"{field}: a case builder needs a non-empty string attribute {field!r}"
-    if "\n" in obj.description:
+    if "\n" in str(obj.description):
         return "description: one line (a row of `flexsat cases`)"
     return None
 

@@ -8,12 +8,16 @@ plain numbers are accepted: a Quantity is refused rather than stripped of its un
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
+import numpy.typing as npt
 
-from flexsat.units import UnitError, holds_quantity, to_si_array
+from flexsat.units import FloatArray, QuantityArrayLike, UnitError, holds_quantity, to_si_array
 
 
-def _real(value, field: str, noun: str):
+def _real(value: Any, field: str, noun: str) -> Any:
     """``value``, or its real part when it is complex with every imaginary part exactly 0.
 
     A nonzero imaginary part, which the float conversion would silently drop, is refused.
@@ -33,7 +37,7 @@ def _real(value, field: str, noun: str):
     return np.real(value)
 
 
-def _plain_numbers(value, field: str) -> None:
+def _plain_numbers(value: object, field: str) -> None:
     """Refuse a Quantity where no unit is declared: ``np.asarray`` would drop its unit."""
     if holds_quantity(value):
         raise UnitError(
@@ -42,7 +46,7 @@ def _plain_numbers(value, field: str) -> None:
         )
 
 
-def require_finite(value, field: str, unit: str | None = None) -> np.ndarray:
+def require_finite(value: QuantityArrayLike, field: str, unit: str | None = None) -> FloatArray:
     """``value`` as a finite float array, in SI when ``unit`` is given (see the module)."""
     if unit is not None:
         arr = to_si_array(value, unit, field)
@@ -63,14 +67,15 @@ def require_finite(value, field: str, unit: str | None = None) -> np.ndarray:
     return arr
 
 
-def require_positive(value, field: str, unit: str | None = None) -> np.ndarray:
+def require_positive(value: QuantityArrayLike, field: str, unit: str | None = None) -> FloatArray:
+    """``value`` as a float array of numbers > 0, in SI when ``unit`` is given (see the module)."""
     arr = require_finite(value, field, unit)
     if np.any(arr <= 0):
         raise ValueError(f"{field}: must be > 0, got {value!r}")
     return arr
 
 
-def require_positive_scalar(value, field: str, unit: str | None = None) -> float:
+def require_positive_scalar(value: QuantityArrayLike, field: str, unit: str | None = None) -> float:
     """``value`` as one finite number > 0, in SI when ``unit`` is given (see the module)."""
     arr = require_positive(value, field, unit)
     if arr.ndim != 0:
@@ -78,14 +83,19 @@ def require_positive_scalar(value, field: str, unit: str | None = None) -> float
     return float(arr)
 
 
-def require_nonneg(value, field: str, unit: str | None = None) -> np.ndarray:
+def require_nonneg(value: QuantityArrayLike, field: str, unit: str | None = None) -> FloatArray:
+    """``value`` as a float array of numbers >= 0, in SI when ``unit`` is given (see the module)."""
     arr = require_finite(value, field, unit)
     if np.any(arr < 0):
         raise ValueError(f"{field}: must be >= 0, got {value!r}")
     return arr
 
 
-def set_si(obj, name: str, check, unit: str, field: str | None = None) -> None:
+#: the signature of the checks above, as :func:`set_si` calls them
+Check = Callable[[Any, str, str], FloatArray]
+
+
+def set_si(obj: object, name: str, check: Check, unit: str, field: str | None = None) -> None:
     """Replace attribute ``name`` of a frozen dataclass by ``check(value, field, unit)``, its
     value checked and converted to SI (a float for a scalar), so the object holds SI numbers
     whatever the caller passed (a number in SI, a pint Quantity or a unit string)."""
@@ -93,7 +103,7 @@ def set_si(obj, name: str, check, unit: str, field: str | None = None) -> None:
     object.__setattr__(obj, name, float(arr) if arr.ndim == 0 else arr)
 
 
-def require_count(value, field: str) -> int:
+def require_count(value: npt.ArrayLike, field: str) -> int:
     """A positive integer (bools and fractional numbers refused)."""
     if isinstance(value, bool):
         raise ValueError(f"{field}: must be a positive integer, got {value!r}")
@@ -103,7 +113,7 @@ def require_count(value, field: str) -> int:
     return int(number)
 
 
-def require_numeric(value, field: str, noun: str = "array") -> np.ndarray:
+def require_numeric(value: npt.ArrayLike, field: str, noun: str = "array") -> FloatArray:
     """A finite numeric array (a copy); strings and non-numbers are refused, naming the field."""
     _plain_numbers(value, field)
     if isinstance(value, (str, bytes)):

@@ -7,9 +7,12 @@ from __future__ import annotations
 import importlib
 import sys
 from collections.abc import Callable
+from typing import Any
 
 
-def lazy_exports(package: str, exports: dict[str, str]) -> tuple[Callable, Callable]:
+def lazy_exports(
+    package: str, exports: dict[str, str]
+) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
     """The ``__getattr__`` and ``__dir__`` of ``package`` re-exporting ``exports``.
 
     Parameters
@@ -20,7 +23,7 @@ def lazy_exports(package: str, exports: dict[str, str]) -> tuple[Callable, Calla
         Each re-exported name and the module of ``package`` that defines it.
     """
 
-    def __getattr__(name: str):
+    def __getattr__(name: str) -> Any:
         if name not in exports:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
         value = getattr(importlib.import_module(f"{package}.{exports[name]}"), name)

@@ -51,7 +51,7 @@ MAX_NESTING = 32
 MAX_DOCUMENT_NODES = 10_000
 
 
-def is_integral(value) -> bool:
+def is_integral(value: object) -> bool:
     """True for an int or a float with an integral value (``1e3``); False for bools, NaN,
     infinities, fractions and non-numbers (compared without a float conversion, so that an
     int of any size is safe)."""

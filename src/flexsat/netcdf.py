@@ -7,9 +7,13 @@ Used by the model files of :mod:`flexsat.structures` and by the reports of
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import xarray
 
 
-def write_netcdf(dataset, path, **options) -> None:
+def write_netcdf(dataset: xarray.Dataset, path: str | Path, **options: Any) -> None:
     """Write ``dataset`` (an ``xarray.Dataset``) to ``path`` as netCDF-4 (engine h5netcdf;
     ``options`` go to ``to_netcdf``, e.g. ``encoding``).
 

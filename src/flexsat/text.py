@@ -6,7 +6,7 @@ from __future__ import annotations
 MISSING = "–"
 
 
-def format_optional(value, spec: str) -> str:
+def format_optional(value: object, spec: str) -> str:
     """``format(value, spec)``, or :data:`MISSING` for None."""
     return MISSING if value is None else format(value, spec)
 

@@ -11,15 +11,30 @@ from __future__ import annotations
 
 import functools
 import math
-from tokenize import NUMBER
+from collections.abc import Callable
+from tokenize import NUMBER, TokenInfo
+from typing import Any, TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 import pint
 from pint.pint_eval import build_eval_tree, tokenizer
 from pint.util import string_preprocessor
 
-ureg = pint.UnitRegistry()
+ureg: pint.UnitRegistry[Any] = pint.UnitRegistry()
 Q_ = ureg.Quantity
+
+#: a pint quantity of any magnitude (a float or an array)
+Quantity: TypeAlias = pint.Quantity[Any]
+#: a scalar physical input at the boundary: a number in the field's unit, a unit string such as
+#: ``"400 ozf*in"`` or a pint Quantity (converted by :func:`to_si`)
+QuantityLike: TypeAlias = float | str | Quantity
+#: an array physical input at the boundary: anything :func:`to_si_array` reads -- a number, an
+#: array or nested list in the field's unit, a unit string, a Quantity (scalar or array), or a
+#: list mixing them
+QuantityArrayLike: TypeAlias = npt.ArrayLike | Quantity
+#: a float array in SI units, what every check and conversion here returns
+FloatArray: TypeAlias = npt.NDArray[np.float64]
 
 #: longest unit expression read; published values are short, and the bound keeps the parse (and
 #: every message quoting the text) small
@@ -33,13 +48,13 @@ class UnitError(ValueError):
     """A quantity has the wrong dimensionality or cannot be parsed."""
 
 
-def _angular(q: pint.Quantity) -> bool:
+def _angular(q: Quantity) -> bool:
     """Whether ``q`` is an angle or an angular rate: its root units hold the radian (rad/s, deg/s,
     rpm = revolution/min, ...)."""
     return dict(q.to_root_units().unit_items()).get("radian", 0) != 0
 
 
-def _cyclic_to_angular(q: pint.Quantity, unit: str) -> pint.Quantity:
+def _cyclic_to_angular(q: Quantity, unit: str) -> Quantity:
     """pint treats the radian as dimensionless, so it would turn 1 Hz into 1 rad/s, and 60 rpm
     (2π rad/s) into 2π Hz. A cyclic frequency asked for in angular units, or an angular rate
     asked for in cyclic ones, is converted with its 2π here."""
@@ -53,7 +68,7 @@ def _cyclic_to_angular(q: pint.Quantity, unit: str) -> pint.Quantity:
     return q
 
 
-def _number_or_unit(token):
+def _number_or_unit(token: TokenInfo) -> float | Quantity:
     """A leaf of a unit expression: numbers become floats (pint keeps integers as Python ints,
     whose powers are unbounded: ``10**10**10`` would build a ten-billion-digit number), names
     become unit quantities."""
@@ -65,7 +80,7 @@ def _number_or_unit(token):
     return Q_(1.0, text)
 
 
-def _bounded_power(base, exponent):
+def _bounded_power(base: Any, exponent: Any) -> Any:
     """``base ** exponent`` with a finite float exponent and unit exponents kept in bounds."""
     if isinstance(exponent, pint.Quantity):
         exponent = exponent.to("").magnitude
@@ -73,13 +88,13 @@ def _bounded_power(base, exponent):
     if not math.isfinite(exponent):
         raise ValueError(f"the exponent {exponent} is not finite")
     if isinstance(base, pint.Quantity):
-        worst = max((abs(p) for _, p in base.unit_items()), default=0) * abs(exponent)
+        worst = max((abs(complex(p)) for _, p in base.unit_items()), default=0.0) * abs(exponent)
         if worst > MAX_UNIT_EXPONENT:
             raise ValueError(f"a unit raised to the power {worst:g}; at most {MAX_UNIT_EXPONENT}")
     return base**exponent
 
 
-_OPERATORS = {
+_OPERATORS: dict[str, Callable[[Any, Any], Any]] = {
     "**": _bounded_power,
     "*": lambda a, b: a * b,
     "": lambda a, b: a * b,  # implicit product, "2 m"
@@ -89,7 +104,7 @@ _OPERATORS = {
 }
 
 
-def parse_quantity(text: str, field: str = "value") -> pint.Quantity:
+def parse_quantity(text: str, field: str = "value") -> Quantity:
     """Read a unit expression such as ``"400 ozf*in"`` with bounded cost.
 
     pint's own parser evaluates integer literals as Python ints, so ``"10**10**10 s"`` hangs and
@@ -124,7 +139,7 @@ def parse_quantity(text: str, field: str = "value") -> pint.Quantity:
         ) from None
 
 
-def holds_quantity(value, strings: bool = False) -> bool:
+def holds_quantity(value: object, strings: bool = False) -> bool:
     """A pint Quantity, or a list or tuple with one anywhere inside (or a string, if
     ``strings``): a value whose units would be lost by ``np.asarray(value, float)``."""
     kinds = (pint.Quantity, str) if strings else pint.Quantity
@@ -139,7 +154,7 @@ def _si_factor(unit: str) -> float:
     return float(Q_(1.0, unit).to_base_units().magnitude)
 
 
-def to_si_array(value, unit: str, field: str = "value") -> np.ndarray:
+def to_si_array(value: QuantityArrayLike, unit: str, field: str = "value") -> FloatArray:
     """Convert ``value`` to a float array in the SI base units of ``unit``'s dimension.
 
     Parameters
@@ -192,7 +207,7 @@ def to_si_array(value, unit: str, field: str = "value") -> np.ndarray:
     return _real(magnitude, value, unit, field) * _si_factor(unit)
 
 
-def _real(magnitude, value, unit: str, field: str) -> np.ndarray:
+def _real(magnitude: Any, value: object, unit: str, field: str) -> FloatArray:
     """``magnitude`` as a float array; None, complex numbers and non-numbers are refused (numpy
     would read None as NaN and drop an imaginary part with only a warning)."""
     try:
@@ -206,13 +221,13 @@ def _real(magnitude, value, unit: str, field: str) -> np.ndarray:
     )
 
 
-def _shown(value) -> str:
+def _shown(value: object) -> str:
     """A short repr for messages (a megabyte of input is not echoed back)."""
     text = repr(value)
     return text if len(text) <= 80 else text[:77] + "..."
 
 
-def to_si(value, unit: str, field: str = "value") -> float:
+def to_si(value: QuantityArrayLike, unit: str, field: str = "value") -> float:
     """Convert a scalar ``value`` to the SI magnitude of ``unit``'s dimension.
 
     Parameters

@@ -225,7 +225,7 @@ def test_nelson_agrees_with_the_modal_expansion_and_selects_modes():
     nelson = modal_derivatives(K0, M0, Kk, Mk, modes=[4, 1])
     assert list(nelson.indices) == [4, 1]
     full = eig_derivatives(K0, Kk, M0, Mk)  # Att. 5 Eqs. 42-43 with ψ = φ, B = M
-    for col, mode in enumerate([4, 1]):
+    for col, _mode in enumerate([4, 1]):
         i = int(np.argmin(np.abs(full.eigenvalues - nelson.eigenvalues[col])))
         s = np.sign(full.right[:, i].real @ nelson.modes[:, col])
         assert np.allclose(

@@ -15,7 +15,8 @@ def case():
 
 
 def _undamped_zeros(b, w):
-    """Zeros (rad/s) of Σ b_k² / (s² + ω_k²): √ of the eigenvalues of PΩ²P on b⊥ (P = I − bbᵀ/bᵀb)."""
+    """Zeros (rad/s) of Σ b_k² / (s² + ω_k²): √ of the eigenvalues of PΩ²P on b⊥
+    (P = I − bbᵀ/bᵀb)."""
     P = np.eye(b.size) - np.outer(b, b) / (b @ b)
     mu = np.sort(np.linalg.eigvalsh(P @ np.diag(w**2) @ P))[1:]  # drop the zero along b
     return np.sqrt(mu)

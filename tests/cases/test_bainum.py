@@ -305,7 +305,7 @@ def _gain_roundoff(A, B, Q, R, dR, S, K):
     Acl = A - B @ K
     lyap = np.kron(np.eye(n), Acl.T) + np.kron(Acl.T, np.eye(n))  # vec(AclᵀX + XAcl), by column
     bound = np.zeros_like(K)
-    for name, X, size in (
+    for name, _matrix, size in (
         ("A", A, eps * np.abs(A)),
         ("B", B, eps * np.abs(B)),
         ("Q", Q, eps * np.abs(Q)),

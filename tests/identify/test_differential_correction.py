@@ -126,7 +126,7 @@ def test_correction_jacobian_matches_central_differences(frame):
     for data in (partial, full):
         _, A = data.predict(model, x[:3], x[3:6], x[6:])
 
-        def f(y):
+        def f(y, data=data):
             return data.predict(model, y[:3], y[3:6], y[6:])[0]
 
         A_fd = _fourth_order_jacobian(f, x)

@@ -431,7 +431,7 @@ def test_eliminated_form_equals_att6_augmented_least_squares(calibrated_rig):
         whiten = np.linalg.inv(np.linalg.cholesky(cam_cov))
         for i, p in enumerate(pts):
 
-            def residuals(x, obs=uv[:, i]):
+            def residuals(x, obs=uv[:, i], sigma=sigma, whiten=whiten):
                 pred = np.stack([project(c, x[:3]) for c in cameras_from(x[3:])])
                 return np.concatenate([((obs - pred) / sigma).ravel(), whiten @ (x[3:] - c_meas)])
 

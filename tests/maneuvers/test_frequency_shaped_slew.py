@@ -43,8 +43,9 @@ def test_damped_shaping_is_ill_conditioned_single_shot_and_uses_multiple_shootin
 
 
 def test_single_and_multiple_shooting_agree():
-    """Forcing multiple shooting (cond_limit = 1, below any condition number) on a well-conditioned case gives the same
-    trajectory; 1e-10 of the peak torque is ~cond(Φ_xp) = 1e3 times eps times the ω_B T growth."""
+    """Forcing multiple shooting (cond_limit = 1, below any condition number) on a
+    well-conditioned case gives the same trajectory; 1e-10 of the peak torque is
+    ~cond(Φ_xp) = 1e3 times eps times the ω_B T growth."""
     t = np.linspace(0.0, 10.0, 401)
     single = frequency_shaped_slew(1.0, INERTIA, 10.0, 2.5)
     multiple = frequency_shaped_slew(1.0, INERTIA, 10.0, 2.5, cond_limit=1.0)

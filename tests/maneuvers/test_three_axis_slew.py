@@ -213,7 +213,7 @@ def test_costate_equations_are_minus_grad_hamiltonian(zeta_b):
         u3 = shaping_control(x, c, OMEGA_B)
         zdot = state_costate_rhs(zk, *args)
 
-        def h_of(v):
+        def h_of(v, u3=u3):
             return hamiltonian(v[:13], v[13:], u3, *args)
 
         grad = np.empty(26)

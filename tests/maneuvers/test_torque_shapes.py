@@ -224,7 +224,7 @@ def test_matches_numerical_integration(s):
         inner = [p for p in pts if 0 < p < t]
         kw = dict(points=inner or None, epsabs=1e-13, epsrel=1e-13, limit=200)
         rate = quad(acc, 0, t, **kw)[0]
-        ang = quad(lambda x: (t - x) * acc(x), 0, t, **kw)[0]
+        ang = quad(lambda x, t=t: (t - x) * acc(x), 0, t, **kw)[0]
         r = s(t)
         assert abs(r.theta_dot - rate) < 1e-9, t
         assert abs(r.theta - s.theta0 - ang) < 1e-9, t

@@ -5,8 +5,9 @@ Tolerances and why
 ------------------
 * Consistent-mass cubic beam elements converge as h^4 in the eigenvalue: with 20 elements the
   first three beta*L are within 8.2e-6 (clamped-free) and 3.1e-5 (free-free, 3rd mode) of the
-  exact roots (measured), inside the required 0.01 % (1e-4).  HRZ lumped mass converges as h^2: 20 elements are within 1.2 %, and
-  doubling the mesh must divide the error by at least 3.5 (4 asymptotically).
+  exact roots (measured), inside the required 0.01 % (1e-4).  HRZ lumped mass converges as
+  h^2: 20 elements are within 1.2 %, and doubling the mesh must divide the error by at least
+  3.5 (4 asymptotically).
 * Rods and torsion (linear elements) are compared with the *exact discrete* eigenvalues of the
   uniform chain (rtol 1e-9, round-off only) and with the continuum to the dispersion error.
 * Geometric stiffness: a string (EI -> 0) and a hanging chain are compared with their
@@ -201,8 +202,11 @@ def test_rod_axial_frequencies(lumped):
 
 # ------------------------------------------------------------------------------------------------
 # orientation, offsets and mass properties
-def small_frame(Q=np.eye(3), shift=np.zeros(3), clamped=False):
-    """An L-shaped frame with a rectangle member, offsets and lumped masses, rotated by Q."""
+def small_frame(Q=None, shift=None, clamped=False):
+    """An L-shaped frame with a rectangle member, offsets and lumped masses, rotated by Q
+    (default the identity) and shifted by ``shift`` (default 0)."""
+    Q = np.eye(3) if Q is None else Q
+    shift = np.zeros(3) if shift is None else shift
     s = Structure()
     pts = {0: (0, 0, 0), 1: (1.2, 0, 0), 2: (1.2, 0.9, 0), 3: (1.2, 0.9, 0.7), 4: (0.4, 0.3, 0.5)}
     for i, p in pts.items():
@@ -258,7 +262,8 @@ def test_mass_properties_hand_calculation():
     ]
     mass, first, inertia = 0.0, np.zeros(3), np.zeros((3, 3))
 
-    def point(m, x, J=np.zeros((3, 3))):
+    def point(m, x, J=None):
+        J = np.zeros((3, 3)) if J is None else J
         r = np.asarray(x, float) - p
         return m, m * r, J + m * (r @ r * np.eye(3) - np.outer(r, r))
 

@@ -72,8 +72,10 @@ def _scaled(a, d):
     return a / np.outer(d, d)
 
 
-def _rigid_vectors(coordinates, reference=np.zeros(3)):
-    """(n, 6, 6) rigid-body motion of each node: u = t + θ × r, rotation θ."""
+def _rigid_vectors(coordinates, reference=None):
+    """(n, 6, 6) rigid-body motion of each node: u = t + θ × r, rotation θ (about ``reference``,
+    default the origin)."""
+    reference = np.zeros(3) if reference is None else reference
     out = np.zeros((len(coordinates), 6, 6))
     for i, r in enumerate(coordinates - reference):
         out[i, :3, :3] = out[i, 3:, 3:] = np.eye(3)

@@ -20,29 +20,32 @@ The regulators of Ch. III / Ch. V use :func:`flexsat.control.lqr`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 import scipy.linalg
 
 from flexsat.input_checks import require_numeric
+from flexsat.units import FloatArray
 
 _EPS = np.finfo(float).eps
 
 
 # -- input checks ------------------------------------------------------------------------------
-def _array(value, field: str) -> np.ndarray:
+def _array(value: npt.ArrayLike, field: str) -> FloatArray:
     return require_numeric(value, field, "array")
 
 
-def _square(value, field: str) -> np.ndarray:
+def _square(value: npt.ArrayLike, field: str) -> FloatArray:
     arr = _array(value, field)
     if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.shape[0] == 0:
         raise ValueError(f"{field}: must be a non-empty square 2-D array, got shape {arr.shape}")
     return arr
 
 
-def _input_matrix(value, n: int, field: str = "B", other: str = "A") -> np.ndarray:
+def _input_matrix(value: npt.ArrayLike, n: int, field: str = "B", other: str = "A") -> FloatArray:
     arr = _array(value, field)
     if arr.ndim == 1:
         arr = arr.reshape(-1, 1)
@@ -54,12 +57,12 @@ def _input_matrix(value, n: int, field: str = "B", other: str = "A") -> np.ndarr
     return arr
 
 
-def _pair(A, B) -> tuple[np.ndarray, np.ndarray]:
+def _pair(A: npt.ArrayLike, B: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
     A = _square(A, "A")
     return A, _input_matrix(B, A.shape[0])
 
 
-def _tol(tol, field: str = "tol"):
+def _tol(tol: float | None, field: str = "tol") -> float | None:
     if tol is None:
         return None
     value = float(_array(tol, field))
@@ -68,7 +71,7 @@ def _tol(tol, field: str = "tol"):
     return value
 
 
-def _rank(M: np.ndarray, tol: float | None) -> int:
+def _rank(M: FloatArray, tol: float | None) -> int:
     """Number of singular values above ``tol`` (default max(shape)·ε·σ_max, numpy's rule)."""
     if M.size == 0:
         return 0
@@ -79,7 +82,7 @@ def _rank(M: np.ndarray, tol: float | None) -> int:
 
 
 # -- Kalman rank -------------------------------------------------------------------------------
-def controllability_matrix(A, B) -> np.ndarray:
+def controllability_matrix(A: npt.ArrayLike, B: npt.ArrayLike) -> FloatArray:
     """The Kalman matrix ``[B, AB, A²B, ..., A^(n-1) B]`` (n x nm), as :func:`control.ctrb`.
 
     Raises
@@ -94,7 +97,7 @@ def controllability_matrix(A, B) -> np.ndarray:
     return np.hstack(blocks)
 
 
-def controllability_rank(A, B, tol: float | None = None) -> int:
+def controllability_rank(A: npt.ArrayLike, B: npt.ArrayLike, tol: float | None = None) -> int:
     """Rank of the Kalman controllability matrix of (A, B).
 
     The rank is the number of singular values of the column-normalized Kalman matrix above
@@ -141,7 +144,7 @@ def controllability_rank(A, B, tol: float | None = None) -> int:
 _SQRT_EPS = np.sqrt(_EPS)
 
 
-def _balanced(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _balanced(A: FloatArray, B: FloatArray) -> tuple[FloatArray, FloatArray]:
     """(D⁻¹AD, D⁻¹B) with D the diagonal balancing of A: a modal model's rows scale as ω² and
     ω, and balancing brings them to ~ω so that its eigenvectors carry errors of ~ε‖A‖/gap with
     the balanced, not the raw, ‖A‖.
@@ -156,7 +159,10 @@ def _balanced(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def pbh_clusters(
-    A: np.ndarray, B: np.ndarray, select=None, tol: float | None = None
+    A: FloatArray,
+    B: FloatArray,
+    select: Callable[[npt.NDArray[np.complex128], float], npt.NDArray[np.bool_]] | None = None,
+    tol: float | None = None,
 ) -> list[complex]:
     """Eigenvalue clusters of A at which ``[λI − A, B]`` loses rank (PBH), each tested on its
     own scale.
@@ -218,12 +224,14 @@ def pbh_clusters(
     return out
 
 
-def _pbh(A: np.ndarray, B: np.ndarray, tol: float | None) -> np.ndarray:
+def _pbh(A: FloatArray, B: FloatArray, tol: float | None) -> npt.NDArray[np.complex128]:
     bad = pbh_clusters(A, B, tol=tol)
     return np.array(sorted(bad, key=lambda z: (z.real, z.imag)), dtype=complex)
 
 
-def pbh_test(A, B, tol: float | None = None) -> np.ndarray:
+def pbh_test(
+    A: npt.ArrayLike, B: npt.ArrayLike, tol: float | None = None
+) -> npt.NDArray[np.complex128]:
     """Uncontrollable eigenvalues of (A, B) by the Popov-Belevitch-Hautus test.
 
     λ (an eigenvalue of A) is uncontrollable iff ``rank [λI - A, B] < n``.
@@ -252,7 +260,9 @@ def pbh_test(A, B, tol: float | None = None) -> np.ndarray:
     return _pbh(A, B, _tol(tol))
 
 
-def is_stabilizable(A, B, tol: float | None = None, margin: float | None = None) -> bool:
+def is_stabilizable(
+    A: npt.ArrayLike, B: npt.ArrayLike, tol: float | None = None, margin: float | None = None
+) -> bool:
     """True iff every uncontrollable eigenvalue of (A, B) has Re λ < 0 (continuous time).
 
     Parameters
@@ -308,7 +318,10 @@ class RepeatedFrequencyResult:
 
 
 def repeated_frequency_test(
-    stiffness, B, tol: float | None = None, freq_tol: float | None = None
+    stiffness: npt.ArrayLike,
+    B: npt.ArrayLike,
+    tol: float | None = None,
+    freq_tol: float | None = None,
 ) -> RepeatedFrequencyResult:
     """Controllability of the undamped modal system ``ẍ + diag(κ) x = B u`` by blocks.
 

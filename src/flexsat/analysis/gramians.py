@@ -48,9 +48,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 import scipy.linalg as sla
 
 from flexsat.input_checks import require_finite, require_nonneg, require_positive
+from flexsat.units import FloatArray
 
 __all__ = [
     "GawronskiGramians",
@@ -73,7 +75,7 @@ _UNDAMPED_TOL = 1e-12
 
 # ------------------------------------------------------------------------------------------------
 # input checks
-def _modal_parameters(omega, zeta) -> tuple[np.ndarray, np.ndarray]:
+def _modal_parameters(omega: npt.ArrayLike, zeta: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
     w = require_nonneg(omega, "omega")
     if w.ndim != 1 or w.size == 0:
         raise ValueError(f"omega: must be a non-empty 1-D array of rad/s, got shape {w.shape}")
@@ -85,7 +87,9 @@ def _modal_parameters(omega, zeta) -> tuple[np.ndarray, np.ndarray]:
     return w, z
 
 
-def _matrix(value, field: str, rows: int | None = None, cols: int | None = None) -> np.ndarray:
+def _matrix(
+    value: npt.ArrayLike, field: str, rows: int | None = None, cols: int | None = None
+) -> FloatArray:
     arr = require_finite(value, field)
     if arr.ndim == 1:
         arr = arr[:, None] if rows is not None and arr.size == rows else arr[None, :]
@@ -98,7 +102,7 @@ def _matrix(value, field: str, rows: int | None = None, cols: int | None = None)
     return arr
 
 
-def _modal_inputs(B, n: int, field: str = "B") -> np.ndarray:
+def _modal_inputs(B: npt.ArrayLike, n: int, field: str = "B") -> FloatArray:
     """Modal input matrix (n, m); a 1-D array of length n is one input."""
     arr = require_finite(B, field)
     if arr.ndim == 1:
@@ -108,11 +112,13 @@ def _modal_inputs(B, n: int, field: str = "B") -> np.ndarray:
     return arr
 
 
-def _modal_outputs(Cq, Cv, n: int) -> tuple[np.ndarray, np.ndarray]:
+def _modal_outputs(
+    Cq: npt.ArrayLike | None, Cv: npt.ArrayLike | None, n: int
+) -> tuple[FloatArray, FloatArray]:
     """Output rows (p, n) on η and η̇; a missing one reads zero, both missing is an error."""
     if Cq is None and Cv is None:
         raise ValueError("Cq, Cv: give at least one output matrix (rows on η or on η̇)")
-    mats = []
+    mats: list[FloatArray | None] = []
     for value, field in ((Cq, "Cq"), (Cv, "Cv")):
         if value is None:
             mats.append(None)
@@ -125,16 +131,16 @@ def _modal_outputs(Cq, Cv, n: int) -> tuple[np.ndarray, np.ndarray]:
             )
         mats.append(arr)
     p = next(a.shape[0] for a in mats if a is not None)
-    mats = [np.zeros((p, n)) if a is None else a for a in mats]
-    if mats[0].shape[0] != mats[1].shape[0]:
+    rows = [np.zeros((p, n)) if a is None else a for a in mats]
+    if rows[0].shape[0] != rows[1].shape[0]:
         raise ValueError(
-            f"Cq, Cv: must have the same number of rows, got {mats[0].shape[0]} and "
-            f"{mats[1].shape[0]}"
+            f"Cq, Cv: must have the same number of rows, got {rows[0].shape[0]} and "
+            f"{rows[1].shape[0]}"
         )
-    return mats[0], mats[1]
+    return rows[0], rows[1]
 
 
-def _require_damped(w, z, caller: str) -> None:
+def _require_damped(w: FloatArray, z: FloatArray, caller: str) -> None:
     decay = z * w
     scale = max(float(w.max()), 1.0)
     bad = np.flatnonzero(decay <= _UNDAMPED_TOL * scale)
@@ -153,7 +159,13 @@ def _kind(kind: str) -> str:
 
 
 # ------------------------------------------------------------------------------------------------
-def modal_state_matrices(omega, zeta, B=None, Cq=None, Cv=None):
+def modal_state_matrices(
+    omega: npt.ArrayLike,
+    zeta: npt.ArrayLike,
+    B: npt.ArrayLike | None = None,
+    Cq: npt.ArrayLike | None = None,
+    Cv: npt.ArrayLike | None = None,
+) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
     r"""First-order modal matrices in the state :math:`z = (\eta, \dot\eta)` (Att. 4 Eq. 16).
 
     Parameters
@@ -185,7 +197,9 @@ def modal_state_matrices(omega, zeta, B=None, Cq=None, Cv=None):
     return A, Bz, Cz
 
 
-def modal_controllability_gramian(omega, zeta, B) -> np.ndarray:
+def modal_controllability_gramian(
+    omega: npt.ArrayLike, zeta: npt.ArrayLike, B: npt.ArrayLike
+) -> FloatArray:
     r"""Closed-form controllability Gramian of a modal system, Att. 4 Eqs. (24)–(25).
 
     Solves :math:`A X + X A^T + B B^T = 0` (Att. 4 Eq. 7, signs as corrected in the notes) for
@@ -237,7 +251,7 @@ def modal_controllability_gramian(omega, zeta, B) -> np.ndarray:
     return np.block([[Xqq, Xqv], [Xqv.T, Xvv]])
 
 
-def _pair_systems(w, z, kind: str) -> np.ndarray:
+def _pair_systems(w: FloatArray, z: FloatArray, kind: str) -> FloatArray:
     r"""The 4 × 4 matrix of the (i, j) block equation, for every pair: shape (n, n, 4, 4).
 
     Unknown block :math:`X^{ij} = [[a, b], [c, d]]` (a = ηη, b = ηη̇, c = η̇η, d = η̇η̇); per mode
@@ -268,7 +282,9 @@ def _pair_systems(w, z, kind: str) -> np.ndarray:
     return np.moveaxis(np.array(rows), (0, 1), (2, 3))
 
 
-def modal_gramian(omega, zeta, Q, kind: str = "controllability") -> np.ndarray:
+def modal_gramian(
+    omega: npt.ArrayLike, zeta: npt.ArrayLike, Q: npt.ArrayLike, kind: str = "controllability"
+) -> FloatArray:
     r"""Exact Gramian of a modal system for any weight :math:`Q = B B^T` or :math:`C^T C`.
 
     Solves :math:`A X + X A^T + Q = 0` (controllability) or :math:`A^T X + X A + Q = 0`
@@ -303,7 +319,12 @@ def modal_gramian(omega, zeta, Q, kind: str = "controllability") -> np.ndarray:
     return 0.5 * (X + X.T)
 
 
-def modal_observability_gramian(omega, zeta, Cq=None, Cv=None) -> np.ndarray:
+def modal_observability_gramian(
+    omega: npt.ArrayLike,
+    zeta: npt.ArrayLike,
+    Cq: npt.ArrayLike | None = None,
+    Cv: npt.ArrayLike | None = None,
+) -> FloatArray:
     r"""Exact observability Gramian :math:`A^T Y + Y A + C^T C = 0` of a modal system,
     :math:`C = [C_q, C_v]` (displacement and velocity outputs), by :func:`modal_gramian`.
 
@@ -352,15 +373,21 @@ class GawronskiGramians:
         w_{c,i}`, everything else 0 (and the dual for observability).
     """
 
-    wc: np.ndarray
-    wo: np.ndarray
-    hankel: np.ndarray
-    h2: np.ndarray
-    controllability: np.ndarray
-    observability: np.ndarray
+    wc: FloatArray
+    wo: FloatArray
+    hankel: FloatArray
+    h2: FloatArray
+    controllability: FloatArray
+    observability: FloatArray
 
 
-def gawronski_gramians(omega, zeta, B, Cq=None, Cv=None) -> GawronskiGramians:
+def gawronski_gramians(
+    omega: npt.ArrayLike,
+    zeta: npt.ArrayLike,
+    B: npt.ArrayLike,
+    Cq: npt.ArrayLike | None = None,
+    Cv: npt.ArrayLike | None = None,
+) -> GawronskiGramians:
     r"""Gawronski's diagonal Gramian approximation (see :class:`GawronskiGramians`).
 
     Parameters
@@ -394,7 +421,7 @@ def gawronski_gramians(omega, zeta, B, Cq=None, Cv=None) -> GawronskiGramians:
 
 
 # ------------------------------------------------------------------------------------------------
-def _system(A, M, kind: str) -> tuple[np.ndarray, np.ndarray]:
+def _system(A: npt.ArrayLike, M: npt.ArrayLike, kind: str) -> tuple[FloatArray, FloatArray]:
     """(A, Q) with Q = B Bᵀ (controllability, B (n, m)) or Cᵀ C (observability, C (p, n))."""
     A = require_finite(A, "A")
     if A.ndim != 2 or A.shape[0] != A.shape[1] or A.shape[0] == 0:
@@ -407,7 +434,9 @@ def _system(A, M, kind: str) -> tuple[np.ndarray, np.ndarray]:
     return A, C.T @ C
 
 
-def lyapunov_gramian(A, M, kind: str = "controllability") -> np.ndarray:
+def lyapunov_gramian(
+    A: npt.ArrayLike, M: npt.ArrayLike, kind: str = "controllability"
+) -> FloatArray:
     r"""Infinite-horizon Gramian of a stable system by Bartels–Stewart.
 
     Controllability: :math:`A X + X A^T + B B^T = 0` (``M`` = B, n × m); observability:
@@ -429,7 +458,9 @@ def lyapunov_gramian(A, M, kind: str = "controllability") -> np.ndarray:
     return 0.5 * (X + X.T)
 
 
-def finite_horizon_gramian(A, M, horizon, kind: str = "controllability") -> np.ndarray:
+def finite_horizon_gramian(
+    A: npt.ArrayLike, M: npt.ArrayLike, horizon: float, kind: str = "controllability"
+) -> FloatArray:
     r"""Finite-horizon Gramian by the Van Loan block exponential; rigid modes allowed.
 
     .. math::
@@ -476,7 +507,9 @@ def finite_horizon_gramian(A, M, horizon, kind: str = "controllability") -> np.n
     return 0.5 * (W + W.T)
 
 
-def gramian_residual(A, M, X, kind: str = "controllability") -> float:
+def gramian_residual(
+    A: npt.ArrayLike, M: npt.ArrayLike, X: npt.ArrayLike, kind: str = "controllability"
+) -> float:
     r"""Relative Lyapunov residual :math:`\|A X + X A^T + BB^T\|_F / \|BB^T\|_F`
     (observability: :math:`\|A^T X + X A + C^T C\|_F / \|C^T C\|_F`)."""
     kind = _kind(kind)

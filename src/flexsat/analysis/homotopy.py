@@ -38,11 +38,15 @@ Gradients are supplied by the user or taken by central finite differences.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any, Literal, overload
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.input_checks import require_numeric
+from flexsat.units import FloatArray
 
 _EPS = np.finfo(float).eps
 
@@ -70,7 +74,7 @@ class HomotopyStep:
 
     phase: str
     gamma: float
-    p: np.ndarray
+    p: FloatArray
     objective: float
     corrections: int
     active: tuple[str, ...]
@@ -113,19 +117,19 @@ class HomotopyResult:
         Calls of the objective function.
     """
 
-    p: np.ndarray
+    p: FloatArray
     objective: float
-    equality: np.ndarray
-    inequality: np.ndarray
+    equality: FloatArray
+    inequality: FloatArray
     feasible: bool
     success: bool
     goal_reached: bool
     gamma: float
     message: str
     path: tuple[HomotopyStep, ...]
-    p_feasible: np.ndarray | None
+    p_feasible: FloatArray | None
     active: tuple[str, ...]
-    jacobian: np.ndarray
+    jacobian: FloatArray
     projected_gradient: float
     n_evaluations: int = 0
 
@@ -139,11 +143,21 @@ class HomotopyResult:
 
 
 # -- input checks ------------------------------------------------------------------------------
-def _vector(value, field: str) -> np.ndarray:
+def _vector(value: npt.ArrayLike, field: str) -> FloatArray:
     return require_numeric(value, field, "vector")
 
 
-def _positive(value, field: str, *, integer: bool = False, upper: float | None = None):
+@overload
+def _positive(
+    value: Any, field: str, *, integer: Literal[True], upper: float | None = None
+) -> int: ...
+@overload
+def _positive(
+    value: Any, field: str, *, integer: Literal[False] = False, upper: float | None = None
+) -> float: ...
+def _positive(
+    value: Any, field: str, *, integer: bool = False, upper: float | None = None
+) -> float:
     if isinstance(value, bool):
         raise ValueError(f"{field}: must be a positive number, got {value!r}")
     try:
@@ -160,7 +174,7 @@ def _positive(value, field: str, *, integer: bool = False, upper: float | None =
     return number
 
 
-def weight_factor(weight, n: int) -> np.ndarray:
+def weight_factor(weight: npt.ArrayLike | None, n: int) -> npt.NDArray[np.floating[Any]]:
     """L with W = L Lᵀ for the weight W of a minimum-norm step (positive definite; a vector is
     a diagonal; None the identity), checked and named ``weight`` in errors."""
     if weight is None:
@@ -182,27 +196,33 @@ def weight_factor(weight, n: int) -> np.ndarray:
         raise ValueError("weight: the matrix W must be positive definite") from None
 
 
+#: ``J(p) -> float``
+ScalarFunction = Callable[[FloatArray], float]
+#: ``f(p) -> array``: a gradient, constraint values or a Jacobian
+VectorFunction = Callable[[FloatArray], npt.ArrayLike]
+
+
 class _Failure(Exception):
     pass
 
 
 @dataclass
 class _Problem:
-    objective: object
-    gradient: object
-    equality: object
-    equality_jacobian: object
-    inequality: object
-    inequality_jacobian: object
+    objective: ScalarFunction
+    gradient: VectorFunction | None
+    equality: VectorFunction | None
+    equality_jacobian: VectorFunction | None
+    inequality: VectorFunction | None
+    inequality_jacobian: VectorFunction | None
     n: int
     m: int
     q: int
     fd_step: float
     evaluations: int = 0
-    cache: dict = field(default_factory=dict)
+    cache: dict[bytes, tuple[float, FloatArray, FloatArray]] = field(default_factory=dict)
 
     # values ------------------------------------------------------------------------------------
-    def values(self, p: np.ndarray):
+    def values(self, p: FloatArray) -> tuple[float, FloatArray, FloatArray]:
         key = p.tobytes()
         if key in self.cache:
             return self.cache[key]
@@ -218,7 +238,7 @@ class _Problem:
         return J, ce, ci
 
     @staticmethod
-    def _call(fun, p, size, name):
+    def _call(fun: VectorFunction | None, p: FloatArray, size: int, name: str) -> FloatArray:
         if fun is None:
             return np.zeros(0)
         out = np.atleast_1d(np.asarray(fun(p.copy()), dtype=float))
@@ -227,7 +247,7 @@ class _Problem:
         return out
 
     # derivatives -------------------------------------------------------------------------------
-    def _fd(self, p, which):
+    def _fd(self, p: FloatArray, which: int) -> FloatArray:
         rows = []
         for k in range(self.n):
             h = self.fd_step * max(1.0, abs(p[k]))
@@ -237,7 +257,7 @@ class _Problem:
             rows.append((np.atleast_1d(plus[which]) - np.atleast_1d(minus[which])) / (2 * h))
         return np.array(rows).T  # (rows, n)
 
-    def grad(self, p):
+    def grad(self, p: FloatArray) -> FloatArray:
         if self.gradient is None:
             return self._fd(p, 0)[0]
         g = np.asarray(self.gradient(p.copy()), dtype=float).reshape(-1)
@@ -247,7 +267,9 @@ class _Problem:
             raise _Failure("non-finite gradient")
         return g
 
-    def jac(self, p, which: int, fun, size, name):
+    def jac(
+        self, p: FloatArray, which: int, fun: VectorFunction | None, size: int, name: str
+    ) -> FloatArray:
         if size == 0:
             return np.zeros((0, self.n))
         if fun is None:
@@ -261,26 +283,26 @@ class _Problem:
             raise _Failure(f"non-finite {name}")
         return jac
 
-    def jac_eq(self, p):
+    def jac_eq(self, p: FloatArray) -> FloatArray:
         return self.jac(p, 1, self.equality_jacobian, self.m, "equality_jacobian")
 
-    def jac_in(self, p):
+    def jac_in(self, p: FloatArray) -> FloatArray:
         return self.jac(p, 2, self.inequality_jacobian, self.q, "inequality_jacobian")
 
 
 def homotopy_minimize(
-    objective,
-    p0,
+    objective: ScalarFunction,
+    p0: npt.ArrayLike,
     *,
-    gradient=None,
-    equality=None,
-    equality_target=None,
-    equality_jacobian=None,
-    inequality=None,
-    inequality_bound=None,
-    inequality_jacobian=None,
+    gradient: VectorFunction | None = None,
+    equality: VectorFunction | None = None,
+    equality_target: npt.ArrayLike | None = None,
+    equality_jacobian: VectorFunction | None = None,
+    inequality: VectorFunction | None = None,
+    inequality_bound: npt.ArrayLike | None = None,
+    inequality_jacobian: VectorFunction | None = None,
     objective_goal: float = 0.0,
-    weight=None,
+    weight: npt.ArrayLike | None = None,
     minimize: bool = True,
     gamma_step: float = 0.1,
     min_gamma_step: float = 1e-9,
@@ -374,13 +396,17 @@ def homotopy_minimize(
         raise ValueError("equality_target: give it exactly when equality is given")
     if (inequality is None) != (inequality_bound is None):
         raise ValueError("inequality_bound: give it exactly when inequality is given")
+    # equality_target is given exactly when equality is (checked above)
     f_o = (
-        np.zeros(0) if equality is None else _vector(equality_target, "equality_target").reshape(-1)
+        np.zeros(0)
+        if equality_target is None
+        else _vector(equality_target, "equality_target").reshape(-1)
     )
     m = f_o.size
     if equality is not None and m == 0:
         raise ValueError("equality_target: must not be empty")
     if inequality is not None:
+        assert inequality_bound is not None  # given with inequality (checked above)
         bound = _vector(inequality_bound, "inequality_bound")
         q = np.atleast_1d(np.asarray(inequality(p.copy()), dtype=float)).size
         T = np.broadcast_to(bound, (q,)).astype(float) if bound.ndim == 0 else bound.reshape(-1)
@@ -439,24 +465,27 @@ def homotopy_minimize(
 
     names = [f"eq[{i}]" for i in range(m)] + [f"ineq[{j}]" for j in range(q)]
 
-    def violation(fe, gi, scaled=False):
+    def violation(fe: FloatArray, gi: FloatArray, scaled: bool = False) -> float:
         parts = [np.abs(fe - f_o), np.maximum(0.0, T - gi)]
         if scaled:
             parts = [parts[0] / se, parts[1] / sb]
         return float(max((x.max() for x in parts if x.size), default=0.0))
 
-    def targets(gamma, phase, J_feas):
+    def targets(gamma: float, phase: str, J_feas: float | None) -> tuple[Any, Any, float | None]:
         if phase == "feasibility":
             return (gamma * f_o + (1 - gamma) * fe0, gamma * T + (1 - gamma) * T_start, None)
+        assert J_feas is not None  # the objective phase starts from a feasible J
         return f_o, T, gamma * objective_goal + (1 - gamma) * J_feas
 
-    def residuals(p, te, tb, Jo):
+    def residuals(
+        p: FloatArray, te: Any, tb: Any, Jo: float | None
+    ) -> tuple[FloatArray, FloatArray, float | None]:
         J, fe, gi = prob.values(p)
         re, ri = (fe - te) / se, (gi - tb) / sb
         rJ = None if Jo is None else (J - Jo) / max(1.0, abs(Jo))
         return re, ri, rJ
 
-    def merit(p, te, tb, Jo):
+    def merit(p: FloatArray, te: Any, tb: Any, Jo: float | None) -> float:
         try:
             re, ri, rJ = residuals(p, te, tb, Jo)
         except (_Failure, ValueError, ArithmeticError, np.linalg.LinAlgError):
@@ -465,7 +494,9 @@ def homotopy_minimize(
             re @ re + np.minimum(ri, 0) @ np.minimum(ri, 0) + (0.0 if rJ is None else rJ * rJ)
         )
 
-    def step(p, te, tb, Jo):
+    def step(
+        p: FloatArray, te: Any, tb: Any, Jo: float | None
+    ) -> tuple[FloatArray, tuple[str, ...], FloatArray]:
         """One damped minimum-norm correction; returns (p_new, active names, jacobian).
 
         The step is the W-norm-minimal Δp with the equality rows (and the objective row)
@@ -528,9 +559,12 @@ def homotopy_minimize(
             alpha /= 2
         raise _Failure("line search failed")
 
-    def converge(p, gamma, phase, J_feas):
+    def converge(
+        p: FloatArray, gamma: float, phase: str, J_feas: float | None
+    ) -> tuple[FloatArray, int, tuple[str, ...], FloatArray]:
         te, tb, Jo = targets(gamma, phase, J_feas)
-        active, A = (), np.zeros((0, n))
+        active: tuple[str, ...] = ()
+        A = np.zeros((0, n))
         for it in range(max_corrections + 1):
             if prob.evaluations > max_evaluations:
                 raise _Failure("evaluation budget exhausted")
@@ -550,9 +584,12 @@ def homotopy_minimize(
         raise _Failure(f"not converged in {max_corrections} corrections")
 
     path: list[HomotopyStep] = []
-    last_active, last_A, last_fail = (), np.zeros((0, n)), ""
+    last_active: tuple[str, ...] = ()
+    last_A, last_fail = np.zeros((0, n)), ""
 
-    def run_phase(p, phase, J_feas):
+    def run_phase(
+        p: FloatArray, phase: str, J_feas: float | None
+    ) -> tuple[FloatArray, float, bool]:
         nonlocal last_active, last_A, last_fail
         gamma, dg, steps = 0.0, gamma_step, 0
         while gamma < 1.0:
@@ -657,7 +694,9 @@ def homotopy_minimize(
     )
 
 
-def _projected_gradient(prob, p, active, Linv_T) -> float:
+def _projected_gradient(
+    prob: _Problem, p: FloatArray, active: Sequence[str], Linv_T: npt.NDArray[Any]
+) -> float:
     g = prob.grad(p)
     rows = []
     if prob.m:

@@ -30,19 +30,31 @@ P = 1. Every returned gradient keeps the leading parameter axis.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import scipy.linalg as sla
+
+from flexsat.units import FloatArray
 
 _EPS = np.finfo(float).eps
 
 #: default relative gap below which two eigenvalues / singular values count as repeated
 GAP_RTOL = 1e-10
 
+ComplexArray = npt.NDArray[np.complex128]
+IntArray = npt.NDArray[np.int_]
+#: a real or complex array (the singular vectors of a real or a complex matrix)
+InexactArray = npt.NDArray[np.inexact[Any]]
+#: κ and its gradient, and with ``order=2`` its Hessian
+ConditionDerivatives = tuple[float, FloatArray] | tuple[float, FloatArray, FloatArray]
+
 
 # -- input checks ------------------------------------------------------------------------------
-def _refuse_complex(value, field: str, allow_complex: bool) -> None:
+def _refuse_complex(value: npt.ArrayLike, field: str, allow_complex: bool) -> None:
     if allow_complex:
         return
     try:
@@ -53,7 +65,9 @@ def _refuse_complex(value, field: str, allow_complex: bool) -> None:
         raise ValueError(f"{field}: must be real (the symmetric modal problem), got complex values")
 
 
-def _matrix(value, field: str, *, square: bool = True, allow_complex: bool = True) -> np.ndarray:
+def _matrix(
+    value: npt.ArrayLike, field: str, *, square: bool = True, allow_complex: bool = True
+) -> npt.NDArray[Any]:
     if isinstance(value, (str, bytes)):
         raise ValueError(f"{field}: must be a numeric matrix, got the string {value!r}")
     _refuse_complex(value, field, allow_complex)
@@ -74,14 +88,14 @@ def _matrix(value, field: str, *, square: bool = True, allow_complex: bool = Tru
 
 
 def _stack(
-    value,
+    value: npt.ArrayLike,
     field: str,
     shape: tuple[int, ...],
     n_params: int | None = None,
     *,
     second: bool = False,
     allow_complex: bool = True,
-) -> np.ndarray:
+) -> npt.NDArray[Any]:
     """A derivative stack of shape (P, *shape), or (P, P, *shape) when ``second``."""
     if isinstance(value, (str, bytes)):
         raise ValueError(f"{field}: must be a numeric array, got the string {value!r}")
@@ -111,13 +125,13 @@ def _stack(
     return arr
 
 
-def _order(order) -> int:
+def _order(order: object) -> int:
     if isinstance(order, bool) or order not in (1, 2):
         raise ValueError(f"order: must be 1 or 2, got {order!r}")
     return int(order)
 
 
-def _gap_rtol(value) -> float:
+def _gap_rtol(value: Any) -> float:
     try:
         value = float(value)
     except (TypeError, ValueError):
@@ -128,7 +142,11 @@ def _gap_rtol(value) -> float:
 
 
 def _check_distinct(
-    values: np.ndarray, scale: float, gap_rtol: float, what: str, select: np.ndarray | None = None
+    values: npt.NDArray[Any],
+    scale: float,
+    gap_rtol: float,
+    what: str,
+    select: npt.NDArray[Any] | None = None,
 ) -> None:
     """Raise if two of ``values`` (or one of ``select`` and any other) are within the gap."""
     n = values.size
@@ -179,19 +197,19 @@ class EigenDerivatives:
         ∂²Φ/∂p_k∂p_l (``order=2``, Eq. 44).
     """
 
-    eigenvalues: np.ndarray
-    right: np.ndarray
-    left: np.ndarray
-    eigenvalue_gradient: np.ndarray
-    coefficients: np.ndarray
-    right_gradient: np.ndarray
-    left_coefficients: np.ndarray
-    left_gradient: np.ndarray
-    eigenvalue_hessian: np.ndarray | None = None
-    right_hessian: np.ndarray | None = None
+    eigenvalues: ComplexArray
+    right: ComplexArray
+    left: ComplexArray
+    eigenvalue_gradient: ComplexArray
+    coefficients: ComplexArray
+    right_gradient: ComplexArray
+    left_coefficients: ComplexArray
+    left_gradient: ComplexArray
+    eigenvalue_hessian: ComplexArray | None = None
+    right_hessian: ComplexArray | None = None
 
 
-def _selection(value, count: int, field: str, what: str) -> np.ndarray:
+def _selection(value: npt.ArrayLike | None, count: int, field: str, what: str) -> npt.NDArray[Any]:
     """Indices 0 … count − 1 picked by ``value`` (all of them for None), checked."""
     if value is None:
         return np.arange(count)
@@ -203,7 +221,9 @@ def _selection(value, count: int, field: str, what: str) -> np.ndarray:
     return sel
 
 
-def eigensolve(A, B=None, *, gap_rtol: float = GAP_RTOL):
+def eigensolve(
+    A: npt.ArrayLike, B: npt.ArrayLike | None = None, *, gap_rtol: float = GAP_RTOL
+) -> tuple[ComplexArray, ComplexArray, ComplexArray]:
     """Eigenvalues and normalised right/left eigenvectors of A φ = λ B φ (Att. 5 Eqs. 40-41).
 
     Parameters
@@ -238,7 +258,9 @@ def eigensolve(A, B=None, *, gap_rtol: float = GAP_RTOL):
     return _eigensolve(A, B, _gap_rtol(gap_rtol))
 
 
-def _eigensolve(A, B, gap_rtol):
+def _eigensolve(
+    A: npt.NDArray[Any], B: npt.NDArray[Any], gap_rtol: float
+) -> tuple[ComplexArray, ComplexArray, ComplexArray]:
     n = A.shape[0]
     if np.linalg.cond(B) > 1.0 / (n * _EPS):
         raise ValueError("B: must be non-singular (a singular B gives infinite eigenvalues)")
@@ -260,7 +282,15 @@ def _eigensolve(A, B, gap_rtol):
 
 
 def eig_derivatives(
-    A, dA, B=None, dB=None, d2A=None, d2B=None, *, order: int = 1, gap_rtol: float = GAP_RTOL
+    A: npt.ArrayLike,
+    dA: npt.ArrayLike,
+    B: npt.ArrayLike | None = None,
+    dB: npt.ArrayLike | None = None,
+    d2A: npt.ArrayLike | None = None,
+    d2B: npt.ArrayLike | None = None,
+    *,
+    order: int = 1,
+    gap_rtol: float = GAP_RTOL,
 ) -> EigenDerivatives:
     """Eigenvalue and eigenvector derivatives of A(p) φ = λ B(p) φ (Att. 5 Eqs. 40-44).
 
@@ -354,7 +384,21 @@ def eig_derivatives(
     return EigenDerivatives(lam, phi, psi, dlam, C, dphi, Dk, dpsi, hess_lam, hess_phi)
 
 
-def _second_order(lam, phi, psi, B, a, b, C, dlam, S, dB, d2A, d2B, denom):
+def _second_order(
+    lam: ComplexArray,
+    phi: ComplexArray,
+    psi: ComplexArray,
+    B: npt.NDArray[Any],
+    a: npt.NDArray[Any],
+    b: npt.NDArray[Any] | None,
+    C: ComplexArray,
+    dlam: ComplexArray,
+    S: npt.NDArray[Any],
+    dB: npt.NDArray[Any] | None,
+    d2A: npt.NDArray[Any] | None,
+    d2B: npt.NDArray[Any] | None,
+    denom: npt.NDArray[Any],
+) -> tuple[ComplexArray, ComplexArray]:
     n = lam.size
     idx = np.arange(n)
     # R[k, l] (see eig_derivatives); Λ as a column scaling: X Λ = X * lam[None, :]
@@ -409,17 +453,23 @@ class ModalDerivatives:
         Mode numbers (ascending ω²) of the columns.
     """
 
-    eigenvalues: np.ndarray
-    frequencies: np.ndarray
-    modes: np.ndarray
-    eigenvalue_gradient: np.ndarray
-    frequency_gradient: np.ndarray
-    mode_gradient: np.ndarray
-    indices: np.ndarray
+    eigenvalues: FloatArray
+    frequencies: FloatArray
+    modes: FloatArray
+    eigenvalue_gradient: FloatArray
+    frequency_gradient: FloatArray
+    mode_gradient: FloatArray
+    indices: IntArray
 
 
 def modal_derivatives(
-    K, M, dK, dM=None, modes=None, *, gap_rtol: float = GAP_RTOL
+    K: npt.ArrayLike,
+    M: npt.ArrayLike,
+    dK: npt.ArrayLike,
+    dM: npt.ArrayLike | None = None,
+    modes: Sequence[int] | npt.ArrayLike | None = None,
+    *,
+    gap_rtol: float = GAP_RTOL,
 ) -> ModalDerivatives:
     """Natural-frequency and mode-shape derivatives of K(p) φ = ω² M(p) φ, Nelson's method.
 
@@ -514,18 +564,24 @@ class SVDDerivatives:
         ∂²σ_i/∂p_k∂p_l (corrected Eq. 27), with ``order=2``.
     """
 
-    singular_values: np.ndarray
-    U: np.ndarray
-    V: np.ndarray
-    indices: np.ndarray
-    singular_value_gradient: np.ndarray
-    U_gradient: np.ndarray
-    V_gradient: np.ndarray
-    singular_value_hessian: np.ndarray | None = None
+    singular_values: FloatArray
+    U: InexactArray
+    V: InexactArray
+    indices: IntArray
+    singular_value_gradient: FloatArray
+    U_gradient: InexactArray
+    V_gradient: InexactArray
+    singular_value_hessian: FloatArray | None = None
 
 
 def svd_derivatives(
-    Phi, dPhi, d2Phi=None, *, order: int = 1, indices=None, gap_rtol: float = GAP_RTOL
+    Phi: npt.ArrayLike,
+    dPhi: npt.ArrayLike,
+    d2Phi: npt.ArrayLike | None = None,
+    *,
+    order: int = 1,
+    indices: Sequence[int] | npt.ArrayLike | None = None,
+    gap_rtol: float = GAP_RTOL,
 ) -> SVDDerivatives:
     """First- and second-order sensitivity of the SVD Φ = U Σ Vᴴ (Att. 5 Eqs. 15-27).
 
@@ -628,8 +684,13 @@ def svd_derivatives(
 
 
 def condition_number_derivatives(
-    Phi, dPhi, d2Phi=None, *, order: int = 1, gap_rtol: float = GAP_RTOL
-):
+    Phi: npt.ArrayLike,
+    dPhi: npt.ArrayLike,
+    d2Phi: npt.ArrayLike | None = None,
+    *,
+    order: int = 1,
+    gap_rtol: float = GAP_RTOL,
+) -> ConditionDerivatives:
     """2-norm condition number κ = σ_1/σ_r of Φ(p) and its gradient (and Hessian).
 
     From Att. 5 Eq. 15 (and Eq. 27 for ``order=2``) applied to the largest and smallest singular
@@ -657,21 +718,31 @@ def condition_number_derivatives(
     return _kappa_from_svd(d, order)
 
 
-def _kappa_from_svd(d: SVDDerivatives, order: int):
+def _kappa_from_svd(d: SVDDerivatives, order: int) -> ConditionDerivatives:
     s1, sr = d.singular_values[d.indices]
     kappa = float(s1 / sr)
     g1, gr = d.singular_value_gradient[:, 0] / s1, d.singular_value_gradient[:, 1] / sr
     g = g1 - gr
     if order == 1:
         return kappa, kappa * g
-    h1 = d.singular_value_hessian[:, :, 0] / s1 - np.outer(g1, g1)
-    hr = d.singular_value_hessian[:, :, 1] / sr - np.outer(gr, gr)
+    hessian = d.singular_value_hessian
+    assert hessian is not None  # svd_derivatives computes it for order=2
+    h1 = hessian[:, :, 0] / s1 - np.outer(g1, g1)
+    hr = hessian[:, :, 1] / sr - np.outer(gr, gr)
     return kappa, kappa * g, kappa * (np.outer(g, g) + h1 - hr)
 
 
 def eigenvector_condition_derivatives(
-    A, dA, B=None, dB=None, d2A=None, d2B=None, *, order: int = 1, gap_rtol: float = GAP_RTOL
-):
+    A: npt.ArrayLike,
+    dA: npt.ArrayLike,
+    B: npt.ArrayLike | None = None,
+    dB: npt.ArrayLike | None = None,
+    d2A: npt.ArrayLike | None = None,
+    d2B: npt.ArrayLike | None = None,
+    *,
+    order: int = 1,
+    gap_rtol: float = GAP_RTOL,
+) -> ConditionDerivatives:
     """Condition number of the normalised modal matrix of A φ = λ B φ and its derivatives.
 
     The performance index of Att. 5 Eq. 46, J = σ_1(Φ)/σ_n(Φ) with φ_iᵀ B φ_i = 1, differentiated

@@ -27,13 +27,17 @@ QUEST measurement model (each b_i a unit vector with isotropic tangential noise 
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.dynamics.attitude import quaternion_to_dcm
+from flexsat.units import FloatArray
 
 __all__ = ["q_method", "quest_covariance", "rotation_error"]
 
 
-def _check_vectors(body, reference, sigma):
+def _check_vectors(
+    body: npt.ArrayLike, reference: npt.ArrayLike, sigma: npt.ArrayLike
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     b = np.asarray(body, float)
     r = np.asarray(reference, float)
     if b.ndim != 2 or b.shape[1] != 3 or r.shape != b.shape:
@@ -55,7 +59,7 @@ def _check_vectors(body, reference, sigma):
     return b, r, s
 
 
-def quest_covariance(body, sigma) -> np.ndarray:
+def quest_covariance(body: npt.ArrayLike, sigma: npt.ArrayLike) -> FloatArray:
     """P = [Σ σ_i⁻² (I − b_i b_iᵀ)]⁻¹ (3, 3), rad² (module docstring).
 
     Raises
@@ -74,7 +78,9 @@ def quest_covariance(body, sigma) -> np.ndarray:
     return np.linalg.inv(info)
 
 
-def q_method(body, reference, sigma=1.0):
+def q_method(
+    body: npt.ArrayLike, reference: npt.ArrayLike, sigma: npt.ArrayLike = 1.0
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """(C_bn, β, P): the attitude minimising Wahba's loss, its Euler parameters (β0 >= 0) and
     the QUEST covariance of the body-axis error angles (module docstring).
 
@@ -99,7 +105,7 @@ def q_method(body, reference, sigma=1.0):
     return quaternion_to_dcm(beta), beta, quest_covariance(b, s)
 
 
-def rotation_error(estimate, truth) -> np.ndarray:
+def rotation_error(estimate: npt.ArrayLike, truth: npt.ArrayLike) -> FloatArray:
     """Body-axis small rotation δθ (..., 3), rad, with C_est = exp(−[δθ×]) C_true: the rotation
     vector of C_true C_estᵀ (exact, not only to first order)."""
     E = np.asarray(truth, float) @ np.swapaxes(np.asarray(estimate, float), -1, -2)

@@ -23,19 +23,23 @@ reference the k-vector is benchmarked and tested against.
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from scipy.spatial import cKDTree
 
 from flexsat.attitude.star_catalog import StarCatalog
+from flexsat.units import FloatArray
 
 __all__ = ["catalog_pairs", "KVectorIndex", "BruteForceIndex", "pair_angles"]
 
+IntArray = npt.NDArray[np.int64]
 
-def pair_angles(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+
+def pair_angles(a: FloatArray, b: FloatArray) -> FloatArray:
     """Angle between unit vectors (..., 3), 2 arcsin(|a − b|/2), rad."""
     return 2.0 * np.arcsin(np.clip(0.5 * np.linalg.norm(a - b, axis=-1), 0.0, 1.0))
 
 
-def catalog_pairs(catalog: StarCatalog, max_angle: float):
+def catalog_pairs(catalog: StarCatalog, max_angle: float) -> tuple[IntArray, IntArray, FloatArray]:
     """(first, second, angle): rows of every catalogue pair within ``max_angle`` rad.
 
     Raises
@@ -64,7 +68,7 @@ def catalog_pairs(catalog: StarCatalog, max_angle: float):
 class _PairIndex:
     """Shared storage: pairs sorted by angle."""
 
-    def __init__(self, catalog: StarCatalog, max_angle: float):
+    def __init__(self, catalog: StarCatalog, max_angle: float) -> None:
         first, second, theta = catalog_pairs(catalog, max_angle)
         order = np.argsort(theta, kind="stable")
         self.catalog = catalog
@@ -74,7 +78,7 @@ class _PairIndex:
     def __len__(self) -> int:
         return self.angles.size
 
-    def query(self, low, high):
+    def query(self, low: npt.ArrayLike, high: npt.ArrayLike) -> tuple[IntArray, IntArray]:
         """(query, pair): for every query q, the rows ``pair`` of the stored pairs with
         ``low[q] <= angle <= high[q]``, flattened (query index repeated per match)."""
         raise NotImplementedError
@@ -83,7 +87,7 @@ class _PairIndex:
 class KVectorIndex(_PairIndex):
     """Mortari's k-vector over the catalogue pairs within ``max_angle`` (module docstring)."""
 
-    def __init__(self, catalog: StarCatalog, max_angle: float):
+    def __init__(self, catalog: StarCatalog, max_angle: float) -> None:
         super().__init__(catalog, max_angle)
         s, n = self.angles, self.angles.size
         xi = 4 * np.finfo(float).eps * max(abs(s[-1]), 1.0)
@@ -91,7 +95,7 @@ class KVectorIndex(_PairIndex):
         self.m = (s[-1] - s[0] + 2 * xi) / max(n - 1, 1)
         self.k = np.searchsorted(s, self.m * np.arange(n) + self.q, side="right")
 
-    def query(self, low, high):
+    def query(self, low: npt.ArrayLike, high: npt.ArrayLike) -> tuple[IntArray, IntArray]:
         low, high = np.asarray(low, float), np.asarray(high, float)
         n = self.angles.size
         jb = np.floor((low - self.q) / self.m).astype(np.int64) - 1
@@ -113,9 +117,10 @@ class KVectorIndex(_PairIndex):
 class BruteForceIndex(_PairIndex):
     """Every stored angle compared with every query's bounds (the reference matcher)."""
 
-    def query(self, low, high):
+    def query(self, low: npt.ArrayLike, high: npt.ArrayLike) -> tuple[IntArray, IntArray]:
         low, high = np.asarray(low, float), np.asarray(high, float)
-        qids, rows = [], []
+        qids: list[IntArray] = []
+        rows: list[IntArray] = []
         for q in range(low.size):
             r = np.flatnonzero((self.angles >= low[q]) & (self.angles <= high[q]))
             qids.append(np.full(r.size, q))

@@ -25,13 +25,15 @@ centroid noise of σ_px pixels is a direction noise of σ_px·pitch/f rad per ax
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.attitude.star_catalog import StarCatalog
 from flexsat.identify.photogrammetry import Camera, euler_angles, project, rotation_matrix
 from flexsat.input_checks import require_count, require_positive_scalar
-from flexsat.units import to_si_array
+from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike, to_si_array
 
 __all__ = ["StarCamera", "StarFrame"]
 
@@ -56,10 +58,10 @@ class StarFrame:
     """
 
     camera: int
-    pixels: np.ndarray
-    vectors: np.ndarray
-    truth: np.ndarray
-    magnitudes: np.ndarray
+    pixels: FloatArray
+    vectors: FloatArray
+    truth: npt.NDArray[np.int_]
+    magnitudes: FloatArray
 
     def __len__(self) -> int:
         return self.truth.size
@@ -87,15 +89,28 @@ class StarCamera:
         z axis.
     """
 
-    field_of_view: float = "12 deg"
+    # the fields hold SI floats; the defaults are quantities that __post_init__ converts
+    field_of_view: float = "12 deg"  # type: ignore[assignment]
     n_pixels: int = 4096
-    pixel_pitch: float = "5.5 um"
+    pixel_pitch: float = "5.5 um"  # type: ignore[assignment]
     centroid_noise: float = 0.1
     magnitude_limit: float = 6.5
-    mounting: tuple = (0.0, 0.0, 0.0)
-    _matrix: np.ndarray = field(init=False, repr=False, compare=False, default=None)
+    mounting: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    _matrix: FloatArray = field(init=False, repr=False, compare=False)
 
-    def __post_init__(self):
+    if TYPE_CHECKING:
+        # what the constructor accepts (the generated __init__ at run time): quantities
+        def __init__(
+            self,
+            field_of_view: QuantityLike = ...,
+            n_pixels: int = ...,
+            pixel_pitch: QuantityLike = ...,
+            centroid_noise: float = ...,
+            magnitude_limit: float = ...,
+            mounting: QuantityArrayLike = ...,
+        ) -> None: ...
+
+    def __post_init__(self) -> None:
         fov = require_positive_scalar(self.field_of_view, "field_of_view", "rad")
         if fov >= np.radians(120):
             raise ValueError(
@@ -132,12 +147,12 @@ class StarCamera:
         object.__setattr__(self, "_matrix", rotation_matrix(ang, "321"))
 
     @property
-    def mounting_matrix(self) -> np.ndarray:
+    def mounting_matrix(self) -> FloatArray:
         """C_cb, body to camera axes."""
         return self._matrix
 
     @property
-    def boresight(self) -> np.ndarray:
+    def boresight(self) -> FloatArray:
         """The camera z axis in body axes (third row of C_cb)."""
         return self._matrix[2].copy()
 
@@ -161,7 +176,7 @@ class StarCamera:
         """Largest angle between two stars on the detector (corner to corner), rad."""
         return 2.0 * np.arctan(np.sqrt(2.0) * np.tan(0.5 * self.field_of_view))
 
-    def camera_model(self, attitude) -> Camera:
+    def camera_model(self, attitude: npt.ArrayLike) -> Camera:
         """The photogrammetry :class:`~flexsat.identify.photogrammetry.Camera` at the origin
         with C_cn = C_cb C_bn, square pixels f, "+f" sign (module docstring)."""
         c_cn = self._matrix @ np.asarray(attitude, float)
@@ -172,7 +187,7 @@ class StarCamera:
             focal_sign=1,
         )
 
-    def directions(self, pixels) -> np.ndarray:
+    def directions(self, pixels: npt.ArrayLike) -> FloatArray:
         """Unit directions in camera axes of centroids (k, 2) in pixels (inverse pinhole)."""
         p = np.asarray(pixels, float)
         uv = (p - 0.5 * self.n_pixels) * self.pixel_pitch
@@ -181,9 +196,9 @@ class StarCamera:
 
     def observe(
         self,
-        attitude,
+        attitude: npt.ArrayLike,
         catalog: StarCatalog,
-        rng,
+        rng: np.random.Generator,
         index: int = 0,
         false_stars: int = 0,
         missing_fraction: float = 0.0,

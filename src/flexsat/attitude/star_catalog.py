@@ -33,8 +33,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.input_checks import require_finite
+from flexsat.units import FloatArray
 
 __all__ = [
     "StarCatalog",
@@ -57,7 +59,7 @@ MIN_STARS = 3
 HIPPARCOS_FIELDS = {"hip": 1, "vmag": 5, "ra_deg": 8, "dec_deg": 9}
 
 
-def _directions(ra, dec) -> np.ndarray:
+def _directions(ra: npt.ArrayLike, dec: npt.ArrayLike) -> FloatArray:
     cd = np.cos(dec)
     return np.stack([cd * np.cos(ra), cd * np.sin(ra), np.sin(dec)], -1)
 
@@ -73,12 +75,12 @@ class StarCatalog:
         disagree in length or hold non-finite values.
     """
 
-    ids: np.ndarray
-    magnitudes: np.ndarray
-    vectors: np.ndarray
+    ids: npt.NDArray[np.int_]
+    magnitudes: FloatArray
+    vectors: FloatArray
     source: str = "user"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         ids = np.asarray(self.ids).reshape(-1)
         mags = require_finite(self.magnitudes, "magnitudes").reshape(-1)
         vec = require_finite(self.vectors, "vectors")
@@ -158,7 +160,7 @@ def synthetic_sky(
     )
 
 
-def load_hipparcos(path, magnitude_limit: float | None = None) -> StarCatalog:
+def load_hipparcos(path: str | Path, magnitude_limit: float | None = None) -> StarCatalog:
     """Stars of a user-supplied Hipparcos main catalogue file (``hip_main.dat``, module
     docstring), optionally only those with V <= ``magnitude_limit``.
 
@@ -176,7 +178,10 @@ def load_hipparcos(path, magnitude_limit: float | None = None) -> StarCatalog:
         if magnitude_limit is None
         else float(require_finite(magnitude_limit, "magnitude_limit"))
     )
-    ids, mags, ra, dec = [], [], [], []
+    ids: list[int] = []
+    mags: list[float] = []
+    ra: list[float] = []
+    dec: list[float] = []
     need = max(HIPPARCOS_FIELDS.values()) + 1
     with p.open(encoding="ascii", errors="replace") as fh:
         for lineno, line in enumerate(fh, 1):

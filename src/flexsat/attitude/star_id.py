@@ -34,15 +34,24 @@ rotation fitting all fields within the tolerance does both, and a field left bel
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from math import comb
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.attitude.fit import q_method
-from flexsat.attitude.pair_index import pair_angles
+from flexsat.attitude.pair_index import BruteForceIndex, KVectorIndex, pair_angles
+from flexsat.units import FloatArray
 
 __all__ = ["FieldMatch", "Identification", "match_field", "identify_frames"]
+
+if TYPE_CHECKING:
+    from flexsat.attitude.star_camera import StarCamera, StarFrame
+
+IntArray = npt.NDArray[np.int64]
 
 
 @dataclass(frozen=True)
@@ -52,7 +61,7 @@ class FieldMatch:
     matched inter-star-angle triplets."""
 
     camera: int
-    matches: np.ndarray
+    matches: IntArray
     triplets: int
 
     @property
@@ -85,11 +94,11 @@ class Identification:
 
     accepted: bool
     reason: str
-    fields: tuple
-    attitude: np.ndarray | None = None
-    quaternion: np.ndarray | None = None
-    covariance: np.ndarray | None = None
-    residuals: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    fields: tuple[FieldMatch, ...]
+    attitude: FloatArray | None = None
+    quaternion: FloatArray | None = None
+    covariance: FloatArray | None = None
+    residuals: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def n_stars(self) -> int:
@@ -97,7 +106,11 @@ class Identification:
 
 
 def match_field(
-    vectors, index, tolerance: float, camera: int = 0, min_votes: int = 2
+    vectors: npt.ArrayLike,
+    index: KVectorIndex | BruteForceIndex,
+    tolerance: float,
+    camera: int = 0,
+    min_votes: int = 2,
 ) -> FieldMatch:
     """Identify the stars of one field of view from their unit directions (module docstring,
     steps 1–3).
@@ -159,15 +172,15 @@ def match_field(
     return FieldMatch(camera, matches, comb(m, 3))
 
 
-def _triplets(matches: np.ndarray) -> int:
+def _triplets(matches: IntArray) -> int:
     m = int(np.count_nonzero(matches >= 0))
     return comb(m, 3) if m >= 3 else 0
 
 
 def identify_frames(
-    frames,
-    cameras,
-    index,
+    frames: Sequence[StarFrame],
+    cameras: Sequence[StarCamera],
+    index: KVectorIndex | BruteForceIndex,
     tolerance: float,
     min_triplets: int = 3,
     min_fields: int = 2,
@@ -201,16 +214,19 @@ def identify_frames(
         fm.matches.copy() if ok else np.full(fm.matches.size, -1) for fm, ok in zip(fields, good)
     ]
     for _ in range(max_refits + 1):
-        body, ref, sig, where = [], [], [], []
+        bodies: list[FloatArray] = []
+        refs: list[FloatArray] = []
+        sigs: list[FloatArray] = []
+        where: list[npt.NDArray[np.intp]] = []
         for f, mt in zip(frames, matches):
             cam = cameras[f.camera]
             used = np.flatnonzero(mt >= 0)
-            body.append(f.vectors[used] @ cam.mounting_matrix)  # v_b = C_cbᵀ v_c
-            ref.append(index.catalog.vectors[mt[used]])
+            bodies.append(f.vectors[used] @ cam.mounting_matrix)  # v_b = C_cbᵀ v_c
+            refs.append(index.catalog.vectors[mt[used]])
             # a noise-free camera is weighted as a thousandth of a pixel (covariance a bound)
-            sig.append(np.full(used.size, max(cam.direction_sigma, 1e-3 * cam.pixel_angle)))
+            sigs.append(np.full(used.size, max(cam.direction_sigma, 1e-3 * cam.pixel_angle)))
             where.append(used)
-        body, ref, sig = np.vstack(body), np.vstack(ref), np.concatenate(sig)
+        body, ref, sig = np.vstack(bodies), np.vstack(refs), np.concatenate(sigs)
         if body.shape[0] < 3:
             return Identification(
                 False,
@@ -244,5 +260,5 @@ def identify_frames(
     return Identification(True, "", tuple(final), C, beta, P, resid)
 
 
-def _final(fields, matches):
+def _final(fields: Sequence[FieldMatch], matches: Sequence[IntArray]) -> list[FieldMatch]:
     return [FieldMatch(fm.camera, mt, _triplets(mt)) for fm, mt in zip(fields, matches)]

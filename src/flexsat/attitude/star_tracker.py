@@ -15,18 +15,20 @@ every camera (a true pair then fails with probability < 0.3 %, and a field has m
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.attitude.fit import rotation_error
 from flexsat.attitude.pair_index import BruteForceIndex, KVectorIndex
-from flexsat.attitude.star_camera import StarCamera
+from flexsat.attitude.star_camera import StarCamera, StarFrame
 from flexsat.attitude.star_catalog import StarCatalog
 from flexsat.attitude.star_id import Identification, identify_frames
 from flexsat.dynamics.attitude import quaternion_to_dcm
 from flexsat.input_checks import require_count
-from flexsat.units import to_si_array
+from flexsat.units import FloatArray, QuantityLike, to_si_array
 
 __all__ = [
     "StarTracker",
@@ -42,10 +44,13 @@ __all__ = [
 ARCSEC = np.pi / 648000.0
 #: the paper's matching tolerance, 5″ (seed 000 L280)
 PAPER_TOLERANCE = 5.0 * ARCSEC
-_INDEXES = {"kvector": KVectorIndex, "brute": BruteForceIndex}
+_INDEXES: dict[str, type[KVectorIndex] | type[BruteForceIndex]] = {
+    "kvector": KVectorIndex,
+    "brute": BruteForceIndex,
+}
 
 
-def random_attitudes(n: int, seed=0) -> np.ndarray:
+def random_attitudes(n: int, seed: int | np.random.Generator = 0) -> FloatArray:
     """n attitudes C_bn (n, 3, 3) uniform on SO(3) (module docstring)."""
     q = np.random.default_rng(seed).normal(size=(require_count(n, "n"), 4))
     return quaternion_to_dcm(q / np.linalg.norm(q, axis=1, keepdims=True))
@@ -71,13 +76,13 @@ class StarTracker:
 
     def __init__(
         self,
-        cameras,
+        cameras: StarCamera | Sequence[StarCamera],
         catalog: StarCatalog,
-        tolerance=PAPER_TOLERANCE,
+        tolerance: QuantityLike = PAPER_TOLERANCE,
         min_triplets: int = 3,
         min_fields: int = 2,
         index: str = "kvector",
-    ):
+    ) -> None:
         cams = [cameras] if isinstance(cameras, StarCamera) else list(cameras)
         for c, cam in enumerate(cams):
             if not isinstance(cam, StarCamera):
@@ -109,14 +114,20 @@ class StarTracker:
         max_angle = max(c.max_pair_angle for c in cams) + self.tolerance
         self.index = _INDEXES[index](self.catalog, max_angle)
 
-    def observe(self, attitude, rng, false_stars: int = 0, missing_fraction: float = 0.0):
+    def observe(
+        self,
+        attitude: npt.ArrayLike,
+        rng: np.random.Generator,
+        false_stars: int = 0,
+        missing_fraction: float = 0.0,
+    ) -> list[StarFrame]:
         """One frame per camera at the true attitude C_bn (:meth:`StarCamera.observe`)."""
         return [
             cam.observe(attitude, self.catalog, rng, c, false_stars, missing_fraction)
             for c, cam in enumerate(self.cameras)
         ]
 
-    def identify(self, frames) -> Identification:
+    def identify(self, frames: Sequence[StarFrame]) -> Identification:
         """Lost-in-space identification of simultaneous frames
         (:func:`~flexsat.attitude.star_id.identify_frames`)."""
         return identify_frames(
@@ -124,7 +135,7 @@ class StarTracker:
         )
 
 
-def score(ident: Identification, frames) -> tuple[bool, int]:
+def score(ident: Identification, frames: Sequence[StarFrame]) -> tuple[bool, int]:
     """(correct, wrong stars): an accepted identification is correct when every star it kept
     is the true one; ``wrong`` counts the kept stars that are not (false stars included)."""
     if not ident.accepted:
@@ -143,16 +154,16 @@ class MonteCarloResult:
     (rad, NaN when rejected), ``sigmas`` (n, 3) QUEST 1σ per axis (rad), ``n_stars`` kept,
     ``triplets`` (n, n_cameras); the first attitude's frames and identification for plots."""
 
-    attitudes: np.ndarray
-    accepted: np.ndarray
-    correct: np.ndarray
-    wrong_accepted: np.ndarray
-    errors: np.ndarray
-    sigmas: np.ndarray
-    nees: np.ndarray
-    n_stars: np.ndarray
-    triplets: np.ndarray
-    example_frames: list
+    attitudes: FloatArray
+    accepted: npt.NDArray[np.bool_]
+    correct: npt.NDArray[np.bool_]
+    wrong_accepted: npt.NDArray[np.bool_]
+    errors: FloatArray
+    sigmas: FloatArray
+    nees: FloatArray
+    n_stars: npt.NDArray[np.int_]
+    triplets: npt.NDArray[np.int_]
+    example_frames: list[StarFrame]
     example: Identification
 
     @property
@@ -160,13 +171,17 @@ class MonteCarloResult:
         return float(np.mean(self.correct))
 
     @property
-    def error_std(self) -> np.ndarray:
+    def error_std(self) -> FloatArray:
         """1σ of the error angles per body axis over the accepted attitudes, rad."""
         return np.nanstd(self.errors, axis=0)
 
 
 def monte_carlo(
-    tracker: StarTracker, n: int = 1000, seed=0, false_stars: int = 0, missing_fraction: float = 0.0
+    tracker: StarTracker,
+    n: int = 1000,
+    seed: int | np.random.Generator = 0,
+    false_stars: int = 0,
+    missing_fraction: float = 0.0,
 ) -> MonteCarloResult:
     """Identify ``n`` seeded random attitudes (module docstring). ``nees`` is δθᵀP⁻¹δθ per
     accepted attitude (χ² with 3 degrees of freedom when the covariance is right)."""
@@ -176,7 +191,7 @@ def monte_carlo(
     acc, cor, wrong = np.zeros(n, bool), np.zeros(n, bool), np.zeros(n, bool)
     err, sig = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
     nees, nst, trip = np.full(n, np.nan), np.zeros(n, int), np.zeros((n, n_cam), int)
-    example = None
+    example: tuple[list[StarFrame], Identification] | None = None
     for k in range(n):
         frames = tracker.observe(att[k], rng, false_stars, missing_fraction)
         ident = tracker.identify(frames)
@@ -187,7 +202,10 @@ def monte_carlo(
         nst[k] = ident.n_stars
         trip[k] = [fm.triplets for fm in ident.fields]
         if ident.accepted:
+            # an accepted identification carries its fitted attitude and covariance
+            assert ident.attitude is not None and ident.covariance is not None
             e = rotation_error(ident.attitude, att[k])
             err[k], sig[k] = e, np.sqrt(np.diag(ident.covariance))
             nees[k] = e @ np.linalg.solve(ident.covariance, e)
+    assert example is not None  # n >= 1 (random_attitudes checks it)
     return MonteCarloResult(att, acc, cor, wrong, err, sig, nees, nst, trip, example[0], example[1])

@@ -27,6 +27,7 @@ Model used here (every value a parameter, documented in docs/agrawal_bang.md):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -34,16 +35,19 @@ from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.dynamics.structural import StructuralPlant
 from flexsat.input_checks import require_count, require_finite, require_nonneg
-from flexsat.structures.fem import Structure
+from flexsat.structures.fem import FEModes, Structure
 from flexsat.structures.modal_model import ModalModel
 from flexsat.structures.mode_description import classify_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
 
+if TYPE_CHECKING:
+    import control
+
 SOURCE = CASES["agrawal_bang"].source
 
 #: what seed 004 prints about the structure and the control problem (no dimension or frequency)
-PUBLISHED = {
+PUBLISHED: dict[str, Any] = {
     "n_modes": 3,  # L291 "three flexible modes are included"
     "n_pairs": 3,  # L207, L291 three collocated sensor/actuator pairs
     "actuator_1": "root of the first structure",  # L349
@@ -180,7 +184,7 @@ class AgrawalBangCase:
         return s
 
     @property
-    def fe_modes(self):
+    def fe_modes(self) -> FEModes:
         """Every finite-element mode (``FEModes``) of the clamped structure."""
         if "modes" not in self._cache:
             asm = self.structure().assemble()
@@ -228,7 +232,7 @@ class AgrawalBangCase:
             )
         return tuple(pairs)
 
-    def to_statespace(self, n_modes: int | None = None):
+    def to_statespace(self, n_modes: int | None = None) -> control.StateSpace:
         """python-control StateSpace, state [η, η'], inputs u_1..u_3 (actuator commands, moment
         a_1 u_j), outputs y_1..y_3 (a_2 × patch strain)."""
         import control
@@ -267,7 +271,7 @@ class AgrawalBangCase:
             rates.append(Sensor(f"y{j}_dot", "strain", ends, axis, gain, rate=True, unit="V/s"))
         return acts, sensors + rates
 
-    def plant(self, n_modes: int | None = None, coordinates: str = "modal"):
+    def plant(self, n_modes: int | None = None, coordinates: str = "modal") -> StructuralPlant:
         """The structure as a :class:`~flexsat.dynamics.structural.StructuralPlant`: inputs
         ``u1`` … ``u3`` (the pair voltages V_c, moment pairs a_1 V_c, Eq. 36), outputs ``y1`` …
         ``y3`` (a_2 × patch strain, Eq. 37, the sensors of :meth:`piezo_pairs`) and their rates
@@ -306,7 +310,7 @@ class AgrawalBangCase:
         y2 = -(uy_t - uy_c) - self.beam2_length * alpha
         return np.vstack([ux_c, alpha, y2, beta])
 
-    def tip_weight(self, w1, w2) -> np.ndarray:
+    def tip_weight(self, w1: float, w2: float) -> np.ndarray:
         """Q̄ of Eq. 35 for ζ_t = [y_1ᵗ, α, y_2ᵗ, β] (l_2 = ``beam2_length``)."""
         w1, w2 = float(require_finite(w1, "w1")), float(require_finite(w2, "w2"))
         l2 = self.beam2_length
@@ -378,7 +382,7 @@ def _patches(raw, beam_lengths, patch_length) -> tuple:
     return tuple(out)
 
 
-def agrawal_bang(**overrides) -> AgrawalBangCase:
+def agrawal_bang(**overrides: Any) -> AgrawalBangCase:
     """Build the L-structure case; override any input by name, as a number (SI) or a unit
     string; ``patches`` is three (structure 1|2, start from that structure's root) pairs.
 

@@ -35,13 +35,20 @@ T the tip rows of :meth:`~flexsat.cases.agrawal_bang.AgrawalBangCase.tip_outputs
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.cases.agrawal_bang import PUBLISHED, AgrawalBangCase, agrawal_bang
 from flexsat.control.ppf import PPFBank, PPFController, PPFModel, PPFProblem
 from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.units import QuantityLike
+
+if TYPE_CHECKING:
+    from flexsat.control.ppf_optimization import PPFHomotopyResult
 
 #: filter damping ratio (not published, spec §1.3; module docstring)
 ZETA_F = 0.1
@@ -55,7 +62,7 @@ GRID = tuple((w, e) for w in PUBLISHED["weights"] for e in EXCITATIONS)
 
 #: Tables 1–3 as printed: (J_init, J_opt at γ = 0.9), 3a/3b with their exponent repaired
 #: (×10⁶, spec §3.2 point 1)
-PUBLISHED_COSTS = {
+PUBLISHED_COSTS: dict[tuple[tuple[float, ...], str], tuple[float, float]] = {
     ((100, 100), "first"): (3.1239e5, 3.1309e5),
     ((100, 100), "three"): (3.4996e5, 3.5066e5),
     ((500, 100), "first"): (6.4476e5, 6.4546e5),
@@ -99,14 +106,14 @@ PUBLISHED_GAINS = {
 }
 
 
-def _weights_key(weights) -> tuple:
+def _weights_key(weights: npt.ArrayLike) -> tuple[float, ...]:
     w = require_nonneg(weights, "weights")
     if w.shape != (2,):
         raise ValueError(f"weights: must be the two numbers (w1, w2) of Eq. 35, got {weights!r}")
     return tuple(float(v) for v in w)
 
 
-def _excitation(excitation) -> str:
+def _excitation(excitation: str) -> str:
     if excitation not in EXCITATIONS:
         raise ValueError(
             f"excitation: must be 'first' (the first flexible mode) or 'three' "
@@ -115,7 +122,7 @@ def _excitation(excitation) -> str:
     return excitation
 
 
-def paper_goal_ratio(weights, excitation) -> float:
+def paper_goal_ratio(weights: npt.ArrayLike, excitation: str) -> float:
     """J_goal/J_init implied by the published Table entry (spec §3.2 point 3):
     J_opt = γ J_goal + (1 − γ) J_init at γ = 0.9, so J_goal/J_init = (J_opt/J_init − 0.1)/0.9.
 
@@ -146,7 +153,7 @@ class GoalRule:
     kind: str
     value: float | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.kind not in ("paper", "ratio", "offset"):
             raise ValueError(f"goal: rule must be 'paper', 'ratio' or 'offset', got {self.kind!r}")
         if self.kind == "paper":
@@ -163,16 +170,18 @@ class GoalRule:
             raise ValueError(f"goal.value: a ratio J_goal/J_init must be >= 0, got {v!r}")
         object.__setattr__(self, "value", v)
 
-    def goal(self, J_init: float, weights, excitation) -> float:
+    def goal(self, J_init: float, weights: npt.ArrayLike, excitation: str) -> float:
         """J_goal for a run starting at J_init."""
         if self.kind == "paper":
             return paper_goal_ratio(weights, excitation) * J_init
+        assert self.value is not None  # the other rules need one (__post_init__)
         return self.value * J_init if self.kind == "ratio" else J_init + self.value
 
     @property
     def label(self) -> str:
         if self.kind == "paper":
             return "paper: J_goal/J_init of the published table"
+        assert self.value is not None  # the other rules need one (__post_init__)
         if self.kind == "ratio":
             return f"J_goal = {self.value:g} J_init"
         return f"J_goal = J_init {'+' if self.value >= 0 else '−'} {abs(self.value):g}"
@@ -186,7 +195,10 @@ def tip_error_rows(case: AgrawalBangCase, n_modes: int = 3) -> np.ndarray:
 
 
 def initial_conditions(
-    case: AgrawalBangCase, excitation: str, amplitude=TIP_AMPLITUDE, n_modes: int = 3
+    case: AgrawalBangCase,
+    excitation: str,
+    amplitude: QuantityLike = TIP_AMPLITUDE,
+    n_modes: int = 3,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(X₀, x₀): the second moment E[x₀ x₀ᵀ] (2m × 2m) over the structural states [η, η̇] and
     the one initial state of the time responses (module docstring). With independent random
@@ -205,14 +217,14 @@ def initial_conditions(
     E = tip_error_rows(case, m)[:2]
     eta1 = a / np.linalg.norm(E[:, 0])
     modes = [0] if excitation == "first" else list(range(min(3, m)))
-    parts = []
+    parts: list[np.ndarray] = []
     for i in modes:
         x = np.zeros(2 * m)
         # equal potential energy ½ ω_i² η_i²; sign: the tip moves along +n̂_1 (y_1ᵗ > 0)
         x[i] = eta1 * omega[0] / omega[i] * (1.0 if E[0, i] >= 0 else -1.0)
         parts.append(x)
-    parts = np.array(parts)
-    return parts.T @ parts, parts.sum(axis=0)
+    states = np.array(parts)
+    return states.T @ states, states.sum(axis=0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -232,7 +244,7 @@ class PPFCaseProblem:
     """
 
     case: AgrawalBangCase
-    weights: tuple
+    weights: tuple[float, ...]
     excitation: str
     problem: PPFProblem
     x0: np.ndarray
@@ -245,12 +257,12 @@ class PPFCaseProblem:
 
 def ppf_problem(
     case: AgrawalBangCase | None = None,
-    weights=(100.0, 100.0),
+    weights: npt.ArrayLike = (100.0, 100.0),
     excitation: str = "first",
-    Q_u=PUBLISHED["control_weight"],
-    zeta_f=ZETA_F,
+    Q_u: npt.ArrayLike = PUBLISHED["control_weight"],
+    zeta_f: npt.ArrayLike = ZETA_F,
     n_modes: int = PUBLISHED["n_modes"],
-    amplitude=TIP_AMPLITUDE,
+    amplitude: QuantityLike = TIP_AMPLITUDE,
 ) -> PPFCaseProblem:
     """The seed 004 problem on the case (module docstring): PPF model from the three pairs and
     ``n_modes`` modes, the bank tuned to the modes with damping ``zeta_f``, Q_s = Tᵀ Q̄(w_1, w_2) T
@@ -297,8 +309,8 @@ class PPFCaseRun:
     setup: PPFCaseProblem
     goal: GoalRule
     initial_gains: np.ndarray
-    optimization: object
-    responses: dict | None = None
+    optimization: PPFHomotopyResult
+    responses: dict[str, np.ndarray] | None = None
 
     @property
     def J_init(self) -> float:
@@ -325,7 +337,7 @@ class PPFCaseRun:
             return f"paper: J_goal = {self.J_goal / self.J_init:.5f} J_init"
         return self.goal.label
 
-    def row(self) -> dict:
+    def row(self) -> dict[str, Any]:
         """The results-table row: costs, γ, gains g_<actuator><mode>, S and pole checks."""
         st = self.setup.problem.stability(self.optimization.gains)
         r = {
@@ -351,7 +363,9 @@ class PPFCaseRun:
         return r
 
 
-def tip_responses(setup: PPFCaseProblem, gains: dict, duration: float, rate: float) -> dict:
+def tip_responses(
+    setup: PPFCaseProblem, gains: Mapping[str, npt.ArrayLike], duration: float, rate: float
+) -> dict[str, np.ndarray]:
     """Tip error and rotation histories of the PPF loop on ``case.plant(m)`` (the simulation
     core, :class:`~flexsat.control.ppf.PPFController` sampled at ``rate``) from the structural
     state ``setup.x0``, filters at rest; ``gains`` maps a label to a gain vector (zero gains:
@@ -361,7 +375,7 @@ def tip_responses(setup: PPFCaseProblem, gains: dict, duration: float, rate: flo
     m = setup.problem.model.n_modes
     plant = setup.case.plant(m)
     config = SimConfig(duration=duration, control_rate=rate)
-    out = {}
+    out: dict[str, np.ndarray] = {}
     for label, g in gains.items():
         law = PPFController(setup.bank, g, dt=config.dt)
         ds = simulate(plant, law, config, initial_state=setup.x0, record_states=True).dataset
@@ -371,19 +385,19 @@ def tip_responses(setup: PPFCaseProblem, gains: dict, duration: float, rate: flo
 
 
 def run_ppf_case(
-    weights=(100.0, 100.0),
+    weights: npt.ArrayLike = (100.0, 100.0),
     excitation: str = "first",
     goal: GoalRule | None = None,
     *,
     case: AgrawalBangCase | None = None,
-    initial_gains=PUBLISHED["initial_gain"],
-    gamma_stop=GAMMA_STOP,
-    Q_u=PUBLISHED["control_weight"],
-    zeta_f=ZETA_F,
-    amplitude=TIP_AMPLITUDE,
-    duration=None,
-    rate=200.0,
-    optimizer_options: dict | None = None,
+    initial_gains: npt.ArrayLike = PUBLISHED["initial_gain"],
+    gamma_stop: float = GAMMA_STOP,
+    Q_u: npt.ArrayLike = PUBLISHED["control_weight"],
+    zeta_f: npt.ArrayLike = ZETA_F,
+    amplitude: QuantityLike = TIP_AMPLITUDE,
+    duration: QuantityLike | None = None,
+    rate: QuantityLike = 200.0,
+    optimizer_options: dict[str, Any] | None = None,
 ) -> PPFCaseRun:
     """Optimise one Tables 1–3 case (F8) and, when ``duration`` (s) is given, simulate the tip
     responses with zero, initial and optimised gains (F9).
@@ -434,7 +448,9 @@ def run_ppf_case(
 
 
 def run_ppf_grid(
-    goals=(GoalRule("paper"), GoalRule("ratio", 0.2)), grid=GRID, **options
+    goals: Iterable[GoalRule] = (GoalRule("paper"), GoalRule("ratio", 0.2)),
+    grid: Iterable[tuple[tuple[float, float], str]] = GRID,
+    **options: Any,
 ) -> list[PPFCaseRun]:
     """Every (w_1, w_2) × excitation of ``grid`` (the Tables 1–3 grid) under every goal rule,
     in the order goal, then grid; ``options`` as :func:`run_ppf_case`."""
@@ -442,7 +458,9 @@ def run_ppf_grid(
     return [run_ppf_case(w, e, goal, case=case, **options) for goal in goals for w, e in grid]
 
 
-def settling_time(t, signal, fraction: float = 0.1) -> float | None:
+def settling_time(
+    t: npt.NDArray[Any] | Sequence[float], signal: npt.ArrayLike, fraction: float = 0.1
+) -> float | None:
     """Last time |signal| exceeds ``fraction`` of its largest value (s); None when it still
     does at the end (not settled within the run)."""
     a = np.abs(np.asarray(signal))

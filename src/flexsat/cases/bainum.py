@@ -35,10 +35,13 @@ and applied by :func:`published_matrix` (docs/bainum.md).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cache
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
@@ -52,6 +55,10 @@ from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.input_checks import require_count, require_finite
 
+if TYPE_CHECKING:
+    from flexsat.dynamics.orbit import BeamInOrbit
+    from flexsat.dynamics.structural import StructuralPlant
+
 SOURCE = CASES["bainum"].source
 
 #: Earth's gravitational parameter (m³/s²) and equatorial radius (m), for the orbit rate
@@ -59,7 +66,7 @@ EARTH_MU = 3.986004418e14
 EARTH_RADIUS = 6378137.0
 
 #: numbers of seed 002 exactly as printed (matrices row by row); see :data:`ERRATA`
-PUBLISHED = {
+PUBLISHED: dict[str, Any] = {
     # Ch. II §4 (L454-L468) and Ch. III (L800, L831)
     "orbit_altitude": "250 nmi",  # L454
     "fundamental_frequency": "0.01 Hz",  # L454 "1/100 cps"
@@ -222,7 +229,7 @@ def free_free_lambda_l(n: int) -> np.ndarray:
     return np.array([2 * _half_root(r) for r in range(1, n + 1)])
 
 
-def mode_shape(r: int, x) -> np.ndarray:
+def mode_shape(r: int, x: npt.ArrayLike) -> np.ndarray:
     """Free-free bending mode r at x = ξ/l ∈ [-1/2, 1/2] (eqs A-3, A-5), normalized as the
     report: φ = +2 at the left end x = -1/2 and ∫φ² dχ = l (so M_r = ρl, eq A-13).
 
@@ -333,12 +340,14 @@ class BainumBeam:
         """diag(3, F_1, ..., F_k): the reduced A of eq 17 (pitch libration κ = 3)."""
         return np.concatenate([[3.0], self.ratios(n_bending)])
 
-    def seconds(self, tau) -> np.ndarray:
+    def seconds(self, tau: npt.ArrayLike) -> np.ndarray:
         """t = τ/ω_c, s."""
         return np.asarray(tau, dtype=float) / self.orbit_rate_value
 
     # -- actuators and linear model (eqs 15-17) ----------------------------------------------
-    def actuator_matrix(self, positions, n_bending: int, pitch: bool = True) -> np.ndarray:
+    def actuator_matrix(
+        self, positions: npt.ArrayLike, n_bending: int, pitch: bool = True
+    ) -> np.ndarray:
         """B_act of eq 15 for point forces at ``positions`` (ξ/l): rows θ (if ``pitch``),
         z_1..z_k; pitch row -2(ξ/l)·``pitch_influence``, mode rows φ_r(ξ)·``modal_influence``
         (exact Appendix A shapes)."""
@@ -348,13 +357,21 @@ class BainumBeam:
         rows += [mode_shape(r, x) * self.modal_influence for r in range(1, k + 1)]
         return np.array(rows)
 
-    def linear_model(self, positions, n_bending: int) -> tuple[np.ndarray, np.ndarray]:
+    def linear_model(
+        self, positions: npt.ArrayLike, n_bending: int
+    ) -> tuple[np.ndarray, np.ndarray]:
         """First-order (A, B) of eq 16, states [θ, z, θ', z'], inputs the forces f."""
         kappa = self.stiffness(n_bending)
         return first_order(kappa, self.actuator_matrix(positions, n_bending))
 
     # -- the plants (flexsat.dynamics.orbit, flexsat.dynamics.structural) ---------------------
-    def plant(self, positions, n_bending: int, stations=DEFAULT_STATIONS, length=None):
+    def plant(
+        self,
+        positions: npt.ArrayLike,
+        n_bending: int,
+        stations: Mapping[str, float] = DEFAULT_STATIONS,
+        length: float | None = None,
+    ) -> BeamInOrbit:
         """The nonlinear beam in orbit (eqs 1-2) as a :class:`~flexsat.dynamics.orbit.BeamInOrbit`
         in seconds: point forces ``f1``, ``f2``, ... (N) at ``positions`` (ξ/l, columns of
         :meth:`actuator_matrix`), outputs pitch, pitch rate, z_n, their rates and the elastic
@@ -378,7 +395,12 @@ class BainumBeam:
             length,
         )
 
-    def linear_plant(self, positions, n_bending: int, stations=DEFAULT_STATIONS):
+    def linear_plant(
+        self,
+        positions: npt.ArrayLike,
+        n_bending: int,
+        stations: Mapping[str, float] = DEFAULT_STATIONS,
+    ) -> StructuralPlant:
         """The linear beam (eqs 5-6) as a :class:`~flexsat.dynamics.structural.StructuralPlant`
         in seconds: M = I, K = ω_c² diag(3, F), inputs ``f1``, ... (N) with influence ω_c² G,
         outputs ``pitch``, ``z1`` ... and the station deflections w/l, with their ``_rate``
@@ -416,7 +438,9 @@ class BainumBeam:
         return StructuralPlant.from_second_order(model, acts, sensors)
 
     # -- equations of motion (eqs 1-2 and 5-6, nondimensional) --------------------------------
-    def accelerations(self, state, u, nonlinear: bool = True) -> np.ndarray:
+    def accelerations(
+        self, state: npt.ArrayLike, u: npt.ArrayLike, nonlinear: bool = True
+    ) -> np.ndarray:
         """[θ'', z''] for ``state`` = [θ, z, θ', z'] and control accelerations ``u`` = [u_θ, u_z]
         (= B_act f): eqs 1-2 in τ (``nonlinear``) or eqs 5-6; the right-hand side of
         :meth:`plant` (:class:`~flexsat.dynamics.orbit.BeamInOrbit`, in seconds) converted to τ."""
@@ -439,10 +463,10 @@ class BainumBeam:
 
     def simulate(
         self,
-        G,
-        K_pos,
-        K_rate,
-        x0,
+        G: npt.ArrayLike,
+        K_pos: npt.ArrayLike,
+        K_rate: npt.ArrayLike,
+        x0: npt.ArrayLike,
         tau_end: float,
         nonlinear: bool = True,
         n_points: int = 401,
@@ -524,7 +548,7 @@ class BainumBeam:
         }
 
 
-def bainum(**overrides) -> BainumBeam:
+def bainum(**overrides: Any) -> BainumBeam:
     """Build the beam-in-orbit case; override any input by name (numbers SI or unit strings).
 
     Inputs: ``frequency_ratios`` ((ω_n/ω_c)², default the report's 3200, 28800, 93079.5,
@@ -567,7 +591,9 @@ def _modal_input(G, n: int, name: str = "G") -> np.ndarray:
     return G
 
 
-def first_order(stiffness, G, damping=None) -> tuple[np.ndarray, np.ndarray]:
+def first_order(
+    stiffness: npt.ArrayLike, G: npt.ArrayLike, damping: npt.ArrayLike | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """(A, B) of ``x'' + E x' + diag(κ) x = G f`` with states [x, x'] (eq 16; Ch. III eq 2 with
     A = I)."""
     k = _stiffness(stiffness)
@@ -580,7 +606,13 @@ def first_order(stiffness, G, damping=None) -> tuple[np.ndarray, np.ndarray]:
     return A, np.vstack([np.zeros_like(G), G])
 
 
-def closed_loop_matrix(stiffness, G, K_pos, K_rate, damping=None) -> np.ndarray:
+def closed_loop_matrix(
+    stiffness: npt.ArrayLike,
+    G: npt.ArrayLike,
+    K_pos: npt.ArrayLike | None,
+    K_rate: npt.ArrayLike | None,
+    damping: npt.ArrayLike | None = None,
+) -> np.ndarray:
     """First-order matrix of ``x'' + E x' + diag(κ) x = G (K_pos x + K_rate x')``."""
     A, B = first_order(stiffness, G, damping)
     n, p = A.shape[0] // 2, B.shape[1]
@@ -592,7 +624,7 @@ def closed_loop_matrix(stiffness, G, K_pos, K_rate, damping=None) -> np.ndarray:
     return A + B @ np.hstack([K_pos, K_rate])
 
 
-def sorted_poles(M) -> np.ndarray:
+def sorted_poles(M: npt.ArrayLike) -> np.ndarray:
     """Eigenvalues sorted by |Im|, then Im, then Re (conjugate pairs adjacent, -j first)."""
     lam = np.linalg.eigvals(np.asarray(M, dtype=float))
     return lam[np.lexsort((lam.real, lam.imag, np.round(np.abs(lam.imag), 9)))]
@@ -709,7 +741,9 @@ def _closed_loop(stiffness, G, K_pos, K_rate) -> ClosedLoop:
     )
 
 
-def chapter2_example(gains=PUBLISHED["ch2_gains"], beam: BainumBeam | None = None) -> ClosedLoop:
+def chapter2_example(
+    gains: npt.ArrayLike = PUBLISHED["ch2_gains"], beam: BainumBeam | None = None
+) -> ClosedLoop:
     """Ch. II §4 (L446-L468): Case 1 (one actuator at ξ = -l/2, pitch + 2 modes) with the
     printed rate feedback f = K1 x1' + K2 x2' + K3 x3' (errata L462/L466 applied: the equations
     are built from eq 16).
@@ -733,7 +767,12 @@ def _svd_rank(M: np.ndarray, rtol: float) -> int:
 
 
 def decoupling_gains(
-    G, stiffness, damping_ratio=1.0, target_stiffness=None, damping=None, rtol: float = 1e-8
+    G: npt.ArrayLike,
+    stiffness: npt.ArrayLike,
+    damping_ratio: npt.ArrayLike = 1.0,
+    target_stiffness: npt.ArrayLike | None = None,
+    damping: npt.ArrayLike | None = None,
+    rtol: float = 1e-8,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Decoupling state feedback of Ch. III §2 (eqs 1-13, L539-L654).
 
@@ -798,7 +837,13 @@ def decoupling_gains(
     return G_pinv @ rhs_pos, G_pinv @ rhs_rate
 
 
-def modal_riccati(stiffness, Q1=1.0, Q2=None, R=1.0, D=0.0) -> tuple[np.ndarray, ...]:
+def modal_riccati(
+    stiffness: npt.ArrayLike,
+    Q1: npt.ArrayLike = 1.0,
+    Q2: npt.ArrayLike | None = None,
+    R: npt.ArrayLike = 1.0,
+    D: npt.ArrayLike = 0.0,
+) -> tuple[np.ndarray, ...]:
     """Closed-form 2x2 Riccati solution of one modal coordinate (Ch. III eqs 19-27).
 
     For x'' + D x' + F x = u', cost ∫ (Q1 x² + Q2 x'² + R u'²) dτ, the stabilizing S of
@@ -868,7 +913,13 @@ def modal_riccati(stiffness, Q1=1.0, Q2=None, R=1.0, D=0.0) -> tuple[np.ndarray,
 
 
 def modal_lqr_gains(
-    G, stiffness, Q1=1.0, Q2=None, R=1.0, D=0.0, rcond: float = 1e-8
+    G: npt.ArrayLike,
+    stiffness: npt.ArrayLike,
+    Q1: npt.ArrayLike = 1.0,
+    Q2: npt.ArrayLike | None = None,
+    R: npt.ArrayLike = 1.0,
+    D: npt.ArrayLike = 0.0,
+    rcond: float = 1e-8,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Per-mode linear regulator mapped to the actuators (Ch. III eqs 16-28).
 
@@ -996,7 +1047,7 @@ class ThreeMassBeam:
         A_r, B_r = self.reduced_pair(1)
         return float(np.linalg.det(np.hstack([B_r, -A_r @ B_r])))
 
-    def plant(self, n_actuators: int = 1):
+    def plant(self, n_actuators: int = 1) -> StructuralPlant:
         """The model as a :class:`~flexsat.dynamics.structural.StructuralPlant`:
         M = [[a, b], [b, a]], K = c I (so that v'' = -A_r v + B_r F, eq 4, with A_r = c M⁻¹),
         force inputs ``F_v1`` (and ``F_v2``), N, on the end deflections, outputs ``v1``, ``v2``
@@ -1008,7 +1059,7 @@ class ThreeMassBeam:
             raise ValueError(f"n_actuators: must be 1 or 2, got {n_actuators!r}")
         a, b = self.a, self.b
         model = SecondOrderModel(
-            [[a, b], [b, a]],
+            np.array([[a, b], [b, a]]),
             np.zeros((2, 2)),
             self.c_value * np.eye(2),
             np.zeros((2, 1)),
@@ -1058,7 +1109,7 @@ class ThreeMassBeam:
         return np.sort_complex(np.roots(self.characteristic_polynomial(K1, K2)))
 
 
-def three_mass(**overrides) -> ThreeMassBeam:
+def three_mass(**overrides: Any) -> ThreeMassBeam:
     """Build the Ch. IV three-mass model; inputs ``total_mass`` ("1000 kg"),
     ``interior_mass_ratio`` (1), ``spring`` ("0.18497 N/m"), ``orbit_rate`` ("1.115e-3 rad/s"),
     ``c`` (printed "0.1862522 N/m"; None for the formula, 0.1862132)."""

@@ -47,6 +47,7 @@ of "pin-ended"); it adds out-of-plane modes (2.83 Hz: the centre bouncing, arms 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -56,6 +57,9 @@ from flexsat.input_checks import require_count
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
+
+if TYPE_CHECKING:
+    from flexsat.dynamics.structural import StructuralPlant
 
 __all__ = [
     "CANTILEVER_BETA_L",
@@ -70,7 +74,7 @@ __all__ = [
 ]
 
 #: Exact βL (Blevins 1979, Table 8-1), as printed to 6 decimals
-PUBLISHED = {
+PUBLISHED: dict[str, Any] = {
     "cantilever_beta_L": (1.875104, 4.694091, 7.854757, 10.995541),
     "free_free_beta_L": (4.730041, 7.853205, 10.995608),
     "fv2_frequencies": ("11.336 Hz", "17.709 Hz", "45.345 Hz", "57.390 Hz"),
@@ -172,7 +176,7 @@ class BeamCase:
             s.clamp(0)
         return s
 
-    def plant(self, n_modes: int = 8, damping=0.01):
+    def plant(self, n_modes: int = 8, damping: float = 0.01) -> StructuralPlant:
         """The beam as a plant: a transverse (z) force ``force`` at the tip, the tip and
         mid-span displacements ``displacement_<node>`` (m) and their rates, on the modal model
         of its first ``n_modes`` modes (the six rigid modes of a free beam included) with
@@ -285,11 +289,11 @@ class BeamCase:
         return out
 
 
-def _beam(boundary: str, builder: str, overrides: dict) -> BeamCase:
+def _beam(boundary: str, builder: str, overrides: dict[str, Any]) -> BeamCase:
     return BeamCase(boundary=boundary, **read_inputs(builder, _BEAM_INPUTS, overrides))
 
 
-def cantilever_beam(**overrides) -> BeamCase:
+def cantilever_beam(**overrides: Any) -> BeamCase:
     """Uniform cantilever (clamped at x = 0); override ``length``, ``E``, ``rho``, ``nu``,
     ``width``, ``height`` (numbers in SI or unit strings), ``n_elements``, ``lumped``.
 
@@ -298,7 +302,7 @@ def cantilever_beam(**overrides) -> BeamCase:
     return _beam("cantilever", "cantilever_beam", overrides)
 
 
-def free_free_beam(**overrides) -> BeamCase:
+def free_free_beam(**overrides: Any) -> BeamCase:
     """Uniform free-free beam (6 rigid-body modes dropped); same overrides as
     :func:`cantilever_beam`."""
     return _beam("free-free", "free_free_beam", overrides)
@@ -360,7 +364,7 @@ class Fv2Case:
             s.clamp(prev, ("ux", "uy", "uz") if self.plane == "3d" else ("ux", "uy"))
         return s
 
-    def plant(self, n_modes: int = 8, damping=0.01):
+    def plant(self, n_modes: int = 8, damping: float = 0.01) -> StructuralPlant:
         """The cross as a plant: a force ``force`` at the mid-point of arm 1 (along x) across
         the arm (along y, in the plane of the in-plane model, the benchmark's), the
         displacements there and at the centre node 0, on the modal model of its first
@@ -403,7 +407,7 @@ class Fv2Case:
         }
 
 
-def nafems_fv2(**overrides) -> Fv2Case:
+def nafems_fv2(**overrides: Any) -> Fv2Case:
     """NAFEMS FV2 double cross; override ``arm_length``, ``side``, ``E``, ``rho``, ``nu`` (SI
     numbers or unit strings), ``elements_per_arm``, ``lumped`` and ``plane`` ("in-plane", the
     benchmark, or "3d": frames pinned in x, y, z at the tips)."""

@@ -16,14 +16,20 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 import scipy.linalg as sla
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.input_checks import require_count, require_finite, require_positive
-from flexsat.units import to_si
+from flexsat.units import QuantityArrayLike, to_si
+
+if TYPE_CHECKING:
+    import control
+    from flexsat.dynamics.structural import StructuralPlant
 
 SOURCE = CASES["draper_rpl"].source
 
@@ -78,7 +84,9 @@ _INPUT_NAMES = ("u1_hub", "u2_tips_1_3", "u3_tips_2_4")
 _OUTPUT_NAMES = ("theta", "rot_tips_1_3", "rot_tips_2_4")
 
 
-def comparison_functions(z, n: int, length: float, derivative: int = 0) -> np.ndarray:
+def comparison_functions(
+    z: npt.ArrayLike, n: int, length: float, derivative: int = 0
+) -> np.ndarray:
     """Clamped-free comparison functions of Eq. 53 and their derivatives.
 
     φ_j(z) = 1 − cos(jπz/L) + ½ (−1)^{j+1} (jπz/L)²,  j = 1 … n  (Att. 5 Eq. 53).
@@ -227,7 +235,8 @@ class DraperRPLCase:
             ``(1 + 2N, 3)``: columns u1 hub torque, u2 torque at the tips of appendages 1 and 3,
             u3 at the tips of appendages 2 and 4; rows [1 2 2], [0 2φ'(L) 0], [0 0 2φ'(L)].
         """
-        return tuple(a.copy() for a in self._model)
+        M, K, B = self._model
+        return M.copy(), K.copy(), B.copy()
 
     # -- free vibration, Eqs. 56-58 -------------------------------------------------------------
     @cached_property
@@ -313,7 +322,7 @@ class DraperRPLCase:
         return f"{phase}, hub {'counter-rotating' if self._hub_moves(mode[0]) else 'at rest'}"
 
     # -- state space ----------------------------------------------------------------------------
-    def to_statespace(self, n_modes: int | None = None):
+    def to_statespace(self, n_modes: int | None = None) -> control.StateSpace:
         """python-control StateSpace of M ẍ + K x = B u with the collocated outputs of Eq. 59.
 
         State z = (x, ẋ) of the full model (``n_modes=None``, 2(1 + 2N) states) or (η1, η̇1) of
@@ -349,7 +358,7 @@ class DraperRPLCase:
             name="draper_rpl",
         )
 
-    def plant(self, n_modes: int | None = None):
+    def plant(self, n_modes: int | None = None) -> StructuralPlant:
         """The model as a :class:`~flexsat.dynamics.structural.StructuralPlant` with the channels
         of :meth:`to_statespace`: torque inputs ``u1_hub``, ``u2_tips_1_3``, ``u3_tips_2_4``
         (N m, the columns of B, Eq. 54) and the collocated rotations ``theta``,
@@ -381,13 +390,15 @@ class DraperRPLCase:
         A = np.block([[zeros, M], [-(K + B @ g1 @ B.T), -(B @ g2 @ B.T)]])
         return A, sla.block_diag(M, M)
 
-    def closed_loop_eigenvalues(self, g1, g2) -> np.ndarray:
+    def closed_loop_eigenvalues(self, g1: QuantityArrayLike, g2: QuantityArrayLike) -> np.ndarray:
         """All 2(1 + 2N) closed-loop eigenvalues for the gains ``g1`` (N m/rad), ``g2``
         (N m s/rad), sorted by imaginary part."""
         lam = sla.eigvals(*self._closed_loop_pencil(g1, g2))
         return lam[np.lexsort((lam.real, lam.imag))]
 
-    def closed_loop_modes(self, g1, g2, n: int = 9) -> tuple[np.ndarray, np.ndarray]:
+    def closed_loop_modes(
+        self, g1: QuantityArrayLike, g2: QuantityArrayLike, n: int = 9
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(ω_i, ζ_i ω_i) of the first ``n`` oscillatory closed-loop modes, as in Table 4.
 
         ω = Im λ and ζ = −Re λ / |λ| (Att. 5 Eqs. 47-49), so ζω = Im λ · (−Re λ) / |λ|, which is
@@ -397,7 +408,9 @@ class DraperRPLCase:
         lam = lam[lam.imag > 0][: require_count(n, "n")]
         return lam.imag, lam.imag * -lam.real / np.abs(lam)
 
-    def condition_number(self, g1, g2, normalisation: str = "plain") -> float:
+    def condition_number(
+        self, g1: QuantityArrayLike, g2: QuantityArrayLike, normalisation: str = "plain"
+    ) -> float:
         """2-norm condition number σ_max/σ_min of the closed-loop modal matrix (Att. 5 Eq. 46).
 
         Right eigenvectors φ_i of E ż = A z, z = (x, ẋ) in SI (θ in rad, q in m), with
@@ -434,13 +447,14 @@ def _gain(value, field: str, unit: str) -> np.ndarray:
 
 def published_gains() -> tuple[np.ndarray, np.ndarray]:
     """G1 (N m/rad) and G2 (N m s/rad) of Att. 5 Eq. 59 (L2229-L2233), converted from ft·lbf."""
-    return tuple(
+    g1, g2 = (
         np.asarray(values) * to_si(f"1 {unit}", si_unit)
         for values, unit, si_unit in PUBLISHED_GAINS.values()
     )
+    return g1, g2
 
 
-def draper_rpl(**overrides) -> DraperRPLCase:
+def draper_rpl(**overrides: Any) -> DraperRPLCase:
     """Build the Draper/RPL case; override any input by name, as a number (SI) or a unit string.
 
     Parameters

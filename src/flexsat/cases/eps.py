@@ -29,8 +29,10 @@ Reconstruction (defaults)
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -41,10 +43,16 @@ from flexsat.structures.mode_description import classify_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
 
+if TYPE_CHECKING:
+    from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
+    from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
+    from flexsat.structures.fem import Assembly, FEModes, MassProperties, Structure
+    from flexsat.structures.modal_model import ModalModel
+
 SOURCE = CASES["eps"].source
 
 #: The EPS data exactly as published (L72-L136)
-PUBLISHED = {
+PUBLISHED: dict[str, Any] = {
     "total_mass": "1028 kg",
     "structural_mass": "548 kg",
     "nonstructural_mass": "329.63 kg",
@@ -164,7 +172,7 @@ RIM_NODES = (66, 69, 85, 88)
 class _Model:
     """The built structure and its bookkeeping."""
 
-    structure: object
+    structure: Structure
     groups: dict
     antenna_nodes: tuple  # per antenna: (hub id, ids by ring (ring, rib) array)
     cg_node: int
@@ -220,20 +228,20 @@ class EPSCase:
 
     @property
     def group_names(self) -> tuple[str, str]:
-        names = tuple(f"{d:g} m antenna" for d in self.diameters)
-        return names if names[0] != names[1] else ("large antenna", "small antenna")
+        large, small = (f"{d:g} m antenna" for d in self.diameters)
+        return (large, small) if large != small else ("large antenna", "small antenna")
 
     # -- geometry ----------------------------------------------------------------------------
     @cached_property
     def _model(self) -> _Model:
         return _build(self)
 
-    def structure(self):
+    def structure(self) -> Structure:
         """The finite-element model (``flexsat.structures.fem.Structure``)."""
         return self._model.structure
 
     @cached_property
-    def assembly(self):
+    def assembly(self) -> Assembly:
         return self._model.structure.assemble()
 
     @property
@@ -275,7 +283,7 @@ class EPSCase:
         return roles
 
     # -- modes -------------------------------------------------------------------------------
-    def modes(self, n_modes: int):
+    def modes(self, n_modes: int) -> FEModes:
         """``FEModes`` of the free-free structure: 6 rigid modes then ``n_modes`` elastic ones."""
         n = require_count(n_modes, "n_modes")
         ndof = len(self.assembly.dofs)
@@ -311,7 +319,10 @@ class EPSCase:
         node roles, JSON-ready."""
         n = require_count(n_modes, "n_modes")
         ours = self.frequencies_hz(n)
-        published, pub_desc, ratio, numbers = [], [], [], []
+        published: list[float | None] = []
+        pub_desc: list[str | None] = []
+        ratio: list[float | None] = []
+        numbers: list[int] = []
         for i in range(n):
             numbers.append(i + 7)
             if i < len(PUBLISHED_MODES):
@@ -340,7 +351,7 @@ class EPSCase:
                 return d.index - 5, d.frequency_hz, str(d)
         raise ValueError(f"max_modes: no truss-dominated mode among the first {max_modes}")
 
-    def modal_model(self, n_modes: int = 45):
+    def modal_model(self, n_modes: int = 45) -> ModalModel:
         """``ModalModel`` (flexsat.structures.modal_model) of the 6 rigid + ``n_modes`` elastic
         modes, ``damping`` (0.5 %) on every elastic mode, reference at the CG node."""
         from flexsat.structures.modal_model import ModalModel
@@ -350,8 +361,12 @@ class EPSCase:
         return ModalModel.from_fe(modes, damping=zeta, reference=self._model.cg, boundary="free")
 
     def plant(
-        self, model: str = "flexible", n_modes: int = 45, forces=FINAL_FORCES, rim_nodes=RIM_NODES
-    ):
+        self,
+        model: str = "flexible",
+        n_modes: int = 45,
+        forces: Sequence[tuple[int, str]] = FINAL_FORCES,
+        rim_nodes: Sequence[int] = RIM_NODES,
+    ) -> FlexibleSpacecraft | RigidSpacecraft:
         """The spacecraft as a three-axis plant of the simulation core.
 
         Parameters
@@ -410,7 +425,7 @@ class EPSCase:
         budget["published_total"] = _published("total_mass", "kg")
         return budget
 
-    def mass_properties(self) -> dict:
+    def mass_properties(self) -> MassProperties:
         """Mass, centre of mass and inertia (about the CG node) from the assembled mass matrix."""
         return self.assembly.mass_properties(self._model.cg)
 
@@ -626,7 +641,7 @@ def _actuator_support(p, nodes, bay, nb, h, tid) -> list[int]:
 
 
 # ------------------------------------------------------------------------------------------------
-def eps(**overrides) -> EPSCase:
+def eps(**overrides: Any) -> EPSCase:
     """Build the EPS case; override any input by name, as a number (SI) or a unit string.
 
     >>> case = eps(small_support_height="4 m", nonstructural_mass="300 kg")  # doctest: +SKIP

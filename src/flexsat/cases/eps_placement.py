@@ -7,10 +7,17 @@ supplies the EPS candidates, disturbance and outputs of the paper and its publis
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.analysis.placement import H2Ranking, actuator_candidates, h2_actuator_ranking
-from flexsat.cases.eps import eps
+from flexsat.cases.eps import EPSCase, eps
+from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    from flexsat.structures.modal_model import ModalModel
 
 #: Seed 003 L238–L253: candidate force-actuator nodes (x, y, z each), outputs, published top 5.
 EPS_CANDIDATE_NODES = (69, 66, 63, 60, 52, 95, 94, 88, 78)
@@ -19,7 +26,9 @@ EPS_DISTURBANCE_NODE = 95
 EPS_PUBLISHED_TOP5 = ("69X", "66X", "63X", "60X", "88X")
 
 
-def eps_h2_setup(case=None, n_modes: int = 20):
+def eps_h2_setup(
+    case: EPSCase | None = None, n_modes: int = 20
+) -> tuple[ModalModel, dict[str, FloatArray], FloatArray, FloatArray]:
     """The seed 003 placement set-up (L238–L253) on the reconstructed EPS model.
 
     Candidates: force actuators at nodes 69, 66, 63, 60, 52, 95, 94, 88, 78 along x, y, z
@@ -55,7 +64,11 @@ def _paper(roles: dict, node: int) -> int:
 
 
 def eps_h2_ranking(
-    case=None, n_modes: int = 20, gamma=1.0, rigid: str = "project", measure: str = "energy"
+    case: EPSCase | None = None,
+    n_modes: int = 20,
+    gamma: npt.ArrayLike = 1.0,
+    rigid: str = "project",
+    measure: str = "energy",
 ) -> H2Ranking:
     """:func:`~flexsat.analysis.placement.h2_actuator_ranking` on :func:`eps_h2_setup`; compare
     ``.top(5)`` with ``EPS_PUBLISHED_TOP5`` = 69X, 66X, 63X, 60X, 88X (seed 003 L248–L253)."""

@@ -31,6 +31,7 @@ is exactly the finite-element model with a free hub.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal, TypeAlias
 
 import numpy as np
 import scipy.linalg
@@ -47,10 +48,16 @@ from flexsat.structures.modal_model import ModalModel, hub_appendage_matrices
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
 
+if TYPE_CHECKING:
+    import control
+
+#: a number of modes, or "all" for every finite-element mode
+ModeCount: TypeAlias = int | Literal["all"] | None
+
 SOURCE = CASES["nps"].source
 
 #: values printed in seed 001, exactly as printed
-PUBLISHED = {
+PUBLISHED: dict[str, Any] = {
     "cantilever_frequency": "0.14 Hz",  # L21 "fundamental cantilever frequency"
     "n_modes": 6,  # L181 "first six cantilever modes"
     "damping": "0.4 percent",  # L181 "0.4 percent critical damping", all modes
@@ -197,7 +204,9 @@ class NPSCase:
             if self.n_modes > modal.n_modes:
                 raise ValueError(f"n_modes: the model has {modal.n_modes} modes; raise n_elements")
             D = modal.participation[: self.n_modes, 5]
-            appendage_share = I_app - (D @ D if self.inertia_convention == "cantilevered" else 0.0)
+            appendage_share = I_app - (
+                float(D @ D) if self.inertia_convention == "cantilevered" else 0.0
+            )
             hub = self.design_inertia - appendage_share
             if hub <= 0:
                 which = "I0zz" if self.inertia_convention == "cantilevered" else "I_zz"
@@ -244,17 +253,17 @@ class NPSCase:
         """I_zz = hub + appendage (Eq. 7), kg m²."""
         return self.hub_inertia_value + self.appendage_inertia
 
-    def coupling(self, n_modes: int | None = None) -> np.ndarray:
+    def coupling(self, n_modes: ModeCount = None) -> np.ndarray:
         """Rigid–elastic coupling D_i = ∫(x φ_iʸ − y φ_iˣ) dm (Eq. 10), kg^½ m, first n modes."""
         return self.modal_model(n_modes).participation[:, 5].copy()
 
-    def cantilevered_inertia(self, n_modes: int | None = None) -> float:
+    def cantilevered_inertia(self, n_modes: ModeCount = None) -> float:
         """I⁰zz = I_zz − Σ D_i² over the first ``n_modes`` modes (Eq. 18), kg m²."""
         D = self.coupling(n_modes)
         return self.total_inertia - float(D @ D)
 
     # -- modal model and hybrid matrices -------------------------------------------------------
-    def modal_model(self, n_modes: int | None = None) -> ModalModel:
+    def modal_model(self, n_modes: ModeCount = None) -> ModalModel:
         """Cantilevered modal model of the appendage (reference: hub centre, the rotation axis).
 
         ``n_modes`` defaults to the case's (6); ``"all"`` keeps every finite-element mode."""
@@ -269,13 +278,14 @@ class NPSCase:
             )
         return modal.truncate(n)
 
-    def model(self, n_modes: int | None = None) -> ModalHybrid:
+    def model(self, n_modes: ModeCount = None) -> ModalHybrid:
         """The simulator plant: hub + appendage in hybrid coordinates (Eq. 16), with the
         reflector's transverse displacement as ``tip_deflection``."""
         return ModalHybrid(
             self.modal_model(n_modes),
             self.hub_inertia_value,
-            axis="z",
+            # ModalHybrid's annotation says int; it takes "z" too (dynamics, pending issue 20)
+            axis="z",  # type: ignore[arg-type]
             tip=(self.reflector_node, "y"),
         )
 
@@ -285,14 +295,18 @@ class NPSCase:
         ``design_inertia`` = 9.84 kg m², see ``inertia_convention``)."""
         return self.design_inertia
 
-    def hybrid_matrices(self, n_modes: int | None = None):
+    def hybrid_matrices(
+        self, n_modes: ModeCount = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Second-order model of Eq. 16 in (θ, q_1 … q_n): M = [[I_zz, Dᵀ], [D, I]],
         K = diag(0, ω²), C = diag(0, 2ζω). Returns (M, C, K)."""
         modal = self.modal_model(n_modes)
         M, C, K = hub_appendage_matrices(modal, self.hub_inertia_value, axis="z")
         return M, C, K
 
-    def statespace_eq18(self, n_modes: int | None = None):
+    def statespace_eq18(
+        self, n_modes: ModeCount = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(A, B, C, D) of Eqs. 16–19 exactly as repaired in the notes (§2 [OCR-FIX]).
 
         X = [θ, q_1..q_n, θ', q'_1..q'_n], U = T_t (total torque on the hub), Y = [θ, θ'];
@@ -326,7 +340,9 @@ class NPSCase:
         C[0, 0] = C[1, n + 1] = 1.0
         return A, B, C, np.zeros((2, 1))
 
-    def statespace_direct(self, n_modes: int | None = None):
+    def statespace_direct(
+        self, n_modes: ModeCount = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(A, B, C, D) from the second-order model: A = [[0, I], [−M⁻¹K, −M⁻¹C]],
         B = [0; M⁻¹e₁]."""
         M, Cd, K = self.hybrid_matrices(n_modes)
@@ -338,7 +354,7 @@ class NPSCase:
         C[0, 0] = C[1, k] = 1.0
         return A, B, C, np.zeros((2, 1))
 
-    def to_statespace(self, n_modes: int | None = None):
+    def to_statespace(self, n_modes: ModeCount = None) -> control.StateSpace:
         """python-control StateSpace of Eq. 18 (input T_t, outputs θ and θ')."""
         import control
 
@@ -357,7 +373,7 @@ class NPSCase:
         )
 
     # -- frequencies ---------------------------------------------------------------------------
-    def system_frequencies(self, n_modes: int | None = None) -> np.ndarray:
+    def system_frequencies(self, n_modes: ModeCount = None) -> np.ndarray:
         """Hub-free (unconstrained) elastic frequencies of the hybrid model, rad/s (rigid mode
         removed): generalized eigenvalues of (K, M) of Eq. 16."""
         M, _, K = self.hybrid_matrices(n_modes)
@@ -404,7 +420,7 @@ class NPSCase:
         }
 
     # -- control -------------------------------------------------------------------------------
-    def pd_gains(self, **kwargs) -> PD:
+    def pd_gains(self, **kwargs: Any) -> PD:
         """Rigid-body pole placement (Eqs. 20–24): k = I ω_n², kτ = 2ζω_n I with
         I = ``design_inertia``; keyword arguments go to :class:`~flexsat.control.PD`."""
         return PD.from_rigid_poles(
@@ -432,7 +448,7 @@ def inertia_budget(case: NPSCase) -> dict[str, float]:
     }
 
 
-def nps(**overrides) -> NPSCase:
+def nps(**overrides: Any) -> NPSCase:
     """Build the NPS FSS case; override any input by name, as a number (SI) or a unit string.
 
     ``mast_bending_stiffness`` is solved for ``cantilever_frequency`` unless given (then the

@@ -10,15 +10,28 @@ modes (:meth:`flexsat.dynamics.structural.StructuralPlant.from_modal_model`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy.typing as npt
+
 from flexsat.dynamics.structural import Actuator, Sensor, StructuralPlant
 from flexsat.input_checks import require_count, require_nonneg
 from flexsat.structures.modal_model import ModalModel
+
+if TYPE_CHECKING:
+    from flexsat.structures.fem import FEModes, Structure
 
 _AXES = ("x", "y", "z")
 
 
 def point_force_plant(
-    modes, force_node: int, sensor_nodes, axis: str = "z", damping=0.01, reference=(0.0, 0.0, 0.0)
+    modes: FEModes,
+    force_node: int,
+    sensor_nodes: Sequence[int],
+    axis: str = "z",
+    damping: float = 0.01,
+    reference: npt.ArrayLike = (0.0, 0.0, 0.0),
 ) -> StructuralPlant:
     """The plant of a finite-element solution with a point force and displacement sensors.
 
@@ -55,7 +68,7 @@ def point_force_plant(
     )
 
 
-def first_modes(structure, n_modes: int, rigid_body_modes: int | None = None):
+def first_modes(structure: Structure, n_modes: int, rigid_body_modes: int | None = None) -> FEModes:
     """The first ``n_modes`` modes (rigid ones included) of ``structure``."""
     n = require_count(n_modes, "n_modes")
     asm = structure.assemble()

@@ -26,8 +26,10 @@ for 10× the acceleration its torque can give, over a slew √10 ≈ 3.2× too s
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
@@ -36,7 +38,7 @@ from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.maneuvers import SmoothBangBang
 from flexsat.sim import BearingFriction, RandomTorque, Sensors, SimConfig, TorqueActuator
 from flexsat.structures.beam import hub_free_frequencies
-from flexsat.units import to_si
+from flexsat.units import QuantityArrayLike, to_si
 
 SOURCE = CASES["tamu"].source
 
@@ -151,7 +153,7 @@ class TamuCase:
         return to_si(PUBLISHED["max_torque"], "N*m")
 
     def sim_config(
-        self, duration: float = 15.0, friction: bool = True, noise: bool = True, **kwargs
+        self, duration: float = 15.0, friction: bool = True, noise: bool = True, **kwargs: Any
     ) -> SimConfig:
         """Hardware settings of Att. 3 §V and its appendix: 75 Hz, 400 oz-in, 0.01° encoder,
         least-squares rate, bearing friction and 5 oz-in (1σ) random torque."""
@@ -174,7 +176,13 @@ class TamuCase:
             **kwargs,
         )
 
-    def law_i(self, g1, g2, g3=0.0, target=None) -> LyapunovRegulator:
+    def law_i(
+        self,
+        g1: npt.ArrayLike,
+        g2: npt.ArrayLike,
+        g3: npt.ArrayLike = 0.0,
+        target: float | None = None,
+    ) -> LyapunovRegulator:
         """Control Law I to ``target`` (default the 40° maneuver); gains in SI."""
         return LyapunovRegulator(
             g1,
@@ -184,7 +192,12 @@ class TamuCase:
             n_appendages=int(self.n_appendages),
         )
 
-    def reference(self, alpha=0.2, u_max=None, angle=None) -> SmoothBangBang:
+    def reference(
+        self,
+        alpha: QuantityArrayLike = 0.2,
+        u_max: QuantityArrayLike | None = None,
+        angle: QuantityArrayLike | None = None,
+    ) -> SmoothBangBang:
         return SmoothBangBang(
             self.angle if angle is None else angle,
             self.reference_inertia,
@@ -192,7 +205,15 @@ class TamuCase:
             alpha=alpha,
         )
 
-    def law_ii(self, g1, g2, g3=0.0, alpha=0.2, u_max=None, angle=None) -> LyapunovTracker:
+    def law_ii(
+        self,
+        g1: npt.ArrayLike,
+        g2: npt.ArrayLike,
+        g3: npt.ArrayLike = 0.0,
+        alpha: QuantityArrayLike = 0.2,
+        u_max: QuantityArrayLike | None = None,
+        angle: QuantityArrayLike | None = None,
+    ) -> LyapunovTracker:
         """Control Law II tracking the smoothed bang-bang reference; gains in SI."""
         return LyapunovTracker(
             self.reference(alpha, u_max, angle),
@@ -204,7 +225,7 @@ class TamuCase:
         )
 
 
-def tamu(**overrides) -> TamuCase:
+def tamu(**overrides: Any) -> TamuCase:
     """Build the TAMU case; override any input by name, as a number (SI) or a unit string.
 
     ``reference_inertia``, when not given, is :func:`published_reference_inertia` of the

@@ -48,9 +48,12 @@ Model (interpretation choices, all documented in docs/structures_benchmarks.md)
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
@@ -59,10 +62,14 @@ from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material
 from flexsat.units import Q_, to_si
 
+if TYPE_CHECKING:
+    from flexsat.dynamics.structural import StructuralPlant
+    from flexsat.structures.modal_model import ModalModel
+
 SOURCE = CASES["tamu_grid"].source
 
 #: Published values, exactly as printed ("lb" of the paper is pound-force: lbf in pint)
-PUBLISHED = {
+PUBLISHED: dict[str, Any] = {
     # Att. 4 Table 1 (L1648-L1655), US column as used; the SI column as printed
     "EI": "3255.2 lbf*in**2",
     "GJ": "4943.0 lbf*in**2",
@@ -152,8 +159,9 @@ SUBSTRUCTURES = ("clamp verticals", "verticals", "horizontals")
 _SHAPE_TO_US = float(np.sqrt(Q_(1, "lbf*s**2/in").to("kg").magnitude))
 
 
-def _nodes(raw, name: str) -> tuple[int, ...]:
+def _nodes(raw: Any, name: str) -> tuple[int, ...]:
     """Node ids 1..20 (not the clamped top row), from a sequence or "3,7,9"."""
+    items: list[Any]
     if isinstance(raw, str):
         items = [p for p in raw.replace(";", ",").split(",") if p.strip()]
     elif isinstance(raw, (int, np.integer)) and not isinstance(raw, bool):
@@ -268,7 +276,9 @@ class TamuGridCase:
         """Moving mass (kg): the 36 members and the motors (the clamped tab excluded)."""
         return 36 * self.rho_A * self.spacing + len(self.motor_nodes) * self.motor_mass
 
-    def structure(self, gravity: bool | None = None, stiffness_scale=None) -> Structure:
+    def structure(
+        self, gravity: bool | None = None, stiffness_scale: Mapping[str, float] | None = None
+    ) -> Structure:
         """The 25-node, 36-member grid; ``gravity`` (default: the case's flag) sets the
         vertical members' tensions; ``stiffness_scale`` maps :data:`SUBSTRUCTURES` names to
         factors on the members' EI and GJ (default 1)."""
@@ -413,7 +423,13 @@ class TamuGridCase:
             },
         }
 
-    def plant(self, n_modes: int = 10, damping=0.01, force_node: int = 1, sensor_nodes=(1, 3)):
+    def plant(
+        self,
+        n_modes: int = 10,
+        damping: float = 0.01,
+        force_node: int = 1,
+        sensor_nodes: Sequence[int] = (1, 3),
+    ) -> StructuralPlant:
         """The hanging grid as a plant: an out-of-plane (z) force ``force`` at ``force_node``
         (a shaker; default the free lower-left corner, which drives bending and torsion), the
         displacements ``displacement_<node>`` (m) and rates at ``sensor_nodes`` (default the
@@ -422,7 +438,9 @@ class TamuGridCase:
         it) with ``damping`` on each (:mod:`flexsat.cases.structure_plants`)."""
         return _grid_plant(self, n_modes, damping, force_node, sensor_nodes)
 
-    def modal_model(self, n_modes: int, damping=0.0, gravity: bool | None = None):
+    def modal_model(
+        self, n_modes: int, damping: npt.ArrayLike = 0.0, gravity: bool | None = None
+    ) -> ModalModel:
         """:class:`~flexsat.structures.modal_model.ModalModel` of the first ``n_modes`` modes,
         cantilevered at the centre of the clamped top row (x = 2 s, y = 4 s)."""
         from flexsat.structures.fem import FEModes
@@ -441,7 +459,9 @@ class TamuGridCase:
         )
 
 
-def _grid_plant(case: TamuGridCase, n_modes: int, damping, force_node: int, sensor_nodes):
+def _grid_plant(
+    case: TamuGridCase, n_modes: int, damping: float, force_node: int, sensor_nodes: Sequence[int]
+) -> StructuralPlant:
     from flexsat.cases.structure_plants import point_force_plant
     from flexsat.structures.fem import FEModes
 
@@ -455,7 +475,7 @@ def _grid_plant(case: TamuGridCase, n_modes: int, damping, force_node: int, sens
     )
 
 
-def tamu_grid(**overrides) -> TamuGridCase:
+def tamu_grid(**overrides: Any) -> TamuGridCase:
     """Build the TAMU grid; override any input by name, as a number (SI) or a unit string.
 
     Inputs: ``EI``, ``GJ`` (N m²), ``rho_A`` (kg/m), ``rho_J`` (kg m), ``spacing`` (m, default

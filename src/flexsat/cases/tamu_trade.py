@@ -20,23 +20,27 @@ from flexsat.design.trade_surfaces import (
     residual_energy_surface,
     tracking_bound_surface,
 )
-from flexsat.units import to_si_array
+from flexsat.units import QuantityArrayLike, QuantityLike, to_si_array
 
 #: the grid of the notes' T table (§2.4), as published: α and u_max [oz-in]
 ALPHA_GRID = (0.0, 0.05, 0.10, 0.15, 0.20, 0.25)
 U_MAX_GRID = tuple(f"{v} ozf*in" for v in (100, 200, 300, 400, 500, 600))
 #: Law II gains of the default scenario (tamu_default.yaml), used for μ
-LAW_II_GAINS = {"g1": "3000 ozf*in/rad", "g2": "800 ozf*in*s/rad", "g3": 0.0}
+LAW_II_GAINS: dict[str, QuantityLike] = {
+    "g1": "3000 ozf*in/rad",
+    "g2": "800 ozf*in*s/rad",
+    "g3": 0.0,
+}
 
 
 def tamu_trade_surfaces(
     case: TamuCase | None = None,
-    alpha=ALPHA_GRID,
-    u_max=U_MAX_GRID,
-    g1=LAW_II_GAINS["g1"],
-    g2=LAW_II_GAINS["g2"],
-    g3=LAW_II_GAINS["g3"],
-    reference_inertia=None,
+    alpha: QuantityArrayLike = ALPHA_GRID,
+    u_max: QuantityArrayLike = U_MAX_GRID,
+    g1: QuantityArrayLike = LAW_II_GAINS["g1"],
+    g2: QuantityArrayLike = LAW_II_GAINS["g2"],
+    g3: QuantityArrayLike = LAW_II_GAINS["g3"],
+    reference_inertia: QuantityLike | None = None,
     n_samples: int = 2001,
     horizon: float = 1.0,
 ) -> xr.Dataset:

@@ -82,8 +82,10 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 from scipy import stats
 
 from flexsat.design.parameter_space import (
@@ -93,6 +95,7 @@ from flexsat.design.parameter_space import (
     si_scalar,
 )
 from flexsat.input_checks import require_count
+from flexsat.units import FloatArray, QuantityLike
 
 #: the percentiles reported by default
 DEFAULT_PERCENTILES = (1.0, 5.0, 50.0, 95.0, 99.0)
@@ -100,6 +103,8 @@ DEFAULT_PERCENTILES = (1.0, 5.0, 50.0, 95.0, 99.0)
 INTERVAL_METHODS = {"clopper_pearson": "exact", "wilson": "wilson"}
 #: the relations a requirement may state
 RELATIONS = ("<=", ">=")
+
+IntArray = npt.NDArray[np.int_]
 
 
 def _confidence(confidence) -> float:
@@ -109,7 +114,7 @@ def _confidence(confidence) -> float:
     return c
 
 
-def _metric(values, field_path: str) -> np.ndarray:
+def _metric(values, field_path: str) -> FloatArray:
     """A 1-D float array of at least one case (NaN and inf allowed: see the module)."""
     if isinstance(values, (str, bytes)):
         raise ValueError(f"{field_path}: must be an array of numbers, got the string {values!r}")
@@ -137,7 +142,13 @@ class Requirement:
     threshold: float
     unit: str = ""
 
-    def __post_init__(self):
+    if TYPE_CHECKING:  # the constructor takes a quantity; ``threshold`` holds the SI float
+
+        def __init__(
+            self, metric: str, relation: str, threshold: QuantityLike, unit: str = ...
+        ) -> None: ...
+
+    def __post_init__(self) -> None:
         f = f"requirement {self.metric!r}"
         if not isinstance(self.metric, str) or not self.metric.strip():
             raise ValueError(
@@ -156,7 +167,7 @@ class Requirement:
     def label(self) -> str:
         return f"{self.metric} {self.relation} {self.threshold:g} {self.unit}".rstrip()
 
-    def met(self, values) -> np.ndarray:
+    def met(self, values: npt.ArrayLike) -> npt.NDArray[np.bool_]:
         """Per case, whether the requirement is met (False where the metric is NaN)."""
         arr = _metric(values, self.metric)
         with np.errstate(invalid="ignore"):
@@ -195,7 +206,7 @@ class ProbabilityEstimate:
     confidence: float
     method: str
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         """Plain numbers and strings (a summary JSON's entry)."""
         r = self.requirement
         return {
@@ -234,7 +245,10 @@ def proportion_interval(
 
 
 def probability_of_meeting(
-    values, requirement: Requirement, confidence: float = 0.95, method: str = "clopper_pearson"
+    values: npt.ArrayLike,
+    requirement: Requirement,
+    confidence: float = 0.95,
+    method: str = "clopper_pearson",
 ) -> ProbabilityEstimate:
     """The probability that a case meets ``requirement``, from the metric over the N cases."""
     if not isinstance(requirement, Requirement):
@@ -245,7 +259,7 @@ def probability_of_meeting(
     return ProbabilityEstimate(requirement, k, n, k / n, low, high, _confidence(confidence), method)
 
 
-def _percentile_rule(q, field_path: str = "q") -> np.ndarray:
+def _percentile_rule(q, field_path: str = "q") -> FloatArray:
     try:
         arr = np.atleast_1d(np.asarray(q, dtype=float))
     except (TypeError, ValueError):
@@ -258,7 +272,7 @@ def _percentile_rule(q, field_path: str = "q") -> np.ndarray:
 
 
 def percentile_interval(
-    values, q: float, confidence: float = 0.95, field_path: str = "metric"
+    values: npt.ArrayLike, q: float, confidence: float = 0.95, field_path: str = "metric"
 ) -> tuple[float, float, float]:
     """The q-th percentile of the cases with a value and its order-statistic interval (see the
     module): ``(estimate, low, high)``, NaNs if no case has a value."""
@@ -297,7 +311,7 @@ class MetricSummary:
     maximum: float
     percentiles: dict[float, float]
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         return {
             "name": self.name,
             "n": self.n,
@@ -311,7 +325,7 @@ class MetricSummary:
 
 
 def metric_summary(
-    values, name: str = "metric", q: Sequence[float] = DEFAULT_PERCENTILES
+    values: npt.ArrayLike, name: str = "metric", q: Sequence[float] = DEFAULT_PERCENTILES
 ) -> MetricSummary:
     """Count, NaN count, mean, sd, extremes and percentiles of one metric (NaN-aware)."""
     arr = _metric(values, name)
@@ -337,7 +351,7 @@ def metric_summary(
     )
 
 
-def checkpoints(n: int, first: int = 10) -> np.ndarray:
+def checkpoints(n: int, first: int = 10) -> IntArray:
     """The case counts of a convergence table: ``first`` × 1, 2, 5, 10, 20, 50, … below ``n``,
     and ``n``."""
     total = require_count(n, "n")
@@ -354,13 +368,13 @@ class Convergence:
     """An estimate (``label``) and its interval on the first ``n[i]`` cases."""
 
     label: str
-    n: np.ndarray
-    estimate: np.ndarray
-    low: np.ndarray
-    high: np.ndarray
+    n: IntArray
+    estimate: FloatArray
+    low: FloatArray
+    high: FloatArray
     confidence: float
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         return {
             "label": self.label,
             "confidence": self.confidence,
@@ -372,7 +386,7 @@ class Convergence:
 
 
 def probability_convergence(
-    values,
+    values: npt.ArrayLike,
     requirement: Requirement,
     confidence: float = 0.95,
     method: str = "clopper_pearson",
@@ -394,7 +408,7 @@ def probability_convergence(
 
 
 def percentile_convergence(
-    values,
+    values: npt.ArrayLike,
     q: float,
     name: str = "metric",
     confidence: float = 0.95,
@@ -409,7 +423,7 @@ def percentile_convergence(
     )
 
 
-def _points(points, n: int) -> np.ndarray:
+def _points(points: Sequence[int] | None, n: int) -> IntArray:
     if points is None:
         return checkpoints(n)
     ns = np.array([require_count(p, "points") for p in points])
@@ -425,10 +439,10 @@ class SobolIndices:
     order) with the half-widths of their bootstrap intervals at ``confidence``."""
 
     names: list[str]
-    first: np.ndarray
-    first_conf: np.ndarray
-    total: np.ndarray
-    total_conf: np.ndarray
+    first: FloatArray
+    first_conf: FloatArray
+    total: FloatArray
+    total_conf: FloatArray
     confidence: float
     n_base: int
 
@@ -437,7 +451,7 @@ class SobolIndices:
         """The parameter names by decreasing total index."""
         return [self.names[i] for i in np.argsort(-self.total, kind="stable")]
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         return {
             "method": "sobol",
             "confidence": self.confidence,
@@ -454,7 +468,7 @@ class SobolIndices:
 
 def sobol_indices(
     design: SobolDesign,
-    y,
+    y: npt.ArrayLike,
     name: str = "metric",
     confidence: float = 0.95,
     num_resamples: int = 100,
@@ -511,9 +525,9 @@ class SensitivityRanking:
     number of cases ``n`` used."""
 
     names: list[str]
-    scores: np.ndarray
-    signed: np.ndarray
-    conf: np.ndarray
+    scores: FloatArray
+    signed: FloatArray
+    conf: FloatArray
     method: str
     n: int
 
@@ -521,7 +535,7 @@ class SensitivityRanking:
     def ranking(self) -> list[str]:
         return [self.names[i] for i in np.argsort(-self.scores, kind="stable")]
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         return {
             "method": self.method,
             "n": self.n,
@@ -535,7 +549,7 @@ class SensitivityRanking:
 
 def sample_sensitivity(
     table: SampleTable,
-    y,
+    y: npt.ArrayLike,
     name: str = "metric",
     method: str = "spearman",
     confidence: float = 0.95,
@@ -585,7 +599,7 @@ def sample_sensitivity(
 
 
 def monte_carlo_summary(
-    metrics: Mapping[str, np.ndarray],
+    metrics: Mapping[str, FloatArray],
     requirements: Sequence[Requirement],
     confidence: float = 0.95,
     method: str = "clopper_pearson",

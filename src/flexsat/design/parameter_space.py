@@ -65,30 +65,38 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from dataclasses import field as dataclass_field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 from scipy import stats
 from scipy.stats import qmc
 
 from flexsat.input_checks import require_count
-from flexsat.units import parse_quantity, to_si_array
+from flexsat.units import (
+    FloatArray,
+    QuantityArrayLike,
+    QuantityLike,
+    parse_quantity,
+    to_si_array,
+)
 
 #: the smallest step of a double in [0.5, 1): the margin kept from the faces of the unit cube
 _UNIT_MARGIN = 2.0**-53
 
 
-def _open_unit(u: np.ndarray) -> np.ndarray:
+def _open_unit(u: FloatArray) -> FloatArray:
     """``u`` clipped into [2^-53, 1 - 2^-53] (see the module: faces of the unit cube)."""
     return np.clip(u, _UNIT_MARGIN, 1.0 - _UNIT_MARGIN)
 
 
-def _check_name(name, field_path: str) -> str:
+def _check_name(name: object, field_path: str) -> str:
     if not isinstance(name, str) or not name.strip():
         raise ValueError(f"{field_path}: a parameter name must be a non-empty string, got {name!r}")
     return name
 
 
-def require_si_unit(unit, field_path: str) -> str:
+def require_si_unit(unit: object, field_path: str) -> str:
     """The parameter's unit must be its SI unit: the table holds SI values under that label."""
     if not isinstance(unit, str):
         raise ValueError(
@@ -105,7 +113,9 @@ def require_si_unit(unit, field_path: str) -> str:
     return unit
 
 
-def si_scalar(value, unit: str, field_path: str, allow_infinite: bool = False) -> float:
+def si_scalar(
+    value: QuantityLike, unit: str, field_path: str, allow_infinite: bool = False
+) -> float:
     """One SI number from a float in ``unit``, a Quantity or a unit string; finite unless
     ``allow_infinite`` (never NaN)."""
     arr = to_si_array(value, unit, field_path)
@@ -124,6 +134,10 @@ class _Distribution:
 
     #: the spec name of the distribution (``distribution:`` in a scenario)
     kind: str = ""
+    # declared by every distribution (dataclass fields of the subclasses)
+    name: str
+    unit: str
+    field: str | None
 
     def _start(self) -> str:
         prefix = self.field or _check_name(self.name, "parameter")
@@ -132,22 +146,25 @@ class _Distribution:
         require_si_unit(self.unit, prefix)
         return prefix
 
-    def _mean_sd(self, f: str) -> tuple[float, float]:
+    def _mean_sd(
+        self, f: str, mean_given: QuantityLike, sd_given: QuantityLike
+    ) -> tuple[float, float]:
         """(mean, sd) in SI of a normal's parameters: mean finite, sd > 0."""
-        mean = si_scalar(self.mean, self.unit, f"{f}.mean")
-        sd = si_scalar(self.sd, self.unit, f"{f}.sd")
+        mean = si_scalar(mean_given, self.unit, f"{f}.mean")
+        sd = si_scalar(sd_given, self.unit, f"{f}.sd")
         if sd <= 0:
-            raise ValueError(f"{f}.sd: must be > 0 (a standard deviation), got {self.sd!r}")
+            raise ValueError(f"{f}.sd: must be > 0 (a standard deviation), got {sd_given!r}")
         return mean, sd
 
     def _set(self, attr: str, value: float) -> None:
         object.__setattr__(self, attr, value)
 
     @property
-    def frozen(self):
+    def frozen(self) -> Any:
+        """The frozen ``scipy.stats`` distribution."""
         raise NotImplementedError
 
-    def ppf(self, u) -> np.ndarray:
+    def ppf(self, u: npt.ArrayLike) -> FloatArray:
         """The SI values :math:`x = F^{-1}(u)` at uniforms ``u`` in (0, 1)."""
         return np.asarray(self.frozen.ppf(u), dtype=float)
 
@@ -163,14 +180,25 @@ class Normal(_Distribution):
     field: str | None = dataclass_field(default=None, repr=False, compare=False)
     kind = "normal"
 
-    def __post_init__(self):
+    if TYPE_CHECKING:  # the constructor takes quantities; the fields hold SI floats
+
+        def __init__(
+            self,
+            name: str,
+            mean: QuantityLike,
+            sd: QuantityLike,
+            unit: str = ...,
+            field: str | None = ...,
+        ) -> None: ...
+
+    def __post_init__(self) -> None:
         f = self._start()
-        mean, sd = self._mean_sd(f)
+        mean, sd = self._mean_sd(f, self.mean, self.sd)
         self._set("mean", mean)
         self._set("sd", sd)
 
     @property
-    def frozen(self):
+    def frozen(self) -> Any:
         return stats.norm(loc=self.mean, scale=self.sd)
 
 
@@ -186,7 +214,18 @@ class Uniform(_Distribution):
     field: str | None = dataclass_field(default=None, repr=False, compare=False)
     kind = "uniform"
 
-    def __post_init__(self):
+    if TYPE_CHECKING:  # the constructor takes quantities; the fields hold SI floats
+
+        def __init__(
+            self,
+            name: str,
+            low: QuantityLike,
+            high: QuantityLike,
+            unit: str = ...,
+            field: str | None = ...,
+        ) -> None: ...
+
+    def __post_init__(self) -> None:
         f = self._start()
         low = si_scalar(self.low, self.unit, f"{f}.low")
         high = si_scalar(self.high, self.unit, f"{f}.high")
@@ -196,7 +235,7 @@ class Uniform(_Distribution):
         self._set("high", high)
 
     @property
-    def frozen(self):
+    def frozen(self) -> Any:
         return stats.uniform(loc=self.low, scale=self.high - self.low)
 
 
@@ -212,7 +251,18 @@ class LogNormal(_Distribution):
     field: str | None = dataclass_field(default=None, repr=False, compare=False)
     kind = "lognormal"
 
-    def __post_init__(self):
+    if TYPE_CHECKING:  # the constructor takes quantities; the fields hold SI floats
+
+        def __init__(
+            self,
+            name: str,
+            median: QuantityLike,
+            gsd: QuantityLike,
+            unit: str = ...,
+            field: str | None = ...,
+        ) -> None: ...
+
+    def __post_init__(self) -> None:
         f = self._start()
         median = si_scalar(self.median, self.unit, f"{f}.median")
         if median <= 0:
@@ -229,7 +279,7 @@ class LogNormal(_Distribution):
         self._set("gsd", gsd)
 
     @property
-    def frozen(self):
+    def frozen(self) -> Any:
         return stats.lognorm(s=math.log(self.gsd), scale=self.median)
 
 
@@ -248,9 +298,22 @@ class TruncatedNormal(_Distribution):
     field: str | None = dataclass_field(default=None, repr=False, compare=False)
     kind = "truncated_normal"
 
-    def __post_init__(self):
+    if TYPE_CHECKING:  # the constructor takes quantities; the fields hold SI floats
+
+        def __init__(
+            self,
+            name: str,
+            mean: QuantityLike,
+            sd: QuantityLike,
+            low: QuantityLike,
+            high: QuantityLike,
+            unit: str = ...,
+            field: str | None = ...,
+        ) -> None: ...
+
+    def __post_init__(self) -> None:
         f = self._start()
-        mean, sd = self._mean_sd(f)
+        mean, sd = self._mean_sd(f, self.mean, self.sd)
         low = si_scalar(self.low, self.unit, f"{f}.low", allow_infinite=True)
         high = si_scalar(self.high, self.unit, f"{f}.high", allow_infinite=True)
         if not low < high:
@@ -272,7 +335,7 @@ class TruncatedNormal(_Distribution):
             self._set(attr, v)
 
     @property
-    def frozen(self):
+    def frozen(self) -> Any:
         return stats.truncnorm(
             (self.low - self.mean) / self.sd,
             (self.high - self.mean) / self.sd,
@@ -280,7 +343,7 @@ class TruncatedNormal(_Distribution):
             scale=self.sd,
         )
 
-    def ppf(self, u) -> np.ndarray:
+    def ppf(self, u: npt.ArrayLike) -> FloatArray:
         # loc + scale z can round one ulp past a bound; the clip keeps the stated support exactly
         return np.clip(super().ppf(u), self.low, self.high)
 
@@ -301,7 +364,7 @@ class SampleTable:
     """N cases: ``values`` name → (N,) SI array, ``units`` name → SI unit, ``start`` the index of
     the first case in the whole run (nonzero for a chunk)."""
 
-    values: dict[str, np.ndarray]
+    values: dict[str, FloatArray]
     units: dict[str, str]
     start: int = 0
 
@@ -312,7 +375,7 @@ class SampleTable:
     def names(self) -> list[str]:
         return list(self.values)
 
-    def matrix(self) -> np.ndarray:
+    def matrix(self) -> FloatArray:
         """The (N, d) array of the values, columns in :attr:`names` order."""
         return np.column_stack([self.values[n] for n in self.names])
 
@@ -333,11 +396,21 @@ class GridAxis:
     linspace with :meth:`linspace`."""
 
     name: str
-    values: Sequence
+    values: FloatArray
     unit: str = ""
     field: str | None = dataclass_field(default=None, repr=False, compare=False)
 
-    def __post_init__(self):
+    if TYPE_CHECKING:  # the constructor takes quantities; ``values`` holds an SI float array
+
+        def __init__(
+            self,
+            name: str,
+            values: QuantityArrayLike,
+            unit: str = ...,
+            field: str | None = ...,
+        ) -> None: ...
+
+    def __post_init__(self) -> None:
         f = self.field or _check_name(self.name, "parameter")
         _check_name(self.name, f)
         object.__setattr__(self, "field", f)
@@ -357,7 +430,13 @@ class GridAxis:
 
     @classmethod
     def linspace(
-        cls, name: str, low, high, n: int, unit: str = "", field: str | None = None
+        cls,
+        name: str,
+        low: QuantityLike,
+        high: QuantityLike,
+        n: int,
+        unit: str = "",
+        field: str | None = None,
     ) -> GridAxis:
         """``n`` ≥ 2 evenly spaced values from ``low`` to ``high`` (> ``low``), both included."""
         f = field or _check_name(name, "parameter")
@@ -391,7 +470,7 @@ class GridSpace:
         At least one, names unique.
     """
 
-    def __init__(self, axes: Sequence[GridAxis], field_path: str = "parameters"):
+    def __init__(self, axes: Sequence[GridAxis], field_path: str = "parameters") -> None:
         axes = list(axes)
         if not axes or not all(isinstance(a, GridAxis) for a in axes):
             raise ValueError(f"{field_path}: a grid needs one GridAxis or more, got {axes!r}")
@@ -438,7 +517,7 @@ class SobolDesign:
     (the unit cube: the analysis is invariant under the per-parameter inverse-CDF maps)."""
 
     table: SampleTable
-    problem: dict
+    problem: dict[str, Any]
     n_base: int
     second_order: bool
 
@@ -452,7 +531,7 @@ class ParameterSpace:
         At least one, names unique.
     """
 
-    def __init__(self, parameters: Sequence[Distribution], field_path: str = "parameters"):
+    def __init__(self, parameters: Sequence[Distribution], field_path: str = "parameters") -> None:
         parameters = list(parameters)
         if not parameters or not all(isinstance(p, _Distribution) for p in parameters):
             raise ValueError(
@@ -470,7 +549,7 @@ class ParameterSpace:
     def units(self) -> dict[str, str]:
         return {p.name: p.unit for p in self.parameters}
 
-    def from_unit(self, u: np.ndarray, start: int = 0) -> SampleTable:
+    def from_unit(self, u: FloatArray, start: int = 0) -> SampleTable:
         """The table of points ``u`` (N, d) of the unit cube, column j mapped by parameter j's
         inverse CDF."""
         u = _open_unit(np.asarray(u, dtype=float))
@@ -487,7 +566,9 @@ class ParameterSpace:
         return np.random.PCG64(np.random.SeedSequence(words))
 
     @classmethod
-    def noise_seeds(cls, n: int, seed: int, start: int = 0, name: str = "noise") -> np.ndarray:
+    def noise_seeds(
+        cls, n: int, seed: int, start: int = 0, name: str = "noise"
+    ) -> npt.NDArray[np.uint64]:
         """Per-case seeds (uint64) of the random processes inside a case (sensor noise,
         disturbances), cases ``start`` to ``start + n``: the ``i``-th 64-bit output of the
         stream of (seed, ``name``), like a parameter's uniforms, so they too are independent of
@@ -531,7 +612,7 @@ class ParameterSpace:
         engine = qmc.Sobol(len(self.parameters), scramble=True, rng=_seed(seed, "seed"))
         return self.from_unit(engine.random_base2(int(math.log2(count))))
 
-    def salib_problem(self) -> dict:
+    def salib_problem(self) -> dict[str, Any]:
         """SALib's problem over the unit cube of this space."""
         return {
             "num_vars": len(self.parameters),
@@ -637,9 +718,9 @@ def space_from_spec(
         items.append(parameter_from_spec(name, entry, units[name], f))
     grids = [isinstance(i, GridAxis) for i in items]
     if all(grids):
-        return GridSpace(items, field_path)
+        return GridSpace([i for i in items if isinstance(i, GridAxis)], field_path)
     if not any(grids):
-        return ParameterSpace(items, field_path)
+        return ParameterSpace([i for i in items if not isinstance(i, GridAxis)], field_path)
     odd = items[grids.index(not grids[0])]
     raise ValueError(
         f"{odd.field}: grid axes (values, low/high/n) and distributions or bounds "

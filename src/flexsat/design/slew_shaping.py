@@ -42,10 +42,17 @@ mrad, 4,400:1, 19 kN m.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.input_checks import require_count
+from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    from flexsat.design.slew_weights import SlewEvaluation
+    from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
 
 __all__ = ["ShapedSlew", "modal_cancelling_torque"]
 
@@ -66,9 +73,9 @@ class ShapedSlew:
         Relative residual of the linear terminal conditions (least squares).
     """
 
-    nominal: object
-    coefficients: np.ndarray
-    inertia: np.ndarray
+    nominal: ThreeAxisSlew
+    coefficients: FloatArray
+    inertia: FloatArray
     residual: float
 
     @property
@@ -76,10 +83,10 @@ class ShapedSlew:
         return self.nominal.duration
 
     @property
-    def target(self) -> np.ndarray:
+    def target(self) -> FloatArray:
         return self.nominal.target
 
-    def correction(self, t) -> np.ndarray:
+    def correction(self, t: npt.ArrayLike) -> FloatArray:
         """v(t) (..., 3), rad/s²; zero outside [0, T]."""
         t = np.asarray(t, float)
         s = np.clip(t, 0.0, self.duration)
@@ -87,12 +94,12 @@ class ShapedSlew:
         basis = np.sin(s[..., None] * (np.pi / self.duration) * np.arange(1, n_b + 1))
         return basis @ self.coefficients.T
 
-    def torque(self, t) -> np.ndarray:
+    def torque(self, t: npt.ArrayLike) -> FloatArray:
         """τ_n(t) + J v(t), N m."""
         return self.nominal.torque(t) + self.correction(t) @ self.inertia.T
 
 
-def modal_cancelling_torque(evaluation, n_basis: int = 30) -> ShapedSlew:
+def modal_cancelling_torque(evaluation: SlewEvaluation, n_basis: int = 30) -> ShapedSlew:
     """The torquers-only correction of ``evaluation``'s nominal that brings its design modes to
     rest at T (module docstring).
 

@@ -83,12 +83,24 @@ from __future__ import annotations
 import time as _time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.input_checks import require_count, require_nonneg, require_positive
 from flexsat.sim.slew_goals import SlewGoals, slew_goal_metrics
+from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    import xarray
+
+    from flexsat.control.base import Controller
+    from flexsat.control.perturbation_feedback import PerturbationDesign
+    from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
+    from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
+    from flexsat.sim.config import SimConfig
+    from flexsat.sim.recording import SimResult
 
 __all__ = [
     "BLOCKS",
@@ -133,7 +145,7 @@ def _block(value, name: str, positive: bool) -> tuple[float, ...] | None:
     return tuple(float(x) for x in w)
 
 
-def _diagonal(values: tuple[float, ...], size: int, name: str) -> np.ndarray:
+def _diagonal(values: tuple[float, ...], size: int, name: str) -> FloatArray:
     if len(values) == 1:
         return np.full(size, values[0])
     if len(values) != size:
@@ -155,14 +167,14 @@ class SlewWeights:
     mode_rates: Any = None
     force: Any = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in BLOCKS:
             value = _block(getattr(self, name), name, positive=name in ("torque", "force"))
             if value is None and name not in ("mode_rates", "force"):
                 raise ValueError(f"{name}: required")
             object.__setattr__(self, name, value)
 
-    def diagonals(self, n_modes: int, n_forces: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    def diagonals(self, n_modes: int, n_forces: int = 0) -> tuple[FloatArray, FloatArray]:
         """(diag Q, diag D) for a design model of ``n_modes`` modes and ``n_forces`` forces."""
         rates = self.modes if self.mode_rates is None else self.mode_rates
         q = np.concatenate(
@@ -195,7 +207,7 @@ class SlewWeights:
             changes[name] = tuple(float(factor) * x for x in values)
         return replace(self, **changes)
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, float | list[float]]:
         """Plain numbers by block (a one-element block as a float), unset blocks left out: the
         ``weights`` mapping of a slew scenario run."""
         out = {}
@@ -207,7 +219,7 @@ class SlewWeights:
 
 
 # -- metrics (shared with the slew scenarios) ----------------------------------------------------
-def nominal_histories(nominal, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def nominal_histories(nominal: ThreeAxisSlew, t: FloatArray) -> tuple[FloatArray, FloatArray]:
     """The nominal torque (N m) and 1-2-3 angles (rad) at times t: the maneuver over [0, T],
     then rest at the target (zero torque)."""
     T = nominal.duration
@@ -216,22 +228,21 @@ def nominal_histories(nominal, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return torque, nominal.euler123(inside)
 
 
-def rim_nodes(dataset) -> list[str]:
+def rim_nodes(dataset: xarray.Dataset) -> list[str]:
     """Nodes of a run's dataset with displacement outputs along all three axes
     (``displacement_66X``, ``…Y``, ``…Z`` -> ``66``), in output order."""
-    names = [
-        n[len("displacement_") : -1] for n in dataset.data_vars if n.startswith("displacement_")
-    ]
+    variables = [str(n) for n in dataset.data_vars]
+    names = [n[len("displacement_") : -1] for n in variables if n.startswith("displacement_")]
     return [
         n for n in dict.fromkeys(names) if all(f"displacement_{n}{a}" in dataset for a in "XYZ")
     ]
 
 
-def _stack(results, name: str) -> np.ndarray:
+def _stack(results: Sequence[SimResult], name: str) -> FloatArray:
     return np.stack([r.dataset[name].isel(case=0).values for r in results])
 
 
-def _rim_deflection(results) -> np.ndarray:
+def _rim_deflection(results: Sequence[SimResult]) -> FloatArray:
     """(n_runs, n_t, n_rim, 3) rim displacements of single-case runs."""
     nodes = rim_nodes(results[0].dataset)
     if not nodes:
@@ -245,8 +256,11 @@ def _rim_deflection(results) -> np.ndarray:
 
 
 def slew_run_metrics(
-    results: Sequence, nominal, goals: SlewGoals = SlewGoals(), deflection_open=None
-) -> tuple[dict, dict]:
+    results: Sequence[SimResult],
+    nominal: ThreeAxisSlew,
+    goals: SlewGoals = SlewGoals(),
+    deflection_open: npt.ArrayLike | None = None,
+) -> tuple[dict[str, Any], dict[str, Any]]:
     """The goal metrics (:func:`~flexsat.sim.slew_goals.slew_goal_metrics`) of single-case
     slew runs on one time grid.
 
@@ -281,11 +295,8 @@ def slew_run_metrics(
             f"deflection_open: shape must be (1,) + {deflection.shape[1:]} (the "
             f"runs' time grid and rim points), got {np.shape(deflection_open)}"
         )
-    force_names = [
-        n
-        for n in results[0].dataset.data_vars
-        if n.startswith("force_") and not n.endswith("_command")
-    ]
+    variables = [str(n) for n in results[0].dataset.data_vars]
+    force_names = [n for n in variables if n.startswith("force_") and not n.endswith("_command")]
     return slew_goal_metrics(
         t,
         nominal.duration,
@@ -300,7 +311,9 @@ def slew_run_metrics(
     )
 
 
-def open_loop_deflection(truth, nominal, config) -> np.ndarray:
+def open_loop_deflection(
+    truth: FlexibleSpacecraft, nominal: ThreeAxisSlew, config: SimConfig
+) -> FloatArray:
     """(1, n_t, n_rim, 3) rim displacements of the nominal torque alone on ``truth`` (the
     open-loop reference of the deflection goal), held as the feedback laws hold it
     (:class:`~flexsat.control.perturbation_feedback.NominalTorque`)."""
@@ -338,14 +351,14 @@ class SlewEvaluation:
 
     def __init__(
         self,
-        truth,
-        design_plant,
-        nominal,
-        config,
+        truth: FlexibleSpacecraft,
+        design_plant: FlexibleSpacecraft,
+        nominal: ThreeAxisSlew,
+        config: SimConfig,
         goals: SlewGoals = SlewGoals(),
-        deflection_open=None,
+        deflection_open: npt.ArrayLike | None = None,
         n_points: int = 11,
-    ):
+    ) -> None:
         for name, plant in (("truth", truth), ("design_plant", design_plant)):
             if not hasattr(plant, "n_modes") or not hasattr(plant, "inputs"):
                 raise ValueError(
@@ -379,7 +392,7 @@ class SlewEvaluation:
         grid = np.linspace(0.0, T, 2001)
         self.peak_nominal_torque = float(np.abs(nominal.torque(grid)).max())
 
-    def forces(self, forces) -> list[str]:
+    def forces(self, forces: str | Sequence[str]) -> list[str]:
         """Force channel names of the design plant (``"all"``, or names with or without the
         ``force_`` prefix)."""
         available = [c.name for c in self.design_plant.inputs if c.name.startswith("force_")]
@@ -398,7 +411,14 @@ class SlewEvaluation:
             names.append(channel)
         return names
 
-    def design(self, weights: SlewWeights, omega_b, zeta_b=0.0, forces=(), decouple=False):
+    def design(
+        self,
+        weights: SlewWeights,
+        omega_b: float,
+        zeta_b: float = 0.0,
+        forces: str | Sequence[str] = (),
+        decouple: bool = False,
+    ) -> PerturbationDesign:
         """The :class:`~flexsat.control.perturbation_feedback.PerturbationDesign` of these
         weights."""
         from flexsat.control import perturbation_design
@@ -422,16 +442,16 @@ class SlewEvaluation:
     def __call__(
         self,
         weights: SlewWeights,
-        omega_b,
-        zeta_b=0.0,
-        forces=(),
+        omega_b: float,
+        zeta_b: float = 0.0,
+        forces: str | Sequence[str] = (),
         decouple: bool = False,
         feedforward: str = "constant",
-    ) -> dict:
+    ) -> dict[str, float | bool]:
         design = self.design(weights, omega_b, zeta_b, forces, decouple)
         return self.run(design.controller(self.config.dt, feedforward, plant=self.truth))
 
-    def run(self, law) -> dict:
+    def run(self, law: Controller) -> dict[str, float | bool]:
         """The metrics of any law on the truth plant (``__call__`` for a design's law; e.g. an
         open-loop :class:`~flexsat.control.perturbation_feedback.NominalTorque` of another
         torque history, judged against this nominal)."""
@@ -555,9 +575,9 @@ def tune_slew_weights(
     free: Sequence[str] = ("attitude", "rate", "modes", "torque"),
     budget: int = 60,
     *,
-    omega_b,
-    zeta_b=0.0,
-    forces=(),
+    omega_b: float,
+    zeta_b: float = 0.0,
+    forces: str | Sequence[str] = (),
     decouple: bool = False,
     feedforward: str = "constant",
     margin: float = 0.05,
@@ -635,7 +655,7 @@ def tune_slew_weights(
     cache: dict[tuple, float] = {}
     start = _time.perf_counter()
 
-    def objective(x: np.ndarray) -> float:
+    def objective(x: FloatArray) -> float:
         x = np.clip(np.asarray(x, float), -bound, bound)
         key = tuple(np.round(x, 10))
         if key in cache:

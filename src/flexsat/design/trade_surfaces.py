@@ -27,16 +27,26 @@ few complex exponentials, with no time step. Every surface is an array of shape
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.control.lyapunov import check_lyapunov_gains
 from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
 from flexsat.maneuvers.torque_shapes import SmoothBangBang
 from flexsat.sim.instruments import unit_row
 from flexsat.sim.open_loop import open_loop_response
+from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
+
+if TYPE_CHECKING:
+    from flexsat.dynamics.hub_appendage import HubAppendage
+    from flexsat.dynamics.hybrid import HybridPlant
 
 
-def _grid_shape(angle, inertia, alpha, u_max):
+def _grid_shape(
+    angle: QuantityLike, inertia: QuantityLike, alpha: QuantityArrayLike, u_max: QuantityArrayLike
+) -> tuple[SmoothBangBang, tuple[int, ...]]:
     """The smoothed bang-bang family on the (α, u_max) grid, flattened to C = n_alpha · n_u_max
     cases (α-major), and the grid's shape."""
     alpha = require_finite(alpha, "alpha", "")
@@ -49,7 +59,9 @@ def _grid_shape(angle, inertia, alpha, u_max):
     return SmoothBangBang(angle, inertia, u_max=u.ravel(), alpha=a.ravel()), a.shape
 
 
-def maneuver_time_surface(angle, inertia, alpha, u_max) -> np.ndarray:
+def maneuver_time_surface(
+    angle: QuantityLike, inertia: QuantityLike, alpha: QuantityArrayLike, u_max: QuantityArrayLike
+) -> FloatArray:
     """Rigid maneuver time T [s] over the grid, Att. 3 Eq. 16 (module docstring).
 
     Parameters
@@ -71,7 +83,13 @@ def maneuver_time_surface(angle, inertia, alpha, u_max) -> np.ndarray:
     return shape.duration.reshape(grid)
 
 
-def residual_energy_surface(plant, angle, inertia, alpha, u_max) -> np.ndarray:
+def residual_energy_surface(
+    plant: HybridPlant,
+    angle: QuantityLike,
+    inertia: QuantityLike,
+    alpha: QuantityArrayLike,
+    u_max: QuantityArrayLike,
+) -> FloatArray:
     """Vibration energy E(T) [J] of the open-loop flexible response at the maneuver's end.
 
     Parameters
@@ -92,7 +110,15 @@ def residual_energy_surface(plant, angle, inertia, alpha, u_max) -> np.ndarray:
     return plant.vibration_energy(x).reshape(grid)
 
 
-def tracking_bound(plant, shape, times, g1, g2, g3=0.0, appendage_inertia=0.0) -> np.ndarray:
+def tracking_bound(
+    plant: HubAppendage,
+    shape: SmoothBangBang,
+    times: QuantityArrayLike,
+    g1: npt.ArrayLike,
+    g2: npt.ArrayLike,
+    g3: npt.ArrayLike = 0.0,
+    appendage_inertia: QuantityLike = 0.0,
+) -> FloatArray:
     """μ(t) of Control Law II (Att. 3 Eq. 22) at ``times`` for the reference torque ``shape``.
 
     Parameters
@@ -114,8 +140,8 @@ def tracking_bound(plant, shape, times, g1, g2, g3=0.0, appendage_inertia=0.0) -
     (n_t, C) array
         μ(t), rad/s.
     """
-    g1, g2, g3 = check_lyapunov_gains(g1, g2, g3, plant.n_appendages)
-    if np.any(g2 <= 0):
+    k1, k2, k3 = check_lyapunov_gains(g1, g2, g3, plant.n_appendages)
+    if np.any(k2 <= 0):
         raise ValueError("g2: must be > 0 (μ of Eq. 22 is divided by g2)")
     I_b = require_nonneg(appendage_inertia, "appendage_inertia", "kg*m**2")
     if np.ndim(shape.duration) > 1:
@@ -133,26 +159,26 @@ def tracking_bound(plant, shape, times, g1, g2, g3=0.0, appendage_inertia=0.0) -
     if th is None or thd is None:
         raise ValueError("plant: μ needs θ and θ' as state coordinates (a hub plant)")
     d = (
-        g1 * (x[..., th] - ref.theta)
-        + g2 * (x[..., thd] - ref.theta_dot)
-        + g3 * (R_r - I_b * ref.theta_ddot)
+        k1 * (x[..., th] - ref.theta)
+        + k2 * (x[..., thd] - ref.theta_dot)
+        + k3 * (R_r - I_b * ref.theta_ddot)
     )
-    return np.abs(d) / g2
+    return np.abs(d) / k2
 
 
 def tracking_bound_surface(
-    plant,
-    angle,
-    inertia,
-    alpha,
-    u_max,
-    g1,
-    g2,
-    g3=0.0,
-    appendage_inertia=0.0,
+    plant: HubAppendage,
+    angle: QuantityLike,
+    inertia: QuantityLike,
+    alpha: QuantityArrayLike,
+    u_max: QuantityArrayLike,
+    g1: npt.ArrayLike,
+    g2: npt.ArrayLike,
+    g3: npt.ArrayLike = 0.0,
+    appendage_inertia: QuantityLike = 0.0,
     n_samples: int = 2001,
-    horizon=1.0,
-) -> np.ndarray:
+    horizon: float = 1.0,
+) -> FloatArray:
     """μ_max(α, u_max) = max_t μ(t) over the grid (Att. 3 Fig. 7), rad/s.
 
     μ is sampled at ``n_samples`` equally spaced times over [0, horizon · T] of each maneuver
@@ -177,9 +203,9 @@ def tracking_bound_surface(
     (n_alpha, n_u_max) array
     """
     n = require_count(n_samples, "n_samples")
-    horizon = require_positive(horizon, "horizon", "")
+    window = require_positive(horizon, "horizon", "")
     shape, grid = _grid_shape(angle, inertia, alpha, u_max)
-    t = np.linspace(0.0, 1.0, n)[:, None] * (horizon * shape.duration)[None, :]
+    t = np.linspace(0.0, 1.0, n)[:, None] * (window * shape.duration)[None, :]
     mu = tracking_bound(plant, shape, t, g1, g2, g3, appendage_inertia)
     return mu.max(axis=0).reshape(grid)
 

@@ -18,16 +18,35 @@ The model is a :class:`~flexsat.identify.structural.SubstructureModel`
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, TypeAlias, cast
 
 import numpy as np
+import numpy.typing as npt
 import scipy.linalg as sla
 
 from flexsat.analysis.sensitivity import modal_derivatives
 from flexsat.identify.structural import SubstructureModel
 from flexsat.input_checks import require_numeric
+from flexsat.units import FloatArray
 
 __all__ = ["CorrectionData", "DifferentialCorrection", "differential_correction"]
+
+IntArray: TypeAlias = npt.NDArray[np.int_]
+ComplexArray: TypeAlias = npt.NDArray[np.complex128]
+#: one FRF measurement as :class:`CorrectionData` stores it: output and input (a dof index or
+#: a vector), omegas, complex values, complex SDs (real and imaginary parts), output and input
+#: gain indices
+FrfItem: TypeAlias = tuple[
+    "int | FloatArray",
+    "int | FloatArray",
+    FloatArray,
+    ComplexArray,
+    ComplexArray,
+    int | None,
+    int | None,
+]
 
 
 def _modes_and_sigma(values, sigma, modes, name, prefix):
@@ -143,21 +162,41 @@ class CorrectionData:
         the analytical mass, L2646); needs shapes on all dofs.
     """
 
-    frequencies: object = None
-    frequency_sigma: object = None
-    frequency_modes: object = None
-    shapes: object = None
-    shape_sigma: object = None
-    shape_dofs: object = None
-    shape_modes: object = None
-    damping_ratios: object = None
-    damping_sigma: object = None
-    damping_modes: object = None
-    frf: object = ()
-    orthogonality_sigma: object = None
-    normalization_sigma: object = None
+    # the fields hold the checked arrays; the constructor takes array_like (see __init__ below)
+    frequencies: FloatArray | None = None
+    frequency_sigma: FloatArray | None = None
+    frequency_modes: IntArray | None = None
+    shapes: FloatArray | None = None
+    shape_sigma: FloatArray | None = None
+    shape_dofs: IntArray | None = None
+    shape_modes: IntArray | None = None
+    damping_ratios: FloatArray | None = None
+    damping_sigma: FloatArray | None = None
+    damping_modes: IntArray | None = None
+    frf: Sequence[FrfItem] = ()
+    orthogonality_sigma: float | None = None
+    normalization_sigma: float | None = None
 
-    def __post_init__(self):
+    if TYPE_CHECKING:
+        # what the constructor accepts (the generated __init__ at run time)
+        def __init__(
+            self,
+            frequencies: npt.ArrayLike | None = ...,
+            frequency_sigma: npt.ArrayLike | None = ...,
+            frequency_modes: npt.ArrayLike | None = ...,
+            shapes: npt.ArrayLike | None = ...,
+            shape_sigma: npt.ArrayLike | None = ...,
+            shape_dofs: npt.ArrayLike | None = ...,
+            shape_modes: npt.ArrayLike | None = ...,
+            damping_ratios: npt.ArrayLike | None = ...,
+            damping_sigma: npt.ArrayLike | None = ...,
+            damping_modes: npt.ArrayLike | None = ...,
+            frf: Sequence[Sequence[Any]] = ...,
+            orthogonality_sigma: float | None = ...,
+            normalization_sigma: float | None = ...,
+        ) -> None: ...
+
+    def __post_init__(self) -> None:
         set_ = object.__setattr__
         for name, prefix in (("frequencies", "frequency"), ("damping_ratios", "damping")):
             if getattr(self, name) is None:
@@ -279,12 +318,12 @@ class CorrectionData:
         return 1 + max((item[6] for item in self.frf if item[6] is not None), default=-1)
 
     @property
-    def _shape_pairs(self):
+    def _shape_pairs(self) -> list[tuple[int, int]]:
         s = 0 if self.shapes is None else self.shapes.shape[1]
         return [(i, j) for i in range(s) for j in range(i + 1, s)]
 
     @property
-    def measured(self) -> np.ndarray:
+    def measured(self) -> FloatArray:
         """Measured ``Q`` stacked: lambda, psi (by mode), zeta, FRF (per element real then
         imaginary), 0_m, 0_k, 0_n."""
         parts = [
@@ -296,25 +335,35 @@ class CorrectionData:
         if self.orthogonality_sigma is not None:
             parts.append(np.zeros(2 * len(self._shape_pairs)))
         if self.normalization_sigma is not None:
+            assert self.shapes is not None  # normalization_sigma needs shapes (__post_init__)
             parts.append(np.ones(self.shapes.shape[1]))
         return np.concatenate([x for x in parts if x is not None] + [np.zeros(0)])
 
     @property
-    def sigma(self) -> np.ndarray:
+    def sigma(self) -> FloatArray:
         """Standard deviations of :attr:`measured`, same order."""
         parts = [
             self.frequency_sigma,
-            None if self.shapes is None else self.shape_sigma.T.ravel(),
+            None if self.shape_sigma is None else self.shape_sigma.T.ravel(),
             self.damping_sigma,
         ]
         parts += [np.concatenate([item[4].real, item[4].imag]) for item in self.frf]
         if self.orthogonality_sigma is not None:
             parts.append(np.full(2 * len(self._shape_pairs), self.orthogonality_sigma))
         if self.normalization_sigma is not None:
+            assert self.shapes is not None  # normalization_sigma needs shapes (__post_init__)
             parts.append(np.full(self.shapes.shape[1], self.normalization_sigma))
         return np.concatenate([x for x in parts if x is not None] + [np.zeros(0)])
 
-    def predict(self, model: SubstructureModel, p=None, q=None, r=None, mu=None, nu=None):
+    def predict(
+        self,
+        model: SubstructureModel,
+        p: npt.ArrayLike | None = None,
+        q: npt.ArrayLike | None = None,
+        r: npt.ArrayLike | None = None,
+        mu: npt.ArrayLike | None = None,
+        nu: npt.ArrayLike | None = None,
+    ) -> tuple[FloatArray, FloatArray]:
         """Calculated ``Q`` (Att. 6 Eq. 12) and its Jacobian ``A = dQ/dP`` (Eq. 13).
 
         ``mu``, ``nu``: output and input gains (Eqs. 6–7), default 1, at least
@@ -337,24 +386,25 @@ class CorrectionData:
         T the lengths of ``mu`` and ``nu``.
         """
         n, P, Q, R = model.n_dofs, model.n_stiffness, model.n_mass, model.n_damping
-        p, q, r = model._params(p, P, "p"), model._params(q, Q, "q"), model._params(r, R, "r")
+        ps, qs, rs = model._params(p, P, "p"), model._params(q, Q, "q"), model._params(r, R, "r")
         gains = []
-        for name, values, kind, pos in (("mu", mu, "output", 5), ("nu", nu, "input", 6)):
+        for name, given, kind, pos in (("mu", mu, "output", 5), ("nu", nu, "input", 6)):
             v = (
                 np.ones(getattr(self, f"n_{kind}_gains"))
-                if values is None
-                else require_numeric(values, name, "vector").reshape(-1)
+                if given is None
+                else require_numeric(given, name, "vector").reshape(-1)
             )
             for i, item in enumerate(self.frf):
-                if item[pos] is not None and item[pos] >= v.size:
+                gain = cast("int | None", item[pos])  # the output or input gain index
+                if gain is not None and gain >= v.size:
                     raise ValueError(
                         f"frf[{i}].{kind}_gain: must be < {v.size} (the length of "
-                        f"{name}), got {item[pos]}"
+                        f"{name}), got {gain}"
                     )
             gains.append(v)
         mu, nu = gains
         S, T = mu.size, nu.size
-        K, M, C = model.K(p), model.M(q), model.C(r)
+        K, M, C = model.K(ps), model.M(qs), model.C(rs)
         if self.shapes is not None:
             if self.shape_dofs is None and self.shapes.shape[0] != n:
                 raise ValueError(
@@ -375,7 +425,8 @@ class CorrectionData:
             raise ValueError(f"frequency_modes, shape_modes, damping_modes: must be < {n}")
         if self.damping_ratios is not None and R == 0:
             raise ValueError("damping_ratios: the model has no damping blocks (C_blocks)")
-        values, jac = [], []
+        values: list[npt.NDArray[Any]] = []
+        jac: list[npt.NDArray[Any]] = []
         needed = sorted(
             set(
                 np.concatenate(
@@ -395,6 +446,7 @@ class CorrectionData:
             )
             col = {int(mode): i for i, mode in enumerate(md.indices)}
         if self.frequencies is not None:
+            assert self.frequency_modes is not None  # set with the frequencies (__post_init__)
             c = [col[int(mode)] for mode in self.frequency_modes]
             if np.any(md.frequencies[c] <= 0):
                 raise ValueError("frequency_modes: a measured mode is a rigid-body mode (w = 0)")
@@ -402,6 +454,7 @@ class CorrectionData:
             jac.append(np.hstack([md.frequency_gradient[:, c].T, np.zeros((len(c), R))]))
         if self.shapes is not None:
             dofs = np.arange(n) if self.shape_dofs is None else self.shape_dofs
+            assert self.shape_modes is not None  # set with the shapes (__post_init__)
             for s, mode in enumerate(self.shape_modes):
                 f = md.modes[dofs, col[int(mode)]]
                 df = md.mode_gradient[:, dofs, col[int(mode)]]
@@ -449,6 +502,7 @@ class CorrectionData:
             jac.append(np.vstack([dh.real, dh.imag]))
         if self.orthogonality_sigma is not None or self.normalization_sigma is not None:
             psi = self.shapes
+            assert psi is not None  # both pseudo-measurements need shapes (__post_init__)
             # psi^T B psi of every block, [fixed part, blocks...], for M and K
             forms_m = [psi.T @ B @ psi for B in [model.M0] + model.M_blocks]
             forms_k = [psi.T @ B @ psi for B in [model.K0] + model.K_blocks]
@@ -456,18 +510,18 @@ class CorrectionData:
             pairs = self._shape_pairs
             if self.orthogonality_sigma is not None:
                 for forms, nominal, scalings, offset, count in (
-                    (forms_m, nominal_m, q, P, Q),
-                    (forms_k, nominal_k, p, 0, P),
+                    (forms_m, nominal_m, qs, P, Q),
+                    (forms_k, nominal_k, ps, 0, P),
                 ):
-                    s = np.array([1.0 / np.sqrt(nominal[i] * nominal[j]) for i, j in pairs])
+                    norm = np.array([1.0 / np.sqrt(nominal[i] * nominal[j]) for i, j in pairs])
                     grad = (
                         np.array([[B[i, j] for B in forms[1:]] for i, j in pairs]).reshape(
                             len(pairs), count
                         )
-                        * s[:, None]
+                        * norm[:, None]
                     )
                     values.append(
-                        np.array([forms[0][i, j] for i, j in pairs]) * s + grad @ scalings
+                        np.array([forms[0][i, j] for i, j in pairs]) * norm + grad @ scalings
                     )
                     block = np.zeros((len(pairs), P + Q + R))
                     block[:, offset : offset + count] = grad
@@ -477,7 +531,7 @@ class CorrectionData:
                     np.array([np.diag(B) for B in forms_m[1:]]).T.reshape(-1, Q)
                     / nominal_m[:, None]
                 )
-                values.append(np.diag(forms_m[0]) / nominal_m + grad @ q)
+                values.append(np.diag(forms_m[0]) / nominal_m + grad @ qs)
                 jac.append(
                     np.hstack([np.zeros((grad.shape[0], P)), grad, np.zeros((grad.shape[0], R))])
                 )
@@ -538,14 +592,14 @@ class DifferentialCorrection:
     """
 
     model: SubstructureModel
-    p: np.ndarray
-    q: np.ndarray
-    r: np.ndarray
-    mu: np.ndarray
-    nu: np.ndarray
-    covariance: np.ndarray
-    residual_history: list
-    residuals: np.ndarray
+    p: FloatArray
+    q: FloatArray
+    r: FloatArray
+    mu: FloatArray
+    nu: FloatArray
+    covariance: FloatArray
+    residual_history: list[float]
+    residuals: FloatArray
     iterations: int
     converged: bool
 
@@ -553,19 +607,19 @@ class DifferentialCorrection:
 def differential_correction(
     model: SubstructureModel,
     data: CorrectionData,
-    p0=None,
-    q0=None,
-    r0=None,
-    fixed_stiffness=(),
-    fixed_mass=(),
-    fixed_damping=(),
-    prior_sigma=None,
-    n_iter=50,
-    tol=1e-10,
-    mu0=None,
-    nu0=None,
-    fixed_output_gains=(),
-    fixed_input_gains=(),
+    p0: npt.ArrayLike | None = None,
+    q0: npt.ArrayLike | None = None,
+    r0: npt.ArrayLike | None = None,
+    fixed_stiffness: npt.ArrayLike = (),
+    fixed_mass: npt.ArrayLike = (),
+    fixed_damping: npt.ArrayLike = (),
+    prior_sigma: npt.ArrayLike | None = None,
+    n_iter: int = 50,
+    tol: float = 1e-10,
+    mu0: npt.ArrayLike | None = None,
+    nu0: npt.ArrayLike | None = None,
+    fixed_output_gains: npt.ArrayLike = (),
+    fixed_input_gains: npt.ArrayLike = (),
 ) -> DifferentialCorrection:
     """Att. 6 differential correction of the substructure scalings and gains (Eqs. 3–13).
 
@@ -674,7 +728,7 @@ def differential_correction(
     x = x0.copy()
     res, rows, dQ = evaluate(x)
     history, converged, it = [float(res @ res)], False, 0
-    through_zero = []  # gains that the last iteration's refused trials took to <= 0
+    through_zero: list[str] = []  # gains that the last iteration's refused trials took to <= 0
     while it < n_iter:
         through_zero = []
         # column-normalised SVD: the rank test does not depend on the parameters' units

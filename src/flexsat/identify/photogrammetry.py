@@ -45,14 +45,17 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
 from flexsat.input_checks import require_finite, require_numeric, require_positive
+from flexsat.units import FloatArray
 
 __all__ = [
     "look_at",
@@ -125,7 +128,7 @@ def _check_euler(euler, field_name="euler"):
     return euler
 
 
-def rotation_matrix(angles, euler: str = "321") -> np.ndarray:
+def rotation_matrix(angles: npt.ArrayLike, euler: str = "321") -> FloatArray:
     """World-to-camera direction cosine matrix ``C`` (passive rotations, radians).
 
     ``"321"``: ``angles = (phi, theta, psi)``, ``C = R1(psi) R2(theta) R3(phi)`` (Att. 8).
@@ -140,7 +143,7 @@ def rotation_matrix(angles, euler: str = "321") -> np.ndarray:
     return _r3(a[2]) @ _r2(a[1]) @ _r1(a[0])
 
 
-def euler_angles(matrix, euler: str = "321") -> np.ndarray:
+def euler_angles(matrix: npt.ArrayLike, euler: str = "321") -> FloatArray:
     """Inverse of :func:`rotation_matrix` (middle angle in [-pi/2, pi/2])."""
     _check_euler(euler)
     c = require_finite(matrix, "matrix")
@@ -159,7 +162,9 @@ def euler_angles(matrix, euler: str = "321") -> np.ndarray:
     return np.array([t1, t2, t3])
 
 
-def look_at(position, target, euler: str = "321", focal_sign: int = -1) -> np.ndarray:
+def look_at(
+    position: npt.ArrayLike, target: npt.ArrayLike, euler: str = "321", focal_sign: int = -1
+) -> FloatArray:
     """Euler angles of a camera at ``position`` whose optical axis passes through ``target``,
     image x axis horizontal (normal to the world Y axis, which must not be the line of sight).
 
@@ -189,8 +194,8 @@ class Camera:
     """Exterior (position, Euler attitude) and interior (x0, y0, fx, fy, Brown k1, k2, p1, p2)
     orientation of one camera.  Give ``f`` for square pixels or ``fx`` and ``fy``."""
 
-    position: Sequence[float]
-    angles: Sequence[float]
+    position: Sequence[float] | FloatArray  # stored as a tuple of 3 floats
+    angles: Sequence[float] | FloatArray  # stored as a tuple of 3 floats
     f: float | None = None
     fx: float | None = None
     fy: float | None = None
@@ -204,7 +209,7 @@ class Camera:
     focal_sign: int = -1
     distortion: str = "brown"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         pos = require_finite(self.position, "position").reshape(-1)
         if pos.size != 3:
             raise ValueError(f"position: must hold 3 coordinates, got {pos.size}")
@@ -238,10 +243,10 @@ class Camera:
             object.__setattr__(self, name, float(require_finite(getattr(self, name), name)))
 
     @property
-    def matrix(self) -> np.ndarray:
+    def matrix(self) -> FloatArray:
         return rotation_matrix(self.angles, self.euler)
 
-    def vector(self) -> np.ndarray:
+    def vector(self) -> FloatArray:
         """Parameters in the order of :data:`CAMERA_PARAMETERS`."""
         return np.array(
             [
@@ -258,7 +263,7 @@ class Camera:
             ]
         )
 
-    def with_vector(self, vec) -> Camera:
+    def with_vector(self, vec: npt.ArrayLike) -> Camera:
         v = np.asarray(vec, dtype=float)
         return dataclasses.replace(
             self,
@@ -302,7 +307,7 @@ def _check_points(points, field_name="points"):
     return p
 
 
-def project(camera: Camera, points) -> np.ndarray:
+def project(camera: Camera, points: npt.ArrayLike) -> FloatArray:
     """Image coordinates ``(u, v)`` of object points, shape ``(..., 3) -> (..., 2)``."""
     if not isinstance(camera, Camera):
         raise ValueError(f"camera: must be a Camera, got {type(camera).__name__}")
@@ -320,14 +325,14 @@ def project(camera: Camera, points) -> np.ndarray:
 # simulation
 # ----------------------------------------------------------------------------------------------
 def simulate_centroids(
-    cameras,
-    points,
-    pixel_size,
+    cameras: Sequence[Camera],
+    points: npt.ArrayLike,
+    pixel_size: npt.ArrayLike,
     noise_px: float = 0.0,
     quantize: bool = True,
-    seed=None,
-    field_px=FIELD_SIZE_PX,
-) -> np.ndarray:
+    seed: int | np.random.Generator | None = None,
+    field_px: tuple[float, float] | None = FIELD_SIZE_PX,
+) -> FloatArray:
     """Simulated image centroids, shape ``(M, ..., 2)`` for ``M`` cameras and points ``(..., 3)``.
 
     Gaussian noise of ``noise_px`` pixels (standard deviation) is added, then, with
@@ -377,7 +382,9 @@ def _check_cameras(cameras, field_name="cameras", minimum=1):
     return cams
 
 
-def calibration_counts(n_points: int, n_cameras: int = 2, params_per_camera: int = 9) -> dict:
+def calibration_counts(
+    n_points: int, n_cameras: int = 2, params_per_camera: int = 9
+) -> dict[str, int]:
     """Att. 8 counting: ``2 M N`` image equations, ``3N - 6 + p M`` unknowns after the datum.
 
     For ``M = 2``, ``p = 9``: 4N equations, 3N + 12 unknowns, ``N >= 12``; ``p = 10``
@@ -399,26 +406,26 @@ def calibration_counts(n_points: int, n_cameras: int = 2, params_per_camera: int
 class CalibrationResult:
     """Output of :func:`calibrate`."""
 
-    cameras: list
-    targets: np.ndarray
-    covariance: np.ndarray  # over the unknowns, ordered as ``names``
-    names: list  # e.g. "cam0.xc", "target3.y"
+    cameras: list[Camera]
+    targets: FloatArray
+    covariance: FloatArray  # over the unknowns, ordered as ``names``
+    names: list[str]  # e.g. "cam0.xc", "target3.y"
     sigma0_squared: float  # residual variance factor (1 if the weights are right)
-    counts: dict
-    residuals_px: np.ndarray = field(repr=False)  # image residuals, observation units
-    result: object = field(repr=False, default=None)
+    counts: dict[str, int]
+    residuals_px: FloatArray = field(repr=False)  # image residuals, observation units
+    result: Any = field(repr=False, default=None)  # scipy's OptimizeResult
 
     def std(self, name: str) -> float:
         return float(np.sqrt(self.covariance[self.names.index(name)][self.names.index(name)]))
 
-    def camera_covariance(self, j: int, params: Sequence[str] | None = None) -> np.ndarray:
+    def camera_covariance(self, j: int, params: Sequence[str] | None = None) -> FloatArray:
         """Covariance block of camera ``j``'s free parameters (``params`` order if given)."""
         sel = [k for k, n in enumerate(self.names) if n.startswith(f"cam{j}.")]
         if params is not None:
             sel = [self.names.index(f"cam{j}.{p}") for p in params]
         return self.covariance[np.ix_(sel, sel)]
 
-    def full_camera_covariance(self) -> np.ndarray:
+    def full_camera_covariance(self) -> FloatArray:
         """Covariance of the stacked camera vectors, ``(14 M, 14 M)``.
 
         Camera ``j`` occupies rows ``14 j .. 14 j + 13`` in :data:`CAMERA_PARAMETERS` order (the
@@ -457,15 +464,15 @@ def _collinear(pts, tol=1e-9):
 
 
 def calibrate(
-    observations,
-    initial_cameras,
-    target_guess,
-    datum=(0, 1, 2),
-    scale=None,
+    observations: npt.ArrayLike,
+    initial_cameras: Sequence[Camera],
+    target_guess: npt.ArrayLike,
+    datum: tuple[int, int, int] | None = (0, 1, 2),
+    scale: Sequence[float] | None = None,
     sigma: float = 1.0,
-    free=DEFAULT_FREE,
-    target_sigma=None,
-    camera_sigma=None,
+    free: Sequence[str] = DEFAULT_FREE,
+    target_sigma: npt.ArrayLike | None = None,
+    camera_sigma: Mapping[str, float] | Sequence[Mapping[str, float]] | None = None,
     max_nfev: int | None = None,
 ) -> CalibrationResult:
     """Static calibration (resection) of ``M >= 2`` cameras and ``N`` targets.
@@ -633,20 +640,20 @@ def calibrate(
     full = lil_matrix((2 * m_cam * n_pts, n_unknown), dtype=int)  # all image rows
     for j in range(m_cam):
         full[2 * n_pts * j : 2 * n_pts * (j + 1), j * p_cam : (j + 1) * p_cam] = 1
-    for col, k in enumerate(tgt_free):
-        i = k // 3
+    for col, entry in enumerate(tgt_free):
+        i = int(entry) // 3
         for j in range(m_cam):
             full[2 * n_pts * j + 2 * i : 2 * n_pts * j + 2 * i + 2, p_cam * m_cam + col] = 1
     sparsity = lil_matrix((n_res, n_unknown), dtype=int)
     sparsity[:n_img] = full.tocsr()[np.flatnonzero(visible)]
-    for col, k in enumerate(tgt_free):
-        i = k // 3
+    for col, entry in enumerate(tgt_free):
+        i = int(entry) // 3
         if scale is not None and i in (si, sj):
             sparsity[n_img, p_cam * m_cam + col] = 1
         if tsig is not None:
             sparsity[n_img + (scale is not None) + col, p_cam * m_cam + col] = 1
-    for row, col in enumerate(prior_rows):
-        sparsity[n_img + (scale is not None) + n_tgt + row, col] = 1
+    for row, column in enumerate(prior_rows):
+        sparsity[n_img + (scale is not None) + n_tgt + row, column] = 1
 
     sol = least_squares(
         residuals,
@@ -682,7 +689,7 @@ def calibrate(
     )
 
 
-def _observations(observations) -> np.ndarray:
+def _observations(observations) -> FloatArray:
     """Image centroids; a target a camera does not see is NaN in both coordinates."""
     if isinstance(observations, (str, bytes)):
         raise ValueError("observations: must be a numeric (M, N, 2) array")
@@ -718,7 +725,7 @@ def _check_visibility(seen, priors: bool, p_cam: int) -> None:
         )
 
 
-def _camera_prior(camera_sigma, free, m_cam) -> np.ndarray:
+def _camera_prior(camera_sigma, free, m_cam) -> FloatArray:
     """Per-unknown a-priori standard deviation of the camera parameters (inf: none)."""
     out = np.full(m_cam * len(free), np.inf)
     if camera_sigma is None:
@@ -864,7 +871,13 @@ def _camera_factor(camera_covariance, m_cam):
     return factor
 
 
-def triangulate(cameras, centroids, pixel_sigma, iterations: int = 10, camera_covariance=None):
+def triangulate(
+    cameras: Sequence[Camera],
+    centroids: npt.ArrayLike,
+    pixel_sigma: npt.ArrayLike,
+    iterations: int = 10,
+    camera_covariance: CalibrationResult | npt.ArrayLike | None = None,
+) -> tuple[FloatArray, FloatArray]:
     r"""Dynamic triangulation with calibrated cameras (Att. 6 eqs. (34)–(37); Att. 8: 4
     equations, 3 unknowns per point for two cameras).
 

@@ -31,15 +31,22 @@ phase.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 from scipy import signal
 from scipy.linalg import expm
 
 from flexsat.identify.excitation import sensor_matrices
-from flexsat.identify.measurements import Measurement
+from flexsat.identify.measurements import Channel, Measurement
 from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    from flexsat.structures.modal_model import ModalModel
 
 __all__ = ["FRFEstimate", "estimate_frf", "frequency_response"]
 
@@ -62,8 +69,8 @@ class FRFEstimate:
     """
 
     frf: Measurement
-    coherence: np.ndarray
-    std: np.ndarray
+    coherence: FloatArray
+    std: FloatArray
     segments: int
 
 
@@ -156,8 +163,12 @@ def estimate_frf(
 
 
 def frequency_response(
-    modal_model, sensors, inputs, frequencies_hz, sample_rate=None
-) -> np.ndarray:
+    modal_model: ModalModel,
+    sensors: Sequence[Channel],
+    inputs: Sequence[Channel],
+    frequencies_hz: npt.ArrayLike,
+    sample_rate: float | None = None,
+) -> npt.NDArray[np.complex128]:
     """Model FRFs (q, r, F) of a :class:`~flexsat.structures.modal_model.ModalModel`.
 
     ``sensors`` and ``inputs`` are :class:`~flexsat.identify.measurements.Channel` lists as in

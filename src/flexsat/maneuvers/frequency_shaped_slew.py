@@ -58,13 +58,16 @@ to the minimum energy.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import scipy.linalg
 import scipy.sparse
 import scipy.sparse.linalg
 
 from flexsat.input_checks import require_finite, require_nonneg, require_positive
+from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
 
 __all__ = [
     "FrequencyShapedSlew",
@@ -79,7 +82,7 @@ _PHASE_PER_SEGMENT = 30.0  # largest |λ| h in one segment (ω_B h for the ringi
 _LOG_OVERFLOW = 700.0  # e^{700} ~ 1e304: beyond it e^{KT} is not representable in float64
 
 
-def hamiltonian_matrix(omega_b: float, zeta_b: float = 0.0, q: float = 0.0) -> np.ndarray:
+def hamiltonian_matrix(omega_b: float, zeta_b: float = 0.0, q: float = 0.0) -> FloatArray:
     """The 8×8 matrix K of ``ż = K z``, ``z = [θ, ω, u1, u2, p, λ, μ1, μ2]`` (SI).
 
     Eqs. (12)-(14) with u3 from (20), and the costate Eqs. (16)-(19) of spec seed003.md §2.4-2.5
@@ -97,14 +100,21 @@ def hamiltonian_matrix(omega_b: float, zeta_b: float = 0.0, q: float = 0.0) -> n
     return k
 
 
-def shaping_control(state, costate, omega_b):
+def shaping_control(state: npt.ArrayLike, costate: npt.ArrayLike, omega_b: float) -> FloatArray:
     """Optimal control u3 = -ω_B² (u1 + ω_B² μ2), Eq. (20), on arrays ``(..., 4)``."""
     state, costate = np.asarray(state), np.asarray(costate)
     wb2 = omega_b * omega_b
     return -wb2 * (state[..., 2] + wb2 * costate[..., 3])
 
 
-def hamiltonian(state, costate, u3, omega_b, zeta_b=0.0, q=0.0):
+def hamiltonian(
+    state: npt.ArrayLike,
+    costate: npt.ArrayLike,
+    u3: npt.ArrayLike,
+    omega_b: float,
+    zeta_b: float = 0.0,
+    q: float = 0.0,
+) -> FloatArray:
     """H = ½ L + p ω + λ u1 + μ1 u2 + μ2 u3 (spec §2.4) for any u3, on arrays ``(..., 4)``.
 
     Kept a function of an arbitrary u3 so that its gradients give the costate equations
@@ -142,11 +152,11 @@ class FrequencyShapedSlew:
     omega_b: float
     zeta_b: float
     q: float
-    K: np.ndarray
-    scale: np.ndarray
-    K_scaled: np.ndarray
-    knots: np.ndarray
-    z_knots: np.ndarray
+    K: FloatArray
+    scale: FloatArray
+    K_scaled: FloatArray
+    knots: FloatArray
+    z_knots: FloatArray
     method: str
     condition: float
 
@@ -154,7 +164,7 @@ class FrequencyShapedSlew:
     def n_segments(self) -> int:
         return len(self.knots) - 1
 
-    def z(self, t) -> np.ndarray:
+    def z(self, t: QuantityArrayLike) -> FloatArray:
         """State-costate vector at times ``t`` (any shape, within [0, T]): shape ``t.shape + (8,)``.
 
         Propagated exactly, ``z(t) = e^{K (t - t_k)} z_k`` from the knot below t, so the growth
@@ -174,19 +184,19 @@ class FrequencyShapedSlew:
         zeta = np.einsum("nij,nj->ni", phi, self.z_knots[k] / self.scale)
         return (zeta * self.scale).reshape(t.shape + (8,))
 
-    def torque(self, t) -> np.ndarray:
+    def torque(self, t: QuantityArrayLike) -> FloatArray:
         """Physical torque I u1(t) [N m]."""
         return self.inertia * self.z(t)[..., 2]
 
-    def theta(self, t) -> np.ndarray:
+    def theta(self, t: QuantityArrayLike) -> FloatArray:
         """Angle θ(t) [rad]."""
         return self.z(t)[..., 0]
 
-    def omega(self, t) -> np.ndarray:
+    def omega(self, t: QuantityArrayLike) -> FloatArray:
         """Rate ω(t) [rad/s]."""
         return self.z(t)[..., 1]
 
-    def hamiltonian(self, t) -> np.ndarray:
+    def hamiltonian(self, t: QuantityArrayLike) -> FloatArray:
         """H(t) along the solution (constant for this autonomous problem)."""
         z = self.z(t)
         u3 = shaping_control(z[..., :4], z[..., 4:], self.omega_b)
@@ -205,7 +215,13 @@ class FrequencyShapedSlew:
 
 
 def frequency_shaped_slew(
-    angle, inertia, duration, omega_b, zeta_b=0.0, q=0.0, cond_limit=1e8
+    angle: QuantityLike,
+    inertia: QuantityLike,
+    duration: QuantityLike,
+    omega_b: QuantityLike,
+    zeta_b: QuantityLike = 0.0,
+    q: QuantityLike = 0.0,
+    cond_limit: float = 1e8,
 ) -> FrequencyShapedSlew:
     """Optimal frequency-shaped rest-to-rest slew about one principal axis (module docstring).
 
@@ -291,12 +307,14 @@ def frequency_shaped_slew(
     )
 
 
-def _multiple_shooting(kb, n, x0, xt):
+def _multiple_shooting(kb: FloatArray, n: int, x0: FloatArray, xt: FloatArray) -> FloatArray:
     """Knots ζ_0..ζ_N of ``ζ' = K_b ζ`` on N equal segments of [0, 1] with the rest-to-rest
     boundary conditions: one sparse (8N + 8)-square block system."""
     phi = scipy.linalg.expm(kb / n)
     m = 8 * (n + 1)
-    rows, cols, vals = [], [], []
+    rows: list[int | np.integer[Any]] = []
+    cols: list[int | np.integer[Any]] = []
+    vals: list[float] = []
     # Rows 0..3: x(0) = x0.
     rows += list(range(4))
     cols += list(range(4))

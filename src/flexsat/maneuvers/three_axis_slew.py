@@ -62,8 +62,10 @@ Newton unknowns are balanced by the magnitudes of the single-axis start.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import scipy.integrate
 import scipy.linalg
 
@@ -79,8 +81,8 @@ from flexsat.dynamics.attitude import (
 )
 from flexsat.dynamics.rigid_body import angular_momentum_inertial, cross3, matvec, require_inertia
 from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
-from flexsat.maneuvers.frequency_shaped_slew import frequency_shaped_slew
-from flexsat.units import to_si_array
+from flexsat.maneuvers.frequency_shaped_slew import FrequencyShapedSlew, frequency_shaped_slew
+from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike, to_si_array
 
 __all__ = [
     "ContinuationStep",
@@ -115,13 +117,21 @@ _MAX_POLISH = 6
 # Kernels: plain functions on arrays (..., 26) with a leading case axis, unchecked.
 
 
-def shaping_control(state, costate, omega_b):
+def shaping_control(state: FloatArray, costate: FloatArray, omega_b: float) -> FloatArray:
     """Optimal control u3 = −ω_B² (u1 + ω_B² μ2), Eq. (20), on arrays ``(..., 13)``."""
     wb2 = omega_b * omega_b
     return -wb2 * (state[..., 7:10] + wb2 * costate[..., 10:13])
 
 
-def hamiltonian(state, costate, u3, inertia, omega_b, zeta_b=0.0, Q=None):
+def hamiltonian(
+    state: npt.ArrayLike,
+    costate: npt.ArrayLike,
+    u3: npt.ArrayLike,
+    inertia: npt.ArrayLike,
+    omega_b: float,
+    zeta_b: float = 0.0,
+    Q: npt.ArrayLike | None = None,
+) -> FloatArray:
     """H = ½L + γᵀΩ(ω)β + λᵀ(u1 + G(ω)) + μ1ᵀu2 + μ2ᵀu3 (spec §2.4) for any u3, on arrays
     ``state, costate (..., 13)``, ``u3 (..., 3)``.
 
@@ -149,7 +159,14 @@ def hamiltonian(state, costate, u3, inertia, omega_b, zeta_b=0.0, Q=None):
     )
 
 
-def state_costate_rhs(z, inertia, omega_b, zeta_b=0.0, Q=None, inertia_inv=None):
+def state_costate_rhs(
+    z: FloatArray,
+    inertia: npt.ArrayLike,
+    omega_b: float,
+    zeta_b: float = 0.0,
+    Q: npt.ArrayLike | None = None,
+    inertia_inv: npt.ArrayLike | None = None,
+) -> FloatArray:
     """ż of the state-costate system, Eqs. (11)-(14) with u3 from (20) and (16)-(19), on
     arrays ``z (..., 26)`` = [β, ω, u1, u2, γ, λ, μ1, μ2] (SI, or dimensionless: module
     docstring).  ``inertia_inv`` may be passed to save the inversion in inner loops."""
@@ -180,7 +197,14 @@ def state_costate_rhs(z, inertia, omega_b, zeta_b=0.0, Q=None, inertia_inv=None)
     return out
 
 
-def state_costate_jacobian(z, inertia, omega_b, zeta_b=0.0, Q=None, inertia_inv=None):
+def state_costate_jacobian(
+    z: FloatArray,
+    inertia: npt.ArrayLike,
+    omega_b: float,
+    zeta_b: float = 0.0,
+    Q: npt.ArrayLike | None = None,
+    inertia_inv: npt.ArrayLike | None = None,
+) -> FloatArray:
     """∂ż/∂z of :func:`state_costate_rhs`, shape ``(..., 26, 26)`` (analytic)."""
     J = np.asarray(inertia, dtype=float)
     Ji = np.linalg.inv(J) if inertia_inv is None else inertia_inv
@@ -242,25 +266,25 @@ class ThreeAxisSlew:
     (segment m on τ ∈ [0, 1/N], stacked), read through ``scale`` (ẑ = scale · ζ).
     """
 
-    inertia: np.ndarray
+    inertia: FloatArray
     duration: float
     omega_b: float
     zeta_b: float
-    Q: np.ndarray
-    target: np.ndarray
-    target_euler123: np.ndarray
+    Q: FloatArray
+    target: FloatArray
+    target_euler123: FloatArray
     axis: int
     history: tuple[ContinuationStep, ...]
     polish_iterations: int
     residual: float
     n_segments: int
-    nodes: np.ndarray
-    scale: np.ndarray
+    nodes: FloatArray
+    scale: FloatArray
     solution: scipy.integrate.OdeSolution
 
     # -- evaluation ---------------------------------------------------------------------------
 
-    def z(self, t) -> np.ndarray:
+    def z(self, t: QuantityArrayLike) -> FloatArray:
         """State-costate vector [β, ω, u1, u2, γ, λ, μ1, μ2] (SI) at times ``t`` (any shape,
         within [0, T]): shape ``t.shape + (26,)``, from the dense output of segment ⌊tN/T⌋."""
         t = require_finite(t, "t", "s")
@@ -281,48 +305,48 @@ class ThreeAxisSlew:
         z_hat = out * self.scale
         return (z_hat / self.duration**_POWERS).reshape(t.shape + (N_Z,))
 
-    def state(self, t) -> np.ndarray:
+    def state(self, t: QuantityArrayLike) -> FloatArray:
         """[β, ω, u1, u2] at ``t``: shape ``t.shape + (13,)``."""
         return self.z(t)[..., :13]
 
-    def costate(self, t) -> np.ndarray:
+    def costate(self, t: QuantityArrayLike) -> FloatArray:
         """[γ, λ, μ1, μ2] at ``t``: shape ``t.shape + (13,)``."""
         return self.z(t)[..., 13:]
 
-    def beta(self, t) -> np.ndarray:
+    def beta(self, t: QuantityArrayLike) -> FloatArray:
         """Euler parameters β(t) (inertial to body), shape ``t.shape + (4,)``."""
         return self.z(t)[..., BETA]
 
-    def omega(self, t) -> np.ndarray:
+    def omega(self, t: QuantityArrayLike) -> FloatArray:
         """Body rate ω(t) [rad/s], body axes."""
         return self.z(t)[..., W]
 
-    def u1(self, t) -> np.ndarray:
+    def u1(self, t: QuantityArrayLike) -> FloatArray:
         """Normalized torque u1 = I⁻¹τ [rad/s²]."""
         return self.z(t)[..., U1]
 
-    def u2(self, t) -> np.ndarray:
+    def u2(self, t: QuantityArrayLike) -> FloatArray:
         """Normalized torque rate u2 = u̇1 [rad/s³]."""
         return self.z(t)[..., U2]
 
-    def torque(self, t) -> np.ndarray:
+    def torque(self, t: QuantityArrayLike) -> FloatArray:
         """Control torque τ = I u1 [N m], body axes."""
         return self.u1(t) @ self.inertia.T
 
-    def torque_rate(self, t) -> np.ndarray:
+    def torque_rate(self, t: QuantityArrayLike) -> FloatArray:
         """Torque rate τ̇ = I u2 [N m/s], body axes."""
         return self.u2(t) @ self.inertia.T
 
-    def euler123(self, t) -> np.ndarray:
+    def euler123(self, t: QuantityArrayLike) -> FloatArray:
         """1-2-3 Euler angles [rad] of β(t) (:func:`~flexsat.dynamics.attitude.dcm_to_euler123`)."""
         return dcm_to_euler123(quaternion_to_dcm(self.beta(t)))
 
-    def momentum(self, t) -> np.ndarray:
+    def momentum(self, t: QuantityArrayLike) -> FloatArray:
         """Angular momentum in inertial components, C(β)ᵀ I ω [N m s]."""
         z = self.z(t)
         return angular_momentum_inertial(z[..., BETA], z[..., W], self.inertia)
 
-    def hamiltonian(self, t) -> np.ndarray:
+    def hamiltonian(self, t: QuantityArrayLike) -> FloatArray:
         """H(t) along the solution [SI: cost per second]; constant (autonomous problem)."""
         z = self.z(t)
         u3 = shaping_control(z[..., :13], z[..., 13:], self.omega_b)
@@ -366,15 +390,15 @@ class ThreeAxisSlew:
 
 
 def three_axis_slew(
-    inertia,
-    target,
-    duration,
-    omega_b,
-    zeta_b=0.0,
-    Q=None,
-    axis=None,
-    steps=10,
-    max_newton=_MAX_NEWTON,
+    inertia: npt.ArrayLike,
+    target: QuantityArrayLike,
+    duration: QuantityLike,
+    omega_b: QuantityLike,
+    zeta_b: QuantityLike = 0.0,
+    Q: QuantityArrayLike | None = None,
+    axis: int | str | None = None,
+    steps: int = 10,
+    max_newton: int = _MAX_NEWTON,
 ) -> ThreeAxisSlew:
     """Frequency-shaped optimal rest-to-rest slew of a rigid body from the identity attitude to
     ``target`` in time T (module docstring; spec seed003.md §2.2-2.5).
@@ -433,7 +457,7 @@ def three_axis_slew(
     nodes_hat, scale = _seed(start, k, tau)
     n_rk = max(1, int(np.ceil(np.max(np.abs(np.linalg.eigvals(start.K_scaled))) / n / _RK4_STEP)))
 
-    def problem(a):
+    def problem(a: float) -> _Problem:
         Ja = J * a + np.diag(np.diag(J)) * (1.0 - a)
         Qa = q_hat * a + np.diag(np.diag(q_hat)) * (1.0 - a)
         ang = angles * a
@@ -488,7 +512,7 @@ def three_axis_slew(
     )
 
 
-def _target_angles(target) -> np.ndarray:
+def _target_angles(target: QuantityArrayLike) -> FloatArray:
     """1-2-3 angles of the target: given directly (3,) or from Euler parameters (4,)."""
     # units (a string or a pint Quantity) only make sense for angles; plain numbers may be either
     with_units = isinstance(target, str) or hasattr(target, "units")
@@ -507,7 +531,7 @@ def _target_angles(target) -> np.ndarray:
     return angles
 
 
-def _select_axis(axis, angles, J) -> int:
+def _select_axis(axis: int | str | None, angles: FloatArray, J: FloatArray) -> int:
     if axis is None:
         # largest |angle|; ties (within rounding) to the largest principal moment
         big = np.abs(angles) >= np.abs(angles).max() * (1 - 1e-12)
@@ -524,14 +548,14 @@ def _select_axis(axis, angles, J) -> int:
     return int(k)
 
 
-def _segment_count(k_scaled) -> int:
+def _segment_count(k_scaled: FloatArray) -> int:
     """Shooting segments on [0, 1]: growth e^{Re λ h} <= e^{2.5} per segment (the linear part,
     the single-axis K, sets the growth of the nonlinear problem near its start)."""
     growth = float(np.max(np.linalg.eigvals(k_scaled).real))
     return max(_MIN_SEGMENTS, int(np.ceil(growth / _GROWTH_PER_SEGMENT)))
 
 
-def _seed(start, k, tau):
+def _seed(start: FrequencyShapedSlew, k: int, tau: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Node values (dimensionless, ẑ) of the mapped single-axis solution at τ = ``tau`` and the
     balancing scale of each component (its largest magnitude along the start; 1 for β)."""
     grid = np.linspace(0.0, 1.0, 401)
@@ -560,7 +584,17 @@ class _Problem:
     rebuilding Ω(ω), B(β), ... from their entries.
     """
 
-    def __init__(self, J, wb, zeta, Q, beta_target, scale, n, n_rk):
+    def __init__(
+        self,
+        J: FloatArray,
+        wb: float,
+        zeta: float,
+        Q: FloatArray,
+        beta_target: FloatArray,
+        scale: FloatArray,
+        n: int,
+        n_rk: int,
+    ) -> None:
         self.beta_target, self.scale, self.n, self.n_rk = beta_target, scale, n, n_rk
         unit = np.vstack([np.zeros(N_Z), np.diag(scale)])  # ẑ = scale · ζ
         jac = state_costate_jacobian(unit, J, wb, zeta, Q, np.linalg.inv(J))
@@ -568,13 +602,13 @@ class _Problem:
         self.a0 = jac[0]
         self.slope = (jac[1:] - jac[0]).reshape(N_Z, N_Z * N_Z)
 
-    def df(self, zeta):
+    def df(self, zeta: FloatArray) -> FloatArray:
         return self.a0 + (zeta @ self.slope).reshape(zeta.shape[:-1] + (N_Z, N_Z))
 
-    def f(self, zeta):
+    def f(self, zeta: FloatArray) -> FloatArray:
         return 0.5 * ((self.a0 + self.df(zeta)) @ zeta[..., None])[..., 0]
 
-    def rk4(self, s):
+    def rk4(self, s: FloatArray) -> tuple[FloatArray, FloatArray]:
         """End values and sensitivity matrices of all segments, fixed-step RK4 (vectorised).
         RK4 applied to the variational equation gives the exact derivative of the RK4 map, so
         Newton on the discretised problem converges quadratically."""
@@ -595,10 +629,10 @@ class _Problem:
             phi = phi + h / 6.0 * (p1 + 2 * p2 + 2 * p3 + p4)
         return z, phi
 
-    def dop853(self, s):
+    def dop853(self, s: FloatArray) -> tuple[FloatArray, scipy.integrate.OdeSolution]:
         """End values of all segments and the stacked dense output, DOP853 at rtol 1e-13."""
 
-        def fun(_, y):
+        def fun(_: float, y: FloatArray) -> FloatArray:
             return self.f(y.reshape(self.n, N_Z)).ravel()
 
         out = scipy.integrate.solve_ivp(
@@ -616,11 +650,11 @@ class _Problem:
             )
         return out.y[:, -1].reshape(self.n, N_Z), out.sol
 
-    def residual(self, s, ends):
+    def residual(self, s: FloatArray, ends: FloatArray) -> FloatArray:
         """Boundary conditions and continuity (balanced units, 26 N rows)."""
         sc = self.scale
         b0, g0 = s[0, BETA], s[0, GAMMA] * sc[GAMMA]
-        r = [
+        r: list[npt.ArrayLike] = [
             s[0, BETA] - [1.0, 0.0, 0.0, 0.0],
             s[0, 4:13],
             [g0 @ b0 / sc[13]],  # γᵀβ = 0 in units of the γ balance
@@ -630,7 +664,7 @@ class _Problem:
         ]
         return np.concatenate(r)
 
-    def jacobian(self, s, phi):
+    def jacobian(self, s: FloatArray, phi: FloatArray) -> FloatArray:
         n, sc = self.n, self.scale
         m = N_Z * n
         A = np.zeros((m, m))
@@ -645,7 +679,9 @@ class _Problem:
         return A
 
 
-def _newton(prob: _Problem, s, max_newton):
+def _newton(
+    prob: _Problem, s: FloatArray, max_newton: int
+) -> tuple[FloatArray, Any, int, float] | None:
     """Newton on the RK4-discretised problem; None if it does not converge (non-finite, or
     not at least halving the residual from the third iteration on: the step is too long)."""
     last = np.inf
@@ -665,7 +701,9 @@ def _newton(prob: _Problem, s, max_newton):
     return None
 
 
-def _polish(prob: _Problem, s, lu):
+def _polish(
+    prob: _Problem, s: FloatArray, lu: Any
+) -> tuple[FloatArray, scipy.integrate.OdeSolution, int, float]:
     """Simplified Newton on DOP853 residuals with the RK4 Jacobian ``lu`` (contracts at the
     RK4 sensitivity error, ~1e-5 per iteration)."""
     for it in range(_MAX_POLISH + 1):

@@ -21,17 +21,25 @@ simulator), pseudo-square and sinusoidal torque shaping.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from flexsat.input_checks import require_finite, require_positive
-from flexsat.units import to_si_array
+from flexsat.units import FloatArray, QuantityArrayLike, to_si_array
 
 __all__ = ["BangBang", "PseudoSquare", "Reference", "Sinusoidal", "SmoothBangBang", "TorqueShape"]
 
 _C_SINE = 1.0 - 2.0 / np.pi  # plateau torque-impulse lost per unit rise time by a quarter sine
+
+#: a profile and its first and second time integrals, ``(g, G1, G2)``
+Integrals = tuple[FloatArray, FloatArray, FloatArray]
+#: a rise or fall profile of :func:`_rounded_square`: ``x`` in [0, 1] to its :data:`Integrals`
+Profile = Callable[[Any], Integrals]
 
 
 @dataclass(frozen=True)
@@ -41,13 +49,13 @@ class Reference:
     All four arrays have the broadcast shape of ``t`` and the shape parameters.
     """
 
-    u: np.ndarray
-    theta: np.ndarray
-    theta_dot: np.ndarray
-    theta_ddot: np.ndarray
+    u: FloatArray
+    theta: FloatArray
+    theta_dot: FloatArray
+    theta_ddot: FloatArray
 
 
-def _exactly(n, **given):
+def _exactly(n: int, **given: object) -> None:
     names = [k for k, v in given.items() if v is not None]
     if len(names) != n:
         raise ValueError(
@@ -56,7 +64,9 @@ def _exactly(n, **given):
         )
 
 
-def _quarter_ratio(name, ratio, why, open_at_zero=False, label=None):
+def _quarter_ratio(
+    name: str, ratio: FloatArray, why: str, open_at_zero: bool = False, label: str | None = None
+) -> FloatArray:
     """Check a dimensionless shape ratio lies in [0, 1/4] (or (0, 1/4]) and clip rounding.
 
     A solved ratio that misses a bound by <= 1e-12 (floating-point rounding of the closed-form
@@ -71,7 +81,9 @@ def _quarter_ratio(name, ratio, why, open_at_zero=False, label=None):
     return np.clip(ratio, 0.0, 0.25)
 
 
-def _rounded_square(tau, half, a, rise, fall):
+def _rounded_square(
+    tau: FloatArray, half: FloatArray, a: FloatArray, rise: Profile, fall: Profile
+) -> Integrals:
     """Half of a rounded square wave and its first and second time integrals from 0.
 
     ``f`` rises over ``[0, a]`` as ``rise``, is 1 on ``[a, half - a]`` and falls over
@@ -101,25 +113,25 @@ def _rounded_square(tau, half, a, rise, fall):
     return f, F1, F2
 
 
-def _smoothstep(x):
+def _smoothstep(x: Any) -> Integrals:
     """Junkins rise ``h = x^2 (3 - 2x)`` (Att. 3 Eq. 12, first piece) and its integrals."""
     x2 = x * x  # products, not **: numpy scalar and array power can differ by an ulp
     return x2 * (3 - 2 * x), x2 * x - x2 * x2 / 2, x2 * x2 / 4 - x2 * x2 * x / 10
 
 
-def _smoothstep_fall(x):
+def _smoothstep_fall(x: Any) -> Integrals:
     """Junkins reversal ``1 - 2 h(x/2)`` for its first half, ``x = (t - t1)/dt`` in [0, 1]."""
     h, h1, h2 = _smoothstep(x / 2)
     return 1 - 2 * h, x - 4 * h1, x * x / 2 - 8 * h2
 
 
-def _sine_rise(x):
+def _sine_rise(x: Any) -> Integrals:
     """NPS quarter-sine rise ``sin(pi x / 2)`` (Eq. 26, first piece) and its integrals."""
     s, c = np.sin(np.pi * x / 2), np.cos(np.pi * x / 2)
     return s, (2 / np.pi) * (1 - c), (2 / np.pi) * (x - (2 / np.pi) * s)
 
 
-def _sine_fall(x):
+def _sine_fall(x: Any) -> Integrals:
     """NPS reversal ``sin(pi (t - P/2 - 2 t_r) / (2 t_r)) = cos(pi x / 2)`` for its first half."""
     s, c = np.sin(np.pi * x / 2), np.cos(np.pi * x / 2)
     return c, (2 / np.pi) * s, (2 / np.pi) ** 2 * (1 - c)
@@ -136,21 +148,27 @@ class TorqueShape(ABC):
         Subclasses add their shape parameter.
     """
 
-    def __init__(self, **fields):
+    angle: FloatArray
+    inertia: FloatArray
+    u_max: FloatArray
+    duration: FloatArray
+    theta0: FloatArray
+
+    def __init__(self, **fields: npt.ArrayLike) -> None:
         arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in fields.values()))
         for name, a in zip(fields, arrays):
             setattr(self, name, np.array(a))
 
     @property
-    def end_time(self):
+    def end_time(self) -> FloatArray:
         """Maneuver end time ``T`` [s] (``= duration``)."""
         return self.duration
 
     @abstractmethod
-    def _half(self, tau):
+    def _half(self, tau: FloatArray) -> Integrals:
         """``f``, ``int f`` and ``int int f`` from 0 to ``tau`` in ``[0, T/2]``."""
 
-    def __call__(self, t):
+    def __call__(self, t: QuantityArrayLike) -> Reference:
         """Evaluate the reference at time(s) ``t`` [s].
 
         For ``t < 0`` the body rests at ``theta0``; for ``t >= T`` it rests at ``theta0 + angle``
@@ -178,7 +196,9 @@ class TorqueShape(ABC):
         return Reference(u=u, theta=theta, theta_dot=k * F1, theta_ddot=u / self.inertia)
 
 
-def _slew(angle, inertia, theta0):
+def _slew(
+    angle: QuantityArrayLike, inertia: QuantityArrayLike, theta0: QuantityArrayLike
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     angle = require_finite(angle, "angle", "rad")
     if np.any(angle == 0):
         raise ValueError(
@@ -207,11 +227,19 @@ class BangBang(TorqueShape):
         Initial angle [rad].
     """
 
-    def __init__(self, angle, inertia, u_max=None, duration=None, theta0=0.0):
+    def __init__(
+        self,
+        angle: QuantityArrayLike,
+        inertia: QuantityArrayLike,
+        u_max: QuantityArrayLike | None = None,
+        duration: QuantityArrayLike | None = None,
+        theta0: QuantityArrayLike = 0.0,
+    ) -> None:
         angle, inertia, theta0 = _slew(angle, inertia, theta0)
         _exactly(1, u_max=u_max, duration=duration)
         m = inertia * np.abs(angle)
         if duration is None:
+            assert u_max is not None  # given: checked by _exactly above
             u_max = require_positive(u_max, "u_max", "N*m")
             duration = np.sqrt(4 * m / u_max)
         else:
@@ -221,7 +249,7 @@ class BangBang(TorqueShape):
             angle=angle, inertia=inertia, u_max=u_max, duration=duration, theta0=theta0
         )
 
-    def _half(self, tau):
+    def _half(self, tau: FloatArray) -> Integrals:
         return np.ones_like(tau), tau, 0.5 * tau * tau
 
 
@@ -251,12 +279,24 @@ class SmoothBangBang(TorqueShape):
         Initial angle [rad].
     """
 
-    def __init__(self, angle, inertia, u_max=None, duration=None, alpha=None, theta0=0.0):
+    alpha: FloatArray
+
+    def __init__(
+        self,
+        angle: QuantityArrayLike,
+        inertia: QuantityArrayLike,
+        u_max: QuantityArrayLike | None = None,
+        duration: QuantityArrayLike | None = None,
+        alpha: QuantityArrayLike | None = None,
+        theta0: QuantityArrayLike = 0.0,
+    ) -> None:
         angle, inertia, theta0 = _slew(angle, inertia, theta0)
         _exactly(2, u_max=u_max, duration=duration, alpha=alpha)
         m = inertia * np.abs(angle)
         if alpha is None:
+            assert u_max is not None  # given: checked by _exactly above
             u_max = require_positive(u_max, "u_max", "N*m")
+            assert duration is not None  # given: checked by _exactly above
             duration = require_positive(duration, "duration", "s")
             # alpha^2/10 - alpha/2 + 1/4 = q; the other root exceeds 5/2
             alpha = (5 - np.sqrt(15 + 40 * m / (u_max * duration**2))) / 2
@@ -271,6 +311,7 @@ class SmoothBangBang(TorqueShape):
         alpha = _quarter_ratio("alpha", alpha, why)
         c = 0.25 - alpha / 2 + alpha**2 / 10
         if duration is None:
+            assert u_max is not None  # given: checked by _exactly above
             u_max = require_positive(u_max, "u_max", "N*m")
             duration = np.sqrt(m / (u_max * c))
         elif u_max is None:
@@ -280,12 +321,12 @@ class SmoothBangBang(TorqueShape):
             angle=angle, inertia=inertia, u_max=u_max, duration=duration, theta0=theta0, alpha=alpha
         )
 
-    def _half(self, tau):
+    def _half(self, tau: FloatArray) -> Integrals:
         return _rounded_square(
             tau, 0.5 * self.duration, self.alpha * self.duration, _smoothstep, _smoothstep_fall
         )
 
-    def __call__(self, t):
+    def __call__(self, t: QuantityArrayLike) -> Reference:
         """:meth:`TorqueShape.__call__`; a table of samples × cases (``t`` of shape (n_t, 1),
         the parameters scalars or (n_cases,)) is evaluated by :func:`_smooth_table`, a
         compiled loop of the same operations (the same bits, without the ~20 temporary
@@ -303,7 +344,15 @@ class SmoothBangBang(TorqueShape):
 
 
 @njit(cache=True, error_model="numpy")
-def _smooth_table(t, T, alpha, angle, u_max, inertia, theta0):
+def _smooth_table(
+    t: FloatArray,
+    T: FloatArray,
+    alpha: FloatArray,
+    angle: FloatArray,
+    u_max: FloatArray,
+    inertia: FloatArray,
+    theta0: FloatArray,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """(u, θ, θ', θ'') of :class:`SmoothBangBang` at every t (n_t,) for every case (C,):
     :meth:`TorqueShape.__call__` with :func:`_rounded_square`, :func:`_smoothstep` and
     :func:`_smoothstep_fall`, element by element, each operation as the array expression
@@ -385,7 +434,17 @@ class PseudoSquare(TorqueShape):
         Initial angle [rad].
     """
 
-    def __init__(self, angle, inertia, u_max=None, duration=None, rise_time=None, theta0=0.0):
+    rise_time: FloatArray
+
+    def __init__(
+        self,
+        angle: QuantityArrayLike,
+        inertia: QuantityArrayLike,
+        u_max: QuantityArrayLike | None = None,
+        duration: QuantityArrayLike | None = None,
+        rise_time: QuantityArrayLike | None = None,
+        theta0: QuantityArrayLike = 0.0,
+    ) -> None:
         angle, inertia, theta0 = _slew(angle, inertia, theta0)
         _exactly(2, u_max=u_max, duration=duration, rise_time=rise_time)
         m = inertia * np.abs(angle)
@@ -394,7 +453,9 @@ class PseudoSquare(TorqueShape):
             "reversal do not overlap (rise_time = duration/4 is the pure sinusoid)"
         )
         if rise_time is None:
+            assert u_max is not None  # given: checked by _exactly above
             u_max = require_positive(u_max, "u_max", "N*m")
+            assert duration is not None  # given: checked by _exactly above
             duration = require_positive(duration, "duration", "s")
             rise_time = (duration**2 / 4 - m / u_max) / (duration * _C_SINE)
             why += (
@@ -404,6 +465,7 @@ class PseudoSquare(TorqueShape):
         else:
             rise_time = require_finite(rise_time, "rise_time", "s")
             if duration is None:
+                assert u_max is not None  # given: checked by _exactly above
                 u_max = require_positive(u_max, "u_max", "N*m")
                 duration = 2 * (
                     rise_time * _C_SINE + np.sqrt((rise_time * _C_SINE) ** 2 + m / u_max)
@@ -423,7 +485,7 @@ class PseudoSquare(TorqueShape):
             rise_time=rise_time,
         )
 
-    def _half(self, tau):
+    def _half(self, tau: FloatArray) -> Integrals:
         return _rounded_square(tau, 0.5 * self.duration, self.rise_time, _sine_rise, _sine_fall)
 
 
@@ -446,11 +508,19 @@ class Sinusoidal(TorqueShape):
         Initial angle [rad].
     """
 
-    def __init__(self, angle, inertia, u_max=None, duration=None, theta0=0.0):
+    def __init__(
+        self,
+        angle: QuantityArrayLike,
+        inertia: QuantityArrayLike,
+        u_max: QuantityArrayLike | None = None,
+        duration: QuantityArrayLike | None = None,
+        theta0: QuantityArrayLike = 0.0,
+    ) -> None:
         angle, inertia, theta0 = _slew(angle, inertia, theta0)
         _exactly(1, u_max=u_max, duration=duration)
         m = 2 * np.pi * inertia * np.abs(angle)
         if duration is None:
+            assert u_max is not None  # given: checked by _exactly above
             u_max = require_positive(u_max, "u_max", "N*m")
             duration = np.sqrt(m / u_max)
         else:
@@ -460,7 +530,7 @@ class Sinusoidal(TorqueShape):
             angle=angle, inertia=inertia, u_max=u_max, duration=duration, theta0=theta0
         )
 
-    def _half(self, tau):
+    def _half(self, tau: FloatArray) -> Integrals:
         w = 2 * np.pi / self.duration
         s = np.sin(w * tau)
         return s, (1 - np.cos(w * tau)) / w, (tau - s / w) / w

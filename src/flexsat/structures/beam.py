@@ -81,14 +81,17 @@ basis coefficients and :math:`\varphi = \theta L`; see :func:`_hub_matrix` for t
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from numbers import Integral
 
 import numpy as np
+import numpy.typing as npt
 from scipy.optimize import brentq
 
 from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.units import FloatArray
 
 __all__ = [
     "CLAMPED_FREE_BETA_L",
@@ -108,24 +111,26 @@ _SCAN_STEP = math.pi / 32  # grid step in z = βL for the sign-change scan
 _SUBDIVIDE = 8  # sub-intervals per refinement of an inconsistent grid interval
 _MAX_DEPTH = 8  # refinement levels (interval shrinks by 8**8 ≈ 1.7e7)
 
+IntArray = npt.NDArray[np.int_]
+
 
 # ------------------------------------------------------------------------------------------------
 # input checks
-def _real(value, field: str) -> float:
+def _real(value: float, field: str) -> float:
     return float(require_finite(value, field))
 
 
-def _positive(value, field: str) -> float:
+def _positive(value: float, field: str) -> float:
     return float(require_positive(value, field))
 
 
-def _nonneg(value, field: str) -> float:
+def _nonneg(value: float, field: str) -> float:
     return float(require_nonneg(value, field))
 
 
 # ------------------------------------------------------------------------------------------------
 # bounded boundary-condition matrices (vectorised over z = βL)
-def _tip_rows(z, mu, iota):
+def _tip_rows(z: FloatArray, mu: float, iota: float) -> tuple[FloatArray, FloatArray]:
     """Tip moment and shear rows, each divided by a positive factor (1 + Ĵ), (1 + m̂)."""
     E, c, s = np.exp(-z), np.cos(z), np.sin(z)
     jh, mh = iota * z**3, mu * z
@@ -134,7 +139,7 @@ def _tip_rows(z, mu, iota):
     return moment, shear
 
 
-def _cantilever_matrix(z, mu, iota):
+def _cantilever_matrix(z: npt.ArrayLike, mu: float, iota: float) -> FloatArray:
     """Bounded 4x4 boundary-condition matrix of the tip-mass cantilever, shape (..., 4, 4)."""
     z = np.asarray(z, dtype=float)
     E, one, zero = np.exp(-z), np.ones_like(z), np.zeros_like(z)
@@ -144,7 +149,7 @@ def _cantilever_matrix(z, mu, iota):
     )
 
 
-def _hub_matrix(z, mu, iota, r, eta):
+def _hub_matrix(z: npt.ArrayLike, mu: float, iota: float, r: float, eta: float) -> FloatArray:
     r"""Bounded 5x5 matrix of the free hub problem, unknowns (a_1..a_4, φ = θL).
 
     With r = l0/L and η = I_h / (n ρ L³), the rows are
@@ -171,7 +176,7 @@ def _hub_matrix(z, mu, iota, r, eta):
 
 # ------------------------------------------------------------------------------------------------
 # Wittrick–Williams root count
-def _clamped_clampedrequire_count(z):
+def _clamped_clamped_count(z: npt.ArrayLike) -> IntArray:
     """Number of roots of cos z cosh z = 1 in (0, z) (clamped–clamped beam frequencies below).
 
     J0 = i − (1 − (−1)^i sgn(1 − cos z cosh z)) / 2 with i = ⌊z/π⌋; the sign is evaluated as
@@ -185,7 +190,7 @@ def _clamped_clampedrequire_count(z):
     return np.where(z < 1.0, 0, np.rint(j0)).astype(int)
 
 
-def _element_dynamic_stiffness(z):
+def _element_dynamic_stiffness(z: npt.ArrayLike) -> FloatArray:
     r"""Exact dynamic stiffness of a free beam element, scaled, shape (..., 4, 4).
 
     End degrees of freedom q = (w(0), w'(0)/β, w(L), w'(L)/β); the conjugate end forces, divided
@@ -217,20 +222,20 @@ def _element_dynamic_stiffness(z):
     return 0.5 * (K + np.swapaxes(K, -1, -2))
 
 
-def _negativerequire_count(K):
+def _negative_count(K: FloatArray) -> IntArray:
     return (np.linalg.eigvalsh(K) < 0).sum(-1)
 
 
-def _cantileverrequire_count(z, mu, iota):
+def _cantilever_count(z: npt.ArrayLike, mu: float, iota: float) -> IntArray:
     """Number of tip-mass cantilever frequencies with βL < z (Wittrick–Williams)."""
     z = np.asarray(z, dtype=float)
     K = _element_dynamic_stiffness(z)[..., 2:, 2:].copy()
     K[..., 0, 0] -= mu * z
     K[..., 1, 1] -= iota * z**3
-    return _clamped_clampedrequire_count(z) + _negativerequire_count(K)
+    return _clamped_clamped_count(z) + _negative_count(K)
 
 
-def _hubrequire_count(z, mu, iota, r, eta):
+def _hub_count(z: npt.ArrayLike, mu: float, iota: float, r: float, eta: float) -> IntArray:
     """Number of free-hub frequencies with βL < z, rigid-body mode included (Wittrick–Williams).
 
     Degrees of freedom (θ/β, w(L), w'(L)/β); the root is slaved to the hub by
@@ -247,24 +252,29 @@ def _hubrequire_count(z, mu, iota, r, eta):
     T[..., 3, 2] = 1.0
     K3 = np.swapaxes(T, -1, -2) @ K @ T
     K3[..., 0, 0] -= eta * z**3
-    return _clamped_clampedrequire_count(z) + _negativerequire_count(
-        0.5 * (K3 + np.swapaxes(K3, -1, -2))
-    )
+    return _clamped_clamped_count(z) + _negative_count(0.5 * (K3 + np.swapaxes(K3, -1, -2)))
 
 
 # ------------------------------------------------------------------------------------------------
 # root finder
-def _find_roots(matrix, count, k: int, z_start: float) -> np.ndarray:
+def _find_roots(
+    matrix: Callable[[npt.ArrayLike], FloatArray],
+    count: Callable[[npt.ArrayLike], IntArray],
+    k: int,
+    z_start: float,
+) -> FloatArray:
     """First k roots z > z_start of det(matrix(z)), with count(z) = number of roots in (z_start, z).
 
     Sign changes on a grid of step π/32 are refined with brentq (relative tolerance 4 eps);
     grid intervals where the number of sign changes disagrees with the count are subdivided.
     """
 
-    def det(z):
+    def det(z: npt.ArrayLike) -> FloatArray:
         return np.linalg.det(matrix(np.atleast_1d(np.asarray(z, dtype=float))))
 
-    def solve(a, b, da, db, na, nb, depth):
+    def solve(
+        a: float, b: float, da: float, db: float, na: int, nb: int, depth: int
+    ) -> list[float]:
         n = nb - na
         if n == 0 and da * db > 0:
             return []
@@ -334,11 +344,11 @@ class CantileverModes:
     """
 
     length: float
-    betas: np.ndarray
-    omegas: np.ndarray
-    coefficients: np.ndarray
+    betas: FloatArray
+    omegas: FloatArray
+    coefficients: FloatArray
 
-    def evaluate(self, xi, derivative: int = 0) -> np.ndarray:
+    def evaluate(self, xi: npt.ArrayLike, derivative: int = 0) -> FloatArray:
         r"""Mode shapes or their derivatives at stations ξ.
 
         .. math::
@@ -382,7 +392,7 @@ class CantileverModes:
         return y * b**j
 
 
-def _gram(z):
+def _gram(z: npt.ArrayLike) -> FloatArray:
     r"""∫_0^z g_p g_q dx for g = (e^{-x}, e^{-(z-x)}, cos x, sin x), shape (..., 4, 4)."""
     z = np.asarray(z, dtype=float)
     E, c, s = np.exp(-z), np.cos(z), np.sin(z)
@@ -434,7 +444,7 @@ class TipMassCantilever:
     tip_mass: float = 0.0
     tip_inertia: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("length", "EI", "rho"):
             object.__setattr__(self, name, _positive(getattr(self, name), name))
         for name in ("tip_mass", "tip_inertia"):
@@ -448,14 +458,14 @@ class TipMassCantilever:
     def _iota(self) -> float:
         return self.tip_inertia / (self.rho * self.length**3)
 
-    def _beta_L(self, k) -> np.ndarray:
+    def _beta_L(self, k: int) -> FloatArray:
         return _tip_loaded_roots(self._mu, self._iota, require_count(k, "k"))
 
-    def betas(self, k: int) -> np.ndarray:
+    def betas(self, k: int) -> FloatArray:
         """First k roots β_i of the frequency equation, 1/m, ascending, relative accuracy ~1e-15."""
         return self._beta_L(k) / self.length
 
-    def frequencies(self, k: int) -> np.ndarray:
+    def frequencies(self, k: int) -> FloatArray:
         """First k natural frequencies ω_i = β_i² √(EI/ρ), rad/s."""
         return self.betas(k) ** 2 * math.sqrt(self.EI / self.rho)
 
@@ -489,17 +499,17 @@ class TipMassCantilever:
 
 
 @lru_cache(maxsize=256)
-def _tip_loaded_roots(mu: float, iota: float, k: int) -> np.ndarray:
+def _tip_loaded_roots(mu: float, iota: float, k: int) -> FloatArray:
     """First k roots βL of the tip-loaded cantilever's frequency equation for the tip mass and
     rotary-inertia ratios μ = m/(ρL), ι = J/(ρL³), read-only and cached: they depend on (μ, ι, k)
     alone, so the beams of a Monte Carlo that disperses EI, the hub or the gains share them
     (the root search is 55 % of a 10-mode hub + appendage build)."""
     z0 = 1e-3
-    while _cantileverrequire_count(np.array([z0]), mu, iota)[0] > 0 and z0 > 1e-12:
+    while _cantilever_count(np.array([z0]), mu, iota)[0] > 0 and z0 > 1e-12:
         z0 /= 10  # only for extreme tip mass, where β_1 L -> (3/μ)^(1/4)
     roots = _find_roots(
         lambda z: _cantilever_matrix(z, mu, iota),
-        lambda z: _cantileverrequire_count(z, mu, iota),
+        lambda z: _cantilever_count(z, mu, iota),
         k,
         z0,
     )
@@ -507,14 +517,14 @@ def _tip_loaded_roots(mu: float, iota: float, k: int) -> np.ndarray:
     return roots
 
 
-def clamped_free_beta_L(k: int) -> np.ndarray:
+def clamped_free_beta_L(k: int) -> FloatArray:
     """First k roots z of 1 + cos z cosh z = 0, computed with the tip-mass solver (m = J = 0)."""
     return TipMassCantilever(1.0, 1.0, 1.0).betas(k)
 
 
 def hub_free_frequencies(
     beam: TipMassCantilever, hub_radius: float, hub_inertia: float, n_appendages: int, k: int
-) -> np.ndarray:
+) -> FloatArray:
     r"""First k elastic natural frequencies of a free hub carrying n identical appendages, rad/s.
 
     The hub (inertia :math:`I_h` about its axis) rotates freely; each beam is clamped radially at
@@ -560,8 +570,8 @@ def hub_free_frequencies(
     mu, iota, r, eta = beam._mu, beam._iota, l0 / L, I_h / (n * rho * L**3)
     z0 = 0.5 * beam._beta_L(1)[0]
 
-    def count(z):
-        return _hubrequire_count(z, mu, iota, r, eta) - 1  # the rigid-body mode lies below z0
+    def count(z: npt.ArrayLike) -> IntArray:
+        return _hub_count(z, mu, iota, r, eta) - 1  # the rigid-body mode lies below z0
 
     z = _find_roots(lambda z: _hub_matrix(z, mu, iota, r, eta), count, k, z0)
     return (z / L) ** 2 * math.sqrt(beam.EI / rho)

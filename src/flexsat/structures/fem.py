@@ -13,16 +13,20 @@ as one ``(n, d, d)`` stack, scattered as COO triplets and summed into CSR.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Collection, Iterable, Sequence
 from dataclasses import dataclass, field
 from numbers import Integral
+from typing import Any, TypedDict
 
 import numpy as np
+import numpy.typing as npt
 import scipy.sparse as sp
 
 from flexsat.input_checks import require_finite, require_nonneg, require_positive
 from flexsat.structures import elements as el
 from flexsat.structures.modal_solve import SYMMETRY_RTOL, factor_positive_definite, solve_modes
 from flexsat.structures.sections import Material, Section
+from flexsat.units import FloatArray
 
 __all__ = ["DOF_NAMES", "Assembly", "FEModes", "Structure"]
 
@@ -37,13 +41,17 @@ _KIND_SLOTS = {
 _ZERO_LENGTH_RTOL = 1e-10  # a member shorter than this times its end coordinates is zero-length
 _PLANE_RTOL = 1e-9  # |z2 - z1| of a planar member, relative to its length
 
+IntArray = npt.NDArray[np.int_]
+#: element blocks of one kind: global slot indices (n, d), K (n, d, d), M (n, d, d)
+ElementBlocks = tuple[IntArray, FloatArray, FloatArray]
+
 
 @dataclass
 class _Member:
     kind: str
     n1: int  # node indices (not ids)
     n2: int
-    props: dict
+    props: dict[str, Any]
     label: object = None
     preload: float = 0.0
 
@@ -52,7 +60,7 @@ class _Member:
 class _Lumped:
     node: int
     mass: float
-    inertia: np.ndarray | None
+    inertia: FloatArray | None
 
 
 # ------------------------------------------------------------------------------------------------
@@ -70,18 +78,18 @@ class Structure:
     (``"node 7: unknown ..."``, ``"E: must be > 0 ..."``) and stating the rule.
     """
 
-    def __init__(self, name: str = ""):
+    def __init__(self, name: str = "") -> None:
         self.name = name
         self._index: dict[int, int] = {}
         self._ids: list[int] = []
-        self._xyz: list[np.ndarray] = []
+        self._xyz: list[FloatArray] = []
         self._members: list[_Member] = []
         self._masses: list[_Lumped] = []
         self._clamped: set[tuple[int, int]] = set()
         self._suppressed: set[tuple[int, int]] = set()  # clamps kept in Assembly.unclamped
 
     # -- nodes ------------------------------------------------------------------------------
-    def add_node(self, node_id: int, xyz) -> None:
+    def add_node(self, node_id: int, xyz: npt.ArrayLike) -> None:
         """Add a node with a unique integer id at position ``xyz`` (3,), m."""
         if isinstance(node_id, bool) or not isinstance(node_id, Integral):
             raise ValueError(f"node_id: must be an integer, got {node_id!r}")
@@ -96,12 +104,12 @@ class Structure:
         self._xyz.append(x)
 
     @property
-    def node_ids(self) -> np.ndarray:
+    def node_ids(self) -> IntArray:
         """Node ids in insertion order."""
         return np.array(self._ids, dtype=int)
 
     @property
-    def coordinates(self) -> np.ndarray:
+    def coordinates(self) -> FloatArray:
         """Node positions (n, 3), m, in the order of :attr:`node_ids`."""
         return np.array(self._xyz, dtype=float).reshape(-1, 3)
 
@@ -110,35 +118,37 @@ class Structure:
         """Number of members (element ids are 0 .. n_elements - 1)."""
         return len(self._members)
 
-    def element(self, element) -> dict:
+    def element(self, element: int) -> dict[str, Any]:
         """Description of a member: ``kind``, ``nodes`` (ids), ``label`` and ``preload`` (N)."""
         m = self._members[self._element_index(element)]
         return dict(
             kind=m.kind, nodes=(self._ids[m.n1], self._ids[m.n2]), label=m.label, preload=m.preload
         )
 
-    def _element_index(self, element) -> int:
+    def _element_index(self, element: object) -> int:
         if (
             isinstance(element, bool)
             or not isinstance(element, Integral)
-            or not (0 <= element < len(self._members))
+            or not (0 <= int(element) < len(self._members))
         ):
             raise ValueError(f"element {element!r}: unknown element id")
         return int(element)
 
-    def _node(self, node_id) -> int:
+    def _node(self, node_id: int) -> int:
         try:
             return self._index[node_id]
         except (KeyError, TypeError):
             raise ValueError(f"node {node_id!r}: unknown node (add it with add_node)") from None
 
     # -- members ----------------------------------------------------------------------------
-    def _add(self, kind, n1, n2, props, label) -> int:
+    def _add(self, kind: str, n1: int, n2: int, props: dict[str, Any], label: object) -> int:
         member = _Member(kind, self._node(n1), self._node(n2), props, label)
         self._members.append(member)
         return len(self._members) - 1
 
-    def _ends(self, n1, n2, offsets=None):
+    def _ends(
+        self, n1: int, n2: int, offsets: FloatArray | None = None
+    ) -> tuple[FloatArray, FloatArray, float]:
         x1, x2 = self._xyz[self._node(n1)], self._xyz[self._node(n2)]
         if offsets is not None:
             x1, x2 = x1 + offsets[0], x2 + offsets[1]
@@ -147,7 +157,7 @@ class Structure:
             raise ValueError(f"member ({n1}, {n2}): zero length (its ends coincide)")
         return x1, x2, length
 
-    def _planar(self, n1, n2):
+    def _planar(self, n1: int, n2: int) -> None:
         x1, x2, length = self._ends(n1, n2)
         if abs(x2[2] - x1[2]) > _PLANE_RTOL * length:
             raise ValueError(
@@ -158,14 +168,14 @@ class Structure:
 
     def add_frame(
         self,
-        n1,
-        n2,
+        n1: int,
+        n2: int,
         material: Material,
         section: Section,
-        orientation=None,
-        offsets=None,
-        lumped=False,
-        label=None,
+        orientation: npt.ArrayLike | None = None,
+        offsets: npt.ArrayLike | None = None,
+        lumped: bool = False,
+        label: object = None,
     ) -> int:
         """Add a 3-D Euler-Bernoulli frame member (12 dofs); returns its element id.
 
@@ -213,7 +223,13 @@ class Structure:
         return self._add("frame", n1, n2, props, label)
 
     def add_beam2d(
-        self, n1, n2, material: Material, section: Section, lumped=False, label=None
+        self,
+        n1: int,
+        n2: int,
+        material: Material,
+        section: Section,
+        lumped: bool = False,
+        label: object = None,
     ) -> int:
         """Add a planar beam in the global X-Y plane (dofs ux, uy, rz; bending with ``Iz``)."""
         _require_type(material, Material, "material")
@@ -225,7 +241,14 @@ class Structure:
         return self._add("beam2d", n1, n2, props, label)
 
     def add_grid(
-        self, n1, n2, EI, GJ, mass_per_length, torsional_inertia_per_length=0.0, label=None
+        self,
+        n1: int,
+        n2: int,
+        EI: float,
+        GJ: float,
+        mass_per_length: float,
+        torsional_inertia_per_length: float = 0.0,
+        label: object = None,
     ) -> int:
         """Add a grid member in the global X-Y plane (dofs uz, rx, ry).
 
@@ -247,7 +270,15 @@ class Structure:
         )
         return self._add("grid", n1, n2, props, label)
 
-    def add_rod(self, n1, n2, material: Material, area, lumped=False, label=None) -> int:
+    def add_rod(
+        self,
+        n1: int,
+        n2: int,
+        material: Material,
+        area: float,
+        lumped: bool = False,
+        label: object = None,
+    ) -> int:
         """Add a truss rod (axial stiffness only; dofs ux, uy, uz)."""
         _require_type(material, Material, "material")
         self._ends(n1, n2)
@@ -260,7 +291,7 @@ class Structure:
         return self._add("rod", n1, n2, props, label)
 
     # -- masses, clamps, preloads -----------------------------------------------------------
-    def add_mass(self, node, mass, inertia=None) -> None:
+    def add_mass(self, node: int, mass: float, inertia: npt.ArrayLike | None = None) -> None:
         """Add a lumped mass (kg) and optionally its inertia about the node (kg m^2).
 
         ``inertia`` is a 3-vector (principal, global axes) or a symmetric positive
@@ -282,7 +313,9 @@ class Structure:
                 raise ValueError("inertia: must be positive semi-definite")
         self._masses.append(_Lumped(index, m, J))
 
-    def clamp(self, node, dofs="all", support: bool | None = None) -> None:
+    def clamp(
+        self, node: int, dofs: str | Iterable[str] = "all", support: bool | None = None
+    ) -> None:
         """Fix dofs of a node: ``"all"`` or an iterable of names from :data:`DOF_NAMES`.
 
         ``support`` says whether the clamp attaches the structure to its carrier (a hub, a
@@ -302,7 +335,7 @@ class Structure:
             if not (everything if support is None else support):
                 self._suppressed.add((index, _SLOT[name]))
 
-    def set_axial_preload(self, element, force) -> None:
+    def set_axial_preload(self, element: int, force: float) -> None:
         """Set the axial force of a member (tension > 0, N); adds its geometric stiffness."""
         self._members[self._element_index(element)].preload = float(require_finite(force, "force"))
 
@@ -321,7 +354,7 @@ class Structure:
         whole = self._assemble(geometric=False, clamped=self._suppressed)
         return dataclasses.replace(assembly, unclamped=whole)
 
-    def _assemble(self, geometric: bool, clamped) -> Assembly:
+    def _assemble(self, geometric: bool, clamped: Collection[tuple[int, int]]) -> Assembly:
         n_nodes = len(self._ids)
         touched = np.zeros((n_nodes, 6), dtype=bool)
         parts = []
@@ -346,12 +379,13 @@ class Structure:
             raise ValueError("structure: no active dofs (every dof is clamped)")
         number = np.full(6 * n_nodes, -1)
         number[active.ravel()] = np.arange(int(active.sum()))
-        K, M = (_sparse(number, [(p[0], p[i]) for p in parts]) for i in (1, 2))
+        K = _sparse(number, [(idx, k) for idx, k, _ in parts])
+        M = _sparse(number, [(idx, m) for idx, _, m in parts])
         node_idx, slot_idx = np.nonzero(active)
         dofs = [(self._ids[i], DOF_NAMES[s]) for i, s in zip(node_idx, slot_idx)]
         return Assembly(K, M, dofs, self.node_ids, self.coordinates, n_clamped=len(clamped))
 
-    def _mass_blocks(self):
+    def _mass_blocks(self) -> ElementBlocks:
         """(global slot indices, K blocks, M blocks) of the lumped masses (6x6 each)."""
         idx = np.array([6 * lm.node + np.arange(6) for lm in self._masses])
         M = np.zeros((len(self._masses), 6, 6))
@@ -362,7 +396,7 @@ class Structure:
         return idx, np.zeros_like(M), M
 
     # -- preloads from gravity --------------------------------------------------------------
-    def gravity_preload(self, g=(0.0, 0.0, -9.80665)) -> np.ndarray:
+    def gravity_preload(self, g: npt.ArrayLike = (0.0, 0.0, -9.80665)) -> FloatArray:
         """Set every member's axial preload from a linear static solve under gravity.
 
         The load is ``f = M a`` with ``a`` the uniform acceleration field ``g`` on the
@@ -403,18 +437,18 @@ class Structure:
         return forces
 
 
-def _require_type(value, cls, field: str):
+def _require_type(value: object, cls: type, field: str) -> None:
     if not isinstance(value, cls):
         raise ValueError(f"{field}: must be a {cls.__name__}, got {type(value).__name__}")
 
 
-def _check_connected(touched, ids):
+def _check_connected(touched: npt.NDArray[np.bool_], ids: Sequence[int]) -> None:
     loose = np.flatnonzero(~touched.any(axis=1))
     if loose.size:
         raise ValueError(f"node {ids[loose[0]]}: not connected to any element or mass")
 
 
-def _sparse(number, blocks) -> sp.csr_matrix:
+def _sparse(number: IntArray, blocks: Iterable[tuple[IntArray, FloatArray]]) -> sp.csr_matrix:
     """Sum element blocks (global slot indices (n, d), matrices (n, d, d)) on the active dofs."""
     rows, cols, vals = [], [], []
     for idx, mat in blocks:
@@ -432,10 +466,11 @@ def _sparse(number, blocks) -> sp.csr_matrix:
     return ((A + A.T) * 0.5).tocsr()
 
 
-def _static_solve(K, f) -> np.ndarray:
+def _static_solve(K: sp.csr_matrix, f: FloatArray) -> FloatArray:
     """u = K^{-1} f for a K that must be positive definite (L D L^T, see modal_solve)."""
     try:
-        return factor_positive_definite(K).solve(f)
+        u: FloatArray = factor_positive_definite(K).solve(f)
+        return u
     except ValueError:
         raise ValueError(
             "gravity_preload: stiffness matrix is singular (a mechanism, or too few clamps)"
@@ -444,18 +479,18 @@ def _static_solve(K, f) -> np.ndarray:
 
 # ------------------------------------------------------------------------------------------------
 # per-kind batched element matrices: (global slot indices (n, d), K (n, d, d), M (n, d, d))
-def _column(members, key):
+def _column(members: Sequence[_Member], key: str) -> FloatArray:
     return np.array([m.props[key] for m in members], dtype=float)
 
 
-def _slot_indices(members, kind):
+def _slot_indices(members: Sequence[_Member], kind: str) -> IntArray:
     slots = np.array(_KIND_SLOTS[kind])
     n1 = np.array([m.n1 for m in members])[:, None]
     n2 = np.array([m.n2 for m in members])[:, None]
     return np.hstack([6 * n1 + slots, 6 * n2 + slots])
 
 
-def _frame_geometry(members, xyz):
+def _frame_geometry(members: Sequence[_Member], xyz: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Lengths (between the offset ends) and 12x12 transformations of frame members."""
     x1 = xyz[[m.n1 for m in members]]
     x2 = xyz[[m.n2 for m in members]]
@@ -472,7 +507,7 @@ def _frame_geometry(members, xyz):
     return np.linalg.norm(x2 - x1, axis=1), T
 
 
-def _frame_blocks(members, xyz, geometric):
+def _frame_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
     c = {k: _column(members, k) for k in ("E", "G", "rho", "A", "Iy", "Iz", "J")}
     L, T = _frame_geometry(members, xyz)
     k = el.frame_local_stiffness(c["E"], c["G"], c["A"], c["Iy"], c["Iz"], c["J"], L)
@@ -487,15 +522,15 @@ def _frame_blocks(members, xyz, geometric):
     return _slot_indices(members, "frame"), el.to_global(k, T), el.to_global(m, T)
 
 
-def _preloads(members):
+def _preloads(members: Sequence[_Member]) -> FloatArray:
     return np.array([m.preload for m in members], dtype=float)
 
 
-def _ends(members, xyz):
+def _ends(members: Sequence[_Member], xyz: FloatArray) -> tuple[FloatArray, FloatArray]:
     return xyz[[m.n1 for m in members]], xyz[[m.n2 for m in members]]
 
 
-def _beam2d_blocks(members, xyz, geometric):
+def _beam2d_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
     c = {k: _column(members, k) for k in ("E", "rho", "A", "Iz")}
     x1, x2 = _ends(members, xyz)
     L = np.linalg.norm((x2 - x1)[:, :2], axis=1)
@@ -512,7 +547,7 @@ def _beam2d_blocks(members, xyz, geometric):
     return _slot_indices(members, "beam2d"), el.to_global(k, T), el.to_global(m, T)
 
 
-def _grid_blocks(members, xyz, geometric):
+def _grid_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
     c = {k: _column(members, k) for k in ("EI", "GJ", "m", "It")}
     x1, x2 = _ends(members, xyz)
     L = np.linalg.norm((x2 - x1)[:, :2], axis=1)
@@ -524,7 +559,7 @@ def _grid_blocks(members, xyz, geometric):
     return _slot_indices(members, "grid"), el.to_global(k, T), el.to_global(m, T)
 
 
-def _rod_blocks(members, xyz, geometric):
+def _rod_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
     c = {k: _column(members, k) for k in ("E", "rho", "A")}
     x1, x2 = _ends(members, xyz)
     L = np.linalg.norm(x2 - x1, axis=1)
@@ -548,7 +583,7 @@ _KIND_BUILDERS = {
 }
 
 
-def _axial_force(member, xyz, displacement) -> float:
+def _axial_force(member: _Member, xyz: FloatArray, displacement: FloatArray) -> float:
     """EA/L x̂·(u_end2 - u_end1) from global node displacements (n_nodes, 6); 0 for grids."""
     if member.kind == "grid":
         return 0.0
@@ -564,10 +599,19 @@ def _axial_force(member, xyz, displacement) -> float:
     e2 = u2[:3] + np.cross(u2[3:], d2)
     axis = (x2 + d2) - (x1 + d1)
     L = np.linalg.norm(axis)
-    return p["E"] * p["A"] / L * float(axis @ (e2 - e1)) / L
+    return float(p["E"] * p["A"] / L * float(axis @ (e2 - e1)) / L)
 
 
 # ------------------------------------------------------------------------------------------------
+class MassProperties(TypedDict):
+    """Rigid-body mass properties (:meth:`Assembly.mass_properties`)."""
+
+    total_mass: float
+    center_of_mass: FloatArray
+    inertia: FloatArray
+    inertia_center_of_mass: FloatArray
+
+
 @dataclass(frozen=True, eq=False)
 class Assembly:
     """Assembled sparse model on the active dofs.
@@ -588,16 +632,16 @@ class Assembly:
 
     K: sp.csr_matrix
     M: sp.csr_matrix
-    dofs: list
-    node_ids: np.ndarray
-    coordinates: np.ndarray
+    dofs: list[tuple[int, str]]
+    node_ids: IntArray
+    coordinates: FloatArray
     n_clamped: int = 0
     unclamped: Assembly | None = None
-    _lookup: dict = field(init=False, repr=False)
-    _node_of_dof: np.ndarray = field(init=False, repr=False)
-    _slot_of_dof: np.ndarray = field(init=False, repr=False)
+    _lookup: dict[tuple[int, str], int] = field(init=False, repr=False)
+    _node_of_dof: IntArray = field(init=False, repr=False)
+    _slot_of_dof: IntArray = field(init=False, repr=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         row = {int(n): i for i, n in enumerate(self.node_ids)}
         lookup = {(int(n), d): i for i, (n, d) in enumerate(self.dofs)}
         object.__setattr__(self, "_lookup", lookup)
@@ -609,7 +653,7 @@ class Assembly:
         """Number of active dofs."""
         return len(self.dofs)
 
-    def index(self, node_id, dof) -> int:
+    def index(self, node_id: int, dof: str) -> int:
         """Row of an active dof, e.g. ``index(12, "uz")``."""
         try:
             return self._lookup[(int(node_id), dof)]
@@ -619,7 +663,7 @@ class Assembly:
                 "clamped, or not touched by any element or mass)"
             ) from None
 
-    def rigid_body_vectors(self, reference=(0.0, 0.0, 0.0)) -> np.ndarray:
+    def rigid_body_vectors(self, reference: npt.ArrayLike = (0.0, 0.0, 0.0)) -> FloatArray:
         """Unit rigid-body motions on the active dofs, shape (ndof, 6).
 
         Columns: translations along x, y, z (1 m) and rotations about x, y, z (1 rad) about
@@ -633,7 +677,7 @@ class Assembly:
         B[:, :3, 3:] = -el.skew(r)
         return B[self._node_of_dof, self._slot_of_dof]
 
-    def mass_properties(self, reference=(0.0, 0.0, 0.0)) -> dict:
+    def mass_properties(self, reference: npt.ArrayLike = (0.0, 0.0, 0.0)) -> MassProperties:
         """Rigid-body mass properties from ``G = R^T M R`` (R: :meth:`rigid_body_vectors`).
 
         Needs all three translations represented (a 3-D model).
@@ -655,14 +699,16 @@ class Assembly:
         a = np.array([G[5, 1] - G[4, 2], G[3, 2] - G[5, 0], G[4, 0] - G[3, 1]]) / (2.0 * m)
         inertia = (G[3:, 3:] + G[3:, 3:].T) / 2.0
         shift = m * (a @ a * np.eye(3) - np.outer(a, a))
-        return dict(
-            total_mass=m,
+        return MassProperties(
+            total_mass=float(m),
             center_of_mass=p + a,
             inertia=inertia,
             inertia_center_of_mass=inertia - shift,
         )
 
-    def modes(self, n_modes, rigid_body_modes: int | None = None, shift=None) -> FEModes:
+    def modes(
+        self, n_modes: int, rigid_body_modes: int | None = None, shift: float | None = None
+    ) -> FEModes:
         """Lowest mass-normalized modes (see :func:`flexsat.structures.modal_solve.solve_modes`).
 
         Parameters
@@ -701,16 +747,16 @@ class FEModes:
     assembly : Assembly
     """
 
-    omegas: np.ndarray
-    shapes: np.ndarray
+    omegas: FloatArray
+    shapes: FloatArray
     assembly: Assembly
 
     @property
-    def frequencies_hz(self) -> np.ndarray:
+    def frequencies_hz(self) -> FloatArray:
         """ω / 2π, Hz."""
         return self.omegas / (2.0 * np.pi)
 
-    def at_nodes(self) -> np.ndarray:
+    def at_nodes(self) -> FloatArray:
         """Mode shapes per node and dof, shape (n_modes, n_nodes, 6), 0 on inactive dofs."""
         a = self.assembly
         out = np.zeros((self.shapes.shape[1], len(a.node_ids), 6))

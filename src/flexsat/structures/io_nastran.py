@@ -37,13 +37,16 @@ lengths by :math:`\ell_u` and frequencies divided by the seconds per model time 
 from __future__ import annotations
 
 import errno
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.input_checks import require_finite, require_nonneg
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
-from flexsat.units import to_si
+from flexsat.units import FloatArray, to_si
 
 __all__ = ["SI_UNITS", "read_nastran_modes"]
 
@@ -57,13 +60,13 @@ _RANK_TOL = 1e-6  # relative singular value below which a rigid motion is absent
 
 
 def read_nastran_modes(
-    op2_path,
-    op4_path=None,
-    superelement=0,
-    damping=0.0,
-    reference=(0.0, 0.0, 0.0),
-    units=None,
-    rigid_frequency=RIGID_FREQUENCY,
+    op2_path: str | Path,
+    op4_path: str | Path | None = None,
+    superelement: int = 0,
+    damping: npt.ArrayLike = 0.0,
+    reference: npt.ArrayLike = (0.0, 0.0, 0.0),
+    units: Mapping[str, str] | None = None,
+    rigid_frequency: float = RIGID_FREQUENCY,
 ) -> ModalModel:
     r"""Modal model of one superelement of a NAS2CAM OP2/OP4 pair.
 
@@ -130,7 +133,7 @@ def read_nastran_modes(
         node_ids=ids,
         coordinates=xyz * length,
         frequencies=frequencies,
-        damping=damping,
+        damping=require_nonneg(damping, "damping"),  # a scalar or one per mode
         shapes=_basic_shapes(phg, first, T) / s,
         rigid_mass=rigid_mass * np.outer(s, s),
         participation=participation * s,
@@ -139,7 +142,7 @@ def read_nastran_modes(
     )
 
 
-def _paths(op2_path, op4_path) -> tuple[Path, Path]:
+def _paths(op2_path: str | Path, op4_path: str | Path | None) -> tuple[Path, Path]:
     """The OP2 and OP4 paths, both existing."""
     op2_file = Path(op2_path)
     op4_file = op2_file.with_suffix(".op4") if op4_path is None else Path(op4_path)
@@ -149,7 +152,7 @@ def _paths(op2_path, op4_path) -> tuple[Path, Path]:
     return op2_file, op4_file
 
 
-def _unit_scales(units) -> tuple[float, float, float]:
+def _unit_scales(units: Mapping[str, str] | None) -> tuple[float, float, float]:
     """Metres, kilograms and seconds per model unit of length, mass and time."""
     given = SI_UNITS if units is None else dict(units)
     if set(given) != set(SI_UNITS):
@@ -157,12 +160,13 @@ def _unit_scales(units) -> tuple[float, float, float]:
             "units: must map exactly 'length', 'mass' and 'time' to unit strings, got "
             f"{sorted(given)}"
         )
-    return tuple(
+    length, mass, time = (
         to_si(f"1 {given[k]}", SI_UNITS[k], f"units[{k!r}]") for k in ("length", "mass", "time")
     )
+    return length, mass, time
 
 
-def _check_modal_data(nas: dict, se, source: str) -> None:
+def _check_modal_data(nas: dict[str, Any], se: int, source: str) -> None:
     """The superelement exists and has eigenvalues, g-set shapes and a mass matrix."""
     if se not in nas["uset"]:
         raise ValueError(
@@ -181,14 +185,23 @@ def _check_modal_data(nas: dict, se, source: str) -> None:
         )
 
 
-def _mass_partition(nas: dict, se, aset: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _mass_partition(
+    nas: dict[str, Any], se: int, aset: npt.NDArray[np.bool_]
+) -> tuple[FloatArray, npt.NDArray[np.bool_]]:
     """Mass matrix and the g-set rows it acts on: MAA on the a-set if present, else MGG."""
     if se in nas.get("maa", {}):
         return nas["maa"][se], aset
     return nas["mgg"][se], np.ones(aset.size, dtype=bool)
 
 
-def _check_sizes(lam, phg, uset, mass, rows, source: str) -> None:
+def _check_sizes(
+    lam: FloatArray,
+    phg: FloatArray,
+    uset: Any,
+    mass: FloatArray,
+    rows: npt.NDArray[np.bool_],
+    source: str,
+) -> None:
     if phg.shape != (len(uset), lam.size):
         raise ValueError(
             f"{source}: PHG has shape {phg.shape}, expected (g-set size, modes) = "
@@ -200,7 +213,9 @@ def _check_sizes(lam, phg, uset, mass, rows, source: str) -> None:
         )
 
 
-def _grids(uset, rb_basic: np.ndarray):
+def _grids(
+    uset: Any, rb_basic: FloatArray
+) -> tuple[npt.NDArray[np.int64], FloatArray, npt.NDArray[np.intp], FloatArray]:
     """Grid ids, basic locations, g-set row of their dof 1 and output-to-basic rotations.
 
     ``rb_basic`` are the rigid-body modes about the basic origin; their translation block at a
@@ -215,7 +230,7 @@ def _grids(uset, rb_basic: np.ndarray):
     return ids, uset.iloc[first][["x", "y", "z"]].to_numpy(dtype=float), first, T
 
 
-def _basic_shapes(phg: np.ndarray, first: np.ndarray, T: np.ndarray) -> np.ndarray:
+def _basic_shapes(phg: FloatArray, first: npt.NDArray[np.intp], T: FloatArray) -> FloatArray:
     """Shapes (m, n, 6) in basic from the g-set shapes in the grids' output systems."""
     local = np.stack([phg[i : i + 6] for i in first])  # (n, 6, m)
     trans = np.einsum("nij,njm->mni", T, local[:, :3])
@@ -223,14 +238,16 @@ def _basic_shapes(phg: np.ndarray, first: np.ndarray, T: np.ndarray) -> np.ndarr
     return np.concatenate([trans, rot], axis=2)
 
 
-def _mass_properties(mass, R, phi) -> tuple[np.ndarray, np.ndarray]:
+def _mass_properties(
+    mass: FloatArray, R: FloatArray, phi: FloatArray
+) -> tuple[FloatArray, FloatArray]:
     """Symmetrised Rᵀ M R and Φᵀ M R on the mass partition (model units)."""
     MR = mass @ R
     rigid = R.T @ MR
     return 0.5 * (rigid + rigid.T), phi.T @ MR
 
 
-def _frequencies(lam: np.ndarray, time: float, rigid_frequency: float) -> np.ndarray:
+def _frequencies(lam: FloatArray, time: float, rigid_frequency: float) -> FloatArray:
     """ω in rad/s from eigenvalues in model units; rigid-body modes' roundoff set to 0."""
     w = np.sqrt(np.clip(lam, 0.0, None)) / time
     w = np.where(w <= rigid_frequency, 0.0, w)
@@ -244,7 +261,7 @@ def _frequencies(lam: np.ndarray, time: float, rigid_frequency: float) -> np.nda
     return w
 
 
-def _boundary(frequencies: np.ndarray, rigid_mass: np.ndarray, source: str) -> str:
+def _boundary(frequencies: FloatArray, rigid_mass: FloatArray, source: str) -> str:
     """Free with one rigid-body mode per rigid motion the model has, cantilevered with none."""
     n_rigid = int(np.count_nonzero(frequencies == 0.0))
     if n_rigid == 0:

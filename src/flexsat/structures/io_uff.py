@@ -31,12 +31,17 @@ exactly. A model without rigid-body modes (cantilevered) needs ``rigid_mass`` an
 from __future__ import annotations
 
 import errno
+from collections.abc import Callable
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.input_checks import require_finite, require_nonneg
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
+from flexsat.units import FloatArray
 
 __all__ = [
     "NORMALISATIONS",
@@ -51,10 +56,16 @@ NORMALISATIONS = ("modal_mass", "as_is")
 _RIGID_FIT_TOL = 1e-3  # relative misfit of rigid motion by the rigid modes (6-digit data: ~1e-5)
 _ABSCISSA_NAMES = {17: "time", 18: "frequency"}  # dataset 58 specific data types
 
+#: one dataset as pyuff reads it: field name -> value
+UffDataset: TypeAlias = dict[str, Any]
+
+if TYPE_CHECKING:
+    import xarray
+
 
 # ------------------------------------------------------------------------------------------------
 # reading
-def _pyuff(caller: str):
+def _pyuff(caller: str) -> ModuleType:
     try:
         import pyuff
     except ImportError as exc:
@@ -64,7 +75,7 @@ def _pyuff(caller: str):
     return pyuff
 
 
-def _read(path, caller: str) -> tuple[Path, dict[int, list[dict]]]:
+def _read(path: str | Path, caller: str) -> tuple[Path, dict[int, list[UffDataset]]]:
     pyuff = _pyuff(caller)
     path = Path(path)
     if not path.is_file():
@@ -72,7 +83,7 @@ def _read(path, caller: str) -> tuple[Path, dict[int, list[dict]]]:
     uff = pyuff.UFF(str(path))
     if uff.get_n_sets() == 0:
         raise ValueError(f"{path}: no universal-file datasets (blocks delimited by '    -1')")
-    datasets: dict[int, list[dict]] = {}
+    datasets: dict[int, list[UffDataset]] = {}
     for i in range(uff.get_n_sets()):
         try:
             dset = uff.read_sets(i)
@@ -82,7 +93,7 @@ def _read(path, caller: str) -> tuple[Path, dict[int, list[dict]]]:
     return path, datasets
 
 
-def read_uff(path) -> dict[int, list[dict]]:
+def read_uff(path: str | Path) -> dict[int, list[UffDataset]]:
     """All datasets of a universal file, as read by pyuff.
 
     Parameters
@@ -107,7 +118,7 @@ def read_uff(path) -> dict[int, list[dict]]:
     return _read(path, "read_uff")[1]
 
 
-def _unit_factors(datasets: dict) -> tuple[float, float]:
+def _unit_factors(datasets: dict[int, list[UffDataset]]) -> tuple[float, float]:
     """Metres and kilograms per file unit of length and mass (dataset 164, else SI)."""
     if 164 not in datasets:
         return 1.0, 1.0
@@ -115,7 +126,9 @@ def _unit_factors(datasets: dict) -> tuple[float, float]:
     return 1.0 / units["length"], units["length"] / units["force"]
 
 
-def _nodes(datasets: dict, path: Path) -> tuple[np.ndarray, np.ndarray]:
+def _nodes(
+    datasets: dict[int, list[UffDataset]], path: Path
+) -> tuple[npt.NDArray[np.int64], FloatArray]:
     """Node ids and coordinates (file units) from datasets 2411 (preferred) or 15."""
     kind = 2411 if 2411 in datasets else 15
     if kind not in datasets:
@@ -133,7 +146,7 @@ def _nodes(datasets: dict, path: Path) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(ids), np.vstack(xyz)
 
 
-def _normal_modes(datasets: dict, path: Path) -> list[dict]:
+def _normal_modes(datasets: dict[int, list[UffDataset]], path: Path) -> list[UffDataset]:
     """Real normal-mode datasets 55, in ascending frequency."""
     modes = [d for d in datasets.get(55, []) if d["analysis_type"] == 2]
     if not modes:
@@ -143,7 +156,7 @@ def _normal_modes(datasets: dict, path: Path) -> list[dict]:
     return sorted(modes, key=lambda d: d["freq"])
 
 
-def _shapes(modes: list[dict], node_ids: np.ndarray, path: Path) -> np.ndarray:
+def _shapes(modes: list[UffDataset], node_ids: npt.NDArray[np.int64], path: Path) -> FloatArray:
     """(m, n, 6) shapes as stored; nodes a mode does not list read zero (UFF note 9)."""
     index = {int(nid): j for j, nid in enumerate(node_ids)}
     shapes = np.zeros((len(modes), node_ids.size, 6))
@@ -160,8 +173,8 @@ def _shapes(modes: list[dict], node_ids: np.ndarray, path: Path) -> np.ndarray:
 
 
 def _normalised(
-    shapes: np.ndarray, modes: list[dict], normalisation: str, path: Path
-) -> np.ndarray:
+    shapes: FloatArray, modes: list[UffDataset], normalisation: str, path: Path
+) -> FloatArray:
     if normalisation not in NORMALISATIONS:
         raise ValueError(f"normalisation: must be one of {NORMALISATIONS}, got {normalisation!r}")
     if normalisation == "as_is":
@@ -177,7 +190,7 @@ def _normalised(
     return shapes / np.sqrt(mu)[:, None, None]
 
 
-def _rigid_vectors(coordinates: np.ndarray, reference: np.ndarray) -> np.ndarray:
+def _rigid_vectors(coordinates: FloatArray, reference: FloatArray) -> FloatArray:
     """(n * 6, 6) rigid-body vectors: a node at r from the reference moves t + θ × r, turns θ."""
     R = np.zeros((len(coordinates), 6, 6))
     R[:, :3, :3] = R[:, 3:, 3:] = np.eye(3)
@@ -186,7 +199,7 @@ def _rigid_vectors(coordinates: np.ndarray, reference: np.ndarray) -> np.ndarray
     return R.reshape(-1, 6)
 
 
-def _rigid_mass_form(B: np.ndarray) -> np.ndarray:
+def _rigid_mass_form(B: FloatArray) -> FloatArray:
     """Nearest [[m I, -[s×]], [[s×], J]] to B: mean mass, skew coupling, symmetric inertia."""
     C = 0.5 * (B[3:, :3] - B[:3, 3:])
     S = 0.5 * (C - C.T)
@@ -194,12 +207,14 @@ def _rigid_mass_form(B: np.ndarray) -> np.ndarray:
     return np.block([[np.trace(B[:3, :3]) / 3 * np.eye(3), -S], [S, J]])
 
 
-def _sqrtm_psd(A: np.ndarray) -> np.ndarray:
+def _sqrtm_psd(A: FloatArray) -> FloatArray:
     e, V = np.linalg.eigh(A)
     return (V * np.sqrt(np.clip(e, 0.0, None))) @ V.T
 
 
-def _rigid_from_modes(rigid_shapes: np.ndarray, coordinates, reference, path: Path):
+def _rigid_from_modes(
+    rigid_shapes: FloatArray, coordinates: FloatArray, reference: FloatArray, path: Path
+) -> tuple[FloatArray, FloatArray]:
     """Rigid mass and participation rows of six mass-normalised rigid-body modes (SI)."""
     phi = rigid_shapes.reshape(len(rigid_shapes), -1).T  # (n * 6, 6)
     R = _rigid_vectors(coordinates, reference)
@@ -216,14 +231,26 @@ def _rigid_from_modes(rigid_shapes: np.ndarray, coordinates, reference, path: Pa
     return rigid_mass, W @ Vt @ _sqrtm_psd(rigid_mass)
 
 
-def _mass_properties(frequencies, shapes, coordinates, reference, rigid_mass, participation, path):
+def _mass_properties(
+    frequencies: FloatArray,
+    shapes: FloatArray,
+    coordinates: FloatArray,
+    reference: FloatArray,
+    rigid_mass: npt.ArrayLike | None,
+    participation: npt.ArrayLike | None,
+    path: Path,
+) -> tuple[FloatArray, FloatArray, str]:
     """(rigid_mass, participation, boundary), given or derived from the rigid-body modes."""
     rigid = frequencies == 0.0
     boundary = "free" if rigid.any() else "cantilevered"
     if (rigid_mass is None) != (participation is None):
         raise ValueError("rigid_mass, participation: give both or neither")
-    if rigid_mass is not None:
-        return rigid_mass, participation, boundary
+    if rigid_mass is not None and participation is not None:
+        return (
+            require_finite(rigid_mass, "rigid_mass"),
+            require_finite(participation, "participation"),
+            boundary,
+        )
     if rigid.sum() != 6:
         raise ValueError(
             f"{path}: a universal file has no mass matrix; rigid_mass and participation are "
@@ -237,13 +264,13 @@ def _mass_properties(frequencies, shapes, coordinates, reference, rigid_mass, pa
 
 
 def modal_model_from_uff(
-    path,
-    damping=None,
-    normalisation="modal_mass",
-    reference=(0.0, 0.0, 0.0),
-    rigid_mass=None,
-    participation=None,
-    rigid_frequency=RIGID_FREQUENCY,
+    path: str | Path,
+    damping: npt.ArrayLike | None = None,
+    normalisation: str = "modal_mass",
+    reference: npt.ArrayLike = (0.0, 0.0, 0.0),
+    rigid_mass: npt.ArrayLike | None = None,
+    participation: npt.ArrayLike | None = None,
+    rigid_frequency: float = RIGID_FREQUENCY,
 ) -> ModalModel:
     """Modal model from the nodes (15 or 2411) and normal modes (55) of a universal file.
 
@@ -295,7 +322,9 @@ def modal_model_from_uff(
         node_ids=node_ids,
         coordinates=xyz * length,
         frequencies=frequencies,
-        damping=[d["modal_damp_vis"] for d in modes] if damping is None else damping,
+        damping=require_nonneg(
+            [d["modal_damp_vis"] for d in modes] if damping is None else damping, "damping"
+        ),
         shapes=shapes,
         rigid_mass=rigid_mass,
         participation=participation,
@@ -304,13 +333,13 @@ def modal_model_from_uff(
     )
 
 
-def _label(value) -> str:
+def _label(value: object) -> str:
     """A dataset 58 label; pyuff's placeholder NONE reads as empty."""
     text = str(value).strip()
     return "" if text.upper() == "NONE" else text
 
 
-def read_uff_functions(path):
+def read_uff_functions(path: str | Path) -> xarray.Dataset:
     """Functions at nodal dofs (dataset 58: time histories, spectra, FRFs) as one xarray Dataset.
 
     Parameters
@@ -351,7 +380,7 @@ def read_uff_functions(path):
                 "by one with read_uff"
             )
     dim = _ABSCISSA_NAMES.get(int(first["abscissa_spec_data_type"]), "abscissa")
-    per_function = {
+    per_function: dict[str, tuple[str, Callable[[Any], int | str]]] = {
         "function_type": ("func_type", int),
         "description": ("id1", _label),
         "response_node": ("rsp_node", int),
@@ -361,7 +390,7 @@ def read_uff_functions(path):
         "ordinate_units": ("ordinate_axis_units_lab", _label),
         "denominator_units": ("orddenom_axis_units_lab", _label),
     }
-    coords = {
+    coords: dict[str, tuple[Any, ...]] = {
         name: ("function", [convert(d[key]) for d in functions])
         for name, (key, convert) in per_function.items()
     }
@@ -381,7 +410,7 @@ def read_uff_functions(path):
 
 # ------------------------------------------------------------------------------------------------
 # writing
-def write_modal_uff(model: ModalModel, path) -> None:
+def write_modal_uff(model: ModalModel, path: str | Path) -> None:
     """Write a modal model as a universal file: units (164, SI), nodes (15), modes (55).
 
     Each mode is a dataset 55 (normal mode, 6 values per node in global axes) with its

@@ -54,15 +54,19 @@ absent ones read zero.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol, TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 from scipy.sparse import issparse
 from scipy.sparse.linalg import norm as sparse_norm
 
 from flexsat.input_checks import require_count, require_finite, require_nonneg
 from flexsat.netcdf import write_netcdf
+from flexsat.units import FloatArray
 
 __all__ = [
     "BOUNDARIES",
@@ -83,6 +87,59 @@ FORMAT_VERSION = 1
 #: plausible, while the rigid modes of a free-free eigen-solve come out as roundoff-size ω.
 RIGID_FREQUENCY = 1e-2
 
+if TYPE_CHECKING:
+    import xarray
+
+    import control
+    from flexsat.structures.beam import TipMassCantilever
+    from flexsat.structures.fem import FEModes
+
+#: a direction: ``"x"``, ``"y"``, ``"z"`` or a 3-vector, or a list of them / a (k, 3) array
+Direction: TypeAlias = npt.ArrayLike
+#: an output of :meth:`ModalModel.to_second_order`: (influence vector, "displacement" or
+#: "velocity")
+Output: TypeAlias = tuple[npt.ArrayLike, str]
+
+
+class HubAppendageParameters(Protocol):
+    """What :meth:`ModalModel.from_hub_appendage` reads of
+    :class:`flexsat.dynamics.hub_appendage.HubAppendageParams` (a higher layer)."""
+
+    @property
+    def n_appendages(self) -> int: ...
+    @property
+    def length(self) -> float: ...
+    @property
+    def hub_radius(self) -> float: ...
+    @property
+    def tip_radius(self) -> float: ...
+    @property
+    def tip_mass(self) -> float: ...
+    @property
+    def tip_inertia(self) -> float: ...
+    @property
+    def rho(self) -> float: ...
+    @property
+    def EI(self) -> float: ...
+    def beam(self) -> TipMassCantilever: ...
+
+
+class HubAppendageModel(Protocol):
+    """What :meth:`ModalModel.from_hub_appendage` reads of
+    :class:`flexsat.dynamics.hub_appendage.HubAppendage` (a higher layer)."""
+
+    @property
+    def params(self) -> HubAppendageParameters: ...
+    @property
+    def n_modes(self) -> int: ...
+    @property
+    def cantilever_frequencies(self) -> FloatArray: ...
+    @property
+    def coupling(self) -> FloatArray: ...
+    @property
+    def damping_ratios(self) -> FloatArray: ...
+
+
 _AXES = ("x", "y", "z")
 _TOL = 1e-9  # relative tolerance of the rigid-mass checks (roundoff of R^T M R is ~1e-14)
 _FREE_STIFFNESS_TOL = 1e-9  # ||K R|| / (||K|| ||R||) below which an FE model is free
@@ -90,13 +147,15 @@ _FREE_STIFFNESS_TOL = 1e-9  # ||K R|| / (||K|| ||R||) below which an FE model is
 
 # ------------------------------------------------------------------------------------------------
 # small linear-algebra helpers
-def _skew(v) -> np.ndarray:
+def _skew(v: FloatArray) -> FloatArray:
     """Cross-product matrix [v×], so that [v×] w = v × w."""
     x, y, z = v
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
-def _rigid_mass_from_moments(mass, first_moment, second_moment, rotary) -> np.ndarray:
+def _rigid_mass_from_moments(
+    mass: float, first_moment: FloatArray, second_moment: FloatArray, rotary: FloatArray
+) -> FloatArray:
     r"""Rigid-body mass matrix about p from the moments of the mass distribution.
 
     .. math::
@@ -111,13 +170,13 @@ def _rigid_mass_from_moments(mass, first_moment, second_moment, rotary) -> np.nd
     return np.block([[mass * np.eye(3), -s], [s, rot]])
 
 
-def _scales(rigid_mass) -> np.ndarray:
+def _scales(rigid_mass: FloatArray) -> FloatArray:
     """√diag of the rigid mass (1 where zero): makes the 6x6 checks unit-free."""
     d = np.sqrt(np.clip(np.diag(rigid_mass), 0.0, None))
     return np.where(d > 0, d, 1.0)
 
 
-def _first_moment(rigid_mass) -> np.ndarray:
+def _first_moment(rigid_mass: FloatArray) -> FloatArray:
     """s = m c from the rotation–translation block [s×] (an entry absent in a plane model is 0)."""
     B = rigid_mass[3:, :3]
     s = np.zeros(3)
@@ -127,7 +186,7 @@ def _first_moment(rigid_mass) -> np.ndarray:
     return s
 
 
-def _present(rigid_mass) -> tuple[np.ndarray, np.ndarray]:
+def _present(rigid_mass: FloatArray) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
     """Which rigid translations and rotations the model has (see module docstring)."""
     d = np.diag(rigid_mass)
     trans = d[:3] > 0
@@ -137,27 +196,27 @@ def _present(rigid_mass) -> tuple[np.ndarray, np.ndarray]:
 
 # ------------------------------------------------------------------------------------------------
 # validation
-def _array(value, field: str, shape: tuple, names: str) -> np.ndarray:
+def _array(value: npt.ArrayLike, field: str, shape: tuple[int, ...], names: str) -> FloatArray:
     arr = require_finite(value, field)
     if arr.shape != shape:
         raise ValueError(f"{field}: must have shape {names} = {shape}, got {arr.shape}")
     return arr
 
 
-def _node_ids(value) -> np.ndarray:
+def _node_ids(value: npt.ArrayLike) -> npt.NDArray[np.int64]:
     ids = require_finite(value, "node_ids")
     if ids.ndim != 1 or ids.size == 0:
         raise ValueError(f"node_ids: must be a non-empty 1-D array, got shape {ids.shape}")
     if np.any(ids != np.rint(ids)):
         raise ValueError(f"node_ids: must be integers, got {value!r}")
-    ids = ids.astype(np.int64)
-    unique, counts = np.unique(ids, return_counts=True)
+    integers = ids.astype(np.int64)
+    unique, counts = np.unique(integers, return_counts=True)
     if np.any(counts > 1):
         raise ValueError(f"node_ids: must be unique, repeated {unique[counts > 1].tolist()}")
-    return ids
+    return integers
 
 
-def _frequencies(value) -> np.ndarray:
+def _frequencies(value: npt.ArrayLike) -> FloatArray:
     w = require_nonneg(value, "frequencies")
     if w.ndim != 1 or w.size == 0:
         raise ValueError(f"frequencies: must be a 1-D array of at least one mode, got {w.shape}")
@@ -166,7 +225,7 @@ def _frequencies(value) -> np.ndarray:
     return w
 
 
-def _damping(value, n_modes: int) -> np.ndarray:
+def _damping(value: npt.ArrayLike, n_modes: int) -> FloatArray:
     zeta = require_nonneg(value, "damping")
     if zeta.ndim == 0:
         return np.full(n_modes, float(zeta))
@@ -177,7 +236,7 @@ def _damping(value, n_modes: int) -> np.ndarray:
     return zeta
 
 
-def _check_rigid_mass(rigid_mass) -> None:
+def _check_rigid_mass(rigid_mass: FloatArray) -> None:
     """Symmetric, positive semi-definite, translational block m·I, coupling block [s×]."""
     d = _scales(rigid_mass)
     S = rigid_mass / np.outer(d, d)
@@ -199,7 +258,7 @@ def _check_rigid_mass(rigid_mass) -> None:
         raise ValueError("rigid_mass: rotation–translation block must be m[c×] (skew)")
 
 
-def _check_bessel(rigid_mass, participation) -> None:
+def _check_bessel(rigid_mass: FloatArray, participation: FloatArray) -> None:
     r"""Mass-normalised modes satisfy :math:`L^T L \preceq M_{rr}` (Bessel's inequality)."""
     d = _scales(rigid_mass)
     gap = (rigid_mass - participation.T @ participation) / np.outer(d, d)
@@ -210,13 +269,13 @@ def _check_bessel(rigid_mass, participation) -> None:
         )
 
 
-def _boundary(value) -> str:
+def _boundary(value: str) -> str:
     if value not in BOUNDARIES:
         raise ValueError(f"boundary: must be one of {BOUNDARIES}, got {value!r}")
     return value
 
 
-def _frozen(arr: np.ndarray) -> np.ndarray:
+def _frozen(arr: npt.NDArray[Any]) -> npt.NDArray[Any]:
     arr = np.array(arr)
     arr.flags.writeable = False
     return arr
@@ -227,20 +286,20 @@ def _frozen(arr: np.ndarray) -> np.ndarray:
 _AXIS_VECTORS = dict(zip(_AXES, np.eye(3)))
 
 
-def _is_single(direction) -> bool:
+def _is_single(direction: Any) -> bool:
     """A name or one vector (also a malformed scalar, refused later), not a list of them."""
     if isinstance(direction, str) or np.ndim(direction) == 0:
         return True
     return np.ndim(direction) == 1 and not any(isinstance(d, str) for d in direction)
 
 
-def _directions(direction, field: str) -> tuple[np.ndarray, bool]:
+def _directions(direction: Any, field: str) -> tuple[FloatArray, bool]:
     """Unit direction rows (k, 3) from 'x'/'y'/'z' or vectors, and whether one was given."""
     try:
         single = _is_single(direction)
         items = [direction] if single else list(direction)
-        vecs = [_AXIS_VECTORS[d] if isinstance(d, str) else np.asarray(d, float) for d in items]
-        vecs = np.array(vecs, dtype=float)
+        rows = [_AXIS_VECTORS[d] if isinstance(d, str) else np.asarray(d, float) for d in items]
+        vecs: FloatArray | None = np.array(rows, dtype=float)
     except (KeyError, ValueError, TypeError):
         vecs = None
     if vecs is None or vecs.ndim != 2 or vecs.shape[1] != 3 or vecs.shape[0] == 0:
@@ -253,7 +312,7 @@ def _directions(direction, field: str) -> tuple[np.ndarray, bool]:
     return vecs / norms[:, None], single
 
 
-def _axis_index(axis) -> int:
+def _axis_index(axis: int | str) -> int:
     if isinstance(axis, str) and axis in _AXES:
         return _AXES.index(axis)
     if isinstance(axis, (int, np.integer)) and not isinstance(axis, bool) and 0 <= axis <= 2:
@@ -297,32 +356,38 @@ class ModalModel:
         participation violating :math:`L^T L \preceq M_{rr}`.
     """
 
-    node_ids: np.ndarray
-    coordinates: np.ndarray
-    frequencies: np.ndarray
-    damping: np.ndarray
-    shapes: np.ndarray
-    rigid_mass: np.ndarray
-    participation: np.ndarray
-    reference: np.ndarray = (0.0, 0.0, 0.0)
+    node_ids: npt.NDArray[np.int64]
+    coordinates: FloatArray
+    frequencies: FloatArray
+    damping: FloatArray
+    shapes: FloatArray
+    rigid_mass: FloatArray
+    participation: FloatArray
+    reference: FloatArray = field(default_factory=lambda: np.zeros(3))
     boundary: str = "free"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         ids = _node_ids(self.node_ids)
         w = _frequencies(self.frequencies)
         m, n = w.size, ids.size
-        fields = dict(
+        coordinates = _array(self.coordinates, "coordinates", (n, 3), "(n, 3)")
+        damping = _damping(self.damping, m)
+        shapes = _array(self.shapes, "shapes", (m, n, 6), "(m, n, 6)")
+        rigid_mass = _array(self.rigid_mass, "rigid_mass", (6, 6), "(6, 6)")
+        participation = _array(self.participation, "participation", (m, 6), "(m, 6)")
+        reference = _array(self.reference, "reference", (3,), "(3,)")
+        _check_rigid_mass(rigid_mass)
+        _check_bessel(rigid_mass, participation)
+        fields: dict[str, npt.NDArray[Any]] = dict(
             node_ids=ids,
-            coordinates=_array(self.coordinates, "coordinates", (n, 3), "(n, 3)"),
+            coordinates=coordinates,
             frequencies=w,
-            damping=_damping(self.damping, m),
-            shapes=_array(self.shapes, "shapes", (m, n, 6), "(m, n, 6)"),
-            rigid_mass=_array(self.rigid_mass, "rigid_mass", (6, 6), "(6, 6)"),
-            participation=_array(self.participation, "participation", (m, 6), "(m, 6)"),
-            reference=_array(self.reference, "reference", (3,), "(3,)"),
+            damping=damping,
+            shapes=shapes,
+            rigid_mass=rigid_mass,
+            participation=participation,
+            reference=reference,
         )
-        _check_rigid_mass(fields["rigid_mass"])
-        _check_bessel(fields["rigid_mass"], fields["participation"])
         for name, value in fields.items():
             object.__setattr__(self, name, _frozen(value))
         object.__setattr__(self, "boundary", _boundary(self.boundary))
@@ -342,7 +407,7 @@ class ModalModel:
         return self.frequencies.size
 
     @property
-    def frequencies_hz(self) -> np.ndarray:
+    def frequencies_hz(self) -> FloatArray:
         """Natural frequencies ω / 2π, Hz."""
         return self.frequencies / (2 * np.pi)
 
@@ -352,11 +417,11 @@ class ModalModel:
         return float(np.diag(self.rigid_mass)[:3].max())
 
     @property
-    def center_of_mass(self) -> np.ndarray:
+    def center_of_mass(self) -> FloatArray:
         """Centre of mass p + c, m, with m[c×] the rotation–translation block of ``rigid_mass``."""
         return self.reference + _first_moment(self.rigid_mass) / self.total_mass
 
-    def inertia(self, about=None) -> np.ndarray:
+    def inertia(self, about: npt.ArrayLike | None = None) -> FloatArray:
         r"""Inertia tensor about a point, kg m², by the parallel-axis theorem.
 
         .. math::
@@ -380,7 +445,7 @@ class ModalModel:
 
     # --------------------------------------------------------------------------------------------
     # mode selection
-    def _select(self, keep, caller: str) -> ModalModel:
+    def _select(self, keep: npt.NDArray[np.bool_], caller: str) -> ModalModel:
         if not np.any(keep):
             raise ValueError(f"{caller}: no mode left")
         return replace(
@@ -391,7 +456,9 @@ class ModalModel:
             participation=self.participation[keep],
         )
 
-    def truncate(self, n_modes=None, max_frequency=None) -> ModalModel:
+    def truncate(
+        self, n_modes: int | None = None, max_frequency: float | None = None
+    ) -> ModalModel:
         """Keep the first ``n_modes`` modes and/or those with ω <= ``max_frequency`` (rad/s)."""
         if n_modes is None and max_frequency is None:
             raise ValueError("truncate: give n_modes, max_frequency or both")
@@ -409,28 +476,28 @@ class ModalModel:
 
     # --------------------------------------------------------------------------------------------
     # modal influence vectors
-    def _node(self, node, field: str = "node") -> np.ndarray:
+    def _node(self, node: int, field: str = "node") -> FloatArray:
         """Shapes (m, 6) at one node."""
         is_id = isinstance(node, (int, np.integer)) and not isinstance(node, bool)
-        hits = np.flatnonzero(self.node_ids == node) if is_id else []
+        hits = np.flatnonzero(self.node_ids == node) if is_id else np.zeros(0, dtype=np.intp)
         if len(hits) != 1:
             shown = ", ".join(map(str, self.node_ids[:8]))
             shown += " ..." if self.node_ids.size > 8 else ""
             raise ValueError(f"{field}: unknown node {node!r} (nodes: {shown})")
         return self.shapes[:, hits[0], :]
 
-    def _project(self, block: np.ndarray, direction, field: str) -> np.ndarray:
+    def _project(self, block: FloatArray, direction: Direction, field: str) -> FloatArray:
         vecs, single = _directions(direction, field)
         out = block @ vecs.T
         return out[:, 0] if single else out
 
-    def _relative_rotation(self, node_a, node_b) -> np.ndarray:
+    def _relative_rotation(self, node_a: int, node_b: int) -> FloatArray:
         rot_a, rot_b = self._node(node_a, "node_a")[:, 3:], self._node(node_b, "node_b")[:, 3:]
         if node_a == node_b:
             raise ValueError(f"node_b: must differ from node_a ({node_a!r})")
         return rot_b - rot_a
 
-    def force_input(self, node, direction) -> np.ndarray:
+    def force_input(self, node: int, direction: Direction) -> FloatArray:
         r"""Modal force of a unit force at ``node`` along ``direction``: :math:`\Phi_t^T d`.
 
         ``direction`` is 'x', 'y', 'z' or a 3-vector (normalised), shape (m,); or a list of
@@ -438,26 +505,26 @@ class ModalModel:
         """
         return self._project(self._node(node)[:, :3], direction, "direction")
 
-    def torque_input(self, node, axis) -> np.ndarray:
+    def torque_input(self, node: int, axis: Direction) -> FloatArray:
         r"""Modal force of a unit moment at ``node`` about ``axis``: :math:`\Phi_r^T a`."""
         return self._project(self._node(node)[:, 3:], axis, "axis")
 
-    def moment_pair(self, node_a, node_b, axis) -> np.ndarray:
+    def moment_pair(self, node_a: int, node_b: int, axis: Direction) -> FloatArray:
         r"""Equal and opposite unit moments, +a at ``node_b`` and −a at ``node_a``.
 
         A piezoelectric patch between two nodes: :math:`(\Phi_{r,b} - \Phi_{r,a})^T a`.
         """
         return self._project(self._relative_rotation(node_a, node_b), axis, "axis")
 
-    def displacement_output(self, node, direction) -> np.ndarray:
+    def displacement_output(self, node: int, direction: Direction) -> FloatArray:
         r"""Row c with :math:`d \cdot u_{node} = c^T \eta` (collocated with force_input)."""
         return self.force_input(node, direction)
 
-    def rotation_output(self, node, axis) -> np.ndarray:
+    def rotation_output(self, node: int, axis: Direction) -> FloatArray:
         r"""Row c with :math:`a \cdot \theta_{node} = c^T \eta` (collocated with torque_input)."""
         return self.torque_input(node, axis)
 
-    def strain_output(self, node_a, node_b, axis) -> np.ndarray:
+    def strain_output(self, node_a: int, node_b: int, axis: Direction) -> FloatArray:
         r"""Relative rotation :math:`a \cdot (\theta_b - \theta_a) = c^T \eta` of the patch ends.
 
         The collocated piezoelectric sensor of :meth:`moment_pair` (same vector).
@@ -466,7 +533,7 @@ class ModalModel:
 
     # --------------------------------------------------------------------------------------------
     # system matrices
-    def _influence(self, vector, field: str) -> np.ndarray:
+    def _influence(self, vector: npt.ArrayLike, field: str) -> FloatArray:
         """One influence vector (m,) or matrix (m, k) as columns (m, k)."""
         arr = require_finite(vector, field)
         arr = arr[:, None] if arr.ndim == 1 else arr
@@ -477,11 +544,11 @@ class ModalModel:
             )
         return arr
 
-    def _columns(self, vectors) -> np.ndarray:
+    def _columns(self, vectors: Sequence[npt.ArrayLike]) -> FloatArray:
         cols = [self._influence(v, f"inputs[{i}]") for i, v in enumerate(vectors)]
         return np.hstack([np.zeros((self.n_modes, 0))] + cols)
 
-    def _output_rows(self, outputs) -> tuple[np.ndarray, np.ndarray]:
+    def _output_rows(self, outputs: Sequence[Output]) -> tuple[FloatArray, FloatArray]:
         Cq, Cv = [np.zeros((0, self.n_modes))], [np.zeros((0, self.n_modes))]
         for i, item in enumerate(outputs):
             vector, kind = item if isinstance(item, tuple) and len(item) == 2 else (None, item)
@@ -495,7 +562,9 @@ class ModalModel:
             Cv.append(rows if kind == "velocity" else np.zeros_like(rows))
         return np.vstack(Cq), np.vstack(Cv)
 
-    def to_second_order(self, inputs=(), outputs=()):
+    def to_second_order(
+        self, inputs: Sequence[npt.ArrayLike] = (), outputs: Sequence[Output] = ()
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
         r"""Second-order modal system :math:`M \ddot\eta + D \dot\eta + K \eta = B u`,
         :math:`y = C_q \eta + C_v \dot\eta`.
 
@@ -521,7 +590,9 @@ class ModalModel:
         Cq, Cv = self._output_rows(outputs)
         return np.eye(self.n_modes), np.diag(2 * z * w), np.diag(w**2), B, Cq, Cv
 
-    def to_statespace(self, inputs=(), outputs=()):
+    def to_statespace(
+        self, inputs: Sequence[npt.ArrayLike] = (), outputs: Sequence[Output] = ()
+    ) -> control.StateSpace:
         r"""python-control StateSpace with state :math:`x = [\eta, \dot\eta]`.
 
         .. math::
@@ -544,7 +615,7 @@ class ModalModel:
 
     # --------------------------------------------------------------------------------------------
     # file format
-    def save(self, path) -> None:
+    def save(self, path: str | Path) -> None:
         """Write one netCDF-4 file (xarray, engine h5netcdf); every variable carries ``units``.
 
         Variables (dims): ``node`` (node) coordinate = node ids, ``coordinates`` (node, axis),
@@ -558,7 +629,7 @@ class ModalModel:
         write_netcdf(_to_dataset(self), path, encoding=_NO_FILL)
 
     @classmethod
-    def load(cls, path) -> ModalModel:
+    def load(cls, path: str | Path) -> ModalModel:
         """Read a file written by :meth:`save` (validated like any construction)."""
         import xarray as xr
 
@@ -568,7 +639,13 @@ class ModalModel:
     # --------------------------------------------------------------------------------------------
     # builders
     @classmethod
-    def from_fe(cls, modes, damping=0.0, reference=(0.0, 0.0, 0.0), boundary=None) -> ModalModel:
+    def from_fe(
+        cls,
+        modes: FEModes,
+        damping: npt.ArrayLike = 0.0,
+        reference: npt.ArrayLike = (0.0, 0.0, 0.0),
+        boundary: str | None = None,
+    ) -> ModalModel:
         r"""Modal model of a finite-element solution (``flexsat.structures.fem.FEModes``).
 
         .. math::
@@ -609,7 +686,7 @@ class ModalModel:
             node_ids=asm.node_ids,
             coordinates=asm.coordinates,
             frequencies=modes.omegas,
-            damping=damping,
+            damping=require_nonneg(damping, "damping"),  # a scalar or one per mode
             shapes=modes.at_nodes(),
             rigid_mass=0.5 * (rigid + rigid.T),
             participation=modes.shapes.T @ MR[rows],
@@ -618,7 +695,9 @@ class ModalModel:
         )
 
     @classmethod
-    def from_hub_appendage(cls, model, stations=None) -> ModalModel:
+    def from_hub_appendage(
+        cls, model: HubAppendageModel, stations: npt.ArrayLike | None = None
+    ) -> ModalModel:
         r"""The n appendages of a :class:`~flexsat.dynamics.hub_appendage.HubAppendage` as one
         cantilevered modal model (hybrid coordinates about the hub centre, reference 0).
 
@@ -684,13 +763,13 @@ class ModalModel:
 
 # ------------------------------------------------------------------------------------------------
 # builder helpers
-def _fe_boundary(K, R) -> str:
+def _fe_boundary(K: Any, R: FloatArray) -> str:
     norm_K = sparse_norm(K) if issparse(K) else np.linalg.norm(K)
     free = np.linalg.norm(K @ R) <= _FREE_STIFFNESS_TOL * norm_K * np.linalg.norm(R)
     return "free" if free else "cantilevered"
 
 
-def _stations(stations, length: float) -> np.ndarray:
+def _stations(stations: npt.ArrayLike | None, length: float) -> FloatArray:
     if stations is None:
         return np.linspace(0.0, length, 5)
     xi = require_finite(stations, "stations")
@@ -701,7 +780,9 @@ def _stations(stations, length: float) -> np.ndarray:
     return xi
 
 
-def hub_appendage_matrices(modal: ModalModel, hub_inertia: float, axis=2):
+def hub_appendage_matrices(
+    modal: ModalModel, hub_inertia: float, axis: int | str = 2
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     r"""Hybrid-coordinate matrices of a rigid hub spinning about ``axis`` through the reference
     point, carrying a cantilevered modal model; coordinates (θ, η).
 
@@ -760,7 +841,7 @@ _UNITS = {
 _NO_FILL = {name: {"_FillValue": None} for name in _UNITS}
 
 
-def _to_dataset(model: ModalModel):
+def _to_dataset(model: ModalModel) -> xarray.Dataset:
     import xarray as xr
 
     Mr, S, P = model.rigid_mass, model.shapes, model.participation
@@ -791,7 +872,7 @@ def _to_dataset(model: ModalModel):
     )
 
 
-def _from_dataset(ds) -> ModalModel:
+def _from_dataset(ds: xarray.Dataset) -> ModalModel:
     version = ds.attrs.get("flexsat_modal_model_version")
     if version is None:
         raise ValueError(

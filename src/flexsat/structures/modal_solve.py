@@ -42,12 +42,16 @@ A computed eigenvalue below minus the near-zero threshold (buckling) is an error
 
 from __future__ import annotations
 
+from typing import TypeAlias
+
 import numpy as np
+import numpy.typing as npt
 import scipy.linalg
 import scipy.sparse as sp
-from scipy.sparse.linalg import LinearOperator, eigsh, splu
+from scipy.sparse.linalg import LinearOperator, SuperLU, eigsh, splu
 
 from flexsat.input_checks import require_count, require_finite
+from flexsat.units import FloatArray
 
 __all__ = ["check_mass_matrix", "factor_positive_definite", "solve_modes"]
 
@@ -60,8 +64,11 @@ DENSE_LIMIT = 200
 _TINY_PIVOT = 1e-13  # LDL^T pivot / diagonal entry below which K - σM counts as singular
 _INFINITE_NU = 1e-14  # shift-invert eigenvalues ν below this times max ν are massless dofs
 
+#: a stiffness or mass matrix as accepted: scipy sparse or dense
+Matrix: TypeAlias = sp.spmatrix | sp.sparray | npt.ArrayLike
 
-def _check_matrix(A, name: str) -> sp.csr_matrix:
+
+def _check_matrix(A: Matrix, name: str) -> sp.csr_matrix:
     """Finite and symmetric (relative tolerance SYMMETRY_RTOL) sparse matrix."""
     A = sp.csr_matrix(A, dtype=float)
     if A.shape[0] != A.shape[1]:
@@ -77,7 +84,7 @@ def _check_matrix(A, name: str) -> sp.csr_matrix:
     return A
 
 
-def _symmetric_lu(A, pivoting: bool):
+def _symmetric_lu(A: Matrix, pivoting: bool) -> SuperLU:
     """SuperLU factors of a symmetric matrix: symmetric minimum-degree ordering of A + A^T;
     without pivoting (pivoting=False) they are A = L D L^T with D = diag(U)."""
     if pivoting:
@@ -90,7 +97,7 @@ def _symmetric_lu(A, pivoting: bool):
     )
 
 
-def _ldl_pivots(A) -> np.ndarray | None:
+def _ldl_pivots(A: Matrix) -> FloatArray | None:
     """Pivots of A = L D L^T (no pivoting, symmetric ordering), or None if that fails."""
     try:
         lu = _symmetric_lu(A, pivoting=False)
@@ -101,7 +108,7 @@ def _ldl_pivots(A) -> np.ndarray | None:
     return lu.U.diagonal()
 
 
-def check_mass_matrix(M) -> sp.csr_matrix:
+def check_mass_matrix(M: Matrix) -> sp.csr_matrix:
     """Validate a mass matrix: finite, symmetric, positive semi-definite, not zero.
 
     Raises
@@ -130,7 +137,7 @@ def check_mass_matrix(M) -> sp.csr_matrix:
     return M
 
 
-def _eigen_scale(K, M) -> float:
+def _eigen_scale(K: sp.csr_matrix, M: sp.csr_matrix) -> float:
     """λ_s = max K_ii / M_ii over dofs with mass."""
     dk, dm = K.diagonal(), M.diagonal()
     scale = float(np.max(dk[dm > 0] / dm[dm > 0]))
@@ -139,7 +146,9 @@ def _eigen_scale(K, M) -> float:
     return scale
 
 
-def _dense_pencil(K, M, k, shift, sigma0):
+def _dense_pencil(
+    K: sp.csr_matrix, M: sp.csr_matrix, k: int, shift: float | None, sigma0: float
+) -> FloatArray:
     """The k eigenvectors nearest ``shift`` (None: lowest) of the pencil, by a dense solve.
 
     Massless dofs (zero rows of M) are first eliminated by exact static condensation,
@@ -171,7 +180,7 @@ def _dense_pencil(K, M, k, shift, sigma0):
     return X
 
 
-def factor_positive_definite(A):
+def factor_positive_definite(A: sp.spmatrix | sp.sparray) -> SuperLU:
     """SuperLU L D L^T factors of a matrix that must be positive definite (no pivoting).
 
     A pivot below 1e-13 times its diagonal entry means A is singular (a mechanism without
@@ -191,14 +200,14 @@ def factor_positive_definite(A):
     return lu
 
 
-def _singular_error():
+def _singular_error() -> ValueError:
     return ValueError(
         "stiffness matrix: K - σM is singular: a mechanism that carries no mass, or a shift "
         "equal to an eigenvalue"
     )
 
 
-def _buckling_error(count, value=None):
+def _buckling_error(count: int, value: float | None = None) -> ValueError:
     at = "" if value is None else f" (lowest ω² = {value:.6g} (rad/s)^2)"
     return ValueError(
         f"stiffness matrix: {count} negative eigenvalue(s){at}: the structure buckles under "
@@ -206,7 +215,7 @@ def _buckling_error(count, value=None):
     )
 
 
-def _sparse_pencil(K, M, k, sigma):
+def _sparse_pencil(K: sp.csr_matrix, M: sp.csr_matrix, k: int, sigma: float) -> FloatArray:
     """k eigenvectors nearest ``sigma`` by shift-invert Lanczos (ARPACK).
 
     For σ < 0, K - σM must be positive definite (:func:`factor_positive_definite`); an
@@ -226,7 +235,9 @@ def _sparse_pencil(K, M, k, sigma):
     return X
 
 
-def _rayleigh_ritz(K, M, X):
+def _rayleigh_ritz(
+    K: sp.csr_matrix, M: sp.csr_matrix, X: FloatArray
+) -> tuple[FloatArray, FloatArray]:
     """Refine a basis X: eigenpairs of (X^T K X, X^T M X), sorted ascending, M-orthonormal.
 
     The eigenvalues are the Rayleigh quotients of the refined vectors, not those of the small
@@ -248,13 +259,15 @@ def _rayleigh_ritz(K, M, X):
     return lam[order], X[:, order]
 
 
-def _near_zero_tolerance(lam, scale) -> float:
+def _near_zero_tolerance(lam: FloatArray, scale: float) -> float:
     floor = ROUNDOFF_RTOL * scale
     above = lam[lam > floor]
     return max(floor, NEAR_ZERO_RTOL * above[0]) if above.size else floor
 
 
-def _rigid_basis(R, K, M, tol):
+def _rigid_basis(
+    R: FloatArray, K: sp.csr_matrix, M: sp.csr_matrix, tol: float
+) -> FloatArray | None:
     """M-orthonormal basis of the rigid-body vectors that are null vectors of K, or None."""
     mass = np.einsum("ij,ij->j", R, M @ R)
     stiff = np.einsum("ij,ij->j", R, K @ R)
@@ -270,7 +283,7 @@ def _rigid_basis(R, K, M, tol):
     return scipy.linalg.solve_triangular(C, R.T, lower=True).T
 
 
-def _count_check(n_zero, n_computed, rigid_body_modes, clamped):
+def _count_check(n_zero: int, n_computed: int, rigid_body_modes: int | None, clamped: bool) -> None:
     found = f"at least {n_zero}" if n_zero == n_computed else str(n_zero)
     r = rigid_body_modes
     if r is None:
@@ -293,15 +306,21 @@ def _count_check(n_zero, n_computed, rigid_body_modes, clamped):
         )
 
 
-def _signed(X):
+def _signed(X: FloatArray) -> FloatArray:
     """Each column multiplied by the sign of its largest-magnitude component."""
     idx = np.argmax(np.abs(X), axis=0)
     return X * np.where(X[idx, np.arange(X.shape[1])] < 0, -1.0, 1.0)
 
 
 def solve_modes(
-    K, M, n_modes, rigid_body_modes=None, shift=None, rigid_vectors=None, clamped=False
-):
+    K: Matrix,
+    M: Matrix,
+    n_modes: int,
+    rigid_body_modes: int | None = None,
+    shift: float | None = None,
+    rigid_vectors: FloatArray | None = None,
+    clamped: bool = False,
+) -> tuple[FloatArray, FloatArray]:
     """Lowest (or nearest to ``shift``) mass-normalized modes of K φ = ω² M φ.
 
     Parameters
@@ -359,14 +378,21 @@ def solve_modes(
     return np.sqrt(np.maximum(lam[:n_modes], 0.0)), _signed(X[:, :n_modes])
 
 
-def _rigid_count(value) -> int:
+def _rigid_count(value: int) -> int:
     number = None if isinstance(value, bool) else float(require_finite(value, "rigid_body_modes"))
     if number is None or number != int(number) or number < 0:
         raise ValueError(f"rigid_body_modes: must be an integer >= 0, got {value!r}")
     return int(number)
 
 
-def _clean_rigid(K, M, X, r, rigid_vectors, tol):
+def _clean_rigid(
+    K: sp.csr_matrix,
+    M: sp.csr_matrix,
+    X: FloatArray,
+    r: int,
+    rigid_vectors: FloatArray | None,
+    tol: float,
+) -> FloatArray:
     """Replace the r near-zero modes by exact rigid-body vectors; M-orthogonalise the rest."""
     basis = None if rigid_vectors is None else _rigid_basis(rigid_vectors, K, M, tol)
     rigid = basis if basis is not None and basis.shape[1] == r else X[:, :r]

@@ -40,10 +40,18 @@ Modes below ``rigid_tol`` (Hz) are ``"rigid body"``.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 import scipy.sparse as sp
+
+from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    from flexsat.structures.fem import FEModes
 
 DOF_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
 _AXES = "xyz"
@@ -62,7 +70,7 @@ class ModeDescription:
     share: float  #: that group's share of the modal kinetic energy (0..1)
     motion: str  #: "rigid body", "torsion about its axis", "z-rotation", "bending/elastic", ...
     rigid_fit: float  #: fraction of the component's own kinetic energy a rigid motion explains
-    shares: dict = field(default_factory=dict)  #: every group's share
+    shares: dict[str, float] = field(default_factory=dict)  #: every group's share
 
     def __str__(self) -> str:
         if self.component is None:
@@ -70,7 +78,9 @@ class ModeDescription:
         return f"{self.component} ({100 * self.share:.0f} %): {self.motion}"
 
 
-def _check_groups(groups, node_ids) -> dict[str, np.ndarray]:
+def _check_groups(
+    groups: Mapping[str, Iterable[int]], node_ids: npt.NDArray[np.int_]
+) -> dict[str, npt.NDArray[np.int_]]:
     if not isinstance(groups, dict) or not groups:
         raise ValueError("groups: must be a non-empty dict {name: node ids}")
     known = set(int(n) for n in node_ids)
@@ -94,7 +104,9 @@ def _check_groups(groups, node_ids) -> dict[str, np.ndarray]:
     return out
 
 
-def _rigid_vectors(dofs, coords_by_node, reference) -> np.ndarray:
+def _rigid_vectors(
+    dofs: Sequence[tuple[int, str]], coords_by_node: Mapping[int, FloatArray], reference: FloatArray
+) -> FloatArray:
     """(len(dofs), 6) rigid motions: unit translations x, y, z, unit rotations about
     ``reference``."""
     R = np.zeros((len(dofs), 6))
@@ -112,7 +124,7 @@ def _rigid_vectors(dofs, coords_by_node, reference) -> np.ndarray:
     return R
 
 
-def _centre_of_mass(A0: np.ndarray) -> np.ndarray:
+def _centre_of_mass(A0: FloatArray) -> FloatArray:
     """Centre of mass c from the rigid mass matrix about the origin, using only the
     translations the model has: A0[k, 3 + a] = m_k (c × e_k)_a for each present translation k
     (least squares; components no present translation sees are 0)."""
@@ -133,7 +145,7 @@ def _centre_of_mass(A0: np.ndarray) -> np.ndarray:
     return c
 
 
-def _symmetry_axis(inertia: np.ndarray, tol: float = 0.05) -> np.ndarray | None:
+def _symmetry_axis(inertia: FloatArray, tol: float = 0.05) -> FloatArray | None:
     """The principal axis whose moment stands apart from the other two, or None when the
     three moments are all within ``tol`` (relative) of each other."""
     lam, vec = np.linalg.eigh(0.5 * (inertia + inertia.T))
@@ -142,14 +154,22 @@ def _symmetry_axis(inertia: np.ndarray, tol: float = 0.05) -> np.ndarray | None:
     return vec[:, 2] if (lam[1] - lam[0]) < (lam[2] - lam[1]) else vec[:, 0]
 
 
-def _closest_axis(v: np.ndarray) -> str:
+def _closest_axis(v: FloatArray) -> str:
     return _AXES[int(np.argmax(np.abs(v)))]
 
 
 class _Component:
     """A group's dofs, mass block and rigid-motion basis about its centre of mass."""
 
-    def __init__(self, name, rows, dofs, M, coords_by_node, axis=None):
+    def __init__(
+        self,
+        name: str,
+        rows: npt.NDArray[np.int_],
+        dofs: Sequence[tuple[int, str]],
+        M: Any,
+        coords_by_node: Mapping[int, FloatArray],
+        axis: npt.ArrayLike | None = None,
+    ) -> None:
         self.name = name
         self.rows = rows
         self.Mgg = M[rows][:, rows] if sp.issparse(M) else M[np.ix_(rows, rows)]
@@ -174,7 +194,9 @@ class _Component:
         else:  # a plane model: some rigid motions are absent, no symmetry axis is inferred
             self.axis = None
 
-    def motion(self, phi: np.ndarray, rigid_fraction: float, torsion_cos: float):
+    def motion(
+        self, phi: FloatArray, rigid_fraction: float, torsion_cos: float
+    ) -> tuple[str, float]:
         phig = phi[self.rows]
         energy = float(phig @ (self.Mgg @ phig))
         if energy <= 0:
@@ -196,12 +218,12 @@ class _Component:
 
 
 def classify_modes(
-    modes,
-    groups: dict,
+    modes: FEModes,
+    groups: Mapping[str, Iterable[int]],
     rigid_tol: float = RIGID_TOL_HZ,
     rigid_fraction: float = 0.5,
     torsion_angle_deg: float = 30.0,
-    axes: dict | None = None,
+    axes: Mapping[str, npt.ArrayLike] | None = None,
 ) -> list[ModeDescription]:
     """Describe every mode of ``modes`` (an ``FEModes``: ``omegas``, mass-normalised ``shapes``
     and its ``assembly`` with ``M``, ``dofs``, ``node_ids``, ``coordinates``).
@@ -268,7 +290,7 @@ def classify_modes(
         if abs(freqs[j]) < rigid_tol:
             out.append(ModeDescription(j, float(freqs[j]), None, 1.0, "rigid body", 1.0, shares))
             continue
-        top = max(shares, key=shares.get)
+        top = max(shares, key=lambda name: shares[name])
         if top == "other":
             motion, fit = "unassigned nodes", 0.0
         else:
@@ -277,7 +299,12 @@ def classify_modes(
     return out
 
 
-def describe_modes(modes, groups: dict, rigid_tol: float = RIGID_TOL_HZ, **options) -> list[str]:
+def describe_modes(
+    modes: FEModes,
+    groups: Mapping[str, Iterable[int]],
+    rigid_tol: float = RIGID_TOL_HZ,
+    **options: Any,
+) -> list[str]:
     """One phrase per mode, e.g. ``"15 m antenna (92 %): torsion about its axis"``.
 
     See :func:`classify_modes` for the parameters (``rigid_fraction``, ``torsion_angle_deg``,

@@ -21,7 +21,7 @@ __all__ = ["Material", "Section"]
 _RECT_TERMS = 40  # odd terms n = 1, 3, ..., 79 of the rectangle torsion series (rel. error < 1e-10)
 
 
-def _positive(value, field: str) -> float:
+def _positive(value: float, field: str) -> float:
     return float(require_positive(value, field))
 
 
@@ -49,7 +49,7 @@ class Material:
     G: float | None = None
     name: str = ""
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, "E", _positive(self.E, "E"))
         object.__setattr__(self, "rho", float(require_nonneg(self.rho, "rho")))
         nu = float(require_finite(self.nu, "nu"))
@@ -88,17 +88,17 @@ class Section:
     J: float
     name: str = ""
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for field in ("A", "Iy", "Iz", "J"):
             object.__setattr__(self, field, _positive(getattr(self, field), field))
 
     @classmethod
-    def general(cls, A, Iy, Iz, J, name: str = "") -> Section:
+    def general(cls, A: float, Iy: float, Iz: float, J: float, name: str = "") -> Section:
         """Section from given properties (same as the constructor)."""
         return cls(A, Iy, Iz, J, name)
 
     @classmethod
-    def tube(cls, outer_diameter, thickness, name: str = "") -> Section:
+    def tube(cls, outer_diameter: float, thickness: float, name: str = "") -> Section:
         r"""Circular tube, exact for any wall thickness.
 
         With :math:`D` the outer and :math:`d = D - 2t` the inner diameter:
@@ -124,13 +124,13 @@ class Section:
         return cls(A, inertia, inertia, 2.0 * inertia, name)
 
     @classmethod
-    def circle(cls, diameter, name: str = "") -> Section:
+    def circle(cls, diameter: float, name: str = "") -> Section:
         """Solid circle of the given diameter, m."""
         D = _positive(diameter, "diameter")
         return cls.tube(D, D / 2.0, name)
 
     @classmethod
-    def rectangle(cls, width, height, name: str = "") -> Section:
+    def rectangle(cls, width: float, height: float, name: str = "") -> Section:
         r"""Solid rectangle, ``width`` along local y and ``height`` along local z.
 
         :math:`A = b h`, :math:`I_z = h b^3 / 12`, :math:`I_y = b h^3 / 12`, and with
