@@ -126,11 +126,11 @@ def _case_plugin_rule(name: str, obj: Any) -> str | None:
     module = importlib.import_module(getattr(obj, "__module__", None) or "builtins")
     if not callable(obj) or getattr(module, getattr(obj, "__qualname__", ""), None) is not obj:
         return f"not a case builder: {obj!r} is not a class or function defined in its module"
-    for field in ("source", "description"):
-        text = getattr(obj, field, None)
+    texts = {field: getattr(obj, field, None) for field in ("source", "description")}
+    for field, text in texts.items():
         if not isinstance(text, str) or not text.strip():
             return f"{field}: a case builder needs a non-empty string attribute {field!r}"
-    if "\n" in str(obj.description):
+    if "\n" in str(texts["description"]):
         return "description: one line (a row of `flexsat cases`)"
     return None
 
