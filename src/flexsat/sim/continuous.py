@@ -69,6 +69,8 @@ class ContinuousRun:
     solution : callable
         Dense output: ``solution(t)`` with t scalar or (k,) in [t[0], t_end] gives the states,
         (n_cases, n_x) or (k, n_cases, n_x), from the integrator's own interpolant (order 7).
+    steps : (n_steps + 1,) array
+        The integrator's accepted step boundaries, s (where its interpolant changes piece).
     """
 
     t: np.ndarray
@@ -79,6 +81,7 @@ class ContinuousRun:
     t_end: float
     x_end: np.ndarray
     solution: Callable
+    steps: np.ndarray
 
 
 class _Loop:
@@ -320,7 +323,9 @@ def run(
         z = dense(tq)
         return z.reshape(nc, -1) if np.ndim(tq) == 0 else z.T.reshape(-1, nc, plant.nx)
 
-    return ContinuousRun(sol.t, states, inputs, commands, stopped_early, t_end, x_end, solution)
+    return ContinuousRun(
+        sol.t, states, inputs, commands, stopped_early, t_end, x_end, solution, dense.ts
+    )
 
 
 def simulate_continuous(
