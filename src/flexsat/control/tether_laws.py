@@ -36,8 +36,8 @@ All three are written in the nondimensional variables of seed 000 Eq. 4 (x = [λ
       \lambda' = -K_1(\lambda - \lambda_f) + K_2[\theta'(1+\theta')\cos^2\phi + \phi'^2]/\lambda,
       \qquad \hat F = -K_3\lambda\phi'
 
-Each law has a nondimensional kernel (:meth:`nondimensional`, for
-:func:`flexsat.dynamics.tether.integrate`) and the controller protocol (reads the plant's SI
+Each law has a nondimensional kernel (:meth:`nondimensional`) inside the controller protocol
+(a static feedback for the engine's sampled or continuous-law mode; reads the plant's SI
 measurements, writes ``tension``/``reel_rate`` and ``thrust`` in SI through the plant's
 :class:`~flexsat.dynamics.tether.TetherScales`). Gains and targets may be arrays over cases.
 
