@@ -23,18 +23,25 @@ class StateFeedback(Controller):
     Parameters
     ----------
     K : array_like (m, n)
-        Gain; m the width of the written channel, n that of the read output.
-    writes : str
-        The input channel written (default ``torque``).
+        Gain; m the width of the written channel (or the number of written channels), n that
+        of the read output.
+    writes : str or tuple of str
+        The input channel written (default ``torque``), or m scalar channels, one per row of
+        K (a plant with one input channel per actuator).
     reads : str
         The output read (default ``state``).
     """
 
-    def __init__(self, K, writes: str = "torque", reads: str = "state"):
+    def __init__(self, K, writes: str | tuple[str, ...] = "torque", reads: str = "state"):
         self.K = require_finite(K, "K")
         if self.K.ndim != 2:
             raise ValueError(f"K: must be a matrix (m, n), got shape {self.K.shape}")
-        self.reads, self.writes = (reads,), (writes,)
+        self.reads = (reads,)
+        self.writes = (writes,) if isinstance(writes, str) else tuple(writes)
+        if len(self.writes) > 1 and len(self.writes) != self.K.shape[0]:
+            raise ValueError(
+                f"writes: {len(self.writes)} scalar channels for the {self.K.shape[0]} rows of K"
+            )
         self.target = 0.0
 
     def __call__(self, t, y, state):
@@ -44,4 +51,6 @@ class StateFeedback(Controller):
                 f"K: {self.K.shape[1]} columns for the {x.shape[-1]} entries of {self.reads[0]!r}"
             )
         u = -(x @ self.K.T)
+        if len(self.writes) > 1:
+            return {name: u[..., i] for i, name in enumerate(self.writes)}, state
         return (u[..., 0] if self.K.shape[0] == 1 else u), state
