@@ -78,15 +78,9 @@ ALLOWED = {
     ),
 }
 
-#: flagged functions that are time integrations still to be moved onto the engine: each is a
-#: known gap (issue 20), listed so that it is seen; the list may only shrink
-PENDING = {
-    ("dynamics/rigid_body.py", "propagate"): (
-        "RKMK4 over a time grid with a torque callable at the stages; used only by the tests "
-        "of the RKMK4 kernel (order, conservation, Euler-Poinsot); to move into the tests or "
-        "onto the engine"
-    ),
-}
+#: flagged functions that are time integrations still to be moved onto the engine: each a
+#: known gap, listed so that it is seen; the list may only shrink
+PENDING: dict[tuple[str, str], str] = {}
 
 
 def _name(node) -> str | None:

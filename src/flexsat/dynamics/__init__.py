@@ -53,7 +53,6 @@ _EXPORTS = {
             "matvec",
             "euler_acceleration",
             "euler_rates",
-            "propagate",
             "angular_momentum_inertial",
             "kinetic_energy",
             "euler_poinsot_rates",
