@@ -242,7 +242,7 @@ def run(
         model's domain (``plant.domain_margin`` < 0, with its ``domain_rule``) or a failed
         integration (naming the time).
     """
-    from flexsat.sim.engine import check_law
+    from flexsat.sim.engine import DIVERGENCE_BOUND, SimulationDiverged, check_law
 
     check_law(plant, controller)
     if getattr(plant, "step", None) is not None:
@@ -267,7 +267,12 @@ def run(
             f"initial_state: must have shape ({plant.nx},) or ({nc}, {plant.nx}), got {x0.shape}"
         ) from None
     loop = _Loop(plant, controller, nc, _exogenous(plant, exogenous, nc))
-    events = []
+
+    def diverging(_t, flat):
+        return DIVERGENCE_BOUND - float(np.max(np.abs(flat)))
+
+    diverging.terminal = True
+    events = [diverging]
     margin = getattr(plant, "domain_margin", None)
     if margin is not None:
         if np.min(margin(x0)) <= 0:
@@ -286,7 +291,7 @@ def run(
         stopped.terminal = True
         stopped.direction = -1
         events.append(stopped)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         sol = solve_ivp(
             loop.rhs,
             (t[0], t[-1]),
@@ -295,17 +300,29 @@ def run(
             t_eval=t,
             rtol=rtol,
             atol=atol,
-            events=events or None,
+            events=events,
             dense_output=True,
+        )
+    if sol.t_events[0].size:
+        at = float(sol.t_events[0][0])
+        x_at = sol.y_events[0][0].reshape(nc, -1)
+        cases = tuple(int(i) for i in np.flatnonzero(np.abs(x_at).max(axis=1) >= DIVERGENCE_BOUND))
+        raise SimulationDiverged(
+            f"simulation diverged at t = {at:.6g} s in case(s) {cases}: a state entry passed "
+            f"{DIVERGENCE_BOUND:g} (SI). Likely cause: the closed loop is unstable (check the "
+            "law's gains and signs)",
+            cases,
+            at,
+            "the closed loop is unstable",
         )
     if sol.status == -1:
         raise ValueError(f"times: the integration failed at t = {sol.t[-1]:.6g} s: {sol.message}")
-    if margin is not None and sol.t_events[0].size:
+    if margin is not None and sol.t_events[1].size:
         raise ValueError(
-            f"{plant.domain_rule} at t = {sol.t_events[0][0]:.3g} s (the run ends there)"
+            f"{plant.domain_rule} at t = {sol.t_events[1][0]:.3g} s (the run ends there)"
         )
     stopped_early = sol.status == 1
-    if stopped_early:
+    if stopped_early:  # only the stop condition is left to end it
         t_end, x_end = float(sol.t_events[-1][0]), sol.y_events[-1][0].reshape(nc, -1)
     else:
         t_end, x_end = float(t[-1]), sol.y[:, -1].reshape(nc, -1)
