@@ -98,8 +98,10 @@ class _Loop:
         self.m, self.slices = plant.n_inputs, plant.input_slices
         self.reads, self.writes = tuple(controller.reads), tuple(controller.writes)
         self.exogenous = exogenous
-        zero_u = np.zeros((nc, self.m))
-        self.zero_u = zero_u
+        self.zero_u = np.zeros((nc, self.m))
+        # how each read is taken from x: state columns, a product with C, or the plant's own
+        # output (called several times per integrator step: the cheap forms matter)
+        self.readers = []
         for name in self.reads:
             mats = plant.output_matrices(name)
             if mats is not None and mats[1] is not None and np.any(mats[1]):
@@ -107,10 +109,28 @@ class _Loop:
                     f"{name}: {self.law} reads an output with feedthrough from the inputs, an "
                     "algebraic loop in continuous-law mode (read the states it is made of)"
                 )
+            self.readers.append((name, self._reader(name, mats)))
+
+    def _reader(self, name: str, mats):
+        plant = self.plant
+        if mats is None:
+            return lambda x: plant.output(name, x, self.zero_u, None)
+        C = np.asarray(mats[0], float)
+        one = C.shape[-2] == 1
+        if C.ndim == 2 and np.all(np.sum(C != 0, axis=1) == 1) and np.all(C.max(axis=1) == 1):
+            cols = np.argmax(C, axis=1)  # rows of the identity: y = x[:, cols]
+            if one:
+                col = int(cols[0])
+                return lambda x: x[:, col]
+            return lambda x: x[:, cols]
+        CT = np.swapaxes(C, -1, -2)
+        if one:
+            return lambda x: apply(x, CT, self.batched)[:, 0]
+        return lambda x: apply(x, CT, self.batched)
 
     def commands(self, t: float, x: np.ndarray) -> np.ndarray:
         """The law's commands (n_cases, m) at time t and states x (n_cases, n_x)."""
-        y = {name: self.plant.output(name, x, self.zero_u, None) for name in self.reads}
+        y = {name: read(x) for name, read in self.readers}
         cmd, _ = self.controller(t, y, {})
         if not isinstance(cmd, Mapping):
             cmd = {self.writes[0]: cmd}
