@@ -171,9 +171,9 @@ class _Loop:
         return dx.ravel()
 
 
-def _exogenous(plant, exogenous, nc: int):
+def _exogenous(plant, exogenous, nc: int, t0: float):
     """``exogenous`` as t -> (n_cases, m): a callable t -> {input channel: (n_cases,) or
-    (n_cases, w) or broadcastable} checked once at t = 0."""
+    (n_cases, w) or broadcastable} checked once at the start t0."""
     if exogenous is None:
         return None
     if not callable(exogenous):
@@ -197,9 +197,8 @@ def _exogenous(plant, exogenous, nc: int):
             d[:, sl] = np.broadcast_to(np.asarray(v, float), shape).reshape(nc, width)
         return d
 
-    first = at(0.0)
-    if not np.isfinite(first).all():
-        raise ValueError("exogenous: returned a non-finite input at t = 0")
+    if not np.isfinite(at(t0)).all():
+        raise ValueError(f"exogenous: returned a non-finite input at t = {t0:g} s")
     return at
 
 
@@ -261,6 +260,9 @@ def run(
         with its own integrator, an output with feedthrough read, the plant leaving its
         model's domain (``plant.domain_margin`` < 0, with its ``domain_rule``) or a failed
         integration (naming the time).
+    SimulationDiverged
+        When a state entry passes :data:`flexsat.sim.engine.DIVERGENCE_BOUND` (an unstable
+        closed loop): no result with NaN or overflow is returned.
     """
     from flexsat.sim.engine import DIVERGENCE_BOUND, SimulationDiverged, check_law
 
@@ -286,7 +288,7 @@ def run(
         raise ValueError(
             f"initial_state: must have shape ({plant.nx},) or ({nc}, {plant.nx}), got {x0.shape}"
         ) from None
-    loop = _Loop(plant, controller, nc, _exogenous(plant, exogenous, nc))
+    loop = _Loop(plant, controller, nc, _exogenous(plant, exogenous, nc, float(t[0])))
 
     def diverging(_t, flat):
         return DIVERGENCE_BOUND - float(np.max(np.abs(flat)))
