@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from flexsat.control.base import Controller
-from flexsat.control.state_feedback import StateFeedback
+from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
 from flexsat.dynamics.state_space import StateSpacePlant
 from flexsat.sim import continuous
@@ -17,6 +17,11 @@ from flexsat.sim.config import SimConfig
 from flexsat.sim.engine import SimulationDiverged, simulate
 
 K = 0.7  # 1/s
+
+
+def feedback(K, writes, reads):
+    """u = −K y: a constant gain schedule."""
+    return ScheduledStateFeedback([0.0], [K], reads, writes)
 
 
 def integrator_plant():
@@ -32,7 +37,7 @@ def oscillator():
 def test_state_feedback_gives_the_exponential():
     t = np.linspace(0.0, 5.0, 51)
     run = continuous.run(
-        integrator_plant(), StateFeedback([[K]], "u", "y"), t, [2.0], rtol=1e-12, atol=1e-15
+        integrator_plant(), feedback([[K]], "u", "y"), t, [2.0], rtol=1e-12, atol=1e-15
     )
     exact = 2.0 * np.exp(-K * t)
     assert np.abs(run.states[0, :, 0] - exact).max() <= 1e-11
@@ -46,7 +51,7 @@ def test_exogenous_input_drives_the_forced_oscillator():
     t = np.linspace(0.0, 2 * np.pi, 201)
     run = continuous.run(
         oscillator(),
-        StateFeedback([[0.0, 0.0]], "u", "state"),
+        feedback([[0.0, 0.0]], "u", "state"),
         t,
         [0.0, 0.0],
         rtol=1e-12,
@@ -65,7 +70,7 @@ def test_stop_condition_ends_the_run_at_its_root():
     # x = e^{−Kt} crosses 1/2 at t = ln 2 / K
     run = continuous.run(
         integrator_plant(),
-        StateFeedback([[K]], "u", "y"),
+        feedback([[K]], "u", "y"),
         np.linspace(0.0, 5.0, 11),
         [1.0],
         rtol=1e-12,
@@ -80,7 +85,7 @@ def test_stop_condition_ends_the_run_at_its_root():
 
 def test_a_decreasing_grid_integrates_backward():
     run = continuous.run(
-        integrator_plant(), StateFeedback([[K]], "u", "y"), [1.0, 0.0], [1.0], rtol=1e-12
+        integrator_plant(), feedback([[K]], "u", "y"), [1.0, 0.0], [1.0], rtol=1e-12
     )
     assert run.x_end[0, 0] == pytest.approx(np.exp(K), rel=1e-11)
 
@@ -88,7 +93,7 @@ def test_a_decreasing_grid_integrates_backward():
 def test_simulate_switches_to_the_continuous_mode():
     config = SimConfig(duration=3.0, control_rate=10.0, law_mode="continuous", rtol=1e-12)
     ds = simulate(
-        integrator_plant(), StateFeedback([[K]], "u", "y"), config, initial_state=[1.0]
+        integrator_plant(), feedback([[K]], "u", "y"), config, initial_state=[1.0]
     ).dataset
     assert ds.attrs["engine"] == "continuous"
     t = ds["time"].values
@@ -98,7 +103,7 @@ def test_simulate_switches_to_the_continuous_mode():
     errors = []
     for rate in (10.0, 100.0):
         cfg = SimConfig(duration=3.0, control_rate=rate)
-        y = simulate(integrator_plant(), StateFeedback([[K]], "u", "y"), cfg, initial_state=[1.0])
+        y = simulate(integrator_plant(), feedback([[K]], "u", "y"), cfg, initial_state=[1.0])
         tt = y.dataset["time"].values
         errors.append(np.abs(y.dataset["y"].values[0] - np.exp(-K * tt)).max())
     assert 8 < errors[0] / errors[1] < 12
@@ -119,18 +124,20 @@ class Counter(Controller):
 
 
 def test_refusals_name_the_field():
-    law = StateFeedback([[K]], "u", "y")
+    law = feedback([[K]], "u", "y")
     with pytest.raises(ValueError, match="law_mode: Counter has an internal state"):
         continuous.run(integrator_plant(), Counter(), [0.0, 1.0], [1.0])
     with pytest.raises(ValueError, match="law_mode: RigidSpacecraft propagates itself"):
         continuous.run(
             RigidSpacecraft(np.diag([1.0, 2.0, 2.5])),
-            StateFeedback(np.zeros((3, 3)), "torque", "rate"),
+            feedback(np.zeros((3, 3)), "torque", "rate"),
             [0.0, 1.0],
             [1.0, 0, 0, 0, 0, 0, 0],
         )
     feedthrough = StateSpacePlant([[0.0]], [[1.0]], [[1.0]], [[0.5]])
-    with pytest.raises(ValueError, match="y: StateFeedback reads an output with feedthrough"):
+    with pytest.raises(
+        ValueError, match="y: ScheduledStateFeedback reads an output with feedthrough"
+    ):
         continuous.run(feedthrough, law, [0.0, 1.0], [1.0])
     with pytest.raises(ValueError, match="times: must be a strictly monotonic"):
         continuous.run(integrator_plant(), law, [0.0, 1.0, 0.5], [1.0])
@@ -152,5 +159,5 @@ def test_refusals_name_the_field():
 def test_a_diverging_loop_is_reported_not_returned():
     # positive feedback x' = +50 x passes the divergence bound 1e12 at t = ln(1e12)/50
     with pytest.raises(SimulationDiverged, match=r"diverged at t = 0\.5526") as info:
-        continuous.run(integrator_plant(), StateFeedback([[-50.0]], "u", "y"), [0.0, 100.0], [1.0])
+        continuous.run(integrator_plant(), feedback([[-50.0]], "u", "y"), [0.0, 100.0], [1.0])
     assert info.value.cases == (0,)

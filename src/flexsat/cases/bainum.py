@@ -49,7 +49,7 @@ from flexsat.analysis.controllability import (
 )
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
-from flexsat.control.state_feedback import StateFeedback
+from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.input_checks import require_count, require_finite
 from flexsat.sim import continuous
 
@@ -453,12 +453,12 @@ class BainumBeam:
     ) -> Response:
         """Closed loop f = K_pos x + K_rate x', u = G f, from ``x0`` ([θ, z] positions, rates
         zero, or a full state) over τ ∈ [0, ``tau_end``]: the beam-in-orbit plant (:meth:`plant`,
-        in seconds; ``nonlinear=False`` its linearisation) under the state feedback
-        (:class:`~flexsat.control.state_feedback.StateFeedback`) in the engine's continuous-law
-        mode (:func:`flexsat.sim.continuous.run`, DOP853), its states [x, ẋ] brought to
-        [x, x' = ẋ/ω_c]. This is what the report's NON-LINEAR program (App. C, L1898-L2116)
-        does, with the full feedback in every equation (its FCT kept only the pitch-rate term
-        in the pitch equation, notes §4.2)."""
+        in seconds; ``nonlinear=False`` its linearisation) under the state feedback (a constant
+        :class:`~flexsat.control.scheduled.ScheduledStateFeedback`) in the engine's
+        continuous-law mode (:func:`flexsat.sim.continuous.run`, DOP853), its states [x, ẋ]
+        brought to [x, x' = ẋ/ω_c]. This is what the report's NON-LINEAR program (App. C,
+        L1898-L2116) does, with the full feedback in every equation (its FCT kept only the
+        pitch-rate term in the pitch equation, notes §4.2)."""
         G = require_finite(G, "G")
         G = G.reshape(-1, 1) if G.ndim == 1 else G
         if G.ndim != 2:
@@ -484,7 +484,9 @@ class BainumBeam:
         plant = self._orbit_plant(G, linearised=not nonlinear)
         wc = plant.orbit_rate
         # seconds: ẋ = ω_c x', so f = K_pos x + K_rate x' = K_pos x + (K_rate/ω_c) ẋ
-        law = StateFeedback(-np.hstack([K_pos, K_rate / wc]), writes=tuple(plant.input_slices))
+        law = ScheduledStateFeedback(
+            [0.0], -np.hstack([K_pos, K_rate / wc])[None], "state", tuple(plant.input_slices)
+        )
         tau = np.linspace(0.0, float(tau_end), int(n_points))
         to_seconds = np.concatenate([np.ones(n), np.full(n, wc)])
         # the tolerances hold for the τ-state [x, x']: the rates in seconds are ω_c x'

@@ -11,10 +11,11 @@ Three steps, as in the paper:
    Q̃ = I: the same gain K = K̃D⁻¹ (S = D⁻¹S̃D⁻¹), without the 1e13 spread of the raw
    weights that would otherwise fail the solver's residual check.
 2. **Attitude loop**: the plant :class:`~flexsat.dynamics.space_station.SpaceStation` under the
-   state feedback u = −Kx (:class:`~flexsat.control.state_feedback.StateFeedback`), closed
-   x' = (A − BK)x + Ew(t) in the engine's continuous-law mode
-   (:func:`flexsat.sim.continuous.run`, w the exogenous input), from 1° on each axis (the
-   paper's initial errors), w the design disturbance (Eq. 11) or the AERO1 substitute.
+   state feedback u = −Kx (a constant
+   :class:`~flexsat.control.scheduled.ScheduledStateFeedback`), closed x' = (A − BK)x + Ew(t)
+   in the engine's continuous-law mode (:func:`flexsat.sim.continuous.run`, w the exogenous
+   input), from 1° on each axis (the paper's initial errors), w the design disturbance
+   (Eq. 11) or the AERO1 substitute.
 3. **CMG loop**, separately (the paper's justification: the attitude bandwidth is ~0.01 rad/s):
    the pseudo-inverse steering :math:`C\dot\sigma = T`,
    :math:`T = [u_1 + n h_3,\ u_2,\ u_3 - n h_1]/h_r` (L4717–L4720), from a chosen σ(0), stopped
@@ -35,7 +36,7 @@ import numpy as np
 
 from flexsat.cases.cmg_pyramid import integrate_gimbals
 from flexsat.control.lqr import lqr
-from flexsat.control.state_feedback import StateFeedback
+from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.dynamics.space_station import (
     PAPER_STATION,
     SpaceStation,
@@ -208,7 +209,7 @@ def simulate_attitude(
     t = np.linspace(0.0, tf, n_out)
     loop = continuous.run(
         plant,
-        StateFeedback(station.gain),
+        ScheduledStateFeedback([0.0], station.gain[None], "state", "torque"),
         t,
         z0,
         rtol=1e-10,
