@@ -44,8 +44,8 @@ def identification_example():
 def _recorded_scenario(tmp_path):
     """A measured-data scenario: the example's tests simulated, written to UFF 58 files next to
     the scenario file, and a scenario with ``records`` pointing at them."""
+    from flexsat.cases.identification_campaign import simulate_records
     from flexsat.cases.tamu_grid import tamu_grid
-    from flexsat.identify.campaign import simulate_records
     from flexsat.scenarios import load_scenario
 
     sim = load_scenario(yaml.safe_dump(_identification_example(fast=True)))

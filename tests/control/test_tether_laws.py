@@ -20,6 +20,7 @@ are the paper's printed precision (half a unit in its last digit) unless said ot
 import numpy as np
 import pytest
 
+from flexsat.cases.tether import run_law
 from flexsat.control.tether_laws import (
     CoupledTetherLaw,
     DecoupledTetherLaw,
@@ -33,7 +34,6 @@ from flexsat.dynamics.tether import (
     TetherScales,
     accelerations,
     integral_of_motion,
-    integrate,
 )
 
 D5 = np.radians(5.0)
@@ -43,9 +43,9 @@ TAU = np.linspace(0, 2 * ORBIT, 4001)  # "over two orbits", the paper's index wi
 PAPER = TetherScales(mass="22.7 kg", length="20 km", altitude="220 km")
 
 
-def run(law, orbits=2.0, control="tension"):
+def run(law, orbits=2.0):
     tau = np.linspace(0, orbits * ORBIT, int(2000 * orbits) + 1)
-    return integrate(law.nondimensional, X0, tau, control=control)
+    return run_law(law, X0, tau)
 
 
 def max_pitch_deg(r):
@@ -116,7 +116,7 @@ def test_printed_sign_of_eq15_diverges():
 def test_v11_v12_controller_2_uses_a_quarter_of_the_thrust():
     # one vectorised run over K4 = 2 (Figs. 4-5) and K4 = 3
     law = CoupledTetherLaw(K1=1.0, K2=0.0, K3=3.0, K4=np.array([2.0, 3.0]), final_length=0.01)
-    r = integrate(law.nondimensional, np.tile(X0, (2, 1)), TAU)
+    r = run_law(law, np.tile(X0, (2, 1)), TAU)
     index = r.thrust_index[:, -1]
     # V11: "0.24 which is 128.4 N-s" and "29.3°" (L4447-L4449); measured 0.2369, 29.31°
     assert index[0] == pytest.approx(0.24, abs=0.01)
@@ -133,7 +133,7 @@ def test_v11_v12_controller_2_uses_a_quarter_of_the_thrust():
 def test_v13_final_length_0_001_needs_a_softer_k1():
     law = CoupledTetherLaw(K1=np.array([1.0, 0.9]), K2=0.0, K3=3.0, K4=2.0, final_length=0.001)
     tau = np.linspace(0, 6 * ORBIT, 6001)
-    r = integrate(law.nondimensional, np.tile(X0, (2, 1)), tau)
+    r = run_law(law, np.tile(X0, (2, 1)), tau)
     theta = np.degrees(r.state[:, :, 1])
     # K1 = 1 (Fig. 6): the pitch goes over the top (200.7° at two orbits) and the motion settles
     # on the undesired equilibrium θ = π, λ = λr of Eq. 16's list
@@ -159,7 +159,7 @@ def test_v15_rate_law_initial_rate_is_5_83_not_30_m_per_s():
     assert 30 / (PAPER.speed * 0.99) == pytest.approx(1.29, abs=0.005)
     # Fig. 8: near-exponential retrieval; oscillatory, slowly decaying pitch; max θ 22.1°,
     # λ(6π) = 0.0165 in the spec's own simulation
-    r = run(law, orbits=3.0, control="rate")
+    r = run(law, orbits=3.0)
     lam = r.state[0, :, 0]
     expo = 0.01 + 0.99 * np.exp(-0.25 * r.tau)
     # within 25 % of the K2 = 0 exponential λf + (λ0 − λf)e^(−K1τ) all the way (measured 20 %:

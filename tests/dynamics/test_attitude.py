@@ -200,6 +200,9 @@ def test_the_package_re_exports_every_kernel():
         "RigidSpacecraft",
         "FlexibleSpacecraft",
         "CmgSpacecraft",
+        "GimbalCluster",
+        "SpaceStation",
+        "StateSpacePlant",
         "TetheredSubsatellite",
         "TetherScales",
     }

@@ -8,6 +8,7 @@ reachable momentum; bad input named."""
 import numpy as np
 import pytest
 
+from flexsat.cases import cmg_pyramid
 from flexsat.dynamics import cmg
 
 DEG = np.deg2rad
@@ -51,7 +52,7 @@ def test_v2_saturation_along_x_is_the_envelope():
 
 def test_v3_pseudo_inverse_from_zero_gimbals_meets_an_internal_singularity():
     threshold = 1e-6
-    run = cmg.integrate_gimbals(np.zeros(4), PAPER_X, 5.0, threshold=threshold)
+    run = cmg_pyramid.integrate_gimbals(np.zeros(4), PAPER_X, 5.0, threshold=threshold)
     assert run.singular
     # the pseudo-inverse tracks ḣ = +x exactly, so |h| = t; the singular point is
     # h = 2cosδ = 1.1546 (the paper's 1.15h). Near it det(CCᵀ) ∝ (1 − h/h_s), so stopping at
@@ -75,7 +76,7 @@ def test_v3_pseudo_inverse_from_zero_gimbals_meets_an_internal_singularity():
     h_units = np.cos(run.sigma[-1])[:, None] * a + np.sin(run.sigma[-1])[:, None] * b
     np.testing.assert_allclose(h_units[1], -h_units[3], atol=1e-12)
     # a +x torque on the spacecraft drives h to −x: the mirror singularity, h antiparallel to it
-    mirror = cmg.integrate_gimbals(np.zeros(4), -PAPER_X, 5.0, threshold=threshold)
+    mirror = cmg_pyramid.integrate_gimbals(np.zeros(4), -PAPER_X, 5.0, threshold=threshold)
     assert mirror.singular and mirror.t[-1] == pytest.approx(h_s, abs=1e-5)
     np.testing.assert_allclose(mirror.h[-1], [-mirror.t[-1], 0.0, 0.0], atol=1e-8)
     np.testing.assert_allclose(np.rad2deg(mirror.sigma[-1]), [90.0, 0.0, -90.0, 0.0], atol=0.1)
@@ -85,7 +86,7 @@ def test_v4_back_integration_from_near_saturation_reaches_the_preferred_set():
     sigma0 = DEG([-89.0, 177.0, 90.0, -1.0])
     h0 = cmg.momentum(sigma0)
     # run backward for the time that removes the x momentum at unit rate (3.1530 s)
-    run = cmg.integrate_gimbals(sigma0, PAPER_X, -h0[0])
+    run = cmg_pyramid.integrate_gimbals(sigma0, PAPER_X, -h0[0])
     assert not run.singular and run.gain.min() > 1e-3  # no singularity on the way
     assert run.h[-1, 0] == pytest.approx(0.0, abs=1e-8)
     # y, z momentum of the perturbation is untouched by an x torque
@@ -129,7 +130,7 @@ def test_v5_preferred_sets_reach_saturation_and_zero_gimbals_do_not(
     demand, sigma0, internal, h_stop, tol
 ):
     u = np.asarray(demand, float) / np.linalg.norm(demand)
-    run = cmg.integrate_gimbals(DEG(sigma0), -u, 10.0)  # unit demand ḣ = u: torque −u
+    run = cmg_pyramid.integrate_gimbals(DEG(sigma0), -u, 10.0)  # unit demand ḣ = u: torque −u
     assert run.singular
     assert np.linalg.norm(run.h[-1]) == pytest.approx(h_stop, abs=tol)
     assert cmg.classify_singularity(run.sigma[-1], threshold=1e-5).internal == internal
@@ -144,7 +145,7 @@ def kurokawa(t):
 
 @pytest.mark.parametrize("sigma0", [PREFERRED_Y, ALTERNATE])
 def test_v6_kurokawa_torque_saturates_at_about_ten_seconds_without_internal_singularity(sigma0):
-    run = cmg.integrate_gimbals(DEG(sigma0), kurokawa, 20.0, n_out=401)
+    run = cmg_pyramid.integrate_gimbals(DEG(sigma0), kurokawa, 20.0, n_out=401)
     assert run.singular
     # the pseudo-inverse tracks the demand exactly: h(t) = h(0) + ∫ḣ, h(0) = 0 for both sets
     # (to the 1.1e-4 of the rounded skew for PREFERRED_Y, V1)
@@ -165,14 +166,14 @@ def test_v6_kurokawa_torque_saturates_at_about_ten_seconds_without_internal_sing
     assert run.t[-1] == pytest.approx((h_env - h0[1]) / 0.3, abs=1e-3)
     assert run.t[-1] == pytest.approx(10.51, abs=0.01)
     # from zero gimbals the same demand goes internally singular at 3.85 s (the notes' [CHECK])
-    zero = cmg.integrate_gimbals(np.zeros(4), kurokawa, 20.0)
+    zero = cmg_pyramid.integrate_gimbals(np.zeros(4), kurokawa, 20.0)
     assert zero.singular and zero.t[-1] == pytest.approx(3.85, abs=5e-3)
     assert cmg.classify_singularity(zero.sigma[-1], threshold=1e-5).internal
 
 
 def test_v7_bedrossian_torque_is_singular_from_zero_gimbals_and_not_from_the_alternate_set():
     torque = -np.array([0.707, 0.707, 0.0])  # |Tx| = |Ty| = 0.707, the notes' (+, +) signs
-    zero = cmg.integrate_gimbals(np.zeros(4), torque, 10.0)
+    zero = cmg_pyramid.integrate_gimbals(np.zeros(4), torque, 10.0)
     assert zero.singular
     assert cmg.classify_singularity(zero.sigma[-1], threshold=1e-5).internal
     # the gain reaches 1e-6 at 1.531 s (h = 1.0825 [1, 1, 0]); the paper's "1.5 s" is read off
@@ -180,10 +181,10 @@ def test_v7_bedrossian_torque_is_singular_from_zero_gimbals_and_not_from_the_alt
     # approach stopped earlier: det(CCᵀ) = 1e-3 there
     assert zero.t[-1] == pytest.approx(1.5, abs=0.05)
     np.testing.assert_allclose(zero.h[-1], [1.0825, 1.0825, 0.0], atol=1e-4)
-    early = cmg.integrate_gimbals(np.zeros(4), torque, 10.0, threshold=1e-3)
+    early = cmg_pyramid.integrate_gimbals(np.zeros(4), torque, 10.0, threshold=1e-3)
     assert early.t[-1] == pytest.approx(1.508, abs=1e-3)  # the notes print 4 digits
     # from [45, −45, 45, −45]° no internal singularity: it runs to the envelope along [1, 1, 0]
-    alt = cmg.integrate_gimbals(DEG(ALTERNATE), torque, 10.0)
+    alt = cmg_pyramid.integrate_gimbals(DEG(ALTERNATE), torque, 10.0)
     assert alt.singular and not cmg.classify_singularity(alt.sigma[-1], threshold=1e-5).internal
     u = np.array([1.0, 1.0, 0.0]) / np.sqrt(2.0)
     assert alt.h[-1] @ u == pytest.approx(cmg.envelope(u)[0], abs=1e-3)
@@ -192,7 +193,7 @@ def test_v7_bedrossian_torque_is_singular_from_zero_gimbals_and_not_from_the_alt
 
 
 def test_preferred_angles_for_x_land_on_the_v4_set():
-    got = np.rad2deg(cmg.preferred_angles([1.0, 0.0, 0.0]))
+    got = np.rad2deg(cmg_pyramid.preferred_angles([1.0, 0.0, 0.0]))
     # the paper's [−59.6, 60.7, 118, −121]° (±0.5°) and the notes' 0.01° reproduction (V4)
     np.testing.assert_allclose(got, [-59.6, 60.7, 118.0, -121.0], atol=0.5)
     np.testing.assert_allclose(got, [-59.66, 60.58, 117.98, -121.12], atol=0.01)
@@ -201,14 +202,14 @@ def test_preferred_angles_for_x_land_on_the_v4_set():
 @pytest.mark.parametrize("u", [[1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, -1, 0], [0, 0, -1]])
 def test_preferred_angles_run_forward_to_the_envelope_without_internal_singularity(u):
     u = np.asarray(u, float)
-    sigma0 = cmg.preferred_angles(u)
+    sigma0 = cmg_pyramid.preferred_angles(u)
     assert np.all(np.abs(sigma0) <= np.pi)
     # near zero momentum: u·h = 0 to the integrator's error; the normal part is the
     # perturbation's (1–3° offsets from saturation leave |h| < 0.07)
     h0 = cmg.momentum(sigma0)
     assert h0 @ u == pytest.approx(0.0, abs=1e-8)
     assert np.linalg.norm(h0) < 0.07
-    run = cmg.integrate_gimbals(sigma0, -u, 10.0)  # the same unit demand ḣ = u
+    run = cmg_pyramid.integrate_gimbals(sigma0, -u, 10.0)  # the same unit demand ḣ = u
     assert run.singular and not cmg.classify_singularity(run.sigma[-1], threshold=1e-5).internal
     # saturation on the envelope along u, within V5's 1e-3 (the gain stop and the normal part)
     assert run.h[-1] @ u == pytest.approx(cmg.envelope(u)[0], abs=1e-3)
@@ -219,11 +220,11 @@ def test_stored_preferred_sets_are_the_back_integration_and_saturate(direction, 
     # the table is computed data: recomputed here; stored to 0.01°, so ±0.005° of rounding plus
     # the back integration's error (rtol 1e-10 on σ, far below)
     u = np.asarray(direction, float) / np.linalg.norm(direction)
-    got = np.rad2deg(cmg.preferred_angles(u))
+    got = np.rad2deg(cmg_pyramid.preferred_angles(u))
     np.testing.assert_allclose(got, stored, atol=0.005 + 1e-6)
     # the stored set runs forward under the unit demand ḣ = u to the envelope, not internally
     # singular (within V5's 1e-3 on the momentum along u)
-    run = cmg.integrate_gimbals(DEG(stored), -u, 10.0)
+    run = cmg_pyramid.integrate_gimbals(DEG(stored), -u, 10.0)
     assert run.singular and not cmg.classify_singularity(run.sigma[-1], threshold=1e-5).internal
     assert run.h[-1] @ u == pytest.approx(cmg.envelope(u)[0], abs=1e-3)
     np.testing.assert_allclose(cmg.preferred_set(2.0 * u), DEG(stored), atol=1e-15)
@@ -242,7 +243,9 @@ def test_null_motion_beside_the_torque_law_avoids_the_v3_singularity():
     # projector), the delivered momentum is unchanged, h(t) = t x (Cτ = 0), and the gimbals
     # reach saturation on the envelope 2cosδ + 2 instead
     target = cmg.preferred_set([1.0, 0.0, 0.0])
-    run = cmg.integrate_gimbals(np.zeros(4), PAPER_X, 10.0, null_target=target, null_gain=1.0)
+    run = cmg_pyramid.integrate_gimbals(
+        np.zeros(4), PAPER_X, 10.0, null_target=target, null_gain=1.0
+    )
     assert run.singular and not cmg.classify_singularity(run.sigma[-1], threshold=1e-5).internal
     h_sat = 2.0 * np.cos(SKEW) + 2.0
     assert run.t[-1] == pytest.approx(h_sat, abs=1e-3)  # the gain stop, as V5
@@ -256,7 +259,7 @@ def test_null_motion_beside_the_torque_law_avoids_the_v3_singularity():
     with pytest.raises(ValueError, match="gain_k: must be >= 0"):
         cmg.steering_with_null_motion(sigma, [0.0, 0.0, 0.0], target, -1.0)
     with pytest.raises(ValueError, match="null_target: one gimbal set"):
-        cmg.integrate_gimbals(np.zeros(4), PAPER_X, 1.0, null_target=np.zeros((2, 4)))
+        cmg_pyramid.integrate_gimbals(np.zeros(4), PAPER_X, 1.0, null_target=np.zeros((2, 4)))
 
 
 @pytest.mark.parametrize(
@@ -341,7 +344,9 @@ def test_null_projector_is_a_projector_onto_torque_free_motion():
 def test_v8_null_motion_reorients_zero_gimbals_to_the_alternate_set():
     # σ = s[1, −1, 1, −1] has h ≡ 0 (§8.5 [CHECK]), and d = k(σ_f − σ) lies along that line, so
     # the law moves s' = k(45° − s): s = 45°(1 − e^{−kt}), exactly, whatever the projector does
-    run = cmg.reorient(np.zeros(4), DEG(ALTERNATE), 10.0, gain_k=1.0, alpha=1e-3, n_out=1001)
+    run = cmg_pyramid.reorient(
+        np.zeros(4), DEG(ALTERNATE), 10.0, gain_k=1.0, alpha=1e-3, n_out=1001
+    )
     s = DEG(45.0) * (1.0 - np.exp(-run.t))
     np.testing.assert_allclose(run.sigma, s[:, None] * [1.0, -1.0, 1.0, -1.0], atol=1e-8)
     np.testing.assert_allclose(run.h, 0.0, atol=1e-12)  # no torque on the spacecraft
@@ -371,25 +376,36 @@ def test_angles_accept_units():
         (lambda: cmg.envelope([0.0, 0.0, 0.0]), "direction: must be nonzero"),
         (lambda: cmg.steering_rates(np.zeros(4), [1.0, 0.0]), "torque: last axis"),
         (lambda: cmg.steering_rates(np.zeros(4), [1.0, 0.0, 0.0], alpha=-1.0), "alpha: must be"),
-        (lambda: cmg.integrate_gimbals(np.zeros(4), [1.0, 0.0, 0.0], 0.0), "t_final: must be"),
-        (lambda: cmg.reorient(np.zeros(4), np.ones(4), 1.0, gain_k=0.0), "gain_k: must be > 0"),
-        (lambda: cmg.reorient(np.zeros(4), np.ones(3), 1.0), "sigma: last axis"),
         (
-            lambda: cmg.integrate_gimbals(DEG([-90.0, 180.0, 90.0, 0.0]), [1.0, 0.0, 0.0], 1.0),
+            lambda: cmg_pyramid.integrate_gimbals(np.zeros(4), [1.0, 0.0, 0.0], 0.0),
+            "t_final: must be",
+        ),
+        (
+            lambda: cmg_pyramid.reorient(np.zeros(4), np.ones(4), 1.0, gain_k=0.0),
+            "gain_k: must be > 0",
+        ),
+        (lambda: cmg_pyramid.reorient(np.zeros(4), np.ones(3), 1.0), "sigma: last axis"),
+        (
+            lambda: cmg_pyramid.integrate_gimbals(
+                DEG([-90.0, 180.0, 90.0, 0.0]), [1.0, 0.0, 0.0], 1.0
+            ),
             "sigma0: starts singular",
         ),
-        (lambda: cmg.preferred_angles([1.0, 0.0, 0.0], n_units=3), "perturbation: required"),
         (
-            lambda: cmg.preferred_angles([1.0, 0.0, 0.0], perturbation=np.zeros(4)),
+            lambda: cmg_pyramid.preferred_angles([1.0, 0.0, 0.0], n_units=3),
+            "perturbation: required",
+        ),
+        (
+            lambda: cmg_pyramid.preferred_angles([1.0, 0.0, 0.0], perturbation=np.zeros(4)),
             "perturbation: must be a nonzero",
         ),
-        (lambda: cmg.preferred_angles([0.0, 0.0, 0.0]), "direction: must be nonzero"),
+        (lambda: cmg_pyramid.preferred_angles([0.0, 0.0, 0.0]), "direction: must be nonzero"),
         (
-            lambda: cmg.integrate_gimbals(np.zeros(4), lambda t: [1.0, 0.0], 1.0),
+            lambda: cmg_pyramid.integrate_gimbals(np.zeros(4), lambda t: [1.0, 0.0], 1.0),
             "torque: the callable must return 3",
         ),
         (
-            lambda: cmg.integrate_gimbals(np.zeros(4), lambda t: [np.nan, 0.0, 0.0], 1.0),
+            lambda: cmg_pyramid.integrate_gimbals(np.zeros(4), lambda t: [np.nan, 0.0, 0.0], 1.0),
             "torque: must be finite",
         ),
     ],
@@ -403,10 +419,12 @@ def test_sr_runs_can_pass_singular_sets_without_stopping():
     # stop_at_singular=False with α > 0: from the +x saturation set (V2, exactly singular) the
     # run goes on to t_final and says it met a singular set; the pseudo-inverse refuses to start
     saturated = DEG([-90.0, 180.0, 90.0, 0.0])
-    run = cmg.integrate_gimbals(saturated, -PAPER_X, 2.0, alpha=1e-3, stop_at_singular=False)
+    run = cmg_pyramid.integrate_gimbals(
+        saturated, -PAPER_X, 2.0, alpha=1e-3, stop_at_singular=False
+    )
     assert run.singular and run.t[-1] == 2.0
     # the demand −x (torque +x) pulls the momentum back inside the envelope, at a reduced rate
     # while the SR inverse is near the singular set: |h| falls, never rises
     assert run.h[-1, 0] < run.h[0, 0] and np.all(np.diff(run.h[:, 0]) <= 1e-12)
     with pytest.raises(ValueError, match="starts singular"):
-        cmg.integrate_gimbals(saturated, -PAPER_X, 2.0)
+        cmg_pyramid.integrate_gimbals(saturated, -PAPER_X, 2.0)

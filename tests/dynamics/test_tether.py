@@ -1,26 +1,45 @@
 """Tethered subsatellite (issue 14, F21; Vadali & Kim, seed 000 Att. 12, Eq. 4): with the length
 held and no thrust the integral of motion V1 of Eq. 8 is constant (V14) and its rate along any
 motion is Eq. 9 (plus φ'F̂/λ with thrust); the z, y form of Eq. 10 follows from Eq. 4; the SI
-plant is Eq. 4 scaled by Ω, m, L and its RK4 step, run by the simulation core, agrees with the
-continuous integration; the paper's scales (Ω = 0.07068 rad/min at 220 km, 0.630 N per unit
-force); non-physical inputs are refused by name."""
+plant is Eq. 4 scaled by Ω, m, L, and the engine's sampled mode (exp_rk4) agrees with its
+continuous-law mode (DOP853); a collapsing tether ends a run by name; the paper's scales
+(Ω = 0.07068 rad/min at 220 km, 0.630 N per unit force); non-physical inputs are refused by
+name."""
 
 import numpy as np
 import pytest
 
+from flexsat.control.base import Controller
 from flexsat.dynamics.tether import (
     TetheredSubsatellite,
     TetherScales,
     accelerations,
     integral_of_motion,
     integral_of_motion_rate,
-    integrate,
     rate_control_accelerations,
 )
+from flexsat.sim import continuous
+from flexsat.sim.config import SimConfig
+from flexsat.sim.engine import simulate
 
 D5 = np.radians(5.0)
 X0 = np.array([1.0, D5, D5, 0.0, 0.0, 0.0])  # the paper's initial conditions, L4399
 RNG = np.random.default_rng(14)
+
+
+class ConstantInputs(Controller):
+    """Holds the tether's two inputs at constants (SI): a static law for either mode."""
+
+    reads = ("length",)
+
+    def __init__(self, first, thrust, control="tension"):
+        self.writes = ("tension" if control == "tension" else "reel_rate", "thrust")
+        self.first, self.thrust = first, thrust
+        self.target = 0.0
+
+    def __call__(self, t, y, state):
+        z = np.zeros(np.shape(y["length"]))
+        return {self.writes[0]: z + self.first, "thrust": z + self.thrust}, state
 
 
 def random_states(n=50):
@@ -34,14 +53,15 @@ def test_v14_integral_of_motion_is_constant_with_the_length_held():
     # V14 (spec §11, L4357-L4363): λ ≡ 1 (rate control, λ' = 0), F̂ = 0, θ = φ = 5° at rest.
     # DOP853 at rtol 1e-12 over two orbits: V1 (~1.1e-2) varies by < 1e-10 absolute.
     tau = np.linspace(0, 4 * np.pi, 801)
-    run = integrate(
-        lambda x: (0 * x[..., 0], 0 * x[..., 0]), X0, tau, control="rate", rtol=1e-12, atol=1e-14
+    plant = TetheredSubsatellite(control="rate")
+    run = continuous.run(
+        plant, ConstantInputs(0.0, 0.0, "rate"), tau, np.delete(X0, 3), rtol=1e-12, atol=1e-14
     )
-    V1 = run.integral_of_motion[0]
+    V1 = plant.output("integral_of_motion", run.states[0])
     assert V1[0] == pytest.approx(0.5 * (3 * np.cos(D5) ** 2 + 4) * np.sin(D5) ** 2, rel=1e-14)
     assert np.ptp(V1) < 1e-10
     # V1 bounds the libration analytically (L4359): 4 sin²φ <= 2 V1 and 3 sin²θ cos²φ <= 2 V1
-    theta, phi = run.state[0, :, 1], run.state[0, :, 2]
+    theta, phi = run.states[0, :, 1], run.states[0, :, 2]
     assert np.all(4 * np.sin(phi) ** 2 <= 2 * V1[0] + 1e-12)
     assert np.all(3 * (np.sin(theta) * np.cos(phi)) ** 2 <= 2 * V1[0] + 1e-12)
 
@@ -128,19 +148,26 @@ def test_si_plant_is_eq4_scaled():
     )
 
 
-def test_rk4_step_of_the_plant_matches_the_continuous_integration():
-    # A constant tension of 3 (the equilibrium value at λ = 1) and no thrust: 2000 RK4 steps of
-    # Δτ = π/1000 over one orbit; RK4's global error ~ (Δτ)⁴ × O(1) ≈ 1e-10 against DOP853.
+def test_sampled_mode_matches_the_continuous_law_mode():
+    # A constant tension of 3 (the equilibrium value at λ = 1) and no thrust, held: the
+    # sampled mode's exp_rk4 (fourth order) with 2000 steps of Δτ = π/1000 over one orbit has
+    # a global error ~ (Δτ)⁴ × O(1) ≈ 1e-10 against DOP853 at rtol 1e-12.
     plant = TetheredSubsatellite()
-    tau = np.linspace(0, 2 * np.pi, 2001)
-    x = X0[None].copy()
-    u = np.array([[3.0, 0.0]])
-    for k in range(2000):
-        x = plant.step(x, u, tau[1])
-    ref = integrate(
-        lambda x: (3.0 + 0 * x[..., 0], 0 * x[..., 0]), X0, tau[[0, -1]], rtol=1e-12, atol=1e-14
+    law = ConstantInputs(3.0, 0.0)
+    config = SimConfig(duration=2 * np.pi, control_rate=1000 / np.pi, substeps=1)
+    sampled = simulate(plant, law, config, initial_state=X0, record_states=True)
+    ref = continuous.run(plant, law, [0.0, 2 * np.pi], X0, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(sampled.dataset["state"].values[0, -1], ref.x_end[0], atol=1e-8)
+    # the same run through simulate's continuous-law mode records the same end state
+    cont = simulate(
+        plant,
+        law,
+        SimConfig(duration=2 * np.pi, control_rate=1000 / np.pi, law_mode="continuous"),
+        initial_state=X0,
+        record_states=True,
     )
-    np.testing.assert_allclose(x[0], ref.state[0, -1], atol=1e-8)
+    np.testing.assert_allclose(cont.dataset["state"].values[0, -1], ref.x_end[0], atol=1e-9)
+    assert cont.dataset.attrs["engine"] == "continuous"
 
 
 @pytest.mark.parametrize(
@@ -170,18 +197,19 @@ def test_non_physical_lengths_and_modes_are_refused():
         plant.state_from(pitch=0.1)
     with pytest.raises(ValueError, match="control: must be one of"):
         TetheredSubsatellite(control="thrust")
-    with pytest.raises(ValueError, match=r"x0 \(lambda\): the tether length must be > 0"):
-        integrate(lambda x: (0 * x[..., 0], 0 * x[..., 0]), [0.0, 0, 0, 0, 0, 0], [0, 1])
-    with pytest.raises(ValueError, match="tau: must be a 1-D strictly increasing"):
-        integrate(lambda x: (0 * x[..., 0], 0 * x[..., 0]), X0, [1.0, 0.0])
+    still = ConstantInputs(0.0, 0.0)
+    with pytest.raises(ValueError, match=r"initial_state: length: the tether collapsed"):
+        continuous.run(plant, still, [0, 1], [0.0, 0, 0, 0, 0, 0])
+    with pytest.raises(ValueError, match="times: must be a strictly monotonic"):
+        continuous.run(plant, still, [1.0, 1.0], X0)
     # reeling in at λ' = -1 from λ = 3e-4 collapses the tether at τ = 2e-4: reported, not
     # integrated past
-    with pytest.raises(ValueError, match=r"fell to 0.0001 L \(collapsed\) at τ = 0.0002"):
-        integrate(
-            lambda x: (-1 + 0 * x[..., 0], 0 * x[..., 0]),
-            [3e-4, D5, D5, 0, 0, 0],
+    with pytest.raises(ValueError, match=r"length: the tether collapsed .* at t = 0.0002 s"):
+        continuous.run(
+            TetheredSubsatellite(control="rate"),
+            ConstantInputs(-1.0, 0.0, "rate"),
             [0, 1.0],
-            control="rate",
+            [3e-4, D5, D5, 0, 0],
         )
     x = plant.state_from(length="2 km", pitch="5 deg", roll="-3 deg")
     np.testing.assert_allclose(x, [2000.0, D5, np.radians(-3), 0, 0, 0])

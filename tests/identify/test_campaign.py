@@ -5,8 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
+from flexsat.cases.identification_campaign import CameraRig, CampaignConfig, run_campaign
 from flexsat.cases.tamu_grid import tamu_grid
-from flexsat.identify.campaign import CameraRig, CampaignConfig, run_campaign
 
 S = 14.5 * 0.0254  # grid spacing, m
 RIG = CameraRig(
@@ -170,8 +170,12 @@ def test_recorded_data_through_universal_files_give_the_same_update(tmp_path):
     """The identification stage runs on records read back from UFF 58 files (the path of
     measured data): the same substructure scalings within the files' ASCII precision, and no
     truth columns."""
+    from flexsat.cases.identification_campaign import (
+        TestRecords,
+        identify_and_update,
+        simulate_records,
+    )
     from flexsat.identify import Measurement
-    from flexsat.identify.campaign import TestRecords, identify_and_update, simulate_records
 
     small = dataclasses.replace(CONFIG, wheel_duration=300.0, frf_segment=2000, bootstrap_samples=0)
     case = tamu_grid(motor_mass="0.5 kg")

@@ -5,6 +5,7 @@ import pytest
 from scipy.linalg import expm
 
 from flexsat.cases.tamu_grid import tamu_grid
+from flexsat.design.era_noise import noise_damping_sweep
 from flexsat.identify import (
     Channel,
     Measurement,
@@ -13,13 +14,12 @@ from flexsat.identify import (
     impulse_hammer,
     markov_from_frf,
     markov_parameters,
-    noise_damping_sweep,
     okid,
     random_force,
-    simulate_test,
     torque_history,
 )
 from flexsat.identify.excitation import sensor_matrices
+from flexsat.sim.vibration_test import simulate_test
 
 pytestmark = pytest.mark.numerics  # tolerances near round-off: re-run on other BLAS kernels
 

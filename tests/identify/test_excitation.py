@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from flexsat.cases import tamu_grid
-from flexsat.identify import Channel, harmonic_shaker, random_force, simulate_test
+from flexsat.identify import Channel, harmonic_shaker, random_force
+from flexsat.sim.vibration_test import simulate_test
 
 
 @pytest.fixture(scope="module")

@@ -9,9 +9,9 @@ from flexsat.identify import (
     harmonic_shaker,
     impulse_hammer,
     random_force,
-    simulate_test,
     torque_history,
 )
+from flexsat.sim.vibration_test import simulate_test
 from flexsat.structures.modal_model import ModalModel
 
 pytest.importorskip("pyuff")

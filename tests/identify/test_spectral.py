@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from flexsat.cases import get_case
-from flexsat.identify import Channel, random_force, simulate_test
+from flexsat.identify import Channel, random_force
 from flexsat.identify.spectral import estimate_frf, frequency_response
+from flexsat.sim.vibration_test import simulate_test
 
 
 @pytest.fixture(scope="module")

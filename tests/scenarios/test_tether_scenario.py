@@ -165,8 +165,8 @@ def test_a_collapsing_tether_is_named_by_its_run():
     )
     with pytest.raises(
         ScenarioError,
-        match=r"runs\['coupled'\].tau: the tether length fell "
-        r"to 0.0001 L \(collapsed\)",
+        match=r"runs\['coupled'\].length: the tether collapsed "
+        r"\(length below 0.0001 L\) at t = 4\.03 s",
     ):
         run_tether(load_scenario(text))
     # a final length at or below that threshold is refused before the run

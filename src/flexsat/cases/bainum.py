@@ -42,7 +42,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
-from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from flexsat.analysis.controllability import (
@@ -53,7 +52,9 @@ from flexsat.analysis.controllability import (
 )
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
+from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.input_checks import require_count, require_finite
+from flexsat.sim import continuous
 
 if TYPE_CHECKING:
     from flexsat.dynamics.orbit import BeamInOrbit
@@ -449,7 +450,7 @@ class BainumBeam:
         u = np.asarray(u, dtype=float)
         return _tau_rhs(self._orbit_plant(np.eye(n)), state, u, nonlinear)[n:]
 
-    def _orbit_plant(self, G: np.ndarray):
+    def _orbit_plant(self, G: np.ndarray, linearised: bool = False):
         """The :class:`~flexsat.dynamics.orbit.BeamInOrbit` of these ratios with influence
         matrix ``G`` ((1 + k) x p: pitch, then k modes) for inputs ``f1`` … ``fp``."""
         from flexsat.dynamics.orbit import BeamInOrbit
@@ -459,6 +460,7 @@ class BainumBeam:
             self.orbit_rate_value,
             self.ratios(k) if k else np.zeros(0),
             {f"f{j + 1}": G[:, j] for j in range(G.shape[1])},
+            linearised=linearised,
         )
 
     def simulate(
@@ -474,10 +476,13 @@ class BainumBeam:
         atol: float = 1e-13,
     ) -> Response:
         """Closed loop f = K_pos x + K_rate x', u = G f, from ``x0`` ([θ, z] positions, rates
-        zero, or a full state) over τ ∈ [0, ``tau_end``] (DOP853), on the right-hand side of the
-        beam-in-orbit plant (:meth:`plant`, converted from seconds to τ). This is what the
-        report's NON-LINEAR program (App. C, L1898-L2116) does, with the full feedback in every
-        equation (its FCT kept only the pitch-rate term in the pitch equation, notes §4.2)."""
+        zero, or a full state) over τ ∈ [0, ``tau_end``]: the beam-in-orbit plant (:meth:`plant`,
+        in seconds; ``nonlinear=False`` its linearisation) under the state feedback (a constant
+        :class:`~flexsat.control.scheduled.ScheduledStateFeedback`) in the engine's
+        continuous-law mode (:func:`flexsat.sim.continuous.run`, DOP853), its states [x, ẋ]
+        brought to [x, x' = ẋ/ω_c]. This is what the report's NON-LINEAR program (App. C,
+        L1898-L2116) does, with the full feedback in every equation (its FCT kept only the
+        pitch-rate term in the pitch equation, notes §4.2)."""
         G = require_finite(G, "G")
         G = G.reshape(-1, 1) if G.ndim == 1 else G
         if G.ndim != 2:
@@ -500,18 +505,19 @@ class BainumBeam:
         if not tau_end > 0:
             raise ValueError(f"tau_end: must be > 0, got {tau_end!r}")
         gain = np.hstack([K_pos, K_rate])
-        plant = self._orbit_plant(G)
-
-        def rhs(_, y):
-            return _tau_rhs(plant, y, gain @ y, nonlinear)
-
-        tau = np.linspace(0.0, float(tau_end), int(n_points))
-        sol = solve_ivp(
-            rhs, (0.0, float(tau_end)), x0, method="DOP853", t_eval=tau, rtol=rtol, atol=atol
+        plant = self._orbit_plant(G, linearised=not nonlinear)
+        wc = plant.orbit_rate
+        # seconds: ẋ = ω_c x', so f = K_pos x + K_rate x' = K_pos x + (K_rate/ω_c) ẋ
+        law = ScheduledStateFeedback(
+            [0.0], -np.hstack([K_pos, K_rate / wc])[None], "state", tuple(plant.input_slices)
         )
-        if not sol.success:
-            raise RuntimeError(f"simulate: integration failed: {sol.message}")
-        states = sol.y.T
+        tau = np.linspace(0.0, float(tau_end), int(n_points))
+        to_seconds = np.concatenate([np.ones(n), np.full(n, wc)])
+        # the tolerances hold for the τ-state [x, x']: the rates in seconds are ω_c x'
+        run = continuous.run(
+            plant, law, tau / wc, x0 * to_seconds, rtol=rtol, atol=atol * min(1.0, wc)
+        )
+        states = run.states[0] / to_seconds
         return Response(tau, states, states @ gain.T)
 
     # -- the case protocol (flexsat modes) ---------------------------------------------------

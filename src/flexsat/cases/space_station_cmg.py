@@ -10,12 +10,16 @@ Three steps, as in the paper:
    below). The Riccati equation is solved in the coordinates x̃ = D⁻¹x, D = diag(maxima), where
    Q̃ = I: the same gain K = K̃D⁻¹ (S = D⁻¹S̃D⁻¹), without the 1e13 spread of the raw
    weights that would otherwise fail the solver's residual check.
-2. **Attitude loop**: the closed loop x' = (A − BK)x + Ew(t) from 1° on each axis (the paper's
-   initial errors), w the design disturbance (Eq. 11) or the AERO1 substitute.
+2. **Attitude loop**: the plant :class:`~flexsat.dynamics.space_station.SpaceStation` under the
+   state feedback u = −Kx (a constant
+   :class:`~flexsat.control.scheduled.ScheduledStateFeedback`), closed x' = (A − BK)x + Ew(t)
+   in the engine's continuous-law mode (:func:`flexsat.sim.continuous.run`, w the exogenous
+   input), from 1° on each axis (the paper's initial errors), w the design disturbance
+   (Eq. 11) or the AERO1 substitute.
 3. **CMG loop**, separately (the paper's justification: the attitude bandwidth is ~0.01 rad/s):
    the pseudo-inverse steering :math:`C\dot\sigma = T`,
    :math:`T = [u_1 + n h_3,\ u_2,\ u_3 - n h_1]/h_r` (L4717–L4720), from a chosen σ(0), stopped
-   at the first singular set (:func:`flexsat.dynamics.cmg.integrate_gimbals`).
+   at the first singular set (:func:`flexsat.cases.cmg_pyramid.integrate_gimbals`).
 
 Default maxima: attitude 1° (the initial error), rate 0.02 deg/s (the station's rate
 requirement, §8.1), momentum 2000 ft-lb-s and its integral 2000 ft-lb-s × 100 s, filter states
@@ -29,19 +33,19 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
+from flexsat.cases.cmg_pyramid import integrate_gimbals
 from flexsat.control.lqr import lqr
-from flexsat.dynamics import cmg
+from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.dynamics.space_station import (
     PAPER_STATION,
+    SpaceStation,
     StationData,
     aero_substitute,
     design_disturbance,
-    pitch_model,
-    roll_yaw_model,
 )
 from flexsat.input_checks import require_positive_scalar
+from flexsat.sim import continuous
 from flexsat.units import to_si_array
 
 __all__ = [
@@ -98,16 +102,28 @@ class BrysonMaxima:
 
 @dataclass(frozen=True)
 class StationDesign:
-    """The two LQR designs: (A, B, E, names, K, closed-loop poles) per axis group."""
+    """The two LQR designs, (A, B, E, names, K, closed-loop poles) per axis group, and the
+    plant they were made on."""
 
     data: StationData
     maxima: BrysonMaxima
     pitch: tuple
     roll_yaw: tuple
+    plant: SpaceStation
 
     @property
     def poles(self) -> np.ndarray:
         return np.concatenate([self.pitch[5], self.roll_yaw[5]])
+
+    @property
+    def gain(self) -> np.ndarray:
+        """K (3, n_x) of u = −K x on the plant's state: u2 from the pitch design, u1 and u3
+        from the roll/yaw design."""
+        npitch = self.plant.n_pitch
+        K = np.zeros((3, self.plant.nx))
+        K[1, :npitch] = self.pitch[4][0]
+        K[[0, 2], npitch:] = self.roll_yaw[4]
+        return K
 
 
 def _lqr_bryson(A, B, names, maxima, n, axis):
@@ -131,15 +147,13 @@ def design(
     """LQR gains of the pitch and roll/yaw loops (module docstring, step 1)."""
     maxima = BrysonMaxima() if maxima is None else maxima
     n = data.orbit_rate
+    plant = SpaceStation(data, pitch_filters, roll_yaw_filters)
     out = []
-    for axis, model, filters in (
-        ("pitch_filters", pitch_model, pitch_filters),
-        ("roll_yaw_filters", roll_yaw_model, roll_yaw_filters),
-    ):
-        A, B, E, names = model(data, filters)
+    for axis, model in (("pitch_filters", plant.pitch), ("roll_yaw_filters", plant.roll_yaw)):
+        A, B, E, names = model
         K, poles = _lqr_bryson(A, B, names, maxima, n, axis)
         out.append((A, B, E, names, K, poles))
-    return StationDesign(data, maxima, out[0], out[1])
+    return StationDesign(data, maxima, out[0], out[1], plant)
 
 
 @dataclass(frozen=True)
@@ -186,35 +200,36 @@ def simulate_attitude(
         raise ValueError(f"initial_attitude: one finite angle, got {initial_attitude!r}")
     data = station.data
     wfun = design_disturbance if disturbance == "design" else aero_substitute
-    Ap, Bp, Ep, _, Kp, _ = station.pitch
-    Ar, Br, Er, _, Kr, _ = station.roll_yaw
-    Acl_p, Acl_r = Ap - Bp @ Kp, Ar - Br @ Kr
-    npitch = Ap.shape[0]
-
-    def rhs(t, z):
-        w = wfun(t, data)
-        return np.concatenate(
-            [Acl_p @ z[:npitch] + Ep[:, 0] * w[1], Acl_r @ z[npitch:] + Er @ w[[0, 2]]]
-        )
-
-    z0 = np.zeros(npitch + Ar.shape[0])
+    plant = station.plant
+    npitch = plant.n_pitch
+    z0 = np.zeros(plant.nx)
     z0[0] = z0[npitch] = z0[npitch + 4] = float(th0)
     # the loop is linear and slow (poles <= 0.006 rad/s): rtol 1e-10 leaves the demand T
     # accurate far beyond what the gimbal integration (rtol 1e-10) resolves
-    sol = solve_ivp(rhs, (0.0, tf), z0, method="DOP853", rtol=1e-10, atol=1e-14, dense_output=True)
-    if sol.status != 0:
-        raise RuntimeError(f"simulate_attitude: solve_ivp failed: {sol.message}")
     t = np.linspace(0.0, tf, n_out)
-    run = StationRun(station, t, None, None, None, None, sol.sol)
-    parts = [run._parts(z) for z in sol.sol(t).T]
+    loop = continuous.run(
+        plant,
+        ScheduledStateFeedback([0.0], station.gain[None], "state", "torque"),
+        t,
+        z0,
+        rtol=1e-10,
+        atol=1e-14,
+        exogenous=lambda tk: {"disturbance": wfun(tk, data)},
+    )
+
+    def solution(tk):
+        return loop.solution(tk)[..., 0, :]
+
+    run = StationRun(station, t, None, None, None, None, solution)
+    parts = [run._parts(z) for z in loop.states[0]]
     att, h, u = (np.array([p[i] for p in parts]) for i in range(3))
-    return StationRun(station, t, att, h, u, wfun(t, data), sol.sol)
+    return StationRun(station, t, att, h, u, wfun(t, data), solution)
 
 
 def cmg_loop(run: StationRun, sigma0, threshold: float = 1e-6, n_out: int = 1001):
     """Pseudo-inverse gimbal steering for the run's demand T(t) from σ0 (module docstring,
     step 3), stopped at the first singular set: a :class:`flexsat.dynamics.cmg.GimbalRun`
     (gimbal momentum in units of h_r)."""
-    return cmg.integrate_gimbals(
+    return integrate_gimbals(
         sigma0, lambda t: -run.demand(t), run.t[-1], threshold=threshold, n_out=n_out
     )

@@ -1,6 +1,7 @@
 """Vadali & Kim's tethered-subsatellite retrieval (AIAA 90-1197; seed 000, Att. 12,
 L4258-L4531; spec seed000_part2.md §7, §11 V10-V15): the Shuttle case and the published numbers
-of each example, with a function that reruns an example (continuous feedback, DOP853).
+of each example, :func:`closed_loop` (one law on the tether, through the engine's continuous-law
+or sampled mode) and :func:`rerun` (an example under continuous feedback, DOP853).
 
 The case (L4397-L4401): circular orbit at 220 km (Ω = 0.07068 rad/min), reference length
 L = 20 km, subsatellite 22.7 kg; start λ = 1, θ = φ = 5°, at rest.
@@ -13,7 +14,7 @@ from functools import cache
 
 import numpy as np
 
-from flexsat.dynamics.tether import ClosedLoopRun, TetherScales, integrate
+from flexsat.dynamics.tether import ClosedLoopRun, TetheredSubsatellite, TetherScales
 
 SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 12, L4258-L4531"
 #: the paper's scales (L4397-L4401)
@@ -130,15 +131,104 @@ def paper_scales() -> TetherScales:
     return TetherScales(**PAPER_SCALES)
 
 
+#: how the law meets the tether: continuous feedback (the paper's), or held samples
+INTEGRATORS = ("continuous", "sampled")
+
+
+def closed_loop(
+    law: str,
+    gains: dict,
+    final_length: float,
+    initial,
+    tau,
+    integrator: str = "continuous",
+    printed_sign: bool = False,
+    scales: TetherScales | None = None,
+) -> ClosedLoopRun:
+    """The law named ``law`` (:func:`make_law`: gains, λ_f nondimensional, ``printed_sign``)
+    on the tether of ``scales`` (default the unit scales) from ``initial``: :func:`run_law` of
+    it."""
+    law = make_law(law, gains, final_length, scales=scales, printed_sign=printed_sign)
+    return run_law(law, initial, tau, integrator)
+
+
+def run_law(law, initial, tau, integrator: str = "continuous") -> ClosedLoopRun:
+    r"""A tether law on the tether (Eq. 4), through :func:`flexsat.sim.engine.simulate`.
+
+    The plant is the SI one of the law's :class:`~flexsat.dynamics.tether.TetherScales` (by
+    default the unit scales Ω = 1 rad/s, m = 1 kg, L = 1 m, where τ is the time and λ the
+    length); grid, initial state and results are in the paper's nondimensional variables.
+
+    Parameters
+    ----------
+    law : DecoupledTetherLaw, CoupledTetherLaw or TetherRateLaw
+        Gains may be arrays over cases; the plant takes the law's scales (the run is the same
+        in τ for any: Eq. 4 is scale-free).
+    initial : array_like (6,) or (n_cases, 6)
+        [λ, θ, φ, λ', θ', φ'] at τ = 0; λ' is ignored under the rate law (it is the law's).
+    tau : (n_t,) array
+        Uniform output grid from 0: the recorded samples (``continuous``: the law acts inside
+        the integrator, DOP853 at rtol 1e-10) or the control samples (``sampled``: the commands
+        held between them, a digital controller; the hold costs accuracy, docs/tether.md).
+    integrator : {"continuous", "sampled"}
+
+    Returns
+    -------
+    ClosedLoopRun
+        With the thrust index ∫|F̂|dτ on the grid (trapezoidal with the sign changes split,
+        :func:`flexsat.control.tether_laws.thrust_index`: O(Δτ²), 1e-6 on 2000 samples an
+        orbit).
+
+    Raises
+    ------
+    ValueError
+        For a bad grid, mode or state, or a tether that collapses (naming τ).
+    """
+    from flexsat.control.tether_laws import thrust_index
+    from flexsat.sim.config import SimConfig
+    from flexsat.sim.engine import simulate
+
+    if integrator not in INTEGRATORS:
+        raise ValueError(f"integrator: must be one of {INTEGRATORS}, got {integrator!r}")
+    tau = np.asarray(tau, float)
+    if tau.ndim != 1 or tau.size < 2 or tau[0] != 0 or not np.allclose(np.diff(tau), tau[1]):
+        raise ValueError(f"tau: must be a uniform grid from 0 of >= 2 times, got {tau!r}")
+    rate = law.writes[0] == "reel_rate"
+    scales = law.scales
+    plant = TetheredSubsatellite(scales, control="rate" if rate else "tension")
+    x0 = scales.state_to_si(np.asarray(initial, float))
+    config = SimConfig(
+        duration=tau[-1] / scales.orbit_rate,
+        control_rate=scales.orbit_rate / tau[1],
+        substeps=1,
+        law_mode="continuous" if integrator == "continuous" else "sampled",
+    )
+    nc = max(law.n_cases, 1 if x0.ndim == 1 else x0.shape[0])
+    ds = simulate(
+        plant,
+        law,
+        config,
+        n_cases=nc,
+        initial_state=np.delete(x0, 3, axis=-1) if rate else x0,
+        record_states=True,
+    ).dataset
+    x = scales.state_from_si(ds["state"].values)
+    u = ds["reel_rate"].values / scales.speed if rate else ds["tension"].values / scales.force
+    F = ds["thrust"].values / scales.force
+    if rate:
+        x = np.insert(x, 3, u, axis=-1)
+    # the grid is uniform: each interval's ∫|F̂| from one call, then the running sum
+    pieces = thrust_index(tau[:2], np.stack([F[:, :-1], F[:, 1:]], -1))
+    index = np.concatenate([np.zeros((nc, 1)), np.cumsum(pieces, axis=-1)], axis=-1)
+    return ClosedLoopRun(tau, x, np.stack([u, F], -1), index)
+
+
 @cache
 def rerun(key: str, samples_per_orbit: int = 2000) -> ClosedLoopRun:
     """Example ``key`` of :data:`EXAMPLES` rerun under continuous feedback."""
     e = EXAMPLES[key]
-    law = make_law(e.law, e.gains, e.final_length)
     tau = np.linspace(0.0, 2 * np.pi * e.orbits, int(samples_per_orbit * e.orbits) + 1)
-    return integrate(
-        law.nondimensional, INITIAL, tau, control="rate" if e.law == "rate" else "tension"
-    )
+    return closed_loop(e.law, e.gains, e.final_length, INITIAL, tau)
 
 
 def measures(run: ClosedLoopRun, final_length: float, scales: TetherScales, law: str) -> dict:
@@ -183,6 +273,8 @@ def measures(run: ClosedLoopRun, final_length: float, scales: TetherScales, law:
 
 __all__ = [
     "EXAMPLES",
+    "INTEGRATORS",
+    "closed_loop",
     "Example",
     "INITIAL",
     "PAPER_SCALES",
@@ -191,4 +283,5 @@ __all__ = [
     "measures",
     "paper_scales",
     "rerun",
+    "run_law",
 ]

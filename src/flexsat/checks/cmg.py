@@ -22,16 +22,17 @@ _X = (-1.0, 0.0, 0.0)  # the paper's +x demand as the torque on the spacecraft
 
 @lru_cache(maxsize=1)
 def _v3():
-    from flexsat.dynamics import cmg
+    from flexsat.cases import cmg_pyramid
 
-    return cmg.integrate_gimbals(np.zeros(4), _X, 5.0)
+    return cmg_pyramid.integrate_gimbals(np.zeros(4), _X, 5.0)
 
 
 @lru_cache(maxsize=1)
 def _v4():
+    from flexsat.cases import cmg_pyramid
     from flexsat.dynamics import cmg
 
-    sigma = cmg.preferred_angles([1.0, 0.0, 0.0])
+    sigma = cmg_pyramid.preferred_angles([1.0, 0.0, 0.0])
     return np.rad2deg(sigma), cmg.momentum(sigma)
 
 
@@ -45,26 +46,26 @@ def _station_zero():
 
 
 def _kurokawa_saturation() -> float:
-    from flexsat.dynamics import cmg
+    from flexsat.cases import cmg_pyramid
 
     def demand(t):
         return -np.array([0.2 * np.sin(4.0 * np.pi * t), 0.3, 0.0])
 
     return float(
-        cmg.integrate_gimbals(np.deg2rad([-120.0, -60.0, 60.0, 120.0]), demand, 20.0).t[-1]
+        cmg_pyramid.integrate_gimbals(np.deg2rad([-120.0, -60.0, 60.0, 120.0]), demand, 20.0).t[-1]
     )
 
 
 def _bedrossian_singular() -> float:
-    from flexsat.dynamics import cmg
+    from flexsat.cases import cmg_pyramid
 
-    return float(cmg.integrate_gimbals(np.zeros(4), [-0.707, -0.707, 0.0], 5.0).t[-1])
+    return float(cmg_pyramid.integrate_gimbals(np.zeros(4), [-0.707, -0.707, 0.0], 5.0).t[-1])
 
 
 def _reoriented_sigma1() -> float:
-    from flexsat.dynamics import cmg
+    from flexsat.cases import cmg_pyramid
 
-    run = cmg.reorient(np.zeros(4), np.deg2rad([45.0, -45.0, 45.0, -45.0]), 20.0, 1.0)
+    run = cmg_pyramid.reorient(np.zeros(4), np.deg2rad([45.0, -45.0, 45.0, -45.0]), 20.0, 1.0)
     return float(np.rad2deg(run.sigma[-1, 0]))
 
 

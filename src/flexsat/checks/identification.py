@@ -44,8 +44,8 @@ def _att6_resection() -> dict:
     """Att. 6 resection of the grid's 20 lit nodes by two cameras with all 13 parameters each
     (eq. (30) with v0), the node positions and the camera values as weighted measurements."""
     from flexsat.cases import tamu_grid
+    from flexsat.cases.identification_campaign import CameraRig
     from flexsat.identify import calibrate, simulate_centroids
-    from flexsat.identify.campaign import CameraRig
 
     asm = tamu_grid().structure().assemble()
     xyz = {int(n): c for n, c in zip(asm.node_ids, asm.coordinates)}
@@ -103,10 +103,11 @@ _MODE2 = Discrepancy(
     TRUE_RAD_S[1] * (0.9 / 1.1) ** 0.5,
     (
         "Inconsistency in Creamer & Junkins 1988 (Att. 7 of Junkins, Pollock & Rahman 1990), "
-        "Table 2: the text defines the starting model as the true one with mass x 1.1 and stiffness "
-        "x 0.9, which scales every frequency by sqrt(0.9/1.1) = 0.9045. The true 1.062 rad/s then "
-        "gives 0.9606, and modes 1, 3, 4 and 5 agree with their printed starting values within the "
-        "printed digits; mode 2 is printed 0.9617, 0.11 % (eleven units of the last digit) higher. "
+        "Table 2: the text defines the starting model as the true one with mass x 1.1 and "
+        "stiffness x 0.9, which scales every frequency by sqrt(0.9/1.1) = 0.9045. The true 1.062 "
+        "rad/s then gives 0.9606, and modes 1, 3, 4 and 5 agree with their printed starting "
+        "values within the printed digits; mode 2 is printed 0.9617, 0.11 % (eleven units of the "
+        "last digit) higher. "
         "The arm model is unpublished, so the printed value is taken to be a misprint."
     ),
 )

@@ -36,8 +36,8 @@ All three are written in the nondimensional variables of seed 000 Eq. 4 (x = [λ
       \lambda' = -K_1(\lambda - \lambda_f) + K_2[\theta'(1+\theta')\cos^2\phi + \phi'^2]/\lambda,
       \qquad \hat F = -K_3\lambda\phi'
 
-Each law has a nondimensional kernel (:meth:`nondimensional`, for
-:func:`flexsat.dynamics.tether.integrate`) and the controller protocol (reads the plant's SI
+Each law has a nondimensional kernel (:meth:`nondimensional`) inside the controller protocol
+(a static feedback for the engine's sampled or continuous-law mode; reads the plant's SI
 measurements, writes ``tension``/``reel_rate`` and ``thrust`` in SI through the plant's
 :class:`~flexsat.dynamics.tether.TetherScales`). Gains and targets may be arrays over cases.
 
@@ -89,8 +89,12 @@ def thrust_index(tau, thrust) -> np.ndarray:
     return np.sum(np.where(same, 0.5 * (np.abs(a) + np.abs(b)), crossing) * h, axis=-1)
 
 
+#: the default pitch band of :func:`settling_time`, the paper's initial 5°, rad
+PITCH_BAND = float(np.radians(5.0))
+
+
 def settling_time(
-    tau, state, final_length, pitch_band=np.radians(5.0), length_band=0.02
+    tau, state, final_length, pitch_band: float = PITCH_BAND, length_band: float = 0.02
 ) -> np.ndarray:
     r"""The τ after which a retrieval stays settled: |θ| <= ``pitch_band`` (rad; default the
     initial 5° of the paper's runs) and |λ − λ_f| <= ``length_band`` |λ(0) − λ_f| (default 2 %

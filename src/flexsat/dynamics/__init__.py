@@ -2,7 +2,7 @@
 
 :mod:`flexsat.dynamics.attitude` (attitude kinematics: Euler parameters, DCM, 1-2-3 Euler
 angles, Gibbs and modified Rodrigues parameters) and :mod:`flexsat.dynamics.rigid_body`
-(Euler's equations, the norm-preserving propagator, the Euler–Poinsot solution) are plain
+(Euler's equations, the norm-preserving step, the Euler–Poinsot solution) are plain
 array kernels with a leading case axis; so is :mod:`flexsat.dynamics.cmg` (the single-gimbal
 CMG pyramid: momentum, Jacobian, gain, envelope, singularities, steering, null motion),
 imported as a module (``from flexsat.dynamics import cmg``) since its short names
@@ -10,8 +10,10 @@ imported as a module (``from flexsat.dynamics import cmg``) since its short name
 (any M, D, K structure with named force, torque and moment-pair inputs),
 :mod:`flexsat.dynamics.orbit` (Bainum's beam in orbit), :class:`RigidSpacecraft` and
 :class:`FlexibleSpacecraft` (three-axis, the latter in hybrid coordinates),
-:class:`CmgSpacecraft` (a rigid body steered by a CMG pyramid), :class:`TetheredSubsatellite`
-(Vadali & Kim's tether, with :class:`TetherScales`). Their names are
+:class:`CmgSpacecraft` (a rigid body steered by a CMG pyramid), :class:`GimbalCluster` (the
+pyramid's gimbal kinematics σ̇ = u), :class:`SpaceStation` (the LVLH station model),
+:class:`TetheredSubsatellite` (Vadali & Kim's tether, with :class:`TetherScales`) and
+:class:`StateSpacePlant` (any x' = Ax + Bu, y = Cx + Du). Their names are
 re-exported here and imported from their modules on first use, so importing the package loads
 nothing.
 """
@@ -53,7 +55,6 @@ _EXPORTS = {
             "matvec",
             "euler_acceleration",
             "euler_rates",
-            "propagate",
             "angular_momentum_inertial",
             "kinetic_energy",
             "euler_poinsot_rates",
@@ -69,6 +70,9 @@ _EXPORTS = {
     "TetheredSubsatellite": "tether",
     "TetherScales": "tether",
     "CmgSpacecraft": "cmg_actuator",
+    "GimbalCluster": "gimbal_cluster",
+    "SpaceStation": "space_station",
+    "StateSpacePlant": "state_space",
 }
 
 __all__ = list(_EXPORTS)

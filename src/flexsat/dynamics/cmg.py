@@ -27,8 +27,6 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq, minimize_scalar
 
 from flexsat.input_checks import require_finite
 
@@ -269,7 +267,8 @@ def steer(sig, torque, a, b, alpha):
 
 @dataclass(frozen=True)
 class GimbalRun:
-    """Result of :func:`integrate_gimbals`: times ``t`` (n_t,), angles ``sigma`` (n_t, n),
+    """A gimbal run (:func:`flexsat.cases.cmg_pyramid.integrate_gimbals`,
+    :func:`~flexsat.cases.cmg_pyramid.reorient`): times ``t`` (n_t,), angles ``sigma`` (n_t, n),
     momenta ``h`` (n_t, 3), ``singular`` (the run stopped on det(CCᵀ) = threshold) and the
     gain there ``gain`` (n_t,)."""
 
@@ -280,202 +279,22 @@ class GimbalRun:
     singular: bool
 
 
-def integrate_gimbals(
-    sigma0,
-    torque,
-    t_final,
-    skew=SKEW,
-    n_units: int = 4,
-    alpha: float = 0.0,
-    threshold: float = 1e-6,
-    rtol: float = 1e-10,
-    atol: float = 1e-12,
-    n_out: int = 201,
-    null_target=None,
-    null_gain: float = 1.0,
-    null_alpha: float = 0.0,
-    stop_at_singular: bool = True,
-) -> GimbalRun:
-    """Integrate σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque(t)) from σ0 (§8.3), forward (t_final > 0) or
-    backward (t_final < 0: the preferred-angle back integration), stopping when the gain
-    det(CCᵀ) falls to ``threshold`` (a terminal solve_ivp event).
-
-    One case per call (solve_ivp); the torque is in units of h per second.
-
-    Parameters
-    ----------
-    torque : array_like ``(3,)`` or callable
-        Torque on the spacecraft: a constant, or a function ``t -> (3,)`` of the time in s (the
-        time-varying demands of §8.3, e.g. Kurokawa's Tx = 0.2 sin 4πt, V6). A callable is
-        checked at t = 0 and wherever the integrator evaluates it.
-    null_target : array_like ``(n,)``, optional
-        Run null motion towards this set beside the torque law
-        (:func:`steering_with_null_motion`, gain ``null_gain`` 1/s, projector weight
-        ``null_alpha``); None: the torque law alone.
-    stop_at_singular : bool
-        Stop at the gain ``threshold`` (default). False runs to ``t_final`` whatever the gain
-        (for the SR inverse, α > 0, which passes singular sets; ``singular`` then says whether
-        the gain fell to the threshold on the way).
-
-    Returns
-    -------
-    GimbalRun
-        Sampled at ``n_out`` equally spaced times up to the end, or up to the singular stop.
-    """
-    sig0, n = _sigma(sigma0, n_units)
-    if sig0.ndim != 1:
-        raise ValueError(f"sigma0: one gimbal set (n,) per run, got shape {sig0.shape}")
-    d = _require_skew(skew)
-    if callable(torque):
-        torque_at = _torque_history(torque)
-    else:
-        tq = require_finite(torque, "torque")
-        if tq.shape != (3,):
-            raise ValueError(f"torque: must have 3 components, got shape {tq.shape}")
-
-        def torque_at(_t):
-            return tq
-
-    tf = float(require_finite(t_final, "t_final", "s"))
-    if tf == 0:
-        raise ValueError("t_final: must be nonzero (negative integrates backward)")
-    thr = float(require_finite(threshold, "threshold"))
-    if thr <= 0:
-        raise ValueError(f"threshold: must be > 0, got {threshold!r}")
-    if stop_at_singular and gain(sig0, d, n) <= thr:
-        raise ValueError(
-            "sigma0: starts singular (det CCᵀ <= threshold); the pseudo-inverse "
-            "cannot steer from it (use alpha > 0 and stop_at_singular=False)"
-        )
-
-    if null_target is None:
-
-        def rhs(t, s):
-            return steering_rates(s, torque_at(t), d, n, alpha)
-    else:
-        target, _ = _sigma(null_target, n)
-        if target.shape != (n,):
-            raise ValueError(f"null_target: one gimbal set ({n},), got shape {target.shape}")
-
-        def rhs(t, s):
-            return steering_with_null_motion(
-                s, torque_at(t), target, null_gain, d, n, alpha, null_alpha
-            )
-
-    def event(_t, s):
-        return gain(s, d, n) - thr
-
-    event.terminal = True
-    event.direction = -1
-    sol = solve_ivp(
-        rhs,
-        (0.0, tf),
-        sig0,
-        method="DOP853",
-        events=event if stop_at_singular else None,
-        rtol=rtol,
-        atol=atol,
-        dense_output=True,
-    )
-    if sol.status == -1:
-        raise RuntimeError(f"integrate_gimbals: solve_ivp failed: {sol.message}")
-    t_end, singular = sol.t[-1], sol.status == 1
-    if stop_at_singular:
-        dip = _first_dip(sol, d, n, thr)
-        if dip is not None and abs(dip) < abs(t_end):
-            t_end, singular = dip, True
-    else:  # the gain on the dense output, 8 points a step: did it touch the threshold?
-        grid = np.linspace(sol.t[:-1], sol.t[1:], 9).T.ravel()
-        singular = bool(np.min(gain(sol.sol(grid).T, d, n)) <= thr)
-    t = np.linspace(0.0, t_end, n_out)
-    sig = sol.sol(t).T
-    if t_end == sol.t[-1]:
-        sig[-1] = sol.y[:, -1]  # the event's exact end point
-    return GimbalRun(t, sig, momentum(sig, d, n), gain(sig, d, n), bool(singular))
-
-
 #: the paper's offset from the +x saturation set [−90, 180, 90, 0]° to its starting set
 #: [−89, 177, 90, −1]° for the back integration (seed000_part2.md §8.3, V4), in rad
 PAPER_PERTURBATION = np.deg2rad([1.0, -3.0, 0.0, -1.0])
 
 
-def preferred_angles(
-    direction,
-    skew=SKEW,
-    n_units: int = 4,
-    perturbation=None,
-    threshold: float = 1e-6,
-    rtol: float = 1e-10,
-    atol: float = 1e-12,
-) -> np.ndarray:
-    """Preferred initial gimbal angles for a momentum demand along u, by back integration from
-    near saturation (Vadali, Oh & Walker; seed000_part2.md §8.3, F24, V4).
-
-    Start at the saturation set along u (:func:`envelope`), moved by ``perturbation`` off that
-    external singularity (where the pseudo-inverse has no solution and the perturbation picks
-    the branch), and integrate the pseudo-inverse steering backward under the unit demand
-    ḣ = u (torque −u) for the time t = uᵀh(σ_start) that removes the momentum along u. The
-    end set holds h ≈ 0 (the perturbation's small momentum normal to u is untouched) and,
-    run forward under the same demand, retraces the path to the envelope along u without an
-    internal singularity.
-
-    Parameters
-    ----------
-    direction : array_like ``(3,)``
-        Nonzero demand direction u (normalised here).
-    perturbation : array_like ``(n,)``, optional
-        Offset from the saturation set, rad or strings with units. Default: the paper's
-        [1, −3, 0, −1]° (V4) for n = 4; required for other n.
-    threshold : float
-        Gain det(CCᵀ) at which the back integration counts as singular (then ValueError).
-
-    Returns
-    -------
-    ndarray ``(n,)``
-        The preferred σ(0), rad, wrapped to (−π, π].
-    """
-    n = _require_units(n_units)
-    d = _require_skew(skew)
-    u = require_finite(direction, "direction")
-    if u.shape != (3,):
-        raise ValueError(f"direction: must have 3 components, got shape {u.shape}")
-    if perturbation is None:
-        if n != 4:
-            raise ValueError(
-                f"perturbation: required for n_units = {n} (the paper's offset "
-                "is for the 4-unit pyramid)"
-            )
-        perturbation = PAPER_PERTURBATION
-    dp = require_finite(perturbation, "perturbation", "rad")
-    if dp.shape != (n,) or not np.any(dp):
-        raise ValueError(
-            f"perturbation: must be a nonzero offset of shape ({n},), got {np.shape(perturbation)}"
-        )
-    _, sig_sat = envelope(u, d, n)  # normalises u and rejects u = 0
-    u = u / np.linalg.norm(u)
-    start = sig_sat + dp
-    t_back = float(u @ momentum(start, d, n))
-    if t_back <= 0:
-        raise ValueError("perturbation: moves the start set off the saturated side (uᵀh <= 0)")
-    run = integrate_gimbals(start, -u, -t_back, d, n, threshold=threshold, rtol=rtol, atol=atol)
-    if run.singular:
-        raise ValueError(
-            f"perturbation: the back integration along {u} met a singularity at "
-            f"t = {run.t[-1]:.6g} s; try another offset"
-        )
-    return np.angle(np.exp(1j * run.sigma[-1]))
-
-
 #: Preferred initial gimbal sets of the paper's pyramid (4 units, δ = 54.74°), in degrees, for
 #: the six axis directions and eight oblique ones: computed data, the output of
-#: :func:`preferred_angles` with the paper's perturbation (back integration, rtol 1e-10),
-#: rounded to 0.01°; ``tests/dynamics/test_cmg.py`` recomputes every row. The paper stores such
-#: sets for use (§8.5, conclusions L4758–L4764: "preferred-set data must be stored"); its
-#: Table 1 lists hand-chosen sets for six demands, of which only the +x row came from the back
-#: integration (V4: [−59.6, 60.7, 118, −121]°). Back integration from the *same* offset lands
-#: elsewhere along other directions (+y: [110.91, −115.22, −52.08, 51.08]°, not Table 1's
-#: [−120, −60, 60, 120]°): any set on the back-integrated path saturates without an internal
-#: singularity, so both are admissible. Directions are as given (normalised when used).
+#: :func:`flexsat.cases.cmg_pyramid.preferred_angles` with the paper's perturbation (back
+#: integration, rtol 1e-10), rounded to 0.01°; ``tests/dynamics/test_cmg.py`` recomputes
+#: every row. The paper stores such sets for use (§8.5, conclusions L4758–L4764:
+#: "preferred-set data must be stored"); its Table 1 lists hand-chosen sets for six demands,
+#: of which only the +x row came from the back integration (V4: [−59.6, 60.7, 118, −121]°).
+#: Back integration from the *same* offset lands elsewhere along other directions (+y:
+#: [110.91, −115.22, −52.08, 51.08]°, not Table 1's [−120, −60, 60, 120]°): any set on the
+#: back-integrated path saturates without an internal singularity, so both are admissible.
+#: Directions are as given (normalised when used).
 PREFERRED_SETS = (
     ((1, 0, 0), (-59.66, 60.58, 117.98, -121.12)),
     ((-1, 0, 0), (120.34, -119.42, -62.02, 58.88)),
@@ -497,7 +316,7 @@ PREFERRED_SETS = (
 def preferred_set(direction) -> np.ndarray:
     """The stored preferred set (:data:`PREFERRED_SETS`) whose direction is nearest to the
     demand direction u (largest cosine), rad ``(4,)``; for the paper's pyramid only (other
-    clusters: :func:`preferred_angles`)."""
+    clusters: :func:`flexsat.cases.cmg_pyramid.preferred_angles`)."""
     u = require_finite(direction, "direction")
     if u.shape != (3,) or not np.any(u):
         raise ValueError(f"direction: must be a nonzero 3-vector, got {direction!r}")
@@ -536,55 +355,6 @@ def steering_with_null_motion(
     return rates + np.einsum("...ij,...j->...i", tau, k * (target - sig))
 
 
-def _torque_history(torque):
-    """Wrap a callable torque so every value is checked: finite, shape (3,)."""
-
-    def torque_at(t):
-        value = require_finite(torque(t), "torque")
-        if value.shape != (3,):
-            raise ValueError(
-                f"torque: the callable must return 3 components, got shape "
-                f"{value.shape} at t = {t!r} s"
-            )
-        return value
-
-    torque_at(0.0)  # a bad callable fails before the integration starts
-    return torque_at
-
-
-def _first_dip(sol, skew, n, thr):
-    """The earliest time the gain touches ``thr`` between solve_ivp's samples, or None.
-
-    The event sees only sign changes at the integrator's steps. Where the commanded ḣ stays
-    normal to the singular direction the pseudo-inverse passes *through* a singularity with
-    finite rates, and det(CCᵀ) (a product of squared singular values) only touches zero: a dip
-    narrower than a step (e.g. a z torque from [45, −45, 45, −45]°, §8.3) that the event misses.
-    So scan the dense output, 8 points a step, and refine every sampled local minimum.
-    """
-    grid = np.concatenate(
-        [np.linspace(t0, t1, 9)[:-1] for t0, t1 in zip(sol.t[:-1], sol.t[1:])] + [sol.t[-1:]]
-    )
-
-    def excess(t):
-        return gain(sol.sol(t).T, skew, n) - thr
-
-    vals = excess(grid)
-    for j in range(1, grid.size):
-        if vals[j] <= 0:
-            return brentq(excess, grid[j - 1], grid[j], xtol=1e-14)
-        if j + 1 < grid.size and vals[j] <= vals[j - 1] and vals[j] <= vals[j + 1]:
-            lo, hi = sorted((grid[j - 1], grid[j + 1]))
-            res = minimize_scalar(
-                excess,
-                bounds=(lo, hi),
-                method="bounded",
-                options={"xatol": 1e-12 * max(1.0, abs(hi))},
-            )
-            if res.fun <= 0:
-                return brentq(excess, grid[j - 1], res.x, xtol=1e-14)
-    return None
-
-
 def null_projector(sigma, skew=SKEW, n_units: int = 4, alpha: float = 0.0) -> np.ndarray:
     """τ = I − Cᵀ(CCᵀ + αI)⁻¹C (§8.5 Eq. 14; α > 0: Eq. 17, the singularity-robust form).
 
@@ -606,44 +376,3 @@ def null_projector(sigma, skew=SKEW, n_units: int = 4, alpha: float = 0.0) -> np
             "projector needs alpha > 0 (singularity-robust inverse)"
         )
     return np.eye(c.shape[-1]) - ct @ np.linalg.solve(m, c)
-
-
-def reorient(
-    sigma0,
-    sigma_target,
-    t_final,
-    gain_k: float = 1.0,
-    skew=SKEW,
-    n_units: int = 4,
-    alpha: float = 1e-3,
-    rtol: float = 1e-10,
-    atol: float = 1e-12,
-    n_out: int = 201,
-) -> GimbalRun:
-    """Null-motion gimbal reorientation σ̇ = τ d, d = k(σ_f − σ) (§8.5 Eq. 13–17).
-
-    V = ½|σ_f − σ|² falls as V' = −k(σ_f − σ)ᵀτ(σ_f − σ) <= 0 (Eq. 16); α > 0 (the paper's
-    ≈ 0.001) carries the motion through singular sets, where the rates go to zero (§8.5).
-    One case per call; returns the run sampled at ``n_out`` times (``singular`` is False).
-    """
-    sig0, n = _sigma(sigma0, n_units)
-    sigf, _ = _sigma(sigma_target, n_units)
-    if sig0.shape != (n,) or sigf.shape != (n,):
-        raise ValueError("sigma0, sigma_target: one gimbal set (n,) each")
-    d = _require_skew(skew)
-    k = float(require_finite(gain_k, "gain_k", "1/s"))
-    if k <= 0:
-        raise ValueError(f"gain_k: must be > 0, got {gain_k!r}")
-    tf = float(require_finite(t_final, "t_final", "s"))
-    if tf <= 0:
-        raise ValueError(f"t_final: must be > 0, got {t_final!r}")
-
-    def rhs(_t, s):
-        return null_projector(s, d, n, alpha) @ (k * (sigf - s))
-
-    sol = solve_ivp(rhs, (0.0, tf), sig0, method="DOP853", rtol=rtol, atol=atol, dense_output=True)
-    if sol.status == -1:
-        raise RuntimeError(f"reorient: solve_ivp failed: {sol.message}")
-    t = np.linspace(0.0, tf, n_out)
-    sig = sol.sol(t).T
-    return GimbalRun(t, sig, momentum(sig, d, n), gain(sig, d, n), False)

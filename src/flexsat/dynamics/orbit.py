@@ -67,6 +67,8 @@ class BeamInOrbit(Plant):
         metres when ``length`` is given.
     length : float, optional
         Beam length l, m (seed 002 does not publish one).
+    linearised : bool
+        Drop the nonlinear remainder f (eqs 5–6 only, the linearisation at rest).
 
     Outputs: ``pitch`` (rad), ``pitch_rate`` (rad/s), ``z1`` … ``zk`` (modal amplitudes
     A_n/l), their rates ``z1_rate`` … (1/s), and the station deflections.
@@ -74,7 +76,16 @@ class BeamInOrbit(Plant):
 
     nonlinear = True
 
-    def __init__(self, orbit_rate, frequency_ratios, actuators, stations=None, length=None):
+    def __init__(
+        self,
+        orbit_rate,
+        frequency_ratios,
+        actuators,
+        stations=None,
+        length=None,
+        linearised: bool = False,
+    ):
+        self.nonlinear = not linearised
         self.orbit_rate = float(require_positive(orbit_rate, "orbit_rate", "rad/s"))
         F = np.atleast_1d(require_finite(frequency_ratios, "frequency_ratios"))
         if F.ndim != 1 or np.any(F <= 0):

@@ -43,10 +43,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexsat.dynamics.plant import Channel, Plant
 from flexsat.input_checks import require_finite, require_positive_scalar
 from flexsat.units import to_si_array
 
 __all__ = [
+    "SpaceStation",
     "StationData",
     "PAPER_STATION",
     "pitch_model",
@@ -225,3 +227,66 @@ def aero_substitute(
     w = w + float(a) * (np.sin(3.0 * n * tt) + np.sin(4.0 * n * tt))[..., None]
     w[..., 1] += float(s) * tt / data.period
     return w
+
+
+class SpaceStation(Plant):
+    """Eq. (8)-(12) as one plant: the pitch model stacked over the roll/yaw model
+    (:func:`pitch_model`, :func:`roll_yaw_model`), x = [x_pitch, x_roll_yaw].
+
+    Parameters
+    ----------
+    data : StationData
+    pitch_filters, roll_yaw_filters : sequence of int
+        The filter frequencies (multiples k of n) of Eq. (12) on each axis group.
+
+    Inputs ``torque`` u = (u1, u2, u3), the CMG torque (N m; the station feels −u) and
+    ``disturbance`` w = (w1, w2, w3) (N m). Outputs ``state``, ``attitude`` (θ1, θ2, θ3, rad)
+    and ``momentum`` (h1, h2, h3, N m s). Linear: the engine propagates it exactly.
+    """
+
+    recorded = ("attitude", "momentum")
+
+    def __init__(
+        self, data: StationData = PAPER_STATION, pitch_filters=(1, 2), roll_yaw_filters=(2,)
+    ):
+        self.data = data
+        self.pitch = pitch_model(data, pitch_filters)
+        self.roll_yaw = roll_yaw_model(data, roll_yaw_filters)
+        self.n_pitch = self.pitch[0].shape[0]
+        self.names = tuple(self.pitch[3]) + tuple(self.roll_yaw[3])
+        self.inputs = (
+            Channel("torque", "N*m", 3, "CMG torque u (roll, pitch, yaw); the station feels −u"),
+            Channel("disturbance", "N*m", 3, "disturbance torque w (roll, pitch, yaw)"),
+        )
+        self.outputs = (
+            Channel("state", "", self.nx, "the state vector (SI)"),
+            Channel("attitude", "rad", 3, "roll, pitch, yaw θ1, θ2, θ3 from LVLH"),
+            Channel("momentum", "N*m*s", 3, "CMG momentum h1, h2, h3"),
+        )
+
+    @property
+    def nx(self) -> int:
+        return self.n_pitch + self.roll_yaw[0].shape[0]
+
+    def linear_part(self):
+        """A block-diagonal; B from u2 (pitch) and u1, u3 (roll/yaw), then E likewise from w."""
+        Ap, Bp, Ep, _ = self.pitch
+        Ar, Br, Er, _ = self.roll_yaw
+        npitch, n = self.n_pitch, self.nx
+        A = np.zeros((n, n))
+        A[:npitch, :npitch], A[npitch:, npitch:] = Ap, Ar
+        B = np.zeros((n, 6))
+        B[:npitch, 1], B[:npitch, 4] = Bp[:, 0], Ep[:, 0]
+        B[npitch:, [0, 2]], B[npitch:, [3, 5]] = Br, Er
+        return A, B
+
+    def output_matrices(self, name: str):
+        n = self.nx
+        if name == "state":
+            return np.eye(n), np.zeros((n, 6)), None
+        rows = {"attitude": ("theta1", "theta2", "theta3"), "momentum": ("h1", "h2", "h3")}.get(
+            name
+        )
+        if rows is None:
+            return None
+        return np.eye(n)[[self.names.index(k) for k in rows]], np.zeros((3, 6)), None

@@ -30,8 +30,9 @@ so V1 is constant while the length is held and no thrust acts.
 :class:`TetheredSubsatellite` is the :class:`~flexsat.dynamics.plant.Plant` of the simulation
 core, in SI (state [l, θ, φ, l̇, θ̇, φ̇] with l̇ the length rate in m/s; rate control drops l̇
 from the state); :class:`TetherScales` converts between the two forms. The kernels
-(:func:`accelerations`, :func:`integral_of_motion`, :func:`integrate`) work on nondimensional
-arrays with a leading case axis.
+(:func:`accelerations`, :func:`integral_of_motion`) work on nondimensional arrays with a leading
+case axis; a closed-loop run is the engine's (:func:`flexsat.cases.tether.closed_loop`, on
+:func:`flexsat.sim.engine.simulate`), kept as a :class:`ClosedLoopRun`.
 """
 
 from __future__ import annotations
@@ -53,7 +54,6 @@ __all__ = [
     "integral_of_motion",
     "integral_of_motion_rate",
     "require_lengths",
-    "integrate",
     "MIN_LENGTH",
     "ClosedLoopRun",
     "CONTROLS",
@@ -63,9 +63,10 @@ __all__ = [
 EARTH_MU = 3.986004418e14
 #: Earth's equatorial radius, m (WGS 84)
 EARTH_RADIUS = 6378137.0
-#: a nondimensional length below which the tether is taken as collapsed (:func:`integrate`
-#: stops): Eq. 4's λ'/λ terms are singular at λ = 0, and an adaptive integrator approaching it
-#: takes steps ~λ, never arriving; 1e-4 L is 2 m of the paper's 20 km tether
+#: a nondimensional length below which the tether is taken as collapsed (the plant's
+#: :meth:`TetheredSubsatellite.domain_margin`: a continuous run stops there): Eq. 4's λ'/λ
+#: terms are singular at λ = 0, and an adaptive integrator approaching it takes steps ~λ, never
+#: arriving; 1e-4 L is 2 m of the paper's 20 km tether
 MIN_LENGTH = 1e-4
 #: the input modes: tension and thrust (Eqs. 4), or length rate and thrust (Eq. 24 with Eq. 4)
 CONTROLS = ("tension", "rate")
@@ -215,11 +216,18 @@ class TetheredSubsatellite(Plant):
 
     In the protocol's form the kinematics (and, with rate control, l̇ = u) are the linear part;
     −T/m enters through B; the rest of the accelerations (ΩL²-scaled Eq. 4) is the nonlinear
-    force with B_f selecting the three (two) acceleration rows. :meth:`step` is classical RK4
-    with the inputs held.
+    force with B_f selecting the three (two) acceleration rows. The engine propagates it with
+    its fourth-order exponential Runge-Kutta scheme (Krogstad's, :mod:`flexsat.sim.integrators`)
+    in the sampled mode, or DOP853 in the continuous-law mode; :meth:`domain_margin` ends a run
+    whose tether collapses.
     """
 
     nonlinear = True
+    #: the engine's fourth-order exponential integrator for the sampled mode (the kinematics
+    #: exactly, Eq. 4's accelerations by Krogstad's scheme)
+    integrator = "exp_rk4"
+    #: what :meth:`domain_margin` < 0 means
+    domain_rule = f"length: the tether collapsed (length below {MIN_LENGTH:g} L)"
     recorded = ("length", "pitch", "roll", "length_rate", "integral_of_motion")
 
     def __init__(self, scales: TetherScales | None = None, control: str = "tension"):
@@ -294,14 +302,9 @@ class TetheredSubsatellite(Plant):
         A, B = self.linear_part()
         return x @ A.T + u @ B.T + self.nonlinear_force(x, u) @ self.force_matrix.T
 
-    def step(self, x, u, h) -> np.ndarray:
-        """One classical RK4 step h (s) with u held."""
-        u = np.asarray(u, float)
-        k1 = self.rhs(x, u)
-        k2 = self.rhs(x + h / 2 * k1, u)
-        k3 = self.rhs(x + h / 2 * k2, u)
-        k4 = self.rhs(x + h * k3, u)
-        return x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    def domain_margin(self, x) -> np.ndarray:
+        """λ − :data:`MIN_LENGTH` per case (the model holds while > 0), x (..., n_x) SI."""
+        return np.asarray(x, float)[..., 0] / self.scales.length - MIN_LENGTH
 
     # -- outputs ---------------------------------------------------------------------------
     _ROWS = {"length": 0, "pitch": 1, "roll": 2}
@@ -344,10 +347,11 @@ class TetheredSubsatellite(Plant):
         return x
 
 
-# -- the closed loop in continuous time -------------------------------------------------------
+# -- a closed-loop run ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class ClosedLoopRun:
-    """A closed-loop run of :func:`integrate` (nondimensional).
+    """A closed-loop tether run in the paper's nondimensional variables
+    (:func:`flexsat.cases.tether.closed_loop`).
 
     Attributes
     ----------
@@ -358,7 +362,7 @@ class ClosedLoopRun:
     control : (n_cases, n_t, 2) array
         (T̂ or λ', F̂) of the law along the run.
     thrust_index : (n_cases, n_t) array
-        ∫₀^τ |F̂| dτ, integrated with the motion.
+        ∫₀^τ |F̂| dτ on the output grid (:func:`flexsat.control.tether_laws.thrust_index`).
     """
 
     tau: np.ndarray
@@ -371,101 +375,3 @@ class ClosedLoopRun:
         """V1 (Eq. 8) along the run, (n_cases, n_t)."""
         x = self.state
         return integral_of_motion(x[..., 1], x[..., 2], x[..., 4], x[..., 5])
-
-
-def integrate(
-    law, x0, tau, control: str = "tension", rtol: float = 1e-10, atol: float = 1e-12
-) -> ClosedLoopRun:
-    r"""Integrate Eq. 4 under a continuous feedback law (no sampling), vectorised over cases.
-
-    Parameters
-    ----------
-    law : callable
-        ``law(x)`` with x (..., n_cases, 6) nondimensional → (u, F̂), each (..., n_cases): u
-        the tension T̂ (``control="tension"``) or the length rate λ' (``"rate"``; x[..., 3] is
-        then meaningless and ignored). It is called with x (n_cases, 6) during the integration
-        and once with (n_t, n_cases, 6) for the recorded commands.
-    x0 : array_like (6,) or (n_cases, 6)
-        Initial [λ, θ, φ, λ', θ', φ'] (rad, per unit τ); λ > 0.
-    tau : array_like (n_t,)
-        Increasing output times, τ[0] the start.
-    control : {"tension", "rate"}
-    rtol, atol : float
-        Of scipy's DOP853 (8th order, adaptive): with the defaults the libration angles are
-        good to ~1e-9 rad over a few orbits.
-
-    Returns
-    -------
-    ClosedLoopRun
-
-    Raises
-    ------
-    ValueError
-        For a non-positive length, a bad grid or mode, or when the tether collapses (λ below
-        :data:`MIN_LENGTH`) or the integration fails (naming τ).
-    """
-    from scipy.integrate import solve_ivp
-
-    if control not in CONTROLS:
-        raise ValueError(f"control: must be one of {CONTROLS}, got {control!r}")
-    x0 = np.atleast_2d(require_finite(x0, "x0")).astype(float)
-    if x0.ndim != 2 or x0.shape[-1] != 6:
-        raise ValueError(f"x0: must have shape (6,) or (n_cases, 6), got {x0.shape}")
-    require_lengths(x0[:, 0], "x0 (lambda)")
-    tau = require_finite(tau, "tau")
-    if tau.ndim != 1 or tau.size < 2 or np.any(np.diff(tau) <= 0):
-        raise ValueError(
-            f"tau: must be a 1-D strictly increasing grid of >= 2 times, got shape {tau.shape}"
-        )
-    nc = x0.shape[0]
-    rate = control == "rate"
-
-    def rhs(_t, flat):
-        y = flat.reshape(nc, 7)
-        x = y[:, :6].copy()
-        u, F = (np.broadcast_to(np.asarray(v, float), (nc,)) for v in law(x))
-        if rate:
-            x[:, 3] = u
-            T = 0.0
-        else:
-            T = u
-        d = np.empty((nc, 7))
-        d[:, 0:3] = x[:, 3:6]
-        d[:, 3:6] = accelerations(x, T, F)
-        if rate:
-            d[:, 3] = 0.0
-        d[:, 6] = np.abs(F)
-        return d.ravel()
-
-    def collapsed(_t, flat):
-        return np.min(flat.reshape(nc, 7)[:, 0]) - MIN_LENGTH
-
-    collapsed.terminal = True
-    y0 = np.concatenate([x0, np.zeros((nc, 1))], 1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sol = solve_ivp(
-            rhs,
-            (tau[0], tau[-1]),
-            y0.ravel(),
-            method="DOP853",
-            t_eval=tau,
-            rtol=rtol,
-            atol=atol,
-            events=collapsed,
-        )
-    if sol.status == 1:
-        raise ValueError(
-            f"tau: the tether length fell to {MIN_LENGTH:g} L (collapsed) at τ = "
-            f"{sol.t_events[0][0]:.6g}"
-        )
-    if sol.status != 0:
-        raise ValueError(f"tau: integration failed at τ = {sol.t[-1]:.6g}: {sol.message}")
-    Y = sol.y.reshape(nc, 7, -1).transpose(2, 0, 1)  # (n_t, n_cases, 7)
-    # the law once on every sample: time leads, so per-case gains (n_cases,) broadcast
-    X = Y[..., :6].copy()
-    u, F = (np.broadcast_to(np.asarray(v, float), X.shape[:-1]) for v in law(X))
-    if rate:
-        X[..., 3] = u
-    U = np.stack([u, F], -1)
-    X, U, Y = (np.swapaxes(a, 0, 1) for a in (X, U, Y))
-    return ClosedLoopRun(tau, X, U, Y[..., 6])

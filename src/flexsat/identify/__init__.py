@@ -1,4 +1,4 @@
-"""System identification from vibration tests: test data, synthetic tests, realization (ERA,
+"""System identification from vibration tests: test data, excitations, realization (ERA,
 OKID), Creamer-Junkins structural identification and model update, and stereo triangulation
 (camera model, calibration, dynamic triangulation). Star identification and attitude fitting
 are in :mod:`flexsat.attitude`."""
@@ -16,7 +16,6 @@ from flexsat.identify.era import (
     mac,
     markov_from_frf,
     markov_parameters,
-    noise_damping_sweep,
     okid,
 )
 from flexsat.identify.excitation import (
@@ -24,7 +23,6 @@ from flexsat.identify.excitation import (
     harmonic_shaker,
     impulse_hammer,
     random_force,
-    simulate_test,
     torque_history,
 )
 from flexsat.identify.measurements import CHANNEL_KINDS, Channel, Measurement
@@ -71,14 +69,14 @@ __all__ = [
     "markov_from_frf",
     "markov_parameters",
     "modal_energy_distribution",
-    "noise_damping_sweep",
     "okid",
     "project",
     "random_force",
     "simulate_centroids",
-    "simulate_test",
     "substructures_from_builder",
     "torque_history",
     "triangulate",
     "update_model",
 ]
+
+# the synthetic tests run on the engine (flexsat.sim.vibration_test.simulate_test), a layer above

@@ -94,7 +94,6 @@ __all__ = [
     "mac",
     "markov_from_frf",
     "markov_parameters",
-    "noise_damping_sweep",
     "okid",
 ]
 
@@ -763,11 +762,8 @@ def era_dc(
     def build():
         H0 = _hankel(Y, 1, rows, cols)
         R = {k: _hankel(Y, 1 + k, rows, cols) @ H0.T for k in range(reach + 1)}
-        big = lambda k: np.block(
-            [
-                [R[k + (i + j) * lag] for j in range(blocks)]  # noqa: E731
-                for i in range(blocks)
-            ]
+        big = lambda k: np.block(  # noqa: E731
+            [[R[k + (i + j) * lag] for j in range(blocks)] for i in range(blocks)]
         )
         U, s, Vt = np.linalg.svd(big(0), full_matrices=False)
         n = _order(s, order)
@@ -781,41 +777,3 @@ def era_dc(
     return _finish(
         Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, None, extra={"method": "ERA/DC"}
     )
-
-
-# ------------------------------------------------------------------------------------------------
-def noise_damping_sweep(
-    modal_model, noise_levels, sensors, excitation, duration, sample_rate, seeds=(0,), **era_kwargs
-):
-    """Relative frequency and damping errors of ERA versus measurement noise.
-
-    Runs :func:`~flexsat.identify.excitation.simulate_test` with each noise level and seed,
-    :func:`markov_parameters` and :func:`era` with ``order = 2 m``, matches each true mode to
-    the nearest identified frequency and returns a dict with ``noise`` (k,),
-    ``frequency_error`` and ``damping_error`` (k, m): mean over seeds of the absolute relative
-    errors.
-    """
-    from flexsat.identify.excitation import simulate_test
-
-    f_true = modal_model.frequencies_hz
-    z_true = modal_model.damping
-    fe, ze = [], []
-    for level in noise_levels:
-        f_err, z_err = [], []
-        for seed in seeds:
-            meas = simulate_test(
-                modal_model, excitation, sensors, duration, sample_rate, noise=level, seed=seed
-            )
-            Y = markov_parameters(meas)
-            kw = dict(order=2 * modal_model.n_modes) | era_kwargs
-            res = era(Y, dt=meas.dt, **kw)
-            idx = np.argmin(np.abs(res.frequencies[None, :] - f_true[:, None]), axis=1)
-            f_err.append(np.abs(res.frequencies[idx] / f_true - 1))
-            z_err.append(np.abs(res.damping[idx] / z_true - 1))
-        fe.append(np.mean(f_err, axis=0))
-        ze.append(np.mean(z_err, axis=0))
-    return {
-        "noise": np.asarray(noise_levels, float),
-        "frequency_error": np.array(fe),
-        "damping_error": np.array(ze),
-    }

@@ -1,23 +1,20 @@
-r"""Synthetic vibration tests of any :class:`~flexsat.structures.modal_model.ModalModel`.
+r"""The pieces of a synthetic vibration test of any
+:class:`~flexsat.structures.modal_model.ModalModel`: the excitations and the test's state space.
+The test itself runs on the engine (:func:`flexsat.sim.vibration_test.simulate_test`).
 
-The modal state space :math:`x = [\eta, \dot\eta]`, :math:`\dot x = A x + B u` is discretised
-exactly for a zero-order-hold input (matrix exponential of the augmented matrix
-:math:`[[A, B], [0, 0]] \, h`) on a fine step :math:`h = \Delta t / \text{oversample}`; each
-excitation is held at its average over every fine step (so pulse areas are kept), and the
-outputs are read every ``oversample`` steps. Sensors:
+Each excitation is described by its average over every fine step h of the run
+(:meth:`Excitation.samples`, so pulse areas are kept). :func:`sensor_matrices` gives the modal
+state space :math:`x = [\eta, \dot\eta]`, :math:`\dot x = A x + B u`, y = C x + D u, with the
+sensors
 
 * displacement / rotation / strain: :math:`y = c^T \eta`;
 * velocity: :math:`y = c^T \dot\eta`;
 * acceleration: :math:`y = c^T \ddot\eta = c^T(-K\eta - D\dot\eta + B u)`.
 
-Noise is white, Gaussian, with standard deviation ``noise`` × the RMS of the clean channel;
-``quantization`` rounds to an ADC step (a number, or the full-scale range / 2^bits via
-``bits``).
-
-Anti-aliasing: with ``anti_alias`` (a cut-off in Hz) every recorded channel, outputs and inputs
-alike, passes an analog Butterworth low-pass of order :data:`ANTI_ALIAS_ORDER` before it is
-sampled, as a data-acquisition front end does. The filters are continuous states of the
-simulated system, so the exact discretisation covers them. Identical filters on the inputs and
+Anti-aliasing (:func:`with_anti_alias`, a cut-off in Hz): every recorded channel, outputs and
+inputs alike, passes an analog Butterworth low-pass of order :data:`ANTI_ALIAS_ORDER` before it
+is sampled, as a data-acquisition front end does. The filters are continuous states of the
+simulated system, so the exact propagation covers them. Identical filters on the inputs and
 outputs cancel in an FRF estimate, which then approximates the continuous FRF of the structure
 (no zero-order-hold distortion and no aliased modes), and modes above the cut-off no longer fold
 into the band.
@@ -29,22 +26,23 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import signal
-from scipy.linalg import block_diag, expm
+from scipy.linalg import block_diag
 
-from flexsat.identify.measurements import Channel, Measurement
-from flexsat.input_checks import require_count, require_nonneg, require_positive
+from flexsat.identify.measurements import Channel
+from flexsat.input_checks import require_nonneg, require_positive
 
 __all__ = [
     "Excitation",
     "harmonic_shaker",
     "impulse_hammer",
     "random_force",
-    "simulate_test",
+    "sensor_matrices",
     "torque_history",
+    "with_anti_alias",
 ]
 
 _KINDS = ("impulse", "harmonic", "random", "history")
-#: order of the analog Butterworth anti-aliasing filter of :func:`simulate_test`
+#: order of the analog Butterworth anti-aliasing filter (:func:`with_anti_alias`)
 ANTI_ALIAS_ORDER = 6
 
 
@@ -178,8 +176,9 @@ def sensor_matrices(model, sensors, inputs):
     return A, B, C, D
 
 
-def _with_anti_alias(A, B, C, D, cutoff_hz):
-    """System + one analog low-pass per output and per input channel (module docstring).
+def with_anti_alias(A, B, C, D, cutoff_hz):
+    """System + one analog low-pass of order :data:`ANTI_ALIAS_ORDER` (Butterworth, cut-off
+    ``cutoff_hz``) per output and per input channel (module docstring).
 
     Returns (A, B, C, D) whose outputs are the filtered outputs followed by the filtered
     inputs."""
@@ -198,114 +197,3 @@ def _with_anti_alias(A, B, C, D, cutoff_hz):
     B_aug = np.vstack([B, Bf @ drive_u])
     C_aug = np.hstack([np.zeros((q + r, ns)), Cf])
     return A_aug, B_aug, C_aug, np.zeros((q + r, r))
-
-
-def simulate_test(
-    modal_model,
-    excitation,
-    sensors,
-    duration,
-    sample_rate,
-    noise=0.0,
-    quantization=None,
-    seed=None,
-    oversample=1,
-    anti_alias=None,
-) -> Measurement:
-    """Simulate a vibration test and record it as a :class:`Measurement`.
-
-    Parameters
-    ----------
-    modal_model : ModalModel
-    excitation : Excitation or sequence of Excitation
-        See :func:`impulse_hammer`, :func:`harmonic_shaker`, :func:`random_force`,
-        :func:`torque_history`.
-    sensors : sequence of Channel
-        Displacement, velocity, acceleration, rotation or strain channels.
-    duration : float
-        s; samples at 0, Δt, ... < duration.
-    sample_rate : float
-        Hz.
-    noise : float
-        Noise standard deviation as a fraction of each clean channel's RMS (0.01 = 1 %).
-    quantization : float, optional
-        ADC step in channel units (values rounded to multiples of it).
-    seed : int, optional
-        Random generator seed (random inputs and noise).
-    oversample : int
-        Fine integration steps per sample (for pulses shorter than a sample or smooth inputs).
-    anti_alias : float, optional
-        Cut-off (Hz, below the Nyquist frequency) of the analog anti-aliasing filters on every
-        recorded channel (module docstring); the recorded inputs are then the filtered inputs.
-
-    Returns
-    -------
-    Measurement
-        ``outputs`` (sensors, N), ``inputs`` (excitations, N: the input sampled at the test rate,
-        averaged over each sample), ``attrs`` with ``noise`` and ``seed``.
-    """
-    excitations = [excitation] if isinstance(excitation, Excitation) else list(excitation)
-    if not excitations or not all(isinstance(e, Excitation) for e in excitations):
-        raise ValueError("excitation: must be an Excitation or a non-empty list of them")
-    sensors = list(sensors)
-    if not sensors or not all(isinstance(s, Channel) for s in sensors):
-        raise ValueError("sensors: must be a non-empty list of Channel")
-    fs = float(require_positive(sample_rate, "sample_rate"))
-    T = float(require_positive(duration, "duration"))
-    noise = float(require_nonneg(noise, "noise"))
-    over = require_count(oversample, "oversample")
-    rng = np.random.default_rng(seed)
-    dt = 1.0 / fs
-    n = int(np.ceil(T * fs - 1e-9))
-    if n < 2:
-        raise ValueError(f"duration: gives {n} sample(s) at {fs} Hz; need at least 2")
-    h = dt / over
-    t_fine = np.arange(n * over) * h
-    U = np.array([e.samples(t_fine, h, over, rng) for e in excitations])  # (r, n*over)
-
-    chans = [e.channel for e in excitations]
-    A, B, C, D = sensor_matrices(modal_model, sensors, chans)
-    n_out = C.shape[0]
-    if anti_alias is not None:
-        cut = float(require_positive(anti_alias, "anti_alias"))
-        if cut >= fs / 2:
-            raise ValueError(
-                f"anti_alias: the cut-off must be below the Nyquist frequency "
-                f"{fs / 2:g} Hz, got {cut:g} Hz"
-            )
-        A, B, C, D = _with_anti_alias(A, B, C, D, cut)
-    ns, r = A.shape[0], B.shape[1]
-    M = np.zeros((ns + r, ns + r))
-    M[:ns, :ns], M[:ns, ns:] = A * h, B * h
-    E = expm(M)
-    Ad, Bd = E[:ns, :ns], E[:ns, ns:]
-    x = np.zeros(ns)
-    X = np.empty((n, ns))
-    for k in range(n * over):
-        if k % over == 0:
-            X[k // over] = x
-        x = Ad @ x + Bd @ U[:, k]
-    u_samples = U[:, ::over] if over == 1 else U.reshape(r, n, over).mean(axis=2)
-    Y = C @ X.T + D @ U[:, ::over]
-    if anti_alias is not None:
-        Y, u_samples = Y[:n_out], Y[n_out:]
-    if noise > 0:
-        rms = np.sqrt(np.mean(Y**2, axis=1, keepdims=True))
-        Y = Y + noise * rms * rng.standard_normal(Y.shape)
-    if quantization is not None:
-        q = float(require_positive(quantization, "quantization"))
-        Y = q * np.round(Y / q)
-    return Measurement(
-        np.arange(n) * dt,
-        Y,
-        tuple(sensors),
-        u_samples,
-        tuple(chans),
-        "time",
-        attrs={
-            "noise": noise,
-            "seed": -1 if seed is None else int(seed),
-            "oversample": over,
-            "anti_alias_hz": -1.0 if anti_alias is None else float(anti_alias),
-        },
-    )

@@ -21,8 +21,8 @@ symmetry still has the noise of its output).
 The model FRF of the modal state space of
 :func:`flexsat.identify.excitation.sensor_matrices` is
 :math:`H(j\omega) = C (j\omega I - A)^{-1} B + D`; for an input held over each sample of
-a test at rate :math:`1/\Delta t` (what :func:`~flexsat.identify.simulate_test` records) the
-sampled data follow the zero-order-hold equivalent
+a test at rate :math:`1/\Delta t` (what :func:`~flexsat.sim.vibration_test.simulate_test`
+records) the sampled data follow the zero-order-hold equivalent
 :math:`H_d = C (e^{j\omega \Delta t} I - A_d)^{-1} B_d + D` with
 :math:`[A_d, B_d] = e^{[A, B; 0, 0] \Delta t}` (Franklin, Powell & Workman, *Digital Control
 of Dynamic Systems*, §4.3), which differs from :math:`H` by about :math:`\omega\Delta t/2` in
@@ -172,7 +172,7 @@ def frequency_response(
     """Model FRFs (q, r, F) of a :class:`~flexsat.structures.modal_model.ModalModel`.
 
     ``sensors`` and ``inputs`` are :class:`~flexsat.identify.measurements.Channel` lists as in
-    :func:`flexsat.identify.simulate_test`; ``frequencies_hz`` a finite vector.  With
+    :func:`flexsat.sim.vibration_test.simulate_test`; ``frequencies_hz`` a finite vector.  With
     ``sample_rate`` (Hz): the zero-order-hold equivalent seen by a sampled test with held inputs
     (module docstring); without: the continuous FRF.
     """

@@ -300,6 +300,7 @@ class CmgRun:
 
 
 def _resolve(value, direction, cluster):
+    from flexsat.cases import cmg_pyramid
     from flexsat.dynamics import cmg
 
     if isinstance(value, list):
@@ -312,7 +313,7 @@ def _resolve(value, direction, cluster):
     return (
         cmg.preferred_set(direction)
         if paper
-        else cmg.preferred_angles(direction, cluster.skew, cluster.n_units)
+        else cmg_pyramid.preferred_angles(direction, cluster.skew, cluster.n_units)
     )
 
 
@@ -325,6 +326,7 @@ def _demand_function(demand):
 
 
 def _one_run(run, cluster):
+    from flexsat.cases import cmg_pyramid
     from flexsat.dynamics import cmg
 
     d = run.demand_direction()
@@ -333,10 +335,10 @@ def _one_run(run, cluster):
     alpha = cluster.alpha if cluster.steering == "sr" else 0.0
     if run.reorient_to is not None:
         target = _resolve(run.reorient_to, d, cluster)
-        g = cmg.reorient(sigma0, target, run.duration, 1.0, alpha=max(alpha, 1e-3), **kw)
+        g = cmg_pyramid.reorient(sigma0, target, run.duration, 1.0, alpha=max(alpha, 1e-3), **kw)
     else:
         null = run.null_motion
-        g = cmg.integrate_gimbals(
+        g = cmg_pyramid.integrate_gimbals(
             sigma0,
             _demand_function(run.demand),
             run.duration,
@@ -451,20 +453,21 @@ class CmgResult:
 def validation_table():
     """V1–V8 computed live: (id, quantity, published, computed, unit) rows (the validate rows of
     :mod:`flexsat.checks.cmg` share them)."""
+    from flexsat.cases import cmg_pyramid
     from flexsat.dynamics import cmg
 
     D = np.deg2rad
     x = np.array([-1.0, 0.0, 0.0])  # the paper's +x demand as the spacecraft torque
-    v3 = cmg.integrate_gimbals(np.zeros(4), x, 5.0)
-    v4 = np.rad2deg(cmg.preferred_angles([1.0, 0.0, 0.0]))
-    v5 = cmg.integrate_gimbals(D(ALTERNATE_DEG), [0.0, 0.0, -1.0], 5.0)
+    v3 = cmg_pyramid.integrate_gimbals(np.zeros(4), x, 5.0)
+    v4 = np.rad2deg(cmg_pyramid.preferred_angles([1.0, 0.0, 0.0]))
+    v5 = cmg_pyramid.integrate_gimbals(D(ALTERNATE_DEG), [0.0, 0.0, -1.0], 5.0)
 
     def kurokawa(t):
         return -np.array([0.2 * np.sin(4.0 * np.pi * t), 0.3, 0.0])
 
-    v6 = cmg.integrate_gimbals(D([-120.0, -60.0, 60.0, 120.0]), kurokawa, 20.0)
-    v7 = cmg.integrate_gimbals(np.zeros(4), [-0.707, -0.707, 0.0], 5.0)
-    v8 = cmg.reorient(np.zeros(4), D(ALTERNATE_DEG), 10.0, 1.0, alpha=1e-3, n_out=1001)
+    v6 = cmg_pyramid.integrate_gimbals(D([-120.0, -60.0, 60.0, 120.0]), kurokawa, 20.0)
+    v7 = cmg_pyramid.integrate_gimbals(np.zeros(4), [-0.707, -0.707, 0.0], 5.0)
+    v8 = cmg_pyramid.reorient(np.zeros(4), D(ALTERNATE_DEG), 10.0, 1.0, alpha=1e-3, n_out=1001)
     return (
         (
             "V1",
@@ -562,7 +565,7 @@ class StationResult:
         hr = self.station.design.data.rotor_momentum
         peak = float(np.linalg.norm(self.station.momentum, axis=1).max())
         out = []
-        for label, g, s0 in zip(self.labels, self.runs, self.initial):
+        for label, g, _s0 in zip(self.labels, self.runs, self.initial):
             rec = {
                 "run": label,
                 "singular": bool(g.singular),

@@ -1,8 +1,9 @@
 """Identification scenarios: test a structure, identify it, update its model (``kind:
 identification``).
 
-A scenario file with ``kind: identification`` runs :func:`flexsat.identify.campaign.run_campaign`
-on a case whose substructure stiffnesses scale (the TAMU grid)::
+A scenario file with ``kind: identification`` runs
+:func:`flexsat.cases.identification_campaign.run_campaign` on a case whose substructure
+stiffnesses scale (the TAMU grid)::
 
     kind: identification
     name: TAMU grid, stiff-clamp a-priori model
@@ -42,7 +43,7 @@ from pydantic import BeforeValidator, Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.cases import get_case
-from flexsat.identify.campaign import (
+from flexsat.cases.identification_campaign import (
     IDENTIFY_STEPS,
     SIMULATE_STEPS,
     CameraRig,

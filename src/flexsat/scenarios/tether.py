@@ -258,29 +258,6 @@ class TetherResult:
         return ds
 
 
-def _sampled(plant, law, x0, tau, scales):
-    """The run on the simulation core (commands held between samples) as a ClosedLoopRun."""
-    from flexsat.control.tether_laws import thrust_index
-    from flexsat.dynamics.tether import ClosedLoopRun
-    from flexsat.sim.config import SimConfig
-    from flexsat.sim.engine import simulate
-
-    cfg = SimConfig(
-        duration=tau[-1] / scales.orbit_rate, control_rate=scales.orbit_rate / tau[1], substeps=1
-    )
-    ds = simulate(plant, law, cfg, initial_state=x0, record_states=True).dataset
-    first = "reel_rate" if plant.control == "rate" else "tension"
-    x = scales.state_from_si(ds["state"].values[0])
-    u0 = ds[first].values[0] / (scales.speed if plant.control == "rate" else scales.force)
-    F = ds["thrust"].values[0] / scales.force
-    if plant.control == "rate":
-        x = np.insert(x, 3, u0, axis=-1)
-    # the grid is uniform: each interval's ∫|F̂| from one call, then the running sum
-    pieces = thrust_index(tau[:2], np.stack([F[:-1], F[1:]], -1))
-    index = np.concatenate([[0.0], np.cumsum(pieces)])
-    return ClosedLoopRun(tau, x[None], np.stack([u0, F], -1)[None], index[None])
-
-
 def run_tether(
     scenario: TetherScenario, progress: Callable[[str], None] | None = None
 ) -> TetherResult:
@@ -291,8 +268,7 @@ def run_tether(
     ScenarioError
         For a run whose tether collapses or whose integration fails (named by its label).
     """
-    from flexsat.cases.tether import SOURCE, make_law
-    from flexsat.dynamics.tether import TetheredSubsatellite, integrate
+    from flexsat.cases.tether import SOURCE, closed_loop
     from flexsat.references import cite
 
     scales = scenario.system.scales()
@@ -304,15 +280,7 @@ def run_tether(
     for index, spec in enumerate(scenario.runs):
         if progress is not None:
             progress(spec.label)
-        control = "rate" if spec.law == "rate" else "tension"
         try:
-            law = make_law(
-                spec.law,
-                spec.gains,
-                spec.final_length / scales.length,
-                scales=scales,
-                printed_sign=spec.printed_sign,
-            )
             x_si = np.array(
                 [
                     ini.length,
@@ -323,14 +291,18 @@ def run_tether(
                     ini.roll_rate,
                 ]
             )
-            if sim.integrator == "continuous":
-                runs.append(
-                    integrate(law.nondimensional, scales.state_from_si(x_si), tau, control=control)
+            runs.append(
+                closed_loop(
+                    spec.law,
+                    spec.gains,
+                    spec.final_length / scales.length,
+                    scales.state_from_si(x_si),
+                    tau,
+                    sim.integrator,
+                    spec.printed_sign,
+                    scales,
                 )
-            else:
-                plant = TetheredSubsatellite(scales, control=control)
-                x0 = x_si if control == "tension" else np.delete(x_si, 3)
-                runs.append(_sampled(plant, law, x0, tau, scales))
+            )
         except ValueError as exc:
             raise ScenarioError([_locate(f"runs{_item(index, spec.label)}", str(exc))]) from None
     notes = (

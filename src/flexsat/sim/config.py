@@ -21,6 +21,9 @@ from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
 from flexsat.sim.recording import CHUNK
 from flexsat.sim.sensors import Sensors
 
+#: how the law meets the plant: held samples of a digital law, or a continuous state feedback
+LAW_MODES = ("sampled", "continuous")
+
 
 @dataclass(frozen=True)
 class SimConfig:
@@ -43,6 +46,13 @@ class SimConfig:
                                  override a preset on the same channel
     settling_band : float        |θ − θ_f| band for the settling time, rad
     seed : int                   base seed; case i uses seed + i unless seeds are given
+    law_mode : {"sampled", "continuous"}
+                                 ``sampled``: the law runs at ``control_rate`` and its commands
+                                 are held (a digital controller); ``continuous``: a static law
+                                 evaluated inside the integrator at every stage, the states
+                                 recorded at ``control_rate`` (:mod:`flexsat.sim.continuous`)
+    rtol, atol : float           local error tolerances of the continuous mode's adaptive
+                                 DOP853 integrator (unused when sampled)
 
     ``duration``, ``control_rate`` and ``settling_band`` take a number in SI, a pint Quantity or
     a unit string (``"15 s"``, ``"75 Hz"``, ``"0.5 deg"``) and are stored in SI.
@@ -61,8 +71,15 @@ class SimConfig:
     channel_sensors: dict = field(default_factory=dict)
     channel_actuators: dict = field(default_factory=dict)
     channel_disturbances: dict = field(default_factory=dict)
+    law_mode: str = "sampled"
+    rtol: float = 1e-10
+    atol: float = 1e-12
 
     def __post_init__(self):
+        if self.law_mode not in LAW_MODES:
+            raise ValueError(f"law_mode: must be one of {LAW_MODES}, got {self.law_mode!r}")
+        set_si(self, "rtol", require_positive, "")
+        set_si(self, "atol", require_positive, "")
         set_si(self, "duration", require_positive, "s")
         set_si(self, "control_rate", require_positive, "Hz")
         set_si(self, "settling_band", require_positive, "rad")
@@ -140,7 +157,7 @@ def stable_substeps(plant, friction, dt: float, requested: int) -> int:
             return requested
         friction = {"torque": ChannelDisturbance(force=friction, force_output="theta_dot")}
     substeps = requested
-    for name, rate in force_rates(plant, friction):
+    for _name, rate in force_rates(plant, friction):
         needed = dt * rate / FRICTION_STEP_LIMIT
         # compared as a float first: a near-zero smoothing makes it too large for an int
         limits.check_count(

@@ -334,6 +334,19 @@ def simulate(
     substeps = check_resources(plant, config, nc, record_states, disturbances)
     seeds = config.seed + np.arange(nc) if seeds is None else np.asarray(seeds, int).reshape(nc)
     x, theta0 = _initial_state(plant, nc, theta0, initial_state, controller.reference)
+    if config.law_mode == "continuous":
+        from flexsat.sim.continuous import simulate_continuous
+
+        return simulate_continuous(
+            plant,
+            controller,
+            config,
+            nc,
+            x,
+            theta0,
+            record_states,
+            (sensors, actuators, disturbances),
+        )
 
     A, B = plant.linear_part()
     batched = plant_cases != 1

@@ -70,8 +70,12 @@ class Recorder:
         batched: bool,
         random_channels=(),
         allocate: bool = True,
+        input_lag: int = 1,
     ):
         self.plant, self.n, self.nc, self.batched = plant, n, nc, batched
+        # the input an output's feedthrough sees at sample k: the one held before it (1, a
+        # sampled-data run) or the one at t_k itself (0, a continuous law)
+        self.input_lag = input_lag
         m = plant.n_inputs
         # the compiled loop (flexsat.sim.compiled) writes its own records and hands views of
         # them over (allocate=False): the histories are then never allocated twice
@@ -121,9 +125,12 @@ class Recorder:
         if T <= 0:
             return
         X = self.buffer[k0:end] if self.states is not None else self.buffer[:T]
-        Wp = np.empty((T, self.nc, self.plant.n_inputs))  # the input held before each sample
-        Wp[1:] = self.disturbed[k0 : end - 1]
-        Wp[0] = self.disturbed[k0 - 1] if k0 > 0 else 0.0
+        if self.input_lag == 0:
+            Wp = self.disturbed[k0:end]
+        else:
+            Wp = np.empty((T, self.nc, self.plant.n_inputs))  # the input held before each sample
+            Wp[1:] = self.disturbed[k0 : end - 1]
+            Wp[0] = self.disturbed[k0 - 1] if k0 > 0 else 0.0
         F = None if self.forces is None else self.forces[k0:end]
         if self.linear:
             Y = self._linear(X, self.CT) + self._linear(Wp, self.DT)
@@ -175,7 +182,7 @@ class Recorder:
         for ch, sl in plant.input_slices.items():
             unit = next(c.unit for c in plant.inputs if c.name == ch)
             one = sl.stop - sl.start == 1
-            pick = (lambda a: a[..., sl.start]) if one else (lambda a: a[..., sl])
+            pick = (lambda a, i=sl.start: a[..., i]) if one else (lambda a, s=sl: a[..., s])
             put(f"{ch}_command", pick(self.commands), unit, ch)
             put(ch, pick(self.applied), unit)
             if ch in self.with_disturbance:

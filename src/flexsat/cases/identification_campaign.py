@@ -46,7 +46,7 @@ from flexsat.identify.era import (
     markov_parameters,
     okid,
 )
-from flexsat.identify.excitation import impulse_hammer, random_force, simulate_test
+from flexsat.identify.excitation import impulse_hammer, random_force
 from flexsat.identify.measurements import Channel, Measurement
 from flexsat.identify.photogrammetry import (
     CAMERA_PARAMETERS,
@@ -63,6 +63,7 @@ from flexsat.identify.structural import (
     identify_undamped,
     substructures_from_builder,
 )
+from flexsat.sim.vibration_test import simulate_test
 from flexsat.structures.fem import FEModes
 from flexsat.structures.modal_model import ModalModel
 

@@ -1,0 +1,157 @@
+r"""Steering laws of a single-gimbal CMG pyramid as controllers (Vadali, Oh & Walker,
+seed000_part2.md §8.2-§8.5), for the plant :class:`~flexsat.dynamics.gimbal_cluster.GimbalCluster`
+(σ̇ = u) in the engine's continuous-law mode.
+
+* :class:`PseudoInverseSteering`: the torque law :math:`\dot\sigma = C^T(CC^T + \alpha I)^{-1}
+  \dot h_{cmd}`, :math:`\dot h_{cmd} = -\tau(t)` (Eq. 7; α > 0 the singularity-robust inverse,
+  Eq. 17), optionally with null motion toward a set σ_f beside it,
+  :math:`+\,[I - C^T(CC^T + \alpha_n I)^{-1}C]\,k(\sigma_f - \sigma)` (Eq. 13-15);
+* :class:`NullMotionSteering`: the reorientation :math:`\dot\sigma = [I - C^T(CC^T + \alpha
+  I)^{-1}C]\,k(\sigma_f - \sigma)` (Eq. 13-17), V = ½|σ_f − σ|² falling as
+  V' = −k(σ_f − σ)ᵀτ(σ_f − σ) <= 0 (Eq. 16).
+
+Both read ``gimbal_angles`` (rad) and write ``gimbal_rates`` (rad/s); the kernels are those of
+:mod:`flexsat.dynamics.cmg` (momenta in rotor momenta h, torques in h per second).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from flexsat.control.base import Controller
+from flexsat.dynamics import cmg
+from flexsat.input_checks import require_finite
+
+__all__ = ["NullMotionSteering", "PseudoInverseSteering"]
+
+
+def _torque_history(torque) -> Callable:
+    """``torque`` (a constant 3-vector or a callable t -> 3-vector, h per second) as a checked
+    t -> (3,): a bad callable fails at t = 0, before any run, and is checked at every call."""
+    if not callable(torque):
+        tq = require_finite(torque, "torque")
+        if tq.shape != (3,):
+            raise ValueError(f"torque: must have 3 components, got shape {tq.shape}")
+        return lambda _t: tq
+
+    def torque_at(t):
+        value = require_finite(torque(t), "torque")
+        if value.shape != (3,):
+            raise ValueError(
+                f"torque: the callable must return 3 components, got shape "
+                f"{value.shape} at t = {t!r} s"
+            )
+        return value
+
+    torque_at(0.0)
+    return torque_at
+
+
+class _GimbalLaw(Controller):
+    reads = ("gimbal_angles",)
+    writes = ("gimbal_rates",)
+
+    def __init__(self, skew, n_units: int):
+        cmg.pyramid_axes(n_units, skew)  # checks both
+        self.skew = float(require_finite(skew, "skew", "rad"))
+        self.n_units = int(n_units)
+
+    def _batched(self):
+        return [()]  # one law for every case
+
+
+class PseudoInverseSteering(_GimbalLaw):
+    """The torque law (module docstring).
+
+    Parameters
+    ----------
+    torque : array_like (3,) or callable
+        Torque on the spacecraft, h per second: a constant or ``t -> (3,)`` (t in s).
+    skew, n_units
+        The pyramid (:func:`flexsat.dynamics.cmg.pyramid_axes`).
+    alpha : float
+        Singularity-robust weight (>= 0; 0 the pseudo-inverse).
+    null_target : array_like (n,), optional
+        Null motion toward this set beside the torque law, gain ``null_gain`` (1/s, >= 0),
+        projector weight ``null_alpha`` (>= 0).
+    """
+
+    def __init__(
+        self,
+        torque,
+        skew=cmg.SKEW,
+        n_units: int = 4,
+        alpha: float = 0.0,
+        null_target=None,
+        null_gain: float = 1.0,
+        null_alpha: float = 0.0,
+    ):
+        super().__init__(skew, n_units)
+        self.torque_at = _torque_history(torque)
+        self.alpha = float(require_finite(alpha, "alpha"))
+        if self.alpha < 0:
+            raise ValueError(f"alpha: must be >= 0, got {alpha!r}")
+        _, self.a, self.b = cmg.pyramid_axes(self.n_units, self.skew)
+        self.null_target = None
+        if null_target is not None:
+            target = require_finite(null_target, "null_target", "rad")
+            if target.shape != (self.n_units,):
+                raise ValueError(
+                    f"null_target: one gimbal set ({self.n_units},), got shape {target.shape}"
+                )
+            self.null_target = target
+        self.null_gain, self.null_alpha = null_gain, null_alpha
+
+    def __call__(self, t, y, state):
+        sig = y["gimbal_angles"]
+        torque = self.torque_at(t)
+        if self.null_target is None:
+            return cmg.steer(sig, torque, self.a, self.b, self.alpha), state
+        rates = cmg.steering_with_null_motion(
+            sig,
+            torque,
+            self.null_target,
+            self.null_gain,
+            self.skew,
+            self.n_units,
+            self.alpha,
+            self.null_alpha,
+        )
+        return rates, state
+
+
+class NullMotionSteering(_GimbalLaw):
+    """The null-motion reorientation toward ``target`` (module docstring).
+
+    Parameters
+    ----------
+    target : array_like (n,)
+        σ_f, rad.
+    gain_k : float
+        k, 1/s (> 0).
+    skew, n_units
+        The pyramid.
+    alpha : float
+        Weight of the projector (>= 0; the paper's ≈ 0.001 carries the motion through singular
+        sets).
+    """
+
+    def __init__(self, target, gain_k: float = 1.0, skew=cmg.SKEW, n_units: int = 4, alpha=1e-3):
+        super().__init__(skew, n_units)
+        self.sigma_target = require_finite(target, "sigma_target", "rad")
+        if self.sigma_target.shape != (self.n_units,):
+            raise ValueError(
+                f"sigma_target: one gimbal set ({self.n_units},), got shape "
+                f"{self.sigma_target.shape}"
+            )
+        self.gain_k = float(require_finite(gain_k, "gain_k", "1/s"))
+        if self.gain_k <= 0:
+            raise ValueError(f"gain_k: must be > 0, got {gain_k!r}")
+        self.alpha = alpha
+
+    def __call__(self, t, y, state):
+        sig = y["gimbal_angles"]
+        tau = cmg.null_projector(sig, self.skew, self.n_units, self.alpha)
+        return np.einsum("...ij,...j->...i", tau, self.gain_k * (self.sigma_target - sig)), state

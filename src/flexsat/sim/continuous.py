@@ -1,0 +1,404 @@
+r"""Continuous-law mode of the engine: the law evaluated inside the integrator, at every stage.
+
+The sampled mode of :func:`flexsat.sim.engine.simulate` holds each command over a control
+period (a digital controller). Here the law is a static state feedback u = k(t, y(x)), the
+closed loop
+
+.. math::
+
+    \dot x = A x + B\,[k(t, C x) + d(t)] + B_f\, f(x, k(t, C x) + d(t))
+
+(the plant's split of :class:`~flexsat.dynamics.plant.Plant`; d an optional exogenous input
+history) is one ordinary differential equation, integrated by the explicit Runge-Kutta pair of
+Dormand & Prince of order 8(5,3) with step-size control (E. Hairer, S. P. Nørsett and G.
+Wanner, *Solving Ordinary Differential Equations I*, 2nd ed., Springer 1993, §II.10; scipy's
+``DOP853``). Its error per unit step is held below ``atol + rtol |x|`` component-wise, so the
+accuracy of a run is the tolerance's, not a sampling period's: the setting of a paper whose
+controller is continuous (the tether retrieval laws, the pseudo-inverse CMG steering).
+
+:func:`run` is the integrator of the mode (output grid, terminal stop condition, dense output,
+backward integration); :func:`simulate_continuous` is what :func:`~flexsat.sim.engine.simulate`
+calls for ``SimConfig(law_mode="continuous")`` and returns the usual
+:class:`~flexsat.sim.recording.SimResult`.
+
+The law reads true outputs without feedthrough (D = 0: y(x) alone), since an output depending
+on the command the law computes from it is an algebraic loop; it holds no internal state
+(a dynamic compensator is a sampled-data law, or states of the plant). Sensors, actuators and
+channel disturbances are sampled-data pieces (noise per sample, holds, rate limits) and have no
+meaning here: a run with one is refused, naming it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from flexsat.input_checks import require_finite, require_positive
+from flexsat.sim.integrators import apply
+from flexsat.sim.recording import CHUNK, Recorder, SimResult
+
+#: default tolerances of the mode: with them the tether's libration angles are good to ~1e-9
+#: rad over a few orbits, and the gimbal angles of a CMG steering run to ~1e-9 rad
+RTOL, ATOL = 1e-10, 1e-12
+
+__all__ = ["ATOL", "RTOL", "ContinuousRun", "run", "simulate_continuous"]
+
+
+@dataclass(frozen=True)
+class ContinuousRun:
+    """A closed-loop run of :func:`run`.
+
+    Attributes
+    ----------
+    t : (n_t,) array
+        Output times reached, s (the grid up to a stop).
+    states : (n_cases, n_t, n_x) array
+    inputs : (n_cases, n_t, m) array
+        The plant's input along the run: the law's commands plus the exogenous input.
+    commands : (n_cases, n_t, m) array
+        The law's commands alone.
+    stopped : bool
+        Whether the stop condition ended the run before the grid's end.
+    t_end : float
+        Time the run ended (the stop's exact root, or the grid's end), s.
+    x_end : (n_cases, n_x) array
+        State at ``t_end``.
+    solution : callable
+        Dense output: ``solution(t)`` with t scalar or (k,) in [t[0], t_end] gives the states,
+        (n_cases, n_x) or (k, n_cases, n_x), from the integrator's own interpolant (order 7).
+    steps : (n_steps + 1,) array
+        The integrator's accepted step boundaries, s (where its interpolant changes piece).
+    """
+
+    t: np.ndarray
+    states: np.ndarray
+    inputs: np.ndarray
+    commands: np.ndarray
+    stopped: bool
+    t_end: float
+    x_end: np.ndarray
+    solution: Callable
+    steps: np.ndarray
+
+
+class _Loop:
+    """The closed-loop right-hand side of one run (module docstring)."""
+
+    def __init__(self, plant, controller, nc: int, exogenous):
+        self.plant, self.controller, self.nc = plant, controller, nc
+        self.law = type(controller).__name__
+        A, B = plant.linear_part()
+        self.batched = np.ndim(A) == 3
+        self.At, self.Bt = np.swapaxes(A, -1, -2), np.swapaxes(B, -1, -2)
+        self.force = plant.nonlinear_force if plant.nonlinear else None
+        self.Bft = np.swapaxes(plant.force_matrix, -1, -2) if plant.nonlinear else None
+        self.m, self.slices = plant.n_inputs, plant.input_slices
+        self.reads, self.writes = tuple(controller.reads), tuple(controller.writes)
+        self.exogenous = exogenous
+        self.zero_u = np.zeros((nc, self.m))
+        # how each read is taken from x: state columns, a product with C, or the plant's own
+        # output (called several times per integrator step: the cheap forms matter)
+        self.readers = []
+        for name in self.reads:
+            mats = plant.output_matrices(name)
+            if mats is not None and mats[1] is not None and np.any(mats[1]):
+                raise ValueError(
+                    f"{name}: {self.law} reads an output with feedthrough from the inputs, an "
+                    "algebraic loop in continuous-law mode (read the states it is made of)"
+                )
+            self.readers.append((name, self._reader(name, mats)))
+
+    def _reader(self, name: str, mats):
+        plant = self.plant
+        if mats is None:
+            return lambda x: plant.output(name, x, self.zero_u, None)
+        C = np.asarray(mats[0], float)
+        one = C.shape[-2] == 1
+        if C.ndim == 2 and np.all(np.sum(C != 0, axis=1) == 1) and np.all(C.max(axis=1) == 1):
+            cols = np.argmax(C, axis=1)  # rows of the identity: y = x[:, cols]
+            if one:
+                col = int(cols[0])
+                return lambda x: x[:, col]
+            return lambda x: x[:, cols]
+        CT = np.swapaxes(C, -1, -2)
+        if one:
+            return lambda x: apply(x, CT, self.batched)[:, 0]
+        return lambda x: apply(x, CT, self.batched)
+
+    def commands(self, t: float, x: np.ndarray) -> np.ndarray:
+        """The law's commands (n_cases, m) at time t and states x (n_cases, n_x)."""
+        y = {name: read(x) for name, read in self.readers}
+        cmd, _ = self.controller(t, y, {})
+        if not isinstance(cmd, Mapping):
+            cmd = {self.writes[0]: cmd}
+        if set(cmd) != set(self.writes):
+            raise ValueError(
+                f"{sorted(set(cmd) ^ set(self.writes))[0]}: {self.law} returned commands for "
+                f"{sorted(cmd)!r} but writes {list(self.writes)!r}"
+            )
+        u = np.zeros((self.nc, self.m))
+        for name in self.writes:
+            sl = self.slices[name]
+            width = sl.stop - sl.start
+            shape = (self.nc,) if width == 1 else (self.nc, width)
+            try:
+                c = np.broadcast_to(np.asarray(cmd[name], float), shape)
+            except ValueError:
+                raise ValueError(
+                    f"{name}: {self.law} returned a command of shape {np.shape(cmd[name])}, "
+                    f"expected {shape} (n_cases × channel size)"
+                ) from None
+            u[:, sl] = c.reshape(self.nc, width)
+        return u
+
+    def exogenous_at(self, t: float) -> np.ndarray | None:
+        return None if self.exogenous is None else self.exogenous(t)
+
+    def input(self, t: float, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        u = self.commands(t, x)
+        d = self.exogenous_at(t)
+        return u, (u if d is None else u + d)
+
+    def rhs(self, t: float, flat: np.ndarray) -> np.ndarray:
+        x = flat.reshape(self.nc, -1)
+        _, w = self.input(t, x)
+        dx = apply(x, self.At, self.batched) + apply(w, self.Bt, self.batched)
+        if self.force is not None:
+            dx = dx + apply(self.force(x, w), self.Bft, self.batched)
+        return dx.ravel()
+
+
+def _exogenous(plant, exogenous, nc: int, t0: float):
+    """``exogenous`` as t -> (n_cases, m): a callable t -> {input channel: (n_cases,) or
+    (n_cases, w) or broadcastable} checked once at the start t0."""
+    if exogenous is None:
+        return None
+    if not callable(exogenous):
+        raise ValueError(
+            f"exogenous: must be a callable t -> {{channel: values}}, got {exogenous!r}"
+        )
+    slices, m = plant.input_slices, plant.n_inputs
+
+    def at(t):
+        values = exogenous(t)
+        if not isinstance(values, Mapping) or not set(values) <= set(slices):
+            raise ValueError(
+                f"exogenous: must return {{input channel: values}} with channels of "
+                f"{type(plant).__name__} ({', '.join(slices)}), got {values!r}"
+            )
+        d = np.zeros((nc, m))
+        for name, v in values.items():
+            sl = slices[name]
+            width = sl.stop - sl.start
+            shape = (nc,) if width == 1 else (nc, width)
+            d[:, sl] = np.broadcast_to(np.asarray(v, float), shape).reshape(nc, width)
+        return d
+
+    if not np.isfinite(at(t0)).all():
+        raise ValueError(f"exogenous: returned a non-finite input at t = {t0:g} s")
+    return at
+
+
+def _grid(times) -> np.ndarray:
+    t = require_finite(times, "times", "s")
+    step = np.diff(t) if t.ndim == 1 else None
+    if t.ndim != 1 or t.size < 2 or not (np.all(step > 0) or np.all(step < 0)):
+        raise ValueError(
+            f"times: must be a strictly monotonic 1-D grid of >= 2 times (decreasing integrates "
+            f"backward), got shape {t.shape}"
+        )
+    return t
+
+
+def run(
+    plant,
+    controller,
+    times,
+    initial_state,
+    rtol: float = RTOL,
+    atol: float = ATOL,
+    stop: Callable | None = None,
+    exogenous: Callable | None = None,
+    n_cases: int | None = None,
+) -> ContinuousRun:
+    """Integrate the closed loop of ``plant`` under the static law ``controller`` evaluated
+    at every integrator stage (module docstring).
+
+    Parameters
+    ----------
+    plant : Plant
+        Any plant with the protocol's split (``linear_part``, ``force_matrix``,
+        ``nonlinear_force``); not one with its own ``step`` (a quaternion integrator).
+    controller : Controller
+        A static law (``initial_state`` empty), reading outputs without feedthrough.
+    times : (n_t,) array
+        Output grid, s, strictly monotonic; a decreasing grid integrates backward in time.
+    initial_state : (n_x,) or (n_cases, n_x) array
+        State at ``times[0]``.
+    rtol, atol : float
+        Local error tolerances of the DOP853 step control (> 0).
+    stop : callable, optional
+        ``stop(t, x)`` -> float with x (n_cases, n_x): the run ends where it falls through zero
+        (a terminal event, located to the integrator's root-finding precision).
+    exogenous : callable, optional
+        ``exogenous(t)`` -> {input channel: values}: a known input history added to the law's
+        commands (a disturbance torque of time).
+    n_cases : int, optional
+        Batch size; default the controller's (or the dispersed plant's).
+
+    Returns
+    -------
+    ContinuousRun
+
+    Raises
+    ------
+    ValueError
+        Naming the field: a bad grid, state or tolerance, a law with internal state, a plant
+        with its own integrator, an output with feedthrough read, the plant leaving its
+        model's domain (``plant.domain_margin`` < 0, with its ``domain_rule``) or a failed
+        integration (naming the time).
+    SimulationDiverged
+        When a state entry passes :data:`flexsat.sim.engine.DIVERGENCE_BOUND` (an unstable
+        closed loop): no result with NaN or overflow is returned.
+    """
+    from flexsat.sim.engine import DIVERGENCE_BOUND, SimulationDiverged, check_law
+
+    check_law(plant, controller)
+    if getattr(plant, "step", None) is not None:
+        raise ValueError(
+            f"law_mode: {type(plant).__name__} propagates itself (its own step on a manifold); "
+            "continuous-law mode needs the protocol's split: use the sampled mode"
+        )
+    nc = n_cases or (controller.n_cases if plant.n_cases == 1 else plant.n_cases)
+    if controller.initial_state(nc):
+        raise ValueError(
+            f"law_mode: {type(controller).__name__} has an internal state; continuous-law mode "
+            "takes a static state feedback (run a dynamic law in the sampled mode)"
+        )
+    t = _grid(times)
+    rtol = float(require_positive(rtol, "rtol"))
+    atol = float(require_positive(atol, "atol"))
+    x0 = require_finite(initial_state, "initial_state")
+    try:
+        x0 = np.array(np.broadcast_to(x0, (nc, plant.nx)), float)
+    except ValueError:
+        raise ValueError(
+            f"initial_state: must have shape ({plant.nx},) or ({nc}, {plant.nx}), got {x0.shape}"
+        ) from None
+    loop = _Loop(plant, controller, nc, _exogenous(plant, exogenous, nc, float(t[0])))
+
+    def diverging(_t, flat):
+        return DIVERGENCE_BOUND - float(np.max(np.abs(flat)))
+
+    diverging.terminal = True
+    events = [diverging]
+    margin = getattr(plant, "domain_margin", None)
+    if margin is not None:
+        if np.min(margin(x0)) <= 0:
+            raise ValueError(f"initial_state: {plant.domain_rule}")
+
+        def left_domain(_t, flat):
+            return float(np.min(margin(flat.reshape(nc, -1))))
+
+        left_domain.terminal = True
+        events.append(left_domain)
+    if stop is not None:
+
+        def stopped(t_, flat):
+            return float(stop(t_, flat.reshape(nc, -1)))
+
+        stopped.terminal = True
+        stopped.direction = -1
+        events.append(stopped)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        sol = solve_ivp(
+            loop.rhs,
+            (t[0], t[-1]),
+            x0.ravel(),
+            method="DOP853",
+            t_eval=t,
+            rtol=rtol,
+            atol=atol,
+            events=events,
+            dense_output=True,
+        )
+    if sol.t_events[0].size:
+        at = float(sol.t_events[0][0])
+        x_at = sol.y_events[0][0].reshape(nc, -1)
+        cases = tuple(int(i) for i in np.flatnonzero(np.abs(x_at).max(axis=1) >= DIVERGENCE_BOUND))
+        raise SimulationDiverged(
+            f"simulation diverged at t = {at:.6g} s in case(s) {cases}: a state entry passed "
+            f"{DIVERGENCE_BOUND:g} (SI). Likely cause: the closed loop is unstable (check the "
+            "law's gains and signs)",
+            cases,
+            at,
+            "the closed loop is unstable",
+        )
+    if sol.status == -1:
+        raise ValueError(f"times: the integration failed at t = {sol.t[-1]:.6g} s: {sol.message}")
+    if margin is not None and sol.t_events[1].size:
+        raise ValueError(
+            f"{plant.domain_rule} at t = {sol.t_events[1][0]:.3g} s (the run ends there)"
+        )
+    stopped_early = sol.status == 1
+    if stopped_early:  # only the stop condition is left to end it
+        t_end, x_end = float(sol.t_events[-1][0]), sol.y_events[-1][0].reshape(nc, -1)
+    else:
+        t_end, x_end = float(t[-1]), sol.y[:, -1].reshape(nc, -1)
+    n_t = sol.t.size
+    states = sol.y.reshape(nc, plant.nx, n_t).transpose(0, 2, 1)
+    commands = np.empty((nc, n_t, loop.m))
+    inputs = np.empty((nc, n_t, loop.m))
+    for k, tk in enumerate(sol.t):
+        commands[:, k], inputs[:, k] = loop.input(float(tk), states[:, k])
+    if not (np.isfinite(states).all() and np.isfinite(inputs).all()):
+        raise ValueError("times: the run left finite values (a diverging closed loop)")
+    dense = sol.sol
+
+    def solution(tq):
+        z = dense(tq)
+        return z.reshape(nc, -1) if np.ndim(tq) == 0 else z.T.reshape(-1, nc, plant.nx)
+
+    return ContinuousRun(
+        sol.t, states, inputs, commands, stopped_early, t_end, x_end, solution, dense.ts
+    )
+
+
+def simulate_continuous(
+    plant, controller, config, nc: int, x0, theta0, record_states: bool, pieces: tuple
+) -> SimResult:
+    """The continuous-law run of :func:`~flexsat.sim.engine.simulate` on the grid of
+    ``config`` (0, 1/control_rate, ..., duration; the output samples), as a
+    :class:`~flexsat.sim.recording.SimResult`.
+
+    ``pieces`` are the run's bound (sensors, actuators, disturbances): any is refused (module
+    docstring).
+    """
+    for role, bound in zip(("sensor", "actuator", "disturbance"), pieces):
+        if bound:
+            name = next(iter(bound))
+            raise ValueError(
+                f"{name}: a {role} is a sampled-data piece; continuous-law mode evaluates the "
+                "law on the true outputs (use law_mode='sampled')"
+            )
+    t = config.dt * np.arange(config.n_steps + 1)
+    if getattr(controller, "reference", None) is not None:
+        controller.tabulate_reference(t)
+    out = run(plant, controller, t, x0, config.rtol, config.atol, n_cases=nc)
+    n = t.size
+    rec = Recorder(plant, n, nc, (), {}, record_states, plant.n_cases != 1, input_lag=0)
+    rec.commands[:] = np.swapaxes(out.commands, 0, 1)
+    rec.applied[:] = rec.commands
+    rec.disturbed[:] = rec.commands
+    X = np.swapaxes(out.states, 0, 1)
+    for k0 in range(0, n, CHUNK):
+        end = min(n, k0 + CHUNK)
+        if rec.states is not None:
+            rec.states[k0:end] = X[k0:end]
+        else:
+            rec.buffer[: end - k0] = X[k0:end]
+        rec.flush(end)
+    return rec.dataset(t, controller, theta0, config, 1, engine="continuous")
