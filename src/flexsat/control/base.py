@@ -23,19 +23,24 @@ import numpy as np
 class Controller(ABC):
     """Discrete control law ``u_k, state_{k+1} = law(t_k, y_k, state_k)``.
 
-    Measurements ``y`` are a mapping of arrays by channel name. The single-axis laws read
-    ``theta`` (rad), ``theta_dot`` (rad/s) and ``root_torque`` (l0 S0 − M0, N m) and write
-    ``torque`` (N m), the defaults below; a law for another plant sets its own.
+    Measurements ``y`` are a mapping of arrays by channel name. Every law declares the
+    channels it reads and writes, on its class or its instance (there is no default: the
+    simulator refuses a law that does not, naming it): a single-axis slew law reads
+    ``theta`` (rad), ``theta_dot`` (rad/s) and perhaps ``root_torque`` (N m) and writes
+    ``torque`` (N m); an attitude law reads ``attitude`` and ``rate``.
     """
 
-    #: measurement channels the law reads
-    reads: tuple[str, ...] = ("theta", "theta_dot", "root_torque")
-    #: input channels the law writes
-    writes: tuple[str, ...] = ("torque",)
+    #: measurement channels the law reads (names of the plant's outputs); no default
+    reads: tuple[str, ...]
+    #: input channels the law writes (names of the plant's inputs); no default
+    writes: tuple[str, ...]
 
-    #: final hub angle the law drives to, rad (array over cases)
+    #: set point the law drives its plant to, in the units of what it regulates (array over
+    #: cases): the final maneuver angle of a slew law, rad; the target Euler parameters of an
+    #: attitude law; the final length of a tether law
     target: np.ndarray
-    #: open-loop reference the law tracks, or None
+    #: open-loop reference of a slew law (a torque shape with ``theta0``, ``theta`` ...,
+    #: :mod:`flexsat.maneuvers.torque_shapes`), or None
     reference = None
 
     @property

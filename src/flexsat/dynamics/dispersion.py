@@ -43,7 +43,7 @@ class DispersedPlant(Plant):
                 "noise_channels",
                 "recorded",
                 "nonlinear",
-                "single_axis_maneuver",
+                "maneuver",
             ):
                 a, b = getattr(first, field), getattr(p, field)
                 if (tuple(a) if isinstance(a, tuple) else a) != (
@@ -71,7 +71,7 @@ class DispersedPlant(Plant):
         self.inputs = tuple(first.inputs)
         self.outputs = tuple(first.outputs)
         self.recorded = tuple(first.recorded)
-        self.single_axis_maneuver = first.single_axis_maneuver
+        self.maneuver = first.maneuver
         self.noise_channels = tuple(first.noise_channels)
         self.nonlinear = bool(first.nonlinear)
         self.integrator = getattr(first, "integrator", "etd2rk")
@@ -145,6 +145,13 @@ class DispersedPlant(Plant):
 
     def momentum(self, x):
         return self._per_case("momentum", x)
+
+    def power(self, x, u):
+        """Each case's dE/dt from its own plant; x (..., n_cases, n_x), u (..., n_cases, m)."""
+        values = [p.power(x[..., i, :], u[..., i, :]) for i, p in enumerate(self.plants)]
+        if any(v is None for v in values):
+            return None
+        return np.stack(values, axis=x.ndim - 2)
 
     def initial_state(self, n_cases: int) -> np.ndarray:
         return np.stack([p.initial_state(1)[0] for p in self.plants])

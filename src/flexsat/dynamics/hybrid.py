@@ -20,7 +20,7 @@ from functools import cached_property
 import numpy as np
 from scipy.linalg import eigh
 
-from flexsat.dynamics.plant import Channel, Plant
+from flexsat.dynamics.plant import Channel, ManeuverChannels, Plant
 from flexsat.input_checks import require_count, require_finite, require_positive
 
 
@@ -58,7 +58,8 @@ class HybridPlant(Plant):
     inputs = (Channel("torque", "N*m", description="hub torque u"),)
     output_channels = HYBRID_OUTPUTS
     recorded = ("theta", "theta_dot", "root_torque", "tip_deflection")
-    single_axis_maneuver = True
+    #: a slew of the hub angle: the maneuver metrics read theta, theta_dot, torque, tip_deflection
+    maneuver = ManeuverChannels()
     #: measured values kept in the result as ``<name>_measured`` (the strain-gauge channel)
     recorded_measurements = ("root_torque",)
     #: input channels whose disturbance and friction histories are always in the result
