@@ -120,7 +120,7 @@ class DispersedPlant(Plant):
         mats = [p.output_matrices(name) for p in self.plants]
         if any(m is None for m in mats):
             return None
-        return tuple(np.stack([m[i] for m in mats]) for i in range(3))
+        return tuple(_stack_optional([m[i] for m in mats]) for i in range(3))
 
     def output(self, name, x, u, f_in=None):
         """Output ``name`` per case, x (..., n_cases, n_x)."""
@@ -173,6 +173,15 @@ class DispersedPlant(Plant):
 
             return vibration_energy
         raise AttributeError(name)
+
+
+def _stack_optional(parts):
+    """The per-case matrices stacked on a leading case axis; None (the output does not depend
+    on that argument) where every case has None, zeros for the cases with None otherwise."""
+    given = [np.asarray(p, float) for p in parts if p is not None]
+    if not given:
+        return None
+    return np.stack([np.zeros_like(given[0]) if p is None else np.asarray(p, float) for p in parts])
 
 
 def _show(value) -> str:

@@ -232,6 +232,15 @@ class HybridPlant(Plant):
         E = 0.5 * np.einsum("...i,...i->...", vel @ self.mass_matrix, vel)
         return E + 0.5 * np.einsum("...i,...i->...", pos @ self.stiffness_matrix, pos)
 
+    def power(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """dE/dt = θ' u − x'ᵀ D x', W: the hub torque's work less the structural damping's
+        dissipation (M x'' + D x' + K x = e_θ u, Att. 3 Eq. 5, dotted with x'); the
+        stiffening forces, when on, are conservative with the energy of
+        :meth:`~flexsat.dynamics.hub_appendage.HubAppendage.energy` and do no net work."""
+        _, vel = self.split(x)
+        u = np.asarray(u, float)[..., 0]
+        return vel[..., 0] * u - np.einsum("...i,...i->...", vel @ self.damping_matrix, vel)
+
     @property
     def energy_matrix(self) -> np.ndarray | None:
         """Q = blockdiag(K, M) of :meth:`energy` = ½ xᵀ Q x (Att. 3 Eq. 7); None with the

@@ -236,8 +236,9 @@ def _size(channels, name: str) -> int:
 
 
 def _references(controller, t, nc):
-    """(θ_ref, θ'_ref) on the sample grid, (n_t, n_cases), or None for a law without them."""
-    if not hasattr(controller, "reference_at"):
+    """(θ_ref, θ'_ref) on the sample grid, (n_t, n_cases), or None for a law without them (no
+    ``target`` for the maneuver angle: a state-space compensator, a scheduled gain)."""
+    if not hasattr(controller, "reference_at") or not hasattr(controller, "target"):
         return None
     table = getattr(controller, "_table", None)
     if table is not None and len(table[0]) == len(t) and np.array_equal(table[0], t):
