@@ -49,7 +49,9 @@ class Controller(ABC):
         return int(np.prod(np.broadcast_shapes(*self._batched())))
 
     def _batched(self) -> list[tuple[int, ...]]:
-        return [np.shape(self.target)]
+        """Shapes of the law's per-case parameters: its ``target`` when it has one (a law
+        with other per-case gains lists them)."""
+        return [np.shape(self.target)] if hasattr(self, "target") else []
 
     def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
         return {}

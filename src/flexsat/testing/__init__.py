@@ -8,7 +8,7 @@ it is written for; each raises an AssertionError ``"<class> fails <check>: <why>
 failure. :func:`plant_checks` / :func:`controller_checks` list the checks (each a callable
 :class:`Check` with its name and, when it does not apply by the subject's declaration, a
 ``skip`` reason) and :func:`parametrize_with_checks` makes them one pytest test each.
-docs/plugins.md ("Checking your plant or law") shows how.
+docs/conformance.md ("Checking your plant or law") shows how.
 """
 
 from __future__ import annotations
