@@ -184,9 +184,11 @@ def shapes(s: PlantSubject) -> None:
     assert np.shape(A) in ((nx, nx), lead + (nx, nx)), f"A: shape {np.shape(A)}, n_x = {nx}"
     assert np.shape(B) in ((nx, m), lead + (nx, m)), f"B: shape {np.shape(B)}, (n_x, m) = {nx, m}"
     Bf = p.force_matrix
-    assert bool(p.nonlinear) == (Bf is not None) or not p.nonlinear, (
-        "nonlinear: the plant is nonlinear but gives no force_matrix"
-    )
+    if p.nonlinear:
+        assert Bf is not None, "nonlinear: the plant is nonlinear but gives no force_matrix"
+        assert np.ndim(Bf) in (2, 3) and np.shape(Bf)[-2] == nx, (
+            f"force_matrix: shape {np.shape(Bf)}, must be (n_x, n_f) with n_x = {nx}"
+        )
     for nc in cases_of(p):
         x0 = np.asarray(p.initial_state(nc))
         assert x0.shape in ((nc, nx), (nx,)), f"initial_state({nc}): shape {x0.shape}"
