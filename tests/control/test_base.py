@@ -43,6 +43,8 @@ def test_a_law_must_declare_its_channels():
         reads = ("theta",)
 
     assert not hasattr(Controller, "reads") and not hasattr(Controller, "writes")
+    # nor a hub angle: target and reference belong to the slew laws (SlewLaw)
+    assert not hasattr(Controller, "reference_at") and "target" not in Controller.__annotations__
     plant = tamu(n_modes=2).model()
     with pytest.raises(ValueError, match=r"^reads: Forgetful declares no measurement channels"):
         simulate(plant, Forgetful(), SimConfig(duration=0.1))

@@ -35,23 +35,15 @@ class Controller(ABC):
     #: input channels the law writes (names of the plant's inputs); no default
     writes: tuple[str, ...]
 
-    #: set point the law drives its plant to, in the units of what it regulates (array over
-    #: cases): the final maneuver angle of a slew law, rad; the target Euler parameters of an
-    #: attitude law; the final length of a tether law
-    target: np.ndarray
-    #: open-loop reference of a slew law (a torque shape with ``theta0``, ``theta`` ...,
-    #: :mod:`flexsat.maneuvers.torque_shapes`), or None
-    reference = None
-
     @property
     def n_cases(self) -> int:
         """Number of cases implied by the law's parameter arrays (1 for scalars)."""
         return int(np.prod(np.broadcast_shapes(*self._batched())))
 
     def _batched(self) -> list[tuple[int, ...]]:
-        """Shapes of the law's per-case parameters: its ``target`` when it has one (a law
-        with other per-case gains lists them)."""
-        return [np.shape(self.target)] if hasattr(self, "target") else []
+        """Shapes of the law's per-case parameters (none here: a law with per-case gains or
+        set points lists them)."""
+        return []
 
     def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
         return {}
@@ -60,7 +52,8 @@ class Controller(ABC):
     def __call__(
         self, t: float, y: Mapping[str, np.ndarray], state: dict[str, np.ndarray]
     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """Return the torque command (N m, shape (n_cases,)) and the next internal state."""
+        """Return the commands (a dict by written channel, or a bare array when the law writes
+        one) and the next internal state."""
 
     def linear_form(self, dt: float, times: np.ndarray, n_cases: int):
         """The law's compiled-loop form for a run, or None when it is not linear.
@@ -81,6 +74,24 @@ class Controller(ABC):
             sample by sample in Python.
         """
         return None
+
+
+class SlewLaw(Controller):
+    """A law that slews a maneuver plant's angle (:attr:`~flexsat.dynamics.plant.Plant.
+    maneuver`) to ``target``, rad, along an optional open-loop ``reference`` (a torque shape
+    of :mod:`flexsat.maneuvers.torque_shapes`: ``theta0``, ``theta``, ``theta_dot``,
+    ``theta_ddot``, ``u``, ``end_time``). The engine starts such a run at the reference's start
+    angle and reads it against the reference for the maneuver metrics
+    (:func:`flexsat.sim.metrics.maneuver_metrics`).
+    """
+
+    #: final maneuver angle, rad (array over cases)
+    target: np.ndarray
+    #: open-loop reference the law tracks, or None (a step to the target)
+    reference = None
+
+    def _batched(self) -> list[tuple[int, ...]]:
+        return [np.shape(self.target)]
 
     def tabulate_reference(self, times: np.ndarray) -> None:
         """Evaluate the reference once on the sample grid; :meth:`reference_at` then looks the

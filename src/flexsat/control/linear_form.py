@@ -428,8 +428,8 @@ def sample_times(dt, times) -> tuple[float, np.ndarray]:
 
 def reference_tables(law, times: np.ndarray, n_cases: int):
     """(θ_ref, θ'_ref, θ''_ref, u_ref) of a single-axis law at every sample, each (n_t, C) with
-    C in {1, n_cases}: what :meth:`~flexsat.control.base.Controller.reference_at` returns after
-    :meth:`~flexsat.control.base.Controller.tabulate_reference` (the same expression), or a step
+    C in {1, n_cases}: what :meth:`~flexsat.control.base.SlewLaw.reference_at` returns after
+    :meth:`~flexsat.control.base.SlewLaw.tabulate_reference` (the same expression), or a step
     to ``law.target`` when the law has no reference."""
     n_t = times.shape[0]
     if law.reference is None:

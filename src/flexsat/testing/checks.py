@@ -137,8 +137,6 @@ class HoldLaw(Controller):
     """
 
     reads: tuple[str, ...] = ()
-    #: the maneuver metrics of a maneuver plant read the hold as a slew to 0
-    target = 0.0
 
     def __init__(self, commands: dict[str, np.ndarray]):
         self.writes = tuple(commands)
