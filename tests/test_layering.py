@@ -19,7 +19,8 @@ layer  units                                        what they are
 4      maneuvers, control, identify, attitude       torque shapes, control laws,
                                                     system identification, star trackers
 5      sim                                          the simulation engine
-6      design                                       sweeps, Monte Carlo, optimisation
+6      design, testing                              sweeps, Monte Carlo, optimisation;
+                                                    conformance checks of plants and laws
 7      cases, catalog                               the published benchmark systems
 8      scenarios                                    scenario files: a case, a plant, a law
 9      report, mode_plot                            report and plot writers
@@ -65,7 +66,7 @@ LAYERS = (
     ("dynamics",),
     ("maneuvers", "control", "identify", "attitude"),
     ("sim",),
-    ("design",),
+    ("design", "testing"),
     ("cases", "catalog"),
     ("scenarios",),
     ("report", "mode_plot"),

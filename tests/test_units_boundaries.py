@@ -2,10 +2,11 @@
 a wrong dimension is a UnitError naming the field, and a Quantity is never stripped of its unit.
 
 For each boundary kind (control laws, simulation settings, maneuvers, case builders; scenario
-files in tests/scenarios/test_maneuver.py) the tests claim (a) a Quantity gives the same object as its SI number, (b) a unit string
-does too, (c) a wrong dimension is refused naming the field, (d) a Quantity where no unit is
-declared is refused. Converted values are compared with ``==`` where the SI conversion factor
-is exact in binary or identical on both sides, else to rel=1e-15 (one rounding of pint's factor).
+files in tests/scenarios/test_maneuver.py) the tests claim (a) a Quantity gives the same object
+as its SI number, (b) a unit string does too, (c) a wrong dimension is refused naming the
+field, (d) a Quantity where no unit is declared is refused. Converted values are compared with
+``==`` where the SI conversion factor is exact in binary or identical on both sides, else to
+rel=1e-15 (one rounding of pint's factor).
 """
 
 from __future__ import annotations
@@ -172,15 +173,17 @@ def test_sensors_actuator_and_disturbances_convert_and_store_si():
 
 
 def test_simulate_initial_angle_converts():
-    """theta0 in degrees gives the run of theta0 in radians (same floats after conversion)."""
+    """An initial angle in degrees gives the run of the angle in radians (same floats after
+    conversion): the named initial values of ``plant.state_from`` take units."""
     plant = tamu(n_modes=2).model()
     law = PD(kp=5.0, kd=20.0)
     config = SimConfig(duration=0.2)
-    si = simulate(plant, law, config, theta0=math.radians(1))
-    q = simulate(plant, law, config, theta0=Q_(1, "deg"))
+    si = simulate(plant, law, config, initial_state=plant.state_from(theta=math.radians(1)))
+    q = simulate(plant, law, config, initial_state=plant.state_from(theta=Q_(1, "deg")))
     assert np.array_equal(si.dataset["theta"].values, q.dataset["theta"].values)
-    with pytest.raises(UnitError, match=r"^theta0: incompatible units"):
-        simulate(plant, law, config, theta0="1 m")
+    assert si.dataset["theta"].values[0, 0] == math.radians(1)
+    with pytest.raises(UnitError, match=r"^theta: incompatible units"):
+        plant.state_from(theta="1 m")
     with pytest.raises(UnitError, match=r"^initial_state: takes a plain number here"):
         simulate(plant, law, config, initial_state=Q_(np.zeros(plant.nx), "rad"))
 

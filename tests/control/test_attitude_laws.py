@@ -13,6 +13,7 @@ from flexsat.control.attitude_laws import error_quaternion
 from flexsat.dynamics import attitude as att
 from flexsat.dynamics import rigid_body as rb
 from flexsat.units import ureg
+from rkmk4_reference import propagate
 
 EPS = np.finfo(float).eps
 # asymmetric body with products of inertia (kg·m²): the laws need no principal axes
@@ -52,9 +53,9 @@ def rate_gains(law):
 
 
 def energy_balance_residual(law, t, beta, w):
-    """U(t) − U(0) − ∫₀ᵗ f dt, f = −Σ g_i ω_i², along a trajectory (g the rate gains); the integral by
-    the corrected trapezoid rule h/2 (f0 + f1) + h²/12 (f0' − f1') (O(h⁴) like the propagator),
-    with f' = −2 Σ g_i ω_i ω̇_i and ω̇ from Euler's equations under the law's torque."""
+    """U(t) − U(0) − ∫₀ᵗ f dt, f = −Σ g_i ω_i², along a trajectory (g the rate gains); the
+    integral by the corrected trapezoid rule h/2 (f0 + f1) + h²/12 (f0' − f1') (O(h⁴) like the
+    propagator), with f' = −2 Σ g_i ω_i ω̇_i and ω̇ from Euler's equations under the law's torque."""
     U = law.lyapunov(beta, w, INERTIA)
     g = rate_gains(law)
     f = law.lyapunov_rate(w)
@@ -68,7 +69,7 @@ def energy_balance_residual(law, t, beta, w):
 def closed_loop(request):
     law = LAWS[request.param]
     t = graded_grid(0.04, T_END)
-    beta, w = rb.propagate(BETA0, W0, INERTIA, t, as_torque(law))
+    beta, w = propagate(BETA0, W0, INERTIA, t, as_torque(law))
     return law, t, beta, w
 
 
@@ -103,7 +104,7 @@ def test_energy_balance_holds_along_the_motion_to_the_integrator_error(closed_lo
     res_coarse, U = energy_balance_residual(law, t, beta, w)
     assert np.abs(res_coarse).max() <= 1e-5 * U[0]
     t_fine = graded_grid(0.02, 10.0)
-    beta_f, w_f = rb.propagate(BETA0, W0, INERTIA, t_fine, as_torque(law))
+    beta_f, w_f = propagate(BETA0, W0, INERTIA, t_fine, as_torque(law))
     res_fine, _ = energy_balance_residual(law, t_fine, beta_f, w_f)
     in_window = t <= t_fine[-1]
     ratio = np.abs(res_coarse[in_window]).max() / np.abs(res_fine).max()
@@ -146,12 +147,12 @@ def test_batched_laws_equal_their_single_cases():
     ]
     for law in laws:
         # the propagator takes its case axes from the state: one initial state per case
-        beta, w = rb.propagate(np.stack([BETA0] * 2), W0, INERTIA, t, as_torque(law))
+        beta, w = propagate(np.stack([BETA0] * 2), W0, INERTIA, t, as_torque(law))
         for case in range(2):
             fields = {
                 name: np.asarray(getattr(law, name))[case] for name in law.__dataclass_fields__
             }
-            b1, w1 = rb.propagate(BETA0, W0, INERTIA, t, as_torque(type(law)(**fields)))
+            b1, w1 = propagate(BETA0, W0, INERTIA, t, as_torque(type(law)(**fields)))
             np.testing.assert_allclose(beta[case], b1, rtol=0, atol=1e-15)
             np.testing.assert_allclose(w[case], w1, rtol=0, atol=1e-14)
 

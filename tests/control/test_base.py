@@ -21,3 +21,32 @@ def test_law_without_reference_commands_a_step():
     th, thd, thdd, u = law.reference_at(5.0)
     assert np.array_equal(th, [0.1, 0.2, 0.3]) and not thd.any() and not u.any()
     assert law.n_cases == 3
+
+
+def test_a_law_must_declare_its_channels():
+    """The base class has no default channels (a single-axis law's ``theta``/``torque`` used to
+    be assumed): a law that declares no ``reads`` or no ``writes`` is refused before the run,
+    by a ValueError naming the field and the law."""
+    import pytest
+
+    from flexsat.cases.tamu import tamu
+    from flexsat.control.base import Controller
+    from flexsat.sim import SimConfig, simulate
+
+    class Forgetful(Controller):
+        target = 0.0
+
+        def __call__(self, t, y, state):
+            return np.zeros(np.shape(y["theta"])), state
+
+    class ReadsOnly(Forgetful):
+        reads = ("theta",)
+
+    assert not hasattr(Controller, "reads") and not hasattr(Controller, "writes")
+    # nor a hub angle: target and reference belong to the slew laws (SlewLaw)
+    assert not hasattr(Controller, "reference_at") and "target" not in Controller.__annotations__
+    plant = tamu(n_modes=2).model()
+    with pytest.raises(ValueError, match=r"^reads: Forgetful declares no measurement channels"):
+        simulate(plant, Forgetful(), SimConfig(duration=0.1))
+    with pytest.raises(ValueError, match=r"^writes: ReadsOnly declares no input channels"):
+        simulate(plant, ReadsOnly(), SimConfig(duration=0.1))

@@ -284,3 +284,21 @@ def test_estimator_law_refuses_another_period(plant):
 def test_per_case_parameters_must_match_the_run():
     with pytest.raises(ValueError, match=r"^kp: has 3 cases, the run has n_cases = 5"):
         PD(np.ones(3), 1.0).linear_form(DT, TIMES, 5)
+
+
+def test_run_controller_calls_a_frozen_law_without_a_reference_with_the_plants_widths():
+    """An attitude law is a frozen dataclass without a reference: run_controller calls it as
+    the engine does (no reference table written on it; found by flexsat.testing, where it
+    raised FrozenInstanceError) with the channel widths given (attitude 4, rate 3, torque 3),
+    and the commands are the law's own, sample by sample."""
+    from flexsat.control.attitude_laws import QuaternionPD
+
+    law = QuaternionPD(Kp=7.2, Kd=12.0)
+    rng = np.random.default_rng(5)
+    beta = rng.standard_normal((4, 2, 4))
+    beta /= np.linalg.norm(beta, axis=-1, keepdims=True)
+    rate = rng.standard_normal((4, 2, 3))
+    U = run_controller(law, DT * np.arange(4), np.concatenate([beta, rate], -1), (4, 3), (3,))
+    for k in range(4):
+        u, _ = law(k * DT, {"attitude": beta[k], "rate": rate[k]}, {})
+        np.testing.assert_array_equal(U[k], u)

@@ -184,6 +184,35 @@ def test_stiffened_model_conserves_energy_to_second_order_accuracy():
     assert 3.5 < drift[0] / drift[1] < 4.5
 
 
+def test_stiffened_momentum_rate_is_the_hub_torque():
+    """With the stiffening on, the hub equation (I_tot + s) θ'' + M_θq q'' + 2 θ' qᵀG q' = u
+    (s = qᵀGq) is dh/dt = u for h = (M x')_θ + s θ'. Differentiated in closed form along
+    x' = A x + B u + B_f f(x, u): dh/dt = M_0·v' + s θ'' + 2 θ' qᵀG q' equals u to round-off
+    at random states (the momentum without s θ', which ``momentum`` returned before, misses
+    2 θ' qᵀG q' + s θ'': tens of N m here)."""
+    from flexsat.testing.checks import state_derivative
+
+    p = HubAppendageParams(0.35, 4, 0.14, 1.16, 23.6, 1.3, 1.7, 0.0, damping=0.0)
+    model = HubAppendage(p, n_modes=4, stiffening=True)
+    rng = np.random.default_rng(2)
+    n = model.ndof
+    x = np.concatenate([0.05 * rng.standard_normal((5, n)), 2.0 * rng.standard_normal((5, n))], 1)
+    u = rng.standard_normal((5, 1))
+    xd = state_derivative(model, x, u)
+    q, qd, thd = x[:, 1:n], xd[:, 1:n], x[:, n]
+    G = model._quad["G"]
+    s = np.einsum("ci,ij,cj->c", q, G, q)
+    dh = (
+        xd[:, n:] @ model.mass_matrix[0]
+        + s * xd[:, n]
+        + 2 * thd * np.einsum("ci,ij,cj->c", q, G, qd)
+    )
+    terms = np.abs(xd[:, n:]) @ np.abs(model.mass_matrix[0]) + np.abs(s * xd[:, n])
+    np.testing.assert_allclose(dh, u[:, 0], rtol=0, atol=8 * n * 2.2e-16 * terms.max())
+    h = model.momentum(x)
+    assert np.array_equal(h, x[:, n:] @ model.mass_matrix[0] + s * thd)
+
+
 def test_stiffening_raises_the_spinning_frequencies():
     """Spinning steadily at Ω the modal stiffness becomes K − Ω² G; with K_g > M_s the
     frequencies rise (the chordwise Southwell effect)."""

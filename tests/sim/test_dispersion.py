@@ -104,3 +104,29 @@ class _Oscillator(Plant):
 def test_non_finite_dispersed_parameters_are_refused():
     with pytest.raises(ValueError, match=r"^A: plants\[1\] has a non-finite entry"):
         stack_plants([_Oscillator(1.0), _Oscillator(float("nan"))])
+
+
+def test_structural_plants_with_no_feedthrough_disperse():
+    """A structure's outputs have no D_f (``output_matrices`` gives None for it): stacked, the
+    outputs still carry their per-case matrices (D_f stays None) and case i of the batch is
+    plant i run alone (found by flexsat.testing's dispersion check; the stacked None used to
+    become an object array and the run failed to start)."""
+    from flexsat.cases.agrawal_bang import agrawal_bang
+    from flexsat.sim import ChannelDisturbance
+    from flexsat.testing.checks import HoldLaw
+
+    plants = [agrawal_bang(tip_mass=m).plant(3) for m in (0.0, 0.01, 0.02)]
+    stacked = stack_plants(plants)
+    assert stacked.output_matrices("y1")[2] is None
+    assert stacked.output_matrices("y1")[0].shape == (3, 1, plants[0].nx)
+    cfg = SimConfig(duration=0.5, channel_disturbances={"u1": ChannelDisturbance(random=0.1)})
+    x0 = 1e-3 * np.random.default_rng(1).standard_normal((3, plants[0].nx))
+    u = {"u1": np.full(3, 0.2), "u2": np.zeros(3), "u3": np.full(3, -0.1)}
+    batch = simulate(stacked, HoldLaw(u), cfg, initial_state=x0).dataset
+    for i, plant in enumerate(plants):
+        one_law = HoldLaw({k: v[i : i + 1] for k, v in u.items()})
+        one = simulate(plant, one_law, cfg, seeds=[i], initial_state=x0[i], n_cases=1).dataset
+        for var in ("y1", "y2", "y3", "u1", "energy"):
+            a, b = batch[var].values[i], one[var].values[0]
+            # batched products round differently: 2 n_x ε per step over 38 steps
+            assert np.abs(a - b).max() <= 2 * plants[0].nx * 38 * 2.2e-16 * np.abs(b).max(), var

@@ -67,8 +67,8 @@ def test_non_finite_command_from_a_finite_state_blames_the_law(tamu_case, plant)
 
 def test_non_finite_start_is_an_input_error(tamu_case, plant):
     law = PD(5.0, 20.0, target=tamu_case.angle)
-    with pytest.raises(ValueError, match=r"^theta0: must be finite"):
-        simulate(plant, law, SimConfig(duration=1.0), theta0=float("nan"))
+    with pytest.raises(ValueError, match=r"^theta: must be finite"):
+        plant.state_from(theta=float("nan"))
     state = np.zeros(plant.nx)
     state[1] = np.inf
     with pytest.raises(ValueError, match=r"^initial_state: must be finite"):

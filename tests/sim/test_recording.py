@@ -199,3 +199,21 @@ def test_a_hub_maneuver_that_has_not_settled_reports_none(tamu_model):
     for key, val in r.metrics.items():  # the metrics are also per-case variables of the dataset
         assert r.dataset[key].dims == ("case",)
         np.testing.assert_array_equal(r.dataset[key].values, val)
+
+
+def test_a_law_without_a_target_on_a_maneuver_plant_records_channel_metrics(tamu_case):
+    """A state-space compensator has no maneuver target: its run of the hub + appendage plant
+    ends with the channel summary instead of the maneuver metrics (found by flexsat.testing:
+    the recorder asked every law for ``reference_at``, which reads ``target``, and the run
+    failed at its end with an AttributeError)."""
+    import control as ct
+    from flexsat.control.state_space_compensator import StateSpaceCompensator
+
+    lead = ct.ss([[-4.0]], [[1.0, 0.5]], [[-3.0]], [[-5.0, -20.0]])
+    config = SimConfig(duration=0.5)
+    law = StateSpaceCompensator(lead, ["theta", "theta_dot"], "torque", dt=config.dt)
+    plant = tamu_case.model()
+    ds = simulate(plant, law, config, initial_state=plant.state_from(theta=0.1)).dataset
+    assert "theta_ref" not in ds and "settling_time_s" not in ds
+    assert ds["final_theta"].values[0] == ds["theta"].values[0, -1]
+    assert ds["peak_torque"].values[0] == np.abs(ds["torque"].values[0]).max() > 0

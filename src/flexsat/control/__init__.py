@@ -1,7 +1,7 @@
 """Control laws behind one interface (:class:`Controller`)."""
 
 from flexsat.control.attitude_laws import GibbsLyapunovLaw, MRPLaw, QuaternionPD
-from flexsat.control.base import Controller
+from flexsat.control.base import Controller, SlewLaw
 from flexsat.control.estimation import (
     RefinedEstimator,
     dkalman,
@@ -63,6 +63,7 @@ from flexsat.control.trajectory_linearization import TrajectoryLinearization, at
 
 __all__ = [
     "Controller",
+    "SlewLaw",
     "EigenvalueRestoration",
     "PPFHomotopyResult",
     "PPFHomotopyStep",

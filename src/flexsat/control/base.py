@@ -23,20 +23,17 @@ import numpy as np
 class Controller(ABC):
     """Discrete control law ``u_k, state_{k+1} = law(t_k, y_k, state_k)``.
 
-    Measurements ``y`` are a mapping of arrays by channel name. The single-axis laws read
-    ``theta`` (rad), ``theta_dot`` (rad/s) and ``root_torque`` (l0 S0 − M0, N m) and write
-    ``torque`` (N m), the defaults below; a law for another plant sets its own.
+    Measurements ``y`` are a mapping of arrays by channel name. Every law declares the
+    channels it reads and writes, on its class or its instance (there is no default: the
+    simulator refuses a law that does not, naming it): a single-axis slew law reads
+    ``theta`` (rad), ``theta_dot`` (rad/s) and perhaps ``root_torque`` (N m) and writes
+    ``torque`` (N m); an attitude law reads ``attitude`` and ``rate``.
     """
 
-    #: measurement channels the law reads
-    reads: tuple[str, ...] = ("theta", "theta_dot", "root_torque")
-    #: input channels the law writes
-    writes: tuple[str, ...] = ("torque",)
-
-    #: final hub angle the law drives to, rad (array over cases)
-    target: np.ndarray
-    #: open-loop reference the law tracks, or None
-    reference = None
+    #: measurement channels the law reads (names of the plant's outputs); no default
+    reads: tuple[str, ...]
+    #: input channels the law writes (names of the plant's inputs); no default
+    writes: tuple[str, ...]
 
     @property
     def n_cases(self) -> int:
@@ -44,7 +41,9 @@ class Controller(ABC):
         return int(np.prod(np.broadcast_shapes(*self._batched())))
 
     def _batched(self) -> list[tuple[int, ...]]:
-        return [np.shape(self.target)]
+        """Shapes of the law's per-case parameters (none here: a law with per-case gains or
+        set points lists them)."""
+        return []
 
     def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
         return {}
@@ -53,7 +52,8 @@ class Controller(ABC):
     def __call__(
         self, t: float, y: Mapping[str, np.ndarray], state: dict[str, np.ndarray]
     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """Return the torque command (N m, shape (n_cases,)) and the next internal state."""
+        """Return the commands (a dict by written channel, or a bare array when the law writes
+        one) and the next internal state."""
 
     def linear_form(self, dt: float, times: np.ndarray, n_cases: int):
         """The law's compiled-loop form for a run, or None when it is not linear.
@@ -74,6 +74,24 @@ class Controller(ABC):
             sample by sample in Python.
         """
         return None
+
+
+class SlewLaw(Controller):
+    """A law that slews a maneuver plant's angle (:attr:`~flexsat.dynamics.plant.Plant.
+    maneuver`) to ``target``, rad, along an optional open-loop ``reference`` (a torque shape
+    of :mod:`flexsat.maneuvers.torque_shapes`: ``theta0``, ``theta``, ``theta_dot``,
+    ``theta_ddot``, ``u``, ``end_time``). The engine starts such a run at the reference's start
+    angle and reads it against the reference for the maneuver metrics
+    (:func:`flexsat.sim.metrics.maneuver_metrics`).
+    """
+
+    #: final maneuver angle, rad (array over cases)
+    target: np.ndarray
+    #: open-loop reference the law tracks, or None (a step to the target)
+    reference = None
+
+    def _batched(self) -> list[tuple[int, ...]]:
+        return [np.shape(self.target)]
 
     def tabulate_reference(self, times: np.ndarray) -> None:
         """Evaluate the reference once on the sample grid; :meth:`reference_at` then looks the

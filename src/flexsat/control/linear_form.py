@@ -235,7 +235,7 @@ def run_linear_law(law: LinearLaw, Y) -> np.ndarray:
     return U
 
 
-def run_controller(law, times, Y) -> np.ndarray:
+def run_controller(law, times, Y, read_sizes=None, write_sizes=None) -> np.ndarray:
     """Commands of any :class:`~flexsat.control.base.Controller` called sample by sample, the
     Python path the linear form must reproduce.
 
@@ -248,6 +248,8 @@ def run_controller(law, times, Y) -> np.ndarray:
         Sample times, s (the law's reference is tabulated on them first, as the engine does).
     Y : (n_t, n_cases, p) array
         Measurements, channels concatenated in ``law.reads`` order.
+    read_sizes, write_sizes : tuple of int, optional
+        Channel widths (the plant's), for a law that does not declare them.
 
     Returns
     -------
@@ -256,9 +258,10 @@ def run_controller(law, times, Y) -> np.ndarray:
     times = np.asarray(times, float)
     Y = np.asarray(Y, float)
     nc = Y.shape[1]
-    rs = getattr(law, "read_sizes", (1,) * len(law.reads))
-    ws = getattr(law, "write_sizes", (1,) * len(law.writes))
-    law.tabulate_reference(times)
+    rs = read_sizes or getattr(law, "read_sizes", (1,) * len(law.reads))
+    ws = write_sizes or getattr(law, "write_sizes", (1,) * len(law.writes))
+    if getattr(law, "reference", None) is not None:  # as the engine: laws without may be frozen
+        law.tabulate_reference(times)
     state = law.initial_state(nc)
     U = np.empty((len(times), nc, sum(ws)))
     for k, t in enumerate(times):
@@ -425,8 +428,8 @@ def sample_times(dt, times) -> tuple[float, np.ndarray]:
 
 def reference_tables(law, times: np.ndarray, n_cases: int):
     """(θ_ref, θ'_ref, θ''_ref, u_ref) of a single-axis law at every sample, each (n_t, C) with
-    C in {1, n_cases}: what :meth:`~flexsat.control.base.Controller.reference_at` returns after
-    :meth:`~flexsat.control.base.Controller.tabulate_reference` (the same expression), or a step
+    C in {1, n_cases}: what :meth:`~flexsat.control.base.SlewLaw.reference_at` returns after
+    :meth:`~flexsat.control.base.SlewLaw.tabulate_reference` (the same expression), or a step
     to ``law.target`` when the law has no reference."""
     n_t = times.shape[0]
     if law.reference is None:

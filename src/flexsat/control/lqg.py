@@ -53,7 +53,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from flexsat.control.base import Controller
+from flexsat.control.base import SlewLaw
 from flexsat.control.estimation import dkalman, kalman
 from flexsat.control.linear_form import (
     LinearLaw,
@@ -102,7 +102,7 @@ def _plant_matrices(plant):
     return np.asarray(A, float), np.asarray(B, float), np.asarray(C, float)
 
 
-class EstimatorController(Controller):
+class EstimatorController(SlewLaw):
     """Shared machinery of the observer-based laws: measurement stacking, the estimator
     update, the reference state and the sample-period check (see the module docstring)."""
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexsat.control.base import Controller
+from flexsat.control.base import SlewLaw
 from flexsat.control.linear_form import per_case, reference_tables, sample_times, static_law
 from flexsat.input_checks import require_finite, require_nonneg
 
@@ -38,7 +38,7 @@ def check_lyapunov_gains(g1, g2, g3, n_appendages: int = 4):
     return g1, g2, g3
 
 
-class LyapunovRegulator(Controller):
+class LyapunovRegulator(SlewLaw):
     """Control Law I: constant-gain Lyapunov output feedback (Att. 3 Eq. 11).
 
     Parameters
@@ -76,7 +76,7 @@ class LyapunovRegulator(Controller):
         return static_law(_gain_row(self, n_cases), y_ref, z[..., None], self.reads, self.writes)
 
 
-class LyapunovTracker(Controller):
+class LyapunovTracker(SlewLaw):
     """Control Law II: Lyapunov tracking of a torque-shaped rigid reference (Att. 3 Eq. 17).
 
     Parameters

@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexsat.control.base import Controller
+from flexsat.control.base import SlewLaw
 from flexsat.control.linear_form import per_case, reference_tables, sample_times, static_law
 from flexsat.input_checks import require_finite, require_nonneg, require_positive
 
 
-class PD(Controller):
+class PD(SlewLaw):
     """u = u_ref − kp (θ − θ_ref) − kd (θ' − θ'_ref).
 
     Parameters

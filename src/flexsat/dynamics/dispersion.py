@@ -43,7 +43,7 @@ class DispersedPlant(Plant):
                 "noise_channels",
                 "recorded",
                 "nonlinear",
-                "single_axis_maneuver",
+                "maneuver",
             ):
                 a, b = getattr(first, field), getattr(p, field)
                 if (tuple(a) if isinstance(a, tuple) else a) != (
@@ -71,7 +71,7 @@ class DispersedPlant(Plant):
         self.inputs = tuple(first.inputs)
         self.outputs = tuple(first.outputs)
         self.recorded = tuple(first.recorded)
-        self.single_axis_maneuver = first.single_axis_maneuver
+        self.maneuver = first.maneuver
         self.noise_channels = tuple(first.noise_channels)
         self.nonlinear = bool(first.nonlinear)
         self.integrator = getattr(first, "integrator", "etd2rk")
@@ -120,7 +120,7 @@ class DispersedPlant(Plant):
         mats = [p.output_matrices(name) for p in self.plants]
         if any(m is None for m in mats):
             return None
-        return tuple(np.stack([m[i] for m in mats]) for i in range(3))
+        return tuple(_stack_optional([m[i] for m in mats]) for i in range(3))
 
     def output(self, name, x, u, f_in=None):
         """Output ``name`` per case, x (..., n_cases, n_x)."""
@@ -146,6 +146,13 @@ class DispersedPlant(Plant):
     def momentum(self, x):
         return self._per_case("momentum", x)
 
+    def power(self, x, u):
+        """Each case's dE/dt from its own plant; x (..., n_cases, n_x), u (..., n_cases, m)."""
+        values = [p.power(x[..., i, :], u[..., i, :]) for i, p in enumerate(self.plants)]
+        if any(v is None for v in values):
+            return None
+        return np.stack(values, axis=x.ndim - 2)
+
     def initial_state(self, n_cases: int) -> np.ndarray:
         return np.stack([p.initial_state(1)[0] for p in self.plants])
 
@@ -166,6 +173,15 @@ class DispersedPlant(Plant):
 
             return vibration_energy
         raise AttributeError(name)
+
+
+def _stack_optional(parts):
+    """The per-case matrices stacked on a leading case axis; None (the output does not depend
+    on that argument) where every case has None, zeros for the cases with None otherwise."""
+    given = [np.asarray(p, float) for p in parts if p is not None]
+    if not given:
+        return None
+    return np.stack([np.zeros_like(given[0]) if p is None else np.asarray(p, float) for p in parts])
 
 
 def _show(value) -> str:

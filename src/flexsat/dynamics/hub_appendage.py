@@ -319,6 +319,17 @@ class HubAppendage(HybridPlant):
             "tip_deflection": pos[..., 1:] @ self._quad["phi_tip"],
         }
 
+    def momentum(self, x: np.ndarray) -> np.ndarray:
+        """Angular momentum about the hub axis, N m s: h = (M x')_θ, plus s θ' (s = qᵀGq) with
+        the stiffening on, whose hub equation (:meth:`nonlinear_force`)
+        (I_tot + s) θ'' + M_θq q'' + 2 θ' qᵀG q' = u is dh/dt = u for that h."""
+        h = super().momentum(x)
+        if self.stiffening:
+            pos, vel = self.split(x)
+            q = pos[..., 1:]
+            h = h + vel[..., 0] * np.einsum("...i,ij,...j->...", q, self._quad["G"], q)
+        return h
+
     # ----------------------------------------------------------------------------------------
     # energies (Att. 3 Eqs. 7, 8, 18)
     def energy(self, x: np.ndarray) -> np.ndarray:

@@ -20,7 +20,7 @@ from functools import cached_property
 import numpy as np
 from scipy.linalg import eigh
 
-from flexsat.dynamics.plant import Channel, Plant
+from flexsat.dynamics.plant import Channel, ManeuverChannels, Plant
 from flexsat.input_checks import require_count, require_finite, require_positive
 
 
@@ -58,7 +58,8 @@ class HybridPlant(Plant):
     inputs = (Channel("torque", "N*m", description="hub torque u"),)
     output_channels = HYBRID_OUTPUTS
     recorded = ("theta", "theta_dot", "root_torque", "tip_deflection")
-    single_axis_maneuver = True
+    #: a slew of the hub angle: the maneuver metrics read theta, theta_dot, torque, tip_deflection
+    maneuver = ManeuverChannels()
     #: measured values kept in the result as ``<name>_measured`` (the strain-gauge channel)
     recorded_measurements = ("root_torque",)
     #: input channels whose disturbance and friction histories are always in the result
@@ -230,6 +231,15 @@ class HybridPlant(Plant):
         # two-operand einsums: the three-operand form is several times slower on batches
         E = 0.5 * np.einsum("...i,...i->...", vel @ self.mass_matrix, vel)
         return E + 0.5 * np.einsum("...i,...i->...", pos @ self.stiffness_matrix, pos)
+
+    def power(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """dE/dt = θ' u − x'ᵀ D x', W: the hub torque's work less the structural damping's
+        dissipation (M x'' + D x' + K x = e_θ u, Att. 3 Eq. 5, dotted with x'); the
+        stiffening forces, when on, are conservative with the energy of
+        :meth:`~flexsat.dynamics.hub_appendage.HubAppendage.energy` and do no net work."""
+        _, vel = self.split(x)
+        u = np.asarray(u, float)[..., 0]
+        return vel[..., 0] * u - np.einsum("...i,...i->...", vel @ self.damping_matrix, vel)
 
     @property
     def energy_matrix(self) -> np.ndarray | None:

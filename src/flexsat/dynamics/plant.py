@@ -62,6 +62,35 @@ class Channel:
             raise ValueError(f"{self.name}: size must be a positive integer, got {self.size!r}")
 
 
+@dataclass(frozen=True)
+class ManeuverChannels:
+    """The channels a single-axis maneuver is read on (a plant's :attr:`Plant.maneuver`).
+
+    A plant that declares them gets the maneuver metrics of
+    :func:`flexsat.sim.metrics.maneuver_metrics` (settling time and overshoot of ``angle``
+    against the law's ``target``, peak rate error of ``rate`` against the law's reference, peak
+    ``torque``, peak ``deflection``, residual vibration energy) and starts at rest at the law's
+    reference start angle unless an initial state is given. It must also give
+    ``vibration_energy(x)``.
+
+    Parameters
+    ----------
+    angle : str
+        Output channel of the maneuver angle, rad (a state coordinate).
+    rate : str
+        Output channel of its rate, rad/s.
+    torque : str
+        Size-1 input channel that drives it, N m.
+    deflection : str
+        Output channel of the peak elastic deflection, m.
+    """
+
+    angle: str = "theta"
+    rate: str = "theta_dot"
+    torque: str = "torque"
+    deflection: str = "tip_deflection"
+
+
 def channel_slices(channels: tuple[Channel, ...]) -> dict[str, slice]:
     """Where each channel sits in the concatenated vector of ``channels``."""
     out, start = {}, 0
@@ -95,9 +124,9 @@ class Plant(ABC):
     outputs: tuple[Channel, ...] = ()
     #: outputs recorded by default, in addition to the inputs (names of ``outputs``)
     recorded: tuple[str, ...] = ()
-    #: a single-axis maneuver plant: its scalar outputs ``theta`` and ``theta_dot`` (the hub
-    #: angle and rate) are read against the law's reference for the maneuver metrics
-    single_axis_maneuver: bool = False
+    #: the channels of a single-axis maneuver (:class:`ManeuverChannels`): declared by a plant
+    #: whose runs are read as slews of one angle (the maneuver metrics); None otherwise
+    maneuver: ManeuverChannels | None = None
 
     @property
     def noise_channels(self) -> tuple[str, ...]:
@@ -259,10 +288,16 @@ class Plant(ABC):
     #: otherwise. The compiled loop evaluates it per sample instead of recording the states
     energy_matrix = None
 
+    def power(self, x: np.ndarray, u: np.ndarray) -> np.ndarray | None:
+        """Rate of :meth:`energy` along the motion, dE/dt = (work rate of the inputs) −
+        (dissipation), W, shape (...,), at states x (..., n_x) and inputs u (..., m); None where
+        undefined. :func:`flexsat.testing.check_plant` compares it with ∇E · ẋ."""
+        return None
+
     def momentum(self, x: np.ndarray) -> np.ndarray | None:
         """Total angular momentum in inertial axes, N m s, shape (..., 3) or (...,) for a
         planar plant; None where undefined."""
         return None
 
 
-__all__ = ["Channel", "Plant", "channel_slices", "find_channel"]
+__all__ = ["Channel", "ManeuverChannels", "Plant", "channel_slices", "find_channel"]

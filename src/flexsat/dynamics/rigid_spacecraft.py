@@ -306,6 +306,11 @@ class RigidSpacecraft(Plant):
         w = x[..., 4:]
         return 0.5 * np.sum(w * matvec(self.inertia, w), axis=-1)
 
+    def power(self, x, u) -> np.ndarray:
+        """dE/dt = ω · τ, W: Euler's equations I ω' = τ − ω × I ω dotted with ω (the
+        gyroscopic term does no work)."""
+        return np.sum(x[..., 4:] * np.asarray(u, float), axis=-1)
+
     def momentum(self, x) -> np.ndarray:
         """Angular momentum about the centre of mass in inertial axes, C(β)ᵀ I ω, N m s."""
         h = matvec(self.inertia, x[..., 4:])

@@ -697,11 +697,6 @@ def run(
     return result
 
 
-#: the histories the single-axis maneuver metrics read (:func:`flexsat.sim.metrics.
-#: maneuver_metrics`): the outputs reduced in the loop, in this order, and the input
-REDUCED_OUTPUTS, REDUCED_INPUT = ("theta", "theta_dot", "tip_deflection"), "torque"
-
-
 def run_reduced(
     plant,
     controller,
@@ -743,15 +738,18 @@ def run_reduced(
     from flexsat.sim.recording import _references
 
     names = [c.name for c in plant.outputs]
+    axis = plant.maneuver
+    if axis is None or plant.n_cases != 1 or theta0 is None:
+        return None
+    # the histories the maneuver metrics read (:func:`flexsat.sim.metrics.maneuver_metrics`):
+    # the outputs reduced in the loop, in this order, and the input
+    reduced_outputs, reduced_input = (axis.angle, axis.rate, axis.deflection), axis.torque
     if (
-        not plant.single_axis_maneuver
-        or plant.n_cases != 1
-        or theta0 is None
-        or not all(
-            k in plant.recorded and k in names and _width(plant, k) == 1 for k in REDUCED_OUTPUTS
+        not all(
+            k in plant.recorded and k in names and _width(plant, k) == 1 for k in reduced_outputs
         )
-        or plant.input_slices.get(REDUCED_INPUT, slice(0, 2)).stop
-        - plant.input_slices.get(REDUCED_INPUT, slice(0, 2)).start
+        or plant.input_slices.get(reduced_input, slice(0, 2)).stop
+        - plant.input_slices.get(reduced_input, slice(0, 2)).start
         != 1
     ):
         return None
@@ -769,7 +767,7 @@ def run_reduced(
         kept,
         law,
         always_modal=True,
-        rows=REDUCED_OUTPUTS,
+        rows=reduced_outputs,
     )
     n_t = a.n_t
     t = config.dt * np.arange(n_t)
@@ -792,7 +790,7 @@ def run_reduced(
         ref_end = np.broadcast_to(np.asarray(ref.end_time, float), (nc,))
         k_end = np.minimum(np.searchsorted(t, ref_end - 1e-12), n_t - 1)
     snap_k = np.ascontiguousarray(np.column_stack([np.full(nc, n_t - 1), k_end]), dtype=np.int64)
-    m_u = plant.input_slices[REDUCED_INPUT].start + 1
+    m_u = plant.input_slices[reduced_input].start + 1
     red = np.empty((nc, 3, 3))
     upeak = np.empty((nc, m_u))
     snapO = np.empty((nc, 2, a.Co.shape[1]))

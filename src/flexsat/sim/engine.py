@@ -145,6 +145,15 @@ def check_law(plant, controller) -> None:
         channel written twice.
     """
     law = type(controller).__name__
+    for field, role in (("reads", "measurement"), ("writes", "input")):
+        declared = getattr(controller, field, None)
+        if not isinstance(declared, (tuple, list)) or not all(
+            isinstance(name, str) for name in declared
+        ):
+            raise ValueError(
+                f"{field}: {law} declares no {role} channels (set {field} = a tuple of the "
+                f"plant's channel names on the law; got {declared!r})"
+            )
     reads, writes = tuple(controller.reads), tuple(controller.writes)
     for name in reads:
         try:
@@ -192,11 +201,13 @@ def _commands(cmd, writes, shapes, nc: int, law: str, check: bool) -> list[np.nd
     return out
 
 
-def _initial_state(plant, nc, theta0, initial_state, ref):
-    """(x0, θ0 per case or None): rest at θ0 for a plant with a ``theta`` state coordinate,
-    or the given full state."""
+def _initial_state(plant, nc, initial_state, ref):
+    """(x0, start angle per case or None): the given state, else the plant's rest state, a
+    maneuver plant's angle (:attr:`~flexsat.dynamics.plant.Plant.maneuver`) at the start of
+    the law's reference; the start angle is that of a maneuver plant's angle coordinate."""
     x = np.array(np.broadcast_to(plant.initial_state(nc), (nc, plant.nx)))
-    row = unit_row(plant, "theta")
+    axis = plant.maneuver
+    row = None if axis is None else unit_row(plant, axis.angle)
     if initial_state is not None:
         x0 = require_finite(initial_state, "initial_state")
         try:
@@ -206,19 +217,9 @@ def _initial_state(plant, nc, theta0, initial_state, ref):
                 f"initial_state: must have shape ({plant.nx},) or ({nc}, "
                 f"{plant.nx}), got {x0.shape}"
             ) from None
-        return x, (x[:, row].copy() if row is not None else None)
-    if theta0 is None:
-        theta0 = ref.theta0 if ref is not None else 0.0
-    theta0 = np.broadcast_to(require_finite(theta0, "theta0", "rad"), (nc,)).copy()
-    if row is None:
-        if np.any(theta0):
-            raise ValueError(
-                f"theta0: {type(plant).__name__} has no hub-angle state "
-                "coordinate; give initial_state"
-            )
-        return x, None
-    x[:, row] = theta0
-    return x, theta0
+    elif row is not None and ref is not None:
+        x[:, row] = np.broadcast_to(require_finite(ref.theta0, "reference.theta0", "rad"), (nc,))
+    return x, (x[:, row].copy() if row is not None else None)
 
 
 def _propagator(plant, A, B, forces: InputForces, nc: int, batched: bool, dt: float, substeps: int):
@@ -254,7 +255,6 @@ def simulate(
     config: SimConfig,
     n_cases: int | None = None,
     seeds=None,
-    theta0=None,
     initial_state=None,
     record_states: bool = False,
     compiled: bool | None = None,
@@ -280,11 +280,10 @@ def simulate(
     seeds : array of int, optional
         Per-case noise seeds (default ``config.seed + arange(n_cases)``); a case run alone with
         its seed reproduces its batch result.
-    theta0 : float or array, optional
-        Initial hub angle (at rest, undeformed) of a plant with a ``theta`` state coordinate;
-        default the reference start or 0.
     initial_state : array (n_x,) or (n_cases, n_x), optional
-        Full initial state instead of rest at ``theta0``.
+        Initial state (named values: ``plant.state_from(theta=0.1)``); by default the plant's
+        rest state, with a maneuver plant's angle (:attr:`~flexsat.dynamics.plant.Plant.
+        maneuver`) at the start of the law's reference.
     record_states : bool
         Also store the full state history (n_cases × n_t × n_x).
     compiled : bool, optional
@@ -313,7 +312,7 @@ def simulate(
     ValueError
         Before the run, naming the channel or field: a law reading a measurement the plant does
         not have or writing an unknown channel, a command of the wrong shape (first sample), a
-        sensor, actuator or disturbance on a missing channel, a non-finite ``theta0`` or
+        sensor, actuator or disturbance on a missing channel, a non-finite or misshapen
         ``initial_state``, a run beyond the limits of :mod:`flexsat.limits`.
     SimulationDiverged
         When a state entry or a command becomes non-finite or exceeds
@@ -333,7 +332,7 @@ def simulate(
     sensors, actuators, disturbances = resolve_channels(plant, config)
     substeps = check_resources(plant, config, nc, record_states, disturbances)
     seeds = config.seed + np.arange(nc) if seeds is None else np.asarray(seeds, int).reshape(nc)
-    x, theta0 = _initial_state(plant, nc, theta0, initial_state, controller.reference)
+    x, theta0 = _initial_state(plant, nc, initial_state, getattr(controller, "reference", None))
     if config.law_mode == "continuous":
         from flexsat.sim.continuous import simulate_continuous
 

@@ -169,15 +169,16 @@ class Recorder:
             data[name] = (dims, np.swapaxes(arr, 0, 1), {"units": _unit(unit)})
 
         outs = {c.name: c for c in plant.outputs}
-        for k in ("theta", "theta_dot"):
+        # a single-axis maneuver is read against its law's reference: its angle and rate
+        # first, the reference histories and the maneuver metrics
+        axis = plant.maneuver
+        for k in () if axis is None else (axis.angle, axis.rate):
             if k in self.outputs:
                 put(k, self.outputs[k], outs[k].unit)
-        # a single-axis maneuver is read against its law's reference: the reference histories
-        # and the maneuver metrics
-        refs = _references(controller, t, nc) if plant.single_axis_maneuver else None
+        refs = _references(controller, t, nc) if axis is not None else None
         if refs is not None:
-            put("theta_ref", refs[0], "rad")
-            put("theta_dot_ref", refs[1], "rad/s")
+            put(f"{axis.angle}_ref", refs[0], "rad")
+            put(f"{axis.rate}_ref", refs[1], "rad/s")
         self.disturbed -= self.applied  # the loop is over: keep the disturbance alone
         for ch, sl in plant.input_slices.items():
             unit = next(c.unit for c in plant.inputs if c.name == ch)
@@ -212,7 +213,7 @@ class Recorder:
         if self.states is not None:
             data["state"] = (("case", "time", "state_index"), np.swapaxes(self.states, 0, 1), {})
         histories = {k: v[1] for k, v in data.items()}
-        metrics = _metrics(histories, t, controller, theta0, config, refs, nc)
+        metrics = _metrics(histories, axis, t, controller, theta0, config, refs, nc)
         units = METRIC_UNITS
         if not metrics:  # not a single-axis maneuver: the summary of every channel
             target = getattr(controller, "beta_target", None)
@@ -242,8 +243,9 @@ def _size(channels, name: str) -> int:
 
 
 def _references(controller, t, nc):
-    """(θ_ref, θ'_ref) on the sample grid, (n_t, n_cases), or None for a law without them."""
-    if not hasattr(controller, "reference_at"):
+    """(θ_ref, θ'_ref) on the sample grid, (n_t, n_cases), or None for a law without them (no
+    ``target`` for the maneuver angle: a state-space compensator, a scheduled gain)."""
+    if not hasattr(controller, "reference_at") or not hasattr(controller, "target"):
         return None
     table = getattr(controller, "_table", None)
     if table is not None and len(table[0]) == len(t) and np.array_equal(table[0], t):
@@ -257,10 +259,13 @@ def _references(controller, t, nc):
     return th, thd
 
 
-def _metrics(ds: dict, t, controller, theta0, config, refs, nc) -> dict:
-    """The single-axis maneuver metrics from the (case, time) histories ``ds``, for a plant
-    with those histories (else none)."""
-    need = ("theta", "theta_dot", "torque", "tip_deflection", "vibration_energy")
+def _metrics(ds: dict, axis, t, controller, theta0, config, refs, nc) -> dict:
+    """The single-axis maneuver metrics from the (case, time) histories ``ds`` of the channels
+    ``axis`` (:class:`~flexsat.dynamics.plant.ManeuverChannels`) names, for a plant with those
+    histories (else none)."""
+    if axis is None:
+        return {}
+    need = (axis.angle, axis.rate, axis.torque, axis.deflection, "vibration_energy")
     if refs is None or theta0 is None or not all(k in ds and ds[k].ndim == 2 for k in need):
         return {}
     target = np.broadcast_to(np.asarray(controller.target, float), (nc,))
@@ -272,11 +277,11 @@ def _metrics(ds: dict, t, controller, theta0, config, refs, nc) -> dict:
         blocks.append(
             maneuver_metrics(
                 t,
-                ds["theta"][c],
-                ds["theta_dot"][c],
+                ds[axis.angle][c],
+                ds[axis.rate][c],
                 refs[1].T[c],
-                ds["torque"][c],
-                ds["tip_deflection"][c],
+                ds[axis.torque][c],
+                ds[axis.deflection][c],
                 ds["vibration_energy"][c],
                 theta0[c],
                 target[c],
