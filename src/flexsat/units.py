@@ -2,24 +2,24 @@
 
 Published values are entered as published (oz-in-s, lbf, deg) and converted here with pint, so
 the conversion factor is never typed by hand. Every public input that carries a physical number
-goes through :func:`to_si_array` (arrays) or :func:`to_si` (scalars): a float is taken in the
-field's unit, a pint Quantity or a unit string is converted, and anything else is a
+goes through :func:`to_si_array` (arrays) or :func:`to_si` (scalars), the one boundary helper:
+a plain number or array is already SI and passes through unchanged (only checked to be real), a
+pint Quantity or a unit string is converted to the field's SI unit, and anything else is a
 :class:`UnitError` naming the field.
+
+pint is imported on first need only, when a Quantity or a unit string is actually given (or
+:data:`ureg` / :data:`Q_` is asked for): a run fed SI numbers never loads it, and the layers
+below ``cases`` and ``scenarios`` import no pint of their own (tests/test_units_lazy.py).
 """
 
 from __future__ import annotations
 
 import functools
 import math
+import sys
 from tokenize import NUMBER
 
 import numpy as np
-import pint
-from pint.pint_eval import build_eval_tree, tokenizer
-from pint.util import string_preprocessor
-
-ureg = pint.UnitRegistry()
-Q_ = ureg.Quantity
 
 #: longest unit expression read; published values are short, and the bound keeps the parse (and
 #: every message quoting the text) small
@@ -29,20 +29,44 @@ MAX_EXPRESSION_LENGTH = 200
 MAX_UNIT_EXPONENT = 100
 
 
+@functools.cache
+def _registry():
+    """pint and the one unit registry, loaded on first use (about 0.3 s of import)."""
+    import pint
+
+    return pint, pint.UnitRegistry()
+
+
+def __getattr__(name: str):
+    """``ureg`` (the unit registry) and ``Q_`` (its Quantity class), loaded on first access."""
+    if name == "ureg":
+        return _registry()[1]
+    if name == "Q_":
+        return _registry()[1].Quantity
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _is_quantity(value) -> bool:
+    """A pint Quantity; without pint loaded no Quantity can exist, so pint is not imported."""
+    pint = sys.modules.get("pint")
+    return pint is not None and isinstance(value, pint.Quantity)
+
+
 class UnitError(ValueError):
     """A quantity has the wrong dimensionality or cannot be parsed."""
 
 
-def _angular(q: pint.Quantity) -> bool:
+def _angular(q) -> bool:
     """Whether ``q`` is an angle or an angular rate: its root units hold the radian (rad/s, deg/s,
     rpm = revolution/min, ...)."""
     return dict(q.to_root_units().unit_items()).get("radian", 0) != 0
 
 
-def _cyclic_to_angular(q: pint.Quantity, unit: str) -> pint.Quantity:
+def _cyclic_to_angular(q, unit: str):
     """pint treats the radian as dimensionless, so it would turn 1 Hz into 1 rad/s, and 60 rpm
     (2π rad/s) into 2π Hz. A cyclic frequency asked for in angular units, or an angular rate
     asked for in cyclic ones, is converted with its 2π here."""
+    Q_ = _registry()[1].Quantity
     wanted = Q_(1, unit)
     want_cyclic = "hertz" in str(wanted.units)
     given_cyclic = "hertz" in str(q.units)
@@ -62,17 +86,17 @@ def _number_or_unit(token):
         return float(text)
     if text.lower() in ("inf", "infinity", "nan"):
         return float(text)
-    return Q_(1.0, text)
+    return _registry()[1].Quantity(1.0, text)
 
 
 def _bounded_power(base, exponent):
     """``base ** exponent`` with a finite float exponent and unit exponents kept in bounds."""
-    if isinstance(exponent, pint.Quantity):
+    if _is_quantity(exponent):
         exponent = exponent.to("").magnitude
     exponent = float(exponent)
     if not math.isfinite(exponent):
         raise ValueError(f"the exponent {exponent} is not finite")
-    if isinstance(base, pint.Quantity):
+    if _is_quantity(base):
         worst = max((abs(p) for _, p in base.unit_items()), default=0) * abs(exponent)
         if worst > MAX_UNIT_EXPONENT:
             raise ValueError(f"a unit raised to the power {worst:g}; at most {MAX_UNIT_EXPONENT}")
@@ -89,7 +113,7 @@ _OPERATORS = {
 }
 
 
-def parse_quantity(text: str, field: str = "value") -> pint.Quantity:
+def parse_quantity(text: str, field: str = "value"):
     """Read a unit expression such as ``"400 ozf*in"`` with bounded cost.
 
     pint's own parser evaluates integer literals as Python ints, so ``"10**10**10 s"`` hangs and
@@ -109,13 +133,17 @@ def parse_quantity(text: str, field: str = "value") -> pint.Quantity:
         )
     if not text.strip():
         raise UnitError(f"{field}: empty string; give a number or a quantity such as '2 m'")
+    pint, ureg = _registry()
+    from pint.pint_eval import build_eval_tree, tokenizer
+    from pint.util import string_preprocessor
+
     try:
         expression = text
         for preprocess in ureg.preprocessors:
             expression = preprocess(expression)
         tree = build_eval_tree(tokenizer(string_preprocessor(expression)))
         value = tree.evaluate(_number_or_unit, _OPERATORS)
-        return value if isinstance(value, pint.Quantity) else Q_(value)
+        return value if isinstance(value, pint.Quantity) else ureg.Quantity(value)
     except Exception as exc:  # noqa: BLE001 - pint's parser raises a version-dependent mix
         # (TokenError, DefinitionSyntaxError, UndefinedUnitError, ZeroDivisionError,
         # OverflowError, DimensionalityError, AssertionError, ...) for malformed text
@@ -127,32 +155,33 @@ def parse_quantity(text: str, field: str = "value") -> pint.Quantity:
 def holds_quantity(value, strings: bool = False) -> bool:
     """A pint Quantity, or a list or tuple with one anywhere inside (or a string, if
     ``strings``): a value whose units would be lost by ``np.asarray(value, float)``."""
-    kinds = (pint.Quantity, str) if strings else pint.Quantity
-    if isinstance(value, kinds):
+    if _is_quantity(value) or (strings and isinstance(value, str)):
         return True
     return isinstance(value, (list, tuple)) and any(holds_quantity(v, strings) for v in value)
 
 
 @functools.lru_cache(maxsize=256)
-def _si_factor(unit: str) -> float:
+def si_factor(unit: str) -> float:
     """Factor from ``unit`` to the SI base units of its dimension (1 for an SI unit)."""
-    return float(Q_(1.0, unit).to_base_units().magnitude)
+    return float(_registry()[1].Quantity(1.0, unit).to_base_units().magnitude)
 
 
 def to_si_array(value, unit: str, field: str = "value") -> np.ndarray:
-    """Convert ``value`` to a float array in the SI base units of ``unit``'s dimension.
+    """``value`` as a float array in SI: the one boundary helper (see the module).
 
     Parameters
     ----------
     value : float, array_like, str or pint.Quantity
-        A number or an array without units is taken to be in ``unit``; a string such as
-        ``"400 ozf*in"`` (or ``"3"``, a number in ``unit``) or a Quantity (scalar or array) is
-        converted; a list may mix them. A dimensionless quantity with units (``"15 deg"``,
-        ``"100 percent"``) is accepted only where ``unit`` is dimensionless too (rad counts as
-        dimensionless, so ``"40 deg"`` reads as an angle). Cyclic and angular frequencies
-        (Hz, rad/s) convert with their 2π.
+        A number or an array without units is SI already and is returned as a float array,
+        unconverted (pint is not loaded). A string such as ``"400 ozf*in"`` (or ``"3"``, a
+        number in ``unit``) or a Quantity (scalar or array) is converted; a list may mix them.
+        A dimensionless quantity with units (``"15 deg"``, ``"100 percent"``) is accepted only
+        where ``unit`` is dimensionless too (rad counts as dimensionless, so ``"40 deg"`` reads
+        as an angle). Cyclic and angular frequencies (Hz, rad/s) convert with their 2π.
     unit : str
-        The field's unit, e.g. ``"N*m"`` (``""``: dimensionless).
+        The field's SI unit, e.g. ``"N*m"`` (``""``: dimensionless); a coherent SI unit, so a
+        plain number needs no factor (tests/test_units_lazy.py checks every unit declared in
+        the sources).
     field : str
         Name used in error messages.
 
@@ -172,11 +201,12 @@ def to_si_array(value, unit: str, field: str = "value") -> np.ndarray:
         if any(item.shape != items[0].shape for item in items):
             raise UnitError(f"{field}: the items of {_shown(value)} differ in shape")
         return np.array(items)
+    if not isinstance(value, str) and not _is_quantity(value):
+        return _real(value, value, unit, field)  # a plain number: SI, passed through
+    pint, ureg = _registry()
     q = parse_quantity(value, field) if isinstance(value, str) else value
-    if not isinstance(q, pint.Quantity) or q.units == ureg.dimensionless:
-        arr = _real(q.magnitude if isinstance(q, pint.Quantity) else q, value, unit, field)
-        factor = _si_factor(unit)
-        return arr if factor == 1.0 else arr * factor
+    if q.units == ureg.dimensionless:
+        return _real(q.magnitude, value, unit, field) * si_factor(unit)
     try:
         q = _cyclic_to_angular(q, unit)
         magnitude = q.to(unit).magnitude
@@ -189,7 +219,7 @@ def to_si_array(value, unit: str, field: str = "value") -> np.ndarray:
             f"{field}: cannot read {_shown(value)} as a quantity in "
             f"{unit or 'dimensionless'} ({exc})"
         ) from None
-    return _real(magnitude, value, unit, field) * _si_factor(unit)
+    return _real(magnitude, value, unit, field) * si_factor(unit)
 
 
 def _real(magnitude, value, unit: str, field: str) -> np.ndarray:
