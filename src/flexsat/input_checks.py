@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexsat.units import UnitError, holds_quantity, to_si_array
+from flexsat.units import FrequencyArray, UnitError, holds_quantity, to_si_array
 
 
 def _real(value, field: str, noun: str):
@@ -35,6 +35,8 @@ def _real(value, field: str, noun: str):
 
 def _plain_numbers(value, field: str) -> None:
     """Refuse a Quantity where no unit is declared: ``np.asarray`` would drop its unit."""
+    if isinstance(value, FrequencyArray):
+        value.si("", field)  # refused, naming its unit
     if holds_quantity(value):
         raise UnitError(
             f"{field}: takes a plain number here (no unit is declared for it), got a quantity "

@@ -56,6 +56,75 @@ class UnitError(ValueError):
     """A quantity has the wrong dimensionality or cannot be parsed."""
 
 
+#: the two units of a frequency that pint cannot tell apart (it calls the radian dimensionless)
+FREQUENCY_UNITS = ("Hz", "rad/s")
+
+
+class FrequencyArray(np.ndarray):
+    """Frequencies that carry their unit, cyclic ``"Hz"`` or angular ``"rad/s"``.
+
+    Hz and rad/s differ by 2π and share a dimension, so a plain array cannot say which it holds
+    (ERA's frequencies in Hz fed to a model update that expects rad/s scaled its stiffness by
+    1/(2π)² with no error). An identification result hands its frequencies out as this array;
+    the boundary helper (:func:`to_si_array`) passes it only where its own unit is declared and
+    refuses it, naming the field, anywhere else (another frequency unit, any other quantity, or
+    a field that declares no unit). Indexing and slicing keep the unit; arithmetic returns a
+    plain array, which is a number the caller has converted and vouches for.
+
+    Parameters
+    ----------
+    values : array_like
+        The frequencies.
+    unit : {"Hz", "rad/s"}
+    """
+
+    unit: str
+
+    def __new__(cls, values, unit: str):
+        if unit not in FREQUENCY_UNITS:
+            raise ValueError(f"unit: must be one of {list(FREQUENCY_UNITS)}, got {unit!r}")
+        arr = np.array(values, dtype=float).view(cls)
+        arr.unit = unit
+        return arr
+
+    def __array_finalize__(self, obj) -> None:
+        self.unit = getattr(obj, "unit", None)
+
+    def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
+        plain = [x.view(np.ndarray) if isinstance(x, FrequencyArray) else x for x in inputs]
+        if "out" in kwargs:
+            kwargs["out"] = tuple(
+                x.view(np.ndarray) if isinstance(x, FrequencyArray) else x for x in kwargs["out"]
+            )
+        return getattr(ufunc, method)(*plain, **kwargs)
+
+    def __reduce__(self):
+        return FrequencyArray, (self.view(np.ndarray), self.unit)
+
+    def __repr__(self) -> str:
+        return f"FrequencyArray({self.view(np.ndarray).tolist()!r}, unit={self.unit!r})"
+
+    def to(self, unit: str) -> FrequencyArray:
+        """The same frequencies in ``unit`` (ω = 2π f)."""
+        if unit not in FREQUENCY_UNITS:
+            raise ValueError(f"unit: must be one of {list(FREQUENCY_UNITS)}, got {unit!r}")
+        values = self.view(np.ndarray)
+        if unit != self.unit:
+            values = values * (2 * math.pi) if unit == "rad/s" else values / (2 * math.pi)
+        return FrequencyArray(values, unit)
+
+    def si(self, unit: str, field: str) -> np.ndarray:
+        """The plain values where the field declares ``unit``; refused (naming the field) unless
+        ``unit`` is this array's own unit."""
+        if unit != self.unit:
+            hint = f"; convert explicitly, e.g. .to({unit!r})" if unit in FREQUENCY_UNITS else ""
+            raise UnitError(
+                f"{field}: frequencies in {self.unit} given where "
+                f"{unit or 'a plain number'} is expected{hint}"
+            )
+        return np.array(self.view(np.ndarray), dtype=float)
+
+
 def _angular(q) -> bool:
     """Whether ``q`` is an angle or an angular rate: its root units hold the radian (rad/s, deg/s,
     rpm = revolution/min, ...)."""
@@ -153,9 +222,12 @@ def parse_quantity(text: str, field: str = "value"):
 
 
 def holds_quantity(value, strings: bool = False) -> bool:
-    """A pint Quantity, or a list or tuple with one anywhere inside (or a string, if
-    ``strings``): a value whose units would be lost by ``np.asarray(value, float)``."""
-    if _is_quantity(value) or (strings and isinstance(value, str)):
+    """A pint Quantity or a :class:`FrequencyArray`, or a list or tuple with one anywhere inside
+    (or a string, if ``strings``): a value whose units would be lost by
+    ``np.asarray(value, float)``."""
+    if _is_quantity(value) or isinstance(value, FrequencyArray):
+        return True
+    if strings and isinstance(value, str):
         return True
     return isinstance(value, (list, tuple)) and any(holds_quantity(v, strings) for v in value)
 
@@ -201,6 +273,8 @@ def to_si_array(value, unit: str, field: str = "value") -> np.ndarray:
         if any(item.shape != items[0].shape for item in items):
             raise UnitError(f"{field}: the items of {_shown(value)} differ in shape")
         return np.array(items)
+    if isinstance(value, FrequencyArray):
+        return value.si(unit, field)
     if not isinstance(value, str) and not _is_quantity(value):
         return _real(value, value, unit, field)  # a plain number: SI, passed through
     pint, ureg = _registry()

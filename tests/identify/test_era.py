@@ -68,7 +68,7 @@ def test_era_noise_free_exact(grid, sensors, true_shapes):
     assert Y.shape == (meas.abscissa.size, 20, 1)
     res = era(Y, dt=meas.dt, reference_shapes=true_shapes)  # order found from the SV drop
     assert res.order == 12
-    assert np.allclose(res.frequencies, grid.frequencies_hz, rtol=1e-10)
+    assert np.allclose(res.frequencies_hz, grid.frequencies_hz, rtol=1e-10)
     assert np.allclose(res.damping, 0.01, rtol=1e-8)
     assert np.all(res.mac > 1 - 1e-10)
     assert np.all(res.emac > 0.99) and np.all(res.mpc > 1 - 1e-8)
@@ -79,12 +79,12 @@ def test_era_one_percent_noise(grid, sensors, true_shapes):
     """Acceptance: 1 % noise, frequencies within 0.1 %, damping within 10 %, MAC > 0.99."""
     meas = _impulse(grid, sensors, 0.01, seed=3)
     res = era(markov_parameters(meas), dt=meas.dt, order=12, reference_shapes=true_shapes)
-    assert np.all(np.abs(res.frequencies / grid.frequencies_hz - 1) < 1e-3)
+    assert np.all(np.abs(res.frequencies_hz / grid.frequencies_hz - 1) < 1e-3)
     assert np.all(np.abs(res.damping / 0.01 - 1) < 0.10)
     assert np.all(res.mac > 0.99)
     assert np.all(res.emac > 0.9) and np.all(res.mpc > 0.99)
     # perturbation uncertainty: positive, and the damping errors lie within 3σ
-    assert np.all(res.frequency_std > 0) and np.all(res.damping_std > 0)
+    assert np.all(res.frequency_std_hz > 0) and np.all(res.damping_std > 0)
     assert np.all(np.abs(res.damping - 0.01) < 3 * res.damping_std)
 
 
@@ -92,7 +92,7 @@ def test_era_dc_one_percent_noise(grid, sensors, true_shapes):
     meas = _impulse(grid, sensors, 0.01, seed=5)
     res = era_dc(markov_parameters(meas), dt=meas.dt, order=12, reference_shapes=true_shapes)
     assert res.extra["method"] == "ERA/DC"
-    assert np.all(np.abs(res.frequencies / grid.frequencies_hz - 1) < 1e-3)
+    assert np.all(np.abs(res.frequencies_hz / grid.frequencies_hz - 1) < 1e-3)
     assert np.all(np.abs(res.damping / 0.01 - 1) < 0.10)
     assert np.all(res.mac > 0.99)
 
@@ -108,7 +108,7 @@ def test_okid_recovers_markov_parameters(grid):
     ref = _discrete_markov(grid, out, [e.channel for e in ex], meas.dt, 60)
     assert np.max(np.abs(Y - ref)) < 1e-8 * np.max(np.abs(ref))
     res = era(Y, dt=meas.dt, order=12)
-    assert np.allclose(res.frequencies, grid.frequencies_hz, rtol=1e-8)
+    assert np.allclose(res.frequencies_hz, grid.frequencies_hz, rtol=1e-8)
 
 
 def test_markov_from_longer_pulse(grid):
@@ -191,7 +191,7 @@ def test_era_from_exact_discrete_frf(grid, sensors, true_shapes):
     ref = _discrete_markov(grid, sensors, inp, dt, Y.shape[0] - 1)
     assert np.max(np.abs(Y - ref)) < 1e-9 * np.max(np.abs(ref))
     res = era(Y, dt=dt, order=12, reference_shapes=true_shapes)
-    assert np.allclose(res.frequencies, grid.frequencies_hz, rtol=1e-12, atol=0)
+    assert np.allclose(res.frequencies_hz, grid.frequencies_hz, rtol=1e-12, atol=0)
     assert np.allclose(res.damping, 0.01, rtol=1e-9, atol=0)
     assert np.all(res.mac > 1 - 1e-12)
 
@@ -206,7 +206,7 @@ def test_era_survives_time_aliasing_of_an_exact_discrete_frf(grid, sensors):
     with pytest.warns(UserWarning, match="^frf: the impulse response has not decayed"):
         Y, dt = markov_from_frf(freqs, H)
     res = era(Y, dt=dt, order=12)
-    assert np.allclose(res.frequencies, grid.frequencies_hz, rtol=1e-12, atol=0)
+    assert np.allclose(res.frequencies_hz, grid.frequencies_hz, rtol=1e-12, atol=0)
     assert np.allclose(res.damping, 0.01, rtol=1e-9, atol=0)
 
 
@@ -230,11 +230,11 @@ def test_era_from_continuous_frf(grid, sensors, true_shapes):
     Y, dt = markov_from_frf(freqs, H)
     for method in (era, era_dc):
         res = method(Y, dt=dt, order=12, reference_shapes=true_shapes)
-        assert np.all(np.abs(res.frequencies / grid.frequencies_hz - 1) < 1e-4), method
+        assert np.all(np.abs(res.frequencies_hz / grid.frequencies_hz - 1) < 1e-4), method
         assert np.all(np.abs(res.damping / 0.01 - 1) < 0.01), method
         assert np.all(res.mac > 1 - 1e-6), method
     late = era(Y[20:], dt=dt, order=12)
-    assert np.all(np.abs(late.frequencies / grid.frequencies_hz - 1) < 1e-6)
+    assert np.all(np.abs(late.frequencies_hz / grid.frequencies_hz - 1) < 1e-6)
     assert np.all(np.abs(late.damping / 0.01 - 1) < 1e-4)
 
 
@@ -269,19 +269,19 @@ def test_bootstrap_uncertainty_matches_the_scatter_over_noise_seeds(grid, sensor
     f_err, z_err = [], []
     for seed in range(12):
         real = era(markov_parameters(_impulse(grid, sensors, 0.02, seed)), dt=1 / RATE, order=12)
-        order = np.argsort(real.frequencies)
-        f_err.append(real.frequencies[order] - f_true)
+        order = np.argsort(real.frequencies_hz)
+        f_err.append(real.frequencies_hz[order] - f_true)
         z_err.append(real.damping[order] - grid.damping)
     f_err, z_err = np.array(f_err), np.array(z_err)
     Y = markov_parameters(_impulse(grid, sensors, 0.02, 100))
     real = era(Y, dt=1 / RATE, order=12)
     boot = bootstrap_uncertainty(real, Y, n_samples=20, seed=0)
-    order = np.argsort(boot.frequencies)
+    order = np.argsort(boot.frequencies_hz)
     assert boot.extra["uncertainty"] == "bootstrap" and boot.extra["bootstrap_samples"] == 20
-    for est, err in ((boot.frequency_std[order], f_err), (boot.damping_std[order], z_err)):
+    for est, err in ((boot.frequency_std_hz[order], f_err), (boot.damping_std[order], z_err)):
         ratio = est / err.std(axis=0, ddof=1)
         assert np.all((ratio > 0.5) & (ratio < 2.0))
-    assert np.all(real.frequency_std > boot.frequency_std)
+    assert np.all(real.frequency_std_hz > boot.frequency_std_hz)
     mean, sem = z_err.mean(axis=0), z_err.std(axis=0, ddof=1) / np.sqrt(12)
     significant = mean > 3 * sem
     assert significant.sum() >= 3
