@@ -34,7 +34,7 @@ def grid():
 
 @pytest.fixture(scope="module")
 def sensors():
-    return [Channel("displacement", n, "z") for n in NODES]
+    return [Channel.at("displacement", n, "z") for n in NODES]
 
 
 @pytest.fixture(scope="module")
@@ -99,8 +99,8 @@ def test_era_dc_one_percent_noise(grid, sensors, true_shapes):
 
 def test_okid_recovers_markov_parameters(grid):
     """Noise-free random force and reaction-wheel torque: OKID Markov parameters to 1e-8."""
-    out = [Channel("displacement", n, "z") for n in (1, 5, 9, 13)]
-    out.append(Channel("acceleration", 3, "z"))
+    out = [Channel.at("displacement", n, "z") for n in (1, 5, 9, 13)]
+    out.append(Channel.at("acceleration", 3, "z"))
     torque = np.random.default_rng(3).standard_normal(500)
     ex = [random_force(1, "z"), torque_history(7, "x", torque)]
     meas = simulate_test(grid, ex, out, 10.0, RATE, seed=2)
@@ -113,7 +113,7 @@ def test_okid_recovers_markov_parameters(grid):
 
 def test_markov_from_longer_pulse(grid):
     """A half-sine hammer spanning two samples is deconvolved by least squares."""
-    out = [Channel("displacement", 1, "z")]
+    out = [Channel.at("displacement", 1, "z")]
     meas = simulate_test(grid, impulse_hammer(2, "z", 5.0, width=0.03), out, 4.0, RATE)
     n = meas.abscissa.size - 1
     Y = markov_parameters(meas, n_markov=n)
@@ -182,7 +182,7 @@ def test_era_from_exact_discrete_frf(grid, sensors, true_shapes):
     then exact to roundoff: measured 2e-15 in frequency, 2e-12 in damping, held to 1e-12 and
     1e-9 (room for other LAPACK builds)."""
     freqs = _frf_grid(FRF_RATE, FRF_PERIOD)
-    inp = [Channel("force", 1, "z")]
+    inp = [Channel.at("force", 1, "z")]
     H = _discrete_frf(grid, sensors, inp, 1 / FRF_RATE, freqs)
     meas = Measurement(freqs, H, tuple(sensors), None, tuple(inp), "frequency")
     Y, dt = markov_from_frf(meas.abscissa, meas.outputs)
@@ -201,7 +201,7 @@ def test_era_survives_time_aliasing_of_an_exact_discrete_frf(grid, sensors):
     C A^(k-1) (I - A^N)^-1 B has the same A, so ERA is still exact to roundoff (measured 1e-14
     and 6e-13; tolerances as in the test above)."""
     freqs = _frf_grid(FRF_RATE, 10.0)
-    inp = [Channel("force", 1, "z")]
+    inp = [Channel.at("force", 1, "z")]
     H = _discrete_frf(grid, sensors, inp, 1 / FRF_RATE, freqs)
     with pytest.warns(UserWarning, match="^frf: the impulse response has not decayed"):
         Y, dt = markov_from_frf(freqs, H)

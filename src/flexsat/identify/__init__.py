@@ -27,7 +27,7 @@ from flexsat.identify.excitation import (
     simulate_test,
     torque_history,
 )
-from flexsat.identify.measurements import CHANNEL_KINDS, Channel, Measurement
+from flexsat.identify.measurements import STRUCTURAL_KINDS, Channel, Measurement, uff_direction
 from flexsat.identify.photogrammetry import (
     CalibrationResult,
     Camera,
@@ -47,7 +47,8 @@ from flexsat.identify.structural import (
 )
 
 __all__ = [
-    "CHANNEL_KINDS",
+    "STRUCTURAL_KINDS",
+    "uff_direction",
     "CalibrationResult",
     "Camera",
     "Channel",

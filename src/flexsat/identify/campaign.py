@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexsat.dynamics.plant import Channel
 from flexsat.identify.differential_correction import CorrectionData, differential_correction
 from flexsat.identify.era import (
     Realization,
@@ -47,7 +48,7 @@ from flexsat.identify.era import (
     okid,
 )
 from flexsat.identify.excitation import impulse_hammer, random_force, simulate_test
-from flexsat.identify.measurements import Channel, Measurement
+from flexsat.identify.measurements import Measurement
 from flexsat.identify.photogrammetry import (
     CAMERA_PARAMETERS,
     Camera,
@@ -334,7 +335,7 @@ def _video_test(cfg, truth, rig, points0, calibration, rng):
     """Filmed free vibration: target z histories by triangulation with the calibrated cameras,
     relative to the calibrated rest positions of the targets."""
     cams, static_xyz = calibration.cameras, calibration.targets
-    z_chan = [Channel("displacement", int(n), "z") for n in cfg.targets]
+    z_chan = [Channel.at("displacement", int(n), "z") for n in cfg.targets]
     test = simulate_test(
         truth,
         _blow(cfg.hammer_node, cfg.hammer_direction, cfg.video_impulse, cfg.field_rate),
@@ -476,8 +477,8 @@ def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
         )
     rng = np.random.default_rng(cfg.seed)
     asm, truth = _true_modes(case, cfg)
-    gauges = [Channel("strain", int(b), ax, node_a=int(a)) for a, b, ax in cfg.strain_gauges]
-    accels = [Channel("acceleration", int(n), d) for n, d in cfg.accelerometers]
+    gauges = [Channel.at("strain", int(b), ax, node_a=int(a)) for a, b, ax in cfg.strain_gauges]
+    accels = [Channel.at("acceleration", int(n), d) for n, d in cfg.accelerometers]
     blow = _blow(cfg.hammer_node, cfg.hammer_direction, cfg.hammer_impulse, cfg.sample_rate)
     say(SIMULATE_STEPS[0])
     hammer = simulate_test(
