@@ -68,11 +68,12 @@ def test_layers_below_the_boundary_do_not_import_pint(package):
 
 
 def test_an_si_only_run_never_loads_pint():
-    """Import every layer below the boundary, build a hub + appendage plant and a PD law from SI
-    floats and simulate: flexsat never imports pint nor builds its unit registry. (xarray, when
-    pint is installed, imports it itself to recognise pint arrays as it builds the result
-    Dataset: the importer of record is reported and must be xarray's, never a flexsat module.)
-    The same script given one unit string loads pint from flexsat.units, so the check can fail.
+    """Import every module of every layer below the boundary, build a hub + appendage plant
+    and a PD law from SI floats and simulate: flexsat never imports pint nor builds its unit
+    registry. (xarray, when pint is installed, imports it itself to recognise pint arrays as it
+    builds the result Dataset: the importer of record is reported and must be xarray's, never
+    a flexsat module.) The same script given one unit string loads pint from flexsat.units,
+    so the check can fail.
     """
     script = textwrap.dedent(
         """
@@ -89,10 +90,14 @@ def test_an_si_only_run_never_loads_pint():
                 return None
 
         sys.meta_path.insert(0, Watch())
+        import importlib, pkgutil
         import numpy as np
-        import flexsat.structures, flexsat.analysis, flexsat.dynamics, flexsat.maneuvers
-        import flexsat.control, flexsat.identify, flexsat.attitude, flexsat.sim, flexsat.design
         from flexsat import units
+
+        for name in sys.argv[2:]:  # every module of every layer below the boundary
+            package = importlib.import_module(f"flexsat.{name}")
+            for info in pkgutil.walk_packages(package.__path__, f"flexsat.{name}."):
+                importlib.import_module(info.name)
         from flexsat.control.pd import PD
         from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
         from flexsat.sim.engine import SimConfig, simulate
@@ -109,7 +114,7 @@ def test_an_si_only_run_never_loads_pint():
 
     def run(length: str) -> tuple[str, str]:
         done = subprocess.run(
-            [sys.executable, "-c", script, length],
+            [sys.executable, "-c", script, length, *BELOW_BOUNDARY],
             capture_output=True,
             text=True,
             check=False,
