@@ -161,3 +161,58 @@ def test_every_declared_unit_is_coherent_si():
     wrong = {u: where for u, where in declared.items() if si_factor(u) != 1.0}
     assert not wrong, f"units that are not coherent SI: {wrong}"
     assert si_factor("deg") != 1.0 and Q_(1, "kHz").to_base_units().magnitude == 1000.0
+
+
+def _count_parses(monkeypatch) -> list[tuple[str, str]]:
+    """(field, text) of every value that goes through pint's parser from now on."""
+    from flexsat import units
+
+    fields: list[tuple[str, str]] = []
+    parse = units.parse_quantity
+
+    def counting(text, field="value"):
+        fields.append((field, text))
+        return parse(text, field)
+
+    monkeypatch.setattr(units, "parse_quantity", counting)
+    return fields
+
+
+def _forbid_registry(monkeypatch) -> None:
+    """From now on, any use of pint by flexsat.units fails the test."""
+    from flexsat import units
+
+    def refuse():
+        raise AssertionError("a plain SI number reached the unit registry")
+
+    monkeypatch.setattr(units, "_registry", refuse)
+
+
+def test_a_number_from_a_case_file_is_converted_once_on_its_way_to_the_kernel(monkeypatch):
+    """``hub_inertia`` read as published is converted by the case (cases/inputs.py); the
+    dynamics layer (HubAppendageParams) takes the SI float the case hands it and passes it
+    through without touching pint (before, it looked its unit up again)."""
+    from flexsat.cases.tamu import tamu
+    from flexsat.dynamics.hub_appendage import HubAppendageParams
+
+    parsed = _count_parses(monkeypatch)
+    case = tamu(hub_inertia="30 ozf*in*s**2")
+    # (the builder also reads the published default once, for its reference inertia)
+    assert parsed.count(("hub_inertia", "30 ozf*in*s**2")) == 1
+    expected = 30 * 0.028349523125 * 9.80665 * 0.0254  # ozf·in·s² in kg·m²: all exact factors
+    assert case.hub_inertia == pytest.approx(expected, rel=1e-15)
+    _forbid_registry(monkeypatch)
+    params = case.params
+    assert isinstance(params, HubAppendageParams) and params.hub_inertia == case.hub_inertia
+
+
+def test_a_duration_from_a_scenario_is_converted_once_on_its_way_to_the_engine(monkeypatch):
+    """``duration: "15 s"`` is converted by the scenario field; SimConfig takes the float."""
+    from flexsat.scenarios.maneuver import SimulationSpec
+
+    parsed = _count_parses(monkeypatch)
+    spec = SimulationSpec(duration="1.5 min", control_rate="75 Hz", settling_band="0.5 deg")
+    assert parsed.count(("duration", "1.5 min")) == 1 and spec.duration == 90.0
+    _forbid_registry(monkeypatch)
+    config = spec.build()
+    assert config.duration == 90.0 and config.control_rate == 75.0
