@@ -15,6 +15,8 @@ round-off (mass-proportional damping: |s| = ω_n), and
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -69,6 +71,9 @@ def test_era_frequencies_in_hz_are_refused_where_rad_s_is_due():
     # and the other way round: rad/s where a grid in Hz is due
     with pytest.raises(UnitError, match=r"^frequencies: frequencies in rad/s given where Hz"):
         markov_from_frf(FrequencyArray([0.0, 1.0, 2.0], "rad/s"), np.ones((1, 1, 3)))
+    # a realization keeps its frequencies in Hz: rad/s values are refused, not relabelled
+    with pytest.raises(UnitError, match=r"^frequencies_hz: frequencies in rad/s given where Hz"):
+        dataclasses.replace(real, frequencies_hz=real.omega_rad_s)
     # a field that declares no unit refuses a tagged array too (its unit would be dropped)
     with pytest.raises(UnitError, match=r"^p0: frequencies in Hz given where a plain number"):
         update_model(model, real.omega_rad_s, p0=real.frequencies_hz[:2])

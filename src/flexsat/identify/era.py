@@ -85,7 +85,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexsat.input_checks import require_count, require_finite, require_positive
-from flexsat.units import FrequencyArray
+from flexsat.units import FrequencyArray, to_si_array
 
 __all__ = [
     "Realization",
@@ -454,10 +454,12 @@ class Realization:
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        object.__setattr__(self, "frequencies_hz", FrequencyArray(self.frequencies_hz, "Hz"))
-        if self.frequency_std_hz is not None:
-            std = FrequencyArray(self.frequency_std_hz, "Hz")
-            object.__setattr__(self, "frequency_std_hz", std)
+        # tagged Hz; values tagged rad/s are refused rather than relabelled
+        for name in ("frequencies_hz", "frequency_std_hz"):
+            value = getattr(self, name)
+            if value is not None:
+                hz = FrequencyArray(to_si_array(value, "Hz", name), "Hz")
+                object.__setattr__(self, name, hz)
 
     @property
     def omega_rad_s(self) -> FrequencyArray:
