@@ -14,7 +14,14 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.units import FloatArray, QuantityArrayLike, UnitError, holds_quantity, to_si_array
+from flexsat.units import (
+    FloatArray,
+    FrequencyArray,
+    QuantityArrayLike,
+    UnitError,
+    holds_quantity,
+    to_si_array,
+)
 
 
 def _real(value: Any, field: str, noun: str) -> Any:
@@ -39,6 +46,8 @@ def _real(value: Any, field: str, noun: str) -> Any:
 
 def _plain_numbers(value: object, field: str) -> None:
     """Refuse a Quantity where no unit is declared: ``np.asarray`` would drop its unit."""
+    if isinstance(value, FrequencyArray):
+        value.si("", field)  # refused, naming its unit
     if holds_quantity(value):
         raise UnitError(
             f"{field}: takes a plain number here (no unit is declared for it), got a quantity "

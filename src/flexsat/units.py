@@ -2,37 +2,41 @@
 
 Published values are entered as published (oz-in-s, lbf, deg) and converted here with pint, so
 the conversion factor is never typed by hand. Every public input that carries a physical number
-goes through :func:`to_si_array` (arrays) or :func:`to_si` (scalars): a float is taken in the
-field's unit, a pint Quantity or a unit string is converted, and anything else is a
+goes through :func:`to_si_array` (arrays) or :func:`to_si` (scalars), the one boundary helper:
+a plain number or array is already SI and passes through unchanged (only checked to be real), a
+pint Quantity or a unit string is converted to the field's SI unit, and anything else is a
 :class:`UnitError` naming the field.
+
+pint is imported on first need only, when a Quantity or a unit string is actually given (or
+:data:`ureg` / :data:`Q_` is asked for): a run fed SI numbers never loads it, and the layers
+below ``cases`` and ``scenarios`` import no pint of their own (tests/test_units_lazy.py).
 """
 
 from __future__ import annotations
 
 import functools
 import math
+import sys
 from collections.abc import Callable
 from tokenize import NUMBER, TokenInfo
-from typing import Any, TypeAlias
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
-import pint
-from pint.pint_eval import build_eval_tree, tokenizer
-from pint.util import string_preprocessor
 
-ureg: pint.UnitRegistry[Any] = pint.UnitRegistry()
-Q_ = ureg.Quantity
+if TYPE_CHECKING:
+    import pint
 
+# the aliases are strings so that pint is imported only by the type checker
 #: a pint quantity of any magnitude (a float or an array)
-Quantity: TypeAlias = pint.Quantity[Any]
+Quantity: TypeAlias = "pint.Quantity[Any]"
 #: a scalar physical input at the boundary: a number in the field's unit, a unit string such as
 #: ``"400 ozf*in"`` or a pint Quantity (converted by :func:`to_si`)
-QuantityLike: TypeAlias = float | str | Quantity
+QuantityLike: TypeAlias = "float | str | pint.Quantity[Any]"
 #: an array physical input at the boundary: anything :func:`to_si_array` reads -- a number, an
 #: array or nested list in the field's unit, a unit string, a Quantity (scalar or array), or a
 #: list mixing them
-QuantityArrayLike: TypeAlias = npt.ArrayLike | Quantity
+QuantityArrayLike: TypeAlias = "npt.ArrayLike | pint.Quantity[Any]"
 #: a float array in SI units, what every check and conversion here returns
 FloatArray: TypeAlias = npt.NDArray[np.float64]
 
@@ -44,8 +48,100 @@ MAX_EXPRESSION_LENGTH = 200
 MAX_UNIT_EXPONENT = 100
 
 
+@functools.cache
+def _registry() -> tuple[Any, Any]:
+    """pint and the one unit registry, loaded on first use (about 0.3 s of import)."""
+    import pint
+
+    return pint, pint.UnitRegistry()
+
+
+def __getattr__(name: str) -> Any:
+    """``ureg`` (the unit registry) and ``Q_`` (its Quantity class), loaded on first access."""
+    if name == "ureg":
+        return _registry()[1]
+    if name == "Q_":
+        return _registry()[1].Quantity
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _is_quantity(value: object) -> bool:
+    """A pint Quantity; without pint loaded no Quantity can exist, so pint is not imported."""
+    pint = sys.modules.get("pint")
+    return pint is not None and isinstance(value, pint.Quantity)
+
+
 class UnitError(ValueError):
     """A quantity has the wrong dimensionality or cannot be parsed."""
+
+
+#: the two units of a frequency that pint cannot tell apart (it calls the radian dimensionless)
+FREQUENCY_UNITS = ("Hz", "rad/s")
+
+
+class FrequencyArray(np.ndarray):
+    """Frequencies that carry their unit, cyclic ``"Hz"`` or angular ``"rad/s"``.
+
+    Hz and rad/s differ by 2π and share a dimension, so a plain array cannot say which it holds
+    (ERA's frequencies in Hz fed to a model update that expects rad/s scaled its stiffness by
+    1/(2π)² with no error). An identification result hands its frequencies out as this array;
+    the boundary helper (:func:`to_si_array`) passes it only where its own unit is declared and
+    refuses it, naming the field, anywhere else (another frequency unit, any other quantity, or
+    a field that declares no unit). Indexing and slicing keep the unit; arithmetic returns a
+    plain array, which is a number the caller has converted and vouches for.
+
+    Parameters
+    ----------
+    values : array_like
+        The frequencies.
+    unit : {"Hz", "rad/s"}
+    """
+
+    unit: str | None
+
+    def __new__(cls, values: npt.ArrayLike, unit: str) -> FrequencyArray:
+        if unit not in FREQUENCY_UNITS:
+            raise ValueError(f"unit: must be one of {list(FREQUENCY_UNITS)}, got {unit!r}")
+        arr = np.array(values, dtype=float).view(cls)
+        arr.unit = unit
+        return arr
+
+    def __array_finalize__(self, obj: object) -> None:
+        self.unit = getattr(obj, "unit", None)
+
+    def __array_ufunc__(self, ufunc: Any, method: str, *inputs: Any, **kwargs: Any) -> Any:
+        plain = [x.view(np.ndarray) if isinstance(x, FrequencyArray) else x for x in inputs]
+        if "out" in kwargs:
+            kwargs["out"] = tuple(
+                x.view(np.ndarray) if isinstance(x, FrequencyArray) else x for x in kwargs["out"]
+            )
+        return getattr(ufunc, method)(*plain, **kwargs)
+
+    def __reduce__(self) -> tuple[type[FrequencyArray], tuple[np.ndarray, str | None]]:
+        return FrequencyArray, (self.view(np.ndarray), self.unit)
+
+    def __repr__(self) -> str:
+        return f"FrequencyArray({self.view(np.ndarray).tolist()!r}, unit={self.unit!r})"
+
+    def to(self, unit: str) -> FrequencyArray:
+        """The same frequencies in ``unit`` (ω = 2π f)."""
+        if unit not in FREQUENCY_UNITS:
+            raise ValueError(f"unit: must be one of {list(FREQUENCY_UNITS)}, got {unit!r}")
+        values = self.view(np.ndarray)
+        if unit != self.unit:
+            values = values * (2 * math.pi) if unit == "rad/s" else values / (2 * math.pi)
+        return FrequencyArray(values, unit)
+
+    def si(self, unit: str, field: str) -> np.ndarray:
+        """The plain values where the field declares ``unit``; refused (naming the field) unless
+        ``unit`` is this array's own unit."""
+        if unit != self.unit:
+            hint = f"; convert explicitly, e.g. .to({unit!r})" if unit in FREQUENCY_UNITS else ""
+            raise UnitError(
+                f"{field}: frequencies in {self.unit} given where "
+                f"{unit or 'a plain number'} is expected{hint}"
+            )
+        return np.array(self.view(np.ndarray), dtype=float)
 
 
 def _angular(q: Quantity) -> bool:
@@ -58,6 +154,7 @@ def _cyclic_to_angular(q: Quantity, unit: str) -> Quantity:
     """pint treats the radian as dimensionless, so it would turn 1 Hz into 1 rad/s, and 60 rpm
     (2π rad/s) into 2π Hz. A cyclic frequency asked for in angular units, or an angular rate
     asked for in cyclic ones, is converted with its 2π here."""
+    Q_ = _registry()[1].Quantity
     wanted = Q_(1, unit)
     want_cyclic = "hertz" in str(wanted.units)
     given_cyclic = "hertz" in str(q.units)
@@ -77,17 +174,17 @@ def _number_or_unit(token: TokenInfo) -> float | Quantity:
         return float(text)
     if text.lower() in ("inf", "infinity", "nan"):
         return float(text)
-    return Q_(1.0, text)
+    return _registry()[1].Quantity(1.0, text)
 
 
 def _bounded_power(base: Any, exponent: Any) -> Any:
     """``base ** exponent`` with a finite float exponent and unit exponents kept in bounds."""
-    if isinstance(exponent, pint.Quantity):
+    if _is_quantity(exponent):
         exponent = exponent.to("").magnitude
     exponent = float(exponent)
     if not math.isfinite(exponent):
         raise ValueError(f"the exponent {exponent} is not finite")
-    if isinstance(base, pint.Quantity):
+    if _is_quantity(base):
         worst = max((abs(complex(p)) for _, p in base.unit_items()), default=0.0) * abs(exponent)
         if worst > MAX_UNIT_EXPONENT:
             raise ValueError(f"a unit raised to the power {worst:g}; at most {MAX_UNIT_EXPONENT}")
@@ -124,13 +221,17 @@ def parse_quantity(text: str, field: str = "value") -> Quantity:
         )
     if not text.strip():
         raise UnitError(f"{field}: empty string; give a number or a quantity such as '2 m'")
+    pint, ureg = _registry()
+    from pint.pint_eval import build_eval_tree, tokenizer
+    from pint.util import string_preprocessor
+
     try:
         expression = text
         for preprocess in ureg.preprocessors:
             expression = preprocess(expression)
         tree = build_eval_tree(tokenizer(string_preprocessor(expression)))
         value = tree.evaluate(_number_or_unit, _OPERATORS)
-        return value if isinstance(value, pint.Quantity) else Q_(value)
+        return value if isinstance(value, pint.Quantity) else ureg.Quantity(value)
     except Exception as exc:  # noqa: BLE001 - pint's parser raises a version-dependent mix
         # (TokenError, DefinitionSyntaxError, UndefinedUnitError, ZeroDivisionError,
         # OverflowError, DimensionalityError, AssertionError, ...) for malformed text
@@ -140,34 +241,38 @@ def parse_quantity(text: str, field: str = "value") -> Quantity:
 
 
 def holds_quantity(value: object, strings: bool = False) -> bool:
-    """A pint Quantity, or a list or tuple with one anywhere inside (or a string, if
-    ``strings``): a value whose units would be lost by ``np.asarray(value, float)``."""
-    kinds = (pint.Quantity, str) if strings else pint.Quantity
-    if isinstance(value, kinds):
+    """A pint Quantity or a :class:`FrequencyArray`, or a list or tuple with one anywhere inside
+    (or a string, if ``strings``): a value whose units would be lost by
+    ``np.asarray(value, float)``."""
+    if _is_quantity(value) or isinstance(value, FrequencyArray):
+        return True
+    if strings and isinstance(value, str):
         return True
     return isinstance(value, (list, tuple)) and any(holds_quantity(v, strings) for v in value)
 
 
 @functools.lru_cache(maxsize=256)
-def _si_factor(unit: str) -> float:
+def si_factor(unit: str) -> float:
     """Factor from ``unit`` to the SI base units of its dimension (1 for an SI unit)."""
-    return float(Q_(1.0, unit).to_base_units().magnitude)
+    return float(_registry()[1].Quantity(1.0, unit).to_base_units().magnitude)
 
 
 def to_si_array(value: QuantityArrayLike, unit: str, field: str = "value") -> FloatArray:
-    """Convert ``value`` to a float array in the SI base units of ``unit``'s dimension.
+    """``value`` as a float array in SI: the one boundary helper (see the module).
 
     Parameters
     ----------
     value : float, array_like, str or pint.Quantity
-        A number or an array without units is taken to be in ``unit``; a string such as
-        ``"400 ozf*in"`` (or ``"3"``, a number in ``unit``) or a Quantity (scalar or array) is
-        converted; a list may mix them. A dimensionless quantity with units (``"15 deg"``,
-        ``"100 percent"``) is accepted only where ``unit`` is dimensionless too (rad counts as
-        dimensionless, so ``"40 deg"`` reads as an angle). Cyclic and angular frequencies
-        (Hz, rad/s) convert with their 2π.
+        A number or an array without units is SI already and is returned as a float array,
+        unconverted (pint is not loaded). A string such as ``"400 ozf*in"`` (or ``"3"``, a
+        number in ``unit``) or a Quantity (scalar or array) is converted; a list may mix them.
+        A dimensionless quantity with units (``"15 deg"``, ``"100 percent"``) is accepted only
+        where ``unit`` is dimensionless too (rad counts as dimensionless, so ``"40 deg"`` reads
+        as an angle). Cyclic and angular frequencies (Hz, rad/s) convert with their 2π.
     unit : str
-        The field's unit, e.g. ``"N*m"`` (``""``: dimensionless).
+        The field's SI unit, e.g. ``"N*m"`` (``""``: dimensionless); a coherent SI unit, so a
+        plain number needs no factor (tests/test_units_lazy.py checks every unit declared in
+        the sources).
     field : str
         Name used in error messages.
 
@@ -187,11 +292,14 @@ def to_si_array(value: QuantityArrayLike, unit: str, field: str = "value") -> Fl
         if any(item.shape != items[0].shape for item in items):
             raise UnitError(f"{field}: the items of {_shown(value)} differ in shape")
         return np.array(items)
-    q = parse_quantity(value, field) if isinstance(value, str) else value
-    if not isinstance(q, pint.Quantity) or q.units == ureg.dimensionless:
-        arr = _real(q.magnitude if isinstance(q, pint.Quantity) else q, value, unit, field)
-        factor = _si_factor(unit)
-        return arr if factor == 1.0 else arr * factor
+    if isinstance(value, FrequencyArray):
+        return value.si(unit, field)
+    if not isinstance(value, str) and not _is_quantity(value):
+        return _real(value, value, unit, field)  # a plain number: SI, passed through
+    pint, ureg = _registry()
+    q: Quantity = parse_quantity(value, field) if isinstance(value, str) else value  # type: ignore[assignment]
+    if q.units == ureg.dimensionless:
+        return _real(q.magnitude, value, unit, field) * si_factor(unit)
     try:
         q = _cyclic_to_angular(q, unit)
         magnitude = q.to(unit).magnitude
@@ -204,7 +312,7 @@ def to_si_array(value: QuantityArrayLike, unit: str, field: str = "value") -> Fl
             f"{field}: cannot read {_shown(value)} as a quantity in "
             f"{unit or 'dimensionless'} ({exc})"
         ) from None
-    return _real(magnitude, value, unit, field) * _si_factor(unit)
+    return _real(magnitude, value, unit, field) * si_factor(unit)
 
 
 def _real(magnitude: Any, value: object, unit: str, field: str) -> FloatArray:

@@ -306,21 +306,41 @@ def tamu():
 def test_tamu_kim_junkins_symmetric_configurations(tamu):
     model, cands, Cq = tamu
     score = kim_junkins_score(model, cands, Cq)
-    att6 = score(("3Y", "7X", "9X"))  # motor layout of Att. 6 (Fig. 1 = configuration 6?)
+    att6 = score(("3RY", "7RX", "9RX"))  # motor layout of Att. 6 (Fig. 1 = configuration 6?)
     assert 0 < att6 < 1
     # near the clamp the grid barely moves: the top row scores far below the bottom row
-    assert score(("16X", "18X", "20X")) < 0.5 * score(("1X", "3X", "5X"))
+    assert score(("16RX", "18RX", "20RX")) < 0.5 * score(("1RX", "3RX", "5RX"))
     # a mirror image scores almost alike: only the cross terms of symmetric and antisymmetric
     # modes in V_i differ, because the output (node 1) is not on the axis of symmetry
-    assert score(("1X",)) == pytest.approx(score(("5X",)), rel=1e-3)
+    assert score(("1RX",)) == pytest.approx(score(("5RX",)), rel=1e-3)
 
 
 def test_tamu_greedy_and_exchange_match_exhaustive(tamu):
     model, cands, Cq = tamu
-    sub = [k for k in cands if int(k[:-1]) <= 10]  # the two lower rows: 20 candidates
+    sub = [k for k in cands if int(k[:-2]) <= 10]  # the two lower rows: 20 candidates
     score = kim_junkins_score(model, cands, Cq)
     ex = exhaustive(sub, 3, score)
     gr, xc = greedy(sub, 3, score), exchange(sub, 3, score)
     assert ex.evaluations == math.comb(20, 3)
-    assert gr.selection == xc.selection == ex.selection == ("2X", "3X", "4X")
+    assert gr.selection == xc.selection == ex.selection == ("2RX", "3RX", "4RX")
     assert gr.evaluations < 0.1 * ex.evaluations
+
+
+def test_force_and_torque_candidates_at_one_node_are_both_kept_and_told_apart(tamu):
+    """A force along x and a torque about x at node 3 are two candidates (before, both were
+    "3X" and the second replaced the first without a word)."""
+    model = tamu[0]
+    both = actuator_candidates(model, (3, 7), ("x", "y"), kind=("force", "torque"))
+    assert len(both) == 8 and {"3X", "3RX", "7Y", "7RY"} <= set(both)
+    np.testing.assert_array_equal(both["3X"], model.force_input(3, "x"))
+    np.testing.assert_array_equal(both["3RX"], model.torque_input(3, "x"))
+    assert not np.allclose(both["3X"], both["3RX"])
+    forces = actuator_candidates(model, (3,), ("x",))
+    torques = actuator_candidates(model, (3,), ("x",), kind="torque")
+    assert set(forces).isdisjoint(torques)  # sets built apart merge without loss too
+    with pytest.raises(ValueError, match=r"^label: the force 3x and the torque 3x are both "):
+        actuator_candidates(
+            model, (3,), ("x",), ("force", "torque"), label=lambda k, n, a: f"{n}{a}"
+        )
+    with pytest.raises(ValueError, match=r"^kind: must be 'force', 'torque' or both"):
+        actuator_candidates(model, (3,), ("x",), kind=("force", "force"))

@@ -6,10 +6,11 @@ turning at orbit rate (Eq. 10), the filters' poles at kn (Eq. 12), the design di
 import numpy as np
 import pytest
 
+from flexsat.cases.space_station_cmg import PAPER_STATION
 from flexsat.control.lqr import lqr
 from flexsat.dynamics import space_station as ss
 
-DATA = ss.PAPER_STATION
+DATA = PAPER_STATION  # the published data, from the case
 I1, I2, I3 = DATA.inertia
 N = DATA.orbit_rate
 
@@ -75,14 +76,14 @@ def test_an_orbit_rate_roll_yaw_filter_is_not_controllable():
 
 def test_design_disturbance_is_eq_11_and_the_substitute_adds_its_stated_terms():
     t = np.linspace(0.0, DATA.period, 4001)
-    w = ss.design_disturbance(t) / ss.FT_LB
+    w = ss.design_disturbance(t, DATA) / ss.FT_LB
     np.testing.assert_allclose(w[0], [1.0, 4.0, 1.0], atol=1e-12)
     # the orbit mean is the bias (trapezoid on a periodic integrand: exact to round-off)
     mean = np.trapezoid(w, t, axis=0) / DATA.period
     np.testing.assert_allclose(mean, [1.0, 4.0, 1.0], atol=1e-9)
-    quarter = ss.design_disturbance(DATA.period / 4) / ss.FT_LB  # sin = 1, sin π = 0
+    quarter = ss.design_disturbance(DATA.period / 4, DATA) / ss.FT_LB  # sin = 1, sin π = 0
     np.testing.assert_allclose(quarter, [2.0, 6.0, 2.0], atol=1e-12)
-    aero = ss.aero_substitute(t, harmonic="0.5 lbf*ft", secular="1 lbf*ft") / ss.FT_LB
+    aero = ss.aero_substitute(t, DATA, harmonic="0.5 lbf*ft", secular="1 lbf*ft") / ss.FT_LB
     extra = aero - w
     np.testing.assert_allclose(
         extra[:, 0], 0.5 * (np.sin(3 * N * t) + np.sin(4 * N * t)), atol=1e-12
@@ -98,10 +99,18 @@ def test_design_disturbance_is_eq_11_and_the_substitute_adds_its_stated_terms():
         (lambda: ss.StationData((1.0, 2.0), 0.001, 1.0), "inertia: three principal moments"),
         (lambda: ss.StationData((1.0, 2.0, -3.0), 0.001, 1.0), r"inertia\[2\]: must be"),
         (lambda: ss.StationData((1.0, 2.0, 3.0), 0.0, 1.0), "orbit_rate: must be"),
-        (lambda: ss.aero_substitute(0.0, secular=-1.0), "harmonic, secular"),
-        (lambda: ss.design_disturbance(np.nan), "t: must be finite"),
+        (lambda: ss.aero_substitute(0.0, DATA, secular=-1.0), "harmonic, secular"),
+        (lambda: ss.design_disturbance(np.nan, DATA), "t: must be finite"),
     ],
 )
 def test_bad_input_is_named(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+def test_the_foot_pound_written_out_is_pints():
+    """FT_LB is written from the exact definitions (no unit registry at import): it equals
+    pint's lbf·ft to the one rounding of either product."""
+    from flexsat.units import to_si
+
+    assert ss.FT_LB == pytest.approx(to_si("1 lbf*ft", "N*m"), rel=2e-16)

@@ -34,7 +34,7 @@ def grid():
 
 @pytest.fixture(scope="module")
 def sensors():
-    return [Channel("displacement", n, "z") for n in NODES]
+    return [Channel.at("displacement", n, "z") for n in NODES]
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +68,7 @@ def test_era_noise_free_exact(grid, sensors, true_shapes):
     assert Y.shape == (meas.abscissa.size, 20, 1)
     res = era(Y, dt=meas.dt, reference_shapes=true_shapes)  # order found from the SV drop
     assert res.order == 12
-    assert np.allclose(res.frequencies, grid.frequencies_hz, rtol=1e-10)
+    assert np.allclose(res.frequencies_hz, grid.frequencies_hz, rtol=1e-10)
     assert np.allclose(res.damping, 0.01, rtol=1e-8)
     assert np.all(res.mac > 1 - 1e-10)
     assert np.all(res.emac > 0.99) and np.all(res.mpc > 1 - 1e-8)
@@ -79,12 +79,12 @@ def test_era_one_percent_noise(grid, sensors, true_shapes):
     """Acceptance: 1 % noise, frequencies within 0.1 %, damping within 10 %, MAC > 0.99."""
     meas = _impulse(grid, sensors, 0.01, seed=3)
     res = era(markov_parameters(meas), dt=meas.dt, order=12, reference_shapes=true_shapes)
-    assert np.all(np.abs(res.frequencies / grid.frequencies_hz - 1) < 1e-3)
+    assert np.all(np.abs(res.frequencies_hz / grid.frequencies_hz - 1) < 1e-3)
     assert np.all(np.abs(res.damping / 0.01 - 1) < 0.10)
     assert np.all(res.mac > 0.99)
     assert np.all(res.emac > 0.9) and np.all(res.mpc > 0.99)
     # perturbation uncertainty: positive, and the damping errors lie within 3σ
-    assert np.all(res.frequency_std > 0) and np.all(res.damping_std > 0)
+    assert np.all(res.frequency_std_hz > 0) and np.all(res.damping_std > 0)
     assert np.all(np.abs(res.damping - 0.01) < 3 * res.damping_std)
 
 
@@ -92,15 +92,15 @@ def test_era_dc_one_percent_noise(grid, sensors, true_shapes):
     meas = _impulse(grid, sensors, 0.01, seed=5)
     res = era_dc(markov_parameters(meas), dt=meas.dt, order=12, reference_shapes=true_shapes)
     assert res.extra["method"] == "ERA/DC"
-    assert np.all(np.abs(res.frequencies / grid.frequencies_hz - 1) < 1e-3)
+    assert np.all(np.abs(res.frequencies_hz / grid.frequencies_hz - 1) < 1e-3)
     assert np.all(np.abs(res.damping / 0.01 - 1) < 0.10)
     assert np.all(res.mac > 0.99)
 
 
 def test_okid_recovers_markov_parameters(grid):
     """Noise-free random force and reaction-wheel torque: OKID Markov parameters to 1e-8."""
-    out = [Channel("displacement", n, "z") for n in (1, 5, 9, 13)]
-    out.append(Channel("acceleration", 3, "z"))
+    out = [Channel.at("displacement", n, "z") for n in (1, 5, 9, 13)]
+    out.append(Channel.at("acceleration", 3, "z"))
     torque = np.random.default_rng(3).standard_normal(500)
     ex = [random_force(1, "z"), torque_history(7, "x", torque)]
     meas = simulate_test(grid, ex, out, 10.0, RATE, seed=2)
@@ -108,12 +108,12 @@ def test_okid_recovers_markov_parameters(grid):
     ref = _discrete_markov(grid, out, [e.channel for e in ex], meas.dt, 60)
     assert np.max(np.abs(Y - ref)) < 1e-8 * np.max(np.abs(ref))
     res = era(Y, dt=meas.dt, order=12)
-    assert np.allclose(res.frequencies, grid.frequencies_hz, rtol=1e-8)
+    assert np.allclose(res.frequencies_hz, grid.frequencies_hz, rtol=1e-8)
 
 
 def test_markov_from_longer_pulse(grid):
     """A half-sine hammer spanning two samples is deconvolved by least squares."""
-    out = [Channel("displacement", 1, "z")]
+    out = [Channel.at("displacement", 1, "z")]
     meas = simulate_test(grid, impulse_hammer(2, "z", 5.0, width=0.03), out, 4.0, RATE)
     n = meas.abscissa.size - 1
     Y = markov_parameters(meas, n_markov=n)
@@ -182,7 +182,7 @@ def test_era_from_exact_discrete_frf(grid, sensors, true_shapes):
     then exact to roundoff: measured 2e-15 in frequency, 2e-12 in damping, held to 1e-12 and
     1e-9 (room for other LAPACK builds)."""
     freqs = _frf_grid(FRF_RATE, FRF_PERIOD)
-    inp = [Channel("force", 1, "z")]
+    inp = [Channel.at("force", 1, "z")]
     H = _discrete_frf(grid, sensors, inp, 1 / FRF_RATE, freqs)
     meas = Measurement(freqs, H, tuple(sensors), None, tuple(inp), "frequency")
     Y, dt = markov_from_frf(meas.abscissa, meas.outputs)
@@ -191,7 +191,7 @@ def test_era_from_exact_discrete_frf(grid, sensors, true_shapes):
     ref = _discrete_markov(grid, sensors, inp, dt, Y.shape[0] - 1)
     assert np.max(np.abs(Y - ref)) < 1e-9 * np.max(np.abs(ref))
     res = era(Y, dt=dt, order=12, reference_shapes=true_shapes)
-    assert np.allclose(res.frequencies, grid.frequencies_hz, rtol=1e-12, atol=0)
+    assert np.allclose(res.frequencies_hz, grid.frequencies_hz, rtol=1e-12, atol=0)
     assert np.allclose(res.damping, 0.01, rtol=1e-9, atol=0)
     assert np.all(res.mac > 1 - 1e-12)
 
@@ -201,12 +201,12 @@ def test_era_survives_time_aliasing_of_an_exact_discrete_frf(grid, sensors):
     C A^(k-1) (I - A^N)^-1 B has the same A, so ERA is still exact to roundoff (measured 1e-14
     and 6e-13; tolerances as in the test above)."""
     freqs = _frf_grid(FRF_RATE, 10.0)
-    inp = [Channel("force", 1, "z")]
+    inp = [Channel.at("force", 1, "z")]
     H = _discrete_frf(grid, sensors, inp, 1 / FRF_RATE, freqs)
     with pytest.warns(UserWarning, match="^frf: the impulse response has not decayed"):
         Y, dt = markov_from_frf(freqs, H)
     res = era(Y, dt=dt, order=12)
-    assert np.allclose(res.frequencies, grid.frequencies_hz, rtol=1e-12, atol=0)
+    assert np.allclose(res.frequencies_hz, grid.frequencies_hz, rtol=1e-12, atol=0)
     assert np.allclose(res.damping, 0.01, rtol=1e-9, atol=0)
 
 
@@ -230,11 +230,11 @@ def test_era_from_continuous_frf(grid, sensors, true_shapes):
     Y, dt = markov_from_frf(freqs, H)
     for method in (era, era_dc):
         res = method(Y, dt=dt, order=12, reference_shapes=true_shapes)
-        assert np.all(np.abs(res.frequencies / grid.frequencies_hz - 1) < 1e-4), method
+        assert np.all(np.abs(res.frequencies_hz / grid.frequencies_hz - 1) < 1e-4), method
         assert np.all(np.abs(res.damping / 0.01 - 1) < 0.01), method
         assert np.all(res.mac > 1 - 1e-6), method
     late = era(Y[20:], dt=dt, order=12)
-    assert np.all(np.abs(late.frequencies / grid.frequencies_hz - 1) < 1e-6)
+    assert np.all(np.abs(late.frequencies_hz / grid.frequencies_hz - 1) < 1e-6)
     assert np.all(np.abs(late.damping / 0.01 - 1) < 1e-4)
 
 
@@ -269,19 +269,19 @@ def test_bootstrap_uncertainty_matches_the_scatter_over_noise_seeds(grid, sensor
     f_err, z_err = [], []
     for seed in range(12):
         real = era(markov_parameters(_impulse(grid, sensors, 0.02, seed)), dt=1 / RATE, order=12)
-        order = np.argsort(real.frequencies)
-        f_err.append(real.frequencies[order] - f_true)
+        order = np.argsort(real.frequencies_hz)
+        f_err.append(real.frequencies_hz[order] - f_true)
         z_err.append(real.damping[order] - grid.damping)
     f_err, z_err = np.array(f_err), np.array(z_err)
     Y = markov_parameters(_impulse(grid, sensors, 0.02, 100))
     real = era(Y, dt=1 / RATE, order=12)
     boot = bootstrap_uncertainty(real, Y, n_samples=20, seed=0)
-    order = np.argsort(boot.frequencies)
+    order = np.argsort(boot.frequencies_hz)
     assert boot.extra["uncertainty"] == "bootstrap" and boot.extra["bootstrap_samples"] == 20
-    for est, err in ((boot.frequency_std[order], f_err), (boot.damping_std[order], z_err)):
+    for est, err in ((boot.frequency_std_hz[order], f_err), (boot.damping_std[order], z_err)):
         ratio = est / err.std(axis=0, ddof=1)
         assert np.all((ratio > 0.5) & (ratio < 2.0))
-    assert np.all(real.frequency_std > boot.frequency_std)
+    assert np.all(real.frequency_std_hz > boot.frequency_std_hz)
     mean, sem = z_err.mean(axis=0), z_err.std(axis=0, ddof=1) / np.sqrt(12)
     significant = mean > 3 * sem
     assert significant.sum() >= 3

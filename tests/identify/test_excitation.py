@@ -19,7 +19,7 @@ def test_harmonic_steady_state_is_the_modal_frf(grid):
     (ω_i² − ω² + 2jζω_iω)| to 1 % (the 1 % covers the residual transient and sampling)."""
     f = 1.5
     w = 2 * np.pi * f
-    sensor = Channel("displacement", 13, "z")
+    sensor = Channel.at("displacement", 13, "z")
     meas = simulate_test(grid, harmonic_shaker(1, "z", 2.0, f), [sensor], 400.0, 100.0)
     tail = meas.outputs[0, -int(20 * 100 / f) :]  # last 20 periods
     amplitude = 0.5 * np.ptp(tail)
@@ -31,7 +31,7 @@ def test_harmonic_steady_state_is_the_modal_frf(grid):
 
 
 def test_noise_is_the_stated_fraction_of_the_channel_rms(grid):
-    sensor = Channel("displacement", 13, "z")
+    sensor = Channel.at("displacement", 13, "z")
     clean = simulate_test(grid, harmonic_shaker(1, "z", 2.0, 1.5), [sensor], 60.0, 100.0)
     noisy = simulate_test(
         grid, harmonic_shaker(1, "z", 2.0, 1.5), [sensor], 60.0, 100.0, noise=0.05, seed=3
@@ -45,7 +45,7 @@ def test_bad_tests_are_refused(grid):
     with pytest.raises(ValueError, match=r"^sensors: must be a non-empty list"):
         simulate_test(grid, harmonic_shaker(1, "z", 1.0, 1.0), [], 1.0, 100.0)
     with pytest.raises(ValueError, match=r"^excitation: must be an Excitation"):
-        simulate_test(grid, [], [Channel("displacement", 1, "z")], 1.0, 100.0)
+        simulate_test(grid, [], [Channel.at("displacement", 1, "z")], 1.0, 100.0)
 
 
 def test_anti_alias_filters_give_the_continuous_frf_with_all_modes():
@@ -58,7 +58,7 @@ def test_anti_alias_filters_give_the_continuous_frf_with_all_modes():
 
     case = get_case("tamu_grid").builder()
     full = case.modal_model(case.n_dofs, damping=0.01)
-    sensors = [Channel("strain", 21, "x", node_a=16), Channel("strain", 14, "x", node_a=9)]
+    sensors = [Channel.at("strain", 21, "x", node_a=16), Channel.at("strain", 14, "x", node_a=9)]
     wheel = random_force(9, "x", 0.05, load="torque")
     errors = {}
     for cut in (None, 20.0):

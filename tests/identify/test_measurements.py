@@ -10,6 +10,7 @@ from flexsat.identify import (
     impulse_hammer,
     random_force,
     torque_history,
+    uff_direction,
 )
 from flexsat.sim.vibration_test import simulate_test
 from flexsat.structures.modal_model import ModalModel
@@ -38,34 +39,37 @@ def beam():
 
 
 def test_channel_defaults_and_errors():
-    c = Channel("acceleration", 3, "z")
-    assert c.units == "m/s^2" and c.uff_direction == 3 and c.name == "acceleration 3z"
-    assert Channel("torque", 1, "x").uff_direction == 4
+    c = Channel.at("acceleration", 3, "z")
+    assert c.unit == "m/s^2" and uff_direction(c) == 3 and c.name == "acceleration 3z"
+    assert uff_direction(Channel.at("torque", 1, "x")) == 4
+    assert Channel.at("torque", 1, "x").unit == "N*m"
     with pytest.raises(ValueError, match="^kind:"):
-        Channel("pressure", 1, "z")
+        Channel.at("pressure", 1, "z")
     with pytest.raises(ValueError, match="^direction:"):
-        Channel("displacement", 1, "w")
+        Channel.at("displacement", 1, "w")
     with pytest.raises(ValueError, match="^node_a:"):
-        Channel("strain", 2, "x")
+        Channel.at("strain", 2, "x")
 
 
 def test_measurement_validation():
     t = np.arange(5) * 0.1
-    ch = (Channel("displacement", 1, "z"),)
+    ch = (Channel.at("displacement", 1, "z"),)
     with pytest.raises(ValueError, match="^outputs: must be finite"):
         Measurement(t, [[0, np.nan, 0, 0, 0]], ch)
     with pytest.raises(ValueError, match="^outputs: must have shape"):
         Measurement(t, np.zeros((2, 5)), ch)
     with pytest.raises(ValueError, match="^inputs: must have shape"):
-        Measurement(t, np.zeros((1, 5)), ch, np.zeros((1, 4)), (Channel("force", 1, "z"),))
+        Measurement(t, np.zeros((1, 5)), ch, np.zeros((1, 4)), (Channel.at("force", 1, "z"),))
     with pytest.raises(ValueError, match="^abscissa: time samples must be uniformly"):
         Measurement([0, 0.1, 0.3], np.zeros((1, 3)), ch)
     with pytest.raises(ValueError, match="^outputs: FRFs must have shape"):
         Measurement(
-            [1.0, 2.0], np.zeros((1, 2)), ch, None, (Channel("force", 1, "z"),), "frequency"
+            [1.0, 2.0], np.zeros((1, 2)), ch, None, (Channel.at("force", 1, "z"),), "frequency"
         )
     with pytest.raises(ValueError, match="^outputs: must be finite"):
-        Measurement([1.0, 2.0], [[[1, np.nan]]], ch, None, (Channel("force", 1, "z"),), "frequency")
+        Measurement(
+            [1.0, 2.0], [[[1, np.nan]]], ch, None, (Channel.at("force", 1, "z"),), "frequency"
+        )
 
 
 def test_impulse_response_matches_modal_sum(beam):
@@ -74,7 +78,7 @@ def test_impulse_response_matches_modal_sum(beam):
     meas = simulate_test(
         beam,
         impulse_hammer(3, "z", 2.0, width=1e-4),
-        [Channel("displacement", 1, "z")],
+        [Channel.at("displacement", 1, "z")],
         2.0,
         fs,
         oversample=50,
@@ -94,11 +98,11 @@ def test_impulse_response_matches_modal_sum(beam):
 
 def test_sensors_noise_quantization(beam):
     sensors = [
-        Channel("displacement", 2, "z"),
-        Channel("velocity", 2, "z"),
-        Channel("acceleration", 2, "z"),
-        Channel("rotation", 3, "x"),
-        Channel("strain", 3, "x", node_a=1),
+        Channel.at("displacement", 2, "z"),
+        Channel.at("velocity", 2, "z"),
+        Channel.at("acceleration", 2, "z"),
+        Channel.at("rotation", 3, "x"),
+        Channel.at("strain", 3, "x", node_a=1),
     ]
     clean = simulate_test(
         beam, harmonic_shaker(1, "z", 1.0, 1.5), sensors, 4.0, 100.0, oversample=10
@@ -112,7 +116,7 @@ def test_sensors_noise_quantization(beam):
     u1 = simulate_test(
         beam,
         harmonic_shaker(1, "z", 1.0, 1.5),
-        [Channel("displacement", 3, "z"), Channel("displacement", 1, "z")],
+        [Channel.at("displacement", 3, "z"), Channel.at("displacement", 1, "z")],
         4.0,
         100.0,
         oversample=10,
@@ -138,7 +142,7 @@ def test_sensors_noise_quantization(beam):
 
 
 def test_excitation_errors(beam):
-    s = [Channel("displacement", 1, "z")]
+    s = [Channel.at("displacement", 1, "z")]
     with pytest.raises(ValueError, match="^sample_rate:"):
         simulate_test(beam, random_force(1, "z"), s, 1.0, -5.0)
     with pytest.raises(ValueError, match="^excitation:"):
@@ -152,7 +156,7 @@ def test_excitation_errors(beam):
 
 
 def test_uff_round_trip_time(beam, tmp_path):
-    sensors = [Channel("acceleration", 2, "z"), Channel("strain", 3, "x", node_a=1)]
+    sensors = [Channel.at("acceleration", 2, "z"), Channel.at("strain", 3, "x", node_a=1)]
     meas = simulate_test(
         beam,
         [random_force(1, "z"), torque_history(2, "x", [1.0, -1.0])],
@@ -182,9 +186,9 @@ def test_uff_round_trip_frf(tmp_path):
     meas = Measurement(
         f,
         outs,
-        (Channel("acceleration", 1, "z"), Channel("displacement", 4, "y")),
+        (Channel.at("acceleration", 1, "z"), Channel.at("displacement", 4, "y")),
         None,
-        (Channel("force", 9, "z"),),
+        (Channel.at("force", 9, "z"),),
         "frequency",
     )
     path = tmp_path / "frf.uff"
@@ -194,3 +198,26 @@ def test_uff_round_trip_frf(tmp_path):
     assert back.output_channels == meas.output_channels
     assert back.input_channels == meas.input_channels
     assert np.allclose(back.outputs, outs)
+
+
+def test_one_channel_class_with_one_unit_attribute():
+    """A test's channel is the plant's Channel, located on the structure (issue 20): one class,
+    one spelling of its unit."""
+    from flexsat.dynamics.plant import Channel as PlantChannel
+
+    c = Channel.at("strain", 3, "x", node_a=1)
+    assert Channel is PlantChannel and isinstance(c, PlantChannel)
+    assert (c.kind, c.node, c.node_a, c.direction, c.unit, c.size) == (
+        "strain",
+        3,
+        1,
+        "x",
+        "rad",
+        1,
+    )
+    assert not hasattr(c, "units")
+    with pytest.raises(ValueError, match=r"^output_channels\[0\]: must be a Channel located"):
+        Measurement([0.0, 1.0], np.zeros((1, 2)), (PlantChannel("theta", "rad"),))
+    # a plant's own channel keeps the identifier rule; a located one may be named freely
+    with pytest.raises(ValueError, match=r"^channel name: must be an identifier"):
+        PlantChannel("hub angle", "rad")

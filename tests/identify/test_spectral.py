@@ -16,12 +16,12 @@ def grid():
     return get_case("tamu_grid").builder().modal_model(6, damping=0.05)
 
 
-SENSORS = [Channel("displacement", 1, "z"), Channel("strain", 21, "x", node_a=16)]
+SENSORS = [Channel.at("displacement", 1, "z"), Channel.at("strain", 21, "x", node_a=16)]
 
 
 def test_model_frf_static_limit_and_resonance(grid):
     """H(0) = C (-A)^-1 B, and |H| peaks at the natural frequency with Q = 1/(2 zeta)."""
-    ins = [Channel("force", 1, "z")]
+    ins = [Channel.at("force", 1, "z")]
     f1 = grid.frequencies[0] / (2 * np.pi)
     H = frequency_response(grid, SENSORS[:1], ins, [1e-6, f1])
     c = grid.displacement_output(1, "z")
@@ -70,8 +70,10 @@ def test_h1_exact_for_static_gain_and_one_sample_delay():
     rng = np.random.default_rng(0)
     u = rng.standard_normal((2, 20_000))
     y = np.vstack([2 * u[0] + 3 * u[1], np.r_[0.0, u[0, :-1]]])
-    ch = [Channel("displacement", n, "z") for n in (1, 2)]
-    m = Measurement(np.arange(20_000) * 0.01, y, ch, u, [Channel("force", n, "z") for n in (1, 2)])
+    ch = [Channel.at("displacement", n, "z") for n in (1, 2)]
+    m = Measurement(
+        np.arange(20_000) * 0.01, y, ch, u, [Channel.at("force", n, "z") for n in (1, 2)]
+    )
     est = estimate_frf(m, 256)
     frf, coh = est.frf, est.coherence
     H = frf.outputs
@@ -83,7 +85,7 @@ def test_h1_exact_for_static_gain_and_one_sample_delay():
 
 def test_zoh_frf_tends_to_continuous_as_sampling_gets_fast(grid):
     """H_d -> H as dt -> 0, first order in dt (the half-sample hold delay)."""
-    ins = [Channel("force", 1, "z")]
+    ins = [Channel.at("force", 1, "z")]
     f = np.array([0.5, 2.0, 4.0])
     H = frequency_response(grid, SENSORS, ins, f)
     errs = [
@@ -104,7 +106,7 @@ def test_estimate_frf_bad_input(grid):
     with pytest.raises(ValueError, match="measurement"):
         estimate_frf(frf, segment=64)
     with pytest.raises(ValueError, match="frequencies_hz"):
-        frequency_response(grid, SENSORS, [Channel("force", 1, "z")], [1.0, np.nan])
+        frequency_response(grid, SENSORS, [Channel.at("force", 1, "z")], [1.0, np.nan])
 
 
 def test_h1_random_error_matches_the_scatter_over_tests(grid):
@@ -112,7 +114,7 @@ def test_h1_random_error_matches_the_scatter_over_tests(grid):
     predicted SD (rms ratio within 0.7-1.4: 16 x ~20 points give ~5 % statistical spread, the
     rest is the first-order formula), including an element that is zero by symmetry (torque
     about y at the centre node, strain gauge on the centre column)."""
-    sensors = [Channel("strain", 23, "x", node_a=18), Channel("strain", 21, "x", node_a=16)]
+    sensors = [Channel.at("strain", 23, "x", node_a=18), Channel.at("strain", 21, "x", node_a=16)]
     ins = [random_force(1, "z", 1.0), random_force(3, "y", 1.0, load="torque")]
     f_pick = np.array([0.5, 1.5, 3.0, 4.0])
     ratios = {}

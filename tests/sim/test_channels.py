@@ -3,10 +3,14 @@ applies its documented formula in the channel's unit, converted to SI when bound
 presets land on the hub plant's channels theta, theta_dot, root_torque and torque; a piece on a
 channel the plant does not have is refused naming it."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
+from flexsat.control.base import Controller
 from flexsat.dynamics.plant import Channel, Plant
+from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
 from flexsat.sim import (
     BearingFriction,
     ChannelActuator,
@@ -17,6 +21,7 @@ from flexsat.sim import (
     Sensors,
     SimConfig,
     TorqueActuator,
+    simulate,
 )
 from flexsat.sim.channels import noise_column, noise_columns, resolve_channels
 from flexsat.units import ureg
@@ -53,7 +58,7 @@ def test_sensor_quantizes_to_q_round_v_over_q():
     """y = q·round(v/q): every measurement is an integer multiple of q within q/2 of v (the
     round-off of q·k is ~eps·|y|, far below q/2)."""
     q = 1e-3
-    s = ChannelSensor(quantum=q).bind("position", "m")
+    s = ChannelSensor(quantum=q).bind(Channel("position", "m"))
     v = np.linspace(-0.0123, 0.0457, 1001)
     y = s.measure(v, None)
     np.testing.assert_array_equal(y, q * np.round(v / q))
@@ -66,14 +71,14 @@ def test_sensor_adds_its_bias_and_scales_the_given_standard_normals():
     range)."""
     rng = np.random.default_rng(1)
     v, n = rng.normal(size=50), rng.standard_normal(50)
-    s = ChannelSensor(noise=0.2, bias=-0.05).bind("position", "m")
+    s = ChannelSensor(noise=0.2, bias=-0.05).bind(Channel("position", "m"))
     np.testing.assert_array_equal(s.measure(v, n), v + -0.05 + 0.2 * n)
 
 
 def test_sensor_order_is_bias_and_noise_then_quantum_then_range():
     """y = sat(Q(v + bias + noise·n)): the quantum acts on the biased noisy value and the range
     clips the quantized one."""
-    s = ChannelSensor(noise=0.1, bias=0.3, quantum=0.25, range=1.0).bind("position", "m")
+    s = ChannelSensor(noise=0.1, bias=0.3, quantum=0.25, range=1.0).bind(Channel("position", "m"))
     v = np.array([0.0, 0.1, 0.4, 2.0, -3.0])
     n = np.array([0.0, 1.0, -1.0, 0.0, 0.0])
     expected = np.clip(0.25 * np.round((v + 0.3 + 0.1 * n) / 0.25), -1.0, 1.0)
@@ -82,7 +87,7 @@ def test_sensor_order_is_bias_and_noise_then_quantum_then_range():
 
 
 def test_sensor_range_saturates_symmetrically():
-    s = ChannelSensor(range="5 mm").bind("position", "m")
+    s = ChannelSensor(range="5 mm").bind(Channel("position", "m"))
     np.testing.assert_array_equal(
         s.measure(np.array([-1.0, -0.004, 0.0, 0.004, 1.0]), None),
         [-0.005, -0.004, 0.0, 0.004, 0.005],
@@ -91,21 +96,23 @@ def test_sensor_range_saturates_symmetrically():
 
 def test_an_ideal_sensor_returns_the_truth():
     v = np.array([1.5, -2.25])
-    np.testing.assert_array_equal(ChannelSensor().bind("position", "m").measure(v, None), v)
+    np.testing.assert_array_equal(
+        ChannelSensor().bind(Channel("position", "m")).measure(v, None), v
+    )
 
 
 def test_binding_converts_unit_strings_and_quantities_to_the_channel_unit():
     """An encoder of 0.01 deg on a rad channel: quantum π/18000 rad (to rounding, 1 ulp)."""
     s = ChannelSensor(quantum="0.01 deg", bias=ureg.Quantity(1.0, "mrad"), range="90 deg").bind(
-        "theta", "rad"
+        Channel("theta", "rad")
     )
     np.testing.assert_allclose(s.quantum, np.pi / 18000, rtol=2e-16)
     np.testing.assert_allclose(s.bias, 1e-3, rtol=2e-16)
     np.testing.assert_allclose(s.range, np.pi / 2, rtol=2e-16)
-    gyro = ChannelSensor(noise="1 deg/s").bind("theta_dot", "rad/s")
+    gyro = ChannelSensor(noise="1 deg/s").bind(Channel("theta_dot", "rad/s"))
     np.testing.assert_allclose(gyro.noise, np.pi / 180, rtol=2e-16)
     # a plain number is already SI of the channel
-    assert ChannelSensor(quantum=1e-4).bind("theta", "rad").quantum == 1e-4
+    assert ChannelSensor(quantum=1e-4).bind(Channel("theta", "rad")).quantum == 1e-4
 
 
 @pytest.mark.parametrize(
@@ -121,7 +128,7 @@ def test_binding_converts_unit_strings_and_quantities_to_the_channel_unit():
 )
 def test_binding_refuses_wrong_dimensions_and_values_naming_the_field(sensor, message):
     with pytest.raises(ValueError, match=message):
-        sensor.bind("theta", "rad")
+        sensor.bind(Channel("theta", "rad"))
 
 
 @pytest.mark.parametrize(
@@ -172,7 +179,9 @@ def test_actuator_is_scale_times_saturated_rate_limited_command_plus_bias():
     period from the last limited command and the scale acts after the saturation (a 2x scale
     on a 0.5 saturation applies 1.0). Exact: every number is a dyadic fraction."""
     dt = 0.25
-    a = ChannelActuator(saturation=0.5, rate_limit=2.0, scale=2.0, bias=0.125).bind("force", "N")
+    a = ChannelActuator(saturation=0.5, rate_limit=2.0, scale=2.0, bias=0.125).bind(
+        Channel("force", "N")
+    )
     u, c = a.apply(np.array([0.25, 10.0, -10.0]), None, dt)  # first sample: no rate limit
     np.testing.assert_array_equal(c, [0.25, 0.5, -0.5])
     np.testing.assert_array_equal(u, [0.625, 1.125, -0.875])
@@ -185,7 +194,7 @@ def test_actuator_is_scale_times_saturated_rate_limited_command_plus_bias():
 def test_rate_limit_ramps_a_step_over_the_control_periods():
     """A step of 1 N under 3 N/s at 30 Hz: 0.1 N per period, reached after 10 periods."""
     dt = 1 / 30
-    a = ChannelActuator(rate_limit="3 N/s").bind("force", "N")
+    a = ChannelActuator(rate_limit="3 N/s").bind(Channel("force", "N"))
     c, out = None, []
     u, c = a.apply(np.zeros(1), c, dt)
     for _ in range(12):
@@ -196,7 +205,7 @@ def test_rate_limit_ramps_a_step_over_the_control_periods():
 
 
 def test_actuator_saturation_per_case_and_units():
-    a = ChannelActuator(saturation=np.array([1.0, 2.0]), bias="-100 mN").bind("force", "N")
+    a = ChannelActuator(saturation=np.array([1.0, 2.0]), bias="-100 mN").bind(Channel("force", "N"))
     u, _ = a.apply(np.array([5.0, -5.0]), None, 0.1)
     np.testing.assert_allclose(u, [0.9, -2.1], rtol=0, atol=1e-15)
 
@@ -213,7 +222,7 @@ def test_actuator_saturation_per_case_and_units():
 )
 def test_bad_actuators_are_refused_naming_the_field(actuator, message):
     with pytest.raises(ValueError, match=message):
-        actuator.bind("force", "N")
+        actuator.bind(Channel("force", "N"))
 
 
 # -- ChannelDisturbance -----------------------------------------------------------------------
@@ -224,7 +233,7 @@ def test_impulses_land_on_the_first_sample_at_or_after_their_time_and_add_up():
     dt = 1 / 75
     times = (0.0, 0.01, 3 * dt, dt, 0.02, 10.0)  # 3·(1/75)/(1/75) = 3.0000000000000004
     d = ChannelDisturbance(impulse_times=times, impulses=(1.0, 2.0, 4.0, 8.0, 16.0, 32.0))
-    got = d.bind("torque", "N*m").impulses_at_samples(75, dt)
+    got = d.bind(Channel("torque", "N*m")).impulses_at_samples(75, dt)
     assert got == {0: 1.0, 1: 10.0, 2: 16.0, 3: 4.0}
 
 
@@ -233,11 +242,11 @@ def test_disturbance_binding_converts_units():
         random="10 mN*m",
         impulse_times=("20 ms", 0.5),
         impulses=("1 N*m*s", ureg.Quantity(2.0, "mN*m*s")),
-    ).bind("torque", "N*m")
+    ).bind(Channel("torque", "N*m"))
     np.testing.assert_allclose(d.random, 0.01, rtol=2e-16)
     np.testing.assert_allclose(d.impulse_times, (0.02, 0.5), rtol=2e-16)
     np.testing.assert_allclose(d.impulses, (1.0, 0.002), rtol=2e-16)
-    assert d.active and not ChannelDisturbance().bind("torque", "N*m").active
+    assert d.active and not ChannelDisturbance().bind(Channel("torque", "N*m")).active
 
 
 @pytest.mark.parametrize(
@@ -249,7 +258,7 @@ def test_disturbance_binding_converts_units():
         ),
         (
             dict(impulse_times=(0.0, 1.0), impulses=(1.0,)),
-            r"^disturbances\[torque\]\.impulses: 1 values for 2 times",
+            r"^disturbances\[torque\]\.impulses: give one number for each of the 2 impulse times",
         ),
         (
             dict(impulse_times=(-1.0,), impulses=(1.0,)),
@@ -260,7 +269,7 @@ def test_disturbance_binding_converts_units():
 )
 def test_bad_disturbances_are_refused_naming_the_field(kwargs, message):
     with pytest.raises(ValueError, match=message):
-        ChannelDisturbance(**kwargs).bind("torque", "N*m")
+        ChannelDisturbance(**kwargs).bind(Channel("torque", "N*m"))
 
 
 def test_a_force_needs_its_driving_output_and_only_with_a_force():
@@ -420,3 +429,68 @@ def test_a_noise_channel_naming_no_channel_is_refused():
     p.noise_channels = ("position", "gyro")
     with pytest.raises(ValueError, match=r"^gyro: noise_channels names no channel of Cart"):
         noise_columns(p)
+
+
+class _TorqueFree(Controller):
+    """Zero torque on a three-axis plant."""
+
+    reads = ("rate",)
+    writes = ("torque",)
+    target = 0.0
+
+    def __call__(self, t, y, state):
+        return np.zeros(np.shape(y["rate"])), state
+
+
+def test_a_channel_named_without_a_width_takes_it_from_the_plant():
+    """The rigid spacecraft's ``torque`` is 3 values wide: pieces given by its name are read per
+    axis (issue 20; before, a piece was one value wide: a scalar impulse hit all three axes and
+    three values were taken as three cases or refused as three impulses)."""
+    J = np.diag([100.0, 200.0, 300.0])
+    plant = RigidSpacecraft(J)
+    config = SimConfig(
+        duration=1.0,
+        channel_actuators={"torque": ChannelActuator(saturation=[0.1, "200 mN*m", 0.3])},
+        channel_sensors={"rate": ChannelSensor(bias=("1 deg/s", 0.0, 0.0))},
+        channel_disturbances={
+            "torque": ChannelDisturbance(impulse_times=(0.0,), impulses=([0.0, 0.0, 3.0],))
+        },
+    )
+    sensors, actuators, disturbances = resolve_channels(plant, config)
+    np.testing.assert_array_equal(actuators["torque"].saturation, [0.1, 0.2, 0.3])
+    np.testing.assert_allclose(sensors["rate"].bias, [np.pi / 180, 0.0, 0.0], rtol=1e-15)
+    per_case = ChannelActuator(saturation=[[0.1, 0.2, 0.3], [1.0, 2.0, 3.0]])
+    assert per_case.bind(plant.inputs[0]).saturation.shape == (2, 3)
+    # the impulse (0, 0, 3) N·m·s about the principal z axis from rest: a pure spin
+    # ω = (0, 0, H / J_z) (angular momentum; rotation about a principal axis stays one)
+    x0 = plant.state_from(euler123=[0.0, 0.0, 0.0], rate=[0.0, 0.0, 0.0])
+    run = simulate(plant, _TorqueFree(), replace(config, channel_sensors={}), 1, initial_state=x0)
+    rate = run.dataset["rate"].values[0, -1]
+    np.testing.assert_allclose(rate, [0.0, 0.0, 3.0 / 300.0], rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize(
+    "piece, message",
+    [
+        (
+            ChannelDisturbance(impulse_times=(0.0,), impulses=(3.0,)),
+            r"^disturbances\[torque\]\.impulses: give 3 values \(the channel is 3 values wide\) "
+            r"for each of the 1 impulse times, got shape \(1,\)",
+        ),
+        (
+            ChannelActuator(saturation=[0.1, 0.2]),
+            r"^actuators\[torque\]\.saturation: the channel is 3 values wide: give a number, 3 "
+            r"values \(one per element\) or \(n_cases, 3\), got shape \(2,\)",
+        ),
+        (
+            ChannelDisturbance(random=[[0.1], [0.2]]),
+            r"^disturbances\[torque\]\.random: the channel is 3 values wide",
+        ),
+    ],
+)
+def test_a_value_that_does_not_fit_the_channels_width_is_refused(piece, message):
+    torque = RigidSpacecraft(np.eye(3)).inputs[0]
+    with pytest.raises(ValueError, match=message):
+        piece.bind(torque)
+    with pytest.raises(ValueError, match=r"^sensors\[theta\]\.noise: the channel is one value"):
+        ChannelSensor(noise=[[0.1, 0.2]]).bind(Channel("theta", "rad"))

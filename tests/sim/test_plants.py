@@ -120,13 +120,20 @@ def test_sensor_and_actuator_per_channel():
 
 
 def test_impulse_on_an_input_channel_is_b_times_j():
-    cfg = SimConfig(
-        duration=0.5,
-        channel_disturbances={
-            "push": ChannelDisturbance(impulse_times=(0.0,), impulses=(0.0, 2.0))
-        },
-    )
-    with pytest.raises(ValueError, match=r"^disturbances\[push\].impulses: 2 values for 1"):
+    """J = (0, 2) N·s on the 2-wide ``push`` (one value per cart, the channel's width from the
+    plant): Δv = B J = (0, 2) m/s; the spring keeps the momentum 2 N·s of the two unit masses,
+    so the gap is 2 sin(ωt)/ω (ω = sqrt(2k)) and their centre moves at 1 m/s, exactly (linear
+    propagation). Before, the channel was taken as one value wide and (0, 2) was refused as two
+    impulses for one time; a flat (0, 2) is now refused naming the width."""
+    push = ChannelDisturbance(impulse_times=(0.0,), impulses=([0.0, 2.0],))
+    cfg = SimConfig(duration=0.5, channel_disturbances={"push": push})
+    ds = simulate(TwoCarts(), GapLaw(0.0), cfg).dataset
+    t, w = ds.time.values, np.sqrt(8.0)
+    np.testing.assert_allclose(ds.gap.values[0], 2.0 * np.sin(w * t) / w, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(ds.position.values[0].mean(axis=-1), t, rtol=0, atol=1e-12)
+    flat = ChannelDisturbance(impulse_times=(0.0,), impulses=(0.0, 2.0))
+    cfg = SimConfig(duration=0.5, channel_disturbances={"push": flat})
+    with pytest.raises(ValueError, match=r"^disturbances\[push\].impulses: give 2 values \(the"):
         simulate(TwoCarts(), GapLaw(0.0), cfg)
 
 

@@ -10,6 +10,7 @@ from flexsat.attitude.star_catalog import synthetic_sky
 from flexsat.attitude.star_tracker import ARCSEC, StarTracker, random_attitudes
 from flexsat.control.base import Controller
 from flexsat.dynamics.attitude import dcm_to_quaternion, quaternion_to_dcm
+from flexsat.dynamics.plant import Channel
 from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
 from flexsat.sim import SimConfig, simulate
 from flexsat.sim.star_sensor import StarTrackerSensor
@@ -17,7 +18,7 @@ from flexsat.sim.star_sensor import StarTrackerSensor
 
 def test_measured_attitude_errors_have_the_stated_covariance():
     P = np.array([[4.0, 1.0, 0.0], [1.0, 2.0, 0.5], [0.0, 0.5, 9.0]]) * ARCSEC**2
-    s = StarTrackerSensor(covariance=P).bind("attitude", "")
+    s = StarTrackerSensor(covariance=P).bind(Channel("attitude", "", size=4))
     rng = np.random.default_rng(0)
     C = random_attitudes(20000, seed=1)
     beta = dcm_to_quaternion(C)
@@ -85,6 +86,6 @@ def test_star_sensor_only_on_the_attitude_channel():
     with pytest.raises(
         ValueError, match="sensors\\[rate\\]: a star tracker measures the attitude channel"
     ):
-        StarTrackerSensor(covariance="1 arcsec").bind("rate", "rad/s")
+        StarTrackerSensor(covariance="1 arcsec").bind(Channel("rate", "rad/s", size=3))
     s = StarTrackerSensor(covariance="1 arcsec")
     np.testing.assert_allclose(np.sqrt(np.diag(s.covariance)), ARCSEC, rtol=1e-12)

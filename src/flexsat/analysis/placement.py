@@ -691,22 +691,43 @@ def h2_actuator_ranking(
 
 # ------------------------------------------------------------------------------------------------
 # candidates and their score
+#: default label suffix of each candidate kind: a force along an axis is the paper's "69X", a
+#: torque about it "69RX" (R for rotation, as the structural rotational dofs rx, ry, rz), so the
+#: two at one node never share a label
+_KIND_MARK = {"force": "", "torque": "R"}
+
+
 def actuator_candidates(
-    model, nodes, axes=("x", "y", "z"), kind: str = "force", label: Callable | None = None
+    model,
+    nodes,
+    axes=("x", "y", "z"),
+    kind: str | Sequence[str] = "force",
+    label: Callable | None = None,
 ) -> dict:
     """Candidate actuators at ``nodes`` along/about ``axes`` as label -> modal input vector.
 
-    ``kind`` is "force" (:meth:`ModalModel.force_input`) or "torque"
-    (:meth:`ModalModel.torque_input`). Default labels: node then upper-case axis, "69X".
+    ``kind`` is "force" (:meth:`ModalModel.force_input`), "torque"
+    (:meth:`ModalModel.torque_input`) or both, ``("force", "torque")``. Default labels: node,
+    then "R" for a torque, then the upper-case axis: "69X" (force along x), "69RX" (torque
+    about x). A ``label(kind, node, axis)`` of your own must tell every candidate apart: two
+    candidates with one label are refused, never one silently replacing the other.
     """
-    if kind not in ("force", "torque"):
-        raise ValueError(f"kind: must be 'force' or 'torque', got {kind!r}")
-    fn = model.force_input if kind == "force" else model.torque_input
-    label = label or (lambda node, axis: f"{node}{str(axis).upper()}")
-    out = {}
-    for node in nodes:
-        for axis in axes:
-            out[label(node, axis)] = fn(node, axis)
+    kinds = (kind,) if isinstance(kind, str) else tuple(kind)
+    if not kinds or any(k not in _KIND_MARK for k in kinds) or len(set(kinds)) != len(kinds):
+        raise ValueError(f"kind: must be 'force', 'torque' or both (each once), got {kind!r}")
+    label = label or (lambda kind, node, axis: f"{node}{_KIND_MARK[kind]}{str(axis).upper()}")
+    out, origin = {}, {}
+    for k in kinds:
+        fn = model.force_input if k == "force" else model.torque_input
+        for node in nodes:
+            for axis in axes:
+                key = label(k, node, axis)
+                if key in out:
+                    raise ValueError(
+                        f"label: the {origin[key]} and the {k} {node}{axis} are both labelled "
+                        f"{key!r}; give labels that tell them apart"
+                    )
+                out[key], origin[key] = fn(node, axis), f"{k} {node}{axis}"
     return out
 
 

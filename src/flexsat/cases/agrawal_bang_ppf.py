@@ -35,7 +35,7 @@ T the tip rows of :meth:`~flexsat.cases.agrawal_bang.AgrawalBangCase.tip_outputs
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -458,20 +458,6 @@ def run_ppf_grid(
     return [run_ppf_case(w, e, goal, case=case, **options) for goal in goals for w, e in grid]
 
 
-def settling_time(
-    t: npt.NDArray[Any] | Sequence[float], signal: npt.ArrayLike, fraction: float = 0.1
-) -> float | None:
-    """Last time |signal| exceeds ``fraction`` of its largest value (s); None when it still
-    does at the end (not settled within the run)."""
-    a = np.abs(np.asarray(signal))
-    above = np.flatnonzero(a > fraction * a.max())
-    if above.size == 0:
-        return 0.0
-    if above[-1] == a.size - 1:
-        return None
-    return float(t[above[-1] + 1])
-
-
 __all__ = [
     "EXCITATIONS",
     "GAMMA_STOP",
@@ -488,7 +474,6 @@ __all__ = [
     "ppf_problem",
     "run_ppf_case",
     "run_ppf_grid",
-    "settling_time",
     "tip_error_rows",
     "tip_responses",
 ]

@@ -49,7 +49,7 @@ def eps_h2_setup(
         model,
         [roles[p] for p in EPS_CANDIDATE_NODES],
         ("x", "y", "z"),
-        label=lambda node, axis: f"{_paper(roles, node)}{axis.upper()}",
+        label=lambda kind, node, axis: f"{_paper(roles, node)}{axis.upper()}",
     )
     disturbance = model.torque_input(roles[EPS_DISTURBANCE_NODE], ["x", "y", "z"])
     outputs = np.vstack(

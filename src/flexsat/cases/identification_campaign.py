@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexsat.dynamics.plant import Channel
 from flexsat.identify.differential_correction import CorrectionData, differential_correction
 from flexsat.identify.era import (
     Realization,
@@ -47,7 +48,7 @@ from flexsat.identify.era import (
     okid,
 )
 from flexsat.identify.excitation import impulse_hammer, random_force
-from flexsat.identify.measurements import Channel, Measurement
+from flexsat.identify.measurements import Measurement
 from flexsat.identify.photogrammetry import (
     CAMERA_PARAMETERS,
     Camera,
@@ -252,7 +253,7 @@ def _truth_damping(cfg: CampaignConfig, n: int) -> np.ndarray:
 def _select(real: Realization, band: float, min_mpc: float = 0.5) -> np.ndarray:
     """Indices of the physical modes in (0, band] Hz: positive damping below 20 %, consistent
     in time (EMAC) and mono-phase enough (MPC) to be a real normal mode."""
-    f, z = real.frequencies, real.damping
+    f, z = real.frequencies_hz, real.damping
     ok = (f > 0) & (f <= band) & (z > 0) & (z < 0.2) & (real.emac > 0.5) & (real.mpc > min_mpc)
     return np.flatnonzero(ok)
 
@@ -335,7 +336,7 @@ def _video_test(cfg, truth, rig, points0, calibration, rng):
     """Filmed free vibration: target z histories by triangulation with the calibrated cameras,
     relative to the calibrated rest positions of the targets."""
     cams, static_xyz = calibration.cameras, calibration.targets
-    z_chan = [Channel("displacement", int(n), "z") for n in cfg.targets]
+    z_chan = [Channel.at("displacement", int(n), "z") for n in cfg.targets]
     test = simulate_test(
         truth,
         _blow(cfg.hammer_node, cfg.hammer_direction, cfg.video_impulse, cfg.field_rate),
@@ -477,8 +478,8 @@ def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
         )
     rng = np.random.default_rng(cfg.seed)
     asm, truth = _true_modes(case, cfg)
-    gauges = [Channel("strain", int(b), ax, node_a=int(a)) for a, b, ax in cfg.strain_gauges]
-    accels = [Channel("acceleration", int(n), d) for n, d in cfg.accelerometers]
+    gauges = [Channel.at("strain", int(b), ax, node_a=int(a)) for a, b, ax in cfg.strain_gauges]
+    accels = [Channel.at("acceleration", int(n), d) for n, d in cfg.accelerometers]
     blow = _blow(cfg.hammer_node, cfg.hammer_direction, cfg.hammer_impulse, cfg.sample_rate)
     say(SIMULATE_STEPS[0])
     hammer = simulate_test(
@@ -623,9 +624,10 @@ def identify_and_update(
     sel = _select(hammer_real, cfg.band)
     if sel.size == 0:
         raise ValueError(f"records: the hammer test shows no mode below {cfg.band:g} Hz")
-    f_meas = hammer_real.frequencies[sel]
+    f_meas = hammer_real.frequencies_hz[sel]
+    omega_meas = hammer_real.omega_rad_s[sel]
     z_meas = hammer_real.damping[sel]
-    f_std = hammer_real.frequency_std[sel]
+    f_std = hammer_real.frequency_std_hz[sel]
     z_std = hammer_real.damping_std[sel]
 
     # --- 2. video test: ERA shapes at the targets ----------------------------------------------
@@ -637,7 +639,7 @@ def identify_and_update(
         video_real = era(markov_parameters(video), video.dt, order=cfg.era_order)
         vsel = _select(video_real, cfg.band, min_mpc=0.3)
         video_shapes = _real_shapes(video_real.shapes[:, vsel])
-        video_f = video_real.frequencies[vsel]
+        video_f = video_real.frequencies_hz[vsel]
         rows = [apriori_asm.index(c.node, "u" + c.direction) for c in video.output_channels]
 
     # --- pair modes: video shapes against the a-priori model, then hammer by frequency ---------
@@ -678,7 +680,7 @@ def identify_and_update(
         # stiffness from the frequencies (Att. 7 Eq. 9b), then damping (Eq. 24)
         und = identify_undamped(
             sub,
-            2 * np.pi * f_meas,
+            omega_meas,
             mode_indices=hammer_index,
             frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas),
         )
@@ -699,11 +701,11 @@ def identify_and_update(
             apriori_asm,
             gauges,
             inputs,
-            np.concatenate([w0, 2 * np.pi * f_meas]),
+            np.concatenate([w0, omega_meas]),
             fit_gains,
         )
         data = CorrectionData(
-            frequencies=2 * np.pi * f_meas,
+            frequencies=omega_meas,
             frequency_modes=hammer_index,
             frequency_sigma=2 * np.pi * np.maximum(f_std, 1e-9 * f_meas),
             damping_ratios=z_meas,
@@ -759,7 +761,7 @@ def identify_and_update(
         "era_damping": z_meas.tolist(),
         "era_damping_std": z_std.tolist(),
         "video_hz": _nearest(video_f, f_meas),
-        "okid_hz": _nearest(okid_real.frequencies[osel], f_meas),
+        "okid_hz": _nearest(okid_real.frequencies_hz[osel], f_meas),
         "a_priori_hz": (w0[hammer_index] / (2 * np.pi)).tolist(),
         "a_priori_damping": zeta0[hammer_index].tolist(),
         "updated_hz": (w1[hammer_index] / (2 * np.pi)).tolist(),

@@ -38,7 +38,6 @@ from flexsat.cases.cmg_pyramid import integrate_gimbals
 from flexsat.control.lqr import lqr
 from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.dynamics.space_station import (
-    PAPER_STATION,
     SpaceStation,
     StationData,
     aero_substitute,
@@ -56,8 +55,13 @@ __all__ = [
     "simulate_attitude",
     "cmg_loop",
     "DISTURBANCES",
+    "PAPER_STATION",
 ]
 
+#: Table 2 of the paper (seed000_part2.md §8.4, L4684–L4688), as published
+PAPER_STATION = StationData(
+    ("5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"), 0.0011, "3500 lbf*ft*s"
+)
 #: disturbance models: the design model Eq. (11), or it plus the stated AERO1 substitute
 DISTURBANCES = ("design", "aero_substitute")
 

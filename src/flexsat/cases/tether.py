@@ -17,6 +17,10 @@ import numpy as np
 from flexsat.dynamics.tether import ClosedLoopRun, TetheredSubsatellite, TetherScales
 
 SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 12, L4258-L4531"
+#: settling bands of a retrieval: |θ| within the runs' initial 5° (rad), |λ − λ_f| within 2 %
+#: of the length change (:func:`flexsat.analysis.settling.settling_time`)
+SETTLING_PITCH_BAND = np.radians(5.0)
+SETTLING_LENGTH_FRACTION = 0.02
 #: the paper's scales (L4397-L4401)
 PAPER_SCALES = dict(mass="22.7 kg", length="20 km", altitude="220 km")
 #: [λ, θ, φ, λ', θ', φ'] at the start of every example (L4399)
@@ -236,7 +240,7 @@ def measures(run: ClosedLoopRun, final_length: float, scales: TetherScales, law:
     retrieval rate (m/s, positive inward), thrust index and
     impulse, maximum and final pitch, final length and roll, settling (orbits), V1 at start
     and end."""
-    from flexsat.control.tether_laws import settling_time
+    from flexsat.analysis.settling import reported, settling_time
 
     x = run.state[0]
     u0 = float(run.control[0, 0, 0])
@@ -247,7 +251,14 @@ def measures(run: ClosedLoopRun, final_length: float, scales: TetherScales, law:
         "initial_rate_m_s": -u0 * scales.speed if rate else None,
     }
     index = float(run.thrust_index[0, -1])
-    settle = settling_time(run.tau, run.state, final_length)[0]
+    # settled: pitch within the initial 5° and length within 2 % of its change, together
+    # ("λ and θ reach their final values in nearly two orbits", L4401, read so)
+    lam, theta = x[:, 0], x[:, 1]
+    settle = settling_time(
+        run.tau,
+        (theta, lam - final_length),
+        (SETTLING_PITCH_BAND, SETTLING_LENGTH_FRACTION * abs(lam[0] - final_length)),
+    )
     # the paper's window for the index is two orbits (L4401, L4447)
     two = (
         float(np.interp(4 * np.pi, run.tau, run.thrust_index[0]))
@@ -264,7 +275,7 @@ def measures(run: ClosedLoopRun, final_length: float, scales: TetherScales, law:
         final_roll_deg=float(np.degrees(x[-1, 2])),
         final_length=float(x[-1, 0]),
         final_length_m=float(x[-1, 0] * scales.length),
-        settling_orbits=None if np.isnan(settle) else float(settle / (2 * np.pi)),
+        settling_orbits=reported(settle / (2 * np.pi)),
         V1_initial=float(run.integral_of_motion[0, 0]),
         V1_final=float(run.integral_of_motion[0, -1]),
     )
@@ -278,6 +289,8 @@ __all__ = [
     "Example",
     "INITIAL",
     "PAPER_SCALES",
+    "SETTLING_LENGTH_FRACTION",
+    "SETTLING_PITCH_BAND",
     "SOURCE",
     "make_law",
     "measures",

@@ -61,7 +61,6 @@ __all__ = [
     "CoupledTetherLaw",
     "TetherRateLaw",
     "thrust_index",
-    "settling_time",
     "liapunov_coupled",
     "MEASUREMENTS",
 ]
@@ -87,29 +86,6 @@ def thrust_index(tau, thrust) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         crossing = (a * a + b * b) / (2 * (np.abs(a) + np.abs(b)))
     return np.sum(np.where(same, 0.5 * (np.abs(a) + np.abs(b)), crossing) * h, axis=-1)
-
-
-#: the default pitch band of :func:`settling_time`, the paper's initial 5°, rad
-PITCH_BAND = float(np.radians(5.0))
-
-
-def settling_time(
-    tau, state, final_length, pitch_band: float = PITCH_BAND, length_band: float = 0.02
-) -> np.ndarray:
-    r"""The τ after which a retrieval stays settled: |θ| <= ``pitch_band`` (rad; default the
-    initial 5° of the paper's runs) and |λ − λ_f| <= ``length_band`` |λ(0) − λ_f| (default 2 %
-    of the length change), for states (..., n_t, 6) on the grid ``tau``; NaN where it never
-    settles. "λ and θ reach their final values in nearly two orbits" (L4401) is read so."""
-    tau = np.asarray(tau, float)
-    x = np.asarray(state, float)
-    lam, theta = x[..., 0], x[..., 1]
-    lf = np.asarray(final_length, float)[..., None]
-    outside = (np.abs(theta) > pitch_band) | (
-        np.abs(lam - lf) > length_band * np.abs(lam[..., :1] - lf)
-    )
-    last = tau.size - 1 - np.argmax(outside[..., ::-1], axis=-1)  # last unsettled sample
-    settled_at = np.where(last + 1 < tau.size, tau[np.minimum(last + 1, tau.size - 1)], np.nan)
-    return np.where(~outside.any(-1), tau[0], settled_at)
 
 
 def liapunov_coupled(x, K1, K2, lambda_r) -> np.ndarray:

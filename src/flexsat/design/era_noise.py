@@ -37,8 +37,8 @@ def noise_damping_sweep(
             Y = markov_parameters(meas)
             kw = dict(order=2 * modal_model.n_modes) | era_kwargs
             res = era(Y, dt=meas.dt, **kw)
-            idx = np.argmin(np.abs(res.frequencies[None, :] - f_true[:, None]), axis=1)
-            f_err.append(np.abs(res.frequencies[idx] / f_true - 1))
+            idx = np.argmin(np.abs(res.frequencies_hz[None, :] - f_true[:, None]), axis=1)
+            f_err.append(np.abs(res.frequencies_hz[idx] / f_true - 1))
             z_err.append(np.abs(res.damping[idx] / z_true - 1))
         fe.append(np.mean(f_err, axis=0))
         ze.append(np.mean(z_err, axis=0))

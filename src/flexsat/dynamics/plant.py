@@ -32,15 +32,32 @@ from functools import cached_property
 
 import numpy as np
 
+#: Kind of a channel located on a structure -> its SI unit (what a test records or applies at a
+#: node). "strain" is the relative rotation of the two ends of a gauge patch
+#: (:meth:`~flexsat.structures.modal_model.ModalModel.strain_output`), rad.
+STRUCTURAL_KINDS = {
+    "displacement": "m",
+    "velocity": "m/s",
+    "acceleration": "m/s^2",
+    "rotation": "rad",
+    "strain": "rad",
+    "force": "N",
+    "torque": "N*m",
+}
+#: directions of a located channel: a translation direction or a rotation axis
+AXES = ("x", "y", "z")
+
 
 @dataclass(frozen=True)
 class Channel:
-    """A named input or output of a plant.
+    """A named input or output: of a plant, or of a test at a point of a structure.
 
     Parameters
     ----------
     name : str
-        Identifier used by laws, sensors, actuators and the recorded dataset.
+        Identifier used by laws, sensors, actuators and the recorded dataset. A channel
+        located on a structure may have any non-blank name (a test's default,
+        ``"displacement 5z"``, is the universal-file id).
     unit : str
         SI unit of its values (a pint expression: ``"N*m"``, ``"rad/s"``, ``""``).
     size : int
@@ -48,18 +65,71 @@ class Channel:
         a quaternion (values (..., n_cases, size)).
     description : str
         One line for reports and error messages.
+    kind, node, direction, node_a
+        Where a test channel sits on a structure (None for a plant's own channels): what it
+        measures or applies (one of :data:`STRUCTURAL_KINDS`), at which node id, along or
+        about which axis (:data:`AXES`), and for a strain gauge the first end ``node_a`` of the
+        patch (``node`` the second). Build one with :meth:`at`.
     """
 
     name: str
     unit: str
     size: int = 1
     description: str = ""
+    kind: str | None = None
+    node: int | None = None
+    direction: str | None = None
+    node_a: int | None = None
 
     def __post_init__(self):
-        if not isinstance(self.name, str) or not self.name.isidentifier():
-            raise ValueError(f"channel name: must be an identifier, got {self.name!r}")
+        if self.kind is None:
+            if not isinstance(self.name, str) or not self.name.isidentifier():
+                raise ValueError(f"channel name: must be an identifier, got {self.name!r}")
+        elif not isinstance(self.name, str) or not self.name.strip():
+            raise ValueError(f"channel name: must be a non-blank string, got {self.name!r}")
         if not isinstance(self.size, int) or self.size < 1:
             raise ValueError(f"{self.name}: size must be a positive integer, got {self.size!r}")
+        if self.kind is not None or self.node is not None or self.direction is not None:
+            self._check_location()
+
+    def _check_location(self) -> None:
+        if self.kind not in STRUCTURAL_KINDS:
+            raise ValueError(f"kind: must be one of {tuple(STRUCTURAL_KINDS)}, got {self.kind!r}")
+        if self.direction not in AXES:
+            raise ValueError(f"direction: must be 'x', 'y' or 'z', got {self.direction!r}")
+        for name in ("node", "node_a"):
+            value = getattr(self, name)
+            if value is None and name == "node_a":
+                continue
+            if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
+                raise ValueError(f"{name}: must be an integer node id, got {value!r}")
+            object.__setattr__(self, name, int(value))
+        if self.kind == "strain" and self.node_a is None:
+            raise ValueError("node_a: a strain channel needs both ends of the patch")
+
+    @classmethod
+    def at(
+        cls,
+        kind: str,
+        node: int,
+        direction: str,
+        unit: str | None = None,
+        node_a: int | None = None,
+        name: str = "",
+    ) -> Channel:
+        """A test channel at a point of a structure: ``kind`` at ``node`` along ``direction``,
+        in ``unit`` (default the kind's SI unit), named ``"<kind> <node><direction>"`` unless
+        ``name`` is given."""
+        if kind not in STRUCTURAL_KINDS:
+            raise ValueError(f"kind: must be one of {tuple(STRUCTURAL_KINDS)}, got {kind!r}")
+        return cls(
+            name or f"{kind} {node}{direction}",
+            STRUCTURAL_KINDS[kind] if unit is None else unit,
+            kind=kind,
+            node=node,
+            direction=direction,
+            node_a=node_a,
+        )
 
 
 @dataclass(frozen=True)

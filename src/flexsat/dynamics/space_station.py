@@ -50,7 +50,6 @@ from flexsat.units import to_si_array
 __all__ = [
     "SpaceStation",
     "StationData",
-    "PAPER_STATION",
     "pitch_model",
     "roll_yaw_model",
     "design_disturbance",
@@ -58,8 +57,12 @@ __all__ = [
     "FT_LB",
 ]
 
-#: one foot-pound-force in N m (the paper's torque and momentum unit)
-FT_LB = float(to_si_array("1 lbf*ft", "N*m"))
+#: one foot-pound-force in N m (the paper's torque and momentum unit), from the exact
+#: definitions: 1 lb = 0.45359237 kg and 1 ft = 0.3048 m (international yard and pound, 1959),
+#: standard gravity 9.80665 m/s² (3rd CGPM, 1901); equal to pint's lbf·ft
+#: (tests/dynamics/test_space_station.py). Written out so that importing this layer loads no
+#: unit registry.
+FT_LB = 0.45359237 * 9.80665 * 0.3048
 
 
 @dataclass(frozen=True)
@@ -105,12 +108,6 @@ class StationData:
         return 2.0 * np.pi / self.orbit_rate
 
 
-#: Table 2 of the paper (seed000_part2.md §8.4, L4684–L4688)
-PAPER_STATION = StationData(
-    ("5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"), 0.0011, "3500 lbf*ft*s"
-)
-
-
 def _filters(filters, field):
     ks = tuple(filters)
     for k in ks:
@@ -137,7 +134,7 @@ def _add_filters(A, attitude_index, ks, n, names, label):
     return out
 
 
-def pitch_model(data: StationData = PAPER_STATION, filters=(1, 2)):
+def pitch_model(data: StationData, filters=(1, 2)):
     """Pitch axis of Eq. (8)–(10) with ∫h2 and the filters of Eq. (12).
 
     State [θ2, θ̇2, h2, ∫h2 dt, (α_k, α̇_k) for k in ``filters``]; input u2 (N m); disturbance
@@ -165,7 +162,7 @@ def pitch_model(data: StationData = PAPER_STATION, filters=(1, 2)):
     return A, B, E, names
 
 
-def roll_yaw_model(data: StationData = PAPER_STATION, filters=(2,)):
+def roll_yaw_model(data: StationData, filters=(2,)):
     """Roll/yaw axes of Eq. (8)–(10) with ∫h1, ∫h3 and the filters of Eq. (12) on θ1 and θ3.
 
     State [θ1, ω1, h1, ∫h1, θ3, ω3, h3, ∫h3, filters on θ1, filters on θ3]; inputs (u1, u3);
@@ -199,7 +196,7 @@ def roll_yaw_model(data: StationData = PAPER_STATION, filters=(2,)):
     return A, B, E, names
 
 
-def design_disturbance(t, data: StationData = PAPER_STATION) -> np.ndarray:
+def design_disturbance(t, data: StationData) -> np.ndarray:
     """Eq. (11): w1 = w3 = 1 + sin nt + 0.5 sin 2nt, w2 = 4 + 2 sin nt + 0.5 sin 2nt ft-lb,
     in N m, shape (..., 3) (roll, pitch, yaw)."""
     tt = require_finite(t, "t", "s")
@@ -209,9 +206,7 @@ def design_disturbance(t, data: StationData = PAPER_STATION) -> np.ndarray:
     return FT_LB * np.stack([roll, 4.0 + 2.0 * s1 + 0.5 * s2, roll], axis=-1)
 
 
-def aero_substitute(
-    t, data: StationData = PAPER_STATION, harmonic=0.5 * FT_LB, secular=1.0 * FT_LB
-) -> np.ndarray:
+def aero_substitute(t, data: StationData, harmonic=0.5 * FT_LB, secular=1.0 * FT_LB) -> np.ndarray:
     """The stated substitute for the paper's AERO1 (module docstring): Eq. (11) plus
     ``harmonic`` × (sin 3nt + sin 4nt) on each axis and a pitch torque growing by ``secular``
     per orbit (N m or unit strings; defaults 0.5 and 1 ft-lb); N m, shape (..., 3)."""
@@ -246,9 +241,7 @@ class SpaceStation(Plant):
 
     recorded = ("attitude", "momentum")
 
-    def __init__(
-        self, data: StationData = PAPER_STATION, pitch_filters=(1, 2), roll_yaw_filters=(2,)
-    ):
+    def __init__(self, data: StationData, pitch_filters=(1, 2), roll_yaw_filters=(2,)):
         self.data = data
         self.pitch = pitch_model(data, pitch_filters)
         self.roll_yaw = roll_yaw_model(data, roll_yaw_filters)

@@ -25,7 +25,7 @@ from flexsat.identify.excitation import (
     random_force,
     torque_history,
 )
-from flexsat.identify.measurements import CHANNEL_KINDS, Channel, Measurement
+from flexsat.identify.measurements import STRUCTURAL_KINDS, Channel, Measurement, uff_direction
 from flexsat.identify.photogrammetry import (
     CalibrationResult,
     Camera,
@@ -45,7 +45,8 @@ from flexsat.identify.structural import (
 )
 
 __all__ = [
-    "CHANNEL_KINDS",
+    "STRUCTURAL_KINDS",
+    "uff_direction",
     "CalibrationResult",
     "Camera",
     "Channel",

@@ -28,7 +28,7 @@ import scipy.linalg as sla
 
 from flexsat.analysis.sensitivity import modal_derivatives
 from flexsat.identify.structural import SubstructureModel
-from flexsat.input_checks import require_numeric
+from flexsat.input_checks import require_finite, require_numeric
 from flexsat.units import FloatArray
 
 __all__ = ["CorrectionData", "DifferentialCorrection", "differential_correction"]
@@ -49,16 +49,17 @@ FrfItem: TypeAlias = tuple[
 ]
 
 
-def _modes_and_sigma(values, sigma, modes, name, prefix):
-    """A measured modal quantity: finite vector > 0, its SDs (> 0) and the model modes."""
-    v = require_numeric(values, name, "vector").ravel()
+def _modes_and_sigma(values, sigma, modes, name, prefix, unit):
+    """A measured modal quantity in ``unit``: finite vector > 0, its SDs (> 0) and the model
+    modes."""
+    v = require_finite(values, name, unit).ravel()
     if v.size == 0 or np.any(v <= 0):
         raise ValueError(f"{name}: must be a non-empty vector of values > 0")
     if sigma is None:
         raise ValueError(
             f"{prefix}_sigma: give the standard deviations (the weights W, Att. 6 Eq. 10)"
         )
-    s = require_numeric(sigma, f"{prefix}_sigma")
+    s = require_finite(sigma, f"{prefix}_sigma", unit)
     if s.ndim > 1 or (s.ndim == 1 and s.size != v.size):
         raise ValueError(f"{prefix}_sigma: must be a scalar or {v.size} values, got {s.shape}")
     s = np.broadcast_to(s, v.shape).astype(float)
@@ -198,7 +199,10 @@ class CorrectionData:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        for name, prefix in (("frequencies", "frequency"), ("damping_ratios", "damping")):
+        for name, prefix, unit in (
+            ("frequencies", "frequency", "rad/s"),
+            ("damping_ratios", "damping", ""),
+        ):
             if getattr(self, name) is None:
                 continue
             v, s, modes = _modes_and_sigma(
@@ -207,6 +211,7 @@ class CorrectionData:
                 getattr(self, f"{prefix}_modes"),
                 name,
                 prefix,
+                unit,
             )
             set_(self, name, v)
             set_(self, f"{prefix}_sigma", s)

@@ -63,7 +63,7 @@ so :math:`\sigma_e = \sigma_{n+1} / (\sqrt m + \sqrt p)`. The same noise in H(1)
 the eigenvalue by :math:`l_i^H \delta A\, r_i` (left/right eigenvectors, :math:`l_i^H r_i = 1`),
 of standard deviation :math:`\sigma_\lambda = \sigma_e \|\Sigma_n^{-1/2} l_i\| \|\Sigma_n^{-1/2}
 r_i\|`. Then :math:`\sigma_s = \sigma_\lambda / (|\lambda| \Delta t)` and, splitting the
-circular complex error evenly, ``frequency_std`` :math:`= \sigma_s / (2\sqrt2\,\pi)` Hz and
+circular complex error evenly, ``frequency_std_hz`` :math:`= \sigma_s / (2\sqrt2\,\pi)` Hz and
 ``damping_std`` :math:`= \sqrt{1-\zeta^2}\, \sigma_s / (\sqrt2\, \omega)`. It is an order-of-
 magnitude indicator (Hankel noise is not i.i.d.: entries repeat along anti-diagonals, and
 the noise shared by H(0) and H(1) partly cancels), not a confidence interval. On the TAMU grid
@@ -85,6 +85,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.units import FrequencyArray, to_si_array
 
 __all__ = [
     "Realization",
@@ -259,7 +260,7 @@ def markov_from_frf(frequencies, frf, n_markov=None, tail_tolerance=1e-3):
     (:math:`C A^{k+19} B`, the same A) reduces that to 2e-7 and 1.3e-5
     (``tests/identify/test_era.py``).
     """
-    f = require_finite(frequencies, "frequencies")
+    f = require_finite(frequencies, "frequencies", "Hz")
     if f.ndim != 1 or f.size < 3:
         raise ValueError(
             f"frequencies: must be a 1-D grid of at least 3 values, got shape {f.shape}"
@@ -415,16 +416,19 @@ class Realization:
     dt : float
     singular_values : ndarray
         Of H(0) (or of the correlation matrix for ERA/DC).
-    frequencies : ndarray (modes,)
-        Hz, ascending.
+    frequencies_hz : FrequencyArray (modes,)
+        Cyclic frequencies, Hz, ascending; tagged with their unit, so a model update that
+        takes rad/s refuses them (use :attr:`omega_rad_s`).
     damping : ndarray (modes,)
     shapes : ndarray (q, modes) complex
         At the output channels, normalised to unit norm with the largest component real.
     emac, mpc, msv : ndarray (modes,)
     mac : ndarray (modes,) or None
         Best MAC with ``reference_shapes``.
-    frequency_std, damping_std : ndarray (modes,)
-        First-order uncertainty from the singular-value noise floor (module docstring).
+    frequency_std_hz : FrequencyArray (modes,) or None
+        Standard deviations of :attr:`frequencies_hz`, Hz: first-order uncertainty from the
+        singular-value noise floor (module docstring), or the bootstrap's.
+    damping_std : ndarray (modes,) or None
     rows, cols, order : int
     """
 
@@ -434,22 +438,35 @@ class Realization:
     D: np.ndarray
     dt: float
     singular_values: np.ndarray
-    frequencies: np.ndarray
+    frequencies_hz: FrequencyArray
     damping: np.ndarray
     shapes: np.ndarray
     emac: np.ndarray
     mpc: np.ndarray
     msv: np.ndarray
     mac: np.ndarray | None
-    frequency_std: np.ndarray | None
+    frequency_std_hz: FrequencyArray | None
     damping_std: np.ndarray | None
     rows: int
     cols: int
     order: int
     extra: dict = field(default_factory=dict)
 
+    def __post_init__(self):
+        # tagged Hz; values tagged rad/s are refused rather than relabelled
+        for name in ("frequencies_hz", "frequency_std_hz"):
+            value = getattr(self, name)
+            if value is not None:
+                hz = FrequencyArray(to_si_array(value, "Hz", name), "Hz")
+                object.__setattr__(self, name, hz)
+
+    @property
+    def omega_rad_s(self) -> FrequencyArray:
+        """Angular frequencies ω = 2π f, rad/s: what a model update takes."""
+        return self.frequencies_hz.to("rad/s")
+
     def __repr__(self) -> str:
-        f = ", ".join(f"{x:.4g}" for x in self.frequencies)
+        f = ", ".join(f"{x:.4g}" for x in self.frequencies_hz)
         return f"Realization(order={self.order}, rows={self.rows}, cols={self.cols}, f=[{f}] Hz)"
 
 
@@ -654,7 +671,7 @@ def bootstrap_uncertainty(
     realization's own Markov parameters are realized by :func:`era` with the same order and
     Hankel sizes, each of their modes is paired with the nearest original mode in frequency
     (within ``match_tolerance``, relative), and the sample standard deviations replace
-    ``frequency_std`` and ``damping_std`` (NaN for a mode found in fewer than half the copies).
+    ``frequency_std_hz`` and ``damping_std`` (NaN for a mode found in fewer than half the copies).
 
     Parameters
     ----------
@@ -670,7 +687,7 @@ def bootstrap_uncertainty(
     Returns
     -------
     Realization
-        A copy with the bootstrap ``frequency_std`` and ``damping_std``;
+        A copy with the bootstrap ``frequency_std_hz`` and ``damping_std``;
         ``extra["uncertainty"] = "bootstrap"``, ``extra["bootstrap_samples"]`` and the
         bootstrap bias estimates ``extra["frequency_bias"]``, ``extra["damping_bias"]`` (mean
         of the copies minus the original: noise biases ERA damping upward, by up to 5 % of
@@ -692,7 +709,7 @@ def bootstrap_uncertainty(
     model = _markov_of(realization, Y.shape[0] - 1)
     sigma = (Y - model)[1:].std(axis=0)
     rng = np.random.default_rng(seed)
-    f0 = realization.frequencies
+    f0 = realization.frequencies_hz.view(np.ndarray)
     f_all = np.full((n, f0.size), np.nan)
     z_all = np.full((n, f0.size), np.nan)
     for b in range(n):
@@ -703,12 +720,12 @@ def bootstrap_uncertainty(
             rows=realization.rows,
             cols=realization.cols,
         )
-        if copy.frequencies.size == 0:
+        if copy.frequencies_hz.size == 0:
             continue
         for i, f in enumerate(f0):
-            k = int(np.argmin(np.abs(copy.frequencies - f)))
-            if f > 0 and abs(copy.frequencies[k] / f - 1) <= match_tolerance:
-                f_all[b, i], z_all[b, i] = copy.frequencies[k], copy.damping[k]
+            k = int(np.argmin(np.abs(copy.frequencies_hz - f)))
+            if f > 0 and abs(copy.frequencies_hz[k] / f - 1) <= match_tolerance:
+                f_all[b, i], z_all[b, i] = copy.frequencies_hz[k], copy.damping[k]
     found = np.sum(np.isfinite(f_all), axis=0)
     ok = found >= max(2, n // 2)
     with warnings.catch_warnings():
@@ -719,7 +736,7 @@ def bootstrap_uncertainty(
         zbias = np.where(ok, np.nanmean(z_all, axis=0) - realization.damping, np.nan)
     return dataclasses.replace(
         realization,
-        frequency_std=fstd,
+        frequency_std_hz=fstd,
         damping_std=zstd,
         extra={
             **realization.extra,
@@ -742,7 +759,7 @@ def era_dc(
     as :math:`\\hat P A^k \\hat W`; its SVD gives A as in ERA, C from the first q rows of
     :math:`\\hat P = P_n \\Sigma_n^{1/2}` and B from :math:`P^{+} H(0)`. Correlating reduces
     the noise bias of the singular values. Arguments and result as :func:`era`; the
-    perturbation uncertainty is not defined for the correlation matrix (``frequency_std`` and
+    perturbation uncertainty is not defined for the correlation matrix (``frequency_std_hz`` and
     ``damping_std`` are None).
     """
     Y = _markov_array(markov)
@@ -762,9 +779,10 @@ def era_dc(
     def build():
         H0 = _hankel(Y, 1, rows, cols)
         R = {k: _hankel(Y, 1 + k, rows, cols) @ H0.T for k in range(reach + 1)}
-        big = lambda k: np.block(  # noqa: E731
-            [[R[k + (i + j) * lag] for j in range(blocks)] for i in range(blocks)]
-        )
+
+        def big(k):
+            return np.block([[R[k + (i + j) * lag] for j in range(blocks)] for i in range(blocks)])
+
         U, s, Vt = np.linalg.svd(big(0), full_matrices=False)
         n = _order(s, order)
         Sh = np.sqrt(s[:n])

@@ -103,7 +103,7 @@ class Excitation:
 def _load(load: str, node, direction, name="") -> Channel:
     if load not in ("force", "torque"):
         raise ValueError(f"load: must be 'force' or 'torque', got {load!r}")
-    return Channel(load, node, direction, name=name)
+    return Channel.at(load, node, direction, name=name)
 
 
 def impulse_hammer(node, direction, amplitude=1.0, width=None, load="force") -> Excitation:

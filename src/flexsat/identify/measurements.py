@@ -8,10 +8,12 @@ A :class:`Measurement` holds either
   channel over input channel, on a frequency axis in Hz; ``inputs`` is then ``None`` and
   ``input_channels`` name the references.
 
-Every channel is a :class:`Channel`: what it measures (``kind``), where (``node``, ``direction``)
-and in which ``units``. Universal-file dataset 58 import/export goes through pyuff
-(:func:`flexsat.structures.io_uff.read_uff`): one function per channel (time response, type 1)
-or per output/input pair (FRF, type 4), with response/reference node and direction.
+Every channel is a :class:`~flexsat.dynamics.plant.Channel` located on the structure
+(:meth:`Channel.at <flexsat.dynamics.plant.Channel.at>`): what it measures (``kind``), where
+(``node``, ``direction``) and in which ``unit``. Universal-file dataset 58 import/export goes
+through pyuff (:func:`flexsat.structures.io_uff.read_uff`): one function per channel (time
+response, type 1) or per output/input pair (FRF, type 4), with response/reference node and
+direction.
 """
 
 from __future__ import annotations
@@ -21,23 +23,12 @@ from pathlib import Path
 
 import numpy as np
 
+from flexsat.dynamics.plant import AXES, STRUCTURAL_KINDS, Channel
 from flexsat.input_checks import require_finite
 
-__all__ = ["CHANNEL_KINDS", "Channel", "Measurement"]
+__all__ = ["STRUCTURAL_KINDS", "Channel", "Measurement", "uff_direction"]
 
-#: Kind -> default SI units. "strain" is the relative rotation of the two ends of a gauge patch
-#: (:meth:`ModalModel.strain_output`), rad.
-CHANNEL_KINDS = {
-    "displacement": "m",
-    "velocity": "m/s",
-    "acceleration": "m/s^2",
-    "rotation": "rad",
-    "strain": "rad",
-    "force": "N",
-    "torque": "N m",
-}
 _ROTATIONAL = ("rotation", "strain", "torque")
-_AXES = ("x", "y", "z")
 #: UFF dataset 58 ordinate specific data types (8 displacement, 11 velocity, 12 acceleration,
 #: 3 strain, 13 excitation force); rotation and torque are 8 and 13 on a rotational dof.
 _UFF_SPEC = {
@@ -61,59 +52,19 @@ _UFF_KIND = {
 }
 
 
-@dataclass(frozen=True)
-class Channel:
-    """One sensor or input channel.
-
-    Parameters
-    ----------
-    kind : str
-        One of :data:`CHANNEL_KINDS` (displacement, velocity, acceleration, rotation, strain,
-        force, torque).
-    node : int
-        Node id (for a strain gauge, the second end ``node_b`` of the patch; see ``node_a``).
-    direction : {"x", "y", "z"}
-        Translation direction, or rotation axis for rotation, strain and torque.
-    units : str, optional
-        Default the SI unit of the kind.
-    node_a : int, optional
-        First end of a strain-gauge patch (strain = a · (θ_node − θ_node_a)).
-    name : str, optional
-    """
-
-    kind: str
-    node: int
-    direction: str
-    units: str | None = None
-    node_a: int | None = None
-    name: str = ""
-
-    def __post_init__(self):
-        if self.kind not in CHANNEL_KINDS:
-            raise ValueError(f"kind: must be one of {tuple(CHANNEL_KINDS)}, got {self.kind!r}")
-        if self.direction not in _AXES:
-            raise ValueError(f"direction: must be 'x', 'y' or 'z', got {self.direction!r}")
-        if not isinstance(self.node, (int, np.integer)) or isinstance(self.node, bool):
-            raise ValueError(f"node: must be an integer node id, got {self.node!r}")
-        object.__setattr__(self, "node", int(self.node))
-        if self.kind == "strain" and self.node_a is None:
-            raise ValueError("node_a: a strain channel needs both ends of the patch")
-        if self.units is None:
-            object.__setattr__(self, "units", CHANNEL_KINDS[self.kind])
-        if not self.name:
-            object.__setattr__(self, "name", f"{self.kind} {self.node}{self.direction}")
-
-    @property
-    def uff_direction(self) -> int:
-        """UFF dof code: 1..3 translation x, y, z, 4..6 rotation about x, y, z."""
-        return _AXES.index(self.direction) + (4 if self.kind in _ROTATIONAL else 1)
+def uff_direction(channel: Channel) -> int:
+    """UFF dof code of a located channel: 1..3 translation x, y, z, 4..6 rotation about x, y,
+    z."""
+    return AXES.index(channel.direction) + (4 if channel.kind in _ROTATIONAL else 1)
 
 
 def _channels(value, field: str) -> tuple[Channel, ...]:
     items = tuple(value)
     for i, c in enumerate(items):
-        if not isinstance(c, Channel):
-            raise ValueError(f"{field}[{i}]: must be a Channel, got {type(c).__name__}")
+        if not isinstance(c, Channel) or c.kind is None:
+            raise ValueError(
+                f"{field}[{i}]: must be a Channel located on the structure (Channel.at), got {c!r}"
+            )
     return items
 
 
@@ -228,7 +179,7 @@ class Measurement:
         dim = self.domain
         coords = {dim: (dim, self.abscissa, {"units": "s" if dim == "time" else "Hz"})}
         for prefix, chans in (("output", self.output_channels), ("input", self.input_channels)):
-            for attr in ("kind", "node", "direction", "units", "name"):
+            for attr in ("kind", "node", "direction", "unit", "name"):
                 values = [getattr(c, attr) for c in chans]
                 coords[f"{prefix}_{attr}"] = (f"{prefix}_channel", values)
             coords[f"{prefix}_node_a"] = (
@@ -278,20 +229,20 @@ class Measurement:
             ref_node, ref_dir, den_units, den_spec = (
                 (0, 0, "NONE", 0)
                 if ref is None
-                else (ref.node, ref.uff_direction, ref.units, _UFF_SPEC[ref.kind])
+                else (ref.node, uff_direction(ref), ref.unit, _UFF_SPEC[ref.kind])
             )
             return pyuff.prepare_58(
                 id1=chan.name,
                 id2=f"node_a {chan.node_a}" if chan.node_a is not None else "NONE",
                 func_type=func_type,
                 rsp_node=chan.node,
-                rsp_dir=chan.uff_direction,
+                rsp_dir=uff_direction(chan),
                 ref_node=ref_node,
                 ref_dir=ref_dir,
                 ord_data_type=ord_type,
                 data=data,
                 ordinate_spec_data_type=_UFF_SPEC[chan.kind],
-                ordinate_axis_units_lab=chan.units,
+                ordinate_axis_units_lab=chan.unit,
                 orddenom_spec_data_type=den_spec,
                 orddenom_axis_units_lab=den_units,
                 **common,
@@ -349,10 +300,10 @@ class Measurement:
             if kind == "strain" and node_a is None:
                 node_a = int(node)
             units = str(units).strip()
-            return Channel(
+            return Channel.at(
                 kind,
                 int(node),
-                _AXES[(code - 1) % 3],
+                AXES[(code - 1) % 3],
                 None if units in ("", "NONE") else units,
                 node_a,
                 str(name).strip() if str(name).strip() not in ("", "NONE") else "",

@@ -69,7 +69,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexsat.analysis.sensitivity import modal_derivatives
-from flexsat.input_checks import require_count, require_numeric
+from flexsat.input_checks import require_count, require_finite, require_numeric
 
 __all__ = [
     "SubstructureModel",
@@ -288,7 +288,7 @@ def modal_energy_distribution(K_blocks, M_blocks, shapes, omegas=None) -> dict:
     ke = np.array([np.einsum("ij,ik,kj->j", phi, Mg, phi) for Mg in Mb]).T
     pe = np.array([np.einsum("ij,ik,kj->j", phi, Kg, phi) for Kg in Kb]).T
     if omegas is not None:
-        w = require_numeric(omegas, "omegas", "vector").ravel()
+        w = require_finite(omegas, "omegas", "rad/s").ravel()
         if w.shape != (phi.shape[1],):
             raise ValueError(f"omegas: must have {phi.shape[1]} entries (one per mode)")
         pe = pe / np.where(w > 0, w**2, 1.0)[:, None]
@@ -318,7 +318,7 @@ def _check_frf(frf, n):
         for name, d in (("output_dof", j), ("input_dof", k)):
             if isinstance(d, bool) or not isinstance(d, (int, np.integer)) or not 0 <= d < n:
                 raise ValueError(f"frf[{i}].{name}: must be a dof index in [0, {n}), got {d!r}")
-        w = require_numeric(w, f"frf[{i}].omegas", "vector").ravel()
+        w = require_finite(w, f"frf[{i}].omegas", "rad/s").ravel()
         h = require_numeric(h, f"frf[{i}].values", "vector").ravel()
         if w.shape != h.shape or w.size == 0:
             raise ValueError(f"frf[{i}]: omegas and values must be equal-length non-empty vectors")
@@ -348,7 +348,7 @@ def fit_modal_normalization(frf, shapes, omegas, rigid_body=False, residual=True
     alpha : (m,), a1 (per FRF element), a2 (per FRF element).
     """
     psi = np.asarray(shapes, float)
-    w_r = np.asarray(omegas, float)
+    w_r = require_finite(omegas, "omegas", "rad/s").ravel()
     items = _check_frf(frf, psi.shape[0])
     if not items:
         raise ValueError("frf: at least one FRF element is needed")
@@ -676,7 +676,7 @@ def identify_undamped(
         estimated from the residual scatter (zero covariance for an exact fit).
     """
     P, Q, n = model.n_stiffness, model.n_mass, model.n_dofs
-    wbar = require_numeric(measured_frequencies, "measured_frequencies", "vector").ravel()
+    wbar = require_finite(measured_frequencies, "measured_frequencies", "rad/s").ravel()
     if wbar.size == 0 or np.any(wbar <= 0):
         raise ValueError("measured_frequencies: must be a non-empty vector of values > 0 rad/s")
     m = wbar.size
@@ -711,9 +711,9 @@ def identify_undamped(
         raise ValueError("fixed_stiffness, fixed_mass: every parameter is fixed")
     sig_w = None
     if frequency_sigma is not None:
-        sig_w = np.broadcast_to(require_numeric(frequency_sigma, "frequency_sigma"), (m,)).astype(
-            float
-        )
+        sig_w = np.broadcast_to(
+            require_finite(frequency_sigma, "frequency_sigma", "rad/s"), (m,)
+        ).astype(float)
         if np.any(sig_w <= 0):
             raise ValueError("frequency_sigma: must be > 0")
     for name, value in (("frf_sigma", frf_sigma), ("mass_prior_sigma", mass_prior_sigma)):
@@ -744,7 +744,7 @@ def identify_undamped(
     frf_sd = 1.0 if frf_sigma is None else float(frf_sigma)
 
     history, converged = [(p.copy(), q.copy())], False
-    for it in range(1, n_iter + 1):
+    for it in range(1, n_iter + 1):  # noqa: B007 - the last count is reported
         K = model.K(p)
         w_model, phi_model = model.modes(p, q)
         idx = _pair_modes(w_model, phi_model, wbar, psi_meas, mode_indices)

@@ -172,13 +172,14 @@ class PPFResult:
     def settling(self, run) -> dict:
         """10 % settling time (s) of |Eᵗ| and of Φ with the initial and the optimised gains
         (None: not settled within the simulated time)."""
-        from flexsat.cases.agrawal_bang_ppf import settling_time
+        from flexsat.analysis.settling import reported, settling_time
 
         R, out = run.responses, {}
         for key, label in (("initial", "initial gains"), ("optimised", "optimised gains")):
             y = R[label]
-            out[f"tip_settling_{key}_s"] = settling_time(R["time"], np.hypot(y[:, 0], y[:, 1]))
-            out[f"rotation_settling_{key}_s"] = settling_time(R["time"], y[:, 2])
+            for name, signal in (("tip", np.hypot(y[:, 0], y[:, 1])), ("rotation", y[:, 2])):
+                settle = settling_time(R["time"], signal, 0.1, relative_to_peak=True)
+                out[f"{name}_settling_{key}_s"] = reported(settle)
         return out
 
     def metrics_records(self) -> list[dict]:

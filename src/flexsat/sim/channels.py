@@ -11,6 +11,13 @@ The planar classes (:class:`~flexsat.sim.sensors.Sensors`, ``TorqueActuator``,
 :func:`resolve_channels` maps them onto channels ``theta``, ``theta_dot``, ``root_torque`` and
 ``torque``. Values are in the channel's unit (a number in SI, a pint Quantity or a unit string),
 converted when the piece is bound to its channel.
+
+A piece is given by channel name only; its width comes from the plant's channel when it is bound
+(:meth:`ChannelSensor.bind` takes the :class:`~flexsat.dynamics.plant.Channel`). On a channel one
+value wide a field is a number or one per case (n_cases,); on a channel ``size`` values wide (a
+three-axis torque) it is a number for every element, one per element (size,), or one per case
+and element (n_cases, size), and each impulse is ``size`` values. Anything else is refused,
+naming the field and the width, rather than read as one value per case.
 """
 
 from __future__ import annotations
@@ -19,7 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from flexsat.dynamics.plant import find_channel
+from flexsat.dynamics.plant import Channel, find_channel
 from flexsat.input_checks import require_count
 from flexsat.sim.disturbances import impulses_at_samples
 from flexsat.sim.sensors import least_squares_derivative_weights
@@ -27,16 +34,28 @@ from flexsat.units import to_si_array
 
 
 def _si(
-    value, unit: str, field: str, nonneg: bool = True, inf_ok: bool = False
+    value, unit: str, field: str, nonneg: bool = True, inf_ok: bool = False, size: int = 1
 ) -> np.ndarray | float:
     """``value`` in SI of ``unit``: finite (+inf too where it means "no limit"), >= 0 if
-    ``nonneg``; a number or an array over cases."""
+    ``nonneg``; shaped for a channel ``size`` values wide (see the module)."""
     v = to_si_array(value, unit, field)
     finite = np.isfinite(v) | (inf_ok & (v == np.inf))
     if not np.all(finite) or (nonneg and np.any(v < 0)):
         rule = "finite" if not nonneg else ">= 0 (inf for none)" if inf_ok else "finite and >= 0"
         raise ValueError(f"{field}: must be {rule}, got {value!r}")
-    return float(v) if v.ndim == 0 else v
+    if v.ndim == 0:
+        return float(v)
+    if size == 1 and v.ndim != 1:
+        raise ValueError(
+            f"{field}: the channel is one value wide: give a number or one per case, "
+            f"got shape {v.shape}"
+        )
+    if size > 1 and not (v.ndim in (1, 2) and v.shape[-1] == size):
+        raise ValueError(
+            f"{field}: the channel is {size} values wide: give a number, {size} values (one "
+            f"per element) or (n_cases, {size}), got shape {v.shape}"
+        )
+    return v
 
 
 def _rate_unit(unit: str) -> str:
@@ -80,15 +99,15 @@ class ChannelSensor:
         require_count(self.order, "order")
         least_squares_derivative_weights(self.window, self.order, 1.0)
 
-    def bind(self, name: str, unit: str) -> ChannelSensor:
-        """A copy with every field in SI of channel ``name``'s ``unit``."""
-        f = f"sensors[{name}]"
+    def bind(self, channel: Channel) -> ChannelSensor:
+        """A copy with every field in SI of ``channel``'s unit, shaped for its width."""
+        f, unit, w = f"sensors[{channel.name}]", channel.unit, channel.size
         out = replace(
             self,
-            noise=_si(self.noise, unit, f"{f}.noise"),
-            bias=_si(self.bias, unit, f"{f}.bias", nonneg=False),
-            quantum=_si(self.quantum, unit, f"{f}.quantum"),
-            range=_si(self.range, unit, f"{f}.range", inf_ok=True),
+            noise=_si(self.noise, unit, f"{f}.noise", size=w),
+            bias=_si(self.bias, unit, f"{f}.bias", nonneg=False, size=w),
+            quantum=_si(self.quantum, unit, f"{f}.quantum", size=w),
+            range=_si(self.range, unit, f"{f}.range", inf_ok=True, size=w),
         )
         if np.any(out.range <= 0):
             raise ValueError(f"{f}.range: must be > 0 (inf for none), got {self.range!r}")
@@ -141,14 +160,17 @@ class ChannelActuator:
     scale: float = 1.0
     bias: float = 0.0
 
-    def bind(self, name: str, unit: str) -> ChannelActuator:
-        f = f"actuators[{name}]"
+    def bind(self, channel: Channel) -> ChannelActuator:
+        """A copy with every field in SI of ``channel``'s unit, shaped for its width."""
+        f, unit, w = f"actuators[{channel.name}]", channel.unit, channel.size
         out = replace(
             self,
-            saturation=_si(self.saturation, unit, f"{f}.saturation", inf_ok=True),
-            rate_limit=_si(self.rate_limit, _rate_unit(unit), f"{f}.rate_limit", inf_ok=True),
-            scale=_si(self.scale, "", f"{f}.scale"),
-            bias=_si(self.bias, unit, f"{f}.bias", nonneg=False),
+            saturation=_si(self.saturation, unit, f"{f}.saturation", inf_ok=True, size=w),
+            rate_limit=_si(
+                self.rate_limit, _rate_unit(unit), f"{f}.rate_limit", inf_ok=True, size=w
+            ),
+            scale=_si(self.scale, "", f"{f}.scale", size=w),
+            bias=_si(self.bias, unit, f"{f}.bias", nonneg=False, size=w),
         )
         for field in ("saturation", "rate_limit", "scale"):
             if np.any(np.asarray(getattr(out, field)) <= 0):
@@ -189,7 +211,8 @@ class ChannelDisturbance:
         1σ of a zero-mean Gaussian input held over each control period, channel unit.
     impulse_times, impulses : sequences
         Impulses (channel unit × s) at these times (s), each applied as Δx = B[:, j] J at the
-        first control sample at or after its time.
+        first control sample at or after its time; on a channel ``size`` values wide each
+        impulse is ``size`` values (one per element).
     force : callable, optional
         State-dependent input force f(y) of the output ``force_output`` (e.g.
         :class:`~flexsat.sim.disturbances.BearingFriction` of θ'), integrated with the plant as
@@ -216,27 +239,33 @@ class ChannelDisturbance:
         if self.force is not None and not callable(self.force):
             raise ValueError(f"force: must be callable f(y), got {self.force!r}")
 
-    def bind(self, name: str, unit: str) -> ChannelDisturbance:
-        f = f"disturbances[{name}]"
+    def bind(self, channel: Channel) -> ChannelDisturbance:
+        """A copy with every field in SI of ``channel``'s unit, shaped for its width."""
+        f, unit, w = f"disturbances[{channel.name}]", channel.unit, channel.size
         times = np.atleast_1d(
             _si(self.impulse_times, "s", f"{f}.impulse_times")
             if len(self.impulse_times)
             else np.zeros(0)
         )
-        values = np.atleast_1d(
-            _si(self.impulses, _impulse_unit(unit), f"{f}.impulses", nonneg=False)
+        values = (
+            to_si_array(self.impulses, _impulse_unit(unit), f"{f}.impulses")
             if len(self.impulses)
-            else np.zeros(0)
+            else np.zeros((0,) if w == 1 else (0, w))
         )
-        if times.shape != values.shape or times.ndim != 1:
+        each = () if w == 1 else (w,)
+        if times.ndim != 1 or values.shape != (times.size, *each):
+            per = "one number" if w == 1 else f"{w} values (the channel is {w} values wide)"
             raise ValueError(
-                f"{f}.impulses: {values.size} values for {times.size} times; give one each"
+                f"{f}.impulses: give {per} for each of the {times.size} impulse times, "
+                f"got shape {values.shape}"
             )
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"{f}.impulses: must be finite, got {self.impulses!r}")
         return replace(
             self,
-            random=_si(self.random, unit, f"{f}.random"),
+            random=_si(self.random, unit, f"{f}.random", size=w),
             impulse_times=tuple(times.tolist()),
-            impulses=tuple(values.tolist()),
+            impulses=tuple(values if w > 1 else values.tolist()),
         )
 
     def impulses_at_samples(self, n_steps: int, dt: float) -> dict[int, float]:
@@ -319,7 +348,7 @@ def resolve_channels(plant, config) -> tuple[dict, dict, dict]:
                 if where is None or name in explicit:
                     raise
                 raise ValueError(f"{exc} — set by the planar preset config.{where}") from None
-            bound[name] = piece.bind(name, ch.unit)
+            bound[name] = piece.bind(ch)
         out.append(bound)
     sensors, actuators, disturbances = out
     for name, s in sensors.items():

@@ -39,6 +39,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from flexsat.analysis.settling import settled_at
 from flexsat.dynamics.dispersion import DispersedPlant
 from flexsat.sim.channels import noise_column, noise_columns
 from flexsat.sim.disturbances import BearingFriction
@@ -822,7 +823,7 @@ def run_reduced(
     vib += snapE
     last = red[:, 0, 2].astype(np.int64)  # 1 + the last sample outside the band
     metrics = {
-        "settling_time_s": np.where(last != n_t, t[np.minimum(last, n_t - 1)], np.nan),
+        "settling_time_s": settled_at(t, last),
         "overshoot_deg": np.degrees(np.maximum(red[:, 0, 1], 0.0)),
         "peak_torque_Nm": upeak[:, m_u - 1].copy(),
         "residual_energy_J": vib[:, 0].copy(),

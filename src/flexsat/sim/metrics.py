@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from flexsat.analysis.settling import settling_time
+
 METRIC_UNITS = {
     "settling_time_s": "s",
     "overshoot_deg": "deg",
@@ -13,22 +15,6 @@ METRIC_UNITS = {
     "peak_tip_deflection_m": "m",
     "peak_rate_error_deg_s": "deg/s",
 }
-
-
-def settling_time(t: np.ndarray, error: np.ndarray, band: float) -> np.ndarray:
-    """First time after which |error| stays within ``band``; NaN where it never settles.
-
-    ``error`` has shape (n_cases, n_t). A case that is still outside the band at the last sample
-    has not settled within the run and gets NaN (JSON null), never the run length.
-    """
-    outside = np.abs(error) > band
-    settled = ~outside[:, -1]
-    # index of the last sample outside the band, + 1
-    last_out = np.where(
-        outside.any(axis=1), outside.shape[1] - np.argmax(outside[:, ::-1], axis=1), 0
-    )
-    ts = t[np.minimum(last_out, len(t) - 1)]
-    return np.where(settled, ts, np.nan)
 
 
 def maneuver_metrics(

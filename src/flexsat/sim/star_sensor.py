@@ -28,6 +28,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from flexsat.dynamics.attitude import quaternion_exp, quaternion_multiply
+from flexsat.dynamics.plant import Channel
 from flexsat.sim.channels import ChannelSensor
 from flexsat.units import to_si_array
 
@@ -121,11 +122,12 @@ class StarTrackerSensor(ChannelSensor):
             )
         return cls(covariance=np.cov(ok, rowvar=False), identification_rate=r.identification_rate)
 
-    def bind(self, name: str, unit: str) -> StarTrackerSensor:
-        if unit != "":
+    def bind(self, channel: Channel) -> StarTrackerSensor:
+        if channel.unit != "" or channel.size != 4:
             raise ValueError(
-                f"sensors[{name}]: a star tracker measures the attitude channel "
-                f"(unit Euler parameters), not a channel in {unit!r}"
+                f"sensors[{channel.name}]: a star tracker measures the attitude channel "
+                f"(4 Euler parameters, unit ''), not a channel of {channel.size} values in "
+                f"{channel.unit!r}"
             )
         out = replace(self)
         object.__setattr__(out, "_acts", (False, True, False, False))

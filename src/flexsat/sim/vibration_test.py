@@ -22,9 +22,10 @@ from __future__ import annotations
 import numpy as np
 
 from flexsat.control.playback import Playback
+from flexsat.dynamics.plant import Channel
 from flexsat.dynamics.state_space import StateSpacePlant
 from flexsat.identify.excitation import Excitation, sensor_matrices, with_anti_alias
-from flexsat.identify.measurements import Channel, Measurement
+from flexsat.identify.measurements import Measurement
 from flexsat.input_checks import require_count, require_nonneg, require_positive
 from flexsat.sim.channels import ChannelSensor
 from flexsat.sim.config import SimConfig
@@ -134,9 +135,10 @@ def simulate_test(
         Y = np.array(
             [
                 ChannelSensor(noise=noise * r, quantum=0.0 if q is None else q)
-                .bind(s.name or s.kind, "")
+                # noise and quantum are in the output's own unit; the name only labels errors
+                .bind(Channel("output", ""))
                 .measure(y, z)
-                for s, r, y, z in zip(sensors, rms, Y, normals)
+                for r, y, z in zip(rms, Y, normals)
             ]
         )
     return Measurement(
