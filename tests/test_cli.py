@@ -267,11 +267,12 @@ def test_the_metrics_table_puts_the_longer_list_down_the_rows():
     requirement, a few statistics each): a column per statistic, so the table fits a terminal."""
     from rich.console import Console
 
-    from flexsat.cli import _metrics_table
+    from flexsat.cli import _result_table
+    from flexsat.report.page import metrics_table
 
     def shown(records):
         console = Console(width=100, record=True)
-        console.print(_metrics_table(records))
+        console.print(_result_table(metrics_table(records)))
         return console.export_text().splitlines()
 
     runs = [

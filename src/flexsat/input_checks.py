@@ -13,6 +13,29 @@ import numpy as np
 from flexsat.units import UnitError, holds_quantity, to_si_array
 
 
+class FieldError(ValueError):
+    """A value refused by the rule of one named input: ``str(exc)`` is ``"field: rule"``.
+
+    The field travels as data (:attr:`field`), so that a caller that knows where the value came
+    from (a scenario, which names it ``runs['Law I'].gains.g1``) can place the problem without
+    reading the message.
+
+    Parameters
+    ----------
+    field : str
+        The input as the refusing function names it (its parameter, ``"gains.k"``, ...).
+    rule : str
+        The rule it breaks and the value given (``"must be > 0, got -1"``).
+    """
+
+    def __init__(self, field: str, rule: str):
+        self.field, self.rule = field, rule
+        super().__init__(f"{field}: {rule}")
+
+    def __reduce__(self):  # picklable across processes (dask workers) with its field
+        return type(self), (self.field, self.rule)
+
+
 def _real(value, field: str, noun: str):
     """``value``, or its real part when it is complex with every imaginary part exactly 0.
 
@@ -26,9 +49,10 @@ def _real(value, field: str, noun: str):
         return value
     imag = np.abs(np.imag(value))
     if np.any(imag != 0):
-        raise ValueError(
-            f"{field}: must be a real {noun}, got a complex value (largest "
-            f"|imaginary part| {np.max(imag):.3g}, which would be dropped)"
+        raise FieldError(
+            field,
+            f"must be a real {noun}, got a complex value (largest "
+            f"|imaginary part| {np.max(imag):.3g}, which would be dropped)",
         )
     return np.real(value)
 
@@ -49,24 +73,25 @@ def require_finite(value, field: str, unit: str | None = None) -> np.ndarray:
     else:
         _plain_numbers(value, field)
         if isinstance(value, (str, bytes)):
-            raise ValueError(
-                f"{field}: must be a number in SI units, got the string {value!r} (quantities with "
-                "units are converted at the boundary: flexsat.units.to_si)"
+            raise FieldError(
+                field,
+                f"must be a number in SI units, got the string {value!r} (quantities with "
+                "units are converted at the boundary: flexsat.units.to_si)",
             )
         real = _real(value, field, "number")
         try:
             arr = np.asarray(real, dtype=float)
         except (TypeError, ValueError):
-            raise ValueError(f"{field}: must be a number, got {value!r}") from None
+            raise FieldError(field, f"must be a number, got {value!r}") from None
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{field}: must be finite (no NaN or inf), got {value!r}")
+        raise FieldError(field, f"must be finite (no NaN or inf), got {value!r}")
     return arr
 
 
 def require_positive(value, field: str, unit: str | None = None) -> np.ndarray:
     arr = require_finite(value, field, unit)
     if np.any(arr <= 0):
-        raise ValueError(f"{field}: must be > 0, got {value!r}")
+        raise FieldError(field, f"must be > 0, got {value!r}")
     return arr
 
 
@@ -74,14 +99,14 @@ def require_positive_scalar(value, field: str, unit: str | None = None) -> float
     """``value`` as one finite number > 0, in SI when ``unit`` is given (see the module)."""
     arr = require_positive(value, field, unit)
     if arr.ndim != 0:
-        raise ValueError(f"{field}: must be one number, got shape {arr.shape}")
+        raise FieldError(field, f"must be one number, got shape {arr.shape}")
     return float(arr)
 
 
 def require_nonneg(value, field: str, unit: str | None = None) -> np.ndarray:
     arr = require_finite(value, field, unit)
     if np.any(arr < 0):
-        raise ValueError(f"{field}: must be >= 0, got {value!r}")
+        raise FieldError(field, f"must be >= 0, got {value!r}")
     return arr
 
 
@@ -96,10 +121,10 @@ def set_si(obj, name: str, check, unit: str, field: str | None = None) -> None:
 def require_count(value, field: str) -> int:
     """A positive integer (bools and fractional numbers refused)."""
     if isinstance(value, bool):
-        raise ValueError(f"{field}: must be a positive integer, got {value!r}")
+        raise FieldError(field, f"must be a positive integer, got {value!r}")
     number = float(require_finite(value, field))
     if number != int(number) or number < 1:
-        raise ValueError(f"{field}: must be a positive integer, got {value!r}")
+        raise FieldError(field, f"must be a positive integer, got {value!r}")
     return int(number)
 
 
@@ -107,15 +132,16 @@ def require_numeric(value, field: str, noun: str = "array") -> np.ndarray:
     """A finite numeric array (a copy); strings and non-numbers are refused, naming the field."""
     _plain_numbers(value, field)
     if isinstance(value, (str, bytes)):
-        raise ValueError(f"{field}: must be a numeric {noun}, got the string {value!r}")
+        raise FieldError(field, f"must be a numeric {noun}, got the string {value!r}")
     real = _real(value, field, noun)
     try:
         arr = np.array(real, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"{field}: must be a numeric {noun}, got {type(value).__name__}") from None
+        raise FieldError(field, f"must be a numeric {noun}, got {type(value).__name__}") from None
     if not np.all(np.isfinite(arr)):
-        raise ValueError(
-            f"{field}: must be finite (no NaN or inf), got shape {arr.shape} with "
-            f"{int(np.sum(~np.isfinite(arr)))} non-finite entries"
+        raise FieldError(
+            field,
+            f"must be finite (no NaN or inf), got shape {arr.shape} with "
+            f"{int(np.sum(~np.isfinite(arr)))} non-finite entries",
         )
     return arr

@@ -8,7 +8,7 @@ import pytest
 from pydantic import ValidationError
 
 from flexsat.scenarios import Scenario, ScenarioError
-from flexsat.scenarios.errors import _allowed_keys, _loc_path, _locate, _problem
+from flexsat.scenarios.errors import _allowed_keys, _loc_path, _locate, pydantic_problem
 
 
 def test_the_error_counts_and_lists_its_problems():
@@ -112,7 +112,7 @@ def test_problem_uses_the_validators_own_message_not_pydantics_wrapper():
     }
     with pytest.raises(ValidationError) as info:
         Scenario.model_validate(data)
-    lines = sorted(_problem(error, data, Scenario) for error in info.value.errors())
+    lines = sorted(pydantic_problem(error, data, Scenario) for error in info.value.errors())
     assert lines[0] == "maneuver.angle: incompatible units (kilogram given, rad expected)"
     assert lines[1].startswith("runs: List should have at least 1 item")
     assert lines[2] == (

@@ -33,26 +33,27 @@ import inspect
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Literal, Union
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.catalog import CASES, get_case
-from flexsat.scenarios.errors import ScenarioError, _item, _locate
+from flexsat.scenarios.datasets import SimulatedRuns
+from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
-    _Document,
+    Document,
     _given,
     _Section,
     check_unique_labels,
     count,
     quantity,
 )
-from flexsat.scenarios.runner import ScenarioResult
+from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 
 #: a value as written in YAML: a number, a quantity string, or a (nested) list of them
-Value = Union[float, int, str, list[Any]]
+Value = float | int | str | list[Any]
 
 
 class SimulationSettings(_Section):
@@ -213,7 +214,7 @@ class SimulationRunSpec(_Section):
         return self
 
 
-class SimulationScenario(_Document):
+class SimulationScenario(Document):
     """A validated simulation scenario (module docstring)."""
 
     kind: Literal["simulation"]
@@ -259,14 +260,25 @@ def simulation_cases() -> tuple[str, ...]:
 
 
 # -- running -------------------------------------------------------------------------------------
-class SimulationResult(ScenarioResult):
+@dataclass(frozen=True)
+class SimulationResult(SimulatedRuns):
     """The runs of a simulation scenario: one :class:`flexsat.sim.SimResult` per run, in one
-    dataset with dims (run, time[, component]) (:class:`~flexsat.scenarios.runner.
-    ScenarioResult`)."""
+    dataset with dims (run, time[, component]) (:class:`~flexsat.scenarios.datasets.
+    SimulatedRuns`)."""
+
+    def figures(self, folder, ds) -> list[str]:
+        from flexsat.report.simulation import draw_figures
+
+        return draw_figures(ds, folder)
+
+    def sections(self, ds, figures: list[str]) -> str:
+        from flexsat.report.simulation import sections
+
+        return sections(self.metrics_records(), ds)
 
 
 def _located(path: str, exc: Exception) -> ScenarioError:
-    return ScenarioError([_locate(path, str(exc))])
+    return ScenarioError([locate(path, exc)])
 
 
 def _build_plant(scenario: SimulationScenario):
@@ -277,8 +289,11 @@ def _build_plant(scenario: SimulationScenario):
         if name not in accepted:
             raise ScenarioError(
                 [
-                    f"plant.{name}: not an option of the {scenario.case} plant "
-                    f"(its options: {', '.join(accepted) or 'none'})"
+                    Problem(
+                        f"plant.{name}",
+                        f"not an option of the {scenario.case} plant "
+                        f"(its options: {', '.join(accepted) or 'none'})",
+                    )
                 ]
             )
     try:
@@ -303,10 +318,13 @@ def _config(scenario: SimulationScenario, plant):
             if name not in names:
                 raise ScenarioError(
                     [
-                        f"{role}.{name}: the {scenario.case} plant has no "
-                        f"{'output' if role == 'sensors' else 'input'} channel "
-                        f"{name!r} (its channels: "
-                        f"{', '.join(c.name for c in channels)})"
+                        Problem(
+                            f"{role}.{name}",
+                            f"the {scenario.case} plant has no "
+                            f"{'output' if role == 'sensors' else 'input'} channel "
+                            f"{name!r} (its channels: "
+                            f"{', '.join(c.name for c in channels)})",
+                        )
                     ]
                 )
             values = _given(spec)
@@ -333,7 +351,7 @@ def _config(scenario: SimulationScenario, plant):
             ),
         )
     except ValueError as exc:
-        raise ScenarioError([f"simulation: {exc}"]) from None
+        raise ScenarioError([Problem("simulation", f"{exc}")]) from None
     try:  # binding each piece to its channel converts its values to the channel's unit
         resolve_channels(plant, config)
     except ValueError as exc:
@@ -343,56 +361,61 @@ def _config(scenario: SimulationScenario, plant):
     return config
 
 
-def run_simulation(
-    scenario: SimulationScenario, progress: Callable[[str], None] | None = None
-) -> SimulationResult:
-    """Build the plant, the configuration and every run's law, then simulate each run.
+class SimulationKind(ScenarioKind):
+    """``kind: simulation``: any case's plant under any law (module docstring), one simulation
+    per run from the plant's initial state."""
 
-    Raises
-    ------
-    ScenarioError
-        Before any run, for a plant option, initial value, channel or gain the case refuses.
-    flexsat.sim.SimulationDiverged
-        If a run diverges (its message starts with the run).
-    """
-    from flexsat.references import cite
-    from flexsat.sim import SimulationDiverged, simulate
+    kind = "simulation"
+    document = SimulationScenario
 
-    plant = _build_plant(scenario)
-    try:
-        x0 = plant.state_from(**scenario.initial)
-    except ValueError as exc:
-        raise _located("initial", exc) from None
-    config = _config(scenario, plant)
-    laws, problems = {}, []
-    for index, run in enumerate(scenario.runs):
+    def steps(self, scenario: SimulationScenario) -> int:
+        return len(scenario.runs)
+
+    def plan(self, scenario: SimulationScenario):
+        """Build the plant, the configuration and every run's law, then simulate each run.
+
+        Raises
+        ------
+        ScenarioError
+            Before any run, for a plant option, initial value, channel or gain the case refuses.
+        """
+        from flexsat.references import cite
+
+        plant = _build_plant(scenario)
         try:
-            laws[run.label] = SIMULATION_LAWS[run.law].build(run, plant, config.dt)
+            x0 = plant.state_from(**scenario.initial)
         except ValueError as exc:
-            problems.append(_locate("runs" + _item(index, run.label), str(exc)))
-    if problems:
-        raise ScenarioError(problems)
-    results = []
-    for index, (label, law) in enumerate(laws.items()):
-        if progress is not None:
-            progress(label)
-        try:
-            results.append(simulate(plant, law, config, n_cases=1, initial_state=x0))
-        except SimulationDiverged as exc:
-            raise SimulationDiverged(
-                f"runs{_item(index, label)}: {exc}", exc.cases, exc.time, exc.cause
-            ) from None
-        except ValueError as exc:
-            raise ScenarioError([f"runs{_item(index, label)}: {exc}"]) from None
-    return SimulationResult(
-        scenario, tuple(laws), tuple(results), cite(get_case(scenario.case).source)
-    )
+            raise _located("initial", exc) from None
+        config = _config(scenario, plant)
+        laws, problems = {}, []
+        for index, run in enumerate(scenario.runs):
+            try:
+                laws[run.label] = SIMULATION_LAWS[run.law].build(run, plant, config.dt)
+            except ValueError as exc:
+                problems.append(locate("runs" + item_path(index, run.label), exc))
+        if problems:
+            raise ScenarioError(problems)
+        results = []
+        for index, (label, law) in enumerate(laws.items()):
+            options = {"n_cases": 1, "initial_state": x0}
+            results.append(
+                (
+                    yield Run(
+                        label,
+                        Simulation(plant, law, config, options),
+                        "runs" + item_path(index, label),
+                    )
+                )
+            )
+        return SimulationResult(
+            scenario, tuple(laws), tuple(results), cite(get_case(scenario.case).source)
+        )
 
 
 __all__ = [
     "SIMULATION_LAWS",
     "SimulationResult",
+    "SimulationKind",
     "SimulationScenario",
-    "run_simulation",
     "simulation_cases",
 ]
