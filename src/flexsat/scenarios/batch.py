@@ -54,7 +54,7 @@ from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.report.page import ReportedResult
-from flexsat.scenarios.errors import Problem, ScenarioError, _locate, locate
+from flexsat.scenarios.errors import Problem, ScenarioError, locate
 from flexsat.scenarios.fields import Document, _Section, count
 from flexsat.scenarios.kind import Run, ScenarioKind
 
@@ -414,7 +414,7 @@ def _run_batch(scenario: BatchScenario, progress: Callable[[str], None] | None =
     try:
         table = _table(scenario)
     except ValueError as exc:
-        raise ScenarioError([_locate("sampling", str(exc))]) from None
+        raise ScenarioError([locate("sampling", exc)]) from None
     design, table = (table, table.table) if scenario.sampling == "saltelli" else (None, table)
     setup_text = scenario.yaml_text + "\0" + maneuver.yaml_text
     histories = tuple(scenario.histories)

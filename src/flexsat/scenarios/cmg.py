@@ -45,7 +45,7 @@ from pydantic import Field, field_validator, model_validator
 from flexsat import limits
 from flexsat.dynamics.space_station import FT_LB as _FT_LB
 from flexsat.report.page import ReportedResult
-from flexsat.scenarios.errors import ScenarioError, _locate, item_path
+from flexsat.scenarios.errors import ScenarioError, item_path, locate
 from flexsat.scenarios.fields import Document, _Section, check_unique_labels, count, quantity
 from flexsat.scenarios.kind import Run, ScenarioKind
 
@@ -657,7 +657,7 @@ def _attitude_loop(scenario: CmgStationScenario):
         maxima = st.BrysonMaxima(q.attitude, q.rate, q.momentum, q.momentum_integral)
         design = st.design(data, maxima, tuple(q.pitch_filters), tuple(q.roll_yaw_filters))
     except ValueError as exc:
-        raise ScenarioError([_locate("lqr", str(exc))]) from None
+        raise ScenarioError([locate("lqr", exc)]) from None
     sim = scenario.simulation
     return st.simulate_attitude(
         design, sim.orbits * data.period, sim.disturbance, sim.initial_attitude

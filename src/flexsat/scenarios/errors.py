@@ -1,8 +1,11 @@
-"""Problems in a scenario: :class:`ScenarioError` and its ``field.path: rule`` messages.
+"""Problems in a scenario: :class:`ScenarioError` and its :class:`Problem` records.
 
-Every problem found while loading, validating or preparing a scenario becomes one line naming
-the field (``runs['Law I'].gains.g1: must be >= 0``); the helpers here build those paths from
-pydantic's error locations and from the ``field: rule`` messages of the runtime classes.
+Every problem found while loading, validating or preparing a scenario is a record of the field
+path and the rule (``runs['Law I'].gains.g1`` and ``must be >= 0``), read as one line
+``runs['Law I'].gains.g1: must be >= 0``. The helpers here build the paths from pydantic's
+error locations and from the field a runtime error names: as data
+(:class:`flexsat.input_checks.FieldError`), or, for the runtime messages that do not carry it
+yet, from the ``field: rule`` form of their text (:func:`_locate`).
 """
 
 from __future__ import annotations
@@ -119,11 +122,6 @@ def locate(path: str, error: Exception) -> Problem:
 
 
 def item_path(index: int, label) -> str:
-    """Path element of list item ``index``; runs are named by their label (``['Law I']``)."""
-    return _item(index, label)
-
-
-def _item(index: int, label) -> str:
     """Path element of list item ``index``; runs are named by their label."""
     return f"[{label!r}]" if isinstance(label, str) else f"[{index}]"
 
@@ -134,7 +132,7 @@ def _loc_path(loc: tuple, data) -> str:
     for key in loc:
         if isinstance(key, int):
             node = node[key] if isinstance(node, list) and 0 <= key < len(node) else None
-            path += _item(key, node.get("label") if isinstance(node, dict) else None)
+            path += item_path(key, node.get("label") if isinstance(node, dict) else None)
         else:
             path = f"{path}.{key}" if path else str(key)
             node = node.get(key) if isinstance(node, dict) else None

@@ -45,7 +45,7 @@ from flexsat.catalog import get_case
 from flexsat.design.slew_weights import SlewWeights, nominal_histories, rim_nodes, slew_run_metrics
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import concat_runs
-from flexsat.scenarios.errors import Problem, ScenarioError, _item, _locate
+from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
     Document,
     _given,
@@ -296,7 +296,7 @@ def _weights(run: SlewRunSpec, index: int, n_modes: int, n_forces: int):
     try:
         q, d = SlewWeights(**run.weights.model_dump()).diagonals(n_modes, n_forces)
     except ValueError as exc:
-        raise ValueError(f"runs{_item(index, run.label)}.weights.{exc}") from None
+        raise ScenarioError([locate(f"runs{item_path(index, run.label)}.weights", exc)]) from None
     return np.diag(q), np.diag(d)
 
 
@@ -311,10 +311,14 @@ def _forces(run: SlewRunSpec, index: int, plant) -> list[str]:
     for name in run.forces:
         channel = name if name.startswith("force_") else f"force_{name}"
         if channel not in available:
-            raise ValueError(
-                f"runs{_item(index, run.label)}.forces: {name!r} is not a force of "
-                f"the plant (its forces: "
-                f"{', '.join(c[len('force_') :] for c in available)})"
+            raise ScenarioError(
+                [
+                    Problem(
+                        f"runs{item_path(index, run.label)}.forces",
+                        f"{name!r} is not a force of the plant (its forces: "
+                        f"{', '.join(c[len('force_') :] for c in available)})",
+                    )
+                ]
             )
         names.append(channel)
     return names
@@ -374,13 +378,10 @@ def _laws(scenario: SlewScenario, truth, design_plant, nominal, dt: float) -> di
                 decouple=run.decouple,
             )
             laws[run.label] = design.controller(dt, run.feedforward, plant=truth)
+        except ScenarioError as exc:  # the run's forces or weights
+            problems.extend(exc.problems)
         except ValueError as exc:
-            message = str(exc)
-            problems.append(
-                message
-                if message.startswith("runs[")
-                else _locate(f"runs{_item(index, run.label)}", message)
-            )
+            problems.append(locate(f"runs{item_path(index, run.label)}", exc))
     if problems:
         raise ScenarioError(problems)
     return laws
@@ -435,7 +436,9 @@ class SlewKind(ScenarioKind):
         results = []
         for index, (label, law) in enumerate(laws.items()):
             run = Run(
-                label, Simulation(truth, law, config, {"n_cases": 1}), f"runs{_item(index, label)}"
+                label,
+                Simulation(truth, law, config, {"n_cases": 1}),
+                f"runs{item_path(index, label)}",
             )
             results.append((yield run))
 

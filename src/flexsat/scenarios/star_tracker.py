@@ -32,7 +32,7 @@ from pydantic import Field, model_validator
 
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
-from flexsat.scenarios.errors import ScenarioError, _locate, item_path
+from flexsat.scenarios.errors import ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
     Document,
     _Buildable,
@@ -271,7 +271,7 @@ def build_tracker(scenario: StarTrackerScenario):
     try:
         catalog = scenario.catalog.build(scenario.folder)
     except ValueError as exc:
-        raise ScenarioError([_locate("catalog", str(exc))]) from None
+        raise ScenarioError([locate("catalog", exc)]) from None
     idn = scenario.identification
     try:
         return StarTracker(
@@ -282,8 +282,10 @@ def build_tracker(scenario: StarTrackerScenario):
             idn.min_fields,
         )
     except ValueError as exc:
-        where = "cameras" if str(exc).startswith("cameras") else "identification"
-        raise ScenarioError([_locate(where, str(exc))]) from None
+        field = getattr(exc, "field", None)
+        raise ScenarioError(
+            [locate("cameras" if field == "cameras" else "identification", exc)]
+        ) from None
 
 
 class StarTrackerKind(ScenarioKind):

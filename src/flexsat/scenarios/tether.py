@@ -31,9 +31,10 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from flexsat import limits
+from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
-from flexsat.scenarios.errors import _item, _locate, item_path
+from flexsat.scenarios.errors import item_path
 from flexsat.scenarios.fields import Document, _Section, check_unique_labels, quantity
 from flexsat.scenarios.kind import Run, ScenarioKind
 
@@ -147,12 +148,10 @@ class TetherScenario(Document):
 
         for index, run in enumerate(self.runs):
             if run.final_length <= MIN_LENGTH * self.system.length:
-                raise ValueError(
-                    _locate(
-                        f"runs{_item(index, run.label)}.final_length",
-                        f"{run.final_length * 1e3:g} mm is below the collapse threshold "
-                        f"{MIN_LENGTH:g} L = {MIN_LENGTH * self.system.length:g} m of the model",
-                    )
+                raise FieldError(
+                    f"runs{item_path(index, run.label)}.final_length",
+                    f"{run.final_length * 1e3:g} mm is below the collapse threshold "
+                    f"{MIN_LENGTH:g} L = {MIN_LENGTH * self.system.length:g} m of the model",
                 )
         if self.initial.length_rate is not None and any(r.law == "rate" for r in self.runs):
             raise ValueError(
