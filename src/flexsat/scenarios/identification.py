@@ -35,24 +35,13 @@ reported as ``field.path: rule`` before anything runs.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Annotated, Literal
+from typing import TYPE_CHECKING, Annotated, Literal
 
 import numpy as np
 from pydantic import BeforeValidator, Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.cases import get_case
-from flexsat.identify.campaign import (
-    IDENTIFY_STEPS,
-    SIMULATE_STEPS,
-    CameraRig,
-    CampaignConfig,
-    CampaignResult,
-    TestRecords,
-    identify_and_update,
-    run_campaign,
-)
-from flexsat.identify.measurements import Measurement
 from flexsat.references import cite
 from flexsat.report.page import ReportedResult, ResultTable
 from flexsat.scenarios.errors import Problem, ScenarioError, locate
@@ -60,6 +49,9 @@ from flexsat.scenarios.fields import Document, _Section, count, quantity
 from flexsat.scenarios.kind import Run, ScenarioKind
 from flexsat.text import format_optional
 from flexsat.units import to_si
+
+if TYPE_CHECKING:  # the identification stack (scipy.signal) is imported when a campaign runs
+    from flexsat.identify.campaign import CampaignConfig, CampaignResult, TestRecords
 
 __all__ = [
     "SUMMARY_COLUMNS",
@@ -259,6 +251,8 @@ class IdentificationScenario(Document):
 
     def config(self) -> CampaignConfig:
         """The :class:`CampaignConfig` of this scenario."""
+        from flexsat.identify.campaign import CameraRig, CampaignConfig
+
         ident = self.identification
         common = dict(
             a_priori_scale=dict(self.a_priori.stiffness_scale),
@@ -428,6 +422,9 @@ def _check_against_case(scenario: IdentificationScenario, case, records=None) ->
 
 def _read_records(scenario: IdentificationScenario) -> TestRecords:
     """The measured tests of ``records`` (paths relative to the scenario file)."""
+    from flexsat.identify.campaign import TestRecords
+    from flexsat.identify.measurements import Measurement
+
     problems, read = [], {}
     for name in ("hammer", "wheels", "video"):
         path = getattr(scenario.records, name)
@@ -458,6 +455,8 @@ def _number(value) -> float | None:
 def _campaign(scenario: IdentificationScenario, case, records, progress=None):
     """The campaign (one call into :mod:`flexsat.identify.campaign`): on the test records, or
     simulating the tests; a value it refuses is reported at the scenario's field for it."""
+    from flexsat.identify.campaign import identify_and_update, run_campaign
+
     try:
         if records is not None:
             return identify_and_update(case, scenario.config(), records, progress=progress)
@@ -485,6 +484,8 @@ class IdentificationKind(ScenarioKind):
     def steps(self, scenario: IdentificationScenario) -> int:
         """The campaign's steps, without the simulated tests when the scenario brings its
         records."""
+        from flexsat.identify.campaign import IDENTIFY_STEPS, SIMULATE_STEPS
+
         return len(IDENTIFY_STEPS) + (0 if scenario.recorded else len(SIMULATE_STEPS))
 
     def plan(self, scenario: IdentificationScenario):
