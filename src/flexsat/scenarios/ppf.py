@@ -37,7 +37,7 @@ from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import item_path
 from flexsat.scenarios.fields import Document, _Section, check_unique_labels, quantity
-from flexsat.scenarios.kind import Run, ScenarioKind
+from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 
 #: the three time responses of every run
 RESPONSES = ("open loop", "initial gains", "optimised gains")
@@ -308,16 +308,18 @@ class PPFKind(ScenarioKind):
     document = PPFScenario
 
     def steps(self, scenario: PPFScenario) -> int:
-        return len(scenario.runs)
+        # per run: the optimisation, then the open loop, the initial and the optimised gains
+        return 4 * len(scenario.runs)
 
     def plan(self, scenario: PPFScenario):
-        """Optimise every run's gains (homotopy of seed 004 Eqs. 15–28) and simulate its tip
+        """Optimise every run's gains (homotopy of seed 004 Eqs. 15–28), then simulate its tip
         responses with zero, initial and optimised gains; a value the problem or the optimiser
         refuses is reported under its run."""
+        import dataclasses
         import functools
 
         from flexsat.cases.agrawal_bang import agrawal_bang
-        from flexsat.cases.agrawal_bang_ppf import run_ppf_case
+        from flexsat.cases.agrawal_bang_ppf import response_simulations, run_ppf_case, tip_history
         from flexsat.catalog import get_case
         from flexsat.references import cite
 
@@ -325,6 +327,7 @@ class PPFKind(ScenarioKind):
         p, sim = scenario.ppf, scenario.simulation
         runs = []
         for index, run in enumerate(scenario.runs):
+            path = "runs" + item_path(index, run.label)
             optimise = functools.partial(
                 run_ppf_case,
                 run.weights,
@@ -336,10 +339,23 @@ class PPFKind(ScenarioKind):
                 Q_u=p.Q_u,
                 zeta_f=p.zeta_f,
                 amplitude=p.amplitude,
-                duration=sim.duration,
-                rate=sim.control_rate,
             )
-            runs.append((yield Run(run.label, optimise, "runs" + item_path(index, run.label))))
+            optimised = yield Run(run.label, optimise, path)
+            gains = {
+                "open loop": np.zeros_like(optimised.initial_gains),
+                "initial gains": optimised.initial_gains,
+                "optimised gains": optimised.optimization.gains,
+            }
+            setup = optimised.setup
+            plant, laws, config = response_simulations(setup, gains, sim.duration, sim.control_rate)
+            options = {"initial_state": setup.x0, "record_states": True}
+            responses = {}
+            for name, law in laws.items():
+                simulation = Simulation(plant, law, config, options)
+                ds = (yield Run(f"{run.label}: {name}", simulation, path)).dataset
+                responses.setdefault("time", ds["time"].values)
+                responses[name] = tip_history(setup, ds)
+            runs.append(dataclasses.replace(optimised, responses=responses))
         notes = (
             f"Filters tuned to the three modes with ζ_f = {p.zeta_f:g}; Q_u = {p.Q_u:g}; "
             f"initial tip error |Eᵗ| = {100 * p.amplitude:g} cm in the first mode (three-mode "
