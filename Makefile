@@ -8,8 +8,11 @@ $(PY):
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 
-$(STAMP): $(PY) pyproject.toml
+# the example plug-in (tests/plugin_package) is part of the test environment: tests/test_example_plugin.py
+# runs its plant, law, case and check through the command line
+$(STAMP): $(PY) pyproject.toml tests/plugin_package/pyproject.toml
 	$(PY) -m pip install -q -e '.[dev]'
+	$(PY) -m pip install -q -e tests/plugin_package
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -3,7 +3,12 @@
 ``flexsat cases`` lists this catalogue and ``flexsat run`` / ``flexsat modes`` look a name up in
 it before anything heavy is imported: a :class:`CaseInfo` holds the module and function of its
 builder, which :attr:`CaseInfo.builder` imports on first use. :mod:`flexsat.cases` re-exports
-the catalogue with the builders themselves.
+the built-in catalogue (:data:`CASES`) with the builders themselves.
+
+Other packages add cases through the ``flexsat.cases`` entry-point group
+(:mod:`flexsat.plugins`, docs/plugins.md): :func:`all_cases` is the built-ins followed by the
+plug-ins, and :func:`get_case` looks a name up in it. The entry points are read on the first
+call, not on import.
 """
 
 from __future__ import annotations
@@ -15,8 +20,8 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class CaseInfo:
-    """A case: its ``name``, the ``module`` of :mod:`flexsat.cases` and the ``function`` in it
-    that builds the case, its ``source`` (seed file and where in it, or a reference; see
+    """A case: its ``name``, the ``module`` (dotted, absolute) and the ``function`` in it that
+    builds the case, its ``source`` (seed file and where in it, or a reference; see
     :func:`flexsat.references.cite`) and a one-line ``description``."""
 
     name: str
@@ -28,7 +33,7 @@ class CaseInfo:
     @property
     def builder(self) -> Callable:
         """The builder, imported on first use (with its numerical dependencies)."""
-        return getattr(importlib.import_module(f"flexsat.cases.{self.module}"), self.function)
+        return getattr(importlib.import_module(self.module), self.function)
 
 
 _BEAMS = "Blevins, Formulas for Natural Frequency and Mode Shape (1979), Table 8-1"
@@ -38,14 +43,14 @@ CASES: dict[str, CaseInfo] = {
     for info in (
         CaseInfo(
             "tamu",
-            "tamu",
+            "flexsat.cases.tamu",
             "tamu",
             "seed 000_7bfdb62d2eacc22a.txt, Att. 3 Table 1 (L1302-L1323) and §V",
             "Texas A&M rigid hub with four flexible appendages and tip masses, single-axis slews",
         ),
         CaseInfo(
             "tamu_grid",
-            "tamu_grid",
+            "flexsat.cases.tamu_grid",
             "tamu_grid",
             "seed 000_7bfdb62d2eacc22a.txt, Att. 4 Table 1 (L1648-L1655), Att. 6 "
             "(L2405-L2705), Att. 8 Fig. 4 (L3234-L3246)",
@@ -54,21 +59,21 @@ CASES: dict[str, CaseInfo] = {
         ),
         CaseInfo(
             "draper_rpl",
-            "draper_rpl",
+            "flexsat.cases.draper_rpl",
             "draper_rpl",
             "seed 000_7bfdb62d2eacc22a.txt, Att. 5 Table 3 (L2156-L2166), Eqs. 50-59, Table 4",
             "Draper/RPL hub with four appendages, Ritz model with comparison functions (Table 4)",
         ),
         CaseInfo(
             "eps",
-            "eps",
+            "flexsat.cases.eps",
             "eps",
             "seed 003_6d17262716e94f5f.txt, L66-L136 (EPS model), L238-L295 (node numbers)",
             "Earth Pointing Satellite: 25 m graphite truss with 15 m and 7.5 m antennas",
         ),
         CaseInfo(
             "nps",
-            "nps",
+            "flexsat.cases.nps",
             "nps",
             "seed 001_79dfdfba94ed8e0d.txt (NPS FSS), L21, L181, L208-L220",
             "NPS Flexible Spacecraft Simulator: hub with a cantilevered astromast and "
@@ -76,14 +81,14 @@ CASES: dict[str, CaseInfo] = {
         ),
         CaseInfo(
             "agrawal_bang",
-            "agrawal_bang",
+            "flexsat.cases.agrawal_bang",
             "agrawal_bang",
             "seed 004_680d3fec9e1f8c83.txt, §4 L205-L303",
             "Agrawal-Bang two-beam L structure with three collocated piezoelectric pairs",
         ),
         CaseInfo(
             "bainum",
-            "bainum",
+            "flexsat.cases.bainum",
             "bainum",
             "seed 002_c3272b32d7cac32e.txt (NASA CR-158684), Ch. II-IV, App. A",
             "Bainum & Reddy free-free beam in orbit: pitch + bending with gravity gradient, "
@@ -91,21 +96,21 @@ CASES: dict[str, CaseInfo] = {
         ),
         CaseInfo(
             "cantilever_beam",
-            "beams",
+            "flexsat.cases.beams",
             "cantilever_beam",
             _BEAMS,
             "uniform cantilever, 3-D frame elements, against the exact beta L",
         ),
         CaseInfo(
             "free_free_beam",
-            "beams",
+            "flexsat.cases.beams",
             "free_free_beam",
             _BEAMS,
             "uniform free-free beam, 3-D frame elements, six rigid modes",
         ),
         CaseInfo(
             "nafems_fv2",
-            "beams",
+            "flexsat.cases.beams",
             "nafems_fv2",
             "NAFEMS R0015 Selected Benchmarks for Natural Frequency Analysis (1987), test FV2",
             "NAFEMS FV2 pin-ended double cross, in-plane frame vibration",
@@ -114,18 +119,56 @@ CASES: dict[str, CaseInfo] = {
 }
 
 
+def _case_plugin_rule(name: str, obj) -> str | None:
+    """Why a ``flexsat.cases`` entry point is not a case, or None."""
+    module = importlib.import_module(getattr(obj, "__module__", None) or "builtins")
+    if not callable(obj) or getattr(module, getattr(obj, "__qualname__", ""), None) is not obj:
+        return f"not a case builder: {obj!r} is not a class or function defined in its module"
+    for field in ("source", "description"):
+        text = getattr(obj, field, None)
+        if not isinstance(text, str) or not text.strip():
+            return f"{field}: a case builder needs a non-empty string attribute {field!r}"
+    if "\n" in obj.description:
+        return "description: one line (a row of `flexsat cases`)"
+    return None
+
+
+def all_cases() -> dict[str, CaseInfo]:
+    """The built-in cases (:data:`CASES`), then those of the ``flexsat.cases`` plug-ins.
+
+    A plug-in is a case builder -- a class or function called with the case's keyword
+    overrides -- with string attributes ``source`` and ``description``; the entry point's name
+    is the case's name. One that cannot be loaded, is not such a builder or takes a built-in
+    name is left out and reported (:func:`flexsat.plugins.broken_plugins`).
+    """
+    from flexsat.plugins import entry_point_objects
+
+    reserved = {
+        name: f"the built-in case {name!r} ({info.module}:{info.function})"
+        for name, info in CASES.items()
+    }
+    plugins = entry_point_objects("flexsat.cases", _case_plugin_rule, reserved)
+    return CASES | {
+        name: CaseInfo(name, obj.__module__, obj.__qualname__, obj.source, obj.description)
+        for name, obj in plugins.items()
+    }
+
+
 def get_case(name: str) -> CaseInfo:
-    """The catalogue entry of ``name``.
+    """The catalogue entry of ``name`` (a built-in case or a plug-in's, :func:`all_cases`).
 
     Raises
     ------
     ValueError
         For an unknown name, listing the known ones.
     """
-    try:
+    if name in CASES:  # the built-ins need no entry point read
         return CASES[name]
+    cases = all_cases()
+    try:
+        return cases[name]
     except KeyError:
-        raise ValueError(f"case: unknown case {name!r}; known: {sorted(CASES)}") from None
+        raise ValueError(f"case: unknown case {name!r}; known: {sorted(cases)}") from None
 
 
-__all__ = ["CASES", "CaseInfo", "get_case"]
+__all__ = ["CASES", "CaseInfo", "all_cases", "get_case"]

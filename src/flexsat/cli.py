@@ -8,6 +8,10 @@ writing no report.
 Each command imports what it needs when it runs (numpy, the cases, the simulation, the
 reports): ``flexsat --help`` and ``flexsat cases`` load only typer, rich and
 :mod:`flexsat.catalog` (tests/test_cli_startup.py, benchmarks/bench_cli.py).
+
+Plug-ins (:mod:`flexsat.plugins`, docs/plugins.md) are read when a command first needs their
+group; every one left out (a missing module, an object of the wrong kind, a built-in's name)
+is named on stderr as the command ends, whatever its exit code, and never stops it.
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
-from flexsat.catalog import CASES, get_case
+from flexsat.catalog import all_cases, get_case
 from flexsat.references import LINE_NUMBERS, cite, references
 
 app = typer.Typer(
@@ -48,8 +52,19 @@ def _version(value: bool) -> None:
         raise typer.Exit()
 
 
+def _report_broken_plugins() -> None:
+    """Name every plug-in the command left out, on stderr (the one place they are reported)."""
+    from flexsat.plugins import broken_plugins
+
+    for plugin in broken_plugins():
+        errors.print(
+            f"warning: {plugin}", style="yellow", markup=False, highlight=False, soft_wrap=True
+        )
+
+
 @app.callback()
 def _main(
+    context: typer.Context,
     version: Annotated[
         bool,
         typer.Option(
@@ -58,6 +73,8 @@ def _main(
     ] = False,
 ) -> None:
     """flexsat: integrated structures-and-control design of flexible spacecraft."""
+    # on close: after the command, also when it exits with an error
+    context.call_on_close(_report_broken_plugins)
 
 
 def _fail(message: str) -> NoReturn:
@@ -99,7 +116,8 @@ def parse_settings(settings: list[str]) -> dict:
 def cases(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON to stdout.")] = False,
 ) -> None:
-    """List the benchmark cases."""
+    """List the benchmark cases (the built-in ones, then the plug-ins')."""
+    catalogue = all_cases()
     if as_json:
         typer.echo(
             json.dumps(
@@ -110,7 +128,7 @@ def cases(
                         "references": references([i.source]),
                         "description": i.description,
                     }
-                    for i in CASES.values()
+                    for i in catalogue.values()
                 ],
                 indent=2,
             )
@@ -119,10 +137,10 @@ def cases(
     table = Table(title="flexsat cases")
     for column in ("case", "source", "description"):
         table.add_column(column, overflow="fold")
-    for info in CASES.values():
+    for info in catalogue.values():
         table.add_row(info.name, cite(info.source), info.description)
     console.print(table)
-    _print_references([i.source for i in CASES.values()])
+    _print_references([i.source for i in catalogue.values()])
 
 
 def _print_references(sources: list[str]) -> None:
@@ -242,19 +260,6 @@ def _result_table(data) -> Table:
     return table
 
 
-def _warn_broken_kinds() -> None:
-    """Name every scenario-kind plug-in that could not be loaded (the others still work)."""
-    from flexsat.plugins import broken_plugins
-    from flexsat.scenarios import scenario_kinds
-
-    scenario_kinds()
-    for broken in broken_plugins():
-        if broken.group == "flexsat.kinds":
-            errors.print(
-                f"warning: {broken}", style="yellow", markup=False, highlight=False, soft_wrap=True
-            )
-
-
 @app.command()
 def run(
     scenario: Annotated[
@@ -296,7 +301,6 @@ def run(
     )
     from flexsat.sim import SimulationDiverged
 
-    _warn_broken_kinds()
     try:
         spec = default_scenario() if scenario is None else load_scenario(scenario)
         kind = scenario_kind(spec.kind)

@@ -16,7 +16,7 @@ other plug-ins.
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 from typing import Any
@@ -69,7 +69,9 @@ def _load_group(group: str) -> dict[str, Any]:
 
 
 def entry_point_objects(
-    group: str, accept: Callable[[str, Any], str | None] | None = None
+    group: str,
+    accept: Callable[[str, Any], str | None] | None = None,
+    reserved: Mapping[str, str] | None = None,
 ) -> dict[str, Any]:
     """The objects the installed packages declare in entry-point ``group``, by entry-point name.
 
@@ -80,6 +82,10 @@ def entry_point_objects(
     accept : callable, optional
         ``accept(name, obj)`` returns None for an acceptable object, or the rule it breaks (for
         example "not a Plant subclass"); a refused object is reported like a failed import.
+    reserved : mapping of str to str, optional
+        The built-in names of the extension point, each with what it is (``"the built-in case
+        'tamu' (flexsat.cases.tamu:tamu)"``): a plug-in of one of these names is refused and
+        reported naming both, so that a package never silently replaces a built-in.
 
     Raises
     ------
@@ -88,9 +94,16 @@ def entry_point_objects(
     """
     if group not in GROUPS:
         raise ValueError(f"group: must be one of {', '.join(GROUPS)}, got {group!r}")
+    reserved = reserved or {}
     objects = {}
     for name, obj in _load_group(group).items():
-        rule = accept(name, obj) if accept is not None else None
+        if name in reserved:
+            rule = f"its name is taken by {reserved[name]}; rename the entry point"
+        else:
+            try:
+                rule = accept(name, obj) if accept is not None else None
+            except Exception as exc:  # noqa: BLE001 -- an object that breaks the rule's checks
+                rule = f"{type(exc).__name__}: {exc}"
         if rule is None:
             objects[name] = obj
         else:

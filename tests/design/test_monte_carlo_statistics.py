@@ -118,7 +118,7 @@ def test_requirements_read_their_units():
     assert requirement_from_spec("t", {"min": 3}, "s").relation == ">="
 
 
-# -- percentiles ---------------------------------------------------------------------------------------
+# -- percentiles -----------------------------------------------------------------------------------
 def test_percentiles_skip_missing_values_and_keep_inf_as_the_worst():
     values = np.array([5.0, 1.0, np.nan, 3.0, 2.0, 4.0, np.inf, np.nan])
     summary = metric_summary(values, "t", q=(0, 50, 80, 100))
@@ -149,7 +149,7 @@ def test_percentile_interval_covers_the_true_percentile():
     assert np.mean(hits) >= 0.91
 
 
-# -- convergence -----------------------------------------------------------------------------------------
+# -- convergence -----------------------------------------------------------------------------------
 def test_convergence_ends_at_the_full_estimate_and_narrows_as_one_over_sqrt_n():
     assert list(checkpoints(1000)) == [10, 20, 50, 100, 200, 500, 1000]
     assert list(checkpoints(7)) == [7] and list(checkpoints(230)) == [10, 20, 50, 100, 200, 230]
@@ -174,7 +174,7 @@ def test_convergence_ends_at_the_full_estimate_and_narrows_as_one_over_sqrt_n():
     assert np.all(p50.low <= p50.estimate) and np.all(p50.estimate <= p50.high)
 
 
-# -- sensitivity ------------------------------------------------------------------------------------------
+# -- sensitivity -----------------------------------------------------------------------------------
 def ishigami(x, a=7.0, b=0.1):
     return np.sin(x[:, 0]) + a * np.sin(x[:, 1]) ** 2 + b * x[:, 2] ** 4 * np.sin(x[:, 0])
 
@@ -231,7 +231,7 @@ def test_summary_is_plain_numbers():
     assert back["requirements"][0]["convergence"]["n"][-1] == 300
 
 
-# -- bad input ---------------------------------------------------------------------------------------------
+# -- bad input -------------------------------------------------------------------------------------
 def test_bad_input_is_refused_by_field():
     with pytest.raises(ValueError, match=r"requirement 'm'\.relation: must be one of <=, >="):
         Requirement("m", "<", 1.0)

@@ -39,7 +39,7 @@ def unit_points(table, space):
     return np.column_stack([p.frozen.cdf(table.values[p.name]) for p in space.parameters])
 
 
-# -- grids ------------------------------------------------------------------------------------------
+# -- grids -----------------------------------------------------------------------------------------
 def test_grid_is_the_full_factorial_with_the_first_axis_slowest():
     alpha = GridAxis.linspace("alpha", 0.0, 0.25, 6)
     u_max = GridAxis("u_max", [f"{u} ozf*in" for u in (100, 200, 300, 400, 500, 600)], "N*m")
@@ -60,7 +60,7 @@ def test_grid_is_the_full_factorial_with_the_first_axis_slowest():
     }
 
 
-# -- space-filling sequences ------------------------------------------------------------------------
+# -- space-filling sequences -----------------------------------------------------------------------
 @pytest.mark.parametrize("method, n", [("latin_hypercube", 100), ("sobol_sequence", 128)])
 def test_sequences_lie_in_their_bounds_are_stratified_and_reproducible(method, n):
     table = getattr(TAMU_BOX, method)(n, seed=11)
@@ -94,7 +94,7 @@ def test_saltelli_design_has_n_times_d_plus_2_cases_in_the_bounds():
     assert np.array_equal(design.table.matrix(), TAMU_BOX.sobol_design(64, seed=5).table.matrix())
 
 
-# -- distributions -----------------------------------------------------------------------------------
+# -- distributions ---------------------------------------------------------------------------------
 DISPERSED = ParameterSpace(
     [
         Normal("hub_inertia", "1.2 kg*m**2", "0.05 kg*m**2", "kg*m**2"),
@@ -137,7 +137,7 @@ def test_truncated_normal_stays_in_its_bounds(low, high):
     assert np.all(np.isfinite(x))
 
 
-# -- reproducibility ----------------------------------------------------------------------------------
+# -- reproducibility -------------------------------------------------------------------------------
 @pytest.mark.parametrize("chunk", [1, 7, 100, 300])
 def test_monte_carlo_cases_do_not_depend_on_the_chunking(chunk):
     whole = DISPERSED.sample(300, seed=99)
@@ -171,7 +171,7 @@ def test_noise_seeds_are_per_case_and_apart_from_the_parameters():
     assert not np.any(raw == seeds)
 
 
-# -- units and scenario dicts --------------------------------------------------------------------------
+# -- units and scenario dicts ----------------------------------------------------------------------
 def test_values_are_read_in_their_units():
     assert Uniform("u_max", "100 ozf*in", "600 ozf*in", "N*m").high == pytest.approx(
         600 * OZF_IN, rel=1e-15

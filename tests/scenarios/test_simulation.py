@@ -122,3 +122,13 @@ def test_report_has_a_figure_per_recorded_channel(tmp_path):
     for name in ("attitude", "rate", "torque"):
         assert f'src="{name}.png"' in html and (folder / f"{name}.png").stat().st_size > 1000
     assert "final_pointing_error_deg" in html
+
+
+def test_open_loop_runs_on_a_plant_with_vector_channels():
+    """The open loop reads the plant's first output and writes every input whatever their
+    widths (the rigid EPS: a 4-wide attitude, a 3-wide torque); at rest it stays at rest."""
+    text = BASE.replace(
+        'law: mrp_pd, gains: {K: "100 N*m", P: "1000 N*m*s/rad"}', "law: open_loop"
+    ).replace('initial: {euler123: ["10 deg", 0, 0]}\n', "")
+    result = run_scenario(load_scenario(text))
+    assert np.all(result.dataset()["torque"].values == 0)

@@ -661,7 +661,7 @@ def eps(**overrides) -> EPSCase:
             f"got {values['tube_wall']:g} m"
         )
     case = EPSCase(**values)
-    case._model  # build now: one clear message at construction
+    case._model  # noqa: B018 -- build now: one clear message at construction
     return case
 
 

@@ -15,6 +15,10 @@ or, for a printed column, :func:`series`. A published number that is an erratum,
 model deviates from for a documented reason, carries a :class:`Discrepancy` (the value computed
 instead and a standalone explanation). A new topic module is one more name in
 :data:`MODULES`.
+
+Other packages add checks through the ``flexsat.checks`` entry-point group (docs/plugins.md):
+each entry point names a :class:`Check` or a list of them, which :func:`all_checks` runs after
+the built-in ones, in entry-point name order.
 """
 
 from __future__ import annotations
@@ -48,9 +52,36 @@ def _import_failure(name: str, exc: Exception) -> Check:
     return Check(name, "check module imports", f"flexsat.checks.{name}", 0.0, "", reraise, atol=0)
 
 
-def all_checks() -> list[Check]:
-    """Every registered check, in table order. A topic module that fails to import shows up as
-    one failing check carrying the error."""
+def _check_plugin_rule(name: str, obj) -> str | None:
+    """Why a ``flexsat.checks`` entry point is not a check or a list of checks, or None."""
+    items = obj if isinstance(obj, list | tuple) else [obj]
+    if not items or not all(isinstance(c, Check) for c in items):
+        return (
+            "not a check: a flexsat.checks entry point names a flexsat.checks.Check or a "
+            f"non-empty list of them, got {type(obj).__name__}"
+        )
+    return None
+
+
+def plugin_checks() -> list[Check]:
+    """The checks of the ``flexsat.checks`` plug-ins, in entry-point name order.
+
+    An entry point that cannot be loaded, is not a :class:`Check` (or a list of them) or takes
+    the name of a built-in topic module (:data:`MODULES`) is left out and reported
+    (:func:`flexsat.plugins.broken_plugins`).
+    """
+    from flexsat.plugins import entry_point_objects
+
+    reserved = {name: f"the built-in checks flexsat.checks.{name}" for name in MODULES}
+    checks: list[Check] = []
+    for obj in entry_point_objects("flexsat.checks", _check_plugin_rule, reserved).values():
+        checks.extend(obj if isinstance(obj, list | tuple) else [obj])
+    return checks
+
+
+def builtin_checks() -> list[Check]:
+    """The checks of the topic modules (:data:`MODULES`), in table order. A topic module that
+    fails to import shows up as one failing check carrying the error."""
     checks: list[Check] = []
     for name in MODULES:
         try:
@@ -60,6 +91,12 @@ def all_checks() -> list[Check]:
             continue
         checks.extend(module.CHECKS)
     return checks
+
+
+def all_checks() -> list[Check]:
+    """Every registered check: the built-in ones (:func:`builtin_checks`), then the plug-ins'
+    (:func:`plugin_checks`)."""
+    return builtin_checks() + plugin_checks()
 
 
 def case_names(checks: Iterable[Check] | None = None) -> list[str]:
@@ -119,8 +156,10 @@ __all__ = [
     "CheckResult",
     "Discrepancy",
     "all_checks",
+    "builtin_checks",
     "case_names",
     "evaluate",
+    "plugin_checks",
     "run_checks",
     "select_checks",
     "series",

@@ -69,8 +69,10 @@ _TRUSS = Discrepancy(
     15.36,
     (
         'Model deviation: the EPS study gives the first truss mode as "about 7.0 Hz" (elastic '
-        "mode 50; the model's mode number agrees). The model keeps the published truss, a 3 m cross "
-        "section of 51 mm x 1.59 mm graphite tubes, whose bending stiffness (about EA x 4 x (1.5 m)² "
+        "mode 50; the model's mode number agrees). The model keeps the published truss, a 3 m "
+        "cross "
+        "section of 51 mm x 1.59 mm graphite tubes, whose bending stiffness (about EA x 4 x (1.5 "
+        "m)² "
         "= 6.1e8 N m²) puts the first bending mode of the 25 m truss near 15.4 Hz; the antennas, "
         "isolated by their supports, cannot lower it much. Only a truss about 1.25 m wide gives "
         "7 Hz, against the published 3 m and structural mass. The paper's figure of the truss is "
@@ -81,7 +83,8 @@ _ELEMENTS = Discrepancy(
     219,
     (
         "Model deviation: the EPS study's NASTRAN deck has 95 nodes (reproduced) and 223 elements. "
-        "The paper's figure of the structure is lost; the reconstruction carries the torquer mass on "
+        "The paper's figure of the structure is lost; the reconstruction carries the torquer mass "
+        "on "
         "4 support tubes, giving 219 elements. With 8 tubes (every bay corner) it would have 223, "
         "but about 17 kg more structure: 570 kg instead of the published 548 kg, which the model "
         "reproduces within 1 %."

@@ -75,7 +75,8 @@ def _printed_eigenvalue_erratum(i: int) -> Discrepancy | None:
             f"Erratum in Junkins & Kim 1990 (Att. 5 of Junkins, Pollock & Rahman 1990), Table 2: "
             f"the printed ζω = {CLOSED_ZETA_OMEGA[i]} contradicts the paper's own closed-loop "
             f"eigenvalue in the same row, {CLOSED_REAL[i]} ± {CLOSED_OMEGA[i]}i, which gives "
-            f"ζω = Im λ·(−Re λ)/|λ| = {implied:.4f}, the value computed here from the printed gains; "
+            f"ζω = Im λ·(−Re λ)/|λ| = {implied:.4f}, the value computed here from the printed "
+            "gains; "
             f"the same formula gives row 3's printed {CLOSED_ZETA_OMEGA[2]} from its eigenvalue."
         ),
     )

@@ -55,9 +55,11 @@ _TYPO = Discrepancy(
     _EI_US,
     (
         "Erratum in Kim & Junkins 1990 (Att. 4 of Junkins, Pollock & Rahman 1990), Table 1: the "
-        "printed SI value 9.34982 N m² is a one-digit typo for 9.34182 N m², the exact conversion of "
+        "printed SI value 9.34982 N m² is a one-digit typo for 9.34182 N m², the exact conversion "
+        "of "
         "the printed US value 3255.2 lbf in² (9.34982 N m² would be 3258.0 lbf in²). The US column "
-        "is the consistent one: it gives E = 10.0e6 psi, aluminium's modulus, for the 2 in x 1/8 in "
+        "is the consistent one: it gives E = 10.0e6 psi, aluminium's modulus, for the 2 in x 1/8 "
+        "in "
         "strip, and the other three rows convert exactly. The model uses the US column."
     ),
 )
@@ -67,7 +69,8 @@ _MODE_COUNT = Discrepancy(
     16,
     (
         "Model deviation: the Fig. 1 caption of Kim & Junkins 1990 (Att. 4 of Junkins, Pollock & "
-        "Rahman 1990) says 10 modes lie below 30 Hz; this 60-dof grid model has 16, with or without "
+        "Rahman 1990) says 10 modes lie below 30 Hz; this 60-dof grid model has 16, with or "
+        "without "
         "gravity and motors, while it reproduces the first six modelled frequencies of Junkins & "
         "James 1988 (Att. 8: 0.90 ... 12.84 Hz) within 4 %. A plate-like grid's mode count grows "
         "about in proportion to frequency, so six modes below 12.84 Hz imply about 14 below 30 Hz: "

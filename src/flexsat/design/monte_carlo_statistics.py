@@ -418,7 +418,7 @@ def _points(points, n: int) -> np.ndarray:
     return ns
 
 
-# -- sensitivity ------------------------------------------------------------------------------------
+# -- sensitivity -----------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class SobolIndices:
     """Sobol' first-order (``first``) and total (``total``) indices per parameter (``names``

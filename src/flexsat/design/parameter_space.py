@@ -559,7 +559,7 @@ class ParameterSpace:
         return SobolDesign(self.from_unit(u), problem, count, bool(second_order))
 
 
-# -- scenario dicts ----------------------------------------------------------------------------------
+# -- scenario dicts --------------------------------------------------------------------------------
 def _keys(
     spec: Mapping, allowed: tuple[str, ...], required: tuple[str, ...], field_path: str, what: str
 ) -> None:

@@ -15,8 +15,10 @@ Modules: :mod:`~flexsat.scenarios.errors` (the error and its field-path problems
 :mod:`~flexsat.scenarios.fields` (quantities, counts and base models shared by every kind),
 :mod:`~flexsat.scenarios.kind` (the kind protocol and registry),
 :mod:`~flexsat.scenarios.documents` (reading a document and validating it by its kind),
-:mod:`~flexsat.scenarios.runner` (the one loop that runs a scenario's runs), then one module
-per kind.
+:mod:`~flexsat.scenarios.runner` (the one loop that runs a scenario's runs),
+:mod:`~flexsat.scenarios.simulation_laws` and :mod:`~flexsat.scenarios.simulation_plants` (the
+laws and plants a simulation scenario names, built-in or plug-in, through the protocol of
+:mod:`~flexsat.scenarios.registry`), then one module per kind.
 
 The names below are imported from their modules on first use: importing the package loads
 none of the kinds.
@@ -46,6 +48,9 @@ _EXPORTS = {
     "SimulationScenario": "simulation",
     "SimulationResult": "simulation",
     "simulation_cases": "simulation",
+    # the registries themselves are the functions of the same name in those modules
+    "LawContext": "simulation_laws",
+    "PlantContext": "simulation_plants",
     "SlewScenario": "slew",
     "SlewResult": "slew",
     "PPFScenario": "ppf",

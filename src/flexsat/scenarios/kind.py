@@ -193,8 +193,6 @@ def _accept(name: str, obj: Any) -> str | None:
     kind = getattr(obj, "kind", None)
     if kind != name:
         return f"its kind is {kind!r}; the entry-point name must be its kind"
-    if name in built_in_kinds():
-        return f"kind {name!r} is built into flexsat"
     document = getattr(obj, "document", None)
     if not (isinstance(document, type) and issubclass(document, BaseModel)):
         return "its document is not a pydantic model"
@@ -205,7 +203,15 @@ def scenario_kinds() -> dict[str, type[ScenarioKind]]:
     """Every scenario kind by name: the built-in ones (:func:`built_in_kinds`), then those of
     the entry-point group ``flexsat.kinds``; a plug-in that cannot be loaded is left out and
     listed by :func:`flexsat.plugins.broken_plugins`."""
-    return {**built_in_kinds(), **plugins.entry_point_objects("flexsat.kinds", accept=_accept)}
+    built_in = built_in_kinds()
+    reserved = {
+        name: f"the built-in kind {name!r} ({cls.__module__}:{cls.__qualname__})"
+        for name, cls in built_in.items()
+    }
+    return {
+        **built_in,
+        **plugins.entry_point_objects("flexsat.kinds", accept=_accept, reserved=reserved),
+    }
 
 
 def scenario_kind(name: Any) -> ScenarioKind:

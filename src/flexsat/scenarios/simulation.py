@@ -19,27 +19,33 @@ and writes named channels, with sensors, actuators and disturbances given per ch
         gains: {k: "4000 N*m*s/rad", A: "800 N*m"}
         target: {euler123: ["1 rad", "1 rad", "1 rad"]}
 
-``plant`` holds the keyword arguments of the case's plant builder, ``initial`` the named initial
-values its plant understands (:meth:`~flexsat.dynamics.plant.Plant.state_from`). Channel
-values take the channel's unit (a number in SI, a quantity string, or a list of them for a
-vector channel). Problems are reported, before anything runs, as ``field.path: rule`` lines of
-one :class:`~flexsat.scenarios.ScenarioError`.
+``plant`` holds the keyword arguments of the case's plant builder, or ``name:`` a registered
+plant and its parameters (:mod:`flexsat.scenarios.simulation_plants`: a ``flexsat.plants`` plug-
+in); a run's ``law`` is a registered law (:mod:`flexsat.scenarios.simulation_laws`: a built-in
+or a ``flexsat.laws`` plug-in), ``gains`` and ``target`` its sections, validated by the law's
+own schema. ``initial`` holds the named initial values the plant understands
+(:meth:`~flexsat.dynamics.plant.Plant.state_from`). Channel values take the channel's unit (a
+number in SI, a quantity string, or a list of them for a vector channel). Problems are reported,
+before anything runs, as ``field.path: rule`` lines of one
+:class:`~flexsat.scenarios.ScenarioError`.
 """
 
 from __future__ import annotations
 
-import functools
-import inspect
 import re
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Literal
 
-import numpy as np
-from pydantic import Field, field_validator, model_validator
+from pydantic import (
+    Field,
+    ValidationInfo,
+    field_serializer,
+    field_validator,
+    model_validator,
+)
 
 from flexsat import limits
-from flexsat.catalog import CASES, get_case
+from flexsat.catalog import get_case
 from flexsat.scenarios.datasets import SimulatedRuns
 from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
@@ -51,9 +57,14 @@ from flexsat.scenarios.fields import (
     quantity,
 )
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
-
-#: a value as written in YAML: a number, a quantity string, or a (nested) list of them
-Value = float | int | str | list[Any]
+from flexsat.scenarios.registry import validate_section
+from flexsat.scenarios.simulation_laws import (
+    LawContext,
+    Value,
+    simulation_laws,
+    target_quaternion,
+)
+from flexsat.scenarios.simulation_plants import PlantContext, simulation_cases, simulation_plants
 
 
 class SimulationSettings(_Section):
@@ -97,121 +108,45 @@ class ChannelDisturbanceSpec(_Section):
     impulses: list[ImpulseSpec] = Field(default_factory=list, max_length=limits.MAX_SAMPLES)
 
 
-# -- laws ----------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class _SimulationLaw:
-    gains: tuple[str, ...]
-    required: tuple[str, ...]
-    targets: bool
-    build: Callable[..., Any]
-
-
-def target_quaternion(target: dict) -> np.ndarray | None:
-    """Euler parameters of a target given as ``euler123`` (rad) or ``attitude``; None if empty."""
-    from flexsat.dynamics.attitude import dcm_to_quaternion, euler123_to_dcm
-    from flexsat.units import to_si_array
-
-    if not target:
-        return None
-    unknown = set(target) - {"euler123", "attitude"}
-    if unknown:
-        raise ValueError(
-            f"target.{sorted(unknown)[0]}: not a target (give euler123 (rad) or "
-            "attitude (a unit quaternion, scalar first))"
-        )
-    if len(target) > 1:
-        raise ValueError("target: give euler123 or attitude, not both")
-    if "euler123" in target:
-        angles = to_si_array(target["euler123"], "rad", "target.euler123")
-        if angles.shape != (3,):
-            raise ValueError(f"target.euler123: three angles, got shape {angles.shape}")
-        return dcm_to_quaternion(euler123_to_dcm(angles))
-    return to_si_array(target["attitude"], "", "target.attitude")
-
-
-def _attitude_law(name: str):
-    """Builder of the attitude law ``flexsat.control.<name>`` from its gains (named as the
-    class's fields) and target; the class is imported when a run is built."""
-
-    def build(run: SimulationRunSpec, plant, dt: float):
-        import flexsat.control
-
-        beta = target_quaternion(run.target)
-        extra = {} if beta is None else {"beta_target": beta}
-        return getattr(flexsat.control, name)(**run.gains, **extra)
-
-    return build
-
-
-def _lqr(run: SimulationRunSpec, plant, dt: float):
-    """Constant LQR state feedback on the plant's linear part, reading its ``state`` output."""
-    from flexsat.control import ScheduledStateFeedback, lqr
-
-    A, B = plant.linear_part()
-    n, m = B.shape
-    Q = _weights(run.gains["state_weights"], n, "gains.state_weights")
-    R = _weights(run.gains.get("input_weights", 1.0), m, "gains.input_weights")
-    K, _, _ = lqr(A, B, Q, R)
-    return ScheduledStateFeedback([0.0], K[None], "state", [c.name for c in plant.inputs])
-
-
-def _weights(value, size: int, field: str) -> np.ndarray:
-    w = np.atleast_1d(np.asarray(value, float))
-    if w.size == 1:
-        w = np.full(size, float(w[0]))
-    if w.shape != (size,) or not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise ValueError(f"{field}: one weight >= 0 or {size} of them, got {np.shape(value)}")
-    return np.diag(w)
-
-
-def _open_loop(run: SimulationRunSpec, plant, dt: float):
-    import control
-    from flexsat.control import StateSpaceCompensator
-
-    m = plant.n_inputs
-    p = plant.outputs[0]
-    system = control.ss([], [], [], np.zeros((m, p.size)))
-    return StateSpaceCompensator(system, [p.name], [c.name for c in plant.inputs], dt=dt)
-
-
-#: the laws a simulation run names, with their gains (the builders import the control package
-#: when a run is built, so reading a scenario does not)
-SIMULATION_LAWS: dict[str, _SimulationLaw] = {
-    "gibbs_lyapunov": _SimulationLaw(
-        ("k", "A"), ("k", "A"), True, _attitude_law("GibbsLyapunovLaw")
-    ),
-    "mrp_pd": _SimulationLaw(("K", "P"), ("K", "P"), True, _attitude_law("MRPLaw")),
-    "quaternion_pd": _SimulationLaw(
-        ("Kp", "Kd"), ("Kp", "Kd"), True, _attitude_law("QuaternionPD")
-    ),
-    "lqr": _SimulationLaw(("state_weights", "input_weights"), ("state_weights",), False, _lqr),
-    "open_loop": _SimulationLaw((), (), False, _open_loop),
-}
-
-
 class SimulationRunSpec(_Section):
-    """One closed-loop run: a law (:data:`SIMULATION_LAWS`), its gains and its target."""
+    """One closed-loop run: a law (:func:`~flexsat.scenarios.simulation_laws.simulation_laws`),
+    its gains and its target, held as instances of the law's ``Parameters`` and ``Target``
+    once validated."""
 
     label: str
-    law: Literal[tuple(sorted(SIMULATION_LAWS))]
-    gains: dict[str, Value] = Field(default_factory=dict)
-    target: dict[str, Value] = Field(default_factory=dict)
+    law: str
+    gains: Any = Field(default_factory=dict, validate_default=True)
+    target: Any = Field(default_factory=dict, validate_default=True)
 
-    @model_validator(mode="after")
-    def _law_inputs(self):
-        law = SIMULATION_LAWS[self.law]
-        for name in self.gains:
-            if name not in law.gains:
-                known = ", ".join(law.gains) or "none"
-                raise ValueError(
-                    f"gains.{name}: not a gain of law {self.law!r} (its gains: {known})"
-                )
-        missing = [g for g in law.required if g not in self.gains]
-        if missing:
-            raise ValueError(f"gains.{missing[0]}: required by law {self.law!r}")
-        if self.target and not law.targets:
-            raise ValueError(f"target: law {self.law!r} takes no target")
-        return self
+    @field_validator("law")
+    @classmethod
+    def _known_law(cls, name: str) -> str:
+        laws = simulation_laws()
+        if name not in laws:
+            raise ValueError(f"law: unknown law {name!r}; known: {', '.join(sorted(laws))}")
+        return name
+
+    @field_validator("gains")
+    @classmethod
+    def _law_gains(cls, gains, info: ValidationInfo):
+        if "law" not in info.data:  # an unknown law is reported on its own
+            return gains
+        name = info.data["law"]
+        law = simulation_laws()[name]
+        return validate_section(law.Parameters, gains, f"law {name!r}", "gain", "gains")
+
+    @field_validator("target")
+    @classmethod
+    def _law_target(cls, target, info: ValidationInfo):
+        if "law" not in info.data:
+            return target
+        name = info.data["law"]
+        model = getattr(simulation_laws()[name], "Target", None)
+        if not target:
+            return None
+        if model is None:
+            raise ValueError(f"target: law {name!r} takes no target")
+        return validate_section(model, target, f"law {name!r}", "target", "target")
 
 
 class SimulationScenario(Document):
@@ -220,7 +155,7 @@ class SimulationScenario(Document):
     kind: Literal["simulation"]
     name: str
     case: str
-    plant: dict[str, Value | bool | dict[str, Any]] = Field(default_factory=dict)
+    plant: Any = Field(default_factory=dict, validate_default=True)
     initial: dict[str, Value] = Field(default_factory=dict)
     simulation: SimulationSettings
     sensors: dict[str, ChannelSensorSpec] = Field(default_factory=dict)
@@ -232,31 +167,62 @@ class SimulationScenario(Document):
     @classmethod
     def _known_case(cls, name: str) -> str:
         get_case(name)
-        if name not in simulation_cases():
-            raise ValueError(
-                f"case: {name!r} builds no plant to simulate; cases with one: "
-                f"{', '.join(simulation_cases())}"
-            )
         return name
 
+    @field_validator("plant")
+    @classmethod
+    def _plant_parameters(cls, section, info: ValidationInfo):
+        """The section as (name, the plant's validated Parameters); left as written when the
+        case is unknown or builds no plant and no name is given (reported on the case)."""
+        return named_plant(section, info.data.get("case")) or section
+
+    @field_serializer("plant")
+    def _plant_as_written(self, plant):
+        """The section as a scenario gives it back: ``name`` and the parameters (SI)."""
+        if isinstance(plant, dict):
+            return plant
+        name, parameters = plant
+        return {"name": name, **parameters.model_dump(exclude_none=True)}
+
     @model_validator(mode="after")
-    def _labels(self):
+    def _plant_and_labels(self):
+        if isinstance(self.plant, dict):
+            named = sorted(set(simulation_plants()) - set(simulation_cases()))
+            raise ValueError(
+                f"case: {self.case!r} builds no plant to simulate; cases with one: "
+                f"{', '.join(simulation_cases())}"
+                + (f"; or name a plant (plant.name: one of {', '.join(named)})" if named else "")
+            )
         check_unique_labels(self.runs)
         return self
 
 
-@functools.cache
-def simulation_cases() -> tuple[str, ...]:
-    """Cases whose builder's object has a ``plant`` method (read from the builder's return
-    annotation, so no case is built)."""
-    import typing
+def named_plant(section: Any, case: str | None) -> tuple[str, Any] | None:
+    """A ``plant:`` section resolved in the registry (:func:`simulation_plants`): the plant's
+    name (``name:``, else the case's) and its validated ``Parameters``; None when no name is
+    given and ``case`` builds no plant.
 
-    names = []
-    for name, info in CASES.items():
-        kind = typing.get_type_hints(info.builder).get("return")
-        if callable(getattr(kind, "plant", None)):
-            names.append(name)
-    return tuple(names)
+    Raises
+    ------
+    ValueError
+        ``field: rule`` for a section that is not a mapping, an unknown plant name, or a
+        parameter the plant refuses (pydantic's ValidationError, located at its field).
+    """
+    if not isinstance(section, dict):
+        raise ValueError(f"plant: a mapping of plant options, got {section!r}")
+    options = dict(section)
+    name = options.pop("name", None)
+    plants = simulation_plants()
+    if name is None:
+        if case not in plants:
+            return None
+        name = case
+    elif name not in plants:
+        raise ValueError(f"name: unknown plant {name!r}; known: {', '.join(sorted(plants))}")
+    parameters = validate_section(
+        plants[name].Parameters, options, f"plant {name!r}", "option", "plant"
+    )
+    return name, parameters
 
 
 # -- running -------------------------------------------------------------------------------------
@@ -282,24 +248,28 @@ def _located(path: str, exc: Exception) -> ScenarioError:
 
 
 def _build_plant(scenario: SimulationScenario):
-    case = get_case(scenario.case).builder()
-    builder = case.plant
-    accepted = inspect.signature(builder).parameters
-    for name in scenario.plant:
-        if name not in accepted:
-            raise ScenarioError(
-                [
-                    Problem(
-                        f"plant.{name}",
-                        f"not an option of the {scenario.case} plant "
-                        f"(its options: {', '.join(accepted) or 'none'})",
-                    )
-                ]
-            )
+    from flexsat.dynamics.plant import Plant
+
     try:
-        return builder(**scenario.plant)
-    except (ValueError, TypeError) as exc:
+        # a slew scenario's plant section is its case's plant options, resolved here
+        name, parameters = (
+            named_plant(scenario.plant, scenario.case)
+            if isinstance(scenario.plant, dict)
+            else scenario.plant
+        )
+        plant = simulation_plants()[name].from_scenario(parameters, PlantContext(scenario.case))
+    except (ValueError, TypeError) as exc:  # a builder's TypeError: an argument it refuses
         raise _located("plant", exc) from None
+    if not isinstance(plant, Plant):
+        raise ScenarioError(
+            [
+                Problem(
+                    "plant",
+                    f"{name!r} built a {type(plant).__name__}, not a flexsat.dynamics.Plant",
+                )
+            ]
+        )
+    return plant
 
 
 def _config(scenario: SimulationScenario, plant):
@@ -377,8 +347,11 @@ class SimulationKind(ScenarioKind):
         Raises
         ------
         ScenarioError
-            Before any run, for a plant option, initial value, channel or gain the case refuses.
+            Before any run, for a plant option, initial value, channel or gain the case refuses
+            (a law's :class:`~flexsat.input_checks.FieldError` naming one of the run's gains is
+            placed under ``gains``).
         """
+        from flexsat.control import Controller
         from flexsat.references import cite
 
         plant = _build_plant(scenario)
@@ -389,33 +362,39 @@ class SimulationKind(ScenarioKind):
         config = _config(scenario, plant)
         laws, problems = {}, []
         for index, run in enumerate(scenario.runs):
+            path = "runs" + item_path(index, run.label)
+            context = LawContext(plant, config.dt, run.target)
             try:
-                laws[run.label] = SIMULATION_LAWS[run.law].build(run, plant, config.dt)
+                laws[run.label] = simulation_laws()[run.law].from_scenario(run.gains, context)
             except ValueError as exc:
-                problems.append(locate("runs" + item_path(index, run.label), exc))
+                gain = getattr(exc, "field", None) in type(run.gains).model_fields
+                problems.append(locate(path + ".gains" if gain else path, exc))
+                continue
+            if not isinstance(laws[run.label], Controller):
+                problems.append(
+                    Problem(
+                        path,
+                        f"law {run.law!r} built a {type(laws[run.label]).__name__}, "
+                        "not a flexsat.control.Controller",
+                    )
+                )
         if problems:
             raise ScenarioError(problems)
         results = []
         for index, (label, law) in enumerate(laws.items()):
             options = {"n_cases": 1, "initial_state": x0}
-            results.append(
-                (
-                    yield Run(
-                        label,
-                        Simulation(plant, law, config, options),
-                        "runs" + item_path(index, label),
-                    )
-                )
-            )
+            simulation = Simulation(plant, law, config, options)
+            results.append((yield Run(label, simulation, "runs" + item_path(index, label))))
         return SimulationResult(
             scenario, tuple(laws), tuple(results), cite(get_case(scenario.case).source)
         )
 
 
 __all__ = [
-    "SIMULATION_LAWS",
-    "SimulationResult",
     "SimulationKind",
+    "SimulationResult",
     "SimulationScenario",
+    "named_plant",
     "simulation_cases",
+    "target_quaternion",
 ]

@@ -154,7 +154,8 @@ def _unit_scales(units) -> tuple[float, float, float]:
     given = SI_UNITS if units is None else dict(units)
     if set(given) != set(SI_UNITS):
         raise ValueError(
-            f"units: must map exactly 'length', 'mass' and 'time' to unit strings, got {sorted(given)}"
+            "units: must map exactly 'length', 'mass' and 'time' to unit strings, got "
+            f"{sorted(given)}"
         )
     return tuple(
         to_si(f"1 {given[k]}", SI_UNITS[k], f"units[{k!r}]") for k in ("length", "mass", "time")
@@ -190,7 +191,8 @@ def _mass_partition(nas: dict, se, aset: np.ndarray) -> tuple[np.ndarray, np.nda
 def _check_sizes(lam, phg, uset, mass, rows, source: str) -> None:
     if phg.shape != (len(uset), lam.size):
         raise ValueError(
-            f"{source}: PHG has shape {phg.shape}, expected (g-set size, modes) = {(len(uset), lam.size)}"
+            f"{source}: PHG has shape {phg.shape}, expected (g-set size, modes) = "
+            f"{(len(uset), lam.size)}"
         )
     if mass.shape != (rows.sum(),) * 2:
         raise ValueError(

@@ -124,7 +124,8 @@ def _nodes(datasets: dict, path: Path) -> tuple[np.ndarray, np.ndarray]:
     for d in datasets[kind]:
         if np.any(np.asarray(d["def_cs"]) != 0) or np.any(np.asarray(d["disp_cs"]) != 0):
             raise ValueError(
-                f"{path}: dataset {kind} has nodes in local coordinate systems (def_cs/disp_cs != 0); "
+                f"{path}: dataset {kind} has nodes in local coordinate systems (def_cs/disp_cs != "
+                "0); "
                 "only global coordinates are supported"
             )
         ids.append(np.asarray(d["node_nums"], dtype=float).astype(np.int64))
@@ -169,7 +170,8 @@ def _normalised(
     if np.any(mu <= 0):
         mode = modes[int(np.argmax(mu <= 0))]["mode_n"]
         raise ValueError(
-            f"{path}: mode {mode} has no modal mass (dataset 55 record 8 field 2 is 0), so its shape "
+            f"{path}: mode {mode} has no modal mass (dataset 55 record 8 field 2 is 0), so its "
+            "shape "
             "cannot be mass-normalised; pass normalisation='as_is' if the shapes already are"
         )
     return shapes / np.sqrt(mu)[:, None, None]
@@ -224,7 +226,8 @@ def _mass_properties(frequencies, shapes, coordinates, reference, rigid_mass, pa
         return rigid_mass, participation, boundary
     if rigid.sum() != 6:
         raise ValueError(
-            f"{path}: a universal file has no mass matrix; rigid_mass and participation are derived "
+            f"{path}: a universal file has no mass matrix; rigid_mass and participation are "
+            "derived "
             f"from six rigid-body modes, found {rigid.sum()}: pass rigid_mass= and participation="
         )
     rigid_mass, rigid_rows = _rigid_from_modes(shapes[rigid], coordinates, reference, path)

@@ -592,9 +592,9 @@ class ModalModel:
         boundary : {"free", "cantilevered"}, optional
             Default: "cantilevered" when the structure has supports (``assembly.unclamped``);
             otherwise "free" when the stiffness annihilates the rigid-body vectors,
-            :math:`\|K R\| \le 10^{-9} \|K\| \|R\|` (Frobenius norms), else "cantilevered". Give it explicitly for a free
-            structure with axial preloads, whose geometric stiffness need not annihilate rigid
-            rotations.
+            :math:`\|K R\| \le 10^{-9} \|K\| \|R\|` (Frobenius norms), else "cantilevered".
+            Give it explicitly for a free structure with axial preloads, whose geometric
+            stiffness need not annihilate rigid rotations.
         """
         asm = modes.assembly
         reference = _array(reference, "reference", (3,), "(3,)")

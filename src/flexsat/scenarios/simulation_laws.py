@@ -1,0 +1,218 @@
+"""The laws a simulation run names (``law:``): the built-in ones and the ``flexsat.laws``
+plug-ins, all built through one protocol (:mod:`flexsat.scenarios.registry`).
+
+A law is a class with ``Parameters`` (the schema of the run's ``gains:``), optionally
+``Target`` (the schema of its ``target:``; None or absent: the law takes no target) and a
+classmethod ``from_scenario(parameters, context)`` returning a
+:class:`flexsat.control.Controller` that reads and writes the plant's channels by name;
+``context`` is a :class:`LawContext`. :func:`simulation_laws` is the registry the scenario
+schema and runner call. The builders import the control package when a run is built, so
+reading a scenario does not.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from pydantic import BaseModel, model_validator
+
+from flexsat.scenarios.fields import _Section
+
+#: a value as written in YAML: a number, a quantity string, or a (nested) list of them
+Value = float | int | str | list[Any]
+
+
+@dataclass(frozen=True)
+class LawContext:
+    """What a law is built against.
+
+    Attributes
+    ----------
+    plant : flexsat.dynamics.plant.Plant
+        The scenario's plant (its channels, its linear part).
+    dt : float
+        Control period, s.
+    target : pydantic model or None
+        The run's validated ``target:`` (an instance of the law's ``Target``), or None when
+        the run gives none.
+    """
+
+    plant: Any
+    dt: float
+    target: BaseModel | None = None
+
+
+def target_quaternion(target: dict) -> np.ndarray | None:
+    """Euler parameters of a target given as ``euler123`` (rad) or ``attitude``; None if empty."""
+    from flexsat.dynamics.attitude import dcm_to_quaternion, euler123_to_dcm
+    from flexsat.units import to_si_array
+
+    if not target:
+        return None
+    unknown = set(target) - {"euler123", "attitude"}
+    if unknown:
+        raise ValueError(
+            f"target.{sorted(unknown)[0]}: not a target (give euler123 (rad) or "
+            "attitude (a unit quaternion, scalar first))"
+        )
+    if len(target) > 1:
+        raise ValueError("target: give euler123 or attitude, not both")
+    if "euler123" in target:
+        angles = to_si_array(target["euler123"], "rad", "target.euler123")
+        if angles.shape != (3,):
+            raise ValueError(f"target.euler123: three angles, got shape {angles.shape}")
+        return dcm_to_quaternion(euler123_to_dcm(angles))
+    return to_si_array(target["attitude"], "", "target.attitude")
+
+
+class AttitudeTarget(_Section):
+    """The attitude an attitude law turns to: 1-2-3 Euler angles (rad) or a unit quaternion
+    (scalar first), one of them."""
+
+    euler123: Value | None = None
+    attitude: Value | None = None
+
+    @model_validator(mode="after")
+    def _one(self):
+        if self.euler123 is not None and self.attitude is not None:
+            raise ValueError("target: give euler123 or attitude, not both")
+        return self
+
+    def quaternion(self) -> np.ndarray | None:
+        """The target's Euler parameters, or None when neither is given."""
+        return target_quaternion(self.model_dump(exclude_none=True))
+
+
+class AttitudeLaw:
+    """A scenario law of an attitude law of :mod:`flexsat.control` (its gains named as the
+    class's fields), turning to the run's ``target``; subclasses name the class."""
+
+    #: the law's class in flexsat.control, imported when a run is built
+    control_class: str
+    Target = AttitudeTarget
+
+    @classmethod
+    def from_scenario(cls, parameters: BaseModel, context: LawContext):
+        import flexsat.control
+
+        beta = None if context.target is None else context.target.quaternion()
+        extra = {} if beta is None else {"beta_target": beta}
+        return getattr(flexsat.control, cls.control_class)(**parameters.model_dump(), **extra)
+
+
+class GibbsLyapunov(AttitudeLaw):
+    """:class:`flexsat.control.GibbsLyapunovLaw`."""
+
+    class Parameters(_Section):
+        k: Value
+        A: Value
+
+    control_class = "GibbsLyapunovLaw"
+
+
+class MRP(AttitudeLaw):
+    """:class:`flexsat.control.MRPLaw`."""
+
+    class Parameters(_Section):
+        K: Value
+        P: Value
+
+    control_class = "MRPLaw"
+
+
+class QuaternionPD(AttitudeLaw):
+    """:class:`flexsat.control.QuaternionPD`."""
+
+    class Parameters(_Section):
+        Kp: Value
+        Kd: Value
+
+    control_class = "QuaternionPD"
+
+
+class LQRWeights(_Section):
+    state_weights: Value
+    input_weights: Value = 1.0
+
+
+class NoGains(_Section):
+    """A law without parameters."""
+
+
+def _weights(value, size: int, field: str) -> np.ndarray:
+    w = np.atleast_1d(np.asarray(value, float))
+    if w.size == 1:
+        w = np.full(size, float(w[0]))
+    if w.shape != (size,) or not np.all(np.isfinite(w)) or np.any(w < 0):
+        raise ValueError(f"{field}: one weight >= 0 or {size} of them, got {np.shape(value)}")
+    return np.diag(w)
+
+
+class LQR:
+    """Constant LQR state feedback on the plant's linear part, reading its ``state`` output."""
+
+    Parameters = LQRWeights
+
+    @classmethod
+    def from_scenario(cls, parameters: LQRWeights, context: LawContext):
+        from flexsat.control import ScheduledStateFeedback, lqr
+
+        plant = context.plant
+        A, B = plant.linear_part()
+        n, m = B.shape
+        Q = _weights(parameters.state_weights, n, "gains.state_weights")
+        R = _weights(parameters.input_weights, m, "gains.input_weights")
+        K, _, _ = lqr(A, B, Q, R)
+        return ScheduledStateFeedback([0.0], K[None], "state", [c.name for c in plant.inputs])
+
+
+class OpenLoop:
+    """No feedback: zero commands on every input (disturbances and initial values drive the
+    plant)."""
+
+    Parameters = NoGains
+
+    @classmethod
+    def from_scenario(cls, parameters: NoGains, context: LawContext):
+        import control
+        from flexsat.control import StateSpaceCompensator
+
+        plant = context.plant
+        first = plant.outputs[0]
+        # the channels themselves, not their names: a name alone counts as one wide
+        system = control.ss([], [], [], np.zeros((plant.n_inputs, first.size)))
+        return StateSpaceCompensator(system, [first], list(plant.inputs), dt=context.dt)
+
+
+#: the built-in laws of a simulation run, by name
+BUILTIN_LAWS: dict[str, Any] = {
+    "gibbs_lyapunov": GibbsLyapunov,
+    "mrp_pd": MRP,
+    "quaternion_pd": QuaternionPD,
+    "lqr": LQR,
+    "open_loop": OpenLoop,
+}
+
+
+def simulation_laws() -> dict[str, Any]:
+    """The laws a simulation run can name: :data:`BUILTIN_LAWS`, then the ``flexsat.laws``
+    plug-ins (read on the first call; a broken or colliding one is left out and reported by
+    :func:`flexsat.plugins.broken_plugins`)."""
+    from flexsat.scenarios.registry import merge_builtins
+
+    return merge_builtins(
+        "flexsat.laws",
+        BUILTIN_LAWS,
+        lambda name, law: f"the built-in law {name!r} ({law.__module__}:{law.__qualname__})",
+    )
+
+
+__all__ = [
+    "BUILTIN_LAWS",
+    "AttitudeTarget",
+    "LawContext",
+    "simulation_laws",
+    "target_quaternion",
+]
