@@ -83,12 +83,12 @@ def calibration_case(n_targets=50):
 def campaign_case():
     from pathlib import Path
 
-    from flexsat.scenarios import load_scenario, run_identification
+    from flexsat.scenarios import load_scenario, run_scenario
 
     spec = load_scenario(
         Path(__file__).resolve().parents[1] / "examples" / "tamu_grid_identification.yaml"
     )
-    t, result = best_of(lambda: run_identification(spec), repeat=2)
+    t, result = best_of(lambda: run_scenario(spec), repeat=2)
     return t, result.campaign.scalings["clamp verticals"]["updated"]
 
 

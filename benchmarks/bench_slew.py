@@ -8,7 +8,8 @@ implementation of the same closed loop, side by side in one run, each the best o
     notional one (seed003.md §3.3 item 2, products ±5e3 kg m²), the paper's (1, 1, 1) rad 1-2-3
     slew, T = 10 s with ω_B = 2.5 rad/s and T = 6 s with ω_B = 5 rad/s, both shaping readings
     ζ_B = 0 and 1. Target: <= 2 s at T = 10 s.
-(b) Closed loop, the pipeline of ``flexsat.scenarios.slew.run_slew`` for seed 003 case A:
+(b) Closed loop, the pipeline of the slew kind (``flexsat.scenarios.slew.SlewKind``) for seed 003
+    case A:
     truth = ``eps().plant(n_modes=45)`` (97 states), design model = its first 10 modes, nominal
     = the (1, 1, 1) rad slew in 10 s (ω_B = 2.5 rad/s, ζ_B = 0), perturbation design with
     Q = diag(1000·I3, 1000·I3, I20), D = 50·I3 at 21 linearisation points, the gain-scheduled
@@ -106,7 +107,7 @@ def bench_tpbvp(repeat: int) -> float:
 
 # -- (b) the closed loop ------------------------------------------------------------------------
 def slew_problem():
-    """(truth, nominal, design function): the run_slew pipeline of case A up to the design."""
+    """(truth, nominal, design function): the slew kind's pipeline of case A up to the design."""
     truth = eps().plant(n_modes=45)
     design_plant = truth.reduced(10)
     nominal = three_axis_slew(truth.inertia, TARGET, DURATION, OMEGA_B, zeta_b=0.0)

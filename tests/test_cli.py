@@ -5,6 +5,7 @@ from __future__ import annotations
 import errno
 import json
 import os
+from pathlib import Path
 
 import pytest
 import yaml
@@ -269,11 +270,12 @@ def test_the_metrics_table_puts_the_longer_list_down_the_rows():
     requirement, a few statistics each): a column per statistic, so the table fits a terminal."""
     from rich.console import Console
 
-    from flexsat.cli import _metrics_table
+    from flexsat.cli import _result_table
+    from flexsat.report.page import metrics_table
 
     def shown(records):
         console = Console(width=100, record=True)
-        console.print(_metrics_table(records))
+        console.print(_result_table(metrics_table(records)))
         return console.export_text().splitlines()
 
     runs = [
@@ -286,3 +288,25 @@ def test_the_metrics_table_puts_the_longer_list_down_the_rows():
     lines = shown(batch)
     assert any("p5" in line and "median" in line and "p95" in line for line in lines)
     assert sum(line.count("metric_") for line in lines) == 5  # one row each
+
+
+def test_workers_are_asked_of_the_kind(tmp_path):
+    """--workers/--scheduler: a kind that runs no batch refuses them (naming the kinds that
+    take them); a batch kind refuses both at once; nothing runs either way."""
+    done = runner.invoke(app, ["run", "--workers", "2", "--out", str(tmp_path / "a")])
+    assert done.exit_code == 2
+    assert (
+        "--workers/--scheduler: a maneuver scenario runs in this process; they apply to kind "
+        "montecarlo and sweep"
+    ) in unwrapped(done.stderr)
+    batch = Path(__file__).parents[1] / "examples" / "tamu_montecarlo.yaml"
+    done = runner.invoke(
+        app,
+        ["run", str(batch), "--workers", "2", "--scheduler", "tcp://localhost:1"]
+        + ["--out", str(tmp_path / "b")],
+    )
+    assert done.exit_code == 2
+    assert "--workers/--scheduler: give one (a local cluster or an existing one), not both" in (
+        done.stderr
+    )
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()

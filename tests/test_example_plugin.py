@@ -134,7 +134,7 @@ def test_the_plugin_law_batches_over_a_leading_case_axis(example_plugin):
 
 
 def test_plugin_parameters_are_checked_with_field_paths(example_plugin):
-    from flexsat.scenarios import ScenarioError, load_scenario, run_simulation
+    from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
 
     base = SCENARIO.read_text()
     mistakes = [
@@ -161,7 +161,7 @@ def test_plugin_parameters_are_checked_with_field_paths(example_plugin):
         text = base.replace(old, new, 1)
         assert text != base, old
         with pytest.raises(ScenarioError) as info:
-            run_simulation(load_scenario(text))
+            run_scenario(load_scenario(text))
         assert message in str(info.value), (message, str(info.value))
 
 
@@ -325,7 +325,7 @@ def test_a_law_that_builds_no_controller_is_refused(example_plugin, monkeypatch)
     from flexsat_example_plugin.law import BangOffBang
 
     import flexsat.scenarios.simulation as simulation
-    from flexsat.scenarios import ScenarioError, load_scenario, run_simulation
+    from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
 
     class Sloppy(BangOffBang):
         @classmethod
@@ -335,4 +335,4 @@ def test_a_law_that_builds_no_controller_is_refused(example_plugin, monkeypatch)
     laws = {**simulation.simulation_laws(), "bang_off_bang": Sloppy}
     monkeypatch.setattr(simulation, "simulation_laws", lambda: laws)
     with pytest.raises(ScenarioError, match="law 'bang_off_bang' built a ndarray, not a"):
-        run_simulation(load_scenario(SCENARIO))
+        run_scenario(load_scenario(SCENARIO))

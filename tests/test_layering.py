@@ -22,8 +22,8 @@ layer  units                                        what they are
 6      design, testing                              sweeps, Monte Carlo, optimisation;
                                                     conformance checks of plants and laws
 7      cases, catalog                               the published benchmark systems
-8      scenarios                                    scenario files: a case, a plant, a law
-9      report, mode_plot                            report and plot writers
+8      report, mode_plot                            report writer, figures, plots
+9      scenarios                                    scenario kinds: a case, a plant, a law
 10     checks                                       ``flexsat validate``: results vs papers
 11     cli                                          the command line
 12     __main__                                     ``python -m flexsat``
@@ -68,8 +68,8 @@ LAYERS = (
     ("sim",),
     ("design", "testing"),
     ("cases", "catalog"),
-    ("scenarios",),
     ("report", "mode_plot"),
+    ("scenarios",),
     ("checks",),
     ("cli",),
     ("__main__",),

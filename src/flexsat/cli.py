@@ -249,83 +249,15 @@ def modes(
         _print_modes(data)
 
 
-def _metrics_table(records: list[dict]) -> Table:
-    """One column per run and a row per metric; transposed when the runs outnumber the metrics
-    (a batch's table: a row per metric of the cases and per requirement), so that it fits."""
-    from flexsat.report import format_metric, metric_rows
-
-    table = Table(title="metrics")
-    names = [key for key in records[0] if key != "run"]
-    if len(records) > len(names):
-        table.add_column("")
-        for name in names:
-            table.add_column(name, justify="right")
-        for record in records:
-            table.add_row(Text(record["run"]), *(format_metric(record[n]) for n in names))
-        return table
-    table.add_column("metric")
-    for record in records:
-        table.add_column(Text(record["run"]), justify="right")  # labels are not markup
-    for metric, values in metric_rows(records):
-        table.add_row(metric, *values)
+def _result_table(data) -> Table:
+    """A result's :class:`~flexsat.report.page.ResultTable` for the console (cells are text,
+    never markup: run labels are the user's)."""
+    table = Table(title=data.title, caption=data.caption)
+    for i, column in enumerate(data.columns):
+        table.add_column(Text(column), justify="left" if i == 0 else "right")
+    for row in data.rows:
+        table.add_row(*(Text(cell) for cell in row))
     return table
-
-
-def _identification_steps(spec) -> int:
-    from flexsat.scenarios import identification_steps
-
-    return identification_steps(spec)
-
-
-def _with_execution(spec, workers, scheduler):
-    """The scenario with ``--workers`` / ``--scheduler`` in place of its ``execution:`` ones;
-    they are refused for a scenario that runs no batch."""
-    from flexsat.scenarios import ScenarioError
-
-    if workers is None and scheduler is None:
-        return spec
-    if spec.kind not in ("sweep", "montecarlo"):
-        raise ScenarioError(
-            [
-                f"--workers/--scheduler: a {spec.kind} scenario runs in this "
-                "process; they apply to kind sweep and montecarlo"
-            ]
-        )
-    if workers is not None and scheduler is not None:
-        raise ScenarioError(
-            ["--workers/--scheduler: give one (a local cluster or an existing one), not both"]
-        )
-    execution = spec.execution.model_copy(update={"workers": workers, "scheduler": scheduler})
-    copy = spec.model_copy(update={"execution": execution})
-    copy._source, copy._folder = spec._source, spec._folder
-    return copy
-
-
-def _batch_steps(spec) -> int:
-    """A batch reports once at its start and once per chunk."""
-    import math
-
-    from flexsat.scenarios.batch import case_count
-
-    return 1 + math.ceil(case_count(spec) / spec.execution.chunk_size)
-
-
-#: per scenario ``kind``: its runner (in flexsat.scenarios), its report writer (in
-#: flexsat.report) and the number of progress steps it announces
-_KINDS = {
-    "maneuver": ("run_scenario", "write_report", lambda spec: len(spec.runs)),
-    "simulation": ("run_simulation", "write_simulation_report", lambda spec: len(spec.runs)),
-    # a slew also solves its nominal maneuver and runs the open loop
-    "slew": ("run_slew", "write_slew_report", lambda spec: len(spec.runs) + 2),
-    "ppf": ("run_ppf", "write_ppf_report", lambda spec: len(spec.runs)),
-    "star_tracker": ("run_star_tracker", "write_star_tracker_report", lambda spec: len(spec.runs)),
-    "tether": ("run_tether", "write_tether_report", lambda spec: len(spec.runs)),
-    "cmg": ("run_cmg", "write_cmg_report", lambda spec: len(spec.runs) + 1),
-    "cmg_station": ("run_cmg_station", "write_cmg_report", lambda spec: len(spec.runs) + 1),
-    "identification": ("run_identification", "write_identification_report", _identification_steps),
-    "sweep": ("run_batch_scenario", "write_batch_report", _batch_steps),
-    "montecarlo": ("run_batch_scenario", "write_batch_report", _batch_steps),
-}
 
 
 @app.command()
@@ -359,17 +291,22 @@ def run(
         check_output_folder(out)
     except OSError as exc:
         _fail(f"--out: {exc}")
-    import flexsat.report as report
-    import flexsat.scenarios as scenarios
-    from flexsat.scenarios import ScenarioError, default_scenario, load_scenario
+    from flexsat.report import write_report
+    from flexsat.scenarios import (
+        ScenarioError,
+        default_scenario,
+        load_scenario,
+        run_scenario,
+        scenario_kind,
+    )
     from flexsat.sim import SimulationDiverged
 
     try:
         spec = default_scenario() if scenario is None else load_scenario(scenario)
-        spec = _with_execution(spec, workers, scheduler)
-        runner, writer, steps = _KINDS[spec.kind]
-        with _progress(steps(spec)) as say:
-            result = getattr(scenarios, runner)(spec, progress=say)
+        kind = scenario_kind(spec.kind)
+        spec = kind.with_execution(spec, workers, scheduler)
+        with _progress(kind.steps(spec)) as say:
+            result = run_scenario(spec, progress=say)
     except ScenarioError as exc:
         _fail(str(exc))
     except SimulationDiverged as exc:  # a result, not an input error: exit 1, nothing written
@@ -383,13 +320,9 @@ def run(
         )
         errors.print(message, style="red", markup=False, highlight=False)
         raise typer.Exit(code=130) from None
-    console.print(
-        _identification_table(result)
-        if spec.kind == "identification"
-        else _metrics_table(result.metrics_records())
-    )
+    console.print(_result_table(result.console_table()))
     try:
-        path = getattr(report, writer)(result, out)
+        path = write_report(result, out)
     except OSError as exc:
         _fail(f"--out: {exc}")
     console.print(f"report written to {path / 'index.html'}", markup=False)
@@ -428,23 +361,6 @@ def _progress(steps: int):
         bar.update(task, completed=started, description="done")
     if not live:
         errors.print(f"done ({started}/{steps} steps)", markup=False, highlight=False)
-
-
-def _identification_table(result) -> Table:
-    from flexsat.scenarios import summary_table
-
-    columns, rows = summary_table(result)
-    table = Table(title="identified modes")
-    table.add_column("mode")
-    for name in columns:
-        table.add_column(name, justify="right")
-    for mode, values in rows:
-        table.add_row(mode, *values)
-    for name, v in result.campaign.scalings.items():
-        table.caption = (table.caption or "") + (
-            f"{name}: a priori x{v['a_priori']:.3f}, updated x{v['updated']:.4f} of nominal\n"
-        )
-    return table
 
 
 #: below this console width the table stacks each source under its quantity and shows the case

@@ -24,6 +24,30 @@ from flexsat.units import (
 )
 
 
+class FieldError(ValueError):
+    """A value refused by the rule of one named input: ``str(exc)`` is ``"field: rule"``.
+
+    The field travels as data (:attr:`field`), so that a caller that knows where the value came
+    from (a scenario, which names it ``runs['Law I'].gains.g1``) can place the problem without
+    reading the message.
+
+    Parameters
+    ----------
+    field : str
+        The input as the refusing function names it (its parameter, ``"gains.k"``, ...).
+    rule : str
+        The rule it breaks and the value given (``"must be > 0, got -1"``).
+    """
+
+    def __init__(self, field: str, rule: str) -> None:
+        self.field, self.rule = field, rule
+        super().__init__(f"{field}: {rule}")
+
+    def __reduce__(self) -> tuple[type[FieldError], tuple[str, str]]:
+        # picklable across processes (dask workers) with its field
+        return type(self), (self.field, self.rule)
+
+
 def _real(value: Any, field: str, noun: str) -> Any:
     """``value``, or its real part when it is complex with every imaginary part exactly 0.
 
@@ -37,9 +61,10 @@ def _real(value: Any, field: str, noun: str) -> Any:
         return value
     imag = np.abs(np.imag(value))
     if np.any(imag != 0):
-        raise ValueError(
-            f"{field}: must be a real {noun}, got a complex value (largest "
-            f"|imaginary part| {np.max(imag):.3g}, which would be dropped)"
+        raise FieldError(
+            field,
+            f"must be a real {noun}, got a complex value (largest "
+            f"|imaginary part| {np.max(imag):.3g}, which would be dropped)",
         )
     return np.real(value)
 
@@ -62,17 +87,18 @@ def require_finite(value: QuantityArrayLike, field: str, unit: str | None = None
     else:
         _plain_numbers(value, field)
         if isinstance(value, (str, bytes)):
-            raise ValueError(
-                f"{field}: must be a number in SI units, got the string {value!r} (quantities with "
-                "units are converted at the boundary: flexsat.units.to_si)"
+            raise FieldError(
+                field,
+                f"must be a number in SI units, got the string {value!r} (quantities with "
+                "units are converted at the boundary: flexsat.units.to_si)",
             )
         real = _real(value, field, "number")
         try:
             arr = np.asarray(real, dtype=float)
         except (TypeError, ValueError):
-            raise ValueError(f"{field}: must be a number, got {value!r}") from None
+            raise FieldError(field, f"must be a number, got {value!r}") from None
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{field}: must be finite (no NaN or inf), got {value!r}")
+        raise FieldError(field, f"must be finite (no NaN or inf), got {value!r}")
     return arr
 
 
@@ -80,7 +106,7 @@ def require_positive(value: QuantityArrayLike, field: str, unit: str | None = No
     """``value`` as a float array of numbers > 0, in SI when ``unit`` is given (see the module)."""
     arr = require_finite(value, field, unit)
     if np.any(arr <= 0):
-        raise ValueError(f"{field}: must be > 0, got {value!r}")
+        raise FieldError(field, f"must be > 0, got {value!r}")
     return arr
 
 
@@ -88,7 +114,7 @@ def require_positive_scalar(value: QuantityArrayLike, field: str, unit: str | No
     """``value`` as one finite number > 0, in SI when ``unit`` is given (see the module)."""
     arr = require_positive(value, field, unit)
     if arr.ndim != 0:
-        raise ValueError(f"{field}: must be one number, got shape {arr.shape}")
+        raise FieldError(field, f"must be one number, got shape {arr.shape}")
     return float(arr)
 
 
@@ -96,7 +122,7 @@ def require_nonneg(value: QuantityArrayLike, field: str, unit: str | None = None
     """``value`` as a float array of numbers >= 0, in SI when ``unit`` is given (see the module)."""
     arr = require_finite(value, field, unit)
     if np.any(arr < 0):
-        raise ValueError(f"{field}: must be >= 0, got {value!r}")
+        raise FieldError(field, f"must be >= 0, got {value!r}")
     return arr
 
 
@@ -115,10 +141,10 @@ def set_si(obj: object, name: str, check: Check, unit: str, field: str | None = 
 def require_count(value: npt.ArrayLike, field: str) -> int:
     """A positive integer (bools and fractional numbers refused)."""
     if isinstance(value, bool):
-        raise ValueError(f"{field}: must be a positive integer, got {value!r}")
+        raise FieldError(field, f"must be a positive integer, got {value!r}")
     number = float(require_finite(value, field))
     if number != int(number) or number < 1:
-        raise ValueError(f"{field}: must be a positive integer, got {value!r}")
+        raise FieldError(field, f"must be a positive integer, got {value!r}")
     return int(number)
 
 
@@ -126,15 +152,16 @@ def require_numeric(value: npt.ArrayLike, field: str, noun: str = "array") -> Fl
     """A finite numeric array (a copy); strings and non-numbers are refused, naming the field."""
     _plain_numbers(value, field)
     if isinstance(value, (str, bytes)):
-        raise ValueError(f"{field}: must be a numeric {noun}, got the string {value!r}")
+        raise FieldError(field, f"must be a numeric {noun}, got the string {value!r}")
     real = _real(value, field, noun)
     try:
         arr = np.array(real, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"{field}: must be a numeric {noun}, got {type(value).__name__}") from None
+        raise FieldError(field, f"must be a numeric {noun}, got {type(value).__name__}") from None
     if not np.all(np.isfinite(arr)):
-        raise ValueError(
-            f"{field}: must be finite (no NaN or inf), got shape {arr.shape} with "
-            f"{int(np.sum(~np.isfinite(arr)))} non-finite entries"
+        raise FieldError(
+            field,
+            f"must be finite (no NaN or inf), got shape {arr.shape} with "
+            f"{int(np.sum(~np.isfinite(arr)))} non-finite entries",
         )
     return arr

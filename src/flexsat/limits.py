@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from flexsat.input_checks import FieldError
+
 #: control samples of one run (duration × control rate): at ~50-100 µs per control step
 #: (docs/performance.md) the limit is a few minutes of simulation
 MAX_SAMPLES = 2_000_000
@@ -84,12 +86,14 @@ def check_count(value: int, limit: int, field: str, what: str, hint: str = "") -
 
     Raises
     ------
-    ValueError
+    flexsat.input_checks.FieldError
+        With ``field`` as its :attr:`~flexsat.input_checks.FieldError.field`.
     """
     if value > limit:
-        raise ValueError(
-            f"{field}: {what} = {value:.4g}, above the limit {limit:,} "
-            f"(flexsat.limits){'; ' + hint if hint else ''}"
+        raise FieldError(
+            field,
+            f"{what} = {value:.4g}, above the limit {limit:,} "
+            f"(flexsat.limits){'; ' + hint if hint else ''}",
         )
 
 
@@ -103,13 +107,14 @@ def check_memory(n_bytes: int, field: str, what: str) -> None:
 
     Raises
     ------
-    ValueError
+    flexsat.input_checks.FieldError
         ``"field: <what> needs about 12 GB of memory, above the limit 2 GB ..."``.
     """
     if n_bytes > MAX_MEMORY:
-        raise ValueError(
-            f"{field}: {what} needs about {_bytes(n_bytes)} of memory, above the "
-            f"limit {_bytes(MAX_MEMORY)} (flexsat.limits.MAX_MEMORY)"
+        raise FieldError(
+            field,
+            f"{what} needs about {_bytes(n_bytes)} of memory, above the "
+            f"limit {_bytes(MAX_MEMORY)} (flexsat.limits.MAX_MEMORY)",
         )
 
 

@@ -203,8 +203,8 @@ def test_metrics_are_the_slew_scenarios_metrics():
     """slew_run_metrics is the extraction the slew scenarios do (scenarios/slew.py is to call
     it): the same numbers, bit for bit, on a small slew scenario."""
     from flexsat.design.slew_weights import slew_run_metrics
+    from flexsat.scenarios import run_scenario
     from flexsat.scenarios.documents import load_scenario
-    from flexsat.scenarios.slew import run_slew
 
     scenario = load_scenario("""
 kind: slew
@@ -221,7 +221,7 @@ runs:
   - {label: forces, weights: {attitude: 1000, rate: 1000, modes: 1, torque: 50, force: 1.0e-3},
      break_frequency: "5 rad/s", forces: all}
 """)
-    result = run_slew(scenario)
+    result = run_scenario(scenario)
     metrics, units = slew_run_metrics(result.results, result.nominal)
     assert metrics.keys() == result.goals.keys() and units == result.goal_units
     for name, values in result.goals.items():

@@ -8,18 +8,18 @@ import xarray as xr
 import yaml
 
 import flexsat.report.identification as rep
-from flexsat.report import MANIFEST
-from flexsat.report.identification import FIGURES, dataset, write_identification_report
-from flexsat.scenarios import load_scenario, run_identification
+from flexsat.report import MANIFEST, write_report
+from flexsat.report.identification import FIGURES, dataset
+from flexsat.scenarios import load_scenario, run_scenario
 
 
 @pytest.fixture(scope="module")
 def result(identification_example):
-    return run_identification(load_scenario(yaml.safe_dump(identification_example(fast=True))))
+    return run_scenario(load_scenario(yaml.safe_dump(identification_example(fast=True))))
 
 
 def test_report_files_tables_and_netcdf_round_trip(result, tmp_path):
-    out = write_identification_report(result, tmp_path / "report")
+    out = write_report(result, tmp_path / "report")
     names = {p.name for p in out.iterdir()}
     assert names == {"identification.json", "results.nc", "index.html", MANIFEST} | {
         f for f, _ in FIGURES
@@ -61,7 +61,7 @@ def test_failed_report_leaves_nothing(result, tmp_path, monkeypatch):
 
     monkeypatch.setattr(rep, "_mac_figure", broken)
     with pytest.raises(RuntimeError):
-        write_identification_report(result, tmp_path / "report")
+        write_report(result, tmp_path / "report")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -75,7 +75,7 @@ def test_report_of_measured_data_without_truth(result, tmp_path):
     measured = dataclasses.replace(
         result, campaign=dataclasses.replace(result.campaign, modes=modes)
     )
-    out = write_identification_report(measured, tmp_path / "report")
+    out = write_report(measured, tmp_path / "report")
     page = (out / "index.html").read_text()
     assert "<td>–</td>" in page
     assert np.all(np.isnan(dataset(measured)["true_hz"].values))

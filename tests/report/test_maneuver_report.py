@@ -14,13 +14,13 @@ import yaml
 import flexsat.report.maneuver as report
 from flexsat.report import (
     MANIFEST,
-    PLOTS,
     OutputError,
     format_metric,
     metric_rows,
     write_atomically,
     write_report,
 )
+from flexsat.report.maneuver import PLOTS
 from flexsat.scenarios import default_scenario, load_scenario, run_scenario
 
 METRICS = {

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from flexsat.report import MANIFEST, write_star_tracker_report
-from flexsat.scenarios import load_scenario, run_star_tracker
+from flexsat.report import MANIFEST, write_report
+from flexsat.scenarios import load_scenario, run_scenario
 
 SMALL = """
 kind: star_tracker
@@ -23,11 +23,11 @@ runs:
 
 @pytest.fixture(scope="module")
 def result():
-    return run_star_tracker(load_scenario(SMALL))
+    return run_scenario(load_scenario(SMALL))
 
 
 def test_report_files_table_and_netcdf_round_trip(result, tmp_path):
-    out = write_star_tracker_report(result, tmp_path / "report")
+    out = write_report(result, tmp_path / "report")
     names = {p.name for p in out.iterdir()}
     assert names == {
         "metrics.json",
@@ -70,8 +70,8 @@ def test_report_of_a_run_with_nothing_identified(tmp_path):
     spec = load_scenario(
         SMALL.replace("centroid_noise: 0.1", "centroid_noise: 0.1, magnitude_limit: 2.0")
     )
-    result = run_star_tracker(spec)
+    result = run_scenario(spec)
     rec = result.metrics_records()[0]
     assert rec["accepted_rate"] == 0.0 and rec["wrong_accepted"] == 0
-    out = write_star_tracker_report(result, tmp_path / "r")
+    out = write_report(result, tmp_path / "r")
     assert (out / "errors.png").is_file()

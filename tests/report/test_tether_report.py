@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from flexsat.report import write_tether_report
+from flexsat.report import write_report
 from flexsat.report.publish import OutputError
 from flexsat.report.tether import FIGURES, paper_example
-from flexsat.scenarios import load_scenario, run_tether
+from flexsat.scenarios import load_scenario, run_scenario
 
 TEXT = """
 kind: tether
@@ -30,8 +30,8 @@ runs:
 
 @pytest.fixture(scope="module")
 def report(tmp_path_factory):
-    result = run_tether(load_scenario(TEXT))
-    return result, write_tether_report(result, tmp_path_factory.mktemp("tether") / "report")
+    result = run_scenario(load_scenario(TEXT))
+    return result, write_report(result, tmp_path_factory.mktemp("tether") / "report")
 
 
 def test_files_hold_the_measures_and_histories(report):
@@ -70,5 +70,5 @@ def test_a_folder_with_other_files_is_refused(report, tmp_path):
     result, _ = report
     (tmp_path / "notes.txt").write_text("mine")
     with pytest.raises(OutputError):
-        write_tether_report(result, tmp_path)
+        write_report(result, tmp_path)
     assert (tmp_path / "notes.txt").read_text() == "mine"

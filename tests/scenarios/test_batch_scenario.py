@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from flexsat.report import write_batch_report
-from flexsat.scenarios import ScenarioError, load_scenario, run_batch_scenario
+from flexsat.report import write_report
+from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -67,7 +67,7 @@ def _write(folder: Path, name: str, text: str) -> Path:
 
 
 def test_a_sweep_runs_every_grid_point_and_maps_the_trade_surfaces(tmp_path):
-    result = run_batch_scenario(load_scenario(_write(tmp_path, "sweep.yaml", SWEEP)))
+    result = run_scenario(load_scenario(_write(tmp_path, "sweep.yaml", SWEEP)))
     ds = result.dataset()
     assert ds.sizes["case"] == 6 and bool(ds["done"].all())
     # the grid in order, first axis slowest; u_max in SI
@@ -81,7 +81,7 @@ def test_a_sweep_runs_every_grid_point_and_maps_the_trade_surfaces(tmp_path):
     assert result.surfaces["residual_energy_J"].shape == (2, 3)
     assert result.chunks_run == 2 and result.chunks_skipped == 0
     # the same scenario again resumes: nothing to run, the same numbers
-    again = run_batch_scenario(load_scenario(tmp_path / "sweep.yaml"))
+    again = run_scenario(load_scenario(tmp_path / "sweep.yaml"))
     assert again.chunks_run == 0 and again.chunks_skipped == 2
     for name in ds.data_vars:
         if name.startswith("metric_"):
@@ -98,7 +98,7 @@ def test_a_sweep_varies_the_actuator_and_sensors_given_in_units(tmp_path):
         """  saturation: {low: "300 ozf*in", high: "500 ozf*in", n: 3}
   encoder_resolution: {values: ["0 deg", "0.01 deg"]}""",
     )
-    result = run_batch_scenario(load_scenario(_write(tmp_path, "hardware.yaml", text)))
+    result = run_scenario(load_scenario(_write(tmp_path, "hardware.yaml", text)))
     ds = result.dataset()
     assert ds.sizes["case"] == 6 and bool(ds["done"].all())
     oz_in = 0.0070615518142  # N m per ozf*in
@@ -113,7 +113,7 @@ def test_a_sweep_varies_the_actuator_and_sensors_given_in_units(tmp_path):
 
 
 def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path):
-    result = run_batch_scenario(load_scenario(_write(tmp_path, "mc.yaml", MONTECARLO)))
+    result = run_scenario(load_scenario(_write(tmp_path, "mc.yaml", MONTECARLO)))
     reqs = {r["metric"]: r for r in result.summary["requirements"]}
     settle = reqs["settling_time_s"]
     met = np.sum(result.dataset()["metric_settling_time_s"].values <= 6.0)
@@ -123,7 +123,7 @@ def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path
     assert set(result.sensitivity) <= {
         k[len("metric_") :] for k in result.dataset().data_vars if k.startswith("metric_")
     }
-    out = write_batch_report(result, tmp_path / "report")
+    out = write_report(result, tmp_path / "report")
     for name in (
         "index.html",
         "summary.json",
@@ -182,7 +182,7 @@ def test_mistakes_found_before_any_case_runs(tmp_path, change, message):
     old, new = change
     path = _write(tmp_path, "sweep.yaml", SWEEP.replace(old, new))
     with pytest.raises(ScenarioError, match=message):
-        run_batch_scenario(load_scenario(path))
+        run_scenario(load_scenario(path))
     assert not (tmp_path / "store.zarr").exists()
 
 
@@ -193,7 +193,7 @@ def test_a_scenario_of_another_kind_is_refused(tmp_path):
         SWEEP.replace("scenario: maneuver.yaml", f"scenario: {EXAMPLES / 'eps_slew_6s.yaml'}"),
     )
     with pytest.raises(ScenarioError, match="is a slew scenario; a batch varies a maneuver"):
-        run_batch_scenario(load_scenario(path))
+        run_scenario(load_scenario(path))
 
 
 def test_the_examples_are_valid():
@@ -213,7 +213,7 @@ def test_the_command_line_runs_a_sweep_on_two_local_workers_and_refuses_them_els
     assert result.exit_code == 0, result.output
     assert (tmp_path / "out" / "results.zarr").exists()
     # the workers do not change the results: the in-process run finds the store complete
-    again = run_batch_scenario(load_scenario(path))
+    again = run_scenario(load_scenario(path))
     assert again.chunks_run == 0
     refused = runner.invoke(
         app,
@@ -235,12 +235,12 @@ def test_a_saltelli_sweep_ranks_the_parameters_by_their_sobol_indices(tmp_path):
 sampling: saltelli
 cases: 8""",
     ).replace("execution: {chunk_size: 4}", "execution: {chunk_size: 16}")
-    result = run_batch_scenario(load_scenario(_write(tmp_path, "saltelli.yaml", text)))
+    result = run_scenario(load_scenario(_write(tmp_path, "saltelli.yaml", text)))
     assert result.dataset().sizes["case"] == 8 * (2 + 2)
     peak = result.sensitivity["peak_torque_Nm"]
     assert peak["method"] == "sobol" and peak["ranking"][0] == "u_max"
     assert peak["indices"]["u_max"]["ST"] > peak["indices"]["alpha"]["ST"]
-    out = write_batch_report(result, tmp_path / "report")
+    out = write_report(result, tmp_path / "report")
     assert "S_T" in (out / "index.html").read_text()
     with pytest.raises(ScenarioError, match="cases: the Saltelli design takes a power of 2"):
         load_scenario(_write(tmp_path, "bad.yaml", text.replace("cases: 8", "cases: 6")))
@@ -287,7 +287,7 @@ def test_ctrl_c_on_the_command_line_keeps_the_finished_cases_and_the_same_comman
     assert resumed["done"].values.all()
     whole = load_scenario(path).model_copy(update={"store": str(tmp_path / "whole.zarr")})
     whole._source, whole._folder = load_scenario(path)._source, tmp_path
-    reference = run_batch_scenario(whole).dataset().load()
+    reference = run_scenario(whole).dataset().load()
     for name in reference.data_vars:
         np.testing.assert_array_equal(resumed[name].values, reference[name].values, name)
 
@@ -305,9 +305,9 @@ def test_the_default_store_is_named_after_the_run_s_fingerprint(tmp_path, monkey
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
     (tmp_path / "tmp").mkdir()
     path = _write(tmp_path, "sweep.yaml", SWEEP.replace("store: store.zarr\n", ""))
-    first = run_batch_scenario(load_scenario(path))
+    first = run_scenario(load_scenario(path))
     assert first.store.parent == tmp_path / "tmp" and first.chunks_run == 2
-    assert run_batch_scenario(load_scenario(path)).chunks_run == 0  # resumed: nothing to do
+    assert run_scenario(load_scenario(path)).chunks_run == 0  # resumed: nothing to do
     monkeypatch.setattr(runner, "STORE_LAYOUT", runner.STORE_LAYOUT + "-next")
-    other = run_batch_scenario(load_scenario(path))
+    other = run_scenario(load_scenario(path))
     assert other.store != first.store and other.chunks_run == 2

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from flexsat.dynamics import cmg
-from flexsat.scenarios import ScenarioError, load_scenario, run_cmg, run_cmg_station
+from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
 
 SMALL = """
 kind: cmg
@@ -34,7 +34,7 @@ runs: [{label: zero, initial: zero}, {label: alternate, initial: alternate}]
 
 
 def test_steering_runs_reproduce_v3_the_preferred_saturation_and_null_motion():
-    result = run_cmg(load_scenario(SMALL))
+    result = run_scenario(load_scenario(SMALL))
     rows = {r["run"]: r for r in result.metrics_records()}
     h_s = 2 * np.cos(cmg.SKEW)
     # V3: internal singularity at 1.1546 h (t = |h| under the unit demand), V2 envelope 3.1546
@@ -60,9 +60,9 @@ def test_a_singular_start_is_refused_by_the_pseudo_inverse_and_passed_by_the_sr_
     start = 'initial: ["-90 deg", "180 deg", "90 deg", "0 deg"]'  # V2: the +x envelope
     text = SMALL.replace('initial: zero, duration: "2 s"', start + ', duration: "2 s"')
     with pytest.raises(ScenarioError, match=r"runs\['zero'\].*starts singular.*alpha > 0"):
-        run_cmg(load_scenario(text))
+        run_scenario(load_scenario(text))
     sr = text.replace("steering: pi", "steering: sr, alpha: 1.0e-3")
-    result = run_cmg(load_scenario(sr))
+    result = run_scenario(load_scenario(sr))
     row = result.metrics_records()[0]
     assert row["singular"] and row["end_time_s"] == pytest.approx(2.0)  # ran the whole time
     # the SR inverse gives no rate along the singular direction: the demand beyond the
@@ -72,7 +72,7 @@ def test_a_singular_start_is_refused_by_the_pseudo_inverse_and_passed_by_the_sr_
 
 
 def test_the_station_scenario_contrasts_zero_gimbals_with_the_alternate_set():
-    result = run_cmg_station(load_scenario(STATION))
+    result = run_scenario(load_scenario(STATION))
     rows = {r["run"]: r for r in result.metrics_records()}
     # V9 (tests/cases/test_space_station_cmg.py): singular at 494 s from σ(0) = 0, none from
     # [45, −45, 45, −45]° (a quarter orbit here)
@@ -161,7 +161,7 @@ def test_station_schema_mistakes_are_named(change, message):
 def test_an_uncontrollable_filter_choice_is_reported_against_lqr():
     text = STATION.replace("runs:", "lqr: {roll_yaw_filters: [1, 2]}\nruns:")
     with pytest.raises(ScenarioError, match="lqr.*roll_yaw_filters.*not stabilizable"):
-        run_cmg_station(load_scenario(text))
+        run_scenario(load_scenario(text))
 
 
 @pytest.mark.parametrize(

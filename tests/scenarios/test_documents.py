@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from flexsat.scenarios import ScenarioError, default_scenario, load_scenario
-from flexsat.scenarios.documents import SCENARIO_KINDS
+from flexsat.scenarios.kind import scenario_kinds
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "tamu_40deg.yaml"
 
@@ -62,10 +62,12 @@ def test_a_file_scenario_remembers_its_folder_and_text(tmp_path, monkeypatch):
 
 
 def test_unknown_kind_is_refused_naming_every_kind():
+    """The registry's kinds: the default (maneuver) first, then by name."""
     message = problem(default_scenario().yaml_text + "kind: survey\n")
-    assert message.startswith("kind: must be 'maneuver', 'simulation', ")
-    assert message.endswith(" or 'identification', got 'survey'")
-    assert all(f"'{kind}'" in message for kind in SCENARIO_KINDS)
+    assert message.startswith("kind: must be 'maneuver', 'cmg', 'cmg_station', ")
+    assert message.endswith(" or 'tether', got 'survey'")
+    assert all(f"'{kind}'" in message for kind in scenario_kinds())
+    assert len(scenario_kinds()) == 11
 
 
 @pytest.mark.parametrize("kind", ["survey", "[maneuver]"])

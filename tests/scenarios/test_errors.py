@@ -4,11 +4,22 @@ their label) and the field a runtime message already names."""
 
 from __future__ import annotations
 
+import pickle
+
 import pytest
+import yaml
 from pydantic import ValidationError
 
-from flexsat.scenarios import Scenario, ScenarioError
-from flexsat.scenarios.errors import _allowed_keys, _loc_path, _locate, _problem
+from flexsat.input_checks import FieldError
+from flexsat.scenarios import (
+    Problem,
+    Scenario,
+    ScenarioError,
+    default_scenario,
+    load_scenario,
+    prepare_scenario,
+)
+from flexsat.scenarios.errors import _allowed_keys, _loc_path, _locate, locate, pydantic_problem
 
 
 def test_the_error_counts_and_lists_its_problems():
@@ -112,7 +123,7 @@ def test_problem_uses_the_validators_own_message_not_pydantics_wrapper():
     }
     with pytest.raises(ValidationError) as info:
         Scenario.model_validate(data)
-    lines = sorted(_problem(error, data, Scenario) for error in info.value.errors())
+    lines = sorted(pydantic_problem(error, data, Scenario) for error in info.value.errors())
     assert lines[0] == "maneuver.angle: incompatible units (kilogram given, rad expected)"
     assert lines[1].startswith("runs: List should have at least 1 item")
     assert lines[2] == (
@@ -120,3 +131,55 @@ def test_problem_uses_the_validators_own_message_not_pydantics_wrapper():
         "integration_step, settling_band, seed)"
     )
     assert len(lines) == 3
+
+
+# -- problems as records, fields as data -------------------------------------------------------
+def test_a_problem_is_a_record_that_reads_as_its_line():
+    problem = Problem("runs['Law I'].gains.g1", "must be >= 0, got -1")
+    assert (problem.path, problem.rule) == ("runs['Law I'].gains.g1", "must be >= 0, got -1")
+    assert problem == "runs['Law I'].gains.g1: must be >= 0, got -1"
+    assert Problem("", "must be a YAML mapping") == "scenario: must be a YAML mapping"
+    assert pickle.loads(pickle.dumps(problem)).path == problem.path  # dask workers
+    error = pickle.loads(pickle.dumps(ScenarioError([problem])))
+    assert error.problems[0].path == problem.path and str(error).endswith(str(problem))
+
+
+def test_locate_takes_the_field_of_a_field_error_as_data():
+    """The field travels as an attribute: a field the text form could not name (an indexed
+    one) is placed all the same, and a rule that itself looks like ``word: ...`` is kept."""
+    assert locate("runs['a'].gains", FieldError("g1", "must be >= 0")) == (
+        "runs['a'].gains.g1: must be >= 0"
+    )
+    indexed = locate("cameras", FieldError("lens[2]", "must be > 0"))
+    assert (indexed.path, indexed.rule) == ("cameras.lens[2]", "must be > 0")
+    tricky = locate("runs[0]", FieldError("k", "note: a rule with a colon"))
+    assert (tricky.path, tricky.rule) == ("runs[0].k", "note: a rule with a colon")
+    assert locate("simulation.duration", FieldError("duration", "x")).path == "simulation.duration"
+
+
+def test_input_checks_and_limits_raise_field_errors():
+    from flexsat import limits
+    from flexsat.input_checks import require_positive
+
+    with pytest.raises(FieldError) as info:
+        require_positive(-1.0, "hub_inertia", "kg*m**2")
+    assert info.value.field == "hub_inertia" and str(info.value).startswith("hub_inertia: ")
+    with pytest.raises(FieldError) as info:
+        limits.check_count(10, 5, "duration", "samples")
+    assert info.value.field == "duration"
+    assert info.value.rule == "samples = 10, above the limit 5 (flexsat.limits)"
+
+
+def test_a_resource_limit_is_placed_by_the_field_it_names():
+    """check_resources names the SimConfig input (``duration``); the maneuver document says
+    where that input comes from (``simulation.duration``), no message is parsed."""
+    data = yaml.safe_load(default_scenario().yaml_text)
+    # 1e6 control samples (within MAX_SAMPLES) x 100 substeps: 1e8 integrator steps
+    data["simulation"]["duration"] = "1e4 s"
+    data["simulation"]["control_rate"] = "100 Hz"
+    data["simulation"]["integration_step"] = "1e-4 s"
+    with pytest.raises(ScenarioError) as info:
+        prepare_scenario(load_scenario(yaml.safe_dump(data)))
+    (problem,) = info.value.problems
+    assert problem.path == "simulation.duration"
+    assert problem.rule.startswith("integrator steps (")

@@ -3,13 +3,8 @@
 import pytest
 import yaml
 
-from flexsat.scenarios import ScenarioError, load_scenario
-from flexsat.scenarios.identification import (
-    SUMMARY_COLUMNS,
-    IdentificationScenario,
-    run_identification,
-    summary_table,
-)
+from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
+from flexsat.scenarios.identification import SUMMARY_COLUMNS, IdentificationScenario
 
 
 def test_example_loads_with_si_values(identification_example):
@@ -27,7 +22,7 @@ def test_example_loads_with_si_values(identification_example):
 @pytest.mark.parametrize(
     "changes, message",
     [
-        ({"kind": "survey"}, "kind: must be 'maneuver', 'simulation', "),
+        ({"kind": "survey"}, "kind: must be 'maneuver', 'cmg', "),
         ({"hammer__force": 3}, "hammer.force: unknown key (allowed: node, direction, impulse"),
         ({"wheels__axes": ["x"]}, "wheels.axes: one torque axis per wheel node (3), got 1"),
         (
@@ -72,19 +67,19 @@ def test_schema_errors_name_the_field(changes, message, identification_example):
 def test_case_dependent_errors_before_anything_runs(changes, message, identification_example):
     s = load_scenario(yaml.safe_dump(identification_example(**changes)))
     with pytest.raises(ScenarioError) as exc:
-        run_identification(s)
+        run_scenario(s)
     assert message in str(exc.value)
 
 
 def test_run_recovers_the_clamp_and_summarises(identification_example):
     s = load_scenario(yaml.safe_dump(identification_example(fast=True)))
     seen = []
-    result = run_identification(s, progress=seen.append)
+    result = run_scenario(s, progress=seen.append)
     assert seen and result.case_source
     assert abs(result.campaign.scalings["clamp verticals"]["updated"] - 1) < 0.01
-    columns, rows = summary_table(result)
-    assert columns == SUMMARY_COLUMNS and len(rows) == 5
-    assert all(len(values) == len(columns) for _, values in rows)
+    table = result.console_table()
+    assert table.columns == ("mode", *SUMMARY_COLUMNS) and len(table.rows) == 5
+    assert all(len(row) == len(table.columns) for row in table.rows)
 
 
 def test_blind_camera_is_a_video_error(identification_example):
@@ -92,7 +87,7 @@ def test_blind_camera_is_a_video_error(identification_example):
     for cam in data["video"]["cameras"]:
         cam["aim"] = ["20 m", "20 m", "0 m"]
     with pytest.raises(ScenarioError, match="video.rig: some targets fall outside"):
-        run_identification(load_scenario(yaml.safe_dump(data)))
+        run_scenario(load_scenario(yaml.safe_dump(data)))
 
 
 def test_recorded_tests_from_universal_files(tmp_path, recorded_scenario):
@@ -101,29 +96,28 @@ def test_recorded_tests_from_universal_files(tmp_path, recorded_scenario):
     within 1 %, with no truth to compare in the tables."""
     s = load_scenario(recorded_scenario(tmp_path))
     assert s.recorded and s.folder == tmp_path
-    result = run_identification(s)
+    result = run_scenario(s)
     c = result.campaign
     assert c.modes["true_hz"] == [None] * len(c.modes["era_hz"])
     assert abs(c.scalings["clamp verticals"]["updated"] - 1) < 0.01
     for v, k in zip(c.wheel_gains.values(), (0.9, 1.1, 1.0)):
         assert v["true"] is None and abs(v["identified"] / k - 1) < 0.01
-    columns, rows = summary_table(result)
-    assert rows[0][1][0] == "–"
+    assert result.console_table().rows[0][1] == "–"
 
 
 def test_recorded_tests_without_video(tmp_path, recorded_scenario):
     """The video record is optional: modes are then paired by frequency and the report says
     there are no measured shapes."""
-    from flexsat.report import write_identification_report
+    from flexsat.report import write_report
 
     path = recorded_scenario(tmp_path)
     data = yaml.safe_load(path.read_text())
     del data["records"]["video"]
     path.write_text(yaml.safe_dump(data))
-    result = run_identification(load_scenario(path))
+    result = run_scenario(load_scenario(path))
     assert result.campaign.mac_updated.size == 0 and result.campaign.video_realization is None
     assert abs(result.campaign.scalings["clamp verticals"]["updated"] - 1) < 0.01
-    out = write_identification_report(result, tmp_path / "report")
+    out = write_report(result, tmp_path / "report")
     assert (out / "mac.png").exists()
 
 
@@ -136,7 +130,7 @@ def test_recorded_scenario_errors(tmp_path, identification_example):
         data.pop(name)
     s = load_scenario(yaml.safe_dump(data))
     with pytest.raises(ScenarioError, match=r"records.hammer: cannot read .*h.uff"):
-        run_identification(s)
+        run_scenario(s)
     data.pop("records")
     with pytest.raises(ScenarioError, match="sensors: required to simulate the tests"):
         load_scenario(yaml.safe_dump(data))

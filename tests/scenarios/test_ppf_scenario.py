@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from flexsat.report import write_ppf_report
-from flexsat.scenarios import PPFScenario, ScenarioError, load_scenario, run_ppf
+from flexsat.report import write_report
+from flexsat.scenarios import PPFScenario, ScenarioError, load_scenario, run_scenario
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "agrawal_bang_ppf.yaml"
 
@@ -36,8 +36,8 @@ runs:
 
 @pytest.fixture(scope="module")
 def example(tmp_path_factory):
-    result = run_ppf(load_scenario(EXAMPLE))
-    return result, write_ppf_report(result, tmp_path_factory.mktemp("ppf") / "report")
+    result = run_scenario(load_scenario(EXAMPLE))
+    return result, write_report(result, tmp_path_factory.mktemp("ppf") / "report")
 
 
 def test_the_example_runs_the_grid_with_both_goal_rules(example):
@@ -122,7 +122,7 @@ def test_a_small_scenario_loads_by_kind_and_runs():
     assert isinstance(spec, PPFScenario)
     assert spec.ppf.amplitude == pytest.approx(0.01)
     assert spec.simulation.control_rate == pytest.approx(100.0)
-    result = run_ppf(spec)
+    result = run_scenario(spec)
     assert result.labels == ("paper", "reducing")
     assert result.runs[1].setup.weights == (100.0, 500.0)
     assert result.runs[0].responses["time"][-1] == pytest.approx(10.0)

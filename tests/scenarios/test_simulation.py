@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexsat.scenarios import ScenarioError, load_scenario, run_simulation, simulation_cases
+from flexsat.scenarios import ScenarioError, load_scenario, run_scenario, simulation_cases
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 SIMULATION_EXAMPLES = sorted(
@@ -32,7 +32,7 @@ def test_every_case_with_a_plant_ships_an_example():
 
 @pytest.mark.parametrize("path", SIMULATION_EXAMPLES, ids=lambda p: p.stem)
 def test_example_runs(path):
-    result = run_simulation(load_scenario(path))
+    result = run_scenario(load_scenario(path))
     ds = result.dataset()
     assert list(ds.run.values) == [run.label for run in result.scenario.runs]
     for name, var in ds.data_vars.items():
@@ -41,7 +41,7 @@ def test_example_runs(path):
 
 def test_the_rigid_slew_reaches_the_papers_attitude():
     """examples/eps_rigid_gibbs_slew.yaml: both laws end within 0.01° of (1, 1, 1) rad."""
-    result = run_simulation(load_scenario(EXAMPLES / "eps_rigid_gibbs_slew.yaml"))
+    result = run_scenario(load_scenario(EXAMPLES / "eps_rigid_gibbs_slew.yaml"))
     for row in result.metrics_records():
         assert row["final_pointing_error_deg"] < 0.01, row
 
@@ -59,7 +59,7 @@ def test_every_attitude_law_builds_from_its_gains(law, gains):
     text = BASE.replace(
         'law: mrp_pd, gains: {K: "100 N*m", P: "1000 N*m*s/rad"}', f"law: {law}, gains: {gains}"
     )
-    result = run_simulation(load_scenario(text))
+    result = run_scenario(load_scenario(text))
     assert result.metrics_records()[0]["final_pointing_error_deg"] < 10.0
 
 
@@ -110,14 +110,14 @@ def test_mistakes_name_the_field(change, message):
     text = BASE.replace(*change)
     assert text != BASE
     with pytest.raises(ScenarioError, match=message.replace("(", r"\(").replace(")", r"\)")):
-        run_simulation(load_scenario(text))
+        run_scenario(load_scenario(text))
 
 
 def test_report_has_a_figure_per_recorded_channel(tmp_path):
-    from flexsat.report import write_simulation_report
+    from flexsat.report import write_report
 
-    result = run_simulation(load_scenario(BASE))
-    folder = write_simulation_report(result, tmp_path / "out")
+    result = run_scenario(load_scenario(BASE))
+    folder = write_report(result, tmp_path / "out")
     html = (folder / "index.html").read_text()
     for name in ("attitude", "rate", "torque"):
         assert f'src="{name}.png"' in html and (folder / f"{name}.png").stat().st_size > 1000
@@ -130,5 +130,5 @@ def test_open_loop_runs_on_a_plant_with_vector_channels():
     text = BASE.replace(
         'law: mrp_pd, gains: {K: "100 N*m", P: "1000 N*m*s/rad"}', "law: open_loop"
     ).replace('initial: {euler123: ["10 deg", 0, 0]}\n', "")
-    result = run_simulation(load_scenario(text))
+    result = run_scenario(load_scenario(text))
     assert np.all(result.dataset()["torque"].values == 0)

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from flexsat.report import write_slew_report
-from flexsat.scenarios import ScenarioError, load_scenario, run_slew
+from flexsat.report import write_report
+from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -41,12 +41,12 @@ runs:
 
 @pytest.fixture(scope="module")
 def ten_seconds():
-    return run_slew(load_scenario(EXAMPLES / "eps_slew_10s.yaml"))
+    return run_scenario(load_scenario(EXAMPLES / "eps_slew_10s.yaml"))
 
 
 @pytest.fixture(scope="module")
 def six_seconds():
-    return run_slew(load_scenario(EXAMPLES / "eps_slew_6s.yaml"))
+    return run_scenario(load_scenario(EXAMPLES / "eps_slew_6s.yaml"))
 
 
 def _rows(result) -> dict:
@@ -115,7 +115,7 @@ def test_case_e_forces_do_better_than_case_d(six_seconds):
 
 
 def test_a_small_slew_runs_and_writes_its_report(tmp_path):
-    result = run_slew(load_scenario(SMALL))
+    result = run_scenario(load_scenario(SMALL))
     assert result.labels == ("open loop", "torquers", "decoupled forces")
     ds = result.dataset()
     for name in (
@@ -140,7 +140,7 @@ def test_a_small_slew_runs_and_writes_its_report(tmp_path):
     assert np.abs(moment).max() <= 1e-12 * np.abs(F).max() * np.abs(plant.force_moments).max()
     assert np.abs(ds["force_88X"].sel(run="decoupled forces").values).max() == 0.0
     assert truth.runs[1].decouple
-    out = write_slew_report(result, tmp_path / "report")
+    out = write_report(result, tmp_path / "report")
     for name in (
         "index.html",
         "metrics.json",
@@ -226,7 +226,7 @@ def test_mistakes_found_while_building_are_named_before_any_run(change, message)
     old, new = change
     assert old in SMALL
     with pytest.raises(ScenarioError, match=message):
-        run_slew(load_scenario(SMALL.replace(old, new)))
+        run_scenario(load_scenario(SMALL.replace(old, new)))
 
 
 def test_the_searched_weights_meet_the_6s_goals_with_forces_only(six_seconds):

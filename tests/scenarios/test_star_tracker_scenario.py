@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexsat.scenarios import ScenarioError, StarTrackerScenario, load_scenario, run_star_tracker
+from flexsat.scenarios import ScenarioError, StarTrackerScenario, load_scenario, run_scenario
 from flexsat.scenarios.star_tracker import build_tracker
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "star_tracker.yaml"
@@ -37,7 +37,7 @@ def test_the_example_loads_with_the_papers_rule():
 
 
 def test_a_small_scenario_runs_and_identifies_every_attitude():
-    result = run_star_tracker(load_scenario(SMALL))
+    result = run_scenario(load_scenario(SMALL))
     rows = {r["run"]: r for r in result.metrics_records()}
     assert set(rows) == {"clean", "noisy"}
     for r in rows.values():

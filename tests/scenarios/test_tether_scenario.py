@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexsat.scenarios import ScenarioError, TetherScenario, load_scenario, run_tether
+from flexsat.scenarios import ScenarioError, TetherScenario, load_scenario, run_scenario
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "tether_retrieval.yaml"
 
@@ -32,7 +32,7 @@ runs:
 
 @pytest.fixture(scope="module")
 def example():
-    return run_tether(load_scenario(EXAMPLE))
+    return run_scenario(load_scenario(EXAMPLE))
 
 
 def test_the_example_reproduces_the_published_retrievals(example):
@@ -67,11 +67,11 @@ def test_sampled_runs_approach_the_continuous_ones():
     # The simulation core with the commands held 500 and 2000 times an orbit: the max pitch
     # error falls more than 4× (first-order hold error, tests/control/test_tether_laws.py)
     spec = load_scenario(SMALL)
-    continuous = run_tether(spec).metrics_records()
+    continuous = run_scenario(spec).metrics_records()
     errors = []
     for n in (500, 2000):
         sim = spec.simulation.model_copy(update={"integrator": "sampled", "samples_per_orbit": n})
-        sampled = run_tether(spec.model_copy(update={"simulation": sim})).metrics_records()
+        sampled = run_scenario(spec.model_copy(update={"simulation": sim})).metrics_records()
         errors.append(abs(sampled[0]["max_pitch_deg"] - continuous[0]["max_pitch_deg"]))
         # the rate law's commanded rate is exact at the first sample either way
         assert sampled[1]["initial_rate_m_s"] == pytest.approx(
@@ -168,11 +168,11 @@ def test_a_collapsing_tether_is_named_by_its_run():
         match=r"runs\['coupled'\].length: the tether collapsed "
         r"\(length below 0.0001 L\) at t = 4\.03 s",
     ):
-        run_tether(load_scenario(text))
+        run_scenario(load_scenario(text))
     # a final length at or below that threshold is refused before the run
     with pytest.raises(
         ScenarioError,
         match=r"runs\['rate'\].final_length: 1 mm is below the "
         r"collapse threshold",
     ):
-        run_tether(load_scenario(SMALL.replace("final_length: 0.2 km", "final_length: 1 mm")))
+        run_scenario(load_scenario(SMALL.replace("final_length: 0.2 km", "final_length: 1 mm")))

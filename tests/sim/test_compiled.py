@@ -17,11 +17,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import flexsat.sim
 from flexsat.control import PD
 from flexsat.dynamics.dispersion import stack_plants
 from flexsat.dynamics.hub_appendage import HubAppendage
-from flexsat.scenarios import default_scenario, load_scenario, run_scenario, runner, simulation
+from flexsat.scenarios import default_scenario, load_scenario, run_scenario, runner
 from flexsat.sim import (
     BearingFriction,
     ChannelSensor,
@@ -138,9 +137,9 @@ def test_structural_plant_under_lqr_is_unchanged(monkeypatch):
     """The Draper/RPL modal plant (a StructuralPlant, three torquers, one saturated) under
     its LQR (ScheduledStateFeedback reading the whole state)."""
     text = (EXAMPLES / "draper_rpl_lqr.yaml").read_text()
-    fast = simulation.run_simulation(load_scenario(text))
-    monkeypatch.setattr(flexsat.sim, "simulate", partial(simulate, compiled=False))
-    slow = simulation.run_simulation(load_scenario(text))
+    fast = run_scenario(load_scenario(text))
+    monkeypatch.setattr(runner, "simulate", partial(simulate, compiled=False))
+    slow = run_scenario(load_scenario(text))
     for a, b in zip(fast.results, slow.results):
         assert a.dataset.attrs["propagation"] == "modal"  # decoupled modes: a permutation
         assert_same(a, b)

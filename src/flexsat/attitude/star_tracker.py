@@ -27,7 +27,7 @@ from flexsat.attitude.star_camera import StarCamera, StarFrame
 from flexsat.attitude.star_catalog import StarCatalog
 from flexsat.attitude.star_id import Identification, identify_frames
 from flexsat.dynamics.attitude import quaternion_to_dcm
-from flexsat.input_checks import require_count
+from flexsat.input_checks import FieldError, require_count
 from flexsat.units import FloatArray, QuantityLike, to_si_array
 
 __all__ = [
@@ -90,25 +90,27 @@ class StarTracker:
         self.min_fields = require_count(min_fields, "min_fields")
         self.min_triplets = require_count(min_triplets, "min_triplets")
         if len(cams) < self.min_fields:
-            raise ValueError(
-                f"cameras: the identification needs {self.min_fields} fields of view "
-                f"(min_fields), got {len(cams)} cameras"
+            raise FieldError(
+                "cameras",
+                f"the identification needs {self.min_fields} fields of view "
+                f"(min_fields), got {len(cams)} cameras",
             )
         if not isinstance(catalog, StarCatalog):
-            raise ValueError(f"catalog: must be a StarCatalog, got {type(catalog).__name__}")
+            raise FieldError("catalog", f"must be a StarCatalog, got {type(catalog).__name__}")
         tol = to_si_array(tolerance, "rad", "tolerance")
         if tol.ndim != 0 or not np.isfinite(tol) or tol <= 0:
-            raise ValueError(f"tolerance: must be one finite angle > 0, got {tolerance!r}")
+            raise FieldError("tolerance", f"must be one finite angle > 0, got {tolerance!r}")
         self.tolerance = float(tol)
         need = max(3 * np.sqrt(2) * c.direction_sigma for c in cams)
         if self.tolerance < need:
-            raise ValueError(
-                f"tolerance: {self.tolerance / ARCSEC:.3g}″ is below 3√2 σ = "
+            raise FieldError(
+                "tolerance",
+                f"{self.tolerance / ARCSEC:.3g}″ is below 3√2 σ = "
                 f"{need / ARCSEC:.3g}″ of a measured inter-star angle (centroid "
-                f"noise × pixel angle); true pairs would fail to match"
+                f"noise × pixel angle); true pairs would fail to match",
             )
         if index not in _INDEXES:
-            raise ValueError(f"index: must be 'kvector' or 'brute', got {index!r}")
+            raise FieldError("index", f"must be 'kvector' or 'brute', got {index!r}")
         self.cameras = tuple(cams)
         self.catalog = catalog.brighter_than(max(c.magnitude_limit for c in cams))
         max_angle = max(c.max_pair_angle for c in cams) + self.tolerance

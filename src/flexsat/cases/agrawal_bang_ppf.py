@@ -48,7 +48,11 @@ from flexsat.input_checks import require_count, require_finite, require_nonneg, 
 from flexsat.units import QuantityLike
 
 if TYPE_CHECKING:
+    import xarray as xr
+
     from flexsat.control.ppf_optimization import PPFHomotopyResult
+    from flexsat.dynamics.structural import StructuralPlant
+    from flexsat.sim import SimConfig
 
 #: filter damping ratio (not published, spec §1.3; module docstring)
 ZETA_F = 0.1
@@ -363,24 +367,40 @@ class PPFCaseRun:
         return r
 
 
+def response_simulations(
+    setup: PPFCaseProblem, gains: Mapping[str, npt.ArrayLike], duration: float, rate: float
+) -> tuple[StructuralPlant, dict[str, PPFController], SimConfig]:
+    """What the tip responses simulate: ``(plant, laws, config)``, the plant ``case.plant(m)``,
+    one :class:`~flexsat.control.ppf.PPFController` sampled at ``rate`` (Hz) per entry of
+    ``gains`` (a label to a gain vector; zero gains: the open loop, u = Eᵀ G ξ = 0) and the
+    configuration of ``duration`` s. Each run starts from the structural state ``setup.x0``
+    with the filters at rest and records its states (:func:`tip_history`)."""
+    from flexsat.sim import SimConfig
+
+    config = SimConfig(duration=duration, control_rate=rate)
+    laws = {label: PPFController(setup.bank, g, dt=config.dt) for label, g in gains.items()}
+    return setup.case.plant(setup.problem.model.n_modes), laws, config
+
+
+def tip_history(setup: PPFCaseProblem, ds: xr.Dataset) -> np.ndarray:
+    """(n_t, 3) history of [Eᵗ·n̂_1, Eᵗ·n̂_2, Φ] (m, m, rad) from the recorded states of one
+    simulation (its dataset ``ds``, one case)."""
+    return ds["state"].values[0][:, : setup.problem.model.n_modes] @ setup.tip_rows.T
+
+
 def tip_responses(
     setup: PPFCaseProblem, gains: Mapping[str, npt.ArrayLike], duration: float, rate: float
 ) -> dict[str, np.ndarray]:
-    """Tip error and rotation histories of the PPF loop on ``case.plant(m)`` (the simulation
-    core, :class:`~flexsat.control.ppf.PPFController` sampled at ``rate``) from the structural
-    state ``setup.x0``, filters at rest; ``gains`` maps a label to a gain vector (zero gains:
-    the open loop, u = Eᵀ G ξ = 0)."""
-    from flexsat.sim import SimConfig, simulate
+    """Tip error and rotation histories (:func:`tip_history`) of the PPF loop of every entry
+    of ``gains`` (:func:`response_simulations`), with their ``time``."""
+    from flexsat.sim import simulate
 
-    m = setup.problem.model.n_modes
-    plant = setup.case.plant(m)
-    config = SimConfig(duration=duration, control_rate=rate)
+    plant, laws, config = response_simulations(setup, gains, duration, rate)
     out: dict[str, np.ndarray] = {}
-    for label, g in gains.items():
-        law = PPFController(setup.bank, g, dt=config.dt)
+    for label, law in laws.items():
         ds = simulate(plant, law, config, initial_state=setup.x0, record_states=True).dataset
         out.setdefault("time", ds["time"].values)
-        out[label] = ds["state"].values[0][:, :m] @ setup.tip_rows.T
+        out[label] = tip_history(setup, ds)
     return out
 
 
@@ -475,5 +495,7 @@ __all__ = [
     "run_ppf_case",
     "run_ppf_grid",
     "tip_error_rows",
+    "response_simulations",
+    "tip_history",
     "tip_responses",
 ]

@@ -64,6 +64,7 @@ from flexsat.identify.structural import (
     identify_undamped,
     substructures_from_builder,
 )
+from flexsat.input_checks import FieldError
 from flexsat.sim.vibration_test import simulate_test
 from flexsat.structures.fem import FEModes
 from flexsat.structures.modal_model import ModalModel
@@ -175,17 +176,18 @@ class CampaignConfig:
 
     def __post_init__(self):
         if self.update not in UPDATE_METHODS:
-            raise ValueError(f"update: must be one of {UPDATE_METHODS}, got {self.update!r}")
+            raise FieldError("update", f"must be one of {UPDATE_METHODS}, got {self.update!r}")
         k = self.wheel_torque_constants
         if k and (len(k) != len(self.wheel_nodes) or not all(np.isfinite(k)) or min(k) <= 0):
-            raise ValueError(
-                f"wheel_torque_constants: one factor > 0 per wheel "
-                f"({len(self.wheel_nodes)}), got {k!r}"
+            raise FieldError(
+                "wheel_torque_constants",
+                f"one factor > 0 per wheel ({len(self.wheel_nodes)}), got {k!r}",
             )
         if (k or self.identify_torque_constants) and self.update != "differential_correction":
-            raise ValueError(
-                "wheel_torque_constants: identifying the wheels' torque constants "
-                "needs the FRF, i.e. update 'differential_correction'"
+            raise FieldError(
+                "wheel_torque_constants",
+                "identifying the wheels' torque constants "
+                "needs the FRF, i.e. update 'differential_correction'",
             )
 
 
@@ -292,9 +294,10 @@ def _calibrate_rig(cfg, rig, points0, rng):
         seed=int(rng.integers(2**31)),
     )
     if np.any(np.isnan(fields)):
-        raise ValueError(
-            "rig: some targets fall outside a camera's 320 x 244 field; aim the "
-            "cameras at the structure or use a shorter focal length"
+        raise FieldError(
+            "rig",
+            "some targets fall outside a camera's 320 x 244 field; aim the "
+            "cameras at the structure or use a shorter focal length",
         )
     obs = fields.mean(axis=1)
     sigma = rig.noise_px * rig.pixel_size / np.sqrt(n_fields)
@@ -357,9 +360,10 @@ def _video_test(cfg, truth, rig, points0, calibration, rng):
         seed=int(rng.integers(2**31)),
     )
     if np.any(np.isnan(uv)):
-        raise ValueError(
-            "rig: a target leaves a camera's field during the video test; reduce "
-            "video_impulse or widen the view"
+        raise FieldError(
+            "rig",
+            "a target leaves a camera's field during the video test; reduce "
+            "video_impulse or widen the view",
         )
     pts, cov = triangulate(cams, uv, rig.noise_px * rig.pixel_size)
     # with the calibration covariance (Att. 6 Eqs. 34-37): the absolute position uncertainty;
@@ -472,9 +476,9 @@ def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
     """
     say = progress or (lambda label: None)
     if cfg.rig is None or not cfg.targets or not cfg.strain_gauges or not cfg.wheel_nodes:
-        raise ValueError(
-            "rig: simulating the tests needs a camera rig, targets, strain gauges "
-            "and reaction wheels"
+        raise FieldError(
+            "rig",
+            "simulating the tests needs a camera rig, targets, strain gauges and reaction wheels",
         )
     rng = np.random.default_rng(cfg.seed)
     asm, truth = _true_modes(case, cfg)
@@ -623,7 +627,7 @@ def identify_and_update(
         )
     sel = _select(hammer_real, cfg.band)
     if sel.size == 0:
-        raise ValueError(f"records: the hammer test shows no mode below {cfg.band:g} Hz")
+        raise FieldError("records", f"the hammer test shows no mode below {cfg.band:g} Hz")
     f_meas = hammer_real.frequencies_hz[sel]
     omega_meas = hammer_real.omega_rad_s[sel]
     z_meas = hammer_real.damping[sel]
@@ -671,8 +675,9 @@ def identify_and_update(
     true_gains = np.asarray(cfg.wheel_torque_constants, float)
     fit_gains = bool(true_gains.size) or cfg.identify_torque_constants
     if true_gains.size and true_gains.size != len(inputs):
-        raise ValueError(
-            f"wheel_torque_constants: one per recorded wheel ({len(inputs)}), got {true_gains.size}"
+        raise FieldError(
+            "wheel_torque_constants",
+            f"one per recorded wheel ({len(inputs)}), got {true_gains.size}",
         )
     wheel_gains, nu1 = {}, np.ones(len(inputs))
     r0 = np.array([2.0 * cfg.a_priori_damping * w0[0], 0.0])  # Eq. 15 in C = r1 M + r2 K

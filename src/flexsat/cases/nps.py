@@ -41,7 +41,7 @@ from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.control import PD
 from flexsat.dynamics.hybrid import ModalHybrid
-from flexsat.input_checks import require_count
+from flexsat.input_checks import FieldError, require_count
 from flexsat.structures.beam import TipMassCantilever, hub_free_frequencies
 from flexsat.structures.fem import Structure
 from flexsat.structures.modal_model import ModalModel, hub_appendage_matrices
@@ -202,7 +202,9 @@ class NPSCase:
             hub = self.hub_inertia
         else:
             if self.n_modes > modal.n_modes:
-                raise ValueError(f"n_modes: the model has {modal.n_modes} modes; raise n_elements")
+                raise FieldError(
+                    "n_modes", f"the model has {modal.n_modes} modes; raise n_elements"
+                )
             D = modal.participation[: self.n_modes, 5]
             appendage_share = I_app - (
                 float(D @ D) if self.inertia_convention == "cantilevered" else 0.0
@@ -210,11 +212,11 @@ class NPSCase:
             hub = self.design_inertia - appendage_share
             if hub <= 0:
                 which = "I0zz" if self.inertia_convention == "cantilevered" else "I_zz"
-                raise ValueError(
-                    f"design_inertia: {self.design_inertia:.6g} kg m² is too small for {which}: "
-                    "the "
+                raise FieldError(
+                    "design_inertia",
+                    f"{self.design_inertia:.6g} kg m² is too small for {which}: the "
                     f"appendage alone contributes {appendage_share:.6g} kg m², so the hub inertia "
-                    "would not be positive (lighten the appendage or change inertia_convention)"
+                    "would not be positive (lighten the appendage or change inertia_convention)",
                 )
         return _Solution(EI=EI, modal=modal, appendage_inertia=I_app, hub_inertia=float(hub))
 
@@ -272,9 +274,10 @@ class NPSCase:
             return modal
         n = self.n_modes if n_modes is None else require_count(n_modes, "n_modes")
         if n > modal.n_modes:
-            raise ValueError(
-                f"n_modes: the finite-element model has {modal.n_modes} modes; raise "
-                f"n_elements for more than that, got {n}"
+            raise FieldError(
+                "n_modes",
+                f"the finite-element model has {modal.n_modes} modes; raise "
+                f"n_elements for more than that, got {n}",
             )
         return modal.truncate(n)
 
@@ -384,8 +387,8 @@ class NPSCase:
         """First ``n_modes`` hub-free elastic frequencies of the six-mode hybrid model, Hz."""
         n = require_count(n_modes, "n_modes")
         if n > self.n_modes:
-            raise ValueError(
-                f"n_modes: the model has {self.n_modes} modes; raise n_modes to at least {n}"
+            raise FieldError(
+                "n_modes", f"the model has {self.n_modes} modes; raise n_modes to at least {n}"
             )
         return self.system_frequencies()[:n] / (2 * np.pi)
 
@@ -458,21 +461,22 @@ def nps(**overrides: Any) -> NPSCase:
     >>> case = nps(mast_length="2 m", inertia_convention="total")
     """
     if "mast_bending_stiffness" in overrides and "cantilever_frequency" in overrides:
-        raise ValueError(
-            "mast_bending_stiffness: give either it or cantilever_frequency (it is "
-            "solved for that frequency), not both"
+        raise FieldError(
+            "mast_bending_stiffness",
+            "give either it or cantilever_frequency (it is solved for that frequency), not both",
         )
     values = read_inputs("nps", _INPUTS, overrides)
     if values["n_elements"] < 2:
-        raise ValueError(f"n_elements: must be >= 2, got {values['n_elements']}")
+        raise FieldError("n_elements", f"must be >= 2, got {values['n_elements']}")
     if values["damping"] >= 1:
-        raise ValueError(
-            f"damping: must be < 1 (a ratio of critical damping), got {values['damping']!r}"
+        raise FieldError(
+            "damping", f"must be < 1 (a ratio of critical damping), got {values['damping']!r}"
         )
     if 2 * values["n_elements"] < values["n_modes"]:
-        raise ValueError(
-            f"n_modes: the mesh of {values['n_elements']} elements has "
-            f"{2 * values['n_elements']} modes; raise n_elements"
+        raise FieldError(
+            "n_modes",
+            f"the mesh of {values['n_elements']} elements has "
+            f"{2 * values['n_elements']} modes; raise n_elements",
         )
     case = NPSCase(**values)
     case._solution  # noqa: B018 -- solve and validate now: one clear message at construction

@@ -35,6 +35,7 @@ from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.control import LyapunovRegulator, LyapunovTracker
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
+from flexsat.input_checks import FieldError
 from flexsat.maneuvers import SmoothBangBang
 from flexsat.sim import BearingFriction, RandomTorque, Sensors, SimConfig, TorqueActuator
 from flexsat.structures.beam import hub_free_frequencies
@@ -102,8 +103,9 @@ class TamuCase:
     @property
     def params(self) -> HubAppendageParams:
         if self.tip_radius <= self.hub_radius:
-            raise ValueError(
-                f"tip_radius: must exceed hub_radius ({self.hub_radius} m), got {self.tip_radius} m"
+            raise FieldError(
+                "tip_radius",
+                f"must exceed hub_radius ({self.hub_radius} m), got {self.tip_radius} m",
             )
         return HubAppendageParams(
             hub_inertia=self.hub_inertia,
@@ -127,8 +129,9 @@ class TamuCase:
         """First ``n_modes`` elastic frequencies of the hub-free model, Hz."""
         model = self.model()
         if n_modes > model.n_modes:
-            raise ValueError(
-                f"n_modes: the model has {model.n_modes} modes; raise n_modes to at least {n_modes}"
+            raise FieldError(
+                "n_modes",
+                f"the model has {model.n_modes} modes; raise n_modes to at least {n_modes}",
             )
         return model.frequencies()[:n_modes] / (2 * np.pi)
 

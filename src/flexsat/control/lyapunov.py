@@ -22,7 +22,7 @@ import numpy as np
 
 from flexsat.control.base import SlewLaw
 from flexsat.control.linear_form import per_case, reference_tables, sample_times, static_law
-from flexsat.input_checks import require_finite, require_nonneg
+from flexsat.input_checks import FieldError, require_finite, require_nonneg
 
 
 def check_lyapunov_gains(g1, g2, g3, n_appendages: int = 4):
@@ -31,9 +31,10 @@ def check_lyapunov_gains(g1, g2, g3, n_appendages: int = 4):
     g2 = require_nonneg(g2, "g2", "N*m*s/rad")
     g3 = require_finite(g3, "g3", "")
     if np.any(g3 <= -n_appendages):
-        raise ValueError(
-            f"g3: must be > -{n_appendages} (= -n_appendages) for the Lyapunov function to be "
-            f"positive definite (a3 > 0), got {g3.tolist()}"
+        raise FieldError(
+            "g3",
+            f"must be > -{n_appendages} (= -n_appendages) for the Lyapunov function to be "
+            f"positive definite (a3 > 0), got {g3.tolist()}",
         )
     return g1, g2, g3
 

@@ -84,7 +84,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
 from flexsat.units import FrequencyArray, to_si_array
 
 __all__ = [
@@ -104,18 +104,21 @@ def _markov_array(markov) -> np.ndarray:
     try:
         Y = np.array(markov, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"markov: must be a numeric array, got {type(markov).__name__}") from None
+        raise FieldError(
+            "markov", f"must be a numeric array, got {type(markov).__name__}"
+        ) from None
     if Y.ndim == 1:
         Y = Y[:, None, None]
     if Y.ndim != 3:
-        raise ValueError(f"markov: must have shape (L+1, q, r) (Y_0 first), got {Y.shape}")
+        raise FieldError("markov", f"must have shape (L+1, q, r) (Y_0 first), got {Y.shape}")
     if not np.all(np.isfinite(Y)):
-        raise ValueError(
-            f"markov: must be finite (no NaN or inf), got "
-            f"{int(np.sum(~np.isfinite(Y)))} non-finite entries"
+        raise FieldError(
+            "markov",
+            f"must be finite (no NaN or inf), got "
+            f"{int(np.sum(~np.isfinite(Y)))} non-finite entries",
         )
     if Y.shape[0] < 4:
-        raise ValueError(f"markov: need at least 4 Markov parameters, got {Y.shape[0]}")
+        raise FieldError("markov", f"need at least 4 Markov parameters, got {Y.shape[0]}")
     return Y
 
 
@@ -126,19 +129,20 @@ def _time_data(u, y):
         try:
             a = np.array(v, dtype=float)
         except (TypeError, ValueError):
-            raise ValueError(f"{name}: must be a numeric array") from None
+            raise FieldError(name, "must be a numeric array") from None
         a = a[None, :] if a.ndim == 1 else a
         if a.ndim != 2:
-            raise ValueError(f"{name}: must have shape (channels, samples), got {a.shape}")
+            raise FieldError(name, f"must have shape (channels, samples), got {a.shape}")
         if not np.all(np.isfinite(a)):
-            raise ValueError(
-                f"{name}: must be finite (no NaN or inf), got "
-                f"{int(np.sum(~np.isfinite(a)))} non-finite entries"
+            raise FieldError(
+                name,
+                f"must be finite (no NaN or inf), got "
+                f"{int(np.sum(~np.isfinite(a)))} non-finite entries",
             )
         arrays.append(a)
     u, y = arrays
     if u.shape[1] != y.shape[1]:
-        raise ValueError(f"y: must have as many samples as u ({u.shape[1]}), got {y.shape[1]}")
+        raise FieldError("y", f"must have as many samples as u ({u.shape[1]}), got {y.shape[1]}")
     return u, y
 
 
@@ -185,23 +189,23 @@ def markov_parameters(measurement=None, *, u=None, y=None, n_markov=None) -> np.
                 )
             blocks.append(markov_parameters(u=m.inputs, y=m.outputs, n_markov=n_markov))
         if len({b.shape for b in blocks}) != 1:
-            raise ValueError("measurement: tests must have the same outputs and length")
+            raise FieldError("measurement", "tests must have the same outputs and length")
         return np.concatenate(blocks, axis=2)
     u, y = _time_data(u, y)
     r, N = u.shape
     q = y.shape[0]
     nz = np.flatnonzero(np.any(u != 0, axis=0))
     if nz.size == 0:
-        raise ValueError("u: the input is zero; no Markov parameters can be read")
+        raise FieldError("u", "the input is zero; no Markov parameters can be read")
     if r == 1 and nz.size == 1:
         k0 = nz[0]
         L = N - 1 - k0 if n_markov is None else require_count(n_markov, "n_markov")
         if L > N - 1 - k0:
-            raise ValueError(f"n_markov: at most {N - 1 - k0} after the pulse, got {L}")
+            raise FieldError("n_markov", f"at most {N - 1 - k0} after the pulse, got {L}")
         return (y[:, k0 : k0 + L + 1] / u[0, k0]).T[:, :, None]
     L = N // 4 if n_markov is None else require_count(n_markov, "n_markov")
     if (L + 1) * r > N:
-        raise ValueError(f"n_markov: {(L + 1) * r} unknowns per output exceed the {N} samples")
+        raise FieldError("n_markov", f"{(L + 1) * r} unknowns per output exceed the {N} samples")
     Phi = np.zeros(((L + 1) * r, N))
     for j in range(L + 1):
         Phi[j * r : (j + 1) * r, j:] = u[:, : N - j]
@@ -262,44 +266,48 @@ def markov_from_frf(frequencies, frf, n_markov=None, tail_tolerance=1e-3):
     """
     f = require_finite(frequencies, "frequencies", "Hz")
     if f.ndim != 1 or f.size < 3:
-        raise ValueError(
-            f"frequencies: must be a 1-D grid of at least 3 values, got shape {f.shape}"
+        raise FieldError(
+            "frequencies", f"must be a 1-D grid of at least 3 values, got shape {f.shape}"
         )
     df = (f[-1] - f[0]) / (f.size - 1)
     if df <= 0:
-        raise ValueError("frequencies: must be ascending")
+        raise FieldError("frequencies", "must be ascending")
     # 1e-6 Δf: the same uniformity rule as a Measurement's time axis
     if abs(f[0]) > 1e-6 * df:
-        raise ValueError(
-            f"frequencies: must start at 0 Hz (the inverse FFT needs every line "
-            f"from DC to Nyquist), got {f[0]:.6g} Hz first"
+        raise FieldError(
+            "frequencies",
+            f"must start at 0 Hz (the inverse FFT needs every line "
+            f"from DC to Nyquist), got {f[0]:.6g} Hz first",
         )
     dev = np.max(np.abs(f - df * np.arange(f.size)))
     if dev > 1e-6 * df:
-        raise ValueError(
-            f"frequencies: must be uniformly spaced (0, Δf, 2Δf, …) for the "
-            f"inverse FFT; deviation {dev:.3g} Hz from the grid of step {df:.6g} Hz"
+        raise FieldError(
+            "frequencies",
+            f"must be uniformly spaced (0, Δf, 2Δf, …) for the "
+            f"inverse FFT; deviation {dev:.3g} Hz from the grid of step {df:.6g} Hz",
         )
     try:
         H = np.array(frf, dtype=complex)
     except (TypeError, ValueError):
-        raise ValueError(f"frf: must be a numeric array, got {type(frf).__name__}") from None
+        raise FieldError("frf", f"must be a numeric array, got {type(frf).__name__}") from None
     if H.ndim == 1:
         H = H[None, None, :]
     if H.ndim != 3 or H.shape[2] != f.size:
-        raise ValueError(
-            f"frf: must have shape (outputs, inputs, {f.size}) to match frequencies, got {H.shape}"
+        raise FieldError(
+            "frf",
+            f"must have shape (outputs, inputs, {f.size}) to match frequencies, got {H.shape}",
         )
     if not np.all(np.isfinite(H)):
-        raise ValueError(
-            f"frf: must be finite (no NaN or inf), got "
-            f"{int(np.sum(~np.isfinite(H)))} non-finite entries"
+        raise FieldError(
+            "frf",
+            f"must be finite (no NaN or inf), got "
+            f"{int(np.sum(~np.isfinite(H)))} non-finite entries",
         )
     tol = float(require_positive(tail_tolerance, "tail_tolerance"))
     N = 2 * (f.size - 1)
     L = N // 2 if n_markov is None else require_count(n_markov, "n_markov")
     if L > N - 1:
-        raise ValueError(f"n_markov: the period holds {N} samples, so at most {N - 1}, got {L}")
+        raise FieldError("n_markov", f"the period holds {N} samples, so at most {N - 1}, got {L}")
     # irfft takes the Nyquist line as real (its imaginary part cannot belong to a real sequence)
     Y = np.fft.irfft(H, n=N, axis=2).transpose(2, 0, 1)
     size = np.sqrt(np.sum(Y**2, axis=(1, 2)))
@@ -351,9 +359,10 @@ def okid(u, y, n_markov, n_observer=None) -> np.ndarray:
     )
     rows = r + p * (r + q)
     if N - p < rows:
-        raise ValueError(
-            f"n_observer: {rows} regressors need more than the {N - p} equations; "
-            "use a smaller observer order or a longer record"
+        raise FieldError(
+            "n_observer",
+            f"{rows} regressors need more than the {N - p} equations; "
+            "use a smaller observer order or a longer record",
         )
     v = np.vstack([u, y])
     V = np.zeros((rows, N - p))
@@ -380,8 +389,9 @@ def mac(phi, psi) -> np.ndarray:
     phi = np.atleast_2d(np.asarray(phi))
     psi = np.atleast_2d(np.asarray(psi))
     if phi.shape[0] != psi.shape[0]:
-        raise ValueError(
-            f"reference_shapes: must have {phi.shape[0]} rows (one per output), got {psi.shape[0]}"
+        raise FieldError(
+            "reference_shapes",
+            f"must have {phi.shape[0]} rows (one per output), got {psi.shape[0]}",
         )
     num = np.abs(phi.conj().T @ psi) ** 2
     den = np.outer(np.sum(np.abs(phi) ** 2, 0), np.sum(np.abs(psi) ** 2, 0))
@@ -488,9 +498,10 @@ def _sizes(L, q, r, order, rows, cols):
         cols = max(1, min(L - rows, max(-(-rows * q // r), 2000 // r)))
     cols = require_count(cols, "cols")
     if rows + cols > L:
-        raise ValueError(
-            f"rows: rows + cols = {rows + cols} needs more than the {L} Markov "
-            "parameters after Y_0 (H(1) uses Y_1 .. Y_rows+cols)"
+        raise FieldError(
+            "rows",
+            f"rows + cols = {rows + cols} needs more than the {L} Markov "
+            "parameters after Y_0 (H(1) uses Y_1 .. Y_rows+cols)",
         )
     return rows, cols
 
@@ -501,16 +512,17 @@ def _order(s, order, field="order"):
     if order is None:
         k = min(rank, s.size - 1)
         if k < 1:
-            raise ValueError("markov: the Hankel matrix has rank 0 (no response)")
+            raise FieldError("markov", "the Hankel matrix has rank 0 (no response)")
         gaps = np.log(s[:k]) - np.log(np.maximum(s[1 : k + 1], tol))
         order = int(np.argmax(gaps)) + 1
         order += order % 2
         return min(order, rank)
     order = require_count(order, field)
     if order > rank:
-        raise ValueError(
-            f"{field}: {order} exceeds the numerical rank {rank} of the Hankel "
-            f"matrix ({s.size} singular values); lower the order or give more data"
+        raise FieldError(
+            field,
+            f"{order} exceeds the numerical rank {rank} of the Hankel "
+            f"matrix ({s.size} singular values); lower the order or give more data",
         )
     return order
 
@@ -696,15 +708,16 @@ def bootstrap_uncertainty(
     Y = _markov_array(markov)
     n = require_count(n_samples, "n_samples")
     if n < 2:
-        raise ValueError(f"n_samples: at least 2 bootstrap copies are needed, got {n}")
+        raise FieldError("n_samples", f"at least 2 bootstrap copies are needed, got {n}")
     if (
         realization.extra.get("method", "era") != "era"
         or realization.C.shape[0] != Y.shape[1]
         or realization.B.shape[1] != Y.shape[2]
     ):
-        raise ValueError(
-            "realization: must come from era() on these Markov parameters "
-            f"({Y.shape[1]} outputs, {Y.shape[2]} inputs)"
+        raise FieldError(
+            "realization",
+            "must come from era() on these Markov parameters "
+            f"({Y.shape[1]} outputs, {Y.shape[2]} inputs)",
         )
     model = _markov_of(realization, Y.shape[0] - 1)
     sigma = (Y - model)[1:].std(axis=0)
@@ -771,9 +784,10 @@ def era_dc(
     if rows is None or cols is None:
         rows, cols = _sizes(L - reach, q, r, order, rows, cols)
     elif rows + cols + reach > L:
-        raise ValueError(
-            f"rows: rows + cols + correlation reach {rows + cols + reach} exceeds "
-            f"the {L} Markov parameters"
+        raise FieldError(
+            "rows",
+            f"rows + cols + correlation reach {rows + cols + reach} exceeds "
+            f"the {L} Markov parameters",
         )
 
     def build():

@@ -42,7 +42,7 @@ from scipy.linalg import expm
 
 from flexsat.identify.excitation import sensor_matrices
 from flexsat.identify.measurements import Channel, Measurement
-from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
@@ -104,16 +104,16 @@ def estimate_frf(
         correlated or absent in a band).
     """
     if measurement.domain != "time" or measurement.inputs is None:
-        raise ValueError(
-            "measurement: the H1 estimate needs a time-domain test with recorded inputs"
+        raise FieldError(
+            "measurement", "the H1 estimate needs a time-domain test with recorded inputs"
         )
     n = require_count(segment, "segment")
     N = measurement.abscissa.size
     if not 4 <= n <= N:
-        raise ValueError(f"segment: must be between 4 and the record length {N} samples, got {n}")
+        raise FieldError("segment", f"must be between 4 and the record length {N} samples, got {n}")
     ov = float(require_finite(overlap, "overlap"))
     if not 0.0 <= ov < 1.0:
-        raise ValueError(f"overlap: must be in [0, 1), got {overlap!r}")
+        raise FieldError("overlap", f"must be in [0, 1), got {overlap!r}")
     fs = measurement.sample_rate
     u, y = measurement.inputs, measurement.outputs
     kw = dict(fs=fs, nperseg=n, noverlap=int(ov * n), window=window, detrend=False)
@@ -135,9 +135,10 @@ def estimate_frf(
     # E[U_a* Y_i] = sum_b H_ib Guu[a, b], i.e. Gyu^T = Guu H^T
     cond = np.linalg.cond(Guu)
     if np.any(~np.isfinite(cond)) or np.any(cond > 1e12):
-        raise ValueError(
-            "measurement: the input cross-spectral matrix is singular at some "
-            "frequencies (inputs fully correlated, or no input power there)"
+        raise FieldError(
+            "measurement",
+            "the input cross-spectral matrix is singular at some "
+            "frequencies (inputs fully correlated, or no input power there)",
         )
     H = np.transpose(np.linalg.solve(Guu, np.swapaxes(Gyu, 1, 2)), (2, 1, 0))  # (q, r, F)
     # E|Y_i|^2 explained by the inputs: sum_ab conj(H_ia) Guu[a, b] H_ib

@@ -26,8 +26,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import report_page
-from flexsat.report.publish import write_atomically
+from flexsat.report.page import images_html
 from flexsat.units import to_si
 
 
@@ -237,9 +236,9 @@ def _fmt(value) -> str:
     return "n/a" if value is None or not np.isfinite(value) else f"{value:.5g}"
 
 
-def _write_all(result, folder: Path) -> None:
-    ds = result.dataset()
-    metrics = _metrics(ds)
+def write_data(result, ds, folder: Path) -> None:
+    """``summary.json`` (the statistics, the sensitivity, the trade surfaces) and a copy of the
+    store, ``results.zarr``."""
     summary = {
         "scenario": result.scenario.name,
         "kind": result.scenario.kind,
@@ -254,30 +253,30 @@ def _write_all(result, folder: Path) -> None:
         json.dumps(_clean(summary), indent=2) + "\n", encoding="utf-8"
     )
     shutil.copytree(result.store, folder / "results.zarr")
-    figures = (
+
+
+def draw_figures(result, ds, folder: Path) -> list[str]:
+    """A sweep's trade surfaces and contours or a Monte Carlo's distributions, then the
+    convergence of the estimates; the file names."""
+    metrics = _metrics(ds)
+    return (
         _trade_surfaces(result, folder) + _contours(result, metrics, folder)
         if result.scenario.kind == "sweep"
         else _distributions(result, metrics, folder)
     ) + _convergence(result, folder)
+
+
+def sections(result, ds, figures: list[str]) -> str:
+    """The page: what ran, the requirement, metric and sensitivity tables, the figures."""
     esc = html.escape
-    images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
-    body = (
+    return (
         f"<p>{int(ds.sizes['case'])} cases of run <b>{esc(result.scenario.run)}</b> of "
         f"<code>{esc(result.scenario.scenario)}</code>, sampling "
         f"{esc(result.scenario.sampling)}; {result.chunks_run} chunks run, "
         f"{result.chunks_skipped} found done in the store; {result.wall_s:.1f} s.</p>"
         + _tables(result)
-        + f"<h2>Figures</h2>{images}"
-    )
-    (folder / "index.html").write_text(
-        report_page(result, body, case=result.maneuver.case), encoding="utf-8"
+        + f"<h2>Figures</h2>{images_html(figures)}"
     )
 
 
-def write_batch_report(result, out_dir) -> Path:
-    """Write the report of a :class:`~flexsat.scenarios.batch.BatchResult` as the folder
-    ``out_dir``, whole or not at all (:func:`flexsat.report.publish.write_atomically`)."""
-    return write_atomically(out_dir, lambda folder: _write_all(result, folder))
-
-
-__all__ = ["write_batch_report"]
+__all__ = ["draw_figures", "sections", "write_data"]

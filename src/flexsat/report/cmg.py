@@ -21,8 +21,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import format_metric, html_table, report_page
-from flexsat.report.publish import write_atomically, write_metrics_and_results
+from flexsat.report.page import format_metric, html_table
 
 _FT_LB_S = 1.3558179483314006  # N m s per ft-lb-s: the station's plots are in the paper's units
 
@@ -106,11 +105,16 @@ def _metrics_html(records) -> str:
     return html_table(["run"] + keys, rows)
 
 
-def _write_cmg(result, folder: Path) -> None:
-    records, ds = write_metrics_and_results(result, folder)
+def draw_cmg_figures(result, ds, folder: Path) -> list[str]:
+    """The gimbal histories and the momentum envelope of a ``kind: cmg`` result."""
     figures = ["gimbals.png", "envelope.png"]
     _gimbal_figure(ds, folder / figures[0], lambda run: ds["time"].sel(run=run).values)
     _envelope_figure(result, ds, folder / figures[1])
+    return figures
+
+
+def cmg_sections(result, records: list[dict], figures: list[str]) -> str:
+    """The runs, metrics, V1–V8 table and figures of a ``kind: cmg`` result."""
     v_rows = [(v, q, f"{p:g}", f"{c:.5g}", u) for v, q, p, c, u in result.table]
     outcomes = [
         (r.label, r.outcome, " ".join(f"{a:.2f}" for a in np.rad2deg(r.sigma0)))
@@ -127,16 +131,20 @@ def _write_cmg(result, folder: Path) -> None:
 <h2>Figures</h2>
 {images}
 """
-    (folder / "index.html").write_text(
-        report_page(result, body, case="SGCMG pyramid"), encoding="utf-8"
-    )
+    return body
 
 
-def _write_station(result, folder: Path) -> None:
-    records, ds = write_metrics_and_results(result, folder)
+def draw_station_figures(ds, folder: Path) -> list[str]:
+    """The attitude loop and the gimbal histories of a ``kind: cmg_station`` result."""
     figures = ["station.png", "gimbals.png"]
     _station_figure(ds, folder / figures[0])
     _gimbal_figure(ds, folder / figures[1], lambda run: ds["time"].values)
+    return figures
+
+
+def station_sections(result, records: list[dict], figures: list[str]) -> str:
+    """The CMG loops (V9), the attitude loop's poles and the figures of a ``kind:
+    cmg_station`` result."""
     images = "".join(f'<figure><img src="{f}" alt="{f}"></figure>' for f in figures)
     notes = "".join(f"<li>{html.escape(n)}</li>" for n in result.notes)
     poles = result.station.design.poles
@@ -150,19 +158,7 @@ from [45, −45, 45, −45]° none, momentum within limits.</p>
 <h2>Figures</h2>
 {images}
 """
-    (folder / "index.html").write_text(
-        report_page(result, body, case="space station (Table 2)"), encoding="utf-8"
-    )
+    return body
 
 
-def write_cmg_report(result, out_dir) -> Path:
-    """Write the report of a :class:`~flexsat.scenarios.cmg.CmgResult` or
-    :class:`~flexsat.scenarios.cmg.StationResult` as the folder ``out_dir``, whole or not at
-    all (:func:`flexsat.report.publish.write_atomically`)."""
-    from flexsat.scenarios.cmg import StationResult
-
-    write = _write_station if isinstance(result, StationResult) else _write_cmg
-    return write_atomically(out_dir, lambda folder: write(result, folder))
-
-
-__all__ = ["write_cmg_report"]
+__all__ = ["cmg_sections", "draw_cmg_figures", "draw_station_figures", "station_sections"]

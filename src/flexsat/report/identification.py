@@ -20,18 +20,17 @@ from __future__ import annotations
 import html
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
 from flexsat.netcdf import write_netcdf
-from flexsat.report.maneuver import html_table, report_page
-from flexsat.report.publish import write_atomically
-from flexsat.scenarios.identification import IdentificationResult, as_dict
+from flexsat.report.page import html_table
 from flexsat.text import format_optional
 
-__all__ = ["FIGURES", "dataset", "write_identification_report"]
+__all__ = ["FIGURES", "as_dict", "dataset", "draw_figures", "sections", "write_data"]
 
 #: figure files and captions
 FIGURES = (
@@ -41,7 +40,7 @@ FIGURES = (
 )
 
 
-def dataset(result: IdentificationResult) -> xr.Dataset:
+def dataset(result) -> xr.Dataset:
     """The campaign as one dataset (module docstring)."""
     c = result.campaign
     m = c.modes
@@ -189,7 +188,8 @@ calibration covariance, Att. 6 Eqs. 34–37); peak motion
 {1e3 * tri["peak_displacement_m"]:.1f} mm.</p>"""
 
 
-def _html(result: IdentificationResult) -> str:
+def sections(result) -> str:
+    """The page: frequencies, damping, scalings, wheel gains, the camera rig, the figures."""
     c, esc = result.campaign, html.escape
     m = c.modes
     freq_rows = [
@@ -250,9 +250,7 @@ def _html(result: IdentificationResult) -> str:
         f'<figure><img src="{f}" alt="{esc(t)}"><figcaption>{esc(t)}</figcaption></figure>'
         for f, t in FIGURES
     )
-    return report_page(
-        result,
-        f"""<h2>Natural frequencies (Hz)</h2>
+    return f"""<h2>Natural frequencies (Hz)</h2>
 <p>Truth: the simulated structure. ERA: hammer test (strain gauges and accelerometers), ± its
 first-order standard deviation. Video: ERA on triangulated target motion. OKID: reaction-wheel
 random-torque test. A priori and updated: the model before and after the update (error against
@@ -270,12 +268,11 @@ updated one (a priori × p; in a simulation, 1 means recovered).</p>
 {gain_html}
 {_camera_html(c)}
 {images}
-""",
-        "flexsat identification report",
-    )
+"""
 
 
-def _write_all(result: IdentificationResult, folder: Path) -> None:
+def write_data(result, ds, folder: Path) -> None:
+    """``identification.json`` (the campaign's numbers) and ``results.nc`` (``ds``)."""
     c = result.campaign
     summary = {
         "scenario": result.scenario.name,
@@ -293,14 +290,25 @@ def _write_all(result: IdentificationResult, folder: Path) -> None:
     (folder / "identification.json").write_text(
         json.dumps(as_dict(summary), indent=2) + "\n", encoding="utf-8"
     )
-    write_netcdf(dataset(result), folder / "results.nc")
-    _frf_figure(c, folder / "frf.png")
-    _mac_figure(c, folder / "mac.png")
-    _frequency_figure(c, folder / "frequencies.png")
-    (folder / "index.html").write_text(_html(result), encoding="utf-8")
+    write_netcdf(ds, folder / "results.nc")
 
 
-def write_identification_report(result: IdentificationResult, out_dir) -> Path:
-    """Write the report as the folder ``out_dir``, whole or not at all (an earlier report there
-    is replaced; see :func:`flexsat.report.publish.write_atomically`)."""
-    return write_atomically(out_dir, lambda folder: _write_all(result, folder))
+def draw_figures(campaign, folder: Path) -> list[str]:
+    """:data:`FIGURES` of the campaign into ``folder``; their file names."""
+    _frf_figure(campaign, folder / "frf.png")
+    _mac_figure(campaign, folder / "mac.png")
+    _frequency_figure(campaign, folder / "frequencies.png")
+    return [f for f, _ in FIGURES]
+
+
+def as_dict(value: Any) -> Any:
+    """JSON-ready copy (numpy arrays and scalars to lists and floats)."""
+    if isinstance(value, dict):
+        return {k: as_dict(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [as_dict(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return as_dict(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    return value

@@ -21,8 +21,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import format_metric, report_page
-from flexsat.report.publish import write_atomically, write_metrics_and_results
+from flexsat.report.page import format_metric
 
 #: results-table columns: (metric, heading)
 RESULT_COLUMNS = (
@@ -249,13 +248,12 @@ def _gains_tables(result) -> str:
     return "".join(blocks)
 
 
-def _html(result, records, ds, figures: list[str]) -> str:
+def sections(result, records: list[dict], ds, figures: list[str]) -> str:
+    """The page's results table (the seed 004 grid), gains and figures."""
     esc = html.escape
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
-    return report_page(
-        result,
-        f"""<h2>Results (seed 004 Tables 1–3 grid)</h2>
+    return f"""<h2>Results (seed 004 Tables 1–3 grid)</h2>
 <p>J = ½ ∫ (ζ_tᵀ Q̄ ζ_t + uᵀ Q_u u) dt (Eqs. 7, 35) by Lyapunov equations; γ: last converged
 homotopy parameter; min eig S: Eq. 6; stable: the deciding check (S &gt; 0 for positive gains,
 else the poles). Settling: last time the tip error |Eᵗ| or the rotation Φ exceeds 10 % of its
@@ -266,12 +264,11 @@ peak (n/a: not within the simulated time).</p>
 {_gains_tables(result)}
 <h2>Figures</h2>
 {images}
-""",
-    )
+"""
 
 
-def _write_all(result, folder: Path) -> None:
-    records, ds = write_metrics_and_results(result, folder)
+def draw_figures(ds, folder: Path) -> list[str]:
+    """The homotopy paths and every run's tip responses into ``folder``; the file names."""
     figures = ["cost.png", "stability.png", "poles.png", "gains.png"]
     _cost(ds, folder / figures[0])
     _checks(ds, folder / figures[1])
@@ -280,13 +277,7 @@ def _write_all(result, folder: Path) -> None:
     for i, run in enumerate(ds["run"].values):
         figures.append(f"response_{i + 1}.png")
         _responses(ds, run, folder / figures[-1])
-    (folder / "index.html").write_text(_html(result, records, ds, figures), encoding="utf-8")
+    return figures
 
 
-def write_ppf_report(result, out_dir) -> Path:
-    """Write the report of a :class:`~flexsat.scenarios.ppf.PPFResult` as the folder
-    ``out_dir``, whole or not at all (:func:`flexsat.report.publish.write_atomically`)."""
-    return write_atomically(out_dir, lambda folder: _write_all(result, folder))
-
-
-__all__ = ["RESULT_COLUMNS", "write_ppf_report"]
+__all__ = ["RESULT_COLUMNS", "draw_figures", "sections"]

@@ -241,7 +241,8 @@ def _refuse_foreign(out: Path, written: set[str] | None) -> None:
         raise OutputError(
             errno.EEXIST,
             (
-                f"'{out}' holds {shown}, not files of a flexsat report; a report folder is replaced as "
+                f"'{out}' holds {shown}, not files of a flexsat report; a report folder is "
+                "replaced as "
                 "a whole: move those away or choose another folder"
             ),
         )
@@ -370,17 +371,15 @@ def _swap(new: Path, out: Path) -> Path:
     return old
 
 
-def write_metrics_and_results(result, folder: Path):
-    """The two data files every scenario report starts with: ``metrics.json`` (one record per
-    run, :meth:`metrics_records`) and ``results.nc`` (the :meth:`dataset`, netCDF4 without
-    pickle). Returns (records, dataset) for the page and the figures."""
+def write_metrics_and_results(result, folder: Path, ds) -> None:
+    """The two data files most scenario reports start with: ``metrics.json`` (one record per
+    run, the result's ``metrics_records()``) and ``results.nc`` (its dataset ``ds``, netCDF4
+    without pickle)."""
     from flexsat.netcdf import write_netcdf
 
     records = result.metrics_records()
     (folder / "metrics.json").write_text(json.dumps(records, indent=2) + "\n", encoding="utf-8")
-    ds = result.dataset()
     write_netcdf(ds, folder / "results.nc")
-    return records, ds
 
 
 def write_atomically(

@@ -1,5 +1,6 @@
 """Report of a simulation scenario (``kind: simulation``): ``metrics.json``, ``results.nc``, one
-PNG per recorded channel and ``index.html``.
+PNG per recorded channel and ``index.html`` (:func:`flexsat.report.page.write_report`; this
+module draws the figures and the page's sections).
 
 ``results.nc`` holds every recorded channel over ``(run, time)`` or, for a vector channel,
 ``(run, time, <channel>_component)``, with its ``units`` attribute (SI), the metrics over
@@ -16,8 +17,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import metric_rows, report_page
-from flexsat.report.publish import write_atomically, write_metrics_and_results
+from flexsat.report.page import metric_rows
 
 #: at most this many time-history figures (a plant with many output channels records them all
 #: in results.nc; the page shows the first ones)
@@ -72,7 +72,7 @@ def _plot(ds, name: str, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _html(result, records: list[dict], names: list[str], units: dict, idle: list[str]) -> str:
+def _html(records: list[dict], names: list[str], units: dict, idle: list[str]) -> str:
     esc = html.escape
     head = "".join(f"<th>{esc(r['run'])}</th>" for r in records)
 
@@ -101,30 +101,27 @@ def _html(result, records: list[dict], names: list[str], units: dict, idle: list
         else ""
     )
     images = "".join(f'<figure><img src="{_file(n)}" alt="{esc(n)}"></figure>' for n in names)
-    return report_page(
-        result,
-        f"""<h2>Metrics</h2>
+    return f"""<h2>Metrics</h2>
 <table><tr><th>metric</th>{head}</tr>{rows}</table>
 <h2>Time histories</h2>
 {quiet}
 {images}
-""",
-    )
+"""
 
 
-def _write_all(result, folder: Path) -> None:
-    records, ds = write_metrics_and_results(result, folder)
-    names, idle = _histories(ds)
+def draw_figures(ds, folder: Path) -> list[str]:
+    """One figure per recorded time history worth one (:func:`_histories`); the file names."""
+    names, _ = _histories(ds)
     for name in names:
         _plot(ds, name, folder / _file(name))
+    return [_file(n) for n in names]
+
+
+def sections(records: list[dict], ds) -> str:
+    """The page's metrics (idle channels' left out) and time histories."""
+    names, idle = _histories(ds)
     units = {k: v.attrs.get("units", "") for k, v in ds.data_vars.items() if v.dims == ("run",)}
-    (folder / "index.html").write_text(_html(result, records, names, units, idle), encoding="utf-8")
+    return _html(records, names, units, idle)
 
 
-def write_simulation_report(result, out_dir) -> Path:
-    """Write the report of a :class:`~flexsat.scenarios.simulation.SimulationResult` as the
-    folder ``out_dir``, whole or not at all (:func:`flexsat.report.publish.write_atomically`)."""
-    return write_atomically(out_dir, lambda folder: _write_all(result, folder))
-
-
-__all__ = ["MAX_FIGURES", "write_simulation_report"]
+__all__ = ["MAX_FIGURES", "draw_figures", "sections"]

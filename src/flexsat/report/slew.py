@@ -23,9 +23,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import format_metric, report_page
-from flexsat.report.publish import write_atomically, write_metrics_and_results
-from flexsat.scenarios.slew import OPEN_LOOP
+from flexsat.report.page import format_metric
 
 #: goal table columns: (metric, heading, verdict metric or None)
 GOAL_COLUMNS = (
@@ -103,7 +101,7 @@ def _scalars(ds, names: list[str], prefix: str, scale: float, ylabel: str):
     ]
 
 
-def _goal_table(records: list[dict]) -> str:
+def _goal_table(records: list[dict], open_loop: str) -> str:
     esc = html.escape
     head = "".join(f"<th>{esc(h)}</th>" for _, h, _ in GOAL_COLUMNS)
     rows = []
@@ -112,7 +110,7 @@ def _goal_table(records: list[dict]) -> str:
         for metric, _, verdict in GOAL_COLUMNS:
             value = r.get(metric)
             text = "–" if value is None else format_metric(value)
-            if verdict == "deflection_goal_met" and r["run"] == OPEN_LOOP:
+            if verdict == "deflection_goal_met" and r["run"] == open_loop:
                 text += " (reference)"  # the open loop is what the goal compares with
             elif verdict is not None and r.get(verdict) is not None:
                 met = bool(r[verdict])
@@ -124,32 +122,31 @@ def _goal_table(records: list[dict]) -> str:
     return f"<table><tr><th>run</th>{head}</tr>{''.join(rows)}</table>"
 
 
-def _html(result, records, figures: list[str]) -> str:
+def sections(result, records: list[dict], figures: list[str]) -> str:
+    """The page's goals (against the open loop, the first run), notes and figures."""
     esc = html.escape
     ds_attrs = result.attributes()
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
     goals = (
         f"Euler-angle error below {100 * ds_attrs['goal_angle_fraction']:g} % of the "
         f"commanded angle ({ds_attrs['goal_angle_tolerance_mrad']:g} mrad) at "
-        f"{ds_attrs['goal_evaluation']:g} T; rim deflection from {ds_attrs['goal_evaluation']:g} T on below "
+        f"{ds_attrs['goal_evaluation']:g} T; rim deflection from "
+        f"{ds_attrs['goal_evaluation']:g} T on below "
         f"1/{ds_attrs['goal_deflection_ratio']:g} of the open-loop one (seed 003 "
         "L792–L801). The open-loop run is the nominal torque alone."
     )
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
-    return report_page(
-        result,
-        f"""<h2>Goals</h2>
+    return f"""<h2>Goals</h2>
 <p>{esc(goals)}</p>
-{_goal_table(records)}
+{_goal_table(records, result.labels[0])}
 <ul>{notes}</ul>
 <h2>Figures</h2>
 {images}
-""",
-    )
+"""
 
 
-def _write_all(result, folder: Path) -> None:
-    records, ds = write_metrics_and_results(result, folder)
+def draw_figures(ds, folder: Path) -> list[str]:
+    """The figures of seed 003 (module docstring) into ``folder``; their file names."""
     tol = ds.attrs["goal_angle_tolerance_mrad"]
     figures = ["nominal.png", "euler_error.png", "rim_deflection.png", "torque_perturbation.png"]
     _nominal(ds, folder / figures[0])
@@ -183,13 +180,7 @@ def _write_all(result, folder: Path) -> None:
         _runs_plot(
             ds, "point forces", folder / figures[-1], _scalars(ds, forces, "force_", 1.0, "{} (N)")
         )
-    (folder / "index.html").write_text(_html(result, records, figures), encoding="utf-8")
+    return figures
 
 
-def write_slew_report(result, out_dir) -> Path:
-    """Write the report of a :class:`~flexsat.scenarios.slew.SlewResult` as the folder
-    ``out_dir``, whole or not at all (:func:`flexsat.report.publish.write_atomically`)."""
-    return write_atomically(out_dir, lambda folder: _write_all(result, folder))
-
-
-__all__ = ["GOAL_COLUMNS", "write_slew_report"]
+__all__ = ["GOAL_COLUMNS", "draw_figures", "sections"]

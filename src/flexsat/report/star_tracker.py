@@ -16,8 +16,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import format_metric, report_page
-from flexsat.report.publish import write_atomically, write_metrics_and_results
+from flexsat.report.page import format_metric
 
 #: table columns: (metric, heading)
 COLUMNS = (
@@ -112,13 +111,18 @@ def _table(records: list[dict]) -> str:
     return f"<table><tr><th>run</th>{head}</tr>{''.join(rows)}</table>"
 
 
-def _write_all(result, folder: Path) -> None:
-    records, ds = write_metrics_and_results(result, folder)
+def draw_figures(ds, folder: Path) -> list[str]:
+    """The error histograms and every run's sky into ``folder``; the file names."""
     figures = ["errors.png"]
     _histograms(ds, folder / figures[0])
     for i, run in enumerate(ds["run"].values):
         figures.append(f"sky_{i + 1}.png")
         _sky(ds, run, folder / figures[-1])
+    return figures
+
+
+def sections(result, records: list[dict], figures: list[str]) -> str:
+    """The page's identification table, notes and figures."""
     esc = html.escape
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
@@ -131,14 +135,7 @@ angles over the accepted attitudes; σ_QUEST: mean predicted 1σ.</p>
 <h2>Figures</h2>
 {images}
 """
-    page = report_page(result, body, title="flexsat star tracker report")
-    (folder / "index.html").write_text(page, encoding="utf-8")
+    return body
 
 
-def write_star_tracker_report(result, out_dir) -> Path:
-    """Write the report of a :class:`~flexsat.scenarios.star_tracker.StarTrackerResult` as the
-    folder ``out_dir``, whole or not at all (:func:`flexsat.report.publish.write_atomically`)."""
-    return write_atomically(out_dir, lambda folder: _write_all(result, folder))
-
-
-__all__ = ["COLUMNS", "write_star_tracker_report"]
+__all__ = ["COLUMNS", "draw_figures", "sections"]

@@ -19,8 +19,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from flexsat.report.maneuver import format_metric, report_page
-from flexsat.report.publish import write_atomically, write_metrics_and_results
+from flexsat.report.page import format_metric
 
 #: metrics-table rows: (metric, heading)
 METRIC_COLUMNS = (
@@ -167,14 +166,13 @@ def _paper_table(result, records) -> str:
     )
 
 
-def _html(result, records, figures) -> str:
+def sections(result, records: list[dict], figures: list[str]) -> str:
+    """The page's system, metrics, comparison with the paper and figures."""
     esc = html.escape
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
     s = result.scales
-    return report_page(
-        result,
-        f"""<h2>System</h2>
+    return f"""<h2>System</h2>
 <p>m = {s.mass:.4g} kg, L = {s.length:.4g} m, Ω = {s.orbit_rate:.6g} rad/s (period
 {s.period / 3600:.4g} h); one unit of T̂ or F̂ is {s.force:.4g} N, of ∫|F̂|dτ {s.impulse:.4g} N s,
 of λ' {s.speed:.4g} m/s. Integrator: {esc(result.scenario.simulation.integrator)}.</p>
@@ -185,22 +183,14 @@ of λ' {s.speed:.4g} m/s. Integrator: {esc(result.scenario.simulation.integrator
 {_paper_table(result, records)}
 <h2>Figures</h2>
 {images}
-""",
-        title="flexsat tether report",
-    )
+"""
 
 
-def _write_all(result, folder: Path) -> None:
-    records, ds = write_metrics_and_results(result, folder)
+def draw_figures(ds, folder: Path) -> list[str]:
+    """:data:`FIGURES` into ``folder``; their file names."""
     for name, draw in zip(FIGURES, (_length, _libration, _controls, _integral)):
         draw(ds, folder / name)
-    (folder / "index.html").write_text(_html(result, records, list(FIGURES)), encoding="utf-8")
+    return list(FIGURES)
 
 
-def write_tether_report(result, out_dir) -> Path:
-    """Write the report of a :class:`~flexsat.scenarios.tether.TetherResult` as the folder
-    ``out_dir``, whole or not at all (:func:`flexsat.report.publish.write_atomically`)."""
-    return write_atomically(out_dir, lambda folder: _write_all(result, folder))
-
-
-__all__ = ["FIGURES", "METRIC_COLUMNS", "paper_example", "write_tether_report"]
+__all__ = ["FIGURES", "METRIC_COLUMNS", "draw_figures", "paper_example", "sections"]

@@ -21,9 +21,10 @@ sets are about), the parameters to vary and how::
 ``kind: sweep`` takes grid axes (``{values: [...]}`` or ``{low:, high:, n:}``, full factorial,
 the first axis slowest) or bounds (``{low:, high:}``) with ``sampling: latin_hypercube`` or
 ``sobol`` and ``cases``, or ``sampling: saltelli`` with ``cases`` the base points (a power of
-2; n (d + 2) cases run) for Sobol' first-order and total indices of every metric; ``kind: montecarlo`` takes distributions (normal, uniform, lognormal,
-truncated_normal; :mod:`flexsat.design.parameter_space`) sampled per case from the seed. The
-parameters are those of :class:`~flexsat.design.batch_runner.HubManeuverBuilder`
+2; n (d + 2) cases run) for Sobol' first-order and total indices of every metric;
+``kind: montecarlo`` takes distributions (normal, uniform, lognormal, truncated_normal;
+:mod:`flexsat.design.parameter_space`) sampled per case from the seed.
+The parameters are those of :class:`~flexsat.design.batch_runner.HubManeuverBuilder`
 (:data:`PARAMETER_UNITS`): the maneuver (``alpha``, ``u_max``, ``duration``), the Law II gains
 (``g1``, ``g2``, ``g3``), the plant (``hub_inertia``, ``EI``, ``damping``, ``tip_mass``,
 ``tip_inertia``), the bearing friction (``friction_coulomb``, ``friction_viscous``) and the
@@ -52,8 +53,10 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
-from flexsat.scenarios.errors import ScenarioError, _locate
-from flexsat.scenarios.fields import _Document, _Section, count
+from flexsat.report.page import ReportedResult
+from flexsat.scenarios.errors import Problem, ScenarioError, locate
+from flexsat.scenarios.fields import Document, _Section, count
+from flexsat.scenarios.kind import Run, ScenarioKind
 
 #: the SI unit of every parameter a batch can vary (HubManeuverBuilder's columns)
 PARAMETER_UNITS = {
@@ -141,7 +144,7 @@ def requirements_of(spec: dict) -> list:
     return out
 
 
-class BatchScenario(_Document):
+class BatchScenario(Document):
     """A validated sweep or Monte Carlo scenario (module docstring)."""
 
     kind: Literal["sweep", "montecarlo"]
@@ -207,7 +210,7 @@ class BatchScenario(_Document):
 
 # -- running -------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class BatchResult:
+class BatchResult(ReportedResult):
     """A batch run: the scenario, the parameter table, the store and its dataset, the
     statistics (``summary``: requirements, metric summaries and convergence; ``sensitivity``:
     the parameters' ranking per metric)."""
@@ -257,6 +260,24 @@ class BatchResult:
             )
         return rows
 
+    def report_case(self) -> str:
+        return self.maneuver.case
+
+    def write_data(self, folder, ds) -> None:
+        from flexsat.report.batch import write_data
+
+        write_data(self, ds, folder)
+
+    def figures(self, folder, ds) -> list[str]:
+        from flexsat.report.batch import draw_figures
+
+        return draw_figures(self, ds, folder)
+
+    def sections(self, ds, figures: list[str]) -> str:
+        from flexsat.report.batch import sections
+
+        return sections(self, ds, figures)
+
 
 def _finite(value):
     """A JSON-ready number: NaN and inf become None."""
@@ -272,12 +293,15 @@ def _maneuver(scenario: BatchScenario):
     try:
         maneuver = load_scenario(path)
     except ScenarioError as exc:
-        raise ScenarioError([f"scenario: {p}" for p in exc.problems]) from None
+        raise ScenarioError([Problem("scenario", str(p)) for p in exc.problems]) from None
     if not isinstance(maneuver, Scenario):
         raise ScenarioError(
             [
-                f"scenario: {str(path)!r} is a {maneuver.kind} scenario; a batch "
-                "varies a maneuver scenario"
+                Problem(
+                    "",
+                    f"{str(path)!r} is a {maneuver.kind} scenario; a batch "
+                    "varies a maneuver scenario",
+                )
             ]
         )
     return maneuver
@@ -287,22 +311,28 @@ def builder_of(scenario: BatchScenario, maneuver):
     """The :class:`~flexsat.design.batch_runner.HubManeuverBuilder` of the named Law II run."""
     from flexsat.control import LyapunovTracker
     from flexsat.design.batch_runner import HubManeuverBuilder
-    from flexsat.scenarios.runner import prepare_scenario
+    from flexsat.scenarios.maneuver_kind import prepare_scenario
 
     plan = prepare_scenario(maneuver)
     if scenario.run not in plan.controllers:
         raise ScenarioError(
             [
-                f"run: {scenario.run!r} is not a run of the scenario (its runs: "
-                f"{', '.join(plan.controllers)})"
+                Problem(
+                    "run",
+                    f"{scenario.run!r} is not a run of the scenario (its runs: "
+                    f"{', '.join(plan.controllers)})",
+                )
             ]
         )
     law = plan.controllers[scenario.run]
     if not isinstance(law, LyapunovTracker):
         raise ScenarioError(
             [
-                f"run: {scenario.run!r} uses {type(law).__name__}; a batch varies "
-                "a Control Law II run (law: lyapunov_tracker)"
+                Problem(
+                    "run",
+                    f"{scenario.run!r} uses {type(law).__name__}; a batch varies "
+                    "a Control Law II run (law: lyapunov_tracker)",
+                )
             ]
         )
     ref, model = law.reference, plan.model
@@ -359,9 +389,7 @@ def default_store(fingerprint: str) -> Path:
     return Path(tempfile.gettempdir()) / f"flexsat-batch-{fingerprint[:20]}.zarr"
 
 
-def run_batch_scenario(
-    scenario: BatchScenario, progress: Callable[[str], None] | None = None
-) -> BatchResult:
+def _run_batch(scenario: BatchScenario, progress: Callable[[str], None] | None = None):
     """Build the Law II case builder from the maneuver scenario, run every case into the store
     (resuming it), then compute the statistics.
 
@@ -386,7 +414,7 @@ def run_batch_scenario(
     try:
         table = _table(scenario)
     except ValueError as exc:
-        raise ScenarioError([_locate("sampling", str(exc))]) from None
+        raise ScenarioError([locate("sampling", exc)]) from None
     design, table = (table, table.table) if scenario.sampling == "saltelli" else (None, table)
     setup_text = scenario.yaml_text + "\0" + maneuver.yaml_text
     histories = tuple(scenario.histories)
@@ -421,7 +449,7 @@ def run_batch_scenario(
             progress=report,
         )
     except ValueError as exc:
-        raise ScenarioError([str(exc)]) from None
+        raise ScenarioError([locate("", exc)]) from None
     from flexsat.design.batch_runner import open_results
 
     ds = open_results(store)
@@ -501,8 +529,66 @@ def trade_surfaces(scenario: BatchScenario, build) -> dict | None:
     }
 
 
+class _BatchKind(ScenarioKind):
+    """A batch of cases of one maneuver scenario's run on dask (module docstring): one run
+    that announces a step as it starts and one per chunk."""
+
+    document = BatchScenario
+    runs_batches = True
+
+    def steps(self, scenario: BatchScenario) -> int:
+        import math
+
+        return 1 + math.ceil(case_count(scenario) / scenario.execution.chunk_size)
+
+    def plan(self, scenario: BatchScenario):
+        import functools
+
+        return (
+            yield Run(scenario.kind, functools.partial(_run_batch, scenario), reports_progress=True)
+        )
+
+    def with_execution(
+        self, scenario: BatchScenario, workers: int | None, scheduler: str | None
+    ) -> BatchScenario:
+        """The scenario with ``--workers`` (a local cluster) or ``--scheduler`` (an existing
+        one) in place of its ``execution:`` section."""
+        if workers is None and scheduler is None:
+            return scenario
+        if workers is not None and scheduler is not None:
+            raise ScenarioError(
+                [
+                    Problem(
+                        "--workers/--scheduler",
+                        "give one (a local cluster or an existing one), not both",
+                    )
+                ]
+            )
+        execution = scenario.execution.model_copy(
+            update={"workers": workers, "scheduler": scheduler}
+        )
+        copy = scenario.model_copy(update={"execution": execution})
+        copy._source, copy._folder = scenario._source, scenario._folder
+        return copy
+
+
+class SweepKind(_BatchKind):
+    """``kind: sweep``: grid axes or bounds sampled by a design (module docstring)."""
+
+    kind = "sweep"
+
+
+class MonteCarloKind(_BatchKind):
+    """``kind: montecarlo``: distributions sampled per case from the seed (module
+    docstring)."""
+
+    kind = "montecarlo"
+
+
 __all__ = [
     "BatchResult",
+    "MonteCarloKind",
+    "SweepKind",
     "BatchScenario",
     "PARAMETER_UNITS",
     "SAMPLINGS",
@@ -511,5 +597,4 @@ __all__ = [
     "trade_surfaces",
     "default_store",
     "requirements_of",
-    "run_batch_scenario",
 ]

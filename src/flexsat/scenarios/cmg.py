@@ -36,7 +36,6 @@ nearest to the direction of the attitude loop's peak momentum.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -45,8 +44,10 @@ from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.dynamics.space_station import FT_LB as _FT_LB
-from flexsat.scenarios.errors import ScenarioError, _item, _locate
-from flexsat.scenarios.fields import _Document, _Section, check_unique_labels, count, quantity
+from flexsat.report.page import ReportedResult
+from flexsat.scenarios.errors import ScenarioError, item_path, locate
+from flexsat.scenarios.fields import Document, _Section, check_unique_labels, count, quantity
+from flexsat.scenarios.kind import Run, ScenarioKind
 
 SOURCE = (
     "S. R. Vadali, H.-S. Oh, S. R. Walker, 'Preferred Gimbal Angles for Single Gimbal "
@@ -194,7 +195,7 @@ class CmgRunSpec(_Section):
         return None if not np.any(d) else d
 
 
-class CmgScenario(_Document):
+class CmgScenario(Document):
     """A validated ``kind: cmg`` scenario (module docstring)."""
 
     kind: Literal["cmg"]
@@ -261,7 +262,7 @@ class StationRunSpec(_Section):
         return value
 
 
-class CmgStationScenario(_Document):
+class CmgStationScenario(Document):
     """A validated ``kind: cmg_station`` scenario (module docstring)."""
 
     kind: Literal["cmg_station"]
@@ -371,7 +372,7 @@ def _one_run(run, cluster):
 
 
 @dataclass(frozen=True)
-class CmgResult:
+class CmgResult(ReportedResult):
     """Runs of a ``kind: cmg`` scenario and the V1–V8 table (:func:`validation_table`)."""
 
     scenario: CmgScenario
@@ -449,6 +450,19 @@ class CmgResult:
         )
         return ds
 
+    def report_case(self) -> str:
+        return "SGCMG pyramid"
+
+    def figures(self, folder, ds) -> list[str]:
+        from flexsat.report.cmg import draw_cmg_figures
+
+        return draw_cmg_figures(self, ds, folder)
+
+    def sections(self, ds, figures: list[str]) -> str:
+        from flexsat.report.cmg import cmg_sections
+
+        return cmg_sections(self, self.metrics_records(), figures)
+
 
 def validation_table():
     """V1–V8 computed live: (id, quantity, published, computed, unit) rows (the validate rows of
@@ -519,35 +533,35 @@ def validation_table():
     )
 
 
-def run_cmg(scenario: CmgScenario, progress: Callable[[str], None] | None = None) -> CmgResult:
-    """Run every steering run and compute the V1–V8 table.
+class CmgKind(ScenarioKind):
+    """``kind: cmg``: every steering run, then the V1–V8 table (module docstring); a run the
+    steering refuses (a singular initial set under the pseudo-inverse, a preferred-angle
+    search that meets a singularity) is reported under its label."""
 
-    Raises
-    ------
-    ScenarioError
-        For a run the steering refuses (a singular initial set under the pseudo-inverse, a
-        preferred-angle search that meets a singularity), named by its label.
-    """
-    runs = []
-    for index, run in enumerate(scenario.runs):
-        if progress is not None:
-            progress(run.label)
-        try:
-            runs.append(_one_run(run, scenario.cluster))
-        except ValueError as exc:
-            raise ScenarioError([_locate(f"runs{_item(index, run.label)}", str(exc))]) from None
-    if progress is not None:
-        progress("V1–V8 table")
-    notes = (
-        "Demands are the paper's T = ḣ (Eq. 5) in rotor momenta per second; the spacecraft "
-        "feels −ḣ. The paper's V3 singular set [−90, 0, −90, 0]° is a misprint for "
-        "[−90, 0, 90, 0]° (spec §13 flag 26).",
-    )
-    return CmgResult(scenario, tuple(runs), validation_table(), SOURCE, notes)
+    kind = "cmg"
+    document = CmgScenario
+
+    def steps(self, scenario: CmgScenario) -> int:
+        return len(scenario.runs) + 1
+
+    def plan(self, scenario: CmgScenario):
+        import functools
+
+        runs = []
+        for index, run in enumerate(scenario.runs):
+            steer = functools.partial(_one_run, run, scenario.cluster)
+            runs.append((yield Run(run.label, steer, "runs" + item_path(index, run.label))))
+        table = yield Run("V1–V8 table", validation_table)
+        notes = (
+            "Demands are the paper's T = ḣ (Eq. 5) in rotor momenta per second; the spacecraft "
+            "feels −ḣ. The paper's V3 singular set [−90, 0, −90, 0]° is a misprint for "
+            "[−90, 0, 90, 0]° (spec §13 flag 26).",
+        )
+        return CmgResult(scenario, tuple(runs), table, SOURCE, notes)
 
 
 @dataclass(frozen=True)
-class StationResult:
+class StationResult(ReportedResult):
     """The attitude loop (:class:`flexsat.cases.space_station_cmg.StationRun`) and one CMG loop
     per run."""
 
@@ -565,7 +579,7 @@ class StationResult:
         hr = self.station.design.data.rotor_momentum
         peak = float(np.linalg.norm(self.station.momentum, axis=1).max())
         out = []
-        for label, g, _s0 in zip(self.labels, self.runs, self.initial):
+        for label, g in zip(self.labels, self.runs):
             rec = {
                 "run": label,
                 "singular": bool(g.singular),
@@ -620,68 +634,100 @@ class StationResult:
         )
         return ds
 
+    def report_case(self) -> str:
+        return "space station (Table 2)"
 
-def run_cmg_station(
-    scenario: CmgStationScenario, progress: Callable[[str], None] | None = None
-) -> StationResult:
-    """LQR design, attitude loop, then one CMG loop per run (module docstring)."""
+    def figures(self, folder, ds) -> list[str]:
+        from flexsat.report.cmg import draw_station_figures
+
+        return draw_station_figures(ds, folder)
+
+    def sections(self, ds, figures: list[str]) -> str:
+        from flexsat.report.cmg import station_sections
+
+        return station_sections(self, self.metrics_records(), figures)
+
+
+def _attitude_loop(scenario: CmgStationScenario):
+    """The LQR design and the attitude loop (one call into
+    :mod:`flexsat.cases.space_station_cmg`); Bryson maxima the design refuses are reported
+    under ``lqr``."""
     from flexsat.cases import space_station_cmg as st
-    from flexsat.dynamics import cmg
 
-    if progress is not None:
-        progress("LQR design and attitude loop")
     q = scenario.lqr
     data = scenario.build_data()
     try:
         maxima = st.BrysonMaxima(q.attitude, q.rate, q.momentum, q.momentum_integral)
         design = st.design(data, maxima, tuple(q.pitch_filters), tuple(q.roll_yaw_filters))
     except ValueError as exc:
-        raise ScenarioError([_locate("lqr", str(exc))]) from None
+        raise ScenarioError([locate("lqr", exc)]) from None
     sim = scenario.simulation
-    run = st.simulate_attitude(
+    return st.simulate_attitude(
         design, sim.orbits * data.period, sim.disturbance, sim.initial_attitude
     )
-    peak_dir = run.momentum[np.argmax(np.linalg.norm(run.momentum, axis=1))]
-    loops, initial = [], []
-    for spec in scenario.runs:
-        if progress is not None:
-            progress(spec.label)
-        s0 = (
-            np.zeros(4)
-            if spec.initial == "zero"
-            else np.deg2rad(ALTERNATE_DEG)
-            if spec.initial == "alternate"
-            else cmg.preferred_set(peak_dir)
-            if spec.initial == "preferred"
-            else np.array(spec.initial)
+
+
+def _initial_set(spec: StationRunSpec, peak_direction: np.ndarray) -> np.ndarray:
+    """A run's initial gimbal angles (rad)."""
+    from flexsat.dynamics import cmg
+
+    if spec.initial == "zero":
+        return np.zeros(4)
+    if spec.initial == "alternate":
+        return np.deg2rad(ALTERNATE_DEG)
+    if spec.initial == "preferred":
+        return cmg.preferred_set(peak_direction)
+    return np.array(spec.initial)
+
+
+class CmgStationKind(ScenarioKind):
+    """``kind: cmg_station``: LQR design and attitude loop, then one CMG loop per run (module
+    docstring)."""
+
+    kind = "cmg_station"
+    document = CmgStationScenario
+
+    def steps(self, scenario: CmgStationScenario) -> int:
+        return len(scenario.runs) + 1
+
+    def plan(self, scenario: CmgStationScenario):
+        import functools
+
+        from flexsat.cases import space_station_cmg as st
+
+        run = yield Run("LQR design and attitude loop", functools.partial(_attitude_loop, scenario))
+        peak_dir = run.momentum[np.argmax(np.linalg.norm(run.momentum, axis=1))]
+        loops, initial = [], []
+        for index, spec in enumerate(scenario.runs):
+            s0 = _initial_set(spec, peak_dir)
+            initial.append(s0)
+            loop = functools.partial(st.cmg_loop, run, s0, scenario.simulation.threshold)
+            loops.append((yield Run(spec.label, loop, "runs" + item_path(index, spec.label))))
+        notes = (
+            "The paper's AERO1 disturbance is not given (Geller, private communication): "
+            "'aero_substitute' is Eq. (11) plus 0.5 ft-lb 3n and 4n harmonics on each axis and "
+            "a pitch torque growing by 1 ft-lb per orbit, a stated assumption (docs/cmg.md).",
+            "The paper's Bryson maxima are not given: these are the scenario's 'lqr' section.",
+            "Roll/yaw filters at the orbit rate make the design uncontrollable (three modes at "
+            "jn, two inputs); the default roll/yaw filters are at 2n only.",
         )
-        initial.append(s0)
-        loops.append(st.cmg_loop(run, s0, sim.threshold))
-    notes = (
-        "The paper's AERO1 disturbance is not given (Geller, private communication): "
-        "'aero_substitute' is Eq. (11) plus 0.5 ft-lb 3n and 4n harmonics on each axis and a "
-        "pitch torque growing by 1 ft-lb per orbit, a stated assumption (docs/cmg.md).",
-        "The paper's Bryson maxima are not given: these are the scenario's 'lqr' section.",
-        "Roll/yaw filters at the orbit rate make the design uncontrollable (three modes at jn, "
-        "two inputs); the default roll/yaw filters are at 2n only.",
-    )
-    return StationResult(
-        scenario,
-        run,
-        tuple(loops),
-        tuple(s.label for s in scenario.runs),
-        tuple(initial),
-        SOURCE,
-        notes,
-    )
+        return StationResult(
+            scenario,
+            run,
+            tuple(loops),
+            tuple(s.label for s in scenario.runs),
+            tuple(initial),
+            SOURCE,
+            notes,
+        )
 
 
 __all__ = [
+    "CmgKind",
     "CmgResult",
     "CmgScenario",
+    "CmgStationKind",
     "CmgStationScenario",
     "StationResult",
-    "run_cmg",
-    "run_cmg_station",
     "validation_table",
 ]

@@ -1,9 +1,15 @@
-"""Pieces of the xarray datasets that scenario results write (``results.nc``)."""
+"""Pieces of the xarray datasets that scenario results write (``results.nc``), and the result
+of the kinds whose runs are simulations (:class:`SimulatedRuns`)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 import xarray as xr
+
+from flexsat.report.page import ReportedResult
 
 
 def add_run_metrics(ds: xr.Dataset, records: list[dict]) -> None:
@@ -20,4 +26,64 @@ def add_run_metrics(ds: xr.Dataset, records: list[dict]) -> None:
             ds[key].loc[record["run"]] = np.nan if value is None else float(value)
 
 
-__all__ = ["add_run_metrics"]
+@dataclass(frozen=True)
+class SimulatedRuns(ReportedResult):
+    """Runs that are one simulation each (:class:`flexsat.sim.SimResult`), in one dataset.
+
+    Attributes
+    ----------
+    scenario
+        The document.
+    labels : tuple of str
+        Run labels, in the scenario's order.
+    results : tuple of SimResult
+        One single-case result per run (every run uses the same noise seed).
+    case_source : str
+        Where the case's data come from (:attr:`flexsat.cases.CaseInfo.source`).
+    """
+
+    scenario: Any
+    labels: tuple[str, ...]
+    results: tuple
+    case_source: str
+
+    def metrics_records(self) -> list[dict]:
+        """One JSON-ready dict per run: ``"run"`` (the label) and the metrics (NaN -> None)."""
+        return [
+            row
+            for label, result in zip(self.labels, self.results)
+            for row in result.metrics_records([label])
+        ]
+
+    def dataset(self) -> xr.Dataset:
+        """All runs in one dataset, dims (run, time[, component]); ``run`` holds the labels.
+
+        Attributes: ``scenario_name``, ``case``, ``case_source``, ``scenario_yaml`` and those of
+        the simulation (``control_rate_Hz``, ``settling_band_rad``).
+        """
+        ds = concat_runs(self.results, self.labels)
+        ds.attrs.update(
+            scenario_name=self.scenario.name,
+            case=self.scenario.case,
+            case_source=self.case_source,
+            scenario_yaml=self.scenario.yaml_text,
+        )
+        return ds
+
+
+def concat_runs(results, labels) -> xr.Dataset:
+    """The single-case datasets of ``results`` along a new dimension ``run`` (``labels``)."""
+    runs = [r.dataset.isel(case=0, drop=True) for r in results]
+    ds = xr.concat(
+        runs,
+        dim="run",
+        data_vars="all",
+        coords="minimal",
+        compat="override",
+        join="exact",
+        combine_attrs="override",
+    )
+    return ds.assign_coords(run=("run", list(labels)))
+
+
+__all__ = ["SimulatedRuns", "add_run_metrics", "concat_runs"]

@@ -4,31 +4,14 @@
 
 from __future__ import annotations
 
-import importlib
 from importlib import resources
 from pathlib import Path
 
 import yaml
-from pydantic import ValidationError
 
 from flexsat import limits
-from flexsat.scenarios.errors import ScenarioError, _problem
-from flexsat.scenarios.maneuver import Scenario
-
-#: per scenario ``kind``: the module and the pydantic model that validate it (imported on use)
-SCENARIO_KINDS = {
-    "maneuver": ("flexsat.scenarios.maneuver", "Scenario"),
-    "simulation": ("flexsat.scenarios.simulation", "SimulationScenario"),
-    "slew": ("flexsat.scenarios.slew", "SlewScenario"),
-    "ppf": ("flexsat.scenarios.ppf", "PPFScenario"),
-    "star_tracker": ("flexsat.scenarios.star_tracker", "StarTrackerScenario"),
-    "tether": ("flexsat.scenarios.tether", "TetherScenario"),
-    "cmg": ("flexsat.scenarios.cmg", "CmgScenario"),
-    "cmg_station": ("flexsat.scenarios.cmg", "CmgStationScenario"),
-    "sweep": ("flexsat.scenarios.batch", "BatchScenario"),
-    "montecarlo": ("flexsat.scenarios.batch", "BatchScenario"),
-    "identification": ("flexsat.scenarios.identification", "IdentificationScenario"),
-}
+from flexsat.scenarios.errors import Problem, ScenarioError
+from flexsat.scenarios.kind import DEFAULT_KIND, scenario_kind
 
 DEFAULT_SCENARIO = "tamu_default.yaml"  # package data of flexsat.cases
 
@@ -59,7 +42,7 @@ def _read(source: str | bytes | Path) -> str:
                 source = file.read(limits.MAX_DOCUMENT_BYTES + 1)
         except OSError as exc:
             raise ScenarioError(
-                [f"scenario: cannot read {str(source)!r} ({exc.strerror})"]
+                [Problem("", f"cannot read {str(source)!r} ({exc.strerror})")]
             ) from None
     if isinstance(source, bytes):
         try:
@@ -99,15 +82,21 @@ class _Loader(yaml.SafeLoader):
             if self._depth > limits.MAX_NESTING:
                 raise ScenarioError(
                     [
-                        f"scenario: nested deeper than {limits.MAX_NESTING} levels "
-                        f"at line {line} (flexsat.limits.MAX_NESTING)"
+                        Problem(
+                            "",
+                            f"nested deeper than {limits.MAX_NESTING} levels "
+                            f"at line {line} (flexsat.limits.MAX_NESTING)",
+                        )
                     ]
                 )
             if self._nodes > limits.MAX_DOCUMENT_NODES:
                 raise ScenarioError(
                     [
-                        f"scenario: more than {limits.MAX_DOCUMENT_NODES:,} values "
-                        f"(at line {line}; flexsat.limits.MAX_DOCUMENT_NODES)"
+                        Problem(
+                            "",
+                            f"more than {limits.MAX_DOCUMENT_NODES:,} values "
+                            f"(at line {line}; flexsat.limits.MAX_DOCUMENT_NODES)",
+                        )
                     ]
                 )
             return super().compose_node(parent, index)
@@ -125,10 +114,7 @@ def _check_nodes(node, path: str, loader: _Loader, sizes: dict, open_: set) -> i
         return sizes[id(node)]
     if id(node) in open_:
         raise ScenarioError(
-            [
-                f"{path or 'scenario'}: an alias refers to the value that "
-                "contains it (recursive anchor)"
-            ]
+            [Problem(path, "an alias refers to the value that contains it (recursive anchor)")]
         )
     open_.add(id(node))
     size = 1
@@ -144,7 +130,12 @@ def _check_nodes(node, path: str, loader: _Loader, sizes: dict, open_: set) -> i
             line = key_node.start_mark.line + 1
             if key is not None and key in lines:
                 raise ScenarioError(
-                    [f"{here}: duplicate key (lines {lines[key]} and {line}); give it once"]
+                    [
+                        Problem(
+                            f"{here}",
+                            f"duplicate key (lines {lines[key]} and {line}); give it once",
+                        )
+                    ]
                 )
             if key is not None:
                 lines[key] = line
@@ -160,9 +151,12 @@ def _check_nodes(node, path: str, loader: _Loader, sizes: dict, open_: set) -> i
     if size > limits.MAX_DOCUMENT_NODES:
         raise ScenarioError(
             [
-                f"{path or 'scenario'}: more than {limits.MAX_DOCUMENT_NODES:,} "
-                "values once aliases are expanded (flexsat.limits."
-                "MAX_DOCUMENT_NODES)"
+                Problem(
+                    path,
+                    f"more than {limits.MAX_DOCUMENT_NODES:,} "
+                    "values once aliases are expanded (flexsat.limits."
+                    "MAX_DOCUMENT_NODES)",
+                )
             ]
         )
     sizes[id(node)] = size
@@ -180,7 +174,7 @@ def _parse(text: str):
         _check_nodes(node, "", loader, {}, set())
         return loader.construct_document(node)
     except yaml.YAMLError as exc:
-        raise ScenarioError([f"yaml: {exc}"]) from None
+        raise ScenarioError([Problem("yaml", f"{exc}")]) from None
     finally:
         if loader is not None:
             loader.dispose()
@@ -189,9 +183,10 @@ def _parse(text: str):
 def load_scenario(source: str | bytes | Path):
     """Parse and validate a scenario (stage 1: YAML, schema, units, section rules).
 
-    ``kind`` (default ``maneuver``) picks the scenario model, :data:`SCENARIO_KINDS`: a
-    :class:`Scenario` for a maneuver, a :class:`flexsat.scenarios.batch.BatchScenario` for a
-    sweep or a Monte Carlo, ...
+    ``kind`` (default ``maneuver``) picks the kind (:func:`flexsat.scenarios.kind.scenario_kinds`,
+    built in or a plug-in), whose document model validates the rest: a
+    :class:`~flexsat.scenarios.maneuver.Scenario` for a maneuver, a
+    :class:`flexsat.scenarios.batch.BatchScenario` for a sweep or a Monte Carlo, ...
 
     Parameters
     ----------
@@ -207,27 +202,18 @@ def load_scenario(source: str | bytes | Path):
     data = _parse(text)
     if not isinstance(data, dict):
         raise ScenarioError(
-            ["scenario: must be a YAML mapping (name, case, simulation, runs, ...)"]
+            [Problem("", "must be a YAML mapping (name, case, simulation, runs, ...)")]
         )
-    kind = data.get("kind", "maneuver")
-    if not isinstance(kind, str) or kind not in SCENARIO_KINDS:
-        known = [repr(k) for k in SCENARIO_KINDS]
-        raise ScenarioError([f"kind: must be {', '.join(known[:-1])} or {known[-1]}, got {kind!r}"])
-    module, name = SCENARIO_KINDS[kind]
-    model = getattr(importlib.import_module(module), name)
-    try:
-        scenario = model.model_validate(data)
-    except ValidationError as exc:
-        raise ScenarioError([_problem(e, data, model) for e in exc.errors()]) from None
+    scenario = scenario_kind(data.get("kind", DEFAULT_KIND)).validate(data)
     scenario._source = text
     if _file_of(source) is not None:
         scenario._folder = Path(source).resolve().parent
     return scenario
 
 
-def default_scenario() -> Scenario:
+def default_scenario():
     """The embedded default: the TAMU 40 deg slew, Law I against Law II (``flexsat run``)."""
     return load_scenario(resources.files("flexsat.cases").joinpath(DEFAULT_SCENARIO).read_text())
 
 
-__all__ = ["DEFAULT_SCENARIO", "SCENARIO_KINDS", "default_scenario", "load_scenario"]
+__all__ = ["DEFAULT_SCENARIO", "default_scenario", "load_scenario"]

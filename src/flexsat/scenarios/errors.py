@@ -1,8 +1,11 @@
-"""Problems in a scenario: :class:`ScenarioError` and its ``field.path: rule`` messages.
+"""Problems in a scenario: :class:`ScenarioError` and its :class:`Problem` records.
 
-Every problem found while loading, validating or preparing a scenario becomes one line naming
-the field (``runs['Law I'].gains.g1: must be >= 0``); the helpers here build those paths from
-pydantic's error locations and from the ``field: rule`` messages of the runtime classes.
+Every problem found while loading, validating or preparing a scenario is a record of the field
+path and the rule (``runs['Law I'].gains.g1`` and ``must be >= 0``), read as one line
+``runs['Law I'].gains.g1: must be >= 0``. The helpers here build the paths from pydantic's
+error locations and from the field a runtime error names: as data
+(:class:`flexsat.input_checks.FieldError`), or, for the runtime messages that do not carry it
+yet, from the ``field: rule`` form of their text (:func:`_locate`).
 """
 
 from __future__ import annotations
@@ -12,22 +15,68 @@ from typing import get_args
 
 from pydantic import BaseModel
 
+from flexsat.input_checks import FieldError
+
+
+class Problem(str):
+    """One problem of a scenario: the field path and the rule it breaks, as data.
+
+    It reads as the line users see, ``"path: rule"`` (``"scenario: rule"`` for the document
+    itself), so that it prints and compares as that text.
+
+    Parameters
+    ----------
+    path : str
+        Dotted field path, runs named by label (``runs['Law I'].gains.g1``); ``""`` for the
+        scenario as a whole.
+    rule : str
+        The rule and the value given (``must be >= 0, got -1``).
+    """
+
+    path: str
+    rule: str
+
+    def __new__(cls, path: str, rule: str) -> Problem:
+        self = super().__new__(cls, f"{path or 'scenario'}: {rule}")
+        self.path, self.rule = path, rule
+        return self
+
+    def __reduce__(self):
+        return type(self), (self.path, self.rule)
+
+
+def _problem_of(item) -> Problem:
+    """``item`` as a :class:`Problem`; a line written as ``"path: rule"`` is split there."""
+    if isinstance(item, Problem):
+        return item
+    path, sep, rule = str(item).partition(": ")
+    return Problem(path, rule) if sep and " " not in path else Problem("", str(item))
+
 
 class ScenarioError(ValueError):
     """An invalid scenario.
 
     Parameters
     ----------
-    problems : list of str
-        One ``field.path: rule`` message per problem; the exception message lists them all.
+    problems : list of Problem or str
+        One problem each (a ``str`` is read as ``"path: rule"``); the exception message lists
+        them all.
+
+    Attributes
+    ----------
+    problems : list of Problem
+        The problems, each with its :attr:`Problem.path` and :attr:`Problem.rule`.
     """
 
     def __init__(self, problems):
-        self.problems = list(problems)
+        self.problems = [_problem_of(p) for p in problems]
         count = "1 problem" if len(self.problems) == 1 else f"{len(self.problems)} problems"
         super().__init__(
             f"invalid scenario ({count}):" + "".join(f"\n  {p}" for p in self.problems)
         )
+
+    def __reduce__(self):
+        return type(self), (self.problems,)
 
 
 # -- messages ----------------------------------------------------------------------------------
@@ -40,21 +89,39 @@ def _head(message: str) -> str | None:
     return match.group(1) if match else None
 
 
-def _locate(path: str, message: str) -> str:
+def _locate(path: str, message: str) -> Problem:
     """Prefix ``message`` with the field path ``path`` (``""`` is the scenario itself).
 
     A message that starts with a field name (``"g1: must be >= 0"``) gets the name appended to the
-    path unless the path already ends with it.
+    path unless the path already ends with it. This reads the text of the messages that carry no
+    field as data (the validators of the schema, the runtime checks not yet raising a
+    :class:`~flexsat.input_checks.FieldError`); :func:`locate` prefers the data.
     """
     head = _head(message)
     if head is None:
-        return f"{path or 'scenario'}: {message}"
+        return Problem(path, message)
+    rule = message[len(head) + 2 :]
     if path == head or path.endswith("." + head):
-        return path + message[len(head) :]
-    return f"{path}.{message}" if path else message
+        return Problem(path, rule)
+    return Problem(f"{path}.{head}" if path else head, rule)
 
 
-def _item(index: int, label) -> str:
+def locate(path: str, error: Exception) -> Problem:
+    """The problem ``error`` raised for the value at field path ``path``.
+
+    A :class:`~flexsat.input_checks.FieldError` names its field as data: it is appended to
+    ``path`` (unless ``path`` already ends with it); any other error's message is placed by
+    :func:`_locate`.
+    """
+    if isinstance(error, FieldError):
+        field = error.field
+        if path == field or path.endswith("." + field):
+            return Problem(path, error.rule)
+        return Problem(f"{path}.{field}" if path else field, error.rule)
+    return _locate(path, str(error))
+
+
+def item_path(index: int, label) -> str:
     """Path element of list item ``index``; runs are named by their label."""
     return f"[{label!r}]" if isinstance(label, str) else f"[{index}]"
 
@@ -65,7 +132,7 @@ def _loc_path(loc: tuple, data) -> str:
     for key in loc:
         if isinstance(key, int):
             node = node[key] if isinstance(node, list) and 0 <= key < len(node) else None
-            path += _item(key, node.get("label") if isinstance(node, dict) else None)
+            path += item_path(key, node.get("label") if isinstance(node, dict) else None)
         else:
             path = f"{path}.{key}" if path else str(key)
             node = node.get(key) if isinstance(node, dict) else None
@@ -91,14 +158,15 @@ def _allowed_keys(loc: tuple, root: type[BaseModel]) -> str:
     return ", ".join(model.model_fields)
 
 
-def _problem(error: dict, data, root: type[BaseModel]) -> str:
-    """One message line for a pydantic error dict of a ``root`` document."""
+def pydantic_problem(error: dict, data, root: type[BaseModel]) -> Problem:
+    """The problem of a pydantic error dict of a ``root`` document."""
     cause = error.get("ctx", {}).get("error")
+    path = _loc_path(error["loc"], data)
     if error["type"] == "extra_forbidden":
-        message = f"unknown key (allowed: {_allowed_keys(error['loc'], root)})"
-    else:
-        message = str(cause) if isinstance(cause, Exception) else error["msg"]
-    return _locate(_loc_path(error["loc"], data), message)
+        return Problem(path, f"unknown key (allowed: {_allowed_keys(error['loc'], root)})")
+    if isinstance(cause, Exception):
+        return locate(path, cause)
+    return _locate(path, error["msg"])
 
 
-__all__ = ["ScenarioError"]
+__all__ = ["Problem", "ScenarioError", "item_path", "locate", "pydantic_problem"]

@@ -96,8 +96,9 @@ class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
-class _Document(_Section):
-    """A whole scenario file: remembers the text it was loaded from."""
+class Document(_Section):
+    """Base of a scenario kind's document (:attr:`flexsat.scenarios.kind.ScenarioKind.document`):
+    unknown keys are errors; it remembers the text and the folder it was loaded from."""
 
     _source: str | None = PrivateAttr(default=None)
     _folder: Path | None = PrivateAttr(default=None)
@@ -136,4 +137,4 @@ def check_unique_labels(runs) -> None:
             raise ValueError(f"runs: duplicate label {label!r}; each run needs its own label")
 
 
-__all__ = ["check_unique_labels", "count", "quantity"]
+__all__ = ["Document", "check_unique_labels", "count", "quantity"]

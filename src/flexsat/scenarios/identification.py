@@ -36,35 +36,29 @@ reported as ``field.path: rule`` before anything runs.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Literal
 
 import numpy as np
 from pydantic import BeforeValidator, Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.cases import get_case
-from flexsat.cases.identification_campaign import (
-    IDENTIFY_STEPS,
-    SIMULATE_STEPS,
-    CameraRig,
-    CampaignConfig,
-    CampaignResult,
-    TestRecords,
-    identify_and_update,
-    run_campaign,
-)
-from flexsat.identify.measurements import Measurement
 from flexsat.references import cite
-from flexsat.scenarios.errors import ScenarioError, _head, _locate
-from flexsat.scenarios.fields import _Document, _Section, count, quantity
+from flexsat.report.page import ReportedResult, ResultTable
+from flexsat.scenarios.errors import Problem, ScenarioError, locate
+from flexsat.scenarios.fields import Document, _Section, count, quantity
+from flexsat.scenarios.kind import Run, ScenarioKind
 from flexsat.text import format_optional
 from flexsat.units import to_si
 
+if TYPE_CHECKING:  # the identification stack (scipy.signal) is imported when a campaign runs
+    from flexsat.cases.identification_campaign import CampaignConfig, CampaignResult, TestRecords
+
 __all__ = [
+    "SUMMARY_COLUMNS",
+    "IdentificationKind",
     "IdentificationResult",
     "IdentificationScenario",
-    "identification_steps",
-    "run_identification",
 ]
 
 
@@ -201,7 +195,7 @@ class IdentificationSpec(_Section):
     torque_constants: bool = False
 
 
-class IdentificationScenario(_Document):
+class IdentificationScenario(Document):
     """A validated identification scenario (SI; see the module docstring)."""
 
     kind: Literal["identification"]
@@ -258,6 +252,8 @@ class IdentificationScenario(_Document):
 
     def config(self) -> CampaignConfig:
         """The :class:`CampaignConfig` of this scenario."""
+        from flexsat.cases.identification_campaign import CameraRig, CampaignConfig
+
         ident = self.identification
         common = dict(
             a_priori_scale=dict(self.a_priori.stiffness_scale),
@@ -311,13 +307,68 @@ class IdentificationScenario(_Document):
         )
 
 
+#: the columns of the console's table of identified modes
+SUMMARY_COLUMNS = ("true Hz", "ERA Hz", "a priori Hz", "updated Hz", "true zeta", "ERA zeta")
+
+
 @dataclass(frozen=True)
-class IdentificationResult:
-    """An identification scenario and its campaign result."""
+class IdentificationResult(ReportedResult):
+    """An identification scenario and its campaign result; its report holds
+    ``identification.json`` and ``results.nc`` (:mod:`flexsat.report.identification`)."""
+
+    report_title = "flexsat identification report"
 
     scenario: IdentificationScenario
     campaign: CampaignResult
     case_source: str
+
+    def metrics_records(self) -> list[dict]:
+        """One JSON-ready dict per identified mode (``"run"``: ``mode k``): true, ERA, a priori
+        and updated frequencies (Hz) and the true and ERA damping ratios (None: no value, the
+        truth of recorded tests)."""
+        m = self.campaign.modes
+        keys = ("true_hz", "era_hz", "a_priori_hz", "updated_hz", "true_damping", "era_damping")
+        return [
+            {
+                "run": f"mode {k + 1}",
+                **{key: _number(m[key][k]) for key in keys},
+            }
+            for k in range(len(m["era_hz"]))
+        ]
+
+    def dataset(self):
+        from flexsat.report.identification import dataset
+
+        return dataset(self)
+
+    def write_data(self, folder, ds) -> None:
+        from flexsat.report.identification import write_data
+
+        write_data(self, ds, folder)
+
+    def figures(self, folder, ds) -> list[str]:
+        from flexsat.report.identification import draw_figures
+
+        return draw_figures(self.campaign, folder)
+
+    def sections(self, ds, figures: list[str]) -> str:
+        from flexsat.report.identification import sections
+
+        return sections(self)
+
+    def console_table(self) -> ResultTable:
+        """The identified modes: per mode, true / ERA / a priori / updated frequencies and the
+        true and ERA damping ratios; the caption gives the substructure scalings."""
+        caption = "".join(
+            f"{name}: a priori x{v['a_priori']:.3f}, updated x{v['updated']:.4f} of nominal\n"
+            for name, v in self.campaign.scalings.items()
+        )
+        return ResultTable(
+            "identified modes",
+            ("mode", *SUMMARY_COLUMNS),
+            tuple((mode, *values) for mode, values in _summary_rows(self)),
+            caption or None,
+        )
 
 
 def _node_fields(scenario: IdentificationScenario, records: TestRecords | None) -> list:
@@ -372,6 +423,9 @@ def _check_against_case(scenario: IdentificationScenario, case, records=None) ->
 
 def _read_records(scenario: IdentificationScenario) -> TestRecords:
     """The measured tests of ``records`` (paths relative to the scenario file)."""
+    from flexsat.cases.identification_campaign import TestRecords
+    from flexsat.identify.measurements import Measurement
+
     problems, read = [], {}
     for name in ("hammer", "wheels", "video"):
         path = getattr(scenario.records, name)
@@ -394,51 +448,67 @@ def _read_records(scenario: IdentificationScenario) -> TestRecords:
     return TestRecords(**read)
 
 
-def identification_steps(scenario: IdentificationScenario) -> int:
-    """How many times :func:`run_identification` calls its ``progress``: the campaign's steps,
-    without the simulated tests when the scenario brings its records."""
-    return len(IDENTIFY_STEPS) + (0 if scenario.recorded else len(SIMULATE_STEPS))
+def _number(value) -> float | None:
+    """A JSON-ready number: None (no value) and NaN become None."""
+    return None if value is None or not np.isfinite(value) else float(value)
 
 
-def run_identification(scenario: IdentificationScenario, progress=None) -> IdentificationResult:
-    """Validate against the case, then run the campaign; ``progress(label)``, if given, is
-    called as each of its :func:`identification_steps` starts.
+def _campaign(scenario: IdentificationScenario, case, records, progress=None):
+    """The campaign (one call into :mod:`flexsat.cases.identification_campaign`): on the test records, or
+    simulating the tests; a value it refuses is reported at the scenario's field for it."""
+    from flexsat.cases.identification_campaign import identify_and_update, run_campaign
 
-    Raises
-    ------
-    ScenarioError
-        Unknown substructures, nodes that are not in the case or are clamped, case overrides the
-        case rejects, or a camera rig that does not see every target.
-    """
-    try:
-        case = get_case(scenario.case).builder(**scenario.case_overrides)
-    except ValueError as exc:
-        raise ScenarioError([f"case_overrides: {exc}"]) from None
-    records = _read_records(scenario) if scenario.recorded else None
-    problems = _check_against_case(scenario, case, records)
-    if problems:
-        raise ScenarioError(problems)
     try:
         if records is not None:
-            result = identify_and_update(case, scenario.config(), records, progress=progress)
-        else:
-            result = run_campaign(case, scenario.config(), progress=progress)
+            return identify_and_update(case, scenario.config(), records, progress=progress)
+        return run_campaign(case, scenario.config(), progress=progress)
     except ValueError as exc:
-        head = _head(str(exc))
+        field = getattr(exc, "field", None)
+        if field == "wheel_torque_constants":
+            raise ScenarioError([Problem("wheels.torque_constants", exc.rule)]) from None
         path = {
             "rig": "video",
-            "wheel_torque_constants": "wheels.torque_constants",
             "records": "records",
             "measurement": "records.wheels",
             "segment": "records.segment",
-        }.get(head, "")
-        message = (
-            str(exc).replace("wheel_torque_constants: ", "")
-            if path.startswith("wheels")
-            else str(exc)
+        }.get(field, "")
+        raise ScenarioError([locate(path, exc)]) from None
+
+
+class IdentificationKind(ScenarioKind):
+    """``kind: identification``: validate against the case, then test the structure, identify
+    it and update its model (module docstring); the campaign announces its own steps."""
+
+    kind = "identification"
+    document = IdentificationScenario
+
+    def steps(self, scenario: IdentificationScenario) -> int:
+        """The campaign's steps, without the simulated tests when the scenario brings its
+        records."""
+        from flexsat.cases.identification_campaign import IDENTIFY_STEPS, SIMULATE_STEPS
+
+        return len(IDENTIFY_STEPS) + (0 if scenario.recorded else len(SIMULATE_STEPS))
+
+    def plan(self, scenario: IdentificationScenario):
+        """Raises ScenarioError for unknown substructures, nodes that are not in the case or
+        are clamped, case overrides the case rejects, or a camera rig that does not see every
+        target."""
+        import functools
+
+        try:
+            case = get_case(scenario.case).builder(**scenario.case_overrides)
+        except ValueError as exc:
+            raise ScenarioError([Problem("case_overrides", str(exc))]) from None
+        records = _read_records(scenario) if scenario.recorded else None
+        problems = _check_against_case(scenario, case, records)
+        if problems:
+            raise ScenarioError(problems)
+        campaign = yield Run(
+            "campaign",
+            functools.partial(_campaign, scenario, case, records),
+            reports_progress=True,
         )
-        raise ScenarioError([_locate(path, message)]) from None
-    return IdentificationResult(scenario, result, cite(get_case(scenario.case).source))
+        return IdentificationResult(scenario, campaign, cite(get_case(scenario.case).source))
 
 
 def _summary_rows(result: IdentificationResult) -> list[tuple[str, list[str]]]:
@@ -460,24 +530,3 @@ def _summary_rows(result: IdentificationResult) -> list[tuple[str, list[str]]]:
             )
         )
     return rows
-
-
-SUMMARY_COLUMNS = ("true Hz", "ERA Hz", "a priori Hz", "updated Hz", "true zeta", "ERA zeta")
-
-
-def summary_table(result: IdentificationResult) -> tuple[tuple[str, ...], list]:
-    """(column names, rows) of the console summary."""
-    return SUMMARY_COLUMNS, _summary_rows(result)
-
-
-def as_dict(value: Any) -> Any:
-    """JSON-ready copy (numpy arrays and scalars to lists and floats)."""
-    if isinstance(value, dict):
-        return {k: as_dict(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [as_dict(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return as_dict(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    return value

@@ -37,7 +37,7 @@ import dataclasses
 import functools
 import math
 import typing
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import BeforeValidator, Field, field_validator, model_validator
 
@@ -46,9 +46,9 @@ from flexsat.cases import CASES, get_case
 from flexsat.dynamics.hybrid import HybridPlant
 from flexsat.maneuvers import BangBang, PseudoSquare, Sinusoidal, SmoothBangBang
 from flexsat.scenarios.fields import (
+    Document,
     _Buildable,
     _converter,
-    _Document,
     _given,
     _Section,
     check_unique_labels,
@@ -313,7 +313,7 @@ class RunSpec(_Section):
         return self
 
 
-class Scenario(_Document):
+class Scenario(Document):
     """A validated scenario, quantities in SI (see the module docstring for the schema)."""
 
     kind: Literal["maneuver"] = "maneuver"
@@ -359,6 +359,16 @@ class Scenario(_Document):
     def case_parameters(self) -> dict[str, Any]:
         """Keyword arguments of the case builder: ``case_overrides`` and the ``model`` options."""
         return {**self.case_overrides, **_given(self.model)}
+
+    #: the document's field each input of :meth:`sim_config` (and the batch size, one case per
+    #: run) comes from: where a value :func:`flexsat.sim.engine.check_resources` refuses is
+    #: reported
+    CONFIG_PATHS: ClassVar[dict[str, str]] = {
+        "friction": "disturbances.friction",
+        "duration": "simulation.duration",
+        "n_cases": "runs",
+        "substeps": "simulation.integration_step",
+    }
 
     def sim_config(self) -> SimConfig:
         """The :class:`SimConfig` shared by every run."""

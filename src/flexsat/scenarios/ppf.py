@@ -26,7 +26,6 @@ damping, initial-condition amplitude) are those of :mod:`flexsat.cases.agrawal_b
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -34,9 +33,11 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
+from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
-from flexsat.scenarios.errors import ScenarioError, _item, _locate
-from flexsat.scenarios.fields import _Document, _Section, check_unique_labels, quantity
+from flexsat.scenarios.errors import item_path
+from flexsat.scenarios.fields import Document, _Section, check_unique_labels, quantity
+from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 
 #: the three time responses of every run
 RESPONSES = ("open loop", "initial gains", "optimised gains")
@@ -132,7 +133,7 @@ class PPFRunSpec(_Section):
         return self
 
 
-class PPFScenario(_Document):
+class PPFScenario(Document):
     """A validated PPF scenario (module docstring)."""
 
     kind: Literal["ppf"]
@@ -150,7 +151,7 @@ class PPFScenario(_Document):
 
 # -- running -------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class PPFResult:
+class PPFResult(ReportedResult):
     """The runs of a PPF scenario.
 
     Attributes
@@ -289,62 +290,91 @@ class PPFResult:
         )
         return ds
 
+    def figures(self, folder, ds) -> list[str]:
+        from flexsat.report.ppf import draw_figures
 
-def run_ppf(scenario: PPFScenario, progress: Callable[[str], None] | None = None) -> PPFResult:
-    """Optimise every run's gains (homotopy of seed 004 Eqs. 15–28) and simulate its tip
-    responses with zero, initial and optimised gains.
+        return draw_figures(ds, folder)
 
-    Raises
-    ------
-    ScenarioError
-        For a run the problem or the optimiser refuses (named by its label).
-    """
-    from flexsat.cases.agrawal_bang import agrawal_bang
-    from flexsat.cases.agrawal_bang_ppf import run_ppf_case
-    from flexsat.catalog import get_case
-    from flexsat.references import cite
+    def sections(self, ds, figures: list[str]) -> str:
+        from flexsat.report.ppf import sections
 
-    case = agrawal_bang()
-    p, sim = scenario.ppf, scenario.simulation
-    runs = []
-    for index, run in enumerate(scenario.runs):
-        if progress is not None:
-            progress(run.label)
-        try:
-            runs.append(
-                run_ppf_case(
-                    run.weights,
-                    run.excitation,
-                    run.goal.build(),
-                    case=case,
-                    initial_gains=p.initial_gains,
-                    gamma_stop=p.gamma_stop,
-                    Q_u=p.Q_u,
-                    zeta_f=p.zeta_f,
-                    amplitude=p.amplitude,
-                    duration=sim.duration,
-                    rate=sim.control_rate,
-                )
+        return sections(self, self.metrics_records(), ds, figures)
+
+
+class PPFKind(ScenarioKind):
+    """``kind: ppf``: the PPF gains of the Agrawal–Bang structure optimised per run (module
+    docstring)."""
+
+    kind = "ppf"
+    document = PPFScenario
+
+    def steps(self, scenario: PPFScenario) -> int:
+        # per run: the optimisation, then the open loop, the initial and the optimised gains
+        return 4 * len(scenario.runs)
+
+    def plan(self, scenario: PPFScenario):
+        """Optimise every run's gains (homotopy of seed 004 Eqs. 15–28), then simulate its tip
+        responses with zero, initial and optimised gains; a value the problem or the optimiser
+        refuses is reported under its run."""
+        import dataclasses
+        import functools
+
+        from flexsat.cases.agrawal_bang import agrawal_bang
+        from flexsat.cases.agrawal_bang_ppf import response_simulations, run_ppf_case, tip_history
+        from flexsat.catalog import get_case
+        from flexsat.references import cite
+
+        case = agrawal_bang()
+        p, sim = scenario.ppf, scenario.simulation
+        runs = []
+        for index, run in enumerate(scenario.runs):
+            path = "runs" + item_path(index, run.label)
+            optimise = functools.partial(
+                run_ppf_case,
+                run.weights,
+                run.excitation,
+                run.goal.build(),
+                case=case,
+                initial_gains=p.initial_gains,
+                gamma_stop=p.gamma_stop,
+                Q_u=p.Q_u,
+                zeta_f=p.zeta_f,
+                amplitude=p.amplitude,
             )
-        except ValueError as exc:
-            raise ScenarioError([_locate(f"runs{_item(index, run.label)}", str(exc))]) from None
-    notes = (
-        f"Filters tuned to the three modes with ζ_f = {p.zeta_f:g}; Q_u = {p.Q_u:g}; initial "
-        f"tip error |Eᵗ| = {100 * p.amplitude:g} cm in the first mode (three-mode runs: each "
-        "mode with that modal energy, random signs in the cost, all pushing the tip along +n̂_1 "
-        "in the responses). The paper gives none of these (spec seed004.md §1.3).",
-        "The 'paper' goal is J_goal/J_init as implied by the published table of the same case "
-        "(J_opt = 0.9 J_goal + 0.1 J_init, spec §3.2): slightly above 1, so the homotopy raises "
-        "J. On this model ∂J/∂g < 0 (more PPF gain, more damping), so the gains move down, "
-        "barely: the published gains' 10³-fold growth is not reproduced.",
-    )
-    return PPFResult(
-        scenario,
-        tuple(r.label for r in scenario.runs),
-        tuple(runs),
-        cite(get_case(scenario.case).source),
-        notes,
-    )
+            optimised = yield Run(run.label, optimise, path)
+            gains = {
+                "open loop": np.zeros_like(optimised.initial_gains),
+                "initial gains": optimised.initial_gains,
+                "optimised gains": optimised.optimization.gains,
+            }
+            setup = optimised.setup
+            plant, laws, config = response_simulations(setup, gains, sim.duration, sim.control_rate)
+            options = {"initial_state": setup.x0, "record_states": True}
+            responses = {}
+            for name, law in laws.items():
+                simulation = Simulation(plant, law, config, options)
+                ds = (yield Run(f"{run.label}: {name}", simulation, path)).dataset
+                responses.setdefault("time", ds["time"].values)
+                responses[name] = tip_history(setup, ds)
+            runs.append(dataclasses.replace(optimised, responses=responses))
+        notes = (
+            f"Filters tuned to the three modes with ζ_f = {p.zeta_f:g}; Q_u = {p.Q_u:g}; "
+            f"initial tip error |Eᵗ| = {100 * p.amplitude:g} cm in the first mode (three-mode "
+            "runs: each mode with that modal energy, random signs in the cost, all pushing the "
+            "tip along +n̂_1 in the responses). The paper gives none of these (spec seed004.md "
+            "§1.3).",
+            "The 'paper' goal is J_goal/J_init as implied by the published table of the same "
+            "case (J_opt = 0.9 J_goal + 0.1 J_init, spec §3.2): slightly above 1, so the "
+            "homotopy raises J. On this model ∂J/∂g < 0 (more PPF gain, more damping), so the "
+            "gains move down, barely: the published gains' 10³-fold growth is not reproduced.",
+        )
+        return PPFResult(
+            scenario,
+            tuple(r.label for r in scenario.runs),
+            tuple(runs),
+            cite(get_case(scenario.case).source),
+            notes,
+        )
 
 
-__all__ = ["OUTPUTS", "OUTPUT_UNITS", "PPFResult", "PPFScenario", "RESPONSES", "run_ppf"]
+__all__ = ["OUTPUTS", "OUTPUT_UNITS", "PPFKind", "PPFResult", "PPFScenario", "RESPONSES"]

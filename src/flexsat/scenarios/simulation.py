@@ -33,7 +33,7 @@ before anything runs, as ``field.path: rule`` lines of one
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, Literal
 
 from pydantic import (
@@ -46,17 +46,18 @@ from pydantic import (
 
 from flexsat import limits
 from flexsat.catalog import get_case
-from flexsat.scenarios.errors import ScenarioError, _head, _item, _locate
+from flexsat.scenarios.datasets import SimulatedRuns
+from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
-    _Document,
+    Document,
     _given,
     _Section,
     check_unique_labels,
     count,
     quantity,
 )
+from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 from flexsat.scenarios.registry import validate_section
-from flexsat.scenarios.runner import ScenarioResult
 from flexsat.scenarios.simulation_laws import (
     LawContext,
     Value,
@@ -148,7 +149,7 @@ class SimulationRunSpec(_Section):
         return validate_section(model, target, f"law {name!r}", "target", "target")
 
 
-class SimulationScenario(_Document):
+class SimulationScenario(Document):
     """A validated simulation scenario (module docstring)."""
 
     kind: Literal["simulation"]
@@ -225,14 +226,25 @@ def named_plant(section: Any, case: str | None) -> tuple[str, Any] | None:
 
 
 # -- running -------------------------------------------------------------------------------------
-class SimulationResult(ScenarioResult):
+@dataclass(frozen=True)
+class SimulationResult(SimulatedRuns):
     """The runs of a simulation scenario: one :class:`flexsat.sim.SimResult` per run, in one
-    dataset with dims (run, time[, component]) (:class:`~flexsat.scenarios.runner.
-    ScenarioResult`)."""
+    dataset with dims (run, time[, component]) (:class:`~flexsat.scenarios.datasets.
+    SimulatedRuns`)."""
+
+    def figures(self, folder, ds) -> list[str]:
+        from flexsat.report.simulation import draw_figures
+
+        return draw_figures(ds, folder)
+
+    def sections(self, ds, figures: list[str]) -> str:
+        from flexsat.report.simulation import sections
+
+        return sections(self.metrics_records(), ds)
 
 
 def _located(path: str, exc: Exception) -> ScenarioError:
-    return ScenarioError([_locate(path, str(exc))])
+    return ScenarioError([locate(path, exc)])
 
 
 def _build_plant(scenario: SimulationScenario):
@@ -250,7 +262,12 @@ def _build_plant(scenario: SimulationScenario):
         raise _located("plant", exc) from None
     if not isinstance(plant, Plant):
         raise ScenarioError(
-            [f"plant: {name!r} built a {type(plant).__name__}, not a flexsat.dynamics.Plant"]
+            [
+                Problem(
+                    "plant",
+                    f"{name!r} built a {type(plant).__name__}, not a flexsat.dynamics.Plant",
+                )
+            ]
         )
     return plant
 
@@ -271,10 +288,13 @@ def _config(scenario: SimulationScenario, plant):
             if name not in names:
                 raise ScenarioError(
                     [
-                        f"{role}.{name}: the {scenario.case} plant has no "
-                        f"{'output' if role == 'sensors' else 'input'} channel "
-                        f"{name!r} (its channels: "
-                        f"{', '.join(c.name for c in channels)})"
+                        Problem(
+                            f"{role}.{name}",
+                            f"the {scenario.case} plant has no "
+                            f"{'output' if role == 'sensors' else 'input'} channel "
+                            f"{name!r} (its channels: "
+                            f"{', '.join(c.name for c in channels)})",
+                        )
                     ]
                 )
             values = _given(spec)
@@ -301,7 +321,7 @@ def _config(scenario: SimulationScenario, plant):
             ),
         )
     except ValueError as exc:
-        raise ScenarioError([f"simulation: {exc}"]) from None
+        raise ScenarioError([Problem("simulation", f"{exc}")]) from None
     try:  # binding each piece to its channel converts its values to the channel's unit
         resolve_channels(plant, config)
     except ValueError as exc:
@@ -311,68 +331,70 @@ def _config(scenario: SimulationScenario, plant):
     return config
 
 
-def run_simulation(
-    scenario: SimulationScenario, progress: Callable[[str], None] | None = None
-) -> SimulationResult:
-    """Build the plant, the configuration and every run's law, then simulate each run.
+class SimulationKind(ScenarioKind):
+    """``kind: simulation``: any case's plant under any law (module docstring), one simulation
+    per run from the plant's initial state."""
 
-    Raises
-    ------
-    ScenarioError
-        Before any run, for a plant option, initial value, channel or gain the case refuses.
-    flexsat.sim.SimulationDiverged
-        If a run diverges (its message starts with the run).
-    """
-    from flexsat.control import Controller
-    from flexsat.references import cite
-    from flexsat.sim import SimulationDiverged, simulate
+    kind = "simulation"
+    document = SimulationScenario
 
-    plant = _build_plant(scenario)
-    try:
-        x0 = plant.state_from(**scenario.initial)
-    except ValueError as exc:
-        raise _located("initial", exc) from None
-    config = _config(scenario, plant)
-    laws, problems = {}, []
-    for index, run in enumerate(scenario.runs):
-        path = "runs" + _item(index, run.label)
-        context = LawContext(plant, config.dt, run.target)
+    def steps(self, scenario: SimulationScenario) -> int:
+        return len(scenario.runs)
+
+    def plan(self, scenario: SimulationScenario):
+        """Build the plant, the configuration and every run's law, then simulate each run.
+
+        Raises
+        ------
+        ScenarioError
+            Before any run, for a plant option, initial value, channel or gain the case refuses
+            (a law's :class:`~flexsat.input_checks.FieldError` naming one of the run's gains is
+            placed under ``gains``).
+        """
+        from flexsat.control import Controller
+        from flexsat.references import cite
+
+        plant = _build_plant(scenario)
         try:
-            laws[run.label] = simulation_laws()[run.law].from_scenario(run.gains, context)
+            x0 = plant.state_from(**scenario.initial)
         except ValueError as exc:
-            # a law names its own parameters ("pulse_width: ..."): they sit in the run's gains
-            gain = _head(str(exc)) in type(run.gains).model_fields
-            problems.append(_locate(path + ".gains" if gain else path, str(exc)))
-            continue
-        if not isinstance(laws[run.label], Controller):
-            problems.append(
-                f"{path}: law {run.law!r} built a {type(laws[run.label]).__name__}, "
-                "not a flexsat.control.Controller"
-            )
-    if problems:
-        raise ScenarioError(problems)
-    results = []
-    for index, (label, law) in enumerate(laws.items()):
-        if progress is not None:
-            progress(label)
-        try:
-            results.append(simulate(plant, law, config, n_cases=1, initial_state=x0))
-        except SimulationDiverged as exc:
-            raise SimulationDiverged(
-                f"runs{_item(index, label)}: {exc}", exc.cases, exc.time, exc.cause
-            ) from None
-        except ValueError as exc:
-            raise ScenarioError([f"runs{_item(index, label)}: {exc}"]) from None
-    return SimulationResult(
-        scenario, tuple(laws), tuple(results), cite(get_case(scenario.case).source)
-    )
+            raise _located("initial", exc) from None
+        config = _config(scenario, plant)
+        laws, problems = {}, []
+        for index, run in enumerate(scenario.runs):
+            path = "runs" + item_path(index, run.label)
+            context = LawContext(plant, config.dt, run.target)
+            try:
+                laws[run.label] = simulation_laws()[run.law].from_scenario(run.gains, context)
+            except ValueError as exc:
+                gain = getattr(exc, "field", None) in type(run.gains).model_fields
+                problems.append(locate(path + ".gains" if gain else path, exc))
+                continue
+            if not isinstance(laws[run.label], Controller):
+                problems.append(
+                    Problem(
+                        path,
+                        f"law {run.law!r} built a {type(laws[run.label]).__name__}, "
+                        "not a flexsat.control.Controller",
+                    )
+                )
+        if problems:
+            raise ScenarioError(problems)
+        results = []
+        for index, (label, law) in enumerate(laws.items()):
+            options = {"n_cases": 1, "initial_state": x0}
+            simulation = Simulation(plant, law, config, options)
+            results.append((yield Run(label, simulation, "runs" + item_path(index, label))))
+        return SimulationResult(
+            scenario, tuple(laws), tuple(results), cite(get_case(scenario.case).source)
+        )
 
 
 __all__ = [
+    "SimulationKind",
     "SimulationResult",
     "SimulationScenario",
     "named_plant",
-    "run_simulation",
     "simulation_cases",
     "target_quaternion",
 ]

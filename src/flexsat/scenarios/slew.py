@@ -34,9 +34,8 @@ SI numbers; one value fills its block.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Literal, Union
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -44,20 +43,23 @@ from pydantic import Field, field_validator, model_validator
 from flexsat import limits
 from flexsat.catalog import get_case
 from flexsat.design.slew_weights import SlewWeights, nominal_histories, rim_nodes, slew_run_metrics
-from flexsat.scenarios.errors import ScenarioError, _item, _locate
+from flexsat.report.page import ReportedResult
+from flexsat.scenarios.datasets import concat_runs
+from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
-    _Document,
+    Document,
     _given,
     _Section,
     check_unique_labels,
     count,
     quantity,
 )
+from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 from flexsat.scenarios.simulation import SimulationSettings, target_quaternion
 from flexsat.sim.slew_goals import euler_angle_error
 
 #: one weight, or one per component of its block
-Weights = Union[float, list[float]]
+Weights = float | list[float]
 
 OPEN_LOOP = "open loop"
 
@@ -146,7 +148,7 @@ class SlewRunSpec(_Section):
         return self
 
 
-class SlewScenario(_Document):
+class SlewScenario(Document):
     """A validated slew scenario (module docstring)."""
 
     kind: Literal["slew"]
@@ -187,7 +189,7 @@ class SlewScenario(_Document):
 
 # -- running -------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class SlewResult:
+class SlewResult(ReportedResult):
     """The runs of a slew scenario: the nominal maneuver, the open-loop run (the nominal torque
     alone) and every closed-loop run, with the goal metrics of each.
 
@@ -243,19 +245,7 @@ class SlewResult:
 
     def dataset(self):
         """Every run in one dataset (:mod:`flexsat.report.slew` lists its variables)."""
-        import xarray as xr
-
-        runs = [r.dataset.isel(case=0, drop=True) for r in self.results]
-        ds = xr.concat(
-            runs,
-            dim="run",
-            data_vars="all",
-            coords="minimal",
-            compat="override",
-            join="exact",
-            combine_attrs="override",
-        )
-        ds = ds.assign_coords(run=("run", list(self.labels)))
+        ds = concat_runs(self.results, self.labels)
         t = ds["time"].values
         nominal_torque, nominal_angles = nominal_histories(self.nominal, t)
         ds["nominal_torque"] = (("time", "torque_component"), nominal_torque, {"units": "N*m"})
@@ -290,13 +280,23 @@ class SlewResult:
         )
         return ds
 
+    def figures(self, folder, ds) -> list[str]:
+        from flexsat.report.slew import draw_figures
+
+        return draw_figures(ds, folder)
+
+    def sections(self, ds, figures: list[str]) -> str:
+        from flexsat.report.slew import sections
+
+        return sections(self, self.metrics_records(), figures)
+
 
 def _weights(run: SlewRunSpec, index: int, n_modes: int, n_forces: int):
     """(Q, D) of a run, diagonal, over [δα, δω, δη, δη̇] and [torque/I, forces]."""
     try:
         q, d = SlewWeights(**run.weights.model_dump()).diagonals(n_modes, n_forces)
     except ValueError as exc:
-        raise ValueError(f"runs{_item(index, run.label)}.weights.{exc}") from None
+        raise ScenarioError([locate(f"runs{item_path(index, run.label)}.weights", exc)]) from None
     return np.diag(q), np.diag(d)
 
 
@@ -311,10 +311,14 @@ def _forces(run: SlewRunSpec, index: int, plant) -> list[str]:
     for name in run.forces:
         channel = name if name.startswith("force_") else f"force_{name}"
         if channel not in available:
-            raise ValueError(
-                f"runs{_item(index, run.label)}.forces: {name!r} is not a force of "
-                f"the plant (its forces: "
-                f"{', '.join(c[len('force_') :] for c in available)})"
+            raise ScenarioError(
+                [
+                    Problem(
+                        f"runs{item_path(index, run.label)}.forces",
+                        f"{name!r} is not a force of the plant (its forces: "
+                        f"{', '.join(c[len('force_') :] for c in available)})",
+                    )
+                ]
             )
         names.append(channel)
     return names
@@ -330,16 +334,22 @@ def _plants(scenario: SlewScenario):
     if not isinstance(truth, FlexibleSpacecraft):
         raise ScenarioError(
             [
-                f"plant: the {scenario.case} plant with these options is a "
-                f"{type(truth).__name__}; a slew needs a flexible spacecraft "
-                "(model: flexible)"
+                Problem(
+                    "plant",
+                    f"the {scenario.case} plant with these options is a "
+                    f"{type(truth).__name__}; a slew needs a flexible spacecraft "
+                    "(model: flexible)",
+                )
             ]
         )
     if scenario.controller.modes > truth.n_modes:
         raise ScenarioError(
             [
-                f"controller.modes: at most the plant's {truth.n_modes} elastic "
-                f"modes, got {scenario.controller.modes}"
+                Problem(
+                    "controller.modes",
+                    f"at most the plant's {truth.n_modes} elastic "
+                    f"modes, got {scenario.controller.modes}",
+                )
             ]
         )
     return truth, truth.reduced(scenario.controller.modes)
@@ -368,94 +378,97 @@ def _laws(scenario: SlewScenario, truth, design_plant, nominal, dt: float) -> di
                 decouple=run.decouple,
             )
             laws[run.label] = design.controller(dt, run.feedforward, plant=truth)
+        except ScenarioError as exc:  # the run's forces or weights
+            problems.extend(exc.problems)
         except ValueError as exc:
-            message = str(exc)
-            problems.append(
-                message
-                if message.startswith("runs[")
-                else _locate(f"runs{_item(index, run.label)}", message)
-            )
+            problems.append(locate(f"runs{item_path(index, run.label)}", exc))
     if problems:
         raise ScenarioError(problems)
     return laws
 
 
-def run_slew(scenario: SlewScenario, progress: Callable[[str], None] | None = None) -> SlewResult:
-    """Solve the nominal maneuver, design every run's perturbation feedback, then simulate the
-    open loop and each run on the case's flexible plant and evaluate the goals.
+class SlewKind(ScenarioKind):
+    """``kind: slew``: solve the nominal maneuver, design every run's perturbation feedback,
+    then simulate the open loop and each run on the case's flexible plant and evaluate the
+    goals (module docstring)."""
 
-    Raises
-    ------
-    ScenarioError
-        Before any simulation, for a plant option, maneuver or run the case or the design
-        refuses (a continuation that does not converge is reported under ``maneuver``).
-    flexsat.sim.SimulationDiverged
-        If a run diverges (its message starts with the run).
-    """
-    from flexsat.maneuvers import three_axis_slew
-    from flexsat.references import cite
-    from flexsat.sim import SimConfig, SimulationDiverged, simulate
-    from flexsat.sim.slew_goals import SlewGoals
+    kind = "slew"
+    document = SlewScenario
 
-    truth, design_plant = _plants(scenario)
-    m = scenario.maneuver
-    if progress is not None:
-        progress("nominal maneuver")
-    try:
-        nominal = three_axis_slew(
-            truth.inertia,
-            target_quaternion(m.target),
-            m.duration,
-            m.break_frequency,
-            m.shaping_damping,
-            Q=m.rate_weight * np.eye(3),
+    def steps(self, scenario: SlewScenario) -> int:
+        # the nominal maneuver and the open loop, then the runs
+        return len(scenario.runs) + 2
+
+    def plan(self, scenario: SlewScenario):
+        """The runs: the nominal maneuver (its continuation failing is reported under
+        ``maneuver``), the open loop, each closed-loop run.
+
+        Raises
+        ------
+        ScenarioError
+            Before any simulation, for a plant option, maneuver or run the case or the design
+            refuses.
+        """
+        from flexsat.maneuvers import three_axis_slew
+        from flexsat.references import cite
+        from flexsat.sim import SimConfig
+        from flexsat.sim.slew_goals import SlewGoals
+
+        truth, design_plant = _plants(scenario)
+        m = scenario.maneuver
+        nominal = yield Run(
+            "nominal maneuver",
+            lambda: three_axis_slew(
+                truth.inertia,
+                target_quaternion(m.target),
+                m.duration,
+                m.break_frequency,
+                m.shaping_damping,
+                Q=m.rate_weight * np.eye(3),
+            ),
+            "maneuver",
         )
-    except ValueError as exc:
-        raise ScenarioError([_locate("maneuver", str(exc))]) from None
-    try:
-        config = SimConfig(**_given(scenario.simulation))
-    except ValueError as exc:
-        raise ScenarioError([f"simulation: {exc}"]) from None
-    laws = _laws(scenario, truth, design_plant, nominal, config.dt)
-
-    results = []
-    for index, (label, law) in enumerate(laws.items()):
-        if progress is not None:
-            progress(label)
         try:
-            results.append(simulate(truth, law, config, n_cases=1))
-        except SimulationDiverged as exc:
-            raise SimulationDiverged(
-                f"runs{_item(index - 1, label)}: {exc}", exc.cases, exc.time, exc.cause
-            ) from None
+            config = SimConfig(**_given(scenario.simulation))
+        except ValueError as exc:
+            raise ScenarioError([Problem("simulation", f"{exc}")]) from None
+        laws = _laws(scenario, truth, design_plant, nominal, config.dt)
+        results = []
+        for index, (label, law) in enumerate(laws.items()):
+            run = Run(
+                label,
+                Simulation(truth, law, config, {"n_cases": 1}),
+                f"runs{item_path(index, label)}",
+            )
+            results.append((yield run))
 
-    g = scenario.goals
-    goals, units = slew_run_metrics(
-        results, nominal, SlewGoals(g.angle_fraction, g.evaluation, g.deflection_ratio)
-    )
-    t = results[0].dataset["time"].values
-    notes = (
-        f"Nominal: three-axis TPBVP by continuation in {len(nominal.history)} steps, "
-        f"boundary error {nominal.boundary_error():.1e}; peak nominal torques "
-        + ", ".join(
-            f"{a} {abs(nominal.torque(t[t <= m.duration])[:, i]).max():,.0f} N m"
-            for i, a in enumerate("xyz")
+        g = scenario.goals
+        goals, units = slew_run_metrics(
+            results, nominal, SlewGoals(g.angle_fraction, g.evaluation, g.deflection_ratio)
         )
-        + ".",
-        f"Plant: {truth.n_modes} elastic modes; design model: {design_plant.n_modes} "
-        f"modes linearised at {scenario.controller.linearization_points} equally spaced "
-        f"times, gains interpolated in time.",
-    )
-    return SlewResult(
-        scenario,
-        tuple(laws),
-        tuple(results),
-        nominal,
-        goals,
-        units,
-        cite(get_case(scenario.case).source),
-        notes,
-    )
+        t = results[0].dataset["time"].values
+        notes = (
+            f"Nominal: three-axis TPBVP by continuation in {len(nominal.history)} steps, "
+            f"boundary error {nominal.boundary_error():.1e}; peak nominal torques "
+            + ", ".join(
+                f"{a} {abs(nominal.torque(t[t <= m.duration])[:, i]).max():,.0f} N m"
+                for i, a in enumerate("xyz")
+            )
+            + ".",
+            f"Plant: {truth.n_modes} elastic modes; design model: {design_plant.n_modes} "
+            f"modes linearised at {scenario.controller.linearization_points} equally spaced "
+            f"times, gains interpolated in time.",
+        )
+        return SlewResult(
+            scenario,
+            tuple(laws),
+            tuple(results),
+            nominal,
+            goals,
+            units,
+            cite(get_case(scenario.case).source),
+            notes,
+        )
 
 
-__all__ = ["OPEN_LOOP", "SlewResult", "SlewScenario", "run_slew"]
+__all__ = ["OPEN_LOOP", "SlewKind", "SlewResult", "SlewScenario"]

@@ -23,7 +23,6 @@ a ``missing_fraction`` of the visible stars dropped per frame.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -31,16 +30,18 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
-from flexsat.scenarios.errors import ScenarioError, _item, _locate
+from flexsat.scenarios.errors import ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
+    Document,
     _Buildable,
-    _Document,
     _Section,
     check_unique_labels,
     count,
     quantity,
 )
+from flexsat.scenarios.kind import Run, ScenarioKind
 
 #: the paper this kind reproduces
 SOURCE = (
@@ -117,7 +118,7 @@ class StarRunSpec(_Section):
     missing_fraction: float = Field(0.0, ge=0.0, lt=1.0)
 
 
-class StarTrackerScenario(_Document):
+class StarTrackerScenario(Document):
     """A validated star-tracker scenario (module docstring)."""
 
     kind: Literal["star_tracker"]
@@ -144,9 +145,11 @@ class StarTrackerScenario(_Document):
 
 
 @dataclass(frozen=True)
-class StarTrackerResult:
+class StarTrackerResult(ReportedResult):
     """The runs of a star-tracker scenario: one
     :class:`~flexsat.attitude.star_tracker.MonteCarloResult` per run label."""
+
+    report_title = "flexsat star tracker report"
 
     scenario: StarTrackerScenario
     labels: tuple[str, ...]
@@ -244,6 +247,16 @@ class StarTrackerResult:
         )
         return ds
 
+    def figures(self, folder, ds) -> list[str]:
+        from flexsat.report.star_tracker import draw_figures
+
+        return draw_figures(ds, folder)
+
+    def sections(self, ds, figures: list[str]) -> str:
+        from flexsat.report.star_tracker import sections
+
+        return sections(self, self.metrics_records(), figures)
+
 
 def build_tracker(scenario: StarTrackerScenario):
     """The :class:`~flexsat.attitude.star_tracker.StarTracker` of a scenario.
@@ -258,7 +271,7 @@ def build_tracker(scenario: StarTrackerScenario):
     try:
         catalog = scenario.catalog.build(scenario.folder)
     except ValueError as exc:
-        raise ScenarioError([_locate("catalog", str(exc))]) from None
+        raise ScenarioError([locate("catalog", exc)]) from None
     idn = scenario.identification
     try:
         return StarTracker(
@@ -269,41 +282,48 @@ def build_tracker(scenario: StarTrackerScenario):
             idn.min_fields,
         )
     except ValueError as exc:
-        where = "cameras" if str(exc).startswith("cameras") else "identification"
-        raise ScenarioError([_locate(where, str(exc))]) from None
+        field = getattr(exc, "field", None)
+        raise ScenarioError(
+            [locate("cameras" if field == "cameras" else "identification", exc)]
+        ) from None
 
 
-def run_star_tracker(
-    scenario: StarTrackerScenario, progress: Callable[[str], None] | None = None
-) -> StarTrackerResult:
-    """Build the tracker once (catalogue, k-vector index) and identify every run's attitudes."""
-    from flexsat.attitude.star_tracker import monte_carlo
+class StarTrackerKind(ScenarioKind):
+    """``kind: star_tracker``: build the tracker once (catalogue, k-vector index) and identify
+    every run's attitudes (module docstring)."""
 
-    tracker = build_tracker(scenario)
-    runs = []
-    for index, run in enumerate(scenario.runs):
-        if progress is not None:
-            progress(run.label)
-        try:
-            runs.append(
-                monte_carlo(tracker, run.attitudes, run.seed, run.false_stars, run.missing_fraction)
+    kind = "star_tracker"
+    document = StarTrackerScenario
+
+    def steps(self, scenario: StarTrackerScenario) -> int:
+        return len(scenario.runs)
+
+    def plan(self, scenario: StarTrackerScenario):
+        import functools
+
+        from flexsat.attitude.star_tracker import monte_carlo
+
+        tracker = build_tracker(scenario)
+        runs = []
+        for index, run in enumerate(scenario.runs):
+            identify = functools.partial(
+                monte_carlo, tracker, run.attitudes, run.seed, run.false_stars, run.missing_fraction
             )
-        except ValueError as exc:
-            raise ScenarioError([_locate(f"runs{_item(index, run.label)}", str(exc))]) from None
-    notes = (
-        f"Catalogue: {tracker.catalog.source}, {len(tracker.catalog)} stars, "
-        f"{len(tracker.index)} pairs within {np.degrees(tracker.index.max_angle):.3g}° in the "
-        "k-vector.",
-        "Accepted: >= min_triplets matched inter-star-angle triplets (triangles whose three "
-        "angles match the catalogue within the tolerance) in >= min_fields fields of view, "
-        "confirmed by one q-method attitude fitting every kept star within the tolerance "
-        "(seed 000 L280).",
-        "Error: body-axis rotation from the true to the estimated attitude; σ_QUEST: the "
-        "covariance of the q-method fit (Shuster & Oh 1981).",
-    )
-    return StarTrackerResult(
-        scenario, tuple(r.label for r in scenario.runs), tuple(runs), tracker, SOURCE, notes
-    )
+            runs.append((yield Run(run.label, identify, "runs" + item_path(index, run.label))))
+        notes = (
+            f"Catalogue: {tracker.catalog.source}, {len(tracker.catalog)} stars, "
+            f"{len(tracker.index)} pairs within {np.degrees(tracker.index.max_angle):.3g}° in "
+            "the k-vector.",
+            "Accepted: >= min_triplets matched inter-star-angle triplets (triangles whose three "
+            "angles match the catalogue within the tolerance) in >= min_fields fields of view, "
+            "confirmed by one q-method attitude fitting every kept star within the tolerance "
+            "(seed 000 L280).",
+            "Error: body-axis rotation from the true to the estimated attitude; σ_QUEST: the "
+            "covariance of the q-method fit (Shuster & Oh 1981).",
+        )
+        return StarTrackerResult(
+            scenario, tuple(r.label for r in scenario.runs), tuple(runs), tracker, SOURCE, notes
+        )
 
 
-__all__ = ["StarTrackerResult", "StarTrackerScenario", "build_tracker", "run_star_tracker"]
+__all__ = ["StarTrackerKind", "StarTrackerResult", "StarTrackerScenario", "build_tracker"]

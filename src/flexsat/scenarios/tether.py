@@ -24,7 +24,6 @@ misprinted sign of Eq. 15 (it diverges).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -32,9 +31,12 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from flexsat import limits
+from flexsat.input_checks import FieldError
+from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
-from flexsat.scenarios.errors import ScenarioError, _item, _locate
-from flexsat.scenarios.fields import _Document, _Section, check_unique_labels, quantity
+from flexsat.scenarios.errors import item_path
+from flexsat.scenarios.fields import Document, _Section, check_unique_labels, quantity
+from flexsat.scenarios.kind import Run, ScenarioKind
 
 #: the gains each law takes (seed 000 Eqs. 14-15, 18 and 20, 24-25)
 LAW_GAINS = {
@@ -125,7 +127,7 @@ class TetherRunSpec(_Section):
         return self
 
 
-class TetherScenario(_Document):
+class TetherScenario(Document):
     """A validated tether scenario (module docstring)."""
 
     kind: Literal["tether"]
@@ -146,12 +148,10 @@ class TetherScenario(_Document):
 
         for index, run in enumerate(self.runs):
             if run.final_length <= MIN_LENGTH * self.system.length:
-                raise ValueError(
-                    _locate(
-                        f"runs{_item(index, run.label)}.final_length",
-                        f"{run.final_length * 1e3:g} mm is below the collapse threshold "
-                        f"{MIN_LENGTH:g} L = {MIN_LENGTH * self.system.length:g} m of the model",
-                    )
+                raise FieldError(
+                    f"runs{item_path(index, run.label)}.final_length",
+                    f"{run.final_length * 1e3:g} mm is below the collapse threshold "
+                    f"{MIN_LENGTH:g} L = {MIN_LENGTH * self.system.length:g} m of the model",
                 )
         if self.initial.length_rate is not None and any(r.law == "rate" for r in self.runs):
             raise ValueError(
@@ -162,7 +162,7 @@ class TetherScenario(_Document):
 
 # -- running -------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class TetherResult:
+class TetherResult(ReportedResult):
     """The runs of a tether scenario.
 
     Attributes
@@ -175,6 +175,8 @@ class TetherResult:
     case_source : str
     notes : tuple of str
     """
+
+    report_title = "flexsat tether report"
 
     scenario: TetherScenario
     labels: tuple[str, ...]
@@ -257,64 +259,78 @@ class TetherResult:
         )
         return ds
 
+    def figures(self, folder, ds) -> list[str]:
+        from flexsat.report.tether import draw_figures
 
-def run_tether(
-    scenario: TetherScenario, progress: Callable[[str], None] | None = None
-) -> TetherResult:
-    """Run every law of the scenario from its initial state.
+        return draw_figures(ds, folder)
 
-    Raises
-    ------
-    ScenarioError
-        For a run whose tether collapses or whose integration fails (named by its label).
-    """
-    from flexsat.cases.tether import SOURCE, closed_loop
-    from flexsat.references import cite
+    def sections(self, ds, figures: list[str]) -> str:
+        from flexsat.report.tether import sections
 
-    scales = scenario.system.scales()
-    ini, sim = scenario.initial, scenario.simulation
-    tau = np.linspace(
-        0.0, 2 * np.pi * sim.orbits, int(round(sim.orbits * sim.samples_per_orbit)) + 1
+        return sections(self, self.metrics_records(), figures)
+
+
+def _one_run(spec: TetherRunSpec, scenario: TetherScenario, tau: np.ndarray):
+    """One run's :class:`~flexsat.dynamics.tether.ClosedLoopRun`: one call into
+    :func:`flexsat.cases.tether.closed_loop`, continuous or sampled (module docstring)."""
+    from flexsat.cases.tether import closed_loop
+
+    scales, ini = scenario.system.scales(), scenario.initial
+    x_si = np.array(
+        [ini.length, ini.pitch, ini.roll, ini.length_rate or 0.0, ini.pitch_rate, ini.roll_rate]
     )
-    runs = []
-    for index, spec in enumerate(scenario.runs):
-        if progress is not None:
-            progress(spec.label)
-        try:
-            x_si = np.array(
-                [
-                    ini.length,
-                    ini.pitch,
-                    ini.roll,
-                    ini.length_rate or 0.0,
-                    ini.pitch_rate,
-                    ini.roll_rate,
-                ]
-            )
-            runs.append(
-                closed_loop(
-                    spec.law,
-                    spec.gains,
-                    spec.final_length / scales.length,
-                    scales.state_from_si(x_si),
-                    tau,
-                    sim.integrator,
-                    spec.printed_sign,
-                    scales,
-                )
-            )
-        except ValueError as exc:
-            raise ScenarioError([_locate(f"runs{_item(index, spec.label)}", str(exc))]) from None
-    notes = (
-        "Straight massless tether, no aerodynamics, circular orbit (the paper's model, "
-        "L4281, L4321). Eq. 15 with the repaired sign −K3λφ' (L4395 prints +, which diverges).",
-        "Thrust index ∫|F̂|dτ over the run; impulse = index × mΩL "
-        f"({scales.impulse:.4g} N s here). Settling: the time after which |θ| <= 5° and λ stays "
-        "within 2 % of its change from the final length.",
-    )
-    return TetherResult(
-        scenario, tuple(r.label for r in scenario.runs), tuple(runs), scales, cite(SOURCE), notes
+    return closed_loop(
+        spec.law,
+        spec.gains,
+        spec.final_length / scales.length,
+        scales.state_from_si(x_si),
+        tau,
+        scenario.simulation.integrator,
+        spec.printed_sign,
+        scales,
     )
 
 
-__all__ = ["LAW_GAINS", "TetherResult", "TetherScenario", "run_tether"]
+class TetherKind(ScenarioKind):
+    """``kind: tether``: every law of the scenario from its initial state (module docstring);
+    a run whose tether collapses or whose integration fails is reported under its label."""
+
+    kind = "tether"
+    document = TetherScenario
+
+    def steps(self, scenario: TetherScenario) -> int:
+        return len(scenario.runs)
+
+    def plan(self, scenario: TetherScenario):
+        import functools
+
+        from flexsat.cases.tether import SOURCE
+        from flexsat.references import cite
+
+        scales, sim = scenario.system.scales(), scenario.simulation
+        tau = np.linspace(
+            0.0, 2 * np.pi * sim.orbits, int(round(sim.orbits * sim.samples_per_orbit)) + 1
+        )
+        runs = []
+        for index, spec in enumerate(scenario.runs):
+            task = functools.partial(_one_run, spec, scenario, tau)
+            runs.append((yield Run(spec.label, task, "runs" + item_path(index, spec.label))))
+        notes = (
+            "Straight massless tether, no aerodynamics, circular orbit (the paper's model, "
+            "L4281, L4321). Eq. 15 with the repaired sign −K3λφ' (L4395 prints +, which "
+            "diverges).",
+            "Thrust index ∫|F̂|dτ over the run; impulse = index × mΩL "
+            f"({scales.impulse:.4g} N s here). Settling: the time after which |θ| <= 5° and λ "
+            "stays within 2 % of its change from the final length.",
+        )
+        return TetherResult(
+            scenario,
+            tuple(r.label for r in scenario.runs),
+            tuple(runs),
+            scales,
+            cite(SOURCE),
+            notes,
+        )
+
+
+__all__ = ["LAW_GAINS", "TetherKind", "TetherResult", "TetherScenario"]

@@ -29,6 +29,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict
 
 from flexsat.control import Controller
+from flexsat.input_checks import FieldError
 from flexsat.scenarios import quantity
 
 #: how far (in control periods) a switching time may sit from a sample and still count as on it
@@ -72,14 +73,14 @@ class BangOffBang(Controller):
             n = np.asarray(value, float) / dt
             whole = np.round(n)
             if not np.all(np.isfinite(n)) or np.any(np.abs(n - whole) > SAMPLE_TOLERANCE):
-                raise ValueError(
-                    f"{name}: must be a whole number of control periods ({dt:g} s), got {value!r}"
+                raise FieldError(
+                    name, f"must be a whole number of control periods ({dt:g} s), got {value!r}"
                 )
             if np.any(whole < least):
-                raise ValueError(f"{name}: must be at least {least} control period(s)")
+                raise FieldError(name, f"must be at least {least} control period(s)")
             samples[name] = whole.astype(int)
         if not np.all(np.isfinite(self.force)):
-            raise ValueError(f"force: must be finite, got {force!r}")
+            raise FieldError("force", f"must be finite, got {force!r}")
         self.n_pulse, self.n_coast = samples["pulse_width"], samples["coast"]
         self.dt = float(dt)
         self.writes = (channel,)

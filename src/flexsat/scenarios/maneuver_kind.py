@@ -1,0 +1,208 @@
+"""The maneuver kind (``kind: maneuver``): build the case, the controllers and the
+configuration, refuse a run beyond :mod:`flexsat.limits` (stage 2 of the validation), then
+simulate each run."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from flexsat.cases import get_case
+from flexsat.control import Controller
+from flexsat.dynamics.hub_appendage import HubAppendage
+from flexsat.references import cite
+from flexsat.scenarios.datasets import SimulatedRuns
+from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
+from flexsat.scenarios.fields import _given
+from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
+from flexsat.scenarios.laws import _LAWS, _CaseContext
+from flexsat.scenarios.maneuver import GainsSpec, PolesSpec, RunSpec, Scenario
+from flexsat.sim import SimConfig
+from flexsat.sim.engine import check_resources
+
+
+@dataclass(frozen=True)
+class ScenarioPlan:
+    """A fully validated maneuver scenario, ready to run.
+
+    Attributes
+    ----------
+    scenario : Scenario
+    case : object
+        The built case (e.g. :class:`flexsat.cases.tamu.TamuCase`).
+    model : HubAppendage
+    config : SimConfig
+    controllers : dict of str to Controller
+        One controller per run, by label, in the scenario's order.
+    """
+
+    scenario: Scenario
+    case: Any
+    model: HubAppendage
+    config: SimConfig
+    controllers: dict[str, Controller]
+
+
+def _build_case(scenario: Scenario):
+    """(case, model); a refused value is placed in ``model`` or ``case_overrides`` by the
+    field its error names."""
+    try:
+        case = get_case(scenario.case).builder(**scenario.case_parameters)
+        return case, case.model()
+    except ValueError as exc:
+        field = getattr(exc, "field", None)
+        if field is not None and field in _given(scenario.model):
+            raise ScenarioError([locate("model", exc)]) from None
+        if field is not None and field in scenario.case_overrides:
+            raise ScenarioError([locate("case_overrides", exc)]) from None
+        raise ScenarioError([Problem("case_overrides", str(exc))]) from None
+    except (ArithmeticError, RuntimeError) as exc:
+        # the model's numerics (overflow, root finding) fail on values far outside a physical
+        # range that the case's own rules do not bound
+        raise ScenarioError(
+            [
+                Problem(
+                    "case_overrides",
+                    f"the {scenario.case} model cannot be built from these values "
+                    f"({type(exc).__name__}: {exc}); give physically sensible values",
+                )
+            ]
+        ) from None
+
+
+def _build_controller(index: int, run: RunSpec, ctx: _CaseContext) -> Controller:
+    """The run's controller; a refused value is placed in the run's reference, gains or poles
+    by the field its error names."""
+    path = "runs" + item_path(index, run.label)
+    reference = None
+    if run.reference is not None:
+        try:
+            reference = run.reference.build(ctx.angle, ctx.reference_inertia)
+        except ValueError as exc:
+            raise ScenarioError([locate(path + ".reference", exc)]) from None
+    try:
+        return _LAWS[run.law].build(run, ctx, reference)
+    except ValueError as exc:
+        field = getattr(exc, "field", None)
+        section = next(
+            (
+                name
+                for name, spec in (("gains", GainsSpec), ("poles", PolesSpec))
+                if field in spec.model_fields
+            ),
+            None,
+        )
+        raise ScenarioError([locate(f"{path}.{section}" if section else path, exc)]) from None
+    except (ArithmeticError, RuntimeError) as exc:
+        raise ScenarioError(
+            [
+                Problem(
+                    path,
+                    f"the {run.law} law cannot be designed from these values "
+                    f"({type(exc).__name__}: {exc})",
+                )
+            ]
+        ) from None
+
+
+def _collect(problems: list, build, *args):
+    """``build(*args)``, or None with its ScenarioError problems appended to ``problems``."""
+    try:
+        return build(*args)
+    except ScenarioError as exc:
+        problems.extend(exc.problems)
+        return None
+
+
+def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
+    """Validate what needs the case (stage 2) and build the model and the controllers.
+
+    Raises
+    ------
+    ScenarioError
+        Listing every problem: case parameters, references, controller gains, and a run beyond
+        the limits of :mod:`flexsat.limits` (substeps, integrator steps, memory).
+    """
+    problems: list = []
+    built = _collect(problems, _build_case, scenario)
+    controllers: dict[str, Controller] = {}
+    if built is not None:
+        case, model = built
+        ctx = _CaseContext(
+            scenario.maneuver.angle,
+            case.reference_inertia,
+            model.appendage_inertia,
+            int(model.n_appendages),
+            model,
+            scenario.sim_config().dt,
+        )
+        for index, run in enumerate(scenario.runs):
+            controllers[run.label] = _collect(problems, _build_controller, index, run, ctx)
+    config = scenario.sim_config()
+    if built is not None and not problems:
+        _collect(problems, _check_resources, scenario, model, config, controllers)
+    if problems:
+        raise ScenarioError(problems)
+    return ScenarioPlan(scenario, case, model, config, controllers)
+
+
+def _check_resources(scenario: Scenario, model, config: SimConfig, controllers: dict) -> None:
+    """Refuse runs beyond :mod:`flexsat.limits`; every run's history is kept until the report
+    is written, so the memory estimate counts the cases of all runs together. The refused
+    input is reported at the document's field it comes from (:attr:`Scenario.CONFIG_PATHS`)."""
+    try:
+        check_resources(model, config, sum(c.n_cases for c in controllers.values()))
+    except ValueError as exc:
+        path = Scenario.CONFIG_PATHS.get(getattr(exc, "field", None))
+        raise ScenarioError(
+            [Problem(path, exc.rule) if path else Problem("simulation", str(exc))]
+        ) from None
+
+
+@dataclass(frozen=True)
+class ManeuverResult(SimulatedRuns):
+    """The runs of a maneuver scenario (:class:`~flexsat.scenarios.datasets.SimulatedRuns`)."""
+
+    def figures(self, folder, ds) -> list[str]:
+        from flexsat.report.maneuver import draw_figures
+
+        return draw_figures(ds, folder)
+
+    def sections(self, ds, figures: list[str]) -> str:
+        from flexsat.report.maneuver import sections
+
+        return sections(self.metrics_records(), figures)
+
+
+class ManeuverKind(ScenarioKind):
+    """``kind: maneuver`` (the default): a case's hub slewed under one or more control laws
+    (:class:`~flexsat.scenarios.maneuver.Scenario`), one simulation per run."""
+
+    kind = "maneuver"
+    document = Scenario
+
+    def steps(self, scenario: Scenario) -> int:
+        return len(scenario.runs)
+
+    def plan(self, scenario: Scenario):
+        prepared = prepare_scenario(scenario)
+        results = []
+        for index, (label, controller) in enumerate(prepared.controllers.items()):
+            results.append(
+                (
+                    yield Run(
+                        label,
+                        Simulation(prepared.model, controller, prepared.config),
+                        "runs" + item_path(index, label),
+                    )
+                )
+            )
+        return ManeuverResult(
+            scenario,
+            tuple(prepared.controllers),
+            tuple(results),
+            cite(get_case(scenario.case).source),
+        )
+
+
+__all__ = ["ManeuverKind", "ManeuverResult", "ScenarioPlan", "prepare_scenario"]
