@@ -23,6 +23,7 @@ from flexsat.dynamics.plant import find_channel
 from flexsat.input_checks import require_count
 from flexsat.sim.disturbances import impulses_at_samples
 from flexsat.sim.sensors import least_squares_derivative_weights
+from flexsat.sim.step import quantised, rate_limited, saturated
 from flexsat.units import to_si_array
 
 
@@ -114,9 +115,9 @@ class ChannelSensor:
         if noisy:
             v = v + self.noise * noise
         if quantized:
-            v = self.quantum * np.round(v / self.quantum)
+            v = quantised(v, self.quantum)
         if ranged:
-            v = np.clip(v, -self.range, self.range)
+            v = saturated(v, self.range)
         return v
 
 
@@ -167,14 +168,12 @@ class ChannelActuator:
     def apply(self, command: np.ndarray, previous, dt: float):
         """(applied input, limited command) of a bound actuator (:meth:`bind`); ``previous``
         is the last limited command (None at the first sample: the rate limit starts there)."""
-        limited, saturated, biased = self._acts
+        limited, clipped, biased = self._acts
         c = command
-        # maximum then minimum: np.clip's result, without its dispatch cost on small arrays
         if limited and previous is not None:
-            step = self.rate_limit * dt
-            c = np.minimum(np.maximum(c, previous - step), previous + step)
-        if saturated:
-            c = np.minimum(np.maximum(c, -self.saturation), self.saturation)
+            c = rate_limited(c, previous, self.rate_limit * dt)
+        if clipped:
+            c = saturated(c, self.saturation)
         u = self.scale * c
         return (u + self.bias if biased else u), c
 

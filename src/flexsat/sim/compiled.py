@@ -45,6 +45,9 @@ from flexsat.sim.disturbances import BearingFriction
 from flexsat.sim.instruments import stacked_output_matrices
 from flexsat.sim.integrators import ExponentialStepper, ModalPropagator, modal_coordinates
 from flexsat.sim.kernels import (
+    Loop,
+    Records,
+    Reductions,
     closed_loop,
     closed_loop_parallel,
     closed_loop_reduced,
@@ -451,10 +454,10 @@ class _Args:
         cb_ = c1 - c0
         O = np.empty((cb_, 0, 0)) if O is None else O
         En = np.empty((cb_, 0)) if En is None else En
-        kernel(*self.inputs(c0, c1, seeds, n_t), X, Y, Ucmd, U, D, F, O, En, stop)
+        kernel(self.inputs(c0, c1, seeds, n_t), Records(X, Y, Ucmd, U, D, F, O, En, stop))
 
-    def inputs(self, c0: int, c1: int, seeds, n_t: int) -> tuple:
-        """The kernel's input arguments (:data:`~flexsat.sim.kernels.ARGUMENTS`) for cases
+    def inputs(self, c0: int, c1: int, seeds, n_t: int) -> Loop:
+        """The kernel's parameters (:class:`~flexsat.sim.kernels.Loop`) for cases
         [c0, c1) over ``n_t`` samples: the noise streams drawn, the per-case arrays sliced."""
 
         def cases(a, axis=0):  # a per-case array's block, a shared one as is
@@ -479,7 +482,7 @@ class _Args:
         Ak, Bk, Ck, Dk, y_ref, u_ff, K0 = self.law
         from flexsat.sim.engine import DIVERGENCE_BOUND
 
-        return (
+        return Loop(
             self.x0[c0:c1],
             cases(self.E),
             self.T is not None,
@@ -801,18 +804,20 @@ def run_reduced(
         c1 = min(nc, c0 + size)
         kernel = closed_loop_reduced_parallel if c1 - c0 >= PARALLEL_CASES else closed_loop_reduced
         kernel(
-            *a.inputs(c0, c1, seeds, n_t),
-            red_c[c0:c1],
-            red_tab,
-            np.ascontiguousarray(rate_ref[None, :, c0:c1]),
-            direction[c0:c1].copy(),
-            red_band,
-            snap_k[c0:c1],
-            red[c0:c1],
-            upeak[c0:c1],
-            snapO[c0:c1],
-            snapE[c0:c1],
-            stop[c0:c1],
+            a.inputs(c0, c1, seeds, n_t),
+            Reductions(
+                red_c[c0:c1],
+                red_tab,
+                np.ascontiguousarray(rate_ref[None, :, c0:c1]),
+                direction[c0:c1].copy(),
+                red_band,
+                snap_k[c0:c1],
+                red[c0:c1],
+                upeak[c0:c1],
+                snapO[c0:c1],
+                snapE[c0:c1],
+                stop[c0:c1],
+            ),
         )
     if (stop >= 0).any():
         return None
