@@ -53,7 +53,12 @@ from flexsat.sim.kernels import (
     closed_loop_reduced,
     closed_loop_reduced_parallel,
 )
-from flexsat.sim.metrics import METRIC_UNITS
+from flexsat.sim.metrics import (
+    METRIC_UNITS,
+    maneuver_direction,
+    metrics_from_reductions,
+    reference_end_sample,
+)
 from flexsat.sim.recording import Recorder, SimResult
 from flexsat.sim.sensors import least_squares_derivative_weights
 
@@ -778,9 +783,7 @@ def run_reduced(
     if not a.lean or a.inertia is None or not a.Q.shape[0] or refs is None:
         return None
     target = np.broadcast_to(np.asarray(controller.target, float), (nc,))
-    theta0 = np.broadcast_to(np.asarray(theta0, float), (nc,))
-    direction = np.sign(target - theta0)
-    direction = np.where(direction == 0, 1.0, direction)
+    direction = maneuver_direction(np.broadcast_to(np.asarray(theta0, float), (nc,)), target)
     # θ − θ_f, θ' − θ'_ref (the reference's rate table), the tip deflection
     red_c = np.zeros((nc, 3))
     red_c[:, 0] = target
@@ -791,7 +794,7 @@ def run_reduced(
     k_end = np.full(nc, n_t - 1, dtype=np.int64)
     if ref is not None:
         ref_end = np.broadcast_to(np.asarray(ref.end_time, float), (nc,))
-        k_end = np.minimum(np.searchsorted(t, ref_end - 1e-12), n_t - 1)
+        k_end = reference_end_sample(t, ref_end)
     snap_k = np.ascontiguousarray(np.column_stack([np.full(nc, n_t - 1), k_end]), dtype=np.int64)
     m_u = plant.input_slices[reduced_input].start + 1
     red = np.empty((nc, 3, 3))
@@ -825,16 +828,16 @@ def run_reduced(
     np.square(vib, out=vib)
     vib *= -0.5 / a.inertia
     vib += snapE
-    last = red[:, 0, 2].astype(np.int64)  # 1 + the last sample outside the band
-    metrics = {
-        "settling_time_s": np.where(last != n_t, t[np.minimum(last, n_t - 1)], np.nan),
-        "overshoot_deg": np.degrees(np.maximum(red[:, 0, 1], 0.0)),
-        "peak_torque_Nm": upeak[:, m_u - 1].copy(),
-        "residual_energy_J": vib[:, 0].copy(),
-        "peak_tip_deflection_m": red[:, 2, 0].copy(),
-        "peak_rate_error_deg_s": np.degrees(red[:, 1, 0]),
-        "residual_energy_at_T_J": (vib[:, 1].copy() if ref is not None else np.full(nc, np.nan)),
-    }
+    metrics = metrics_from_reductions(
+        t,
+        red[:, 0, 2],
+        red[:, 0, 1],
+        upeak[:, m_u - 1].copy(),
+        vib[:, 0].copy(),
+        red[:, 2, 0].copy(),
+        red[:, 1, 0],
+        vib[:, 1].copy() if ref is not None else None,
+    )
     data = {k: (("case",), v, {"units": METRIC_UNITS[k]}) for k, v in metrics.items()}
     ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}), "case": np.arange(nc)})
     ds.attrs.update(

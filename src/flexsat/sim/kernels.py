@@ -69,6 +69,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
+from flexsat.sim.metrics import outside_term, past_term, peak_term
 from flexsat.sim.step import actuated, friction_torque, quantised, saturated
 
 __all__ = [
@@ -866,14 +867,17 @@ def _lanes(c0, nl, loop, reductions):
                 v = ov[j, l] - redc[j, l]
                 if tab >= 0:
                     v = v - red_t[tab, _ci(red_t.shape[1], k), ct[l]]
-                a = abs(v)
+                # running maxima of the metrics' per-sample terms (flexsat.sim.metrics)
                 c = cl[l]
+                a = peak_term(v)
                 if a > red[c, j, 0]:
                     red[c, j, 0] = a
-                if rdir[l] * v > red[c, j, 1]:
-                    red[c, j, 1] = rdir[l] * v
-                if a > band:
-                    red[c, j, 2] = k + 1
+                a = past_term(v, rdir[l])
+                if a > red[c, j, 1]:
+                    red[c, j, 1] = a
+                a = outside_term(v, band, k)
+                if a > red[c, j, 2]:
+                    red[c, j, 2] = a
         for i in range(n_snap):
             for l in range(LANES):
                 if snapc[i, l] == k:
@@ -893,8 +897,8 @@ def _lanes(c0, nl, loop, reductions):
             for l in range(LANES):
                 u = actuated(ucmd[i, l], actv[i, 0, l], actv[i, 1, l])
                 d = dstdv[i, l] * noise[cl[l], k, slot] if slot >= 0 else 0.0
-                if i < upeak.shape[1] and abs(u) > upeak[cl[l], i]:
-                    upeak[cl[l], i] = abs(u)
+                if i < upeak.shape[1] and peak_term(u) > upeak[cl[l], i]:
+                    upeak[cl[l], i] = peak_term(u)
                 w[i, l] = u + d
         if k == n_t - 1:
             break
