@@ -338,6 +338,17 @@ def resolve_channels(plant, config) -> tuple[dict, dict, dict]:
     return sensors, actuators, disturbances
 
 
+def input_impulses(disturbances: dict, slices: dict, m: int, n_t: int, dt: float) -> dict:
+    """The impulses of the channels' disturbances on the sample grid: {sample: J (m,)}, the
+    impulses of every input channel at that sample (SI), summed where two fall on
+    one sample; both loops apply Δx = B J there."""
+    impulses = {}
+    for k, d in disturbances.items():
+        for i, J in d.impulses_at_samples(n_t, dt).items():
+            impulses.setdefault(i, np.zeros(m))[slices[k]] += J
+    return impulses
+
+
 def noise_columns(plant) -> dict[str, slice]:
     """Columns of each noise channel in a case's stream (the plant's ``noise_channels``)."""
     out, start = {}, 0
@@ -368,6 +379,7 @@ __all__ = [
     "ChannelActuator",
     "ChannelDisturbance",
     "ChannelSensor",
+    "input_impulses",
     "noise_column",
     "noise_columns",
     "resolve_channels",

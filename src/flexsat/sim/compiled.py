@@ -40,7 +40,7 @@ import numpy as np
 import xarray as xr
 
 from flexsat.dynamics.dispersion import DispersedPlant
-from flexsat.sim.channels import noise_column, noise_columns
+from flexsat.sim.channels import input_impulses, noise_column, noise_columns
 from flexsat.sim.disturbances import BearingFriction
 from flexsat.sim.instruments import stacked_output_matrices
 from flexsat.sim.integrators import ExponentialStepper, ModalPropagator, modal_coordinates
@@ -306,10 +306,7 @@ class _Args:
         self.substeps = int(substeps)
         # impulses: Δx = J B (the Python loop's ``impulses[k] @ Bt``), ascending samples
         Bt = np.swapaxes(B, -1, -2)
-        imp = {}
-        for k, d in disturbances.items():
-            for i, J in d.impulses_at_samples(n_t, dt).items():
-                imp.setdefault(i, np.zeros(m))[slices[k]] += J
+        imp = input_impulses(disturbances, slices, m, n_t, dt)
         keys = sorted(imp)
         self.imp_k = np.array(keys, dtype=np.int64)
         self.imp_dx = _c(

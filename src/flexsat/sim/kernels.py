@@ -57,6 +57,15 @@ energy at chosen samples (the metrics of a sweep, issue 13). It takes the cases 
 lane performing the scalar operations of :func:`closed_loop` in the same order: its numbers
 are those the history loop records, bit for bit, whatever the grouping.
 
+The kernels are plain numba functions on arrays: their parameters come as one record,
+:class:`Loop` (a named tuple of arrays and scalars, numba-typed field by field: the attribute
+reads compile to the same loads as positional arguments), their outputs as :class:`Records`
+or :class:`Reductions`; :mod:`flexsat.sim.compiled` builds them from the plant, the law and
+the channels. The formulas of a step's pieces (quantiser, saturation, actuator, bearing
+friction: :mod:`flexsat.sim.step`) and of the maneuver metrics' per-sample terms
+(:mod:`flexsat.sim.metrics`) are the plain functions the Python loop and the post-hoc metrics
+run, compiled here.
+
 The kernels use numba's numpy error model: no zero-division checks in the loop (the divisors
 are a positive quantum, a positive smoothing speed and the FIR length, validated upstream).
 """
@@ -514,6 +523,9 @@ def closed_loop(loop: Loop, records: Records) -> None:
 
     Parameters
     ----------
+    loop : Loop                 the loop's parameters, the fields below
+    records : Records           the arrays written, the fields after ``Q`` below
+
     x0 : (C, n)                 initial states
     E : (Cp, n, n) or (Cp, n, 2)
                                 e^{hA}, h = dt / substeps; with ``block_diagonal`` (n even)
