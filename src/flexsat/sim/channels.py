@@ -100,7 +100,8 @@ class ChannelSensor:
             (
                 bool(np.any(out.bias)),
                 bool(np.any(out.noise)),
-                bool(np.any(out.quantum)),
+                # 2: some elements (cases) without a quantiser, 1: all with one
+                0 if not np.any(out.quantum) else 1 if np.all(out.quantum > 0) else 2,
                 bool(np.any(np.isfinite(out.range))),
             ),
         )
@@ -114,8 +115,11 @@ class ChannelSensor:
             v = v + self.bias
         if noisy:
             v = v + self.noise * noise
-        if quantized:
+        if quantized == 1:
             v = quantised(v, self.quantum)
+        elif quantized:  # a zero quantum reads the value itself (as the compiled loop does)
+            q = self.quantum
+            v = np.where(q > 0, quantised(v, np.where(q > 0, q, 1.0)), v)
         if ranged:
             v = saturated(v, self.range)
         return v
