@@ -52,6 +52,7 @@ from flexsat.sim.integrators import (  # noqa: E402
 )
 from flexsat.sim.kernels import (  # noqa: E402
     ARGUMENTS,
+    Loop,
     allocate_records,
     closed_loop,
     closed_loop_parallel,
@@ -197,7 +198,7 @@ def run_kernel(args, parallel=False, record_states=False, rec=None):
     n_t, (nc, n) = args["y_ref"].shape[0], args["x0"].shape
     if rec is None:
         rec = allocate_records(n_t, nc, n, 1, 3, record_states)
-    (closed_loop_parallel if parallel else closed_loop)(*(args[k] for k in ARGUMENTS), *rec)
+    (closed_loop_parallel if parallel else closed_loop)(Loop(*(args[k] for k in ARGUMENTS)), rec)
     return rec
 
 
@@ -444,7 +445,7 @@ def panels_problem():
 
 def run_panels_kernel(args, n_t):
     rec = allocate_records(n_t, 1, args["x0"].shape[1], 3, 6, False)
-    closed_loop(*(args[k] for k in ARGUMENTS), *rec)
+    closed_loop(Loop(*(args[k] for k in ARGUMENTS)), rec)
     return rec
 
 

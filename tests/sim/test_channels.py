@@ -75,6 +75,14 @@ def test_sensor_adds_its_bias_and_scales_the_given_standard_normals():
     np.testing.assert_array_equal(s.measure(v, n), v + -0.05 + 0.2 * n)
 
 
+def test_a_zero_quantum_element_reads_the_value_itself():
+    """A quantum per case with a zero (a case without an encoder): that case's reading is the
+    value itself, the others' the quantised one (as the compiled loop's q > 0 test), not NaN."""
+    s = ChannelSensor(quantum=np.array([0.25, 0.0])).bind(Channel("position", "m"))
+    v = np.array([0.3, 0.3])
+    assert np.array_equal(s.measure(v, None), [0.25, 0.3])
+
+
 def test_sensor_order_is_bias_and_noise_then_quantum_then_range():
     """y = sat(Q(v + bias + noise·n)): the quantum acts on the biased noisy value and the range
     clips the quantized one."""

@@ -18,6 +18,7 @@ from flexsat.sim.integrators import phi_products
 from flexsat.sim.kernels import (
     ARGUMENTS,
     RECORDS,
+    Loop,
     allocate_records,
     closed_loop,
     closed_loop_parallel,
@@ -153,7 +154,7 @@ def run_kernel(prob, parallel=False, record_states=True):
     m, p = prob["P1u"].shape[2], prob["Cm"].shape[1]
     rec = allocate_records(n_t, nc, n, m, p, record_states, prob["Co"].shape[1], True)
     fn = closed_loop_parallel if parallel else closed_loop
-    fn(*(prob[k] for k in ARGUMENTS), *rec)
+    fn(Loop(*(prob[k] for k in ARGUMENTS)), rec)
     return dict(zip(RECORDS, rec))
 
 

@@ -80,7 +80,7 @@ def settled_at(t, after_last_outside) -> np.ndarray:
     :func:`settling_time` and the compiled loop, which accumulates that index sample by sample
     instead of keeping the history (:func:`flexsat.sim.compiled.run_reduced`)."""
     t = np.asarray(t, dtype=float)
-    k = np.asarray(after_last_outside)
+    k = np.asarray(after_last_outside).astype(np.int64)  # the compiled loop keeps it as a float
     return np.where(k >= t.size, np.nan, t[np.minimum(k, t.size - 1)])
 
 

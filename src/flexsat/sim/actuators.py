@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexsat.input_checks import require_positive, set_si
+from flexsat.sim.step import actuated
 from flexsat.units import to_si_array
 
 
@@ -38,4 +39,4 @@ class TorqueActuator:
         set_si(self, "torque_constant_ratio", require_positive, "")
 
     def __call__(self, command: np.ndarray) -> np.ndarray:
-        return self.torque_constant_ratio * np.clip(command, -self.saturation, self.saturation)
+        return actuated(command, self.saturation, self.torque_constant_ratio)

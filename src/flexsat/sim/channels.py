@@ -30,6 +30,7 @@ from flexsat.dynamics.plant import Channel, find_channel
 from flexsat.input_checks import require_count
 from flexsat.sim.disturbances import impulses_at_samples
 from flexsat.sim.sensors import least_squares_derivative_weights
+from flexsat.sim.step import quantised, rate_limited, saturated
 from flexsat.units import to_si_array
 
 
@@ -118,7 +119,8 @@ class ChannelSensor:
             (
                 bool(np.any(out.bias)),
                 bool(np.any(out.noise)),
-                bool(np.any(out.quantum)),
+                # 2: some elements (cases) without a quantiser, 1: all with one
+                0 if not np.any(out.quantum) else 1 if np.all(out.quantum > 0) else 2,
                 bool(np.any(np.isfinite(out.range))),
             ),
         )
@@ -132,10 +134,13 @@ class ChannelSensor:
             v = v + self.bias
         if noisy:
             v = v + self.noise * noise
-        if quantized:
-            v = self.quantum * np.round(v / self.quantum)
+        if quantized == 1:
+            v = quantised(v, self.quantum)
+        elif quantized:  # a zero quantum reads the value itself (as the compiled loop does)
+            q = self.quantum
+            v = np.where(q > 0, quantised(v, np.where(q > 0, q, 1.0)), v)
         if ranged:
-            v = np.clip(v, -self.range, self.range)
+            v = saturated(v, self.range)
         return v
 
 
@@ -189,14 +194,12 @@ class ChannelActuator:
     def apply(self, command: np.ndarray, previous, dt: float):
         """(applied input, limited command) of a bound actuator (:meth:`bind`); ``previous``
         is the last limited command (None at the first sample: the rate limit starts there)."""
-        limited, saturated, biased = self._acts
+        limited, clipped, biased = self._acts
         c = command
-        # maximum then minimum: np.clip's result, without its dispatch cost on small arrays
         if limited and previous is not None:
-            step = self.rate_limit * dt
-            c = np.minimum(np.maximum(c, previous - step), previous + step)
-        if saturated:
-            c = np.minimum(np.maximum(c, -self.saturation), self.saturation)
+            c = rate_limited(c, previous, self.rate_limit * dt)
+        if clipped:
+            c = saturated(c, self.saturation)
         u = self.scale * c
         return (u + self.bias if biased else u), c
 
@@ -368,6 +371,17 @@ def resolve_channels(plant, config) -> tuple[dict, dict, dict]:
     return sensors, actuators, disturbances
 
 
+def input_impulses(disturbances: dict, slices: dict, m: int, n_t: int, dt: float) -> dict:
+    """The impulses of the channels' disturbances on the sample grid: {sample: J (m,)}, the
+    impulses of every input channel at that sample (SI), summed where two fall on
+    one sample; both loops apply Δx = B J there."""
+    impulses = {}
+    for k, d in disturbances.items():
+        for i, J in d.impulses_at_samples(n_t, dt).items():
+            impulses.setdefault(i, np.zeros(m))[slices[k]] += J
+    return impulses
+
+
 def noise_columns(plant) -> dict[str, slice]:
     """Columns of each noise channel in a case's stream (the plant's ``noise_channels``)."""
     out, start = {}, 0
@@ -398,6 +412,7 @@ __all__ = [
     "ChannelActuator",
     "ChannelDisturbance",
     "ChannelSensor",
+    "input_impulses",
     "noise_column",
     "noise_columns",
     "resolve_channels",

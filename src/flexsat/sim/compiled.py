@@ -39,19 +39,26 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from flexsat.analysis.settling import settled_at
 from flexsat.dynamics.dispersion import DispersedPlant
-from flexsat.sim.channels import noise_column, noise_columns
+from flexsat.sim.channels import input_impulses, noise_column, noise_columns
 from flexsat.sim.disturbances import BearingFriction
 from flexsat.sim.instruments import stacked_output_matrices
 from flexsat.sim.integrators import ExponentialStepper, ModalPropagator, modal_coordinates
 from flexsat.sim.kernels import (
+    Loop,
+    Records,
+    Reductions,
     closed_loop,
     closed_loop_parallel,
     closed_loop_reduced,
     closed_loop_reduced_parallel,
 )
-from flexsat.sim.metrics import METRIC_UNITS
+from flexsat.sim.metrics import (
+    METRIC_UNITS,
+    maneuver_direction,
+    metrics_from_reductions,
+    reference_end_sample,
+)
 from flexsat.sim.recording import Recorder, SimResult
 from flexsat.sim.sensors import least_squares_derivative_weights
 
@@ -299,10 +306,7 @@ class _Args:
         self.substeps = int(substeps)
         # impulses: Δx = J B (the Python loop's ``impulses[k] @ Bt``), ascending samples
         Bt = np.swapaxes(B, -1, -2)
-        imp = {}
-        for k, d in disturbances.items():
-            for i, J in d.impulses_at_samples(n_t, dt).items():
-                imp.setdefault(i, np.zeros(m))[slices[k]] += J
+        imp = input_impulses(disturbances, slices, m, n_t, dt)
         keys = sorted(imp)
         self.imp_k = np.array(keys, dtype=np.int64)
         self.imp_dx = _c(
@@ -452,10 +456,10 @@ class _Args:
         cb_ = c1 - c0
         O = np.empty((cb_, 0, 0)) if O is None else O
         En = np.empty((cb_, 0)) if En is None else En
-        kernel(*self.inputs(c0, c1, seeds, n_t), X, Y, Ucmd, U, D, F, O, En, stop)
+        kernel(self.inputs(c0, c1, seeds, n_t), Records(X, Y, Ucmd, U, D, F, O, En, stop))
 
-    def inputs(self, c0: int, c1: int, seeds, n_t: int) -> tuple:
-        """The kernel's input arguments (:data:`~flexsat.sim.kernels.ARGUMENTS`) for cases
+    def inputs(self, c0: int, c1: int, seeds, n_t: int) -> Loop:
+        """The kernel's parameters (:class:`~flexsat.sim.kernels.Loop`) for cases
         [c0, c1) over ``n_t`` samples: the noise streams drawn, the per-case arrays sliced."""
 
         def cases(a, axis=0):  # a per-case array's block, a shared one as is
@@ -480,7 +484,7 @@ class _Args:
         Ak, Bk, Ck, Dk, y_ref, u_ff, K0 = self.law
         from flexsat.sim.engine import DIVERGENCE_BOUND
 
-        return (
+        return Loop(
             self.x0[c0:c1],
             cases(self.E),
             self.T is not None,
@@ -776,9 +780,7 @@ def run_reduced(
     if not a.lean or a.inertia is None or not a.Q.shape[0] or refs is None:
         return None
     target = np.broadcast_to(np.asarray(controller.target, float), (nc,))
-    theta0 = np.broadcast_to(np.asarray(theta0, float), (nc,))
-    direction = np.sign(target - theta0)
-    direction = np.where(direction == 0, 1.0, direction)
+    direction = maneuver_direction(np.broadcast_to(np.asarray(theta0, float), (nc,)), target)
     # θ − θ_f, θ' − θ'_ref (the reference's rate table), the tip deflection
     red_c = np.zeros((nc, 3))
     red_c[:, 0] = target
@@ -789,7 +791,7 @@ def run_reduced(
     k_end = np.full(nc, n_t - 1, dtype=np.int64)
     if ref is not None:
         ref_end = np.broadcast_to(np.asarray(ref.end_time, float), (nc,))
-        k_end = np.minimum(np.searchsorted(t, ref_end - 1e-12), n_t - 1)
+        k_end = reference_end_sample(t, ref_end)
     snap_k = np.ascontiguousarray(np.column_stack([np.full(nc, n_t - 1), k_end]), dtype=np.int64)
     m_u = plant.input_slices[reduced_input].start + 1
     red = np.empty((nc, 3, 3))
@@ -802,18 +804,20 @@ def run_reduced(
         c1 = min(nc, c0 + size)
         kernel = closed_loop_reduced_parallel if c1 - c0 >= PARALLEL_CASES else closed_loop_reduced
         kernel(
-            *a.inputs(c0, c1, seeds, n_t),
-            red_c[c0:c1],
-            red_tab,
-            np.ascontiguousarray(rate_ref[None, :, c0:c1]),
-            direction[c0:c1].copy(),
-            red_band,
-            snap_k[c0:c1],
-            red[c0:c1],
-            upeak[c0:c1],
-            snapO[c0:c1],
-            snapE[c0:c1],
-            stop[c0:c1],
+            a.inputs(c0, c1, seeds, n_t),
+            Reductions(
+                red_c[c0:c1],
+                red_tab,
+                np.ascontiguousarray(rate_ref[None, :, c0:c1]),
+                direction[c0:c1].copy(),
+                red_band,
+                snap_k[c0:c1],
+                red[c0:c1],
+                upeak[c0:c1],
+                snapO[c0:c1],
+                snapE[c0:c1],
+                stop[c0:c1],
+            ),
         )
     if (stop >= 0).any():
         return None
@@ -821,16 +825,16 @@ def run_reduced(
     np.square(vib, out=vib)
     vib *= -0.5 / a.inertia
     vib += snapE
-    last = red[:, 0, 2].astype(np.int64)  # 1 + the last sample outside the band
-    metrics = {
-        "settling_time_s": settled_at(t, last),
-        "overshoot_deg": np.degrees(np.maximum(red[:, 0, 1], 0.0)),
-        "peak_torque_Nm": upeak[:, m_u - 1].copy(),
-        "residual_energy_J": vib[:, 0].copy(),
-        "peak_tip_deflection_m": red[:, 2, 0].copy(),
-        "peak_rate_error_deg_s": np.degrees(red[:, 1, 0]),
-        "residual_energy_at_T_J": (vib[:, 1].copy() if ref is not None else np.full(nc, np.nan)),
-    }
+    metrics = metrics_from_reductions(
+        t,
+        red[:, 0, 2],
+        red[:, 0, 1],
+        upeak[:, m_u - 1].copy(),
+        vib[:, 0].copy(),
+        red[:, 2, 0].copy(),
+        red[:, 1, 0],
+        vib[:, 1].copy() if ref is not None else None,
+    )
     data = {k: (("case",), v, {"units": METRIC_UNITS[k]}) for k, v in metrics.items()}
     ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}), "case": np.arange(nc)})
     ds.attrs.update(

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexsat.input_checks import require_finite, require_nonneg, require_positive, set_si
+from flexsat.sim.step import friction_torque
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ class BearingFriction:
         return float(np.max(self.coulomb / self.smoothing + self.viscous))
 
     def __call__(self, rate: np.ndarray) -> np.ndarray:
-        return -self.coulomb * np.tanh(rate / self.smoothing) - self.viscous * rate
+        return friction_torque(rate, self.coulomb, self.viscous, self.smoothing)
 
 
 @dataclass(frozen=True)

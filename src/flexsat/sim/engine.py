@@ -28,7 +28,12 @@ from flexsat.dynamics.plant import find_channel
 from flexsat.input_checks import require_count, require_finite
 from flexsat.sim import compiled as compiled_path
 from flexsat.sim import integrators
-from flexsat.sim.channels import noise_column, noise_columns, resolve_channels
+from flexsat.sim.channels import (
+    input_impulses,
+    noise_column,
+    noise_columns,
+    resolve_channels,
+)
 from flexsat.sim.config import FRICTION_STEP_LIMIT, SimConfig, check_resources, stable_substeps
 from flexsat.sim.instruments import InputForces, Instruments, unit_row
 from flexsat.sim.recording import CHUNK, Recorder, SimResult
@@ -428,10 +433,7 @@ def simulate(
         else _propagator(plant, A, B, forces, nc, batched, dt, substeps)
     )
 
-    impulses = {}
-    for k, d in disturbances.items():
-        for i, J in d.impulses_at_samples(n + 1, dt).items():
-            impulses.setdefault(i, np.zeros(m))[slices[k]] += J
+    impulses = input_impulses(disturbances, slices, m, n + 1, dt)
     random = [
         (slices[k], d.random, noise_column(columns, k, "its random disturbance", plant))
         for k, d in disturbances.items()

@@ -55,7 +55,7 @@ class InputForces:
         self.m, slices = plant.n_inputs, plant.input_slices
         self.cols = [j for k in forced for j in range(slices[k].start, slices[k].stop)]
         self.drivers = []
-        for k, d in forced.items():
+        for d in forced.values():
             mats = plant.output_matrices(d.force_output)
             if mats is None:
                 self.drivers.append((d, d.force_output, None))

@@ -57,6 +57,15 @@ energy at chosen samples (the metrics of a sweep, issue 13). It takes the cases 
 lane performing the scalar operations of :func:`closed_loop` in the same order: its numbers
 are those the history loop records, bit for bit, whatever the grouping.
 
+The kernels are plain numba functions on arrays: their parameters come as one record,
+:class:`Loop` (a named tuple of arrays and scalars, numba-typed field by field: the attribute
+reads compile to the same loads as positional arguments), their outputs as :class:`Records`
+or :class:`Reductions`; :mod:`flexsat.sim.compiled` builds them from the plant, the law and
+the channels. The formulas of a step's pieces (quantiser, saturation, actuator, bearing
+friction: :mod:`flexsat.sim.step`) and of the maneuver metrics' per-sample terms
+(:mod:`flexsat.sim.metrics`) are the plain functions the Python loop and the post-hoc metrics
+run, compiled here.
+
 The kernels use numba's numpy error model: no zero-division checks in the loop (the divisors
 are a positive quantum, a positive smoothing speed and the FIR length, validated upstream).
 """
@@ -64,12 +73,19 @@ are a positive quantum, a positive smoothing speed and the FIR length, validated
 from __future__ import annotations
 
 import warnings
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
+from flexsat.sim.metrics import outside_term, past_term, peak_term
+from flexsat.sim.step import actuated, friction_torque, quantised, saturated
+
 __all__ = [
     "ARGUMENTS",
+    "Loop",
+    "Records",
+    "Reductions",
     "RECORDS",
     "REDUCTIONS",
     "allocate_records",
@@ -105,61 +121,79 @@ def _jit(**options):
     return wrap
 
 
-#: input arguments of :func:`closed_loop` in order (the records of :data:`RECORDS` follow)
-ARGUMENTS = (
-    "x0",
-    "E",
-    "block_diagonal",
-    "P1u",
-    "P1f",
-    "P2f",
-    "Cr",
-    "fric",
-    "substeps",
-    "imp_k",
-    "imp_dx",
-    "Cm",
-    "Dm",
-    "Dmf",
-    "sensor",
-    "sensor_slot",
-    "fir_src",
-    "fir_dst",
-    "fir_w",
-    "Ak",
-    "Bk",
-    "Ck",
-    "Dk",
-    "y_ref",
-    "u_ff",
-    "K0",
-    "act",
-    "dist_std",
-    "dist_slot",
-    "noise",
-    "bound",
-    "Co",
-    "Do",
-    "Dof",
-    "Q",
-)
-#: output arguments of :func:`closed_loop`, as returned by :func:`allocate_records`
-RECORDS = ("X", "Y", "Ucmd", "U", "D", "F", "O", "En", "stop")
-#: the arguments of :func:`closed_loop_reduced` after those of :data:`ARGUMENTS` (inputs,
-#: then outputs)
-REDUCTIONS = (
-    "red_c",
-    "red_tab",
-    "red_t",
-    "red_dir",
-    "red_band",
-    "snap_k",
-    "red",
-    "upeak",
-    "snapO",
-    "snapE",
-    "stop",
-)
+class Loop(NamedTuple):
+    """The parameters of a closed loop (shapes and meanings: :func:`closed_loop`)."""
+
+    x0: np.ndarray
+    E: np.ndarray
+    block_diagonal: bool
+    P1u: np.ndarray
+    P1f: np.ndarray
+    P2f: np.ndarray
+    Cr: np.ndarray
+    fric: np.ndarray
+    substeps: int
+    imp_k: np.ndarray
+    imp_dx: np.ndarray
+    Cm: np.ndarray
+    Dm: np.ndarray
+    Dmf: np.ndarray
+    sensor: np.ndarray
+    sensor_slot: np.ndarray
+    fir_src: int
+    fir_dst: int
+    fir_w: np.ndarray
+    Ak: np.ndarray
+    Bk: np.ndarray
+    Ck: np.ndarray
+    Dk: np.ndarray
+    y_ref: np.ndarray
+    u_ff: np.ndarray
+    K0: np.ndarray
+    act: np.ndarray
+    dist_std: np.ndarray
+    dist_slot: np.ndarray
+    noise: np.ndarray
+    bound: float
+    Co: np.ndarray
+    Do: np.ndarray
+    Dof: np.ndarray
+    Q: np.ndarray
+
+
+class Records(NamedTuple):
+    """What :func:`closed_loop` records (:func:`allocate_records`)."""
+
+    X: np.ndarray
+    Y: np.ndarray
+    Ucmd: np.ndarray
+    U: np.ndarray
+    D: np.ndarray
+    F: np.ndarray
+    O: np.ndarray
+    En: np.ndarray
+    stop: np.ndarray
+
+
+class Reductions(NamedTuple):
+    """The reductions of :func:`closed_loop_reduced`: their definitions (inputs), then the
+    arrays it writes."""
+
+    red_c: np.ndarray
+    red_tab: np.ndarray
+    red_t: np.ndarray
+    red_dir: np.ndarray
+    red_band: np.ndarray
+    snap_k: np.ndarray
+    red: np.ndarray
+    upeak: np.ndarray
+    snapO: np.ndarray
+    snapE: np.ndarray
+    stop: np.ndarray
+
+
+#: the fields of :class:`Loop`, :class:`Records` and :class:`Reductions` in order
+ARGUMENTS, RECORDS, REDUCTIONS = Loop._fields, Records._fields, Reductions._fields
 
 
 @_jit(inline="always", error_model="numpy")
@@ -190,8 +224,7 @@ def _dot(a, b):
 @_jit(error_model="numpy")
 def _force(x, cr, c1, c2, eps):
     """N(x) = −c1 tanh(r/ε) − c2 r with r = C_r x."""
-    r = _dot(cr, x)
-    return -c1 * np.tanh(r / eps) - c2 * r
+    return friction_torque(_dot(cr, x), c1, c2, eps)
 
 
 @_jit(error_model="numpy")
@@ -246,53 +279,46 @@ def _energy(Qc, x, qx):
 
 
 @_jit(error_model="numpy")
-def _case(
-    c,
-    x0,
-    E,
-    block_diagonal,
-    P1u,
-    P1f,
-    P2f,
-    Cr,
-    fric,
-    substeps,
-    imp_k,
-    imp_dx,
-    Cm,
-    Dm,
-    Dmf,
-    sensor,
-    sensor_slot,
-    fir_src,
-    fir_dst,
-    fir_w,
-    Ak,
-    Bk,
-    Ck,
-    Dk,
-    y_ref,
-    u_ff,
-    K0,
-    act,
-    dist_std,
-    dist_slot,
-    noise,
-    bound,
-    Co,
-    Do,
-    Dof,
-    Q,
-    X,
-    Y,
-    Ucmd,
-    U,
-    D,
-    F,
-    O,
-    En,
-    stop,
-):
+def _case(c, loop, records):
+    """Case c of :func:`closed_loop`."""
+    (
+        x0,
+        E,
+        block_diagonal,
+        P1u,
+        P1f,
+        P2f,
+        Cr,
+        fric,
+        substeps,
+        imp_k,
+        imp_dx,
+        Cm,
+        Dm,
+        Dmf,
+        sensor,
+        sensor_slot,
+        fir_src,
+        fir_dst,
+        fir_w,
+        Ak,
+        Bk,
+        Ck,
+        Dk,
+        y_ref,
+        u_ff,
+        K0,
+        act,
+        dist_std,
+        dist_slot,
+        noise,
+        bound,
+        Co,
+        Do,
+        Dof,
+        Q,
+    ) = loop
+    X, Y, Ucmd, U, D, F, O, En, stop = records
     n = x0.shape[1]
     m = P1u.shape[2]
     p = Cm.shape[1]
@@ -381,10 +407,8 @@ def _case(
                 s += sens[i, 1] * noisec[k, sensor_slot[i]]
             q = sens[i, 0]
             if q > 0.0:
-                s = q * np.rint(s / q)
-            sat = sens[i, 3]
-            s = min(max(s, -sat), sat)
-            y[i] = s
+                s = quantised(s, q)
+            y[i] = saturated(s, sens[i, 3])
         # 5. FIR-derivative channel
         if fir_src >= 0:
             if k == 0:
@@ -459,8 +483,7 @@ def _case(
             return
         # 8. actuator and disturbance
         for i in range(m):
-            sat = actc[i, 0]
-            u = actc[i, 1] * min(max(ucmd[i], -sat), sat)
+            u = actuated(ucmd[i], actc[i, 0], actc[i, 1])
             d = dstd[i] * noisec[k, dist_slot[i]] if dist_slot[i] >= 0 else 0.0
             U[c, k, i] = u
             D[c, k, i] = d
@@ -495,56 +518,14 @@ def _case(
 
 
 @_jit(error_model="numpy")
-def closed_loop(
-    x0,
-    E,
-    block_diagonal,
-    P1u,
-    P1f,
-    P2f,
-    Cr,
-    fric,
-    substeps,
-    imp_k,
-    imp_dx,
-    Cm,
-    Dm,
-    Dmf,
-    sensor,
-    sensor_slot,
-    fir_src,
-    fir_dst,
-    fir_w,
-    Ak,
-    Bk,
-    Ck,
-    Dk,
-    y_ref,
-    u_ff,
-    K0,
-    act,
-    dist_std,
-    dist_slot,
-    noise,
-    bound,
-    Co,
-    Do,
-    Dof,
-    Q,
-    X,
-    Y,
-    Ucmd,
-    U,
-    D,
-    F,
-    O,
-    En,
-    stop,
-):
+def closed_loop(loop: Loop, records: Records) -> None:
     """Run the closed loop for every case, serially (see the module docstring).
 
     Parameters
     ----------
+    loop : Loop                 the loop's parameters, the fields below
+    records : Records           the arrays written, the fields after ``Q`` below
+
     x0 : (C, n)                 initial states
     E : (Cp, n, n) or (Cp, n, 2)
                                 e^{hA}, h = dt / substeps; with ``block_diagonal`` (n even)
@@ -586,154 +567,17 @@ def closed_loop(
     stop : (C,) int64           written: −1, or the first diverged sample (its X, Y, Ucmd and
                                 F are recorded; U, D there and every later row are not)
     """
-    for c in range(x0.shape[0]):
-        _case(
-            c,
-            x0,
-            E,
-            block_diagonal,
-            P1u,
-            P1f,
-            P2f,
-            Cr,
-            fric,
-            substeps,
-            imp_k,
-            imp_dx,
-            Cm,
-            Dm,
-            Dmf,
-            sensor,
-            sensor_slot,
-            fir_src,
-            fir_dst,
-            fir_w,
-            Ak,
-            Bk,
-            Ck,
-            Dk,
-            y_ref,
-            u_ff,
-            K0,
-            act,
-            dist_std,
-            dist_slot,
-            noise,
-            bound,
-            Co,
-            Do,
-            Dof,
-            Q,
-            X,
-            Y,
-            Ucmd,
-            U,
-            D,
-            F,
-            O,
-            En,
-            stop,
-        )
+    for c in range(loop.x0.shape[0]):
+        _case(c, loop, records)
 
 
 @_jit(parallel=True, error_model="numpy")
-def closed_loop_parallel(
-    x0,
-    E,
-    block_diagonal,
-    P1u,
-    P1f,
-    P2f,
-    Cr,
-    fric,
-    substeps,
-    imp_k,
-    imp_dx,
-    Cm,
-    Dm,
-    Dmf,
-    sensor,
-    sensor_slot,
-    fir_src,
-    fir_dst,
-    fir_w,
-    Ak,
-    Bk,
-    Ck,
-    Dk,
-    y_ref,
-    u_ff,
-    K0,
-    act,
-    dist_std,
-    dist_slot,
-    noise,
-    bound,
-    Co,
-    Do,
-    Dof,
-    Q,
-    X,
-    Y,
-    Ucmd,
-    U,
-    D,
-    F,
-    O,
-    En,
-    stop,
-):
+def closed_loop_parallel(loop: Loop, records: Records) -> None:
     """:func:`closed_loop` with the cases spread over threads (same arguments, bit-identical
     results: each case runs the same scalar operations as in the serial loop)."""
-    for c in prange(x0.shape[0]):
+    for c in prange(loop.x0.shape[0]):
         # prange's index is unsigned; the case index must stay a signed integer
-        _case(
-            np.int64(c),
-            x0,
-            E,
-            block_diagonal,
-            P1u,
-            P1f,
-            P2f,
-            Cr,
-            fric,
-            substeps,
-            imp_k,
-            imp_dx,
-            Cm,
-            Dm,
-            Dmf,
-            sensor,
-            sensor_slot,
-            fir_src,
-            fir_dst,
-            fir_w,
-            Ak,
-            Bk,
-            Ck,
-            Dk,
-            y_ref,
-            u_ff,
-            K0,
-            act,
-            dist_std,
-            dist_slot,
-            noise,
-            bound,
-            Co,
-            Do,
-            Dof,
-            Q,
-            X,
-            Y,
-            Ucmd,
-            U,
-            D,
-            F,
-            O,
-            En,
-            stop,
-        )
+        _case(np.int64(c), loop, records)
 
 
 #: cases per group of :func:`closed_loop_reduced`: the lanes of its vector operations (8:
@@ -742,61 +586,62 @@ LANES = 8
 
 
 @_jit(error_model="numpy")
-def _lanes(
-    c0,
-    nl,
-    x0,
-    E,
-    block_diagonal,
-    P1u,
-    P1f,
-    P2f,
-    Cr,
-    fric,
-    substeps,
-    imp_k,
-    imp_dx,
-    Cm,
-    Dm,
-    Dmf,
-    sensor,
-    sensor_slot,
-    fir_src,
-    fir_dst,
-    fir_w,
-    Ak,
-    Bk,
-    Ck,
-    Dk,
-    y_ref,
-    u_ff,
-    K0,
-    act,
-    dist_std,
-    dist_slot,
-    noise,
-    bound,
-    Co,
-    Do,
-    Dof,
-    Q,
-    red_c,
-    red_tab,
-    red_t,
-    red_dir,
-    red_band,
-    snap_k,
-    red,
-    upeak,
-    snapO,
-    snapE,
-    stop,
-):
+def _lanes(c0, nl, loop, reductions):
     """Cases c0 .. c0 + nl − 1 (nl <= :data:`LANES`) of :func:`closed_loop_reduced` side by
     side: every per-case quantity is a row of :data:`LANES` lanes, the innermost loops run
     over the lanes (independent cases; the rows' sums in registers, :func:`_rows8`), and
     each lane performs the scalar operations of :func:`_case` in its order, so a case's
     numbers do not depend on its group or on ``nl``."""
+    (
+        x0,
+        E,
+        block_diagonal,
+        P1u,
+        P1f,
+        P2f,
+        Cr,
+        fric,
+        substeps,
+        imp_k,
+        imp_dx,
+        Cm,
+        Dm,
+        Dmf,
+        sensor,
+        sensor_slot,
+        fir_src,
+        fir_dst,
+        fir_w,
+        Ak,
+        Bk,
+        Ck,
+        Dk,
+        y_ref,
+        u_ff,
+        K0,
+        act,
+        dist_std,
+        dist_slot,
+        noise,
+        bound,
+        Co,
+        Do,
+        Dof,
+        Q,
+    ) = loop
+    (
+        red_c,
+        red_tab,
+        red_t,
+        red_dir,
+        red_band,
+        snap_k,
+        red,
+        upeak,
+        snapO,
+        snapE,
+        stop,
+    ) = reductions
     n = x0.shape[1]
     m = P1u.shape[2]
     p = Cm.shape[1]
@@ -958,9 +803,8 @@ def _lanes(
                     v += sensv[i, 1, l] * noise[cl[l], k, slot]
                 q = sensv[i, 0, l]
                 if q > 0.0:
-                    v = q * np.rint(v / q)
-                sat = sensv[i, 3, l]
-                y[i, l] = min(max(v, -sat), sat)
+                    v = quantised(v, q)
+                y[i, l] = saturated(v, sensv[i, 3, l])
         # 5. FIR-derivative channel (one ring buffer position for every lane)
         if fir_src >= 0:
             if k == 0:
@@ -1035,14 +879,17 @@ def _lanes(
                 v = ov[j, l] - redc[j, l]
                 if tab >= 0:
                     v = v - red_t[tab, _ci(red_t.shape[1], k), ct[l]]
-                a = abs(v)
+                # running maxima of the metrics' per-sample terms (flexsat.sim.metrics)
                 c = cl[l]
+                a = peak_term(v)
                 if a > red[c, j, 0]:
                     red[c, j, 0] = a
-                if rdir[l] * v > red[c, j, 1]:
-                    red[c, j, 1] = rdir[l] * v
-                if a > band:
-                    red[c, j, 2] = k + 1
+                a = past_term(v, rdir[l])
+                if a > red[c, j, 1]:
+                    red[c, j, 1] = a
+                a = outside_term(v, band, k)
+                if a > red[c, j, 2]:
+                    red[c, j, 2] = a
         for i in range(n_snap):
             for l in range(LANES):
                 if snapc[i, l] == k:
@@ -1060,11 +907,10 @@ def _lanes(
         for i in range(m):
             slot = dist_slot[i]
             for l in range(LANES):
-                sat = actv[i, 0, l]
-                u = actv[i, 1, l] * min(max(ucmd[i, l], -sat), sat)
+                u = actuated(ucmd[i, l], actv[i, 0, l], actv[i, 1, l])
                 d = dstdv[i, l] * noise[cl[l], k, slot] if slot >= 0 else 0.0
-                if i < upeak.shape[1] and abs(u) > upeak[cl[l], i]:
-                    upeak[cl[l], i] = abs(u)
+                if i < upeak.shape[1] and peak_term(u) > upeak[cl[l], i]:
+                    upeak[cl[l], i] = peak_term(u)
                 w[i, l] = u + d
         if k == n_t - 1:
             break
@@ -1142,8 +988,7 @@ def _force_lanes(x, crv, c1, c2, eps, out, s0, s1, s2, s3):
             s0[l] += crv[j, l] * x[j, l]
         j += 1
     for l in range(nl):
-        rr = (s0[l] + s1[l]) + (s2[l] + s3[l])
-        out[l] = -c1[l] * np.tanh(rr / eps[l]) - c2[l] * rr
+        out[l] = friction_torque((s0[l] + s1[l]) + (s2[l] + s3[l]), c1[l], c2[l], eps[l])
 
 
 @_jit(inline="always", error_model="numpy")
@@ -1190,54 +1035,7 @@ def _energy_lane(Qv, x, qx, l):
 
 
 @_jit(error_model="numpy")
-def closed_loop_reduced(
-    x0,
-    E,
-    block_diagonal,
-    P1u,
-    P1f,
-    P2f,
-    Cr,
-    fric,
-    substeps,
-    imp_k,
-    imp_dx,
-    Cm,
-    Dm,
-    Dmf,
-    sensor,
-    sensor_slot,
-    fir_src,
-    fir_dst,
-    fir_w,
-    Ak,
-    Bk,
-    Ck,
-    Dk,
-    y_ref,
-    u_ff,
-    K0,
-    act,
-    dist_std,
-    dist_slot,
-    noise,
-    bound,
-    Co,
-    Do,
-    Dof,
-    Q,
-    red_c,
-    red_tab,
-    red_t,
-    red_dir,
-    red_band,
-    snap_k,
-    red,
-    upeak,
-    snapO,
-    snapE,
-    stop,
-):
+def closed_loop_reduced(loop: Loop, reductions: Reductions) -> None:
     """:func:`closed_loop` keeping no history: per case, the reductions of the first
     R output rows o_j (C_o, D_o, D_of), s_j = o_j − red_c[c, j] − red_t[red_tab[j], k, c]
     (the table term only where red_tab[j] >= 0), over every sample k:
@@ -1250,164 +1048,19 @@ def closed_loop_reduced(
     snapE[c, s] (S = 0 in snapE: none); red_t (n_tab, 1 or n_t, 1 or C). The cases run in
     groups of :data:`LANES` (:func:`_lanes`), each lane the operations of :func:`closed_loop`
     in the same order: the same bits as its records give, whatever the grouping."""
-    nc = x0.shape[0]
+    nc = loop.x0.shape[0]
     for g in range((nc + LANES - 1) // LANES):
         c0 = g * LANES
-        _lanes(
-            c0,
-            min(LANES, nc - c0),
-            x0,
-            E,
-            block_diagonal,
-            P1u,
-            P1f,
-            P2f,
-            Cr,
-            fric,
-            substeps,
-            imp_k,
-            imp_dx,
-            Cm,
-            Dm,
-            Dmf,
-            sensor,
-            sensor_slot,
-            fir_src,
-            fir_dst,
-            fir_w,
-            Ak,
-            Bk,
-            Ck,
-            Dk,
-            y_ref,
-            u_ff,
-            K0,
-            act,
-            dist_std,
-            dist_slot,
-            noise,
-            bound,
-            Co,
-            Do,
-            Dof,
-            Q,
-            red_c,
-            red_tab,
-            red_t,
-            red_dir,
-            red_band,
-            snap_k,
-            red,
-            upeak,
-            snapO,
-            snapE,
-            stop,
-        )
+        _lanes(c0, min(LANES, nc - c0), loop, reductions)
 
 
 @_jit(parallel=True, error_model="numpy")
-def closed_loop_reduced_parallel(
-    x0,
-    E,
-    block_diagonal,
-    P1u,
-    P1f,
-    P2f,
-    Cr,
-    fric,
-    substeps,
-    imp_k,
-    imp_dx,
-    Cm,
-    Dm,
-    Dmf,
-    sensor,
-    sensor_slot,
-    fir_src,
-    fir_dst,
-    fir_w,
-    Ak,
-    Bk,
-    Ck,
-    Dk,
-    y_ref,
-    u_ff,
-    K0,
-    act,
-    dist_std,
-    dist_slot,
-    noise,
-    bound,
-    Co,
-    Do,
-    Dof,
-    Q,
-    red_c,
-    red_tab,
-    red_t,
-    red_dir,
-    red_band,
-    snap_k,
-    red,
-    upeak,
-    snapO,
-    snapE,
-    stop,
-):
+def closed_loop_reduced_parallel(loop: Loop, reductions: Reductions) -> None:
     """:func:`closed_loop_reduced` with the groups spread over threads (bit-identical)."""
-    nc = x0.shape[0]
+    nc = loop.x0.shape[0]
     for g in prange((nc + LANES - 1) // LANES):
         c0 = np.int64(g) * LANES
-        _lanes(
-            c0,
-            min(LANES, nc - c0),
-            x0,
-            E,
-            block_diagonal,
-            P1u,
-            P1f,
-            P2f,
-            Cr,
-            fric,
-            substeps,
-            imp_k,
-            imp_dx,
-            Cm,
-            Dm,
-            Dmf,
-            sensor,
-            sensor_slot,
-            fir_src,
-            fir_dst,
-            fir_w,
-            Ak,
-            Bk,
-            Ck,
-            Dk,
-            y_ref,
-            u_ff,
-            K0,
-            act,
-            dist_std,
-            dist_slot,
-            noise,
-            bound,
-            Co,
-            Do,
-            Dof,
-            Q,
-            red_c,
-            red_tab,
-            red_t,
-            red_dir,
-            red_band,
-            snap_k,
-            red,
-            upeak,
-            snapO,
-            snapE,
-            stop,
-        )
+        _lanes(c0, min(LANES, nc - c0), loop, reductions)
 
 
 def allocate_records(

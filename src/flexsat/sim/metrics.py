@@ -1,10 +1,20 @@
-"""Closed-loop maneuver metrics, vectorized over the case axis."""
+"""Closed-loop maneuver metrics, vectorized over the case axis.
+
+The single-axis maneuver metrics are each the maximum over the samples k of one per-sample
+term of a signal s_k (:func:`peak_term`, :func:`past_term`, :func:`outside_term`), or a value at
+one sample (:func:`reference_end_sample`), then finished by :func:`metrics_from_reductions`.
+Both ways of computing them use these functions: :func:`maneuver_metrics` on the recorded
+histories (the maximum over the time axis), and the metrics-only kernel
+(:func:`flexsat.sim.kernels.closed_loop_reduced`) in the loop (a running maximum, the terms
+compiled by numba), so the two give the same numbers bit for bit (a maximum is exact).
+"""
 
 from __future__ import annotations
 
 import numpy as np
+from numba.extending import register_jitable
 
-from flexsat.analysis.settling import settling_time
+from flexsat.analysis.settling import settled_at, settling_time
 
 METRIC_UNITS = {
     "settling_time_s": "s",
@@ -15,6 +25,68 @@ METRIC_UNITS = {
     "peak_tip_deflection_m": "m",
     "peak_rate_error_deg_s": "deg/s",
 }
+
+
+@register_jitable
+def peak_term(s):
+    """|s|: its maximum over the samples is a peak (tip deflection, rate error, torque)."""
+    return np.abs(s)
+
+
+@register_jitable
+def past_term(s, direction):
+    """d · s, d = ±1 the slew direction: its maximum over the samples of s = θ − θ_f is the
+    largest excursion past the target (the overshoot where positive)."""
+    return direction * s
+
+
+@register_jitable
+def outside_term(s, band, k):
+    """k + 1 where |s_k| > band, else 0: its maximum over the samples is 1 + the last sample
+    outside the band (0 if none; n_t if the last sample is outside: not settled)."""
+    return (k + 1.0) * (np.abs(s) > band)
+
+
+def maneuver_direction(theta0: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The slew direction d = sign(θ_f − θ_0), +1 for no slew."""
+    direction = np.sign(target - theta0)
+    return np.where(direction == 0, 1.0, direction)
+
+
+def reference_end_sample(t: np.ndarray, reference_end: np.ndarray) -> np.ndarray:
+    """The sample at the end T of the reference (the first t_k >= T − 1e-12 s, at most the
+    last): where ``residual_energy_at_T_J`` is read."""
+    return np.minimum(np.searchsorted(t, reference_end - 1e-12), len(t) - 1)
+
+
+def metrics_from_reductions(
+    t: np.ndarray,
+    last_outside: np.ndarray,
+    past: np.ndarray,
+    peak_torque: np.ndarray,
+    residual_energy: np.ndarray,
+    peak_tip_deflection: np.ndarray,
+    peak_rate_error: np.ndarray,
+    residual_energy_at_T: np.ndarray | None,
+) -> dict[str, np.ndarray]:
+    """The single-axis maneuver metrics (SI, angles in deg) of a batch from the maxima of
+    their per-sample terms (module docstring), each (n_cases,): ``last_outside`` of
+    θ − θ_f, ``past`` of d (θ − θ_f), the peaks of |u|, |tip| and |θ' − θ'_ref|, and the
+    vibration energies at the last sample and at the end of the reference (None: the law has
+    no reference, NaN)."""
+    return {
+        "settling_time_s": settled_at(t, last_outside),
+        "overshoot_deg": np.degrees(np.maximum(past, 0.0)),
+        "peak_torque_Nm": peak_torque,
+        "residual_energy_J": residual_energy,
+        "peak_tip_deflection_m": peak_tip_deflection,
+        "peak_rate_error_deg_s": np.degrees(peak_rate_error),
+        "residual_energy_at_T_J": (
+            np.full(len(last_outside), np.nan)
+            if residual_energy_at_T is None
+            else residual_energy_at_T
+        ),
+    }
 
 
 def maneuver_metrics(
@@ -34,25 +106,25 @@ def maneuver_metrics(
 
     overshoot: largest excursion past the target in the direction of the maneuver.
     residual energy: vibration energy (elastic modes of the free vehicle) at the end of the run
-    and at the end T of the reference (NaN when the law has no reference).
+    and at the end T of the reference (NaN when the law has no reference). Each the maximum
+    over the time axis of its per-sample term (module docstring).
     """
-    direction = np.sign(target - theta0)
-    direction = np.where(direction == 0, 1.0, direction)
-    past = direction[:, None] * (theta - target[:, None])
-    out = {
-        "settling_time_s": settling_time(t, theta - target[:, None], band),
-        "overshoot_deg": np.degrees(np.maximum(past.max(axis=1), 0.0)),
-        "peak_torque_Nm": np.abs(torque).max(axis=1),
-        "residual_energy_J": vibration_energy[:, -1],
-        "peak_tip_deflection_m": np.abs(tip_deflection).max(axis=1),
-        "peak_rate_error_deg_s": np.degrees(np.abs(theta_dot - theta_dot_ref).max(axis=1)),
-    }
-    if reference_end is None:
-        out["residual_energy_at_T_J"] = np.full(theta.shape[0], np.nan)
-    else:
-        k = np.minimum(np.searchsorted(t, reference_end - 1e-12), len(t) - 1)
-        out["residual_energy_at_T_J"] = vibration_energy[np.arange(theta.shape[0]), k]
-    return out
+    k = np.arange(len(t))
+    direction = maneuver_direction(theta0, target)
+    error = theta - target[:, None]
+    at_T = None
+    if reference_end is not None:
+        at_T = vibration_energy[np.arange(theta.shape[0]), reference_end_sample(t, reference_end)]
+    return metrics_from_reductions(
+        t,
+        outside_term(error, band, k).max(axis=1),
+        past_term(error, direction[:, None]).max(axis=1),
+        peak_term(torque).max(axis=1),
+        vibration_energy[:, -1],
+        peak_term(tip_deflection).max(axis=1),
+        peak_term(theta_dot - theta_dot_ref).max(axis=1),
+        at_T,
+    )
 
 
 def channel_metrics(

@@ -20,7 +20,8 @@ def least_squares_derivative_weights(window: int, order: int, dt: float) -> np.n
     """
     if order < 1 or window < order + 1:
         raise ValueError(
-            f"rate_filter: need order >= 1 and window >= order + 1, got window={window}, order={order}"
+            "rate_filter: need order >= 1 and window >= order + 1, "
+            f"got window={window}, order={order}"
         )
     tau = dt * (np.arange(window) - (window - 1))
     V = np.vander(tau, order + 1, increasing=True)

@@ -1,0 +1,50 @@
+"""The pieces of one closed-loop step, as plain numpy functions of arrays or scalars.
+
+The same functions run in the Python loop of :func:`flexsat.sim.engine.simulate` (on the
+(n_cases[, width]) arrays of a channel: :class:`~flexsat.sim.channels.ChannelSensor`,
+:class:`~flexsat.sim.channels.ChannelActuator`,
+:class:`~flexsat.sim.disturbances.BearingFriction`) and, compiled by numba, in the loops of
+:mod:`flexsat.sim.kernels` (on one element of one case): one definition of each formula, so
+the two loops differ only in the order of the sums of their matrix products. Each is a plain
+Python function (``register_jitable``: numba compiles it where a kernel calls it).
+
+Saturation is ``minimum(maximum(v, −b), b)``: ``np.clip``'s result (a NaN stays NaN), without
+its dispatch cost on small arrays.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba.extending import register_jitable
+
+
+@register_jitable
+def quantised(v, quantum):
+    """An encoder's reading of v: q · rint(v / q), q > 0 (round half to even)."""
+    return quantum * np.rint(v / quantum)
+
+
+@register_jitable
+def saturated(v, bound):
+    """v clipped to [−bound, bound] (bound > 0, inf for none)."""
+    return np.minimum(np.maximum(v, -bound), bound)
+
+
+@register_jitable
+def rate_limited(command, previous, step):
+    """The command moved from ``previous`` by at most ``step`` (rate limit × dt)."""
+    return np.minimum(np.maximum(command, previous - step), previous + step)
+
+
+@register_jitable
+def actuated(command, saturation, scale):
+    """An actuator's output scale · sat(command) (seed 000, Att. 3: the torque constant's
+    ratio times the amplifier's saturation)."""
+    return scale * saturated(command, saturation)
+
+
+@register_jitable
+def friction_torque(rate, coulomb, viscous, smoothing):
+    """τ = −c1 tanh(θ'/ε) − c2 θ': the bearing friction of seed 000, Att. 3 Eq. 23, its sign
+    regularised over the smoothing rate ε (:class:`~flexsat.sim.disturbances.BearingFriction`)."""
+    return -coulomb * np.tanh(rate / smoothing) - viscous * rate
