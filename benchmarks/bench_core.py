@@ -642,7 +642,7 @@ def report(a, b, c, d, repeat) -> str:
         f"{c['setup_dense'] * 1e3:.0f} ms; set-up included, one 100-mode maneuver "
         f"costs {(c['modal'] * 1125 + c['setup_modal']) * 1e3:.0f} ms modal against "
         f"{(c['pc'] * 1125 + c['setup_dense']) * 1e3:.0f} ms for `forced_response` "
-        f"(ratio {(c['pc'] * 1125 + c['setup_dense']) / (c['modal'] * 1125 + c['setup_modal']):.2f}): "
+        f"(ratio {(c['pc'] * 1125 + c['setup_dense']) / (c['modal'] * 1125 + c['setup_modal']):.2f}): "  # noqa: E501
         "the modal set-up pays off once per plant, over a batch or repeated runs."
         + (
             ""

@@ -243,7 +243,7 @@ def bench_loop(repeat: int, ladder: bool) -> float:
         f"{'run':42} {'best s':>7} {'median s':>8} {'f evals':>8} {'/ flexsat':>9} "
         f"{'per round':>9} {'Δ final att. rad':>16} {'Δ rim max m':>11}"
     )
-    for label, key, nfev, (angle, rim, _), engine in rows:
+    for label, key, nfev, (angle, rim, _), _engine in rows:
         print(
             f"{label:42} {best[key]:7.3f} {median[key]:8.3f} {nfev:>8} "
             f"{best[key] / flexsat_best:8.2f}× {round_ratio(key, 4):8.2f}× {angle:16.1e} "

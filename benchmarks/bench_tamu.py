@@ -112,7 +112,8 @@ class SensorState:
         self.history = np.repeat(sensors.quantize(theta0)[:, None], sensors.rate_window, axis=1)
 
     def measure(self, truth: dict[str, np.ndarray], noise: np.ndarray) -> dict[str, np.ndarray]:
-        """Measurements from true outputs; ``noise`` (n_cases, 2) standard normals [gyro, strain]."""
+        """Measurements from true outputs; ``noise`` (n_cases, 2) standard normals
+        [gyro, strain]."""
         s = self.sensors
         theta = s.quantize(truth["theta"])
         self.history[:, :-1] = self.history[:, 1:]
@@ -318,7 +319,7 @@ def machine() -> dict:
         "numpy": np.__version__,
         "scipy": scipy.__version__,
         "xarray": xarray.__version__,
-        "load": "%.2f %.2f %.2f" % load,
+        "load": " ".join(f"{v:.2f}" for v in load),
     }
 
 
@@ -351,7 +352,7 @@ def table(res) -> str:
             f"{b['ratio']:.1f}× slower than flexsat; {b['nfev']:,} rhs evals; "
             f"max abs Δθ = {b['dtheta_deg']:.1e}° |"
         )
-    for key, b in res["batch"].items():
+    for b in res["batch"].values():
         ok = "met" if b["us"] <= TARGET_US else "missed"
         rows.append(
             f"| flexsat `simulate`, batch of {b['n_cases']:,} | {b['label']} | "

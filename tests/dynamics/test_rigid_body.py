@@ -7,10 +7,10 @@ import re
 
 import numpy as np
 import pytest
-from rkmk4_reference import propagate
 
 from flexsat.dynamics import attitude as att
 from flexsat.dynamics import rigid_body as rb
+from rkmk4_reference import propagate
 
 EPS = np.finfo(float).eps
 MOMENTS = np.array([100.0, 200.0, 300.0])  # kg·m², asymmetric

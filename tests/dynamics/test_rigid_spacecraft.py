@@ -7,7 +7,6 @@ outputs are checked."""
 
 import numpy as np
 import pytest
-from rkmk4_reference import propagate
 from scipy.integrate import solve_ivp
 
 from flexsat.control import MRPLaw, QuaternionPD
@@ -16,6 +15,7 @@ from flexsat.dynamics import RigidSpacecraft
 from flexsat.dynamics import attitude as att
 from flexsat.dynamics import rigid_body as rb
 from flexsat.units import ureg
+from rkmk4_reference import propagate
 
 EPS = np.finfo(float).eps
 MOMENTS = np.array([10.0, 15.0, 20.0])

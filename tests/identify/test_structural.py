@@ -231,7 +231,8 @@ TRUSS = dict(bays=10, bay=1.0, depth=(1.0, 0.5), E=70e9, rho=2700.0, tube=(0.04,
 
 
 def _truss_builder(fk, fm):
-    """Tapered planar truss, cantilevered at x = 0; groups: 0 chords, 1 diagonals; verticals fixed."""
+    """Tapered planar truss, cantilevered at x = 0; groups: 0 chords, 1 diagonals; verticals
+    fixed."""
     t = TRUSS
     s = Structure("tapered truss")
     sec = Section.tube(*t["tube"])

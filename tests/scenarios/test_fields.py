@@ -11,10 +11,10 @@ import pytest
 from pydantic import ValidationError
 
 from flexsat.scenarios import count, quantity
-from flexsat.scenarios.fields import _given, _Section
+from flexsat.scenarios.fields import SchemaSection, given_fields
 
 
-class Probe(_Section):
+class Probe(SchemaSection):
     length: quantity("m")
     rate: quantity("Hz", optional=True) = None
     ratio: quantity("", optional=True) = None
@@ -91,5 +91,5 @@ def test_an_unbounded_count_has_a_lower_bound_only():
 def test_unknown_keys_are_errors_and_given_drops_what_was_left_out():
     with pytest.raises(ValidationError, match="Extra inputs are not permitted"):
         Probe(length=1, colour="red")
-    assert _given(Probe(length="2 m", modes=3)) == {"length": 2.0, "modes": 3, "seed": 0}
-    assert _given(Probe(length=1), exclude={"length", "seed"}) == {}
+    assert given_fields(Probe(length="2 m", modes=3)) == {"length": 2.0, "modes": 3, "seed": 0}
+    assert given_fields(Probe(length=1), exclude={"length", "seed"}) == {}

@@ -11,7 +11,7 @@ import typing
 import numpy as np
 import pytest
 
-from flexsat.scenarios.laws import _LAWS, _CaseContext
+from flexsat.scenarios.laws import MANEUVER_LAWS, CaseContext
 from flexsat.scenarios.maneuver import GainsSpec, ReferenceSpec, RunSpec
 
 LQG = {
@@ -25,7 +25,7 @@ LQG = {
 
 @pytest.fixture(scope="module")
 def ctx(tamu_case, tamu_model):
-    return _CaseContext(
+    return CaseContext(
         angle=math.radians(40),
         reference_inertia=tamu_case.reference_inertia,
         appendage_inertia=tamu_model.appendage_inertia,
@@ -39,12 +39,12 @@ def build(ctx, shape=None, **run):
     """The controller of the run given by ``run`` (RunSpec keywords), tracking the torque
     ``shape`` built from its reference."""
     run = RunSpec(label="run", **run)
-    return _LAWS[run.law].build(run, ctx, shape)
+    return MANEUVER_LAWS[run.law].build(run, ctx, shape)
 
 
 def test_the_law_table_matches_the_schema():
-    assert set(_LAWS) == set(typing.get_args(RunSpec.model_fields["law"].annotation))
-    for law in _LAWS.values():
+    assert set(MANEUVER_LAWS) == set(typing.get_args(RunSpec.model_fields["law"].annotation))
+    for law in MANEUVER_LAWS.values():
         assert set(law.required) <= set(law.gains) <= set(GainsSpec.model_fields)
 
 

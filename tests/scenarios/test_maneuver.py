@@ -150,7 +150,8 @@ def test_disturbance_rules():
     [
         (
             lambda d: d["runs"][0]["gains"].update(kp=1),
-            "runs['Law I'].gains.kp: not a gain of law 'lyapunov_regulator' (its gains: g1, g2, g3)",
+            "runs['Law I'].gains.kp: not a gain of law 'lyapunov_regulator' "
+            "(its gains: g1, g2, g3)",
         ),
         (
             lambda d: d["runs"][1].pop("reference"),
@@ -170,7 +171,8 @@ def test_disturbance_rules():
         ),
         (
             lambda d: d["runs"][1].update(law="unknown"),
-            "runs['Law II'].law: Input should be 'lyapunov_regulator', 'lyapunov_tracker', 'pd' or 'lqg'",
+            "runs['Law II'].law: Input should be 'lyapunov_regulator', 'lyapunov_tracker', "
+            "'pd' or 'lqg'",
         ),
         (
             lambda d: d["runs"].append({"label": "PD", "law": "pd"}),
@@ -226,7 +228,7 @@ def test_model_option_given_twice():
     )
 
 
-# -- scenario files (flexsat.scenarios.quantity goes through flexsat.units.to_si) -------------------
+# -- scenario files (flexsat.scenarios.quantity goes through flexsat.units.to_si) ------------------
 def test_scenario_refuses_a_dimensionless_unit_where_a_dimension_is_due():
     assert "simulation.duration: incompatible units (degree given, s expected)" in problems_of(
         lambda d: d["simulation"].update(duration="15 deg")

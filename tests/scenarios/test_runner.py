@@ -159,7 +159,8 @@ def test_nothing_runs_when_any_run_is_invalid(monkeypatch):
     [
         (
             changed("simulation", duration="1e12 s"),
-            "simulation.duration: control samples (duration × control_rate) = 7.5e+13, above the limit "
+            "simulation.duration: control samples (duration × control_rate) = 7.5e+13, "
+            "above the limit "
             "2,000,000 (flexsat.limits); shorten the run or lower the control rate",
         ),
         (

@@ -102,8 +102,10 @@ def test_a_hipparcos_catalogue_is_read_relative_to_the_scenario(tmp_path):
         (("centroid_noise: 0.1}", "centroid_noise: -0.1}"), r"cameras.*centroid_noise"),
         (
             (
-                'field_of_view: "12 deg", n_pixels: 4096, pixel_pitch: "5.5 um", centroid_noise: 0.1}',
-                'field_of_view: "150 deg", n_pixels: 4096, pixel_pitch: "5.5 um", centroid_noise: 0.1}',
+                'field_of_view: "12 deg", n_pixels: 4096, pixel_pitch: "5.5 um", '
+                "centroid_noise: 0.1}",
+                'field_of_view: "150 deg", n_pixels: 4096, pixel_pitch: "5.5 um", '
+                "centroid_noise: 0.1}",
             ),
             r"cameras.*below 120°",
         ),

@@ -191,7 +191,7 @@ def reference_loop(prob):
             c1, c2, eps = pick(P["fric"], c)
             cr = pick(P["Cr"], c)
 
-            def N(x):
+            def N(x, cr=cr, c1=c1, c2=c2, eps=eps):
                 r = cr @ x
                 return -c1 * np.tanh(r / eps) - c2 * r
         else:

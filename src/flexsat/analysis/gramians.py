@@ -75,7 +75,7 @@ _UNDAMPED_TOL = 1e-12
 
 # ------------------------------------------------------------------------------------------------
 # input checks
-def _modal_parameters(omega: npt.ArrayLike, zeta: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
+def modal_parameters(omega: npt.ArrayLike, zeta: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
     w = require_nonneg(omega, "omega")
     if w.ndim != 1 or w.size == 0:
         raise ValueError(f"omega: must be a non-empty 1-D array of rad/s, got shape {w.shape}")
@@ -102,7 +102,7 @@ def _matrix(
     return arr
 
 
-def _modal_inputs(B: npt.ArrayLike, n: int, field: str = "B") -> FloatArray:
+def modal_inputs(B: npt.ArrayLike, n: int, field: str = "B") -> FloatArray:
     """Modal input matrix (n, m); a 1-D array of length n is one input."""
     arr = require_finite(B, field)
     if arr.ndim == 1:
@@ -112,7 +112,7 @@ def _modal_inputs(B: npt.ArrayLike, n: int, field: str = "B") -> FloatArray:
     return arr
 
 
-def _modal_outputs(
+def modal_outputs(
     Cq: npt.ArrayLike | None, Cv: npt.ArrayLike | None, n: int
 ) -> tuple[FloatArray, FloatArray]:
     """Output rows (p, n) on η and η̇; a missing one reads zero, both missing is an error."""
@@ -140,7 +140,7 @@ def _modal_outputs(
     return rows[0], rows[1]
 
 
-def _require_damped(w: FloatArray, z: FloatArray, caller: str) -> None:
+def require_damped(w: FloatArray, z: FloatArray, caller: str) -> None:
     decay = z * w
     scale = max(float(w.max()), 1.0)
     bad = np.flatnonzero(decay <= _UNDAMPED_TOL * scale)
@@ -183,16 +183,16 @@ def modal_state_matrices(
     Bz : ndarray (2n, m) = [0; B] (None when ``B`` is None)
     Cz : ndarray (p, 2n) = [Cq, Cv] (None when both are None)
     """
-    w, z = _modal_parameters(omega, zeta)
+    w, z = modal_parameters(omega, zeta)
     n = w.size
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.diag(w**2), -np.diag(2 * z * w)]])
     Bz = None
     if B is not None:
-        Bm = _modal_inputs(B, n)
+        Bm = modal_inputs(B, n)
         Bz = np.vstack([np.zeros_like(Bm), Bm])
     Cz = None
     if Cq is not None or Cv is not None:
-        Cq, Cv = _modal_outputs(Cq, Cv, n)
+        Cq, Cv = modal_outputs(Cq, Cv, n)
         Cz = np.hstack([Cq, Cv])
     return A, Bz, Cz
 
@@ -237,9 +237,9 @@ def modal_controllability_gramian(
         Bad shapes, non-finite values, or a mode with ζω = 0 (rigid or undamped; see
         :func:`finite_horizon_gramian`).
     """
-    w, z = _modal_parameters(omega, zeta)
-    Bm = _modal_inputs(B, w.size)
-    _require_damped(w, z, "modal_controllability_gramian")
+    w, z = modal_parameters(omega, zeta)
+    Bm = modal_inputs(B, w.size)
+    require_damped(w, z, "modal_controllability_gramian")
     W = Bm @ Bm.T
     wi, wj = w[:, None], w[None, :]
     zi, zj = z[:, None], z[None, :]
@@ -305,13 +305,13 @@ def modal_gramian(
     -------
     ndarray (2n, 2n)
     """
-    w, z = _modal_parameters(omega, zeta)
+    w, z = modal_parameters(omega, zeta)
     kind = _kind(kind)
     n = w.size
     Q = require_finite(Q, "Q")
     if Q.shape != (2 * n, 2 * n):
         raise ValueError(f"Q: must have shape (2n, 2n) = ({2 * n}, {2 * n}), got {Q.shape}")
-    _require_damped(w, z, "modal_gramian")
+    require_damped(w, z, "modal_gramian")
     # rhs per pair: −(Q_ηη, Q_ηη̇, Q_η̇η, Q_η̇η̇)[i, j]
     rhs = -np.stack([Q[:n, :n], Q[:n, n:], Q[n:, :n], Q[n:, n:]], axis=-1)
     sol = np.linalg.solve(_pair_systems(w, z, kind), rhs[..., None])[..., 0]
@@ -334,8 +334,8 @@ def modal_observability_gramian(
     :math:`Y_{\dot\eta\dot\eta} = \|c_i\|^2 / (4\zeta_i\omega_i^3)` (c_i the i-th column of
     C_q), which the tests check.
     """
-    w, z = _modal_parameters(omega, zeta)
-    Cq, Cv = _modal_outputs(Cq, Cv, w.size)
+    w, z = modal_parameters(omega, zeta)
+    Cq, Cv = modal_outputs(Cq, Cv, w.size)
     C = np.hstack([Cq, Cv])
     return modal_gramian(w, z, C.T @ C, kind="observability")
 
@@ -399,11 +399,11 @@ def gawronski_gramians(
     Cq, Cv : array_like (p, n), optional
         Output rows on η and η̇ (at least one).
     """
-    w, z = _modal_parameters(omega, zeta)
+    w, z = modal_parameters(omega, zeta)
     n = w.size
-    Bm = _modal_inputs(B, n)
-    Cq, Cv = _modal_outputs(Cq, Cv, n)
-    _require_damped(w, z, "gawronski_gramians")
+    Bm = modal_inputs(B, n)
+    Cq, Cv = modal_outputs(Cq, Cv, n)
+    require_damped(w, z, "gawronski_gramians")
     b2 = np.sum(Bm**2, axis=1)
     c2 = np.sum(Cq**2, axis=0) / w**2 + np.sum(Cv**2, axis=0)
     wc, wo = b2 / (4 * z * w), c2 / (4 * z * w)

@@ -43,14 +43,14 @@ import numpy as np
 import scipy.linalg as sla
 
 from flexsat.analysis.gramians import (
-    _modal_inputs,
-    _modal_outputs,
-    _modal_parameters,
-    _require_damped,
     finite_horizon_gramian,
     lyapunov_gramian,
     modal_controllability_gramian,
+    modal_inputs,
+    modal_outputs,
+    modal_parameters,
     modal_state_matrices,
+    require_damped,
 )
 from flexsat.input_checks import require_count, require_finite, require_positive
 
@@ -140,8 +140,8 @@ def modal_controllability(omega, zeta, B, form: str = "first_order") -> ModalCon
         Modal input matrix :math:`\bar D = \Phi^T D`.
     form : {"first_order", "second_order"}
     """
-    w, z = _modal_parameters(omega, zeta)
-    Bm = _modal_inputs(B, w.size)
+    w, z = modal_parameters(omega, zeta)
+    Bm = modal_inputs(B, w.size)
     if form not in _FORMS:
         raise ValueError(f"form: must be one of {_FORMS}, got {form!r}")
     if np.any(z >= 1):
@@ -263,10 +263,10 @@ def modal_cost(omega, zeta, B, Cq=None, Cv=None, Q=None, horizon=None) -> ModalC
     horizon : float, optional
         Finite horizon T, s.
     """
-    w, z = _modal_parameters(omega, zeta)
+    w, z = modal_parameters(omega, zeta)
     n = w.size
-    Bm = _modal_inputs(B, n)
-    Cq, Cv = _modal_outputs(Cq, Cv, n)
+    Bm = modal_inputs(B, n)
+    Cq, Cv = modal_outputs(Cq, Cv, n)
     Qw = _weight(Q, Cq.shape[0])
     if horizon is None:
         X = modal_controllability_gramian(w, z, Bm)
@@ -385,11 +385,11 @@ def gawronski_index(
         :math:`w_{ki}` (default 1).
     norm : {"h2", "hankel"}
     """
-    w, z = _modal_parameters(omega, zeta)
+    w, z = modal_parameters(omega, zeta)
     n = w.size
-    Bm = _modal_inputs(B, n)
-    Cq, Cv = _modal_outputs(Cq, Cv, n)
-    _require_damped(w, z, "gawronski_index")
+    Bm = modal_inputs(B, n)
+    Cq, Cv = modal_outputs(Cq, Cv, n)
+    require_damped(w, z, "gawronski_index")
     if norm not in ("h2", "hankel"):
         raise ValueError(f"norm: must be 'h2' or 'hankel', got {norm!r}")
     c = np.sqrt(np.sum(Cq**2, axis=0) / w**2 + np.sum(Cv**2, axis=0))
@@ -593,7 +593,7 @@ def _vectors(items, n: int, field_name: str) -> tuple[list, np.ndarray]:
             if v.shape != (n,):
                 raise ValueError(f"{field_name}[{k!r}]: must have shape ({n},), got {v.shape}")
         return labels, np.column_stack(cols)
-    arr = _modal_inputs(items, n, field_name)
+    arr = modal_inputs(items, n, field_name)
     return list(range(arr.shape[1])), arr
 
 
@@ -660,8 +660,8 @@ def h2_actuator_ranking(
         raise ValueError(f"measure: must be 'energy' or 'printed', got {measure!r}")
     n = model.n_modes
     labels, Bm = _vectors(actuators, n, "actuators")
-    bd = _modal_inputs(disturbance, n, "disturbance")
-    Cq, Cv = _modal_outputs(outputs, velocity_outputs, n)
+    bd = modal_inputs(disturbance, n, "disturbance")
+    Cq, Cv = modal_outputs(outputs, velocity_outputs, n)
     wr = RIGID_FREQUENCY if rigid_frequency is None else float(rigid_frequency)
     is_rigid = model.frequencies <= wr
     keep = ~is_rigid if rigid == "project" else np.ones(n, dtype=bool)

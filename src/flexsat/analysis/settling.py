@@ -58,7 +58,7 @@ def settling_time(t, error, band, *, relative_to_peak: bool = False) -> np.ndarr
     bands = band if isinstance(band, tuple) else (band,) * len(signals)
     if len(bands) != len(signals):
         raise ValueError(f"band: one per error signal ({len(signals)}), got {len(bands)}")
-    outside = False
+    outside: np.ndarray | bool = False
     for e, b in zip(signals, bands):
         magnitude = np.abs(np.asarray(e, dtype=float))
         if magnitude.shape[-1] != t.size:
@@ -69,6 +69,7 @@ def settling_time(t, error, band, *, relative_to_peak: bool = False) -> np.ndarr
         if relative_to_peak:
             limit = limit * magnitude.max(axis=-1, keepdims=True)
         outside = outside | (magnitude > limit)
+    outside = np.asarray(outside)
     # index just after the last sample outside (0 when none is)
     after_last = np.where(outside.any(axis=-1), t.size - np.argmax(outside[..., ::-1], axis=-1), 0)
     return settled_at(t, after_last)

@@ -46,10 +46,10 @@ import numpy as np
 from flexsat.control.lqr import (
     WEIGHT_TOL,
     RiccatiSolution,
-    _riccati,
     check_matrix,
     check_psd,
     check_square,
+    solve_riccati,
 )
 
 __all__ = [
@@ -98,7 +98,7 @@ def _filter(A, G, C, Qn, Rn, Nn, discrete: bool) -> RiccatiSolution:
     W = G @ Qn @ G.T
     W = 0.5 * (W + W.T)
     kind = "dkalman" if discrete else "kalman"
-    dual = _riccati(A.T, C.T, W, Rn, NG, discrete, _KALMAN_LABELS, kind, checked=True)
+    dual = solve_riccati(A.T, C.T, W, Rn, NG, discrete, _KALMAN_LABELS, kind, checked=True)
     return RiccatiSolution(
         dual.gain.T,
         dual.solution,

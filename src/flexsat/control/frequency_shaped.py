@@ -189,7 +189,8 @@ def frequency_shaped_lqr(
     R : array_like (m, m)
         Control weight at low frequency (the paper's D; PD).
     break_frequency : float, str or pint.Quantity
-        ω_B, rad/s (a Quantity or a string such as ``"2 Hz"`` is converted): above it the control is penalised as ω⁴/ω_B⁴ (order 2) or ω²/ω_B² (order 1).
+        ω_B, rad/s (a Quantity or a string such as ``"2 Hz"`` is converted): above it the
+        control is penalised as ω⁴/ω_B⁴ (order 2) or ω²/ω_B² (order 1).
     order : {1, 2}
         1: augment the control (rate is the new control); 2: control and rate (acceleration
         is the new control, the paper's form).

@@ -69,7 +69,7 @@ __all__ = ["EstimatorController", "LQGController", "zoh"]
 
 DEFAULT_MEASUREMENTS = ("theta", "theta_dot")
 #: relative tolerance on the spacing of successive calls (the law is built for one period)
-_DT_TOL = 1e-6
+DT_TOL = 1e-6
 
 
 def zoh(A, B, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -225,7 +225,7 @@ class EstimatorController(SlewLaw):
         started = np.asarray(state["started"], bool)
         t_prev = np.asarray(state["t"], float)
         gap = t - t_prev[started]
-        if gap.size and np.any(np.abs(gap - self.dt) > _DT_TOL * self.dt):
+        if gap.size and np.any(np.abs(gap - self.dt) > DT_TOL * self.dt):
             raise ValueError(
                 f"dt: the law was built for a sample period of {self.dt:g} s but was "
                 f"called {float(np.max(gap)):g} s after its previous sample (build it "
@@ -248,7 +248,7 @@ class EstimatorController(SlewLaw):
         formed), u_ref (n_t, C, 1) (zero without feedforward), and the start: K0 = C⁺
         (x̂₀ = C⁺ y₀) or the given estimate s0 (C, n)."""
         dt, times = sample_times(dt, times)
-        if abs(dt - self.dt) > _DT_TOL * self.dt:
+        if abs(dt - self.dt) > DT_TOL * self.dt:
             raise ValueError(
                 f"dt: the law was built for a sample period of {self.dt:g} s, the "
                 f"run samples every {dt:g} s (build it with the simulator's "

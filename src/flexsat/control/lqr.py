@@ -295,7 +295,7 @@ _LQR_LABELS = {
 }
 
 
-def _riccati(
+def solve_riccati(
     A, B, Q, R, N, discrete: bool, labels: dict, kind: str, checked: bool = False
 ) -> RiccatiSolution:
     """Validate, solve, verify and log one Riccati design (labels name the fields)."""
@@ -421,7 +421,7 @@ def lqr(A, B, Q, R, N=None) -> RiccatiSolution:
         indefinite, (A, B) not stabilizable, the weighted pair not detectable, no
         stabilizing solution, or a relative residual above the accepted one (module docstring).
     """
-    return _riccati(A, B, Q, R, N, False, _LQR_LABELS, "lqr")
+    return solve_riccati(A, B, Q, R, N, False, _LQR_LABELS, "lqr")
 
 
 def dlqr(A, B, Q, R, N=None) -> RiccatiSolution:
@@ -430,4 +430,4 @@ def dlqr(A, B, Q, R, N=None) -> RiccatiSolution:
     Arguments, checks and result as :func:`lqr` (residual ρ_d; poles eig(A − BK) inside the
     unit circle). Gains equal ``control.dlqr``'s.
     """
-    return _riccati(A, B, Q, R, N, True, _LQR_LABELS, "dlqr")
+    return solve_riccati(A, B, Q, R, N, True, _LQR_LABELS, "dlqr")

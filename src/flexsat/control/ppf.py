@@ -45,7 +45,8 @@ Gradient, repaired (spec §2 (13) [OCR-FIX / sign error]), with V from Eq. 14
 
 .. math::
 
-    \frac{\partial J}{\partial g_k} = \mathrm{tr}\Big[V \bar P \frac{\partial\bar A}{\partial g_k}\Big]
+    \frac{\partial J}{\partial g_k}
+        = \mathrm{tr}\Big[V \bar P \frac{\partial\bar A}{\partial g_k}\Big]
         + \mathrm{tr}\Big[V K^T Q_u \frac{\partial K}{\partial g_k}\Big]
     = \big[V(\bar P B + K^T Q_u)\big]_{\xi_k,\, i(k)},
 

@@ -29,7 +29,7 @@ from flexsat.control.linear_form import (
     split_channels,
     stack_channels,
 )
-from flexsat.control.lqg import _DT_TOL, zoh
+from flexsat.control.lqg import DT_TOL, zoh
 from flexsat.input_checks import require_finite, require_positive
 
 __all__ = ["StateSpaceCompensator"]
@@ -50,7 +50,7 @@ def _state_space(system):
     return system
 
 
-def _references(references, names, sizes, units) -> np.ndarray:
+def reference_histories(references, names, sizes, units) -> np.ndarray:
     """r (C, p) from {channel: value}; a missing channel has reference 0."""
     references = {} if references is None else dict(references)
     unknown = sorted(set(references) - set(names))
@@ -140,13 +140,13 @@ class StateSpaceCompensator(Controller):
             self.dt = float(sys.dt)
             if dt is not None:
                 dt = float(require_positive(dt, "dt", "s"))
-                if abs(dt - self.dt) > _DT_TOL * self.dt:
+                if abs(dt - self.dt) > DT_TOL * self.dt:
                     raise ValueError(
                         f"system.dt: the discrete system samples every {self.dt:g} "
                         f"s, the control period dt is {dt:g} s"
                     )
         self.matrices = (A, B, C, D)
-        self.r = _references(references, names, sizes, units)
+        self.r = reference_histories(references, names, sizes, units)
 
     @property
     def n_states(self) -> int:
@@ -164,7 +164,7 @@ class StateSpaceCompensator(Controller):
         t_prev = np.asarray(state["t"], float)
         started = np.isfinite(t_prev)
         gap = t - t_prev[started]
-        if gap.size and np.any(np.abs(gap - self.dt) > _DT_TOL * self.dt):
+        if gap.size and np.any(np.abs(gap - self.dt) > DT_TOL * self.dt):
             raise ValueError(
                 f"dt: the compensator runs at a period of {self.dt:g} s but was "
                 f"called {float(np.max(gap)):g} s after its previous sample"
@@ -179,7 +179,7 @@ class StateSpaceCompensator(Controller):
     def linear_form(self, dt, times, n_cases):
         """Constant matrices (Φ, Γ, C, D), y_ref = r, no feedforward, x₀ = 0."""
         dt, times = sample_times(dt, times)
-        if abs(dt - self.dt) > _DT_TOL * self.dt:
+        if abs(dt - self.dt) > DT_TOL * self.dt:
             raise ValueError(
                 f"dt: the compensator runs at a period of {self.dt:g} s, the run "
                 f"samples every {dt:g} s"

@@ -839,8 +839,9 @@ def run_batch(
     ------
     ValueError
         Naming the field: an unknown parameter name (with the known ones), columns of different
-        lengths or non-finite values, a value the builder's ``check`` refuses, a scheduler that does not answer within
-        :data:`CONNECT_TIMEOUT` s, a store that belongs to another setup.
+        lengths or non-finite values, a value the builder's ``check`` refuses, a scheduler
+        that does not answer within :data:`CONNECT_TIMEOUT` s, a store that belongs to another
+        setup.
     """
     from distributed import as_completed
 

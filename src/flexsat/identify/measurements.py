@@ -203,9 +203,9 @@ class Measurement:
         for inputs). FRFs: function type 4, reference = the input channel. A strain channel's
         ``node_a`` is kept in ID line 2 (``"node_a <id>"``).
         """
-        from flexsat.structures.io_uff import _pyuff
+        from flexsat.structures.io_uff import require_pyuff
 
-        pyuff = _pyuff("Measurement.to_uff")
+        pyuff = require_pyuff("Measurement.to_uff")
         x = self.abscissa
         common = dict(
             abscissa_spacing=1,

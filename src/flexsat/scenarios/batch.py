@@ -55,7 +55,7 @@ from pydantic import Field, field_validator, model_validator
 from flexsat import limits
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.errors import Problem, ScenarioError, locate
-from flexsat.scenarios.fields import Document, _Section, count
+from flexsat.scenarios.fields import Document, SchemaSection, count
 from flexsat.scenarios.kind import Run, ScenarioKind
 
 #: the SI unit of every parameter a batch can vary (HubManeuverBuilder's columns)
@@ -84,7 +84,7 @@ PARAMETER_UNITS = {
 SAMPLINGS = ("grid", "random", "latin_hypercube", "sobol", "saltelli")
 
 
-class ExecutionSpec(_Section):
+class ExecutionSpec(SchemaSection):
     """How the chunks run (:func:`~flexsat.design.batch_runner.run_batch`)."""
 
     chunk_size: count(1, limits.MAX_SAMPLES) = 1000

@@ -46,7 +46,7 @@ from flexsat import limits
 from flexsat.dynamics.space_station import FT_LB as _FT_LB
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
-from flexsat.scenarios.fields import Document, _Section, check_unique_labels, count, quantity
+from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, count, quantity
 from flexsat.scenarios.kind import Run, ScenarioKind
 
 SOURCE = (
@@ -99,7 +99,7 @@ def _vector3(value, field):
     return v.tolist()
 
 
-class Cluster(_Section):
+class Cluster(SchemaSection):
     """The SGCMG pyramid and its steering."""
 
     skew: quantity("rad", positive=True) = float(np.deg2rad(54.74))
@@ -117,7 +117,7 @@ class Cluster(_Section):
         return value
 
 
-class HarmonicDemand(_Section):
+class HarmonicDemand(SchemaSection):
     """T(t) = constant + amplitude · sin(2π f t), rotor momenta per second."""
 
     constant: list[float]
@@ -137,7 +137,7 @@ class HarmonicDemand(_Section):
         return _vector3(value, info.field_name)
 
 
-class NullMotion(_Section):
+class NullMotion(SchemaSection):
     target: str | list = "preferred"
     gain: quantity("1/s", positive=True) = 1.0
 
@@ -147,7 +147,7 @@ class NullMotion(_Section):
         return _angles(value, "target")
 
 
-class CmgRunSpec(_Section):
+class CmgRunSpec(SchemaSection):
     label: str
     initial: str | list = "zero"
     duration: quantity("s", positive=True)
@@ -225,7 +225,7 @@ class CmgScenario(Document):
         return self
 
 
-class StationSection(_Section):
+class StationSection(SchemaSection):
     inertia: list = Field(
         default_factory=lambda: ["5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"]
     )
@@ -233,7 +233,7 @@ class StationSection(_Section):
     rotor_momentum: quantity("N*m*s", positive=True) = 3500.0 * _FT_LB
 
 
-class LqrSection(_Section):
+class LqrSection(SchemaSection):
     attitude: quantity("rad", positive=True) = float(np.deg2rad(1.0))
     rate: quantity("rad/s", positive=True) = float(np.deg2rad(0.02))
     momentum: quantity("N*m*s", positive=True) = 2000.0 * _FT_LB
@@ -242,14 +242,14 @@ class LqrSection(_Section):
     roll_yaw_filters: list[int] = Field(default_factory=lambda: [2])
 
 
-class StationSimulation(_Section):
+class StationSimulation(SchemaSection):
     orbits: float = Field(2.0, gt=0.0, le=50.0, allow_inf_nan=False)
     disturbance: Literal["design", "aero_substitute"] = "aero_substitute"
     initial_attitude: quantity("rad") = float(np.deg2rad(1.0))
     threshold: float = Field(1e-6, gt=0.0, allow_inf_nan=False)
 
 
-class StationRunSpec(_Section):
+class StationRunSpec(SchemaSection):
     label: str
     initial: str | list = "zero"
 

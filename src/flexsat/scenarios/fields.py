@@ -23,7 +23,7 @@ from flexsat.units import to_si
 
 
 # -- quantities --------------------------------------------------------------------------------
-def _converter(unit: str, positive: bool = False) -> Callable:
+def quantity_converter(unit: str, positive: bool = False) -> Callable:
     """Before-validator converting a quantity to SI (None passes through for optional fields)."""
 
     def convert(value, info: ValidationInfo):
@@ -53,7 +53,7 @@ def quantity(unit: str, optional: bool = False, positive: bool = False):
         Refuse zero and negative values.
     """
     return Annotated[
-        float | None if optional else float, BeforeValidator(_converter(unit, positive))
+        float | None if optional else float, BeforeValidator(quantity_converter(unit, positive))
     ]
 
 
@@ -84,19 +84,19 @@ def count(minimum: int = 1, maximum: int | None = None, optional: bool = False):
     return Annotated[int | None if optional else int, BeforeValidator(check)]
 
 
-def _given(section: BaseModel, exclude=()) -> dict[str, Any]:
+def given_fields(section: BaseModel, exclude=()) -> dict[str, Any]:
     """The fields of ``section`` that were set (not None), as keyword arguments."""
     return section.model_dump(exclude_none=True, exclude=set(exclude))
 
 
 # -- schema ------------------------------------------------------------------------------------
-class _Section(BaseModel):
+class SchemaSection(BaseModel):
     """Base of every schema model: unknown keys are errors."""
 
     model_config = ConfigDict(extra="forbid")
 
 
-class Document(_Section):
+class Document(SchemaSection):
     """Base of a scenario kind's document (:attr:`flexsat.scenarios.kind.ScenarioKind.document`):
     unknown keys are errors; it remembers the text and the folder it was loaded from."""
 
@@ -117,7 +117,7 @@ class Document(_Section):
         return yaml.safe_dump(self.model_dump(exclude_none=True), sort_keys=False)
 
 
-class _Buildable(_Section):
+class BuildableSection(SchemaSection):
     """A section that maps onto a runtime object; building it checks the runtime's own rules."""
 
     def build(self):

@@ -46,7 +46,7 @@ from flexsat.cases import get_case
 from flexsat.references import cite
 from flexsat.report.page import ReportedResult, ResultTable
 from flexsat.scenarios.errors import Problem, ScenarioError, locate
-from flexsat.scenarios.fields import Document, _Section, count, quantity
+from flexsat.scenarios.fields import Document, SchemaSection, count, quantity
 from flexsat.scenarios.kind import Run, ScenarioKind
 from flexsat.text import format_optional
 from flexsat.units import to_si
@@ -88,7 +88,7 @@ def _sampled(spec, duration: str, rate: str) -> None:
     )
 
 
-class TruthSpec(_Section):
+class TruthSpec(SchemaSection):
     """The simulated "real" structure: modes kept (default all) and modal damping (Att. 6
     Table 1 default)."""
 
@@ -99,21 +99,21 @@ class TruthSpec(_Section):
     other_damping: Annotated[float, Field(gt=0, lt=1)] = 0.01
 
 
-class APrioriSpec(_Section):
+class APrioriSpec(SchemaSection):
     """The model to update: substructure stiffness factors on the truth, Eq. 15 damping."""
 
     stiffness_scale: dict[str, Annotated[float, Field(gt=0)]] = Field(default_factory=dict)
     damping: Annotated[float, Field(gt=0, lt=1)] = 0.006
 
 
-class SensorSpec(_Section):
+class SensorSpec(SchemaSection):
     noise: Annotated[float, Field(ge=0)] = 0.01
     strain_gauges: list[tuple[int, int, Literal["x", "y", "z"]]] = Field(min_length=1)
     accelerometers: list[tuple[int, Literal["x", "y", "z"]]] = Field(default_factory=list)
     targets: list[int] = Field(min_length=1)
 
 
-class HammerSpec(_Section):
+class HammerSpec(SchemaSection):
     node: int
     direction: Literal["x", "y", "z"] = "z"
     impulse: quantity("N*s") = 0.5
@@ -126,12 +126,12 @@ class HammerSpec(_Section):
         return self
 
 
-class CameraSpec(_Section):
+class CameraSpec(SchemaSection):
     position: _vector("m")
     aim: _vector("m")
 
 
-class VideoSpec(_Section):
+class VideoSpec(SchemaSection):
     cameras: list[CameraSpec] = Field(min_length=2)
     impulse: quantity("N*s") = 0.3
     duration: quantity("s") = 4.5
@@ -149,7 +149,7 @@ class VideoSpec(_Section):
         return self
 
 
-class WheelSpec(_Section):
+class WheelSpec(SchemaSection):
     nodes: list[int] = Field(min_length=1)
     axes: list[Literal["x", "y", "z"]] = Field(min_length=1)
     torque_rms: quantity("N*m") = 0.05
@@ -173,7 +173,7 @@ class WheelSpec(_Section):
         return self
 
 
-class RecordsSpec(_Section):
+class RecordsSpec(SchemaSection):
     """Measured tests as universal files (dataset 58, :meth:`Measurement.from_uff`), paths
     relative to the scenario file: the hammer test (outputs and the hammer's force), the
     reaction-wheel test (strain gauges and commanded torques) and, optionally, the target
@@ -185,7 +185,7 @@ class RecordsSpec(_Section):
     segment: count(16, limits.MAX_SAMPLES) = 2000
 
 
-class IdentificationSpec(_Section):
+class IdentificationSpec(SchemaSection):
     band: quantity("Hz") = 10.0
     # the ERA Hankel matrix and the bootstrap's repeats grow with these: minutes at the bounds
     era_order: count(2, 1000) = 80
@@ -454,8 +454,9 @@ def _number(value) -> float | None:
 
 
 def _campaign(scenario: IdentificationScenario, case, records, progress=None):
-    """The campaign (one call into :mod:`flexsat.cases.identification_campaign`): on the test records, or
-    simulating the tests; a value it refuses is reported at the scenario's field for it."""
+    """The campaign (one call into :mod:`flexsat.cases.identification_campaign`): on the test
+    records, or simulating the tests; a value it refuses is reported at the scenario's field
+    for it."""
     from flexsat.cases.identification_campaign import identify_and_update, run_campaign
 
     try:

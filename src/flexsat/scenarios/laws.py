@@ -17,14 +17,14 @@ from flexsat.control import (
     LyapunovTracker,
     refine_estimator,
 )
-from flexsat.scenarios.fields import _given
+from flexsat.scenarios.fields import given_fields
 
 if TYPE_CHECKING:
     from flexsat.scenarios.maneuver import RunSpec
 
 
 @dataclass(frozen=True)
-class _CaseContext:
+class CaseContext:
     """What the controllers need from the case and the maneuver."""
 
     angle: float
@@ -35,31 +35,33 @@ class _CaseContext:
     dt: float = 0.0
 
 
-def _regulator(run: RunSpec, ctx: _CaseContext, reference) -> Controller:
-    return LyapunovRegulator(**_given(run.gains), target=ctx.angle, n_appendages=ctx.n_appendages)
+def _regulator(run: RunSpec, ctx: CaseContext, reference) -> Controller:
+    return LyapunovRegulator(
+        **given_fields(run.gains), target=ctx.angle, n_appendages=ctx.n_appendages
+    )
 
 
-def _tracker(run: RunSpec, ctx: _CaseContext, reference) -> Controller:
+def _tracker(run: RunSpec, ctx: CaseContext, reference) -> Controller:
     return LyapunovTracker(
         reference,
-        **_given(run.gains),
+        **given_fields(run.gains),
         appendage_inertia=ctx.appendage_inertia,
         n_appendages=ctx.n_appendages,
     )
 
 
-def _pd(run: RunSpec, ctx: _CaseContext, reference) -> Controller:
+def _pd(run: RunSpec, ctx: CaseContext, reference) -> Controller:
     options = {"target": ctx.angle, "reference": reference}
     if run.feedforward is not None:
         options["feedforward"] = run.feedforward
     if run.poles is None:
-        return PD(**_given(run.gains), **options)
+        return PD(**given_fields(run.gains), **options)
     return PD.from_rigid_poles(
         ctx.reference_inertia, run.poles.natural_frequency, run.poles.damping_ratio, **options
     )
 
 
-def _lqg(run: RunSpec, ctx: _CaseContext, reference) -> Controller:
+def _lqg(run: RunSpec, ctx: CaseContext, reference) -> Controller:
     spec, plant = run.lqg, ctx.plant
     A, B, _ = plant.state_space
     n, k = plant.ndof, plant.ndof - 1
@@ -95,11 +97,11 @@ class _Law:
     gains: tuple[str, ...]
     required: tuple[str, ...]
     reference: Literal["required", "optional", "forbidden"]
-    build: Callable[[RunSpec, _CaseContext, Any], Controller]
+    build: Callable[[RunSpec, CaseContext, Any], Controller]
     pd_options: bool = False
 
 
-_LAWS = {
+MANEUVER_LAWS = {
     "lyapunov_regulator": _Law(("g1", "g2", "g3"), ("g1", "g2"), "forbidden", _regulator),
     "lyapunov_tracker": _Law(("g1", "g2", "g3"), ("g1", "g2"), "required", _tracker),
     "pd": _Law(("kp", "kd"), ("kp", "kd"), "optional", _pd, pd_options=True),

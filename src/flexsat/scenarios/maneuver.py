@@ -46,16 +46,16 @@ from flexsat.cases import CASES, get_case
 from flexsat.dynamics.hybrid import HybridPlant
 from flexsat.maneuvers import BangBang, PseudoSquare, Sinusoidal, SmoothBangBang
 from flexsat.scenarios.fields import (
+    BuildableSection,
     Document,
-    _Buildable,
-    _converter,
-    _given,
-    _Section,
+    SchemaSection,
     check_unique_labels,
     count,
+    given_fields,
     quantity,
+    quantity_converter,
 )
-from flexsat.scenarios.laws import _LAWS
+from flexsat.scenarios.laws import MANEUVER_LAWS
 from flexsat.sim import (
     BearingFriction,
     Impulses,
@@ -66,7 +66,7 @@ from flexsat.sim import (
 )
 
 
-class ModelSpec(_Section):
+class ModelSpec(SchemaSection):
     """Model options, forwarded to the case builder as overrides."""
 
     n_modes: int | None = None  # the builder checks it (positive, at most flexsat.limits.MAX_MODES)
@@ -77,7 +77,7 @@ class ModelSpec(_Section):
 MAX_SLEW = 20 * math.pi
 
 
-class ManeuverSpec(_Section):
+class ManeuverSpec(SchemaSection):
     """The slew: ``angle`` (rad), from rest at 0, at most ten turns either way."""
 
     angle: quantity("rad")
@@ -93,7 +93,7 @@ class ManeuverSpec(_Section):
         return angle
 
 
-class SimulationSpec(_Buildable):
+class SimulationSpec(BuildableSection):
     """Run length and sampling; ``integration_step`` sets the substeps per control period."""
 
     duration: quantity("s")
@@ -104,7 +104,7 @@ class SimulationSpec(_Buildable):
 
     def build(self, **components) -> SimConfig:
         """The :class:`SimConfig`; ``components`` are its actuator, sensors and disturbances."""
-        config = SimConfig(**_given(self, exclude={"integration_step"}), **components)
+        config = SimConfig(**given_fields(self, exclude={"integration_step"}), **components)
         if self.integration_step is None:
             return config
         return dataclasses.replace(config, substeps=self._substeps(config.dt))
@@ -121,7 +121,7 @@ class SimulationSpec(_Buildable):
         return math.ceil(period / step - 1e-9)
 
 
-class ActuatorSpec(_Buildable):
+class ActuatorSpec(BuildableSection):
     saturation: quantity("N*m", optional=True) = None
     torque_constant_ratio: quantity("", optional=True) = None
 
@@ -137,10 +137,10 @@ class ActuatorSpec(_Buildable):
         return ratio
 
     def build(self) -> TorqueActuator:
-        return TorqueActuator(**_given(self))
+        return TorqueActuator(**given_fields(self))
 
 
-class SensorsSpec(_Buildable):
+class SensorsSpec(BuildableSection):
     encoder_resolution: quantity("rad", optional=True) = None
     rate: Literal["ideal", "ls_filter", "gyro"] | None = None
     # a least-squares rate over at most 1,000 samples, a polynomial of at most order 10
@@ -150,24 +150,24 @@ class SensorsSpec(_Buildable):
     strain_noise: quantity("N*m", optional=True) = None
 
     def build(self) -> Sensors:
-        return Sensors(**_given(self))
+        return Sensors(**given_fields(self))
 
 
-class FrictionSpec(_Buildable):
+class FrictionSpec(BuildableSection):
     coulomb: quantity("N*m", optional=True) = None
     viscous: quantity("N*m*s/rad", optional=True) = None
     smoothing: quantity("rad/s", optional=True) = None
 
     def build(self) -> BearingFriction:
-        return BearingFriction(**_given(self))
+        return BearingFriction(**given_fields(self))
 
 
-class ImpulseSpec(_Section):
+class ImpulseSpec(SchemaSection):
     time: quantity("s")
     impulse: quantity("N*m*s")
 
 
-class DisturbancesSpec(_Buildable):
+class DisturbancesSpec(BuildableSection):
     """Bearing friction, random torque (1 sigma, N m) and angular impulses on the hub."""
 
     friction: FrictionSpec = Field(default_factory=FrictionSpec)
@@ -186,7 +186,7 @@ class DisturbancesSpec(_Buildable):
         return {"friction": self.friction.build(), "random_torque": random, "impulses": impulses}
 
 
-class GainsSpec(_Section):
+class GainsSpec(SchemaSection):
     """Feedback gains: g1, g2, g3 (Lyapunov laws) or kp, kd (PD)."""
 
     g1: quantity("N*m/rad", optional=True) = None
@@ -196,7 +196,7 @@ class GainsSpec(_Section):
     kd: quantity("N*m*s/rad", optional=True) = None
 
 
-class PolesSpec(_Section):
+class PolesSpec(SchemaSection):
     """Rigid closed-loop poles of a PD law; ``natural_frequency`` in Hz or rad/s (a bare
     number is rad/s; :func:`flexsat.units.to_si` applies the 2π between the two)."""
 
@@ -204,7 +204,7 @@ class PolesSpec(_Section):
     damping_ratio: quantity("")
 
 
-class LQGSpec(_Section):
+class LQGSpec(SchemaSection):
     """Weights and noise intensities of an LQG law on the plant's modal state
     x = [θ, q, θ', q'] with measurements (θ, θ') (seed 001 Eqs. 38-53).
 
@@ -215,9 +215,9 @@ class LQGSpec(_Section):
     """
 
     rigid_weight: quantity("") = 1.0
-    mode_weights: list[Annotated[float, BeforeValidator(_converter(""))]] | float = 0.1
+    mode_weights: list[Annotated[float, BeforeValidator(quantity_converter(""))]] | float = 0.1
     control_weight: quantity("")
-    sensor_noise: list[Annotated[float, BeforeValidator(_converter(""))]]
+    sensor_noise: list[Annotated[float, BeforeValidator(quantity_converter(""))]]
     process_noise: quantity("")
     refine: Literal["none", "weighted", "truncated"] = "none"
     keep_modes: count(0, limits.MAX_MODES, optional=True) = None
@@ -242,7 +242,7 @@ _SHAPES = {
 _SHAPE_PARAMETERS = {"smooth_bang_bang": ("alpha",), "pseudo_square": ("rise_time",)}
 
 
-class ReferenceSpec(_Section):
+class ReferenceSpec(SchemaSection):
     """Rigid reference maneuver: a torque shape with any two of u_max, duration and its own
     parameter (one of u_max, duration for bang_bang and sinusoidal)."""
 
@@ -262,10 +262,10 @@ class ReferenceSpec(_Section):
 
     def build(self, angle: float, inertia: float):
         """The torque shape slewing ``angle`` (rad) with the rigid ``inertia`` (kg m²)."""
-        return _SHAPES[self.shape](angle, inertia, **_given(self, exclude={"shape"}))
+        return _SHAPES[self.shape](angle, inertia, **given_fields(self, exclude={"shape"}))
 
 
-class RunSpec(_Section):
+class RunSpec(SchemaSection):
     """One closed-loop run.
 
     ``law`` is ``lyapunov_regulator`` (gains g1, g2, g3), ``lyapunov_tracker`` (same gains and a
@@ -274,7 +274,7 @@ class RunSpec(_Section):
     """
 
     label: str
-    law: Literal[tuple(_LAWS)]
+    law: Literal[tuple(MANEUVER_LAWS)]
     gains: GainsSpec | None = None
     poles: PolesSpec | None = None
     reference: ReferenceSpec | None = None
@@ -283,8 +283,8 @@ class RunSpec(_Section):
 
     @model_validator(mode="after")
     def _law_inputs(self):
-        law = _LAWS[self.law]
-        given = _given(self.gains) if self.gains is not None else {}
+        law = MANEUVER_LAWS[self.law]
+        given = given_fields(self.gains) if self.gains is not None else {}
         for name in given:
             if name not in law.gains:
                 raise ValueError(
@@ -349,7 +349,7 @@ class Scenario(Document):
 
     @model_validator(mode="after")
     def _consistent(self):
-        for name in _given(self.model):
+        for name in given_fields(self.model):
             if name in self.case_overrides:
                 raise ValueError(f"model.{name}: also given in case_overrides; give it once")
         check_unique_labels(self.runs)
@@ -358,7 +358,7 @@ class Scenario(Document):
     @property
     def case_parameters(self) -> dict[str, Any]:
         """Keyword arguments of the case builder: ``case_overrides`` and the ``model`` options."""
-        return {**self.case_overrides, **_given(self.model)}
+        return {**self.case_overrides, **given_fields(self.model)}
 
     #: the document's field each input of :meth:`sim_config` (and the batch size, one case per
     #: run) comes from: where a value :func:`flexsat.sim.engine.check_resources` refuses is

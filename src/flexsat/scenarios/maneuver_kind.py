@@ -13,9 +13,9 @@ from flexsat.dynamics.hub_appendage import HubAppendage
 from flexsat.references import cite
 from flexsat.scenarios.datasets import SimulatedRuns
 from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
-from flexsat.scenarios.fields import _given
+from flexsat.scenarios.fields import given_fields
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
-from flexsat.scenarios.laws import _LAWS, _CaseContext
+from flexsat.scenarios.laws import MANEUVER_LAWS, CaseContext
 from flexsat.scenarios.maneuver import GainsSpec, PolesSpec, RunSpec, Scenario
 from flexsat.sim import SimConfig
 from flexsat.sim.engine import check_resources
@@ -51,7 +51,7 @@ def _build_case(scenario: Scenario):
         return case, case.model()
     except ValueError as exc:
         field = getattr(exc, "field", None)
-        if field is not None and field in _given(scenario.model):
+        if field is not None and field in given_fields(scenario.model):
             raise ScenarioError([locate("model", exc)]) from None
         if field is not None and field in scenario.case_overrides:
             raise ScenarioError([locate("case_overrides", exc)]) from None
@@ -70,7 +70,7 @@ def _build_case(scenario: Scenario):
         ) from None
 
 
-def _build_controller(index: int, run: RunSpec, ctx: _CaseContext) -> Controller:
+def _build_controller(index: int, run: RunSpec, ctx: CaseContext) -> Controller:
     """The run's controller; a refused value is placed in the run's reference, gains or poles
     by the field its error names."""
     path = "runs" + item_path(index, run.label)
@@ -81,7 +81,7 @@ def _build_controller(index: int, run: RunSpec, ctx: _CaseContext) -> Controller
         except ValueError as exc:
             raise ScenarioError([locate(path + ".reference", exc)]) from None
     try:
-        return _LAWS[run.law].build(run, ctx, reference)
+        return MANEUVER_LAWS[run.law].build(run, ctx, reference)
     except ValueError as exc:
         field = getattr(exc, "field", None)
         section = next(
@@ -128,7 +128,7 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
     controllers: dict[str, Controller] = {}
     if built is not None:
         case, model = built
-        ctx = _CaseContext(
+        ctx = CaseContext(
             scenario.maneuver.angle,
             case.reference_inertia,
             model.appendage_inertia,

@@ -36,7 +36,7 @@ from flexsat import limits
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import item_path
-from flexsat.scenarios.fields import Document, _Section, check_unique_labels, quantity
+from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, quantity
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 
 #: the three time responses of every run
@@ -46,7 +46,7 @@ OUTPUTS = ("tip_error_n1", "tip_error_n2", "tip_rotation")
 OUTPUT_UNITS = ("m", "m", "rad")
 
 
-class PPFSettings(_Section):
+class PPFSettings(SchemaSection):
     """The problem and optimiser settings shared by every run."""
 
     zeta_f: float = Field(0.1, ge=0.0, allow_inf_nan=False)
@@ -67,7 +67,7 @@ class PPFSettings(_Section):
         return value
 
 
-class PPFSimulation(_Section):
+class PPFSimulation(SchemaSection):
     """Length and control rate of the time responses."""
 
     duration: quantity("s", positive=True)
@@ -84,7 +84,7 @@ class PPFSimulation(_Section):
         return self
 
 
-class GoalSpec(_Section):
+class GoalSpec(SchemaSection):
     """J_goal from J_init (module docstring)."""
 
     rule: Literal["paper", "ratio", "offset"]
@@ -107,7 +107,7 @@ class GoalSpec(_Section):
             ) from None
 
 
-class PPFRunSpec(_Section):
+class PPFRunSpec(SchemaSection):
     """One Tables 1–3 case under one goal rule."""
 
     label: str

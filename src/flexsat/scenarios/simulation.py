@@ -50,10 +50,10 @@ from flexsat.scenarios.datasets import SimulatedRuns
 from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
     Document,
-    _given,
-    _Section,
+    SchemaSection,
     check_unique_labels,
     count,
+    given_fields,
     quantity,
 )
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
@@ -67,7 +67,7 @@ from flexsat.scenarios.simulation_laws import (
 from flexsat.scenarios.simulation_plants import PlantContext, simulation_cases, simulation_plants
 
 
-class SimulationSettings(_Section):
+class SimulationSettings(SchemaSection):
     """Run length, control rate, integrator substeps per control period and the noise seed."""
 
     duration: quantity("s")
@@ -76,7 +76,7 @@ class SimulationSettings(_Section):
     seed: count(0, limits.MAX_SEED, optional=True) = None
 
 
-class ChannelSensorSpec(_Section):
+class ChannelSensorSpec(SchemaSection):
     """A sensor on one output channel (values in the channel's unit)."""
 
     noise: Value | None = None
@@ -85,7 +85,7 @@ class ChannelSensorSpec(_Section):
     range: Value | None = None
 
 
-class ChannelActuatorSpec(_Section):
+class ChannelActuatorSpec(SchemaSection):
     """An actuator on one input channel (values in the channel's unit, per second for the rate
     limit)."""
 
@@ -95,12 +95,12 @@ class ChannelActuatorSpec(_Section):
     bias: Value | None = None
 
 
-class ImpulseSpec(_Section):
+class ImpulseSpec(SchemaSection):
     time: quantity("s")
     impulse: Value
 
 
-class ChannelDisturbanceSpec(_Section):
+class ChannelDisturbanceSpec(SchemaSection):
     """A disturbance on one input channel: Gaussian (1σ, held over each control period) and
     impulses (the channel's unit × s)."""
 
@@ -108,7 +108,7 @@ class ChannelDisturbanceSpec(_Section):
     impulses: list[ImpulseSpec] = Field(default_factory=list, max_length=limits.MAX_SAMPLES)
 
 
-class SimulationRunSpec(_Section):
+class SimulationRunSpec(SchemaSection):
     """One closed-loop run: a law (:func:`~flexsat.scenarios.simulation_laws.simulation_laws`),
     its gains and its target, held as instances of the law's ``Parameters`` and ``Target``
     once validated."""
@@ -247,7 +247,7 @@ def _located(path: str, exc: Exception) -> ScenarioError:
     return ScenarioError([locate(path, exc)])
 
 
-def _build_plant(scenario: SimulationScenario):
+def build_plant(scenario: SimulationScenario):
     from flexsat.dynamics.plant import Plant
 
     try:
@@ -297,7 +297,7 @@ def _config(scenario: SimulationScenario, plant):
                         )
                     ]
                 )
-            values = _given(spec)
+            values = given_fields(spec)
             if "impulses" in values:
                 impulses = values.pop("impulses")
                 values["impulse_times"] = tuple(i["time"] for i in impulses)
@@ -308,7 +308,7 @@ def _config(scenario: SimulationScenario, plant):
                 raise _located(f"{role}.{name}", exc) from None
         return out
 
-    settings = _given(scenario.simulation)
+    settings = given_fields(scenario.simulation)
     try:
         config = SimConfig(
             **settings,
@@ -354,7 +354,7 @@ class SimulationKind(ScenarioKind):
         from flexsat.control import Controller
         from flexsat.references import cite
 
-        plant = _build_plant(scenario)
+        plant = build_plant(scenario)
         try:
             x0 = plant.state_from(**scenario.initial)
         except ValueError as exc:

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, model_validator
 
-from flexsat.scenarios.fields import _Section
+from flexsat.scenarios.fields import SchemaSection
 
 #: a value as written in YAML: a number, a quantity string, or a (nested) list of them
 Value = float | int | str | list[Any]
@@ -67,7 +67,7 @@ def target_quaternion(target: dict) -> np.ndarray | None:
     return to_si_array(target["attitude"], "", "target.attitude")
 
 
-class AttitudeTarget(_Section):
+class AttitudeTarget(SchemaSection):
     """The attitude an attitude law turns to: 1-2-3 Euler angles (rad) or a unit quaternion
     (scalar first), one of them."""
 
@@ -105,7 +105,7 @@ class AttitudeLaw:
 class GibbsLyapunov(AttitudeLaw):
     """:class:`flexsat.control.GibbsLyapunovLaw`."""
 
-    class Parameters(_Section):
+    class Parameters(SchemaSection):
         k: Value
         A: Value
 
@@ -115,7 +115,7 @@ class GibbsLyapunov(AttitudeLaw):
 class MRP(AttitudeLaw):
     """:class:`flexsat.control.MRPLaw`."""
 
-    class Parameters(_Section):
+    class Parameters(SchemaSection):
         K: Value
         P: Value
 
@@ -125,19 +125,19 @@ class MRP(AttitudeLaw):
 class QuaternionPD(AttitudeLaw):
     """:class:`flexsat.control.QuaternionPD`."""
 
-    class Parameters(_Section):
+    class Parameters(SchemaSection):
         Kp: Value
         Kd: Value
 
     control_class = "QuaternionPD"
 
 
-class LQRWeights(_Section):
+class LQRWeights(SchemaSection):
     state_weights: Value
     input_weights: Value = 1.0
 
 
-class NoGains(_Section):
+class NoGains(SchemaSection):
     """A law without parameters."""
 
 

@@ -48,10 +48,10 @@ from flexsat.scenarios.datasets import concat_runs
 from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
     Document,
-    _given,
-    _Section,
+    SchemaSection,
     check_unique_labels,
     count,
+    given_fields,
     quantity,
 )
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
@@ -64,7 +64,7 @@ Weights = float | list[float]
 OPEN_LOOP = "open loop"
 
 
-class SlewManeuverSpec(_Section):
+class SlewManeuverSpec(SchemaSection):
     """The nominal rigid-body maneuver (seed 003 Eqs. 9–21)."""
 
     target: dict[str, Any]
@@ -89,14 +89,14 @@ class SlewManeuverSpec(_Section):
         return target
 
 
-class ControllerSpec(_Section):
+class ControllerSpec(SchemaSection):
     """The reduced design model and the gain schedule."""
 
     modes: count(1, 500) = 10
     linearization_points: count(1, 1000) = 11
 
 
-class GoalsSpec(_Section):
+class GoalsSpec(SchemaSection):
     """The goals of seed 003 L792–L801 (:class:`~flexsat.sim.slew_goals.SlewGoals`)."""
 
     angle_fraction: float = Field(0.03, gt=0.0)
@@ -104,7 +104,7 @@ class GoalsSpec(_Section):
     deflection_ratio: float = Field(10.0, gt=0.0)
 
 
-class SlewWeightsSpec(_Section):
+class SlewWeightsSpec(SchemaSection):
     """Diagonal weights of the perturbation design (module docstring)."""
 
     attitude: Weights
@@ -115,7 +115,7 @@ class SlewWeightsSpec(_Section):
     force: Weights | None = None
 
 
-class SlewRunSpec(_Section):
+class SlewRunSpec(SchemaSection):
     """One closed-loop run: its weights, shaping, forces and feedforward."""
 
     label: str
@@ -328,9 +328,9 @@ def _plants(scenario: SlewScenario):
     """(truth, design model): the case's flexible plant as given, and the same plant on the
     controller's first modes."""
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
-    from flexsat.scenarios.simulation import _build_plant
+    from flexsat.scenarios.simulation import build_plant
 
-    truth = _build_plant(scenario)
+    truth = build_plant(scenario)
     if not isinstance(truth, FlexibleSpacecraft):
         raise ScenarioError(
             [
@@ -429,7 +429,7 @@ class SlewKind(ScenarioKind):
             "maneuver",
         )
         try:
-            config = SimConfig(**_given(scenario.simulation))
+            config = SimConfig(**given_fields(scenario.simulation))
         except ValueError as exc:
             raise ScenarioError([Problem("simulation", f"{exc}")]) from None
         laws = _laws(scenario, truth, design_plant, nominal, config.dt)

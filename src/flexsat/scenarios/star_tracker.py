@@ -34,9 +34,9 @@ from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
+    BuildableSection,
     Document,
-    _Buildable,
-    _Section,
+    SchemaSection,
     check_unique_labels,
     count,
     quantity,
@@ -52,7 +52,7 @@ SOURCE = (
 MAX_ATTITUDES = 100_000
 
 
-class CatalogSpec(_Section):
+class CatalogSpec(SchemaSection):
     """The on-board catalogue."""
 
     source: Literal["synthetic", "hipparcos"] = "synthetic"
@@ -77,7 +77,7 @@ class CatalogSpec(_Section):
         return load_hipparcos(path if path.is_absolute() else folder / path, self.magnitude_limit)
 
 
-class CameraSpec(_Buildable):
+class CameraSpec(BuildableSection):
     """One star camera (:class:`flexsat.attitude.star_camera.StarCamera`)."""
 
     field_of_view: quantity("rad", positive=True) = float(np.radians(12.0))
@@ -100,7 +100,7 @@ class CameraSpec(_Buildable):
         )
 
 
-class IdentificationSpec(_Section):
+class IdentificationSpec(SchemaSection):
     """The paper's acceptance rule (seed 000 L280)."""
 
     tolerance: quantity("rad", positive=True) = float(np.radians(5.0 / 3600.0))
@@ -108,7 +108,7 @@ class IdentificationSpec(_Section):
     min_fields: count(1) = 2
 
 
-class StarRunSpec(_Section):
+class StarRunSpec(SchemaSection):
     """One Monte Carlo of random attitudes."""
 
     label: str

@@ -35,7 +35,7 @@ from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import item_path
-from flexsat.scenarios.fields import Document, _Section, check_unique_labels, quantity
+from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, quantity
 from flexsat.scenarios.kind import Run, ScenarioKind
 
 #: the gains each law takes (seed 000 Eqs. 14-15, 18 and 20, 24-25)
@@ -46,7 +46,7 @@ LAW_GAINS = {
 }
 
 
-class TetherSystem(_Section):
+class TetherSystem(SchemaSection):
     """Subsatellite mass, reference length L and the orbit (altitude or rate)."""
 
     mass: quantity("kg", positive=True)
@@ -69,7 +69,7 @@ class TetherSystem(_Section):
         )
 
 
-class TetherInitial(_Section):
+class TetherInitial(SchemaSection):
     """Initial length and libration (rates default to rest)."""
 
     length: quantity("m", positive=True)
@@ -80,7 +80,7 @@ class TetherInitial(_Section):
     roll_rate: quantity("rad/s") = 0.0
 
 
-class TetherSimulation(_Section):
+class TetherSimulation(SchemaSection):
     """Run length in orbits, output (or control) samples per orbit and the integrator."""
 
     orbits: float = Field(gt=0, allow_inf_nan=False)
@@ -98,7 +98,7 @@ class TetherSimulation(_Section):
         return self
 
 
-class TetherRunSpec(_Section):
+class TetherRunSpec(SchemaSection):
     """One law with its gains and final length."""
 
     label: str

@@ -740,7 +740,7 @@ def run_reduced(
     A divergence, or the bound met in modal coordinates, returns None: :func:`run` then
     raises as the Python loop does.
     """
-    from flexsat.sim.recording import _references
+    from flexsat.sim.recording import reference_histories
 
     names = [c.name for c in plant.outputs]
     axis = plant.maneuver
@@ -776,7 +776,7 @@ def run_reduced(
     )
     n_t = a.n_t
     t = config.dt * np.arange(n_t)
-    refs = _references(controller, t, nc)
+    refs = reference_histories(controller, t, nc)
     if not a.lean or a.inertia is None or not a.Q.shape[0] or refs is None:
         return None
     target = np.broadcast_to(np.asarray(controller.target, float), (nc,))
@@ -905,7 +905,7 @@ def _divergence(a, config, seeds, stop, Ucmd):
     """The :class:`~flexsat.sim.engine.SimulationDiverged` of the Python loop: at the first
     sample where any case diverged, the cases bad there and the state growth of the batch
     (the states around that sample recomputed by a run of the batch up to it)."""
-    from flexsat.sim.engine import _diverged
+    from flexsat.sim.engine import divergence_error
 
     k = int(stop[stop >= 0].min())
     nc, n, m = a.nc, a.n, a.m
@@ -918,4 +918,4 @@ def _divergence(a, config, seeds, stop, Ucmd):
         a.block(c0, c1, seeds, k + 1, X[c0:c1], *(r[c0:c1] for r in rec), F[c0:c1], st[c0:c1])
     X = X[:, max(k - 1, 0) :]  # a dense run (run() reruns a modal one dense)
     prev = float(np.abs(X[:, 0]).max()) if k > 0 else 0.0
-    return _diverged(X[:, -1], Ucmd[:, k], config.dt * k, k, prev, config)
+    return divergence_error(X[:, -1], Ucmd[:, k], config.dt * k, k, prev, config)

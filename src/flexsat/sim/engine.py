@@ -62,7 +62,7 @@ class SimulationDiverged(ValueError):
         self.cases, self.time, self.cause = cases, time, cause
 
 
-def _diverged(
+def divergence_error(
     x, u_cmd, time: float, k: int, state_prev: float, config: SimConfig
 ) -> SimulationDiverged:
     """The exception for a divergence found at sample ``k``: which cases, when, likely why."""
@@ -490,7 +490,7 @@ def simulate(
         state_size = np.abs(x).max()
         size = np.abs(cmds[0]).max() if len(cmds) == 1 else max(np.abs(c).max() for c in cmds)
         if not (state_size <= DIVERGENCE_BOUND and size <= DIVERGENCE_BOUND):
-            raise _diverged(x, np.column_stack(cmds), t[k], k, state_prev, config)
+            raise divergence_error(x, np.column_stack(cmds), t[k], k, state_prev, config)
         state_prev = state_size
         u = None if single else np.zeros((nc, m))
         for i, ((sl, act), c) in enumerate(zip(acts, cmds)):

@@ -175,7 +175,7 @@ class Recorder:
         for k in () if axis is None else (axis.angle, axis.rate):
             if k in self.outputs:
                 put(k, self.outputs[k], outs[k].unit)
-        refs = _references(controller, t, nc) if axis is not None else None
+        refs = reference_histories(controller, t, nc) if axis is not None else None
         if refs is not None:
             put(f"{axis.angle}_ref", refs[0], "rad")
             put(f"{axis.rate}_ref", refs[1], "rad/s")
@@ -242,7 +242,7 @@ def _size(channels, name: str) -> int:
     return next(c.size for c in channels if c.name == name)
 
 
-def _references(controller, t, nc):
+def reference_histories(controller, t, nc):
     """(θ_ref, θ'_ref) on the sample grid, (n_t, n_cases), or None for a law without them (no
     ``target`` for the maneuver angle: a state-space compensator, a scheduled gain)."""
     if not hasattr(controller, "reference_at") or not hasattr(controller, "target"):

@@ -65,7 +65,7 @@ if TYPE_CHECKING:
 
 # ------------------------------------------------------------------------------------------------
 # reading
-def _pyuff(caller: str) -> ModuleType:
+def require_pyuff(caller: str) -> ModuleType:
     try:
         import pyuff
     except ImportError as exc:
@@ -76,7 +76,7 @@ def _pyuff(caller: str) -> ModuleType:
 
 
 def _read(path: str | Path, caller: str) -> tuple[Path, dict[int, list[UffDataset]]]:
-    pyuff = _pyuff(caller)
+    pyuff = require_pyuff(caller)
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(errno.ENOENT, "universal file not found", str(path))
@@ -430,7 +430,7 @@ def write_modal_uff(model: ModalModel, path: str | Path) -> None:
     ImportError
         pyuff is not installed.
     """
-    pyuff = _pyuff("write_modal_uff")
+    pyuff = require_pyuff("write_modal_uff")
     nodes, xyz = [int(n) for n in model.node_ids], model.coordinates
     datasets = [
         pyuff.prepare_164(
