@@ -342,11 +342,11 @@ def linear_form(s: PlantSubject) -> None:
     if p.step is not None:
         h = 1e-3 * scale_x / magnitude(xd)
 
-        def quotient(e):
+        def step_quotient(e):
             return (np.asarray(p.step(x, u, e)) - x) / e
 
         def extrapolated(e):
-            return 2 * quotient(e / 2) - quotient(e)
+            return 2 * step_quotient(e / 2) - step_quotient(e)
 
         r, err = _richardson(extrapolated, h)
         tol = 3 * err.max() + 64 * EPS * scale_x / h
@@ -419,10 +419,13 @@ def energy(s: PlantSubject) -> None:
     if Q is not None:
         Q = np.asarray(Q)
         quad = 0.5 * np.einsum("...i,...ij,...j->...", x, Q, x)
+        energy = p.energy(x)
+        # a plant declares an energy matrix only for an energy it defines (Plant.energy_matrix)
+        assert energy is not None, "energy_matrix: given, but energy(x) is None"
         assert_close(
             "energy_matrix",
             quad,
-            p.energy(x),
+            energy,
             4 * p.nx * EPS * magnitude(Q) * magnitude(x) ** 2,
             "½ xᵀ Q x vs energy(x)",
         )
