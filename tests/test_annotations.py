@@ -53,6 +53,7 @@ COMPLETE = (
     "cases/tamu_grid.py",
     "cases/tamu_trade.py",
     "catalog.py",
+    "control/base.py",
     "design/monte_carlo_statistics.py",
     "design/parameter_space.py",
     "design/slew_shaping.py",
