@@ -67,6 +67,7 @@ COMPLETE = (
     "lazy.py",
     "limits.py",
     "netcdf.py",
+    "plugins.py",
     "references.py",
     "text.py",
     "units.py",
