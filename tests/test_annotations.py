@@ -69,6 +69,9 @@ COMPLETE = (
     "netcdf.py",
     "plugins.py",
     "references.py",
+    "report/page.py",
+    "scenarios/errors.py",
+    "scenarios/kind.py",
     "text.py",
     "units.py",
 )
