@@ -35,6 +35,7 @@ COMPLETE = (
     "attitude",
     "maneuvers",
     "structures",
+    "testing",
     "analysis/controllability.py",
     "analysis/gramians.py",
     "analysis/homotopy.py",
