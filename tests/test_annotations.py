@@ -73,6 +73,7 @@ COMPLETE = (
     "report/page.py",
     "scenarios/errors.py",
     "scenarios/kind.py",
+    "sim/config.py",
     "text.py",
     "units.py",
 )
