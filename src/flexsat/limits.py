@@ -71,12 +71,14 @@ def _bytes(n: float) -> str:
     return f"{n:.0f} B"
 
 
-def check_count(value: int, limit: int, field: str, what: str, hint: str = "") -> None:
+def check_count(value: float, limit: int, field: str, what: str, hint: str = "") -> None:
     """Refuse ``value`` above ``limit`` with ``"field: <what> = value exceeds the limit ..."``.
 
     Parameters
     ----------
-    value, limit : int
+    value : float
+        The count (a product such as duration × control_rate need not be an integer).
+    limit : int
     field : str
         The input to blame (message head).
     what : str

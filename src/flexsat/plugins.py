@@ -95,8 +95,9 @@ def entry_point_objects(
     if group not in GROUPS:
         raise ValueError(f"group: must be one of {', '.join(GROUPS)}, got {group!r}")
     reserved = reserved or {}
-    objects = {}
+    objects: dict[str, Any] = {}
     for name, obj in _load_group(group).items():
+        rule: str | None
         if name in reserved:
             rule = f"its name is taken by {reserved[name]}; rename the entry point"
         else:

@@ -16,8 +16,16 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.control.linear_form import LinearLaw
+    from flexsat.maneuvers.torque_shapes import TorqueShape
+    from flexsat.units import FloatArray
 
 
 class Controller(ABC):
@@ -45,17 +53,17 @@ class Controller(ABC):
         set points lists them)."""
         return []
 
-    def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
+    def initial_state(self, n_cases: int) -> dict[str, FloatArray]:
         return {}
 
     @abstractmethod
     def __call__(
-        self, t: float, y: Mapping[str, np.ndarray], state: dict[str, np.ndarray]
-    ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[FloatArray | Mapping[str, FloatArray], dict[str, FloatArray]]:
         """Return the commands (a dict by written channel, or a bare array when the law writes
         one) and the next internal state."""
 
-    def linear_form(self, dt: float, times: np.ndarray, n_cases: int):
+    def linear_form(self, dt: float, times: FloatArray, n_cases: int) -> LinearLaw | None:
         """The law's compiled-loop form for a run, or None when it is not linear.
 
         Parameters
@@ -86,24 +94,26 @@ class SlewLaw(Controller):
     """
 
     #: final maneuver angle, rad (array over cases)
-    target: np.ndarray
+    target: FloatArray
     #: open-loop reference the law tracks, or None (a step to the target)
-    reference = None
+    reference: TorqueShape | None = None
+    #: the reference on the sample grid (times, θ, θ', θ'', u), set by :meth:`tabulate_reference`
+    _table: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray] | None
 
     def _batched(self) -> list[tuple[int, ...]]:
         return [np.shape(self.target)]
 
-    def tabulate_reference(self, times: np.ndarray) -> None:
+    def tabulate_reference(self, times: npt.ArrayLike) -> None:
         """Evaluate the reference once on the sample grid; :meth:`reference_at` then looks the
         samples up instead of re-evaluating the shape (the simulator calls this before its time
         loop; the shapes are analytic, so the table holds exactly what a direct call returns)."""
         self._table = None
         if self.reference is not None:
-            times = np.asarray(times, float)
-            r = self.reference(times[:, None])
-            self._table = (times, r.theta, r.theta_dot, r.theta_ddot, r.u)
+            grid = np.asarray(times, float)
+            r = self.reference(grid[:, None])
+            self._table = (grid, r.theta, r.theta_dot, r.theta_ddot, r.u)
 
-    def reference_at(self, t: float):
+    def reference_at(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """(θ_ref, θ'_ref, θ''_ref, u_ref) at time t; a step to the target when no reference."""
         table = getattr(self, "_table", None)
         if table is not None:

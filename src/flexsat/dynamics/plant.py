@@ -27,10 +27,17 @@ walks through it.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray, QuantityArrayLike
 
 #: Kind of a channel located on a structure -> its SI unit (what a test records or applies at a
 #: node). "strain" is the relative rotation of the two ends of a gauge patch
@@ -81,7 +88,7 @@ class Channel:
     direction: str | None = None
     node_a: int | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.kind is None:
             if not isinstance(self.name, str) or not self.name.isidentifier():
                 raise ValueError(f"channel name: must be an identifier, got {self.name!r}")
@@ -163,7 +170,8 @@ class ManeuverChannels:
 
 def channel_slices(channels: tuple[Channel, ...]) -> dict[str, slice]:
     """Where each channel sits in the concatenated vector of ``channels``."""
-    out, start = {}, 0
+    out: dict[str, slice] = {}
+    start = 0
     for ch in channels:
         out[ch.name] = slice(start, start + ch.size)
         start += ch.size
@@ -204,7 +212,7 @@ class Plant(ABC):
         noise, inputs for random disturbances); fixing the order keeps every case's noise
         bit-reproducible from its seed whatever else is measured. Default: every output but
         the whole ``state``, then every input."""
-        given = getattr(self, "_noise_channels", None)
+        given: tuple[str, ...] | None = getattr(self, "_noise_channels", None)
         if given is not None:
             return given
         return tuple(c.name for c in self.outputs if c.name != "state") + tuple(
@@ -212,7 +220,7 @@ class Plant(ABC):
         )
 
     @noise_channels.setter
-    def noise_channels(self, names) -> None:
+    def noise_channels(self, names: Iterable[str]) -> None:
         self._noise_channels = tuple(names)
 
     #: True when f is not identically zero
@@ -238,31 +246,33 @@ class Plant(ABC):
         return channel_slices(self.inputs)
 
     @abstractmethod
-    def linear_part(self) -> tuple[np.ndarray, np.ndarray]:
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """(A, B): (n_x, n_x) and (n_x, m), or with a leading case axis when dispersed."""
 
     @property
-    def force_matrix(self) -> np.ndarray | None:
+    def force_matrix(self) -> FloatArray | None:
         """B_f (n_x, n_f) of the nonlinear force, or None for a linear plant."""
         return None
 
-    def nonlinear_force(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+    def nonlinear_force(self, x: FloatArray, u: FloatArray) -> FloatArray:
         """f(x, u), shape (..., n_f); the plant's own nonlinear terms only (disturbance
         forces such as bearing friction are added by the engine on their input channel)."""
         raise NotImplementedError(f"{type(self).__name__} is linear: it has no nonlinear force")
 
-    def force_jacobian(self, x: np.ndarray, u: np.ndarray):
+    def force_jacobian(self, x: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray] | None:
         """(∂f/∂x, ∂f/∂u) at (x, u), shapes (..., n_f, n_x) and (..., n_f, m); None when the
         plant gives no analytic Jacobian (callers then difference :meth:`nonlinear_force`)."""
         return None
 
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         """(C, D, D_f) with y = C x + D u + D_f f_in for a linear output, where f_in (..., m)
-        is any extra force added on the input channels (friction); None when the output is
-        nonlinear (then :meth:`output` computes it)."""
+        is any extra force added on the input channels (friction), D_f None when f_in does not
+        reach it; None when the output is nonlinear (then :meth:`output` computes it)."""
         return None
 
-    def output(self, name: str, x: np.ndarray, u: np.ndarray, f_in=None) -> np.ndarray:
+    def output(
+        self, name: str, x: FloatArray, u: FloatArray, f_in: FloatArray | None = None
+    ) -> FloatArray:
         """Value of output channel ``name`` at states x (..., n_x), inputs u (..., m) and extra
         input-channel force f_in (..., m) or None; shape (...,) or (..., size)."""
         mats = self.output_matrices(name)
@@ -271,7 +281,7 @@ class Plant(ABC):
                 f"{type(self).__name__}.output: {name!r} has no output matrices and no output()"
             )
         C, D, Df = mats
-        y = x @ C.T + u @ D.T
+        y: FloatArray = x @ C.T + u @ D.T
         if f_in is not None and Df is not None:
             y = y + f_in @ Df.T
         return y[..., 0] if self._size(name) == 1 else y
@@ -279,11 +289,11 @@ class Plant(ABC):
     def _size(self, name: str) -> int:
         return find_channel(self.outputs, name, "output", type(self).__name__).size
 
-    def initial_state(self, n_cases: int) -> np.ndarray:
+    def initial_state(self, n_cases: int) -> FloatArray:
         """Rest state, (n_cases, n_x)."""
         return np.zeros((n_cases, self.nx))
 
-    def state_from(self, **values) -> np.ndarray:
+    def state_from(self, **values: QuantityArrayLike) -> FloatArray:
         """Initial state (n_x,) from named initial values (a scenario's ``initial``), SI.
 
         Every plant takes ``state`` (the whole vector) and any output channel that reads state
@@ -320,7 +330,7 @@ class Plant(ABC):
             x[index] = v
         return x
 
-    def _state_coordinates(self, name: str) -> np.ndarray | None:
+    def _state_coordinates(self, name: str) -> npt.NDArray[np.intp] | None:
         """Indices of the state entries output ``name`` reads one to one, or None."""
         if name not in {c.name for c in self.outputs}:
             return None
@@ -341,30 +351,30 @@ class Plant(ABC):
             if c.name != "state" and self._state_coordinates(c.name) is not None
         )
 
-    def normalize(self, x: np.ndarray) -> np.ndarray:
+    def normalize(self, x: FloatArray) -> FloatArray:
         """Project a state back onto its manifold after a step (identity by default)."""
         return x
 
     #: set by plants with their own integrator: ``step(x, u, h)`` advances one step h with u
     #: held; None uses the engine's exponential integrators
-    step = None
+    step: Callable[[FloatArray, FloatArray, float], FloatArray] | None = None
 
-    def energy(self, x: np.ndarray) -> np.ndarray | None:
+    def energy(self, x: FloatArray) -> FloatArray | None:
         """Total mechanical energy, J, shape (...,); None where undefined."""
         return None
 
     #: Q (n_x, n_x), symmetric, with :meth:`energy` E(x) = ½ xᵀ Q x, for a plant whose energy
     #: is that quadratic form (a linear structure: Q = blockdiag(K, M) for x = [q, q']); None
     #: otherwise. The compiled loop evaluates it per sample instead of recording the states
-    energy_matrix = None
+    energy_matrix: FloatArray | None = None
 
-    def power(self, x: np.ndarray, u: np.ndarray) -> np.ndarray | None:
+    def power(self, x: FloatArray, u: FloatArray) -> FloatArray | None:
         """Rate of :meth:`energy` along the motion, dE/dt = (work rate of the inputs) −
         (dissipation), W, shape (...,), at states x (..., n_x) and inputs u (..., m); None where
         undefined. :func:`flexsat.testing.check_plant` compares it with ∇E · ẋ."""
         return None
 
-    def momentum(self, x: np.ndarray) -> np.ndarray | None:
+    def momentum(self, x: FloatArray) -> FloatArray | None:
         """Total angular momentum in inertial axes, N m s, shape (..., 3) or (...,) for a
         planar plant; None where undefined."""
         return None

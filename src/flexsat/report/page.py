@@ -11,11 +11,15 @@ into a folder published whole or not at all (:func:`flexsat.report.publish.write
 from __future__ import annotations
 
 import html
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from flexsat.report.publish import write_atomically, write_metrics_and_results
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 
 def format_metric(value: float | None) -> str:
@@ -23,7 +27,7 @@ def format_metric(value: float | None) -> str:
     return "n/a" if value is None else f"{value:.4g}"
 
 
-def html_table(headings, rows) -> str:
+def html_table(headings: Iterable[object], rows: Iterable[Iterable[object]]) -> str:
     """An HTML table: a heading row, then one row per item of ``rows`` (cells shown with
     ``str``, every text escaped)."""
     esc = html.escape
@@ -34,7 +38,7 @@ def html_table(headings, rows) -> str:
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
-def metric_rows(records: list[dict]) -> list[tuple[str, list[str]]]:
+def metric_rows(records: list[dict[str, Any]]) -> list[tuple[str, list[str]]]:
     """Metrics table, one row per metric and one formatted column per run of ``records``."""
     names = [key for key in records[0] if key != "run"]
     return [(name, [format_metric(r[name]) for r in records]) for name in names]
@@ -57,7 +61,9 @@ pre { background: #f4f4f4; padding: 1em; overflow-x: auto; }
 </style>"""
 
 
-def report_page(result, body: str, title: str = "flexsat report", case: str | None = None) -> str:
+def report_page(
+    result: ReportedResult, body: str, title: str = "flexsat report", case: str | None = None
+) -> str:
     """A report's index.html: the heading, the scenario and its case (``case``, default the
     scenario's) with the case's source, ``body`` (HTML), and the scenario as given."""
     esc = html.escape
@@ -88,7 +94,7 @@ class ResultTable:
     caption: str | None = None
 
 
-def metrics_table(records: list[dict]) -> ResultTable:
+def metrics_table(records: list[dict[str, Any]]) -> ResultTable:
     """One column per run and a row per metric; transposed when the runs outnumber the metrics
     (a batch's table: a row per metric of the cases and per requirement), so that it fits."""
     names = [key for key in records[0] if key != "run"]
@@ -116,12 +122,12 @@ class ReportedResult:
     scenario: Any
     case_source: str
 
-    def metrics_records(self) -> list[dict]:
+    def metrics_records(self) -> list[dict[str, Any]]:
         """One JSON-ready dict per run: ``"run"`` (the label) and its metrics (None: no
         value, not settled, not applicable)."""
         raise NotImplementedError
 
-    def dataset(self):
+    def dataset(self) -> xr.Dataset:
         """Everything the run produced, as one :class:`xarray.Dataset` (``results.nc``)."""
         raise NotImplementedError
 
@@ -129,15 +135,15 @@ class ReportedResult:
         """The case the page names."""
         return self.scenario.case
 
-    def write_data(self, folder: Path, ds) -> None:
+    def write_data(self, folder: Path, ds: xr.Dataset) -> None:
         """The data files of the report: ``metrics.json`` and ``results.nc`` (``ds``)."""
         write_metrics_and_results(self, folder, ds)
 
-    def figures(self, folder: Path, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         """Draw the figures into ``folder``; their file names, in page order."""
         return []
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         """The page's HTML between the heading and the scenario text (``figures``: the files
         :meth:`figures` wrote)."""
         raise NotImplementedError
@@ -147,7 +153,7 @@ class ReportedResult:
         return metrics_table(self.metrics_records())
 
 
-def write_report(result: ReportedResult, out_dir) -> Path:
+def write_report(result: ReportedResult, out_dir: str | Path) -> Path:
     """Write the report of ``result`` as the folder ``out_dir``, whole or not at all
     (:func:`flexsat.report.publish.write_atomically`).
 

@@ -11,11 +11,15 @@ yet, from the ``field: rule`` form of their text (:func:`_locate`).
 from __future__ import annotations
 
 import re
-from typing import get_args
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, get_args
 
 from pydantic import BaseModel
 
 from flexsat.input_checks import FieldError
+
+if TYPE_CHECKING:
+    from pydantic_core import ErrorDetails
 
 
 class Problem(str):
@@ -41,11 +45,11 @@ class Problem(str):
         self.path, self.rule = path, rule
         return self
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[type[Problem], tuple[str, str]]:
         return type(self), (self.path, self.rule)
 
 
-def _problem_of(item) -> Problem:
+def _problem_of(item: object) -> Problem:
     """``item`` as a :class:`Problem`; a line written as ``"path: rule"`` is split there."""
     if isinstance(item, Problem):
         return item
@@ -68,14 +72,14 @@ class ScenarioError(ValueError):
         The problems, each with its :attr:`Problem.path` and :attr:`Problem.rule`.
     """
 
-    def __init__(self, problems):
+    def __init__(self, problems: Iterable[str]) -> None:
         self.problems = [_problem_of(p) for p in problems]
         count = "1 problem" if len(self.problems) == 1 else f"{len(self.problems)} problems"
         super().__init__(
             f"invalid scenario ({count}):" + "".join(f"\n  {p}" for p in self.problems)
         )
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[type[ScenarioError], tuple[list[Problem]]]:
         return type(self), (self.problems,)
 
 
@@ -121,12 +125,12 @@ def locate(path: str, error: Exception) -> Problem:
     return _locate(path, str(error))
 
 
-def item_path(index: int, label) -> str:
+def item_path(index: int, label: object) -> str:
     """Path element of list item ``index``; runs are named by their label."""
     return f"[{label!r}]" if isinstance(label, str) else f"[{index}]"
 
 
-def _loc_path(loc: tuple, data) -> str:
+def _loc_path(loc: tuple[int | str, ...], data: object) -> str:
     """Dotted field path of a pydantic error location, runs named by their label in ``data``."""
     path, node = "", data
     for key in loc:
@@ -139,14 +143,14 @@ def _loc_path(loc: tuple, data) -> str:
     return path
 
 
-def _models_in(annotation) -> list[type[BaseModel]]:
+def _models_in(annotation: object) -> list[type[BaseModel]]:
     """The schema models inside a field annotation (``X | None``, ``list[X]``, ...)."""
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return [annotation]
     return [m for arg in get_args(annotation) for m in _models_in(arg)]
 
 
-def _allowed_keys(loc: tuple, root: type[BaseModel]) -> str:
+def _allowed_keys(loc: tuple[int | str, ...], root: type[BaseModel]) -> str:
     """The keys allowed beside the unknown key at ``loc`` of a ``root`` document."""
     model = root
     for key in loc[:-1]:
@@ -158,7 +162,7 @@ def _allowed_keys(loc: tuple, root: type[BaseModel]) -> str:
     return ", ".join(model.model_fields)
 
 
-def pydantic_problem(error: dict, data, root: type[BaseModel]) -> Problem:
+def pydantic_problem(error: ErrorDetails, data: object, root: type[BaseModel]) -> Problem:
     """The problem of a pydantic error dict of a ``root`` document."""
     cause = error.get("ctx", {}).get("error")
     path = _loc_path(error["loc"], data)

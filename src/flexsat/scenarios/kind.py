@@ -33,12 +33,18 @@ import importlib
 import pkgutil
 from collections.abc import Callable, Generator, Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from pydantic import BaseModel, ValidationError
 
 from flexsat import plugins
 from flexsat.scenarios.errors import Problem, ScenarioError, pydantic_problem
+
+if TYPE_CHECKING:
+    from flexsat.control.base import Controller
+    from flexsat.dynamics.plant import Plant
+    from flexsat.sim.config import SimConfig
 
 
 @dataclass(frozen=True)
@@ -55,9 +61,9 @@ class Simulation:
         ``initial_state``, ``record_states``, ...).
     """
 
-    plant: Any
-    law: Any
-    config: Any
+    plant: Plant
+    law: Controller
+    config: SimConfig
     options: Mapping[str, Any] = field(default_factory=dict)
 
 
@@ -104,7 +110,7 @@ class ScenarioKind:
     document: ClassVar[type[BaseModel]]
     runs_batches: ClassVar[bool] = False
 
-    def validate(self, data: dict) -> BaseModel:
+    def validate(self, data: dict[str, Any]) -> BaseModel:
         """The document of ``data`` (stage 1: schema, units, section rules).
 
         Raises
@@ -157,7 +163,7 @@ class ScenarioKind:
         )
 
 
-def _kind_classes(module) -> list[type[ScenarioKind]]:
+def _kind_classes(module: ModuleType) -> list[type[ScenarioKind]]:
     return [
         obj
         for obj in vars(module).values()

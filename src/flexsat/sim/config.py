@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +22,9 @@ from flexsat.sim.channels import (
 from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
 from flexsat.sim.recording import CHUNK
 from flexsat.sim.sensors import Sensors
+
+if TYPE_CHECKING:
+    from flexsat.dynamics.plant import Plant
 
 #: how the law meets the plant: held samples of a digital law, or a continuous state feedback
 LAW_MODES = ("sampled", "continuous")
@@ -68,14 +73,14 @@ class SimConfig:
     impulses: Impulses = field(default_factory=Impulses)
     settling_band: float = np.radians(0.5)
     seed: int = 0
-    channel_sensors: dict = field(default_factory=dict)
-    channel_actuators: dict = field(default_factory=dict)
-    channel_disturbances: dict = field(default_factory=dict)
+    channel_sensors: dict[str, ChannelSensor] = field(default_factory=dict)
+    channel_actuators: dict[str, ChannelActuator] = field(default_factory=dict)
+    channel_disturbances: dict[str, ChannelDisturbance] = field(default_factory=dict)
     law_mode: str = "sampled"
     rtol: float = 1e-10
     atol: float = 1e-12
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.law_mode not in LAW_MODES:
             raise ValueError(f"law_mode: must be one of {LAW_MODES}, got {self.law_mode!r}")
         set_si(self, "rtol", require_positive, "")
@@ -125,16 +130,21 @@ class SimConfig:
 FRICTION_STEP_LIMIT = 1.5
 
 
-def force_rates(plant, disturbances: dict) -> list[tuple[str, float]]:
+def force_rates(
+    plant: Plant, disturbances: Mapping[str, ChannelDisturbance]
+) -> list[tuple[str, float]]:
     """(channel, λ) of each input force with a ``max_slope``: the damping rate
     λ = max|∂f/∂y| · |C_y B_j| of the force f(y) of output y on input j (for the bearing,
     (c1/ε + c2) (M⁻¹)_θθ: inside |θ'| < ε the regularised friction is a stiff damper)."""
     _, B = plant.linear_part()
-    out = []
+    out: list[tuple[str, float]] = []
     for name, d in disturbances.items():
         slope = getattr(d.force, "max_slope", None)
         if d.force is None or slope is None:
             continue
+        # a disturbance with a force names its driving output (ChannelDisturbance refuses one
+        # without)
+        assert d.force_output is not None
         mats = plant.output_matrices(d.force_output)
         if mats is None:
             continue
@@ -144,7 +154,12 @@ def force_rates(plant, disturbances: dict) -> list[tuple[str, float]]:
     return out
 
 
-def stable_substeps(plant, friction, dt: float, requested: int) -> int:
+def stable_substeps(
+    plant: Plant,
+    friction: BearingFriction | Mapping[str, ChannelDisturbance],
+    dt: float,
+    requested: int,
+) -> int:
     """Substeps per control period: the requested number, raised where needed so that the
     explicitly integrated input forces stay stable (h λ <= FRICTION_STEP_LIMIT, λ from
     :func:`force_rates`).
@@ -172,7 +187,9 @@ def stable_substeps(plant, friction, dt: float, requested: int) -> int:
     return substeps
 
 
-def run_substeps(plant, config: SimConfig, disturbances: dict) -> int:
+def run_substeps(
+    plant: Plant, config: SimConfig, disturbances: Mapping[str, ChannelDisturbance]
+) -> int:
     """Integrator substeps of a run: 1 for a linear plant without input forces (the exact
     step), else the requested number raised for stability (:func:`stable_substeps`)."""
     forced = any(d.force is not None for d in disturbances.values())
@@ -183,7 +200,7 @@ def run_substeps(plant, config: SimConfig, disturbances: dict) -> int:
     return stable_substeps(plant, disturbances, config.dt, config.substeps)
 
 
-def recorded_values(plant) -> int:
+def recorded_values(plant: Plant) -> int:
     """Histories kept per case and sample with the default recording (at most): the recorded
     outputs, the references θ_ref, θ'_ref (a plant with ``theta``), command, applied input,
     disturbance and input force per input, the recorded measurements, energy and vibration
@@ -197,11 +214,11 @@ def recorded_values(plant) -> int:
 
 
 def check_resources(
-    plant,
+    plant: Plant,
     config: SimConfig,
     n_cases: int = 1,
     record_states: bool = False,
-    disturbances: dict | None = None,
+    disturbances: Mapping[str, ChannelDisturbance] | None = None,
 ) -> int:
     """Check that a run fits the limits of :mod:`flexsat.limits` before it starts.
 

@@ -21,6 +21,7 @@ recorded outputs and energies are computed per chunk of samples after the fact
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -37,6 +38,12 @@ from flexsat.sim.channels import (
 from flexsat.sim.config import FRICTION_STEP_LIMIT, SimConfig, check_resources, stable_substeps
 from flexsat.sim.instruments import InputForces, Instruments, unit_row
 from flexsat.sim.recording import CHUNK, Recorder, SimResult
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.control.base import Controller
+    from flexsat.dynamics.plant import Plant
 
 #: a state entry (rad, rad/s, modal coordinates) or a command (SI) beyond this is taken as
 #: divergence: no slew or modal amplitude comes near it, and it leaves room for the products
@@ -140,7 +147,7 @@ def _noise_streams(seeds, n_samples: int, width: int = 3) -> np.ndarray:
     return _NoiseStreams(seeds, width).next(n_samples)
 
 
-def check_law(plant, controller) -> None:
+def check_law(plant: Plant, controller: Controller) -> None:
     """Check the law's ``reads`` and ``writes`` against the plant's channels.
 
     Raises
@@ -255,12 +262,12 @@ def _propagator(plant, A, B, forces: InputForces, nc: int, batched: bool, dt: fl
 
 
 def simulate(
-    plant,
-    controller,
+    plant: Plant,
+    controller: Controller,
     config: SimConfig,
     n_cases: int | None = None,
-    seeds=None,
-    initial_state=None,
+    seeds: npt.ArrayLike | None = None,
+    initial_state: npt.ArrayLike | None = None,
     record_states: bool = False,
     compiled: bool | None = None,
     metrics_only: bool = False,

@@ -14,6 +14,7 @@ docs/conformance.md ("Checking your plant or law") shows how.
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import TYPE_CHECKING, Any
 
 from flexsat.control.base import Controller
 from flexsat.dynamics.plant import Plant
@@ -21,8 +22,11 @@ from flexsat.testing.checks import Check, run_checks
 from flexsat.testing.law_checks import LAW_CHECKS, controller_checks
 from flexsat.testing.plant_checks import PLANT_CHECKS, plant_checks
 
+if TYPE_CHECKING:
+    import pytest
 
-def check_plant(plant: Plant, **options) -> list[Check]:
+
+def check_plant(plant: Plant, **options: Any) -> list[Check]:
     """Run every conformance check of ``plant``; return the checks skipped by its declarations.
 
     Parameters
@@ -39,7 +43,7 @@ def check_plant(plant: Plant, **options) -> list[Check]:
     return run_checks(plant_checks(plant, **options))
 
 
-def check_controller(law: Controller, plant: Plant, **options) -> list[Check]:
+def check_controller(law: Controller, plant: Plant, **options: Any) -> list[Check]:
     """Run every conformance check of ``law`` on ``plant``; return the skipped checks.
 
     Parameters
@@ -58,7 +62,9 @@ def check_controller(law: Controller, plant: Plant, **options) -> list[Check]:
     return run_checks(controller_checks(law, plant, **options))
 
 
-def parametrize_with_checks(plants: Iterable[Plant] = (), laws: Iterable = ()):
+def parametrize_with_checks(
+    plants: Iterable[Plant] = (), laws: Iterable[tuple[Controller, Plant]] = ()
+) -> pytest.MarkDecorator:
     """A ``pytest.mark.parametrize`` over the checks of ``plants`` and of ``laws`` (pairs
     ``(law, plant)``): one test per check, with argument ``check`` (call it), a check that
     does not apply marked skipped with its reason.

@@ -10,13 +10,19 @@ subject and the check.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexsat.control.base import Controller
 from flexsat.dynamics.plant import Plant
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray
 
 #: unit round-off of float64
 EPS = float(np.finfo(float).eps)
@@ -73,7 +79,7 @@ def run_checks(checks: Iterable[Check]) -> list[Check]:
     AssertionError
         ``"<subject> fails <check>: <why>"`` for the first failing check.
     """
-    skipped = []
+    skipped: list[Check] = []
     for check in checks:
         if check.skip is not None:
             skipped.append(check)
@@ -82,17 +88,20 @@ def run_checks(checks: Iterable[Check]) -> list[Check]:
     return skipped
 
 
-def matvec(M: np.ndarray, v: np.ndarray) -> np.ndarray:
+def matvec(M: FloatArray, v: FloatArray) -> FloatArray:
     """M v over the case axis: M (r, c) or (n_cases, r, c), v (n_cases, c) -> (n_cases, r)."""
     return np.einsum("...ij,...j->...i", M, v)
 
 
-def state_derivative(plant: Plant, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+def state_derivative(plant: Plant, x: FloatArray, u: FloatArray) -> FloatArray:
     """x' = A x + B u + B_f f(x, u), the split form of the plant protocol, (n_cases, n_x)."""
     A, B = plant.linear_part()
     xd = matvec(A, x) + matvec(B, u)
     if plant.nonlinear:
-        xd = xd + matvec(plant.force_matrix, plant.nonlinear_force(x, u))
+        Bf = plant.force_matrix
+        # a nonlinear plant gives B_f (Plant.force_matrix; the ``shapes`` check asserts it)
+        assert Bf is not None, "nonlinear: the plant is nonlinear but gives no force_matrix"
+        xd = xd + matvec(Bf, plant.nonlinear_force(x, u))
     return xd
 
 
@@ -102,8 +111,8 @@ def cases_of(plant: Plant) -> tuple[int, ...]:
 
 
 def sample_states(
-    plant: Plant, n_cases: int, seed: int, scale: float, rest_state=None
-) -> np.ndarray:
+    plant: Plant, n_cases: int, seed: int, scale: float, rest_state: npt.ArrayLike | None = None
+) -> FloatArray:
     """States (n_cases, n_x) near ``rest_state`` (default the plant's ``initial_state``):
     rest + scale N(0, 1), projected back onto the plant's manifold
     (:meth:`~flexsat.dynamics.plant.Plant.normalize`)."""
@@ -113,12 +122,12 @@ def sample_states(
     return plant.normalize(x0 + scale * rng.standard_normal((n_cases, plant.nx)))
 
 
-def sample_inputs(plant: Plant, n_cases: int, seed: int, scale: float) -> np.ndarray:
+def sample_inputs(plant: Plant, n_cases: int, seed: int, scale: float) -> FloatArray:
     """Inputs (n_cases, m): scale N(0, 1) in each channel's SI unit."""
     return scale * np.random.default_rng(seed).standard_normal((n_cases, plant.n_inputs))
 
 
-def split_inputs(plant: Plant, u: np.ndarray) -> dict[str, np.ndarray]:
+def split_inputs(plant: Plant, u: FloatArray) -> dict[str, FloatArray]:
     """The concatenated inputs u (n_cases, m) as commands by channel name."""
     return {
         name: u[:, sl.start] if sl.stop - sl.start == 1 else u[:, sl]
@@ -138,26 +147,30 @@ class HoldLaw(Controller):
 
     reads: tuple[str, ...] = ()
 
-    def __init__(self, commands: dict[str, np.ndarray]):
+    def __init__(self, commands: Mapping[str, npt.ArrayLike]) -> None:
         self.writes = tuple(commands)
         self.commands = {k: np.asarray(v, float) for k, v in commands.items()}
 
-    def __call__(self, t, y, state):
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[dict[str, FloatArray], dict[str, FloatArray]]:
         return dict(self.commands), state
 
 
-def assert_close(name: str, got: np.ndarray, want: np.ndarray, tol: float, what: str) -> None:
+def assert_close(
+    name: str, got: npt.ArrayLike, want: npt.ArrayLike, tol: float | FloatArray, what: str
+) -> None:
     """|got − want| <= tol everywhere (NaN fails), or an AssertionError naming ``name``."""
-    got, want = np.asarray(got, float), np.asarray(want, float)
-    assert got.shape == want.shape, f"{name}: shape {got.shape}, expected {want.shape} ({what})"
-    same_nan = np.isnan(got) & np.isnan(want)  # an undefined metric (never settled) in both
-    assert np.array_equal(np.isnan(got), np.isnan(want)), f"{name}: NaN in one only ({what})"
-    err = np.where(same_nan, 0.0, np.abs(got - want))
+    g, w = np.asarray(got, float), np.asarray(want, float)
+    assert g.shape == w.shape, f"{name}: shape {g.shape}, expected {w.shape} ({what})"
+    same_nan = np.isnan(g) & np.isnan(w)  # an undefined metric (never settled) in both
+    assert np.array_equal(np.isnan(g), np.isnan(w)), f"{name}: NaN in one only ({what})"
+    err = np.where(same_nan, 0.0, np.abs(g - w))
     worst = float(err.max()) if err.size else 0.0
     assert (err <= tol).all(), f"{name}: differs by {worst:.3g} > {tol:.3g} ({what})"
 
 
-def magnitude(*arrays) -> float:
+def magnitude(*arrays: npt.ArrayLike) -> float:
     """Largest |entry| of the arrays (1 when all are zero), the scale of a round-off bound."""
     m = max((float(np.abs(a).max()) for a in arrays if np.size(a)), default=0.0)
     return m if m > 0 else 1.0

@@ -25,7 +25,9 @@ plant it is written for.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -45,6 +47,11 @@ from flexsat.testing.checks import (
     sample_states,
 )
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray
+
 #: samples of the law-against-itself comparisons
 LAW_SAMPLES = 12
 
@@ -54,16 +61,21 @@ class LawSubject:
     :class:`~flexsat.testing.plant_checks.PlantSubject`)."""
 
     def __init__(
-        self, law: Controller, plant: Plant, state_scale: float, seed: int, rest_state=None
-    ):
+        self,
+        law: Controller,
+        plant: Plant,
+        state_scale: float,
+        seed: int,
+        rest_state: npt.ArrayLike | None = None,
+    ) -> None:
         self.law, self.plant, self.name = law, plant, type(law).__name__
         self.state_scale, self.seed, self.rest_state = state_scale, seed, rest_state
 
-    def call(self, times, Y) -> np.ndarray:
+    def call(self, times: FloatArray, Y: FloatArray) -> FloatArray:
         """The law's commands called sample by sample on Y, with the plant's channel widths."""
         return run_controller(self.law, times, Y, *self.sizes)
 
-    def states(self, nc: int, offset: int = 0) -> np.ndarray:
+    def states(self, nc: int, offset: int = 0) -> FloatArray:
         return sample_states(self.plant, nc, self.seed + offset, self.state_scale, self.rest_state)
 
     @property
@@ -79,14 +91,14 @@ class LawSubject:
             return (pc,)
         return (1, 3) if n == 1 else (n,)
 
-    def measurements(self, nc: int, offset: int = 0) -> dict[str, np.ndarray]:
+    def measurements(self, nc: int, offset: int = 0) -> dict[str, FloatArray]:
         """The plant's outputs the law reads at sample states, zero input."""
         p = self.plant
         x = self.states(nc, offset)
         u = np.zeros((nc, p.n_inputs))
         return {k: np.asarray(p.output(k, x, u)) for k in self.law.reads}
 
-    def sequence(self, nc: int) -> np.ndarray:
+    def sequence(self, nc: int) -> FloatArray:
         """Measurements (n_t, n_cases, p) over LAW_SAMPLES samples, channels in reads order."""
         rows = []
         for k in range(LAW_SAMPLES):
@@ -96,11 +108,11 @@ class LawSubject:
             )
         return np.stack(rows)
 
-    def times(self) -> np.ndarray:
+    def times(self) -> FloatArray:
         return np.arange(LAW_SAMPLES) / CHECK_RATE
 
 
-def _commands(law: Controller, u) -> dict[str, np.ndarray]:
+def _commands(law: Controller, u: FloatArray | Mapping[str, FloatArray]) -> dict[str, FloatArray]:
     return dict(u) if isinstance(u, Mapping) else {law.writes[0]: u}
 
 
@@ -128,7 +140,9 @@ def shapes(s: LawSubject) -> None:
     _, ws = s.sizes
     for nc in s.law_cases():
         if getattr(law, "reference", None) is not None:  # as the engine does
-            law.tabulate_reference(s.times())
+            # duck-typed as the engine and run_controller: a law with a reference (a SlewLaw's)
+            # tabulates it
+            law.tabulate_reference(s.times())  # type: ignore[attr-defined]
         u, state = law(0.0, s.measurements(nc), law.initial_state(nc))
         cmd = _commands(law, u)
         assert set(cmd) == set(law.writes), f"commands: {sorted(cmd)} for writes {law.writes}"
@@ -157,6 +171,8 @@ def linear_form(s: LawSubject) -> None:
     nc = s.law_cases()[-1]
     times = s.times()
     form = law.linear_form(1.0 / CHECK_RATE, times, nc)
+    # the check is skipped for a law whose linear_form() is None (_skip)
+    assert form is not None, "linear_form: None (the check applies only to a linear law)"
     assert form.reads == tuple(law.reads) and form.writes == tuple(law.writes), (
         f"linear_form: channels {form.reads} -> {form.writes}, the law's {law.reads} -> "
         f"{law.writes}"
@@ -207,7 +223,7 @@ class _Without(Plant):
     """The plant's channels less one (a plant a law must be refused on): only its channel
     declarations are read (:func:`~flexsat.sim.engine.check_law`)."""
 
-    def __init__(self, plant: Plant, missing: str):
+    def __init__(self, plant: Plant, missing: str) -> None:
         self.inputs = tuple(c for c in plant.inputs if c.name != missing) or (
             Channel("other_input", ""),
         )
@@ -218,7 +234,7 @@ class _Without(Plant):
     def nx(self) -> int:
         return self._nx
 
-    def linear_part(self):
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         raise AssertionError("only the channel declarations of this plant are read")
 
 
@@ -255,7 +271,12 @@ def _skip(s: LawSubject, name: str) -> str | None:
 
 
 def controller_checks(
-    law: Controller, plant: Plant, *, state_scale: float = 1e-2, seed: int = 0, rest_state=None
+    law: Controller,
+    plant: Plant,
+    *,
+    state_scale: float = 1e-2,
+    seed: int = 0,
+    rest_state: npt.ArrayLike | None = None,
 ) -> list[Check]:
     """The conformance checks of ``law`` on ``plant`` (module docstring).
 
@@ -291,7 +312,7 @@ def controller_checks(
             if declared
             else "the law's reads/writes are not channels of the plant (channels_declared)"
         )
-        out.append(Check(s.name, fn.__name__, (lambda fn=fn: fn(s)), skip))
+        out.append(Check(s.name, fn.__name__, functools.partial(fn, s), skip))
     return out
 
 

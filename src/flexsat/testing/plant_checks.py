@@ -44,6 +44,10 @@ Each check states the property of the plant protocol it tests and the bound it a
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from flexsat.dynamics.dispersion import stack_plants
@@ -69,6 +73,12 @@ from flexsat.testing.checks import (
 )
 from flexsat.units import Q_
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.sim.recording import SimResult
+    from flexsat.units import FloatArray
+
 #: what a declared maneuver channel must be measured in
 MANEUVER_UNITS = {"angle": "rad", "rate": "rad/s", "torque": "N*m", "deflection": "m"}
 
@@ -90,19 +100,24 @@ class PlantSubject:
     """
 
     def __init__(
-        self, plant: Plant, state_scale: float, input_scale: float, seed: int, rest_state=None
-    ):
+        self,
+        plant: Plant,
+        state_scale: float,
+        input_scale: float,
+        seed: int,
+        rest_state: npt.ArrayLike | None = None,
+    ) -> None:
         self.plant, self.name = plant, type(plant).__name__
         self.state_scale, self.input_scale, self.seed = state_scale, input_scale, seed
         self.rest_state = rest_state
 
-    def states(self, n: int, offset: int = 0) -> np.ndarray:
+    def states(self, n: int, offset: int = 0) -> FloatArray:
         return sample_states(self.plant, n, self.seed + offset, self.state_scale, self.rest_state)
 
-    def inputs(self, n: int, offset: int = 1) -> np.ndarray:
+    def inputs(self, n: int, offset: int = 1) -> FloatArray:
         return sample_inputs(self.plant, n, self.seed + offset, self.input_scale)
 
-    def config(self, **kw) -> SimConfig:
+    def config(self, **kw: Any) -> SimConfig:
         return SimConfig(duration=CHECK_SAMPLES / CHECK_RATE, control_rate=CHECK_RATE, **kw)
 
     def noisy_input(self) -> str | None:
@@ -110,7 +125,7 @@ class PlantSubject:
         names = [c.name for c in self.plant.inputs]
         return next((k for k in self.plant.noise_channels if k in names), None)
 
-    def run(self, plant: Plant, n: int, seed: int = 0, noise: bool = True):
+    def run(self, plant: Plant, n: int, seed: int = 0, noise: bool = True) -> SimResult:
         """The short open-loop run of ``plant`` (n cases) from the sample states, held sample
         inputs, a random disturbance on the first noisy input (``noise``)."""
         name = self.noisy_input() if noise else None
@@ -173,7 +188,7 @@ def channels_declared(s: PlantSubject) -> None:
 
 
 # -- shapes ---------------------------------------------------------------------------------------
-def _outputs(p: Plant, x, u) -> dict[str, np.ndarray]:
+def _outputs(p: Plant, x: FloatArray, u: FloatArray) -> dict[str, FloatArray]:
     return {c.name: np.asarray(p.output(c.name, x, u)) for c in p.outputs}
 
 
@@ -195,6 +210,7 @@ def shapes(s: PlantSubject) -> None:
         assert x0.shape in ((nc, nx), (nx,)), f"initial_state({nc}): shape {x0.shape}"
         x, u = s.states(nc), s.inputs(nc)
         if p.nonlinear:
+            assert Bf is not None  # asserted above for a nonlinear plant
             f = np.asarray(p.nonlinear_force(x, u))
             assert f.shape == (nc, Bf.shape[-1]), (
                 f"nonlinear_force: shape {f.shape} for {nc} cases, expected {(nc, Bf.shape[-1])}"
@@ -231,7 +247,7 @@ def shapes(s: PlantSubject) -> None:
 
 
 # -- batch_equals_singles -------------------------------------------------------------------------
-def _evaluations(p: Plant, x, u) -> dict[str, np.ndarray]:
+def _evaluations(p: Plant, x: FloatArray, u: FloatArray) -> dict[str, FloatArray]:
     out = {f"output {k}": v for k, v in _outputs(p, x, u).items()}
     if p.nonlinear:
         out["nonlinear_force"] = p.nonlinear_force(x, u)
@@ -241,13 +257,14 @@ def _evaluations(p: Plant, x, u) -> dict[str, np.ndarray]:
     return out
 
 
-def _histories(result) -> list[str]:
+def _histories(result: SimResult) -> list[str]:
     """The time histories of a run (its metrics are functions of them, compared through
     them: a metric alone has no scale for the round-off of the state it was read from)."""
-    return [k for k, v in result.dataset.data_vars.items() if "time" in v.dims]
+    # str(k) is k: the recorder names every variable by a str (a channel or metric name)
+    return [str(k) for k, v in result.dataset.data_vars.items() if "time" in v.dims]
 
 
-def _compare_runs(a, b, bound_per_sample: float, what: str) -> None:
+def _compare_runs(a: SimResult, b: SimResult, bound_per_sample: float, what: str) -> None:
     assert _histories(a) == _histories(b), f"histories: {_histories(a)} vs {_histories(b)}"
     for name in _histories(a):
         va, vb = a.dataset[name].values, b.dataset[name].values
@@ -307,7 +324,7 @@ def dispersion(s: PlantSubject) -> None:
 
 
 # -- linear_form ----------------------------------------------------------------------------------
-def _richardson(g, h: float):
+def _richardson(g: Callable[[float], FloatArray], h: float) -> tuple[FloatArray, FloatArray]:
     """(g(h/2), |g(h) − g(h/2)|): a difference quotient and the bound on its error (the change
     between step h and h/2 is 3/4 of the O(h²) term at h, 3 × its value at h/2)."""
     a, b = g(h), g(h / 2)
@@ -332,21 +349,24 @@ def linear_form(s: PlantSubject) -> None:
             ("force_jacobian ∂f/∂u", jac[1], du, lambda e: (x, u + e * du)),
         ):
 
-            def quotient(e, shift=shift):
+            def quotient(
+                e: float, shift: Callable[[float], tuple[FloatArray, FloatArray]] = shift
+            ) -> FloatArray:
                 return (p.nonlinear_force(*shift(e)) - p.nonlinear_force(*shift(-e))) / (2 * e)
 
             fd, err = _richardson(quotient, h)
             f0 = magnitude(p.nonlinear_force(x, u))
             tol = 3 * err + 16 * p.nx * EPS * f0 / h + 1e-12 * magnitude(fd)
             assert_close(name, matvec(J, d), fd, tol.max(), "analytic vs central difference")
-    if p.step is not None:
+    own_step = p.step
+    if own_step is not None:
         h = 1e-3 * scale_x / magnitude(xd)
 
-        def quotient(e):
-            return (np.asarray(p.step(x, u, e)) - x) / e
+        def step_quotient(e: float) -> FloatArray:
+            return (np.asarray(own_step(x, u, e)) - x) / e
 
-        def extrapolated(e):
-            return 2 * quotient(e / 2) - quotient(e)
+        def extrapolated(e: float) -> FloatArray:
+            return 2 * step_quotient(e / 2) - step_quotient(e)
 
         r, err = _richardson(extrapolated, h)
         tol = 3 * err.max() + 64 * EPS * scale_x / h
@@ -376,8 +396,19 @@ def linear_form(s: PlantSubject) -> None:
 
 
 # -- energy ---------------------------------------------------------------------------------------
-def _rate(fun, x, xd, h):
-    """Central difference of fun along x' and its error bound (Richardson + round-off)."""
+def _rate(
+    quantity: Callable[[FloatArray], FloatArray | None], x: FloatArray, xd: FloatArray, h: float
+) -> tuple[FloatArray, FloatArray]:
+    """Central difference of ``quantity`` along x' and its error bound (Richardson +
+    round-off)."""
+
+    def fun(z: FloatArray) -> FloatArray:
+        # a quantity the plant defines: the energy check is skipped for a plant whose energy is
+        # None, and momentum is differenced only when it is not None
+        value = quantity(z)
+        assert value is not None, "the differenced quantity is None"
+        return value
+
     d, err = _richardson(lambda e: (fun(x + e * xd) - fun(x - e * xd)) / (2 * e), h)
     roundoff = 16 * x.shape[-1] * EPS * magnitude(fun(x + h * xd), fun(x)) / h
     return d, 3 * err + roundoff
@@ -419,10 +450,13 @@ def energy(s: PlantSubject) -> None:
     if Q is not None:
         Q = np.asarray(Q)
         quad = 0.5 * np.einsum("...i,...ij,...j->...", x, Q, x)
+        energy = p.energy(x)
+        # a plant declares an energy matrix only for an energy it defines (Plant.energy_matrix)
+        assert energy is not None, "energy_matrix: given, but energy(x) is None"
         assert_close(
             "energy_matrix",
             quad,
-            p.energy(x),
+            energy,
             4 * p.nx * EPS * magnitude(Q) * magnitude(x) ** 2,
             "½ xᵀ Q x vs energy(x)",
         )
@@ -445,7 +479,7 @@ def determinism(s: PlantSubject) -> None:
 
 
 # -- bad_input ------------------------------------------------------------------------------------
-def _refused(field: str, action, what: str) -> None:
+def _refused(field: str, action: Callable[[], object], what: str) -> None:
     try:
         action()
     except ValueError as exc:
@@ -478,7 +512,7 @@ def bad_input(s: PlantSubject) -> None:
     ):
         _refused(
             "initial_state",
-            lambda bad=bad: simulate(p, law, config, n_cases=nc, initial_state=bad),
+            functools.partial(simulate, p, law, config, n_cases=nc, initial_state=bad),
             what,
         )
     wrong = HoldLaw({"no_such_input": np.zeros(nc)})
@@ -518,7 +552,7 @@ def plant_checks(
     state_scale: float = 1e-2,
     input_scale: float = 1e-3,
     seed: int = 0,
-    rest_state=None,
+    rest_state: npt.ArrayLike | None = None,
 ) -> list[Check]:
     """The conformance checks of ``plant`` (module docstring), each with its skip reason.
 
@@ -538,10 +572,10 @@ def plant_checks(
     list of :class:`~flexsat.testing.checks.Check`
     """
     s = PlantSubject(plant, state_scale, input_scale, seed, rest_state)
-    out = []
+    out: list[Check] = []
     for fn in PLANT_CHECKS:
         skip = _skip(s, fn.__name__)
-        out.append(Check(s.name, fn.__name__, (lambda fn=fn: fn(s)), skip))
+        out.append(Check(s.name, fn.__name__, functools.partial(fn, s), skip))
     return out
 
 
