@@ -213,3 +213,19 @@ def test_non_physical_lengths_and_modes_are_refused():
         )
     x = plant.state_from(length="2 km", pitch="5 deg", roll="-3 deg")
     np.testing.assert_allclose(x, [2000.0, D5, np.radians(-3), 0, 0, 0])
+
+
+def test_the_rest_state_is_the_deployed_tether_not_a_collapsed_one():
+    """initial_state (what simulate starts from by default) is the tether at its reference
+    length along the local vertical, at rest: the state state_from(length=L) builds, which a
+    zero length would not be (state_from refuses it)."""
+    from flexsat.dynamics.tether import TetheredSubsatellite, TetherScales
+
+    scales = TetherScales(mass=22.7, length=20e3, orbit_rate=0.07068 / 60)
+    for control in ("tension", "rate"):
+        plant = TetheredSubsatellite(scales, control=control)
+        x0 = plant.initial_state(3)
+        assert x0.shape == (3, plant.nx)
+        np.testing.assert_array_equal(x0, np.broadcast_to(plant.state_from(length=20e3), x0.shape))
+        with pytest.raises(ValueError, match="length"):
+            plant.state_from(length=0.0)

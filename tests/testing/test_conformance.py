@@ -113,29 +113,11 @@ def _tether_working_point(plant):
 #: working points of plants whose rest state is not one (by key)
 REST_STATES = {"tether_tension": _tether_working_point, "tether_rate": _tether_working_point}
 
-#: checks that find a bug not fixed on this branch (the plant is another branch's): each
-#: must fail, with the reason
-KNOWN_FAILURES = {
-    (
-        "plant",
-        "tether_tension",
-        "bad_input",
-    ): "TetheredSubsatellite.initial_state is zero length, which "
-    "its own state_from refuses (simulate without initial_state starts a degenerate tether)",
-    (
-        "plant",
-        "tether_rate",
-        "bad_input",
-    ): "TetheredSubsatellite.initial_state is zero length, which "
-    "its own state_from refuses (simulate without initial_state starts a degenerate tether)",
-}
-
 
 def _marks(kind, key, check):
     if check.skip is not None:
         return pytest.mark.skip(reason=check.skip)
-    reason = KNOWN_FAILURES.get((kind, key, check.name))
-    return () if reason is None else pytest.mark.xfail(reason=reason, strict=True)
+    return ()
 
 
 def _all_plant_checks():

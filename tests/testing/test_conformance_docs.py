@@ -170,3 +170,13 @@ def test_parametrize_with_checks_marks_the_skipped(example):
     mark = parametrize_with_checks(plants=[NoEnergy()])
     (energy,) = [p for p in mark.args[1] if p.id.endswith("-energy")]
     assert energy.marks[0].name == "skip"
+
+
+def test_a_per_entry_bound_names_the_entry_furthest_over_it():
+    """assert_close with one bound per entry (the energy and power checks' error estimates):
+    the message gives that entry's error and bound instead of failing to format an array."""
+    from flexsat.testing.checks import assert_close
+
+    assert_close("power", [1.0, 2.0], [1.05, 2.0], np.array([0.1, 0.0]), "within")
+    with pytest.raises(AssertionError, match=r"^power: differs by 0\.05 > 0\.01 \(rate\)$"):
+        assert_close("power", [1.0, 2.0], [1.05, 2.0], np.array([0.01, 0.1]), "rate")

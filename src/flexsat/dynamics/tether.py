@@ -337,6 +337,14 @@ class TetheredSubsatellite(Plant):
             u = np.zeros(np.shape(x)[:-1] + (2,))
         return super().output(name, x, u, f_in)
 
+    def initial_state(self, n_cases: int) -> np.ndarray:
+        """The tether deployed to its reference length L along the local vertical, at rest,
+        (n_cases, n_x) SI: the plant's rest state (a zero length is the collapsed tether, which
+        :meth:`state_from` refuses and the laws divide by)."""
+        x = np.zeros((n_cases, self.nx))
+        x[:, 0] = self.scales.length
+        return x
+
     def state_from(self, **values) -> np.ndarray:
         """Initial state from ``length`` (> 0), ``pitch``, ``roll`` and their rates, SI (a
         number, a Quantity or a unit string); the length has no default."""

@@ -166,8 +166,10 @@ def assert_close(
     same_nan = np.isnan(g) & np.isnan(w)  # an undefined metric (never settled) in both
     assert np.array_equal(np.isnan(g), np.isnan(w)), f"{name}: NaN in one only ({what})"
     err = np.where(same_nan, 0.0, np.abs(g - w))
-    worst = float(err.max()) if err.size else 0.0
-    assert (err <= tol).all(), f"{name}: differs by {worst:.3g} > {tol:.3g} ({what})"
+    bound = np.broadcast_to(np.asarray(tol, float), err.shape)  # a bound per entry, or one
+    if err.size and not (err <= bound).all():
+        k = np.unravel_index(np.argmax(err - bound), err.shape)  # the entry furthest over
+        raise AssertionError(f"{name}: differs by {err[k]:.3g} > {bound[k]:.3g} ({what})")
 
 
 def magnitude(*arrays: npt.ArrayLike) -> float:
