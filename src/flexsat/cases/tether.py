@@ -11,10 +11,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexsat.dynamics.tether import ClosedLoopRun, TetheredSubsatellite, TetherScales
+
+if TYPE_CHECKING:
+    from flexsat.sim.config import SimConfig
 
 SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 12, L4258-L4531"
 #: settling bands of a retrieval: |θ| within the runs' initial 5° (rad), |λ − λ_f| within 2 %
@@ -162,6 +166,8 @@ def run_law(law, initial, tau, integrator: str = "continuous") -> ClosedLoopRun:
     The plant is the SI one of the law's :class:`~flexsat.dynamics.tether.TetherScales` (by
     default the unit scales Ω = 1 rad/s, m = 1 kg, L = 1 m, where τ is the time and λ the
     length); grid, initial state and results are in the paper's nondimensional variables.
+    :func:`tether_simulation` says what is simulated, :func:`closed_loop_run` reads the result
+    (a scenario hands the first to the runner and reads its outcome with the second).
 
     Parameters
     ----------
@@ -188,9 +194,25 @@ def run_law(law, initial, tau, integrator: str = "continuous") -> ClosedLoopRun:
     ValueError
         For a bad grid, mode or state, or a tether that collapses (naming τ).
     """
-    from flexsat.control.tether_laws import thrust_index
-    from flexsat.sim.config import SimConfig
     from flexsat.sim.engine import simulate
+
+    plant, config, options = tether_simulation(law, initial, tau, integrator)
+    return closed_loop_run(law, tau, simulate(plant, law, config, **options).dataset)
+
+
+def tether_simulation(
+    law, initial, tau, integrator: str = "continuous"
+) -> tuple[TetheredSubsatellite, SimConfig, dict]:
+    """What :func:`run_law` simulates: the plant, the configuration and the options of
+    :func:`flexsat.sim.engine.simulate` (case count, SI initial state, recorded states), with
+    the arguments of :func:`run_law`.
+
+    Raises
+    ------
+    ValueError
+        For a bad grid, mode or state.
+    """
+    from flexsat.sim.config import SimConfig
 
     if integrator not in INTEGRATORS:
         raise ValueError(f"integrator: must be one of {INTEGRATORS}, got {integrator!r}")
@@ -207,23 +229,33 @@ def run_law(law, initial, tau, integrator: str = "continuous") -> ClosedLoopRun:
         substeps=1,
         law_mode="continuous" if integrator == "continuous" else "sampled",
     )
-    nc = max(law.n_cases, 1 if x0.ndim == 1 else x0.shape[0])
-    ds = simulate(
-        plant,
-        law,
-        config,
-        n_cases=nc,
-        initial_state=np.delete(x0, 3, axis=-1) if rate else x0,
-        record_states=True,
-    ).dataset
-    x = scales.state_from_si(ds["state"].values)
-    u = ds["reel_rate"].values / scales.speed if rate else ds["tension"].values / scales.force
-    F = ds["thrust"].values / scales.force
+    options = {
+        "n_cases": max(law.n_cases, 1 if x0.ndim == 1 else x0.shape[0]),
+        "initial_state": np.delete(x0, 3, axis=-1) if rate else x0,
+        "record_states": True,
+    }
+    return plant, config, options
+
+
+def closed_loop_run(law, tau, dataset) -> ClosedLoopRun:
+    """The simulated run of :func:`tether_simulation` (its ``dataset``, recorded states) in the
+    paper's nondimensional variables on the grid ``tau``, with the running thrust index."""
+    from flexsat.control.tether_laws import thrust_index
+
+    tau = np.asarray(tau, float)
+    scales, rate = law.scales, law.writes[0] == "reel_rate"
+    x = scales.state_from_si(dataset["state"].values)
+    u = (
+        dataset["reel_rate"].values / scales.speed
+        if rate
+        else dataset["tension"].values / scales.force
+    )
+    F = dataset["thrust"].values / scales.force
     if rate:
         x = np.insert(x, 3, u, axis=-1)
     # the grid is uniform: each interval's ∫|F̂| from one call, then the running sum
     pieces = thrust_index(tau[:2], np.stack([F[:, :-1], F[:, 1:]], -1))
-    index = np.concatenate([np.zeros((nc, 1)), np.cumsum(pieces, axis=-1)], axis=-1)
+    index = np.concatenate([np.zeros((len(F), 1)), np.cumsum(pieces, axis=-1)], axis=-1)
     return ClosedLoopRun(tau, x, np.stack([u, F], -1), index)
 
 
@@ -286,6 +318,7 @@ __all__ = [
     "EXAMPLES",
     "INTEGRATORS",
     "closed_loop",
+    "closed_loop_run",
     "Example",
     "INITIAL",
     "PAPER_SCALES",
@@ -297,4 +330,5 @@ __all__ = [
     "paper_scales",
     "rerun",
     "run_law",
+    "tether_simulation",
 ]

@@ -34,9 +34,9 @@ from flexsat import limits
 from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
-from flexsat.scenarios.errors import item_path
+from flexsat.scenarios.errors import ScenarioError, item_path, locate
 from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, quantity
-from flexsat.scenarios.kind import Run, ScenarioKind
+from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 
 #: the gains each law takes (seed 000 Eqs. 14-15, 18 and 20, 24-25)
 LAW_GAINS = {
@@ -270,27 +270,6 @@ class TetherResult(ReportedResult):
         return sections(self, self.metrics_records(), figures)
 
 
-def _one_run(spec: TetherRunSpec, scenario: TetherScenario, tau: np.ndarray):
-    """One run's :class:`~flexsat.dynamics.tether.ClosedLoopRun`: one call into
-    :func:`flexsat.cases.tether.closed_loop`, continuous or sampled (module docstring)."""
-    from flexsat.cases.tether import closed_loop
-
-    scales, ini = scenario.system.scales(), scenario.initial
-    x_si = np.array(
-        [ini.length, ini.pitch, ini.roll, ini.length_rate or 0.0, ini.pitch_rate, ini.roll_rate]
-    )
-    return closed_loop(
-        spec.law,
-        spec.gains,
-        spec.final_length / scales.length,
-        scales.state_from_si(x_si),
-        tau,
-        scenario.simulation.integrator,
-        spec.printed_sign,
-        scales,
-    )
-
-
 class TetherKind(ScenarioKind):
     """``kind: tether``: every law of the scenario from its initial state (module docstring);
     a run whose tether collapses or whose integration fails is reported under its label."""
@@ -302,19 +281,35 @@ class TetherKind(ScenarioKind):
         return len(scenario.runs)
 
     def plan(self, scenario: TetherScenario):
-        import functools
-
-        from flexsat.cases.tether import SOURCE
+        from flexsat.cases.tether import SOURCE, closed_loop_run, make_law, tether_simulation
         from flexsat.references import cite
 
         scales, sim = scenario.system.scales(), scenario.simulation
         tau = np.linspace(
             0.0, 2 * np.pi * sim.orbits, int(round(sim.orbits * sim.samples_per_orbit)) + 1
         )
+        ini = scenario.initial
+        x_si = np.array(
+            [ini.length, ini.pitch, ini.roll, ini.length_rate or 0.0, ini.pitch_rate, ini.roll_rate]
+        )
         runs = []
         for index, spec in enumerate(scenario.runs):
-            task = functools.partial(_one_run, spec, scenario, tau)
-            runs.append((yield Run(spec.label, task, "runs" + item_path(index, spec.label))))
+            path = "runs" + item_path(index, spec.label)
+            try:
+                law = make_law(
+                    spec.law,
+                    spec.gains,
+                    spec.final_length / scales.length,
+                    scales=scales,
+                    printed_sign=spec.printed_sign,
+                )
+                plant, config, options = tether_simulation(
+                    law, scales.state_from_si(x_si), tau, sim.integrator
+                )
+            except ValueError as exc:
+                raise ScenarioError([locate(path, exc)]) from None
+            result = yield Run(spec.label, Simulation(plant, law, config, options), path)
+            runs.append(closed_loop_run(law, tau, result.dataset))
         notes = (
             "Straight massless tether, no aerodynamics, circular orbit (the paper's model, "
             "L4281, L4321). Eq. 15 with the repaired sign −K3λφ' (L4395 prints +, which "
