@@ -101,7 +101,40 @@ PLANTS = {
         "flexsat.dynamics.tether", fromlist=["x"]
     ).TetheredSubsatellite(control="rate"),
     "dispersed_tamu": _dispersed,
+    "gimbal_cluster": lambda: __import__(
+        "flexsat.dynamics.gimbal_cluster", fromlist=["x"]
+    ).GimbalCluster(),
+    "space_station": lambda: _station().plant,
+    "vibration_test_state_space": lambda: _vibration_plant(),
+    "plugin_two_mass_spring": lambda: __import__(
+        "flexsat_example_plugin.plant", fromlist=["x"]
+    ).TwoMassSpring(1.0, 2.0, 4.0, 0.1),
 }
+
+
+def _station():
+    """The station's pitch and roll/yaw LQR design on the paper's data (the published case)."""
+    from flexsat.cases.space_station_cmg import PAPER_STATION, design
+
+    return design(PAPER_STATION)
+
+
+def _vibration_plant():
+    """The modal-survey plant of :func:`flexsat.sim.vibration_test.simulate_test`: the small
+    flexible spacecraft's two modes driven by forces at both nodes, displacement, velocity and
+    acceleration sensors (the last with a feed-through D)."""
+    from flexsat.dynamics.plant import Channel
+    from flexsat.dynamics.state_space import StateSpacePlant
+    from flexsat.identify.excitation import sensor_matrices
+
+    sensors = [
+        Channel.at(kind, node, axis)
+        for kind, node, axis in (("displacement", 1, "y"), ("velocity", 2, "x"))
+        + (("acceleration", 1, "y"),)
+    ]
+    forces = [Channel.at("force", 1, "y"), Channel.at("force", 2, "x")]
+    matrices = sensor_matrices(_coupled_modal(), sensors, forces)
+    return StateSpacePlant(*matrices, "excitation", "sensors")
 
 
 def _tether_working_point(plant):
