@@ -308,6 +308,62 @@ def _pd(**kw):
     return PD(5.0, 20.0, **kw), _tamu().model()
 
 
+def _steering(kind: str):
+    """The §8.3 pseudo-inverse law on Kurokawa's torque Tx = 0.2 sin 4πt (h/s), plain and with
+    null motion toward the zero set, and the §8.5 null-motion reorientation (cases/cmg_pyramid)."""
+    from flexsat.cases.cmg_pyramid import NullMotionSteering, PseudoInverseSteering
+    from flexsat.dynamics.gimbal_cluster import GimbalCluster
+
+    def kurokawa(t):
+        return np.array([0.2 * np.sin(4 * np.pi * t), 0.0, 0.0])
+
+    law = {
+        "pseudo_inverse": lambda: PseudoInverseSteering(kurokawa),
+        "pseudo_inverse_null": lambda: PseudoInverseSteering(
+            kurokawa, alpha=1e-3, null_target=np.zeros(4), null_gain=0.5
+        ),
+        "null_motion": lambda: NullMotionSteering(np.radians([45.0, -45.0, 45.0, -45.0]), 1.0),
+    }[kind]()
+    return law, GimbalCluster()
+
+
+def _station_feedback():
+    """The station's attitude loop: one knot, u = −K x (cases/space_station_cmg)."""
+    from flexsat.control.scheduled import ScheduledStateFeedback
+
+    station = _station()
+    return ScheduledStateFeedback([0.0], station.gain[None], "state", "torque"), station.plant
+
+
+def _bainum_feedback():
+    """Bainum's Ch. II example on the beam in orbit: f = K x' (printed rate gains), one knot
+    u = −[0, −K/ω_c] x in seconds, as BainumBeam.simulate builds it."""
+    from flexsat.cases.bainum import CH2_LAYOUTS, PUBLISHED, bainum
+    from flexsat.control.scheduled import ScheduledStateFeedback
+
+    plant = bainum().plant(CH2_LAYOUTS[1][2], 2)
+    K_rate = np.reshape(PUBLISHED["ch2_gains"], (1, 3))
+    gain = -np.hstack([np.zeros((1, 3)), K_rate / plant.orbit_rate])
+    law = ScheduledStateFeedback([0.0], gain[None], "state", tuple(plant.input_slices))
+    return law, plant
+
+
+def _playback():
+    """A hammer-and-shaker table on the modal-survey plant, as simulate_test drives it."""
+    from flexsat.control.playback import Playback
+
+    t = np.arange(30) * DT
+    table = np.column_stack([np.where(t < 2 * DT, 5.0, 0.0), 0.3 * np.sin(2 * np.pi * 0.9 * t)])
+    return Playback(table, DT, "excitation"), _vibration_plant()
+
+
+def _bang_off_bang():
+    """The plug-in's law on its carts: pulses of 3 control periods, a 2-period coast."""
+    from flexsat_example_plugin.law import BangOffBang
+
+    return BangOffBang(0.5, 3 * DT, 2 * DT, DT), PLANTS["plugin_two_mass_spring"]()
+
+
 LAWS = {
     "pd_step": lambda: _pd(target=0.3),
     "pd_reference": lambda: _pd(reference=_tamu().reference()),
@@ -333,6 +389,13 @@ LAWS = {
     "tether_rate": lambda: _tether("rate", "V15"),
     "perturbation_feedback": lambda: _perturbation("feedback"),
     "nominal_torque": lambda: _perturbation("nominal"),
+    "cmg_pseudo_inverse": lambda: _steering("pseudo_inverse"),
+    "cmg_pseudo_inverse_null": lambda: _steering("pseudo_inverse_null"),
+    "cmg_null_motion": lambda: _steering("null_motion"),
+    "station_state_feedback": _station_feedback,
+    "bainum_state_feedback": _bainum_feedback,
+    "playback": _playback,
+    "plugin_bang_off_bang": _bang_off_bang,
 }
 
 
