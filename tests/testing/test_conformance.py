@@ -4,14 +4,24 @@ the subject's declaration.
 
 The plants are built from the published cases where one exists (TAMU hub + appendages, NPS
 hybrid model, Draper/RPL, Agrawal & Bang's piezo beam, Bainum's beam in orbit, the TAMU grid,
-the EPS, the tether) and each law on the plant it is written for.
+the EPS, the tether, the CMG pyramid, the space station, the vibration test's state-space model,
+the example plug-in's carts) and each law on the plant it is written for.
+:func:`test_every_plant_and_law_of_the_package_is_a_subject` fails when a concrete Plant or
+Controller subclass of flexsat is in neither PLANTS / LAWS nor the commented NOT_SUBJECTS.
 """
 
 from __future__ import annotations
 
+import functools
+import importlib
+import pkgutil
+
 import numpy as np
 import pytest
 
+import flexsat
+from flexsat.control.base import Controller
+from flexsat.dynamics.plant import Plant
 from flexsat.testing import controller_checks, plant_checks
 from flexsat.testing.checks import CHECK_RATE
 
@@ -153,10 +163,16 @@ def _marks(kind, key, check):
     return ()
 
 
+@functools.cache
+def _plant(key):
+    """The plant of PLANTS[key], built once (collection and the coverage test share it)."""
+    return PLANTS[key]()
+
+
 def _all_plant_checks():
     params = []
-    for key, build in PLANTS.items():
-        plant = build()
+    for key in PLANTS:
+        plant = _plant(key)
         rest = REST_STATES.get(key, lambda p: None)(plant)
         params += [
             pytest.param(key, check, id=f"{key}-{check.name}", marks=_marks("plant", key, check))
@@ -399,10 +415,16 @@ LAWS = {
 }
 
 
+@functools.cache
+def _law(key):
+    """The (law, plant) of LAWS[key], built once."""
+    return LAWS[key]()
+
+
 def _all_law_checks():
     params = []
-    for key, build in LAWS.items():
-        law, plant = build()
+    for key in LAWS:
+        law, plant = _law(key)
         rest = _tether_working_point(plant) if key.startswith("tether") else None
         params += [
             pytest.param(key, check, id=f"{key}-{check.name}", marks=_marks("law", key, check))
@@ -414,3 +436,53 @@ def _all_law_checks():
 @pytest.mark.parametrize("key, check", _all_law_checks())
 def test_law(key, check):
     check()
+
+
+# -- coverage: every concrete plant and law of the package is in the dicts above ---------------
+#: Plant / Controller subclasses of flexsat that are not subjects of their own, each with why
+NOT_SUBJECTS = {
+    # abstract bases: the shared machinery of the concrete classes below them
+    "flexsat.dynamics.hybrid.HybridPlant": "base of HubAppendage and ModalHybrid",
+    "flexsat.control.base.SlewLaw": "abstract base of PD, LQG, Lyapunov laws",
+    "flexsat.control.lqg.EstimatorController": "abstract base of LQG, frequency-shaped",
+    "flexsat.control.attitude_laws._AttitudeLaw": "base of the Gibbs, MRP, quaternion laws",
+    "flexsat.control.tether_laws._TetherLaw": "base of the three tether laws",
+    "flexsat.control.cmg_steering._GimbalLaw": "abstract base of the two steering laws",
+    # the conformance checks' own test doubles
+    "flexsat.testing.checks.HoldLaw": "the plant checks' open-loop drive",
+    "flexsat.testing.law_checks._Without": "the law checks' plant missing a channel",
+}
+
+
+def _name(cls: type) -> str:
+    return f"{cls.__module__}.{cls.__qualname__}"
+
+
+def _subclasses(cls: type) -> set[type]:
+    out = set()
+    for sub in cls.__subclasses__():
+        out |= {sub} | _subclasses(sub)
+    return out
+
+
+def _package_classes(base: type) -> set[str]:
+    """Every subclass of ``base`` defined in flexsat, after importing every module of it (the
+    command-line entry point ``__main__`` excepted: importing it runs the CLI)."""
+    for mod in pkgutil.walk_packages(flexsat.__path__, "flexsat."):
+        if not mod.name.endswith("__main__"):
+            importlib.import_module(mod.name)
+    return {_name(c) for c in _subclasses(base) if c.__module__.startswith("flexsat.")}
+
+
+def test_every_plant_and_law_of_the_package_is_a_subject():
+    """A concrete Plant or Controller subclass of src/flexsat missing from PLANTS / LAWS fails
+    here, by name; so does a NOT_SUBJECTS entry that no longer exists or that is a subject."""
+    plants, laws = _package_classes(Plant), _package_classes(Controller)
+    stale = sorted(set(NOT_SUBJECTS) - plants - laws)
+    assert not stale, f"NOT_SUBJECTS names classes that are gone: {stale}"
+    covered = {_name(type(_plant(k))) for k in PLANTS}
+    covered |= {_name(type(_law(k)[0])) for k in LAWS}
+    both = sorted(covered & set(NOT_SUBJECTS))
+    assert not both, f"in NOT_SUBJECTS but built by the suite: {both}"
+    missing = sorted((plants | laws) - covered - set(NOT_SUBJECTS))
+    assert not missing, f"plants/laws not in the conformance suite (PLANTS / LAWS): {missing}"
