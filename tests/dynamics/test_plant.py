@@ -45,3 +45,16 @@ def test_linear_outputs_keep_leading_axes():
     np.testing.assert_array_equal(plant.output("phase", x, u), x)
     assert plant.n_inputs == 1 and plant.initial_state(5).shape == (5, 2)
     assert plant.energy(x) is None and plant.force_matrix is None
+
+
+def test_unknown_output_is_a_value_error_naming_it():
+    """Plant.output on a name the plant does not declare: a ValueError naming it, not the
+    NotImplementedError of a plant whose output_matrices returns None for what it does not know
+    (StateSpacePlant, SpaceStation did; found by the conformance suite's bad_input)."""
+    from flexsat.dynamics.state_space import StateSpacePlant
+
+    plant = StateSpacePlant([[-1.0]], [[1.0]], [[2.0]], [[0.0]])
+    x, u = np.ones((2, 1)), np.zeros((2, 1))
+    np.testing.assert_array_equal(plant.output("y", x, u), [2.0, 2.0])
+    with pytest.raises(ValueError, match=r"^gyro: StateSpacePlant has no output channel 'gyro'"):
+        plant.output("gyro", x, u)

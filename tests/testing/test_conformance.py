@@ -4,14 +4,24 @@ the subject's declaration.
 
 The plants are built from the published cases where one exists (TAMU hub + appendages, NPS
 hybrid model, Draper/RPL, Agrawal & Bang's piezo beam, Bainum's beam in orbit, the TAMU grid,
-the EPS, the tether) and each law on the plant it is written for.
+the EPS, the tether, the CMG pyramid, the space station, the vibration test's state-space model,
+the example plug-in's carts) and each law on the plant it is written for.
+:func:`test_every_plant_and_law_of_the_package_is_a_subject` fails when a concrete Plant or
+Controller subclass of flexsat is in neither PLANTS / LAWS nor the commented NOT_SUBJECTS.
 """
 
 from __future__ import annotations
 
+import functools
+import importlib
+import pkgutil
+
 import numpy as np
 import pytest
 
+import flexsat
+from flexsat.control.base import Controller
+from flexsat.dynamics.plant import Plant
 from flexsat.testing import controller_checks, plant_checks
 from flexsat.testing.checks import CHECK_RATE
 
@@ -101,7 +111,40 @@ PLANTS = {
         "flexsat.dynamics.tether", fromlist=["x"]
     ).TetheredSubsatellite(control="rate"),
     "dispersed_tamu": _dispersed,
+    "gimbal_cluster": lambda: __import__(
+        "flexsat.dynamics.gimbal_cluster", fromlist=["x"]
+    ).GimbalCluster(),
+    "space_station": lambda: _station().plant,
+    "vibration_test_state_space": lambda: _vibration_plant(),
+    "plugin_two_mass_spring": lambda: __import__(
+        "flexsat_example_plugin.plant", fromlist=["x"]
+    ).TwoMassSpring(1.0, 2.0, 4.0, 0.1),
 }
+
+
+def _station():
+    """The station's pitch and roll/yaw LQR design on the paper's data (the published case)."""
+    from flexsat.cases.space_station_cmg import PAPER_STATION, design
+
+    return design(PAPER_STATION)
+
+
+def _vibration_plant():
+    """The modal-survey plant of :func:`flexsat.sim.vibration_test.simulate_test`: the small
+    flexible spacecraft's two modes driven by forces at both nodes, displacement, velocity and
+    acceleration sensors (the last with a feed-through D)."""
+    from flexsat.dynamics.plant import Channel
+    from flexsat.dynamics.state_space import StateSpacePlant
+    from flexsat.identify.excitation import sensor_matrices
+
+    sensors = [
+        Channel.at(kind, node, axis)
+        for kind, node, axis in (("displacement", 1, "y"), ("velocity", 2, "x"))
+        + (("acceleration", 1, "y"),)
+    ]
+    forces = [Channel.at("force", 1, "y"), Channel.at("force", 2, "x")]
+    matrices = sensor_matrices(_coupled_modal(), sensors, forces)
+    return StateSpacePlant(*matrices, "excitation", "sensors")
 
 
 def _tether_working_point(plant):
@@ -120,10 +163,16 @@ def _marks(kind, key, check):
     return ()
 
 
+@functools.cache
+def _plant(key):
+    """The plant of PLANTS[key], built once (collection and the coverage test share it)."""
+    return PLANTS[key]()
+
+
 def _all_plant_checks():
     params = []
-    for key, build in PLANTS.items():
-        plant = build()
+    for key in PLANTS:
+        plant = _plant(key)
         rest = REST_STATES.get(key, lambda p: None)(plant)
         params += [
             pytest.param(key, check, id=f"{key}-{check.name}", marks=_marks("plant", key, check))
@@ -275,6 +324,62 @@ def _pd(**kw):
     return PD(5.0, 20.0, **kw), _tamu().model()
 
 
+def _steering(kind: str):
+    """The §8.3 pseudo-inverse law on Kurokawa's torque Tx = 0.2 sin 4πt (h/s), plain and with
+    null motion toward the zero set, and the §8.5 null-motion reorientation (cases/cmg_pyramid)."""
+    from flexsat.cases.cmg_pyramid import NullMotionSteering, PseudoInverseSteering
+    from flexsat.dynamics.gimbal_cluster import GimbalCluster
+
+    def kurokawa(t):
+        return np.array([0.2 * np.sin(4 * np.pi * t), 0.0, 0.0])
+
+    law = {
+        "pseudo_inverse": lambda: PseudoInverseSteering(kurokawa),
+        "pseudo_inverse_null": lambda: PseudoInverseSteering(
+            kurokawa, alpha=1e-3, null_target=np.zeros(4), null_gain=0.5
+        ),
+        "null_motion": lambda: NullMotionSteering(np.radians([45.0, -45.0, 45.0, -45.0]), 1.0),
+    }[kind]()
+    return law, GimbalCluster()
+
+
+def _station_feedback():
+    """The station's attitude loop: one knot, u = −K x (cases/space_station_cmg)."""
+    from flexsat.control.scheduled import ScheduledStateFeedback
+
+    station = _station()
+    return ScheduledStateFeedback([0.0], station.gain[None], "state", "torque"), station.plant
+
+
+def _bainum_feedback():
+    """Bainum's Ch. II example on the beam in orbit: f = K x' (printed rate gains), one knot
+    u = −[0, −K/ω_c] x in seconds, as BainumBeam.simulate builds it."""
+    from flexsat.cases.bainum import CH2_LAYOUTS, PUBLISHED, bainum
+    from flexsat.control.scheduled import ScheduledStateFeedback
+
+    plant = bainum().plant(CH2_LAYOUTS[1][2], 2)
+    K_rate = np.reshape(PUBLISHED["ch2_gains"], (1, 3))
+    gain = -np.hstack([np.zeros((1, 3)), K_rate / plant.orbit_rate])
+    law = ScheduledStateFeedback([0.0], gain[None], "state", tuple(plant.input_slices))
+    return law, plant
+
+
+def _playback():
+    """A hammer-and-shaker table on the modal-survey plant, as simulate_test drives it."""
+    from flexsat.control.playback import Playback
+
+    t = np.arange(30) * DT
+    table = np.column_stack([np.where(t < 2 * DT, 5.0, 0.0), 0.3 * np.sin(2 * np.pi * 0.9 * t)])
+    return Playback(table, DT, "excitation"), _vibration_plant()
+
+
+def _bang_off_bang():
+    """The plug-in's law on its carts: pulses of 3 control periods, a 2-period coast."""
+    from flexsat_example_plugin.law import BangOffBang
+
+    return BangOffBang(0.5, 3 * DT, 2 * DT, DT), PLANTS["plugin_two_mass_spring"]()
+
+
 LAWS = {
     "pd_step": lambda: _pd(target=0.3),
     "pd_reference": lambda: _pd(reference=_tamu().reference()),
@@ -300,13 +405,26 @@ LAWS = {
     "tether_rate": lambda: _tether("rate", "V15"),
     "perturbation_feedback": lambda: _perturbation("feedback"),
     "nominal_torque": lambda: _perturbation("nominal"),
+    "cmg_pseudo_inverse": lambda: _steering("pseudo_inverse"),
+    "cmg_pseudo_inverse_null": lambda: _steering("pseudo_inverse_null"),
+    "cmg_null_motion": lambda: _steering("null_motion"),
+    "station_state_feedback": _station_feedback,
+    "bainum_state_feedback": _bainum_feedback,
+    "playback": _playback,
+    "plugin_bang_off_bang": _bang_off_bang,
 }
+
+
+@functools.cache
+def _law(key):
+    """The (law, plant) of LAWS[key], built once."""
+    return LAWS[key]()
 
 
 def _all_law_checks():
     params = []
-    for key, build in LAWS.items():
-        law, plant = build()
+    for key in LAWS:
+        law, plant = _law(key)
         rest = _tether_working_point(plant) if key.startswith("tether") else None
         params += [
             pytest.param(key, check, id=f"{key}-{check.name}", marks=_marks("law", key, check))
@@ -318,3 +436,53 @@ def _all_law_checks():
 @pytest.mark.parametrize("key, check", _all_law_checks())
 def test_law(key, check):
     check()
+
+
+# -- coverage: every concrete plant and law of the package is in the dicts above ---------------
+#: Plant / Controller subclasses of flexsat that are not subjects of their own, each with why
+NOT_SUBJECTS = {
+    # abstract bases: the shared machinery of the concrete classes below them
+    "flexsat.dynamics.hybrid.HybridPlant": "base of HubAppendage and ModalHybrid",
+    "flexsat.control.base.SlewLaw": "abstract base of PD, LQG, Lyapunov laws",
+    "flexsat.control.lqg.EstimatorController": "abstract base of LQG, frequency-shaped",
+    "flexsat.control.attitude_laws._AttitudeLaw": "base of the Gibbs, MRP, quaternion laws",
+    "flexsat.control.tether_laws._TetherLaw": "base of the three tether laws",
+    "flexsat.control.cmg_steering._GimbalLaw": "abstract base of the two steering laws",
+    # the conformance checks' own test doubles
+    "flexsat.testing.checks.HoldLaw": "the plant checks' open-loop drive",
+    "flexsat.testing.law_checks._Without": "the law checks' plant missing a channel",
+}
+
+
+def _name(cls: type) -> str:
+    return f"{cls.__module__}.{cls.__qualname__}"
+
+
+def _subclasses(cls: type) -> set[type]:
+    out = set()
+    for sub in cls.__subclasses__():
+        out |= {sub} | _subclasses(sub)
+    return out
+
+
+def _package_classes(base: type) -> set[str]:
+    """Every subclass of ``base`` defined in flexsat, after importing every module of it (the
+    command-line entry point ``__main__`` excepted: importing it runs the CLI)."""
+    for mod in pkgutil.walk_packages(flexsat.__path__, "flexsat."):
+        if not mod.name.endswith("__main__"):
+            importlib.import_module(mod.name)
+    return {_name(c) for c in _subclasses(base) if c.__module__.startswith("flexsat.")}
+
+
+def test_every_plant_and_law_of_the_package_is_a_subject():
+    """A concrete Plant or Controller subclass of src/flexsat missing from PLANTS / LAWS fails
+    here, by name; so does a NOT_SUBJECTS entry that no longer exists or that is a subject."""
+    plants, laws = _package_classes(Plant), _package_classes(Controller)
+    stale = sorted(set(NOT_SUBJECTS) - plants - laws)
+    assert not stale, f"NOT_SUBJECTS names classes that are gone: {stale}"
+    covered = {_name(type(_plant(k))) for k in PLANTS}
+    covered |= {_name(type(_law(k)[0])) for k in LAWS}
+    both = sorted(covered & set(NOT_SUBJECTS))
+    assert not both, f"in NOT_SUBJECTS but built by the suite: {both}"
+    missing = sorted((plants | laws) - covered - set(NOT_SUBJECTS))
+    assert not missing, f"plants/laws not in the conformance suite (PLANTS / LAWS): {missing}"

@@ -38,8 +38,17 @@ class Playback(Controller):
         self.writes = (writes,)
         self.target = 0.0
 
+    def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
+        """The index of the sample last played in each case (−1 before the first): the law
+        reads no measurement, so its state is what carries the run's case axis."""
+        return {"played": np.full(n_cases, -1)}
+
     def __call__(self, t, y, state):
+        """Sample k = round(t / dt) of the table (zeros after it) in every case: (n_cases,) for a
+        1-wide channel (a 1-D or 1-column table), (n_cases, m) for an m-wide one (the Controller
+        protocol's shapes)."""
         k = int(np.rint(t / self.dt))
-        if k >= self.values.shape[0]:
-            return np.zeros(self.values.shape[1:]), state
-        return self.values[k], state
+        n = state["played"].shape
+        row = self.values[k] if k < self.values.shape[0] else np.zeros(self.values.shape[1:])
+        row = row.reshape(()) if row.shape == (1,) else row  # a 1-column table: a 1-wide channel
+        return np.broadcast_to(row, n + row.shape).copy(), {"played": np.full(n, k)}

@@ -274,7 +274,14 @@ class Plant(ABC):
         self, name: str, x: FloatArray, u: FloatArray, f_in: FloatArray | None = None
     ) -> FloatArray:
         """Value of output channel ``name`` at states x (..., n_x), inputs u (..., m) and extra
-        input-channel force f_in (..., m) or None; shape (...,) or (..., size)."""
+        input-channel force f_in (..., m) or None; shape (...,) or (..., size).
+
+        Raises
+        ------
+        ValueError
+            Naming ``name`` when the plant has no such output channel.
+        """
+        size = self._size(name)  # an unknown name is a ValueError naming it, before the matrices
         mats = self.output_matrices(name)
         if mats is None:
             raise NotImplementedError(
@@ -284,7 +291,7 @@ class Plant(ABC):
         y: FloatArray = x @ C.T + u @ D.T
         if f_in is not None and Df is not None:
             y = y + f_in @ Df.T
-        return y[..., 0] if self._size(name) == 1 else y
+        return y[..., 0] if size == 1 else y
 
     def _size(self, name: str) -> int:
         return find_channel(self.outputs, name, "output", type(self).__name__).size

@@ -103,9 +103,9 @@ class LawSubject:
         rows = []
         for k in range(LAW_SAMPLES):
             y = self.measurements(nc, offset=k)
-            rows.append(
-                np.concatenate([v.reshape(nc, -1) for v in (y[n] for n in self.law.reads)], axis=1)
-            )
+            # a law reading nothing (an open-loop table) is fed an empty (nc, 0) measurement
+            columns = [y[n].reshape(nc, -1) for n in self.law.reads] or [np.zeros((nc, 0))]
+            rows.append(np.concatenate(columns, axis=1))
         return np.stack(rows)
 
     def times(self) -> FloatArray:
