@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 import flexsat
+from eigenaxis_slew import EigenaxisSlew
 from flexsat.control.base import Controller
 from flexsat.dynamics.plant import Plant
 from flexsat.testing import controller_checks, plant_checks
@@ -256,43 +257,11 @@ def _tether(kind: str, key: str):
     return make_law(e.law, e.gains, e.final_length), TetheredSubsatellite(control=kind)
 
 
-class _EigenaxisSlew:
-    """Rest-to-rest rotation by ``angle`` about a fixed body axis in ``duration`` s, exact for
-    the rigid body: θ(τ) = Θ(35τ⁴ − 84τ⁵ + 70τ⁶ − 20τ⁷), β = [cos θ/2, e sin θ/2], ω = θ' e,
-    τ = J e θ'' + ω × J ω (Euler's equation)."""
-
-    def __init__(self, inertia, axis, angle, duration):
-        self.inertia = np.asarray(inertia, float)
-        self.axis = np.asarray(axis, float) / np.linalg.norm(axis)
-        self.angle, self.duration = float(angle), float(duration)
-
-    def _profile(self, t):
-        s = np.clip(np.asarray(t, float) / self.duration, 0.0, 1.0)
-        T, a = self.duration, self.angle
-        return (
-            a * (35 * s**4 - 84 * s**5 + 70 * s**6 - 20 * s**7),
-            a * (140 * s**3 - 420 * s**4 + 420 * s**5 - 140 * s**6) / T,
-            a * (420 * s**2 - 1680 * s**3 + 2100 * s**4 - 840 * s**5) / T**2,
-        )
-
-    def beta(self, t):
-        theta = self._profile(t)[0][..., None]
-        return np.concatenate([np.cos(theta / 2), np.sin(theta / 2) * self.axis], -1)
-
-    def omega(self, t):
-        return self._profile(t)[1][..., None] * self.axis
-
-    def torque(self, t):
-        _, rate, acc = self._profile(t)
-        w = rate[..., None] * self.axis
-        return acc[..., None] * (self.inertia @ self.axis) + np.cross(w, w @ self.inertia.T)
-
-
 def _perturbation(kind: str):
     from flexsat.control.perturbation_feedback import NominalTorque, perturbation_design
 
     plant = _flexible()
-    nominal = _EigenaxisSlew(plant.inertia, [1.0, 1.0, 1.0], 1.0, 2.0)
+    nominal = EigenaxisSlew(plant.inertia, [1.0, 1.0, 1.0], 1.0, 2.0)
     if kind == "nominal":
         return NominalTorque(nominal, DT), plant
     design = perturbation_design(plant, nominal, np.r_[[1000.0] * 6, [100.0] * 4], [50.0] * 3, 2.5)
