@@ -4,7 +4,7 @@ Every function takes numpy arrays ``A`` (n x n) and ``B`` (n x m, a 1-D ``B`` of
 input column), as :func:`control.ctrb` does, and refuses bad shapes and non-finite entries with a
 message that starts with the field name.
 
-Tests provided (seed 002, Bainum & Reddy 1979; notes ``shared/spec/seed002.md`` §2.4):
+Tests provided (Bainum & Reddy 1979, NASA CR-158684, Ch. II):
 
 - :func:`controllability_rank`: rank of the Kalman matrix ``[B, AB, ..., A^(n-1) B]`` by SVD;
 - :func:`pbh_test`: the Popov-Belevitch-Hautus test, ``rank [λI - A, B] = n`` at every

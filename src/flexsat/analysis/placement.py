@@ -4,19 +4,19 @@ Measures
 --------
 * :func:`modal_controllability`, :func:`hamdan_nayfeh`: Hamdan & Nayfeh's modal
   controllability, the angle between the left eigenvector :math:`q_i` and each input column
-  :math:`b_j` and the gross measure :math:`\rho_i` (Att. 4 Eqs. 2–3, seed
-  ``000_7bfdb62d2eacc22a.txt`` L1460–L1484).
+  :math:`b_j` and the gross measure :math:`\rho_i` (Att. 4 Eqs. 2–3, L1460–L1484; Y. Kim
+  and J. L. Junkins, "A Measure of Controllability for Actuator Placement", AIAA GNC 1990).
 * :func:`modal_cost`: Skelton's modal cost analysis, :math:`V = \mathrm{tr}(Q C X C^T)` split
   into component costs :math:`V_i` (Att. 4 Eqs. 4–7, 20–27, L1498–L1620).
 * :func:`kim_junkins_index`: :math:`\alpha = \sum_i (V_i/V) \rho_i^2` (Att. 4 Eq. 28, L1623),
-  with the analytic modal Gramian of Att. 4 Eq. (25) in the corrected signs of
-  ``shared/spec/seed000_part1.md`` §3.1.
+  with the analytic modal Gramian of Att. 4 Eq. (25) in corrected signs (the paper prints
+  "−" where "+" holds).
 * :func:`gawronski_index`: Gawronski's H2 (or Hankel) placement index per actuator and mode,
   :math:`\sigma_{ki} = w_{ki} \|G_{ki}\| / \|G\|` (W. Gawronski, *Advanced Structural Dynamics
   and Active Control of Structures*, 2004, §5.3 and Ch. 8).
-* :func:`h2_placement`, :func:`h2_actuator_ranking`: the H2 ranking of seed
-  ``003_6d17262716e94f5f.txt`` Eqs. (1)–(8) (L188–L235, reconstructed in
-  ``shared/spec/seed003.md`` §2.1 [RECON]), made to work with rigid-body modes.
+* :func:`h2_placement`, :func:`h2_actuator_ranking`: the H2 ranking of the EPS slew
+  study c. 1989 (NASA Langley Earth Pointing Satellite report section), Eqs. (1)–(8) (L188–L235,
+  reconstructed by the developers from the text [RECON]), made to work with rigid-body modes.
   The paper's EPS study (its candidates, outputs and published top 5) is
   :mod:`flexsat.cases.eps_placement`.
 

@@ -1,8 +1,7 @@
 """Eigenvalue, eigenvector and singular-value sensitivities, first and second order.
 
 Source: Junkins & Kim, *First and Second Order Sensitivity of the Singular Value Decomposition*,
-J. Astronautical Sciences 38(1), 1990 = seed ``000_7bfdb62d2eacc22a.txt`` Attachment 5
-(L1844-L2360); curated notes ``shared/spec/seed000_part1.md`` §4.1-§4.3.
+J. Astronautical Sciences 38(1), 1990 (Att. 5 of Junkins, Pollock & Rahman 1990), L1844-L2360.
 
 Three groups of functions, all vectorised over the parameters p_1 … p_P:
 

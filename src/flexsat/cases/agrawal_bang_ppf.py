@@ -1,7 +1,7 @@
 r"""The PPF gain study of seed 004 on the rebuilt Agrawal–Bang L structure (issue #12, F8–F10).
 
-Seed 004_680d3fec9e1f8c83.txt (Agrawal & Bang, *Adaptive Structures for Large Precision
-Antennas*, Acta Astronautica 1996), curated in ../shared/spec/seed004.md: three collocated piezo
+B. N. Agrawal and H. Bang, *Adaptive Structures for Large Precision Antennas*, Acta Astronautica
+1996 (IAF-94.1.4.202): three collocated piezo
 pairs, three flexible modes, a bank of 3 × 3 PPF filters tuned to the modes (Eqs. 3–5), the
 tip-error cost of Eq. 35 with Q̄(w_1, w_2) and Q = 1e-8 on u (L303), initial gains 100, γ stopped
 at 0.9 (L345), first-mode and three-mode initial conditions (L303); Tables 1–3 for

@@ -1,8 +1,8 @@
 """Bainum & Reddy's long free-free beam in orbit with point actuators (seed 002).
 
 P. M. Bainum and A. S. S. R. Reddy, *The Dynamics and Control of Large Flexible Space
-Structures - II, Part A*, NASA CR-158684 (1979): seed ``002_c3272b32d7cac32e.txt``, curated in
-``shared/spec/seed002.md`` (the "notes"; ``Lnnn`` are seed lines).
+Structures - II, Part A*, NASA CR-158684, Howard University (1979); ``Lnnn`` are lines of the
+developers' transcript (:data:`flexsat.references.LINE_NUMBERS`).
 
 Model (Ch. II eqs 1-6, L211-L245; Ch. III eqs 29-34, L750-L796). A uniform free-free beam of
 length l, centre of mass on a circular orbit of rate ω_c, planar pitch θ (from the local

@@ -1,6 +1,7 @@
 """Draper/RPL rigid hub with four flexible appendages (Junkins & Kim 1990, Example 2).
 
-Source: seed 000_7bfdb62d2eacc22a.txt, Attachment 5 (L2145-L2255): Table 3 (configuration
+Source: Junkins & Kim, J. Astronautical Sciences 38(1), 1990 (Att. 5 of Junkins, Pollock & Rahman
+1990), L2145-L2255: Table 3 (configuration
 parameters, entered here as printed in slug-ft-lbf-in units and converted with pint), the Ritz
 model of Eqs. 50-54, the modal reduction of Eqs. 56-58, the structural feedback of Eq. 59 with the
 converged gains G1, G2, and Table 4 (open- and closed-loop characteristics).

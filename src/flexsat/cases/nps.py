@@ -1,6 +1,7 @@
 """NPS Flexible Spacecraft Simulator (Hailey, Sortun & Agrawal), pitch axis.
 
-Seed 001_79dfdfba94ed8e0d.txt (curated in ../shared/spec/seed001.md §1–§2): a rigid central body
+J. A. Hailey, C. D. Sortun and B. N. Agrawal, "Experimental Verification of Attitude Control
+Techniques for Slew Maneuvers of Flexible Spacecraft", NPS (c. 1992): a rigid central body
 (hub) on an air bearing carrying a cantilevered flexible appendage, "a reflector supported by a
 flexible astromast" (L21), planar rotation θ about the vertical z axis. The paper prints only:
 fundamental cantilever frequency 0.14 Hz (L21), six cantilever modes with 0.4 % damping (L181),

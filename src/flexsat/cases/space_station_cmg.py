@@ -1,5 +1,5 @@
 r"""Space-station attitude control and CMG momentum management (Vadali, Oh & Walker, space-station
-example; /work/shared/spec/seed000_part2.md §8.4, feature F26, validation row V9).
+example, Junkins, Pollock & Rahman 1990, L4533-L4830).
 
 Three steps, as in the paper:
 

@@ -1,7 +1,7 @@
 """The seed 000 trade surfaces of the TAMU 40° maneuver: T, E(T) and μ_max over (α, u_max).
 
-Junkins, Rahman & Bang, Att. 3 Figs. 5–7 and Eqs. 12–16, 22 (seed 000_7bfdb62d2eacc22a.txt;
-notes ../shared/spec/seed000_part1.md §2.4–2.5), on :func:`flexsat.cases.tamu`: the published
+Junkins, Rahman & Bang, Att. 3 Figs. 5–7 and Eqs. 12–16, 22 (Junkins, Pollock & Rahman 1990),
+on :func:`flexsat.cases.tamu`: the published
 slew angle (40°), the reference designed with the case's ``reference_inertia`` (the published
 I = 2128 oz-in-s² by default), the open-loop flexible response of the case's model (10 modes,
 hub 50 oz-in-s², damping 0.005) and, for μ, Control Law II with the default scenario's gains

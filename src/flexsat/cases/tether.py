@@ -20,7 +20,7 @@ from flexsat.dynamics.tether import ClosedLoopRun, TetheredSubsatellite, TetherS
 if TYPE_CHECKING:
     from flexsat.sim.config import SimConfig
 
-SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 12, L4258-L4531"
+SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12, L4258-L4531"
 #: settling bands of a retrieval: |θ| within the runs' initial 5° (rad), |λ − λ_f| within 2 %
 #: of the length change (:func:`flexsat.analysis.settling.settling_time`)
 SETTLING_PITCH_BAND = np.radians(5.0)

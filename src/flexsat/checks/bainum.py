@@ -1,5 +1,5 @@
-"""Bainum & Reddy's beam in orbit (issues #4 and #10): seed 002_c3272b32d7cac32e.txt
-(flexsat.cases.bainum; notes shared/spec/seed002.md §3, §6).
+"""Bainum & Reddy's beam in orbit (issues #4 and #10): Bainum & Reddy 1979,
+NASA CR-158684 (flexsat.cases.bainum).
 
 **Ch. II numerical example and Ch. III Case 1, on the simulation core (issue #10).** The
 closed-loop roots are the eigenvalues of the case's plant's linear part (``plant.linear_part()``)
@@ -62,7 +62,7 @@ import numpy as np
 
 from flexsat.checks.core import Check, series
 
-SEED = "seed 002_c3272b32d7cac32e.txt"
+SEED = "Bainum & Reddy 1979"
 
 #: initial position of every coordinate (θ rad, z = A/l), rates zero (L468, L843)
 _X0 = 0.01

@@ -1,6 +1,6 @@
 """Single-gimbal CMG pyramid and the space-station CMG loop (issue 14): Vadali, Oh & Walker,
-"Preferred Gimbal Angles for Single Gimbal Control Moment Gyros", seed
-000_7bfdb62d2eacc22a.txt, L4533–L4830 (docs/cmg.md; tests/dynamics/test_cmg.py,
+"Preferred Gimbal Angles for Single Gimbal Control Moment Gyros", Junkins,
+Pollock & Rahman 1990, L4533–L4830 (docs/cmg.md; tests/dynamics/test_cmg.py,
 tests/cases/test_space_station_cmg.py).
 
 Momenta in rotor momenta h; the paper's "unit +x torque" is the demand ḣ = +x (the spacecraft
@@ -16,7 +16,7 @@ import numpy as np
 
 from flexsat.checks.core import Check, Discrepancy
 
-SEED = "seed 000_7bfdb62d2eacc22a.txt"
+SEED = "Junkins, Pollock & Rahman 1990"
 _X = (-1.0, 0.0, 0.0)  # the paper's +x demand as the torque on the spacecraft
 
 

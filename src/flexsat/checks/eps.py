@@ -1,4 +1,4 @@
-"""Earth Pointing Satellite (issue #3): seed 003_6d17262716e94f5f.txt, L66-L136 (docs/eps.md,
+"""Earth Pointing Satellite (issue #3): EPS slew study c. 1989, L66-L136 (docs/eps.md,
 tests/cases/test_eps.py).
 
 The structure is a reconstruction (Fig. 1 is lost): the checks show how close it comes. Two
@@ -16,7 +16,7 @@ from functools import lru_cache
 
 from flexsat.checks.core import Check, Discrepancy, series
 
-SEED = "seed 003_6d17262716e94f5f.txt"
+SEED = "EPS slew study c. 1989"
 #: L100-L125: paper modes 7-20, Hz
 MODES_7_20 = (
     0.2422,

@@ -1,4 +1,4 @@
-"""Identification and optical sensing (issue #5): seed 000_7bfdb62d2eacc22a.txt, Att. 7 and 8
+"""Identification and optical sensing (issue #5): Junkins, Pollock & Rahman 1990, Att. 7 and 8
 (docs/identification.md; tests/identify/).
 
 Checked: Att. 7 Table 2's starting-model frequencies ω_ns, which the text defines as the true
@@ -21,7 +21,7 @@ import numpy as np
 
 from flexsat.checks.core import Check, Discrepancy
 
-SEED = "seed 000_7bfdb62d2eacc22a.txt"
+SEED = "Junkins, Pollock & Rahman 1990"
 TRUE_RAD_S = (0.0230, 1.062, 55.44, 91.12, 156.75)  # Att. 7 Table 2, ω_n
 START_RAD_S = (0.0209, 0.9617, 50.15, 82.42, 141.78)  # Att. 7 Table 2, ω_ns
 

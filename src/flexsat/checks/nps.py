@@ -1,4 +1,4 @@
-"""NPS Flexible Spacecraft Simulator (issue #3): seed 001_79dfdfba94ed8e0d.txt (docs/nps.md,
+"""NPS Flexible Spacecraft Simulator (issue #3): Hailey, Sortun & Agrawal c. 1992 (docs/nps.md,
 tests/cases/test_nps.py).
 
 The appendage is representative (the GIFTS model is unpublished): its bending stiffness is
@@ -17,7 +17,7 @@ from functools import lru_cache
 
 from flexsat.checks.core import Check
 
-SEED = "seed 001_79dfdfba94ed8e0d.txt"
+SEED = "Hailey, Sortun & Agrawal c. 1992"
 _FITTED = "fitted: the unpublished EI is solved to give this frequency"
 
 

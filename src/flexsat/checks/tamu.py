@@ -1,9 +1,9 @@
-"""TAMU hub + four appendages (issue #2): seed 000_7bfdb62d2eacc22a.txt, Att. 1-3.
+"""TAMU hub + four appendages (issue #2): Junkins, Pollock & Rahman 1990, Att. 1-3.
 
 Checked:
 
-- the rigid 40° maneuver times T of the smoothed bang-bang reference (Att. 3 Eq. 16, L1152;
-  tabulated in shared/spec/seed000_part1.md §2.4), as :mod:`flexsat.cases.tamu` builds them;
+- the rigid 40° maneuver times T of the smoothed bang-bang reference (Att. 3 Eq. 16, L1152,
+  evaluated: the paper gives the law, not a table of T), as :mod:`flexsat.cases.tamu` builds them;
 - the numbers the paper reads off its experiments (Att. 3 §V, L1222-L1226; Att. 2 L865), against
   the embedded default scenario (``flexsat run``) plus Law I with g2 = 0 (Att. 3 Fig. 9), same
   hardware, noise and seed as ``tests/test_default_scenario.py``.
@@ -21,7 +21,7 @@ from functools import lru_cache
 
 from flexsat.checks.core import Check
 
-SEED = "seed 000_7bfdb62d2eacc22a.txt"
+SEED = "Junkins, Pollock & Rahman 1990"
 
 
 @lru_cache(maxsize=1)

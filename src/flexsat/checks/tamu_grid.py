@@ -1,4 +1,4 @@
-"""The TAMU 5′ × 5′ grid (issue #3): seed 000_7bfdb62d2eacc22a.txt, Att. 4, 6 and 8
+"""The TAMU 5′ × 5′ grid (issue #3): Junkins, Pollock & Rahman 1990, Att. 4, 6 and 8
 (docs/structures_benchmarks.md §3, tests/cases/test_tamu_grid.py).
 
 Checked: Att. 4 Table 1's printed SI column against pint's conversion of its US column; the
@@ -17,7 +17,7 @@ from functools import cache
 
 from flexsat.checks.core import Check, Discrepancy, series
 
-SEED = "seed 000_7bfdb62d2eacc22a.txt"
+SEED = "Junkins, Pollock & Rahman 1990"
 ATT8 = (0.90, 2.34, 4.85, 6.05, 7.78, 12.84)  # Att. 8 Figure 4 table, "Modeled Value", Hz
 ATT6 = (0.809, 2.21, 4.48, 5.65, 7.76)  # Att. 6 Table 1 "Modelled (Hz)"
 

@@ -1,4 +1,4 @@
-"""Vadali & Kim's tethered-subsatellite retrieval (issue 14): seed 000_7bfdb62d2eacc22a.txt,
+"""Vadali & Kim's tethered-subsatellite retrieval (issue 14): Junkins, Pollock & Rahman 1990,
 Att. 12, L4397-L4465 (docs/tether.md, tests/control/test_tether_laws.py). Every value is a live
 rerun of the example under continuous feedback (:func:`flexsat.cases.tether.rerun`).
 
@@ -15,7 +15,7 @@ import numpy as np
 
 from flexsat.checks.core import Check, Discrepancy
 
-SEED = "seed 000_7bfdb62d2eacc22a.txt, Att. 12"
+SEED = "Junkins, Pollock & Rahman 1990, Att. 12"
 
 
 @cache

@@ -1,5 +1,4 @@
-r"""Frequency-shaped LQR with a cross weight (seed 003 §2.6, Eqs. 22–30; notes
-../shared/spec/seed003.md §2.3 and §2.6).
+r"""Frequency-shaped LQR with a cross weight (EPS slew study c. 1989, Eqs. 22–30).
 
 The control penalty is shaped in frequency by augmenting the plant with the control and its
 derivatives. With ``order=2`` (the paper) the plant input :math:`u_1` and its rate

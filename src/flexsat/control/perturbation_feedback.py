@@ -1,6 +1,6 @@
 r"""Gain-scheduled frequency-shaped perturbation feedback about a rigid nominal slew, with
-disturbance feedforward and force/torque decoupling (seed 003 §2.6–2.8, Eqs. 22–37,
-L536–L753; notes ../shared/spec/seed003.md §2.6–2.8; features F9–F12, F15).
+disturbance feedforward and force/torque decoupling (EPS slew study c. 1989,
+Eqs. 22–37, L536–L753).
 
 Design (:func:`perturbation_design`). The flexible design model (a few elastic modes) is
 linearised at ``n_points`` equally spaced times :math:`t_i` of [0, T] along the nominal

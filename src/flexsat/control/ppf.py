@@ -1,7 +1,7 @@
 r"""Positive position feedback (PPF) on collocated actuator/sensor pairs (issue #12).
 
-Seed 004_680d3fec9e1f8c83.txt (Agrawal & Bang, *Adaptive Structures for Large Precision
-Antennas*, Acta Astronautica 1996), clean equations and errata in ../shared/spec/seed004.md §2.
+B. N. Agrawal and H. Bang, *Adaptive Structures for Large Precision Antennas*, Acta Astronautica
+1996 (IAF-94.1.4.202), §2; where the printed equations are wrong the docstrings below say so.
 
 The structure in modal coordinates (Eq. 2), with n_a collocated pairs,
 

@@ -1,8 +1,7 @@
 """Homotopic minimum-norm optimisation of PPF gains with eigenvalue-constraint restoration.
 
-Source: Agrawal & Bang, *Adaptive structures for large precision antennas* (seed
-``004_680d3fec9e1f8c83.txt`` L113-L203); curated notes ``shared/spec/seed004.md`` §2
-Eqs. 15-28, features F6-F7, and §3.2-§3.3 for the behaviour checked by the tests.
+Source: Agrawal & Bang, *Adaptive structures for large precision antennas*,
+Acta Astronautica, 1996, Eqs. 15-28 (L113-L203).
 
 Problem (Eq. 15, with the constraint of Eqs. 21-22 and a direct stability check)::
 
@@ -78,7 +77,7 @@ from flexsat.input_checks import (
     require_numeric,
 )
 
-SOURCE = "seed 004_680d3fec9e1f8c83.txt, Eqs. 15-28 (L113-L203); shared/spec/seed004.md §2"
+SOURCE = "Agrawal & Bang 1996, Eqs. 15-28 (L113-L203)"
 
 #: the PPF gain-problem interface (duck-typed)
 PROBLEM_METHODS = (

@@ -1,5 +1,5 @@
 """Single-gimbal control moment gyros in a pyramid (Vadali, Oh & Walker, "Preferred Gimbal Angles
-for Single Gimbal CMGs"; /work/shared/spec/seed000_part2.md §8, features F23–F25).
+for Single Gimbal CMGs"; in Junkins, Pollock & Rahman 1990, L4533–L4830).
 
 Plain array kernels with a leading case axis: the gimbal angles ``sigma`` have shape
 ``(..., n)``; momenta ``(..., 3)``, Jacobians ``(..., 3, n)``. Momenta are in units of one

@@ -1,7 +1,7 @@
 r"""Linearised attitude and CMG-momentum model of the space station about LVLH, with
 gravity-gradient torque, the design disturbance and periodic-disturbance filters (Vadali, Oh &
-Walker, space-station example; /work/shared/spec/seed000_part2.md §8.4, Eq. 8–12, feature F26,
-after Wie et al., AIAA 88-4132).
+Walker, space-station example, Eq. 8–12, in Junkins, Pollock & Rahman 1990; after Wie et al.,
+AIAA 88-4132).
 
 Small roll, pitch, yaw θ1, θ2, θ3 from LVLH, body rates ω, CMG momentum h (body axes), the
 internal torque u (the station feels −u) and the disturbance w:
