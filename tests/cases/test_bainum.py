@@ -1,4 +1,4 @@
-"""Bainum & Reddy's beam in orbit (seed 002; notes shared/spec/seed002.md).
+"""Bainum & Reddy's beam in orbit (Bainum & Reddy 1979, NASA CR-158684).
 
 Tolerances: an acceptance number printed with k decimals is matched to half a unit of its last
 digit (e.g. -0.1717 to 5e-5); the report's gain matrices are matched to the figures they carry

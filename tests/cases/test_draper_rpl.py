@@ -1,6 +1,5 @@
-"""Draper/RPL hub + four appendages: seed 000_7bfdb62d2eacc22a.txt, Att. 5 (Junkins & Kim 1990),
-Table 3 (L2156-L2166), Eqs. 50-59 and Table 4 (L2235-L2248); curated notes
-shared/spec/seed000_part1.md §4.5."""
+"""Draper/RPL hub + four appendages: Junkins & Kim 1990 (Att. 5 of Junkins, Pollock & Rahman
+1990), Table 3 (L2156-L2166), Eqs. 50-59 and Table 4 (L2235-L2248)."""
 
 import importlib
 

@@ -1,5 +1,5 @@
 """The seed 000 trade surfaces of the TAMU 40° maneuver (flexsat.cases.tamu_trade): Att. 3
-Figs. 5-7, Eqs. 12-16 and 17-22 (notes shared/spec/seed000_part1.md §2.4-2.5)."""
+Figs. 5-7, Eqs. 12-16 and 17-22 (Junkins, Pollock & Rahman 1990)."""
 
 import numpy as np
 import pytest

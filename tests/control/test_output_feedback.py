@@ -1,6 +1,6 @@
-"""Symmetric collocated output feedback and minimum-sensitivity design: seed
-000_7bfdb62d2eacc22a.txt, Att. 5 (Junkins & Kim 1990) Eqs. 28-49, Example 1 (L2081-L2143, Tables
-1-2) and Example 2 gains (L2229-L2233); curated notes shared/spec/seed000_part1.md §4.3-§4.5."""
+"""Symmetric collocated output feedback and minimum-sensitivity design: Junkins & Kim 1990 (Att. 5
+of Junkins, Pollock & Rahman 1990) Eqs. 28-49, Example 1 (L2081-L2143, Tables 1-2) and Example 2
+gains (L2229-L2233)."""
 
 import importlib
 

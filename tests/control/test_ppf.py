@@ -1,5 +1,5 @@
-"""Positive position feedback on the Agrawal–Bang L structure (seed 004_680d3fec9e1f8c83.txt;
-clean equations and errata in ../shared/spec/seed004.md §2, features F1–F5, F10)."""
+"""Positive position feedback on the Agrawal–Bang L structure (Agrawal & Bang 1996, Acta
+Astronautica, §2, with the misprints that flexsat.control.ppf names repaired)."""
 
 import numpy as np
 import pytest

@@ -1,5 +1,5 @@
-"""Homotopic PPF gain optimisation with eigenvalue-constraint restoration (seed 004 §2
-Eqs. 15-28, F6-F7; notes shared/spec/seed004.md), on a small notional PPF problem.
+"""Homotopic PPF gain optimisation with eigenvalue-constraint restoration (Agrawal &
+Bang 1996, Eqs. 15-28), on a small notional PPF problem.
 
 The paper's own model is lost (spec §1.3), so the claims are checked on a notional one built
 here, :class:`NotionalPPF`; its numbers differ from the spec's notional run of §3.3 (J 3.18e-3
