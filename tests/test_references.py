@@ -38,9 +38,12 @@ def test_references_find_a_source_named_by_its_short_citation():
     assert references(["Att. 4 of nothing"]) == []  # an attachment only of the Texas A&M report
 
 
-#: pointers to files outside the repository: the developers' notes and seed transcripts, and
-#: absolute paths of the machine they were written on
-OUTSIDE_FILE = re.compile(r"shared/spec|shared/seeds|/work/|\b\d{3}_[0-9a-f]{16}\.txt\b")
+#: pointers to files outside the repository: the developers' notes (by path or by file name,
+#: ``seed003.md``, ``seed000_part2.md``) and seed transcripts, and absolute paths of the machine
+#: they were written on
+OUTSIDE_FILE = re.compile(
+    r"shared/spec|shared/seeds|/work/|\b\d{3}_[0-9a-f]{16}\.txt\b|\bseed\d{3}(_part\d)?\.md\b"
+)
 #: what ships or is read by users: the package, its documentation and examples
 PRODUCT = ("src", "docs", "README.md", "examples", "benchmarks")
 
@@ -51,6 +54,8 @@ def test_outside_file_pattern_matches_each_kind_of_pointer():
         "shared/seeds/x",
         "/work/main/README.md",
         "seed 000_7bfdb62d2eacc22a.txt, Att. 3",
+        "(spec seed003.md §3.2)",
+        "`seed000_part2.md` §8",
     ):
         assert OUTSIDE_FILE.search(pointer), pointer
     assert not OUTSIDE_FILE.search("Junkins, Pollock & Rahman 1990, Att. 3 Eq. 12 (L1152)")

@@ -1,4 +1,4 @@
-"""The PPF gain study of seed 004 (Agrawal & Bang 1996, Tables 1–3; spec seed004.md §3, F8–F10)
+"""The PPF gain study of seed 004 (Agrawal & Bang 1996, Tables 1–3; F8–F10)
 run on the rebuilt L structure: the problem's choices, the two goal rules, the paper's
 qualitative claims, the homotopy's targets and the time responses."""
 

@@ -1,4 +1,4 @@
-"""NPS Flexible Spacecraft Simulator (seed 001_79dfdfba94ed8e0d.txt; notes seed001.md §1–§2)."""
+"""NPS Flexible Spacecraft Simulator (Hailey, Sortun & Agrawal c. 1992)."""
 
 import json
 

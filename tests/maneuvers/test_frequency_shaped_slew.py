@@ -1,5 +1,5 @@
 """Tests of flexsat.maneuvers.frequency_shaped_slew: the single-axis frequency-shaped optimal
-rest-to-rest slew of seed 003 (spec seed003.md §2.3-2.5, Eqs. 12-21)."""
+rest-to-rest slew of seed 003 (Eqs. 12-21)."""
 
 import numpy as np
 import pytest

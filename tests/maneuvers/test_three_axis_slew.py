@@ -1,5 +1,5 @@
 """Tests of flexsat.maneuvers.three_axis_slew: the three-axis frequency-shaped optimal slew of
-seed 003 (spec seed003.md §2.2-2.5, Eqs. 11-20; §3.3 validation cases 1-2; features F5-F7)."""
+seed 003 (EPS slew study c. 1989, Eqs. 11-20, and its validation cases 1-2)."""
 
 import numpy as np
 import pytest

@@ -1,5 +1,5 @@
 """Vadali & Kim's tethered-subsatellite retrieval (AIAA 90-1197; seed 000, Att. 12,
-L4258-L4531; spec seed000_part2.md §7, §11 V10-V15): the Shuttle case and the published numbers
+L4258-L4531): the Shuttle case and the published numbers
 of each example, :func:`closed_loop` (one law on the tether, through the engine's continuous-law
 or sampled mode) and :func:`rerun` (an example under continuous feedback, DOP853).
 
@@ -45,7 +45,7 @@ class Example:
     lines: str
 
 
-#: the examples of Figs. 2-8 (spec §11 V10-V13, V15)
+#: the examples of Figs. 2-8
 EXAMPLES = {
     e.key: e
     for e in (

@@ -483,7 +483,7 @@ def _roots():
     )
 
 
-# the roots as corrected in the notes (seed002.md §6, errata for L1091-L1101: the printed ones
+# the roots as corrected by the developers (errata for L1091-L1101: the printed ones
 # come from single-precision root finding and the pair's real part is printed 10× too large);
 # the corrected values carry 6 figures (4 for the pair's real part): half a unit in the last
 _ROOTS = f"{SEED}, Ch. IV eq. 16 roots (L1091-L1101), errata corrected"

@@ -95,7 +95,7 @@ COLLOCATION_TOL = 1e-10
 # kernels (plain arrays; gains may carry leading case axes)
 def replicate_matrix(n_actuators: int, n_tuned: int) -> np.ndarray:
     """E (n_a n_t × n_a): sensor i copied to its n_t mode-tuned filters, ``E[i n_t + j, i] = 1``
-    (seed 004 Eq. 4; spec seed004.md §2 [RECON])."""
+    (Agrawal & Bang 1996 Eq. 4; the paper does not print E: reconstructed)."""
     return np.kron(np.eye(n_actuators), np.ones((n_tuned, 1)))
 
 

@@ -1,5 +1,5 @@
 r"""Liapunov retrieval laws of a tethered subsatellite (Vadali & Kim, AIAA 90-1197; seed 000,
-Att. 12, L4335-L4465; spec seed000_part2.md §7.4-§7.8), on the plant
+Att. 12, L4335-L4465), on the plant
 :class:`~flexsat.dynamics.tether.TetheredSubsatellite`.
 
 All three are written in the nondimensional variables of seed 000 Eq. 4 (x = [λ, θ, φ, λ', θ',

@@ -30,7 +30,7 @@ import numpy as np
 
 from flexsat.input_checks import require_finite
 
-#: the paper's pyramid skew angle, 54.74° (seed000_part2.md §8.1, L4620), in rad
+#: the paper's pyramid skew angle, 54.74° (L4620), in rad
 SKEW = float(np.deg2rad(54.74))
 
 
@@ -78,7 +78,7 @@ def pyramid_axes(n_units: int = 4, skew=SKEW):
     Returns
     -------
     g, a, b : ndarray
-        See the module; for n = 4 they reproduce Eq. (1)–(2) of seed000_part2.md §8.2.
+        See the module; for n = 4 they reproduce the paper's Eq. (1)–(2).
     """
     return _axes(_require_units(n_units), _require_skew(skew))
 
@@ -92,7 +92,7 @@ def _sigma(sigma, n_units):
 
 
 def momentum(sigma, skew=SKEW, n_units: int = 4) -> np.ndarray:
-    """Cluster momentum h(σ) = Σ_i cosσ_i a_i + sinσ_i b_i (seed000_part2.md §8.2 Eq. 1), in
+    """Cluster momentum h(σ) = Σ_i cosσ_i a_i + sinσ_i b_i (the paper's Eq. 1), in
     units of one rotor's momentum; shape ``(..., 3)``."""
     sig, n = _sigma(sigma, n_units)
     _, a, b = _axes(n, _require_skew(skew))
@@ -280,7 +280,7 @@ class GimbalRun:
 
 
 #: the paper's offset from the +x saturation set [−90, 180, 90, 0]° to its starting set
-#: [−89, 177, 90, −1]° for the back integration (seed000_part2.md §8.3, V4), in rad
+#: [−89, 177, 90, −1]° for the back integration, in rad
 PAPER_PERTURBATION = np.deg2rad([1.0, -3.0, 0.0, -1.0])
 
 

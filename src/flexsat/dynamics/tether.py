@@ -1,6 +1,6 @@
 r"""Tethered subsatellite: the three-degree-of-freedom libration and length dynamics of a point
 mass on a straight massless tether below (or above) a body in a circular orbit (Vadali & Kim,
-AIAA 90-1197; seed 000, Att. 12, L4319-L4333; spec seed000_part2.md §7.3).
+AIAA 90-1197; seed 000, Att. 12, L4319-L4333).
 
 Nondimensional form (seed 000 Eq. 4), τ = Ω t, λ = l/L, T̂ = T/(mΩ²L), F̂ = F/(mΩ²L), ' = d/dτ:
 

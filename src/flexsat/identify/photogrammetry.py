@@ -1,6 +1,6 @@
 """Stereo photogrammetry: collinearity camera model, static calibration, dynamic triangulation.
 
-Sources (seed 000, spec part 2 §1.5–1.7 and §3.2–3.3):
+Sources (Att. 6 and 8 of Junkins, Pollock & Rahman 1990):
 
 * Att. 6 (James & Junkins 1989), eqs. (22)–(29): ``u = u0 + du + f_u (C1.d)/(C3.d)`` with a
   (1,2,3) Euler matrix ``C = R3(t3) R2(t2) R1(t1)``, separate ``f_u, f_v`` and Brown distortion.

@@ -1,5 +1,5 @@
 """Single-axis frequency-shaped optimal rest-to-rest slew, solved exactly by the Hamiltonian
-matrix exponential (seed 003, Chun, Turner & Juang; spec ``seed003.md`` §2.3-2.5).
+matrix exponential (EPS slew study c. 1989, after Chun, Turner & Juang 1987).
 
 Problem (spec §2.5, "Derived single-axis closed-form problem"; a principal axis, so G(ω) = 0).
 State ``x = [θ, ω, u1, u2]`` with the normalized torque ``u1 = u / I`` [rad/s²], its rate ``u2``
@@ -85,7 +85,7 @@ _LOG_OVERFLOW = 700.0  # e^{700} ~ 1e304: beyond it e^{KT} is not representable 
 def hamiltonian_matrix(omega_b: float, zeta_b: float = 0.0, q: float = 0.0) -> FloatArray:
     """The 8×8 matrix K of ``ż = K z``, ``z = [θ, ω, u1, u2, p, λ, μ1, μ2]`` (SI).
 
-    Eqs. (12)-(14) with u3 from (20), and the costate Eqs. (16)-(19) of spec seed003.md §2.4-2.5
+    Eqs. (12)-(14) with u3 from (20), and the costate Eqs. (16)-(19) of the paper
     in the general ζ_B form (see the module docstring).
     """
     wb2 = omega_b * omega_b

@@ -1,6 +1,6 @@
 r"""Three-axis frequency-shaped optimal rest-to-rest slew of a rigid spacecraft: the nonlinear
-two-point boundary-value problem of seed 003 (Chun & Turner 1988; spec ``seed003.md`` §2.2-2.5,
-Eqs. 12-20, features F5-F7), solved by continuation from the single-axis solution.
+two-point boundary-value problem of seed 003 (Chun & Turner 1988; EPS slew study c. 1989,
+Eqs. 12-20), solved by continuation from the single-axis solution.
 
 Problem.  State ``x = [β(4), ω(3), u1(3), u2(3)]`` (Euler parameters, body rate, normalized
 torque ``u1 = I⁻¹τ`` [rad/s²] and its rate), control ``u3 = u̇2``::
@@ -401,7 +401,7 @@ def three_axis_slew(
     max_newton: int = _MAX_NEWTON,
 ) -> ThreeAxisSlew:
     """Frequency-shaped optimal rest-to-rest slew of a rigid body from the identity attitude to
-    ``target`` in time T (module docstring; spec seed003.md §2.2-2.5).
+    ``target`` in time T (module docstring; EPS slew study c. 1989, Eqs. 12-20).
 
     Parameters
     ----------
