@@ -326,7 +326,7 @@ def repeated_frequency_test(
     """Controllability of the undamped modal system ``ẍ + diag(κ) x = B u`` by blocks.
 
     The theorem (Balas 1978, applied in seed 002 Ch. II §3, L305: "these m subsystems with their
-    corresponding blocks in the B matrix must each be separately controllable"; notes §2.4):
+    corresponding blocks in the B matrix must each be separately controllable"):
     group the modes by equal κ_k = ω_k². The 2n-state system ``[[0, I], [-diag(κ), 0]]``,
     ``[[0], [B]]`` is controllable iff, for every group, the rows of B of its modes have rank
     equal to the multiplicity. (By PBH: at λ with λ² = -κ_k the rank of

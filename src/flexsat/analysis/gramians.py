@@ -202,7 +202,7 @@ def modal_controllability_gramian(
 ) -> FloatArray:
     r"""Closed-form controllability Gramian of a modal system, Att. 4 Eqs. (24)–(25).
 
-    Solves :math:`A X + X A^T + B B^T = 0` (Att. 4 Eq. 7, signs as corrected in the notes) for
+    Solves :math:`A X + X A^T + B B^T = 0` (Att. 4 Eq. 7, signs corrected) for
     :math:`B = [0; \bar D]`. With :math:`W = \bar D \bar D^T`:
 
     .. math::

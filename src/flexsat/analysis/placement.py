@@ -98,7 +98,7 @@ class ModalControllability:
         0 for an input column that is identically zero.
     rho : ndarray (n,)
         Gross measure :math:`\rho_i = \|f_i\|`, :math:`f_i^T = q_i^H B / \|q_i\|`, i.e. the rows
-        of :math:`F = (\cos\Theta)\,\mathrm{diag}(\|b_j\|)` (the notes' [AMBIG]: cos Θ is
+        of :math:`F = (\cos\Theta)\,\mathrm{diag}(\|b_j\|)` (the paper is ambiguous: cos Θ is
         modes × inputs).
     eigenvalues : ndarray (n,) complex
         The eigenvalue of each row (for modal systems the one with Im λ >= 0).
@@ -122,7 +122,7 @@ def modal_controllability(omega, zeta, B, form: str = "first_order") -> ModalCon
         \cos\theta_{ij} = \frac{|\bar D_{ij}|}{\sqrt{1 + \omega_i^2}\; \|\bar D_{:j}\|}, \qquad
         \rho_i = \frac{\|\bar D_{i:}\|}{\sqrt{1 + \omega_i^2}}.
 
-    Both conjugate eigenvalues give the same values (the notes' [AMBIG] on Eq. 28: one per
+    Both conjugate eigenvalues give the same values (the paper is ambiguous on Eq. 28: one per
     mode). A rigid mode (ω = 0, a Jordan block) has the single left eigenvector (0, 1): the same
     formula. The :math:`\sqrt{1+\omega^2}` mixes η and η̇, so ρ depends on the time unit
     (here s): the measures are not invariant under non-orthogonal scaling, as Att. 4 warns.
@@ -441,7 +441,7 @@ class H2Placement:
         \|u\|^2`.
     energy : ndarray (m,)
         :math:`f_i W_c f_i^T` (f_i row i of F): the energy of control input i; sums to
-        :math:`\|u\|^2` (the notes' reading of "the total energy in each control input").
+        :math:`\|u\|^2` (a reading of the paper's "the total energy in each control input").
     printed : ndarray (m,)
         :math:`b_i^T W_o b_i` (Eq. 8 as printed: control energy of an impulse through actuator i).
     gamma : float
@@ -475,9 +475,9 @@ def h2_placement(A, B, b, C, gamma=1.0) -> H2Placement:
 
         (A + BF)^T W_o + W_o (A + BF) + F^T F = 0, \quad \|u_i\|_2^2 = b_i^T W_o b_i \qquad (8)
 
-    Eq. (7)'s source term is :math:`b b^T` (the notes' [OCR-FIX]; printed "BBᵀ"). Eq. (8) is
+    Eq. (7)'s source term is :math:`b b^T` (a misprint repaired; printed "BBᵀ"). Eq. (8) is
     offered both as printed (``printed``) and as :math:`f_i W_c f_i^T` (``energy``), which adds
-    up to :math:`\|u\|^2`; they rank differently in general (notes §2.1 [AMBIG]).
+    up to :math:`\|u\|^2`; they rank differently in general (the paper is ambiguous here).
 
     Needs (A, B) stabilisable and (A, C) detectable: with rigid-body modes both hold only if
     the actuators can move and the outputs can see every rigid motion. Otherwise the CARE has

@@ -63,7 +63,7 @@ PUBLISHED_GAINS = {
     ),
 }
 
-#: Gauss-Legendre points for the mass integrals of Eq. 54: 400 (as the curated notes), or 40 per
+#: Gauss-Legendre points for the mass integrals of Eq. 54: 400 (an earlier value), or 40 per
 #: comparison function when that is more (the integrands oscillate like cos(2Nπz/L)).
 QUADRATURE_POINTS = 400
 _POINTS_PER_FUNCTION = 40

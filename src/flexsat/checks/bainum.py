@@ -26,9 +26,9 @@ L843):
 
 The report's time is τ = ω_c t and its rates d/dτ; the plants run in seconds, so the gains
 enter as K/ω_c on the state's rates and the times and roots are converted back (τ = ω_c t,
-s_τ = s/ω_c). The response numbers are not printed: the report's figures are lost (OCR) and the
-notes recompute them from the printed gains in continuous time (notes §3.1, §3.2 [DERIVED]);
-they are the published values here, with half a unit of the notes' last digit.
+s_τ = s/ω_c). The response numbers are not printed: the report's figures are lost (OCR), so they are
+recomputed from the printed gains in continuous time (derived, not printed) and stand for the
+published values here, with half a unit of their last digit.
 
 The engine is sampled-data (zero-order hold of the command over each control period), the
 report's loop continuous. Each run's control rate is chosen so that this sampled-data error
@@ -41,8 +41,8 @@ error).
 
 **Ch. IV three-mass example (issue #4).** The eigenvalues λ1, λ2 of the three-mass model
 reproduce. The roots of the closed-loop characteristic equation (16) with the printed c,
-K1 = 0.4728, K2 = 0.4 are checked against the values as corrected in the notes (the printed ones
-carry about three figures and the complex pair's real part is printed 10 times too large,
+K1 = 0.4728, K2 = 0.4 are checked against the values as corrected by the developers (the printed
+roots carry about three figures and the complex pair's real part is printed 10 times too large,
 erratum L1097-L1101). Both λ and the roots are computed on the model's plant
 (``ThreeMassBeam.plant``, a :class:`flexsat.dynamics.structural.StructuralPlant`): λ from its M
 and K, the roots as the eigenvalues of its linear part under the feedback of eq. 13, not from
@@ -235,7 +235,7 @@ def _ch3_case2_roots():
     return closed_loop_roots(plant, _gains(published_matrix("ch3_case2_K")))
 
 
-# Ch. II: the notes print the roots to 6 decimals and ζ to 4 figures: half a unit of the last
+# Ch. II: the recomputed roots are given to 6 decimals and ζ to 4 figures: half a unit of the last
 # digit (the roots are eigenvalues of a 6x6 matrix, exact to 1e-13 here)
 _CH2_CHECKS = [
     Check(
@@ -292,7 +292,7 @@ _CH2_CHECKS = [
         lambda: _ch2_roots()[5].imag,
         atol=5e-7,
     ),
-    # the gains were designed for uncoupled ζ = 0.1, 0.01, 0.001 (notes §3.1); the coupled loop
+    # the gains were designed for uncoupled ζ = 0.1, 0.01, 0.001; the coupled loop
     Check(
         "bainum",
         "Ch. II example, ζ of the pitch pair",
@@ -414,7 +414,7 @@ _CH3_CHECKS = [
 ]
 
 # Ch. III Case 2, the printed decoupling gains (K51 = -1.167, erratum L841): roots printed in
-# the notes to 5 decimals (the pitch pair) or 4: half a unit of the last digit
+# the recomputation to 5 decimals (the pitch pair) or 4: half a unit of the last digit
 _CASE2 = (
     f"{SEED}, Ch. III Case 2 (L829-L841), closed-loop roots recomputed from the printed K "
     "(K51 = -1.167)"

@@ -4,7 +4,7 @@ Pollock & Rahman 1990, L4533–L4830 (docs/cmg.md; tests/dynamics/test_cmg.py,
 tests/cases/test_space_station_cmg.py).
 
 Momenta in rotor momenta h; the paper's "unit +x torque" is the demand ḣ = +x (the spacecraft
-feels −ḣ). Not checked: the spec's own reproductions (1.1848, 0.5928, 3.266, 1.282, ...), which
+feels −ḣ). Not checked: the developers' own reproductions (1.1848, 0.5928, 3.266, 1.282, ...), which
 the paper does not print.
 """
 

@@ -1,8 +1,8 @@
 """Draper/RPL hub + four appendages (issue #3): Junkins, Pollock & Rahman 1990, Att. 5 Table 4
 (L2235-L2248), gains of Eq. 59 (L2229-L2233) (docs/draper_rpl.md, tests/cases/test_draper_rpl.py).
 
-Not checked: EI = 74.5985 lb ft² and J = 28.1963 slug ft² are derived in the notes, not printed;
-the gains are inputs.
+Not checked: EI = 74.5985 lb ft² and J = 28.1963 slug ft² are derived, not
+printed: the gains are inputs.
 """
 
 from __future__ import annotations

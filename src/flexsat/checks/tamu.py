@@ -63,7 +63,7 @@ def _metric(run: str, name: str) -> float:
     return value
 
 
-_T_SOURCE = f"{SEED}, Att. 3 Eq. 16 (L1152), evaluated"  # the notes' table, §2.4
+_T_SOURCE = f"{SEED}, Att. 3 Eq. 16 (L1152), evaluated"  # the law, tabulated by the developers
 
 # Experimental readings: "≈ 1.5°", "~10°", "−34°", "6 seconds" are read off single hardware runs
 # with bearing friction, sensor noise and random torques, and the model's hub inertia is not

@@ -3,7 +3,7 @@ for Single Gimbal CMGs"; in Junkins, Pollock & Rahman 1990, L4533–L4830).
 
 Plain array kernels with a leading case axis: the gimbal angles ``sigma`` have shape
 ``(..., n)``; momenta ``(..., 3)``, Jacobians ``(..., 3, n)``. Momenta are in units of one
-rotor's momentum h (the notes' h = 1). Only the axial rotor momentum is modelled (§8.1).
+rotor's momentum h (h = 1). Only the axial rotor momentum is modelled.
 
 Geometry. Unit i of n sits at azimuth φ_i = 2π(i − 1)/n around the body z axis; its gimbal axis
 is tilted by the skew angle δ from z towards the azimuth, and its rotor momentum turns in the
@@ -12,10 +12,10 @@ plane normal to the gimbal axis::
     g_i = [sinδ cosφ_i, sinδ sinφ_i, cosδ],   a_i = [−sinφ_i, cosφ_i, 0],   b_i = g_i × a_i
     h_i(σ_i) = cosσ_i a_i + sinσ_i b_i
 
-For n = 4 this is exactly the notes' Eq. (1), and the Jacobian column ∂h_i/∂σ_i =
+For n = 4 this is exactly the paper's Eq. (1), and the Jacobian column ∂h_i/∂σ_i =
 −sinσ_i a_i + cosσ_i b_i = g_i × h_i is Eq. (2).
 
-Sign convention. The notes' Eq. (4)–(5) at ω = 0: the spacecraft feels the torque −ḣ, and the
+Sign convention. The paper's Eq. (4)–(5) at ω = 0: the spacecraft feels the torque −ḣ, and the
 steering law solves C σ̇ = ḣ_cmd. The kernels here take ``torque``, the torque on the
 spacecraft, so ḣ_cmd = −torque; the paper's "torque demand" T of Eq. (5) is ḣ_cmd itself
 (its "unit +x torque" is ``torque = [-1, 0, 0]`` here).

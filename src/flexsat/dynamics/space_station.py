@@ -16,8 +16,8 @@ internal torque u (the station feels −u) and the disturbance w:
 
     \dot h_1 - n h_3 = u_1, \quad \dot h_2 = u_2, \quad \dot h_3 + n h_1 = u_3       \quad (10)
 
-(the printed "ω" of the roll equation is ω3 and the printed "ḣ1 = u2" is ḣ2: spec §13 flags
-27, 28). The 3n² terms are the gravity-gradient torque. Pitch decouples from roll/yaw. Both
+(the printed "ω" of the roll equation is ω3 and the printed "ḣ1 = u2" is ḣ2: misprints).
+The 3n² terms are the gravity-gradient torque. Pitch decouples from roll/yaw. Both
 axes carry the integral of the CMG momentum (∫h dt: zero mean momentum, so the station settles
 at its torque-equilibrium attitude) and periodic-disturbance rejection filters on the attitude,
 α̈ + (kn)²α = θ (Eq. 12), one per disturbance frequency kn.
