@@ -62,7 +62,7 @@ import numpy as np
 
 from flexsat.checks.core import Check, series
 
-SEED = "Bainum & Reddy 1979"
+SOURCE = "Bainum & Reddy 1979"
 
 #: initial position of every coordinate (θ rad, z = A/l), rates zero (L468, L843)
 _X0 = 0.01
@@ -211,10 +211,10 @@ def _damping(root) -> float:
     return float(-root.real / abs(root))
 
 
-_CH2 = f"{SEED}, Ch. II §4 example (L446-L468; Fig. 2 lost)"
+_CH2 = f"{SOURCE}, Ch. II §4 example (L446-L468; Fig. 2 lost)"
 _CH2_ROOTS = f"{_CH2}, closed-loop roots recomputed from the printed gains (not printed)"
 _CH2_RESP = f"{_CH2}, linear response recomputed from the printed gains (figure lost)"
-_CH3 = f"{SEED}, Ch. III Case 1 (L798-L806; Fig. 2 lost)"
+_CH3 = f"{SOURCE}, Ch. III Case 1 (L798-L806; Fig. 2 lost)"
 _CH3_ROOTS = f"{_CH3}, closed-loop roots recomputed from the printed K, G13 = -29.76"
 _CH3_RESP = f"{_CH3}, peak actuator forces recomputed from the printed K (figure lost)"
 _CORE = "computed on the simulation core: "
@@ -416,7 +416,7 @@ _CH3_CHECKS = [
 # Ch. III Case 2, the printed decoupling gains (K51 = -1.167, erratum L841): roots printed in
 # the recomputation to 5 decimals (the pitch pair) or 4: half a unit of the last digit
 _CASE2 = (
-    f"{SEED}, Ch. III Case 2 (L829-L841), closed-loop roots recomputed from the printed K "
+    f"{SOURCE}, Ch. III Case 2 (L829-L841), closed-loop roots recomputed from the printed K "
     "(K51 = -1.167)"
 )
 
@@ -486,14 +486,14 @@ def _roots():
 # the roots as corrected by the developers (errata for L1091-L1101: the printed ones
 # come from single-precision root finding and the pair's real part is printed 10× too large);
 # the corrected values carry 6 figures (4 for the pair's real part): half a unit in the last
-_ROOTS = f"{SEED}, Ch. IV eq. 16 roots (L1091-L1101), errata corrected"
+_ROOTS = f"{SOURCE}, Ch. IV eq. 16 roots (L1091-L1101), errata corrected"
 
 _CH4_CHECKS = [
     # printed to 5 and 6 figures and exact given the printed m, k, c: half a unit
     Check(
         "bainum",
         "λ1, three-mass model",
-        f"{SEED}, Ch. IV (L1083)",
+        f"{SOURCE}, Ch. IV (L1083)",
         5.5876e-4,
         "",
         lambda: _lambdas()[0],
@@ -502,7 +502,7 @@ _CH4_CHECKS = [
     Check(
         "bainum",
         "λ2, three-mass model",
-        f"{SEED}, Ch. IV (L1085)",
+        f"{SOURCE}, Ch. IV (L1085)",
         1.67627e-3,
         "",
         lambda: _lambdas()[1],

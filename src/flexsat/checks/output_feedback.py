@@ -16,9 +16,9 @@ from functools import lru_cache
 
 from flexsat.checks.core import Check, Discrepancy, series
 
-SEED = "Junkins, Pollock & Rahman 1990"
-TABLE1 = f"{SEED}, Att. 5 Table 1 (L2131-L2136)"
-TABLE2 = f"{SEED}, Att. 5 Table 2 (L2138-L2143), gains L2121"
+SOURCE = "Junkins, Pollock & Rahman 1990"
+TABLE1 = f"{SOURCE}, Att. 5 Table 1 (L2131-L2136)"
+TABLE2 = f"{SOURCE}, Att. 5 Table 2 (L2138-L2143), gains L2121"
 OPEN_OMEGA = (1.4447, 4.4721, 6.9219)
 OPEN_CONDITION = 9.4903
 CLOSED_REAL = (-0.8833, -1.0574, -0.5322)
