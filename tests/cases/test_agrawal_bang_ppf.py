@@ -113,7 +113,7 @@ def test_a_goal_below_j_init_lowers_j_monotonically(reducing):
 
 
 def test_the_papers_apparent_goal_raises_j_but_barely_moves_the_gains(paper):
-    """The published runs' J rose by ≈ 0.1–0.2 % while the gains grew 10³-fold (spec §3.2).
+    """The published runs' J rose by ≈ 0.1–0.2 % while the gains grew 10³-fold.
     Here the same rise is reached, but on this model ∂J/∂g11 < 0 (more PPF gain, more damping)
     and J is sensitive to g11, so the minimum-norm step lowers g11 by less than 1 % and leaves
     the other gains within 0.1 %: the published growth is not reproduced by a goal above

@@ -132,7 +132,7 @@ def test_closed_form_stiffness_matches_quadrature(case):
 
 
 def test_quadrature_points_are_enough(case, monkeypatch):
-    """400 Gauss-Legendre points (notes §4.5): doubling them moves the Table 4 frequencies by
+    """400 Gauss-Legendre points: doubling them moves the Table 4 frequencies by
     less than 1e-9 rad/s and every frequency by less than 1e-10 relative (eigensolver noise)."""
     monkeypatch.setattr(module, "QUADRATURE_POINTS", 800)
     finer = draper_rpl().frequencies()

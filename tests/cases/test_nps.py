@@ -98,7 +98,7 @@ def test_single_mode_identity(case):
 
 
 def test_coupling_completeness(case):
-    """Σ D_i² grows with the modes towards the appendage inertia about the hub axis (notes §2):
+    """Σ D_i² grows with the modes towards the appendage inertia about the hub axis:
     with every finite-element mode it reaches it up to the attachment node's consistent-mass
     share, which vanishes with the mesh."""
     budget = inertia_budget(case)

@@ -25,7 +25,7 @@ from flexsat.units import UnitError, ureg
 
 EPS = np.finfo(float).eps
 M = 3  # modes retained (seed 004 L291)
-ZETA_F = 0.1  # filter damping: not published (spec §1.3); a common PPF choice
+ZETA_F = 0.1  # filter damping: not published; a common PPF choice
 
 
 @pytest.fixture(scope="module")
