@@ -4,8 +4,8 @@ implementation of the same closed loop, side by side in one run, each the best o
 
 (a) TPBVP: wall time of :func:`flexsat.maneuvers.three_axis_slew` from the call to the polished
     solution (continuation a1 = a2: 0 -> 1, Newton multiple shooting, the DOP853 polish), with
-    the accuracy of each solution. Cases: the EPS inertia (flexsat.cases.eps) and the spec's
-    notional one (seed003.md §3.3 item 2, products ±5e3 kg m²), the paper's (1, 1, 1) rad 1-2-3
+    the accuracy of each solution. Cases: the EPS inertia (flexsat.cases.eps) and a
+    notional one (products of inertia ±5e3 kg m²), the paper's (1, 1, 1) rad 1-2-3
     slew, T = 10 s with ω_B = 2.5 rad/s and T = 6 s with ω_B = 5 rad/s, both shaping readings
     ζ_B = 0 and 1. Target: <= 2 s at T = 10 s.
 (b) Closed loop, the pipeline of the slew kind (``flexsat.scenarios.slew.SlewKind``) for seed 003

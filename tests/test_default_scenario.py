@@ -1,5 +1,5 @@
 """The embedded default scenario (`flexsat run`) reproduces the TAMU experiment's claims
-(seed 000_7bfdb62d2eacc22a.txt, Att. 3 §V, L1222-L1228; notes seed000_part1.md §2.7)."""
+(Junkins, Pollock & Rahman 1990, Att. 3 §V, L1222-L1228)."""
 
 from importlib import resources
 

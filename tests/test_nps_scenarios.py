@@ -49,7 +49,7 @@ def lqg_plan():
 
 def test_lqg_position_gain_is_the_integrator_value(lqg_plan):
     """With R_xx(θ) = 1 and R_uu = 7 the LQR position gain is √(1/7) = 0.378 whatever the modal
-    data (the θ channel is a pure integrator; notes seed001.md §3)."""
+    data (the θ channel is a pure integrator)."""
     law = lqg_plan.controllers["LQG"]
     assert law.K[0, 0] == pytest.approx(np.sqrt(1 / 7), rel=1e-8)
 

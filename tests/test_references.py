@@ -1,5 +1,9 @@
 """Citations that replace the developers' seed file names (flexsat.references)."""
 
+import re
+import subprocess
+from pathlib import Path
+
 from flexsat.references import ATTACHMENTS, SEEDS, cite, references
 
 
@@ -24,3 +28,57 @@ def test_every_seed_is_cited_with_authors_title_and_year():
     for number, ref in SEEDS.items():
         assert any(str(year) in ref.short for year in range(1970, 2000)), number
         assert len(ref.full) > len(ref.short) + 40, number
+
+
+def test_references_find_a_source_named_by_its_short_citation():
+    lines = references(["Junkins, Pollock & Rahman 1990, Att. 12, L4258", "Bainum & Reddy 1979"])
+    assert lines[0].startswith("Junkins, Pollock & Rahman 1990: J. L. Junkins")
+    assert lines[1] == f"  Att. 12: {ATTACHMENTS[12]}"
+    assert lines[2].startswith("Bainum & Reddy 1979: P. M. Bainum") and len(lines) == 3
+    assert references(["Att. 4 of nothing"]) == []  # an attachment only of the Texas A&M report
+
+
+#: pointers to files outside the repository: the developers' notes (by path or by file name,
+#: ``seed003.md``, ``seed000_part2.md``) and seed transcripts, and absolute paths of the machine
+#: they were written on
+OUTSIDE_FILE = re.compile(
+    r"shared/spec|shared/seeds|/work/|\b\d{3}_[0-9a-f]{16}\.txt\b|\bseed\d{3}(_part\d)?\.md\b"
+)
+#: what ships or is read by users: the package, its documentation and examples
+PRODUCT = ("src", "docs", "README.md", "examples", "benchmarks")
+
+
+def test_outside_file_pattern_matches_each_kind_of_pointer():
+    for pointer in (
+        "notes ../shared/spec/seed003.md §2.6",
+        "shared/seeds/x",
+        "/work/main/README.md",
+        "seed 000_7bfdb62d2eacc22a.txt, Att. 3",
+        "(spec seed003.md §3.2)",
+        "`seed000_part2.md` §8",
+    ):
+        assert OUTSIDE_FILE.search(pointer), pointer
+    assert not OUTSIDE_FILE.search("Junkins, Pollock & Rahman 1990, Att. 3 Eq. 12 (L1152)")
+
+
+def test_the_product_points_to_no_file_outside_the_repository():
+    """Sources are cited by full reference (flexsat.references), never by a path outside."""
+    root = Path(__file__).resolve().parents[1]
+    listed = subprocess.run(
+        ["git", "ls-files", "-z", "--", *PRODUCT],
+        cwd=root,
+        capture_output=True,
+        check=True,
+    ).stdout.decode()
+    files = [name for name in listed.split("\0") if name]
+    assert any(name.startswith("src/flexsat/") for name in files)  # the listing worked
+    found = []
+    for name in files:
+        try:
+            text = (root / name).read_text(encoding="utf-8")
+        except (UnicodeDecodeError, FileNotFoundError):  # binary, or deleted in the work tree
+            continue
+        for number, line in enumerate(text.splitlines(), 1):
+            if OUTSIDE_FILE.search(line):
+                found.append(f"{name}:{number}: {line.strip()}")
+    assert found == [], "\n".join(found)

@@ -47,14 +47,14 @@ CASES: dict[str, CaseInfo] = {
             "tamu",
             "flexsat.cases.tamu",
             "tamu",
-            "seed 000_7bfdb62d2eacc22a.txt, Att. 3 Table 1 (L1302-L1323) and §V",
+            "Junkins, Pollock & Rahman 1990, Att. 3 Table 1 (L1302-L1323) and §V",
             "Texas A&M rigid hub with four flexible appendages and tip masses, single-axis slews",
         ),
         CaseInfo(
             "tamu_grid",
             "flexsat.cases.tamu_grid",
             "tamu_grid",
-            "seed 000_7bfdb62d2eacc22a.txt, Att. 4 Table 1 (L1648-L1655), Att. 6 "
+            "Junkins, Pollock & Rahman 1990, Att. 4 Table 1 (L1648-L1655), Att. 6 "
             "(L2405-L2705), Att. 8 Fig. 4 (L3234-L3246)",
             "Texas A&M 5 ft x 5 ft aluminium grid hanging in a vertical plane, "
             "plate-grid elements, optional gravity stiffening",
@@ -63,21 +63,21 @@ CASES: dict[str, CaseInfo] = {
             "draper_rpl",
             "flexsat.cases.draper_rpl",
             "draper_rpl",
-            "seed 000_7bfdb62d2eacc22a.txt, Att. 5 Table 3 (L2156-L2166), Eqs. 50-59, Table 4",
+            "Junkins, Pollock & Rahman 1990, Att. 5 Table 3 (L2156-L2166), Eqs. 50-59, Table 4",
             "Draper/RPL hub with four appendages, Ritz model with comparison functions (Table 4)",
         ),
         CaseInfo(
             "eps",
             "flexsat.cases.eps",
             "eps",
-            "seed 003_6d17262716e94f5f.txt, L66-L136 (EPS model), L238-L295 (node numbers)",
+            "EPS slew study c. 1989, L66-L136 (EPS model), L238-L295 (node numbers)",
             "Earth Pointing Satellite: 25 m graphite truss with 15 m and 7.5 m antennas",
         ),
         CaseInfo(
             "nps",
             "flexsat.cases.nps",
             "nps",
-            "seed 001_79dfdfba94ed8e0d.txt (NPS FSS), L21, L181, L208-L220",
+            "Hailey, Sortun & Agrawal c. 1992 (NPS FSS), L21, L181, L208-L220",
             "NPS Flexible Spacecraft Simulator: hub with a cantilevered astromast and "
             "reflector, hybrid coordinates",
         ),
@@ -85,14 +85,14 @@ CASES: dict[str, CaseInfo] = {
             "agrawal_bang",
             "flexsat.cases.agrawal_bang",
             "agrawal_bang",
-            "seed 004_680d3fec9e1f8c83.txt, §4 L205-L303",
+            "Agrawal & Bang 1996, §4 L205-L303",
             "Agrawal-Bang two-beam L structure with three collocated piezoelectric pairs",
         ),
         CaseInfo(
             "bainum",
             "flexsat.cases.bainum",
             "bainum",
-            "seed 002_c3272b32d7cac32e.txt (NASA CR-158684), Ch. II-IV, App. A",
+            "Bainum & Reddy 1979 (NASA CR-158684), Ch. II-IV, App. A",
             "Bainum & Reddy free-free beam in orbit: pitch + bending with gravity gradient, "
             "point-force actuators (controllability, decoupling, per-mode LQR)",
         ),

@@ -1,10 +1,11 @@
-"""The published sources behind the cases and checks, cited so that a reader without the
-developers' seed files can find them.
+"""The published sources behind the cases and checks, cited so that a reader can find them.
 
-The code base names its sources as the developers' OCR transcripts, ``seed NNN_<hash>.txt`` with
-line numbers ``Lnnn`` into them. Those files do not ship; :func:`cite` replaces each name by a
-short citation (authors, year) and :func:`references` lists the full ones (authors, title,
-report or journal, year), with the attached papers of the Texas A&M report that a text names.
+The cases and checks name their sources by a short citation (authors and year, :data:`SEEDS`)
+with line numbers ``Lnnn`` into the developers' OCR transcripts (:data:`LINE_NUMBERS`).
+:func:`references` lists the full citations (authors, title, report or journal, year) of the
+sources a text names, with the attached papers of the Texas A&M report it names. A source still
+written as a transcript file name (``seed NNN_<hash>.txt``, the form plug-ins written against
+older versions may use) is understood too, and :func:`cite` turns it into the short citation.
 
 Deliberately free of numpy and the models: ``flexsat cases`` and ``flexsat validate`` print
 through it before anything heavy loads.
@@ -92,19 +93,25 @@ LINE_NUMBERS = (
 
 
 def cite(text: str) -> str:
-    """``text`` with every seed file name replaced by its short citation
-    (``"seed 000_7bfdb62d2eacc22a.txt, Att. 4"`` → ``"Junkins, Pollock & Rahman 1990, Att. 4"``).
-    Unknown seed numbers are left as they are."""
+    """``text`` with every transcript file name (``seed NNN_<16 hex digits>.txt``) replaced by
+    its short citation (for seed 000: ``"Junkins, Pollock & Rahman 1990"``). Unknown seed
+    numbers are left as they are."""
     return _SEED.sub(lambda m: SEEDS[m.group(1)].short if m.group(1) in SEEDS else m.group(0), text)
 
 
+def _sources_named(text: str) -> set[str]:
+    """The seed numbers whose short citation or transcript file name ``text`` contains."""
+    by_name = {m.group(1) for m in _SEED.finditer(text)} & set(SEEDS)
+    return by_name | {number for number, ref in SEEDS.items() if ref.short in text}
+
+
 def references(texts: Iterable[str]) -> list[str]:
-    """The full citations of the seeds named in ``texts`` (in seed order), each followed by the
+    """The full citations of the sources named in ``texts`` (in seed order), each followed by the
     attached papers of the Texas A&M report the same texts name (``Att. N``)."""
-    texts = list(texts)
-    seeds = sorted({m.group(1) for t in texts for m in _SEED.finditer(t)} & set(SEEDS))
+    named = [(t, _sources_named(t)) for t in texts]
+    seeds = sorted(set().union(*(numbers for _, numbers in named)))
     attachments = sorted(
-        {int(n) for t in texts if _SEED.search(t) and "000_" in t for n in _ATTACHMENT.findall(t)}
+        {int(n) for t, numbers in named if "000" in numbers for n in _ATTACHMENT.findall(t)}
         & set(ATTACHMENTS)
     )
     lines = []

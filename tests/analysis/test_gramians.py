@@ -64,7 +64,7 @@ def test_closed_form_diagonal_and_att4_layout(modal_system):
 
 
 def test_printed_signs_of_eq25_are_wrong():
-    """With the OCR's "−" signs Δ_ii = 0 and the numerator 0: X_ii = 0/0 (notes [OCR-FIX])."""
+    """With the OCR's "−" signs Δ_ii = 0 and the numerator 0: X_ii = 0/0 (the print is wrong)."""
     w, z = np.array([2.0]), np.array([0.01])
     s_printed = z * w - z * w
     delta_printed = 0.0 - 4 * w * w * s_printed * (z * w - z * w)

@@ -1,6 +1,6 @@
-"""Homotopic minimum-norm differential correction: seed 000_7bfdb62d2eacc22a.txt, Att. 5 Appendix
-Eqs. A1-A11 (L2255-L2325; notes shared/spec/seed000_part1.md §4.6) and seed 004 §2 Eqs. 16-28
-(notes shared/spec/seed004.md), on textbook problems with known optima."""
+"""Homotopic minimum-norm differential correction: Junkins & Kim 1990 (Att. 5 of Junkins, Pollock
+& Rahman 1990), Appendix Eqs. A1-A11 (L2255-L2325), and Agrawal & Bang 1996 Eqs. 16-28, on
+textbook problems with known optima."""
 
 import numpy as np
 import pytest

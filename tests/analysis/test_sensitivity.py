@@ -1,5 +1,5 @@
-"""Eigen and SVD sensitivities: seed 000_7bfdb62d2eacc22a.txt, Att. 5 (Junkins & Kim 1990)
-Eqs. 15-27 and 40-44; curated notes shared/spec/seed000_part1.md §4.1-§4.3.
+"""Eigen and SVD sensitivities: Junkins & Kim 1990 (Att. 5 of Junkins, Pollock & Rahman 1990),
+Eqs. 15-27 and 40-44.
 
 Every analytic derivative is checked against central finite differences at 1e-7 relative on
 seeded random well-conditioned cases; second derivatives against central differences of the

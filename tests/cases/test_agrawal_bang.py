@@ -1,4 +1,4 @@
-"""Agrawal & Bang L structure with collocated piezo pairs (seed 004_680d3fec9e1f8c83.txt)."""
+"""Agrawal & Bang L structure with collocated piezo pairs (Agrawal & Bang 1996)."""
 
 import json
 

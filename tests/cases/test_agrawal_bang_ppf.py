@@ -1,4 +1,4 @@
-"""The PPF gain study of seed 004 (Agrawal & Bang 1996, Tables 1–3; spec seed004.md §3, F8–F10)
+"""The PPF gain study of seed 004 (Agrawal & Bang 1996, Tables 1–3; F8–F10)
 run on the rebuilt L structure: the problem's choices, the two goal rules, the paper's
 qualitative claims, the homotopy's targets and the time responses."""
 
@@ -113,7 +113,7 @@ def test_a_goal_below_j_init_lowers_j_monotonically(reducing):
 
 
 def test_the_papers_apparent_goal_raises_j_but_barely_moves_the_gains(paper):
-    """The published runs' J rose by ≈ 0.1–0.2 % while the gains grew 10³-fold (spec §3.2).
+    """The published runs' J rose by ≈ 0.1–0.2 % while the gains grew 10³-fold.
     Here the same rise is reached, but on this model ∂J/∂g11 < 0 (more PPF gain, more damping)
     and J is sensitive to g11, so the minimum-norm step lowers g11 by less than 1 % and leaves
     the other gains within 0.1 %: the published growth is not reproduced by a goal above

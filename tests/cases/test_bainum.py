@@ -1,4 +1,4 @@
-"""Bainum & Reddy's beam in orbit (seed 002; notes shared/spec/seed002.md).
+"""Bainum & Reddy's beam in orbit (Bainum & Reddy 1979, NASA CR-158684).
 
 Tolerances: an acceptance number printed with k decimals is matched to half a unit of its last
 digit (e.g. -0.1717 to 5e-5); the report's gain matrices are matched to the figures they carry
@@ -129,7 +129,7 @@ def test_chapter2_example_closed_loop_poles():
     ]
     np.testing.assert_allclose(poles.real, np.real(expected), atol=5e-5)
     np.testing.assert_allclose(poles.imag, np.imag(expected), atol=5e-5)
-    # the gains are uncoupled ζ ≈ 0.1, 0.01, 0.001 designs (notes §3.1)
+    # the gains are uncoupled ζ ≈ 0.1, 0.01, 0.001 designs
     zeta = (
         -np.array([59.52, 20.0, 20.0])
         * PUBLISHED["ch2_gains"]
@@ -273,7 +273,7 @@ def test_chapter3_case2_per_mode_regulator_gains():
     for col in (0, 1, 2, 4):
         np.testing.assert_allclose(K_rate[:, col], printed[:, 5 + col], rtol=2e-4, atol=5e-4)
     np.testing.assert_allclose(K_pos[:, 0], printed[:, 0], rtol=5e-3)
-    assert not np.allclose(K_rate[:, 3], printed[:, 8], rtol=0.05)  # unresolved (notes §3.3)
+    assert not np.allclose(K_rate[:, 3], printed[:, 8], rtol=0.05)  # unresolved
     np.testing.assert_allclose(K_rate[[0, 2], 3], [-3.78926, -10.82645], rtol=1e-5)
     # the same gains from the full 10x10 regulator (cross-check of eq 18's mapping)
     A, B = first_order(F, G)
@@ -378,7 +378,7 @@ def test_chapter3_case1_response_at_36_seconds():
 # -- Ch. IV: three-mass model --------------------------------------------------------------------
 def test_three_mass_parameters_and_controllability():
     """L1063-L1081: M* = 111.11, a = 222.22, b = 111.11, λ1 = 5.5876e-4, λ2 = 1.67627e-3, g = 3
-    with the printed c; the formula gives c = 0.1862132 (printed 0.1862522, notes §3.4); one
+    with the printed c; the formula gives c = 0.1862132 (printed 0.1862522); one
     actuator is enough: det C = bc/(a² - b²)² = 1.509e-8."""
     t = three_mass()
     assert (t.m_star, t.a, t.b) == pytest.approx((111.11, 222.22, 111.11), abs=5e-3)

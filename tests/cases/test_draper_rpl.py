@@ -1,6 +1,5 @@
-"""Draper/RPL hub + four appendages: seed 000_7bfdb62d2eacc22a.txt, Att. 5 (Junkins & Kim 1990),
-Table 3 (L2156-L2166), Eqs. 50-59 and Table 4 (L2235-L2248); curated notes
-shared/spec/seed000_part1.md §4.5."""
+"""Draper/RPL hub + four appendages: Junkins & Kim 1990 (Att. 5 of Junkins, Pollock & Rahman
+1990), Table 3 (L2156-L2166), Eqs. 50-59 and Table 4 (L2235-L2248)."""
 
 import importlib
 
@@ -133,7 +132,7 @@ def test_closed_form_stiffness_matches_quadrature(case):
 
 
 def test_quadrature_points_are_enough(case, monkeypatch):
-    """400 Gauss-Legendre points (notes §4.5): doubling them moves the Table 4 frequencies by
+    """400 Gauss-Legendre points: doubling them moves the Table 4 frequencies by
     less than 1e-9 rad/s and every frequency by less than 1e-10 relative (eigensolver noise)."""
     monkeypatch.setattr(module, "QUADRATURE_POINTS", 800)
     finer = draper_rpl().frequencies()

@@ -1,4 +1,4 @@
-"""The Earth Pointing Satellite structure (seed 003_6d17262716e94f5f.txt, L66-L136)."""
+"""The Earth Pointing Satellite structure (EPS slew study c. 1989, L66-L136)."""
 
 import json
 

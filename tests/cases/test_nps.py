@@ -1,4 +1,4 @@
-"""NPS Flexible Spacecraft Simulator (seed 001_79dfdfba94ed8e0d.txt; notes seed001.md §1–§2)."""
+"""NPS Flexible Spacecraft Simulator (Hailey, Sortun & Agrawal c. 1992)."""
 
 import json
 
@@ -98,7 +98,7 @@ def test_single_mode_identity(case):
 
 
 def test_coupling_completeness(case):
-    """Σ D_i² grows with the modes towards the appendage inertia about the hub axis (notes §2):
+    """Σ D_i² grows with the modes towards the appendage inertia about the hub axis:
     with every finite-element mode it reaches it up to the attachment node's consistent-mass
     share, which vanishes with the mesh."""
     budget = inertia_budget(case)

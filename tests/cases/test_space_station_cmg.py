@@ -1,4 +1,4 @@
-"""Space-station momentum management with CMGs (issue 14, seed000_part2.md §8.4, F26, V9): the
+"""Space-station momentum management with CMGs (issue 14, F26, V9): the
 Bryson-weighted LQR equals the Riccati solution of the unscaled problem, the station settles at
 its torque-equilibrium attitude with the periodic disturbance filtered out of pitch, the CMG
 loop delivers the attitude loop's momentum, and — the paper's point — σ(0) = 0 meets an

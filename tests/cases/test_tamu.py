@@ -1,4 +1,4 @@
-"""The TAMU hub + appendage experiment (seed 000_7bfdb62d2eacc22a.txt, Att. 1-3)."""
+"""The TAMU hub + appendage experiment (Junkins, Pollock & Rahman 1990, Att. 1-3)."""
 
 import numpy as np
 import pytest

@@ -1,5 +1,5 @@
 """The seed 000 trade surfaces of the TAMU 40° maneuver (flexsat.cases.tamu_trade): Att. 3
-Figs. 5-7, Eqs. 12-16 and 17-22 (notes shared/spec/seed000_part1.md §2.4-2.5)."""
+Figs. 5-7, Eqs. 12-16 and 17-22 (Junkins, Pollock & Rahman 1990)."""
 
 import numpy as np
 import pytest
@@ -11,7 +11,7 @@ from flexsat.sim import SimConfig, simulate
 from flexsat.sim.open_loop import open_loop_response
 from flexsat.units import to_si
 
-#: the T table of the notes (seed000_part1.md §2.4, "[DERIVED] T in seconds for θ_f − θ_o = 40°,
+#: the T table of the notes ("[DERIVED] T in seconds for θ_f − θ_o = 40°,
 #: I = 2128 oz-in-s²"): rows u_max = 100 … 600 oz-in, columns α = 0, 0.05, …, 0.25. The three
 #: values the paper itself prints are 3.8544 (α = 0), 4.2986 (0.1) and 4.9109 (0.2) at 400 oz-in.
 T_TABLE = np.array(

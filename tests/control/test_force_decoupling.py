@@ -1,4 +1,4 @@
-"""Force/torque decoupling of the EPS point forces (seed 003 Eqs. 32-37, notes §2.8, F12): the
+"""Force/torque decoupling of the EPS point forces (seed 003 Eqs. 32-37, F12): the
 moment-free parametrisation is Eq. 35's corrected R̂⁻¹ = M_W, the paper's printed R̂ does
 not enforce the constraint, the full-coordinate Riccati equation has no stabilising
 solution, and the decoupled commands exert no net moment."""
@@ -69,8 +69,8 @@ def test_m_w_is_the_null_space_form_and_the_printed_r_hat_is_not(design):
 def test_the_full_coordinate_riccati_equation_has_no_stabilising_solution(design):
     # Eq. 35 in the full augmented coordinates [δX, δu₁, δu₂] (all 10 inputs): with
     # R̂⁻¹ = M_W it is the LQR of (Â, B̂S, Q̂, SᵀR S, N S), and Wδu₁, Wδu₂ are integrators that
-    # no admissible δu₃ reaches: eigenvalue 0, uncontrollable, so no stabilising solution
-    # (notes §2.8) - the flexsat solver refuses it by name and scipy's finds none (measured:
+    # no admissible δu₃ reaches: eigenvalue 0, uncontrollable, so no stabilising solution:
+    # the flexsat solver refuses it by name and scipy's finds none (measured:
     # LinAlgError "Failed to find a finite solution")
     i = 1
     A, B = design.A[i], design.B[i]

@@ -174,7 +174,7 @@ def test_sampled_law_is_stable_and_starts_smoothly(plant, order, zeta):
 
 
 def test_sampled_literal_weight_can_lose_stability(plant):
-    """ζ_B = 0 leaves a lightly damped closed-loop pair near ω_B (notes §2.3 [AMBIG]); the
+    """ζ_B = 0 leaves a lightly damped closed-loop pair near ω_B (the paper is ambiguous here); the
     sample-and-hold delay at dt = 0.05 s (ω_B dt = 0.1) then destabilises it — use ζ_B > 0 or
     a faster rate."""
     A, B, C, Q, L = plant

@@ -1,4 +1,4 @@
-"""Control Laws I and II (seed 000_7bfdb62d2eacc22a.txt, Att. 3 Eqs. 11 and 17)."""
+"""Control Laws I and II (Junkins, Pollock & Rahman 1990, Att. 3 Eqs. 11 and 17)."""
 
 import numpy as np
 import pytest

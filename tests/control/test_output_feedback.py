@@ -1,6 +1,6 @@
-"""Symmetric collocated output feedback and minimum-sensitivity design: seed
-000_7bfdb62d2eacc22a.txt, Att. 5 (Junkins & Kim 1990) Eqs. 28-49, Example 1 (L2081-L2143, Tables
-1-2) and Example 2 gains (L2229-L2233); curated notes shared/spec/seed000_part1.md §4.3-§4.5."""
+"""Symmetric collocated output feedback and minimum-sensitivity design: Junkins & Kim 1990 (Att. 5
+of Junkins, Pollock & Rahman 1990) Eqs. 28-49, Example 1 (L2081-L2143, Tables 1-2) and Example 2
+gains (L2229-L2233)."""
 
 import importlib
 
@@ -70,7 +70,7 @@ def test_example1_closed_loop_table_2(plant, printed):
 
 
 def test_example1_closed_loop_zeta_omega(plant, printed):
-    """ζω = Im λ (−Re λ)/|λ| (notes §4.3). Mode 3 matches Table 2 (0.5306); the printed 0.7532
+    """ζω = Im λ (−Re λ)/|λ|. Mode 3 matches Table 2 (0.5306); the printed 0.7532
     and 1.0189 disagree with the paper's own eigenvalues, which give 0.7536 and 1.0290 (notes
     §4.4 [AMBIG]; 1.0189 is probably a typo)."""
     _, zw = plant.modes(*printed)
@@ -81,7 +81,7 @@ def test_example1_closed_loop_zeta_omega(plant, printed):
 
 
 def test_plain_transpose_normalisation_matters(plant, printed):
-    """With unit-2-norm columns the condition numbers would be 6.92 and 7.52 (notes §4.4)."""
+    """With unit-2-norm columns the condition numbers would be 6.92 and 7.52."""
     A, B = plant.pencil(*printed)
     import scipy.linalg as sla
 
@@ -214,7 +214,7 @@ def test_draper_rpl_reduced_model_with_the_printed_gains():
 
 @pytest.mark.slow
 def test_draper_rpl_gain_design_from_identity():
-    """Att. 5 Example 2 design (notes §4.5): minimise κ of the 9-mode reduced model (18th order)
+    """Att. 5 Example 2 design: minimise κ of the 9-mode reduced model (18th order)
     with ω_1 = 0.3 (rigid mode), ω_2, ω_3 held at their zero-gain values and ζω >= 0.2, 0.2, 0.25,
     from G = I (ft·lbf units). Cut after 20 objective steps (~8 s): κ is already below the
     printed gains' 362.44 on the same model, and the full 42-state check lands between the

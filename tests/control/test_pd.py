@@ -1,4 +1,4 @@
-"""PD with rigid-body pole placement (seed 001_79dfdfba94ed8e0d.txt, Eqs. 20-24)."""
+"""PD with rigid-body pole placement (Hailey, Sortun & Agrawal c. 1992, Eqs. 20-24)."""
 
 import numpy as np
 import pytest
@@ -10,7 +10,7 @@ from flexsat.maneuvers import Sinusoidal
 def test_nps_gains_from_poles():
     """Seed 001 L208-L220: ω_n = 0.06 Hz, ζ = 0.9 give k = 1.3985 N m/rad and
     kτ = 6.6773 N m s/rad. The inertia is not printed; I = 9.84012 kg m² is the value implied
-    by k (notes seed001.md §1.3), so k is reproduced to 5 digits by construction and kτ is an
+    by k, so k is reproduced to 5 digits by construction and kτ is an
     independent check (printed to 5 significant digits: tolerance 1e-4 relative)."""
     wn = 2 * np.pi * 0.06
     law = PD.from_rigid_poles(9.84012, wn, 0.9)

@@ -28,7 +28,7 @@ COUPLED_OUTPUTS = [(1, "y"), (2, "x"), (3, "x")]
 
 
 def eps_weights():
-    """Case A (seed 003 L873-L900, notes §3.2): 1000 on the angles and rates, 1 on the 20
+    """Case A (seed 003 L873-L900): 1000 on the angles and rates, 1 on the 20
     modal states, D = 50 on the normalized torques; ordered [δα, δω, δη, δη̇]."""
     return np.r_[[1000.0] * 6, [1.0] * 20], [50.0] * 3
 
@@ -94,7 +94,7 @@ def test_the_feedforward_is_the_limit_of_the_backward_sweep(coupled):
     # −ξ̇ = Â_cl(P)ᵀξ + P d̂ backward from P = 0, ξ = 0 over a horizon of 40 s (ξ converges
     # as e^{Re λ_max T_h}, Re λ_max = −0.65 s⁻¹ here: e^{−26}) reaches the algebraic P and
     # ξ = −Â_clᵀ⁻¹P d̂, and −R̂⁻¹B̂ᵀξ is the design's K_d d. The agreement is the DOP853
-    # sweep's (rtol 1e-12): measured 5e-7 (P), 5e-7 (ξ), 2e-6 (feedforward); notes §2.6
+    # sweep's (rtol 1e-12): measured 5e-7 (P), 5e-7 (ξ), 2e-6 (feedforward); earlier computations
     # report 6e-8 and 2e-5. Allowed 1e-5.
     _, design = coupled
     i = 4
@@ -365,7 +365,7 @@ def test_bad_design_input_is_named(eps_design_plant, eps_nominal, change, messag
 
 
 def test_redundant_inputs_with_the_literal_weight_are_explained(coupled):
-    # With ζ_B = 0 the shaping penalty vanishes at ω_B (notes §2.3): torquers plus 5 forces
+    # With ζ_B = 0 the shaping penalty vanishes at ω_B: torquers plus 5 forces
     # on a 2-mode model have 8 inputs for 3 + 2 driven rows, so some combination moves
     # nothing and would ring at ω_B unseen - no stabilising Riccati solution. A clear error;
     # with ζ_B = 1 (or decoupled forces) the same design exists.

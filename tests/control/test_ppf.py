@@ -1,5 +1,5 @@
-"""Positive position feedback on the Agrawal–Bang L structure (seed 004_680d3fec9e1f8c83.txt;
-clean equations and errata in ../shared/spec/seed004.md §2, features F1–F5, F10)."""
+"""Positive position feedback on the Agrawal–Bang L structure (Agrawal & Bang 1996, Acta
+Astronautica, §2, with the misprints that flexsat.control.ppf names repaired)."""
 
 import numpy as np
 import pytest
@@ -25,7 +25,7 @@ from flexsat.units import UnitError, ureg
 
 EPS = np.finfo(float).eps
 M = 3  # modes retained (seed 004 L291)
-ZETA_F = 0.1  # filter damping: not published (spec §1.3); a common PPF choice
+ZETA_F = 0.1  # filter damping: not published; a common PPF choice
 
 
 @pytest.fixture(scope="module")

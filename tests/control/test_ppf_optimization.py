@@ -1,7 +1,7 @@
-"""Homotopic PPF gain optimisation with eigenvalue-constraint restoration (seed 004 §2
-Eqs. 15-28, F6-F7; notes shared/spec/seed004.md), on a small notional PPF problem.
+"""Homotopic PPF gain optimisation with eigenvalue-constraint restoration (Agrawal &
+Bang 1996, Eqs. 15-28), on a small notional PPF problem.
 
-The paper's own model is lost (spec §1.3), so the claims are checked on a notional one built
+The paper's own model is lost, so the claims are checked on a notional one built
 here, :class:`NotionalPPF`; its numbers differ from the spec's notional run of §3.3 (J 3.18e-3
 → 6.35e-4 there), the behaviour is what is compared.
 """
@@ -31,11 +31,11 @@ class NotionalPPF:
     Modes ω = (1, 2.7, 5.3) rad/s with ζ = 0.005; modal influence F̄ = Φᵀ F of the three pairs
     drawn from a seeded normal law; a1 = 1e-2, a2 = 1e-3 (so S = Ω − a1 a2 Cᵀ G C loses
     definiteness near g = 1e4 on every filter); each actuator's three filters tuned to the
-    three modes, ζ_f = 0.3, C = E F̄ᵀ with the replicate matrix E (spec §2 [RECON]).
+    three modes, ζ_f = 0.3, C = E F̄ᵀ with the replicate matrix E (reconstructed, not printed).
     State x = [η, η̇, ξ, ξ̇] (24), Ā of Eq. 8 written as A − B G_x with B = [0; a1 F̄; 0; 0] and
     G_x = −[0, 0, Eᵀ G, 0] (Eq. 9), Q_s = blockdiag(Ω, I, 0, 0) (twice the modal energy),
     Q_u = q_u I, x0 = η(0) = (1, 0.5, 0.25). J = ½ tr(P̄ X0) (Eqs. 10-12) and the repaired
-    gradient (spec §2 (13)-(14))::
+    gradient::
 
         ∂J/∂g = tr[V P_s ∂Ā/∂g] − tr[V (P_u B − G_xᵀ Q_u) ∂G_x/∂g],  V Āᵀ + Ā V + X0 = 0
     """
@@ -204,7 +204,7 @@ def test_scipy_agrees_on_the_constrained_minimum(model, fifth, unreachable):
     # asks to explain
     assert s.cost < 0.5 * fifth.cost
     # the minimum uses negative gains, which S's test would call safe whatever their size
-    # (spec §2 (6)): both optimisers checked the poles directly
+    # (derived from Eq. 6): both optimisers checked the poles directly
     assert np.any(s.gains < 0) and np.any(unreachable.gains < 0)
 
 

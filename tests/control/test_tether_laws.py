@@ -1,5 +1,5 @@
 """Liapunov retrieval of a tethered subsatellite (issue 14, F22; Vadali & Kim, seed 000 Att. 12,
-L4369-L4465; spec seed000_part2.md §7.6-§7.8, §11 V10-V15), from λ = 1, θ = φ = 5° at rest.
+L4369-L4465; V10-V15), from λ = 1, θ = φ = 5° at rest.
 
 Reproduced: controller 1 starts at T̂ ≈ 4 and retrieves λ and θ in about two orbits while roll
 lags (V10); controller 2 spends a thrust index of 0.24 with a 29.3° maximum pitch (V11) and

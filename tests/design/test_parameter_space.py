@@ -27,7 +27,7 @@ from flexsat.design.parameter_space import (
 )
 from flexsat.units import Q_, UnitError
 
-#: seed 000's TAMU ranges (spec seed000_part1.md §2.4): α in [0, 0.25], u_max in [100, 600] oz-in
+#: seed 000's TAMU ranges: α in [0, 0.25], u_max in [100, 600] oz-in
 TAMU_BOX = ParameterSpace(
     [Uniform("alpha", 0.0, 0.25), Uniform("u_max", "100 ozf*in", "600 ozf*in", "N*m")]
 )

@@ -1,5 +1,5 @@
 """Trade surfaces of the smoothed bang-bang maneuver (flexsat.design.trade_surfaces), seed 000
-Att. 3 Eqs. 12-16, 22 (notes shared/spec/seed000_part1.md §2.4-2.5)."""
+Att. 3 Eqs. 12-16, 22 (Junkins, Pollock & Rahman 1990)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Single-gimbal CMG pyramid (issue 14, seed000_part2.md §8, §11 V1–V8, F24): the zero-momentum
+"""Single-gimbal CMG pyramid (issue 14, V1–V8, F24): the zero-momentum
 gain of the preferred set, saturation along +x on the envelope, the internal singularity met from
 zero gimbals under pseudo-inverse steering, the back integration to the preferred set, the
 preferred-set table (V5), the preferred-angle search (F24), time-varying torques (Kurokawa V6,

@@ -1,4 +1,4 @@
-"""A rigid spacecraft with a CMG pyramid as its actuator (issue 14 part 2; seed000_part2.md §8.2
+"""A rigid spacecraft with a CMG pyramid as its actuator (issue 14 part 2; Vadali, Oh & Walker,
 Eq. 3–7, 17): the steering law delivers the commanded torque (Iω̇ + ω×Iω = τ_c), ḣ = h_r C σ̇
 is the derivative of h(σ) along the motion, the total angular momentum is conserved with no
 external torque (through the simulation core, fourth order), the gimbal-rate limit scales the

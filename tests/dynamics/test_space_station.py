@@ -1,4 +1,4 @@
-"""Space-station LVLH model (issue 14, seed000_part2.md §8.4 Eq. 8–12, F26): the pitch
+"""Space-station LVLH model (issue 14, Eq. 8–12, F26): the pitch
 gravity-gradient libration, the roll/yaw characteristic equation of Eq. (8)–(9), the momentum
 turning at orbit rate (Eq. 10), the filters' poles at kn (Eq. 12), the design disturbance
 (Eq. 11) and the stated AERO1 substitute; bad input named."""

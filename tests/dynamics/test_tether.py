@@ -50,7 +50,7 @@ def random_states(n=50):
 
 @pytest.mark.numerics
 def test_v14_integral_of_motion_is_constant_with_the_length_held():
-    # V14 (spec §11, L4357-L4363): λ ≡ 1 (rate control, λ' = 0), F̂ = 0, θ = φ = 5° at rest.
+    # V14 (L4357-L4363): λ ≡ 1 (rate control, λ' = 0), F̂ = 0, θ = φ = 5° at rest.
     # DOP853 at rtol 1e-12 over two orbits: V1 (~1.1e-2) varies by < 1e-10 absolute.
     tau = np.linspace(0, 4 * np.pi, 801)
     plant = TetheredSubsatellite(control="rate")
@@ -107,7 +107,7 @@ def test_eq10_decoupled_form_follows_from_eq4():
 
 
 def test_paper_scales():
-    # L4397-L4401: 220 km, .07068 rad/min, "nearly 1.48 hours"; spec §7.1's derived scales.
+    # L4397-L4401: 220 km, .07068 rad/min, "nearly 1.48 hours", and the scales derived from them.
     s = TetherScales(mass="22.7 kg", length="20 km", altitude="220 km")
     assert s.orbit_rate * 60 == pytest.approx(0.07068, abs=5e-6)  # printed to 4 figures
     assert s.period / 3600 == pytest.approx(1.48, abs=0.005)

@@ -1,4 +1,4 @@
-"""Stereo photogrammetry (issue #5 item 4; spec part 2 §1.5–1.7, §3.2–3.3)."""
+"""Stereo photogrammetry (issue #5 item 4)."""
 
 import dataclasses
 

@@ -1,5 +1,5 @@
 """Tests of flexsat.maneuvers.frequency_shaped_slew: the single-axis frequency-shaped optimal
-rest-to-rest slew of seed 003 (spec seed003.md §2.3-2.5, Eqs. 12-21)."""
+rest-to-rest slew of seed 003 (Eqs. 12-21)."""
 
 import numpy as np
 import pytest
@@ -7,7 +7,7 @@ import pytest
 from flexsat.maneuvers import FrequencyShapedSlew, frequency_shaped_slew
 from flexsat.maneuvers.frequency_shaped_slew import hamiltonian, shaping_control
 
-# Paper cases (spec §1.3, §3.2): 1 rad in 10 s or 6 s, ω_B = 2.5 or 5 rad/s; I_zz of the order
+# Paper cases: 1 rad in 10 s or 6 s, ω_B = 2.5 or 5 rad/s; I_zz of the order
 # the spec derives (§1.4, 0.8-1.5e5 kg m²).
 INERTIA = 1.2e5
 PAPER = [(T, wb, zb) for T in (6.0, 10.0) for wb in (2.5, 5.0) for zb in (0.0, 1.0)]
@@ -22,7 +22,7 @@ def _sign_changes(u):
 
 @pytest.mark.parametrize("T, omega_b, zeta_b", PAPER)
 def test_boundary_conditions_met(T, omega_b, zeta_b):
-    """θ(0) = 0, θ(T) = Θ, ω = u1 = u2 = 0 at both ends (spec §2.4), each relative to the
+    """θ(0) = 0, θ(T) = Θ, ω = u1 = u2 = 0 at both ends, each relative to the
     slew's plain scale Θ/T^k (stricter for u2 than ``boundary_error``).  1e-9: the brief's bound;
     measured ≤ 3e-12 (expm rounding grown over one segment)."""
     angle = 1.0

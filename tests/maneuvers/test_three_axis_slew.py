@@ -1,5 +1,5 @@
 """Tests of flexsat.maneuvers.three_axis_slew: the three-axis frequency-shaped optimal slew of
-seed 003 (spec seed003.md §2.2-2.5, Eqs. 11-20; §3.3 validation cases 1-2; features F5-F7)."""
+seed 003 (EPS slew study c. 1989, Eqs. 11-20, and its validation cases 1-2)."""
 
 import numpy as np
 import pytest
@@ -15,7 +15,7 @@ from flexsat.maneuvers.three_axis_slew import (
     state_costate_rhs,
 )
 
-# The paper's maneuver (spec §1.3): 1 rad about each axis, 1-2-3, in T = 10 s; ω_B = 2.5 rad/s.
+# The paper's maneuver: 1 rad about each axis, 1-2-3, in T = 10 s; ω_B = 2.5 rad/s.
 T, OMEGA_B, TARGET = 10.0, 2.5, np.array([1.0, 1.0, 1.0])
 BETA_F = np.array([0.565676, 0.570941, 0.167519, 0.570941])  # spec F4, 6 digits
 # The spec's notional inertia (§3.3 item 2: diag(1.2, 0.6, 1.5)e5 "plus small products"; the
@@ -78,7 +78,7 @@ def test_rigid_replay_reaches_the_target_at_rest(which, zeta_b):
 @pytest.mark.parametrize("which, zeta_b", CASES)
 def test_momentum_returns_to_zero_and_torque_vanishes_at_the_ends(which, zeta_b):
     """Spec §3.1: the inertial angular momentum rises and returns to 0; torque and torque rate
-    are 0 at both ends (u1 = u2 = 0, spec §2.4).  Bounds 1e-9 of the peak: the BC tolerance."""
+    are 0 at both ends (u1 = u2 = 0).  Bounds 1e-9 of the peak: the BC tolerance."""
     slew = _slew(which, zeta_b)
     t = np.linspace(0.0, T, 2001)
     h = slew.momentum(t)
@@ -97,7 +97,7 @@ def test_momentum_returns_to_zero_and_torque_vanishes_at_the_ends(which, zeta_b)
 def test_hamiltonian_and_first_integrals_are_constant(which, zeta_b):
     """The problem is autonomous: H is constant (spec §3.3: to 1e-9), relative to the largest
     term of H along the solution (H itself is a sum of cancelling terms); |β| = 1 and γᵀβ = 0
-    (spec §2.4) to 1e-10 (DOP853 at rtol 1e-13 over ~10 segments; measured ~1e-13)."""
+    to 1e-10 (DOP853 at rtol 1e-13 over ~10 segments; measured ~1e-13)."""
     slew = _slew(which, zeta_b)
     t = np.linspace(0.0, T, 2001)
     z = slew.z(t)
@@ -180,7 +180,7 @@ def test_eps_peak_z_torque_is_of_the_published_order():
 
 
 def test_continuation_history():
-    """Ten equal steps a1 = a2 = 0.1, ..., 1 (spec §2.5), each converged by Newton."""
+    """Ten equal steps a1 = a2 = 0.1, ..., 1, each converged by Newton."""
     slew = _slew("eps", 1.0)
     assert len(slew.history) == 10
     np.testing.assert_allclose([s.a1 for s in slew.history], np.linspace(0.1, 1.0, 10))

@@ -98,7 +98,7 @@ def test_pd_gains_and_feedforward_pass_through(ctx):
 
 def test_lqg_position_gain_is_the_integrator_value(ctx):
     """The θ channel is a pure integrator: the LQR position gain is √(R_xx(θ) / R_uu) = √(1/7)
-    whatever the modes (as for the NPS case, notes seed001.md §3); the Riccati solve's
+    whatever the modes (as for the NPS case); the Riccati solve's
     round-off is ~1e-14 here."""
     law = build(ctx, law="lqg", lqg=LQG)
     n = ctx.plant.ndof

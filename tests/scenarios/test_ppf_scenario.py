@@ -47,7 +47,7 @@ def test_the_example_runs_the_grid_with_both_goal_rules(example):
     for label, r in rows.items():
         assert r["gamma"] == pytest.approx(0.9) and r["stable"], label
         if "paper" in label:
-            assert r["J_opt"] > r["J_init"]  # the goal above J_init raises J (spec §3.2)
+            assert r["J_opt"] > r["J_init"]  # the goal above J_init raises J
         else:
             assert r["J_opt"] == pytest.approx(0.28 * r["J_init"], rel=1e-9)
             # the optimised loop settles (10 % of the peak tip error) 5× sooner than the

@@ -1,5 +1,5 @@
 """Slew scenarios (kind: slew): seed 003's three-axis slews of the Earth Pointing Satellite,
-the paper's claims on the examples (spec seed003.md §3.2), the report, and each mistake
+the paper's claims on the examples, the report, and each mistake
 reported as ``field.path: rule`` before anything runs."""
 
 from pathlib import Path

@@ -4,7 +4,7 @@ Every function takes numpy arrays ``A`` (n x n) and ``B`` (n x m, a 1-D ``B`` of
 input column), as :func:`control.ctrb` does, and refuses bad shapes and non-finite entries with a
 message that starts with the field name.
 
-Tests provided (seed 002, Bainum & Reddy 1979; notes ``shared/spec/seed002.md`` §2.4):
+Tests provided (Bainum & Reddy 1979, NASA CR-158684, Ch. II):
 
 - :func:`controllability_rank`: rank of the Kalman matrix ``[B, AB, ..., A^(n-1) B]`` by SVD;
 - :func:`pbh_test`: the Popov-Belevitch-Hautus test, ``rank [λI - A, B] = n`` at every
@@ -326,7 +326,7 @@ def repeated_frequency_test(
     """Controllability of the undamped modal system ``ẍ + diag(κ) x = B u`` by blocks.
 
     The theorem (Balas 1978, applied in seed 002 Ch. II §3, L305: "these m subsystems with their
-    corresponding blocks in the B matrix must each be separately controllable"; notes §2.4):
+    corresponding blocks in the B matrix must each be separately controllable"):
     group the modes by equal κ_k = ω_k². The 2n-state system ``[[0, I], [-diag(κ), 0]]``,
     ``[[0], [B]]`` is controllable iff, for every group, the rows of B of its modes have rank
     equal to the multiplicity. (By PBH: at λ with λ² = -κ_k the rank of

@@ -1,9 +1,9 @@
 r"""Controllability and observability Gramians of lightly damped modal systems.
 
-Sources: seed ``000_7bfdb62d2eacc22a.txt``, Att. 4 (Kim & Junkins, "A Measure of Controllability
-for Actuator Placement"), Eqs. (7), (14)–(16), (24)–(25), L1498–L1603; notes
-``shared/spec/seed000_part1.md`` §3.1 (the printed signs of Eq. (25) are wrong: every "−" is a
-"+", [OCR-FIX]). Gawronski's approximate modal Gramians: W. Gawronski, *Advanced Structural
+Sources: Y. Kim and J. L. Junkins, "A Measure of Controllability for Actuator Placement", AIAA
+Guidance, Navigation and Control Conference, 1990 (Att. 4 of Junkins, Pollock & Rahman 1990),
+Eqs. (7), (14)–(16), (24)–(25), L1498–L1603 (the printed signs of Eq. (25) are wrong: every "−"
+is a "+"). Gawronski's approximate modal Gramians: W. Gawronski, *Advanced Structural
 Dynamics and Active Control of Structures* (Springer 2004), Ch. 4–5 (Property 5.1).
 
 State convention
@@ -202,7 +202,7 @@ def modal_controllability_gramian(
 ) -> FloatArray:
     r"""Closed-form controllability Gramian of a modal system, Att. 4 Eqs. (24)–(25).
 
-    Solves :math:`A X + X A^T + B B^T = 0` (Att. 4 Eq. 7, signs as corrected in the notes) for
+    Solves :math:`A X + X A^T + B B^T = 0` (Att. 4 Eq. 7, signs corrected) for
     :math:`B = [0; \bar D]`. With :math:`W = \bar D \bar D^T`:
 
     .. math::

@@ -1,8 +1,9 @@
 """Homotopic nonlinear programming by minimum-norm differential correction.
 
-Source: Junkins & Kim 1990, Appendix of Attachment 5 of seed ``000_7bfdb62d2eacc22a.txt``
-(L2255-L2325; notes ``shared/spec/seed000_part1.md`` §4.6, Eqs. A1-A11), and the same optimizer
-as used by Agrawal & Bang (seed 004 §2 Eqs. 16-28, notes ``shared/spec/seed004.md`` §2-§3).
+Source: J. L. Junkins and Y. Kim, "First and Second Order Sensitivity of the Singular Value
+Decomposition", Journal of the Astronautical Sciences 38(1), 1990, Appendix, Eqs. A1-A11
+(L2255-L2325), and the same optimizer as used by B. N. Agrawal and H. Bang, "Adaptive Structures
+for Large Precision Antennas", Acta Astronautica, 1996, Eqs. 16-28.
 
 Problem (A1-A2)::
 

@@ -4,19 +4,19 @@ Measures
 --------
 * :func:`modal_controllability`, :func:`hamdan_nayfeh`: Hamdan & Nayfeh's modal
   controllability, the angle between the left eigenvector :math:`q_i` and each input column
-  :math:`b_j` and the gross measure :math:`\rho_i` (Att. 4 Eqs. 2–3, seed
-  ``000_7bfdb62d2eacc22a.txt`` L1460–L1484).
+  :math:`b_j` and the gross measure :math:`\rho_i` (Att. 4 Eqs. 2–3, L1460–L1484; Y. Kim
+  and J. L. Junkins, "A Measure of Controllability for Actuator Placement", AIAA GNC 1990).
 * :func:`modal_cost`: Skelton's modal cost analysis, :math:`V = \mathrm{tr}(Q C X C^T)` split
   into component costs :math:`V_i` (Att. 4 Eqs. 4–7, 20–27, L1498–L1620).
 * :func:`kim_junkins_index`: :math:`\alpha = \sum_i (V_i/V) \rho_i^2` (Att. 4 Eq. 28, L1623),
-  with the analytic modal Gramian of Att. 4 Eq. (25) in the corrected signs of
-  ``shared/spec/seed000_part1.md`` §3.1.
+  with the analytic modal Gramian of Att. 4 Eq. (25) in corrected signs (the paper prints
+  "−" where "+" holds).
 * :func:`gawronski_index`: Gawronski's H2 (or Hankel) placement index per actuator and mode,
   :math:`\sigma_{ki} = w_{ki} \|G_{ki}\| / \|G\|` (W. Gawronski, *Advanced Structural Dynamics
   and Active Control of Structures*, 2004, §5.3 and Ch. 8).
-* :func:`h2_placement`, :func:`h2_actuator_ranking`: the H2 ranking of seed
-  ``003_6d17262716e94f5f.txt`` Eqs. (1)–(8) (L188–L235, reconstructed in
-  ``shared/spec/seed003.md`` §2.1 [RECON]), made to work with rigid-body modes.
+* :func:`h2_placement`, :func:`h2_actuator_ranking`: the H2 ranking of the EPS slew
+  study c. 1989 (NASA Langley Earth Pointing Satellite report section), Eqs. (1)–(8) (L188–L235,
+  reconstructed by the developers from the text [RECON]), made to work with rigid-body modes.
   The paper's EPS study (its candidates, outputs and published top 5) is
   :mod:`flexsat.cases.eps_placement`.
 
@@ -98,7 +98,7 @@ class ModalControllability:
         0 for an input column that is identically zero.
     rho : ndarray (n,)
         Gross measure :math:`\rho_i = \|f_i\|`, :math:`f_i^T = q_i^H B / \|q_i\|`, i.e. the rows
-        of :math:`F = (\cos\Theta)\,\mathrm{diag}(\|b_j\|)` (the notes' [AMBIG]: cos Θ is
+        of :math:`F = (\cos\Theta)\,\mathrm{diag}(\|b_j\|)` (the paper is ambiguous: cos Θ is
         modes × inputs).
     eigenvalues : ndarray (n,) complex
         The eigenvalue of each row (for modal systems the one with Im λ >= 0).
@@ -122,7 +122,7 @@ def modal_controllability(omega, zeta, B, form: str = "first_order") -> ModalCon
         \cos\theta_{ij} = \frac{|\bar D_{ij}|}{\sqrt{1 + \omega_i^2}\; \|\bar D_{:j}\|}, \qquad
         \rho_i = \frac{\|\bar D_{i:}\|}{\sqrt{1 + \omega_i^2}}.
 
-    Both conjugate eigenvalues give the same values (the notes' [AMBIG] on Eq. 28: one per
+    Both conjugate eigenvalues give the same values (the paper is ambiguous on Eq. 28: one per
     mode). A rigid mode (ω = 0, a Jordan block) has the single left eigenvector (0, 1): the same
     formula. The :math:`\sqrt{1+\omega^2}` mixes η and η̇, so ρ depends on the time unit
     (here s): the measures are not invariant under non-orthogonal scaling, as Att. 4 warns.
@@ -441,7 +441,7 @@ class H2Placement:
         \|u\|^2`.
     energy : ndarray (m,)
         :math:`f_i W_c f_i^T` (f_i row i of F): the energy of control input i; sums to
-        :math:`\|u\|^2` (the notes' reading of "the total energy in each control input").
+        :math:`\|u\|^2` (a reading of the paper's "the total energy in each control input").
     printed : ndarray (m,)
         :math:`b_i^T W_o b_i` (Eq. 8 as printed: control energy of an impulse through actuator i).
     gamma : float
@@ -475,9 +475,9 @@ def h2_placement(A, B, b, C, gamma=1.0) -> H2Placement:
 
         (A + BF)^T W_o + W_o (A + BF) + F^T F = 0, \quad \|u_i\|_2^2 = b_i^T W_o b_i \qquad (8)
 
-    Eq. (7)'s source term is :math:`b b^T` (the notes' [OCR-FIX]; printed "BBᵀ"). Eq. (8) is
+    Eq. (7)'s source term is :math:`b b^T` (a misprint repaired; printed "BBᵀ"). Eq. (8) is
     offered both as printed (``printed``) and as :math:`f_i W_c f_i^T` (``energy``), which adds
-    up to :math:`\|u\|^2`; they rank differently in general (notes §2.1 [AMBIG]).
+    up to :math:`\|u\|^2`; they rank differently in general (the paper is ambiguous here).
 
     Needs (A, B) stabilisable and (A, C) detectable: with rigid-body modes both hold only if
     the actuators can move and the outputs can see every rigid motion. Otherwise the CARE has

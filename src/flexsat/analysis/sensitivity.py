@@ -1,8 +1,7 @@
 """Eigenvalue, eigenvector and singular-value sensitivities, first and second order.
 
 Source: Junkins & Kim, *First and Second Order Sensitivity of the Singular Value Decomposition*,
-J. Astronautical Sciences 38(1), 1990 = seed ``000_7bfdb62d2eacc22a.txt`` Attachment 5
-(L1844-L2360); curated notes ``shared/spec/seed000_part1.md`` §4.1-§4.3.
+J. Astronautical Sciences 38(1), 1990 (Att. 5 of Junkins, Pollock & Rahman 1990), L1844-L2360.
 
 Three groups of functions, all vectorised over the parameters p_1 … p_P:
 
@@ -17,9 +16,10 @@ Three groups of functions, all vectorised over the parameters p_1 … p_P:
   (φᵀ M φ = 1), by **Nelson's method** (Nelson 1976), which needs only the modes asked for.
 - :func:`svd_derivatives` and :func:`condition_number_derivatives`: singular values and vectors
   of a (complex) matrix Φ(p), Att. 5 Eqs. 15, 17-23 and the second-order Eq. 27 with the
-  corrected subscripts of the notes, and the 2-norm condition number κ = σ_1/σ_n (Eq. 46) built
-  from them. :func:`eigenvector_condition_derivatives` chains the two (Att. 5 §"performance
-  index": SVD sensitivity of the modal matrix, then eigenvector derivatives).
+  subscripts corrected (the print has U_jᴴ Φ V_j for U_jᴴ Φ V_i), and the 2-norm condition
+  number κ = σ_1/σ_n (Eq. 46) built from them. :func:`eigenvector_condition_derivatives`
+  chains the two (Att. 5 §"performance index": SVD sensitivity of the modal matrix, then
+  eigenvector derivatives).
 
 All results hold for **distinct** eigenvalues (non-defective problems) and **distinct, non-zero**
 singular values only; coincident ones raise :class:`ValueError` naming the indices. Derivative
@@ -300,9 +300,9 @@ def eig_derivatives(
     - ∂λ_i/∂p_k = ψ_iᵀ (A_k − λ_i B_k) φ_i                                   (Eq. 42)
     - ∂φ_i/∂p_k = Σ_j c^k_ji φ_j,  c^k_ji = ψ_jᵀ (A_k − λ_i B_k) φ_i / (λ_i − λ_j)  (j ≠ i)
     - c^k_ii = −[φ_iᵀ B_k φ_i + Σ_{l≠i} c^k_li φ_lᵀ (B + Bᵀ) φ_i] / φ_iᵀ(B + Bᵀ)φ_i, the
-      derivative of φ_iᵀ B φ_i = 1 (Eq. 43; the denominator is 2, the notes' "−½")
+      derivative of φ_iᵀ B φ_i = 1 (Eq. 43; the denominator is 2, hence "−½")
     - ∂ψ_i/∂p_k = Σ_j d^k_ji ψ_j,  d^k_ji = ψ_iᵀ (A_k − λ_i B_k) φ_j / (λ_i − λ_j)  (j ≠ i),
-      d^k_ii = −ψ_iᵀ B_k φ_i − c^k_ii (Eq. 43, with the index order of the notes' "standard
+      d^k_ii = −ψ_iᵀ B_k φ_i − c^k_ii (Eq. 43, with the index order of the "standard
       form", confirmed by finite differences)
 
     Second order (``order=2``, Eq. 44): write ∂²Φ/∂p_k∂p_l = Φ Y (so Y = C^l C^k + ∂C^k/∂p_l).
@@ -593,7 +593,7 @@ def svd_derivatives(
       b_ji = [σ_j G_ji + σ_i conj(G_ij)] / (σ_i² − σ_j²),
       and a_ii − b_ii = i Im(G_ii)/σ_i (only the difference is fixed: phase freedom; here
       b_ii = 0).
-    - corrected Eq. 27 (notes §4.2; the print has U_jᴴ Φ V_j for U_jᴴ Φ V_i):
+    - corrected Eq. 27 (the print has U_jᴴ Φ V_j for U_jᴴ Φ V_i):
 
           ∂²σ_i/∂p_k∂p_l = Re{ G^{kl}_ii + Σ_{j≠i} [σ_i (conj(G^l_ji) G^k_ji + conj(G^l_ij) G^k_ij)
                              + σ_j (G^l_ij G^k_ji + G^l_ji G^k_ij)] / (σ_i² − σ_j²) }

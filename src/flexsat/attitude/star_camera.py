@@ -1,5 +1,6 @@
-r"""Pinhole star camera on the photogrammetry camera model (seed 000 §2.3.4; spec part 1 §1.1
-L278–L282): which catalogue stars a camera sees at an attitude, and their noisy centroids.
+r"""Pinhole star camera on the photogrammetry camera model (Junkins, Pollock & Rahman
+1990, §2.3.4, L278–L282): which catalogue stars a camera sees at an attitude, and their noisy
+centroids.
 
 Stars lie at infinity, so the collinearity equations of :mod:`flexsat.identify.photogrammetry`
 (Att. 6 eqs. 22–24 with the "+f" sign) apply with the camera at the origin and the star's unit

@@ -1,5 +1,5 @@
 r"""A star tracker: two or more star cameras fixed to the body, a catalogue and its pair index,
-and the lost-in-space identification (seed 000 §2.3.4; spec part 1 §1.1 L278–L282: "two or
+and the lost-in-space identification (Junkins, Pollock & Rahman 1990, §2.3.4, L278–L282: "two or
 more star cameras are fixed to the main body of a spacecraft").
 
 :class:`StarTracker` simulates the frames at a true attitude (:meth:`StarTracker.observe`),

@@ -1,7 +1,7 @@
 """Agrawal & Bang two-beam L structure with three collocated piezoelectric pairs.
 
-Seed 004_680d3fec9e1f8c83.txt (Agrawal & Bang, *Adaptive Structures for Large Precision
-Antennas*, Acta Astronautica 1996; curated in ../shared/spec/seed004.md §1): "two elastic
+B. N. Agrawal and H. Bang, *Adaptive Structures for Large Precision Antennas*, Acta Astronautica
+1996 (IAF-94.1.4.202), §4: "two elastic
 structures connected in orthogonal configuration" (L207), three collocated piezoceramic
 sensor/actuator pairs, actuator 1 "at the root of the first structure" (L349), the actuator a
 bending moment M_a = a_1 V (Eq. 36) and the sensor a voltage proportional to the local bending

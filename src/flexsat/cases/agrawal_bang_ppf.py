@@ -1,13 +1,13 @@
 r"""The PPF gain study of seed 004 on the rebuilt Agrawal–Bang L structure (issue #12, F8–F10).
 
-Seed 004_680d3fec9e1f8c83.txt (Agrawal & Bang, *Adaptive Structures for Large Precision
-Antennas*, Acta Astronautica 1996), curated in ../shared/spec/seed004.md: three collocated piezo
+B. N. Agrawal and H. Bang, *Adaptive Structures for Large Precision Antennas*, Acta Astronautica
+1996 (IAF-94.1.4.202): three collocated piezo
 pairs, three flexible modes, a bank of 3 × 3 PPF filters tuned to the modes (Eqs. 3–5), the
 tip-error cost of Eq. 35 with Q̄(w_1, w_2) and Q = 1e-8 on u (L303), initial gains 100, γ stopped
 at 0.9 (L345), first-mode and three-mode initial conditions (L303); Tables 1–3 for
 (w_1, w_2) ∈ {(100, 100), (500, 100), (100, 500)}.
 
-Choices the paper leaves open (spec §1.3), made here and used by every run:
+Choices the paper leaves open, made here and used by every run:
 
 - **Filter damping** ζ_f = 0.1 (:data:`ZETA_F`), ω_f = ω_j (L61): a common PPF choice, the
   same as the PPF tests of the control layer.
@@ -22,15 +22,16 @@ Choices the paper leaves open (spec §1.3), made here and used by every run:
   (y_1ᵗ > 0).
 - **J_goal** (:class:`GoalRule`). The paper sets it "based upon the objective function with the
   initial gains" (L345) but every published "optimised" cost is ≈ +700 *above* J_init, so its
-  goal was, in effect, slightly above J_init (spec §3.2: J_opt = 0.9 J_goal + 0.1 J_init gives
-  J_goal − J_init ≈ +778). Its costs are in unknown units (the model is lost), so the rule
+  goal was, in effect, slightly above J_init (the γ stop of L345, J_opt = 0.9 J_goal + 0.1 J_init,
+  gives J_goal − J_init ≈ +778). Its costs are in unknown units (the model is lost), so the rule
   ``paper`` reproduces the *ratio* J_goal/J_init implied by the published Table entry of the
   same (w_1, w_2, excitation) (:func:`paper_goal_ratio`, 1.0006–1.0025); ``ratio`` sets
-  J_goal = r J_init (r = 0.2: a goal below J_init, the reduction of spec §3.3) and ``offset``
+  J_goal = r J_init (r = 0.2: a goal below J_init) and ``offset``
   J_goal = J_init + ΔJ.
 
-The cost is J = ½ tr(P̄ X₀) (Eq. 10 with the ½ of Eq. 7; spec §2 [AMBIG]) with Q_s = Tᵀ Q̄ T on η,
-T the tip rows of :meth:`~flexsat.cases.agrawal_bang.AgrawalBangCase.tip_outputs`.
+The cost is J = ½ tr(P̄ X₀) (Eq. 10 with the ½ of Eq. 7; the paper is ambiguous) with
+Q_s = Tᵀ Q̄ T on η, T the tip rows of
+:meth:`~flexsat.cases.agrawal_bang.AgrawalBangCase.tip_outputs`.
 """
 
 from __future__ import annotations
@@ -54,7 +55,7 @@ if TYPE_CHECKING:
     from flexsat.dynamics.structural import StructuralPlant
     from flexsat.sim import SimConfig
 
-#: filter damping ratio (not published, spec §1.3; module docstring)
+#: filter damping ratio (not published; module docstring)
 ZETA_F = 0.1
 #: |Eᵗ| of the first-mode initial condition, m (not published; module docstring)
 TIP_AMPLITUDE = 0.01
@@ -65,7 +66,7 @@ EXCITATIONS = ("first", "three")
 GRID = tuple((w, e) for w in PUBLISHED["weights"] for e in EXCITATIONS)
 
 #: Tables 1–3 as printed: (J_init, J_opt at γ = 0.9), 3a/3b with their exponent repaired
-#: (×10⁶, spec §3.2 point 1)
+#: (×10⁶)
 PUBLISHED_COSTS: dict[tuple[tuple[float, ...], str], tuple[float, float]] = {
     ((100, 100), "first"): (3.1239e5, 3.1309e5),
     ((100, 100), "three"): (3.4996e5, 3.5066e5),
@@ -127,7 +128,7 @@ def _excitation(excitation: str) -> str:
 
 
 def paper_goal_ratio(weights: npt.ArrayLike, excitation: str) -> float:
-    """J_goal/J_init implied by the published Table entry (spec §3.2 point 3):
+    """J_goal/J_init implied by the published Table entry:
     J_opt = γ J_goal + (1 − γ) J_init at γ = 0.9, so J_goal/J_init = (J_opt/J_init − 0.1)/0.9.
 
     Raises

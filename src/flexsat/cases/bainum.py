@@ -1,8 +1,8 @@
 """Bainum & Reddy's long free-free beam in orbit with point actuators (seed 002).
 
 P. M. Bainum and A. S. S. R. Reddy, *The Dynamics and Control of Large Flexible Space
-Structures - II, Part A*, NASA CR-158684 (1979): seed ``002_c3272b32d7cac32e.txt``, curated in
-``shared/spec/seed002.md`` (the "notes"; ``Lnnn`` are seed lines).
+Structures - II, Part A*, NASA CR-158684, Howard University (1979); ``Lnnn`` are lines of the
+developers' transcript (:data:`flexsat.references.LINE_NUMBERS`).
 
 Model (Ch. II eqs 1-6, L211-L245; Ch. III eqs 29-34, L750-L796). A uniform free-free beam of
 length l, centre of mass on a circular orbit of rate ω_c, planar pitch θ (from the local
@@ -29,8 +29,8 @@ Chapters reproduced: Ch. II controllability Cases 1-4 (:func:`chapter2_case`) an
 example (:func:`chapter2_example`); Ch. III decoupling (:func:`decoupling_gains`) and per-mode
 linear regulator in closed form (:func:`modal_riccati`, :func:`modal_lqr_gains`); Ch. IV
 three-mass model, independent modal control against coupled rate feedback
-(:class:`ThreeMassBeam`, :func:`three_mass`). The errata of the notes §6 are in :data:`ERRATA`
-and applied by :func:`published_matrix` (docs/bainum.md).
+(:class:`ThreeMassBeam`, :func:`three_mass`). The errata (repaired printed numbers) are in
+:data:`ERRATA` and applied by :func:`published_matrix` (docs/bainum.md).
 """
 
 from __future__ import annotations
@@ -124,7 +124,7 @@ PUBLISHED: dict[str, Any] = {
 
 @dataclass(frozen=True)
 class Erratum:
-    """One repair of a printed number (notes §6)."""
+    """One repair of a printed number."""
 
     line: str
     item: str
@@ -134,7 +134,7 @@ class Erratum:
     index: tuple | None = None  # entry of the PUBLISHED matrix ``item`` replaced, if any
 
 
-#: the errata applied (notes §6); ``index`` marks those applied by :func:`published_matrix`
+#: the errata applied; ``index`` marks those applied by :func:`published_matrix`
 ERRATA = (
     Erratum(
         "L800",
@@ -195,7 +195,7 @@ def published_matrix(item: str, errata: bool = True) -> np.ndarray:
     """A printed matrix of :data:`PUBLISHED` as an array, with the :data:`ERRATA` applied.
 
     Column 9 of ``"ch3_case2_lqr"`` (printed -4.348, -6.021; recomputed -3.789, -10.826) is
-    unresolved in the notes and left as printed.
+    unresolved and left as printed.
     """
     if item not in PUBLISHED:
         raise ValueError(f"item: unknown published item {item!r}")
@@ -482,7 +482,7 @@ class BainumBeam:
         continuous-law mode (:func:`flexsat.sim.continuous.run`, DOP853), its states [x, ẋ]
         brought to [x, x' = ẋ/ω_c]. This is what the report's NON-LINEAR program (App. C,
         L1898-L2116) does, with the full feedback in every equation (its FCT kept only the
-        pitch-rate term in the pitch equation, notes §4.2)."""
+        pitch-rate term in the pitch equation)."""
         G = require_finite(G, "G")
         G = G.reshape(-1, 1) if G.ndim == 1 else G
         if G.ndim != 2:
@@ -692,7 +692,7 @@ def chapter2_case(
     Returns
     -------
     ControllabilityCase
-        Kalman rank of the reduced pair (n x np, Balas' reduction, notes §2.4), the repeated-
+        Kalman rank of the reduced pair (n x np, Balas' reduction), the repeated-
         frequency block test, and PBH uncontrollable eigenvalues of the full 2n-state model.
     """
     if case not in CH2_LAYOUTS:
@@ -755,7 +755,7 @@ def chapter2_example(
     are built from eq 16).
 
     Poles with the printed gains: -0.171737 ± 1.723625j, -0.565594 ± 56.562701j,
-    -0.169485 ± 169.703929j (notes §3.1). The gains are not a decoupling design (one actuator
+    -0.169485 ± 169.703929j. The gains are not a decoupling design (one actuator
     cannot decouple three coordinates); they match uncoupled ζ = 0.1, 0.01, 0.001.
     """
     beam = bainum() if beam is None else beam
@@ -788,7 +788,7 @@ def decoupling_gains(
     column by column G K_i = (E - Z)_i and G L_i = (F - W)_i (eq 12).
 
     Each column is solvable iff rank G = rank [G | column] (Rouché-Capelli; the report's rule
-    "rank must be n when n > m", L628, is impossible, notes §2.6); the solution is unique iff
+    "rank must be n when n > m", L628, is impossible); the solution is unique iff
     rank G = m (columns of G), otherwise the minimum-norm one is returned. Ranks count singular
     values above ``rtol`` · σ_max.
 
@@ -860,7 +860,7 @@ def modal_riccati(
     - S11 = F S22 + D S12 + S12 S22 / R          (eq 27)
 
     with the + roots. Eq 25 (and 26) cancel catastrophically when F² ≫ Q1/R; they are
-    evaluated as Q1/(F + √(F² + Q1/R)) for F > 0 (notes §2.7). The control is
+    evaluated as Q1/(F + √(F² + Q1/R)) for F > 0. The control is
     u' = -(S12 x + S22 x')/R (eq 28 has R = 1).
 
     Parameters
@@ -938,7 +938,7 @@ def modal_lqr_gains(
     ValueError
         ``G`` not square (#actuators ≠ #coordinates: use the full 2n x 2n regulator,
         :func:`flexsat.control.lqr`, L1116) or singular (σ_min ≤ ``rcond`` σ_max, e.g. the
-        exact-shape symmetric five-actuator layout of Ch. III Case 2, notes §3.3); and the
+        exact-shape symmetric five-actuator layout of Ch. III Case 2); and the
         errors of :func:`modal_riccati`.
     """
     F = _stiffness(stiffness)
@@ -968,7 +968,7 @@ def chapter3_case(
 
     ``shapes="published"``: the printed G with the errata (G13 = -29.76); ``"exact"``: built
     from the Appendix A shapes (Case 2 is then singular: symmetric forces drive only modes 1
-    and 3, notes §3.3).
+    and 3).
     """
     if case not in (1, 2):
         raise ValueError(f"case: must be 1 or 2, got {case!r}")

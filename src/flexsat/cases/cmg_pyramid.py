@@ -1,5 +1,5 @@
 """Gimbal runs of Vadali, Oh & Walker's single-gimbal CMG pyramid ("Preferred Gimbal Angles for
-Single Gimbal CMGs"; seed000_part2.md §8.3-§8.5, features F23-F25, rows V3-V8): torque steering
+Single Gimbal CMGs", in Junkins, Pollock & Rahman 1990, L4533-L4830): torque steering
 from a gimbal set until the first singular set, the back integration to preferred angles, and
 the null-motion reorientation.
 
@@ -166,7 +166,7 @@ def preferred_angles(
     atol: float = 1e-12,
 ) -> np.ndarray:
     """Preferred initial gimbal angles for a momentum demand along u, by back integration from
-    near saturation (Vadali, Oh & Walker; seed000_part2.md §8.3, F24, V4).
+    near saturation (Vadali, Oh & Walker; the paper's back-integration study).
 
     Start at the saturation set along u (:func:`flexsat.dynamics.cmg.envelope`), moved by
     ``perturbation`` off that external singularity (where the pseudo-inverse has no solution

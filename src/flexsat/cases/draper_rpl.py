@@ -1,6 +1,7 @@
 """Draper/RPL rigid hub with four flexible appendages (Junkins & Kim 1990, Example 2).
 
-Source: seed 000_7bfdb62d2eacc22a.txt, Attachment 5 (L2145-L2255): Table 3 (configuration
+Source: Junkins & Kim, J. Astronautical Sciences 38(1), 1990 (Att. 5 of Junkins, Pollock & Rahman
+1990), L2145-L2255: Table 3 (configuration
 parameters, entered here as printed in slug-ft-lbf-in units and converted with pint), the Ritz
 model of Eqs. 50-54, the modal reduction of Eqs. 56-58, the structural feedback of Eq. 59 with the
 converged gains G1, G2, and Table 4 (open- and closed-loop characteristics).
@@ -62,7 +63,7 @@ PUBLISHED_GAINS = {
     ),
 }
 
-#: Gauss-Legendre points for the mass integrals of Eq. 54: 400 (as the curated notes), or 40 per
+#: Gauss-Legendre points for the mass integrals of Eq. 54: 400 (an earlier value), or 40 per
 #: comparison function when that is more (the integrands oscillate like cos(2Nπz/L)).
 QUADRATURE_POINTS = 400
 _POINTS_PER_FUNCTION = 40

@@ -1,4 +1,4 @@
-"""NASA LaRC Earth Pointing Satellite (EPS) structure (seed 003_6d17262716e94f5f.txt, L66-L136).
+"""NASA LaRC Earth Pointing Satellite (EPS) structure (EPS slew study c. 1989, L66-L136).
 
 The published data (L72-L136) are entered in ``PUBLISHED`` exactly as printed and converted with
 pint.  The NASTRAN deck (95 nodes, 223 elements, by J. Walz) is not reproduced and Fig. 1 is lost,

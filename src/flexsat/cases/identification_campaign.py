@@ -1,6 +1,6 @@
 r"""An end-to-end identification campaign on a substructured finite-element case.
 
-The loop of the Texas A&M grid experiments (seed 000 Att. 6 and 8; spec part 2 §1, §3), run on
+The loop of the Texas A&M grid experiments (Att. 6 and 8 of Junkins, Pollock & Rahman 1990), run on
 a simulated "true" structure:
 
 The true structure is the case's finite-element model with all its modes; the sampled tests

@@ -1,6 +1,7 @@
 """NPS Flexible Spacecraft Simulator (Hailey, Sortun & Agrawal), pitch axis.
 
-Seed 001_79dfdfba94ed8e0d.txt (curated in ../shared/spec/seed001.md §1–§2): a rigid central body
+J. A. Hailey, C. D. Sortun and B. N. Agrawal, "Experimental Verification of Attitude Control
+Techniques for Slew Maneuvers of Flexible Spacecraft", NPS (c. 1992): a rigid central body
 (hub) on an air bearing carrying a cantilevered flexible appendage, "a reflector supported by a
 flexible astromast" (L21), planar rotation θ about the vertical z axis. The paper prints only:
 fundamental cantilever frequency 0.14 Hz (L21), six cantilever modes with 0.4 % damping (L181),
@@ -17,7 +18,7 @@ Model used here (every dimension a parameter, documented in docs/nps.md):
 - the mast EI is **solved** (Brent's method on the finite-element frequency) so that the first
   cantilever frequency is the published 0.14 Hz;
 - the hub inertia is solved so that the design inertia implied by the PD gains, k/ω_n² ≈ 9.84
-  kg·m² (notes §1.3), is either the cantilevered inertia I⁰zz = I_zz − Σ D_i² over the six modes
+  kg·m², is either the cantilevered inertia I⁰zz = I_zz − Σ D_i² over the six modes
   (``inertia_convention="cantilevered"``, default, as the issue states and as the paper's rigid
   profiles Eqs. 25, 28, 30 use I⁰zz) or the total rigid inertia I_zz (``"total"``).
 
@@ -70,7 +71,7 @@ PUBLISHED: dict[str, Any] = {
     "lqg_slew_angle": "30 deg",  # L375
 }
 
-#: I = k / ω_n² = 9.84012 and kτ / (2 ζ ω_n) = 9.84005 kg m² (notes §1.3 [DERIVED]); 9.84
+#: I = k / ω_n² = 9.84012 and kτ / (2 ζ ω_n) = 9.84005 kg m² (derived, not printed); 9.84
 #: reproduces both printed gains to their printed digits.
 DESIGN_INERTIA = "9.84 kg*m**2"
 
@@ -310,7 +311,7 @@ class NPSCase:
     def statespace_eq18(
         self, n_modes: ModeCount = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(A, B, C, D) of Eqs. 16–19 exactly as repaired in the notes (§2 [OCR-FIX]).
+        """(A, B, C, D) of Eqs. 16–19 exactly as repaired (the print has misprints).
 
         X = [θ, q_1..q_n, θ', q'_1..q'_n], U = T_t (total torque on the hub), Y = [θ, θ'];
         I0 = I_zz − Σ D_i², F_i = D_i ω_i², G_i = ω_i² I0 + D_i F_i, H_i = 2ζ_iω_i D_i,

@@ -1,5 +1,5 @@
 r"""Space-station attitude control and CMG momentum management (Vadali, Oh & Walker, space-station
-example; /work/shared/spec/seed000_part2.md §8.4, feature F26, validation row V9).
+example, Junkins, Pollock & Rahman 1990, L4533-L4830).
 
 Three steps, as in the paper:
 
@@ -58,7 +58,7 @@ __all__ = [
     "PAPER_STATION",
 ]
 
-#: Table 2 of the paper (seed000_part2.md §8.4, L4684–L4688), as published
+#: Table 2 of the paper (L4684–L4688), as published
 PAPER_STATION = StationData(
     ("5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"), 0.0011, "3500 lbf*ft*s"
 )

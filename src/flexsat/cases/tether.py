@@ -1,5 +1,5 @@
 """Vadali & Kim's tethered-subsatellite retrieval (AIAA 90-1197; seed 000, Att. 12,
-L4258-L4531; spec seed000_part2.md §7, §11 V10-V15): the Shuttle case and the published numbers
+L4258-L4531): the Shuttle case and the published numbers
 of each example, :func:`closed_loop` (one law on the tether, through the engine's continuous-law
 or sampled mode) and :func:`rerun` (an example under continuous feedback, DOP853).
 
@@ -20,7 +20,7 @@ from flexsat.dynamics.tether import ClosedLoopRun, TetheredSubsatellite, TetherS
 if TYPE_CHECKING:
     from flexsat.sim.config import SimConfig
 
-SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 12, L4258-L4531"
+SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12, L4258-L4531"
 #: settling bands of a retrieval: |θ| within the runs' initial 5° (rad), |λ − λ_f| within 2 %
 #: of the length change (:func:`flexsat.analysis.settling.settling_time`)
 SETTLING_PITCH_BAND = np.radians(5.0)
@@ -45,7 +45,7 @@ class Example:
     lines: str
 
 
-#: the examples of Figs. 2-8 (spec §11 V10-V13, V15)
+#: the examples of Figs. 2-8
 EXAMPLES = {
     e.key: e
     for e in (

@@ -8,7 +8,7 @@ import the case modules inside ``compute``, so a broken case fails its own check
 
 Adding a check is one entry in a module's ``CHECKS``::
 
-    Check("nps", "PD rate gain kτ", "seed 001_79dfdfba94ed8e0d.txt, L220", 6.6773, "N m s/rad",
+    Check("nps", "PD rate gain kτ", "Hailey, Sortun & Agrawal c. 1992, L220", 6.6773, "N m s/rad",
           lambda: float(_case().pd_gains().kd), atol=5e-5)   # half a unit in the last digit
 
 or, for a printed column, :func:`series`. A published number that is an erratum, or that the

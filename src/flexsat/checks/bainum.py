@@ -1,5 +1,5 @@
-"""Bainum & Reddy's beam in orbit (issues #4 and #10): seed 002_c3272b32d7cac32e.txt
-(flexsat.cases.bainum; notes shared/spec/seed002.md §3, §6).
+"""Bainum & Reddy's beam in orbit (issues #4 and #10): Bainum & Reddy 1979,
+NASA CR-158684 (flexsat.cases.bainum).
 
 **Ch. II numerical example and Ch. III Case 1, on the simulation core (issue #10).** The
 closed-loop roots are the eigenvalues of the case's plant's linear part (``plant.linear_part()``)
@@ -26,9 +26,9 @@ L843):
 
 The report's time is τ = ω_c t and its rates d/dτ; the plants run in seconds, so the gains
 enter as K/ω_c on the state's rates and the times and roots are converted back (τ = ω_c t,
-s_τ = s/ω_c). The response numbers are not printed: the report's figures are lost (OCR) and the
-notes recompute them from the printed gains in continuous time (notes §3.1, §3.2 [DERIVED]);
-they are the published values here, with half a unit of the notes' last digit.
+s_τ = s/ω_c). The response numbers are not printed: the report's figures are lost (OCR), so they are
+recomputed from the printed gains in continuous time (derived, not printed) and stand for the
+published values here, with half a unit of their last digit.
 
 The engine is sampled-data (zero-order hold of the command over each control period), the
 report's loop continuous. Each run's control rate is chosen so that this sampled-data error
@@ -41,8 +41,8 @@ error).
 
 **Ch. IV three-mass example (issue #4).** The eigenvalues λ1, λ2 of the three-mass model
 reproduce. The roots of the closed-loop characteristic equation (16) with the printed c,
-K1 = 0.4728, K2 = 0.4 are checked against the values as corrected in the notes (the printed ones
-carry about three figures and the complex pair's real part is printed 10 times too large,
+K1 = 0.4728, K2 = 0.4 are checked against the values as corrected by the developers (the printed
+roots carry about three figures and the complex pair's real part is printed 10 times too large,
 erratum L1097-L1101). Both λ and the roots are computed on the model's plant
 (``ThreeMassBeam.plant``, a :class:`flexsat.dynamics.structural.StructuralPlant`): λ from its M
 and K, the roots as the eigenvalues of its linear part under the feedback of eq. 13, not from
@@ -62,7 +62,7 @@ import numpy as np
 
 from flexsat.checks.core import Check, series
 
-SEED = "seed 002_c3272b32d7cac32e.txt"
+SOURCE = "Bainum & Reddy 1979"
 
 #: initial position of every coordinate (θ rad, z = A/l), rates zero (L468, L843)
 _X0 = 0.01
@@ -211,10 +211,10 @@ def _damping(root) -> float:
     return float(-root.real / abs(root))
 
 
-_CH2 = f"{SEED}, Ch. II §4 example (L446-L468; Fig. 2 lost)"
+_CH2 = f"{SOURCE}, Ch. II §4 example (L446-L468; Fig. 2 lost)"
 _CH2_ROOTS = f"{_CH2}, closed-loop roots recomputed from the printed gains (not printed)"
 _CH2_RESP = f"{_CH2}, linear response recomputed from the printed gains (figure lost)"
-_CH3 = f"{SEED}, Ch. III Case 1 (L798-L806; Fig. 2 lost)"
+_CH3 = f"{SOURCE}, Ch. III Case 1 (L798-L806; Fig. 2 lost)"
 _CH3_ROOTS = f"{_CH3}, closed-loop roots recomputed from the printed K, G13 = -29.76"
 _CH3_RESP = f"{_CH3}, peak actuator forces recomputed from the printed K (figure lost)"
 _CORE = "computed on the simulation core: "
@@ -235,7 +235,7 @@ def _ch3_case2_roots():
     return closed_loop_roots(plant, _gains(published_matrix("ch3_case2_K")))
 
 
-# Ch. II: the notes print the roots to 6 decimals and ζ to 4 figures: half a unit of the last
+# Ch. II: the recomputed roots are given to 6 decimals and ζ to 4 figures: half a unit of the last
 # digit (the roots are eigenvalues of a 6x6 matrix, exact to 1e-13 here)
 _CH2_CHECKS = [
     Check(
@@ -292,7 +292,7 @@ _CH2_CHECKS = [
         lambda: _ch2_roots()[5].imag,
         atol=5e-7,
     ),
-    # the gains were designed for uncoupled ζ = 0.1, 0.01, 0.001 (notes §3.1); the coupled loop
+    # the gains were designed for uncoupled ζ = 0.1, 0.01, 0.001; the coupled loop
     Check(
         "bainum",
         "Ch. II example, ζ of the pitch pair",
@@ -414,9 +414,9 @@ _CH3_CHECKS = [
 ]
 
 # Ch. III Case 2, the printed decoupling gains (K51 = -1.167, erratum L841): roots printed in
-# the notes to 5 decimals (the pitch pair) or 4: half a unit of the last digit
+# the recomputation to 5 decimals (the pitch pair) or 4: half a unit of the last digit
 _CASE2 = (
-    f"{SEED}, Ch. III Case 2 (L829-L841), closed-loop roots recomputed from the printed K "
+    f"{SOURCE}, Ch. III Case 2 (L829-L841), closed-loop roots recomputed from the printed K "
     "(K51 = -1.167)"
 )
 
@@ -483,17 +483,17 @@ def _roots():
     )
 
 
-# the roots as corrected in the notes (seed002.md §6, errata for L1091-L1101: the printed ones
+# the roots as corrected by the developers (errata for L1091-L1101: the printed ones
 # come from single-precision root finding and the pair's real part is printed 10× too large);
 # the corrected values carry 6 figures (4 for the pair's real part): half a unit in the last
-_ROOTS = f"{SEED}, Ch. IV eq. 16 roots (L1091-L1101), errata corrected"
+_ROOTS = f"{SOURCE}, Ch. IV eq. 16 roots (L1091-L1101), errata corrected"
 
 _CH4_CHECKS = [
     # printed to 5 and 6 figures and exact given the printed m, k, c: half a unit
     Check(
         "bainum",
         "λ1, three-mass model",
-        f"{SEED}, Ch. IV (L1083)",
+        f"{SOURCE}, Ch. IV (L1083)",
         5.5876e-4,
         "",
         lambda: _lambdas()[0],
@@ -502,7 +502,7 @@ _CH4_CHECKS = [
     Check(
         "bainum",
         "λ2, three-mass model",
-        f"{SEED}, Ch. IV (L1085)",
+        f"{SOURCE}, Ch. IV (L1085)",
         1.67627e-3,
         "",
         lambda: _lambdas()[1],

@@ -1,4 +1,4 @@
-"""Earth Pointing Satellite (issue #3): seed 003_6d17262716e94f5f.txt, L66-L136 (docs/eps.md,
+"""Earth Pointing Satellite (issue #3): EPS slew study c. 1989, L66-L136 (docs/eps.md,
 tests/cases/test_eps.py).
 
 The structure is a reconstruction (Fig. 1 is lost): the checks show how close it comes. Two
@@ -16,7 +16,7 @@ from functools import lru_cache
 
 from flexsat.checks.core import Check, Discrepancy, series
 
-SEED = "seed 003_6d17262716e94f5f.txt"
+SOURCE = "EPS slew study c. 1989"
 #: L100-L125: paper modes 7-20, Hz
 MODES_7_20 = (
     0.2422,
@@ -95,7 +95,7 @@ _ELEMENTS = Discrepancy(
 CHECKS: list[Check] = series(
     "eps",
     [f"f, paper mode {i + 7}" for i in range(len(MODES_7_20))],
-    f"{SEED}, L100-L125",
+    f"{SOURCE}, L100-L125",
     MODES_7_20,
     "Hz",
     lambda: _case().frequencies_hz(len(MODES_7_20)),
@@ -106,7 +106,7 @@ CHECKS += [
     Check(
         "eps",
         "first truss mode frequency",
-        f"{SEED}, L127-L129",
+        f"{SOURCE}, L127-L129",
         7.0,
         "Hz",
         lambda: _first_truss_mode()[1],
@@ -117,7 +117,7 @@ CHECKS += [
     Check(
         "eps",
         "first truss mode number (elastic)",
-        f"{SEED}, L128-L129",
+        f"{SOURCE}, L128-L129",
         50.0,
         "",
         lambda: _first_truss_mode()[0],
@@ -126,7 +126,7 @@ CHECKS += [
     Check(
         "eps",
         "truss beam elements",
-        f"{SEED}, L82",
+        f"{SOURCE}, L82",
         135.0,
         "",
         lambda: _case().element_counts["truss"],
@@ -135,7 +135,7 @@ CHECKS += [
     Check(
         "eps",
         "NASTRAN deck nodes",
-        f"{SEED}, L130-L131",
+        f"{SOURCE}, L130-L131",
         95.0,
         "",
         lambda: len(_case().assembly.node_ids),
@@ -144,7 +144,7 @@ CHECKS += [
     Check(
         "eps",
         "NASTRAN deck elements",
-        f"{SEED}, L130-L131",
+        f"{SOURCE}, L130-L131",
         223.0,
         "",
         lambda: _case().n_elements,
@@ -156,7 +156,7 @@ CHECKS += [
     Check(
         "eps",
         "structural mass",
-        f"{SEED}, L72-L73",
+        f"{SOURCE}, L72-L73",
         548.0,
         "kg",
         lambda: _case().mass_budget()["structural"],
@@ -169,7 +169,7 @@ CHECKS += [
     Check(
         "eps",
         "peak nominal z torque, 10 s slew",
-        f"{SEED}, L814-L831",
+        f"{SOURCE}, L814-L831",
         12000.0,
         "N*m",
         lambda: _peak_torque(2),

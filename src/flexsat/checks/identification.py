@@ -1,4 +1,4 @@
-"""Identification and optical sensing (issue #5): seed 000_7bfdb62d2eacc22a.txt, Att. 7 and 8
+"""Identification and optical sensing (issue #5): Junkins, Pollock & Rahman 1990, Att. 7 and 8
 (docs/identification.md; tests/identify/).
 
 Checked: Att. 7 Table 2's starting-model frequencies ω_ns, which the text defines as the true
@@ -21,7 +21,7 @@ import numpy as np
 
 from flexsat.checks.core import Check, Discrepancy
 
-SEED = "seed 000_7bfdb62d2eacc22a.txt"
+SOURCE = "Junkins, Pollock & Rahman 1990"
 TRUE_RAD_S = (0.0230, 1.062, 55.44, 91.12, 156.75)  # Att. 7 Table 2, ω_n
 START_RAD_S = (0.0209, 0.9617, 50.15, 82.42, 141.78)  # Att. 7 Table 2, ω_ns
 
@@ -98,7 +98,7 @@ def _counts(key: str) -> float:
     }[key]
 
 
-_TABLE2 = f"{SEED}, Att. 7 Table 2 (L2962-L2969), starting model"
+_TABLE2 = f"{SOURCE}, Att. 7 Table 2 (L2962-L2969), starting model"
 _MODE2 = Discrepancy(
     TRUE_RAD_S[1] * (0.9 / 1.1) ** 0.5,
     (
@@ -111,8 +111,8 @@ _MODE2 = Discrepancy(
         "The arm model is unpublished, so the printed value is taken to be a misprint."
     ),
 )
-_ATT8 = f"{SEED}, Att. 8 (L3149-L3153), 2 cameras x 9 parameters"
-_ATT6 = f"{SEED}, Att. 6 eqs. (30)-(31) (L2592-L2618), 20 targets, 2 cameras"
+_ATT8 = f"{SOURCE}, Att. 8 (L3149-L3153), 2 cameras x 9 parameters"
+_ATT6 = f"{SOURCE}, Att. 6 eqs. (30)-(31) (L2592-L2618), 20 targets, 2 cameras"
 _V0 = (
     "13 parameters per camera, v0 included: the transcribed list drops v0, and only 13 "
     "give 166 and 86"

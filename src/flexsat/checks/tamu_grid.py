@@ -1,4 +1,4 @@
-"""The TAMU 5′ × 5′ grid (issue #3): seed 000_7bfdb62d2eacc22a.txt, Att. 4, 6 and 8
+"""The TAMU 5′ × 5′ grid (issue #3): Junkins, Pollock & Rahman 1990, Att. 4, 6 and 8
 (docs/structures_benchmarks.md §3, tests/cases/test_tamu_grid.py).
 
 Checked: Att. 4 Table 1's printed SI column against pint's conversion of its US column; the
@@ -17,7 +17,7 @@ from functools import cache
 
 from flexsat.checks.core import Check, Discrepancy, series
 
-SEED = "seed 000_7bfdb62d2eacc22a.txt"
+SOURCE = "Junkins, Pollock & Rahman 1990"
 ATT8 = (0.90, 2.34, 4.85, 6.05, 7.78, 12.84)  # Att. 8 Figure 4 table, "Modeled Value", Hz
 ATT6 = (0.809, 2.21, 4.48, 5.65, 7.76)  # Att. 6 Table 1 "Modelled (Hz)"
 
@@ -48,7 +48,7 @@ def _modes_below_30_hz() -> int:
     return _grid().mode_details(1)["modes_below_30_hz_with_gravity"]
 
 
-_TABLE1 = f"{SEED}, Att. 4 Table 1 (L1648-L1655), SI column"
+_TABLE1 = f"{SOURCE}, Att. 4 Table 1 (L1648-L1655), SI column"
 #: 3255.2 lbf in² in N m², to the printed digits
 _EI_US = 9.34182
 _TYPO = Discrepancy(
@@ -124,7 +124,7 @@ CHECKS: list[Check] = [
         Check(
             "tamu_grid",
             f"model {name}",
-            f"{SEED}, Att. 6 (L2415-L2511)",
+            f"{SOURCE}, Att. 6 (L2415-L2511)",
             float(value),
             "",
             lambda name=name: _counts()[name],
@@ -140,7 +140,7 @@ CHECKS: list[Check] = [
 CHECKS += series(
     "tamu_grid",
     [f"f_{i + 1}, Das et al. model (no motors, gravity)" for i in range(len(ATT8))],
-    f"{SEED}, Att. 8 Figure 4 table (L3234-L3246)",
+    f"{SOURCE}, Att. 8 Figure 4 table (L3234-L3246)",
     ATT8,
     "Hz",
     lambda: _grid().frequencies_hz(len(ATT8)),
@@ -150,7 +150,7 @@ CHECKS += series(
 CHECKS += series(
     "tamu_grid",
     [f"f_{i + 1}, Att. 6 model (motors, gravity)" for i in range(len(ATT6))],
-    f"{SEED}, Att. 6 Table 1 (L2656-L2665)",
+    f"{SOURCE}, Att. 6 Table 1 (L2656-L2665)",
     ATT6,
     "Hz",
     lambda: _grid("0.5 kg").frequencies_hz(len(ATT6)),
@@ -162,7 +162,7 @@ CHECKS += [
     Check(
         "tamu_grid",
         "first frequency of the hardware (with motors)",
-        f"{SEED}, Att. 4 Fig. 1 caption (L1805)",
+        f"{SOURCE}, Att. 4 Fig. 1 caption (L1805)",
         0.8,
         "Hz",
         lambda: _grid("0.5 kg").frequencies_hz(1)[0],
@@ -174,7 +174,7 @@ CHECKS += [
     Check(
         "tamu_grid",
         "modes below 30 Hz",
-        f"{SEED}, Att. 4 Fig. 1 caption (L1805)",
+        f"{SOURCE}, Att. 4 Fig. 1 caption (L1805)",
         10.0,
         "",
         _modes_below_30_hz,

@@ -1,4 +1,4 @@
-"""Vadali & Kim's tethered-subsatellite retrieval (issue 14): seed 000_7bfdb62d2eacc22a.txt,
+"""Vadali & Kim's tethered-subsatellite retrieval (issue 14): Junkins, Pollock & Rahman 1990,
 Att. 12, L4397-L4465 (docs/tether.md, tests/control/test_tether_laws.py). Every value is a live
 rerun of the example under continuous feedback (:func:`flexsat.cases.tether.rerun`).
 
@@ -15,7 +15,7 @@ import numpy as np
 
 from flexsat.checks.core import Check, Discrepancy
 
-SEED = "seed 000_7bfdb62d2eacc22a.txt, Att. 12"
+SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12"
 
 
 @cache
@@ -75,7 +75,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "orbit rate at 220 km",
-        f"{SEED}, L4397",
+        f"{SOURCE}, L4397",
         0.07068,
         "rad/min",
         _orbit_rate_per_minute,
@@ -86,7 +86,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 1: initial tension T^(0)",
-        f"{SEED}, L4401",
+        f"{SOURCE}, L4401",
         4.0,
         "",
         _get("V10", "initial_tension"),
@@ -95,7 +95,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 1: initial tension",
-        f"{SEED}, L4401",
+        f"{SOURCE}, L4401",
         2.52,
         "N",
         _get("V10", "initial_tension_N"),
@@ -105,7 +105,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 1: lambda and theta settle",
-        f"{SEED}, L4401",
+        f"{SOURCE}, L4401",
         2.0,
         "orbits",
         _get("V10", "settling_orbits"),
@@ -116,7 +116,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 1: thrust index, 2 orbits",
-        f"{SEED}, L4401",
+        f"{SOURCE}, L4401",
         0.9,
         "",
         _get("V10", "thrust_index_2_orbits"),
@@ -126,7 +126,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 1: thrust impulse, 2 orbits",
-        f"{SEED}, L4401",
+        f"{SOURCE}, L4401",
         481.0,
         "N*s",
         _get("V10", "thrust_impulse_2_orbits_Ns"),
@@ -138,7 +138,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2: thrust index, 2 orbits",
-        f"{SEED}, L4447",
+        f"{SOURCE}, L4447",
         0.24,
         "",
         _get("V11", "thrust_index_2_orbits"),
@@ -147,7 +147,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2: thrust impulse, 2 orbits",
-        f"{SEED}, L4447",
+        f"{SOURCE}, L4447",
         128.4,
         "N*s",
         _get("V11", "thrust_impulse_2_orbits_Ns"),
@@ -156,7 +156,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2: max pitch",
-        f"{SEED}, L4449",
+        f"{SOURCE}, L4449",
         29.3,
         "deg",
         _get("V11", "max_pitch_deg"),
@@ -165,7 +165,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2, K4 = 3: thrust index",
-        f"{SEED}, L4447",
+        f"{SOURCE}, L4447",
         0.258,
         "",
         _get("V12", "thrust_index_2_orbits"),
@@ -176,7 +176,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2, lambda_r = .001, K1 = 1: final pitch",
-        f"{SEED}, L4449",
+        f"{SOURCE}, L4449",
         180.0,
         "deg",
         _final_pitch_6_orbits,
@@ -186,7 +186,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2, lambda_r = .001, K1 = 0.9: max pitch",
-        f"{SEED}, L4449",
+        f"{SOURCE}, L4449",
         21.9,
         "deg",
         _get("V13 K1=0.9", "max_pitch_deg"),
@@ -196,7 +196,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "rate law: initial retrieval rate",
-        f"{SEED}, L4465",
+        f"{SOURCE}, L4465",
         30.0,
         "m/s",
         _get("V15", "initial_rate_m_s"),

@@ -8,8 +8,8 @@ its vector part is in body components. The target is at rest, so the body rate �
 is the inertial body rate, and the closed loop is Euler's equations
 :math:`I\dot\omega = -\omega\times I\omega + u` with the kinematics of the error.
 
-* :class:`GibbsLyapunovLaw`, Junkins, Att. 3 §II Eqs. 1–4 (seed 000; notes
-  ``seed000_part1.md`` §2.8), Gibbs (classical Rodrigues) parameters q of the error:
+* :class:`GibbsLyapunovLaw`, Junkins, Att. 3 §II Eqs. 1–4 (Junkins, Pollock &
+  Rahman 1990), Gibbs (classical Rodrigues) parameters q of the error:
 
   .. math::
 

@@ -1,6 +1,7 @@
 r"""Steering laws of a single-gimbal CMG pyramid as controllers (Vadali, Oh & Walker,
-seed000_part2.md §8.2-§8.5), for the plant :class:`~flexsat.dynamics.gimbal_cluster.GimbalCluster`
-(σ̇ = u) in the engine's continuous-law mode.
+Eqs. 3–7, in Junkins, Pollock & Rahman 1990), for the plant
+:class:`~flexsat.dynamics.gimbal_cluster.GimbalCluster` (σ̇ = u) in the engine's continuous-law
+mode.
 
 * :class:`PseudoInverseSteering`: the torque law :math:`\dot\sigma = C^T(CC^T + \alpha I)^{-1}
   \dot h_{cmd}`, :math:`\dot h_{cmd} = -\tau(t)` (Eq. 7; α > 0 the singularity-robust inverse,

@@ -1,5 +1,5 @@
-r"""Force/torque decoupling of point-force actuators (seed 003 Eqs. 32–37, L701–L753; notes
-../shared/spec/seed003.md §2.8; feature F12).
+r"""Force/torque decoupling of point-force actuators (EPS slew study c. 1989, Eqs. 32–37,
+L701–L753).
 
 The point forces :math:`F_i` (N, along body axes at nodes) of a frequency-shaped perturbation
 law should damp the elastic modes without turning the vehicle: their net moment about the
@@ -19,8 +19,8 @@ weight's inverse the singular projector-like
 
     M_W = R^{-1} - R^{-1}W^T(WR^{-1}W^T)^{-1}WR^{-1} = Z(Z^TRZ)^{-1}Z^T, \qquad W M_W = 0,
 
-Z an orthonormal basis of the null space of W (notes §2.8 [VERIFIED]; Eqs. 35–37 with
-:math:`\hat R^{-1} := M_W`). Two errata of the paper (notes §2.8):
+Z an orthonormal basis of the null space of W (verified; Eqs. 35–37 with
+:math:`\hat R^{-1} := M_W`). Two errata of the paper:
 
 * Eq. 35 prints :math:`\hat R = R + \tfrac12 W^T(WR^{-1}W^T)^{-1}W`; its inverse is not
   :math:`M_W` and :math:`W\hat R^{-1} \ne 0`: it does not enforce the constraint.

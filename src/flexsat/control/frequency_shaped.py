@@ -1,5 +1,4 @@
-r"""Frequency-shaped LQR with a cross weight (seed 003 §2.6, Eqs. 22–30; notes
-../shared/spec/seed003.md §2.3 and §2.6).
+r"""Frequency-shaped LQR with a cross weight (EPS slew study c. 1989, Eqs. 22–30).
 
 The control penalty is shaped in frequency by augmenting the plant with the control and its
 derivatives. With ``order=2`` (the paper) the plant input :math:`u_1` and its rate
@@ -19,7 +18,7 @@ frequency :math:`\omega_B`), i.e. frequency weight
 break frequency". Dropping the total-derivative terms
 (:math:`2u_1u_2 = d(u_1^2)/dt`, :math:`2u_2u_3 = d(u_2^2)/dt`, which change the cost by a
 constant fixed by the initial state and so leave the optimal gain unchanged) gives the weight of
-Eq. 22 (generalised to :math:`\zeta_B` as the notes recommend):
+Eq. 22 (generalised to :math:`\zeta_B`, the damped reading of the weight):
 
 .. math::
 
@@ -28,7 +27,7 @@ Eq. 22 (generalised to :math:`\zeta_B` as the notes recommend):
     \hat R = R / \omega_B^4 .
 
 :math:`\zeta_B = 0` is the paper's literal weight (the penalty vanishes at ω_B and the optimal
-torque can ring there; notes §2.3 [AMBIG]); :math:`\zeta_B = 1` is a double real pole. With
+torque can ring there; the paper is ambiguous here); :math:`\zeta_B = 1` is a double real pole. With
 ``order=1`` only :math:`u_1` is a state, the control is :math:`u_2 = \dot u_1` and
 :math:`W(s) = 1 + s/\omega_B` (one-pole roll-off): :math:`\hat Q = \mathrm{diag}(Q, R)`,
 :math:`\hat N = [0; R/\omega_B]`, :math:`\hat R = R/\omega_B^2`.
@@ -152,7 +151,7 @@ class FrequencyShapedDesign:
         the augmented state (:math:`\hat d = E d`) and :math:`\hat A_{cl} = \hat A -
         \hat B\hat K`, so that the feedforward :math:`K_d d = -\hat R^{-1}\hat B^T\xi` with
         ξ of Eq. 29. Seed 003's "time-varying" feedforward interpolates this gain and
-        multiplies the current d(t) (notes §2.7)."""
+        multiplies the current d(t)."""
         n = self.A.shape[0]
         Acl = self.A_aug - self.B_aug @ self.gain
         return np.linalg.solve(

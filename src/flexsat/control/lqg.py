@@ -8,7 +8,7 @@ by a Kalman estimator (:func:`~flexsat.control.estimation.kalman`)
     \dot{\hat x} = A \hat x + B u + L (y - C \hat x)
 
 (the paper's SOBS of Eq. 45, with the full estimated state as output — the paper prints output
-matrix C there, which would only reproduce ŷ; notes seed001.md §2 [AMBIG]).
+matrix C there, which would only reproduce ŷ; the paper is ambiguous here).
 
 Discrete-time implementation
 ----------------------------

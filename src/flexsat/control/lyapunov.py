@@ -1,6 +1,6 @@
 """Lyapunov maneuver laws of Junkins, Rahman & Bang for a hub with flexible appendages.
 
-Seed 000_7bfdb62d2eacc22a.txt, Att. 3 (notes: ../shared/spec/seed000_part1.md §2.3, §2.5).
+Att. 3 of Junkins, Pollock & Rahman 1990 (Junkins, Rahman & Bang, AIAA Aerospace Sciences 1990).
 With the error-energy function (Att. 3 Eq. 8, a1 = 1)
 
     2U = I_hub θ'² + g1 (θ − θ_f)² + (1 + g3/n) · 2 E_beams

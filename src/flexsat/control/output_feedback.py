@@ -1,8 +1,8 @@
 """Symmetric collocated output feedback with Cholesky-parameterised gains (minimum sensitivity).
 
 Source: Junkins & Kim 1990, *First and Second Order Sensitivity of the Singular Value
-Decomposition*, seed ``000_7bfdb62d2eacc22a.txt`` Attachment 5 (L2001-L2143); curated notes
-``shared/spec/seed000_part1.md`` §4.3-§4.4.
+Decomposition*, J. Astronautical Sciences 38(1), 1990 (Att. 5 of Junkins, Pollock & Rahman 1990),
+L2001-L2143.
 
 Plant and law (Eqs. 28-29)::
 
@@ -40,9 +40,9 @@ from flexsat.analysis.sensitivity import (
 )
 from flexsat.input_checks import require_finite
 
-SOURCE = "seed 000_7bfdb62d2eacc22a.txt, Att. 5 Eqs. 28-49 (L2001-L2089), Example 1 (L2081-L2143)"
+SOURCE = "Junkins, Pollock & Rahman 1990, Att. 5 Eqs. 28-49 (L2001-L2089), Example 1 (L2081-L2143)"
 
-#: Att. 5 Example 1 (L2081-L2143; notes §4.4): "6th order, 4 outputs, 2 inputs", as printed
+#: Att. 5 Example 1 (L2081-L2143): "6th order, 4 outputs, 2 inputs", as printed
 EXAMPLE1 = {
     "M": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
     "K": [[20.0, -10.0, 0.0], [-10.0, 30.0, -20.0], [0.0, -20.0, 20.0]],
@@ -311,7 +311,7 @@ class SymmetricOutputFeedback:
     def modes(self, G1, G2) -> tuple[np.ndarray, np.ndarray]:
         """(ω_i, ζ_iω_i) of the oscillatory modes, ascending ω (Tables 1-2 of Att. 5).
 
-        ω = Im λ, ζ = −Re λ/|λ| (notes §4.3), so ζω = Im λ (−Re λ)/|λ|, not −Re λ.
+        ω = Im λ, ζ = −Re λ/|λ|, so ζω = Im λ (−Re λ)/|λ|, not −Re λ.
         """
         lam = self.eigenvalues(G1, G2)
         lam = lam[lam.imag > 0]

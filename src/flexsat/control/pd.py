@@ -1,6 +1,6 @@
 """Proportional-derivative attitude control with rigid-body pole placement.
 
-Seed 001_79dfdfba94ed8e0d.txt (Hailey, Sortun, Agrawal), Eqs. 20-24 and 29:
+Hailey, Sortun & Agrawal c. 1992 (NPS), Eqs. 20-24 and 29:
 
     T_c = −k (θ_e + τ θ'_e),   θ_e = θ − θ_ref
     s² + 2 ζ ω_n s + ω_n² = 0  for the rigid plant I θ'' = T_c  ⇒  k = I ω_n²,  k τ = 2 ζ ω_n I

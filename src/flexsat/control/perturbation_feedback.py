@@ -1,6 +1,6 @@
 r"""Gain-scheduled frequency-shaped perturbation feedback about a rigid nominal slew, with
-disturbance feedforward and force/torque decoupling (seed 003 §2.6–2.8, Eqs. 22–37,
-L536–L753; notes ../shared/spec/seed003.md §2.6–2.8; features F9–F12, F15).
+disturbance feedforward and force/torque decoupling (EPS slew study c. 1989,
+Eqs. 22–37, L536–L753).
 
 Design (:func:`perturbation_design`). The flexible design model (a few elastic modes) is
 linearised at ``n_points`` equally spaced times :math:`t_i` of [0, T] along the nominal
@@ -25,7 +25,7 @@ and the design runs on (A, B S) with weight SᵀDS, in inputs scaled to unit wei
 
 Gain scheduling (F10): :math:`K(t)` is interpolated linearly between the :math:`t_i`
 (:func:`~flexsat.control.scheduled.interpolate_schedule`) and held at :math:`K(T)` after T.
-Feedforward (F11, notes §2.7), three forms:
+Feedforward (F11), three forms:
 
 * ``"constant"`` (the paper's default, L808–L809): the command :math:`K_{d,i}\,d(t_i)`
   evaluated at the linearisation times and interpolated;
@@ -80,7 +80,7 @@ __all__ = [
     "perturbation_design",
 ]
 
-#: the feedforward forms of seed 003 (notes §2.7) and none
+#: the feedforward forms of seed 003 and none
 FEEDFORWARD = ("constant", "time-varying", "none")
 
 
@@ -179,7 +179,7 @@ def perturbation_design(
     omega_b : float, str or Quantity
         Break frequency ω_B, rad/s (> 0).
     zeta_b : float
-        Shaping damping ζ_B (≥ 0; 0 the paper's literal weight, notes §2.3).
+        Shaping damping ζ_B (≥ 0; 0 the paper's literal weight).
     n_points : int
         Number of equally spaced linearisation times over [0, T] (1: t = 0 only, a constant
         gain).
@@ -195,7 +195,7 @@ def perturbation_design(
         n_points < 1, an unknown force channel, ``decouple`` without forces or with no
         moment-free force combination, a nominal without the attributes, with ζ_B = 0 inputs
         of which a combination moves no design state (more inputs than 3 + n: that
-        combination's shaping chain would ring at ω_B with zero penalty, notes §2.3), or a
+        combination's shaping chain would ring at ω_B with zero penalty), or a
         Riccati equation without a stabilising solution at a linearisation time (naming t_i).
     """
     lin = TrajectoryLinearization(plant, nominal, forces)
@@ -263,7 +263,7 @@ def _check_inputs_act(B, times, inputs) -> None:
             raise ValueError(
                 f"forces: at t = {t:.6g} s some combination of the inputs {', '.join(inputs)} "
                 f"moves no state of the design model (B has rank {rank} < {B[i].shape[1]}). "
-                f"With zeta_b = 0 the shaping weight vanishes at ω_B (notes §2.3), so such a "
+                f"With zeta_b = 0 the shaping weight vanishes at ω_B, so such a "
                 f"combination would ring at ω_B unpenalised and unseen: the Riccati equation "
                 f"has no stabilising solution. Use zeta_b > 0, fewer forces, more design modes "
                 f"or decouple=True"

@@ -1,7 +1,7 @@
 r"""Positive position feedback (PPF) on collocated actuator/sensor pairs (issue #12).
 
-Seed 004_680d3fec9e1f8c83.txt (Agrawal & Bang, *Adaptive Structures for Large Precision
-Antennas*, Acta Astronautica 1996), clean equations and errata in ../shared/spec/seed004.md §2.
+B. N. Agrawal and H. Bang, *Adaptive Structures for Large Precision Antennas*, Acta Astronautica
+1996 (IAF-94.1.4.202), §2; where the printed equations are wrong the docstrings below say so.
 
 The structure in modal coordinates (Eq. 2), with n_a collocated pairs,
 
@@ -12,7 +12,7 @@ The structure in modal coordinates (Eq. 2), with n_a collocated pairs,
 B_a (m × n_a) the actuator influence (the paper's a_1 F̄ = a_1 Φᵀ F) and C_s (n_a × m) the
 sensor rows (a_2 Fᵀ Φ). A bank of second-order filters, one per (actuator i, tuned mode j),
 n_f = n_a n_t filters (Eqs. 3–4), each fed by its pair's sensor through the replicate matrix E
-(n_f × n_a, ``E[i n_t + j, i] = 1``, spec §2 [RECON]):
+(n_f × n_a, ``E[i n_t + j, i] = 1``, reconstructed, not printed):
 
 .. math::
 
@@ -26,21 +26,21 @@ G = diag(g), g ordered actuator-major, ``g[i n_t + j] = g_ij`` (Eqs. 38–39). T
     \bar A = \begin{bmatrix} 0 & I & 0 & 0 \\ -\Omega & -D & B_a E^T G & 0 \\
              0 & 0 & 0 & I \\ \Omega_f E C_s & 0 & -\Omega_f & -D_f \end{bmatrix}
 
-(the (4,1) block is a_2 Ω_f C, spec §2 (8) [OCR-FIX] of the printed "a_2 C_f C"). In the paper's
+(the (4,1) block is a_2 Ω_f C, a misprint repaired of the printed "a_2 C_f C"). In the paper's
 notation a_1 Cᵀ G ξ = B_a Eᵀ G ξ and a_2 C η = E C_s η with C = E Fᵀ Φ.
 
 Stability (Eq. 6): S = Ω − a_1 a_2 Cᵀ G C = Ω − B_a Eᵀ G E C_s. For collocated pairs
 (B_a[:, i] = r_i C_s[i]ᵀ, r_i = a_1/a_2 of pair i > 0) S is symmetric, and scaling the filter
 equations by G R Ω_f⁻¹ makes the loop a symmetric second-order system with "mass"
 diag(I, G R Ω_f⁻¹), damping diag(D, G R Ω_f⁻¹ D_f) and stiffness whose Schur complement is S
-(spec §2 [DERIVED]). So S > 0 decides stability only when G > 0 and both dampings are positive
+(derived, not printed). So S > 0 decides stability only when G > 0 and both dampings are positive
 definite; otherwise (a negative gain) S can be positive definite for an unstable loop and the
 closed-loop eigenvalues decide.
 
 Cost (Eqs. 7, 10–12): J = ½ tr(P̄ X₀), P̄ the solution of
 Āᵀ P̄ + P̄ Ā + Q_s + Kᵀ Q_u K = 0 (P_s + P_u of Eq. 12 in one equation), K = [0, 0, Eᵀ G, 0] the
 state form of u, X₀ = x₀ x₀ᵀ or E[x₀ x₀ᵀ] over an initial-condition distribution (F10).
-Gradient, repaired (spec §2 (13) [OCR-FIX / sign error]), with V from Eq. 14
+Gradient, repaired (a sign error repaired), with V from Eq. 14
 (Ā V + V Āᵀ + X₀ = 0):
 
 .. math::
@@ -95,7 +95,7 @@ COLLOCATION_TOL = 1e-10
 # kernels (plain arrays; gains may carry leading case axes)
 def replicate_matrix(n_actuators: int, n_tuned: int) -> np.ndarray:
     """E (n_a n_t × n_a): sensor i copied to its n_t mode-tuned filters, ``E[i n_t + j, i] = 1``
-    (seed 004 Eq. 4; spec seed004.md §2 [RECON])."""
+    (Agrawal & Bang 1996 Eq. 4; the paper does not print E: reconstructed)."""
     return np.kron(np.eye(n_actuators), np.ones((n_tuned, 1)))
 
 
@@ -118,7 +118,7 @@ def ppf_state_matrices(omega, zeta, B_a, C_s, omega_f, zeta_f, E):
     Returns
     -------
     A0 : (n_x, n_x) array
-        Ā at g = 0, n_x = 2m + 2n_f, with the (4,1) block Ω_f E C_s (spec §2 (8) [OCR-FIX]).
+        Ā at g = 0, n_x = 2m + 2n_f, with the (4,1) block Ω_f E C_s (a misprint repaired).
     B : (n_x, n_a) array
         [0; B_a; 0; 0].
     """
@@ -140,7 +140,7 @@ def ppf_state_matrices(omega, zeta, B_a, C_s, omega_f, zeta_f, E):
 
 
 def ppf_feedback(g, E, n_modes: int) -> np.ndarray:
-    """K (..., n_a, n_x) with u = K x = Eᵀ G ξ (Eq. 5; the paper's −G of Eq. 9, spec [AMBIG])."""
+    """K (..., n_a, n_x) with u = K x = Eᵀ G ξ (Eq. 5; the paper's −G of Eq. 9: ambiguous)."""
     g = np.asarray(g, float)
     nf, na = E.shape
     K = np.zeros(g.shape[:-1] + (na, 2 * n_modes + 2 * nf))
@@ -179,7 +179,7 @@ def _lyap(A, Q) -> np.ndarray:
 
 
 def ppf_cost_gradient(A0, B, E, n_modes: int, g, Q_s, Q_u, X0, gradient: bool = True):
-    r"""J = ½ tr(P̄ X₀) (Eqs. 10–12) and the repaired ∂J/∂g (spec §2 (13)–(14)).
+    r"""J = ½ tr(P̄ X₀) (Eqs. 10–12) and the repaired ∂J/∂g (Eqs. 13–14, printed sign repaired).
 
     Parameters
     ----------
@@ -424,7 +424,7 @@ class PPFBank:
 
 @dataclass(frozen=True)
 class PPFStability:
-    """Stability of a PPF loop (Eq. 6, spec §2 [DERIVED]).
+    """Stability of a PPF loop (Eq. 6, derived, not printed).
 
     Attributes
     ----------

@@ -1,8 +1,7 @@
 """Homotopic minimum-norm optimisation of PPF gains with eigenvalue-constraint restoration.
 
-Source: Agrawal & Bang, *Adaptive structures for large precision antennas* (seed
-``004_680d3fec9e1f8c83.txt`` L113-L203); curated notes ``shared/spec/seed004.md`` §2
-Eqs. 15-28, features F6-F7, and §3.2-§3.3 for the behaviour checked by the tests.
+Source: Agrawal & Bang, *Adaptive structures for large precision antennas*,
+Acta Astronautica, 1996, Eqs. 15-28 (L113-L203).
 
 Problem (Eq. 15, with the constraint of Eqs. 21-22 and a direct stability check)::
 
@@ -24,7 +23,7 @@ Method of :func:`optimize_ppf_gains` (the paper's, L113-L203):
    H = J(g) − J0(γ) is driven to zero.
 2. **Minimum-norm correction (Eqs. 18-20).** H + Ã Δg = 0 with Ã = ∇Jᵀ (one row), and the
    W-norm-minimal solution Δg = −W⁻¹Ãᵀ(ÃW⁻¹Ãᵀ)⁻¹H. Its length is |H| / |∇J|_W⁻¹: where J is
-   insensitive to the gains they move far (spec §3.2 point 4).
+   insensitive to the gains they move far.
 3. **Nested restoration and the active set (Eqs. 21-28).** After each correction the
    eigenvalues of S are checked; if some λ_j < λ_j^c the violated rows H_c = λ_j − λ_j^c are
    corrected by Δg = −W⁻¹L̃ᵀ(L̃W⁻¹L̃ᵀ)⁻¹H_c with the analytic sensitivities L̃ (Eq. 26),
@@ -37,7 +36,7 @@ Method of :func:`optimize_ppf_gains` (the paper's, L113-L203):
    restorations alternate (two projections) and converge only linearly along the boundary:
    on the tests' model the run then crept in γ steps of 1e-6 and used up ``max_steps``.
 4. **Stability.** The closed-loop poles are then checked directly: S > 0 implies stability only
-   for G > 0 (spec §2 (6) [DERIVED]; on the tests' model g = −1e3 on every filter is unstable
+   for G > 0 (derived from Eq. 6; on the tests' model g = −1e3 on every filter is unstable
    with S > 0). A correction that leaves the loop unstable is rejected outright and the cost is
    never evaluated there (the Lyapunov "cost" of an unstable loop is finite and may even be
    negative).
@@ -56,7 +55,7 @@ their multipliers, whereas the paper enters a constraint only through the nested
 reproducing the paper means its iteration; (b) it has no veto for a step that destabilises the
 loop (its line search accepts any trial that lowers its merit, and the cost of an unstable loop
 is a meaningless finite number); (c) it refuses a goal at or above the starting cost, while
-the paper's published runs apparently had J_goal > J_init (spec §3.2), which this module must
+the paper's published runs apparently had J_goal > J_init, which this module must
 reproduce. The W handling (W = L Lᵀ, a vector is a diagonal) is reused from it.
 
 :func:`scipy_ppf_gains` solves the same constrained problem with ``scipy.optimize.minimize``
@@ -78,7 +77,7 @@ from flexsat.input_checks import (
     require_numeric,
 )
 
-SOURCE = "seed 004_680d3fec9e1f8c83.txt, Eqs. 15-28 (L113-L203); shared/spec/seed004.md §2"
+SOURCE = "Agrawal & Bang 1996, Eqs. 15-28 (L113-L203)"
 
 #: the PPF gain-problem interface (duck-typed)
 PROBLEM_METHODS = (
@@ -90,7 +89,7 @@ PROBLEM_METHODS = (
 )
 
 #: default λ_i^c as a fraction of the open-loop stiffness eigenvalues λ_i(S(0)) = ω_i² (the
-#: paper gives no margin, spec §1.3): 1 % keeps every mode's stiffness away from zero.
+#: paper gives no margin): 1 % keeps every mode's stiffness away from zero.
 DEFAULT_FLOOR_FRACTION = 0.01
 
 #: restoration aims this far (relative) above the floor: λ_min(S) is concave in g (S is affine
@@ -380,7 +379,7 @@ def _start(problem, g0, eigenvalue_floor, stability_margin):
         raise ValueError(
             f"g0: the closed loop is unstable at the start: max Re(pole) = "
             f"{max_re:.6g} >= −stability_margin = {-margin:.6g} (S alone does not "
-            f"guarantee stability for negative gains, spec §2 (6))"
+            f"guarantee stability for negative gains)"
         )
     try:
         J = ev.cost(g)
@@ -509,7 +508,7 @@ def optimize_ppf_gains(
         restore it first with :func:`restore_eigenvalue_constraints`.
     J_goal : float, optional
         The goal cost. Above J_init the homotopy *raises* J (along +∇J), as the paper's
-        published runs apparently did (spec §3.2).
+        published runs apparently did.
     goal_ratio : float, optional
         Alternatively J_goal = goal_ratio · J_init (the paper sets the goal "based upon the
         objective function with the initial gains", L345). Give exactly one of the two.
@@ -523,7 +522,7 @@ def optimize_ppf_gains(
     stability_margin : float
         Every closed-loop pole must have Re < −stability_margin (1/s, >= 0).
     gamma_step : float
-        First and largest γ increment, in (0, 1] (0.1: the spec's γ = 0.1 … 1.0).
+        First and largest γ increment, in (0, 1] (0.1: the paper's γ = 0.1 … 1.0).
     min_gamma_step : float
         The run stalls when the increment falls below this.
     max_corrections : int

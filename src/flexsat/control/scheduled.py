@@ -1,6 +1,6 @@
 r"""Time-varying (gain-scheduled) state feedback.
 
-Seed 003 §2.6 (notes ../shared/spec/seed003.md §2.6, L562–L583; checks F10): the flexible plant
+EPS slew study c. 1989 (L562–L583): the flexible plant
 is linearised at several equally spaced times along the nominal maneuver, a constant-gain LQR is
 designed at each point, and the gains are interpolated in time. With the state measured
 (a plant output holding the full state, or the listed channels),

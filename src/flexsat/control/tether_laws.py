@@ -1,5 +1,5 @@
 r"""Liapunov retrieval laws of a tethered subsatellite (Vadali & Kim, AIAA 90-1197; seed 000,
-Att. 12, L4335-L4465; spec seed000_part2.md §7.4-§7.8), on the plant
+Att. 12, L4335-L4465), on the plant
 :class:`~flexsat.dynamics.tether.TetheredSubsatellite`.
 
 All three are written in the nondimensional variables of seed 000 Eq. 4 (x = [λ, θ, φ, λ', θ',
@@ -17,7 +17,7 @@ All three are written in the nondimensional variables of seed 000 Eq. 4 (x = [λ
 
   The last sign is the repaired one: solving Eq. 13 exactly gives −K3λφ' (with Eqs. 11-12,
   K3 y' z − K3 z' y = K3 λ²φ' enters F̂/λ with the determinant −λ²). L4395 prints "+", with
-  which the retrieval diverges (spec §7.6, §13 flag 21); ``printed_sign=True`` keeps it, to
+  which the retrieval diverges; ``printed_sign=True`` keeps it, to
   show that. At φ = 0 the tension is the in-plane law (7).
 * :class:`CoupledTetherLaw` (controller 2, Eqs. 18 and 20), built on the integral of motion V1
   (Eq. 8) inside the Liapunov function (16), so that V' = −K3λ'² − (K2 + λ²)K4φ'² (Eq. 21):
@@ -89,7 +89,7 @@ def thrust_index(tau, thrust) -> np.ndarray:
 
 
 def liapunov_coupled(x, K1, K2, lambda_r) -> np.ndarray:
-    r"""V of Eq. 16 (with θ'² for the printed θ², spec §13 flag 22) at x = [λ, θ, φ, λ', θ', φ']:
+    r"""V of Eq. 16 (with θ'² for the printed θ², a misprint) at x = [λ, θ, φ, λ', θ', φ']:
     ½[λ'² + K1(λ − λr)² + (K2 + λ²)·2V1]."""
     x = np.asarray(x, float)
     V1 = integral_of_motion(x[..., 1], x[..., 2], x[..., 4], x[..., 5])

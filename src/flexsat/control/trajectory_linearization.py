@@ -1,5 +1,5 @@
 r"""Perturbation coordinates about a rigid nominal slew and their linearisation along it
-(seed 003 §2.6, L562–L583, Eq. 23; notes ../shared/spec/seed003.md §2.6–2.7; feature F8).
+(EPS slew study c. 1989, Eq. 23, L562–L583).
 
 The nominal. Seed 003 slews the flexible spacecraft with a rigid-body optimal maneuver: Euler
 parameters :math:`\beta_n(t)` (inertial to body, scalar first), body rate :math:`\omega_n(t)`

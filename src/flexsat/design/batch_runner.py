@@ -271,7 +271,7 @@ _NOISE_CHANNELS = {"gyro_noise": "theta_dot", "strain_noise": "root_torque"}
 class HubManeuverBuilder:
     r"""Control Law II slews of a hub + appendage plant, one batched call per chunk.
 
-    Each case is the slew of Att. 3 §V (seed 000; notes seed000_part1.md §2.3–2.5): the
+    Each case is the slew of Att. 3 §V (Junkins, Pollock & Rahman 1990): the
     smoothed bang-bang reference (Att. 3 Eqs. 12–16, :class:`~flexsat.maneuvers.SmoothBangBang`)
     tracked by Law II (Eq. 17, :class:`~flexsat.control.LyapunovTracker`) on
     :class:`~flexsat.dynamics.hub_appendage.HubAppendage`. Any of :data:`MANEUVER_PARAMETERS`,

@@ -1,6 +1,5 @@
 r"""Automated search of the perturbation-feedback weights of a three-axis slew toward the seed 003
-goals (F18; the paper's main recommendation, seed 003 L905–L925; notes
-../shared/spec/seed003.md §3.2).
+goals (the paper's main recommendation, EPS slew study c. 1989, L905–L925).
 
 Seed 003 designs its perturbation feedback (frequency-shaped LQR with cross weight, Eqs. 22–28,
 :func:`~flexsat.control.perturbation_feedback.perturbation_design`) with diagonal weights

@@ -1,6 +1,6 @@
 r"""Trade surfaces of the smoothed bang-bang maneuver over (α, u_max): T, E(T) and μ_max.
 
-Seed 000_7bfdb62d2eacc22a.txt, Att. 3 (notes ../shared/spec/seed000_part1.md §2.4–2.5), the
+Att. 3 of Junkins, Pollock & Rahman 1990 (Junkins, Rahman & Bang), Eqs. 12-16 and 22, the
 designer's three surfaces for a rest-to-rest slew of a hub with flexible appendages:
 
 - **T(α, u_max)** (Fig. 5), Eq. 16:

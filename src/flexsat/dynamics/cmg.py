@@ -1,9 +1,9 @@
 """Single-gimbal control moment gyros in a pyramid (Vadali, Oh & Walker, "Preferred Gimbal Angles
-for Single Gimbal CMGs"; /work/shared/spec/seed000_part2.md §8, features F23–F25).
+for Single Gimbal CMGs"; in Junkins, Pollock & Rahman 1990, L4533–L4830).
 
 Plain array kernels with a leading case axis: the gimbal angles ``sigma`` have shape
 ``(..., n)``; momenta ``(..., 3)``, Jacobians ``(..., 3, n)``. Momenta are in units of one
-rotor's momentum h (the notes' h = 1). Only the axial rotor momentum is modelled (§8.1).
+rotor's momentum h (h = 1). Only the axial rotor momentum is modelled.
 
 Geometry. Unit i of n sits at azimuth φ_i = 2π(i − 1)/n around the body z axis; its gimbal axis
 is tilted by the skew angle δ from z towards the azimuth, and its rotor momentum turns in the
@@ -12,10 +12,10 @@ plane normal to the gimbal axis::
     g_i = [sinδ cosφ_i, sinδ sinφ_i, cosδ],   a_i = [−sinφ_i, cosφ_i, 0],   b_i = g_i × a_i
     h_i(σ_i) = cosσ_i a_i + sinσ_i b_i
 
-For n = 4 this is exactly the notes' Eq. (1), and the Jacobian column ∂h_i/∂σ_i =
+For n = 4 this is exactly the paper's Eq. (1), and the Jacobian column ∂h_i/∂σ_i =
 −sinσ_i a_i + cosσ_i b_i = g_i × h_i is Eq. (2).
 
-Sign convention. The notes' Eq. (4)–(5) at ω = 0: the spacecraft feels the torque −ḣ, and the
+Sign convention. The paper's Eq. (4)–(5) at ω = 0: the spacecraft feels the torque −ḣ, and the
 steering law solves C σ̇ = ḣ_cmd. The kernels here take ``torque``, the torque on the
 spacecraft, so ḣ_cmd = −torque; the paper's "torque demand" T of Eq. (5) is ḣ_cmd itself
 (its "unit +x torque" is ``torque = [-1, 0, 0]`` here).
@@ -30,7 +30,7 @@ import numpy as np
 
 from flexsat.input_checks import require_finite
 
-#: the paper's pyramid skew angle, 54.74° (seed000_part2.md §8.1, L4620), in rad
+#: the paper's pyramid skew angle, 54.74° (L4620), in rad
 SKEW = float(np.deg2rad(54.74))
 
 
@@ -78,7 +78,7 @@ def pyramid_axes(n_units: int = 4, skew=SKEW):
     Returns
     -------
     g, a, b : ndarray
-        See the module; for n = 4 they reproduce Eq. (1)–(2) of seed000_part2.md §8.2.
+        See the module; for n = 4 they reproduce the paper's Eq. (1)–(2).
     """
     return _axes(_require_units(n_units), _require_skew(skew))
 
@@ -92,7 +92,7 @@ def _sigma(sigma, n_units):
 
 
 def momentum(sigma, skew=SKEW, n_units: int = 4) -> np.ndarray:
-    """Cluster momentum h(σ) = Σ_i cosσ_i a_i + sinσ_i b_i (seed000_part2.md §8.2 Eq. 1), in
+    """Cluster momentum h(σ) = Σ_i cosσ_i a_i + sinσ_i b_i (the paper's Eq. 1), in
     units of one rotor's momentum; shape ``(..., 3)``."""
     sig, n = _sigma(sigma, n_units)
     _, a, b = _axes(n, _require_skew(skew))
@@ -280,7 +280,7 @@ class GimbalRun:
 
 
 #: the paper's offset from the +x saturation set [−90, 180, 90, 0]° to its starting set
-#: [−89, 177, 90, −1]° for the back integration (seed000_part2.md §8.3, V4), in rad
+#: [−89, 177, 90, −1]° for the back integration, in rad
 PAPER_PERTURBATION = np.deg2rad([1.0, -3.0, 0.0, -1.0])
 
 

@@ -1,6 +1,6 @@
 r"""A rigid spacecraft actuated by a cluster of single-gimbal CMGs, as a
-:class:`~flexsat.dynamics.plant.Plant` (Vadali, Oh & Walker; /work/shared/spec/seed000_part2.md
-§8.2 Eq. 3–7, features F23–F25).
+:class:`~flexsat.dynamics.plant.Plant` (Vadali, Oh & Walker, Eqs. 3–7;
+in Junkins, Pollock & Rahman 1990).
 
 State :math:`x = [\beta, \omega, \sigma]` (Euler parameters inertial to body, scalar first; body
 rate, rad/s; the n gimbal angles, rad), input the commanded torque on the body τ_c (N m, body

@@ -1,6 +1,6 @@
 r"""The gimbal kinematics of a single-gimbal CMG pyramid as a plant: σ̇ = u.
 
-Vadali, Oh & Walker's steering studies (seed000_part2.md §8.3, §8.5; :mod:`flexsat.dynamics.cmg`)
+Vadali, Oh & Walker's steering studies (Junkins, Pollock & Rahman 1990; :mod:`flexsat.dynamics.cmg`)
 treat the cluster kinematically: the gimbal angles σ (n) follow the commanded gimbal rates, and
 the steering law (a torque law, null motion) is a feedback of σ, evaluated continuously. In the
 protocol's split that is the linear plant

@@ -1,7 +1,7 @@
 """Rigid hub with n identical cantilevered appendages, single axis, in hybrid coordinates.
 
-The distributed-parameter system of Junkins, Rahman & Bang (seed 000_7bfdb62d2eacc22a.txt,
-Att. 3 Eqs. 5-7; notes ../shared/spec/seed000_part1.md §2.2):
+The distributed-parameter system of Junkins, Rahman & Bang (Att. 3 of
+Junkins, Pollock & Rahman 1990, Eqs. 5-7):
 
     I_hub θ'' = u + n (M0 − l0 S0)
     ρ (y_tt + x θ'') + EI y_xxxx = 0,       l0 < x < l

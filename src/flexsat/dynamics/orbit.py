@@ -1,6 +1,6 @@
 r"""A free-free beam in a circular orbit: nonlinear pitch and bending with gravity gradient.
 
-Bainum & Reddy (1979), seed 002 Ch. II eqs 1–2 (L211–L229; shared/spec/seed002.md §1), for a
+Bainum & Reddy (1979), NASA CR-158684, Ch. II eqs 1–2 (L211–L229), for a
 uniform beam whose centre of mass is on a circular orbit of rate :math:`\omega_c`, pitch θ
 from the local vertical and bending amplitudes :math:`A_n = l z_n`. The report writes them in
 the nondimensional time :math:`\tau = \omega_c t` (' = d/dτ):

@@ -1,7 +1,7 @@
 r"""Linearised attitude and CMG-momentum model of the space station about LVLH, with
 gravity-gradient torque, the design disturbance and periodic-disturbance filters (Vadali, Oh &
-Walker, space-station example; /work/shared/spec/seed000_part2.md §8.4, Eq. 8–12, feature F26,
-after Wie et al., AIAA 88-4132).
+Walker, space-station example, Eq. 8–12, in Junkins, Pollock & Rahman 1990; after Wie et al.,
+AIAA 88-4132).
 
 Small roll, pitch, yaw θ1, θ2, θ3 from LVLH, body rates ω, CMG momentum h (body axes), the
 internal torque u (the station feels −u) and the disturbance w:
@@ -16,8 +16,8 @@ internal torque u (the station feels −u) and the disturbance w:
 
     \dot h_1 - n h_3 = u_1, \quad \dot h_2 = u_2, \quad \dot h_3 + n h_1 = u_3       \quad (10)
 
-(the printed "ω" of the roll equation is ω3 and the printed "ḣ1 = u2" is ḣ2: spec §13 flags
-27, 28). The 3n² terms are the gravity-gradient torque. Pitch decouples from roll/yaw. Both
+(the printed "ω" of the roll equation is ω3 and the printed "ḣ1 = u2" is ḣ2: misprints).
+The 3n² terms are the gravity-gradient torque. Pitch decouples from roll/yaw. Both
 axes carry the integral of the CMG momentum (∫h dt: zero mean momentum, so the station settles
 at its torque-equilibrium attitude) and periodic-disturbance rejection filters on the attitude,
 α̈ + (kn)²α = θ (Eq. 12), one per disturbance frequency kn.

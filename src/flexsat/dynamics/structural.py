@@ -24,7 +24,7 @@ linear, so the whole of it is the exactly propagated part: with the state
 
 Input kinds: ``force`` (N), ``torque`` (N m, on a rotation dof) and ``moment_pair`` (a
 piezoelectric patch, seed 004 Eq. 36: equal and opposite moments :math:`\pm a_1 u` at the two
-rotation dofs of an element pair, shared/spec/seed004.md F1). Output kinds: ``displacement``
+rotation dofs of an element pair). Output kinds: ``displacement``
 (m), ``rotation`` (rad) and ``strain``: the relative rotation :math:`\theta_b - \theta_a` of
 the pair times ``gain`` (seed 004 Eq. 37, :math:`y = a_2 M`: with ``gain`` =
 :math:`(t/2)/L_p` the surface strain averaged over a patch of length :math:`L_p`, as

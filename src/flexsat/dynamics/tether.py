@@ -1,6 +1,6 @@
 r"""Tethered subsatellite: the three-degree-of-freedom libration and length dynamics of a point
 mass on a straight massless tether below (or above) a body in a circular orbit (Vadali & Kim,
-AIAA 90-1197; seed 000, Att. 12, L4319-L4333; spec seed000_part2.md §7.3).
+AIAA 90-1197; seed 000, Att. 12, L4319-L4333).
 
 Nondimensional form (seed 000 Eq. 4), τ = Ω t, λ = l/L, T̂ = T/(mΩ²L), F̂ = F/(mΩ²L), ' = d/dτ:
 
@@ -12,12 +12,12 @@ Nondimensional form (seed 000 Eq. 4), τ = Ω t, λ = l/L, T̂ = T/(mΩ²L), F̂
     \phi'' + 2(\lambda'/\lambda)\phi' + \cos\phi\sin\phi[(1+\theta')^2 + 3\cos^2\theta]
         &= \hat F/\lambda
 
-θ is the in-plane pitch, φ the out-of-plane roll (the paper calls it "yaw" once, L4325; spec
-§13 flag 20), l the tether length, T the tension, F the out-of-plane thrust on the subsatellite
+θ is the in-plane pitch, φ the out-of-plane roll (the paper calls it "yaw" once,
+L4325), l the tether length, T the tension, F the out-of-plane thrust on the subsatellite
 of mass m, Ω the orbital rate and L the reference length. With the length rate as the control
 (the tether-rate law, Eq. 24) the first equation is replaced by λ' = u.
 
-The integral of motion (Eq. 8) and its rate (Eq. 9; the thrust term added, spec §7.5):
+The integral of motion (Eq. 8) and its rate (Eq. 9; the thrust term added):
 
 .. math::
 
@@ -113,7 +113,7 @@ def integral_of_motion(theta, phi, theta_rate, phi_rate) -> np.ndarray:
 
 
 def integral_of_motion_rate(x, thrust=0.0) -> np.ndarray:
-    r"""V1' of Eq. 9 with the thrust term φ'F̂/λ (spec §7.5) at x = [λ, θ, φ, λ', θ', φ']."""
+    r"""V1' of Eq. 9 with the thrust term φ'F̂/λ at x = [λ, θ, φ, λ', θ', φ']."""
     lam, ph, dl, dth, dph = x[..., 0], x[..., 2], x[..., 3], x[..., 4], x[..., 5]
     return -2.0 * dl / lam * (dth * (1.0 + dth) * np.cos(ph) ** 2 + dph**2) + dph * thrust / lam
 

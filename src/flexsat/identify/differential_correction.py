@@ -1,5 +1,5 @@
-"""James–Junkins differential correction of substructure scalings (seed 000 Att. 6 Eqs. 3–13;
-spec part 2 §1.3).
+"""James–Junkins differential correction of substructure scalings (James & Junkins, AAS 89-425,
+1989 = Att. 6 of Junkins, Pollock & Rahman 1990, Eqs. 3–13).
 
 Gauss-Newton on all scalings at once, ``P_{i+1} = P_i + (A^T W A)^-1 A^T W dQ``, fitting free
 and forced response together: any of undamped frequencies, mode shapes (subset of dofs,

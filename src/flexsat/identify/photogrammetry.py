@@ -1,6 +1,6 @@
 """Stereo photogrammetry: collinearity camera model, static calibration, dynamic triangulation.
 
-Sources (seed 000, spec part 2 §1.5–1.7 and §3.2–3.3):
+Sources (Att. 6 and 8 of Junkins, Pollock & Rahman 1990):
 
 * Att. 6 (James & Junkins 1989), eqs. (22)–(29): ``u = u0 + du + f_u (C1.d)/(C3.d)`` with a
   (1,2,3) Euler matrix ``C = R3(t3) R2(t2) R1(t1)``, separate ``f_u, f_v`` and Brown distortion.
@@ -11,7 +11,7 @@ Both conventions are supported through ``Camera.euler`` (``"321"`` or ``"123"``)
 ``Camera.focal_sign`` (``-1`` as in Att. 8, ``+1`` as in Att. 6).  ``d = C (p - c)`` is the
 object point in camera axes.
 
-Distortion is Brown's first-order model (spec §1.5: the printed eqs. (25)–(26) are garbled),
+Distortion is Brown's first-order model (the printed eqs. (25)–(26) are garbled),
 evaluated on the *ideal* centred image coordinates ``ub = s fx d1/d3``, ``vb = s fy d2/d3``:
 
     du = ub (k1 r^2 + k2 r^4) + p1 (r^2 + 2 ub^2) + 2 p2 ub vb
@@ -574,7 +574,7 @@ def calibrate(
     if scale is None and tsig is None:
         raise ValueError(
             "scale: a known distance (i, j, distance) is required; the datum "
-            "leaves the overall scale undetermined (spec §3.3)"
+            "leaves the overall scale undetermined"
         )
     if scale is not None:
         si, sj, sd, ssig = _check_scale(scale, n_pts)

@@ -1,7 +1,7 @@
 """Single-axis frequency-shaped optimal rest-to-rest slew, solved exactly by the Hamiltonian
-matrix exponential (seed 003, Chun, Turner & Juang; spec ``seed003.md`` §2.3-2.5).
+matrix exponential (EPS slew study c. 1989, after Chun, Turner & Juang 1987).
 
-Problem (spec §2.5, "Derived single-axis closed-form problem"; a principal axis, so G(ω) = 0).
+Problem (the single-axis closed form; a principal axis, so G(ω) = 0).
 State ``x = [θ, ω, u1, u2]`` with the normalized torque ``u1 = u / I`` [rad/s²], its rate ``u2``
 and the control ``u3 = u̇2``::
 
@@ -10,26 +10,26 @@ and the control ``u3 = u̇2``::
     J = ½ ∫_0^T [ q ω² + (u1 + u3/ω_B²)² + (4 ζ_B²/ω_B²) u2² ] dt              (15)
 
 The running cost is the time-domain form of the frequency weight |W(jω)|² on the torque with the
-two-pole shaping filter ``W(s) = 1 + 2 ζ_B s/ω_B + s²/ω_B²`` (spec §2.3 "Recommendation"):
+two-pole shaping filter ``W(s) = 1 + 2 ζ_B s/ω_B + s²/ω_B²`` (the damped reading):
 ``|W(u1)|² = (u1 + ü1/ω_B²)² + 4ζ_B² u̇1²/ω_B² + d/dt(...)``, the total derivatives vanishing
-because u1 = u2 = 0 at both ends.  ``ζ_B = 0`` is the paper's literal weight (s = +1 in the spec:
+because u1 = u2 = 0 at both ends.  ``ζ_B = 0`` is the paper's literal weight (s = +1:
 penalty (1 - ω²/ω_B²)², zero at ω_B, so the torque rings at ω_B); ``ζ_B = 1`` is the damped
-reading (penalty (1 + ω²/ω_B²)², the spec's s = -1 form up to boundary terms).
+reading (penalty (1 + ω²/ω_B²)², the s = -1 form up to boundary terms).
 
-Costates ``[p, λ, μ1, μ2]`` and the optimal control (spec §2.4 Eqs. 17-20, single axis)::
+Costates ``[p, λ, μ1, μ2]`` and the optimal control (Eqs. 17-20, single axis)::
 
     H  = ½ L + p ω + λ u1 + μ1 u2 + μ2 u3
     ṗ = 0,  λ̇ = -q ω - p,  μ̇1 = ω_B² μ2 - λ,  μ̇2 = -(4ζ_B²/ω_B²) u2 - μ1    (16)-(19)
     u3 = -ω_B² (u1 + ω_B² μ2)                                                  (20)
 
 so ``z = [x, costates]`` obeys the linear Hamiltonian system ``ż = K z`` and
-``z(T) = e^{KT} z(0)`` (Eq. 21).  Boundary conditions (spec §2.4): θ(0) = 0, θ(T) = Θ and
+``z(T) = e^{KT} z(0)`` (Eq. 21).  Boundary conditions: θ(0) = 0, θ(T) = Θ and
 ω = u1 = u2 = 0 at both ends.
 
 Solution.  Single shooting partitions ``Φ = e^{KT}`` and solves ``Φ_xp p(0) = x_T - Φ_xx x_0``
-for the initial costates (the "standard partitioned matrix solution", spec §2.5).  With ζ_B > 0
+for the initial costates (the "standard partitioned matrix solution").  With ζ_B > 0
 the Hamiltonian has eigenvalues with real part ±ζ_B ω_B (±ω_B for ζ_B = 1), so Φ_xp grows like
-e^{ζ_B ω_B T} and is ill conditioned once ω_B T ≳ 15 (spec §2.3).  When ``cond(Φ_xp)`` exceeds
+e^{ζ_B ω_B T} and is ill conditioned once ω_B T ≳ 15.  When ``cond(Φ_xp)`` exceeds
 ``cond_limit``, or one interval would be too long for an accurate exponential, the problem is
 solved instead by multiple shooting: the knots ``z_k`` of N equal segments are the unknowns of
 one sparse block system ``e^{Kh} z_k - z_{k+1} = 0`` plus the eight boundary conditions, each
@@ -43,11 +43,11 @@ raw K holds ω_B⁴ next to 1.
 
 Also propagated in those scaled variables (``FrequencyShapedSlew.z``), from the knot below t.
 
-The spec's observation (§2.3 [VERIFIED]) that with ζ_B = 0, q = 0, T = 10 s, u1 changes sign 5
+The observation that with ζ_B = 0, q = 0, T = 10 s, u1 changes sign 5
 times at ω_B = 2.5 rad/s and 13 times at 5 rad/s is reproduced by this formulation (tested);
 with ζ_B = 1 it changes sign once.
 
-Limits (spec §2.5).  ω_B → ∞ with q = 0 gives the minimum-energy torque 6IΘ/T²(1 - 2t/T) only for
+Limits.  ω_B → ∞ with q = 0 gives the minimum-energy torque 6IΘ/T²(1 - 2t/T) only for
 ζ_B > 0: the forced zero torque at the ends costs a boundary layer of width ~1/ω_B and a peak
 deficit O(1/(ω_B T)) (0.4 % at ω_B T = 2000).  With the literal ζ_B = 0 the ringing at ω_B is free
 (zero penalty), so it absorbs the jump of the minimum-energy torque at the ends and keeps its
@@ -85,7 +85,7 @@ _LOG_OVERFLOW = 700.0  # e^{700} ~ 1e304: beyond it e^{KT} is not representable 
 def hamiltonian_matrix(omega_b: float, zeta_b: float = 0.0, q: float = 0.0) -> FloatArray:
     """The 8×8 matrix K of ``ż = K z``, ``z = [θ, ω, u1, u2, p, λ, μ1, μ2]`` (SI).
 
-    Eqs. (12)-(14) with u3 from (20), and the costate Eqs. (16)-(19) of spec seed003.md §2.4-2.5
+    Eqs. (12)-(14) with u3 from (20), and the costate Eqs. (16)-(19) of the paper
     in the general ζ_B form (see the module docstring).
     """
     wb2 = omega_b * omega_b
@@ -115,7 +115,7 @@ def hamiltonian(
     zeta_b: float = 0.0,
     q: float = 0.0,
 ) -> FloatArray:
-    """H = ½ L + p ω + λ u1 + μ1 u2 + μ2 u3 (spec §2.4) for any u3, on arrays ``(..., 4)``.
+    """H = ½ L + p ω + λ u1 + μ1 u2 + μ2 u3 for any u3, on arrays ``(..., 4)``.
 
     Kept a function of an arbitrary u3 so that its gradients give the costate equations
     (-∂H/∂x) and the stationarity condition (∂H/∂u3 = 0 at Eq. 20).

@@ -1,6 +1,6 @@
 r"""Three-axis frequency-shaped optimal rest-to-rest slew of a rigid spacecraft: the nonlinear
-two-point boundary-value problem of seed 003 (Chun & Turner 1988; spec ``seed003.md`` §2.2-2.5,
-Eqs. 12-20, features F5-F7), solved by continuation from the single-axis solution.
+two-point boundary-value problem of seed 003 (Chun & Turner 1988; EPS slew study c. 1989,
+Eqs. 12-20), solved by continuation from the single-axis solution.
 
 Problem.  State ``x = [β(4), ω(3), u1(3), u2(3)]`` (Euler parameters, body rate, normalized
 torque ``u1 = I⁻¹τ`` [rad/s²] and its rate), control ``u3 = u̇2``::
@@ -9,10 +9,10 @@ torque ``u1 = I⁻¹τ`` [rad/s²] and its rate), control ``u3 = u̇2``::
 
     J = ½ ∫ [ ωᵀQω + |u1 + u3/ω_B²|² + (4ζ_B²/ω_B²)|u2|² ] dt                          (15)
 
-the time-domain form of the shaping weight W(s) = 1 + 2ζ_B s/ω_B + s²/ω_B² on the torque (spec
-§2.3 "Recommendation"; ζ_B = 0 is the paper's literal weight, ζ_B = 1 the damped reading; see
+the time-domain form of the shaping weight W(s) = 1 + 2ζ_B s/ω_B + s²/ω_B² on the torque
+(ζ_B = 0 is the paper's literal weight, ζ_B = 1 the damped reading; see
 :mod:`flexsat.maneuvers.frequency_shaped_slew`).  With the costates γ(4), λ(3), μ1(3), μ2(3)
-and ``H = ½L + γᵀΩ(ω)β + λᵀ(u1 + G(ω)) + μ1ᵀu2 + μ2ᵀu3`` (spec §2.4)::
+and ``H = ½L + γᵀΩ(ω)β + λᵀ(u1 + G(ω)) + μ1ᵀu2 + μ2ᵀu3``::
 
     γ̇ = Ω(ω) γ                                                                      (16)
     λ̇ = −Qω − B(β)ᵀγ + (Iω)~ I⁻¹λ − I ω̃ I⁻¹λ                                         (17)
@@ -20,12 +20,12 @@ and ``H = ½L + γᵀΩ(ω)β + λᵀ(u1 + G(ω)) + μ1ᵀu2 + μ2ᵀu3`` (spec 
     μ̇2 = −(4ζ_B²/ω_B²) u2 − μ1                                                       (19)
     u3 = −ω_B² (u1 + ω_B² μ2)   (∂H/∂u3 = 0)                                          (20)
 
-Boundary conditions (spec §2.4): β(0) = [1, 0, 0, 0], ω = u1 = u2 = 0 at both ends, β_1..3(T)
+Boundary conditions: β(0) = [1, 0, 0, 0], ω = u1 = u2 = 0 at both ends, β_1..3(T)
 = the target (|β| is a first integral, so the fourth condition would be redundant) and the
 gauge γ(0)ᵀβ(0) = 0 (γᵀβ is also a first integral and γ ∝ β a null direction of the problem):
 26 ODEs, 14 + 12 boundary conditions.
 
-Continuation (spec §2.5).  ``a1`` multiplies the products of inertia (and the off-diagonal
+Continuation.  ``a1`` multiplies the products of inertia (and the off-diagonal
 entries of Q, so that the a1 = 0 problem decouples exactly), ``a2`` the terminal 1-2-3 Euler
 angles of the two non-selected axes.  At a1 = a2 = 0 the slew is a rotation about the principal
 axis k by θ_k, solved exactly by :func:`~flexsat.maneuvers.frequency_shaped_slew` and mapped by
@@ -132,7 +132,7 @@ def hamiltonian(
     zeta_b: float = 0.0,
     Q: npt.ArrayLike | None = None,
 ) -> FloatArray:
-    """H = ½L + γᵀΩ(ω)β + λᵀ(u1 + G(ω)) + μ1ᵀu2 + μ2ᵀu3 (spec §2.4) for any u3, on arrays
+    """H = ½L + γᵀΩ(ω)β + λᵀ(u1 + G(ω)) + μ1ᵀu2 + μ2ᵀu3 for any u3, on arrays
     ``state, costate (..., 13)``, ``u3 (..., 3)``.
 
     Kept a function of an arbitrary u3 so that its gradients give the costate equations (−∂H/∂x)
@@ -355,7 +355,7 @@ class ThreeAxisSlew:
         )
 
     def boundary_error(self) -> float:
-        """Largest residual of the boundary conditions (spec §2.4) and of the continuity of the
+        """Largest residual of the boundary conditions and of the continuity of the
         trajectory at the segment joins, from the evaluated trajectory, each relative to its
         natural size: β to 1; ω, u1, u2 to φ/T, φ/T², (φ/T³)·max(1, ω_B T) (φ the principal
         angle of the target; u2 rises on the time scale 1/ω_B); the gauge γᵀβ to |γ|; a join
@@ -401,7 +401,7 @@ def three_axis_slew(
     max_newton: int = _MAX_NEWTON,
 ) -> ThreeAxisSlew:
     """Frequency-shaped optimal rest-to-rest slew of a rigid body from the identity attitude to
-    ``target`` in time T (module docstring; spec seed003.md §2.2-2.5).
+    ``target`` in time T (module docstring; EPS slew study c. 1989, Eqs. 12-20).
 
     Parameters
     ----------

@@ -13,9 +13,9 @@ SI units throughout: rad, kg m^2, N m, s; a parameter may also be a pint Quantit
 
 Sources
 -------
-seed 000_7bfdb62d2eacc22a.txt, Att. 3 Eqs. 12-16: Junkins, Rahman & Bang, smoothed bang-bang.
-seed 001_79dfdfba94ed8e0d.txt, Eqs. 25-37: Hailey, Sortun & Agrawal (NPS flexible spacecraft
-simulator), pseudo-square and sinusoidal torque shaping.
+Junkins, Pollock & Rahman 1990, Att. 3 Eqs. 12-16: Junkins, Rahman & Bang, smoothed bang-bang.
+Hailey, Sortun & Agrawal c. 1992, Eqs. 25-37 (NPS flexible spacecraft simulator), pseudo-square
+and sinusoidal torque shaping. Full references: :func:`flexsat.references.references`.
 """
 
 from __future__ import annotations
@@ -214,7 +214,7 @@ def _slew(
 class BangBang(TorqueShape):
     """Minimum-time bang-bang slew, ``T^2 = 4 I |angle| / u_max``.
 
-    The ``alpha = 0`` case of Att. 3 Eq. 16 (seed 000_7bfdb62d2eacc22a.txt): ``u = +u_max`` on
+    The ``alpha = 0`` case of Att. 3 Eq. 16 (Junkins, Pollock & Rahman 1990): ``u = +u_max`` on
     ``[0, T/2)``, ``-u_max`` on ``[T/2, T)`` (sign of ``angle``).
 
     Parameters
@@ -254,7 +254,7 @@ class BangBang(TorqueShape):
 
 
 class SmoothBangBang(TorqueShape):
-    """Junkins smoothed bang-bang slew (seed 000_7bfdb62d2eacc22a.txt, Att. 3 Eqs. 12-16).
+    """Junkins smoothed bang-bang slew (Junkins, Pollock & Rahman 1990, Att. 3 Eqs. 12-16).
 
     ``u = sign(angle) u_max f(t)`` with ``dt = alpha T``, ``t1 = T/2 - dt``, ``t2 = T/2 + dt``,
     ``t3 = T - dt`` and the cubic smoothstep ``h(x) = x^2 (3 - 2x)``::
@@ -409,7 +409,7 @@ def _smooth_table(
 
 
 class PseudoSquare(TorqueShape):
-    """NPS pseudo-square torque (seed 001_79dfdfba94ed8e0d.txt, Eqs. 25-26).
+    """NPS pseudo-square torque (Hailey, Sortun & Agrawal c. 1992, Eqs. 25-26).
 
     ``u = sign(angle) u_max f(t)`` with period ``P = duration`` and rise time ``t_r``::
 
@@ -490,7 +490,7 @@ class PseudoSquare(TorqueShape):
 
 
 class Sinusoidal(TorqueShape):
-    """NPS sinusoidal torque (seed 001_79dfdfba94ed8e0d.txt, Eqs. 27-37).
+    """NPS sinusoidal torque (Hailey, Sortun & Agrawal c. 1992, Eqs. 27-37).
 
     ``I theta'' = sign(angle) A sin(2 pi t / P)`` over one period ``P = duration``, with
     ``A = u_max = 2 pi I |angle| / P^2`` (Eq. 36) and ``P = sqrt(2 pi I |angle| / A)`` (Eq. 37).

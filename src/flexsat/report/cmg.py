@@ -2,8 +2,8 @@
 ``results.nc``, figures and ``index.html``.
 
 ``kind: cmg``: per run the gimbal angles, the gain det(CCᵀ) and the momentum against the
-envelope along the demand, and the V1–V8 table (published against computed, seed000_part2.md
-§11). ``results.nc`` holds over ``run`` × ``sample``: ``time`` (s), ``gimbal_angles`` (rad),
+envelope along the demand, and the V1–V8 table (published against computed).
+``results.nc`` holds over ``run`` × ``sample``: ``time`` (s), ``gimbal_angles`` (rad),
 ``momentum`` (rotor momenta), ``gain``, and ``initial_angles``, ``outcome``.
 
 ``kind: cmg_station``: the attitude (roll, pitch, yaw), the CMG momentum and the torques of the
@@ -125,7 +125,7 @@ def cmg_sections(result, records: list[dict], figures: list[str]) -> str:
     body = f"""<h2>Runs</h2>
 {html_table(["run", "outcome", "σ(0) (deg)"], outcomes)}
 {_metrics_html(records)}
-<h2>Validation V1–V8 (seed000_part2.md §11), computed live</h2>
+<h2>Validation V1–V8 (Vadali, Oh &amp; Walker, published), computed live</h2>
 {html_table(["id", "quantity", "published", "computed", "unit"], v_rows)}
 <ul>{notes}</ul>
 <h2>Figures</h2>

@@ -2,7 +2,7 @@
 (length, pitch and roll, tension or reel rate and thrust, the integral of motion V1, all against
 time in orbits) and ``index.html`` with the metrics of every run and, for runs that are one of
 Vadali & Kim's examples (same law, gains, final length and start), the published numbers beside
-the measured ones (spec seed000_part2.md §11 V10-V13, V15).
+the measured ones (Figs. 2-8 and their text, Att. 12 of Junkins, Pollock & Rahman 1990).
 
 ``results.nc`` holds, over ``run`` × ``time`` (s; coordinate ``orbits``): ``length`` (m),
 ``pitch``, ``roll`` (rad), ``tension`` (N; NaN for rate-law runs), ``reel_rate`` (m/s; NaN for

@@ -1,6 +1,6 @@
 """CMG scenarios (issue 14): ``kind: cmg``, gimbal steering of the SGCMG pyramid from chosen
 initial sets under torque demands, and ``kind: cmg_station``, the space-station momentum
-management with the CMG loop (Vadali, Oh & Walker; seed000_part2.md §8, V1–V9)::
+management with the CMG loop (Vadali, Oh & Walker; Junkins, Pollock & Rahman 1990, L4533-L4830)::
 
     kind: cmg
     name: Preferred gimbal angles, pseudo-inverse steering
@@ -555,7 +555,7 @@ class CmgKind(ScenarioKind):
         notes = (
             "Demands are the paper's T = ḣ (Eq. 5) in rotor momenta per second; the spacecraft "
             "feels −ḣ. The paper's V3 singular set [−90, 0, −90, 0]° is a misprint for "
-            "[−90, 0, 90, 0]° (spec §13 flag 26).",
+            "[−90, 0, 90, 0]°.",
         )
         return CmgResult(scenario, tuple(runs), table, SOURCE, notes)
 

@@ -361,10 +361,9 @@ class PPFKind(ScenarioKind):
             f"Filters tuned to the three modes with ζ_f = {p.zeta_f:g}; Q_u = {p.Q_u:g}; "
             f"initial tip error |Eᵗ| = {100 * p.amplitude:g} cm in the first mode (three-mode "
             "runs: each mode with that modal energy, random signs in the cost, all pushing the "
-            "tip along +n̂_1 in the responses). The paper gives none of these (spec seed004.md "
-            "§1.3).",
+            "tip along +n̂_1 in the responses). The paper gives none of these.",
             "The 'paper' goal is J_goal/J_init as implied by the published table of the same "
-            "case (J_opt = 0.9 J_goal + 0.1 J_init, spec §3.2): slightly above 1, so the "
+            "case (J_opt = 0.9 J_goal + 0.1 J_init, the γ stop of L345): slightly above 1, so the "
             "homotopy raises J. On this model ∂J/∂g < 0 (more PPF gain, more damping), so the "
             "gains move down, barely: the published gains' 10³-fold growth is not reproduced.",
         )

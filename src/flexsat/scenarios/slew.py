@@ -1,7 +1,7 @@
 """Slew scenarios (``kind: slew``): a frequency-shaped optimal three-axis slew of a flexible
 spacecraft with gain-scheduled perturbation feedback, judged against the seed 003 goals.
 
-The method of seed 003 (notes ../shared/spec/seed003.md §2.2–§2.8, §3.2): a rigid-body optimal
+The method of the EPS slew study c. 1989 (after Chun, Turner & Juang 1987): a rigid-body optimal
 nominal maneuver (:func:`~flexsat.maneuvers.three_axis_slew.three_axis_slew`, the TPBVP solved
 by continuation) is applied open loop to the flexible plant, and perturbation feedback designed
 on a reduced flexible model linearised along the nominal (frequency-shaped LQR with cross

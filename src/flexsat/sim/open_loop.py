@@ -20,8 +20,8 @@ Written in σ, the coefficients carry no inverse powers of h_j, so rise times �
 smoothed bang-bang) stay exact; a zero-length piece leaves the state unchanged.
 
 Used for the seed 000 trade surfaces (:mod:`flexsat.design.trade_surfaces`): the open-loop
-flexible response to the smoothed bang-bang torque (Att. 3 Eq. 12 of seed
-000_7bfdb62d2eacc22a.txt), whose pieces :func:`torque_pieces` gives exactly.
+flexible response to the smoothed bang-bang torque (Att. 3 Eq. 12 of
+Junkins, Pollock & Rahman 1990), whose pieces :func:`torque_pieces` gives exactly.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ _SMOOTH_PIECES = np.array(
 def torque_pieces(shape) -> tuple[np.ndarray, np.ndarray]:
     """Breaks and σ-polynomial coefficients of a smoothed bang-bang (or bang-bang) torque.
 
-    Att. 3 Eq. 12 (seed 000_7bfdb62d2eacc22a.txt): with Δt = αT, t1 = T/2 − Δt, t2 = T/2 + Δt,
+    Att. 3 Eq. 12 (Junkins, Pollock & Rahman 1990): with Δt = αT, t1 = T/2 − Δt, t2 = T/2 + Δt,
     t3 = T − Δt, u = sign(angle) u_max f with f = h(t/Δt), 1, 1 − 2h((t − t1)/(2Δt)), −1,
     −1 + h((t − t3)/Δt), h(x) = x²(3 − 2x). α = 0 (bang-bang) leaves three zero-length pieces.
 

@@ -1,5 +1,5 @@
-r"""Performance goals of a finite-time slew (seed 003 L792–L801; notes
-../shared/spec/seed003.md §1.3 and F16).
+r"""Performance goals of a finite-time slew (EPS slew study c. 1989,
+L792–L801).
 
 The paper judges each closed-loop slew of the Earth Pointing Satellite against three goals:
 
