@@ -74,7 +74,7 @@ from flexsat.dynamics.attitude import (
     require_shape,
 )
 from flexsat.dynamics.rigid_body import require_inertia
-from flexsat.input_checks import require_finite, require_positive, set_si
+from flexsat.input_checks import FieldError, require_finite, require_positive, set_si
 
 __all__ = ["GibbsLyapunovLaw", "MRPLaw", "QuaternionPD", "error_quaternion"]
 
@@ -114,9 +114,10 @@ def _error(b, r):
 def _per_axis(value, name: str) -> np.ndarray:
     value = np.asarray(value, float)
     if value.ndim and value.shape[-1] != 3:
-        raise ValueError(
-            f"{name}: per-axis gains must be a scalar or have last axis 3 (body "
-            f"axes 1, 2, 3; leading axes are cases), got shape {value.shape}"
+        raise FieldError(
+            name,
+            "per-axis gains must be a scalar or have last axis 3 (body "
+            f"axes 1, 2, 3; leading axes are cases), got shape {value.shape}",
         )
     return value
 
@@ -201,9 +202,10 @@ class GibbsLyapunovLaw(_AttitudeLaw):
         """Gibbs parameters q = l tan(φ/2) of the error (shape (..., 3)); refused at 180°."""
         e = _error(np.asarray(beta, float), self.beta_target)
         if np.any(np.abs(e[..., 0]) < SINGULAR_TOL):
-            raise ValueError(
-                f"attitude: the Gibbs law is singular at a 180° error (|β0| < "
-                f"{SINGULAR_TOL:g}); start below 180°, where U keeps the motion"
+            raise FieldError(
+                "attitude",
+                "the Gibbs law is singular at a 180° error (|β0| < "
+                f"{SINGULAR_TOL:g}); start below 180°, where U keeps the motion",
             )
         return e[..., 1:] / e[..., :1]
 
@@ -320,9 +322,10 @@ class QuaternionPD(_AttitudeLaw):
     def lyapunov(self, beta, w, inertia) -> np.ndarray:
         r"""V = ½ ωᵀIω + 2K_p(1 − |δβ0|) (J), for a scalar K_p and ω_ref = 0."""
         if np.ndim(self.Kp) and np.shape(self.Kp)[-1] == 3 or np.any(self.w_ref != 0):
-            raise ValueError(
-                "Kp: the Lyapunov function V = ½ωᵀIω + 2Kp(1 − |δβ0|) needs a "
-                "gain equal on every axis and w_ref = 0"
+            raise FieldError(
+                "Kp",
+                "the Lyapunov function V = ½ωᵀIω + 2Kp(1 − |δβ0|) needs a "
+                "gain equal on every axis and w_ref = 0",
             )
         beta, w = self._measured(beta, w)
         return self._kinetic(w, inertia) + 2 * self.Kp * (1 - self.error(beta)[..., 0])

@@ -23,7 +23,7 @@ import numpy as np
 
 from flexsat.control.base import Controller
 from flexsat.dynamics import cmg
-from flexsat.input_checks import require_finite
+from flexsat.input_checks import FieldError, require_finite
 
 __all__ = ["NullMotionSteering", "PseudoInverseSteering"]
 
@@ -34,15 +34,15 @@ def _torque_history(torque) -> Callable:
     if not callable(torque):
         tq = require_finite(torque, "torque")
         if tq.shape != (3,):
-            raise ValueError(f"torque: must have 3 components, got shape {tq.shape}")
+            raise FieldError("torque", f"must have 3 components, got shape {tq.shape}")
         return lambda _t: tq
 
     def torque_at(t):
         value = require_finite(torque(t), "torque")
         if value.shape != (3,):
-            raise ValueError(
-                f"torque: the callable must return 3 components, got shape "
-                f"{value.shape} at t = {t!r} s"
+            raise FieldError(
+                "torque",
+                f"the callable must return 3 components, got shape {value.shape} at t = {t!r} s",
             )
         return value
 
@@ -93,14 +93,14 @@ class PseudoInverseSteering(_GimbalLaw):
         self.torque_at = _torque_history(torque)
         self.alpha = float(require_finite(alpha, "alpha"))
         if self.alpha < 0:
-            raise ValueError(f"alpha: must be >= 0, got {alpha!r}")
+            raise FieldError("alpha", f"must be >= 0, got {alpha!r}")
         _, self.a, self.b = cmg.pyramid_axes(self.n_units, self.skew)
         self.null_target = None
         if null_target is not None:
             target = require_finite(null_target, "null_target", "rad")
             if target.shape != (self.n_units,):
-                raise ValueError(
-                    f"null_target: one gimbal set ({self.n_units},), got shape {target.shape}"
+                raise FieldError(
+                    "null_target", f"one gimbal set ({self.n_units},), got shape {target.shape}"
                 )
             self.null_target = target
         self.null_gain, self.null_alpha = null_gain, null_alpha
@@ -143,13 +143,13 @@ class NullMotionSteering(_GimbalLaw):
         super().__init__(skew, n_units)
         self.sigma_target = require_finite(target, "sigma_target", "rad")
         if self.sigma_target.shape != (self.n_units,):
-            raise ValueError(
-                f"sigma_target: one gimbal set ({self.n_units},), got shape "
-                f"{self.sigma_target.shape}"
+            raise FieldError(
+                "sigma_target",
+                f"one gimbal set ({self.n_units},), got shape {self.sigma_target.shape}",
             )
         self.gain_k = float(require_finite(gain_k, "gain_k", "1/s"))
         if self.gain_k <= 0:
-            raise ValueError(f"gain_k: must be > 0, got {gain_k!r}")
+            raise FieldError("gain_k", f"must be > 0, got {gain_k!r}")
         self.alpha = alpha
 
     def __call__(self, t, y, state):

@@ -51,6 +51,7 @@ from flexsat.control.lqr import (
     check_square,
     solve_riccati,
 )
+from flexsat.input_checks import FieldError
 
 __all__ = [
     "RefinedEstimator",
@@ -72,7 +73,8 @@ _KALMAN_LABELS = {
     "detectable": "(A, G Qn^½) is not stabilizable: the process noise does not excite "
     "eigenvalue(s) {} of A (on or outside the stability boundary), so no "
     "stabilizing filter exists",
-    "joint": "Nn: the joint noise intensity [[Qn, Nn], [Nnᵀ, Rn]] must be positive "
+    "joint_field": "Nn",
+    "joint": "the joint noise intensity [[Qn, Nn], [Nnᵀ, Rn]] must be positive "
     "semi-definite, but Qn − Nn Rn⁻¹ Nnᵀ has smallest eigenvalue {:.3g}",
 }
 
@@ -93,7 +95,9 @@ def _filter(A, G, C, Qn, Rn, Nn, discrete: bool) -> RiccatiSolution:
         lam = np.linalg.eigvalsh(0.5 * (joint + joint.T))
         scale = max(np.abs(np.linalg.eigvalsh(Qn)).max(), np.finfo(float).tiny)
         if lam.min() < -WEIGHT_TOL * scale:
-            raise ValueError(_KALMAN_LABELS["joint"].format(lam.min()))
+            raise FieldError(
+                _KALMAN_LABELS["joint_field"], _KALMAN_LABELS["joint"].format(lam.min())
+            )
         NG = G @ Nn
     W = G @ Qn @ G.T
     W = 0.5 * (W + W.T)
@@ -205,12 +209,14 @@ def _mask(keep, n: int) -> np.ndarray:
     arr = np.asarray(keep)
     if arr.dtype == bool:
         if arr.shape != (n,):
-            raise ValueError(f"keep: a boolean mask must have shape ({n},), got {arr.shape}")
+            raise FieldError("keep", f"a boolean mask must have shape ({n},), got {arr.shape}")
         return arr.copy()
     if arr.ndim != 1 or arr.size == 0 or not np.issubdtype(arr.dtype, np.integer):
-        raise ValueError(f"keep: must be state indices (integers) or a boolean mask, got {keep!r}")
+        raise FieldError(
+            "keep", f"must be state indices (integers) or a boolean mask, got {keep!r}"
+        )
     if np.any(arr < 0) or np.any(arr >= n):
-        raise ValueError(f"keep: indices must be in 0 … {n - 1}, got {arr.tolist()}")
+        raise FieldError("keep", f"indices must be in 0 … {n - 1}, got {arr.tolist()}")
     mask = np.zeros(n, dtype=bool)
     mask[arr] = True
     return mask

@@ -41,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from flexsat.input_checks import require_finite
+from flexsat.input_checks import FieldError, require_finite
 
 __all__ = ["decoupled_input_map", "moment_free_forces"]
 
@@ -64,13 +64,14 @@ def moment_free_forces(moments) -> np.ndarray:
     """
     G = require_finite(moments, "moments")
     if G.ndim != 2 or G.shape[0] != 3 or G.shape[1] == 0:
-        raise ValueError(f"moments: must have shape (3, n_F) with n_F >= 1, got {G.shape}")
+        raise FieldError("moments", f"must have shape (3, n_F) with n_F >= 1, got {G.shape}")
     Z = scipy.linalg.null_space(G)
     if Z.shape[1] == 0:
-        raise ValueError(
-            f"moments: the {G.shape[1]} forces have no combination with zero net "
+        raise FieldError(
+            "moments",
+            f"the {G.shape[1]} forces have no combination with zero net "
             f"moment (rank {np.linalg.matrix_rank(G)} = n_F): decoupled forces "
-            f"would all be zero; add force actuators (pairs with opposite moments)"
+            f"would all be zero; add force actuators (pairs with opposite moments)",
         )
     return Z
 

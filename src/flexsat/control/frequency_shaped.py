@@ -54,7 +54,13 @@ import numpy as np
 
 from flexsat.control.lqg import DEFAULT_MEASUREMENTS, EstimatorController, zoh
 from flexsat.control.lqr import RiccatiSolution, check_matrix, check_psd, check_square, lqr
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 
 __all__ = [
     "FrequencyShapedController",
@@ -165,7 +171,7 @@ class FrequencyShapedDesign:
         n = self.A.shape[0]
         d = require_finite(d, "d")
         if d.shape != (n,):
-            raise ValueError(f"d: must have shape (n,) = ({n},), got {d.shape}")
+            raise FieldError("d", f"must have shape (n,) = ({n},), got {d.shape}")
         return self.disturbance_gain @ d
 
     def controller(self, C, L, dt, **kwargs) -> FrequencyShapedController:
@@ -210,8 +216,8 @@ def frequency_shaped_lqr(
     R = check_psd(check_matrix(R, "R", m, m, f"(m, m) = ({m}, {m})"), "R", strict=True)
     order = require_count(order, "order")
     if order not in (1, 2):
-        raise ValueError(
-            f"order: must be 1 (control rate) or 2 (rate and acceleration), got {order}"
+        raise FieldError(
+            "order", f"must be 1 (control rate) or 2 (rate and acceleration), got {order}"
         )
     wb = float(require_positive(break_frequency, "break_frequency", "rad/s"))
     zb = float(require_nonneg(damping, "damping", ""))

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.input_checks import require_finite
+from flexsat.input_checks import FieldError, require_finite
 
 __all__ = [
     "LinearLaw",
@@ -57,19 +57,19 @@ def _names(names, field: str) -> tuple[str, ...]:
     names = tuple(names)
     for name in names:
         if not isinstance(name, str) or not name.isidentifier():
-            raise ValueError(f"{field}: channel names must be identifiers, got {name!r}")
+            raise FieldError(field, f"channel names must be identifiers, got {name!r}")
     if len(set(names)) != len(names):
-        raise ValueError(f"{field}: channel names must be distinct, got {names!r}")
+        raise FieldError(field, f"channel names must be distinct, got {names!r}")
     return names
 
 
 def _sizes(sizes, names, field: str) -> tuple[int, ...]:
     sizes = tuple(sizes)
     if len(sizes) != len(names):
-        raise ValueError(f"{field}: give one width per channel of {names!r}, got {sizes!r}")
+        raise FieldError(field, f"give one width per channel of {names!r}, got {sizes!r}")
     for s in sizes:
         if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 1:
-            raise ValueError(f"{field}: widths must be positive integers, got {sizes!r}")
+            raise FieldError(field, f"widths must be positive integers, got {sizes!r}")
     return tuple(int(s) for s in sizes)
 
 
@@ -128,7 +128,7 @@ class LinearLaw:
             arr = require_finite(getattr(self, name), name)
             ndim = 3 if name in ("y_ref", "u_ff", "K0") else 4
             if arr.ndim != ndim:
-                raise ValueError(f"{name}: must have {ndim} axes, got shape {arr.shape}")
+                raise FieldError(name, f"must have {ndim} axes, got shape {arr.shape}")
             arrays[name] = arr
         nk = arrays["Ak"].shape[-1]
         n_t = arrays["y_ref"].shape[0]
@@ -145,21 +145,22 @@ class LinearLaw:
         for name, arr in arrays.items():
             tail = tails[name]
             if arr.shape[-len(tail) :] != tail:
-                raise ValueError(
-                    f"{name}: trailing axes must be {tail} (nk = {nk}, p = {p} from "
-                    f"reads, m = {m} from writes), got shape {arr.shape}"
+                raise FieldError(
+                    name,
+                    f"trailing axes must be {tail} (nk = {nk}, p = {p} from "
+                    f"reads, m = {m} from writes), got shape {arr.shape}",
                 )
             c = arr.shape[-len(tail) - 1]
             if c not in (1, n_cases):
-                raise ValueError(f"{name}: case axis must be 1 or n_cases = {n_cases}, got {c}")
+                raise FieldError(name, f"case axis must be 1 or n_cases = {n_cases}, got {c}")
             if name in ("y_ref", "u_ff"):
                 if arr.shape[0] != n_t:
-                    raise ValueError(
-                        f"{name}: time axis must be n_t = {n_t} (that of y_ref), got {arr.shape[0]}"
+                    raise FieldError(
+                        name, f"time axis must be n_t = {n_t} (that of y_ref), got {arr.shape[0]}"
                     )
             elif name != "K0" and arr.shape[0] not in (1, n_t):
-                raise ValueError(
-                    f"{name}: time axis must be 1 (constant) or n_t = {n_t}, got {arr.shape[0]}"
+                raise FieldError(
+                    name, f"time axis must be 1 (constant) or n_t = {n_t}, got {arr.shape[0]}"
                 )
             if arr.flags.writeable:  # a caller's array: freeze a copy, not theirs
                 arr = arr.copy()
@@ -208,12 +209,12 @@ def run_linear_law(law: LinearLaw, Y) -> np.ndarray:
     """
     Y = require_finite(Y, "Y")
     if Y.ndim != 3 or Y.shape[0] != law.n_t or Y.shape[2] != law.p:
-        raise ValueError(
-            f"Y: must have shape (n_t, n_cases, p) = ({law.n_t}, n_cases, {law.p}), got {Y.shape}"
+        raise FieldError(
+            "Y", f"must have shape (n_t, n_cases, p) = ({law.n_t}, n_cases, {law.p}), got {Y.shape}"
         )
     nc = max(Y.shape[1], law.n_cases)
     if Y.shape[1] not in (1, nc) or law.n_cases not in (1, nc):
-        raise ValueError(f"Y: has {Y.shape[1]} cases, the law {law.n_cases}")
+        raise FieldError("Y", f"has {Y.shape[1]} cases, the law {law.n_cases}")
     U = np.empty((law.n_t, nc, law.m))
     xi = np.zeros((nc, law.n_states))
 
@@ -352,9 +353,9 @@ def channel_spec(items, field: str):
             sizes.append(item.size)
             units.append(item.unit)
         else:
-            raise ValueError(f"{field}: give channel names or Channels, got {item!r}")
+            raise FieldError(field, f"give channel names or Channels, got {item!r}")
     if not names:
-        raise ValueError(f"{field}: give at least one channel")
+        raise FieldError(field, "give at least one channel")
     names = _names(names, field)
     return names, _sizes(sizes, names, field), tuple(units)
 
@@ -366,15 +367,15 @@ def stack_channels(y: Mapping, names, sizes, n_cases: int, field: str = "y") -> 
         try:
             v = np.asarray(y[name], float)
         except KeyError:
-            raise ValueError(
-                f"{name}: channel {name!r} not among the values given {sorted(y)}"
+            raise FieldError(
+                name, f"channel {name!r} not among the values given {sorted(y)}"
             ) from None
         shape = (n_cases,) if size == 1 else (n_cases, size)
         try:
             v = np.broadcast_to(v, shape)
         except ValueError:
-            raise ValueError(
-                f"{name}: values must have shape {shape} (n_cases, width), got {v.shape}"
+            raise FieldError(
+                name, f"values must have shape {shape} (n_cases, width), got {v.shape}"
             ) from None
         cols.append(v.reshape(n_cases, size))
     return np.concatenate(cols, axis=-1)
@@ -406,10 +407,10 @@ def per_case(value, n_cases: int, field: str, tail: tuple[int, ...] = ()) -> np.
     arr = np.asarray(value, float)
     lead = arr.shape[: arr.ndim - len(tail)] if tail else arr.shape
     if arr.shape[arr.ndim - len(tail) :] != tail or len(lead) > 1:
-        raise ValueError(f"{field}: must have shape {tail} or (n_cases, *{tail}), got {arr.shape}")
+        raise FieldError(field, f"must have shape {tail} or (n_cases, *{tail}), got {arr.shape}")
     c = lead[0] if lead else 1
     if c not in (1, n_cases):
-        raise ValueError(f"{field}: has {c} cases, the run has n_cases = {n_cases}")
+        raise FieldError(field, f"has {c} cases, the run has n_cases = {n_cases}")
     return arr.reshape((c,) + tail)
 
 
@@ -417,11 +418,11 @@ def sample_times(dt, times) -> tuple[float, np.ndarray]:
     """The control period (s, > 0) and the sample times (s, 1-D, increasing) of a run."""
     dt = float(require_finite(dt, "dt", "s"))
     if dt <= 0:
-        raise ValueError(f"dt: must be > 0, got {dt!r}")
+        raise FieldError("dt", f"must be > 0, got {dt!r}")
     times = require_finite(times, "times", "s")
     if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
-        raise ValueError(
-            f"times: must be a 1-D increasing array of sample times, got shape {times.shape}"
+        raise FieldError(
+            "times", f"must be a 1-D increasing array of sample times, got shape {times.shape}"
         )
     return dt, times
 
@@ -451,6 +452,8 @@ def reference_tables(law, times: np.ndarray, n_cases: int):
         v = np.asarray(v, float)
         v = np.broadcast_to(v, np.broadcast_shapes(v.shape, (n_t, 1)))
         if v.ndim != 2 or v.shape[1] not in (1, n_cases):
-            raise ValueError(f"reference: has {v.shape[-1]} cases, the run has n_cases = {n_cases}")
+            raise FieldError(
+                "reference", f"has {v.shape[-1]} cases, the run has n_cases = {n_cases}"
+            )
         out.append(v)
     return tuple(out)

@@ -63,7 +63,7 @@ from flexsat.control.linear_form import (
     sample_times,
 )
 from flexsat.control.lqr import check_matrix, check_square, dlqr, lqr
-from flexsat.input_checks import require_finite, require_numeric, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_numeric, require_positive
 
 __all__ = ["EstimatorController", "LQGController", "zoh"]
 
@@ -92,12 +92,12 @@ def _plant_matrices(plant):
         A, B, C, _ = plant.first_order()
     elif isinstance(plant, (tuple, list)):
         if len(plant) not in (3, 4):
-            raise ValueError(f"plant: give (A, B, C) or (A, B, C, D), got {len(plant)} items")
+            raise FieldError("plant", f"give (A, B, C) or (A, B, C, D), got {len(plant)} items")
         A, B, C = plant[:3]
     else:
         dt = getattr(plant, "dt", 0)
         if dt not in (0, None):
-            raise ValueError(f"plant: must be a continuous-time model, got dt = {dt}")
+            raise FieldError("plant", f"must be a continuous-time model, got dt = {dt}")
         A, B, C = plant.A, plant.B, plant.C
     return np.asarray(A, float), np.asarray(B, float), np.asarray(C, float)
 
@@ -127,9 +127,10 @@ class EstimatorController(SlewLaw):
         n = A.shape[0]
         B = check_matrix(B, "B", n, None, f"(n, 1) with n = {n}")
         if B.shape[1] != 1:
-            raise ValueError(
-                f"B: the controller interface commands one torque, so B must have "
-                f"one column, got {B.shape[1]}"
+            raise FieldError(
+                "B",
+                "the controller interface commands one torque, so B must have "
+                f"one column, got {B.shape[1]}",
             )
         C = check_matrix(C, "C", None, n, f"(p, n) with n = {n}")
         p = C.shape[0]
@@ -139,24 +140,26 @@ class EstimatorController(SlewLaw):
             measurements = (measurements,)
         measurements = tuple(measurements)
         if len(measurements) != p or not all(isinstance(k, str) for k in measurements):
-            raise ValueError(
-                f"measurements: give {p} measurement keys (one per row of C), got {measurements!r}"
+            raise FieldError(
+                "measurements",
+                f"give {p} measurement keys (one per row of C), got {measurements!r}",
             )
         if reference_states is None:
             if n % 2:
-                raise ValueError(
-                    "reference_states: the state has odd size; give the indices "
-                    "(angle, rate) of θ and θ' in the state"
+                raise FieldError(
+                    "reference_states",
+                    "the state has odd size; give the indices "
+                    "(angle, rate) of θ and θ' in the state",
                 )
             reference_states = (0, n // 2)
         i, j = (int(v) for v in reference_states)
         if not (0 <= i < n and 0 <= j < n) or i == j:
-            raise ValueError(
-                f"reference_states: must be two distinct state indices in 0 … "
-                f"{n - 1}, got {reference_states!r}"
+            raise FieldError(
+                "reference_states",
+                f"must be two distinct state indices in 0 … {n - 1}, got {reference_states!r}",
             )
         if gains not in ("continuous", "discrete"):
-            raise ValueError(f"gains: must be 'continuous' or 'discrete', got {gains!r}")
+            raise FieldError("gains", f"must be 'continuous' or 'discrete', got {gains!r}")
         self.A, self.B, self.C, self.L = A, B, C, L
         self.gains = gains
         self.measurements = measurements
@@ -177,17 +180,17 @@ class EstimatorController(SlewLaw):
         self._Cpinv = np.linalg.pinv(C)
         if isinstance(initial_estimate, str):
             if initial_estimate != "measurement":
-                raise ValueError(
-                    "initial_estimate: must be 'measurement' or a state array, got "
-                    f"{initial_estimate!r}"
+                raise FieldError(
+                    "initial_estimate",
+                    f"must be 'measurement' or a state array, got {initial_estimate!r}",
                 )
             self.initial_estimate = None
         else:
             x0 = require_finite(initial_estimate, "initial_estimate")
             if x0.shape[-1:] != (n,) or x0.ndim > 2:
-                raise ValueError(
-                    f"initial_estimate: must have shape (n,) or (n_cases, n) with "
-                    f"n = {n}, got {x0.shape}"
+                raise FieldError(
+                    "initial_estimate",
+                    f"must have shape (n,) or (n_cases, n) with n = {n}, got {x0.shape}",
                 )
             self.initial_estimate = x0
 
@@ -211,8 +214,8 @@ class EstimatorController(SlewLaw):
         try:
             cols = [np.broadcast_to(np.asarray(y[k], float), (n_cases,)) for k in self.measurements]
         except KeyError as exc:
-            raise ValueError(
-                f"measurements: key {exc.args[0]!r} not in the measurements {sorted(y)}"
+            raise FieldError(
+                "measurements", f"key {exc.args[0]!r} not in the measurements {sorted(y)}"
             ) from None
         return np.stack(cols, axis=-1)
 
@@ -226,10 +229,11 @@ class EstimatorController(SlewLaw):
         t_prev = np.asarray(state["t"], float)
         gap = t - t_prev[started]
         if gap.size and np.any(np.abs(gap - self.dt) > DT_TOL * self.dt):
-            raise ValueError(
-                f"dt: the law was built for a sample period of {self.dt:g} s but was "
+            raise FieldError(
+                "dt",
+                f"the law was built for a sample period of {self.dt:g} s but was "
                 f"called {float(np.max(gap)):g} s after its previous sample (build it "
-                "with the simulator's 1/control_rate)"
+                "with the simulator's 1/control_rate)",
             )
         if not np.all(started):
             new = ~started
@@ -249,10 +253,11 @@ class EstimatorController(SlewLaw):
         (x̂₀ = C⁺ y₀) or the given estimate s0 (C, n)."""
         dt, times = sample_times(dt, times)
         if abs(dt - self.dt) > DT_TOL * self.dt:
-            raise ValueError(
-                f"dt: the law was built for a sample period of {self.dt:g} s, the "
+            raise FieldError(
+                "dt",
+                f"the law was built for a sample period of {self.dt:g} s, the "
                 f"run samples every {dt:g} s (build it with the simulator's "
-                "1/control_rate)"
+                "1/control_rate)",
             )
         th, thd, _, u_r = reference_tables(self, times, n_cases)
         i, j = self.reference_states
@@ -432,6 +437,6 @@ class LQGController(EstimatorController):
         r"""Closed loop of the continuous design, [[A, −BK], [LC, A − BK − LC]] (separation
         principle: eigenvalues eig(A − BK) ∪ eig(A − LC)); only for continuous gains."""
         if self.gains != "continuous":
-            raise ValueError("gains: the continuous closed loop needs continuous gains")
+            raise FieldError("gains", "the continuous closed loop needs continuous gains")
         A, B, C, K, L = self.A, self.B, self.C, self.K, self.L
         return np.block([[A, -B @ K], [L @ C, A - B @ K - L @ C]])

@@ -90,7 +90,7 @@ import numpy as np
 import scipy.linalg
 
 from flexsat.analysis.controllability import pbh_clusters
-from flexsat.input_checks import require_numeric
+from flexsat.input_checks import FieldError, require_numeric
 
 log = logging.getLogger(__name__)
 
@@ -172,7 +172,7 @@ def check_square(value, field: str) -> np.ndarray:
     if arr.ndim == 0:
         arr = arr.reshape(1, 1)
     if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.shape[0] == 0:
-        raise ValueError(f"{field}: must be a non-empty square matrix, got shape {arr.shape}")
+        raise FieldError(field, f"must be a non-empty square matrix, got shape {arr.shape}")
     return arr
 
 
@@ -190,7 +190,7 @@ def check_matrix(value, field: str, rows: int | None, cols: int | None, rule: st
         or (cols is not None and arr.shape[1] != cols)
         or arr.size == 0
     ):
-        raise ValueError(f"{field}: must have shape {rule}, got {np.shape(value)}")
+        raise FieldError(field, f"must have shape {rule}, got {np.shape(value)}")
     return arr
 
 
@@ -198,7 +198,7 @@ def check_symmetric(arr: np.ndarray, field: str) -> np.ndarray:
     scale = max(np.abs(arr).max(initial=0.0), np.finfo(float).tiny)
     asym = np.abs(arr - arr.T).max(initial=0.0)
     if asym > WEIGHT_TOL * scale:
-        raise ValueError(f"{field}: must be symmetric (max |{field} − {field}ᵀ| = {asym:.3g})")
+        raise FieldError(field, f"must be symmetric (max |{field} − {field}ᵀ| = {asym:.3g})")
     return 0.5 * (arr + arr.T)
 
 
@@ -208,12 +208,12 @@ def check_psd(arr: np.ndarray, field: str, strict: bool = False) -> np.ndarray:
     lam = np.linalg.eigvalsh(arr)
     scale = max(np.abs(lam).max(initial=0.0), np.finfo(float).tiny)
     if strict and lam.min() <= arr.shape[0] * np.finfo(float).eps * scale:
-        raise ValueError(
-            f"{field}: must be symmetric positive definite (smallest eigenvalue {lam.min():.3g})"
+        raise FieldError(
+            field, f"must be symmetric positive definite (smallest eigenvalue {lam.min():.3g})"
         )
     if lam.min() < -WEIGHT_TOL * scale:
-        raise ValueError(
-            f"{field}: must be positive semi-definite (smallest eigenvalue {lam.min():.3g})"
+        raise FieldError(
+            field, f"must be positive semi-definite (smallest eigenvalue {lam.min():.3g})"
         )
     return arr
 
@@ -290,7 +290,8 @@ _LQR_LABELS = {
     "stabilizable": "(A, B) is not stabilizable: eigenvalue(s) {} of A are not controllable from B",
     "detectable": "(Q − N R⁻¹ Nᵀ, A − B R⁻¹ Nᵀ) is not detectable: eigenvalue(s) {} are not "
     "seen by the state weight (weight those states in Q)",
-    "joint": "N: the joint weight [[Q, N], [Nᵀ, R]] must be positive semi-definite, but "
+    "joint_field": "N",
+    "joint": "the joint weight [[Q, N], [Nᵀ, R]] must be positive semi-definite, but "
     "Q − N R⁻¹ Nᵀ has smallest eigenvalue {:.3g}",
 }
 
@@ -320,7 +321,7 @@ def solve_riccati(
             np.finfo(float).tiny,
         )
         if lam.min() < -WEIGHT_TOL * scale:
-            raise ValueError(labels["joint"].format(lam.min()))
+            raise FieldError(labels["joint_field"], labels["joint"].format(lam.min()))
         At = A - B @ RiN
     else:
         N, Qt, At = None, Q, A
@@ -339,12 +340,13 @@ def solve_riccati(
         with np.errstate(over="ignore", invalid="ignore"):
             S = solver(A, B, Q, R, s=N, balanced=True)
     except (np.linalg.LinAlgError, ValueError) as exc:
-        raise ValueError(
-            f"{labels['A']}: no stabilizing Riccati solution ({exc}); the pair is "
-            "numerically close to unstabilizable or undetectable"
+        raise FieldError(
+            labels["A"],
+            f"no stabilizing Riccati solution ({exc}); the pair is "
+            "numerically close to unstabilizable or undetectable",
         ) from None
     if not np.all(np.isfinite(S)):
-        raise ValueError(f"{labels['A']}: the Riccati solution is not finite")
+        raise FieldError(labels["A"], "the Riccati solution is not finite")
     S = 0.5 * (S + S.T)
     NT = 0.0 if N is None else N.T
     if discrete:
@@ -356,10 +358,11 @@ def solve_riccati(
     E = scipy.linalg.eigvals(A - B @ K)
     margin = np.max(np.abs(E)) - 1.0 if discrete else np.max(E.real)
     if margin >= 0:
-        raise ValueError(
-            f"{labels['A']}: the Riccati solution does not stabilize the closed loop "
+        raise FieldError(
+            labels["A"],
+            "the Riccati solution does not stabilize the closed loop "
             f"(max {'|λ|' if discrete else 'Re λ'} = "
-            f"{np.max(np.abs(E)) if discrete else np.max(E.real):.3g})"
+            f"{np.max(np.abs(E)) if discrete else np.max(E.real):.3g})",
         )
     log.debug(
         "%s: n=%d m=%d relative Riccati residual %.3e (rel. to ||Q|| %.3e)", kind, n, m, rel, rel_q
@@ -370,11 +373,12 @@ def solve_riccati(
             f"‖{labels[k]}‖ = {np.linalg.norm(v):.3g}"
             for k, v in (("A", A), ("B", B), ("Q", Q), ("R", R))
         )
-        raise ValueError(
-            f"{labels['A']}: the Riccati solution is inaccurate: its relative residual {rel:.3g} "
+        raise FieldError(
+            labels["A"],
+            f"the Riccati solution is inaccurate: its relative residual {rel:.3g} "
             f"exceeds the accepted {accepted:.2g} (ten times the Schur method's error bound, "
             f"within [√ε, {RESIDUAL_MAX:g}]): the data are too badly scaled for the solver "
-            f"({norms}); rescale the states, inputs or time unit"
+            f"({norms}); rescale the states, inputs or time unit",
         )
     return RiccatiSolution(K, S, E, rel, rel_q, absolute, kind)
 

@@ -38,7 +38,7 @@ from flexsat.analysis.sensitivity import (
     eigensolve,
     eigenvector_condition_derivatives,
 )
-from flexsat.input_checks import require_finite
+from flexsat.input_checks import FieldError, require_finite
 
 SOURCE = "Junkins, Pollock & Rahman 1990, Att. 5 Eqs. 28-49 (L2001-L2089), Example 1 (L2081-L2143)"
 
@@ -84,8 +84,8 @@ def n_parameters(n_inputs: int) -> int:
 def _params(p, m: int) -> np.ndarray:
     p = require_finite(p, "p").reshape(-1)
     if p.size != n_parameters(m):
-        raise ValueError(
-            f"p: must have m(m + 1) = {n_parameters(m)} entries for m = {m} inputs, got {p.size}"
+        raise FieldError(
+            "p", f"must have m(m + 1) = {n_parameters(m)} entries for m = {m} inputs, got {p.size}"
         )
     return p
 
@@ -117,7 +117,7 @@ def cholesky_parameters(G1, G2) -> np.ndarray:
     """
     G1, G2 = _gain(G1, "G1"), _gain(G2, "G2")
     if G1.shape != G2.shape:
-        raise ValueError(f"G2: must have the shape of G1 {G1.shape}, got {G2.shape}")
+        raise FieldError("G2", f"must have the shape of G1 {G1.shape}, got {G2.shape}")
     m = G1.shape[0]
     rows, cols = _tril_columnwise(m)
     out = []
@@ -125,9 +125,10 @@ def cholesky_parameters(G1, G2) -> np.ndarray:
         try:
             L = np.linalg.cholesky(G)
         except np.linalg.LinAlgError:
-            raise ValueError(
-                f"{name}: must be positive definite to have a Cholesky factor "
-                f"(eigenvalues {np.linalg.eigvalsh(G).tolist()})"
+            raise FieldError(
+                name,
+                "must be positive definite to have a Cholesky factor "
+                f"(eigenvalues {np.linalg.eigvalsh(G).tolist()})",
             ) from None
         v = L[rows, cols]
         diag = rows == cols
@@ -172,24 +173,25 @@ def cholesky_gain_derivatives(p, n_inputs: int):
 # -- the plant and its closed loop -------------------------------------------------------------
 def _inputs(n_inputs) -> int:
     if isinstance(n_inputs, bool) or not isinstance(n_inputs, (int, np.integer)) or n_inputs < 1:
-        raise ValueError(f"n_inputs: must be a positive integer, got {n_inputs!r}")
+        raise FieldError("n_inputs", f"must be a positive integer, got {n_inputs!r}")
     return int(n_inputs)
 
 
 def _gain(value, field: str, m: int | None = None) -> np.ndarray:
     G = require_finite(value, field)
     if G.ndim != 2 or G.shape[0] != G.shape[1]:
-        raise ValueError(f"{field}: must be a square matrix, got shape {G.shape}")
+        raise FieldError(field, f"must be a square matrix, got shape {G.shape}")
     if m is not None and G.shape != (m, m):
-        raise ValueError(f"{field}: must be {m}x{m} (one row per input), got shape {G.shape}")
+        raise FieldError(field, f"must be {m}x{m} (one row per input), got shape {G.shape}")
     scale = max(1.0, float(np.abs(G).max()))
     if not np.allclose(G, G.T, rtol=0, atol=1e-12 * scale):
-        raise ValueError(f"{field}: must be symmetric (Att. 5 Eq. 29)")
+        raise FieldError(field, "must be symmetric (Att. 5 Eq. 29)")
     low = float(np.linalg.eigvalsh(0.5 * (G + G.T)).min())
     if low < -1e-12 * scale:
-        raise ValueError(
-            f"{field}: must be positive semidefinite (smallest eigenvalue {low:.3g})"
-            "; the collocated law is guaranteed stable only for G >= 0"
+        raise FieldError(
+            field,
+            f"must be positive semidefinite (smallest eigenvalue {low:.3g})"
+            "; the collocated law is guaranteed stable only for G >= 0",
         )
     return 0.5 * (G + G.T)
 
@@ -197,9 +199,9 @@ def _gain(value, field: str, m: int | None = None) -> np.ndarray:
 def _square(value, field: str, n: int | None = None) -> np.ndarray:
     A = require_finite(value, field)
     if A.ndim != 2 or A.shape[0] != A.shape[1]:
-        raise ValueError(f"{field}: must be a square matrix, got shape {A.shape}")
+        raise FieldError(field, f"must be a square matrix, got shape {A.shape}")
     if n is not None and A.shape[0] != n:
-        raise ValueError(f"{field}: must be {n}x{n} like M, got shape {A.shape}")
+        raise FieldError(field, f"must be {n}x{n} like M, got shape {A.shape}")
     return A
 
 
@@ -261,13 +263,13 @@ class SymmetricOutputFeedback:
         if D.ndim == 1:
             D = D[:, None]
         if D.ndim != 2 or D.shape[0] != n:
-            raise ValueError(
-                f"D: must be an ({n}, m) matrix (one column per input), got shape {D.shape}"
+            raise FieldError(
+                "D", f"must be an ({n}, m) matrix (one column per input), got shape {D.shape}"
             )
         self.D = D
         self.C = np.zeros((n, n)) if C is None else _square(C, "C", n)
         if np.linalg.cond(self.M) > 1e12:
-            raise ValueError("M: must be non-singular")
+            raise FieldError("M", "must be non-singular")
         self.n_dof, self.n_inputs = n, D.shape[1]
         self.n_parameters = n_parameters(self.n_inputs)
 
@@ -440,14 +442,13 @@ def _mode_map(value, field: str) -> dict[int, float]:
     if value is None:
         return {}
     if not isinstance(value, dict):
-        raise ValueError(
-            f"{field}: must be a mapping {{mode number (0-based): value}}, got "
-            f"{type(value).__name__}"
+        raise FieldError(
+            field, f"must be a mapping {{mode number (0-based): value}}, got {type(value).__name__}"
         )
     out = {}
     for key, val in value.items():
         if isinstance(key, bool) or not isinstance(key, (int, np.integer)) or key < 0:
-            raise ValueError(f"{field}: mode numbers must be integers >= 0, got {key!r}")
+            raise FieldError(field, f"mode numbers must be integers >= 0, got {key!r}")
         out[int(key)] = float(require_finite(val, f"{field}[{key}]"))
     return out
 
@@ -504,15 +505,15 @@ def design_minimum_sensitivity(
     ...                                     decay_bounds={0: 0.3, 1: 0.3})  # doctest: +SKIP
     """
     if not isinstance(plant, SymmetricOutputFeedback):
-        raise ValueError(f"plant: must be a SymmetricOutputFeedback, got {type(plant).__name__}")
+        raise FieldError("plant", f"must be a SymmetricOutputFeedback, got {type(plant).__name__}")
     freq = _mode_map(frequencies, "frequencies")
     decay = _mode_map(decay_bounds, "decay_bounds")
     m = plant.n_inputs
     if start is None:
         start = (np.eye(m), np.eye(m))
     if not isinstance(start, (tuple, list)) or len(start) != 2:
-        raise ValueError(
-            f"start: must be a pair (G1, G2) of {m}x{m} gains, got {type(start).__name__}"
+        raise FieldError(
+            "start", f"must be a pair (G1, G2) of {m}x{m} gains, got {type(start).__name__}"
         )
     G1s, G2s = start
     p0 = plant.parameters(G1s, G2s)
@@ -528,9 +529,10 @@ def design_minimum_sensitivity(
                 cache.clear()
             s = plant.sensitivity(p, order=order, strict=False)
             if s.omega.size < needed:
-                raise ValueError(
-                    f"frequencies: the closed loop has only {s.omega.size} "
-                    f"oscillatory modes, the constraints need {needed}"
+                raise FieldError(
+                    "frequencies",
+                    f"the closed loop has only {s.omega.size} "
+                    f"oscillatory modes, the constraints need {needed}",
                 )
             cache[key] = s
         return cache[key]

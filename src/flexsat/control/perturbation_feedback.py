@@ -69,7 +69,13 @@ from flexsat.control.lqr import check_matrix, check_psd
 from flexsat.control.scheduled import interpolate_schedule
 from flexsat.control.trajectory_linearization import TrajectoryLinearization
 from flexsat.dynamics.attitude import quaternion_multiply
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 
 __all__ = [
     "FEEDFORWARD",
@@ -89,7 +95,7 @@ def _weight(value, size: int, field: str, strict: bool) -> np.ndarray:
     arr = require_finite(value, field)
     if arr.ndim == 1:
         if arr.size != size:
-            raise ValueError(f"{field}: a diagonal must have {size} entries, got {arr.size}")
+            raise FieldError(field, f"a diagonal must have {size} entries, got {arr.size}")
         arr = np.diag(arr)
     return check_psd(
         check_matrix(arr, field, size, size, f"({size}, {size}) or ({size},) for a diagonal"),
@@ -207,9 +213,9 @@ def perturbation_design(
     n_points = require_count(n_points, "n_points")
     if decouple:
         if m == 3:
-            raise ValueError(
-                "decouple: needs force channels (forces=...); the torquers alone "
-                "have nothing to decouple"
+            raise FieldError(
+                "decouple",
+                "needs force channels (forces=...); the torquers alone have nothing to decouple",
             )
         S = decoupled_input_map(lin.force_moments)
     else:
@@ -260,13 +266,14 @@ def _check_inputs_act(B, times, inputs) -> None:
         s = np.linalg.svd(B[i], compute_uv=False)
         rank = int(np.sum(s > max(B[i].shape) * np.finfo(float).eps * s[0]))
         if rank < B[i].shape[1]:
-            raise ValueError(
-                f"forces: at t = {t:.6g} s some combination of the inputs {', '.join(inputs)} "
+            raise FieldError(
+                "forces",
+                f"at t = {t:.6g} s some combination of the inputs {', '.join(inputs)} "
                 f"moves no state of the design model (B has rank {rank} < {B[i].shape[1]}). "
                 f"With zeta_b = 0 the shaping weight vanishes at ω_B, so such a "
                 f"combination would ring at ω_B unpenalised and unseen: the Riccati equation "
                 f"has no stabilising solution. Use zeta_b > 0, fewer forces, more design modes "
-                f"or decouple=True"
+                f"or decouple=True",
             )
 
 
@@ -274,9 +281,9 @@ def _check_same_modes(design_plant, plant) -> None:
     """The first modes of ``plant`` are the design model's (:class:`PerturbationFeedback`)."""
     n = design_plant.n_modes
     if getattr(plant, "n_modes", 0) < n or not hasattr(plant, "modal"):
-        raise ValueError(
-            f"plant: must be a FlexibleSpacecraft with at least the design "
-            f"model's {n} elastic modes"
+        raise FieldError(
+            "plant",
+            f"must be a FlexibleSpacecraft with at least the design model's {n} elastic modes",
         )
     a, b = design_plant.modal, plant.modal
     for k in range(n):
@@ -285,12 +292,13 @@ def _check_same_modes(design_plant, plant) -> None:
             abs(a.frequencies[k] - b.frequencies[k]) > 1e-9 * a.frequencies[k]
             or np.abs(a.shapes[k] - b.shapes[k]).max() > 1e-9 * scale
         ):
-            raise ValueError(
-                f"plant: its elastic mode {k + 1} is not the design model's (frequency "
+            raise FieldError(
+                "plant",
+                f"its elastic mode {k + 1} is not the design model's (frequency "
                 f"{b.frequencies[k]:.6g} against {a.frequencies[k]:.6g} rad/s, or another "
                 f"shape: a sign or a rotated repeated pair), so the law would read the wrong "
                 f"coordinates; build the design model from the plant's modal model "
-                f"(FlexibleSpacecraft(plant.modal, ..., n_modes={n}))"
+                f"(FlexibleSpacecraft(plant.modal, ..., n_modes={n}))",
             )
 
 
@@ -334,10 +342,10 @@ class PerturbationFeedback(Controller):
         plant=None,
     ):
         if not isinstance(design, PerturbationDesign):
-            raise ValueError(f"design: must be a PerturbationDesign, got {type(design).__name__}")
+            raise FieldError("design", f"must be a PerturbationDesign, got {type(design).__name__}")
         if feedforward not in FEEDFORWARD:
-            raise ValueError(
-                f"feedforward: must be one of {', '.join(FEEDFORWARD)}, got {feedforward!r}"
+            raise FieldError(
+                "feedforward", f"must be one of {', '.join(FEEDFORWARD)}, got {feedforward!r}"
             )
         self.design, self.feedforward = design, feedforward
         self.dt = h = float(require_positive(dt, "dt", "s"))
@@ -350,8 +358,9 @@ class PerturbationFeedback(Controller):
             n if n_modes_plant is None else require_count(n_modes_plant, "n_modes_plant")
         )
         if self.n_modes_plant < n:
-            raise ValueError(
-                f"n_modes_plant: must be >= the design model's {n} modes, got {self.n_modes_plant}"
+            raise FieldError(
+                "n_modes_plant",
+                f"must be >= the design model's {n} modes, got {self.n_modes_plant}",
             )
         self.writes = lin.inputs
         self.knots, self.gains = design.times, design.gains
@@ -388,17 +397,19 @@ class PerturbationFeedback(Controller):
         h = self.dt
         k = int(round(t / h))
         if k < 0 or abs(t - k * h) > 1e-6 * h:
-            raise ValueError(
-                f"t: {type(self).__name__} runs on its sample grid k·dt with dt = "
-                f"{h:g} s (the simulator's control period); called at t = {t!r}"
+            raise FieldError(
+                "t",
+                f"{type(self).__name__} runs on its sample grid k·dt with dt = "
+                f"{h:g} s (the simulator's control period); called at t = {t!r}",
             )
         j = min(k, len(self._torque) - 1)
         n, n_p = self.design.n_modes, self.n_modes_plant
         elastic = np.asarray(y["elastic"], float)
         if elastic.shape[-1] != 2 * n_p:
-            raise ValueError(
-                f"elastic: expected 2·n_modes_plant = {2 * n_p} columns, got "
-                f"{elastic.shape[-1]} (set n_modes_plant to the plant's modes)"
+            raise FieldError(
+                "elastic",
+                f"expected 2·n_modes_plant = {2 * n_p} columns, got "
+                f"{elastic.shape[-1]} (set n_modes_plant to the plant's modes)",
             )
         dq = np.asarray(y["attitude"], float) @ self._error_maps[j]
         z1, z2 = state["z1"], state["z2"]
@@ -448,9 +459,10 @@ class NominalTorque(Controller):
     def __init__(self, nominal, dt):
         missing = [a for a in ("torque", "duration") if not hasattr(nominal, a)]
         if missing:
-            raise ValueError(
-                f"nominal: must have torque(t) and duration; "
-                f"{type(nominal).__name__} lacks {', '.join(missing)}"
+            raise FieldError(
+                "nominal",
+                "must have torque(t) and duration; "
+                f"{type(nominal).__name__} lacks {', '.join(missing)}",
             )
         T = float(require_positive(nominal.duration, "nominal.duration", "s"))
         self.dt = h = float(require_positive(dt, "dt", "s"))

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexsat.control.base import Controller
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_positive
 
 __all__ = ["Playback"]
 
@@ -33,7 +33,7 @@ class Playback(Controller):
     def __init__(self, values, dt: float, writes: str):
         self.values = require_finite(values, "values")
         if self.values.ndim not in (1, 2) or self.values.shape[0] == 0:
-            raise ValueError(f"values: must be (n_t,) or (n_t, m), got {self.values.shape}")
+            raise FieldError("values", f"must be (n_t,) or (n_t, m), got {self.values.shape}")
         self.dt = float(require_positive(dt, "dt", "s"))
         self.writes = (writes,)
         self.target = 0.0

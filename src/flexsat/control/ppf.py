@@ -67,7 +67,13 @@ import scipy.linalg
 
 from flexsat.control.lqr import check_matrix, check_psd, check_square
 from flexsat.control.state_space_compensator import StateSpaceCompensator
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 
 __all__ = [
     "PPFBank",
@@ -240,15 +246,15 @@ def initial_second_moment(x0, weights=None) -> np.ndarray:
     if x.ndim == 1:
         x = x[None]
     if x.ndim != 2 or x.size == 0:
-        raise ValueError(f"x0: must have shape (n,) or (n_samples, n), got {x.shape}")
+        raise FieldError("x0", f"must have shape (n,) or (n_samples, n), got {x.shape}")
     if weights is None:
         w = np.full(x.shape[0], 1.0 / x.shape[0])
     else:
         w = require_nonneg(weights, "weights")
         if w.shape != (x.shape[0],) or w.sum() <= 0:
-            raise ValueError(
-                f"weights: must be {x.shape[0]} non-negative numbers, not all zero, "
-                f"got shape {w.shape}"
+            raise FieldError(
+                "weights",
+                f"must be {x.shape[0]} non-negative numbers, not all zero, got shape {w.shape}",
             )
         w = w / w.sum()
     return np.einsum("s,si,sj->ij", w, x, x)
@@ -289,14 +295,14 @@ class PPFModel:
     def __post_init__(self):
         w = require_positive(self.omega, "omega", "rad/s")
         if w.ndim != 1 or w.size == 0:
-            raise ValueError(
-                f"omega: must be a 1-D array of the m modal frequencies, got shape {w.shape}"
+            raise FieldError(
+                "omega", f"must be a 1-D array of the m modal frequencies, got shape {w.shape}"
             )
         m = w.size
         z = require_nonneg(self.zeta, "zeta")
         if z.ndim > 1 or z.size not in (1, m):
-            raise ValueError(
-                f"zeta: must be a scalar or one ratio per mode ({m}), got shape {z.shape}"
+            raise FieldError(
+                "zeta", f"must be a scalar or one ratio per mode ({m}), got shape {z.shape}"
             )
         B_a = check_matrix(self.actuators, "actuators", m, None, f"(m, n_a) = ({m}, n_a)")
         na = B_a.shape[1]
@@ -307,18 +313,19 @@ class PPFModel:
         for i in range(na):
             s, b = C_s[i], B_a[:, i]
             if not np.any(s):
-                raise ValueError(f"sensors[{i}]: pair {i + 1} has a zero sensor row (a_2 = 0)")
+                raise FieldError(f"sensors[{i}]", f"pair {i + 1} has a zero sensor row (a_2 = 0)")
             if not np.any(b):
-                raise ValueError(
-                    f"actuators[:, {i}]: pair {i + 1} has a zero actuator column (a_1 = 0)"
+                raise FieldError(
+                    f"actuators[:, {i}]", f"pair {i + 1} has a zero actuator column (a_1 = 0)"
                 )
             r = (b @ s) / (s @ s)
             if r <= 0 or np.linalg.norm(b - r * s) > COLLOCATION_TOL * np.linalg.norm(b):
-                raise ValueError(
-                    f"actuators[:, {i}]: pair {i + 1} is not collocated: its actuator "
+                raise FieldError(
+                    f"actuators[:, {i}]",
+                    f"pair {i + 1} is not collocated: its actuator "
                     f"influence must be a positive multiple of its sensor row "
                     f"(a_1/a_2 > 0), residual {np.linalg.norm(b - r * s):.3g} of "
-                    f"{np.linalg.norm(b):.3g}"
+                    f"{np.linalg.norm(b):.3g}",
                 )
             ratio[i] = r
         for name, arr in (
@@ -337,7 +344,7 @@ class PPFModel:
         """From objects with modal ``actuator`` and ``sensor`` vectors (the case's piezo pairs)."""
         pairs = tuple(pairs)
         if not pairs:
-            raise ValueError("pairs: give at least one actuator/sensor pair")
+            raise FieldError("pairs", "give at least one actuator/sensor pair")
         return cls(
             omega,
             zeta,
@@ -371,13 +378,13 @@ class PPFBank:
     def __post_init__(self):
         w = require_positive(self.omega_f, "omega_f", "rad/s")
         if w.ndim != 2 or w.size == 0:
-            raise ValueError(f"omega_f: must have shape (n_actuators, n_tuned), got {w.shape}")
+            raise FieldError("omega_f", f"must have shape (n_actuators, n_tuned), got {w.shape}")
         z = require_nonneg(self.zeta_f, "zeta_f")
         try:
             z = np.broadcast_to(z, w.shape)
         except ValueError:
-            raise ValueError(
-                f"zeta_f: must be a scalar or have the shape of omega_f {w.shape}, got {z.shape}"
+            raise FieldError(
+                "zeta_f", f"must be a scalar or have the shape of omega_f {w.shape}, got {z.shape}"
             ) from None
         for name, arr in (("omega_f", w), ("zeta_f", z)):
             arr = np.array(arr, float)
@@ -390,7 +397,7 @@ class PPFBank:
         L61: efficiency is largest when the filter and structure frequencies match)."""
         n = model.n_modes if n_tuned is None else require_count(n_tuned, "n_tuned")
         if n > model.n_modes:
-            raise ValueError(f"n_tuned: must be 1 to {model.n_modes}, got {n_tuned!r}")
+            raise FieldError("n_tuned", f"must be 1 to {model.n_modes}, got {n_tuned!r}")
         return cls(np.tile(model.omega[:n], (model.n_actuators, 1)), zeta_f)
 
     @property
@@ -414,10 +421,11 @@ class PPFBank:
         """g as a float vector of n_f finite values (actuator-major), else a ValueError."""
         g = require_finite(g, field)
         if g.shape != (self.n_filters,):
-            raise ValueError(
-                f"{field}: must have {self.n_filters} = n_actuators × n_tuned = "
+            raise FieldError(
+                field,
+                f"must have {self.n_filters} = n_actuators × n_tuned = "
                 f"{self.n_actuators} × {self.n_tuned} values (g[i*n_tuned + j] = "
-                f"g_ij), got shape {g.shape}"
+                f"g_ij), got shape {g.shape}",
             )
         return g
 
@@ -473,13 +481,14 @@ class PPFProblem:
 
     def __init__(self, model: PPFModel, bank: PPFBank, Q_s, Q_u, X0):
         if not isinstance(model, PPFModel):
-            raise ValueError(f"model: must be a PPFModel, got {type(model).__name__}")
+            raise FieldError("model", f"must be a PPFModel, got {type(model).__name__}")
         if not isinstance(bank, PPFBank):
-            raise ValueError(f"bank: must be a PPFBank, got {type(bank).__name__}")
+            raise FieldError("bank", f"must be a PPFBank, got {type(bank).__name__}")
         if bank.n_actuators != model.n_actuators:
-            raise ValueError(
-                f"bank: has filters for {bank.n_actuators} actuators, the model has "
-                f"{model.n_actuators} pairs"
+            raise FieldError(
+                "bank",
+                f"has filters for {bank.n_actuators} actuators, the model has "
+                f"{model.n_actuators} pairs",
             )
         self.model, self.bank = model, bank
         m, nf = model.n_modes, bank.n_filters
@@ -488,9 +497,10 @@ class PPFProblem:
         Qu = require_finite(Q_u, "Q_u")
         Qu = Qu * np.eye(model.n_actuators) if Qu.ndim == 0 else check_square(Qu, "Q_u")
         if Qu.shape[0] != model.n_actuators:
-            raise ValueError(
-                f"Q_u: must be {model.n_actuators} × {model.n_actuators} (one row "
-                f"per actuator), got shape {Qu.shape}"
+            raise FieldError(
+                "Q_u",
+                f"must be {model.n_actuators} × {model.n_actuators} (one row "
+                f"per actuator), got shape {Qu.shape}",
             )
         self.Q_u = check_psd(Qu, "Q_u")
         self.X0 = self._state_matrix(X0, "X0")
@@ -514,9 +524,9 @@ class PPFProblem:
         T = check_matrix(outputs, "outputs", None, m, f"(q, m) = (q, {m})")
         Qb = check_psd(check_square(output_weight, "output_weight"), "output_weight")
         if Qb.shape[0] != T.shape[0]:
-            raise ValueError(
-                f"output_weight: must be {T.shape[0]} × {T.shape[0]} (one row per "
-                f"output), got shape {Qb.shape}"
+            raise FieldError(
+                "output_weight",
+                f"must be {T.shape[0]} × {T.shape[0]} (one row per output), got shape {Qb.shape}",
             )
         Q_s = np.zeros((2 * m, 2 * m))
         Q_s[:m, :m] = T.T @ Qb @ T
@@ -528,9 +538,10 @@ class PPFProblem:
         if M.shape[0] == m2:
             M = scipy.linalg.block_diag(M, np.zeros((n - m2, n - m2)))
         elif M.shape[0] != n:
-            raise ValueError(
-                f"{field}: must be {m2} × {m2} (structure states [η, η̇]) or {n} × {n}"
-                f" (with the filter states [ξ, ξ̇]), got shape {M.shape}"
+            raise FieldError(
+                field,
+                f"must be {m2} × {m2} (structure states [η, η̇]) or {n} × {n}"
+                f" (with the filter states [ξ, ξ̇]), got shape {M.shape}",
             )
         return M
 
@@ -583,9 +594,10 @@ class PPFProblem:
         g = self.gains(g)
         max_re = float(np.max(self.closed_loop_poles(g).real))
         if not max_re < 0:
-            raise ValueError(
-                f"gains: the closed loop is unstable (largest real part of its poles "
-                f"{max_re:.4g} 1/s): the cost of Eq. 7 is infinite"
+            raise FieldError(
+                "gains",
+                "the closed loop is unstable (largest real part of its poles "
+                f"{max_re:.4g} 1/s): the cost of Eq. 7 is infinite",
             )
         return g
 
@@ -650,7 +662,7 @@ class PPFController(StateSpaceCompensator):
 
     def __init__(self, bank: PPFBank, gains, dt, measurements=None, commands=None):
         if not isinstance(bank, PPFBank):
-            raise ValueError(f"bank: must be a PPFBank, got {type(bank).__name__}")
+            raise FieldError("bank", f"must be a PPFBank, got {type(bank).__name__}")
         n = bank.n_actuators
         self.bank = bank
         self.gains = bank.check_gains(gains)

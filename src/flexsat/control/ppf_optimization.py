@@ -71,6 +71,7 @@ from scipy.optimize import minimize
 
 from flexsat.analysis.homotopy import weight_factor
 from flexsat.input_checks import (
+    FieldError,
     require_count,
     require_finite,
     require_nonneg,
@@ -264,9 +265,10 @@ class _Checked:
     def __init__(self, problem):
         missing = [name for name in PROBLEM_METHODS if not callable(getattr(problem, name, None))]
         if missing:
-            raise ValueError(
-                f"problem: missing method(s) {', '.join(missing)}; a PPF gain "
-                f"problem needs {', '.join(PROBLEM_METHODS)}"
+            raise FieldError(
+                "problem",
+                f"missing method(s) {', '.join(missing)}; a PPF gain "
+                f"problem needs {', '.join(PROBLEM_METHODS)}",
             )
         self.problem = problem
         self.n_gains = 0
@@ -285,32 +287,32 @@ class _Checked:
     def gradient(self, g) -> np.ndarray:
         out = np.asarray(self.problem.gradient(g.copy()), float)
         if out.shape != (self.n_gains,):
-            raise ValueError(f"problem.gradient: must return ({self.n_gains},), got {out.shape}")
+            raise FieldError("problem.gradient", f"must return ({self.n_gains},), got {out.shape}")
         return self._finite(out, "gradient")
 
     def eigenvalues(self, g) -> np.ndarray:
         out = np.asarray(self.problem.stiffness_eigenvalues(g.copy()), float)
         if out.shape != (self.n_modes,):
-            raise ValueError(
-                f"problem.stiffness_eigenvalues: must return ({self.n_modes},), got {out.shape}"
+            raise FieldError(
+                "problem.stiffness_eigenvalues", f"must return ({self.n_modes},), got {out.shape}"
             )
         return self._finite(out, "stiffness_eigenvalues")
 
     def eigenvalue_jacobian(self, g) -> np.ndarray:
         out = np.asarray(self.problem.stiffness_eigenvalue_gradients(g.copy()), float)
         if out.shape != (self.n_modes, self.n_gains):
-            raise ValueError(
-                f"problem.stiffness_eigenvalue_gradients: must return "
-                f"({self.n_modes}, {self.n_gains}), got {out.shape}"
+            raise FieldError(
+                "problem.stiffness_eigenvalue_gradients",
+                f"must return ({self.n_modes}, {self.n_gains}), got {out.shape}",
             )
         return self._finite(out, "stiffness_eigenvalue_gradients")
 
     def max_pole_real(self, g) -> float:
         poles = np.asarray(self.problem.closed_loop_poles(g.copy()))
         if poles.ndim != 1 or poles.size == 0:
-            raise ValueError(
-                f"problem.closed_loop_poles: must return a 1-D array of poles, got "
-                f"shape {poles.shape}"
+            raise FieldError(
+                "problem.closed_loop_poles",
+                f"must return a 1-D array of poles, got shape {poles.shape}",
             )
         return float(self._finite(np.max(poles.real), "closed_loop_poles"))
 
@@ -320,32 +322,34 @@ def _setup(problem, g, field: str, eigenvalue_floor):
     ev = _Checked(problem)
     g = require_numeric(g, field, "gain vector")
     if g.ndim != 1 or g.size == 0:
-        raise ValueError(f"{field}: must be a non-empty vector of gains, got shape {g.shape}")
+        raise FieldError(field, f"must be a non-empty vector of gains, got shape {g.shape}")
     ev.n_gains = g.size
     try:
         lam = np.asarray(problem.stiffness_eigenvalues(g.copy()), float)
         jac = np.asarray(problem.stiffness_eigenvalue_gradients(g.copy()), float)
     except (ValueError, IndexError, TypeError) as exc:
-        raise ValueError(
-            f"{field}: the problem cannot be evaluated at {g.size} gains ({exc})"
+        raise FieldError(
+            field, f"the problem cannot be evaluated at {g.size} gains ({exc})"
         ) from None
     if lam.ndim != 1 or jac.shape != (lam.size, g.size):
-        raise ValueError(
-            f"{field}: has {g.size} gains but the problem's eigenvalue sensitivities "
-            f"have shape {jac.shape} (one column per gain expected)"
+        raise FieldError(
+            field,
+            f"has {g.size} gains but the problem's eigenvalue sensitivities "
+            f"have shape {jac.shape} (one column per gain expected)",
         )
     ev.n_modes = lam.size
     if eigenvalue_floor is None:
         try:
             floor = DEFAULT_FLOOR_FRACTION * ev.eigenvalues(np.zeros(g.size))
         except _Failure as exc:
-            raise ValueError(f"eigenvalue_floor: the default needs λ(S(0)), but {exc}") from None
+            raise FieldError("eigenvalue_floor", f"the default needs λ(S(0)), but {exc}") from None
     else:
         floor = require_nonneg(eigenvalue_floor, "eigenvalue_floor", "1/s**2")
         if floor.ndim > 1 or floor.size not in (1, lam.size):
-            raise ValueError(
-                f"eigenvalue_floor: must be a number or {lam.size} values (one per "
-                f"eigenvalue of S, ascending), got shape {floor.shape}"
+            raise FieldError(
+                "eigenvalue_floor",
+                f"must be a number or {lam.size} values (one per "
+                f"eigenvalue of S, ascending), got shape {floor.shape}",
             )
         floor = np.broadcast_to(floor.reshape(-1), lam.shape).astype(float)
     return ev, g, floor
@@ -366,26 +370,28 @@ def _start(problem, g0, eigenvalue_floor, stability_margin):
         lam = ev.eigenvalues(g)
         max_re = ev.max_pole_real(g)
     except _Failure as exc:
-        raise ValueError(f"g0: {exc} at the start") from None
+        raise FieldError("g0", f"{exc} at the start") from None
     low = np.flatnonzero(lam < floor)
     if low.size:
         i = int(low[0])
-        raise ValueError(
-            f"g0: violates the eigenvalue floor: λ_{i + 1}(S) = {lam[i]:.6g} < "
+        raise FieldError(
+            "g0",
+            f"violates the eigenvalue floor: λ_{i + 1}(S) = {lam[i]:.6g} < "
             f"λ_{i + 1}^c = {floor[i]:.6g} (Eq. 22); make the start feasible first, "
-            f"e.g. with restore_eigenvalue_constraints"
+            f"e.g. with restore_eigenvalue_constraints",
         )
     if max_re >= -margin:
-        raise ValueError(
-            f"g0: the closed loop is unstable at the start: max Re(pole) = "
+        raise FieldError(
+            "g0",
+            "the closed loop is unstable at the start: max Re(pole) = "
             f"{max_re:.6g} >= −stability_margin = {-margin:.6g} (S alone does not "
-            f"guarantee stability for negative gains)"
+            f"guarantee stability for negative gains)",
         )
     try:
         J = ev.cost(g)
         ev.gradient(g)
     except _Failure as exc:
-        raise ValueError(f"g0: {exc} at the start") from None
+        raise FieldError("g0", f"{exc} at the start") from None
     return ev, g, floor, margin, J
 
 
@@ -547,8 +553,8 @@ def optimize_ppf_gains(
     """
     ev, g, floor, margin, J_init = _start(problem, g0, eigenvalue_floor, stability_margin)
     if (J_goal is None) == (goal_ratio is None):
-        raise ValueError(
-            "J_goal: give exactly one of J_goal and goal_ratio (J_goal = goal_ratio · J_init)"
+        raise FieldError(
+            "J_goal", "give exactly one of J_goal and goal_ratio (J_goal = goal_ratio · J_init)"
         )
     if J_goal is not None:
         J_goal = float(require_finite(J_goal, "J_goal"))
@@ -556,21 +562,21 @@ def optimize_ppf_gains(
         J_goal = float(require_finite(goal_ratio, "goal_ratio")) * J_init
     gamma_stop = float(require_finite(gamma_stop, "gamma_stop"))
     if not 0.0 < gamma_stop <= 1.0:
-        raise ValueError(f"gamma_stop: must be in (0, 1], got {gamma_stop!r}")
+        raise FieldError("gamma_stop", f"must be in (0, 1], got {gamma_stop!r}")
     gamma_step = float(require_finite(gamma_step, "gamma_step"))
     if not 0.0 < gamma_step <= 1.0:
-        raise ValueError(f"gamma_step: must be in (0, 1], got {gamma_step!r}")
+        raise FieldError("gamma_step", f"must be in (0, 1], got {gamma_step!r}")
     min_gamma_step = float(require_finite(min_gamma_step, "min_gamma_step"))
     if not 0.0 < min_gamma_step <= gamma_step:
-        raise ValueError(
-            f"min_gamma_step: must be in (0, gamma_step = {gamma_step}], got {min_gamma_step!r}"
+        raise FieldError(
+            "min_gamma_step", f"must be in (0, gamma_step = {gamma_step}], got {min_gamma_step!r}"
         )
     max_corrections = require_count(max_corrections, "max_corrections")
     max_restorations = require_count(max_restorations, "max_restorations")
     max_steps = require_count(max_steps, "max_steps")
     rtol = float(require_finite(rtol, "rtol"))
     if not 0.0 < rtol < 1.0:
-        raise ValueError(f"rtol: must be in (0, 1), got {rtol!r}")
+        raise FieldError("rtol", f"must be in (0, 1), got {rtol!r}")
     Winv = _inverse_weight(weight, g.size)
 
     lam_target = _restoration_target(floor)
@@ -700,7 +706,7 @@ def scipy_ppf_gains(
     ev, g0, floor, margin, J_init = _start(problem, g0, eigenvalue_floor, stability_margin)
     tol = float(require_finite(tol, "tol"))
     if not tol > 0:
-        raise ValueError(f"tol: must be > 0, got {tol!r}")
+        raise FieldError("tol", f"must be > 0, got {tol!r}")
     max_iterations = require_count(max_iterations, "max_iterations")
     scale = np.abs(g0)
     scale[scale == 0] = 1.0
@@ -735,7 +741,7 @@ def scipy_ppf_gains(
             options={"ftol": tol, "maxiter": max_iterations},
         )
     except _Failure as exc:
-        raise ValueError(f"problem: {exc} during the SLSQP run") from None
+        raise FieldError("problem", f"{exc} during the SLSQP run") from None
     x = res.x
     feasible = bool(np.all(eig_con(x) >= -CONSTRAINT_TOL) and stab_con(x)[0] > 0)
     return ScipyPPFResult(

@@ -32,7 +32,7 @@ from flexsat.control.linear_form import (
     stack_channels,
     static_law,
 )
-from flexsat.input_checks import require_finite
+from flexsat.input_checks import FieldError, require_finite
 
 __all__ = ["ScheduledStateFeedback", "interpolate_schedule"]
 
@@ -77,15 +77,16 @@ class ScheduledStateFeedback(Controller):
     ):
         knots = require_finite(times, "times", "s")
         if knots.ndim != 1 or knots.size < 1 or np.any(np.diff(knots) <= 0):
-            raise ValueError(
-                f"times: must be a 1-D strictly increasing array of schedule times, "
-                f"got {knots.tolist()}"
+            raise FieldError(
+                "times",
+                f"must be a 1-D strictly increasing array of schedule times, got {knots.tolist()}",
             )
         K = require_finite(gains, "gains")
         if K.ndim not in (3, 4) or K.shape[0] != knots.size:
-            raise ValueError(
-                f"gains: must have shape (n_knots, m, n) or (n_knots, n_cases, m, n) "
-                f"with n_knots = {knots.size} schedule times, got {K.shape}"
+            raise FieldError(
+                "gains",
+                "must have shape (n_knots, m, n) or (n_knots, n_cases, m, n) "
+                f"with n_knots = {knots.size} schedule times, got {K.shape}",
             )
         self.knots = knots
         self.gains = K if K.ndim == 4 else K[:, None]
@@ -100,10 +101,11 @@ class ScheduledStateFeedback(Controller):
             return value
         v = require_finite(value, field)
         if v.ndim not in (2, 3) or v.shape[0] != self.knots.size or v.shape[-1] != width:
-            raise ValueError(
-                f"{field}: must have shape (n_knots, {width}) or (n_knots, n_cases, "
+            raise FieldError(
+                field,
+                f"must have shape (n_knots, {width}) or (n_knots, n_cases, "
                 f"{width}) at the {self.knots.size} schedule times, or be a function "
-                f"of t; got {v.shape}"
+                f"of t; got {v.shape}",
             )
         return v if v.ndim == 3 else v[:, None]
 
@@ -149,8 +151,8 @@ class ScheduledStateFeedback(Controller):
             ("feedforward", self.feedforward),
         ):
             if isinstance(table, np.ndarray) and table.shape[1] not in (1, n_cases):
-                raise ValueError(
-                    f"{field}: have {table.shape[1]} cases, the run has n_cases = {n_cases}"
+                raise FieldError(
+                    field, f"have {table.shape[1]} cases, the run has n_cases = {n_cases}"
                 )
         D = -(self.gains if len(self.knots) == 1 else self.gain(times))
         y_ref = self._at(self.state_reference, times, n, "state_reference", n_cases)
@@ -166,8 +168,8 @@ def _channels(spec, width: int, field: str, symbol: str, axis: str):
         return (channel_spec(spec, field)[0], (width,))
     names, sizes, _ = channel_spec(spec, field)
     if sum(sizes) != width:
-        raise ValueError(
-            f"{field}: their widths {sizes} sum to {sum(sizes)}, the gains have "
-            f"{symbol} = {width} {axis}"
+        raise FieldError(
+            field,
+            f"their widths {sizes} sum to {sum(sizes)}, the gains have {symbol} = {width} {axis}",
         )
     return names, sizes

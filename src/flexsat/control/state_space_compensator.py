@@ -30,7 +30,7 @@ from flexsat.control.linear_form import (
     stack_channels,
 )
 from flexsat.control.lqg import DT_TOL, zoh
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_positive
 
 __all__ = ["StateSpaceCompensator"]
 
@@ -43,9 +43,10 @@ def _state_space(system):
     if isinstance(system, ct.TransferFunction):
         system = ct.ss(system)
     if not isinstance(system, ct.StateSpace):
-        raise ValueError(
-            f"system: must be a python-control StateSpace (or TransferFunction), got "
-            f"{type(system).__name__}"
+        raise FieldError(
+            "system",
+            "must be a python-control StateSpace (or TransferFunction), got "
+            f"{type(system).__name__}",
         )
     return system
 
@@ -55,8 +56,8 @@ def reference_histories(references, names, sizes, units) -> np.ndarray:
     references = {} if references is None else dict(references)
     unknown = sorted(set(references) - set(names))
     if unknown:
-        raise ValueError(
-            f"references: {unknown[0]!r} is not a measurement channel (they are {list(names)})"
+        raise FieldError(
+            "references", f"{unknown[0]!r} is not a measurement channel (they are {list(names)})"
         )
     cols, n_cases = [], 1
     for name, size, unit in zip(names, sizes, units):
@@ -69,13 +70,14 @@ def reference_histories(references, names, sizes, units) -> np.ndarray:
         elif size > 1 and r.shape[-1:] == (size,) and r.ndim <= 2:
             r = r.reshape(-1, size)
         else:
-            raise ValueError(
-                f"{field}: must be a scalar, or have shape (n_cases,) for a one-wide "
+            raise FieldError(
+                field,
+                "must be a scalar, or have shape (n_cases,) for a one-wide "
                 f"channel, (size,) or (n_cases, size) for one {size} wide; got "
-                f"{r.shape}"
+                f"{r.shape}",
             )
         if r.shape[0] != 1 and n_cases not in (1, r.shape[0]):
-            raise ValueError(f"{field}: has {r.shape[0]} cases, another reference {n_cases}")
+            raise FieldError(field, f"has {r.shape[0]} cases, another reference {n_cases}")
         n_cases = max(n_cases, r.shape[0])
         cols.append(r)
     return np.concatenate([np.broadcast_to(c, (n_cases, c.shape[1])) for c in cols], axis=-1)
@@ -108,14 +110,15 @@ class StateSpaceCompensator(Controller):
         names, sizes, units = channel_spec(measurements, "measurements")
         cnames, csizes, _ = channel_spec(commands, "commands")
         if sum(sizes) != sys.ninputs:
-            raise ValueError(
-                f"measurements: their widths {sizes} sum to {sum(sizes)}, the system "
-                f"has {sys.ninputs} inputs"
+            raise FieldError(
+                "measurements",
+                f"their widths {sizes} sum to {sum(sizes)}, the system has {sys.ninputs} inputs",
             )
         if sum(csizes) != sys.noutputs:
-            raise ValueError(
-                f"commands: their widths {csizes} sum to {sum(csizes)}, the system "
-                f"has {sys.noutputs} outputs"
+            raise FieldError(
+                "commands",
+                f"their widths {csizes} sum to {sum(csizes)}, the system "
+                f"has {sys.noutputs} outputs",
             )
         self.reads, self.read_sizes = names, sizes
         self.writes, self.write_sizes = cnames, csizes
@@ -123,17 +126,19 @@ class StateSpaceCompensator(Controller):
         C, D = np.asarray(sys.C, float), np.asarray(sys.D, float)
         if sys.dt in (0, None):
             if dt is None:
-                raise ValueError(
-                    "dt: a continuous system needs the control period to be "
-                    "discretised (zero-order hold)"
+                raise FieldError(
+                    "dt",
+                    "a continuous system needs the control period to be "
+                    "discretised (zero-order hold)",
                 )
             self.dt = float(require_positive(dt, "dt", "s"))
             A, B = zoh(A, B, self.dt)
         elif sys.dt is True:
             if dt is None:
-                raise ValueError(
-                    "dt: the system is discrete with an unspecified sampling time "
-                    "(dt=True); give the control period"
+                raise FieldError(
+                    "dt",
+                    "the system is discrete with an unspecified sampling time "
+                    "(dt=True); give the control period",
                 )
             self.dt = float(require_positive(dt, "dt", "s"))
         else:
@@ -141,9 +146,10 @@ class StateSpaceCompensator(Controller):
             if dt is not None:
                 dt = float(require_positive(dt, "dt", "s"))
                 if abs(dt - self.dt) > DT_TOL * self.dt:
-                    raise ValueError(
-                        f"system.dt: the discrete system samples every {self.dt:g} "
-                        f"s, the control period dt is {dt:g} s"
+                    raise FieldError(
+                        "system.dt",
+                        f"the discrete system samples every {self.dt:g} "
+                        f"s, the control period dt is {dt:g} s",
                     )
         self.matrices = (A, B, C, D)
         self.r = reference_histories(references, names, sizes, units)
@@ -165,9 +171,10 @@ class StateSpaceCompensator(Controller):
         started = np.isfinite(t_prev)
         gap = t - t_prev[started]
         if gap.size and np.any(np.abs(gap - self.dt) > DT_TOL * self.dt):
-            raise ValueError(
-                f"dt: the compensator runs at a period of {self.dt:g} s but was "
-                f"called {float(np.max(gap)):g} s after its previous sample"
+            raise FieldError(
+                "dt",
+                f"the compensator runs at a period of {self.dt:g} s but was "
+                f"called {float(np.max(gap)):g} s after its previous sample",
             )
         e = stack_channels(y, self.reads, self.read_sizes, nc) - self.r
         A, B, C, D = self.matrices
@@ -180,13 +187,14 @@ class StateSpaceCompensator(Controller):
         """Constant matrices (Φ, Γ, C, D), y_ref = r, no feedforward, x₀ = 0."""
         dt, times = sample_times(dt, times)
         if abs(dt - self.dt) > DT_TOL * self.dt:
-            raise ValueError(
-                f"dt: the compensator runs at a period of {self.dt:g} s, the run "
-                f"samples every {dt:g} s"
+            raise FieldError(
+                "dt",
+                f"the compensator runs at a period of {self.dt:g} s, the run "
+                f"samples every {dt:g} s",
             )
         if self.r.shape[0] not in (1, n_cases):
-            raise ValueError(
-                f"references: have {self.r.shape[0]} cases, the run has n_cases = {n_cases}"
+            raise FieldError(
+                "references", f"have {self.r.shape[0]} cases, the run has n_cases = {n_cases}"
             )
         A, B, C, D = (M[None, None] for M in self.matrices)
         y_ref = np.broadcast_to(self.r, (len(times),) + self.r.shape)

@@ -53,7 +53,7 @@ import numpy as np
 
 from flexsat.control.base import Controller
 from flexsat.dynamics.tether import TetherScales, integral_of_motion, require_lengths
-from flexsat.input_checks import require_finite, require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 from flexsat.units import holds_quantity
 
 __all__ = [
@@ -77,9 +77,10 @@ def thrust_index(tau, thrust) -> np.ndarray:
     tau = require_finite(tau, "tau")
     F = require_finite(thrust, "thrust")
     if tau.ndim != 1 or F.shape[-1] != tau.size or np.any(np.diff(tau) <= 0):
-        raise ValueError(
-            f"tau: must be an increasing grid matching thrust's last axis, got "
-            f"{tau.shape} and {F.shape}"
+        raise FieldError(
+            "tau",
+            "must be an increasing grid matching thrust's last axis, got "
+            f"{tau.shape} and {F.shape}",
         )
     a, b, h = F[..., :-1], F[..., 1:], np.diff(tau)
     same = a * b >= 0
@@ -107,7 +108,7 @@ class _TetherLaw(Controller):
     def __init__(self, scales: TetherScales | None, **gains):
         self.scales = TetherScales() if scales is None else scales
         if not isinstance(self.scales, TetherScales):
-            raise ValueError(f"scales: must be a TetherScales, got {type(scales).__name__}")
+            raise FieldError("scales", f"must be a TetherScales, got {type(scales).__name__}")
         for name, value in gains.items():
             if name == "final_length" and holds_quantity(value, strings=True):
                 # a length with units ("200 m"): λf = l_f / L

@@ -85,7 +85,7 @@ from flexsat.dynamics.attitude import quaternion_multiply
 from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
 from flexsat.dynamics.rigid_body import cross3, matvec
 from flexsat.dynamics.rigid_spacecraft import quaternion_kinematics, skew
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_positive
 
 __all__ = ["TrajectoryLinearization", "attitude_error"]
 
@@ -120,9 +120,10 @@ def _require_nominal(nominal) -> float:
         name for name in ("beta", "omega", "torque", "duration") if not hasattr(nominal, name)
     ]
     if missing:
-        raise ValueError(
-            f"nominal: must have beta(t), omega(t), torque(t) and duration; "
-            f"{type(nominal).__name__} lacks {', '.join(missing)}"
+        raise FieldError(
+            "nominal",
+            "must have beta(t), omega(t), torque(t) and duration; "
+            f"{type(nominal).__name__} lacks {', '.join(missing)}",
         )
     return float(require_positive(nominal.duration, "nominal.duration", "s"))
 
@@ -153,11 +154,12 @@ class TrajectoryLinearization:
 
     def __init__(self, plant, nominal, forces=()):
         if not isinstance(plant, FlexibleSpacecraft):
-            raise ValueError(f"plant: must be a FlexibleSpacecraft, got {type(plant).__name__}")
+            raise FieldError("plant", f"must be a FlexibleSpacecraft, got {type(plant).__name__}")
         if plant.translation:
-            raise ValueError(
-                "plant: must be built without translation (the perturbation "
-                "state is attitude, rate and elastic coordinates)"
+            raise FieldError(
+                "plant",
+                "must be built without translation (the perturbation "
+                "state is attitude, rate and elastic coordinates)",
             )
         self.plant = plant
         self.nominal = nominal
@@ -165,19 +167,20 @@ class TrajectoryLinearization:
         names = [c.name for c in plant.inputs[1:]]
         if isinstance(forces, str):
             if forces != "all":
-                raise ValueError(
-                    f"forces: must be 'all' or a sequence of force channel names, got {forces!r}"
+                raise FieldError(
+                    "forces", f"must be 'all' or a sequence of force channel names, got {forces!r}"
                 )
             forces = names
         chosen = []
         for name in forces:
             if name not in names:
-                raise ValueError(
-                    f"{name}: not a force channel of the plant (its force "
-                    f"channels: {', '.join(names) or 'none'})"
+                raise FieldError(
+                    name,
+                    "not a force channel of the plant (its force "
+                    f"channels: {', '.join(names) or 'none'})",
                 )
             if name in chosen:
-                raise ValueError(f"{name}: given twice in forces")
+                raise FieldError(name, "given twice in forces")
             chosen.append(name)
         self.inputs = ("torque",) + tuple(chosen)
         self._columns = np.r_[0:3, [3 + names.index(c) for c in chosen]].astype(int)
@@ -200,16 +203,18 @@ class TrajectoryLinearization:
         tau = np.asarray(self.nominal.torque(t), float)
         for field, value, width in (("beta", beta, 4), ("omega", w, 3), ("torque", tau, 3)):
             if value.shape != t.shape + (width,) or not np.all(np.isfinite(value)):
-                raise ValueError(
-                    f"nominal.{field}: must return finite values of shape "
+                raise FieldError(
+                    f"nominal.{field}",
+                    "must return finite values of shape "
                     f"{t.shape + (width,)} at times of shape {t.shape}, got "
-                    f"{value.shape}"
+                    f"{value.shape}",
                 )
         norm = np.abs(np.linalg.norm(beta, axis=-1) - 1.0)
         if np.any(norm > _UNIT_TOL):
-            raise ValueError(
-                f"nominal.beta: must be unit Euler parameters (largest ||β| − 1| "
-                f"{norm.max():.3g} > {_UNIT_TOL:g})"
+            raise FieldError(
+                "nominal.beta",
+                "must be unit Euler parameters (largest ||β| − 1| "
+                f"{norm.max():.3g} > {_UNIT_TOL:g})",
             )
         J = self.inertia
         w_dot = matvec(self._inertia_inverse, tau - cross3(w, matvec(J, w)))
@@ -241,9 +246,7 @@ class TrajectoryLinearization:
     @staticmethod
     def _check_width(value, width: int, field: str) -> None:
         if value.ndim < 1 or value.shape[-1] != width:
-            raise ValueError(
-                f"{field}: last axis must have {width} entries, got shape {value.shape}"
-            )
+            raise FieldError(field, f"last axis must have {width} entries, got shape {value.shape}")
 
     # -- dynamics ----------------------------------------------------------------------------
     def rhs(self, t, dX, du) -> np.ndarray:
