@@ -74,6 +74,7 @@ COMPLETE = (
     "scenarios/errors.py",
     "scenarios/kind.py",
     "sim/config.py",
+    "sim/metrics.py",
     "sim/step.py",
     "text.py",
     "units.py",
