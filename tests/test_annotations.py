@@ -73,6 +73,7 @@ COMPLETE = (
     "report/page.py",
     "scenarios/errors.py",
     "scenarios/kind.py",
+    "sim/channels.py",
     "sim/config.py",
     "sim/metrics.py",
     "sim/step.py",
