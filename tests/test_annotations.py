@@ -76,6 +76,7 @@ COMPLETE = (
     "sim/channels.py",
     "sim/config.py",
     "sim/metrics.py",
+    "sim/recording.py",
     "sim/step.py",
     "text.py",
     "units.py",
