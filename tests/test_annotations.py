@@ -75,6 +75,7 @@ COMPLETE = (
     "scenarios/kind.py",
     "sim/channels.py",
     "sim/config.py",
+    "sim/continuous.py",
     "sim/metrics.py",
     "sim/recording.py",
     "sim/step.py",
