@@ -76,6 +76,7 @@ COMPLETE = (
     "sim/channels.py",
     "sim/config.py",
     "sim/continuous.py",
+    "sim/engine.py",
     "sim/metrics.py",
     "sim/recording.py",
     "sim/step.py",
