@@ -29,7 +29,7 @@ class TorqueActuator:
     saturation: float = np.inf
     torque_constant_ratio: float = 1.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         saturation = to_si_array(self.saturation, "N*m", "saturation")
         if not np.all(saturation > 0):  # inf (no limit) is allowed, NaN and <= 0 are not
             raise ValueError(f"saturation: must be > 0 (inf for none), got {self.saturation!r}")

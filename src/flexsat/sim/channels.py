@@ -22,21 +22,33 @@ naming the field and the width, rather than read as one value per case.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from flexsat.dynamics.plant import Channel, find_channel
+from flexsat.dynamics.plant import Channel, Plant, find_channel
 from flexsat.input_checks import require_count
 from flexsat.sim.disturbances import impulses_at_samples
 from flexsat.sim.sensors import least_squares_derivative_weights
 from flexsat.sim.step import quantised, rate_limited, saturated
 from flexsat.units import to_si_array
 
+if TYPE_CHECKING:
+    from flexsat.sim.config import SimConfig
+    from flexsat.sim.step import Values
+    from flexsat.units import FloatArray, QuantityArrayLike
+
 
 def _si(
-    value, unit: str, field: str, nonneg: bool = True, inf_ok: bool = False, size: int = 1
-) -> np.ndarray | float:
+    value: QuantityArrayLike,
+    unit: str,
+    field: str,
+    nonneg: bool = True,
+    inf_ok: bool = False,
+    size: int = 1,
+) -> FloatArray | float:
     """``value`` in SI of ``unit``: finite (+inf too where it means "no limit"), >= 0 if
     ``nonneg``; shaped for a channel ``size`` values wide (see the module)."""
     v = to_si_array(value, unit, field)
@@ -87,15 +99,18 @@ class ChannelSensor:
         ``window`` samples with a polynomial of degree ``order`` (a rate from an encoder).
     """
 
-    noise: float = 0.0
-    bias: float = 0.0
-    quantum: float = 0.0
-    range: float = np.inf
+    noise: QuantityArrayLike = 0.0
+    bias: QuantityArrayLike = 0.0
+    quantum: QuantityArrayLike = 0.0
+    range: QuantityArrayLike = np.inf
     derivative_of: str | None = None
     window: int = 8
     order: int = 1
+    # which operations act, set by bind; not an __init__ argument, so a copy made by replace
+    # is unbound again
+    _acts: tuple[bool, bool, int, bool] = field(init=False, repr=False, compare=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         require_count(self.window, "window")
         require_count(self.order, "order")
         least_squares_derivative_weights(self.window, self.order, 1.0)
@@ -103,44 +118,43 @@ class ChannelSensor:
     def bind(self, channel: Channel) -> ChannelSensor:
         """A copy with every field in SI of ``channel``'s unit, shaped for its width."""
         f, unit, w = f"sensors[{channel.name}]", channel.unit, channel.size
-        out = replace(
-            self,
-            noise=_si(self.noise, unit, f"{f}.noise", size=w),
-            bias=_si(self.bias, unit, f"{f}.bias", nonneg=False, size=w),
-            quantum=_si(self.quantum, unit, f"{f}.quantum", size=w),
-            range=_si(self.range, unit, f"{f}.range", inf_ok=True, size=w),
-        )
-        if np.any(out.range <= 0):
+        noise = _si(self.noise, unit, f"{f}.noise", size=w)
+        bias = _si(self.bias, unit, f"{f}.bias", nonneg=False, size=w)
+        quantum = _si(self.quantum, unit, f"{f}.quantum", size=w)
+        range_ = _si(self.range, unit, f"{f}.range", inf_ok=True, size=w)
+        out = replace(self, noise=noise, bias=bias, quantum=quantum, range=range_)
+        if np.any(np.asarray(range_) <= 0):
             raise ValueError(f"{f}.range: must be > 0 (inf for none), got {self.range!r}")
         # which operations act, decided once: the sample loop skips the others
         object.__setattr__(
             out,
             "_acts",
             (
-                bool(np.any(out.bias)),
-                bool(np.any(out.noise)),
+                bool(np.any(bias)),
+                bool(np.any(noise)),
                 # 2: some elements (cases) without a quantiser, 1: all with one
-                0 if not np.any(out.quantum) else 1 if np.all(out.quantum > 0) else 2,
-                bool(np.any(np.isfinite(out.range))),
+                0 if not np.any(quantum) else 1 if np.all(np.asarray(quantum) > 0) else 2,
+                bool(np.any(np.isfinite(range_))),
             ),
         )
         return out
 
-    def measure(self, v: np.ndarray, noise) -> np.ndarray:
+    def measure(self, v: FloatArray, noise: FloatArray | float) -> FloatArray:
         """Measured value from v (the truth, or the derivative filter's output); a bound
         sensor (:meth:`bind`) only."""
         bias, noisy, quantized, ranged = self._acts
+        # bound (the precondition above): bind left every field in SI, a float or an array
         if bias:
-            v = v + self.bias
+            v = v + cast("Values", self.bias)
         if noisy:
-            v = v + self.noise * noise
+            v = v + cast("Values", self.noise) * noise
         if quantized == 1:
-            v = quantised(v, self.quantum)
+            v = quantised(v, cast("Values", self.quantum))
         elif quantized:  # a zero quantum reads the value itself (as the compiled loop does)
-            q = self.quantum
+            q = cast("Values", self.quantum)
             v = np.where(q > 0, quantised(v, np.where(q > 0, q, 1.0)), v)
         if ranged:
-            v = saturated(v, self.range)
+            v = saturated(v, cast("Values", self.range))
         return v
 
 
@@ -160,48 +174,54 @@ class ChannelActuator:
         Constant offset, channel unit.
     """
 
-    saturation: float = np.inf
-    rate_limit: float = np.inf
-    scale: float = 1.0
-    bias: float = 0.0
+    saturation: QuantityArrayLike = np.inf
+    rate_limit: QuantityArrayLike = np.inf
+    scale: QuantityArrayLike = 1.0
+    bias: QuantityArrayLike = 0.0
+    # which operations act, set by bind; not an __init__ argument, so a copy made by replace
+    # is unbound again
+    _acts: tuple[bool, bool, bool] = field(init=False, repr=False, compare=False)
 
     def bind(self, channel: Channel) -> ChannelActuator:
         """A copy with every field in SI of ``channel``'s unit, shaped for its width."""
         f, unit, w = f"actuators[{channel.name}]", channel.unit, channel.size
-        out = replace(
-            self,
-            saturation=_si(self.saturation, unit, f"{f}.saturation", inf_ok=True, size=w),
-            rate_limit=_si(
-                self.rate_limit, _rate_unit(unit), f"{f}.rate_limit", inf_ok=True, size=w
-            ),
-            scale=_si(self.scale, "", f"{f}.scale", size=w),
-            bias=_si(self.bias, unit, f"{f}.bias", nonneg=False, size=w),
-        )
-        for field in ("saturation", "rate_limit", "scale"):
-            if np.any(np.asarray(getattr(out, field)) <= 0):
-                raise ValueError(f"{f}.{field}: must be > 0, got {getattr(self, field)!r}")
+        saturation = _si(self.saturation, unit, f"{f}.saturation", inf_ok=True, size=w)
+        rate_limit = _si(self.rate_limit, _rate_unit(unit), f"{f}.rate_limit", inf_ok=True, size=w)
+        scale = _si(self.scale, "", f"{f}.scale", size=w)
+        bias = _si(self.bias, unit, f"{f}.bias", nonneg=False, size=w)
+        out = replace(self, saturation=saturation, rate_limit=rate_limit, scale=scale, bias=bias)
+        for name, value in (
+            ("saturation", saturation),
+            ("rate_limit", rate_limit),
+            ("scale", scale),
+        ):
+            if np.any(np.asarray(value) <= 0):
+                raise ValueError(f"{f}.{name}: must be > 0, got {getattr(self, name)!r}")
         object.__setattr__(
             out,
             "_acts",
             (
-                bool(np.any(np.isfinite(out.rate_limit))),
-                bool(np.any(np.isfinite(out.saturation))),
-                bool(np.any(out.bias)),
+                bool(np.any(np.isfinite(rate_limit))),
+                bool(np.any(np.isfinite(saturation))),
+                bool(np.any(bias)),
             ),
         )
         return out
 
-    def apply(self, command: np.ndarray, previous, dt: float):
+    def apply(
+        self, command: FloatArray, previous: FloatArray | None, dt: float
+    ) -> tuple[FloatArray, FloatArray]:
         """(applied input, limited command) of a bound actuator (:meth:`bind`); ``previous``
         is the last limited command (None at the first sample: the rate limit starts there)."""
         limited, clipped, biased = self._acts
+        # bound (the precondition above): bind left every field in SI, a float or an array
         c = command
         if limited and previous is not None:
-            c = rate_limited(c, previous, self.rate_limit * dt)
+            c = rate_limited(c, previous, cast("Values", self.rate_limit) * dt)
         if clipped:
-            c = saturated(c, self.saturation)
-        u = self.scale * c
-        return (u + self.bias if biased else u), c
+            c = saturated(c, cast("Values", self.saturation))
+        u = cast("Values", self.scale) * c
+        return (u + cast("Values", self.bias) if biased else u), c
 
 
 @dataclass(frozen=True)
@@ -227,14 +247,15 @@ class ChannelDisturbance:
         Prefix of its recorded history (``friction`` → ``friction_torque``).
     """
 
-    random: float = 0.0
-    impulse_times: tuple = ()
-    impulses: tuple = ()
-    force: object = None
+    random: QuantityArrayLike = 0.0
+    # each a number, a unit string or a Quantity (to_si_array reads the list); SI once bound
+    impulse_times: Sequence[Any] = ()
+    impulses: Sequence[Any] = ()
+    force: Callable[[FloatArray], FloatArray] | None = None
     force_output: str | None = None
     force_name: str = "friction"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if (self.force is None) != (self.force_output is None):
             raise ValueError(
                 "force_output: give the output channel driving the force, and only with a force"
@@ -281,9 +302,12 @@ class ChannelDisturbance:
         return bool(np.any(self.random) or self.impulses or self.force is not None)
 
 
-def _planar_presets(config) -> tuple[dict, dict, dict]:
+def _planar_presets(
+    config: SimConfig,
+) -> tuple[dict[str, ChannelSensor], dict[str, ChannelActuator], dict[str, ChannelDisturbance]]:
     """The single-axis presets of ``config`` as per-channel pieces (only those not ideal)."""
-    s, sensors = config.sensors, {}
+    s = config.sensors
+    sensors: dict[str, ChannelSensor] = {}
     if s.encoder_resolution > 0:
         sensors["theta"] = ChannelSensor(quantum=s.encoder_resolution)
     if s.rate == "ls_filter":
@@ -294,12 +318,14 @@ def _planar_presets(config) -> tuple[dict, dict, dict]:
         sensors["theta_dot"] = ChannelSensor(noise=s.gyro_noise)
     if s.strain_noise > 0:
         sensors["root_torque"] = ChannelSensor(noise=s.strain_noise)
-    a, actuators = config.actuator, {}
+    a = config.actuator
+    actuators: dict[str, ChannelActuator] = {}
     if np.any(np.isfinite(a.saturation)) or a.torque_constant_ratio != 1.0:
         actuators["torque"] = ChannelActuator(
             saturation=a.saturation, scale=a.torque_constant_ratio
         )
-    fr, imp, disturbances = config.friction, config.impulses, {}
+    fr, imp = config.friction, config.impulses
+    disturbances: dict[str, ChannelDisturbance] = {}
     d = ChannelDisturbance(
         random=config.random_torque.std,
         impulse_times=imp.times,
@@ -312,7 +338,9 @@ def _planar_presets(config) -> tuple[dict, dict, dict]:
     return sensors, actuators, disturbances
 
 
-def resolve_channels(plant, config) -> tuple[dict, dict, dict]:
+def resolve_channels(
+    plant: Plant, config: SimConfig
+) -> tuple[dict[str, ChannelSensor], dict[str, ChannelActuator], dict[str, ChannelDisturbance]]:
     """Bound sensors, actuators and disturbances by channel name: the planar presets of
     ``config`` overridden by its ``channel_sensors``, ``channel_actuators`` and
     ``channel_disturbances``; each checked against the plant's channels.
@@ -333,13 +361,13 @@ def resolve_channels(plant, config) -> tuple[dict, dict, dict]:
     sensors.update(config.channel_sensors)
     actuators.update(config.channel_actuators)
     disturbances.update(config.channel_disturbances)
-    out = []
+    out: list[dict[str, Any]] = []  # the bound sensors, actuators and disturbances
     for pieces, role, kind in (
         (sensors, "output", ChannelSensor),
         (actuators, "input", ChannelActuator),
         (disturbances, "input", ChannelDisturbance),
     ):
-        bound = {}
+        bound: dict[str, Any] = {}
         for name, piece in pieces.items():
             if not isinstance(piece, kind):
                 raise ValueError(f"{name}: expected a {kind.__name__}, got {piece!r}")
@@ -362,6 +390,7 @@ def resolve_channels(plant, config) -> tuple[dict, dict, dict]:
     columns = noise_columns(plant)
     for name, d in disturbances.items():
         if d.force is not None:
+            assert d.force_output is not None  # __post_init__: a force comes with its output
             find_channel(plant.outputs, d.force_output, "output", owner)
         if np.any(d.random):
             noise_column(columns, name, "its random disturbance", plant)
@@ -371,20 +400,27 @@ def resolve_channels(plant, config) -> tuple[dict, dict, dict]:
     return sensors, actuators, disturbances
 
 
-def input_impulses(disturbances: dict, slices: dict, m: int, n_t: int, dt: float) -> dict:
+def input_impulses(
+    disturbances: Mapping[str, ChannelDisturbance],
+    slices: Mapping[str, slice],
+    m: int,
+    n_t: int,
+    dt: float,
+) -> dict[int, FloatArray]:
     """The impulses of the channels' disturbances on the sample grid: {sample: J (m,)}, the
     impulses of every input channel at that sample (SI), summed where two fall on
     one sample; both loops apply Δx = B J there."""
-    impulses = {}
+    impulses: dict[int, FloatArray] = {}
     for k, d in disturbances.items():
         for i, J in d.impulses_at_samples(n_t, dt).items():
             impulses.setdefault(i, np.zeros(m))[slices[k]] += J
     return impulses
 
 
-def noise_columns(plant) -> dict[str, slice]:
+def noise_columns(plant: Plant) -> dict[str, slice]:
     """Columns of each noise channel in a case's stream (the plant's ``noise_channels``)."""
-    out, start = {}, 0
+    out: dict[str, slice] = {}
+    start = 0
     for name in plant.noise_channels:
         for channels in (plant.outputs, plant.inputs):
             ch = next((c for c in channels if c.name == name), None)
@@ -397,7 +433,7 @@ def noise_columns(plant) -> dict[str, slice]:
     return out
 
 
-def noise_column(columns: dict[str, slice], name: str, what: str, plant):
+def noise_column(columns: Mapping[str, slice], name: str, what: str, plant: Plant) -> int | slice:
     """The stream column(s) of channel ``name``, or a ValueError when it has no stream."""
     if name not in columns:
         raise ValueError(

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -39,6 +40,18 @@ from scipy.integrate import solve_ivp
 from flexsat.input_checks import require_finite, require_positive
 from flexsat.sim.integrators import apply
 from flexsat.sim.recording import CHUNK, Recorder, SimResult
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.control.base import Controller
+    from flexsat.dynamics.plant import Plant
+    from flexsat.sim.channels import ChannelActuator, ChannelDisturbance, ChannelSensor
+    from flexsat.sim.config import SimConfig
+    from flexsat.units import FloatArray, QuantityArrayLike
+
+#: the law's reading of one output from the states x (n_cases, n_x)
+Reader = Callable[["FloatArray"], "FloatArray"]
 
 #: default tolerances of the mode: with them the tether's libration angles are good to ~1e-9
 #: rad over a few orbits, and the gimbal angles of a CMG steering run to ~1e-9 rad
@@ -80,28 +93,36 @@ class ContinuousRun:
     stopped: bool
     t_end: float
     x_end: np.ndarray
-    solution: Callable
+    solution: Callable[[float | FloatArray], FloatArray]
     steps: np.ndarray
 
 
 class _Loop:
     """The closed-loop right-hand side of one run (module docstring)."""
 
-    def __init__(self, plant, controller, nc: int, exogenous):
+    def __init__(
+        self,
+        plant: Plant,
+        controller: Controller,
+        nc: int,
+        exogenous: Callable[[float], FloatArray] | None,
+    ) -> None:
         self.plant, self.controller, self.nc = plant, controller, nc
         self.law = type(controller).__name__
         A, B = plant.linear_part()
         self.batched = np.ndim(A) == 3
         self.At, self.Bt = np.swapaxes(A, -1, -2), np.swapaxes(B, -1, -2)
         self.force = plant.nonlinear_force if plant.nonlinear else None
-        self.Bft = np.swapaxes(plant.force_matrix, -1, -2) if plant.nonlinear else None
+        # B_f: None only for a linear plant (Plant.force_matrix)
+        Bf = plant.force_matrix if plant.nonlinear else None
+        self.Bft = None if Bf is None else np.swapaxes(Bf, -1, -2)
         self.m, self.slices = plant.n_inputs, plant.input_slices
         self.reads, self.writes = tuple(controller.reads), tuple(controller.writes)
         self.exogenous = exogenous
         self.zero_u = np.zeros((nc, self.m))
         # how each read is taken from x: state columns, a product with C, or the plant's own
         # output (called several times per integrator step: the cheap forms matter)
-        self.readers = []
+        self.readers: list[tuple[str, Reader]] = []
         for name in self.reads:
             mats = plant.output_matrices(name)
             if mats is not None and mats[1] is not None and np.any(mats[1]):
@@ -111,7 +132,9 @@ class _Loop:
                 )
             self.readers.append((name, self._reader(name, mats)))
 
-    def _reader(self, name: str, mats):
+    def _reader(
+        self, name: str, mats: tuple[FloatArray, FloatArray, FloatArray | None] | None
+    ) -> Reader:
         plant = self.plant
         if mats is None:
             return lambda x: plant.output(name, x, self.zero_u, None)
@@ -167,11 +190,17 @@ class _Loop:
         _, w = self.input(t, x)
         dx = apply(x, self.At, self.batched) + apply(w, self.Bt, self.batched)
         if self.force is not None:
+            assert self.Bft is not None  # both set for a nonlinear plant (__init__)
             dx = dx + apply(self.force(x, w), self.Bft, self.batched)
         return dx.ravel()
 
 
-def _exogenous(plant, exogenous, nc: int, t0: float):
+def _exogenous(
+    plant: Plant,
+    exogenous: Callable[[float], Mapping[str, npt.ArrayLike]] | None,
+    nc: int,
+    t0: float,
+) -> Callable[[float], FloatArray] | None:
     """``exogenous`` as t -> (n_cases, m): a callable t -> {input channel: (n_cases,) or
     (n_cases, w) or broadcastable} checked once at the start t0."""
     if exogenous is None:
@@ -182,7 +211,7 @@ def _exogenous(plant, exogenous, nc: int, t0: float):
         )
     slices, m = plant.input_slices, plant.n_inputs
 
-    def at(t):
+    def at(t: float) -> FloatArray:
         values = exogenous(t)
         if not isinstance(values, Mapping) or not set(values) <= set(slices):
             raise ValueError(
@@ -202,9 +231,9 @@ def _exogenous(plant, exogenous, nc: int, t0: float):
     return at
 
 
-def _grid(times) -> np.ndarray:
+def _grid(times: QuantityArrayLike) -> FloatArray:
     t = require_finite(times, "times", "s")
-    step = np.diff(t) if t.ndim == 1 else None
+    step = np.diff(t) if t.ndim == 1 else np.zeros(0)  # read only for a 1-D grid
     if t.ndim != 1 or t.size < 2 or not (np.all(step > 0) or np.all(step < 0)):
         raise ValueError(
             f"times: must be a strictly monotonic 1-D grid of >= 2 times (decreasing integrates "
@@ -214,14 +243,14 @@ def _grid(times) -> np.ndarray:
 
 
 def run(
-    plant,
-    controller,
-    times,
-    initial_state,
+    plant: Plant,
+    controller: Controller,
+    times: QuantityArrayLike,
+    initial_state: QuantityArrayLike,
     rtol: float = RTOL,
     atol: float = ATOL,
-    stop: Callable | None = None,
-    exogenous: Callable | None = None,
+    stop: Callable[[float, FloatArray], float] | None = None,
+    exogenous: Callable[[float], Mapping[str, npt.ArrayLike]] | None = None,
     n_cases: int | None = None,
 ) -> ContinuousRun:
     """Integrate the closed loop of ``plant`` under the static law ``controller`` evaluated
@@ -290,28 +319,31 @@ def run(
         ) from None
     loop = _Loop(plant, controller, nc, _exogenous(plant, exogenous, nc, float(t[0])))
 
-    def diverging(_t, flat):
+    # solve_ivp reads an event's ``terminal`` and ``direction`` from attributes of the function
+    # (its documented interface), which a Callable type does not declare
+    def diverging(_t: float, flat: FloatArray) -> float:
         return DIVERGENCE_BOUND - float(np.max(np.abs(flat)))
 
-    diverging.terminal = True
-    events = [diverging]
+    diverging.terminal = True  # type: ignore[attr-defined]
+    events: list[Callable[[float, FloatArray], float]] = [diverging]
     margin = getattr(plant, "domain_margin", None)
     if margin is not None:
         if np.min(margin(x0)) <= 0:
-            raise ValueError(f"initial_state: {plant.domain_rule}")
+            # a plant with a domain_margin states its domain_rule (Plant's optional pair)
+            raise ValueError(f"initial_state: {plant.domain_rule}")  # type: ignore[attr-defined]
 
-        def left_domain(_t, flat):
+        def left_domain(_t: float, flat: FloatArray) -> float:
             return float(np.min(margin(flat.reshape(nc, -1))))
 
-        left_domain.terminal = True
+        left_domain.terminal = True  # type: ignore[attr-defined]
         events.append(left_domain)
     if stop is not None:
 
-        def stopped(t_, flat):
+        def stopped(t_: float, flat: FloatArray) -> float:
             return float(stop(t_, flat.reshape(nc, -1)))
 
-        stopped.terminal = True
-        stopped.direction = -1
+        stopped.terminal = True  # type: ignore[attr-defined]
+        stopped.direction = -1  # type: ignore[attr-defined]
         events.append(stopped)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         sol = solve_ivp(
@@ -341,7 +373,7 @@ def run(
         raise ValueError(f"times: the integration failed at t = {sol.t[-1]:.6g} s: {sol.message}")
     if margin is not None and sol.t_events[1].size:
         raise ValueError(
-            f"{plant.domain_rule} at t = {sol.t_events[1][0]:.3g} s (the run ends there)"
+            f"{plant.domain_rule} at t = {sol.t_events[1][0]:.3g} s (the run ends there)"  # type: ignore[attr-defined]
         )
     stopped_early = sol.status == 1
     if stopped_early:  # only the stop condition is left to end it
@@ -358,7 +390,7 @@ def run(
         raise ValueError("times: the run left finite values (a diverging closed loop)")
     dense = sol.sol
 
-    def solution(tq):
+    def solution(tq: float | FloatArray) -> FloatArray:
         z = dense(tq)
         return z.reshape(nc, -1) if np.ndim(tq) == 0 else z.T.reshape(-1, nc, plant.nx)
 
@@ -368,7 +400,16 @@ def run(
 
 
 def simulate_continuous(
-    plant, controller, config, nc: int, x0, theta0, record_states: bool, pieces: tuple
+    plant: Plant,
+    controller: Controller,
+    config: SimConfig,
+    nc: int,
+    x0: FloatArray,
+    theta0: FloatArray | None,
+    record_states: bool,
+    pieces: tuple[
+        Mapping[str, ChannelSensor], Mapping[str, ChannelActuator], Mapping[str, ChannelDisturbance]
+    ],
 ) -> SimResult:
     """The continuous-law run of :func:`~flexsat.sim.engine.simulate` on the grid of
     ``config`` (0, 1/control_rate, ..., duration; the output samples), as a
@@ -384,9 +425,10 @@ def simulate_continuous(
                 f"{name}: a {role} is a sampled-data piece; continuous-law mode evaluates the "
                 "law on the true outputs (use law_mode='sampled')"
             )
-    t = config.dt * np.arange(config.n_steps + 1)
+    t = config.dt * np.arange(config.n_steps + 1, dtype=np.float64)
     if getattr(controller, "reference", None) is not None:
-        controller.tabulate_reference(t)
+        # a law with a reference is a slew law (flexsat.control.base.SlewLaw)
+        controller.tabulate_reference(t)  # type: ignore[attr-defined]
     out = run(plant, controller, t, x0, config.rtol, config.atol, n_cases=nc)
     n = t.size
     rec = Recorder(plant, n, nc, (), {}, record_states, plant.n_cases != 1, input_lag=0)

@@ -20,8 +20,8 @@ recorded outputs and energies are computed per chunk of samples after the fact
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from collections.abc import Callable, Iterable, Mapping
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -44,6 +44,12 @@ if TYPE_CHECKING:
 
     from flexsat.control.base import Controller
     from flexsat.dynamics.plant import Plant
+    from flexsat.maneuvers.torque_shapes import TorqueShape
+    from flexsat.sim.step import Values
+    from flexsat.units import FloatArray
+
+    #: a force term f(x, w) of the propagators: states (n_cases, n_x) and inputs (n_cases, m)
+    Force = Callable[[FloatArray, FloatArray], FloatArray]
 
 #: a state entry (rad, rad/s, modal coordinates) or a command (SI) beyond this is taken as
 #: divergence: no slew or modal amplitude comes near it, and it leaves room for the products
@@ -64,13 +70,13 @@ class SimulationDiverged(ValueError):
         The likely cause.
     """
 
-    def __init__(self, message: str, cases: tuple[int, ...], time: float, cause: str):
+    def __init__(self, message: str, cases: tuple[int, ...], time: float, cause: str) -> None:
         super().__init__(message)
         self.cases, self.time, self.cause = cases, time, cause
 
 
 def divergence_error(
-    x, u_cmd, time: float, k: int, state_prev: float, config: SimConfig
+    x: FloatArray, u_cmd: FloatArray, time: float, k: int, state_prev: float, config: SimConfig
 ) -> SimulationDiverged:
     """The exception for a divergence found at sample ``k``: which cases, when, likely why."""
     bad_state = ~(np.abs(x) <= DIVERGENCE_BOUND).all(axis=1)
@@ -114,7 +120,7 @@ class _NoiseStreams:
     """Standard normals per case, drawn chunk by chunk from each case's own generator (the
     same numbers as one draw of the whole run: the generator fills its output in order)."""
 
-    def __init__(self, seeds, width: int):
+    def __init__(self, seeds: Iterable[int | np.integer[Any]], width: int) -> None:
         self.rngs = [np.random.default_rng(int(s)) for s in seeds]
         self.width = width
 
@@ -125,7 +131,14 @@ class _NoiseStreams:
         return out
 
 
-def build_stepper(kind: str, A, B, Bf, dt: float, substeps: int):
+def build_stepper(
+    kind: str,
+    A: FloatArray,
+    B: FloatArray,
+    Bf: FloatArray | None,
+    dt: float,
+    substeps: int,
+) -> integrators.ExponentialStepper | integrators.ExpRK4Stepper:
     """The propagator of a run: Krogstad's ``exp_rk4`` for a plant asking for it with a force,
     else the exact linear step with ETD2RK for the force columns ``Bf`` (None: linear)."""
     if kind not in integrators.INTEGRATORS:
@@ -141,7 +154,9 @@ def build_stepper(kind: str, A, B, Bf, dt: float, substeps: int):
 ExponentialStepper = integrators.ExponentialStepper
 
 
-def _noise_streams(seeds, n_samples: int, width: int = 3) -> np.ndarray:
+def _noise_streams(
+    seeds: Iterable[int | np.integer[Any]], n_samples: int, width: int = 3
+) -> np.ndarray:
     """Standard normals (n_samples, n_cases, width) of the whole run at once, case i from its
     seed: the numbers the loop draws chunk by chunk (benchmarks replay them)."""
     return _NoiseStreams(seeds, width).next(n_samples)
@@ -183,7 +198,14 @@ def check_law(plant: Plant, controller: Controller) -> None:
         raise ValueError(f"writes: {law} must write each input channel once, got {writes!r}")
 
 
-def _commands(cmd, writes, shapes, nc: int, law: str, check: bool) -> list[np.ndarray]:
+def _commands(
+    cmd: FloatArray | Mapping[str, FloatArray],
+    writes: tuple[str, ...],
+    shapes: list[tuple[int, ...]],
+    nc: int,
+    law: str,
+    check: bool,
+) -> list[np.ndarray]:
     """The law's commands as one array per written channel, shape (n_cases,) or (n_cases, w);
     on the first sample (``check``) a wrong shape, key or type is a ValueError naming it."""
     if not isinstance(cmd, Mapping):
@@ -213,7 +235,9 @@ def _commands(cmd, writes, shapes, nc: int, law: str, check: bool) -> list[np.nd
     return out
 
 
-def _initial_state(plant, nc, initial_state, ref):
+def _initial_state(
+    plant: Plant, nc: int, initial_state: npt.ArrayLike | None, ref: TorqueShape | None
+) -> tuple[FloatArray, FloatArray | None]:
     """(x0, start angle per case or None): the given state, else the plant's rest state, a
     maneuver plant's angle (:attr:`~flexsat.dynamics.plant.Plant.maneuver`) at the start of
     the law's reference; the start angle is that of a maneuver plant's angle coordinate."""
@@ -234,7 +258,16 @@ def _initial_state(plant, nc, initial_state, ref):
     return x, (x[:, row].copy() if row is not None else None)
 
 
-def _propagator(plant, A, B, forces: InputForces, nc: int, batched: bool, dt: float, substeps: int):
+def _propagator(
+    plant: Plant,
+    A: FloatArray,
+    B: FloatArray,
+    forces: InputForces,
+    nc: int,
+    batched: bool,
+    dt: float,
+    substeps: int,
+) -> tuple[integrators.ExponentialStepper | integrators.ExpRK4Stepper, Force | None]:
     """(stepper, force) of a plant propagated by the exponential integrators: the force
     columns are the plant's B_f and the columns of B of the inputs with a force (friction),
     rank-1 for the bearing; ``force`` is None for a linear run (the exact step alone)."""
@@ -254,7 +287,7 @@ def _propagator(plant, A, B, forces: InputForces, nc: int, batched: bool, dt: fl
     if not forces.cols:
         return stepper, plant.nonlinear_force
 
-    def force(xs, w):
+    def force(xs: FloatArray, w: FloatArray) -> FloatArray:
         fc = forces.compact(xs, w)
         return np.concatenate([plant.nonlinear_force(xs, w + forces.full(fc)), fc], axis=1)
 
@@ -366,7 +399,7 @@ def simulate(
     columns = noise_columns(plant)
     forced = {k: d for k, d in disturbances.items() if d.force is not None}
     writes = tuple(controller.writes)
-    shapes = [
+    shapes: list[tuple[int, ...]] = [
         (nc,) if slices[k].stop - slices[k].start == 1 else (nc, slices[k].stop - slices[k].start)
         for k in writes
     ]
@@ -377,9 +410,10 @@ def simulate(
     )
     inst = Instruments(plant, measured, sensors, columns, dt, nc, batched, bool(forced))
     forces = InputForces(plant, forced, batched)
-    t = dt * np.arange(n + 1)
+    t = dt * np.arange(n + 1, dtype=np.float64)
     if getattr(controller, "reference", None) is not None:  # laws without one may be frozen
-        controller.tabulate_reference(t)
+        # a law with a reference is a slew law (flexsat.control.base.SlewLaw)
+        controller.tabulate_reference(t)  # type: ignore[attr-defined]
     kept = tuple(k for k in measured if k in getattr(plant, "recorded_measurements", ()))
     if compiled is not False:
         reason = compiled_path.unsupported(
@@ -429,7 +463,7 @@ def simulate(
         if compiled:
             raise ValueError(f"compiled: this run cannot take the compiled loop: {reason}")
 
-    def input_force(xs, w):
+    def input_force(xs: FloatArray, w: FloatArray) -> FloatArray:
         """Input-channel forces f_in (n_cases, m) at states xs."""
         return forces.full(forces.compact(xs, w))
 
@@ -442,7 +476,12 @@ def simulate(
 
     impulses = input_impulses(disturbances, slices, m, n + 1, dt)
     random = [
-        (slices[k], d.random, noise_column(columns, k, "its random disturbance", plant))
+        # d is bound (resolve_channels): its random is SI, a float or an array
+        (
+            slices[k],
+            cast("Values", d.random),
+            noise_column(columns, k, "its random disturbance", plant),
+        )
         for k, d in disturbances.items()
         if np.any(d.random)
     ]
@@ -466,7 +505,7 @@ def simulate(
         batched,
         [k for k, d in disturbances.items() if np.any(d.random)],
     )
-    law = type(controller).__name__
+    law_name = type(controller).__name__
     # views the loop writes into: one history per written channel, the state slot ring
     cmd_hist = [
         rec.commands[:, :, sl.start] if sl.stop - sl.start == 1 else rec.commands[:, :, sl]
@@ -476,14 +515,16 @@ def simulate(
     ring = rec.states is None
     buffer, nbuf = rec.buffer, len(rec.buffer)
     single = m == 1  # one written input of size 1: u is the command column itself
-    w_prev = np.zeros((nc, m))
-    f_in = None
-    prev_cmd = [None] * len(acts)  # the last rate-limited commands
+    w_prev: FloatArray = np.zeros((nc, m))
+    f_in: FloatArray | None = None
+    prev_cmd: list[FloatArray | None] = [None] * len(acts)  # the last rate-limited commands
     state_prev = 0.0
-    noise = noise_k = None
+    noise: FloatArray = np.empty((0, nc, width))  # drawn at sample 0 of a noisy run, read after
+    noise_k: FloatArray | None = None
     for k in range(n + 1):
         if noisy:
             if k % CHUNK == 0:
+                assert streams is not None  # made for a noisy run
                 noise = streams.next(min(CHUNK, n + 1 - k))
             noise_k = noise[k % CHUNK]
         if k in impulses:
@@ -492,7 +533,7 @@ def simulate(
             f_in = input_force(x, w_prev)
         y = inst.measure(x, w_prev, f_in, noise_k, k == 0)
         cmd, cstate = controller(t[k], y, cstate)
-        cmds = _commands(cmd, writes, shapes, nc, law, k == 0)
+        cmds = _commands(cmd, writes, shapes, nc, law_name, k == 0)
         # one reduction per sample (NaN fails the comparison too): a diverging run stops here
         state_size = np.abs(x).max()
         size = np.abs(cmds[0]).max() if len(cmds) == 1 else max(np.abs(c).max() for c in cmds)
@@ -507,9 +548,12 @@ def simulate(
             if single:
                 u = c[:, None]
             else:
+                assert u is not None  # allocated above when not single
                 u[:, sl] = c if c.ndim == 2 else c[:, None]
+        assert u is not None  # set by the one written channel when single (check_law: >= 1)
         w = u
         for sl, std, col in random:
+            assert noise_k is not None  # a random disturbance makes the run noisy
             w = w.copy() if w is u else w
             w[:, sl] += (
                 (std * noise_k[:, col])[:, None] if isinstance(col, int) else std * noise_k[:, col]
@@ -517,6 +561,7 @@ def simulate(
         rec.applied[k] = u
         rec.disturbed[k] = w
         if forced:
+            assert rec.forces is not None  # kept for the forced channels
             rec.forces[k] = f_in
         for hist, name in meas_hist:
             hist[k] = y[name]
@@ -534,6 +579,7 @@ def simulate(
                         own_step(x, w if f_in is None else w + input_force(x, w), h)
                     )
             else:
+                assert stepper is not None  # built by _propagator for a plant without own step
                 x = stepper.step(x, w, force)
         w_prev = w
     rec.flush(n + 1)

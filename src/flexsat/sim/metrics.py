@@ -11,10 +11,22 @@ compiled by numba), so the two give the same numbers bit for bit (a maximum is e
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any, overload
+
 import numpy as np
+import numpy.typing as npt
 from numba.extending import register_jitable
 
 from flexsat.analysis.settling import settled_at, settling_time
+
+if TYPE_CHECKING:
+    from flexsat.sim.step import Values
+    from flexsat.units import FloatArray
+
+# a per-sample term of two or more arguments has two overloads, all floats -> float (the compiled
+# kernel) and any array -> array (the recorded histories): the ignore on the first is safe for the
+# reason given at flexsat.sim.step.Values (floats pick the first overload)
 
 METRIC_UNITS = {
     "settling_time_s": "s",
@@ -27,24 +39,53 @@ METRIC_UNITS = {
 }
 
 
+@overload
+def peak_term(s: float) -> float: ...
+
+
+@overload
+def peak_term(s: FloatArray) -> FloatArray: ...
+
+
 @register_jitable
-def peak_term(s):
+def peak_term(s: Values) -> Values:
     """|s|: its maximum over the samples is a peak (tip deflection, rate error, torque)."""
     return np.abs(s)
 
 
+@overload
+def past_term(s: float, direction: float) -> float: ...  # type: ignore[overload-overlap]
+
+
+@overload
+def past_term(s: Values, direction: Values) -> FloatArray: ...
+
+
 @register_jitable
-def past_term(s, direction):
+def past_term(s: Values, direction: Values) -> Values:
     """d · s, d = ±1 the slew direction: its maximum over the samples of s = θ − θ_f is the
     largest excursion past the target (the overshoot where positive)."""
     return direction * s
 
 
+@overload
+def outside_term(s: float, band: float, k: float) -> float: ...  # type: ignore[overload-overlap]
+
+
+@overload
+def outside_term(
+    s: Values, band: Values, k: FloatArray | npt.NDArray[np.integer[Any]] | float
+) -> FloatArray: ...
+
+
 @register_jitable
-def outside_term(s, band, k):
+def outside_term(
+    s: Values, band: Values, k: FloatArray | npt.NDArray[np.integer[Any]] | float
+) -> Values:
     """k + 1 where |s_k| > band, else 0: its maximum over the samples is 1 + the last sample
     outside the band (0 if none; n_t if the last sample is outside: not settled)."""
-    return (k + 1.0) * (np.abs(s) > band)
+    # numpy's stubs type an integer array + 1.0 as floating[Any]; at run time it is float64
+    return (k + 1.0) * (np.abs(s) > band)  # type: ignore[return-value]
 
 
 def maneuver_direction(theta0: np.ndarray, target: np.ndarray) -> np.ndarray:
@@ -128,14 +169,14 @@ def maneuver_metrics(
 
 
 def channel_metrics(
-    histories: dict,
-    units: dict,
-    outputs,
-    inputs,
-    t: np.ndarray,
-    attitude_target=None,
+    histories: Mapping[str, FloatArray],
+    units: Mapping[str, str],
+    outputs: Sequence[str],
+    inputs: Sequence[str],
+    t: FloatArray,
+    attitude_target: npt.ArrayLike | None = None,
     band: float | None = None,
-) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+) -> tuple[dict[str, FloatArray], dict[str, str]]:
     """Summary metrics of any plant's run, from its recorded (case, time[, component]) histories.
 
     For each recorded output channel: ``peak_<name>`` (largest magnitude, the Euclidean norm of
@@ -151,9 +192,10 @@ def channel_metrics(
     (dict, dict)
         Metrics (n_cases,) by name, and their units.
     """
-    metrics, metric_units = {}, {}
+    metrics: dict[str, FloatArray] = {}
+    metric_units: dict[str, str] = {}
 
-    def norm(a):
+    def norm(a: FloatArray) -> FloatArray:
         return np.abs(a) if a.ndim == 2 else np.linalg.norm(a, axis=-1)
 
     for name in outputs:

@@ -10,13 +10,21 @@ so neither a per-sample Python call per output nor the full state history is nee
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import xarray as xr
 
 from flexsat.sim.instruments import stacked_output_matrices
 from flexsat.sim.metrics import METRIC_UNITS, channel_metrics, maneuver_metrics
+
+if TYPE_CHECKING:
+    from flexsat.control.base import Controller
+    from flexsat.dynamics.plant import Channel, ManeuverChannels, Plant
+    from flexsat.sim.config import SimConfig
+    from flexsat.units import FloatArray
 
 #: samples per chunk of states kept in the loop before its outputs are computed; 32 keeps the
 #: buffer (32 × n_x values per case) small next to the recorded histories
@@ -33,12 +41,12 @@ class SimResult:
     dataset: xr.Dataset
     metrics: dict[str, np.ndarray]
 
-    def metrics_records(self, labels=None) -> list[dict]:
+    def metrics_records(self, labels: Sequence[Any] | None = None) -> list[dict[str, Any]]:
         """One JSON-ready dict per case (NaN → None)."""
         n = self.dataset.sizes["case"]
         rows = []
         for i in range(n):
-            row = {} if labels is None else {"run": labels[i]}
+            row: dict[str, Any] = {} if labels is None else {"run": labels[i]}
             for key, val in self.metrics.items():
                 v = float(val[i])
                 row[key] = None if not np.isfinite(v) else v
@@ -61,48 +69,50 @@ class Recorder:
 
     def __init__(
         self,
-        plant,
+        plant: Plant,
         n: int,
         nc: int,
         measured: tuple[str, ...],
-        force_names: dict,
+        force_names: Mapping[str, str],
         record_states: bool,
         batched: bool,
-        random_channels=(),
+        random_channels: Iterable[str] = (),
         allocate: bool = True,
         input_lag: int = 1,
-    ):
+    ) -> None:
         self.plant, self.n, self.nc, self.batched = plant, n, nc, batched
         # the input an output's feedthrough sees at sample k: the one held before it (1, a
         # sampled-data run) or the one at t_k itself (0, a continuous law)
         self.input_lag = input_lag
         m = plant.n_inputs
         # the compiled loop (flexsat.sim.compiled) writes its own records and hands views of
-        # them over (allocate=False): the histories are then never allocated twice
-        zeros = np.zeros if allocate else (lambda shape: None)
-        self.commands = zeros((n, nc, m))
-        self.applied = zeros((n, nc, m))
-        self.disturbed = zeros((n, nc, m))  # applied + disturbance: the plant's input
-        self.forces = zeros((n, nc, m)) if force_names else None
+        # them over (allocate=False): the histories are then never allocated twice. They are
+        # typed as what they hold once the loop runs; None only until that hand-over
+        zeros: Callable[[tuple[int, ...]], Any] = np.zeros if allocate else (lambda shape: None)
+        self.commands: FloatArray = zeros((n, nc, m))
+        self.applied: FloatArray = zeros((n, nc, m))
+        self.disturbed: FloatArray = zeros((n, nc, m))  # applied + disturbance: the plant's input
+        self.forces: FloatArray | None = zeros((n, nc, m)) if force_names else None
         self.force_names = force_names
         # disturbance and force histories: of the channels that have them, and of those the
         # plant always records (the planar torque: a stable dataset for reports)
         always = set(getattr(plant, "recorded_disturbances", ()))
         self.with_disturbance = set(random_channels) | always
         self.with_force = set(force_names) | always
-        self.measured = {
-            k: _history(n, nc, _size(plant.outputs, k)) if allocate else None for k in measured
-        }
-        self.states = zeros((n, nc, plant.nx)) if record_states else None
-        self.buffer = (
-            self.states
+        history: Callable[[str], Any] = (
+            (lambda k: _history(n, nc, _size(plant.outputs, k))) if allocate else (lambda k: None)
+        )
+        self.measured: dict[str, FloatArray] = {k: history(k) for k in measured}
+        self.states: FloatArray | None = zeros((n, nc, plant.nx)) if record_states else None
+        # recording states: the states themselves; allocate=False: None, never read (the
+        # compiled loop computes its outputs itself)
+        self.buffer: FloatArray = (
+            cast("FloatArray", self.states)
             if record_states or not allocate
             else np.empty((min(CHUNK, n), nc, plant.nx))
         )
         names = [c for c in plant.recorded]
-        self.outputs = {
-            k: _history(n, nc, _size(plant.outputs, k)) if allocate else None for k in names
-        }
+        self.outputs: dict[str, FloatArray] = {k: history(k) for k in names}
         mats = [plant.output_matrices(k) for k in names]
         self.linear = [k for k, mt in zip(names, mats) if mt is not None]
         self.nonlinear = [k for k, mt in zip(names, mats) if mt is None]
@@ -115,8 +125,8 @@ class Recorder:
         probe = np.zeros((plant.n_cases, plant.nx))  # (cases, n_x): one state per parameter case
         self.has_energy = plant.energy(probe) is not None
         self.has_vibration = has_vib and self.has_energy
-        self.energy = zeros((n, nc)) if self.has_energy else None
-        self.vibration = zeros((n, nc)) if self.has_vibration else None
+        self.energy: FloatArray | None = zeros((n, nc)) if self.has_energy else None
+        self.vibration: FloatArray | None = zeros((n, nc)) if self.has_vibration else None
         self.done = 0
 
     def flush(self, end: int) -> None:
@@ -147,21 +157,30 @@ class Recorder:
             E = self.plant.energy(X)
             self.energy[k0:end] = E
             if self.vibration is not None:
-                self.vibration[k0:end] = self.plant.vibration_energy(X, E)
+                # has_vibration (set in __init__): the plant has vibration_energy
+                self.vibration[k0:end] = self.plant.vibration_energy(X, E)  # type: ignore[attr-defined]
         self.done = end
 
-    def _linear(self, X, MT):
+    def _linear(self, X: FloatArray, MT: FloatArray) -> FloatArray:
         if not self.batched or MT.ndim == 2:
             return X @ MT
         return np.einsum("tci,cip->tcp", X, MT)
 
-    def dataset(self, t, controller, theta0, config, substeps, engine: str = "python") -> SimResult:
+    def dataset(
+        self,
+        t: FloatArray,
+        controller: Controller,
+        theta0: FloatArray | None,
+        config: SimConfig,
+        substeps: int,
+        engine: str = "python",
+    ) -> SimResult:
         """The xarray dataset (case × time; views, no copies) and the maneuver metrics;
         ``engine`` (``"python"`` or ``"compiled"``: which loop ran) goes to its attributes."""
         plant, nc = self.plant, self.nc
-        data = {}
+        data: dict[str, tuple[tuple[str, ...], Any, dict[str, str]]] = {}
 
-        def put(name, arr, unit, channel=None):
+        def put(name: str, arr: FloatArray, unit: str, channel: str | None = None) -> None:
             # every history of one channel (command, applied, disturbance, measured) shares
             # its component axis, so they combine element-wise
             axis = f"{channel or name}_component"
@@ -176,28 +195,28 @@ class Recorder:
             if k in self.outputs:
                 put(k, self.outputs[k], outs[k].unit)
         refs = reference_histories(controller, t, nc) if axis is not None else None
-        if refs is not None:
+        if axis is not None and refs is not None:  # refs is None without an axis
             put(f"{axis.angle}_ref", refs[0], "rad")
             put(f"{axis.rate}_ref", refs[1], "rad/s")
         self.disturbed -= self.applied  # the loop is over: keep the disturbance alone
         for ch, sl in plant.input_slices.items():
             unit = next(c.unit for c in plant.inputs if c.name == ch)
-            one = sl.stop - sl.start == 1
-            pick = (lambda a, i=sl.start: a[..., i]) if one else (lambda a, s=sl: a[..., s])
+
+            def pick(a: FloatArray, sl: slice = sl) -> FloatArray:
+                return a[..., sl.start] if sl.stop - sl.start == 1 else a[..., sl]
+
             put(f"{ch}_command", pick(self.commands), unit, ch)
             put(ch, pick(self.applied), unit)
             if ch in self.with_disturbance:
                 put(f"disturbance_{ch}", pick(self.disturbed), unit, ch)
             if ch in self.with_force:
                 name = f"{self.force_names.get(ch, 'friction')}_{ch}"
-                put(
-                    name,
-                    pick(self.forces)
-                    if ch in self.force_names
-                    else np.broadcast_to(0.0, pick(self.applied).shape),
-                    unit,
-                    ch,
-                )  # no memory
+                if ch in self.force_names:
+                    assert self.forces is not None  # kept whenever force_names is given
+                    force = pick(self.forces)
+                else:
+                    force = np.broadcast_to(0.0, pick(self.applied).shape)  # no memory
+                put(name, force, unit, ch)
         for k, v in self.outputs.items():
             if k not in data:
                 put(k, v, outs[k].unit)
@@ -238,28 +257,40 @@ class Recorder:
         return SimResult(ds, metrics)
 
 
-def _size(channels, name: str) -> int:
+def _size(channels: Iterable[Channel], name: str) -> int:
     return next(c.size for c in channels if c.name == name)
 
 
-def reference_histories(controller, t, nc):
+def reference_histories(
+    controller: Controller, t: FloatArray, nc: int
+) -> tuple[FloatArray, FloatArray] | None:
     """(θ_ref, θ'_ref) on the sample grid, (n_t, n_cases), or None for a law without them (no
     ``target`` for the maneuver angle: a state-space compensator, a scheduled gain)."""
     if not hasattr(controller, "reference_at") or not hasattr(controller, "target"):
         return None
     table = getattr(controller, "_table", None)
     if table is not None and len(table[0]) == len(t) and np.array_equal(table[0], t):
-        return tuple(
+        th_ref, thd_ref = (
             np.broadcast_to(np.asarray(a, float).reshape(len(t), -1), (len(t), nc))
             for a in table[1:3]
         )
+        return th_ref, thd_ref
     th, thd = np.zeros((len(t), nc)), np.zeros((len(t), nc))
     for k, tk in enumerate(t):
         th[k], thd[k] = controller.reference_at(tk)[:2]
     return th, thd
 
 
-def _metrics(ds: dict, axis, t, controller, theta0, config, refs, nc) -> dict:
+def _metrics(
+    ds: Mapping[str, FloatArray],
+    axis: ManeuverChannels | None,
+    t: FloatArray,
+    controller: Controller,
+    theta0: FloatArray | None,
+    config: SimConfig,
+    refs: tuple[FloatArray, FloatArray] | None,
+    nc: int,
+) -> dict[str, FloatArray]:
     """The single-axis maneuver metrics from the (case, time) histories ``ds`` of the channels
     ``axis`` (:class:`~flexsat.dynamics.plant.ManeuverChannels`) names, for a plant with those
     histories (else none)."""
@@ -268,8 +299,11 @@ def _metrics(ds: dict, axis, t, controller, theta0, config, refs, nc) -> dict:
     need = (axis.angle, axis.rate, axis.torque, axis.deflection, "vibration_energy")
     if refs is None or theta0 is None or not all(k in ds and ds[k].ndim == 2 for k in need):
         return {}
-    target = np.broadcast_to(np.asarray(controller.target, float), (nc,))
-    ref = controller.reference
+    # refs is not None: the law has a target (reference_histories checked) and, a slew law,
+    # a reference (flexsat.control.base.SlewLaw)
+    goal = controller.target  # type: ignore[attr-defined]
+    target = np.broadcast_to(np.asarray(goal, float), (nc,))
+    ref = controller.reference  # type: ignore[attr-defined]
     ref_end = None if ref is None else np.broadcast_to(np.asarray(ref.end_time, float), (nc,))
     blocks = []
     for start in range(0, nc, METRIC_BLOCK):

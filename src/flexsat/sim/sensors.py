@@ -56,7 +56,7 @@ class Sensors:
     gyro_noise: float = 0.0
     strain_noise: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         set_si(self, "encoder_resolution", require_nonneg, "rad")
         set_si(self, "gyro_noise", require_nonneg, "rad/s")
         set_si(self, "strain_noise", require_nonneg, "N*m")
