@@ -5,7 +5,6 @@ import pytest
 from scipy.linalg import expm
 
 from flexsat.cases.tamu_grid import tamu_grid
-from flexsat.design.era_noise import noise_damping_sweep
 from flexsat.identify import (
     Channel,
     Measurement,
@@ -119,15 +118,6 @@ def test_markov_from_longer_pulse(grid):
     Y = markov_parameters(meas, n_markov=n)
     ref = _discrete_markov(grid, out, [meas.input_channels[0]], meas.dt, n)
     assert np.max(np.abs(Y - ref)) < 1e-8 * np.max(np.abs(ref))
-
-
-def test_noise_damping_sweep_trend(grid, sensors):
-    sweep = noise_damping_sweep(
-        grid, [0.001, 0.01, 0.05], sensors, impulse_hammer(1, "z", 10.0), DURATION, RATE, seeds=(0,)
-    )
-    mean = sweep["damping_error"].mean(axis=1)
-    assert sweep["damping_error"].shape == (3, 6)
-    assert np.all(np.diff(mean) > 0)
 
 
 def test_degenerate_inputs(grid, sensors):
