@@ -46,6 +46,9 @@ class LyapunovRegulator(SlewLaw):
     ----------
     g1 : N m/rad;  g2 : N m s/rad;  g3 : dimensionless gain on l0 S0 − M0.
     target : final angle θ_f, rad.
+
+    Notes
+    -----
     Each a number in these SI units, a pint Quantity or a unit string (converted).
     """
 

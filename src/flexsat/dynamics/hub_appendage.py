@@ -84,6 +84,8 @@ class HubAppendageParams:
     damping : float or sequence of float
         Modal damping ratios of the cantilever modes (one value for all, or one per mode).
 
+    Notes
+    -----
     Each physical field also takes a pint Quantity or a unit string (``length="36 in"``) and is
     stored in SI.
     """

@@ -70,6 +70,8 @@ class BeamInOrbit(Plant):
     linearised : bool
         Drop the nonlinear remainder f (eqs 5–6 only, the linearisation at rest).
 
+    Notes
+    -----
     Outputs: ``pitch`` (rad), ``pitch_rate`` (rad/s), ``z1`` … ``zk`` (modal amplitudes
     A_n/l), their rates ``z1_rate`` … (1/s), and the station deflections.
     """

@@ -234,6 +234,8 @@ class SpaceStation(Plant):
     pitch_filters, roll_yaw_filters : sequence of int
         The filter frequencies (multiples k of n) of Eq. (12) on each axis group.
 
+    Notes
+    -----
     Inputs ``torque`` u = (u1, u2, u3), the CMG torque (N m; the station feels −u) and
     ``disturbance`` w = (w1, w2, w3) (N m). Outputs ``state``, ``attitude`` (θ1, θ2, θ3, rad)
     and ``momentum`` (h1, h2, h3, N m s). Linear: the engine propagates it exactly.

@@ -133,6 +133,8 @@ class TetherScales:
     length : float, str or Quantity
         Reference tether length L, m (> 0).
 
+    Notes
+    -----
     The paper's case (L4397-L4401): 220 km (Ω = 0.07068 rad/min), m = 22.7 kg, L = 20 km, so
     one unit of T̂ or F̂ is mΩ²L = 0.630 N, of ∫|F̂|dτ mΩL = 534.8 N s, of λ' LΩ = 23.56 m/s.
     """
@@ -214,6 +216,8 @@ class TetheredSubsatellite(Plant):
         ``rate``: inputs ``reel_rate`` (the commanded l̇, m/s) and ``thrust``, state
         [l, θ, φ, θ̇, φ̇].
 
+    Notes
+    -----
     In the protocol's form the kinematics (and, with rate control, l̇ = u) are the linear part;
     −T/m enters through B; the rest of the accelerations (ΩL²-scaled Eq. 4) is the nonlinear
     force with B_f selecting the three (two) acceleration rows. The engine propagates it with

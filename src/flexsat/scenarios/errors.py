@@ -26,9 +26,9 @@ class Problem(str):
     """One problem of a scenario: the field path and the rule it breaks, as data.
 
     It reads as the line users see, ``"path: rule"`` (``"scenario: rule"`` for the document
-    itself), so that it prints and compares as that text.
+    itself), so that it prints and compares as that text. ``Problem(path, rule)`` builds one.
 
-    Parameters
+    Attributes
     ----------
     path : str
         Dotted field path, runs named by label (``runs['Law I'].gains.g1``); ``""`` for the
