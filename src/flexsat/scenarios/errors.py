@@ -107,6 +107,8 @@ def _locate(path: str, message: str) -> Problem:
     rule = message[len(head) + 2 :]
     if path == head or path.endswith("." + head):
         return Problem(path, rule)
+    if head.startswith(path + "."):  # the message already names the path from the root
+        return Problem(head, rule)
     return Problem(f"{path}.{head}" if path else head, rule)
 
 
@@ -121,6 +123,8 @@ def locate(path: str, error: Exception) -> Problem:
         field = error.field
         if path == field or path.endswith("." + field):
             return Problem(path, error.rule)
+        if field.startswith(path + "."):  # the error already names the path from the root
+            return Problem(field, error.rule)
         return Problem(f"{path}.{field}" if path else field, error.rule)
     return _locate(path, str(error))
 
