@@ -86,6 +86,7 @@ if TYPE_CHECKING:
     from flexsat.units import FloatArray, QuantityArrayLike
 
 __all__ = [
+    "CollocatedPair",
     "PPFBank",
     "PPFController",
     "PPFModel",
