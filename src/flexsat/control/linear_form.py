@@ -120,13 +120,13 @@ class LinearLaw:
     float64 and made read-only; shapes and finiteness are checked, each error naming the field.
     """
 
-    Ak: np.ndarray
-    Bk: np.ndarray
-    Ck: np.ndarray
-    Dk: np.ndarray
-    y_ref: np.ndarray
-    u_ff: np.ndarray
-    K0: np.ndarray | None
+    Ak: FloatArray
+    Bk: FloatArray
+    Ck: FloatArray
+    Dk: FloatArray
+    y_ref: FloatArray
+    u_ff: FloatArray
+    K0: FloatArray | None
     reads: tuple[str, ...]
     writes: tuple[str, ...]
     read_sizes: tuple[int, ...]
