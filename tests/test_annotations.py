@@ -33,6 +33,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "flexsat"
 # whose every public parameter and return is annotated
 COMPLETE = (
     "attitude",
+    "control",
     "maneuvers",
     "structures",
     "testing",
@@ -54,7 +55,6 @@ COMPLETE = (
     "cases/tamu_grid.py",
     "cases/tamu_trade.py",
     "catalog.py",
-    "control/base.py",
     "design/monte_carlo_statistics.py",
     "design/parameter_space.py",
     "design/slew_shaping.py",
