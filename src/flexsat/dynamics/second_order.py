@@ -27,12 +27,16 @@ the hybrid coordinates of the NPS simulator, seed 001 Eqs. 10, 16).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
 
 from flexsat.input_checks import require_count, require_finite, require_positive
 from flexsat.structures.modal_model import hub_appendage_matrices
+
+if TYPE_CHECKING:
+    from flexsat.units import FloatArray
 
 __all__ = ["SecondOrderModel"]
 
@@ -41,7 +45,7 @@ __all__ = ["SecondOrderModel"]
 SYMMETRY_TOL = 1e-9
 
 
-def rigid_eigenvalue_bound(lam: np.ndarray) -> float:
+def rigid_eigenvalue_bound(lam: FloatArray) -> float:
     """Largest |λ| of eig(K, M) that is round-off of a rigid (λ = 0) mode.
 
     A backward-stable symmetric-definite solve perturbs each eigenvalue by about
@@ -56,7 +60,7 @@ def rigid_eigenvalue_bound(lam: np.ndarray) -> float:
     )
 
 
-def _matrix(value, field: str, shape: tuple[int | None, int | None], names: str) -> np.ndarray:
+def _matrix(value, field: str, shape: tuple[int | None, int | None], names: str) -> FloatArray:
     arr = require_finite(value, field)
     if arr.ndim == 1:  # a vector: one column (length n) or one row (length of the columns)
         if shape[0] is not None and arr.size == shape[0] and shape[1] in (None, 1):
@@ -69,7 +73,7 @@ def _matrix(value, field: str, shape: tuple[int | None, int | None], names: str)
     return arr.copy()
 
 
-def _symmetric(arr: np.ndarray, field: str) -> np.ndarray:
+def _symmetric(arr: FloatArray, field: str) -> FloatArray:
     scale = max(np.abs(arr).max(initial=0.0), np.finfo(float).tiny)
     if np.abs(arr - arr.T).max(initial=0.0) > SYMMETRY_TOL * scale:
         raise ValueError(
@@ -108,13 +112,13 @@ class SecondOrderModel:
         positive definite, K not symmetric positive semi-definite.
     """
 
-    M: np.ndarray
-    D: np.ndarray
-    K: np.ndarray
-    B: np.ndarray
-    Cq: np.ndarray
-    Cv: np.ndarray | None = None
-    Dff: np.ndarray | None = None
+    M: FloatArray
+    D: FloatArray
+    K: FloatArray
+    B: FloatArray
+    Cq: FloatArray
+    Cv: FloatArray | None = None
+    Dff: FloatArray | None = None
 
     def __post_init__(self):
         M = _matrix(self.M, "M", (None, None), "(n, n)")
@@ -175,7 +179,7 @@ class SecondOrderModel:
 
     # ------------------------------------------------------------------------------------------
     # first-order form
-    def first_order(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def first_order(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         r"""(A, B, C, D) of the realisation with state :math:`x = [q, \dot q]` (module docstring);
         :math:`M^{-1}` is applied by a Cholesky solve."""
         n = self.n_dof
@@ -256,12 +260,12 @@ class SecondOrderModel:
 
     # ------------------------------------------------------------------------------------------
     # modal form
-    def frequencies(self) -> np.ndarray:
+    def frequencies(self) -> FloatArray:
         """Undamped natural frequencies √eig(K, M), rad/s, ascending (rigid modes as 0)."""
         lam = scipy.linalg.eigh(self.K, self.M, eigvals_only=True)
         return np.sqrt(np.clip(lam, 0.0, None))
 
-    def modes(self) -> tuple[np.ndarray, np.ndarray]:
+    def modes(self) -> tuple[FloatArray, FloatArray]:
         r"""Undamped modes: frequencies ω (rad/s, ascending) and mass-normalised shapes Φ
         (columns, :math:`\Phi^T M \Phi = I`, :math:`\Phi^T K \Phi = \mathrm{diag}(\omega^2)`).
 

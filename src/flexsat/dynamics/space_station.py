@@ -40,12 +40,16 @@ secular component"). Its magnitudes are assumptions, documented in docs/cmg.md.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
 from flexsat.input_checks import require_finite, require_positive_scalar
 from flexsat.units import to_si_array
+
+if TYPE_CHECKING:
+    from flexsat.units import FloatArray
 
 __all__ = [
     "SpaceStation",
@@ -196,7 +200,7 @@ def roll_yaw_model(data: StationData, filters=(2,)):
     return A, B, E, names
 
 
-def design_disturbance(t, data: StationData) -> np.ndarray:
+def design_disturbance(t, data: StationData) -> FloatArray:
     """Eq. (11): w1 = w3 = 1 + sin nt + 0.5 sin 2nt, w2 = 4 + 2 sin nt + 0.5 sin 2nt ft-lb,
     in N m, shape (..., 3) (roll, pitch, yaw)."""
     tt = require_finite(t, "t", "s")
@@ -206,7 +210,7 @@ def design_disturbance(t, data: StationData) -> np.ndarray:
     return FT_LB * np.stack([roll, 4.0 + 2.0 * s1 + 0.5 * s2, roll], axis=-1)
 
 
-def aero_substitute(t, data: StationData, harmonic=0.5 * FT_LB, secular=1.0 * FT_LB) -> np.ndarray:
+def aero_substitute(t, data: StationData, harmonic=0.5 * FT_LB, secular=1.0 * FT_LB) -> FloatArray:
     """The stated substitute for the paper's AERO1 (module docstring): Eq. (11) plus
     ``harmonic`` × (sin 3nt + sin 4nt) on each axis and a pitch torque growing by ``secular``
     per orbit (N m or unit strings; defaults 0.5 and 1 ft-lb); N m, shape (..., 3)."""
@@ -261,7 +265,7 @@ class SpaceStation(Plant):
     def nx(self) -> int:
         return self.n_pitch + self.roll_yaw[0].shape[0]
 
-    def linear_part(self):
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """A block-diagonal; B from u2 (pitch) and u1, u3 (roll/yaw), then E likewise from w."""
         Ap, Bp, Ep, _ = self.pitch
         Ar, Br, Er, _ = self.roll_yaw
@@ -273,7 +277,7 @@ class SpaceStation(Plant):
         B[npitch:, [0, 2]], B[npitch:, [3, 5]] = Br, Er
         return A, B
 
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         n = self.nx
         if name == "state":
             return np.eye(n), np.zeros((n, 6)), None

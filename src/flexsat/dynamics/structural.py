@@ -36,6 +36,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -43,6 +44,9 @@ from flexsat.dynamics.plant import Channel, Plant, find_channel
 from flexsat.dynamics.second_order import SecondOrderModel
 from flexsat.input_checks import require_finite
 from flexsat.units import parse_quantity
+
+if TYPE_CHECKING:
+    from flexsat.units import FloatArray
 
 __all__ = ["Actuator", "ModalBlocks", "Sensor", "StructuralPlant"]
 
@@ -118,8 +122,8 @@ class ModalBlocks:
     integrator block).
     """
 
-    frequencies: np.ndarray  # ω, rad/s
-    damping: np.ndarray  # ζ (0 for a rigid mode)
+    frequencies: FloatArray  # ω, rad/s
+    damping: FloatArray  # ζ (0 for a rigid mode)
     n_rigid: int
 
 
@@ -172,7 +176,7 @@ class _Dofs:
             + " or an influence vector)"
         )
 
-    def vector(self, spec, pair: bool) -> np.ndarray:
+    def vector(self, spec, pair: bool) -> FloatArray:
         name = spec.name
         if spec.axis is not None:
             raise ValueError(f"{name}: axis applies to modal coordinates only (give the dof)")
@@ -227,7 +231,7 @@ class _Modes:
         self.modal = modal
         self.n = modal.n_modes
 
-    def vector(self, spec, pair: bool) -> np.ndarray:
+    def vector(self, spec, pair: bool) -> FloatArray:
         name, at, m = spec.name, spec.at, self.modal
         if spec.axis is None:
             raise ValueError(f"{name}: give the axis (or direction) on a modal model")
@@ -367,12 +371,12 @@ class StructuralPlant(Plant):
             arr.flags.writeable = False
         return A, B, C
 
-    def linear_part(self) -> tuple[np.ndarray, np.ndarray]:
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """(A, B) of the first-order form (module docstring)."""
         A, B, _ = self._first_order
         return A, B
 
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         """(C (1, 2n), D = 0 (1, m), None): every output is linear in the state."""
         find_channel(self.outputs, name, "output", type(self).__name__)
         if name == "state":
@@ -380,12 +384,12 @@ class StructuralPlant(Plant):
         i = [c.name for c in self.outputs].index(name)
         return self._first_order[2][i : i + 1], np.zeros((1, self.n_inputs)), None
 
-    def derivative(self, x, u) -> np.ndarray:
+    def derivative(self, x, u) -> FloatArray:
         """ẋ = A x + B u for states (..., 2n) and inputs (..., m)."""
         A, B = self.linear_part()
         return np.asarray(x, float) @ A.T + np.asarray(u, float) @ B.T
 
-    def energy(self, x) -> np.ndarray:
+    def energy(self, x: FloatArray) -> FloatArray:
         r"""Mechanical energy :math:`\tfrac12\dot q^T M\dot q + \tfrac12 q^T K q`, J, (...,)."""
         x = np.asarray(x, dtype=float)
         n = self.model.n_dof
@@ -395,14 +399,14 @@ class StructuralPlant(Plant):
         )
 
     @property
-    def energy_matrix(self) -> np.ndarray:
+    def energy_matrix(self) -> FloatArray:
         r"""Q = blockdiag(K, M) of :meth:`energy` = :math:`\tfrac12 x^T Q x`, x = [q, q̇]."""
         n = self.model.n_dof
         Q = np.zeros((2 * n, 2 * n))
         Q[:n, :n], Q[n:, n:] = self.model.K, self.model.M
         return Q
 
-    def power(self, x, u) -> np.ndarray:
+    def power(self, x: FloatArray, u: FloatArray) -> FloatArray:
         r"""Rate of :meth:`energy`, :math:`\dot q^T B u - \dot q^T D \dot q` (the work of the
         inputs less the dissipation), W, (...,)."""
         x, u = np.asarray(x, dtype=float), np.asarray(u, dtype=float)
