@@ -33,7 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -50,6 +50,9 @@ from flexsat.input_checks import (
 from flexsat.structures.beam import TipMassCantilever
 
 if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.structures.beam import CantileverModes
     from flexsat.units import FloatArray
 
 
@@ -61,6 +64,17 @@ def gauss_legendre(n: int) -> tuple[FloatArray, FloatArray]:
     s, w = np.polynomial.legendre.leggauss(n)
     s.flags.writeable = w.flags.writeable = False
     return s, w
+
+
+class _ModalIntegrals(TypedDict):
+    """The Galerkin integrals of :class:`HubAppendage` (its ``_modal_integrals``)."""
+
+    modes: CantileverModes
+    omega: FloatArray  # cantilever frequencies, rad/s
+    d: FloatArray  # rigid-elastic coupling of one appendage, kg m
+    e: FloatArray  # shear coupling, kg
+    phi_tip: FloatArray  # mode shapes at the tip
+    G: FloatArray  # rotational-stiffening matrix of all appendages
 
 
 @dataclass(frozen=True)
@@ -102,7 +116,7 @@ class HubAppendageParams:
     tip_inertia: float = 0.0
     damping: float | tuple[float, ...] = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name, unit in (
             ("hub_inertia", "kg*m**2"),
             ("length", "m"),
@@ -155,14 +169,14 @@ class HubAppendage(HybridPlant):
     params: HubAppendageParams
     n_modes: int = 10
     stiffening: bool = False
-    _quad: dict = field(init=False, repr=False, compare=False)
+    _quad: _ModalIntegrals = field(init=False, repr=False, compare=False)
 
     output_channels = HYBRID_OUTPUTS + (
         Channel("root_shear", "N", description="root shear force S0 of one appendage"),
         Channel("root_moment", "N*m", description="root bending moment M0 of one appendage"),
     )
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         require_count(self.n_modes, "n_modes")
         limits.check_count(self.n_modes, limits.MAX_MODES, "n_modes", "modes per appendage")
         zeta = np.atleast_1d(np.asarray(self.params.damping, dtype=float))
@@ -174,7 +188,7 @@ class HubAppendage(HybridPlant):
 
     # ----------------------------------------------------------------------------------------
     # modal integrals
-    def _modal_integrals(self) -> dict:
+    def _modal_integrals(self) -> _ModalIntegrals:
         p, k = self.params, self.n_modes
         modes = p.beam().modes(k)
         npts = max(200, 24 * k)
@@ -192,7 +206,7 @@ class HubAppendage(HybridPlant):
         spin_mass = p.rho * (phi * w[:, None]).T @ phi + p.tip_mass * np.outer(phi_l, phi_l)
         tension = p.rho * (l**2 - x**2) / 2 + p.tip_mass * l
         geometric = (dphi * (w * tension)[:, None]).T @ dphi
-        return dict(
+        return _ModalIntegrals(
             modes=modes,
             omega=modes.omegas,
             d=coupling,
@@ -252,7 +266,7 @@ class HubAppendage(HybridPlant):
         """
         return self.cantilever_frequencies.copy() if constrained else self.hub_free_frequencies()
 
-    def nonlinear_force(self, x: FloatArray, u: FloatArray) -> FloatArray:
+    def nonlinear_force(self, x: FloatArray, u: npt.ArrayLike) -> FloatArray:
         """Generalized force of the rotational-stiffening terms, shape (..., ndof).
 
         With s = qᵀGq the hub equation gains (I_tot + s) θ'' + 2 θ' qᵀ G q' and the modal
@@ -279,7 +293,7 @@ class HubAppendage(HybridPlant):
     def _tip_row(self) -> FloatArray:
         return self._quad["phi_tip"]
 
-    def _output_coefficients(self, name: str):
+    def _output_coefficients(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray, float]:
         """Linear forms of the root loads by force summation (module docstring): ``root_torque``
         = I_b θ'' + dᵀ q'', S0 = [ρ (l² − l0²)/2 + m l] θ'' + eᵀ q'', M0 = l0 S0 − (l0 S0 − M0).
         """
@@ -300,7 +314,9 @@ class HubAppendage(HybridPlant):
             return super()._output_coefficients(name)
         return z, z, acc, 0.0
 
-    def output_values(self, x: FloatArray, u, extra_force=0.0) -> dict[str, FloatArray]:
+    def output_values(
+        self, x: FloatArray, u: npt.ArrayLike, extra_force: float | FloatArray = 0.0
+    ) -> dict[str, FloatArray]:
         """Physical outputs of state x under hub torque u (SI).
 
         Returns hub angle and rate, root shear S0, root bending moment M0, the Lyapunov-law

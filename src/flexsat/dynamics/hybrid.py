@@ -15,8 +15,9 @@ stiffening) and :class:`ModalHybrid` (any cantilevered :class:`ModalModel`) buil
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Self, TypeAlias
 
 import numpy as np
 from scipy.linalg import eigh
@@ -25,19 +26,32 @@ from flexsat.dynamics.plant import Channel, ManeuverChannels, Plant
 from flexsat.input_checks import require_count, require_finite, require_positive
 
 if TYPE_CHECKING:
-    from flexsat.units import FloatArray
+    import numpy.typing as npt
+
+    import control
+    from flexsat.structures.modal_model import Direction, ModalModel
+    from flexsat.units import FloatArray, QuantityLike
+
+    #: every output of a hybrid plant at once: ``(x, u, extra_force)`` -> {name: values}
+    OutputEvaluator: TypeAlias = Callable[
+        [FloatArray, npt.ArrayLike, float | FloatArray], dict[str, FloatArray]
+    ]
 
 
-class OutputChannels(tuple):
+class OutputChannels(tuple[Channel, ...]):
     """The output channels of a hybrid plant, callable as its historical ``outputs(x, u,
     extra_force)`` (every output at once, a dict); the plant protocol reads the tuple."""
 
-    def __new__(cls, channels, evaluate):
+    _evaluate: OutputEvaluator
+
+    def __new__(cls, channels: Iterable[Channel], evaluate: OutputEvaluator) -> Self:
         obj = super().__new__(cls, channels)
         obj._evaluate = evaluate
         return obj
 
-    def __call__(self, x, u, extra_force=0.0) -> dict[str, FloatArray]:
+    def __call__(
+        self, x: FloatArray, u: npt.ArrayLike, extra_force: float | FloatArray = 0.0
+    ) -> dict[str, FloatArray]:
         return self._evaluate(x, u, extra_force)
 
 
@@ -60,7 +74,7 @@ class HybridPlant(Plant):
 
     stiffening = False
     inputs = (Channel("torque", "N*m", description="hub torque u"),)
-    output_channels = HYBRID_OUTPUTS
+    output_channels: tuple[Channel, ...] = HYBRID_OUTPUTS
     recorded = ("theta", "theta_dot", "root_torque", "tip_deflection")
     #: a slew of the hub angle: the maneuver metrics read theta, theta_dot, torque, tip_deflection
     maneuver = ManeuverChannels()
@@ -69,17 +83,47 @@ class HybridPlant(Plant):
     #: input channels whose disturbance and friction histories are always in the result
     recorded_disturbances = ("torque",)
     # gyro, strain gauge, random torque: the order of today's streams, so each case's noise
-    # is bit-identical whatever the engine measures
-    noise_channels = ("theta_dot", "root_torque", "torque")
+    # is bit-identical whatever the engine measures (the stored order Plant.noise_channels reads)
+    _noise_channels: tuple[str, ...] = ("theta_dot", "root_torque", "torque")
+
+    if TYPE_CHECKING:
+        # what a subclass provides, as an attribute or a property (class docstring)
+        @property
+        def mass_matrix(self) -> FloatArray: ...
+        @property
+        def damping_matrix(self) -> FloatArray: ...
+        @property
+        def stiffness_matrix(self) -> FloatArray: ...
+        @property
+        def hub_inertia(self) -> float: ...
+        @property
+        def n_appendages(self) -> int: ...
+        @property
+        def _tip_row(self) -> FloatArray: ...
+        def output_values(
+            self, x: FloatArray, u: npt.ArrayLike, extra_force: float | FloatArray = 0.0
+        ) -> dict[str, FloatArray]: ...
 
     @property
     def outputs(self) -> OutputChannels:
         """Output channels (a tuple), callable as ``outputs(x, u, extra_force)`` → dict."""
         return OutputChannels(self.output_channels, self.output_values)
 
+    @outputs.setter
+    def outputs(self, channels: tuple[Channel, ...]) -> None:
+        raise AttributeError(
+            f"outputs: the output channels of {type(self).__name__} are its output_channels"
+        )
+
     @property
     def nonlinear(self) -> bool:
         return bool(self.stiffening)
+
+    @nonlinear.setter
+    def nonlinear(self, value: bool) -> None:
+        raise AttributeError(
+            f"nonlinear: {type(self).__name__} is nonlinear exactly when its stiffening is on"
+        )
 
     @property
     def ndof(self) -> int:
@@ -101,7 +145,8 @@ class HybridPlant(Plant):
 
     @cached_property
     def mass_inverse(self) -> FloatArray:
-        return np.linalg.inv(self.mass_matrix)
+        # numpy types inv() as floating[Any]; it is float64 here, so the astype copies nothing
+        return np.linalg.inv(self.mass_matrix).astype(np.float64, copy=False)
 
     @cached_property
     def torque_input(self) -> FloatArray:
@@ -152,7 +197,7 @@ class HybridPlant(Plant):
         D = c_acc @ B[k1:] + c_u
         return C[None, :], D[None, :], D[None, :].copy()
 
-    def _output_coefficients(self, name: str):
+    def _output_coefficients(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray, float]:
         """(c_pos, c_vel, c_acc, c_u) of the outputs every hybrid plant has."""
         k1 = self.ndof
         z = np.zeros(k1)
@@ -168,11 +213,13 @@ class HybridPlant(Plant):
             return np.concatenate([[0.0], self._tip_row]), z, z, 0.0
         raise ValueError(f"{name}: {type(self).__name__} has no output channel {name!r}")
 
-    def output(self, name: str, x: FloatArray, u: FloatArray, f_in=None) -> FloatArray:
+    def output(
+        self, name: str, x: FloatArray, u: FloatArray, f_in: FloatArray | None = None
+    ) -> FloatArray:
         """Output ``name`` at x (..., n_x), u (..., 1) and extra hub force f_in (..., 1)."""
         if self.output_matrices(name) is not None:
             return super().output(name, x, u, f_in)
-        extra = (
+        extra: float | FloatArray = (
             0.0 if f_in is None else np.multiply.outer(np.asarray(f_in)[..., 0], self.torque_input)
         )
         return self.output_values(x, np.asarray(u)[..., 0], extra)[name]
@@ -186,7 +233,7 @@ class HybridPlant(Plant):
         lam = eigh(self.stiffness_matrix, self.mass_matrix, eigvals_only=True)
         return np.sqrt(np.clip(lam[1:], 0.0, None))
 
-    def to_statespace(self):
+    def to_statespace(self) -> control.StateSpace:
         """python-control StateSpace, input hub torque, outputs θ and θ'."""
         import control
 
@@ -197,22 +244,24 @@ class HybridPlant(Plant):
         return control.ss(A, Bu[:, None], C, np.zeros((2, 1)))
 
     # -- state helpers (x has shape (..., nx)) ---------------------------------------------------
-    def split(self, x: FloatArray):
+    def split(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         k1 = self.ndof
         return x[..., :k1], x[..., k1:]
 
-    def nonlinear_force(self, x: FloatArray, u: FloatArray) -> FloatArray:
+    def nonlinear_force(self, x: FloatArray, u: npt.ArrayLike) -> FloatArray:
         """Generalized force of nonlinear terms, shape (..., ndof); none in a linear plant."""
         return np.zeros(x.shape[:-1] + (self.ndof,))
 
-    def _linear_force(self, pos, vel, u):
+    def _linear_force(self, pos: FloatArray, vel: FloatArray, u: npt.ArrayLike) -> FloatArray:
         return (
             -pos @ self.stiffness_matrix
             - vel @ self.damping_matrix
             + np.multiply.outer(_torque(u, pos), self.torque_input)
         )
 
-    def acceleration(self, x: FloatArray, u, extra_force=0.0) -> FloatArray:
+    def acceleration(
+        self, x: FloatArray, u: npt.ArrayLike, extra_force: float | FloatArray = 0.0
+    ) -> FloatArray:
         """Generalized accelerations (θ'', q'') for state x, hub torque u and extra force."""
         pos, vel = self.split(x)
         force = self._linear_force(pos, vel, u) + extra_force
@@ -220,7 +269,9 @@ class HybridPlant(Plant):
             force = force + self.nonlinear_force(x, u)
         return force @ self.mass_inverse
 
-    def reaction_torque(self, x: FloatArray, u, extra_force=0.0) -> FloatArray:
+    def reaction_torque(
+        self, x: FloatArray, u: npt.ArrayLike, extra_force: float | FloatArray = 0.0
+    ) -> FloatArray:
         """Torque the flexible body exerts back on the hub, per appendage:
         I_hub θ'' = u − n·(this), the Lyapunov laws' ``root_torque`` (l0 S0 − M0 for beams)."""
         acc = self.acceleration(x, u, extra_force)
@@ -258,7 +309,7 @@ class HybridPlant(Plant):
         """Row r (n_x,) of :meth:`momentum` = r · x: [0, M[0]] (h = (M x')_θ)."""
         return np.concatenate([np.zeros(self.ndof), self.mass_matrix[0]])
 
-    def vibration_energy(self, x: FloatArray, energy=None) -> FloatArray:
+    def vibration_energy(self, x: FloatArray, energy: FloatArray | None = None) -> FloatArray:
         """Energy in the elastic modes of the free vehicle, E − h² / (2 I_tot), J.
 
         h = (M x')_θ is the angular momentum; the rigid mode is M-orthogonal to the elastic ones,
@@ -270,7 +321,9 @@ class HybridPlant(Plant):
         E = self.energy(x) if energy is None else energy
         return E - 0.5 * h**2 / self.total_inertia
 
-    def lyapunov(self, x: FloatArray, theta_f, g1, g3) -> FloatArray:
+    def lyapunov(
+        self, x: FloatArray, theta_f: float | FloatArray, g1: float, g3: float
+    ) -> FloatArray:
         """Error-energy Lyapunov function of Att. 3 Eq. 8 (normalised a1 = 1), J.
 
         U = ½ I_hub θ'² + ½ g1 (θ − θ_f)² + (1 + g3/n) E_flex, with g1 = a2/a1 and
@@ -305,8 +358,19 @@ class ModalHybrid(HybridPlant):
     """
 
     n_appendages = 1
+    hub_inertia: float
+    mass_matrix: FloatArray
+    damping_matrix: FloatArray
+    stiffness_matrix: FloatArray
 
-    def __init__(self, modal, hub_inertia, axis: int = 2, n_modes=None, tip=None):
+    def __init__(
+        self,
+        modal: ModalModel,
+        hub_inertia: QuantityLike,
+        axis: int | str = 2,
+        n_modes: int | None = None,
+        tip: tuple[int, Direction] | None = None,
+    ) -> None:
         from flexsat.structures.modal_model import hub_appendage_matrices
 
         if n_modes is not None:
@@ -326,7 +390,9 @@ class ModalHybrid(HybridPlant):
     def _tip_row(self) -> FloatArray:
         return self._tip
 
-    def output_values(self, x: FloatArray, u, extra_force=0.0) -> dict[str, FloatArray]:
+    def output_values(
+        self, x: FloatArray, u: npt.ArrayLike, extra_force: float | FloatArray = 0.0
+    ) -> dict[str, FloatArray]:
         """Hub angle and rate, the reaction torque on the hub (``root_torque``) and the
         displacement of the ``tip`` node."""
         pos, vel = self.split(x)
@@ -338,11 +404,11 @@ class ModalHybrid(HybridPlant):
         }
 
 
-def _torque(u, pos) -> FloatArray:
+def _torque(u: npt.ArrayLike, pos: FloatArray) -> FloatArray:
     """The hub torque as (...,): the protocol's (..., 1) input vector or the historical scalar
     torque per state."""
-    u = np.asarray(u, float)
-    return u[..., 0] if u.ndim and u.shape == pos.shape[:-1] + (1,) else u
+    torque = np.asarray(u, float)
+    return torque[..., 0] if torque.ndim and torque.shape == pos.shape[:-1] + (1,) else torque
 
 
 def _block_diagonal(a: FloatArray, b: FloatArray) -> FloatArray:
