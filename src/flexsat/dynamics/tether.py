@@ -46,7 +46,9 @@ from flexsat.dynamics.plant import Channel, Plant
 from flexsat.input_checks import require_finite, require_positive
 
 if TYPE_CHECKING:
-    from flexsat.units import FloatArray, QuantityArrayLike
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
 
 __all__ = [
     "EARTH_MU",
@@ -76,7 +78,7 @@ MIN_LENGTH = 1e-4
 CONTROLS = ("tension", "rate")
 
 
-def require_lengths(lam, field: str = "lambda") -> FloatArray:
+def require_lengths(lam: npt.ArrayLike, field: str = "lambda") -> FloatArray:
     """``lam`` as a float array of nondimensional tether lengths, each finite and > 0 (Eq. 4
     divides by λ: a zero or negative length is no tether)."""
     arr = require_finite(lam, field)
@@ -85,7 +87,9 @@ def require_lengths(lam, field: str = "lambda") -> FloatArray:
     return arr
 
 
-def accelerations(x, tension, thrust) -> FloatArray:
+def accelerations(
+    x: FloatArray, tension: float | FloatArray, thrust: float | FloatArray
+) -> FloatArray:
     r"""(λ'', θ'', φ'') of Eq. 4 at nondimensional states x = [λ, θ, φ, λ', θ', φ'] (..., 6),
     tension T̂ and thrust F̂ (...,); unchecked (a kernel)."""
     lam, th, ph, dl, dth, dph = (x[..., i] for i in range(6))
@@ -98,7 +102,9 @@ def accelerations(x, tension, thrust) -> FloatArray:
     return out
 
 
-def rate_control_accelerations(x, length_rate, thrust) -> FloatArray:
+def rate_control_accelerations(
+    x: FloatArray, length_rate: npt.ArrayLike, thrust: float | FloatArray
+) -> FloatArray:
     r"""(θ'', φ'') of Eq. 4 with the length rate λ' as the control, at nondimensional states
     x = [λ, θ, φ, θ', φ'] (..., 5); unchecked."""
     full = np.concatenate(
@@ -107,7 +113,12 @@ def rate_control_accelerations(x, length_rate, thrust) -> FloatArray:
     return accelerations(full, 0.0, thrust)[..., 1:]
 
 
-def integral_of_motion(theta, phi, theta_rate, phi_rate) -> FloatArray:
+def integral_of_motion(
+    theta: float | FloatArray,
+    phi: float | FloatArray,
+    theta_rate: float | FloatArray,
+    phi_rate: float | FloatArray,
+) -> FloatArray:
     r"""V1 of Eq. 8, :math:`\tfrac12(\theta'^2\cos^2\phi + 3\sin^2\theta\cos^2\phi + \phi'^2 +
     4\sin^2\phi)` (nondimensional rates)."""
     c2 = np.cos(phi) ** 2
@@ -116,13 +127,13 @@ def integral_of_motion(theta, phi, theta_rate, phi_rate) -> FloatArray:
     )
 
 
-def integral_of_motion_rate(x, thrust=0.0) -> FloatArray:
+def integral_of_motion_rate(x: FloatArray, thrust: float | FloatArray = 0.0) -> FloatArray:
     r"""V1' of Eq. 9 with the thrust term φ'F̂/λ at x = [λ, θ, φ, λ', θ', φ']."""
     lam, ph, dl, dth, dph = x[..., 0], x[..., 2], x[..., 3], x[..., 4], x[..., 5]
     return -2.0 * dl / lam * (dth * (1.0 + dth) * np.cos(ph) ** 2 + dph**2) + dph * thrust / lam
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class TetherScales:
     """The scales of the nondimensional form: Ω, m and L (seed 000 L4329).
 
@@ -141,31 +152,39 @@ class TetherScales:
     one unit of T̂ or F̂ is mΩ²L = 0.630 N, of ∫|F̂|dτ mΩL = 534.8 N s, of λ' LΩ = 23.56 m/s.
     """
 
-    mass: float = 1.0
-    length: float = 1.0
-    orbit_rate: float | None = None
-    altitude: float | None = None
+    mass: float
+    length: float
+    orbit_rate: float
+    altitude: float | None
 
-    def __post_init__(self):
-        object.__setattr__(self, "mass", float(require_positive(self.mass, "mass", "kg")))
-        object.__setattr__(self, "length", float(require_positive(self.length, "length", "m")))
-        if (self.orbit_rate is None) == (self.altitude is None):
-            if self.orbit_rate is None:  # neither: the nondimensional form itself
-                object.__setattr__(self, "orbit_rate", 1.0)
-                return
+    # the scales arrive as numbers, Quantities or unit strings (the orbit as its rate or its
+    # altitude) and are stored in SI: an explicit __init__ keeps the attributes' types apart
+    # from the parameters'
+    def __init__(
+        self,
+        mass: QuantityLike = 1.0,
+        length: QuantityLike = 1.0,
+        orbit_rate: QuantityLike | None = None,
+        altitude: QuantityLike | None = None,
+    ) -> None:
+        object.__setattr__(self, "mass", float(require_positive(mass, "mass", "kg")))
+        object.__setattr__(self, "length", float(require_positive(length, "length", "m")))
+        if orbit_rate is not None and altitude is not None:
             raise ValueError("orbit_rate: give the orbit rate or the altitude, not both")
-        if self.altitude is not None:
-            h = float(require_finite(self.altitude, "altitude", "m"))
-            if h < 0:
-                raise ValueError(f"altitude: must be >= 0 (above the Earth's surface), got {h} m")
-            object.__setattr__(self, "altitude", h)
-            object.__setattr__(
-                self, "orbit_rate", float(np.sqrt(EARTH_MU / (EARTH_RADIUS + h) ** 3))
-            )
-        else:
-            object.__setattr__(
-                self, "orbit_rate", float(require_positive(self.orbit_rate, "orbit_rate", "rad/s"))
-            )
+        height = None
+        if altitude is not None:
+            height = float(require_finite(altitude, "altitude", "m"))
+            if height < 0:
+                raise ValueError(
+                    f"altitude: must be >= 0 (above the Earth's surface), got {height} m"
+                )
+            rate = float(np.sqrt(EARTH_MU / (EARTH_RADIUS + height) ** 3))
+        elif orbit_rate is not None:
+            rate = float(require_positive(orbit_rate, "orbit_rate", "rad/s"))
+        else:  # neither: the nondimensional form itself
+            rate = 1.0
+        object.__setattr__(self, "orbit_rate", rate)
+        object.__setattr__(self, "altitude", height)
 
     @property
     def force(self) -> float:
@@ -234,7 +253,7 @@ class TetheredSubsatellite(Plant):
     domain_rule = f"length: the tether collapsed (length below {MIN_LENGTH:g} L)"
     recorded = ("length", "pitch", "roll", "length_rate", "integral_of_motion")
 
-    def __init__(self, scales: TetherScales | None = None, control: str = "tension"):
+    def __init__(self, scales: TetherScales | None = None, control: str = "tension") -> None:
         if control not in CONTROLS:
             raise ValueError(f"control: must be one of {CONTROLS}, got {control!r}")
         self.scales = TetherScales() if scales is None else scales
@@ -286,7 +305,9 @@ class TetheredSubsatellite(Plant):
         Bf[3:, :] = np.eye(n - 3)
         return Bf
 
-    def _nondimensional(self, x, u):
+    def _nondimensional(
+        self, x: FloatArray, u: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
         s = self.scales
         xhat = x / s._factors(self.nx)
         return xhat, u[..., 0], u[..., 1] / s.force
@@ -306,7 +327,7 @@ class TetheredSubsatellite(Plant):
         A, B = self.linear_part()
         return x @ A.T + u @ B.T + self.nonlinear_force(x, u) @ self.force_matrix.T
 
-    def domain_margin(self, x) -> FloatArray:
+    def domain_margin(self, x: npt.ArrayLike) -> FloatArray:
         """λ − :data:`MIN_LENGTH` per case (the model holds while > 0), x (..., n_x) SI."""
         return np.asarray(x, float)[..., 0] / self.scales.length - MIN_LENGTH
 
