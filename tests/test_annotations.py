@@ -61,6 +61,7 @@ COMPLETE = (
     "design/slew_shaping.py",
     "design/slew_weights.py",
     "design/trade_surfaces.py",
+    "dynamics/plant.py",
     "identify/differential_correction.py",
     "identify/photogrammetry.py",
     "identify/spectral.py",
