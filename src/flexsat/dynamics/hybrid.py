@@ -112,7 +112,7 @@ class HybridPlant(Plant):
     @outputs.setter
     def outputs(self, channels: tuple[Channel, ...]) -> None:
         raise AttributeError(
-            f"outputs: the output channels of {type(self).__name__} are its output_channels"
+            f"outputs: {type(self).__name__}'s are its output_channels (read-only)"
         )
 
     @property
@@ -121,9 +121,7 @@ class HybridPlant(Plant):
 
     @nonlinear.setter
     def nonlinear(self, value: bool) -> None:
-        raise AttributeError(
-            f"nonlinear: {type(self).__name__} is nonlinear exactly when its stiffening is on"
-        )
+        raise AttributeError(f"nonlinear: {type(self).__name__}'s is its stiffening (read-only)")
 
     @property
     def ndof(self) -> int:
@@ -303,6 +301,12 @@ class HybridPlant(Plant):
         if self.stiffening:
             return None
         return _block_diagonal(self.stiffness_matrix, self.mass_matrix)
+
+    @energy_matrix.setter
+    def energy_matrix(self, Q: FloatArray | None) -> None:
+        raise AttributeError(
+            f"energy_matrix: {type(self).__name__}'s follows its model (read-only)"
+        )
 
     @property
     def momentum_row(self) -> FloatArray:

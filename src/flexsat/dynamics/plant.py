@@ -370,13 +370,10 @@ class Plant(ABC):
         """Total mechanical energy, J, shape (...,); None where undefined."""
         return None
 
-    @property
-    def energy_matrix(self) -> FloatArray | None:
-        """Q (n_x, n_x), symmetric, with :meth:`energy` E(x) = ½ xᵀ Q x, for a plant whose
-        energy is that quadratic form (a linear structure: Q = blockdiag(K, M) for x = [q, q']);
-        None otherwise. The compiled loop evaluates it per sample instead of recording the
-        states."""
-        return None
+    #: Q (n_x, n_x), symmetric, with :meth:`energy` E(x) = ½ xᵀ Q x, for a plant whose energy
+    #: is that quadratic form (a linear structure: Q = blockdiag(K, M) for x = [q, q']); None
+    #: otherwise. The compiled loop evaluates it per sample instead of recording the states
+    energy_matrix: FloatArray | None = None
 
     def power(self, x: FloatArray, u: FloatArray) -> FloatArray | None:
         """Rate of :meth:`energy` along the motion, dE/dt = (work rate of the inputs) −

@@ -453,6 +453,12 @@ class StructuralPlant(Plant):
         Q[:n, :n], Q[n:, n:] = self.model.K, self.model.M
         return Q
 
+    @energy_matrix.setter
+    def energy_matrix(self, Q: FloatArray | None) -> None:
+        raise AttributeError(
+            f"energy_matrix: {type(self).__name__}'s is blockdiag(K, M) of its model (read-only)"
+        )
+
     def power(self, x: FloatArray, u: FloatArray) -> FloatArray:
         r"""Rate of :meth:`energy`, :math:`\dot q^T B u - \dot q^T D \dot q` (the work of the
         inputs less the dissipation), W, (...,)."""
