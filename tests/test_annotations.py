@@ -34,6 +34,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "flexsat"
 COMPLETE = (
     "attitude",
     "control",
+    "dynamics",
     "maneuvers",
     "structures",
     "testing",
@@ -60,7 +61,6 @@ COMPLETE = (
     "design/slew_shaping.py",
     "design/slew_weights.py",
     "design/trade_surfaces.py",
-    "dynamics/plant.py",
     "identify/differential_correction.py",
     "identify/photogrammetry.py",
     "identify/spectral.py",

@@ -203,7 +203,7 @@ class TrajectoryLinearization:
         self.n_states = 6 + 2 * plant.n_modes
         self.n_inputs = 3 + len(chosen)
         self.inertia = plant.inertia
-        self._inertia_inverse = np.linalg.inv(plant.inertia)
+        self._inertia_inverse = np.linalg.inv(plant.inertia).astype(np.float64, copy=False)
 
     # -- the nominal -------------------------------------------------------------------------
     def nominal_at(
