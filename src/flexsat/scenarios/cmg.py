@@ -47,7 +47,7 @@ from flexsat.dynamics.space_station import FT_LB as _FT_LB
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
 from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, count, quantity
-from flexsat.scenarios.kind import Run, ScenarioKind
+from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 
 SOURCE = (
     "S. R. Vadali, H.-S. Oh, S. R. Walker, 'Preferred Gimbal Angles for Single Gimbal "
@@ -326,31 +326,36 @@ def _demand_function(demand):
     return lambda t: -(c + a * np.sin(2.0 * np.pi * f * t))
 
 
-def _one_run(run, cluster):
+def _steering_run(run: CmgRunSpec, cluster: Cluster, sigma0: np.ndarray) -> CmgRun:
+    """A torque-steering run from ``sigma0``: the pseudo-inverse (or SR) law until the first
+    singular set (:func:`flexsat.cases.cmg_pyramid.integrate_gimbals`, which stops there)."""
     from flexsat.cases import cmg_pyramid
+
+    null = run.null_motion
+    d = run.demand_direction()
+    alpha = cluster.alpha if cluster.steering == "sr" else 0.0
+    g = cmg_pyramid.integrate_gimbals(
+        sigma0,
+        _demand_function(run.demand),
+        run.duration,
+        skew=cluster.skew,
+        n_units=cluster.n_units,
+        n_out=N_OUT,
+        alpha=alpha,
+        threshold=cluster.threshold,
+        stop_at_singular=cluster.steering == "pi",
+        null_target=None if null is None else _resolve(null.target, d, cluster),
+        null_gain=1.0 if null is None else null.gain,
+        null_alpha=alpha,
+    )
+    return _cmg_run(run.label, g, sigma0, d, cluster)
+
+
+def _cmg_run(label: str, g, sigma0: np.ndarray, direction, cluster: Cluster) -> CmgRun:
+    """The :class:`CmgRun` of a gimbal history ``g`` (:class:`flexsat.dynamics.cmg.GimbalRun`):
+    its peak gimbal rate and outcome (the singularity met and its kind)."""
     from flexsat.dynamics import cmg
 
-    d = run.demand_direction()
-    sigma0 = _resolve(run.initial, d, cluster)
-    kw = dict(skew=cluster.skew, n_units=cluster.n_units, n_out=N_OUT)
-    alpha = cluster.alpha if cluster.steering == "sr" else 0.0
-    if run.reorient_to is not None:
-        target = _resolve(run.reorient_to, d, cluster)
-        g = cmg_pyramid.reorient(sigma0, target, run.duration, 1.0, alpha=max(alpha, 1e-3), **kw)
-    else:
-        null = run.null_motion
-        g = cmg_pyramid.integrate_gimbals(
-            sigma0,
-            _demand_function(run.demand),
-            run.duration,
-            alpha=alpha,
-            threshold=cluster.threshold,
-            stop_at_singular=cluster.steering == "pi",
-            null_target=None if null is None else _resolve(null.target, d, cluster),
-            null_gain=1.0 if null is None else null.gain,
-            null_alpha=alpha,
-            **kw,
-        )
     rates = np.gradient(g.sigma, g.t, axis=0)
     internal = None
     if g.singular:
@@ -368,7 +373,7 @@ def _one_run(run, cluster):
         )
     else:
         outcome = "no singularity"
-    return CmgRun(run.label, g, sigma0, d, float(np.abs(rates).max()), outcome, internal)
+    return CmgRun(label, g, sigma0, direction, float(np.abs(rates).max()), outcome, internal)
 
 
 @dataclass(frozen=True)
@@ -545,12 +550,45 @@ class CmgKind(ScenarioKind):
         return len(scenario.runs) + 1
 
     def plan(self, scenario: CmgScenario):
+        """Each run in turn: a reorientation is a :class:`~flexsat.scenarios.kind.Simulation`
+        of the null-motion law on the gimbal cluster
+        (:func:`flexsat.cases.cmg_pyramid.reorient_simulation`); a torque-steering run, which
+        stops at the first singular set (a terminal condition :func:`flexsat.sim.simulate`
+        does not take), is run by :func:`flexsat.cases.cmg_pyramid.integrate_gimbals` on the
+        engine's continuous mode."""
         import functools
 
+        from flexsat.cases import cmg_pyramid
+
+        cluster = scenario.cluster
         runs = []
         for index, run in enumerate(scenario.runs):
-            steer = functools.partial(_one_run, run, scenario.cluster)
-            runs.append((yield Run(run.label, steer, "runs" + item_path(index, run.label))))
+            path = "runs" + item_path(index, run.label)
+            d = run.demand_direction()
+            try:
+                sigma0 = _resolve(run.initial, d, cluster)
+                if run.reorient_to is not None:
+                    target = _resolve(run.reorient_to, d, cluster)
+                    alpha = cluster.alpha if cluster.steering == "sr" else 0.0
+                    plant, law, config, options = cmg_pyramid.reorient_simulation(
+                        sigma0,
+                        target,
+                        run.duration,
+                        1.0,
+                        cluster.skew,
+                        cluster.n_units,
+                        alpha=max(alpha, 1e-3),
+                        n_out=N_OUT,
+                    )
+            except ValueError as exc:
+                raise ScenarioError([locate(path, exc)]) from None
+            if run.reorient_to is None:
+                steer = functools.partial(_steering_run, run, cluster, sigma0)
+                runs.append((yield Run(run.label, steer, path)))
+                continue
+            result = yield Run(run.label, Simulation(plant, law, config, options), path)
+            g = cmg_pyramid.gimbal_run(plant, result.dataset)
+            runs.append(_cmg_run(run.label, g, sigma0, d, cluster))
         table = yield Run("V1–V8 table", validation_table)
         notes = (
             "Demands are the paper's T = ḣ (Eq. 5) in rotor momenta per second; the spacecraft "
