@@ -4,13 +4,18 @@ from a gimbal set until the first singular set, the back integration to preferre
 the null-motion reorientation.
 
 Each is the plant :class:`~flexsat.dynamics.gimbal_cluster.GimbalCluster` (σ̇ = u) under a law of
-:mod:`flexsat.control.cmg_steering`, run by the engine's continuous-law mode
-(:func:`flexsat.sim.continuous.run`: the law at every stage of DOP853, rtol 1e-10): the paper's
-steering is continuous. One case per call; torques in rotor momenta h per second.
+:mod:`flexsat.control.cmg_steering`, in the engine's continuous-law mode (the law at every stage
+of DOP853, rtol 1e-10): the paper's steering is continuous. The reorientation is a
+:func:`flexsat.sim.simulate` run of the triple :func:`reorient_simulation` builds (what the
+``kind: cmg`` scenario hands to the runner). Torque steering stops at the first singular set, a
+terminal condition and dense output :func:`~flexsat.sim.simulate` does not offer, so it calls
+the mode's integrator :func:`flexsat.sim.continuous.run` directly. One case per call; torques
+in rotor momenta h per second.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -50,17 +55,17 @@ def _gimbal_set(sigma, n_units: int, field: str) -> np.ndarray:
 
 
 def integrate_gimbals(
-    sigma0,
-    torque,
-    t_final,
-    skew=SKEW,
+    sigma0: npt.ArrayLike,
+    torque: npt.ArrayLike | Callable[[float], npt.ArrayLike],
+    t_final: float | str,
+    skew: float | str = SKEW,
     n_units: int = 4,
     alpha: float = 0.0,
     threshold: float = 1e-6,
     rtol: float = 1e-10,
     atol: float = 1e-12,
     n_out: int = 201,
-    null_target=None,
+    null_target: npt.ArrayLike | None = None,
     null_gain: float = 1.0,
     null_alpha: float = 0.0,
     stop_at_singular: bool = True,
@@ -170,10 +175,10 @@ def _first_dip(sigma_at, steps, skew, n, thr):
 
 
 def preferred_angles(
-    direction,
-    skew=SKEW,
+    direction: npt.ArrayLike,
+    skew: float | str = SKEW,
     n_units: int = 4,
-    perturbation=None,
+    perturbation: npt.ArrayLike | None = None,
     threshold: float = 1e-6,
     rtol: float = 1e-10,
     atol: float = 1e-12,
