@@ -36,8 +36,10 @@ nearest to the direction of the attitude loop's peak momentum.
 
 from __future__ import annotations
 
+from collections.abc import Generator
 from dataclasses import dataclass
-from typing import Literal
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -48,6 +50,11 @@ from flexsat.report.page import ReportedResult
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
 from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, count, quantity
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from flexsat.dynamics.space_station import StationData
 
 SOURCE = (
     "S. R. Vadali, H.-S. Oh, S. R. Walker, 'Preferred Gimbal Angles for Single Gimbal "
@@ -188,7 +195,7 @@ class CmgRunSpec(SchemaSection):
             raise ValueError("initial: 'preferred' needs a demand with a nonzero mean direction")
         return self
 
-    def demand_direction(self):
+    def demand_direction(self) -> np.ndarray | None:
         if self.demand is None:
             return None
         d = np.asarray(self.demand if isinstance(self.demand, list) else self.demand.constant)
@@ -278,7 +285,7 @@ class CmgStationScenario(Document):
         self.build_data()
         return self
 
-    def build_data(self):
+    def build_data(self) -> StationData:
         from flexsat.dynamics.space_station import StationData
 
         s = self.station
@@ -413,7 +420,7 @@ class CmgResult(ReportedResult):
             out.append(rec)
         return out
 
-    def dataset(self):
+    def dataset(self) -> xr.Dataset:
         import xarray as xr
 
         n = self.scenario.cluster.n_units
@@ -458,18 +465,18 @@ class CmgResult(ReportedResult):
     def report_case(self) -> str:
         return "SGCMG pyramid"
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.cmg import draw_cmg_figures
 
         return draw_cmg_figures(self, ds, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.cmg import cmg_sections
 
         return cmg_sections(self, self.metrics_records(), figures)
 
 
-def validation_table():
+def validation_table() -> tuple[tuple[str, str, float, float, str], ...]:
     """V1–V8 computed live: (id, quantity, published, computed, unit) rows (the validate rows of
     :mod:`flexsat.checks.cmg` share them)."""
     from flexsat.cases import cmg_pyramid
@@ -549,7 +556,7 @@ class CmgKind(ScenarioKind):
     def steps(self, scenario: CmgScenario) -> int:
         return len(scenario.runs) + 1
 
-    def plan(self, scenario: CmgScenario):
+    def plan(self, scenario: CmgScenario) -> Generator[Run, Any, CmgResult]:
         """Each run in turn: a reorientation is a :class:`~flexsat.scenarios.kind.Simulation`
         of the null-motion law on the gimbal cluster
         (:func:`flexsat.cases.cmg_pyramid.reorient_simulation`); a torque-steering run, which
@@ -633,7 +640,7 @@ class StationResult(ReportedResult):
             out.append(rec)
         return out
 
-    def dataset(self):
+    def dataset(self) -> xr.Dataset:
         import xarray as xr
 
         st = self.station
@@ -675,12 +682,12 @@ class StationResult(ReportedResult):
     def report_case(self) -> str:
         return "space station (Table 2)"
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.cmg import draw_station_figures
 
         return draw_station_figures(ds, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.cmg import station_sections
 
         return station_sections(self, self.metrics_records(), figures)
@@ -728,7 +735,7 @@ class CmgStationKind(ScenarioKind):
     def steps(self, scenario: CmgStationScenario) -> int:
         return len(scenario.runs) + 1
 
-    def plan(self, scenario: CmgStationScenario):
+    def plan(self, scenario: CmgStationScenario) -> Generator[Run, Any, StationResult]:
         import functools
 
         from flexsat.cases import space_station_cmg as st
