@@ -200,7 +200,9 @@ def test_mistakes_found_before_any_case_runs(tmp_path, change, message):
             r"parameters: the grid of 400 × 400 has 160,000 cases",
         ),
         (
-            SWEEP.replace("alpha: {values: [0.0, 0.25]}", "alpha: {low: 0.0, high: 0.25, n: 1000000000}"),
+            SWEEP.replace(
+                "alpha: {values: [0.0, 0.25]}", "alpha: {low: 0.0, high: 0.25, n: 1000000000}"
+            ),
             r"^invalid scenario \(1 problem\):\n  parameters\.alpha\.n: grid points on one axis",
         ),
     ],

@@ -34,6 +34,16 @@ if TYPE_CHECKING:
 #: the spacecraft torque as given: a constant 3-vector or a callable t (s) -> 3-vector
 TorqueHistory: TypeAlias = "npt.ArrayLike | Callable[[float], npt.ArrayLike]"
 
+
+def _weight(value: float, field: str) -> float:
+    """A nonnegative weight or gain (α, k), checked when the law is made, not at its first
+    call inside a run."""
+    out = float(require_finite(value, field))
+    if out < 0:
+        raise FieldError(field, f"must be >= 0, got {value!r}")
+    return out
+
+
 __all__ = ["NullMotionSteering", "PseudoInverseSteering"]
 
 
@@ -63,7 +73,7 @@ class _GimbalLaw(Controller):
     reads = ("gimbal_angles",)
     writes = ("gimbal_rates",)
 
-    def __init__(self, skew: float, n_units: int) -> None:
+    def __init__(self, skew: float | str, n_units: int) -> None:
         cmg.pyramid_axes(n_units, skew)  # checks both
         self.skew = float(require_finite(skew, "skew", "rad"))
         self.n_units = int(n_units)
@@ -91,7 +101,7 @@ class PseudoInverseSteering(_GimbalLaw):
     def __init__(
         self,
         torque: TorqueHistory,
-        skew: float = cmg.SKEW,
+        skew: float | str = cmg.SKEW,
         n_units: int = 4,
         alpha: float = 0.0,
         null_target: npt.ArrayLike | None = None,
@@ -100,9 +110,7 @@ class PseudoInverseSteering(_GimbalLaw):
     ) -> None:
         super().__init__(skew, n_units)
         self.torque_at = _torque_history(torque)
-        self.alpha = float(require_finite(alpha, "alpha"))
-        if self.alpha < 0:
-            raise FieldError("alpha", f"must be >= 0, got {alpha!r}")
+        self.alpha = _weight(alpha, "alpha")
         _, self.a, self.b = cmg.pyramid_axes(self.n_units, self.skew)
         self.null_target: FloatArray | None = None
         if null_target is not None:
@@ -112,7 +120,8 @@ class PseudoInverseSteering(_GimbalLaw):
                     "null_target", f"one gimbal set ({self.n_units},), got shape {target.shape}"
                 )
             self.null_target = target
-        self.null_gain, self.null_alpha = null_gain, null_alpha
+        self.null_gain = _weight(null_gain, "null_gain")
+        self.null_alpha = _weight(null_alpha, "null_alpha")
 
     def __call__(
         self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
@@ -154,7 +163,7 @@ class NullMotionSteering(_GimbalLaw):
         self,
         target: npt.ArrayLike,
         gain_k: float = 1.0,
-        skew: float = cmg.SKEW,
+        skew: float | str = cmg.SKEW,
         n_units: int = 4,
         alpha: float = 1e-3,
     ) -> None:
@@ -168,7 +177,7 @@ class NullMotionSteering(_GimbalLaw):
         self.gain_k = float(require_finite(gain_k, "gain_k", "1/s"))
         if self.gain_k <= 0:
             raise FieldError("gain_k", f"must be > 0, got {gain_k!r}")
-        self.alpha = alpha
+        self.alpha = _weight(alpha, "alpha")
 
     def __call__(
         self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
