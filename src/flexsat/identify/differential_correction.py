@@ -509,6 +509,7 @@ class CorrectionData:
             psi = self.shapes
             assert psi is not None  # both pseudo-measurements need shapes (__post_init__)
             # psi^T B psi of every block, [fixed part, blocks...], for M and K
+            assert model.M0 is not None and model.K0 is not None  # zeros when not given
             forms_m = [psi.T @ B @ psi for B in [model.M0] + model.M_blocks]
             forms_k = [psi.T @ B @ psi for B in [model.K0] + model.K_blocks]
             nominal_m, nominal_k = np.diag(sum(forms_m)), np.diag(sum(forms_k))
