@@ -32,15 +32,12 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "flexsat"
 # packages (a directory under src/flexsat) and single modules (a path relative to src/flexsat)
 # whose every public parameter and return is annotated
 COMPLETE = (
+    "analysis",
     "attitude",
     "identify",
     "maneuvers",
     "structures",
     "testing",
-    "analysis/controllability.py",
-    "analysis/gramians.py",
-    "analysis/homotopy.py",
-    "analysis/sensitivity.py",
     "cases/__init__.py",
     "cases/agrawal_bang.py",
     "cases/agrawal_bang_ppf.py",
