@@ -137,6 +137,16 @@ def _one_line(text: str) -> str:
     return " ".join(text.split())
 
 
+def _wait_for_holder(run: subprocess.Popen, lock: Path) -> None:
+    """Wait until ``run`` holds the store of the lock file ``lock``."""
+    deadline = time.monotonic() + 300
+    while not (lock.exists() and lock.read_text()):
+        assert run.poll() is None, run.communicate()
+        assert time.monotonic() < deadline, "the run never took the store"
+        time.sleep(0.02)
+    assert json.loads(lock.read_text())["pid"] == run.pid
+
+
 # -- two runs at once ----------------------------------------------------------------------------
 def test_two_runs_at_once_one_completes_the_other_is_refused_naming_it(tmp_path, reference):
     """Two ``flexsat run`` of one sweep at once: the second is refused with exit code 2, naming
@@ -147,13 +157,7 @@ def test_two_runs_at_once_one_completes_the_other_is_refused_naming_it(tmp_path,
     lock = tmp_path / ".store.zarr.lock"
     first = _flexsat(sweep, "first")
     try:
-        deadline = time.monotonic() + 120
-        while not (lock.exists() and lock.read_text()):
-            assert first.poll() is None, first.communicate()
-            assert time.monotonic() < deadline, "the first run never took the store"
-            time.sleep(0.02)
-        holder = json.loads(lock.read_text())
-        assert holder["pid"] == first.pid
+        _wait_for_holder(first, lock)
         os.kill(first.pid, signal.SIGSTOP)
         try:
             second = _flexsat(sweep, "second")
@@ -183,14 +187,17 @@ def _dead_pid() -> int:
 
 
 def test_a_lock_left_by_a_killed_run_is_stale_and_taken_over(tmp_path, reference):
-    """A run killed with SIGKILL leaves its lock file; the kernel has released its lock, so the
-    next run takes it over and completes the store."""
+    """A run killed with SIGKILL once it holds the store leaves its lock file behind; the kernel
+    has released its lock, so the next run takes it over and completes the store."""
     sweep = _sweep(tmp_path)
-    _interrupted(sweep, 1)
-    record = {"pid": _dead_pid(), "host": socket.gethostname(), "started": "earlier"}
-    (tmp_path / ".store.zarr.lock").write_text(json.dumps(record))
+    lock = tmp_path / ".store.zarr.lock"
+    killed = _flexsat(sweep, "killed")
+    _wait_for_holder(killed, lock)
+    killed.kill()
+    killed.wait()
+    assert json.loads(lock.read_text())["pid"] == killed.pid
     run_scenario(load_scenario(sweep))
-    assert not (tmp_path / ".store.zarr.lock").exists()
+    assert not lock.exists()
     _same(_values(tmp_path / "store.zarr"), reference)
 
 
@@ -203,6 +210,17 @@ def test_a_held_store_is_refused_and_left_as_it_was(tmp_path):
     assert info.value.errno == errno.EBUSY and info.value.store == store
     assert f"(pid {os.getpid()} on host {socket.gethostname()!r}, started " in str(info.value)
     assert not store.exists() and not (tmp_path / ".s.zarr.lock").exists()
+
+
+def test_one_store_is_one_lock_however_its_path_is_spelled(tmp_path):
+    """A store reached through a linked folder or a relative path holds the same lock."""
+    (tmp_path / "real").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "real")
+    with StoreLock(tmp_path / "link" / "s.zarr"):
+        with pytest.raises(StoreInUse):
+            with StoreLock(tmp_path / "real" / ".." / "real" / "s.zarr"):
+                pass
+        assert (tmp_path / "real" / ".s.zarr.lock").exists()
 
 
 @pytest.fixture

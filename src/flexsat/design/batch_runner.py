@@ -44,8 +44,13 @@ client (``LocalCluster(processes=False)``, one worker thread: the chunk is alrea
 and the one code path — futures, ``retries=``, completion order — is the same as on a cluster;
 dask's synchronous scheduler would have no retries and no futures to stream from); ``workers=N``
 starts a local cluster of N single-threaded worker processes; ``scheduler="tcp://HOST:PORT"``
-uses an existing cluster (no answer within :data:`CONNECT_TIMEOUT` s is a ValueError naming the
-address). A chunk whose task fails or whose worker dies is run again (``retries``).
+uses an existing cluster, asked first whether it is one (no dask scheduler answering within
+:data:`CONNECT_TIMEOUT` s is a :class:`~flexsat.input_checks.FieldError` of ``scheduler``
+naming the address; :mod:`flexsat.design.batch_cluster`). A chunk whose worker dies, or whose
+task fails otherwise, is run again (``retries``); a ValueError a chunk raises (a value its run
+refuses, a history it does not record, a diverged case) would be raised again by every retry,
+so it is sent back as the task's result and raised once on the client, with its own type and
+attributes (a FieldError's ``field``).
 
 Store. Results stream to a zarr store (xarray) as chunks finish, written by the client (a single
 writer: no two writers share a zarr chunk, and workers need no access to the store's disk):
@@ -62,7 +67,13 @@ store of a different setup is refused. The store's layout is built in a sibling 
 ``.<name>.partial``, and renamed into place when complete: a run killed while laying it out
 leaves no store (the next run starts afresh) rather than a half-made one it would refuse. An
 interrupted run (Ctrl-C) raises :class:`BatchInterrupted`, saying how many cases the store keeps.
-Nothing is pickled into the store.
+Nothing is pickled into the store. One run at a time fills a store: a run holds a lock file next
+to it, and a second run is refused at once with
+:class:`~flexsat.design.batch_store.StoreInUse`, naming the first (its process, host, start
+and command); a lock whose run died is stale and taken over. A store that cannot be written (a
+read-only or full disk, a file-size limit, a folder that cannot be made) raises
+:class:`~flexsat.design.batch_store.StoreError` saying what it keeps, and stays resumable
+(:mod:`flexsat.design.batch_store`).
 """
 
 from __future__ import annotations
@@ -773,7 +784,11 @@ def run_batch(
         Naming the field: an unknown parameter name (with the known ones), columns of different
         lengths or non-finite values, a value the builder's ``check`` refuses, a scheduler
         that does not answer within :data:`CONNECT_TIMEOUT` s, a store that belongs to another
-        setup.
+        setup; or the ValueError a chunk raised, with its type and attributes.
+    flexsat.design.batch_store.StoreInUse
+        Another run holds the store (naming it); nothing is changed.
+    flexsat.design.batch_store.StoreError
+        The store cannot be locked, read or written (saying what it keeps).
     """
     from distributed import as_completed
 

@@ -143,7 +143,12 @@ def _gone(holder: Mapping[str, Any]) -> bool:
         return True
     if holder.get("host") != socket.gethostname():
         return False
-    pid = int(holder["pid"])
+    try:
+        pid = int(holder["pid"])
+    except (TypeError, ValueError):  # not a record this module wrote
+        return True
+    if pid <= 0:  # kill(0 or -n) would ask about process groups
+        return True
     if pid == os.getpid():
         return False
     try:
@@ -169,11 +174,13 @@ class StoreLock:
 
     def __init__(self, store: str | Path) -> None:
         self.store = Path(store)
-        self.path = self.store.with_name(f".{self.store.name}.lock")
+        # next to the store itself: one lock however the path to it is spelled (links, ..)
+        real = Path(os.path.realpath(self.store))
+        self.path = real.with_name(f".{real.name}.lock")
         self._fd: int | None = None
 
     def __enter__(self) -> StoreLock:
-        self.store.parent.mkdir(parents=True, exist_ok=True)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
         while self._fd is None:
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
             try:
@@ -190,24 +197,30 @@ class StoreLock:
         locked = _flock(fd)
         if locked is False:
             raise StoreInUse(self.store, _read_holder(fd))
-        if locked is None and not _gone(_read_holder(fd)):
-            raise StoreInUse(self.store, _read_holder(fd), self.path)
+        if locked is None:
+            holder = _read_holder(fd)
+            if not _gone(holder):
+                raise StoreInUse(self.store, holder, self.path)
         try:
             if os.fstat(fd).st_ino != os.stat(self.path).st_ino:
                 return False
         except FileNotFoundError:
             return False
-        program = Path(sys.argv[0])
-        if program.name == "__main__.py":  # python -m flexsat
-            program = Path(f"python -m {program.parent.name}")
+        argv0 = Path(sys.argv[0])
+        program = f"python -m {argv0.parent.name}" if argv0.name == "__main__.py" else argv0.name
         record = {
             "pid": os.getpid(),
             "host": socket.gethostname(),
             "started": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
-            "command": " ".join([program.name, *sys.argv[1:]])[:300],
+            "command": " ".join([program, *sys.argv[1:]])[:300],
         }
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, json.dumps(record).encode(), 0)
+        try:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, json.dumps(record).encode(), 0)
+        except OSError:  # a full disk: leave no empty lock file behind (it is this run's)
+            with suppress(OSError):
+                os.unlink(self.path)
+            raise
         return True
 
     def __exit__(
