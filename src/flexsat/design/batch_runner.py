@@ -730,7 +730,7 @@ class BatchSummary:
 def run_batch(
     build: Callable,
     parameters: Mapping[str, Any],
-    store,
+    store: str | Path,
     *,
     extract: Callable[[SimResult], Mapping[str, np.ndarray]] = maneuver_metrics,
     base_seed: int = 0,

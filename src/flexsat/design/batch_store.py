@@ -86,7 +86,9 @@ class StoreInUse(StoreError):
     """Another run holds the store (:class:`StoreLock`); ``holder`` is what its lock file says
     (``pid``, ``host``, ``started``, ``command``; empty if it had not written it yet)."""
 
-    def __init__(self, store: Path, holder: Mapping[str, Any], lock_file: Path | None = None):
+    def __init__(
+        self, store: Path, holder: Mapping[str, Any], lock_file: Path | None = None
+    ) -> None:
         self.holder, self.lock_file = dict(holder), lock_file
         who = describe_holder(holder)
         reason = f"another flexsat run is filling it ({who})"
