@@ -116,16 +116,17 @@ def batch_client(workers: int | None, scheduler: str | None) -> tuple[Any, Any]:
                 f"the dask scheduler at {scheduler!r} stopped answering "
                 f"({type(exc).__name__}: {exc})",
             ) from None
+    # no dashboard; the scheduler's own HTTP server (health checks) on a free port of this host:
+    # on its default, 8787, a second cluster (another sweep) would warn that the port is taken
+    quiet = {"dashboard_address": None, "scheduler_kwargs": {"dashboard_address": "127.0.0.1:0"}}
     if workers is None:
-        cluster = LocalCluster(
-            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
-        )
+        cluster = LocalCluster(processes=False, n_workers=1, threads_per_worker=1, **quiet)
     else:
         cluster = LocalCluster(
             n_workers=require_count(workers, "workers"),
             threads_per_worker=1,
             processes=True,
-            dashboard_address=None,
+            **quiet,
         )
     return Client(cluster, set_as_default=False), cluster
 
