@@ -308,7 +308,9 @@ def create_store(
     import xarray as xr
 
     case = np.arange(n_cases)
-    data = {f"param_{k}": ("case", v) for k, v in table.items()}
+    data: dict[str, tuple[str | tuple[str, ...], Any]] = {
+        f"param_{k}": ("case", v) for k, v in table.items()
+    }
     data["done"] = ("case", np.zeros(n_cases, bool))
     encoding = {}
     for name, values in first.items():
@@ -335,7 +337,7 @@ def create_store(
     try:
         ds.to_zarr(partial, mode="w", compute=False, encoding=encoding, consolidated=False)
         # the parameter table, the mask and the coordinates are small: written now in full
-        ds[[n for n in ds.data_vars if n == "done" or n.startswith("param_")]].to_zarr(
+        ds[[n for n in map(str, ds.data_vars) if n == "done" or n.startswith("param_")]].to_zarr(
             partial, mode="r+", consolidated=False
         )
         partial.rename(path)
