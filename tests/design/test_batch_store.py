@@ -42,6 +42,7 @@ from flexsat.design.batch_store import StoreInUse, StoreLock
 from flexsat.input_checks import FieldError
 from flexsat.scenarios import load_scenario, run_scenario
 from flexsat.sim import SimulationDiverged
+from flexsat.sim.engine import offset_cases
 
 SRC = Path(__file__).resolve().parents[2] / "src"
 runner = CliRunner()
@@ -386,7 +387,12 @@ class Refusing:
     [
         FieldError("parameters['alpha']", "must be <= 1/4, got 0.5"),
         FieldError("parameters['alpha']", "must be <= 1/4, got " + ", ".join(["0.5"] * 4000)),
-        SimulationDiverged("case 1 diverged", (1,), 0.25, "the gains are too high"),
+        SimulationDiverged(
+            "simulation diverged at t = 0.25 s (sample 5) in case(s) 1: too high",
+            (1,),
+            0.25,
+            "the gains are too high",
+        ),
     ],
     ids=["FieldError", "FieldError, a long message", "SimulationDiverged"],
 )
@@ -408,8 +414,10 @@ def test_an_error_inside_a_worker_keeps_its_type_and_fields_and_is_not_retried(
             chunk_size=2,
             retries=2,
         )
-    assert type(info.value) is type(error) and str(info.value) == str(error)
-    assert vars(info.value) == vars(error)
+    # a divergence is named by the batch's case numbers: case 1 of the chunk from case 2 is 3
+    expected = offset_cases(error, 2) if isinstance(error, SimulationDiverged) else error
+    assert type(info.value) is type(error) and str(info.value) == str(expected)
+    assert vars(info.value) == vars(expected)
     assert calls.read_text().split().count("0.5") == 1  # run once, though retries=2
 
 

@@ -112,9 +112,10 @@ from flexsat.input_checks import (
     require_positive,
 )
 from flexsat.maneuvers.torque_shapes import SmoothBangBang
-from flexsat.sim import SimConfig, simulate
+from flexsat.sim import SimConfig, SimulationDiverged, simulate
 from flexsat.sim.channels import ChannelSensor
 from flexsat.sim.disturbances import RandomTorque
+from flexsat.sim.engine import offset_cases
 from flexsat.sim.recording import SimResult
 
 
@@ -678,6 +679,9 @@ def _chunk_task(
     """:func:`run_chunk` as a dask task: a ValueError is returned as a :class:`_Refusal`."""
     try:
         return run_chunk(build, extract, parameters, start, base_seed, histories)
+    except SimulationDiverged as exc:  # named by the batch's case numbers, not the chunk's
+        exc = offset_cases(exc, start)
+        return _Refusal(type(exc), exc.args, dict(vars(exc)))
     except ValueError as exc:
         return _Refusal(type(exc), exc.args, dict(vars(exc)))
 
