@@ -89,9 +89,8 @@ _ATTACHMENT = re.compile(r"Att\. (\d+)")
 
 def cite(text: str) -> str:
     """``text`` with every transcript file name (``seed NNN_<16 hex digits>.txt``) replaced by
-    its short citation (for Junkins, Pollock & Rahman 1990: ``"Junkins, Pollock
-    & Rahman 1990"``). Unknown seed
-    numbers are left as they are."""
+    its short citation (``seed 000_<hex>.txt`` becomes ``"Junkins, Pollock & Rahman 1990"``).
+    Unknown seed numbers are left as they are."""
     return _SEED.sub(lambda m: SEEDS[m.group(1)].short if m.group(1) in SEEDS else m.group(0), text)
 
 
