@@ -19,8 +19,8 @@ Method, as implemented by :func:`homotopy_minimize`:
 2. **Feasibility homotopy (A5-A7).** The targets move from their values at the start to the
    goal, f_p(γ) = γ f_o + (1 − γ) f(p_start), γ = 0 → 1 (an inequality already satisfied at the
    start keeps its bound T_j).
-3. **Minimum-norm correction (A8; Agrawal & Bang 1996 Eqs. 18-20, 25,
-28).** For the residual r of the
+3. **Minimum-norm correction (A8; Agrawal & Bang 1996 Eqs. 18-20, 25, 28).** For the residual
+   r of the
    active rows with Jacobian A, Δp = −W⁻¹ Aᵀ (A W⁻¹ Aᵀ)⁺ r, the W-norm-minimal step, computed
    with a pseudo-inverse (rank-deficient rows give the least-squares step). Each step is
    damped by a backtracking line search on the sum of squared scaled residuals.
