@@ -9,8 +9,8 @@ Tests provided (Bainum & Reddy 1979, NASA CR-158684, Ch. II):
 - :func:`controllability_rank`: rank of the Kalman matrix ``[B, AB, ..., A^(n-1) B]`` by SVD;
 - :func:`pbh_test`: the Popov-Belevitch-Hautus test, ``rank [λI - A, B] = n`` at every
   eigenvalue λ of A, returning the uncontrollable eigenvalues;
-- :func:`repeated_frequency_test`: the block test of Balas (1978) used in Ch. II §3 (seed 002
-  L293-L305, L377-L442) for an undamped modal system ``ẍ + diag(κ) x = B u``: the pair is
+- :func:`repeated_frequency_test`: the block test of Balas (1978) used in Ch. II §3 (Bainum & Reddy
+  1979) for an undamped modal system ``ẍ + diag(κ) x = B u``: the pair is
   controllable iff, for every distinct κ, the rows of B of the modes sharing it have rank equal
   to their number (the multiplicity);
 - :func:`is_stabilizable`: PBH restricted to eigenvalues with Re λ >= 0.
@@ -122,8 +122,8 @@ def controllability_rank(A: npt.ArrayLike, B: npt.ArrayLike, tol: float | None =
     Notes
     -----
     The Kalman matrix is badly conditioned for large n or widely spread eigenvalues; prefer
-    :func:`pbh_test` (or :func:`repeated_frequency_test` for modal systems) there. Seed 002 Ch.
-    III (L648-L652) makes the same point by counting the C(36, 12) = 1.25e9 minors a hand
+    :func:`pbh_test` (or :func:`repeated_frequency_test` for modal systems) there. Bainum & Reddy
+    1979 Ch. III §2 makes the same point by counting the C(36, 12) = 1.25e9 minors a hand
     search would need.
 
     Examples
@@ -325,7 +325,8 @@ def repeated_frequency_test(
 ) -> RepeatedFrequencyResult:
     """Controllability of the undamped modal system ``ẍ + diag(κ) x = B u`` by blocks.
 
-    The theorem (Balas 1978, applied in seed 002 Ch. II §3, L305: "these m subsystems with their
+    The theorem (Balas 1978, applied in Bainum & Reddy 1979 Ch. II §3:
+    "these m subsystems with their
     corresponding blocks in the B matrix must each be separately controllable"):
     group the modes by equal κ_k = ω_k². The 2n-state system ``[[0, I], [-diag(κ), 0]]``,
     ``[[0], [B]]`` is controllable iff, for every group, the rows of B of its modes have rank
@@ -339,7 +340,7 @@ def repeated_frequency_test(
         κ = ω², in any consistent unit (for Bainum's beam the nondimensional
         (3, (ω_1/ω_c)², ...)). Only undamped modal (diagonal, unit-mass) systems; use
         :func:`controllability_rank` or :func:`pbh_test` on the first-order model otherwise
-        (seed 002 Ch. III L564-L566).
+        (Bainum & Reddy 1979 Ch. III §2).
     B : (n, m) array_like
         Modal input matrix; a 1-D array is one column.
     tol : float, optional
@@ -356,7 +357,7 @@ def repeated_frequency_test(
 
     Examples
     --------
-    Seed 002 Ch. II Case 4 with ω_2 = √3 ω_c (pitch and mode 2 share κ = 3):
+    Bainum & Reddy 1979 Ch. II Case 4 with ω_2 = √3 ω_c (pitch and mode 2 share κ = 3):
 
     >>> r = repeated_frequency_test([3, 3200, 3], [[59.52, -59.52, 0], [20, 20, -12.16],
     ...                                            [20, -20, 0]])

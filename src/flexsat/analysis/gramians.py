@@ -2,7 +2,7 @@ r"""Controllability and observability Gramians of lightly damped modal systems.
 
 Sources: Y. Kim and J. L. Junkins, "A Measure of Controllability for Actuator Placement", AIAA
 Guidance, Navigation and Control Conference, 1990 (Att. 4 of Junkins, Pollock & Rahman 1990),
-Eqs. (7), (14)–(16), (24)–(25), L1498–L1603 (the printed signs of Eq. (25) are wrong: every "−"
+Eqs. (7), (14)–(16), (24)–(25) (the printed signs of Eq. (25) are wrong: every "−"
 is a "+"). Gawronski's approximate modal Gramians: W. Gawronski, *Advanced Structural
 Dynamics and Active Control of Structures* (Springer 2004), Ch. 4–5 (Property 5.1).
 

@@ -2,7 +2,7 @@
 
 Source: J. L. Junkins and Y. Kim, "First and Second Order Sensitivity of the Singular Value
 Decomposition", Journal of the Astronautical Sciences 38(1), 1990, Appendix, Eqs. A1-A11
-(L2255-L2325), and the same optimizer as used by B. N. Agrawal and H. Bang, "Adaptive Structures
+(Att. 5 Appendix), and the same optimizer as used by B. N. Agrawal and H. Bang, "Adaptive Structures
 for Large Precision Antennas", Acta Astronautica, 1996, Eqs. 16-28.
 
 Problem (A1-A2)::
@@ -19,7 +19,8 @@ Method, as implemented by :func:`homotopy_minimize`:
 2. **Feasibility homotopy (A5-A7).** The targets move from their values at the start to the
    goal, f_p(γ) = γ f_o + (1 − γ) f(p_start), γ = 0 → 1 (an inequality already satisfied at the
    start keeps its bound T_j).
-3. **Minimum-norm correction (A8; seed 004 Eqs. 18-20, 25, 28).** For the residual r of the
+3. **Minimum-norm correction (A8; Agrawal & Bang 1996 Eqs. 18-20, 25, 28).** For the residual
+   r of the
    active rows with Jacobian A, Δp = −W⁻¹ Aᵀ (A W⁻¹ Aᵀ)⁺ r, the W-norm-minimal step, computed
    with a pseudo-inverse (rank-deficient rows give the least-squares step). Each step is
    damped by a backtracking line search on the sum of squared scaled residuals.
@@ -27,7 +28,7 @@ Method, as implemented by :func:`homotopy_minimize`:
    corrections). On success γ advances; on failure the increment is halved and the last
    converged point restored. The feasibility phase fails when the increment falls below
    ``min_gamma_step``; the result then reports the active rows and their Jacobian (A8).
-5. **Objective homotopy (A9-A11; seed 004 Eqs. 16-17).** From the feasible point, J is
+5. **Objective homotopy (A9-A11; Agrawal & Bang 1996 Eqs. 16-17).** From the feasible point, J is
    appended as an extra row with target J_o(γ) = γ J_goal + (1 − γ) J(p_feasible), γ reset to 0.
    The largest γ that still converges gives the constrained minimum (A11); reaching γ = 1
    means the goal itself was attained. The converged J exceeds the minimum by about
@@ -316,7 +317,7 @@ def homotopy_minimize(
     max_evaluations: int = 100_000,
 ) -> HomotopyResult:
     """Minimise J(p) with equality and inequality constraints by homotopic minimum-norm
-    differential correction (Att. 5 Appendix Eqs. A1-A11; seed 004 Eqs. 16-28).
+    differential correction (Att. 5 Appendix Eqs. A1-A11; Agrawal & Bang 1996 Eqs. 16-28).
 
     Parameters
     ----------

@@ -4,18 +4,18 @@ Measures
 --------
 * :func:`modal_controllability`, :func:`hamdan_nayfeh`: Hamdan & Nayfeh's modal
   controllability, the angle between the left eigenvector :math:`q_i` and each input column
-  :math:`b_j` and the gross measure :math:`\rho_i` (Att. 4 Eqs. 2–3, L1460–L1484; Y. Kim
+  :math:`b_j` and the gross measure :math:`\rho_i` (Att. 4 Eqs. 2–3; Y. Kim
   and J. L. Junkins, "A Measure of Controllability for Actuator Placement", AIAA GNC 1990).
 * :func:`modal_cost`: Skelton's modal cost analysis, :math:`V = \mathrm{tr}(Q C X C^T)` split
-  into component costs :math:`V_i` (Att. 4 Eqs. 4–7, 20–27, L1498–L1620).
-* :func:`kim_junkins_index`: :math:`\alpha = \sum_i (V_i/V) \rho_i^2` (Att. 4 Eq. 28, L1623),
+  into component costs :math:`V_i` (Att. 4 Eqs. 4–7, 20–27).
+* :func:`kim_junkins_index`: :math:`\alpha = \sum_i (V_i/V) \rho_i^2` (Att. 4 Eq. 28),
   with the analytic modal Gramian of Att. 4 Eq. (25) in corrected signs (the paper prints
   "−" where "+" holds).
 * :func:`gawronski_index`: Gawronski's H2 (or Hankel) placement index per actuator and mode,
   :math:`\sigma_{ki} = w_{ki} \|G_{ki}\| / \|G\|` (W. Gawronski, *Advanced Structural Dynamics
   and Active Control of Structures*, 2004, §5.3 and Ch. 8).
 * :func:`h2_placement`, :func:`h2_actuator_ranking`: the H2 ranking of the EPS slew
-  study c. 1989 (NASA Langley Earth Pointing Satellite report section), Eqs. (1)–(8) (L188–L235,
+  study c. 1989 (NASA Langley Earth Pointing Satellite report section), Eqs. (1)–(8) (as
   reconstructed by the developers from the text [RECON]), made to work with rigid-body modes.
   The paper's EPS study (its candidates, outputs and published top 5) is
   :mod:`flexsat.cases.eps_placement`.
@@ -146,7 +146,7 @@ def modal_controllability(
     formula. The :math:`\sqrt{1+\omega^2}` mixes η and η̇, so ρ depends on the time unit
     (here s): the measures are not invariant under non-orthogonal scaling, as Att. 4 warns.
 
-    ``form="second_order"`` (Hamdan & Nayfeh's second-order version, to which Att. 4 L1560
+    ``form="second_order"`` (Hamdan & Nayfeh's second-order version, to which Att. 4 Eq. 15
     refers): the left eigenvectors of :math:`\ddot\eta + \Omega^2 \eta = \bar D u` are the unit
     vectors, :math:`\cos\theta_{ij} = |\bar D_{ij}| / \|\bar D_{:j}\|`, :math:`\rho_i =
     \|\bar D_{i:}\|`.
@@ -462,10 +462,10 @@ def gawronski_index(
 
 
 # ------------------------------------------------------------------------------------------------
-# Seed 003 H2 placement, Eqs. (1)–(8)
+# EPS slew study c. 1989 H2 placement, Eqs. (1)–(8)
 @dataclass(frozen=True)
 class H2Placement:
-    r"""Solution of the H2 placement problem of seed 003 Eqs. (1)–(8).
+    r"""Solution of the H2 placement problem of EPS slew study c. 1989 Eqs. (1)–(8).
 
     Attributes
     ----------
@@ -504,7 +504,7 @@ class H2Placement:
 def h2_placement(
     A: npt.ArrayLike, B: npt.ArrayLike, b: npt.ArrayLike, C: npt.ArrayLike, gamma: float = 1.0
 ) -> H2Placement:
-    r"""Seed 003 Eqs. (1)–(8): full-information H2 control and per-actuator energies.
+    r"""EPS slew study c. 1989, Eqs. (1)–(8): full-information H2 control and per-actuator energies.
 
     .. math::
 
@@ -559,7 +559,8 @@ def h2_placement(
         X = sla.solve_continuous_are(A, B, g**2 * C.T @ C, np.eye(B.shape[1]))
     except (np.linalg.LinAlgError, ValueError) as exc:
         raise ValueError(
-            "A, B, C: the H2 Riccati equation (seed 003 Eq. 4) has no stabilising solution: "
+            "A, B, C: the H2 Riccati equation (EPS slew study c. 1989 Eq. 4) has no "
+            "stabilising solution: "
             "(A, B) must be stabilisable and (A, C) detectable. With rigid-body modes the "
             "candidates must move and the outputs see every rigid motion, or project the "
             f"rigid modes out (rigid='project'). ({exc})"
@@ -593,7 +594,7 @@ def h2_placement(
 
 @dataclass(frozen=True)
 class H2Ranking:
-    """Candidate actuators ranked by the seed 003 Eq. (8) energy, largest first.
+    """Candidate actuators ranked by the EPS slew study c. 1989 Eq. (8) energy, largest first.
 
     Attributes
     ----------
@@ -655,7 +656,7 @@ def h2_actuator_ranking(
     rigid_frequency: float | None = None,
 ) -> H2Ranking:
     r"""Rank candidate actuators of a :class:`~flexsat.structures.modal_model.ModalModel` by
-    seed 003 Eqs. (1)–(8) (:func:`h2_placement` with every candidate in B at once).
+    EPS slew study c. 1989 Eqs. (1)–(8) (:func:`h2_placement` with every candidate in B at once).
 
     Rigid-body modes (ω <= ``rigid_frequency``, default ``ModalModel.RIGID_FREQUENCY``):
 
@@ -663,7 +664,8 @@ def h2_actuator_ranking(
       posed on the elastic modal states only. The mass-normalised elastic modes are
       M-orthogonal to the rigid ones, so the elastic subsystem is decoupled from the rigid one
       and this is exact for the vibration, not a truncation. Why: the ranking is "on modal
-      energy" (L248) with "only the modal state equations" (L202), and the rigid attitude is
+      energy" ("Actuator Placement") with "only the modal state equations" ("Actuator
+      Placement"), and the rigid attitude is
       the torquers' task (the slew and perturbation controllers). With the rigid modes in the
       infinite-horizon cost, an impulse of the CG torquers leaves the body spinning, the
       outputs (node displacements) grow without bound unless the *force* candidates stop the

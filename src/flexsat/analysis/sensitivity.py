@@ -1,7 +1,7 @@
 """Eigenvalue, eigenvector and singular-value sensitivities, first and second order.
 
 Source: Junkins & Kim, *First and Second Order Sensitivity of the Singular Value Decomposition*,
-J. Astronautical Sciences 38(1), 1990 (Att. 5 of Junkins, Pollock & Rahman 1990), L1844-L2360.
+J. Astronautical Sciences 38(1), 1990 (Att. 5 of Junkins, Pollock & Rahman 1990).
 
 Three groups of functions, all vectorised over the parameters p_1 … p_P:
 

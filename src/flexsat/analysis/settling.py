@@ -15,10 +15,12 @@ value"), read on the sampled response: a band crossed between two samples is not
 
 The band is absolute (rad, m, ...) by default; ``relative_to_peak`` makes it a fraction of the
 signal's largest magnitude over the run (the 10 % settling of the tip error and the rotation in
-the PPF study on the Agrawal-Bang structure, :mod:`flexsat.scenarios.ppf`, seed 004, which
+the PPF study on the Agrawal-Bang structure,
+:mod:`flexsat.scenarios.ppf`, Agrawal & Bang 1996, which
 publishes no band). Several signals settle together when each is inside its own band (the
-tether retrieval of seed 000 Att. 12: "λ and θ reach their final values in nearly two orbits",
-L4401, read as pitch within 5° and length within 2 % of its change; :mod:`flexsat.cases.tether`).
+tether retrieval of Junkins, Pollock & Rahman 1990 Att. 12: "λ and θ reach their final values in
+nearly two orbits", Figs. 2-3, read as pitch within 5° and length within 2 % of its
+change; :mod:`flexsat.cases.tether`).
 
 "Not settled" is NaN in arrays (a batch keeps its float dtype) and None at the JSON/report
 boundary (:func:`reported`), one way each.

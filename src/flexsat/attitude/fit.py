@@ -1,5 +1,5 @@
 r"""Attitude from matched star directions: Davenport's q-method and the QUEST covariance
-(seed 000 §2.3.4: the attitude follows once the imaged stars are identified).
+(Junkins, Pollock & Rahman 1990 §2.3.4: the attitude follows once the imaged stars are identified).
 
 Wahba's problem: find the rotation C (inertial to body) minimising
 :math:`\tfrac12\sum_i w_i |b_i - C r_i|^2` for body directions b_i, catalogue directions r_i and

@@ -1,6 +1,6 @@
 r"""Index of catalogue star pairs by inter-star angle: the k-vector of Mortari and a brute-force
-scan with the same interface (seed 000 §2.3.4: measured inter-star angles are matched against
-catalogue pairs; L278–L282).
+scan with the same interface (Junkins, Pollock & Rahman 1990 §2.3.4: measured inter-star angles
+are matched against catalogue pairs).
 
 Every pair of catalogue stars closer than ``max_angle`` (a camera's corner-to-corner field) is
 stored with its angle :math:`\theta_{ab} = 2 \arcsin(|r_a - r_b|/2)` (the chord form: accurate

@@ -1,5 +1,5 @@
 r"""Pinhole star camera on the photogrammetry camera model (Junkins, Pollock & Rahman
-1990, §2.3.4, L278–L282): which catalogue stars a camera sees at an attitude, and their noisy
+1990, §2.3.4): which catalogue stars a camera sees at an attitude, and their noisy
 centroids.
 
 Stars lie at infinity, so the collinearity equations of :mod:`flexsat.identify.photogrammetry`

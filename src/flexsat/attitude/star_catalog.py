@@ -1,5 +1,5 @@
 r"""Star catalogues for star-pattern identification (Junkins, Pollock & Rahman
-1990, §2.3.4, L278–L282): a seeded synthetic sky and a loader for the Hipparcos main catalogue.
+1990, §2.3.4): a seeded synthetic sky and a loader for the Hipparcos main catalogue.
 
 A catalogue holds, per star, an identifier, a visual magnitude and a unit direction in the
 inertial (ICRS) frame, ``r = [cos δ cos α, cos δ sin α, sin δ]``.

@@ -1,5 +1,5 @@
 r"""A star tracker: two or more star cameras fixed to the body, a catalogue and its pair index,
-and the lost-in-space identification (Junkins, Pollock & Rahman 1990, §2.3.4, L278–L282: "two or
+and the lost-in-space identification (Junkins, Pollock & Rahman 1990, §2.3.4: "two or
 more star cameras are fixed to the main body of a spacecraft").
 
 :class:`StarTracker` simulates the frames at a true attitude (:meth:`StarTracker.observe`),
@@ -44,7 +44,7 @@ __all__ = [
 
 #: one arcsecond, rad
 ARCSEC = np.pi / 648000.0
-#: the paper's matching tolerance, 5″ (seed 000 L280)
+#: the paper's matching tolerance, 5″ (Junkins, Pollock & Rahman 1990 §2.3.4)
 PAPER_TOLERANCE = 5.0 * ARCSEC
 _INDEXES: dict[str, type[KVectorIndex] | type[BruteForceIndex]] = {
     "kvector": KVectorIndex,

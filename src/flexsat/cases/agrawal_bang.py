@@ -2,10 +2,10 @@
 
 B. N. Agrawal and H. Bang, *Adaptive Structures for Large Precision Antennas*, Acta Astronautica
 1996 (IAF-94.1.4.202), §4: "two elastic
-structures connected in orthogonal configuration" (L207), three collocated piezoceramic
-sensor/actuator pairs, actuator 1 "at the root of the first structure" (L349), the actuator a
+structures connected in orthogonal configuration" (§4), three collocated piezoceramic
+sensor/actuator pairs, actuator 1 "at the root of the first structure" (§4), the actuator a
 bending moment M_a = a_1 V (Eq. 36) and the sensor a voltage proportional to the local bending
-(Eq. 37), three flexible modes retained (L291). Figs. 1–2 (geometry, patch positions) are lost
+(Eq. 37), three flexible modes retained (§4). Figs. 1–2 (geometry, patch positions) are lost
 and the experiment's reference [9] is missing: no dimension, property, frequency or gain a_1, a_2
 of the structure is published.
 
@@ -46,13 +46,14 @@ if TYPE_CHECKING:
 
 SOURCE = CASES["agrawal_bang"].source
 
-#: what seed 004 prints about the structure and the control problem (no dimension or frequency)
+#: what Agrawal & Bang 1996 prints about the structure and the control
+#: problem (no dimension or frequency)
 PUBLISHED: dict[str, Any] = {
-    "n_modes": 3,  # L291 "three flexible modes are included"
-    "n_pairs": 3,  # L207, L291 three collocated sensor/actuator pairs
-    "actuator_1": "root of the first structure",  # L349
-    "control_weight": 1e-8,  # L303 Q
-    "weights": ((100, 100), (500, 100), (100, 500)),  # L303 (w_1, w_2)
+    "n_modes": 3,  # §4 "three flexible modes are included"
+    "n_pairs": 3,  # §4 three collocated sensor/actuator pairs
+    "actuator_1": "root of the first structure",  # §4
+    "control_weight": 1e-8,  # §4 Q
+    "weights": ((100, 100), (500, 100), (100, 500)),  # §4 (w_1, w_2)
     "initial_gain": 100.0,  # Tables 1-3, every g_ij
 }
 
@@ -351,7 +352,7 @@ class AgrawalBangCase:
                 for p in pairs
             ],
             "mass_kg": self.modal_model().total_mass,
-            "published_frequencies": "none (seed 004 prints no frequency of its model)",
+            "published_frequencies": "none (Agrawal & Bang 1996 prints no frequency of its model)",
         }
 
 

@@ -1,5 +1,5 @@
 """Gimbal runs of Vadali, Oh & Walker's single-gimbal CMG pyramid ("Preferred Gimbal Angles for
-Single Gimbal CMGs", in Junkins, Pollock & Rahman 1990, L4533-L4830): torque steering
+Single Gimbal CMGs", in Junkins, Pollock & Rahman 1990, Att. 13): torque steering
 from a gimbal set until the first singular set, the back integration to preferred angles, and
 the null-motion reorientation.
 

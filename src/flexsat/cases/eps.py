@@ -1,6 +1,7 @@
-"""NASA LaRC Earth Pointing Satellite (EPS) structure (EPS slew study c. 1989, L66-L136).
+"""NASA LaRC Earth Pointing Satellite (EPS) structure (EPS slew study c. 1989, "Model Development").
 
-The published data (L72-L136) are entered in ``PUBLISHED`` exactly as printed and converted with
+The published data ("Model Development") are entered in ``PUBLISHED``
+exactly as printed and converted with
 pint.  The NASTRAN deck (95 nodes, 223 elements, by J. Walz) is not reproduced and Fig. 1 is lost,
 so the geometry below is a reconstruction; every choice is a parameter and is argued in
 docs/eps.md.
@@ -51,7 +52,7 @@ if TYPE_CHECKING:
 
 SOURCE = CASES["eps"].source
 
-#: The EPS data exactly as published (L72-L136)
+#: The EPS data exactly as published ("Model Development")
 PUBLISHED: dict[str, Any] = {
     "total_mass": "1028 kg",
     "structural_mass": "548 kg",
@@ -75,7 +76,8 @@ PUBLISHED: dict[str, Any] = {
     "nastran_elements": 223,
 }
 
-#: L100-L125: (mode number, frequency, description) as printed; modes 1-6 are rigid (0.0 Hz)
+#: "Model Development": (mode number, frequency, description) as
+#: printed; modes 1-6 are rigid (0.0 Hz)
 PUBLISHED_MODES = (
     (7, "0.2422 Hz", "Torsion of 15 m Antenna"),
     (8, "0.4056 Hz", "z-rotation 15 m Antenna"),
@@ -93,7 +95,8 @@ PUBLISHED_MODES = (
     (20, "3.1532 Hz", "15 m Antenna mode"),
 )
 
-#: the paper's node numbers (L238-L295, L935) and the role we give them
+#: the paper's node numbers ("Actuator Placement", "Perturbation Control - Torquers + Force
+#: Actuators, 10 s Maneuver") and the role we give them
 NODE_ROLES = {
     60: "15 m antenna rim, 0° (+x, along the truss)",
     63: "15 m antenna rim, 90° (+z)",
@@ -162,9 +165,11 @@ def _published(key: str, unit: str) -> float:
     return to_si(PUBLISHED[key], unit, key)
 
 
-#: the final point-force actuators of seed 003 (L286-L295): paper node and body axis
+#: the final point-force actuators of the EPS slew study c. 1989 ("Actuator
+#: Placement"): paper node and body axis
 FINAL_FORCES = ((69, "x"), (63, "x"), (66, "y"), (66, "z"), (60, "y"), (60, "z"), (88, "x"))
-#: antenna rim nodes whose deflections the paper's goals bound (seed 003 §3.2)
+#: antenna rim nodes whose deflections the paper's goals bound (EPS slew study
+#: c. 1989, "Simulation Results")
 RIM_NODES = (66, 69, 85, 88)
 
 
@@ -375,8 +380,9 @@ class EPSCase:
             ``"flexible"``: :class:`~flexsat.dynamics.flexible_spacecraft.FlexibleSpacecraft`
             in hybrid coordinates on the free-free :meth:`modal_model` (``n_modes`` elastic
             modes), ideal torquers at the CG node (95) loading the modes there, point forces
-            ``force_<node><AXIS>`` at the paper's nodes (default the final set of seed 003
-            L286-L295: 69X, 63X, 66Y, 66Z, 60Y, 60Z, 88X) and the elastic displacements of the
+            ``force_<node><AXIS>`` at the paper's nodes (default the final set of the EPS slew
+            study c. 1989, "Actuator Placement": 69X, 63X, 66Y, 66Z, 60Y, 60Z, 88X) and
+            the elastic displacements of the
             antenna rims (nodes 66, 69, 85, 88, three axes each); ``"rigid"``:
             :class:`~flexsat.dynamics.rigid_spacecraft.RigidSpacecraft` with the model's
             inertia about its CG (the published inertia set is in :meth:`mass_properties`).

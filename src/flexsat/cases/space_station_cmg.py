@@ -1,5 +1,5 @@
 r"""Space-station attitude control and CMG momentum management (Vadali, Oh & Walker, space-station
-example, Junkins, Pollock & Rahman 1990, L4533-L4830).
+example, Junkins, Pollock & Rahman 1990, Att. 13).
 
 Three steps, as in the paper:
 
@@ -18,7 +18,8 @@ Three steps, as in the paper:
    (Eq. 11) or the AERO1 substitute.
 3. **CMG loop**, separately (the paper's justification: the attitude bandwidth is ~0.01 rad/s):
    the pseudo-inverse steering :math:`C\dot\sigma = T`,
-   :math:`T = [u_1 + n h_3,\ u_2,\ u_3 - n h_1]/h_r` (L4717–L4720), from a chosen σ(0), stopped
+   :math:`T = [u_1 + n h_3,\ u_2,\ u_3 - n h_1]/h_r` (Att. 13 "Space Station
+   Example"), from a chosen σ(0), stopped
    at the first singular set (:func:`flexsat.cases.cmg_pyramid.integrate_gimbals`).
 
 Default maxima: attitude 1° (the initial error), rate 0.02 deg/s (the station's rate
@@ -58,7 +59,7 @@ __all__ = [
     "PAPER_STATION",
 ]
 
-#: Table 2 of the paper (L4684–L4688), as published
+#: Table 2 of the paper, as published
 PAPER_STATION = StationData(
     ("5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"), 0.0011, "3500 lbf*ft*s"
 )
@@ -182,7 +183,8 @@ class StationRun:
         return (xr[0], xp[0], xr[4]), (xr[2], xp[2], xr[6]), (u1, u2, u3)
 
     def demand(self, t) -> np.ndarray:
-        """T = [u1 + n h3, u2, u3 − n h1] / h_r at time t (L4717–L4720), (3,)."""
+        """T = [u1 + n h3, u2, u3 − n h1] / h_r at time t, (3,) (Att. 13 "Space Station
+        Example")."""
         _, (h1, h2, h3), (u1, u2, u3) = self._parts(self.solution(t))
         n = self.design.data.orbit_rate
         return np.array([u1 + n * h3, u2, u3 - n * h1]) / self.design.data.rotor_momentum

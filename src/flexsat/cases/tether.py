@@ -1,9 +1,10 @@
-"""Vadali & Kim's tethered-subsatellite retrieval (AIAA 90-1197; seed 000, Att. 12,
-L4258-L4531): the Shuttle case and the published numbers
+"""Vadali & Kim's tethered-subsatellite retrieval (AIAA 90-1197; Junkins, Pollock & Rahman 1990,
+Att. 12): the Shuttle case and the published numbers
 of each example, :func:`closed_loop` (one law on the tether, through the engine's continuous-law
 or sampled mode) and :func:`rerun` (an example under continuous feedback, DOP853).
 
-The case (L4397-L4401): circular orbit at 220 km (Ω = 0.07068 rad/min), reference length
+The case (Att. 12, "Tension Control Law Design Based on Decoupled Equations of Motion"): circular
+orbit at 220 km (Ω = 0.07068 rad/min), reference length
 L = 20 km, subsatellite 22.7 kg; start λ = 1, θ = φ = 5°, at rest.
 """
 
@@ -20,14 +21,15 @@ from flexsat.dynamics.tether import ClosedLoopRun, TetheredSubsatellite, TetherS
 if TYPE_CHECKING:
     from flexsat.sim.config import SimConfig
 
-SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12, L4258-L4531"
+SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12"
 #: settling bands of a retrieval: |θ| within the runs' initial 5° (rad), |λ − λ_f| within 2 %
 #: of the length change (:func:`flexsat.analysis.settling.settling_time`)
 SETTLING_PITCH_BAND = np.radians(5.0)
 SETTLING_LENGTH_FRACTION = 0.02
-#: the paper's scales (L4397-L4401)
+#: the paper's scales (Att. 12 "Tension Control Law Design Based on Decoupled Equations of Motion")
 PAPER_SCALES = dict(mass="22.7 kg", length="20 km", altitude="220 km")
-#: [λ, θ, φ, λ', θ', φ'] at the start of every example (L4399)
+#: [λ, θ, φ, λ', θ', φ'] at the start of every example (Att. 12 "Tension Control Law Design Based on
+#: Decoupled Equations of Motion")
 INITIAL = (1.0, np.radians(5.0), np.radians(5.0), 0.0, 0.0, 0.0)
 
 
@@ -42,7 +44,7 @@ class Example:
     final_length: float
     orbits: float
     published: dict
-    lines: str
+    locator: str
 
 
 #: the examples of Figs. 2-8
@@ -62,7 +64,7 @@ EXAMPLES = {
                 thrust_impulse_2_orbits_Ns=481.0,
                 settling_orbits=2.0,
             ),
-            "L4401",
+            "Figs. 2-3",
         ),
         Example(
             "V11",
@@ -71,7 +73,7 @@ EXAMPLES = {
             0.01,
             2.0,
             dict(thrust_index_2_orbits=0.24, thrust_impulse_2_orbits_Ns=128.4, max_pitch_deg=29.3),
-            "L4447-L4449",
+            "Figs. 4-5",
         ),
         Example(
             "V12",
@@ -80,7 +82,7 @@ EXAMPLES = {
             0.01,
             2.0,
             dict(thrust_index_2_orbits=0.258),
-            "L4447",
+            "Figs. 4-5",
         ),
         Example(
             "V13 K1=1.0",
@@ -89,7 +91,7 @@ EXAMPLES = {
             0.001,
             6.0,
             dict(final_pitch_deg=180.0),
-            "L4449",
+            "Fig. 6",
         ),
         Example(
             "V13 K1=0.9",
@@ -98,7 +100,7 @@ EXAMPLES = {
             0.001,
             2.0,
             dict(max_pitch_deg=21.9),
-            "L4449",
+            "Fig. 7",
         ),
         Example(
             "V15",
@@ -107,7 +109,7 @@ EXAMPLES = {
             0.01,
             3.0,
             dict(initial_rate_m_s=30.0),
-            "L4465",
+            "'A Tether Rate Control Law', Fig. 8",
         ),
     )
 }
@@ -284,14 +286,14 @@ def measures(run: ClosedLoopRun, final_length: float, scales: TetherScales, law:
     }
     index = float(run.thrust_index[0, -1])
     # settled: pitch within the initial 5° and length within 2 % of its change, together
-    # ("λ and θ reach their final values in nearly two orbits", L4401, read so)
+    # ("λ and θ reach their final values in nearly two orbits", Att. 12 Figs. 2-3, read so)
     lam, theta = x[:, 0], x[:, 1]
     settle = settling_time(
         run.tau,
         (theta, lam - final_length),
         (SETTLING_PITCH_BAND, SETTLING_LENGTH_FRACTION * abs(lam[0] - final_length)),
     )
-    # the paper's window for the index is two orbits (L4401, L4447)
+    # the paper's window for the index is two orbits (Att. 12 Figs. 2-5)
     two = (
         float(np.interp(4 * np.pi, run.tau, run.thrust_index[0]))
         if run.tau[-1] >= 4 * np.pi * (1 - 1e-12)

@@ -8,8 +8,8 @@ import the case modules inside ``compute``, so a broken case fails its own check
 
 Adding a check is one entry in a module's ``CHECKS``::
 
-    Check("nps", "PD rate gain kτ", "Hailey, Sortun & Agrawal c. 1992, L220", 6.6773, "N m s/rad",
-          lambda: float(_case().pd_gains().kd), atol=5e-5)   # half a unit in the last digit
+    Check("nps", "PD rate gain kτ", "Hailey, Sortun & Agrawal c. 1992, after Eq. 24", 6.6773,
+          "N m s/rad", lambda: float(_case().pd_gains().kd), atol=5e-5)  # half a unit, last digit
 
 or, for a printed column, :func:`series`. A published number that is an erratum, or that the
 model deviates from for a documented reason, carries a :class:`Discrepancy` (the value computed

@@ -1,7 +1,7 @@
 """The published-number check: one value printed in a source, recomputed live, and a tolerance.
 
-A :class:`Check` names the case, the quantity, the source (seed file and equation, table or
-line, or a published reference), the value as printed (``published``, in ``unit``) and a
+A :class:`Check` names the case, the quantity, the source (short citation and equation, table
+or section, or a published reference), the value as printed (``published``, in ``unit``) and a
 ``compute`` callable that recomputes it from the code base each time it is run. Nothing computed
 is stored: :func:`evaluate` calls ``compute`` and compares.
 
@@ -87,7 +87,7 @@ class Check:
     quantity : str
         What is compared, short (e.g. ``"ω_4, open loop"``).
     source : str
-        Seed file and equation/table/line, or the published reference.
+        Short citation and equation/table/section, or the published reference.
     published : float
         The value as printed, in ``unit``.
     unit : str

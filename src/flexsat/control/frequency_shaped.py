@@ -171,7 +171,8 @@ class FrequencyShapedDesign:
         :math:`K_d = \hat R^{-1}\hat B^T \hat A_{cl}^{-T} P E` with E = [I; 0] placing d in
         the augmented state (:math:`\hat d = E d`) and :math:`\hat A_{cl} = \hat A -
         \hat B\hat K`, so that the feedforward :math:`K_d d = -\hat R^{-1}\hat B^T\xi` with
-        ξ of Eq. 29. Seed 003's "time-varying" feedforward interpolates this gain and
+        ξ of Eq. 29. The "time-varying" feedforward of the EPS slew study c.
+        1989 interpolates this gain and
         multiplies the current d(t)."""
         n = self.A.shape[0]
         Acl = self.A_aug - self.B_aug @ self.gain
@@ -205,7 +206,7 @@ def frequency_shaped_lqr(
     order: int = 2,
     damping: float = 0.0,
 ) -> FrequencyShapedDesign:
-    r"""Frequency-shaped LQR (seed 003 Eqs. 22–28), module docstring.
+    r"""Frequency-shaped LQR (EPS slew study c. 1989 Eqs. 22–28), module docstring.
 
     Parameters
     ----------

@@ -1,8 +1,8 @@
-r"""Liapunov retrieval laws of a tethered subsatellite (Vadali & Kim, AIAA 90-1197; seed 000,
-Att. 12, L4335-L4465), on the plant
+r"""Liapunov retrieval laws of a tethered subsatellite (Vadali & Kim, AIAA 90-1197; Junkins,
+Pollock & Rahman 1990, Att. 12, "In-plane Control Law" to "A Tether Rate Control Law"), on the plant
 :class:`~flexsat.dynamics.tether.TetheredSubsatellite`.
 
-All three are written in the nondimensional variables of seed 000 Eq. 4 (x = [λ, θ, φ, λ', θ',
+All three are written in the nondimensional variables of Att. 12 Eq. 4 (x = [λ, θ, φ, λ', θ',
 φ'], ' = d/dτ):
 
 * :class:`DecoupledTetherLaw` (controller 1, Eqs. 13-15): z = λ cos φ, y = λ sin φ nearly
@@ -16,7 +16,7 @@ All three are written in the nondimensional variables of seed 000 Eq. 4 (x = [λ
                - 2K_2\theta'(1+\theta')\tan\phi/\lambda - K_3\lambda\phi'
 
   The last sign is the repaired one: solving Eq. 13 exactly gives −K3λφ' (with Eqs. 11-12,
-  K3 y' z − K3 z' y = K3 λ²φ' enters F̂/λ with the determinant −λ²). L4395 prints "+", with
+  K3 y' z − K3 z' y = K3 λ²φ' enters F̂/λ with the determinant −λ²). Att. 12 Eq. 15 prints "+", with
   which the retrieval diverges; ``printed_sign=True`` keeps it, to
   show that. At φ = 0 the tension is the in-plane law (7).
 * :class:`CoupledTetherLaw` (controller 2, Eqs. 18 and 20), built on the integral of motion V1
@@ -181,7 +181,7 @@ class DecoupledTetherLaw(_TetherLaw):
         divided by the scales' L.
     scales : TetherScales, optional
     printed_sign : bool
-        Use L4395's "+K3λφ'" (an erratum: the retrieval diverges) instead of "−".
+        Use Att. 12 Eq. 15's "+K3λφ'" (an erratum: the retrieval diverges) instead of "−".
     """
 
     _gain_names = ("K1", "K2", "K3", "final_length")

@@ -1,7 +1,8 @@
 r"""Running many cases of one maneuver setup: vectorised chunks, dask scheduling, a zarr store.
 
-Issue 13, "Execution" (trade studies and Monte Carlo at scale; the seed 000 trade surfaces of
-Att. 3 Figs. 5–7 and the robustness sets of seeds 003 and 004 are sweeps of this kind). A run
+Issue 13, "Execution" (trade studies and Monte Carlo at scale; the Junkins, Pollock & Rahman 1990
+trade surfaces of Att. 3 Figs. 5–7 and the robustness sets of the EPS slew study c. 1989 and
+Agrawal & Bang 1996 are sweeps of this kind). A run
 is three pieces:
 
 * a **case builder** ``build(parameters, seeds) -> (plant, law, config, initial_state)``: for a

@@ -6,7 +6,8 @@ A parameter is a scenario quantity (a hub inertia, a torque limit, a damping rat
 caller and declared in its SI unit (``"kg*m**2"``, ``"N*m"``, ``"rad"``, ``""`` for a
 dimensionless one). Every value given for it (a mean, a bound, a grid value) is a float in that
 unit, a pint Quantity or a unit string, converted with :func:`flexsat.units.to_si_array`, so
-published values are entered as published: ``"300 ozf*in"`` for seed 000's torque limit (pint's
+published values are entered as published: ``"300 ozf*in"`` for Junkins, Pollock &
+Rahman 1990's torque limit (pint's
 ``oz`` is the ounce of mass; the ounce-force is ``ozf``), ``"5 deg"`` for an angle.
 
 The pieces:

@@ -1,7 +1,9 @@
-r"""Automated search of the perturbation-feedback weights of a three-axis slew toward the seed 003
-goals (the paper's main recommendation, EPS slew study c. 1989, L905–L925).
+r"""Automated search of the perturbation-feedback weights of a three-axis slew toward the goals of
+the EPS slew study c. 1989 (the paper's main recommendation, "Perturbation Control - Torquers +
+Force Actuators, 10 s Maneuver").
 
-Seed 003 designs its perturbation feedback (frequency-shaped LQR with cross weight, Eqs. 22–28,
+The EPS slew study c. 1989 designs its perturbation feedback (frequency-shaped LQR
+with cross weight, Eqs. 22–28,
 :func:`~flexsat.control.perturbation_feedback.perturbation_design`) with diagonal weights
 
 .. math::
@@ -10,10 +12,11 @@ Seed 003 designs its perturbation feedback (frequency-shaped LQR with cross weig
     D = \mathrm{diag}(d_\tau I_3,\ d_F)
 
 over δX = [δα, δω, δη, δη̇] and δu₁ = [J⁻¹δτ, δF], chosen by hand, and judges each design by
-simulation against two goals (L792–L801, :mod:`flexsat.sim.slew_goals`): the 1-2-3 angle error
+simulation against two goals ("Simulation Results",
+:mod:`flexsat.sim.slew_goals`): the 1-2-3 angle error
 at 1.25 T at most 3 % of the commanded angle, and the peak rim deflection after the slew at most
 1/10 of the open-loop one. Its 6 s torquers-only case D misses both and the paper recommends
-"an optimization of the weighting matrices" (L905–L925). This module does that search.
+"an optimization of the weighting matrices" (ibid.). This module does that search.
 
 The pieces:
 

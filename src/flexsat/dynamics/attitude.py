@@ -1,7 +1,8 @@
 r"""Attitude kinematics: Euler parameters, direction cosines, 1-2-3 Euler angles, Gibbs and
 modified Rodrigues parameters, on arrays with a leading case axis.
 
-Conventions (seed 003 §1.3, §2.2, Eqs. 9–11; Schaub & Junkins, *Analytical Mechanics of Space
+Conventions (EPS slew study c. 1989, "Simulation Results" and Eqs. 9–11; Schaub & Junkins,
+*Analytical Mechanics of Space
 Systems*, 4th ed., Ch. 3):
 
 * Euler parameters (quaternion) scalar first, :math:`\beta = [\beta_0, \beta_1, \beta_2,
@@ -133,7 +134,7 @@ def cross_matrix(v: npt.ArrayLike) -> FloatArray:
 
 def omega_matrix(w: npt.ArrayLike) -> FloatArray:
     r"""Ω(ω) of the Euler-parameter kinematics :math:`\dot\beta = \Omega(\omega)\beta`
-    (seed 003 Eq. 11; Schaub & Junkins Eq. 3.104), the ½ included:
+    (EPS slew study c. 1989 Eq. 11; Schaub & Junkins Eq. 3.104), the ½ included:
 
     .. math::
 
@@ -158,7 +159,8 @@ def omega_matrix(w: npt.ArrayLike) -> FloatArray:
 
 
 def quaternion_rate_matrix(beta: npt.ArrayLike) -> FloatArray:
-    r"""B(β) with :math:`\dot\beta = B(\beta)\,\omega = \Omega(\omega)\beta` (seed 003 §2.2,
+    r"""B(β) with :math:`\dot\beta = B(\beta)\,\omega = \Omega(\omega)\beta`
+    (EPS slew study c. 1989 Eq. 11,
     Schaub & Junkins Eq. 3.104), the ½ included:
 
     .. math::
@@ -291,7 +293,7 @@ def _axis_rotation(angle: FloatArray, axis: int) -> FloatArray:
 
 def euler123_to_dcm(angles: npt.ArrayLike) -> FloatArray:
     r"""C of the 1-2-3 Euler angles, :math:`C = R_3(\theta_3) R_2(\theta_2) R_1(\theta_1)`
-    (seed 003 §1.3; Schaub & Junkins Table B.1).
+    (EPS slew study c. 1989, "Simulation Results"; Schaub & Junkins Table B.1).
 
     Parameters
     ----------
@@ -319,7 +321,8 @@ def euler123_to_quaternion(angles: npt.ArrayLike) -> FloatArray:
     Unlike ``dcm_to_quaternion(euler123_to_dcm(angles))``, whose sign is fixed by β0 >= 0, this
     is a smooth function of the angles: a path of angles gives a continuous path of β (what a
     continuation in the terminal angles needs). For (1, 1, 1) rad it gives
-    [0.565676, 0.570941, 0.167519, 0.570941] (seed 003 §1.3, spec F4).
+    [0.565676, 0.570941, 0.167519, 0.570941] (EPS slew study c. 1989,
+    "Simulation Results"; spec F4).
 
     Parameters
     ----------
@@ -372,7 +375,8 @@ def dcm_to_euler123(dcm: npt.ArrayLike) -> FloatArray:
 
 
 def principal_rotation_to_quaternion(axis: npt.ArrayLike, angle: npt.ArrayLike) -> FloatArray:
-    r"""Euler parameters of the rotation ``angle`` about the unit ``axis`` (seed 003 Eqs. 9–10):
+    r"""Euler parameters of the rotation ``angle`` about the unit ``axis`` (EPS
+    slew study c. 1989 Eqs. 9–10):
     :math:`\beta_0 = \cos(\phi/2)`, :math:`\beta_i = l_i \sin(\phi/2)`.
 
     Parameters

@@ -1,5 +1,5 @@
 """Single-gimbal control moment gyros in a pyramid (Vadali, Oh & Walker, "Preferred Gimbal Angles
-for Single Gimbal CMGs"; in Junkins, Pollock & Rahman 1990, L4533–L4830).
+for Single Gimbal CMGs"; in Junkins, Pollock & Rahman 1990, Att. 13).
 
 Plain array kernels with a leading case axis: the gimbal angles ``sigma`` have shape
 ``(..., n)``; momenta ``(..., 3)``, Jacobians ``(..., 3, n)``. Momenta are in units of one
@@ -36,7 +36,8 @@ if TYPE_CHECKING:
 
     from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
 
-#: the paper's pyramid skew angle, 54.74° (L4620), in rad
+#: the paper's pyramid skew angle, 54.74° (Att. 13 "Determination of Preferred
+#: Initial Gimbal Angles"), in rad
 SKEW = float(np.deg2rad(54.74))
 
 
@@ -308,7 +309,7 @@ PAPER_PERTURBATION = np.deg2rad([1.0, -3.0, 0.0, -1.0])
 #: the six axis directions and eight oblique ones: computed data, the output of
 #: :func:`flexsat.cases.cmg_pyramid.preferred_angles` with the paper's perturbation (back
 #: integration, rtol 1e-10), rounded to 0.01°; ``tests/dynamics/test_cmg.py`` recomputes
-#: every row. The paper stores such sets for use (§8.5, conclusions L4758–L4764:
+#: every row. The paper stores such sets for use (Att. 13 "Conclusions":
 #: "preferred-set data must be stored"); its Table 1 lists hand-chosen sets for six demands,
 #: of which only the +x row came from the back integration (V4: [−59.6, 60.7, 118, −121]°).
 #: Back integration from the *same* offset lands elsewhere along other directions (+y:
@@ -357,7 +358,7 @@ def steering_with_null_motion(
 ) -> FloatArray:
     """Torque steering with null motion beside it: σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque) + τ k(σ_f − σ)
     (§8.2 Eq. 7 plus §8.5 Eq. 13–15; the paper's conclusion that "the reorientation law may
-    need to run alongside the torque law", L4758–L4764).
+    need to run alongside the torque law", Att. 13 "Conclusions").
 
     τ = I − Cᵀ(CCᵀ + α_n I)⁻¹C (:func:`null_projector`): with ``null_alpha`` = 0 the added
     motion changes no momentum (Cτ = 0), so the torque delivered is the steering law's alone;

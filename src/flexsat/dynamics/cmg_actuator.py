@@ -30,7 +30,7 @@ of the rates actually run, :math:`-h_r C\dot\sigma - \omega\times h`.
 No external torque acts, so the total angular momentum :math:`C(\beta)^T(I\omega + h)` is
 constant whatever is commanded (:meth:`CmgSpacecraft.momentum`): the cluster only exchanges
 momentum with the body. Only the axial rotor momentum is modelled; gimbal and transverse rotor
-inertia are neglected, as in the paper (§8.1, L4584).
+inertia are neglected, as in the paper (Att. 13 "CMG Steering").
 """
 
 from __future__ import annotations

@@ -1,10 +1,13 @@
-r"""Three-axis flexible spacecraft in hybrid coordinates (the DISCOS analogue, seed 003 F3).
+r"""Three-axis flexible spacecraft in hybrid coordinates (the DISCOS analogue of the
+EPS slew study c. 1989; spec F3).
 
-Coordinates (seed 003 §2.2 and L132–L136: DISCOS takes the elastic modes, translational and
+Coordinates (EPS slew study c. 1989, Eqs. 9–14 and "Model Development": DISCOS takes the
+elastic modes, translational and
 rotational shapes at the nodes and the lumped masses, and computes the inertial integrals):
 
 * the attitude of a body frame B fixed to the undeformed structure with its origin at the centre
-  of mass, Euler parameters β (inertial to body, scalar first; seed 003 Eqs. 9–11), and the body
+  of mass, Euler parameters β (inertial to body, scalar first; EPS slew study
+  c. 1989 Eqs. 9–11), and the body
   rate ω (body axes);
 * optionally the inertial position r and velocity v of the centre of mass;
 * the elastic coordinates η of a free-free :class:`~flexsat.structures.modal_model.ModalModel`
@@ -41,7 +44,8 @@ Lagrange's equations in quasi-coordinates for ω (Meirovitch, *Methods of Analyt
     \qquad \dot r = v,
 
 for ideal torquers u at the centre of mass and point forces F_k = F e_a along body axes at the
-nodes (seed 003 F15). Torquers mounted on a node k (``torque_node``, the CG node of a DISCOS
+nodes (EPS slew study c. 1989; spec F15). Torquers mounted on a node k
+(``torque_node``, the CG node of a DISCOS
 model) add :math:`\Phi_{r,k}^T u` to the elastic equation. In matrix form, with
 :math:`\mathcal M = [[J, \Delta^T], [\Delta, I]]`, F the vector of force magnitudes, E the
 matrix of their body-axis directions e_a, G that of their moment arms (r_k − c) × e_a and
@@ -281,7 +285,8 @@ class FlexibleSpacecraft(Plant):
             )
         )
         self.outputs = tuple(outputs)
-        # the node outputs are what a flexible run is about (the rim deflections of seed 003)
+        # the node outputs are what a flexible run is about (the rim
+        # deflections of EPS slew study c. 1989)
         self.recorded = type(self).recorded + tuple(
             c.name for c in self.outputs if c.name.startswith(("displacement_", "rotation_"))
         )

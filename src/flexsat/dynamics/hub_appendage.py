@@ -9,7 +9,8 @@ Junkins, Pollock & Rahman 1990, Eqs. 5-7):
 
 is discretised by Galerkin's method with k exact tip-mass cantilever modes φ_i (mass normalised
 per beam), y = Σ φ_i q_i, identical for every beam (anti-symmetric deformation). The generalized
-coordinates are (θ, q_1 … q_k) and the state is x = [θ, q, θ', q'] (the ordering of seed 001):
+coordinates are (θ, q_1 … q_k) and the state is x = [θ, q, θ', q'] (the ordering of
+Hailey, Sortun & Agrawal c. 1992):
 
     M = [[I_tot, n dᵀ], [n d, n 1]],   K = diag(0, n ω²),   D = diag(0, 2 n ζ ω),   B = e_θ
 

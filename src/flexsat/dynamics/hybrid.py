@@ -2,7 +2,8 @@
 
     M [θ'', q'']ᵀ + D [θ', q']ᵀ + K [θ, q]ᵀ = e_θ u + f,     x = [θ, q, θ', q']
 
-(seed 001 Eqs. 15-16; seed 000 Att. 3 Eq. 5 discretised). :class:`HybridPlant` holds what every
+(Hailey, Sortun & Agrawal c. 1992 Eqs. 15-16; Junkins, Pollock & Rahman 1990 Att. 3 Eq. 5
+discretised). :class:`HybridPlant` holds what every
 such plant shares — the first-order form, accelerations, energy, vibration energy and the
 error-energy Lyapunov function — and implements the plant protocol
 (:class:`~flexsat.dynamics.plant.Plant`) that :func:`flexsat.sim.simulate` drives: one input
@@ -345,7 +346,8 @@ class HybridPlant(Plant):
 
 class ModalHybrid(HybridPlant):
     """A rigid hub carrying a cantilevered :class:`~flexsat.structures.modal_model.ModalModel`
-    (seed 001 Eq. 16: M = [[I_zz, Dᵀ], [D, 1]], K = diag(0, ω²), C = diag(0, 2ζω)).
+    (Hailey, Sortun & Agrawal c. 1992 Eq. 16: M = [[I_zz, Dᵀ], [D, 1]], K =
+    diag(0, ω²), C = diag(0, 2ζω)).
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 r"""A free-free beam in a circular orbit: nonlinear pitch and bending with gravity gradient.
 
-Bainum & Reddy (1979), NASA CR-158684, Ch. II eqs 1–2 (L211–L229), for a
+Bainum & Reddy (1979), NASA CR-158684, Ch. II eqs 1–2, for a
 uniform beam whose centre of mass is on a circular orbit of rate :math:`\omega_c`, pitch θ
 from the local vertical and bending amplitudes :math:`A_n = l z_n`. The report writes them in
 the nondimensional time :math:`\tau = \omega_c t` (' = d/dτ):
@@ -74,7 +74,7 @@ class BeamInOrbit(Plant):
         elastic deflection there, :math:`\sum_n z_n \phi_n(\xi)` (= w/l, dimensionless), or in
         metres when ``length`` is given.
     length : float, optional
-        Beam length l, m (seed 002 does not publish one).
+        Beam length l, m (Bainum & Reddy 1979 does not publish one).
     linearised : bool
         Drop the nonlinear remainder f (eqs 5–6 only, the linearisation at rest).
 

@@ -2,7 +2,7 @@ r"""Three-axis rigid body: Euler's equations, a norm-preserving step of (β, ω)
 the plants' own step, which the engine calls) and the analytic Euler–Poinsot motion of a
 torque-free asymmetric body, on arrays with a leading case axis.
 
-Euler's equations (seed 003 Eq. 12; Schaub & Junkins Eq. 4.33), body components:
+Euler's equations (EPS slew study c. 1989 Eq. 12; Schaub & Junkins Eq. 4.33), body components:
 
 .. math::
 
@@ -102,7 +102,7 @@ def euler_rates(
     w: npt.ArrayLike, inertia: QuantityArrayLike, torque: npt.ArrayLike | None = None
 ) -> FloatArray:
     r"""ω̇ from Euler's equations, :math:`\dot\omega = I^{-1}(u - \omega \times I\omega)`
-    (seed 003 Eq. 12).
+    (EPS slew study c. 1989 Eq. 12).
 
     Parameters
     ----------

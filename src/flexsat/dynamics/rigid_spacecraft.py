@@ -7,7 +7,7 @@ the centre of mass in body axes (N m):
 
 .. math::
 
-    \dot\beta = \Omega(\omega)\,\beta \quad \text{(seed 003 Eq. 11)}, \qquad
+    \dot\beta = \Omega(\omega)\,\beta \quad \text{(EPS slew study c. 1989 Eq. 11)}, \qquad
     I\dot\omega = -\omega\times I\omega + u \quad \text{(Eq. 12)}.
 
 In the plant protocol's form :math:`\dot x = A x + B u + B_f f(x)` the linear part is
@@ -119,13 +119,14 @@ def skew(v: FloatArray) -> FloatArray:
 
 
 def omega(w: FloatArray) -> FloatArray:
-    """Ω(ω) (..., 4, 4) of seed 003 Eq. 11, the ½ included
+    """Ω(ω) (..., 4, 4) of EPS slew study c. 1989 Eq. 11, the ½ included
     (:func:`flexsat.dynamics.attitude.omega_matrix`, unchecked)."""
     return (w @ _OMEGA).reshape(w.shape[:-1] + (4, 4))
 
 
 def quaternion_kinematics(beta: FloatArray, w: FloatArray) -> FloatArray:
-    r""":math:`\dot\beta = \Omega(\omega)\beta = B(\beta)\,\omega` (seed 003 Eq. 11), unchecked."""
+    r""":math:`\dot\beta = \Omega(\omega)\beta = B(\beta)\,\omega` (EPS slew study
+    c. 1989 Eq. 11), unchecked."""
     return (omega(w) @ beta[..., None])[..., 0]
 
 

@@ -21,7 +21,7 @@ The models of issues #2 and #3 convert to it: :meth:`SecondOrderModel.from_hub_a
 (the hub + appendage assumed-modes model), :meth:`SecondOrderModel.from_modal_model` (a free or
 cantilevered :class:`~flexsat.structures.modal_model.ModalModel` with chosen inputs and
 outputs) and :meth:`SecondOrderModel.from_hybrid` (a cantilevered ModalModel on a rigid hub,
-the hybrid coordinates of the NPS simulator, seed 001 Eqs. 10, 16).
+the hybrid coordinates of the NPS simulator, Hailey, Sortun & Agrawal c. 1992 Eqs. 10, 16).
 """
 
 from __future__ import annotations
@@ -425,7 +425,8 @@ class SecondOrderModel:
         outputs: Sequence[Output] | None = None,
     ) -> SecondOrderModel:
         r"""Rigid hub carrying a cantilevered modal model, in hybrid coordinates (θ, η)
-        (seed 001 Eqs. 10, 16; ``flexsat.structures.modal_model.hub_appendage_matrices``):
+        (Hailey, Sortun & Agrawal c. 1992 Eqs. 10, 16;
+        ``flexsat.structures.modal_model.hub_appendage_matrices``):
 
         .. math::
 

@@ -23,10 +23,11 @@ linear, so the whole of it is the exactly propagated part: with the state
   ``moment_pair``, and their collocated outputs).
 
 Input kinds: ``force`` (N), ``torque`` (N m, on a rotation dof) and ``moment_pair`` (a
-piezoelectric patch, seed 004 Eq. 36: equal and opposite moments :math:`\pm a_1 u` at the two
+piezoelectric patch, Agrawal & Bang 1996 Eq. 36: equal and opposite
+moments :math:`\pm a_1 u` at the two
 rotation dofs of an element pair). Output kinds: ``displacement``
 (m), ``rotation`` (rad) and ``strain``: the relative rotation :math:`\theta_b - \theta_a` of
-the pair times ``gain`` (seed 004 Eq. 37, :math:`y = a_2 M`: with ``gain`` =
+the pair times ``gain`` (Agrawal & Bang 1996 Eq. 37, :math:`y = a_2 M`: with ``gain`` =
 :math:`(t/2)/L_p` the surface strain averaged over a patch of length :math:`L_p`, as
 ``cases/agrawal_bang.py``; with :math:`EI/L_p` the bending moment, ``unit="N*m"``). A sensor with
 ``rate=True`` reads the velocity of the same quantity (unit per second).
@@ -79,7 +80,7 @@ class Actuator:
     axis : str or array_like (3,), optional
         Direction of a force, axis of a torque or moment pair (modal coordinates only).
     gain : float
-        Load per unit command (a_1 of seed 004 Eq. 36 for a moment pair); default 1.
+        Load per unit command (a_1 of Agrawal & Bang 1996 Eq. 36 for a moment pair); default 1.
     unit : str, optional
         Unit of the command (default N for a force, N m otherwise; a piezo voltage: "V").
     """
@@ -103,7 +104,8 @@ class Sensor:
     kind : {"displacement", "rotation", "strain"}
     at, axis : as :class:`Actuator` (a pair of rotation dofs or nodes for a strain).
     gain : float
-        Output per unit of the quantity (a_2 (t/2)/L_p for a patch strain sensor, seed 004
+        Output per unit of the quantity (a_2 (t/2)/L_p for a patch
+        strain sensor, Agrawal & Bang 1996
         Eq. 37); default 1.
     rate : bool
         Read the velocity of the quantity instead (q̇ instead of q).
@@ -390,7 +392,7 @@ class StructuralPlant(Plant):
         zero); dense or scipy.sparse. ``dofs`` labels the rows, e.g. ``Assembly.dofs``
         ((node, "uy"), (node, "rz"), ...), so that specs can say ``at=(12, "rz")``; ``fixed``
         labels supported dofs (not in the matrices): one end of a moment pair or strain pair may
-        sit there (a patch at a clamped root, seed 004 L349), contributing nothing."""
+        sit there (a patch at a clamped root, Agrawal & Bang 1996 §4), contributing nothing."""
         Md, Kd = _dense(M), _dense(K)
         n = np.shape(Md)[0] if np.ndim(Md) == 2 else 0
         Dd = np.zeros((n, n)) if D is None else _dense(D)

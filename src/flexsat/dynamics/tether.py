@@ -1,8 +1,9 @@
 r"""Tethered subsatellite: the three-degree-of-freedom libration and length dynamics of a point
 mass on a straight massless tether below (or above) a body in a circular orbit (Vadali & Kim,
-AIAA 90-1197; seed 000, Att. 12, L4319-L4333).
+AIAA 90-1197; Junkins, Pollock & Rahman 1990, Att. 12, "Equations of Motion").
 
-Nondimensional form (seed 000 Eq. 4), τ = Ω t, λ = l/L, T̂ = T/(mΩ²L), F̂ = F/(mΩ²L), ' = d/dτ:
+Nondimensional form (Junkins, Pollock & Rahman 1990, Att. 12 Eq. 4), τ = Ω t, λ = l/L,
+T̂ = T/(mΩ²L), F̂ = F/(mΩ²L), ' = d/dτ:
 
 .. math::
 
@@ -13,7 +14,8 @@ Nondimensional form (seed 000 Eq. 4), τ = Ω t, λ = l/L, T̂ = T/(mΩ²L), F̂
         &= \hat F/\lambda
 
 θ is the in-plane pitch, φ the out-of-plane roll (the paper calls it "yaw" once,
-L4325), l the tether length, T the tension, F the out-of-plane thrust on the subsatellite
+Att. 12 "Equations of Motion"), l the tether length, T the tension, F the
+out-of-plane thrust on the subsatellite
 of mass m, Ω the orbital rate and L the reference length. With the length rate as the control
 (the tether-rate law, Eq. 24) the first equation is replaced by λ' = u.
 
@@ -135,7 +137,8 @@ def integral_of_motion_rate(x: FloatArray, thrust: float | FloatArray = 0.0) -> 
 
 @dataclass(frozen=True, init=False)
 class TetherScales:
-    """The scales of the nondimensional form: Ω, m and L (seed 000 L4329).
+    """The scales of the nondimensional form: Ω, m and L (Junkins, Pollock & Rahman 1990,
+    Att. 12 "Equations of Motion").
 
     Parameters
     ----------
@@ -150,7 +153,8 @@ class TetherScales:
 
     Notes
     -----
-    The paper's case (L4397-L4401): 220 km (Ω = 0.07068 rad/min), m = 22.7 kg, L = 20 km, so
+    The paper's case (Att. 12 "Tension Control Law Design Based on Decoupled Equations of Motion"):
+    220 km (Ω = 0.07068 rad/min), m = 22.7 kg, L = 20 km, so
     one unit of T̂ or F̂ is mΩ²L = 0.630 N, of ∫|F̂|dτ mΩL = 534.8 N s, of λ' LΩ = 23.56 m/s.
     """
 

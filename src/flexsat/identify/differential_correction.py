@@ -167,7 +167,7 @@ class CorrectionData:
     normalization_sigma : float, optional
         ``0_n``: pseudo-measurements ``psi_i^T M psi_i / psi_i^T M(1) psi_i = 1``: the measured
         shapes keep the normalisation they have with the nominal mass (Att. 6 scales them with
-        the analytical mass, L2646); needs shapes on all dofs.
+        the analytical mass, Att. 6 "Mode Shapes"); needs shapes on all dofs.
     """
 
     # the fields hold the checked arrays; the constructor takes array_like (see __init__ below)

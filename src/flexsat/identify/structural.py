@@ -16,7 +16,8 @@ Undamped identification (:func:`identify_undamped`, Att. 7 Eqs. 1–9)
        factors are written through the mass, ``alpha_r = 1 / psibar_r^T M(q) psibar_r`` (Eq.
        7a, i = j), and Eq. 5 is fitted in ``q`` by Gauss-Newton, together with the optional
        rigid-body term ``a1/w^2`` and residual ``a2``; the current model's prediction of the
-       unmeasured modes is subtracted from the FRF first (the iteration of L2845).
+       unmeasured modes is subtracted from the FRF first (the iteration of Att. 7
+       "Identification of Undamped Structures").
     3. Stiffness scalings from Eq. 9b, ``psibar_i^T K psibar_j = delta_ij wbar_j^2/alpha_j``,
        linear least squares; with the current model's shapes the diagonal rows are exactly the
        Gauss-Newton step on the eigenvalues, since ``d(lambda_i)/dp_k = phi_i^T K_k phi_i`` and
@@ -569,7 +570,8 @@ def _eq5(
 
     ``known + sum_r psibar_jr psibar_kr / (mu_r (wbar_r^2 - w^2))`` where ``known = h_model -
     sum_r phi_jr phi_kr / (lambda_r - w^2)`` is the current model's prediction of the unmeasured
-    modes (the iteration of L2845), ``mu_r = psibar_r^T M(q) psibar_r = 1/alpha_r`` (Eq. 7a,
+    modes (the iteration of Att. 7 "Identification of Undamped Structures"),
+    ``mu_r = psibar_r^T M(q) psibar_r = 1/alpha_r`` (Eq. 7a,
     i = j) and ``psibar`` the measured shapes (fixed) or the model's ``phi`` (``mu = 1``).
     The gradient with respect to the free ``(p, q)`` is exact: model FRF gradient (see
     :func:`_model_frf`) and the measured modes' ``d lambda``, ``d phi`` by Nelson's method.

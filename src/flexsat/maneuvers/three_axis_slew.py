@@ -1,5 +1,6 @@
 r"""Three-axis frequency-shaped optimal rest-to-rest slew of a rigid spacecraft: the nonlinear
-two-point boundary-value problem of seed 003 (Chun & Turner 1988; EPS slew study c. 1989,
+two-point boundary-value problem of the EPS slew study (Chun &
+Turner 1988; EPS slew study c. 1989,
 Eqs. 12-20), solved by continuation from the single-axis solution.
 
 Problem.  State ``x = [β(4), ω(3), u1(3), u2(3)]`` (Euler parameters, body rate, normalized

@@ -10,7 +10,8 @@ per metric the parameters' sensitivity ranking (NaN and inf written as null). ``
 with ``xarray.open_zarr(path)``. Figures: a sweep over two grid axes gets a contour map of every
 metric over them (one axis: a line per metric); a Monte Carlo gets each metric's histogram and
 CDF with the requirement lines, and the convergence of each probability estimate with its
-confidence band against N. A sweep over exactly (α, u_max) also gets the seed 000 trade surfaces
+confidence band against N. A sweep over exactly (α, u_max) also gets the Junkins,
+Pollock & Rahman 1990 trade surfaces
 (Att. 3 Figs. 5-7: T, E(T), μ_max; :func:`~flexsat.scenarios.batch.trade_surfaces`), also in
 ``summary.json``.
 """
@@ -88,7 +89,7 @@ def _contours(result, metrics: dict, folder: Path) -> list[str]:
     return files
 
 
-#: the seed 000 trade surfaces (Att. 3 Figs. 5-7): key, title, colour scale
+#: the Junkins, Pollock & Rahman 1990 trade surfaces (Att. 3 Figs. 5-7): key, title, colour scale
 SURFACES = (
     ("maneuver_time_s", "maneuver time T (s), Att. 3 Eq. 16, Fig. 5", "linear"),
     ("residual_energy_J", "vibration energy E(T) of the open-loop response (J), Fig. 6", "log"),

@@ -2,7 +2,8 @@
 maneuver scenario's Law II run, in chunks on dask, streamed to a zarr store, with statistics.
 
 A batch scenario names a maneuver scenario file and one of its runs (Control Law II,
-``lyapunov_tracker``: the slews of seed 000 Att. 3 that the TAMU trade studies and robustness
+``lyapunov_tracker``: the slews of Junkins, Pollock & Rahman 1990 Att. 3 that the
+TAMU trade studies and robustness
 sets are about), the parameters to vary and how::
 
     kind: montecarlo
@@ -504,7 +505,8 @@ def _run_batch(scenario: BatchScenario, progress: Callable[[str], None] | None =
 
 
 def trade_surfaces(scenario: BatchScenario, build) -> dict | None:
-    """For a grid over exactly (alpha, u_max): the seed 000 trade surfaces of the run's
+    """For a grid over exactly (alpha, u_max): the Junkins, Pollock & Rahman 1990 trade
+    surfaces of the run's
     maneuver, computed exactly (:mod:`flexsat.design.trade_surfaces`): the maneuver time T
     (Att. 3 Eq. 16, Fig. 5), the vibration energy E(T) of the open-loop flexible response
     (Fig. 6) and the Law II tracking bound μ_max (Eq. 22, Fig. 7), each (n_alpha, n_u_max) with

@@ -1,6 +1,6 @@
 """CMG scenarios (issue 14): ``kind: cmg``, gimbal steering of the SGCMG pyramid from chosen
 initial sets under torque demands, and ``kind: cmg_station``, the space-station momentum
-management with the CMG loop (Vadali, Oh & Walker; Junkins, Pollock & Rahman 1990, L4533-L4830)::
+management with the CMG loop (Vadali, Oh & Walker; Junkins, Pollock & Rahman 1990, Att. 13)::
 
     kind: cmg
     name: Preferred gimbal angles, pseudo-inverse steering
@@ -58,7 +58,7 @@ if TYPE_CHECKING:
 
 SOURCE = (
     "S. R. Vadali, H.-S. Oh, S. R. Walker, 'Preferred Gimbal Angles for Single Gimbal "
-    "Control Moment Gyros', JGCD (accepted); seed 000 Attachment 13, L4533–L4830"
+    "Control Moment Gyros', JGCD (accepted); Junkins, Pollock & Rahman 1990, Attachment 13"
 )
 #: named initial sets
 NAMED_SETS = ("zero", "alternate", "preferred")

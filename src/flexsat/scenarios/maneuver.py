@@ -206,7 +206,7 @@ class PolesSpec(SchemaSection):
 
 class LQGSpec(SchemaSection):
     """Weights and noise intensities of an LQG law on the plant's modal state
-    x = [θ, q, θ', q'] with measurements (θ, θ') (seed 001 Eqs. 38-53).
+    x = [θ, q, θ', q'] with measurements (θ, θ') (Hailey, Sortun & Agrawal c. 1992 Eqs. 38-53).
 
     ``mode_weights`` (one per retained mode, or one for all) weight q_i and q'_i alike;
     ``process_noise`` is the intensity of a torque disturbance (Q_xx = B·qn·Bᵀ, Eq. 43);

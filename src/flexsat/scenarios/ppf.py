@@ -1,4 +1,5 @@
-"""PPF gain-optimisation scenarios (``kind: ppf``): seed 004's homotopic optimisation of the
+"""PPF gain-optimisation scenarios (``kind: ppf``): Agrawal & Bang 1996's homotopic
+optimisation of the
 nine positive-position-feedback gains of the Agrawal–Bang L structure, its results table and
 the tip responses with the initial and the optimised gains (issue #12, F8–F9)::
 
@@ -313,7 +314,8 @@ class PPFKind(ScenarioKind):
         return 4 * len(scenario.runs)
 
     def plan(self, scenario: PPFScenario):
-        """Optimise every run's gains (homotopy of seed 004 Eqs. 15–28), then simulate its tip
+        """Optimise every run's gains (homotopy of Agrawal & Bang 1996 Eqs. 15–28), then
+        simulate its tip
         responses with zero, initial and optimised gains; a value the problem or the optimiser
         refuses is reported under its run."""
         import dataclasses
@@ -363,7 +365,7 @@ class PPFKind(ScenarioKind):
             "runs: each mode with that modal energy, random signs in the cost, all pushing the "
             "tip along +n̂_1 in the responses). The paper gives none of these.",
             "The 'paper' goal is J_goal/J_init as implied by the published table of the same "
-            "case (J_opt = 0.9 J_goal + 0.1 J_init, the γ stop of L345): slightly above 1, so the "
+            "case (J_opt = 0.9 J_goal + 0.1 J_init, the γ stop of §4): slightly above 1, so the "
             "homotopy raises J. On this model ∂J/∂g < 0 (more PPF gain, more damping), so the "
             "gains move down, barely: the published gains' 10³-fold growth is not reproduced.",
         )

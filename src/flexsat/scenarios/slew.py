@@ -1,5 +1,6 @@
 """Slew scenarios (``kind: slew``): a frequency-shaped optimal three-axis slew of a flexible
-spacecraft with gain-scheduled perturbation feedback, judged against the seed 003 goals.
+spacecraft with gain-scheduled perturbation feedback, judged against
+the EPS slew study c. 1989 goals.
 
 The method of the EPS slew study c. 1989 (after Chun, Turner & Juang 1987): a rigid-body optimal
 nominal maneuver (:func:`~flexsat.maneuvers.three_axis_slew.three_axis_slew`, the TPBVP solved
@@ -9,7 +10,7 @@ weight, gains interpolated in time, disturbance feedforward, optionally the poin
 force/torque decoupling) corrects it::
 
     kind: slew
-    name: EPS 10 s slew, seed 003 cases A-C
+    name: EPS 10 s slew, EPS slew study c. 1989 cases A-C
     case: eps
     plant: {n_modes: 45}
     maneuver:
@@ -65,7 +66,7 @@ OPEN_LOOP = "open loop"
 
 
 class SlewManeuverSpec(SchemaSection):
-    """The nominal rigid-body maneuver (seed 003 Eqs. 9–21)."""
+    """The nominal rigid-body maneuver (EPS slew study c. 1989 Eqs. 9–21)."""
 
     target: dict[str, Any]
     duration: quantity("s", positive=True)
@@ -97,7 +98,8 @@ class ControllerSpec(SchemaSection):
 
 
 class GoalsSpec(SchemaSection):
-    """The goals of seed 003 L792–L801 (:class:`~flexsat.sim.slew_goals.SlewGoals`)."""
+    """The goals of EPS slew study c. 1989 "Simulation Results"
+    (:class:`~flexsat.sim.slew_goals.SlewGoals`)."""
 
     angle_fraction: float = Field(0.03, gt=0.0)
     evaluation: float = Field(1.25, ge=1.0)

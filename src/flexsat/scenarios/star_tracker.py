@@ -1,5 +1,5 @@
 """Star-tracker scenarios (``kind: star_tracker``): lost-in-space star-pattern identification
-on seeded random attitudes (seed 000 §2.3.4; issue 14 part 4)::
+on seeded random attitudes (Junkins, Pollock & Rahman 1990 §2.3.4; issue 14 part 4)::
 
     kind: star_tracker
     name: two 12° cameras, synthetic sky
@@ -45,7 +45,8 @@ from flexsat.scenarios.kind import Run, ScenarioKind
 
 #: the paper this kind reproduces
 SOURCE = (
-    "seed 000 §2.3.4 (Anderson, Pollock & Junkins 1990, 'A testbed for autonomous star "
+    "Junkins, Pollock & Rahman 1990 §2.3.4 (Anderson, Pollock & Junkins 1990, "
+    "'A testbed for autonomous star "
     "pattern recognition and attitude determination'; Junkins, White & Turner 1977)"
 )
 #: most attitudes one run may identify (a run costs ~5 ms per attitude)
@@ -101,7 +102,7 @@ class CameraSpec(BuildableSection):
 
 
 class IdentificationSpec(SchemaSection):
-    """The paper's acceptance rule (seed 000 L280)."""
+    """The paper's acceptance rule (Junkins, Pollock & Rahman 1990 §2.3.4)."""
 
     tolerance: quantity("rad", positive=True) = float(np.radians(5.0 / 3600.0))
     min_triplets: count(1) = 3
@@ -325,7 +326,7 @@ class StarTrackerKind(ScenarioKind):
             "Accepted: >= min_triplets matched inter-star-angle triplets (triangles whose three "
             "angles match the catalogue within the tolerance) in >= min_fields fields of view, "
             "confirmed by one q-method attitude fitting every kept star within the tolerance "
-            "(seed 000 L280).",
+            "(Junkins, Pollock & Rahman 1990 §2.3.4).",
             "Error: body-axis rotation from the true to the estimated attitude; σ_QUEST: the "
             "covariance of the q-method fit (Shuster & Oh 1981).",
         )

@@ -1,5 +1,6 @@
 """Tethered-subsatellite retrieval scenarios (``kind: tether``): Vadali & Kim's Liapunov laws
-(seed 000 Att. 12; :mod:`flexsat.control.tether_laws`) on the three-degree-of-freedom tether
+(Junkins, Pollock & Rahman 1990, Att. 12; :mod:`flexsat.control.tether_laws`) on the
+three-degree-of-freedom tether
 (:mod:`flexsat.dynamics.tether`), one run per law and gain set (issue 14, F21-F22)::
 
     kind: tether
@@ -38,7 +39,7 @@ from flexsat.scenarios.errors import ScenarioError, item_path, locate
 from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, quantity
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 
-#: the gains each law takes (seed 000 Eqs. 14-15, 18 and 20, 24-25)
+#: the gains each law takes (Junkins, Pollock & Rahman 1990, Att. 12 Eqs. 14-15, 18 and 20, 24-25)
 LAW_GAINS = {
     "decoupled": ("K1", "K2", "K3"),
     "coupled": ("K1", "K2", "K3", "K4"),
@@ -312,7 +313,8 @@ class TetherKind(ScenarioKind):
             runs.append(closed_loop_run(law, tau, result.dataset))
         notes = (
             "Straight massless tether, no aerodynamics, circular orbit (the paper's model, "
-            "L4281, L4321). Eq. 15 with the repaired sign −K3λφ' (L4395 prints +, which "
+            "Att. 12, 'Equations of Motion'). Eq. 15 with the repaired sign −K3λφ' (the paper "
+            "prints +, which "
             "diverges).",
             "Thrust index ∫|F̂|dτ over the run; impulse = index × mΩL "
             f"({scales.impulse:.4g} N s here). Settling: the time after which |θ| <= 5° and λ "

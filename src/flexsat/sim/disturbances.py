@@ -13,7 +13,8 @@ from flexsat.sim.step import friction_torque
 
 @dataclass(frozen=True)
 class BearingFriction:
-    """τ = −c1 sign(θ') − c2 θ' (seed 000, Att. 3 Eq. 23; c1 ≈ 20 oz-in, c2 ≈ 0.001 oz-in s).
+    """τ = −c1 sign(θ') − c2 θ' (Junkins, Pollock & Rahman 1990, Att. 3 Eq. 23;
+    c1 ≈ 20 oz-in, c2 ≈ 0.001 oz-in s).
 
     The sign is regularised as tanh(θ'/ε) so the integrator sees a Lipschitz force; inside
     |θ'| < ε the bearing acts as a stiff viscous damper c1/ε, which reproduces sticking to within

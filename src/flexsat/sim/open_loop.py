@@ -19,7 +19,8 @@ a Jordan chain) whose response is the polynomial
 Written in σ, the coefficients carry no inverse powers of h_j, so rise times → 0 (α → 0 of the
 smoothed bang-bang) stay exact; a zero-length piece leaves the state unchanged.
 
-Used for the seed 000 trade surfaces (:mod:`flexsat.design.trade_surfaces`): the open-loop
+Used for the Junkins, Pollock & Rahman 1990 trade surfaces
+(:mod:`flexsat.design.trade_surfaces`): the open-loop
 flexible response to the smoothed bang-bang torque (Att. 3 Eq. 12 of
 Junkins, Pollock & Rahman 1990), whose pieces :func:`torque_pieces` gives exactly.
 """

@@ -1,5 +1,5 @@
 r"""Performance goals of a finite-time slew (EPS slew study c. 1989,
-L792–L801).
+"Simulation Results").
 
 The paper judges each closed-loop slew of the Earth Pointing Satellite against three goals:
 
@@ -14,7 +14,7 @@ Goal 2 reads "at 125 % of the nominal time" a value of an oscillation; this modu
 peak from 1.25 T to the end of the record (the vibration that remains at 1.25 T: its amplitude
 rather than its phase at one instant, so a record should run on past 1.25 T by about a period
 of the first mode) and reports the peak during the slew [0, T] beside it (the paper's "peak
-deformations during the slew drop by 1.5–2×", L895–L900).
+deformations during the slew drop by 1.5–2×", Fig. 7).
 A rim point's deflection is the Euclidean norm of its displacement components; the peak is over
 every rim point.
 
@@ -38,7 +38,7 @@ __all__ = ["SlewGoals", "euler_angle_error", "slew_goal_metrics"]
 
 @dataclass(frozen=True)
 class SlewGoals:
-    """The goals' numbers (defaults: seed 003 L792–L801)."""
+    """The goals' numbers (defaults: EPS slew study c. 1989 "Simulation Results")."""
 
     #: angle tolerance as a fraction of the commanded angle
     angle_fraction: float = 0.03

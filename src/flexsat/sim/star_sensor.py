@@ -1,4 +1,5 @@
-r"""Star tracker as a sensor of a three-axis plant's ``attitude`` channel (seed 000 §2.3.4;
+r"""Star tracker as a sensor of a three-axis plant's ``attitude`` channel
+(Junkins, Pollock & Rahman 1990 §2.3.4;
 issue 14 part 4).
 
 The measured attitude is the true one turned by a small body-axis error,
