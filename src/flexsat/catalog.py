@@ -18,6 +18,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from flexsat.input_checks import FieldError
+
 
 @dataclass(frozen=True)
 class CaseInfo:
@@ -170,7 +172,7 @@ def get_case(name: str) -> CaseInfo:
     try:
         return cases[name]
     except KeyError:
-        raise ValueError(f"case: unknown case {name!r}; known: {sorted(cases)}") from None
+        raise FieldError("case", f"unknown case {name!r}; known: {sorted(cases)}") from None
 
 
 __all__ = ["CASES", "CaseInfo", "all_cases", "get_case"]
