@@ -18,8 +18,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from flexsat.input_checks import FieldError
-
 
 @dataclass(frozen=True)
 class CaseInfo:
@@ -172,6 +170,8 @@ def get_case(name: str) -> CaseInfo:
     try:
         return cases[name]
     except KeyError:
+        from flexsat.input_checks import FieldError  # numpy: loaded for the refusal only
+
         raise FieldError("case", f"unknown case {name!r}; known: {sorted(cases)}") from None
 
 

@@ -21,8 +21,6 @@ from dataclasses import dataclass
 from importlib.metadata import entry_points
 from typing import Any
 
-from flexsat.input_checks import FieldError
-
 #: the extension points: scenario kinds, plants, control laws, published cases, published checks
 GROUPS = ("flexsat.kinds", "flexsat.plants", "flexsat.laws", "flexsat.cases", "flexsat.checks")
 
@@ -95,6 +93,8 @@ def entry_point_objects(
         For a group that is not one of :data:`GROUPS`.
     """
     if group not in GROUPS:
+        from flexsat.input_checks import FieldError  # numpy: loaded for the refusal only
+
         raise FieldError("group", f"must be one of {', '.join(GROUPS)}, got {group!r}")
     reserved = reserved or {}
     objects: dict[str, Any] = {}
