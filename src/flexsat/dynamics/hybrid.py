@@ -21,7 +21,7 @@ import numpy as np
 from scipy.linalg import eigh
 
 from flexsat.dynamics.plant import Channel, ManeuverChannels, Plant
-from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
 
 
 class OutputChannels(tuple):
@@ -162,7 +162,7 @@ class HybridPlant(Plant):
             return z, z, -self.hub_inertia * e0 / n, 1.0 / n
         if name == "tip_deflection":
             return np.concatenate([[0.0], self._tip_row]), z, z, 0.0
-        raise ValueError(f"{name}: {type(self).__name__} has no output channel {name!r}")
+        raise FieldError(name, f"{type(self).__name__} has no output channel {name!r}")
 
     def output(self, name: str, x: np.ndarray, u: np.ndarray, f_in=None) -> np.ndarray:
         """Output ``name`` at x (..., n_x), u (..., 1) and extra hub force f_in (..., 1)."""

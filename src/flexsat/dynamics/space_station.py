@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.input_checks import require_finite, require_positive_scalar
+from flexsat.input_checks import FieldError, require_finite, require_positive_scalar
 from flexsat.units import to_si_array
 
 __all__ = [
@@ -85,8 +85,8 @@ class StationData:
 
     def __post_init__(self):
         if len(self.inertia) != 3:
-            raise ValueError(
-                f"inertia: three principal moments (roll, pitch, yaw), got {self.inertia!r}"
+            raise FieldError(
+                "inertia", f"three principal moments (roll, pitch, yaw), got {self.inertia!r}"
             )
         moments = tuple(
             require_positive_scalar(v, f"inertia[{i}]", "kg*m**2")
@@ -112,11 +112,11 @@ def _filters(filters, field):
     ks = tuple(filters)
     for k in ks:
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-            raise ValueError(
-                f"{field}: multiples of the orbit rate must be integers >= 1, got {filters!r}"
+            raise FieldError(
+                field, f"multiples of the orbit rate must be integers >= 1, got {filters!r}"
             )
     if len(set(ks)) != len(ks):
-        raise ValueError(f"{field}: each frequency once, got {filters!r}")
+        raise FieldError(field, f"each frequency once, got {filters!r}")
     return ks
 
 

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_positive
 
 __all__ = [
     "EARTH_MU",
@@ -77,7 +77,7 @@ def require_lengths(lam, field: str = "lambda") -> np.ndarray:
     divides by λ: a zero or negative length is no tether)."""
     arr = require_finite(lam, field)
     if np.any(arr <= 0):
-        raise ValueError(f"{field}: the tether length must be > 0, got min {arr.min():.6g}")
+        raise FieldError(field, f"the tether length must be > 0, got min {arr.min():.6g}")
     return arr
 
 
@@ -149,11 +149,11 @@ class TetherScales:
             if self.orbit_rate is None:  # neither: the nondimensional form itself
                 object.__setattr__(self, "orbit_rate", 1.0)
                 return
-            raise ValueError("orbit_rate: give the orbit rate or the altitude, not both")
+            raise FieldError("orbit_rate", "give the orbit rate or the altitude, not both")
         if self.altitude is not None:
             h = float(require_finite(self.altitude, "altitude", "m"))
             if h < 0:
-                raise ValueError(f"altitude: must be >= 0 (above the Earth's surface), got {h} m")
+                raise FieldError("altitude", f"must be >= 0 (above the Earth's surface), got {h} m")
             object.__setattr__(self, "altitude", h)
             object.__setattr__(
                 self, "orbit_rate", float(np.sqrt(EARTH_MU / (EARTH_RADIUS + h) ** 3))
@@ -197,8 +197,8 @@ class TetherScales:
             return np.array([L, 1.0, 1.0, L * W, W, W])
         if n == 5:
             return np.array([L, 1.0, 1.0, W, W])
-        raise ValueError(
-            f"state: must have 6 (tension control) or 5 (rate control) entries, got {n}"
+        raise FieldError(
+            "state", f"must have 6 (tension control) or 5 (rate control) entries, got {n}"
         )
 
 
@@ -232,10 +232,10 @@ class TetheredSubsatellite(Plant):
 
     def __init__(self, scales: TetherScales | None = None, control: str = "tension"):
         if control not in CONTROLS:
-            raise ValueError(f"control: must be one of {CONTROLS}, got {control!r}")
+            raise FieldError("control", f"must be one of {CONTROLS}, got {control!r}")
         self.scales = TetherScales() if scales is None else scales
         if not isinstance(self.scales, TetherScales):
-            raise ValueError(f"scales: must be a TetherScales, got {type(scales).__name__}")
+            raise FieldError("scales", f"must be a TetherScales, got {type(scales).__name__}")
         self.control = control
         first = (
             Channel("tension", "N", 1, "tether tension T (>= 0 for a tether)")
@@ -350,7 +350,7 @@ class TetheredSubsatellite(Plant):
         number, a Quantity or a unit string); the length has no default."""
         x = super().state_from(**values)
         if "length" not in values and "state" not in values:
-            raise ValueError("length: the initial tether length is required (> 0)")
+            raise FieldError("length", "the initial tether length is required (> 0)")
         require_lengths(x[0], "length")
         return x
 
