@@ -29,7 +29,7 @@ from scipy import signal
 from scipy.linalg import block_diag
 
 from flexsat.identify.measurements import Channel
-from flexsat.input_checks import require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_nonneg, require_positive
 
 __all__ = [
     "Excitation",
@@ -74,10 +74,10 @@ class Excitation:
 
     def __post_init__(self):
         if self.kind not in _KINDS:
-            raise ValueError(f"kind: must be one of {_KINDS}, got {self.kind!r}")
+            raise FieldError("kind", f"must be one of {_KINDS}, got {self.kind!r}")
         if self.channel.kind not in ("force", "torque"):
-            raise ValueError(
-                f"channel: an excitation is a force or torque, got {self.channel.kind!r}"
+            raise FieldError(
+                "channel", f"an excitation is a force or torque, got {self.channel.kind!r}"
             )
 
     def samples(self, t_fine: np.ndarray, h: float, oversample: int, rng) -> np.ndarray:
@@ -102,7 +102,7 @@ class Excitation:
 
 def _load(load: str, node, direction, name="") -> Channel:
     if load not in ("force", "torque"):
-        raise ValueError(f"load: must be 'force' or 'torque', got {load!r}")
+        raise FieldError("load", f"must be 'force' or 'torque', got {load!r}")
     return Channel.at(load, node, direction, name=name)
 
 
@@ -134,7 +134,7 @@ def torque_history(node, axis, values) -> Excitation:
     """User torque history (e.g. a reaction wheel), N m, one value per sample (zero after)."""
     vals = np.asarray(values, dtype=float)
     if vals.ndim != 1 or not np.all(np.isfinite(vals)):
-        raise ValueError("values: must be a finite 1-D array of torque samples")
+        raise FieldError("values", "must be a finite 1-D array of torque samples")
     return Excitation("history", _load("torque", node, axis), 1.0, values=vals)
 
 
@@ -151,7 +151,7 @@ def _output_rows(model, chan: Channel) -> np.ndarray:
         return model.rotation_output(chan.node, chan.direction)
     if chan.kind == "strain":
         return model.strain_output(chan.node_a, chan.node, chan.direction)
-    raise ValueError(f"sensors: {chan.kind!r} is not a sensor kind")
+    raise FieldError("sensors", f"{chan.kind!r} is not a sensor kind")
 
 
 def sensor_matrices(model, sensors, inputs):
