@@ -85,7 +85,13 @@ from flexsat import limits
 from flexsat.control.lyapunov import LyapunovTracker
 from flexsat.dynamics.dispersion import stack_plants
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 from flexsat.maneuvers.torque_shapes import SmoothBangBang
 from flexsat.sim import SimConfig, simulate
 from flexsat.sim.channels import ChannelSensor
@@ -101,7 +107,7 @@ STORE_LAYOUT = "flexsat.design.batch_runner/2"
 def _nonneg_int(value, name: str) -> int:
     """An integer >= 0 (bools and fractions refused), naming the field."""
     if isinstance(value, bool) or not float(require_finite(value, name)).is_integer() or value < 0:
-        raise ValueError(f"{name}: must be an integer >= 0, got {value!r}")
+        raise FieldError(name, f"must be an integer >= 0, got {value!r}")
     return int(value)
 
 
@@ -186,23 +192,24 @@ def _spawned_seeds(base: int, idx: np.ndarray) -> np.ndarray:
 def _table(parameters: Mapping[str, Any], known: tuple[str, ...] | None) -> dict[str, np.ndarray]:
     """The parameter table as {name: (n_cases,) float array}; ValueError naming a bad column."""
     if not parameters:
-        raise ValueError("parameters: give at least one column (name -> one value per case)")
+        raise FieldError("parameters", "give at least one column (name -> one value per case)")
     table = {}
     for name, values in parameters.items():
         if known is not None and name not in known:
-            raise ValueError(
-                f"parameters: unknown parameter {name!r}; the case builder knows {', '.join(known)}"
+            raise FieldError(
+                "parameters",
+                f"unknown parameter {name!r}; the case builder knows {', '.join(known)}",
             )
         col = require_finite(values, f"parameters[{name!r}]")
         if col.ndim != 1:
-            raise ValueError(
-                f"parameters[{name!r}]: must be one value per case (1-D), got shape {col.shape}"
+            raise FieldError(
+                f"parameters[{name!r}]", f"must be one value per case (1-D), got shape {col.shape}"
             )
         table[name] = np.ascontiguousarray(col, dtype=np.float64)
     sizes = {name: len(col) for name, col in table.items()}
     if len(set(sizes.values())) != 1 or not next(iter(sizes.values())):
-        raise ValueError(
-            f"parameters: every column must have the same number (>= 1) of cases, got {sizes}"
+        raise FieldError(
+            "parameters", f"every column must have the same number (>= 1) of cases, got {sizes}"
         )
     return table
 
@@ -365,9 +372,9 @@ class HubManeuverBuilder:
         inertia, appendage = self._inertias(table, n)
         shape = {k: table[k] for k in MANEUVER_PARAMETERS if k in table}
         if len(shape) == 3:
-            raise ValueError(
-                "parameters: give at most two of alpha, u_max, duration (Att. 3 "
-                "Eq. 15 fixes the third)"
+            raise FieldError(
+                "parameters",
+                "give at most two of alpha, u_max, duration (Att. 3 Eq. 15 fixes the third)",
             )
         for k in ("alpha", "u_max"):
             if len(shape) < 2 and k not in shape:
@@ -401,10 +408,11 @@ class HubManeuverBuilder:
                 unit, rule = _SENSOR_ACTUATOR_RULES[k]
                 out[k] = rule(table[k], f"parameters[{k!r}]", unit)
         if "gyro_noise" in out and self.config.sensors.rate != "gyro":
-            raise ValueError(
-                f"parameters['gyro_noise']: the run's rate measurement is "
+            raise FieldError(
+                "parameters['gyro_noise']",
+                "the run's rate measurement is "
                 f"{self.config.sensors.rate!r}, not 'gyro'; a gyro noise would "
-                f"change nothing"
+                f"change nothing",
             )
         return out
 
@@ -429,9 +437,10 @@ class HubManeuverBuilder:
         if "encoder_resolution" in cols:
             values = np.unique(cols["encoder_resolution"])
             if len(values) != 1:
-                raise ValueError(
-                    "parameters['encoder_resolution']: one value per call; run "
-                    "the cases through run_chunk, which splits a chunk by it"
+                raise FieldError(
+                    "parameters['encoder_resolution']",
+                    "one value per call; run "
+                    "the cases through run_chunk, which splits a chunk by it",
                 )
             config = replace(
                 config, sensors=replace(config.sensors, encoder_resolution=float(values[0]))
@@ -602,17 +611,17 @@ def _run_cases(
     for name, values in extract(result).items():
         values = np.asarray(values, float)
         if values.shape != (n,):
-            raise ValueError(
-                f"extract: metric {name!r} has shape {values.shape}, expected "
-                f"({n},) (one value per case)"
+            raise FieldError(
+                "extract",
+                f"metric {name!r} has shape {values.shape}, expected ({n},) (one value per case)",
             )
         out["metric_" + name] = values
     for name in histories:
         if name not in result.dataset:
             recorded = [v for v in result.dataset.data_vars if "time" in result.dataset[v].dims]
-            raise ValueError(
-                f"histories: {name!r} is not a recorded variable; the run records "
-                f"{', '.join(recorded)}"
+            raise FieldError(
+                "histories",
+                f"{name!r} is not a recorded variable; the run records {', '.join(recorded)}",
             )
         out["history_" + name] = np.asarray(
             result.dataset[name].transpose("case", "time").values, float
@@ -646,15 +655,16 @@ def _client(workers: int | None, scheduler: str | None):
 
     if scheduler is not None:
         if workers is not None:
-            raise ValueError(
-                "workers: give workers (a local cluster) or scheduler (an existing one), not both"
+            raise FieldError(
+                "workers", "give workers (a local cluster) or scheduler (an existing one), not both"
             )
         try:
             return Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s", set_as_default=False), None
         except (OSError, TimeoutError) as exc:
-            raise ValueError(
-                f"scheduler: no dask scheduler answered at {scheduler!r} within "
-                f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {exc})"
+            raise FieldError(
+                "scheduler",
+                f"no dask scheduler answered at {scheduler!r} within "
+                f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {exc})",
             ) from None
     if workers is None:
         cluster = LocalCluster(
@@ -679,17 +689,19 @@ def _open_existing(path: Path, fp: str, n_cases: int) -> np.ndarray | None:
     try:
         ds = xr.open_zarr(path, consolidated=False)
     except Exception as exc:  # noqa: BLE001 - any unreadable directory is refused the same way
-        raise ValueError(
-            f"store: {str(path)!r} exists and is not a batch store "
-            f"({type(exc).__name__}: {exc}); give a new path"
+        raise FieldError(
+            "store",
+            f"{str(path)!r} exists and is not a batch store "
+            f"({type(exc).__name__}: {exc}); give a new path",
         ) from None
     theirs = ds.attrs.get("fingerprint")
     if theirs != fp or ds.sizes.get("case") != n_cases:
-        raise ValueError(
-            f"store: {str(path)!r} holds the results of a different setup "
+        raise FieldError(
+            "store",
+            f"{str(path)!r} holds the results of a different setup "
             f"(fingerprint {theirs!s:.12} ≠ {fp:.12}: another scenario, parameter "
             f"table, base seed or history selection); refusing to resume into it, "
-            f"give a new path"
+            f"give a new path",
         )
     return np.asarray(ds["done"].values, bool)
 
