@@ -166,10 +166,11 @@ class _Dofs:
         key = tuple(at) if isinstance(at, (tuple, list)) else at
         if self.labels is not None and key in self.labels:
             return self.labels.index(key)
-        raise ValueError(
-            f"{name}: unknown dof {at!r} (give a 0-based index"
+        raise FieldError(
+            name,
+            f"unknown dof {at!r} (give a 0-based index"
             + (", a dof label such as " + repr(self.labels[0]) if self.labels else "")
-            + " or an influence vector)"
+            + " or an influence vector)",
         )
 
     def vector(self, spec, pair: bool) -> np.ndarray:
