@@ -11,6 +11,7 @@ import xarray as xr
 
 from flexsat.report import write_report
 from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
+from report_browser import assert_renders
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -112,7 +113,7 @@ def test_a_sweep_varies_the_actuator_and_sensors_given_in_units(tmp_path):
     assert np.all(np.diff(peak[::2]) > 0) and peak[0] <= ds["param_saturation"].values[0]
 
 
-def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path):
+def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path, browser):
     result = run_scenario(load_scenario(_write(tmp_path, "mc.yaml", MONTECARLO)))
     reqs = {r["metric"]: r for r in result.summary["requirements"]}
     settle = reqs["settling_time_s"]
@@ -136,6 +137,7 @@ def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path
     with xr.open_zarr(out / "results.zarr", consolidated=False) as saved:
         assert saved.sizes["case"] == 24
     assert "settling_time_s &lt;= 6" in (out / "index.html").read_text()
+    assert "settling_time_s <= 6" in assert_renders(browser, out / "index.html")
     rows = result.metrics_records()
     assert any(r["run"].startswith("P(settling_time_s") for r in rows)
 
@@ -184,6 +186,46 @@ def test_mistakes_found_before_any_case_runs(tmp_path, change, message):
     with pytest.raises(ScenarioError, match=message):
         run_scenario(load_scenario(path))
     assert not (tmp_path / "store.zarr").exists()
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        (MONTECARLO.replace("cases: 24", "cases: 2000000"), r"cases: the sample has 2,000,000"),
+        (
+            SWEEP.replace(
+                "alpha: {values: [0.0, 0.25]}", "alpha: {low: 0.0, high: 0.25, n: 400}"
+            ).replace(
+                'u_max: {values: ["300 ozf*in", "400 ozf*in", "500 ozf*in"]}',
+                'u_max: {low: "300 ozf*in", high: "500 ozf*in", n: 400}',
+            ),
+            r"parameters: the grid of 400 × 400 has 160,000 cases",
+        ),
+        (
+            SWEEP.replace(
+                "alpha: {values: [0.0, 0.25]}", "alpha: {low: 0.0, high: 0.25, n: 1000000000}"
+            ),
+            r"^invalid scenario \(1 problem\):\n  parameters\.alpha\.n: grid points on one axis",
+        ),
+    ],
+)
+def test_a_study_beyond_the_case_limit_is_refused_before_its_table(
+    tmp_path, monkeypatch, text, message
+):
+    # counted from the sizes given and the axes' lengths: no table, no linspace of 1e9 points
+    from flexsat.design import parameter_space
+
+    def no_table(*args, **kwargs):
+        raise AssertionError("the table was built")
+
+    for name in ("table", "sample", "latin_hypercube", "sobol_sequence", "sobol_design"):
+        for cls in (parameter_space.GridSpace, parameter_space.ParameterSpace):
+            if hasattr(cls, name):
+                monkeypatch.setattr(cls, name, no_table)
+    path = _write(tmp_path, "study.yaml", text)
+    with pytest.raises(ScenarioError, match=message) as err:
+        load_scenario(path)
+    assert "MAX_CASES" in str(err.value) or "flexsat.limits" in str(err.value)
 
 
 def test_a_scenario_of_another_kind_is_refused(tmp_path):
