@@ -4,6 +4,10 @@ Each check takes the field's SI ``unit`` where the field is a physical quantity:
 taken in that unit and a pint Quantity or a unit string is converted to it
 (:func:`flexsat.units.to_si_array`); ``""`` declares a dimensionless field. Without a unit only
 plain numbers are accepted: a Quantity is refused rather than stripped of its unit.
+
+A refusal is a :class:`FieldError` (``str`` ``"field: rule"``, the field as data), defined in
+:mod:`flexsat.units` beside :class:`~flexsat.units.UnitError`, which is one, and imported from
+here by the layers above.
 """
 
 from __future__ import annotations
