@@ -171,7 +171,9 @@ def get_case(name: str) -> CaseInfo:
     try:
         return cases[name]
     except KeyError:
-        raise ValueError(f"case: unknown case {name!r}; known: {sorted(cases)}") from None
+        from flexsat.input_checks import FieldError  # numpy: loaded for the refusal only
+
+        raise FieldError("case", f"unknown case {name!r}; known: {sorted(cases)}") from None
 
 
 __all__ = ["CASES", "CaseInfo", "all_cases", "get_case"]

@@ -27,7 +27,7 @@ import numpy as np
 import numpy.typing as npt
 import scipy.linalg
 
-from flexsat.input_checks import require_numeric
+from flexsat.input_checks import FieldError, require_numeric
 from flexsat.units import FloatArray
 
 _EPS = np.finfo(float).eps
@@ -41,7 +41,7 @@ def _array(value: npt.ArrayLike, field: str) -> FloatArray:
 def _square(value: npt.ArrayLike, field: str) -> FloatArray:
     arr = _array(value, field)
     if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.shape[0] == 0:
-        raise ValueError(f"{field}: must be a non-empty square 2-D array, got shape {arr.shape}")
+        raise FieldError(field, f"must be a non-empty square 2-D array, got shape {arr.shape}")
     return arr
 
 
@@ -50,9 +50,10 @@ def _input_matrix(value: npt.ArrayLike, n: int, field: str = "B", other: str = "
     if arr.ndim == 1:
         arr = arr.reshape(-1, 1)
     if arr.ndim != 2 or arr.shape[0] != n or arr.shape[1] == 0:
-        raise ValueError(
-            f"{field}: must have {n} rows ({other} is {n}x{n}) and at least one "
-            f"column, got shape {np.shape(value)}"
+        raise FieldError(
+            field,
+            f"must have {n} rows ({other} is {n}x{n}) and at least one "
+            f"column, got shape {np.shape(value)}",
         )
     return arr
 
@@ -67,7 +68,7 @@ def _tol(tol: float | None, field: str = "tol") -> float | None:
         return None
     value = float(_array(tol, field))
     if value < 0:
-        raise ValueError(f"{field}: must be >= 0, got {tol!r}")
+        raise FieldError(field, f"must be >= 0, got {tol!r}")
     return value
 
 
@@ -367,14 +368,15 @@ def repeated_frequency_test(
     k = _array(stiffness, "stiffness")
     if k.ndim == 2:
         if k.shape[0] != k.shape[1] or np.any(k - np.diag(np.diag(k))):
-            raise ValueError(
-                f"stiffness: must be a 1-D array or a diagonal (modal) matrix, got "
-                f"a non-diagonal array of shape {k.shape}"
+            raise FieldError(
+                "stiffness",
+                "must be a 1-D array or a diagonal (modal) matrix, got "
+                f"a non-diagonal array of shape {k.shape}",
             )
         k = np.diag(k).copy()
     if k.ndim != 1 or k.size == 0:
-        raise ValueError(
-            f"stiffness: must be a non-empty 1-D array or a diagonal matrix, got shape {k.shape}"
+        raise FieldError(
+            "stiffness", f"must be a non-empty 1-D array or a diagonal matrix, got shape {k.shape}"
         )
     n = k.size
     B = _input_matrix(B, n, "B", "stiffness")

@@ -47,7 +47,7 @@ from typing import Any, Literal, overload
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import require_numeric
+from flexsat.input_checks import FieldError, require_numeric
 from flexsat.units import FloatArray
 
 _EPS = np.finfo(float).eps
@@ -161,17 +161,17 @@ def _positive(
     value: Any, field: str, *, integer: bool = False, upper: float | None = None
 ) -> float:
     if isinstance(value, bool):
-        raise ValueError(f"{field}: must be a positive number, got {value!r}")
+        raise FieldError(field, f"must be a positive number, got {value!r}")
     try:
         number = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{field}: must be a positive number, got {value!r}") from None
+        raise FieldError(field, f"must be a positive number, got {value!r}") from None
     if not (np.isfinite(number) and number > 0) or (upper is not None and number > upper):
         rule = f"in (0, {upper}]" if upper is not None else "> 0 and finite"
-        raise ValueError(f"{field}: must be {rule}, got {value!r}")
+        raise FieldError(field, f"must be {rule}, got {value!r}")
     if integer:
         if number != int(number):
-            raise ValueError(f"{field}: must be an integer, got {value!r}")
+            raise FieldError(field, f"must be an integer, got {value!r}")
         return int(number)
     return number
 
@@ -184,18 +184,18 @@ def weight_factor(weight: npt.ArrayLike | None, n: int) -> npt.NDArray[np.floati
     w = _vector(weight, "weight")
     if w.ndim == 1:
         if w.shape != (n,) or np.any(w <= 0):
-            raise ValueError(f"weight: a vector weight must have {n} entries > 0, got {weight!r}")
+            raise FieldError("weight", f"a vector weight must have {n} entries > 0, got {weight!r}")
         return np.diag(np.sqrt(w))
     if w.shape != (n, n):
-        raise ValueError(
-            f"weight: must be a vector of {n} or an ({n}, {n}) matrix, got shape {w.shape}"
+        raise FieldError(
+            "weight", f"must be a vector of {n} or an ({n}, {n}) matrix, got shape {w.shape}"
         )
     if not np.allclose(w, w.T, rtol=1e-12, atol=0):
-        raise ValueError("weight: the matrix W must be symmetric")
+        raise FieldError("weight", "the matrix W must be symmetric")
     try:
         return np.linalg.cholesky(w)
     except np.linalg.LinAlgError:
-        raise ValueError("weight: the matrix W must be positive definite") from None
+        raise FieldError("weight", "the matrix W must be positive definite") from None
 
 
 #: ``J(p) -> float``
@@ -245,7 +245,7 @@ class _Problem:
             return np.zeros(0)
         out = np.atleast_1d(np.asarray(fun(p.copy()), dtype=float))
         if out.shape != (size,):
-            raise ValueError(f"{name}: must return {size} values, got shape {out.shape}")
+            raise FieldError(name, f"must return {size} values, got shape {out.shape}")
         return out
 
     # derivatives -------------------------------------------------------------------------------
@@ -264,7 +264,7 @@ class _Problem:
             return self._fd(p, 0)[0]
         g = np.asarray(self.gradient(p.copy()), dtype=float).reshape(-1)
         if g.shape != (self.n,):
-            raise ValueError(f"gradient: must return {self.n} values, got shape {g.shape}")
+            raise FieldError("gradient", f"must return {self.n} values, got shape {g.shape}")
         if not np.all(np.isfinite(g)):
             raise _Failure("non-finite gradient")
         return g
@@ -278,8 +278,8 @@ class _Problem:
             return self._fd(p, which)
         jac = np.asarray(fun(p.copy()), dtype=float).reshape(size, -1)
         if jac.shape != (size, self.n):
-            raise ValueError(
-                f"{name}: must return a ({size}, {self.n}) Jacobian, got shape {jac.shape}"
+            raise FieldError(
+                name, f"must return a ({size}, {self.n}) Jacobian, got shape {jac.shape}"
             )
         if not np.all(np.isfinite(jac)):
             raise _Failure(f"non-finite {name}")
@@ -381,10 +381,10 @@ def homotopy_minimize(
     """
     p = _vector(p0, "p0").reshape(-1)
     if p.size == 0:
-        raise ValueError("p0: needs at least one parameter")
+        raise FieldError("p0", "needs at least one parameter")
     n = p.size
     if not callable(objective):
-        raise ValueError("objective: must be callable")
+        raise FieldError("objective", "must be callable")
     for name, fun in (
         ("gradient", gradient),
         ("equality", equality),
@@ -393,11 +393,11 @@ def homotopy_minimize(
         ("inequality_jacobian", inequality_jacobian),
     ):
         if fun is not None and not callable(fun):
-            raise ValueError(f"{name}: must be callable or None")
+            raise FieldError(name, "must be callable or None")
     if (equality is None) != (equality_target is None):
-        raise ValueError("equality_target: give it exactly when equality is given")
+        raise FieldError("equality_target", "give it exactly when equality is given")
     if (inequality is None) != (inequality_bound is None):
-        raise ValueError("inequality_bound: give it exactly when inequality is given")
+        raise FieldError("inequality_bound", "give it exactly when inequality is given")
     # equality_target is given exactly when equality is (checked above)
     f_o = (
         np.zeros(0)
@@ -406,15 +406,15 @@ def homotopy_minimize(
     )
     m = f_o.size
     if equality is not None and m == 0:
-        raise ValueError("equality_target: must not be empty")
+        raise FieldError("equality_target", "must not be empty")
     if inequality is not None:
         assert inequality_bound is not None  # given with inequality (checked above)
         bound = _vector(inequality_bound, "inequality_bound")
         q = np.atleast_1d(np.asarray(inequality(p.copy()), dtype=float)).size
         T = np.broadcast_to(bound, (q,)).astype(float) if bound.ndim == 0 else bound.reshape(-1)
         if T.size != q:
-            raise ValueError(
-                f"inequality_bound: must have {q} entries (one per inequality), got {T.size}"
+            raise FieldError(
+                "inequality_bound", f"must have {q} entries (one per inequality), got {T.size}"
             )
     else:
         T = np.zeros(0)
@@ -448,7 +448,7 @@ def homotopy_minimize(
     try:
         J0, fe0, gi0 = prob.values(p)
     except _Failure:
-        raise ValueError("objective: non-finite value at p0") from None
+        raise FieldError("objective", "non-finite value at p0") from None
     # validate user derivatives at the start (shape errors surface here, not mid-run)
     for name, check in (
         ("gradient", prob.grad),
@@ -459,7 +459,7 @@ def homotopy_minimize(
             check(p)
         except _Failure:
             if name != "gradient":  # a gradient may be undefined at the start only
-                raise ValueError(f"{name}: non-finite value at p0") from None
+                raise FieldError(name, "non-finite value at p0") from None
 
     se = np.maximum(1.0, np.abs(f_o))
     sb = np.maximum(1.0, np.abs(T))

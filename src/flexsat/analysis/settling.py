@@ -34,6 +34,7 @@ from typing import SupportsFloat
 import numpy as np
 import numpy.typing as npt
 
+from flexsat.input_checks import FieldError
 from flexsat.units import FloatArray
 
 
@@ -69,13 +70,13 @@ def settling_time(
     signals = error if isinstance(error, tuple) else (error,)
     bands = band if isinstance(band, tuple) else (band,) * len(signals)
     if len(bands) != len(signals):
-        raise ValueError(f"band: one per error signal ({len(signals)}), got {len(bands)}")
+        raise FieldError("band", f"one per error signal ({len(signals)}), got {len(bands)}")
     outside: np.ndarray | bool = False
     for e, b in zip(signals, bands):
         magnitude = np.abs(np.asarray(e, dtype=float))
         if magnitude.shape[-1] != t.size:
-            raise ValueError(
-                f"error: {magnitude.shape[-1]} samples along its last axis for {t.size} times"
+            raise FieldError(
+                "error", f"{magnitude.shape[-1]} samples along its last axis for {t.size} times"
             )
         limit = np.asarray(b, dtype=float)
         if relative_to_peak:

@@ -88,7 +88,7 @@ class StarTracker:
         cams = [cameras] if isinstance(cameras, StarCamera) else list(cameras)
         for c, cam in enumerate(cams):
             if not isinstance(cam, StarCamera):
-                raise ValueError(f"cameras[{c}]: must be a StarCamera, got {type(cam).__name__}")
+                raise FieldError(f"cameras[{c}]", f"must be a StarCamera, got {type(cam).__name__}")
         self.min_fields = require_count(min_fields, "min_fields")
         self.min_triplets = require_count(min_triplets, "min_triplets")
         if len(cams) < self.min_fields:

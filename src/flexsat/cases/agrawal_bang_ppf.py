@@ -46,7 +46,13 @@ import numpy.typing as npt
 
 from flexsat.cases.agrawal_bang import PUBLISHED, AgrawalBangCase, agrawal_bang
 from flexsat.control.ppf import PPFBank, PPFController, PPFModel, PPFProblem
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 from flexsat.units import QuantityLike
 
 if TYPE_CHECKING:
@@ -115,15 +121,16 @@ PUBLISHED_GAINS = {
 def _weights_key(weights: npt.ArrayLike) -> tuple[float, ...]:
     w = require_nonneg(weights, "weights")
     if w.shape != (2,):
-        raise ValueError(f"weights: must be the two numbers (w1, w2) of Eq. 35, got {weights!r}")
+        raise FieldError("weights", f"must be the two numbers (w1, w2) of Eq. 35, got {weights!r}")
     return tuple(float(v) for v in w)
 
 
 def _excitation(excitation: str) -> str:
     if excitation not in EXCITATIONS:
-        raise ValueError(
-            f"excitation: must be 'first' (the first flexible mode) or 'three' "
-            f"(all three modes), got {excitation!r}"
+        raise FieldError(
+            "excitation",
+            "must be 'first' (the first flexible mode) or 'three' "
+            f"(all three modes), got {excitation!r}",
         )
     return excitation
 
@@ -139,9 +146,10 @@ def paper_goal_ratio(weights: npt.ArrayLike, excitation: str) -> float:
     """
     key = (_weights_key(weights), _excitation(excitation))
     if key not in PUBLISHED_COSTS:
-        raise ValueError(
-            f"weights: the paper's goal is known only for its own weights "
-            f"{list(PUBLISHED['weights'])}, got {list(key[0])}"
+        raise FieldError(
+            "weights",
+            "the paper's goal is known only for its own weights "
+            f"{list(PUBLISHED['weights'])}, got {list(key[0])}",
         )
     J_init, J_opt = PUBLISHED_COSTS[key]
     return (J_opt / J_init - (1 - GAMMA_STOP)) / GAMMA_STOP
@@ -161,19 +169,21 @@ class GoalRule:
 
     def __post_init__(self) -> None:
         if self.kind not in ("paper", "ratio", "offset"):
-            raise ValueError(f"goal: rule must be 'paper', 'ratio' or 'offset', got {self.kind!r}")
+            raise FieldError(
+                "goal", f"rule must be 'paper', 'ratio' or 'offset', got {self.kind!r}"
+            )
         if self.kind == "paper":
             if self.value is not None:
-                raise ValueError(
-                    "goal.value: the 'paper' rule takes no value (its ratio comes "
-                    "from the published table)"
+                raise FieldError(
+                    "goal.value",
+                    "the 'paper' rule takes no value (its ratio comes from the published table)",
                 )
             return
         if self.value is None:
-            raise ValueError(f"goal.value: the {self.kind!r} rule needs a value")
+            raise FieldError("goal.value", f"the {self.kind!r} rule needs a value")
         v = float(require_finite(self.value, "goal.value"))
         if self.kind == "ratio" and v < 0:
-            raise ValueError(f"goal.value: a ratio J_goal/J_init must be >= 0, got {v!r}")
+            raise FieldError("goal.value", f"a ratio J_goal/J_init must be >= 0, got {v!r}")
         object.__setattr__(self, "value", v)
 
     def goal(self, J_init: float, weights: npt.ArrayLike, excitation: str) -> float:

@@ -52,7 +52,7 @@ from flexsat.analysis.controllability import (
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.control.scheduled import ScheduledStateFeedback
-from flexsat.input_checks import require_count, require_finite
+from flexsat.input_checks import FieldError, require_count, require_finite
 from flexsat.sim import continuous
 
 if TYPE_CHECKING:
@@ -207,7 +207,7 @@ def published_matrix(item: str, errata: bool = True) -> np.ndarray:
     unresolved and left as printed.
     """
     if item not in PUBLISHED:
-        raise ValueError(f"item: unknown published item {item!r}")
+        raise FieldError("item", f"unknown published item {item!r}")
     M = np.array(PUBLISHED[item], dtype=float)
     if errata:
         for e in ERRATA:
@@ -251,7 +251,7 @@ def mode_shape(r: int, x: npt.ArrayLike) -> np.ndarray:
     r = require_count(r, "r")
     x = require_finite(x, "x")
     if np.any(np.abs(x) > 0.5 + 1e-12):
-        raise ValueError(f"x: positions are ξ/l in [-0.5, 0.5], got {x!r}")
+        raise FieldError("x", f"positions are ξ/l in [-0.5, 0.5], got {x!r}")
     h = _half_root(r)
     if r % 2:
         return np.cosh(2 * h * x) / np.cosh(h) + np.cos(2 * h * x) / np.cos(h)
@@ -273,12 +273,12 @@ def _ratios(raw, name: str) -> tuple[float, ...]:
         try:
             raw = [float(v) for v in raw.strip().strip("[]()").split(",") if v.strip()]
         except ValueError:
-            raise ValueError(
-                f"{name}: must be a comma-separated list of numbers, got {raw!r}"
+            raise FieldError(
+                name, f"must be a comma-separated list of numbers, got {raw!r}"
             ) from None
     arr = np.atleast_1d(require_finite(raw, name))
     if arr.ndim != 1 or arr.size == 0 or np.any(arr <= 0):
-        raise ValueError(f"{name}: must be a non-empty list of (ω_n/ω_c)² > 0, got {raw!r}")
+        raise FieldError(name, f"must be a non-empty list of (ω_n/ω_c)² > 0, got {raw!r}")
     return tuple(float(v) for v in arr)
 
 
@@ -295,9 +295,9 @@ def _positions(positions, name: str = "positions") -> np.ndarray:
     x = require_finite(positions, name)
     x = np.atleast_1d(x)
     if x.ndim != 1 or x.size == 0:
-        raise ValueError(f"{name}: must be a non-empty list of ξ/l, got {positions!r}")
+        raise FieldError(name, f"must be a non-empty list of ξ/l, got {positions!r}")
     if np.any(np.abs(x) > 0.5):
-        raise ValueError(f"{name}: actuator positions are ξ/l in [-0.5, 0.5], got {positions!r}")
+        raise FieldError(name, f"actuator positions are ξ/l in [-0.5, 0.5], got {positions!r}")
     return x
 
 
@@ -495,24 +495,24 @@ class BainumBeam:
         G = require_finite(G, "G")
         G = G.reshape(-1, 1) if G.ndim == 1 else G
         if G.ndim != 2:
-            raise ValueError(
-                f"G: must be a 2-D (coordinates x actuators) array, got shape {G.shape}"
+            raise FieldError(
+                "G", f"must be a 2-D (coordinates x actuators) array, got shape {G.shape}"
             )
         n = G.shape[0]
         K_pos = np.zeros((G.shape[1], n)) if K_pos is None else require_finite(K_pos, "K_pos")
         K_rate = require_finite(K_rate, "K_rate")
         for name, K in (("K_pos", K_pos), ("K_rate", K_rate)):
             if K.shape != (G.shape[1], n):
-                raise ValueError(
-                    f"{name}: must be {G.shape[1]}x{n} (G is {n}x{G.shape[1]}), got shape {K.shape}"
+                raise FieldError(
+                    name, f"must be {G.shape[1]}x{n} (G is {n}x{G.shape[1]}), got shape {K.shape}"
                 )
         x0 = require_finite(x0, "x0").ravel()
         if x0.size == n:
             x0 = np.concatenate([x0, np.zeros(n)])
         if x0.size != 2 * n:
-            raise ValueError(f"x0: must have {n} positions or {2 * n} states, got {x0.size}")
+            raise FieldError("x0", f"must have {n} positions or {2 * n} states, got {x0.size}")
         if not tau_end > 0:
-            raise ValueError(f"tau_end: must be > 0, got {tau_end!r}")
+            raise FieldError("tau_end", f"must be > 0, got {tau_end!r}")
         gain = np.hstack([K_pos, K_rate])
         plant = self._orbit_plant(G, linearised=not nonlinear)
         wc = plant.orbit_rate
@@ -590,9 +590,10 @@ def _stiffness(stiffness, name: str = "stiffness") -> np.ndarray:
     if k.ndim == 2 and k.shape[0] == k.shape[1] and not np.any(k - np.diag(np.diag(k))):
         k = np.diag(k).copy()
     if k.ndim != 1 or k.size == 0:
-        raise ValueError(
-            f"{name}: must be the diagonal (ω/ω_c)² as a 1-D array or a diagonal "
-            f"matrix, got shape {k.shape}"
+        raise FieldError(
+            name,
+            "must be the diagonal (ω/ω_c)² as a 1-D array or a diagonal "
+            f"matrix, got shape {k.shape}",
         )
     return k
 
@@ -602,7 +603,7 @@ def _modal_input(G, n: int, name: str = "G") -> np.ndarray:
     if G.ndim == 1:
         G = G.reshape(-1, 1)
     if G.ndim != 2 or G.shape[0] != n:
-        raise ValueError(f"{name}: must have {n} rows (one per coordinate), got shape {G.shape}")
+        raise FieldError(name, f"must have {n} rows (one per coordinate), got shape {G.shape}")
     return G
 
 
@@ -616,7 +617,7 @@ def first_order(
     G = _modal_input(G, n)
     E = np.zeros((n, n)) if damping is None else require_finite(damping, "damping")
     if E.shape != (n, n):
-        raise ValueError(f"damping: must be {n}x{n}, got shape {E.shape}")
+        raise FieldError("damping", f"must be {n}x{n}, got shape {E.shape}")
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.diag(k), -E]])
     return A, np.vstack([np.zeros_like(G), G])
 
@@ -635,7 +636,7 @@ def closed_loop_matrix(
     K_rate = np.zeros((p, n)) if K_rate is None else require_finite(K_rate, "K_rate")
     for name, K in (("K_pos", K_pos), ("K_rate", K_rate)):
         if K.shape != (p, n):
-            raise ValueError(f"{name}: must be {p}x{n} (G is {n}x{p}), got shape {K.shape}")
+            raise FieldError(name, f"must be {p}x{n} (G is {n}x{p}), got shape {K.shape}")
     return A + B @ np.hstack([K_pos, K_rate])
 
 
@@ -705,9 +706,9 @@ def chapter2_case(
         frequency block test, and PBH uncontrollable eigenvalues of the full 2n-state model.
     """
     if case not in CH2_LAYOUTS:
-        raise ValueError(f"case: must be one of {sorted(CH2_LAYOUTS)}, got {case!r}")
+        raise FieldError("case", f"must be one of {sorted(CH2_LAYOUTS)}, got {case!r}")
     if midspan not in ("exact", "published"):
-        raise ValueError(f"midspan: must be 'exact' or 'published', got {midspan!r}")
+        raise FieldError("midspan", f"must be 'exact' or 'published', got {midspan!r}")
     beam = bainum() if beam is None else beam
     pitch, k, positions = CH2_LAYOUTS[case]
     F = beam.ratios(k)
@@ -770,7 +771,7 @@ def chapter2_example(
     beam = bainum() if beam is None else beam
     K = require_finite(gains, "gains").reshape(1, -1)
     if K.shape != (1, 3):
-        raise ValueError(f"gains: must be the three rate gains K1, K2, K3, got {gains!r}")
+        raise FieldError("gains", f"must be the three rate gains K1, K2, K3, got {gains!r}")
     G = beam.actuator_matrix(CH2_LAYOUTS[1][2], 2)
     return _closed_loop(beam.stiffness(2), G, np.zeros((1, 3)), K)
 
@@ -828,15 +829,15 @@ def decoupling_gains(
     G = _modal_input(G, n)
     W = F if target_stiffness is None else _stiffness(target_stiffness, "target_stiffness")
     if W.size != n:
-        raise ValueError(f"target_stiffness: must have {n} entries, got {W.size}")
+        raise FieldError("target_stiffness", f"must have {n} entries, got {W.size}")
     if np.any(W < 0):
-        raise ValueError(f"target_stiffness: must be >= 0, got {W.tolist()}")
+        raise FieldError("target_stiffness", f"must be >= 0, got {W.tolist()}")
     zeta = np.broadcast_to(require_finite(damping_ratio, "damping_ratio"), (n,))
     if np.any(zeta < 0):
-        raise ValueError(f"damping_ratio: must be >= 0, got {damping_ratio!r}")
+        raise FieldError("damping_ratio", f"must be >= 0, got {damping_ratio!r}")
     E = np.zeros((n, n)) if damping is None else require_finite(damping, "damping")
     if E.shape != (n, n):
-        raise ValueError(f"damping: must be {n}x{n}, got shape {E.shape}")
+        raise FieldError("damping", f"must be {n}x{n}, got shape {E.shape}")
     rhs_rate = E - np.diag(2 * zeta * np.sqrt(W))
     rhs_pos = np.diag(F) - np.diag(W)
     rank_G = _svd_rank(G, rtol)
@@ -844,9 +845,10 @@ def decoupling_gains(
         for i in range(n):
             r = _svd_rank(np.column_stack([G, rhs[:, i]]), rtol)
             if r > rank_G:
-                raise ValueError(
-                    f"G: decoupling impossible: {name} column {i + 1} is not in the range of G "
-                    f"(rank G = {rank_G}, rank [G | column] = {r}); move or add actuators"
+                raise FieldError(
+                    "G",
+                    f"decoupling impossible: {name} column {i + 1} is not in the range of G "
+                    f"(rank G = {rank_G}, rank [G | column] = {r}); move or add actuators",
                 )
     G_pinv = np.linalg.pinv(G, rcond=rtol)
     return G_pinv @ rhs_pos, G_pinv @ rhs_rate
@@ -901,12 +903,10 @@ def modal_riccati(
     R = require_finite(R, "R")
     D = require_finite(D, "D")
     if np.any(R <= 0):
-        raise ValueError(f"R: must be > 0 (positive definite control weight), got {R.tolist()}")
+        raise FieldError("R", f"must be > 0 (positive definite control weight), got {R.tolist()}")
     for name, Q in (("Q1", Q1), ("Q2", Q2)):
         if np.any(Q < 0):
-            raise ValueError(
-                f"{name}: must be >= 0 (positive semidefinite weight), got {Q.tolist()}"
-            )
+            raise FieldError(name, f"must be >= 0 (positive semidefinite weight), got {Q.tolist()}")
     F, Q1, Q2, R, D = np.broadcast_arrays(F, Q1, Q2, R, D)
     q = Q1 / R
     root = np.sqrt(F * F + q)
@@ -954,15 +954,17 @@ def modal_lqr_gains(
     n = F.size
     G = _modal_input(G, n)
     if G.shape != (n, n):
-        raise ValueError(
-            f"G: per-mode regulator needs as many actuators as coordinates "
-            f"(u = E⁻¹u', eq 18), got shape {G.shape}; use the full regulator"
+        raise FieldError(
+            "G",
+            "per-mode regulator needs as many actuators as coordinates "
+            f"(u = E⁻¹u', eq 18), got shape {G.shape}; use the full regulator",
         )
     s = np.linalg.svd(G, compute_uv=False)
     if s[-1] <= rcond * s[0]:
-        raise ValueError(
-            f"G: singular (σ_min/σ_max = {s[-1] / s[0]:.3g} <= {rcond:g}): these "
-            f"actuators cannot drive every coordinate independently"
+        raise FieldError(
+            "G",
+            f"singular (σ_min/σ_max = {s[-1] / s[0]:.3g} <= {rcond:g}): these "
+            f"actuators cannot drive every coordinate independently",
         )
     _, S12, S22 = modal_riccati(F, Q1, Q2, R, D)
     R = np.broadcast_to(np.asarray(R, dtype=float), (n,))
@@ -980,9 +982,9 @@ def chapter3_case(
     and 3).
     """
     if case not in (1, 2):
-        raise ValueError(f"case: must be 1 or 2, got {case!r}")
+        raise FieldError("case", f"must be 1 or 2, got {case!r}")
     if shapes not in ("published", "exact"):
-        raise ValueError(f"shapes: must be 'published' or 'exact', got {shapes!r}")
+        raise FieldError("shapes", f"must be 'published' or 'exact', got {shapes!r}")
     beam = bainum() if beam is None else beam
     k = 2 if case == 1 else 4
     if shapes == "published":
@@ -1052,7 +1054,7 @@ class ThreeMassBeam:
     def reduced_pair(self, n_actuators: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """(A_r, B_r) of eq 4: v'' = -A_r v + B_r F (one actuator: F_v2 = 0, eq 6)."""
         if n_actuators not in (1, 2):
-            raise ValueError(f"n_actuators: must be 1 or 2, got {n_actuators!r}")
+            raise FieldError("n_actuators", f"must be 1 or 2, got {n_actuators!r}")
         a, b, c = self.a, self.b, self.c_value
         P = np.array([[a, -b], [-b, a]]) / (a * a - b * b)
         return c * P, P[:, :n_actuators]
@@ -1071,7 +1073,7 @@ class ThreeMassBeam:
         from flexsat.dynamics.structural import Actuator, Sensor, StructuralPlant
 
         if n_actuators not in (1, 2):
-            raise ValueError(f"n_actuators: must be 1 or 2, got {n_actuators!r}")
+            raise FieldError("n_actuators", f"must be 1 or 2, got {n_actuators!r}")
         a, b = self.a, self.b
         model = SecondOrderModel(
             np.array([[a, b], [b, a]]),

@@ -25,7 +25,7 @@ import scipy.linalg as sla
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
-from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
 from flexsat.units import QuantityArrayLike, to_si
 
 if TYPE_CHECKING:
@@ -118,7 +118,7 @@ def comparison_functions(
         return a * np.sin(az) + s * a * az
     if derivative == 2:
         return a**2 * np.cos(az) + s * a**2
-    raise ValueError(f"derivative: must be 0, 1 or 2, got {derivative!r}")
+    raise FieldError("derivative", f"must be 0, 1 or 2, got {derivative!r}")
 
 
 def _ordinal(k: int) -> str:
@@ -286,7 +286,7 @@ class DraperRPLCase:
             return self.n_dof
         n = require_count(n, field)
         if n > self.n_dof:
-            raise ValueError(f"{field}: the model has {self.n_dof} modes, got {n}")
+            raise FieldError(field, f"the model has {self.n_dof} modes, got {n}")
         return n
 
     # -- mode descriptions ----------------------------------------------------------------------
@@ -433,8 +433,8 @@ class DraperRPLCase:
         elif normalisation == "hermitian":
             norm2 = np.einsum("ij,ik,kj->j", phi.conj(), E, phi).real
         else:
-            raise ValueError(
-                f"normalisation: must be 'plain' or 'hermitian', got {normalisation!r}"
+            raise FieldError(
+                "normalisation", f"must be 'plain' or 'hermitian', got {normalisation!r}"
             )
         return float(np.linalg.cond(phi / np.sqrt(norm2)))
 
@@ -442,7 +442,7 @@ class DraperRPLCase:
 def _gain(value, field: str, unit: str) -> np.ndarray:
     g = require_finite(value, field, unit)
     if g.shape != (3, 3):
-        raise ValueError(f"{field}: must be a 3x3 matrix (one row per input), got shape {g.shape}")
+        raise FieldError(field, f"must be a 3x3 matrix (one row per input), got shape {g.shape}")
     return g
 
 

@@ -39,7 +39,7 @@ import numpy as np
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
-from flexsat.input_checks import require_count, require_nonneg
+from flexsat.input_checks import FieldError, require_count, require_nonneg
 from flexsat.structures.mode_description import classify_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
@@ -293,7 +293,7 @@ class EPSCase:
         n = require_count(n_modes, "n_modes")
         ndof = len(self.assembly.dofs)
         if n + 6 > ndof:
-            raise ValueError(f"n_modes: the model has {ndof - 6} elastic modes, got {n}")
+            raise FieldError("n_modes", f"the model has {ndof - 6} elastic modes, got {n}")
         cached = self._cache.get("modes")
         if cached is None or cached.shapes.shape[1] < n + 6:
             cached = self.assembly.modes(min(max(n + 6, 26), ndof), rigid_body_modes=6)
@@ -354,7 +354,7 @@ class EPSCase:
         for d in self._classified(max_modes)[6:]:
             if d.component == "truss":
                 return d.index - 5, d.frequency_hz, str(d)
-        raise ValueError(f"max_modes: no truss-dominated mode among the first {max_modes}")
+        raise FieldError("max_modes", f"no truss-dominated mode among the first {max_modes}")
 
     def modal_model(self, n_modes: int = 45) -> ModalModel:
         """``ModalModel`` (flexsat.structures.modal_model) of the 6 rigid + ``n_modes`` elastic
@@ -398,16 +398,15 @@ class EPSCase:
 
             return RigidSpacecraft(self.mass_properties()["inertia_center_of_mass"])
         if model != "flexible":
-            raise ValueError(f"model: must be 'flexible' or 'rigid', got {model!r}")
+            raise FieldError("model", f"must be 'flexible' or 'rigid', got {model!r}")
         from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
 
         roles = self.node_roles
 
         def node(paper, field):
             if paper not in roles:
-                raise ValueError(
-                    f"{field}: {paper!r} is not one of the paper's nodes "
-                    f"({min(roles)}-{max(roles)})"
+                raise FieldError(
+                    field, f"{paper!r} is not one of the paper's nodes ({min(roles)}-{max(roles)})"
                 )
             return roles[paper]
 
@@ -623,10 +622,11 @@ def _actuator_mass(case: EPSCase, structural: float) -> float:
         return float(case.actuator_mass)
     act = case.total_mass - structural - case.nonstructural_mass
     if act < 0:
-        raise ValueError(
-            f"actuator_mass: balancing to total_mass = {case.total_mass:g} kg gives {act:.2f} kg "
+        raise FieldError(
+            "actuator_mass",
+            f"balancing to total_mass = {case.total_mass:g} kg gives {act:.2f} kg "
             f"(structural {structural:.2f} kg + non-structural {case.nonstructural_mass:g} kg "
-            "exceed it); give actuator_mass explicitly or raise total_mass"
+            "exceed it); give actuator_mass explicitly or raise total_mass",
         )
     return act
 
@@ -658,28 +658,27 @@ def eps(**overrides: Any) -> EPSCase:
         values["small_antenna_bay"] = nb
     for name in ("large_antenna_bay", "small_antenna_bay"):
         if values[name] > nb:
-            raise ValueError(
-                f"{name}: must be a bay number 1..truss_bays = {nb}, got {values[name]}"
-            )
+            raise FieldError(name, f"must be a bay number 1..truss_bays = {nb}, got {values[name]}")
     if values["large_antenna_bay"] == values["small_antenna_bay"]:
-        raise ValueError(
-            "small_antenna_bay: must differ from large_antenna_bay "
-            f"(both {values['large_antenna_bay']})"
+        raise FieldError(
+            "small_antenna_bay",
+            f"must differ from large_antenna_bay (both {values['large_antenna_bay']})",
         )
     if values["ribs"] < 3:
-        raise ValueError(f"ribs: must be >= 3, got {values['ribs']}")
+        raise FieldError("ribs", f"must be >= 3, got {values['ribs']}")
     share = values["large_antenna_share"]
     if share is not None and not 0 <= share <= 1:
-        raise ValueError(f"large_antenna_share: must be in [0, 1], got {share!r}")
+        raise FieldError("large_antenna_share", f"must be in [0, 1], got {share!r}")
     if not values["poisson_ratio"] < 0.5:
-        raise ValueError(f"poisson_ratio: must be < 0.5, got {values['poisson_ratio']!r}")
+        raise FieldError("poisson_ratio", f"must be < 0.5, got {values['poisson_ratio']!r}")
     if not values["damping"] < 1:
-        raise ValueError(f"damping: must be a modal damping ratio < 1, got {values['damping']!r}")
+        raise FieldError("damping", f"must be a modal damping ratio < 1, got {values['damping']!r}")
     if values["tube_wall"] > values["tube_outer_diameter"] / 2:
-        raise ValueError(
-            f"tube_wall: must be <= tube_outer_diameter / 2 "
+        raise FieldError(
+            "tube_wall",
+            "must be <= tube_outer_diameter / 2 "
             f"= {values['tube_outer_diameter'] / 2:g} m, "
-            f"got {values['tube_wall']:g} m"
+            f"got {values['tube_wall']:g} m",
         )
     case = EPSCase(**values)
     case._model  # noqa: B018 -- build now: one clear message at construction

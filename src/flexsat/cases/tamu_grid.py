@@ -57,7 +57,7 @@ import numpy.typing as npt
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
-from flexsat.input_checks import require_count
+from flexsat.input_checks import FieldError, require_count
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material
 from flexsat.units import Q_, to_si
@@ -170,7 +170,7 @@ def _nodes(raw: Any, name: str) -> tuple[int, ...]:
         try:
             items = list(raw)
         except TypeError:
-            raise ValueError(f"{name}: must be node ids in 1..20, got {raw!r}") from None
+            raise FieldError(name, f"must be node ids in 1..20, got {raw!r}") from None
     out = []
     for item in items:
         try:
@@ -179,12 +179,12 @@ def _nodes(raw: Any, name: str) -> tuple[int, ...]:
             try:
                 n = require_count(float(item), name)
             except (TypeError, ValueError):
-                raise ValueError(f"{name}: must be node ids in 1..20, got {raw!r}") from None
+                raise FieldError(name, f"must be node ids in 1..20, got {raw!r}") from None
         if not 1 <= n <= 20:
-            raise ValueError(f"{name}: must be node ids in 1..20 (21-25 are clamped), got {n}")
+            raise FieldError(name, f"must be node ids in 1..20 (21-25 are clamped), got {n}")
         out.append(n)
     if len(set(out)) != len(out):
-        raise ValueError(f"{name}: node ids must be distinct, got {raw!r}")
+        raise FieldError(name, f"node ids must be distinct, got {raw!r}")
     return tuple(out)
 
 
@@ -286,13 +286,13 @@ class TamuGridCase:
         scale = dict(stiffness_scale or {})
         for name, factor in scale.items():
             if name not in SUBSTRUCTURES:
-                raise ValueError(
-                    f"stiffness_scale: unknown substructure {name!r}; known: "
-                    f"{', '.join(SUBSTRUCTURES)}"
+                raise FieldError(
+                    "stiffness_scale",
+                    f"unknown substructure {name!r}; known: {', '.join(SUBSTRUCTURES)}",
                 )
             if not (np.isfinite(factor) and factor > 0):
-                raise ValueError(
-                    f"stiffness_scale: {name!r} must be a finite factor > 0, got {factor!r}"
+                raise FieldError(
+                    "stiffness_scale", f"{name!r} must be a finite factor > 0, got {factor!r}"
                 )
         s = Structure("TAMU 5 ft x 5 ft grid")
         for n in range(1, 26):
@@ -352,7 +352,7 @@ class TamuGridCase:
         n = require_count(n_modes, "n_modes")
         f = self._modes(self.gravity if gravity is None else gravity).frequencies_hz
         if n > len(f):
-            raise ValueError(f"n_modes: the grid has {len(f)} modes, got {n}")
+            raise FieldError("n_modes", f"the grid has {len(f)} modes, got {n}")
         return f[:n].copy()
 
     def mode_descriptions(self, n_modes: int) -> list[str]:
@@ -360,7 +360,7 @@ class TamuGridCase:
         n = require_count(n_modes, "n_modes")
         modes = self._modes(self.gravity)
         if n > modes.shapes.shape[1]:
-            raise ValueError(f"n_modes: the grid has {modes.shapes.shape[1]} modes, got {n}")
+            raise FieldError("n_modes", f"the grid has {modes.shapes.shape[1]} modes, got {n}")
         uz = modes.at_nodes()[:n, :20, 2].reshape(n, 4, 5)  # rows 1-4 (bottom first), columns
         out = []
         for w in uz:
@@ -449,7 +449,7 @@ class TamuGridCase:
         n = require_count(n_modes, "n_modes")
         modes = self._modes(self.gravity if gravity is None else gravity)
         if n > modes.shapes.shape[1]:
-            raise ValueError(f"n_modes: the grid has {modes.shapes.shape[1]} modes, got {n}")
+            raise FieldError("n_modes", f"the grid has {modes.shapes.shape[1]} modes, got {n}")
         cut = FEModes(modes.omegas[:n], modes.shapes[:, :n], modes.assembly)
         return ModalModel.from_fe(
             cut,
@@ -468,7 +468,7 @@ def _grid_plant(
     n = require_count(n_modes, "n_modes")
     modes = case._modes(case.gravity)
     if n > modes.shapes.shape[1]:
-        raise ValueError(f"n_modes: the grid has {modes.shapes.shape[1]} modes, got {n}")
+        raise FieldError("n_modes", f"the grid has {modes.shapes.shape[1]} modes, got {n}")
     cut = FEModes(modes.omegas[:n], modes.shapes[:, :n], modes.assembly)
     return point_force_plant(
         cut, force_node, sensor_nodes, "z", damping, (2 * case.spacing, 4 * case.spacing, 0.0)

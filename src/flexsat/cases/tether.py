@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from flexsat.dynamics.tether import ClosedLoopRun, TetheredSubsatellite, TetherScales
+from flexsat.input_checks import FieldError
 
 if TYPE_CHECKING:
     from flexsat.sim.config import SimConfig
@@ -134,7 +135,7 @@ def make_law(
         return CoupledTetherLaw(final_length=final_length, scales=scales, **gains)
     if law == "rate":
         return TetherRateLaw(final_length=final_length, scales=scales, **gains)
-    raise ValueError(f"law: must be 'decoupled', 'coupled' or 'rate', got {law!r}")
+    raise FieldError("law", f"must be 'decoupled', 'coupled' or 'rate', got {law!r}")
 
 
 def paper_scales() -> TetherScales:
@@ -217,10 +218,10 @@ def tether_simulation(
     from flexsat.sim.config import SimConfig
 
     if integrator not in INTEGRATORS:
-        raise ValueError(f"integrator: must be one of {INTEGRATORS}, got {integrator!r}")
+        raise FieldError("integrator", f"must be one of {INTEGRATORS}, got {integrator!r}")
     tau = np.asarray(tau, float)
     if tau.ndim != 1 or tau.size < 2 or tau[0] != 0 or not np.allclose(np.diff(tau), tau[1]):
-        raise ValueError(f"tau: must be a uniform grid from 0 of >= 2 times, got {tau!r}")
+        raise FieldError("tau", f"must be a uniform grid from 0 of >= 2 times, got {tau!r}")
     rate = law.writes[0] == "reel_rate"
     scales = law.scales
     plant = TetheredSubsatellite(scales, control="rate" if rate else "tension")

@@ -27,6 +27,7 @@ import importlib
 from collections.abc import Iterable
 
 from flexsat.checks.core import COLUMNS, STATUSES, Check, CheckResult, Discrepancy, evaluate, series
+from flexsat.input_checks import FieldError
 
 #: the topic modules of :mod:`flexsat.checks`, in table order (issues #2, #3, #4, then #5)
 MODULES = (
@@ -123,7 +124,7 @@ def select_checks(
     known = case_names(checks)
     unknown = [n for n in names if n not in known]
     if unknown:
-        raise ValueError(f"case: no checks for {', '.join(map(repr, unknown))}; known: {known}")
+        raise FieldError("case", f"no checks for {', '.join(map(repr, unknown))}; known: {known}")
     return [c for c in checks if c.case in names]
 
 

@@ -61,6 +61,7 @@ from functools import cache, lru_cache
 import numpy as np
 
 from flexsat.checks.core import Check, series
+from flexsat.input_checks import FieldError
 
 SOURCE = "Bainum & Reddy 1979"
 
@@ -167,7 +168,7 @@ def refined_peak(tau, y) -> tuple[float, float]:
     a = np.abs(np.asarray(y, dtype=float))
     i = int(np.argmax(a))
     if i == 0 or i == a.size - 1:
-        raise ValueError("y: the peak is at an end of the run; lengthen it")
+        raise FieldError("y", "the peak is at an end of the run; lengthen it")
     y0, y1, y2 = a[i - 1], a[i], a[i + 1]
     d = 0.5 * (y0 - y2) / (y0 - 2 * y1 + y2)
     return float(y1 - 0.25 * (y0 - y2) * d), float(tau[i] + d * (tau[1] - tau[0]))

@@ -31,6 +31,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from flexsat.input_checks import FieldError
 from flexsat.references import cite, references
 
 #: the columns of the validation table, in order (also the keys of :meth:`CheckResult.as_dict`)
@@ -71,9 +72,9 @@ class Discrepancy:
 
     def __post_init__(self):
         if not math.isfinite(self.value):
-            raise ValueError(f"discrepancy.value: must be finite, got {self.value!r}")
+            raise FieldError("discrepancy.value", f"must be finite, got {self.value!r}")
         if not isinstance(self.explanation, str) or not self.explanation.strip():
-            raise ValueError("discrepancy.explanation: must be a non-empty string")
+            raise FieldError("discrepancy.explanation", "must be a non-empty string")
 
 
 @dataclass(frozen=True)
@@ -119,17 +120,17 @@ class Check:
     def __post_init__(self):
         for name in ("case", "quantity", "source"):
             if not isinstance(getattr(self, name), str) or not getattr(self, name).strip():
-                raise ValueError(f"{name}: must be a non-empty string, got {getattr(self, name)!r}")
+                raise FieldError(name, f"must be a non-empty string, got {getattr(self, name)!r}")
         if self.rtol is None and self.atol is None:
             raise ValueError(f"{self.case} / {self.quantity}: give rtol or atol (or both)")
         for name in ("rtol", "atol"):
             value = getattr(self, name)
             if value is not None and not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"{name}: must be a finite number >= 0, got {value!r}")
+                raise FieldError(name, f"must be a finite number >= 0, got {value!r}")
         if not math.isfinite(self.published):
-            raise ValueError(f"published: must be finite, got {self.published!r}")
+            raise FieldError("published", f"must be finite, got {self.published!r}")
         if not callable(self.compute):
-            raise ValueError("compute: must be callable with no arguments")
+            raise FieldError("compute", "must be callable with no arguments")
         if self.discrepancy is not None and self.passes(self.discrepancy.value):
             raise ValueError(
                 f"{self.case} / {self.quantity}: discrepancy.value "
@@ -303,8 +304,8 @@ def series(
     notes = list(notes) if notes is not None else [""] * len(published)
     discrepancies = list(discrepancies) if discrepancies is not None else [None] * len(published)
     if not len(quantities) == len(published) == len(notes) == len(discrepancies):
-        raise ValueError(
-            "series: quantities, published, notes and discrepancies must have the same length"
+        raise FieldError(
+            "series", "quantities, published, notes and discrepancies must have the same length"
         )
     return [
         Check(case, q, source, float(p), unit, (lambda i=i: values()[i]), rtol, atol, note, d)

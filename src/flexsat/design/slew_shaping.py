@@ -50,7 +50,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import require_count
+from flexsat.input_checks import FieldError, require_count
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
@@ -122,9 +122,10 @@ def modal_cancelling_torque(evaluation: SlewEvaluation, n_basis: int = 30) -> Sh
     T, h = float(nominal.duration), float(config.dt)
     n_steps = int(round(T / h))
     if abs(n_steps * h - T) > 1e-9 * T:
-        raise ValueError(
-            f"evaluation.config: the control period {h:g} s must divide the "
-            f"maneuver time {T:g} s (the correction is integrated on that grid)"
+        raise FieldError(
+            "evaluation.config",
+            f"the control period {h:g} s must divide the "
+            f"maneuver time {T:g} s (the correction is integrated on that grid)",
         )
     run = simulate(truth, NominalTorque(nominal, h), config, n_cases=1, record_states=True)
     x_T = run.dataset["state"].isel(case=0).values[n_steps]

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from flexsat.input_checks import require_numeric
+from flexsat.input_checks import FieldError, require_numeric
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -70,9 +70,9 @@ def require_shape(value: npt.ArrayLike, field: str, shape: tuple[int, ...]) -> F
     """``value`` as a finite float array whose trailing axes are ``shape``."""
     arr = require_numeric(value, field)
     if arr.ndim < len(shape) or arr.shape[arr.ndim - len(shape) :] != shape:
-        raise ValueError(
-            f"{field}: last axes must have shape {shape} (leading axes are cases), "
-            f"got shape {arr.shape}"
+        raise FieldError(
+            field,
+            f"last axes must have shape {shape} (leading axes are cases), got shape {arr.shape}",
         )
     return arr
 
@@ -93,9 +93,10 @@ def require_quaternion(beta: npt.ArrayLike, field: str = "beta") -> FloatArray:
     b = require_shape(beta, field, (4,))
     err = np.abs(np.linalg.norm(b, axis=-1) - 1.0)
     if np.any(err > UNIT_TOL):
-        raise ValueError(
-            f"{field}: must be a unit quaternion (| ‖β‖ − 1 | <= {UNIT_TOL:g}), "
-            f"largest departure {err.max():.3g}"
+        raise FieldError(
+            field,
+            f"must be a unit quaternion (| ‖β‖ − 1 | <= {UNIT_TOL:g}), "
+            f"largest departure {err.max():.3g}",
         )
     return b
 
@@ -104,12 +105,13 @@ def _dcm(dcm: npt.ArrayLike, field: str = "dcm") -> FloatArray:
     C = require_shape(dcm, field, (3, 3))
     err = np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)).max(axis=(-2, -1), initial=0.0)
     if np.any(err > UNIT_TOL):
-        raise ValueError(
-            f"{field}: must be orthonormal (max |C Cᵀ − I| <= {UNIT_TOL:g}), "
-            f"largest departure {err.max():.3g}"
+        raise FieldError(
+            field,
+            f"must be orthonormal (max |C Cᵀ − I| <= {UNIT_TOL:g}), "
+            f"largest departure {err.max():.3g}",
         )
     if np.any(np.linalg.det(C) < 0):
-        raise ValueError(f"{field}: must be a proper rotation (det C = +1), got a reflection")
+        raise FieldError(field, "must be a proper rotation (det C = +1), got a reflection")
     return C
 
 
@@ -394,9 +396,10 @@ def principal_rotation_to_quaternion(axis: npt.ArrayLike, angle: npt.ArrayLike) 
     phi = require_numeric(angle, "angle")
     err = np.abs(np.linalg.norm(ax, axis=-1) - 1.0)
     if np.any(err > UNIT_TOL):
-        raise ValueError(
-            f"axis: must be a unit vector (| ‖l‖ − 1 | <= {UNIT_TOL:g}), largest "
-            f"departure {err.max():.3g}"
+        raise FieldError(
+            "axis",
+            f"must be a unit vector (| ‖l‖ − 1 | <= {UNIT_TOL:g}), largest "
+            f"departure {err.max():.3g}",
         )
     case_shape(axis=ax.shape[:-1], angle=phi.shape)
     half = phi / 2
@@ -500,9 +503,10 @@ def quaternion_to_gibbs(beta: npt.ArrayLike) -> FloatArray:
     b = require_quaternion(beta)
     b0 = b[..., 0]
     if np.any(np.abs(b0) < SINGULAR_TOL):
-        raise ValueError(
-            f"beta: the Gibbs vector is singular at a 180° principal rotation "
-            f"(|β0| < {SINGULAR_TOL:g}); use MRPs or Euler parameters there"
+        raise FieldError(
+            "beta",
+            "the Gibbs vector is singular at a 180° principal rotation "
+            f"(|β0| < {SINGULAR_TOL:g}); use MRPs or Euler parameters there",
         )
     return b[..., 1:] / b0[..., None]
 
@@ -528,9 +532,10 @@ def quaternion_to_mrp(beta: npt.ArrayLike) -> FloatArray:
     b = require_quaternion(beta)
     den = 1 + b[..., 0]
     if np.any(den < SINGULAR_TOL):
-        raise ValueError(
-            f"beta: the MRP vector is singular at β0 = −1 (1 + β0 < "
-            f"{SINGULAR_TOL:g}); pass −beta, the same attitude"
+        raise FieldError(
+            "beta",
+            "the MRP vector is singular at β0 = −1 (1 + β0 < "
+            f"{SINGULAR_TOL:g}); pass −beta, the same attitude",
         )
     return b[..., 1:] / den[..., None]
 
@@ -557,7 +562,7 @@ def mrp_shadow(sigma: npt.ArrayLike) -> FloatArray:
     s = require_shape(sigma, "sigma", (3,))
     s2 = np.sum(s * s, axis=-1)
     if np.any(s2 == 0):
-        raise ValueError("sigma: the shadow set of σ = 0 (the identity) is at infinity")
+        raise FieldError("sigma", "the shadow set of σ = 0 (the identity) is at infinity")
     return -s / s2[..., None]
 
 

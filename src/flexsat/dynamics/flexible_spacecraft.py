@@ -97,6 +97,7 @@ from flexsat.dynamics.rigid_spacecraft import (
     quaternion_kinematics,
     skew,
 )
+from flexsat.input_checks import FieldError
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
 
 if TYPE_CHECKING:
@@ -114,7 +115,7 @@ def _check_node(modal: ModalModel, node: object, field: str) -> None:
         shown = ", ".join(map(str, modal.node_ids[:8])) + (
             " ..." if modal.node_ids.size > 8 else ""
         )
-        raise ValueError(f"{field}: unknown node {node!r} (nodes: {shown})")
+        raise FieldError(field, f"unknown node {node!r} (nodes: {shown})")
 
 
 def _points(
@@ -126,15 +127,15 @@ def _points(
         try:
             node, axis = item
         except (TypeError, ValueError):
-            raise ValueError(
-                f"{field}[{i}]: must be a pair (node, 'x'|'y'|'z'), got {item!r}"
+            raise FieldError(
+                f"{field}[{i}]", f"must be a pair (node, 'x'|'y'|'z'), got {item!r}"
             ) from None
         if not isinstance(axis, str) or axis.lower() not in _AXES:
-            raise ValueError(f"{field}[{i}]: axis must be 'x', 'y' or 'z', got {axis!r}")
+            raise FieldError(f"{field}[{i}]", f"axis must be 'x', 'y' or 'z', got {axis!r}")
         _check_node(modal, node, f"{field}[{i}]")
         pair = (int(node), axis.lower())
         if pair in out:
-            raise ValueError(f"{field}[{i}]: {pair} given twice")
+            raise FieldError(f"{field}[{i}]", f"{pair} given twice")
         out.append(pair)
     return out
 
@@ -191,12 +192,13 @@ class FlexibleSpacecraft(Plant):
         rigid_frequency: float = RIGID_FREQUENCY,
     ) -> None:
         if not isinstance(modal, ModalModel):
-            raise ValueError(f"modal: must be a ModalModel, got {type(modal).__name__}")
+            raise FieldError("modal", f"must be a ModalModel, got {type(modal).__name__}")
         if modal.boundary != "free":
-            raise ValueError(
-                f"modal: must be free-free (boundary 'free'), got "
+            raise FieldError(
+                "modal",
+                "must be free-free (boundary 'free'), got "
                 f"{modal.boundary!r}: hybrid coordinates here carry the rigid "
-                f"motion of the whole structure"
+                f"motion of the whole structure",
             )
         elastic = modal.elastic(rigid_frequency)
         if n_modes is not None:
@@ -213,9 +215,10 @@ class FlexibleSpacecraft(Plant):
         Delta = L[:, 3:] + L[:, :3] @ skew(d)
         Mr = np.block([[J, Delta.T], [Delta, np.eye(n)]])
         if np.linalg.eigvalsh(Mr).min() <= 1e-12 * np.abs(J).max():
-            raise ValueError(
-                "modal: the rotational participation exceeds the inertia "
-                "(J − ΔᵀΔ not positive definite): not a free-free model"
+            raise FieldError(
+                "modal",
+                "the rotational participation exceeds the inertia "
+                "(J − ΔᵀΔ not positive definite): not a free-free model",
             )
         self.inertia, self.coupling = J, Delta
         self.rotation_mass = Mr
@@ -319,8 +322,8 @@ class FlexibleSpacecraft(Plant):
 
         n_modes = require_count(n_modes, "n_modes")
         if n_modes > self.n_modes:
-            raise ValueError(
-                f"n_modes: at most the plant's {self.n_modes} elastic modes, got {n_modes}"
+            raise FieldError(
+                "n_modes", f"at most the plant's {self.n_modes} elastic modes, got {n_modes}"
             )
         return FlexibleSpacecraft(
             self.modal,

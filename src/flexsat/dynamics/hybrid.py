@@ -24,7 +24,7 @@ import numpy as np
 from scipy.linalg import eigh
 
 from flexsat.dynamics.plant import Channel, ManeuverChannels, Plant
-from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -210,7 +210,7 @@ class HybridPlant(Plant):
             return z, z, -self.hub_inertia * e0 / n, 1.0 / n
         if name == "tip_deflection":
             return np.concatenate([[0.0], self._tip_row]), z, z, 0.0
-        raise ValueError(f"{name}: {type(self).__name__} has no output channel {name!r}")
+        raise FieldError(name, f"{type(self).__name__} has no output channel {name!r}")
 
     def output(
         self, name: str, x: FloatArray, u: FloatArray, f_in: FloatArray | None = None

@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_positive
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -85,7 +85,7 @@ def require_lengths(lam: npt.ArrayLike, field: str = "lambda") -> FloatArray:
     divides by λ: a zero or negative length is no tether)."""
     arr = require_finite(lam, field)
     if np.any(arr <= 0):
-        raise ValueError(f"{field}: the tether length must be > 0, got min {arr.min():.6g}")
+        raise FieldError(field, f"the tether length must be > 0, got min {arr.min():.6g}")
     return arr
 
 
@@ -176,13 +176,13 @@ class TetherScales:
         object.__setattr__(self, "mass", float(require_positive(mass, "mass", "kg")))
         object.__setattr__(self, "length", float(require_positive(length, "length", "m")))
         if orbit_rate is not None and altitude is not None:
-            raise ValueError("orbit_rate: give the orbit rate or the altitude, not both")
+            raise FieldError("orbit_rate", "give the orbit rate or the altitude, not both")
         height = None
         if altitude is not None:
             height = float(require_finite(altitude, "altitude", "m"))
             if height < 0:
-                raise ValueError(
-                    f"altitude: must be >= 0 (above the Earth's surface), got {height} m"
+                raise FieldError(
+                    "altitude", f"must be >= 0 (above the Earth's surface), got {height} m"
                 )
             rate = float(np.sqrt(EARTH_MU / (EARTH_RADIUS + height) ** 3))
         elif orbit_rate is not None:
@@ -226,8 +226,8 @@ class TetherScales:
             return np.array([L, 1.0, 1.0, L * W, W, W])
         if n == 5:
             return np.array([L, 1.0, 1.0, W, W])
-        raise ValueError(
-            f"state: must have 6 (tension control) or 5 (rate control) entries, got {n}"
+        raise FieldError(
+            "state", f"must have 6 (tension control) or 5 (rate control) entries, got {n}"
         )
 
 
@@ -263,10 +263,10 @@ class TetheredSubsatellite(Plant):
 
     def __init__(self, scales: TetherScales | None = None, control: str = "tension") -> None:
         if control not in CONTROLS:
-            raise ValueError(f"control: must be one of {CONTROLS}, got {control!r}")
+            raise FieldError("control", f"must be one of {CONTROLS}, got {control!r}")
         self.scales = TetherScales() if scales is None else scales
         if not isinstance(self.scales, TetherScales):
-            raise ValueError(f"scales: must be a TetherScales, got {type(scales).__name__}")
+            raise FieldError("scales", f"must be a TetherScales, got {type(scales).__name__}")
         self.control = control
         first = (
             Channel("tension", "N", 1, "tether tension T (>= 0 for a tether)")
@@ -385,7 +385,7 @@ class TetheredSubsatellite(Plant):
         number, a Quantity or a unit string); the length has no default."""
         x = super().state_from(**values)
         if "length" not in values and "state" not in values:
-            raise ValueError("length: the initial tether length is required (> 0)")
+            raise FieldError("length", "the initial tether length is required (> 0)")
         require_lengths(x[0], "length")
         return x
 

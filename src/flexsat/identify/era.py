@@ -206,8 +206,8 @@ def markov_parameters(
                 blocks.append(markov_from_frf(m.abscissa, m.outputs, n_markov=n_markov)[0])
                 continue
             if m.inputs is None:
-                raise ValueError(
-                    f"measurement[{i}]: needs time histories with recorded inputs or FRFs"
+                raise FieldError(
+                    f"measurement[{i}]", "needs time histories with recorded inputs or FRFs"
                 )
             blocks.append(markov_parameters(u=m.inputs, y=m.outputs, n_markov=n_markov))
         if len({b.shape for b in blocks}) != 1:

@@ -32,7 +32,7 @@ from scipy import signal
 from scipy.linalg import block_diag
 
 from flexsat.identify.measurements import Channel
-from flexsat.input_checks import require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_nonneg, require_positive
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
@@ -84,15 +84,15 @@ class Excitation:
 
     def __post_init__(self) -> None:
         if self.kind not in _KINDS:
-            raise ValueError(f"kind: must be one of {_KINDS}, got {self.kind!r}")
+            raise FieldError("kind", f"must be one of {_KINDS}, got {self.kind!r}")
         if self.channel.kind not in ("force", "torque"):
-            raise ValueError(
-                f"channel: an excitation is a force or torque, got {self.channel.kind!r}"
+            raise FieldError(
+                "channel", f"an excitation is a force or torque, got {self.channel.kind!r}"
             )
         if self.kind == "harmonic" and self.frequency is None:
-            raise ValueError("frequency: a harmonic excitation needs its frequency, Hz")
+            raise FieldError("frequency", "a harmonic excitation needs its frequency, Hz")
         if self.kind == "history" and self.values is None:
-            raise ValueError("values: a history excitation needs its samples")
+            raise FieldError("values", "a history excitation needs its samples")
 
     def samples(
         self, t_fine: FloatArray, h: float, oversample: int, rng: np.random.Generator
@@ -119,7 +119,7 @@ class Excitation:
 
 def _load(load: str, node: int, direction: str, name: str = "") -> Channel:
     if load not in ("force", "torque"):
-        raise ValueError(f"load: must be 'force' or 'torque', got {load!r}")
+        raise FieldError("load", f"must be 'force' or 'torque', got {load!r}")
     return Channel.at(load, node, direction, name=name)
 
 
@@ -159,7 +159,7 @@ def torque_history(node: int, axis: str, values: npt.ArrayLike) -> Excitation:
     """User torque history (e.g. a reaction wheel), N m, one value per sample (zero after)."""
     vals = np.asarray(values, dtype=float)
     if vals.ndim != 1 or not np.all(np.isfinite(vals)):
-        raise ValueError("values: must be a finite 1-D array of torque samples")
+        raise FieldError("values", "must be a finite 1-D array of torque samples")
     return Excitation("history", _load("torque", node, axis), 1.0, values=vals)
 
 
@@ -179,7 +179,7 @@ def _input_vector(model: ModalModel, chan: Channel) -> FloatArray:
 
 def _output_rows(model: ModalModel, chan: Channel) -> FloatArray:
     if chan.kind not in ("displacement", "velocity", "acceleration", "rotation", "strain"):
-        raise ValueError(f"sensors: {chan.kind!r} is not a sensor kind")
+        raise FieldError("sensors", f"{chan.kind!r} is not a sensor kind")
     node, direction = _located(chan)
     if chan.kind == "rotation":
         return model.rotation_output(node, direction)

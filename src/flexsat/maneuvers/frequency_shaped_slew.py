@@ -66,7 +66,7 @@ import scipy.linalg
 import scipy.sparse
 import scipy.sparse.linalg
 
-from flexsat.input_checks import require_finite, require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
 
 __all__ = [
@@ -173,9 +173,10 @@ class FrequencyShapedSlew:
         t = require_finite(t, "t", "s")
         span = 1e-12 * self.duration  # rounding of t = T computed by the caller
         if np.any(t < -span) or np.any(t > self.duration + span):
-            raise ValueError(
-                f"t: must lie in [0, {self.duration:g}] s (the maneuver), got "
-                f"[{t.min():g}, {t.max():g}]"
+            raise FieldError(
+                "t",
+                f"must lie in [0, {self.duration:g}] s (the maneuver), got "
+                f"[{t.min():g}, {t.max():g}]",
             )
         flat = np.clip(t.ravel(), 0.0, self.duration)
         k = np.clip(np.searchsorted(self.knots, flat, side="right") - 1, 0, self.n_segments - 1)
@@ -241,7 +242,7 @@ def frequency_shaped_slew(
     """
     angle = float(require_finite(angle, "angle", "rad"))
     if angle == 0.0:
-        raise ValueError("angle: must be nonzero (a zero slew has the trivial solution u = 0)")
+        raise FieldError("angle", "must be nonzero (a zero slew has the trivial solution u = 0)")
     inertia = float(require_positive(inertia, "inertia", "kg*m**2"))
     duration = float(require_positive(duration, "duration", "s"))
     omega_b = float(require_positive(omega_b, "omega_b", "rad/s"))

@@ -81,7 +81,13 @@ from flexsat.dynamics.attitude import (
     require_shape,
 )
 from flexsat.dynamics.rigid_body import angular_momentum_inertial, cross3, matvec, require_inertia
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 from flexsat.maneuvers.frequency_shaped_slew import FrequencyShapedSlew, frequency_shaped_slew
 from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike, to_si_array
 
@@ -291,9 +297,10 @@ class ThreeAxisSlew:
         t = require_finite(t, "t", "s")
         span = 1e-12 * self.duration  # rounding of t = T computed by the caller
         if np.any(t < -span) or np.any(t > self.duration + span):
-            raise ValueError(
-                f"t: must lie in [0, {self.duration:g}] s (the maneuver), got "
-                f"[{t.min():g}, {t.max():g}]"
+            raise FieldError(
+                "t",
+                f"must lie in [0, {self.duration:g}] s (the maneuver), got "
+                f"[{t.min():g}, {t.max():g}]",
             )
         n = self.n_segments
         tau = np.clip(t.ravel(), 0.0, self.duration) / self.duration
@@ -432,7 +439,7 @@ def three_axis_slew(
     """
     J = require_inertia(inertia)
     if J.shape != (3, 3):
-        raise ValueError(f"inertia: must be one (3, 3) tensor, got shape {J.shape}")
+        raise FieldError("inertia", f"must be one (3, 3) tensor, got shape {J.shape}")
     duration = float(require_positive(duration, "duration", "s"))
     omega_b = float(require_positive(omega_b, "omega_b", "rad/s"))
     zeta_b = float(require_nonneg(zeta_b, "zeta_b", ""))
@@ -440,11 +447,11 @@ def three_axis_slew(
         np.zeros((3, 3)) if Q is None else require_shape(to_si_array(Q, "1/s**2", "Q"), "Q", (3, 3))
     )
     if Qm.shape != (3, 3):
-        raise ValueError(f"Q: must be one (3, 3) matrix, got shape {Qm.shape}")
+        raise FieldError("Q", f"must be one (3, 3) matrix, got shape {Qm.shape}")
     if np.abs(Qm - Qm.T).max() > 1e-12 * max(np.abs(Qm).max(), 1e-300):
-        raise ValueError("Q: must be symmetric")
+        raise FieldError("Q", "must be symmetric")
     if np.linalg.eigvalsh(Qm)[0] < -1e-12 * np.abs(Qm).max():
-        raise ValueError("Q: must be positive semi-definite")
+        raise FieldError("Q", "must be positive semi-definite")
     steps = require_count(steps, "steps")
     max_newton = require_count(max_newton, "max_newton")
     angles = _target_angles(target)
@@ -478,10 +485,11 @@ def three_axis_slew(
             halvings += 1
             da /= 2.0
             if halvings > _MAX_HALVINGS:
-                raise ValueError(
-                    f"continuation: Newton failed to converge beyond the last "
+                raise FieldError(
+                    "continuation",
+                    "Newton failed to converge beyond the last "
                     f"converged a1 = a2 = {a:.6g} (step {da * 2:.3g} after "
-                    f"{_MAX_HALVINGS} halvings)"
+                    f"{_MAX_HALVINGS} halvings)",
                 )
             continue
         halvings = 0
@@ -523,12 +531,12 @@ def _target_angles(target: QuantityArrayLike) -> FloatArray:
     elif arr.shape == (4,):
         angles = dcm_to_euler123(quaternion_to_dcm(require_quaternion(arr, "target")))
     else:
-        raise ValueError(
-            f"target: must be Euler parameters (4,) or 1-2-3 Euler angles (3,), "
-            f"got shape {arr.shape}"
+        raise FieldError(
+            "target",
+            f"must be Euler parameters (4,) or 1-2-3 Euler angles (3,), got shape {arr.shape}",
         )
     if not np.any(angles):
-        raise ValueError("target: the identity attitude (no slew: the optimal torque is 0)")
+        raise FieldError("target", "the identity attitude (no slew: the optimal torque is 0)")
     return angles
 
 
@@ -540,11 +548,12 @@ def _select_axis(axis: int | str | None, angles: FloatArray, J: FloatArray) -> i
     names = {"x": 0, "y": 1, "z": 2}
     k = names.get(axis, axis) if isinstance(axis, str) else axis
     if isinstance(k, str) or not isinstance(k, (int, np.integer)) or k not in (0, 1, 2):
-        raise ValueError(f"axis: must be 0, 1, 2, 'x', 'y' or 'z', got {axis!r}")
+        raise FieldError("axis", f"must be 0, 1, 2, 'x', 'y' or 'z', got {axis!r}")
     if angles[k] == 0.0:
-        raise ValueError(
-            f"axis: the target angle about axis {k} is 0, so the single-axis "
-            f"start is trivial; select an axis the target rotates about"
+        raise FieldError(
+            "axis",
+            f"the target angle about axis {k} is 0, so the single-axis "
+            f"start is trivial; select an axis the target rotates about",
         )
     return int(k)
 
@@ -646,8 +655,8 @@ class _Problem:
             dense_output=True,
         )
         if not out.success:
-            raise ValueError(
-                f"continuation: the final trajectory could not be integrated ({out.message})"
+            raise FieldError(
+                "continuation", f"the final trajectory could not be integrated ({out.message})"
             )
         return out.y[:, -1].reshape(self.n, N_Z), out.sol
 
@@ -714,7 +723,8 @@ def _polish(
         if res <= _FINE_TOL:
             return s, sol, it, res
         s = s - scipy.linalg.lu_solve(lu, r, check_finite=False).reshape(s.shape)
-    raise ValueError(
-        f"continuation: converged at a1 = a2 = 1 on the RK4 grid, but the DOP853 "
-        f"polish left a residual {res:.3g} > {_FINE_TOL:g}"
+    raise FieldError(
+        "continuation",
+        "converged at a1 = a2 = 1 on the RK4 grid, but the DOP853 "
+        f"polish left a residual {res:.3g} > {_FINE_TOL:g}",
     )

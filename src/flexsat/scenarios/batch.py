@@ -54,6 +54,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
+from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.errors import Problem, ScenarioError, locate
 from flexsat.scenarios.fields import Document, SchemaSection, count
@@ -96,9 +97,9 @@ class ExecutionSpec(SchemaSection):
     @model_validator(mode="after")
     def _one_place(self):
         if self.workers is not None and self.scheduler is not None:
-            raise ValueError(
-                "execution: give workers (a local cluster) or scheduler (an "
-                "existing cluster), not both"
+            raise FieldError(
+                "execution",
+                "give workers (a local cluster) or scheduler (an existing cluster), not both",
             )
         return self
 
@@ -113,8 +114,8 @@ def _metric_unit(metric: str) -> str:
     from flexsat.sim.metrics import METRIC_UNITS
 
     if metric not in METRIC_UNITS:
-        raise ValueError(
-            f"requirements.{metric}: unknown metric; metrics: {', '.join(METRIC_UNITS)}"
+        raise FieldError(
+            f"requirements.{metric}", f"unknown metric; metrics: {', '.join(METRIC_UNITS)}"
         )
     return METRIC_UNITS[metric]
 
@@ -135,7 +136,7 @@ def requirements_of(spec: dict) -> list:
                 or len(entry) != 1
                 or next(iter(entry)) not in ("max", "min")
             ):
-                raise ValueError(f"{path}: give exactly one of max: or min:, got {entry!r}")
+                raise FieldError(path, f"give exactly one of max: or min:, got {entry!r}")
             key, value = next(iter(entry.items()))
             si = "rad" if unit == "deg" else "rad/s"
             threshold = float(np.degrees(si_scalar(value, si, f"{path}.{key}")))
@@ -182,27 +183,29 @@ class BatchScenario(Document):
             "grid" if grid else "random" if self.kind == "montecarlo" else "latin_hypercube"
         )
         if grid != (sampling == "grid"):
-            raise ValueError(
-                f"sampling: {sampling!r} needs "
+            raise FieldError(
+                "sampling",
+                f"{sampling!r} needs "
                 + (
                     "grid axes (values: or low/high/n)"
                     if sampling == "grid"
                     else "bounds (low/high) or distributions, not grid axes"
-                )
+                ),
             )
         if self.kind == "montecarlo" and sampling != "random":
-            raise ValueError(
-                f"sampling: a montecarlo samples its distributions at random, "
-                f"got {sampling!r} (use kind: sweep for grids and designs)"
+            raise FieldError(
+                "sampling",
+                "a montecarlo samples its distributions at random, "
+                f"got {sampling!r} (use kind: sweep for grids and designs)",
             )
         if sampling != "grid" and self.cases is None:
-            raise ValueError(f"cases: required with sampling {sampling!r}")
+            raise FieldError("cases", f"required with sampling {sampling!r}")
         if sampling == "saltelli" and self.cases & (self.cases - 1):
-            raise ValueError(
-                f"cases: the Saltelli design takes a power of 2 base points, got {self.cases}"
+            raise FieldError(
+                "cases", f"the Saltelli design takes a power of 2 base points, got {self.cases}"
             )
         if sampling == "grid" and self.cases is not None:
-            raise ValueError("cases: a grid has as many cases as its points; leave cases out")
+            raise FieldError("cases", "a grid has as many cases as its points; leave cases out")
         self.sampling = sampling
         # the case count, from the axes' lengths or the sizes given: before any table is built
         n_cases = case_count(self)
@@ -217,12 +220,15 @@ class BatchScenario(Document):
                 )
             else:
                 what = "the sample"
-            raise ValueError(
-                f"{field}: {what} has {n_cases:,} cases, above the limit {limits.MAX_CASES:,} "
-                f"(flexsat.limits.MAX_CASES); split the study or sample it more sparsely"
+            raise FieldError(
+                field,
+                f"{what} has {n_cases:,} cases, above the limit {limits.MAX_CASES:,} "
+                f"(flexsat.limits.MAX_CASES); split the study or sample it more sparsely",
             )
         if self.requirements and self.kind != "montecarlo":
-            raise ValueError("requirements: belong to a montecarlo (a probability of meeting them)")
+            raise FieldError(
+                "requirements", "belong to a montecarlo (a probability of meeting them)"
+            )
         return self
 
 

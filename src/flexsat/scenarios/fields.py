@@ -18,6 +18,7 @@ from pydantic import (
     model_validator,
 )
 
+from flexsat.input_checks import FieldError
 from flexsat.limits import is_integral
 from flexsat.units import to_si
 
@@ -31,10 +32,10 @@ def quantity_converter(unit: str, positive: bool = False) -> Callable:
             return None
         field = info.field_name
         if isinstance(value, bool):
-            raise ValueError(f"{field}: expected a number or a quantity such as '1 {unit}'")
+            raise FieldError(field, f"expected a number or a quantity such as '1 {unit}'")
         si = to_si(value, unit, field)
         if positive and not si > 0:
-            raise ValueError(f"{field}: must be > 0, got {value!r}")
+            raise FieldError(field, f"must be > 0, got {value!r}")
         return si
 
     return convert
@@ -78,7 +79,7 @@ def count(minimum: int = 1, maximum: int | None = None, optional: bool = False):
         if value is None and optional:
             return None
         if not is_integral(value) or value < minimum or (maximum is not None and value > maximum):
-            raise ValueError(f"{info.field_name}: must be {rule}, got {value!r}")
+            raise FieldError(info.field_name, f"must be {rule}, got {value!r}")
         return int(value)
 
     return Annotated[int | None if optional else int, BeforeValidator(check)]
@@ -134,7 +135,7 @@ def check_unique_labels(runs) -> None:
     labels = [run.label for run in runs]
     for label in labels:
         if labels.count(label) > 1:
-            raise ValueError(f"runs: duplicate label {label!r}; each run needs its own label")
+            raise FieldError("runs", f"duplicate label {label!r}; each run needs its own label")
 
 
 __all__ = ["Document", "check_unique_labels", "count", "quantity"]

@@ -43,6 +43,7 @@ from pydantic import BeforeValidator, Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.cases import get_case
+from flexsat.input_checks import FieldError
 from flexsat.references import cite
 from flexsat.report.page import ReportedResult, ResultTable
 from flexsat.scenarios.errors import Problem, ScenarioError, locate
@@ -67,7 +68,7 @@ def _vector(unit: str):
 
     def convert(value, info):
         if not isinstance(value, (list, tuple)) or len(value) != 3:
-            raise ValueError(f"{info.field_name}: must be 3 quantities, e.g. ['1 {unit}', 0, 0]")
+            raise FieldError(info.field_name, f"must be 3 quantities, e.g. ['1 {unit}', 0, 0]")
         return tuple(to_si(v, unit, info.field_name) for v in value)
 
     return Annotated[tuple[float, float, float], BeforeValidator(convert)]
@@ -78,7 +79,7 @@ def _sampled(spec, duration: str, rate: str) -> None:
     :data:`flexsat.limits.MAX_SAMPLES` samples."""
     for name in (duration, rate):
         if not getattr(spec, name) > 0:
-            raise ValueError(f"{name}: must be > 0, got {getattr(spec, name):g}")
+            raise FieldError(name, f"must be > 0, got {getattr(spec, name):g}")
     limits.check_count(
         getattr(spec, duration) * getattr(spec, rate),
         limits.MAX_SAMPLES,
@@ -162,13 +163,13 @@ class WheelSpec(SchemaSection):
     def _one_axis_per_wheel(self):
         _sampled(self, "duration", "sample_rate")
         if len(self.axes) != len(self.nodes):
-            raise ValueError(
-                f"axes: one torque axis per wheel node ({len(self.nodes)}), got {len(self.axes)}"
+            raise FieldError(
+                "axes", f"one torque axis per wheel node ({len(self.nodes)}), got {len(self.axes)}"
             )
         if self.torque_constants and len(self.torque_constants) != len(self.nodes):
-            raise ValueError(
-                f"torque_constants: one factor per wheel ({len(self.nodes)}), got "
-                f"{len(self.torque_constants)}"
+            raise FieldError(
+                "torque_constants",
+                f"one factor per wheel ({len(self.nodes)}), got {len(self.torque_constants)}",
             )
         return self
 
@@ -224,24 +225,26 @@ class IdentificationScenario(Document):
         if self.records is None:
             missing = [name for name in simulated if getattr(self, name) is None]
             if missing:
-                raise ValueError(
-                    f"{missing[0]}: required to simulate the tests (or give "
-                    "'records' with measured data)"
+                raise FieldError(
+                    f"{missing[0]}",
+                    "required to simulate the tests (or give 'records' with measured data)",
                 )
         else:
             given = [name for name in simulated + ("truth",) if name in self.model_fields_set]
             if given:
-                raise ValueError(
-                    f"{given[0]}: describes a simulated test; with 'records' the "
-                    "tests are measured (leave it out)"
+                raise FieldError(
+                    f"{given[0]}",
+                    "describes a simulated test; with 'records' the "
+                    "tests are measured (leave it out)",
                 )
         gains = self.identification.torque_constants or (
             self.wheels is not None and self.wheels.torque_constants
         )
         if gains and self.identification.update != "differential_correction":
-            raise ValueError(
-                "identification.update: the wheels' torque constants are identified "
-                "from the FRF, which only 'differential_correction' uses"
+            raise FieldError(
+                "identification.update",
+                "the wheels' torque constants are identified "
+                "from the FRF, which only 'differential_correction' uses",
             )
         return self
 

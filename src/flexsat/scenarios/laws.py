@@ -17,6 +17,7 @@ from flexsat.control import (
     LyapunovTracker,
     refine_estimator,
 )
+from flexsat.input_checks import FieldError
 from flexsat.scenarios.fields import given_fields
 
 if TYPE_CHECKING:
@@ -73,8 +74,9 @@ def _lqg(run: RunSpec, ctx: CaseContext, reference) -> Controller:
         else None
     )
     if modes is None:
-        raise ValueError(
-            f"lqg.mode_weights: give one weight or one per mode ({k}), got {len(spec.mode_weights)}"
+        raise FieldError(
+            "lqg.mode_weights",
+            f"give one weight or one per mode ({k}), got {len(spec.mode_weights)}",
         )
     per_dof = np.concatenate([[spec.rigid_weight], modes])
     Q = np.diag(np.concatenate([per_dof, per_dof]))

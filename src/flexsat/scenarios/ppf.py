@@ -34,6 +34,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
+from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import item_path
@@ -61,9 +62,9 @@ class PPFSettings(SchemaSection):
     def _gains(cls, value):
         g = np.atleast_1d(np.asarray(value, float))
         if g.shape not in ((1,), (9,)) or not np.all(np.isfinite(g)):
-            raise ValueError(
-                f"initial_gains: one gain or nine (actuator-major, g11 g12 g13 g21 "
-                f"...), finite, got {value!r}"
+            raise FieldError(
+                "initial_gains",
+                f"one gain or nine (actuator-major, g11 g12 g13 g21 ...), finite, got {value!r}",
             )
         return value
 
@@ -78,9 +79,10 @@ class PPFSimulation(SchemaSection):
     def _samples(self):
         n = self.duration * self.control_rate
         if n > limits.MAX_SAMPLES:
-            raise ValueError(
-                f"simulation.duration: {n:.3g} control periods is more than "
-                f"{limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)"
+            raise FieldError(
+                "simulation.duration",
+                f"{n:.3g} control periods is more than "
+                f"{limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)",
             )
         return self
 
@@ -101,11 +103,8 @@ class GoalSpec(SchemaSection):
 
         try:
             return GoalRule(self.rule, self.value)
-        except ValueError as exc:
-            message = str(exc)
-            raise ValueError(
-                message[len("goal.") :] if message.startswith("goal.") else message
-            ) from None
+        except FieldError as exc:  # GoalRule's goal.value is this section's value
+            raise FieldError(exc.field.removeprefix("goal."), exc.rule) from None
 
 
 class PPFRunSpec(SchemaSection):
@@ -120,8 +119,8 @@ class PPFRunSpec(SchemaSection):
     @classmethod
     def _weights(cls, value):
         if len(value) != 2 or not all(np.isfinite(value)) or min(value) < 0:
-            raise ValueError(
-                f"weights: must be the two numbers (w1, w2) >= 0 of Eq. 35, got {value!r}"
+            raise FieldError(
+                "weights", f"must be the two numbers (w1, w2) >= 0 of Eq. 35, got {value!r}"
             )
         return value
 

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, model_validator
 
+from flexsat.input_checks import FieldError
 from flexsat.scenarios.fields import SchemaSection
 
 #: a value as written in YAML: a number, a quantity string, or a (nested) list of them
@@ -53,16 +54,16 @@ def target_quaternion(target: dict) -> np.ndarray | None:
         return None
     unknown = set(target) - {"euler123", "attitude"}
     if unknown:
-        raise ValueError(
-            f"target.{sorted(unknown)[0]}: not a target (give euler123 (rad) or "
-            "attitude (a unit quaternion, scalar first))"
+        raise FieldError(
+            f"target.{sorted(unknown)[0]}",
+            "not a target (give euler123 (rad) or attitude (a unit quaternion, scalar first))",
         )
     if len(target) > 1:
-        raise ValueError("target: give euler123 or attitude, not both")
+        raise FieldError("target", "give euler123 or attitude, not both")
     if "euler123" in target:
         angles = to_si_array(target["euler123"], "rad", "target.euler123")
         if angles.shape != (3,):
-            raise ValueError(f"target.euler123: three angles, got shape {angles.shape}")
+            raise FieldError("target.euler123", f"three angles, got shape {angles.shape}")
         return dcm_to_quaternion(euler123_to_dcm(angles))
     return to_si_array(target["attitude"], "", "target.attitude")
 
@@ -77,7 +78,7 @@ class AttitudeTarget(SchemaSection):
     @model_validator(mode="after")
     def _one(self):
         if self.euler123 is not None and self.attitude is not None:
-            raise ValueError("target: give euler123 or attitude, not both")
+            raise FieldError("target", "give euler123 or attitude, not both")
         return self
 
     def quaternion(self) -> np.ndarray | None:
@@ -146,7 +147,7 @@ def _weights(value, size: int, field: str) -> np.ndarray:
     if w.size == 1:
         w = np.full(size, float(w[0]))
     if w.shape != (size,) or not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise ValueError(f"{field}: one weight >= 0 or {size} of them, got {np.shape(value)}")
+        raise FieldError(field, f"one weight >= 0 or {size} of them, got {np.shape(value)}")
     return np.diag(w)
 
 

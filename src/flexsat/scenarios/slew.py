@@ -44,6 +44,7 @@ from pydantic import Field, field_validator, model_validator
 from flexsat import limits
 from flexsat.catalog import get_case
 from flexsat.design.slew_weights import SlewWeights, nominal_histories, rim_nodes, slew_run_metrics
+from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import concat_runs
 from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
@@ -78,14 +79,16 @@ class SlewManeuverSpec(SchemaSection):
     @classmethod
     def _rotation(cls, target: dict) -> dict:
         if not target:
-            raise ValueError(
-                "target: give euler123 (three angles) or attitude (a unit quaternion, scalar first)"
+            raise FieldError(
+                "target",
+                "give euler123 (three angles) or attitude (a unit quaternion, scalar first)",
             )
         beta = target_quaternion(target)
         if beta.shape != (4,) or abs(np.linalg.norm(beta) - 1.0) > 1e-9:
-            raise ValueError(
-                f"target.attitude: must be a unit quaternion (4 values, norm 1 to "
-                f"1e-9), got {np.round(beta, 12).tolist()}"
+            raise FieldError(
+                "target.attitude",
+                "must be a unit quaternion (4 values, norm 1 to "
+                f"1e-9), got {np.round(beta, 12).tolist()}",
             )
         return target
 
@@ -132,20 +135,22 @@ class SlewRunSpec(SchemaSection):
     @classmethod
     def _not_open_loop(cls, label: str) -> str:
         if label == OPEN_LOOP:
-            raise ValueError(
-                f"label: {OPEN_LOOP!r} names the nominal torque alone, which every "
-                "slew scenario runs; choose another label"
+            raise FieldError(
+                "label",
+                f"{OPEN_LOOP!r} names the nominal torque alone, which every "
+                "slew scenario runs; choose another label",
             )
         return label
 
     @model_validator(mode="after")
     def _force_weights(self):
         if self.forces != "none" and self.weights.force is None:
-            raise ValueError("weights.force: required when the run uses forces")
+            raise FieldError("weights.force", "required when the run uses forces")
         if self.decouple and self.forces == "none":
-            raise ValueError(
-                "decouple: needs forces (decoupling keeps the forces' net moment "
-                "about the centre of mass zero)"
+            raise FieldError(
+                "decouple",
+                "needs forces (decoupling keeps the forces' net moment "
+                "about the centre of mass zero)",
             )
         return self
 
@@ -170,9 +175,10 @@ class SlewScenario(Document):
 
         get_case(name)
         if name not in simulation_cases():
-            raise ValueError(
-                f"case: {name!r} builds no plant to slew; cases with one: "
-                f"{', '.join(simulation_cases())}"
+            raise FieldError(
+                "case",
+                f"{name!r} builds no plant to slew; cases with one: "
+                f"{', '.join(simulation_cases())}",
             )
         return name
 
@@ -180,11 +186,12 @@ class SlewScenario(Document):
     def _checks(self):
         check_unique_labels(self.runs)
         if self.simulation.duration < self.goals.evaluation * self.maneuver.duration:
-            raise ValueError(
-                f"simulation.duration: must reach {self.goals.evaluation:g} × the "
+            raise FieldError(
+                "simulation.duration",
+                f"must reach {self.goals.evaluation:g} × the "
                 f"maneuver duration ({self.goals.evaluation * self.maneuver.duration:g}"
                 f" s) where the goals are evaluated, got "
-                f"{self.simulation.duration:g} s"
+                f"{self.simulation.duration:g} s",
             )
         return self
 

@@ -30,6 +30,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
@@ -64,8 +65,8 @@ class CatalogSpec(SchemaSection):
     @model_validator(mode="after")
     def _path(self):
         if (self.source == "hipparcos") != (self.path is not None):
-            raise ValueError(
-                "path: give the hip_main.dat path with source: hipparcos, and only then"
+            raise FieldError(
+                "path", "give the hip_main.dat path with source: hipparcos, and only then"
             )
         return self
 
@@ -133,10 +134,11 @@ class StarTrackerScenario(Document):
     def _checks(self):
         check_unique_labels(self.runs)
         if len(self.cameras) < self.identification.min_fields:
-            raise ValueError(
-                f"cameras: identification.min_fields = "
+            raise FieldError(
+                "cameras",
+                "identification.min_fields = "
                 f"{self.identification.min_fields} needs as many cameras, got "
-                f"{len(self.cameras)}"
+                f"{len(self.cameras)}",
             )
         return self
 

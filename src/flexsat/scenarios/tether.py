@@ -64,7 +64,7 @@ class TetherSystem(SchemaSection):
         from flexsat.dynamics.tether import TetherScales
 
         if self.altitude is None and self.orbit_rate is None:
-            raise ValueError("altitude: give the orbit's altitude or its orbit_rate")
+            raise FieldError("altitude", "give the orbit's altitude or its orbit_rate")
         return TetherScales(
             mass=self.mass, length=self.length, altitude=self.altitude, orbit_rate=self.orbit_rate
         )
@@ -92,9 +92,9 @@ class TetherSimulation(SchemaSection):
     def _samples(self):
         n = self.orbits * self.samples_per_orbit
         if n > limits.MAX_SAMPLES:
-            raise ValueError(
-                f"simulation.samples_per_orbit: {n:.3g} samples is more than "
-                f"{limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)"
+            raise FieldError(
+                "simulation.samples_per_orbit",
+                f"{n:.3g} samples is more than {limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)",
             )
         return self
 
@@ -114,17 +114,18 @@ class TetherRunSpec(SchemaSection):
         missing = [k for k in need if k not in self.gains]
         extra = [k for k in self.gains if k not in need]
         if missing or extra:
-            raise ValueError(
-                f"gains: law {self.law!r} takes {', '.join(need)}"
+            raise FieldError(
+                "gains",
+                f"law {self.law!r} takes {', '.join(need)}"
                 + (f"; missing {', '.join(missing)}" if missing else "")
-                + (f"; unknown {', '.join(extra)}" if extra else "")
+                + (f"; unknown {', '.join(extra)}" if extra else ""),
             )
         for k, v in self.gains.items():
             if not np.isfinite(v) or v < 0 or (k == "K1" and v == 0):
                 rule = "> 0" if k == "K1" else ">= 0"
-                raise ValueError(f"gains: {k} must be finite and {rule}, got {v!r}")
+                raise FieldError("gains", f"{k} must be finite and {rule}, got {v!r}")
         if self.printed_sign and self.law != "decoupled":
-            raise ValueError("printed_sign: only the decoupled law (Eq. 15) has a printed sign")
+            raise FieldError("printed_sign", "only the decoupled law (Eq. 15) has a printed sign")
         return self
 
 
@@ -155,8 +156,8 @@ class TetherScenario(Document):
                     f"{MIN_LENGTH:g} L = {MIN_LENGTH * self.system.length:g} m of the model",
                 )
         if self.initial.length_rate is not None and any(r.law == "rate" for r in self.runs):
-            raise ValueError(
-                "initial.length_rate: a rate-law run sets the length rate itself; leave it out"
+            raise FieldError(
+                "initial.length_rate", "a rate-law run sets the length rate itself; leave it out"
             )
         return self
 

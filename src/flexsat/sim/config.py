@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from flexsat import limits
-from flexsat.input_checks import require_count, require_positive, set_si
+from flexsat.input_checks import FieldError, require_count, require_positive, set_si
 from flexsat.sim.actuators import TorqueActuator
 from flexsat.sim.channels import (
     ChannelActuator,
@@ -84,7 +84,7 @@ class SimConfig:
 
     def __post_init__(self) -> None:
         if self.law_mode not in LAW_MODES:
-            raise ValueError(f"law_mode: must be one of {LAW_MODES}, got {self.law_mode!r}")
+            raise FieldError("law_mode", f"must be one of {LAW_MODES}, got {self.law_mode!r}")
         set_si(self, "rtol", require_positive, "")
         set_si(self, "atol", require_positive, "")
         set_si(self, "duration", require_positive, "s")
@@ -92,8 +92,8 @@ class SimConfig:
         set_si(self, "settling_band", require_positive, "rad")
         require_count(self.substeps, "substeps")
         if not limits.is_integral(self.seed) or not 0 <= self.seed <= limits.MAX_SEED:
-            raise ValueError(
-                f"seed: must be an integer in [0, {limits.MAX_SEED}], got {self.seed!r}"
+            raise FieldError(
+                "seed", f"must be an integer in [0, {limits.MAX_SEED}], got {self.seed!r}"
             )
         limits.check_count(
             self.duration * self.control_rate,
@@ -114,9 +114,7 @@ class SimConfig:
             if not isinstance(pieces, dict) or not all(
                 isinstance(k, str) and isinstance(v, kind) for k, v in pieces.items()
             ):
-                raise ValueError(
-                    f"{name}: must map channel names to {kind.__name__}, got {pieces!r}"
-                )
+                raise FieldError(name, f"must map channel names to {kind.__name__}, got {pieces!r}")
 
     @property
     def dt(self) -> float:

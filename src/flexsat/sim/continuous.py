@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_positive
 from flexsat.sim.integrators import apply
 from flexsat.sim.recording import CHUNK, Recorder, SimResult
 
@@ -126,9 +126,10 @@ class _Loop:
         for name in self.reads:
             mats = plant.output_matrices(name)
             if mats is not None and mats[1] is not None and np.any(mats[1]):
-                raise ValueError(
-                    f"{name}: {self.law} reads an output with feedthrough from the inputs, an "
-                    "algebraic loop in continuous-law mode (read the states it is made of)"
+                raise FieldError(
+                    name,
+                    f"{self.law} reads an output with feedthrough from the inputs, an "
+                    "algebraic loop in continuous-law mode (read the states it is made of)",
                 )
             self.readers.append((name, self._reader(name, mats)))
 
@@ -158,9 +159,10 @@ class _Loop:
         if not isinstance(cmd, Mapping):
             cmd = {self.writes[0]: cmd}
         if set(cmd) != set(self.writes):
-            raise ValueError(
-                f"{sorted(set(cmd) ^ set(self.writes))[0]}: {self.law} returned commands for "
-                f"{sorted(cmd)!r} but writes {list(self.writes)!r}"
+            raise FieldError(
+                f"{sorted(set(cmd) ^ set(self.writes))[0]}",
+                f"{self.law} returned commands for "
+                f"{sorted(cmd)!r} but writes {list(self.writes)!r}",
             )
         u = np.zeros((self.nc, self.m))
         for name in self.writes:
@@ -170,9 +172,10 @@ class _Loop:
             try:
                 c = np.broadcast_to(np.asarray(cmd[name], float), shape)
             except ValueError:
-                raise ValueError(
-                    f"{name}: {self.law} returned a command of shape {np.shape(cmd[name])}, "
-                    f"expected {shape} (n_cases × channel size)"
+                raise FieldError(
+                    name,
+                    f"{self.law} returned a command of shape {np.shape(cmd[name])}, "
+                    f"expected {shape} (n_cases × channel size)",
                 ) from None
             u[:, sl] = c.reshape(self.nc, width)
         return u
@@ -206,17 +209,18 @@ def _exogenous(
     if exogenous is None:
         return None
     if not callable(exogenous):
-        raise ValueError(
-            f"exogenous: must be a callable t -> {{channel: values}}, got {exogenous!r}"
+        raise FieldError(
+            "exogenous", f"must be a callable t -> {{channel: values}}, got {exogenous!r}"
         )
     slices, m = plant.input_slices, plant.n_inputs
 
     def at(t: float) -> FloatArray:
         values = exogenous(t)
         if not isinstance(values, Mapping) or not set(values) <= set(slices):
-            raise ValueError(
-                f"exogenous: must return {{input channel: values}} with channels of "
-                f"{type(plant).__name__} ({', '.join(slices)}), got {values!r}"
+            raise FieldError(
+                "exogenous",
+                f"must return {{input channel: values}} with channels of "
+                f"{type(plant).__name__} ({', '.join(slices)}), got {values!r}",
             )
         d = np.zeros((nc, m))
         for name, v in values.items():
@@ -227,7 +231,7 @@ def _exogenous(
         return d
 
     if not np.isfinite(at(t0)).all():
-        raise ValueError(f"exogenous: returned a non-finite input at t = {t0:g} s")
+        raise FieldError("exogenous", f"returned a non-finite input at t = {t0:g} s")
     return at
 
 
@@ -235,9 +239,10 @@ def _grid(times: QuantityArrayLike) -> FloatArray:
     t = require_finite(times, "times", "s")
     step = np.diff(t) if t.ndim == 1 else np.zeros(0)  # read only for a 1-D grid
     if t.ndim != 1 or t.size < 2 or not (np.all(step > 0) or np.all(step < 0)):
-        raise ValueError(
-            f"times: must be a strictly monotonic 1-D grid of >= 2 times (decreasing integrates "
-            f"backward), got shape {t.shape}"
+        raise FieldError(
+            "times",
+            "must be a strictly monotonic 1-D grid of >= 2 times (decreasing integrates "
+            f"backward), got shape {t.shape}",
         )
     return t
 
@@ -297,15 +302,17 @@ def run(
 
     check_law(plant, controller)
     if getattr(plant, "step", None) is not None:
-        raise ValueError(
-            f"law_mode: {type(plant).__name__} propagates itself (its own step on a manifold); "
-            "continuous-law mode needs the protocol's split: use the sampled mode"
+        raise FieldError(
+            "law_mode",
+            f"{type(plant).__name__} propagates itself (its own step on a manifold); "
+            "continuous-law mode needs the protocol's split: use the sampled mode",
         )
     nc = n_cases or (controller.n_cases if plant.n_cases == 1 else plant.n_cases)
     if controller.initial_state(nc):
-        raise ValueError(
-            f"law_mode: {type(controller).__name__} has an internal state; continuous-law mode "
-            "takes a static state feedback (run a dynamic law in the sampled mode)"
+        raise FieldError(
+            "law_mode",
+            f"{type(controller).__name__} has an internal state; continuous-law mode "
+            "takes a static state feedback (run a dynamic law in the sampled mode)",
         )
     t = _grid(times)
     rtol = float(require_positive(rtol, "rtol"))
@@ -314,8 +321,8 @@ def run(
     try:
         x0 = np.array(np.broadcast_to(x0, (nc, plant.nx)), float)
     except ValueError:
-        raise ValueError(
-            f"initial_state: must have shape ({plant.nx},) or ({nc}, {plant.nx}), got {x0.shape}"
+        raise FieldError(
+            "initial_state", f"must have shape ({plant.nx},) or ({nc}, {plant.nx}), got {x0.shape}"
         ) from None
     loop = _Loop(plant, controller, nc, _exogenous(plant, exogenous, nc, float(t[0])))
 
@@ -330,7 +337,7 @@ def run(
     if margin is not None:
         if np.min(margin(x0)) <= 0:
             # a plant with a domain_margin states its domain_rule (Plant's optional pair)
-            raise ValueError(f"initial_state: {plant.domain_rule}")  # type: ignore[attr-defined]
+            raise FieldError("initial_state", f"{plant.domain_rule}")  # type: ignore[attr-defined]
 
         def left_domain(_t: float, flat: FloatArray) -> float:
             return float(np.min(margin(flat.reshape(nc, -1))))
@@ -370,7 +377,7 @@ def run(
             "the closed loop is unstable",
         )
     if sol.status == -1:
-        raise ValueError(f"times: the integration failed at t = {sol.t[-1]:.6g} s: {sol.message}")
+        raise FieldError("times", f"the integration failed at t = {sol.t[-1]:.6g} s: {sol.message}")
     if margin is not None and sol.t_events[1].size:
         raise ValueError(
             f"{plant.domain_rule} at t = {sol.t_events[1][0]:.3g} s (the run ends there)"  # type: ignore[attr-defined]
@@ -387,7 +394,7 @@ def run(
     for k, tk in enumerate(sol.t):
         commands[:, k], inputs[:, k] = loop.input(float(tk), states[:, k])
     if not (np.isfinite(states).all() and np.isfinite(inputs).all()):
-        raise ValueError("times: the run left finite values (a diverging closed loop)")
+        raise FieldError("times", "the run left finite values (a diverging closed loop)")
     dense = sol.sol
 
     def solution(tq: float | FloatArray) -> FloatArray:
@@ -421,9 +428,10 @@ def simulate_continuous(
     for role, bound in zip(("sensor", "actuator", "disturbance"), pieces):
         if bound:
             name = next(iter(bound))
-            raise ValueError(
-                f"{name}: a {role} is a sampled-data piece; continuous-law mode evaluates the "
-                "law on the true outputs (use law_mode='sampled')"
+            raise FieldError(
+                name,
+                f"a {role} is a sampled-data piece; continuous-law mode evaluates the "
+                "law on the true outputs (use law_mode='sampled')",
             )
     t = config.dt * np.arange(config.n_steps + 1, dtype=np.float64)
     if getattr(controller, "reference", None) is not None:

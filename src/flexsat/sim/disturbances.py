@@ -7,7 +7,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.input_checks import require_finite, require_nonneg, require_positive, set_si
+from flexsat.input_checks import (
+    FieldError,
+    require_finite,
+    require_nonneg,
+    require_positive,
+    set_si,
+)
 from flexsat.sim.step import friction_torque
 
 
@@ -83,8 +89,8 @@ class Impulses:
         times = np.atleast_1d(require_nonneg(self.times, "impulses.times", "s"))
         impulses = np.atleast_1d(require_finite(self.impulses, "impulses.impulses", "N*m*s"))
         if times.shape != impulses.shape or times.ndim != 1:
-            raise ValueError(
-                f"impulses: {impulses.size} values for {times.size} times; give one each"
+            raise FieldError(
+                "impulses", f"{impulses.size} values for {times.size} times; give one each"
             )
         object.__setattr__(self, "times", tuple(times.tolist()))
         object.__setattr__(self, "impulses", tuple(impulses.tolist()))

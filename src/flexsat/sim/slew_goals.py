@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_positive
 from flexsat.units import FloatArray
 
 __all__ = ["SlewGoals", "euler_angle_error", "slew_goal_metrics"]
@@ -51,9 +51,9 @@ class SlewGoals:
         for name in ("angle_fraction", "deflection_ratio"):
             require_positive(getattr(self, name), name)
         if not float(require_finite(self.evaluation, "evaluation")) >= 1.0:
-            raise ValueError(
-                f"evaluation: must be >= 1 (a multiple of the maneuver time T), "
-                f"got {self.evaluation}"
+            raise FieldError(
+                "evaluation",
+                f"must be >= 1 (a multiple of the maneuver time T), got {self.evaluation}",
             )
 
 
@@ -121,9 +121,10 @@ def slew_goal_metrics(
     T = float(require_positive(duration, "duration", "s"))
     t_eval = goals.evaluation * T
     if t.ndim != 1 or len(t) < 2 or t[0] > 0.0 or t[-1] < t_eval * (1 - 1e-9):
-        raise ValueError(
-            f"t: the record must span [0, {t_eval:g}] s ({goals.evaluation:g} T) "
-            f"to evaluate the goals, got [{t[0]:g}, {t[-1]:g}] s"
+        raise FieldError(
+            "t",
+            f"the record must span [0, {t_eval:g}] s ({goals.evaluation:g} T) "
+            f"to evaluate the goals, got [{t[0]:g}, {t[-1]:g}] s",
         )
     angles = np.asarray(euler123, float)
     target = np.asarray(target, float)
@@ -131,7 +132,7 @@ def slew_goal_metrics(
     defl_open = np.broadcast_to(np.asarray(deflection_open, float), defl.shape)
     tolerance = goals.angle_fraction * float(np.max(np.abs(target)))
     if tolerance <= 0.0:
-        raise ValueError("target: a slew of zero angle has no angle goal (3 % of 0 rad)")
+        raise FieldError("target", "a slew of zero angle has no angle goal (3 % of 0 rad)")
 
     error = np.abs(euler_angle_error(_at(t, angles, min(t_eval, t[-1])), target))
     slew = _peak(t, defl, 0.0, T)
