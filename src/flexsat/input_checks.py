@@ -18,8 +18,10 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+# FieldError lives in flexsat.units (a UnitError is one; units cannot import this module) and
+# is exported from here, where every layer takes its checks from
+from flexsat.units import FieldError as FieldError
 from flexsat.units import (
-    FieldError,
     FloatArray,
     FrequencyArray,
     QuantityArrayLike,
