@@ -231,6 +231,19 @@ def perturbation_design(
     Dw = _weight(D, m, "D", strict=True)
     wb = float(require_positive(omega_b, "omega_b", "rad/s"))
     zb = float(require_nonneg(zeta_b, "zeta_b", ""))
+    # the shaped weights hold D/ω_B⁴ and 4ζ_B² D/ω_B² beside Q: refuse them unrepresentable
+    # here, by name, rather than as a failed Riccati solution at every linearisation point
+    with np.errstate(over="ignore", under="ignore"):
+        if not 0.0 < np.float64(wb) ** -4 < np.inf:
+            raise FieldError(
+                "omega_b",
+                f"ω_B⁻⁴ = {np.float64(wb) ** -4:.3g} (the weight D/ω_B⁴ "
+                f"of the shaped input) is not a representable float, got {wb:.3g}",
+            )
+        if not np.isfinite(4.0 * np.float64(zb) ** 2 / np.float64(wb) ** 2):
+            raise FieldError(
+                "zeta_b", f"the shaping weight 4ζ_B²/ω_B² overflows, got ζ_B = {zb:.3g}"
+            )
     n_p = require_count(n_points, "n_points")
     if decouple:
         if m == 3:

@@ -69,6 +69,7 @@ import numpy.typing as npt
 import scipy.integrate
 import scipy.linalg
 
+from flexsat import limits
 from flexsat.dynamics.attitude import (
     cross_matrix,
     dcm_to_euler123,
@@ -80,7 +81,13 @@ from flexsat.dynamics.attitude import (
     require_shape,
 )
 from flexsat.dynamics.rigid_body import angular_momentum_inertial, cross3, matvec, require_inertia
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 from flexsat.maneuvers.frequency_shaped_slew import FrequencyShapedSlew, frequency_shaped_slew
 from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike, to_si_array
 
@@ -451,11 +458,15 @@ def three_axis_slew(
 
     T = duration
     wbt, q_hat = omega_b * T, Qm * T * T
-    start = frequency_shaped_slew(angles[k], J[k, k], 1.0, wbt, zeta_b, q=q_hat[k, k])
+    try:
+        start = frequency_shaped_slew(angles[k], J[k, k], 1.0, wbt, zeta_b, q=q_hat[k, k])
+    except FieldError as exc:  # its q is this problem's Q T² about the start axis
+        raise FieldError("Q" if exc.field == "q" else exc.field, exc.rule) from None
     n = _segment_count(start.K_scaled)
+    n_rk = max(1, int(np.ceil(np.max(np.abs(np.linalg.eigvals(start.K_scaled))) / n / _RK4_STEP)))
+    _check_resources(n, n_rk, wbt)
     tau = np.arange(n) / n
     nodes_hat, scale = _seed(start, k, tau)
-    n_rk = max(1, int(np.ceil(np.max(np.abs(np.linalg.eigvals(start.K_scaled))) / n / _RK4_STEP)))
 
     def problem(a: float) -> _Problem:
         Ja = J * a + np.diag(np.diag(J)) * (1.0 - a)
@@ -546,6 +557,25 @@ def _select_axis(axis: int | str | None, angles: FloatArray, J: FloatArray) -> i
             f"start is trivial; select an axis the target rotates about"
         )
     return int(k)
+
+
+def _check_resources(n: int, n_rk: int, wbt: float) -> None:
+    """Refuse, before anything is allocated, a continuation whose dense Newton Jacobian
+    ((N_Z n)² floats, twice with its LU factors) exceeds :data:`flexsat.limits.MAX_MEMORY` or
+    whose RK4 sweeps (n segments × n_rk steps) exceed
+    :data:`flexsat.limits.MAX_INTEGRATOR_STEPS`; both grow with ω_B T."""
+    what = f"ω_B T = {wbt:.3g} (break frequency × duration)"
+    limits.check_memory(
+        2 * limits.memory_estimate(N_Z * n, N_Z * n, 1),
+        "omega_b",
+        f"{what}: the Newton Jacobian of {n:,} shooting segments",
+    )
+    limits.check_count(
+        n * n_rk,
+        limits.MAX_INTEGRATOR_STEPS,
+        "omega_b",
+        f"{what}: RK4 steps per sweep ({n:,} segments × {n_rk:,} steps)",
+    )
 
 
 def _segment_count(k_scaled: FloatArray) -> int:

@@ -43,6 +43,7 @@ from pydantic import Field, field_validator, model_validator
 from flexsat import limits
 from flexsat.catalog import get_case
 from flexsat.design.slew_weights import SlewWeights, nominal_histories, rim_nodes, slew_run_metrics
+from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import concat_runs
 from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
@@ -62,6 +63,22 @@ from flexsat.sim.slew_goals import euler_angle_error
 Weights = float | list[float]
 
 OPEN_LOOP = "open loop"
+
+#: the maneuver's fields by the names :func:`~flexsat.maneuvers.three_axis_slew` gives them
+_MANEUVER_FIELDS = {
+    "omega_b": "break_frequency",
+    "zeta_b": "shaping_damping",
+    "Q": "rate_weight",
+    "target": "target",
+}
+#: the run's fields by the names :func:`~flexsat.control.perturbation_design` gives them
+_DESIGN_FIELDS = {
+    "omega_b": "break_frequency",
+    "zeta_b": "shaping_damping",
+    "n_points": "controller.linearization_points",
+    "Q": "weights",
+    "D": "weights",
+}
 
 
 class SlewManeuverSpec(SchemaSection):
@@ -99,7 +116,7 @@ class ControllerSpec(SchemaSection):
 class GoalsSpec(SchemaSection):
     """The goals of seed 003 L792–L801 (:class:`~flexsat.sim.slew_goals.SlewGoals`)."""
 
-    angle_fraction: float = Field(0.03, gt=0.0)
+    angle_fraction: float = Field(0.03, gt=0.0, le=1.0)
     evaluation: float = Field(1.25, ge=1.0)
     deflection_ratio: float = Field(10.0, gt=0.0)
 
@@ -177,6 +194,20 @@ class SlewScenario(Document):
     @model_validator(mode="after")
     def _checks(self):
         check_unique_labels(self.runs)
+        # the nominal torque is played back and the feedback runs at the control rate: a
+        # shaping break above its Nyquist frequency π f_c shapes what neither can produce
+        nyquist = np.pi * self.simulation.control_rate
+        breaks = [("maneuver.break_frequency", self.maneuver.break_frequency)] + [
+            (f"runs{item_path(i, r.label)}.break_frequency", r.break_frequency)
+            for i, r in enumerate(self.runs)
+        ]
+        for field, value in breaks:
+            if value > nyquist:
+                raise FieldError(
+                    field,
+                    f"must be at most the control's Nyquist frequency π × "
+                    f"simulation.control_rate = {nyquist:.4g} rad/s, got {value:.4g} rad/s",
+                )
         if self.simulation.duration < self.goals.evaluation * self.maneuver.duration:
             raise ValueError(
                 f"simulation.duration: must reach {self.goals.evaluation:g} × the "
@@ -380,6 +411,10 @@ def _laws(scenario: SlewScenario, truth, design_plant, nominal, dt: float) -> di
             laws[run.label] = design.controller(dt, run.feedforward, plant=truth)
         except ScenarioError as exc:  # the run's forces or weights
             problems.extend(exc.problems)
+        except FieldError as exc:  # named by the scenario's fields
+            field = _DESIGN_FIELDS.get(exc.field, exc.field)
+            where = "" if field.startswith("controller.") else f"runs{item_path(index, run.label)}"
+            problems.append(locate(where, FieldError(field, exc.rule)))
         except ValueError as exc:
             problems.append(locate(f"runs{item_path(index, run.label)}", exc))
     if problems:
@@ -416,18 +451,21 @@ class SlewKind(ScenarioKind):
 
         truth, design_plant = _plants(scenario)
         m = scenario.maneuver
-        nominal = yield Run(
-            "nominal maneuver",
-            lambda: three_axis_slew(
-                truth.inertia,
-                target_quaternion(m.target),
-                m.duration,
-                m.break_frequency,
-                m.shaping_damping,
-                Q=m.rate_weight * np.eye(3),
-            ),
-            "maneuver",
-        )
+
+        def solve_nominal():
+            try:
+                return three_axis_slew(
+                    truth.inertia,
+                    target_quaternion(m.target),
+                    m.duration,
+                    m.break_frequency,
+                    m.shaping_damping,
+                    Q=m.rate_weight * np.eye(3),
+                )
+            except FieldError as exc:  # named by the scenario's fields
+                raise FieldError(_MANEUVER_FIELDS.get(exc.field, exc.field), exc.rule) from None
+
+        nominal = yield Run("nominal maneuver", solve_nominal, "maneuver")
         try:
             config = SimConfig(**given_fields(scenario.simulation))
         except ValueError as exc:
