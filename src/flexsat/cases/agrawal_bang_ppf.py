@@ -45,7 +45,13 @@ import numpy.typing as npt
 
 from flexsat.cases.agrawal_bang import PUBLISHED, AgrawalBangCase, agrawal_bang
 from flexsat.control.ppf import PPFBank, PPFController, PPFModel, PPFProblem
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 from flexsat.units import QuantityLike
 
 if TYPE_CHECKING:
@@ -151,7 +157,7 @@ class GoalRule:
     """How J_goal follows from J_init (module docstring).
 
     ``kind``: ``"paper"`` (the ratio implied by the published table, :func:`paper_goal_ratio`;
-    ``value`` unused), ``"ratio"`` (J_goal = value · J_init, value ≥ 0) or ``"offset"``
+    ``value`` unused), ``"ratio"`` (J_goal = value · J_init, value > 0) or ``"offset"``
     (J_goal = J_init + value, value in the cost's units).
     """
 
@@ -171,8 +177,11 @@ class GoalRule:
         if self.value is None:
             raise ValueError(f"goal.value: the {self.kind!r} rule needs a value")
         v = float(require_finite(self.value, "goal.value"))
-        if self.kind == "ratio" and v < 0:
-            raise ValueError(f"goal.value: a ratio J_goal/J_init must be >= 0, got {v!r}")
+        if self.kind == "ratio" and v <= 0:
+            raise FieldError(
+                "goal.value",
+                f"a ratio J_goal/J_init must be > 0 (the cost of a stable loop is > 0), got {v!r}",
+            )
         object.__setattr__(self, "value", v)
 
     def goal(self, J_init: float, weights: npt.ArrayLike, excitation: str) -> float:
