@@ -528,7 +528,8 @@ def restore_eigenvalue_constraints(
 def _check_costs(J_init: float, goal: float, goal_field: str, rtol: float) -> None:
     """Refuse a start cost or a goal the homotopy cannot follow in float64.
 
-    J is a positive quadratic cost, so J_goal <= 0 is unreachable. The targets
+    J is a positive quadratic cost, so J_goal < 0 is meaningless (J_goal = 0, unreachable,
+    asks for the constrained minimum, L127). The targets
     J0(γ) = γ J_goal + (1 − γ) J_init are met to ``rtol`` · |J0|: with J_goal > J_init/rtol
     the J_init part is below that tolerance from the first step on, and a J_init that is not
     at least tiny/rtol (weights of 1e300 scale it to ~1e-306) leaves no digits to converge on.
@@ -541,12 +542,12 @@ def _check_costs(J_init: float, goal: float, goal_field: str, rtol: float) -> No
             f"{huge * rtol:.3g}], where rtol = {rtol:g} of it is a float64 number: its "
             "weights are out of scale",
         )
-    if not 0.0 < goal <= J_init / rtol:
+    if not 0.0 <= goal <= J_init / rtol:
         raise FieldError(
             goal_field,
-            f"the goal cost J_goal = {goal:.3g} must be in (0, J_init/rtol = "
-            f"{J_init / rtol:.3g}] (J > 0 for a stable closed loop; beyond J_init/rtol the "
-            "start is below the convergence tolerance)",
+            f"the goal cost J_goal = {goal:.3g} must be in [0, J_init/rtol = "
+            f"{J_init / rtol:.3g}] (J >= 0; beyond J_init/rtol the start is below the "
+            "convergence tolerance)",
         )
 
 
