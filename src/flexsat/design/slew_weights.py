@@ -87,7 +87,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import FieldError, require_count, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_nonneg,
+    require_numeric,
+    require_positive,
+)
 from flexsat.sim.slew_goals import SlewGoals, slew_goal_metrics
 from flexsat.units import FloatArray
 
@@ -131,16 +137,15 @@ METHODS = ("nelder-mead", "powell")
 def _block(value, name: str, positive: bool) -> tuple[float, ...] | None:
     if value is None:
         return None
-    w = np.atleast_1d(np.asarray(value, float))
-    if (
-        w.ndim != 1
-        or w.size == 0
-        or not np.all(np.isfinite(w))
-        or np.any(w < 0)
-        or (positive and np.any(w <= 0))
-    ):
-        rule = "> 0 (D is inverted)" if positive else ">= 0"
-        raise ValueError(f"{name}: one weight or a list of them, finite and {rule}, got {value!r}")
+    rule = "> 0 (D is inverted)" if positive else ">= 0"
+    try:  # a Quantity is refused here (weights are SI numbers), not stripped of its unit
+        w = np.atleast_1d(require_numeric(value, name, "weight"))
+    except FieldError as exc:
+        raise FieldError(
+            name, f"one weight or a list of them, finite and {rule}: {exc.rule}"
+        ) from None
+    if w.ndim != 1 or w.size == 0 or np.any(w < 0) or (positive and np.any(w <= 0)):
+        raise FieldError(name, f"one weight or a list of them, finite and {rule}, got {value!r}")
     return tuple(float(x) for x in w)
 
 
