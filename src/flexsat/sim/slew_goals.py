@@ -28,7 +28,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_finite,
+    require_positive,
+    require_positive_scalar,
+)
 
 __all__ = ["SlewGoals", "euler_angle_error", "slew_goal_metrics"]
 
@@ -46,8 +51,11 @@ class SlewGoals:
 
     def __post_init__(self):
         for name in ("angle_fraction", "deflection_ratio"):
-            require_positive(getattr(self, name), name)
-        if not float(require_finite(self.evaluation, "evaluation")) >= 1.0:
+            require_positive_scalar(getattr(self, name), name)
+        evaluation = require_finite(self.evaluation, "evaluation")
+        if evaluation.ndim != 0:
+            raise FieldError("evaluation", f"must be one number, got shape {evaluation.shape}")
+        if not float(evaluation) >= 1.0:
             raise ValueError(
                 f"evaluation: must be >= 1 (a multiple of the maneuver time T), "
                 f"got {self.evaluation}"
