@@ -373,6 +373,20 @@ def _plants(scenario: SlewScenario):
                 )
             ]
         )
+    outputs = {c.name for c in truth.outputs}
+    nodes = {n[len("displacement_") : -1] for n in outputs if n.startswith("displacement_")}
+    if not any(all(f"displacement_{n}{a}" in outputs for a in "XYZ") for n in nodes):
+        # the deflection goal compares rim deflections: refused now, not after every run
+        raise ScenarioError(
+            [
+                Problem(
+                    "plant.rim_nodes" if "rim_nodes" in scenario.plant else "plant",
+                    f"the {scenario.case} plant with these options records no rim displacement "
+                    "along X, Y and Z (outputs displacement_<node>X/Y/Z), so the deflection "
+                    "goal cannot be judged; give at least one rim node",
+                )
+            ]
+        )
     if scenario.controller.modes > truth.n_modes:
         raise ScenarioError(
             [
