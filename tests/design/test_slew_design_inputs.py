@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from flexsat.control.frequency_shaped import shaping_weights
-from flexsat.design.slew_weights import MAX_WEIGHT_RANGE, SlewWeights
+from flexsat.design.slew_weights import SlewWeights
 from flexsat.input_checks import FieldError
+from flexsat.limits import MAX_WEIGHT_RANGE
 from flexsat.maneuvers import three_axis_slew
 from flexsat.maneuvers.frequency_shaped_slew import frequency_shaped_slew
 from flexsat.units import ureg

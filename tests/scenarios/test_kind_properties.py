@@ -13,8 +13,8 @@ missing and unknown keys (tests/scenario_mutations.py). Deterministic
 from __future__ import annotations
 
 import contextlib
-import functools
 import copy
+import functools
 import time
 from pathlib import Path
 from unittest import mock
@@ -214,3 +214,89 @@ def test_mutated_simulation_examples_are_refused_by_name_or_run_finite(document)
 def test_the_small_examples_run(kind, name):
     # the properties are not vacuous: every document they mutate runs to finite results
     assert outcome(yaml.safe_dump(BASES[kind][name], sort_keys=False)) == "ran"
+
+
+def _changed(kind: str, name: str, path: tuple, value) -> str:
+    data = copy.deepcopy(BASES[kind][name])
+    set_at(data, path, value)
+    return yaml.safe_dump(data, sort_keys=False)
+
+
+#: the findings of the issue 21 probe, each (kind, example, key path, value, field path named)
+PROBE = [
+    (
+        "slew",
+        "eps_slew_6s",
+        ("maneuver", "break_frequency"),
+        "1e12 rad/s",
+        "maneuver.break_frequency",
+    ),
+    (
+        "slew",
+        "eps_slew_6s",
+        ("runs", 0, "break_frequency"),
+        "1e12 rad/s",
+        "runs['D: torquers'].break_frequency",
+    ),
+    ("slew", "eps_slew_6s", ("maneuver", "shaping_damping"), 1e300, "maneuver.shaping_damping"),
+    ("slew", "eps_slew_6s", ("maneuver", "rate_weight"), 1e300, "maneuver.rate_weight"),
+    (
+        "slew",
+        "eps_slew_6s",
+        ("runs", 0, "shaping_damping"),
+        1e300,
+        "runs['D: torquers'].shaping_damping",
+    ),
+    (
+        "slew",
+        "eps_slew_6s",
+        ("runs", 0, "weights", "attitude"),
+        1e300,
+        "runs['D: torquers'].weights.attitude",
+    ),
+    (
+        "slew",
+        "eps_slew_6s",
+        ("controller", "linearization_points"),
+        1e12,
+        "controller.linearization_points",
+    ),
+    ("slew", "eps_slew_6s", ("controller", "modes"), 101, "controller.modes"),
+    ("slew", "eps_slew_6s", ("plant", "n_modes"), 101, "plant.n_modes"),
+    ("slew", "eps_slew_6s", ("plant", "rim_nodes"), [], "plant.rim_nodes"),
+    ("ppf", "agrawal_bang_ppf", ("runs", 1, "weights"), [1e300, 1e300], "runs['3b 0.2'].weights"),
+    ("ppf", "agrawal_bang_ppf", ("ppf", "Q_u"), 1e300, "runs['1a paper'].weights"),
+    ("ppf", "agrawal_bang_ppf", ("runs", 1, "goal", "value"), 0, "runs['3b 0.2'].goal.value"),
+    ("ppf", "agrawal_bang_ppf", ("runs", 1, "goal", "value"), 1e300, "runs['3b 0.2'].goal.value"),
+    (
+        "ppf",
+        "agrawal_bang_ppf",
+        ("runs", 1, "goal"),
+        {"rule": "offset", "value": -1e300},
+        "runs['3b 0.2'].goal.value",
+    ),
+    (
+        "simulation",
+        "agrawal_bang_lqr",
+        ("runs", 0, "gains", "state_weights"),
+        1e300,
+        "runs['LQR'].gains.state_weights",
+    ),
+    (
+        "simulation",
+        "agrawal_bang_lqr",
+        ("runs", 0, "gains", "input_weights"),
+        1e-300,
+        "runs['LQR'].gains.input_weights",
+    ),
+]
+
+
+@pytest.mark.parametrize("kind, name, path, value, field", PROBE)
+def test_the_probe_findings_are_refused_before_the_runs_naming_the_field(
+    kind, name, path, value, field
+):
+    document = _changed(kind, name, path, value)
+    with guarded(), pytest.raises(ScenarioError) as caught:
+        run_scenario(load_scenario(document))
+    assert [p.path for p in caught.value.problems] == [field]

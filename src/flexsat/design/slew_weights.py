@@ -87,6 +87,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from flexsat import limits
 from flexsat.input_checks import (
     FieldError,
     require_count,
@@ -157,29 +158,23 @@ def _diagonal(values: tuple[float, ...], size: int, name: str) -> FloatArray:
     return np.asarray(values)
 
 
-#: largest ratio of two nonzero weights of one design: beyond ~1/ε (ε = 2.2e-16) the smaller
-#: weight is below the rounding of the larger in the Riccati equation, so it weighs nothing
-#: and the solver fails without saying which weight (the examples span at most 1e10)
-MAX_WEIGHT_RANGE = 1e15
-
-
 def _check_range(weights: SlewWeights, q: FloatArray, d: FloatArray) -> None:
-    """Refuse weights spanning more than :data:`MAX_WEIGHT_RANGE`, naming the block whose
-    extreme value lies farther (in decades) from the median of the nonzero weights."""
+    """Refuse weights spanning more than :data:`flexsat.limits.MAX_WEIGHT_RANGE`, naming the
+    block whose extreme value lies farther (in decades) from 1."""
     values = np.concatenate([q, d])
     positive = values[values > 0]
     low, high = positive.min(), positive.max()
-    if high <= MAX_WEIGHT_RANGE * low:
+    if high <= limits.MAX_WEIGHT_RANGE * low:
         return
-    median = np.median(np.log10(positive))
-    extreme = high if np.log10(high) - median >= median - np.log10(low) else low
+    # weights are SI numbers of natural scale 1: the one farther from 1 is out of place
+    extreme = high if abs(np.log10(high)) >= abs(np.log10(low)) else low
     block = next(
         name for name in BLOCKS if getattr(weights, name) and extreme in getattr(weights, name)
     )
     raise FieldError(
         block,
         f"the weights span {high / low:.3g} (from {low:.3g} to {high:.3g}), above "
-        f"{MAX_WEIGHT_RANGE:.0e} (flexsat.design.slew_weights.MAX_WEIGHT_RANGE: the smaller "
+        f"{limits.MAX_WEIGHT_RANGE:.0e} (flexsat.limits.MAX_WEIGHT_RANGE: the smaller "
         "would be below the rounding of the larger)",
     )
 
