@@ -72,6 +72,8 @@ from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
 __all__ = [
     "MAX_SHOOTING_SEGMENTS",
     "FrequencyShapedSlew",
+    "balanced_hamiltonian",
+    "shooting_segments",
     "frequency_shaped_slew",
     "hamiltonian",
     "hamiltonian_matrix",
@@ -260,10 +262,7 @@ def frequency_shaped_slew(
     # Dimensionless problem: τ = t/T, θ in units of Θ (the problem is linear in Θ).  In these
     # units K becomes K(ω_B T, ζ_B, q T²) with the costates rescaled accordingly; the diagonal
     # balancing D (powers of two) then evens out the powers of ω_B T.
-    kb, d, growth, n = _balanced_segments(omega_b * duration, zeta_b, q * duration**2)
-    if not n <= MAX_SHOOTING_SEGMENTS:
-        _refuse_segments(omega_b, duration, zeta_b, q, n)
-    n = int(n)
+    kb, d, growth, n = shooting_segments(omega_b, duration, zeta_b, q)
     x0 = np.zeros(4)
     xt = np.array([1.0, 0.0, 0.0, 0.0])
     if growth < _LOG_OVERFLOW:
@@ -306,11 +305,12 @@ def frequency_shaped_slew(
     )
 
 
-def _balanced_segments(
+def balanced_hamiltonian(
     wbt: float, zeta_b: float, q_hat: float
 ) -> tuple[FloatArray, FloatArray, float, float]:
-    """(K_b, D, spectral abscissa, segment count) of the dimensionless problem; the count is
-    inf when K̂ is not finite (ω_B T or ζ_B overflowing its entries).
+    """(K_b, D, spectral abscissa, segment count) of the dimensionless problem (ω_B T, ζ_B,
+    q T²), before anything is solved: K_b = D⁻¹ K̂ D is K̂ balanced by the powers of two D; the
+    count is inf when K̂ is not finite (ω_B T or ζ_B overflowing its entries).
 
     Segment count: each segment's e^{K_b h} grows by at most e^3 (spectral abscissa) and turns
     by at most _PHASE_PER_SEGMENT rad (spectral radius); beyond that the scaling and squaring of
@@ -330,14 +330,25 @@ def _balanced_segments(
     return kb, d, growth, n
 
 
-def _refuse_segments(omega_b: float, duration: float, zeta_b: float, q: float, n: float) -> None:
-    """Raise the FieldError of a problem needing ``n`` > :data:`MAX_SHOOTING_SEGMENTS`
-    segments, blaming the input that makes it so: ``q`` if the problem without it fits, else
-    ``zeta_b`` if the undamped one fits, else ``omega_b`` (with ``duration``: ω_B T counts)."""
+def shooting_segments(
+    omega_b: float, duration: float, zeta_b: float, q: float
+) -> tuple[FloatArray, FloatArray, float, int]:
+    """:func:`balanced_hamiltonian` of a slew (SI inputs), its segment count checked against
+    :data:`MAX_SHOOTING_SEGMENTS` before anything is allocated.
+
+    Raises
+    ------
+    flexsat.input_checks.FieldError
+        Blaming the input that makes the count too large: ``q`` if the problem without it fits,
+        else ``zeta_b`` if the undamped one fits, else ``omega_b`` (ω_B T counts).
+    """
     wbt = omega_b * duration
-    if q > 0 and _balanced_segments(wbt, zeta_b, 0.0)[3] <= MAX_SHOOTING_SEGMENTS:
+    kb, d, growth, n = balanced_hamiltonian(wbt, zeta_b, q * duration**2)
+    if n <= MAX_SHOOTING_SEGMENTS:
+        return kb, d, growth, int(n)
+    if q > 0 and balanced_hamiltonian(wbt, zeta_b, 0.0)[3] <= MAX_SHOOTING_SEGMENTS:
         field, what = "q", f"the rate weight q T² = {q * duration**2:.3g}"
-    elif zeta_b > 0 and _balanced_segments(wbt, 0.0, 0.0)[3] <= MAX_SHOOTING_SEGMENTS:
+    elif zeta_b > 0 and balanced_hamiltonian(wbt, 0.0, 0.0)[3] <= MAX_SHOOTING_SEGMENTS:
         field, what = "zeta_b", f"the shaping damping ζ_B = {zeta_b:.3g} (4ζ_B²/(ω_B T)²)"
     else:
         field, what = "omega_b", f"ω_B T = {wbt:.3g} (break frequency × duration)"

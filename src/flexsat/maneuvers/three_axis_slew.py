@@ -88,7 +88,11 @@ from flexsat.input_checks import (
     require_nonneg,
     require_positive,
 )
-from flexsat.maneuvers.frequency_shaped_slew import FrequencyShapedSlew, frequency_shaped_slew
+from flexsat.maneuvers.frequency_shaped_slew import (
+    FrequencyShapedSlew,
+    frequency_shaped_slew,
+    shooting_segments,
+)
 from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike, to_si_array
 
 __all__ = [
@@ -458,13 +462,16 @@ def three_axis_slew(
 
     T = duration
     wbt, q_hat = omega_b * T, Qm * T * T
+    # the continuation's size follows from the start's balanced K alone: checked before the
+    # start is solved
     try:
-        start = frequency_shaped_slew(angles[k], J[k, k], 1.0, wbt, zeta_b, q=q_hat[k, k])
+        kb = shooting_segments(wbt, 1.0, zeta_b, q_hat[k, k])[0]
     except FieldError as exc:  # its q is this problem's Q T² about the start axis
         raise FieldError("Q" if exc.field == "q" else exc.field, exc.rule) from None
-    n = _segment_count(start.K_scaled)
-    n_rk = max(1, int(np.ceil(np.max(np.abs(np.linalg.eigvals(start.K_scaled))) / n / _RK4_STEP)))
+    n = _segment_count(kb)
+    n_rk = max(1, int(np.ceil(np.max(np.abs(np.linalg.eigvals(kb))) / n / _RK4_STEP)))
     _check_resources(n, n_rk, wbt)
+    start = frequency_shaped_slew(angles[k], J[k, k], 1.0, wbt, zeta_b, q=q_hat[k, k])
     tau = np.arange(n) / n
     nodes_hat, scale = _seed(start, k, tau)
 

@@ -148,7 +148,7 @@ def _weights(value, size: int, field: str) -> np.ndarray:
     if w.size == 1:
         w = np.full(size, float(w[0]))
     if w.shape != (size,) or not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise ValueError(f"{field}: one finite weight >= 0 or {size} of them, got {value!r}")
+        raise ValueError(f"{field}: one weight >= 0 or {size} of them (finite), got {value!r}")
     return np.diag(w)
 
 
