@@ -69,7 +69,6 @@ _MANEUVER_FIELDS = {
     "omega_b": "break_frequency",
     "zeta_b": "shaping_damping",
     "Q": "rate_weight",
-    "target": "target",
 }
 #: the run's fields by the names :func:`~flexsat.control.perturbation_design` gives them
 _DESIGN_FIELDS = {
