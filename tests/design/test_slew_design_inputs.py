@@ -74,6 +74,8 @@ def test_a_single_axis_slew_needing_too_many_segments_is_refused_before_allocati
         ({"omega_b": 1e12}, "omega_b"),
         ({"omega_b": 1e6}, "omega_b"),  # few segments, but 3e7 RK4 steps per sweep
         ({"omega_b": 5.0, "zeta_b": 1e300}, "zeta_b"),
+        # the start fits, but the continuation's Jacobian would need ~1.5 TB: the damping's
+        ({"omega_b": 5.0, "zeta_b": 1e3}, "zeta_b"),
         ({"omega_b": 5.0, "Q": 1e300 * np.eye(3)}, "Q"),
         ({"omega_b": math.nan}, "omega_b"),
         ({"omega_b": "5 Hz*m"}, "omega_b"),

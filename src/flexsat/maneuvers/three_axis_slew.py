@@ -465,12 +465,10 @@ def three_axis_slew(
     # the continuation's size follows from the start's balanced K alone: checked before the
     # start is solved
     try:
-        kb = shooting_segments(wbt, 1.0, zeta_b, q_hat[k, k])[0]
+        n, n_rk = _continuation_size(wbt, zeta_b, q_hat[k, k])
     except FieldError as exc:  # its q is this problem's Q T² about the start axis
         raise FieldError("Q" if exc.field == "q" else exc.field, exc.rule) from None
-    n = _segment_count(kb)
-    n_rk = max(1, int(np.ceil(np.max(np.abs(np.linalg.eigvals(kb))) / n / _RK4_STEP)))
-    _check_resources(n, n_rk, wbt)
+    _check_resources(n, n_rk, wbt, zeta_b, q_hat[k, k])
     start = frequency_shaped_slew(angles[k], J[k, k], 1.0, wbt, zeta_b, q=q_hat[k, k])
     tau = np.arange(n) / n
     nodes_hat, scale = _seed(start, k, tau)
@@ -566,21 +564,44 @@ def _select_axis(axis: int | str | None, angles: FloatArray, J: FloatArray) -> i
     return int(k)
 
 
-def _check_resources(n: int, n_rk: int, wbt: float) -> None:
+def _continuation_size(wbt: float, zeta_b: float, q_hat: float) -> tuple[int, int]:
+    """(shooting segments, RK4 steps per segment) of the continuation, from the balanced
+    Hamiltonian of the single-axis start (:func:`shooting_segments`, which refuses a start too
+    large to solve)."""
+    kb = shooting_segments(wbt, 1.0, zeta_b, q_hat)[0]
+    n = _segment_count(kb)
+    return n, max(1, int(np.ceil(np.max(np.abs(np.linalg.eigvals(kb))) / n / _RK4_STEP)))
+
+
+def _memory(n: int) -> int:
+    """Bytes of the dense Newton Jacobian of ``n`` segments, twice (with its LU factors)."""
+    return 2 * limits.memory_estimate(N_Z * n, N_Z * n, 1)
+
+
+def _fits(size: tuple[int, int]) -> bool:
+    n, n_rk = size
+    return _memory(n) <= limits.MAX_MEMORY and n * n_rk <= limits.MAX_INTEGRATOR_STEPS
+
+
+def _check_resources(n: int, n_rk: int, wbt: float, zeta_b: float, q_hat: float) -> None:
     """Refuse, before anything is allocated, a continuation whose dense Newton Jacobian
-    ((N_Z n)² floats, twice with its LU factors) exceeds :data:`flexsat.limits.MAX_MEMORY` or
-    whose RK4 sweeps (n segments × n_rk steps) exceed
-    :data:`flexsat.limits.MAX_INTEGRATOR_STEPS`; both grow with ω_B T."""
-    what = f"ω_B T = {wbt:.3g} (break frequency × duration)"
-    limits.check_memory(
-        2 * limits.memory_estimate(N_Z * n, N_Z * n, 1),
-        "omega_b",
-        f"{what}: the Newton Jacobian of {n:,} shooting segments",
-    )
+    exceeds :data:`flexsat.limits.MAX_MEMORY` or whose RK4 sweeps (n segments × n_rk steps)
+    exceed :data:`flexsat.limits.MAX_INTEGRATOR_STEPS`, blaming the input that makes it so:
+    ``Q`` if the problem without it fits, else ``zeta_b`` if the undamped one fits, else
+    ``omega_b`` (ω_B T counts)."""
+    if _fits((n, n_rk)):
+        return
+    if q_hat > 0 and _fits(_continuation_size(wbt, zeta_b, 0.0)):
+        field, what = "Q", f"the rate weight Q T² = {q_hat:.3g} about the start axis"
+    elif zeta_b > 0 and _fits(_continuation_size(wbt, 0.0, 0.0)):
+        field, what = "zeta_b", f"the shaping damping ζ_B = {zeta_b:.3g}"
+    else:
+        field, what = "omega_b", f"ω_B T = {wbt:.3g} (break frequency × duration)"
+    limits.check_memory(_memory(n), field, f"{what}: the Newton Jacobian of {n:,} segments")
     limits.check_count(
         n * n_rk,
         limits.MAX_INTEGRATOR_STEPS,
-        "omega_b",
+        field,
         f"{what}: RK4 steps per sweep ({n:,} segments × {n_rk:,} steps)",
     )
 
