@@ -250,6 +250,13 @@ PROBE = [
     (
         "slew",
         "eps_slew_6s",
+        ("runs", 0, "shaping_damping"),
+        1e10,
+        "runs['D: torquers'].shaping_damping",
+    ),
+    (
+        "slew",
+        "eps_slew_6s",
         ("runs", 0, "weights", "attitude"),
         1e300,
         "runs['D: torquers'].weights.attitude",
