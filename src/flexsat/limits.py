@@ -53,6 +53,12 @@ MAX_CATALOG_PAIRS = 20_000_000
 #: pairs × catalogue pairs within the tolerance), ~100 bytes each in the voting
 MAX_PAIR_CANDIDATES = 4_000_000
 
+#: largest ratio of two nonzero weights of one LQR-type design (a slew's Q and D, a simulation
+#: run's state and input weights): beyond ~1/ε (ε = 2.2e-16) the smaller weight is below the
+#: rounding of the larger in the Riccati equation, so it weighs nothing and the solver fails
+#: without saying which weight (the examples span at most 1e10)
+MAX_WEIGHT_RANGE = 1e15
+
 #: largest noise seed (numpy's seeds are unbounded, but seed + case index must stay an int64)
 MAX_SEED = 2**32 - 1
 
@@ -148,6 +154,7 @@ __all__ = [
     "MAX_SAMPLES",
     "MAX_SEED",
     "MAX_SUBSTEPS",
+    "MAX_WEIGHT_RANGE",
     "check_count",
     "check_memory",
     "is_integral",

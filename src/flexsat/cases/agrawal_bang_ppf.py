@@ -160,7 +160,7 @@ class GoalRule:
     """How J_goal follows from J_init (module docstring).
 
     ``kind``: ``"paper"`` (the ratio implied by the published table, :func:`paper_goal_ratio`;
-    ``value`` unused), ``"ratio"`` (J_goal = value · J_init, value ≥ 0) or ``"offset"``
+    ``value`` unused), ``"ratio"`` (J_goal = value · J_init, value > 0) or ``"offset"``
     (J_goal = J_init + value, value in the cost's units).
     """
 
@@ -182,8 +182,11 @@ class GoalRule:
         if self.value is None:
             raise FieldError("goal.value", f"the {self.kind!r} rule needs a value")
         v = float(require_finite(self.value, "goal.value"))
-        if self.kind == "ratio" and v < 0:
-            raise FieldError("goal.value", f"a ratio J_goal/J_init must be >= 0, got {v!r}")
+        if self.kind == "ratio" and v <= 0:
+            raise FieldError(
+                "goal.value",
+                f"a ratio J_goal/J_init must be > 0 (the cost of a stable loop is > 0), got {v!r}",
+            )
         object.__setattr__(self, "value", v)
 
     def goal(self, J_init: float, weights: npt.ArrayLike, excitation: str) -> float:

@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from flexsat import limits
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.input_checks import FieldError, require_count, require_nonneg
@@ -412,8 +413,10 @@ class EPSCase:
 
         points = [(node(int(n), "forces"), str(a).lower()) for n, a in forces]
         rims = [(node(int(n), "rim_nodes"), a) for n in rim_nodes for a in "xyz"]
+        n_modes = require_count(n_modes, "n_modes")
+        limits.check_count(n_modes, limits.MAX_MODES, "n_modes", "elastic modes of the plant")
         return FlexibleSpacecraft(
-            self.modal_model(require_count(n_modes, "n_modes")),
+            self.modal_model(n_modes),
             forces=points,
             displacements=rims,
             torque_node=roles[95],

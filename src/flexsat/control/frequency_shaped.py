@@ -93,11 +93,22 @@ def shaping_weights(
     Qm = np.atleast_2d(np.asarray(Q, float))
     Rm = np.atleast_2d(np.asarray(R, float))
     n, m = Qm.shape[0], Rm.shape[0]
+    wb = np.float64(wb)  # an absurd ω_B or ζ_B overflows to inf (refused below), not an exception
+    with np.errstate(over="ignore", under="ignore"):
+        scales = (wb ** -(2 * order), 4 * np.float64(zb) ** 2 / wb**2)
+    if not 0.0 < scales[0] < np.inf:
+        raise FieldError(
+            "break_frequency",
+            f"ω_B^-{2 * order} = {scales[0]:.3g} (the weight R/ω_B^{2 * order} of the shaped "
+            f"input) is not a representable float, got ω_B = {wb:.3g} rad/s",
+        )
+    if not np.isfinite(scales[1]):
+        raise FieldError("damping", f"the shaping weight 4ζ²/ω_B² overflows, got ζ = {zb:.3g}")
     if order == 2:
         Qa = np.zeros((n + 2 * m, n + 2 * m))
         Qa[:n, :n] = Qm
         Qa[n : n + m, n : n + m] = Rm
-        Qa[n + m :, n + m :] = 4 * zb**2 / wb**2 * Rm
+        Qa[n + m :, n + m :] = scales[1] * Rm
         Na = np.zeros((n + 2 * m, m))
         Na[n : n + m] = Rm / wb**2
         return Qa, Na, Rm / wb**4

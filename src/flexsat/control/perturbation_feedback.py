@@ -64,6 +64,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from flexsat import limits
 from flexsat.control.base import Controller
 from flexsat.control.force_decoupling import decoupled_input_map
 from flexsat.control.frequency_shaped import FrequencyShapedDesign, frequency_shaped_lqr
@@ -231,6 +232,25 @@ def perturbation_design(
     Dw = _weight(D, m, "D", strict=True)
     wb = float(require_positive(omega_b, "omega_b", "rad/s"))
     zb = float(require_nonneg(zeta_b, "zeta_b", ""))
+    # the shaped weights hold D/ω_B⁴ and 4ζ_B² D/ω_B² beside Q: refuse them unrepresentable
+    # here, by name, rather than as a failed Riccati solution at every linearisation point
+    with np.errstate(over="ignore", under="ignore"):
+        if not 0.0 < np.float64(wb) ** -4 < np.inf:
+            raise FieldError(
+                "omega_b",
+                f"ω_B⁻⁴ = {np.float64(wb) ** -4:.3g} (the weight D/ω_B⁴ "
+                f"of the shaped input) is not a representable float, got {wb:.3g}",
+            )
+        # at ω_B the torque-rate weight 4ζ_B²/ω_B² costs 4ζ_B² times the torque's own weight:
+        # beyond the weight range the torque's weight is lost in its rounding
+        if not 4.0 * np.float64(zb) ** 2 <= limits.MAX_WEIGHT_RANGE:
+            raise FieldError(
+                "zeta_b",
+                f"the shaping weight 4ζ_B²/ω_B² weighs the torque at ω_B 4ζ_B² = "
+                f"{4.0 * np.float64(zb) ** 2:.3g} times its own weight, above "
+                f"{limits.MAX_WEIGHT_RANGE:.0e} (flexsat.limits.MAX_WEIGHT_RANGE), got "
+                f"ζ_B = {zb:.3g}",
+            )
     n_p = require_count(n_points, "n_points")
     if decouple:
         if m == 3:

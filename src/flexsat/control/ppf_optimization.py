@@ -526,6 +526,32 @@ def restore_eigenvalue_constraints(
 
 
 # -- the homotopy ------------------------------------------------------------------------------
+def _check_costs(J_init: float, goal: float, goal_field: str, rtol: float) -> None:
+    """Refuse a start cost or a goal the homotopy cannot follow in float64.
+
+    J is a positive quadratic cost, so J_goal < 0 is meaningless (J_goal = 0, unreachable,
+    asks for the constrained minimum, L127). The targets
+    J0(γ) = γ J_goal + (1 − γ) J_init are met to ``rtol`` · |J0|: with J_goal > J_init/rtol
+    the J_init part is below that tolerance from the first step on, and a J_init that is not
+    at least tiny/rtol (weights of 1e300 scale it to ~1e-306) leaves no digits to converge on.
+    """
+    tiny, huge = np.finfo(float).tiny, np.finfo(float).max
+    if not tiny / rtol <= J_init <= huge * rtol:
+        raise FieldError(
+            "problem",
+            f"the cost at the start J_init = {J_init:.3g} is outside [{tiny / rtol:.3g}, "
+            f"{huge * rtol:.3g}], where rtol = {rtol:g} of it is a float64 number: its "
+            "weights are out of scale",
+        )
+    if not 0.0 <= goal <= J_init / rtol:
+        raise FieldError(
+            goal_field,
+            f"the goal cost J_goal = {goal:.3g} must be in [0, J_init/rtol = "
+            f"{J_init / rtol:.3g}] (J >= 0; beyond J_init/rtol the start is below the "
+            "convergence tolerance)",
+        )
+
+
 def optimize_ppf_gains(
     problem: PPFGainProblem,
     g0: npt.ArrayLike,
@@ -599,13 +625,18 @@ def optimize_ppf_gains(
     """
     ev, g, floor, margin, J_init = _start(problem, g0, eigenvalue_floor, stability_margin)
     if J_goal is not None and goal_ratio is None:
-        goal = float(require_finite(J_goal, "J_goal"))
+        goal, goal_field = float(require_finite(J_goal, "J_goal")), "J_goal"
     elif goal_ratio is not None and J_goal is None:
         goal = float(require_finite(goal_ratio, "goal_ratio")) * J_init
+        goal_field = "goal_ratio"
     else:
         raise FieldError(
             "J_goal", "give exactly one of J_goal and goal_ratio (J_goal = goal_ratio · J_init)"
         )
+    rtol = float(require_finite(rtol, "rtol"))
+    if not 0.0 < rtol < 1.0:
+        raise FieldError("rtol", f"must be in (0, 1), got {rtol!r}")
+    _check_costs(J_init, goal, goal_field, rtol)
     gamma_stop = float(require_finite(gamma_stop, "gamma_stop"))
     if not 0.0 < gamma_stop <= 1.0:
         raise FieldError("gamma_stop", f"must be in (0, 1], got {gamma_stop!r}")
@@ -620,9 +651,6 @@ def optimize_ppf_gains(
     max_corrections = require_count(max_corrections, "max_corrections")
     max_restorations = require_count(max_restorations, "max_restorations")
     max_steps = require_count(max_steps, "max_steps")
-    rtol = float(require_finite(rtol, "rtol"))
-    if not 0.0 < rtol < 1.0:
-        raise FieldError("rtol", f"must be in (0, 1), got {rtol!r}")
     Winv = _inverse_weight(weight, g.size)
 
     lam_target = _restoration_target(floor)

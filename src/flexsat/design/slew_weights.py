@@ -90,7 +90,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import FieldError, require_count, require_nonneg, require_positive
+from flexsat import limits
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_nonneg,
+    require_numeric,
+    require_positive,
+)
 from flexsat.sim.slew_goals import SlewGoals, slew_goal_metrics
 from flexsat.units import FloatArray
 
@@ -134,15 +141,14 @@ METHODS = ("nelder-mead", "powell")
 def _block(value, name: str, positive: bool) -> tuple[float, ...] | None:
     if value is None:
         return None
-    w = np.atleast_1d(np.asarray(value, float))
-    if (
-        w.ndim != 1
-        or w.size == 0
-        or not np.all(np.isfinite(w))
-        or np.any(w < 0)
-        or (positive and np.any(w <= 0))
-    ):
-        rule = "> 0 (D is inverted)" if positive else ">= 0"
+    rule = "> 0 (D is inverted)" if positive else ">= 0"
+    try:  # a Quantity is refused here (weights are SI numbers), not stripped of its unit
+        w = np.atleast_1d(require_numeric(value, name, "weight"))
+    except FieldError as exc:
+        raise FieldError(
+            name, f"one weight or a list of them, finite and {rule}: {exc.rule}"
+        ) from None
+    if w.ndim != 1 or w.size == 0 or np.any(w < 0) or (positive and np.any(w <= 0)):
         raise FieldError(name, f"one weight or a list of them, finite and {rule}, got {value!r}")
     return tuple(float(x) for x in w)
 
@@ -153,6 +159,27 @@ def _diagonal(values: tuple[float, ...], size: int, name: str) -> FloatArray:
     if len(values) != size:
         raise FieldError(name, f"one weight or {size} of them, got {len(values)}")
     return np.asarray(values)
+
+
+def _check_range(weights: SlewWeights, q: FloatArray, d: FloatArray) -> None:
+    """Refuse weights spanning more than :data:`flexsat.limits.MAX_WEIGHT_RANGE`, naming the
+    block whose extreme value lies farther (in decades) from 1."""
+    values = np.concatenate([q, d])
+    positive = values[values > 0]
+    low, high = positive.min(), positive.max()
+    if high <= limits.MAX_WEIGHT_RANGE * low:
+        return
+    # weights are SI numbers of natural scale 1: the one farther from 1 is out of place
+    extreme = high if abs(np.log10(high)) >= abs(np.log10(low)) else low
+    block = next(
+        name for name in BLOCKS if getattr(weights, name) and extreme in getattr(weights, name)
+    )
+    raise FieldError(
+        block,
+        f"the weights span {high / low:.3g} (from {low:.3g} to {high:.3g}), above "
+        f"{limits.MAX_WEIGHT_RANGE:.0e} (flexsat.limits.MAX_WEIGHT_RANGE: the smaller "
+        "would be below the rounding of the larger)",
+    )
 
 
 @dataclass(frozen=True)
@@ -192,6 +219,7 @@ class SlewWeights:
             if self.force is None:
                 raise FieldError("force", "required when the design uses forces")
             d = np.concatenate([d, _diagonal(self.force, n_forces, "force")])
+        _check_range(self, q, d)
         return q, d
 
     def scaled(self, factors: Mapping[str, float]) -> SlewWeights:

@@ -70,6 +70,7 @@ import numpy.typing as npt
 import scipy.integrate
 import scipy.linalg
 
+from flexsat import limits
 from flexsat.dynamics.attitude import (
     cross_matrix,
     dcm_to_euler123,
@@ -88,7 +89,11 @@ from flexsat.input_checks import (
     require_nonneg,
     require_positive,
 )
-from flexsat.maneuvers.frequency_shaped_slew import FrequencyShapedSlew, frequency_shaped_slew
+from flexsat.maneuvers.frequency_shaped_slew import (
+    FrequencyShapedSlew,
+    frequency_shaped_slew,
+    shooting_segments,
+)
 from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike, to_si_array
 
 __all__ = [
@@ -459,11 +464,16 @@ def three_axis_slew(
 
     T = duration
     wbt, q_hat = omega_b * T, Qm * T * T
+    # the continuation's size follows from the start's balanced K alone: checked before the
+    # start is solved
+    try:
+        n, n_rk = _continuation_size(wbt, zeta_b, q_hat[k, k])
+    except FieldError as exc:  # its q is this problem's Q T² about the start axis
+        raise FieldError("Q" if exc.field == "q" else exc.field, exc.rule) from None
+    _check_resources(n, n_rk, wbt, zeta_b, q_hat[k, k])
     start = frequency_shaped_slew(angles[k], J[k, k], 1.0, wbt, zeta_b, q=q_hat[k, k])
-    n = _segment_count(start.K_scaled)
     tau = np.arange(n) / n
     nodes_hat, scale = _seed(start, k, tau)
-    n_rk = max(1, int(np.ceil(np.max(np.abs(np.linalg.eigvals(start.K_scaled))) / n / _RK4_STEP)))
 
     def problem(a: float) -> _Problem:
         Ja = J * a + np.diag(np.diag(J)) * (1.0 - a)
@@ -556,6 +566,48 @@ def _select_axis(axis: int | str | None, angles: FloatArray, J: FloatArray) -> i
             f"start is trivial; select an axis the target rotates about",
         )
     return int(k)
+
+
+def _continuation_size(wbt: float, zeta_b: float, q_hat: float) -> tuple[int, int]:
+    """(shooting segments, RK4 steps per segment) of the continuation, from the balanced
+    Hamiltonian of the single-axis start (:func:`shooting_segments`, which refuses a start too
+    large to solve)."""
+    kb = shooting_segments(wbt, 1.0, zeta_b, q_hat)[0]
+    n = _segment_count(kb)
+    return n, max(1, int(np.ceil(np.max(np.abs(np.linalg.eigvals(kb))) / n / _RK4_STEP)))
+
+
+def _memory(n: int) -> int:
+    """Bytes of the dense Newton Jacobian of ``n`` segments, twice (with its LU factors)."""
+    return 2 * limits.memory_estimate(N_Z * n, N_Z * n, 1)
+
+
+def _fits(size: tuple[int, int]) -> bool:
+    n, n_rk = size
+    return _memory(n) <= limits.MAX_MEMORY and n * n_rk <= limits.MAX_INTEGRATOR_STEPS
+
+
+def _check_resources(n: int, n_rk: int, wbt: float, zeta_b: float, q_hat: float) -> None:
+    """Refuse, before anything is allocated, a continuation whose dense Newton Jacobian
+    exceeds :data:`flexsat.limits.MAX_MEMORY` or whose RK4 sweeps (n segments × n_rk steps)
+    exceed :data:`flexsat.limits.MAX_INTEGRATOR_STEPS`, blaming the input that makes it so:
+    ``Q`` if the problem without it fits, else ``zeta_b`` if the undamped one fits, else
+    ``omega_b`` (ω_B T counts)."""
+    if _fits((n, n_rk)):
+        return
+    if q_hat > 0 and _fits(_continuation_size(wbt, zeta_b, 0.0)):
+        field, what = "Q", f"the rate weight Q T² = {q_hat:.3g} about the start axis"
+    elif zeta_b > 0 and _fits(_continuation_size(wbt, 0.0, 0.0)):
+        field, what = "zeta_b", f"the shaping damping ζ_B = {zeta_b:.3g}"
+    else:
+        field, what = "omega_b", f"ω_B T = {wbt:.3g} (break frequency × duration)"
+    limits.check_memory(_memory(n), field, f"{what}: the Newton Jacobian of {n:,} segments")
+    limits.check_count(
+        n * n_rk,
+        limits.MAX_INTEGRATOR_STEPS,
+        field,
+        f"{what}: RK4 steps per sweep ({n:,} segments × {n_rk:,} steps)",
+    )
 
 
 def _segment_count(k_scaled: FloatArray) -> int:

@@ -301,6 +301,25 @@ class PPFResult(ReportedResult):
         return sections(self, self.metrics_records(), ds, figures)
 
 
+#: the run's fields by the names :func:`~flexsat.control.ppf_optimization.optimize_ppf_gains`
+#: gives them (the cost's scale follows from the run's weights and the shared ``Q_u``)
+_OPTIMISER_FIELDS = {"problem": "weights", "J_goal": "goal.value"}
+
+
+def _optimise(*args, **kwargs):
+    """:func:`~flexsat.cases.agrawal_bang_ppf.run_ppf_case`, its refusals named by the run's
+    fields."""
+    from flexsat.cases.agrawal_bang_ppf import run_ppf_case
+
+    try:
+        return run_ppf_case(*args, **kwargs)
+    except FieldError as exc:
+        rule = exc.rule + (
+            " (the run's weights and ppf.Q_u set it)" if exc.field == "problem" else ""
+        )
+        raise FieldError(_OPTIMISER_FIELDS.get(exc.field, exc.field), rule) from None
+
+
 class PPFKind(ScenarioKind):
     """``kind: ppf``: the PPF gains of the Agrawal–Bang structure optimised per run (module
     docstring)."""
@@ -321,7 +340,7 @@ class PPFKind(ScenarioKind):
         import functools
 
         from flexsat.cases.agrawal_bang import agrawal_bang
-        from flexsat.cases.agrawal_bang_ppf import response_simulations, run_ppf_case, tip_history
+        from flexsat.cases.agrawal_bang_ppf import response_simulations, tip_history
         from flexsat.catalog import get_case
         from flexsat.references import cite
 
@@ -331,7 +350,7 @@ class PPFKind(ScenarioKind):
         for index, run in enumerate(scenario.runs):
             path = "runs" + item_path(index, run.label)
             optimise = functools.partial(
-                run_ppf_case,
+                _optimise,
                 run.weights,
                 run.excitation,
                 run.goal.build(),

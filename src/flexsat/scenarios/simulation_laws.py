@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, model_validator
 
+from flexsat import limits
 from flexsat.input_checks import FieldError
 from flexsat.scenarios.fields import SchemaSection
 
@@ -147,8 +148,27 @@ def _weights(value, size: int, field: str) -> np.ndarray:
     if w.size == 1:
         w = np.full(size, float(w[0]))
     if w.shape != (size,) or not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise FieldError(field, f"one weight >= 0 or {size} of them, got {np.shape(value)}")
+        raise FieldError(field, f"one weight >= 0 or {size} of them (finite), got {value!r}")
     return np.diag(w)
+
+
+def _check_span(q: np.ndarray, r: np.ndarray) -> None:
+    """Refuse LQR weights spanning more than :data:`flexsat.limits.MAX_WEIGHT_RANGE`, naming
+    the weights that hold the extreme value farther (in decades) from 1."""
+    values = np.concatenate([q, r])
+    positive = values[values > 0]
+    if positive.size == 0 or positive.max() <= limits.MAX_WEIGHT_RANGE * positive.min():
+        return
+    low, high = positive.min(), positive.max()
+    # weights are SI numbers of natural scale 1: the one farther from 1 is out of place
+    extreme = high if abs(np.log10(high)) >= abs(np.log10(low)) else low
+    field = "gains.state_weights" if extreme in q else "gains.input_weights"
+    raise FieldError(
+        field,
+        f"the weights span {high / low:.3g} (from {low:.3g} to {high:.3g}), above "
+        f"{limits.MAX_WEIGHT_RANGE:.0e} (flexsat.limits.MAX_WEIGHT_RANGE: the smaller "
+        "would be below the rounding of the larger in the Riccati equation)",
+    )
 
 
 class LQR:
@@ -165,6 +185,7 @@ class LQR:
         n, m = B.shape
         Q = _weights(parameters.state_weights, n, "gains.state_weights")
         R = _weights(parameters.input_weights, m, "gains.input_weights")
+        _check_span(np.diag(Q), np.diag(R))
         K, _, _ = lqr(A, B, Q, R)
         return ScheduledStateFeedback([0.0], K[None], "state", [c.name for c in plant.inputs])
 

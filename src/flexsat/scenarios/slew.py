@@ -65,6 +65,21 @@ Weights = float | list[float]
 
 OPEN_LOOP = "open loop"
 
+#: the maneuver's fields by the names :func:`~flexsat.maneuvers.three_axis_slew` gives them
+_MANEUVER_FIELDS = {
+    "omega_b": "break_frequency",
+    "zeta_b": "shaping_damping",
+    "Q": "rate_weight",
+}
+#: the run's fields by the names :func:`~flexsat.control.perturbation_design` gives them
+_DESIGN_FIELDS = {
+    "omega_b": "break_frequency",
+    "zeta_b": "shaping_damping",
+    "n_points": "controller.linearization_points",
+    "Q": "weights",
+    "D": "weights",
+}
+
 
 class SlewManeuverSpec(SchemaSection):
     """The nominal rigid-body maneuver (EPS slew study c. 1989 Eqs. 9–21)."""
@@ -104,7 +119,7 @@ class GoalsSpec(SchemaSection):
     """The goals of EPS slew study c. 1989 "Simulation Results"
     (:class:`~flexsat.sim.slew_goals.SlewGoals`)."""
 
-    angle_fraction: float = Field(0.03, gt=0.0)
+    angle_fraction: float = Field(0.03, gt=0.0, le=1.0)
     evaluation: float = Field(1.25, ge=1.0)
     deflection_ratio: float = Field(10.0, gt=0.0)
 
@@ -185,6 +200,20 @@ class SlewScenario(Document):
     @model_validator(mode="after")
     def _checks(self):
         check_unique_labels(self.runs)
+        # the nominal torque is played back and the feedback runs at the control rate: a
+        # shaping break above its Nyquist frequency π f_c shapes what neither can produce
+        nyquist = np.pi * self.simulation.control_rate
+        breaks = [("maneuver.break_frequency", self.maneuver.break_frequency)] + [
+            (f"runs{item_path(i, r.label)}.break_frequency", r.break_frequency)
+            for i, r in enumerate(self.runs)
+        ]
+        for field, value in breaks:
+            if value > nyquist:
+                raise FieldError(
+                    field,
+                    f"must be at most the control's Nyquist frequency π × "
+                    f"simulation.control_rate = {nyquist:.4g} rad/s, got {value:.4g} rad/s",
+                )
         if self.simulation.duration < self.goals.evaluation * self.maneuver.duration:
             raise FieldError(
                 "simulation.duration",
@@ -351,6 +380,20 @@ def _plants(scenario: SlewScenario):
                 )
             ]
         )
+    outputs = {c.name for c in truth.outputs}
+    nodes = {n[len("displacement_") : -1] for n in outputs if n.startswith("displacement_")}
+    if not any(all(f"displacement_{n}{a}" in outputs for a in "XYZ") for n in nodes):
+        # the deflection goal compares rim deflections: refused now, not after every run
+        raise ScenarioError(
+            [
+                Problem(
+                    "plant.rim_nodes" if "rim_nodes" in scenario.plant else "plant",
+                    f"the {scenario.case} plant with these options records no rim displacement "
+                    "along X, Y and Z (outputs displacement_<node>X/Y/Z), so the deflection "
+                    "goal cannot be judged; give at least one rim node",
+                )
+            ]
+        )
     if scenario.controller.modes > truth.n_modes:
         raise ScenarioError(
             [
@@ -389,6 +432,10 @@ def _laws(scenario: SlewScenario, truth, design_plant, nominal, dt: float) -> di
             laws[run.label] = design.controller(dt, run.feedforward, plant=truth)
         except ScenarioError as exc:  # the run's forces or weights
             problems.extend(exc.problems)
+        except FieldError as exc:  # named by the scenario's fields
+            field = _DESIGN_FIELDS.get(exc.field, exc.field)
+            where = "" if field.startswith("controller.") else f"runs{item_path(index, run.label)}"
+            problems.append(locate(where, FieldError(field, exc.rule)))
         except ValueError as exc:
             problems.append(locate(f"runs{item_path(index, run.label)}", exc))
     if problems:
@@ -425,18 +472,21 @@ class SlewKind(ScenarioKind):
 
         truth, design_plant = _plants(scenario)
         m = scenario.maneuver
-        nominal = yield Run(
-            "nominal maneuver",
-            lambda: three_axis_slew(
-                truth.inertia,
-                target_quaternion(m.target),
-                m.duration,
-                m.break_frequency,
-                m.shaping_damping,
-                Q=m.rate_weight * np.eye(3),
-            ),
-            "maneuver",
-        )
+
+        def solve_nominal():
+            try:
+                return three_axis_slew(
+                    truth.inertia,
+                    target_quaternion(m.target),
+                    m.duration,
+                    m.break_frequency,
+                    m.shaping_damping,
+                    Q=m.rate_weight * np.eye(3),
+                )
+            except FieldError as exc:  # named by the scenario's fields
+                raise FieldError(_MANEUVER_FIELDS.get(exc.field, exc.field), exc.rule) from None
+
+        nominal = yield Run("nominal maneuver", solve_nominal, "maneuver")
         try:
             config = SimConfig(**given_fields(scenario.simulation))
         except ValueError as exc:

@@ -30,7 +30,12 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import FieldError, require_finite, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_finite,
+    require_positive,
+    require_positive_scalar,
+)
 from flexsat.units import FloatArray
 
 __all__ = ["SlewGoals", "euler_angle_error", "slew_goal_metrics"]
@@ -49,8 +54,11 @@ class SlewGoals:
 
     def __post_init__(self) -> None:
         for name in ("angle_fraction", "deflection_ratio"):
-            require_positive(getattr(self, name), name)
-        if not float(require_finite(self.evaluation, "evaluation")) >= 1.0:
+            require_positive_scalar(getattr(self, name), name)
+        evaluation = require_finite(self.evaluation, "evaluation")
+        if evaluation.ndim != 0:
+            raise FieldError("evaluation", f"must be one number, got shape {evaluation.shape}")
+        if not float(evaluation) >= 1.0:
             raise FieldError(
                 "evaluation",
                 f"must be >= 1 (a multiple of the maneuver time T), got {self.evaluation}",
