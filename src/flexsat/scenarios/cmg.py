@@ -54,6 +54,8 @@ from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 if TYPE_CHECKING:
     import xarray as xr
 
+    from flexsat.cases.space_station_cmg import StationDesign
+    from flexsat.dynamics.cmg import GimbalRun
     from flexsat.dynamics.space_station import StationData
 
 SOURCE = (
@@ -333,15 +335,15 @@ def _demand_function(demand):
     return lambda t: -(c + a * np.sin(2.0 * np.pi * f * t))
 
 
-def _steering_run(run: CmgRunSpec, cluster: Cluster, sigma0: np.ndarray) -> CmgRun:
-    """A torque-steering run from ``sigma0``: the pseudo-inverse (or SR) law until the first
-    singular set (:func:`flexsat.cases.cmg_pyramid.integrate_gimbals`, which stops there)."""
+def _steering_simulation(run: CmgRunSpec, cluster: Cluster, sigma0: np.ndarray) -> Simulation:
+    """A torque-steering run from ``sigma0``: the pseudo-inverse (or SR) law on the gimbal
+    cluster, stopped at the first singular set under ``pi``
+    (:func:`flexsat.cases.cmg_pyramid.steering_simulation`)."""
     from flexsat.cases import cmg_pyramid
 
     null = run.null_motion
-    d = run.demand_direction()
     alpha = cluster.alpha if cluster.steering == "sr" else 0.0
-    g = cmg_pyramid.integrate_gimbals(
+    plant, law, config, options = cmg_pyramid.steering_simulation(
         sigma0,
         _demand_function(run.demand),
         run.duration,
@@ -351,19 +353,29 @@ def _steering_run(run: CmgRunSpec, cluster: Cluster, sigma0: np.ndarray) -> CmgR
         alpha=alpha,
         threshold=cluster.threshold,
         stop_at_singular=cluster.steering == "pi",
-        null_target=None if null is None else _resolve(null.target, d, cluster),
+        null_target=None
+        if null is None
+        else _resolve(null.target, run.demand_direction(), cluster),
         null_gain=1.0 if null is None else null.gain,
         null_alpha=alpha,
     )
-    return _cmg_run(run.label, g, sigma0, d, cluster)
+    return Simulation(plant, law, config, options)
 
 
-def _cmg_run(label: str, g, sigma0: np.ndarray, direction, cluster: Cluster) -> CmgRun:
-    """The :class:`CmgRun` of a gimbal history ``g`` (:class:`flexsat.dynamics.cmg.GimbalRun`):
-    its peak gimbal rate and outcome (the singularity met and its kind)."""
+def _cmg_run(
+    label: str,
+    g: GimbalRun,
+    sigma0: np.ndarray,
+    direction: np.ndarray | None,
+    cluster: Cluster,
+    rates: np.ndarray,
+) -> CmgRun:
+    """The :class:`CmgRun` of a gimbal history ``g`` (:class:`flexsat.dynamics.cmg.GimbalRun`)
+    and its recorded gimbal rates ``rates`` (n_t, n), the law's σ̇ at the samples (at a
+    singular stop the rate there, which grows as the gain falls): its peak gimbal rate and
+    outcome (the singularity met and its kind)."""
     from flexsat.dynamics import cmg
 
-    rates = np.gradient(g.sigma, g.t, axis=0)
     internal = None
     if g.singular:
         k = int(np.argmin(g.gain))
@@ -424,24 +436,31 @@ class CmgResult(ReportedResult):
         import xarray as xr
 
         n = self.scenario.cluster.n_units
+        # a run stopped at a singular set holds fewer samples: NaN after its end
+        width = max(r.gimbals.t.size for r in self.runs)
+
+        def stacked(name: str) -> np.ndarray:
+            out = []
+            for r in self.runs:
+                a = np.asarray(getattr(r.gimbals, name), float)
+                pad = np.full((width - a.shape[0],) + a.shape[1:], np.nan)
+                out.append(np.concatenate([a, pad]))
+            return np.array(out)
+
         ds = xr.Dataset(
             {
-                "time": (
-                    ("run", "sample"),
-                    np.array([r.gimbals.t for r in self.runs]),
-                    {"units": "s"},
-                ),
+                "time": (("run", "sample"), stacked("t"), {"units": "s"}),
                 "gimbal_angles": (
                     ("run", "sample", "gimbal"),
-                    np.array([r.gimbals.sigma for r in self.runs]),
+                    stacked("sigma"),
                     {"units": "rad"},
                 ),
                 "momentum": (
                     ("run", "sample", "axis"),
-                    np.array([r.gimbals.h for r in self.runs]),
+                    stacked("h"),
                     {"units": "rotor momenta h"},
                 ),
-                "gain": (("run", "sample"), np.array([r.gimbals.gain for r in self.runs])),
+                "gain": (("run", "sample"), stacked("gain")),
                 "initial_angles": (
                     ("run", "gimbal"),
                     np.array([r.sigma0 for r in self.runs]),
@@ -557,15 +576,12 @@ class CmgKind(ScenarioKind):
         return len(scenario.runs) + 1
 
     def plan(self, scenario: CmgScenario) -> Generator[Run, Any, CmgResult]:
-        """Each run in turn: a reorientation is a :class:`~flexsat.scenarios.kind.Simulation`
-        of the null-motion law on the gimbal cluster
-        (:func:`flexsat.cases.cmg_pyramid.reorient_simulation`); a torque-steering run, which
-        stops at the first singular set (a terminal condition :func:`flexsat.sim.simulate`
-        does not take), is run by :func:`flexsat.cases.cmg_pyramid.integrate_gimbals` on the
-        engine's continuous mode."""
-        import functools
-
+        """Each run in turn, a :class:`~flexsat.scenarios.kind.Simulation` on the gimbal
+        cluster: a torque-steering run the pseudo-inverse (or SR) law, stopped at the first
+        singular set (:func:`flexsat.cases.cmg_pyramid.steering_simulation`), a reorientation
+        the null-motion law (:func:`flexsat.cases.cmg_pyramid.reorient_simulation`)."""
         from flexsat.cases import cmg_pyramid
+        from flexsat.dynamics.gimbal_cluster import GimbalCluster
 
         cluster = scenario.cluster
         runs = []
@@ -574,28 +590,30 @@ class CmgKind(ScenarioKind):
             d = run.demand_direction()
             try:
                 sigma0 = _resolve(run.initial, d, cluster)
-                if run.reorient_to is not None:
+                if run.reorient_to is None:
+                    task = _steering_simulation(run, cluster, sigma0)
+                else:
                     target = _resolve(run.reorient_to, d, cluster)
                     alpha = cluster.alpha if cluster.steering == "sr" else 0.0
-                    plant, law, config, options = cmg_pyramid.reorient_simulation(
-                        sigma0,
-                        target,
-                        run.duration,
-                        1.0,
-                        cluster.skew,
-                        cluster.n_units,
-                        alpha=max(alpha, 1e-3),
-                        n_out=N_OUT,
+                    task = Simulation(
+                        *cmg_pyramid.reorient_simulation(
+                            sigma0,
+                            target,
+                            run.duration,
+                            1.0,
+                            cluster.skew,
+                            cluster.n_units,
+                            alpha=max(alpha, 1e-3),
+                            n_out=N_OUT,
+                        )
                     )
             except ValueError as exc:
                 raise ScenarioError([locate(path, exc)]) from None
-            if run.reorient_to is None:
-                steer = functools.partial(_steering_run, run, cluster, sigma0)
-                runs.append((yield Run(run.label, steer, path)))
-                continue
-            result = yield Run(run.label, Simulation(plant, law, config, options), path)
-            g = cmg_pyramid.gimbal_run(plant, result.dataset)
-            runs.append(_cmg_run(run.label, g, sigma0, d, cluster))
+            result = yield Run(run.label, task, path)
+            assert isinstance(task.plant, GimbalCluster)  # both builders make one
+            g = cmg_pyramid.gimbal_run(task.plant, result.dataset)
+            rates = result.dataset["gimbal_rates"].values[0]
+            runs.append(_cmg_run(run.label, g, sigma0, d, cluster, rates))
         table = yield Run("V1–V8 table", validation_table)
         notes = (
             "Demands are the paper's T = ḣ (Eq. 5) in rotor momenta per second; the spacecraft "
@@ -693,23 +711,18 @@ class StationResult(ReportedResult):
         return station_sections(self, self.metrics_records(), figures)
 
 
-def _attitude_loop(scenario: CmgStationScenario):
-    """The LQR design and the attitude loop (one call into
-    :mod:`flexsat.cases.space_station_cmg`); Bryson maxima the design refuses are reported
-    under ``lqr``."""
+def _station_design(scenario: CmgStationScenario) -> StationDesign:
+    """The LQR design (:func:`flexsat.cases.space_station_cmg.design`); Bryson maxima or filters
+    the design refuses are reported under ``lqr``."""
     from flexsat.cases import space_station_cmg as st
 
     q = scenario.lqr
     data = scenario.build_data()
     try:
         maxima = st.BrysonMaxima(q.attitude, q.rate, q.momentum, q.momentum_integral)
-        design = st.design(data, maxima, tuple(q.pitch_filters), tuple(q.roll_yaw_filters))
+        return st.design(data, maxima, tuple(q.pitch_filters), tuple(q.roll_yaw_filters))
     except ValueError as exc:
         raise ScenarioError([locate("lqr", exc)]) from None
-    sim = scenario.simulation
-    return st.simulate_attitude(
-        design, sim.orbits * data.period, sim.disturbance, sim.initial_attitude
-    )
 
 
 def _initial_set(spec: StationRunSpec, peak_direction: np.ndarray) -> np.ndarray:
@@ -736,18 +749,38 @@ class CmgStationKind(ScenarioKind):
         return len(scenario.runs) + 1
 
     def plan(self, scenario: CmgStationScenario) -> Generator[Run, Any, StationResult]:
-        import functools
-
+        """The attitude loop, a :class:`~flexsat.scenarios.kind.Simulation` of the station
+        under its LQR law (:func:`flexsat.cases.space_station_cmg.attitude_simulation`), then
+        per run the station with its gimbals under the attitude law and the steering of the
+        momentum it demands, stopped at the first singular set
+        (:func:`flexsat.cases.space_station_cmg.cmg_simulation`)."""
         from flexsat.cases import space_station_cmg as st
 
-        run = yield Run("LQR design and attitude loop", functools.partial(_attitude_loop, scenario))
+        design = _station_design(scenario)
+        sim = scenario.simulation
+        duration = sim.orbits * design.data.period
+        try:
+            attitude = st.attitude_simulation(
+                design, duration, sim.disturbance, sim.initial_attitude
+            )
+        except ValueError as exc:
+            raise ScenarioError([locate("simulation", exc)]) from None
+        result = yield Run("LQR design and attitude loop", Simulation(*attitude), "simulation")
+        run = st.station_run(design, result.dataset, sim.disturbance, sim.initial_attitude)
         peak_dir = run.momentum[np.argmax(np.linalg.norm(run.momentum, axis=1))]
         loops, initial = [], []
         for index, spec in enumerate(scenario.runs):
+            path = "runs" + item_path(index, spec.label)
             s0 = _initial_set(spec, peak_dir)
             initial.append(s0)
-            loop = functools.partial(st.cmg_loop, run, s0, scenario.simulation.threshold)
-            loops.append((yield Run(spec.label, loop, "runs" + item_path(index, spec.label))))
+            try:
+                plant, law, config, options = st.cmg_simulation(
+                    design, duration, sim.disturbance, sim.initial_attitude, s0, sim.threshold
+                )
+            except ValueError as exc:
+                raise ScenarioError([locate(path, exc)]) from None
+            result = yield Run(spec.label, Simulation(plant, law, config, options), path)
+            loops.append(st.gimbal_history(plant, result.dataset))
         notes = (
             "The paper's AERO1 disturbance is not given (Geller, private communication): "
             "'aero_substitute' is Eq. (11) plus 0.5 ft-lb 3n and 4n harmonics on each axis and "

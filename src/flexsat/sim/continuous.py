@@ -402,26 +402,26 @@ def run(
                 stop_time is None or abs(touch - t[0]) < abs(stop_time - t[0])
             ):
                 stop_time = touch
-    times, y = sol.t, sol.y.T.reshape(-1, nc, plant.nx)
+    t_out, y = sol.t, sol.y.T.reshape(-1, nc, plant.nx)
     stopped_early = stop is not None and stop.terminal and stop_time is not None
     if stopped_early:
         assert stop_time is not None  # stopped_early says so
         t_end, x_end = stop_time, solution(stop_time)
-        before = (times - t_end) * np.sign(t[-1] - t[0]) < 0
-        times = np.append(times[before], t_end)
+        before = (t_out - t_end) * np.sign(t[-1] - t[0]) < 0
+        t_out = np.append(t_out[before], t_end)
         y = np.concatenate([y[before], x_end[None]])
     else:
         t_end, x_end = float(t[-1]), y[-1]
-    n_t = times.size
+    n_t = t_out.size
     states = np.ascontiguousarray(np.swapaxes(y, 0, 1))
     commands = np.empty((nc, n_t, loop.m))
     inputs = np.empty((nc, n_t, loop.m))
-    for k, tk in enumerate(times):
+    for k, tk in enumerate(t_out):
         commands[:, k], inputs[:, k] = loop.input(float(tk), states[:, k])
     if not (np.isfinite(states).all() and np.isfinite(inputs).all()):
         raise ValueError("times: the run left finite values (a diverging closed loop)")
     return ContinuousRun(
-        times, states, inputs, commands, stopped_early, stop_time, t_end, x_end, solution, dense.ts
+        t_out, states, inputs, commands, stopped_early, stop_time, t_end, x_end, solution, dense.ts
     )
 
 
@@ -459,6 +459,8 @@ def first_touch(
         return float(_margin(stop, np.array([tq]), solution(np.array([tq])))[0])
 
     vals = _margin(stop, grid, solution(grid))
+    if vals[0] <= 0:  # held at the start (a run that does not stop there)
+        return float(grid[0])
     for j in range(1, grid.size):
         if vals[j] <= 0:
             lo, hi = sorted((grid[j - 1], grid[j]))
