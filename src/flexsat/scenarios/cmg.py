@@ -80,7 +80,13 @@ def _angles(value, field):
         return value
     if not isinstance(value, list) or not value:
         raise ValueError(f"{field}: must be one of {NAMED_SETS} or a list of angles, got {value!r}")
-    out = np.array([float(to_si_array(v, "rad", field)) for v in value])
+    if any(isinstance(v, bool) or not isinstance(v, (int, float, str)) for v in value):
+        raise ValueError(
+            f"{field}: gimbal angles must be numbers or angles with units, got {value!r}"
+        )
+    out = np.array([to_si_array(v, "rad", field) for v in value], float)
+    if out.shape != (len(value),):
+        raise ValueError(f"{field}: each gimbal angle must be one value, got {value!r}")
     if not np.all(np.isfinite(out)):
         raise ValueError(f"{field}: angles must be finite, got {value!r}")
     return out.tolist()
@@ -94,6 +100,8 @@ MAX_DURATION = 3600.0
 
 
 def _vector3(value, field):
+    if isinstance(value, list) and any(isinstance(v, bool) for v in value):
+        raise ValueError(f"{field}: must be three finite numbers, got {value!r}")
     try:
         v = np.asarray(value, float) if isinstance(value, list) else None
     except (TypeError, ValueError):
@@ -140,7 +148,7 @@ class HarmonicDemand(SchemaSection):
             raise ValueError(f"frequency: must lie in [0, 100] Hz, got {value!r}")
         return value
 
-    @field_validator("constant", "amplitude")
+    @field_validator("constant", "amplitude", mode="before")
     @classmethod
     def _three(cls, value, info):
         return _vector3(value, info.field_name)
@@ -177,7 +185,7 @@ class CmgRunSpec(SchemaSection):
     def _initial(cls, value, info):
         return None if value is None else _angles(value, info.field_name)
 
-    @field_validator("demand")
+    @field_validator("demand", mode="before")
     @classmethod
     def _demand(cls, value):
         return _vector3(value, "demand") if isinstance(value, list) else value
