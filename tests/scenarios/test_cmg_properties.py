@@ -29,24 +29,32 @@ from flexsat.sim import SimulationDiverged
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
-#: seconds one document may take from text to outcome (load, plan, the runs)
-TIME_BOUND = 5.0
+#: seconds one document may take from text to outcome (load, plan, the runs): an unmutated
+#: base takes ~0.7 s on an idle core, ~2.5 s with 8 processes on 2 cores (measured); the bound
+#: catches a hang or a run whose work the schema failed to bound, not a slow machine
+TIME_BOUND = 10.0
 #: a valid document is run only when its work is this small: steering-run seconds × the largest
 #: demand rate (rotor momenta per second, or the harmonic's frequency), or station orbits × runs
-STEERING_WORK = 60.0
-STATION_WORK = 1.5
+STEERING_WORK = 20.0
+STATION_WORK = 0.5
 
 
 def _short_cmg(data: dict) -> dict:
+    """One run of each form (constant demand, null motion beside it, harmonic demand,
+    reorientation), 2 s each."""
     data = copy.deepcopy(data)
+    keep = ("x, zero gimbals (V3)", "x, zero + null motion", "Kurokawa (V6)")
+    data["runs"] = [r for r in data["runs"] if r["label"] in keep or "reorient_to" in r]
     for run in data["runs"]:
-        run["duration"] = "4 s"
+        run["duration"] = "2 s"
     return data
 
 
 def _short_station(data: dict) -> dict:
+    """A tenth of an orbit (571 s: V9's 494 s inside it), zero and preferred gimbals."""
     data = copy.deepcopy(data)
-    data["simulation"]["orbits"] = 0.25
+    data["simulation"]["orbits"] = 0.1
+    data["runs"] = [r for r in data["runs"] if r["initial"] != "alternate"]
     return data
 
 
@@ -226,7 +234,7 @@ def test_what_the_property_found_is_refused_by_field(name, path, value, message)
 
 @pytest.mark.parametrize(
     "path, value",
-    [(("runs", 0, "demand"), [True, 0, 0]), (("runs", 4, "demand", "constant"), [0, 0.3, False])],
+    [(("runs", 0, "demand"), [True, 0, 0]), (("runs", 2, "demand", "constant"), [0, 0.3, False])],
 )
 def test_a_boolean_demand_is_refused_by_field(path, value):
     data = copy.deepcopy(BASES["cmg"])
