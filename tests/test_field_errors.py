@@ -34,9 +34,6 @@ FIELD_IN_TEXT = re.compile(rf'ValueError\(\s*[rRfF]*"({HEAD}): ')
 #: this set and _locate.
 PENDING = {
     "sim/engine.py",
-    "scenarios/cmg.py",
-    "cases/cmg_pyramid.py",
-    "cases/space_station_cmg.py",
 }
 
 #: heads in the ``field: rule`` form that are not the field of an input

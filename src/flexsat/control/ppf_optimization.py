@@ -530,7 +530,7 @@ def _check_costs(J_init: float, goal: float, goal_field: str, rtol: float) -> No
     """Refuse a start cost or a goal the homotopy cannot follow in float64.
 
     J is a positive quadratic cost, so J_goal < 0 is meaningless (J_goal = 0, unreachable,
-    asks for the constrained minimum, L127). The targets
+    asks for the constrained minimum, §3.1). The targets
     J0(γ) = γ J_goal + (1 − γ) J_init are met to ``rtol`` · |J0|: with J_goal > J_init/rtol
     the J_init part is below that tolerance from the first step on, and a J_init that is not
     at least tiny/rtol (weights of 1e300 scale it to ~1e-306) leaves no digits to converge on.
