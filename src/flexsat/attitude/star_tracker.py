@@ -36,6 +36,7 @@ __all__ = [
     "MonteCarloResult",
     "monte_carlo",
     "check_field_load",
+    "check_identifiable",
     "random_attitudes",
     "score",
     "ARCSEC",
@@ -141,6 +142,36 @@ class StarTracker:
         per_pair = self.index.count(angles - self.tolerance, angles + self.tolerance) / angles.size
         return 0.5 * k * max(k - 1.0, 0.0) * per_pair
 
+    def expected_stars(self, missing_fraction: float = 0.0) -> FloatArray:
+        """Mean catalogue stars in each camera's field (n_cameras,): N_c Ω_c/4π of the N_c
+        catalogue stars camera c detects (Ω = 4 arcsin sin²(F/2), the solid angle of a square
+        field of full angle F), less the missing fraction; the mean over attitudes uniform on
+        SO(3), for a sky uniform on the sphere."""
+        out = []
+        for cam in self.cameras:
+            solid_angle = 4.0 * np.arcsin(np.sin(0.5 * cam.field_of_view) ** 2)
+            detected = np.count_nonzero(self.catalog.magnitudes <= cam.magnitude_limit)
+            out.append(detected * solid_angle / (4 * np.pi) * (1.0 - missing_fraction))
+        return np.array(out)
+
+    def identifiable_fraction(self, missing_fraction: float = 0.0) -> float:
+        r"""Probability that a random attitude puts >= 3 catalogue stars (one triangle, the
+        least a field's triplet needs) in at least ``min_fields`` fields: the star count of
+        camera c Poisson with mean μ_c (:meth:`expected_stars`), the fields independent,
+
+        .. math::  p_c = 1 - e^{-\mu_c}(1 + \mu_c + \mu_c^2/2)
+
+        and the count of fields with p_c summed by the Poisson-binomial recursion. An upper
+        bound on the identification rate (the matching itself can still fail)."""
+        mu = self.expected_stars(missing_fraction)
+        p = -np.expm1(-mu) - mu * np.exp(-mu) * (1.0 + 0.5 * mu)
+        fields = np.zeros(len(p) + 1)  # fields[j]: probability that j fields have enough
+        fields[0] = 1.0
+        for pc in np.clip(p, 0.0, 1.0):
+            fields[1:] = fields[1:] * (1 - pc) + fields[:-1] * pc
+            fields[0] *= 1 - pc
+        return float(fields[self.min_fields :].sum())
+
     def observe(
         self,
         attitude: npt.ArrayLike,
@@ -224,6 +255,42 @@ def check_field_load(tracker: StarTracker, false_stars: int, missing_fraction: f
         )
 
 
+#: fewest expected identifiable attitudes of a run (:func:`check_identifiable`): below it the
+#: run would, with more than 99 % probability, identify nothing
+MIN_IDENTIFIABLE = 0.01
+
+
+def check_identifiable(tracker: StarTracker, attitudes: int, missing_fraction: float) -> None:
+    """Refuse, before any frame is made, a run that can only identify nothing: fewer than
+    :data:`MIN_IDENTIFIABLE` of its ``attitudes`` expected to show >= 3 catalogue stars in
+    ``min_fields`` fields (:meth:`StarTracker.identifiable_fraction`): an empty or too faint
+    catalogue, a field of view too small for the sky, nearly every star missing.
+
+    Raises
+    ------
+    flexsat.input_checks.FieldError
+        Naming ``missing_fraction`` when the stars are there but dropped, else ``cameras``.
+    """
+    if attitudes * tracker.identifiable_fraction() < MIN_IDENTIFIABLE:
+        missing_fraction = 0.0  # the sky and the cameras alone identify nothing
+        field = "cameras"
+    elif attitudes * tracker.identifiable_fraction(missing_fraction) < MIN_IDENTIFIABLE:
+        field = "missing_fraction"
+    else:
+        return
+    expected = attitudes * tracker.identifiable_fraction(missing_fraction)
+    stars = tracker.expected_stars(missing_fraction)
+    raise FieldError(
+        field,
+        f"the fields of view hold on average {np.array2string(stars, precision=3)} catalogue "
+        f"stars ({len(tracker.catalog)} in the catalogue, fraction {missing_fraction:g} "
+        "missing), so "
+        f"about {expected:.3g} of the {attitudes} attitudes could show the 3 stars in "
+        f"{tracker.min_fields} fields an identification needs: the run could only report no "
+        "data; a wider field, a fainter magnitude limit or fewer missing stars",
+    )
+
+
 def monte_carlo(
     tracker: StarTracker,
     n: int = 1000,
@@ -234,6 +301,7 @@ def monte_carlo(
     """Identify ``n`` seeded random attitudes (module docstring). ``nees`` is δθᵀP⁻¹δθ per
     accepted attitude (χ² with 3 degrees of freedom when the covariance is right)."""
     check_field_load(tracker, false_stars, missing_fraction)
+    check_identifiable(tracker, n, missing_fraction)
     rng = np.random.default_rng(seed)
     att = random_attitudes(n, rng)
     n_cam = len(tracker.cameras)
