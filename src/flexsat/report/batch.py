@@ -35,7 +35,9 @@ from flexsat.units import to_si
 
 
 def _metrics(ds) -> dict:
-    return {k[len("metric_") :]: ds[k].values for k in ds.data_vars if k.startswith("metric_")}
+    return {
+        k[len("metric_") :]: ds[k].values for k in sorted(ds.data_vars) if k.startswith("metric_")
+    }
 
 
 def _grid_axes(result) -> list[tuple[str, np.ndarray]]:
