@@ -64,12 +64,12 @@ def test_report_files_table_and_netcdf_round_trip(result, tmp_path):
 
 
 def test_report_of_a_run_with_nothing_identified_states_no_data(tmp_path):
-    # cameras limited to m = 4 on the synthetic sky (293 stars: a 12° field holds 1.0 on
-    # average, 3 stars in both fields with probability 0.7 %): identification is
+    # cameras limited to m = 4.4 on the synthetic sky (463 stars: a 12° field holds 1.6 on
+    # average; the 4 stars of 3 triplets in both fields with probability 0.6 %): identification is
     # possible (the run is not refused) but none of the 20 attitudes gets it; the metrics of
     # the errors are null with the reason, and metrics.json is strict JSON
     spec = load_scenario(
-        SMALL.replace("centroid_noise: 0.1", "centroid_noise: 0.1, magnitude_limit: 4.0")
+        SMALL.replace("centroid_noise: 0.1", "centroid_noise: 0.1, magnitude_limit: 4.4")
     )
     result = run_scenario(spec)
     rec = result.metrics_records()[0]

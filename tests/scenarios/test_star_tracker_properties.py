@@ -15,6 +15,7 @@ import math
 import time
 from pathlib import Path
 
+import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -132,3 +133,42 @@ def test_mutated_star_tracker_documents_end_cleanly_and_quickly(document):
 
 def test_the_small_base_runs():
     assert _outcome(yaml.safe_dump(BASE, sort_keys=False)) == "ran"
+
+
+@pytest.mark.parametrize(
+    "path, value",
+    [
+        (("catalog", "magnitude_limit"), 1e308),
+        (("catalog", "magnitude_limit"), 30),
+        (("catalog", "magnitude_limit"), -5),
+        (("catalog", "seed"), 2**70),
+        (("cameras", 0, "field_of_view"), "1e-6 deg"),
+        (("cameras", 0, "field_of_view"), "179 deg"),
+        (("cameras", 0, "field_of_view"), "180 deg"),
+        (("cameras", 0, "field_of_view"), "400 deg"),
+        (("cameras", 0, "n_pixels"), 2**70),
+        (("cameras", 0, "n_pixels"), 2),
+        (("cameras", 0, "pixel_pitch"), "1e-300 m"),
+        (("cameras", 0, "centroid_noise"), 1e308),
+        (("cameras", 0, "magnitude_limit"), -30),
+        (("cameras", 1, "mounting"), ["nan deg", "0 deg", "0 deg"]),
+        (("cameras", 1, "mounting"), ["1e300 deg", "0 deg", "0 deg"]),
+        (("cameras", 1, "mounting"), ["0 deg"]),
+        (("identification", "tolerance"), "1e-300 arcsec"),
+        (("identification", "tolerance"), "180 deg"),
+        (("identification", "min_triplets"), 10**9),
+        (("identification", "min_fields"), 3),
+        (("runs", 0, "false_stars"), 1000),
+        (("runs", 0, "missing_fraction"), 0.999),
+        (("runs", 0, "seed"), 2**70),
+    ],
+)
+def test_extreme_values_end_cleanly(path, value):
+    data = copy.deepcopy(BASE)
+    node = data
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = value
+    start = time.perf_counter()
+    assert _outcome(yaml.safe_dump(data, sort_keys=False)) in ("error", "ran", "valid")
+    assert time.perf_counter() - start < TIME_BOUND

@@ -33,10 +33,15 @@ import numpy.typing as npt
 
 from flexsat.attitude.star_catalog import StarCatalog
 from flexsat.identify.photogrammetry import Camera, euler_angles, project, rotation_matrix
-from flexsat.input_checks import require_count, require_positive_scalar
+from flexsat.input_checks import FieldError, require_count, require_positive_scalar
 from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike, to_si_array
 
-__all__ = ["StarCamera", "StarFrame"]
+__all__ = ["MIN_PIXEL_PITCH", "StarCamera", "StarFrame"]
+
+#: smallest pixel pitch, m: below any detector (diffraction makes pixels under half a
+#: wavelength pointless), and far enough from the float range that the focal length and the
+#: image coordinates keep their digits
+MIN_PIXEL_PITCH = 1e-7
 
 
 @dataclass(frozen=True)
@@ -123,9 +128,14 @@ class StarCamera:
         if n < 2:
             raise ValueError(f"n_pixels: must be >= 2, got {n}")
         object.__setattr__(self, "n_pixels", n)
-        object.__setattr__(
-            self, "pixel_pitch", require_positive_scalar(self.pixel_pitch, "pixel_pitch", "m")
-        )
+        pitch = require_positive_scalar(self.pixel_pitch, "pixel_pitch", "m")
+        if pitch < MIN_PIXEL_PITCH:
+            raise FieldError(
+                "pixel_pitch",
+                f"{pitch:.3g} m is below {MIN_PIXEL_PITCH:g} m, smaller than any detector's "
+                "pixel (visible light's wavelength is 0.4-0.7 µm)",
+            )
+        object.__setattr__(self, "pixel_pitch", pitch)
         noise = to_si_array(self.centroid_noise, "", "centroid_noise")
         if noise.ndim != 0 or not np.isfinite(noise) or noise < 0:
             raise ValueError(

@@ -114,9 +114,16 @@ class StarTracker:
             )
         if index not in _INDEXES:
             raise FieldError("index", f"must be 'kvector' or 'brute', got {index!r}")
+        widest = max(c.max_pair_angle for c in cams)
+        if self.tolerance >= widest:
+            raise FieldError(
+                "tolerance",
+                f"{self.tolerance / ARCSEC:.3g}″ is not below the widest inter-star angle of "
+                f"a field, {widest / ARCSEC:.3g}″: every pair would match every pair",
+            )
         self.cameras = tuple(cams)
         self.catalog = catalog.brighter_than(max(c.magnitude_limit for c in cams))
-        max_angle = max(c.max_pair_angle for c in cams) + self.tolerance
+        max_angle = widest + self.tolerance
         self.index = _INDEXES[index](self.catalog, max_angle)
 
     def expected_candidates(self, false_stars: int = 0, missing_fraction: float = 0.0) -> float:
@@ -154,17 +161,29 @@ class StarTracker:
             out.append(detected * solid_angle / (4 * np.pi) * (1.0 - missing_fraction))
         return np.array(out)
 
-    def identifiable_fraction(self, missing_fraction: float = 0.0) -> float:
-        r"""Probability that a random attitude puts >= 3 catalogue stars (one triangle, the
-        least a field's triplet needs) in at least ``min_fields`` fields: the star count of
-        camera c Poisson with mean μ_c (:meth:`expected_stars`), the fields independent,
+    @property
+    def stars_needed(self) -> int:
+        """Fewest stars in a field whose triangles can reach ``min_triplets``: the smallest
+        k >= 3 with C(k, 3) >= min_triplets (a field of k stars has C(k, 3) triplets)."""
+        k = max(3, int(np.cbrt(6.0 * self.min_triplets)))
+        while k * (k - 1) * (k - 2) // 6 < self.min_triplets:
+            k += 1
+        return k
 
-        .. math::  p_c = 1 - e^{-\mu_c}(1 + \mu_c + \mu_c^2/2)
+    def identifiable_fraction(
+        self, missing_fraction: float = 0.0, stars: int | None = None
+    ) -> float:
+        r"""Probability that a random attitude puts at least :attr:`stars_needed` catalogue
+        stars (3, one triangle, for up to one triplet) in at least ``min_fields`` fields: the
+        star count of camera c Poisson with mean μ_c (:meth:`expected_stars`), the fields
+        independent, p_c = P(N_c >= k) (for k = 3,
+        :math:`1 - e^{-\mu_c}(1 + \mu_c + \mu_c^2/2)`), and the count of fields with p_c
+        summed by the Poisson-binomial recursion. An upper bound on the identification rate
+        (the matching itself can still fail). ``stars`` replaces :attr:`stars_needed`."""
+        from scipy.stats import poisson
 
-        and the count of fields with p_c summed by the Poisson-binomial recursion. An upper
-        bound on the identification rate (the matching itself can still fail)."""
         mu = self.expected_stars(missing_fraction)
-        p = -np.expm1(-mu) - mu * np.exp(-mu) * (1.0 + 0.5 * mu)
+        p = poisson.sf((self.stars_needed if stars is None else stars) - 1, mu)
         fields = np.zeros(len(p) + 1)  # fields[j]: probability that j fields have enough
         fields[0] = 1.0
         for pc in np.clip(p, 0.0, 1.0):
@@ -242,8 +261,17 @@ def check_field_load(tracker: StarTracker, false_stars: int, missing_fraction: f
     Raises
     ------
     flexsat.input_checks.FieldError
-        Naming ``false_stars``.
+        Naming ``tolerance`` when the real stars alone exceed the limit, else ``false_stars``.
     """
+    bare = tracker.expected_candidates(0, missing_fraction)
+    if bare > limits.MAX_PAIR_CANDIDATES:  # the real stars alone: the tolerance is too wide
+        raise FieldError(
+            "tolerance",
+            f"{tracker.tolerance / ARCSEC:.3g}″ would make about {bare:.3g} candidate catalogue "
+            f"matches per field from the real stars alone, above the limit "
+            f"{limits.MAX_PAIR_CANDIDATES:,} (flexsat.limits.MAX_PAIR_CANDIDATES): the "
+            "identification would crawl; a smaller tolerance",
+        )
     expected = tracker.expected_candidates(false_stars, missing_fraction)
     if expected > limits.MAX_PAIR_CANDIDATES:
         raise FieldError(
@@ -269,11 +297,15 @@ def check_identifiable(tracker: StarTracker, attitudes: int, missing_fraction: f
     Raises
     ------
     flexsat.input_checks.FieldError
-        Naming ``missing_fraction`` when the stars are there but dropped, else ``cameras``.
+        Naming ``missing_fraction`` when the stars are there but dropped, ``min_triplets`` when
+        no field can hold the stars its triplets need, else ``cameras``.
     """
-    if attitudes * tracker.identifiable_fraction() < MIN_IDENTIFIABLE:
+    if attitudes * tracker.identifiable_fraction(0.0, stars=3) < MIN_IDENTIFIABLE:
         missing_fraction = 0.0  # the sky and the cameras alone identify nothing
         field = "cameras"
+    elif attitudes * tracker.identifiable_fraction() < MIN_IDENTIFIABLE:
+        missing_fraction = 0.0  # no field holds the stars of that many triplets
+        field = "min_triplets"
     elif attitudes * tracker.identifiable_fraction(missing_fraction) < MIN_IDENTIFIABLE:
         field = "missing_fraction"
     else:
@@ -285,9 +317,10 @@ def check_identifiable(tracker: StarTracker, attitudes: int, missing_fraction: f
         f"the fields of view hold on average {np.array2string(stars, precision=3)} catalogue "
         f"stars ({len(tracker.catalog)} in the catalogue, fraction {missing_fraction:g} "
         "missing), so "
-        f"about {expected:.3g} of the {attitudes} attitudes could show the 3 stars in "
-        f"{tracker.min_fields} fields an identification needs: the run could only report no "
-        "data; a wider field, a fainter magnitude limit or fewer missing stars",
+        f"about {expected:.3g} of the {attitudes} attitudes could show the "
+        f"{tracker.stars_needed} stars in {tracker.min_fields} fields an identification needs "
+        f"({tracker.min_triplets} triplets a field): the run could only report no data; a "
+        "wider field, a fainter magnitude limit, fewer missing stars or fewer triplets",
     )
 
 

@@ -320,9 +320,12 @@ class StarTrackerKind(ScenarioKind):
                 check_field_load(tracker, run.false_stars, run.missing_fraction)
                 check_identifiable(tracker, run.attitudes, run.missing_fraction)
             except ValueError as exc:
-                # a sky the cameras cannot identify in is the cameras' problem, not the run's
-                if getattr(exc, "field", None) == "cameras":
-                    raise ScenarioError([locate("", exc)]) from None
+                # a sky, cameras or acceptance rule that fails every run is named once, in
+                # its own section
+                field = getattr(exc, "field", None)
+                if field in ("cameras", "min_triplets", "tolerance"):
+                    where = "" if field == "cameras" else "identification"
+                    raise ScenarioError([locate(where, exc)]) from None
                 problems.append(locate("runs" + item_path(index, run.label), exc))
         if problems:
             raise ScenarioError(problems)
