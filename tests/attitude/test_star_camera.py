@@ -113,3 +113,8 @@ def test_a_pixel_below_any_detector_s_is_refused():
     # 1e-300 m made the focal length and image coordinates subnormal (divide by zero)
     with pytest.raises(FieldError, match=r"pixel_pitch: 1e-300 m is below 1e-07 m"):
         StarCamera(pixel_pitch="1e-300 m")
+
+
+def test_mountings_must_be_three_angles_not_a_nested_list():
+    with pytest.raises(ValueError, match=r"mounting: must be 3 finite"):
+        StarCamera(mounting=[[0.0, 0.0, 0.0]])

@@ -176,3 +176,9 @@ def test_acceptance_rules_that_can_only_identify_nothing_are_refused_by_name(tra
     wide = StarTracker(tracker.cameras, synthetic_sky(6.5, seed=0), tolerance="10 deg")
     with pytest.raises(FieldError, match=r"^tolerance: .*real stars alone"):
         monte_carlo(wide, n=1)
+
+
+def test_an_empty_monte_carlo_is_refused_as_such(tracker):
+    # n = 0 used to reach the no-data check and be blamed on the cameras
+    with pytest.raises(FieldError, match=r"^n: must be a positive integer"):
+        monte_carlo(tracker, n=0)

@@ -86,3 +86,14 @@ def test_the_paper_s_examples_are_well_within_the_limit():
         tether = make_law(e.law, e.gains, e.final_length)
         cost = continuous_evaluations(tether, INITIAL, 2 * np.pi * e.orbits)
         assert cost < 0.3 * limits.MAX_ADAPTIVE_EVALUATIONS, e.key
+
+
+@pytest.mark.parametrize(
+    "initial, message",
+    [([np.nan] * 6, r"initial: must be finite"), ([1.0, 0.0], r"initial: must be \[λ")],
+)
+def test_a_bad_initial_state_is_named_not_blamed_on_the_gains(initial, message):
+    # a NaN state made the cost estimate NaN, which was refused as "gains"
+    tether = make_law("coupled", GAINS["coupled"], 0.01)
+    with pytest.raises(FieldError, match=message):
+        run_law(tether, initial, np.linspace(0.0, 0.1, 5))

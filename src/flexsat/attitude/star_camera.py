@@ -149,8 +149,8 @@ class StarCamera:
                 f"magnitude_limit: must be one finite number, got {self.magnitude_limit!r}"
             )
         object.__setattr__(self, "magnitude_limit", float(lim))
-        ang = to_si_array(self.mounting, "rad", "mounting").reshape(-1)
-        if ang.size != 3 or not np.all(np.isfinite(ang)):
+        ang = to_si_array(self.mounting, "rad", "mounting")
+        if ang.shape != (3,) or not np.all(np.isfinite(ang)):
             raise ValueError(
                 f"mounting: must be 3 finite 3-2-1 Euler angles, got {self.mounting!r}"
             )

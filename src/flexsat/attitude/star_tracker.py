@@ -333,6 +333,7 @@ def monte_carlo(
 ) -> MonteCarloResult:
     """Identify ``n`` seeded random attitudes (module docstring). ``nees`` is δθᵀP⁻¹δθ per
     accepted attitude (χ² with 3 degrees of freedom when the covariance is right)."""
+    n = require_count(n, "n")
     check_field_load(tracker, false_stars, missing_fraction)
     check_identifiable(tracker, n, missing_fraction)
     rng = np.random.default_rng(seed)

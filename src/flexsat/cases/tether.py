@@ -302,6 +302,7 @@ def tether_simulation(
         For a bad grid, mode or state, or gains too stiff for the continuous integrator
         (:func:`check_continuous_cost`).
     """
+    from flexsat.input_checks import FieldError, require_finite
     from flexsat.sim.config import SimConfig
 
     if integrator not in INTEGRATORS:
@@ -309,8 +310,13 @@ def tether_simulation(
     tau = np.asarray(tau, float)
     if tau.ndim != 1 or tau.size < 2 or tau[0] != 0 or not np.allclose(np.diff(tau), tau[1]):
         raise ValueError(f"tau: must be a uniform grid from 0 of >= 2 times, got {tau!r}")
+    start = require_finite(initial, "initial")
+    if start.ndim not in (1, 2) or start.shape[-1] != 6:
+        raise FieldError(
+            "initial", f"must be [λ, θ, φ, λ', θ', φ'] (6,) or (n_cases, 6), got {start.shape}"
+        )
     if integrator == "continuous":
-        check_continuous_cost(law, initial, float(tau[-1]))
+        check_continuous_cost(law, start, float(tau[-1]))
     rate = law.writes[0] == "reel_rate"
     scales = law.scales
     plant = TetheredSubsatellite(scales, control="rate" if rate else "tension")

@@ -43,7 +43,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.input_checks import FieldError, require_finite, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_finite,
+    require_positive_scalar,
+)
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -174,13 +178,16 @@ class TetherScales:
         orbit_rate: QuantityLike | None = None,
         altitude: QuantityLike | None = None,
     ) -> None:
-        object.__setattr__(self, "mass", float(require_positive(mass, "mass", "kg")))
-        object.__setattr__(self, "length", float(require_positive(length, "length", "m")))
+        object.__setattr__(self, "mass", require_positive_scalar(mass, "mass", "kg"))
+        object.__setattr__(self, "length", require_positive_scalar(length, "length", "m"))
         if orbit_rate is not None and altitude is not None:
             raise ValueError("orbit_rate: give the orbit rate or the altitude, not both")
         height = None
         if altitude is not None:
-            height = float(require_finite(altitude, "altitude", "m"))
+            height = require_finite(altitude, "altitude", "m")
+            if height.ndim != 0:
+                raise FieldError("altitude", f"must be one altitude, got shape {height.shape}")
+            height = float(height)
             if height < 0:
                 raise ValueError(
                     f"altitude: must be >= 0 (above the Earth's surface), got {height} m"
@@ -193,7 +200,7 @@ class TetherScales:
                 )
             rate = float(np.sqrt(EARTH_MU / (EARTH_RADIUS + height) ** 3))
         elif orbit_rate is not None:
-            rate = float(require_positive(orbit_rate, "orbit_rate", "rad/s"))
+            rate = require_positive_scalar(orbit_rate, "orbit_rate", "rad/s")
         else:  # neither: the nondimensional form itself
             rate = 1.0
         object.__setattr__(self, "orbit_rate", rate)
@@ -201,7 +208,7 @@ class TetherScales:
         # the nondimensional form divides by these units: each a normal, finite float
         units = {"force mΩ²L": self.force, "speed LΩ": self.speed, "impulse mΩL": self.impulse}
         for name, unit in units.items():
-            if not (np.isfinite(unit) and np.isfinite(1.0 / unit) and unit >= 1e-300):
+            if not (np.isfinite(unit) and unit >= 1e-300):  # so that 1/unit is finite too
                 raise FieldError(
                     "mass",
                     f"the mass {self.mass:.3g} kg, length {self.length:.3g} m and orbit rate "
