@@ -29,7 +29,7 @@ from scipy import signal
 from scipy.linalg import block_diag
 
 from flexsat.identify.measurements import Channel
-from flexsat.input_checks import require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 
 __all__ = [
     "Excitation",
@@ -106,6 +106,14 @@ def _load(load: str, node, direction, name="") -> Channel:
     return Channel.at(load, node, direction, name=name)
 
 
+def _amplitude(value) -> float:
+    """One finite amplitude (N or N m)."""
+    arr = require_finite(value, "amplitude")
+    if arr.ndim != 0:
+        raise FieldError("amplitude", f"must be one number, got shape {arr.shape}")
+    return float(arr)
+
+
 def impulse_hammer(node, direction, amplitude=1.0, width=None, load="force") -> Excitation:
     """Half-sine hammer pulse of peak ``amplitude`` (N) and duration ``width`` (s).
 
@@ -114,14 +122,14 @@ def impulse_hammer(node, direction, amplitude=1.0, width=None, load="force") -> 
     """
     if width is not None:
         require_positive(width, "width")
-    return Excitation("impulse", _load(load, node, direction), float(amplitude), width=width)
+    return Excitation("impulse", _load(load, node, direction), _amplitude(amplitude), width=width)
 
 
 def harmonic_shaker(node, direction, amplitude, frequency, load="force") -> Excitation:
     """Sine force (or torque) of ``amplitude`` and ``frequency`` (Hz) from t = 0."""
     require_positive(frequency, "frequency")
     return Excitation(
-        "harmonic", _load(load, node, direction), float(amplitude), frequency=float(frequency)
+        "harmonic", _load(load, node, direction), _amplitude(amplitude), frequency=float(frequency)
     )
 
 
@@ -133,8 +141,8 @@ def random_force(node, direction, rms=1.0, load="force") -> Excitation:
 def torque_history(node, axis, values) -> Excitation:
     """User torque history (e.g. a reaction wheel), N m, one value per sample (zero after)."""
     vals = np.asarray(values, dtype=float)
-    if vals.ndim != 1 or not np.all(np.isfinite(vals)):
-        raise ValueError("values: must be a finite 1-D array of torque samples")
+    if vals.ndim != 1 or vals.size == 0 or not np.all(np.isfinite(vals)):
+        raise ValueError("values: must be a finite, non-empty 1-D array of torque samples")
     return Excitation("history", _load("torque", node, axis), 1.0, values=vals)
 
 
