@@ -18,7 +18,12 @@ import numpy as np
 from flexsat.dynamics.tether import ClosedLoopRun, TetheredSubsatellite, TetherScales
 
 if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.control.tether_laws import CoupledTetherLaw, DecoupledTetherLaw, TetherRateLaw
     from flexsat.sim.config import SimConfig
+
+    TetherLaw = DecoupledTetherLaw | CoupledTetherLaw | TetherRateLaw
 
 SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12, L4258-L4531"
 #: settling bands of a retrieval: |θ| within the runs' initial 5° (rad), |λ − λ_f| within 2 %
@@ -150,7 +155,7 @@ EVALUATIONS_PER_RADIAN = 1000.0
 EVALUATIONS_PER_DECAY = 20.0
 
 
-def closed_loop_rhs(law, x):
+def closed_loop_rhs(law: TetherLaw, x: np.ndarray) -> np.ndarray:
     """x' of the closed loop (Eq. 4 with the law), nondimensional, at x (..., 6): λ' is the
     law's under rate control (then x[..., 3] is ignored and its rate is 0)."""
     from flexsat.dynamics.tether import accelerations
@@ -163,7 +168,7 @@ def closed_loop_rhs(law, x):
     return np.concatenate([x[..., 3:], accelerations(x, u, F)], -1)
 
 
-def closed_loop_rates(law, x) -> tuple[np.ndarray, np.ndarray]:
+def closed_loop_rates(law: TetherLaw, x: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """(fastest oscillation |Im s|, fastest decay or growth |Re s|) per case of the closed
     loop linearised at the nondimensional state x (6,) or (n_cases, 6), rad per unit τ: the
     eigenvalues s of its Jacobian, by central differences (step 1e-6 relative)."""
@@ -181,7 +186,7 @@ def closed_loop_rates(law, x) -> tuple[np.ndarray, np.ndarray]:
     return np.abs(s.imag).max(-1), np.abs(s.real).max(-1)
 
 
-def continuous_evaluations(law, initial, tau_end: float) -> float:
+def continuous_evaluations(law: TetherLaw, initial: npt.ArrayLike, tau_end: float) -> float:
     r"""Estimated right-hand-side evaluations of a continuous-law run of ``law`` from
     ``initial`` to τ = ``tau_end``: an explicit Runge-Kutta method takes steps h with
     h|s| bounded by its accuracy on an oscillation (|Im s|) or its stability on a decay
@@ -203,7 +208,7 @@ def continuous_evaluations(law, initial, tau_end: float) -> float:
     return tau_end * cost
 
 
-def check_continuous_cost(law, initial, tau_end: float) -> None:
+def check_continuous_cost(law: TetherLaw, initial: npt.ArrayLike, tau_end: float) -> None:
     """Refuse a continuous-law run whose :func:`continuous_evaluations` exceed
     :data:`flexsat.limits.MAX_ADAPTIVE_EVALUATIONS` (stiff gains would make the adaptive
     integrator crawl for hours).
