@@ -25,6 +25,11 @@ MAX_SUBSTEPS = 1_000
 #: integrator steps of one run (control samples × substeps): minutes on one core
 MAX_INTEGRATOR_STEPS = 20_000_000
 
+#: right-hand-side evaluations of one continuous-law run (the adaptive DOP853 of
+#: :mod:`flexsat.sim.continuous`, a Python law and plant: ~0.3 ms each for the tether, so the
+#: limit is ~5 minutes); estimated from the closed loop's fastest rate before the run
+MAX_ADAPTIVE_EVALUATIONS = 1_000_000
+
 #: estimated memory of one run's histories, bytes (samples × cases × recorded values × 8)
 MAX_MEMORY = 2 * 1024**3
 
@@ -139,6 +144,7 @@ def check_memory(n_bytes: int, field: str, what: str) -> None:
 
 
 __all__ = [
+    "MAX_ADAPTIVE_EVALUATIONS",
     "MAX_CASES",
     "MAX_CATALOG_PAIRS",
     "MAX_CATALOG_STARS",

@@ -36,7 +36,12 @@ from flexsat.identify.photogrammetry import Camera, euler_angles, project, rotat
 from flexsat.input_checks import FieldError, require_count, require_positive_scalar
 from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike, to_si_array
 
-__all__ = ["StarCamera", "StarFrame"]
+__all__ = ["MIN_PIXEL_PITCH", "StarCamera", "StarFrame"]
+
+#: smallest pixel pitch, m: below any detector (diffraction makes pixels under half a
+#: wavelength pointless), and far enough from the float range that the focal length and the
+#: image coordinates keep their digits
+MIN_PIXEL_PITCH = 1e-7
 
 
 @dataclass(frozen=True)
@@ -123,9 +128,14 @@ class StarCamera:
         if n < 2:
             raise FieldError("n_pixels", f"must be >= 2, got {n}")
         object.__setattr__(self, "n_pixels", n)
-        object.__setattr__(
-            self, "pixel_pitch", require_positive_scalar(self.pixel_pitch, "pixel_pitch", "m")
-        )
+        pitch = require_positive_scalar(self.pixel_pitch, "pixel_pitch", "m")
+        if pitch < MIN_PIXEL_PITCH:
+            raise FieldError(
+                "pixel_pitch",
+                f"{pitch:.3g} m is below {MIN_PIXEL_PITCH:g} m, smaller than any detector's "
+                "pixel (visible light's wavelength is 0.4-0.7 µm)",
+            )
+        object.__setattr__(self, "pixel_pitch", pitch)
         noise = to_si_array(self.centroid_noise, "", "centroid_noise")
         if noise.ndim != 0 or not np.isfinite(noise) or noise < 0:
             raise FieldError(
@@ -139,8 +149,8 @@ class StarCamera:
                 "magnitude_limit", f"must be one finite number, got {self.magnitude_limit!r}"
             )
         object.__setattr__(self, "magnitude_limit", float(lim))
-        ang = to_si_array(self.mounting, "rad", "mounting").reshape(-1)
-        if ang.size != 3 or not np.all(np.isfinite(ang)):
+        ang = to_si_array(self.mounting, "rad", "mounting")
+        if ang.shape != (3,) or not np.all(np.isfinite(ang)):
             raise FieldError(
                 "mounting", f"must be 3 finite 3-2-1 Euler angles, got {self.mounting!r}"
             )

@@ -45,7 +45,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.input_checks import FieldError, require_finite, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_finite,
+    require_positive_scalar,
+)
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -62,6 +66,7 @@ __all__ = [
     "integral_of_motion",
     "integral_of_motion_rate",
     "require_lengths",
+    "MAX_ALTITUDE",
     "MIN_LENGTH",
     "ClosedLoopRun",
     "CONTROLS",
@@ -71,6 +76,10 @@ __all__ = [
 EARTH_MU = 3.986004418e14
 #: Earth's equatorial radius, m (WGS 84)
 EARTH_RADIUS = 6378137.0
+#: highest altitude of a circular Earth orbit here, m: the Earth's Hill sphere radius
+#: a (m/3M)^(1/3) ≈ 1.5e9 m (1 au, Earth/Sun mass ratio 3.0e-6), beyond which the Sun, not
+#: the Earth, holds the orbit
+MAX_ALTITUDE = 1.5e9
 #: a nondimensional length below which the tether is taken as collapsed (the plant's
 #: :meth:`TetheredSubsatellite.domain_margin`: a continuous run stops there): Eq. 4's λ'/λ
 #: terms are singular at λ = 0, and an adaptive integrator approaching it takes steps ~λ, never
@@ -173,24 +182,43 @@ class TetherScales:
         orbit_rate: QuantityLike | None = None,
         altitude: QuantityLike | None = None,
     ) -> None:
-        object.__setattr__(self, "mass", float(require_positive(mass, "mass", "kg")))
-        object.__setattr__(self, "length", float(require_positive(length, "length", "m")))
+        object.__setattr__(self, "mass", require_positive_scalar(mass, "mass", "kg"))
+        object.__setattr__(self, "length", require_positive_scalar(length, "length", "m"))
         if orbit_rate is not None and altitude is not None:
             raise FieldError("orbit_rate", "give the orbit rate or the altitude, not both")
-        height = None
+        height: float | None = None
         if altitude is not None:
-            height = float(require_finite(altitude, "altitude", "m"))
+            given = require_finite(altitude, "altitude", "m")
+            if given.ndim != 0:
+                raise FieldError("altitude", f"must be one altitude, got shape {given.shape}")
+            height = float(given)
             if height < 0:
                 raise FieldError(
                     "altitude", f"must be >= 0 (above the Earth's surface), got {height} m"
                 )
+            if height > MAX_ALTITUDE:
+                raise FieldError(
+                    "altitude",
+                    f"{height:.3g} m is beyond the Earth's Hill sphere ({MAX_ALTITUDE:.2g} m): "
+                    "no circular Earth orbit there",
+                )
             rate = float(np.sqrt(EARTH_MU / (EARTH_RADIUS + height) ** 3))
         elif orbit_rate is not None:
-            rate = float(require_positive(orbit_rate, "orbit_rate", "rad/s"))
+            rate = require_positive_scalar(orbit_rate, "orbit_rate", "rad/s")
         else:  # neither: the nondimensional form itself
             rate = 1.0
         object.__setattr__(self, "orbit_rate", rate)
         object.__setattr__(self, "altitude", height)
+        # the nondimensional form divides by these units: each a normal, finite float
+        units = {"force mΩ²L": self.force, "speed LΩ": self.speed, "impulse mΩL": self.impulse}
+        for name, unit in units.items():
+            if not (np.isfinite(unit) and unit >= 1e-300):  # so that 1/unit is finite too
+                raise FieldError(
+                    "mass",
+                    f"the mass {self.mass:.3g} kg, length {self.length:.3g} m and orbit rate "
+                    f"{rate:.3g} rad/s make the {name} unit {unit:.3g} (SI), beyond a float's "
+                    "range",
+                )
 
     @property
     def force(self) -> float:

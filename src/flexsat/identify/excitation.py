@@ -32,7 +32,7 @@ from scipy import signal
 from scipy.linalg import block_diag
 
 from flexsat.identify.measurements import Channel
-from flexsat.input_checks import FieldError, require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
@@ -123,6 +123,14 @@ def _load(load: str, node: int, direction: str, name: str = "") -> Channel:
     return Channel.at(load, node, direction, name=name)
 
 
+def _amplitude(value: float) -> float:
+    """One finite amplitude (N or N m)."""
+    arr = require_finite(value, "amplitude")
+    if arr.ndim != 0:
+        raise FieldError("amplitude", f"must be one number, got shape {arr.shape}")
+    return float(arr)
+
+
 def impulse_hammer(
     node: int,
     direction: str,
@@ -137,7 +145,7 @@ def impulse_hammer(
     """
     if width is not None:
         require_positive(width, "width")
-    return Excitation("impulse", _load(load, node, direction), float(amplitude), width=width)
+    return Excitation("impulse", _load(load, node, direction), _amplitude(amplitude), width=width)
 
 
 def harmonic_shaker(
@@ -146,7 +154,7 @@ def harmonic_shaker(
     """Sine force (or torque) of ``amplitude`` and ``frequency`` (Hz) from t = 0."""
     require_positive(frequency, "frequency")
     return Excitation(
-        "harmonic", _load(load, node, direction), float(amplitude), frequency=float(frequency)
+        "harmonic", _load(load, node, direction), _amplitude(amplitude), frequency=float(frequency)
     )
 
 
@@ -158,8 +166,8 @@ def random_force(node: int, direction: str, rms: float = 1.0, load: str = "force
 def torque_history(node: int, axis: str, values: npt.ArrayLike) -> Excitation:
     """User torque history (e.g. a reaction wheel), N m, one value per sample (zero after)."""
     vals = np.asarray(values, dtype=float)
-    if vals.ndim != 1 or not np.all(np.isfinite(vals)):
-        raise FieldError("values", "must be a finite 1-D array of torque samples")
+    if vals.ndim != 1 or vals.size == 0 or not np.all(np.isfinite(vals)):
+        raise FieldError("values", "must be a finite, non-empty 1-D array of torque samples")
     return Excitation("history", _load("torque", node, axis), 1.0, values=vals)
 
 

@@ -14,40 +14,31 @@ confidence band against N. A sweep over exactly (α, u_max) also gets the Junkin
 Pollock & Rahman 1990 trade surfaces
 (Att. 3 Figs. 5-7: T, E(T), μ_max; :func:`~flexsat.scenarios.batch.trade_surfaces`), also in
 ``summary.json``.
+
+The files are the same for the same scenario however it ran: the wall time and how many chunks
+a run found already done in its store (a resumed run) vary between identical runs, so they stay
+on the result (``wall_s``, ``chunks_run``, ``chunks_skipped``) and out of ``summary.json`` and
+``index.html``.
 """
 
 from __future__ import annotations
 
 import html
-import json
-import math
 import shutil
 from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 
+from flexsat.report.json_data import dumps
 from flexsat.report.page import images_html
 from flexsat.units import to_si
 
 
-def _clean(value):
-    """JSON-ready: NaN and inf become None, numpy numbers plain."""
-    if isinstance(value, dict):
-        return {str(k): _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.ndarray):
-        return _clean(value.tolist())
-    return value
-
-
 def _metrics(ds) -> dict:
-    return {k[len("metric_") :]: ds[k].values for k in ds.data_vars if k.startswith("metric_")}
+    return {
+        k[len("metric_") :]: ds[k].values for k in sorted(ds.data_vars) if k.startswith("metric_")
+    }
 
 
 def _grid_axes(result) -> list[tuple[str, np.ndarray]]:
@@ -245,14 +236,11 @@ def write_data(result, ds, folder: Path) -> None:
         "kind": result.scenario.kind,
         "cases": int(ds.sizes["case"]),
         "sampling": result.scenario.sampling,
-        "wall_s": result.wall_s,
         **result.summary,
         "sensitivity": result.sensitivity,
         "trade_surfaces": result.surfaces,
     }
-    (folder / "summary.json").write_text(
-        json.dumps(_clean(summary), indent=2) + "\n", encoding="utf-8"
-    )
+    (folder / "summary.json").write_text(dumps(summary), encoding="utf-8")
     shutil.copytree(result.store, folder / "results.zarr")
 
 
@@ -273,8 +261,7 @@ def sections(result, ds, figures: list[str]) -> str:
     return (
         f"<p>{int(ds.sizes['case'])} cases of run <b>{esc(result.scenario.run)}</b> of "
         f"<code>{esc(result.scenario.scenario)}</code>, sampling "
-        f"{esc(result.scenario.sampling)}; {result.chunks_run} chunks run, "
-        f"{result.chunks_skipped} found done in the store; {result.wall_s:.1f} s.</p>"
+        f"{esc(result.scenario.sampling)}.</p>"
         + _tables(result)
         + f"<h2>Figures</h2>{images_html(figures)}"
     )

@@ -104,9 +104,35 @@ class ExecutionSpec(SchemaSection):
         return self
 
 
+def _check_entry_values(parameters: dict) -> None:
+    """Each parameter's values of the right shape before they are read: ``distribution`` a
+    name, ``values`` a list of numbers or quantities, every other key (mean, sd, low, high, n,
+    ...) one number or quantity string: a list or a mapping where one value belongs is refused
+    by name here (the parameter space would otherwise hash it, as a distribution name, or
+    broadcast it)."""
+    for name, entry in parameters.items():
+        if not isinstance(entry, dict):
+            continue  # space_from_spec refuses a non-mapping by name
+        for key, value in entry.items():
+            path = f"parameters.{name}.{key}"
+            if key == "distribution":
+                if not isinstance(value, str):
+                    raise FieldError(path, f"must be a distribution name (a string), got {value!r}")
+            elif key == "values":
+                if not isinstance(value, list) or any(
+                    isinstance(v, (list, dict, bool)) or v is None for v in value
+                ):
+                    raise FieldError(
+                        path, f"must be a list of numbers or quantities, got {value!r}"
+                    )
+            elif isinstance(value, (list, dict, bool)) or value is None:
+                raise FieldError(path, f"must be one number or quantity, got {value!r}")
+
+
 def _space(parameters: dict):
     from flexsat.design.parameter_space import space_from_spec
 
+    _check_entry_values(parameters)
     return space_from_spec(parameters, PARAMETER_UNITS)
 
 
@@ -480,7 +506,11 @@ def _run_batch(scenario: BatchScenario, progress: Callable[[str], None] | None =
     from flexsat.design.batch_runner import open_results
 
     ds = open_results(store)
-    metrics = {k[len("metric_") :]: ds[k].values for k in ds.data_vars if k.startswith("metric_")}
+    # by name: a zarr store lists its arrays in no fixed order, and the summary's order is
+    # part of the files two identical runs must write alike
+    metrics = {
+        k[len("metric_") :]: ds[k].values for k in sorted(ds.data_vars) if k.startswith("metric_")
+    }
     stats = monte_carlo_summary(metrics, requirements_of(scenario.requirements))
     sensitivity = {}
     for name, values in metrics.items():

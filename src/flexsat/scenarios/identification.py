@@ -421,7 +421,39 @@ def _check_against_case(scenario: IdentificationScenario, case, records=None) ->
             problems.append(f"{path}: node {node} is clamped (it does not move)")
     if records is None and len(set(scenario.sensors.targets)) != len(scenario.sensors.targets):
         problems.append("sensors.targets: node ids must be distinct")
+    if scenario.truth.modes is not None and scenario.truth.modes > asm.n_dofs:
+        problems.append(
+            f"truth.modes: {scenario.truth.modes} is more than the {asm.n_dofs} modes of "
+            f"{scenario.case}'s model"
+        )
+    problems.extend(_band_problems(scenario, records))
     return list(dict.fromkeys(problems))
+
+
+def _band_problems(scenario: IdentificationScenario, records) -> list[str]:
+    """The identification band inside every simulated test's anti-aliased bandwidth: the
+    campaign filters each channel at ``anti_alias`` × its sample rate, so a band above the
+    slowest test's cut-off holds no measured mode, and the FRF grid over it (0.4 Hz to the band
+    in fixed steps) would grow without bound."""
+    band = scenario.identification.band
+    if not band > 0:
+        return [f"identification.band: must be > 0 Hz, got {band:g} Hz"]
+    if records is not None:
+        return []
+    rates = {
+        "hammer.sample_rate": scenario.hammer.sample_rate,
+        "wheels.sample_rate": scenario.wheels.sample_rate,
+        "video.field_rate": scenario.video.field_rate,
+    }
+    slowest = min(rates, key=rates.get)
+    cutoff = scenario.identification.anti_alias * rates[slowest]
+    if band > cutoff:
+        return [
+            f"identification.band: {band:g} Hz is above the anti-alias cut-off {cutoff:g} Hz "
+            f"of the slowest test ({slowest} {rates[slowest]:g} Hz × anti_alias "
+            f"{scenario.identification.anti_alias:g}): no mode above it is measured"
+        ]
+    return []
 
 
 def _read_records(scenario: IdentificationScenario) -> TestRecords:

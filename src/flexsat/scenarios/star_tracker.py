@@ -31,6 +31,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from flexsat.input_checks import FieldError
+from flexsat.report.json_data import NULL_REASONS
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
@@ -162,27 +163,31 @@ class StarTrackerResult(ReportedResult):
     notes: tuple[str, ...] = ()
 
     def metrics_records(self) -> list[dict]:
-        """One JSON-ready dict per run (arcseconds for angles)."""
+        """One JSON-ready dict per run (arcseconds for angles). A run that accepted no attitude
+        has no error statistics: those metrics are None and its ``null_reasons`` say so."""
         from flexsat.attitude.star_tracker import ARCSEC
 
         out = []
         for label, r in zip(self.labels, self.runs):
             acc = r.accepted
-            std = r.error_std / ARCSEC if acc.any() else np.full(3, np.nan)
-            sig = np.nanmean(r.sigmas, 0) / ARCSEC if acc.any() else np.full(3, np.nan)
             rec = {
                 "run": label,
                 "attitudes": int(acc.size),
                 "identification_rate": float(r.identification_rate),
                 "accepted_rate": float(acc.mean()),
                 "wrong_accepted": int(r.wrong_accepted.sum()),
-                "mean_stars": float(r.n_stars[acc].mean()) if acc.any() else float("nan"),
+                "mean_stars": float(r.n_stars[acc].mean()) if acc.any() else None,
                 "min_triplets": int(r.triplets[acc].min()) if acc.any() else 0,
-                "nees_mean": float(np.nanmean(r.nees)) if acc.any() else float("nan"),
+                "nees_mean": float(np.nanmean(r.nees)) if acc.any() else None,
             }
+            std = r.error_std / ARCSEC if acc.any() else (None,) * 3
+            sig = np.nanmean(r.sigmas, 0) / ARCSEC if acc.any() else (None,) * 3
             for k, axis in enumerate("xyz"):
-                rec[f"error_std_{axis}_arcsec"] = float(std[k])
-                rec[f"quest_sigma_{axis}_arcsec"] = float(sig[k])
+                rec[f"error_std_{axis}_arcsec"] = None if std[k] is None else float(std[k])
+                rec[f"quest_sigma_{axis}_arcsec"] = None if sig[k] is None else float(sig[k])
+            if not acc.any():
+                why = f"no data: none of the {acc.size} attitudes was identified and accepted"
+                rec[NULL_REASONS] = {k: why for k, v in rec.items() if v is None}
             out.append(rec)
         return out
 
@@ -286,9 +291,8 @@ def build_tracker(scenario: StarTrackerScenario):
         )
     except ValueError as exc:
         field = getattr(exc, "field", None)
-        raise ScenarioError(
-            [locate("cameras" if field == "cameras" else "identification", exc)]
-        ) from None
+        section = field if field in ("cameras", "catalog") else "identification"
+        raise ScenarioError([locate(section, exc)]) from None
 
 
 class StarTrackerKind(ScenarioKind):
@@ -304,14 +308,27 @@ class StarTrackerKind(ScenarioKind):
     def plan(self, scenario: StarTrackerScenario):
         import functools
 
-        from flexsat.attitude.star_tracker import check_field_load, monte_carlo
+        from flexsat.attitude.star_tracker import (
+            check_field_load,
+            check_identifiable,
+            monte_carlo,
+        )
 
         tracker = build_tracker(scenario)
         problems = []
-        for index, run in enumerate(scenario.runs):  # every run's load, before the first runs
+        # every run's load, before the first runs; the runs in order of size, so that a sky the
+        # cameras cannot identify in is named for the largest run
+        for index, run in sorted(enumerate(scenario.runs), key=lambda ir: -ir[1].attitudes):
             try:
                 check_field_load(tracker, run.false_stars, run.missing_fraction)
+                check_identifiable(tracker, run.attitudes, run.missing_fraction)
             except ValueError as exc:
+                # a sky, cameras or acceptance rule that fails every run is named once, in
+                # its own section
+                field = getattr(exc, "field", None)
+                if field in ("cameras", "min_triplets", "tolerance"):
+                    where = "" if field == "cameras" else "identification"
+                    raise ScenarioError([locate(where, exc)]) from None
                 problems.append(locate("runs" + item_path(index, run.label), exc))
         if problems:
             raise ScenarioError(problems)

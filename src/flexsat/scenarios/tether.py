@@ -80,6 +80,19 @@ class TetherInitial(SchemaSection):
     pitch_rate: quantity("rad/s") = 0.0
     roll_rate: quantity("rad/s") = 0.0
 
+    @model_validator(mode="after")
+    def _angles(self):
+        # Eq. 4 divides by cos φ (the roll is defined within ±90°), and a pitch is an angle of
+        # one turn at most: a pitch of 1e12° is no libration, and its sine costs the adaptive
+        # integrator every digit (minutes of vanishing steps)
+        if not abs(self.pitch) <= np.pi:
+            raise FieldError("pitch", f"must lie within ±180°, got {np.degrees(self.pitch):g}°")
+        if not abs(self.roll) < 0.5 * np.pi:
+            raise FieldError(
+                "roll", f"must lie strictly within ±90° (Eq. 4), got {np.degrees(self.roll):g}°"
+            )
+        return self
+
 
 class TetherSimulation(SchemaSection):
     """Run length in orbits, output (or control) samples per orbit and the integrator."""

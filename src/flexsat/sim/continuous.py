@@ -388,7 +388,8 @@ def run(
             "the closed loop is unstable",
         )
     if sol.status == -1:
-        raise FieldError("times", f"the integration failed at t = {sol.t[-1]:.6g} s: {sol.message}")
+        at = sol.t[-1] if len(sol.t) else t[0]  # a failed first step records no time
+        raise FieldError("times", f"the integration failed at t = {at:.6g} s: {sol.message}")
     if margin is not None and sol.t_events[1].size:
         raise ValueError(
             f"{plant.domain_rule} at t = {sol.t_events[1][0]:.3g} s (the run ends there)"  # type: ignore[attr-defined]
