@@ -33,7 +33,9 @@ Everything is seeded: the same configuration gives the same result.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 
@@ -66,7 +68,7 @@ from flexsat.identify.structural import (
 )
 from flexsat.input_checks import FieldError
 from flexsat.sim.vibration_test import simulate_test
-from flexsat.structures.fem import FEModes
+from flexsat.structures.fem import Assembly, FEModes, Structure
 from flexsat.structures.modal_model import ModalModel
 
 __all__ = [
@@ -75,6 +77,7 @@ __all__ = [
     "CampaignResult",
     "IDENTIFY_STEPS",
     "SIMULATE_STEPS",
+    "SubstructuredCase",
     "TestRecords",
     "identify_and_update",
     "run_campaign",
@@ -105,6 +108,21 @@ DAMPING_FORM_ERROR = 0.3
 
 #: camera parameters calibrated in the video test (principal point held; module docstring)
 VIDEO_FREE = ("xc", "yc", "zc", "a1", "a2", "a3", "f")
+
+
+class SubstructuredCase(Protocol):
+    """A case the campaign tests and updates (e.g. :class:`flexsat.cases.tamu_grid.
+    TamuGridCase`): named stiffness substructures and the finite-element structure with a
+    factor on each."""
+
+    @property
+    def substructures(self) -> Sequence[str]:
+        """The substructures' names."""
+        ...
+
+    def structure(self, *, stiffness_scale: Mapping[str, float] | None = None) -> Structure:
+        """The structure, each named substructure's stiffness scaled (default 1)."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -174,7 +192,7 @@ class CampaignConfig:
     bootstrap_samples: int = 10
     seed: int = 0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.update not in UPDATE_METHODS:
             raise FieldError("update", f"must be one of {UPDATE_METHODS}, got {self.update!r}")
         k = self.wheel_torque_constants
@@ -457,7 +475,7 @@ class TestRecords:
     triangulation: dict = field(default_factory=dict)
 
 
-def _true_modes(case, cfg: CampaignConfig):
+def _true_modes(case: SubstructuredCase, cfg: CampaignConfig) -> tuple[Assembly, ModalModel]:
     """The truth: the case's finite-element model with ``truth_modes`` modes (default all)."""
     asm = case.structure().assemble()
     modes = asm.modes(asm.n_dofs if cfg.truth_modes is None else min(cfg.truth_modes, asm.n_dofs))
@@ -466,7 +484,9 @@ def _true_modes(case, cfg: CampaignConfig):
     )
 
 
-def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
+def simulate_records(
+    case: SubstructuredCase, cfg: CampaignConfig, progress: Callable[[str], None] | None = None
+) -> TestRecords:
     """Run the hammer, video and reaction-wheel tests on the true structure (module docstring).
 
     The truth is the case as built, with ``cfg.truth_damping``; the strain and accelerometer
@@ -545,7 +565,9 @@ def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
     return TestRecords(hammer, wheel_test, video, calib_summary, tri)
 
 
-def run_campaign(case, cfg: CampaignConfig, progress=None) -> CampaignResult:
+def run_campaign(
+    case: SubstructuredCase, cfg: CampaignConfig, progress: Callable[[str], None] | None = None
+) -> CampaignResult:
     """Test the true structure (:func:`simulate_records`), identify it and update the a-priori
     model (:func:`identify_and_update`), with the truth in the tables; ``progress`` as there."""
     return identify_and_update(
@@ -568,7 +590,11 @@ def _nearest(f_list, targets_hz, tolerance=0.05):
 
 
 def identify_and_update(
-    case, cfg: CampaignConfig, records: TestRecords, truth=None, progress=None
+    case: SubstructuredCase,
+    cfg: CampaignConfig,
+    records: TestRecords,
+    truth: ModalModel | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> CampaignResult:
     """Identify the recorded tests and update the a-priori model (module docstring, 1-4).
 
