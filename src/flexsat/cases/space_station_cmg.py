@@ -30,9 +30,12 @@ the singularity time from σ(0) = 0 depends on them (docs/cmg.md gives a scan).
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.cases.cmg_pyramid import integrate_gimbals
 from flexsat.control.lqr import lqr
@@ -45,7 +48,14 @@ from flexsat.dynamics.space_station import (
 )
 from flexsat.input_checks import require_positive_scalar
 from flexsat.sim import continuous
-from flexsat.units import to_si_array
+from flexsat.units import QuantityLike, to_si, to_si_array
+
+if TYPE_CHECKING:
+    from flexsat.dynamics.cmg import GimbalRun
+    from flexsat.units import FloatArray
+
+#: one axis group's design: A, B, E, state names, the gain K and the closed-loop poles
+AxisDesign = tuple[np.ndarray, np.ndarray, np.ndarray, list[str], np.ndarray, np.ndarray]
 
 __all__ = [
     "BrysonMaxima",
@@ -60,7 +70,9 @@ __all__ = [
 
 #: Table 2 of the paper (L4684–L4688), as published
 PAPER_STATION = StationData(
-    ("5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"), 0.0011, "3500 lbf*ft*s"
+    ("5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"),
+    0.0011,
+    to_si("3500 lbf*ft*s", "N*m*s"),
 )
 #: disturbance models: the design model Eq. (11), or it plus the stated AERO1 substitute
 DISTURBANCES = ("design", "aero_substitute")
@@ -70,12 +82,12 @@ DISTURBANCES = ("design", "aero_substitute")
 class BrysonMaxima:
     """Anticipated maxima of the LQR states (module docstring), SI after construction."""
 
-    attitude: float = "1 deg"
-    rate: float = "0.02 deg/s"
-    momentum: float = "2000 lbf*ft*s"
-    momentum_integral: float = "2e5 lbf*ft*s**2"
+    attitude: float = to_si("1 deg", "rad")
+    rate: float = to_si("0.02 deg/s", "rad/s")
+    momentum: float = to_si("2000 lbf*ft*s", "N*m*s")
+    momentum_integral: float = to_si("2e5 lbf*ft*s**2", "N*m*s**2")
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name, unit in (
             ("attitude", "rad"),
             ("rate", "rad/s"),
@@ -86,9 +98,10 @@ class BrysonMaxima:
                 self, name, require_positive_scalar(getattr(self, name), f"maxima.{name}", unit)
             )
 
-    def scales(self, names, n):
-        """D = the maxima of the states ``names`` of :mod:`flexsat.dynamics.space_station`."""
-        out = []
+    def scales(self, names: Sequence[str], n: float) -> np.ndarray:
+        """D = the maxima of the states ``names`` of :mod:`flexsat.dynamics.space_station`
+        (``n`` the orbit rate, rad/s, for the filter states)."""
+        out: list[float] = []
         for name in names:
             if name.startswith("theta") and "filter" in name:
                 k = int(name.split("_filter_")[1].split("n")[0])
@@ -111,8 +124,8 @@ class StationDesign:
 
     data: StationData
     maxima: BrysonMaxima
-    pitch: tuple
-    roll_yaw: tuple
+    pitch: AxisDesign
+    roll_yaw: AxisDesign
     plant: SpaceStation
 
     @property
@@ -130,7 +143,9 @@ class StationDesign:
         return K
 
 
-def _lqr_bryson(A, B, names, maxima, n, axis):
+def _lqr_bryson(
+    A: np.ndarray, B: np.ndarray, names: Sequence[str], maxima: BrysonMaxima, n: float, axis: str
+) -> tuple[np.ndarray, np.ndarray]:
     D = maxima.scales(names, n)
     try:
         K_s = lqr(A / D[:, None] * D[None, :], B / D[:, None], np.eye(len(D)), np.eye(B.shape[1]))[
@@ -145,14 +160,14 @@ def _lqr_bryson(A, B, names, maxima, n, axis):
 def design(
     data: StationData = PAPER_STATION,
     maxima: BrysonMaxima | None = None,
-    pitch_filters=(1, 2),
-    roll_yaw_filters=(2,),
+    pitch_filters: Sequence[int] = (1, 2),
+    roll_yaw_filters: Sequence[int] = (2,),
 ) -> StationDesign:
     """LQR gains of the pitch and roll/yaw loops (module docstring, step 1)."""
     maxima = BrysonMaxima() if maxima is None else maxima
     n = data.orbit_rate
     plant = SpaceStation(data, pitch_filters, roll_yaw_filters)
-    out = []
+    out: list[AxisDesign] = []
     for axis, model in (("pitch_filters", plant.pitch), ("roll_yaw_filters", plant.roll_yaw)):
         A, B, E, names = model
         K, poles = _lqr_bryson(A, B, names, maxima, n, axis)
@@ -172,27 +187,32 @@ class StationRun:
     momentum: np.ndarray
     torque: np.ndarray
     disturbance: np.ndarray
-    solution: object = field(repr=False)
+    solution: Callable[[float], FloatArray] = field(repr=False)
 
-    def _parts(self, z):
-        npitch = self.design.pitch[0].shape[0]
-        xp, xr = z[:npitch], z[npitch:]
-        u2 = -(self.design.pitch[4] @ xp)[0]
-        u1, u3 = -(self.design.roll_yaw[4] @ xr)
-        return (xr[0], xp[0], xr[4]), (xr[2], xp[2], xr[6]), (u1, u2, u3)
-
-    def demand(self, t) -> np.ndarray:
+    def demand(self, t: float) -> np.ndarray:
         """T = [u1 + n h3, u2, u3 − n h1] / h_r at time t (L4717–L4720), (3,)."""
-        _, (h1, h2, h3), (u1, u2, u3) = self._parts(self.solution(t))
+        _, (h1, h2, h3), (u1, u2, u3) = _parts(self.design, self.solution(t))
         n = self.design.data.orbit_rate
         return np.array([u1 + n * h3, u2, u3 - n * h1]) / self.design.data.rotor_momentum
 
 
+Triple = tuple[float, float, float]
+
+
+def _parts(design: StationDesign, z: np.ndarray) -> tuple[Triple, Triple, Triple]:
+    """(attitude θ1, θ2, θ3), (momentum h1, h2, h3), (torque u1, u2, u3) of the state z."""
+    npitch = design.pitch[0].shape[0]
+    xp, xr = z[:npitch], z[npitch:]
+    u2 = -(design.pitch[4] @ xp)[0]
+    u1, u3 = -(design.roll_yaw[4] @ xr)
+    return (xr[0], xp[0], xr[4]), (xr[2], xp[2], xr[6]), (u1, u2, u3)
+
+
 def simulate_attitude(
     station: StationDesign,
-    duration,
+    duration: QuantityLike,
     disturbance: str = "design",
-    initial_attitude="1 deg",
+    initial_attitude: QuantityLike = "1 deg",
     n_out: int = 1001,
 ) -> StationRun:
     """The closed attitude/momentum loop (module docstring, step 2) over ``duration`` s."""
@@ -221,16 +241,17 @@ def simulate_attitude(
         exogenous=lambda tk: {"disturbance": wfun(tk, data)},
     )
 
-    def solution(tk):
+    def solution(tk: float) -> FloatArray:
         return loop.solution(tk)[..., 0, :]
 
-    run = StationRun(station, t, None, None, None, None, solution)
-    parts = [run._parts(z) for z in loop.states[0]]
+    parts = [_parts(station, z) for z in loop.states[0]]
     att, h, u = (np.array([p[i] for p in parts]) for i in range(3))
     return StationRun(station, t, att, h, u, wfun(t, data), solution)
 
 
-def cmg_loop(run: StationRun, sigma0, threshold: float = 1e-6, n_out: int = 1001):
+def cmg_loop(
+    run: StationRun, sigma0: npt.ArrayLike, threshold: float = 1e-6, n_out: int = 1001
+) -> GimbalRun:
     """Pseudo-inverse gimbal steering for the run's demand T(t) from σ0 (module docstring,
     step 3), stopped at the first singular set: a :class:`flexsat.dynamics.cmg.GimbalRun`
     (gimbal momentum in units of h_r)."""

@@ -9,7 +9,9 @@ for the printed 30 m/s).
 
 from __future__ import annotations
 
-from functools import cache
+from collections.abc import Callable
+from functools import cache, partial
+from typing import Any
 
 import numpy as np
 
@@ -19,21 +21,27 @@ SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12"
 
 
 @cache
-def _measures(key: str) -> dict:
+def _measures(key: str) -> dict[str, Any]:
     from flexsat.cases.tether import EXAMPLES, measures, paper_scales, rerun
 
     e = EXAMPLES[key]
     return measures(rerun(key), e.final_length, paper_scales(), e.law)
 
 
-def _get(key: str, name: str):
-    return lambda: float(_measures(key)[name])
+def _measure(key: str, name: str) -> float:
+    return float(_measures(key)[name])
+
+
+def _get(key: str, name: str) -> Callable[[], float]:
+    return partial(_measure, key, name)
 
 
 def _orbit_rate_per_minute() -> float:
     from flexsat.cases.tether import paper_scales
 
-    return paper_scales().orbit_rate * 60
+    rate = paper_scales().orbit_rate
+    assert rate is not None  # TetherScales sets it (from the altitude when not given)
+    return rate * 60
 
 
 def _final_pitch_6_orbits() -> float:

@@ -25,7 +25,9 @@ from flexsat.units import to_si
 # -- quantities --------------------------------------------------------------------------------
 # A field is declared ``Annotated[float, in_unit("m")]`` in the modules checked by mypy (a call
 # is no type to it); ``quantity("m")`` builds the same type for a plug-in's schema.
-def quantity_converter(unit: str, positive: bool = False) -> Callable[[Any, ValidationInfo], Any]:
+def quantity_converter(
+    unit: str, positive: bool = False
+) -> Callable[[Any, ValidationInfo], float | None]:
     """Before-validator converting a quantity to SI (None passes through for optional fields)."""
 
     def convert(value: Any, info: ValidationInfo) -> float | None:

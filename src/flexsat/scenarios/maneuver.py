@@ -40,7 +40,7 @@ import typing
 from collections.abc import Callable
 from typing import Annotated, Any, ClassVar, Literal, Self
 
-from pydantic import BeforeValidator, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.cases import CASES, get_case
@@ -54,7 +54,6 @@ from flexsat.scenarios.fields import (
     given_fields,
     in_unit,
     integer_in,
-    quantity_converter,
 )
 from flexsat.scenarios.laws import MANEUVER_LAWS, LawName
 from flexsat.sim import (
@@ -217,9 +216,9 @@ class LQGSpec(SchemaSection):
     """
 
     rigid_weight: Annotated[float, in_unit("")] = 1.0
-    mode_weights: list[Annotated[float, BeforeValidator(quantity_converter(""))]] | float = 0.1
+    mode_weights: list[Annotated[float, in_unit("")]] | float = 0.1
     control_weight: Annotated[float, in_unit("")]
-    sensor_noise: list[Annotated[float, BeforeValidator(quantity_converter(""))]]
+    sensor_noise: list[Annotated[float, in_unit("")]]
     process_noise: Annotated[float, in_unit("")]
     refine: Literal["none", "weighted", "truncated"] = "none"
     keep_modes: Annotated[int | None, integer_in(0, limits.MAX_MODES, optional=True)] = None
