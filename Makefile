@@ -2,7 +2,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-numerics bench clean
+.PHONY: demo test test-numerics docs bench clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -37,6 +37,11 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks
 	$(VENV)/bin/ruff format --check src tests benchmarks
 	$(VENV)/bin/mypy
+
+# the documentation site (mkdocs.yml: the guides in docs/ and an API reference from the
+# docstrings), built strictly: a broken link or a docstring section it cannot parse fails
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_tamu.py

@@ -41,6 +41,18 @@ MAX_MODES = 100
 #: finite elements of a case's structural mesh (dense eigen-solves of 3-6 dofs per node)
 MAX_ELEMENTS = 1_000
 
+#: stars of one catalogue (Tycho-2 holds 2.5 million; Hipparcos 118,218): ~40 bytes each, plus
+#: the pair index below
+MAX_CATALOG_STARS = 3_000_000
+
+#: catalogue pairs of a star-pattern pair index (pairs closer than a camera's field): ~24 bytes
+#: each, plus the sort (Hipparcos with a 20° field would need ~10⁸ pairs, ~3 GB)
+MAX_CATALOG_PAIRS = 20_000_000
+
+#: candidate matches of one field of view's measured pairs against the pair index (measured
+#: pairs × catalogue pairs within the tolerance), ~100 bytes each in the voting
+MAX_PAIR_CANDIDATES = 4_000_000
+
 #: largest noise seed (numpy's seeds are unbounded, but seed + case index must stay an int64)
 MAX_SEED = 2**32 - 1
 
@@ -122,6 +134,8 @@ def check_memory(n_bytes: int, field: str, what: str) -> None:
 
 __all__ = [
     "MAX_CASES",
+    "MAX_CATALOG_PAIRS",
+    "MAX_CATALOG_STARS",
     "MAX_DOCUMENT_BYTES",
     "MAX_DOCUMENT_NODES",
     "MAX_MODES",
@@ -129,6 +143,7 @@ __all__ = [
     "MAX_INTEGRATOR_STEPS",
     "MAX_MEMORY",
     "MAX_NESTING",
+    "MAX_PAIR_CANDIDATES",
     "MAX_RUNS",
     "MAX_SAMPLES",
     "MAX_SEED",

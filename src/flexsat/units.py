@@ -89,17 +89,19 @@ class FrequencyArray(np.ndarray):
     refuses it, naming the field, anywhere else (another frequency unit, any other quantity, or
     a field that declares no unit). Indexing and slicing keep the unit; arithmetic returns a
     plain array, which is a number the caller has converted and vouches for.
-
-    Parameters
-    ----------
-    values : array_like
-        The frequencies.
-    unit : {"Hz", "rad/s"}
     """
 
     unit: str | None
 
     def __new__(cls, values: npt.ArrayLike, unit: str) -> FrequencyArray:
+        """The frequencies ``values`` in ``unit``.
+
+        Parameters
+        ----------
+        values : array_like
+            The frequencies.
+        unit : {"Hz", "rad/s"}
+        """
         if unit not in FREQUENCY_UNITS:
             raise ValueError(f"unit: must be one of {list(FREQUENCY_UNITS)}, got {unit!r}")
         arr = np.array(values, dtype=float).view(cls)

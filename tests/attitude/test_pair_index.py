@@ -3,8 +3,15 @@
 import numpy as np
 import pytest
 
-from flexsat.attitude.pair_index import BruteForceIndex, KVectorIndex, catalog_pairs
+from flexsat import limits
+from flexsat.attitude.pair_index import (
+    BruteForceIndex,
+    KVectorIndex,
+    catalog_pairs,
+    expected_pairs,
+)
 from flexsat.attitude.star_catalog import StarCatalog, synthetic_sky
+from flexsat.input_checks import FieldError
 
 
 @pytest.fixture(scope="module")
@@ -64,3 +71,30 @@ def test_bad_index_input():
         KVectorIndex(axes, np.radians(10))
     with pytest.raises(ValueError, match="catalog: must be a StarCatalog"):
         BruteForceIndex(np.eye(3), 0.1)
+
+
+def test_expected_pairs_is_the_uniform_sky_count(sky):
+    # for points uniform on the sphere two pairs sharing a star are independent events, so the
+    # count is C(N, 2) Bernoulli(p) draws with no covariance: σ = √(C(N, 2) p (1 − p))
+    angle = np.radians(17)
+    n = len(sky)
+    p = 0.5 * (1 - np.cos(angle))
+    sigma = np.sqrt(0.5 * n * (n - 1) * p * (1 - p))
+    stored = len(KVectorIndex(sky, angle))
+    assert abs(stored - expected_pairs(n, angle)) < 5 * sigma
+
+
+@pytest.mark.parametrize("index", [KVectorIndex, BruteForceIndex])
+def test_count_is_the_size_of_the_query(sky, index):
+    idx = index(sky, np.radians(17))
+    lo = np.radians(np.linspace(0.01, 17.5, 300))
+    hi = lo + np.radians(np.linspace(0, 0.2, 300))
+    qid, _ = idx.query(lo, hi)
+    assert idx.count(lo, hi) == qid.size
+
+
+def test_an_index_beyond_the_pair_limit_is_refused_before_it_is_built(sky, monkeypatch):
+    monkeypatch.setattr(limits, "MAX_CATALOG_PAIRS", 1000)
+    with pytest.raises(FieldError, match=r"catalog: its 5,000 stars form about .* pairs") as err:
+        KVectorIndex(sky, np.radians(17))
+    assert "MAX_CATALOG_PAIRS" in str(err.value)

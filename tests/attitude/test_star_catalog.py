@@ -12,6 +12,7 @@ from flexsat.attitude.star_catalog import (
     load_hipparcos,
     synthetic_sky,
 )
+from flexsat.input_checks import FieldError
 
 
 @pytest.fixture(scope="module")
@@ -122,3 +123,17 @@ def test_bad_catalogue_files_name_the_line(tmp_path):
         load_hipparcos(bad)
     with pytest.raises(ValueError, match="vectors: must be unit"):
         StarCatalog([1, 2, 3], [1.0, 2.0, 3.0], [[2, 0, 0], [0, 1, 0], [0, 0, 1]])
+
+
+@pytest.mark.parametrize("limit", [30.0, 1e6])
+def test_a_sky_beyond_the_star_limit_is_refused_before_it_is_drawn(limit):
+    # m = 30 would be ~10^15.7 stars (20 PiB), m = 1e6 overflows 10^x: both refused by name
+    with pytest.raises(FieldError, match=r"magnitude_limit: .*MAX_CATALOG_STARS") as err:
+        synthetic_sky(limit)
+    assert err.value.field == "magnitude_limit"
+
+
+def test_the_calibration_count_must_be_a_count():
+    for bad in (float("inf"), 0, 2.5, True):
+        with pytest.raises(FieldError, match="stars_brighter_than_6_5"):
+            synthetic_sky(6.5, stars_brighter_than_6_5=bad)

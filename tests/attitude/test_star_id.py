@@ -7,10 +7,13 @@ from math import comb
 import numpy as np
 import pytest
 
+from flexsat import limits
+from flexsat.attitude import star_id
 from flexsat.attitude.star_camera import StarCamera, StarFrame
 from flexsat.attitude.star_catalog import StarCatalog, synthetic_sky
 from flexsat.attitude.star_id import match_field
 from flexsat.attitude.star_tracker import ARCSEC, StarTracker, random_attitudes, score
+from flexsat.input_checks import FieldError
 
 CAMERAS = (StarCamera(), StarCamera(mounting=(0, "90 deg", 0)))
 
@@ -103,3 +106,45 @@ def test_bad_tracker_settings(sky):
         StarTracker(CAMERAS, sky, tolerance=-5 * ARCSEC)
     with pytest.raises(ValueError, match="cameras\\[1\\]: must be a StarCamera"):
         StarTracker([CAMERAS[0], "camera"], sky)
+
+
+def test_the_sparse_tally_equals_the_dense_table(tracker, monkeypatch):
+    # the votes of a crowded field (300 false stars), tallied both ways: same hypotheses
+    frame = tracker.observe(random_attitudes(1, seed=21)[0], np.random.default_rng(3), 300)[0]
+    dense = match_field(frame.vectors, tracker.index, tracker.tolerance)
+    monkeypatch.setattr(star_id, "DENSE_TALLY", 0)
+    sparse = match_field(frame.vectors, tracker.index, tracker.tolerance)
+    assert np.array_equal(dense.matches, sparse.matches) and dense.triplets == sparse.triplets
+    assert dense.n_matched >= 3
+
+
+def _reference_deletion(conflict, support):
+    """The rule as stated: delete the star with the most conflicts among those alive (ties:
+    fewest votes, then the first), recounting the whole table every time."""
+    alive = np.ones(len(support), bool)
+    while True:
+        conflicts = np.where(alive, (conflict & alive[None, :]).sum(1), -1)
+        if conflicts.max() <= 0:
+            return alive
+        tied = np.flatnonzero(conflicts == conflicts.max())
+        alive[tied[np.argmin(support[tied])]] = False
+
+
+@pytest.mark.parametrize("density", [0.02, 0.1, 0.5])
+def test_the_updated_conflict_counts_delete_as_recounting_does(density):
+    rng = np.random.default_rng(int(density * 100))
+    for h in (1, 3, 40, 200):
+        upper = np.triu(rng.random((h, h)) < density, 1)
+        conflict = upper | upper.T
+        support = rng.integers(2, 6, h)  # few distinct votes: many ties
+        kept = star_id.consistent_stars(conflict, support)
+        assert np.array_equal(kept, _reference_deletion(conflict, support))
+        assert not np.any(conflict[np.ix_(kept, kept)])  # no conflict left among the kept
+
+
+def test_a_field_beyond_the_candidate_limit_is_refused_before_voting(tracker, monkeypatch):
+    frame = tracker.observe(random_attitudes(1, seed=23)[0], np.random.default_rng(4), 100)[0]
+    monkeypatch.setattr(limits, "MAX_PAIR_CANDIDATES", 1000)
+    with pytest.raises(FieldError, match=r"vectors: the field's .*MAX_PAIR_CANDIDATES") as err:
+        match_field(frame.vectors, tracker.index, tracker.tolerance)
+    assert err.value.field == "vectors"

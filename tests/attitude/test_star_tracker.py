@@ -9,9 +9,11 @@ star-pattern identification, >= 3 triplets within 5″ in each of two fields).
 import numpy as np
 import pytest
 
+from flexsat.attitude.pair_index import pair_angles
 from flexsat.attitude.star_camera import StarCamera
 from flexsat.attitude.star_catalog import synthetic_sky
 from flexsat.attitude.star_tracker import ARCSEC, StarTracker, monte_carlo, random_attitudes
+from flexsat.input_checks import FieldError
 
 N = 1000
 
@@ -79,3 +81,23 @@ def test_other_realistic_fields_of_view(fov, n_pixels, magnitude, tolerance):
     assert r.identification_rate >= 0.995  # 200 attitudes: at most one miss
     assert r.wrong_accepted.sum() == 0
     assert np.all(r.error_std < 5 * ARCSEC)
+
+
+def test_the_expected_candidates_predict_a_crowded_field(tracker):
+    # 300 false stars on each detector: the measured pairs' candidate matches, counted on the
+    # index, against the estimate made before any frame; the count varies by ~3 % between
+    # attitudes (the real stars are Poisson), the 24 × 24 grid average by ~1 %: 10 %
+    rng = np.random.default_rng(8)
+    counts = []
+    for C in random_attitudes(10, seed=31):
+        v = tracker.observe(C, rng, false_stars=300)[0].vectors
+        i, j = np.triu_indices(v.shape[0], 1)
+        theta = pair_angles(v[i], v[j])
+        counts.append(tracker.index.count(theta - tracker.tolerance, theta + tracker.tolerance))
+    assert tracker.expected_candidates(false_stars=300) == pytest.approx(np.mean(counts), rel=0.1)
+
+
+def test_a_monte_carlo_that_would_crawl_is_refused_before_the_first_frame(tracker):
+    # 1,000 false stars per field: ~1.7e7 candidate matches per field, above the limit
+    with pytest.raises(FieldError, match=r"false_stars: 1000 per field .*MAX_PAIR_CANDIDATES"):
+        monte_carlo(tracker, n=1, false_stars=1000)

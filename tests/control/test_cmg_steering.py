@@ -56,6 +56,13 @@ def test_the_null_motion_changes_no_momentum():
         (lambda: PseudoInverseSteering([0, 0, 1], null_target=[0.0, 0.0]), "null_target"),
         (lambda: NullMotionSteering(np.zeros(4), gain_k=0.0), "gain_k"),
         (lambda: NullMotionSteering(np.zeros(3)), "sigma_target"),
+        # refused when the law is made, not at its first call inside a run
+        (lambda: NullMotionSteering(np.zeros(4), alpha=-1e-3), "alpha"),
+        (
+            lambda: PseudoInverseSteering([0, 0, 1], null_target=np.zeros(4), null_gain=-1),
+            "null_gain",
+        ),
+        (lambda: PseudoInverseSteering([0, 0, 1], null_alpha=np.nan), "null_alpha"),
     ],
 )
 def test_bad_gains_are_refused_naming_the_field(build, field):

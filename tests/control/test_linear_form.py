@@ -302,3 +302,13 @@ def test_run_controller_calls_a_frozen_law_without_a_reference_with_the_plants_w
     for k in range(4):
         u, _ = law(k * DT, {"attitude": beta[k], "rate": rate[k]}, {})
         np.testing.assert_array_equal(U[k], u)
+
+
+@pytest.mark.parametrize("spec", [3, None, object()])
+def test_channel_spec_refuses_what_is_no_channel_naming_the_field(spec):
+    """One value that is neither a name, a Channel, a sequence nor a mapping is refused with the
+    field's rule (it used to escape as ``TypeError: ... is not iterable``)."""
+    from flexsat.control.linear_form import channel_spec
+
+    with pytest.raises(ValueError, match=r"^measurements: give channel names or Channels, got "):
+        channel_spec(spec, "measurements")

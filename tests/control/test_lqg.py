@@ -148,6 +148,16 @@ def test_slew_of_the_tamu_plant_through_the_simulator(tamu_case, tamu_model):
     )
 
 
+def test_closed_loop_matrix_of_a_given_plant(nps_plant):
+    """The design plant given explicitly yields the default matrix (the same ZOH and output
+    matrix, so bit for bit); a plant given without its output matrix is refused naming C."""
+    A, B, C, Q = nps_plant
+    law = LQGController.design((A, B, C), Q, 7.0, 0.1, RN, dt=0.05)
+    np.testing.assert_array_equal(law.closed_loop_matrix(A, B, C), law.closed_loop_matrix())
+    with pytest.raises(ValueError, match="^C: give A, B and C of the plant together"):
+        law.closed_loop_matrix(A, B)
+
+
 # ------------------------------------------------------------------------------------------------
 # bad inputs
 def test_wrong_sample_period_is_refused(nps_plant):

@@ -98,3 +98,13 @@ def test_a_stiffened_plant_has_no_quadratic_energy():
     """With the stiffening term the energy is quartic (Att. 3 Eq. 7): no energy matrix, so the
     compiled loop keeps the states for it."""
     assert tamu(n_modes=4, stiffening=True).model().energy_matrix is None
+
+
+@pytest.mark.parametrize("field", ["outputs", "nonlinear", "energy_matrix"])
+def test_the_derived_plant_fields_are_read_only(field):
+    """A hybrid plant's outputs (its output_channels), nonlinearity (its stiffening) and energy
+    matrix (blockdiag(K, M)) follow from the model: assigning one is an AttributeError naming
+    the field, not a silently inconsistent plant."""
+    plant = ModalHybrid(ModalModel.from_hub_appendage(tamu(n_modes=2).model()), 0.353, axis="z")
+    with pytest.raises(AttributeError, match=rf"^{field}: ModalHybrid"):
+        setattr(plant, field, getattr(plant, field))

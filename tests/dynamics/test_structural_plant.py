@@ -362,3 +362,15 @@ def test_energy_is_the_quadratic_form_of_the_energy_matrix():
     scale = 0.5 * np.abs(Q).max() * (x**2).sum(axis=-1) * 10
     got = 0.5 * np.einsum("ci,ij,cj->c", x, Q, x)
     assert np.all(np.abs(got - plant.energy(x)) <= 16 * EPS * scale)
+
+
+def test_the_energy_matrix_is_read_only():
+    """Q = blockdiag(K, M) follows from the model: assigning it is an AttributeError naming
+    the field."""
+    M, D, K = _random_model()
+    plant = StructuralPlant.from_second_order(
+        SecondOrderModel(M, D, K, np.zeros((5, 1)), np.zeros((1, 5))),
+        [Actuator("f", "force", 1)],
+    )
+    with pytest.raises(AttributeError, match=r"^energy_matrix: StructuralPlant"):
+        plant.energy_matrix = np.eye(10)

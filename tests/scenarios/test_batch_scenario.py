@@ -198,6 +198,46 @@ def test_a_law_ii_run_tracking_another_shape_is_refused_by_name(tmp_path):
     assert not (tmp_path / "store.zarr").exists()
 
 
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        (MONTECARLO.replace("cases: 24", "cases: 2000000"), r"cases: the sample has 2,000,000"),
+        (
+            SWEEP.replace(
+                "alpha: {values: [0.0, 0.25]}", "alpha: {low: 0.0, high: 0.25, n: 400}"
+            ).replace(
+                'u_max: {values: ["300 ozf*in", "400 ozf*in", "500 ozf*in"]}',
+                'u_max: {low: "300 ozf*in", high: "500 ozf*in", n: 400}',
+            ),
+            r"parameters: the grid of 400 × 400 has 160,000 cases",
+        ),
+        (
+            SWEEP.replace(
+                "alpha: {values: [0.0, 0.25]}", "alpha: {low: 0.0, high: 0.25, n: 1000000000}"
+            ),
+            r"^invalid scenario \(1 problem\):\n  parameters\.alpha\.n: grid points on one axis",
+        ),
+    ],
+)
+def test_a_study_beyond_the_case_limit_is_refused_before_its_table(
+    tmp_path, monkeypatch, text, message
+):
+    # counted from the sizes given and the axes' lengths: no table, no linspace of 1e9 points
+    from flexsat.design import parameter_space
+
+    def no_table(*args, **kwargs):
+        raise AssertionError("the table was built")
+
+    for name in ("table", "sample", "latin_hypercube", "sobol_sequence", "sobol_design"):
+        for cls in (parameter_space.GridSpace, parameter_space.ParameterSpace):
+            if hasattr(cls, name):
+                monkeypatch.setattr(cls, name, no_table)
+    path = _write(tmp_path, "study.yaml", text)
+    with pytest.raises(ScenarioError, match=message) as err:
+        load_scenario(path)
+    assert "MAX_CASES" in str(err.value) or "flexsat.limits" in str(err.value)
+
+
 def test_a_scenario_of_another_kind_is_refused(tmp_path):
     path = _write(
         tmp_path,

@@ -56,6 +56,44 @@ def test_steering_runs_reproduce_v3_the_preferred_saturation_and_null_motion():
     assert result.table[0][0] == "V1"
 
 
+def test_a_reorientation_run_is_a_simulation_the_runner_hands_to_simulate():
+    # the kind plans a reorientation as a (plant, law, configuration) triple on the gimbal
+    # cluster, a torque-steering run (stopped at the first singular set) as a callable
+    from flexsat.control.cmg_steering import NullMotionSteering
+    from flexsat.dynamics.gimbal_cluster import GimbalCluster
+    from flexsat.scenarios.cmg import N_OUT, CmgKind
+    from flexsat.scenarios.kind import Simulation
+    from flexsat.sim import simulate
+
+    scenario = load_scenario(SMALL)
+    plan = CmgKind().plan(scenario)
+    tasks = {}
+    run = next(plan)
+    while run.label != "reorient":
+        tasks[run.label] = run.task
+        run = plan.send(run.task())
+    assert all(callable(t) and not isinstance(t, Simulation) for t in tasks.values())
+    task = run.task
+    assert isinstance(task, Simulation) and run.path == "runs['reorient']"
+    assert isinstance(task.plant, GimbalCluster) and isinstance(task.law, NullMotionSteering)
+    assert task.config.law_mode == "continuous" and task.config.n_steps == N_OUT - 1
+    # σ = s[1, −1, 1, −1] has h ≡ 0 and the law moves s' = 45° − s: s = 45°(1 − e^{−t}) (V8)
+    sim = simulate(task.plant, task.law, task.config, **task.options)
+    t = sim.dataset["time"].values
+    s = np.deg2rad(45.0) * (1.0 - np.exp(-t))
+    np.testing.assert_allclose(
+        sim.dataset["state"].values[0], s[:, None] * [1.0, -1.0, 1.0, -1.0], atol=1e-8
+    )
+    # the simulation comes back as the run's gimbal history; the V1–V8 table closes the plan
+    assert plan.send(sim).label == "V1–V8 table"
+    with pytest.raises(StopIteration) as done:
+        plan.send(())
+    result = done.value.value
+    assert [r.label for r in result.runs] == ["zero", "preferred", "with null", "reorient"]
+    np.testing.assert_array_equal(result.runs[-1].gimbals.sigma, sim.dataset["state"].values[0])
+    assert result.runs[-1].outcome == "no singularity"
+
+
 def test_a_singular_start_is_refused_by_the_pseudo_inverse_and_passed_by_the_sr_inverse():
     start = 'initial: ["-90 deg", "180 deg", "90 deg", "0 deg"]'  # V2: the +x envelope
     text = SMALL.replace('initial: zero, duration: "2 s"', start + ', duration: "2 s"')

@@ -54,28 +54,3 @@ def test_validate_section_converts_quantities_and_locates_bad_values():
     with pytest.raises(ValidationError) as info:
         validate_section(Gains, {"kp": "-1 N/m"}, "law 'x'", "gain", "gains")
     assert info.value.errors()[0]["loc"] == ("kp",)
-
-
-class Carts:
-    """A case builder that is a class with a plant: what a plug-in case may offer."""
-
-    def plant(self, k: float = 1.0):
-        from flexsat_example_plugin.plant import TwoMassSpring
-
-        return TwoMassSpring(k=k)
-
-
-def test_a_case_class_with_a_plant_offers_it(monkeypatch):
-    """A case whose builder is a class with ``plant()`` is a simulation case, found on the
-    class (a function builder: on its return annotation) without building it."""
-    import flexsat.scenarios.simulation_plants as plants
-    from flexsat.catalog import CASES, CaseInfo
-
-    info = CaseInfo("carts", __name__, "Carts", "a test", "two carts")
-    monkeypatch.setattr(plants, "all_cases", lambda: {**CASES, "carts": info})
-    plants.simulation_cases.cache_clear()
-    try:
-        assert plants.simulation_cases()[-1] == "carts" and "tamu" not in plants.simulation_cases()
-        assert isinstance(plants.simulation_plants()["carts"], plants.CasePlant)
-    finally:
-        plants.simulation_cases.cache_clear()

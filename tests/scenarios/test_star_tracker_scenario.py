@@ -122,3 +122,21 @@ def test_schema_mistakes_are_named(change, message):
     with pytest.raises(ScenarioError, match=message):
         spec = load_scenario(SMALL.replace(old, new))
         build_tracker(spec)
+
+
+def test_a_crowded_run_is_refused_before_any_run_starts(monkeypatch):
+    # the second run's 1,000 false stars per field would give ~1.7e7 candidate matches a field:
+    # refused by name before the first (clean) run is identified
+    import flexsat.attitude.star_tracker as star_tracker
+
+    started = []
+    monkeypatch.setattr(star_tracker, "monte_carlo", lambda *a, **k: started.append(a))
+    spec = load_scenario(SMALL.replace("false_stars: 2", "false_stars: 1000"))
+    with pytest.raises(ScenarioError, match=r"runs\['noisy'\]\.false_stars: 1000 per field") as e:
+        run_scenario(spec)
+    assert started == [] and len(e.value.problems) == 1
+
+
+def test_a_sky_beyond_the_star_limit_is_refused_by_name():
+    with pytest.raises(ScenarioError, match=r"catalog\.magnitude_limit: .*MAX_CATALOG_STARS"):
+        build_tracker(load_scenario(SMALL.replace("magnitude_limit: 6.5", "magnitude_limit: 30")))

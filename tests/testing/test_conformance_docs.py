@@ -1,5 +1,6 @@
-"""docs/conformance.md: its example runs as printed, and its checks have teeth (a plant or law
-broken in one way fails the check that says so)."""
+"""docs/conformance.md: its example runs as printed and its pytest form marks the skipped checks
+(the checks' teeth -- a plant or law broken in one way fails the check that says so -- are
+tested in tests/testing/test_plant_checks.py and test_law_checks.py)."""
 
 from __future__ import annotations
 
@@ -10,11 +11,7 @@ import numpy as np
 import pytest
 
 from flexsat.testing import (
-    check_controller,
-    check_plant,
-    controller_checks,
     parametrize_with_checks,
-    plant_checks,
 )
 
 DOC = Path(__file__).parents[2] / "docs" / "conformance.md"
@@ -53,111 +50,6 @@ def example():
 def _fails(check_name: str, run, *args):
     with pytest.raises(AssertionError, match=rf"fails {check_name}: "):
         run(*args)
-
-
-def test_a_non_si_unit_fails_channels_declared(example):
-    plant = example["TorsionPendulum"]()
-    Channel = type(plant.outputs[0])
-    plant.outputs = (Channel("angle", "deg"), Channel("rate", "rad/s"))
-    _fails("channels_declared", check_plant, plant)
-
-
-def test_a_wrong_power_fails_energy(example):
-    """Power without the dissipation: dE/dt differs by c θ'² (the difference quotient of the
-    quadratic energy is exact to round-off)."""
-    cls = example["TorsionPendulum"]
-
-    class Undamped(cls):
-        def power(self, x, u):
-            return x[..., 1] * u[..., 0]
-
-    _fails("energy", check_plant, Undamped())
-
-
-def test_an_energy_that_grows_fails_without_a_declared_power(example):
-    cls = example["TorsionPendulum"]
-
-    class Active(cls):
-        power = example["Plant"].power  # not declared: the passivity check applies
-
-        def __init__(self):
-            super().__init__(damping=-0.5)
-
-    _fails("energy", check_plant, Active())
-
-
-def test_a_case_axis_dropped_fails_shapes(example):
-    cls = example["TorsionPendulum"]
-
-    class Scalar(cls):
-        def output(self, name, x, u, f_in=None):
-            return np.asarray(super().output(name, x, u, f_in))[..., :1]
-
-    _fails("shapes", check_plant, Scalar())
-
-
-def test_an_unknown_name_as_a_key_error_fails_bad_input(example):
-    cls = example["TorsionPendulum"]
-
-    class Careless(cls):  # its own output(): Plant.output's check of the name is bypassed
-        def output(self, name, x, u, f_in=None):
-            return x[..., {"angle": 0, "rate": 1}[name]]
-
-    _fails("bad_input", check_plant, Careless())
-
-
-def test_a_linear_form_that_disagrees_fails(example):
-    cls = example["RateDamper"]
-
-    class Off(cls):
-        def linear_form(self, dt, times, n_cases):
-            form = super().linear_form(dt, times, n_cases)
-            return type(form)(**{**form.__dict__, "Dk": 1.001 * form.Dk})
-
-    _fails("linear_form", check_controller, Off(0.5), example["TorsionPendulum"]())
-
-
-def test_a_law_with_hidden_state_fails_determinism(example):
-    cls = example["RateDamper"]
-
-    class Drifting(cls):
-        calls = 0
-
-        def __call__(self, t, y, state):
-            type(self).calls += 1
-            return -(self.gain + 1e-3 * self.calls) * y["rate"], state
-
-        linear_form = example["Controller"].linear_form
-
-    checks = controller_checks(Drifting(0.5), example["TorsionPendulum"]())
-    _fails("batch_equals_singles", check_controller, Drifting(0.5), example["TorsionPendulum"]())
-    (determinism,) = [c for c in checks if c.name == "determinism"]
-    _fails("determinism", determinism)
-
-
-def test_a_law_reading_a_missing_channel_fails_channels_declared(example):
-    cls = example["RateDamper"]
-
-    class Misnamed(cls):
-        reads = ("omega",)
-
-    checks = controller_checks(Misnamed(0.5), example["TorsionPendulum"]())
-    assert [c.skip is None for c in checks] == [True] + [False] * 5
-    _fails("channels_declared", checks[0])
-
-
-def test_skips_follow_the_declarations(example):
-    cls = example["TorsionPendulum"]
-
-    class NoEnergy(cls):
-        energy = example["Plant"].energy
-
-    skipped = {c.name: c.skip for c in plant_checks(NoEnergy()) if c.skip}
-    assert skipped == {"energy": "the plant declares no energy (energy() is None)"}
-    law_skips = {
-        c.name for c in controller_checks(example["RateDamper"]([0.4, 0.5, 0.6]), cls()) if c.skip
-    }
-    assert law_skips == {"batch_equals_singles"}
 
 
 def test_parametrize_with_checks_marks_the_skipped(example):

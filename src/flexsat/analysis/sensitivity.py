@@ -732,6 +732,14 @@ def _kappa_from_svd(d: SVDDerivatives, order: int) -> ConditionDerivatives:
     return kappa, kappa * g, kappa * (np.outer(g, g) + h1 - hr)
 
 
+#: what :func:`eigenvector_condition_derivatives` returns: κ, its gradient (and Hessian) and
+#: the eigen-solution last
+EigenConditionDerivatives = (
+    tuple[float, FloatArray, EigenDerivatives]
+    | tuple[float, FloatArray, FloatArray, EigenDerivatives]
+)
+
+
 def eigenvector_condition_derivatives(
     A: npt.ArrayLike,
     dA: npt.ArrayLike,
@@ -742,7 +750,7 @@ def eigenvector_condition_derivatives(
     *,
     order: int = 1,
     gap_rtol: float = GAP_RTOL,
-) -> ConditionDerivatives:
+) -> EigenConditionDerivatives:
     """Condition number of the normalised modal matrix of A φ = λ B φ and its derivatives.
 
     The performance index of Att. 5 Eq. 46, J = σ_1(Φ)/σ_n(Φ) with φ_iᵀ B φ_i = 1, differentiated

@@ -26,10 +26,12 @@ import numpy as np
 import numpy.typing as npt
 from scipy.spatial import cKDTree
 
+from flexsat import limits
 from flexsat.attitude.star_catalog import StarCatalog
+from flexsat.input_checks import FieldError
 from flexsat.units import FloatArray
 
-__all__ = ["catalog_pairs", "KVectorIndex", "BruteForceIndex", "pair_angles"]
+__all__ = ["catalog_pairs", "expected_pairs", "KVectorIndex", "BruteForceIndex", "pair_angles"]
 
 IntArray = npt.NDArray[np.int64]
 
@@ -37,6 +39,13 @@ IntArray = npt.NDArray[np.int64]
 def pair_angles(a: FloatArray, b: FloatArray) -> FloatArray:
     """Angle between unit vectors (..., 3), 2 arcsin(|a − b|/2), rad."""
     return 2.0 * np.arcsin(np.clip(0.5 * np.linalg.norm(a - b, axis=-1), 0.0, 1.0))
+
+
+def expected_pairs(n_stars: int, max_angle: float) -> float:
+    """Pairs of ``n_stars`` stars uniform on the sphere closer than ``max_angle`` rad:
+    C(n, 2) times the fraction of the sphere within the angle of a point, (1 − cos θ)/2. The
+    real sky is denser towards the galactic plane, by up to about 2 for naked-eye stars."""
+    return 0.5 * n_stars * (n_stars - 1) * 0.5 * (1.0 - np.cos(max_angle))
 
 
 def catalog_pairs(catalog: StarCatalog, max_angle: float) -> tuple[IntArray, IntArray, FloatArray]:
@@ -53,6 +62,15 @@ def catalog_pairs(catalog: StarCatalog, max_angle: float) -> tuple[IntArray, Int
     ang = float(max_angle)
     if not 0 < ang < np.pi:
         raise ValueError(f"max_angle: must lie in (0, π) rad, got {max_angle!r}")
+    expected = expected_pairs(len(catalog), ang)
+    if expected > limits.MAX_CATALOG_PAIRS:
+        raise FieldError(
+            "catalog",
+            f"its {len(catalog):,} stars form about {expected:.3g} pairs within "
+            f"{np.degrees(ang):.3g}° (the cameras' field), above the limit "
+            f"{limits.MAX_CATALOG_PAIRS:,} (flexsat.limits.MAX_CATALOG_PAIRS); a brighter "
+            f"magnitude limit or a narrower field of view",
+        )
     tree = cKDTree(catalog.vectors)
     pairs = tree.query_pairs(2.0 * np.sin(0.5 * ang), output_type="ndarray")
     if pairs.shape[0] == 0:
@@ -77,6 +95,14 @@ class _PairIndex:
 
     def __len__(self) -> int:
         return self.angles.size
+
+    def count(self, low: npt.ArrayLike, high: npt.ArrayLike) -> int:
+        """How many (query, pair) rows :meth:`query` returns for these bounds, counted on the
+        sorted angles without building them (the size a caller checks before asking)."""
+        low, high = np.asarray(low, float), np.asarray(high, float)
+        stop = np.searchsorted(self.angles, high, side="right")
+        start = np.searchsorted(self.angles, low, side="left")
+        return int(np.maximum(stop - start, 0).sum())
 
     def query(self, low: npt.ArrayLike, high: npt.ArrayLike) -> tuple[IntArray, IntArray]:
         """(query, pair): for every query q, the rows ``pair`` of the stored pairs with

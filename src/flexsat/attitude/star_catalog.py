@@ -35,7 +35,8 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import require_finite
+from flexsat import limits
+from flexsat.input_checks import FieldError, require_count, require_finite
 from flexsat.units import FloatArray
 
 __all__ = [
@@ -138,9 +139,16 @@ def synthetic_sky(
         When the limit leaves fewer than :data:`MIN_STARS` stars.
     """
     limit = float(require_finite(magnitude_limit, "magnitude_limit"))
-    n65 = int(stars_brighter_than_6_5)
-    if n65 <= 0:
-        raise ValueError(f"stars_brighter_than_6_5: must be > 0, got {stars_brighter_than_6_5!r}")
+    n65 = require_count(stars_brighter_than_6_5, "stars_brighter_than_6_5")
+    # the count is checked on its logarithm, before 10^x can overflow or the sky is drawn
+    log_n = np.log10(n65) + 0.5 * (limit - 6.5)
+    if log_n > np.log10(limits.MAX_CATALOG_STARS):
+        raise FieldError(
+            "magnitude_limit",
+            f"{limit:g} gives a synthetic sky of about 10^{log_n:.3g} stars, above the limit "
+            f"{limits.MAX_CATALOG_STARS:,} (flexsat.limits.MAX_CATALOG_STARS); star cameras "
+            f"detect to about m = 7-9",
+        )
     n = int(round(n65 * 10 ** (0.5 * (limit - 6.5))))
     if n < MIN_STARS or limit <= BRIGHTEST_MAGNITUDE:
         raise ValueError(

@@ -21,8 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from flexsat import limits
 from flexsat.attitude.fit import rotation_error
-from flexsat.attitude.pair_index import BruteForceIndex, KVectorIndex
+from flexsat.attitude.pair_index import BruteForceIndex, KVectorIndex, pair_angles
 from flexsat.attitude.star_camera import StarCamera, StarFrame
 from flexsat.attitude.star_catalog import StarCatalog
 from flexsat.attitude.star_id import Identification, identify_frames
@@ -34,6 +35,7 @@ __all__ = [
     "StarTracker",
     "MonteCarloResult",
     "monte_carlo",
+    "check_field_load",
     "random_attitudes",
     "score",
     "ARCSEC",
@@ -116,6 +118,29 @@ class StarTracker:
         max_angle = max(c.max_pair_angle for c in cams) + self.tolerance
         self.index = _INDEXES[index](self.catalog, max_angle)
 
+    def expected_candidates(self, false_stars: int = 0, missing_fraction: float = 0.0) -> float:
+        """Expected candidate matches of one field of view (the size
+        :func:`~flexsat.attitude.star_id.match_field` checks against
+        :data:`flexsat.limits.MAX_PAIR_CANDIDATES`), estimated before any frame is made.
+
+        The widest camera sees N Ω/4π of the N catalogue stars it detects (Ω = 4 arcsin
+        sin²(F/2), the solid angle of a square field of full angle F), less the missing
+        fraction, plus the false stars: k stars, C(k, 2) measured pairs. A measured pair
+        matches the index's pairs within the tolerance of its angle: their mean count over the
+        pairs of a 24 × 24 grid of points on the detector (stars, real or false, uniform on it).
+        """
+        cam = max(self.cameras, key=lambda c: c.field_of_view)
+        half = 0.5 * cam.field_of_view
+        solid_angle = 4.0 * np.arcsin(np.sin(half) ** 2)
+        detected = np.count_nonzero(self.catalog.magnitudes <= cam.magnitude_limit)
+        k = detected * solid_angle / (4 * np.pi) * (1.0 - missing_fraction) + false_stars
+        ticks = (np.arange(24) + 0.5) * cam.n_pixels / 24
+        grid = cam.directions(np.stack(np.meshgrid(ticks, ticks), -1).reshape(-1, 2))
+        first, second = np.triu_indices(grid.shape[0], 1)
+        angles = pair_angles(grid[first], grid[second])
+        per_pair = self.index.count(angles - self.tolerance, angles + self.tolerance) / angles.size
+        return 0.5 * k * max(k - 1.0, 0.0) * per_pair
+
     def observe(
         self,
         attitude: npt.ArrayLike,
@@ -178,6 +203,27 @@ class MonteCarloResult:
         return np.nanstd(self.errors, axis=0)
 
 
+def check_field_load(tracker: StarTracker, false_stars: int, missing_fraction: float) -> None:
+    """Refuse, before any frame is made, false stars that would give one field more candidate
+    matches than :data:`flexsat.limits.MAX_PAIR_CANDIDATES`
+    (:meth:`StarTracker.expected_candidates`).
+
+    Raises
+    ------
+    flexsat.input_checks.FieldError
+        Naming ``false_stars``.
+    """
+    expected = tracker.expected_candidates(false_stars, missing_fraction)
+    if expected > limits.MAX_PAIR_CANDIDATES:
+        raise FieldError(
+            "false_stars",
+            f"{false_stars} per field would make about {expected:.3g} candidate catalogue "
+            f"matches per field, above the limit {limits.MAX_PAIR_CANDIDATES:,} "
+            f"(flexsat.limits.MAX_PAIR_CANDIDATES): the identification would crawl; fewer "
+            f"false stars or a smaller tolerance",
+        )
+
+
 def monte_carlo(
     tracker: StarTracker,
     n: int = 1000,
@@ -187,6 +233,7 @@ def monte_carlo(
 ) -> MonteCarloResult:
     """Identify ``n`` seeded random attitudes (module docstring). ``nees`` is δθᵀP⁻¹δθ per
     accepted attitude (χ² with 3 degrees of freedom when the covariance is right)."""
+    check_field_load(tracker, false_stars, missing_fraction)
     rng = np.random.default_rng(seed)
     att = random_attitudes(n, rng)
     n_cam = len(tracker.cameras)

@@ -4,12 +4,19 @@ from a gimbal set until the first singular set, the back integration to preferre
 the null-motion reorientation.
 
 Each is the plant :class:`~flexsat.dynamics.gimbal_cluster.GimbalCluster` (σ̇ = u) under a law of
-:mod:`flexsat.control.cmg_steering`, run by the engine's continuous-law mode
-(:func:`flexsat.sim.continuous.run`: the law at every stage of DOP853, rtol 1e-10): the paper's
-steering is continuous. One case per call; torques in rotor momenta h per second.
+:mod:`flexsat.control.cmg_steering`, in the engine's continuous-law mode (the law at every stage
+of DOP853, rtol 1e-10): the paper's steering is continuous. The reorientation is a
+:func:`flexsat.sim.simulate` run of the triple :func:`reorient_simulation` builds (what the
+``kind: cmg`` scenario hands to the runner). Torque steering stops at the first singular set, a
+terminal condition and dense output :func:`~flexsat.sim.simulate` does not offer, so it calls
+the mode's integrator :func:`flexsat.sim.continuous.run` directly. One case per call; torques
+in rotor momenta h per second.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
@@ -19,9 +26,20 @@ from flexsat.dynamics import cmg
 from flexsat.dynamics.cmg import PAPER_PERTURBATION, SKEW, GimbalRun
 from flexsat.dynamics.gimbal_cluster import GimbalCluster
 from flexsat.input_checks import require_finite
-from flexsat.sim import continuous
+from flexsat.sim import continuous, simulate
+from flexsat.sim.config import SimConfig
 
-__all__ = ["integrate_gimbals", "preferred_angles", "reorient"]
+if TYPE_CHECKING:
+    import numpy.typing as npt
+    import xarray as xr
+
+__all__ = [
+    "gimbal_run",
+    "integrate_gimbals",
+    "preferred_angles",
+    "reorient",
+    "reorient_simulation",
+]
 
 
 def _gimbal_set(sigma, n_units: int, field: str) -> np.ndarray:
@@ -37,17 +55,17 @@ def _gimbal_set(sigma, n_units: int, field: str) -> np.ndarray:
 
 
 def integrate_gimbals(
-    sigma0,
-    torque,
-    t_final,
-    skew=SKEW,
+    sigma0: npt.ArrayLike,
+    torque: npt.ArrayLike | Callable[[float], npt.ArrayLike],
+    t_final: float | str,
+    skew: float | str = SKEW,
     n_units: int = 4,
     alpha: float = 0.0,
     threshold: float = 1e-6,
     rtol: float = 1e-10,
     atol: float = 1e-12,
     n_out: int = 201,
-    null_target=None,
+    null_target: npt.ArrayLike | None = None,
     null_gain: float = 1.0,
     null_alpha: float = 0.0,
     stop_at_singular: bool = True,
@@ -157,10 +175,10 @@ def _first_dip(sigma_at, steps, skew, n, thr):
 
 
 def preferred_angles(
-    direction,
-    skew=SKEW,
+    direction: npt.ArrayLike,
+    skew: float | str = SKEW,
     n_units: int = 4,
-    perturbation=None,
+    perturbation: npt.ArrayLike | None = None,
     threshold: float = 1e-6,
     rtol: float = 1e-10,
     atol: float = 1e-12,
@@ -223,24 +241,26 @@ def preferred_angles(
     return np.angle(np.exp(1j * run.sigma[-1]))
 
 
-def reorient(
-    sigma0,
-    sigma_target,
-    t_final,
+def reorient_simulation(
+    sigma0: npt.ArrayLike,
+    sigma_target: npt.ArrayLike,
+    t_final: float | str,
     gain_k: float = 1.0,
-    skew=SKEW,
+    skew: float | str = SKEW,
     n_units: int = 4,
     alpha: float = 1e-3,
     rtol: float = 1e-10,
     atol: float = 1e-12,
     n_out: int = 201,
-) -> GimbalRun:
-    """Null-motion gimbal reorientation σ̇ = τ d, d = k(σ_f − σ) (§8.5 Eq. 13–17;
-    :class:`~flexsat.control.cmg_steering.NullMotionSteering`).
+) -> tuple[GimbalCluster, NullMotionSteering, SimConfig, dict[str, Any]]:
+    """What :func:`reorient` simulates: the plant, the law, the configuration and the options
+    of :func:`flexsat.sim.simulate` (continuous-law mode, the law at every stage of DOP853,
+    recorded at ``n_out`` equally spaced times over ``t_final``).
 
-    V = ½|σ_f − σ|² falls as V' = −k(σ_f − σ)ᵀτ(σ_f − σ) <= 0 (Eq. 16); α > 0 (the paper's
-    ≈ 0.001) carries the motion through singular sets, where the rates go to zero (§8.5).
-    One case per call; returns the run sampled at ``n_out`` times (``singular`` is False).
+    Raises
+    ------
+    ValueError
+        Naming the field: a bad gimbal set, pyramid, gain, weight, duration or sample count.
     """
     plant = GimbalCluster(n_units, skew)
     n, d = plant.n_units, plant.skew
@@ -250,6 +270,50 @@ def reorient(
     tf = float(require_finite(t_final, "t_final", "s"))
     if tf <= 0:
         raise ValueError(f"t_final: must be > 0, got {t_final!r}")
-    run = continuous.run(plant, law, np.linspace(0.0, tf, n_out), sig0, rtol, atol)
-    sig = run.states[0]
-    return GimbalRun(run.t, sig, cmg.momentum(sig, d, n), cmg.gain(sig, d, n), False)
+    if isinstance(n_out, bool) or not isinstance(n_out, (int, np.integer)) or n_out < 2:
+        raise ValueError(f"n_out: must be an integer >= 2, got {n_out!r}")
+    config = SimConfig(
+        duration=tf,
+        control_rate=(n_out - 1) / tf,
+        substeps=1,
+        law_mode="continuous",
+        rtol=rtol,
+        atol=atol,
+    )
+    return plant, law, config, {"initial_state": sig0, "record_states": True}
+
+
+def gimbal_run(plant: GimbalCluster, dataset: xr.Dataset) -> GimbalRun:
+    """The recorded run of :func:`reorient_simulation` (``dataset`` of its
+    :class:`~flexsat.sim.recording.SimResult`, one case) as a :class:`GimbalRun`
+    (``singular`` False: the null motion runs through singular sets)."""
+    t = dataset["time"].values
+    sig = dataset["state"].values[0]
+    d, n = plant.skew, plant.n_units
+    return GimbalRun(t, sig, cmg.momentum(sig, d, n), cmg.gain(sig, d, n), False)
+
+
+def reorient(
+    sigma0: npt.ArrayLike,
+    sigma_target: npt.ArrayLike,
+    t_final: float | str,
+    gain_k: float = 1.0,
+    skew: float | str = SKEW,
+    n_units: int = 4,
+    alpha: float = 1e-3,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    n_out: int = 201,
+) -> GimbalRun:
+    """Null-motion gimbal reorientation σ̇ = τ d, d = k(σ_f − σ) (§8.5 Eq. 13–17;
+    :class:`~flexsat.control.cmg_steering.NullMotionSteering`), run by
+    :func:`flexsat.sim.simulate` on :func:`reorient_simulation`.
+
+    V = ½|σ_f − σ|² falls as V' = −k(σ_f − σ)ᵀτ(σ_f − σ) <= 0 (Eq. 16); α > 0 (the paper's
+    ≈ 0.001) carries the motion through singular sets, where the rates go to zero (§8.5).
+    One case per call; returns the run sampled at ``n_out`` times (``singular`` is False).
+    """
+    plant, law, config, options = reorient_simulation(
+        sigma0, sigma_target, t_final, gain_k, skew, n_units, alpha, rtol, atol, n_out
+    )
+    return gimbal_run(plant, simulate(plant, law, config, **options).dataset)

@@ -288,8 +288,7 @@ class NPSCase:
         return ModalHybrid(
             self.modal_model(n_modes),
             self.hub_inertia_value,
-            # ModalHybrid's annotation says int; it takes "z" too (dynamics, pending issue 20)
-            axis="z",  # type: ignore[arg-type]
+            axis="z",
             tip=(self.reflector_node, "y"),
         )
 

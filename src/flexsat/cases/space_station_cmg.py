@@ -70,7 +70,11 @@ __all__ = [
 
 #: Table 2 of the paper (L4684–L4688), as published
 PAPER_STATION = StationData(
-    ("5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"),
+    (
+        to_si("5.28e6 slug*ft**2", "kg*m**2"),
+        to_si("10.80e6 slug*ft**2", "kg*m**2"),
+        to_si("58.57e6 slug*ft**2", "kg*m**2"),
+    ),
     0.0011,
     to_si("3500 lbf*ft*s", "N*m*s"),
 )

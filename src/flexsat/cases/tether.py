@@ -18,7 +18,6 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat.dynamics.tether import ClosedLoopRun, TetheredSubsatellite, TetherScales
-from flexsat.units import to_si
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -146,12 +145,7 @@ def make_law(
 
 def paper_scales() -> TetherScales:
     """The paper's tether: 22.7 kg, 20 km, a 220 km orbit (L4397-L4401)."""
-    s = PAPER_SCALES
-    return TetherScales(
-        mass=to_si(s["mass"], "kg"),
-        length=to_si(s["length"], "m"),
-        altitude=to_si(s["altitude"], "m"),
-    )
+    return TetherScales(**PAPER_SCALES)
 
 
 #: how the law meets the tether: continuous feedback (the paper's), or held samples

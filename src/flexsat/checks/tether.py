@@ -39,9 +39,7 @@ def _get(key: str, name: str) -> Callable[[], float]:
 def _orbit_rate_per_minute() -> float:
     from flexsat.cases.tether import paper_scales
 
-    rate = paper_scales().orbit_rate
-    assert rate is not None  # TetherScales sets it (from the altitude when not given)
-    return rate * 60
+    return paper_scales().orbit_rate * 60
 
 
 def _final_pitch_6_orbits() -> float:

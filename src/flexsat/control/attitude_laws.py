@@ -62,7 +62,10 @@ the torque argument of :func:`flexsat.dynamics.rigid_body.propagate` through
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from abc import abstractmethod
+from collections.abc import Mapping
+from dataclasses import Field, dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -76,12 +79,17 @@ from flexsat.dynamics.attitude import (
 from flexsat.dynamics.rigid_body import require_inertia
 from flexsat.input_checks import FieldError, require_finite, require_positive, set_si
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray
+
 __all__ = ["GibbsLyapunovLaw", "MRPLaw", "QuaternionPD", "error_quaternion"]
 
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
 
 
-def error_quaternion(beta, beta_target) -> np.ndarray:
+def error_quaternion(beta: npt.ArrayLike, beta_target: npt.ArrayLike) -> FloatArray:
     r"""β(B/R) = β(B/N) ⊗ β(R/N)*: the attitude of the body relative to the target frame.
 
     Parameters
@@ -102,7 +110,7 @@ def error_quaternion(beta, beta_target) -> np.ndarray:
     return _error(b, r)
 
 
-def _error(b, r):
+def _error(b: FloatArray, r: FloatArray) -> FloatArray:
     # β ⊗ r* written out (Schaub & Junkins Eq. 3.105 with r* = [r0, −r_v])
     out = np.empty(np.broadcast_shapes(b.shape, r.shape))
     bv, rv = b[..., 1:], r[..., 1:]
@@ -111,7 +119,7 @@ def _error(b, r):
     return out
 
 
-def _per_axis(value, name: str) -> np.ndarray:
+def _per_axis(value: npt.ArrayLike, name: str) -> FloatArray:
     value = np.asarray(value, float)
     if value.ndim and value.shape[-1] != 3:
         raise FieldError(
@@ -130,12 +138,17 @@ class _AttitudeLaw(Controller):
     writes = ("torque",)
     #: fields whose last axis is a body axis or a quaternion component, not a case axis
     _VECTORS: tuple[str, ...] = ()
+    # the dataclass machinery of the subclasses (typeshed's DataclassInstance)
+    __dataclass_fields__: ClassVar[dict[str, Field[Any]]]
+    beta_target: npt.ArrayLike
+    _field_cases: dict[str, tuple[int, ...]]
+    _case_shape: tuple[int, ...]
 
-    def _finish(self):
+    def _finish(self) -> None:
         """Check the target quaternion and the case axes of every field against each other;
         keep the case shape."""
         object.__setattr__(self, "beta_target", require_quaternion(self.beta_target, "beta_target"))
-        shapes = {}
+        shapes: dict[str, tuple[int, ...]] = {}
         for name in self.__dataclass_fields__:
             shape = np.shape(getattr(self, name))
             shapes[name] = shape[:-1] if name in self._VECTORS and shape else shape
@@ -147,25 +160,31 @@ class _AttitudeLaw(Controller):
     def n_cases(self) -> int:
         return int(np.prod(self._case_shape))
 
-    def _measured(self, beta, w):
+    def _measured(self, beta: npt.ArrayLike, w: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
         """β and ω checked and their case axes checked against the law's (for the public
         functions of (β, ω); the per-sample call trusts the engine's shapes)."""
         b = require_quaternion(beta)
-        w = require_shape(w, "w", (3,))
-        case_shape(beta=b.shape[:-1], w=w.shape[:-1], **self._field_cases)
-        return b, w
+        rate = require_shape(w, "w", (3,))
+        case_shape(beta=b.shape[:-1], w=rate.shape[:-1], **self._field_cases)
+        return b, rate
 
-    def __call__(self, t, y, state):
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[FloatArray, dict[str, FloatArray]]:
         """The torque command (N·m, body components, (n_cases, 3)) from the measured
         ``attitude`` and ``rate``; the law has no internal state."""
         return self._torque(np.asarray(y["attitude"], float), np.asarray(y["rate"], float)), state
 
-    def torque(self, beta, w) -> np.ndarray:
+    def torque(self, beta: npt.ArrayLike, w: npt.ArrayLike) -> FloatArray:
         """The torque u (N·m, body components, shape (..., 3)) at attitude β, rate ω (checked)."""
         return self._torque(*self._measured(beta, w))
 
+    @abstractmethod
+    def _torque(self, beta: FloatArray, w: FloatArray) -> FloatArray:
+        """The law's torque at checked β (..., 4) and ω (..., 3)."""
+
     @staticmethod
-    def _kinetic(w, inertia):
+    def _kinetic(w: FloatArray, inertia: npt.ArrayLike) -> FloatArray:
         J = require_inertia(inertia)
         return 0.5 * np.einsum("...i,...ij,...j->...", w, J, w)
 
@@ -186,21 +205,20 @@ class GibbsLyapunovLaw(_AttitudeLaw):
         Unit Euler parameters of the target frame (default: the inertial frame).
     """
 
-    k: object
-    A: object
-    beta_target: object = field(default=_IDENTITY)
+    k: float | FloatArray
+    A: float | FloatArray
+    beta_target: npt.ArrayLike = field(default=_IDENTITY)
     _VECTORS = ("k", "beta_target")
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         set_si(self, "k", require_positive, "N*m*s/rad")
         _per_axis(self.k, "k")
         set_si(self, "A", require_positive, "N*m")
         self._finish()
-        object.__setattr__(self, "_A", np.asarray(self.A)[..., None])
 
-    def gibbs(self, beta) -> np.ndarray:
+    def gibbs(self, beta: npt.ArrayLike) -> FloatArray:
         """Gibbs parameters q = l tan(φ/2) of the error (shape (..., 3)); refused at 180°."""
-        e = _error(np.asarray(beta, float), self.beta_target)
+        e = _error(np.asarray(beta, float), np.asarray(self.beta_target, float))
         if np.any(np.abs(e[..., 0]) < SINGULAR_TOL):
             raise FieldError(
                 "attitude",
@@ -209,20 +227,21 @@ class GibbsLyapunovLaw(_AttitudeLaw):
             )
         return e[..., 1:] / e[..., :1]
 
-    def _torque(self, beta, w):
+    def _torque(self, beta: FloatArray, w: FloatArray) -> FloatArray:
         q = self.gibbs(beta)
-        return -(self.k * w + self._A * q * (1 + np.sum(q * q, axis=-1))[..., None])
+        A = np.asarray(self.A)[..., None]
+        return -(self.k * w + A * q * (1 + np.sum(q * q, axis=-1))[..., None])
 
-    def lyapunov(self, beta, w, inertia) -> np.ndarray:
+    def lyapunov(self, beta: npt.ArrayLike, w: npt.ArrayLike, inertia: npt.ArrayLike) -> FloatArray:
         r"""U = ½ ωᵀIω + A qᵀq (J), Att. 3 Eq. 2."""
-        beta, w = self._measured(beta, w)
-        q = self.gibbs(beta)
-        return self._kinetic(w, inertia) + self.A * np.sum(q * q, axis=-1)
+        b, rate = self._measured(beta, w)
+        q = self.gibbs(b)
+        return self._kinetic(rate, inertia) + self.A * np.sum(q * q, axis=-1)
 
-    def lyapunov_rate(self, w) -> np.ndarray:
+    def lyapunov_rate(self, w: npt.ArrayLike) -> FloatArray:
         r""":math:`\dot U = -\sum_i k_i\omega_i^2` (W) along the closed loop, Att. 3 Eq. 4."""
-        w = require_shape(w, "w", (3,))
-        return -np.sum(self.k * w * w, axis=-1)
+        rate = require_shape(w, "w", (3,))
+        return -np.sum(self.k * rate * rate, axis=-1)
 
 
 @dataclass(frozen=True)
@@ -242,41 +261,40 @@ class MRPLaw(_AttitudeLaw):
         Unit Euler parameters of the target frame (default: the inertial frame).
     """
 
-    K: object
-    P: object
-    beta_target: object = field(default=_IDENTITY)
+    K: float | FloatArray
+    P: float | FloatArray
+    beta_target: npt.ArrayLike = field(default=_IDENTITY)
     _VECTORS = ("P", "beta_target")
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         set_si(self, "K", require_positive, "N*m")
         set_si(self, "P", require_positive, "N*m*s/rad")
         _per_axis(self.P, "P")
         self._finish()
-        object.__setattr__(self, "_K", np.asarray(self.K)[..., None])
 
-    def mrp(self, beta) -> np.ndarray:
+    def mrp(self, beta: npt.ArrayLike) -> FloatArray:
         """MRPs σ = l tan(φ/4) of the error on its short rotation, |σ| <= 1 (shape (..., 3)).
 
         The error quaternion is taken with β0 >= 0, so 1 + β0 >= 1 and no shadow switch
         or singularity check is needed.
         """
-        e = _error(np.asarray(beta, float), self.beta_target)
+        e = _error(np.asarray(beta, float), np.asarray(self.beta_target, float))
         e = np.where(e[..., :1] < 0, -e, e)
         return e[..., 1:] / (1 + e[..., :1])
 
-    def _torque(self, beta, w):
-        return -(self._K * self.mrp(beta) + self.P * w)
+    def _torque(self, beta: FloatArray, w: FloatArray) -> FloatArray:
+        return -(np.asarray(self.K)[..., None] * self.mrp(beta) + self.P * w)
 
-    def lyapunov(self, beta, w, inertia) -> np.ndarray:
+    def lyapunov(self, beta: npt.ArrayLike, w: npt.ArrayLike, inertia: npt.ArrayLike) -> FloatArray:
         r"""V = ½ ωᵀIω + 2K ln(1 + σᵀσ) (J), Schaub & Junkins Ch. 8."""
-        beta, w = self._measured(beta, w)
-        s = self.mrp(beta)
-        return self._kinetic(w, inertia) + 2 * self.K * np.log1p(np.sum(s * s, axis=-1))
+        b, rate = self._measured(beta, w)
+        s = self.mrp(b)
+        return self._kinetic(rate, inertia) + 2 * self.K * np.log1p(np.sum(s * s, axis=-1))
 
-    def lyapunov_rate(self, w) -> np.ndarray:
+    def lyapunov_rate(self, w: npt.ArrayLike) -> FloatArray:
         r""":math:`\dot V = -\omega^T P\omega` (W) along the closed loop."""
-        w = require_shape(w, "w", (3,))
-        return -np.sum(self.P * w * w, axis=-1)
+        rate = require_shape(w, "w", (3,))
+        return -np.sum(self.P * rate * rate, axis=-1)
 
 
 @dataclass(frozen=True)
@@ -296,13 +314,13 @@ class QuaternionPD(_AttitudeLaw):
         Reference body rate, rad/s (default 0: regulation to the target).
     """
 
-    Kp: object
-    Kd: object
-    beta_target: object = field(default=_IDENTITY)
-    w_ref: object = field(default=(0.0, 0.0, 0.0))
+    Kp: float | FloatArray
+    Kd: float | FloatArray
+    beta_target: npt.ArrayLike = field(default=_IDENTITY)
+    w_ref: npt.ArrayLike = field(default=(0.0, 0.0, 0.0))
     _VECTORS = ("Kp", "Kd", "beta_target", "w_ref")
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         set_si(self, "Kp", require_positive, "N*m")
         _per_axis(self.Kp, "Kp")
         set_si(self, "Kd", require_positive, "N*m*s/rad")
@@ -311,26 +329,26 @@ class QuaternionPD(_AttitudeLaw):
         object.__setattr__(self, "w_ref", w_ref)
         self._finish()
 
-    def error(self, beta) -> np.ndarray:
+    def error(self, beta: npt.ArrayLike) -> FloatArray:
         """The error quaternion on its short rotation, δβ0 >= 0 (shape (..., 4))."""
-        e = _error(np.asarray(beta, float), self.beta_target)
+        e = _error(np.asarray(beta, float), np.asarray(self.beta_target, float))
         return np.where(e[..., :1] < 0, -e, e)
 
-    def _torque(self, beta, w):
-        return -(self.Kp * self.error(beta)[..., 1:] + self.Kd * (w - self.w_ref))
+    def _torque(self, beta: FloatArray, w: FloatArray) -> FloatArray:
+        return -(self.Kp * self.error(beta)[..., 1:] + self.Kd * (w - np.asarray(self.w_ref)))
 
-    def lyapunov(self, beta, w, inertia) -> np.ndarray:
+    def lyapunov(self, beta: npt.ArrayLike, w: npt.ArrayLike, inertia: npt.ArrayLike) -> FloatArray:
         r"""V = ½ ωᵀIω + 2K_p(1 − |δβ0|) (J), for a scalar K_p and ω_ref = 0."""
-        if np.ndim(self.Kp) and np.shape(self.Kp)[-1] == 3 or np.any(self.w_ref != 0):
+        if np.ndim(self.Kp) and np.shape(self.Kp)[-1] == 3 or np.any(np.asarray(self.w_ref) != 0):
             raise FieldError(
                 "Kp",
                 "the Lyapunov function V = ½ωᵀIω + 2Kp(1 − |δβ0|) needs a "
                 "gain equal on every axis and w_ref = 0",
             )
-        beta, w = self._measured(beta, w)
-        return self._kinetic(w, inertia) + 2 * self.Kp * (1 - self.error(beta)[..., 0])
+        b, rate = self._measured(beta, w)
+        return self._kinetic(rate, inertia) + 2 * self.Kp * (1 - self.error(b)[..., 0])
 
-    def lyapunov_rate(self, w) -> np.ndarray:
+    def lyapunov_rate(self, w: npt.ArrayLike) -> FloatArray:
         r""":math:`\dot V = -\omega^T K_d\,\omega` (W) along the closed loop (ω_ref = 0)."""
-        w = require_shape(w, "w", (3,))
-        return -np.sum(self.Kd * w * w, axis=-1)
+        rate = require_shape(w, "w", (3,))
+        return -np.sum(self.Kd * rate * rate, axis=-1)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -26,6 +26,26 @@ if TYPE_CHECKING:
     from flexsat.control.linear_form import LinearLaw
     from flexsat.maneuvers.torque_shapes import TorqueShape
     from flexsat.units import FloatArray
+
+
+class TorqueNominal(Protocol):
+    """An open-loop torque history on [0, ``duration``] (s): ``torque(t)`` (N·m, body axes,
+    shape t.shape + (3,))."""
+
+    @property
+    def duration(self) -> float: ...
+
+    def torque(self, t: FloatArray) -> npt.ArrayLike: ...
+
+
+class RigidNominal(TorqueNominal, Protocol):
+    """A rigid three-axis nominal maneuver (e.g. :class:`flexsat.maneuvers.three_axis_slew.
+    ThreeAxisSlew`): its torque and ``beta(t)`` (unit Euler parameters, t.shape + (4,)) and
+    ``omega(t)`` (body rate, rad/s, t.shape + (3,))."""
+
+    def beta(self, t: FloatArray) -> npt.ArrayLike: ...
+
+    def omega(self, t: FloatArray) -> npt.ArrayLike: ...
 
 
 class Controller(ABC):

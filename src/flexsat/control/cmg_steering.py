@@ -17,7 +17,8 @@ Both read ``gimbal_angles`` (rad) and write ``gimbal_rates`` (rad/s); the kernel
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, TypeAlias
 
 import numpy as np
 
@@ -25,10 +26,28 @@ from flexsat.control.base import Controller
 from flexsat.dynamics import cmg
 from flexsat.input_checks import FieldError, require_finite
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray
+
+#: the spacecraft torque as given: a constant 3-vector or a callable t (s) -> 3-vector
+TorqueHistory: TypeAlias = "npt.ArrayLike | Callable[[float], npt.ArrayLike]"
+
+
+def _weight(value: float, field: str) -> float:
+    """A nonnegative weight or gain (α, k), checked when the law is made, not at its first
+    call inside a run."""
+    out = float(require_finite(value, field))
+    if out < 0:
+        raise FieldError(field, f"must be >= 0, got {value!r}")
+    return out
+
+
 __all__ = ["NullMotionSteering", "PseudoInverseSteering"]
 
 
-def _torque_history(torque) -> Callable:
+def _torque_history(torque: TorqueHistory) -> Callable[[float], FloatArray]:
     """``torque`` (a constant 3-vector or a callable t -> 3-vector, h per second) as a checked
     t -> (3,): a bad callable fails at t = 0, before any run, and is checked at every call."""
     if not callable(torque):
@@ -37,7 +56,7 @@ def _torque_history(torque) -> Callable:
             raise FieldError("torque", f"must have 3 components, got shape {tq.shape}")
         return lambda _t: tq
 
-    def torque_at(t):
+    def torque_at(t: float) -> FloatArray:
         value = require_finite(torque(t), "torque")
         if value.shape != (3,):
             raise FieldError(
@@ -54,12 +73,12 @@ class _GimbalLaw(Controller):
     reads = ("gimbal_angles",)
     writes = ("gimbal_rates",)
 
-    def __init__(self, skew, n_units: int):
+    def __init__(self, skew: float | str, n_units: int) -> None:
         cmg.pyramid_axes(n_units, skew)  # checks both
         self.skew = float(require_finite(skew, "skew", "rad"))
         self.n_units = int(n_units)
 
-    def _batched(self):
+    def _batched(self) -> list[tuple[int, ...]]:
         return [()]  # one law for every case
 
 
@@ -81,21 +100,19 @@ class PseudoInverseSteering(_GimbalLaw):
 
     def __init__(
         self,
-        torque,
-        skew=cmg.SKEW,
+        torque: TorqueHistory,
+        skew: float | str = cmg.SKEW,
         n_units: int = 4,
         alpha: float = 0.0,
-        null_target=None,
+        null_target: npt.ArrayLike | None = None,
         null_gain: float = 1.0,
         null_alpha: float = 0.0,
-    ):
+    ) -> None:
         super().__init__(skew, n_units)
         self.torque_at = _torque_history(torque)
-        self.alpha = float(require_finite(alpha, "alpha"))
-        if self.alpha < 0:
-            raise FieldError("alpha", f"must be >= 0, got {alpha!r}")
+        self.alpha = _weight(alpha, "alpha")
         _, self.a, self.b = cmg.pyramid_axes(self.n_units, self.skew)
-        self.null_target = None
+        self.null_target: FloatArray | None = None
         if null_target is not None:
             target = require_finite(null_target, "null_target", "rad")
             if target.shape != (self.n_units,):
@@ -103,9 +120,12 @@ class PseudoInverseSteering(_GimbalLaw):
                     "null_target", f"one gimbal set ({self.n_units},), got shape {target.shape}"
                 )
             self.null_target = target
-        self.null_gain, self.null_alpha = null_gain, null_alpha
+        self.null_gain = _weight(null_gain, "null_gain")
+        self.null_alpha = _weight(null_alpha, "null_alpha")
 
-    def __call__(self, t, y, state):
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[FloatArray, dict[str, FloatArray]]:
         sig = y["gimbal_angles"]
         torque = self.torque_at(t)
         if self.null_target is None:
@@ -139,7 +159,14 @@ class NullMotionSteering(_GimbalLaw):
         sets).
     """
 
-    def __init__(self, target, gain_k: float = 1.0, skew=cmg.SKEW, n_units: int = 4, alpha=1e-3):
+    def __init__(
+        self,
+        target: npt.ArrayLike,
+        gain_k: float = 1.0,
+        skew: float | str = cmg.SKEW,
+        n_units: int = 4,
+        alpha: float = 1e-3,
+    ) -> None:
         super().__init__(skew, n_units)
         self.sigma_target = require_finite(target, "sigma_target", "rad")
         if self.sigma_target.shape != (self.n_units,):
@@ -150,9 +177,11 @@ class NullMotionSteering(_GimbalLaw):
         self.gain_k = float(require_finite(gain_k, "gain_k", "1/s"))
         if self.gain_k <= 0:
             raise FieldError("gain_k", f"must be > 0, got {gain_k!r}")
-        self.alpha = alpha
+        self.alpha = _weight(alpha, "alpha")
 
-    def __call__(self, t, y, state):
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[FloatArray, dict[str, FloatArray]]:
         sig = y["gimbal_angles"]
         tau = cmg.null_projector(sig, self.skew, self.n_units, self.alpha)
         return np.einsum("...ij,...j->...i", tau, self.gain_k * (self.sigma_target - sig)), state

@@ -40,6 +40,7 @@ are near zero) and the retained ones closed loop (:func:`refine_estimator`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -52,6 +53,11 @@ from flexsat.control.lqr import (
     solve_riccati,
 )
 from flexsat.input_checks import FieldError
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray
 
 __all__ = [
     "RefinedEstimator",
@@ -79,18 +85,33 @@ _KALMAN_LABELS = {
 }
 
 
-def _filter(A, G, C, Qn, Rn, Nn, discrete: bool) -> RiccatiSolution:
-    A = check_square(A, "A")
+def _filter(
+    state_matrix: npt.ArrayLike,
+    noise_input: npt.ArrayLike | None,
+    output_matrix: npt.ArrayLike,
+    process_noise: npt.ArrayLike,
+    measurement_noise: npt.ArrayLike,
+    cross_noise: npt.ArrayLike | None,
+    discrete: bool,
+) -> RiccatiSolution:
+    """:func:`kalman` (``discrete`` false) or :func:`dkalman`; the arguments in their order."""
+    A = check_square(state_matrix, "A")
     n = A.shape[0]
-    G = np.eye(n) if G is None else check_matrix(G, "G", n, None, f"(n, g) with n = {n}")
+    G = (
+        np.eye(n)
+        if noise_input is None
+        else check_matrix(noise_input, "G", n, None, f"(n, g) with n = {n}")
+    )
     g = G.shape[1]
-    C = check_matrix(C, "C", None, n, f"(p, n) with n = {n}")
+    C = check_matrix(output_matrix, "C", None, n, f"(p, n) with n = {n}")
     p = C.shape[0]
-    Qn = check_psd(check_matrix(Qn, "Qn", g, g, f"(g, g) = ({g}, {g})"), "Qn")
-    Rn = check_psd(check_matrix(Rn, "Rn", p, p, f"(p, p) = ({p}, {p})"), "Rn", strict=True)
+    Qn = check_psd(check_matrix(process_noise, "Qn", g, g, f"(g, g) = ({g}, {g})"), "Qn")
+    Rn = check_psd(
+        check_matrix(measurement_noise, "Rn", p, p, f"(p, p) = ({p}, {p})"), "Rn", strict=True
+    )
     NG = None
-    if Nn is not None:
-        Nn = check_matrix(Nn, "Nn", g, p, f"(g, p) = ({g}, {p})")
+    if cross_noise is not None:
+        Nn = check_matrix(cross_noise, "Nn", g, p, f"(g, p) = ({g}, {p})")
         joint = Qn - Nn @ np.linalg.solve(Rn, Nn.T)
         lam = np.linalg.eigvalsh(0.5 * (joint + joint.T))
         scale = max(np.abs(np.linalg.eigvalsh(Qn)).max(), np.finfo(float).tiny)
@@ -114,7 +135,14 @@ def _filter(A, G, C, Qn, Rn, Nn, discrete: bool) -> RiccatiSolution:
     )
 
 
-def kalman(A, G, C, Qn, Rn, Nn=None) -> RiccatiSolution:
+def kalman(
+    A: npt.ArrayLike,
+    G: npt.ArrayLike | None,
+    C: npt.ArrayLike,
+    Qn: npt.ArrayLike,
+    Rn: npt.ArrayLike,
+    Nn: npt.ArrayLike | None = None,
+) -> RiccatiSolution:
     r"""Continuous-time steady-state Kalman filter (module docstring; seed 001 Eqs. 41–44).
 
     Parameters
@@ -147,7 +175,14 @@ def kalman(A, G, C, Qn, Rn, Nn=None) -> RiccatiSolution:
     return _filter(A, G, C, Qn, Rn, Nn, False)
 
 
-def dkalman(A, G, C, Qn, Rn, Nn=None) -> RiccatiSolution:
+def dkalman(
+    A: npt.ArrayLike,
+    G: npt.ArrayLike | None,
+    C: npt.ArrayLike,
+    Qn: npt.ArrayLike,
+    Rn: npt.ArrayLike,
+    Nn: npt.ArrayLike | None = None,
+) -> RiccatiSolution:
     r"""Discrete-time steady-state Kalman filter, predictor form (as ``control.dlqe``).
 
     For :math:`x_{k+1} = A x_k + B u_k + G w_k`, :math:`y_k = C x_k + v_k` with covariances
@@ -165,7 +200,7 @@ def dkalman(A, G, C, Qn, Rn, Nn=None) -> RiccatiSolution:
 
 # ------------------------------------------------------------------------------------------------
 # NPS estimator refinement (seed 001 Eqs. 46–53)
-def regulator_weighted_process_noise(gain, B) -> np.ndarray:
+def regulator_weighted_process_noise(gain: npt.ArrayLike, B: npt.ArrayLike) -> FloatArray:
     r"""Process-noise intensity :math:`Q_{xx} = G^T B^T B G` (seed 001 Eq. 52).
 
     Parameters
@@ -182,13 +217,13 @@ def regulator_weighted_process_noise(gain, B) -> np.ndarray:
     """
     Gm = check_matrix(gain, "gain", None, None, "(m, n)")
     m, n = Gm.shape
-    B = check_matrix(B, "B", n, m, f"(n, m) = ({n}, {m}), matching gain (m, n)")
-    BG = B @ Gm
+    Bm = check_matrix(B, "B", n, m, f"(n, m) = ({n}, {m}), matching gain (m, n)")
+    BG = Bm @ Gm
     Qxx = BG.T @ BG
     return 0.5 * (Qxx + Qxx.T)
 
 
-def truncate_gains(gain, keep) -> np.ndarray:
+def truncate_gains(gain: npt.ArrayLike, keep: npt.ArrayLike) -> FloatArray:
     """Regulator gain with every column outside ``keep`` set to zero (seed 001 Eq. 53).
 
     Parameters
@@ -205,7 +240,7 @@ def truncate_gains(gain, keep) -> np.ndarray:
     return K
 
 
-def _mask(keep, n: int) -> np.ndarray:
+def _mask(keep: npt.ArrayLike, n: int) -> npt.NDArray[np.bool_]:
     arr = np.asarray(keep)
     if arr.dtype == bool:
         if arr.shape != (n,):
@@ -234,17 +269,25 @@ class RefinedEstimator:
     keep : ndarray (n,) bool  states whose gains are kept
     """
 
-    gain: np.ndarray
-    process_noise: np.ndarray
+    gain: FloatArray
+    process_noise: FloatArray
     filter: RiccatiSolution
-    keep: np.ndarray
+    keep: npt.NDArray[np.bool_]
 
     @property
-    def L(self) -> np.ndarray:
+    def L(self) -> FloatArray:
         return self.filter.gain
 
 
-def refine_estimator(A, B, C, gain, keep, Rn, truncate: bool = True) -> RefinedEstimator:
+def refine_estimator(
+    A: npt.ArrayLike,
+    B: npt.ArrayLike,
+    C: npt.ArrayLike,
+    gain: npt.ArrayLike,
+    keep: npt.ArrayLike,
+    Rn: npt.ArrayLike,
+    truncate: bool = True,
+) -> RefinedEstimator:
     r"""The NPS estimator refinement (seed 001 Eqs. 52–53, L415–L427).
 
     1. zero the regulator gains outside ``keep`` (Eq. 53) unless ``truncate`` is false;
@@ -255,9 +298,10 @@ def refine_estimator(A, B, C, gain, keep, Rn, truncate: bool = True) -> RefinedE
     The filter then has (near) zero gain rows for the states the regulator no longer uses —
     they are estimated open loop, as the paper says.
     """
-    A = check_square(A, "A")
-    K = check_matrix(gain, "gain", None, A.shape[0], f"(m, n) with n = {A.shape[0]}")
-    mask = _mask(keep, A.shape[0]) if truncate else np.ones(A.shape[0], bool)
+    Am = check_square(A, "A")
+    n = Am.shape[0]
+    K = check_matrix(gain, "gain", None, n, f"(m, n) with n = {n}")
+    mask = _mask(keep, n) if truncate else np.ones(n, bool)
     K = truncate_gains(K, mask)
     Qxx = regulator_weighted_process_noise(K, B)
-    return RefinedEstimator(K, Qxx, kalman(A, None, C, Qxx, Rn), mask)
+    return RefinedEstimator(K, Qxx, kalman(Am, None, C, Qxx, Rn), mask)

@@ -38,15 +38,22 @@ set the law is Eq. 37's with :math:`M_W`.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import scipy.linalg
 
 from flexsat.input_checks import FieldError, require_finite
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray
+
 __all__ = ["decoupled_input_map", "moment_free_forces"]
 
 
-def moment_free_forces(moments) -> np.ndarray:
+def moment_free_forces(moments: npt.ArrayLike) -> FloatArray:
     r"""Z: orthonormal basis (n_F, n_F − rank G) of the force combinations with zero net
     moment, :math:`GZ = 0` (module docstring; the SVD's null space, rank at the default
     tolerance max(n) ε σ_max).
@@ -76,7 +83,7 @@ def moment_free_forces(moments) -> np.ndarray:
     return Z
 
 
-def decoupled_input_map(moments, n_torques: int = 3) -> np.ndarray:
+def decoupled_input_map(moments: npt.ArrayLike, n_torques: int = 3) -> FloatArray:
     """S = blockdiag(I, Z) (n_torques + n_F, n_torques + dim null G): physical inputs
     [δu_τ, δF] = S [v_τ, v_F] with the torquers free and the forces moment-free
     (:func:`moment_free_forces`)."""

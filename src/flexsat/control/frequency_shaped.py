@@ -48,7 +48,9 @@ the second term the feedforward of a slowly varying plant disturbance
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -62,6 +64,13 @@ from flexsat.input_checks import (
     require_positive,
 )
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.control.linear_form import LinearLaw
+    from flexsat.maneuvers.torque_shapes import TorqueShape
+    from flexsat.units import FloatArray
+
 __all__ = [
     "FrequencyShapedController",
     "FrequencyShapedDesign",
@@ -70,31 +79,37 @@ __all__ = [
 ]
 
 
-def shaping_weights(Q, R, break_frequency, order: int = 2, damping: float = 0.0):
+def shaping_weights(
+    Q: npt.ArrayLike,
+    R: npt.ArrayLike,
+    break_frequency: float,
+    order: int = 2,
+    damping: float = 0.0,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     r"""Augmented weights (Q̂, N̂, R̂) of Eq. 22 (module docstring) for state weight Q (n, n)
     and control weight R (m, m) (the paper's D)."""
     wb = float(require_positive(break_frequency, "break_frequency", "rad/s"))
     zb = float(require_nonneg(damping, "damping", ""))
-    Q = np.atleast_2d(np.asarray(Q, float))
-    R = np.atleast_2d(np.asarray(R, float))
-    n, m = Q.shape[0], R.shape[0]
+    Qm = np.atleast_2d(np.asarray(Q, float))
+    Rm = np.atleast_2d(np.asarray(R, float))
+    n, m = Qm.shape[0], Rm.shape[0]
     if order == 2:
         Qa = np.zeros((n + 2 * m, n + 2 * m))
-        Qa[:n, :n] = Q
-        Qa[n : n + m, n : n + m] = R
-        Qa[n + m :, n + m :] = 4 * zb**2 / wb**2 * R
+        Qa[:n, :n] = Qm
+        Qa[n : n + m, n : n + m] = Rm
+        Qa[n + m :, n + m :] = 4 * zb**2 / wb**2 * Rm
         Na = np.zeros((n + 2 * m, m))
-        Na[n : n + m] = R / wb**2
-        return Qa, Na, R / wb**4
+        Na[n : n + m] = Rm / wb**2
+        return Qa, Na, Rm / wb**4
     Qa = np.zeros((n + m, n + m))
-    Qa[:n, :n] = Q
-    Qa[n:, n:] = R
+    Qa[:n, :n] = Qm
+    Qa[n:, n:] = Rm
     Na = np.zeros((n + m, m))
-    Na[n:] = R / wb
-    return Qa, Na, R / wb**2
+    Na[n:] = Rm / wb
+    return Qa, Na, Rm / wb**2
 
 
-def augment(A, B, order: int = 2) -> tuple[np.ndarray, np.ndarray]:
+def augment(A: FloatArray, B: FloatArray, order: int = 2) -> tuple[FloatArray, FloatArray]:
     """Augmented (Â, B̂) of Eq. 23 (integrator chain of ``order`` on every input)."""
     n, m = B.shape
     k = order * m
@@ -120,38 +135,38 @@ class FrequencyShapedDesign:
     break_frequency, order, damping : shaping parameters
     """
 
-    A: np.ndarray
-    B: np.ndarray
-    A_aug: np.ndarray
-    B_aug: np.ndarray
-    Q_aug: np.ndarray
-    N_aug: np.ndarray
-    R_aug: np.ndarray
+    A: FloatArray
+    B: FloatArray
+    A_aug: FloatArray
+    B_aug: FloatArray
+    Q_aug: FloatArray
+    N_aug: FloatArray
+    R_aug: FloatArray
     solution: RiccatiSolution
     break_frequency: float
     order: int
     damping: float
 
     @property
-    def gain(self) -> np.ndarray:
+    def gain(self) -> FloatArray:
         """K̂ (m, n + order·m): δu_order+1 = −K̂ δX (Eq. 26)."""
         return self.solution.gain
 
     @property
-    def plant_gain(self) -> np.ndarray:
+    def plant_gain(self) -> FloatArray:
         return self.gain[:, : self.A.shape[0]]
 
     @property
-    def chain_gain(self) -> np.ndarray:
+    def chain_gain(self) -> FloatArray:
         """Gains on the control states [δu1(, δu2)]."""
         return self.gain[:, self.A.shape[0] :]
 
     @property
-    def poles(self) -> np.ndarray:
+    def poles(self) -> npt.NDArray[np.complex128]:
         return self.solution.poles
 
     @property
-    def disturbance_gain(self) -> np.ndarray:
+    def disturbance_gain(self) -> FloatArray:
         r"""K_d (m, n), the coefficient of a constant plant disturbance d in Eq. 30:
         :math:`K_d = \hat R^{-1}\hat B^T \hat A_{cl}^{-T} P E` with E = [I; 0] placing d in
         the augmented state (:math:`\hat d = E d`) and :math:`\hat A_{cl} = \hat A -
@@ -160,28 +175,35 @@ class FrequencyShapedDesign:
         multiplies the current d(t)."""
         n = self.A.shape[0]
         Acl = self.A_aug - self.B_aug @ self.gain
-        return np.linalg.solve(
-            self.R_aug, self.B_aug.T @ np.linalg.solve(Acl.T, self.solution.solution[:, :n])
-        )
+        xi = np.linalg.solve(Acl.T, self.solution.solution[:, :n])
+        return np.asarray(np.linalg.solve(self.R_aug, self.B_aug.T @ xi), np.float64)
 
-    def disturbance_feedforward(self, d) -> np.ndarray:
+    def disturbance_feedforward(self, d: npt.ArrayLike) -> FloatArray:
         r"""Constant control term of Eq. 30 for a constant plant disturbance d (n,):
         :math:`\hat R^{-1}\hat B^T \hat A_{cl}^{-T} P \hat d` = :math:`-\hat R^{-1}\hat B^T\xi`
         with ξ of Eq. 29 (:attr:`disturbance_gain` times d)."""
         n = self.A.shape[0]
-        d = require_finite(d, "d")
-        if d.shape != (n,):
-            raise FieldError("d", f"must have shape (n,) = ({n},), got {d.shape}")
-        return self.disturbance_gain @ d
+        dv = require_finite(d, "d")
+        if dv.shape != (n,):
+            raise FieldError("d", f"must have shape (n,) = ({n},), got {dv.shape}")
+        return self.disturbance_gain @ dv
 
-    def controller(self, C, L, dt, **kwargs) -> FrequencyShapedController:
+    def controller(
+        self, C: npt.ArrayLike, L: npt.ArrayLike, dt: float, **kwargs: Any
+    ) -> FrequencyShapedController:
         """The law with estimator gain L (n, p) on the plant outputs C (p, n); keyword
         arguments as :class:`FrequencyShapedController`."""
         return FrequencyShapedController(self, C, L, dt, **kwargs)
 
 
 def frequency_shaped_lqr(
-    A, B, Q, R, break_frequency, order: int = 2, damping: float = 0.0
+    A: npt.ArrayLike,
+    B: npt.ArrayLike,
+    Q: npt.ArrayLike,
+    R: npt.ArrayLike,
+    break_frequency: float,
+    order: int = 2,
+    damping: float = 0.0,
 ) -> FrequencyShapedDesign:
     r"""Frequency-shaped LQR (seed 003 Eqs. 22–28), module docstring.
 
@@ -208,23 +230,21 @@ def frequency_shaped_lqr(
         The augmented problem and its :class:`~flexsat.control.lqr.RiccatiSolution` (gain,
         P, closed-loop poles, relative residual).
     """
-    A = check_square(A, "A")
-    n = A.shape[0]
-    B = check_matrix(B, "B", n, None, f"(n, m) with n = {n}")
-    m = B.shape[1]
-    Q = check_psd(check_matrix(Q, "Q", n, n, f"(n, n) = ({n}, {n})"), "Q")
-    R = check_psd(check_matrix(R, "R", m, m, f"(m, m) = ({m}, {m})"), "R", strict=True)
-    order = require_count(order, "order")
-    if order not in (1, 2):
-        raise FieldError(
-            "order", f"must be 1 (control rate) or 2 (rate and acceleration), got {order}"
-        )
+    a = check_square(A, "A")
+    n = a.shape[0]
+    b = check_matrix(B, "B", n, None, f"(n, m) with n = {n}")
+    m = b.shape[1]
+    q = check_psd(check_matrix(Q, "Q", n, n, f"(n, n) = ({n}, {n})"), "Q")
+    r = check_psd(check_matrix(R, "R", m, m, f"(m, m) = ({m}, {m})"), "R", strict=True)
+    k = require_count(order, "order")
+    if k not in (1, 2):
+        raise FieldError("order", f"must be 1 (control rate) or 2 (rate and acceleration), got {k}")
     wb = float(require_positive(break_frequency, "break_frequency", "rad/s"))
     zb = float(require_nonneg(damping, "damping", ""))
-    Qa, Na, Ra = shaping_weights(Q, R, wb, order, zb)
-    Aa, Ba = augment(A, B, order)
+    Qa, Na, Ra = shaping_weights(q, r, wb, k, zb)
+    Aa, Ba = augment(a, b, k)
     sol = lqr(Aa, Ba, Qa, Ra, Na)
-    return FrequencyShapedDesign(A, B, Aa, Ba, Qa, Na, Ra, sol, wb, order, zb)
+    return FrequencyShapedDesign(a, b, Aa, Ba, Qa, Na, Ra, sol, wb, k, zb)
 
 
 class FrequencyShapedController(EstimatorController):
@@ -258,17 +278,17 @@ class FrequencyShapedController(EstimatorController):
     def __init__(
         self,
         design: FrequencyShapedDesign,
-        C,
-        L,
-        dt,
-        target=0.0,
-        reference=None,
-        measurements=DEFAULT_MEASUREMENTS,
-        reference_states=None,
-        feedforward=True,
-        initial_estimate="measurement",
-        disturbance=None,
-    ):
+        C: npt.ArrayLike,
+        L: npt.ArrayLike,
+        dt: float,
+        target: float | npt.ArrayLike = 0.0,
+        reference: TorqueShape | None = None,
+        measurements: str | Sequence[str] = DEFAULT_MEASUREMENTS,
+        reference_states: Sequence[int] | None = None,
+        feedforward: bool = True,
+        initial_estimate: str | npt.ArrayLike = "measurement",
+        disturbance: npt.ArrayLike | None = None,
+    ) -> None:
         self._setup(
             design.A,
             design.B,
@@ -293,12 +313,14 @@ class FrequencyShapedController(EstimatorController):
             0.0 if disturbance is None else float(design.disturbance_feedforward(disturbance)[0])
         )
 
-    def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
+    def initial_state(self, n_cases: int) -> dict[str, FloatArray]:
         state = super().initial_state(n_cases)
         state["chain"] = np.zeros((n_cases, self.design.order))
         return state
 
-    def __call__(self, t, y, state):
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[FloatArray, dict[str, FloatArray]]:
         Y, x_hat, x_ref, u_ref = self._begin(t, y, state)
         z = np.asarray(state["chain"], float)
         u = u_ref + z[:, 0]
@@ -312,7 +334,7 @@ class FrequencyShapedController(EstimatorController):
         out["chain"] = z @ Pz.T + np.multiply.outer(v, Gz[:, 0])
         return u, out
 
-    def linear_form(self, dt, times, n_cases):
+    def linear_form(self, dt: float, times: npt.ArrayLike, n_cases: int) -> LinearLaw:
         r"""State [x̂, z]: with e1 picking δu1 from the chain,
 
         .. math::
@@ -339,11 +361,10 @@ class FrequencyShapedController(EstimatorController):
         a, b = np.broadcast_arrays(u_ref, self.offset + on_ref(Kx))
         v = np.concatenate([a, b], axis=-1)
         K0 = None if Cpinv is None else np.vstack([Cpinv, np.zeros((k, Cpinv.shape[1]))])
-        if s0 is not None:
-            s0 = np.concatenate([s0, np.zeros((s0.shape[0], k))], axis=-1)
-        return self._linear_law(A, B, C, u_ref, F, v, K0, s0)
+        start = None if s0 is None else np.concatenate([s0, np.zeros((s0.shape[0], k))], axis=-1)
+        return self._linear_law(A, B, C, u_ref, F, v, K0, start)
 
-    def closed_loop_matrix(self) -> np.ndarray:
+    def closed_loop_matrix(self) -> FloatArray:
         """Sampled-data closed-loop transition matrix of the design plant with this law,
         state [x, x̂, z]; stable iff every eigenvalue is inside the unit circle."""
         Phi_p, Gam_p = self.plant_zoh

@@ -30,12 +30,27 @@ and every law's ``linear_form`` are tested against.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, TypeAlias
 
 import numpy as np
 
+from flexsat.control.base import SlewLaw
 from flexsat.input_checks import FieldError, require_finite
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.control.base import Controller
+    from flexsat.dynamics.plant import Channel
+    from flexsat.units import FloatArray
+
+#: a law's channels as given: a name, a (name, width) pair or a Channel, a sequence of these,
+#: or a mapping {name: width}
+ChannelItems: TypeAlias = (
+    "str | Channel | Iterable[str | tuple[str, int] | Channel] | Mapping[str, int]"
+)
 
 __all__ = [
     "LinearLaw",
@@ -53,24 +68,27 @@ __all__ = [
 ]
 
 
-def _names(names, field: str) -> tuple[str, ...]:
-    names = tuple(names)
+def _names(names: Iterable[object], field: str) -> tuple[str, ...]:
+    checked: list[str] = []
     for name in names:
         if not isinstance(name, str) or not name.isidentifier():
             raise FieldError(field, f"channel names must be identifiers, got {name!r}")
-    if len(set(names)) != len(names):
-        raise FieldError(field, f"channel names must be distinct, got {names!r}")
-    return names
+        checked.append(name)
+    if len(set(checked)) != len(checked):
+        raise FieldError(field, f"channel names must be distinct, got {tuple(checked)!r}")
+    return tuple(checked)
 
 
-def _sizes(sizes, names, field: str) -> tuple[int, ...]:
-    sizes = tuple(sizes)
-    if len(sizes) != len(names):
-        raise FieldError(field, f"give one width per channel of {names!r}, got {sizes!r}")
-    for s in sizes:
+def _sizes(sizes: Iterable[object], names: Sequence[str], field: str) -> tuple[int, ...]:
+    given = tuple(sizes)
+    if len(given) != len(names):
+        raise FieldError(field, f"give one width per channel of {names!r}, got {given!r}")
+    checked: list[int] = []
+    for s in given:
         if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 1:
-            raise FieldError(field, f"widths must be positive integers, got {sizes!r}")
-    return tuple(int(s) for s in sizes)
+            raise FieldError(field, f"widths must be positive integers, got {given!r}")
+        checked.append(int(s))
+    return tuple(checked)
 
 
 @dataclass(frozen=True)
@@ -102,19 +120,19 @@ class LinearLaw:
     float64 and made read-only; shapes and finiteness are checked, each error naming the field.
     """
 
-    Ak: np.ndarray
-    Bk: np.ndarray
-    Ck: np.ndarray
-    Dk: np.ndarray
-    y_ref: np.ndarray
-    u_ff: np.ndarray
-    K0: np.ndarray | None
+    Ak: FloatArray
+    Bk: FloatArray
+    Ck: FloatArray
+    Dk: FloatArray
+    y_ref: FloatArray
+    u_ff: FloatArray
+    K0: FloatArray | None
     reads: tuple[str, ...]
     writes: tuple[str, ...]
     read_sizes: tuple[int, ...]
     write_sizes: tuple[int, ...]
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         reads = _names(self.reads, "reads")
         writes = _names(self.writes, "writes")
         object.__setattr__(self, "reads", reads)
@@ -192,7 +210,7 @@ class LinearLaw:
         return sum(self.write_sizes)
 
 
-def run_linear_law(law: LinearLaw, Y) -> np.ndarray:
+def run_linear_law(law: LinearLaw, Y: npt.ArrayLike) -> FloatArray:
     """Commands of a linear law for a measurement sequence: the reference implementation.
 
     Parameters
@@ -218,7 +236,7 @@ def run_linear_law(law: LinearLaw, Y) -> np.ndarray:
     U = np.empty((law.n_t, nc, law.m))
     xi = np.zeros((nc, law.n_states))
 
-    def at(arr, k):
+    def at(arr: FloatArray, k: int) -> FloatArray:
         return arr[min(k, arr.shape[0] - 1)]
 
     for k in range(law.n_t):
@@ -236,7 +254,13 @@ def run_linear_law(law: LinearLaw, Y) -> np.ndarray:
     return U
 
 
-def run_controller(law, times, Y, read_sizes=None, write_sizes=None) -> np.ndarray:
+def run_controller(
+    law: Controller,
+    times: npt.ArrayLike,
+    Y: npt.ArrayLike,
+    read_sizes: Sequence[int] | None = None,
+    write_sizes: Sequence[int] | None = None,
+) -> FloatArray:
     """Commands of any :class:`~flexsat.control.base.Controller` called sample by sample, the
     Python path the linear form must reproduce.
 
@@ -259,10 +283,10 @@ def run_controller(law, times, Y, read_sizes=None, write_sizes=None) -> np.ndarr
     times = np.asarray(times, float)
     Y = np.asarray(Y, float)
     nc = Y.shape[1]
-    rs = read_sizes or getattr(law, "read_sizes", (1,) * len(law.reads))
-    ws = write_sizes or getattr(law, "write_sizes", (1,) * len(law.writes))
-    if getattr(law, "reference", None) is not None:  # as the engine: laws without may be frozen
-        law.tabulate_reference(times)
+    rs: Sequence[int] = read_sizes or tuple(getattr(law, "read_sizes", (1,) * len(law.reads)))
+    ws: Sequence[int] = write_sizes or tuple(getattr(law, "write_sizes", (1,) * len(law.writes)))
+    if isinstance(law, SlewLaw) and law.reference is not None:
+        law.tabulate_reference(times)  # as the engine: laws without a reference may be frozen
     state = law.initial_state(nc)
     U = np.empty((len(times), nc, sum(ws)))
     for k, t in enumerate(times):
@@ -273,7 +297,14 @@ def run_controller(law, times, Y, read_sizes=None, write_sizes=None) -> np.ndarr
     return U
 
 
-def absorb_affine(A, C, g, F, v, s0=None):
+def absorb_affine(
+    A: FloatArray,
+    C: FloatArray,
+    g: FloatArray,
+    F: FloatArray,
+    v: FloatArray,
+    s0: npt.ArrayLike | None = None,
+) -> FloatArray:
     r"""Shift an affine recursion into the linear form (module docstring).
 
     For :math:`x_{k+1} = A_k x_k + B_k e_k + F v_k`, :math:`u_k = g_k + C_k x_k + D_k e_k` with
@@ -307,7 +338,15 @@ def absorb_affine(A, C, g, F, v, s0=None):
     return u
 
 
-def static_law(Dk, y_ref, u_ff, reads, writes, read_sizes=None, write_sizes=None) -> LinearLaw:
+def static_law(
+    Dk: FloatArray,
+    y_ref: FloatArray,
+    u_ff: FloatArray,
+    reads: tuple[str, ...],
+    writes: tuple[str, ...],
+    read_sizes: tuple[int, ...] | None = None,
+    write_sizes: tuple[int, ...] | None = None,
+) -> LinearLaw:
     """A law without internal state (nk = 0): u = u_ff + D (y − y_ref); widths default to 1."""
     m, p = np.shape(Dk)[2:]
     empty = np.zeros((1, 1, 0, 0))
@@ -327,19 +366,26 @@ def static_law(Dk, y_ref, u_ff, reads, writes, read_sizes=None, write_sizes=None
 
 
 # -- channels and case axes shared by the laws ------------------------------------------------
-def channel_spec(items, field: str):
+def channel_spec(
+    items: ChannelItems, field: str
+) -> tuple[tuple[str, ...], tuple[int, ...], tuple[str | None, ...]]:
     """Names, widths and units of a law's channels.
 
     ``items`` is a sequence whose entries are a channel name (width 1, values in SI numbers), a
     pair (name, width), or a :class:`~flexsat.dynamics.plant.Channel` (its width and unit); or a
     mapping {name: width}.
     """
-    if isinstance(items, str) or hasattr(items, "size") and hasattr(items, "name"):
-        items = (items,)
-    elif isinstance(items, Mapping):
-        items = tuple(items.items())
-    names, sizes, units = [], [], []
-    for item in items:
+    entries: Iterable[object]
+    if isinstance(items, Mapping):
+        entries = tuple(items.items())
+    elif isinstance(items, Iterable) and not isinstance(items, str):
+        entries = items
+    else:  # one name or one Channel
+        entries = (items,)
+    names: list[object] = []
+    sizes: list[object] = []
+    units: list[str | None] = []
+    for item in entries:
         if isinstance(item, str):
             names.append(item)
             sizes.append(1)
@@ -356,11 +402,17 @@ def channel_spec(items, field: str):
             raise FieldError(field, f"give channel names or Channels, got {item!r}")
     if not names:
         raise FieldError(field, "give at least one channel")
-    names = _names(names, field)
-    return names, _sizes(sizes, names, field), tuple(units)
+    checked = _names(names, field)
+    return checked, _sizes(sizes, checked, field), tuple(units)
 
 
-def stack_channels(y: Mapping, names, sizes, n_cases: int, field: str = "y") -> np.ndarray:
+def stack_channels(
+    y: Mapping[str, npt.ArrayLike],
+    names: Iterable[str],
+    sizes: Iterable[int],
+    n_cases: int,
+    field: str = "y",
+) -> FloatArray:
     """Concatenate channel values {name: (n_cases,) or (n_cases, size)} to (n_cases, p)."""
     cols = []
     for name, size in zip(names, sizes):
@@ -381,7 +433,7 @@ def stack_channels(y: Mapping, names, sizes, n_cases: int, field: str = "y") -> 
     return np.concatenate(cols, axis=-1)
 
 
-def cases_of(y: Mapping, names, sizes) -> int:
+def cases_of(y: Mapping[str, npt.ArrayLike], names: Iterable[str], sizes: Iterable[int]) -> int:
     """Largest case count among the values of channels ``names`` in ``y`` (1 for scalars);
     a channel missing from ``y`` is left to :func:`stack_channels` to report."""
     n = 1
@@ -393,7 +445,9 @@ def cases_of(y: Mapping, names, sizes) -> int:
     return n
 
 
-def split_channels(u: np.ndarray, names, sizes) -> dict[str, np.ndarray]:
+def split_channels(
+    u: FloatArray, names: Iterable[str], sizes: Iterable[int]
+) -> dict[str, FloatArray]:
     """Inverse of :func:`stack_channels` on the last axis: {name: (...,) or (..., size)}."""
     out, start = {}, 0
     for name, size in zip(names, sizes):
@@ -402,7 +456,9 @@ def split_channels(u: np.ndarray, names, sizes) -> dict[str, np.ndarray]:
     return out
 
 
-def per_case(value, n_cases: int, field: str, tail: tuple[int, ...] = ()) -> np.ndarray:
+def per_case(
+    value: npt.ArrayLike, n_cases: int, field: str, tail: tuple[int, ...] = ()
+) -> FloatArray:
     """``value`` with one case axis (1 or n_cases) before the trailing axes ``tail``."""
     arr = np.asarray(value, float)
     lead = arr.shape[: arr.ndim - len(tail)] if tail else arr.shape
@@ -414,7 +470,7 @@ def per_case(value, n_cases: int, field: str, tail: tuple[int, ...] = ()) -> np.
     return arr.reshape((c,) + tail)
 
 
-def sample_times(dt, times) -> tuple[float, np.ndarray]:
+def sample_times(dt: float, times: npt.ArrayLike) -> tuple[float, FloatArray]:
     """The control period (s, > 0) and the sample times (s, 1-D, increasing) of a run."""
     dt = float(require_finite(dt, "dt", "s"))
     if dt <= 0:
@@ -427,7 +483,9 @@ def sample_times(dt, times) -> tuple[float, np.ndarray]:
     return dt, times
 
 
-def reference_tables(law, times: np.ndarray, n_cases: int):
+def reference_tables(
+    law: SlewLaw, times: FloatArray, n_cases: int
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """(θ_ref, θ'_ref, θ''_ref, u_ref) of a single-axis law at every sample, each (n_t, C) with
     C in {1, n_cases}: what :meth:`~flexsat.control.base.SlewLaw.reference_at` returns after
     :meth:`~flexsat.control.base.SlewLaw.tabulate_reference` (the same expression), or a step
@@ -447,13 +505,14 @@ def reference_tables(law, times: np.ndarray, n_cases: int):
     else:
         r = law.reference(times[:, None])
         values = [getattr(r, name) for name in ("theta", "theta_dot", "theta_ddot", "u")]
-    out = []
-    for v in values:
-        v = np.asarray(v, float)
+    out: list[FloatArray] = []
+    for value in values:
+        v = np.asarray(value, float)
         v = np.broadcast_to(v, np.broadcast_shapes(v.shape, (n_t, 1)))
         if v.ndim != 2 or v.shape[1] not in (1, n_cases):
             raise FieldError(
                 "reference", f"has {v.shape[-1]} cases, the run has n_cases = {n_cases}"
             )
         out.append(v)
-    return tuple(out)
+    theta, theta_dot, theta_ddot, u = out
+    return theta, theta_dot, theta_ddot, u

@@ -50,6 +50,9 @@ estimate is given.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 import scipy.linalg
 
@@ -65,6 +68,16 @@ from flexsat.control.linear_form import (
 from flexsat.control.lqr import check_matrix, check_square, dlqr, lqr
 from flexsat.input_checks import FieldError, require_finite, require_numeric, require_positive
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.control.lqr import RiccatiSolution
+    from flexsat.maneuvers.torque_shapes import TorqueShape
+    from flexsat.units import FloatArray
+
+#: K x_ref on the sample grid, (n_t, C, 1), for a gain row K (1, n)
+ReferenceGain = Callable[["FloatArray"], "FloatArray"]
+
 __all__ = ["EstimatorController", "LQGController", "zoh"]
 
 DEFAULT_MEASUREMENTS = ("theta", "theta_dot")
@@ -72,21 +85,21 @@ DEFAULT_MEASUREMENTS = ("theta", "theta_dot")
 DT_TOL = 1e-6
 
 
-def zoh(A, B, dt: float) -> tuple[np.ndarray, np.ndarray]:
+def zoh(A: npt.ArrayLike, B: npt.ArrayLike, dt: float) -> tuple[FloatArray, FloatArray]:
     r"""Exact zero-order-hold discretisation: :math:`\Phi = e^{A dt}`,
     :math:`\Gamma = \int_0^{dt} e^{A s} ds\, B` (one matrix exponential of the block matrix)."""
-    A = require_numeric(A, "A", "matrix")
-    B = require_numeric(B, "B", "matrix")
-    dt = float(require_positive(dt, "dt", "s"))
-    n, m = B.shape
+    a = require_numeric(A, "A", "matrix")
+    b = require_numeric(B, "B", "matrix")
+    h = float(require_positive(dt, "dt", "s"))
+    n, m = b.shape
     blk = np.zeros((n + m, n + m))
-    blk[:n, :n] = A * dt
-    blk[:n, n:] = B * dt
+    blk[:n, :n] = a * h
+    blk[:n, n:] = b * h
     E = scipy.linalg.expm(blk)
     return E[:n, :n], E[:n, n:]
 
 
-def _plant_matrices(plant):
+def _plant_matrices(plant: Any) -> tuple[FloatArray, FloatArray, FloatArray]:
     """(A, B, C) of a StateSpace, a SecondOrderModel or a tuple (A, B, C[, D])."""
     if hasattr(plant, "first_order"):
         A, B, C, _ = plant.first_order()
@@ -107,42 +120,54 @@ class EstimatorController(SlewLaw):
     update, the reference state and the sample-period check (see the module docstring)."""
 
     writes = ("torque",)
+    A: FloatArray
+    B: FloatArray
+    C: FloatArray
+    L: FloatArray
+    dt: float
+    gains: str
+    measurements: tuple[str, ...]
+    reference_states: tuple[int, int]
+    feedforward: bool
+    plant_zoh: tuple[FloatArray, FloatArray]
+    #: (Φ, Γ_u, Γ_y) of x̂_{k+1} = Φ x̂_k + Γ_u u_k + Γ_y y_k
+    estimator: tuple[FloatArray, FloatArray, FloatArray]
+    initial_estimate: FloatArray | None
+    _Cpinv: FloatArray
 
     def _setup(
         self,
-        A,
-        B,
-        C,
-        L,
-        dt,
-        target,
-        reference,
-        measurements,
-        reference_states,
-        feedforward,
-        gains,
-        initial_estimate,
-    ):
-        A = check_square(A, "A")
-        n = A.shape[0]
-        B = check_matrix(B, "B", n, None, f"(n, 1) with n = {n}")
-        if B.shape[1] != 1:
+        A: npt.ArrayLike,
+        B: npt.ArrayLike,
+        C: npt.ArrayLike,
+        L: npt.ArrayLike,
+        dt: float,
+        target: float | npt.ArrayLike,
+        reference: TorqueShape | None,
+        measurements: str | Sequence[str],
+        reference_states: Sequence[int] | None,
+        feedforward: bool,
+        gains: str,
+        initial_estimate: str | npt.ArrayLike,
+    ) -> None:
+        a = check_square(A, "A")
+        n = a.shape[0]
+        b = check_matrix(B, "B", n, None, f"(n, 1) with n = {n}")
+        if b.shape[1] != 1:
             raise FieldError(
                 "B",
                 "the controller interface commands one torque, so B must have "
-                f"one column, got {B.shape[1]}",
+                f"one column, got {b.shape[1]}",
             )
-        C = check_matrix(C, "C", None, n, f"(p, n) with n = {n}")
-        p = C.shape[0]
-        L = check_matrix(L, "L", n, p, f"(n, p) = ({n}, {p})")
+        c = check_matrix(C, "C", None, n, f"(p, n) with n = {n}")
+        p = c.shape[0]
+        gain = check_matrix(L, "L", n, p, f"(n, p) = ({n}, {p})")
         self.dt = float(require_positive(dt, "dt", "s"))
-        if isinstance(measurements, str):
-            measurements = (measurements,)
-        measurements = tuple(measurements)
-        if len(measurements) != p or not all(isinstance(k, str) for k in measurements):
+        keys = (measurements,) if isinstance(measurements, str) else tuple(measurements)
+        if len(keys) != p or not all(isinstance(k, str) for k in keys):
             raise FieldError(
                 "measurements",
-                f"give {p} measurement keys (one per row of C), got {measurements!r}",
+                f"give {p} measurement keys (one per row of C), got {keys!r}",
             )
         if reference_states is None:
             if n % 2:
@@ -160,24 +185,24 @@ class EstimatorController(SlewLaw):
             )
         if gains not in ("continuous", "discrete"):
             raise FieldError("gains", f"must be 'continuous' or 'discrete', got {gains!r}")
-        self.A, self.B, self.C, self.L = A, B, C, L
+        self.A, self.B, self.C, self.L = a, b, c, gain
         self.gains = gains
-        self.measurements = measurements
-        self.reads = measurements
+        self.measurements = keys
+        self.reads = keys
         self.reference_states = (i, j)
         self.reference = reference
         self.feedforward = bool(feedforward)
         if reference is not None:
             target = reference.theta0 + reference.angle
         self.target = require_finite(target, "target", "rad")
-        self.plant_zoh = zoh(A, B, self.dt)
+        self.plant_zoh = zoh(a, b, self.dt)
         if gains == "continuous":
-            Phi, Gam = zoh(A - L @ C, np.hstack([B, L]), self.dt)
+            Phi, Gam = zoh(a - gain @ c, np.hstack([b, gain]), self.dt)
         else:
-            Phi = self.plant_zoh[0] - L @ C
-            Gam = np.hstack([self.plant_zoh[1], L])
+            Phi = self.plant_zoh[0] - gain @ c
+            Gam = np.hstack([self.plant_zoh[1], gain])
         self.estimator = (Phi, Gam[:, :1], Gam[:, 1:])
-        self._Cpinv = np.linalg.pinv(C)
+        self._Cpinv = np.asarray(np.linalg.pinv(c), np.float64)
         if isinstance(initial_estimate, str):
             if initial_estimate != "measurement":
                 raise FieldError(
@@ -198,7 +223,7 @@ class EstimatorController(SlewLaw):
     def n_states(self) -> int:
         return self.A.shape[0]
 
-    def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
+    def initial_state(self, n_cases: int) -> dict[str, FloatArray]:
         n = self.n_states
         state = {
             "x_hat": np.zeros((n_cases, n)),
@@ -210,7 +235,7 @@ class EstimatorController(SlewLaw):
             state["started"][:] = True
         return state
 
-    def _measure(self, y, n_cases: int) -> np.ndarray:
+    def _measure(self, y: Mapping[str, FloatArray], n_cases: int) -> FloatArray:
         try:
             cols = [np.broadcast_to(np.asarray(y[k], float), (n_cases,)) for k in self.measurements]
         except KeyError as exc:
@@ -219,7 +244,9 @@ class EstimatorController(SlewLaw):
             ) from None
         return np.stack(cols, axis=-1)
 
-    def _begin(self, t, y, state):
+    def _begin(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray | float]:
         """Stacked measurements Y (n_cases, p), estimate x̂ (initialised if new), reference
         state x_ref and reference torque u_ref for this sample."""
         x_hat = np.array(state["x_hat"], float)
@@ -246,43 +273,55 @@ class EstimatorController(SlewLaw):
         u_ref = np.broadcast_to(np.asarray(u_r, float), (nc,)) if self.feedforward else 0.0
         return Y, x_hat, x_ref, u_ref
 
-    def _linear_pieces(self, dt, times, n_cases):
+    def _linear_pieces(
+        self, dt: float, times: npt.ArrayLike, n_cases: int
+    ) -> tuple[ReferenceGain, FloatArray, FloatArray | None, FloatArray | None]:
         """What every estimator law's linear form shares, tabulated on ``times``: a function
         giving K x_ref (n_t, C, 1) for a gain row K (x_ref = θ_ref e_θ + θ'_ref e_θ', never
         formed), u_ref (n_t, C, 1) (zero without feedforward), and the start: K0 = C⁺
         (x̂₀ = C⁺ y₀) or the given estimate s0 (C, n)."""
-        dt, times = sample_times(dt, times)
-        if abs(dt - self.dt) > DT_TOL * self.dt:
+        period, grid = sample_times(dt, times)
+        if abs(period - self.dt) > DT_TOL * self.dt:
             raise FieldError(
                 "dt",
                 f"the law was built for a sample period of {self.dt:g} s, the "
-                f"run samples every {dt:g} s (build it with the simulator's "
+                f"run samples every {period:g} s (build it with the simulator's "
                 "1/control_rate)",
             )
-        th, thd, _, u_r = reference_tables(self, times, n_cases)
+        th, thd, _, u_r = reference_tables(self, grid, n_cases)
         i, j = self.reference_states
 
-        def gain_on_reference(K):
+        def gain_on_reference(K: FloatArray) -> FloatArray:
             return (K[0, i] * th + K[0, j] * thd)[..., None]
 
-        u_ref = (u_r if self.feedforward else np.zeros((len(times), 1)))[..., None]
+        u_ref = (u_r if self.feedforward else np.zeros((len(grid), 1)))[..., None]
         if self.initial_estimate is None:
             return gain_on_reference, u_ref, self._Cpinv, None
         s0 = per_case(self.initial_estimate, n_cases, "initial_estimate", (self.n_states,))
         return gain_on_reference, u_ref, None, s0
 
-    def _linear_law(self, A, B, C, g, F, v, K0, s0) -> LinearLaw:
+    def _linear_law(
+        self,
+        A: FloatArray,
+        B: FloatArray,
+        C: FloatArray,
+        g: FloatArray,
+        F: FloatArray,
+        v: FloatArray,
+        K0: FloatArray | None,
+        s0: FloatArray | None,
+    ) -> LinearLaw:
         """The LinearLaw of x̂_{k+1} = A x̂ + B y + F v_k, u = g_k + C x̂ (absolute
         coordinates, y_ref = 0), shifted by :func:`~flexsat.control.linear_form.absorb_affine`."""
-        A, C = A[None, None], C[None, None]
-        p, m = B.shape[1], C.shape[2]
+        Ak, Ck = A[None, None], C[None, None]
+        p, m = B.shape[1], Ck.shape[2]
         return LinearLaw(
-            A,
+            Ak,
             B[None, None],
-            C,
+            Ck,
             np.zeros((1, 1, m, p)),
             np.zeros((g.shape[0], 1, p)),
-            absorb_affine(A, C, g, F, v, s0),
+            absorb_affine(Ak, Ck, g, F, v, s0),
             None if K0 is None else K0[None],
             self.reads,
             self.writes,
@@ -290,7 +329,9 @@ class EstimatorController(SlewLaw):
             (1,) * m,
         )
 
-    def _propagate(self, t, x_hat, u, Y) -> dict[str, np.ndarray]:
+    def _propagate(
+        self, t: float, x_hat: FloatArray, u: FloatArray, Y: FloatArray
+    ) -> dict[str, FloatArray]:
         Phi, Gu, Gy = self.estimator
         nc = x_hat.shape[0]
         x_next = x_hat @ Phi.T + np.multiply.outer(u, Gu[:, 0]) + Y @ Gy.T
@@ -327,22 +368,26 @@ class LQGController(EstimatorController):
         x̂₀ = C⁺ y₀ from the first sample, or the given absolute state.
     """
 
+    #: the designs behind the gains, set by :meth:`design`
+    regulator: RiccatiSolution
+    filter: RiccatiSolution
+
     def __init__(
         self,
-        A,
-        B,
-        C,
-        K,
-        L,
-        dt,
-        target=0.0,
-        reference=None,
-        measurements=DEFAULT_MEASUREMENTS,
-        reference_states=None,
-        feedforward=True,
-        gains="continuous",
-        initial_estimate="measurement",
-    ):
+        A: npt.ArrayLike,
+        B: npt.ArrayLike,
+        C: npt.ArrayLike,
+        K: npt.ArrayLike,
+        L: npt.ArrayLike,
+        dt: float,
+        target: float | npt.ArrayLike = 0.0,
+        reference: TorqueShape | None = None,
+        measurements: str | Sequence[str] = DEFAULT_MEASUREMENTS,
+        reference_states: Sequence[int] | None = None,
+        feedforward: bool = True,
+        gains: str = "continuous",
+        initial_estimate: str | npt.ArrayLike = "measurement",
+    ) -> None:
         self._setup(
             A,
             B,
@@ -362,7 +407,18 @@ class LQGController(EstimatorController):
 
     @classmethod
     def design(
-        cls, plant, Q, R, Qn, Rn, dt, G=None, N=None, Nn=None, gains="continuous", **kwargs
+        cls,
+        plant: Any,
+        Q: npt.ArrayLike,
+        R: npt.ArrayLike,
+        Qn: npt.ArrayLike,
+        Rn: npt.ArrayLike,
+        dt: float,
+        G: npt.ArrayLike | None = None,
+        N: npt.ArrayLike | None = None,
+        Nn: npt.ArrayLike | None = None,
+        gains: str = "continuous",
+        **kwargs: Any,
     ) -> LQGController:
         r"""Design K and L and build the law.
 
@@ -374,35 +430,37 @@ class LQGController(EstimatorController):
         The designs are in ``.regulator`` and ``.filter`` (RiccatiSolution with residuals).
         """
         A, B, C = _plant_matrices(plant)
-        G = B if G is None else G
-        dt = float(require_positive(dt, "dt", "s"))
+        noise_input = B if G is None else G
+        h = float(require_positive(dt, "dt", "s"))
         if gains == "discrete":
-            Phi, Gam = zoh(A, B, dt)
+            Phi, Gam = zoh(A, B, h)
             reg = dlqr(
                 Phi,
                 Gam,
-                require_numeric(Q, "Q") * dt,
-                require_numeric(R, "R") * dt,
-                None if N is None else require_numeric(N, "N") * dt,
+                require_numeric(Q, "Q") * h,
+                require_numeric(R, "R") * h,
+                None if N is None else require_numeric(N, "N") * h,
             )
-            G = check_matrix(G, "G", A.shape[0], None, "(n, g)")
-            W = G @ np.atleast_2d(require_numeric(Qn, "Qn")) @ G.T * dt
-            V = np.atleast_2d(require_numeric(Rn, "Rn")) / dt
-            NW = None if Nn is None else G @ np.atleast_2d(require_numeric(Nn, "Nn"))
+            Gm = check_matrix(noise_input, "G", A.shape[0], None, "(n, g)")
+            W = Gm @ np.atleast_2d(require_numeric(Qn, "Qn")) @ Gm.T * h
+            V = np.atleast_2d(require_numeric(Rn, "Rn")) / h
+            NW = None if Nn is None else Gm @ np.atleast_2d(require_numeric(Nn, "Nn"))
             filt = dkalman(Phi, None, C, W, V, NW)
         else:
             reg = lqr(A, B, Q, R, N)
-            filt = kalman(A, G, C, Qn, Rn, Nn)
-        law = cls(A, B, C, reg.gain, filt.gain, dt, gains=gains, **kwargs)
+            filt = kalman(A, noise_input, C, Qn, Rn, Nn)
+        law = cls(A, B, C, reg.gain, filt.gain, h, gains=gains, **kwargs)
         law.regulator, law.filter = reg, filt
         return law
 
-    def __call__(self, t, y, state):
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[FloatArray, dict[str, FloatArray]]:
         Y, x_hat, x_ref, u_ref = self._begin(t, y, state)
         u = u_ref - (x_hat - x_ref) @ self.K[0]
         return u, self._propagate(t, x_hat, u, Y)
 
-    def linear_form(self, dt, times, n_cases):
+    def linear_form(self, dt: float, times: npt.ArrayLike, n_cases: int) -> LinearLaw:
         r"""With w_k = u_ref,k + K x_ref,k the law is u_k = w_k − K x̂_k,
         x̂_{k+1} = (Φ − Γ_u K) x̂_k + Γ_y y_k + Γ_u w_k: an affine recursion in absolute
         coordinates, shifted into the linear form (:mod:`~flexsat.control.linear_form`)."""
@@ -412,7 +470,12 @@ class LQGController(EstimatorController):
         return self._linear_law(Phi - Gu @ self.K, Gy, -self.K, w, Gu, w, K0, s0)
 
     # ------------------------------------------------------------------------------------------
-    def closed_loop_matrix(self, A=None, B=None, C=None) -> np.ndarray:
+    def closed_loop_matrix(
+        self,
+        A: npt.ArrayLike | None = None,
+        B: npt.ArrayLike | None = None,
+        C: npt.ArrayLike | None = None,
+    ) -> FloatArray:
         r"""Sampled-data closed-loop transition matrix of a plant (default the design plant)
         with this law, state [x, x̂]:
 
@@ -426,14 +489,17 @@ class LQGController(EstimatorController):
         """
         if A is None:
             Phi_p, Gam_p = self.plant_zoh
-            C = self.C
+            Cp = self.C
         else:
+            if B is None or C is None:
+                raise FieldError("B" if B is None else "C", "give A, B and C of the plant together")
             Phi_p, Gam_p = zoh(A, B, self.dt)
+            Cp = np.asarray(C, float)
         Phi, Gu, Gy = self.estimator
         K = self.K
-        return np.block([[Phi_p, -Gam_p @ K], [Gy @ C, Phi - Gu @ K]])
+        return np.block([[Phi_p, -Gam_p @ K], [Gy @ Cp, Phi - Gu @ K]])
 
-    def continuous_closed_loop(self) -> np.ndarray:
+    def continuous_closed_loop(self) -> FloatArray:
         r"""Closed loop of the continuous design, [[A, −BK], [LC, A − BK − LC]] (separation
         principle: eigenvalues eig(A − BK) ∪ eig(A − LC)); only for continuous gains."""
         if self.gains != "continuous":

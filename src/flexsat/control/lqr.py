@@ -85,12 +85,19 @@ eigenvalue is tested on its own scale:
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
 
 from flexsat.analysis.controllability import pbh_clusters
 from flexsat.input_checks import FieldError, require_numeric
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray
 
 log = logging.getLogger(__name__)
 
@@ -113,7 +120,7 @@ RESIDUAL_TOL = _SQRT_EPS
 RESIDUAL_MAX = 1e-6
 
 
-class RiccatiSolution(tuple):
+class RiccatiSolution(tuple[np.ndarray, np.ndarray, np.ndarray]):
     """Result of a Riccati design: unpacks as ``(gain, solution, poles)`` like python-control's
     ``lqr`` → (K, S, E) and ``lqe`` → (L, P, E).
 
@@ -131,9 +138,28 @@ class RiccatiSolution(tuple):
         Residual norm relative to ‖Q‖_F (the weight or the process-noise intensity) alone.
     absolute_residual : float
         Frobenius norm of the residual matrix.
+    kind : str
+        What was designed ("lqr", "dlqr", "kalman", ...; empty when not said).
     """
 
-    def __new__(cls, gain, solution, poles, residual, residual_q, absolute_residual, kind=""):
+    gain: FloatArray
+    solution: FloatArray
+    poles: npt.NDArray[np.complex128]
+    residual: float
+    residual_q: float
+    absolute_residual: float
+    kind: str
+
+    def __new__(
+        cls,
+        gain: FloatArray,
+        solution: FloatArray,
+        poles: npt.NDArray[np.complex128],
+        residual: float,
+        residual_q: float,
+        absolute_residual: float,
+        kind: str = "",
+    ) -> RiccatiSolution:
         obj = super().__new__(cls, (gain, solution, poles))
         obj.gain, obj.solution, obj.poles = gain, solution, poles
         obj.residual = float(residual)
@@ -142,7 +168,9 @@ class RiccatiSolution(tuple):
         obj.kind = kind
         return obj
 
-    def __getnewargs__(self):
+    def __getnewargs__(
+        self,
+    ) -> tuple[FloatArray, FloatArray, npt.NDArray[np.complex128], float, float, float, str]:
         return (
             self.gain,
             self.solution,
@@ -162,11 +190,11 @@ class RiccatiSolution(tuple):
 
 # ------------------------------------------------------------------------------------------------
 # input checks (shared with flexsat.control.estimation)
-def _finite(value, field: str) -> np.ndarray:
+def _finite(value: npt.ArrayLike, field: str) -> FloatArray:
     return require_numeric(value, field, "matrix")
 
 
-def check_square(value, field: str) -> np.ndarray:
+def check_square(value: npt.ArrayLike, field: str) -> FloatArray:
     """A finite non-empty square matrix (a scalar is 1 × 1)."""
     arr = _finite(value, field)
     if arr.ndim == 0:
@@ -176,7 +204,9 @@ def check_square(value, field: str) -> np.ndarray:
     return arr
 
 
-def check_matrix(value, field: str, rows: int | None, cols: int | None, rule: str) -> np.ndarray:
+def check_matrix(
+    value: npt.ArrayLike, field: str, rows: int | None, cols: int | None, rule: str
+) -> FloatArray:
     """A finite 2-D matrix of the given rows/cols (None: any); 1-D means one column when rows
     is fixed, one row when cols is fixed."""
     arr = _finite(value, field)
@@ -194,7 +224,7 @@ def check_matrix(value, field: str, rows: int | None, cols: int | None, rule: st
     return arr
 
 
-def check_symmetric(arr: np.ndarray, field: str) -> np.ndarray:
+def check_symmetric(arr: FloatArray, field: str) -> FloatArray:
     scale = max(np.abs(arr).max(initial=0.0), np.finfo(float).tiny)
     asym = np.abs(arr - arr.T).max(initial=0.0)
     if asym > WEIGHT_TOL * scale:
@@ -202,7 +232,7 @@ def check_symmetric(arr: np.ndarray, field: str) -> np.ndarray:
     return 0.5 * (arr + arr.T)
 
 
-def check_psd(arr: np.ndarray, field: str, strict: bool = False) -> np.ndarray:
+def check_psd(arr: FloatArray, field: str, strict: bool = False) -> FloatArray:
     """Symmetric positive semi-definite (definite when ``strict``)."""
     arr = check_symmetric(arr, field)
     lam = np.linalg.eigvalsh(arr)
@@ -218,12 +248,12 @@ def check_psd(arr: np.ndarray, field: str, strict: bool = False) -> np.ndarray:
     return arr
 
 
-def _pbh_fails(A: np.ndarray, B: np.ndarray, discrete: bool) -> list[complex]:
+def _pbh_fails(A: FloatArray, B: FloatArray, discrete: bool) -> list[complex]:
     """Unstable or marginal eigenvalues λ of A at which [A − λI, B] loses rank (PBH), each
     cluster tested on its own scale (:func:`flexsat.analysis.controllability.pbh_clusters`), one
     of each conjugate pair."""
 
-    def marginal(lam: np.ndarray, radius: float) -> np.ndarray:
+    def marginal(lam: npt.NDArray[np.complex128], radius: float) -> npt.NDArray[np.bool_]:
         if discrete:
             unstable = np.abs(lam) >= 1.0 - _SQRT_EPS
         else:
@@ -233,24 +263,33 @@ def _pbh_fails(A: np.ndarray, B: np.ndarray, discrete: bool) -> list[complex]:
     return pbh_clusters(A, B, marginal)
 
 
-def uncontrollable_modes(A, B, discrete: bool = False) -> list[complex]:
+def uncontrollable_modes(
+    A: npt.ArrayLike, B: npt.ArrayLike, discrete: bool = False
+) -> list[complex]:
     """Unstable or marginal eigenvalues of A that are not controllable from B (PBH test).
 
     Empty when (A, B) is stabilizable. For detectability of (C, A) call it with (Aᵀ, Cᵀ).
     """
-    A = check_square(A, "A")
-    B = check_matrix(B, "B", A.shape[0], None, f"(n, m) with n = {A.shape[0]}")
-    return _pbh_fails(A, B, discrete)
+    a = check_square(A, "A")
+    b = check_matrix(B, "B", a.shape[0], None, f"(n, m) with n = {a.shape[0]}")
+    return _pbh_fails(a, b, discrete)
 
 
-def _fmt(modes) -> str:
+def _fmt(modes: Sequence[complex]) -> str:
     return ", ".join(f"{m.real:.4g}{m.imag:+.4g}j" for m in modes[:6]) + (
         " ..." if len(modes) > 6 else ""
     )
 
 
 # ------------------------------------------------------------------------------------------------
-def care_residual(A, B, Q, R, S, N=None) -> tuple[float, float, float]:
+def care_residual(
+    A: FloatArray,
+    B: FloatArray,
+    Q: FloatArray,
+    R: FloatArray,
+    S: FloatArray,
+    N: FloatArray | None = None,
+) -> tuple[float, float, float]:
     """(relative ρ_c, relative to ‖Q‖_F, absolute) residual of the continuous Riccati equation
     at S (module docstring)."""
     SBN = S @ B + (0.0 if N is None else N)
@@ -260,13 +299,20 @@ def care_residual(A, B, Q, R, S, N=None) -> tuple[float, float, float]:
     absolute = np.linalg.norm(res)
     denom = 2 * np.linalg.norm(AtS) + np.linalg.norm(quad) + np.linalg.norm(Q)
     return (
-        absolute / denom if denom > 0 else absolute,
-        absolute / np.linalg.norm(Q) if np.linalg.norm(Q) > 0 else np.inf,
-        absolute,
+        float(absolute / denom if denom > 0 else absolute),
+        float(absolute / np.linalg.norm(Q) if np.linalg.norm(Q) > 0 else np.inf),
+        float(absolute),
     )
 
 
-def dare_residual(A, B, Q, R, S, N=None) -> tuple[float, float, float]:
+def dare_residual(
+    A: FloatArray,
+    B: FloatArray,
+    Q: FloatArray,
+    R: FloatArray,
+    S: FloatArray,
+    N: FloatArray | None = None,
+) -> tuple[float, float, float]:
     """(relative ρ_d, relative to ‖Q‖_F, absolute) residual of the discrete Riccati equation."""
     AtSB = A.T @ S @ B + (0.0 if N is None else N)
     quad = AtSB @ np.linalg.solve(R + B.T @ S @ B, AtSB.T)
@@ -275,9 +321,9 @@ def dare_residual(A, B, Q, R, S, N=None) -> tuple[float, float, float]:
     absolute = np.linalg.norm(res)
     denom = np.linalg.norm(AtSA) + np.linalg.norm(S) + np.linalg.norm(quad) + np.linalg.norm(Q)
     return (
-        absolute / denom if denom > 0 else absolute,
-        absolute / np.linalg.norm(Q) if np.linalg.norm(Q) > 0 else np.inf,
-        absolute,
+        float(absolute / denom if denom > 0 else absolute),
+        float(absolute / np.linalg.norm(Q) if np.linalg.norm(Q) > 0 else np.inf),
+        float(absolute),
     )
 
 
@@ -297,19 +343,52 @@ _LQR_LABELS = {
 
 
 def solve_riccati(
-    A, B, Q, R, N, discrete: bool, labels: dict, kind: str, checked: bool = False
+    A: npt.ArrayLike,
+    B: npt.ArrayLike,
+    Q: npt.ArrayLike,
+    R: npt.ArrayLike,
+    N: npt.ArrayLike | None,
+    discrete: bool,
+    labels: dict[str, str],
+    kind: str,
+    checked: bool = False,
 ) -> RiccatiSolution:
-    """Validate, solve, verify and log one Riccati design (labels name the fields)."""
-    if not checked:
-        A = check_square(A, labels["A"])
-        n = A.shape[0]
-        B = check_matrix(B, labels["B"], n, None, f"(n, m) with n = {n} (the states of A)")
-        m = B.shape[1]
-        Q = check_psd(check_matrix(Q, labels["Q"], n, n, f"(n, n) = ({n}, {n})"), labels["Q"])
-        R = check_psd(
-            check_matrix(R, labels["R"], m, m, f"(m, m) = ({m}, {m})"), labels["R"], strict=True
+    """Validate, solve, verify and log one Riccati design (labels name the fields); with
+    ``checked`` the matrices are trusted to be checked already (only made float arrays)."""
+    if checked:
+        return _solve_checked(
+            np.asarray(A, float),
+            np.asarray(B, float),
+            np.asarray(Q, float),
+            np.asarray(R, float),
+            None if N is None else np.asarray(N, float),
+            discrete,
+            labels,
+            kind,
         )
-        N = None if N is None else check_matrix(N, labels["N"], n, m, f"(n, m) = ({n}, {m})")
+    a = check_square(A, labels["A"])
+    n = a.shape[0]
+    b = check_matrix(B, labels["B"], n, None, f"(n, m) with n = {n} (the states of A)")
+    m = b.shape[1]
+    q = check_psd(check_matrix(Q, labels["Q"], n, n, f"(n, n) = ({n}, {n})"), labels["Q"])
+    r = check_psd(
+        check_matrix(R, labels["R"], m, m, f"(m, m) = ({m}, {m})"), labels["R"], strict=True
+    )
+    cross = None if N is None else check_matrix(N, labels["N"], n, m, f"(n, m) = ({n}, {m})")
+    return _solve_checked(a, b, q, r, cross, discrete, labels, kind)
+
+
+def _solve_checked(
+    A: FloatArray,
+    B: FloatArray,
+    Q: FloatArray,
+    R: FloatArray,
+    N: FloatArray | None,
+    discrete: bool,
+    labels: dict[str, str],
+    kind: str,
+) -> RiccatiSolution:
+    """Solve, verify and log a Riccati design on checked matrices (:func:`solve_riccati`)."""
     n, m = B.shape
     if N is not None and np.any(N):
         RiN = np.linalg.solve(R, N.T)
@@ -383,7 +462,7 @@ def solve_riccati(
     return RiccatiSolution(K, S, E, rel, rel_q, absolute, kind)
 
 
-def riccati_error_bound(S) -> float:
+def riccati_error_bound(S: npt.ArrayLike) -> float:
     """Relative error bound of a Riccati solution S computed by the Schur method, and of its
     relative residual: n ε (κ(U11) + 3), κ(U11) = √(1 + s_max²)/√(1 + s_min²) over the singular
     values of S (module docstring).
@@ -397,7 +476,13 @@ def riccati_error_bound(S) -> float:
     return len(s) * np.finfo(float).eps * (np.hypot(1.0, s[0]) / np.hypot(1.0, s[-1]) + 3.0)
 
 
-def lqr(A, B, Q, R, N=None) -> RiccatiSolution:
+def lqr(
+    A: npt.ArrayLike,
+    B: npt.ArrayLike,
+    Q: npt.ArrayLike,
+    R: npt.ArrayLike,
+    N: npt.ArrayLike | None = None,
+) -> RiccatiSolution:
     r"""Continuous-time LQR (seed 001 Eqs. 38–40; with N, seed 003 Eq. 28).
 
     Parameters
@@ -428,7 +513,13 @@ def lqr(A, B, Q, R, N=None) -> RiccatiSolution:
     return solve_riccati(A, B, Q, R, N, False, _LQR_LABELS, "lqr")
 
 
-def dlqr(A, B, Q, R, N=None) -> RiccatiSolution:
+def dlqr(
+    A: npt.ArrayLike,
+    B: npt.ArrayLike,
+    Q: npt.ArrayLike,
+    R: npt.ArrayLike,
+    N: npt.ArrayLike | None = None,
+) -> RiccatiSolution:
     r"""Discrete-time LQR for :math:`x_{k+1} = A x_k + B u_k`, :math:`u_k = -K x_k`.
 
     Arguments, checks and result as :func:`lqr` (residual ρ_d; poles eig(A − BK) inside the

@@ -26,7 +26,9 @@ Eqs. 47-49.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
 import scipy.linalg as sla
@@ -40,10 +42,18 @@ from flexsat.analysis.sensitivity import (
 )
 from flexsat.input_checks import FieldError, require_finite
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.analysis.sensitivity import ComplexArray
+    from flexsat.units import FloatArray
+
+IntArray: TypeAlias = "npt.NDArray[np.intp]"
+
 SOURCE = "Junkins, Pollock & Rahman 1990, Att. 5 Eqs. 28-49 (L2001-L2089), Example 1 (L2081-L2143)"
 
 #: Att. 5 Example 1 (L2081-L2143): "6th order, 4 outputs, 2 inputs", as printed
-EXAMPLE1 = {
+EXAMPLE1: dict[str, Any] = {
     "M": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
     "K": [[20.0, -10.0, 0.0], [-10.0, 30.0, -20.0], [0.0, -20.0, 20.0]],
     "D": [[1.0, 0.0], [0.0, 0.0], [0.0, 1.0]],
@@ -70,7 +80,7 @@ EXAMPLE1 = {
 
 
 # -- Cholesky parameterisation, Eqs. 30-32 -----------------------------------------------------
-def _tril_columnwise(m: int) -> tuple[np.ndarray, np.ndarray]:
+def _tril_columnwise(m: int) -> tuple[IntArray, IntArray]:
     """(row, column) of the lower triangle in the order q11 q21 … q_m1 q22 … q_mm."""
     cols, rows = np.triu_indices(m)
     return rows, cols
@@ -81,32 +91,33 @@ def n_parameters(n_inputs: int) -> int:
     return n_inputs * (n_inputs + 1)
 
 
-def _params(p, m: int) -> np.ndarray:
-    p = require_finite(p, "p").reshape(-1)
-    if p.size != n_parameters(m):
+def _params(p: npt.ArrayLike, m: int) -> FloatArray:
+    flat = require_finite(p, "p").reshape(-1)
+    if flat.size != n_parameters(m):
         raise FieldError(
-            "p", f"must have m(m + 1) = {n_parameters(m)} entries for m = {m} inputs, got {p.size}"
+            "p",
+            f"must have m(m + 1) = {n_parameters(m)} entries for m = {m} inputs, got {flat.size}",
         )
-    return p
+    return flat
 
 
-def _factor(q: np.ndarray, m: int) -> np.ndarray:
+def _factor(q: FloatArray, m: int) -> FloatArray:
     rows, cols = _tril_columnwise(m)
     L = np.zeros((m, m))
     L[rows, cols] = np.where(rows == cols, q**2, q)
     return L
 
 
-def cholesky_gains(p, n_inputs: int) -> tuple[np.ndarray, np.ndarray]:
+def cholesky_gains(p: npt.ArrayLike, n_inputs: int) -> tuple[FloatArray, FloatArray]:
     """G1 = L1 L1ᵀ and G2 = L2 L2ᵀ from p (Att. 5 Eqs. 30-32; squared diagonals)."""
     m = _inputs(n_inputs)
-    p = _params(p, m)
-    h = p.size // 2
-    L1, L2 = _factor(p[:h], m), _factor(p[h:], m)
+    q = _params(p, m)
+    h = q.size // 2
+    L1, L2 = _factor(q[:h], m), _factor(q[h:], m)
     return L1 @ L1.T, L2 @ L2.T
 
 
-def cholesky_parameters(G1, G2) -> np.ndarray:
+def cholesky_parameters(G1: npt.ArrayLike, G2: npt.ArrayLike) -> FloatArray:
     """Inverse of :func:`cholesky_gains`: p with q_ii = √(L_ii) > 0, q_ij = L_ij.
 
     Raises
@@ -115,13 +126,13 @@ def cholesky_parameters(G1, G2) -> np.ndarray:
         A gain that is not symmetric positive definite (a semidefinite gain has no unique
         Cholesky factor with positive diagonal).
     """
-    G1, G2 = _gain(G1, "G1"), _gain(G2, "G2")
-    if G1.shape != G2.shape:
-        raise FieldError("G2", f"must have the shape of G1 {G1.shape}, got {G2.shape}")
-    m = G1.shape[0]
+    g1, g2 = _gain(G1, "G1"), _gain(G2, "G2")
+    if g1.shape != g2.shape:
+        raise FieldError("G2", f"must have the shape of G1 {g1.shape}, got {g2.shape}")
+    m = g1.shape[0]
     rows, cols = _tril_columnwise(m)
     out = []
-    for name, G in (("G1", G1), ("G2", G2)):
+    for name, G in (("G1", g1), ("G2", g2)):
         try:
             L = np.linalg.cholesky(G)
         except np.linalg.LinAlgError:
@@ -137,7 +148,9 @@ def cholesky_parameters(G1, G2) -> np.ndarray:
     return np.concatenate(out)
 
 
-def cholesky_gain_derivatives(p, n_inputs: int):
+def cholesky_gain_derivatives(
+    p: npt.ArrayLike, n_inputs: int
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """∂G/∂p_k and ∂²G/∂p_k∂p_l of the parameterisation (Eqs. 30-32).
 
     Returns
@@ -148,13 +161,13 @@ def cholesky_gain_derivatives(p, n_inputs: int):
         dL_k dL_lᵀ + dL_l dL_kᵀ, plus 2(E_ii Lᵀ + L E_ii) when k = l is a diagonal q_ii.
     """
     m = _inputs(n_inputs)
-    p = _params(p, m)
-    P, h = p.size, p.size // 2
+    flat = _params(p, m)
+    P, h = flat.size, flat.size // 2
     rows, cols = _tril_columnwise(m)
     dG = np.zeros((2, P, m, m))
     d2G = np.zeros((2, P, P, m, m))
     for half in (0, 1):
-        q = p[half * h : (half + 1) * h]
+        q = flat[half * h : (half + 1) * h]
         L = _factor(q, m)
         dL = np.zeros((h, m, m))
         dL[np.arange(h), rows, cols] = np.where(rows == cols, 2 * q, 1.0)
@@ -171,13 +184,13 @@ def cholesky_gain_derivatives(p, n_inputs: int):
 
 
 # -- the plant and its closed loop -------------------------------------------------------------
-def _inputs(n_inputs) -> int:
+def _inputs(n_inputs: object) -> int:
     if isinstance(n_inputs, bool) or not isinstance(n_inputs, (int, np.integer)) or n_inputs < 1:
         raise FieldError("n_inputs", f"must be a positive integer, got {n_inputs!r}")
     return int(n_inputs)
 
 
-def _gain(value, field: str, m: int | None = None) -> np.ndarray:
+def _gain(value: npt.ArrayLike, field: str, m: int | None = None) -> FloatArray:
     G = require_finite(value, field)
     if G.ndim != 2 or G.shape[0] != G.shape[1]:
         raise FieldError(field, f"must be a square matrix, got shape {G.shape}")
@@ -196,7 +209,7 @@ def _gain(value, field: str, m: int | None = None) -> np.ndarray:
     return 0.5 * (G + G.T)
 
 
-def _square(value, field: str, n: int | None = None) -> np.ndarray:
+def _square(value: npt.ArrayLike, field: str, n: int | None = None) -> FloatArray:
     A = require_finite(value, field)
     if A.ndim != 2 or A.shape[0] != A.shape[1]:
         raise FieldError(field, f"must be a square matrix, got shape {A.shape}")
@@ -227,13 +240,13 @@ class FeedbackSensitivity:
     """
 
     condition_number: float
-    gradient: np.ndarray
-    hessian: np.ndarray | None
-    omega: np.ndarray
-    zeta_omega: np.ndarray
-    omega_gradient: np.ndarray
-    zeta_omega_gradient: np.ndarray
-    eigenvalues: np.ndarray
+    gradient: FloatArray
+    hessian: FloatArray | None
+    omega: FloatArray
+    zeta_omega: FloatArray
+    omega_gradient: FloatArray
+    zeta_omega_gradient: FloatArray
+    eigenvalues: ComplexArray
 
 
 class SymmetricOutputFeedback:
@@ -255,22 +268,29 @@ class SymmetricOutputFeedback:
     n_dof, n_inputs, n_parameters : int
     """
 
-    def __init__(self, M, K, D, C=None):
+    def __init__(
+        self,
+        M: npt.ArrayLike,
+        K: npt.ArrayLike,
+        D: npt.ArrayLike,
+        C: npt.ArrayLike | None = None,
+    ) -> None:
         self.M = _square(M, "M")
         n = self.M.shape[0]
         self.K = _square(K, "K", n)
-        D = require_finite(D, "D")
-        if D.ndim == 1:
-            D = D[:, None]
-        if D.ndim != 2 or D.shape[0] != n:
+        influence = require_finite(D, "D")
+        if influence.ndim == 1:
+            influence = influence[:, None]
+        if influence.ndim != 2 or influence.shape[0] != n:
             raise FieldError(
-                "D", f"must be an ({n}, m) matrix (one column per input), got shape {D.shape}"
+                "D",
+                f"must be an ({n}, m) matrix (one column per input), got shape {influence.shape}",
             )
-        self.D = D
+        self.D = influence
         self.C = np.zeros((n, n)) if C is None else _square(C, "C", n)
         if np.linalg.cond(self.M) > 1e12:
             raise FieldError("M", "must be non-singular")
-        self.n_dof, self.n_inputs = n, D.shape[1]
+        self.n_dof, self.n_inputs = n, influence.shape[1]
         self.n_parameters = n_parameters(self.n_inputs)
 
     @classmethod
@@ -280,37 +300,37 @@ class SymmetricOutputFeedback:
         return cls(EXAMPLE1["M"], EXAMPLE1["K"], EXAMPLE1["D"], EXAMPLE1["C"])
 
     # -- gains ------------------------------------------------------------------------------
-    def gains(self, p) -> tuple[np.ndarray, np.ndarray]:
+    def gains(self, p: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
         """(G1, G2) of the Cholesky parameters p (Eqs. 30-32)."""
         return cholesky_gains(p, self.n_inputs)
 
-    def parameters(self, G1, G2) -> np.ndarray:
+    def parameters(self, G1: npt.ArrayLike, G2: npt.ArrayLike) -> FloatArray:
         """Cholesky parameters p of positive definite (G1, G2)."""
-        G1, G2 = _gain(G1, "G1", self.n_inputs), _gain(G2, "G2", self.n_inputs)
-        return cholesky_parameters(G1, G2)
+        return cholesky_parameters(_gain(G1, "G1", self.n_inputs), _gain(G2, "G2", self.n_inputs))
 
     # -- closed loop ------------------------------------------------------------------------
-    def pencil(self, G1, G2) -> tuple[np.ndarray, np.ndarray]:
+    def pencil(self, G1: npt.ArrayLike, G2: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
         """A and B of B ż = A z: A = [[0, M], [−K̄, −C̄]], B = diag(M, M) (Eqs. 34-38)."""
-        G1, G2 = _gain(G1, "G1", self.n_inputs), _gain(G2, "G2", self.n_inputs)
-        return self._pencil(G1, G2)
+        return self._pencil(_gain(G1, "G1", self.n_inputs), _gain(G2, "G2", self.n_inputs))
 
-    def _pencil(self, G1, G2):
+    def _pencil(self, G1: FloatArray, G2: FloatArray) -> tuple[FloatArray, FloatArray]:
         D, M = self.D, self.M
         Z = np.zeros_like(M)
         A = np.block([[Z, M], [-(self.K + D @ G1 @ D.T), -(self.C + D @ G2 @ D.T)]])
         return A, sla.block_diag(M, M)
 
-    def stiffness_damping(self, G1, G2) -> tuple[np.ndarray, np.ndarray]:
+    def stiffness_damping(
+        self, G1: npt.ArrayLike, G2: npt.ArrayLike
+    ) -> tuple[FloatArray, FloatArray]:
         """K̄ = K + D G1 Dᵀ and C̄ = C + D G2 Dᵀ (Eqs. 34-35)."""
-        G1, G2 = _gain(G1, "G1", self.n_inputs), _gain(G2, "G2", self.n_inputs)
-        return self.K + self.D @ G1 @ self.D.T, self.C + self.D @ G2 @ self.D.T
+        g1, g2 = _gain(G1, "G1", self.n_inputs), _gain(G2, "G2", self.n_inputs)
+        return self.K + self.D @ g1 @ self.D.T, self.C + self.D @ g2 @ self.D.T
 
-    def eigenvalues(self, G1, G2) -> np.ndarray:
+    def eigenvalues(self, G1: npt.ArrayLike, G2: npt.ArrayLike) -> ComplexArray:
         """All 2n closed-loop eigenvalues, by |Im λ|, then Im λ descending, then Re λ."""
         return _sorted(sla.eigvals(*self.pencil(G1, G2)))
 
-    def modes(self, G1, G2) -> tuple[np.ndarray, np.ndarray]:
+    def modes(self, G1: npt.ArrayLike, G2: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
         """(ω_i, ζ_iω_i) of the oscillatory modes, ascending ω (Tables 1-2 of Att. 5).
 
         ω = Im λ, ζ = −Re λ/|λ|, so ζω = Im λ (−Re λ)/|λ|, not −Re λ.
@@ -319,7 +339,9 @@ class SymmetricOutputFeedback:
         lam = lam[lam.imag > 0]
         return lam.imag, lam.imag * -lam.real / np.abs(lam)
 
-    def condition_number(self, G1, G2, *, gap_rtol: float = GAP_RTOL) -> float:
+    def condition_number(
+        self, G1: npt.ArrayLike, G2: npt.ArrayLike, *, gap_rtol: float = GAP_RTOL
+    ) -> float:
         """κ(Φ) = σ_max/σ_min of the closed-loop modal matrix, φ_iᵀ B φ_i = 1 (Eqs. 40-41, 46).
 
         Plain (non-conjugate) transpose normalisation, which reproduces Att. 5 Tables 1-2
@@ -328,13 +350,13 @@ class SymmetricOutputFeedback:
         _, phi, _ = eigensolve(*self.pencil(G1, G2), gap_rtol=gap_rtol)
         return float(np.linalg.cond(phi))
 
-    def undamped_frequencies(self) -> np.ndarray:
+    def undamped_frequencies(self) -> FloatArray:
         """Zero-gain undamped natural frequencies √eig(K, M), rad/s, ascending."""
         w2 = sla.eigvals(self.K, self.M).real
         return np.sqrt(np.clip(np.sort(w2), 0.0, None))
 
     # -- sensitivities ----------------------------------------------------------------------
-    def pencil_derivatives(self, p):
+    def pencil_derivatives(self, p: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
         """∂A/∂p_k (P, 2n, 2n) and ∂²A/∂p_k∂p_l (P, P, 2n, 2n); B does not depend on p."""
         dG1, dG2, d2G1, d2G2 = cholesky_gain_derivatives(p, self.n_inputs)
         n, D = self.n_dof, self.D
@@ -348,7 +370,7 @@ class SymmetricOutputFeedback:
         return dA, d2A
 
     def sensitivity(
-        self, p, *, order: int = 1, gap_rtol: float = GAP_RTOL, strict: bool = True
+        self, p: npt.ArrayLike, *, order: int = 1, gap_rtol: float = GAP_RTOL, strict: bool = True
     ) -> FeedbackSensitivity:
         """κ and the mode frequencies/decay rates at p with their analytic derivatives.
 
@@ -375,24 +397,26 @@ class SymmetricOutputFeedback:
             Bad p, repeated closed-loop eigenvalues, or (``strict``) a repeated extreme singular
             value.
         """
-        p = _params(p, self.n_inputs)
-        A, B = self._pencil(*self.gains(p))
-        dA, d2A = self.pencil_derivatives(p)
-        d2A = d2A if order == 2 else None
+        flat = _params(p, self.n_inputs)
+        A, B = self._pencil(*self.gains(flat))
+        dA, second = self.pencil_derivatives(flat)
+        d2A = second if order == 2 else None
         try:
             out = eigenvector_condition_derivatives(
                 A, dA, B, None, d2A, None, order=order, gap_rtol=gap_rtol
             )
-            kappa, grad = out[0], out[1]
-            hess = out[2] if order == 2 else None
-            eig = out[-1]
+            if len(out) == 4:  # order 2
+                kappa, grad, hess, eig = out
+            else:
+                kappa, grad, eig = out
+                hess = None
         except ValueError as exc:
             if strict or not str(exc).startswith("singular values"):
                 raise
             eig = eig_derivatives(A, dA, B, None, d2A, None, order=order, gap_rtol=gap_rtol)
             kappa = float(np.linalg.cond(eig.right))
-            grad = np.full(p.size, np.nan)
-            hess = np.full((p.size, p.size), np.nan) if order == 2 else None
+            grad = np.full(flat.size, np.nan)
+            hess = np.full((flat.size, flat.size), np.nan) if order == 2 else None
         lam = eig.eigenvalues
         upper = np.flatnonzero(lam.imag > 0)
         upper = upper[np.argsort(lam.imag[upper])]
@@ -405,7 +429,7 @@ class SymmetricOutputFeedback:
         return FeedbackSensitivity(kappa, grad, hess, y, zw, dl.imag.copy(), dzw, _sorted(lam))
 
 
-def _sorted(lam: np.ndarray) -> np.ndarray:
+def _sorted(lam: ComplexArray) -> ComplexArray:
     """By |Im λ| (conjugates together despite rounding), then Im λ > 0 first, then Re λ."""
     scale = max(float(np.abs(lam).max()), np.finfo(float).tiny)
     return lam[np.lexsort((lam.real, -lam.imag, np.round(np.abs(lam.imag) / scale, 10)))]
@@ -429,16 +453,16 @@ class FeedbackDesign:
         The optimizer's record (path, active set, messages).
     """
 
-    G1: np.ndarray
-    G2: np.ndarray
-    parameters: np.ndarray
+    G1: FloatArray
+    G2: FloatArray
+    parameters: FloatArray
     condition_number: float
-    omega: np.ndarray
-    zeta_omega: np.ndarray
+    omega: FloatArray
+    zeta_omega: FloatArray
     result: HomotopyResult
 
 
-def _mode_map(value, field: str) -> dict[int, float]:
+def _mode_map(value: Mapping[int, float] | None, field: str) -> dict[int, float]:
     if value is None:
         return {}
     if not isinstance(value, dict):
@@ -456,11 +480,11 @@ def _mode_map(value, field: str) -> dict[int, float]:
 def design_minimum_sensitivity(
     plant: SymmetricOutputFeedback,
     *,
-    frequencies=None,
-    decay_bounds=None,
-    start=None,
+    frequencies: Mapping[int, float] | None = None,
+    decay_bounds: Mapping[int, float] | None = None,
+    start: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
     order: int = 1,
-    **options,
+    **options: Any,
 ) -> FeedbackDesign:
     """Minimise the closed-loop modal condition number over symmetric gains (Att. 5 Eqs. 46-49).
 
@@ -522,7 +546,7 @@ def design_minimum_sensitivity(
     needed = max(f_modes + d_modes, default=-1) + 1
     cache: dict[bytes, FeedbackSensitivity] = {}
 
-    def sens(p):
+    def sens(p: FloatArray) -> FeedbackSensitivity:
         key = np.asarray(p, float).tobytes()
         if key not in cache:
             if len(cache) > 32:
@@ -537,7 +561,7 @@ def design_minimum_sensitivity(
             cache[key] = s
         return cache[key]
 
-    kw = dict(gradient=lambda p: sens(p).gradient)
+    kw: dict[str, Any] = dict(gradient=lambda p: sens(p).gradient)
     if f_modes:
         kw.update(
             equality=lambda p: sens(p).omega[f_modes],

@@ -58,7 +58,9 @@ value.)
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -77,6 +79,13 @@ from flexsat.input_checks import (
     require_positive,
 )
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.control.base import RigidNominal, TorqueNominal
+    from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
+    from flexsat.units import FloatArray, QuantityArrayLike
+
 __all__ = [
     "FEEDFORWARD",
     "NominalTorque",
@@ -90,7 +99,7 @@ __all__ = [
 FEEDFORWARD = ("constant", "time-varying", "none")
 
 
-def _weight(value, size: int, field: str, strict: bool) -> np.ndarray:
+def _weight(value: npt.ArrayLike, size: int, field: str, strict: bool) -> FloatArray:
     """A (size, size) symmetric PSD (PD when strict) weight; a 1-D array is its diagonal."""
     arr = require_finite(value, field)
     if arr.ndim == 1:
@@ -137,17 +146,17 @@ class PerturbationDesign:
     """
 
     linearization: TrajectoryLinearization
-    times: np.ndarray
-    A: np.ndarray
-    B: np.ndarray
-    d: np.ndarray
-    input_map: np.ndarray
+    times: FloatArray
+    A: FloatArray
+    B: FloatArray
+    d: FloatArray
+    input_map: FloatArray
     designs: tuple[FrequencyShapedDesign, ...]
-    gains: np.ndarray
-    disturbance_gains: np.ndarray
-    constant_feedforward: np.ndarray
-    Q: np.ndarray
-    D: np.ndarray
+    gains: FloatArray
+    disturbance_gains: FloatArray
+    constant_feedforward: FloatArray
+    Q: FloatArray
+    D: FloatArray
     omega_b: float
     zeta_b: float
     decouple: bool
@@ -157,14 +166,26 @@ class PerturbationDesign:
         return self.linearization.n_modes
 
     def controller(
-        self, dt, feedforward: str = "constant", n_modes_plant: int | None = None, plant=None
+        self,
+        dt: QuantityArrayLike,
+        feedforward: str = "constant",
+        n_modes_plant: int | None = None,
+        plant: FlexibleSpacecraft | None = None,
     ) -> PerturbationFeedback:
         """The law at control period ``dt`` (:class:`PerturbationFeedback`)."""
         return PerturbationFeedback(self, dt, feedforward, n_modes_plant, plant)
 
 
 def perturbation_design(
-    plant, nominal, Q, D, omega_b, zeta_b=0.0, n_points: int = 11, forces=(), decouple: bool = False
+    plant: FlexibleSpacecraft,
+    nominal: RigidNominal,
+    Q: npt.ArrayLike,
+    D: npt.ArrayLike,
+    omega_b: QuantityArrayLike,
+    zeta_b: float = 0.0,
+    n_points: int = 11,
+    forces: str | Sequence[str] = (),
+    decouple: bool = False,
 ) -> PerturbationDesign:
     r"""Gain-scheduled frequency-shaped perturbation design (module docstring).
 
@@ -206,11 +227,11 @@ def perturbation_design(
     """
     lin = TrajectoryLinearization(plant, nominal, forces)
     N, m = lin.n_states, lin.n_inputs
-    Q = _weight(Q, N, "Q", strict=False)
-    D = _weight(D, m, "D", strict=True)
-    omega_b = float(require_positive(omega_b, "omega_b", "rad/s"))
-    zeta_b = float(require_nonneg(zeta_b, "zeta_b", ""))
-    n_points = require_count(n_points, "n_points")
+    Qw = _weight(Q, N, "Q", strict=False)
+    Dw = _weight(D, m, "D", strict=True)
+    wb = float(require_positive(omega_b, "omega_b", "rad/s"))
+    zb = float(require_nonneg(zeta_b, "zeta_b", ""))
+    n_p = require_count(n_points, "n_points")
     if decouple:
         if m == 3:
             raise FieldError(
@@ -220,7 +241,7 @@ def perturbation_design(
         S = decoupled_input_map(lin.force_moments)
     else:
         S = np.eye(m)
-    times = np.linspace(0.0, lin.duration, n_points)
+    times = np.linspace(0.0, lin.duration, n_p)
     A, B = lin.jacobians(times)
     d = lin.disturbance(times)
     # Design in inputs of unit weight, w = Lᵀ v with Sᵀ D S = L Lᵀ (so S ← S L⁻ᵀ, D_w = I):
@@ -228,15 +249,15 @@ def perturbation_design(
     # solver then see one scale. Forces weighted 1e-7 N⁻² beside normalized torques weighted
     # 50 (rad/s²)⁻² (seed 003 case B) put 9 decades between the chain states' weights, and the
     # detectability test judged the forces' shaping chains unseen (refused at t = 0.5 s).
-    L = np.linalg.cholesky(S.T @ D @ S)
-    S = np.linalg.solve(L, S.T).T
+    L = np.linalg.cholesky(S.T @ Dw @ S)
+    S = np.asarray(np.linalg.solve(L, S.T).T, np.float64)
     Dv = np.eye(S.shape[1])
-    if zeta_b == 0.0:
+    if zb == 0.0:
         _check_inputs_act(B @ S, times, lin.inputs)
     designs = []
     for i, t in enumerate(times):
         try:
-            designs.append(frequency_shaped_lqr(A[i], B[i] @ S, Q, Dv, omega_b, 2, zeta_b))
+            designs.append(frequency_shaped_lqr(A[i], B[i] @ S, Qw, Dv, wb, 2, zb))
         except ValueError as exc:
             raise ValueError(f"linearisation point {i} (t = {t:.6g} s): {exc}") from None
     Kd = np.stack([x.disturbance_gain for x in designs])
@@ -251,15 +272,15 @@ def perturbation_design(
         gains=np.stack([x.gain for x in designs]),
         disturbance_gains=Kd,
         constant_feedforward=np.einsum("imn,in->im", Kd, d),
-        Q=Q,
-        D=D,
-        omega_b=omega_b,
-        zeta_b=zeta_b,
+        Q=Qw,
+        D=Dw,
+        omega_b=wb,
+        zeta_b=zb,
         decouple=bool(decouple),
     )
 
 
-def _check_inputs_act(B, times, inputs) -> None:
+def _check_inputs_act(B: FloatArray, times: FloatArray, inputs: Sequence[str]) -> None:
     """With ζ_B = 0 every input combination must move the design model (B full column rank,
     at numpy's rank tolerance max(N, m) ε σ_max)."""
     for i, t in enumerate(times):
@@ -277,7 +298,7 @@ def _check_inputs_act(B, times, inputs) -> None:
             )
 
 
-def _check_same_modes(design_plant, plant) -> None:
+def _check_same_modes(design_plant: FlexibleSpacecraft, plant: FlexibleSpacecraft) -> None:
     """The first modes of ``plant`` are the design model's (:class:`PerturbationFeedback`)."""
     n = design_plant.n_modes
     if getattr(plant, "n_modes", 0) < n or not hasattr(plant, "modal"):
@@ -336,11 +357,11 @@ class PerturbationFeedback(Controller):
     def __init__(
         self,
         design: PerturbationDesign,
-        dt,
+        dt: QuantityArrayLike,
         feedforward: str = "constant",
         n_modes_plant: int | None = None,
-        plant=None,
-    ):
+        plant: FlexibleSpacecraft | None = None,
+    ) -> None:
         if not isinstance(design, PerturbationDesign):
             raise FieldError("design", f"must be a PerturbationDesign, got {type(design).__name__}")
         if feedforward not in FEEDFORWARD:
@@ -365,7 +386,7 @@ class PerturbationFeedback(Controller):
         self.writes = lin.inputs
         self.knots, self.gains = design.times, design.gains
         # the sample grid through T and one beyond (held after it)
-        grid = h * np.arange(int(np.ceil(lin.duration / h)) + 2)
+        grid = h * np.arange(int(np.ceil(lin.duration / h)) + 2, dtype=np.float64)
         beta_n, self._omega, _, _ = lin.nominal_at(grid)
         # δq = β ⊗ β_n* is linear in β: δq = β @ E_k with row j of E_k the product e_j ⊗ β_n*
         conj = beta_n * np.array([1.0, -1.0, -1.0, -1.0])
@@ -386,14 +407,16 @@ class PerturbationFeedback(Controller):
         self._inertia_T = lin.inertia.T.copy()
         self.beta_target = self.target = beta_n[-1]
 
-    def _batched(self):
+    def _batched(self) -> list[tuple[int, ...]]:
         return [()]
 
-    def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
+    def initial_state(self, n_cases: int) -> dict[str, FloatArray]:
         m_v = self.design.input_map.shape[1]
         return {"z1": np.zeros((n_cases, m_v)), "z2": np.zeros((n_cases, m_v))}
 
-    def __call__(self, t, y, state):
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[dict[str, FloatArray], dict[str, FloatArray]]:
         h = self.dt
         k = int(round(t / h))
         if k < 0 or abs(t - k * h) > 1e-6 * h:
@@ -432,7 +455,9 @@ class PerturbationFeedback(Controller):
         return commands, {"z1": z1 + h * z2 + (0.5 * h * h) * u3, "z2": z2 + h * u3}
 
 
-def interval_means(signal, grid: np.ndarray, h: float) -> np.ndarray:
+def interval_means(
+    signal: Callable[[FloatArray], FloatArray], grid: FloatArray, h: float
+) -> FloatArray:
     """Means of ``signal(t)`` over [t_k, t_k + h) for the grid times t_k, by Simpson's rule
     (error O(h⁵) per interval for a smooth signal): the value a zero-order hold must carry for
     the held signal to have the exact impulse of each interval (module docstring)."""
@@ -456,7 +481,7 @@ class NominalTorque(Controller):
     reads = ("attitude",)
     writes = ("torque",)
 
-    def __init__(self, nominal, dt):
+    def __init__(self, nominal: TorqueNominal, dt: QuantityArrayLike) -> None:
         missing = [a for a in ("torque", "duration") if not hasattr(nominal, a)]
         if missing:
             raise FieldError(
@@ -466,18 +491,20 @@ class NominalTorque(Controller):
             )
         T = float(require_positive(nominal.duration, "nominal.duration", "s"))
         self.dt = h = float(require_positive(dt, "dt", "s"))
-        grid = h * np.arange(int(np.ceil(T / h)) + 2)
+        grid = h * np.arange(int(np.ceil(T / h)) + 2, dtype=np.float64)
 
-        def torque(t):
+        def torque(t: FloatArray) -> FloatArray:
             return np.where((t > T)[..., None], 0.0, nominal.torque(np.clip(t, 0.0, T)))
 
         self._torque = interval_means(torque, grid, h)
         self.target = np.zeros(1)
 
-    def _batched(self):
+    def _batched(self) -> list[tuple[int, ...]]:
         return [()]
 
-    def __call__(self, t, y, state):
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[FloatArray, dict[str, FloatArray]]:
         k = min(int(round(t / self.dt)), len(self._torque) - 1)
         n = np.shape(y["attitude"])[0]
         return np.broadcast_to(self._torque[k], (n, 3)).copy(), state

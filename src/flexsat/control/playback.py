@@ -7,10 +7,18 @@ zero-order hold like any command (held over [t_k, t_k + Δt)).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from flexsat.control.base import Controller
 from flexsat.input_checks import FieldError, require_finite, require_positive
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray
 
 __all__ = ["Playback"]
 
@@ -30,7 +38,7 @@ class Playback(Controller):
 
     reads: tuple[str, ...] = ()
 
-    def __init__(self, values, dt: float, writes: str):
+    def __init__(self, values: npt.ArrayLike, dt: float, writes: str) -> None:
         self.values = require_finite(values, "values")
         if self.values.ndim not in (1, 2) or self.values.shape[0] == 0:
             raise FieldError("values", f"must be (n_t,) or (n_t, m), got {self.values.shape}")
@@ -38,12 +46,14 @@ class Playback(Controller):
         self.writes = (writes,)
         self.target = 0.0
 
-    def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
+    def initial_state(self, n_cases: int) -> dict[str, FloatArray]:
         """The index of the sample last played in each case (−1 before the first): the law
         reads no measurement, so its state is what carries the run's case axis."""
         return {"played": np.full(n_cases, -1)}
 
-    def __call__(self, t, y, state):
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[FloatArray, dict[str, FloatArray]]:
         """Sample k = round(t / dt) of the table (zeros after it) in every case: (n_cases,) for a
         1-wide channel (a 1-D or 1-column table), (n_cases, m) for an m-wide one (the Controller
         protocol's shapes)."""

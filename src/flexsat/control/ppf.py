@@ -60,7 +60,9 @@ Eigenvalue sensitivities of S (Eqs. 26–27, S symmetric so ψ_i = φ_i):
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 import scipy.linalg
@@ -75,7 +77,16 @@ from flexsat.input_checks import (
     require_positive,
 )
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    import control as ct
+    from flexsat.analysis.sensitivity import InexactArray
+    from flexsat.control.linear_form import ChannelItems
+    from flexsat.units import FloatArray, QuantityArrayLike
+
 __all__ = [
+    "CollocatedPair",
     "PPFBank",
     "PPFController",
     "PPFModel",
@@ -99,13 +110,32 @@ COLLOCATION_TOL = 1e-10
 
 # ------------------------------------------------------------------------------------------------
 # kernels (plain arrays; gains may carry leading case axes)
-def replicate_matrix(n_actuators: int, n_tuned: int) -> np.ndarray:
+class CollocatedPair(Protocol):
+    """An actuator/sensor pair in modal coordinates (a case's piezo pair): the modal force of
+    a unit command (m,) and the sensor's modal output row (m,)."""
+
+    @property
+    def actuator(self) -> npt.ArrayLike: ...
+
+    @property
+    def sensor(self) -> npt.ArrayLike: ...
+
+
+def replicate_matrix(n_actuators: int, n_tuned: int) -> FloatArray:
     """E (n_a n_t × n_a): sensor i copied to its n_t mode-tuned filters, ``E[i n_t + j, i] = 1``
     (Agrawal & Bang 1996 Eq. 4; the paper does not print E: reconstructed)."""
-    return np.kron(np.eye(n_actuators), np.ones((n_tuned, 1)))
+    return np.asarray(np.kron(np.eye(n_actuators), np.ones((n_tuned, 1))), np.float64)
 
 
-def ppf_state_matrices(omega, zeta, B_a, C_s, omega_f, zeta_f, E):
+def ppf_state_matrices(
+    omega: FloatArray,
+    zeta: FloatArray,
+    B_a: FloatArray,
+    C_s: FloatArray,
+    omega_f: FloatArray,
+    zeta_f: FloatArray,
+    E: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
     r"""Open part A₀ and input matrix B of the closed loop Ā = A₀ + B K(g) (Eq. 8).
 
     Parameters
@@ -145,46 +175,57 @@ def ppf_state_matrices(omega, zeta, B_a, C_s, omega_f, zeta_f, E):
     return A0, B
 
 
-def ppf_feedback(g, E, n_modes: int) -> np.ndarray:
+def ppf_feedback(g: npt.ArrayLike, E: FloatArray, n_modes: int) -> FloatArray:
     """K (..., n_a, n_x) with u = K x = Eᵀ G ξ (Eq. 5; the paper's −G of Eq. 9: ambiguous)."""
-    g = np.asarray(g, float)
+    gains = np.asarray(g, float)
     nf, na = E.shape
-    K = np.zeros(g.shape[:-1] + (na, 2 * n_modes + 2 * nf))
-    K[..., 2 * n_modes : 2 * n_modes + nf] = np.swapaxes(E * g[..., :, None], -1, -2)
+    K = np.zeros(gains.shape[:-1] + (na, 2 * n_modes + 2 * nf))
+    K[..., 2 * n_modes : 2 * n_modes + nf] = np.swapaxes(E * gains[..., :, None], -1, -2)
     return K
 
 
-def ppf_closed_loop(A0, B, K) -> np.ndarray:
+def ppf_closed_loop(A0: FloatArray, B: FloatArray, K: FloatArray) -> FloatArray:
     """Ā = A₀ + B K (Eq. 8), (..., n_x, n_x) for K (..., n_a, n_x)."""
     return A0 + B @ K
 
 
-def ppf_stiffness(omega, B_a, C_s, E, g) -> np.ndarray:
+def ppf_stiffness(
+    omega: FloatArray, B_a: FloatArray, C_s: FloatArray, E: FloatArray, g: npt.ArrayLike
+) -> FloatArray:
     r"""S = Ω − a_1 a_2 Cᵀ G C = Ω − B_a (Eᵀ G E) C_s (Eq. 6), symmetrised, (..., m, m).
 
     Eᵀ G E is diagonal, each actuator's gains summed over its filters (each filter passes a
     constant sensor signal with unit gain: Ω_f⁻¹ Ω_f), so S sees the quasi-static feedback.
     """
-    g = np.asarray(g, float)
-    s = g @ E  # (..., n_a): diagonal of Eᵀ G E
+    s = np.asarray(g, float) @ E  # (..., n_a): diagonal of Eᵀ G E
     S = np.diag(omega**2) - np.einsum("ki,...i,il->...kl", B_a, s, C_s)
     return 0.5 * (S + np.swapaxes(S, -1, -2))
 
 
-def ppf_stiffness_gradient(B_a, C_s, E) -> np.ndarray:
+def ppf_stiffness_gradient(B_a: FloatArray, C_s: FloatArray, E: FloatArray) -> FloatArray:
     """∂S/∂g_k = −a_1 a_2 Cᵀ (∂G/∂g_k) C = −sym(B_a[:, i(k)] C_s[i(k)]) (Eq. 26), (n_f, m, m)."""
     outer = -np.einsum("ki,il->ikl", B_a, C_s)
     outer = 0.5 * (outer + np.swapaxes(outer, -1, -2))
     return outer[np.argmax(E, axis=1)]
 
 
-def _lyap(A, Q) -> np.ndarray:
+def _lyap(A: FloatArray, Q: FloatArray) -> FloatArray:
     """X with A X + X Aᵀ + Q = 0 (Bartels–Stewart), symmetrised."""
     X = scipy.linalg.solve_continuous_lyapunov(A, -Q)
     return 0.5 * (X + X.T)
 
 
-def ppf_cost_gradient(A0, B, E, n_modes: int, g, Q_s, Q_u, X0, gradient: bool = True):
+def ppf_cost_gradient(
+    A0: FloatArray,
+    B: FloatArray,
+    E: FloatArray,
+    n_modes: int,
+    g: npt.ArrayLike,
+    Q_s: FloatArray,
+    Q_u: FloatArray,
+    X0: FloatArray,
+    gradient: bool = True,
+) -> tuple[FloatArray, FloatArray | None]:
     r"""J = ½ tr(P̄ X₀) (Eqs. 10–12) and the repaired ∂J/∂g (Eqs. 13–14, printed sign repaired).
 
     Parameters
@@ -212,9 +253,9 @@ def ppf_cost_gradient(A0, B, E, n_modes: int, g, Q_s, Q_u, X0, gradient: bool = 
     The cost is finite only for a stable Ā; an unstable one gives a P̄ that is not the integral
     of Eq. 7, so callers check stability first (:class:`PPFProblem` does).
     """
-    g = np.asarray(g, float)
-    lead = g.shape[:-1]
-    flat = g.reshape(-1, g.shape[-1])
+    gains = np.asarray(g, float)
+    lead = gains.shape[:-1]
+    flat = gains.reshape(-1, gains.shape[-1])
     K_all = ppf_feedback(flat, E, n_modes)
     nf = E.shape[0]
     xi = 2 * n_modes + np.arange(nf)
@@ -225,14 +266,14 @@ def ppf_cost_gradient(A0, B, E, n_modes: int, g, Q_s, Q_u, X0, gradient: bool = 
         Abar = A0 + B @ K
         P = _lyap(Abar.T, Q_s + K.T @ Q_u @ K)
         J[c] = 0.5 * np.sum(P * X0)
-        if gradient:
+        if dJ is not None:
             V = _lyap(Abar, X0)
             W = V[xi] @ (P @ B + K.T @ Q_u)
             dJ[c] = W[np.arange(nf), act]
-    return J.reshape(lead), (dJ.reshape(g.shape) if gradient else None)
+    return J.reshape(lead), (None if dJ is None else dJ.reshape(gains.shape))
 
 
-def initial_second_moment(x0, weights=None) -> np.ndarray:
+def initial_second_moment(x0: npt.ArrayLike, weights: npt.ArrayLike | None = None) -> FloatArray:
     """X₀ = E[x₀ x₀ᵀ] over initial conditions (seed 004 L367–L369, spec F10).
 
     Parameters
@@ -285,14 +326,14 @@ class PPFModel:
         (non-collocated; S of Eq. 6 needs collocation).
     """
 
-    omega: np.ndarray
-    zeta: np.ndarray
-    actuators: np.ndarray
-    sensors: np.ndarray
+    omega: FloatArray
+    zeta: FloatArray
+    actuators: FloatArray
+    sensors: FloatArray
     #: a_1/a_2 of each pair (B_a[:, i] = ratio[i] C_s[i]), set from the vectors
-    ratio: np.ndarray = field(init=False, repr=False)
+    ratio: FloatArray = field(init=False, repr=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         w = require_positive(self.omega, "omega", "rad/s")
         if w.ndim != 1 or w.size == 0:
             raise FieldError(
@@ -340,16 +381,18 @@ class PPFModel:
             object.__setattr__(self, name, arr)
 
     @classmethod
-    def from_pairs(cls, omega, zeta, pairs) -> PPFModel:
+    def from_pairs(
+        cls, omega: QuantityArrayLike, zeta: npt.ArrayLike, pairs: Iterable[CollocatedPair]
+    ) -> PPFModel:
         """From objects with modal ``actuator`` and ``sensor`` vectors (the case's piezo pairs)."""
-        pairs = tuple(pairs)
-        if not pairs:
+        given = tuple(pairs)
+        if not given:
             raise FieldError("pairs", "give at least one actuator/sensor pair")
         return cls(
-            omega,
-            zeta,
-            np.column_stack([p.actuator for p in pairs]),
-            np.vstack([p.sensor for p in pairs]),
+            require_positive(omega, "omega", "rad/s"),
+            require_nonneg(zeta, "zeta"),
+            np.column_stack([p.actuator for p in given]),
+            np.vstack([p.sensor for p in given]),
         )
 
     @property
@@ -372,10 +415,10 @@ class PPFBank:
         ``omega_f`` not 2-D, non-finite or ≤ 0; ``zeta_f`` negative or of another shape.
     """
 
-    omega_f: np.ndarray
-    zeta_f: np.ndarray
+    omega_f: FloatArray
+    zeta_f: FloatArray
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         w = require_positive(self.omega_f, "omega_f", "rad/s")
         if w.ndim != 2 or w.size == 0:
             raise FieldError("omega_f", f"must have shape (n_actuators, n_tuned), got {w.shape}")
@@ -392,13 +435,17 @@ class PPFBank:
             object.__setattr__(self, name, arr)
 
     @classmethod
-    def tuned(cls, model: PPFModel, zeta_f, n_tuned: int | None = None) -> PPFBank:
+    def tuned(
+        cls, model: PPFModel, zeta_f: float | npt.ArrayLike, n_tuned: int | None = None
+    ) -> PPFBank:
         """ω_f,ij = ω_j for the first ``n_tuned`` modes (default all), every actuator (seed 004
         L61: efficiency is largest when the filter and structure frequencies match)."""
         n = model.n_modes if n_tuned is None else require_count(n_tuned, "n_tuned")
         if n > model.n_modes:
             raise FieldError("n_tuned", f"must be 1 to {model.n_modes}, got {n_tuned!r}")
-        return cls(np.tile(model.omega[:n], (model.n_actuators, 1)), zeta_f)
+        return cls(
+            np.tile(model.omega[:n], (model.n_actuators, 1)), require_nonneg(zeta_f, "zeta_f")
+        )
 
     @property
     def n_actuators(self) -> int:
@@ -413,21 +460,21 @@ class PPFBank:
         return self.omega_f.size
 
     @property
-    def E(self) -> np.ndarray:
+    def E(self) -> FloatArray:
         """Replicate matrix (n_f × n_a)."""
         return replicate_matrix(self.n_actuators, self.n_tuned)
 
-    def check_gains(self, g, field: str = "gains") -> np.ndarray:
+    def check_gains(self, g: npt.ArrayLike, field: str = "gains") -> FloatArray:
         """g as a float vector of n_f finite values (actuator-major), else a ValueError."""
-        g = require_finite(g, field)
-        if g.shape != (self.n_filters,):
+        gains = require_finite(g, field)
+        if gains.shape != (self.n_filters,):
             raise FieldError(
                 field,
                 f"must have {self.n_filters} = n_actuators × n_tuned = "
                 f"{self.n_actuators} × {self.n_tuned} values (g[i*n_tuned + j] = "
-                f"g_ij), got shape {g.shape}",
+                f"g_ij), got shape {gains.shape}",
             )
-        return g
+        return gains
 
 
 @dataclass(frozen=True)
@@ -451,7 +498,7 @@ class PPFStability:
         The deciding test's verdict.
     """
 
-    stiffness_eigenvalues: np.ndarray
+    stiffness_eigenvalues: FloatArray
     stiffness_positive: bool
     gains_positive: bool
     max_real_pole: float
@@ -479,7 +526,14 @@ class PPFProblem:
         starts the filters at rest.
     """
 
-    def __init__(self, model: PPFModel, bank: PPFBank, Q_s, Q_u, X0):
+    def __init__(
+        self,
+        model: PPFModel,
+        bank: PPFBank,
+        Q_s: npt.ArrayLike,
+        Q_u: npt.ArrayLike,
+        X0: npt.ArrayLike,
+    ) -> None:
         if not isinstance(model, PPFModel):
             raise FieldError("model", f"must be a PPFModel, got {type(model).__name__}")
         if not isinstance(bank, PPFBank):
@@ -517,7 +571,15 @@ class PPFProblem:
         self.dS = ppf_stiffness_gradient(model.actuators, model.sensors, self.E)
 
     @classmethod
-    def from_output_weight(cls, model, bank, outputs, output_weight, Q_u, X0) -> PPFProblem:
+    def from_output_weight(
+        cls,
+        model: PPFModel,
+        bank: PPFBank,
+        outputs: npt.ArrayLike,
+        output_weight: npt.ArrayLike,
+        Q_u: npt.ArrayLike,
+        X0: npt.ArrayLike,
+    ) -> PPFProblem:
         """Q_s with Tᵀ Q̄ T on the η block for outputs ζ = T η (Eq. 35: T the tip rows giving
         ζ_t = [y_1ᵗ, α, y_2ᵗ, β], Q̄ the tip weight)."""
         m = model.n_modes
@@ -532,7 +594,7 @@ class PPFProblem:
         Q_s[:m, :m] = T.T @ Qb @ T
         return cls(model, bank, Q_s, Q_u, X0)
 
-    def _state_matrix(self, value, field: str) -> np.ndarray:
+    def _state_matrix(self, value: npt.ArrayLike, field: str) -> FloatArray:
         M = check_psd(check_square(value, field), field)
         m2, n = 2 * self.model.n_modes, self.n_states
         if M.shape[0] == m2:
@@ -549,67 +611,66 @@ class PPFProblem:
     def n_gains(self) -> int:
         return self.bank.n_filters
 
-    def gains(self, g) -> np.ndarray:
+    def gains(self, g: npt.ArrayLike) -> FloatArray:
         """``g`` checked: n_g finite values (actuator-major)."""
         return self.bank.check_gains(g)
 
-    def closed_loop_matrix(self, g) -> np.ndarray:
+    def closed_loop_matrix(self, g: npt.ArrayLike) -> FloatArray:
         """Ā of Eq. 8 (n_x × n_x)."""
         K = ppf_feedback(self.gains(g), self.E, self.model.n_modes)
         return ppf_closed_loop(self.A0, self.B, K)
 
-    def closed_loop_poles(self, g) -> np.ndarray:
-        """Eigenvalues of Ā, sorted by real part (descending)."""
+    def closed_loop_poles(self, g: npt.ArrayLike) -> InexactArray:
+        """Eigenvalues of Ā, sorted by real part (descending); real when every one is."""
         lam = np.linalg.eigvals(self.closed_loop_matrix(g))
         return lam[np.argsort(-lam.real, kind="stable")]
 
-    def stiffness(self, g) -> np.ndarray:
+    def stiffness(self, g: npt.ArrayLike) -> FloatArray:
         """S of Eq. 6 (m × m, symmetric)."""
         m = self.model
         return ppf_stiffness(m.omega, m.actuators, m.sensors, self.E, self.gains(g))
 
-    def stiffness_eigenvalues(self, g) -> np.ndarray:
+    def stiffness_eigenvalues(self, g: npt.ArrayLike) -> FloatArray:
         """Eigenvalues λ_i of S (Eq. 21), ascending."""
-        return np.linalg.eigvalsh(self.stiffness(g))
+        return np.asarray(np.linalg.eigvalsh(self.stiffness(g)), np.float64)
 
-    def stiffness_eigenvalue_gradients(self, g) -> np.ndarray:
+    def stiffness_eigenvalue_gradients(self, g: npt.ArrayLike) -> FloatArray:
         """∂λ_i/∂g_k = φ_iᵀ (∂S/∂g_k) φ_i (Eqs. 26–27), (m, n_g), rows in the order of
         :meth:`stiffness_eigenvalues` (valid for distinct eigenvalues)."""
         _, phi = np.linalg.eigh(self.stiffness(g))
         return np.einsum("li,klm,mi->ik", phi, self.dS, phi)
 
-    def stability(self, g) -> PPFStability:
+    def stability(self, g: npt.ArrayLike) -> PPFStability:
         """The report of Eq. 6 with the G > 0 and direct eigenvalue checks (class docstring of
         :class:`PPFStability`)."""
-        g = self.gains(g)
-        lam = self.stiffness_eigenvalues(g)
-        s_pos, g_pos = bool(lam[0] > 0), bool(np.all(g > 0))
+        gains = self.gains(g)
+        lam = self.stiffness_eigenvalues(gains)
+        s_pos, g_pos = bool(lam[0] > 0), bool(np.all(gains > 0))
         damped = bool(np.all(self.model.zeta > 0) and np.all(self.bank.zeta_f > 0))
-        max_re = float(np.max(self.closed_loop_poles(g).real))
+        max_re = float(np.max(self.closed_loop_poles(gains).real))
         if g_pos and damped:
             return PPFStability(lam, s_pos, g_pos, max_re, "stiffness", s_pos)
         return PPFStability(lam, s_pos, g_pos, max_re, "eigenvalues", max_re < 0)
 
-    def _checked_stable(self, g) -> np.ndarray:
-        g = self.gains(g)
-        max_re = float(np.max(self.closed_loop_poles(g).real))
+    def _checked_stable(self, g: npt.ArrayLike) -> FloatArray:
+        gains = self.gains(g)
+        max_re = float(np.max(self.closed_loop_poles(gains).real))
         if not max_re < 0:
             raise FieldError(
                 "gains",
                 "the closed loop is unstable (largest real part of its poles "
                 f"{max_re:.4g} 1/s): the cost of Eq. 7 is infinite",
             )
-        return g
+        return gains
 
-    def cost(self, g) -> float:
+    def cost(self, g: npt.ArrayLike) -> float:
         """J = ½ tr(P̄ X₀) (Eqs. 10–12); ValueError for an unstable loop (J infinite)."""
-        g = self._checked_stable(g)
         J, _ = ppf_cost_gradient(
             self.A0,
             self.B,
             self.E,
             self.model.n_modes,
-            g,
+            self._checked_stable(g),
             self.Q_s,
             self.Q_u,
             self.X0,
@@ -617,20 +678,21 @@ class PPFProblem:
         )
         return float(J)
 
-    def cost_and_gradient(self, g) -> tuple[float, np.ndarray]:
+    def cost_and_gradient(self, g: npt.ArrayLike) -> tuple[float, FloatArray]:
         """(J, ∂J/∂g) sharing the Lyapunov solve of P̄."""
-        g = self._checked_stable(g)
+        gains = self._checked_stable(g)
         J, dJ = ppf_cost_gradient(
-            self.A0, self.B, self.E, self.model.n_modes, g, self.Q_s, self.Q_u, self.X0
+            self.A0, self.B, self.E, self.model.n_modes, gains, self.Q_s, self.Q_u, self.X0
         )
+        assert dJ is not None  # asked for (gradient=True)
         return float(J), dJ
 
-    def gradient(self, g) -> np.ndarray:
+    def gradient(self, g: npt.ArrayLike) -> FloatArray:
         """∂J/∂g, repaired Eq. 13 with V of Eq. 14 (module docstring), (n_g,)."""
         return self.cost_and_gradient(g)[1]
 
 
-def ppf_compensator(bank: PPFBank, gains):
+def ppf_compensator(bank: PPFBank, gains: npt.ArrayLike) -> ct.StateSpace:
     """The bank as a continuous python-control ``StateSpace`` from the n_a sensor signals to the
     n_a commands: state [ξ, ξ̇], ξ̈ = −Ω_f ξ − D_f ξ̇ + Ω_f E y, u = Eᵀ G ξ (Eqs. 3–5)."""
     import control as ct
@@ -660,7 +722,14 @@ class PPFController(StateSpaceCompensator):
         Pair i's sensor and actuator channels; default ``y1`` … and ``u1`` … (the case's plant).
     """
 
-    def __init__(self, bank: PPFBank, gains, dt, measurements=None, commands=None):
+    def __init__(
+        self,
+        bank: PPFBank,
+        gains: npt.ArrayLike,
+        dt: QuantityArrayLike,
+        measurements: ChannelItems | None = None,
+        commands: ChannelItems | None = None,
+    ) -> None:
         if not isinstance(bank, PPFBank):
             raise FieldError("bank", f"must be a PPFBank, got {type(bank).__name__}")
         n = bank.n_actuators

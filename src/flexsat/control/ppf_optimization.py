@@ -65,6 +65,7 @@ reproduce. The W handling (W = L Lᵀ, a vector is a diagonal) is reused from it
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 from scipy.optimize import minimize
@@ -78,9 +79,31 @@ from flexsat.input_checks import (
     require_numeric,
 )
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray
+
 SOURCE = "Agrawal & Bang 1996, Eqs. 15-28 (L113-L203)"
 
-#: the PPF gain-problem interface (duck-typed)
+
+class PPFGainProblem(Protocol):
+    """The PPF gain-problem interface (:class:`~flexsat.control.ppf.PPFProblem` is one), each
+    method of the gain vector g (n_g,): the cost J, its gradient (n_g,), the ascending
+    eigenvalues of S (n,), their gradients (n, n_g) and the closed-loop poles."""
+
+    def cost(self, g: FloatArray) -> npt.ArrayLike: ...
+
+    def gradient(self, g: FloatArray) -> npt.ArrayLike: ...
+
+    def stiffness_eigenvalues(self, g: FloatArray) -> npt.ArrayLike: ...
+
+    def stiffness_eigenvalue_gradients(self, g: FloatArray) -> npt.ArrayLike: ...
+
+    def closed_loop_poles(self, g: FloatArray) -> npt.ArrayLike: ...
+
+
+#: the methods of :class:`PPFGainProblem` (checked at run time: the interface is duck-typed)
 PROBLEM_METHODS = (
     "cost",
     "gradient",
@@ -134,7 +157,7 @@ class PPFHomotopyStep:
     gamma: float
     cost: float
     target: float
-    gains: np.ndarray
+    gains: FloatArray
     min_stiffness_eigenvalue: float
     max_pole_real: float
     corrections: int
@@ -170,14 +193,14 @@ class PPFHomotopyResult:
         Calls of ``problem.cost``.
     """
 
-    gains: np.ndarray
+    gains: FloatArray
     cost: float
     gamma: float
     status: str
     message: str
     cost_initial: float
     cost_goal: float
-    eigenvalue_floor: np.ndarray
+    eigenvalue_floor: FloatArray
     history: tuple[PPFHomotopyStep, ...]
     n_evaluations: int
 
@@ -186,19 +209,19 @@ class PPFHomotopyResult:
         return self.status == GOAL_REACHED
 
     @property
-    def gamma_path(self) -> np.ndarray:
+    def gamma_path(self) -> FloatArray:
         return np.array([s.gamma for s in self.history])
 
     @property
-    def cost_path(self) -> np.ndarray:
+    def cost_path(self) -> FloatArray:
         return np.array([s.cost for s in self.history])
 
     @property
-    def target_path(self) -> np.ndarray:
+    def target_path(self) -> FloatArray:
         return np.array([s.target for s in self.history])
 
     @property
-    def gain_path(self) -> np.ndarray:
+    def gain_path(self) -> FloatArray:
         """(n_steps, n_g): the gains at every converged γ."""
         return np.array([s.gains for s in self.history])
 
@@ -222,9 +245,9 @@ class EigenvalueRestoration:
     message : str
     """
 
-    gains: np.ndarray
-    step: np.ndarray
-    eigenvalues: np.ndarray
+    gains: FloatArray
+    step: FloatArray
+    eigenvalues: FloatArray
     restored: bool
     iterations: int
     message: str
@@ -247,7 +270,7 @@ class ScipyPPFResult:
         Calls of ``problem.cost``.
     """
 
-    gains: np.ndarray
+    gains: FloatArray
     cost: float
     success: bool
     message: str
@@ -262,7 +285,7 @@ class _Checked:
     """The problem's methods with their shapes checked (a wrong shape is the problem's bug: a
     ValueError naming the method) and non-finite values turned into a failed step."""
 
-    def __init__(self, problem):
+    def __init__(self, problem: PPFGainProblem) -> None:
         missing = [name for name in PROBLEM_METHODS if not callable(getattr(problem, name, None))]
         if missing:
             raise FieldError(
@@ -275,22 +298,22 @@ class _Checked:
         self.n_modes = 0
         self.evaluations = 0
 
-    def _finite(self, value, name):
+    def _finite(self, value: FloatArray, name: str) -> FloatArray:
         if not np.all(np.isfinite(value)):
             raise _Failure(f"problem.{name} is not finite")
         return value
 
-    def cost(self, g) -> float:
+    def cost(self, g: FloatArray) -> float:
         self.evaluations += 1
         return float(self._finite(np.asarray(self.problem.cost(g.copy()), float), "cost"))
 
-    def gradient(self, g) -> np.ndarray:
+    def gradient(self, g: FloatArray) -> FloatArray:
         out = np.asarray(self.problem.gradient(g.copy()), float)
         if out.shape != (self.n_gains,):
             raise FieldError("problem.gradient", f"must return ({self.n_gains},), got {out.shape}")
         return self._finite(out, "gradient")
 
-    def eigenvalues(self, g) -> np.ndarray:
+    def eigenvalues(self, g: FloatArray) -> FloatArray:
         out = np.asarray(self.problem.stiffness_eigenvalues(g.copy()), float)
         if out.shape != (self.n_modes,):
             raise FieldError(
@@ -298,7 +321,7 @@ class _Checked:
             )
         return self._finite(out, "stiffness_eigenvalues")
 
-    def eigenvalue_jacobian(self, g) -> np.ndarray:
+    def eigenvalue_jacobian(self, g: FloatArray) -> FloatArray:
         out = np.asarray(self.problem.stiffness_eigenvalue_gradients(g.copy()), float)
         if out.shape != (self.n_modes, self.n_gains):
             raise FieldError(
@@ -307,7 +330,7 @@ class _Checked:
             )
         return self._finite(out, "stiffness_eigenvalue_gradients")
 
-    def max_pole_real(self, g) -> float:
+    def max_pole_real(self, g: FloatArray) -> float:
         poles = np.asarray(self.problem.closed_loop_poles(g.copy()))
         if poles.ndim != 1 or poles.size == 0:
             raise FieldError(
@@ -317,7 +340,12 @@ class _Checked:
         return float(self._finite(np.max(poles.real), "closed_loop_poles"))
 
 
-def _setup(problem, g, field: str, eigenvalue_floor):
+def _setup(
+    problem: PPFGainProblem,
+    g: npt.ArrayLike,
+    field: str,
+    eigenvalue_floor: float | npt.ArrayLike | None,
+) -> tuple[_Checked, FloatArray, FloatArray]:
     """The checked problem, the gains ``g`` (named ``field``) and λ^c."""
     ev = _Checked(problem)
     g = require_numeric(g, field, "gain vector")
@@ -355,7 +383,12 @@ def _setup(problem, g, field: str, eigenvalue_floor):
     return ev, g, floor
 
 
-def _start(problem, g0, eigenvalue_floor, stability_margin):
+def _start(
+    problem: PPFGainProblem,
+    g0: npt.ArrayLike,
+    eigenvalue_floor: float | npt.ArrayLike | None,
+    stability_margin: float,
+) -> tuple[_Checked, FloatArray, FloatArray, float, float]:
     """Check the problem and the start; return (checked problem, g0, λ^c, margin, J_init).
 
     The start must be feasible (λ_i(S) >= λ_i^c) and stable: J_init = J(g_feasible) anchors the
@@ -395,20 +428,27 @@ def _start(problem, g0, eigenvalue_floor, stability_margin):
     return ev, g, floor, margin, J
 
 
-def _inverse_weight(weight, n: int) -> np.ndarray:
+def _inverse_weight(weight: npt.ArrayLike | None, n: int) -> FloatArray:
     """W⁻¹ of Eqs. 19 and 28 (W positive definite; a vector is a diagonal)."""
     Linv = np.linalg.inv(weight_factor(weight, n))
     return Linv.T @ Linv
 
 
-def _minimum_norm_step(rows: np.ndarray, residual: np.ndarray, Winv: np.ndarray) -> np.ndarray:
+def _minimum_norm_step(rows: FloatArray, residual: FloatArray, Winv: FloatArray) -> FloatArray:
     """Δg = −W⁻¹Aᵀ(AW⁻¹Aᵀ)⁻¹H (Eqs. 19, 28); a pseudo-inverse for rank-deficient rows (then the
     least-squares step)."""
     WA = Winv @ rows.T
     return -WA @ (np.linalg.pinv(rows @ WA, rcond=1e-13, hermitian=True) @ residual)
 
 
-def _restore(ev: _Checked, g, target, floor, Winv, max_iterations: int):
+def _restore(
+    ev: _Checked,
+    g: FloatArray,
+    target: FloatArray,
+    floor: FloatArray,
+    Winv: FloatArray,
+    max_iterations: int,
+) -> tuple[FloatArray, int, npt.NDArray[np.bool_]]:
     """Eqs. 23-28: restore λ_j >= λ_j^c on the violated set.
 
     Returns (gains, steps, rows): ``rows`` marks every eigenvalue that was corrected (the
@@ -433,13 +473,18 @@ def _restore(ev: _Checked, g, target, floor, Winv, max_iterations: int):
     raise AssertionError("unreachable")  # the loop returns or raises at it == max_iterations
 
 
-def _restoration_target(floor):
+def _restoration_target(floor: FloatArray) -> FloatArray:
     """Where Eq. 24 aims: ``RESTORATION_MARGIN`` (relative) above λ^c."""
     return floor + RESTORATION_MARGIN * np.maximum(floor, np.finfo(float).tiny)
 
 
 def restore_eigenvalue_constraints(
-    problem, g, eigenvalue_floor=None, *, weight=None, max_iterations: int = 20
+    problem: PPFGainProblem,
+    g: npt.ArrayLike,
+    eigenvalue_floor: float | npt.ArrayLike | None = None,
+    *,
+    weight: npt.ArrayLike | None = None,
+    max_iterations: int = 20,
 ) -> EigenvalueRestoration:
     """Restore λ_i(S(g)) >= λ_i^c by minimum-norm corrections (seed 004 Eqs. 21-28).
 
@@ -464,32 +509,32 @@ def restore_eigenvalue_constraints(
     -------
     EigenvalueRestoration
     """
-    ev, g, floor = _setup(problem, g, "g", eigenvalue_floor)
+    ev, given, floor = _setup(problem, g, "g", eigenvalue_floor)
     max_iterations = require_count(max_iterations, "max_iterations")
-    Winv = _inverse_weight(weight, g.size)
+    Winv = _inverse_weight(weight, given.size)
     try:
         g_new, its, _ = _restore(
-            ev, g.copy(), _restoration_target(floor), floor, Winv, max_iterations
+            ev, given.copy(), _restoration_target(floor), floor, Winv, max_iterations
         )
     except _Failure as exc:
         return EigenvalueRestoration(
-            g, np.zeros_like(g), ev.eigenvalues(g), False, max_iterations, str(exc)
+            given, np.zeros_like(given), ev.eigenvalues(given), False, max_iterations, str(exc)
         )
     message = "feasible as given" if its == 0 else f"restored in {its} step(s)"
-    return EigenvalueRestoration(g_new, g_new - g, ev.eigenvalues(g_new), True, its, message)
+    return EigenvalueRestoration(g_new, g_new - given, ev.eigenvalues(g_new), True, its, message)
 
 
 # -- the homotopy ------------------------------------------------------------------------------
 def optimize_ppf_gains(
-    problem,
-    g0,
-    J_goal=None,
-    goal_ratio=None,
-    gamma_stop=1.0,
-    eigenvalue_floor=None,
-    weight=None,
+    problem: PPFGainProblem,
+    g0: npt.ArrayLike,
+    J_goal: float | None = None,
+    goal_ratio: float | None = None,
+    gamma_stop: float = 1.0,
+    eigenvalue_floor: float | npt.ArrayLike | None = None,
+    weight: npt.ArrayLike | None = None,
     *,
-    stability_margin=0.0,
+    stability_margin: float = 0.0,
     gamma_step: float = 0.1,
     min_gamma_step: float = 1e-6,
     max_corrections: int = 10,
@@ -552,14 +597,14 @@ def optimize_ppf_gains(
         both given or not finite; gamma_stop outside (0, 1]; other options out of range.
     """
     ev, g, floor, margin, J_init = _start(problem, g0, eigenvalue_floor, stability_margin)
-    if (J_goal is None) == (goal_ratio is None):
+    if J_goal is not None and goal_ratio is None:
+        goal = float(require_finite(J_goal, "J_goal"))
+    elif goal_ratio is not None and J_goal is None:
+        goal = float(require_finite(goal_ratio, "goal_ratio")) * J_init
+    else:
         raise FieldError(
             "J_goal", "give exactly one of J_goal and goal_ratio (J_goal = goal_ratio · J_init)"
         )
-    if J_goal is not None:
-        J_goal = float(require_finite(J_goal, "J_goal"))
-    else:
-        J_goal = float(require_finite(goal_ratio, "goal_ratio")) * J_init
     gamma_stop = float(require_finite(gamma_stop, "gamma_stop"))
     if not 0.0 < gamma_stop <= 1.0:
         raise FieldError("gamma_stop", f"must be in (0, 1], got {gamma_stop!r}")
@@ -581,7 +626,9 @@ def optimize_ppf_gains(
 
     lam_target = _restoration_target(floor)
 
-    def converge(g, target):
+    def converge(
+        g: FloatArray, target: float
+    ) -> tuple[FloatArray, float, int, int, npt.NDArray[np.bool_]]:
         """Corrections (Eq. 19) with the nested restoration (Eq. 28), the active set and the
         stability veto, at one γ; returns (gains, J, corrections, restorations, active)."""
         tol = rtol * (abs(target) if target != 0 else abs(J_init))
@@ -614,7 +661,15 @@ def optimize_ppf_gains(
                 )
         raise AssertionError("unreachable")  # returns or raises at k == max_corrections
 
-    def record(gamma, g, J, target, corrections, restorations, active):
+    def record(
+        gamma: float,
+        g: FloatArray,
+        J: float,
+        target: float,
+        corrections: int,
+        restorations: int,
+        active: npt.NDArray[np.bool_],
+    ) -> PPFHomotopyStep:
         return PPFHomotopyStep(
             gamma,
             J,
@@ -640,7 +695,7 @@ def optimize_ppf_gains(
         g_try = gamma + dgamma
         if g_try > gamma_stop - 1e-12:
             g_try = gamma_stop
-        target = g_try * J_goal + (1.0 - g_try) * J_init
+        target = g_try * goal + (1.0 - g_try) * J_init
         try:
             g_new, J_new, corrections, restorations, active = converge(g, target)
         except (_Failure, np.linalg.LinAlgError) as exc:
@@ -661,16 +716,16 @@ def optimize_ppf_gains(
     else:
         message = f"{status}: γ = {gamma:.9g}, J = {J:.10g}"
     return PPFHomotopyResult(
-        g, J, gamma, status, message, J_init, J_goal, floor, tuple(history), ev.evaluations
+        g, J, gamma, status, message, J_init, goal, floor, tuple(history), ev.evaluations
     )
 
 
 # -- the scipy cross-check ---------------------------------------------------------------------
 def scipy_ppf_gains(
-    problem,
-    g0,
-    eigenvalue_floor=None,
-    stability_margin=0.0,
+    problem: PPFGainProblem,
+    g0: npt.ArrayLike,
+    eigenvalue_floor: float | npt.ArrayLike | None = None,
+    stability_margin: float = 0.0,
     *,
     tol: float = 1e-12,
     max_iterations: int = 1000,
@@ -703,38 +758,38 @@ def scipy_ppf_gains(
         ``CONSTRAINT_TOL`` (scaled): SLSQP meets its linearised constraints exactly, so what
         is left is second order in its last step.
     """
-    ev, g0, floor, margin, J_init = _start(problem, g0, eigenvalue_floor, stability_margin)
+    ev, start, floor, margin, J_init = _start(problem, g0, eigenvalue_floor, stability_margin)
     tol = float(require_finite(tol, "tol"))
     if not tol > 0:
         raise FieldError("tol", f"must be > 0, got {tol!r}")
     max_iterations = require_count(max_iterations, "max_iterations")
-    scale = np.abs(g0)
+    scale = np.abs(start)
     scale[scale == 0] = 1.0
     J_scale = abs(J_init) if J_init != 0 else 1.0
-    lam_scale = np.maximum(floor, np.abs(ev.eigenvalues(np.zeros(g0.size))))
+    lam_scale = np.maximum(floor, np.abs(ev.eigenvalues(np.zeros(start.size))))
     lam_scale[lam_scale == 0] = 1.0
-    re_scale = max(abs(ev.max_pole_real(np.zeros(g0.size))), margin, np.finfo(float).tiny)
+    re_scale = max(abs(ev.max_pole_real(np.zeros(start.size))), margin, np.finfo(float).tiny)
 
-    def fun(x):
+    def fun(x: FloatArray) -> float:
         return ev.cost(scale * x) / J_scale
 
-    def jac(x):
+    def jac(x: FloatArray) -> FloatArray:
         return ev.gradient(scale * x) * scale / J_scale
 
-    def eig_con(x):
+    def eig_con(x: FloatArray) -> FloatArray:
         return (ev.eigenvalues(scale * x) - floor) / lam_scale
 
-    def eig_jac(x):
+    def eig_jac(x: FloatArray) -> FloatArray:
         return ev.eigenvalue_jacobian(scale * x) * scale[None, :] / lam_scale[:, None]
 
-    def stab_con(x):
+    def stab_con(x: FloatArray) -> FloatArray:
         return np.array([(-ev.max_pole_real(scale * x) - margin) / re_scale])
 
     cons = [{"type": "ineq", "fun": eig_con, "jac": eig_jac}, {"type": "ineq", "fun": stab_con}]
     try:
         res = minimize(
             fun,
-            g0 / scale,
+            start / scale,
             jac=jac,
             method="SLSQP",
             constraints=cons,
@@ -763,6 +818,7 @@ __all__ = [
     "RESTORATION_MARGIN",
     "SOURCE",
     "EigenvalueRestoration",
+    "PPFGainProblem",
     "PPFHomotopyResult",
     "PPFHomotopyStep",
     "ScipyPPFResult",

@@ -20,6 +20,9 @@ D_k = −K(t_k), y_ref,k = x_ref(t_k), u_ff,k = u_ff(t_k) (:mod:`~flexsat.contro
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, TypeAlias
+
 import numpy as np
 
 from flexsat.control.base import Controller
@@ -34,17 +37,28 @@ from flexsat.control.linear_form import (
 )
 from flexsat.input_checks import FieldError, require_finite
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.control.linear_form import ChannelItems, LinearLaw
+    from flexsat.units import FloatArray, QuantityArrayLike
+
+#: x_ref or u_ff as given: a table at the schedule times or a function of t (s)
+ScheduleInput: TypeAlias = "npt.ArrayLike | Callable[[float], npt.ArrayLike]"
+#: the same as kept: a (n_knots, C, width) table, the function, or None (zero)
+ScheduleTable: TypeAlias = "FloatArray | Callable[[float], npt.ArrayLike] | None"
+
 __all__ = ["ScheduledStateFeedback", "interpolate_schedule"]
 
 
-def interpolate_schedule(knots: np.ndarray, table: np.ndarray, t) -> np.ndarray:
+def interpolate_schedule(knots: FloatArray, table: FloatArray, t: npt.ArrayLike) -> FloatArray:
     """Piecewise-linear interpolation of ``table`` (n_knots, ...) at times ``t`` (scalar or
     (n_t,)), held at the end values outside the knots; shape t.shape + table.shape[1:]."""
-    t = np.asarray(t, float)
+    tt = np.asarray(t, float)
     if len(knots) == 1:
-        return np.broadcast_to(table[0], t.shape + table.shape[1:])
-    i = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, len(knots) - 2)
-    w = np.clip((t - knots[i]) / (knots[i + 1] - knots[i]), 0.0, 1.0)
+        return np.broadcast_to(table[0], tt.shape + table.shape[1:])
+    i = np.clip(np.searchsorted(knots, tt, side="right") - 1, 0, len(knots) - 2)
+    w = np.clip((tt - knots[i]) / (knots[i + 1] - knots[i]), 0.0, 1.0)
     w = w.reshape(w.shape + (1,) * (table.ndim - 1))
     return (1 - w) * table[i] + w * table[i + 1]
 
@@ -73,8 +87,14 @@ class ScheduledStateFeedback(Controller):
     """
 
     def __init__(
-        self, times, gains, measurements, commands="torque", state_reference=None, feedforward=None
-    ):
+        self,
+        times: QuantityArrayLike,
+        gains: npt.ArrayLike,
+        measurements: ChannelItems,
+        commands: ChannelItems = "torque",
+        state_reference: ScheduleInput | None = None,
+        feedforward: ScheduleInput | None = None,
+    ) -> None:
         knots = require_finite(times, "times", "s")
         if knots.ndim != 1 or knots.size < 1 or np.any(np.diff(knots) <= 0):
             raise FieldError(
@@ -96,7 +116,7 @@ class ScheduledStateFeedback(Controller):
         self.state_reference = self._schedule_table(state_reference, n, "state_reference")
         self.feedforward = self._schedule_table(feedforward, m, "feedforward")
 
-    def _schedule_table(self, value, width: int, field: str):
+    def _schedule_table(self, value: ScheduleInput | None, width: int, field: str) -> ScheduleTable:
         if value is None or callable(value):
             return value
         v = require_finite(value, field)
@@ -109,18 +129,20 @@ class ScheduledStateFeedback(Controller):
             )
         return v if v.ndim == 3 else v[:, None]
 
-    def _batched(self):
-        shapes = [(self.gains.shape[1],)]
+    def _batched(self) -> list[tuple[int, ...]]:
+        shapes: list[tuple[int, ...]] = [(self.gains.shape[1],)]
         for table in (self.state_reference, self.feedforward):
             if isinstance(table, np.ndarray):
                 shapes.append((table.shape[1],))
         return shapes
 
-    def gain(self, t) -> np.ndarray:
+    def gain(self, t: npt.ArrayLike) -> FloatArray:
         """K(t), shape t.shape + (C, m, n)."""
         return interpolate_schedule(self.knots, self.gains, t)
 
-    def _at(self, table, t, width: int, field: str, n_cases: int) -> np.ndarray:
+    def _at(
+        self, table: ScheduleTable, t: FloatArray, width: int, field: str, n_cases: int
+    ) -> FloatArray:
         """x_ref or u_ff at times t (n_t,): (n_t, C, width)."""
         if table is None:
             return np.zeros((len(t), 1, width))
@@ -128,7 +150,9 @@ class ScheduledStateFeedback(Controller):
             return interpolate_schedule(self.knots, table, t)
         return np.stack([per_case(table(tk), n_cases, field, (width,)) for tk in t])
 
-    def __call__(self, t, y, state):
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[FloatArray | dict[str, FloatArray], dict[str, FloatArray]]:
         m, n = self.gains.shape[-2:]
         nc = max(self.n_cases, cases_of(y, self.reads, self.read_sizes))
         x = stack_channels(y, self.reads, self.read_sizes, nc)
@@ -140,10 +164,10 @@ class ScheduledStateFeedback(Controller):
         commands = split_channels(u, self.writes, self.write_sizes)
         return (commands[self.writes[0]] if len(self.writes) == 1 else commands), state
 
-    def linear_form(self, dt, times, n_cases):
+    def linear_form(self, dt: float, times: npt.ArrayLike, n_cases: int) -> LinearLaw:
         """D_k = −K(t_k), y_ref = x_ref(t_k), u_ff = u_ff(t_k); D constant (T = 1) for a
         one-point schedule."""
-        _, times = sample_times(dt, times)
+        _, grid = sample_times(dt, times)
         m, n = self.gains.shape[-2:]
         for field, table in (
             ("gains", self.gains),
@@ -154,15 +178,17 @@ class ScheduledStateFeedback(Controller):
                 raise FieldError(
                     field, f"have {table.shape[1]} cases, the run has n_cases = {n_cases}"
                 )
-        D = -(self.gains if len(self.knots) == 1 else self.gain(times))
-        y_ref = self._at(self.state_reference, times, n, "state_reference", n_cases)
-        u_ff = self._at(self.feedforward, times, m, "feedforward", n_cases)
+        D = -(self.gains if len(self.knots) == 1 else self.gain(grid))
+        y_ref = self._at(self.state_reference, grid, n, "state_reference", n_cases)
+        u_ff = self._at(self.feedforward, grid, m, "feedforward", n_cases)
         return static_law(
             D, y_ref, u_ff, self.reads, self.writes, self.read_sizes, self.write_sizes
         )
 
 
-def _channels(spec, width: int, field: str, symbol: str, axis: str):
+def _channels(
+    spec: ChannelItems, width: int, field: str, symbol: str, axis: str
+) -> tuple[tuple[str, ...], tuple[int, ...]]:
     """Names and widths; a single name takes the whole width."""
     if isinstance(spec, str):
         return (channel_spec(spec, field)[0], (width,))

@@ -19,6 +19,9 @@ y_ref = r.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from flexsat.control.base import Controller
@@ -32,16 +35,23 @@ from flexsat.control.linear_form import (
 from flexsat.control.lqg import DT_TOL, zoh
 from flexsat.input_checks import FieldError, require_finite, require_positive
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    import control as ct
+    from flexsat.control.linear_form import ChannelItems
+    from flexsat.units import FloatArray, QuantityArrayLike
+
 __all__ = ["StateSpaceCompensator"]
 
 
-def _state_space(system):
+def _state_space(system: ct.StateSpace | ct.TransferFunction) -> ct.StateSpace:
     # python-control takes ~1 s to import: load it when a compensator is built, not with
     # flexsat.control
     import control as ct
 
     if isinstance(system, ct.TransferFunction):
-        system = ct.ss(system)
+        return ct.ss(system)
     if not isinstance(system, ct.StateSpace):
         raise FieldError(
             "system",
@@ -51,18 +61,24 @@ def _state_space(system):
     return system
 
 
-def reference_histories(references, names, sizes, units) -> np.ndarray:
+def reference_histories(
+    references: Mapping[str, QuantityArrayLike] | None,
+    names: Sequence[str],
+    sizes: Sequence[int],
+    units: Sequence[str | None],
+) -> FloatArray:
     """r (C, p) from {channel: value}; a missing channel has reference 0."""
-    references = {} if references is None else dict(references)
-    unknown = sorted(set(references) - set(names))
+    given = {} if references is None else dict(references)
+    unknown = sorted(set(given) - set(names))
     if unknown:
         raise FieldError(
             "references", f"{unknown[0]!r} is not a measurement channel (they are {list(names)})"
         )
-    cols, n_cases = [], 1
+    cols: list[FloatArray] = []
+    n_cases = 1
     for name, size, unit in zip(names, sizes, units):
         field = f"references.{name}"
-        r = require_finite(references.get(name, 0.0), field, unit)
+        r = require_finite(given.get(name, 0.0), field, unit)
         if r.ndim == 0:
             r = np.full((1, size), float(r))
         elif size == 1 and r.ndim == 1:
@@ -104,7 +120,14 @@ class StateSpaceCompensator(Controller):
         (a Quantity or a unit string is converted), SI numbers for a channel given by name.
     """
 
-    def __init__(self, system, measurements, commands, dt=None, references=None):
+    def __init__(
+        self,
+        system: ct.StateSpace | ct.TransferFunction,
+        measurements: ChannelItems,
+        commands: ChannelItems,
+        dt: QuantityArrayLike | None = None,
+        references: Mapping[str, QuantityArrayLike] | None = None,
+    ) -> None:
         sys = _state_space(system)
         self.system = sys
         names, sizes, units = channel_spec(measurements, "measurements")
@@ -144,12 +167,12 @@ class StateSpaceCompensator(Controller):
         else:
             self.dt = float(sys.dt)
             if dt is not None:
-                dt = float(require_positive(dt, "dt", "s"))
-                if abs(dt - self.dt) > DT_TOL * self.dt:
+                period = float(require_positive(dt, "dt", "s"))
+                if abs(period - self.dt) > DT_TOL * self.dt:
                     raise FieldError(
                         "system.dt",
                         f"the discrete system samples every {self.dt:g} "
-                        f"s, the control period dt is {dt:g} s",
+                        f"s, the control period dt is {period:g} s",
                     )
         self.matrices = (A, B, C, D)
         self.r = reference_histories(references, names, sizes, units)
@@ -158,13 +181,15 @@ class StateSpaceCompensator(Controller):
     def n_states(self) -> int:
         return self.matrices[0].shape[0]
 
-    def _batched(self):
+    def _batched(self) -> list[tuple[int, ...]]:
         return [(self.r.shape[0],)]
 
-    def initial_state(self, n_cases: int) -> dict[str, np.ndarray]:
+    def initial_state(self, n_cases: int) -> dict[str, FloatArray]:
         return {"x": np.zeros((n_cases, self.n_states)), "t": np.full(n_cases, np.nan)}
 
-    def __call__(self, t, y, state):
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[FloatArray | dict[str, FloatArray], dict[str, FloatArray]]:
         x = np.asarray(state["x"], float)
         nc = x.shape[0]
         t_prev = np.asarray(state["t"], float)
@@ -183,22 +208,22 @@ class StateSpaceCompensator(Controller):
         commands = split_channels(u, self.writes, self.write_sizes)
         return (commands[self.writes[0]] if len(self.writes) == 1 else commands), out
 
-    def linear_form(self, dt, times, n_cases):
+    def linear_form(self, dt: float, times: npt.ArrayLike, n_cases: int) -> LinearLaw:
         """Constant matrices (Φ, Γ, C, D), y_ref = r, no feedforward, x₀ = 0."""
-        dt, times = sample_times(dt, times)
-        if abs(dt - self.dt) > DT_TOL * self.dt:
+        period, grid = sample_times(dt, times)
+        if abs(period - self.dt) > DT_TOL * self.dt:
             raise FieldError(
                 "dt",
                 f"the compensator runs at a period of {self.dt:g} s, the run "
-                f"samples every {dt:g} s",
+                f"samples every {period:g} s",
             )
         if self.r.shape[0] not in (1, n_cases):
             raise FieldError(
                 "references", f"have {self.r.shape[0]} cases, the run has n_cases = {n_cases}"
             )
         A, B, C, D = (M[None, None] for M in self.matrices)
-        y_ref = np.broadcast_to(self.r, (len(times),) + self.r.shape)
-        u_ff = np.zeros((len(times), 1, C.shape[2]))
+        y_ref = np.broadcast_to(self.r, (len(grid),) + self.r.shape)
+        u_ff = np.zeros((len(grid), 1, C.shape[2]))
         return LinearLaw(
             A,
             B,

@@ -47,7 +47,9 @@ The measures of the paper: :func:`thrust_index` (∫|F̂|dτ over a grid), :func
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -55,6 +57,11 @@ from flexsat.control.base import Controller
 from flexsat.dynamics.tether import TetherScales, integral_of_motion, require_lengths
 from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 from flexsat.units import holds_quantity
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray, QuantityArrayLike
 
 __all__ = [
     "DecoupledTetherLaw",
@@ -69,59 +76,68 @@ __all__ = [
 MEASUREMENTS = ("length", "pitch", "roll", "length_rate", "pitch_rate", "roll_rate")
 
 
-def thrust_index(tau, thrust) -> np.ndarray:
+def thrust_index(tau: npt.ArrayLike, thrust: npt.ArrayLike) -> FloatArray:
     r"""∫|F̂| dτ over the grid ``tau`` (n_t,) of thrust samples (..., n_t), by the trapezoidal
     rule on |F̂| with each sign change split at its linear zero (so the kink of |F̂| costs no
     accuracy beyond the rule's O(Δτ²)). Multiply by mΩL (:attr:`TetherScales.impulse`) for
     N s."""
-    tau = require_finite(tau, "tau")
+    grid = require_finite(tau, "tau")
     F = require_finite(thrust, "thrust")
-    if tau.ndim != 1 or F.shape[-1] != tau.size or np.any(np.diff(tau) <= 0):
+    if grid.ndim != 1 or F.shape[-1] != grid.size or np.any(np.diff(grid) <= 0):
         raise FieldError(
             "tau",
             "must be an increasing grid matching thrust's last axis, got "
-            f"{tau.shape} and {F.shape}",
+            f"{grid.shape} and {F.shape}",
         )
-    a, b, h = F[..., :-1], F[..., 1:], np.diff(tau)
+    a, b, h = F[..., :-1], F[..., 1:], np.diff(grid)
     same = a * b >= 0
     with np.errstate(divide="ignore", invalid="ignore"):
         crossing = (a * a + b * b) / (2 * (np.abs(a) + np.abs(b)))
     return np.sum(np.where(same, 0.5 * (np.abs(a) + np.abs(b)), crossing) * h, axis=-1)
 
 
-def liapunov_coupled(x, K1, K2, lambda_r) -> np.ndarray:
+def liapunov_coupled(
+    x: npt.ArrayLike,
+    K1: float | npt.ArrayLike,
+    K2: float | npt.ArrayLike,
+    lambda_r: float | npt.ArrayLike,
+) -> FloatArray:
     r"""V of Eq. 16 (with θ'² for the printed θ², a misprint) at x = [λ, θ, φ, λ', θ', φ']:
     ½[λ'² + K1(λ − λr)² + (K2 + λ²)·2V1]."""
-    x = np.asarray(x, float)
-    V1 = integral_of_motion(x[..., 1], x[..., 2], x[..., 4], x[..., 5])
-    lam = x[..., 0]
-    return 0.5 * (x[..., 3] ** 2 + K1 * (lam - lambda_r) ** 2) + (K2 + lam**2) * V1
+    s = np.asarray(x, float)
+    k1, k2, lr = (np.asarray(v, float) for v in (K1, K2, lambda_r))
+    V1 = integral_of_motion(s[..., 1], s[..., 2], s[..., 4], s[..., 5])
+    lam = s[..., 0]
+    return 0.5 * (s[..., 3] ** 2 + k1 * (lam - lr) ** 2) + (k2 + lam**2) * V1
 
 
 class _TetherLaw(Controller):
     """Shared plumbing: gains as arrays, SI ↔ nondimensional through the plant's scales."""
 
-    reads = MEASUREMENTS
-    writes = ("tension", "thrust")
+    reads: tuple[str, ...] = MEASUREMENTS
+    writes: tuple[str, ...] = ("tension", "thrust")
     _gain_names: tuple[str, ...] = ()
+    #: λ_f, nondimensional (set from the gains)
+    final_length: FloatArray
 
-    def __init__(self, scales: TetherScales | None, **gains):
+    def __init__(self, scales: TetherScales | None, **gains: QuantityArrayLike) -> None:
         self.scales = TetherScales() if scales is None else scales
         if not isinstance(self.scales, TetherScales):
             raise FieldError("scales", f"must be a TetherScales, got {type(scales).__name__}")
-        for name, value in gains.items():
-            if name == "final_length" and holds_quantity(value, strings=True):
+        for name, given in gains.items():
+            value = given
+            if name == "final_length" and holds_quantity(given, strings=True):
                 # a length with units ("200 m"): λf = l_f / L
-                value = require_positive(value, name, "m") / self.scales.length
+                value = require_positive(given, name, "m") / self.scales.length
             check = require_positive if name in ("K1", "final_length") else require_nonneg
             setattr(self, name, check(value, name))
         require_lengths(self.final_length, "final_length")
         self.target = self.final_length
 
-    def _batched(self):
+    def _batched(self) -> list[tuple[int, ...]]:
         return [np.shape(getattr(self, n)) for n in self._gain_names]
 
-    def _state(self, y: Mapping[str, np.ndarray]) -> np.ndarray:
+    def _state(self, y: Mapping[str, FloatArray]) -> FloatArray:
         s = self.scales
         return np.stack(
             [
@@ -135,7 +151,13 @@ class _TetherLaw(Controller):
             -1,
         )
 
-    def __call__(self, t, y, state):
+    @abstractmethod
+    def nondimensional(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The law's two commands, nondimensional, at nondimensional states x (..., 6)."""
+
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[dict[str, FloatArray], dict[str, FloatArray]]:
         u, F = self.nondimensional(self._state(y))
         s = self.scales
         first = u * (s.force if self.writes[0] == "tension" else s.speed)
@@ -163,12 +185,23 @@ class DecoupledTetherLaw(_TetherLaw):
     """
 
     _gain_names = ("K1", "K2", "K3", "final_length")
+    K1: FloatArray
+    K2: FloatArray
+    K3: FloatArray
 
-    def __init__(self, K1, K2, K3, final_length, scales=None, printed_sign: bool = False):
+    def __init__(
+        self,
+        K1: float | npt.ArrayLike,
+        K2: float | npt.ArrayLike,
+        K3: float | npt.ArrayLike,
+        final_length: QuantityArrayLike,
+        scales: TetherScales | None = None,
+        printed_sign: bool = False,
+    ) -> None:
         super().__init__(scales, K1=K1, K2=K2, K3=K3, final_length=final_length)
         self.printed_sign = bool(printed_sign)
 
-    def nondimensional(self, x):
+    def nondimensional(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(T̂, F̂) of Eqs. 14-15 at nondimensional states x (..., 6)."""
         lam, ph, dl, dth, dph = x[..., 0], x[..., 2], x[..., 3], x[..., 4], x[..., 5]
         K1, K2, K3, lf = self.K1, self.K2, self.K3, self.final_length
@@ -201,18 +234,30 @@ class CoupledTetherLaw(_TetherLaw):
     """
 
     _gain_names = ("K1", "K2", "K3", "K4", "final_length")
+    K1: FloatArray
+    K2: FloatArray
+    K3: FloatArray
+    K4: FloatArray
 
-    def __init__(self, K1, K2, K3, K4, final_length, scales=None):
+    def __init__(
+        self,
+        K1: float | npt.ArrayLike,
+        K2: float | npt.ArrayLike,
+        K3: float | npt.ArrayLike,
+        K4: float | npt.ArrayLike,
+        final_length: QuantityArrayLike,
+        scales: TetherScales | None = None,
+    ) -> None:
         super().__init__(scales, K1=K1, K2=K2, K3=K3, K4=K4, final_length=final_length)
 
-    def nondimensional(self, x):
+    def nondimensional(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(T̂, F̂) of Eqs. 18 and 20 at nondimensional states x (..., 6)."""
         lam, ph, dl, dth, dph = x[..., 0], x[..., 2], x[..., 3], x[..., 4], x[..., 5]
         W = dth * (1 + dth) * np.cos(ph) ** 2 + dph * dph
         T = 3 * lam + self.K1 * (lam - self.final_length) - 2 * self.K2 * W / lam + self.K3 * dl
         return T, -self.K4 * lam * dph
 
-    def liapunov(self, x) -> np.ndarray:
+    def liapunov(self, x: npt.ArrayLike) -> FloatArray:
         """V of Eq. 16 along nondimensional states x (..., 6)."""
         return liapunov_coupled(x, self.K1, self.K2, self.final_length)
 
@@ -235,16 +280,26 @@ class TetherRateLaw(_TetherLaw):
     reads = ("length", "pitch", "roll", "pitch_rate", "roll_rate")
     writes = ("reel_rate", "thrust")
     _gain_names = ("K1", "K2", "K3", "final_length")
+    K1: FloatArray
+    K2: FloatArray
+    K3: FloatArray
 
-    def __init__(self, K1, K2, K3, final_length, scales=None):
+    def __init__(
+        self,
+        K1: float | npt.ArrayLike,
+        K2: float | npt.ArrayLike,
+        K3: float | npt.ArrayLike,
+        final_length: QuantityArrayLike,
+        scales: TetherScales | None = None,
+    ) -> None:
         super().__init__(scales, K1=K1, K2=K2, K3=K3, final_length=final_length)
 
-    def _state(self, y):
-        y = dict(y)
-        y["length_rate"] = np.zeros(np.shape(y["length"]))  # the law sets it; not read
-        return super()._state(y)
+    def _state(self, y: Mapping[str, FloatArray]) -> FloatArray:
+        measured = dict(y)
+        measured["length_rate"] = np.zeros(np.shape(y["length"]))  # the law sets it; not read
+        return super()._state(measured)
 
-    def nondimensional(self, x):
+    def nondimensional(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(λ', F̂) of Eqs. 24-25 at nondimensional states x (..., 6); x[..., 3] is unused."""
         lam, ph, dth, dph = x[..., 0], x[..., 2], x[..., 4], x[..., 5]
         W = dth * (1 + dth) * np.cos(ph) ** 2 + dph * dph

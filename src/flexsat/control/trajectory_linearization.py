@@ -79,6 +79,9 @@ modes): Eq. 31 without the translational block, which free-free elastic modes do
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from flexsat.dynamics.attitude import quaternion_multiply
@@ -87,6 +90,12 @@ from flexsat.dynamics.rigid_body import cross3, matvec
 from flexsat.dynamics.rigid_spacecraft import quaternion_kinematics, skew
 from flexsat.input_checks import FieldError, require_finite, require_positive
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.control.base import RigidNominal
+    from flexsat.units import FloatArray, QuantityArrayLike
+
 __all__ = ["TrajectoryLinearization", "attitude_error"]
 
 #: |β| − 1 accepted from a nominal (a propagated or solved trajectory keeps the norm to round-off
@@ -94,11 +103,11 @@ __all__ = ["TrajectoryLinearization", "attitude_error"]
 _UNIT_TOL = 1e-9
 
 
-def _conjugate(beta: np.ndarray) -> np.ndarray:
+def _conjugate(beta: FloatArray) -> FloatArray:
     return beta * np.array([1.0, -1.0, -1.0, -1.0])
 
 
-def attitude_error(beta, beta_nominal) -> np.ndarray:
+def attitude_error(beta: npt.ArrayLike, beta_nominal: npt.ArrayLike) -> FloatArray:
     r"""Body-frame attitude error δα = 2 δq_v (δq₀ ≥ 0) with δq = β ⊗ β_n* (module docstring).
 
     Parameters
@@ -115,7 +124,7 @@ def attitude_error(beta, beta_nominal) -> np.ndarray:
     return np.where(dq[..., :1] < 0, -2.0, 2.0) * dq[..., 1:]
 
 
-def _require_nominal(nominal) -> float:
+def _require_nominal(nominal: RigidNominal) -> float:
     missing = [
         name for name in ("beta", "omega", "torque", "duration") if not hasattr(nominal, name)
     ]
@@ -152,7 +161,12 @@ class TrajectoryLinearization:
         T of the nominal, s.
     """
 
-    def __init__(self, plant, nominal, forces=()):
+    def __init__(
+        self,
+        plant: FlexibleSpacecraft,
+        nominal: RigidNominal,
+        forces: str | Sequence[str] = (),
+    ) -> None:
         if not isinstance(plant, FlexibleSpacecraft):
             raise FieldError("plant", f"must be a FlexibleSpacecraft, got {type(plant).__name__}")
         if plant.translation:
@@ -170,9 +184,8 @@ class TrajectoryLinearization:
                 raise FieldError(
                     "forces", f"must be 'all' or a sequence of force channel names, got {forces!r}"
                 )
-            forces = names
-        chosen = []
-        for name in forces:
+        chosen: list[str] = []
+        for name in names if isinstance(forces, str) else forces:
             if name not in names:
                 raise FieldError(
                     name,
@@ -190,23 +203,25 @@ class TrajectoryLinearization:
         self.n_states = 6 + 2 * plant.n_modes
         self.n_inputs = 3 + len(chosen)
         self.inertia = plant.inertia
-        self._inertia_inverse = np.linalg.inv(plant.inertia)
+        self._inertia_inverse = np.linalg.inv(plant.inertia).astype(np.float64, copy=False)
 
     # -- the nominal -------------------------------------------------------------------------
-    def nominal_at(self, t):
+    def nominal_at(
+        self, t: QuantityArrayLike
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         r"""(β_n, ω_n, τ_n, ω̇_n) at times t (any shape; held beyond [0, T]), shapes
         t.shape + (4,), (3,), (3,), (3,); ω̇_n from the rigid Euler equation (module
         docstring)."""
-        t = np.clip(require_finite(t, "t", "s"), 0.0, self.duration)
-        beta = np.asarray(self.nominal.beta(t), float)
-        w = np.asarray(self.nominal.omega(t), float)
-        tau = np.asarray(self.nominal.torque(t), float)
+        held = np.clip(require_finite(t, "t", "s"), 0.0, self.duration)
+        beta = np.asarray(self.nominal.beta(held), float)
+        w = np.asarray(self.nominal.omega(held), float)
+        tau = np.asarray(self.nominal.torque(held), float)
         for field, value, width in (("beta", beta, 4), ("omega", w, 3), ("torque", tau, 3)):
-            if value.shape != t.shape + (width,) or not np.all(np.isfinite(value)):
+            if value.shape != held.shape + (width,) or not np.all(np.isfinite(value)):
                 raise FieldError(
                     f"nominal.{field}",
                     "must return finite values of shape "
-                    f"{t.shape + (width,)} at times of shape {t.shape}, got "
+                    f"{held.shape + (width,)} at times of shape {held.shape}, got "
                     f"{value.shape}",
                 )
         norm = np.abs(np.linalg.norm(beta, axis=-1) - 1.0)
@@ -221,7 +236,14 @@ class TrajectoryLinearization:
         return beta, w, tau, w_dot
 
     # -- coordinates -------------------------------------------------------------------------
-    def _plant_point(self, beta_n, w_n, tau_n, dX, du):
+    def _plant_point(
+        self,
+        beta_n: FloatArray,
+        w_n: FloatArray,
+        tau_n: FloatArray,
+        dX: FloatArray,
+        du: FloatArray,
+    ) -> tuple[FloatArray, FloatArray]:
         """Plant state and input (..., n_x), (..., m_plant) of perturbation (δX, δu)."""
         n = self.n_modes
         half = 0.5 * dX[..., :3]
@@ -236,28 +258,28 @@ class TrajectoryLinearization:
         u[..., self._columns[3:]] = du[..., 3:]
         return x, u
 
-    def state(self, t, dX) -> np.ndarray:
+    def state(self, t: QuantityArrayLike, dX: npt.ArrayLike) -> FloatArray:
         """Plant state x (..., 7 + 2n) of perturbation δX (..., 6 + 2n) at times t (|δα| < 2)."""
         beta_n, w_n, tau_n, _ = self.nominal_at(t)
-        dX = require_finite(dX, "dX")
-        self._check_width(dX, self.n_states, "dX")
-        return self._plant_point(beta_n, w_n, tau_n, dX, np.zeros(self.n_inputs))[0]
+        dx = require_finite(dX, "dX")
+        self._check_width(dx, self.n_states, "dX")
+        return self._plant_point(beta_n, w_n, tau_n, dx, np.zeros(self.n_inputs))[0]
 
     @staticmethod
-    def _check_width(value, width: int, field: str) -> None:
+    def _check_width(value: FloatArray, width: int, field: str) -> None:
         if value.ndim < 1 or value.shape[-1] != width:
             raise FieldError(field, f"last axis must have {width} entries, got shape {value.shape}")
 
     # -- dynamics ----------------------------------------------------------------------------
-    def rhs(self, t, dX, du) -> np.ndarray:
+    def rhs(self, t: QuantityArrayLike, dX: npt.ArrayLike, du: npt.ArrayLike) -> FloatArray:
         r"""Nonlinear perturbation dynamics :math:`\delta\dot X(t, \delta X, \delta u)`: the
         plant's right-hand side at (x, u) of the perturbation, minus the nominal's rates, with
         the exact error-quaternion kinematics for δα (module docstring); (..., 6 + 2n)."""
         beta_n, w_n, tau_n, w_dot_n = self.nominal_at(t)
-        dX, du = require_finite(dX, "dX"), require_finite(du, "du")
-        self._check_width(dX, self.n_states, "dX")
-        self._check_width(du, self.n_inputs, "du")
-        x, u = self._plant_point(beta_n, w_n, tau_n, dX, du)
+        dx, dv = require_finite(dX, "dX"), require_finite(du, "du")
+        self._check_width(dx, self.n_states, "dX")
+        self._check_width(dv, self.n_inputs, "du")
+        x, u = self._plant_point(beta_n, w_n, tau_n, dx, dv)
         x_dot = self.plant.rhs(x, u)
         beta_n_dot = quaternion_kinematics(beta_n, w_n)
         # δq = β ⊗ β_n*, differentiated as a bilinear product
@@ -271,12 +293,12 @@ class TrajectoryLinearization:
         out[..., 6:] = x_dot[..., 7:]
         return out
 
-    def disturbance(self, t) -> np.ndarray:
+    def disturbance(self, t: QuantityArrayLike) -> FloatArray:
         """d(t) = δẊ at δX = 0, δu = 0 (module docstring, Eq. 31), shape t.shape + (6 + 2n,)."""
-        t = require_finite(t, "t", "s")
-        return self.rhs(t, np.zeros(t.shape + (self.n_states,)), np.zeros(self.n_inputs))
+        tt = require_finite(t, "t", "s")
+        return self.rhs(tt, np.zeros(tt.shape + (self.n_states,)), np.zeros(self.n_inputs))
 
-    def jacobians(self, t):
+    def jacobians(self, t: QuantityArrayLike) -> tuple[FloatArray, FloatArray]:
         r"""Analytic (A(t), B(t)) of the perturbation dynamics (module docstring) at times t:
         shapes t.shape + (6 + 2n, 6 + 2n) and t.shape + (6 + 2n, 3 + n_F); B's torque columns
         per normalized torque (J applied)."""

@@ -72,7 +72,9 @@ import numpy.typing as npt
 from scipy import stats
 from scipy.stats import qmc
 
+from flexsat import limits
 from flexsat.input_checks import require_count
+from flexsat.limits import check_count
 from flexsat.units import (
     FloatArray,
     QuantityArrayLike,
@@ -446,6 +448,7 @@ class GridAxis:
         if not lo < hi:
             raise ValueError(f"{f}: low must be < high, got low={low!r}, high={high!r}")
         count = require_count(n, f"{f}.n")
+        check_count(count, limits.MAX_CASES, f"{f}.n", "grid points on one axis")
         if count < 2:
             raise ValueError(
                 f"{f}.n: a linspace needs n >= 2 (give one value as values: [x]), got {n!r}"

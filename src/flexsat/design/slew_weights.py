@@ -343,6 +343,8 @@ class SlewEvaluation:
     n_points : int
         Linearisation times of the gain schedule.
 
+    Notes
+    -----
     Calling it with weights, ω_B, ζ_B, forces, decoupling and feedforward returns the metrics
     of :func:`slew_run_metrics` as floats, plus ``peak_nominal_torque_Nm`` and
     ``deflection_ratio_goal`` (what :func:`slew_objective` needs).

@@ -18,9 +18,16 @@ Every function takes arrays whose last axis (or two) is the representation, ``(.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from flexsat.input_checks import require_numeric
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray
 
 __all__ = [
     "require_shape",
@@ -58,7 +65,7 @@ UNIT_TOL = 1e-9
 SINGULAR_TOL = 1e-8
 
 
-def require_shape(value, field: str, shape: tuple[int, ...]) -> np.ndarray:
+def require_shape(value: npt.ArrayLike, field: str, shape: tuple[int, ...]) -> FloatArray:
     """``value`` as a finite float array whose trailing axes are ``shape``."""
     arr = require_numeric(value, field)
     if arr.ndim < len(shape) or arr.shape[arr.ndim - len(shape) :] != shape:
@@ -69,7 +76,7 @@ def require_shape(value, field: str, shape: tuple[int, ...]) -> np.ndarray:
     return arr
 
 
-def case_shape(**fields) -> tuple[int, ...]:
+def case_shape(**fields: tuple[int, ...]) -> tuple[int, ...]:
     """The common leading (case) shape of the named arrays' leading axes, or a clear error."""
     try:
         return np.broadcast_shapes(*fields.values())
@@ -80,7 +87,7 @@ def case_shape(**fields) -> tuple[int, ...]:
         ) from None
 
 
-def require_quaternion(beta, field: str = "beta") -> np.ndarray:
+def require_quaternion(beta: npt.ArrayLike, field: str = "beta") -> FloatArray:
     """``beta`` as a float array (..., 4) of unit Euler parameters (to :data:`UNIT_TOL`)."""
     b = require_shape(beta, field, (4,))
     err = np.abs(np.linalg.norm(b, axis=-1) - 1.0)
@@ -92,7 +99,7 @@ def require_quaternion(beta, field: str = "beta") -> np.ndarray:
     return b
 
 
-def _dcm(dcm, field: str = "dcm") -> np.ndarray:
+def _dcm(dcm: npt.ArrayLike, field: str = "dcm") -> FloatArray:
     C = require_shape(dcm, field, (3, 3))
     err = np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)).max(axis=(-2, -1), initial=0.0)
     if np.any(err > UNIT_TOL):
@@ -105,7 +112,7 @@ def _dcm(dcm, field: str = "dcm") -> np.ndarray:
     return C
 
 
-def cross_matrix(v) -> np.ndarray:
+def cross_matrix(v: npt.ArrayLike) -> FloatArray:
     r"""The skew-symmetric matrix :math:`[\tilde v]` with :math:`[\tilde v] x = v \times x`.
 
     Parameters
@@ -124,7 +131,7 @@ def cross_matrix(v) -> np.ndarray:
     )
 
 
-def omega_matrix(w) -> np.ndarray:
+def omega_matrix(w: npt.ArrayLike) -> FloatArray:
     r"""Ω(ω) of the Euler-parameter kinematics :math:`\dot\beta = \Omega(\omega)\beta`
     (seed 003 Eq. 11; Schaub & Junkins Eq. 3.104), the ½ included:
 
@@ -150,7 +157,7 @@ def omega_matrix(w) -> np.ndarray:
     return 0.5 * np.stack([np.stack(r, -1) for r in rows], -2)
 
 
-def quaternion_rate_matrix(beta) -> np.ndarray:
+def quaternion_rate_matrix(beta: npt.ArrayLike) -> FloatArray:
     r"""B(β) with :math:`\dot\beta = B(\beta)\,\omega = \Omega(\omega)\beta` (seed 003 §2.2,
     Schaub & Junkins Eq. 3.104), the ½ included:
 
@@ -175,7 +182,7 @@ def quaternion_rate_matrix(beta) -> np.ndarray:
     return 0.5 * np.stack([np.stack(r, -1) for r in rows], -2)
 
 
-def quaternion_to_dcm(beta) -> np.ndarray:
+def quaternion_to_dcm(beta: npt.ArrayLike) -> FloatArray:
     r"""Direction cosine matrix C(β), :math:`v_B = C v_N` (Schaub & Junkins Eq. 3.98):
 
     .. math::
@@ -208,7 +215,7 @@ def quaternion_to_dcm(beta) -> np.ndarray:
     return np.stack([np.stack(r, -1) for r in rows], -2)
 
 
-def dcm_to_quaternion(dcm) -> np.ndarray:
+def dcm_to_quaternion(dcm: npt.ArrayLike) -> FloatArray:
     r"""Euler parameters of a rotation matrix by Shepperd's method (Shepperd 1978, J. Guidance
     Control 1(3); Schaub & Junkins Eqs. 3.94–3.96), with :math:`\beta_0 \ge 0`.
 
@@ -266,7 +273,7 @@ def dcm_to_quaternion(dcm) -> np.ndarray:
     return np.where(beta[..., :1] < 0, -beta, beta)
 
 
-def _axis_rotation(angle: np.ndarray, axis: int) -> np.ndarray:
+def _axis_rotation(angle: FloatArray, axis: int) -> FloatArray:
     """R_axis(θ): the frame rotation about body axis ``axis`` (0, 1, 2), shape (..., 3, 3)."""
     c, s = np.cos(angle), np.sin(angle)
     R = np.zeros(angle.shape + (3, 3))
@@ -282,7 +289,7 @@ def _axis_rotation(angle: np.ndarray, axis: int) -> np.ndarray:
     return R
 
 
-def euler123_to_dcm(angles) -> np.ndarray:
+def euler123_to_dcm(angles: npt.ArrayLike) -> FloatArray:
     r"""C of the 1-2-3 Euler angles, :math:`C = R_3(\theta_3) R_2(\theta_2) R_1(\theta_1)`
     (seed 003 §1.3; Schaub & Junkins Table B.1).
 
@@ -303,7 +310,7 @@ def euler123_to_dcm(angles) -> np.ndarray:
     )
 
 
-def euler123_to_quaternion(angles) -> np.ndarray:
+def euler123_to_quaternion(angles: npt.ArrayLike) -> FloatArray:
     r"""Euler parameters of the 1-2-3 Euler angles as the product of the three elementary
     rotations, :math:`\beta = \beta_3(\theta_3) \otimes \beta_2(\theta_2) \otimes
     \beta_1(\theta_1)` with :math:`\beta_k(\theta) = [\cos(\theta/2), \sin(\theta/2)\,e_k]`
@@ -333,7 +340,7 @@ def euler123_to_quaternion(angles) -> np.ndarray:
     return quaternion_multiply(q3, quaternion_multiply(q2, q1))
 
 
-def dcm_to_euler123(dcm) -> np.ndarray:
+def dcm_to_euler123(dcm: npt.ArrayLike) -> FloatArray:
     r"""1-2-3 Euler angles of C (Schaub & Junkins Table B.1):
     :math:`\theta_1 = \operatorname{atan2}(-C_{32}, C_{33})`,
     :math:`\theta_2 = \operatorname{atan2}(C_{31}, \sqrt{C_{11}^2 + C_{21}^2})`,
@@ -364,7 +371,7 @@ def dcm_to_euler123(dcm) -> np.ndarray:
     )
 
 
-def principal_rotation_to_quaternion(axis, angle) -> np.ndarray:
+def principal_rotation_to_quaternion(axis: npt.ArrayLike, angle: npt.ArrayLike) -> FloatArray:
     r"""Euler parameters of the rotation ``angle`` about the unit ``axis`` (seed 003 Eqs. 9–10):
     :math:`\beta_0 = \cos(\phi/2)`, :math:`\beta_i = l_i \sin(\phi/2)`.
 
@@ -392,7 +399,7 @@ def principal_rotation_to_quaternion(axis, angle) -> np.ndarray:
     return np.concatenate([np.cos(half)[..., None], ax * np.sin(half)[..., None]], -1)
 
 
-def quaternion_to_principal_rotation(beta) -> tuple[np.ndarray, np.ndarray]:
+def quaternion_to_principal_rotation(beta: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
     r"""Principal axis l and angle :math:`\phi = 2\,\operatorname{atan2}(\|\beta_{1:3}\|,
     \beta_0) \in [0, 2\pi]` (atan2 keeps φ accurate near 0 and π, where arccos β0 does not).
 
@@ -415,7 +422,7 @@ def quaternion_to_principal_rotation(beta) -> tuple[np.ndarray, np.ndarray]:
     return axis, angle
 
 
-def quaternion_multiply(second, first) -> np.ndarray:
+def quaternion_multiply(second: npt.ArrayLike, first: npt.ArrayLike) -> FloatArray:
     r"""Composition of two rotations, ``first`` then ``second``: the Euler parameters β of
     :math:`C(\beta) = C(\beta'')\,C(\beta')` with β'' = ``second``, β' = ``first``
     (Schaub & Junkins Eq. 3.105; e.g. β(F/N) = β(F/B) ⊗ β(B/N)):
@@ -455,7 +462,7 @@ def quaternion_multiply(second, first) -> np.ndarray:
     )
 
 
-def quaternion_exp(theta) -> np.ndarray:
+def quaternion_exp(theta: npt.ArrayLike) -> FloatArray:
     r"""Euler parameters of the rotation vector θ (axis θ/‖θ‖, angle ‖θ‖):
     :math:`[\cos(\|\theta\|/2), \operatorname{sinc}\cdot\theta/2]`, with the sinc evaluated
     by numpy (exact at θ = 0, no 0/0). For constant ω, β(t) = exp(ω t) ⊗ β(0).
@@ -477,7 +484,7 @@ def quaternion_exp(theta) -> np.ndarray:
     )
 
 
-def quaternion_to_gibbs(beta) -> np.ndarray:
+def quaternion_to_gibbs(beta: npt.ArrayLike) -> FloatArray:
     r"""Classical Rodrigues (Gibbs) parameters :math:`q_i = \beta_i / \beta_0 =
     l_i \tan(\phi/2)` (Schaub & Junkins Eq. 3.112).
 
@@ -496,7 +503,7 @@ def quaternion_to_gibbs(beta) -> np.ndarray:
     return b[..., 1:] / b0[..., None]
 
 
-def gibbs_to_quaternion(q) -> np.ndarray:
+def gibbs_to_quaternion(q: npt.ArrayLike) -> FloatArray:
     r"""Euler parameters of Gibbs parameters, β0 > 0 (Schaub & Junkins Eq. 3.113):
     :math:`\beta_0 = 1/\sqrt{1 + q^Tq}`, :math:`\beta_i = q_i/\sqrt{1 + q^Tq}`.
     """
@@ -505,7 +512,7 @@ def gibbs_to_quaternion(q) -> np.ndarray:
     return np.concatenate([s, q * s], -1)
 
 
-def quaternion_to_mrp(beta) -> np.ndarray:
+def quaternion_to_mrp(beta: npt.ArrayLike) -> FloatArray:
     r"""Modified Rodrigues parameters :math:`\sigma_i = \beta_i / (1 + \beta_0) =
     l_i \tan(\phi/4)` (Schaub & Junkins Eq. 3.142); |σ| <= 1 for β0 >= 0.
 
@@ -524,7 +531,7 @@ def quaternion_to_mrp(beta) -> np.ndarray:
     return b[..., 1:] / den[..., None]
 
 
-def mrp_to_quaternion(sigma) -> np.ndarray:
+def mrp_to_quaternion(sigma: npt.ArrayLike) -> FloatArray:
     r"""Euler parameters of MRPs (Schaub & Junkins Eq. 3.144):
     :math:`\beta_0 = (1 - \sigma^T\sigma)/(1 + \sigma^T\sigma)`,
     :math:`\beta_i = 2\sigma_i/(1 + \sigma^T\sigma)`.
@@ -534,7 +541,7 @@ def mrp_to_quaternion(sigma) -> np.ndarray:
     return np.concatenate([(1 - s2) / (1 + s2), 2 * s / (1 + s2)], -1)
 
 
-def mrp_shadow(sigma) -> np.ndarray:
+def mrp_shadow(sigma: npt.ArrayLike) -> FloatArray:
     r"""The shadow set :math:`\sigma^S = -\sigma / \sigma^T\sigma` (Schaub & Junkins Eq. 3.151):
     the same attitude, with |σ^S| <= 1 when |σ| >= 1.
 
@@ -550,7 +557,7 @@ def mrp_shadow(sigma) -> np.ndarray:
     return -s / s2[..., None]
 
 
-def gibbs_rate(q, w) -> np.ndarray:
+def gibbs_rate(q: npt.ArrayLike, w: npt.ArrayLike) -> FloatArray:
     r"""Gibbs-parameter kinematics :math:`\dot q = \tfrac12 [I + \tilde q + q q^T]\,\omega`
     (Schaub & Junkins Eq. 3.124).
 
@@ -566,7 +573,7 @@ def gibbs_rate(q, w) -> np.ndarray:
     return 0.5 * (w + np.cross(q, w) + q * np.sum(q * w, axis=-1)[..., None])
 
 
-def mrp_rate(sigma, w) -> np.ndarray:
+def mrp_rate(sigma: npt.ArrayLike, w: npt.ArrayLike) -> FloatArray:
     r"""MRP kinematics :math:`\dot\sigma = \tfrac14 [(1 - \sigma^T\sigma) I + 2\tilde\sigma +
     2\sigma\sigma^T]\,\omega` (Schaub & Junkins Eq. 3.163).
 

@@ -25,33 +25,39 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexsat.input_checks import require_finite
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
+
 #: the paper's pyramid skew angle, 54.74° (L4620), in rad
 SKEW = float(np.deg2rad(54.74))
 
 
-def _require_skew(skew) -> float:
-    value = require_finite(skew, "skew", "rad")
-    if value.ndim != 0:
-        raise ValueError(f"skew: must be a scalar angle, got shape {value.shape}")
-    value = float(value)
+def _require_skew(skew: QuantityLike) -> float:
+    given = require_finite(skew, "skew", "rad")
+    if given.ndim != 0:
+        raise ValueError(f"skew: must be a scalar angle, got shape {given.shape}")
+    value = float(given)
     if not 0.0 < value < np.pi / 2:
         raise ValueError(f"skew: must lie in (0, 90°) (a pyramid), got {np.rad2deg(value):.6g}°")
     return value
 
 
-def _require_units(n_units) -> int:
+def _require_units(n_units: object) -> int:
     if isinstance(n_units, bool) or not isinstance(n_units, (int, np.integer)) or n_units < 3:
         raise ValueError(f"n_units: must be an integer >= 3 (3 units span 3-D), got {n_units!r}")
     return int(n_units)
 
 
 @lru_cache(maxsize=64)
-def _axes(n_units: int, skew: float):
+def _axes(n_units: int, skew: float) -> tuple[FloatArray, FloatArray, FloatArray]:
     phi = 2.0 * np.pi * np.arange(n_units) / n_units
     g = np.stack(
         [np.sin(skew) * np.cos(phi), np.sin(skew) * np.sin(phi), np.full(n_units, np.cos(skew))],
@@ -64,7 +70,9 @@ def _axes(n_units: int, skew: float):
     return g, a, b
 
 
-def pyramid_axes(n_units: int = 4, skew=SKEW):
+def pyramid_axes(
+    n_units: int = 4, skew: QuantityLike = SKEW
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Gimbal axes g, rotor reference directions a (σ = 0) and b = g × a, each ``(n, 3)``.
 
     Parameters
@@ -83,7 +91,7 @@ def pyramid_axes(n_units: int = 4, skew=SKEW):
     return _axes(_require_units(n_units), _require_skew(skew))
 
 
-def _sigma(sigma, n_units):
+def _sigma(sigma: QuantityArrayLike, n_units: int) -> tuple[FloatArray, int]:
     n = _require_units(n_units)
     sig = require_finite(sigma, "sigma", "rad")
     if sig.ndim == 0 or sig.shape[-1] != n:
@@ -91,7 +99,7 @@ def _sigma(sigma, n_units):
     return sig, n
 
 
-def momentum(sigma, skew=SKEW, n_units: int = 4) -> np.ndarray:
+def momentum(sigma: QuantityArrayLike, skew: QuantityLike = SKEW, n_units: int = 4) -> FloatArray:
     """Cluster momentum h(σ) = Σ_i cosσ_i a_i + sinσ_i b_i (the paper's Eq. 1), in
     units of one rotor's momentum; shape ``(..., 3)``."""
     sig, n = _sigma(sigma, n_units)
@@ -99,11 +107,11 @@ def momentum(sigma, skew=SKEW, n_units: int = 4) -> np.ndarray:
     return np.cos(sig) @ a + np.sin(sig) @ b
 
 
-def _unit_momenta(sig, a, b):
+def _unit_momenta(sig: FloatArray, a: FloatArray, b: FloatArray) -> FloatArray:
     return np.cos(sig)[..., :, None] * a + np.sin(sig)[..., :, None] * b
 
 
-def jacobian(sigma, skew=SKEW, n_units: int = 4) -> np.ndarray:
+def jacobian(sigma: QuantityArrayLike, skew: QuantityLike = SKEW, n_units: int = 4) -> FloatArray:
     """C(σ) = ∂h/∂σ, column i = −sinσ_i a_i + cosσ_i b_i = g_i × h_i (Eq. 2); ``(..., 3, n)``."""
     sig, n = _sigma(sigma, n_units)
     _, a, b = _axes(n, _require_skew(skew))
@@ -111,13 +119,15 @@ def jacobian(sigma, skew=SKEW, n_units: int = 4) -> np.ndarray:
     return np.swapaxes(cols, -1, -2)
 
 
-def gain(sigma, skew=SKEW, n_units: int = 4) -> np.ndarray:
+def gain(sigma: QuantityArrayLike, skew: QuantityLike = SKEW, n_units: int = 4) -> FloatArray:
     """The cluster's gain det(C Cᵀ) (§8.2, after Eq. 7); zero exactly at singular σ."""
     c = jacobian(sigma, skew, n_units)
     return np.linalg.det(c @ np.swapaxes(c, -1, -2))
 
 
-def envelope(direction, skew=SKEW, n_units: int = 4):
+def envelope(
+    direction: npt.ArrayLike, skew: QuantityLike = SKEW, n_units: int = 4
+) -> tuple[FloatArray, FloatArray]:
     """The momentum envelope along a direction u: max over σ of uᵀh(σ).
 
     Each unit's momentum turns in the plane normal to its gimbal axis, so uᵀh_i is largest when
@@ -167,14 +177,16 @@ class Singularity:
     envelope along u. ``margin``: envelope(u) − uᵀh (zero at an external singularity).
     """
 
-    singular: np.ndarray
-    internal: np.ndarray
-    direction: np.ndarray
-    signs: np.ndarray
-    margin: np.ndarray
+    singular: npt.NDArray[np.bool_]
+    internal: npt.NDArray[np.bool_]
+    direction: FloatArray
+    signs: npt.NDArray[np.int_]
+    margin: FloatArray
 
 
-def classify_singularity(sigma, skew=SKEW, n_units: int = 4, threshold: float = 1e-6):
+def classify_singularity(
+    sigma: QuantityArrayLike, skew: QuantityLike = SKEW, n_units: int = 4, threshold: float = 1e-6
+) -> Singularity:
     """Singularity detection and classification (§8.2–§8.3, F23).
 
     At a singular σ every column g_i × h_i of C is normal to the singular direction u, so each
@@ -211,7 +223,13 @@ def classify_singularity(sigma, skew=SKEW, n_units: int = 4, threshold: float = 
     return Singularity(singular, internal, u, signs, margin)
 
 
-def steering_rates(sigma, torque, skew=SKEW, n_units: int = 4, alpha: float = 0.0):
+def steering_rates(
+    sigma: QuantityArrayLike,
+    torque: npt.ArrayLike,
+    skew: QuantityLike = SKEW,
+    n_units: int = 4,
+    alpha: float = 0.0,
+) -> FloatArray:
     """Gimbal rates σ̇ = Cᵀ(CCᵀ + αI)⁻¹ ḣ_cmd with ḣ_cmd = −torque (§8.2 Eq. 7; α > 0 is the
     singularity-robust inverse of Nakamura & Hanafusa, §8.5 Eq. 17).
 
@@ -242,7 +260,9 @@ def steering_rates(sigma, torque, skew=SKEW, n_units: int = 4, alpha: float = 0.
     return steer(sig, tq, a, b, al)
 
 
-def steer(sig, torque, a, b, alpha):
+def steer(
+    sig: FloatArray, torque: FloatArray, a: FloatArray, b: FloatArray, alpha: float
+) -> FloatArray:
     """Unchecked kernel of :func:`steering_rates` (for plants that check once): ``sig``
     (..., n) rad, ``torque`` (..., 3), axes ``a``, ``b`` of :func:`pyramid_axes`, α >= 0."""
     c = np.swapaxes(-np.sin(sig)[..., :, None] * a + np.cos(sig)[..., :, None] * b, -1, -2)
@@ -272,10 +292,10 @@ class GimbalRun:
     momenta ``h`` (n_t, 3), ``singular`` (the run stopped on det(CCᵀ) = threshold) and the
     gain there ``gain`` (n_t,)."""
 
-    t: np.ndarray
-    sigma: np.ndarray
-    h: np.ndarray
-    gain: np.ndarray
+    t: FloatArray
+    sigma: FloatArray
+    h: FloatArray
+    gain: FloatArray
     singular: bool
 
 
@@ -313,7 +333,7 @@ PREFERRED_SETS = (
 )
 
 
-def preferred_set(direction) -> np.ndarray:
+def preferred_set(direction: npt.ArrayLike) -> FloatArray:
     """The stored preferred set (:data:`PREFERRED_SETS`) whose direction is nearest to the
     demand direction u (largest cosine), rad ``(4,)``; for the paper's pyramid only (other
     clusters: :func:`flexsat.cases.cmg_pyramid.preferred_angles`)."""
@@ -326,15 +346,15 @@ def preferred_set(direction) -> np.ndarray:
 
 
 def steering_with_null_motion(
-    sigma,
-    torque,
-    sigma_target,
-    gain_k: float = 1.0,
-    skew=SKEW,
+    sigma: QuantityArrayLike,
+    torque: npt.ArrayLike,
+    sigma_target: QuantityArrayLike,
+    gain_k: QuantityLike = 1.0,
+    skew: QuantityLike = SKEW,
     n_units: int = 4,
     alpha: float = 0.0,
     null_alpha: float = 0.0,
-) -> np.ndarray:
+) -> FloatArray:
     """Torque steering with null motion beside it: σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque) + τ k(σ_f − σ)
     (§8.2 Eq. 7 plus §8.5 Eq. 13–15; the paper's conclusion that "the reorientation law may
     need to run alongside the torque law", L4758–L4764).
@@ -355,7 +375,9 @@ def steering_with_null_motion(
     return rates + np.einsum("...ij,...j->...i", tau, k * (target - sig))
 
 
-def null_projector(sigma, skew=SKEW, n_units: int = 4, alpha: float = 0.0) -> np.ndarray:
+def null_projector(
+    sigma: QuantityArrayLike, skew: QuantityLike = SKEW, n_units: int = 4, alpha: float = 0.0
+) -> FloatArray:
     """τ = I − Cᵀ(CCᵀ + αI)⁻¹C (§8.5 Eq. 14; α > 0: Eq. 17, the singularity-robust form).
 
     With α = 0, τ is the orthogonal projector onto the null space of C (τ² = τ, Cτ = 0): gimbal

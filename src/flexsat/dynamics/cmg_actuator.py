@@ -36,6 +36,7 @@ inertia are neglected, as in the paper (§8.1, L4584).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -52,6 +53,11 @@ from flexsat.dynamics.rigid_spacecraft import (
 )
 from flexsat.input_checks import require_finite
 from flexsat.units import to_si_array
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
 
 __all__ = ["CmgSpacecraft", "SingularityEvent", "STEERING_LAWS"]
 
@@ -100,18 +106,19 @@ class CmgSpacecraft(Plant):
 
     def __init__(
         self,
-        inertia,
-        rotor_momentum,
-        skew=cmg.SKEW,
+        inertia: QuantityArrayLike,
+        rotor_momentum: QuantityLike,
+        skew: QuantityLike = cmg.SKEW,
         n_units: int = 4,
         steering: str = "pi",
         alpha: float = 1e-3,
-        gimbal_rate_limit=np.inf,
-    ):
+        gimbal_rate_limit: QuantityLike = np.inf,
+    ) -> None:
         J = require_inertia(inertia)
         if J.shape != (3, 3):
             raise ValueError(f"inertia: must have shape (3, 3), got {J.shape}")
-        self.inertia, self.inertia_inverse = J, np.linalg.inv(J)
+        # numpy types inv() as floating[Any]; it is float64 here, so the astype copies nothing
+        self.inertia, self.inertia_inverse = J, np.linalg.inv(J).astype(np.float64, copy=False)
         hr = to_si_array(rotor_momentum, "N*m*s", "rotor_momentum")
         if hr.ndim != 0 or not np.isfinite(hr) or hr <= 0:
             raise ValueError(
@@ -151,13 +158,13 @@ class CmgSpacecraft(Plant):
     def nx(self) -> int:
         return 7 + self.n_units
 
-    def initial_state(self, n_cases: int) -> np.ndarray:
+    def initial_state(self, n_cases: int) -> FloatArray:
         """At rest, inertial attitude, gimbals at zero."""
         x = np.zeros((n_cases, self.nx))
         x[:, 0] = 1.0
         return x
 
-    def state_from(self, **values) -> np.ndarray:
+    def state_from(self, **values: QuantityArrayLike) -> FloatArray:
         """Initial state from ``attitude`` or ``euler123``, ``rate`` and ``gimbal_angles``
         (rad or unit strings, e.g. a preferred set), or ``state``."""
         values = dict(values)
@@ -174,21 +181,21 @@ class CmgSpacecraft(Plant):
     def initial_values(self) -> tuple[str, ...]:
         return ("attitude", "euler123", "rate", "gimbal_angles", "state")
 
-    def cmg_momentum(self, x) -> np.ndarray:
+    def cmg_momentum(self, x: FloatArray) -> FloatArray:
         """Cluster momentum h = h_r ĥ(σ), body axes, N m s, (..., 3)."""
         return self._momentum(x[..., 7:])
 
     # unchecked kernels on the cached axes: they run at every RK stage
-    def _momentum(self, sig):
+    def _momentum(self, sig: FloatArray) -> FloatArray:
         return self.rotor_momentum * (np.cos(sig) @ self._a + np.sin(sig) @ self._b)
 
-    def _hdot(self, sig, sdot):
+    def _hdot(self, sig: FloatArray, sdot: FloatArray) -> FloatArray:
         """h_r C(σ) σ̇ = h_r Σ_i σ̇_i (−sinσ_i a_i + cosσ_i b_i)."""
         return self.rotor_momentum * (
             (-np.sin(sig) * sdot) @ self._a + (np.cos(sig) * sdot) @ self._b
         )
 
-    def gimbal_rates(self, x, u) -> np.ndarray:
+    def gimbal_rates(self, x: FloatArray, u: npt.ArrayLike) -> FloatArray:
         """σ̇ of the steering law for the commanded torque u, after the rate limit (module
         docstring), (..., n).
 
@@ -199,7 +206,7 @@ class CmgSpacecraft(Plant):
         """
         return self._gimbal_rates(x[..., 4:7], x[..., 7:], np.asarray(u, float))
 
-    def _gimbal_rates(self, w, sig, u):
+    def _gimbal_rates(self, w: FloatArray, sig: FloatArray, u: FloatArray) -> FloatArray:
         demand = (u + cross3(w, self._momentum(sig))) / self.rotor_momentum
         try:
             rates = cmg.steer(sig, demand, self._a, self._b, self.alpha)
@@ -213,7 +220,9 @@ class CmgSpacecraft(Plant):
             rates = rates * np.minimum(1.0, self.gimbal_rate_limit / np.maximum(peak, 1e-300))
         return rates
 
-    def _rates(self, w, sig, u):
+    def _rates(
+        self, w: FloatArray, sig: FloatArray, u: npt.ArrayLike
+    ) -> tuple[FloatArray, FloatArray]:
         """(ω̇, σ̇) at body rate w, gimbals sig and command u."""
         sdot = self._gimbal_rates(w, sig, np.asarray(u, float))
         wdot = matvec(
@@ -222,42 +231,44 @@ class CmgSpacecraft(Plant):
         )
         return wdot, sdot
 
-    def linear_part(self):
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """A = 0, B = 0: the command reaches the body only through the steering law, which is
         nonlinear in σ; the whole motion is the force f (``force_matrix`` = I)."""
         return np.zeros((self.nx, self.nx)), np.zeros((self.nx, 3))
 
     @property
-    def force_matrix(self) -> np.ndarray:
+    def force_matrix(self) -> FloatArray:
         return np.eye(self.nx)
 
-    def nonlinear_force(self, x, u) -> np.ndarray:
+    def nonlinear_force(self, x: FloatArray, u: FloatArray) -> FloatArray:
         """f = ẋ = [Ω(ω)β, ω̇, σ̇] (module docstring)."""
         wdot, sdot = self._rates(x[..., 4:7], x[..., 7:], u)
         return np.concatenate([quaternion_kinematics(x[..., :4], x[..., 4:7]), wdot, sdot], -1)
 
-    def rhs(self, x, u) -> np.ndarray:
+    def rhs(self, x: FloatArray, u: FloatArray) -> FloatArray:
         """ẋ (for reference integrators)."""
         return self.nonlinear_force(x, u)
 
-    def step(self, x, u, h) -> np.ndarray:
+    def step(self, x: FloatArray, u: FloatArray, h: float) -> FloatArray:
         """One RKMK4 step h (s) with the command u held (:func:`flexsat.dynamics.rigid_body.
         rkmk4_step` on the attitude, classical RK4 on (ω, σ)): fourth order, β unit to
         round-off."""
         u = np.asarray(u, float)
         n_w = 3
 
-        def rates(tau, theta, ws):
+        def rates(tau: float, theta: FloatArray, ws: FloatArray) -> tuple[FloatArray, FloatArray]:
             wdot, sdot = self._rates(ws[..., :n_w], ws[..., n_w:], u)
             return dexpinv(theta, ws[..., :n_w]), np.concatenate([wdot, sdot], -1)
 
         beta, ws = rkmk4_step(x[..., :4], x[..., 4:], h, rates, np.zeros(x.shape[:-1] + (3,)))
         return np.concatenate([beta, ws], -1)
 
-    def normalize(self, x) -> np.ndarray:
+    def normalize(self, x: FloatArray) -> FloatArray:
         return normalize_quaternion(x)
 
-    def output(self, name: str, x, u=None, f_in=None) -> np.ndarray:
+    def output(
+        self, name: str, x: FloatArray, u: FloatArray | None = None, f_in: FloatArray | None = None
+    ) -> FloatArray:
         self._size(name)  # unknown names: a ValueError naming the channel
         if name == "gimbal_angles":
             return x[..., 7:]
@@ -271,19 +282,21 @@ class CmgSpacecraft(Plant):
             return self.gimbal_rates(x, u)
         return attitude_output(name, x[..., :4], x[..., 4:7])
 
-    def energy(self, x) -> np.ndarray:
+    def energy(self, x: FloatArray) -> FloatArray:
         """Body kinetic energy ½ωᵀIω, J (constant-speed rotors: their energy does not change;
         the CMG exchanges momentum, and work with the gimbal motors)."""
         w = x[..., 4:7]
         return 0.5 * np.sum(w * matvec(self.inertia, w), axis=-1)
 
-    def momentum(self, x) -> np.ndarray:
+    def momentum(self, x: FloatArray) -> FloatArray:
         """Total angular momentum C(β)ᵀ(Iω + h) in inertial axes, N m s: constant (no external
         torque)."""
         total = matvec(self.inertia, x[..., 4:7]) + self.cmg_momentum(x)
         return np.einsum("...ji,...j->...i", dcm(x[..., :4]), total)
 
-    def singularity_events(self, t, x, threshold: float = 1e-3) -> list[SingularityEvent]:
+    def singularity_events(
+        self, t: npt.ArrayLike, x: npt.ArrayLike, threshold: float = 1e-3
+    ) -> list[SingularityEvent]:
         """Passages of the gain below ``threshold`` along a recorded run (times ``t`` (n_t,),
         states ``x`` (n_t, nx)), each classified internal or external at its least gain."""
         thr = float(require_finite(threshold, "threshold"))

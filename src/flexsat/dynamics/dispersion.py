@@ -8,11 +8,16 @@ propagators (batched products), so case i of the batch is plant i run alone.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexsat.dynamics.plant import Plant
+
+if TYPE_CHECKING:
+    from flexsat.units import FloatArray
 
 
 class DispersedPlant(Plant):
@@ -30,7 +35,7 @@ class DispersedPlant(Plant):
         Naming the field that differs between the plants, or a non-finite matrix entry.
     """
 
-    def __init__(self, plants):
+    def __init__(self, plants: Iterable[Plant]) -> None:
         plants = tuple(plants)
         if not plants or not all(isinstance(p, Plant) for p in plants):
             raise ValueError("plants: give one or more Plant instances")
@@ -54,9 +59,9 @@ class DispersedPlant(Plant):
                         f"has {_show(a)}; a dispersed batch needs the same "
                         f"channels and state"
                     )
-            if (first.force_matrix is None) != (p.force_matrix is None) or (
-                first.force_matrix is not None
-                and np.shape(first.force_matrix) != np.shape(p.force_matrix)
+            fa, fb = first.force_matrix, p.force_matrix
+            if (fa is None) != (fb is None) or (
+                fa is not None and fb is not None and fa.shape != fb.shape
             ):
                 raise ValueError(
                     f"force_matrix: plants[{i}] has a different nonlinear force "
@@ -95,34 +100,39 @@ class DispersedPlant(Plant):
         return len(self.plants)
 
     @cached_property
-    def _linear(self):
+    def _linear(self) -> tuple[FloatArray, FloatArray]:
         parts = [p.linear_part() for p in self.plants]
         return np.stack([a for a, _ in parts]), np.stack([b for _, b in parts])
 
-    def linear_part(self):
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """(A, B) with a leading case axis: (n_cases, n_x, n_x), (n_cases, n_x, m)."""
         return self._linear
 
     @cached_property
-    def force_matrix(self):
-        if self.plants[0].force_matrix is None:
+    def force_matrix(self) -> FloatArray | None:
+        matrices = [p.force_matrix for p in self.plants]
+        if any(m is None for m in matrices):  # all or none: checked at construction
             return None
-        return np.stack([p.force_matrix for p in self.plants])
+        return np.stack([m for m in matrices if m is not None])
 
-    def nonlinear_force(self, x, u):
+    def nonlinear_force(self, x: FloatArray, u: FloatArray) -> FloatArray:
         """Each case's force from its own plant; x (..., n_cases, n_x)."""
         return np.stack(
             [p.nonlinear_force(x[..., i, :], u[..., i, :]) for i, p in enumerate(self.plants)],
             axis=-2,
         )
 
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         mats = [p.output_matrices(name) for p in self.plants]
-        if any(m is None for m in mats):
+        given = [m for m in mats if m is not None]
+        if len(given) < len(mats):
             return None
-        return tuple(_stack_optional([m[i] for m in mats]) for i in range(3))
+        C, D = (np.stack([np.asarray(m[i], float) for m in given]) for i in range(2))
+        return C, D, _stack_optional([m[2] for m in given])
 
-    def output(self, name, x, u, f_in=None):
+    def output(
+        self, name: str, x: FloatArray, u: FloatArray, f_in: FloatArray | None = None
+    ) -> FloatArray:
         """Output ``name`` per case, x (..., n_cases, n_x)."""
         return np.stack(
             [
@@ -134,38 +144,39 @@ class DispersedPlant(Plant):
             axis=x.ndim - 2,
         )
 
-    def _per_case(self, method: str, x):
+    def _per_case(self, method: str, x: FloatArray) -> FloatArray | None:
         values = [getattr(p, method)(x[..., i, :]) for i, p in enumerate(self.plants)]
         if any(v is None for v in values):
             return None
         return np.stack(values, axis=x.ndim - 2)
 
-    def energy(self, x):
+    def energy(self, x: FloatArray) -> FloatArray | None:
         return self._per_case("energy", x)
 
-    def momentum(self, x):
+    def momentum(self, x: FloatArray) -> FloatArray | None:
         return self._per_case("momentum", x)
 
-    def power(self, x, u):
+    def power(self, x: FloatArray, u: FloatArray) -> FloatArray | None:
         """Each case's dE/dt from its own plant; x (..., n_cases, n_x), u (..., n_cases, m)."""
         values = [p.power(x[..., i, :], u[..., i, :]) for i, p in enumerate(self.plants)]
-        if any(v is None for v in values):
+        given = [v for v in values if v is not None]
+        if len(given) < len(values):
             return None
-        return np.stack(values, axis=x.ndim - 2)
+        return np.stack(given, axis=x.ndim - 2)
 
-    def initial_state(self, n_cases: int) -> np.ndarray:
+    def initial_state(self, n_cases: int) -> FloatArray:
         return np.stack([p.initial_state(1)[0] for p in self.plants])
 
-    def __getattr__(self, name):
+    def __getattr__(self, name: str) -> Callable[[FloatArray, FloatArray | None], FloatArray]:
         # per-case extras of the planar plants (vibration_energy): only when every plant has it
         if name == "vibration_energy" and all(
             hasattr(p, name) for p in self.__dict__.get("plants", ())
         ):
 
-            def vibration_energy(x, energy=None):
+            def vibration_energy(x: FloatArray, energy: FloatArray | None = None) -> FloatArray:
                 return np.stack(
                     [
-                        p.vibration_energy(x[..., i, :], None if energy is None else energy[..., i])
+                        getattr(p, name)(x[..., i, :], None if energy is None else energy[..., i])
                         for i, p in enumerate(self.plants)
                     ],
                     axis=x.ndim - 2,
@@ -175,7 +186,7 @@ class DispersedPlant(Plant):
         raise AttributeError(name)
 
 
-def _stack_optional(parts):
+def _stack_optional(parts: list[FloatArray | None]) -> FloatArray | None:
     """The per-case matrices stacked on a leading case axis; None (the output does not depend
     on that argument) where every case has None, zeros for the cases with None otherwise."""
     given = [np.asarray(p, float) for p in parts if p is not None]
@@ -184,13 +195,13 @@ def _stack_optional(parts):
     return np.stack([np.zeros_like(given[0]) if p is None else np.asarray(p, float) for p in parts])
 
 
-def _show(value) -> str:
+def _show(value: object) -> str:
     if isinstance(value, tuple) and value and hasattr(value[0], "name"):
         return "(" + ", ".join(c.name for c in value) + ")"
     return repr(value)
 
 
-def stack_plants(plants) -> DispersedPlant:
+def stack_plants(plants: Iterable[Plant]) -> DispersedPlant:
     """One :class:`DispersedPlant` whose case i is ``plants[i]``."""
     return DispersedPlant(plants)
 

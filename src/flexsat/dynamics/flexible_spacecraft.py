@@ -76,6 +76,9 @@ exponential integrator; the rest is :math:`B_f f` with
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
@@ -92,12 +95,17 @@ from flexsat.dynamics.rigid_spacecraft import (
 )
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray, QuantityArrayLike
+
 __all__ = ["FlexibleSpacecraft"]
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
 
-def _check_node(modal: ModalModel, node, field: str) -> None:
+def _check_node(modal: ModalModel, node: object, field: str) -> None:
     if not (isinstance(node, (int, np.integer)) and np.any(modal.node_ids == node)):
         shown = ", ".join(map(str, modal.node_ids[:8])) + (
             " ..." if modal.node_ids.size > 8 else ""
@@ -105,7 +113,9 @@ def _check_node(modal: ModalModel, node, field: str) -> None:
         raise ValueError(f"{field}: unknown node {node!r} (nodes: {shown})")
 
 
-def _points(items, field: str, modal: ModalModel) -> list[tuple[int, str]]:
+def _points(
+    items: Iterable[tuple[int, str]], field: str, modal: ModalModel
+) -> list[tuple[int, str]]:
     """[(node, axis)] with known nodes, axes 'x'/'y'/'z' (any case), no repeats."""
     out = []
     for i, item in enumerate(items):
@@ -163,19 +173,19 @@ class FlexibleSpacecraft(Plant):
     nonlinear = True
     #: the engine's fourth-order exponential integrator: the elastic modes exactly, f by RK4
     integrator = "exp_rk4"
-    recorded = ("attitude", "euler123", "rate")
+    recorded: tuple[str, ...] = ("attitude", "euler123", "rate")
 
     def __init__(
         self,
-        modal,
-        forces=(),
-        displacements=(),
-        rotations=(),
-        torque_node=None,
-        translation=False,
-        n_modes=None,
-        rigid_frequency=RIGID_FREQUENCY,
-    ):
+        modal: ModalModel,
+        forces: Iterable[tuple[int, str]] = (),
+        displacements: Iterable[tuple[int, str]] = (),
+        rotations: Iterable[tuple[int, str]] = (),
+        torque_node: int | None = None,
+        translation: bool = False,
+        n_modes: int | None = None,
+        rigid_frequency: float = RIGID_FREQUENCY,
+    ) -> None:
         if not isinstance(modal, ModalModel):
             raise ValueError(f"modal: must be a ModalModel, got {type(modal).__name__}")
         if modal.boundary != "free":
@@ -326,13 +336,13 @@ class FlexibleSpacecraft(Plant):
     def n_f(self) -> int:
         return 10 if self.translation else 7
 
-    def initial_state(self, n_cases: int) -> np.ndarray:
+    def initial_state(self, n_cases: int) -> FloatArray:
         """At rest, undeformed, in the inertial attitude β = (1, 0, 0, 0)."""
         x = np.zeros((n_cases, self.nx))
         x[:, 0] = 1.0
         return x
 
-    def state_from(self, **values) -> np.ndarray:
+    def state_from(self, **values: QuantityArrayLike) -> FloatArray:
         """Initial state from ``attitude`` or ``euler123``, ``rate`` and ``state``
         (:func:`~flexsat.dynamics.rigid_spacecraft.attitude_state_from`); undeformed at rest
         otherwise."""
@@ -342,12 +352,12 @@ class FlexibleSpacecraft(Plant):
     def initial_values(self) -> tuple[str, ...]:
         return ("attitude", "euler123", "rate", "state")
 
-    def _velocity_rows(self) -> np.ndarray:
+    def _velocity_rows(self) -> npt.NDArray[np.intp]:
         """Rows of (ω, η̇) in x."""
         return self._vel
 
     # -- linear part ---------------------------------------------------------------------------
-    def _build_linear(self):
+    def _build_linear(self) -> tuple[FloatArray, FloatArray]:
         n, nx = self.n_modes, self.nx
         Minv = self.rotation_mass_inverse
         A = np.zeros((nx, nx))
@@ -371,7 +381,7 @@ class FlexibleSpacecraft(Plant):
             B[10:13, 3:] = self.force_directions / self.mass
         return A, B
 
-    def _build_force_matrix(self):
+    def _build_force_matrix(self) -> FloatArray:
         Bf = np.zeros((self.nx, self.n_f))
         Bf[:4, :4] = np.eye(4)
         Bf[self._velocity_rows(), 4:7] = self.rotation_mass_inverse[:, :3]
@@ -379,20 +389,20 @@ class FlexibleSpacecraft(Plant):
             Bf[10:13, 7:10] = np.eye(3)
         return Bf
 
-    def linear_part(self):
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """(A, B): the linearisation about rest (module docstring)."""
         return self._linear
 
     @property
-    def force_matrix(self) -> np.ndarray:
+    def force_matrix(self) -> FloatArray:
         return self._force_matrix
 
     # -- nonlinear remainder ---------------------------------------------------------------
-    def _momentum_body(self, x):
+    def _momentum_body(self, x: FloatArray) -> FloatArray:
         """h = Jω + Δᵀη̇, body axes."""
         return matvec(self.inertia, x[..., 4:7]) + x[..., self._eta_dot] @ self.coupling
 
-    def nonlinear_force(self, x, u) -> np.ndarray:
+    def nonlinear_force(self, x: FloatArray, u: FloatArray) -> FloatArray:
         """f(x, u) (..., n_f) of the module docstring."""
         x = np.asarray(x, float)
         beta, w = x[..., :4], x[..., 4:7]
@@ -409,7 +419,7 @@ class FlexibleSpacecraft(Plant):
             f[..., 7:10] = (np.einsum("...ji,...j->...i", dcm(beta), F) - F) / self.mass
         return f
 
-    def force_jacobian(self, x, u):
+    def force_jacobian(self, x: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         r"""(∂f/∂x, ∂f/∂u), analytic:
 
         * β block: ∂/∂β = Ω(ω), ∂/∂ω = B(β) − [0; ½ I];
@@ -452,20 +462,20 @@ class FlexibleSpacecraft(Plant):
             Ju[..., 7:10, 3:] = (Ct - eye) @ self.force_directions / self.mass
         return Jx, Ju
 
-    def rhs(self, x, u) -> np.ndarray:
+    def rhs(self, x: FloatArray, u: FloatArray) -> FloatArray:
         """ẋ = A x + B u + B_f f(x, u), the full right-hand side (for reference integrators)."""
         A, B = self._linear
         return (
             x @ A.T + np.asarray(u, float) @ B.T + self.nonlinear_force(x, u) @ self._force_matrix.T
         )
 
-    def normalize(self, x) -> np.ndarray:
+    def normalize(self, x: FloatArray) -> FloatArray:
         """β scaled back to unit norm after a step (the exponential integrator does not keep
         it: its error is the integrator's, O(h⁵) per step)."""
         return normalize_quaternion(x)
 
     # -- outputs -----------------------------------------------------------------------------
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         """Linear outputs: the node displacements and rotations (Φ η), position, velocity and
         the elastic state ``elastic`` = [η, η̇] (what a perturbation law on a reduced model
         reads: its modes are the first ones of this plant when both come from one
@@ -482,7 +492,9 @@ class FlexibleSpacecraft(Plant):
             return None
         return C, np.zeros((C.shape[0], m)), None
 
-    def output(self, name: str, x, u=None, f_in=None) -> np.ndarray:
+    def output(
+        self, name: str, x: FloatArray, u: FloatArray | None = None, f_in: FloatArray | None = None
+    ) -> FloatArray:
         self._size(name)  # unknown names: a ValueError naming the channel
         if name in self._rows:
             return x[..., self._eta] @ self._rows[name]
@@ -495,7 +507,7 @@ class FlexibleSpacecraft(Plant):
         return attitude_output(name, x[..., :4], x[..., 4:7])
 
     # -- invariants ------------------------------------------------------------------------
-    def energy(self, x) -> np.ndarray:
+    def energy(self, x: FloatArray) -> FloatArray:
         r"""T + V = ½[ω; η̇]ᵀ𝓜[ω; η̇] + ½ηᵀΩ²η (+ ½ m vᵀv), J."""
         p = x[..., self._velocity_rows()]
         eta = x[..., self._eta]
@@ -506,7 +518,7 @@ class FlexibleSpacecraft(Plant):
             E = E + 0.5 * self.mass * np.sum(x[..., 10:13] ** 2, -1)
         return E
 
-    def momentum(self, x) -> np.ndarray:
+    def momentum(self, x: FloatArray) -> FloatArray:
         """Total angular momentum in inertial axes, N m s: C(β)ᵀ h about the centre of mass,
         plus r × m v about the inertial origin with translation."""
         H = np.einsum("...ji,...j->...i", dcm(x[..., :4]), self._momentum_body(x))

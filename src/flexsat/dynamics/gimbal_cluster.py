@@ -17,11 +17,16 @@ the cluster momentum h(Ïƒ) (Eq. 1, units of one rotor's h) and the gain det(CCáµ
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from flexsat.dynamics import cmg
 from flexsat.dynamics.plant import Channel, Plant
 from flexsat.input_checks import require_finite
+
+if TYPE_CHECKING:
+    from flexsat.units import FloatArray, QuantityLike
 
 __all__ = ["GimbalCluster"]
 
@@ -39,7 +44,7 @@ class GimbalCluster(Plant):
 
     recorded = ("gimbal_angles", "momentum", "gain")
 
-    def __init__(self, n_units: int = 4, skew=cmg.SKEW):
+    def __init__(self, n_units: int = 4, skew: QuantityLike = cmg.SKEW) -> None:
         self.g, self.a, self.b = cmg.pyramid_axes(n_units, skew)
         self.n_units = int(n_units)
         self.skew = float(require_finite(skew, "skew", "rad"))  # pyramid_axes checked it
@@ -55,16 +60,18 @@ class GimbalCluster(Plant):
     def nx(self) -> int:
         return self.n_units
 
-    def linear_part(self):
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """A = 0, B = I (module docstring)."""
         return np.zeros((self.nx, self.nx)), np.eye(self.nx)
 
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         if name == "gimbal_angles":
             return np.eye(self.nx), np.zeros((self.nx, self.nx)), None
         return None
 
-    def output(self, name: str, x, u=None, f_in=None) -> np.ndarray:
+    def output(
+        self, name: str, x: FloatArray, u: FloatArray | None = None, f_in: FloatArray | None = None
+    ) -> FloatArray:
         self._size(name)
         if name == "momentum":
             return cmg.momentum(x, self.skew, self.n_units)

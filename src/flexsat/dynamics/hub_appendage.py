@@ -33,6 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -48,15 +49,32 @@ from flexsat.input_checks import (
 )
 from flexsat.structures.beam import TipMassCantilever
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.structures.beam import CantileverModes
+    from flexsat.units import FloatArray
+
 
 @lru_cache(maxsize=16)
-def gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+def gauss_legendre(n: int) -> tuple[FloatArray, FloatArray]:
     """Gauss–Legendre nodes and weights on [−1, 1] (numpy's ``leggauss``), read-only and cached:
     numpy recomputes them on every call, 35 % of a 10-mode hub + appendage build (a Monte Carlo
     builds one per case)."""
     s, w = np.polynomial.legendre.leggauss(n)
     s.flags.writeable = w.flags.writeable = False
     return s, w
+
+
+class _ModalIntegrals(TypedDict):
+    """The Galerkin integrals of :class:`HubAppendage` (its ``_modal_integrals``)."""
+
+    modes: CantileverModes
+    omega: FloatArray  # cantilever frequencies, rad/s
+    d: FloatArray  # rigid-elastic coupling of one appendage, kg m
+    e: FloatArray  # shear coupling, kg
+    phi_tip: FloatArray  # mode shapes at the tip
+    G: FloatArray  # rotational-stiffening matrix of all appendages
 
 
 @dataclass(frozen=True)
@@ -84,6 +102,8 @@ class HubAppendageParams:
     damping : float or sequence of float
         Modal damping ratios of the cantilever modes (one value for all, or one per mode).
 
+    Notes
+    -----
     Each physical field also takes a pint Quantity or a unit string (``length="36 in"``) and is
     stored in SI.
     """
@@ -98,7 +118,7 @@ class HubAppendageParams:
     tip_inertia: float = 0.0
     damping: float | tuple[float, ...] = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name, unit in (
             ("hub_inertia", "kg*m**2"),
             ("length", "m"),
@@ -151,14 +171,14 @@ class HubAppendage(HybridPlant):
     params: HubAppendageParams
     n_modes: int = 10
     stiffening: bool = False
-    _quad: dict = field(init=False, repr=False, compare=False)
+    _quad: _ModalIntegrals = field(init=False, repr=False, compare=False)
 
     output_channels = HYBRID_OUTPUTS + (
         Channel("root_shear", "N", description="root shear force S0 of one appendage"),
         Channel("root_moment", "N*m", description="root bending moment M0 of one appendage"),
     )
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         require_count(self.n_modes, "n_modes")
         limits.check_count(self.n_modes, limits.MAX_MODES, "n_modes", "modes per appendage")
         zeta = np.atleast_1d(np.asarray(self.params.damping, dtype=float))
@@ -170,7 +190,7 @@ class HubAppendage(HybridPlant):
 
     # ----------------------------------------------------------------------------------------
     # modal integrals
-    def _modal_integrals(self) -> dict:
+    def _modal_integrals(self) -> _ModalIntegrals:
         p, k = self.params, self.n_modes
         modes = p.beam().modes(k)
         npts = max(200, 24 * k)
@@ -188,7 +208,7 @@ class HubAppendage(HybridPlant):
         spin_mass = p.rho * (phi * w[:, None]).T @ phi + p.tip_mass * np.outer(phi_l, phi_l)
         tension = p.rho * (l**2 - x**2) / 2 + p.tip_mass * l
         geometric = (dphi * (w * tension)[:, None]).T @ dphi
-        return dict(
+        return _ModalIntegrals(
             modes=modes,
             omega=modes.omegas,
             d=coupling,
@@ -208,21 +228,21 @@ class HubAppendage(HybridPlant):
         return self.params.n_appendages
 
     @property
-    def cantilever_frequencies(self) -> np.ndarray:
+    def cantilever_frequencies(self) -> FloatArray:
         """Constrained (hub clamped) natural frequencies ω_i, rad/s (exact for these modes)."""
         return self._quad["omega"]
 
     @property
-    def coupling(self) -> np.ndarray:
+    def coupling(self) -> FloatArray:
         """Rigid-elastic coupling d_i of one appendage, kg m (Galerkin integral)."""
         return self._quad["d"]
 
     @property
-    def damping_ratios(self) -> np.ndarray:
+    def damping_ratios(self) -> FloatArray:
         return np.broadcast_to(np.asarray(self.params.damping, float), (self.n_modes,)).copy()
 
     @cached_property
-    def mass_matrix(self) -> np.ndarray:
+    def mass_matrix(self) -> FloatArray:
         p, n, k = self.params, self.params.n_appendages, self.n_modes
         M = np.zeros((k + 1, k + 1))
         M[0, 0] = p.total_inertia
@@ -231,16 +251,16 @@ class HubAppendage(HybridPlant):
         return M
 
     @cached_property
-    def stiffness_matrix(self) -> np.ndarray:
+    def stiffness_matrix(self) -> FloatArray:
         n, w = self.params.n_appendages, self.cantilever_frequencies
         return np.diag(np.concatenate([[0.0], n * w**2]))
 
     @cached_property
-    def damping_matrix(self) -> np.ndarray:
+    def damping_matrix(self) -> FloatArray:
         n, w = self.params.n_appendages, self.cantilever_frequencies
         return np.diag(np.concatenate([[0.0], 2 * n * self.damping_ratios * w]))
 
-    def frequencies(self, constrained: bool = False) -> np.ndarray:
+    def frequencies(self, constrained: bool = False) -> FloatArray:
         """Natural frequencies of the model, rad/s, ascending.
 
         Unconstrained (hub free): the elastic frequencies of (K, M), the rigid mode dropped.
@@ -248,7 +268,7 @@ class HubAppendage(HybridPlant):
         """
         return self.cantilever_frequencies.copy() if constrained else self.hub_free_frequencies()
 
-    def nonlinear_force(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+    def nonlinear_force(self, x: FloatArray, u: npt.ArrayLike) -> FloatArray:
         """Generalized force of the rotational-stiffening terms, shape (..., ndof).
 
         With s = qᵀGq the hub equation gains (I_tot + s) θ'' + 2 θ' qᵀ G q' and the modal
@@ -272,10 +292,10 @@ class HubAppendage(HybridPlant):
         return f
 
     @property
-    def _tip_row(self) -> np.ndarray:
+    def _tip_row(self) -> FloatArray:
         return self._quad["phi_tip"]
 
-    def _output_coefficients(self, name: str):
+    def _output_coefficients(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray, float]:
         """Linear forms of the root loads by force summation (module docstring): ``root_torque``
         = I_b θ'' + dᵀ q'', S0 = [ρ (l² − l0²)/2 + m l] θ'' + eᵀ q'', M0 = l0 S0 − (l0 S0 − M0).
         """
@@ -296,7 +316,9 @@ class HubAppendage(HybridPlant):
             return super()._output_coefficients(name)
         return z, z, acc, 0.0
 
-    def output_values(self, x: np.ndarray, u, extra_force=0.0) -> dict[str, np.ndarray]:
+    def output_values(
+        self, x: FloatArray, u: npt.ArrayLike, extra_force: float | FloatArray = 0.0
+    ) -> dict[str, FloatArray]:
         """Physical outputs of state x under hub torque u (SI).
 
         Returns hub angle and rate, root shear S0, root bending moment M0, the Lyapunov-law
@@ -319,7 +341,7 @@ class HubAppendage(HybridPlant):
             "tip_deflection": pos[..., 1:] @ self._quad["phi_tip"],
         }
 
-    def momentum(self, x: np.ndarray) -> np.ndarray:
+    def momentum(self, x: FloatArray) -> FloatArray:
         """Angular momentum about the hub axis, N m s: h = (M x')_θ, plus s θ' (s = qᵀGq) with
         the stiffening on, whose hub equation (:meth:`nonlinear_force`)
         (I_tot + s) θ'' + M_θq q'' + 2 θ' qᵀG q' = u is dh/dt = u for that h."""
@@ -332,7 +354,7 @@ class HubAppendage(HybridPlant):
 
     # ----------------------------------------------------------------------------------------
     # energies (Att. 3 Eqs. 7, 8, 18)
-    def energy(self, x: np.ndarray) -> np.ndarray:
+    def energy(self, x: FloatArray) -> FloatArray:
         """Total mechanical energy E (Att. 3 Eq. 7), J; includes the stiffening term if on."""
         E = super().energy(x)
         if self.stiffening:

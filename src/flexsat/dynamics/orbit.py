@@ -40,12 +40,20 @@ and the remainder is a generalized acceleration on every coordinate (:math:`B_f 
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant, find_channel
 from flexsat.input_checks import require_finite, require_positive
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.dynamics.structural import ModalBlocks
+    from flexsat.units import FloatArray, QuantityLike
 
 __all__ = ["BeamInOrbit"]
 
@@ -70,6 +78,8 @@ class BeamInOrbit(Plant):
     linearised : bool
         Drop the nonlinear remainder f (eqs 5–6 only, the linearisation at rest).
 
+    Notes
+    -----
     Outputs: ``pitch`` (rad), ``pitch_rate`` (rad/s), ``z1`` … ``zk`` (modal amplitudes
     A_n/l), their rates ``z1_rate`` … (1/s), and the station deflections.
     """
@@ -78,13 +88,13 @@ class BeamInOrbit(Plant):
 
     def __init__(
         self,
-        orbit_rate,
-        frequency_ratios,
-        actuators,
-        stations=None,
-        length=None,
+        orbit_rate: QuantityLike,
+        frequency_ratios: npt.ArrayLike,
+        actuators: dict[str, npt.ArrayLike],
+        stations: Mapping[str, npt.ArrayLike] | None = None,
+        length: QuantityLike | None = None,
         linearised: bool = False,
-    ):
+    ) -> None:
         self.nonlinear = not linearised
         self.orbit_rate = float(require_positive(orbit_rate, "orbit_rate", "rad/s"))
         F = np.atleast_1d(require_finite(frequency_ratios, "frequency_ratios"))
@@ -98,9 +108,9 @@ class BeamInOrbit(Plant):
         if not isinstance(actuators, dict) or not actuators:
             raise ValueError("actuators: must be a non-empty {name: column of G} mapping")
         cols = []
-        for name, col in actuators.items():
+        for name, given in actuators.items():
             Channel(name, "N")
-            col = require_finite(col, name)
+            col = require_finite(given, name)
             if col.shape != (n,):
                 raise ValueError(
                     f"{name}: its column of G must have 1 + {k} = {n} entries "
@@ -112,10 +122,9 @@ class BeamInOrbit(Plant):
         self.inputs = tuple(Channel(name, "N", description="point force") for name in actuators)
         self.length = None if length is None else float(require_positive(length, "length", "m"))
         unit = "" if self.length is None else "m"
-        stations = {} if stations is None else stations
         rows = {}
-        for name, values in stations.items():
-            values = np.atleast_1d(require_finite(values, f"w_{name}"))
+        for name, given in ({} if stations is None else stations).items():
+            values = np.atleast_1d(require_finite(given, f"w_{name}"))
             if values.shape != (k,):
                 raise ValueError(
                     f"w_{name}: station shape values must have {k} entries (one "
@@ -153,12 +162,12 @@ class BeamInOrbit(Plant):
         return 2 * self.n_coordinates
 
     @cached_property
-    def stiffness(self) -> np.ndarray:
+    def stiffness(self) -> FloatArray:
         """diag(3, F_1, …, F_k): pitch libration κ = 3 and the modes (eqs 5–6, τ units)."""
         return np.concatenate([[3.0], self.frequency_ratios])
 
     @cached_property
-    def _linear(self):
+    def _linear(self) -> tuple[FloatArray, FloatArray]:
         n, w2 = self.n_coordinates, self.orbit_rate**2
         A = np.zeros((2 * n, 2 * n))
         A[:n, n:] = np.eye(n)
@@ -168,12 +177,12 @@ class BeamInOrbit(Plant):
             arr.flags.writeable = False
         return A, B
 
-    def linear_part(self) -> tuple[np.ndarray, np.ndarray]:
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """(A, B) of the linearisation at rest, eqs 5–6 in seconds (module docstring)."""
         return self._linear
 
     @cached_property
-    def modal_blocks(self):
+    def modal_blocks(self) -> ModalBlocks:
         """The linear part is decoupled: pitch libration ω_c√3 and the bending modes ω_c√F_n,
         undamped, none rigid (a :class:`~flexsat.dynamics.structural.ModalBlocks`)."""
         from flexsat.dynamics.structural import ModalBlocks
@@ -182,19 +191,19 @@ class BeamInOrbit(Plant):
         return ModalBlocks(self.orbit_rate * np.sqrt(self.stiffness), np.zeros(n), 0)
 
     @cached_property
-    def force_matrix(self) -> np.ndarray:
+    def force_matrix(self) -> FloatArray:
         """B_f = [0; I]: the remainder is an acceleration on every coordinate."""
         n = self.n_coordinates
         Bf = np.vstack([np.zeros((n, n)), np.eye(n)])
         Bf.flags.writeable = False
         return Bf
 
-    def _split(self, x):
+    def _split(self, x: npt.ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         x = np.asarray(x, dtype=float)
         n = self.n_coordinates
         return x[..., 0], x[..., 1:n], x[..., n], x
 
-    def nonlinear_force(self, x, u=None) -> np.ndarray:
+    def nonlinear_force(self, x: npt.ArrayLike, u: npt.ArrayLike | None = None) -> FloatArray:
         """f(x), (..., 1 + k): eqs 1–2 less eqs 5–6, times ω_c² (module docstring)."""
         theta, z, dtheta, _ = self._split(x)
         wc = self.orbit_rate
@@ -202,11 +211,13 @@ class BeamInOrbit(Plant):
         g = (3.0 * np.sin(theta) ** 2 - 1.0) + (dtheta / wc - 1.0) ** 2
         return np.concatenate([f_theta[..., None], wc**2 * g[..., None] * z], axis=-1)
 
-    def force_jacobian(self, x, u=None):
+    def force_jacobian(
+        self, x: npt.ArrayLike, u: npt.ArrayLike | None = None
+    ) -> tuple[FloatArray, FloatArray]:
         """(∂f/∂x (..., 1 + k, 2(1 + k)), ∂f/∂u = 0 (..., 1 + k, m)), analytic."""
-        theta, z, dtheta, x = self._split(x)
+        theta, z, dtheta, states = self._split(x)
         n, wc = self.n_coordinates, self.orbit_rate
-        lead = x.shape[:-1]
+        lead = states.shape[:-1]
         J = np.zeros(lead + (n, 2 * n))
         J[..., 0, 0] = wc**2 * (3.0 - 3.0 * np.cos(2.0 * theta))
         g = (3.0 * np.sin(theta) ** 2 - 1.0) + (dtheta / wc - 1.0) ** 2
@@ -216,16 +227,16 @@ class BeamInOrbit(Plant):
         J[..., idx, idx] = wc**2 * g[..., None]
         return J, np.zeros(lead + (n, self.n_inputs))
 
-    def derivative(self, x, u, nonlinear: bool = True) -> np.ndarray:
+    def derivative(self, x: npt.ArrayLike, u: npt.ArrayLike, nonlinear: bool = True) -> FloatArray:
         """ẋ = A x + B u + B_f f(x) (eqs 1–2; ``nonlinear=False``: eqs 5–6 only), (..., 2n)."""
         A, B = self.linear_part()
-        x = np.asarray(x, dtype=float)
-        dx = x @ A.T + np.asarray(u, dtype=float) @ B.T
+        states = np.asarray(x, dtype=float)
+        dx = states @ A.T + np.asarray(u, dtype=float) @ B.T
         if nonlinear:
-            dx = dx + self.nonlinear_force(x) @ self.force_matrix.T
+            dx = dx + self.nonlinear_force(states) @ self.force_matrix.T
         return dx
 
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         """(C (1, 2n), 0, None): every output is linear in the state."""
         find_channel(self.outputs, name, "output", type(self).__name__)
         n = self.n_coordinates

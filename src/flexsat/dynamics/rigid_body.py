@@ -29,6 +29,9 @@ unit time, and a midpoint exponential exp(Ω(ω̄)h) would cut the order to two.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TYPE_CHECKING, TypeAlias
+
 import numpy as np
 import scipy.special
 
@@ -38,7 +41,15 @@ from flexsat.dynamics.attitude import (
     require_shape,
 )
 from flexsat.input_checks import require_numeric
-from flexsat.units import to_si_array
+from flexsat.units import FloatArray, to_si_array
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import QuantityArrayLike
+
+#: ``rates(tau, theta, w)`` -> (θ̇, ω̇) of one RKMK4 stage (:func:`rkmk4_step`)
+StageRates: TypeAlias = Callable[[float, FloatArray, FloatArray], tuple[FloatArray, FloatArray]]
 
 __all__ = [
     "require_inertia",
@@ -59,7 +70,7 @@ __all__ = [
 _SERIES_ANGLE = 0.02
 
 
-def require_inertia(inertia, field: str = "inertia") -> np.ndarray:
+def require_inertia(inertia: QuantityArrayLike, field: str = "inertia") -> FloatArray:
     r"""``inertia`` as a float array (..., 3, 3) in kg·m² (a pint Quantity or a string with
     units is converted), checked to be a physical inertia tensor: symmetric
     (:math:`|I - I^T| \le 10^{-12}\max|I|`), positive definite, and with principal moments
@@ -87,7 +98,9 @@ def require_inertia(inertia, field: str = "inertia") -> np.ndarray:
     return J
 
 
-def euler_rates(w, inertia, torque=None) -> np.ndarray:
+def euler_rates(
+    w: npt.ArrayLike, inertia: QuantityArrayLike, torque: npt.ArrayLike | None = None
+) -> FloatArray:
     r"""ω̇ from Euler's equations, :math:`\dot\omega = I^{-1}(u - \omega \times I\omega)`
     (seed 003 Eq. 12).
 
@@ -107,14 +120,15 @@ def euler_rates(w, inertia, torque=None) -> np.ndarray:
     w = require_shape(w, "w", (3,))
     J = require_inertia(inertia)
     u = np.zeros(3) if torque is None else require_shape(torque, "torque", (3,))
-    return euler_acceleration(w, J, np.linalg.inv(J), u)
+    # numpy types inv() as floating[Any]: it is float64 here, so the astype copies nothing
+    return euler_acceleration(w, J, np.linalg.inv(J).astype(np.float64, copy=False), u)
 
 
 # The kernels below run once per RK stage on tiny arrays: no input checks (the public functions
 # check once) and slicing in place of np.cross / np.stack, whose overhead dominates here.
 
 
-def cross3(a, b):
+def cross3(a: FloatArray, b: FloatArray) -> FloatArray:
     """a × b on (..., 3) arrays, unchecked."""
     out = np.empty(np.broadcast_shapes(a.shape, b.shape))
     out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
@@ -123,17 +137,17 @@ def cross3(a, b):
     return out
 
 
-def matvec(A, x):
+def matvec(A: FloatArray, x: FloatArray) -> FloatArray:
     """A x on (..., n, k) and (..., k) arrays, unchecked."""
     return (A @ x[..., None])[..., 0]
 
 
-def euler_acceleration(w, J, Jinv, u):
+def euler_acceleration(w: FloatArray, J: FloatArray, Jinv: FloatArray, u: FloatArray) -> FloatArray:
     """ω̇ = I⁻¹(u − ω × Iω) (Euler's equations), unchecked."""
     return matvec(Jinv, u - cross3(w, matvec(J, w)))
 
 
-def dexpinv(theta, w):
+def dexpinv(theta: FloatArray, w: FloatArray) -> FloatArray:
     """θ̇ of the rotation-vector kinematics (module docstring), vectorised."""
     a2 = np.sum(theta * theta, axis=-1)
     c = 1 / 12 + a2 / 720 + a2 * a2 / 30240
@@ -146,7 +160,7 @@ def dexpinv(theta, w):
     return w + 0.5 * tw + c * cross3(theta, tw)
 
 
-def _exp(theta):
+def _exp(theta: FloatArray) -> FloatArray:
     """Unchecked :func:`~flexsat.dynamics.attitude.quaternion_exp`."""
     n = np.sqrt(np.sum(theta * theta, axis=-1))
     out = np.empty(theta.shape[:-1] + (4,))
@@ -155,7 +169,7 @@ def _exp(theta):
     return out
 
 
-def _mul(q, p):
+def _mul(q: FloatArray, p: FloatArray) -> FloatArray:
     """Unchecked :func:`~flexsat.dynamics.attitude.quaternion_multiply` (q after p)."""
     out = np.empty(np.broadcast_shapes(q.shape, p.shape))
     out[..., 0] = q[..., 0] * p[..., 0] - np.sum(q[..., 1:] * p[..., 1:], axis=-1)
@@ -165,7 +179,13 @@ def _mul(q, p):
     return out
 
 
-def rkmk4_step(beta, w, h, rates, zero=None):
+def rkmk4_step(
+    beta: FloatArray,
+    w: FloatArray,
+    h: float,
+    rates: StageRates,
+    zero: FloatArray | None = None,
+) -> tuple[FloatArray, FloatArray]:
     r"""One RKMK4 step (module docstring) of (β, ω) over h, unchecked (a kernel: the callers
     check once).
 
@@ -195,7 +215,9 @@ def rkmk4_step(beta, w, h, rates, zero=None):
     return _mul(_exp(theta), beta), w + h / 6 * (k1w + 2 * k2w + 2 * k3w + k4w)
 
 
-def angular_momentum_inertial(beta, w, inertia) -> np.ndarray:
+def angular_momentum_inertial(
+    beta: npt.ArrayLike, w: npt.ArrayLike, inertia: QuantityArrayLike
+) -> FloatArray:
     r"""Angular momentum in inertial components, :math:`h_N = C(\beta)^T I \omega` (constant
     when no external torque acts).
 
@@ -211,13 +233,13 @@ def angular_momentum_inertial(beta, w, inertia) -> np.ndarray:
     return np.einsum("...ji,...j->...i", C, h)
 
 
-def kinetic_energy(w, inertia) -> np.ndarray:
+def kinetic_energy(w: npt.ArrayLike, inertia: QuantityArrayLike) -> FloatArray:
     r"""Rotational kinetic energy :math:`T = \tfrac12 \omega^T I \omega` (J)."""
     w = require_shape(w, "w", (3,))
     return 0.5 * np.einsum("...i,...ij,...j->...", w, require_inertia(inertia), w)
 
 
-def euler_poinsot_rates(moments, w0, t) -> np.ndarray:
+def euler_poinsot_rates(moments: npt.ArrayLike, w0: npt.ArrayLike, t: npt.ArrayLike) -> FloatArray:
     r"""Body rates of the torque-free asymmetric rigid body, in principal axes, by Jacobi
     elliptic functions (Landau & Lifshitz, *Mechanics*, §37; Schaub & Junkins §4.4).
 

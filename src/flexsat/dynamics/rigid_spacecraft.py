@@ -20,6 +20,9 @@ the norm-preserving RKMK4 of :mod:`flexsat.dynamics.rigid_body` with u held over
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from flexsat.dynamics.attitude import case_shape, require_quaternion, require_shape
@@ -33,6 +36,11 @@ from flexsat.dynamics.rigid_body import (
     rkmk4_step,
 )
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray, QuantityArrayLike
+
 __all__ = ["RigidSpacecraft", "ATTITUDE_OUTPUTS", "attitude_state_from"]
 
 #: the attitude outputs every three-axis plant gives
@@ -44,7 +52,7 @@ ATTITUDE_OUTPUTS = (
 )
 
 
-def attitude_state_from(plant: Plant, values: dict) -> np.ndarray:
+def attitude_state_from(plant: Plant, values: Mapping[str, QuantityArrayLike]) -> FloatArray:
     """Initial state of a three-axis plant whose state starts [β, ω]: the attitude as
     ``attitude`` (unit Euler parameters, scalar first) or ``euler123`` (rad), the body ``rate``
     (rad/s); other names as :meth:`Plant.state_from` (``state``, outputs reading state
@@ -72,7 +80,7 @@ def attitude_state_from(plant: Plant, values: dict) -> np.ndarray:
     return x
 
 
-def _tensor(entries, shape):
+def _tensor(entries: list[tuple[int, int, int, float]], shape: tuple[int, int]) -> FloatArray:
     """Constant (3, prod(shape)) with (v @ T).reshape(shape) linear in v as ``entries`` say:
     (row, col, component, sign) per non-zero entry."""
     T = np.zeros((3,) + shape)
@@ -105,23 +113,23 @@ _OMEGA = _tensor(
 )
 
 
-def skew(v: np.ndarray) -> np.ndarray:
+def skew(v: FloatArray) -> FloatArray:
     """[v×] (..., 3, 3) of vectors (..., 3), unchecked."""
     return (v @ _SKEW).reshape(v.shape[:-1] + (3, 3))
 
 
-def omega(w: np.ndarray) -> np.ndarray:
+def omega(w: FloatArray) -> FloatArray:
     """Ω(ω) (..., 4, 4) of seed 003 Eq. 11, the ½ included
     (:func:`flexsat.dynamics.attitude.omega_matrix`, unchecked)."""
     return (w @ _OMEGA).reshape(w.shape[:-1] + (4, 4))
 
 
-def quaternion_kinematics(beta: np.ndarray, w: np.ndarray) -> np.ndarray:
+def quaternion_kinematics(beta: FloatArray, w: FloatArray) -> FloatArray:
     r""":math:`\dot\beta = \Omega(\omega)\beta = B(\beta)\,\omega` (seed 003 Eq. 11), unchecked."""
     return (omega(w) @ beta[..., None])[..., 0]
 
 
-def kinematics_jacobians(beta: np.ndarray, w: np.ndarray):
+def kinematics_jacobians(beta: FloatArray, w: FloatArray) -> tuple[FloatArray, FloatArray]:
     r"""(∂β̇/∂β, ∂β̇/∂ω) = (Ω(ω), B(β)) of :func:`quaternion_kinematics`, (..., 4, 4), (..., 4, 3)
     (:func:`flexsat.dynamics.attitude.omega_matrix`, ``quaternion_rate_matrix``)."""
     shape = np.broadcast_shapes(beta.shape[:-1], w.shape[:-1])
@@ -132,7 +140,7 @@ def kinematics_jacobians(beta: np.ndarray, w: np.ndarray):
     return Om, Bq
 
 
-def dcm(beta: np.ndarray) -> np.ndarray:
+def dcm(beta: FloatArray) -> FloatArray:
     """C(β), inertial to body (Schaub & Junkins Eq. 3.98), unchecked."""
     b0, b1, b2, b3 = (beta[..., i] for i in range(4))
     C = np.empty(beta.shape[:-1] + (3, 3))
@@ -148,7 +156,7 @@ def dcm(beta: np.ndarray) -> np.ndarray:
     return C
 
 
-def attitude_output(name: str, beta: np.ndarray, w: np.ndarray) -> np.ndarray:
+def attitude_output(name: str, beta: FloatArray, w: FloatArray) -> FloatArray:
     """The :data:`ATTITUDE_OUTPUTS` channel ``name`` from β (..., 4) and ω (..., 3)."""
     if name == "attitude":
         return beta
@@ -172,7 +180,7 @@ def attitude_output(name: str, beta: np.ndarray, w: np.ndarray) -> np.ndarray:
     raise KeyError(name)
 
 
-def normalize_quaternion(x: np.ndarray) -> np.ndarray:
+def normalize_quaternion(x: FloatArray) -> FloatArray:
     """x with its first four components (β) scaled to unit norm."""
     out = np.array(x, float)
     out[..., :4] /= np.linalg.norm(out[..., :4], axis=-1, keepdims=True)
@@ -196,12 +204,13 @@ class RigidSpacecraft(Plant):
     recorded = ("attitude", "euler123", "rate")
     nonlinear = True
 
-    def __init__(self, inertia):
+    def __init__(self, inertia: QuantityArrayLike) -> None:
         J = require_inertia(inertia)
         if J.ndim > 3:
             raise ValueError(f"inertia: must have shape (3, 3) or (n_cases, 3, 3), got {J.shape}")
         self.inertia = J
-        self.inertia_inverse = np.linalg.inv(J)
+        # numpy types inv() as floating[Any]; it is float64 here, so the astype copies nothing
+        self.inertia_inverse = np.linalg.inv(J).astype(np.float64, copy=False)
 
     @property
     def nx(self) -> int:
@@ -211,13 +220,13 @@ class RigidSpacecraft(Plant):
     def n_cases(self) -> int:
         return 1 if self.inertia.ndim == 2 else self.inertia.shape[0]
 
-    def initial_state(self, n_cases: int) -> np.ndarray:
+    def initial_state(self, n_cases: int) -> FloatArray:
         """At rest in the inertial attitude, β = (1, 0, 0, 0)."""
         x = np.zeros((n_cases, 7))
         x[:, 0] = 1.0
         return x
 
-    def state_from(self, **values) -> np.ndarray:
+    def state_from(self, **values: QuantityArrayLike) -> FloatArray:
         """Initial [β, ω] from ``attitude`` or ``euler123`` and ``rate``
         (:func:`attitude_state_from`)."""
         return attitude_state_from(self, values)
@@ -226,16 +235,16 @@ class RigidSpacecraft(Plant):
     def initial_values(self) -> tuple[str, ...]:
         return ("attitude", "euler123", "rate", "state")
 
-    def state(self, beta, w) -> np.ndarray:
+    def state(self, beta: npt.ArrayLike, w: npt.ArrayLike) -> FloatArray:
         """The state vector [β, ω] (..., 7) of attitude ``beta`` (unit) and rate ``w``."""
         b = require_quaternion(beta)
-        w = require_shape(w, "w", (3,))
-        shape = case_shape(beta=b.shape[:-1], w=w.shape[:-1])
+        rate = require_shape(w, "w", (3,))
+        shape = case_shape(beta=b.shape[:-1], w=rate.shape[:-1])
         return np.concatenate(
-            [np.broadcast_to(b, shape + (4,)), np.broadcast_to(w, shape + (3,))], -1
+            [np.broadcast_to(b, shape + (4,)), np.broadcast_to(rate, shape + (3,))], -1
         )
 
-    def linear_part(self):
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """A = 0, B = [0; I⁻¹] (7 × 3), with a leading case axis when the inertia has one."""
         Jinv = self.inertia_inverse
         A = np.zeros(Jinv.shape[:-2] + (7, 7))
@@ -244,11 +253,11 @@ class RigidSpacecraft(Plant):
         return A, B
 
     @property
-    def force_matrix(self) -> np.ndarray:
+    def force_matrix(self) -> FloatArray:
         """B_f = I₇: f carries the whole kinematics and the gyroscopic acceleration."""
         return np.eye(7)
 
-    def nonlinear_force(self, x, u) -> np.ndarray:
+    def nonlinear_force(self, x: FloatArray, u: FloatArray) -> FloatArray:
         r"""f = [Ω(ω)β, −I⁻¹ ω × Iω] (..., 7)."""
         beta, w = x[..., :4], x[..., 4:]
         f = np.empty(np.broadcast_shapes(x.shape, np.shape(u)[:-1] + (7,)))
@@ -256,7 +265,7 @@ class RigidSpacecraft(Plant):
         f[..., 4:] = -matvec(self.inertia_inverse, cross3(w, matvec(self.inertia, w)))
         return f
 
-    def force_jacobian(self, x, u):
+    def force_jacobian(self, x: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         r"""∂f/∂x (..., 7, 7): [[Ω(ω), B(β)], [0, I⁻¹([h×] − [ω×] I)]] with h = Iω, because
         :math:`d(-\omega\times h) = h\times d\omega - \omega\times I\,d\omega`; ∂f/∂u = 0."""
         beta, w = x[..., :4], x[..., 4:]
@@ -267,29 +276,29 @@ class RigidSpacecraft(Plant):
         Jx[..., 4:, 4:] = self.inertia_inverse @ (skew(h) - skew(w) @ self.inertia)
         return Jx, np.zeros(x.shape[:-1] + (7, 3))
 
-    def rhs(self, x, u) -> np.ndarray:
+    def rhs(self, x: FloatArray, u: FloatArray) -> FloatArray:
         """ẋ = A x + B u + B_f f(x, u), the full right-hand side (for reference integrators)."""
         f = self.nonlinear_force(x, u)
         f[..., 4:] += matvec(self.inertia_inverse, u)
         return f
 
-    def step(self, x, u, h) -> np.ndarray:
+    def step(self, x: FloatArray, u: FloatArray, h: float) -> FloatArray:
         """One RKMK4 step h (s) with the torque u held (:func:`~flexsat.dynamics.rigid_body.
         rkmk4_step`): fourth order, β unit to round-off."""
         J, Jinv = self.inertia, self.inertia_inverse
         u = np.asarray(u, float)
 
-        def rates(tau, theta, w):
+        def rates(tau: float, theta: FloatArray, w: FloatArray) -> tuple[FloatArray, FloatArray]:
             return dexpinv(theta, w), euler_acceleration(w, J, Jinv, u)
 
         beta, w = rkmk4_step(x[..., :4], x[..., 4:], h, rates)
         return np.concatenate([beta, w], -1)
 
-    def normalize(self, x) -> np.ndarray:
+    def normalize(self, x: FloatArray) -> FloatArray:
         """β scaled back to unit norm (after a generic integrator's step)."""
         return normalize_quaternion(x)
 
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         """Attitude and rate are components of x: C selects them (D = 0, no input force)."""
         if name not in ("attitude", "rate"):
             return None
@@ -297,21 +306,23 @@ class RigidSpacecraft(Plant):
         C = np.eye(7)[rows]
         return C, np.zeros((C.shape[0], 3)), None
 
-    def output(self, name: str, x, u=None, f_in=None) -> np.ndarray:
+    def output(
+        self, name: str, x: FloatArray, u: FloatArray | None = None, f_in: FloatArray | None = None
+    ) -> FloatArray:
         self._size(name)  # unknown names: a ValueError naming the channel
         return attitude_output(name, x[..., :4], x[..., 4:7])
 
-    def energy(self, x) -> np.ndarray:
+    def energy(self, x: FloatArray) -> FloatArray:
         """Kinetic energy ½ ωᵀIω, J."""
         w = x[..., 4:]
         return 0.5 * np.sum(w * matvec(self.inertia, w), axis=-1)
 
-    def power(self, x, u) -> np.ndarray:
+    def power(self, x: FloatArray, u: FloatArray) -> FloatArray:
         """dE/dt = ω · τ, W: Euler's equations I ω' = τ − ω × I ω dotted with ω (the
         gyroscopic term does no work)."""
         return np.sum(x[..., 4:] * np.asarray(u, float), axis=-1)
 
-    def momentum(self, x) -> np.ndarray:
+    def momentum(self, x: FloatArray) -> FloatArray:
         """Angular momentum about the centre of mass in inertial axes, C(β)ᵀ I ω, N m s."""
         h = matvec(self.inertia, x[..., 4:])
         return np.einsum("...ji,...j->...i", dcm(x[..., :4]), h)

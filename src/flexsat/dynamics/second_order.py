@@ -26,13 +26,26 @@ the hybrid coordinates of the NPS simulator, seed 001 Eqs. 10, 16).
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, TypeAlias
 
 import numpy as np
 import scipy.linalg
 
 from flexsat.input_checks import require_count, require_finite, require_positive
 from flexsat.structures.modal_model import hub_appendage_matrices
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    import control
+    from flexsat.dynamics.hub_appendage import HubAppendage
+    from flexsat.structures.modal_model import ModalModel, Output
+    from flexsat.units import FloatArray, QuantityLike
+
+    #: a continuous python-control ``StateSpace`` or its matrices (A, B, C, D)
+    StateSpaceLike: TypeAlias = control.StateSpace | tuple[npt.ArrayLike, ...] | list[npt.ArrayLike]
 
 __all__ = ["SecondOrderModel"]
 
@@ -41,7 +54,7 @@ __all__ = ["SecondOrderModel"]
 SYMMETRY_TOL = 1e-9
 
 
-def rigid_eigenvalue_bound(lam: np.ndarray) -> float:
+def rigid_eigenvalue_bound(lam: FloatArray) -> float:
     """Largest |λ| of eig(K, M) that is round-off of a rigid (λ = 0) mode.
 
     A backward-stable symmetric-definite solve perturbs each eigenvalue by about
@@ -56,7 +69,9 @@ def rigid_eigenvalue_bound(lam: np.ndarray) -> float:
     )
 
 
-def _matrix(value, field: str, shape: tuple[int | None, int | None], names: str) -> np.ndarray:
+def _matrix(
+    value: npt.ArrayLike, field: str, shape: tuple[int | None, int | None], names: str
+) -> FloatArray:
     arr = require_finite(value, field)
     if arr.ndim == 1:  # a vector: one column (length n) or one row (length of the columns)
         if shape[0] is not None and arr.size == shape[0] and shape[1] in (None, 1):
@@ -69,7 +84,7 @@ def _matrix(value, field: str, shape: tuple[int | None, int | None], names: str)
     return arr.copy()
 
 
-def _symmetric(arr: np.ndarray, field: str) -> np.ndarray:
+def _symmetric(arr: FloatArray, field: str) -> FloatArray:
     scale = max(np.abs(arr).max(initial=0.0), np.finfo(float).tiny)
     if np.abs(arr - arr.T).max(initial=0.0) > SYMMETRY_TOL * scale:
         raise ValueError(
@@ -79,7 +94,7 @@ def _symmetric(arr: np.ndarray, field: str) -> np.ndarray:
     return 0.5 * (arr + arr.T)
 
 
-@dataclass(frozen=True, eq=False, repr=False)
+@dataclass(frozen=True, eq=False, repr=False, init=False)
 class SecondOrderModel:
     r"""Linear second-order model :math:`M\ddot q + D\dot q + Kq = Bu`,
     :math:`y = C_q q + C_v \dot q + D_{ff} u`.
@@ -101,6 +116,9 @@ class SecondOrderModel:
     Dff : array_like (p, m), optional
         Feedthrough (default zero).
 
+    The attributes are the checked matrices as read-only float arrays (``Cv`` and ``Dff`` the
+    zero matrices when not given).
+
     Raises
     ------
     ValueError
@@ -108,16 +126,27 @@ class SecondOrderModel:
         positive definite, K not symmetric positive semi-definite.
     """
 
-    M: np.ndarray
-    D: np.ndarray
-    K: np.ndarray
-    B: np.ndarray
-    Cq: np.ndarray
-    Cv: np.ndarray | None = None
-    Dff: np.ndarray | None = None
+    M: FloatArray
+    D: FloatArray
+    K: FloatArray
+    B: FloatArray
+    Cq: FloatArray
+    Cv: FloatArray
+    Dff: FloatArray
 
-    def __post_init__(self):
-        M = _matrix(self.M, "M", (None, None), "(n, n)")
+    # the matrices arrive as any array_like and are stored checked: an explicit __init__ keeps
+    # the attributes' types (FloatArray) apart from the parameters' (array_like, Cv/Dff None)
+    def __init__(
+        self,
+        M: npt.ArrayLike,
+        D: npt.ArrayLike,
+        K: npt.ArrayLike,
+        B: npt.ArrayLike,
+        Cq: npt.ArrayLike,
+        Cv: npt.ArrayLike | None = None,
+        Dff: npt.ArrayLike | None = None,
+    ) -> None:
+        M = _matrix(M, "M", (None, None), "(n, n)")
         n = M.shape[0]
         if M.shape != (n, n) or n == 0:
             raise ValueError(f"M: must be a non-empty square matrix, got shape {M.shape}")
@@ -129,18 +158,18 @@ class SecondOrderModel:
                 f"M: must be positive definite (smallest eigenvalue "
                 f"{np.linalg.eigvalsh(M).min():.3g})"
             ) from None
-        D = _matrix(self.D, "D", (n, n), "(n, n)")
-        K = _symmetric(_matrix(self.K, "K", (n, n), "(n, n)"), "K")
+        D = _matrix(D, "D", (n, n), "(n, n)")
+        K = _symmetric(_matrix(K, "K", (n, n), "(n, n)"), "K")
         lam = np.linalg.eigvalsh(K)
         if lam.min(initial=0.0) < -SYMMETRY_TOL * max(np.abs(lam).max(initial=0.0), 1e-300):
             raise ValueError(
                 f"K: must be positive semi-definite (smallest eigenvalue {lam.min():.3g})"
             )
-        B = _matrix(self.B, "B", (n, None), "(n, m)")
-        Cq = _matrix(self.Cq, "Cq", (None, n), "(p, n)")
+        B = _matrix(B, "B", (n, None), "(n, m)")
+        Cq = _matrix(Cq, "Cq", (None, n), "(p, n)")
         p, m = Cq.shape[0], B.shape[1]
-        Cv = np.zeros((p, n)) if self.Cv is None else _matrix(self.Cv, "Cv", (p, n), "(p, n)")
-        Dff = np.zeros((p, m)) if self.Dff is None else _matrix(self.Dff, "Dff", (p, m), "(p, m)")
+        Cv = np.zeros((p, n)) if Cv is None else _matrix(Cv, "Cv", (p, n), "(p, n)")
+        Dff = np.zeros((p, m)) if Dff is None else _matrix(Dff, "Dff", (p, m), "(p, m)")
         for name, value in dict(M=M, D=D, K=K, B=B, Cq=Cq, Cv=Cv, Dff=Dff).items():
             value.flags.writeable = False
             object.__setattr__(self, name, value)
@@ -168,14 +197,14 @@ class SecondOrderModel:
     def n_outputs(self) -> int:
         return self.Cq.shape[0]
 
-    def _replace(self, **changes) -> SecondOrderModel:
+    def _replace(self, **changes: FloatArray) -> SecondOrderModel:
         fields = dict(M=self.M, D=self.D, K=self.K, B=self.B, Cq=self.Cq, Cv=self.Cv, Dff=self.Dff)
         fields.update(changes)
         return SecondOrderModel(**fields)
 
     # ------------------------------------------------------------------------------------------
     # first-order form
-    def first_order(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def first_order(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         r"""(A, B, C, D) of the realisation with state :math:`x = [q, \dot q]` (module docstring);
         :math:`M^{-1}` is applied by a Cholesky solve."""
         n = self.n_dof
@@ -188,7 +217,7 @@ class SecondOrderModel:
         Bx = np.vstack([np.zeros((n, self.n_inputs)), rhs[:, 2 * n :]])
         return A, Bx, np.hstack([self.Cq, self.Cv]), self.Dff.copy()
 
-    def to_statespace(self):
+    def to_statespace(self) -> control.StateSpace:
         """python-control ``StateSpace`` of :meth:`first_order` (states ``q[i]``, ``q_dot[i]``)."""
         import control
 
@@ -198,7 +227,11 @@ class SecondOrderModel:
 
     @classmethod
     def from_statespace(
-        cls, sys, n_dof: int | None = None, M=None, tol: float = 1e-10
+        cls,
+        sys: StateSpaceLike,
+        n_dof: int | None = None,
+        M: npt.ArrayLike | None = None,
+        tol: float = 1e-10,
     ) -> SecondOrderModel:
         r"""Second-order model of a continuous realisation in :math:`[q, \dot q]` form.
 
@@ -244,24 +277,24 @@ class SecondOrderModel:
             )
         return cls(Mm, -Mm @ A[n:, n:], K, Mm @ B[n:], C[:, :n], C[:, n:], Dff)
 
-    def discretize(self, dt, method: str = "zoh"):
+    def discretize(self, dt: QuantityLike, method: str = "zoh") -> control.StateSpace:
         """Discrete-time python-control ``StateSpace`` sampled at ``dt`` s.
 
         ``method`` is any of ``control.StateSpace.sample``'s ('zoh' exact for held inputs,
         'foh', 'bilinear'/'tustin', 'euler', 'backward_diff', 'impulse')."""
-        dt = float(require_positive(dt, "dt"))
+        step = float(require_positive(dt, "dt"))
         import control
 
-        return control.ss(*self.first_order()).sample(dt, method=method)
+        return control.ss(*self.first_order()).sample(step, method=method)
 
     # ------------------------------------------------------------------------------------------
     # modal form
-    def frequencies(self) -> np.ndarray:
+    def frequencies(self) -> FloatArray:
         """Undamped natural frequencies √eig(K, M), rad/s, ascending (rigid modes as 0)."""
         lam = scipy.linalg.eigh(self.K, self.M, eigvals_only=True)
         return np.sqrt(np.clip(lam, 0.0, None))
 
-    def modes(self) -> tuple[np.ndarray, np.ndarray]:
+    def modes(self) -> tuple[FloatArray, FloatArray]:
         r"""Undamped modes: frequencies ω (rad/s, ascending) and mass-normalised shapes Φ
         (columns, :math:`\Phi^T M \Phi = I`, :math:`\Phi^T K \Phi = \mathrm{diag}(\omega^2)`).
 
@@ -353,7 +386,7 @@ class SecondOrderModel:
     # ------------------------------------------------------------------------------------------
     # constructors from the models of #2 and #3
     @classmethod
-    def from_hub_appendage(cls, model) -> SecondOrderModel:
+    def from_hub_appendage(cls, model: HubAppendage) -> SecondOrderModel:
         r"""Hub + appendage model (:class:`~flexsat.dynamics.hub_appendage.HubAppendage`) in
         its coordinates (θ, q_1 … q_k): input the hub torque, outputs θ and θ'.
 
@@ -373,7 +406,9 @@ class SecondOrderModel:
         )
 
     @classmethod
-    def from_modal_model(cls, modal, inputs=(), outputs=()) -> SecondOrderModel:
+    def from_modal_model(
+        cls, modal: ModalModel, inputs: Sequence[npt.ArrayLike] = (), outputs: Sequence[Output] = ()
+    ) -> SecondOrderModel:
         r"""Modal model of a flexible body (``ModalModel.to_second_order``): M = I,
         D = diag(2ζω), K = diag(ω²) with the given modal influence inputs and
         (vector, 'displacement' | 'velocity') outputs."""
@@ -381,7 +416,14 @@ class SecondOrderModel:
         return cls(M, D, K, B, Cq, Cv)
 
     @classmethod
-    def from_hybrid(cls, modal, hub_inertia, axis="z", inputs=(), outputs=None) -> SecondOrderModel:
+    def from_hybrid(
+        cls,
+        modal: ModalModel,
+        hub_inertia: float,
+        axis: int | str = "z",
+        inputs: Iterable[npt.ArrayLike] = (),
+        outputs: Sequence[Output] | None = None,
+    ) -> SecondOrderModel:
         r"""Rigid hub carrying a cantilevered modal model, in hybrid coordinates (θ, η)
         (seed 001 Eqs. 10, 16; ``flexsat.structures.modal_model.hub_appendage_matrices``):
 
@@ -399,8 +441,8 @@ class SecondOrderModel:
         M, D, K = hub_appendage_matrices(modal, hub_inertia, axis=axis)
         n = M.shape[0]
         cols = [np.eye(n, 1)]
-        for i, v in enumerate(inputs):
-            v = require_finite(v, f"inputs[{i}]")
+        for i, given in enumerate(inputs):
+            v = require_finite(given, f"inputs[{i}]")
             if v.shape != (n - 1,):
                 raise ValueError(f"inputs[{i}]: must have shape (m,) = ({n - 1},), got {v.shape}")
             cols.append(np.concatenate([[0.0], v])[:, None])
@@ -411,8 +453,8 @@ class SecondOrderModel:
         else:
             Cq, Cv = np.zeros((len(outputs), n)), np.zeros((len(outputs), n))
             for i, item in enumerate(outputs):
-                row, kind = item
-                row = require_finite(row, f"outputs[{i}]")
+                values, kind = item
+                row = require_finite(values, f"outputs[{i}]")
                 if row.shape != (n,) or kind not in ("displacement", "velocity"):
                     raise ValueError(
                         f"outputs[{i}]: must be (row of shape ({n},), "
@@ -422,7 +464,7 @@ class SecondOrderModel:
         return cls(M, D, K, B, Cq, Cv)
 
 
-def _abcd(sys):
+def _abcd(sys: StateSpaceLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """(A, B, C, D) float arrays of a StateSpace or a 4-tuple, continuous only."""
     if isinstance(sys, (tuple, list)):
         if len(sys) != 4:
@@ -433,11 +475,10 @@ def _abcd(sys):
         if dt not in (0, None):
             raise ValueError(f"sys: must be continuous-time, got dt = {dt}")
         A, B, C, D = sys.A, sys.B, sys.C, sys.D
-    A = require_finite(A, "A")
-    if A.ndim != 2 or A.shape[0] != A.shape[1]:
-        raise ValueError(f"A: must be square, got shape {A.shape}")
-    nx = A.shape[0]
-    B = _matrix(B, "B", (nx, None), "(n, m)")
-    C = _matrix(C, "C", (None, nx), "(p, n)")
-    D = _matrix(D, "D", (C.shape[0], B.shape[1]), "(p, m)")
-    return A, B, C, D
+    Af = require_finite(A, "A")
+    if Af.ndim != 2 or Af.shape[0] != Af.shape[1]:
+        raise ValueError(f"A: must be square, got shape {Af.shape}")
+    nx = Af.shape[0]
+    Bf = _matrix(B, "B", (nx, None), "(n, m)")
+    Cf = _matrix(C, "C", (None, nx), "(p, n)")
+    return Af, Bf, Cf, _matrix(D, "D", (Cf.shape[0], Bf.shape[1]), "(p, m)")

@@ -39,13 +39,21 @@ secular component"). Its magnitudes are assumptions, documented in docs/cmg.md.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, TypeAlias
 
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
 from flexsat.input_checks import require_finite, require_positive_scalar
 from flexsat.units import to_si_array
+
+if TYPE_CHECKING:
+    from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
+
+    #: (A, B, E, state names) of x' = A x + B u + E w (:func:`pitch_model`, :func:`roll_yaw_model`)
+    LinearModel: TypeAlias = tuple[FloatArray, FloatArray, FloatArray, list[str]]
 
 __all__ = [
     "SpaceStation",
@@ -79,11 +87,11 @@ class StationData:
         h per CMG, N m s (Table 2: ``"3500 lbf*ft*s"``).
     """
 
-    inertia: tuple
+    inertia: tuple[float, float, float]
     orbit_rate: float
     rotor_momentum: float
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if len(self.inertia) != 3:
             raise ValueError(
                 f"inertia: three principal moments (roll, pitch, yaw), got {self.inertia!r}"
@@ -108,7 +116,7 @@ class StationData:
         return 2.0 * np.pi / self.orbit_rate
 
 
-def _filters(filters, field):
+def _filters(filters: Iterable[int], field: str) -> tuple[int, ...]:
     ks = tuple(filters)
     for k in ks:
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
@@ -120,7 +128,14 @@ def _filters(filters, field):
     return ks
 
 
-def _add_filters(A, attitude_index, ks, n, names, label):
+def _add_filters(
+    A: FloatArray,
+    attitude_index: int,
+    ks: tuple[int, ...],
+    n: float,
+    names: list[str],
+    label: str,
+) -> FloatArray:
     """Append α̈ + (kn)²α = θ (Eq. 12) for each k, driven by state ``attitude_index``."""
     size = A.shape[0]
     out = np.zeros((size + 2 * len(ks),) * 2)
@@ -134,7 +149,7 @@ def _add_filters(A, attitude_index, ks, n, names, label):
     return out
 
 
-def pitch_model(data: StationData, filters=(1, 2)):
+def pitch_model(data: StationData, filters: Iterable[int] = (1, 2)) -> LinearModel:
     """Pitch axis of Eq. (8)–(10) with ∫h2 and the filters of Eq. (12).
 
     State [θ2, θ̇2, h2, ∫h2 dt, (α_k, α̇_k) for k in ``filters``]; input u2 (N m); disturbance
@@ -162,7 +177,7 @@ def pitch_model(data: StationData, filters=(1, 2)):
     return A, B, E, names
 
 
-def roll_yaw_model(data: StationData, filters=(2,)):
+def roll_yaw_model(data: StationData, filters: Iterable[int] = (2,)) -> LinearModel:
     """Roll/yaw axes of Eq. (8)–(10) with ∫h1, ∫h3 and the filters of Eq. (12) on θ1 and θ3.
 
     State [θ1, ω1, h1, ∫h1, θ3, ω3, h3, ∫h3, filters on θ1, filters on θ3]; inputs (u1, u3);
@@ -196,7 +211,7 @@ def roll_yaw_model(data: StationData, filters=(2,)):
     return A, B, E, names
 
 
-def design_disturbance(t, data: StationData) -> np.ndarray:
+def design_disturbance(t: QuantityArrayLike, data: StationData) -> FloatArray:
     """Eq. (11): w1 = w3 = 1 + sin nt + 0.5 sin 2nt, w2 = 4 + 2 sin nt + 0.5 sin 2nt ft-lb,
     in N m, shape (..., 3) (roll, pitch, yaw)."""
     tt = require_finite(t, "t", "s")
@@ -206,7 +221,12 @@ def design_disturbance(t, data: StationData) -> np.ndarray:
     return FT_LB * np.stack([roll, 4.0 + 2.0 * s1 + 0.5 * s2, roll], axis=-1)
 
 
-def aero_substitute(t, data: StationData, harmonic=0.5 * FT_LB, secular=1.0 * FT_LB) -> np.ndarray:
+def aero_substitute(
+    t: QuantityArrayLike,
+    data: StationData,
+    harmonic: QuantityLike = 0.5 * FT_LB,
+    secular: QuantityLike = 1.0 * FT_LB,
+) -> FloatArray:
     """The stated substitute for the paper's AERO1 (module docstring): Eq. (11) plus
     ``harmonic`` × (sin 3nt + sin 4nt) on each axis and a pitch torque growing by ``secular``
     per orbit (N m or unit strings; defaults 0.5 and 1 ft-lb); N m, shape (..., 3)."""
@@ -234,6 +254,8 @@ class SpaceStation(Plant):
     pitch_filters, roll_yaw_filters : sequence of int
         The filter frequencies (multiples k of n) of Eq. (12) on each axis group.
 
+    Notes
+    -----
     Inputs ``torque`` u = (u1, u2, u3), the CMG torque (N m; the station feels −u) and
     ``disturbance`` w = (w1, w2, w3) (N m). Outputs ``state``, ``attitude`` (θ1, θ2, θ3, rad)
     and ``momentum`` (h1, h2, h3, N m s). Linear: the engine propagates it exactly.
@@ -241,7 +263,12 @@ class SpaceStation(Plant):
 
     recorded = ("attitude", "momentum")
 
-    def __init__(self, data: StationData, pitch_filters=(1, 2), roll_yaw_filters=(2,)):
+    def __init__(
+        self,
+        data: StationData,
+        pitch_filters: Iterable[int] = (1, 2),
+        roll_yaw_filters: Iterable[int] = (2,),
+    ) -> None:
         self.data = data
         self.pitch = pitch_model(data, pitch_filters)
         self.roll_yaw = roll_yaw_model(data, roll_yaw_filters)
@@ -261,7 +288,7 @@ class SpaceStation(Plant):
     def nx(self) -> int:
         return self.n_pitch + self.roll_yaw[0].shape[0]
 
-    def linear_part(self):
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """A block-diagonal; B from u2 (pitch) and u1, u3 (roll/yaw), then E likewise from w."""
         Ap, Bp, Ep, _ = self.pitch
         Ar, Br, Er, _ = self.roll_yaw
@@ -273,7 +300,7 @@ class SpaceStation(Plant):
         B[npitch:, [0, 2]], B[npitch:, [3, 5]] = Br, Er
         return A, B
 
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         n = self.nx
         if name == "state":
             return np.eye(n), np.zeros((n, 6)), None

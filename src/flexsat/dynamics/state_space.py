@@ -8,10 +8,17 @@ channel the whole output vector, unless named channels are given.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
 from flexsat.input_checks import require_finite
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray
 
 __all__ = ["StateSpacePlant"]
 
@@ -31,15 +38,15 @@ class StateSpacePlant(Plant):
 
     def __init__(
         self,
-        A,
-        B,
-        C,
-        D,
+        A: npt.ArrayLike,
+        B: npt.ArrayLike,
+        C: npt.ArrayLike,
+        D: npt.ArrayLike,
         input_name: str = "u",
         output_name: str = "y",
         input_unit: str = "",
         output_unit: str = "",
-    ):
+    ) -> None:
         self.A, self.B = require_finite(A, "A"), require_finite(B, "B")
         self.C, self.D = require_finite(C, "C"), require_finite(D, "D")
         n = self.A.shape[0] if self.A.ndim == 2 else -1
@@ -64,10 +71,10 @@ class StateSpacePlant(Plant):
     def nx(self) -> int:
         return self.A.shape[0]
 
-    def linear_part(self):
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         return self.A, self.B
 
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         if name == self.outputs[0].name:
             return self.C, self.D, None
         if name == "state":

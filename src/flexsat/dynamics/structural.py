@@ -34,8 +34,10 @@ the pair times ``gain`` (seed 004 Eq. 37, :math:`y = a_2 M`: with ``gain`` =
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING, Self, TypeAlias, cast
 
 import numpy as np
 
@@ -43,6 +45,16 @@ from flexsat.dynamics.plant import Channel, Plant, find_channel
 from flexsat.dynamics.second_order import SecondOrderModel
 from flexsat.input_checks import require_finite
 from flexsat.units import parse_quantity
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+    import scipy.sparse
+
+    from flexsat.structures.modal_model import Direction, ModalModel
+    from flexsat.units import FloatArray
+
+    #: a dense matrix or a scipy.sparse one (:meth:`StructuralPlant.from_fe`)
+    Matrix: TypeAlias = npt.ArrayLike | scipy.sparse.spmatrix | scipy.sparse.sparray
 
 __all__ = ["Actuator", "ModalBlocks", "Sensor", "StructuralPlant"]
 
@@ -75,7 +87,7 @@ class Actuator:
     name: str
     kind: str
     at: object
-    axis: object = None
+    axis: Direction | None = None
     gain: float = 1.0
     unit: str | None = None
 
@@ -102,7 +114,7 @@ class Sensor:
     name: str
     kind: str
     at: object
-    axis: object = None
+    axis: Direction | None = None
     gain: float = 1.0
     rate: bool = False
     unit: str | None = None
@@ -118,9 +130,14 @@ class ModalBlocks:
     integrator block).
     """
 
-    frequencies: np.ndarray  # ω, rad/s
-    damping: np.ndarray  # ζ (0 for a rigid mode)
+    frequencies: FloatArray  # ω, rad/s
+    damping: FloatArray  # ζ (0 for a rigid mode)
     n_rigid: int
+
+
+def _dense(matrix: Matrix) -> npt.ArrayLike:
+    """A scipy.sparse matrix as a dense array; anything else as given."""
+    return matrix.toarray() if hasattr(matrix, "toarray") else matrix
 
 
 def _unit(unit: str, field: str) -> str:
@@ -142,8 +159,10 @@ def _rate_unit(unit: str) -> str:
 class _Dofs:
     """Resolves specs on generalised coordinates (dof index, dof label or influence vector)."""
 
-    def __init__(self, n: int, labels=None, fixed=()):
-        def key(d):
+    def __init__(
+        self, n: int, labels: Iterable[object] | None = None, fixed: Iterable[object] = ()
+    ) -> None:
+        def key(d: object) -> object:
             return tuple(d) if isinstance(d, (tuple, list)) else d
 
         self.n = n
@@ -152,7 +171,7 @@ class _Dofs:
             raise ValueError(f"dofs: {len(self.labels)} labels for {n} coordinates")
         self.fixed = {key(d) for d in fixed}
 
-    def _dof(self, at, name: str) -> int | None:
+    def _dof(self, at: object, name: str) -> int | None:
         """Index of a dof, or None for a fixed (supported) one: a load there goes into the
         support and a sensor there reads zero."""
         if (tuple(at) if isinstance(at, (tuple, list)) else at) in self.fixed:
@@ -172,7 +191,7 @@ class _Dofs:
             + " or an influence vector)"
         )
 
-    def vector(self, spec, pair: bool) -> np.ndarray:
+    def vector(self, spec: Actuator | Sensor, pair: bool) -> FloatArray:
         name = spec.name
         if spec.axis is not None:
             raise ValueError(f"{name}: axis applies to modal coordinates only (give the dof)")
@@ -223,11 +242,11 @@ class _Dofs:
 class _Modes:
     """Resolves specs on a ModalModel's modal coordinates (node, axis)."""
 
-    def __init__(self, modal):
+    def __init__(self, modal: ModalModel) -> None:
         self.modal = modal
         self.n = modal.n_modes
 
-    def vector(self, spec, pair: bool) -> np.ndarray:
+    def vector(self, spec: Actuator | Sensor, pair: bool) -> FloatArray:
         name, at, m = spec.name, spec.at, self.modal
         if spec.axis is None:
             raise ValueError(f"{name}: give the axis (or direction) on a modal model")
@@ -236,17 +255,23 @@ class _Modes:
                 if not isinstance(at, (tuple, list)) or len(at) != 2:
                     raise ValueError(f"needs a node pair (node_a, node_b), got {at!r}")
                 return m.moment_pair(at[0], at[1], spec.axis)
+            node = cast(int, at)  # any spec may arrive here: the modal model checks the node id
             if spec.kind in ("force", "displacement"):
-                return m.force_input(at, spec.axis)
-            return m.torque_input(at, spec.axis)
+                return m.force_input(node, spec.axis)
+            return m.torque_input(node, spec.axis)
         except ValueError as err:
             raise ValueError(f"{name}: {err}") from None
 
 
-def _resolve(specs, kinds: dict, role: str, locator) -> tuple[tuple[Channel, ...], list, list]:
+def _resolve(
+    specs: Iterable[Actuator | Sensor], kinds: dict[str, str], role: str, locator: _Dofs | _Modes
+) -> tuple[tuple[Channel, ...], list[FloatArray], list[bool]]:
     """Channels, their vectors over the coordinates, and (outputs) whether they read rates."""
     spec_type = Actuator if role == "input" else Sensor
-    channels, vectors, rates, seen = [], [], [], set()
+    channels: list[Channel] = []
+    vectors: list[FloatArray] = []
+    rates: list[bool] = []
+    seen: set[str] = set()
     for i, spec in enumerate(specs):
         if not isinstance(spec, spec_type):
             raise ValueError(f"{role}s[{i}]: must be a {spec_type.__name__}, got {spec!r}")
@@ -287,7 +312,9 @@ class StructuralPlant(Plant):
         The channels, in the order of B's columns and of the output rows.
     """
 
-    def __init__(self, model: SecondOrderModel, inputs, outputs):
+    def __init__(
+        self, model: SecondOrderModel, inputs: Iterable[Channel], outputs: Iterable[Channel]
+    ) -> None:
         if not isinstance(model, SecondOrderModel):
             raise ValueError(f"model: must be a SecondOrderModel, got {type(model).__name__}")
         self.inputs, self.outputs = tuple(inputs), tuple(outputs)
@@ -313,7 +340,15 @@ class StructuralPlant(Plant):
 
     # -- constructors --------------------------------------------------------------------------
     @classmethod
-    def _build(cls, M, D, K, locator, inputs, outputs):
+    def _build(
+        cls,
+        M: npt.ArrayLike,
+        D: npt.ArrayLike,
+        K: npt.ArrayLike,
+        locator: _Dofs | _Modes,
+        inputs: Iterable[Actuator],
+        outputs: Iterable[Sensor],
+    ) -> Self:
         in_ch, b_cols, _ = _resolve(inputs, INPUT_KINDS, "input", locator)
         out_ch, rows, rates = _resolve(outputs, OUTPUT_KINDS, "output", locator)
         n = locator.n
@@ -324,7 +359,13 @@ class StructuralPlant(Plant):
         return cls(SecondOrderModel(M, D, K, B, Cq, Cv), in_ch, out_ch)
 
     @classmethod
-    def from_second_order(cls, model: SecondOrderModel, inputs=(), outputs=(), dofs=None):
+    def from_second_order(
+        cls,
+        model: SecondOrderModel,
+        inputs: Iterable[Actuator] = (),
+        outputs: Iterable[Sensor] = (),
+        dofs: Iterable[object] | None = None,
+    ) -> Self:
         """Channels on the coordinates q of ``model`` (its own B, Cq, Cv are not used).
 
         ``inputs`` are :class:`Actuator` s, ``outputs`` :class:`Sensor` s; ``dofs`` optionally
@@ -335,20 +376,30 @@ class StructuralPlant(Plant):
         return cls._build(model.M, model.D, model.K, _Dofs(model.n_dof, dofs), inputs, outputs)
 
     @classmethod
-    def from_fe(cls, M, K, inputs=(), outputs=(), D=None, dofs=None, fixed=()):
+    def from_fe(
+        cls,
+        M: Matrix,
+        K: Matrix,
+        inputs: Iterable[Actuator] = (),
+        outputs: Iterable[Sensor] = (),
+        D: Matrix | None = None,
+        dofs: Iterable[object] | None = None,
+        fixed: Iterable[object] = (),
+    ) -> Self:
         """Finite-element (or any generalised-coordinate) matrices M, K and damping D (default
         zero); dense or scipy.sparse. ``dofs`` labels the rows, e.g. ``Assembly.dofs``
         ((node, "uy"), (node, "rz"), ...), so that specs can say ``at=(12, "rz")``; ``fixed``
         labels supported dofs (not in the matrices): one end of a moment pair or strain pair may
         sit there (a patch at a clamped root, seed 004 L349), contributing nothing."""
-        M = M.toarray() if hasattr(M, "toarray") else M
-        K = K.toarray() if hasattr(K, "toarray") else K
-        n = np.shape(M)[0] if np.ndim(M) == 2 else 0
-        D = np.zeros((n, n)) if D is None else (D.toarray() if hasattr(D, "toarray") else D)
-        return cls._build(M, D, K, _Dofs(n, dofs, fixed), inputs, outputs)
+        Md, Kd = _dense(M), _dense(K)
+        n = np.shape(Md)[0] if np.ndim(Md) == 2 else 0
+        Dd = np.zeros((n, n)) if D is None else _dense(D)
+        return cls._build(Md, Dd, Kd, _Dofs(n, dofs, fixed), inputs, outputs)
 
     @classmethod
-    def from_modal_model(cls, modal, inputs=(), outputs=()):
+    def from_modal_model(
+        cls, modal: ModalModel, inputs: Iterable[Actuator] = (), outputs: Iterable[Sensor] = ()
+    ) -> Self:
         r"""Modal coordinates η of a :class:`~flexsat.structures.modal_model.ModalModel`:
         M = I, D = diag(2ζω), K = diag(ω²) (``ModalModel.to_second_order``); specs name nodes
         and axes (module docstring). :attr:`modal_blocks` then gives (ω, ζ)."""
@@ -361,18 +412,18 @@ class StructuralPlant(Plant):
         return self.model.n_states
 
     @cached_property
-    def _first_order(self):
+    def _first_order(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         A, B, C, _ = self.model.first_order()
         for arr in (A, B, C):
             arr.flags.writeable = False
         return A, B, C
 
-    def linear_part(self) -> tuple[np.ndarray, np.ndarray]:
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """(A, B) of the first-order form (module docstring)."""
         A, B, _ = self._first_order
         return A, B
 
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         """(C (1, 2n), D = 0 (1, m), None): every output is linear in the state."""
         find_channel(self.outputs, name, "output", type(self).__name__)
         if name == "state":
@@ -380,12 +431,12 @@ class StructuralPlant(Plant):
         i = [c.name for c in self.outputs].index(name)
         return self._first_order[2][i : i + 1], np.zeros((1, self.n_inputs)), None
 
-    def derivative(self, x, u) -> np.ndarray:
+    def derivative(self, x: npt.ArrayLike, u: npt.ArrayLike) -> FloatArray:
         """ẋ = A x + B u for states (..., 2n) and inputs (..., m)."""
         A, B = self.linear_part()
         return np.asarray(x, float) @ A.T + np.asarray(u, float) @ B.T
 
-    def energy(self, x) -> np.ndarray:
+    def energy(self, x: FloatArray) -> FloatArray:
         r"""Mechanical energy :math:`\tfrac12\dot q^T M\dot q + \tfrac12 q^T K q`, J, (...,)."""
         x = np.asarray(x, dtype=float)
         n = self.model.n_dof
@@ -395,14 +446,20 @@ class StructuralPlant(Plant):
         )
 
     @property
-    def energy_matrix(self) -> np.ndarray:
+    def energy_matrix(self) -> FloatArray:
         r"""Q = blockdiag(K, M) of :meth:`energy` = :math:`\tfrac12 x^T Q x`, x = [q, q̇]."""
         n = self.model.n_dof
         Q = np.zeros((2 * n, 2 * n))
         Q[:n, :n], Q[n:, n:] = self.model.K, self.model.M
         return Q
 
-    def power(self, x, u) -> np.ndarray:
+    @energy_matrix.setter
+    def energy_matrix(self, Q: FloatArray | None) -> None:
+        raise AttributeError(
+            f"energy_matrix: {type(self).__name__}'s is blockdiag(K, M) of its model (read-only)"
+        )
+
+    def power(self, x: FloatArray, u: FloatArray) -> FloatArray:
         r"""Rate of :meth:`energy`, :math:`\dot q^T B u - \dot q^T D \dot q` (the work of the
         inputs less the dissipation), W, (...,)."""
         x, u = np.asarray(x, dtype=float), np.asarray(u, dtype=float)

@@ -38,11 +38,17 @@ case axis; a closed-loop run is the engine's (:func:`flexsat.cases.tether.closed
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
 from flexsat.input_checks import require_finite, require_positive
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
 
 __all__ = [
     "EARTH_MU",
@@ -72,7 +78,7 @@ MIN_LENGTH = 1e-4
 CONTROLS = ("tension", "rate")
 
 
-def require_lengths(lam, field: str = "lambda") -> np.ndarray:
+def require_lengths(lam: npt.ArrayLike, field: str = "lambda") -> FloatArray:
     """``lam`` as a float array of nondimensional tether lengths, each finite and > 0 (Eq. 4
     divides by λ: a zero or negative length is no tether)."""
     arr = require_finite(lam, field)
@@ -81,7 +87,9 @@ def require_lengths(lam, field: str = "lambda") -> np.ndarray:
     return arr
 
 
-def accelerations(x, tension, thrust) -> np.ndarray:
+def accelerations(
+    x: FloatArray, tension: float | FloatArray, thrust: float | FloatArray
+) -> FloatArray:
     r"""(λ'', θ'', φ'') of Eq. 4 at nondimensional states x = [λ, θ, φ, λ', θ', φ'] (..., 6),
     tension T̂ and thrust F̂ (...,); unchecked (a kernel)."""
     lam, th, ph, dl, dth, dph = (x[..., i] for i in range(6))
@@ -94,7 +102,9 @@ def accelerations(x, tension, thrust) -> np.ndarray:
     return out
 
 
-def rate_control_accelerations(x, length_rate, thrust) -> np.ndarray:
+def rate_control_accelerations(
+    x: FloatArray, length_rate: npt.ArrayLike, thrust: float | FloatArray
+) -> FloatArray:
     r"""(θ'', φ'') of Eq. 4 with the length rate λ' as the control, at nondimensional states
     x = [λ, θ, φ, θ', φ'] (..., 5); unchecked."""
     full = np.concatenate(
@@ -103,7 +113,12 @@ def rate_control_accelerations(x, length_rate, thrust) -> np.ndarray:
     return accelerations(full, 0.0, thrust)[..., 1:]
 
 
-def integral_of_motion(theta, phi, theta_rate, phi_rate) -> np.ndarray:
+def integral_of_motion(
+    theta: float | FloatArray,
+    phi: float | FloatArray,
+    theta_rate: float | FloatArray,
+    phi_rate: float | FloatArray,
+) -> FloatArray:
     r"""V1 of Eq. 8, :math:`\tfrac12(\theta'^2\cos^2\phi + 3\sin^2\theta\cos^2\phi + \phi'^2 +
     4\sin^2\phi)` (nondimensional rates)."""
     c2 = np.cos(phi) ** 2
@@ -112,13 +127,13 @@ def integral_of_motion(theta, phi, theta_rate, phi_rate) -> np.ndarray:
     )
 
 
-def integral_of_motion_rate(x, thrust=0.0) -> np.ndarray:
+def integral_of_motion_rate(x: FloatArray, thrust: float | FloatArray = 0.0) -> FloatArray:
     r"""V1' of Eq. 9 with the thrust term φ'F̂/λ at x = [λ, θ, φ, λ', θ', φ']."""
     lam, ph, dl, dth, dph = x[..., 0], x[..., 2], x[..., 3], x[..., 4], x[..., 5]
     return -2.0 * dl / lam * (dth * (1.0 + dth) * np.cos(ph) ** 2 + dph**2) + dph * thrust / lam
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class TetherScales:
     """The scales of the nondimensional form: Ω, m and L (seed 000 L4329).
 
@@ -133,35 +148,45 @@ class TetherScales:
     length : float, str or Quantity
         Reference tether length L, m (> 0).
 
+    Notes
+    -----
     The paper's case (L4397-L4401): 220 km (Ω = 0.07068 rad/min), m = 22.7 kg, L = 20 km, so
     one unit of T̂ or F̂ is mΩ²L = 0.630 N, of ∫|F̂|dτ mΩL = 534.8 N s, of λ' LΩ = 23.56 m/s.
     """
 
-    mass: float = 1.0
-    length: float = 1.0
-    orbit_rate: float | None = None
-    altitude: float | None = None
+    mass: float
+    length: float
+    orbit_rate: float
+    altitude: float | None
 
-    def __post_init__(self):
-        object.__setattr__(self, "mass", float(require_positive(self.mass, "mass", "kg")))
-        object.__setattr__(self, "length", float(require_positive(self.length, "length", "m")))
-        if (self.orbit_rate is None) == (self.altitude is None):
-            if self.orbit_rate is None:  # neither: the nondimensional form itself
-                object.__setattr__(self, "orbit_rate", 1.0)
-                return
+    # the scales arrive as numbers, Quantities or unit strings (the orbit as its rate or its
+    # altitude) and are stored in SI: an explicit __init__ keeps the attributes' types apart
+    # from the parameters'
+    def __init__(
+        self,
+        mass: QuantityLike = 1.0,
+        length: QuantityLike = 1.0,
+        orbit_rate: QuantityLike | None = None,
+        altitude: QuantityLike | None = None,
+    ) -> None:
+        object.__setattr__(self, "mass", float(require_positive(mass, "mass", "kg")))
+        object.__setattr__(self, "length", float(require_positive(length, "length", "m")))
+        if orbit_rate is not None and altitude is not None:
             raise ValueError("orbit_rate: give the orbit rate or the altitude, not both")
-        if self.altitude is not None:
-            h = float(require_finite(self.altitude, "altitude", "m"))
-            if h < 0:
-                raise ValueError(f"altitude: must be >= 0 (above the Earth's surface), got {h} m")
-            object.__setattr__(self, "altitude", h)
-            object.__setattr__(
-                self, "orbit_rate", float(np.sqrt(EARTH_MU / (EARTH_RADIUS + h) ** 3))
-            )
-        else:
-            object.__setattr__(
-                self, "orbit_rate", float(require_positive(self.orbit_rate, "orbit_rate", "rad/s"))
-            )
+        height = None
+        if altitude is not None:
+            height = float(require_finite(altitude, "altitude", "m"))
+            if height < 0:
+                raise ValueError(
+                    f"altitude: must be >= 0 (above the Earth's surface), got {height} m"
+                )
+            rate = float(np.sqrt(EARTH_MU / (EARTH_RADIUS + height) ** 3))
+        elif orbit_rate is not None:
+            rate = float(require_positive(orbit_rate, "orbit_rate", "rad/s"))
+        else:  # neither: the nondimensional form itself
+            rate = 1.0
+        object.__setattr__(self, "orbit_rate", rate)
+        object.__setattr__(self, "altitude", height)
 
     @property
     def force(self) -> float:
@@ -183,15 +208,15 @@ class TetherScales:
         """Orbital period 2π/Ω, s."""
         return 2.0 * np.pi / self.orbit_rate
 
-    def state_to_si(self, xhat: np.ndarray) -> np.ndarray:
+    def state_to_si(self, xhat: FloatArray) -> FloatArray:
         """[λ, θ, φ, (λ'), θ', φ'] → [l, θ, φ, (l̇), θ̇, φ̇] (6 or 5 entries)."""
         return np.asarray(xhat, float) * self._factors(np.shape(xhat)[-1])
 
-    def state_from_si(self, x: np.ndarray) -> np.ndarray:
+    def state_from_si(self, x: FloatArray) -> FloatArray:
         """[l, θ, φ, (l̇), θ̇, φ̇] → [λ, θ, φ, (λ'), θ', φ']."""
         return np.asarray(x, float) / self._factors(np.shape(x)[-1])
 
-    def _factors(self, n: int) -> np.ndarray:
+    def _factors(self, n: int) -> FloatArray:
         W, L = self.orbit_rate, self.length
         if n == 6:
             return np.array([L, 1.0, 1.0, L * W, W, W])
@@ -214,6 +239,8 @@ class TetheredSubsatellite(Plant):
         ``rate``: inputs ``reel_rate`` (the commanded l̇, m/s) and ``thrust``, state
         [l, θ, φ, θ̇, φ̇].
 
+    Notes
+    -----
     In the protocol's form the kinematics (and, with rate control, l̇ = u) are the linear part;
     −T/m enters through B; the rest of the accelerations (ΩL²-scaled Eq. 4) is the nonlinear
     force with B_f selecting the three (two) acceleration rows. The engine propagates it with
@@ -230,7 +257,7 @@ class TetheredSubsatellite(Plant):
     domain_rule = f"length: the tether collapsed (length below {MIN_LENGTH:g} L)"
     recorded = ("length", "pitch", "roll", "length_rate", "integral_of_motion")
 
-    def __init__(self, scales: TetherScales | None = None, control: str = "tension"):
+    def __init__(self, scales: TetherScales | None = None, control: str = "tension") -> None:
         if control not in CONTROLS:
             raise ValueError(f"control: must be one of {CONTROLS}, got {control!r}")
         self.scales = TetherScales() if scales is None else scales
@@ -262,7 +289,7 @@ class TetheredSubsatellite(Plant):
         return 6 if self.control == "tension" else 5
 
     # -- the protocol's split -----------------------------------------------------------------
-    def linear_part(self):
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
         """A: the kinematics (l̇, θ̇, φ̇ rows); B: −1/m on l̈ (tension) or 1 on l̇ (rate)."""
         n = self.nx
         A = np.zeros((n, n))
@@ -276,18 +303,20 @@ class TetheredSubsatellite(Plant):
         return A, B
 
     @property
-    def force_matrix(self) -> np.ndarray:
+    def force_matrix(self) -> FloatArray:
         n = self.nx
         Bf = np.zeros((n, n - 3))
         Bf[3:, :] = np.eye(n - 3)
         return Bf
 
-    def _nondimensional(self, x, u):
+    def _nondimensional(
+        self, x: FloatArray, u: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
         s = self.scales
         xhat = x / s._factors(self.nx)
         return xhat, u[..., 0], u[..., 1] / s.force
 
-    def nonlinear_force(self, x, u) -> np.ndarray:
+    def nonlinear_force(self, x: FloatArray, u: FloatArray) -> FloatArray:
         """The accelerations of Eq. 4 in SI less the linear −T/m (module docstring)."""
         s = self.scales
         W2 = s.orbit_rate**2
@@ -297,19 +326,19 @@ class TetheredSubsatellite(Plant):
             return acc * np.array([s.length * W2, W2, W2])
         return rate_control_accelerations(xhat, u0 / s.speed, Fhat) * W2
 
-    def rhs(self, x, u) -> np.ndarray:
+    def rhs(self, x: FloatArray, u: FloatArray) -> FloatArray:
         """ẋ = A x + B u + B_f f(x, u), SI."""
         A, B = self.linear_part()
         return x @ A.T + u @ B.T + self.nonlinear_force(x, u) @ self.force_matrix.T
 
-    def domain_margin(self, x) -> np.ndarray:
+    def domain_margin(self, x: npt.ArrayLike) -> FloatArray:
         """λ − :data:`MIN_LENGTH` per case (the model holds while > 0), x (..., n_x) SI."""
         return np.asarray(x, float)[..., 0] / self.scales.length - MIN_LENGTH
 
     # -- outputs ---------------------------------------------------------------------------
     _ROWS = {"length": 0, "pitch": 1, "roll": 2}
 
-    def output_matrices(self, name: str):
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         n = self.nx
         rows = dict(self._ROWS)
         rows.update(
@@ -325,7 +354,9 @@ class TetheredSubsatellite(Plant):
             return np.eye(n)[[rows[name]]], np.zeros((1, 2)), None
         return None
 
-    def output(self, name: str, x, u=None, f_in=None) -> np.ndarray:
+    def output(
+        self, name: str, x: FloatArray, u: FloatArray | None = None, f_in: FloatArray | None = None
+    ) -> FloatArray:
         self._size(name)
         if name == "integral_of_motion":
             xhat = np.asarray(x, float) / self.scales._factors(self.nx)
@@ -337,7 +368,7 @@ class TetheredSubsatellite(Plant):
             u = np.zeros(np.shape(x)[:-1] + (2,))
         return super().output(name, x, u, f_in)
 
-    def initial_state(self, n_cases: int) -> np.ndarray:
+    def initial_state(self, n_cases: int) -> FloatArray:
         """The tether deployed to its reference length L along the local vertical, at rest,
         (n_cases, n_x) SI: the plant's rest state (a zero length is the collapsed tether, which
         :meth:`state_from` refuses and the laws divide by)."""
@@ -345,7 +376,7 @@ class TetheredSubsatellite(Plant):
         x[:, 0] = self.scales.length
         return x
 
-    def state_from(self, **values) -> np.ndarray:
+    def state_from(self, **values: QuantityArrayLike) -> FloatArray:
         """Initial state from ``length`` (> 0), ``pitch``, ``roll`` and their rates, SI (a
         number, a Quantity or a unit string); the length has no default."""
         x = super().state_from(**values)
@@ -373,13 +404,13 @@ class ClosedLoopRun:
         ∫₀^τ |F̂| dτ on the output grid (:func:`flexsat.control.tether_laws.thrust_index`).
     """
 
-    tau: np.ndarray
-    state: np.ndarray
-    control: np.ndarray
-    thrust_index: np.ndarray
+    tau: FloatArray
+    state: FloatArray
+    control: FloatArray
+    thrust_index: FloatArray
 
     @property
-    def integral_of_motion(self) -> np.ndarray:
+    def integral_of_motion(self) -> FloatArray:
         """V1 (Eq. 8) along the run, (n_cases, n_t)."""
         x = self.state
         return integral_of_motion(x[..., 1], x[..., 2], x[..., 4], x[..., 5])

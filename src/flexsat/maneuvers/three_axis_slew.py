@@ -171,7 +171,7 @@ def state_costate_rhs(
     arrays ``z (..., 26)`` = [β, ω, u1, u2, γ, λ, μ1, μ2] (SI, or dimensionless: module
     docstring).  ``inertia_inv`` may be passed to save the inversion in inner loops."""
     J = np.asarray(inertia, dtype=float)
-    Ji = np.linalg.inv(J) if inertia_inv is None else inertia_inv
+    Ji = np.asarray(np.linalg.inv(J) if inertia_inv is None else inertia_inv, dtype=np.float64)
     Q = np.zeros((3, 3)) if Q is None else np.asarray(Q, dtype=float)
     wb2 = omega_b * omega_b
     w, u1, u2, mu1, mu2 = z[..., W], z[..., U1], z[..., U2], z[..., MU1], z[..., MU2]
@@ -207,7 +207,7 @@ def state_costate_jacobian(
 ) -> FloatArray:
     """∂ż/∂z of :func:`state_costate_rhs`, shape ``(..., 26, 26)`` (analytic)."""
     J = np.asarray(inertia, dtype=float)
-    Ji = np.linalg.inv(J) if inertia_inv is None else inertia_inv
+    Ji = np.asarray(np.linalg.inv(J) if inertia_inv is None else inertia_inv, dtype=np.float64)
     Q = np.zeros((3, 3)) if Q is None else np.asarray(Q, dtype=float)
     wb2 = omega_b * omega_b
     w, lam = z[..., W], z[..., LAM]

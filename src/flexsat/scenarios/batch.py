@@ -212,6 +212,24 @@ class BatchScenario(Document):
         if sampling == "grid" and self.cases is not None:
             raise ValueError("cases: a grid has as many cases as its points; leave cases out")
         self.sampling = sampling
+        # the case count, from the axes' lengths or the sizes given: before any table is built
+        n_cases = case_count(self)
+        if n_cases > limits.MAX_CASES:
+            field = "parameters" if sampling == "grid" else "cases"
+            space = _space(self.parameters)
+            if isinstance(space, GridSpace):  # sampling "grid"
+                what = f"the grid of {' × '.join(map(str, space.shape))}"
+            elif sampling == "saltelli":
+                what = (
+                    f"the Saltelli design of {self.cases} base points × "
+                    f"({len(self.parameters)} parameters + 2)"
+                )
+            else:
+                what = "the sample"
+            raise ValueError(
+                f"{field}: {what} has {n_cases:,} cases, above the limit {limits.MAX_CASES:,} "
+                f"(flexsat.limits.MAX_CASES); split the study or sample it more sparsely"
+            )
         if self.requirements and self.kind != "montecarlo":
             raise ValueError("requirements: belong to a montecarlo (a probability of meeting them)")
         return self

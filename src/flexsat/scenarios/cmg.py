@@ -36,8 +36,10 @@ nearest to the direction of the attitude loop's peak momentum.
 
 from __future__ import annotations
 
+from collections.abc import Generator
 from dataclasses import dataclass
-from typing import Literal
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -47,7 +49,12 @@ from flexsat.dynamics.space_station import FT_LB as _FT_LB
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
 from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, count, quantity
-from flexsat.scenarios.kind import Run, ScenarioKind
+from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from flexsat.dynamics.space_station import StationData
 
 SOURCE = (
     "S. R. Vadali, H.-S. Oh, S. R. Walker, 'Preferred Gimbal Angles for Single Gimbal "
@@ -188,7 +195,7 @@ class CmgRunSpec(SchemaSection):
             raise ValueError("initial: 'preferred' needs a demand with a nonzero mean direction")
         return self
 
-    def demand_direction(self):
+    def demand_direction(self) -> np.ndarray | None:
         if self.demand is None:
             return None
         d = np.asarray(self.demand if isinstance(self.demand, list) else self.demand.constant)
@@ -278,7 +285,7 @@ class CmgStationScenario(Document):
         self.build_data()
         return self
 
-    def build_data(self):
+    def build_data(self) -> StationData:
         from flexsat.dynamics.space_station import StationData
 
         s = self.station
@@ -326,31 +333,36 @@ def _demand_function(demand):
     return lambda t: -(c + a * np.sin(2.0 * np.pi * f * t))
 
 
-def _one_run(run, cluster):
+def _steering_run(run: CmgRunSpec, cluster: Cluster, sigma0: np.ndarray) -> CmgRun:
+    """A torque-steering run from ``sigma0``: the pseudo-inverse (or SR) law until the first
+    singular set (:func:`flexsat.cases.cmg_pyramid.integrate_gimbals`, which stops there)."""
     from flexsat.cases import cmg_pyramid
+
+    null = run.null_motion
+    d = run.demand_direction()
+    alpha = cluster.alpha if cluster.steering == "sr" else 0.0
+    g = cmg_pyramid.integrate_gimbals(
+        sigma0,
+        _demand_function(run.demand),
+        run.duration,
+        skew=cluster.skew,
+        n_units=cluster.n_units,
+        n_out=N_OUT,
+        alpha=alpha,
+        threshold=cluster.threshold,
+        stop_at_singular=cluster.steering == "pi",
+        null_target=None if null is None else _resolve(null.target, d, cluster),
+        null_gain=1.0 if null is None else null.gain,
+        null_alpha=alpha,
+    )
+    return _cmg_run(run.label, g, sigma0, d, cluster)
+
+
+def _cmg_run(label: str, g, sigma0: np.ndarray, direction, cluster: Cluster) -> CmgRun:
+    """The :class:`CmgRun` of a gimbal history ``g`` (:class:`flexsat.dynamics.cmg.GimbalRun`):
+    its peak gimbal rate and outcome (the singularity met and its kind)."""
     from flexsat.dynamics import cmg
 
-    d = run.demand_direction()
-    sigma0 = _resolve(run.initial, d, cluster)
-    kw = dict(skew=cluster.skew, n_units=cluster.n_units, n_out=N_OUT)
-    alpha = cluster.alpha if cluster.steering == "sr" else 0.0
-    if run.reorient_to is not None:
-        target = _resolve(run.reorient_to, d, cluster)
-        g = cmg_pyramid.reorient(sigma0, target, run.duration, 1.0, alpha=max(alpha, 1e-3), **kw)
-    else:
-        null = run.null_motion
-        g = cmg_pyramid.integrate_gimbals(
-            sigma0,
-            _demand_function(run.demand),
-            run.duration,
-            alpha=alpha,
-            threshold=cluster.threshold,
-            stop_at_singular=cluster.steering == "pi",
-            null_target=None if null is None else _resolve(null.target, d, cluster),
-            null_gain=1.0 if null is None else null.gain,
-            null_alpha=alpha,
-            **kw,
-        )
     rates = np.gradient(g.sigma, g.t, axis=0)
     internal = None
     if g.singular:
@@ -368,7 +380,7 @@ def _one_run(run, cluster):
         )
     else:
         outcome = "no singularity"
-    return CmgRun(run.label, g, sigma0, d, float(np.abs(rates).max()), outcome, internal)
+    return CmgRun(label, g, sigma0, direction, float(np.abs(rates).max()), outcome, internal)
 
 
 @dataclass(frozen=True)
@@ -408,7 +420,7 @@ class CmgResult(ReportedResult):
             out.append(rec)
         return out
 
-    def dataset(self):
+    def dataset(self) -> xr.Dataset:
         import xarray as xr
 
         n = self.scenario.cluster.n_units
@@ -453,18 +465,18 @@ class CmgResult(ReportedResult):
     def report_case(self) -> str:
         return "SGCMG pyramid"
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.cmg import draw_cmg_figures
 
         return draw_cmg_figures(self, ds, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.cmg import cmg_sections
 
         return cmg_sections(self, self.metrics_records(), figures)
 
 
-def validation_table():
+def validation_table() -> tuple[tuple[str, str, float, float, str], ...]:
     """V1–V8 computed live: (id, quantity, published, computed, unit) rows (the validate rows of
     :mod:`flexsat.checks.cmg` share them)."""
     from flexsat.cases import cmg_pyramid
@@ -544,13 +556,46 @@ class CmgKind(ScenarioKind):
     def steps(self, scenario: CmgScenario) -> int:
         return len(scenario.runs) + 1
 
-    def plan(self, scenario: CmgScenario):
+    def plan(self, scenario: CmgScenario) -> Generator[Run, Any, CmgResult]:
+        """Each run in turn: a reorientation is a :class:`~flexsat.scenarios.kind.Simulation`
+        of the null-motion law on the gimbal cluster
+        (:func:`flexsat.cases.cmg_pyramid.reorient_simulation`); a torque-steering run, which
+        stops at the first singular set (a terminal condition :func:`flexsat.sim.simulate`
+        does not take), is run by :func:`flexsat.cases.cmg_pyramid.integrate_gimbals` on the
+        engine's continuous mode."""
         import functools
 
+        from flexsat.cases import cmg_pyramid
+
+        cluster = scenario.cluster
         runs = []
         for index, run in enumerate(scenario.runs):
-            steer = functools.partial(_one_run, run, scenario.cluster)
-            runs.append((yield Run(run.label, steer, "runs" + item_path(index, run.label))))
+            path = "runs" + item_path(index, run.label)
+            d = run.demand_direction()
+            try:
+                sigma0 = _resolve(run.initial, d, cluster)
+                if run.reorient_to is not None:
+                    target = _resolve(run.reorient_to, d, cluster)
+                    alpha = cluster.alpha if cluster.steering == "sr" else 0.0
+                    plant, law, config, options = cmg_pyramid.reorient_simulation(
+                        sigma0,
+                        target,
+                        run.duration,
+                        1.0,
+                        cluster.skew,
+                        cluster.n_units,
+                        alpha=max(alpha, 1e-3),
+                        n_out=N_OUT,
+                    )
+            except ValueError as exc:
+                raise ScenarioError([locate(path, exc)]) from None
+            if run.reorient_to is None:
+                steer = functools.partial(_steering_run, run, cluster, sigma0)
+                runs.append((yield Run(run.label, steer, path)))
+                continue
+            result = yield Run(run.label, Simulation(plant, law, config, options), path)
+            g = cmg_pyramid.gimbal_run(plant, result.dataset)
+            runs.append(_cmg_run(run.label, g, sigma0, d, cluster))
         table = yield Run("V1–V8 table", validation_table)
         notes = (
             "Demands are the paper's T = ḣ (Eq. 5) in rotor momenta per second; the spacecraft "
@@ -595,7 +640,7 @@ class StationResult(ReportedResult):
             out.append(rec)
         return out
 
-    def dataset(self):
+    def dataset(self) -> xr.Dataset:
         import xarray as xr
 
         st = self.station
@@ -637,12 +682,12 @@ class StationResult(ReportedResult):
     def report_case(self) -> str:
         return "space station (Table 2)"
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.cmg import draw_station_figures
 
         return draw_station_figures(ds, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.cmg import station_sections
 
         return station_sections(self, self.metrics_records(), figures)
@@ -690,7 +735,7 @@ class CmgStationKind(ScenarioKind):
     def steps(self, scenario: CmgStationScenario) -> int:
         return len(scenario.runs) + 1
 
-    def plan(self, scenario: CmgStationScenario):
+    def plan(self, scenario: CmgStationScenario) -> Generator[Run, Any, StationResult]:
         import functools
 
         from flexsat.cases import space_station_cmg as st

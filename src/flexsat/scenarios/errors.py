@@ -26,9 +26,9 @@ class Problem(str):
     """One problem of a scenario: the field path and the rule it breaks, as data.
 
     It reads as the line users see, ``"path: rule"`` (``"scenario: rule"`` for the document
-    itself), so that it prints and compares as that text.
+    itself), so that it prints and compares as that text. ``Problem(path, rule)`` builds one.
 
-    Parameters
+    Attributes
     ----------
     path : str
         Dotted field path, runs named by label (``runs['Law I'].gains.g1``); ``""`` for the
@@ -107,6 +107,8 @@ def _locate(path: str, message: str) -> Problem:
     rule = message[len(head) + 2 :]
     if path == head or path.endswith("." + head):
         return Problem(path, rule)
+    if head.startswith(path + "."):  # the message already names the path from the root
+        return Problem(head, rule)
     return Problem(f"{path}.{head}" if path else head, rule)
 
 
@@ -121,6 +123,8 @@ def locate(path: str, error: Exception) -> Problem:
         field = error.field
         if path == field or path.endswith("." + field):
             return Problem(path, error.rule)
+        if field.startswith(path + "."):  # the error already names the path from the root
+            return Problem(field, error.rule)
         return Problem(f"{path}.{field}" if path else field, error.rule)
     return _locate(path, str(error))
 

@@ -47,6 +47,7 @@ def _regulator(run: RunSpec, ctx: CaseContext, reference: TorqueShape | None) ->
 
 
 def _tracker(run: RunSpec, ctx: CaseContext, reference: TorqueShape | None) -> Controller:
+    assert reference is not None  # RunSpec requires a reference of lyapunov_tracker
     return LyapunovTracker(
         reference,
         **_gains(run),

@@ -313,9 +313,17 @@ class StarTrackerKind(ScenarioKind):
     def plan(self, scenario: StarTrackerScenario) -> Generator[Run, Any, StarTrackerResult]:
         import functools
 
-        from flexsat.attitude.star_tracker import monte_carlo
+        from flexsat.attitude.star_tracker import check_field_load, monte_carlo
 
         tracker = build_tracker(scenario)
+        problems = []
+        for index, run in enumerate(scenario.runs):  # every run's load, before the first runs
+            try:
+                check_field_load(tracker, run.false_stars, run.missing_fraction)
+            except ValueError as exc:
+                problems.append(locate("runs" + item_path(index, run.label), exc))
+        if problems:
+            raise ScenarioError(problems)
         runs = []
         for index, run in enumerate(scenario.runs):
             identify = functools.partial(

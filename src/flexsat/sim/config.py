@@ -59,6 +59,8 @@ class SimConfig:
     rtol, atol : float           local error tolerances of the continuous mode's adaptive
                                  DOP853 integrator (unused when sampled)
 
+    Notes
+    -----
     ``duration``, ``control_rate`` and ``settling_band`` take a number in SI, a pint Quantity or
     a unit string (``"15 s"``, ``"75 Hz"``, ``"0.5 deg"``) and are stored in SI.
     """

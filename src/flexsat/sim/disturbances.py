@@ -24,6 +24,8 @@ class BearingFriction:
     viscous : float   c2, N m s/rad
     smoothing : float ε, rad/s
 
+    Notes
+    -----
     Each a number in SI, a pint Quantity or a unit string (``"20 ozf*in"``), stored in SI; or
     one value per case of the batch, (n_cases,) (a Monte Carlo over the friction).
     """

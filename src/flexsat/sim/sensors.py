@@ -45,6 +45,8 @@ class Sensors:
     strain_noise : float
         Noise on the measured l0 S0 − M0, 1σ N m per sample.
 
+    Notes
+    -----
     The physical fields take a number in SI, a pint Quantity or a unit string
     (``encoder_resolution="0.01 deg"``), and are stored in SI.
     """

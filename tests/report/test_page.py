@@ -1,0 +1,145 @@
+"""The one report writer (:mod:`flexsat.report.page`): tables escape every text and read back
+cell for cell through an HTML parser; metrics show 4 significant digits and ``n/a``; the console
+table transposes when runs outnumber metrics; :func:`write_report` writes the metrics, the
+dataset and the page of any :class:`ReportedResult`, each read back equal, and nothing when the
+result fails while being written."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from html.parser import HTMLParser
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from flexsat.report.page import (
+    ReportedResult,
+    format_metric,
+    html_table,
+    images_html,
+    metric_rows,
+    metrics_table,
+    report_page,
+    write_report,
+)
+
+
+class Cells(HTMLParser):
+    """The text of every table cell, row by row (an independent reading of the table)."""
+
+    def __init__(self):
+        super().__init__(convert_charrefs=True)
+        self.rows, self._cell = [], None
+
+    def handle_starttag(self, tag, attrs):
+        if tag == "tr":
+            self.rows.append([])
+        elif tag in ("td", "th"):
+            self._cell = ""
+
+    def handle_endtag(self, tag):
+        if tag in ("td", "th"):
+            self.rows[-1].append(self._cell)
+            self._cell = None
+
+    def handle_data(self, data):
+        if self._cell is not None:
+            self._cell += data
+
+
+def test_html_table_escapes_and_reads_back_cell_for_cell():
+    headings = ["metric", "<b>run</b>", "a & b"]
+    rows = [["<script>alert(1)</script>", 1.5, None], ['"quoted"', "x<y", 3]]
+    text = html_table(headings, rows)
+    assert "<script>" not in text and "<b>" not in text
+    parser = Cells()
+    parser.feed(text)
+    assert parser.rows == [headings, [str(c) for c in rows[0]], [str(c) for c in rows[1]]]
+
+
+@pytest.mark.parametrize(
+    "value, shown",
+    [(None, "n/a"), (1234.5678, "1235"), (0.000123456, "0.0001235"), (-2.0, "-2"), (1e9, "1e+09")],
+)
+def test_metrics_show_four_significant_digits(value, shown):
+    assert format_metric(value) == shown
+
+
+RECORDS = [
+    {"run": "Law I", "settling_time_s": 12.3456, "peak_torque": None},
+    {"run": "Law II", "settling_time_s": 7.0, "peak_torque": 0.5},
+]
+
+
+def test_metrics_table_has_a_row_per_metric_and_a_column_per_run():
+    table = metrics_table(RECORDS)
+    assert table.columns == ("metric", "Law I", "Law II")
+    assert table.rows == (("settling_time_s", "12.35", "7"), ("peak_torque", "n/a", "0.5"))
+    assert metric_rows(RECORDS) == [
+        ("settling_time_s", ["12.35", "7"]),
+        ("peak_torque", ["n/a", "0.5"]),
+    ]
+
+
+def test_metrics_table_transposes_when_the_runs_outnumber_the_metrics():
+    records = [{"run": f"case {i}", "error": 0.1 * i} for i in range(3)]
+    table = metrics_table(records)
+    assert table.columns == ("", "error")
+    assert table.rows == (("case 0", "0"), ("case 1", "0.1"), ("case 2", "0.2"))
+
+
+def test_images_are_figures_in_order_and_escaped():
+    text = images_html(["a.png", 'b"c.png'])
+    assert text.index("a.png") < text.index("b&quot;c.png") and text.count("<figure>") == 2
+
+
+@dataclass(frozen=True)
+class Result(ReportedResult):
+    """The smallest result: two runs of one metric and a time history."""
+
+    scenario: object
+    case_source: str = "a <source>"
+    fail: bool = False
+
+    def metrics_records(self):
+        return [{"run": "a", "x": 1.0}, {"run": "b", "x": None}]
+
+    def dataset(self):
+        t = np.linspace(0.0, 1.0, 5)
+        return xr.Dataset(
+            {"y": (("run", "time"), np.vstack([t, t**2]))}, coords={"run": ["a", "b"], "time": t}
+        )
+
+    def sections(self, ds, figures):
+        if self.fail:
+            raise RuntimeError("drawing failed")
+        return html_table(["metric", "a", "b"], [("y max", *ds["y"].max("time").values)])
+
+
+SCENARIO = SimpleNamespace(name="<Test> & co", case="tamu", yaml_text="kind: x\nname: <Test>\n")
+
+
+def test_write_report_writes_metrics_dataset_and_page(tmp_path):
+    result = Result(SCENARIO)
+    folder = write_report(result, tmp_path / "out")
+    assert json.loads((folder / "metrics.json").read_text()) == result.metrics_records()
+    with xr.open_dataset(folder / "results.nc") as ds:
+        xr.testing.assert_equal(ds.load(), result.dataset())
+    page = (folder / "index.html").read_text()
+    assert page == report_page(
+        result, result.sections(result.dataset(), []), "flexsat report", "tamu"
+    )
+    # the scenario's name, case source and text are escaped, never markup
+    assert "&lt;Test&gt; &amp; co" in page and "<Test>" not in page
+    assert "a &lt;source&gt;" in page and "name: &lt;Test&gt;" in page
+    # the console's default: the metrics table (two runs of one metric: a row per run)
+    assert result.console_table().rows == (("a", "1"), ("b", "n/a"))
+
+
+def test_a_result_failing_while_written_leaves_no_report(tmp_path):
+    with pytest.raises(RuntimeError, match="drawing failed"):
+        write_report(Result(SCENARIO, fail=True), tmp_path / "out")
+    assert not (tmp_path / "out").exists()
