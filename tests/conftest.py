@@ -110,3 +110,11 @@ def schur_error_bound():
     from flexsat.control.lqr import riccati_error_bound
 
     return riccati_error_bound
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """Headless Chromium for the report pages (tests/report_browser.py)."""
+    from report_browser import start_browser
+
+    yield from start_browser()

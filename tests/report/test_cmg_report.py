@@ -10,6 +10,7 @@ import xarray as xr
 from typer.testing import CliRunner
 
 from flexsat.cli import app
+from report_browser import assert_renders
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -54,3 +55,9 @@ def test_station_report_has_the_v9_contrast_and_the_histories(reports):
     assert ds["attitude"].dims == ("time", "axis")
     assert ds["cmg_momentum"].attrs["units"] == "N*m*s"
     assert (folder / "station.png").is_file() and (folder / "gimbals.png").is_file()
+
+
+@pytest.mark.parametrize("name", ["cmg_preferred_angles", "space_station_cmg"])
+def test_the_pages_read_right_in_a_browser(reports, name, browser):
+    folder, _ = reports[name]
+    assert_renders(browser, folder / "index.html")

@@ -11,6 +11,7 @@ import flexsat.report.identification as rep
 from flexsat.report import MANIFEST, write_report
 from flexsat.report.identification import FIGURES, dataset
 from flexsat.scenarios import load_scenario, run_scenario
+from report_browser import assert_renders
 
 
 @pytest.fixture(scope="module")
@@ -79,3 +80,8 @@ def test_report_of_measured_data_without_truth(result, tmp_path):
     page = (out / "index.html").read_text()
     assert "<td>–</td>" in page
     assert np.all(np.isnan(dataset(measured)["true_hz"].values))
+
+
+def test_the_page_reads_right_in_a_browser(result, tmp_path, browser):
+    text = assert_renders(browser, write_report(result, tmp_path / "report") / "index.html")
+    assert "Natural frequencies" in text

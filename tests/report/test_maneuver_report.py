@@ -22,6 +22,7 @@ from flexsat.report import (
 )
 from flexsat.report.maneuver import PLOTS
 from flexsat.scenarios import default_scenario, load_scenario, run_scenario
+from report_browser import assert_renders
 
 METRICS = {
     "run",
@@ -150,3 +151,8 @@ def test_metric_formatting():
     assert format_metric(0.000123456) == "0.0001235"
     rows = metric_rows([{"run": "a", "x_s": 1.0}, {"run": "b", "x_s": None}])
     assert rows == [("x_s", ["1", "n/a"])]
+
+
+def test_the_page_reads_right_in_a_browser(result, tmp_path, browser):
+    text = assert_renders(browser, write_report(result, tmp_path / "report") / "index.html")
+    assert "Law II" in text

@@ -8,6 +8,7 @@ import xarray as xr
 
 from flexsat.report import MANIFEST, write_report
 from flexsat.scenarios import load_scenario, run_scenario
+from report_browser import assert_renders
 
 SMALL = """
 kind: star_tracker
@@ -75,3 +76,8 @@ def test_report_of_a_run_with_nothing_identified(tmp_path):
     assert rec["accepted_rate"] == 0.0 and rec["wrong_accepted"] == 0
     out = write_report(result, tmp_path / "r")
     assert (out / "errors.png").is_file()
+
+
+def test_the_page_reads_right_in_a_browser(result, tmp_path, browser):
+    text = assert_renders(browser, write_report(result, tmp_path / "report") / "index.html")
+    assert "false + missing" in text

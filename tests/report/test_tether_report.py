@@ -13,6 +13,7 @@ from flexsat.report import write_report
 from flexsat.report.publish import OutputError
 from flexsat.report.tether import FIGURES, paper_example
 from flexsat.scenarios import load_scenario, run_scenario
+from report_browser import assert_renders
 
 TEXT = """
 kind: tether
@@ -72,3 +73,8 @@ def test_a_folder_with_other_files_is_refused(report, tmp_path):
     with pytest.raises(OutputError):
         write_report(result, tmp_path)
     assert (tmp_path / "notes.txt").read_text() == "mine"
+
+
+def test_the_page_reads_right_in_a_browser(report, browser):
+    _, out = report
+    assert "Vadali" in assert_renders(browser, out / "index.html")

@@ -11,6 +11,7 @@ import xarray as xr
 
 from flexsat.report import write_report
 from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
+from report_browser import assert_renders
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -112,7 +113,7 @@ def test_a_sweep_varies_the_actuator_and_sensors_given_in_units(tmp_path):
     assert np.all(np.diff(peak[::2]) > 0) and peak[0] <= ds["param_saturation"].values[0]
 
 
-def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path):
+def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path, browser):
     result = run_scenario(load_scenario(_write(tmp_path, "mc.yaml", MONTECARLO)))
     reqs = {r["metric"]: r for r in result.summary["requirements"]}
     settle = reqs["settling_time_s"]
@@ -136,6 +137,7 @@ def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path
     with xr.open_zarr(out / "results.zarr", consolidated=False) as saved:
         assert saved.sizes["case"] == 24
     assert "settling_time_s &lt;= 6" in (out / "index.html").read_text()
+    assert "settling_time_s <= 6" in assert_renders(browser, out / "index.html")
     rows = result.metrics_records()
     assert any(r["run"].startswith("P(settling_time_s") for r in rows)
 

@@ -10,6 +10,7 @@ import xarray as xr
 
 from flexsat.report import write_report
 from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
+from report_browser import assert_renders
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -114,7 +115,7 @@ def test_case_e_forces_do_better_than_case_d(six_seconds):
     assert e["deflection_ratio_after"] > 10 * d["deflection_ratio_after"]
 
 
-def test_a_small_slew_runs_and_writes_its_report(tmp_path):
+def test_a_small_slew_runs_and_writes_its_report(tmp_path, browser):
     result = run_scenario(load_scenario(SMALL))
     assert result.labels == ("open loop", "torquers", "decoupled forces")
     ds = result.dataset()
@@ -154,6 +155,7 @@ def test_a_small_slew_runs_and_writes_its_report(tmp_path):
         assert (out / name).is_file(), name
     page = (out / "index.html").read_text()
     assert "PASS" in page or "FAIL" in page
+    assert "rim" in assert_renders(browser, out / "index.html").lower()
     with xr.open_dataset(out / "results.nc", engine="h5netcdf") as saved:
         assert list(saved.run.values) == list(result.labels)
 
