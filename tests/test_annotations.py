@@ -33,10 +33,12 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "flexsat"
 # whose every public parameter and return is annotated
 COMPLETE = (
     "attitude",
+    "cases",
     "checks",
     "control",
     "dynamics",
     "maneuvers",
+    "scenarios",
     "structures",
     "testing",
     "analysis/controllability.py",
