@@ -293,12 +293,13 @@ def run(
 ) -> None:
     """Run a scenario and write its report (metrics or identification tables, netCDF, plots,
     HTML)."""
-    from flexsat.report.publish import check_output_folder
+    from flexsat.report.publish import check_output_folder, write_error
 
     try:  # before any work: a report that cannot be written is known in a second
         check_output_folder(out)
     except OSError as exc:
         _fail(f"--out: {exc}")
+    from flexsat.design.batch_store import StoreError
     from flexsat.report import write_report
     from flexsat.scenarios import (
         ScenarioError,
@@ -317,6 +318,8 @@ def run(
             result = run_scenario(spec, progress=say)
     except ScenarioError as exc:
         _fail(str(exc))
+    except StoreError as exc:  # a sweep's store: worded as a report that cannot be written
+        _fail(f"store: {write_error(exc, exc.store, 'the batch store', exc.outcome)}")
     except SimulationDiverged as exc:  # a result, not an input error: exit 1, nothing written
         errors.print(str(exc), style="red", markup=False, highlight=False)
         raise typer.Exit(code=1) from None

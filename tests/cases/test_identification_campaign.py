@@ -169,7 +169,8 @@ def test_campaign_is_reproducible_and_rejects_a_blind_rig():
 def test_recorded_data_through_universal_files_give_the_same_update(tmp_path):
     """The identification stage runs on records read back from UFF 58 files (the path of
     measured data): the same substructure scalings within the files' ASCII precision, and no
-    truth columns."""
+    truth columns. A wheel test read without its torque records (outputs only) is refused by
+    the H1 estimate, before OKID needs them."""
     from flexsat.cases.identification_campaign import (
         TestRecords,
         identify_and_update,
@@ -191,3 +192,6 @@ def test_recorded_data_through_universal_files_give_the_same_update(tmp_path):
     for name, v in direct.scalings.items():
         assert abs(from_files.scalings[name]["updated"] - v["updated"]) < 1e-4
         assert abs(v["updated"] - 1) < 0.01
+    outputs_only = dataclasses.replace(read["wheels"], inputs=None, input_channels=())
+    with pytest.raises(ValueError, match="^measurement: the H1 estimate needs a time-domain"):
+        identify_and_update(case, small, TestRecords(**{**read, "wheels": outputs_only}))

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from flexsat.cases import tamu_grid
-from flexsat.identify import Channel, harmonic_shaker, random_force
+from flexsat.identify import Channel, Excitation, harmonic_shaker, random_force
 from flexsat.sim.vibration_test import simulate_test
 
 
@@ -28,6 +28,16 @@ def test_harmonic_steady_state_is_the_modal_frf(grid):
     wi, zi = grid.frequencies, grid.damping
     frf = np.sum(phi_o * phi_i / (wi**2 - w**2 + 2j * zi * wi * w))
     assert amplitude == pytest.approx(2.0 * abs(frf), rel=1e-2)
+
+
+def test_excitations_missing_their_data_are_refused_by_field():
+    """A harmonic excitation without its frequency and a history without its samples used to
+    fail only when sampled (float(None), a 0-d array); they are refused when built."""
+    force = Channel.at("force", 1, "z")
+    with pytest.raises(ValueError, match=r"^frequency: a harmonic excitation needs"):
+        Excitation("harmonic", force)
+    with pytest.raises(ValueError, match=r"^values: a history excitation needs"):
+        Excitation("history", force)
 
 
 def test_anti_alias_filters_give_the_continuous_frf_with_all_modes():

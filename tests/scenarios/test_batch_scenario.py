@@ -11,6 +11,7 @@ import xarray as xr
 
 from flexsat.report import write_report
 from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
+from flexsat.sim import SimulationDiverged
 from report_browser import assert_renders
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
@@ -365,3 +366,21 @@ def test_the_default_store_is_named_after_the_run_s_fingerprint(tmp_path, monkey
     monkeypatch.setattr(runner, "STORE_LAYOUT", runner.STORE_LAYOUT + "-next")
     other = run_scenario(load_scenario(path))
     assert other.store != first.store and other.chunks_run == 2
+
+
+def test_a_diverged_case_is_a_divergence_named_by_its_case_in_the_sweep(tmp_path):
+    # a rate gain of 1e5 N m s/rad at 50 Hz with the torque unbounded: g2 dt / J >> 2, the
+    # sampled loop is unstable; the last of the four cases, alone in its chunk, is case 3
+    text = (
+        SWEEP.replace(
+            "alpha: {values: [0.0, 0.25]}", 'g2: {values: ["800 ozf*in*s/rad", "1e5 N*m*s/rad"]}'
+        )
+        .replace(
+            'u_max: {values: ["300 ozf*in", "400 ozf*in", "500 ozf*in"]}',
+            'saturation: {values: ["400 ozf*in", "1e9 N*m"]}',
+        )
+        .replace("chunk_size: 4", "chunk_size: 1")
+    )
+    with pytest.raises(SimulationDiverged) as err:
+        run_scenario(load_scenario(_write(tmp_path, "sweep.yaml", text)))
+    assert err.value.cases == (3,) and "in case(s) 3:" in str(err.value)

@@ -146,3 +146,17 @@ def test_modes_beyond_the_limit_are_refused_before_the_model_is_built(tamu_case)
         r"limit 100",
     ):
         tamu(n_modes=100_000).model()
+
+
+def test_a_divergence_in_a_chunk_is_named_by_the_batch_s_case_numbers():
+    from flexsat.sim.engine import SimulationDiverged, offset_cases
+
+    local = SimulationDiverged(
+        "simulation diverged at t = 1 s (sample 75) in case(s) 0, 4: a state entry ...",
+        (0, 4),
+        1.0,
+        "unstable",
+    )
+    batch = offset_cases(local, 1000)
+    assert batch.cases == (1000, 1004) and (batch.time, batch.cause) == (1.0, "unstable")
+    assert "in case(s) 1000, 1004: a state entry" in str(batch)

@@ -16,6 +16,7 @@ from scipy.linalg import block_diag
 from flexsat.cases.tamu import tamu
 from flexsat.sim.integrators import (
     ExponentialStepper,
+    ExpRK4Stepper,
     ModalPropagator,
     block_propagators,
     modal_coordinates,
@@ -66,6 +67,26 @@ def test_modal_plant_step_equals_full_exponential_with_force():
 
     assert rel(modal.step(x, w), dense.step(x, w[:, 0])) < 1e-12
     assert rel(modal.step(x, w, force), dense.step(x, w[:, 0], force)) < 1e-12
+
+
+def test_a_force_given_to_a_propagator_built_without_force_columns_is_refused():
+    """Built without ``Bf`` the modal propagator has no φ-products for a force: a force given
+    to its step is refused by name (it raised AttributeError on None before), as by
+    :class:`ExponentialStepper`."""
+    linear = ModalPropagator.build([0.0, 2.0], [0.0, 0.1], np.ones((4, 1)), H)
+    dense = ExponentialStepper.build(np.zeros((4, 4)), np.ones(4), None, H)
+    x, w = np.zeros((1, 4)), np.zeros((1, 1))
+
+    def force(x, w):
+        return np.zeros((x.shape[0], 1))
+
+    for stepper in (linear, dense):
+        with pytest.raises(ValueError, match=r"^force: this \w+ was built without force columns"):
+            stepper.step(x, w[:, 0] if stepper is dense else w, force)
+    # and the other way round: Krogstad's scheme is built for a force and needs one
+    rk4 = ExpRK4Stepper.build(np.zeros((4, 4)), np.ones(4), np.ones((4, 1)), H)
+    with pytest.raises(ValueError, match=r"^force: exp_rk4 needs the plant's nonlinear force"):
+        rk4.step(x, w[:, 0], None)
 
 
 @pytest.mark.parametrize("n_modes", [6, 100])

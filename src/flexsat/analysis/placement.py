@@ -36,10 +36,12 @@ from __future__ import annotations
 import heapq
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, TypeAlias, TypeVar
 
 import numpy as np
+import numpy.typing as npt
 import scipy.linalg as sla
 
 from flexsat.analysis.gramians import (
@@ -53,6 +55,10 @@ from flexsat.analysis.gramians import (
     require_damped,
 )
 from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    from flexsat.structures.modal_model import ModalModel
 
 __all__ = [
     "MAX_EXHAUSTIVE_SETS",
@@ -84,6 +90,14 @@ MAX_EXHAUSTIVE_SETS = 1_000_000
 RIGID_TREATMENTS = ("project", "keep")
 _FORMS = ("first_order", "second_order")
 
+ComplexArray: TypeAlias = npt.NDArray[np.complex128]
+#: a set of candidates (their labels), in the order of ``candidates``
+Selection: TypeAlias = tuple[Hashable, ...]
+#: the score of a candidate set, larger is better (:func:`kim_junkins_score`)
+Score: TypeAlias = Callable[[Selection], float]
+#: a candidate's label (a key of a mapping of candidates)
+_Label = TypeVar("_Label", bound=Hashable)
+
 
 # ------------------------------------------------------------------------------------------------
 # Hamdan–Nayfeh modal controllability
@@ -104,12 +118,17 @@ class ModalControllability:
         The eigenvalue of each row (for modal systems the one with Im λ >= 0).
     """
 
-    cos_theta: np.ndarray
-    rho: np.ndarray
-    eigenvalues: np.ndarray
+    cos_theta: FloatArray
+    rho: FloatArray
+    eigenvalues: ComplexArray
 
 
-def modal_controllability(omega, zeta, B, form: str = "first_order") -> ModalControllability:
+def modal_controllability(
+    omega: npt.ArrayLike,
+    zeta: float | npt.ArrayLike,
+    B: npt.ArrayLike,
+    form: str = "first_order",
+) -> ModalControllability:
     r"""Hamdan–Nayfeh measures of a modal system in closed form (one row per mode).
 
     ``form="first_order"`` (Att. 4, Section IV): the left eigenvector of mode i of the modal A
@@ -159,7 +178,7 @@ def modal_controllability(omega, zeta, B, form: str = "first_order") -> ModalCon
     return ModalControllability(cos_theta=cos, rho=rho, eigenvalues=lam)
 
 
-def hamdan_nayfeh(A, B) -> ModalControllability:
+def hamdan_nayfeh(A: npt.ArrayLike, B: npt.ArrayLike) -> ModalControllability:
     r"""Hamdan–Nayfeh measures of a general first-order system (Att. 4 Eqs. 2–3, 17).
 
     The left eigenvectors :math:`A^T q_i = \lambda_i q_i` come from
@@ -210,18 +229,18 @@ class ModalCost:
     """
 
     total: float
-    costs: np.ndarray
-    displacement: np.ndarray
-    velocity: np.ndarray
-    gramian: np.ndarray = field(repr=False)
+    costs: FloatArray
+    displacement: FloatArray
+    velocity: FloatArray
+    gramian: FloatArray = field(repr=False)
 
     @property
-    def fractions(self) -> np.ndarray:
+    def fractions(self) -> FloatArray:
         """Normalised modal costs :math:`V_i / V`."""
         return self.costs / self.total
 
 
-def _weight(Q, p: int) -> np.ndarray:
+def _weight(Q: float | npt.ArrayLike | None, p: int) -> FloatArray:
     if Q is None:
         return np.eye(p)
     Q = require_finite(Q, "Q")
@@ -238,7 +257,15 @@ def _weight(Q, p: int) -> np.ndarray:
     return Q
 
 
-def modal_cost(omega, zeta, B, Cq=None, Cv=None, Q=None, horizon=None) -> ModalCost:
+def modal_cost(
+    omega: npt.ArrayLike,
+    zeta: float | npt.ArrayLike,
+    B: npt.ArrayLike,
+    Cq: npt.ArrayLike | None = None,
+    Cv: npt.ArrayLike | None = None,
+    Q: float | npt.ArrayLike | None = None,
+    horizon: float | None = None,
+) -> ModalCost:
     r"""Modal cost analysis of the unit-impulse output energy (Att. 4 Eqs. 4–7, 20–27).
 
     .. math::
@@ -272,6 +299,7 @@ def modal_cost(omega, zeta, B, Cq=None, Cv=None, Q=None, horizon=None) -> ModalC
         X = modal_controllability_gramian(w, z, Bm)
     else:
         A, Bz, _ = modal_state_matrices(w, z, Bm)
+        assert Bz is not None  # B was given
         X = finite_horizon_gramian(A, Bz, horizon)
     C = np.hstack([Cq, Cv])
     parts = np.einsum("ij,ji->i", X, C.T @ Qw @ C)
@@ -301,12 +329,20 @@ class KimJunkins:
     """
 
     alpha: float
-    contributions: np.ndarray
-    rho: np.ndarray
+    contributions: FloatArray
+    rho: FloatArray
     cost: ModalCost
 
 
-def kim_junkins_index(omega, zeta, B, Cq=None, Cv=None, Q=None, horizon=None) -> KimJunkins:
+def kim_junkins_index(
+    omega: npt.ArrayLike,
+    zeta: float | npt.ArrayLike,
+    B: npt.ArrayLike,
+    Cq: npt.ArrayLike | None = None,
+    Cv: npt.ArrayLike | None = None,
+    Q: float | npt.ArrayLike | None = None,
+    horizon: float | None = None,
+) -> KimJunkins:
     r"""Kim & Junkins' output measure of controllability, Att. 4 Eq. (28).
 
     .. math::
@@ -348,14 +384,20 @@ class GawronskiIndex:
         "h2" or "hankel".
     """
 
-    sigma: np.ndarray
-    actuator: np.ndarray
-    mode: np.ndarray
+    sigma: FloatArray
+    actuator: FloatArray
+    mode: FloatArray
     norm: str
 
 
 def gawronski_index(
-    omega, zeta, B, Cq=None, Cv=None, weights=None, norm: str = "h2"
+    omega: npt.ArrayLike,
+    zeta: float | npt.ArrayLike,
+    B: npt.ArrayLike,
+    Cq: npt.ArrayLike | None = None,
+    Cv: npt.ArrayLike | None = None,
+    weights: float | npt.ArrayLike | None = None,
+    norm: str = "h2",
 ) -> GawronskiIndex:
     r"""Gawronski's H2 (or Hankel) actuator placement index per actuator and mode.
 
@@ -447,19 +489,21 @@ class H2Placement:
     gamma : float
     """
 
-    X: np.ndarray = field(repr=False)
-    F: np.ndarray = field(repr=False)
-    Wc: np.ndarray = field(repr=False)
-    Wo: np.ndarray = field(repr=False)
+    X: FloatArray = field(repr=False)
+    F: FloatArray = field(repr=False)
+    Wc: FloatArray = field(repr=False)
+    Wo: FloatArray = field(repr=False)
     beta2: float
     y_norm2: float
     u_norm2: float
-    energy: np.ndarray
-    printed: np.ndarray
+    energy: FloatArray
+    printed: FloatArray
     gamma: float
 
 
-def h2_placement(A, B, b, C, gamma=1.0) -> H2Placement:
+def h2_placement(
+    A: npt.ArrayLike, B: npt.ArrayLike, b: npt.ArrayLike, C: npt.ArrayLike, gamma: float = 1.0
+) -> H2Placement:
     r"""Seed 003 Eqs. (1)–(8): full-information H2 control and per-actuator energies.
 
     .. math::
@@ -568,21 +612,23 @@ class H2Ranking:
         Modes in the model and how many of them are rigid (ω <= ``rigid_frequency``).
     """
 
-    ranking: tuple
-    scores: dict
-    energy: dict
-    printed: dict
+    ranking: tuple[Hashable, ...]
+    scores: dict[Hashable, float]
+    energy: dict[Hashable, float]
+    printed: dict[Hashable, float]
     placement: H2Placement = field(repr=False)
     measure: str
     rigid: str
     n_modes: int
     n_rigid: int
 
-    def top(self, k: int = 5) -> tuple:
+    def top(self, k: int = 5) -> tuple[Hashable, ...]:
         return self.ranking[: require_count(k, "k")]
 
 
-def _vectors(items, n: int, field_name: str) -> tuple[list, np.ndarray]:
+def _vectors(
+    items: Mapping[_Label, npt.ArrayLike] | npt.ArrayLike, n: int, field_name: str
+) -> tuple[list[_Label] | list[int], FloatArray]:
     """Labels and columns (n, k) from a mapping label -> vector (n,) or an (n, k) array."""
     if isinstance(items, Mapping):
         if not items:
@@ -598,15 +644,15 @@ def _vectors(items, n: int, field_name: str) -> tuple[list, np.ndarray]:
 
 
 def h2_actuator_ranking(
-    model,
-    actuators,
-    disturbance,
-    outputs,
-    gamma=1.0,
+    model: ModalModel,
+    actuators: Mapping[_Label, npt.ArrayLike] | npt.ArrayLike,
+    disturbance: npt.ArrayLike,
+    outputs: npt.ArrayLike,
+    gamma: float = 1.0,
     rigid: str = "project",
     measure: str = "energy",
-    velocity_outputs=None,
-    rigid_frequency=None,
+    velocity_outputs: npt.ArrayLike | None = None,
+    rigid_frequency: float | None = None,
 ) -> H2Ranking:
     r"""Rank candidate actuators of a :class:`~flexsat.structures.modal_model.ModalModel` by
     seed 003 Eqs. (1)–(8) (:func:`h2_placement` with every candidate in B at once).
@@ -671,6 +717,7 @@ def h2_actuator_ranking(
     zeta = np.where(is_rigid, 0.0, model.damping)[keep]
     A, Bz, Cz = modal_state_matrices(w, zeta, Bm[keep], Cq[:, keep], Cv[:, keep])
     _, bz, _ = modal_state_matrices(w, zeta, bd[keep])
+    assert Bz is not None and bz is not None and Cz is not None  # all three were given
     result = h2_placement(A, Bz, bz, Cz, gamma)
     energy = dict(zip(labels, result.energy.tolist()))
     printed = dict(zip(labels, result.printed.tolist()))
@@ -698,12 +745,12 @@ _KIND_MARK = {"force": "", "torque": "R"}
 
 
 def actuator_candidates(
-    model,
-    nodes,
-    axes=("x", "y", "z"),
+    model: ModalModel,
+    nodes: Sequence[int],
+    axes: Sequence[str] = ("x", "y", "z"),
     kind: str | Sequence[str] = "force",
-    label: Callable | None = None,
-) -> dict:
+    label: Callable[[str, int, str], str] | None = None,
+) -> dict[str, FloatArray]:
     """Candidate actuators at ``nodes`` along/about ``axes`` as label -> modal input vector.
 
     ``kind`` is "force" (:meth:`ModalModel.force_input`), "torque"
@@ -716,7 +763,8 @@ def actuator_candidates(
     if not kinds or any(k not in _KIND_MARK for k in kinds) or len(set(kinds)) != len(kinds):
         raise ValueError(f"kind: must be 'force', 'torque' or both (each once), got {kind!r}")
     label = label or (lambda kind, node, axis: f"{node}{_KIND_MARK[kind]}{str(axis).upper()}")
-    out, origin = {}, {}
+    out: dict[str, FloatArray] = {}
+    origin: dict[str, str] = {}
     for k in kinds:
         fn = model.force_input if k == "force" else model.torque_input
         for node in nodes:
@@ -731,15 +779,23 @@ def actuator_candidates(
     return out
 
 
-def kim_junkins_score(model, actuators: Mapping, Cq=None, Cv=None, Q=None) -> Callable:
+def kim_junkins_score(
+    model: ModalModel,
+    actuators: Mapping[_Label, npt.ArrayLike],
+    Cq: npt.ArrayLike | None = None,
+    Cv: npt.ArrayLike | None = None,
+    Q: float | npt.ArrayLike | None = None,
+) -> Score:
     """Score function for the searches: selection (labels of ``actuators``) -> α of
     :func:`kim_junkins_index` on ``model`` (its frequencies and damping)."""
     if not isinstance(actuators, Mapping) or not actuators:
         raise ValueError("actuators: must be a non-empty mapping label -> modal input vector")
     w, z = model.frequencies, model.damping
-    cols = {k: require_finite(v, f"actuators[{k!r}]") for k, v in actuators.items()}
+    cols: dict[Hashable, FloatArray] = {
+        k: require_finite(v, f"actuators[{k!r}]") for k, v in actuators.items()
+    }
 
-    def score(selection) -> float:
+    def score(selection: Selection) -> float:
         B = np.column_stack([cols[k] for k in selection])
         return kim_junkins_index(w, z, B, Cq, Cv, Q).alpha
 
@@ -767,14 +823,14 @@ class SearchResult:
         greedy step or accepted exchange).
     """
 
-    selection: tuple
+    selection: Selection
     score: float
     method: str
     evaluations: int
-    best: tuple = ()
+    best: tuple[tuple[float, Selection], ...] = ()
 
 
-def _search_inputs(candidates, size) -> tuple[list, int]:
+def _search_inputs(candidates: Sequence[Hashable], size: int) -> tuple[list[Hashable], int]:
     try:
         cands = list(candidates)
     except TypeError:
@@ -795,12 +851,13 @@ def _search_inputs(candidates, size) -> tuple[list, int]:
 class _Scorer:
     """Calls score on index sets (sorted), caches, counts and checks the values."""
 
-    def __init__(self, cands: list, score: Callable):
+    def __init__(self, cands: list[Hashable], score: Score):
         if not callable(score):
             raise ValueError(f"score: must be callable, got {score!r}")
-        self.cands, self.score, self.cache = cands, score, {}
+        self.cands, self.score = cands, score
+        self.cache: dict[tuple[int, ...], float] = {}
 
-    def __call__(self, idx) -> float:
+    def __call__(self, idx: Sequence[int]) -> float:
         key = tuple(sorted(idx))
         if key not in self.cache:
             value = self.score(tuple(self.cands[i] for i in key))
@@ -813,14 +870,14 @@ class _Scorer:
             self.cache[key] = value
         return self.cache[key]
 
-    def labels(self, idx) -> tuple:
+    def labels(self, idx: Sequence[int]) -> Selection:
         return tuple(self.cands[i] for i in sorted(idx))
 
 
 def exhaustive(
-    candidates: Sequence,
+    candidates: Sequence[Hashable],
     size: int,
-    score: Callable,
+    score: Score,
     max_sets: int = MAX_EXHAUSTIVE_SETS,
     keep: int = 10,
 ) -> SearchResult:
@@ -841,7 +898,7 @@ def exhaustive(
         )
     f = _Scorer(cands, score)
     keep = require_count(keep, "keep")
-    heap: list = []  # min-heap of (score, -order, idx)
+    heap: list[tuple[float, int, tuple[int, ...]]] = []  # min-heap of (score, -order, idx)
     for order, idx in enumerate(itertools.combinations(range(len(cands)), k)):
         item = (f(idx), -order, idx)
         if len(heap) < keep:
@@ -859,7 +916,12 @@ def exhaustive(
     )
 
 
-def greedy(candidates: Sequence, size: int, score: Callable, start: Sequence = ()) -> SearchResult:
+def greedy(
+    candidates: Sequence[Hashable],
+    size: int,
+    score: Score,
+    start: Sequence[Hashable] = (),
+) -> SearchResult:
     """Forward selection: add, one at a time, the candidate that maximises the score of the
     enlarged set (``score`` is called on sets of 1 … ``size`` candidates). ``start``: candidates
     already chosen. n·size evaluations at most; optimal when the score is additive
@@ -879,7 +941,9 @@ def greedy(candidates: Sequence, size: int, score: Callable, start: Sequence = (
     )
 
 
-def _greedy(f: _Scorer, n: int, k: int, chosen: list) -> tuple[list, list]:
+def _greedy(
+    f: _Scorer, n: int, k: int, chosen: list[int]
+) -> tuple[list[int], list[tuple[float, Selection]]]:
     chosen, path = list(chosen), []
     while len(chosen) < k:
         best_s, best_i = -np.inf, None
@@ -896,7 +960,7 @@ def _greedy(f: _Scorer, n: int, k: int, chosen: list) -> tuple[list, list]:
     return chosen, path
 
 
-def _positions(cands: list, items, field_name: str) -> list:
+def _positions(cands: list[Hashable], items: Sequence[Hashable], field_name: str) -> list[int]:
     index = {c: i for i, c in enumerate(cands)}
     out = []
     for c in items:
@@ -909,10 +973,10 @@ def _positions(cands: list, items, field_name: str) -> list:
 
 
 def exchange(
-    candidates: Sequence,
+    candidates: Sequence[Hashable],
     size: int,
-    score: Callable,
-    start: Sequence | None = None,
+    score: Score,
+    start: Sequence[Hashable] | None = None,
     max_rounds: int = 100,
     tol: float = 0.0,
 ) -> SearchResult:

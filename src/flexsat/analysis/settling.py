@@ -27,11 +27,21 @@ boundary (:func:`reported`), one way each.
 from __future__ import annotations
 
 import math
+from typing import SupportsFloat
 
 import numpy as np
+import numpy.typing as npt
+
+from flexsat.units import FloatArray
 
 
-def settling_time(t, error, band, *, relative_to_peak: bool = False) -> np.ndarray:
+def settling_time(
+    t: npt.ArrayLike,
+    error: npt.ArrayLike | tuple[npt.ArrayLike, ...],
+    band: float | npt.ArrayLike | tuple[float | npt.ArrayLike, ...],
+    *,
+    relative_to_peak: bool = False,
+) -> FloatArray:
     """First time after which every ``error`` signal stays within its ``band`` (module).
 
     Parameters
@@ -75,7 +85,7 @@ def settling_time(t, error, band, *, relative_to_peak: bool = False) -> np.ndarr
     return settled_at(t, after_last)
 
 
-def settled_at(t, after_last_outside) -> np.ndarray:
+def settled_at(t: npt.ArrayLike, after_last_outside: float | npt.ArrayLike) -> FloatArray:
     """:math:`t_s` from the index just after the last sample outside the band (0 when none
     is; ``t.size`` when the last sample is outside: NaN, not settled). The step shared by
     :func:`settling_time` and the compiled loop, which accumulates that index sample by sample
@@ -85,7 +95,7 @@ def settled_at(t, after_last_outside) -> np.ndarray:
     return np.where(k >= t.size, np.nan, t[np.minimum(k, t.size - 1)])
 
 
-def reported(value) -> float | None:
+def reported(value: SupportsFloat) -> float | None:
     """A settling time as reported (JSON, tables): the float, or None for not settled (NaN)."""
     value = float(value)
     return None if math.isnan(value) else value

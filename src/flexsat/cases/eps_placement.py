@@ -10,7 +10,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from flexsat.analysis.placement import H2Ranking, actuator_candidates, h2_actuator_ranking
 from flexsat.cases.eps import EPSCase, eps
@@ -66,7 +65,7 @@ def _paper(roles: dict, node: int) -> int:
 def eps_h2_ranking(
     case: EPSCase | None = None,
     n_modes: int = 20,
-    gamma: npt.ArrayLike = 1.0,
+    gamma: float = 1.0,
     rigid: str = "project",
     measure: str = "energy",
 ) -> H2Ranking:

@@ -420,6 +420,12 @@ def _video_test(
     return video, tri
 
 
+def _node(channel: Channel) -> int:
+    """The node of a measured channel (a Measurement's channels are located: Channel.at)."""
+    assert channel.node is not None
+    return channel.node
+
+
 def _fe_vector(asm: Assembly, terms: Mapping[tuple[int, str], float]) -> np.ndarray:
     """Vector over the assembly's dofs with ``{(node, dof): weight}`` (clamped dofs dropped)."""
     v = np.zeros(asm.n_dofs)
@@ -688,6 +694,8 @@ def identify_and_update(
     f_meas = hammer_real.frequencies_hz[sel]
     omega_meas = hammer_real.omega_rad_s[sel]
     z_meas = hammer_real.damping[sel]
+    # era() always gives the perturbation uncertainty; the bootstrap replaces it
+    assert hammer_real.frequency_std_hz is not None and hammer_real.damping_std is not None
     f_std = hammer_real.frequency_std_hz[sel]
     z_std = hammer_real.damping_std[sel]
 
@@ -701,7 +709,7 @@ def identify_and_update(
         vsel = _select(video_real, cfg.band, min_mpc=0.3)
         video_shapes = _real_shapes(video_real.shapes[:, vsel])
         video_f = video_real.frequencies_hz[vsel]
-        rows = [apriori_asm.index(c.node, "u" + c.direction) for c in video.output_channels]
+        rows = [apriori_asm.index(_node(c), f"u{c.direction}") for c in video.output_channels]
 
     # --- pair modes: video shapes against the a-priori model, then hammer by frequency ---------
     hammer_index = _pair(f_meas, w0 / (2 * np.pi))
@@ -721,6 +729,7 @@ def identify_and_update(
     gauges, inputs = list(wheel_test.output_channels), list(wheel_test.input_channels)
     estimate = estimate_frf(wheel_test, cfg.frf_segment)
     frf, coh = estimate.frf, estimate.coherence
+    assert wheel_test.inputs is not None  # estimate_frf refuses a test without inputs
     gscale = np.sqrt(np.mean(wheel_test.outputs**2, axis=1))
     n_obs = int(np.ceil(cfg.era_order / len(gauges))) + 4
     Y_okid = okid(wheel_test.inputs, wheel_test.outputs / gscale[:, None], 4 * n_obs, n_obs)
@@ -839,7 +848,7 @@ def identify_and_update(
         n_cols = int(video_index.max()) + 3
         mac_updated = mac(video_shapes, phi1[rows][:, :n_cols])
         mac_apriori = mac(video_shapes, phi0[rows][:, :n_cols])
-    targets = tuple(c.node for c in records.video.output_channels) if records.video else ()
+    targets = tuple(_node(c) for c in records.video.output_channels) if records.video else ()
     return CampaignResult(
         names,
         modes_table,

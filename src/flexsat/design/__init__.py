@@ -71,6 +71,9 @@ _EXPORTS = {
     "open_results": "batch_runner",
     "run_batch": "batch_runner",
     "run_chunk": "batch_runner",
+    "StoreError": "batch_store",
+    "StoreInUse": "batch_store",
+    "StoreLock": "batch_store",
 }
 
 __all__ = list(_EXPORTS)

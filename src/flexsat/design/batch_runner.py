@@ -44,8 +44,13 @@ client (``LocalCluster(processes=False)``, one worker thread: the chunk is alrea
 and the one code path — futures, ``retries=``, completion order — is the same as on a cluster;
 dask's synchronous scheduler would have no retries and no futures to stream from); ``workers=N``
 starts a local cluster of N single-threaded worker processes; ``scheduler="tcp://HOST:PORT"``
-uses an existing cluster (no answer within :data:`CONNECT_TIMEOUT` s is a ValueError naming the
-address). A chunk whose task fails or whose worker dies is run again (``retries``).
+uses an existing cluster, asked first whether it is one (no dask scheduler answering within
+:data:`CONNECT_TIMEOUT` s is a :class:`~flexsat.input_checks.FieldError` of ``scheduler``
+naming the address; :mod:`flexsat.design.batch_cluster`). A chunk whose worker dies, or whose
+task fails otherwise, is run again (``retries``); a ValueError a chunk raises (a value its run
+refuses, a history it does not record, a diverged case) would be raised again by every retry,
+so it is sent back as the task's result and raised once on the client, with its own type and
+attributes (a FieldError's ``field``).
 
 Store. Results stream to a zarr store (xarray) as chunks finish, written by the client (a single
 writer: no two writers share a zarr chunk, and workers need no access to the store's disk):
@@ -62,16 +67,22 @@ store of a different setup is refused. The store's layout is built in a sibling 
 ``.<name>.partial``, and renamed into place when complete: a run killed while laying it out
 leaves no store (the next run starts afresh) rather than a half-made one it would refuse. An
 interrupted run (Ctrl-C) raises :class:`BatchInterrupted`, saying how many cases the store keeps.
-Nothing is pickled into the store.
+Nothing is pickled into the store. One run at a time fills a store: a run holds a lock file next
+to it, and a second run is refused at once with
+:class:`~flexsat.design.batch_store.StoreInUse`, naming the first (its process, host, start
+and command); a lock whose run died is stale and taken over. A store that cannot be written (a
+read-only or full disk, a file-size limit, a folder that cannot be made) raises
+:class:`~flexsat.design.batch_store.StoreError` saying what it keeps, and stays resumable
+(:mod:`flexsat.design.batch_store`).
 """
 
 from __future__ import annotations
 
 import hashlib
 import math
-import shutil
 import time
 from collections.abc import Callable, Mapping
+from contextlib import ExitStack
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
@@ -79,23 +90,33 @@ from typing import Any
 
 import numpy as np
 import xarray as xr
-import zarr
 
 from flexsat import limits
 from flexsat.control.lyapunov import LyapunovTracker
+from flexsat.design.batch_cluster import CONNECT_TIMEOUT, batch_client
+from flexsat.design.batch_store import (
+    STORE_LAYOUT,
+    StoreLock,
+    create_store,
+    open_store_mask,
+    store_faults,
+    write_chunk,
+)
 from flexsat.dynamics.dispersion import stack_plants
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 from flexsat.maneuvers.torque_shapes import SmoothBangBang
-from flexsat.sim import SimConfig, simulate
+from flexsat.sim import SimConfig, SimulationDiverged, simulate
 from flexsat.sim.channels import ChannelSensor
 from flexsat.sim.disturbances import RandomTorque
+from flexsat.sim.engine import offset_cases
 from flexsat.sim.recording import SimResult
-
-#: seconds to wait for an existing scheduler to answer before refusing its address
-CONNECT_TIMEOUT = 5.0
-#: the layout of the store; part of the fingerprint so a store of another layout is refused
-STORE_LAYOUT = "flexsat.design.batch_runner/2"
 
 
 def _nonneg_int(value, name: str) -> int:
@@ -610,9 +631,9 @@ def _run_cases(
     for name in histories:
         if name not in result.dataset:
             recorded = [v for v in result.dataset.data_vars if "time" in result.dataset[v].dims]
-            raise ValueError(
-                f"histories: {name!r} is not a recorded variable; the run records "
-                f"{', '.join(recorded)}"
+            raise FieldError(
+                "histories",
+                f"{name!r} is not a recorded variable; the run records {', '.join(recorded)}",
             )
         out["history_" + name] = np.asarray(
             result.dataset[name].transpose("case", "time").values, float
@@ -620,6 +641,49 @@ def _run_cases(
     out["time"] = np.asarray(result.dataset["time"].values, float)
     out["seed"] = seeds
     return out
+
+
+@dataclass(frozen=True)
+class _Refusal:
+    """A ValueError a chunk raised on its worker (a value the engine refuses, a history it does
+    not record, a diverged case), sent back as the task's result instead of raised.
+
+    The same chunk would raise it again on every retry (the cases and their seeds fix the run),
+    so it is not retried, nor logged by dask as a failed task; and the client raises it again
+    with its own type and attributes (a :class:`~flexsat.input_checks.FieldError`'s ``field``,
+    a :class:`~flexsat.sim.SimulationDiverged`'s ``cases``), which dask's own transport loses
+    for a class whose ``__init__`` takes more than its message (it sends a bare ``Exception``).
+    """
+
+    kind: type[ValueError]
+    args: tuple[Any, ...]
+    state: dict[str, Any]
+
+    def error(self) -> ValueError:
+        """The exception again: its class, its arguments and its attributes, without calling
+        its ``__init__``."""
+        exc = self.kind.__new__(self.kind, *self.args)
+        exc.args = self.args
+        exc.__dict__.update(self.state)
+        return exc
+
+
+def _chunk_task(
+    build: Callable,
+    extract: Callable,
+    parameters: Mapping[str, np.ndarray],
+    start: int,
+    base_seed: int,
+    histories: tuple[str, ...],
+) -> dict[str, np.ndarray] | _Refusal:
+    """:func:`run_chunk` as a dask task: a ValueError is returned as a :class:`_Refusal`."""
+    try:
+        return run_chunk(build, extract, parameters, start, base_seed, histories)
+    except SimulationDiverged as exc:  # named by the batch's case numbers, not the chunk's
+        exc = offset_cases(exc, start)
+        return _Refusal(type(exc), exc.args, dict(vars(exc)))
+    except ValueError as exc:
+        return _Refusal(type(exc), exc.args, dict(vars(exc)))
 
 
 # -- progress ----------------------------------------------------------------------------------
@@ -636,123 +700,6 @@ class BatchProgress:
     chunks_total: int
     cases_per_s: float
     eta_s: float
-
-
-# -- scheduling --------------------------------------------------------------------------------
-def _client(workers: int | None, scheduler: str | None):
-    """(client, cluster or None): in-process, a local cluster of ``workers`` processes, or the
-    existing cluster at ``scheduler``."""
-    from distributed import Client, LocalCluster
-
-    if scheduler is not None:
-        if workers is not None:
-            raise ValueError(
-                "workers: give workers (a local cluster) or scheduler (an existing one), not both"
-            )
-        try:
-            return Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s", set_as_default=False), None
-        except (OSError, TimeoutError) as exc:
-            raise ValueError(
-                f"scheduler: no dask scheduler answered at {scheduler!r} within "
-                f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {exc})"
-            ) from None
-    if workers is None:
-        cluster = LocalCluster(
-            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
-        )
-    else:
-        cluster = LocalCluster(
-            n_workers=require_count(workers, "workers"),
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-        )
-    return Client(cluster, set_as_default=False), cluster
-
-
-# -- the store ---------------------------------------------------------------------------------
-def _open_existing(path: Path, fp: str, n_cases: int) -> np.ndarray | None:
-    """The completion mask of the store at ``path`` (None if there is none); ValueError if it
-    belongs to another setup."""
-    if not path.exists():
-        return None
-    try:
-        ds = xr.open_zarr(path, consolidated=False)
-    except Exception as exc:  # noqa: BLE001 - any unreadable directory is refused the same way
-        raise ValueError(
-            f"store: {str(path)!r} exists and is not a batch store "
-            f"({type(exc).__name__}: {exc}); give a new path"
-        ) from None
-    theirs = ds.attrs.get("fingerprint")
-    if theirs != fp or ds.sizes.get("case") != n_cases:
-        raise ValueError(
-            f"store: {str(path)!r} holds the results of a different setup "
-            f"(fingerprint {theirs!s:.12} ≠ {fp:.12}: another scenario, parameter "
-            f"table, base seed or history selection); refusing to resume into it, "
-            f"give a new path"
-        )
-    return np.asarray(ds["done"].values, bool)
-
-
-def _create(
-    path: Path,
-    fp: str,
-    setup_text: str,
-    table: Mapping[str, np.ndarray],
-    first: dict[str, np.ndarray],
-    zchunk: int,
-    n_cases: int,
-) -> None:
-    """Lay out the store (metadata and the parameter table; the results are left to fill)."""
-    import dask.array as da
-
-    case = np.arange(n_cases)
-    data = {f"param_{k}": ("case", v) for k, v in table.items()}
-    data["done"] = ("case", np.zeros(n_cases, bool))
-    encoding = {}
-    for name, values in first.items():
-        if name == "time":
-            continue
-        shape = (n_cases,) + values.shape[1:]
-        dims = ("case", "time") if values.ndim == 2 else ("case",)
-        fill = -1 if values.dtype.kind == "i" else np.nan
-        data[name] = (
-            dims,
-            da.full(shape, fill, dtype=values.dtype, chunks=(zchunk,) + values.shape[1:]),
-        )
-        encoding[name] = {"chunks": (zchunk,) + values.shape[1:]}
-    ds = xr.Dataset(
-        data,
-        coords={"case": case, "time": first["time"]},
-        attrs={"fingerprint": fp, "setup_text": setup_text, "layout": STORE_LAYOUT},
-    )
-    for name in ("done",) + tuple(f"param_{k}" for k in table):
-        encoding[name] = {"chunks": (zchunk,)}
-    partial = path.with_name(f".{path.name}.partial")
-    shutil.rmtree(partial, ignore_errors=True)  # a run killed while laying out its store
-    path.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        ds.to_zarr(partial, mode="w", compute=False, encoding=encoding, consolidated=False)
-        # the parameter table, the mask and the coordinates are small: written now in full
-        ds[[n for n in ds.data_vars if n == "done" or n.startswith("param_")]].to_zarr(
-            partial, mode="r+", consolidated=False
-        )
-        partial.rename(path)
-    except BaseException:
-        shutil.rmtree(partial, ignore_errors=True)
-        raise
-
-
-def _write(store, start: int, out: dict[str, np.ndarray]) -> None:
-    """Write one chunk's results into the zarr group ``store`` (the layout :func:`_create` made),
-    then (only then) mark its cases done. Plain zarr slice assignments: an xarray region write
-    re-reads the store's metadata for every chunk (twice the time, ~1 % of a 5,000-case
-    chunk's compute)."""
-    stop = start + len(out["seed"])
-    for name, values in out.items():
-        if name != "time":
-            store[name][start:stop] = values
-    store["done"][start:stop] = True
 
 
 # -- the run -----------------------------------------------------------------------------------
@@ -787,7 +734,7 @@ class BatchSummary:
 def run_batch(
     build: Callable,
     parameters: Mapping[str, Any],
-    store,
+    store: str | Path,
     *,
     extract: Callable[[SimResult], Mapping[str, np.ndarray]] = maneuver_metrics,
     base_seed: int = 0,
@@ -841,7 +788,11 @@ def run_batch(
         Naming the field: an unknown parameter name (with the known ones), columns of different
         lengths or non-finite values, a value the builder's ``check`` refuses, a scheduler
         that does not answer within :data:`CONNECT_TIMEOUT` s, a store that belongs to another
-        setup.
+        setup; or the ValueError a chunk raised, with its type and attributes.
+    flexsat.design.batch_store.StoreInUse
+        Another run holds the store (naming it); nothing is changed.
+    flexsat.design.batch_store.StoreError
+        The store cannot be locked, read or written (saying what it keeps).
     """
     from distributed import as_completed
 
@@ -859,92 +810,111 @@ def run_batch(
     describe = getattr(build, "describe", None)
     fp = fingerprint(setup_text, table, base_seed, histories, describe() if describe else "")
     path = Path(store)
-    done = _open_existing(path, fp, n_cases)
-    created = done is not None
-    starts = [
-        s
-        for s in range(0, n_cases, chunk_size)
-        if done is None or not done[s : s + chunk_size].all()
-    ]
-    n_chunks = math.ceil(n_cases / chunk_size)
-    cases_done = n_cases - sum(min(chunk_size, n_cases - s) for s in starts)
-    t0 = time.perf_counter()
-    if progress is not None:
-        progress(
-            BatchProgress(
-                cases_done,
-                n_cases,
-                n_chunks - len(starts),
-                n_chunks,
-                0.0,
-                math.inf if starts else 0.0,
-            )
+    created, cases_done = False, 0
+
+    def kept() -> str:
+        """What the store keeps, for a fault of the store (:func:`store_faults`)."""
+        if not created:
+            return "No store was made; run the same command again once it can be written."
+        return (
+            f"The store keeps {cases_done} of {n_cases} cases; run the same command again "
+            f"to resume it."
         )
-    if not starts:
-        return BatchSummary(path, n_cases, 0, n_chunks, time.perf_counter() - t0, fp)
 
-    client, cluster = _client(workers, scheduler)
-    window = 2 * max(1, len(client.scheduler_info().get("workers", {})) or 1)
-    pending = list(reversed(starts))
-    computed = 0
-    try:
-
-        def submit(start):
-            chunk = {k: v[start : start + chunk_size] for k, v in table.items()}
-            return client.submit(
-                run_chunk,
-                build,
-                extract,
-                chunk,
-                start,
-                base_seed,
-                histories,
-                retries=retries,
-                pure=False,
-                key=f"chunk-{fp[:12]}-{start}",
-            )
-
-        futures = as_completed(
-            [submit(pending.pop()) for _ in range(min(window, len(pending)))],
-            with_results=False,
-            loop=client.loop,
-        )
-        chunks_run, group = 0, None
-        for future in futures:
-            out = future.result()
-            start = int(future.key.rsplit("-", 1)[1])
-            future.release()
-            if not created:
-                _create(path, fp, setup_text, table, out, chunk_size, n_cases)
-                created = True
-            if group is None:
-                group = zarr.open_group(str(path), mode="r+")
-            _write(group, start, out)
-            n = len(out["seed"])
-            del out
-            computed += n
-            cases_done += n
-            chunks_run += 1
-            if pending:
-                futures.add(submit(pending.pop()))
-            if progress is not None:
-                rate = computed / max(time.perf_counter() - t0, 1e-9)
-                progress(
-                    BatchProgress(
-                        cases_done,
-                        n_cases,
-                        n_chunks - len(starts) + chunks_run,
-                        n_chunks,
-                        rate,
-                        (n_cases - cases_done) / rate,
-                    )
+    with ExitStack() as held:
+        with store_faults(path, kept):
+            held.enter_context(StoreLock(path))  # one run at a time, until this one ends
+            done = open_store_mask(path, fp, n_cases)
+        created = done is not None
+        starts = [
+            s
+            for s in range(0, n_cases, chunk_size)
+            if done is None or not done[s : s + chunk_size].all()
+        ]
+        n_chunks = math.ceil(n_cases / chunk_size)
+        cases_done = n_cases - sum(min(chunk_size, n_cases - s) for s in starts)
+        t0 = time.perf_counter()
+        if progress is not None:
+            progress(
+                BatchProgress(
+                    cases_done,
+                    n_cases,
+                    n_chunks - len(starts),
+                    n_chunks,
+                    0.0,
+                    math.inf if starts else 0.0,
                 )
-    except KeyboardInterrupt as exc:
-        raise BatchInterrupted(path, cases_done, n_cases) from exc
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+            )
+        if not starts:
+            return BatchSummary(path, n_cases, 0, n_chunks, time.perf_counter() - t0, fp)
+
+        client, cluster = batch_client(workers, scheduler)
+        window = 2 * max(1, len(client.scheduler_info().get("workers", {})) or 1)
+        pending = list(reversed(starts))
+        computed = 0
+        try:
+
+            def submit(start):
+                chunk = {k: v[start : start + chunk_size] for k, v in table.items()}
+                return client.submit(
+                    _chunk_task,
+                    build,
+                    extract,
+                    chunk,
+                    start,
+                    base_seed,
+                    histories,
+                    retries=retries,
+                    pure=False,
+                    key=f"chunk-{fp[:12]}-{start}",
+                )
+
+            futures = as_completed(
+                [submit(pending.pop()) for _ in range(min(window, len(pending)))],
+                with_results=False,
+                loop=client.loop,
+            )
+            chunks_run, group = 0, None
+            for future in futures:
+                out = future.result()
+                if isinstance(out, _Refusal):
+                    raise out.error()
+                start = int(future.key.rsplit("-", 1)[1])
+                future.release()
+                with store_faults(path, kept):
+                    if not created:
+                        create_store(path, fp, setup_text, table, out, chunk_size, n_cases)
+                        created = True
+                    if group is None:
+                        import zarr
+
+                        group = zarr.open_group(str(path), mode="r+")
+                    write_chunk(group, start, out)
+                n = len(out["seed"])
+                del out
+                computed += n
+                cases_done += n
+                chunks_run += 1
+                if pending:
+                    futures.add(submit(pending.pop()))
+                if progress is not None:
+                    rate = computed / max(time.perf_counter() - t0, 1e-9)
+                    progress(
+                        BatchProgress(
+                            cases_done,
+                            n_cases,
+                            n_chunks - len(starts) + chunks_run,
+                            n_chunks,
+                            rate,
+                            (n_cases - cases_done) / rate,
+                        )
+                    )
+        except KeyboardInterrupt as exc:
+            raise BatchInterrupted(path, cases_done, n_cases) from exc
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
     return BatchSummary(
         path, n_cases, chunks_run, n_chunks - len(starts), time.perf_counter() - t0, fp
     )

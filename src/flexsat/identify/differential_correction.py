@@ -49,7 +49,14 @@ FrfItem: TypeAlias = tuple[
 ]
 
 
-def _modes_and_sigma(values, sigma, modes, name, prefix, unit):
+def _modes_and_sigma(
+    values: npt.ArrayLike,
+    sigma: float | npt.ArrayLike | None,
+    modes: npt.ArrayLike | None,
+    name: str,
+    prefix: str,
+    unit: str,
+) -> tuple[FloatArray, FloatArray, IntArray]:
     """A measured modal quantity in ``unit``: finite vector > 0, its SDs (> 0) and the model
     modes."""
     v = require_finite(values, name, unit).ravel()
@@ -68,7 +75,7 @@ def _modes_and_sigma(values, sigma, modes, name, prefix, unit):
     return v, s, _mode_numbers(modes, v.size, f"{prefix}_modes")
 
 
-def _mode_numbers(modes, count, name):
+def _mode_numbers(modes: npt.ArrayLike | None, count: int, name: str) -> IntArray:
     if modes is None:
         return np.arange(count)
     idx = np.asarray(modes).ravel()
@@ -82,7 +89,7 @@ def _mode_numbers(modes, count, name):
     return idx.astype(int)
 
 
-def _dof_or_vector(value, n, name):
+def _dof_or_vector(value: int | npt.ArrayLike, n: int, name: str) -> FloatArray:
     """An FRF output/input: a dof index or an (n,) vector (a row of H, a column of B)."""
     if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
         if not 0 <= value < n:
@@ -98,7 +105,7 @@ def _dof_or_vector(value, n, name):
     return v
 
 
-def _gain_index(value, name):
+def _gain_index(value: object, name: str) -> int | None:
     """An FRF item's optional gain: None or an index >= 0 into mu (outputs) or nu (inputs)."""
     if value is None:
         return None
@@ -109,7 +116,7 @@ def _gain_index(value, name):
     return int(value)
 
 
-def _start_gains(values, count, name, kind):
+def _start_gains(values: npt.ArrayLike | None, count: int, name: str, kind: str) -> FloatArray:
     """Start values of the ``count`` output (``mu0``) or input (``nu0``) gains: default 1, > 0."""
     if values is None:
         return np.ones(count)
@@ -472,6 +479,7 @@ class CorrectionData:
                     np.hstack([(np.outer(d_scale, f) + scale * df).T, np.zeros((dofs.size, R))])
                 )
         if self.damping_ratios is not None:
+            assert self.damping_modes is not None  # set with the damping ratios (__post_init__)
             values_z, jac_z = _damping_ratios(model, K, M, C, self.damping_modes)
             values.append(values_z)
             jac.append(jac_z)
@@ -509,6 +517,7 @@ class CorrectionData:
             psi = self.shapes
             assert psi is not None  # both pseudo-measurements need shapes (__post_init__)
             # psi^T B psi of every block, [fixed part, blocks...], for M and K
+            assert model.M0 is not None and model.K0 is not None  # zeros when not given
             forms_m = [psi.T @ B @ psi for B in [model.M0] + model.M_blocks]
             forms_k = [psi.T @ B @ psi for B in [model.K0] + model.K_blocks]
             nominal_m, nominal_k = np.diag(sum(forms_m)), np.diag(sum(forms_k))
@@ -546,7 +555,9 @@ class CorrectionData:
         )
 
 
-def _damping_ratios(model, K, M, C, modes):
+def _damping_ratios(
+    model: SubstructureModel, K: FloatArray, M: FloatArray, C: FloatArray, modes: IntArray
+) -> tuple[FloatArray, FloatArray]:
     """Damping ratios of the damped modes paired with the undamped ``modes``, and gradients."""
     n = model.n_dofs
     w0 = np.sqrt(np.clip(sla.eigh(K, M, eigvals_only=True), 0.0, None))
@@ -721,7 +732,7 @@ def differential_correction(
             "prior_sigma (0_p)"
         )
 
-    def evaluate(x):
+    def evaluate(x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         calc, A = data.predict(model, x[:P], x[P : P + Q], x[P + Q : G], x[G : G + S], x[G + S :])
         res = (measured - calc) / sd
         rows = A[:, free] / sd[:, None]

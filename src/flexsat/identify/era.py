@@ -80,12 +80,18 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
-from flexsat.units import FrequencyArray, to_si_array
+from flexsat.units import FloatArray, FrequencyArray, to_si_array
+
+if TYPE_CHECKING:
+    from flexsat.identify.measurements import Measurement
 
 __all__ = [
     "Realization",
@@ -98,9 +104,19 @@ __all__ = [
     "okid",
 ]
 
+ComplexArray: TypeAlias = npt.NDArray[np.complex128]
+IntArray: TypeAlias = npt.NDArray[np.intp]
+#: real or complex: :func:`numpy.linalg.eig` returns real arrays when every eigenvalue is real
+InexactArray: TypeAlias = npt.NDArray[np.inexact[Any]]
+#: a realization's factors: A, B, C, the singular values, the order, and the observability and
+#: controllability factors
+Factors: TypeAlias = tuple[
+    FloatArray, FloatArray, FloatArray, FloatArray, int, FloatArray, FloatArray
+]
+
 
 # ------------------------------------------------------------------------------------------------
-def _markov_array(markov) -> np.ndarray:
+def _markov_array(markov: npt.ArrayLike) -> FloatArray:
     try:
         Y = np.array(markov, dtype=float)
     except (TypeError, ValueError):
@@ -122,7 +138,7 @@ def _markov_array(markov) -> np.ndarray:
     return Y
 
 
-def _time_data(u, y):
+def _time_data(u: npt.ArrayLike | None, y: npt.ArrayLike | None) -> tuple[FloatArray, FloatArray]:
     """Checked (r, N) inputs and (q, N) outputs (1-D taken as one channel)."""
     arrays = []
     for name, v in (("u", u), ("y", y)):
@@ -146,7 +162,13 @@ def _time_data(u, y):
     return u, y
 
 
-def markov_parameters(measurement=None, *, u=None, y=None, n_markov=None) -> np.ndarray:
+def markov_parameters(
+    measurement: Measurement | Sequence[Measurement] | None = None,
+    *,
+    u: npt.ArrayLike | None = None,
+    y: npt.ArrayLike | None = None,
+    n_markov: int | None = None,
+) -> FloatArray:
     """Markov parameters Y_0..Y_L from pulse-test data.
 
     Parameters
@@ -202,7 +224,7 @@ def markov_parameters(measurement=None, *, u=None, y=None, n_markov=None) -> np.
         L = N - 1 - k0 if n_markov is None else require_count(n_markov, "n_markov")
         if L > N - 1 - k0:
             raise FieldError("n_markov", f"at most {N - 1 - k0} after the pulse, got {L}")
-        return (y[:, k0 : k0 + L + 1] / u[0, k0]).T[:, :, None]
+        return np.asarray((y[:, k0 : k0 + L + 1] / u[0, k0]).T[:, :, None], dtype=float)
     L = N // 4 if n_markov is None else require_count(n_markov, "n_markov")
     if (L + 1) * r > N:
         raise FieldError("n_markov", f"{(L + 1) * r} unknowns per output exceed the {N} samples")
@@ -210,10 +232,15 @@ def markov_parameters(measurement=None, *, u=None, y=None, n_markov=None) -> np.
     for j in range(L + 1):
         Phi[j * r : (j + 1) * r, j:] = u[:, : N - j]
     sol, *_ = np.linalg.lstsq(Phi.T, y.T, rcond=None)  # ((L+1) r, q)
-    return sol.reshape(L + 1, r, q).transpose(0, 2, 1)
+    return np.asarray(sol.reshape(L + 1, r, q).transpose(0, 2, 1), dtype=float)
 
 
-def markov_from_frf(frequencies, frf, n_markov=None, tail_tolerance=1e-3):
+def markov_from_frf(
+    frequencies: npt.ArrayLike,
+    frf: npt.ArrayLike,
+    n_markov: int | None = None,
+    tail_tolerance: float = 1e-3,
+) -> tuple[FloatArray, float]:
     """Markov parameters from uniformly sampled FRFs by inverse FFT (module docstring).
 
     Parameters
@@ -324,7 +351,9 @@ def markov_from_frf(frequencies, frf, n_markov=None, tail_tolerance=1e-3):
     return Y[: L + 1], 1.0 / (N * df)
 
 
-def okid(u, y, n_markov, n_observer=None) -> np.ndarray:
+def okid(
+    u: npt.ArrayLike, y: npt.ArrayLike, n_markov: int, n_observer: int | None = None
+) -> FloatArray:
     """Markov parameters from arbitrary input/output data by OKID (Juang et al. 1993).
 
     Parameters
@@ -384,7 +413,7 @@ def okid(u, y, n_markov, n_observer=None) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------------------------------
-def mac(phi, psi) -> np.ndarray:
+def mac(phi: npt.ArrayLike, psi: npt.ArrayLike) -> FloatArray:
     """Modal assurance criterion matrix |φ_i^H ψ_j|² / (|φ_i|² |ψ_j|²); shapes as columns."""
     phi = np.atleast_2d(np.asarray(phi))
     psi = np.atleast_2d(np.asarray(psi))
@@ -398,14 +427,14 @@ def mac(phi, psi) -> np.ndarray:
     return num / np.where(den > 0, den, 1.0)
 
 
-def _mpc(shape) -> float:
+def _mpc(shape: ComplexArray) -> float:
     X = np.column_stack([shape.real, shape.imag])
     ev = np.linalg.eigvalsh(X.T @ X)
     tot = ev.sum()
     return float(((ev[1] - ev[0]) / tot) ** 2) if tot > 0 else 0.0
 
 
-def _coherence(pred, ident) -> float:
+def _coherence(pred: InexactArray, ident: InexactArray) -> float:
     """EMAC of one mode's components (Pappa et al. 1993)."""
     a, b = np.abs(pred), np.abs(ident)
     ratio = np.where((a > 0) & (b > 0), np.minimum(a, b) / np.maximum(np.maximum(a, b), 1e-300), 0)
@@ -442,27 +471,27 @@ class Realization:
     rows, cols, order : int
     """
 
-    A: np.ndarray
-    B: np.ndarray
-    C: np.ndarray
-    D: np.ndarray
+    A: FloatArray
+    B: FloatArray
+    C: FloatArray
+    D: FloatArray
     dt: float
-    singular_values: np.ndarray
+    singular_values: FloatArray
     frequencies_hz: FrequencyArray
-    damping: np.ndarray
-    shapes: np.ndarray
-    emac: np.ndarray
-    mpc: np.ndarray
-    msv: np.ndarray
-    mac: np.ndarray | None
+    damping: FloatArray
+    shapes: ComplexArray
+    emac: FloatArray
+    mpc: FloatArray
+    msv: FloatArray
+    mac: FloatArray | None
     frequency_std_hz: FrequencyArray | None
-    damping_std: np.ndarray | None
+    damping_std: FloatArray | None
     rows: int
     cols: int
     order: int
-    extra: dict = field(default_factory=dict)
+    extra: dict[str, Any] = field(default_factory=dict)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         # tagged Hz; values tagged rad/s are refused rather than relabelled
         for name in ("frequencies_hz", "frequency_std_hz"):
             value = getattr(self, name)
@@ -480,7 +509,7 @@ class Realization:
         return f"Realization(order={self.order}, rows={self.rows}, cols={self.cols}, f=[{f}] Hz)"
 
 
-def _hankel(Y, start, rows, cols):
+def _hankel(Y: FloatArray, start: int, rows: int, cols: int) -> FloatArray:
     q, r = Y.shape[1:]
     H = np.empty((rows * q, cols * r))
     for i in range(rows):
@@ -489,7 +518,9 @@ def _hankel(Y, start, rows, cols):
     return H
 
 
-def _sizes(L, q, r, order, rows, cols):
+def _sizes(
+    L: int, q: int, r: int, order: int | None, rows: int | None, cols: int | None
+) -> tuple[int, int]:
     if rows is None:
         want = max(10 * (order or 0), 200)
         rows = max(2, min(-(-want // q), L // 2))
@@ -506,7 +537,7 @@ def _sizes(L, q, r, order, rows, cols):
     return rows, cols
 
 
-def _order(s, order, field="order"):
+def _order(s: FloatArray, order: int | None, field: str = "order") -> int:
     tol = s[0] * max(s.size, 1) * np.finfo(float).eps * 10
     rank = int(np.sum(s > tol))
     if order is None:
@@ -527,7 +558,25 @@ def _order(s, order, field="order"):
     return order
 
 
-def _modes(A, B, C, dt, cols, reference_shapes):
+def _modes(
+    A: FloatArray,
+    B: FloatArray,
+    C: FloatArray,
+    dt: float,
+    cols: int,
+    reference_shapes: npt.ArrayLike | None,
+) -> tuple[
+    FloatArray,
+    FloatArray,
+    ComplexArray,
+    FloatArray,
+    FloatArray,
+    FloatArray | None,
+    InexactArray,
+    InexactArray,
+    IntArray,
+    InexactArray,
+]:
     lam, W = np.linalg.eig(A)
     s = np.log(lam.astype(complex)) / dt
     keep = np.flatnonzero(s.imag > 1e-9 / dt)
@@ -555,7 +604,7 @@ def _modes(A, B, C, dt, cols, reference_shapes):
     return freq, zeta, norm, msv, mpc, mac_best, lam_k, bmod, keep, W
 
 
-def _realize(Y, dt, order, rows, cols):
+def _realize(Y: FloatArray, order: int | None, rows: int, cols: int) -> Factors:
     q, r = Y.shape[1:]
     H0 = _hankel(Y, 1, rows, cols)
     H1 = _hankel(Y, 2, rows, cols)
@@ -568,7 +617,14 @@ def _realize(Y, dt, order, rows, cols):
     return A, Co[:, :r], Ob[:q], s, n, Ob, Co
 
 
-def era(markov, dt=1.0, order=None, rows=None, cols=None, reference_shapes=None):
+def era(
+    markov: npt.ArrayLike,
+    dt: float = 1.0,
+    order: int | None = None,
+    rows: int | None = None,
+    cols: int | None = None,
+    reference_shapes: npt.ArrayLike | None = None,
+) -> Realization:
     """Eigensystem Realization Algorithm (Juang & Pappa 1985).
 
     Parameters
@@ -599,11 +655,21 @@ def era(markov, dt=1.0, order=None, rows=None, cols=None, reference_shapes=None)
     dt = float(require_positive(dt, "dt"))
     L, q, r = Y.shape[0] - 1, Y.shape[1], Y.shape[2]
     rows, cols = _sizes(L, q, r, order, rows, cols)
-    A, B, C, s, n, Ob, Co = _realize(Y, dt, order, rows, cols)
-    return _finish(Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, (rows * q, cols * r))
+    factors = _realize(Y, order, rows, cols)
+    return _finish(Y, dt, factors, rows, cols, reference_shapes, (rows * q, cols * r))
 
 
-def _perturbation_std(s, n, shape, W, keep, lam, freq, zeta, dt):
+def _perturbation_std(
+    s: FloatArray,
+    n: int,
+    shape: tuple[int, int],
+    W: InexactArray,
+    keep: IntArray,
+    lam: InexactArray,
+    freq: FloatArray,
+    zeta: FloatArray,
+    dt: float,
+) -> tuple[FloatArray, FloatArray]:
     """First-order standard deviations of f and ζ from the singular-value noise floor."""
     if n >= s.size:
         return np.zeros_like(freq), np.zeros_like(zeta)
@@ -619,7 +685,17 @@ def _perturbation_std(s, n, shape, W, keep, lam, freq, zeta, dt):
     return fstd, zstd
 
 
-def _finish(Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, shape, extra=None):
+def _finish(
+    Y: FloatArray,
+    dt: float,
+    factors: Factors,
+    rows: int,
+    cols: int,
+    reference_shapes: npt.ArrayLike | None,
+    shape: tuple[int, int] | None,
+    extra: dict[str, Any] | None = None,
+) -> Realization:
+    A, B, C, s, n, Ob, Co = factors
     q, r = Y.shape[1:]
     freq, zeta, shapes, msv, mpc, mac_best, lam, bmod, keep, W = _modes(
         A, B, C, dt, cols, reference_shapes
@@ -648,14 +724,14 @@ def _finish(Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, shape, e
         Y[0],
         dt,
         s,
-        freq,
+        FrequencyArray(freq, "Hz"),
         zeta,
         shapes,
         emac,
         mpc,
         msv,
         mac_best,
-        fstd,
+        None if fstd is None else FrequencyArray(fstd, "Hz"),
         zstd,
         rows,
         cols,
@@ -664,7 +740,7 @@ def _finish(Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, shape, e
     )
 
 
-def _markov_of(real: Realization, n: int) -> np.ndarray:
+def _markov_of(real: Realization, n: int) -> FloatArray:
     """Markov parameters D, CB, CAB, ... (n + 1 of them) of a discrete realization."""
     out, x = [real.D], real.B
     for _ in range(n):
@@ -674,7 +750,11 @@ def _markov_of(real: Realization, n: int) -> np.ndarray:
 
 
 def bootstrap_uncertainty(
-    realization: Realization, markov, n_samples: int = 20, seed=None, match_tolerance: float = 0.05
+    realization: Realization,
+    markov: npt.ArrayLike,
+    n_samples: int = 20,
+    seed: int | None = None,
+    match_tolerance: float = 0.05,
 ) -> Realization:
     """Standard deviations of the frequencies and damping ratios by parametric bootstrap.
 
@@ -749,7 +829,7 @@ def bootstrap_uncertainty(
         zbias = np.where(ok, np.nanmean(z_all, axis=0) - realization.damping, np.nan)
     return dataclasses.replace(
         realization,
-        frequency_std_hz=fstd,
+        frequency_std_hz=FrequencyArray(fstd, "Hz"),
         damping_std=zstd,
         extra={
             **realization.extra,
@@ -762,8 +842,15 @@ def bootstrap_uncertainty(
 
 
 def era_dc(
-    markov, dt=1.0, order=None, rows=None, cols=None, blocks=2, lag=1, reference_shapes=None
-):
+    markov: npt.ArrayLike,
+    dt: float = 1.0,
+    order: int | None = None,
+    rows: int | None = None,
+    cols: int | None = None,
+    blocks: int = 2,
+    lag: int = 1,
+    reference_shapes: npt.ArrayLike | None = None,
+) -> Realization:
     """ERA with data correlations (ERA/DC; Juang, Cooper & Wright, *Control Theory Adv. Tech.*
     4(1), 1988), built on ERA (Juang & Pappa 1985).
 
@@ -790,11 +877,11 @@ def era_dc(
             f"the {L} Markov parameters",
         )
 
-    def build():
+    def build(rows: int, cols: int) -> Factors:
         H0 = _hankel(Y, 1, rows, cols)
         R = {k: _hankel(Y, 1 + k, rows, cols) @ H0.T for k in range(reach + 1)}
 
-        def big(k):
+        def big(k: int) -> FloatArray:
             return np.block([[R[k + (i + j) * lag] for j in range(blocks)] for i in range(blocks)])
 
         U, s, Vt = np.linalg.svd(big(0), full_matrices=False)
@@ -805,7 +892,6 @@ def era_dc(
         Gam = np.linalg.pinv(Pn) @ H0
         return A, Gam[:, :r], Pn[:q], s, n, Pn, Gam
 
-    A, B, C, s, n, Ob, Co = build()
     return _finish(
-        Y, dt, A, B, C, s, n, Ob, Co, rows, cols, reference_shapes, None, extra={"method": "ERA/DC"}
+        Y, dt, build(rows, cols), rows, cols, reference_shapes, None, extra={"method": "ERA/DC"}
     )

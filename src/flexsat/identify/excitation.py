@@ -22,14 +22,21 @@ into the band.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 from scipy import signal
 from scipy.linalg import block_diag
 
 from flexsat.identify.measurements import Channel
 from flexsat.input_checks import require_nonneg, require_positive
+from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    from flexsat.structures.modal_model import ModalModel
 
 __all__ = [
     "Excitation",
@@ -44,6 +51,9 @@ __all__ = [
 _KINDS = ("impulse", "harmonic", "random", "history")
 #: order of the analog Butterworth anti-aliasing filter (:func:`with_anti_alias`)
 ANTI_ALIAS_ORDER = 6
+
+#: a continuous state-space system (A, B, C, D)
+StateSpaceMatrices: TypeAlias = tuple[FloatArray, FloatArray, FloatArray, FloatArray]
 
 
 @dataclass(frozen=True)
@@ -70,17 +80,23 @@ class Excitation:
     amplitude: float = 1.0
     width: float | None = None
     frequency: float | None = None
-    values: np.ndarray | None = None
+    values: FloatArray | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.kind not in _KINDS:
             raise ValueError(f"kind: must be one of {_KINDS}, got {self.kind!r}")
         if self.channel.kind not in ("force", "torque"):
             raise ValueError(
                 f"channel: an excitation is a force or torque, got {self.channel.kind!r}"
             )
+        if self.kind == "harmonic" and self.frequency is None:
+            raise ValueError("frequency: a harmonic excitation needs its frequency, Hz")
+        if self.kind == "history" and self.values is None:
+            raise ValueError("values: a history excitation needs its samples")
 
-    def samples(self, t_fine: np.ndarray, h: float, oversample: int, rng) -> np.ndarray:
+    def samples(
+        self, t_fine: FloatArray, h: float, oversample: int, rng: np.random.Generator
+    ) -> FloatArray:
         """Average of the input over each fine step starting at ``t_fine``."""
         a = float(self.amplitude)
         if self.kind == "impulse":
@@ -88,6 +104,7 @@ class Excitation:
             lo, hi = np.clip(t_fine, 0, w), np.clip(t_fine + h, 0, w)
             return a * w / np.pi * (np.cos(np.pi * lo / w) - np.cos(np.pi * hi / w)) / h
         if self.kind == "harmonic":
+            assert self.frequency is not None  # a harmonic excitation has one (__post_init__)
             om = 2 * np.pi * float(self.frequency)
             return a * (np.cos(om * t_fine) - np.cos(om * (t_fine + h))) / (om * h)
         if self.kind == "random":
@@ -100,13 +117,19 @@ class Excitation:
         return np.repeat(full, oversample)[: t_fine.size]
 
 
-def _load(load: str, node, direction, name="") -> Channel:
+def _load(load: str, node: int, direction: str, name: str = "") -> Channel:
     if load not in ("force", "torque"):
         raise ValueError(f"load: must be 'force' or 'torque', got {load!r}")
     return Channel.at(load, node, direction, name=name)
 
 
-def impulse_hammer(node, direction, amplitude=1.0, width=None, load="force") -> Excitation:
+def impulse_hammer(
+    node: int,
+    direction: str,
+    amplitude: float = 1.0,
+    width: float | None = None,
+    load: str = "force",
+) -> Excitation:
     """Half-sine hammer pulse of peak ``amplitude`` (N) and duration ``width`` (s).
 
     The impulse is :math:`2 F w / \\pi`; the default width is one sample, which makes the
@@ -117,7 +140,9 @@ def impulse_hammer(node, direction, amplitude=1.0, width=None, load="force") -> 
     return Excitation("impulse", _load(load, node, direction), float(amplitude), width=width)
 
 
-def harmonic_shaker(node, direction, amplitude, frequency, load="force") -> Excitation:
+def harmonic_shaker(
+    node: int, direction: str, amplitude: float, frequency: float, load: str = "force"
+) -> Excitation:
     """Sine force (or torque) of ``amplitude`` and ``frequency`` (Hz) from t = 0."""
     require_positive(frequency, "frequency")
     return Excitation(
@@ -125,12 +150,12 @@ def harmonic_shaker(node, direction, amplitude, frequency, load="force") -> Exci
     )
 
 
-def random_force(node, direction, rms=1.0, load="force") -> Excitation:
+def random_force(node: int, direction: str, rms: float = 1.0, load: str = "force") -> Excitation:
     """White Gaussian force (or torque) of standard deviation ``rms``, held over each sample."""
     return Excitation("random", _load(load, node, direction), float(require_nonneg(rms, "rms")))
 
 
-def torque_history(node, axis, values) -> Excitation:
+def torque_history(node: int, axis: str, values: npt.ArrayLike) -> Excitation:
     """User torque history (e.g. a reaction wheel), N m, one value per sample (zero after)."""
     vals = np.asarray(values, dtype=float)
     if vals.ndim != 1 or not np.all(np.isfinite(vals)):
@@ -138,23 +163,35 @@ def torque_history(node, axis, values) -> Excitation:
     return Excitation("history", _load("torque", node, axis), 1.0, values=vals)
 
 
-def _input_vector(model, chan: Channel) -> np.ndarray:
+def _located(chan: Channel) -> tuple[int, str]:
+    """The node and direction of a test channel (one with a structural kind)."""
+    # a Channel with a structural kind has both (Channel.__post_init__)
+    assert chan.node is not None and chan.direction is not None
+    return chan.node, chan.direction
+
+
+def _input_vector(model: ModalModel, chan: Channel) -> FloatArray:
+    node, direction = _located(chan)
     if chan.kind == "force":
-        return model.force_input(chan.node, chan.direction)
-    return model.torque_input(chan.node, chan.direction)
+        return model.force_input(node, direction)
+    return model.torque_input(node, direction)
 
 
-def _output_rows(model, chan: Channel) -> np.ndarray:
-    if chan.kind in ("displacement", "velocity", "acceleration"):
-        return model.displacement_output(chan.node, chan.direction)
+def _output_rows(model: ModalModel, chan: Channel) -> FloatArray:
+    if chan.kind not in ("displacement", "velocity", "acceleration", "rotation", "strain"):
+        raise ValueError(f"sensors: {chan.kind!r} is not a sensor kind")
+    node, direction = _located(chan)
     if chan.kind == "rotation":
-        return model.rotation_output(chan.node, chan.direction)
+        return model.rotation_output(node, direction)
     if chan.kind == "strain":
-        return model.strain_output(chan.node_a, chan.node, chan.direction)
-    raise ValueError(f"sensors: {chan.kind!r} is not a sensor kind")
+        assert chan.node_a is not None  # a strain channel has both ends (Channel.__post_init__)
+        return model.strain_output(chan.node_a, node, direction)
+    return model.displacement_output(node, direction)
 
 
-def sensor_matrices(model, sensors, inputs):
+def sensor_matrices(
+    model: ModalModel, sensors: Sequence[Channel], inputs: Sequence[Channel]
+) -> StateSpaceMatrices:
     """Continuous (A, B, C, D) of the modal model for the given sensors and input channels."""
     m = model.n_modes
     w, z = model.frequencies, model.damping
@@ -176,7 +213,9 @@ def sensor_matrices(model, sensors, inputs):
     return A, B, C, D
 
 
-def with_anti_alias(A, B, C, D, cutoff_hz):
+def with_anti_alias(
+    A: FloatArray, B: FloatArray, C: FloatArray, D: FloatArray, cutoff_hz: float
+) -> StateSpaceMatrices:
     """System + one analog low-pass of order :data:`ANTI_ALIAS_ORDER` (Butterworth, cut-off
     ``cutoff_hz``) per output and per input channel (module docstring).
 

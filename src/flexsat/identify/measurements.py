@@ -18,15 +18,24 @@ direction.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.dynamics.plant import AXES, STRUCTURAL_KINDS, Channel
 from flexsat.input_checks import require_finite
+from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    import xarray
 
 __all__ = ["STRUCTURAL_KINDS", "Channel", "Measurement", "uff_direction"]
+
+ComplexArray: TypeAlias = npt.NDArray[np.complex128]
 
 _ROTATIONAL = ("rotation", "strain", "torque")
 #: UFF dataset 58 ordinate specific data types (8 displacement, 11 velocity, 12 acceleration,
@@ -58,17 +67,25 @@ def uff_direction(channel: Channel) -> int:
     return AXES.index(channel.direction) + (4 if channel.kind in _ROTATIONAL else 1)
 
 
-def _channels(value, field: str) -> tuple[Channel, ...]:
+def _uff_spec(channel: Channel) -> int:
+    """UFF ordinate specific data type of a located channel."""
+    assert channel.kind is not None  # a Measurement keeps located channels only (__post_init__)
+    return _UFF_SPEC[channel.kind]
+
+
+def _channels(value: Iterable[object], field: str) -> tuple[Channel, ...]:
     items = tuple(value)
+    channels = []
     for i, c in enumerate(items):
         if not isinstance(c, Channel) or c.kind is None:
             raise ValueError(
                 f"{field}[{i}]: must be a Channel located on the structure (Channel.at), got {c!r}"
             )
-    return items
+        channels.append(c)
+    return tuple(channels)
 
 
-def _data(value, field: str, complex_ok: bool) -> np.ndarray:
+def _data(value: npt.ArrayLike, field: str, complex_ok: bool) -> FloatArray | ComplexArray:
     try:
         arr = np.array(value, dtype=complex if complex_ok else float)
     except (TypeError, ValueError):
@@ -102,15 +119,15 @@ class Measurement:
         a non-uniform time axis.
     """
 
-    abscissa: np.ndarray
-    outputs: np.ndarray
-    output_channels: tuple = ()
-    inputs: np.ndarray | None = None
-    input_channels: tuple = ()
+    abscissa: FloatArray
+    outputs: FloatArray | ComplexArray
+    output_channels: tuple[Channel, ...] = ()
+    inputs: FloatArray | None = None
+    input_channels: tuple[Channel, ...] = ()
     domain: str = "time"
-    attrs: dict = field(default_factory=dict)
+    attrs: dict[str, Any] = field(default_factory=dict)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.domain not in ("time", "frequency"):
             raise ValueError(f"domain: must be 'time' or 'frequency', got {self.domain!r}")
         x = require_finite(self.abscissa, "abscissa")
@@ -172,12 +189,14 @@ class Measurement:
             f"inputs={len(self.input_channels)}, samples={self.abscissa.size})"
         )
 
-    def to_dataset(self):
+    def to_dataset(self) -> xarray.Dataset:
         """xarray.Dataset: ``outputs`` (and ``inputs``) with per-channel coordinates."""
         import xarray as xr
 
         dim = self.domain
-        coords = {dim: (dim, self.abscissa, {"units": "s" if dim == "time" else "Hz"})}
+        coords: dict[str, tuple[Any, ...]] = {
+            dim: (dim, self.abscissa, {"units": "s" if dim == "time" else "Hz"})
+        }
         for prefix, chans in (("output", self.output_channels), ("input", self.input_channels)):
             for attr in ("kind", "node", "direction", "unit", "name"):
                 values = [getattr(c, attr) for c in chans]
@@ -186,6 +205,7 @@ class Measurement:
                 f"{prefix}_channel",
                 [-1 if c.node_a is None else c.node_a for c in chans],
             )
+        data: dict[str, tuple[tuple[str, ...], FloatArray | ComplexArray]]
         if dim == "time":
             data = {"outputs": (("output_channel", dim), self.outputs)}
             if self.inputs is not None:
@@ -196,7 +216,7 @@ class Measurement:
 
     # ------------------------------------------------------------------------------------------
     # universal file 58
-    def to_uff(self, path) -> None:
+    def to_uff(self, path: str | Path) -> None:
         """Write as universal-file datasets 58 (one per channel, or per FRF pair), SI units.
 
         Time histories: function type 1 (time response), outputs then inputs (reference node 0
@@ -225,11 +245,17 @@ class Measurement:
             id5="NONE",
         )
 
-        def one(chan, data, ref, func_type, ord_type):
+        def one(
+            chan: Channel,
+            data: FloatArray | ComplexArray,
+            ref: Channel | None,
+            func_type: int,
+            ord_type: int,
+        ) -> dict[str, Any]:
             ref_node, ref_dir, den_units, den_spec = (
                 (0, 0, "NONE", 0)
                 if ref is None
-                else (ref.node, uff_direction(ref), ref.unit, _UFF_SPEC[ref.kind])
+                else (ref.node, uff_direction(ref), ref.unit, _uff_spec(ref))
             )
             return pyuff.prepare_58(
                 id1=chan.name,
@@ -241,7 +267,7 @@ class Measurement:
                 ref_dir=ref_dir,
                 ord_data_type=ord_type,
                 data=data,
-                ordinate_spec_data_type=_UFF_SPEC[chan.kind],
+                ordinate_spec_data_type=_uff_spec(chan),
                 ordinate_axis_units_lab=chan.unit,
                 orddenom_spec_data_type=den_spec,
                 orddenom_axis_units_lab=den_units,
@@ -262,7 +288,7 @@ class Measurement:
         pyuff.UFF(str(Path(path))).write_sets(sets, mode="overwrite")
 
     @classmethod
-    def from_uff(cls, path) -> Measurement:
+    def from_uff(cls, path: str | Path) -> Measurement:
         """Read dataset-58 functions written by :meth:`to_uff` or by test software.
 
         Time histories (function type 1): channels of kind force/torque (excitation, specific
@@ -289,7 +315,9 @@ class Measurement:
                 raise ValueError(f"{path}: functions have different abscissae")
         frf = int(functions[0]["func_type"]) == 4
 
-        def channel(node, code, spec, units, name="", id2=""):
+        def channel(
+            node: Any, code: Any, spec: Any, units: Any, name: Any = "", id2: Any = ""
+        ) -> Channel:
             code = abs(int(code))
             rot = code >= 4
             kind = _UFF_KIND.get((int(spec), rot), "rotation" if rot else "displacement")
@@ -310,7 +338,10 @@ class Measurement:
             )
 
         if not frf:
-            outs, ochan, ins, ichan = [], [], [], []
+            outs: list[FloatArray] = []
+            ins: list[FloatArray] = []
+            ochan: list[Channel] = []
+            ichan: list[Channel] = []
             for f in functions:
                 c = channel(
                     f["rsp_node"],
@@ -325,12 +356,13 @@ class Measurement:
             return cls(
                 x,
                 np.array(outs).reshape(len(outs), x.size),
-                ochan,
+                tuple(ochan),
                 np.array(ins) if ins else None,
-                ichan if ins else (),
+                tuple(ichan) if ins else (),
                 "time",
             )
-        ochan, ichan, table = [], [], {}
+        ochan, ichan = [], []
+        table: dict[tuple[int, int], ComplexArray] = {}
         for f in functions:
             c = channel(
                 f["rsp_node"],
@@ -354,4 +386,4 @@ class Measurement:
         if len(table) != len(ochan) * len(ichan):
             raise ValueError(f"{path}: FRFs missing for some response/reference pairs")
         data = np.array([[table[(i, j)] for j in range(len(ichan))] for i in range(len(ochan))])
-        return cls(x, data, ochan, None, ichan, "frequency")
+        return cls(x, data, tuple(ochan), None, tuple(ichan), "frequency")

@@ -103,22 +103,22 @@ _FREE_NAMES = set(CAMERA_PARAMETERS) | {"f"}
 # ----------------------------------------------------------------------------------------------
 # rotations
 # ----------------------------------------------------------------------------------------------
-def _r1(a):
+def _r1(a: float) -> FloatArray:
     c, s = np.cos(a), np.sin(a)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])
 
 
-def _r2(a):
+def _r2(a: float) -> FloatArray:
     c, s = np.cos(a), np.sin(a)
     return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
 
 
-def _r3(a):
+def _r3(a: float) -> FloatArray:
     c, s = np.cos(a), np.sin(a)
     return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def _check_euler(euler, field_name="euler"):
+def _check_euler(euler: str, field_name: str = "euler") -> str:
     if euler not in ("321", "123"):
         raise ValueError(
             f"{field_name}: must be '321' (Att. 8: C = R1(psi) R2(theta) R3(phi), "
@@ -281,7 +281,9 @@ class Camera:
         )
 
 
-def _project_vec(vec, euler, sign, form, pts):
+def _project_vec(
+    vec: FloatArray, euler: str, sign: float, form: str, pts: FloatArray
+) -> tuple[FloatArray, FloatArray]:
     """Projection from a raw parameter vector (no validation); pts (K, 3) -> (K, 2)."""
     c = rotation_matrix(vec[3:6], euler)
     d = (pts - vec[0:3]) @ c.T
@@ -300,7 +302,7 @@ def _project_vec(vec, euler, sign, form, pts):
     return np.stack([vec[6] + ub + du, vec[7] + vb + dv], axis=-1), depth
 
 
-def _check_points(points, field_name="points"):
+def _check_points(points: npt.ArrayLike, field_name: str = "points") -> FloatArray:
     p = require_numeric(points, field_name)
     if p.ndim == 0 or p.shape[-1] != 3:
         raise ValueError(f"{field_name}: last axis must hold (x, y, z), got shape {p.shape}")
@@ -370,7 +372,9 @@ def simulate_centroids(
 # ----------------------------------------------------------------------------------------------
 # calibration
 # ----------------------------------------------------------------------------------------------
-def _check_cameras(cameras, field_name="cameras", minimum=1):
+def _check_cameras(
+    cameras: Camera | Sequence[Camera], field_name: str = "cameras", minimum: int = 1
+) -> list[Camera]:
     if isinstance(cameras, Camera):
         cameras = [cameras]
     cams = list(cameras)
@@ -443,7 +447,7 @@ class CalibrationResult:
         return tie @ self.covariance[np.ix_(sel, sel)] @ tie.T
 
 
-def _free_indices(free):
+def _free_indices(free: Sequence[str]) -> tuple[str, ...]:
     free = tuple(free)
     for name in free:
         if name not in _FREE_NAMES:
@@ -457,7 +461,7 @@ def _free_indices(free):
     return free
 
 
-def _collinear(pts, tol=1e-9):
+def _collinear(pts: FloatArray, tol: float = 1e-9) -> bool:
     centred = pts - pts.mean(axis=0)
     s = np.linalg.svd(centred, compute_uv=False)
     return s[0] == 0 or s[1] <= tol * s[0]
@@ -591,7 +595,7 @@ def calibrate(
     names = [f"cam{j}.{n}" for j in range(m_cam) for n in free]
     names += [f"target{k // 3}.{'xyz'[k % 3]}" for k in tgt_free]
 
-    def unpack(x):
+    def unpack(x: FloatArray) -> tuple[list[FloatArray], FloatArray]:
         vecs = []
         for j in range(m_cam):
             v = base_vecs[j].copy()
@@ -616,7 +620,7 @@ def calibrate(
     visible = np.repeat(seen.reshape(-1), 2)
     obs_flat = obs.reshape(-1)[visible]
 
-    def residuals(x):
+    def residuals(x: FloatArray) -> FloatArray:
         vecs, t = unpack(x)
         pred = np.stack(
             [
@@ -689,7 +693,7 @@ def calibrate(
     )
 
 
-def _observations(observations) -> FloatArray:
+def _observations(observations: npt.ArrayLike) -> FloatArray:
     """Image centroids; a target a camera does not see is NaN in both coordinates."""
     if isinstance(observations, (str, bytes)):
         raise ValueError("observations: must be a numeric (M, N, 2) array")
@@ -706,7 +710,7 @@ def _observations(observations) -> FloatArray:
     return obs
 
 
-def _check_visibility(seen, priors: bool, p_cam: int) -> None:
+def _check_visibility(seen: npt.NDArray[np.bool_], priors: bool, p_cam: int) -> None:
     """Every camera must see enough targets for its parameters, every target two cameras (one
     with a-priori target positions)."""
     for j, row in enumerate(seen):
@@ -725,18 +729,23 @@ def _check_visibility(seen, priors: bool, p_cam: int) -> None:
         )
 
 
-def _camera_prior(camera_sigma, free, m_cam) -> FloatArray:
+def _camera_prior(
+    camera_sigma: Mapping[str, float] | Sequence[Mapping[str, float]] | None,
+    free: tuple[str, ...],
+    m_cam: int,
+) -> FloatArray:
     """Per-unknown a-priori standard deviation of the camera parameters (inf: none)."""
     out = np.full(m_cam * len(free), np.inf)
     if camera_sigma is None:
         return out
     per_camera = [camera_sigma] * m_cam if isinstance(camera_sigma, dict) else list(camera_sigma)
-    if len(per_camera) != m_cam or not all(isinstance(d, dict) for d in per_camera):
+    mappings = [d for d in per_camera if isinstance(d, dict)]
+    if len(per_camera) != m_cam or len(mappings) != len(per_camera):
         raise ValueError(
             f"camera_sigma: must be a mapping {{parameter: sigma}} or one mapping "
             f"per camera ({m_cam})"
         )
-    for j, sigmas in enumerate(per_camera):
+    for j, sigmas in enumerate(mappings):
         for name, value in sigmas.items():
             if name not in free:
                 raise ValueError(
@@ -746,7 +755,7 @@ def _camera_prior(camera_sigma, free, m_cam) -> FloatArray:
     return out
 
 
-def _check_datum(datum, targets, n_pts):
+def _check_datum(datum: Sequence[int], targets: FloatArray, n_pts: int) -> tuple[int, int, int]:
     try:
         i0, i1, i2 = (int(v) for v in datum)
     except (TypeError, ValueError):
@@ -775,7 +784,7 @@ def _check_datum(datum, targets, n_pts):
     return i0, i1, i2
 
 
-def _check_scale(scale, n_pts):
+def _check_scale(scale: Sequence[float], n_pts: int) -> tuple[int, int, float, float]:
     try:
         si, sj = int(scale[0]), int(scale[1])
         sd = float(require_positive(scale[2], "scale distance"))
@@ -787,7 +796,7 @@ def _check_scale(scale, n_pts):
     return si, sj, sd, ssig
 
 
-def _inverse_normal(jac, field_name):
+def _inverse_normal(jac: FloatArray, field_name: str) -> FloatArray:
     """``(J^T J)^-1`` with column equilibration; a clear error when the geometry is singular."""
     norms = np.linalg.norm(jac, axis=0)
     if np.any(norms == 0):
@@ -809,7 +818,7 @@ def _inverse_normal(jac, field_name):
 # ----------------------------------------------------------------------------------------------
 # triangulation
 # ----------------------------------------------------------------------------------------------
-def _linear_guess(cams, uv):
+def _linear_guess(cams: Sequence[Camera], uv: FloatArray) -> FloatArray:
     """Distortion-free linear triangulation; uv (M, K, 2) -> (K, 3)."""
     k = uv.shape[1]
     a = np.zeros((k, 3, 3))
@@ -818,14 +827,16 @@ def _linear_guess(cams, uv):
         c = cam.matrix
         pos = np.asarray(cam.position)
         s = cam.focal_sign
-        for axis, (f, off) in enumerate(((cam.fx, cam.x0), (cam.fy, cam.y0))):
+        fx, fy = cam.fx, cam.fy
+        assert fx is not None and fy is not None  # __post_init__ sets both (from f if given)
+        for axis, (f, off) in enumerate(((fx, cam.x0), (fy, cam.y0))):
             rows = (uv[j, :, axis] - off)[:, None] * c[2] - s * f * c[axis]  # (K, 3)
             a += rows[:, :, None] * rows[:, None, :]
             b += rows * (rows @ pos)[:, None]
-    return np.linalg.solve(a, b[..., None])[..., 0]
+    return np.asarray(np.linalg.solve(a, b[..., None])[..., 0], dtype=float)
 
 
-def _camera_factor(camera_covariance, m_cam):
+def _camera_factor(camera_covariance: CalibrationResult | npt.ArrayLike, m_cam: int) -> FloatArray:
     """``L`` with ``L L^T`` = the ``(14 M, 14 M)`` camera covariance, one column per direction.
 
     The eigenvectors are taken of the correlation matrix, not of the covariance itself, so the
@@ -957,7 +968,7 @@ def triangulate(
     n_par = len(CAMERA_PARAMETERS)
     base = np.concatenate([c.vector() for c in cams])
 
-    def model(p, vec=base):
+    def model(p: FloatArray, vec: FloatArray = base) -> FloatArray:
         return np.concatenate(
             [
                 _project_vec(
@@ -970,7 +981,7 @@ def triangulate(
 
     obs = np.concatenate([flat[j] for j in range(m_cam)], axis=1)  # (K, 2M)
 
-    def jacobian(p):
+    def jacobian(p: FloatArray) -> FloatArray:
         h = 1e-6 * np.maximum(1.0, np.abs(p))
         cols = []
         for a in range(3):
@@ -979,7 +990,7 @@ def triangulate(
             cols.append((model(p + dp) - model(p - dp)) / (2 * h[:, a : a + 1]))
         return np.stack(cols, axis=-1)  # (K, 2M, 3)
 
-    def weighted(p, jac):
+    def weighted(p: FloatArray, jac: FloatArray) -> FloatArray:
         """S^-1 J_p per point (Notes above)."""
         if factor is None or factor.shape[1] == 0:
             return jac / var[None, :, None]

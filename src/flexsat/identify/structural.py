@@ -63,13 +63,18 @@ to a few thousand dofs).  Errors are ``ValueError`` naming the field.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any, TypeAlias, cast
 
 import numpy as np
+import numpy.typing as npt
 import scipy.sparse as sp
 
 from flexsat.analysis.sensitivity import modal_derivatives
 from flexsat.input_checks import require_count, require_finite, require_numeric
+from flexsat.structures.modal_solve import Matrix
+from flexsat.units import FloatArray
 
 __all__ = [
     "SubstructureModel",
@@ -85,12 +90,24 @@ __all__ = [
     "damped_eigenvalues",
 ]
 
+IntArray: TypeAlias = npt.NDArray[np.intp]
+ComplexArray: TypeAlias = npt.NDArray[np.complex128]
+#: one FRF element as given: (output dof, input dof, omegas rad/s, receptance values)
+FrfElement: TypeAlias = tuple[int, int, npt.ArrayLike, npt.ArrayLike]
+#: one FRF element checked (:func:`_check_frf`)
+FrfItem: TypeAlias = tuple[int, int, FloatArray, FloatArray]
+#: per FRF element: values (N,) and two gradients (N, ...) (:func:`_model_frf`, :func:`_eq5`)
+FrfRows: TypeAlias = tuple[FloatArray, FloatArray, FloatArray]
+
 
 # ------------------------------------------------------------------------------------------------
-def _dense(A, field_name, n=None) -> np.ndarray:
-    if sp.issparse(A):
-        A = A.toarray()
-    A = require_numeric(A, field_name, "matrix")
+def _array_like(A: Matrix) -> npt.ArrayLike:
+    """A dense or sparse matrix as an array_like (sparse ones densified)."""
+    return cast(Any, A).toarray() if sp.issparse(A) else A
+
+
+def _dense(A: Matrix, field_name: str, n: int | None = None) -> FloatArray:
+    A = require_numeric(_array_like(A), field_name, "matrix")
     if A.ndim != 2 or A.shape[0] != A.shape[1]:
         raise ValueError(f"{field_name}: must be a square matrix, got shape {A.shape}")
     if n is not None and A.shape[0] != n:
@@ -100,7 +117,7 @@ def _dense(A, field_name, n=None) -> np.ndarray:
     return (A + A.T) / 2.0
 
 
-def _blocks(blocks, name, n):
+def _blocks(blocks: Sequence[Matrix] | None, name: str, n: int) -> list[FloatArray]:
     if blocks is None:
         return []
     if sp.issparse(blocks) or (isinstance(blocks, np.ndarray) and blocks.ndim == 2):
@@ -124,19 +141,19 @@ class SubstructureModel:
         have the same length).
     """
 
-    K_blocks: list
-    M_blocks: list
-    C_blocks: list = field(default_factory=list)
-    K0: np.ndarray | None = None
-    M0: np.ndarray | None = None
-    C0: np.ndarray | None = None
-    names: tuple = ()
+    K_blocks: list[FloatArray]
+    M_blocks: list[FloatArray]
+    C_blocks: list[FloatArray] = field(default_factory=list)
+    K0: FloatArray | None = None
+    M0: FloatArray | None = None
+    C0: FloatArray | None = None
+    names: tuple[str, ...] = ()
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if not self.K_blocks and self.K0 is None:
             raise ValueError("K_blocks: give at least one stiffness block (or K0)")
-        first = self.K_blocks[0] if self.K_blocks else self.K0
-        n = first.shape[0] if hasattr(first, "shape") else np.asarray(first).shape[0]
+        first: Matrix = self.K_blocks[0] if self.K_blocks else self.K0
+        n = np.shape(first)[0]
         object.__setattr__(self, "K_blocks", _blocks(self.K_blocks, "K_blocks", n))
         object.__setattr__(self, "M_blocks", _blocks(self.M_blocks, "M_blocks", n))
         object.__setattr__(self, "C_blocks", _blocks(self.C_blocks, "C_blocks", n))
@@ -151,7 +168,7 @@ class SubstructureModel:
 
     @property
     def n_dofs(self) -> int:
-        return self.K0.shape[0]
+        return _fixed(self.K0).shape[0]
 
     @property
     def n_stiffness(self) -> int:
@@ -165,7 +182,7 @@ class SubstructureModel:
     def n_damping(self) -> int:
         return len(self.C_blocks)
 
-    def _params(self, values, count, name):
+    def _params(self, values: npt.ArrayLike | None, count: int, name: str) -> FloatArray:
         if values is None:
             return np.ones(count)
         v = require_numeric(values, name, "vector").ravel()
@@ -173,19 +190,24 @@ class SubstructureModel:
             raise ValueError(f"{name}: must have {count} entries (one per block), got {v.size}")
         return v
 
-    def K(self, p=None) -> np.ndarray:
-        p = self._params(p, self.n_stiffness, "p")
-        return self.K0 + sum((pk * Kk for pk, Kk in zip(p, self.K_blocks)), np.zeros_like(self.K0))
+    def K(self, p: npt.ArrayLike | None = None) -> FloatArray:
+        scale = self._params(p, self.n_stiffness, "p")
+        return _combination(_fixed(self.K0), scale, self.K_blocks)
 
-    def M(self, q=None) -> np.ndarray:
-        q = self._params(q, self.n_mass, "q")
-        return self.M0 + sum((qk * Mk for qk, Mk in zip(q, self.M_blocks)), np.zeros_like(self.M0))
+    def M(self, q: npt.ArrayLike | None = None) -> FloatArray:
+        scale = self._params(q, self.n_mass, "q")
+        return _combination(_fixed(self.M0), scale, self.M_blocks)
 
-    def C(self, r=None) -> np.ndarray:
-        r = self._params(r, self.n_damping, "r")
-        return self.C0 + sum((rk * Ck for rk, Ck in zip(r, self.C_blocks)), np.zeros_like(self.C0))
+    def C(self, r: npt.ArrayLike | None = None) -> FloatArray:
+        scale = self._params(r, self.n_damping, "r")
+        return _combination(_fixed(self.C0), scale, self.C_blocks)
 
-    def modes(self, p=None, q=None, n_modes=None):
+    def modes(
+        self,
+        p: npt.ArrayLike | None = None,
+        q: npt.ArrayLike | None = None,
+        n_modes: int | None = None,
+    ) -> tuple[FloatArray, FloatArray]:
         """Natural frequencies (rad/s, ascending) and mass-normalised shapes (n, n_modes).
 
         Solved by :func:`flexsat.structures.modal_solve.solve_modes` (shift-invert pencil,
@@ -217,15 +239,20 @@ class SubstructureModel:
                 f"stiffness scalings: K(p) is not positive semi-definite ({error})"
             ) from None
 
-    def scaled(self, p=None, q=None, r=None) -> SubstructureModel:
+    def scaled(
+        self,
+        p: npt.ArrayLike | None = None,
+        q: npt.ArrayLike | None = None,
+        r: npt.ArrayLike | None = None,
+    ) -> SubstructureModel:
         """The same parameterisation with the blocks multiplied by ``p, q, r`` (new nominal)."""
-        p = self._params(p, self.n_stiffness, "p")
-        q = self._params(q, self.n_mass, "q")
-        r = self._params(r, self.n_damping, "r")
+        ps = self._params(p, self.n_stiffness, "p")
+        qs = self._params(q, self.n_mass, "q")
+        rs = self._params(r, self.n_damping, "r")
         return SubstructureModel(
-            [a * B for a, B in zip(p, self.K_blocks)],
-            [a * B for a, B in zip(q, self.M_blocks)],
-            [a * B for a, B in zip(r, self.C_blocks)],
+            [a * B for a, B in zip(ps, self.K_blocks)],
+            [a * B for a, B in zip(qs, self.M_blocks)],
+            [a * B for a, B in zip(rs, self.C_blocks)],
             self.K0,
             self.M0,
             self.C0,
@@ -233,7 +260,24 @@ class SubstructureModel:
         )
 
 
-def substructures_from_builder(build, n_stiffness, n_mass=None, C_blocks=(), names=()):
+def _fixed(part: FloatArray | None) -> FloatArray:
+    """A fixed part K0, M0 or C0 of a model: zeros when not given (``__post_init__``)."""
+    assert part is not None  # __post_init__ replaces None by zeros
+    return part
+
+
+def _combination(fixed: FloatArray, scale: FloatArray, blocks: list[FloatArray]) -> FloatArray:
+    """``fixed + sum_k scale_k blocks_k``."""
+    return fixed + sum((a * B for a, B in zip(scale, blocks)), np.zeros_like(fixed))
+
+
+def substructures_from_builder(
+    build: Callable[[FloatArray, FloatArray], Any],
+    n_stiffness: int,
+    n_mass: int | None = None,
+    C_blocks: Sequence[Matrix] = (),
+    names: Sequence[str] = (),
+) -> SubstructureModel:
     """Blocks of a linear FE model from a builder of scaled assemblies.
 
     ``build(stiffness_factors, mass_factors)`` must return an object with ``K`` and ``M`` (e.g. a
@@ -261,11 +305,17 @@ def substructures_from_builder(build, n_stiffness, n_mass=None, C_blocks=(), nam
     scale_k, scale_m = np.abs(K1).max(), np.abs(M1).max()
     K0[np.abs(K0) < 1e-12 * scale_k] = 0.0
     M0[np.abs(M0) < 1e-12 * scale_m] = 0.0
-    return SubstructureModel(Kb, Mb, list(C_blocks), K0, M0, names=names)
+    Cb = [_dense(C, f"C_blocks[{k}]") for k, C in enumerate(C_blocks)]
+    return SubstructureModel(Kb, Mb, Cb, K0, M0, names=tuple(names))
 
 
 # ------------------------------------------------------------------------------------------------
-def modal_energy_distribution(K_blocks, M_blocks, shapes, omegas=None) -> dict:
+def modal_energy_distribution(
+    K_blocks: Sequence[Matrix],
+    M_blocks: Sequence[Matrix],
+    shapes: npt.ArrayLike,
+    omegas: npt.ArrayLike | None = None,
+) -> dict[str, FloatArray]:
     """Att. 7 Table 1: share of each substructure in the kinetic and strain energy of each mode.
 
     ``kinetic[i, g] = phi_i^T M_g phi_i`` and ``strain[i, g] = phi_i^T K_g phi_i / w_i^2``,
@@ -293,7 +343,7 @@ def modal_energy_distribution(K_blocks, M_blocks, shapes, omegas=None) -> dict:
             raise ValueError(f"omegas: must have {phi.shape[1]} entries (one per mode)")
         pe = pe / np.where(w > 0, w**2, 1.0)[:, None]
 
-    def frac(e, what):
+    def frac(e: FloatArray, what: str) -> FloatArray:
         tot = e.sum(axis=1, keepdims=True)
         if np.any(np.abs(tot) <= 0):
             raise ValueError(f"shapes: a mode has no {what} energy in the given blocks")
@@ -303,14 +353,15 @@ def modal_energy_distribution(K_blocks, M_blocks, shapes, omegas=None) -> dict:
 
 
 # ------------------------------------------------------------------------------------------------
-def _check_frf(frf, n):
+def _check_frf(frf: FrfElement | Sequence[FrfElement] | None, n: int) -> list[FrfItem]:
     """Normalise FRF input to a list of (j, k, omegas, values)."""
     if frf is None:
         return []
-    if isinstance(frf, tuple) and len(frf) == 4 and np.ndim(frf[2]) == 1:
-        frf = [frf]
+    entries: Any = frf  # user data, checked item by item
+    if isinstance(entries, tuple) and len(entries) == 4 and np.ndim(entries[2]) == 1:
+        entries = [entries]
     out = []
-    for i, item in enumerate(frf):
+    for i, item in enumerate(entries):
         try:
             j, k, w, h = item
         except (TypeError, ValueError):
@@ -328,7 +379,14 @@ def _check_frf(frf, n):
     return out
 
 
-def fit_modal_normalization(frf, shapes, omegas, rigid_body=False, residual=True, known_part=None):
+def fit_modal_normalization(
+    frf: FrfElement | Sequence[FrfElement],
+    shapes: npt.ArrayLike,
+    omegas: npt.ArrayLike,
+    rigid_body: bool = False,
+    residual: bool = True,
+    known_part: Sequence[FloatArray] | None = None,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Linear least-squares fit of the modal normalisation factors (Att. 7 Eqs. 5–6).
 
     ``h_jk(w) ~= a1/w^2 + sum_r alpha_r psi_jr psi_kr / (w_r^2 - w^2) + a2`` (real FRF
@@ -394,7 +452,13 @@ def fit_modal_normalization(frf, shapes, omegas, rigid_body=False, residual=True
     return alpha, a1, a2
 
 
-def _model_frf(K, M, items, K_blocks=(), M_blocks=()):
+def _model_frf(
+    K: FloatArray,
+    M: FloatArray,
+    items: Sequence[FrfItem],
+    K_blocks: Sequence[FloatArray] = (),
+    M_blocks: Sequence[FloatArray] = (),
+) -> list[FrfRows]:
     """Receptance elements of a model at the FRF points (direct solve), with gradients.
 
     ``h = e_j^T Z^-1 e_k`` with ``Z = K - w^2 M``; ``dh/dp_g = -u^T K_g v`` and ``dh/dq_g = w^2
@@ -430,17 +494,19 @@ class UndampedIdentification:
     iterations : passes made; history : list of (p, q) per pass; converged : bool.
     """
 
-    p: np.ndarray
-    q: np.ndarray
-    covariance: np.ndarray
-    frequencies: np.ndarray
-    alpha: np.ndarray
+    p: FloatArray
+    q: FloatArray
+    covariance: FloatArray
+    frequencies: FloatArray
+    alpha: FloatArray
     iterations: int
     converged: bool
-    history: list
+    history: list[tuple[FloatArray, FloatArray]]
 
 
-def _solve_ls(A, b, weights, name):
+def _solve_ls(
+    A: FloatArray, b: FloatArray, weights: FloatArray, name: str
+) -> tuple[FloatArray, FloatArray, FloatArray, int]:
     if A.shape[0] < A.shape[1]:
         raise ValueError(
             f"{name}: {A.shape[0]} equations for {A.shape[1]} parameters: more "
@@ -468,7 +534,13 @@ def _solve_ls(A, b, weights, name):
     return x / scale, cov_s / np.outer(scale, scale), res, dof
 
 
-def _pair_modes(omega_model, phi_model, measured_w, measured_shapes, mode_indices):
+def _pair_modes(
+    omega_model: FloatArray,
+    phi_model: FloatArray,
+    measured_w: FloatArray,
+    measured_shapes: FloatArray | None,
+    mode_indices: npt.ArrayLike | None,
+) -> IntArray:
     if mode_indices is not None:
         return np.asarray(mode_indices, int)
     if measured_shapes is None:
@@ -482,7 +554,17 @@ def _pair_modes(omega_model, phi_model, measured_w, measured_shapes, mode_indice
     return idx
 
 
-def _eq5(model, p, q, wbar, items, idx, psi_meas, free_p, free_q):
+def _eq5(
+    model: SubstructureModel,
+    p: FloatArray,
+    q: FloatArray,
+    wbar: FloatArray,
+    items: Sequence[FrfItem],
+    idx: IntArray,
+    psi_meas: FloatArray | None,
+    free_p: IntArray,
+    free_q: IntArray,
+) -> list[FrfRows]:
     """Right side of Eq. 5 for the current model, with its gradients.
 
     ``known + sum_r psibar_jr psibar_kr / (mu_r (wbar_r^2 - w^2))`` where ``known = h_model -
@@ -526,19 +608,19 @@ def _eq5(model, p, q, wbar, items, idx, psi_meas, free_p, free_q):
 
 
 def _mass_step(
-    model,
-    psi,
-    items,
-    rows_eq5,
-    q,
-    free_q,
-    q_prior,
-    prior_sd,
-    frf_sd,
-    pairs_off,
-    rigid_body,
-    residual,
-):
+    model: SubstructureModel,
+    psi: FloatArray,
+    items: Sequence[FrfItem],
+    rows_eq5: Sequence[FrfRows],
+    q: FloatArray,
+    free_q: IntArray,
+    q_prior: FloatArray,
+    prior_sd: float | None,
+    frf_sd: float,
+    pairs_off: Sequence[tuple[int, int]],
+    rigid_body: bool,
+    residual: bool,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, int]:
     """One Gauss-Newton step of the joint Eq. 5-6 / 9a fit of the mass scalings.
 
     ``rows_eq5`` holds per FRF element the residual of Eq. 5 (see :func:`_eq5`), its gradient
@@ -552,7 +634,7 @@ def _mass_step(
     mu = np.einsum("ij,ik,kj->j", psi, Mq, psi)
     nf, Qf = len(items), free_q.size
     n_extra = (int(rigid_body) + int(residual)) * nf
-    rows, rhs, sd, r_wbar = [], [], [], []
+    rows, rhs, sd_rows, r_wbar = [], [], [], []
     for i, ((_, _, w, h), (r, J, dr_dw)) in enumerate(zip(items, rows_eq5)):
         extra = np.zeros((w.size, n_extra))
         if rigid_body:
@@ -561,7 +643,7 @@ def _mass_step(
             extra[:, (nf if rigid_body else 0) + i] = 1.0
         rows.append(np.hstack([J, extra]))
         rhs.append(r)
-        sd.append(frf_sd * np.maximum(np.abs(h), 1e-12 * np.abs(h).max()))
+        sd_rows.append(frf_sd * np.maximum(np.abs(h), 1e-12 * np.abs(h).max()))
         r_wbar.append(dr_dw)
     n_frf = sum(r.size for r in rhs)
     if pairs_off:
@@ -576,13 +658,13 @@ def _mass_step(
         )
         rows.append(np.hstack([A_off, np.zeros((len(pairs_off), n_extra))]))
         rhs.append(-np.array([psi[:, i] @ Mq @ psi[:, j] for i, j in pairs_off]) * s)
-        sd.append(np.full(len(pairs_off), frf_sd))
+        sd_rows.append(np.full(len(pairs_off), frf_sd))
     if prior_sd is not None:
         # Tikhonov rows: the a-priori scalings as pseudo-measurements (Att. 6 Eq. 12, 0_p)
         rows.append(np.hstack([np.eye(Qf), np.zeros((Qf, n_extra))]))
         rhs.append(q_prior[free_q] - q[free_q])
-        sd.append(np.full(Qf, prior_sd))
-    A, b, sd = np.vstack(rows), np.concatenate(rhs), np.concatenate(sd)
+        sd_rows.append(np.full(Qf, prior_sd))
+    A, b, sd = np.vstack(rows), np.concatenate(rhs), np.concatenate(sd_rows)
     x, cov, res, _ = _solve_ls(A, b, 1.0 / sd, "mass scalings")
     gain = (cov @ (A.T / sd**2))[:Qf]  # d(step)/d(right side)
     g_w = gain[:, :n_frf] @ np.vstack(r_wbar)
@@ -599,23 +681,23 @@ def _mass_step(
 
 def identify_undamped(
     model: SubstructureModel,
-    measured_frequencies,
-    measured_shapes=None,
-    frf=None,
-    p0=None,
-    q0=None,
-    fixed_stiffness=(),
-    fixed_mass=(),
-    frequency_sigma=None,
-    frf_sigma=None,
-    mass_prior_sigma=None,
-    mode_indices=None,
-    off_diagonal=None,
-    rigid_body=False,
-    residual=False,
-    n_iter=30,
-    tol=1e-10,
-    identify_mass=None,
+    measured_frequencies: npt.ArrayLike,
+    measured_shapes: npt.ArrayLike | None = None,
+    frf: FrfElement | Sequence[FrfElement] | None = None,
+    p0: npt.ArrayLike | None = None,
+    q0: npt.ArrayLike | None = None,
+    fixed_stiffness: npt.ArrayLike = (),
+    fixed_mass: npt.ArrayLike = (),
+    frequency_sigma: float | npt.ArrayLike | None = None,
+    frf_sigma: float | None = None,
+    mass_prior_sigma: float | None = None,
+    mode_indices: npt.ArrayLike | None = None,
+    off_diagonal: bool | None = None,
+    rigid_body: bool = False,
+    residual: bool = False,
+    n_iter: int = 30,
+    tol: float = 1e-10,
+    identify_mass: bool | None = None,
 ) -> UndampedIdentification:
     """Iterated least-squares identification of the stiffness and mass scalings (Eqs. 1–9).
 
@@ -877,19 +959,19 @@ class DampingIdentification:
     mode_indices : (m,) model mode paired with each measured eigenvalue.
     """
 
-    r: np.ndarray
-    covariance: np.ndarray
-    predicted_real_parts: np.ndarray
-    eigenvalues: np.ndarray
-    mode_indices: np.ndarray
+    r: FloatArray
+    covariance: FloatArray
+    predicted_real_parts: FloatArray
+    eigenvalues: ComplexArray
+    mode_indices: IntArray
 
 
-def damped_eigenvalues(K, M, C, n_modes=None) -> np.ndarray:
+def damped_eigenvalues(K: Matrix, M: Matrix, C: Matrix, n_modes: int | None = None) -> ComplexArray:
     """Eigenvalues of ``M x'' + C x' + K x = 0`` with positive imaginary part, by frequency."""
-    K, M, C = (np.asarray(A.toarray() if sp.issparse(A) else A, float) for A in (K, M, C))
-    n = K.shape[0]
-    Minv = np.linalg.inv(M)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ C]])
+    Kd, Md, Cd = (np.asarray(_array_like(A), float) for A in (K, M, C))
+    n = Kd.shape[0]
+    Minv = np.linalg.inv(Md)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ Kd, -Minv @ Cd]])
     lam = np.linalg.eigvals(A)
     lam = lam[lam.imag > 0]
     lam = lam[np.argsort(lam.imag)]
@@ -898,12 +980,12 @@ def damped_eigenvalues(K, M, C, n_modes=None) -> np.ndarray:
 
 def identify_damping(
     model: SubstructureModel,
-    measured_eigenvalues,
-    p=None,
-    q=None,
-    mode_indices=None,
-    fixed=(),
-    r0=None,
+    measured_eigenvalues: npt.ArrayLike,
+    p: npt.ArrayLike | None = None,
+    q: npt.ArrayLike | None = None,
+    mode_indices: npt.ArrayLike | None = None,
+    fixed: npt.ArrayLike = (),
+    r0: npt.ArrayLike | None = None,
 ) -> DampingIdentification:
     """Damping scalings from measured eigenvalue real parts by first-order perturbation.
 
@@ -985,7 +1067,9 @@ def identify_damping(
     return DampingIdentification(r, cov, predicted, eig, idx)
 
 
-def _match_modes(w_model, w_meas, mode_indices=None) -> np.ndarray:
+def _match_modes(
+    w_model: FloatArray, w_meas: FloatArray, mode_indices: IntArray | None = None
+) -> IntArray:
     """Model mode of each measured natural frequency ``|lambda|`` (rad/s).
 
     Distances are ``|ln(w_meas / w_model)|`` (relative: spectra span decades) to the elastic
@@ -1053,20 +1137,20 @@ class UpdatedModel:
     """
 
     model: SubstructureModel
-    p: np.ndarray
-    q: np.ndarray
-    r: np.ndarray
-    covariance: np.ndarray
+    p: FloatArray
+    q: FloatArray
+    r: FloatArray
+    covariance: FloatArray
     undamped: UndampedIdentification
     damping: DampingIdentification | None
 
 
 def update_model(
     model: SubstructureModel,
-    measured_frequencies,
-    measured_eigenvalues=None,
-    damping_kwargs=None,
-    **kwargs,
+    measured_frequencies: npt.ArrayLike,
+    measured_eigenvalues: npt.ArrayLike | None = None,
+    damping_kwargs: dict[str, Any] | None = None,
+    **kwargs: Any,
 ) -> UpdatedModel:
     """Identify ``p, q`` (and ``r`` from ``measured_eigenvalues``) and return the scaled model.
 

@@ -78,7 +78,7 @@ _NO_LOCKS = {errno.ENOLCK, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EINVAL, errno.
 _HINTS = {
     errno.ENOSPC: "free some space or choose another folder",
     errno.EDQUOT: "free some space or choose another folder",
-    errno.EFBIG: "choose a folder on another file system",
+    errno.EFBIG: "raise the file-size limit (ulimit -f) or choose a folder on another file system",
     errno.EROFS: "choose a folder you can write to",
     errno.EACCES: "choose a folder you can write to",
     errno.EPERM: "choose a folder you can write to",
@@ -189,28 +189,65 @@ def _resolve(out_dir: str | os.PathLike[str]) -> Path:
     return out
 
 
-def _error(exc: OSError, out: Path) -> OutputError:
-    """``exc`` (raised while writing the report to ``out``) as a message saying where and why."""
+def write_error(
+    exc: OSError, target: Path, what: str, outcome: str, full_disk_notes: tuple[str, ...] = ()
+) -> OutputError:
+    """``exc``, raised while writing ``what`` (``"the report"``) to the folder ``target``, as
+    one message saying where and why: the reason, the file (named inside ``target`` or inside
+    its sibling working folder ``.<target>.*``, else in full), on a full disk the space free
+    there and ``full_disk_notes``, what to do for that error, then ``outcome`` (what is left).
+
+    The one place a write fault is put into words: the report's own writes and the batch store
+    of a sweep (:class:`flexsat.design.batch_store.StoreError`, ``flexsat run``) both use it.
+
+    Parameters
+    ----------
+    exc : OSError
+        The error (its ``errno``, ``strerror`` and ``filename``).
+    target : Path
+        The folder being written.
+    what : str
+        What was being written, as the message names it.
+    outcome : str
+        The closing sentence: what is left as it was, what to do next.
+    full_disk_notes : tuple of str
+        Further notes for a full disk or an exceeded quota.
+    """
     reason = exc.strerror or str(exc)
     if exc.filename is not None:
         path = Path(os.fsdecode(exc.filename))
-        temporary = path.parent.name.startswith(f".{out.name}.tmp-")
-        reason += f" (writing {path.name})" if temporary else f": '{path}'"
-    message = f"cannot write the report to '{out}': {reason}"
+        folder = next(
+            (
+                p
+                for p in path.parents
+                if p == target
+                or (p.parent == target.parent and p.name.startswith(f".{target.name}."))
+            ),
+            None,
+        )
+        reason += f" (writing {path.relative_to(folder)})" if folder else f": '{path}'"
+    message = f"cannot write {what} to '{target}': {reason}"
     if exc.errno in (errno.ENOSPC, errno.EDQUOT):
         notes = []
         try:
-            fs = os.statvfs(next(p for p in (out, *out.parents) if p.exists()))
+            fs = os.statvfs(next(p for p in (target, *target.parents) if p.exists()))
             notes.append(f"{fs.f_bavail * fs.f_frsize / 1e6:.1f} MB free there")
         except OSError:
             pass
-        if out.exists():
-            notes.append("the earlier report stays until the new one is complete, so both must fit")
+        notes += full_disk_notes
         if notes:
             message += f" ({'; '.join(notes)})"
     if exc.errno in _HINTS:
         message += f"; {_HINTS[exc.errno]}"
-    return OutputError(exc.errno or errno.EIO, message + f". '{out}' is unchanged.")
+    return OutputError(exc.errno or errno.EIO, f"{message}. {outcome}")
+
+
+def _error(exc: OSError, out: Path) -> OutputError:
+    """``exc`` (raised while writing the report to ``out``) as a message saying where and why."""
+    earlier = ("the earlier report stays until the new one is complete, so both must fit",)
+    return write_error(
+        exc, out, "the report", f"'{out}' is unchanged.", earlier if out.exists() else ()
+    )
 
 
 def _listed(out: Path) -> set[str] | None:
@@ -458,5 +495,6 @@ __all__ = [
     "OutputError",
     "check_output_folder",
     "write_atomically",
+    "write_error",
     "write_metrics_and_results",
 ]

@@ -453,6 +453,7 @@ def _run_batch(
         sobol_indices,
     )
     from flexsat.references import cite
+    from flexsat.sim import SimulationDiverged
 
     maneuver = _maneuver(scenario)
     build = builder_of(scenario, maneuver)
@@ -497,6 +498,8 @@ def _run_batch(
             retries=e.retries,
             progress=report,
         )
+    except SimulationDiverged:
+        raise  # a result, not an input error (the runner names the run)
     except ValueError as exc:
         raise ScenarioError([locate("", exc)]) from None
     from flexsat.design.batch_runner import open_results

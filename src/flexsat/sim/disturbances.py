@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,7 +35,7 @@ class BearingFriction:
     viscous: float = 0.0
     smoothing: float = 1e-3
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         set_si(self, "coulomb", require_nonneg, "N*m")
         set_si(self, "viscous", require_nonneg, "N*m*s/rad")
         set_si(self, "smoothing", require_positive, "rad/s")
@@ -61,7 +62,7 @@ class RandomTorque:
 
     std: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         set_si(self, "std", require_nonneg, "N*m")
 
 
@@ -77,7 +78,7 @@ class Impulses:
     times: tuple[float, ...] = ()
     impulses: tuple[float, ...] = ()
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         times = np.atleast_1d(require_nonneg(self.times, "impulses.times", "s"))
         impulses = np.atleast_1d(require_finite(self.impulses, "impulses.impulses", "N*m*s"))
         if times.shape != impulses.shape or times.ndim != 1:
@@ -92,7 +93,9 @@ class Impulses:
         return impulses_at_samples(self.times, self.impulses, n_steps, dt)
 
 
-def impulses_at_samples(times, impulses, n_steps: int, dt: float) -> dict[int, float]:
+def impulses_at_samples(
+    times: Sequence[float], impulses: Sequence[float], n_steps: int, dt: float
+) -> dict[int, float]:
     """Impulse per control-sample index: each at the first sample at or after its time (a
     relative 1e-9 of dt absorbs the round-off of a time given as a multiple of dt); impulses
     on one sample add; those after the last sample are dropped."""

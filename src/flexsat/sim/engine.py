@@ -107,13 +107,26 @@ def divergence_error(
             f"{np.abs(x).max():.3g} over the last control period"
         )
     )
-    which = ", ".join(map(str, cases[:10])) + (" ..." if len(cases) > 10 else "")
     message = (
-        f"simulation diverged at t = {time:.6g} s (sample {k}) in case(s) {which}: a "
+        f"simulation diverged at t = {time:.6g} s (sample {k}) in case(s) {_listed(cases)}: a "
         f"state entry or the torque command is non-finite or beyond "
         f"{DIVERGENCE_BOUND:g} (SI){growth}. Likely cause: {cause}."
     )
     return SimulationDiverged(message, cases, float(time), cause)
+
+
+def _listed(cases: tuple[int, ...]) -> str:
+    return ", ".join(map(str, cases[:10])) + (" ..." if len(cases) > 10 else "")
+
+
+def offset_cases(exc: SimulationDiverged, offset: int) -> SimulationDiverged:
+    """``exc`` with its cases counted from ``offset``: a divergence in a chunk of a larger batch
+    (cases ``offset`` onwards) named by the batch's case numbers, in ``cases`` and the message."""
+    cases = tuple(offset + c for c in exc.cases)
+    message = str(exc).replace(
+        f"in case(s) {_listed(exc.cases)}:", f"in case(s) {_listed(cases)}:", 1
+    )
+    return SimulationDiverged(message, cases, exc.time, exc.cause)
 
 
 class _NoiseStreams:

@@ -31,16 +31,30 @@ and each step is a batched product.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeAlias, TypeVar, cast
 
 import numpy as np
+import numpy.typing as npt
 from scipy.linalg import eigh, expm
+
+from flexsat.units import FloatArray
 
 #: the schemes a plant may ask for with its ``integrator`` attribute
 INTEGRATORS = ("etd2rk", "exp_rk4")
 
+#: the nonlinear generalized force N(x, w), (n_cases, n_f) from states and held inputs
+Force: TypeAlias = Callable[[FloatArray, FloatArray], FloatArray]
+#: the propagators :func:`_per_case` builds for one case: a tuple of arrays (None: absent)
+_Mats = TypeVar("_Mats", bound=tuple[FloatArray | None, ...])
+#: the force columns B_f a propagator is built with (None for a linear run)
+_Columns = TypeVar("_Columns", FloatArray, FloatArray | None)
 
-def phi_products(A: np.ndarray, h: float, B: np.ndarray, n2: int = 0, order: int = 2):
+
+def phi_products(
+    A: FloatArray, h: float, B: FloatArray, n2: int = 0, order: int = 2
+) -> tuple[FloatArray, ...]:
     """(e^{hA}, h φ1(hA) B, h φ2(hA) B₂[, h φ3(hA) B₂]) by one block exponential; B₂ = B's
     last ``n2`` columns; φ3 is returned when ``order`` = 3.
 
@@ -68,25 +82,33 @@ def phi_products(A: np.ndarray, h: float, B: np.ndarray, n2: int = 0, order: int
     return out + (E[:n, n + k + n2 :] / h**2,) if order == 3 else out
 
 
-def _per_case(fn, A, Bu, Bf):
+def _per_case(
+    fn: Callable[[FloatArray, FloatArray, _Columns], _Mats],
+    A: FloatArray,
+    Bu: FloatArray,
+    Bf: _Columns,
+) -> tuple[_Mats, bool]:
     """``fn(A, Bu, Bf)`` for shared matrices, or stacked over the case axis when any of them
     carries one (a dispersed plant); each result then has a leading case axis."""
     if A.ndim == 2 and Bu.ndim == 2 and (Bf is None or Bf.ndim == 2):
         return fn(A, Bu, Bf), False
     n = max(a.shape[0] for a in (A, Bu, Bf) if a is not None and a.ndim == 3)
-    pick = [
-        None if a is None else (a if a.ndim == 2 else a[i]) for i in range(n) for a in (A, Bu, Bf)
-    ]
-    parts = [fn(*pick[3 * i : 3 * i + 3]) for i in range(n)]
-    return tuple(None if p[0] is None else np.stack(p) for p in zip(*parts)), True
+
+    def case(a: FloatArray, i: int) -> FloatArray:
+        return a if a.ndim == 2 else a[i]
+
+    parts = [fn(case(A, i), case(Bu, i), Bf if Bf is None else case(Bf, i)) for i in range(n)]
+    stacked = tuple(None if p[0] is None else np.stack(p) for p in zip(*parts))
+    # each entry stacked over the cases: the same pattern of arrays and None as one case's
+    return cast(_Mats, stacked), True
 
 
-def _inputs(Bu) -> np.ndarray:
+def _inputs(Bu: npt.ArrayLike) -> FloatArray:
     Bu = np.asarray(Bu, float)
     return Bu[..., None] if Bu.ndim == 1 else Bu
 
 
-def apply(x: np.ndarray, Mt: np.ndarray, batched: bool) -> np.ndarray:
+def apply(x: FloatArray, Mt: FloatArray, batched: bool) -> FloatArray:
     """x @ Mt for shared Mt (k, n), or per case (x[i] @ Mt[i]) when ``batched``."""
     return np.matmul(x[:, None, :], Mt)[:, 0] if batched else x @ Mt
 
@@ -100,15 +122,22 @@ class ExponentialStepper:
     holds no φ2 product and takes no force.
     """
 
-    Et: np.ndarray  # e^{hA}ᵀ
-    P1u: np.ndarray  # (h φ1 B_u)ᵀ, shape (m, n_x)
-    P1f: np.ndarray | None  # (h φ1 B_f)ᵀ, shape (n_f, n_x)
-    P2f: np.ndarray | None  # (h φ2 B_f)ᵀ
+    Et: FloatArray  # e^{hA}ᵀ
+    P1u: FloatArray  # (h φ1 B_u)ᵀ, shape (m, n_x)
+    P1f: FloatArray | None  # (h φ1 B_f)ᵀ, shape (n_f, n_x)
+    P2f: FloatArray | None  # (h φ2 B_f)ᵀ
     substeps: int
     batched: bool = False
 
     @classmethod
-    def build(cls, A, Bu, Bf, dt: float, substeps: int = 1) -> ExponentialStepper:
+    def build(
+        cls,
+        A: npt.ArrayLike,
+        Bu: npt.ArrayLike,
+        Bf: npt.ArrayLike | None,
+        dt: float,
+        substeps: int = 1,
+    ) -> ExponentialStepper:
         """Propagators of x' = A x + B_u w + B_f N(x); ``Bf=None`` for a linear run.
 
         Only the products of φ1, φ2 with the input columns are formed (:func:`phi_products`):
@@ -118,7 +147,9 @@ class ExponentialStepper:
             raise ValueError(f"substeps: must be >= 1, got {substeps}")
         h = dt / substeps
 
-        def one(A, Bu, Bf):
+        def one(
+            A: FloatArray, Bu: FloatArray, Bf: FloatArray | None
+        ) -> tuple[FloatArray, FloatArray, FloatArray | None, FloatArray | None]:
             m = Bu.shape[1]
             nf = 0 if Bf is None else Bf.shape[1]
             B = Bu if Bf is None else np.hstack([Bu, Bf])
@@ -126,18 +157,18 @@ class ExponentialStepper:
             P1f, P2f = (P1[:, m:].T.copy(), P2.T.copy()) if Bf is not None else (None, None)
             return E.T.copy(), P1[:, :m].T.copy(), P1f, P2f
 
-        Bf = None if Bf is None else np.asarray(Bf, float)
-        mats, batched = _per_case(one, np.asarray(A, float), _inputs(Bu), Bf)
+        force_columns = None if Bf is None else np.asarray(Bf, float)
+        mats, batched = _per_case(one, np.asarray(A, float), _inputs(Bu), force_columns)
         return cls(*mats, substeps, batched)
 
-    def drive(self, w: np.ndarray) -> np.ndarray:
+    def drive(self, w: FloatArray) -> FloatArray:
         """The held input's contribution h φ1 B_u w, (n_cases, n_x); w (n_cases, m) or
         (n_cases,) for one input."""
         if w.ndim == 1:
             w = w[:, None]
         return w @ self.P1u if not self.batched else apply(w, self.P1u, True)
 
-    def step(self, x: np.ndarray, w: np.ndarray, force=None) -> np.ndarray:
+    def step(self, x: FloatArray, w: FloatArray, force: Force | None = None) -> FloatArray:
         """Advance one control period with held input w and force N(x, w) (n_cases, n_f).
 
         Each substep is the exact zero-order-hold step of the linear part, plus the ETD2RK
@@ -147,24 +178,22 @@ class ExponentialStepper:
             raise ValueError("force: this stepper was built without force columns (Bf=None)")
         drive = self.drive(w)  # held input: the same for every substep
         b = self.batched
-        if not b:  # shared propagators: plain products (the common, fastest path)
-            Et, P1f, P2f = self.Et, self.P1f, self.P2f
+        Et, P1f, P2f = self.Et, self.P1f, self.P2f
+        if force is None or P1f is None or P2f is None:  # the linear step (P1f, P2f: both)
             for _ in range(self.substeps):
-                if force is None:
-                    x = x @ Et + drive
-                    continue
+                x = (x @ Et if not b else apply(x, Et, b)) + drive
+            return x
+        if not b:  # shared propagators: plain products (the common, fastest path)
+            for _ in range(self.substeps):
                 f0 = force(x, w)
                 a = x @ Et + drive + f0 @ P1f
                 x = a + (force(a, w) - f0) @ P2f
             return x
         for _ in range(self.substeps):
-            base = apply(x, self.Et, b) + drive
-            if force is None:
-                x = base
-                continue
+            base = apply(x, Et, b) + drive
             f0 = force(x, w)
-            a = base + apply(f0, self.P1f, b)
-            x = a + apply(force(a, w) - f0, self.P2f, b)
+            a = base + apply(f0, P1f, b)
+            x = a + apply(force(a, w) - f0, P2f, b)
         return x
 
 
@@ -174,20 +203,27 @@ class ExpRK4Stepper:
     for one control period split into ``substeps``; transposed as in
     :class:`ExponentialStepper`."""
 
-    E2t: np.ndarray  # e^{hA/2}ᵀ
-    Et: np.ndarray  # e^{hA}ᵀ
-    Q1u: np.ndarray  # ((h/2) φ1(hA/2) B_u)ᵀ
-    P1u: np.ndarray  # (h φ1(hA) B_u)ᵀ
-    Q1f: np.ndarray  # ((h/2) φ1(hA/2) B_f)ᵀ
-    Q2f: np.ndarray  # (h φ2(hA/2) B_f)ᵀ
-    P1f: np.ndarray  # (h φ1 B_f)ᵀ
-    P2f: np.ndarray  # (h φ2 B_f)ᵀ
-    P3f: np.ndarray  # (h φ3 B_f)ᵀ
+    E2t: FloatArray  # e^{hA/2}ᵀ
+    Et: FloatArray  # e^{hA}ᵀ
+    Q1u: FloatArray  # ((h/2) φ1(hA/2) B_u)ᵀ
+    P1u: FloatArray  # (h φ1(hA) B_u)ᵀ
+    Q1f: FloatArray  # ((h/2) φ1(hA/2) B_f)ᵀ
+    Q2f: FloatArray  # (h φ2(hA/2) B_f)ᵀ
+    P1f: FloatArray  # (h φ1 B_f)ᵀ
+    P2f: FloatArray  # (h φ2 B_f)ᵀ
+    P3f: FloatArray  # (h φ3 B_f)ᵀ
     substeps: int
     batched: bool = False
 
     @classmethod
-    def build(cls, A, Bu, Bf, dt: float, substeps: int = 1) -> ExpRK4Stepper:
+    def build(
+        cls,
+        A: npt.ArrayLike,
+        Bu: npt.ArrayLike,
+        Bf: npt.ArrayLike | None,
+        dt: float,
+        substeps: int = 1,
+    ) -> ExpRK4Stepper:
         """Propagators of x' = A x + B_u w + B_f N(x) with the φ-products at h/2 and h."""
         if substeps < 1:
             raise ValueError(f"substeps: must be >= 1, got {substeps}")
@@ -195,7 +231,7 @@ class ExpRK4Stepper:
             raise ValueError("force_matrix: exp_rk4 needs the plant's nonlinear force matrix")
         h = dt / substeps
 
-        def one(A, Bu, Bf):
+        def one(A: FloatArray, Bu: FloatArray, Bf: FloatArray) -> tuple[FloatArray, ...]:
             m, nf = Bu.shape[1], Bf.shape[1]
             B = np.hstack([Bu, Bf])
             E2, R1, R2 = phi_products(A, h / 2, B, nf)  # τ φ1(τA) B, τ φ2(τA) B₂, τ = h/2
@@ -204,10 +240,14 @@ class ExpRK4Stepper:
             return tuple(M.T.copy() for M in t)
 
         mats, batched = _per_case(one, np.asarray(A, float), _inputs(Bu), np.asarray(Bf, float))
-        return cls(*mats, substeps, batched)
+        E2t, Et, Q1u, P1u, Q1f, Q2f, P1f, P2f, P3f = mats
+        return cls(E2t, Et, Q1u, P1u, Q1f, Q2f, P1f, P2f, P3f, substeps, batched)
 
-    def step(self, x: np.ndarray, w: np.ndarray, force) -> np.ndarray:
-        """Advance one control period with held input w and force N(x, w)."""
+    def step(self, x: FloatArray, w: FloatArray, force: Force | None) -> FloatArray:
+        """Advance one control period with held input w and force N(x, w) (required: the
+        scheme exists for the force; a linear run takes :class:`ExponentialStepper`)."""
+        if force is None:
+            raise ValueError("force: exp_rk4 needs the plant's nonlinear force N(x, w)")
         w = np.asarray(w, float)
         w2 = w[:, None] if w.ndim == 1 else w
         b = self.batched
@@ -312,7 +352,9 @@ def _block_closed_form(a: float, b: float, h: float) -> tuple[np.ndarray, np.nda
     return out[0], out[1], out[2]
 
 
-def block_propagators(omega, zeta, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def block_propagators(
+    omega: npt.ArrayLike, zeta: float | npt.ArrayLike, h: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """(e^{hA_i}, h φ1(hA_i), h φ2(hA_i)) per block A_i = [[0, 1], [−ω_i², −2ζ_i ω_i]], each
     (n_blocks, 2, 2); ω = 0 is a rigid (double-integrator) block."""
     omega = np.asarray(omega, float)
@@ -354,8 +396,8 @@ def _refined_modes(K: np.ndarray, M: np.ndarray, steps: int = 2) -> tuple[np.nda
 
 
 def modal_coordinates(
-    M, K, C, rigid_tol: float = 1e-12
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    M: npt.ArrayLike, K: npt.ArrayLike, C: npt.ArrayLike, rigid_tol: float = 1e-12
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Similarity x = T z that makes the first-order form of M q'' + C q' + K q = f
     block-diagonal with companion 2×2 blocks.
 
@@ -459,43 +501,55 @@ class ModalPropagator:
     substeps : int
     """
 
-    E: np.ndarray
-    P1u: np.ndarray
-    P1f: np.ndarray | None
-    P2f: np.ndarray | None
+    E: FloatArray
+    P1u: FloatArray
+    P1f: FloatArray | None
+    P2f: FloatArray | None
     substeps: int
 
     @classmethod
-    def build(cls, omega, zeta, B, dt: float, substeps: int = 1, Bf=None) -> ModalPropagator:
+    def build(
+        cls,
+        omega: npt.ArrayLike,
+        zeta: float | npt.ArrayLike,
+        B: npt.ArrayLike,
+        dt: float,
+        substeps: int = 1,
+        Bf: npt.ArrayLike | None = None,
+    ) -> ModalPropagator:
         """Propagators of the modal plant with block frequencies ``omega`` (rad/s), damping
         ratios ``zeta``, input columns ``B`` (n, m) and force columns ``Bf`` (n, n_f)."""
         if substeps < 1:
             raise ValueError(f"substeps: must be >= 1, got {substeps}")
         E2, F1, F2 = block_propagators(omega, zeta, dt / substeps)
         n = 2 * E2.shape[0]
-        B = np.asarray(B, float).reshape(n, -1)
+        inputs = np.asarray(B, float).reshape(n, -1)
 
-        def apply(F, X):  # block-diagonal F (nb, 2, 2) times X (n, k)
+        def apply(F: FloatArray, X: FloatArray) -> FloatArray:
+            # block-diagonal F (nb, 2, 2) times X (n, k)
             return np.einsum("bij,bjk->bik", F, X.reshape(-1, 2, X.shape[1])).reshape(n, -1)
 
         P1f = P2f = None
         if Bf is not None:
-            Bf = np.asarray(Bf, float).reshape(n, -1)
-            P1f, P2f = apply(F1, Bf), apply(F2, Bf)
-        return cls(E2.reshape(n, 2), apply(F1, B), P1f, P2f, substeps)
+            forces = np.asarray(Bf, float).reshape(n, -1)
+            P1f, P2f = apply(F1, forces), apply(F2, forces)
+        return cls(E2.reshape(n, 2), apply(F1, inputs), P1f, P2f, substeps)
 
-    def step(self, z: np.ndarray, w: np.ndarray, force=None) -> np.ndarray:
+    def step(self, z: FloatArray, w: FloatArray, force: Force | None = None) -> FloatArray:
         """Advance z (n_cases, n) one control period with held input w (n_cases, m); ``force``
         (z, w) -> (n_cases, n_f) adds the ETD2RK correction as in :class:`ExponentialStepper`."""
+        if force is not None and self.P1f is None:
+            raise ValueError("force: this propagator was built without force columns (Bf=None)")
         Eb = self.E.reshape(-1, 2, 2)
         drive = w @ self.P1u.T
+        P1f, P2f = self.P1f, self.P2f
         for _ in range(self.substeps):
             zb = z.reshape(z.shape[0], -1, 2)
             base = np.einsum("bij,cbj->cbi", Eb, zb).reshape(z.shape) + drive
-            if force is None:
+            if force is None or P1f is None or P2f is None:  # linear (built without Bf)
                 z = base
                 continue
             f0 = force(z, w)
-            a = base + f0 @ self.P1f.T
-            z = a + (force(a, w) - f0) @ self.P2f.T
+            a = base + f0 @ P1f.T
+            z = a + (force(a, w) - f0) @ P2f.T
         return z

@@ -27,12 +27,22 @@ Junkins, Pollock & Rahman 1990), whose pieces :func:`torque_pieces` gives exactl
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.input_checks import require_finite
 from flexsat.maneuvers.torque_shapes import BangBang, SmoothBangBang
 from flexsat.sim.instruments import unit_row
+from flexsat.units import FloatArray
+
+if TYPE_CHECKING:
+    from flexsat.dynamics.plant import Plant
+
+#: modal coordinates and the eigen-quantities behind them: complex in general, real for a
+#: plant with rigid modes only
+InexactArray: TypeAlias = npt.NDArray[np.inexact[Any]]
 
 #: |z| below which φ_m(z) is summed as its Taylor series (the recurrence
 #: φ_{m+1} = (φ_m − 1/m!)/z cancels for small |z|); 30 terms leave 2^30/30! ≈ 4e-24
@@ -51,7 +61,7 @@ _SMOOTH_PIECES = np.array(
 )
 
 
-def torque_pieces(shape) -> tuple[np.ndarray, np.ndarray]:
+def torque_pieces(shape: SmoothBangBang | BangBang) -> tuple[FloatArray, FloatArray]:
     """Breaks and σ-polynomial coefficients of a smoothed bang-bang (or bang-bang) torque.
 
     Att. 3 Eq. 12 (Junkins, Pollock & Rahman 1990): with Δt = αT, t1 = T/2 − Δt, t2 = T/2 + Δt,
@@ -85,12 +95,13 @@ def torque_pieces(shape) -> tuple[np.ndarray, np.ndarray]:
     return breaks, peak[:, None, None] * _SMOOTH_PIECES
 
 
-def _phi(z: np.ndarray, m_max: int) -> list[np.ndarray]:
+def _phi(z: InexactArray, m_max: int) -> list[InexactArray]:
     """φ_1 … φ_{m_max} of complex z (module docstring), series inside |z| < 2."""
     small = np.abs(z) < _SERIES_RADIUS
     zl = np.where(small, 1.0, z)
     zs = z[small]
-    out, phi = [], np.exp(zl)
+    out: list[InexactArray] = []
+    phi = np.exp(zl)
     for m in range(1, m_max + 1):
         phi = (phi - 1.0 / math.factorial(m - 1)) / zl
         value = phi.copy()
@@ -109,7 +120,7 @@ _NOT_MODAL = (
 )
 
 
-def _nullity(s: np.ndarray) -> int:
+def _nullity(s: FloatArray) -> int:
     """Number of zero singular values among ``s`` (descending): below 1e-10 of the largest,
     far under the smallest elastic one (6e-7 of it for the 10-mode TAMU A²) and far above the
     rounding of structural zeros (2e-20 of it there)."""
@@ -119,7 +130,7 @@ def _nullity(s: np.ndarray) -> int:
 class _Modes:
     """A = V diag-ish(A_r, Λ) V⁻¹: nilpotent rigid block A_r and distinct elastic λ."""
 
-    def __init__(self, A: np.ndarray, B: np.ndarray):
+    def __init__(self, A: FloatArray, B: FloatArray):
         n = A.shape[0]
         # rigid directions: the null space of A² (θ, θ' of a free hub span it exactly)
         _, s, vh = np.linalg.svd(A @ A)
@@ -140,7 +151,9 @@ class _Modes:
         self.Ar = Ar
         self.b = self.Vinv @ B
 
-    def advance(self, xi, s, sigma, a):
+    def advance(
+        self, xi: InexactArray, s: FloatArray, sigma: FloatArray, a: FloatArray
+    ) -> InexactArray:
         """Modal state ``s`` seconds into a piece from ``xi`` (..., n) under coefficients
         ``a`` (..., d+1), at σ = s/h (..., )."""
         r, b = self.r, self.b
@@ -157,7 +170,14 @@ class _Modes:
         return np.concatenate([rig, el], axis=-1)
 
 
-def piecewise_polynomial_response(A, B, breaks, coeffs, times, x0=None) -> np.ndarray:
+def piecewise_polynomial_response(
+    A: npt.ArrayLike,
+    B: npt.ArrayLike,
+    breaks: npt.ArrayLike,
+    coeffs: npt.ArrayLike,
+    times: npt.ArrayLike,
+    x0: npt.ArrayLike | None = None,
+) -> FloatArray:
     """States of x' = A x + B u(t) at ``times`` under a piecewise-polynomial torque, exactly.
 
     Parameters
@@ -213,14 +233,14 @@ def piecewise_polynomial_response(A, B, breaks, coeffs, times, x0=None) -> np.nd
     if np.any(times < breaks[:, 0]):
         raise ValueError("times: must not precede the start of the response (breaks[:, 0])")
     modes = _Modes(A, B)
-    x0 = np.zeros(n) if x0 is None else require_finite(x0, "x0")
-    xi = np.broadcast_to(x0 @ modes.Vinv.T, (C, n))
+    start_state = np.zeros(n) if x0 is None else require_finite(x0, "x0")
+    xi: InexactArray = np.broadcast_to(start_state @ modes.Vinv.T, (C, n))
     # modal state at every break, one piece at a time over all cases
-    at_breaks = [xi]
-    for j in range(P):
-        xi = modes.advance(xi, h[:, j], np.ones(C), coeffs[:, j])
-        at_breaks.append(xi)
-    at_breaks = np.stack(at_breaks, axis=1)  # (C, P+1, n)
+    states = [xi]
+    for piece in range(P):
+        xi = modes.advance(xi, h[:, piece], np.ones(C), coeffs[:, piece])
+        states.append(xi)
+    at_breaks = np.stack(states, axis=1)  # (C, P+1, n)
     # piece of each time: the last break <= t (P: after the end, the free response)
     j = np.stack(
         [np.searchsorted(breaks[c], times[:, c], side="right") - 1 for c in range(C)], axis=1
@@ -238,7 +258,9 @@ def piecewise_polynomial_response(A, B, breaks, coeffs, times, x0=None) -> np.nd
     return (xi_t @ modes.V.T).real
 
 
-def open_loop_response(plant, shape, times) -> np.ndarray:
+def open_loop_response(
+    plant: Plant, shape: SmoothBangBang | BangBang, times: npt.ArrayLike
+) -> FloatArray:
     """Exact open-loop response of a linear plant, at rest at ``shape.theta0``, to the torque
     ``shape`` (a smoothed bang-bang batch), at ``times`` (n_t,) or (n_t, C), s.
 

@@ -25,10 +25,13 @@ fraction times the largest commanded angle (3 % of 1 rad for the paper's (1, 1, 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.input_checks import require_finite, require_positive
+from flexsat.units import FloatArray
 
 __all__ = ["SlewGoals", "euler_angle_error", "slew_goal_metrics"]
 
@@ -44,7 +47,7 @@ class SlewGoals:
     #: required open-loop / closed-loop ratio of the peak rim deflection from the evaluation time
     deflection_ratio: float = 10.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("angle_fraction", "deflection_ratio"):
             require_positive(getattr(self, name), name)
         if not float(require_finite(self.evaluation, "evaluation")) >= 1.0:
@@ -54,20 +57,20 @@ class SlewGoals:
             )
 
 
-def euler_angle_error(angles, target) -> np.ndarray:
+def euler_angle_error(angles: npt.ArrayLike, target: npt.ArrayLike) -> FloatArray:
     """Angle minus target, wrapped to [−π, π) (rad), broadcasting ``target`` (..., 3)."""
     e = np.asarray(angles, float) - np.asarray(target, float)
     return (e + np.pi) % (2 * np.pi) - np.pi
 
 
-def _at(t: np.ndarray, history: np.ndarray, time: float) -> np.ndarray:
+def _at(t: FloatArray, history: FloatArray, time: float) -> FloatArray:
     """History (cases, time, ...) linearly interpolated at one time inside the record."""
     k = int(np.clip(np.searchsorted(t, time, side="right") - 1, 0, len(t) - 2))
     w = (time - t[k]) / (t[k + 1] - t[k])
     return (1.0 - w) * history[:, k] + w * history[:, k + 1]
 
 
-def _peak(t: np.ndarray, deflection: np.ndarray, start: float, stop: float) -> np.ndarray:
+def _peak(t: FloatArray, deflection: FloatArray, start: float, stop: float) -> FloatArray:
     """Largest rim-point deflection norm over the samples in [start, stop], per case."""
     inside = (t >= start - 1e-9 * stop) & (t <= stop + 1e-9 * stop)
     if not inside.any():  # the record ends at the evaluation time: its last sample
@@ -76,17 +79,17 @@ def _peak(t: np.ndarray, deflection: np.ndarray, start: float, stop: float) -> n
 
 
 def slew_goal_metrics(
-    t,
-    duration,
-    euler123,
-    target,
-    deflection,
-    deflection_open,
-    torque=None,
-    torque_nominal=None,
-    forces=None,
+    t: npt.ArrayLike,
+    duration: float,
+    euler123: npt.ArrayLike,
+    target: npt.ArrayLike,
+    deflection: npt.ArrayLike,
+    deflection_open: npt.ArrayLike,
+    torque: npt.ArrayLike | None = None,
+    torque_nominal: npt.ArrayLike | None = None,
+    forces: npt.ArrayLike | None = None,
     goals: SlewGoals = SlewGoals(),
-) -> tuple[dict, dict]:
+) -> tuple[dict[str, npt.NDArray[Any]], dict[str, str]]:
     """The goals of a batch of slews (module docstring).
 
     Parameters
@@ -138,7 +141,7 @@ def slew_goal_metrics(
     with np.errstate(divide="ignore"):
         ratio = np.where(after > 0, after_open / after, np.inf)
         ratio_slew = np.where(slew > 0, slew_open / slew, np.inf)
-    metrics = {
+    metrics: dict[str, npt.NDArray[Any]] = {
         "angle_error_mrad": 1e3 * error.max(axis=-1),
         "angle_tolerance_mrad": np.full(len(error), 1e3 * tolerance),
         "angle_goal_met": error.max(axis=-1) <= tolerance,

@@ -24,13 +24,17 @@ agrees with it: tests/identify/test_star_tracker.py). A rejected identification 
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexsat.dynamics.attitude import quaternion_exp, quaternion_multiply
 from flexsat.dynamics.plant import Channel
 from flexsat.sim.channels import ChannelSensor
-from flexsat.units import to_si_array
+from flexsat.units import FloatArray, QuantityArrayLike, to_si_array
+
+if TYPE_CHECKING:
+    from flexsat.attitude.star_tracker import StarTracker
 
 __all__ = ["StarTrackerSensor"]
 
@@ -49,11 +53,14 @@ class StarTrackerSensor(ChannelSensor):
         Fraction of frames identified by the full pipeline (recorded, not simulated).
     """
 
-    covariance: object = 0.0
+    covariance: QuantityArrayLike = 0.0
     identification_rate: float = 1.0
-    _factor: np.ndarray = field(init=False, repr=False, compare=False, default=None)
+    # L with L Lᵀ = P, set by __post_init__
+    _factor: FloatArray = field(
+        init=False, repr=False, compare=False, default_factory=lambda: np.zeros((3, 3))
+    )
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         super().__post_init__()
         try:
             given = np.asarray(self.covariance, float)
@@ -102,7 +109,12 @@ class StarTrackerSensor(ChannelSensor):
 
     @classmethod
     def from_tracker(
-        cls, tracker, n: int = 300, seed=0, false_stars: int = 0, missing_fraction: float = 0.0
+        cls,
+        tracker: StarTracker,
+        n: int = 300,
+        seed: int | np.random.Generator = 0,
+        false_stars: int = 0,
+        missing_fraction: float = 0.0,
     ) -> StarTrackerSensor:
         """Calibrated from the full pipeline (module docstring) on ``n`` random attitudes.
 
@@ -133,7 +145,7 @@ class StarTrackerSensor(ChannelSensor):
         object.__setattr__(out, "_acts", (False, True, False, False))
         return out
 
-    def measure(self, v: np.ndarray, noise) -> np.ndarray:
+    def measure(self, v: FloatArray, noise: FloatArray | float) -> FloatArray:
         """β_m = δβ(L n) ⊗ β for true attitudes v (n_cases, 4) and noise (n_cases, 4)."""
         v = np.asarray(v, float)
         if v.shape[-1] != 4:

@@ -19,6 +19,9 @@ accelerometer sees the force acting at its sample), and each channel then passes
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from flexsat.control.playback import Playback
@@ -31,20 +34,23 @@ from flexsat.sim.channels import ChannelSensor
 from flexsat.sim.config import SimConfig
 from flexsat.sim.engine import simulate
 
+if TYPE_CHECKING:
+    from flexsat.structures.modal_model import ModalModel
+
 __all__ = ["simulate_test"]
 
 
 def simulate_test(
-    modal_model,
-    excitation,
-    sensors,
-    duration,
-    sample_rate,
-    noise=0.0,
-    quantization=None,
-    seed=None,
-    oversample=1,
-    anti_alias=None,
+    modal_model: ModalModel,
+    excitation: Excitation | Sequence[Excitation],
+    sensors: Sequence[Channel],
+    duration: float,
+    sample_rate: float,
+    noise: float = 0.0,
+    quantization: float | None = None,
+    seed: int | None = None,
+    oversample: int = 1,
+    anti_alias: float | None = None,
 ) -> Measurement:
     """Simulate a vibration test and record it as a :class:`Measurement` (module docstring).
 
@@ -97,7 +103,7 @@ def simulate_test(
     if n < 2:
         raise ValueError(f"duration: gives {n} sample(s) at {fs} Hz; need at least 2")
     h = dt / over
-    t_fine = np.arange(n * over) * h
+    t_fine = np.arange(n * over, dtype=float) * h
     U = np.array([e.samples(t_fine, h, over, rng) for e in excitations])  # (r, n*over)
 
     chans = [e.channel for e in excitations]
@@ -142,7 +148,7 @@ def simulate_test(
             ]
         )
     return Measurement(
-        np.arange(n) * dt,
+        np.arange(n, dtype=float) * dt,
         Y,
         tuple(sensors),
         u_samples,
