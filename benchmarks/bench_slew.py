@@ -8,7 +8,8 @@ implementation of the same closed loop, side by side in one run, each the best o
     notional one (products of inertia ±5e3 kg m²), the paper's (1, 1, 1) rad 1-2-3
     slew, T = 10 s with ω_B = 2.5 rad/s and T = 6 s with ω_B = 5 rad/s, both shaping readings
     ζ_B = 0 and 1. Target: <= 2 s at T = 10 s.
-(b) Closed loop, the pipeline of the slew kind (``flexsat.scenarios.slew.SlewKind``) for seed 003
+(b) Closed loop, the pipeline of the slew kind
+(``flexsat.scenarios.slew.SlewKind``) for EPS slew study c. 1989
     case A:
     truth = ``eps().plant(n_modes=45)`` (97 states), design model = its first 10 modes, nominal
     = the (1, 1, 1) rad slew in 10 s (ω_B = 2.5 rad/s, ζ_B = 0), perturbation design with
@@ -55,7 +56,7 @@ NOTIONAL = np.array([[1.2e5, -5e3, 5e3], [-5e3, 0.6e5, -5e3], [5e3, -5e3, 1.5e5]
 TARGET = [1.0, 1.0, 1.0]
 TPBVP_TARGET_S = 2.0  # issue 11 benchmark, s
 LOOP_TARGET_S = 1.0  # issue 11 benchmark, s
-DURATION, OMEGA_B, RATE = 10.0, 2.5, 100.0  # s, rad/s, Hz (seed 003 case A)
+DURATION, OMEGA_B, RATE = 10.0, 2.5, 100.0  # s, rad/s, Hz (EPS slew study c. 1989 case A)
 # the solve_ivp baselines timed by default: (method, rtol); atol = 1e-3 rtol (the quaternion and
 # the excited modal coordinates are O(0.1-1); the unexcited ones, O(1e-12), stay below it).
 # Chosen from the --ladder table for accuracy comparable to flexsat's: rtol 1e-10 to the 4-substep

@@ -3,7 +3,7 @@
 A plain script, never collected as a test: ``python benchmarks/bench_tether.py``.
 
 Controller 2 (K = 1, 0, 3, 2; λr = 0.01) from λ = 1, θ = φ = 5°, two orbits, the paper's scales
-(Vadali & Kim; seed 000 Att. 12):
+(Vadali & Kim; Junkins, Pollock & Rahman 1990 Att. 12):
 
 1. continuous feedback (:func:`flexsat.dynamics.tether.integrate`, DOP853 at rtol 1e-10,
    2,000 output samples an orbit) for 1 case and for 100 cases in one vectorised call;

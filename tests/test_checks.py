@@ -62,8 +62,8 @@ def test_every_check_cites_a_source_by_its_short_citation_or_a_reference():
         seeds = [ref.short for ref in SEEDS.values() if ref.short in c.source]
         assert seeds or any(ref in c.source for ref in REFERENCES), c
         assert not seeds or references([c.source]), c  # the full citation is found
-        if seeds:  # and where in it: a line, an equation, a table or a figure
-            assert re.search(r"L\d+|Eq\.|Table|Fig", c.source), c
+        if seeds:  # and where in it: a section, an equation, a table, a figure or an example
+            assert re.search(r"§|Ch\. [IVX]+|(?i:eqs?)\.|Table|Fig|'[^']+'|Example", c.source), c
 
 
 def test_checks_are_unique_and_have_a_tolerance(registry):

@@ -97,7 +97,7 @@ def test_table_of_passing_cases_exits_0(monkeypatch, width):
     assert "9 checks: 9 passed, 0 discrepancies (explained), 0 failed" in out
     # sources cited by authors and year, the full reference below the table; no seed file
     flat = " ".join(out.split())  # narrow consoles wrap
-    assert "Hailey, Sortun & Agrawal c. 1992, L" in flat
+    assert "Hailey, Sortun & Agrawal c. 1992, 'Experimental Setup'" in flat  # where in the paper
     assert "Experimental Verification of Attitude Control Techniques" in flat
     assert ".txt" not in out and "../shared" not in out
     assert "the unpublished EI is solved to give this frequency" in flat  # the fitted 0.14 Hz

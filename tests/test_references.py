@@ -82,3 +82,66 @@ def test_the_product_points_to_no_file_outside_the_repository():
             if OUTSIDE_FILE.search(line):
                 found.append(f"{name}:{number}: {line.strip()}")
     assert found == [], "\n".join(found)
+
+
+#: the developers' internal names of their sources, which a reader cannot use: the seed numbers
+#: (``seed 003``, ``Seed 003's``, ``seeds 003 and 004``, ``seed003``; the transcript-file form
+#: ``seed 003_<hex>.txt`` is OUTSIDE_FILE's) and line numbers into their OCR transcripts
+#: (``L208``, ``L1302-L1323``, ``L208–L220``, ``L2-L9``). Not flagged: one-digit names such as
+#: the factors L1, L2 of the output-feedback weights or an L2 cache, "L" as a length, and random
+#: seeds (``seed 0``, ``seed=123``, ``seeds 5 and 6``).
+INTERNAL_POINTER = re.compile(r"\b(?i:seeds?)\s*\d{3}\b(?!_)|\bL\d{2,5}\b|\bL\d+\s*[-–]\s*L\d+\b")
+
+
+def test_internal_pointer_pattern_matches_seed_numbers_and_line_numbers_only():
+    for pointer in (
+        "seed 003's main recommendation",
+        "(seed 000 Att. 12)",
+        "Seed 004 publishes no frequency",
+        "the robustness sets of seeds 003 and 004",
+        "notional (seed003 §3.3)",
+        "piezo pairs (seed\n004)",
+        "Table 1 (L1302-L1323)",
+        "L208–L220",
+        "(L21)",
+        "Att. 6 L2415/L2495",
+        "L2-L9",
+        'f"{SOURCE}, L82"',
+    ):
+        assert INTERNAL_POINTER.search(pointer), pointer
+    for legit in (
+        "G1 = L1 L1ᵀ, G2 = L2 L2ᵀ",
+        "4 MiB L2;",
+        "the Agrawal-Bang L-shaped structure",
+        "λ = l/L, T̂ = T/(mΩ²L)",
+        "(A - l2 * I2) / (l1 - l2)",
+        "seed 000_7bfdb62d2eacc22a.txt",  # the transcript-file form cite() still reads
+        "Measured (seed 0):",
+        "default_rng(seed=123)",
+        "runs with seeds 5 and 6 are identical",
+    ):
+        assert not INTERNAL_POINTER.search(legit), legit
+
+
+def test_the_product_cites_no_seed_number_and_no_transcript_line():
+    """Sources are located by section, table, figure, equation or attachment, which a reader
+    holding the paper can use, never by the developers' seed numbers or transcript lines."""
+    root = Path(__file__).resolve().parents[1]
+    listed = subprocess.run(
+        ["git", "ls-files", "-z", "--", *PRODUCT],
+        cwd=root,
+        capture_output=True,
+        check=True,
+    ).stdout.decode()
+    files = [name for name in listed.split("\0") if name]
+    assert any(name.startswith("src/flexsat/") for name in files)  # the listing worked
+    found = []
+    for name in files:
+        try:
+            text = (root / name).read_text(encoding="utf-8")
+        except (UnicodeDecodeError, FileNotFoundError):  # binary, or deleted in the work tree
+            continue
+        for match in INTERNAL_POINTER.finditer(text):  # the whole text: "seed\n004" too
+            number = text.count("\n", 0, match.start()) + 1
+            found.append(f"{name}:{number}: {match.group()!r}")
+    assert found == [], "\n".join(found)

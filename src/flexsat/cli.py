@@ -29,7 +29,7 @@ from rich.table import Table
 from rich.text import Text
 
 from flexsat.catalog import all_cases, get_case
-from flexsat.references import LINE_NUMBERS, cite, references
+from flexsat.references import cite, references
 
 if TYPE_CHECKING:
     from flexsat.checks import CheckResult
@@ -150,12 +150,11 @@ def cases(
 
 
 def _print_references(sources: list[str]) -> None:
-    """The full citations of the seeds the printed sources abbreviate, and what Lnnn means."""
+    """The full citations of the sources the printed short citations abbreviate."""
     lines = references(sources)
     if lines:
         for line in lines:
             console.print(line, markup=False, highlight=False, soft_wrap=False)
-        console.print(LINE_NUMBERS, markup=False, highlight=False)
 
 
 def _modes_data(

@@ -4,6 +4,10 @@ Each check takes the field's SI ``unit`` where the field is a physical quantity:
 taken in that unit and a pint Quantity or a unit string is converted to it
 (:func:`flexsat.units.to_si_array`); ``""`` declares a dimensionless field. Without a unit only
 plain numbers are accepted: a Quantity is refused rather than stripped of its unit.
+
+A refusal is a :class:`FieldError` (``str`` ``"field: rule"``, the field as data), defined in
+:mod:`flexsat.units` beside :class:`~flexsat.units.UnitError`, which is one, and imported from
+here by the layers above.
 """
 
 from __future__ import annotations
@@ -14,6 +18,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+# FieldError lives in flexsat.units (a UnitError is one; units cannot import this module) and
+# is exported from here, where every layer takes its checks from
+from flexsat.units import FieldError as FieldError
 from flexsat.units import (
     FloatArray,
     FrequencyArray,
@@ -22,30 +29,6 @@ from flexsat.units import (
     holds_quantity,
     to_si_array,
 )
-
-
-class FieldError(ValueError):
-    """A value refused by the rule of one named input: ``str(exc)`` is ``"field: rule"``.
-
-    The field travels as data (:attr:`field`), so that a caller that knows where the value came
-    from (a scenario, which names it ``runs['Law I'].gains.g1``) can place the problem without
-    reading the message.
-
-    Parameters
-    ----------
-    field : str
-        The input as the refusing function names it (its parameter, ``"gains.k"``, ...).
-    rule : str
-        The rule it breaks and the value given (``"must be > 0, got -1"``).
-    """
-
-    def __init__(self, field: str, rule: str) -> None:
-        self.field, self.rule = field, rule
-        super().__init__(f"{field}: {rule}")
-
-    def __reduce__(self) -> tuple[type[FieldError], tuple[str, str]]:
-        # picklable across processes (dask workers) with its field
-        return type(self), (self.field, self.rule)
 
 
 def _real(value: Any, field: str, noun: str) -> Any:
@@ -75,8 +58,9 @@ def _plain_numbers(value: object, field: str) -> None:
         value.si("", field)  # refused, naming its unit
     if holds_quantity(value):
         raise UnitError(
-            f"{field}: takes a plain number here (no unit is declared for it), got a quantity "
-            f"with units ({str(value)[:80]}); convert it yourself, its unit is not dropped silently"
+            field,
+            "takes a plain number here (no unit is declared for it), got a quantity with units "
+            f"({str(value)[:80]}); convert it yourself, its unit is not dropped silently",
         )
 
 

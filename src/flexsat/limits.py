@@ -25,6 +25,11 @@ MAX_SUBSTEPS = 1_000
 #: integrator steps of one run (control samples × substeps): minutes on one core
 MAX_INTEGRATOR_STEPS = 20_000_000
 
+#: right-hand-side evaluations of one continuous-law run (the adaptive DOP853 of
+#: :mod:`flexsat.sim.continuous`, a Python law and plant: ~0.3 ms each for the tether, so the
+#: limit is ~5 minutes); estimated from the closed loop's fastest rate before the run
+MAX_ADAPTIVE_EVALUATIONS = 1_000_000
+
 #: estimated memory of one run's histories, bytes (samples × cases × recorded values × 8)
 MAX_MEMORY = 2 * 1024**3
 
@@ -52,6 +57,12 @@ MAX_CATALOG_PAIRS = 20_000_000
 #: candidate matches of one field of view's measured pairs against the pair index (measured
 #: pairs × catalogue pairs within the tolerance), ~100 bytes each in the voting
 MAX_PAIR_CANDIDATES = 4_000_000
+
+#: largest ratio of two nonzero weights of one LQR-type design (a slew's Q and D, a simulation
+#: run's state and input weights): beyond ~1/ε (ε = 2.2e-16) the smaller weight is below the
+#: rounding of the larger in the Riccati equation, so it weighs nothing and the solver fails
+#: without saying which weight (the examples span at most 1e10)
+MAX_WEIGHT_RANGE = 1e15
 
 #: largest noise seed (numpy's seeds are unbounded, but seed + case index must stay an int64)
 MAX_SEED = 2**32 - 1
@@ -133,6 +144,7 @@ def check_memory(n_bytes: int, field: str, what: str) -> None:
 
 
 __all__ = [
+    "MAX_ADAPTIVE_EVALUATIONS",
     "MAX_CASES",
     "MAX_CATALOG_PAIRS",
     "MAX_CATALOG_STARS",
@@ -148,6 +160,7 @@ __all__ = [
     "MAX_SAMPLES",
     "MAX_SEED",
     "MAX_SUBSTEPS",
+    "MAX_WEIGHT_RANGE",
     "check_count",
     "check_memory",
     "is_integral",

@@ -93,7 +93,9 @@ def entry_point_objects(
         For a group that is not one of :data:`GROUPS`.
     """
     if group not in GROUPS:
-        raise ValueError(f"group: must be one of {', '.join(GROUPS)}, got {group!r}")
+        from flexsat.input_checks import FieldError  # numpy: loaded for the refusal only
+
+        raise FieldError("group", f"must be one of {', '.join(GROUPS)}, got {group!r}")
     reserved = reserved or {}
     objects: dict[str, Any] = {}
     for name, obj in _load_group(group).items():

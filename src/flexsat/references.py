@@ -1,7 +1,7 @@
 """The published sources behind the cases and checks, cited so that a reader can find them.
 
 The cases and checks name their sources by a short citation (authors and year, :data:`SEEDS`)
-with line numbers ``Lnnn`` into the developers' OCR transcripts (:data:`LINE_NUMBERS`).
+and a locator a reader holding the source can use (section, table, figure, equation, attachment).
 :func:`references` lists the full citations (authors, title, report or journal, year) of the
 sources a text names, with the attached papers of the Texas A&M report it names. A source still
 written as a transcript file name (``seed NNN_<hash>.txt``, the form plug-ins written against
@@ -59,7 +59,8 @@ SEEDS: dict[str, Reference] = {
     ),
 }
 
-#: the papers attached to the Texas A&M report (seed 000) that the cases and checks cite
+#: the papers attached to the Texas A&M report (Junkins, Pollock & Rahman 1990)
+#: that the cases and checks cite
 ATTACHMENTS: dict[int, str] = {
     1: 'J. L. Junkins, Z. H. Rahman and H. Bang, "Near-Minimum-Time Maneuvers of Flexible '
     'Vehicles: A Liapunov Control Law Design Method", AIAA paper 90-1222, 1990',
@@ -85,17 +86,11 @@ ATTACHMENTS: dict[int, str] = {
 _SEED = re.compile(r"seed (?:file )?(\d{3})_[0-9a-f]{16}\.txt")
 _ATTACHMENT = re.compile(r"Att\. (\d+)")
 
-#: what the ``Lnnn`` line numbers kept in the sources mean
-LINE_NUMBERS = (
-    "Lnnn: line numbers in the developers' OCR transcript of the source, "
-    "kept to locate the passage in the project's notes"
-)
-
 
 def cite(text: str) -> str:
     """``text`` with every transcript file name (``seed NNN_<16 hex digits>.txt``) replaced by
-    its short citation (for seed 000: ``"Junkins, Pollock & Rahman 1990"``). Unknown seed
-    numbers are left as they are."""
+    its short citation (``seed 000_<hex>.txt`` becomes ``"Junkins, Pollock & Rahman 1990"``).
+    Unknown seed numbers are left as they are."""
     return _SEED.sub(lambda m: SEEDS[m.group(1)].short if m.group(1) in SEEDS else m.group(0), text)
 
 
@@ -123,4 +118,4 @@ def references(texts: Iterable[str]) -> list[str]:
     return lines
 
 
-__all__ = ["ATTACHMENTS", "LINE_NUMBERS", "SEEDS", "Reference", "cite", "references"]
+__all__ = ["ATTACHMENTS", "SEEDS", "Reference", "cite", "references"]

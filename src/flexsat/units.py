@@ -71,8 +71,32 @@ def _is_quantity(value: object) -> bool:
     return pint is not None and isinstance(value, pint.Quantity)
 
 
-class UnitError(ValueError):
-    """A quantity has the wrong dimensionality or cannot be parsed."""
+class FieldError(ValueError):
+    """A value refused by the rule of one named input: ``str(exc)`` is ``"field: rule"``.
+
+    The field travels as data (:attr:`field`), so that a caller that knows where the value came
+    from (a scenario, which names it ``runs['Law I'].gains.g1``) can place the problem without
+    reading the message.
+
+    Parameters
+    ----------
+    field : str
+        The input as the refusing function names it (its parameter, ``"gains.k"``, ...).
+    rule : str
+        The rule it breaks and the value given (``"must be > 0, got -1"``).
+    """
+
+    def __init__(self, field: str, rule: str) -> None:
+        self.field, self.rule = field, rule
+        super().__init__(f"{field}: {rule}")
+
+    def __reduce__(self) -> tuple[type[FieldError], tuple[str, str]]:
+        # picklable across processes (dask workers) with its field
+        return type(self), (self.field, self.rule)
+
+
+class UnitError(FieldError):
+    """A quantity of field ``field`` has the wrong dimensionality or cannot be parsed."""
 
 
 #: the two units of a frequency that pint cannot tell apart (it calls the radian dimensionless)
@@ -103,7 +127,7 @@ class FrequencyArray(np.ndarray):
         unit : {"Hz", "rad/s"}
         """
         if unit not in FREQUENCY_UNITS:
-            raise ValueError(f"unit: must be one of {list(FREQUENCY_UNITS)}, got {unit!r}")
+            raise FieldError("unit", f"must be one of {list(FREQUENCY_UNITS)}, got {unit!r}")
         arr = np.array(values, dtype=float).view(cls)
         arr.unit = unit
         return arr
@@ -128,7 +152,7 @@ class FrequencyArray(np.ndarray):
     def to(self, unit: str) -> FrequencyArray:
         """The same frequencies in ``unit`` (ω = 2π f)."""
         if unit not in FREQUENCY_UNITS:
-            raise ValueError(f"unit: must be one of {list(FREQUENCY_UNITS)}, got {unit!r}")
+            raise FieldError("unit", f"must be one of {list(FREQUENCY_UNITS)}, got {unit!r}")
         values = self.view(np.ndarray)
         if unit != self.unit:
             values = values * (2 * math.pi) if unit == "rad/s" else values / (2 * math.pi)
@@ -140,8 +164,9 @@ class FrequencyArray(np.ndarray):
         if unit != self.unit:
             hint = f"; convert explicitly, e.g. .to({unit!r})" if unit in FREQUENCY_UNITS else ""
             raise UnitError(
-                f"{field}: frequencies in {self.unit} given where "
-                f"{unit or 'a plain number'} is expected{hint}"
+                field,
+                f"frequencies in {self.unit} given where "
+                f"{unit or 'a plain number'} is expected{hint}",
             )
         return np.array(self.view(np.ndarray), dtype=float)
 
@@ -218,11 +243,10 @@ def parse_quantity(text: str, field: str = "value") -> Quantity:
     """
     if len(text) > MAX_EXPRESSION_LENGTH:
         raise UnitError(
-            f"{field}: a quantity must be at most {MAX_EXPRESSION_LENGTH} characters, "
-            f"got {len(text)}"
+            field, f"a quantity must be at most {MAX_EXPRESSION_LENGTH} characters, got {len(text)}"
         )
     if not text.strip():
-        raise UnitError(f"{field}: empty string; give a number or a quantity such as '2 m'")
+        raise UnitError(field, "empty string; give a number or a quantity such as '2 m'")
     pint, ureg = _registry()
     from pint.pint_eval import build_eval_tree, tokenizer
     from pint.util import string_preprocessor
@@ -238,7 +262,7 @@ def parse_quantity(text: str, field: str = "value") -> Quantity:
         # (TokenError, DefinitionSyntaxError, UndefinedUnitError, ZeroDivisionError,
         # OverflowError, DimensionalityError, AssertionError, ...) for malformed text
         raise UnitError(
-            f"{field}: cannot read {text!r} as a quantity ({type(exc).__name__}: {exc})"
+            field, f"cannot read {text!r} as a quantity ({type(exc).__name__}: {exc})"
         ) from None
 
 
@@ -292,7 +316,7 @@ def to_si_array(value: QuantityArrayLike, unit: str, field: str = "value") -> Fl
     if isinstance(value, (list, tuple)) and holds_quantity(value, strings=True):
         items = [to_si_array(v, unit, field) for v in value]
         if any(item.shape != items[0].shape for item in items):
-            raise UnitError(f"{field}: the items of {_shown(value)} differ in shape")
+            raise UnitError(field, f"the items of {_shown(value)} differ in shape")
         return np.array(items)
     if isinstance(value, FrequencyArray):
         return value.si(unit, field)
@@ -307,12 +331,11 @@ def to_si_array(value: QuantityArrayLike, unit: str, field: str = "value") -> Fl
         magnitude = q.to(unit).magnitude
     except pint.DimensionalityError as exc:
         raise UnitError(
-            f"{field}: incompatible units ({exc.units1} given, {unit or 'dimensionless'} expected)"
+            field, f"incompatible units ({exc.units1} given, {unit or 'dimensionless'} expected)"
         ) from None
     except (pint.PintError, ValueError, TypeError, AttributeError, ArithmeticError) as exc:
         raise UnitError(
-            f"{field}: cannot read {_shown(value)} as a quantity in "
-            f"{unit or 'dimensionless'} ({exc})"
+            field, f"cannot read {_shown(value)} as a quantity in {unit or 'dimensionless'} ({exc})"
         ) from None
     return _real(magnitude, value, unit, field) * si_factor(unit)
 
@@ -326,8 +349,9 @@ def _real(magnitude: Any, value: object, unit: str, field: str) -> FloatArray:
     except (TypeError, ValueError):
         pass
     raise UnitError(
-        f"{field}: cannot read {_shown(value)} as a real number or a quantity in "
-        f"{unit or 'dimensionless'} units"
+        field,
+        f"cannot read {_shown(value)} as a real number or a quantity in "
+        f"{unit or 'dimensionless'} units",
     )
 
 
@@ -358,8 +382,8 @@ def to_si(value: QuantityArrayLike, unit: str, field: str = "value") -> float:
     """
     arr = to_si_array(value, unit, field)
     if arr.size != 1:
-        raise UnitError(f"{field}: must be a single number, got {_shown(value)}")
+        raise UnitError(field, f"must be a single number, got {_shown(value)}")
     si = float(arr.reshape(()))
     if not math.isfinite(si):
-        raise UnitError(f"{field}: must be a finite number, got {_shown(value)}")
+        raise UnitError(field, f"must be a finite number, got {_shown(value)}")
     return si

@@ -8,6 +8,7 @@ from flexsat.attitude.star_camera import StarCamera
 from flexsat.attitude.star_catalog import StarCatalog, synthetic_sky
 from flexsat.attitude.star_tracker import ARCSEC, random_attitudes
 from flexsat.identify.photogrammetry import rotation_matrix
+from flexsat.input_checks import FieldError
 
 
 @pytest.fixture(scope="module")
@@ -106,3 +107,14 @@ def test_bad_frame_requests(sky):
         cam.observe(np.eye(3), sky, rng, missing_fraction=1.0)
     with pytest.raises(ValueError, match="false_stars: must be a positive integer"):
         cam.observe(np.eye(3), sky, rng, false_stars=-1)
+
+
+def test_a_pixel_below_any_detector_s_is_refused():
+    # 1e-300 m made the focal length and image coordinates subnormal (divide by zero)
+    with pytest.raises(FieldError, match=r"pixel_pitch: 1e-300 m is below 1e-07 m"):
+        StarCamera(pixel_pitch="1e-300 m")
+
+
+def test_mountings_must_be_three_angles_not_a_nested_list():
+    with pytest.raises(ValueError, match=r"mounting: must be 3 finite"):
+        StarCamera(mounting=[[0.0, 0.0, 0.0]])

@@ -101,3 +101,84 @@ def test_a_monte_carlo_that_would_crawl_is_refused_before_the_first_frame(tracke
     # 1,000 false stars per field: ~1.7e7 candidate matches per field, above the limit
     with pytest.raises(FieldError, match=r"false_stars: 1000 per field .*MAX_PAIR_CANDIDATES"):
         monte_carlo(tracker, n=1, false_stars=1000)
+
+
+def test_the_expected_stars_and_identifiable_fraction_match_observed_frames(tracker):
+    # independent method: count the catalogue stars (truth >= 0) of 400 simulated frames per
+    # camera. The mean is ~17.4 a field (Poisson sd 4.2, over 400 frames 0.21; the synthetic
+    # sky is uniform only on average: 3 %); the fraction with >= 4 stars in both fields, with
+    # 40 % missing and a 4° field (μ ≈ 1.2), against the Poisson estimate, binomial sd ~0.02
+    stars = tracker.expected_stars()
+    rng = np.random.default_rng(5)
+    counts = np.array(
+        [
+            [np.count_nonzero(f.truth >= 0) for f in tracker.observe(C, rng)]
+            for C in random_attitudes(400, seed=6)
+        ]
+    )
+    np.testing.assert_allclose(counts.mean(axis=0), stars, rtol=0.03)
+    narrow = StarTracker(
+        [
+            StarCamera(field_of_view="4 deg", centroid_noise=0.1, n_pixels=1024),
+            StarCamera(
+                field_of_view="4 deg", centroid_noise=0.1, n_pixels=1024, mounting=(0, "90 deg", 0)
+            ),
+        ],
+        synthetic_sky(6.5, seed=0),
+        tolerance="20 arcsec",
+    )
+    counts = np.array(
+        [
+            [np.count_nonzero(f.truth >= 0) for f in narrow.observe(C, rng, missing_fraction=0.4)]
+            for C in random_attitudes(2000, seed=7)
+        ]
+    )
+    observed = np.mean(np.all(counts >= narrow.stars_needed, axis=1))
+    assert narrow.identifiable_fraction(0.4) == pytest.approx(observed, abs=0.03)
+    # one camera, one field: exactly the Poisson tail P(N >= 3) for one triplet, P(N >= 4) for
+    # the default 3 (C(4, 3) = 4 triangles)
+    single = StarTracker(
+        narrow.cameras[0], synthetic_sky(6.5, seed=0), tolerance="20 arcsec", min_fields=1
+    )
+    mu = single.expected_stars(0.4)[0]
+    tail = 1 - np.exp(-mu) * (1 + mu + mu * mu / 2)
+    assert single.identifiable_fraction(0.4, stars=3) == pytest.approx(tail, rel=1e-12)
+    assert single.stars_needed == 4
+    tail -= np.exp(-mu) * mu**3 / 6
+    assert single.identifiable_fraction(0.4) == pytest.approx(tail, rel=1e-12)
+
+
+def test_a_run_that_can_only_identify_nothing_is_refused_before_the_first_frame(tracker):
+    # 99.9 % of the stars missing: 0.017 a field, 3 in both fields for ~1e-12 of the attitudes
+    with pytest.raises(FieldError, match=r"missing_fraction: .*could only report no data"):
+        monte_carlo(tracker, n=1000, missing_fraction=0.999)
+    tiny = StarTracker(
+        [StarCamera(field_of_view="0.5 deg", n_pixels=64, centroid_noise=0.1)],
+        synthetic_sky(6.5, seed=0),
+        tolerance="60 arcsec",
+        min_fields=1,
+    )
+    with pytest.raises(FieldError, match=r"cameras: .*could only report no data"):
+        monte_carlo(tiny, n=10)
+
+
+def test_acceptance_rules_that_can_only_identify_nothing_are_refused_by_name(tracker):
+    # min_triplets 1e9 needs C(k, 3) >= 1e9: k = 1819 stars in a field of ~17
+    strict = StarTracker(tracker.cameras, synthetic_sky(6.5, seed=0), min_triplets=10**9)
+    assert strict.stars_needed == 1819
+    assert 1818 * 1817 * 1816 // 6 < 10**9 <= 1819 * 1818 * 1817 // 6
+    with pytest.raises(FieldError, match=r"min_triplets: .*1819 stars"):
+        monte_carlo(strict, n=10)
+    # a tolerance as wide as the field: every pair matches every pair
+    with pytest.raises(FieldError, match=r"tolerance: .* not below the widest"):
+        StarTracker(tracker.cameras, synthetic_sky(6.5, seed=0), tolerance="30 deg")
+    # 10°: the real stars alone make ~4e7 candidate matches a field; the tolerance is named
+    wide = StarTracker(tracker.cameras, synthetic_sky(6.5, seed=0), tolerance="10 deg")
+    with pytest.raises(FieldError, match=r"^tolerance: .*real stars alone"):
+        monte_carlo(wide, n=1)
+
+
+def test_an_empty_monte_carlo_is_refused_as_such(tracker):
+    # n = 0 used to reach the no-data check and be blamed on the cameras
+    with pytest.raises(FieldError, match=r"^n: must be a positive integer"):
+        monte_carlo(tracker, n=0)

@@ -314,7 +314,20 @@ def test_bad_input_is_named_by_field():
             lambda: cmg_pyramid.reorient(np.zeros(4), np.ones(4), 1.0, gain_k=0.0),
             "gain_k: must be > 0",
         ),
-        (lambda: cmg_pyramid.reorient(np.zeros(4), np.ones(3), 1.0), "sigma: last axis"),
+        (
+            lambda: cmg_pyramid.reorient(np.zeros(4), np.ones(3), 1.0),
+            "sigma_target: last axis must hold the 4",
+        ),
+        (
+            lambda: cmg_pyramid.integrate_gimbals([True, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0], 1.0),
+            "sigma0: gimbal angles must be numbers",
+        ),
+        (
+            lambda: cmg_pyramid.integrate_gimbals(
+                np.zeros(4), [1.0, 0.0, 0.0], -1.0, null_target=np.zeros(4)
+            ),
+            "null_target: null motion runs forward only",
+        ),
         (
             lambda: cmg_pyramid.integrate_gimbals(
                 DEG([-90.0, 180.0, 90.0, 0.0]), [1.0, 0.0, 0.0], 1.0

@@ -78,9 +78,57 @@ def test_with_the_design_disturbance_alone_zero_gimbals_do_not_go_singular():
     assert not st.cmg_loop(run, np.zeros(4)).singular
 
 
+def test_the_station_and_its_gimbals_are_one_simulation():
+    # one plant (station state, then σ) under one law (u = −Kx, σ̇ = C⁺T): within the run the
+    # cluster's momentum change is the station model's, h_r (h(σ) − h(σ0)) = h − h(0), since
+    # ḣ = u + [n h3, 0, −n h1] = h_r T (Eq. 10) and C σ̇ = T; DOP853 at rtol 1e-10 over a
+    # quarter orbit keeps both to ~1e-9 h_r
+    from flexsat.dynamics.station_gimbals import StationWithGimbals
+    from flexsat.sim import simulate
+
+    quarter = DATA.period / 4
+    plant, law, config, options = st.cmg_simulation(
+        DESIGN, quarter, "aero_substitute", "1 deg", ALTERNATE
+    )
+    assert isinstance(plant, StationWithGimbals) and config.law_mode == "continuous"
+    ds = simulate(plant, law, config, **options).dataset
+    assert ds.attrs["stopped"] == 0 and np.isnan(ds.attrs["stop_time"])
+    hr = DATA.rotor_momentum
+    sig = ds["gimbal_angles"].values[0]
+    h_model = ds["momentum"].values[0]
+    np.testing.assert_allclose(
+        hr * (cmg.momentum(sig) - cmg.momentum(ALTERNATE)), h_model - h_model[0], atol=1e-8 * hr
+    )
+    # the station part is the attitude loop alone (the same ODE, other step sizes): the two
+    # runs' global errors at rtol 1e-10 differ by ~6e-10 of the largest value (measured);
+    # bound 1e-8 of it
+    alone = st.simulate_attitude(DESIGN, quarter, "aero_substitute")
+    for name, ref in (("attitude", alone.attitude), ("torque", alone.torque)):
+        np.testing.assert_allclose(ds[name].values[0], ref, rtol=0, atol=1e-8 * np.abs(ref).max())
+
+
 @pytest.mark.parametrize(
     "call, message",
     [
+        (
+            lambda: st.cmg_simulation(
+                DESIGN, 100.0, "design", "1 deg", np.deg2rad([-90.0, 180.0, 90.0, 0.0])
+            ),
+            "sigma0: starts singular",
+        ),
+        (
+            lambda: st.cmg_simulation(DESIGN, 100.0, "design", "1 deg", [False, 0, 0, 0]),
+            "sigma0: gimbal angles must be numbers",
+        ),
+        (
+            lambda: st.cmg_simulation(DESIGN, 100.0, "design", "1 deg", np.zeros(3)),
+            "sigma0: last axis must hold the 4",
+        ),
+        (
+            lambda: st.cmg_simulation(DESIGN, 100.0, "design", "1 deg", np.zeros(4), 0.0),
+            "threshold: must be > 0",
+        ),
+        (lambda: st.attitude_simulation(DESIGN, 100.0, n_out=1), "n_out: must be an integer"),
         (lambda: st.BrysonMaxima(attitude="0 deg"), "maxima.attitude: must be"),
         (lambda: st.BrysonMaxima(rate="1 furlong"), "maxima.rate"),
         (lambda: st.design(roll_yaw_filters=(1, 2)), "roll_yaw_filters: .*not stabilizable"),

@@ -69,3 +69,46 @@ def test_bad_gains_are_refused_naming_the_field(build, field):
     with pytest.raises(FieldError) as caught:
         build()
     assert caught.value.field == field
+
+
+def test_the_station_law_steers_the_momentum_its_attitude_feedback_demands():
+    """u = −Kx, and C σ̇ = T = [u1 + n h3, u2, u3 − n h1]/h_r (Eq. 10, L4717–L4720) to
+    round-off, on two states and gimbal sets."""
+    from flexsat.control.cmg_steering import StationMomentumSteering
+
+    rng = np.random.default_rng(3)
+    K = rng.normal(size=(3, 6))
+    n, hr = 0.0011, 4745.0
+    law = StationMomentumSteering(K, (1, 3, 5), n, hr)
+    x = rng.normal(size=(2, 6))
+    cmd, _ = law(0.0, {"state": x, "gimbal_angles": SETS}, {})
+    u = -x @ K.T
+    np.testing.assert_allclose(cmd["torque"], u, rtol=1e-15)
+    T = np.stack([u[:, 0] + n * x[:, 5], u[:, 1], u[:, 2] - n * x[:, 1]], axis=-1) / hr
+    hdot = np.einsum("...ij,...j->...i", cmg.jacobian(SETS), cmd["gimbal_rates"])
+    bound = 100 * EPS * np.linalg.cond(cmg.jacobian(SETS)).max() * np.abs(T).max()
+    np.testing.assert_allclose(hdot, T, rtol=0, atol=bound)
+
+
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        ({"gain": np.zeros((2, 6))}, "gain"),
+        ({"momentum_rows": (1, 3, 6)}, "momentum_rows"),
+        ({"momentum_rows": (1.0, 3.0, 5.0)}, "momentum_rows"),
+        ({"orbit_rate": 0.0}, "orbit_rate"),
+        ({"rotor_momentum": -1.0}, "rotor_momentum"),
+        ({"alpha": -1.0}, "alpha"),
+    ],
+)
+def test_the_station_law_refuses_bad_parameters_by_name(kwargs, field):
+    from flexsat.control.cmg_steering import StationMomentumSteering
+
+    args = {
+        "gain": np.zeros((3, 6)),
+        "momentum_rows": (1, 3, 5),
+        "orbit_rate": 0.0011,
+        "rotor_momentum": 4745.0,
+    }
+    with pytest.raises(FieldError, match=f"^{field}: "):
+        StationMomentumSteering(**{**args, **kwargs})

@@ -35,6 +35,7 @@ from flexsat.dynamics.tether import (
     accelerations,
     integral_of_motion,
 )
+from flexsat.input_checks import FieldError
 
 D5 = np.radians(5.0)
 X0 = np.array([1.0, D5, D5, 0.0, 0.0, 0.0])
@@ -272,3 +273,15 @@ def test_final_length_with_units_is_divided_by_the_reference_length():
 def test_bad_gains_are_refused_by_name(make, message):
     with pytest.raises(ValueError, match=message):
         make()
+
+
+def test_the_laws_and_measures_refuse_empty_and_misshapen_inputs_by_name():
+    # an empty gain array was accepted, liapunov_coupled of a wrong shape an IndexError
+    with pytest.raises(FieldError, match=r"K1: must hold a value per case"):
+        CoupledTetherLaw([], 0.0, 3.0, 2.0, 0.01)
+    with pytest.raises(FieldError, match=r"tau: must be a grid of >= 2 times"):
+        thrust_index([], [])
+    with pytest.raises(FieldError, match=r"x: must be states"):
+        liapunov_coupled([1.0, 2.0], 1.0, 0.0, 0.1)
+    with pytest.raises(ValueError, match=r"x: must be finite"):
+        liapunov_coupled([np.nan] * 6, 1.0, 0.0, 0.1)

@@ -229,3 +229,20 @@ def test_the_rest_state_is_the_deployed_tether_not_a_collapsed_one():
         np.testing.assert_array_equal(x0, np.broadcast_to(plant.state_from(length=20e3), x0.shape))
         with pytest.raises(ValueError, match="length"):
             plant.state_from(length=0.0)
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(length=[1.0, 2.0]), r"length: "),
+        (dict(mass="1 m"), r"mass: incompatible units"),
+        (dict(altitude=["1 km", "2 km"]), r"altitude: must be one altitude"),
+        (dict(altitude="1e10 m"), r"altitude: .* beyond the Earth's Hill sphere"),
+        (dict(altitude="1e308 m"), r"altitude: "),
+        (dict(mass=1e-300, length=1e-300, orbit_rate=1e-300), r"mass: .* beyond a float's range"),
+    ],
+)
+def test_scales_refuse_shapes_units_and_ranges_by_name(kwargs, message):
+    # a length array was a TypeError, 1e308 m of altitude an OverflowError (issue 21)
+    with pytest.raises(ValueError, match=message):
+        TetherScales(**kwargs)

@@ -226,7 +226,7 @@ def test_differential_correction_errors(frame):
             shape_dofs=[0, 1, 2, 3],
             orthogonality_sigma=0.01,
         )
-    with pytest.raises(ValueError, match="CorrectionData: give at least one kind"):
+    with pytest.raises(ValueError, match="CorrectionData needs at least one kind of measurement"):
         CorrectionData()
     with pytest.raises(ValueError, match="frequency_sigma: give the standard deviations"):
         CorrectionData(frequencies=w[:3])

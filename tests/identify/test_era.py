@@ -293,3 +293,13 @@ def test_bootstrap_uncertainty_bad_input(grid, sensors):
         bootstrap_uncertainty(era_dc(Y, dt=1 / RATE, order=12), Y)
     with pytest.raises(ValueError, match="realization: must come from era"):
         bootstrap_uncertainty(real, Y[:, :5])
+
+
+def test_mac_refuses_empty_and_non_finite_shapes_by_name():
+    from flexsat.identify.era import mac
+
+    # both used to return a matrix: of zeros (empty) or of NaN
+    with pytest.raises(ValueError, match=r"^phi: must be a non-empty finite"):
+        mac(np.empty((0, 2)), np.empty((0, 2)))
+    with pytest.raises(ValueError, match=r"^reference_shapes: must be a non-empty finite"):
+        mac(np.ones((3, 2)), np.full((3, 2), np.nan))

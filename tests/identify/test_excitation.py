@@ -62,3 +62,15 @@ def test_anti_alias_filters_give_the_continuous_frf_with_all_modes():
     assert errors[20.0] < 0.02 < 0.2 < errors[None]
     with pytest.raises(ValueError, match="anti_alias: the cut-off must be below the Nyquist"):
         simulate_test(full, wheel, sensors, 10.0, 50.0, anti_alias=25.0)
+
+
+def test_excitations_refuse_non_finite_amplitudes_and_empty_histories_by_name():
+    from flexsat.identify.excitation import impulse_hammer, torque_history
+
+    # a NaN amplitude made a NaN excitation, an empty history an input of zeros
+    with pytest.raises(ValueError, match=r"^amplitude: must be finite"):
+        impulse_hammer(1, "z", amplitude=float("nan"))
+    with pytest.raises(ValueError, match=r"^amplitude: must be one number"):
+        harmonic_shaker(1, "z", [1.0, 2.0], 5.0)
+    with pytest.raises(ValueError, match=r"^values: must be a finite, non-empty"):
+        torque_history(1, "x", [])

@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 from flexsat.report import MANIFEST, write_report
-from flexsat.scenarios import load_scenario, run_scenario
+from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
 from report_browser import assert_renders
 
 SMALL = """
@@ -64,18 +64,37 @@ def test_report_files_table_and_netcdf_round_trip(result, tmp_path):
         assert text in page
 
 
-def test_report_of_a_run_with_nothing_identified(tmp_path):
-    # cameras limited to m = 2 on the synthetic sky (5000·10^-2.25 = 28 stars: a field holds
-    # 0.1 on average): no field gets a triplet, every attitude is rejected, the report still
-    # writes (NaN errors, empty histograms)
+def test_report_of_a_run_with_nothing_identified_states_no_data(tmp_path):
+    # cameras limited to m = 4.4 on the synthetic sky (463 stars: a 12° field holds 1.6 on
+    # average; the 4 stars of 3 triplets in both fields with probability 0.6 %): identification is
+    # possible (the run is not refused) but none of the 20 attitudes gets it; the metrics of
+    # the errors are null with the reason, and metrics.json is strict JSON
     spec = load_scenario(
-        SMALL.replace("centroid_noise: 0.1", "centroid_noise: 0.1, magnitude_limit: 2.0")
+        SMALL.replace("centroid_noise: 0.1", "centroid_noise: 0.1, magnitude_limit: 4.4")
     )
     result = run_scenario(spec)
     rec = result.metrics_records()[0]
     assert rec["accepted_rate"] == 0.0 and rec["wrong_accepted"] == 0
     out = write_report(result, tmp_path / "r")
     assert (out / "errors.png").is_file()
+    text = (out / "metrics.json").read_text()
+    written = json.loads(text, parse_constant=lambda token: pytest.fail(f"{token} in JSON"))
+    for run in written:
+        assert run["mean_stars"] is None and run["error_std_x_arcsec"] is None
+        assert "none of the 20 attitudes" in run["null_reasons"]["error_std_x_arcsec"]
+        assert set(run["null_reasons"]) == {k for k, v in run.items() if v is None}
+
+
+def test_a_sky_the_cameras_cannot_identify_in_is_refused_before_the_run():
+    # m = 2: ~30 stars, 0.1 in a field on average; 3 in both fields for about 1e-8 of the
+    # attitudes: 20 attitudes would report no data
+    spec = load_scenario(
+        SMALL.replace("centroid_noise: 0.1", "centroid_noise: 0.1, magnitude_limit: 2.0")
+    )
+    with pytest.raises(ScenarioError) as info:
+        run_scenario(spec)
+    assert [p.path for p in info.value.problems] == ["cameras"]
+    assert "could only report no data" in info.value.problems[0].rule
 
 
 def test_the_page_reads_right_in_a_browser(result, tmp_path, browser):

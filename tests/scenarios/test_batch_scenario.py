@@ -160,6 +160,17 @@ def test_a_monte_carlo_estimates_its_requirements_and_writes_its_report(tmp_path
             "give workers .* or scheduler .*, not both",
         ),
         (("kind: montecarlo", "kind: sweep"), r"requirements: belong to a montecarlo"),
+        # a distribution written as a list or a mapping, a bound as a list: refused by name
+        # (they used to reach a dict lookup: TypeError: unhashable type)
+        (
+            ("distribution: normal", "distribution: [normal]"),
+            r"parameters.hub_inertia.distribution: must be a distribution name",
+        ),
+        (
+            ("distribution: uniform", "distribution: {uniform: 1}"),
+            r"parameters.tip_mass.distribution: must be a distribution name",
+        ),
+        (('low: "0 kg"', 'low: ["0 kg"]'), r"parameters.tip_mass.low: must be one number"),
     ],
 )
 def test_schema_mistakes_are_named(tmp_path, change, message):
@@ -168,6 +179,24 @@ def test_schema_mistakes_are_named(tmp_path, change, message):
     path = _write(tmp_path, "mc.yaml", MONTECARLO.replace(old, new))
     with pytest.raises(ScenarioError, match=message):
         load_scenario(path)
+
+
+def test_identical_monte_carlo_runs_write_identical_summaries_and_pages(tmp_path):
+    # the wall time and the resumed-chunk counts vary between identical runs: they stay out of
+    # the files a user compares (a second run in the same folder resumes from the store)
+    pages = []
+    for name in ("first", "second"):
+        folder = tmp_path / name
+        folder.mkdir()
+        result = run_scenario(load_scenario(_write(folder, "mc.yaml", MONTECARLO)))
+        out = write_report(result, folder / "report")
+        pages.append(((out / "summary.json").read_text(), (out / "index.html").read_text()))
+    again = run_scenario(load_scenario(tmp_path / "first" / "mc.yaml"))
+    assert again.chunks_run == 0
+    out = write_report(again, tmp_path / "first" / "report")
+    pages.append(((out / "summary.json").read_text(), (out / "index.html").read_text()))
+    assert pages[0][0] == pages[1][0] == pages[2][0]
+    assert pages[0][1] == pages[1][1] == pages[2][1]
 
 
 @pytest.mark.parametrize(

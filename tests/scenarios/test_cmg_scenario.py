@@ -56,10 +56,11 @@ def test_steering_runs_reproduce_v3_the_preferred_saturation_and_null_motion():
     assert result.table[0][0] == "V1"
 
 
-def test_a_reorientation_run_is_a_simulation_the_runner_hands_to_simulate():
-    # the kind plans a reorientation as a (plant, law, configuration) triple on the gimbal
-    # cluster, a torque-steering run (stopped at the first singular set) as a callable
-    from flexsat.control.cmg_steering import NullMotionSteering
+def test_every_run_is_a_simulation_the_runner_hands_to_simulate():
+    # the kind plans each run as a (plant, law, configuration) triple on the gimbal cluster:
+    # a torque-steering run the pseudo-inverse law with the engine's stop at the first singular
+    # set, a reorientation the null-motion law
+    from flexsat.control.cmg_steering import NullMotionSteering, PseudoInverseSteering
     from flexsat.dynamics.gimbal_cluster import GimbalCluster
     from flexsat.scenarios.cmg import N_OUT, CmgKind
     from flexsat.scenarios.kind import Simulation
@@ -67,12 +68,18 @@ def test_a_reorientation_run_is_a_simulation_the_runner_hands_to_simulate():
 
     scenario = load_scenario(SMALL)
     plan = CmgKind().plan(scenario)
-    tasks = {}
     run = next(plan)
     while run.label != "reorient":
-        tasks[run.label] = run.task
-        run = plan.send(run.task())
-    assert all(callable(t) and not isinstance(t, Simulation) for t in tasks.values())
+        task = run.task
+        assert isinstance(task, Simulation) and isinstance(task.law, PseudoInverseSteering)
+        assert task.config.law_mode == "continuous" and task.config.stop.terminal
+        sim = simulate(task.plant, task.law, task.config, **task.options)
+        if run.label == "zero":
+            # V3: under the unit demand from σ = 0 the stop is at |h| = t = 2 cos δ (1.1546 h)
+            assert sim.dataset.attrs["stopped"] == 1
+            assert sim.dataset.attrs["stop_time"] == pytest.approx(2 * np.cos(cmg.SKEW), abs=1e-5)
+            assert sim.dataset["time"].values[-1] == sim.dataset.attrs["stop_time"]
+        run = plan.send(sim)
     task = run.task
     assert isinstance(task, Simulation) and run.path == "runs['reorient']"
     assert isinstance(task.plant, GimbalCluster) and isinstance(task.law, NullMotionSteering)

@@ -13,7 +13,7 @@ from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
 from flexsat.dynamics.state_space import StateSpacePlant
 from flexsat.sim import continuous
 from flexsat.sim.channels import ChannelSensor
-from flexsat.sim.config import SimConfig
+from flexsat.sim.config import SimConfig, StopCondition
 from flexsat.sim.engine import SimulationDiverged, simulate
 
 K = 0.7  # 1/s
@@ -75,12 +75,74 @@ def test_stop_condition_ends_the_run_at_its_root():
         [1.0],
         rtol=1e-12,
         atol=1e-15,
-        stop=lambda t, x: x[0, 0] - 0.5,
+        stop=StopCondition(lambda t, x: x[:, 0, 0] - 0.5, "x fell to 1/2"),
     )
     assert run.stopped
     assert run.t_end == pytest.approx(np.log(2) / K, rel=1e-10)
+    assert run.stop_time == run.t_end
     assert run.x_end[0, 0] == pytest.approx(0.5, rel=1e-10)
-    assert run.t[-1] <= run.t_end  # the grid up to the stop
+    # the grid points before the stop, then the stop itself
+    np.testing.assert_array_equal(run.t[:-1], np.linspace(0.0, 5.0, 11)[: run.t.size - 1])
+    assert run.t[-1] == run.t_end and run.states[0, -1, 0] == run.x_end[0, 0]
+
+
+def test_a_margin_that_only_touches_zero_is_found_between_steps():
+    # x = 1 − t under x' = −1 (a zero law and a constant exogenous input; the integrator
+    # takes one step over the run): the margin (x − 0.3)² − 1e-8 dips below 0 only on
+    # t ∈ 0.7 ∓ 1e-4, inside the step, changing sign twice between its ends, which a
+    # sign-change event does not see; the scan finds its first root to brentq's xtol
+    law = ScheduledStateFeedback([0.0], np.zeros((1, 1, 1)), "y", "u")
+    plant = integrator_plant()
+    margin = StopCondition(
+        lambda t, x: (x[:, 0, 0] - 0.3) ** 2 - 1e-8, "x passed 0.3", touches=True
+    )
+    config = SimConfig(
+        duration=2.0,
+        control_rate=10.0,
+        law_mode="continuous",
+        stop=margin,
+        exogenous=lambda t: {"u": -1.0},
+    )
+    ds = simulate(plant, law, config, initial_state=[1.0]).dataset
+    assert ds.attrs["stopped"] == 1 and ds.attrs["stop_reason"] == "x passed 0.3"
+    assert ds.attrs["stop_time"] == pytest.approx(0.7 - 1e-4, abs=1e-12)
+    assert ds["time"].values[-1] == ds.attrs["stop_time"]
+    assert ds["time"].size == 8  # 0, 0.1, ..., 0.6 and the stop
+    np.testing.assert_allclose(ds["disturbance_u"].values[0], -1.0)
+    # not terminal: the run goes on to its end and records the time alone
+    config = SimConfig(
+        duration=2.0,
+        control_rate=10.0,
+        law_mode="continuous",
+        stop=StopCondition(margin.margin, margin.reason, terminal=False, touches=True),
+        exogenous=lambda t: {"u": -1.0},
+    )
+    ds = simulate(plant, law, config, initial_state=[1.0]).dataset
+    assert ds.attrs["stopped"] == 0 and ds["time"].values[-1] == 2.0
+    assert ds.attrs["stop_time"] == pytest.approx(0.7 - 1e-4, abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("settings", "match"),
+    [
+        ({"stop": "x < 0"}, "stop: must be a StopCondition"),
+        ({"exogenous": 1.0}, "exogenous: must be a callable"),
+        ({"stop": StopCondition(lambda t, x: t, "t")}, "stop: only in law_mode='continuous'"),
+    ],
+)
+def test_stop_and_exogenous_are_refused_where_they_have_no_meaning(settings, match):
+    with pytest.raises(ValueError, match=match):
+        SimConfig(duration=1.0, **settings)
+
+
+def test_a_start_where_the_run_stops_is_refused():
+    config = SimConfig(
+        duration=1.0,
+        law_mode="continuous",
+        stop=StopCondition(lambda t, x: x[:, 0, 0] - 2.0, "x fell to 2"),
+    )
+    with pytest.raises(ValueError, match="initial_state: the run would stop at its start: x fell"):
+        simulate(integrator_plant(), feedback([[K]], "u", "y"), config, initial_state=[1.0])
 
 
 def test_a_decreasing_grid_integrates_backward():

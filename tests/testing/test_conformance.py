@@ -116,6 +116,9 @@ PLANTS = {
         "flexsat.dynamics.gimbal_cluster", fromlist=["x"]
     ).GimbalCluster(),
     "space_station": lambda: _station().plant,
+    "station_with_gimbals": lambda: __import__(
+        "flexsat.dynamics.station_gimbals", fromlist=["x"]
+    ).StationWithGimbals(_station().plant),
     "vibration_test_state_space": lambda: _vibration_plant(),
     "plugin_two_mass_spring": lambda: __import__(
         "flexsat_example_plugin.plant", fromlist=["x"]
@@ -320,6 +323,18 @@ def _station_feedback():
     return ScheduledStateFeedback([0.0], station.gain[None], "state", "torque"), station.plant
 
 
+def _station_steering():
+    """The station's attitude law with the pseudo-inverse steering of the momentum it demands,
+    on the station with its gimbals (cases/space_station_cmg.cmg_simulation)."""
+    from flexsat.cases.space_station_cmg import cmg_simulation
+
+    station = _station()
+    plant, law, _, _ = cmg_simulation(
+        station, 100.0, "design", "1 deg", np.radians([45.0, -45.0, 45.0, -45.0])
+    )
+    return law, plant
+
+
 def _bainum_feedback():
     """Bainum's Ch. II example on the beam in orbit: f = K x' (printed rate gains), one knot
     u = −[0, −K/ω_c] x in seconds, as BainumBeam.simulate builds it."""
@@ -378,6 +393,7 @@ LAWS = {
     "cmg_pseudo_inverse_null": lambda: _steering("pseudo_inverse_null"),
     "cmg_null_motion": lambda: _steering("null_motion"),
     "station_state_feedback": _station_feedback,
+    "station_momentum_steering": _station_steering,
     "bainum_state_feedback": _bainum_feedback,
     "playback": _playback,
     "plugin_bang_off_bang": _bang_off_bang,
@@ -416,7 +432,7 @@ NOT_SUBJECTS = {
     "flexsat.control.lqg.EstimatorController": "abstract base of LQG, frequency-shaped",
     "flexsat.control.attitude_laws._AttitudeLaw": "base of the Gibbs, MRP, quaternion laws",
     "flexsat.control.tether_laws._TetherLaw": "base of the three tether laws",
-    "flexsat.control.cmg_steering._GimbalLaw": "abstract base of the two steering laws",
+    "flexsat.control.cmg_steering._GimbalLaw": "abstract base of the three steering laws",
     # the conformance checks' own test doubles
     "flexsat.testing.checks.HoldLaw": "the plant checks' open-loop drive",
     "flexsat.testing.law_checks._Without": "the law checks' plant missing a channel",

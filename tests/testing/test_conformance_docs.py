@@ -4,31 +4,20 @@ tested in tests/testing/test_plant_checks.py and test_law_checks.py)."""
 
 from __future__ import annotations
 
-import re
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from conformance_example import DOC, documented_example, python_blocks
 from flexsat.testing import (
     parametrize_with_checks,
 )
 
-DOC = Path(__file__).parents[2] / "docs" / "conformance.md"
-
-
-def _example() -> dict:
-    blocks = re.findall(r"```python\n(.*?)```", DOC.read_text(), re.S)
-    namespace: dict = {}
-    exec(compile(blocks[0], str(DOC), "exec"), namespace)
-    return namespace
-
 
 def test_the_documented_example_runs(capsys):
-    ns = _example()
+    ns = documented_example()
     assert capsys.readouterr().out.strip() == "conforms"
     # the pytest form of the page: one parametrized test per check
-    blocks = re.findall(r"```python\n(.*?)```", DOC.read_text(), re.S)
+    blocks = python_blocks()
     exec(compile(blocks[1], str(DOC), "exec"), ns)
     marks = ns["test_conformance"].pytestmark
     params = marks[0].args[1]
@@ -44,12 +33,7 @@ def test_the_documented_example_runs(capsys):
 
 @pytest.fixture
 def example():
-    return _example()
-
-
-def _fails(check_name: str, run, *args):
-    with pytest.raises(AssertionError, match=rf"fails {check_name}: "):
-        run(*args)
+    return documented_example()
 
 
 def test_parametrize_with_checks_marks_the_skipped(example):

@@ -6,41 +6,19 @@ channel; the skips follow the law's declarations."""
 
 from __future__ import annotations
 
-import re
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from conformance_example import assert_fails, documented_example, one_check
 from flexsat.testing import check_controller, controller_checks
-
-DOC = Path(__file__).parents[2] / "docs" / "conformance.md"
-
-
-def _example() -> dict:
-    """The namespace of docs/conformance.md's example: TorsionPendulum, RateDamper, ..."""
-    blocks = re.findall(r"```python\n(.*?)```", DOC.read_text(), re.S)
-    namespace: dict = {}
-    exec(compile(blocks[0], str(DOC), "exec"), namespace)
-    return namespace
 
 
 @pytest.fixture
 def example():
-    return _example()
+    return documented_example()
 
 
-def _fails(check_name: str, run, *args):
-    with pytest.raises(AssertionError, match=rf"fails {check_name}: "):
-        run(*args)
-
-
-def _one(checks, name):
-    (check,) = [c for c in checks if c.name == name]
-    return check
-
-
-def test_a_linear_form_that_disagrees_fails(example):
+def test_a_linear_form_that_disagreesassert_fails(example):
     cls = example["RateDamper"]
 
     class Off(cls):
@@ -48,7 +26,7 @@ def test_a_linear_form_that_disagrees_fails(example):
             form = super().linear_form(dt, times, n_cases)
             return type(form)(**{**form.__dict__, "Dk": 1.001 * form.Dk})
 
-    _fails("linear_form", check_controller, Off(0.5), example["TorsionPendulum"]())
+    assert_fails("linear_form", check_controller, Off(0.5), example["TorsionPendulum"]())
 
 
 def test_a_law_with_hidden_state_fails_determinism(example):
@@ -64,9 +42,11 @@ def test_a_law_with_hidden_state_fails_determinism(example):
         linear_form = example["Controller"].linear_form
 
     checks = controller_checks(Drifting(0.5), example["TorsionPendulum"]())
-    _fails("batch_equals_singles", check_controller, Drifting(0.5), example["TorsionPendulum"]())
+    assert_fails(
+        "batch_equals_singles", check_controller, Drifting(0.5), example["TorsionPendulum"]()
+    )
     (determinism,) = [c for c in checks if c.name == "determinism"]
-    _fails("determinism", determinism)
+    assert_fails("determinism", determinism)
 
 
 def test_a_law_reading_a_missing_channel_fails_channels_declared(example):
@@ -77,7 +57,7 @@ def test_a_law_reading_a_missing_channel_fails_channels_declared(example):
 
     checks = controller_checks(Misnamed(0.5), example["TorsionPendulum"]())
     assert [c.skip is None for c in checks] == [True] + [False] * 5
-    _fails("channels_declared", checks[0])
+    assert_fails("channels_declared", checks[0])
 
 
 def test_the_documented_law_passes_every_check(example):
@@ -103,7 +83,7 @@ def test_a_command_without_its_case_axis_fails_shapes(example):
             return -self.gain * np.asarray(y["rate"])[:1], state
 
     plant = example["TorsionPendulum"]()
-    _fails("shapes", _one(controller_checks(FirstCaseOnly(0.5), plant), "shapes"))
+    assert_fails("shapes", one_check(controller_checks(FirstCaseOnly(0.5), plant), "shapes"))
 
 
 def test_a_refusal_that_does_not_name_the_channel_fails_bad_input(example, monkeypatch):
@@ -115,7 +95,7 @@ def test_a_refusal_that_does_not_name_the_channel_fails_bad_input(example, monke
 
     monkeypatch.setattr(law_checks, "check_law", vague)
     checks = controller_checks(example["RateDamper"](0.5), example["TorsionPendulum"]())
-    _fails("bad_input", _one(checks, "bad_input"))
+    assert_fails("bad_input", one_check(checks, "bad_input"))
 
 
 def test_skips_follow_the_declarations(example):

@@ -6,45 +6,23 @@ form; the skips follow the plant's declarations."""
 
 from __future__ import annotations
 
-import re
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from conformance_example import assert_fails, documented_example, one_check
 from flexsat.testing import check_plant, plant_checks
-
-DOC = Path(__file__).parents[2] / "docs" / "conformance.md"
-
-
-def _example() -> dict:
-    """The namespace of docs/conformance.md's example: TorsionPendulum, RateDamper, ..."""
-    blocks = re.findall(r"```python\n(.*?)```", DOC.read_text(), re.S)
-    namespace: dict = {}
-    exec(compile(blocks[0], str(DOC), "exec"), namespace)
-    return namespace
 
 
 @pytest.fixture
 def example():
-    return _example()
-
-
-def _fails(check_name: str, run, *args):
-    with pytest.raises(AssertionError, match=rf"fails {check_name}: "):
-        run(*args)
-
-
-def _one(checks, name):
-    (check,) = [c for c in checks if c.name == name]
-    return check
+    return documented_example()
 
 
 def test_a_non_si_unit_fails_channels_declared(example):
     plant = example["TorsionPendulum"]()
     Channel = type(plant.outputs[0])
     plant.outputs = (Channel("angle", "deg"), Channel("rate", "rad/s"))
-    _fails("channels_declared", check_plant, plant)
+    assert_fails("channels_declared", check_plant, plant)
 
 
 def test_a_wrong_power_fails_energy(example):
@@ -56,7 +34,7 @@ def test_a_wrong_power_fails_energy(example):
         def power(self, x, u):
             return x[..., 1] * u[..., 0]
 
-    _fails("energy", check_plant, Undamped())
+    assert_fails("energy", check_plant, Undamped())
 
 
 def test_an_energy_that_grows_fails_without_a_declared_power(example):
@@ -68,7 +46,7 @@ def test_an_energy_that_grows_fails_without_a_declared_power(example):
         def __init__(self):
             super().__init__(damping=-0.5)
 
-    _fails("energy", check_plant, Active())
+    assert_fails("energy", check_plant, Active())
 
 
 def test_a_case_axis_dropped_fails_shapes(example):
@@ -78,7 +56,7 @@ def test_a_case_axis_dropped_fails_shapes(example):
         def output(self, name, x, u, f_in=None):
             return np.asarray(super().output(name, x, u, f_in))[..., :1]
 
-    _fails("shapes", check_plant, Scalar())
+    assert_fails("shapes", check_plant, Scalar())
 
 
 def test_an_unknown_name_as_a_key_error_fails_bad_input(example):
@@ -88,7 +66,7 @@ def test_an_unknown_name_as_a_key_error_fails_bad_input(example):
         def output(self, name, x, u, f_in=None):
             return x[..., {"angle": 0, "rate": 1}[name]]
 
-    _fails("bad_input", check_plant, Careless())
+    assert_fails("bad_input", check_plant, Careless())
 
 
 def test_the_documented_plant_passes_every_check(example):
@@ -116,7 +94,7 @@ def test_cases_coupled_in_a_batch_fail_batch_equals_singles(example):
             y = np.asarray(super().output(name, x, u, f_in), float)
             return y - y.mean(axis=-1, keepdims=True) if name == "angle" else y
 
-    _fails("batch_equals_singles", _one(plant_checks(Coupled()), "batch_equals_singles"))
+    assert_fails("batch_equals_singles", one_check(plant_checks(Coupled()), "batch_equals_singles"))
 
 
 def test_an_rhs_that_is_not_the_split_form_fails_linear_form(example):
@@ -129,7 +107,7 @@ def test_an_rhs_that_is_not_the_split_form_fails_linear_form(example):
             A[1, 0] *= 1.01
             return x @ A.T + u @ B.T
 
-    _fails("linear_form", _one(plant_checks(Stiffer()), "linear_form"))
+    assert_fails("linear_form", one_check(plant_checks(Stiffer()), "linear_form"))
 
 
 def test_skips_follow_the_declarations(example):

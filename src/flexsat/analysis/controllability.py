@@ -9,8 +9,8 @@ Tests provided (Bainum & Reddy 1979, NASA CR-158684, Ch. II):
 - :func:`controllability_rank`: rank of the Kalman matrix ``[B, AB, ..., A^(n-1) B]`` by SVD;
 - :func:`pbh_test`: the Popov-Belevitch-Hautus test, ``rank [λI - A, B] = n`` at every
   eigenvalue λ of A, returning the uncontrollable eigenvalues;
-- :func:`repeated_frequency_test`: the block test of Balas (1978) used in Ch. II §3 (seed 002
-  L293-L305, L377-L442) for an undamped modal system ``ẍ + diag(κ) x = B u``: the pair is
+- :func:`repeated_frequency_test`: the block test of Balas (1978) used in Ch. II §3 (Bainum & Reddy
+  1979) for an undamped modal system ``ẍ + diag(κ) x = B u``: the pair is
   controllable iff, for every distinct κ, the rows of B of the modes sharing it have rank equal
   to their number (the multiplicity);
 - :func:`is_stabilizable`: PBH restricted to eigenvalues with Re λ >= 0.
@@ -27,7 +27,7 @@ import numpy as np
 import numpy.typing as npt
 import scipy.linalg
 
-from flexsat.input_checks import require_numeric
+from flexsat.input_checks import FieldError, require_numeric
 from flexsat.units import FloatArray
 
 _EPS = np.finfo(float).eps
@@ -41,7 +41,7 @@ def _array(value: npt.ArrayLike, field: str) -> FloatArray:
 def _square(value: npt.ArrayLike, field: str) -> FloatArray:
     arr = _array(value, field)
     if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.shape[0] == 0:
-        raise ValueError(f"{field}: must be a non-empty square 2-D array, got shape {arr.shape}")
+        raise FieldError(field, f"must be a non-empty square 2-D array, got shape {arr.shape}")
     return arr
 
 
@@ -50,9 +50,10 @@ def _input_matrix(value: npt.ArrayLike, n: int, field: str = "B", other: str = "
     if arr.ndim == 1:
         arr = arr.reshape(-1, 1)
     if arr.ndim != 2 or arr.shape[0] != n or arr.shape[1] == 0:
-        raise ValueError(
-            f"{field}: must have {n} rows ({other} is {n}x{n}) and at least one "
-            f"column, got shape {np.shape(value)}"
+        raise FieldError(
+            field,
+            f"must have {n} rows ({other} is {n}x{n}) and at least one "
+            f"column, got shape {np.shape(value)}",
         )
     return arr
 
@@ -67,7 +68,7 @@ def _tol(tol: float | None, field: str = "tol") -> float | None:
         return None
     value = float(_array(tol, field))
     if value < 0:
-        raise ValueError(f"{field}: must be >= 0, got {tol!r}")
+        raise FieldError(field, f"must be >= 0, got {tol!r}")
     return value
 
 
@@ -122,8 +123,8 @@ def controllability_rank(A: npt.ArrayLike, B: npt.ArrayLike, tol: float | None =
     Notes
     -----
     The Kalman matrix is badly conditioned for large n or widely spread eigenvalues; prefer
-    :func:`pbh_test` (or :func:`repeated_frequency_test` for modal systems) there. Seed 002 Ch.
-    III (L648-L652) makes the same point by counting the C(36, 12) = 1.25e9 minors a hand
+    :func:`pbh_test` (or :func:`repeated_frequency_test` for modal systems) there. Bainum & Reddy
+    1979 Ch. III §2 makes the same point by counting the C(36, 12) = 1.25e9 minors a hand
     search would need.
 
     Examples
@@ -325,7 +326,8 @@ def repeated_frequency_test(
 ) -> RepeatedFrequencyResult:
     """Controllability of the undamped modal system ``ẍ + diag(κ) x = B u`` by blocks.
 
-    The theorem (Balas 1978, applied in seed 002 Ch. II §3, L305: "these m subsystems with their
+    The theorem (Balas 1978, applied in Bainum & Reddy 1979 Ch. II §3:
+    "these m subsystems with their
     corresponding blocks in the B matrix must each be separately controllable"):
     group the modes by equal κ_k = ω_k². The 2n-state system ``[[0, I], [-diag(κ), 0]]``,
     ``[[0], [B]]`` is controllable iff, for every group, the rows of B of its modes have rank
@@ -339,7 +341,7 @@ def repeated_frequency_test(
         κ = ω², in any consistent unit (for Bainum's beam the nondimensional
         (3, (ω_1/ω_c)², ...)). Only undamped modal (diagonal, unit-mass) systems; use
         :func:`controllability_rank` or :func:`pbh_test` on the first-order model otherwise
-        (seed 002 Ch. III L564-L566).
+        (Bainum & Reddy 1979 Ch. III §2).
     B : (n, m) array_like
         Modal input matrix; a 1-D array is one column.
     tol : float, optional
@@ -356,7 +358,7 @@ def repeated_frequency_test(
 
     Examples
     --------
-    Seed 002 Ch. II Case 4 with ω_2 = √3 ω_c (pitch and mode 2 share κ = 3):
+    Bainum & Reddy 1979 Ch. II Case 4 with ω_2 = √3 ω_c (pitch and mode 2 share κ = 3):
 
     >>> r = repeated_frequency_test([3, 3200, 3], [[59.52, -59.52, 0], [20, 20, -12.16],
     ...                                            [20, -20, 0]])
@@ -366,14 +368,15 @@ def repeated_frequency_test(
     k = _array(stiffness, "stiffness")
     if k.ndim == 2:
         if k.shape[0] != k.shape[1] or np.any(k - np.diag(np.diag(k))):
-            raise ValueError(
-                f"stiffness: must be a 1-D array or a diagonal (modal) matrix, got "
-                f"a non-diagonal array of shape {k.shape}"
+            raise FieldError(
+                "stiffness",
+                "must be a 1-D array or a diagonal (modal) matrix, got "
+                f"a non-diagonal array of shape {k.shape}",
             )
         k = np.diag(k).copy()
     if k.ndim != 1 or k.size == 0:
-        raise ValueError(
-            f"stiffness: must be a non-empty 1-D array or a diagonal matrix, got shape {k.shape}"
+        raise FieldError(
+            "stiffness", f"must be a non-empty 1-D array or a diagonal matrix, got shape {k.shape}"
         )
     n = k.size
     B = _input_matrix(B, n, "B", "stiffness")

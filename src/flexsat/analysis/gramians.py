@@ -2,7 +2,7 @@ r"""Controllability and observability Gramians of lightly damped modal systems.
 
 Sources: Y. Kim and J. L. Junkins, "A Measure of Controllability for Actuator Placement", AIAA
 Guidance, Navigation and Control Conference, 1990 (Att. 4 of Junkins, Pollock & Rahman 1990),
-Eqs. (7), (14)–(16), (24)–(25), L1498–L1603 (the printed signs of Eq. (25) are wrong: every "−"
+Eqs. (7), (14)–(16), (24)–(25) (the printed signs of Eq. (25) are wrong: every "−"
 is a "+"). Gawronski's approximate modal Gramians: W. Gawronski, *Advanced Structural
 Dynamics and Active Control of Structures* (Springer 2004), Ch. 4–5 (Property 5.1).
 
@@ -51,7 +51,7 @@ import numpy as np
 import numpy.typing as npt
 import scipy.linalg as sla
 
-from flexsat.input_checks import require_finite, require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 from flexsat.units import FloatArray
 
 __all__ = [
@@ -78,12 +78,12 @@ _UNDAMPED_TOL = 1e-12
 def modal_parameters(omega: npt.ArrayLike, zeta: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
     w = require_nonneg(omega, "omega")
     if w.ndim != 1 or w.size == 0:
-        raise ValueError(f"omega: must be a non-empty 1-D array of rad/s, got shape {w.shape}")
+        raise FieldError("omega", f"must be a non-empty 1-D array of rad/s, got shape {w.shape}")
     z = require_nonneg(zeta, "zeta")
     if z.ndim == 0:
         z = np.full(w.size, float(z))
     if z.shape != w.shape:
-        raise ValueError(f"zeta: must be a scalar or have shape {w.shape}, got {z.shape}")
+        raise FieldError("zeta", f"must be a scalar or have shape {w.shape}, got {z.shape}")
     return w, z
 
 
@@ -94,11 +94,11 @@ def _matrix(
     if arr.ndim == 1:
         arr = arr[:, None] if rows is not None and arr.size == rows else arr[None, :]
     if arr.ndim != 2:
-        raise ValueError(f"{field}: must be a 2-D array, got shape {arr.shape}")
+        raise FieldError(field, f"must be a 2-D array, got shape {arr.shape}")
     if rows is not None and arr.shape[0] != rows:
-        raise ValueError(f"{field}: must have {rows} rows, got shape {arr.shape}")
+        raise FieldError(field, f"must have {rows} rows, got shape {arr.shape}")
     if cols is not None and arr.shape[1] != cols:
-        raise ValueError(f"{field}: must have {cols} columns, got shape {arr.shape}")
+        raise FieldError(field, f"must have {cols} columns, got shape {arr.shape}")
     return arr
 
 
@@ -108,7 +108,7 @@ def modal_inputs(B: npt.ArrayLike, n: int, field: str = "B") -> FloatArray:
     if arr.ndim == 1:
         arr = arr[:, None]
     if arr.ndim != 2 or arr.shape[0] != n:
-        raise ValueError(f"{field}: must have shape (n_modes, m) = ({n}, m), got {np.shape(B)}")
+        raise FieldError(field, f"must have shape (n_modes, m) = ({n}, m), got {np.shape(B)}")
     return arr
 
 
@@ -126,8 +126,8 @@ def modal_outputs(
         arr = require_finite(value, field)
         arr = arr[None, :] if arr.ndim == 1 else arr
         if arr.ndim != 2 or arr.shape[1] != n:
-            raise ValueError(
-                f"{field}: must have shape (p, n_modes) = (p, {n}), got {np.shape(value)}"
+            raise FieldError(
+                field, f"must have shape (p, n_modes) = (p, {n}), got {np.shape(value)}"
             )
         mats.append(arr)
     p = next(a.shape[0] for a in mats if a is not None)
@@ -154,7 +154,7 @@ def require_damped(w: FloatArray, z: FloatArray, caller: str) -> None:
 
 def _kind(kind: str) -> str:
     if kind not in KINDS:
-        raise ValueError(f"kind: must be one of {KINDS}, got {kind!r}")
+        raise FieldError("kind", f"must be one of {KINDS}, got {kind!r}")
     return kind
 
 
@@ -310,7 +310,7 @@ def modal_gramian(
     n = w.size
     Q = require_finite(Q, "Q")
     if Q.shape != (2 * n, 2 * n):
-        raise ValueError(f"Q: must have shape (2n, 2n) = ({2 * n}, {2 * n}), got {Q.shape}")
+        raise FieldError("Q", f"must have shape (2n, 2n) = ({2 * n}, {2 * n}), got {Q.shape}")
     require_damped(w, z, "modal_gramian")
     # rhs per pair: −(Q_ηη, Q_ηη̇, Q_η̇η, Q_η̇η̇)[i, j]
     rhs = -np.stack([Q[:n, :n], Q[:n, n:], Q[n:, :n], Q[n:, n:]], axis=-1)
@@ -425,7 +425,7 @@ def _system(A: npt.ArrayLike, M: npt.ArrayLike, kind: str) -> tuple[FloatArray, 
     """(A, Q) with Q = B Bᵀ (controllability, B (n, m)) or Cᵀ C (observability, C (p, n))."""
     A = require_finite(A, "A")
     if A.ndim != 2 or A.shape[0] != A.shape[1] or A.shape[0] == 0:
-        raise ValueError(f"A: must be a non-empty square matrix, got shape {A.shape}")
+        raise FieldError("A", f"must be a non-empty square matrix, got shape {A.shape}")
     n = A.shape[0]
     if kind == "controllability":
         B = _matrix(M, "B", rows=n)
@@ -449,10 +449,11 @@ def lyapunov_gramian(
     lam = np.linalg.eigvals(A)
     scale = max(float(np.abs(lam).max()), 1.0)
     if np.any(lam.real >= -_UNDAMPED_TOL * scale):
-        raise ValueError(
-            "A: not asymptotically stable (max Re λ = "
+        raise FieldError(
+            "A",
+            "not asymptotically stable (max Re λ = "
             f"{lam.real.max():.3g}); rigid-body or undamped modes have no infinite-horizon "
-            "Gramian: use finite_horizon_gramian"
+            "Gramian: use finite_horizon_gramian",
         )
     X = sla.solve_continuous_lyapunov(A if kind == "controllability" else A.T, -Q)
     return 0.5 * (X + X.T)

@@ -2,7 +2,7 @@
 
 Source: J. L. Junkins and Y. Kim, "First and Second Order Sensitivity of the Singular Value
 Decomposition", Journal of the Astronautical Sciences 38(1), 1990, Appendix, Eqs. A1-A11
-(L2255-L2325), and the same optimizer as used by B. N. Agrawal and H. Bang, "Adaptive Structures
+(Att. 5 Appendix), and the same optimizer as used by B. N. Agrawal and H. Bang, "Adaptive Structures
 for Large Precision Antennas", Acta Astronautica, 1996, Eqs. 16-28.
 
 Problem (A1-A2)::
@@ -19,7 +19,8 @@ Method, as implemented by :func:`homotopy_minimize`:
 2. **Feasibility homotopy (A5-A7).** The targets move from their values at the start to the
    goal, f_p(γ) = γ f_o + (1 − γ) f(p_start), γ = 0 → 1 (an inequality already satisfied at the
    start keeps its bound T_j).
-3. **Minimum-norm correction (A8; seed 004 Eqs. 18-20, 25, 28).** For the residual r of the
+3. **Minimum-norm correction (A8; Agrawal & Bang 1996 Eqs. 18-20, 25, 28).** For the residual
+   r of the
    active rows with Jacobian A, Δp = −W⁻¹ Aᵀ (A W⁻¹ Aᵀ)⁺ r, the W-norm-minimal step, computed
    with a pseudo-inverse (rank-deficient rows give the least-squares step). Each step is
    damped by a backtracking line search on the sum of squared scaled residuals.
@@ -27,7 +28,7 @@ Method, as implemented by :func:`homotopy_minimize`:
    corrections). On success γ advances; on failure the increment is halved and the last
    converged point restored. The feasibility phase fails when the increment falls below
    ``min_gamma_step``; the result then reports the active rows and their Jacobian (A8).
-5. **Objective homotopy (A9-A11; seed 004 Eqs. 16-17).** From the feasible point, J is
+5. **Objective homotopy (A9-A11; Agrawal & Bang 1996 Eqs. 16-17).** From the feasible point, J is
    appended as an extra row with target J_o(γ) = γ J_goal + (1 − γ) J(p_feasible), γ reset to 0.
    The largest γ that still converges gives the constrained minimum (A11); reaching γ = 1
    means the goal itself was attained. The converged J exceeds the minimum by about
@@ -46,7 +47,7 @@ from typing import Any, Literal, overload
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import require_numeric
+from flexsat.input_checks import FieldError, require_numeric
 from flexsat.units import FloatArray
 
 _EPS = np.finfo(float).eps
@@ -160,17 +161,17 @@ def _positive(
     value: Any, field: str, *, integer: bool = False, upper: float | None = None
 ) -> float:
     if isinstance(value, bool):
-        raise ValueError(f"{field}: must be a positive number, got {value!r}")
+        raise FieldError(field, f"must be a positive number, got {value!r}")
     try:
         number = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{field}: must be a positive number, got {value!r}") from None
+        raise FieldError(field, f"must be a positive number, got {value!r}") from None
     if not (np.isfinite(number) and number > 0) or (upper is not None and number > upper):
         rule = f"in (0, {upper}]" if upper is not None else "> 0 and finite"
-        raise ValueError(f"{field}: must be {rule}, got {value!r}")
+        raise FieldError(field, f"must be {rule}, got {value!r}")
     if integer:
         if number != int(number):
-            raise ValueError(f"{field}: must be an integer, got {value!r}")
+            raise FieldError(field, f"must be an integer, got {value!r}")
         return int(number)
     return number
 
@@ -183,18 +184,18 @@ def weight_factor(weight: npt.ArrayLike | None, n: int) -> npt.NDArray[np.floati
     w = _vector(weight, "weight")
     if w.ndim == 1:
         if w.shape != (n,) or np.any(w <= 0):
-            raise ValueError(f"weight: a vector weight must have {n} entries > 0, got {weight!r}")
+            raise FieldError("weight", f"a vector weight must have {n} entries > 0, got {weight!r}")
         return np.diag(np.sqrt(w))
     if w.shape != (n, n):
-        raise ValueError(
-            f"weight: must be a vector of {n} or an ({n}, {n}) matrix, got shape {w.shape}"
+        raise FieldError(
+            "weight", f"must be a vector of {n} or an ({n}, {n}) matrix, got shape {w.shape}"
         )
     if not np.allclose(w, w.T, rtol=1e-12, atol=0):
-        raise ValueError("weight: the matrix W must be symmetric")
+        raise FieldError("weight", "the matrix W must be symmetric")
     try:
         return np.linalg.cholesky(w)
     except np.linalg.LinAlgError:
-        raise ValueError("weight: the matrix W must be positive definite") from None
+        raise FieldError("weight", "the matrix W must be positive definite") from None
 
 
 #: ``J(p) -> float``
@@ -244,7 +245,7 @@ class _Problem:
             return np.zeros(0)
         out = np.atleast_1d(np.asarray(fun(p.copy()), dtype=float))
         if out.shape != (size,):
-            raise ValueError(f"{name}: must return {size} values, got shape {out.shape}")
+            raise FieldError(name, f"must return {size} values, got shape {out.shape}")
         return out
 
     # derivatives -------------------------------------------------------------------------------
@@ -263,7 +264,7 @@ class _Problem:
             return self._fd(p, 0)[0]
         g = np.asarray(self.gradient(p.copy()), dtype=float).reshape(-1)
         if g.shape != (self.n,):
-            raise ValueError(f"gradient: must return {self.n} values, got shape {g.shape}")
+            raise FieldError("gradient", f"must return {self.n} values, got shape {g.shape}")
         if not np.all(np.isfinite(g)):
             raise _Failure("non-finite gradient")
         return g
@@ -277,8 +278,8 @@ class _Problem:
             return self._fd(p, which)
         jac = np.asarray(fun(p.copy()), dtype=float).reshape(size, -1)
         if jac.shape != (size, self.n):
-            raise ValueError(
-                f"{name}: must return a ({size}, {self.n}) Jacobian, got shape {jac.shape}"
+            raise FieldError(
+                name, f"must return a ({size}, {self.n}) Jacobian, got shape {jac.shape}"
             )
         if not np.all(np.isfinite(jac)):
             raise _Failure(f"non-finite {name}")
@@ -316,7 +317,7 @@ def homotopy_minimize(
     max_evaluations: int = 100_000,
 ) -> HomotopyResult:
     """Minimise J(p) with equality and inequality constraints by homotopic minimum-norm
-    differential correction (Att. 5 Appendix Eqs. A1-A11; seed 004 Eqs. 16-28).
+    differential correction (Att. 5 Appendix Eqs. A1-A11; Agrawal & Bang 1996 Eqs. 16-28).
 
     Parameters
     ----------
@@ -380,10 +381,10 @@ def homotopy_minimize(
     """
     p = _vector(p0, "p0").reshape(-1)
     if p.size == 0:
-        raise ValueError("p0: needs at least one parameter")
+        raise FieldError("p0", "needs at least one parameter")
     n = p.size
     if not callable(objective):
-        raise ValueError("objective: must be callable")
+        raise FieldError("objective", "must be callable")
     for name, fun in (
         ("gradient", gradient),
         ("equality", equality),
@@ -392,11 +393,11 @@ def homotopy_minimize(
         ("inequality_jacobian", inequality_jacobian),
     ):
         if fun is not None and not callable(fun):
-            raise ValueError(f"{name}: must be callable or None")
+            raise FieldError(name, "must be callable or None")
     if (equality is None) != (equality_target is None):
-        raise ValueError("equality_target: give it exactly when equality is given")
+        raise FieldError("equality_target", "give it exactly when equality is given")
     if (inequality is None) != (inequality_bound is None):
-        raise ValueError("inequality_bound: give it exactly when inequality is given")
+        raise FieldError("inequality_bound", "give it exactly when inequality is given")
     # equality_target is given exactly when equality is (checked above)
     f_o = (
         np.zeros(0)
@@ -405,15 +406,15 @@ def homotopy_minimize(
     )
     m = f_o.size
     if equality is not None and m == 0:
-        raise ValueError("equality_target: must not be empty")
+        raise FieldError("equality_target", "must not be empty")
     if inequality is not None:
         assert inequality_bound is not None  # given with inequality (checked above)
         bound = _vector(inequality_bound, "inequality_bound")
         q = np.atleast_1d(np.asarray(inequality(p.copy()), dtype=float)).size
         T = np.broadcast_to(bound, (q,)).astype(float) if bound.ndim == 0 else bound.reshape(-1)
         if T.size != q:
-            raise ValueError(
-                f"inequality_bound: must have {q} entries (one per inequality), got {T.size}"
+            raise FieldError(
+                "inequality_bound", f"must have {q} entries (one per inequality), got {T.size}"
             )
     else:
         T = np.zeros(0)
@@ -447,7 +448,7 @@ def homotopy_minimize(
     try:
         J0, fe0, gi0 = prob.values(p)
     except _Failure:
-        raise ValueError("objective: non-finite value at p0") from None
+        raise FieldError("objective", "non-finite value at p0") from None
     # validate user derivatives at the start (shape errors surface here, not mid-run)
     for name, check in (
         ("gradient", prob.grad),
@@ -458,7 +459,7 @@ def homotopy_minimize(
             check(p)
         except _Failure:
             if name != "gradient":  # a gradient may be undefined at the start only
-                raise ValueError(f"{name}: non-finite value at p0") from None
+                raise FieldError(name, "non-finite value at p0") from None
 
     se = np.maximum(1.0, np.abs(f_o))
     sb = np.maximum(1.0, np.abs(T))

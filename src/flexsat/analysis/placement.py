@@ -4,18 +4,18 @@ Measures
 --------
 * :func:`modal_controllability`, :func:`hamdan_nayfeh`: Hamdan & Nayfeh's modal
   controllability, the angle between the left eigenvector :math:`q_i` and each input column
-  :math:`b_j` and the gross measure :math:`\rho_i` (Att. 4 Eqs. 2–3, L1460–L1484; Y. Kim
+  :math:`b_j` and the gross measure :math:`\rho_i` (Att. 4 Eqs. 2–3; Y. Kim
   and J. L. Junkins, "A Measure of Controllability for Actuator Placement", AIAA GNC 1990).
 * :func:`modal_cost`: Skelton's modal cost analysis, :math:`V = \mathrm{tr}(Q C X C^T)` split
-  into component costs :math:`V_i` (Att. 4 Eqs. 4–7, 20–27, L1498–L1620).
-* :func:`kim_junkins_index`: :math:`\alpha = \sum_i (V_i/V) \rho_i^2` (Att. 4 Eq. 28, L1623),
+  into component costs :math:`V_i` (Att. 4 Eqs. 4–7, 20–27).
+* :func:`kim_junkins_index`: :math:`\alpha = \sum_i (V_i/V) \rho_i^2` (Att. 4 Eq. 28),
   with the analytic modal Gramian of Att. 4 Eq. (25) in corrected signs (the paper prints
   "−" where "+" holds).
 * :func:`gawronski_index`: Gawronski's H2 (or Hankel) placement index per actuator and mode,
   :math:`\sigma_{ki} = w_{ki} \|G_{ki}\| / \|G\|` (W. Gawronski, *Advanced Structural Dynamics
   and Active Control of Structures*, 2004, §5.3 and Ch. 8).
 * :func:`h2_placement`, :func:`h2_actuator_ranking`: the H2 ranking of the EPS slew
-  study c. 1989 (NASA Langley Earth Pointing Satellite report section), Eqs. (1)–(8) (L188–L235,
+  study c. 1989 (NASA Langley Earth Pointing Satellite report section), Eqs. (1)–(8) (as
   reconstructed by the developers from the text [RECON]), made to work with rigid-body modes.
   The paper's EPS study (its candidates, outputs and published top 5) is
   :mod:`flexsat.cases.eps_placement`.
@@ -54,7 +54,7 @@ from flexsat.analysis.gramians import (
     modal_state_matrices,
     require_damped,
 )
-from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
@@ -146,7 +146,7 @@ def modal_controllability(
     formula. The :math:`\sqrt{1+\omega^2}` mixes η and η̇, so ρ depends on the time unit
     (here s): the measures are not invariant under non-orthogonal scaling, as Att. 4 warns.
 
-    ``form="second_order"`` (Hamdan & Nayfeh's second-order version, to which Att. 4 L1560
+    ``form="second_order"`` (Hamdan & Nayfeh's second-order version, to which Att. 4 Eq. 15
     refers): the left eigenvectors of :math:`\ddot\eta + \Omega^2 \eta = \bar D u` are the unit
     vectors, :math:`\cos\theta_{ij} = |\bar D_{ij}| / \|\bar D_{:j}\|`, :math:`\rho_i =
     \|\bar D_{i:}\|`.
@@ -162,11 +162,12 @@ def modal_controllability(
     w, z = modal_parameters(omega, zeta)
     Bm = modal_inputs(B, w.size)
     if form not in _FORMS:
-        raise ValueError(f"form: must be one of {_FORMS}, got {form!r}")
+        raise FieldError("form", f"must be one of {_FORMS}, got {form!r}")
     if np.any(z >= 1):
-        raise ValueError(
-            "zeta: the closed form needs underdamped modes (ζ < 1); use hamdan_nayfeh(A, B) "
-            f"for others, got max ζ = {z.max():.3g}"
+        raise FieldError(
+            "zeta",
+            "the closed form needs underdamped modes (ζ < 1); use hamdan_nayfeh(A, B) "
+            f"for others, got max ζ = {z.max():.3g}",
         )
     lam = -z * w + 1j * w * np.sqrt(1 - z**2)
     qnorm = np.sqrt(1 + w**2) if form == "first_order" else np.ones_like(w)
@@ -190,11 +191,11 @@ def hamdan_nayfeh(A: npt.ArrayLike, B: npt.ArrayLike) -> ModalControllability:
     """
     A = require_finite(A, "A")
     if A.ndim != 2 or A.shape[0] != A.shape[1] or A.shape[0] == 0:
-        raise ValueError(f"A: must be a non-empty square matrix, got shape {A.shape}")
+        raise FieldError("A", f"must be a non-empty square matrix, got shape {A.shape}")
     B = require_finite(B, "B")
     B = B[:, None] if B.ndim == 1 else B
     if B.ndim != 2 or B.shape[0] != A.shape[0]:
-        raise ValueError(f"B: must have shape ({A.shape[0]}, m), got {B.shape}")
+        raise FieldError("B", f"must have shape ({A.shape[0]}, m), got {B.shape}")
     lam, vl = sla.eig(A, left=True, right=False)
     order = np.lexsort((lam.imag, np.abs(lam.imag)))
     lam, q = lam[order], np.conj(vl[:, order])  # Aᵀ q = λ q
@@ -249,11 +250,11 @@ def _weight(Q: float | npt.ArrayLike | None, p: int) -> FloatArray:
     if Q.ndim == 1:
         Q = np.diag(Q)
     if Q.shape != (p, p):
-        raise ValueError(f"Q: must be a scalar, (p,) or (p, p) with p = {p}, got {Q.shape}")
+        raise FieldError("Q", f"must be a scalar, (p,) or (p, p) with p = {p}, got {Q.shape}")
     if np.max(np.abs(Q - Q.T), initial=0.0) > 1e-12 * max(np.abs(Q).max(), 1.0):
-        raise ValueError("Q: must be symmetric")
+        raise FieldError("Q", "must be symmetric")
     if np.linalg.eigvalsh(0.5 * (Q + Q.T)).min() < -1e-12 * max(np.abs(Q).max(), 1.0):
-        raise ValueError("Q: must be positive semi-definite")
+        raise FieldError("Q", "must be positive semi-definite")
     return Q
 
 
@@ -433,7 +434,7 @@ def gawronski_index(
     Cq, Cv = modal_outputs(Cq, Cv, n)
     require_damped(w, z, "gawronski_index")
     if norm not in ("h2", "hankel"):
-        raise ValueError(f"norm: must be 'h2' or 'hankel', got {norm!r}")
+        raise FieldError("norm", f"must be 'h2' or 'hankel', got {norm!r}")
     c = np.sqrt(np.sum(Cq**2, axis=0) / w**2 + np.sum(Cv**2, axis=0))
     if norm == "h2":
         G = np.abs(Bm) * (c / (2 * np.sqrt(z * w)))[:, None]
@@ -448,8 +449,8 @@ def gawronski_index(
         try:
             wts = np.broadcast_to(wts, G.shape)
         except ValueError:
-            raise ValueError(
-                f"weights: must broadcast to (n_modes, m) = {G.shape}, got {np.shape(weights)}"
+            raise FieldError(
+                "weights", f"must broadcast to (n_modes, m) = {G.shape}, got {np.shape(weights)}"
             ) from None
         G = G * wts
     sigma = G / total
@@ -462,10 +463,10 @@ def gawronski_index(
 
 
 # ------------------------------------------------------------------------------------------------
-# Seed 003 H2 placement, Eqs. (1)–(8)
+# EPS slew study c. 1989 H2 placement, Eqs. (1)–(8)
 @dataclass(frozen=True)
 class H2Placement:
-    r"""Solution of the H2 placement problem of seed 003 Eqs. (1)–(8).
+    r"""Solution of the H2 placement problem of EPS slew study c. 1989 Eqs. (1)–(8).
 
     Attributes
     ----------
@@ -504,7 +505,7 @@ class H2Placement:
 def h2_placement(
     A: npt.ArrayLike, B: npt.ArrayLike, b: npt.ArrayLike, C: npt.ArrayLike, gamma: float = 1.0
 ) -> H2Placement:
-    r"""Seed 003 Eqs. (1)–(8): full-information H2 control and per-actuator energies.
+    r"""EPS slew study c. 1989, Eqs. (1)–(8): full-information H2 control and per-actuator energies.
 
     .. math::
 
@@ -541,7 +542,7 @@ def h2_placement(
     """
     A = require_finite(A, "A")
     if A.ndim != 2 or A.shape[0] != A.shape[1] or A.shape[0] == 0:
-        raise ValueError(f"A: must be a non-empty square matrix, got shape {A.shape}")
+        raise FieldError("A", f"must be a non-empty square matrix, got shape {A.shape}")
     N = A.shape[0]
     B = require_finite(B, "B")
     B = B[:, None] if B.ndim == 1 else B
@@ -551,15 +552,16 @@ def h2_placement(
     C = C[None, :] if C.ndim == 1 else C
     for name, M, ax in (("B", B, 0), ("b", b, 0), ("C", C, 1)):
         if M.ndim != 2 or M.shape[ax] != N:
-            raise ValueError(
-                f"{name}: must have {N} {'rows' if ax == 0 else 'columns'}, got shape {M.shape}"
+            raise FieldError(
+                name, f"must have {N} {'rows' if ax == 0 else 'columns'}, got shape {M.shape}"
             )
     g = float(require_positive(gamma, "gamma"))
     try:
         X = sla.solve_continuous_are(A, B, g**2 * C.T @ C, np.eye(B.shape[1]))
     except (np.linalg.LinAlgError, ValueError) as exc:
         raise ValueError(
-            "A, B, C: the H2 Riccati equation (seed 003 Eq. 4) has no stabilising solution: "
+            "A, B, C: the H2 Riccati equation (EPS slew study c. 1989 Eq. 4) has no "
+            "stabilising solution: "
             "(A, B) must be stabilisable and (A, C) detectable. With rigid-body modes the "
             "candidates must move and the outputs see every rigid motion, or project the "
             f"rigid modes out (rigid='project'). ({exc})"
@@ -593,7 +595,7 @@ def h2_placement(
 
 @dataclass(frozen=True)
 class H2Ranking:
-    """Candidate actuators ranked by the seed 003 Eq. (8) energy, largest first.
+    """Candidate actuators ranked by the EPS slew study c. 1989 Eq. (8) energy, largest first.
 
     Attributes
     ----------
@@ -632,12 +634,12 @@ def _vectors(
     """Labels and columns (n, k) from a mapping label -> vector (n,) or an (n, k) array."""
     if isinstance(items, Mapping):
         if not items:
-            raise ValueError(f"{field_name}: must not be empty")
+            raise FieldError(field_name, "must not be empty")
         labels = list(items)
         cols = [require_finite(items[k], f"{field_name}[{k!r}]") for k in labels]
         for k, v in zip(labels, cols):
             if v.shape != (n,):
-                raise ValueError(f"{field_name}[{k!r}]: must have shape ({n},), got {v.shape}")
+                raise FieldError(f"{field_name}[{k!r}]", f"must have shape ({n},), got {v.shape}")
         return labels, np.column_stack(cols)
     arr = modal_inputs(items, n, field_name)
     return list(range(arr.shape[1])), arr
@@ -655,7 +657,7 @@ def h2_actuator_ranking(
     rigid_frequency: float | None = None,
 ) -> H2Ranking:
     r"""Rank candidate actuators of a :class:`~flexsat.structures.modal_model.ModalModel` by
-    seed 003 Eqs. (1)–(8) (:func:`h2_placement` with every candidate in B at once).
+    EPS slew study c. 1989 Eqs. (1)–(8) (:func:`h2_placement` with every candidate in B at once).
 
     Rigid-body modes (ω <= ``rigid_frequency``, default ``ModalModel.RIGID_FREQUENCY``):
 
@@ -663,7 +665,8 @@ def h2_actuator_ranking(
       posed on the elastic modal states only. The mass-normalised elastic modes are
       M-orthogonal to the rigid ones, so the elastic subsystem is decoupled from the rigid one
       and this is exact for the vibration, not a truncation. Why: the ranking is "on modal
-      energy" (L248) with "only the modal state equations" (L202), and the rigid attitude is
+      energy" ("Actuator Placement") with "only the modal state equations" ("Actuator
+      Placement"), and the rigid attitude is
       the torquers' task (the slew and perturbation controllers). With the rigid modes in the
       infinite-horizon cost, an impulse of the CG torquers leaves the body spinning, the
       outputs (node displacements) grow without bound unless the *force* candidates stop the
@@ -701,9 +704,9 @@ def h2_actuator_ranking(
     from flexsat.structures.modal_model import RIGID_FREQUENCY
 
     if rigid not in RIGID_TREATMENTS:
-        raise ValueError(f"rigid: must be one of {RIGID_TREATMENTS}, got {rigid!r}")
+        raise FieldError("rigid", f"must be one of {RIGID_TREATMENTS}, got {rigid!r}")
     if measure not in ("energy", "printed"):
-        raise ValueError(f"measure: must be 'energy' or 'printed', got {measure!r}")
+        raise FieldError("measure", f"must be 'energy' or 'printed', got {measure!r}")
     n = model.n_modes
     labels, Bm = _vectors(actuators, n, "actuators")
     bd = modal_inputs(disturbance, n, "disturbance")
@@ -712,7 +715,7 @@ def h2_actuator_ranking(
     is_rigid = model.frequencies <= wr
     keep = ~is_rigid if rigid == "project" else np.ones(n, dtype=bool)
     if not keep.any():
-        raise ValueError("model: no elastic mode left after projecting out the rigid modes")
+        raise FieldError("model", "no elastic mode left after projecting out the rigid modes")
     w = np.where(is_rigid, 0.0, model.frequencies)[keep]
     zeta = np.where(is_rigid, 0.0, model.damping)[keep]
     A, Bz, Cz = modal_state_matrices(w, zeta, Bm[keep], Cq[:, keep], Cv[:, keep])
@@ -761,7 +764,7 @@ def actuator_candidates(
     """
     kinds = (kind,) if isinstance(kind, str) else tuple(kind)
     if not kinds or any(k not in _KIND_MARK for k in kinds) or len(set(kinds)) != len(kinds):
-        raise ValueError(f"kind: must be 'force', 'torque' or both (each once), got {kind!r}")
+        raise FieldError("kind", f"must be 'force', 'torque' or both (each once), got {kind!r}")
     label = label or (lambda kind, node, axis: f"{node}{_KIND_MARK[kind]}{str(axis).upper()}")
     out: dict[str, FloatArray] = {}
     origin: dict[str, str] = {}
@@ -771,9 +774,10 @@ def actuator_candidates(
             for axis in axes:
                 key = label(k, node, axis)
                 if key in out:
-                    raise ValueError(
-                        f"label: the {origin[key]} and the {k} {node}{axis} are both labelled "
-                        f"{key!r}; give labels that tell them apart"
+                    raise FieldError(
+                        "label",
+                        f"the {origin[key]} and the {k} {node}{axis} are both labelled "
+                        f"{key!r}; give labels that tell them apart",
                     )
                 out[key], origin[key] = fn(node, axis), f"{k} {node}{axis}"
     return out
@@ -789,7 +793,7 @@ def kim_junkins_score(
     """Score function for the searches: selection (labels of ``actuators``) -> α of
     :func:`kim_junkins_index` on ``model`` (its frequencies and damping)."""
     if not isinstance(actuators, Mapping) or not actuators:
-        raise ValueError("actuators: must be a non-empty mapping label -> modal input vector")
+        raise FieldError("actuators", "must be a non-empty mapping label -> modal input vector")
     w, z = model.frequencies, model.damping
     cols: dict[Hashable, FloatArray] = {
         k: require_finite(v, f"actuators[{k!r}]") for k, v in actuators.items()
@@ -834,17 +838,17 @@ def _search_inputs(candidates: Sequence[Hashable], size: int) -> tuple[list[Hash
     try:
         cands = list(candidates)
     except TypeError:
-        raise ValueError(f"candidates: must be a sequence, got {candidates!r}") from None
+        raise FieldError("candidates", f"must be a sequence, got {candidates!r}") from None
     if not cands:
-        raise ValueError("candidates: must not be empty")
+        raise FieldError("candidates", "must not be empty")
     try:
         if len(set(cands)) != len(cands):
-            raise ValueError("candidates: must be distinct")
+            raise FieldError("candidates", "must be distinct")
     except TypeError:
-        raise ValueError("candidates: must be hashable (labels)") from None
+        raise FieldError("candidates", "must be hashable (labels)") from None
     k = require_count(size, "size")
     if k > len(cands):
-        raise ValueError(f"size: must be <= the number of candidates ({len(cands)}), got {k}")
+        raise FieldError("size", f"must be <= the number of candidates ({len(cands)}), got {k}")
     return cands, k
 
 
@@ -853,7 +857,7 @@ class _Scorer:
 
     def __init__(self, cands: list[Hashable], score: Score):
         if not callable(score):
-            raise ValueError(f"score: must be callable, got {score!r}")
+            raise FieldError("score", f"must be callable, got {score!r}")
         self.cands, self.score = cands, score
         self.cache: dict[tuple[int, ...], float] = {}
 
@@ -864,9 +868,9 @@ class _Scorer:
             try:
                 value = float(value)
             except (TypeError, ValueError):
-                raise ValueError(f"score: must return a number, got {value!r}") from None
+                raise FieldError("score", f"must return a number, got {value!r}") from None
             if np.isnan(value):
-                raise ValueError(f"score: returned NaN for {tuple(self.cands[i] for i in key)}")
+                raise FieldError("score", f"returned NaN for {tuple(self.cands[i] for i in key)}")
             self.cache[key] = value
         return self.cache[key]
 
@@ -892,9 +896,10 @@ def exhaustive(
     limit = require_count(max_sets, "max_sets")
     count = math.comb(len(cands), k)
     if count > limit:
-        raise ValueError(
-            f"exhaustive: C({len(cands)}, {k}) = {count:,} candidate sets exceeds max_sets = "
-            f"{limit:,}; refusing to enumerate. Use greedy() or exchange() for large problems"
+        raise FieldError(
+            "exhaustive",
+            f"C({len(cands)}, {k}) = {count:,} candidate sets exceeds max_sets = "
+            f"{limit:,}; refusing to enumerate. Use greedy() or exchange() for large problems",
         )
     f = _Scorer(cands, score)
     keep = require_count(keep, "keep")
@@ -930,7 +935,7 @@ def greedy(
     f = _Scorer(cands, score)
     chosen = _positions(cands, start, "start")
     if len(chosen) > k:
-        raise ValueError(f"start: has {len(chosen)} candidates, more than size = {k}")
+        raise FieldError("start", f"has {len(chosen)} candidates, more than size = {k}")
     chosen, path = _greedy(f, len(cands), k, chosen)
     return SearchResult(
         selection=f.labels(chosen),
@@ -965,9 +970,9 @@ def _positions(cands: list[Hashable], items: Sequence[Hashable], field_name: str
     out = []
     for c in items:
         if c not in index:
-            raise ValueError(f"{field_name}: {c!r} is not a candidate")
+            raise FieldError(field_name, f"{c!r} is not a candidate")
         if index[c] in out:
-            raise ValueError(f"{field_name}: {c!r} repeated")
+            raise FieldError(field_name, f"{c!r} repeated")
         out.append(index[c])
     return out
 
@@ -993,7 +998,7 @@ def exchange(
     else:
         chosen = _positions(cands, start, "start")
         if len(chosen) != k:
-            raise ValueError(f"start: must have size = {k} candidates, got {len(chosen)}")
+            raise FieldError("start", f"must have size = {k} candidates, got {len(chosen)}")
     rounds = require_count(max_rounds, "max_rounds")
     tol = float(require_finite(tol, "tol"))
     current = f(chosen)

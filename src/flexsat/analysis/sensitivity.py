@@ -1,7 +1,7 @@
 """Eigenvalue, eigenvector and singular-value sensitivities, first and second order.
 
 Source: Junkins & Kim, *First and Second Order Sensitivity of the Singular Value Decomposition*,
-J. Astronautical Sciences 38(1), 1990 (Att. 5 of Junkins, Pollock & Rahman 1990), L1844-L2360.
+J. Astronautical Sciences 38(1), 1990 (Att. 5 of Junkins, Pollock & Rahman 1990).
 
 Three groups of functions, all vectorised over the parameters p_1 … p_P:
 
@@ -38,6 +38,7 @@ import numpy as np
 import numpy.typing as npt
 import scipy.linalg as sla
 
+from flexsat.input_checks import FieldError
 from flexsat.units import FloatArray
 
 _EPS = np.finfo(float).eps
@@ -62,26 +63,26 @@ def _refuse_complex(value: npt.ArrayLike, field: str, allow_complex: bool) -> No
     except (TypeError, ValueError):
         return
     if np.iscomplexobj(probe) and np.any(probe.imag):
-        raise ValueError(f"{field}: must be real (the symmetric modal problem), got complex values")
+        raise FieldError(field, "must be real (the symmetric modal problem), got complex values")
 
 
 def _matrix(
     value: npt.ArrayLike, field: str, *, square: bool = True, allow_complex: bool = True
 ) -> npt.NDArray[Any]:
     if isinstance(value, (str, bytes)):
-        raise ValueError(f"{field}: must be a numeric matrix, got the string {value!r}")
+        raise FieldError(field, f"must be a numeric matrix, got the string {value!r}")
     _refuse_complex(value, field, allow_complex)
     try:
         arr = np.array(value, dtype=complex if allow_complex else float)
     except (TypeError, ValueError):
         kind = "numeric" if allow_complex else "real"
-        raise ValueError(f"{field}: must be a {kind} matrix, got {type(value).__name__}") from None
+        raise FieldError(field, f"must be a {kind} matrix, got {type(value).__name__}") from None
     if arr.ndim != 2 or arr.size == 0:
-        raise ValueError(f"{field}: must be a non-empty 2-D matrix, got shape {arr.shape}")
+        raise FieldError(field, f"must be a non-empty 2-D matrix, got shape {arr.shape}")
     if square and arr.shape[0] != arr.shape[1]:
-        raise ValueError(f"{field}: must be square, got shape {arr.shape}")
+        raise FieldError(field, f"must be square, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{field}: must be finite (no NaN or inf)")
+        raise FieldError(field, "must be finite (no NaN or inf)")
     if allow_complex and not np.any(arr.imag):
         arr = arr.real.copy()
     return arr
@@ -98,28 +99,28 @@ def _stack(
 ) -> npt.NDArray[Any]:
     """A derivative stack of shape (P, *shape), or (P, P, *shape) when ``second``."""
     if isinstance(value, (str, bytes)):
-        raise ValueError(f"{field}: must be a numeric array, got the string {value!r}")
+        raise FieldError(field, f"must be a numeric array, got the string {value!r}")
     _refuse_complex(value, field, allow_complex)
     try:
         arr = np.array(value, dtype=complex if allow_complex else float)
     except (TypeError, ValueError):
-        raise ValueError(f"{field}: must be a numeric array, got {type(value).__name__}") from None
+        raise FieldError(field, f"must be a numeric array, got {type(value).__name__}") from None
     lead = 2 if second else 1
     if arr.shape == shape and not second:
         arr = arr[None]
     if arr.ndim != len(shape) + lead or arr.shape[lead:] != shape:
         want = ("(P, P, " if second else "(P, ") + ", ".join(map(str, shape)) + ")"
-        raise ValueError(f"{field}: must have shape {want}, got {arr.shape}")
+        raise FieldError(field, f"must have shape {want}, got {arr.shape}")
     if second and arr.shape[0] != arr.shape[1]:
-        raise ValueError(f"{field}: the two parameter axes must agree, got shape {arr.shape}")
+        raise FieldError(field, f"the two parameter axes must agree, got shape {arr.shape}")
     if n_params is not None and arr.shape[0] != n_params:
-        raise ValueError(
-            f"{field}: expected {n_params} parameters along the first axis, got {arr.shape[0]}"
+        raise FieldError(
+            field, f"expected {n_params} parameters along the first axis, got {arr.shape[0]}"
         )
     if arr.shape[0] == 0:
-        raise ValueError(f"{field}: needs at least one parameter, got shape {arr.shape}")
+        raise FieldError(field, f"needs at least one parameter, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{field}: must be finite (no NaN or inf)")
+        raise FieldError(field, "must be finite (no NaN or inf)")
     if allow_complex and not np.any(arr.imag):
         arr = arr.real.copy()
     return arr
@@ -127,7 +128,7 @@ def _stack(
 
 def _order(order: object) -> int:
     if isinstance(order, bool) or order not in (1, 2):
-        raise ValueError(f"order: must be 1 or 2, got {order!r}")
+        raise FieldError("order", f"must be 1 or 2, got {order!r}")
     return int(order)
 
 
@@ -135,9 +136,9 @@ def _gap_rtol(value: Any) -> float:
     try:
         value = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"gap_rtol: must be a number, got {value!r}") from None
+        raise FieldError("gap_rtol", f"must be a number, got {value!r}") from None
     if not (np.isfinite(value) and value >= 0):
-        raise ValueError(f"gap_rtol: must be finite and >= 0, got {value!r}")
+        raise FieldError("gap_rtol", f"must be finite and >= 0, got {value!r}")
     return value
 
 
@@ -162,11 +163,12 @@ def _check_distinct(
     if hit.size:
         i, j = int(rows[hit[0, 0]]), int(hit[0, 1])
         i, j = min(i, j), max(i, j)
-        raise ValueError(
-            f"{what}: {what[:-1] if what.endswith('s') else what} {i} and {j} are repeated "
+        raise FieldError(
+            what,
+            f"{what[:-1] if what.endswith('s') else what} {i} and {j} are repeated "
             f"({values[i]:.6g} and {values[j]:.6g}, gap {abs(values[i] - values[j]):.3g} <= "
             f"{tol:.3g} = gap_rtol x scale); their derivatives are undefined (the formulas divide "
-            f"by the gap)"
+            f"by the gap)",
         )
 
 
@@ -215,9 +217,9 @@ def _selection(value: npt.ArrayLike | None, count: int, field: str, what: str) -
         return np.arange(count)
     sel = np.atleast_1d(np.asarray(value))
     if sel.dtype.kind not in "iu" or sel.ndim != 1 or sel.size == 0:
-        raise ValueError(f"{field}: must be {what}, got {value!r}")
+        raise FieldError(field, f"must be {what}, got {value!r}")
     if np.any(sel < 0) or np.any(sel >= count):
-        raise ValueError(f"{field}: must lie in 0 … {count - 1}, got {value!r}")
+        raise FieldError(field, f"must lie in 0 … {count - 1}, got {value!r}")
     return sel
 
 
@@ -254,7 +256,7 @@ def eigensolve(
     n = A.shape[0]
     B = np.eye(n) if B is None else _matrix(B, "B")
     if B.shape != A.shape:
-        raise ValueError(f"B: must have the shape of A {A.shape}, got {B.shape}")
+        raise FieldError("B", f"must have the shape of A {A.shape}, got {B.shape}")
     return _eigensolve(A, B, _gap_rtol(gap_rtol))
 
 
@@ -263,7 +265,7 @@ def _eigensolve(
 ) -> tuple[ComplexArray, ComplexArray, ComplexArray]:
     n = A.shape[0]
     if np.linalg.cond(B) > 1.0 / (n * _EPS):
-        raise ValueError("B: must be non-singular (a singular B gives infinite eigenvalues)")
+        raise FieldError("B", "must be non-singular (a singular B gives infinite eigenvalues)")
     lam, phi = sla.eig(A, B)
     scale = max(float(np.abs(lam).max()), float(np.finfo(float).tiny))
     _check_distinct(lam, scale, gap_rtol, "eigenvalues")
@@ -272,9 +274,10 @@ def _eigensolve(
     bad = np.abs(norm2) <= 1e3 * _EPS * size
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
-        raise ValueError(
-            f"eigenvalues: eigenvector {i} (λ = {lam[i]:.6g}) has φᵀBφ ≈ 0, so the "
-            "plain-transpose normalisation φᵀBφ = 1 of Att. 5 Eq. 41 is impossible"
+        raise FieldError(
+            "eigenvalues",
+            f"eigenvector {i} (λ = {lam[i]:.6g}) has φᵀBφ ≈ 0, so the "
+            "plain-transpose normalisation φᵀBφ = 1 of Att. 5 Eq. 41 is impossible",
         )
     phi = phi / np.sqrt(norm2)
     psi = np.linalg.inv(B @ phi).T  # Ψᵀ B Φ = I
@@ -344,12 +347,12 @@ def eig_derivatives(
     n = A.shape[0]
     B = np.eye(n) if B is None else _matrix(B, "B")
     if B.shape != A.shape:
-        raise ValueError(f"B: must have the shape of A {A.shape}, got {B.shape}")
+        raise FieldError("B", f"must have the shape of A {A.shape}, got {B.shape}")
     dA = _stack(dA, "dA", (n, n))
     P = dA.shape[0]
     dB = None if dB is None else _stack(dB, "dB", (n, n), P)
     if order == 1 and (d2A is not None or d2B is not None):
-        raise ValueError("d2A: second derivatives are used only with order=2")
+        raise FieldError("d2A", "second derivatives are used only with order=2")
     d2A = None if d2A is None else _stack(d2A, "d2A", (n, n), P, second=True)
     d2B = None if d2B is None else _stack(d2B, "d2B", (n, n), P, second=True)
     lam, phi, psi = _eigensolve(A, B, _gap_rtol(gap_rtol))
@@ -507,10 +510,10 @@ def modal_derivatives(
     n = K.shape[0]
     M = _matrix(M, "M", allow_complex=False)
     if M.shape != K.shape:
-        raise ValueError(f"M: must have the shape of K {K.shape}, got {M.shape}")
+        raise FieldError("M", f"must have the shape of K {K.shape}, got {M.shape}")
     for name, mat in (("K", K), ("M", M)):
         if not np.allclose(mat, mat.T, rtol=1e-10, atol=1e-12 * np.abs(mat).max()):
-            raise ValueError(f"{name}: must be symmetric")
+            raise FieldError(name, "must be symmetric")
     dK = _stack(dK, "dK", (n, n), allow_complex=False)
     P = dK.shape[0]
     dM = np.zeros_like(dK) if dM is None else _stack(dM, "dM", (n, n), P, allow_complex=False)
@@ -518,7 +521,7 @@ def modal_derivatives(
     try:
         lam_all, phi_all = sla.eigh(K, M)
     except np.linalg.LinAlgError:
-        raise ValueError("M: must be positive definite") from None
+        raise FieldError("M", "must be positive definite") from None
     sel = _selection(modes, n, "modes", "mode numbers (integers)")
     scale = max(float(np.abs(lam_all).max()), float(np.finfo(float).tiny))
     _check_distinct(lam_all, scale, gap_rtol, "eigenvalues", select=sel)
@@ -630,7 +633,7 @@ def svd_derivatives(
     dPhi = _stack(dPhi, "dPhi", (m, n))
     P = dPhi.shape[0]
     if order == 1 and d2Phi is not None:
-        raise ValueError("d2Phi: second derivatives are used only with order=2")
+        raise FieldError("d2Phi", "second derivatives are used only with order=2")
     d2Phi = None if d2Phi is None else _stack(d2Phi, "d2Phi", (m, n), P, second=True)
     gap_rtol = _gap_rtol(gap_rtol)
     U, sig, Vh = np.linalg.svd(Phi, full_matrices=True)
@@ -711,8 +714,8 @@ def condition_number_derivatives(
     Phi = _matrix(Phi, "Phi", square=False)
     last = min(Phi.shape) - 1
     if last == 0:
-        raise ValueError(
-            f"Phi: a condition number needs at least 2 singular values, got shape {Phi.shape}"
+        raise FieldError(
+            "Phi", f"a condition number needs at least 2 singular values, got shape {Phi.shape}"
         )
     d = svd_derivatives(Phi, dPhi, d2Phi, order=order, indices=[0, last], gap_rtol=gap_rtol)
     return _kappa_from_svd(d, order)
@@ -768,7 +771,7 @@ def eigenvector_condition_derivatives(
     eig = eig_derivatives(A, dA, B, dB, d2A, d2B, order=order, gap_rtol=gap_rtol)
     n = eig.right.shape[0]
     if n < 2:
-        raise ValueError("A: a condition number needs n >= 2")
+        raise FieldError("A", "a condition number needs n >= 2")
     svd = svd_derivatives(
         eig.right,
         eig.right_gradient,

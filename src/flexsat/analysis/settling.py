@@ -15,10 +15,12 @@ value"), read on the sampled response: a band crossed between two samples is not
 
 The band is absolute (rad, m, ...) by default; ``relative_to_peak`` makes it a fraction of the
 signal's largest magnitude over the run (the 10 % settling of the tip error and the rotation in
-the PPF study on the Agrawal-Bang structure, :mod:`flexsat.scenarios.ppf`, seed 004, which
+the PPF study on the Agrawal-Bang structure,
+:mod:`flexsat.scenarios.ppf`, Agrawal & Bang 1996, which
 publishes no band). Several signals settle together when each is inside its own band (the
-tether retrieval of seed 000 Att. 12: "λ and θ reach their final values in nearly two orbits",
-L4401, read as pitch within 5° and length within 2 % of its change; :mod:`flexsat.cases.tether`).
+tether retrieval of Junkins, Pollock & Rahman 1990 Att. 12: "λ and θ reach their final values in
+nearly two orbits", Figs. 2-3, read as pitch within 5° and length within 2 % of its
+change; :mod:`flexsat.cases.tether`).
 
 "Not settled" is NaN in arrays (a batch keeps its float dtype) and None at the JSON/report
 boundary (:func:`reported`), one way each.
@@ -32,6 +34,7 @@ from typing import SupportsFloat
 import numpy as np
 import numpy.typing as npt
 
+from flexsat.input_checks import FieldError
 from flexsat.units import FloatArray
 
 
@@ -67,13 +70,13 @@ def settling_time(
     signals = error if isinstance(error, tuple) else (error,)
     bands = band if isinstance(band, tuple) else (band,) * len(signals)
     if len(bands) != len(signals):
-        raise ValueError(f"band: one per error signal ({len(signals)}), got {len(bands)}")
+        raise FieldError("band", f"one per error signal ({len(signals)}), got {len(bands)}")
     outside: np.ndarray | bool = False
     for e, b in zip(signals, bands):
         magnitude = np.abs(np.asarray(e, dtype=float))
         if magnitude.shape[-1] != t.size:
-            raise ValueError(
-                f"error: {magnitude.shape[-1]} samples along its last axis for {t.size} times"
+            raise FieldError(
+                "error", f"{magnitude.shape[-1]} samples along its last axis for {t.size} times"
             )
         limit = np.asarray(b, dtype=float)
         if relative_to_peak:

@@ -1,5 +1,5 @@
 r"""Attitude from matched star directions: Davenport's q-method and the QUEST covariance
-(seed 000 §2.3.4: the attitude follows once the imaged stars are identified).
+(Junkins, Pollock & Rahman 1990 §2.3.4: the attitude follows once the imaged stars are identified).
 
 Wahba's problem: find the rotation C (inertial to body) minimising
 :math:`\tfrac12\sum_i w_i |b_i - C r_i|^2` for body directions b_i, catalogue directions r_i and
@@ -30,6 +30,7 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat.dynamics.attitude import quaternion_to_dcm
+from flexsat.input_checks import FieldError
 from flexsat.units import FloatArray
 
 __all__ = ["q_method", "quest_covariance", "rotation_error"]
@@ -41,19 +42,20 @@ def _check_vectors(
     b = np.asarray(body, float)
     r = np.asarray(reference, float)
     if b.ndim != 2 or b.shape[1] != 3 or r.shape != b.shape:
-        raise ValueError(
-            f"body: body and reference directions must both have shape (n, 3), got "
-            f"{b.shape} and {r.shape}"
+        raise FieldError(
+            "body",
+            "body and reference directions must both have shape (n, 3), got "
+            f"{b.shape} and {r.shape}",
         )
     if b.shape[0] < 2:
-        raise ValueError(
-            f"body: an attitude needs at least 2 non-parallel directions, got {b.shape[0]}"
+        raise FieldError(
+            "body", f"an attitude needs at least 2 non-parallel directions, got {b.shape[0]}"
         )
     if not (np.all(np.isfinite(b)) and np.all(np.isfinite(r))):
-        raise ValueError("body: directions must be finite")
+        raise FieldError("body", "directions must be finite")
     s = np.broadcast_to(np.asarray(sigma, float), (b.shape[0],))
     if not np.all(np.isfinite(s)) or np.any(s <= 0):
-        raise ValueError(f"sigma: direction noise must be finite and > 0, got {sigma!r}")
+        raise FieldError("sigma", f"direction noise must be finite and > 0, got {sigma!r}")
     b = b / np.linalg.norm(b, axis=1, keepdims=True)
     r = r / np.linalg.norm(r, axis=1, keepdims=True)
     return b, r, s
@@ -71,9 +73,10 @@ def quest_covariance(body: npt.ArrayLike, sigma: npt.ArrayLike) -> FloatArray:
     w = 1.0 / s**2
     info = np.sum(w) * np.eye(3) - np.einsum("i,ij,ik->jk", w, b, b)
     if np.linalg.cond(info) > 1e12:
-        raise ValueError(
-            "body: the directions are parallel; the rotation about them is "
-            "unobservable (information matrix singular)"
+        raise FieldError(
+            "body",
+            "the directions are parallel; the rotation about them is "
+            "unobservable (information matrix singular)",
         )
     return np.linalg.inv(info)
 

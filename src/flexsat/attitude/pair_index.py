@@ -1,6 +1,6 @@
 r"""Index of catalogue star pairs by inter-star angle: the k-vector of Mortari and a brute-force
-scan with the same interface (seed 000 §2.3.4: measured inter-star angles are matched against
-catalogue pairs; L278–L282).
+scan with the same interface (Junkins, Pollock & Rahman 1990 §2.3.4: measured inter-star angles
+are matched against catalogue pairs).
 
 Every pair of catalogue stars closer than ``max_angle`` (a camera's corner-to-corner field) is
 stored with its angle :math:`\theta_{ab} = 2 \arcsin(|r_a - r_b|/2)` (the chord form: accurate
@@ -58,10 +58,10 @@ def catalog_pairs(catalog: StarCatalog, max_angle: float) -> tuple[IntArray, Int
         or too sparse for the field of view).
     """
     if not isinstance(catalog, StarCatalog):
-        raise ValueError(f"catalog: must be a StarCatalog, got {type(catalog).__name__}")
+        raise FieldError("catalog", f"must be a StarCatalog, got {type(catalog).__name__}")
     ang = float(max_angle)
     if not 0 < ang < np.pi:
-        raise ValueError(f"max_angle: must lie in (0, π) rad, got {max_angle!r}")
+        raise FieldError("max_angle", f"must lie in (0, π) rad, got {max_angle!r}")
     expected = expected_pairs(len(catalog), ang)
     if expected > limits.MAX_CATALOG_PAIRS:
         raise FieldError(
@@ -74,10 +74,11 @@ def catalog_pairs(catalog: StarCatalog, max_angle: float) -> tuple[IntArray, Int
     tree = cKDTree(catalog.vectors)
     pairs = tree.query_pairs(2.0 * np.sin(0.5 * ang), output_type="ndarray")
     if pairs.shape[0] == 0:
-        raise ValueError(
-            f"catalog: no two of its {len(catalog)} stars lie within "
+        raise FieldError(
+            "catalog",
+            f"no two of its {len(catalog)} stars lie within "
             f"{np.degrees(ang):.3g}° of each other; the index needs at least one "
-            f"pair in a field of view"
+            f"pair in a field of view",
         )
     theta = pair_angles(catalog.vectors[pairs[:, 0]], catalog.vectors[pairs[:, 1]])
     return pairs[:, 0].astype(np.int64), pairs[:, 1].astype(np.int64), theta

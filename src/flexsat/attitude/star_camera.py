@@ -1,5 +1,5 @@
 r"""Pinhole star camera on the photogrammetry camera model (Junkins, Pollock & Rahman
-1990, §2.3.4, L278–L282): which catalogue stars a camera sees at an attitude, and their noisy
+1990, §2.3.4): which catalogue stars a camera sees at an attitude, and their noisy
 centroids.
 
 Stars lie at infinity, so the collinearity equations of :mod:`flexsat.identify.photogrammetry`
@@ -33,10 +33,15 @@ import numpy.typing as npt
 
 from flexsat.attitude.star_catalog import StarCatalog
 from flexsat.identify.photogrammetry import Camera, euler_angles, project, rotation_matrix
-from flexsat.input_checks import require_count, require_positive_scalar
+from flexsat.input_checks import FieldError, require_count, require_positive_scalar
 from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike, to_si_array
 
-__all__ = ["StarCamera", "StarFrame"]
+__all__ = ["MIN_PIXEL_PITCH", "StarCamera", "StarFrame"]
+
+#: smallest pixel pitch, m: below any detector (diffraction makes pixels under half a
+#: wavelength pointless), and far enough from the float range that the focal length and the
+#: image coordinates keep their digits
+MIN_PIXEL_PITCH = 1e-7
 
 
 @dataclass(frozen=True)
@@ -114,35 +119,40 @@ class StarCamera:
     def __post_init__(self) -> None:
         fov = require_positive_scalar(self.field_of_view, "field_of_view", "rad")
         if fov >= np.radians(120):
-            raise ValueError(
-                f"field_of_view: a pinhole star camera needs a full angle below "
-                f"120°, got {np.degrees(fov):.4g}°"
+            raise FieldError(
+                "field_of_view",
+                f"a pinhole star camera needs a full angle below 120°, got {np.degrees(fov):.4g}°",
             )
         object.__setattr__(self, "field_of_view", fov)
         n = require_count(self.n_pixels, "n_pixels")
         if n < 2:
-            raise ValueError(f"n_pixels: must be >= 2, got {n}")
+            raise FieldError("n_pixels", f"must be >= 2, got {n}")
         object.__setattr__(self, "n_pixels", n)
-        object.__setattr__(
-            self, "pixel_pitch", require_positive_scalar(self.pixel_pitch, "pixel_pitch", "m")
-        )
+        pitch = require_positive_scalar(self.pixel_pitch, "pixel_pitch", "m")
+        if pitch < MIN_PIXEL_PITCH:
+            raise FieldError(
+                "pixel_pitch",
+                f"{pitch:.3g} m is below {MIN_PIXEL_PITCH:g} m, smaller than any detector's "
+                "pixel (visible light's wavelength is 0.4-0.7 µm)",
+            )
+        object.__setattr__(self, "pixel_pitch", pitch)
         noise = to_si_array(self.centroid_noise, "", "centroid_noise")
         if noise.ndim != 0 or not np.isfinite(noise) or noise < 0:
-            raise ValueError(
-                f"centroid_noise: must be one finite number >= 0 (pixels), got "
-                f"{self.centroid_noise!r}"
+            raise FieldError(
+                "centroid_noise",
+                f"must be one finite number >= 0 (pixels), got {self.centroid_noise!r}",
             )
         object.__setattr__(self, "centroid_noise", float(noise))
         lim = to_si_array(self.magnitude_limit, "", "magnitude_limit")
         if lim.ndim != 0 or not np.isfinite(lim):
-            raise ValueError(
-                f"magnitude_limit: must be one finite number, got {self.magnitude_limit!r}"
+            raise FieldError(
+                "magnitude_limit", f"must be one finite number, got {self.magnitude_limit!r}"
             )
         object.__setattr__(self, "magnitude_limit", float(lim))
-        ang = to_si_array(self.mounting, "rad", "mounting").reshape(-1)
-        if ang.size != 3 or not np.all(np.isfinite(ang)):
-            raise ValueError(
-                f"mounting: must be 3 finite 3-2-1 Euler angles, got {self.mounting!r}"
+        ang = to_si_array(self.mounting, "rad", "mounting")
+        if ang.shape != (3,) or not np.all(np.isfinite(ang)):
+            raise FieldError(
+                "mounting", f"must be 3 finite 3-2-1 Euler angles, got {self.mounting!r}"
             )
         object.__setattr__(self, "mounting", tuple(float(a) for a in ang))
         object.__setattr__(self, "_matrix", rotation_matrix(ang, "321"))
@@ -222,7 +232,7 @@ class StarCamera:
         n_false = require_count(false_stars, "false_stars") if false_stars else 0
         miss = float(missing_fraction)
         if not 0.0 <= miss < 1.0:
-            raise ValueError(f"missing_fraction: must lie in [0, 1), got {missing_fraction!r}")
+            raise FieldError("missing_fraction", f"must lie in [0, 1), got {missing_fraction!r}")
         c_cn = self._matrix @ np.asarray(attitude, float)
         bright = catalog.magnitudes <= self.magnitude_limit
         depth = catalog.vectors @ c_cn[2]

@@ -1,5 +1,5 @@
 r"""Star catalogues for star-pattern identification (Junkins, Pollock & Rahman
-1990, §2.3.4, L278–L282): a seeded synthetic sky and a loader for the Hipparcos main catalogue.
+1990, §2.3.4): a seeded synthetic sky and a loader for the Hipparcos main catalogue.
 
 A catalogue holds, per star, an identifier, a visual magnitude and a unit direction in the
 inertial (ICRS) frame, ``r = [cos δ cos α, cos δ sin α, sin δ]``.
@@ -86,20 +86,22 @@ class StarCatalog:
         mags = require_finite(self.magnitudes, "magnitudes").reshape(-1)
         vec = require_finite(self.vectors, "vectors")
         if vec.ndim != 2 or vec.shape[1] != 3:
-            raise ValueError(f"vectors: must have shape (n_stars, 3), got {vec.shape}")
+            raise FieldError("vectors", f"must have shape (n_stars, 3), got {vec.shape}")
         if not (ids.size == mags.size == vec.shape[0]):
-            raise ValueError(
-                f"catalog: ids ({ids.size}), magnitudes ({mags.size}) and vectors "
-                f"({vec.shape[0]}) must have one entry per star"
+            raise FieldError(
+                "catalog",
+                f"ids ({ids.size}), magnitudes ({mags.size}) and vectors "
+                f"({vec.shape[0]}) must have one entry per star",
             )
         if ids.size < MIN_STARS:
-            raise ValueError(
-                f"catalog: must hold at least {MIN_STARS} stars (one triangle of "
-                f"inter-star angles), got {ids.size}"
+            raise FieldError(
+                "catalog",
+                f"must hold at least {MIN_STARS} stars (one triangle of "
+                f"inter-star angles), got {ids.size}",
             )
         norms = np.linalg.norm(vec, axis=1)
         if np.any(np.abs(norms - 1) > 1e-6):
-            raise ValueError("vectors: must be unit directions (|r| = 1 to 1e-6)")
+            raise FieldError("vectors", "must be unit directions (|r| = 1 to 1e-6)")
         object.__setattr__(self, "ids", ids)
         object.__setattr__(self, "magnitudes", mags)
         object.__setattr__(self, "vectors", vec / norms[:, None])
@@ -118,9 +120,10 @@ class StarCatalog:
         limit = float(require_finite(magnitude_limit, "magnitude_limit"))
         keep = self.magnitudes <= limit
         if keep.sum() < MIN_STARS:
-            raise ValueError(
-                f"magnitude_limit: only {int(keep.sum())} stars are brighter than "
-                f"{limit:g}; a catalogue needs at least {MIN_STARS}"
+            raise FieldError(
+                "magnitude_limit",
+                f"only {int(keep.sum())} stars are brighter than "
+                f"{limit:g}; a catalogue needs at least {MIN_STARS}",
             )
         return StarCatalog(self.ids[keep], self.magnitudes[keep], self.vectors[keep], self.source)
 
@@ -151,9 +154,9 @@ def synthetic_sky(
         )
     n = int(round(n65 * 10 ** (0.5 * (limit - 6.5))))
     if n < MIN_STARS or limit <= BRIGHTEST_MAGNITUDE:
-        raise ValueError(
-            f"magnitude_limit: {limit:g} gives {n} synthetic stars; a catalogue "
-            f"needs at least {MIN_STARS}"
+        raise FieldError(
+            "magnitude_limit",
+            f"{limit:g} gives {n} synthetic stars; a catalogue needs at least {MIN_STARS}",
         )
     rng = np.random.default_rng(seed)
     z = rng.uniform(-1.0, 1.0, n)
@@ -180,7 +183,7 @@ def load_hipparcos(path: str | Path, magnitude_limit: float | None = None) -> St
     """
     p = Path(path)
     if not p.is_file():
-        raise ValueError(f"path: no Hipparcos catalogue file at {str(p)!r}")
+        raise FieldError("path", f"no Hipparcos catalogue file at {str(p)!r}")
     limit = (
         None
         if magnitude_limit is None
@@ -223,10 +226,11 @@ def load_hipparcos(path: str | Path, magnitude_limit: float | None = None) -> St
             ra.append(values["ra_deg"])
             dec.append(values["dec_deg"])
     if len(ids) < MIN_STARS:
-        raise ValueError(
-            f"catalog: {p.name} holds {len(ids)} usable stars"
+        raise FieldError(
+            "catalog",
+            f"{p.name} holds {len(ids)} usable stars"
             f"{'' if limit is None else f' brighter than {limit:g}'}; a catalogue "
-            f"needs at least {MIN_STARS} (one triangle of inter-star angles)"
+            f"needs at least {MIN_STARS} (one triangle of inter-star angles)",
         )
     vec = _directions(np.radians(ra), np.radians(dec))
     return StarCatalog(np.array(ids), np.array(mags), vec, f"Hipparcos ({p.name})")

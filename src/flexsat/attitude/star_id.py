@@ -1,5 +1,5 @@
 r"""Lost-in-space star-pattern identification by inter-star angles (Junkins, Pollock & Rahman
-1990, §2.3.4, L278–L282; Junkins, White & Turner, J. Astronaut. Sci. 25(3), 1977).
+1990, §2.3.4; Junkins, White & Turner, J. Astronaut. Sci. 25(3), 1977).
 
 The paper's rule: the measured inter-star angles are compared with catalogue pairs; when at
 least three measured inter-star-angle *triplets* (triangles of three measured stars whose three

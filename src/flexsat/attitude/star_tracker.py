@@ -1,5 +1,5 @@
 r"""A star tracker: two or more star cameras fixed to the body, a catalogue and its pair index,
-and the lost-in-space identification (Junkins, Pollock & Rahman 1990, §2.3.4, L278–L282: "two or
+and the lost-in-space identification (Junkins, Pollock & Rahman 1990, §2.3.4: "two or
 more star cameras are fixed to the main body of a spacecraft").
 
 :class:`StarTracker` simulates the frames at a true attitude (:meth:`StarTracker.observe`),
@@ -36,6 +36,7 @@ __all__ = [
     "MonteCarloResult",
     "monte_carlo",
     "check_field_load",
+    "check_identifiable",
     "random_attitudes",
     "score",
     "ARCSEC",
@@ -44,7 +45,7 @@ __all__ = [
 
 #: one arcsecond, rad
 ARCSEC = np.pi / 648000.0
-#: the paper's matching tolerance, 5″ (seed 000 L280)
+#: the paper's matching tolerance, 5″ (Junkins, Pollock & Rahman 1990 §2.3.4)
 PAPER_TOLERANCE = 5.0 * ARCSEC
 _INDEXES: dict[str, type[KVectorIndex] | type[BruteForceIndex]] = {
     "kvector": KVectorIndex,
@@ -88,7 +89,7 @@ class StarTracker:
         cams = [cameras] if isinstance(cameras, StarCamera) else list(cameras)
         for c, cam in enumerate(cams):
             if not isinstance(cam, StarCamera):
-                raise ValueError(f"cameras[{c}]: must be a StarCamera, got {type(cam).__name__}")
+                raise FieldError(f"cameras[{c}]", f"must be a StarCamera, got {type(cam).__name__}")
         self.min_fields = require_count(min_fields, "min_fields")
         self.min_triplets = require_count(min_triplets, "min_triplets")
         if len(cams) < self.min_fields:
@@ -113,9 +114,16 @@ class StarTracker:
             )
         if index not in _INDEXES:
             raise FieldError("index", f"must be 'kvector' or 'brute', got {index!r}")
+        widest = max(c.max_pair_angle for c in cams)
+        if self.tolerance >= widest:
+            raise FieldError(
+                "tolerance",
+                f"{self.tolerance / ARCSEC:.3g}″ is not below the widest inter-star angle of "
+                f"a field, {widest / ARCSEC:.3g}″: every pair would match every pair",
+            )
         self.cameras = tuple(cams)
         self.catalog = catalog.brighter_than(max(c.magnitude_limit for c in cams))
-        max_angle = max(c.max_pair_angle for c in cams) + self.tolerance
+        max_angle = widest + self.tolerance
         self.index = _INDEXES[index](self.catalog, max_angle)
 
     def expected_candidates(self, false_stars: int = 0, missing_fraction: float = 0.0) -> float:
@@ -140,6 +148,48 @@ class StarTracker:
         angles = pair_angles(grid[first], grid[second])
         per_pair = self.index.count(angles - self.tolerance, angles + self.tolerance) / angles.size
         return 0.5 * k * max(k - 1.0, 0.0) * per_pair
+
+    def expected_stars(self, missing_fraction: float = 0.0) -> FloatArray:
+        """Mean catalogue stars in each camera's field (n_cameras,): N_c Ω_c/4π of the N_c
+        catalogue stars camera c detects (Ω = 4 arcsin sin²(F/2), the solid angle of a square
+        field of full angle F), less the missing fraction; the mean over attitudes uniform on
+        SO(3), for a sky uniform on the sphere."""
+        out = []
+        for cam in self.cameras:
+            solid_angle = 4.0 * np.arcsin(np.sin(0.5 * cam.field_of_view) ** 2)
+            detected = np.count_nonzero(self.catalog.magnitudes <= cam.magnitude_limit)
+            out.append(detected * solid_angle / (4 * np.pi) * (1.0 - missing_fraction))
+        return np.array(out)
+
+    @property
+    def stars_needed(self) -> int:
+        """Fewest stars in a field whose triangles can reach ``min_triplets``: the smallest
+        k >= 3 with C(k, 3) >= min_triplets (a field of k stars has C(k, 3) triplets)."""
+        k = max(3, int(np.cbrt(6.0 * self.min_triplets)))
+        while k * (k - 1) * (k - 2) // 6 < self.min_triplets:
+            k += 1
+        return k
+
+    def identifiable_fraction(
+        self, missing_fraction: float = 0.0, stars: int | None = None
+    ) -> float:
+        r"""Probability that a random attitude puts at least :attr:`stars_needed` catalogue
+        stars (3, one triangle, for up to one triplet) in at least ``min_fields`` fields: the
+        star count of camera c Poisson with mean μ_c (:meth:`expected_stars`), the fields
+        independent, p_c = P(N_c >= k) (for k = 3,
+        :math:`1 - e^{-\mu_c}(1 + \mu_c + \mu_c^2/2)`), and the count of fields with p_c
+        summed by the Poisson-binomial recursion. An upper bound on the identification rate
+        (the matching itself can still fail). ``stars`` replaces :attr:`stars_needed`."""
+        from scipy.stats import poisson
+
+        mu = self.expected_stars(missing_fraction)
+        p = poisson.sf((self.stars_needed if stars is None else stars) - 1, mu)
+        fields = np.zeros(len(p) + 1)  # fields[j]: probability that j fields have enough
+        fields[0] = 1.0
+        for pc in np.clip(p, 0.0, 1.0):
+            fields[1:] = fields[1:] * (1 - pc) + fields[:-1] * pc
+            fields[0] *= 1 - pc
+        return float(fields[self.min_fields :].sum())
 
     def observe(
         self,
@@ -211,8 +261,17 @@ def check_field_load(tracker: StarTracker, false_stars: int, missing_fraction: f
     Raises
     ------
     flexsat.input_checks.FieldError
-        Naming ``false_stars``.
+        Naming ``tolerance`` when the real stars alone exceed the limit, else ``false_stars``.
     """
+    bare = tracker.expected_candidates(0, missing_fraction)
+    if bare > limits.MAX_PAIR_CANDIDATES:  # the real stars alone: the tolerance is too wide
+        raise FieldError(
+            "tolerance",
+            f"{tracker.tolerance / ARCSEC:.3g}″ would make about {bare:.3g} candidate catalogue "
+            f"matches per field from the real stars alone, above the limit "
+            f"{limits.MAX_PAIR_CANDIDATES:,} (flexsat.limits.MAX_PAIR_CANDIDATES): the "
+            "identification would crawl; a smaller tolerance",
+        )
     expected = tracker.expected_candidates(false_stars, missing_fraction)
     if expected > limits.MAX_PAIR_CANDIDATES:
         raise FieldError(
@@ -224,6 +283,47 @@ def check_field_load(tracker: StarTracker, false_stars: int, missing_fraction: f
         )
 
 
+#: fewest expected identifiable attitudes of a run (:func:`check_identifiable`): below it the
+#: run would, with more than 99 % probability, identify nothing
+MIN_IDENTIFIABLE = 0.01
+
+
+def check_identifiable(tracker: StarTracker, attitudes: int, missing_fraction: float) -> None:
+    """Refuse, before any frame is made, a run that can only identify nothing: fewer than
+    :data:`MIN_IDENTIFIABLE` of its ``attitudes`` expected to show >= 3 catalogue stars in
+    ``min_fields`` fields (:meth:`StarTracker.identifiable_fraction`): an empty or too faint
+    catalogue, a field of view too small for the sky, nearly every star missing.
+
+    Raises
+    ------
+    flexsat.input_checks.FieldError
+        Naming ``missing_fraction`` when the stars are there but dropped, ``min_triplets`` when
+        no field can hold the stars its triplets need, else ``cameras``.
+    """
+    if attitudes * tracker.identifiable_fraction(0.0, stars=3) < MIN_IDENTIFIABLE:
+        missing_fraction = 0.0  # the sky and the cameras alone identify nothing
+        field = "cameras"
+    elif attitudes * tracker.identifiable_fraction() < MIN_IDENTIFIABLE:
+        missing_fraction = 0.0  # no field holds the stars of that many triplets
+        field = "min_triplets"
+    elif attitudes * tracker.identifiable_fraction(missing_fraction) < MIN_IDENTIFIABLE:
+        field = "missing_fraction"
+    else:
+        return
+    expected = attitudes * tracker.identifiable_fraction(missing_fraction)
+    stars = tracker.expected_stars(missing_fraction)
+    raise FieldError(
+        field,
+        f"the fields of view hold on average {np.array2string(stars, precision=3)} catalogue "
+        f"stars ({len(tracker.catalog)} in the catalogue, fraction {missing_fraction:g} "
+        "missing), so "
+        f"about {expected:.3g} of the {attitudes} attitudes could show the "
+        f"{tracker.stars_needed} stars in {tracker.min_fields} fields an identification needs "
+        f"({tracker.min_triplets} triplets a field): the run could only report no data; a "
+        "wider field, a fainter magnitude limit, fewer missing stars or fewer triplets",
+    )
+
+
 def monte_carlo(
     tracker: StarTracker,
     n: int = 1000,
@@ -233,7 +333,9 @@ def monte_carlo(
 ) -> MonteCarloResult:
     """Identify ``n`` seeded random attitudes (module docstring). ``nees`` is δθᵀP⁻¹δθ per
     accepted attitude (χ² with 3 degrees of freedom when the covariance is right)."""
+    n = require_count(n, "n")
     check_field_load(tracker, false_stars, missing_fraction)
+    check_identifiable(tracker, n, missing_fraction)
     rng = np.random.default_rng(seed)
     att = random_attitudes(n, rng)
     n_cam = len(tracker.cameras)

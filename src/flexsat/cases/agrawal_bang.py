@@ -2,10 +2,10 @@
 
 B. N. Agrawal and H. Bang, *Adaptive Structures for Large Precision Antennas*, Acta Astronautica
 1996 (IAF-94.1.4.202), §4: "two elastic
-structures connected in orthogonal configuration" (L207), three collocated piezoceramic
-sensor/actuator pairs, actuator 1 "at the root of the first structure" (L349), the actuator a
+structures connected in orthogonal configuration" (§4), three collocated piezoceramic
+sensor/actuator pairs, actuator 1 "at the root of the first structure" (§4), the actuator a
 bending moment M_a = a_1 V (Eq. 36) and the sensor a voltage proportional to the local bending
-(Eq. 37), three flexible modes retained (L291). Figs. 1–2 (geometry, patch positions) are lost
+(Eq. 37), three flexible modes retained (§4). Figs. 1–2 (geometry, patch positions) are lost
 and the experiment's reference [9] is missing: no dimension, property, frequency or gain a_1, a_2
 of the structure is published.
 
@@ -34,7 +34,7 @@ import numpy as np
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.dynamics.structural import StructuralPlant
-from flexsat.input_checks import require_count, require_finite, require_nonneg
+from flexsat.input_checks import FieldError, require_count, require_finite, require_nonneg
 from flexsat.structures.fem import FEModes, Structure
 from flexsat.structures.modal_model import ModalModel
 from flexsat.structures.mode_description import classify_modes
@@ -46,13 +46,14 @@ if TYPE_CHECKING:
 
 SOURCE = CASES["agrawal_bang"].source
 
-#: what seed 004 prints about the structure and the control problem (no dimension or frequency)
+#: what Agrawal & Bang 1996 prints about the structure and the control
+#: problem (no dimension or frequency)
 PUBLISHED: dict[str, Any] = {
-    "n_modes": 3,  # L291 "three flexible modes are included"
-    "n_pairs": 3,  # L207, L291 three collocated sensor/actuator pairs
-    "actuator_1": "root of the first structure",  # L349
-    "control_weight": 1e-8,  # L303 Q
-    "weights": ((100, 100), (500, 100), (100, 500)),  # L303 (w_1, w_2)
+    "n_modes": 3,  # §4 "three flexible modes are included"
+    "n_pairs": 3,  # §4 three collocated sensor/actuator pairs
+    "actuator_1": "root of the first structure",  # §4
+    "control_weight": 1e-8,  # §4 Q
+    "weights": ((100, 100), (500, 100), (100, 500)),  # §4 (w_1, w_2)
     "initial_gain": 100.0,  # Tables 1-3, every g_ij
 }
 
@@ -204,8 +205,8 @@ class AgrawalBangCase:
             return modal
         n = self.n_modes if n_modes is None else require_count(n_modes, "n_modes")
         if n > modal.n_modes:
-            raise ValueError(
-                f"n_modes: the finite-element model has {modal.n_modes} modes, got {n}"
+            raise FieldError(
+                "n_modes", f"the finite-element model has {modal.n_modes} modes, got {n}"
             )
         return modal.truncate(n)
 
@@ -282,11 +283,11 @@ class AgrawalBangCase:
             acts, sensors = self._channel_specs(lambda n: n)
             return StructuralPlant.from_modal_model(self.modal_model(n_modes), acts, sensors)
         if coordinates != "fe":
-            raise ValueError(f"coordinates: must be 'modal' or 'fe', got {coordinates!r}")
+            raise FieldError("coordinates", f"must be 'modal' or 'fe', got {coordinates!r}")
         if n_modes is not None:
-            raise ValueError(
-                "n_modes: the finite-element plant keeps every dof; use "
-                "coordinates='modal' to truncate"
+            raise FieldError(
+                "n_modes",
+                "the finite-element plant keeps every dof; use coordinates='modal' to truncate",
             )
         asm = self.structure().assemble()
         acts, sensors = self._channel_specs(lambda n: (n, "rz"))
@@ -351,7 +352,7 @@ class AgrawalBangCase:
                 for p in pairs
             ],
             "mass_kg": self.modal_model().total_mass,
-            "published_frequencies": "none (seed 004 prints no frequency of its model)",
+            "published_frequencies": "none (Agrawal & Bang 1996 prints no frequency of its model)",
         }
 
 
@@ -361,24 +362,25 @@ def _patches(raw, beam_lengths, patch_length) -> tuple:
     except TypeError:
         items = None
     if items is None or len(items) != 3 or any(len(p) != 2 for p in items):
-        raise ValueError(f"patches: must be three (structure, start) pairs, got {raw!r}")
+        raise FieldError("patches", f"must be three (structure, start) pairs, got {raw!r}")
     out = []
     for j, (beam, start) in enumerate(items):
         if isinstance(beam, bool) or beam not in (1, 2):
-            raise ValueError(f"patches[{j}]: structure must be 1 or 2, got {beam!r}")
+            raise FieldError(f"patches[{j}]", f"structure must be 1 or 2, got {beam!r}")
         s = float(require_nonneg(to_si(start, "m", f"patches[{j}]"), f"patches[{j}]"))
         L = beam_lengths[beam - 1]
         if s + patch_length > L * (1 + 1e-12):
-            raise ValueError(
-                f"patches[{j}]: the patch [{s}, {s + patch_length}] m runs past the "
-                f"end of structure {beam} ({L} m)"
+            raise FieldError(
+                f"patches[{j}]",
+                f"the patch [{s}, {s + patch_length}] m runs past the "
+                f"end of structure {beam} ({L} m)",
             )
         out.append((int(beam), s))
     for i in range(3):
         for j in range(i):
             (bi, si), (bj, sj) = out[i], out[j]
             if bi == bj and abs(si - sj) < patch_length:
-                raise ValueError(f"patches[{i}]: overlaps patches[{j}] on structure {bi}")
+                raise FieldError(f"patches[{i}]", f"overlaps patches[{j}] on structure {bi}")
     return tuple(out)
 
 
@@ -390,15 +392,14 @@ def agrawal_bang(**overrides: Any) -> AgrawalBangCase:
     """
     values = read_inputs("agrawal_bang", _INPUTS, overrides)
     if values["damping"] >= 1:
-        raise ValueError(
-            f"damping: must be < 1 (a ratio of critical damping), got {values['damping']!r}"
+        raise FieldError(
+            "damping", f"must be < 1 (a ratio of critical damping), got {values['damping']!r}"
         )
     for name in ("element_length", "patch_length"):
         shortest = min(values["beam1_length"], values["beam2_length"])
         if values[name] > shortest:
-            raise ValueError(
-                f"{name}: must not exceed the shorter structure ({shortest} m), "
-                f"got {values[name]} m"
+            raise FieldError(
+                name, f"must not exceed the shorter structure ({shortest} m), got {values[name]} m"
             )
     values["patches"] = _patches(
         values["patches"], (values["beam1_length"], values["beam2_length"]), values["patch_length"]

@@ -1,15 +1,16 @@
-r"""The PPF gain study of seed 004 on the rebuilt Agrawal–Bang L structure (issue #12, F8–F10).
+r"""The PPF gain study of Agrawal & Bang 1996 on the rebuilt Agrawal–Bang L
+structure (issue #12, F8–F10).
 
 B. N. Agrawal and H. Bang, *Adaptive Structures for Large Precision Antennas*, Acta Astronautica
 1996 (IAF-94.1.4.202): three collocated piezo
 pairs, three flexible modes, a bank of 3 × 3 PPF filters tuned to the modes (Eqs. 3–5), the
-tip-error cost of Eq. 35 with Q̄(w_1, w_2) and Q = 1e-8 on u (L303), initial gains 100, γ stopped
-at 0.9 (L345), first-mode and three-mode initial conditions (L303); Tables 1–3 for
+tip-error cost of Eq. 35 with Q̄(w_1, w_2) and Q = 1e-8 on u (§4), initial gains 100, γ stopped
+at 0.9 (§4), first-mode and three-mode initial conditions (§4); Tables 1–3 for
 (w_1, w_2) ∈ {(100, 100), (500, 100), (100, 500)}.
 
 Choices the paper leaves open, made here and used by every run:
 
-- **Filter damping** ζ_f = 0.1 (:data:`ZETA_F`), ω_f = ω_j (L61): a common PPF choice, the
+- **Filter damping** ζ_f = 0.1 (:data:`ZETA_F`), ω_f = ω_j (§2): a common PPF choice, the
   same as the PPF tests of the control layer.
 - **Initial conditions** (:func:`initial_conditions`). First-mode: η_1 displaced, at rest, so
   that the tip of structure 2 is off its undeformed place by |Eᵗ| = :data:`TIP_AMPLITUDE`
@@ -17,12 +18,12 @@ Choices the paper leaves open, made here and used by every run:
   mode displaced with the potential energy of the first-mode case (½ ω_i² η_i² equal, η_i =
   η_1 ω_1/ω_i), with independent random signs, because the sign of an eigenvector is the
   eigensolver's choice and a fixed-sign sum would make the cost depend on it: the cost uses
-  the expected second moment X₀ = E[x₀ x₀ᵀ] = Σ_i x_i x_iᵀ (F10, L367–L369), and the time
+  the expected second moment X₀ = E[x₀ x₀ᵀ] = Σ_i x_i x_iᵀ (F10, §4), and the time
   responses one sample of it, the signs making every mode push the tip along +n̂_1
   (y_1ᵗ > 0).
 - **J_goal** (:class:`GoalRule`). The paper sets it "based upon the objective function with the
-  initial gains" (L345) but every published "optimised" cost is ≈ +700 *above* J_init, so its
-  goal was, in effect, slightly above J_init (the γ stop of L345, J_opt = 0.9 J_goal + 0.1 J_init,
+  initial gains" (§4) but every published "optimised" cost is ≈ +700 *above* J_init, so its
+  goal was, in effect, slightly above J_init (the γ stop of §4, J_opt = 0.9 J_goal + 0.1 J_init,
   gives J_goal − J_init ≈ +778). Its costs are in unknown units (the model is lost), so the rule
   ``paper`` reproduces the *ratio* J_goal/J_init implied by the published Table entry of the
   same (w_1, w_2, excitation) (:func:`paper_goal_ratio`, 1.0006–1.0025); ``ratio`` sets
@@ -45,7 +46,13 @@ import numpy.typing as npt
 
 from flexsat.cases.agrawal_bang import PUBLISHED, AgrawalBangCase, agrawal_bang
 from flexsat.control.ppf import PPFBank, PPFController, PPFModel, PPFProblem
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 from flexsat.units import QuantityLike
 
 if TYPE_CHECKING:
@@ -59,10 +66,10 @@ if TYPE_CHECKING:
 ZETA_F = 0.1
 #: |Eᵗ| of the first-mode initial condition, m (not published; module docstring)
 TIP_AMPLITUDE = 0.01
-#: γ at which the paper reports its gains (L345)
+#: γ at which the paper reports its gains (§4)
 GAMMA_STOP = 0.9
 EXCITATIONS = ("first", "three")
-#: the Tables 1–3 grid: (w_1, w_2) × excitation (L303)
+#: the Tables 1–3 grid: (w_1, w_2) × excitation (§4)
 GRID = tuple((w, e) for w in PUBLISHED["weights"] for e in EXCITATIONS)
 
 #: Tables 1–3 as printed: (J_init, J_opt at γ = 0.9), 3a/3b with their exponent repaired
@@ -114,15 +121,16 @@ PUBLISHED_GAINS = {
 def _weights_key(weights: npt.ArrayLike) -> tuple[float, ...]:
     w = require_nonneg(weights, "weights")
     if w.shape != (2,):
-        raise ValueError(f"weights: must be the two numbers (w1, w2) of Eq. 35, got {weights!r}")
+        raise FieldError("weights", f"must be the two numbers (w1, w2) of Eq. 35, got {weights!r}")
     return tuple(float(v) for v in w)
 
 
 def _excitation(excitation: str) -> str:
     if excitation not in EXCITATIONS:
-        raise ValueError(
-            f"excitation: must be 'first' (the first flexible mode) or 'three' "
-            f"(all three modes), got {excitation!r}"
+        raise FieldError(
+            "excitation",
+            "must be 'first' (the first flexible mode) or 'three' "
+            f"(all three modes), got {excitation!r}",
         )
     return excitation
 
@@ -134,13 +142,14 @@ def paper_goal_ratio(weights: npt.ArrayLike, excitation: str) -> float:
     Raises
     ------
     ValueError
-        ``weights`` not one of the published (w1, w2) pairs (L303).
+        ``weights`` not one of the published (w1, w2) pairs (§4).
     """
     key = (_weights_key(weights), _excitation(excitation))
     if key not in PUBLISHED_COSTS:
-        raise ValueError(
-            f"weights: the paper's goal is known only for its own weights "
-            f"{list(PUBLISHED['weights'])}, got {list(key[0])}"
+        raise FieldError(
+            "weights",
+            "the paper's goal is known only for its own weights "
+            f"{list(PUBLISHED['weights'])}, got {list(key[0])}",
         )
     J_init, J_opt = PUBLISHED_COSTS[key]
     return (J_opt / J_init - (1 - GAMMA_STOP)) / GAMMA_STOP
@@ -151,7 +160,7 @@ class GoalRule:
     """How J_goal follows from J_init (module docstring).
 
     ``kind``: ``"paper"`` (the ratio implied by the published table, :func:`paper_goal_ratio`;
-    ``value`` unused), ``"ratio"`` (J_goal = value · J_init, value ≥ 0) or ``"offset"``
+    ``value`` unused), ``"ratio"`` (J_goal = value · J_init, value > 0) or ``"offset"``
     (J_goal = J_init + value, value in the cost's units).
     """
 
@@ -160,19 +169,24 @@ class GoalRule:
 
     def __post_init__(self) -> None:
         if self.kind not in ("paper", "ratio", "offset"):
-            raise ValueError(f"goal: rule must be 'paper', 'ratio' or 'offset', got {self.kind!r}")
+            raise FieldError(
+                "goal", f"rule must be 'paper', 'ratio' or 'offset', got {self.kind!r}"
+            )
         if self.kind == "paper":
             if self.value is not None:
-                raise ValueError(
-                    "goal.value: the 'paper' rule takes no value (its ratio comes "
-                    "from the published table)"
+                raise FieldError(
+                    "goal.value",
+                    "the 'paper' rule takes no value (its ratio comes from the published table)",
                 )
             return
         if self.value is None:
-            raise ValueError(f"goal.value: the {self.kind!r} rule needs a value")
+            raise FieldError("goal.value", f"the {self.kind!r} rule needs a value")
         v = float(require_finite(self.value, "goal.value"))
-        if self.kind == "ratio" and v < 0:
-            raise ValueError(f"goal.value: a ratio J_goal/J_init must be >= 0, got {v!r}")
+        if self.kind == "ratio" and v <= 0:
+            raise FieldError(
+                "goal.value",
+                f"a ratio J_goal/J_init must be > 0 (the cost of a stable loop is > 0), got {v!r}",
+            )
         object.__setattr__(self, "value", v)
 
     def goal(self, J_init: float, weights: npt.ArrayLike, excitation: str) -> float:
@@ -269,7 +283,8 @@ def ppf_problem(
     n_modes: int = PUBLISHED["n_modes"],
     amplitude: QuantityLike = TIP_AMPLITUDE,
 ) -> PPFCaseProblem:
-    """The seed 004 problem on the case (module docstring): PPF model from the three pairs and
+    """The Agrawal & Bang 1996 problem on the case (module docstring): PPF model from the
+    three pairs and
     ``n_modes`` modes, the bank tuned to the modes with damping ``zeta_f``, Q_s = Tᵀ Q̄(w_1, w_2) T
     (Eq. 35), the control weight ``Q_u`` and X₀ of the excitation.
 

@@ -1,10 +1,9 @@
-"""Bainum & Reddy's long free-free beam in orbit with point actuators (seed 002).
+"""Bainum & Reddy's long free-free beam in orbit with point actuators (Bainum & Reddy 1979).
 
 P. M. Bainum and A. S. S. R. Reddy, *The Dynamics and Control of Large Flexible Space
-Structures - II, Part A*, NASA CR-158684, Howard University (1979); ``Lnnn`` are lines of the
-developers' transcript (:data:`flexsat.references.LINE_NUMBERS`).
+Structures - II, Part A*, NASA CR-158684, Howard University (1979).
 
-Model (Ch. II eqs 1-6, L211-L245; Ch. III eqs 29-34, L750-L796). A uniform free-free beam of
+Model (Ch. II eqs 1-6; Ch. III eqs 29-34). A uniform free-free beam of
 length l, centre of mass on a circular orbit of rate ω_c, planar pitch θ (from the local
 vertical) and transverse bending amplitudes A_n = l z_n. In the nondimensional time τ = ω_c t,
 with ' = d/dτ:
@@ -18,9 +17,9 @@ with ' = d/dτ:
   -(θ' - 1)² cancel at θ = θ' = 0);
 - point forces f_j at ξ_j (eqs 10-15): u = B_act f with pitch row -ξ_j/(J ω_c²) and mode rows
   φ_n(ξ_j)/(M_n l ω_c²). The report's numbers are l/(2 J ω_c²) = 59.52 and 2/(M_n l ω_c²) = 20.0
-  (L462; M_n = ρl for every mode, L291), so here ``pitch_influence`` = 59.52 and
+  (Ch. II §4; M_n = ρl for every mode, Ch. II §2), so here ``pitch_influence`` = 59.52 and
   ``modal_influence`` = 1/(M l ω_c²) = 10.0, with the mode shapes of Appendix A normalized to
-  φ = +2 at the left end ξ = -l/2 and ∫φ² dχ = l (L1124-L1185).
+  φ = +2 at the left end ξ = -l/2 and ∫φ² dχ = l (Appendix A).
 
 Sign convention of the gains (the report's, Ch. III eq 3): f = K_pos x + K_rate x', so the
 closed loop is x'' + F x = G (K_pos x + K_rate x').
@@ -53,7 +52,7 @@ from flexsat.analysis.controllability import (
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
 from flexsat.control.scheduled import ScheduledStateFeedback
-from flexsat.input_checks import require_count, require_finite
+from flexsat.input_checks import FieldError, require_count, require_finite
 from flexsat.sim import continuous
 
 if TYPE_CHECKING:
@@ -66,21 +65,21 @@ SOURCE = CASES["bainum"].source
 EARTH_MU = 3.986004418e14
 EARTH_RADIUS = 6378137.0
 
-#: numbers of seed 002 exactly as printed (matrices row by row); see :data:`ERRATA`
+#: numbers of Bainum & Reddy 1979 exactly as printed (matrices row by row); see :data:`ERRATA`
 PUBLISHED: dict[str, Any] = {
-    # Ch. II §4 (L454-L468) and Ch. III (L800, L831)
-    "orbit_altitude": "250 nmi",  # L454
-    "fundamental_frequency": "0.01 Hz",  # L454 "1/100 cps"
-    "frequency_ratios": (3200.0, 28800.0, 93079.50, 255331.40),  # (ω_n/ω_c)², L456, L831
-    "pitch_influence": 59.52,  # l/(2 J ω_c²), L462
-    "modal_influence_end": 20.0,  # 2/(M_1 l ω_c²) (the end value φ = 2), L462
-    "ch2_gains": (-0.00577, -0.05656, -0.01695),  # K1, K2, K3 (rate), L468
-    "initial_position": 0.01,  # every position coordinate, rates zero (L468, L843)
-    # Ch. III Case 1 (L800-L804), actuators at (-l/2, +l/2, +l/4)
+    # Ch. II §4 and Ch. III §4
+    "orbit_altitude": "250 nmi",  # Ch. II §4
+    "fundamental_frequency": "0.01 Hz",  # Ch. II §4 "1/100 cps"
+    "frequency_ratios": (3200.0, 28800.0, 93079.50, 255331.40),  # (ω_n/ω_c)², Ch. II §4, Ch. III §4
+    "pitch_influence": 59.52,  # l/(2 J ω_c²), Ch. II §4
+    "modal_influence_end": 20.0,  # 2/(M_1 l ω_c²) (the end value φ = 2), Ch. II §4
+    "ch2_gains": (-0.00577, -0.05656, -0.01695),  # K1, K2, K3 (rate), Ch. II §4
+    "initial_position": 0.01,  # every position coordinate, rates zero (Ch. II §4, Ch. III §4)
+    # Ch. III Case 1, actuators at (-l/2, +l/2, +l/4)
     "ch3_case1_positions": (-0.5, 0.5, 0.25),
     "ch3_case1_G": ((59.52, -59.52, 29.76), (20.0, 20.0, -2.0), (20.0, -20.0, 9.3)),
     "ch3_case1_K": ((-0.011, -2.835, -5.2757), (0.017, -2.835, 3.5171), (0.0602, 0.0, -17.5855)),
-    # Ch. III Case 2 (L829-L880), actuators at (-l/2, -l/4, 0, +l/4, +l/2)
+    # Ch. III Case 2, actuators at (-l/2, -l/4, 0, +l/4, +l/2)
     "ch3_case2_positions": (-0.5, -0.25, 0.0, 0.25, 0.5),
     "ch3_case2_G": (
         (59.52, 29.76, 0.0, -29.76, -59.52),
@@ -96,7 +95,7 @@ PUBLISHED: dict[str, Any] = {
         (-3.278, 0.0, -2200.36, 0.0, 9397.81),
         (-1.669, -1.423, -780.55, -7.578, 3362.45),
     ),
-    # 5 x 10: columns 1-5 position gains on (θ, z1..z4), 6-10 rate gains (L875-L880)
+    # 5 x 10: columns 1-5 position gains on (θ, z1..z4), 6-10 rate gains (Ch. III §4)
     "ch3_case2_lqr": (
         (-0.056, 1.258e-6, 0.0, 0.0, 0.0, -0.6312, -0.712, -394.52, -4.348, 1582.6),
         (-0.1559, 0.0, 0.0, 0.0, 0.0, -1.7527, 0.0, -109.17, 0.0, 4696.0),
@@ -104,7 +103,7 @@ PUBLISHED: dict[str, Any] = {
         (-0.1535, 0.0, 0.0, 0.0, 0.0, -1.7255, 0.0, -1100.18, 0.0, 4698.9),
         (-0.0545, 0.0, 0.0, 0.0, 0.0, -0.6142, -0.712, 390.27, -4.348, 1531.2),
     ),
-    # Ch. IV numerical example (L1063-L1101)
+    # Ch. IV numerical example
     "ch4_total_mass": "1000 kg",
     "ch4_interior_mass_ratio": 1.0,  # m0/m, m = m0 = M/3
     "ch4_spring": "0.18497 N/m",  # k = 3EI/ℓ³
@@ -126,7 +125,7 @@ PUBLISHED: dict[str, Any] = {
 class Erratum:
     """One repair of a printed number."""
 
-    line: str
+    where: str
     item: str
     printed: object
     corrected: object
@@ -137,7 +136,7 @@ class Erratum:
 #: the errata applied; ``index`` marks those applied by :func:`published_matrix`
 ERRATA = (
     Erratum(
-        "L800",
+        "Ch. III §4, Case 1 G",
         "ch3_case1_G",
         29.76,
         -29.76,
@@ -146,7 +145,7 @@ ERRATA = (
         (0, 2),
     ),
     Erratum(
-        "L841",
+        "Ch. III §4, Case 2 K",
         "ch3_case2_K",
         -1.669,
         -1.167,
@@ -154,13 +153,23 @@ ERRATA = (
         "-1.669 the loop is unstable (+0.114, +26.34)",
         (4, 0),
     ),
-    Erratum("L877", "ch3_case2_lqr", -109.17, -1091.7, "recomputed column 8", (1, 7)),
-    Erratum("L878", "ch3_case2_lqr", -310.35, -810.35, "recomputed column 8", (2, 7)),
-    Erratum("L880", "ch3_case2_lqr", 390.27, -390.27, "recomputed column 8", (4, 7)),
-    Erratum("L876", "ch3_case2_lqr", 1582.6, 1682.6, "recomputed column 10", (0, 9)),
-    Erratum("L880", "ch3_case2_lqr", 1531.2, 1681.2, "recomputed column 10", (4, 9)),
     Erratum(
-        "L351, L387",
+        "Ch. III §4, Case 2 LQR", "ch3_case2_lqr", -109.17, -1091.7, "recomputed column 8", (1, 7)
+    ),
+    Erratum(
+        "Ch. III §4, Case 2 LQR", "ch3_case2_lqr", -310.35, -810.35, "recomputed column 8", (2, 7)
+    ),
+    Erratum(
+        "Ch. III §4, Case 2 LQR", "ch3_case2_lqr", 390.27, -390.27, "recomputed column 8", (4, 7)
+    ),
+    Erratum(
+        "Ch. III §4, Case 2 LQR", "ch3_case2_lqr", 1582.6, 1682.6, "recomputed column 10", (0, 9)
+    ),
+    Erratum(
+        "Ch. III §4, Case 2 LQR", "ch3_case2_lqr", 1531.2, 1681.2, "recomputed column 10", (4, 9)
+    ),
+    Erratum(
+        "Ch. II §3, Cases 2 and 4",
         "mode-1 mid-span value",
         -np.sqrt(2.0),
         -1.2156445,
@@ -169,7 +178,7 @@ ERRATA = (
         "as printed there because the printed gains were computed with it",
     ),
     Erratum(
-        "L1097-L1101",
+        "Ch. IV numerical example",
         "ch4_roots",
         PUBLISHED["ch4_roots"],
         (
@@ -182,7 +191,7 @@ ERRATA = (
         "ones are accurate to about 3 figures (single-precision Bairstow)",
     ),
     Erratum(
-        "L462, L466",
+        "Ch. II §4",
         "Ch. II example equations",
         "ẍ1 + 3ẋ1; -20K2ẋ1",
         "ẍ1 + 3x1; -20K1ẋ1",
@@ -198,7 +207,7 @@ def published_matrix(item: str, errata: bool = True) -> np.ndarray:
     unresolved and left as printed.
     """
     if item not in PUBLISHED:
-        raise ValueError(f"item: unknown published item {item!r}")
+        raise FieldError("item", f"unknown published item {item!r}")
     M = np.array(PUBLISHED[item], dtype=float)
     if errata:
         for e in ERRATA:
@@ -242,7 +251,7 @@ def mode_shape(r: int, x: npt.ArrayLike) -> np.ndarray:
     r = require_count(r, "r")
     x = require_finite(x, "x")
     if np.any(np.abs(x) > 0.5 + 1e-12):
-        raise ValueError(f"x: positions are ξ/l in [-0.5, 0.5], got {x!r}")
+        raise FieldError("x", f"positions are ξ/l in [-0.5, 0.5], got {x!r}")
     h = _half_root(r)
     if r % 2:
         return np.cosh(2 * h * x) / np.cosh(h) + np.cos(2 * h * x) / np.cos(h)
@@ -264,12 +273,12 @@ def _ratios(raw, name: str) -> tuple[float, ...]:
         try:
             raw = [float(v) for v in raw.strip().strip("[]()").split(",") if v.strip()]
         except ValueError:
-            raise ValueError(
-                f"{name}: must be a comma-separated list of numbers, got {raw!r}"
+            raise FieldError(
+                name, f"must be a comma-separated list of numbers, got {raw!r}"
             ) from None
     arr = np.atleast_1d(require_finite(raw, name))
     if arr.ndim != 1 or arr.size == 0 or np.any(arr <= 0):
-        raise ValueError(f"{name}: must be a non-empty list of (ω_n/ω_c)² > 0, got {raw!r}")
+        raise FieldError(name, f"must be a non-empty list of (ω_n/ω_c)² > 0, got {raw!r}")
     return tuple(float(v) for v in arr)
 
 
@@ -286,9 +295,9 @@ def _positions(positions, name: str = "positions") -> np.ndarray:
     x = require_finite(positions, name)
     x = np.atleast_1d(x)
     if x.ndim != 1 or x.size == 0:
-        raise ValueError(f"{name}: must be a non-empty list of ξ/l, got {positions!r}")
+        raise FieldError(name, f"must be a non-empty list of ξ/l, got {positions!r}")
     if np.any(np.abs(x) > 0.5):
-        raise ValueError(f"{name}: actuator positions are ξ/l in [-0.5, 0.5], got {positions!r}")
+        raise FieldError(name, f"actuator positions are ξ/l in [-0.5, 0.5], got {positions!r}")
     return x
 
 
@@ -481,29 +490,29 @@ class BainumBeam:
         :class:`~flexsat.control.scheduled.ScheduledStateFeedback`) in the engine's
         continuous-law mode (:func:`flexsat.sim.continuous.run`, DOP853), its states [x, ẋ]
         brought to [x, x' = ẋ/ω_c]. This is what the report's NON-LINEAR program (App. C,
-        L1898-L2116) does, with the full feedback in every equation (its FCT kept only the
+        Appendix C) does, with the full feedback in every equation (its FCT kept only the
         pitch-rate term in the pitch equation)."""
         G = require_finite(G, "G")
         G = G.reshape(-1, 1) if G.ndim == 1 else G
         if G.ndim != 2:
-            raise ValueError(
-                f"G: must be a 2-D (coordinates x actuators) array, got shape {G.shape}"
+            raise FieldError(
+                "G", f"must be a 2-D (coordinates x actuators) array, got shape {G.shape}"
             )
         n = G.shape[0]
         K_pos = np.zeros((G.shape[1], n)) if K_pos is None else require_finite(K_pos, "K_pos")
         K_rate = require_finite(K_rate, "K_rate")
         for name, K in (("K_pos", K_pos), ("K_rate", K_rate)):
             if K.shape != (G.shape[1], n):
-                raise ValueError(
-                    f"{name}: must be {G.shape[1]}x{n} (G is {n}x{G.shape[1]}), got shape {K.shape}"
+                raise FieldError(
+                    name, f"must be {G.shape[1]}x{n} (G is {n}x{G.shape[1]}), got shape {K.shape}"
                 )
         x0 = require_finite(x0, "x0").ravel()
         if x0.size == n:
             x0 = np.concatenate([x0, np.zeros(n)])
         if x0.size != 2 * n:
-            raise ValueError(f"x0: must have {n} positions or {2 * n} states, got {x0.size}")
+            raise FieldError("x0", f"must have {n} positions or {2 * n} states, got {x0.size}")
         if not tau_end > 0:
-            raise ValueError(f"tau_end: must be > 0, got {tau_end!r}")
+            raise FieldError("tau_end", f"must be > 0, got {tau_end!r}")
         gain = np.hstack([K_pos, K_rate])
         plant = self._orbit_plant(G, linearised=not nonlinear)
         wc = plant.orbit_rate
@@ -581,9 +590,10 @@ def _stiffness(stiffness, name: str = "stiffness") -> np.ndarray:
     if k.ndim == 2 and k.shape[0] == k.shape[1] and not np.any(k - np.diag(np.diag(k))):
         k = np.diag(k).copy()
     if k.ndim != 1 or k.size == 0:
-        raise ValueError(
-            f"{name}: must be the diagonal (ω/ω_c)² as a 1-D array or a diagonal "
-            f"matrix, got shape {k.shape}"
+        raise FieldError(
+            name,
+            "must be the diagonal (ω/ω_c)² as a 1-D array or a diagonal "
+            f"matrix, got shape {k.shape}",
         )
     return k
 
@@ -593,7 +603,7 @@ def _modal_input(G, n: int, name: str = "G") -> np.ndarray:
     if G.ndim == 1:
         G = G.reshape(-1, 1)
     if G.ndim != 2 or G.shape[0] != n:
-        raise ValueError(f"{name}: must have {n} rows (one per coordinate), got shape {G.shape}")
+        raise FieldError(name, f"must have {n} rows (one per coordinate), got shape {G.shape}")
     return G
 
 
@@ -607,7 +617,7 @@ def first_order(
     G = _modal_input(G, n)
     E = np.zeros((n, n)) if damping is None else require_finite(damping, "damping")
     if E.shape != (n, n):
-        raise ValueError(f"damping: must be {n}x{n}, got shape {E.shape}")
+        raise FieldError("damping", f"must be {n}x{n}, got shape {E.shape}")
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.diag(k), -E]])
     return A, np.vstack([np.zeros_like(G), G])
 
@@ -626,7 +636,7 @@ def closed_loop_matrix(
     K_rate = np.zeros((p, n)) if K_rate is None else require_finite(K_rate, "K_rate")
     for name, K in (("K_pos", K_pos), ("K_rate", K_rate)):
         if K.shape != (p, n):
-            raise ValueError(f"{name}: must be {p}x{n} (G is {n}x{p}), got shape {K.shape}")
+            raise FieldError(name, f"must be {p}x{n} (G is {n}x{p}), got shape {K.shape}")
     return A + B @ np.hstack([K_pos, K_rate])
 
 
@@ -637,7 +647,7 @@ def sorted_poles(M: npt.ArrayLike) -> np.ndarray:
 
 
 # -- Ch. II: controllability cases 1-4 and the numerical example --------------------------------
-#: (pitch in the model, bending modes, actuator positions ξ/l), seed 002 L311-L442
+#: (pitch in the model, bending modes, actuator positions ξ/l), Bainum & Reddy 1979 Ch. II §3
 CH2_LAYOUTS = {
     1: (True, 2, (-0.5,)),
     2: (False, 2, (-0.5, 0.5, 0.0)),
@@ -674,7 +684,7 @@ def chapter2_case(
     beam: BainumBeam | None = None,
     midspan: str = "exact",
 ) -> ControllabilityCase:
-    """Ch. II Case 1-4 (L307-L442): reduced pair (A, B) of eq 17 and its controllability.
+    """Ch. II Case 1-4: reduced pair (A, B) of eq 17 and its controllability.
 
     Parameters
     ----------
@@ -687,7 +697,7 @@ def chapter2_case(
         Influence coefficients a = ``pitch_influence`` and b = 2·``modal_influence``.
     midspan : {"exact", "published"}
         Mode-1 value at the midspan actuator: the Appendix A shape (-1.21564, erratum) or the
-        report's -√2 (e = √2/(M_1 l ω_c²), L351, L387).
+        report's -√2 (e = √2/(M_1 l ω_c²), Ch. II §3, Cases 2 and 4).
 
     Returns
     -------
@@ -696,9 +706,9 @@ def chapter2_case(
         frequency block test, and PBH uncontrollable eigenvalues of the full 2n-state model.
     """
     if case not in CH2_LAYOUTS:
-        raise ValueError(f"case: must be one of {sorted(CH2_LAYOUTS)}, got {case!r}")
+        raise FieldError("case", f"must be one of {sorted(CH2_LAYOUTS)}, got {case!r}")
     if midspan not in ("exact", "published"):
-        raise ValueError(f"midspan: must be 'exact' or 'published', got {midspan!r}")
+        raise FieldError("midspan", f"must be 'exact' or 'published', got {midspan!r}")
     beam = bainum() if beam is None else beam
     pitch, k, positions = CH2_LAYOUTS[case]
     F = beam.ratios(k)
@@ -750,8 +760,8 @@ def _closed_loop(stiffness, G, K_pos, K_rate) -> ClosedLoop:
 def chapter2_example(
     gains: npt.ArrayLike = PUBLISHED["ch2_gains"], beam: BainumBeam | None = None
 ) -> ClosedLoop:
-    """Ch. II §4 (L446-L468): Case 1 (one actuator at ξ = -l/2, pitch + 2 modes) with the
-    printed rate feedback f = K1 x1' + K2 x2' + K3 x3' (errata L462/L466 applied: the equations
+    """Ch. II §4: Case 1 (one actuator at ξ = -l/2, pitch + 2 modes) with the
+    printed rate feedback f = K1 x1' + K2 x2' + K3 x3' (the Ch. II §4 errata applied: the equations
     are built from eq 16).
 
     Poles with the printed gains: -0.171737 ± 1.723625j, -0.565594 ± 56.562701j,
@@ -761,7 +771,7 @@ def chapter2_example(
     beam = bainum() if beam is None else beam
     K = require_finite(gains, "gains").reshape(1, -1)
     if K.shape != (1, 3):
-        raise ValueError(f"gains: must be the three rate gains K1, K2, K3, got {gains!r}")
+        raise FieldError("gains", f"must be the three rate gains K1, K2, K3, got {gains!r}")
     G = beam.actuator_matrix(CH2_LAYOUTS[1][2], 2)
     return _closed_loop(beam.stiffness(2), G, np.zeros((1, 3)), K)
 
@@ -780,7 +790,7 @@ def decoupling_gains(
     damping: npt.ArrayLike | None = None,
     rtol: float = 1e-8,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Decoupling state feedback of Ch. III §2 (eqs 1-13, L539-L654).
+    """Decoupling state feedback of Ch. III §2 (eqs 1-13).
 
     For ``x'' + E x' + F x = G f`` (E = ``damping``, default 0; F = diag(``stiffness``)) and
     f = L x + K x' (eq 3), the closed loop x'' + (E - GK) x' + (F - GL) x = 0 is decoupled with
@@ -788,7 +798,7 @@ def decoupling_gains(
     column by column G K_i = (E - Z)_i and G L_i = (F - W)_i (eq 12).
 
     Each column is solvable iff rank G = rank [G | column] (Rouché-Capelli; the report's rule
-    "rank must be n when n > m", L628, is impossible); the solution is unique iff
+    "rank must be n when n > m", Ch. III §2, is impossible); the solution is unique iff
     rank G = m (columns of G), otherwise the minimum-norm one is returned. Ranks count singular
     values above ``rtol`` · σ_max.
 
@@ -799,7 +809,7 @@ def decoupling_gains(
     stiffness : (n,) array_like
         F = diag(A⁻¹C), e.g. (3, 3200, 28800).
     damping_ratio : float or (n,) array_like
-        ζ of each decoupled coordinate; 1 = critical (the report's choice, L802, L839).
+        ζ of each decoupled coordinate; 1 = critical (the report's choice, Ch. III §4).
     target_stiffness, damping : optional
         W (default F: rate feedback only, L = 0) and E (default 0).
 
@@ -819,15 +829,15 @@ def decoupling_gains(
     G = _modal_input(G, n)
     W = F if target_stiffness is None else _stiffness(target_stiffness, "target_stiffness")
     if W.size != n:
-        raise ValueError(f"target_stiffness: must have {n} entries, got {W.size}")
+        raise FieldError("target_stiffness", f"must have {n} entries, got {W.size}")
     if np.any(W < 0):
-        raise ValueError(f"target_stiffness: must be >= 0, got {W.tolist()}")
+        raise FieldError("target_stiffness", f"must be >= 0, got {W.tolist()}")
     zeta = np.broadcast_to(require_finite(damping_ratio, "damping_ratio"), (n,))
     if np.any(zeta < 0):
-        raise ValueError(f"damping_ratio: must be >= 0, got {damping_ratio!r}")
+        raise FieldError("damping_ratio", f"must be >= 0, got {damping_ratio!r}")
     E = np.zeros((n, n)) if damping is None else require_finite(damping, "damping")
     if E.shape != (n, n):
-        raise ValueError(f"damping: must be {n}x{n}, got shape {E.shape}")
+        raise FieldError("damping", f"must be {n}x{n}, got shape {E.shape}")
     rhs_rate = E - np.diag(2 * zeta * np.sqrt(W))
     rhs_pos = np.diag(F) - np.diag(W)
     rank_G = _svd_rank(G, rtol)
@@ -835,9 +845,10 @@ def decoupling_gains(
         for i in range(n):
             r = _svd_rank(np.column_stack([G, rhs[:, i]]), rtol)
             if r > rank_G:
-                raise ValueError(
-                    f"G: decoupling impossible: {name} column {i + 1} is not in the range of G "
-                    f"(rank G = {rank_G}, rank [G | column] = {r}); move or add actuators"
+                raise FieldError(
+                    "G",
+                    f"decoupling impossible: {name} column {i + 1} is not in the range of G "
+                    f"(rank G = {rank_G}, rank [G | column] = {r}); move or add actuators",
                 )
     G_pinv = np.linalg.pinv(G, rcond=rtol)
     return G_pinv @ rhs_pos, G_pinv @ rhs_rate
@@ -869,7 +880,7 @@ def modal_riccati(
         F_i (any real; vectorized).
     Q1, Q2 : float or array_like
         Position and rate weights, >= 0. ``Q2=None`` is F: rates "penalized by a factor of
-        frequency squared" (L873), the report's choice with Q1 = R = 1.
+        frequency squared" (Ch. III §4), the report's choice with Q1 = R = 1.
     R : float or array_like
         Control weight, > 0.
     D : float or array_like
@@ -892,12 +903,10 @@ def modal_riccati(
     R = require_finite(R, "R")
     D = require_finite(D, "D")
     if np.any(R <= 0):
-        raise ValueError(f"R: must be > 0 (positive definite control weight), got {R.tolist()}")
+        raise FieldError("R", f"must be > 0 (positive definite control weight), got {R.tolist()}")
     for name, Q in (("Q1", Q1), ("Q2", Q2)):
         if np.any(Q < 0):
-            raise ValueError(
-                f"{name}: must be >= 0 (positive semidefinite weight), got {Q.tolist()}"
-            )
+            raise FieldError(name, f"must be >= 0 (positive semidefinite weight), got {Q.tolist()}")
     F, Q1, Q2, R, D = np.broadcast_arrays(F, Q1, Q2, R, D)
     q = Q1 / R
     root = np.sqrt(F * F + q)
@@ -937,7 +946,7 @@ def modal_lqr_gains(
     ------
     ValueError
         ``G`` not square (#actuators ≠ #coordinates: use the full 2n x 2n regulator,
-        :func:`flexsat.control.lqr`, L1116) or singular (σ_min ≤ ``rcond`` σ_max, e.g. the
+        :func:`flexsat.control.lqr`, Ch. V) or singular (σ_min ≤ ``rcond`` σ_max, e.g. the
         exact-shape symmetric five-actuator layout of Ch. III Case 2); and the
         errors of :func:`modal_riccati`.
     """
@@ -945,15 +954,17 @@ def modal_lqr_gains(
     n = F.size
     G = _modal_input(G, n)
     if G.shape != (n, n):
-        raise ValueError(
-            f"G: per-mode regulator needs as many actuators as coordinates "
-            f"(u = E⁻¹u', eq 18), got shape {G.shape}; use the full regulator"
+        raise FieldError(
+            "G",
+            "per-mode regulator needs as many actuators as coordinates "
+            f"(u = E⁻¹u', eq 18), got shape {G.shape}; use the full regulator",
         )
     s = np.linalg.svd(G, compute_uv=False)
     if s[-1] <= rcond * s[0]:
-        raise ValueError(
-            f"G: singular (σ_min/σ_max = {s[-1] / s[0]:.3g} <= {rcond:g}): these "
-            f"actuators cannot drive every coordinate independently"
+        raise FieldError(
+            "G",
+            f"singular (σ_min/σ_max = {s[-1] / s[0]:.3g} <= {rcond:g}): these "
+            f"actuators cannot drive every coordinate independently",
         )
     _, S12, S22 = modal_riccati(F, Q1, Q2, R, D)
     R = np.broadcast_to(np.asarray(R, dtype=float), (n,))
@@ -963,17 +974,17 @@ def modal_lqr_gains(
 def chapter3_case(
     case: int, beam: BainumBeam | None = None, shapes: str = "published"
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(stiffness, G) of Ch. III Case 1 (pitch + 2 modes, actuators -l/2, +l/2, +l/4; L800)
-    or Case 2 (pitch + 4 modes, -l/2, -l/4, 0, +l/4, +l/2; L831-L835).
+    """(stiffness, G) of Ch. III Case 1 (pitch + 2 modes, actuators -l/2, +l/2, +l/4; Ch. III §4)
+    or Case 2 (pitch + 4 modes, -l/2, -l/4, 0, +l/4, +l/2; Ch. III §4).
 
     ``shapes="published"``: the printed G with the errata (G13 = -29.76); ``"exact"``: built
     from the Appendix A shapes (Case 2 is then singular: symmetric forces drive only modes 1
     and 3).
     """
     if case not in (1, 2):
-        raise ValueError(f"case: must be 1 or 2, got {case!r}")
+        raise FieldError("case", f"must be 1 or 2, got {case!r}")
     if shapes not in ("published", "exact"):
-        raise ValueError(f"shapes: must be 'published' or 'exact', got {shapes!r}")
+        raise FieldError("shapes", f"must be 'published' or 'exact', got {shapes!r}")
     beam = bainum() if beam is None else beam
     k = 2 if case == 1 else 4
     if shapes == "published":
@@ -989,14 +1000,14 @@ _THREE_MASS_INPUTS = {
     "interior_mass_ratio": Param(PUBLISHED["ch4_interior_mass_ratio"], rule="nonneg"),
     "spring": Param(PUBLISHED["ch4_spring"], "N/m", "nonneg"),
     "orbit_rate": Param(PUBLISHED["ch4_orbit_rate"], "rad/s", "nonneg"),
-    # None: c = 3ω0²M*(2 + m̄0) + k = 0.1862132; the report prints 0.1862522 (L1081)
+    # None: c = 3ω0²M*(2 + m̄0) + k = 0.1862132; the report prints 0.1862522 (Ch. IV example)
     "c": Param(PUBLISHED["ch4_c"], "N/m", optional=True),
 }
 
 
 @dataclass(frozen=True)
 class ThreeMassBeam:
-    """Ch. IV three-mass model (L936-L1103): end masses m, centre mass m0 = m̄0 m, total M̄,
+    """Ch. IV three-mass model: end masses m, centre mass m0 = m̄0 m, total M̄,
     two hinged cantilever springs k = 3EI/ℓ³; end deflections v1, v2 (SI, time in s)."""
 
     total_mass: float
@@ -1043,13 +1054,13 @@ class ThreeMassBeam:
     def reduced_pair(self, n_actuators: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """(A_r, B_r) of eq 4: v'' = -A_r v + B_r F (one actuator: F_v2 = 0, eq 6)."""
         if n_actuators not in (1, 2):
-            raise ValueError(f"n_actuators: must be 1 or 2, got {n_actuators!r}")
+            raise FieldError("n_actuators", f"must be 1 or 2, got {n_actuators!r}")
         a, b, c = self.a, self.b, self.c_value
         P = np.array([[a, -b], [-b, a]]) / (a * a - b * b)
         return c * P, P[:, :n_actuators]
 
     def controllability_det(self) -> float:
-        """det [B, -A_r B] with one actuator = b c/(a² - b²)² (L1011)."""
+        """det [B, -A_r B] with one actuator = b c/(a² - b²)² (Ch. IV)."""
         A_r, B_r = self.reduced_pair(1)
         return float(np.linalg.det(np.hstack([B_r, -A_r @ B_r])))
 
@@ -1062,7 +1073,7 @@ class ThreeMassBeam:
         from flexsat.dynamics.structural import Actuator, Sensor, StructuralPlant
 
         if n_actuators not in (1, 2):
-            raise ValueError(f"n_actuators: must be 1 or 2, got {n_actuators!r}")
+            raise FieldError("n_actuators", f"must be 1 or 2, got {n_actuators!r}")
         a, b = self.a, self.b
         model = SecondOrderModel(
             np.array([[a, b], [b, a]]),

@@ -53,7 +53,7 @@ import numpy as np
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
-from flexsat.input_checks import require_count
+from flexsat.input_checks import FieldError, require_count
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
@@ -107,7 +107,7 @@ def _poisson(raw, name: str) -> float:
     """Poisson's ratio (dimensionless), -1 < nu < 0.5."""
     nu = to_si(raw, "", name)
     if not -1.0 < nu < 0.5:
-        raise ValueError(f"{name}: must satisfy -1 < nu < 0.5, got {raw!r}")
+        raise FieldError(name, f"must satisfy -1 < nu < 0.5, got {raw!r}")
     return nu
 
 
@@ -231,9 +231,10 @@ class BeamCase:
                 break
             m = 2 * len(f)
         if len(own) < n:
-            raise ValueError(
-                f"n_modes: the model has {len(own)} {name} bending modes "
-                f"with n_elements = {self.n_elements}, got {n}"
+            raise FieldError(
+                "n_modes",
+                f"the model has {len(own)} {name} bending modes "
+                f"with n_elements = {self.n_elements}, got {n}",
             )
         return own[:n].copy()
 
@@ -243,7 +244,7 @@ class BeamCase:
         n = require_count(n_modes, "n_modes")
         f, _, _ = self._solve(n)
         if n > len(f):
-            raise ValueError(f"n_modes: the model has {len(f)} elastic modes, got {n}")
+            raise FieldError("n_modes", f"the model has {len(f)} elastic modes, got {n}")
         return f[:n].copy()
 
     def mode_descriptions(self, n_modes: int) -> list[str]:
@@ -263,7 +264,7 @@ class BeamCase:
         "edgewise" (alias "xy")."""
         n = require_count(n_modes, "n_modes")
         if plane not in _PLANES:
-            raise ValueError(f"plane: must be one of {sorted(_PLANES)}, got {plane!r}")
+            raise FieldError("plane", f"must be one of {sorted(_PLANES)}, got {plane!r}")
         return self._family(_PLANES[plane], n)
 
     def beta_L(self, n_modes: int, plane: str = "flatwise") -> np.ndarray:
@@ -373,9 +374,9 @@ class Fv2Case:
 
         if self.plane != "in-plane":
             # pinned tips with free rotations: no rigid-mass split a ModalModel can carry
-            raise ValueError(
-                "plane: the plant is built on the in-plane model (plane "
-                "'in-plane', the benchmark's)"
+            raise FieldError(
+                "plane",
+                "the plant is built on the in-plane model (plane 'in-plane', the benchmark's)",
             )
         mid = 100 + self.elements_per_arm // 2
         return point_force_plant(
@@ -393,7 +394,7 @@ class Fv2Case:
         n = require_count(n_modes, "n_modes")
         f = self._frequencies()
         if n > len(f):
-            raise ValueError(f"n_modes: at most {len(f)} modes are computed, got {n}")
+            raise FieldError("n_modes", f"at most {len(f)} modes are computed, got {n}")
         return f[:n].copy()
 
     def mode_details(self, n_modes: int) -> dict:

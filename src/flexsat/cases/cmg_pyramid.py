@@ -1,16 +1,16 @@
 """Gimbal runs of Vadali, Oh & Walker's single-gimbal CMG pyramid ("Preferred Gimbal Angles for
-Single Gimbal CMGs", in Junkins, Pollock & Rahman 1990, L4533-L4830): torque steering
+Single Gimbal CMGs", in Junkins, Pollock & Rahman 1990, Att. 13): torque steering
 from a gimbal set until the first singular set, the back integration to preferred angles, and
 the null-motion reorientation.
 
 Each is the plant :class:`~flexsat.dynamics.gimbal_cluster.GimbalCluster` (σ̇ = u) under a law of
 :mod:`flexsat.control.cmg_steering`, in the engine's continuous-law mode (the law at every stage
-of DOP853, rtol 1e-10): the paper's steering is continuous. The reorientation is a
-:func:`flexsat.sim.simulate` run of the triple :func:`reorient_simulation` builds (what the
-``kind: cmg`` scenario hands to the runner). Torque steering stops at the first singular set, a
-terminal condition and dense output :func:`~flexsat.sim.simulate` does not offer, so it calls
-the mode's integrator :func:`flexsat.sim.continuous.run` directly. One case per call; torques
-in rotor momenta h per second.
+of DOP853, rtol 1e-10): the paper's steering is continuous. Each run is a
+:func:`flexsat.sim.simulate` run of the triple :func:`steering_simulation` or
+:func:`reorient_simulation` builds (what the ``kind: cmg`` scenario hands to the runner); torque
+steering ends at the first singular set by the engine's stop condition
+(:class:`flexsat.sim.StopCondition` on det(CCᵀ), which also finds a gain dip narrower than an
+integrator step). One case per call; torques in rotor momenta h per second.
 """
 
 from __future__ import annotations
@@ -19,44 +19,142 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
-from flexsat.control.cmg_steering import NullMotionSteering, PseudoInverseSteering
+from flexsat.control.cmg_steering import NullMotionSteering, PseudoInverseSteering, TorqueHistory
 from flexsat.dynamics import cmg
 from flexsat.dynamics.cmg import PAPER_PERTURBATION, SKEW, GimbalRun
 from flexsat.dynamics.gimbal_cluster import GimbalCluster
-from flexsat.input_checks import require_finite
-from flexsat.sim import continuous, simulate
-from flexsat.sim.config import SimConfig
+from flexsat.input_checks import FieldError, require_finite
+from flexsat.sim import simulate
+from flexsat.sim.config import SimConfig, StopCondition
 
 if TYPE_CHECKING:
     import numpy.typing as npt
     import xarray as xr
 
+    from flexsat.units import FloatArray
+
 __all__ = [
     "gimbal_run",
+    "gimbal_set",
     "integrate_gimbals",
     "preferred_angles",
     "reorient",
     "reorient_simulation",
+    "steering_simulation",
 ]
 
 
-def _gimbal_set(sigma, n_units: int, field: str) -> np.ndarray:
-    """One gimbal set (n,), rad, checked by the kernels' rule."""
+def gimbal_set(sigma: npt.ArrayLike, n_units: int, field: str) -> FloatArray:
+    """One gimbal set (n,), rad, checked by the kernels' rule; a boolean is not an angle."""
+    if isinstance(sigma, (bool, np.bool_)) or (
+        isinstance(sigma, (list, tuple, np.ndarray))
+        and any(isinstance(v, (bool, np.bool_)) for v in np.asarray(sigma, object).ravel())
+    ):
+        raise FieldError(field, f"gimbal angles must be numbers, got {sigma!r}")
     sig = require_finite(sigma, field, "rad")
     if sig.ndim == 0 or sig.shape[-1] != n_units:
-        raise ValueError(
-            f"sigma: last axis must hold the {n_units} gimbal angles, got shape {sig.shape}"
+        raise FieldError(
+            field, f"last axis must hold the {n_units} gimbal angles, got shape {sig.shape}"
         )
     if sig.ndim != 1:
-        raise ValueError(f"{field}: one gimbal set (n,) per run, got shape {sig.shape}")
+        raise FieldError(field, f"one gimbal set (n,) per run, got shape {sig.shape}")
     return sig
+
+
+def _reversed(torque: TorqueHistory) -> Callable[[float], FloatArray]:
+    """The torque of a back integration run forward in s = −t: s ↦ −τ(−s) (σ' = −σ̇(−s), and
+    the steering is linear in τ)."""
+    if callable(torque):
+        return lambda s: -require_finite(torque(-s), "torque")
+    tq = -require_finite(torque, "torque")
+    return lambda _s: tq
+
+
+def steering_simulation(
+    sigma0: npt.ArrayLike,
+    torque: TorqueHistory,
+    t_final: float | str,
+    skew: float | str = SKEW,
+    n_units: int = 4,
+    alpha: float = 0.0,
+    threshold: float = 1e-6,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    n_out: int = 201,
+    null_target: npt.ArrayLike | None = None,
+    null_gain: float = 1.0,
+    null_alpha: float = 0.0,
+    stop_at_singular: bool = True,
+) -> tuple[GimbalCluster, PseudoInverseSteering, SimConfig, dict[str, Any]]:
+    """What :func:`integrate_gimbals` simulates: the gimbal cluster, the torque law, the
+    configuration (continuous-law mode, recorded at ``n_out`` equally spaced times over
+    |t_final|, the stop condition det(CCᵀ) <= ``threshold``) and the options of
+    :func:`flexsat.sim.simulate` (what a ``kind: cmg`` steering run hands to the runner).
+
+    A back integration (t_final < 0) runs forward in s = −t under the torque s ↦ −τ(−s)
+    (:func:`gimbal_run` with ``direction=-1`` maps it back); null motion is forward only.
+
+    Raises
+    ------
+    ValueError
+        Naming the field: a bad gimbal set (or, stopping at singular sets, one that starts
+        singular), torque, pyramid, weight, threshold, duration or sample count.
+    """
+    plant = GimbalCluster(n_units, skew)
+    n, d = plant.n_units, plant.skew
+    sig0 = gimbal_set(sigma0, n, "sigma0")
+    tf = float(require_finite(t_final, "t_final", "s"))
+    if tf == 0:
+        raise FieldError("t_final", "must be nonzero (negative integrates backward)")
+    if tf < 0 and null_target is not None:
+        raise FieldError("null_target", "null motion runs forward only (t_final > 0)")
+    thr = float(require_finite(threshold, "threshold"))
+    if thr <= 0:
+        raise FieldError("threshold", f"must be > 0, got {threshold!r}")
+    if stop_at_singular and cmg.gain(sig0, d, n) <= thr:
+        raise FieldError(
+            "sigma0",
+            "starts singular (det CCᵀ <= threshold); the pseudo-inverse "
+            "cannot steer from it (use alpha > 0 and stop_at_singular=False)",
+        )
+    if isinstance(n_out, bool) or not isinstance(n_out, (int, np.integer)) or n_out < 2:
+        raise FieldError("n_out", f"must be an integer >= 2, got {n_out!r}")
+    law = PseudoInverseSteering(
+        torque if tf > 0 else _reversed(torque),
+        d,
+        n,
+        alpha,
+        null_target,
+        null_gain,
+        null_alpha,
+    )
+
+    def gain_margin(_t: FloatArray, x: FloatArray) -> FloatArray:
+        # x (k, n_cases, n): the lowest gain of the batch
+        return np.asarray(cmg.gain(x, d, n), float).min(axis=-1) - thr
+
+    stop = StopCondition(
+        gain_margin,
+        f"singular set (det CCᵀ <= {thr:g})",
+        terminal=stop_at_singular,
+        touches=True,
+    )
+    config = SimConfig(
+        duration=abs(tf),
+        control_rate=(n_out - 1) / abs(tf),
+        substeps=1,
+        law_mode="continuous",
+        rtol=rtol,
+        atol=atol,
+        stop=stop,
+    )
+    return plant, law, config, {"initial_state": sig0, "record_states": True}
 
 
 def integrate_gimbals(
     sigma0: npt.ArrayLike,
-    torque: npt.ArrayLike | Callable[[float], npt.ArrayLike],
+    torque: TorqueHistory,
     t_final: float | str,
     skew: float | str = SKEW,
     n_units: int = 4,
@@ -72,7 +170,8 @@ def integrate_gimbals(
 ) -> GimbalRun:
     """Steer σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque(t)) from σ0 (§8.3), forward (t_final > 0) or
     backward (t_final < 0: the preferred-angle back integration), stopping when the gain
-    det(CCᵀ) falls to ``threshold`` (the engine's terminal stop condition).
+    det(CCᵀ) falls to ``threshold``: :func:`flexsat.sim.simulate` on
+    :func:`steering_simulation`.
 
     Parameters
     ----------
@@ -92,86 +191,27 @@ def integrate_gimbals(
     Returns
     -------
     GimbalRun
-        Sampled at ``n_out`` equally spaced times up to the end, or up to the singular stop.
+        Sampled at ``n_out`` equally spaced times over [0, t_final]; stopped at a singular
+        set, the samples before it and the stop itself (the exact end point).
     """
-    law = PseudoInverseSteering(torque, skew, n_units, alpha, null_target, null_gain, null_alpha)
-    plant = GimbalCluster(n_units, skew)
-    n, d = plant.n_units, plant.skew
-    sig0 = _gimbal_set(sigma0, n, "sigma0")
-    tf = float(require_finite(t_final, "t_final", "s"))
-    if tf == 0:
-        raise ValueError("t_final: must be nonzero (negative integrates backward)")
-    thr = float(require_finite(threshold, "threshold"))
-    if thr <= 0:
-        raise ValueError(f"threshold: must be > 0, got {threshold!r}")
-    if stop_at_singular and cmg.gain(sig0, d, n) <= thr:
-        raise ValueError(
-            "sigma0: starts singular (det CCᵀ <= threshold); the pseudo-inverse "
-            "cannot steer from it (use alpha > 0 and stop_at_singular=False)"
-        )
-
-    def below_threshold(_t, x):
-        return cmg.gain(x[0], d, n) - thr
-
-    run = continuous.run(
-        plant,
-        law,
-        [0.0, tf],
-        sig0,
+    plant, law, config, options = steering_simulation(
+        sigma0,
+        torque,
+        t_final,
+        skew,
+        n_units,
+        alpha,
+        threshold,
         rtol,
         atol,
-        stop=below_threshold if stop_at_singular else None,
+        n_out,
+        null_target,
+        null_gain,
+        null_alpha,
+        stop_at_singular,
     )
-
-    def sigma_at(t):
-        return run.solution(t)[..., 0, :]
-
-    t_end, singular = run.t_end, run.stopped
-    if stop_at_singular:
-        dip = _first_dip(sigma_at, run.steps, d, n, thr)
-        if dip is not None and abs(dip) < abs(t_end):
-            t_end, singular = dip, True
-    else:  # the gain on the dense output, 8 points a step: did it touch the threshold?
-        grid = np.linspace(run.steps[:-1], run.steps[1:], 9).T.ravel()
-        singular = bool(np.min(cmg.gain(sigma_at(grid), d, n)) <= thr)
-    t = np.linspace(0.0, t_end, n_out)
-    sig = sigma_at(t)
-    if t_end == run.t_end:
-        sig[-1] = run.x_end[0]  # the stop's exact end point
-    return GimbalRun(t, sig, cmg.momentum(sig, d, n), cmg.gain(sig, d, n), bool(singular))
-
-
-def _first_dip(sigma_at, steps, skew, n, thr):
-    """The earliest time the gain touches ``thr`` between the integrator's steps, or None.
-
-    The stop condition sees only sign changes at the integrator's steps. Where the commanded ḣ
-    stays normal to the singular direction the pseudo-inverse passes *through* a singularity
-    with finite rates, and det(CCᵀ) (a product of squared singular values) only touches zero: a
-    dip narrower than a step (e.g. a z torque from [45, −45, 45, −45]°, §8.3) that the stop
-    misses. So scan the dense output, 8 points a step, and refine every sampled local minimum.
-    """
-    grid = np.concatenate(
-        [np.linspace(t0, t1, 9)[:-1] for t0, t1 in zip(steps[:-1], steps[1:])] + [steps[-1:]]
-    )
-
-    def excess(t):
-        return cmg.gain(sigma_at(t), skew, n) - thr
-
-    vals = excess(grid)
-    for j in range(1, grid.size):
-        if vals[j] <= 0:
-            return brentq(excess, grid[j - 1], grid[j], xtol=1e-14)
-        if j + 1 < grid.size and vals[j] <= vals[j - 1] and vals[j] <= vals[j + 1]:
-            lo, hi = sorted((grid[j - 1], grid[j + 1]))
-            res = minimize_scalar(
-                excess,
-                bounds=(lo, hi),
-                method="bounded",
-                options={"xatol": 1e-12 * max(1.0, abs(hi))},
-            )
-            if res.fun <= 0:
-                return brentq(excess, grid[j - 1], res.x, xtol=1e-14)
-    return None
+    direction = 1.0 if float(require_finite(t_final, "t_final", "s")) > 0 else -1.0
+    return gimbal_run(plant, simulate(plant, law, config, **options).dataset, direction)
 
 
 def preferred_angles(
@@ -213,30 +253,32 @@ def preferred_angles(
     n, d = plant.n_units, plant.skew
     u = require_finite(direction, "direction")
     if u.shape != (3,):
-        raise ValueError(f"direction: must have 3 components, got shape {u.shape}")
+        raise FieldError("direction", f"must have 3 components, got shape {u.shape}")
     if perturbation is None:
         if n != 4:
-            raise ValueError(
-                f"perturbation: required for n_units = {n} (the paper's offset "
-                "is for the 4-unit pyramid)"
+            raise FieldError(
+                "perturbation",
+                f"required for n_units = {n} (the paper's offset is for the 4-unit pyramid)",
             )
         perturbation = PAPER_PERTURBATION
     dp = require_finite(perturbation, "perturbation", "rad")
     if dp.shape != (n,) or not np.any(dp):
-        raise ValueError(
-            f"perturbation: must be a nonzero offset of shape ({n},), got {np.shape(perturbation)}"
+        raise FieldError(
+            "perturbation",
+            f"must be a nonzero offset of shape ({n},), got {np.shape(perturbation)}",
         )
     _, sig_sat = cmg.envelope(u, d, n)  # normalises u and rejects u = 0
     u = u / np.linalg.norm(u)
     start = sig_sat + dp
     t_back = float(u @ cmg.momentum(start, d, n))
     if t_back <= 0:
-        raise ValueError("perturbation: moves the start set off the saturated side (uᵀh <= 0)")
+        raise FieldError("perturbation", "moves the start set off the saturated side (uᵀh <= 0)")
     run = integrate_gimbals(start, -u, -t_back, d, n, threshold=threshold, rtol=rtol, atol=atol)
     if run.singular:
-        raise ValueError(
-            f"perturbation: the back integration along {u} met a singularity at "
-            f"t = {run.t[-1]:.6g} s; try another offset"
+        raise FieldError(
+            "perturbation",
+            f"the back integration along {u} met a singularity at "
+            f"t = {run.t[-1]:.6g} s; try another offset",
         )
     return np.angle(np.exp(1j * run.sigma[-1]))
 
@@ -264,14 +306,14 @@ def reorient_simulation(
     """
     plant = GimbalCluster(n_units, skew)
     n, d = plant.n_units, plant.skew
-    sig0 = _gimbal_set(sigma0, n, "sigma0")
-    _gimbal_set(sigma_target, n, "sigma_target")
+    sig0 = gimbal_set(sigma0, n, "sigma0")
+    gimbal_set(sigma_target, n, "sigma_target")
     law = NullMotionSteering(sigma_target, gain_k, d, n, alpha)
     tf = float(require_finite(t_final, "t_final", "s"))
     if tf <= 0:
-        raise ValueError(f"t_final: must be > 0, got {t_final!r}")
+        raise FieldError("t_final", f"must be > 0, got {t_final!r}")
     if isinstance(n_out, bool) or not isinstance(n_out, (int, np.integer)) or n_out < 2:
-        raise ValueError(f"n_out: must be an integer >= 2, got {n_out!r}")
+        raise FieldError("n_out", f"must be an integer >= 2, got {n_out!r}")
     config = SimConfig(
         duration=tf,
         control_rate=(n_out - 1) / tf,
@@ -283,14 +325,17 @@ def reorient_simulation(
     return plant, law, config, {"initial_state": sig0, "record_states": True}
 
 
-def gimbal_run(plant: GimbalCluster, dataset: xr.Dataset) -> GimbalRun:
-    """The recorded run of :func:`reorient_simulation` (``dataset`` of its
-    :class:`~flexsat.sim.recording.SimResult`, one case) as a :class:`GimbalRun`
-    (``singular`` False: the null motion runs through singular sets)."""
-    t = dataset["time"].values
+def gimbal_run(plant: GimbalCluster, dataset: xr.Dataset, direction: float = 1.0) -> GimbalRun:
+    """The recorded run of :func:`steering_simulation` or :func:`reorient_simulation`
+    (``dataset`` of its :class:`~flexsat.sim.recording.SimResult`, one case) as a
+    :class:`GimbalRun`, times multiplied by ``direction`` (−1: a back integration run in
+    reversed time); ``singular`` when the run's stop condition (det(CCᵀ) <= threshold) held
+    (never for the null motion, which runs through singular sets)."""
+    t = direction * dataset["time"].values
     sig = dataset["state"].values[0]
     d, n = plant.skew, plant.n_units
-    return GimbalRun(t, sig, cmg.momentum(sig, d, n), cmg.gain(sig, d, n), False)
+    singular = bool(np.isfinite(dataset.attrs.get("stop_time", np.nan)))
+    return GimbalRun(t, sig, cmg.momentum(sig, d, n), cmg.gain(sig, d, n), singular)
 
 
 def reorient(

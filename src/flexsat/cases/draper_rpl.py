@@ -1,7 +1,7 @@
 """Draper/RPL rigid hub with four flexible appendages (Junkins & Kim 1990, Example 2).
 
 Source: Junkins & Kim, J. Astronautical Sciences 38(1), 1990 (Att. 5 of Junkins, Pollock & Rahman
-1990), L2145-L2255: Table 3 (configuration
+1990), Example 2 ("Numerical Demonstrations"): Table 3 (configuration
 parameters, entered here as printed in slug-ft-lbf-in units and converted with pint), the Ritz
 model of Eqs. 50-54, the modal reduction of Eqs. 56-58, the structural feedback of Eq. 59 with the
 converged gains G1, G2, and Table 4 (open- and closed-loop characteristics).
@@ -25,7 +25,7 @@ import scipy.linalg as sla
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
-from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
 from flexsat.units import QuantityArrayLike, to_si
 
 if TYPE_CHECKING:
@@ -34,7 +34,7 @@ if TYPE_CHECKING:
 
 SOURCE = CASES["draper_rpl"].source
 
-#: Att. 5 Table 3, exactly as printed (L2156-L2166)
+#: Att. 5 Table 3, exactly as printed
 PUBLISHED = {
     "hub_radius": "1 ft",
     "hub_inertia": "8 slug*ft**2",
@@ -47,7 +47,7 @@ PUBLISHED = {
     "tip_inertia": "0.0018 slug*ft**2",
 }
 
-#: Att. 5 converged gains of Eq. 59 (L2229-L2233) as (values, unit as implied, SI unit). The
+#: Att. 5 converged gains of Eq. 59 as (values, unit as implied, SI unit). The
 #: paper gives no unit; its model is in slug-ft-s and Dᵀx is an angle, so G1 is in ft·lbf/rad and
 #: G2 in ft·lbf·s/rad.
 PUBLISHED_GAINS = {
@@ -118,7 +118,7 @@ def comparison_functions(
         return a * np.sin(az) + s * a * az
     if derivative == 2:
         return a**2 * np.cos(az) + s * a**2
-    raise ValueError(f"derivative: must be 0, 1 or 2, got {derivative!r}")
+    raise FieldError("derivative", f"must be 0, 1 or 2, got {derivative!r}")
 
 
 def _ordinal(k: int) -> str:
@@ -286,7 +286,7 @@ class DraperRPLCase:
             return self.n_dof
         n = require_count(n, field)
         if n > self.n_dof:
-            raise ValueError(f"{field}: the model has {self.n_dof} modes, got {n}")
+            raise FieldError(field, f"the model has {self.n_dof} modes, got {n}")
         return n
 
     # -- mode descriptions ----------------------------------------------------------------------
@@ -433,8 +433,8 @@ class DraperRPLCase:
         elif normalisation == "hermitian":
             norm2 = np.einsum("ij,ik,kj->j", phi.conj(), E, phi).real
         else:
-            raise ValueError(
-                f"normalisation: must be 'plain' or 'hermitian', got {normalisation!r}"
+            raise FieldError(
+                "normalisation", f"must be 'plain' or 'hermitian', got {normalisation!r}"
             )
         return float(np.linalg.cond(phi / np.sqrt(norm2)))
 
@@ -442,12 +442,12 @@ class DraperRPLCase:
 def _gain(value, field: str, unit: str) -> np.ndarray:
     g = require_finite(value, field, unit)
     if g.shape != (3, 3):
-        raise ValueError(f"{field}: must be a 3x3 matrix (one row per input), got shape {g.shape}")
+        raise FieldError(field, f"must be a 3x3 matrix (one row per input), got shape {g.shape}")
     return g
 
 
 def published_gains() -> tuple[np.ndarray, np.ndarray]:
-    """G1 (N m/rad) and G2 (N m s/rad) of Att. 5 Eq. 59 (L2229-L2233), converted from ft·lbf."""
+    """G1 (N m/rad) and G2 (N m s/rad) of Att. 5 Eq. 59, converted from ft·lbf."""
     g1, g2 = (
         np.asarray(values) * to_si(f"1 {unit}", si_unit)
         for values, unit, si_unit in PUBLISHED_GAINS.values()

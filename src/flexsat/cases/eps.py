@@ -1,6 +1,7 @@
-"""NASA LaRC Earth Pointing Satellite (EPS) structure (EPS slew study c. 1989, L66-L136).
+"""NASA LaRC Earth Pointing Satellite (EPS) structure (EPS slew study c. 1989, "Model Development").
 
-The published data (L72-L136) are entered in ``PUBLISHED`` exactly as printed and converted with
+The published data ("Model Development") are entered in ``PUBLISHED``
+exactly as printed and converted with
 pint.  The NASTRAN deck (95 nodes, 223 elements, by J. Walz) is not reproduced and Fig. 1 is lost,
 so the geometry below is a reconstruction; every choice is a parameter and is argued in
 docs/eps.md.
@@ -36,9 +37,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from flexsat import limits
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
-from flexsat.input_checks import require_count, require_nonneg
+from flexsat.input_checks import FieldError, require_count, require_nonneg
 from flexsat.structures.mode_description import classify_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
@@ -51,7 +53,7 @@ if TYPE_CHECKING:
 
 SOURCE = CASES["eps"].source
 
-#: The EPS data exactly as published (L72-L136)
+#: The EPS data exactly as published ("Model Development")
 PUBLISHED: dict[str, Any] = {
     "total_mass": "1028 kg",
     "structural_mass": "548 kg",
@@ -75,7 +77,8 @@ PUBLISHED: dict[str, Any] = {
     "nastran_elements": 223,
 }
 
-#: L100-L125: (mode number, frequency, description) as printed; modes 1-6 are rigid (0.0 Hz)
+#: "Model Development": (mode number, frequency, description) as
+#: printed; modes 1-6 are rigid (0.0 Hz)
 PUBLISHED_MODES = (
     (7, "0.2422 Hz", "Torsion of 15 m Antenna"),
     (8, "0.4056 Hz", "z-rotation 15 m Antenna"),
@@ -93,7 +96,8 @@ PUBLISHED_MODES = (
     (20, "3.1532 Hz", "15 m Antenna mode"),
 )
 
-#: the paper's node numbers (L238-L295, L935) and the role we give them
+#: the paper's node numbers ("Actuator Placement", "Perturbation Control - Torquers + Force
+#: Actuators, 10 s Maneuver") and the role we give them
 NODE_ROLES = {
     60: "15 m antenna rim, 0° (+x, along the truss)",
     63: "15 m antenna rim, 90° (+z)",
@@ -162,9 +166,11 @@ def _published(key: str, unit: str) -> float:
     return to_si(PUBLISHED[key], unit, key)
 
 
-#: the final point-force actuators of seed 003 (L286-L295): paper node and body axis
+#: the final point-force actuators of the EPS slew study c. 1989 ("Actuator
+#: Placement"): paper node and body axis
 FINAL_FORCES = ((69, "x"), (63, "x"), (66, "y"), (66, "z"), (60, "y"), (60, "z"), (88, "x"))
-#: antenna rim nodes whose deflections the paper's goals bound (seed 003 §3.2)
+#: antenna rim nodes whose deflections the paper's goals bound (EPS slew study
+#: c. 1989, "Simulation Results")
 RIM_NODES = (66, 69, 85, 88)
 
 
@@ -288,7 +294,7 @@ class EPSCase:
         n = require_count(n_modes, "n_modes")
         ndof = len(self.assembly.dofs)
         if n + 6 > ndof:
-            raise ValueError(f"n_modes: the model has {ndof - 6} elastic modes, got {n}")
+            raise FieldError("n_modes", f"the model has {ndof - 6} elastic modes, got {n}")
         cached = self._cache.get("modes")
         if cached is None or cached.shapes.shape[1] < n + 6:
             cached = self.assembly.modes(min(max(n + 6, 26), ndof), rigid_body_modes=6)
@@ -349,7 +355,7 @@ class EPSCase:
         for d in self._classified(max_modes)[6:]:
             if d.component == "truss":
                 return d.index - 5, d.frequency_hz, str(d)
-        raise ValueError(f"max_modes: no truss-dominated mode among the first {max_modes}")
+        raise FieldError("max_modes", f"no truss-dominated mode among the first {max_modes}")
 
     def modal_model(self, n_modes: int = 45) -> ModalModel:
         """``ModalModel`` (flexsat.structures.modal_model) of the 6 rigid + ``n_modes`` elastic
@@ -375,8 +381,9 @@ class EPSCase:
             ``"flexible"``: :class:`~flexsat.dynamics.flexible_spacecraft.FlexibleSpacecraft`
             in hybrid coordinates on the free-free :meth:`modal_model` (``n_modes`` elastic
             modes), ideal torquers at the CG node (95) loading the modes there, point forces
-            ``force_<node><AXIS>`` at the paper's nodes (default the final set of seed 003
-            L286-L295: 69X, 63X, 66Y, 66Z, 60Y, 60Z, 88X) and the elastic displacements of the
+            ``force_<node><AXIS>`` at the paper's nodes (default the final set of the EPS slew
+            study c. 1989, "Actuator Placement": 69X, 63X, 66Y, 66Z, 60Y, 60Z, 88X) and
+            the elastic displacements of the
             antenna rims (nodes 66, 69, 85, 88, three axes each); ``"rigid"``:
             :class:`~flexsat.dynamics.rigid_spacecraft.RigidSpacecraft` with the model's
             inertia about its CG (the published inertia set is in :meth:`mass_properties`).
@@ -392,23 +399,24 @@ class EPSCase:
 
             return RigidSpacecraft(self.mass_properties()["inertia_center_of_mass"])
         if model != "flexible":
-            raise ValueError(f"model: must be 'flexible' or 'rigid', got {model!r}")
+            raise FieldError("model", f"must be 'flexible' or 'rigid', got {model!r}")
         from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
 
         roles = self.node_roles
 
         def node(paper, field):
             if paper not in roles:
-                raise ValueError(
-                    f"{field}: {paper!r} is not one of the paper's nodes "
-                    f"({min(roles)}-{max(roles)})"
+                raise FieldError(
+                    field, f"{paper!r} is not one of the paper's nodes ({min(roles)}-{max(roles)})"
                 )
             return roles[paper]
 
         points = [(node(int(n), "forces"), str(a).lower()) for n, a in forces]
         rims = [(node(int(n), "rim_nodes"), a) for n in rim_nodes for a in "xyz"]
+        n_modes = require_count(n_modes, "n_modes")
+        limits.check_count(n_modes, limits.MAX_MODES, "n_modes", "elastic modes of the plant")
         return FlexibleSpacecraft(
-            self.modal_model(require_count(n_modes, "n_modes")),
+            self.modal_model(n_modes),
             forces=points,
             displacements=rims,
             torque_node=roles[95],
@@ -617,10 +625,11 @@ def _actuator_mass(case: EPSCase, structural: float) -> float:
         return float(case.actuator_mass)
     act = case.total_mass - structural - case.nonstructural_mass
     if act < 0:
-        raise ValueError(
-            f"actuator_mass: balancing to total_mass = {case.total_mass:g} kg gives {act:.2f} kg "
+        raise FieldError(
+            "actuator_mass",
+            f"balancing to total_mass = {case.total_mass:g} kg gives {act:.2f} kg "
             f"(structural {structural:.2f} kg + non-structural {case.nonstructural_mass:g} kg "
-            "exceed it); give actuator_mass explicitly or raise total_mass"
+            "exceed it); give actuator_mass explicitly or raise total_mass",
         )
     return act
 
@@ -652,28 +661,27 @@ def eps(**overrides: Any) -> EPSCase:
         values["small_antenna_bay"] = nb
     for name in ("large_antenna_bay", "small_antenna_bay"):
         if values[name] > nb:
-            raise ValueError(
-                f"{name}: must be a bay number 1..truss_bays = {nb}, got {values[name]}"
-            )
+            raise FieldError(name, f"must be a bay number 1..truss_bays = {nb}, got {values[name]}")
     if values["large_antenna_bay"] == values["small_antenna_bay"]:
-        raise ValueError(
-            "small_antenna_bay: must differ from large_antenna_bay "
-            f"(both {values['large_antenna_bay']})"
+        raise FieldError(
+            "small_antenna_bay",
+            f"must differ from large_antenna_bay (both {values['large_antenna_bay']})",
         )
     if values["ribs"] < 3:
-        raise ValueError(f"ribs: must be >= 3, got {values['ribs']}")
+        raise FieldError("ribs", f"must be >= 3, got {values['ribs']}")
     share = values["large_antenna_share"]
     if share is not None and not 0 <= share <= 1:
-        raise ValueError(f"large_antenna_share: must be in [0, 1], got {share!r}")
+        raise FieldError("large_antenna_share", f"must be in [0, 1], got {share!r}")
     if not values["poisson_ratio"] < 0.5:
-        raise ValueError(f"poisson_ratio: must be < 0.5, got {values['poisson_ratio']!r}")
+        raise FieldError("poisson_ratio", f"must be < 0.5, got {values['poisson_ratio']!r}")
     if not values["damping"] < 1:
-        raise ValueError(f"damping: must be a modal damping ratio < 1, got {values['damping']!r}")
+        raise FieldError("damping", f"must be a modal damping ratio < 1, got {values['damping']!r}")
     if values["tube_wall"] > values["tube_outer_diameter"] / 2:
-        raise ValueError(
-            f"tube_wall: must be <= tube_outer_diameter / 2 "
+        raise FieldError(
+            "tube_wall",
+            "must be <= tube_outer_diameter / 2 "
             f"= {values['tube_outer_diameter'] / 2:g} m, "
-            f"got {values['tube_wall']:g} m"
+            f"got {values['tube_wall']:g} m",
         )
     case = EPSCase(**values)
     case._model  # noqa: B018 -- build now: one clear message at construction

@@ -1,4 +1,5 @@
-"""The seed 003 actuator-placement study on the reconstructed EPS (L238-L253).
+"""The actuator-placement study of the EPS slew study c. 1989 ("Actuator Placement") on the
+reconstructed EPS.
 
 The generic H2 ranking is :func:`flexsat.analysis.placement.h2_actuator_ranking`; this module
 supplies the EPS candidates, disturbance and outputs of the paper and its published top 5
@@ -18,7 +19,8 @@ from flexsat.units import FloatArray
 if TYPE_CHECKING:
     from flexsat.structures.modal_model import ModalModel
 
-#: Seed 003 L238–L253: candidate force-actuator nodes (x, y, z each), outputs, published top 5.
+#: EPS slew study c. 1989, "Actuator Placement": candidate force-actuator nodes (x, y, z
+#: each), outputs, published top 5.
 EPS_CANDIDATE_NODES = (69, 66, 63, 60, 52, 95, 94, 88, 78)
 EPS_OUTPUT_NODES = (69, 66, 95)
 EPS_DISTURBANCE_NODE = 95
@@ -28,7 +30,8 @@ EPS_PUBLISHED_TOP5 = ("69X", "66X", "63X", "60X", "88X")
 def eps_h2_setup(
     case: EPSCase | None = None, n_modes: int = 20
 ) -> tuple[ModalModel, dict[str, FloatArray], FloatArray, FloatArray]:
-    """The seed 003 placement set-up (L238–L253) on the reconstructed EPS model.
+    """The placement set-up of the EPS slew study c. 1989 ("Actuator Placement") on the
+    reconstructed EPS model.
 
     Candidates: force actuators at nodes 69, 66, 63, 60, 52, 95, 94, 88, 78 along x, y, z
     (27, labelled "69X" …; the paper's axis letters are taken as ours, an assumption: the
@@ -70,7 +73,8 @@ def eps_h2_ranking(
     measure: str = "energy",
 ) -> H2Ranking:
     """:func:`~flexsat.analysis.placement.h2_actuator_ranking` on :func:`eps_h2_setup`; compare
-    ``.top(5)`` with ``EPS_PUBLISHED_TOP5`` = 69X, 66X, 63X, 60X, 88X (seed 003 L248–L253)."""
+    ``.top(5)`` with ``EPS_PUBLISHED_TOP5`` = 69X, 66X, 63X, 60X, 88X (EPS
+    slew study c. 1989, "Actuator Placement")."""
     model, actuators, disturbance, outputs = eps_h2_setup(case, n_modes)
     return h2_actuator_ranking(
         model, actuators, disturbance, outputs, gamma=gamma, rigid=rigid, measure=measure

@@ -17,7 +17,8 @@ the continuous one.
    point is held at the detector centre, because images of one plane of targets fix only a
    homography, 8 numbers, per camera); a second hammer blow is filmed at the field rate, every
    field is triangulated, and ERA on the target z displacements gives the mode shapes.
-3. **Reaction-wheel test** (Att. 6 L2673): random torques from the wheels, recorded by the strain
+3. **Reaction-wheel test** (Att. 6 "Frequency Response Functions"): random torques from the
+   wheels, recorded by the strain
    gauges; the H1 FRFs and an OKID realization (arbitrary inputs).
 4. **Model update**, ``update`` =
    ``"creamer_junkins"`` (Att. 7 Eqs. 1–9 and 24): the substructure stiffness scalings from the
@@ -588,7 +589,8 @@ def simulate_records(
     gains = np.asarray(cfg.wheel_torque_constants, float)
     if gains.size:
         # the wheels deliver k x the commanded torque; the record holds the command (Att. 6
-        # L2525: B carries each motor's current-to-torque constant, not known a priori)
+        # Att. 6 "Input and Strain Transformation Matrix": B carries each motor's current-to-torque
+        # constant, not known a priori)
         wheel_test = Measurement(
             wheel_test.abscissa,
             wheel_test.outputs,

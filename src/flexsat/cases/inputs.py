@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from flexsat import limits
-from flexsat.input_checks import require_count, require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_count, require_nonneg, require_positive
 from flexsat.units import to_si
 
 _QUANTITY_RULES = {"positive": require_positive, "nonneg": require_nonneg}
@@ -63,16 +63,17 @@ class Param:
 
     def __post_init__(self) -> None:
         if isinstance(self.rule, str) and self.rule not in (*_QUANTITY_RULES, *_OTHER_RULES):
-            raise ValueError(
-                f"rule: must be one of {[*_QUANTITY_RULES, *_OTHER_RULES]} or a "
-                f"callable, got {self.rule!r}"
+            raise FieldError(
+                "rule",
+                f"must be one of {[*_QUANTITY_RULES, *_OTHER_RULES]} or a "
+                f"callable, got {self.rule!r}",
             )
         if self.limit and not (self.rule == "count" and hasattr(limits, self.limit)):
-            raise ValueError(
-                f"limit: must name a flexsat.limits constant of a 'count', got {self.limit!r}"
+            raise FieldError(
+                "limit", f"must name a flexsat.limits constant of a 'count', got {self.limit!r}"
             )
         if self.rule == "choice" and not self.choices:
-            raise ValueError("choices: a 'choice' input needs at least one choice")
+            raise FieldError("choices", "a 'choice' input needs at least one choice")
 
     def read(self, raw: Any, name: str) -> Any:
         """``raw`` (an override or the default) checked and converted by the rule."""
@@ -106,13 +107,13 @@ def _flag(raw: object, name: str) -> bool:
         return bool(raw)
     if isinstance(raw, str) and raw.strip().lower() in ("true", "false"):
         return raw.strip().lower() == "true"
-    raise ValueError(f"{name}: must be true or false, got {raw!r}")
+    raise FieldError(name, f"must be true or false, got {raw!r}")
 
 
 def _choice(raw: object, name: str, choices: tuple[str, ...]) -> str:
     if isinstance(raw, str) and raw.strip().lower() in choices:
         return raw.strip().lower()
-    raise ValueError(f"{name}: must be one of {list(choices)}, got {raw!r}")
+    raise FieldError(name, f"must be one of {list(choices)}, got {raw!r}")
 
 
 def read_inputs(

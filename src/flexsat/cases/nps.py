@@ -3,10 +3,12 @@
 J. A. Hailey, C. D. Sortun and B. N. Agrawal, "Experimental Verification of Attitude Control
 Techniques for Slew Maneuvers of Flexible Spacecraft", NPS (c. 1992): a rigid central body
 (hub) on an air bearing carrying a cantilevered flexible appendage, "a reflector supported by a
-flexible astromast" (L21), planar rotation θ about the vertical z axis. The paper prints only:
-fundamental cantilever frequency 0.14 Hz (L21), six cantilever modes with 0.4 % damping (L181),
+flexible astromast" ("Experimental Setup"), planar rotation θ about the vertical z axis. The
+paper prints only: fundamental cantilever frequency 0.14 Hz ("Experimental Setup"), six
+cantilever modes with 0.4 % damping ("Proportional - Derivative Control"),
 and the rigid-body PD design ω_n = 0.06 Hz, ζ = 0.9 → k = 1.3985 N·m/rad, kτ = 6.6773 N·m·s/rad
-(L208–L220). Its finite-element model (GIFTS), the geometry and the inertias are not published.
+("Proportional - Derivative Control"). Its finite-element model (GIFTS), the geometry and
+the inertias are not published.
 
 Model used here (every dimension a parameter, documented in docs/nps.md):
 
@@ -57,18 +59,18 @@ ModeCount: TypeAlias = int | Literal["all"] | None
 
 SOURCE = CASES["nps"].source
 
-#: values printed in seed 001, exactly as printed
+#: values printed in Hailey, Sortun & Agrawal c. 1992, exactly as printed
 PUBLISHED: dict[str, Any] = {
-    "cantilever_frequency": "0.14 Hz",  # L21 "fundamental cantilever frequency"
-    "n_modes": 6,  # L181 "first six cantilever modes"
-    "damping": "0.4 percent",  # L181 "0.4 percent critical damping", all modes
-    "controller_frequency": "0.06 Hz",  # L212 ω_n
-    "controller_damping": 0.9,  # L208 ξ
-    "position_gain": "1.3985 N*m/rad",  # L218 k
-    "rate_gain": "6.6773 N*m*s/rad",  # L220 kτ
-    "pd_slew_angle": "60 deg",  # L204
-    "sinusoid_period": "10 s",  # L290
-    "lqg_slew_angle": "30 deg",  # L375
+    "cantilever_frequency": "0.14 Hz",  # "Experimental Setup": "fundamental cantilever frequency"
+    "n_modes": 6,  # "Proportional - Derivative Control": "first six cantilever modes"
+    "damping": "0.4 percent",  # ibid.: "0.4 percent critical damping", all modes
+    "controller_frequency": "0.06 Hz",  # "Proportional - Derivative Control" ω_n
+    "controller_damping": 0.9,  # "Proportional - Derivative Control" ξ
+    "position_gain": "1.3985 N*m/rad",  # "Proportional - Derivative Control" k
+    "rate_gain": "6.6773 N*m*s/rad",  # "Proportional - Derivative Control" kτ
+    "pd_slew_angle": "60 deg",  # "Proportional - Derivative Control"
+    "sinusoid_period": "10 s",  # "Torque Shaping -- Sinusoidal"
+    "lqg_slew_angle": "30 deg",  # "Optimal Control"
 }
 
 #: I = k / ω_n² = 9.84012 and kτ / (2 ζ ω_n) = 9.84005 kg m² (derived, not printed); 9.84
@@ -435,7 +437,7 @@ class NPSCase:
 
     @property
     def slew_angle(self) -> float:
-        """60°, the PD and torque-shaping slews (L204), rad."""
+        """60°, the PD and torque-shaping slews ("Proportional - Derivative Control"), rad."""
         return to_si(PUBLISHED["pd_slew_angle"], "rad")
 
 

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy.typing as npt
 
 from flexsat.dynamics.structural import Actuator, Sensor, StructuralPlant
-from flexsat.input_checks import require_count, require_nonneg
+from flexsat.input_checks import FieldError, require_count, require_nonneg
 from flexsat.structures.modal_model import ModalModel
 
 if TYPE_CHECKING:
@@ -51,14 +51,14 @@ def point_force_plant(
         Reference point of the modal model (the support of a clamped structure), m.
     """
     if axis not in _AXES:
-        raise ValueError(f"axis: must be one of {_AXES}, got {axis!r}")
+        raise FieldError("axis", f"must be one of {_AXES}, got {axis!r}")
     zeta = require_nonneg(damping, "damping", "")
     modal = ModalModel.from_fe(modes, damping=float(zeta), reference=reference)
     ids = set(modal.node_ids.tolist())
     for field, nodes in (("force_node", [force_node]), ("sensor_nodes", list(sensor_nodes))):
         for node in nodes:
             if node not in ids:
-                raise ValueError(f"{field}: node {node!r} is not a node of the model")
+                raise FieldError(field, f"node {node!r} is not a node of the model")
     sensors = [Sensor(f"displacement_{n}", "displacement", n, axis) for n in sensor_nodes]
     sensors += [
         Sensor(f"displacement_{n}_dot", "displacement", n, axis, rate=True) for n in sensor_nodes
@@ -73,7 +73,7 @@ def first_modes(structure: Structure, n_modes: int, rigid_body_modes: int | None
     n = require_count(n_modes, "n_modes")
     asm = structure.assemble()
     if n > asm.n_dofs:
-        raise ValueError(f"n_modes: the model has {asm.n_dofs} dofs, got {n}")
+        raise FieldError("n_modes", f"the model has {asm.n_dofs} dofs, got {n}")
     return asm.modes(n, rigid_body_modes=rigid_body_modes)
 
 

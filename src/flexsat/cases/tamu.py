@@ -1,6 +1,6 @@
 """Texas A&M hub + four appendages maneuver experiment (Junkins, Rahman & Bang 1990).
 
-Parameters are Att. 3 Table 1 of Junkins, Pollock & Rahman 1990 (L1302-L1323), entered in the
+Parameters are Att. 3 Table 1 of Junkins, Pollock & Rahman 1990, entered in the
 published oz-in-s units and converted with pint. Table 1 is inconsistent: the four appendages
 with their tip masses alone have a rigid inertia 4 [ρ (l³ − l0³)/3 + m l²] = 2163.6 oz-in-s²,
 above the stated total 2128 oz-in-s², and no hub inertia is given (the paper is ambiguous here).

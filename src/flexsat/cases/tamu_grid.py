@@ -3,18 +3,18 @@ r"""The TAMU 5′ × 5′ monolithic aluminium grid (Texas A&M, 1987–1989), ha
 Sources (Att. 4, 6 and 8 of Junkins, Pollock & Rahman 1990, the Texas A&M final report, AFOSR
 F49620-87-C-0078):
 
-* Att. 4 (Kim & Junkins), Table 1 "Material Properties of Grid Model" (L1648–L1655): EI, GJ,
-  ρA, ρJ, printed in lb-in-s units with an SI column; Fig. 1 caption (L1805): "first natural
+* Att. 4 (Kim & Junkins), Table 1 "Material Properties of Grid Model": EI, GJ,
+  ρA, ρJ, printed in lb-in-s units with an SI column; Fig. 1 caption: "first natural
   frequency is .8 Hz, 10 modes have natural frequencies below 30 Hz"; output y_d is the normal
   displacement of the lower-left corner.
-* Att. 6 (James & Junkins, AAS 89-425), L2405–L2511: 25 structure nodes, nodes 21–25 fixed,
+* Att. 6 (James & Junkins, AAS 89-425): 25 structure nodes, nodes 21–25 fixed,
   36 Paz grid elements, 60 dof; node i+5 directly above node i; three Clifton Precision
   AS-780D-100 motors with brass reaction wheels at nodes 3, 7 and 9 (masses not given); gravity
-  stiffening by a pendulum model; Table 1 (L2656–L2665): modelled .809, 2.21, 4.48, 5.65,
-  7.76 Hz and experiment .877, 2.19, 4.81, 6.17, 8.18 Hz; Table 2 (L2681–L2705): modelled and
+  stiffening by a pendulum model; Table 1: modelled .809, 2.21, 4.48, 5.65,
+  7.76 Hz and experiment .877, 2.19, 4.81, 6.17, 8.18 Hz; Table 2: modelled and
   measured mode-1 shape, mass normalised with the analytical mass matrix.
-* Att. 8 (Junkins & James, AAS 88-015), L3195: "5′ × 5′ grid, with 12.5″ × 2″ × 1/8″ members",
-  3003-H14; Figure 4 table (L3234–L3246): modelled .90, 2.34, 4.85, 6.05, 7.78, 12.84 Hz (the
+* Att. 8 (Junkins & James, AAS 88-015), §4.0: "5′ × 5′ grid, with 12.5″ × 2″ × 1/8″ members",
+  3003-H14; Figure 4 table: modelled .90, 2.34, 4.85, 6.05, 7.78, 12.84 Hz (the
   FE model of Das et al., ref. 8), measured .91, 2.07, 4.76, 5.14, 6.57, 10.86 Hz.
 
 Model (interpretation choices, all documented in docs/structures_benchmarks.md)
@@ -30,7 +30,7 @@ Model (interpretation choices, all documented in docs/structures_benchmarks.md)
   (``Structure.add_grid``, dofs uz, rx, ry).  The 4 members between the clamped top-row nodes
   carry no dof and are not modelled, which is how 25 nodes give 36 elements and 20 × 3 = 60 dof.
 * Node spacing ``s`` = **14.5 in** (default), the centre-line pitch of 2″-wide members with
-  12.5″ clear length: 5 × 2″ + 4 × 12.5″ = 60″ = 5′ (Att. 8, L3195).  The 15 in of a naive
+  12.5″ clear length: 5 × 2″ + 4 × 12.5″ = 60″ = 5′ (Att. 8, §4.0).  The 15 in of a naive
   60″ / 4 bays is available as an override (``spacing="15 in"``).
 * Gravity stiffening: the grid element has no axial dof (``gravity_preload`` gives grid members
   no force), so the tension of each vertical member is found by statics, as in the paper's
@@ -57,7 +57,7 @@ import numpy.typing as npt
 
 from flexsat.cases.inputs import Param, read_inputs
 from flexsat.catalog import CASES
-from flexsat.input_checks import require_count
+from flexsat.input_checks import FieldError, require_count
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material
 from flexsat.units import Q_, to_si
@@ -70,7 +70,7 @@ SOURCE = CASES["tamu_grid"].source
 
 #: Published values, exactly as printed ("lb" of the paper is pound-force: lbf in pint)
 PUBLISHED: dict[str, Any] = {
-    # Att. 4 Table 1 (L1648-L1655), US column as used; the SI column as printed
+    # Att. 4 Table 1, US column as used; the SI column as printed
     "EI": "3255.2 lbf*in**2",
     "GJ": "4943.0 lbf*in**2",
     "rho_A": "0.0000648 lbf*s**2/in**2",  # printed "lb·sec²·in²" [OCR]; mass per length
@@ -79,7 +79,7 @@ PUBLISHED: dict[str, Any] = {
     "GJ_si_printed": "14.18550 N*m**2",
     "rho_A_si_printed": "0.44678 kg/m",
     "rho_J_si_printed": "0.0000965 kg*m",
-    # geometry: Att. 4 caption, Att. 6 L2415/L2495, Att. 8 L3195
+    # geometry: Att. 4 caption, Att. 6 "Hardware Description" and "Initial Model", Att. 8 §4.0
     "size": "5 ft",
     "member_clear_length": "12.5 in",
     "member_width": "2 in",
@@ -87,18 +87,18 @@ PUBLISHED: dict[str, Any] = {
     "nodes": 25,
     "elements": 36,
     "dof": 60,
-    # Att. 4 Fig. 1 caption (L1805)
+    # Att. 4 Fig. 1 caption
     "first_frequency": "0.8 Hz",
     "modes_below_30_hz": 10,
-    # Att. 8 Figure 4 table (L3234-L3246), Hz
+    # Att. 8 Figure 4 table, Hz
     "att8_modelled_hz": (0.90, 2.34, 4.85, 6.05, 7.78, 12.84),
     "att8_measured_hz": (0.91, 2.07, 4.76, 5.14, 6.57, 10.86),
     "att8_identified_hz": (0.92, 2.06, 4.76, 5.58, 7.09, 11.57),
-    # Att. 6 Table 1 (L2656-L2665), Hz (model with motors and gravity correction)
+    # Att. 6 Table 1, Hz (model with motors and gravity correction)
     "att6_modelled_hz": (0.809, 2.21, 4.48, 5.65, 7.76),
     "att6_experiment_hz": (0.877, 2.19, 4.81, 6.17, 8.18),
     "att6_damping_ratio": (0.00603, 0.00489, 0.01105, 0.00596, 0.01293),
-    # Att. 6 Table 2 (L2681-L2705): mode-1 z amplitude at nodes 1-20, mass-normalised (US units)
+    # Att. 6 Table 2: mode-1 z amplitude at nodes 1-20, mass-normalised (US units)
     "att6_mode1_modelled": (
         8.25,
         8.35,
@@ -143,7 +143,7 @@ PUBLISHED: dict[str, Any] = {
         1.59,
         1.43,
     ),
-    # Att. 10 Table 1 (L3599-L3611), a second measurement campaign, Hz
+    # Att. 10 Table 1, a second measurement campaign, Hz
     "att10_measured_hz": (0.92, 2.32, 4.93, 6.38, 7.27),
 }
 
@@ -170,7 +170,7 @@ def _nodes(raw: Any, name: str) -> tuple[int, ...]:
         try:
             items = list(raw)
         except TypeError:
-            raise ValueError(f"{name}: must be node ids in 1..20, got {raw!r}") from None
+            raise FieldError(name, f"must be node ids in 1..20, got {raw!r}") from None
     out = []
     for item in items:
         try:
@@ -179,12 +179,12 @@ def _nodes(raw: Any, name: str) -> tuple[int, ...]:
             try:
                 n = require_count(float(item), name)
             except (TypeError, ValueError):
-                raise ValueError(f"{name}: must be node ids in 1..20, got {raw!r}") from None
+                raise FieldError(name, f"must be node ids in 1..20, got {raw!r}") from None
         if not 1 <= n <= 20:
-            raise ValueError(f"{name}: must be node ids in 1..20 (21-25 are clamped), got {n}")
+            raise FieldError(name, f"must be node ids in 1..20 (21-25 are clamped), got {n}")
         out.append(n)
     if len(set(out)) != len(out):
-        raise ValueError(f"{name}: node ids must be distinct, got {raw!r}")
+        raise FieldError(name, f"node ids must be distinct, got {raw!r}")
     return tuple(out)
 
 
@@ -286,13 +286,13 @@ class TamuGridCase:
         scale = dict(stiffness_scale or {})
         for name, factor in scale.items():
             if name not in SUBSTRUCTURES:
-                raise ValueError(
-                    f"stiffness_scale: unknown substructure {name!r}; known: "
-                    f"{', '.join(SUBSTRUCTURES)}"
+                raise FieldError(
+                    "stiffness_scale",
+                    f"unknown substructure {name!r}; known: {', '.join(SUBSTRUCTURES)}",
                 )
             if not (np.isfinite(factor) and factor > 0):
-                raise ValueError(
-                    f"stiffness_scale: {name!r} must be a finite factor > 0, got {factor!r}"
+                raise FieldError(
+                    "stiffness_scale", f"{name!r} must be a finite factor > 0, got {factor!r}"
                 )
         s = Structure("TAMU 5 ft x 5 ft grid")
         for n in range(1, 26):
@@ -352,7 +352,7 @@ class TamuGridCase:
         n = require_count(n_modes, "n_modes")
         f = self._modes(self.gravity if gravity is None else gravity).frequencies_hz
         if n > len(f):
-            raise ValueError(f"n_modes: the grid has {len(f)} modes, got {n}")
+            raise FieldError("n_modes", f"the grid has {len(f)} modes, got {n}")
         return f[:n].copy()
 
     def mode_descriptions(self, n_modes: int) -> list[str]:
@@ -360,7 +360,7 @@ class TamuGridCase:
         n = require_count(n_modes, "n_modes")
         modes = self._modes(self.gravity)
         if n > modes.shapes.shape[1]:
-            raise ValueError(f"n_modes: the grid has {modes.shapes.shape[1]} modes, got {n}")
+            raise FieldError("n_modes", f"the grid has {modes.shapes.shape[1]} modes, got {n}")
         uz = modes.at_nodes()[:n, :20, 2].reshape(n, 4, 5)  # rows 1-4 (bottom first), columns
         out = []
         for w in uz:
@@ -449,7 +449,7 @@ class TamuGridCase:
         n = require_count(n_modes, "n_modes")
         modes = self._modes(self.gravity if gravity is None else gravity)
         if n > modes.shapes.shape[1]:
-            raise ValueError(f"n_modes: the grid has {modes.shapes.shape[1]} modes, got {n}")
+            raise FieldError("n_modes", f"the grid has {modes.shapes.shape[1]} modes, got {n}")
         cut = FEModes(modes.omegas[:n], modes.shapes[:, :n], modes.assembly)
         return ModalModel.from_fe(
             cut,
@@ -468,7 +468,7 @@ def _grid_plant(
     n = require_count(n_modes, "n_modes")
     modes = case._modes(case.gravity)
     if n > modes.shapes.shape[1]:
-        raise ValueError(f"n_modes: the grid has {modes.shapes.shape[1]} modes, got {n}")
+        raise FieldError("n_modes", f"the grid has {modes.shapes.shape[1]} modes, got {n}")
     cut = FEModes(modes.omegas[:n], modes.shapes[:, :n], modes.assembly)
     return point_force_plant(
         cut, force_node, sensor_nodes, "z", damping, (2 * case.spacing, 4 * case.spacing, 0.0)

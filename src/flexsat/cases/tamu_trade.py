@@ -1,4 +1,5 @@
-"""The seed 000 trade surfaces of the TAMU 40° maneuver: T, E(T) and μ_max over (α, u_max).
+"""The Junkins, Pollock & Rahman 1990 trade surfaces of the TAMU 40° maneuver: T, E(T) and
+μ_max over (α, u_max).
 
 Junkins, Rahman & Bang, Att. 3 Figs. 5–7 and Eqs. 12–16, 22 (Junkins, Pollock & Rahman 1990),
 on :func:`flexsat.cases.tamu`: the published

@@ -1,9 +1,10 @@
-"""Vadali & Kim's tethered-subsatellite retrieval (AIAA 90-1197; seed 000, Att. 12,
-L4258-L4531): the Shuttle case and the published numbers
+"""Vadali & Kim's tethered-subsatellite retrieval (AIAA 90-1197; Junkins, Pollock & Rahman 1990,
+Att. 12): the Shuttle case and the published numbers
 of each example, :func:`closed_loop` (one law on the tether, through the engine's continuous-law
 or sampled mode) and :func:`rerun` (an example under continuous feedback, DOP853).
 
-The case (L4397-L4401): circular orbit at 220 km (Ω = 0.07068 rad/min), reference length
+The case (Att. 12, "Tension Control Law Design Based on Decoupled Equations of Motion"): circular
+orbit at 220 km (Ω = 0.07068 rad/min), reference length
 L = 20 km, subsatellite 22.7 kg; start λ = 1, θ = φ = 5°, at rest.
 """
 
@@ -18,8 +19,10 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat.dynamics.tether import ClosedLoopRun, TetheredSubsatellite, TetherScales
+from flexsat.input_checks import FieldError
 
 if TYPE_CHECKING:
+    import numpy.typing as npt
     import xarray as xr
 
     from flexsat.control.tether_laws import CoupledTetherLaw, DecoupledTetherLaw, TetherRateLaw
@@ -28,14 +31,15 @@ if TYPE_CHECKING:
     #: the tether laws a case run takes
     TetherLaw = DecoupledTetherLaw | CoupledTetherLaw | TetherRateLaw
 
-SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12, L4258-L4531"
+SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12"
 #: settling bands of a retrieval: |θ| within the runs' initial 5° (rad), |λ − λ_f| within 2 %
 #: of the length change (:func:`flexsat.analysis.settling.settling_time`)
 SETTLING_PITCH_BAND = np.radians(5.0)
 SETTLING_LENGTH_FRACTION = 0.02
-#: the paper's scales (L4397-L4401)
+#: the paper's scales (Att. 12 "Tension Control Law Design Based on Decoupled Equations of Motion")
 PAPER_SCALES: dict[str, str] = dict(mass="22.7 kg", length="20 km", altitude="220 km")
-#: [λ, θ, φ, λ', θ', φ'] at the start of every example (L4399)
+#: [λ, θ, φ, λ', θ', φ'] at the start of every example (Att. 12 "Tension Control Law Design Based on
+#: Decoupled Equations of Motion")
 INITIAL = (1.0, np.radians(5.0), np.radians(5.0), 0.0, 0.0, 0.0)
 
 
@@ -50,7 +54,7 @@ class Example:
     final_length: float
     orbits: float
     published: dict[str, float]
-    lines: str
+    locator: str
 
 
 #: the examples of Figs. 2-8
@@ -70,7 +74,7 @@ EXAMPLES = {
                 thrust_impulse_2_orbits_Ns=481.0,
                 settling_orbits=2.0,
             ),
-            "L4401",
+            "Figs. 2-3",
         ),
         Example(
             "V11",
@@ -79,7 +83,7 @@ EXAMPLES = {
             0.01,
             2.0,
             dict(thrust_index_2_orbits=0.24, thrust_impulse_2_orbits_Ns=128.4, max_pitch_deg=29.3),
-            "L4447-L4449",
+            "Figs. 4-5",
         ),
         Example(
             "V12",
@@ -88,7 +92,7 @@ EXAMPLES = {
             0.01,
             2.0,
             dict(thrust_index_2_orbits=0.258),
-            "L4447",
+            "Figs. 4-5",
         ),
         Example(
             "V13 K1=1.0",
@@ -97,7 +101,7 @@ EXAMPLES = {
             0.001,
             6.0,
             dict(final_pitch_deg=180.0),
-            "L4449",
+            "Fig. 6",
         ),
         Example(
             "V13 K1=0.9",
@@ -106,7 +110,7 @@ EXAMPLES = {
             0.001,
             2.0,
             dict(max_pitch_deg=21.9),
-            "L4449",
+            "Fig. 7",
         ),
         Example(
             "V15",
@@ -115,7 +119,7 @@ EXAMPLES = {
             0.01,
             3.0,
             dict(initial_rate_m_s=30.0),
-            "L4465",
+            "'A Tether Rate Control Law', Fig. 8",
         ),
     )
 }
@@ -140,7 +144,7 @@ def make_law(
         return CoupledTetherLaw(final_length=final_length, scales=scales, **gains)
     if law == "rate":
         return TetherRateLaw(final_length=final_length, scales=scales, **gains)
-    raise ValueError(f"law: must be 'decoupled', 'coupled' or 'rate', got {law!r}")
+    raise FieldError("law", f"must be 'decoupled', 'coupled' or 'rate', got {law!r}")
 
 
 def paper_scales() -> TetherScales:
@@ -150,6 +154,95 @@ def paper_scales() -> TetherScales:
 
 #: how the law meets the tether: continuous feedback (the paper's), or held samples
 INTEGRATORS = ("continuous", "sampled")
+
+#: DOP853 right-hand-side evaluations per radian of the closed loop's fastest oscillation at
+#: the continuous mode's rtol 1e-10 (accuracy-limited: 140-900 measured for K1 = 1 ... 1e6,
+#: tests/cases/test_tether_cost.py), and per unit of its fastest decay (stability-limited:
+#: 1-17 measured)
+EVALUATIONS_PER_RADIAN = 1000.0
+EVALUATIONS_PER_DECAY = 20.0
+
+
+def closed_loop_rhs(law: TetherLaw, x: np.ndarray) -> np.ndarray:
+    """x' of the closed loop (Eq. 4 with the law), nondimensional, at x (..., 6): λ' is the
+    law's under rate control (then x[..., 3] is ignored and its rate is 0)."""
+    from flexsat.dynamics.tether import accelerations
+
+    u, F = law.nondimensional(x)
+    if law.writes[0] == "reel_rate":
+        x = np.concatenate([x[..., :3], u[..., None] + 0 * x[..., :1], x[..., 4:]], -1)
+        acc = accelerations(x, 0.0, F)
+        return np.stack([u, x[..., 4], x[..., 5], 0 * u, acc[..., 1], acc[..., 2]], -1)
+    return np.concatenate([x[..., 3:], accelerations(x, u, F)], -1)
+
+
+def closed_loop_rates(law: TetherLaw, x: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """(fastest oscillation |Im s|, fastest decay or growth |Re s|) per case of the closed
+    loop linearised at the nondimensional state x (6,) or (n_cases, 6), rad per unit τ: the
+    eigenvalues s of its Jacobian, by central differences (step 1e-6 relative)."""
+    x = np.broadcast_to(np.asarray(x, float), (max(law.n_cases, 1), 6)).copy()
+    jac = np.empty(x.shape + (6,))
+    for i in range(6):
+        h = 1e-6 * np.maximum(1.0, np.abs(x[:, i]))
+        up, down = x.copy(), x.copy()
+        up[:, i] += h
+        down[:, i] -= h
+        jac[..., i] = (closed_loop_rhs(law, up) - closed_loop_rhs(law, down)) / (2 * h[:, None])
+    if not np.isfinite(jac).all():  # gains so large that the rates overflow
+        return np.full(len(x), np.inf), np.full(len(x), np.inf)
+    s = np.linalg.eigvals(jac)
+    return np.abs(s.imag).max(-1), np.abs(s.real).max(-1)
+
+
+def continuous_evaluations(law: TetherLaw, initial: npt.ArrayLike, tau_end: float) -> float:
+    r"""Estimated right-hand-side evaluations of a continuous-law run of ``law`` from
+    ``initial`` to τ = ``tau_end``: an explicit Runge-Kutta method takes steps h with
+    h|s| bounded by its accuracy on an oscillation (|Im s|) or its stability on a decay
+    (|Re s|) (Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.4, and II, §IV.2), so
+
+    .. math:: n pprox 	au_{end}\,(c_{osc}\max|\mathrm{Im}\,s| + c_{dec}\max|\mathrm{Re}\,s|)
+
+    with the eigenvalues s of the linearised closed loop at the start and at the target
+    (λ_f, at rest), the fastest over both and the cases; c from :data:`EVALUATIONS_PER_RADIAN`
+    and :data:`EVALUATIONS_PER_DECAY` (measured). A scale, not a count: it decides whether a
+    run can finish, before it starts."""
+    start = np.asarray(initial, float)
+    target = np.zeros((max(law.n_cases, 1), 6))
+    target[:, 0] = np.broadcast_to(law.final_length, target.shape[:1])
+    cost = 0.0
+    for x in (start, target):
+        osc, dec = closed_loop_rates(law, x)
+        cost = max(cost, float(np.max(EVALUATIONS_PER_RADIAN * osc + EVALUATIONS_PER_DECAY * dec)))
+    return tau_end * cost
+
+
+def check_continuous_cost(law: TetherLaw, initial: npt.ArrayLike, tau_end: float) -> None:
+    """Refuse a continuous-law run whose :func:`continuous_evaluations` exceed
+    :data:`flexsat.limits.MAX_ADAPTIVE_EVALUATIONS` (stiff gains would make the adaptive
+    integrator crawl for hours).
+
+    Raises
+    ------
+    flexsat.input_checks.FieldError
+        Naming ``gains``.
+    """
+    from flexsat import limits
+    from flexsat.input_checks import FieldError
+
+    n = continuous_evaluations(law, initial, tau_end)
+    if not n <= limits.MAX_ADAPTIVE_EVALUATIONS:
+        gains = ", ".join(
+            f"{g} = {np.max(getattr(law, g)):.3g}"
+            for g in ("K1", "K2", "K3", "K4")
+            if hasattr(law, g)
+        )
+        raise FieldError(
+            "gains",
+            f"{gains} make a closed loop so fast that integrating it over "
+            f"{tau_end / (2 * np.pi):.3g} orbits takes about {n:.3g} evaluations, above the "
+            f"limit {limits.MAX_ADAPTIVE_EVALUATIONS:,} (flexsat.limits."
+            "MAX_ADAPTIVE_EVALUATIONS): smaller gains, fewer orbits, or integrator: sampled",
+        )
 
 
 def closed_loop(
@@ -221,15 +314,24 @@ def tether_simulation(
     Raises
     ------
     ValueError
-        For a bad grid, mode or state.
+        For a bad grid, mode or state, or gains too stiff for the continuous integrator
+        (:func:`check_continuous_cost`).
     """
+    from flexsat.input_checks import FieldError, require_finite
     from flexsat.sim.config import SimConfig
 
     if integrator not in INTEGRATORS:
-        raise ValueError(f"integrator: must be one of {INTEGRATORS}, got {integrator!r}")
+        raise FieldError("integrator", f"must be one of {INTEGRATORS}, got {integrator!r}")
     grid = np.asarray(tau, float)
     if grid.ndim != 1 or grid.size < 2 or grid[0] != 0 or not np.allclose(np.diff(grid), grid[1]):
-        raise ValueError(f"tau: must be a uniform grid from 0 of >= 2 times, got {grid!r}")
+        raise FieldError("tau", f"must be a uniform grid from 0 of >= 2 times, got {grid!r}")
+    start = require_finite(initial, "initial")
+    if start.ndim not in (1, 2) or start.shape[-1] != 6:
+        raise FieldError(
+            "initial", f"must be [λ, θ, φ, λ', θ', φ'] (6,) or (n_cases, 6), got {start.shape}"
+        )
+    if integrator == "continuous":
+        check_continuous_cost(law, start, float(grid[-1]))
     rate = law.writes[0] == "reel_rate"
     scales = law.scales
     plant = TetheredSubsatellite(scales, control="rate" if rate else "tension")
@@ -297,14 +399,14 @@ def measures(
     }
     index = float(run.thrust_index[0, -1])
     # settled: pitch within the initial 5° and length within 2 % of its change, together
-    # ("λ and θ reach their final values in nearly two orbits", L4401, read so)
+    # ("λ and θ reach their final values in nearly two orbits", Att. 12 Figs. 2-3, read so)
     lam, theta = x[:, 0], x[:, 1]
     settle = settling_time(
         run.tau,
         (theta, lam - final_length),
         (SETTLING_PITCH_BAND, SETTLING_LENGTH_FRACTION * abs(lam[0] - final_length)),
     )
-    # the paper's window for the index is two orbits (L4401, L4447)
+    # the paper's window for the index is two orbits (Att. 12 Figs. 2-5)
     two = (
         float(np.interp(4 * np.pi, run.tau, run.thrust_index[0]))
         if run.tau[-1] >= 4 * np.pi * (1 - 1e-12)
@@ -328,10 +430,16 @@ def measures(
 
 
 __all__ = [
+    "EVALUATIONS_PER_DECAY",
+    "EVALUATIONS_PER_RADIAN",
     "EXAMPLES",
     "INTEGRATORS",
+    "check_continuous_cost",
     "closed_loop",
+    "closed_loop_rates",
+    "closed_loop_rhs",
     "closed_loop_run",
+    "continuous_evaluations",
     "Example",
     "INITIAL",
     "PAPER_SCALES",

@@ -8,8 +8,8 @@ import the case modules inside ``compute``, so a broken case fails its own check
 
 Adding a check is one entry in a module's ``CHECKS``::
 
-    Check("nps", "PD rate gain kτ", "Hailey, Sortun & Agrawal c. 1992, L220", 6.6773, "N m s/rad",
-          lambda: float(_case().pd_gains().kd), atol=5e-5)   # half a unit in the last digit
+    Check("nps", "PD rate gain kτ", "Hailey, Sortun & Agrawal c. 1992, after Eq. 24", 6.6773,
+          "N m s/rad", lambda: float(_case().pd_gains().kd), atol=5e-5)  # half a unit, last digit
 
 or, for a printed column, :func:`series`. A published number that is an erratum, or that the
 model deviates from for a documented reason, carries a :class:`Discrepancy` (the value computed
@@ -27,6 +27,7 @@ import importlib
 from collections.abc import Iterable
 
 from flexsat.checks.core import COLUMNS, STATUSES, Check, CheckResult, Discrepancy, evaluate, series
+from flexsat.input_checks import FieldError
 
 #: the topic modules of :mod:`flexsat.checks`, in table order (issues #2, #3, #4, then #5)
 MODULES = (
@@ -123,7 +124,7 @@ def select_checks(
     known = case_names(checks)
     unknown = [n for n in names if n not in known]
     if unknown:
-        raise ValueError(f"case: no checks for {', '.join(map(repr, unknown))}; known: {known}")
+        raise FieldError("case", f"no checks for {', '.join(map(repr, unknown))}; known: {known}")
     return [c for c in checks if c.case in names]
 
 

@@ -5,23 +5,23 @@ NASA CR-158684 (flexsat.cases.bainum).
 closed-loop roots are the eigenvalues of the case's plant's linear part (``plant.linear_part()``)
 under the published rate gains, and the responses are runs of :func:`flexsat.sim.simulate` of
 that plant under a :class:`flexsat.control.ScheduledStateFeedback` built from the published
-gains, from the report's initial state (0.01 in every position coordinate, rates zero; L468,
-L843):
+gains, from the report's initial state (0.01 in every position coordinate, rates zero; Ch. II §4,
+Ch. III §4):
 
-- Ch. II (L446-L490): one actuator at ξ = -l/2, pitch + 2 modes, f = K1 θ' + K2 z1' + K3 z2'
-  with the printed K = (-0.00577, -0.05656, -0.01695) (L468), on the **linear** plant
+- Ch. II §4: one actuator at ξ = -l/2, pitch + 2 modes, f = K1 θ' + K2 z1' + K3 z2'
+  with the printed K = (-0.00577, -0.05656, -0.01695) (Ch. II §4), on the **linear** plant
   ``bainum().linear_plant((-0.5,), 2)`` (eqs 5-6; its influence column is the report's
   (59.52, 20, 20): the Appendix A shapes are exactly 2 at the end);
-- Ch. III Case 1 (L798-L806): actuators at (-l/2, +l/2, +l/4), the printed decoupling gains
-  (L804), on the beam-in-orbit plant (:class:`flexsat.dynamics.orbit.BeamInOrbit`) with the
-  **printed** influence matrix G (L800, erratum G13 = -29.76): the printed gains were computed
+- Ch. III Case 1: actuators at (-l/2, +l/2, +l/4), the printed decoupling gains
+  (Ch. III §4), on the beam-in-orbit plant (:class:`flexsat.dynamics.orbit.BeamInOrbit`) with the
+  **printed** influence matrix G (Ch. III §4, erratum G13 = -29.76): the printed gains were computed
   with its G33 = 9.3, which the exact shapes (11.695) of ``linear_plant`` do not reproduce. Its
   roots come from its linear part (eqs 5-6); its response is the **nonlinear** run (eqs 1-2,
   as the report's NON-LINEAR program, App. C, with the full feedback in every equation): at these
   amplitudes it is within 1e-6 of the linear one (tests/cases/test_bainum.py), far inside the
   printed figures;
-- Ch. III Case 2 (L829-L841): pitch + 4 modes, five actuators, the printed G (L835) and the
-  printed decoupling gains with the erratum K51 = -1.167 (L841): closed-loop roots only (its
+- Ch. III Case 2: pitch + 4 modes, five actuators, the printed G (Ch. III §4) and the
+  printed decoupling gains with the erratum K51 = -1.167 (Ch. III §4): closed-loop roots only (its
   responses need a few thousand samples per second: too slow for the table).
 
 The report's time is τ = ω_c t and its rates d/dτ; the plants run in seconds, so the gains
@@ -43,13 +43,13 @@ error).
 reproduce. The roots of the closed-loop characteristic equation (16) with the printed c,
 K1 = 0.4728, K2 = 0.4 are checked against the values as corrected by the developers (the printed
 roots carry about three figures and the complex pair's real part is printed 10 times too large,
-erratum L1097-L1101). Both λ and the roots are computed on the model's plant
+erratum in the Ch. IV numerical example). Both λ and the roots are computed on the model's plant
 (``ThreeMassBeam.plant``, a :class:`flexsat.dynamics.structural.StructuralPlant`): λ from its M
 and K, the roots as the eigenvalues of its linear part under the feedback of eq. 13, not from
 the closed forms of eqs 7-8 and 16 (they agree to 2e-15 relative,
 tests/cases/test_bainum_plant.py).
 
-Not checked here: the Ch. III decoupling and per-mode regulator gain matrices (L800-L880, with
+Not checked here: the Ch. III decoupling and per-mode regulator gain matrices (with
 errata), compared element-wise against matrices printed to the figures they carry
 (tests/cases/test_bainum.py).
 """
@@ -63,6 +63,7 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat.checks.core import Check, series
+from flexsat.input_checks import FieldError
 
 if TYPE_CHECKING:
     from flexsat.cases.bainum import BainumBeam, ThreeMassBeam
@@ -72,7 +73,7 @@ if TYPE_CHECKING:
 
 SOURCE = "Bainum & Reddy 1979"
 
-#: initial position of every coordinate (θ rad, z = A/l), rates zero (L468, L843)
+#: initial position of every coordinate (θ rad, z = A/l), rates zero (Ch. II §4, Ch. III §4)
 _X0 = 0.01
 
 
@@ -180,7 +181,7 @@ def refined_peak(tau: np.ndarray, y: npt.ArrayLike) -> tuple[float, float]:
     a = np.abs(np.asarray(y, dtype=float))
     i = int(np.argmax(a))
     if i == 0 or i == a.size - 1:
-        raise ValueError("y: the peak is at an end of the run; lengthen it")
+        raise FieldError("y", "the peak is at an end of the run; lengthen it")
     y0, y1, y2 = a[i - 1], a[i], a[i + 1]
     d = 0.5 * (y0 - y2) / (y0 - 2 * y1 + y2)
     return float(y1 - 0.25 * (y0 - y2) * d), float(tau[i] + d * (tau[1] - tau[0]))
@@ -224,10 +225,10 @@ def _damping(root: complex) -> float:
     return float(-root.real / abs(root))
 
 
-_CH2 = f"{SOURCE}, Ch. II §4 example (L446-L468; Fig. 2 lost)"
+_CH2 = f"{SOURCE}, Ch. II §4 example (Fig. 2 lost)"
 _CH2_ROOTS = f"{_CH2}, closed-loop roots recomputed from the printed gains (not printed)"
 _CH2_RESP = f"{_CH2}, linear response recomputed from the printed gains (figure lost)"
-_CH3 = f"{SOURCE}, Ch. III Case 1 (L798-L806; Fig. 2 lost)"
+_CH3 = f"{SOURCE}, Ch. III Case 1 (Fig. 2 lost)"
 _CH3_ROOTS = f"{_CH3}, closed-loop roots recomputed from the printed K, G13 = -29.76"
 _CH3_RESP = f"{_CH3}, peak actuator forces recomputed from the printed K (figure lost)"
 _CORE = "computed on the simulation core: "
@@ -235,8 +236,8 @@ _CORE = "computed on the simulation core: "
 
 @lru_cache(maxsize=1)
 def _ch3_case2_roots() -> np.ndarray:
-    """Ch. III Case 2 (pitch + 4 modes, five actuators, L829-L841): the beam-in-orbit plant with
-    the printed G (L835) under the printed decoupling gains with the erratum K51 = -1.167."""
+    """Ch. III Case 2 (pitch + 4 modes, five actuators): the beam-in-orbit plant with
+    the printed G (Ch. III §4) under the printed decoupling gains with the erratum K51 = -1.167."""
     from flexsat.cases.bainum import chapter3_case, published_matrix
     from flexsat.dynamics.orbit import BeamInOrbit
 
@@ -426,12 +427,9 @@ _CH3_CHECKS = [
     ),
 ]
 
-# Ch. III Case 2, the printed decoupling gains (K51 = -1.167, erratum L841): roots printed in
+# Ch. III Case 2, the printed decoupling gains (K51 = -1.167, erratum, Ch. III §4): roots printed in
 # the recomputation to 5 decimals (the pitch pair) or 4: half a unit of the last digit
-_CASE2 = (
-    f"{SOURCE}, Ch. III Case 2 (L829-L841), closed-loop roots recomputed from the printed K "
-    "(K51 = -1.167)"
-)
+_CASE2 = f"{SOURCE}, Ch. III Case 2, closed-loop roots recomputed from the printed K (K51 = -1.167)"
 
 
 def _case2_values() -> list[float]:
@@ -500,17 +498,17 @@ def _roots() -> np.ndarray:
     )
 
 
-# the roots as corrected by the developers (errata for L1091-L1101: the printed ones
+# the roots as corrected by the developers (errata for the Ch. IV roots: the printed ones
 # come from single-precision root finding and the pair's real part is printed 10× too large);
 # the corrected values carry 6 figures (4 for the pair's real part): half a unit in the last
-_ROOTS = f"{SOURCE}, Ch. IV eq. 16 roots (L1091-L1101), errata corrected"
+_ROOTS = f"{SOURCE}, Ch. IV eq. 16 roots, errata corrected"
 
 _CH4_CHECKS = [
     # printed to 5 and 6 figures and exact given the printed m, k, c: half a unit
     Check(
         "bainum",
         "λ1, three-mass model",
-        f"{SOURCE}, Ch. IV (L1083)",
+        f"{SOURCE}, Ch. IV numerical example",
         5.5876e-4,
         "",
         lambda: _lambdas()[0],
@@ -519,7 +517,7 @@ _CH4_CHECKS = [
     Check(
         "bainum",
         "λ2, three-mass model",
-        f"{SOURCE}, Ch. IV (L1085)",
+        f"{SOURCE}, Ch. IV numerical example",
         1.67627e-3,
         "",
         lambda: _lambdas()[1],

@@ -1,6 +1,6 @@
 """Single-gimbal CMG pyramid and the space-station CMG loop (issue 14): Vadali, Oh & Walker,
 "Preferred Gimbal Angles for Single Gimbal Control Moment Gyros", Junkins,
-Pollock & Rahman 1990, L4533–L4830 (docs/cmg.md; tests/dynamics/test_cmg.py,
+Pollock & Rahman 1990, Att. 13 (docs/cmg.md; tests/dynamics/test_cmg.py,
 tests/cases/test_space_station_cmg.py).
 
 Momenta in rotor momenta h; the paper's "unit +x torque" is the demand ḣ = +x (the spacecraft
@@ -103,7 +103,7 @@ CHECKS: list[Check] = [
     Check(
         "cmg",
         "gain det(CCᵀ) at σ = [−60, 60, 120, −120]° (V1)",
-        f"{SOURCE}, L4624",
+        f"{SOURCE}, Att. 13 'Determination of Preferred Initial Gimbal Angles'",
         1.1854,
         "",
         lambda: _gain([-60.0, 60.0, 120.0, -120.0]),
@@ -113,7 +113,7 @@ CHECKS: list[Check] = [
     Check(
         "cmg",
         "saturation momentum along +x, σ = [−90, 180, 90, 0]° (V2)",
-        f"{SOURCE}, L4624",
+        f"{SOURCE}, Att. 13 'Determination of Preferred Initial Gimbal Angles'",
         3.1545,
         "h",
         lambda: _hx([-90.0, 180.0, 90.0, 0.0]),
@@ -123,7 +123,7 @@ CHECKS: list[Check] = [
     Check(
         "cmg",
         "|h| at the internal singularity from σ = 0, +x demand (V3)",
-        f"{SOURCE}, L4620",
+        f"{SOURCE}, Att. 13 'Determination of Preferred Initial Gimbal Angles'",
         1.15,
         "h",
         lambda: float(np.linalg.norm(_v3().h[-1])),
@@ -132,7 +132,7 @@ CHECKS: list[Check] = [
     Check(
         "cmg",
         "σ3 at that singularity (V3)",
-        f"{SOURCE}, L4620",
+        f"{SOURCE}, Att. 13 'Determination of Preferred Initial Gimbal Angles'",
         -90.0,
         "deg",
         lambda: float(np.rad2deg(_v3().sigma[-1, 2])),
@@ -151,7 +151,7 @@ CHECKS: list[Check] = [
         Check(
             "cmg",
             f"back-integrated preferred set σ{i + 1} (V4)",
-            f"{SOURCE}, L4624",
+            f"{SOURCE}, Att. 13 'Determination of Preferred Initial Gimbal Angles'",
             p,
             "deg",
             partial(_preferred_angle, i),
@@ -164,7 +164,7 @@ CHECKS: list[Check] = [
         Check(
             "cmg",
             f"momentum h{'xyz'[i]} at the end of the back integration (V4)",
-            f"{SOURCE}, L4624",
+            f"{SOURCE}, Att. 13 'Determination of Preferred Initial Gimbal Angles'",
             p,
             "h",
             partial(_back_momentum, i),
@@ -177,7 +177,7 @@ CHECKS: list[Check] = [
     Check(
         "cmg",
         "Kurokawa demand: saturation time from [−120, −60, 60, 120]° (V6)",
-        f"{SOURCE}, L4648",
+        f"{SOURCE}, Att. 13 'Determination of Preferred Initial Gimbal Angles'",
         10.0,
         "s",
         _kurokawa_saturation,
@@ -187,7 +187,7 @@ CHECKS: list[Check] = [
     Check(
         "cmg",
         "Bedrossian demand: singular time from σ = 0 (V7)",
-        f"{SOURCE}, L4650",
+        f"{SOURCE}, Att. 13 Fig. 6",
         1.5,
         "s",
         _bedrossian_singular,
@@ -198,7 +198,7 @@ CHECKS: list[Check] = [
     Check(
         "cmg",
         "null-motion reorientation 0 → [45, −45, 45, −45]°: final σ1 (V8)",
-        f"{SOURCE}, L4754-L4756",
+        f"{SOURCE}, Att. 13 Eq. 17, Fig. 12",
         45.0,
         "deg",
         _reoriented_sigma1,
@@ -208,7 +208,7 @@ CHECKS: list[Check] = [
     Check(
         "cmg",
         "space station, σ(0) = 0: singular time (V9)",
-        f"{SOURCE}, L4722",
+        f"{SOURCE}, Att. 13 Fig. 10",
         720.0,
         "s",
         lambda: float(_station_zero().t[-1]),

@@ -1,7 +1,7 @@
 """The published-number check: one value printed in a source, recomputed live, and a tolerance.
 
-A :class:`Check` names the case, the quantity, the source (seed file and equation, table or
-line, or a published reference), the value as printed (``published``, in ``unit``) and a
+A :class:`Check` names the case, the quantity, the source (short citation and equation, table
+or section, or a published reference), the value as printed (``published``, in ``unit``) and a
 ``compute`` callable that recomputes it from the code base each time it is run. Nothing computed
 is stored: :func:`evaluate` calls ``compute`` and compares.
 
@@ -33,6 +33,7 @@ from dataclasses import dataclass
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
+from flexsat.input_checks import FieldError
 from flexsat.references import cite, references
 
 if TYPE_CHECKING:
@@ -76,9 +77,9 @@ class Discrepancy:
 
     def __post_init__(self) -> None:
         if not math.isfinite(self.value):
-            raise ValueError(f"discrepancy.value: must be finite, got {self.value!r}")
+            raise FieldError("discrepancy.value", f"must be finite, got {self.value!r}")
         if not isinstance(self.explanation, str) or not self.explanation.strip():
-            raise ValueError("discrepancy.explanation: must be a non-empty string")
+            raise FieldError("discrepancy.explanation", "must be a non-empty string")
 
 
 @dataclass(frozen=True)
@@ -92,7 +93,7 @@ class Check:
     quantity : str
         What is compared, short (e.g. ``"ω_4, open loop"``).
     source : str
-        Seed file and equation/table/line, or the published reference.
+        Short citation and equation/table/section, or the published reference.
     published : float
         The value as printed, in ``unit``.
     unit : str
@@ -124,17 +125,17 @@ class Check:
     def __post_init__(self) -> None:
         for name in ("case", "quantity", "source"):
             if not isinstance(getattr(self, name), str) or not getattr(self, name).strip():
-                raise ValueError(f"{name}: must be a non-empty string, got {getattr(self, name)!r}")
+                raise FieldError(name, f"must be a non-empty string, got {getattr(self, name)!r}")
         if self.rtol is None and self.atol is None:
             raise ValueError(f"{self.case} / {self.quantity}: give rtol or atol (or both)")
         for name in ("rtol", "atol"):
             value = getattr(self, name)
             if value is not None and not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"{name}: must be a finite number >= 0, got {value!r}")
+                raise FieldError(name, f"must be a finite number >= 0, got {value!r}")
         if not math.isfinite(self.published):
-            raise ValueError(f"published: must be finite, got {self.published!r}")
+            raise FieldError("published", f"must be finite, got {self.published!r}")
         if not callable(self.compute):
-            raise ValueError("compute: must be callable with no arguments")
+            raise FieldError("compute", "must be callable with no arguments")
         if self.discrepancy is not None and self.passes(self.discrepancy.value):
             raise ValueError(
                 f"{self.case} / {self.quantity}: discrepancy.value "
@@ -310,8 +311,8 @@ def series(
     remarks = list(notes) if notes is not None else [""] * len(values_published)
     explained = list(discrepancies) if discrepancies is not None else [None] * len(values_published)
     if not len(names) == len(values_published) == len(remarks) == len(explained):
-        raise ValueError(
-            "series: quantities, published, notes and discrepancies must have the same length"
+        raise FieldError(
+            "series", "quantities, published, notes and discrepancies must have the same length"
         )
     return [
         Check(case, q, source, float(p), unit, partial(_entry, values, i), rtol, atol, note, d)

@@ -1,5 +1,5 @@
 """Draper/RPL hub + four appendages (issue #3): Junkins, Pollock & Rahman 1990, Att. 5 Table 4
-(L2235-L2248), gains of Eq. 59 (L2229-L2233) (docs/draper_rpl.md, tests/cases/test_draper_rpl.py).
+(Att. 5 Table 4), gains of Eq. 59 (docs/draper_rpl.md, tests/cases/test_draper_rpl.py).
 
 Not checked: EI = 74.5985 lb ft² and J = 28.1963 slug ft² are derived, not
 printed: the gains are inputs.
@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 
     from flexsat.cases.draper_rpl import DraperRPLCase
 
-TABLE4 = "Junkins, Pollock & Rahman 1990, Att. 5 Table 4 (L2235-L2248)"
+TABLE4 = "Junkins, Pollock & Rahman 1990, Att. 5 Table 4"
 OPEN = (0.0, 4.3724, 7.9070, 51.4510, 52.8058, 157.5566, 158.3659, 313.7099, 314.3402)
 CLOSED_OMEGA = (0.3000, 4.3726, 7.9071, 52.0041, 53.0653, 158.0285, 158.5273, 308.8039, 311.7689)
 CLOSED_ZETA_OMEGA = (0.2000, 0.2061, 0.2539, 5.3354, 8.0875, 14.0467, 21.4808, 34.8815, 22.6602)
@@ -59,7 +59,7 @@ CHECKS: list[Check] = series(
 CHECKS += series(
     "draper_rpl",
     [f"ω_{i + 1}, closed loop" for i in range(len(CLOSED_OMEGA))],
-    f"{TABLE4}, gains L2229-L2233",
+    f"{TABLE4}, gains of Eq. 59",
     CLOSED_OMEGA,
     "rad/s",
     lambda: _closed_loop()[0],
@@ -68,7 +68,7 @@ CHECKS += series(
 CHECKS += series(
     "draper_rpl",
     [f"ζω_{i + 1}, closed loop" for i in range(len(CLOSED_ZETA_OMEGA))],
-    f"{TABLE4}, gains L2229-L2233",
+    f"{TABLE4}, gains of Eq. 59",
     CLOSED_ZETA_OMEGA,
     "rad/s",
     lambda: _closed_loop()[1],

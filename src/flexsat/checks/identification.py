@@ -103,7 +103,7 @@ def _counts(key: str) -> float:
     }[key]
 
 
-_TABLE2 = f"{SOURCE}, Att. 7 Table 2 (L2962-L2969), starting model"
+_TABLE2 = f"{SOURCE}, Att. 7 Table 2, starting model"
 _MODE2 = Discrepancy(
     TRUE_RAD_S[1] * (0.9 / 1.1) ** 0.5,
     (
@@ -116,8 +116,8 @@ _MODE2 = Discrepancy(
         "The arm model is unpublished, so the printed value is taken to be a misprint."
     ),
 )
-_ATT8 = f"{SOURCE}, Att. 8 (L3149-L3153), 2 cameras x 9 parameters"
-_ATT6 = f"{SOURCE}, Att. 6 eqs. (30)-(31) (L2592-L2618), 20 targets, 2 cameras"
+_ATT8 = f"{SOURCE}, Att. 8 §2.0, 2 cameras x 9 parameters"
+_ATT6 = f"{SOURCE}, Att. 6 eqs. (30)-(31), 20 targets, 2 cameras"
 _V0 = (
     "13 parameters per camera, v0 included: the transcribed list drops v0, and only 13 "
     "give 166 and 86"

@@ -57,7 +57,7 @@ CHECKS: list[Check] = [
     Check(
         "nps",
         "first cantilever frequency, 20 FE elements",
-        f"{SOURCE}, L21",
+        f"{SOURCE}, 'Experimental Setup'",
         0.14,
         "Hz",
         lambda: _case().modal_model().frequencies_hz[0],
@@ -67,7 +67,7 @@ CHECKS: list[Check] = [
     Check(
         "nps",
         "first cantilever frequency, exact beam",
-        f"{SOURCE}, L21",
+        f"{SOURCE}, 'Experimental Setup'",
         0.14,
         "Hz",
         _exact_cantilever_hz,
@@ -77,7 +77,7 @@ CHECKS: list[Check] = [
     Check(
         "nps",
         "PD position gain k (ω_n = 0.06 Hz, ξ = 0.9)",
-        f"{SOURCE}, L208-L218",
+        f"{SOURCE}, 'Proportional - Derivative Control'",
         1.3985,
         "N m/rad",
         lambda: float(_pd().kp),
@@ -86,7 +86,7 @@ CHECKS: list[Check] = [
     Check(
         "nps",
         "PD rate gain kτ (ω_n = 0.06 Hz, ξ = 0.9)",
-        f"{SOURCE}, L208-L220",
+        f"{SOURCE}, 'Proportional - Derivative Control'",
         6.6773,
         "N m s/rad",
         lambda: float(_pd().kd),

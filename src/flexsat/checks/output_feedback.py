@@ -1,6 +1,6 @@
 """Symmetric collocated output feedback, Att. 5 Example 1 (issue #4): Junkins
-& Kim 1990 (Att. 5 of Junkins, Pollock & Rahman 1990), Tables 1-2 (L2131-L2143) with the
-converged gains of L2121 (flexsat.control.output_feedback).
+& Kim 1990 (Att. 5 of Junkins, Pollock & Rahman 1990), Tables 1-2 with the
+converged gains of its Example 1 (flexsat.control.output_feedback).
 
 The plant (M = I, K, D of Example 1) and the gains are the printed inputs; the checks recompute
 the open- and closed-loop eigenvalues and the condition numbers of the modal matrix (plain
@@ -23,8 +23,8 @@ if TYPE_CHECKING:
     from flexsat.control.output_feedback import SymmetricOutputFeedback
 
 SOURCE = "Junkins, Pollock & Rahman 1990"
-TABLE1 = f"{SOURCE}, Att. 5 Table 1 (L2131-L2136)"
-TABLE2 = f"{SOURCE}, Att. 5 Table 2 (L2138-L2143), gains L2121"
+TABLE1 = f"{SOURCE}, Att. 5 Table 1"
+TABLE2 = f"{SOURCE}, Att. 5 Table 2, Example 1 gains"
 OPEN_OMEGA = (1.4447, 4.4721, 6.9219)
 OPEN_CONDITION = 9.4903
 CLOSED_REAL = (-0.8833, -1.0574, -0.5322)

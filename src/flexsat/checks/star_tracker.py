@@ -1,5 +1,5 @@
-"""Star-pattern identification (issue 14 part 4): Junkins, Pollock & Rahman 1990, §2.3.4 (L278–L282)
-and the summary (L153) (docs/star_tracker.md; tests/identify/).
+"""Star-pattern identification (issue 14 part 4): Junkins, Pollock & Rahman 1990, §2.3.4
+and the Summary (docs/star_tracker.md; tests/identify/).
 
 The paper's numbers are claims, not a table: stars are identified "with essentially probability
 1" when >= 3 inter-star-angle triplets match the catalogue within 5″ in each of two fields of
@@ -27,8 +27,8 @@ if TYPE_CHECKING:
     from flexsat.attitude.star_tracker import MonteCarloResult
 
 SOURCE = "Junkins, Pollock & Rahman 1990"
-_RULE = f"{SOURCE}, §2.3.4 (L280): >= 3 triplets within 5″ in each of 2 fields"
-_ACCURACY = f"{SOURCE}, L153 and §2.3.4 (L282): sub-five arc-second attitude"
+_RULE = f"{SOURCE}, §2.3.4: >= 3 triplets within 5″ in each of 2 fields"
+_ACCURACY = f"{SOURCE}, 'Summary' and §2.3.4: sub-five arc-second attitude"
 _SETUP = (
     "1,000 random attitudes, synthetic sky to m = 6.5, two 12° cameras 90° apart, 0.1 px "
     "centroid noise, 2 false stars and 20 % missing stars per frame"

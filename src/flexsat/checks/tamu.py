@@ -2,9 +2,9 @@
 
 Checked:
 
-- the rigid 40° maneuver times T of the smoothed bang-bang reference (Att. 3 Eq. 16, L1152,
+- the rigid 40° maneuver times T of the smoothed bang-bang reference (Att. 3 Eq. 16,
   evaluated: the paper gives the law, not a table of T), as :mod:`flexsat.cases.tamu` builds them;
-- the numbers the paper reads off its experiments (Att. 3 §V, L1222-L1226; Att. 2 L865), against
+- the numbers the paper reads off its experiments (Att. 3 §V; Att. 2 Fig. 9), against
   the embedded default scenario (``flexsat run``) plus Law I with g2 = 0 (Att. 3 Fig. 9), same
   hardware, noise and seed as ``tests/test_default_scenario.py``.
 
@@ -67,7 +67,7 @@ def _metric(run: str, name: str) -> float:
     return value
 
 
-_T_SOURCE = f"{SOURCE}, Att. 3 Eq. 16 (L1152), evaluated"  # the law, tabulated by the developers
+_T_SOURCE = f"{SOURCE}, Att. 3 Eq. 16, evaluated"  # the law, tabulated by the developers
 
 # Experimental readings: "≈ 1.5°", "~10°", "−34°", "6 seconds" are read off single hardware runs
 # with bearing friction, sensor noise and random torques, and the model's hub inertia is not
@@ -109,7 +109,7 @@ CHECKS: list[Check] = [
     Check(
         "tamu",
         "Law II overshoot (α = 0.2, g1 = 3000, g2 = 800)",
-        f'{SOURCE}, Att. 3 §V (L1226) "≈ 1.5°"',
+        f'{SOURCE}, Att. 3 §V "≈ 1.5°"',
         1.5,
         "deg",
         lambda: _metric("Law II", "overshoot_deg"),
@@ -119,7 +119,7 @@ CHECKS: list[Check] = [
     Check(
         "tamu",
         "Law II settling time",
-        f'{SOURCE}, Att. 3 §V (L1226) "6 seconds"',
+        f'{SOURCE}, Att. 3 §V "6 seconds"',
         6.0,
         "s",
         lambda: _metric("Law II", "settling_time_s"),
@@ -129,7 +129,7 @@ CHECKS: list[Check] = [
     Check(
         "tamu",
         "Law I overshoot (g1 = 600, g2 = 800)",
-        f'{SOURCE}, Att. 2 (L865) "~10°", Att. 3 Fig. 10 (L1226)',
+        f'{SOURCE}, Att. 2 Fig. 9 "~10°", Att. 3 Fig. 10',
         10.0,
         "deg",
         lambda: _metric("Law I", "overshoot_deg"),
@@ -139,7 +139,7 @@ CHECKS: list[Check] = [
     Check(
         "tamu",
         "Law I overshoot, g2 = 0",
-        f'{SOURCE}, Att. 3 Fig. 9 (L1222) "−34°"',
+        f'{SOURCE}, Att. 3 Fig. 9 "−34°"',
         34.0,
         "deg",
         lambda: _metric("Law I, g2 = 0", "overshoot_deg"),

@@ -1,5 +1,5 @@
 """Vadali & Kim's tethered-subsatellite retrieval (issue 14): Junkins, Pollock & Rahman 1990,
-Att. 12, L4397-L4465 (docs/tether.md, tests/control/test_tether_laws.py). Every value is a live
+Att. 12, Figs. 2-8 (docs/tether.md, tests/control/test_tether_laws.py). Every value is a live
 rerun of the example under continuous feedback (:func:`flexsat.cases.tether.rerun`).
 
 Two published numbers are not reproduced and carry a :class:`Discrepancy`: controller 1's
@@ -81,7 +81,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "orbit rate at 220 km",
-        f"{SOURCE}, L4397",
+        f"{SOURCE}, 'Tension Control Law Design Based on Decoupled Equations of Motion'",
         0.07068,
         "rad/min",
         _orbit_rate_per_minute,
@@ -92,7 +92,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 1: initial tension T^(0)",
-        f"{SOURCE}, L4401",
+        f"{SOURCE}, Figs. 2-3",
         4.0,
         "",
         _get("V10", "initial_tension"),
@@ -101,7 +101,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 1: initial tension",
-        f"{SOURCE}, L4401",
+        f"{SOURCE}, Figs. 2-3",
         2.52,
         "N",
         _get("V10", "initial_tension_N"),
@@ -111,7 +111,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 1: lambda and theta settle",
-        f"{SOURCE}, L4401",
+        f"{SOURCE}, Figs. 2-3",
         2.0,
         "orbits",
         _get("V10", "settling_orbits"),
@@ -122,7 +122,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 1: thrust index, 2 orbits",
-        f"{SOURCE}, L4401",
+        f"{SOURCE}, Figs. 2-3",
         0.9,
         "",
         _get("V10", "thrust_index_2_orbits"),
@@ -132,7 +132,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 1: thrust impulse, 2 orbits",
-        f"{SOURCE}, L4401",
+        f"{SOURCE}, Figs. 2-3",
         481.0,
         "N*s",
         _get("V10", "thrust_impulse_2_orbits_Ns"),
@@ -144,7 +144,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2: thrust index, 2 orbits",
-        f"{SOURCE}, L4447",
+        f"{SOURCE}, Figs. 4-5",
         0.24,
         "",
         _get("V11", "thrust_index_2_orbits"),
@@ -153,7 +153,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2: thrust impulse, 2 orbits",
-        f"{SOURCE}, L4447",
+        f"{SOURCE}, Figs. 4-5",
         128.4,
         "N*s",
         _get("V11", "thrust_impulse_2_orbits_Ns"),
@@ -162,7 +162,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2: max pitch",
-        f"{SOURCE}, L4449",
+        f"{SOURCE}, Fig. 4",
         29.3,
         "deg",
         _get("V11", "max_pitch_deg"),
@@ -171,7 +171,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2, K4 = 3: thrust index",
-        f"{SOURCE}, L4447",
+        f"{SOURCE}, Figs. 4-5",
         0.258,
         "",
         _get("V12", "thrust_index_2_orbits"),
@@ -182,7 +182,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2, lambda_r = .001, K1 = 1: final pitch",
-        f"{SOURCE}, L4449",
+        f"{SOURCE}, Fig. 6",
         180.0,
         "deg",
         _final_pitch_6_orbits,
@@ -192,7 +192,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "controller 2, lambda_r = .001, K1 = 0.9: max pitch",
-        f"{SOURCE}, L4449",
+        f"{SOURCE}, Fig. 7",
         21.9,
         "deg",
         _get("V13 K1=0.9", "max_pitch_deg"),
@@ -202,7 +202,7 @@ CHECKS: list[Check] = [
     Check(
         "tether",
         "rate law: initial retrieval rate",
-        f"{SOURCE}, L4465",
+        f"{SOURCE}, 'A Tether Rate Control Law', Fig. 8",
         30.0,
         "m/s",
         _get("V15", "initial_rate_m_s"),

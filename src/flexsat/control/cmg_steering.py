@@ -11,7 +11,13 @@ mode.
   I)^{-1}C]\,k(\sigma_f - \sigma)` (Eq. 13-17), V = ½|σ_f − σ|² falling as
   V' = −k(σ_f − σ)ᵀτ(σ_f − σ) <= 0 (Eq. 16).
 
-Both read ``gimbal_angles`` (rad) and write ``gimbal_rates`` (rad/s); the kernels are those of
+* :class:`StationMomentumSteering`: the space station's attitude law u = −Kx and the
+  pseudo-inverse steering of the momentum it demands,
+  :math:`C\dot\sigma = T = [u_1 + n h_3,\ u_2,\ u_3 - n h_1]/h_r` (Att. 13 "Space Station
+  Example"), for the plant
+  :class:`~flexsat.dynamics.station_gimbals.StationWithGimbals`.
+
+They read ``gimbal_angles`` (rad) and write ``gimbal_rates`` (rad/s); the kernels are those of
 :mod:`flexsat.dynamics.cmg` (momenta in rotor momenta h, torques in h per second).
 """
 
@@ -24,7 +30,7 @@ import numpy as np
 
 from flexsat.control.base import Controller
 from flexsat.dynamics import cmg
-from flexsat.input_checks import FieldError, require_finite
+from flexsat.input_checks import FieldError, require_finite, require_positive_scalar
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -44,7 +50,7 @@ def _weight(value: float, field: str) -> float:
     return out
 
 
-__all__ = ["NullMotionSteering", "PseudoInverseSteering"]
+__all__ = ["NullMotionSteering", "PseudoInverseSteering", "StationMomentumSteering"]
 
 
 def _torque_history(torque: TorqueHistory) -> Callable[[float], FloatArray]:
@@ -70,8 +76,8 @@ def _torque_history(torque: TorqueHistory) -> Callable[[float], FloatArray]:
 
 
 class _GimbalLaw(Controller):
-    reads = ("gimbal_angles",)
-    writes = ("gimbal_rates",)
+    reads: tuple[str, ...] = ("gimbal_angles",)
+    writes: tuple[str, ...] = ("gimbal_rates",)
 
     def __init__(self, skew: float | str, n_units: int) -> None:
         cmg.pyramid_axes(n_units, skew)  # checks both
@@ -185,3 +191,82 @@ class NullMotionSteering(_GimbalLaw):
         sig = y["gimbal_angles"]
         tau = cmg.null_projector(sig, self.skew, self.n_units, self.alpha)
         return np.einsum("...ij,...j->...i", tau, self.gain_k * (self.sigma_target - sig)), state
+
+
+class StationMomentumSteering(_GimbalLaw):
+    r"""The station's attitude law and its CMG loop as one law (module docstring): reads the
+    station ``state`` x and ``gimbal_angles`` σ, writes ``torque`` u = −Kx (N m) and
+    ``gimbal_rates`` σ̇ = Cᵀ(CCᵀ + αI)⁻¹T with
+
+    .. math::
+
+        T = [u_1 + n h_3,\ u_2,\ u_3 - n h_1] / h_r
+
+    the rate of the cluster momentum in body axes that delivers u in the rotating LVLH frame
+    (Eq. 10 and "Space Station Example" of Vadali, Oh & Walker, Att. 13 of Junkins, Pollock &
+    Rahman 1990).
+
+    Parameters
+    ----------
+    gain : array_like (3, n_x)
+        K of u = −Kx on the station's state (N m per state unit).
+    momentum_rows : sequence of 3 int
+        Where h1, h2, h3 (N m s) sit in the station's state.
+    orbit_rate : float
+        n, rad/s (> 0).
+    rotor_momentum : float
+        h_r of one rotor, N m s (> 0).
+    skew, n_units
+        The pyramid.
+    alpha : float
+        Singularity-robust weight (>= 0; 0 the pseudo-inverse).
+    """
+
+    reads = ("state", "gimbal_angles")
+    writes = ("torque", "gimbal_rates")
+
+    def __init__(
+        self,
+        gain: npt.ArrayLike,
+        momentum_rows: tuple[int, int, int],
+        orbit_rate: float,
+        rotor_momentum: float,
+        skew: float | str = cmg.SKEW,
+        n_units: int = 4,
+        alpha: float = 0.0,
+    ) -> None:
+        super().__init__(skew, n_units)
+        self.gain = require_finite(gain, "gain")
+        if self.gain.ndim != 2 or self.gain.shape[0] != 3:
+            raise FieldError("gain", f"must be K of shape (3, n_x), got {self.gain.shape}")
+        rows = np.asarray(momentum_rows)
+        if (
+            rows.shape != (3,)
+            or rows.dtype.kind not in "iu"
+            or not (np.all(rows >= 0) and np.all(rows < self.gain.shape[1]))
+        ):
+            raise FieldError(
+                "momentum_rows",
+                f"must be 3 state indices below {self.gain.shape[1]}, got {momentum_rows!r}",
+            )
+        self.rows = rows
+        self.orbit_rate = require_positive_scalar(orbit_rate, "orbit_rate", "rad/s")
+        self.rotor_momentum = require_positive_scalar(rotor_momentum, "rotor_momentum", "N*m*s")
+        self.alpha = _weight(alpha, "alpha")
+        _, self.a, self.b = cmg.pyramid_axes(self.n_units, self.skew)
+
+    def demand(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """u = −Kx (N m) and T (rotor momenta per second) of the states x (..., n_x)."""
+        u = -np.einsum("ij,...j->...i", self.gain, x)
+        h = x[..., self.rows]
+        n = self.orbit_rate
+        T = np.stack([u[..., 0] + n * h[..., 2], u[..., 1], u[..., 2] - n * h[..., 0]], axis=-1)
+        return u, T / self.rotor_momentum
+
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[dict[str, FloatArray], dict[str, FloatArray]]:
+        u, T = self.demand(y["state"])
+        # the kernels take the torque on the spacecraft, −ḣ
+        rates = cmg.steer(y["gimbal_angles"], -T, self.a, self.b, self.alpha)
+        return {"torque": u, "gimbal_rates": rates}, state

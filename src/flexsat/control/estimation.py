@@ -1,6 +1,6 @@
 r"""Kalman filters and the NPS estimator refinement.
 
-Continuous-time steady-state Kalman filter (seed 001 Eqs. 41–44) for
+Continuous-time steady-state Kalman filter (Hailey, Sortun & Agrawal c. 1992 Eqs. 41–44) for
 
 .. math::
 
@@ -17,10 +17,11 @@ with estimator :math:`\dot{\hat x} = A\hat x + B u + L (y - C \hat x)`,
 
 solved as the dual regulator problem :math:`(A^T, C^T, G Q_n G^T, R_n, G N_n)` of
 :func:`flexsat.control.lqr.lqr` ("by duality: A → Aᵀ, B → Cᵀ, R_xx → Q_xx, R_uu → Q_yy",
-seed 001 after Eq. 44), so it has the same checks, the same reported and logged relative
+Hailey, Sortun & Agrawal c. 1992 after Eq. 44), so it has the same checks, the
+same reported and logged relative
 residual, and gains equal to python-control's ``lqe`` / ``dlqe``.
 
-Estimator refinement (seed 001 Eqs. 46–53)
+Estimator refinement (Hailey, Sortun & Agrawal c. 1992 Eqs. 46–53)
 ------------------------------------------
 With the regulator :math:`u = G_R \hat x` (:math:`G_R = -K`) the estimation error e enters the
 plant as :math:`B G_R e` (Eq. 50), so the error that matters is the one the regulator feeds
@@ -143,7 +144,8 @@ def kalman(
     Rn: npt.ArrayLike,
     Nn: npt.ArrayLike | None = None,
 ) -> RiccatiSolution:
-    r"""Continuous-time steady-state Kalman filter (module docstring; seed 001 Eqs. 41–44).
+    r"""Continuous-time steady-state Kalman filter (module docstring; Hailey, Sortun
+    & Agrawal c. 1992 Eqs. 41–44).
 
     Parameters
     ----------
@@ -199,9 +201,10 @@ def dkalman(
 
 
 # ------------------------------------------------------------------------------------------------
-# NPS estimator refinement (seed 001 Eqs. 46–53)
+# NPS estimator refinement (Hailey, Sortun & Agrawal c. 1992 Eqs. 46–53)
 def regulator_weighted_process_noise(gain: npt.ArrayLike, B: npt.ArrayLike) -> FloatArray:
-    r"""Process-noise intensity :math:`Q_{xx} = G^T B^T B G` (seed 001 Eq. 52).
+    r"""Process-noise intensity :math:`Q_{xx} = G^T B^T B G` (Hailey,
+    Sortun & Agrawal c. 1992 Eq. 52).
 
     Parameters
     ----------
@@ -224,7 +227,8 @@ def regulator_weighted_process_noise(gain: npt.ArrayLike, B: npt.ArrayLike) -> F
 
 
 def truncate_gains(gain: npt.ArrayLike, keep: npt.ArrayLike) -> FloatArray:
-    """Regulator gain with every column outside ``keep`` set to zero (seed 001 Eq. 53).
+    """Regulator gain with every column outside ``keep`` set to zero (Hailey, Sortun &
+    Agrawal c. 1992 Eq. 53).
 
     Parameters
     ----------
@@ -288,7 +292,7 @@ def refine_estimator(
     Rn: npt.ArrayLike,
     truncate: bool = True,
 ) -> RefinedEstimator:
-    r"""The NPS estimator refinement (seed 001 Eqs. 52–53, L415–L427).
+    r"""The NPS estimator refinement (Hailey, Sortun & Agrawal c. 1992 Eqs. 52–53).
 
     1. zero the regulator gains outside ``keep`` (Eq. 53) unless ``truncate`` is false;
     2. set :math:`Q_{xx} = K^T B^T B K` with that gain (Eq. 52);

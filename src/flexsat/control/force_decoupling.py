@@ -1,5 +1,5 @@
 r"""Force/torque decoupling of point-force actuators (EPS slew study c. 1989, Eqs. 32–37,
-L701–L753).
+"Force/Torque Decoupling").
 
 The point forces :math:`F_i` (N, along body axes at nodes) of a frequency-shaped perturbation
 law should damp the elastic modes without turning the vehicle: their net moment about the

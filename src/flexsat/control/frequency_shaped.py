@@ -93,11 +93,22 @@ def shaping_weights(
     Qm = np.atleast_2d(np.asarray(Q, float))
     Rm = np.atleast_2d(np.asarray(R, float))
     n, m = Qm.shape[0], Rm.shape[0]
+    wb = np.float64(wb)  # an absurd ω_B or ζ_B overflows to inf (refused below), not an exception
+    with np.errstate(over="ignore", under="ignore"):
+        scales = (wb ** -(2 * order), 4 * np.float64(zb) ** 2 / wb**2)
+    if not 0.0 < scales[0] < np.inf:
+        raise FieldError(
+            "break_frequency",
+            f"ω_B^-{2 * order} = {scales[0]:.3g} (the weight R/ω_B^{2 * order} of the shaped "
+            f"input) is not a representable float, got ω_B = {wb:.3g} rad/s",
+        )
+    if not np.isfinite(scales[1]):
+        raise FieldError("damping", f"the shaping weight 4ζ²/ω_B² overflows, got ζ = {zb:.3g}")
     if order == 2:
         Qa = np.zeros((n + 2 * m, n + 2 * m))
         Qa[:n, :n] = Qm
         Qa[n : n + m, n : n + m] = Rm
-        Qa[n + m :, n + m :] = 4 * zb**2 / wb**2 * Rm
+        Qa[n + m :, n + m :] = scales[1] * Rm
         Na = np.zeros((n + 2 * m, m))
         Na[n : n + m] = Rm / wb**2
         return Qa, Na, Rm / wb**4
@@ -171,7 +182,8 @@ class FrequencyShapedDesign:
         :math:`K_d = \hat R^{-1}\hat B^T \hat A_{cl}^{-T} P E` with E = [I; 0] placing d in
         the augmented state (:math:`\hat d = E d`) and :math:`\hat A_{cl} = \hat A -
         \hat B\hat K`, so that the feedforward :math:`K_d d = -\hat R^{-1}\hat B^T\xi` with
-        ξ of Eq. 29. Seed 003's "time-varying" feedforward interpolates this gain and
+        ξ of Eq. 29. The "time-varying" feedforward of the EPS slew study c.
+        1989 interpolates this gain and
         multiplies the current d(t)."""
         n = self.A.shape[0]
         Acl = self.A_aug - self.B_aug @ self.gain
@@ -205,7 +217,7 @@ def frequency_shaped_lqr(
     order: int = 2,
     damping: float = 0.0,
 ) -> FrequencyShapedDesign:
-    r"""Frequency-shaped LQR (seed 003 Eqs. 22–28), module docstring.
+    r"""Frequency-shaped LQR (EPS slew study c. 1989 Eqs. 22–28), module docstring.
 
     Parameters
     ----------

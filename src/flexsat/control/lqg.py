@@ -1,6 +1,7 @@
 r"""LQG compensator behind the :class:`~flexsat.control.base.Controller` interface.
 
-Seed 001 Eqs. 38–45: a regulator :math:`u = -K \hat x` (:func:`~flexsat.control.lqr.lqr`) fed
+Hailey, Sortun & Agrawal c. 1992, Eqs. 38–45: a regulator :math:`u = -K \hat x`
+(:func:`~flexsat.control.lqr.lqr`) fed
 by a Kalman estimator (:func:`~flexsat.control.estimation.kalman`)
 
 .. math::
@@ -339,7 +340,8 @@ class EstimatorController(SlewLaw):
 
 
 class LQGController(EstimatorController):
-    r"""Observer-based LQG compensator (module docstring; seed 001 Eqs. 38–45).
+    r"""Observer-based LQG compensator (module docstring; Hailey, Sortun
+    & Agrawal c. 1992 Eqs. 38–45).
 
     Parameters
     ----------

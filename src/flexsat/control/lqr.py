@@ -1,6 +1,7 @@
 r"""Linear-quadratic regulators with checked inputs and a reported Riccati residual.
 
-Continuous time (seed 001 Eqs. 38–40; seed 003 Eq. 28 with the cross weight N):
+Continuous time (Hailey, Sortun & Agrawal c. 1992 Eqs. 38–40; EPS slew study c. 1989
+Eq. 28 with the cross weight N):
 
 .. math::
 
@@ -483,7 +484,8 @@ def lqr(
     R: npt.ArrayLike,
     N: npt.ArrayLike | None = None,
 ) -> RiccatiSolution:
-    r"""Continuous-time LQR (seed 001 Eqs. 38–40; with N, seed 003 Eq. 28).
+    r"""Continuous-time LQR (Hailey, Sortun & Agrawal c. 1992 Eqs. 38–40; with N,
+    EPS slew study c. 1989 Eq. 28).
 
     Parameters
     ----------

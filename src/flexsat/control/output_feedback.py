@@ -2,7 +2,7 @@
 
 Source: Junkins & Kim 1990, *First and Second Order Sensitivity of the Singular Value
 Decomposition*, J. Astronautical Sciences 38(1), 1990 (Att. 5 of Junkins, Pollock & Rahman 1990),
-L2001-L2143.
+Att. 5 "Example: Minimum Sensitivity Symmetric Output Feedback Gain Design".
 
 Plant and law (Eqs. 28-29)::
 
@@ -50,9 +50,9 @@ if TYPE_CHECKING:
 
 IntArray: TypeAlias = "npt.NDArray[np.intp]"
 
-SOURCE = "Junkins, Pollock & Rahman 1990, Att. 5 Eqs. 28-49 (L2001-L2089), Example 1 (L2081-L2143)"
+SOURCE = "Junkins, Pollock & Rahman 1990, Att. 5 Eqs. 28-49, Example 1"
 
-#: Att. 5 Example 1 (L2081-L2143): "6th order, 4 outputs, 2 inputs", as printed
+#: Att. 5 Example 1: "6th order, 4 outputs, 2 inputs", as printed
 EXAMPLE1: dict[str, Any] = {
     "M": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
     "K": [[20.0, -10.0, 0.0], [-10.0, 30.0, -20.0], [0.0, -20.0, 20.0]],
@@ -296,7 +296,7 @@ class SymmetricOutputFeedback:
     @classmethod
     def example1(cls) -> SymmetricOutputFeedback:
         """Att. 5 Example 1: M = I3, K = [[20,−10,0],[−10,30,−20],[0,−20,20]], D = [e1 e3],
-        C = 0 (L2081-L2143)."""
+        C = 0 (Att. 5 "Example: Minimum Sensitivity Symmetric Output Feedback Gain Design")."""
         return cls(EXAMPLE1["M"], EXAMPLE1["K"], EXAMPLE1["D"], EXAMPLE1["C"])
 
     # -- gains ------------------------------------------------------------------------------

@@ -34,9 +34,11 @@ class PD(SlewLaw):
         Position gain (N m/rad) and rate gain (N m s/rad), >= 0; a number is in these SI
         units, a Quantity or a string such as ``"3000 ozf*in/rad"`` is converted.
     target : float, array, str or pint.Quantity
-        Final angle, rad, when no reference is given (a step command, seed 001 Eq. 20).
+        Final angle, rad, when no reference is given (a step command, Hailey,
+        Sortun & Agrawal c. 1992 Eq. 20).
     reference : TorqueShape, optional
-        Shaped reference to track (seed 001 Eq. 29); its torque is fed forward when
+        Shaped reference to track (Hailey, Sortun & Agrawal c. 1992 Eq. 29);
+        its torque is fed forward when
         ``feedforward`` is true.
     """
 
@@ -66,7 +68,8 @@ class PD(SlewLaw):
         damping_ratio: QuantityArrayLike,
         **kwargs: Any,
     ) -> PD:
-        """Gains placing the rigid closed-loop poles at ω_n, ζ (seed 001 Eqs. 20-24).
+        """Gains placing the rigid closed-loop poles at ω_n, ζ (Hailey, Sortun & Agrawal
+        c. 1992 Eqs. 20-24).
 
         ``inertia`` in kg m², ``natural_frequency`` in rad/s (``"0.06 Hz"`` converts with its
         2π), ``damping_ratio`` dimensionless; each a number in SI, a Quantity or a unit string.
@@ -90,7 +93,8 @@ class PD(SlewLaw):
 
     def linear_form(self, dt: float, times: npt.ArrayLike, n_cases: int) -> LinearLaw:
         """No internal state: D = [−kp, −kd] on y = (θ, θ'), y_ref = (θ_ref, θ'_ref) and
-        u_ff = u_ref (zero without ``feedforward``), seed 001 Eqs. 20 and 29."""
+        u_ff = u_ref (zero without ``feedforward``), Hailey, Sortun &
+        Agrawal c. 1992 Eqs. 20 and 29."""
         _, grid = sample_times(dt, times)
         th, thd, _, u_r = reference_tables(self, grid, n_cases)
         kp, kd = per_case(self.kp, n_cases, "kp"), per_case(self.kd, n_cases, "kd")

@@ -1,6 +1,6 @@
 r"""Gain-scheduled frequency-shaped perturbation feedback about a rigid nominal slew, with
 disturbance feedforward and force/torque decoupling (EPS slew study c. 1989,
-Eqs. 22–37, L536–L753).
+Eqs. 22–37).
 
 Design (:func:`perturbation_design`). The flexible design model (a few elastic modes) is
 linearised at ``n_points`` equally spaced times :math:`t_i` of [0, T] along the nominal
@@ -19,7 +19,7 @@ with :math:`K_{d,i}` the coefficient of the disturbance d (Eq. 29–30,
 :attr:`~flexsat.control.frequency_shaped.FrequencyShapedDesign.disturbance_gain`) and
 d(t) the modal accelerations the nominal torque causes (Eq. 31). With forces and
 ``decouple=True`` the inputs are δu_k = S v_k, S = blockdiag(I₃, Z), Z the moment-free force
-combinations (:mod:`~flexsat.control.force_decoupling`, Eqs. 32–37 as corrected in notes §2.8),
+combinations (:mod:`~flexsat.control.force_decoupling`, Eqs. 32–37 as corrected there),
 and the design runs on (A, B S) with weight SᵀDS, in inputs scaled to unit weight
 (S ← S L⁻ᵀ with SᵀDS = LLᵀ: the same optimal law, one scale for the Riccati solver).
 
@@ -27,7 +27,7 @@ Gain scheduling (F10): :math:`K(t)` is interpolated linearly between the :math:`
 (:func:`~flexsat.control.scheduled.interpolate_schedule`) and held at :math:`K(T)` after T.
 Feedforward (F11), three forms:
 
-* ``"constant"`` (the paper's default, L808–L809): the command :math:`K_{d,i}\,d(t_i)`
+* ``"constant"`` (the paper's default, "Simulation Results"): the command :math:`K_{d,i}\,d(t_i)`
   evaluated at the linearisation times and interpolated;
 * ``"time-varying"``: the gains :math:`K_d(t)` interpolated and d(t) recomputed every sample;
 * ``"none"``.
@@ -64,6 +64,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from flexsat import limits
 from flexsat.control.base import Controller
 from flexsat.control.force_decoupling import decoupled_input_map
 from flexsat.control.frequency_shaped import FrequencyShapedDesign, frequency_shaped_lqr
@@ -95,7 +96,7 @@ __all__ = [
     "perturbation_design",
 ]
 
-#: the feedforward forms of seed 003 and none
+#: the feedforward forms of EPS slew study c. 1989 and none
 FEEDFORWARD = ("constant", "time-varying", "none")
 
 
@@ -231,6 +232,25 @@ def perturbation_design(
     Dw = _weight(D, m, "D", strict=True)
     wb = float(require_positive(omega_b, "omega_b", "rad/s"))
     zb = float(require_nonneg(zeta_b, "zeta_b", ""))
+    # the shaped weights hold D/ω_B⁴ and 4ζ_B² D/ω_B² beside Q: refuse them unrepresentable
+    # here, by name, rather than as a failed Riccati solution at every linearisation point
+    with np.errstate(over="ignore", under="ignore"):
+        if not 0.0 < np.float64(wb) ** -4 < np.inf:
+            raise FieldError(
+                "omega_b",
+                f"ω_B⁻⁴ = {np.float64(wb) ** -4:.3g} (the weight D/ω_B⁴ "
+                f"of the shaped input) is not a representable float, got {wb:.3g}",
+            )
+        # at ω_B the torque-rate weight 4ζ_B²/ω_B² costs 4ζ_B² times the torque's own weight:
+        # beyond the weight range the torque's weight is lost in its rounding
+        if not 4.0 * np.float64(zb) ** 2 <= limits.MAX_WEIGHT_RANGE:
+            raise FieldError(
+                "zeta_b",
+                f"the shaping weight 4ζ_B²/ω_B² weighs the torque at ω_B 4ζ_B² = "
+                f"{4.0 * np.float64(zb) ** 2:.3g} times its own weight, above "
+                f"{limits.MAX_WEIGHT_RANGE:.0e} (flexsat.limits.MAX_WEIGHT_RANGE), got "
+                f"ζ_B = {zb:.3g}",
+            )
     n_p = require_count(n_points, "n_points")
     if decouple:
         if m == 3:
@@ -247,7 +267,8 @@ def perturbation_design(
     # Design in inputs of unit weight, w = Lᵀ v with Sᵀ D S = L Lᵀ (so S ← S L⁻ᵀ, D_w = I):
     # the optimal law is the same (an input change of variables), but the Riccati checks and
     # solver then see one scale. Forces weighted 1e-7 N⁻² beside normalized torques weighted
-    # 50 (rad/s²)⁻² (seed 003 case B) put 9 decades between the chain states' weights, and the
+    # 50 (rad/s²)⁻² (EPS slew study c. 1989 case B) put 9 decades between the
+    # chain states' weights, and the
     # detectability test judged the forces' shaping chains unseen (refused at t = 0.5 s).
     L = np.linalg.cholesky(S.T @ Dw @ S)
     S = np.asarray(np.linalg.solve(L, S.T).T, np.float64)
@@ -467,7 +488,8 @@ def interval_means(
 
 class NominalTorque(Controller):
     """Open loop: the nominal torque alone, held per control period at its interval mean as
-    :class:`PerturbationFeedback` holds it (the open-loop run the seed 003 goals compare
+    :class:`PerturbationFeedback` holds it (the open-loop run the EPS
+    slew study c. 1989 goals compare
     with). Zero after the maneuver.
 
     Parameters

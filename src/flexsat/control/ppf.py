@@ -274,7 +274,7 @@ def ppf_cost_gradient(
 
 
 def initial_second_moment(x0: npt.ArrayLike, weights: npt.ArrayLike | None = None) -> FloatArray:
-    """X₀ = E[x₀ x₀ᵀ] over initial conditions (seed 004 L367–L369, spec F10).
+    """X₀ = E[x₀ x₀ᵀ] over initial conditions (Agrawal & Bang 1996 §4, spec F10).
 
     Parameters
     ----------
@@ -438,8 +438,8 @@ class PPFBank:
     def tuned(
         cls, model: PPFModel, zeta_f: float | npt.ArrayLike, n_tuned: int | None = None
     ) -> PPFBank:
-        """ω_f,ij = ω_j for the first ``n_tuned`` modes (default all), every actuator (seed 004
-        L61: efficiency is largest when the filter and structure frequencies match)."""
+        """ω_f,ij = ω_j for the first ``n_tuned`` modes (default all), every actuator (Agrawal &
+        Bang 1996 §2: efficiency is largest when the filter and structure frequencies match)."""
         n = model.n_modes if n_tuned is None else require_count(n_tuned, "n_tuned")
         if n > model.n_modes:
             raise FieldError("n_tuned", f"must be 1 to {model.n_modes}, got {n_tuned!r}")
@@ -507,7 +507,8 @@ class PPFStability:
 
 
 class PPFProblem:
-    """The gain-optimisation problem of seed 004 §3 (Eqs. 6–14, 26) for a fixed model, bank,
+    """The gain-optimisation problem of Agrawal & Bang 1996 §3 (Eqs. 6–14, 26) for a fixed
+    model, bank,
     weights and initial-condition moment: cost, gradient, stiffness eigenvalues and their
     sensitivities, closed-loop poles and the stability report, all as functions of the gain
     vector g (n_g = n_a n_t values, ``g[i*n_tuned + j] = g_ij``).

@@ -1,7 +1,7 @@
 """Homotopic minimum-norm optimisation of PPF gains with eigenvalue-constraint restoration.
 
 Source: Agrawal & Bang, *Adaptive structures for large precision antennas*,
-Acta Astronautica, 1996, Eqs. 15-28 (L113-L203).
+Acta Astronautica, 1996, Eqs. 15-28.
 
 Problem (Eq. 15, with the constraint of Eqs. 21-22 and a direct stability check)::
 
@@ -16,7 +16,7 @@ The problem is any object with the five methods of the PPF gain problem (duck-ty
     stiffness_eigenvalue_gradients(g) -> (n, n_g)   ∂λ_i/∂g_k                 (Eq. 26)
     closed_loop_poles(g) -> complex array     eigenvalues of Ā               (Eq. 8)
 
-Method of :func:`optimize_ppf_gains` (the paper's, L113-L203):
+Method of :func:`optimize_ppf_gains` (the paper's, §§3.1–3.2):
 
 1. **Homotopy (Eqs. 16-17).** From a feasible start g0 with J_init = J(g0), the target cost
    moves as J0(γ) = γ J_goal + (1 − γ) J_init; at each γ the residual
@@ -28,10 +28,10 @@ Method of :func:`optimize_ppf_gains` (the paper's, L113-L203):
    eigenvalues of S are checked; if some λ_j < λ_j^c the violated rows H_c = λ_j − λ_j^c are
    corrected by Δg = −W⁻¹L̃ᵀ(L̃W⁻¹L̃ᵀ)⁻¹H_c with the analytic sensitivities L̃ (Eq. 26),
    repeated until every eigenvalue is back above its floor (the restoration loop sits inside
-   the γ loop, L203). A restored constraint "becomes an active set on the prescribed boundary"
-   (L167): the next corrections at the same γ hold it there, its row joining Ã in Eq. 18
-   ("locally, only the active constraint set is considered", L115); "on the next stage with
-   new homotopy parameter γ, the design parameters are set free to change" (L203), so every
+   the γ loop, §3.2). A restored constraint "becomes an active set on the prescribed boundary"
+   (§3.2): the next corrections at the same γ hold it there, its row joining Ã in Eq. 18
+   ("locally, only the active constraint set is considered", §3.1); "on the next stage with
+   new homotopy parameter γ, the design parameters are set free to change" (§3.2), so every
    new γ starts with an empty active set. Without the held rows the corrections of J and the
    restorations alternate (two projections) and converge only linearly along the boundary:
    on the tests' model the run then crept in γ steps of 1e-6 and used up ``max_steps``.
@@ -44,11 +44,12 @@ Method of :func:`optimize_ppf_gains` (the paper's, L113-L203):
    not converged, unstable loop, non-finite values) is abandoned, the last converged gains are
    restored and the γ increment halved; a quickly converged γ doubles it again (up to
    ``gamma_step``). "We adopt the solution corresponding to the largest γ for which
-   convergence is achieved as the constrained minimum" (L127): when the increment falls below
+   convergence is achieved as the constrained minimum" (§3.1): when the increment falls below
    ``min_gamma_step`` the run stops there (status ``"stalled"``).
 
 Why not :func:`flexsat.analysis.homotopy.homotopy_minimize` (the general form of the same
-method, seed 000 Att. 5, which cites this paper): (a) it picks its working set before each
+method, Junkins, Pollock & Rahman 1990 Att. 5, which cites this paper): (a) it
+picks its working set before each
 step by predicting which inequalities the linearised step would violate and releasing rows by
 their multipliers, whereas the paper enters a constraint only through the nested restoration
 (Eq. 28, eigenvalue rows alone, after a correction of J alone) and frees it at the next γ —
@@ -84,7 +85,7 @@ if TYPE_CHECKING:
 
     from flexsat.units import FloatArray
 
-SOURCE = "Agrawal & Bang 1996, Eqs. 15-28 (L113-L203)"
+SOURCE = "Agrawal & Bang 1996, Eqs. 15-28"
 
 
 class PPFGainProblem(Protocol):
@@ -180,7 +181,7 @@ class PPFHomotopyResult:
     status : {"goal reached", "stopped at gamma_stop", "stalled"}
         γ = 1 reached (J = J_goal); γ = ``gamma_stop`` < 1 reached; or the γ increment fell
         below ``min_gamma_step`` (or ``max_steps`` was used up) at ``gamma``, which then marks
-        the constrained minimum in the paper's sense (L127).
+        the constrained minimum in the paper's sense (§3.1).
     message : str
         The status with the reason of the last failed step.
     cost_initial, cost_goal : float
@@ -393,7 +394,7 @@ def _start(
 
     The start must be feasible (λ_i(S) >= λ_i^c) and stable: J_init = J(g_feasible) anchors the
     homotopy (Eq. 16, "the initial choice … must be found to satisfy the inequality
-    constraints", L127), and a cost evaluated on an unstable loop means nothing. An infeasible
+    constraints", §3.1), and a cost evaluated on an unstable loop means nothing. An infeasible
     start is an error naming the violated eigenvalue; :func:`restore_eigenvalue_constraints`
     makes one feasible (Eq. 28 applied to the start).
     """
@@ -452,7 +453,7 @@ def _restore(
     """Eqs. 23-28: restore λ_j >= λ_j^c on the violated set.
 
     Returns (gains, steps, rows): ``rows`` marks every eigenvalue that was corrected (the
-    constraints that became active "on the prescribed boundary", L167).
+    constraints that became active "on the prescribed boundary", §3.2).
     """
     rows = np.zeros(floor.shape, bool)
     for it in range(max_iterations + 1):
@@ -486,7 +487,7 @@ def restore_eigenvalue_constraints(
     weight: npt.ArrayLike | None = None,
     max_iterations: int = 20,
 ) -> EigenvalueRestoration:
-    """Restore λ_i(S(g)) >= λ_i^c by minimum-norm corrections (seed 004 Eqs. 21-28).
+    """Restore λ_i(S(g)) >= λ_i^c by minimum-norm corrections (Agrawal & Bang 1996 Eqs. 21-28).
 
     Each step takes the violated set {j : λ_j < λ_j^c} (Eq. 23), H_c = λ_j − λ_j^c (Eq. 24)
     with the analytic sensitivities ∂λ_j/∂g_k = φ_jᵀ (∂S/∂g_k) φ_j (Eq. 26) and
@@ -525,6 +526,32 @@ def restore_eigenvalue_constraints(
 
 
 # -- the homotopy ------------------------------------------------------------------------------
+def _check_costs(J_init: float, goal: float, goal_field: str, rtol: float) -> None:
+    """Refuse a start cost or a goal the homotopy cannot follow in float64.
+
+    J is a positive quadratic cost, so J_goal < 0 is meaningless (J_goal = 0, unreachable,
+    asks for the constrained minimum, §3.1). The targets
+    J0(γ) = γ J_goal + (1 − γ) J_init are met to ``rtol`` · |J0|: with J_goal > J_init/rtol
+    the J_init part is below that tolerance from the first step on, and a J_init that is not
+    at least tiny/rtol (weights of 1e300 scale it to ~1e-306) leaves no digits to converge on.
+    """
+    tiny, huge = np.finfo(float).tiny, np.finfo(float).max
+    if not tiny / rtol <= J_init <= huge * rtol:
+        raise FieldError(
+            "problem",
+            f"the cost at the start J_init = {J_init:.3g} is outside [{tiny / rtol:.3g}, "
+            f"{huge * rtol:.3g}], where rtol = {rtol:g} of it is a float64 number: its "
+            "weights are out of scale",
+        )
+    if not 0.0 <= goal <= J_init / rtol:
+        raise FieldError(
+            goal_field,
+            f"the goal cost J_goal = {goal:.3g} must be in [0, J_init/rtol = "
+            f"{J_init / rtol:.3g}] (J >= 0; beyond J_init/rtol the start is below the "
+            "convergence tolerance)",
+        )
+
+
 def optimize_ppf_gains(
     problem: PPFGainProblem,
     g0: npt.ArrayLike,
@@ -542,7 +569,7 @@ def optimize_ppf_gains(
     max_steps: int = 500,
     rtol: float = 1e-10,
 ) -> PPFHomotopyResult:
-    """Optimise PPF gains by the homotopic minimum-norm method of seed 004 (Eqs. 15-28).
+    """Optimise PPF gains by the homotopic minimum-norm method of Agrawal & Bang 1996 (Eqs. 15-28).
 
     At γ = γ_k the cost is driven to J0(γ) = γ J_goal + (1 − γ) J_init (Eqs. 16-17) by
     corrections Δg = −W⁻¹∇J (J − J0) / (∇Jᵀ W⁻¹ ∇J) (Eqs. 18-20), each followed by the nested
@@ -555,16 +582,16 @@ def optimize_ppf_gains(
         Any object with ``cost``, ``gradient``, ``stiffness_eigenvalues``,
         ``stiffness_eigenvalue_gradients`` and ``closed_loop_poles`` (see the module).
     g0 : (n_g,) array_like
-        Feasible, stable start (all 100 in the paper, L264). An infeasible start is an error:
+        Feasible, stable start (all 100 in the paper, Table 1). An infeasible start is an error:
         restore it first with :func:`restore_eigenvalue_constraints`.
     J_goal : float, optional
         The goal cost. Above J_init the homotopy *raises* J (along +∇J), as the paper's
         published runs apparently did.
     goal_ratio : float, optional
         Alternatively J_goal = goal_ratio · J_init (the paper sets the goal "based upon the
-        objective function with the initial gains", L345). Give exactly one of the two.
+        objective function with the initial gains", §4). Give exactly one of the two.
     gamma_stop : float
-        Last γ, in (0, 1] (0.9 in the paper, L345).
+        Last γ, in (0, 1] (0.9 in the paper, §4).
     eigenvalue_floor : float or (n,) array_like, optional
         λ_i^c >= 0 of Eq. 22, 1/s², for the i-th smallest eigenvalue of S. Default
         ``DEFAULT_FLOOR_FRACTION`` · λ_i(S(0)) = 1 % of ω_i² (the paper gives none).
@@ -598,13 +625,18 @@ def optimize_ppf_gains(
     """
     ev, g, floor, margin, J_init = _start(problem, g0, eigenvalue_floor, stability_margin)
     if J_goal is not None and goal_ratio is None:
-        goal = float(require_finite(J_goal, "J_goal"))
+        goal, goal_field = float(require_finite(J_goal, "J_goal")), "J_goal"
     elif goal_ratio is not None and J_goal is None:
         goal = float(require_finite(goal_ratio, "goal_ratio")) * J_init
+        goal_field = "goal_ratio"
     else:
         raise FieldError(
             "J_goal", "give exactly one of J_goal and goal_ratio (J_goal = goal_ratio · J_init)"
         )
+    rtol = float(require_finite(rtol, "rtol"))
+    if not 0.0 < rtol < 1.0:
+        raise FieldError("rtol", f"must be in (0, 1), got {rtol!r}")
+    _check_costs(J_init, goal, goal_field, rtol)
     gamma_stop = float(require_finite(gamma_stop, "gamma_stop"))
     if not 0.0 < gamma_stop <= 1.0:
         raise FieldError("gamma_stop", f"must be in (0, 1], got {gamma_stop!r}")
@@ -619,9 +651,6 @@ def optimize_ppf_gains(
     max_corrections = require_count(max_corrections, "max_corrections")
     max_restorations = require_count(max_restorations, "max_restorations")
     max_steps = require_count(max_steps, "max_steps")
-    rtol = float(require_finite(rtol, "rtol"))
-    if not 0.0 < rtol < 1.0:
-        raise FieldError("rtol", f"must be in (0, 1), got {rtol!r}")
     Winv = _inverse_weight(weight, g.size)
 
     lam_target = _restoration_target(floor)
@@ -633,7 +662,7 @@ def optimize_ppf_gains(
         stability veto, at one γ; returns (gains, J, corrections, restorations, active)."""
         tol = rtol * (abs(target) if target != 0 else abs(J_init))
         restorations = 0
-        active = np.zeros(floor.shape, bool)  # free at every new γ (L203)
+        active = np.zeros(floor.shape, bool)  # free at every new γ (§3.2)
         for k in range(max_corrections + 1):
             J = ev.cost(g)
             H = J - target
@@ -711,7 +740,7 @@ def optimize_ppf_gains(
     if status == STALLED:
         message = (
             f"stalled at γ = {gamma:.9g} (J = {J:.10g}): the constrained minimum in the "
-            f"paper's sense (L127); next step: {last_fail}"
+            f"paper's sense (§3.1); next step: {last_fail}"
         )
     else:
         message = f"{status}: γ = {gamma:.9g}, J = {J:.10g}"

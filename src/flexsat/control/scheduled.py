@@ -1,6 +1,6 @@
 r"""Time-varying (gain-scheduled) state feedback.
 
-EPS slew study c. 1989 (L562–L583): the flexible plant
+EPS slew study c. 1989 ("Control Design Strategy"): the flexible plant
 is linearised at several equally spaced times along the nominal maneuver, a constant-gain LQR is
 designed at each point, and the gains are interpolated in time. With the state measured
 (a plant output holding the full state, or the listed channels),
@@ -65,7 +65,7 @@ def interpolate_schedule(knots: FloatArray, table: FloatArray, t: npt.ArrayLike)
 
 class ScheduledStateFeedback(Controller):
     r"""u = u_ff(t) − K(t)(x − x_ref(t)) with K interpolated linearly between schedule times
-    (module docstring; seed 003 §2.6, F10).
+    (module docstring; EPS slew study c. 1989, "Control Problem Formulation"; spec F10).
 
     Parameters
     ----------

@@ -1,8 +1,8 @@
-r"""Liapunov retrieval laws of a tethered subsatellite (Vadali & Kim, AIAA 90-1197; seed 000,
-Att. 12, L4335-L4465), on the plant
+r"""Liapunov retrieval laws of a tethered subsatellite (Vadali & Kim, AIAA 90-1197; Junkins,
+Pollock & Rahman 1990, Att. 12, "In-plane Control Law" to "A Tether Rate Control Law"), on the plant
 :class:`~flexsat.dynamics.tether.TetheredSubsatellite`.
 
-All three are written in the nondimensional variables of seed 000 Eq. 4 (x = [λ, θ, φ, λ', θ',
+All three are written in the nondimensional variables of Att. 12 Eq. 4 (x = [λ, θ, φ, λ', θ',
 φ'], ' = d/dτ):
 
 * :class:`DecoupledTetherLaw` (controller 1, Eqs. 13-15): z = λ cos φ, y = λ sin φ nearly
@@ -16,7 +16,7 @@ All three are written in the nondimensional variables of seed 000 Eq. 4 (x = [λ
                - 2K_2\theta'(1+\theta')\tan\phi/\lambda - K_3\lambda\phi'
 
   The last sign is the repaired one: solving Eq. 13 exactly gives −K3λφ' (with Eqs. 11-12,
-  K3 y' z − K3 z' y = K3 λ²φ' enters F̂/λ with the determinant −λ²). L4395 prints "+", with
+  K3 y' z − K3 z' y = K3 λ²φ' enters F̂/λ with the determinant −λ²). Att. 12 Eq. 15 prints "+", with
   which the retrieval diverges; ``printed_sign=True`` keeps it, to
   show that. At φ = 0 the tension is the in-plane law (7).
 * :class:`CoupledTetherLaw` (controller 2, Eqs. 18 and 20), built on the integral of motion V1
@@ -83,7 +83,9 @@ def thrust_index(tau: npt.ArrayLike, thrust: npt.ArrayLike) -> FloatArray:
     N s."""
     grid = require_finite(tau, "tau")
     F = require_finite(thrust, "thrust")
-    if grid.ndim != 1 or F.shape[-1] != grid.size or np.any(np.diff(grid) <= 0):
+    if grid.ndim != 1 or grid.size < 2:
+        raise FieldError("tau", f"must be a grid of >= 2 times, got shape {grid.shape}")
+    if F.ndim == 0 or F.shape[-1] != grid.size or np.any(np.diff(grid) <= 0):
         raise FieldError(
             "tau",
             "must be an increasing grid matching thrust's last axis, got "
@@ -104,8 +106,10 @@ def liapunov_coupled(
 ) -> FloatArray:
     r"""V of Eq. 16 (with θ'² for the printed θ², a misprint) at x = [λ, θ, φ, λ', θ', φ']:
     ½[λ'² + K1(λ − λr)² + (K2 + λ²)·2V1]."""
-    s = np.asarray(x, float)
-    k1, k2, lr = (np.asarray(v, float) for v in (K1, K2, lambda_r))
+    s = require_finite(x, "x")
+    if s.ndim == 0 or s.shape[-1] != 6:
+        raise FieldError("x", f"must be states [λ, θ, φ, λ', θ', φ'] (..., 6), got {s.shape}")
+    k1, k2, lr = (require_finite(v, n) for v, n in ((K1, "K1"), (K2, "K2"), (lambda_r, "lambda_r")))
     V1 = integral_of_motion(s[..., 1], s[..., 2], s[..., 4], s[..., 5])
     lam = s[..., 0]
     return 0.5 * (s[..., 3] ** 2 + k1 * (lam - lr) ** 2) + (k2 + lam**2) * V1
@@ -130,7 +134,10 @@ class _TetherLaw(Controller):
                 # a length with units ("200 m"): λf = l_f / L
                 value = require_positive(given, name, "m") / self.scales.length
             check = require_positive if name in ("K1", "final_length") else require_nonneg
-            setattr(self, name, check(value, name))
+            checked = check(value, name)
+            if checked.size == 0:
+                raise FieldError(name, "must hold a value per case, got an empty array")
+            setattr(self, name, checked)
         require_lengths(self.final_length, "final_length")
         self.target = self.final_length
 
@@ -181,7 +188,7 @@ class DecoupledTetherLaw(_TetherLaw):
         divided by the scales' L.
     scales : TetherScales, optional
     printed_sign : bool
-        Use L4395's "+K3λφ'" (an erratum: the retrieval diverges) instead of "−".
+        Use Att. 12 Eq. 15's "+K3λφ'" (an erratum: the retrieval diverges) instead of "−".
     """
 
     _gain_names = ("K1", "K2", "K3", "final_length")

@@ -1,14 +1,16 @@
 r"""Perturbation coordinates about a rigid nominal slew and their linearisation along it
-(EPS slew study c. 1989, Eq. 23, L562–L583).
+(EPS slew study c. 1989, Eq. 23).
 
-The nominal. Seed 003 slews the flexible spacecraft with a rigid-body optimal maneuver: Euler
+The nominal. The EPS slew study c. 1989 slews the flexible spacecraft with a
+rigid-body optimal maneuver: Euler
 parameters :math:`\beta_n(t)` (inertial to body, scalar first), body rate :math:`\omega_n(t)`
 and torque :math:`\tau_n(t)` on [0, T], with the elastic coordinates at rest
 (:math:`\eta = \dot\eta = 0`) and no point forces. Any object with ``beta(t)`` (..., 4),
 ``omega(t)`` (..., 3), ``torque(t)`` (..., 3, N m) and ``duration`` (T, s) serves; beyond T it
 is held at its end (a rest-to-rest maneuver ends at rest with zero torque, so this is its
 continuation). Its angular acceleration is that of the rigid body it was designed on,
-:math:`\dot\omega_n = J^{-1}(\tau_n - \omega_n\times J\omega_n)` (seed 003 Eq. 12) with J the
+:math:`\dot\omega_n = J^{-1}(\tau_n - \omega_n\times J\omega_n)` (EPS slew
+study c. 1989 Eq. 12) with J the
 plant's inertia about the centre of mass.
 
 Perturbation state. :math:`\delta X = [\delta\alpha, \delta\omega, \delta\eta, \delta\dot\eta]`
@@ -26,7 +28,8 @@ that the dynamics leave constant whatever the input, an uncontrollable eigenvalu
 LQR Riccati equation on δβ has no stabilising solution; δα spans exactly the rotations.
 Inputs :math:`\delta u = [\delta u_\tau, \delta F]`: the torque perturbation normalized by the
 inertia, :math:`\delta u_\tau = J^{-1}\delta\tau` (rad/s², so the paper's D weights on
-"normalized torques" apply as published, seed 003 Eq. 12 and L596–L601), then the selected
+"normalized torques" apply as published, EPS slew study c. 1989 Eq. 12 and "Control Problem
+Formulation"), then the selected
 point forces (N).
 
 Attitude-error kinematics. With :math:`\dot\beta = \tfrac12[0, \omega]\otimes\beta` (Eq. 11 in
@@ -62,7 +65,8 @@ rigid–elastic equations do not depend on the attitude), the δα rows are the 
     B(t_i) = \begin{bmatrix} 0 \\ \partial(\dot\omega, \dot\eta, \ddot\eta)/\partial u\;
     \mathrm{diag}(J, I) \end{bmatrix}.
 
-Disturbance (seed 003 Eq. 31, generalised): the rigid nominal is not a solution of the flexible
+Disturbance (EPS slew study c. 1989 Eq. 31, generalised): the rigid nominal is
+not a solution of the flexible
 model, :math:`\delta\dot X = A\,\delta X + B\,\delta u + d(t)` with
 
 .. math::

@@ -104,8 +104,8 @@ def batch_client(workers: int | None, scheduler: str | None) -> tuple[Any, Any]:
 
     if scheduler is not None:
         if workers is not None:
-            raise ValueError(
-                "workers: give workers (a local cluster) or scheduler (an existing one), not both"
+            raise FieldError(
+                "workers", "give workers (a local cluster) or scheduler (an existing one), not both"
             )
         check_scheduler(scheduler)
         try:

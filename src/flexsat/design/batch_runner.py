@@ -1,7 +1,8 @@
 r"""Running many cases of one maneuver setup: vectorised chunks, dask scheduling, a zarr store.
 
-Issue 13, "Execution" (trade studies and Monte Carlo at scale; the seed 000 trade surfaces of
-Att. 3 Figs. 5–7 and the robustness sets of seeds 003 and 004 are sweeps of this kind). A run
+Issue 13, "Execution" (trade studies and Monte Carlo at scale; the Junkins, Pollock & Rahman 1990
+trade surfaces of Att. 3 Figs. 5–7 and the robustness sets of the EPS slew study c. 1989 and
+Agrawal & Bang 1996 are sweeps of this kind). A run
 is three pieces:
 
 * a **case builder** ``build(parameters, seeds) -> (plant, law, config, initial_state)``: for a
@@ -122,7 +123,7 @@ from flexsat.sim.recording import SimResult
 def _nonneg_int(value, name: str) -> int:
     """An integer >= 0 (bools and fractions refused), naming the field."""
     if isinstance(value, bool) or not float(require_finite(value, name)).is_integer() or value < 0:
-        raise ValueError(f"{name}: must be an integer >= 0, got {value!r}")
+        raise FieldError(name, f"must be an integer >= 0, got {value!r}")
     return int(value)
 
 
@@ -207,23 +208,24 @@ def _spawned_seeds(base: int, idx: np.ndarray) -> np.ndarray:
 def _table(parameters: Mapping[str, Any], known: tuple[str, ...] | None) -> dict[str, np.ndarray]:
     """The parameter table as {name: (n_cases,) float array}; ValueError naming a bad column."""
     if not parameters:
-        raise ValueError("parameters: give at least one column (name -> one value per case)")
+        raise FieldError("parameters", "give at least one column (name -> one value per case)")
     table = {}
     for name, values in parameters.items():
         if known is not None and name not in known:
-            raise ValueError(
-                f"parameters: unknown parameter {name!r}; the case builder knows {', '.join(known)}"
+            raise FieldError(
+                "parameters",
+                f"unknown parameter {name!r}; the case builder knows {', '.join(known)}",
             )
         col = require_finite(values, f"parameters[{name!r}]")
         if col.ndim != 1:
-            raise ValueError(
-                f"parameters[{name!r}]: must be one value per case (1-D), got shape {col.shape}"
+            raise FieldError(
+                f"parameters[{name!r}]", f"must be one value per case (1-D), got shape {col.shape}"
             )
         table[name] = np.ascontiguousarray(col, dtype=np.float64)
     sizes = {name: len(col) for name, col in table.items()}
     if len(set(sizes.values())) != 1 or not next(iter(sizes.values())):
-        raise ValueError(
-            f"parameters: every column must have the same number (>= 1) of cases, got {sizes}"
+        raise FieldError(
+            "parameters", f"every column must have the same number (>= 1) of cases, got {sizes}"
         )
     return table
 
@@ -386,9 +388,9 @@ class HubManeuverBuilder:
         inertia, appendage = self._inertias(table, n)
         shape = {k: table[k] for k in MANEUVER_PARAMETERS if k in table}
         if len(shape) == 3:
-            raise ValueError(
-                "parameters: give at most two of alpha, u_max, duration (Att. 3 "
-                "Eq. 15 fixes the third)"
+            raise FieldError(
+                "parameters",
+                "give at most two of alpha, u_max, duration (Att. 3 Eq. 15 fixes the third)",
             )
         for k in ("alpha", "u_max"):
             if len(shape) < 2 and k not in shape:
@@ -422,10 +424,11 @@ class HubManeuverBuilder:
                 unit, rule = _SENSOR_ACTUATOR_RULES[k]
                 out[k] = rule(table[k], f"parameters[{k!r}]", unit)
         if "gyro_noise" in out and self.config.sensors.rate != "gyro":
-            raise ValueError(
-                f"parameters['gyro_noise']: the run's rate measurement is "
+            raise FieldError(
+                "parameters['gyro_noise']",
+                "the run's rate measurement is "
                 f"{self.config.sensors.rate!r}, not 'gyro'; a gyro noise would "
-                f"change nothing"
+                f"change nothing",
             )
         return out
 
@@ -450,9 +453,10 @@ class HubManeuverBuilder:
         if "encoder_resolution" in cols:
             values = np.unique(cols["encoder_resolution"])
             if len(values) != 1:
-                raise ValueError(
-                    "parameters['encoder_resolution']: one value per call; run "
-                    "the cases through run_chunk, which splits a chunk by it"
+                raise FieldError(
+                    "parameters['encoder_resolution']",
+                    "one value per call; run "
+                    "the cases through run_chunk, which splits a chunk by it",
                 )
             config = replace(
                 config, sensors=replace(config.sensors, encoder_resolution=float(values[0]))
@@ -623,9 +627,9 @@ def _run_cases(
     for name, values in extract(result).items():
         values = np.asarray(values, float)
         if values.shape != (n,):
-            raise ValueError(
-                f"extract: metric {name!r} has shape {values.shape}, expected "
-                f"({n},) (one value per case)"
+            raise FieldError(
+                "extract",
+                f"metric {name!r} has shape {values.shape}, expected ({n},) (one value per case)",
             )
         out["metric_" + name] = values
     for name in histories:

@@ -45,6 +45,8 @@ from typing import Any
 
 import numpy as np
 
+from flexsat.input_checks import FieldError
+
 #: the layout of the store; part of the fingerprint so a store of another layout is refused
 STORE_LAYOUT = "flexsat.design.batch_runner/2"
 #: errors of flock that mean the file system has no locks (NFS emulates flock with POSIX locks,
@@ -262,17 +264,19 @@ def open_store_mask(path: Path, fp: str, n_cases: int) -> np.ndarray | None:
     try:
         ds = xr.open_zarr(path, consolidated=False)
     except Exception as exc:  # noqa: BLE001 - any unreadable directory is refused the same way
-        raise ValueError(
-            f"store: {str(path)!r} exists and is not a batch store "
-            f"({type(exc).__name__}: {exc}); give a new path"
+        raise FieldError(
+            "store",
+            f"{str(path)!r} exists and is not a batch store "
+            f"({type(exc).__name__}: {exc}); give a new path",
         ) from None
     theirs = ds.attrs.get("fingerprint")
     if theirs != fp or ds.sizes.get("case") != n_cases:
-        raise ValueError(
-            f"store: {str(path)!r} holds the results of a different setup "
+        raise FieldError(
+            "store",
+            f"{str(path)!r} holds the results of a different setup "
             f"(fingerprint {theirs!s:.12} ≠ {fp:.12}: another scenario, parameter "
             f"table, base seed or history selection); refusing to resume into it, "
-            f"give a new path"
+            f"give a new path",
         )
     return np.asarray(ds["done"].values, bool)
 

@@ -94,7 +94,7 @@ from flexsat.design.parameter_space import (
     require_si_unit,
     si_scalar,
 )
-from flexsat.input_checks import require_count
+from flexsat.input_checks import FieldError, require_count
 from flexsat.units import FloatArray, QuantityLike
 
 #: the percentiles reported by default
@@ -110,24 +110,26 @@ IntArray = npt.NDArray[np.int_]
 def _confidence(confidence) -> float:
     c = float(confidence) if isinstance(confidence, (int, float)) else math.nan
     if isinstance(confidence, bool) or not 0 < c < 1:
-        raise ValueError(f"confidence: must be a number in (0, 1) such as 0.95, got {confidence!r}")
+        raise FieldError(
+            "confidence", f"must be a number in (0, 1) such as 0.95, got {confidence!r}"
+        )
     return c
 
 
 def _metric(values, field_path: str) -> FloatArray:
     """A 1-D float array of at least one case (NaN and inf allowed: see the module)."""
     if isinstance(values, (str, bytes)):
-        raise ValueError(f"{field_path}: must be an array of numbers, got the string {values!r}")
+        raise FieldError(field_path, f"must be an array of numbers, got the string {values!r}")
     try:
         arr = np.asarray(values, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(
-            f"{field_path}: must be an array of numbers, got {type(values).__name__}"
+        raise FieldError(
+            field_path, f"must be an array of numbers, got {type(values).__name__}"
         ) from None
     if arr.ndim != 1 or arr.size == 0:
-        raise ValueError(
-            f"{field_path}: must be a 1-D array over the cases with one case or "
-            f"more, got shape {arr.shape}"
+        raise FieldError(
+            field_path,
+            f"must be a 1-D array over the cases with one case or more, got shape {arr.shape}",
         )
     return arr
 
@@ -151,12 +153,12 @@ class Requirement:
     def __post_init__(self) -> None:
         f = f"requirement {self.metric!r}"
         if not isinstance(self.metric, str) or not self.metric.strip():
-            raise ValueError(
-                f"requirement.metric: must be a non-empty metric name, got {self.metric!r}"
+            raise FieldError(
+                "requirement.metric", f"must be a non-empty metric name, got {self.metric!r}"
             )
         if self.relation not in RELATIONS:
-            raise ValueError(
-                f"{f}.relation: must be one of {', '.join(RELATIONS)}, got {self.relation!r}"
+            raise FieldError(
+                f"{f}.relation", f"must be one of {', '.join(RELATIONS)}, got {self.relation!r}"
             )
         require_si_unit(self.unit, f)
         object.__setattr__(
@@ -181,9 +183,8 @@ def requirement_from_spec(
     (metric ≥ ...), in the metric's SI ``unit``; errors name ``field_path``."""
     f = field_path or metric
     if not isinstance(spec, Mapping) or len(spec) != 1 or next(iter(spec)) not in ("max", "min"):
-        raise ValueError(
-            f"{f}: give exactly one of max: (metric <= value) or min: "
-            f"(metric >= value), got {spec!r}"
+        raise FieldError(
+            f, f"give exactly one of max: (metric <= value) or min: (metric >= value), got {spec!r}"
         )
     key, value = next(iter(spec.items()))
     require_si_unit(unit, f)
@@ -230,14 +231,14 @@ def proportion_interval(
 ) -> tuple[float, float]:
     """The interval of a binomial proportion from ``successes`` of ``n`` (see the module)."""
     if method not in INTERVAL_METHODS:
-        raise ValueError(f"method: must be one of {', '.join(INTERVAL_METHODS)}, got {method!r}")
+        raise FieldError("method", f"must be one of {', '.join(INTERVAL_METHODS)}, got {method!r}")
     count = require_count(n, "n")
     if (
         isinstance(successes, bool)
         or not float(successes).is_integer()
         or not 0 <= successes <= count
     ):
-        raise ValueError(f"successes: must be an integer in 0..n = {count}, got {successes!r}")
+        raise FieldError("successes", f"must be an integer in 0..n = {count}, got {successes!r}")
     ci = stats.binomtest(int(successes), count).proportion_ci(
         confidence_level=_confidence(confidence), method=INTERVAL_METHODS[method]
     )
@@ -252,7 +253,7 @@ def probability_of_meeting(
 ) -> ProbabilityEstimate:
     """The probability that a case meets ``requirement``, from the metric over the N cases."""
     if not isinstance(requirement, Requirement):
-        raise ValueError(f"requirement: must be a Requirement, got {requirement!r}")
+        raise FieldError("requirement", f"must be a Requirement, got {requirement!r}")
     met = requirement.met(values)
     k, n = int(np.count_nonzero(met)), int(met.size)
     low, high = proportion_interval(k, n, confidence, method)
@@ -263,11 +264,11 @@ def _percentile_rule(q, field_path: str = "q") -> FloatArray:
     try:
         arr = np.atleast_1d(np.asarray(q, dtype=float))
     except (TypeError, ValueError):
-        raise ValueError(
-            f"{field_path}: percentiles must be numbers in [0, 100], got {q!r}"
+        raise FieldError(
+            field_path, f"percentiles must be numbers in [0, 100], got {q!r}"
         ) from None
     if arr.ndim != 1 or arr.size == 0 or not np.all((arr >= 0) & (arr <= 100)):
-        raise ValueError(f"{field_path}: percentiles must be numbers in [0, 100], got {q!r}")
+        raise FieldError(field_path, f"percentiles must be numbers in [0, 100], got {q!r}")
     return arr
 
 
@@ -279,7 +280,7 @@ def percentile_interval(
     c = _confidence(confidence)
     qs = _percentile_rule(q)
     if np.ndim(q) != 0:
-        raise ValueError(f"q: must be a single percentile in [0, 100], got {q!r}")
+        raise FieldError("q", f"must be a single percentile in [0, 100], got {q!r}")
     qq = float(qs[0])
     x = np.sort(_metric(values, field_path))
     x = x[~np.isnan(x)]
@@ -428,7 +429,7 @@ def _points(points: Sequence[int] | None, n: int) -> IntArray:
         return checkpoints(n)
     ns = np.array([require_count(p, "points") for p in points])
     if ns.size == 0 or np.any(ns > n) or np.any(np.diff(ns) <= 0):
-        raise ValueError(f"points: must be increasing case counts in 1..{n}, got {points!r}")
+        raise FieldError("points", f"must be increasing case counts in 1..{n}, got {points!r}")
     return ns
 
 
@@ -477,20 +478,21 @@ def sobol_indices(
     """Sobol' indices of the metric ``y`` over the cases of a Saltelli ``design`` (see the
     module); ``y`` must have a value in every case."""
     if not isinstance(design, SobolDesign):
-        raise ValueError(
-            f"design: must be a SobolDesign (ParameterSpace.sobol_design), got "
-            f"{type(design).__name__}"
+        raise FieldError(
+            "design",
+            f"must be a SobolDesign (ParameterSpace.sobol_design), got {type(design).__name__}",
         )
     from SALib.analyze import sobol as salib_sobol
 
     arr = _metric(y, name)
     if arr.size != len(design.table):
-        raise ValueError(f"{name}: has {arr.size} cases, the Sobol' design {len(design.table)}")
+        raise FieldError(name, f"has {arr.size} cases, the Sobol' design {len(design.table)}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(
-            f"{name}: Sobol' indices need a finite value in every case; "
+        raise FieldError(
+            name,
+            "Sobol' indices need a finite value in every case; "
             f"{int(np.sum(~np.isfinite(arr)))} are NaN or inf (analyse a "
-            f"requirement's indicator instead)"
+            f"requirement's indicator instead)",
         )
     result = salib_sobol.analyze(
         design.problem,
@@ -563,22 +565,22 @@ def sample_sensitivity(
     as the larger half-width.
     """
     if not isinstance(table, SampleTable):
-        raise ValueError(f"table: must be a SampleTable, got {type(table).__name__}")
+        raise FieldError("table", f"must be a SampleTable, got {type(table).__name__}")
     if method not in SAMPLE_METHODS:
-        raise ValueError(f"method: must be one of {', '.join(SAMPLE_METHODS)}, got {method!r}")
+        raise FieldError("method", f"must be one of {', '.join(SAMPLE_METHODS)}, got {method!r}")
     c = _confidence(confidence)
     arr = _metric(y, name)
     if arr.size != len(table):
-        raise ValueError(f"{name}: has {arr.size} cases, the table {len(table)}")
+        raise FieldError(name, f"has {arr.size} cases, the table {len(table)}")
     keep = ~np.isnan(arr)
     x, yy = table.matrix()[keep], arr[keep]
     n = int(keep.sum())
     names = table.names
     if method == "spearman":
         if n < MIN_RANKING_CASES:
-            raise ValueError(
-                f"{name}: Spearman's ranking needs {MIN_RANKING_CASES} cases with a "
-                f"value or more, got {n}"
+            raise FieldError(
+                name,
+                f"Spearman's ranking needs {MIN_RANKING_CASES} cases with a value or more, got {n}",
             )
         rho = np.array([stats.spearmanr(x[:, j], yy).statistic for j in range(len(names))])
         z = stats.norm.ppf(0.5 + c / 2) * math.sqrt(1.06 / (n - 3))
@@ -609,7 +611,7 @@ def monte_carlo_summary(
     estimate and convergence, per metric its summary and the convergence of its percentiles."""
     for r in requirements:
         if not isinstance(r, Requirement):
-            raise ValueError(f"requirements: must be Requirement objects, got {r!r}")
+            raise FieldError("requirements", f"must be Requirement objects, got {r!r}")
         if r.metric not in metrics:
             raise ValueError(
                 f"requirement {r.metric!r}: no such metric; metrics: {', '.join(metrics)}"

@@ -6,7 +6,8 @@ A parameter is a scenario quantity (a hub inertia, a torque limit, a damping rat
 caller and declared in its SI unit (``"kg*m**2"``, ``"N*m"``, ``"rad"``, ``""`` for a
 dimensionless one). Every value given for it (a mean, a bound, a grid value) is a float in that
 unit, a pint Quantity or a unit string, converted with :func:`flexsat.units.to_si_array`, so
-published values are entered as published: ``"300 ozf*in"`` for seed 000's torque limit (pint's
+published values are entered as published: ``"300 ozf*in"`` for Junkins, Pollock &
+Rahman 1990's torque limit (pint's
 ``oz`` is the ounce of mass; the ounce-force is ``ozf``), ``"5 deg"`` for an angle.
 
 The pieces:
@@ -73,7 +74,7 @@ from scipy import stats
 from scipy.stats import qmc
 
 from flexsat import limits
-from flexsat.input_checks import require_count
+from flexsat.input_checks import FieldError, require_count
 from flexsat.limits import check_count
 from flexsat.units import (
     FloatArray,
@@ -94,23 +95,24 @@ def _open_unit(u: FloatArray) -> FloatArray:
 
 def _check_name(name: object, field_path: str) -> str:
     if not isinstance(name, str) or not name.strip():
-        raise ValueError(f"{field_path}: a parameter name must be a non-empty string, got {name!r}")
+        raise FieldError(field_path, f"a parameter name must be a non-empty string, got {name!r}")
     return name
 
 
 def require_si_unit(unit: object, field_path: str) -> str:
     """The parameter's unit must be its SI unit: the table holds SI values under that label."""
     if not isinstance(unit, str):
-        raise ValueError(
-            f"{field_path}.unit: must be a unit string such as 'N*m' or '' "
-            f"(dimensionless), got {unit!r}"
+        raise FieldError(
+            f"{field_path}.unit",
+            f"must be a unit string such as 'N*m' or '' (dimensionless), got {unit!r}",
         )
     factor = parse_quantity(f"1 {unit}", f"{field_path}.unit").to_base_units().magnitude
     if factor != 1.0:
-        raise ValueError(
-            f"{field_path}.unit: must be an SI unit (the table holds SI values); "
+        raise FieldError(
+            f"{field_path}.unit",
+            "must be an SI unit (the table holds SI values); "
             f"1 {unit} is {factor:.6g} of its SI unit; declare the SI unit and give "
-            f"values as strings such as '5 {unit}'"
+            f"values as strings such as '5 {unit}'",
         )
     return unit
 
@@ -122,10 +124,10 @@ def si_scalar(
     ``allow_infinite`` (never NaN)."""
     arr = to_si_array(value, unit, field_path)
     if arr.size != 1:
-        raise ValueError(f"{field_path}: must be a single number, got {value!r}")
+        raise FieldError(field_path, f"must be a single number, got {value!r}")
     x = float(arr.reshape(()))
     if math.isnan(x) or (math.isinf(x) and not allow_infinite):
-        raise ValueError(f"{field_path}: must be finite (no NaN or inf), got {value!r}")
+        raise FieldError(field_path, f"must be finite (no NaN or inf), got {value!r}")
     return x
 
 
@@ -155,7 +157,7 @@ class _Distribution:
         mean = si_scalar(mean_given, self.unit, f"{f}.mean")
         sd = si_scalar(sd_given, self.unit, f"{f}.sd")
         if sd <= 0:
-            raise ValueError(f"{f}.sd: must be > 0 (a standard deviation), got {sd_given!r}")
+            raise FieldError(f"{f}.sd", f"must be > 0 (a standard deviation), got {sd_given!r}")
         return mean, sd
 
     def _set(self, attr: str, value: float) -> None:
@@ -232,7 +234,7 @@ class Uniform(_Distribution):
         low = si_scalar(self.low, self.unit, f"{f}.low")
         high = si_scalar(self.high, self.unit, f"{f}.high")
         if not low < high:
-            raise ValueError(f"{f}: low must be < high, got low={self.low!r}, high={self.high!r}")
+            raise FieldError(f, f"low must be < high, got low={self.low!r}, high={self.high!r}")
         self._set("low", low)
         self._set("high", high)
 
@@ -268,14 +270,16 @@ class LogNormal(_Distribution):
         f = self._start()
         median = si_scalar(self.median, self.unit, f"{f}.median")
         if median <= 0:
-            raise ValueError(
-                f"{f}.median: must be > 0 (a lognormal variable is positive), got {self.median!r}"
+            raise FieldError(
+                f"{f}.median",
+                f"must be > 0 (a lognormal variable is positive), got {self.median!r}",
             )
         gsd = si_scalar(self.gsd, "", f"{f}.gsd")
         if gsd <= 1:
-            raise ValueError(
-                f"{f}.gsd: the geometric standard deviation must be > 1 "
-                f"(dimensionless; 1.1 is a 10 % dispersion), got {self.gsd!r}"
+            raise FieldError(
+                f"{f}.gsd",
+                "the geometric standard deviation must be > 1 "
+                f"(dimensionless; 1.1 is a 10 % dispersion), got {self.gsd!r}",
             )
         self._set("median", median)
         self._set("gsd", gsd)
@@ -319,7 +323,7 @@ class TruncatedNormal(_Distribution):
         low = si_scalar(self.low, self.unit, f"{f}.low", allow_infinite=True)
         high = si_scalar(self.high, self.unit, f"{f}.high", allow_infinite=True)
         if not low < high:
-            raise ValueError(f"{f}: low must be < high, got low={self.low!r}, high={self.high!r}")
+            raise FieldError(f, f"low must be < high, got low={self.low!r}, high={self.high!r}")
         a, b = (low - mean) / sd, (high - mean) / sd
         # the probability of [a, b] under N(0, 1), from the tail nearer to the interval so that
         # far tails do not cancel to 0 in 1 - Phi
@@ -329,9 +333,10 @@ class TruncatedNormal(_Distribution):
             else (stats.norm.cdf(b) - stats.norm.cdf(a))
         )
         if not mass > 0:
-            raise ValueError(
-                f"{f}: the normal N({mean:g}, {sd:g}²) puts no probability in "
-                f"[{low:g}, {high:g}] ({a:.3g} to {b:.3g} sd from the mean)"
+            raise FieldError(
+                f,
+                f"the normal N({mean:g}, {sd:g}²) puts no probability in "
+                f"[{low:g}, {high:g}] ({a:.3g} to {b:.3g} sd from the mean)",
             )
         for attr, v in (("mean", mean), ("sd", sd), ("low", low), ("high", high)):
             self._set(attr, v)
@@ -418,16 +423,16 @@ class GridAxis:
         object.__setattr__(self, "field", f)
         require_si_unit(self.unit, f)
         if isinstance(self.values, str):
-            raise ValueError(
-                f"{f}.values: must be a list of values, got the string {self.values!r}"
+            raise FieldError(
+                f"{f}.values", f"must be a list of values, got the string {self.values!r}"
             )
         arr = to_si_array(self.values, self.unit, f"{f}.values")
         if arr.ndim != 1 or arr.size == 0:
-            raise ValueError(
-                f"{f}.values: must be a non-empty list of numbers, got shape {arr.shape}"
+            raise FieldError(
+                f"{f}.values", f"must be a non-empty list of numbers, got shape {arr.shape}"
             )
         if not np.all(np.isfinite(arr)):
-            raise ValueError(f"{f}.values: must be finite (no NaN or inf), got {self.values!r}")
+            raise FieldError(f"{f}.values", f"must be finite (no NaN or inf), got {self.values!r}")
         object.__setattr__(self, "values", arr)
 
     @classmethod
@@ -446,12 +451,12 @@ class GridAxis:
         lo = si_scalar(low, unit, f"{f}.low")
         hi = si_scalar(high, unit, f"{f}.high")
         if not lo < hi:
-            raise ValueError(f"{f}: low must be < high, got low={low!r}, high={high!r}")
+            raise FieldError(f, f"low must be < high, got low={low!r}, high={high!r}")
         count = require_count(n, f"{f}.n")
         check_count(count, limits.MAX_CASES, f"{f}.n", "grid points on one axis")
         if count < 2:
-            raise ValueError(
-                f"{f}.n: a linspace needs n >= 2 (give one value as values: [x]), got {n!r}"
+            raise FieldError(
+                f"{f}.n", f"a linspace needs n >= 2 (give one value as values: [x]), got {n!r}"
             )
         return cls(name, np.linspace(lo, hi, count), unit, field=f)
 
@@ -460,7 +465,7 @@ def _unique_names(items, field_path: str) -> None:
     seen = set()
     for item in items:
         if item.name in seen:
-            raise ValueError(f"{field_path}: the parameter {item.name!r} is given twice")
+            raise FieldError(field_path, f"the parameter {item.name!r} is given twice")
         seen.add(item.name)
 
 
@@ -476,7 +481,7 @@ class GridSpace:
     def __init__(self, axes: Sequence[GridAxis], field_path: str = "parameters") -> None:
         axes = list(axes)
         if not axes or not all(isinstance(a, GridAxis) for a in axes):
-            raise ValueError(f"{field_path}: a grid needs one GridAxis or more, got {axes!r}")
+            raise FieldError(field_path, f"a grid needs one GridAxis or more, got {axes!r}")
         _unique_names(axes, field_path)
         self.axes = axes
 
@@ -503,13 +508,13 @@ class GridSpace:
 
 def _seed(seed, field_path: str) -> int:
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"{field_path}: the seed must be a non-negative integer, got {seed!r}")
+        raise FieldError(field_path, f"the seed must be a non-negative integer, got {seed!r}")
     return int(seed)
 
 
 def _start(start) -> int:
     if isinstance(start, bool) or not isinstance(start, (int, np.integer)) or start < 0:
-        raise ValueError(f"start: must be a non-negative integer, got {start!r}")
+        raise FieldError("start", f"must be a non-negative integer, got {start!r}")
     return int(start)
 
 
@@ -537,9 +542,10 @@ class ParameterSpace:
     def __init__(self, parameters: Sequence[Distribution], field_path: str = "parameters") -> None:
         parameters = list(parameters)
         if not parameters or not all(isinstance(p, _Distribution) for p in parameters):
-            raise ValueError(
-                f"{field_path}: a parameter space needs one distribution or more "
-                f"(Normal, Uniform, LogNormal, TruncatedNormal), got {parameters!r}"
+            raise FieldError(
+                field_path,
+                "a parameter space needs one distribution or more "
+                f"(Normal, Uniform, LogNormal, TruncatedNormal), got {parameters!r}",
             )
         _unique_names(parameters, field_path)
         self.parameters = parameters
@@ -608,9 +614,10 @@ class ParameterSpace:
         Sobol' sequence (scipy.stats.qmc.Sobol, Owen scrambling)."""
         count = require_count(n, "n")
         if count & (count - 1):
-            raise ValueError(
-                f"n: a Sobol' sequence needs a power of 2 (its balance holds on "
-                f"2^m points), got {n!r}"
+            raise FieldError(
+                "n",
+                "a Sobol' sequence needs a power of 2 (its balance holds on "
+                f"2^m points), got {n!r}",
             )
         engine = qmc.Sobol(len(self.parameters), scramble=True, rng=_seed(seed, "seed"))
         return self.from_unit(engine.random_base2(int(math.log2(count))))
@@ -631,7 +638,7 @@ class ParameterSpace:
 
         count = require_count(n_base, "n_base")
         if count & (count - 1):
-            raise ValueError(f"n_base: the Saltelli design needs a power of 2, got {n_base!r}")
+            raise FieldError("n_base", f"the Saltelli design needs a power of 2, got {n_base!r}")
         problem = self.salib_problem()
         u = salib_sobol.sample(
             problem,
@@ -649,10 +656,12 @@ def _keys(
 ) -> None:
     for key in spec:
         if key not in allowed:
-            raise ValueError(f"{field_path}.{key}: unknown key; {what} takes {', '.join(allowed)}")
+            raise FieldError(
+                f"{field_path}.{key}", f"unknown key; {what} takes {', '.join(allowed)}"
+            )
     for key in required:
         if key not in spec:
-            raise ValueError(f"{field_path}.{key}: missing; {what} takes {', '.join(allowed)}")
+            raise FieldError(f"{field_path}.{key}", f"missing; {what} takes {', '.join(allowed)}")
 
 
 def parameter_from_spec(
@@ -668,17 +677,18 @@ def parameter_from_spec(
     """
     f = field_path or name
     if not isinstance(spec, Mapping):
-        raise ValueError(
-            f"{f}: must be a mapping such as {{distribution: normal, mean: ..., "
+        raise FieldError(
+            f,
+            f"must be a mapping such as {{distribution: normal, mean: ..., "
             f"sd: ...}}, {{values: [...]}} or {{low: ..., high: ..., n: ...}}, "
-            f"got {spec!r}"
+            f"got {spec!r}",
         )
     if "distribution" in spec:
         kind = spec["distribution"]
         if kind not in DISTRIBUTIONS:
-            raise ValueError(
-                f"{f}.distribution: unknown distribution {kind!r}; known: "
-                f"{', '.join(DISTRIBUTIONS)}"
+            raise FieldError(
+                f"{f}.distribution",
+                f"unknown distribution {kind!r}; known: {', '.join(DISTRIBUTIONS)}",
             )
         cls, keys = DISTRIBUTIONS[kind]
         _keys(spec, ("distribution", *keys), keys, f, f"a {kind} distribution")
@@ -692,9 +702,10 @@ def parameter_from_spec(
     if "low" in spec or "high" in spec:
         _keys(spec, ("low", "high"), ("low", "high"), f, "a range (uniform bounds)")
         return Uniform(name, spec["low"], spec["high"], unit, field=f)
-    raise ValueError(
-        f"{f}: give a distribution ({', '.join(DISTRIBUTIONS)}), values: [...], "
-        f"low/high/n (a linspace) or low/high (bounds); got keys {sorted(spec)}"
+    raise FieldError(
+        f,
+        f"give a distribution ({', '.join(DISTRIBUTIONS)}), values: [...], "
+        f"low/high/n (a linspace) or low/high (bounds); got keys {sorted(spec)}",
     )
 
 
@@ -708,16 +719,17 @@ def space_from_spec(
     two do not mix (a grid is a design, a distribution a population).
     """
     if not isinstance(spec, Mapping) or not spec:
-        raise ValueError(
-            f"{field_path}: must be a non-empty mapping of parameter name to its "
-            f"values or distribution, got {spec!r}"
+        raise FieldError(
+            field_path,
+            "must be a non-empty mapping of parameter name to its "
+            f"values or distribution, got {spec!r}",
         )
     items = []
     for name, entry in spec.items():
         f = f"{field_path}.{name}"
         if name not in units:
             known = ", ".join(sorted(units)) or "none"
-            raise ValueError(f"{f}: unknown parameter; known: {known}")
+            raise FieldError(f, f"unknown parameter; known: {known}")
         items.append(parameter_from_spec(name, entry, units[name], f))
     grids = [isinstance(i, GridAxis) for i in items]
     if all(grids):
@@ -725,9 +737,9 @@ def space_from_spec(
     if not any(grids):
         return ParameterSpace([i for i in items if not isinstance(i, GridAxis)], field_path)
     odd = items[grids.index(not grids[0])]
-    raise ValueError(
-        f"{odd.field}: grid axes (values, low/high/n) and distributions or bounds "
-        f"cannot be mixed in one space"
+    raise FieldError(
+        f"{odd.field}",
+        "grid axes (values, low/high/n) and distributions or bounds cannot be mixed in one space",
     )
 
 

@@ -1,9 +1,11 @@
-r"""A torquers-only slew that meets the seed 003 goals: the rigid nominal torque plus the
+r"""A torquers-only slew that meets the EPS slew study c. 1989 goals:
+the rigid nominal torque plus the
 minimum-norm correction that brings the design modes to rest at T (the closing argument of the
 F18 weight search, :mod:`flexsat.design.slew_weights`).
 
-Why it is needed. The weight search finds no diagonal Q/D of the perturbation feedback (seed
-003 Eqs. 22–31) meeting the 6 s goals with the centre-of-mass torquers alone. That is not a
+Why it is needed. The weight search finds no diagonal Q/D of the perturbation feedback (EPS
+slew study c. 1989, Eqs. 22–31) meeting the 6 s goals with the
+centre-of-mass torquers alone. That is not a
 limit of the torquers: on the EPS they load the antenna modes through the CG node's rotational
 shapes (:math:`\Phi_{r,CG}^T\tau`, ``torque_node``), a constant, strong input (for a unit
 normalized torque J⁻¹δτ the modal accelerations of modes 1–4 are 116, 84, 114 and 36), so the
@@ -27,7 +29,8 @@ with the coefficients c the minimum-norm solution of the linear terminal conditi
     \delta X(T) = \int_0^T \Phi(T, s)\,B(s)\,v(s)\,ds
     = [\,0_6;\ -\eta_{ol}(T);\ -\dot\eta_{ol}(T)\,],
 
-Φ the transition matrix of the perturbation dynamics linearised along the nominal (seed 003
+Φ the transition matrix of the perturbation dynamics linearised along the
+nominal (EPS slew study c. 1989
 Eq. 23, :class:`~flexsat.control.trajectory_linearization.TrajectoryLinearization` on the design
 model, integrated by RK4 on the control grid with the Jacobians at the half steps) and
 :math:`(\eta_{ol}, \dot\eta_{ol})(T)` the design modes' state at T when the nominal torque alone
@@ -47,7 +50,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import require_count
+from flexsat.input_checks import FieldError, require_count
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
@@ -119,9 +122,10 @@ def modal_cancelling_torque(evaluation: SlewEvaluation, n_basis: int = 30) -> Sh
     T, h = float(nominal.duration), float(config.dt)
     n_steps = int(round(T / h))
     if abs(n_steps * h - T) > 1e-9 * T:
-        raise ValueError(
-            f"evaluation.config: the control period {h:g} s must divide the "
-            f"maneuver time {T:g} s (the correction is integrated on that grid)"
+        raise FieldError(
+            "evaluation.config",
+            f"the control period {h:g} s must divide the "
+            f"maneuver time {T:g} s (the correction is integrated on that grid)",
         )
     run = simulate(truth, NominalTorque(nominal, h), config, n_cases=1, record_states=True)
     x_T = run.dataset["state"].isel(case=0).values[n_steps]

@@ -1,7 +1,9 @@
-r"""Automated search of the perturbation-feedback weights of a three-axis slew toward the seed 003
-goals (the paper's main recommendation, EPS slew study c. 1989, L905–L925).
+r"""Automated search of the perturbation-feedback weights of a three-axis slew toward the goals of
+the EPS slew study c. 1989 (the paper's main recommendation, "Perturbation Control - Torquers +
+Force Actuators, 10 s Maneuver").
 
-Seed 003 designs its perturbation feedback (frequency-shaped LQR with cross weight, Eqs. 22–28,
+The EPS slew study c. 1989 designs its perturbation feedback (frequency-shaped LQR
+with cross weight, Eqs. 22–28,
 :func:`~flexsat.control.perturbation_feedback.perturbation_design`) with diagonal weights
 
 .. math::
@@ -10,10 +12,11 @@ Seed 003 designs its perturbation feedback (frequency-shaped LQR with cross weig
     D = \mathrm{diag}(d_\tau I_3,\ d_F)
 
 over δX = [δα, δω, δη, δη̇] and δu₁ = [J⁻¹δτ, δF], chosen by hand, and judges each design by
-simulation against two goals (L792–L801, :mod:`flexsat.sim.slew_goals`): the 1-2-3 angle error
+simulation against two goals ("Simulation Results",
+:mod:`flexsat.sim.slew_goals`): the 1-2-3 angle error
 at 1.25 T at most 3 % of the commanded angle, and the peak rim deflection after the slew at most
 1/10 of the open-loop one. Its 6 s torquers-only case D misses both and the paper recommends
-"an optimization of the weighting matrices" (L905–L925). This module does that search.
+"an optimization of the weighting matrices" (ibid.). This module does that search.
 
 The pieces:
 
@@ -87,7 +90,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import require_count, require_nonneg, require_positive
+from flexsat import limits
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_nonneg,
+    require_numeric,
+    require_positive,
+)
 from flexsat.sim.slew_goals import SlewGoals, slew_goal_metrics
 from flexsat.units import FloatArray
 
@@ -131,16 +141,15 @@ METHODS = ("nelder-mead", "powell")
 def _block(value, name: str, positive: bool) -> tuple[float, ...] | None:
     if value is None:
         return None
-    w = np.atleast_1d(np.asarray(value, float))
-    if (
-        w.ndim != 1
-        or w.size == 0
-        or not np.all(np.isfinite(w))
-        or np.any(w < 0)
-        or (positive and np.any(w <= 0))
-    ):
-        rule = "> 0 (D is inverted)" if positive else ">= 0"
-        raise ValueError(f"{name}: one weight or a list of them, finite and {rule}, got {value!r}")
+    rule = "> 0 (D is inverted)" if positive else ">= 0"
+    try:  # a Quantity is refused here (weights are SI numbers), not stripped of its unit
+        w = np.atleast_1d(require_numeric(value, name, "weight"))
+    except FieldError as exc:
+        raise FieldError(
+            name, f"one weight or a list of them, finite and {rule}: {exc.rule}"
+        ) from None
+    if w.ndim != 1 or w.size == 0 or np.any(w < 0) or (positive and np.any(w <= 0)):
+        raise FieldError(name, f"one weight or a list of them, finite and {rule}, got {value!r}")
     return tuple(float(x) for x in w)
 
 
@@ -148,8 +157,29 @@ def _diagonal(values: tuple[float, ...], size: int, name: str) -> FloatArray:
     if len(values) == 1:
         return np.full(size, values[0])
     if len(values) != size:
-        raise ValueError(f"{name}: one weight or {size} of them, got {len(values)}")
+        raise FieldError(name, f"one weight or {size} of them, got {len(values)}")
     return np.asarray(values)
+
+
+def _check_range(weights: SlewWeights, q: FloatArray, d: FloatArray) -> None:
+    """Refuse weights spanning more than :data:`flexsat.limits.MAX_WEIGHT_RANGE`, naming the
+    block whose extreme value lies farther (in decades) from 1."""
+    values = np.concatenate([q, d])
+    positive = values[values > 0]
+    low, high = positive.min(), positive.max()
+    if high <= limits.MAX_WEIGHT_RANGE * low:
+        return
+    # weights are SI numbers of natural scale 1: the one farther from 1 is out of place
+    extreme = high if abs(np.log10(high)) >= abs(np.log10(low)) else low
+    block = next(
+        name for name in BLOCKS if getattr(weights, name) and extreme in getattr(weights, name)
+    )
+    raise FieldError(
+        block,
+        f"the weights span {high / low:.3g} (from {low:.3g} to {high:.3g}), above "
+        f"{limits.MAX_WEIGHT_RANGE:.0e} (flexsat.limits.MAX_WEIGHT_RANGE: the smaller "
+        "would be below the rounding of the larger)",
+    )
 
 
 @dataclass(frozen=True)
@@ -170,7 +200,7 @@ class SlewWeights:
         for name in BLOCKS:
             value = _block(getattr(self, name), name, positive=name in ("torque", "force"))
             if value is None and name not in ("mode_rates", "force"):
-                raise ValueError(f"{name}: required")
+                raise FieldError(name, "required")
             object.__setattr__(self, name, value)
 
     def diagonals(self, n_modes: int, n_forces: int = 0) -> tuple[FloatArray, FloatArray]:
@@ -187,8 +217,9 @@ class SlewWeights:
         d = _diagonal(self.torque, 3, "torque")
         if n_forces:
             if self.force is None:
-                raise ValueError("force: required when the design uses forces")
+                raise FieldError("force", "required when the design uses forces")
             d = np.concatenate([d, _diagonal(self.force, n_forces, "force")])
+        _check_range(self, q, d)
         return q, d
 
     def scaled(self, factors: Mapping[str, float]) -> SlewWeights:
@@ -197,12 +228,12 @@ class SlewWeights:
         changes = {}
         for name, factor in factors.items():
             if name not in BLOCKS:
-                raise ValueError(f"factors: unknown block {name!r}; blocks: {', '.join(BLOCKS)}")
+                raise FieldError("factors", f"unknown block {name!r}; blocks: {', '.join(BLOCKS)}")
             values = getattr(self, name)
             if values is None and name == "mode_rates":
                 values = self.modes
             if values is None:
-                raise ValueError(f"factors: block {name!r} is not set in these weights")
+                raise FieldError("factors", f"block {name!r} is not set in these weights")
             changes[name] = tuple(float(factor) * x for x in values)
         return replace(self, **changes)
 
@@ -245,9 +276,10 @@ def _rim_deflection(results: Sequence[SimResult]) -> FloatArray:
     """(n_runs, n_t, n_rim, 3) rim displacements of single-case runs."""
     nodes = rim_nodes(results[0].dataset)
     if not nodes:
-        raise ValueError(
-            "results: the plant records no rim displacements (outputs "
-            "displacement_<node>X/Y/Z), so the deflection goal cannot be judged"
+        raise FieldError(
+            "results",
+            "the plant records no rim displacements (outputs "
+            "displacement_<node>X/Y/Z), so the deflection goal cannot be judged",
         )
     return np.stack(
         [np.stack([_stack(results, f"displacement_{n}{a}") for a in "XYZ"], -1) for n in nodes], -2
@@ -284,15 +316,16 @@ def slew_run_metrics(
     from flexsat.dynamics.attitude import dcm_to_euler123, quaternion_to_dcm
 
     if len(results) == 0:
-        raise ValueError("results: at least one run")
+        raise FieldError("results", "at least one run")
     t = results[0].dataset["time"].values
     deflection = _rim_deflection(results)
     if deflection_open is None:
         deflection_open = deflection[:1]
     elif np.shape(deflection_open) != (1,) + deflection.shape[1:]:
-        raise ValueError(
-            f"deflection_open: shape must be (1,) + {deflection.shape[1:]} (the "
-            f"runs' time grid and rim points), got {np.shape(deflection_open)}"
+        raise FieldError(
+            "deflection_open",
+            f"shape must be (1,) + {deflection.shape[1:]} (the "
+            f"runs' time grid and rim points), got {np.shape(deflection_open)}",
         )
     variables = [str(n) for n in results[0].dataset.data_vars]
     force_names = [n for n in variables if n.startswith("force_") and not n.endswith("_command")]
@@ -362,27 +395,26 @@ class SlewEvaluation:
     ) -> None:
         for name, plant in (("truth", truth), ("design_plant", design_plant)):
             if not hasattr(plant, "n_modes") or not hasattr(plant, "inputs"):
-                raise ValueError(
-                    f"{name}: must be a FlexibleSpacecraft, got {type(plant).__name__}"
-                )
+                raise FieldError(name, f"must be a FlexibleSpacecraft, got {type(plant).__name__}")
         if design_plant.n_modes > truth.n_modes:
-            raise ValueError(
-                f"design_plant: at most the truth's {truth.n_modes} modes, got "
-                f"{design_plant.n_modes}"
+            raise FieldError(
+                "design_plant",
+                f"at most the truth's {truth.n_modes} modes, got {design_plant.n_modes}",
             )
         missing = [
             a for a in ("duration", "target", "torque", "euler123") if not hasattr(nominal, a)
         ]
         if missing:
-            raise ValueError(f"nominal: lacks {', '.join(missing)} (a ThreeAxisSlew has them)")
+            raise FieldError("nominal", f"lacks {', '.join(missing)} (a ThreeAxisSlew has them)")
         if not isinstance(goals, SlewGoals):
-            raise ValueError(f"goals: must be a SlewGoals, got {type(goals).__name__}")
+            raise FieldError("goals", f"must be a SlewGoals, got {type(goals).__name__}")
         T = float(nominal.duration)
         if config.duration < goals.evaluation * T * (1 - 1e-9):
-            raise ValueError(
-                f"config.duration: must reach {goals.evaluation:g} T = "
+            raise FieldError(
+                "config.duration",
+                f"must reach {goals.evaluation:g} T = "
                 f"{goals.evaluation * T:g} s where the goals are evaluated, got "
-                f"{config.duration:g} s"
+                f"{config.duration:g} s",
             )
         self.truth, self.design_plant, self.nominal = truth, design_plant, nominal
         self.config, self.goals = config, goals
@@ -405,9 +437,10 @@ class SlewEvaluation:
         for name in forces:
             channel = name if name.startswith("force_") else f"force_{name}"
             if channel not in available:
-                raise ValueError(
-                    f"forces: {name!r} is not a force of the design plant (its "
-                    f"forces: {', '.join(c[6:] for c in available) or 'none'})"
+                raise FieldError(
+                    "forces",
+                    f"{name!r} is not a force of the design plant (its "
+                    f"forces: {', '.join(c[6:] for c in available) or 'none'})",
                 )
             names.append(channel)
         return names
@@ -425,7 +458,7 @@ class SlewEvaluation:
         from flexsat.control import perturbation_design
 
         if not isinstance(weights, SlewWeights):
-            raise ValueError(f"weights: must be SlewWeights, got {type(weights).__name__}")
+            raise FieldError("weights", f"must be SlewWeights, got {type(weights).__name__}")
         names = self.forces(forces)
         q, d = weights.diagonals(self.design_plant.n_modes, len(names))
         return perturbation_design(
@@ -477,7 +510,7 @@ def goal_violations(metrics: Mapping) -> tuple[float, float]:
         "deflection_ratio_goal",
     ):
         if key not in metrics:
-            raise ValueError(f"metrics: lacks {key!r} (the metrics of a SlewEvaluation)")
+            raise FieldError("metrics", f"lacks {key!r} (the metrics of a SlewEvaluation)")
     ratio = float(metrics["deflection_ratio_after"])
     v_angle = float(metrics["angle_error_mrad"]) / float(metrics["angle_tolerance_mrad"]) - 1.0
     v_ratio = float(metrics["deflection_ratio_goal"]) / ratio - 1.0 if ratio > 0 else np.inf
@@ -513,7 +546,7 @@ def slew_objective(
     """
     margin = float(require_nonneg(margin, "margin"))
     if margin >= 1.0:
-        raise ValueError(f"margin: must be in [0, 1), got {margin}")
+        raise FieldError("margin", f"must be in [0, 1), got {margin}")
     effort_weight = float(require_nonneg(effort_weight, "effort_weight"))
     force_scale = float(require_positive(force_scale, "force_scale", "N"))
     if metrics is None:
@@ -630,24 +663,24 @@ def tune_slew_weights(
     from flexsat.control.perturbation_feedback import FEEDFORWARD
 
     if not isinstance(evaluation, SlewEvaluation):
-        raise ValueError(f"evaluation: must be a SlewEvaluation, got {type(evaluation).__name__}")
+        raise FieldError("evaluation", f"must be a SlewEvaluation, got {type(evaluation).__name__}")
     if not isinstance(initial, SlewWeights):
-        raise ValueError(f"initial: must be SlewWeights, got {type(initial).__name__}")
+        raise FieldError("initial", f"must be SlewWeights, got {type(initial).__name__}")
     free = tuple(free)
     if not free or len(set(free)) != len(free) or any(b not in BLOCKS for b in free):
-        raise ValueError(f"free: distinct block names among {', '.join(BLOCKS)}, got {free!r}")
+        raise FieldError("free", f"distinct block names among {', '.join(BLOCKS)}, got {free!r}")
     names = evaluation.forces(forces)
     if "force" in free and not names:
-        raise ValueError("free: 'force' needs forces (forces=...)")
+        raise FieldError("free", "'force' needs forces (forces=...)")
     if names and initial.force is None:
-        raise ValueError("initial.force: required when the design uses forces")
+        raise FieldError("initial.force", "required when the design uses forces")
     budget = require_count(budget, "budget")
     step = float(require_positive(step, "step"))
     bound = float(require_positive(bound, "bound"))
     if method not in METHODS:
-        raise ValueError(f"method: one of {', '.join(METHODS)}, got {method!r}")
+        raise FieldError("method", f"one of {', '.join(METHODS)}, got {method!r}")
     if feedforward not in FEEDFORWARD:
-        raise ValueError(f"feedforward: one of {', '.join(FEEDFORWARD)}, got {feedforward!r}")
+        raise FieldError("feedforward", f"one of {', '.join(FEEDFORWARD)}, got {feedforward!r}")
     slew_objective(None, margin, effort_weight, force_scale)  # checks the three up front
     require_positive(omega_b, "omega_b", "rad/s")
     require_nonneg(zeta_b, "zeta_b")

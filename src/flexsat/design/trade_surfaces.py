@@ -33,7 +33,13 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat.control.lyapunov import check_lyapunov_gains
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 from flexsat.maneuvers.torque_shapes import SmoothBangBang
 from flexsat.sim.instruments import unit_row
 from flexsat.sim.open_loop import open_loop_response
@@ -142,12 +148,12 @@ def tracking_bound(
     """
     k1, k2, k3 = check_lyapunov_gains(g1, g2, g3, plant.n_appendages)
     if np.any(k2 <= 0):
-        raise ValueError("g2: must be > 0 (μ of Eq. 22 is divided by g2)")
+        raise FieldError("g2", "must be > 0 (μ of Eq. 22 is divided by g2)")
     I_b = require_nonneg(appendage_inertia, "appendage_inertia", "kg*m**2")
     if np.ndim(shape.duration) > 1:
-        raise ValueError(
-            f"shape: parameters must be scalars or (C,) arrays, got shape "
-            f"{np.shape(shape.duration)}"
+        raise FieldError(
+            "shape",
+            f"parameters must be scalars or (C,) arrays, got shape {np.shape(shape.duration)}",
         )
     times = require_finite(times, "times", "s")
     C = int(np.size(shape.duration))
@@ -157,7 +163,7 @@ def tracking_bound(
     R_r = plant.output("root_torque", x, ref.u[..., None])
     th, thd = unit_row(plant, "theta"), unit_row(plant, "theta_dot")
     if th is None or thd is None:
-        raise ValueError("plant: μ needs θ and θ' as state coordinates (a hub plant)")
+        raise FieldError("plant", "μ needs θ and θ' as state coordinates (a hub plant)")
     d = (
         k1 * (x[..., th] - ref.theta)
         + k2 * (x[..., thd] - ref.theta_dot)

@@ -1,7 +1,8 @@
 r"""Attitude kinematics: Euler parameters, direction cosines, 1-2-3 Euler angles, Gibbs and
 modified Rodrigues parameters, on arrays with a leading case axis.
 
-Conventions (seed 003 §1.3, §2.2, Eqs. 9–11; Schaub & Junkins, *Analytical Mechanics of Space
+Conventions (EPS slew study c. 1989, "Simulation Results" and Eqs. 9–11; Schaub & Junkins,
+*Analytical Mechanics of Space
 Systems*, 4th ed., Ch. 3):
 
 * Euler parameters (quaternion) scalar first, :math:`\beta = [\beta_0, \beta_1, \beta_2,
@@ -22,7 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from flexsat.input_checks import require_numeric
+from flexsat.input_checks import FieldError, require_numeric
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -69,9 +70,9 @@ def require_shape(value: npt.ArrayLike, field: str, shape: tuple[int, ...]) -> F
     """``value`` as a finite float array whose trailing axes are ``shape``."""
     arr = require_numeric(value, field)
     if arr.ndim < len(shape) or arr.shape[arr.ndim - len(shape) :] != shape:
-        raise ValueError(
-            f"{field}: last axes must have shape {shape} (leading axes are cases), "
-            f"got shape {arr.shape}"
+        raise FieldError(
+            field,
+            f"last axes must have shape {shape} (leading axes are cases), got shape {arr.shape}",
         )
     return arr
 
@@ -92,9 +93,10 @@ def require_quaternion(beta: npt.ArrayLike, field: str = "beta") -> FloatArray:
     b = require_shape(beta, field, (4,))
     err = np.abs(np.linalg.norm(b, axis=-1) - 1.0)
     if np.any(err > UNIT_TOL):
-        raise ValueError(
-            f"{field}: must be a unit quaternion (| ‖β‖ − 1 | <= {UNIT_TOL:g}), "
-            f"largest departure {err.max():.3g}"
+        raise FieldError(
+            field,
+            f"must be a unit quaternion (| ‖β‖ − 1 | <= {UNIT_TOL:g}), "
+            f"largest departure {err.max():.3g}",
         )
     return b
 
@@ -103,12 +105,13 @@ def _dcm(dcm: npt.ArrayLike, field: str = "dcm") -> FloatArray:
     C = require_shape(dcm, field, (3, 3))
     err = np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)).max(axis=(-2, -1), initial=0.0)
     if np.any(err > UNIT_TOL):
-        raise ValueError(
-            f"{field}: must be orthonormal (max |C Cᵀ − I| <= {UNIT_TOL:g}), "
-            f"largest departure {err.max():.3g}"
+        raise FieldError(
+            field,
+            f"must be orthonormal (max |C Cᵀ − I| <= {UNIT_TOL:g}), "
+            f"largest departure {err.max():.3g}",
         )
     if np.any(np.linalg.det(C) < 0):
-        raise ValueError(f"{field}: must be a proper rotation (det C = +1), got a reflection")
+        raise FieldError(field, "must be a proper rotation (det C = +1), got a reflection")
     return C
 
 
@@ -133,7 +136,7 @@ def cross_matrix(v: npt.ArrayLike) -> FloatArray:
 
 def omega_matrix(w: npt.ArrayLike) -> FloatArray:
     r"""Ω(ω) of the Euler-parameter kinematics :math:`\dot\beta = \Omega(\omega)\beta`
-    (seed 003 Eq. 11; Schaub & Junkins Eq. 3.104), the ½ included:
+    (EPS slew study c. 1989 Eq. 11; Schaub & Junkins Eq. 3.104), the ½ included:
 
     .. math::
 
@@ -158,7 +161,8 @@ def omega_matrix(w: npt.ArrayLike) -> FloatArray:
 
 
 def quaternion_rate_matrix(beta: npt.ArrayLike) -> FloatArray:
-    r"""B(β) with :math:`\dot\beta = B(\beta)\,\omega = \Omega(\omega)\beta` (seed 003 §2.2,
+    r"""B(β) with :math:`\dot\beta = B(\beta)\,\omega = \Omega(\omega)\beta`
+    (EPS slew study c. 1989 Eq. 11,
     Schaub & Junkins Eq. 3.104), the ½ included:
 
     .. math::
@@ -291,7 +295,7 @@ def _axis_rotation(angle: FloatArray, axis: int) -> FloatArray:
 
 def euler123_to_dcm(angles: npt.ArrayLike) -> FloatArray:
     r"""C of the 1-2-3 Euler angles, :math:`C = R_3(\theta_3) R_2(\theta_2) R_1(\theta_1)`
-    (seed 003 §1.3; Schaub & Junkins Table B.1).
+    (EPS slew study c. 1989, "Simulation Results"; Schaub & Junkins Table B.1).
 
     Parameters
     ----------
@@ -319,7 +323,8 @@ def euler123_to_quaternion(angles: npt.ArrayLike) -> FloatArray:
     Unlike ``dcm_to_quaternion(euler123_to_dcm(angles))``, whose sign is fixed by β0 >= 0, this
     is a smooth function of the angles: a path of angles gives a continuous path of β (what a
     continuation in the terminal angles needs). For (1, 1, 1) rad it gives
-    [0.565676, 0.570941, 0.167519, 0.570941] (seed 003 §1.3, spec F4).
+    [0.565676, 0.570941, 0.167519, 0.570941] (EPS slew study c. 1989,
+    "Simulation Results"; spec F4).
 
     Parameters
     ----------
@@ -372,7 +377,8 @@ def dcm_to_euler123(dcm: npt.ArrayLike) -> FloatArray:
 
 
 def principal_rotation_to_quaternion(axis: npt.ArrayLike, angle: npt.ArrayLike) -> FloatArray:
-    r"""Euler parameters of the rotation ``angle`` about the unit ``axis`` (seed 003 Eqs. 9–10):
+    r"""Euler parameters of the rotation ``angle`` about the unit ``axis`` (EPS
+    slew study c. 1989 Eqs. 9–10):
     :math:`\beta_0 = \cos(\phi/2)`, :math:`\beta_i = l_i \sin(\phi/2)`.
 
     Parameters
@@ -390,9 +396,10 @@ def principal_rotation_to_quaternion(axis: npt.ArrayLike, angle: npt.ArrayLike) 
     phi = require_numeric(angle, "angle")
     err = np.abs(np.linalg.norm(ax, axis=-1) - 1.0)
     if np.any(err > UNIT_TOL):
-        raise ValueError(
-            f"axis: must be a unit vector (| ‖l‖ − 1 | <= {UNIT_TOL:g}), largest "
-            f"departure {err.max():.3g}"
+        raise FieldError(
+            "axis",
+            f"must be a unit vector (| ‖l‖ − 1 | <= {UNIT_TOL:g}), largest "
+            f"departure {err.max():.3g}",
         )
     case_shape(axis=ax.shape[:-1], angle=phi.shape)
     half = phi / 2
@@ -496,9 +503,10 @@ def quaternion_to_gibbs(beta: npt.ArrayLike) -> FloatArray:
     b = require_quaternion(beta)
     b0 = b[..., 0]
     if np.any(np.abs(b0) < SINGULAR_TOL):
-        raise ValueError(
-            f"beta: the Gibbs vector is singular at a 180° principal rotation "
-            f"(|β0| < {SINGULAR_TOL:g}); use MRPs or Euler parameters there"
+        raise FieldError(
+            "beta",
+            "the Gibbs vector is singular at a 180° principal rotation "
+            f"(|β0| < {SINGULAR_TOL:g}); use MRPs or Euler parameters there",
         )
     return b[..., 1:] / b0[..., None]
 
@@ -524,9 +532,10 @@ def quaternion_to_mrp(beta: npt.ArrayLike) -> FloatArray:
     b = require_quaternion(beta)
     den = 1 + b[..., 0]
     if np.any(den < SINGULAR_TOL):
-        raise ValueError(
-            f"beta: the MRP vector is singular at β0 = −1 (1 + β0 < "
-            f"{SINGULAR_TOL:g}); pass −beta, the same attitude"
+        raise FieldError(
+            "beta",
+            "the MRP vector is singular at β0 = −1 (1 + β0 < "
+            f"{SINGULAR_TOL:g}); pass −beta, the same attitude",
         )
     return b[..., 1:] / den[..., None]
 
@@ -553,7 +562,7 @@ def mrp_shadow(sigma: npt.ArrayLike) -> FloatArray:
     s = require_shape(sigma, "sigma", (3,))
     s2 = np.sum(s * s, axis=-1)
     if np.any(s2 == 0):
-        raise ValueError("sigma: the shadow set of σ = 0 (the identity) is at infinity")
+        raise FieldError("sigma", "the shadow set of σ = 0 (the identity) is at infinity")
     return -s / s2[..., None]
 
 

@@ -1,5 +1,5 @@
 """Single-gimbal control moment gyros in a pyramid (Vadali, Oh & Walker, "Preferred Gimbal Angles
-for Single Gimbal CMGs"; in Junkins, Pollock & Rahman 1990, L4533–L4830).
+for Single Gimbal CMGs"; in Junkins, Pollock & Rahman 1990, Att. 13).
 
 Plain array kernels with a leading case axis: the gimbal angles ``sigma`` have shape
 ``(..., n)``; momenta ``(..., 3)``, Jacobians ``(..., 3, n)``. Momenta are in units of one
@@ -29,30 +29,31 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from flexsat.input_checks import require_finite
+from flexsat.input_checks import FieldError, require_finite
 
 if TYPE_CHECKING:
     import numpy.typing as npt
 
     from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
 
-#: the paper's pyramid skew angle, 54.74° (L4620), in rad
+#: the paper's pyramid skew angle, 54.74° (Att. 13 "Determination of Preferred
+#: Initial Gimbal Angles"), in rad
 SKEW = float(np.deg2rad(54.74))
 
 
 def _require_skew(skew: QuantityLike) -> float:
     given = require_finite(skew, "skew", "rad")
     if given.ndim != 0:
-        raise ValueError(f"skew: must be a scalar angle, got shape {given.shape}")
+        raise FieldError("skew", f"must be a scalar angle, got shape {given.shape}")
     value = float(given)
     if not 0.0 < value < np.pi / 2:
-        raise ValueError(f"skew: must lie in (0, 90°) (a pyramid), got {np.rad2deg(value):.6g}°")
+        raise FieldError("skew", f"must lie in (0, 90°) (a pyramid), got {np.rad2deg(value):.6g}°")
     return value
 
 
 def _require_units(n_units: object) -> int:
     if isinstance(n_units, bool) or not isinstance(n_units, (int, np.integer)) or n_units < 3:
-        raise ValueError(f"n_units: must be an integer >= 3 (3 units span 3-D), got {n_units!r}")
+        raise FieldError("n_units", f"must be an integer >= 3 (3 units span 3-D), got {n_units!r}")
     return int(n_units)
 
 
@@ -95,7 +96,9 @@ def _sigma(sigma: QuantityArrayLike, n_units: int) -> tuple[FloatArray, int]:
     n = _require_units(n_units)
     sig = require_finite(sigma, "sigma", "rad")
     if sig.ndim == 0 or sig.shape[-1] != n:
-        raise ValueError(f"sigma: last axis must hold the {n} gimbal angles, got shape {sig.shape}")
+        raise FieldError(
+            "sigma", f"last axis must hold the {n} gimbal angles, got shape {sig.shape}"
+        )
     return sig, n
 
 
@@ -157,10 +160,10 @@ def envelope(
     """
     u = require_finite(direction, "direction")
     if u.ndim == 0 or u.shape[-1] != 3:
-        raise ValueError(f"direction: last axis must have 3 components, got shape {u.shape}")
+        raise FieldError("direction", f"last axis must have 3 components, got shape {u.shape}")
     norm = np.linalg.norm(u, axis=-1, keepdims=True)
     if np.any(norm == 0):
-        raise ValueError("direction: must be nonzero")
+        raise FieldError("direction", "must be nonzero")
     u = u / norm
     _, a, b = _axes(_require_units(n_units), _require_skew(skew))
     ua, ub = u @ a.T, u @ b.T  # components of P_i u in the unit's (a_i, b_i) plane
@@ -201,7 +204,7 @@ def classify_singularity(
     """
     thr = float(require_finite(threshold, "threshold"))
     if thr <= 0:
-        raise ValueError(f"threshold: must be > 0, got {threshold!r}")
+        raise FieldError("threshold", f"must be > 0, got {threshold!r}")
     sig, n = _sigma(sigma, n_units)
     d = _require_skew(skew)
     c = jacobian(sig, d, n)
@@ -251,10 +254,10 @@ def steering_rates(
     """
     al = float(require_finite(alpha, "alpha"))
     if al < 0:
-        raise ValueError(f"alpha: must be >= 0, got {alpha!r}")
+        raise FieldError("alpha", f"must be >= 0, got {alpha!r}")
     tq = require_finite(torque, "torque")
     if tq.ndim == 0 or tq.shape[-1] != 3:
-        raise ValueError(f"torque: last axis must have 3 components, got shape {tq.shape}")
+        raise FieldError("torque", f"last axis must have 3 components, got shape {tq.shape}")
     sig, n = _sigma(sigma, n_units)
     _, a, b = _axes(n, _require_skew(skew))
     return steer(sig, tq, a, b, al)
@@ -273,10 +276,11 @@ def steer(
     lam = np.linalg.eigvalsh(m)
     # CCᵀ singular to working precision: its solve would return round-off amplified by 1/eps
     if np.any(lam[..., 0] <= 10 * np.finfo(float).eps * lam[..., -1]):
-        raise ValueError(
-            "sigma: singular gimbal set (CCᵀ singular to working precision): the "
+        raise FieldError(
+            "sigma",
+            "singular gimbal set (CCᵀ singular to working precision): the "
             "pseudo-inverse has no solution; use alpha > 0 (singularity-robust "
-            "inverse)"
+            "inverse)",
         )
     shape = np.broadcast_shapes(m.shape[:-1], torque.shape)
     y = np.linalg.solve(
@@ -308,7 +312,7 @@ PAPER_PERTURBATION = np.deg2rad([1.0, -3.0, 0.0, -1.0])
 #: the six axis directions and eight oblique ones: computed data, the output of
 #: :func:`flexsat.cases.cmg_pyramid.preferred_angles` with the paper's perturbation (back
 #: integration, rtol 1e-10), rounded to 0.01°; ``tests/dynamics/test_cmg.py`` recomputes
-#: every row. The paper stores such sets for use (§8.5, conclusions L4758–L4764:
+#: every row. The paper stores such sets for use (Att. 13 "Conclusions":
 #: "preferred-set data must be stored"); its Table 1 lists hand-chosen sets for six demands,
 #: of which only the +x row came from the back integration (V4: [−59.6, 60.7, 118, −121]°).
 #: Back integration from the *same* offset lands elsewhere along other directions (+y:
@@ -339,7 +343,7 @@ def preferred_set(direction: npt.ArrayLike) -> FloatArray:
     clusters: :func:`flexsat.cases.cmg_pyramid.preferred_angles`)."""
     u = require_finite(direction, "direction")
     if u.shape != (3,) or not np.any(u):
-        raise ValueError(f"direction: must be a nonzero 3-vector, got {direction!r}")
+        raise FieldError("direction", f"must be a nonzero 3-vector, got {direction!r}")
     dirs = np.array([d for d, _ in PREFERRED_SETS], float)
     cos = dirs @ u / (np.linalg.norm(dirs, axis=1) * np.linalg.norm(u))
     return np.deg2rad(np.array(PREFERRED_SETS[int(np.argmax(cos))][1]))
@@ -357,7 +361,7 @@ def steering_with_null_motion(
 ) -> FloatArray:
     """Torque steering with null motion beside it: σ̇ = Cᵀ(CCᵀ + αI)⁻¹(−torque) + τ k(σ_f − σ)
     (§8.2 Eq. 7 plus §8.5 Eq. 13–15; the paper's conclusion that "the reorientation law may
-    need to run alongside the torque law", L4758–L4764).
+    need to run alongside the torque law", Att. 13 "Conclusions").
 
     τ = I − Cᵀ(CCᵀ + α_n I)⁻¹C (:func:`null_projector`): with ``null_alpha`` = 0 the added
     motion changes no momentum (Cτ = 0), so the torque delivered is the steering law's alone;
@@ -367,7 +371,7 @@ def steering_with_null_motion(
     """
     k = float(require_finite(gain_k, "gain_k", "1/s"))
     if k < 0:
-        raise ValueError(f"gain_k: must be >= 0, got {gain_k!r}")
+        raise FieldError("gain_k", f"must be >= 0, got {gain_k!r}")
     sig, n = _sigma(sigma, n_units)
     target, _ = _sigma(sigma_target, n)
     rates = steering_rates(sig, torque, skew, n, alpha)
@@ -386,15 +390,16 @@ def null_projector(
     """
     al = float(require_finite(alpha, "alpha"))
     if al < 0:
-        raise ValueError(f"alpha: must be >= 0, got {alpha!r}")
+        raise FieldError("alpha", f"must be >= 0, got {alpha!r}")
     c = jacobian(sigma, skew, n_units)
     ct = np.swapaxes(c, -1, -2)
     m = c @ ct + al * np.eye(3)
     if al == 0 and np.any(
         np.linalg.eigvalsh(m)[..., 0] <= 10 * np.finfo(float).eps * np.linalg.eigvalsh(m)[..., -1]
     ):
-        raise ValueError(
-            "sigma: singular gimbal set (CCᵀ singular to working precision): the "
-            "projector needs alpha > 0 (singularity-robust inverse)"
+        raise FieldError(
+            "sigma",
+            "singular gimbal set (CCᵀ singular to working precision): the "
+            "projector needs alpha > 0 (singularity-robust inverse)",
         )
     return np.eye(c.shape[-1]) - ct @ np.linalg.solve(m, c)

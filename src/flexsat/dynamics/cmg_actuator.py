@@ -30,7 +30,7 @@ of the rates actually run, :math:`-h_r C\dot\sigma - \omega\times h`.
 No external torque acts, so the total angular momentum :math:`C(\beta)^T(I\omega + h)` is
 constant whatever is commanded (:meth:`CmgSpacecraft.momentum`): the cluster only exchanges
 momentum with the body. Only the axial rotor momentum is modelled; gimbal and transverse rotor
-inertia are neglected, as in the paper (§8.1, L4584).
+inertia are neglected, as in the paper (Att. 13 "CMG Steering").
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ from flexsat.dynamics.rigid_spacecraft import (
     normalize_quaternion,
     quaternion_kinematics,
 )
-from flexsat.input_checks import require_finite
+from flexsat.input_checks import FieldError, require_finite
 from flexsat.units import to_si_array
 
 if TYPE_CHECKING:
@@ -116,33 +116,34 @@ class CmgSpacecraft(Plant):
     ) -> None:
         J = require_inertia(inertia)
         if J.shape != (3, 3):
-            raise ValueError(f"inertia: must have shape (3, 3), got {J.shape}")
+            raise FieldError("inertia", f"must have shape (3, 3), got {J.shape}")
         # numpy types inv() as floating[Any]; it is float64 here, so the astype copies nothing
         self.inertia, self.inertia_inverse = J, np.linalg.inv(J).astype(np.float64, copy=False)
         hr = to_si_array(rotor_momentum, "N*m*s", "rotor_momentum")
         if hr.ndim != 0 or not np.isfinite(hr) or hr <= 0:
-            raise ValueError(
-                f"rotor_momentum: must be one finite value > 0 N m s, got {rotor_momentum!r}"
+            raise FieldError(
+                "rotor_momentum", f"must be one finite value > 0 N m s, got {rotor_momentum!r}"
             )
         self.rotor_momentum = float(hr)
         self.n_units = cmg._require_units(n_units)
         self.skew = cmg._require_skew(skew)
         if steering not in STEERING_LAWS:
-            raise ValueError(
-                f"steering: must be one of {STEERING_LAWS} (pseudo-inverse or "
-                f"singularity-robust inverse), got {steering!r}"
+            raise FieldError(
+                "steering",
+                f"must be one of {STEERING_LAWS} (pseudo-inverse or "
+                f"singularity-robust inverse), got {steering!r}",
             )
         self.steering = steering
         al = float(require_finite(alpha, "alpha"))
         if steering == "sr" and al <= 0:
-            raise ValueError(
-                f"alpha: the singularity-robust inverse needs alpha > 0, got {alpha!r}"
+            raise FieldError(
+                "alpha", f"the singularity-robust inverse needs alpha > 0, got {alpha!r}"
             )
         self.alpha = al if steering == "sr" else 0.0
         limit = to_si_array(gimbal_rate_limit, "rad/s", "gimbal_rate_limit")
         if limit.ndim != 0 or np.isnan(limit) or limit <= 0:
-            raise ValueError(
-                f"gimbal_rate_limit: must be > 0 rad/s (inf for none), got {gimbal_rate_limit!r}"
+            raise FieldError(
+                "gimbal_rate_limit", f"must be > 0 rad/s (inf for none), got {gimbal_rate_limit!r}"
             )
         self.gimbal_rate_limit = float(limit)
         n = self.n_units
@@ -173,7 +174,7 @@ class CmgSpacecraft(Plant):
         if sig is not None:
             s = to_si_array(sig, "rad", "gimbal_angles")
             if s.shape != (self.n_units,) or not np.all(np.isfinite(s)):
-                raise ValueError(f"gimbal_angles: {self.n_units} finite angles, got {sig!r}")
+                raise FieldError("gimbal_angles", f"{self.n_units} finite angles, got {sig!r}")
             x[7:] = s
         return x
 
@@ -211,9 +212,10 @@ class CmgSpacecraft(Plant):
         try:
             rates = cmg.steer(sig, demand, self._a, self._b, self.alpha)
         except ValueError as err:
-            raise ValueError(
-                f"torque: the pseudo-inverse steering (steering='pi') cannot "
-                f"deliver it: {err}; configure steering='sr'"
+            raise FieldError(
+                "torque",
+                "the pseudo-inverse steering (steering='pi') cannot "
+                f"deliver it: {err}; configure steering='sr'",
             ) from None
         if np.isfinite(self.gimbal_rate_limit):
             peak = np.abs(rates).max(axis=-1, keepdims=True)
@@ -278,7 +280,7 @@ class CmgSpacecraft(Plant):
             return cmg.gain(x[..., 7:], self.skew, self.n_units)
         if name == "gimbal_rates":
             if u is None:
-                raise ValueError("gimbal_rates: needs the commanded torque u")
+                raise FieldError("gimbal_rates", "needs the commanded torque u")
             return self.gimbal_rates(x, u)
         return attitude_output(name, x[..., :4], x[..., 4:7])
 
@@ -301,7 +303,7 @@ class CmgSpacecraft(Plant):
         states ``x`` (n_t, nx)), each classified internal or external at its least gain."""
         thr = float(require_finite(threshold, "threshold"))
         if thr <= 0:
-            raise ValueError(f"threshold: must be > 0, got {threshold!r}")
+            raise FieldError("threshold", f"must be > 0, got {threshold!r}")
         t = np.asarray(t, float)
         g = cmg.gain(np.asarray(x)[..., 7:], self.skew, self.n_units)
         below = g < thr

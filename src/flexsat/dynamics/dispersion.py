@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from flexsat.dynamics.plant import Plant
+from flexsat.input_checks import FieldError
 
 if TYPE_CHECKING:
     from flexsat.units import FloatArray
@@ -38,7 +39,7 @@ class DispersedPlant(Plant):
     def __init__(self, plants: Iterable[Plant]) -> None:
         plants = tuple(plants)
         if not plants or not all(isinstance(p, Plant) for p in plants):
-            raise ValueError("plants: give one or more Plant instances")
+            raise FieldError("plants", "give one or more Plant instances")
         first = plants[0]
         for i, p in enumerate(plants[1:], 1):
             for field in (
@@ -54,23 +55,25 @@ class DispersedPlant(Plant):
                 if (tuple(a) if isinstance(a, tuple) else a) != (
                     tuple(b) if isinstance(b, tuple) else b
                 ):
-                    raise ValueError(
-                        f"{field}: plants[{i}] has {field} {_show(b)}, plants[0] "
+                    raise FieldError(
+                        field,
+                        f"plants[{i}] has {field} {_show(b)}, plants[0] "
                         f"has {_show(a)}; a dispersed batch needs the same "
-                        f"channels and state"
+                        f"channels and state",
                     )
             fa, fb = first.force_matrix, p.force_matrix
             if (fa is None) != (fb is None) or (
                 fa is not None and fb is not None and fa.shape != fb.shape
             ):
-                raise ValueError(
-                    f"force_matrix: plants[{i}] has a different nonlinear force "
-                    "structure from plants[0]"
+                raise FieldError(
+                    "force_matrix",
+                    f"plants[{i}] has a different nonlinear force structure from plants[0]",
                 )
             if getattr(p, "step", None) is not None:
-                raise ValueError(
-                    f"step: plants[{i}] has its own integrator; a dispersed batch "
-                    "is propagated by the exponential integrators"
+                raise FieldError(
+                    "step",
+                    f"plants[{i}] has its own integrator; a dispersed batch "
+                    "is propagated by the exponential integrators",
                 )
         self.plants = plants
         self.inputs = tuple(first.inputs)
@@ -86,9 +89,10 @@ class DispersedPlant(Plant):
         for name, M in (("A", self._linear[0]), ("B", self._linear[1])):
             bad = np.argwhere(~np.isfinite(M).reshape(len(plants), -1).all(axis=1))
             if bad.size:
-                raise ValueError(
-                    f"{name}: plants[{int(bad[0, 0])}] has a non-finite entry in "
-                    f"its linear part; check its dispersed parameters"
+                raise FieldError(
+                    name,
+                    f"plants[{int(bad[0, 0])}] has a non-finite entry in "
+                    f"its linear part; check its dispersed parameters",
                 )
 
     @property

@@ -1,10 +1,13 @@
-r"""Three-axis flexible spacecraft in hybrid coordinates (the DISCOS analogue, seed 003 F3).
+r"""Three-axis flexible spacecraft in hybrid coordinates (the DISCOS analogue of the
+EPS slew study c. 1989; spec F3).
 
-Coordinates (seed 003 §2.2 and L132–L136: DISCOS takes the elastic modes, translational and
+Coordinates (EPS slew study c. 1989, Eqs. 9–14 and "Model Development": DISCOS takes the
+elastic modes, translational and
 rotational shapes at the nodes and the lumped masses, and computes the inertial integrals):
 
 * the attitude of a body frame B fixed to the undeformed structure with its origin at the centre
-  of mass, Euler parameters β (inertial to body, scalar first; seed 003 Eqs. 9–11), and the body
+  of mass, Euler parameters β (inertial to body, scalar first; EPS slew study
+  c. 1989 Eqs. 9–11), and the body
   rate ω (body axes);
 * optionally the inertial position r and velocity v of the centre of mass;
 * the elastic coordinates η of a free-free :class:`~flexsat.structures.modal_model.ModalModel`
@@ -41,7 +44,8 @@ Lagrange's equations in quasi-coordinates for ω (Meirovitch, *Methods of Analyt
     \qquad \dot r = v,
 
 for ideal torquers u at the centre of mass and point forces F_k = F e_a along body axes at the
-nodes (seed 003 F15). Torquers mounted on a node k (``torque_node``, the CG node of a DISCOS
+nodes (EPS slew study c. 1989; spec F15). Torquers mounted on a node k
+(``torque_node``, the CG node of a DISCOS
 model) add :math:`\Phi_{r,k}^T u` to the elastic equation. In matrix form, with
 :math:`\mathcal M = [[J, \Delta^T], [\Delta, I]]`, F the vector of force magnitudes, E the
 matrix of their body-axis directions e_a, G that of their moment arms (r_k − c) × e_a and
@@ -93,6 +97,7 @@ from flexsat.dynamics.rigid_spacecraft import (
     quaternion_kinematics,
     skew,
 )
+from flexsat.input_checks import FieldError
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
 
 if TYPE_CHECKING:
@@ -110,7 +115,7 @@ def _check_node(modal: ModalModel, node: object, field: str) -> None:
         shown = ", ".join(map(str, modal.node_ids[:8])) + (
             " ..." if modal.node_ids.size > 8 else ""
         )
-        raise ValueError(f"{field}: unknown node {node!r} (nodes: {shown})")
+        raise FieldError(field, f"unknown node {node!r} (nodes: {shown})")
 
 
 def _points(
@@ -122,15 +127,15 @@ def _points(
         try:
             node, axis = item
         except (TypeError, ValueError):
-            raise ValueError(
-                f"{field}[{i}]: must be a pair (node, 'x'|'y'|'z'), got {item!r}"
+            raise FieldError(
+                f"{field}[{i}]", f"must be a pair (node, 'x'|'y'|'z'), got {item!r}"
             ) from None
         if not isinstance(axis, str) or axis.lower() not in _AXES:
-            raise ValueError(f"{field}[{i}]: axis must be 'x', 'y' or 'z', got {axis!r}")
+            raise FieldError(f"{field}[{i}]", f"axis must be 'x', 'y' or 'z', got {axis!r}")
         _check_node(modal, node, f"{field}[{i}]")
         pair = (int(node), axis.lower())
         if pair in out:
-            raise ValueError(f"{field}[{i}]: {pair} given twice")
+            raise FieldError(f"{field}[{i}]", f"{pair} given twice")
         out.append(pair)
     return out
 
@@ -187,12 +192,13 @@ class FlexibleSpacecraft(Plant):
         rigid_frequency: float = RIGID_FREQUENCY,
     ) -> None:
         if not isinstance(modal, ModalModel):
-            raise ValueError(f"modal: must be a ModalModel, got {type(modal).__name__}")
+            raise FieldError("modal", f"must be a ModalModel, got {type(modal).__name__}")
         if modal.boundary != "free":
-            raise ValueError(
-                f"modal: must be free-free (boundary 'free'), got "
+            raise FieldError(
+                "modal",
+                "must be free-free (boundary 'free'), got "
                 f"{modal.boundary!r}: hybrid coordinates here carry the rigid "
-                f"motion of the whole structure"
+                f"motion of the whole structure",
             )
         elastic = modal.elastic(rigid_frequency)
         if n_modes is not None:
@@ -209,9 +215,10 @@ class FlexibleSpacecraft(Plant):
         Delta = L[:, 3:] + L[:, :3] @ skew(d)
         Mr = np.block([[J, Delta.T], [Delta, np.eye(n)]])
         if np.linalg.eigvalsh(Mr).min() <= 1e-12 * np.abs(J).max():
-            raise ValueError(
-                "modal: the rotational participation exceeds the inertia "
-                "(J − ΔᵀΔ not positive definite): not a free-free model"
+            raise FieldError(
+                "modal",
+                "the rotational participation exceeds the inertia "
+                "(J − ΔᵀΔ not positive definite): not a free-free model",
             )
         self.inertia, self.coupling = J, Delta
         self.rotation_mass = Mr
@@ -281,7 +288,8 @@ class FlexibleSpacecraft(Plant):
             )
         )
         self.outputs = tuple(outputs)
-        # the node outputs are what a flexible run is about (the rim deflections of seed 003)
+        # the node outputs are what a flexible run is about (the rim
+        # deflections of EPS slew study c. 1989)
         self.recorded = type(self).recorded + tuple(
             c.name for c in self.outputs if c.name.startswith(("displacement_", "rotation_"))
         )
@@ -314,8 +322,8 @@ class FlexibleSpacecraft(Plant):
 
         n_modes = require_count(n_modes, "n_modes")
         if n_modes > self.n_modes:
-            raise ValueError(
-                f"n_modes: at most the plant's {self.n_modes} elastic modes, got {n_modes}"
+            raise FieldError(
+                "n_modes", f"at most the plant's {self.n_modes} elastic modes, got {n_modes}"
             )
         return FlexibleSpacecraft(
             self.modal,

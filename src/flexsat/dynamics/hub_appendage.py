@@ -9,7 +9,8 @@ Junkins, Pollock & Rahman 1990, Eqs. 5-7):
 
 is discretised by Galerkin's method with k exact tip-mass cantilever modes φ_i (mass normalised
 per beam), y = Σ φ_i q_i, identical for every beam (anti-symmetric deformation). The generalized
-coordinates are (θ, q_1 … q_k) and the state is x = [θ, q, θ', q'] (the ordering of seed 001):
+coordinates are (θ, q_1 … q_k) and the state is x = [θ, q, θ', q'] (the ordering of
+Hailey, Sortun & Agrawal c. 1992):
 
     M = [[I_tot, n dᵀ], [n d, n 1]],   K = diag(0, n ω²),   D = diag(0, 2 n ζ ω),   B = e_θ
 
@@ -41,6 +42,7 @@ from flexsat import limits
 from flexsat.dynamics.hybrid import HYBRID_OUTPUTS, HybridPlant
 from flexsat.dynamics.plant import Channel
 from flexsat.input_checks import (
+    FieldError,
     require_count,
     require_finite,
     require_nonneg,
@@ -131,7 +133,7 @@ class HubAppendageParams:
         require_count(self.n_appendages, "n_appendages")
         zeta = require_finite(self.damping, "damping", "")
         if np.any(zeta < 0):
-            raise ValueError(f"damping: modal damping ratios must be >= 0, got {self.damping!r}")
+            raise FieldError("damping", f"modal damping ratios must be >= 0, got {self.damping!r}")
         object.__setattr__(self, "damping", float(zeta) if zeta.ndim == 0 else tuple(zeta.tolist()))
 
     @property
@@ -183,8 +185,8 @@ class HubAppendage(HybridPlant):
         limits.check_count(self.n_modes, limits.MAX_MODES, "n_modes", "modes per appendage")
         zeta = np.atleast_1d(np.asarray(self.params.damping, dtype=float))
         if zeta.size not in (1, self.n_modes):
-            raise ValueError(
-                f"damping: give one ratio or one per mode ({self.n_modes}), got {zeta.size}"
+            raise FieldError(
+                "damping", f"give one ratio or one per mode ({self.n_modes}), got {zeta.size}"
             )
         object.__setattr__(self, "_quad", self._modal_integrals())
 

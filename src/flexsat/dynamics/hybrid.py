@@ -2,7 +2,8 @@
 
     M [θ'', q'']ᵀ + D [θ', q']ᵀ + K [θ, q]ᵀ = e_θ u + f,     x = [θ, q, θ', q']
 
-(seed 001 Eqs. 15-16; seed 000 Att. 3 Eq. 5 discretised). :class:`HybridPlant` holds what every
+(Hailey, Sortun & Agrawal c. 1992 Eqs. 15-16; Junkins, Pollock & Rahman 1990 Att. 3 Eq. 5
+discretised). :class:`HybridPlant` holds what every
 such plant shares — the first-order form, accelerations, energy, vibration energy and the
 error-energy Lyapunov function — and implements the plant protocol
 (:class:`~flexsat.dynamics.plant.Plant`) that :func:`flexsat.sim.simulate` drives: one input
@@ -23,7 +24,7 @@ import numpy as np
 from scipy.linalg import eigh
 
 from flexsat.dynamics.plant import Channel, ManeuverChannels, Plant
-from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -209,7 +210,7 @@ class HybridPlant(Plant):
             return z, z, -self.hub_inertia * e0 / n, 1.0 / n
         if name == "tip_deflection":
             return np.concatenate([[0.0], self._tip_row]), z, z, 0.0
-        raise ValueError(f"{name}: {type(self).__name__} has no output channel {name!r}")
+        raise FieldError(name, f"{type(self).__name__} has no output channel {name!r}")
 
     def output(
         self, name: str, x: FloatArray, u: FloatArray, f_in: FloatArray | None = None
@@ -345,7 +346,8 @@ class HybridPlant(Plant):
 
 class ModalHybrid(HybridPlant):
     """A rigid hub carrying a cantilevered :class:`~flexsat.structures.modal_model.ModalModel`
-    (seed 001 Eq. 16: M = [[I_zz, Dᵀ], [D, 1]], K = diag(0, ω²), C = diag(0, 2ζω)).
+    (Hailey, Sortun & Agrawal c. 1992 Eq. 16: M = [[I_zz, Dᵀ], [D, 1]], K =
+    diag(0, ω²), C = diag(0, 2ζω)).
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 r"""A free-free beam in a circular orbit: nonlinear pitch and bending with gravity gradient.
 
-Bainum & Reddy (1979), NASA CR-158684, Ch. II eqs 1–2 (L211–L229), for a
+Bainum & Reddy (1979), NASA CR-158684, Ch. II eqs 1–2, for a
 uniform beam whose centre of mass is on a circular orbit of rate :math:`\omega_c`, pitch θ
 from the local vertical and bending amplitudes :math:`A_n = l z_n`. The report writes them in
 the nondimensional time :math:`\tau = \omega_c t` (' = d/dτ):
@@ -47,7 +47,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant, find_channel
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_positive
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -74,7 +74,7 @@ class BeamInOrbit(Plant):
         elastic deflection there, :math:`\sum_n z_n \phi_n(\xi)` (= w/l, dimensionless), or in
         metres when ``length`` is given.
     length : float, optional
-        Beam length l, m (seed 002 does not publish one).
+        Beam length l, m (Bainum & Reddy 1979 does not publish one).
     linearised : bool
         Drop the nonlinear remainder f (eqs 5–6 only, the linearisation at rest).
 
@@ -99,22 +99,24 @@ class BeamInOrbit(Plant):
         self.orbit_rate = float(require_positive(orbit_rate, "orbit_rate", "rad/s"))
         F = np.atleast_1d(require_finite(frequency_ratios, "frequency_ratios"))
         if F.ndim != 1 or np.any(F <= 0):
-            raise ValueError(
-                f"frequency_ratios: must be a 1-D list of (ω_n/ω_c)² > 0, got {frequency_ratios!r}"
+            raise FieldError(
+                "frequency_ratios",
+                f"must be a 1-D list of (ω_n/ω_c)² > 0, got {frequency_ratios!r}",
             )
         self.frequency_ratios = F
         k = F.size
         n = k + 1
         if not isinstance(actuators, dict) or not actuators:
-            raise ValueError("actuators: must be a non-empty {name: column of G} mapping")
+            raise FieldError("actuators", "must be a non-empty {name: column of G} mapping")
         cols = []
         for name, given in actuators.items():
             Channel(name, "N")
             col = require_finite(given, name)
             if col.shape != (n,):
-                raise ValueError(
-                    f"{name}: its column of G must have 1 + {k} = {n} entries "
-                    f"(pitch, then each mode), got shape {col.shape}"
+                raise FieldError(
+                    name,
+                    f"its column of G must have 1 + {k} = {n} entries "
+                    f"(pitch, then each mode), got shape {col.shape}",
                 )
             cols.append(col.astype(float))
         self.G = np.column_stack(cols)
@@ -126,9 +128,10 @@ class BeamInOrbit(Plant):
         for name, given in ({} if stations is None else stations).items():
             values = np.atleast_1d(require_finite(given, f"w_{name}"))
             if values.shape != (k,):
-                raise ValueError(
-                    f"w_{name}: station shape values must have {k} entries (one "
-                    f"per mode), got shape {values.shape}"
+                raise FieldError(
+                    f"w_{name}",
+                    f"station shape values must have {k} entries (one "
+                    f"per mode), got shape {values.shape}",
                 )
             rows[f"w_{name}"] = values * (1.0 if self.length is None else self.length)
         outs = [
@@ -144,7 +147,7 @@ class BeamInOrbit(Plant):
         names = [c.name for c in outs]
         for name in names:
             if names.count(name) > 1:
-                raise ValueError(f"{name}: duplicate output channel name")
+                raise FieldError(name, "duplicate output channel name")
         self.outputs = tuple(outs)
         self.recorded = ("pitch", "pitch_rate")
         self._rows = rows

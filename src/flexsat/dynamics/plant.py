@@ -34,6 +34,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from flexsat.input_checks import FieldError
+
 if TYPE_CHECKING:
     import numpy.typing as npt
 
@@ -95,24 +97,24 @@ class Channel:
         elif not isinstance(self.name, str) or not self.name.strip():
             raise ValueError(f"channel name: must be a non-blank string, got {self.name!r}")
         if not isinstance(self.size, int) or self.size < 1:
-            raise ValueError(f"{self.name}: size must be a positive integer, got {self.size!r}")
+            raise FieldError(self.name, f"size must be a positive integer, got {self.size!r}")
         if self.kind is not None or self.node is not None or self.direction is not None:
             self._check_location()
 
     def _check_location(self) -> None:
         if self.kind not in STRUCTURAL_KINDS:
-            raise ValueError(f"kind: must be one of {tuple(STRUCTURAL_KINDS)}, got {self.kind!r}")
+            raise FieldError("kind", f"must be one of {tuple(STRUCTURAL_KINDS)}, got {self.kind!r}")
         if self.direction not in AXES:
-            raise ValueError(f"direction: must be 'x', 'y' or 'z', got {self.direction!r}")
+            raise FieldError("direction", f"must be 'x', 'y' or 'z', got {self.direction!r}")
         for name in ("node", "node_a"):
             value = getattr(self, name)
             if value is None and name == "node_a":
                 continue
             if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
-                raise ValueError(f"{name}: must be an integer node id, got {value!r}")
+                raise FieldError(name, f"must be an integer node id, got {value!r}")
             object.__setattr__(self, name, int(value))
         if self.kind == "strain" and self.node_a is None:
-            raise ValueError("node_a: a strain channel needs both ends of the patch")
+            raise FieldError("node_a", "a strain channel needs both ends of the patch")
 
     @classmethod
     def at(
@@ -128,7 +130,7 @@ class Channel:
         in ``unit`` (default the kind's SI unit), named ``"<kind> <node><direction>"`` unless
         ``name`` is given."""
         if kind not in STRUCTURAL_KINDS:
-            raise ValueError(f"kind: must be one of {tuple(STRUCTURAL_KINDS)}, got {kind!r}")
+            raise FieldError("kind", f"must be one of {tuple(STRUCTURAL_KINDS)}, got {kind!r}")
         return cls(
             name or f"{kind} {node}{direction}",
             STRUCTURAL_KINDS[kind] if unit is None else unit,
@@ -184,9 +186,7 @@ def find_channel(channels: tuple[Channel, ...], name: str, role: str, owner: str
         if ch.name == name:
             return ch
     known = ", ".join(c.name for c in channels) or "none"
-    raise ValueError(
-        f"{name}: {owner} has no {role} channel {name!r} (its {role} channels: {known})"
-    )
+    raise FieldError(name, f"{owner} has no {role} channel {name!r} (its {role} channels: {known})")
 
 
 class Plant(ABC):
@@ -319,21 +319,22 @@ class Plant(ABC):
         if "state" in values:
             v = require_finite(values["state"], "state")
             if v.shape != (self.nx,):
-                raise ValueError(f"state: must have {self.nx} entries, got shape {v.shape}")
+                raise FieldError("state", f"must have {self.nx} entries, got shape {v.shape}")
             x = v.copy()
         for name, value in values.items():
             if name == "state":
                 continue
             index = self._state_coordinates(name)
             if index is None:
-                raise ValueError(
-                    f"{name}: not an initial value of {type(self).__name__} (it "
-                    f"takes: {', '.join(self.initial_values)})"
+                raise FieldError(
+                    name,
+                    f"not an initial value of {type(self).__name__} (it "
+                    f"takes: {', '.join(self.initial_values)})",
                 )
             unit = find_channel(self.outputs, name, "output", type(self).__name__).unit
             v = np.atleast_1d(require_finite(value, name, unit))
             if v.shape != index.shape:
-                raise ValueError(f"{name}: must have {index.size} entries, got shape {v.shape}")
+                raise FieldError(name, f"must have {index.size} entries, got shape {v.shape}")
             x[index] = v
         return x
 

@@ -2,7 +2,7 @@ r"""Three-axis rigid body: Euler's equations, a norm-preserving step of (β, ω)
 the plants' own step, which the engine calls) and the analytic Euler–Poinsot motion of a
 torque-free asymmetric body, on arrays with a leading case axis.
 
-Euler's equations (seed 003 Eq. 12; Schaub & Junkins Eq. 4.33), body components:
+Euler's equations (EPS slew study c. 1989 Eq. 12; Schaub & Junkins Eq. 4.33), body components:
 
 .. math::
 
@@ -40,7 +40,7 @@ from flexsat.dynamics.attitude import (
     quaternion_to_dcm,
     require_shape,
 )
-from flexsat.input_checks import require_numeric
+from flexsat.input_checks import FieldError, require_numeric
 from flexsat.units import FloatArray, to_si_array
 
 if TYPE_CHECKING:
@@ -80,20 +80,21 @@ def require_inertia(inertia: QuantityArrayLike, field: str = "inertia") -> Float
     J = require_shape(to_si_array(inertia, "kg*m**2", field), field, (3, 3))
     scale = np.abs(J).max(axis=(-2, -1))
     if np.any(np.abs(J - np.swapaxes(J, -1, -2)).max(axis=(-2, -1)) > 1e-12 * scale):
-        raise ValueError(f"{field}: must be symmetric (|I − Iᵀ| <= 1e-12 max|I|)")
+        raise FieldError(field, "must be symmetric (|I − Iᵀ| <= 1e-12 max|I|)")
     eig = np.linalg.eigvalsh(J)
     if np.any(eig[..., 0] <= 0):
-        raise ValueError(
-            f"{field}: must be positive definite, smallest principal moment "
-            f"{eig[..., 0].min():.3g} kg·m²"
+        raise FieldError(
+            field,
+            f"must be positive definite, smallest principal moment {eig[..., 0].min():.3g} kg·m²",
         )
     gap = eig[..., 0] + eig[..., 1] - eig[..., 2]
     if np.any(gap < -1e-12 * eig[..., 2]):
         k = np.unravel_index(np.argmin(gap / eig[..., 2]), gap.shape)
-        raise ValueError(
-            f"{field}: principal moments {np.round(eig[k], 6).tolist()} kg·m² "
+        raise FieldError(
+            field,
+            f"principal moments {np.round(eig[k], 6).tolist()} kg·m² "
             f"violate the triangle inequality I1 + I2 >= I3 (no mass distribution "
-            f"has them)"
+            f"has them)",
         )
     return J
 
@@ -102,7 +103,7 @@ def euler_rates(
     w: npt.ArrayLike, inertia: QuantityArrayLike, torque: npt.ArrayLike | None = None
 ) -> FloatArray:
     r"""ω̇ from Euler's equations, :math:`\dot\omega = I^{-1}(u - \omega \times I\omega)`
-    (seed 003 Eq. 12).
+    (EPS slew study c. 1989 Eq. 12).
 
     Parameters
     ----------
@@ -281,12 +282,12 @@ def euler_poinsot_rates(moments: npt.ArrayLike, w0: npt.ArrayLike, t: npt.ArrayL
     w0 = require_shape(w0, "w0", (3,))
     t = require_numeric(t, "t")
     if t.ndim != 1:
-        raise ValueError(f"t: must be a 1-D time grid, got shape {t.shape}")
+        raise FieldError("t", f"must be a 1-D time grid, got shape {t.shape}")
     shape = case_shape(moments=moments.shape[:-1], w0=w0.shape[:-1])
     moments = np.broadcast_to(moments, shape + (3,))
     w0 = np.broadcast_to(w0, shape + (3,))
     if np.any(moments <= 0):
-        raise ValueError("moments: principal moments must be > 0")
+        raise FieldError("moments", "principal moments must be > 0")
     order = np.argsort(moments, axis=-1)
     # ω is a pseudovector: relabelling the axes by an odd permutation (a left-handed frame)
     # flips its sign, so the sorted frame sees parity·P ω and the result is mapped back alike
@@ -295,7 +296,7 @@ def euler_poinsot_rates(moments: npt.ArrayLike, w0: npt.ArrayLike, t: npt.ArrayL
     Is = np.take_along_axis(moments, order, -1)
     ws = parity * np.take_along_axis(w0, order, -1)
     if np.any(np.diff(Is, axis=-1) <= 1e-12 * Is[..., 2:]):
-        raise ValueError("moments: principal moments must be distinct (asymmetric body)")
+        raise FieldError("moments", "principal moments must be distinct (asymmetric body)")
     H2 = np.sum((Is * ws) ** 2, -1)
     T2 = np.sum(Is * ws * ws, -1)
     Ia, Ib, Ic = Is[..., 0], Is[..., 1], Is[..., 2]
@@ -311,16 +312,17 @@ def euler_poinsot_rates(moments: npt.ArrayLike, w0: npt.ArrayLike, t: npt.ArrayL
     p = np.sqrt((Id - Ib) * (H2 - T2 * In) / (In * Ib * Id))
     m = (Ib - In) * (T2 * Id - H2) / ((Id - Ib) * (H2 - T2 * In))
     if np.any(~np.isfinite(m)) or np.any(An == 0):
-        raise ValueError(
-            "w0: a pure spin about a principal axis has no elliptic solution "
-            "(the rates are constant)"
+        raise FieldError(
+            "w0",
+            "a pure spin about a principal axis has no elliptic solution (the rates are constant)",
         )
     phi0 = np.arctan2(eps * wb / Ab, wn / An)
     u0 = scipy.special.ellipkinc(phi0, m)
     if not np.all(np.isfinite(u0)):  # m = 1 and φ0 = ±π/2: at rest on the separatrix
-        raise ValueError(
-            "w0: a pure spin about the intermediate axis (an unstable equilibrium "
-            "on the separatrix H² = 2T·I2) has no elliptic solution"
+        raise FieldError(
+            "w0",
+            "a pure spin about the intermediate axis (an unstable equilibrium "
+            "on the separatrix H² = 2T·I2) has no elliptic solution",
         )
     sn, cn, dn, _ = scipy.special.ellipj(p[..., None] * t + u0[..., None], m[..., None])
     on, ob, od = An[..., None] * cn, (eps * Ab)[..., None] * sn, (eps * Ad)[..., None] * dn

@@ -7,7 +7,7 @@ the centre of mass in body axes (N m):
 
 .. math::
 
-    \dot\beta = \Omega(\omega)\,\beta \quad \text{(seed 003 Eq. 11)}, \qquad
+    \dot\beta = \Omega(\omega)\,\beta \quad \text{(EPS slew study c. 1989 Eq. 11)}, \qquad
     I\dot\omega = -\omega\times I\omega + u \quad \text{(Eq. 12)}.
 
 In the plant protocol's form :math:`\dot x = A x + B u + B_f f(x)` the linear part is
@@ -35,6 +35,7 @@ from flexsat.dynamics.rigid_body import (
     require_inertia,
     rkmk4_step,
 )
+from flexsat.input_checks import FieldError
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -62,7 +63,7 @@ def attitude_state_from(plant: Plant, values: Mapping[str, QuantityArrayLike]) -
 
     values = dict(values)
     if "attitude" in values and "euler123" in values:
-        raise ValueError("attitude: give attitude or euler123, not both")
+        raise FieldError("attitude", "give attitude or euler123, not both")
     own = {k: values.pop(k) for k in ("attitude", "euler123", "rate") if k in values}
     x = Plant.state_from(plant, **values)
     if "attitude" in own:
@@ -70,12 +71,12 @@ def attitude_state_from(plant: Plant, values: Mapping[str, QuantityArrayLike]) -
     if "euler123" in own:
         angles = to_si_array(own["euler123"], "rad", "euler123")
         if angles.shape != (3,) or not np.all(np.isfinite(angles)):
-            raise ValueError(f"euler123: three finite angles, got {own['euler123']!r}")
+            raise FieldError("euler123", f"three finite angles, got {own['euler123']!r}")
         x[:4] = dcm_to_quaternion(euler123_to_dcm(angles))
     if "rate" in own:
         w = to_si_array(own["rate"], "rad/s", "rate")
         if w.shape != (3,) or not np.all(np.isfinite(w)):
-            raise ValueError(f"rate: three finite body rates, got {own['rate']!r}")
+            raise FieldError("rate", f"three finite body rates, got {own['rate']!r}")
         x[4:7] = w
     return x
 
@@ -119,13 +120,14 @@ def skew(v: FloatArray) -> FloatArray:
 
 
 def omega(w: FloatArray) -> FloatArray:
-    """Ω(ω) (..., 4, 4) of seed 003 Eq. 11, the ½ included
+    """Ω(ω) (..., 4, 4) of EPS slew study c. 1989 Eq. 11, the ½ included
     (:func:`flexsat.dynamics.attitude.omega_matrix`, unchecked)."""
     return (w @ _OMEGA).reshape(w.shape[:-1] + (4, 4))
 
 
 def quaternion_kinematics(beta: FloatArray, w: FloatArray) -> FloatArray:
-    r""":math:`\dot\beta = \Omega(\omega)\beta = B(\beta)\,\omega` (seed 003 Eq. 11), unchecked."""
+    r""":math:`\dot\beta = \Omega(\omega)\beta = B(\beta)\,\omega` (EPS slew study
+    c. 1989 Eq. 11), unchecked."""
     return (omega(w) @ beta[..., None])[..., 0]
 
 
@@ -207,7 +209,7 @@ class RigidSpacecraft(Plant):
     def __init__(self, inertia: QuantityArrayLike) -> None:
         J = require_inertia(inertia)
         if J.ndim > 3:
-            raise ValueError(f"inertia: must have shape (3, 3) or (n_cases, 3, 3), got {J.shape}")
+            raise FieldError("inertia", f"must have shape (3, 3) or (n_cases, 3, 3), got {J.shape}")
         self.inertia = J
         # numpy types inv() as floating[Any]; it is float64 here, so the astype copies nothing
         self.inertia_inverse = np.linalg.inv(J).astype(np.float64, copy=False)

@@ -21,7 +21,7 @@ The models of issues #2 and #3 convert to it: :meth:`SecondOrderModel.from_hub_a
 (the hub + appendage assumed-modes model), :meth:`SecondOrderModel.from_modal_model` (a free or
 cantilevered :class:`~flexsat.structures.modal_model.ModalModel` with chosen inputs and
 outputs) and :meth:`SecondOrderModel.from_hybrid` (a cantilevered ModalModel on a rigid hub,
-the hybrid coordinates of the NPS simulator, seed 001 Eqs. 10, 16).
+the hybrid coordinates of the NPS simulator, Hailey, Sortun & Agrawal c. 1992 Eqs. 10, 16).
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, TypeAlias
 import numpy as np
 import scipy.linalg
 
-from flexsat.input_checks import require_count, require_finite, require_positive
+from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
 from flexsat.structures.modal_model import hub_appendage_matrices
 
 if TYPE_CHECKING:
@@ -80,16 +80,17 @@ def _matrix(
             arr = arr[None, :]
     if arr.ndim != 2 or any(s is not None and a != s for a, s in zip(arr.shape, shape)):
         want = tuple("?" if s is None else s for s in shape)
-        raise ValueError(f"{field}: must have shape {names} = {want}, got {np.shape(value)}")
+        raise FieldError(field, f"must have shape {names} = {want}, got {np.shape(value)}")
     return arr.copy()
 
 
 def _symmetric(arr: FloatArray, field: str) -> FloatArray:
     scale = max(np.abs(arr).max(initial=0.0), np.finfo(float).tiny)
     if np.abs(arr - arr.T).max(initial=0.0) > SYMMETRY_TOL * scale:
-        raise ValueError(
-            f"{field}: must be symmetric (max |{field} − {field}ᵀ| = "
-            f"{np.abs(arr - arr.T).max():.3g}, max |{field}| = {scale:.3g})"
+        raise FieldError(
+            field,
+            f"must be symmetric (max |{field} − {field}ᵀ| = "
+            f"{np.abs(arr - arr.T).max():.3g}, max |{field}| = {scale:.3g})",
         )
     return 0.5 * (arr + arr.T)
 
@@ -149,21 +150,22 @@ class SecondOrderModel:
         M = _matrix(M, "M", (None, None), "(n, n)")
         n = M.shape[0]
         if M.shape != (n, n) or n == 0:
-            raise ValueError(f"M: must be a non-empty square matrix, got shape {M.shape}")
+            raise FieldError("M", f"must be a non-empty square matrix, got shape {M.shape}")
         M = _symmetric(M, "M")
         try:
             np.linalg.cholesky(M)
         except np.linalg.LinAlgError:
-            raise ValueError(
-                f"M: must be positive definite (smallest eigenvalue "
-                f"{np.linalg.eigvalsh(M).min():.3g})"
+            raise FieldError(
+                "M",
+                "must be positive definite (smallest eigenvalue "
+                f"{np.linalg.eigvalsh(M).min():.3g})",
             ) from None
         D = _matrix(D, "D", (n, n), "(n, n)")
         K = _symmetric(_matrix(K, "K", (n, n), "(n, n)"), "K")
         lam = np.linalg.eigvalsh(K)
         if lam.min(initial=0.0) < -SYMMETRY_TOL * max(np.abs(lam).max(initial=0.0), 1e-300):
-            raise ValueError(
-                f"K: must be positive semi-definite (smallest eigenvalue {lam.min():.3g})"
+            raise FieldError(
+                "K", f"must be positive semi-definite (smallest eigenvalue {lam.min():.3g})"
             )
         B = _matrix(B, "B", (n, None), "(n, m)")
         Cq = _matrix(Cq, "Cq", (None, n), "(p, n)")
@@ -253,11 +255,11 @@ class SecondOrderModel:
         nx = A.shape[0]
         if n_dof is None:
             if nx % 2:
-                raise ValueError(f"n_dof: {nx} states is odd; give n_dof")
+                raise FieldError("n_dof", f"{nx} states is odd; give n_dof")
             n_dof = nx // 2
         n = require_count(n_dof, "n_dof")
         if 2 * n != nx:
-            raise ValueError(f"n_dof: {n} coordinates need {2 * n} states, sys has {nx}")
+            raise FieldError("n_dof", f"{n} coordinates need {2 * n} states, sys has {nx}")
         scale = max(np.abs(A).max(initial=0.0), 1.0)
         bscale = max(np.abs(B).max(initial=0.0), 1.0)
         if (
@@ -265,15 +267,17 @@ class SecondOrderModel:
             or np.abs(A[:n, n:] - np.eye(n)).max() > tol * scale
             or np.abs(B[:n]).max(initial=0.0) > tol * bscale
         ):
-            raise ValueError(
-                "sys: not in [q, q̇] form (need A = [[0, I], [·, ·]] and B = [0; ·]); "
-                "transform the realisation first"
+            raise FieldError(
+                "sys",
+                "not in [q, q̇] form (need A = [[0, I], [·, ·]] and B = [0; ·]); "
+                "transform the realisation first",
             )
         Mm = np.eye(n) if M is None else _matrix(M, "M", (n, n), "(n_dof, n_dof)")
         K = -Mm @ A[n:, :n]
         if M is None and np.abs(K - K.T).max() > SYMMETRY_TOL * max(np.abs(K).max(), 1e-300):
-            raise ValueError(
-                "sys: −A21 is not symmetric; give the mass matrix M (K = −M A21 must be symmetric)"
+            raise FieldError(
+                "sys",
+                "−A21 is not symmetric; give the mass matrix M (K = −M A21 must be symmetric)",
             )
         return cls(Mm, -Mm @ A[n:, n:], K, Mm @ B[n:], C[:, :n], C[:, n:], Dff)
 
@@ -363,15 +367,15 @@ class SecondOrderModel:
         modal = self.modal()
         k = require_count(n_modes, "n_modes")
         if k > modal.n_dof:
-            raise ValueError(f"n_modes: the model has {modal.n_dof} modes, got {k}")
+            raise FieldError("n_modes", f"the model has {modal.n_dof} modes, got {k}")
         if method not in ("truncate", "residualize"):
-            raise ValueError(f"method: must be 'truncate' or 'residualize', got {method!r}")
+            raise FieldError("method", f"must be 'truncate' or 'residualize', got {method!r}")
         keep = slice(0, k)
         Dff = modal.Dff
         if method == "residualize" and k < modal.n_dof:
             w2 = np.diag(modal.K)[k:]
             if np.any(w2 <= 0):
-                raise ValueError("n_modes: residualize cannot drop a rigid (ω = 0) mode")
+                raise FieldError("n_modes", "residualize cannot drop a rigid (ω = 0) mode")
             Dff = Dff + (modal.Cq[:, k:] / w2) @ modal.B[k:]
         return SecondOrderModel(
             modal.M[keep, keep],
@@ -425,7 +429,8 @@ class SecondOrderModel:
         outputs: Sequence[Output] | None = None,
     ) -> SecondOrderModel:
         r"""Rigid hub carrying a cantilevered modal model, in hybrid coordinates (θ, η)
-        (seed 001 Eqs. 10, 16; ``flexsat.structures.modal_model.hub_appendage_matrices``):
+        (Hailey, Sortun & Agrawal c. 1992 Eqs. 10, 16;
+        ``flexsat.structures.modal_model.hub_appendage_matrices``):
 
         .. math::
 
@@ -444,7 +449,9 @@ class SecondOrderModel:
         for i, given in enumerate(inputs):
             v = require_finite(given, f"inputs[{i}]")
             if v.shape != (n - 1,):
-                raise ValueError(f"inputs[{i}]: must have shape (m,) = ({n - 1},), got {v.shape}")
+                raise FieldError(
+                    f"inputs[{i}]", f"must have shape (m,) = ({n - 1},), got {v.shape}"
+                )
             cols.append(np.concatenate([[0.0], v])[:, None])
         B = np.hstack(cols)
         if outputs is None:
@@ -456,9 +463,10 @@ class SecondOrderModel:
                 values, kind = item
                 row = require_finite(values, f"outputs[{i}]")
                 if row.shape != (n,) or kind not in ("displacement", "velocity"):
-                    raise ValueError(
-                        f"outputs[{i}]: must be (row of shape ({n},), "
-                        f"'displacement' or 'velocity'), got {item!r}"
+                    raise FieldError(
+                        f"outputs[{i}]",
+                        f"must be (row of shape ({n},), "
+                        f"'displacement' or 'velocity'), got {item!r}",
                     )
                 (Cq if kind == "displacement" else Cv)[i] = row
         return cls(M, D, K, B, Cq, Cv)
@@ -468,16 +476,16 @@ def _abcd(sys: StateSpaceLike) -> tuple[FloatArray, FloatArray, FloatArray, Floa
     """(A, B, C, D) float arrays of a StateSpace or a 4-tuple, continuous only."""
     if isinstance(sys, (tuple, list)):
         if len(sys) != 4:
-            raise ValueError(f"sys: give a StateSpace or (A, B, C, D), got {len(sys)} items")
+            raise FieldError("sys", f"give a StateSpace or (A, B, C, D), got {len(sys)} items")
         A, B, C, D = sys
     else:
         dt = getattr(sys, "dt", 0)
         if dt not in (0, None):
-            raise ValueError(f"sys: must be continuous-time, got dt = {dt}")
+            raise FieldError("sys", f"must be continuous-time, got dt = {dt}")
         A, B, C, D = sys.A, sys.B, sys.C, sys.D
     Af = require_finite(A, "A")
     if Af.ndim != 2 or Af.shape[0] != Af.shape[1]:
-        raise ValueError(f"A: must be square, got shape {Af.shape}")
+        raise FieldError("A", f"must be square, got shape {Af.shape}")
     nx = Af.shape[0]
     Bf = _matrix(B, "B", (nx, None), "(n, m)")
     Cf = _matrix(C, "C", (None, nx), "(p, n)")

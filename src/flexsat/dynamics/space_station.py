@@ -46,7 +46,7 @@ from typing import TYPE_CHECKING, TypeAlias
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.input_checks import require_finite, require_positive_scalar
+from flexsat.input_checks import FieldError, require_finite, require_positive_scalar
 from flexsat.units import to_si_array
 
 if TYPE_CHECKING:
@@ -93,8 +93,8 @@ class StationData:
 
     def __post_init__(self) -> None:
         if len(self.inertia) != 3:
-            raise ValueError(
-                f"inertia: three principal moments (roll, pitch, yaw), got {self.inertia!r}"
+            raise FieldError(
+                "inertia", f"three principal moments (roll, pitch, yaw), got {self.inertia!r}"
             )
         moments = tuple(
             require_positive_scalar(v, f"inertia[{i}]", "kg*m**2")
@@ -120,11 +120,11 @@ def _filters(filters: Iterable[int], field: str) -> tuple[int, ...]:
     ks = tuple(filters)
     for k in ks:
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-            raise ValueError(
-                f"{field}: multiples of the orbit rate must be integers >= 1, got {filters!r}"
+            raise FieldError(
+                field, f"multiples of the orbit rate must be integers >= 1, got {filters!r}"
             )
     if len(set(ks)) != len(ks):
-        raise ValueError(f"{field}: each frequency once, got {filters!r}")
+        raise FieldError(field, f"each frequency once, got {filters!r}")
     return ks
 
 

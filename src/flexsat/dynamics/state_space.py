@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.input_checks import require_finite
+from flexsat.input_checks import FieldError, require_finite
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -58,7 +58,7 @@ class StateSpacePlant(Plant):
             ("D", self.D, (p, m)),
         ):
             if M.shape != shape or n < 1:
-                raise ValueError(f"{name}: must have shape {shape} (A square), got {M.shape}")
+                raise FieldError(name, f"must have shape {shape} (A square), got {M.shape}")
         self.inputs = (Channel(input_name, input_unit, m, "the input vector"),)
         self.outputs = (
             Channel(output_name, output_unit, p, "the output vector"),

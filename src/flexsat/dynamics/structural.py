@@ -23,10 +23,11 @@ linear, so the whole of it is the exactly propagated part: with the state
   ``moment_pair``, and their collocated outputs).
 
 Input kinds: ``force`` (N), ``torque`` (N m, on a rotation dof) and ``moment_pair`` (a
-piezoelectric patch, seed 004 Eq. 36: equal and opposite moments :math:`\pm a_1 u` at the two
+piezoelectric patch, Agrawal & Bang 1996 Eq. 36: equal and opposite
+moments :math:`\pm a_1 u` at the two
 rotation dofs of an element pair). Output kinds: ``displacement``
 (m), ``rotation`` (rad) and ``strain``: the relative rotation :math:`\theta_b - \theta_a` of
-the pair times ``gain`` (seed 004 Eq. 37, :math:`y = a_2 M`: with ``gain`` =
+the pair times ``gain`` (Agrawal & Bang 1996 Eq. 37, :math:`y = a_2 M`: with ``gain`` =
 :math:`(t/2)/L_p` the surface strain averaged over a patch of length :math:`L_p`, as
 ``cases/agrawal_bang.py``; with :math:`EI/L_p` the bending moment, ``unit="N*m"``). A sensor with
 ``rate=True`` reads the velocity of the same quantity (unit per second).
@@ -43,7 +44,7 @@ import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant, find_channel
 from flexsat.dynamics.second_order import SecondOrderModel
-from flexsat.input_checks import require_finite
+from flexsat.input_checks import FieldError, require_finite
 from flexsat.units import parse_quantity
 
 if TYPE_CHECKING:
@@ -79,7 +80,7 @@ class Actuator:
     axis : str or array_like (3,), optional
         Direction of a force, axis of a torque or moment pair (modal coordinates only).
     gain : float
-        Load per unit command (a_1 of seed 004 Eq. 36 for a moment pair); default 1.
+        Load per unit command (a_1 of Agrawal & Bang 1996 Eq. 36 for a moment pair); default 1.
     unit : str, optional
         Unit of the command (default N for a force, N m otherwise; a piezo voltage: "V").
     """
@@ -103,7 +104,8 @@ class Sensor:
     kind : {"displacement", "rotation", "strain"}
     at, axis : as :class:`Actuator` (a pair of rotation dofs or nodes for a strain).
     gain : float
-        Output per unit of the quantity (a_2 (t/2)/L_p for a patch strain sensor, seed 004
+        Output per unit of the quantity (a_2 (t/2)/L_p for a patch
+        strain sensor, Agrawal & Bang 1996
         Eq. 37); default 1.
     rate : bool
         Read the velocity of the quantity instead (q̇ instead of q).
@@ -143,7 +145,7 @@ def _dense(matrix: Matrix) -> npt.ArrayLike:
 def _unit(unit: str, field: str) -> str:
     """The unit string, checked to parse (pint), so a typo fails at construction."""
     if not isinstance(unit, str):
-        raise ValueError(f"{field}: unit must be a string, got {unit!r}")
+        raise FieldError(field, f"unit must be a string, got {unit!r}")
     if unit:
         parse_quantity(unit, f"{field}: unit")
     return unit
@@ -168,7 +170,7 @@ class _Dofs:
         self.n = n
         self.labels = None if labels is None else [key(d) for d in labels]
         if self.labels is not None and len(self.labels) != n:
-            raise ValueError(f"dofs: {len(self.labels)} labels for {n} coordinates")
+            raise FieldError("dofs", f"{len(self.labels)} labels for {n} coordinates")
         self.fixed = {key(d) for d in fixed}
 
     def _dof(self, at: object, name: str) -> int | None:
@@ -178,23 +180,24 @@ class _Dofs:
             return None
         if isinstance(at, (int, np.integer)) and not isinstance(at, bool):
             if not 0 <= at < self.n:
-                raise ValueError(
-                    f"{name}: dof {at} out of range (the model has {self.n} coordinates, 0-based)"
+                raise FieldError(
+                    name, f"dof {at} out of range (the model has {self.n} coordinates, 0-based)"
                 )
             return int(at)
         key = tuple(at) if isinstance(at, (tuple, list)) else at
         if self.labels is not None and key in self.labels:
             return self.labels.index(key)
-        raise ValueError(
-            f"{name}: unknown dof {at!r} (give a 0-based index"
+        raise FieldError(
+            name,
+            f"unknown dof {at!r} (give a 0-based index"
             + (", a dof label such as " + repr(self.labels[0]) if self.labels else "")
-            + " or an influence vector)"
+            + " or an influence vector)",
         )
 
     def vector(self, spec: Actuator | Sensor, pair: bool) -> FloatArray:
         name = spec.name
         if spec.axis is not None:
-            raise ValueError(f"{name}: axis applies to modal coordinates only (give the dof)")
+            raise FieldError(name, "axis applies to modal coordinates only (give the dof)")
         if pair:
             at = spec.at
             if (
@@ -202,16 +205,15 @@ class _Dofs:
                 or len(at) != 2
                 or (self.labels is not None and tuple(at) in self.labels)
             ):
-                raise ValueError(
-                    f"{name}: a {spec.kind} needs a pair of rotation dofs (a, b), got {at!r}"
+                raise FieldError(
+                    name, f"a {spec.kind} needs a pair of rotation dofs (a, b), got {at!r}"
                 )
             a, b = self._dof(at[0], name), self._dof(at[1], name)
             if a is None and b is None:
-                raise ValueError(f"{name}: both dofs of the {spec.kind} are fixed (supports)")
+                raise FieldError(name, f"both dofs of the {spec.kind} are fixed (supports)")
             if a == b:
-                raise ValueError(
-                    f"{name}: the two dofs of a {spec.kind} must differ, got "
-                    f"{at[0]!r} and {at[1]!r}"
+                raise FieldError(
+                    name, f"the two dofs of a {spec.kind} must differ, got {at[0]!r} and {at[1]!r}"
                 )
             v = np.zeros(self.n)
             for dof, sign in ((b, 1.0), (a, -1.0)):
@@ -225,15 +227,15 @@ class _Dofs:
         if isinstance(at, np.ndarray) or (isinstance(at, (list, tuple)) and not named):
             v = require_finite(at, f"{name}: at")
             if v.shape != (self.n,):
-                raise ValueError(
-                    f"{name}: an influence vector must have shape ({self.n},), got {v.shape}"
+                raise FieldError(
+                    name, f"an influence vector must have shape ({self.n},), got {v.shape}"
                 )
             return v.astype(float)
         v = np.zeros(self.n)
         dof = self._dof(at, name)
         if dof is None:
-            raise ValueError(
-                f"{name}: dof {at!r} is fixed (a support): a {spec.kind} there does nothing"
+            raise FieldError(
+                name, f"dof {at!r} is fixed (a support): a {spec.kind} there does nothing"
             )
         v[dof] = 1.0
         return v
@@ -249,7 +251,7 @@ class _Modes:
     def vector(self, spec: Actuator | Sensor, pair: bool) -> FloatArray:
         name, at, m = spec.name, spec.at, self.modal
         if spec.axis is None:
-            raise ValueError(f"{name}: give the axis (or direction) on a modal model")
+            raise FieldError(name, "give the axis (or direction) on a modal model")
         try:
             if pair:
                 if not isinstance(at, (tuple, list)) or len(at) != 2:
@@ -260,7 +262,7 @@ class _Modes:
                 return m.force_input(node, spec.axis)
             return m.torque_input(node, spec.axis)
         except ValueError as err:
-            raise ValueError(f"{name}: {err}") from None
+            raise FieldError(name, f"{err}") from None
 
 
 def _resolve(
@@ -274,17 +276,17 @@ def _resolve(
     seen: set[str] = set()
     for i, spec in enumerate(specs):
         if not isinstance(spec, spec_type):
-            raise ValueError(f"{role}s[{i}]: must be a {spec_type.__name__}, got {spec!r}")
+            raise FieldError(f"{role}s[{i}]", f"must be a {spec_type.__name__}, got {spec!r}")
         name = spec.name
         Channel(name, "")  # checks the name is an identifier
         if name in seen:
-            raise ValueError(f"{name}: duplicate {role} channel name")
+            raise FieldError(name, f"duplicate {role} channel name")
         seen.add(name)
         if spec.kind not in kinds:
-            raise ValueError(f"{name}: kind must be one of {', '.join(kinds)}, got {spec.kind!r}")
+            raise FieldError(name, f"kind must be one of {', '.join(kinds)}, got {spec.kind!r}")
         gain = float(require_finite(spec.gain, f"{name}: gain"))
         if gain == 0.0:
-            raise ValueError(f"{name}: gain must be non-zero")
+            raise FieldError(name, "gain must be non-zero")
         pair = spec.kind in ("moment_pair", "strain")
         vectors.append(gain * locator.vector(spec, pair))
         rate = bool(getattr(spec, "rate", False))
@@ -316,23 +318,23 @@ class StructuralPlant(Plant):
         self, model: SecondOrderModel, inputs: Iterable[Channel], outputs: Iterable[Channel]
     ) -> None:
         if not isinstance(model, SecondOrderModel):
-            raise ValueError(f"model: must be a SecondOrderModel, got {type(model).__name__}")
+            raise FieldError("model", f"must be a SecondOrderModel, got {type(model).__name__}")
         self.inputs, self.outputs = tuple(inputs), tuple(outputs)
         if len(self.inputs) != model.n_inputs or any(c.size != 1 for c in self.inputs):
-            raise ValueError(
-                f"inputs: {len(self.inputs)} size-1 channels for {model.n_inputs} columns of B"
+            raise FieldError(
+                "inputs", f"{len(self.inputs)} size-1 channels for {model.n_inputs} columns of B"
             )
         if len(self.outputs) != model.n_outputs or any(c.size != 1 for c in self.outputs):
-            raise ValueError(
-                f"outputs: {len(self.outputs)} size-1 channels for {model.n_outputs} output rows"
+            raise FieldError(
+                "outputs", f"{len(self.outputs)} size-1 channels for {model.n_outputs} output rows"
             )
         if np.any(model.Dff):
-            raise ValueError("model: Dff must be zero (outputs read q and q̇ only)")
+            raise FieldError("model", "Dff must be zero (outputs read q and q̇ only)")
         for role, chans in (("input", self.inputs), ("output", self.outputs)):
             names = [c.name for c in chans]
             for name in names:
                 if names.count(name) > 1:
-                    raise ValueError(f"{name}: duplicate {role} channel name")
+                    raise FieldError(name, f"duplicate {role} channel name")
         self.model = model
         self.recorded = tuple(c.name for c in self.outputs)
         # the whole state as one more output: what a state-feedback law reads
@@ -372,7 +374,7 @@ class StructuralPlant(Plant):
         labels the coordinates (e.g. ``[("hub", "rz"), (3, "uy"), ...]``) so specs may name
         them."""
         if not isinstance(model, SecondOrderModel):
-            raise ValueError(f"model: must be a SecondOrderModel, got {type(model).__name__}")
+            raise FieldError("model", f"must be a SecondOrderModel, got {type(model).__name__}")
         return cls._build(model.M, model.D, model.K, _Dofs(model.n_dof, dofs), inputs, outputs)
 
     @classmethod
@@ -390,7 +392,7 @@ class StructuralPlant(Plant):
         zero); dense or scipy.sparse. ``dofs`` labels the rows, e.g. ``Assembly.dofs``
         ((node, "uy"), (node, "rz"), ...), so that specs can say ``at=(12, "rz")``; ``fixed``
         labels supported dofs (not in the matrices): one end of a moment pair or strain pair may
-        sit there (a patch at a clamped root, seed 004 L349), contributing nothing."""
+        sit there (a patch at a clamped root, Agrawal & Bang 1996 §4), contributing nothing."""
         Md, Kd = _dense(M), _dense(K)
         n = np.shape(Md)[0] if np.ndim(Md) == 2 else 0
         Dd = np.zeros((n, n)) if D is None else _dense(D)

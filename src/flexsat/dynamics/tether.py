@@ -1,8 +1,9 @@
 r"""Tethered subsatellite: the three-degree-of-freedom libration and length dynamics of a point
 mass on a straight massless tether below (or above) a body in a circular orbit (Vadali & Kim,
-AIAA 90-1197; seed 000, Att. 12, L4319-L4333).
+AIAA 90-1197; Junkins, Pollock & Rahman 1990, Att. 12, "Equations of Motion").
 
-Nondimensional form (seed 000 Eq. 4), τ = Ω t, λ = l/L, T̂ = T/(mΩ²L), F̂ = F/(mΩ²L), ' = d/dτ:
+Nondimensional form (Junkins, Pollock & Rahman 1990, Att. 12 Eq. 4), τ = Ω t, λ = l/L,
+T̂ = T/(mΩ²L), F̂ = F/(mΩ²L), ' = d/dτ:
 
 .. math::
 
@@ -13,7 +14,8 @@ Nondimensional form (seed 000 Eq. 4), τ = Ω t, λ = l/L, T̂ = T/(mΩ²L), F̂
         &= \hat F/\lambda
 
 θ is the in-plane pitch, φ the out-of-plane roll (the paper calls it "yaw" once,
-L4325), l the tether length, T the tension, F the out-of-plane thrust on the subsatellite
+Att. 12 "Equations of Motion"), l the tether length, T the tension, F the
+out-of-plane thrust on the subsatellite
 of mass m, Ω the orbital rate and L the reference length. With the length rate as the control
 (the tether-rate law, Eq. 24) the first equation is replaced by λ' = u.
 
@@ -43,7 +45,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_finite,
+    require_positive_scalar,
+)
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -60,6 +66,7 @@ __all__ = [
     "integral_of_motion",
     "integral_of_motion_rate",
     "require_lengths",
+    "MAX_ALTITUDE",
     "MIN_LENGTH",
     "ClosedLoopRun",
     "CONTROLS",
@@ -69,6 +76,10 @@ __all__ = [
 EARTH_MU = 3.986004418e14
 #: Earth's equatorial radius, m (WGS 84)
 EARTH_RADIUS = 6378137.0
+#: highest altitude of a circular Earth orbit here, m: the Earth's Hill sphere radius
+#: a (m/3M)^(1/3) ≈ 1.5e9 m (1 au, Earth/Sun mass ratio 3.0e-6), beyond which the Sun, not
+#: the Earth, holds the orbit
+MAX_ALTITUDE = 1.5e9
 #: a nondimensional length below which the tether is taken as collapsed (the plant's
 #: :meth:`TetheredSubsatellite.domain_margin`: a continuous run stops there): Eq. 4's λ'/λ
 #: terms are singular at λ = 0, and an adaptive integrator approaching it takes steps ~λ, never
@@ -83,7 +94,7 @@ def require_lengths(lam: npt.ArrayLike, field: str = "lambda") -> FloatArray:
     divides by λ: a zero or negative length is no tether)."""
     arr = require_finite(lam, field)
     if np.any(arr <= 0):
-        raise ValueError(f"{field}: the tether length must be > 0, got min {arr.min():.6g}")
+        raise FieldError(field, f"the tether length must be > 0, got min {arr.min():.6g}")
     return arr
 
 
@@ -135,7 +146,8 @@ def integral_of_motion_rate(x: FloatArray, thrust: float | FloatArray = 0.0) -> 
 
 @dataclass(frozen=True, init=False)
 class TetherScales:
-    """The scales of the nondimensional form: Ω, m and L (seed 000 L4329).
+    """The scales of the nondimensional form: Ω, m and L (Junkins, Pollock & Rahman 1990,
+    Att. 12 "Equations of Motion").
 
     Parameters
     ----------
@@ -150,7 +162,8 @@ class TetherScales:
 
     Notes
     -----
-    The paper's case (L4397-L4401): 220 km (Ω = 0.07068 rad/min), m = 22.7 kg, L = 20 km, so
+    The paper's case (Att. 12 "Tension Control Law Design Based on Decoupled Equations of Motion"):
+    220 km (Ω = 0.07068 rad/min), m = 22.7 kg, L = 20 km, so
     one unit of T̂ or F̂ is mΩ²L = 0.630 N, of ∫|F̂|dτ mΩL = 534.8 N s, of λ' LΩ = 23.56 m/s.
     """
 
@@ -169,24 +182,43 @@ class TetherScales:
         orbit_rate: QuantityLike | None = None,
         altitude: QuantityLike | None = None,
     ) -> None:
-        object.__setattr__(self, "mass", float(require_positive(mass, "mass", "kg")))
-        object.__setattr__(self, "length", float(require_positive(length, "length", "m")))
+        object.__setattr__(self, "mass", require_positive_scalar(mass, "mass", "kg"))
+        object.__setattr__(self, "length", require_positive_scalar(length, "length", "m"))
         if orbit_rate is not None and altitude is not None:
-            raise ValueError("orbit_rate: give the orbit rate or the altitude, not both")
-        height = None
+            raise FieldError("orbit_rate", "give the orbit rate or the altitude, not both")
+        height: float | None = None
         if altitude is not None:
-            height = float(require_finite(altitude, "altitude", "m"))
+            given = require_finite(altitude, "altitude", "m")
+            if given.ndim != 0:
+                raise FieldError("altitude", f"must be one altitude, got shape {given.shape}")
+            height = float(given)
             if height < 0:
-                raise ValueError(
-                    f"altitude: must be >= 0 (above the Earth's surface), got {height} m"
+                raise FieldError(
+                    "altitude", f"must be >= 0 (above the Earth's surface), got {height} m"
+                )
+            if height > MAX_ALTITUDE:
+                raise FieldError(
+                    "altitude",
+                    f"{height:.3g} m is beyond the Earth's Hill sphere ({MAX_ALTITUDE:.2g} m): "
+                    "no circular Earth orbit there",
                 )
             rate = float(np.sqrt(EARTH_MU / (EARTH_RADIUS + height) ** 3))
         elif orbit_rate is not None:
-            rate = float(require_positive(orbit_rate, "orbit_rate", "rad/s"))
+            rate = require_positive_scalar(orbit_rate, "orbit_rate", "rad/s")
         else:  # neither: the nondimensional form itself
             rate = 1.0
         object.__setattr__(self, "orbit_rate", rate)
         object.__setattr__(self, "altitude", height)
+        # the nondimensional form divides by these units: each a normal, finite float
+        units = {"force mΩ²L": self.force, "speed LΩ": self.speed, "impulse mΩL": self.impulse}
+        for name, unit in units.items():
+            if not (np.isfinite(unit) and unit >= 1e-300):  # so that 1/unit is finite too
+                raise FieldError(
+                    "mass",
+                    f"the mass {self.mass:.3g} kg, length {self.length:.3g} m and orbit rate "
+                    f"{rate:.3g} rad/s make the {name} unit {unit:.3g} (SI), beyond a float's "
+                    "range",
+                )
 
     @property
     def force(self) -> float:
@@ -222,8 +254,8 @@ class TetherScales:
             return np.array([L, 1.0, 1.0, L * W, W, W])
         if n == 5:
             return np.array([L, 1.0, 1.0, W, W])
-        raise ValueError(
-            f"state: must have 6 (tension control) or 5 (rate control) entries, got {n}"
+        raise FieldError(
+            "state", f"must have 6 (tension control) or 5 (rate control) entries, got {n}"
         )
 
 
@@ -259,10 +291,10 @@ class TetheredSubsatellite(Plant):
 
     def __init__(self, scales: TetherScales | None = None, control: str = "tension") -> None:
         if control not in CONTROLS:
-            raise ValueError(f"control: must be one of {CONTROLS}, got {control!r}")
+            raise FieldError("control", f"must be one of {CONTROLS}, got {control!r}")
         self.scales = TetherScales() if scales is None else scales
         if not isinstance(self.scales, TetherScales):
-            raise ValueError(f"scales: must be a TetherScales, got {type(scales).__name__}")
+            raise FieldError("scales", f"must be a TetherScales, got {type(scales).__name__}")
         self.control = control
         first = (
             Channel("tension", "N", 1, "tether tension T (>= 0 for a tether)")
@@ -381,7 +413,7 @@ class TetheredSubsatellite(Plant):
         number, a Quantity or a unit string); the length has no default."""
         x = super().state_from(**values)
         if "length" not in values and "state" not in values:
-            raise ValueError("length: the initial tether length is required (> 0)")
+            raise FieldError("length", "the initial tether length is required (> 0)")
         require_lengths(x[0], "length")
         return x
 

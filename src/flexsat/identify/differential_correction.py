@@ -28,7 +28,7 @@ import scipy.linalg as sla
 
 from flexsat.analysis.sensitivity import modal_derivatives
 from flexsat.identify.structural import SubstructureModel
-from flexsat.input_checks import require_finite, require_numeric
+from flexsat.input_checks import FieldError, require_finite, require_numeric
 from flexsat.units import FloatArray
 
 __all__ = ["CorrectionData", "DifferentialCorrection", "differential_correction"]
@@ -61,17 +61,17 @@ def _modes_and_sigma(
     modes."""
     v = require_finite(values, name, unit).ravel()
     if v.size == 0 or np.any(v <= 0):
-        raise ValueError(f"{name}: must be a non-empty vector of values > 0")
+        raise FieldError(name, "must be a non-empty vector of values > 0")
     if sigma is None:
-        raise ValueError(
-            f"{prefix}_sigma: give the standard deviations (the weights W, Att. 6 Eq. 10)"
+        raise FieldError(
+            f"{prefix}_sigma", "give the standard deviations (the weights W, Att. 6 Eq. 10)"
         )
     s = require_finite(sigma, f"{prefix}_sigma", unit)
     if s.ndim > 1 or (s.ndim == 1 and s.size != v.size):
-        raise ValueError(f"{prefix}_sigma: must be a scalar or {v.size} values, got {s.shape}")
+        raise FieldError(f"{prefix}_sigma", f"must be a scalar or {v.size} values, got {s.shape}")
     s = np.broadcast_to(s, v.shape).astype(float)
     if np.any(s <= 0):
-        raise ValueError(f"{prefix}_sigma: must be > 0")
+        raise FieldError(f"{prefix}_sigma", "must be > 0")
     return v, s, _mode_numbers(modes, v.size, f"{prefix}_modes")
 
 
@@ -85,7 +85,7 @@ def _mode_numbers(modes: npt.ArrayLike | None, count: int, name: str) -> IntArra
         or np.any(idx < 0)
         or np.unique(idx).size != count
     ):
-        raise ValueError(f"{name}: must be {count} distinct mode numbers (0-based integers)")
+        raise FieldError(name, f"must be {count} distinct mode numbers (0-based integers)")
     return idx.astype(int)
 
 
@@ -93,14 +93,14 @@ def _dof_or_vector(value: int | npt.ArrayLike, n: int, name: str) -> FloatArray:
     """An FRF output/input: a dof index or an (n,) vector (a row of H, a column of B)."""
     if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
         if not 0 <= value < n:
-            raise ValueError(f"{name}: must be a dof index in [0, {n}), got {value}")
+            raise FieldError(name, f"must be a dof index in [0, {n}), got {value}")
         e = np.zeros(n)
         e[value] = 1.0
         return e
     v = require_numeric(value, name, "vector")
     if v.shape != (n,):
-        raise ValueError(
-            f"{name}: must be a dof index or a vector of {n} entries, got shape {v.shape}"
+        raise FieldError(
+            name, f"must be a dof index or a vector of {n} entries, got shape {v.shape}"
         )
     return v
 
@@ -110,9 +110,7 @@ def _gain_index(value: object, name: str) -> int | None:
     if value is None:
         return None
     if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 0:
-        raise ValueError(
-            f"{name}: must be None or an index >= 0 into the gain vector, got {value!r}"
-        )
+        raise FieldError(name, f"must be None or an index >= 0 into the gain vector, got {value!r}")
     return int(value)
 
 
@@ -125,9 +123,9 @@ def _start_gains(values: npt.ArrayLike | None, count: int, name: str, kind: str)
         used = (
             f"one per {kind} 0..{count - 1} of data.frf" if count else f"data.frf names no {kind}"
         )
-        raise ValueError(f"{name}: must have {count} entries ({used}), got {v.size}")
+        raise FieldError(name, f"must have {count} entries ({used}), got {v.size}")
     if np.any(v <= 0):
-        raise ValueError(f"{name}: must be > 0 (gains relative to the a-priori H rows / B columns)")
+        raise FieldError(name, "must be > 0 (gains relative to the a-priori H rows / B columns)")
     return v
 
 
@@ -167,7 +165,7 @@ class CorrectionData:
     normalization_sigma : float, optional
         ``0_n``: pseudo-measurements ``psi_i^T M psi_i / psi_i^T M(1) psi_i = 1``: the measured
         shapes keep the normalisation they have with the nominal mass (Att. 6 scales them with
-        the analytical mass, L2646); needs shapes on all dofs.
+        the analytical mass, Att. 6 "Mode Shapes"); needs shapes on all dofs.
     """
 
     # the fields hold the checked arrays; the constructor takes array_like (see __init__ below)
@@ -228,18 +226,19 @@ class CorrectionData:
             if y.ndim == 1:
                 y = y[:, None]
             if y.ndim != 2 or y.size == 0:
-                raise ValueError(f"shapes: must be a (dofs, modes) matrix, got shape {y.shape}")
+                raise FieldError("shapes", f"must be a (dofs, modes) matrix, got shape {y.shape}")
             if self.shape_sigma is None:
-                raise ValueError("shape_sigma: give the standard deviations (the weights W)")
+                raise FieldError("shape_sigma", "give the standard deviations (the weights W)")
             s = require_numeric(self.shape_sigma, "shape_sigma")
             try:
                 s = np.broadcast_to(s, y.shape).astype(float)
             except ValueError:
-                raise ValueError(
-                    f"shape_sigma: must be a scalar or shaped like shapes {y.shape}, got {s.shape}"
+                raise FieldError(
+                    "shape_sigma",
+                    f"must be a scalar or shaped like shapes {y.shape}, got {s.shape}",
                 ) from None
             if np.any(s <= 0):
-                raise ValueError("shape_sigma: must be > 0")
+                raise FieldError("shape_sigma", "must be > 0")
             if self.shape_dofs is not None:
                 dofs = np.asarray(self.shape_dofs).ravel()
                 if (
@@ -248,9 +247,9 @@ class CorrectionData:
                     or np.unique(dofs).size != dofs.size
                     or np.any(dofs < 0)
                 ):
-                    raise ValueError(
-                        f"shape_dofs: must be {y.shape[0]} distinct dof indices "
-                        "(one per row of shapes)"
+                    raise FieldError(
+                        "shape_dofs",
+                        f"must be {y.shape[0]} distinct dof indices (one per row of shapes)",
                     )
                 set_(self, "shape_dofs", dofs.astype(int))
             set_(self, "shapes", y)
@@ -261,11 +260,11 @@ class CorrectionData:
             if value is None:
                 continue
             if np.ndim(value) != 0 or float(require_numeric(value, name)) <= 0:
-                raise ValueError(f"{name}: must be a scalar > 0")
+                raise FieldError(name, "must be a scalar > 0")
             if self.shapes is None or self.shape_dofs is not None:
-                raise ValueError(f"{name}: needs measured shapes on all dofs (shape_dofs=None)")
+                raise FieldError(name, "needs measured shapes on all dofs (shape_dofs=None)")
             if name == "orthogonality_sigma" and self.shapes.shape[1] < 2:
-                raise ValueError(f"{name}: needs at least two measured shapes")
+                raise FieldError(name, "needs at least two measured shapes")
             set_(self, name, float(value))
         frf = self.frf
         if isinstance(frf, tuple) and len(frf) in (5, 7) and np.ndim(frf[2]) == 1:
@@ -273,9 +272,9 @@ class CorrectionData:
         items = []
         for i, item in enumerate(frf):
             if not isinstance(item, (tuple, list)) or len(item) not in (5, 7):
-                raise ValueError(
-                    f"frf[{i}]: must be (output, input, omegas, values, sigma"
-                    "[, output_gain, input_gain])"
+                raise FieldError(
+                    f"frf[{i}]",
+                    "must be (output, input, omegas, values, sigma[, output_gain, input_gain])",
                 )
             out, inp, w, h, sd, og, ig = (*item, None, None)[:7]  # 5-tuples: no gains
             og = _gain_index(og, f"frf[{i}].output_gain")
@@ -283,23 +282,25 @@ class CorrectionData:
             w = require_numeric(w, f"frf[{i}].omegas", "vector").ravel()
             h = np.asarray(h)
             if h.dtype.kind not in "biufc":
-                raise ValueError(f"frf[{i}].values: must be a numeric (complex) vector")
+                raise FieldError(f"frf[{i}].values", "must be a numeric (complex) vector")
             h = h.astype(complex).ravel()
             if not np.all(np.isfinite(h)):
-                raise ValueError(
-                    f"frf[{i}].values: must be finite (no NaN or inf), got "
-                    f"{int(np.sum(~np.isfinite(h)))} non-finite entries"
+                raise FieldError(
+                    f"frf[{i}].values",
+                    "must be finite (no NaN or inf), got "
+                    f"{int(np.sum(~np.isfinite(h)))} non-finite entries",
                 )
             if w.size == 0 or h.shape != w.shape:
-                raise ValueError(
-                    f"frf[{i}]: omegas and values must be equal-length non-empty "
-                    f"vectors, got {w.size} and {h.size}"
+                raise FieldError(
+                    f"frf[{i}]",
+                    "omegas and values must be equal-length non-empty "
+                    f"vectors, got {w.size} and {h.size}",
                 )
             if np.any(w <= 0):
-                raise ValueError(f"frf[{i}].omegas: must be > 0 rad/s")
+                raise FieldError(f"frf[{i}].omegas", "must be > 0 rad/s")
             sd = np.asarray(sd)
             if sd.dtype.kind not in "biufc" or not np.all(np.isfinite(sd)):
-                raise ValueError(f"frf[{i}].sigma: must be finite numbers")
+                raise FieldError(f"frf[{i}].sigma", "must be finite numbers")
             if sd.dtype.kind != "c":
                 sd = sd + 1j * sd  # the same SD for the real and the imaginary part
             if (
@@ -308,7 +309,7 @@ class CorrectionData:
                 or np.any(sd.real <= 0)
                 or np.any(sd.imag <= 0)
             ):
-                raise ValueError(f"frf[{i}].sigma: must be a scalar or {w.size} values, > 0")
+                raise FieldError(f"frf[{i}].sigma", f"must be a scalar or {w.size} values, > 0")
             items.append((out, inp, w, h, np.broadcast_to(sd, w.shape).astype(complex), og, ig))
         set_(self, "frf", items)
         if (
@@ -317,7 +318,10 @@ class CorrectionData:
             and self.damping_ratios is None
             and not items
         ):
-            raise ValueError("CorrectionData: give at least one kind of measurement")
+            raise ValueError(
+                "CorrectionData needs at least one kind of measurement: frequencies, shapes, "
+                "damping_ratios or frf"
+            )
 
     @property
     def n_output_gains(self) -> int:
@@ -409,9 +413,9 @@ class CorrectionData:
             for i, item in enumerate(self.frf):
                 gain = cast("int | None", item[pos])  # the output or input gain index
                 if gain is not None and gain >= v.size:
-                    raise ValueError(
-                        f"frf[{i}].{kind}_gain: must be < {v.size} (the length of "
-                        f"{name}), got {gain}"
+                    raise FieldError(
+                        f"frf[{i}].{kind}_gain",
+                        f"must be < {v.size} (the length of {name}), got {gain}",
                     )
             gains.append(v)
         mu, nu = gains
@@ -419,12 +423,13 @@ class CorrectionData:
         K, M, C = model.K(ps), model.M(qs), model.C(rs)
         if self.shapes is not None:
             if self.shape_dofs is None and self.shapes.shape[0] != n:
-                raise ValueError(
-                    f"shapes: without shape_dofs must have one row per dof ({n}), "
-                    f"got {self.shapes.shape[0]}"
+                raise FieldError(
+                    "shapes",
+                    f"without shape_dofs must have one row per dof ({n}), "
+                    f"got {self.shapes.shape[0]}",
                 )
             if self.shape_dofs is not None and self.shape_dofs.max() >= n:
-                raise ValueError(f"shape_dofs: must be dof indices < {n}")
+                raise FieldError("shape_dofs", f"must be dof indices < {n}")
         modes_used = np.concatenate(
             [
                 m
@@ -436,7 +441,7 @@ class CorrectionData:
         if modes_used.size and modes_used.max() >= n:
             raise ValueError(f"frequency_modes, shape_modes, damping_modes: must be < {n}")
         if self.damping_ratios is not None and R == 0:
-            raise ValueError("damping_ratios: the model has no damping blocks (C_blocks)")
+            raise FieldError("damping_ratios", "the model has no damping blocks (C_blocks)")
         values: list[npt.NDArray[Any]] = []
         jac: list[npt.NDArray[Any]] = []
         needed = sorted(
@@ -461,7 +466,7 @@ class CorrectionData:
             assert self.frequency_modes is not None  # set with the frequencies (__post_init__)
             c = [col[int(mode)] for mode in self.frequency_modes]
             if np.any(md.frequencies[c] <= 0):
-                raise ValueError("frequency_modes: a measured mode is a rigid-body mode (w = 0)")
+                raise FieldError("frequency_modes", "a measured mode is a rigid-body mode (w = 0)")
             values.append(md.frequencies[c])
             jac.append(np.hstack([md.frequency_gradient[:, c].T, np.zeros((len(c), R))]))
         if self.shapes is not None:
@@ -495,9 +500,10 @@ class CorrectionData:
                 try:
                     u, v = np.linalg.solve(Z, np.column_stack([cvec, bvec])).T
                 except np.linalg.LinAlgError:
-                    raise ValueError(
-                        f"frf[{i}].omegas: {wk} rad/s is an undamped resonance of "
-                        "the model (K - w^2 M + i w C singular)"
+                    raise FieldError(
+                        f"frf[{i}].omegas",
+                        f"{wk} rad/s is an undamped resonance of "
+                        "the model (K - w^2 M + i w C singular)",
                     ) from None
                 h[k] = cvec @ v
                 dh[k] = (
@@ -567,9 +573,9 @@ def _damping_ratios(
     cand = np.nonzero(s_all.imag > 0)[0]
     pick = [int(cand[np.argmin(np.abs(np.abs(s_all[cand]) - w0[mode]))]) for mode in modes]
     if len(set(pick)) != len(pick):
-        raise ValueError(
-            "damping_modes: two modes pair with the same damped eigenvalue (close "
-            "modes or heavy damping)"
+        raise FieldError(
+            "damping_modes",
+            "two modes pair with the same damped eigenvalue (close modes or heavy damping)",
         )
     values, jac = (
         np.empty(len(pick)),
@@ -679,7 +685,7 @@ def differential_correction(
     DifferentialCorrection
     """
     if not isinstance(data, CorrectionData):
-        raise ValueError("data: must be a CorrectionData")
+        raise FieldError("data", "must be a CorrectionData")
     P, Q, R = model.n_stiffness, model.n_mass, model.n_damping
     S, T = data.n_output_gains, data.n_input_gains
     G = P + Q + R  # the gains' first column
@@ -709,7 +715,7 @@ def differential_correction(
     ):
         idx = np.asarray(fixed).ravel()
         if idx.size and (idx.dtype.kind not in "iu" or np.any(idx < 0) or np.any(idx >= count)):
-            raise ValueError(f"{name}: must be {kind} indices in [0, {count})")
+            raise FieldError(name, f"must be {kind} indices in [0, {count})")
         held += (offset + idx.astype(int)).tolist()
     free = np.setdiff1d(np.arange(x0.size), held)
     if free.size == 0:
@@ -722,14 +728,15 @@ def differential_correction(
     if prior_sigma is not None:
         s = require_numeric(prior_sigma, "prior_sigma")
         if s.ndim > 1 or (s.ndim == 1 and s.size != x0.size) or np.any(s <= 0):
-            raise ValueError(f"prior_sigma: must be a scalar or {x0.size} values, > 0")
+            raise FieldError("prior_sigma", f"must be a scalar or {x0.size} values, > 0")
         sd_prior = np.broadcast_to(s, x0.shape)[free]
     measured, sd = data.measured, data.sigma
     if sd_prior is None and measured.size < free.size:
-        raise ValueError(
-            f"data: {measured.size} measurements for {free.size} free parameters: "
+        raise FieldError(
+            "data",
+            f"{measured.size} measurements for {free.size} free parameters: "
             "more parameters than data; add measurements, hold parameters, or give "
-            "prior_sigma (0_p)"
+            "prior_sigma (0_p)",
         )
 
     def evaluate(x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -751,18 +758,19 @@ def differential_correction(
         scale = np.linalg.norm(rows, axis=0)
         if np.any(scale == 0):
             bad = [names[k] for k in free[scale == 0]]
-            raise ValueError(f"data: {bad} do not affect any measurement; hold them or add data")
+            raise FieldError("data", f"{bad} do not affect any measurement; hold them or add data")
         U, s, Vt = np.linalg.svd(rows / scale, full_matrices=False)
         if s[-1] < 1e-8 * s[0]:
             v = Vt[-1] / scale
             v /= np.abs(v).max()
             combo = " + ".join(f"{c:.2f} {names[k]}" for c, k in zip(v, free) if abs(c) > 0.05)
-            raise ValueError(
-                f"data: the parameters are not identifiable from these measurements "
+            raise FieldError(
+                "data",
+                "the parameters are not identifiable from these measurements "
                 f"(condition number {s[0] / max(s[-1], 1e-300):.2g}; changing "
                 f"{combo} leaves them unchanged); add FRF data (the absolute "
                 "scale; with gains free, items from calibrated sensors or inputs, "
-                "gain None), hold parameters, or give prior_sigma (0_p)"
+                "gain None), hold parameters, or give prior_sigma (0_p)",
             )
         step = (Vt.T @ ((U.T @ res) / s)) / scale
         if np.abs(step).max() < tol:

@@ -206,8 +206,8 @@ def markov_parameters(
                 blocks.append(markov_from_frf(m.abscissa, m.outputs, n_markov=n_markov)[0])
                 continue
             if m.inputs is None:
-                raise ValueError(
-                    f"measurement[{i}]: needs time histories with recorded inputs or FRFs"
+                raise FieldError(
+                    f"measurement[{i}]", "needs time histories with recorded inputs or FRFs"
                 )
             blocks.append(markov_parameters(u=m.inputs, y=m.outputs, n_markov=n_markov))
         if len({b.shape for b in blocks}) != 1:
@@ -417,6 +417,11 @@ def mac(phi: npt.ArrayLike, psi: npt.ArrayLike) -> FloatArray:
     """Modal assurance criterion matrix |φ_i^H ψ_j|² / (|φ_i|² |ψ_j|²); shapes as columns."""
     phi = np.atleast_2d(np.asarray(phi))
     psi = np.atleast_2d(np.asarray(psi))
+    for name, shapes in (("phi", phi), ("reference_shapes", psi)):
+        if shapes.ndim != 2 or shapes.size == 0 or not np.all(np.isfinite(shapes)):
+            raise FieldError(
+                name, f"must be a non-empty finite (outputs, modes) array, got shape {shapes.shape}"
+            )
     if phi.shape[0] != psi.shape[0]:
         raise FieldError(
             "reference_shapes",

@@ -32,7 +32,7 @@ from scipy import signal
 from scipy.linalg import block_diag
 
 from flexsat.identify.measurements import Channel
-from flexsat.input_checks import require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
@@ -84,15 +84,15 @@ class Excitation:
 
     def __post_init__(self) -> None:
         if self.kind not in _KINDS:
-            raise ValueError(f"kind: must be one of {_KINDS}, got {self.kind!r}")
+            raise FieldError("kind", f"must be one of {_KINDS}, got {self.kind!r}")
         if self.channel.kind not in ("force", "torque"):
-            raise ValueError(
-                f"channel: an excitation is a force or torque, got {self.channel.kind!r}"
+            raise FieldError(
+                "channel", f"an excitation is a force or torque, got {self.channel.kind!r}"
             )
         if self.kind == "harmonic" and self.frequency is None:
-            raise ValueError("frequency: a harmonic excitation needs its frequency, Hz")
+            raise FieldError("frequency", "a harmonic excitation needs its frequency, Hz")
         if self.kind == "history" and self.values is None:
-            raise ValueError("values: a history excitation needs its samples")
+            raise FieldError("values", "a history excitation needs its samples")
 
     def samples(
         self, t_fine: FloatArray, h: float, oversample: int, rng: np.random.Generator
@@ -119,8 +119,16 @@ class Excitation:
 
 def _load(load: str, node: int, direction: str, name: str = "") -> Channel:
     if load not in ("force", "torque"):
-        raise ValueError(f"load: must be 'force' or 'torque', got {load!r}")
+        raise FieldError("load", f"must be 'force' or 'torque', got {load!r}")
     return Channel.at(load, node, direction, name=name)
+
+
+def _amplitude(value: float) -> float:
+    """One finite amplitude (N or N m)."""
+    arr = require_finite(value, "amplitude")
+    if arr.ndim != 0:
+        raise FieldError("amplitude", f"must be one number, got shape {arr.shape}")
+    return float(arr)
 
 
 def impulse_hammer(
@@ -137,7 +145,7 @@ def impulse_hammer(
     """
     if width is not None:
         require_positive(width, "width")
-    return Excitation("impulse", _load(load, node, direction), float(amplitude), width=width)
+    return Excitation("impulse", _load(load, node, direction), _amplitude(amplitude), width=width)
 
 
 def harmonic_shaker(
@@ -146,7 +154,7 @@ def harmonic_shaker(
     """Sine force (or torque) of ``amplitude`` and ``frequency`` (Hz) from t = 0."""
     require_positive(frequency, "frequency")
     return Excitation(
-        "harmonic", _load(load, node, direction), float(amplitude), frequency=float(frequency)
+        "harmonic", _load(load, node, direction), _amplitude(amplitude), frequency=float(frequency)
     )
 
 
@@ -158,8 +166,8 @@ def random_force(node: int, direction: str, rms: float = 1.0, load: str = "force
 def torque_history(node: int, axis: str, values: npt.ArrayLike) -> Excitation:
     """User torque history (e.g. a reaction wheel), N m, one value per sample (zero after)."""
     vals = np.asarray(values, dtype=float)
-    if vals.ndim != 1 or not np.all(np.isfinite(vals)):
-        raise ValueError("values: must be a finite 1-D array of torque samples")
+    if vals.ndim != 1 or vals.size == 0 or not np.all(np.isfinite(vals)):
+        raise FieldError("values", "must be a finite, non-empty 1-D array of torque samples")
     return Excitation("history", _load("torque", node, axis), 1.0, values=vals)
 
 
@@ -179,7 +187,7 @@ def _input_vector(model: ModalModel, chan: Channel) -> FloatArray:
 
 def _output_rows(model: ModalModel, chan: Channel) -> FloatArray:
     if chan.kind not in ("displacement", "velocity", "acceleration", "rotation", "strain"):
-        raise ValueError(f"sensors: {chan.kind!r} is not a sensor kind")
+        raise FieldError("sensors", f"{chan.kind!r} is not a sensor kind")
     node, direction = _located(chan)
     if chan.kind == "rotation":
         return model.rotation_output(node, direction)

@@ -27,7 +27,7 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat.dynamics.plant import AXES, STRUCTURAL_KINDS, Channel
-from flexsat.input_checks import require_finite
+from flexsat.input_checks import FieldError, require_finite
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
@@ -78,8 +78,9 @@ def _channels(value: Iterable[object], field: str) -> tuple[Channel, ...]:
     channels = []
     for i, c in enumerate(items):
         if not isinstance(c, Channel) or c.kind is None:
-            raise ValueError(
-                f"{field}[{i}]: must be a Channel located on the structure (Channel.at), got {c!r}"
+            raise FieldError(
+                f"{field}[{i}]",
+                f"must be a Channel located on the structure (Channel.at), got {c!r}",
             )
         channels.append(c)
     return tuple(channels)
@@ -89,10 +90,10 @@ def _data(value: npt.ArrayLike, field: str, complex_ok: bool) -> FloatArray | Co
     try:
         arr = np.array(value, dtype=complex if complex_ok else float)
     except (TypeError, ValueError):
-        raise ValueError(f"{field}: must be a numeric array, got {type(value).__name__}") from None
+        raise FieldError(field, f"must be a numeric array, got {type(value).__name__}") from None
     if not np.all(np.isfinite(arr)):
         bad = int(np.sum(~np.isfinite(arr)))
-        raise ValueError(f"{field}: must be finite (no NaN or inf), got {bad} non-finite entries")
+        raise FieldError(field, f"must be finite (no NaN or inf), got {bad} non-finite entries")
     return arr
 
 
@@ -129,14 +130,14 @@ class Measurement:
 
     def __post_init__(self) -> None:
         if self.domain not in ("time", "frequency"):
-            raise ValueError(f"domain: must be 'time' or 'frequency', got {self.domain!r}")
+            raise FieldError("domain", f"must be 'time' or 'frequency', got {self.domain!r}")
         x = require_finite(self.abscissa, "abscissa")
         if x.ndim != 1 or x.size < 2 or np.any(np.diff(x) <= 0):
-            raise ValueError("abscissa: must be a 1-D ascending array of at least 2 values")
+            raise FieldError("abscissa", "must be a 1-D ascending array of at least 2 values")
         if self.domain == "time":
             dt = np.diff(x)
             if np.ptp(dt) > 1e-6 * dt.mean():
-                raise ValueError("abscissa: time samples must be uniformly spaced")
+                raise FieldError("abscissa", "time samples must be uniformly spaced")
         freq = self.domain == "frequency"
         outs = _data(self.outputs, "outputs", complex_ok=freq)
         ochan = _channels(self.output_channels, "output_channels")
@@ -145,26 +146,29 @@ class Measurement:
         if freq:
             want = (len(ochan), len(ichan), n)
             if outs.shape != want:
-                raise ValueError(
-                    f"outputs: FRFs must have shape (outputs, inputs, frequencies) "
-                    f"= {want}, got {outs.shape}"
+                raise FieldError(
+                    "outputs",
+                    "FRFs must have shape (outputs, inputs, frequencies) "
+                    f"= {want}, got {outs.shape}",
                 )
             if self.inputs is not None:
-                raise ValueError("inputs: must be None for FRF data (the FRF is per unit input)")
+                raise FieldError("inputs", "must be None for FRF data (the FRF is per unit input)")
             ins = None
         else:
             if outs.shape != (len(ochan), n):
-                raise ValueError(
-                    f"outputs: must have shape (output_channels, samples) = "
-                    f"{(len(ochan), n)}, got {outs.shape}"
+                raise FieldError(
+                    "outputs",
+                    "must have shape (output_channels, samples) = "
+                    f"{(len(ochan), n)}, got {outs.shape}",
                 )
             ins = None
             if self.inputs is not None:
                 ins = _data(self.inputs, "inputs", complex_ok=False)
                 if ins.shape != (len(ichan), n):
-                    raise ValueError(
-                        f"inputs: must have shape (input_channels, samples) = "
-                        f"{(len(ichan), n)}, got {ins.shape}"
+                    raise FieldError(
+                        "inputs",
+                        "must have shape (input_channels, samples) = "
+                        f"{(len(ichan), n)}, got {ins.shape}",
                     )
         object.__setattr__(self, "abscissa", x)
         object.__setattr__(self, "outputs", outs)

@@ -54,7 +54,7 @@ import numpy.typing as npt
 from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
-from flexsat.input_checks import require_finite, require_numeric, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_numeric, require_positive
 from flexsat.units import FloatArray
 
 __all__ = [
@@ -120,10 +120,11 @@ def _r3(a: float) -> FloatArray:
 
 def _check_euler(euler: str, field_name: str = "euler") -> str:
     if euler not in ("321", "123"):
-        raise ValueError(
-            f"{field_name}: must be '321' (Att. 8: C = R1(psi) R2(theta) R3(phi), "
+        raise FieldError(
+            field_name,
+            "must be '321' (Att. 8: C = R1(psi) R2(theta) R3(phi), "
             f"angles (phi, theta, psi)) or '123' (Att. 6: C = R3(t3) R2(t2) R1(t1), "
-            f"angles (t1, t2, t3)), got {euler!r}"
+            f"angles (t1, t2, t3)), got {euler!r}",
         )
     return euler
 
@@ -137,7 +138,7 @@ def rotation_matrix(angles: npt.ArrayLike, euler: str = "321") -> FloatArray:
     _check_euler(euler)
     a = require_finite(angles, "angles").reshape(-1)
     if a.size != 3:
-        raise ValueError(f"angles: must hold 3 Euler angles, got {a.size}")
+        raise FieldError("angles", f"must hold 3 Euler angles, got {a.size}")
     if euler == "321":
         return _r1(a[2]) @ _r2(a[1]) @ _r3(a[0])
     return _r3(a[2]) @ _r2(a[1]) @ _r1(a[0])
@@ -148,9 +149,9 @@ def euler_angles(matrix: npt.ArrayLike, euler: str = "321") -> FloatArray:
     _check_euler(euler)
     c = require_finite(matrix, "matrix")
     if c.shape != (3, 3):
-        raise ValueError(f"matrix: must be 3x3, got shape {c.shape}")
+        raise FieldError("matrix", f"must be 3x3, got shape {c.shape}")
     if not np.allclose(c @ c.T, np.eye(3), atol=1e-8) or np.linalg.det(c) <= 0:
-        raise ValueError("matrix: must be a proper rotation (orthonormal, det +1)")
+        raise FieldError("matrix", "must be a proper rotation (orthonormal, det +1)")
     if euler == "321":
         theta = -math.asin(float(np.clip(c[0, 2], -1.0, 1.0)))
         phi = math.atan2(c[0, 1], c[0, 0])
@@ -174,13 +175,14 @@ def look_at(
     pos = require_finite(position, "position").reshape(-1)
     z = require_finite(target, "target").reshape(-1) - pos
     if pos.size != 3 or z.size != 3 or np.linalg.norm(z) == 0:
-        raise ValueError("target: position and target must be distinct 3-vectors")
+        raise FieldError("target", "position and target must be distinct 3-vectors")
     z = z / np.linalg.norm(z) * (1 if focal_sign > 0 else -1)
     x = np.cross([0.0, 1.0, 0.0], z)
     if np.linalg.norm(x) < 1e-9:
-        raise ValueError(
-            "target: the line of sight is along the world Y axis (the image x axis "
-            "is taken normal to Y); aim the camera off the vertical"
+        raise FieldError(
+            "target",
+            "the line of sight is along the world Y axis (the image x axis "
+            "is taken normal to Y); aim the camera off the vertical",
         )
     x /= np.linalg.norm(x)
     return euler_angles(np.vstack([x, np.cross(z, x), z]), euler)
@@ -212,26 +214,26 @@ class Camera:
     def __post_init__(self) -> None:
         pos = require_finite(self.position, "position").reshape(-1)
         if pos.size != 3:
-            raise ValueError(f"position: must hold 3 coordinates, got {pos.size}")
+            raise FieldError("position", f"must hold 3 coordinates, got {pos.size}")
         ang = require_finite(self.angles, "angles").reshape(-1)
         if ang.size != 3:
-            raise ValueError(f"angles: must hold 3 Euler angles, got {ang.size}")
+            raise FieldError("angles", f"must hold 3 Euler angles, got {ang.size}")
         _check_euler(self.euler)
         if self.focal_sign not in (1, -1):
-            raise ValueError(
-                f"focal_sign: must be +1 (Att. 6, '+f') or -1 (Att. 8, '-f'), "
-                f"got {self.focal_sign!r}"
+            raise FieldError(
+                "focal_sign",
+                f"must be +1 (Att. 6, '+f') or -1 (Att. 8, '-f'), got {self.focal_sign!r}",
             )
         if self.distortion not in ("brown", "printed"):
-            raise ValueError(f"distortion: must be 'brown' or 'printed', got {self.distortion!r}")
+            raise FieldError("distortion", f"must be 'brown' or 'printed', got {self.distortion!r}")
         if self.f is not None:
             if self.fx is not None or self.fy is not None:
-                raise ValueError("f: give either f (square pixels) or fx and fy, not both")
+                raise FieldError("f", "give either f (square pixels) or fx and fy, not both")
             f = float(require_positive(self.f, "f"))
             fx = fy = f
         else:
             if self.fx is None or self.fy is None:
-                raise ValueError("f: a focal length is required (f, or both fx and fy)")
+                raise FieldError("f", "a focal length is required (f, or both fx and fy)")
             fx = float(require_positive(self.fx, "fx"))
             fy = float(require_positive(self.fy, "fy"))
         object.__setattr__(self, "position", tuple(float(v) for v in pos))
@@ -305,21 +307,21 @@ def _project_vec(
 def _check_points(points: npt.ArrayLike, field_name: str = "points") -> FloatArray:
     p = require_numeric(points, field_name)
     if p.ndim == 0 or p.shape[-1] != 3:
-        raise ValueError(f"{field_name}: last axis must hold (x, y, z), got shape {p.shape}")
+        raise FieldError(field_name, f"last axis must hold (x, y, z), got shape {p.shape}")
     return p
 
 
 def project(camera: Camera, points: npt.ArrayLike) -> FloatArray:
     """Image coordinates ``(u, v)`` of object points, shape ``(..., 3) -> (..., 2)``."""
     if not isinstance(camera, Camera):
-        raise ValueError(f"camera: must be a Camera, got {type(camera).__name__}")
+        raise FieldError("camera", f"must be a Camera, got {type(camera).__name__}")
     p = _check_points(points)
     flat = p.reshape(-1, 3)
     uv, depth = _project_vec(
         camera.vector(), camera.euler, camera.focal_sign, camera.distortion, flat
     )
     if np.any(np.abs(depth) < 1e-12):
-        raise ValueError("points: a point lies in the camera's focal plane (zero depth)")
+        raise FieldError("points", "a point lies in the camera's focal plane (zero depth)")
     return uv.reshape(p.shape[:-1] + (2,))
 
 
@@ -348,11 +350,11 @@ def simulate_centroids(
     p = _check_points(points)
     size = require_positive(pixel_size, "pixel_size").reshape(-1)
     if size.size not in (1, 2):
-        raise ValueError(f"pixel_size: must be a scalar or (sx, sy), got {size.size} values")
+        raise FieldError("pixel_size", f"must be a scalar or (sx, sy), got {size.size} values")
     size = np.broadcast_to(size, (2,))
     noise = float(require_finite(noise_px, "noise_px"))
     if noise < 0:
-        raise ValueError(f"noise_px: must be >= 0, got {noise_px!r}")
+        raise FieldError("noise_px", f"must be >= 0, got {noise_px!r}")
     rng = np.random.default_rng(seed)
     out = np.stack([project(cam, p) for cam in cams])
     if noise > 0:
@@ -362,7 +364,7 @@ def simulate_centroids(
     if field_px is not None:
         fw = require_positive(field_px, "field_px").reshape(-1)
         if fw.size != 2:
-            raise ValueError(f"field_px: must be (width, height) in pixels, got {field_px!r}")
+            raise FieldError("field_px", f"must be (width, height) in pixels, got {field_px!r}")
         half = 0.5 * fw * size
         outside = np.any(np.abs(out) > half, axis=-1)
         out[outside] = np.nan
@@ -379,10 +381,10 @@ def _check_cameras(
         cameras = [cameras]
     cams = list(cameras)
     if len(cams) < minimum:
-        raise ValueError(f"{field_name}: at least {minimum} cameras are needed, got {len(cams)}")
+        raise FieldError(field_name, f"at least {minimum} cameras are needed, got {len(cams)}")
     for j, cam in enumerate(cams):
         if not isinstance(cam, Camera):
-            raise ValueError(f"{field_name}[{j}]: must be a Camera, got {type(cam).__name__}")
+            raise FieldError(f"{field_name}[{j}]", f"must be a Camera, got {type(cam).__name__}")
     return cams
 
 
@@ -397,7 +399,7 @@ def calibration_counts(
     """
     m, p = int(n_cameras), int(params_per_camera)
     if 2 * m - 3 <= 0:
-        raise ValueError(f"n_cameras: calibration needs at least 2 cameras, got {n_cameras}")
+        raise FieldError("n_cameras", f"calibration needs at least 2 cameras, got {n_cameras}")
     n_min = max(3, math.ceil((p * m - 6) / (2 * m - 3)))
     return {
         "equations": 2 * m * int(n_points),
@@ -451,13 +453,13 @@ def _free_indices(free: Sequence[str]) -> tuple[str, ...]:
     free = tuple(free)
     for name in free:
         if name not in _FREE_NAMES:
-            raise ValueError(
-                f"free: unknown camera parameter {name!r}; choose from {sorted(_FREE_NAMES)}"
+            raise FieldError(
+                "free", f"unknown camera parameter {name!r}; choose from {sorted(_FREE_NAMES)}"
             )
     if len(set(free)) != len(free):
-        raise ValueError(f"free: repeated parameter names in {free}")
+        raise FieldError("free", f"repeated parameter names in {free}")
     if "f" in free and ("fx" in free or "fy" in free):
-        raise ValueError("free: 'f' ties fx = fy; do not combine it with 'fx' or 'fy'")
+        raise FieldError("free", "'f' ties fx = fy; do not combine it with 'fx' or 'fy'")
     return free
 
 
@@ -523,12 +525,13 @@ def calibrate(
     obs = _observations(observations)
     targets = require_numeric(target_guess, "target_guess")
     if targets.ndim != 2 or targets.shape[1] != 3:
-        raise ValueError(f"target_guess: must have shape (N, 3), got {targets.shape}")
+        raise FieldError("target_guess", f"must have shape (N, 3), got {targets.shape}")
     n_pts = targets.shape[0]
     if obs.shape != (m_cam, n_pts, 2):
-        raise ValueError(
-            f"observations: must have shape (M, N, 2) = ({m_cam}, {n_pts}, 2) "
-            f"for {m_cam} cameras and {n_pts} targets, got {obs.shape}"
+        raise FieldError(
+            "observations",
+            f"must have shape (M, N, 2) = ({m_cam}, {n_pts}, 2) "
+            f"for {m_cam} cameras and {n_pts} targets, got {obs.shape}",
         )
     free = _free_indices(free)
     sig = float(require_positive(sigma, "sigma"))
@@ -537,16 +540,18 @@ def calibrate(
 
     counts = calibration_counts(n_pts, m_cam, len(free))
     if n_pts < counts["min_points"]:
-        raise ValueError(
-            f"target_guess: {n_pts} targets are too few: {m_cam} cameras with {len(free)} free "
+        raise FieldError(
+            "target_guess",
+            f"{n_pts} targets are too few: {m_cam} cameras with {len(free)} free "
             f"parameters each need N >= {counts['min_points']} ({counts['equations']} equations "
             f"2MN < {counts['unknowns']} unknowns 3N - 6 + {len(free)}M; Att. 8: 4N vs 3N + 12, "
-            f"N >= 12)"
+            f"N >= 12)",
         )
     if _collinear(targets):
-        raise ValueError(
-            "target_guess: the targets are collinear; calibration needs targets "
-            "spread in at least a plane (better in depth too)"
+        raise FieldError(
+            "target_guess",
+            "the targets are collinear; calibration needs targets "
+            "spread in at least a plane (better in depth too)",
         )
 
     if target_sigma is not None:
@@ -556,17 +561,19 @@ def calibrate(
                 tsig.reshape(tsig.shape + (1,) * (tsig.ndim == 1)), (n_pts, 3)
             ).copy()
         except ValueError:
-            raise ValueError(
-                f"target_sigma: must be a scalar, (N,) or (N, 3) with N = {n_pts}, "
-                f"got shape {np.shape(target_sigma)}"
+            raise FieldError(
+                "target_sigma",
+                f"must be a scalar, (N,) or (N, 3) with N = {n_pts}, "
+                f"got shape {np.shape(target_sigma)}",
             ) from None
     else:
         tsig = None
     fixed_mask = np.zeros((n_pts, 3), dtype=bool)
     if datum is None and tsig is None:
-        raise ValueError(
-            "datum: required (i0, i1, i2) unless target_sigma gives a-priori "
-            "target positions that fix the frame"
+        raise FieldError(
+            "datum",
+            "required (i0, i1, i2) unless target_sigma gives a-priori "
+            "target positions that fix the frame",
         )
     if datum is not None:
         i0, i1, i2 = _check_datum(datum, targets, n_pts)
@@ -576,9 +583,10 @@ def calibrate(
 
     # scale
     if scale is None and tsig is None:
-        raise ValueError(
-            "scale: a known distance (i, j, distance) is required; the datum "
-            "leaves the overall scale undetermined"
+        raise FieldError(
+            "scale",
+            "a known distance (i, j, distance) is required; the datum "
+            "leaves the overall scale undetermined",
         )
     if scale is not None:
         si, sj, sd, ssig = _check_scale(scale, n_pts)
@@ -696,17 +704,17 @@ def calibrate(
 def _observations(observations: npt.ArrayLike) -> FloatArray:
     """Image centroids; a target a camera does not see is NaN in both coordinates."""
     if isinstance(observations, (str, bytes)):
-        raise ValueError("observations: must be a numeric (M, N, 2) array")
+        raise FieldError("observations", "must be a numeric (M, N, 2) array")
     try:
         obs = np.array(observations, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError("observations: must be a numeric (M, N, 2) array") from None
+        raise FieldError("observations", "must be a numeric (M, N, 2) array") from None
     if obs.ndim != 3 or obs.shape[-1] != 2:
-        raise ValueError(f"observations: must have shape (M, N, 2), got {obs.shape}")
+        raise FieldError("observations", f"must have shape (M, N, 2), got {obs.shape}")
     if np.any(np.isinf(obs)):
-        raise ValueError("observations: must not contain inf (NaN marks an unseen target)")
+        raise FieldError("observations", "must not contain inf (NaN marks an unseen target)")
     if np.any(np.isnan(obs[..., 0]) != np.isnan(obs[..., 1])):
-        raise ValueError("observations: an unseen target must be NaN in both u and v")
+        raise FieldError("observations", "an unseen target must be NaN in both u and v")
     return obs
 
 
@@ -715,17 +723,19 @@ def _check_visibility(seen: npt.NDArray[np.bool_], priors: bool, p_cam: int) -> 
     with a-priori target positions)."""
     for j, row in enumerate(seen):
         if 2 * row.sum() < p_cam:
-            raise ValueError(
-                f"observations: camera {j} sees {int(row.sum())} targets, too few "
-                f"for its {p_cam} free parameters"
+            raise FieldError(
+                "observations",
+                f"camera {j} sees {int(row.sum())} targets, too few "
+                f"for its {p_cam} free parameters",
             )
     need = 1 if priors else 2
     blind = np.flatnonzero(seen.sum(axis=0) < need)
     if blind.size:
-        raise ValueError(
-            f"observations: targets {blind.tolist()} are seen by fewer than {need} "
+        raise FieldError(
+            "observations",
+            f"targets {blind.tolist()} are seen by fewer than {need} "
             "camera(s); their positions are undetermined (drop them or give "
-            "target_sigma)"
+            "target_sigma)",
         )
 
 
@@ -741,15 +751,15 @@ def _camera_prior(
     per_camera = [camera_sigma] * m_cam if isinstance(camera_sigma, dict) else list(camera_sigma)
     mappings = [d for d in per_camera if isinstance(d, dict)]
     if len(per_camera) != m_cam or len(mappings) != len(per_camera):
-        raise ValueError(
-            f"camera_sigma: must be a mapping {{parameter: sigma}} or one mapping "
-            f"per camera ({m_cam})"
+        raise FieldError(
+            "camera_sigma",
+            f"must be a mapping {{parameter: sigma}} or one mapping per camera ({m_cam})",
         )
     for j, sigmas in enumerate(mappings):
         for name, value in sigmas.items():
             if name not in free:
-                raise ValueError(
-                    f"camera_sigma: {name!r} is not a free parameter ({', '.join(free)})"
+                raise FieldError(
+                    "camera_sigma", f"{name!r} is not a free parameter ({', '.join(free)})"
                 )
             out[j * len(free) + free.index(name)] = float(require_positive(value, "camera_sigma"))
     return out
@@ -759,12 +769,12 @@ def _check_datum(datum: Sequence[int], targets: FloatArray, n_pts: int) -> tuple
     try:
         i0, i1, i2 = (int(v) for v in datum)
     except (TypeError, ValueError):
-        raise ValueError(
-            f"datum: must be three target indices (i0, i1, i2), got {datum!r}"
+        raise FieldError(
+            "datum", f"must be three target indices (i0, i1, i2), got {datum!r}"
         ) from None
     if len({i0, i1, i2}) != 3 or not all(0 <= i < n_pts for i in (i0, i1, i2)):
-        raise ValueError(
-            f"datum: must be three distinct target indices in [0, {n_pts}), got {datum!r}"
+        raise FieldError(
+            "datum", f"must be three distinct target indices in [0, {n_pts}), got {datum!r}"
         )
     scl = 1e-6 * max(1.0, float(np.max(np.abs(targets))))
     if (
@@ -772,14 +782,16 @@ def _check_datum(datum: Sequence[int], targets: FloatArray, n_pts: int) -> tuple
         or np.any(np.abs(targets[i1, 1:]) > scl)
         or abs(targets[i2, 2]) > scl
     ):
-        raise ValueError(
-            f"target_guess: must be in the datum frame: target {i0} at the origin, "
-            f"target {i1} with y = z = 0, target {i2} with z = 0"
+        raise FieldError(
+            "target_guess",
+            f"must be in the datum frame: target {i0} at the origin, "
+            f"target {i1} with y = z = 0, target {i2} with z = 0",
         )
     if _collinear(targets[[i0, i1, i2]]) or abs(targets[i1, 0]) <= scl:
-        raise ValueError(
-            f"datum: targets {i0}, {i1}, {i2} are collinear (or coincide) and "
-            f"cannot define the X axis and the XY plane"
+        raise FieldError(
+            "datum",
+            f"targets {i0}, {i1}, {i2} are collinear (or coincide) and "
+            f"cannot define the X axis and the XY plane",
         )
     return i0, i1, i2
 
@@ -790,9 +802,11 @@ def _check_scale(scale: Sequence[float], n_pts: int) -> tuple[int, int, float, f
         sd = float(require_positive(scale[2], "scale distance"))
         ssig = float(require_positive(scale[3], "scale sigma")) if len(scale) > 3 else 1e-6 * sd
     except (TypeError, IndexError):
-        raise ValueError(f"scale: must be (i, j, distance[, sigma]), got {scale!r}") from None
+        raise FieldError("scale", f"must be (i, j, distance[, sigma]), got {scale!r}") from None
     if si == sj or not (0 <= si < n_pts and 0 <= sj < n_pts):
-        raise ValueError(f"scale: needs two distinct target indices in [0, {n_pts}), got {scale!r}")
+        raise FieldError(
+            "scale", f"needs two distinct target indices in [0, {n_pts}), got {scale!r}"
+        )
     return si, sj, sd, ssig
 
 
@@ -800,16 +814,17 @@ def _inverse_normal(jac: FloatArray, field_name: str) -> FloatArray:
     """``(J^T J)^-1`` with column equilibration; a clear error when the geometry is singular."""
     norms = np.linalg.norm(jac, axis=0)
     if np.any(norms == 0):
-        raise ValueError(
-            f"{field_name}: some unknowns do not affect any observation (singular geometry)"
+        raise FieldError(
+            field_name, "some unknowns do not affect any observation (singular geometry)"
         )
     js = jac / norms
     s = np.linalg.svd(js, compute_uv=False)
     if s[-1] <= 1e-10 * s[0]:
-        raise ValueError(
-            f"{field_name}: the normal matrix is singular (condition "
+        raise FieldError(
+            field_name,
+            "the normal matrix is singular (condition "
             f"{s[0] / max(s[-1], 1e-300):.3g}); the geometry does not determine "
-            f"the unknowns (collinear targets or too few views?)"
+            f"the unknowns (collinear targets or too few views?)",
         )
     inv = np.linalg.inv(js.T @ js)
     return inv / np.outer(norms, norms)
@@ -845,26 +860,28 @@ def _camera_factor(camera_covariance: CalibrationResult | npt.ArrayLike, m_cam: 
     n = len(CAMERA_PARAMETERS) * m_cam
     if isinstance(camera_covariance, CalibrationResult):
         if len(camera_covariance.cameras) != m_cam:
-            raise ValueError(
-                f"camera_covariance: the calibration has "
-                f"{len(camera_covariance.cameras)} cameras, triangulate got {m_cam}"
+            raise FieldError(
+                "camera_covariance",
+                "the calibration has "
+                f"{len(camera_covariance.cameras)} cameras, triangulate got {m_cam}",
             )
         cov = camera_covariance.full_camera_covariance()
     else:
         cov = require_numeric(camera_covariance, "camera_covariance")
         if cov.shape != (n, n):
-            raise ValueError(
-                f"camera_covariance: must be a CalibrationResult or a ({n}, {n}) "
+            raise FieldError(
+                "camera_covariance",
+                f"must be a CalibrationResult or a ({n}, {n}) "
                 f"matrix over CAMERA_PARAMETERS of each of the {m_cam} cameras, got "
-                f"shape {cov.shape}"
+                f"shape {cov.shape}",
             )
     scale = float(np.max(np.abs(cov))) if cov.size else 0.0
     if not np.allclose(cov, cov.T, rtol=0.0, atol=1e-10 * scale):
-        raise ValueError("camera_covariance: must be symmetric")
+        raise FieldError("camera_covariance", "must be symmetric")
     if np.any(np.diag(cov) < -1e-12 * scale):
-        raise ValueError(
-            f"camera_covariance: must be positive semi-definite (diagonal entry "
-            f"{np.min(np.diag(cov)):.3g})"
+        raise FieldError(
+            "camera_covariance",
+            f"must be positive semi-definite (diagonal entry {np.min(np.diag(cov)):.3g})",
         )
     std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     live = np.flatnonzero(std > 0)
@@ -872,9 +889,9 @@ def _camera_factor(camera_covariance: CalibrationResult | npt.ArrayLike, m_cam: 
     lam, vec = np.linalg.eigh(corr)
     # roundoff leaves eigenvalues of order 1e-15 n of either sign on a singular correlation
     if lam.size and lam[0] < -1e-9 * max(lam[-1], 1.0):
-        raise ValueError(
-            f"camera_covariance: must be positive semi-definite (correlation "
-            f"eigenvalue {lam[0]:.3g})"
+        raise FieldError(
+            "camera_covariance",
+            f"must be positive semi-definite (correlation eigenvalue {lam[0]:.3g})",
         )
     keep = lam > 1e-12 * max(lam[-1], 1.0) if lam.size else np.zeros(0, bool)
     factor = np.zeros((n, int(np.sum(keep))))
@@ -954,12 +971,12 @@ def triangulate(
     m_cam = len(cams)
     uv = require_numeric(centroids, "centroids")
     if uv.ndim < 2 or uv.shape[0] != m_cam or uv.shape[-1] != 2:
-        raise ValueError(
-            f"centroids: must have shape (M, ..., 2) with M = {m_cam} cameras, got {uv.shape}"
+        raise FieldError(
+            "centroids", f"must have shape (M, ..., 2) with M = {m_cam} cameras, got {uv.shape}"
         )
     sig = require_positive(pixel_sigma, "pixel_sigma").reshape(-1)
     if sig.size not in (1, m_cam):
-        raise ValueError(f"pixel_sigma: must be a scalar or one value per camera, got {sig.size}")
+        raise FieldError("pixel_sigma", f"must be a scalar or one value per camera, got {sig.size}")
     factor = None if camera_covariance is None else _camera_factor(camera_covariance, m_cam)
     var = np.repeat(np.broadcast_to(sig, (m_cam,)) ** 2, 2)  # (2M,)
     lead = uv.shape[1:-1]
@@ -1017,9 +1034,10 @@ def triangulate(
     normal = np.einsum("kra,krb->kab", weighted(pts, jac), jac)
     cond = np.linalg.cond(normal)
     if np.any(cond > 1e14):
-        raise ValueError(
-            "centroids: the rays are (nearly) parallel for some points; the "
-            "triangulation geometry is singular"
+        raise FieldError(
+            "centroids",
+            "the rays are (nearly) parallel for some points; the "
+            "triangulation geometry is singular",
         )
     cov = np.linalg.inv(normal)
     return pts.reshape(lead + (3,)), cov.reshape(lead + (3, 3))

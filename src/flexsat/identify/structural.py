@@ -16,7 +16,8 @@ Undamped identification (:func:`identify_undamped`, Att. 7 Eqs. 1–9)
        factors are written through the mass, ``alpha_r = 1 / psibar_r^T M(q) psibar_r`` (Eq.
        7a, i = j), and Eq. 5 is fitted in ``q`` by Gauss-Newton, together with the optional
        rigid-body term ``a1/w^2`` and residual ``a2``; the current model's prediction of the
-       unmeasured modes is subtracted from the FRF first (the iteration of L2845).
+       unmeasured modes is subtracted from the FRF first (the iteration of Att. 7
+       "Identification of Undamped Structures").
     3. Stiffness scalings from Eq. 9b, ``psibar_i^T K psibar_j = delta_ij wbar_j^2/alpha_j``,
        linear least squares; with the current model's shapes the diagonal rows are exactly the
        Gauss-Newton step on the eigenvalues, since ``d(lambda_i)/dp_k = phi_i^T K_k phi_i`` and
@@ -72,7 +73,7 @@ import numpy.typing as npt
 import scipy.sparse as sp
 
 from flexsat.analysis.sensitivity import modal_derivatives
-from flexsat.input_checks import require_count, require_finite, require_numeric
+from flexsat.input_checks import FieldError, require_count, require_finite, require_numeric
 from flexsat.structures.modal_solve import Matrix
 from flexsat.units import FloatArray
 
@@ -109,11 +110,11 @@ def _array_like(A: Matrix) -> npt.ArrayLike:
 def _dense(A: Matrix, field_name: str, n: int | None = None) -> FloatArray:
     A = require_numeric(_array_like(A), field_name, "matrix")
     if A.ndim != 2 or A.shape[0] != A.shape[1]:
-        raise ValueError(f"{field_name}: must be a square matrix, got shape {A.shape}")
+        raise FieldError(field_name, f"must be a square matrix, got shape {A.shape}")
     if n is not None and A.shape[0] != n:
-        raise ValueError(f"{field_name}: must be {n}x{n} like the other blocks, got {A.shape}")
+        raise FieldError(field_name, f"must be {n}x{n} like the other blocks, got {A.shape}")
     if np.abs(A - A.T).max() > 1e-9 * max(np.abs(A).max(), 1e-300):
-        raise ValueError(f"{field_name}: must be symmetric")
+        raise FieldError(field_name, "must be symmetric")
     return (A + A.T) / 2.0
 
 
@@ -121,7 +122,7 @@ def _blocks(blocks: Sequence[Matrix] | None, name: str, n: int) -> list[FloatArr
     if blocks is None:
         return []
     if sp.issparse(blocks) or (isinstance(blocks, np.ndarray) and blocks.ndim == 2):
-        raise ValueError(f"{name}: must be a list of matrices (one per substructure)")
+        raise FieldError(name, "must be a list of matrices (one per substructure)")
     return [_dense(B, f"{name}[{k}]", n) for k, B in enumerate(blocks)]
 
 
@@ -151,14 +152,14 @@ class SubstructureModel:
 
     def __post_init__(self) -> None:
         if not self.K_blocks and self.K0 is None:
-            raise ValueError("K_blocks: give at least one stiffness block (or K0)")
+            raise FieldError("K_blocks", "give at least one stiffness block (or K0)")
         first: Matrix = self.K_blocks[0] if self.K_blocks else self.K0
         n = np.shape(first)[0]
         object.__setattr__(self, "K_blocks", _blocks(self.K_blocks, "K_blocks", n))
         object.__setattr__(self, "M_blocks", _blocks(self.M_blocks, "M_blocks", n))
         object.__setattr__(self, "C_blocks", _blocks(self.C_blocks, "C_blocks", n))
         if not self.M_blocks and self.M0 is None:
-            raise ValueError("M_blocks: give at least one mass block (or M0)")
+            raise FieldError("M_blocks", "give at least one mass block (or M0)")
         for name in ("K0", "M0", "C0"):
             value = getattr(self, name)
             object.__setattr__(
@@ -187,7 +188,7 @@ class SubstructureModel:
             return np.ones(count)
         v = require_numeric(values, name, "vector").ravel()
         if v.shape != (count,):
-            raise ValueError(f"{name}: must have {count} entries (one per block), got {v.size}")
+            raise FieldError(name, f"must have {count} entries (one per block), got {v.size}")
         return v
 
     def K(self, p: npt.ArrayLike | None = None) -> FloatArray:
@@ -340,13 +341,13 @@ def modal_energy_distribution(
     if omegas is not None:
         w = require_finite(omegas, "omegas", "rad/s").ravel()
         if w.shape != (phi.shape[1],):
-            raise ValueError(f"omegas: must have {phi.shape[1]} entries (one per mode)")
+            raise FieldError("omegas", f"must have {phi.shape[1]} entries (one per mode)")
         pe = pe / np.where(w > 0, w**2, 1.0)[:, None]
 
     def frac(e: FloatArray, what: str) -> FloatArray:
         tot = e.sum(axis=1, keepdims=True)
         if np.any(np.abs(tot) <= 0):
-            raise ValueError(f"shapes: a mode has no {what} energy in the given blocks")
+            raise FieldError("shapes", f"a mode has no {what} energy in the given blocks")
         return e / tot
 
     return dict(kinetic=frac(ke, "kinetic"), strain=frac(pe, "strain"))
@@ -365,16 +366,20 @@ def _check_frf(frf: FrfElement | Sequence[FrfElement] | None, n: int) -> list[Fr
         try:
             j, k, w, h = item
         except (TypeError, ValueError):
-            raise ValueError(f"frf[{i}]: must be (output_dof, input_dof, omegas, values)") from None
+            raise FieldError(
+                f"frf[{i}]", "must be (output_dof, input_dof, omegas, values)"
+            ) from None
         for name, d in (("output_dof", j), ("input_dof", k)):
             if isinstance(d, bool) or not isinstance(d, (int, np.integer)) or not 0 <= d < n:
-                raise ValueError(f"frf[{i}].{name}: must be a dof index in [0, {n}), got {d!r}")
+                raise FieldError(f"frf[{i}].{name}", f"must be a dof index in [0, {n}), got {d!r}")
         w = require_finite(w, f"frf[{i}].omegas", "rad/s").ravel()
         h = require_numeric(h, f"frf[{i}].values", "vector").ravel()
         if w.shape != h.shape or w.size == 0:
-            raise ValueError(f"frf[{i}]: omegas and values must be equal-length non-empty vectors")
+            raise FieldError(
+                f"frf[{i}]", "omegas and values must be equal-length non-empty vectors"
+            )
         if np.any(w <= 0):
-            raise ValueError(f"frf[{i}].omegas: must be > 0 rad/s")
+            raise FieldError(f"frf[{i}].omegas", "must be > 0 rad/s")
         out.append((int(j), int(k), w, h))
     return out
 
@@ -409,7 +414,7 @@ def fit_modal_normalization(
     w_r = require_finite(omegas, "omegas", "rad/s").ravel()
     items = _check_frf(frf, psi.shape[0])
     if not items:
-        raise ValueError("frf: at least one FRF element is needed")
+        raise FieldError("frf", "at least one FRF element is needed")
     m, nf = psi.shape[1], len(items)
     n_extra = (int(rigid_body) + int(residual)) * nf
     rows, rhs = [], []
@@ -419,7 +424,7 @@ def fit_modal_normalization(
             h = h - known_part[i]
         denom = w_r[None, :] ** 2 - w[:, None] ** 2
         if np.any(np.abs(denom) < 1e-9 * w_r.max() ** 2):
-            raise ValueError(f"frf[{i}].omegas: a point coincides with a natural frequency")
+            raise FieldError(f"frf[{i}].omegas", "a point coincides with a natural frequency")
         L = psi[j] * psi[k] / denom
         extra = np.zeros((w.size, n_extra))
         col = 0
@@ -434,18 +439,20 @@ def fit_modal_normalization(
         rhs.append(h * wgt)
     A, b = np.vstack(rows), np.concatenate(rhs)
     if A.shape[0] < A.shape[1]:
-        raise ValueError(
-            f"frf: {A.shape[0]} FRF points for {A.shape[1]} unknowns "
-            "(normalisation factors and rigid/residual terms): need more points"
+        raise FieldError(
+            "frf",
+            f"{A.shape[0]} FRF points for {A.shape[1]} unknowns "
+            "(normalisation factors and rigid/residual terms): need more points",
         )
     scale = np.abs(A).max(axis=0)
     scale[scale == 0] = 1.0
     x = np.linalg.lstsq(A / scale, b, rcond=None)[0] / scale
     alpha = x[:m]
     if np.any(alpha <= 0):
-        raise ValueError(
-            "frf: fitted modal normalisation factors must be > 0 (FRF does not "
-            f"observe a measured mode, or shapes inconsistent): {alpha}"
+        raise FieldError(
+            "frf",
+            "fitted modal normalisation factors must be > 0 (FRF does not "
+            f"observe a measured mode, or shapes inconsistent): {alpha}",
         )
     a1 = x[m : m + nf] if rigid_body else np.zeros(nf)
     a2 = x[m + (nf if rigid_body else 0) :] if residual else np.zeros(nf)
@@ -508,24 +515,27 @@ def _solve_ls(
     A: FloatArray, b: FloatArray, weights: FloatArray, name: str
 ) -> tuple[FloatArray, FloatArray, FloatArray, int]:
     if A.shape[0] < A.shape[1]:
-        raise ValueError(
-            f"{name}: {A.shape[0]} equations for {A.shape[1]} parameters: more "
-            "parameters than data (measure more modes, add FRFs, or fix parameters)"
+        raise FieldError(
+            name,
+            f"{A.shape[0]} equations for {A.shape[1]} parameters: more "
+            "parameters than data (measure more modes, add FRFs, or fix parameters)",
         )
     Aw, bw = A * weights[:, None], b * weights
     scale = np.linalg.norm(Aw, axis=0)
     if np.any(scale == 0):
         bad = np.nonzero(scale == 0)[0].tolist()
-        raise ValueError(
-            f"{name}: parameters {bad} do not affect the measured modes (no modal "
-            "energy; see modal_energy_distribution): fix them"
+        raise FieldError(
+            name,
+            f"parameters {bad} do not affect the measured modes (no modal "
+            "energy; see modal_energy_distribution): fix them",
         )
     As = Aw / scale
     s = np.linalg.svd(As, compute_uv=False)
     if s[-1] < 1e-10 * s[0]:
-        raise ValueError(
-            f"{name}: parameters not identifiable from the data (condition number "
-            f"{s[0] / max(s[-1], 1e-300):.3g}); fix some or add data"
+        raise FieldError(
+            name,
+            "parameters not identifiable from the data (condition number "
+            f"{s[0] / max(s[-1], 1e-300):.3g}); fix some or add data",
         )
     x = np.linalg.lstsq(As, bw, rcond=None)[0]
     res = bw - As @ x
@@ -569,7 +579,8 @@ def _eq5(
 
     ``known + sum_r psibar_jr psibar_kr / (mu_r (wbar_r^2 - w^2))`` where ``known = h_model -
     sum_r phi_jr phi_kr / (lambda_r - w^2)`` is the current model's prediction of the unmeasured
-    modes (the iteration of L2845), ``mu_r = psibar_r^T M(q) psibar_r = 1/alpha_r`` (Eq. 7a,
+    modes (the iteration of Att. 7 "Identification of Undamped Structures"),
+    ``mu_r = psibar_r^T M(q) psibar_r = 1/alpha_r`` (Eq. 7a,
     i = j) and ``psibar`` the measured shapes (fixed) or the model's ``phi`` (``mu = 1``).
     The gradient with respect to the free ``(p, q)`` is exact: model FRF gradient (see
     :func:`_model_frf`) and the measured modes' ``d lambda``, ``d phi`` by Nelson's method.
@@ -592,7 +603,7 @@ def _eq5(
     for i, ((j, k, w, _), (hm, hp, hq)) in enumerate(zip(items, _model_frf(K, M, items, Kb, Mb))):
         d_meas = wbar[None, :] ** 2 - w[:, None] ** 2
         if np.any(np.abs(d_meas) < 1e-9 * wbar.max() ** 2):
-            raise ValueError(f"frf[{i}].omegas: a point coincides with a natural frequency")
+            raise FieldError(f"frf[{i}].omegas", "a point coincides with a natural frequency")
         d_model = lam[None, :] - w[:, None] ** 2
         pp = phi[j] * phi[k]
         dpp = dphi[:, j, :] * phi[k] + phi[j] * dphi[:, k, :]
@@ -760,23 +771,24 @@ def identify_undamped(
     P, Q, n = model.n_stiffness, model.n_mass, model.n_dofs
     wbar = require_finite(measured_frequencies, "measured_frequencies", "rad/s").ravel()
     if wbar.size == 0 or np.any(wbar <= 0):
-        raise ValueError("measured_frequencies: must be a non-empty vector of values > 0 rad/s")
+        raise FieldError("measured_frequencies", "must be a non-empty vector of values > 0 rad/s")
     m = wbar.size
     if m > n:
-        raise ValueError(f"measured_frequencies: {m} modes but the model has {n} dofs")
+        raise FieldError("measured_frequencies", f"{m} modes but the model has {n} dofs")
     psi_meas = None
     if measured_shapes is not None:
         psi_meas = require_numeric(measured_shapes, "measured_shapes", "matrix")
         if psi_meas.ndim == 1:
             psi_meas = psi_meas[:, None]
         if psi_meas.shape != (n, m):
-            raise ValueError(f"measured_shapes: must have shape ({n}, {m}), got {psi_meas.shape}")
+            raise FieldError("measured_shapes", f"must have shape ({n}, {m}), got {psi_meas.shape}")
     items = _check_frf(frf, n)
     identify_mass = bool(items) if identify_mass is None else bool(identify_mass)
     if identify_mass and not items:
-        raise ValueError(
-            "identify_mass: the mass scalings need an FRF (the absolute scale; "
-            "frequencies and shapes are unchanged by scaling K and M together)"
+        raise FieldError(
+            "identify_mass",
+            "the mass scalings need an FRF (the absolute scale; "
+            "frequencies and shapes are unchanged by scaling K and M together)",
         )
     if off_diagonal is None:
         off_diagonal = psi_meas is not None
@@ -797,14 +809,14 @@ def identify_undamped(
             require_finite(frequency_sigma, "frequency_sigma", "rad/s"), (m,)
         ).astype(float)
         if np.any(sig_w <= 0):
-            raise ValueError("frequency_sigma: must be > 0")
+            raise FieldError("frequency_sigma", "must be > 0")
     for name, value in (("frf_sigma", frf_sigma), ("mass_prior_sigma", mass_prior_sigma)):
         if value is not None and (np.ndim(value) != 0 or float(require_numeric(value, name)) <= 0):
-            raise ValueError(f"{name}: must be a scalar > 0")
+            raise FieldError(name, "must be a scalar > 0")
     if mass_prior_sigma is not None and frf_sigma is None:
-        raise ValueError(
-            "mass_prior_sigma: needs frf_sigma (the prior is weighted against the "
-            "FRF's standard deviation)"
+        raise FieldError(
+            "mass_prior_sigma",
+            "needs frf_sigma (the prior is weighted against the FRF's standard deviation)",
         )
     pairs = [(i, i) for i in range(m)]
     pairs_off = [(i, j) for i in range(m) for j in range(i + 1, m)] if off_diagonal else []
@@ -815,10 +827,11 @@ def identify_undamped(
         limits.append(("mass", free_q.size))
     for name, count in limits:
         if count > n_rows:
-            raise ValueError(
-                f"measured_frequencies: {n_rows} equations for {count} {name} parameters: "
+            raise FieldError(
+                "measured_frequencies",
+                f"{n_rows} equations for {count} {name} parameters: "
                 "more parameters than data (Att. 7 needs m(m+1)/2 > parameters with measured "
-                "shapes, m >= parameters without): measure more modes or fix parameters"
+                "shapes, m >= parameters without): measure more modes or fix parameters",
             )
     ii = np.array([i for i, _ in pairs])
     jj = np.array([j for _, j in pairs])
@@ -1010,44 +1023,48 @@ def identify_damping(
     """
     R = model.n_damping
     if R == 0:
-        raise ValueError("C_blocks: the model has no damping blocks")
+        raise FieldError("C_blocks", "the model has no damping blocks")
     lam = np.asarray(measured_eigenvalues)
     if isinstance(measured_eigenvalues, (str, bytes)) or lam.dtype.kind not in "biufc":
-        raise ValueError("measured_eigenvalues: must be a numeric (complex) vector")
+        raise FieldError("measured_eigenvalues", "must be a numeric (complex) vector")
     lam = lam.ravel().astype(complex)
     if lam.size == 0 or not np.all(np.isfinite(lam)):
-        raise ValueError("measured_eigenvalues: must be a non-empty finite vector (no NaN or inf)")
+        raise FieldError(
+            "measured_eigenvalues", "must be a non-empty finite vector (no NaN or inf)"
+        )
     sigma = lam.real
     if np.any(sigma >= 0):
-        raise ValueError(
-            "measured_eigenvalues: real parts must be < 0 (a damped, stable structure)"
+        raise FieldError(
+            "measured_eigenvalues", "real parts must be < 0 (a damped, stable structure)"
         )
     m = sigma.size
     r = model._params(r0, R, "r0").copy()
     free = np.setdiff1d(np.arange(R), np.asarray(fixed, int))
     if free.size == 0:
-        raise ValueError("fixed: every damping parameter is fixed")
+        raise FieldError("fixed", "every damping parameter is fixed")
     if free.size > m:
-        raise ValueError(
-            f"measured_eigenvalues: {m} eigenvalues for {free.size} damping "
-            "parameters: more parameters than data (Att. 7 needs m > R)"
+        raise FieldError(
+            "measured_eigenvalues",
+            f"{m} eigenvalues for {free.size} damping "
+            "parameters: more parameters than data (Att. 7 needs m > R)",
         )
     w0, phi = model.modes(p, q)
     if mode_indices is not None:
         idx = np.asarray(mode_indices, int).ravel()
         if idx.size != m or idx.min() < 0 or idx.max() >= phi.shape[1]:
-            raise ValueError("mode_indices: must give one model mode per measured eigenvalue")
+            raise FieldError("mode_indices", "must give one model mode per measured eigenvalue")
         if np.unique(idx).size != m:
-            raise ValueError("mode_indices: each model mode at most once")
+            raise FieldError("mode_indices", "each model mode at most once")
     if np.all(lam.imag == 0):  # real parts carry no frequency: paired in order
         idx = np.arange(m) if mode_indices is None else idx
         if idx.max() >= phi.shape[1]:
-            raise ValueError("mode_indices: must give one model mode per measured eigenvalue")
+            raise FieldError("mode_indices", "must give one model mode per measured eigenvalue")
     elif np.any(lam.imag == 0):
-        raise ValueError(
-            "measured_eigenvalues: give every eigenvalue as sigma + i w with w != 0 "
+        raise FieldError(
+            "measured_eigenvalues",
+            "give every eigenvalue as sigma + i w with w != 0 "
             "(matched to the model frequencies) or every one as its real part "
-            "sigma (paired in order)"
+            "sigma (paired in order)",
         )
     else:
         idx = _match_modes(w0, np.abs(lam), None if mode_indices is None else idx)
@@ -1081,7 +1098,7 @@ def _match_modes(
     """
     elastic = np.flatnonzero(w_model > 0)
     if elastic.size == 0:
-        raise ValueError("measured_eigenvalues: the model has no elastic mode to match them to")
+        raise FieldError("measured_eigenvalues", "the model has no elastic mode to match them to")
     d = np.abs(np.log(w_meas[:, None] / w_model[None, elastic]))
     order = np.argsort(d, axis=1)
     near = elastic[order[:, 0]]
@@ -1093,22 +1110,24 @@ def _match_modes(
         wrong = np.flatnonzero(clear & (near != mode_indices))
         if wrong.size:
             i = wrong[0]
-            raise ValueError(
-                f"mode_indices: measured_eigenvalues[{i}] (natural frequency {w_meas[i]:.6g} "
+            raise FieldError(
+                "mode_indices",
+                f"measured_eigenvalues[{i}] (natural frequency {w_meas[i]:.6g} "
                 f"rad/s) is nearest model mode {near[i]} ({w_model[near[i]]:.6g} rad/s) but "
                 f"mode_indices pairs it with mode {mode_indices[i]} "
                 f"({w_model[mode_indices[i]]:.6g} rad/s): list the eigenvalues in the order of "
-                "mode_indices"
+                "mode_indices",
             )
         return np.asarray(mode_indices, int)
     unclear = np.flatnonzero(~clear)
     if unclear.size:
         i = unclear[0]
         a, b = sorted(elastic[order[i, :2]])
-        raise ValueError(
-            f"measured_eigenvalues[{i}]: natural frequency {w_meas[i]:.6g} rad/s has no clearly "
+        raise FieldError(
+            f"measured_eigenvalues[{i}]",
+            f"natural frequency {w_meas[i]:.6g} rad/s has no clearly "
             f"nearest model mode (modes {a} at {w_model[a]:.6g} and {b} at {w_model[b]:.6g} "
-            "rad/s are comparably close): the model may lack this mode; give mode_indices"
+            "rad/s are comparably close): the model may lack this mode; give mode_indices",
         )
     k, count = np.unique(near, return_counts=True)
     if np.any(count > 1):

@@ -66,11 +66,14 @@ import scipy.linalg
 import scipy.sparse
 import scipy.sparse.linalg
 
-from flexsat.input_checks import require_finite, require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike
 
 __all__ = [
+    "MAX_SHOOTING_SEGMENTS",
     "FrequencyShapedSlew",
+    "balanced_hamiltonian",
+    "shooting_segments",
     "frequency_shaped_slew",
     "hamiltonian",
     "hamiltonian_matrix",
@@ -81,6 +84,11 @@ _GROWTH_PER_SEGMENT = 3.0  # ln of the largest growth e^{Re(λ) h} allowed in on
 _PHASE_PER_SEGMENT = 30.0  # largest |λ| h in one segment (ω_B h for the ringing at ω_B)
 _LOG_OVERFLOW = 700.0  # e^{700} ~ 1e304: beyond it e^{KT} is not representable in float64
 
+#: shooting segments of one single-axis slew: the sparse system holds ~72 entries per segment
+#: (~9 kB of Python lists while it is assembled), so 10⁵ segments are ~1 GB; the three-axis
+#: continuation (:mod:`flexsat.maneuvers.three_axis_slew`) checks its own dense Jacobian
+MAX_SHOOTING_SEGMENTS = 100_000
+
 
 def hamiltonian_matrix(omega_b: float, zeta_b: float = 0.0, q: float = 0.0) -> FloatArray:
     """The 8×8 matrix K of ``ż = K z``, ``z = [θ, ω, u1, u2, p, λ, μ1, μ2]`` (SI).
@@ -88,15 +96,17 @@ def hamiltonian_matrix(omega_b: float, zeta_b: float = 0.0, q: float = 0.0) -> F
     Eqs. (12)-(14) with u3 from (20), and the costate Eqs. (16)-(19) of the paper
     in the general ζ_B form (see the module docstring).
     """
-    wb2 = omega_b * omega_b
+    wb2 = np.float64(omega_b) * omega_b
     k = np.zeros((8, 8))
     k[0, 1] = 1.0  # θ̇ = ω
     k[1, 2] = 1.0  # ω̇ = u1
     k[2, 3] = 1.0  # u̇1 = u2
-    k[3, 2], k[3, 7] = -wb2, -wb2 * wb2  # u̇2 = u3 = -ω_B²(u1 + ω_B² μ2)
+    # an absurd ω_B or ζ_B overflows to inf here (numpy floats), which the caller refuses by name
+    with np.errstate(over="ignore"):
+        k[3, 2], k[3, 7] = -wb2, -wb2 * wb2  # u̇2 = u3 = -ω_B²(u1 + ω_B² μ2)
+        k[7, 3], k[7, 6] = -4.0 * np.float64(zeta_b) ** 2 / wb2, -1.0  # μ̇2 = -(4ζ_B²/ω_B²) u2 - μ1
     k[5, 1], k[5, 4] = -q, -1.0  # λ̇ = -q ω - p
     k[6, 7], k[6, 5] = wb2, -1.0  # μ̇1 = ω_B² μ2 - λ
-    k[7, 3], k[7, 6] = -4.0 * zeta_b**2 / wb2, -1.0  # μ̇2 = -(4ζ_B²/ω_B²) u2 - μ1
     return k
 
 
@@ -173,9 +183,10 @@ class FrequencyShapedSlew:
         t = require_finite(t, "t", "s")
         span = 1e-12 * self.duration  # rounding of t = T computed by the caller
         if np.any(t < -span) or np.any(t > self.duration + span):
-            raise ValueError(
-                f"t: must lie in [0, {self.duration:g}] s (the maneuver), got "
-                f"[{t.min():g}, {t.max():g}]"
+            raise FieldError(
+                "t",
+                f"must lie in [0, {self.duration:g}] s (the maneuver), got "
+                f"[{t.min():g}, {t.max():g}]",
             )
         flat = np.clip(t.ravel(), 0.0, self.duration)
         k = np.clip(np.searchsorted(self.knots, flat, side="right") - 1, 0, self.n_segments - 1)
@@ -241,7 +252,7 @@ def frequency_shaped_slew(
     """
     angle = float(require_finite(angle, "angle", "rad"))
     if angle == 0.0:
-        raise ValueError("angle: must be nonzero (a zero slew has the trivial solution u = 0)")
+        raise FieldError("angle", "must be nonzero (a zero slew has the trivial solution u = 0)")
     inertia = float(require_positive(inertia, "inertia", "kg*m**2"))
     duration = float(require_positive(duration, "duration", "s"))
     omega_b = float(require_positive(omega_b, "omega_b", "rad/s"))
@@ -252,21 +263,9 @@ def frequency_shaped_slew(
     # Dimensionless problem: τ = t/T, θ in units of Θ (the problem is linear in Θ).  In these
     # units K becomes K(ω_B T, ζ_B, q T²) with the costates rescaled accordingly; the diagonal
     # balancing D (powers of two) then evens out the powers of ω_B T.
-    k_hat = hamiltonian_matrix(omega_b * duration, zeta_b, q * duration**2)
-    _, (d, _) = scipy.linalg.matrix_balance(k_hat, permute=False, separate=True)
-    kb = k_hat * (1.0 / d)[:, None] * d[None, :]  # K_b = D⁻¹ K̂ D, ζ = D⁻¹ ẑ
+    kb, d, growth, n = shooting_segments(omega_b, duration, zeta_b, q)
     x0 = np.zeros(4)
     xt = np.array([1.0, 0.0, 0.0, 0.0])
-
-    # Segment count: each segment's e^{K_b h} grows by at most e^3 (spectral abscissa) and
-    # turns by at most _PHASE_PER_SEGMENT rad (spectral radius); beyond that the scaling and
-    # squaring of expm and the single-shot partition lose digits (measured: BC error 1.6e-12
-    # at ω_B T = 25, 2e-8 at ω_B T = 500 single shot).
-    eig = np.linalg.eigvals(kb)
-    growth, radius = float(np.max(eig.real)), float(np.max(np.abs(eig)))
-    n = max(
-        1, int(np.ceil(growth / _GROWTH_PER_SEGMENT)), int(np.ceil(radius / _PHASE_PER_SEGMENT))
-    )
     if growth < _LOG_OVERFLOW:
         phi = scipy.linalg.expm(kb)
         # In balanced variables x_b(1) = Φ_xx x_b(0) + Φ_xp c_b(0).
@@ -304,6 +303,61 @@ def frequency_shaped_slew(
         z_knots=z_knots,
         method=method,
         condition=condition,
+    )
+
+
+def balanced_hamiltonian(
+    wbt: float, zeta_b: float, q_hat: float
+) -> tuple[FloatArray, FloatArray, float, float]:
+    """(K_b, D, spectral abscissa, segment count) of the dimensionless problem (ω_B T, ζ_B,
+    q T²), before anything is solved: K_b = D⁻¹ K̂ D is K̂ balanced by the powers of two D; the
+    count is inf when K̂ is not finite (ω_B T or ζ_B overflowing its entries).
+
+    Segment count: each segment's e^{K_b h} grows by at most e^3 (spectral abscissa) and turns
+    by at most _PHASE_PER_SEGMENT rad (spectral radius); beyond that the scaling and squaring of
+    expm and the single-shot partition lose digits (measured: BC error 1.6e-12 at ω_B T = 25,
+    2e-8 at ω_B T = 500 single shot).
+    """
+    k_hat = hamiltonian_matrix(wbt, zeta_b, q_hat)
+    if not np.all(np.isfinite(k_hat)):
+        return k_hat, np.ones(8), np.inf, np.inf
+    _, (d, _) = scipy.linalg.matrix_balance(k_hat, permute=False, separate=True)
+    kb = k_hat * (1.0 / d)[:, None] * d[None, :]  # K_b = D⁻¹ K̂ D, ζ = D⁻¹ ẑ
+    eig = np.linalg.eigvals(kb)
+    growth, radius = float(np.max(eig.real)), float(np.max(np.abs(eig)))
+    if not (np.isfinite(growth) and np.isfinite(radius)):
+        return kb, d, np.inf, np.inf
+    n = max(1.0, np.ceil(growth / _GROWTH_PER_SEGMENT), np.ceil(radius / _PHASE_PER_SEGMENT))
+    return kb, d, growth, n
+
+
+def shooting_segments(
+    omega_b: float, duration: float, zeta_b: float, q: float
+) -> tuple[FloatArray, FloatArray, float, int]:
+    """:func:`balanced_hamiltonian` of a slew (SI inputs), its segment count checked against
+    :data:`MAX_SHOOTING_SEGMENTS` before anything is allocated.
+
+    Raises
+    ------
+    flexsat.input_checks.FieldError
+        Blaming the input that makes the count too large: ``q`` if the problem without it fits,
+        else ``zeta_b`` if the undamped one fits, else ``omega_b`` (ω_B T counts).
+    """
+    wbt = omega_b * duration
+    kb, d, growth, n = balanced_hamiltonian(wbt, zeta_b, q * duration**2)
+    if n <= MAX_SHOOTING_SEGMENTS:
+        return kb, d, growth, int(n)
+    if q > 0 and balanced_hamiltonian(wbt, zeta_b, 0.0)[3] <= MAX_SHOOTING_SEGMENTS:
+        field, what = "q", f"the rate weight q T² = {q * duration**2:.3g}"
+    elif zeta_b > 0 and balanced_hamiltonian(wbt, 0.0, 0.0)[3] <= MAX_SHOOTING_SEGMENTS:
+        field, what = "zeta_b", f"the shaping damping ζ_B = {zeta_b:.3g} (4ζ_B²/(ω_B T)²)"
+    else:
+        field, what = "omega_b", f"ω_B T = {wbt:.3g} (break frequency × duration)"
+    raise FieldError(
+        field,
+        f"{what} needs {n:.3g} shooting segments, above the limit {MAX_SHOOTING_SEGMENTS:,} "
+        "(flexsat.maneuvers.frequency_shaped_slew.MAX_SHOOTING_SEGMENTS: one segment per e³ "
+        "of growth or 30 rad of ringing of the Hamiltonian system)",
     )
 
 

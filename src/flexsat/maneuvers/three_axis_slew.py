@@ -1,5 +1,6 @@
 r"""Three-axis frequency-shaped optimal rest-to-rest slew of a rigid spacecraft: the nonlinear
-two-point boundary-value problem of seed 003 (Chun & Turner 1988; EPS slew study c. 1989,
+two-point boundary-value problem of the EPS slew study (Chun &
+Turner 1988; EPS slew study c. 1989,
 Eqs. 12-20), solved by continuation from the single-axis solution.
 
 Problem.  State ``x = [β(4), ω(3), u1(3), u2(3)]`` (Euler parameters, body rate, normalized
@@ -69,6 +70,7 @@ import numpy.typing as npt
 import scipy.integrate
 import scipy.linalg
 
+from flexsat import limits
 from flexsat.dynamics.attitude import (
     cross_matrix,
     dcm_to_euler123,
@@ -80,8 +82,18 @@ from flexsat.dynamics.attitude import (
     require_shape,
 )
 from flexsat.dynamics.rigid_body import angular_momentum_inertial, cross3, matvec, require_inertia
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
-from flexsat.maneuvers.frequency_shaped_slew import FrequencyShapedSlew, frequency_shaped_slew
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
+from flexsat.maneuvers.frequency_shaped_slew import (
+    FrequencyShapedSlew,
+    frequency_shaped_slew,
+    shooting_segments,
+)
 from flexsat.units import FloatArray, QuantityArrayLike, QuantityLike, to_si_array
 
 __all__ = [
@@ -290,9 +302,10 @@ class ThreeAxisSlew:
         t = require_finite(t, "t", "s")
         span = 1e-12 * self.duration  # rounding of t = T computed by the caller
         if np.any(t < -span) or np.any(t > self.duration + span):
-            raise ValueError(
-                f"t: must lie in [0, {self.duration:g}] s (the maneuver), got "
-                f"[{t.min():g}, {t.max():g}]"
+            raise FieldError(
+                "t",
+                f"must lie in [0, {self.duration:g}] s (the maneuver), got "
+                f"[{t.min():g}, {t.max():g}]",
             )
         n = self.n_segments
         tau = np.clip(t.ravel(), 0.0, self.duration) / self.duration
@@ -431,7 +444,7 @@ def three_axis_slew(
     """
     J = require_inertia(inertia)
     if J.shape != (3, 3):
-        raise ValueError(f"inertia: must be one (3, 3) tensor, got shape {J.shape}")
+        raise FieldError("inertia", f"must be one (3, 3) tensor, got shape {J.shape}")
     duration = float(require_positive(duration, "duration", "s"))
     omega_b = float(require_positive(omega_b, "omega_b", "rad/s"))
     zeta_b = float(require_nonneg(zeta_b, "zeta_b", ""))
@@ -439,11 +452,11 @@ def three_axis_slew(
         np.zeros((3, 3)) if Q is None else require_shape(to_si_array(Q, "1/s**2", "Q"), "Q", (3, 3))
     )
     if Qm.shape != (3, 3):
-        raise ValueError(f"Q: must be one (3, 3) matrix, got shape {Qm.shape}")
+        raise FieldError("Q", f"must be one (3, 3) matrix, got shape {Qm.shape}")
     if np.abs(Qm - Qm.T).max() > 1e-12 * max(np.abs(Qm).max(), 1e-300):
-        raise ValueError("Q: must be symmetric")
+        raise FieldError("Q", "must be symmetric")
     if np.linalg.eigvalsh(Qm)[0] < -1e-12 * np.abs(Qm).max():
-        raise ValueError("Q: must be positive semi-definite")
+        raise FieldError("Q", "must be positive semi-definite")
     steps = require_count(steps, "steps")
     max_newton = require_count(max_newton, "max_newton")
     angles = _target_angles(target)
@@ -451,11 +464,16 @@ def three_axis_slew(
 
     T = duration
     wbt, q_hat = omega_b * T, Qm * T * T
+    # the continuation's size follows from the start's balanced K alone: checked before the
+    # start is solved
+    try:
+        n, n_rk = _continuation_size(wbt, zeta_b, q_hat[k, k])
+    except FieldError as exc:  # its q is this problem's Q T² about the start axis
+        raise FieldError("Q" if exc.field == "q" else exc.field, exc.rule) from None
+    _check_resources(n, n_rk, wbt, zeta_b, q_hat[k, k])
     start = frequency_shaped_slew(angles[k], J[k, k], 1.0, wbt, zeta_b, q=q_hat[k, k])
-    n = _segment_count(start.K_scaled)
     tau = np.arange(n) / n
     nodes_hat, scale = _seed(start, k, tau)
-    n_rk = max(1, int(np.ceil(np.max(np.abs(np.linalg.eigvals(start.K_scaled))) / n / _RK4_STEP)))
 
     def problem(a: float) -> _Problem:
         Ja = J * a + np.diag(np.diag(J)) * (1.0 - a)
@@ -477,10 +495,11 @@ def three_axis_slew(
             halvings += 1
             da /= 2.0
             if halvings > _MAX_HALVINGS:
-                raise ValueError(
-                    f"continuation: Newton failed to converge beyond the last "
+                raise FieldError(
+                    "continuation",
+                    "Newton failed to converge beyond the last "
                     f"converged a1 = a2 = {a:.6g} (step {da * 2:.3g} after "
-                    f"{_MAX_HALVINGS} halvings)"
+                    f"{_MAX_HALVINGS} halvings)",
                 )
             continue
         halvings = 0
@@ -522,12 +541,12 @@ def _target_angles(target: QuantityArrayLike) -> FloatArray:
     elif arr.shape == (4,):
         angles = dcm_to_euler123(quaternion_to_dcm(require_quaternion(arr, "target")))
     else:
-        raise ValueError(
-            f"target: must be Euler parameters (4,) or 1-2-3 Euler angles (3,), "
-            f"got shape {arr.shape}"
+        raise FieldError(
+            "target",
+            f"must be Euler parameters (4,) or 1-2-3 Euler angles (3,), got shape {arr.shape}",
         )
     if not np.any(angles):
-        raise ValueError("target: the identity attitude (no slew: the optimal torque is 0)")
+        raise FieldError("target", "the identity attitude (no slew: the optimal torque is 0)")
     return angles
 
 
@@ -539,13 +558,56 @@ def _select_axis(axis: int | str | None, angles: FloatArray, J: FloatArray) -> i
     names = {"x": 0, "y": 1, "z": 2}
     k = names.get(axis, axis) if isinstance(axis, str) else axis
     if isinstance(k, str) or not isinstance(k, (int, np.integer)) or k not in (0, 1, 2):
-        raise ValueError(f"axis: must be 0, 1, 2, 'x', 'y' or 'z', got {axis!r}")
+        raise FieldError("axis", f"must be 0, 1, 2, 'x', 'y' or 'z', got {axis!r}")
     if angles[k] == 0.0:
-        raise ValueError(
-            f"axis: the target angle about axis {k} is 0, so the single-axis "
-            f"start is trivial; select an axis the target rotates about"
+        raise FieldError(
+            "axis",
+            f"the target angle about axis {k} is 0, so the single-axis "
+            f"start is trivial; select an axis the target rotates about",
         )
     return int(k)
+
+
+def _continuation_size(wbt: float, zeta_b: float, q_hat: float) -> tuple[int, int]:
+    """(shooting segments, RK4 steps per segment) of the continuation, from the balanced
+    Hamiltonian of the single-axis start (:func:`shooting_segments`, which refuses a start too
+    large to solve)."""
+    kb = shooting_segments(wbt, 1.0, zeta_b, q_hat)[0]
+    n = _segment_count(kb)
+    return n, max(1, int(np.ceil(np.max(np.abs(np.linalg.eigvals(kb))) / n / _RK4_STEP)))
+
+
+def _memory(n: int) -> int:
+    """Bytes of the dense Newton Jacobian of ``n`` segments, twice (with its LU factors)."""
+    return 2 * limits.memory_estimate(N_Z * n, N_Z * n, 1)
+
+
+def _fits(size: tuple[int, int]) -> bool:
+    n, n_rk = size
+    return _memory(n) <= limits.MAX_MEMORY and n * n_rk <= limits.MAX_INTEGRATOR_STEPS
+
+
+def _check_resources(n: int, n_rk: int, wbt: float, zeta_b: float, q_hat: float) -> None:
+    """Refuse, before anything is allocated, a continuation whose dense Newton Jacobian
+    exceeds :data:`flexsat.limits.MAX_MEMORY` or whose RK4 sweeps (n segments × n_rk steps)
+    exceed :data:`flexsat.limits.MAX_INTEGRATOR_STEPS`, blaming the input that makes it so:
+    ``Q`` if the problem without it fits, else ``zeta_b`` if the undamped one fits, else
+    ``omega_b`` (ω_B T counts)."""
+    if _fits((n, n_rk)):
+        return
+    if q_hat > 0 and _fits(_continuation_size(wbt, zeta_b, 0.0)):
+        field, what = "Q", f"the rate weight Q T² = {q_hat:.3g} about the start axis"
+    elif zeta_b > 0 and _fits(_continuation_size(wbt, 0.0, 0.0)):
+        field, what = "zeta_b", f"the shaping damping ζ_B = {zeta_b:.3g}"
+    else:
+        field, what = "omega_b", f"ω_B T = {wbt:.3g} (break frequency × duration)"
+    limits.check_memory(_memory(n), field, f"{what}: the Newton Jacobian of {n:,} segments")
+    limits.check_count(
+        n * n_rk,
+        limits.MAX_INTEGRATOR_STEPS,
+        field,
+        f"{what}: RK4 steps per sweep ({n:,} segments × {n_rk:,} steps)",
+    )
 
 
 def _segment_count(k_scaled: FloatArray) -> int:
@@ -645,8 +707,8 @@ class _Problem:
             dense_output=True,
         )
         if not out.success:
-            raise ValueError(
-                f"continuation: the final trajectory could not be integrated ({out.message})"
+            raise FieldError(
+                "continuation", f"the final trajectory could not be integrated ({out.message})"
             )
         return out.y[:, -1].reshape(self.n, N_Z), out.sol
 
@@ -713,7 +775,8 @@ def _polish(
         if res <= _FINE_TOL:
             return s, sol, it, res
         s = s - scipy.linalg.lu_solve(lu, r, check_finite=False).reshape(s.shape)
-    raise ValueError(
-        f"continuation: converged at a1 = a2 = 1 on the RK4 grid, but the DOP853 "
-        f"polish left a residual {res:.3g} > {_FINE_TOL:g}"
+    raise FieldError(
+        "continuation",
+        "converged at a1 = a2 = 1 on the RK4 grid, but the DOP853 "
+        f"polish left a residual {res:.3g} > {_FINE_TOL:g}",
     )

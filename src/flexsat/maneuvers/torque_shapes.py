@@ -29,7 +29,7 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_positive
 from flexsat.units import FloatArray, QuantityArrayLike, to_si_array
 
 __all__ = ["BangBang", "PseudoSquare", "Reference", "Sinusoidal", "SmoothBangBang", "TorqueShape"]
@@ -77,7 +77,7 @@ def _quarter_ratio(
     bad = bad | (ratio > 0.25 + tol)
     if np.any(bad):
         worst = np.asarray(ratio)[bad].flat[0]
-        raise ValueError(f"{name}: out of range ({why}); got {label or name} = {worst:.6g}")
+        raise FieldError(name, f"out of range ({why}); got {label or name} = {worst:.6g}")
     return np.clip(ratio, 0.0, 0.25)
 
 
@@ -201,8 +201,8 @@ def _slew(
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     angle = require_finite(angle, "angle", "rad")
     if np.any(angle == 0):
-        raise ValueError(
-            "angle: must be nonzero (a rest-to-rest slew of 0 rad has no torque shape)"
+        raise FieldError(
+            "angle", "must be nonzero (a rest-to-rest slew of 0 rad has no torque shape)"
         )
     return (
         angle,

@@ -10,16 +10,20 @@ per metric the parameters' sensitivity ranking (NaN and inf written as null). ``
 with ``xarray.open_zarr(path)``. Figures: a sweep over two grid axes gets a contour map of every
 metric over them (one axis: a line per metric); a Monte Carlo gets each metric's histogram and
 CDF with the requirement lines, and the convergence of each probability estimate with its
-confidence band against N. A sweep over exactly (α, u_max) also gets the seed 000 trade surfaces
+confidence band against N. A sweep over exactly (α, u_max) also gets the Junkins,
+Pollock & Rahman 1990 trade surfaces
 (Att. 3 Figs. 5-7: T, E(T), μ_max; :func:`~flexsat.scenarios.batch.trade_surfaces`), also in
 ``summary.json``.
+
+The files are the same for the same scenario however it ran: the wall time and how many chunks
+a run found already done in its store (a resumed run) vary between identical runs, so they stay
+on the result (``wall_s``, ``chunks_run``, ``chunks_skipped``) and out of ``summary.json`` and
+``index.html``.
 """
 
 from __future__ import annotations
 
 import html
-import json
-import math
 import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
@@ -27,6 +31,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 from matplotlib.figure import Figure
 
+from flexsat.report.json_data import dumps
 from flexsat.report.page import images_html
 from flexsat.units import to_si
 
@@ -60,24 +65,11 @@ class BatchReport(Protocol):
     def surfaces(self) -> dict[str, np.ndarray] | None: ...
 
 
-def _clean(value: Any) -> Any:
-    """JSON-ready: NaN and inf become None, numpy numbers plain."""
-    if isinstance(value, dict):
-        return {str(k): _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.ndarray):
-        return _clean(value.tolist())
-    return value
-
-
 def _metrics(ds: xr.Dataset) -> dict[str, np.ndarray]:
     return {
-        str(k)[len("metric_") :]: ds[k].values for k in ds.data_vars if str(k).startswith("metric_")
+        str(k)[len("metric_") :]: ds[k].values
+        for k in sorted(map(str, ds.data_vars))
+        if str(k).startswith("metric_")
     }
 
 
@@ -120,7 +112,7 @@ def _contours(result: BatchReport, metrics: dict[str, np.ndarray], folder: Path)
     return files
 
 
-#: the seed 000 trade surfaces (Att. 3 Figs. 5-7): key, title, colour scale
+#: the Junkins, Pollock & Rahman 1990 trade surfaces (Att. 3 Figs. 5-7): key, title, colour scale
 SURFACES = (
     ("maneuver_time_s", "maneuver time T (s), Att. 3 Eq. 16, Fig. 5", "linear"),
     ("residual_energy_J", "vibration energy E(T) of the open-loop response (J), Fig. 6", "log"),
@@ -276,14 +268,11 @@ def write_data(result: BatchReport, ds: xr.Dataset, folder: Path) -> None:
         "kind": result.scenario.kind,
         "cases": int(ds.sizes["case"]),
         "sampling": result.scenario.sampling,
-        "wall_s": result.wall_s,
         **result.summary,
         "sensitivity": result.sensitivity,
         "trade_surfaces": result.surfaces,
     }
-    (folder / "summary.json").write_text(
-        json.dumps(_clean(summary), indent=2) + "\n", encoding="utf-8"
-    )
+    (folder / "summary.json").write_text(dumps(summary), encoding="utf-8")
     shutil.copytree(result.store, folder / "results.zarr")
 
 
@@ -304,8 +293,7 @@ def sections(result: BatchReport, ds: xr.Dataset, figures: list[str]) -> str:
     return (
         f"<p>{int(ds.sizes['case'])} cases of run <b>{esc(result.scenario.run)}</b> of "
         f"<code>{esc(result.scenario.scenario)}</code>, sampling "
-        f"{esc(result.scenario.sampling)}; {result.chunks_run} chunks run, "
-        f"{result.chunks_skipped} found done in the store; {result.wall_s:.1f} s.</p>"
+        f"{esc(result.scenario.sampling)}.</p>"
         + _tables(result)
         + f"<h2>Figures</h2>{images_html(figures)}"
     )

@@ -4,7 +4,8 @@
 ``kind: cmg``: per run the gimbal angles, the gain det(CCᵀ) and the momentum against the
 envelope along the demand, and the V1–V8 table (published against computed).
 ``results.nc`` holds over ``run`` × ``sample``: ``time`` (s), ``gimbal_angles`` (rad),
-``momentum`` (rotor momenta), ``gain``, and ``initial_angles``, ``outcome``.
+``momentum`` (rotor momenta), ``gain`` (NaN past the end of a run stopped at a singular set,
+which holds fewer samples), and ``initial_angles``, ``outcome``.
 
 ``kind: cmg_station``: the attitude (roll, pitch, yaw), the CMG momentum and the torques of the
 attitude loop against time, and per run the gimbal angles and the gain (NaN after a singular

@@ -18,7 +18,6 @@ Open it with ``xarray.open_dataset(path, engine="h5netcdf")``.
 from __future__ import annotations
 
 import html
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -27,6 +26,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from flexsat.netcdf import write_netcdf
+from flexsat.report.json_data import dumps
 from flexsat.report.page import html_table
 from flexsat.text import format_optional
 
@@ -36,7 +36,6 @@ if TYPE_CHECKING:
 __all__ = [
     "FIGURES",
     "IdentificationReport",
-    "as_dict",
     "dataset",
     "draw_figures",
     "sections",
@@ -312,9 +311,7 @@ def write_data(result: IdentificationReport, ds: xr.Dataset, folder: Path) -> No
         "mac_a_priori": c.mac_a_priori,
         "mac_updated": c.mac_updated,
     }
-    (folder / "identification.json").write_text(
-        json.dumps(as_dict(summary), indent=2) + "\n", encoding="utf-8"
-    )
+    (folder / "identification.json").write_text(dumps(summary), encoding="utf-8")
     write_netcdf(ds, folder / "results.nc")
 
 
@@ -324,16 +321,3 @@ def draw_figures(campaign: CampaignResult, folder: Path) -> list[str]:
     _mac_figure(campaign, folder / "mac.png")
     _frequency_figure(campaign, folder / "frequencies.png")
     return [f for f, _ in FIGURES]
-
-
-def as_dict(value: Any) -> Any:
-    """JSON-ready copy (numpy arrays and scalars to lists and floats)."""
-    if isinstance(value, dict):
-        return {k: as_dict(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [as_dict(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return as_dict(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    return value

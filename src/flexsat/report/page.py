@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
+from flexsat.report.json_data import NULL_REASONS
 from flexsat.report.publish import write_atomically, write_metrics_and_results
 
 if TYPE_CHECKING:
@@ -40,7 +41,7 @@ def html_table(headings: Iterable[object], rows: Iterable[Iterable[object]]) -> 
 
 def metric_rows(records: list[dict[str, Any]]) -> list[tuple[str, list[str]]]:
     """Metrics table, one row per metric and one formatted column per run of ``records``."""
-    names = [key for key in records[0] if key != "run"]
+    names = [key for key in records[0] if key not in ("run", NULL_REASONS)]
     return [(name, [format_metric(r[name]) for r in records]) for name in names]
 
 
@@ -97,7 +98,7 @@ class ResultTable:
 def metrics_table(records: list[dict[str, Any]]) -> ResultTable:
     """One column per run and a row per metric; transposed when the runs outnumber the metrics
     (a batch's table: a row per metric of the cases and per requirement), so that it fits."""
-    names = [key for key in records[0] if key != "run"]
+    names = [key for key in records[0] if key not in ("run", NULL_REASONS)]
     if len(records) > len(names):
         rows = tuple(
             (str(record["run"]), *(format_metric(record[n]) for n in names)) for record in records

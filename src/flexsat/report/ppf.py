@@ -1,5 +1,5 @@
 """Report of a PPF scenario (``kind: ppf``): ``metrics.json``, ``results.nc``, figures and
-``index.html`` with the results table and the gains of every run (seed 004 Tables 1–3).
+``index.html`` with the results table and the gains of every run (Agrawal & Bang 1996 Tables 1–3).
 
 ``results.nc`` holds, over ``run``: the tip responses ``tip_response`` (response × time ×
 output: the tip error of Eq. 33 along n̂_1 and n̂_2 in m, the rotation Φ of Eq. 34 in rad, for
@@ -273,11 +273,11 @@ def _gains_tables(result: PPFReport) -> str:
 def sections(
     result: PPFReport, records: list[dict[str, Any]], ds: xr.Dataset, figures: list[str]
 ) -> str:
-    """The page's results table (the seed 004 grid), gains and figures."""
+    """The page's results table (the Agrawal & Bang 1996 grid), gains and figures."""
     esc = html.escape
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
-    return f"""<h2>Results (seed 004 Tables 1–3 grid)</h2>
+    return f"""<h2>Results (Agrawal & Bang 1996 Tables 1–3 grid)</h2>
 <p>J = ½ ∫ (ζ_tᵀ Q̄ ζ_t + uᵀ Q_u u) dt (Eqs. 7, 35) by Lyapunov equations; γ: last converged
 homotopy parameter; min eig S: Eq. 6; stable: the deciding check (S &gt; 0 for positive gains,
 else the poles). Settling: last time the tip error |Eᵗ| or the rotation Φ exceeds 10 % of its

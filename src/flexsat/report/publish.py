@@ -419,9 +419,10 @@ def write_metrics_and_results(result: ReportedResult, folder: Path, ds: xr.Datas
     run, the result's ``metrics_records()``) and ``results.nc`` (its dataset ``ds``, netCDF4
     without pickle)."""
     from flexsat.netcdf import write_netcdf
+    from flexsat.report.json_data import dumps
 
     records = result.metrics_records()
-    (folder / "metrics.json").write_text(json.dumps(records, indent=2) + "\n", encoding="utf-8")
+    (folder / "metrics.json").write_text(dumps(records), encoding="utf-8")
     write_netcdf(ds, folder / "results.nc")
 
 

@@ -1,5 +1,5 @@
 """Report of a slew scenario (``kind: slew``): ``metrics.json``, ``results.nc``, the figures of
-seed 003 and ``index.html`` with the goals table.
+EPS slew study c. 1989 and ``index.html`` with the goals table.
 
 ``results.nc`` holds every run (the nominal torque alone first, as ``open loop``) over
 ``(run, time[, component])``: the recorded channels of the flexible plant (``attitude``,
@@ -10,7 +10,8 @@ Euler-angle error against the nominal maneuver ``euler123_error``, the rim defle
 scenario (``scenario_yaml``), the maneuver time ``duration_s`` and the goals. Open it with
 ``xarray.open_dataset(path, engine="h5netcdf")``.
 
-The figures follow the paper's (seed 003 Figs. 3–17): the nominal torques and Euler angles, the
+The figures follow the paper's (EPS slew study c. 1989 Figs. 3–17): the
+nominal torques and Euler angles, the
 Euler-angle errors of every run with the goal band at 1.25 T, the rim deflections of the
 antenna nodes open against closed loop, the torque perturbations and the point forces.
 """
@@ -164,8 +165,8 @@ def sections(result: SlewReport, records: list[dict[str, Any]], figures: list[st
         f"commanded angle ({ds_attrs['goal_angle_tolerance_mrad']:g} mrad) at "
         f"{ds_attrs['goal_evaluation']:g} T; rim deflection from "
         f"{ds_attrs['goal_evaluation']:g} T on below "
-        f"1/{ds_attrs['goal_deflection_ratio']:g} of the open-loop one (seed 003 "
-        "L792–L801). The open-loop run is the nominal torque alone."
+        f"1/{ds_attrs['goal_deflection_ratio']:g} of the open-loop one (EPS slew study c. 1989 "
+        "'Simulation Results'). The open-loop run is the nominal torque alone."
     )
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
     return f"""<h2>Goals</h2>
@@ -178,7 +179,8 @@ def sections(result: SlewReport, records: list[dict[str, Any]], figures: list[st
 
 
 def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
-    """The figures of seed 003 (module docstring) into ``folder``; their file names."""
+    """The figures of the EPS slew study c. 1989 (module docstring) into ``folder``; their
+    file names."""
     tol = ds.attrs["goal_angle_tolerance_mrad"]
     figures = ["nominal.png", "euler_error.png", "rim_deflection.png", "torque_perturbation.png"]
     _nominal(ds, folder / figures[0])

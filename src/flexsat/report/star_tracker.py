@@ -1,5 +1,6 @@
 """Report of a star-tracker scenario (``kind: star_tracker``): ``metrics.json``,
-``results.nc``, figures and ``index.html`` with the identification table (seed 000 §2.3.4).
+``results.nc``, figures and ``index.html`` with the identification table (Junkins,
+Pollock & Rahman 1990 §2.3.4).
 
 ``results.nc`` holds, over ``run`` and ``attitude``: the body-axis error angles ``error``
 (arcsec, NaN where the identification was rejected), ``accepted``, ``correct`` and
@@ -139,7 +140,8 @@ def sections(result: NotedResult, records: list[dict[str, Any]], figures: list[s
     esc = html.escape
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
     notes = "".join(f"<li>{esc(n)}</li>" for n in result.notes)
-    body = f"""<h2>Identification (seed 000 §2.3.4: sub-5″ attitude from star patterns)</h2>
+    body = f"""<h2>Identification (Junkins, Pollock & Rahman 1990 §2.3.4: sub-5″
+    attitude from star patterns)</h2>
 <p>Correct: accepted with every kept star its true catalogue star; wrong accepted: accepted
 with at least one wrong star (the paper's claim: never). σ: standard deviation of the error
 angles over the accepted attitudes; σ_QUEST: mean predicted 1σ.</p>

@@ -172,7 +172,7 @@ def _paper_table(result: TetherReport, records: list[dict[str, Any]]) -> str:
         for key, value in e.published.items():
             heading = dict(METRIC_COLUMNS).get(key, key)
             rows.append(
-                f"<tr><td>{esc(rec['run'])}</td><td>{esc(e.key)} ({esc(e.lines)})</td>"
+                f"<tr><td>{esc(rec['run'])}</td><td>{esc(e.key)} ({esc(e.locator)})</td>"
                 f"<td>{esc(heading)}</td><td>{value:.4g}</td>"
                 f"<td>{format_metric(rec.get(key))}</td></tr>"
             )

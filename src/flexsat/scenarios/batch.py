@@ -2,7 +2,8 @@
 maneuver scenario's Law II run, in chunks on dask, streamed to a zarr store, with statistics.
 
 A batch scenario names a maneuver scenario file and one of its runs (Control Law II,
-``lyapunov_tracker``: the slews of seed 000 Att. 3 that the TAMU trade studies and robustness
+``lyapunov_tracker``: the slews of Junkins, Pollock & Rahman 1990 Att. 3 that the
+TAMU trade studies and robustness
 sets are about), the parameters to vary and how::
 
     kind: montecarlo
@@ -53,6 +54,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
+from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.errors import Problem, ScenarioError, locate
 from flexsat.scenarios.fields import Document, SchemaSection, integer_in
@@ -104,16 +106,42 @@ class ExecutionSpec(SchemaSection):
     @model_validator(mode="after")
     def _one_place(self) -> Self:
         if self.workers is not None and self.scheduler is not None:
-            raise ValueError(
-                "execution: give workers (a local cluster) or scheduler (an "
-                "existing cluster), not both"
+            raise FieldError(
+                "execution",
+                "give workers (a local cluster) or scheduler (an existing cluster), not both",
             )
         return self
+
+
+def _check_entry_values(parameters: dict[str, Any]) -> None:
+    """Each parameter's values of the right shape before they are read: ``distribution`` a
+    name, ``values`` a list of numbers or quantities, every other key (mean, sd, low, high, n,
+    ...) one number or quantity string: a list or a mapping where one value belongs is refused
+    by name here (the parameter space would otherwise hash it, as a distribution name, or
+    broadcast it)."""
+    for name, entry in parameters.items():
+        if not isinstance(entry, dict):
+            continue  # space_from_spec refuses a non-mapping by name
+        for key, value in entry.items():
+            path = f"parameters.{name}.{key}"
+            if key == "distribution":
+                if not isinstance(value, str):
+                    raise FieldError(path, f"must be a distribution name (a string), got {value!r}")
+            elif key == "values":
+                if not isinstance(value, list) or any(
+                    isinstance(v, (list, dict, bool)) or v is None for v in value
+                ):
+                    raise FieldError(
+                        path, f"must be a list of numbers or quantities, got {value!r}"
+                    )
+            elif isinstance(value, (list, dict, bool)) or value is None:
+                raise FieldError(path, f"must be one number or quantity, got {value!r}")
 
 
 def _space(parameters: dict[str, dict[str, Any]]) -> ParameterSpace | GridSpace:
     from flexsat.design.parameter_space import space_from_spec
 
+    _check_entry_values(parameters)
     return space_from_spec(parameters, PARAMETER_UNITS)
 
 
@@ -121,8 +149,8 @@ def _metric_unit(metric: str) -> str:
     from flexsat.sim.metrics import METRIC_UNITS
 
     if metric not in METRIC_UNITS:
-        raise ValueError(
-            f"requirements.{metric}: unknown metric; metrics: {', '.join(METRIC_UNITS)}"
+        raise FieldError(
+            f"requirements.{metric}", f"unknown metric; metrics: {', '.join(METRIC_UNITS)}"
         )
     return METRIC_UNITS[metric]
 
@@ -143,7 +171,7 @@ def requirements_of(spec: dict[str, Any]) -> list[Requirement]:
                 or len(entry) != 1
                 or next(iter(entry)) not in ("max", "min")
             ):
-                raise ValueError(f"{path}: give exactly one of max: or min:, got {entry!r}")
+                raise FieldError(path, f"give exactly one of max: or min:, got {entry!r}")
             key, value = next(iter(entry.items()))
             si = "rad" if unit == "deg" else "rad/s"
             threshold = float(np.degrees(si_scalar(value, si, f"{path}.{key}")))
@@ -190,27 +218,29 @@ class BatchScenario(Document):
             "grid" if grid else "random" if self.kind == "montecarlo" else "latin_hypercube"
         )
         if grid != (sampling == "grid"):
-            raise ValueError(
-                f"sampling: {sampling!r} needs "
+            raise FieldError(
+                "sampling",
+                f"{sampling!r} needs "
                 + (
                     "grid axes (values: or low/high/n)"
                     if sampling == "grid"
                     else "bounds (low/high) or distributions, not grid axes"
-                )
+                ),
             )
         if self.kind == "montecarlo" and sampling != "random":
-            raise ValueError(
-                f"sampling: a montecarlo samples its distributions at random, "
-                f"got {sampling!r} (use kind: sweep for grids and designs)"
+            raise FieldError(
+                "sampling",
+                "a montecarlo samples its distributions at random, "
+                f"got {sampling!r} (use kind: sweep for grids and designs)",
             )
         if sampling != "grid" and self.cases is None:
-            raise ValueError(f"cases: required with sampling {sampling!r}")
+            raise FieldError("cases", f"required with sampling {sampling!r}")
         if sampling == "saltelli" and self.cases is not None and self.cases & (self.cases - 1):
-            raise ValueError(
-                f"cases: the Saltelli design takes a power of 2 base points, got {self.cases}"
+            raise FieldError(
+                "cases", f"the Saltelli design takes a power of 2 base points, got {self.cases}"
             )
         if sampling == "grid" and self.cases is not None:
-            raise ValueError("cases: a grid has as many cases as its points; leave cases out")
+            raise FieldError("cases", "a grid has as many cases as its points; leave cases out")
         self.sampling = sampling
         # the case count, from the axes' lengths or the sizes given: before any table is built
         n_cases = case_count(self)
@@ -226,12 +256,15 @@ class BatchScenario(Document):
                 )
             else:
                 what = "the sample"
-            raise ValueError(
-                f"{field}: {what} has {n_cases:,} cases, above the limit {limits.MAX_CASES:,} "
-                f"(flexsat.limits.MAX_CASES); split the study or sample it more sparsely"
+            raise FieldError(
+                field,
+                f"{what} has {n_cases:,} cases, above the limit {limits.MAX_CASES:,} "
+                f"(flexsat.limits.MAX_CASES); split the study or sample it more sparsely",
             )
         if self.requirements and self.kind != "montecarlo":
-            raise ValueError("requirements: belong to a montecarlo (a probability of meeting them)")
+            raise FieldError(
+                "requirements", "belong to a montecarlo (a probability of meeting them)"
+            )
         return self
 
 
@@ -505,8 +538,12 @@ def _run_batch(
     from flexsat.design.batch_runner import open_results
 
     ds = open_results(store)
+    # by name: a zarr store lists its arrays in no fixed order, and the summary's order is
+    # part of the files two identical runs must write alike
     metrics = {
-        str(k)[len("metric_") :]: ds[k].values for k in ds.data_vars if str(k).startswith("metric_")
+        str(k)[len("metric_") :]: ds[k].values
+        for k in sorted(map(str, ds.data_vars))
+        if str(k).startswith("metric_")
     }
     stats = monte_carlo_summary(metrics, requirements_of(scenario.requirements))
     sensitivity: dict[str, dict[str, Any]] = {}
@@ -540,7 +577,8 @@ def _run_batch(
 def trade_surfaces(
     scenario: BatchScenario, build: HubManeuverBuilder
 ) -> dict[str, np.ndarray] | None:
-    """For a grid over exactly (alpha, u_max): the seed 000 trade surfaces of the run's
+    """For a grid over exactly (alpha, u_max): the Junkins, Pollock & Rahman 1990 trade
+    surfaces of the run's
     maneuver, computed exactly (:mod:`flexsat.design.trade_surfaces`): the maneuver time T
     (Att. 3 Eq. 16, Fig. 5), the vibration energy E(T) of the open-loop flexible response
     (Fig. 6) and the Law II tracking bound μ_max (Eq. 22, Fig. 7), each (n_alpha, n_u_max) with

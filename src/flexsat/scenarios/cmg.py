@@ -1,6 +1,6 @@
 """CMG scenarios (issue 14): ``kind: cmg``, gimbal steering of the SGCMG pyramid from chosen
 initial sets under torque demands, and ``kind: cmg_station``, the space-station momentum
-management with the CMG loop (Vadali, Oh & Walker; Junkins, Pollock & Rahman 1990, L4533-L4830)::
+management with the CMG loop (Vadali, Oh & Walker; Junkins, Pollock & Rahman 1990, Att. 13)::
 
     kind: cmg
     name: Preferred gimbal angles, pseudo-inverse steering
@@ -46,6 +46,7 @@ from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.dynamics.space_station import FT_LB as _FT_LB
+from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
 from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, count, quantity
@@ -54,11 +55,13 @@ from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 if TYPE_CHECKING:
     import xarray as xr
 
+    from flexsat.cases.space_station_cmg import StationDesign
+    from flexsat.dynamics.cmg import GimbalRun
     from flexsat.dynamics.space_station import StationData
 
 SOURCE = (
     "S. R. Vadali, H.-S. Oh, S. R. Walker, 'Preferred Gimbal Angles for Single Gimbal "
-    "Control Moment Gyros', JGCD (accepted); seed 000 Attachment 13, L4533–L4830"
+    "Control Moment Gyros', JGCD (accepted); Junkins, Pollock & Rahman 1990, Attachment 13"
 )
 #: named initial sets
 NAMED_SETS = ("zero", "alternate", "preferred")
@@ -72,15 +75,21 @@ def _angles(value, field):
 
     if isinstance(value, str):
         if value not in NAMED_SETS:
-            raise ValueError(
-                f"{field}: must be one of {NAMED_SETS} or a list of angles, got {value!r}"
+            raise FieldError(
+                field, f"must be one of {NAMED_SETS} or a list of angles, got {value!r}"
             )
         return value
     if not isinstance(value, list) or not value:
-        raise ValueError(f"{field}: must be one of {NAMED_SETS} or a list of angles, got {value!r}")
-    out = np.array([float(to_si_array(v, "rad", field)) for v in value])
+        raise FieldError(field, f"must be one of {NAMED_SETS} or a list of angles, got {value!r}")
+    if any(isinstance(v, bool) or not isinstance(v, (int, float, str)) for v in value):
+        raise FieldError(
+            field, f"gimbal angles must be numbers or angles with units, got {value!r}"
+        )
+    out = np.array([to_si_array(v, "rad", field) for v in value], float)
+    if out.shape != (len(value),):
+        raise FieldError(field, f"each gimbal angle must be one value, got {value!r}")
     if not np.all(np.isfinite(out)):
-        raise ValueError(f"{field}: angles must be finite, got {value!r}")
+        raise FieldError(field, f"angles must be finite, got {value!r}")
     return out.tolist()
 
 
@@ -92,16 +101,18 @@ MAX_DURATION = 3600.0
 
 
 def _vector3(value, field):
+    if isinstance(value, list) and any(isinstance(v, bool) for v in value):
+        raise FieldError(field, f"must be three finite numbers, got {value!r}")
     try:
         v = np.asarray(value, float) if isinstance(value, list) else None
     except (TypeError, ValueError):
         v = None
     if v is None or v.shape != (3,) or not np.all(np.isfinite(v)):
-        raise ValueError(f"{field}: must be three finite numbers, got {value!r}")
+        raise FieldError(field, f"must be three finite numbers, got {value!r}")
     if np.abs(v).max() > MAX_DEMAND:
-        raise ValueError(
-            f"{field}: components must be at most {MAX_DEMAND:g} rotor momenta per "
-            f"second, got {value!r}"
+        raise FieldError(
+            field,
+            f"components must be at most {MAX_DEMAND:g} rotor momenta per second, got {value!r}",
         )
     return v.tolist()
 
@@ -120,7 +131,7 @@ class Cluster(SchemaSection):
     @classmethod
     def _skew(cls, value):
         if not value < np.pi / 2:
-            raise ValueError(f"skew: must lie in (0, 90°), got {np.rad2deg(value):.6g}°")
+            raise FieldError("skew", f"must lie in (0, 90°), got {np.rad2deg(value):.6g}°")
         return value
 
 
@@ -135,10 +146,10 @@ class HarmonicDemand(SchemaSection):
     @classmethod
     def _frequency(cls, value):
         if not 0.0 <= value <= 100.0:
-            raise ValueError(f"frequency: must lie in [0, 100] Hz, got {value!r}")
+            raise FieldError("frequency", f"must lie in [0, 100] Hz, got {value!r}")
         return value
 
-    @field_validator("constant", "amplitude")
+    @field_validator("constant", "amplitude", mode="before")
     @classmethod
     def _three(cls, value, info):
         return _vector3(value, info.field_name)
@@ -164,7 +175,7 @@ class CmgRunSpec(SchemaSection):
     @classmethod
     def _duration(cls, value):
         if value > MAX_DURATION:
-            raise ValueError(f"duration: at most {MAX_DURATION:g} s, got {value!r}")
+            raise FieldError("duration", f"at most {MAX_DURATION:g} s, got {value!r}")
         return value
 
     null_motion: NullMotion | None = None
@@ -175,7 +186,7 @@ class CmgRunSpec(SchemaSection):
     def _initial(cls, value, info):
         return None if value is None else _angles(value, info.field_name)
 
-    @field_validator("demand")
+    @field_validator("demand", mode="before")
     @classmethod
     def _demand(cls, value):
         return _vector3(value, "demand") if isinstance(value, list) else value
@@ -183,16 +194,16 @@ class CmgRunSpec(SchemaSection):
     @model_validator(mode="after")
     def _one_law(self):
         if (self.demand is None) == (self.reorient_to is None):
-            raise ValueError(
-                "demand: give a torque demand or reorient_to (null motion alone), one of them"
+            raise FieldError(
+                "demand", "give a torque demand or reorient_to (null motion alone), one of them"
             )
         if self.reorient_to is not None and self.null_motion is not None:
-            raise ValueError("null_motion: not with reorient_to (that is the null motion)")
+            raise FieldError("null_motion", "not with reorient_to (that is the null motion)")
         uses_direction = "preferred" in (self.initial, self.reorient_to) or (
             self.null_motion is not None and self.null_motion.target == "preferred"
         )
         if uses_direction and self.demand_direction() is None:
-            raise ValueError("initial: 'preferred' needs a demand with a nonzero mean direction")
+            raise FieldError("initial", "'preferred' needs a demand with a nonzero mean direction")
         return self
 
     def demand_direction(self) -> np.ndarray | None:
@@ -220,14 +231,15 @@ class CmgScenario(Document):
                 None if run.null_motion is None else run.null_motion.target,
             ):
                 if isinstance(value, list) and len(value) != self.cluster.n_units:
-                    raise ValueError(
-                        f"runs[{run.label!r}]: gimbal sets need "
+                    raise FieldError(
+                        f"runs[{run.label!r}]",
+                        "gimbal sets need "
                         f"{self.cluster.n_units} angles (cluster.n_units), got "
-                        f"{len(value)}"
+                        f"{len(value)}",
                     )
             if "alternate" in (run.initial, run.reorient_to) and self.cluster.n_units != 4:
-                raise ValueError(
-                    f"runs[{run.label!r}]: 'alternate' is the 4-unit set [45, -45, 45, -45] deg"
+                raise FieldError(
+                    f"runs[{run.label!r}]", "'alternate' is the 4-unit set [45, -45, 45, -45] deg"
                 )
         return self
 
@@ -265,7 +277,7 @@ class StationRunSpec(SchemaSection):
     def _initial(cls, value):
         value = _angles(value, "initial")
         if isinstance(value, list) and len(value) != 4:
-            raise ValueError(f"initial: the station's pyramid has 4 gimbals, got {len(value)}")
+            raise FieldError("initial", f"the station's pyramid has 4 gimbals, got {len(value)}")
         return value
 
 
@@ -333,15 +345,15 @@ def _demand_function(demand):
     return lambda t: -(c + a * np.sin(2.0 * np.pi * f * t))
 
 
-def _steering_run(run: CmgRunSpec, cluster: Cluster, sigma0: np.ndarray) -> CmgRun:
-    """A torque-steering run from ``sigma0``: the pseudo-inverse (or SR) law until the first
-    singular set (:func:`flexsat.cases.cmg_pyramid.integrate_gimbals`, which stops there)."""
+def _steering_simulation(run: CmgRunSpec, cluster: Cluster, sigma0: np.ndarray) -> Simulation:
+    """A torque-steering run from ``sigma0``: the pseudo-inverse (or SR) law on the gimbal
+    cluster, stopped at the first singular set under ``pi``
+    (:func:`flexsat.cases.cmg_pyramid.steering_simulation`)."""
     from flexsat.cases import cmg_pyramid
 
     null = run.null_motion
-    d = run.demand_direction()
     alpha = cluster.alpha if cluster.steering == "sr" else 0.0
-    g = cmg_pyramid.integrate_gimbals(
+    plant, law, config, options = cmg_pyramid.steering_simulation(
         sigma0,
         _demand_function(run.demand),
         run.duration,
@@ -351,19 +363,29 @@ def _steering_run(run: CmgRunSpec, cluster: Cluster, sigma0: np.ndarray) -> CmgR
         alpha=alpha,
         threshold=cluster.threshold,
         stop_at_singular=cluster.steering == "pi",
-        null_target=None if null is None else _resolve(null.target, d, cluster),
+        null_target=None
+        if null is None
+        else _resolve(null.target, run.demand_direction(), cluster),
         null_gain=1.0 if null is None else null.gain,
         null_alpha=alpha,
     )
-    return _cmg_run(run.label, g, sigma0, d, cluster)
+    return Simulation(plant, law, config, options)
 
 
-def _cmg_run(label: str, g, sigma0: np.ndarray, direction, cluster: Cluster) -> CmgRun:
-    """The :class:`CmgRun` of a gimbal history ``g`` (:class:`flexsat.dynamics.cmg.GimbalRun`):
-    its peak gimbal rate and outcome (the singularity met and its kind)."""
+def _cmg_run(
+    label: str,
+    g: GimbalRun,
+    sigma0: np.ndarray,
+    direction: np.ndarray | None,
+    cluster: Cluster,
+    rates: np.ndarray,
+) -> CmgRun:
+    """The :class:`CmgRun` of a gimbal history ``g`` (:class:`flexsat.dynamics.cmg.GimbalRun`)
+    and its recorded gimbal rates ``rates`` (n_t, n), the law's σ̇ at the samples (at a
+    singular stop the rate there, which grows as the gain falls): its peak gimbal rate and
+    outcome (the singularity met and its kind)."""
     from flexsat.dynamics import cmg
 
-    rates = np.gradient(g.sigma, g.t, axis=0)
     internal = None
     if g.singular:
         k = int(np.argmin(g.gain))
@@ -424,24 +446,31 @@ class CmgResult(ReportedResult):
         import xarray as xr
 
         n = self.scenario.cluster.n_units
+        # a run stopped at a singular set holds fewer samples: NaN after its end
+        width = max(r.gimbals.t.size for r in self.runs)
+
+        def stacked(name: str) -> np.ndarray:
+            out = []
+            for r in self.runs:
+                a = np.asarray(getattr(r.gimbals, name), float)
+                pad = np.full((width - a.shape[0],) + a.shape[1:], np.nan)
+                out.append(np.concatenate([a, pad]))
+            return np.array(out)
+
         ds = xr.Dataset(
             {
-                "time": (
-                    ("run", "sample"),
-                    np.array([r.gimbals.t for r in self.runs]),
-                    {"units": "s"},
-                ),
+                "time": (("run", "sample"), stacked("t"), {"units": "s"}),
                 "gimbal_angles": (
                     ("run", "sample", "gimbal"),
-                    np.array([r.gimbals.sigma for r in self.runs]),
+                    stacked("sigma"),
                     {"units": "rad"},
                 ),
                 "momentum": (
                     ("run", "sample", "axis"),
-                    np.array([r.gimbals.h for r in self.runs]),
+                    stacked("h"),
                     {"units": "rotor momenta h"},
                 ),
-                "gain": (("run", "sample"), np.array([r.gimbals.gain for r in self.runs])),
+                "gain": (("run", "sample"), stacked("gain")),
                 "initial_angles": (
                     ("run", "gimbal"),
                     np.array([r.sigma0 for r in self.runs]),
@@ -557,15 +586,12 @@ class CmgKind(ScenarioKind):
         return len(scenario.runs) + 1
 
     def plan(self, scenario: CmgScenario) -> Generator[Run, Any, CmgResult]:
-        """Each run in turn: a reorientation is a :class:`~flexsat.scenarios.kind.Simulation`
-        of the null-motion law on the gimbal cluster
-        (:func:`flexsat.cases.cmg_pyramid.reorient_simulation`); a torque-steering run, which
-        stops at the first singular set (a terminal condition :func:`flexsat.sim.simulate`
-        does not take), is run by :func:`flexsat.cases.cmg_pyramid.integrate_gimbals` on the
-        engine's continuous mode."""
-        import functools
-
+        """Each run in turn, a :class:`~flexsat.scenarios.kind.Simulation` on the gimbal
+        cluster: a torque-steering run the pseudo-inverse (or SR) law, stopped at the first
+        singular set (:func:`flexsat.cases.cmg_pyramid.steering_simulation`), a reorientation
+        the null-motion law (:func:`flexsat.cases.cmg_pyramid.reorient_simulation`)."""
         from flexsat.cases import cmg_pyramid
+        from flexsat.dynamics.gimbal_cluster import GimbalCluster
 
         cluster = scenario.cluster
         runs = []
@@ -574,28 +600,30 @@ class CmgKind(ScenarioKind):
             d = run.demand_direction()
             try:
                 sigma0 = _resolve(run.initial, d, cluster)
-                if run.reorient_to is not None:
+                if run.reorient_to is None:
+                    task = _steering_simulation(run, cluster, sigma0)
+                else:
                     target = _resolve(run.reorient_to, d, cluster)
                     alpha = cluster.alpha if cluster.steering == "sr" else 0.0
-                    plant, law, config, options = cmg_pyramid.reorient_simulation(
-                        sigma0,
-                        target,
-                        run.duration,
-                        1.0,
-                        cluster.skew,
-                        cluster.n_units,
-                        alpha=max(alpha, 1e-3),
-                        n_out=N_OUT,
+                    task = Simulation(
+                        *cmg_pyramid.reorient_simulation(
+                            sigma0,
+                            target,
+                            run.duration,
+                            1.0,
+                            cluster.skew,
+                            cluster.n_units,
+                            alpha=max(alpha, 1e-3),
+                            n_out=N_OUT,
+                        )
                     )
             except ValueError as exc:
                 raise ScenarioError([locate(path, exc)]) from None
-            if run.reorient_to is None:
-                steer = functools.partial(_steering_run, run, cluster, sigma0)
-                runs.append((yield Run(run.label, steer, path)))
-                continue
-            result = yield Run(run.label, Simulation(plant, law, config, options), path)
-            g = cmg_pyramid.gimbal_run(plant, result.dataset)
-            runs.append(_cmg_run(run.label, g, sigma0, d, cluster))
+            result = yield Run(run.label, task, path)
+            assert isinstance(task.plant, GimbalCluster)  # both builders make one
+            g = cmg_pyramid.gimbal_run(task.plant, result.dataset)
+            rates = result.dataset["gimbal_rates"].values[0]
+            runs.append(_cmg_run(run.label, g, sigma0, d, cluster, rates))
         table = yield Run("V1–V8 table", validation_table)
         notes = (
             "Demands are the paper's T = ḣ (Eq. 5) in rotor momenta per second; the spacecraft "
@@ -693,23 +721,18 @@ class StationResult(ReportedResult):
         return station_sections(self, self.metrics_records(), figures)
 
 
-def _attitude_loop(scenario: CmgStationScenario):
-    """The LQR design and the attitude loop (one call into
-    :mod:`flexsat.cases.space_station_cmg`); Bryson maxima the design refuses are reported
-    under ``lqr``."""
+def _station_design(scenario: CmgStationScenario) -> StationDesign:
+    """The LQR design (:func:`flexsat.cases.space_station_cmg.design`); Bryson maxima or filters
+    the design refuses are reported under ``lqr``."""
     from flexsat.cases import space_station_cmg as st
 
     q = scenario.lqr
     data = scenario.build_data()
     try:
         maxima = st.BrysonMaxima(q.attitude, q.rate, q.momentum, q.momentum_integral)
-        design = st.design(data, maxima, tuple(q.pitch_filters), tuple(q.roll_yaw_filters))
+        return st.design(data, maxima, tuple(q.pitch_filters), tuple(q.roll_yaw_filters))
     except ValueError as exc:
         raise ScenarioError([locate("lqr", exc)]) from None
-    sim = scenario.simulation
-    return st.simulate_attitude(
-        design, sim.orbits * data.period, sim.disturbance, sim.initial_attitude
-    )
 
 
 def _initial_set(spec: StationRunSpec, peak_direction: np.ndarray) -> np.ndarray:
@@ -736,18 +759,38 @@ class CmgStationKind(ScenarioKind):
         return len(scenario.runs) + 1
 
     def plan(self, scenario: CmgStationScenario) -> Generator[Run, Any, StationResult]:
-        import functools
-
+        """The attitude loop, a :class:`~flexsat.scenarios.kind.Simulation` of the station
+        under its LQR law (:func:`flexsat.cases.space_station_cmg.attitude_simulation`), then
+        per run the station with its gimbals under the attitude law and the steering of the
+        momentum it demands, stopped at the first singular set
+        (:func:`flexsat.cases.space_station_cmg.cmg_simulation`)."""
         from flexsat.cases import space_station_cmg as st
 
-        run = yield Run("LQR design and attitude loop", functools.partial(_attitude_loop, scenario))
+        design = _station_design(scenario)
+        sim = scenario.simulation
+        duration = sim.orbits * design.data.period
+        try:
+            attitude = st.attitude_simulation(
+                design, duration, sim.disturbance, sim.initial_attitude
+            )
+        except ValueError as exc:
+            raise ScenarioError([locate("simulation", exc)]) from None
+        result = yield Run("LQR design and attitude loop", Simulation(*attitude), "simulation")
+        run = st.station_run(design, result.dataset, sim.disturbance, sim.initial_attitude)
         peak_dir = run.momentum[np.argmax(np.linalg.norm(run.momentum, axis=1))]
         loops, initial = [], []
         for index, spec in enumerate(scenario.runs):
+            path = "runs" + item_path(index, spec.label)
             s0 = _initial_set(spec, peak_dir)
             initial.append(s0)
-            loop = functools.partial(st.cmg_loop, run, s0, scenario.simulation.threshold)
-            loops.append((yield Run(spec.label, loop, "runs" + item_path(index, spec.label))))
+            try:
+                plant, law, config, options = st.cmg_simulation(
+                    design, duration, sim.disturbance, sim.initial_attitude, s0, sim.threshold
+                )
+            except ValueError as exc:
+                raise ScenarioError([locate(path, exc)]) from None
+            result = yield Run(spec.label, Simulation(plant, law, config, options), path)
+            loops.append(st.gimbal_history(plant, result.dataset))
         notes = (
             "The paper's AERO1 disturbance is not given (Geller, private communication): "
             "'aero_substitute' is Eq. (11) plus 0.5 ft-lb 3n and 4n harmonics on each axis and "

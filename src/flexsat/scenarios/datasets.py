@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import xarray as xr
 
+from flexsat.report.json_data import NULL_REASONS
 from flexsat.report.page import ReportedResult
 
 if TYPE_CHECKING:
@@ -19,11 +20,12 @@ if TYPE_CHECKING:
 def add_run_metrics(ds: xr.Dataset, records: list[dict[str, Any]]) -> None:
     """Add each metric of ``records`` (one dict per run: ``run`` its label, then metric: value)
     to ``ds`` as a variable over its ``run`` coordinate; a run without the metric, or with
-    None, holds NaN."""
+    None, holds NaN (a record's ``null_reasons`` say why in ``metrics.json``; they are no
+    metric)."""
     labels = list(ds["run"].values)
     for record in records:
         for key, value in record.items():
-            if key == "run":
+            if key in ("run", NULL_REASONS):
                 continue
             if key not in ds:
                 ds[key] = ("run", np.full(len(labels), np.nan))

@@ -3,9 +3,11 @@
 Every problem found while loading, validating or preparing a scenario is a record of the field
 path and the rule (``runs['Law I'].gains.g1`` and ``must be >= 0``), read as one line
 ``runs['Law I'].gains.g1: must be >= 0``. The helpers here build the paths from pydantic's
-error locations and from the field a runtime error names: as data
-(:class:`flexsat.input_checks.FieldError`), or, for the runtime messages that do not carry it
-yet, from the ``field: rule`` form of their text (:func:`_locate`).
+error locations (:func:`pydantic_problem`) and from the field a runtime error names as data
+(:attr:`flexsat.input_checks.FieldError.field`, :func:`locate`); no message is parsed for them.
+Only the runtime messages of the few modules that do not raise a
+:class:`~flexsat.input_checks.FieldError` yet are read as ``field: rule`` text
+(:func:`_locate`; tests/test_field_errors.py lists those modules).
 """
 
 from __future__ import annotations
@@ -97,9 +99,10 @@ def _locate(path: str, message: str) -> Problem:
     """Prefix ``message`` with the field path ``path`` (``""`` is the scenario itself).
 
     A message that starts with a field name (``"g1: must be >= 0"``) gets the name appended to the
-    path unless the path already ends with it. This reads the text of the messages that carry no
-    field as data (the validators of the schema, the runtime checks not yet raising a
-    :class:`~flexsat.input_checks.FieldError`); :func:`locate` prefers the data.
+    path unless the path already ends with it. This reads the text of the runtime messages that
+    carry no field as data: those of the modules that do not raise a
+    :class:`~flexsat.input_checks.FieldError` yet (the allow-list of
+    tests/test_field_errors.py); delete it with the last of them.
     """
     head = _head(message)
     if head is None:
@@ -115,8 +118,9 @@ def _locate(path: str, message: str) -> Problem:
 def locate(path: str, error: Exception) -> Problem:
     """The problem ``error`` raised for the value at field path ``path``.
 
-    A :class:`~flexsat.input_checks.FieldError` names its field as data: it is appended to
-    ``path`` (unless ``path`` already ends with it); any other error's message is placed by
+    A :class:`~flexsat.input_checks.FieldError` (every refusal of an input below the scenarios,
+    a :class:`~flexsat.units.UnitError` included) names its field as data: it is appended to
+    ``path`` (unless ``path`` already ends with it). Any other error's message is placed by
     :func:`_locate`.
     """
     if isinstance(error, FieldError):
@@ -167,14 +171,18 @@ def _allowed_keys(loc: tuple[int | str, ...], root: type[BaseModel]) -> str:
 
 
 def pydantic_problem(error: ErrorDetails, data: object, root: type[BaseModel]) -> Problem:
-    """The problem of a pydantic error dict of a ``root`` document."""
+    """The problem of a pydantic error dict of a ``root`` document.
+
+    The path is pydantic's location; a validator's own error (``ctx["error"]``) is placed by
+    :func:`locate`, and pydantic's messages (``Input should be ...``) name no field of their own.
+    """
     cause = error.get("ctx", {}).get("error")
     path = _loc_path(error["loc"], data)
     if error["type"] == "extra_forbidden":
         return Problem(path, f"unknown key (allowed: {_allowed_keys(error['loc'], root)})")
     if isinstance(cause, Exception):
         return locate(path, cause)
-    return _locate(path, error["msg"])
+    return Problem(path, error["msg"])
 
 
 __all__ = ["Problem", "ScenarioError", "item_path", "locate", "pydantic_problem"]

@@ -18,6 +18,7 @@ from pydantic import (
     model_validator,
 )
 
+from flexsat.input_checks import FieldError
 from flexsat.limits import is_integral
 from flexsat.units import to_si
 
@@ -35,10 +36,10 @@ def quantity_converter(
             return None
         field = info.field_name or ""  # always set for a field validator
         if isinstance(value, bool):
-            raise ValueError(f"{field}: expected a number or a quantity such as '1 {unit}'")
+            raise FieldError(field, f"expected a number or a quantity such as '1 {unit}'")
         si = to_si(value, unit, field)
         if positive and not si > 0:
-            raise ValueError(f"{field}: must be > 0, got {value!r}")
+            raise FieldError(field, f"must be > 0, got {value!r}")
         return si
 
     return convert
@@ -88,7 +89,7 @@ def integer_in(
         if value is None and optional:
             return None
         if not is_integral(value) or value < minimum or (maximum is not None and value > maximum):
-            raise ValueError(f"{info.field_name}: must be {rule}, got {value!r}")
+            raise FieldError(info.field_name or "", f"must be {rule}, got {value!r}")
         return int(value)
 
     return BeforeValidator(check)
@@ -165,7 +166,7 @@ def check_unique_labels(runs: Iterable[Any]) -> None:
     labels = [run.label for run in runs]
     for label in labels:
         if labels.count(label) > 1:
-            raise ValueError(f"runs: duplicate label {label!r}; each run needs its own label")
+            raise FieldError("runs", f"duplicate label {label!r}; each run needs its own label")
 
 
 __all__ = ["Document", "check_unique_labels", "count", "in_unit", "integer_in", "quantity"]

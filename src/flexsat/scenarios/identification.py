@@ -79,7 +79,7 @@ def _vector_in(unit: str) -> BeforeValidator:
     def convert(value: Any, info: ValidationInfo) -> tuple[float, ...]:
         field = info.field_name or ""  # always set for a field validator
         if not isinstance(value, (list, tuple)) or len(value) != 3:
-            raise ValueError(f"{field}: must be 3 quantities, e.g. ['1 {unit}', 0, 0]")
+            raise FieldError(field, f"must be 3 quantities, e.g. ['1 {unit}', 0, 0]")
         return tuple(to_si(v, unit, field) for v in value)
 
     return BeforeValidator(convert)
@@ -90,7 +90,7 @@ def _sampled(spec: SchemaSection, duration: str, rate: str) -> None:
     :data:`flexsat.limits.MAX_SAMPLES` samples."""
     for name in (duration, rate):
         if not getattr(spec, name) > 0:
-            raise ValueError(f"{name}: must be > 0, got {getattr(spec, name):g}")
+            raise FieldError(name, f"must be > 0, got {getattr(spec, name):g}")
     limits.check_count(
         getattr(spec, duration) * getattr(spec, rate),
         limits.MAX_SAMPLES,
@@ -174,13 +174,13 @@ class WheelSpec(SchemaSection):
     def _one_axis_per_wheel(self) -> Self:
         _sampled(self, "duration", "sample_rate")
         if len(self.axes) != len(self.nodes):
-            raise ValueError(
-                f"axes: one torque axis per wheel node ({len(self.nodes)}), got {len(self.axes)}"
+            raise FieldError(
+                "axes", f"one torque axis per wheel node ({len(self.nodes)}), got {len(self.axes)}"
             )
         if self.torque_constants and len(self.torque_constants) != len(self.nodes):
-            raise ValueError(
-                f"torque_constants: one factor per wheel ({len(self.nodes)}), got "
-                f"{len(self.torque_constants)}"
+            raise FieldError(
+                "torque_constants",
+                f"one factor per wheel ({len(self.nodes)}), got {len(self.torque_constants)}",
             )
         return self
 
@@ -236,24 +236,26 @@ class IdentificationScenario(Document):
         if self.records is None:
             missing = [name for name in simulated if getattr(self, name) is None]
             if missing:
-                raise ValueError(
-                    f"{missing[0]}: required to simulate the tests (or give "
-                    "'records' with measured data)"
+                raise FieldError(
+                    f"{missing[0]}",
+                    "required to simulate the tests (or give 'records' with measured data)",
                 )
         else:
             given = [name for name in simulated + ("truth",) if name in self.model_fields_set]
             if given:
-                raise ValueError(
-                    f"{given[0]}: describes a simulated test; with 'records' the "
-                    "tests are measured (leave it out)"
+                raise FieldError(
+                    f"{given[0]}",
+                    "describes a simulated test; with 'records' the "
+                    "tests are measured (leave it out)",
                 )
         gains = self.identification.torque_constants or (
             self.wheels is not None and self.wheels.torque_constants
         )
         if gains and self.identification.update != "differential_correction":
-            raise ValueError(
-                "identification.update: the wheels' torque constants are identified "
-                "from the FRF, which only 'differential_correction' uses"
+            raise FieldError(
+                "identification.update",
+                "the wheels' torque constants are identified "
+                "from the FRF, which only 'differential_correction' uses",
             )
         return self
 
@@ -436,7 +438,41 @@ def _check_against_case(
     targets = [] if records is not None or scenario.sensors is None else scenario.sensors.targets
     if len(set(targets)) != len(targets):
         problems.append("sensors.targets: node ids must be distinct")
+    if scenario.truth.modes is not None and scenario.truth.modes > asm.n_dofs:
+        problems.append(
+            f"truth.modes: {scenario.truth.modes} is more than the {asm.n_dofs} modes of "
+            f"{scenario.case}'s model"
+        )
+    problems.extend(_band_problems(scenario, records))
     return list(dict.fromkeys(problems))
+
+
+def _band_problems(scenario: IdentificationScenario, records: object) -> list[str]:
+    """The identification band inside every simulated test's anti-aliased bandwidth: the
+    campaign filters each channel at ``anti_alias`` × its sample rate, so a band above the
+    slowest test's cut-off holds no measured mode, and the FRF grid over it (0.4 Hz to the band
+    in fixed steps) would grow without bound."""
+    band = scenario.identification.band
+    if not band > 0:
+        return [f"identification.band: must be > 0 Hz, got {band:g} Hz"]
+    if records is not None:
+        return []
+    # without records every test is simulated: the schema requires all three sections then
+    assert scenario.hammer and scenario.wheels and scenario.video
+    rates = {
+        "hammer.sample_rate": scenario.hammer.sample_rate,
+        "wheels.sample_rate": scenario.wheels.sample_rate,
+        "video.field_rate": scenario.video.field_rate,
+    }
+    slowest = min(rates, key=lambda name: rates[name])
+    cutoff = scenario.identification.anti_alias * rates[slowest]
+    if band > cutoff:
+        return [
+            f"identification.band: {band:g} Hz is above the anti-alias cut-off {cutoff:g} Hz "
+            f"of the slowest test ({slowest} {rates[slowest]:g} Hz × anti_alias "
+            f"{scenario.identification.anti_alias:g}): no mode above it is measured"
+        ]
+    return []
 
 
 def _read_records(scenario: IdentificationScenario) -> TestRecords:

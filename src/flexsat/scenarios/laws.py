@@ -17,6 +17,7 @@ from flexsat.control import (
     LyapunovTracker,
     refine_estimator,
 )
+from flexsat.input_checks import FieldError
 from flexsat.scenarios.fields import given_fields
 
 if TYPE_CHECKING:
@@ -76,8 +77,8 @@ def _lqg(run: RunSpec, ctx: CaseContext, reference: TorqueShape | None) -> Contr
     C[0, 0] = C[1, n] = 1.0
     weights = spec.mode_weights
     if not isinstance(weights, float) and len(weights) != k:
-        raise ValueError(
-            f"lqg.mode_weights: give one weight or one per mode ({k}), got {len(weights)}"
+        raise FieldError(
+            "lqg.mode_weights", f"give one weight or one per mode ({k}), got {len(weights)}"
         )
     modes = np.broadcast_to(np.asarray(weights, float), (k,))
     per_dof = np.concatenate([[spec.rigid_weight], modes])

@@ -45,6 +45,7 @@ from pydantic import Field, field_validator, model_validator
 from flexsat import limits
 from flexsat.cases import CASES, get_case
 from flexsat.dynamics.hybrid import HybridPlant
+from flexsat.input_checks import FieldError
 from flexsat.maneuvers import BangBang, PseudoSquare, Sinusoidal, SmoothBangBang, TorqueShape
 from flexsat.scenarios.fields import (
     BuildableSection,
@@ -86,9 +87,9 @@ class ManeuverSpec(SchemaSection):
     @classmethod
     def _sensible(cls, angle: float) -> float:
         if abs(angle) > MAX_SLEW:
-            raise ValueError(
-                f"angle: a slew of at most ten turns ({MAX_SLEW:.4g} rad) either "
-                f"way, got {angle:.4g} rad"
+            raise FieldError(
+                "angle",
+                f"a slew of at most ten turns ({MAX_SLEW:.4g} rad) either way, got {angle:.4g} rad",
             )
         return angle
 
@@ -113,11 +114,12 @@ class SimulationSpec(BuildableSection):
 
     def _substeps(self, period: float, step: float) -> int:
         if step <= 0:
-            raise ValueError(f"integration_step: must be > 0, got {step:g} s")
+            raise FieldError("integration_step", f"must be > 0, got {step:g} s")
         if step >= period:
-            raise ValueError(
-                f"integration_step: must be smaller than the control period 1/control_rate = "
-                f"{1e3 * period:.4g} ms, got {1e3 * step:.4g} ms"
+            raise FieldError(
+                "integration_step",
+                "must be smaller than the control period 1/control_rate = "
+                f"{1e3 * period:.4g} ms, got {1e3 * step:.4g} ms",
             )
         return math.ceil(period / step - 1e-9)
 
@@ -131,9 +133,9 @@ class ActuatorSpec(BuildableSection):
     def _sensible(cls, ratio: float | None) -> float | None:
         # actual / nominal torque constant: a motor off by more than 10x is a different motor
         if ratio is not None and ratio > 10:
-            raise ValueError(
-                f"torque_constant_ratio: actual / nominal torque constant, at most "
-                f"10, got {ratio:g}"
+            raise FieldError(
+                "torque_constant_ratio",
+                f"actual / nominal torque constant, at most 10, got {ratio:g}",
             )
         return ratio
 
@@ -179,8 +181,8 @@ class DisturbancesSpec(BuildableSection):
         """Keyword arguments ``friction``, ``random_torque``, ``impulses`` of :class:`SimConfig`."""
         try:
             random = RandomTorque(*(() if self.random_torque is None else (self.random_torque,)))
-        except ValueError as exc:
-            raise ValueError(str(exc).replace("std:", "random_torque:", 1)) from None
+        except FieldError as exc:  # its one input, std, is this section's random_torque
+            raise FieldError("random_torque", exc.rule) from None
         impulses = Impulses(
             tuple(i.time for i in self.impulses), tuple(i.impulse for i in self.impulses)
         )
@@ -207,7 +209,7 @@ class PolesSpec(SchemaSection):
 
 class LQGSpec(SchemaSection):
     """Weights and noise intensities of an LQG law on the plant's modal state
-    x = [θ, q, θ', q'] with measurements (θ, θ') (seed 001 Eqs. 38-53).
+    x = [θ, q, θ', q'] with measurements (θ, θ') (Hailey, Sortun & Agrawal c. 1992 Eqs. 38-53).
 
     ``mode_weights`` (one per retained mode, or one for all) weight q_i and q'_i alike;
     ``process_noise`` is the intensity of a torque disturbance (Q_xx = B·qn·Bᵀ, Eq. 43);
@@ -226,10 +228,10 @@ class LQGSpec(SchemaSection):
     @model_validator(mode="after")
     def _truncation(self) -> Self:
         if self.refine == "truncated" and self.keep_modes is None:
-            raise ValueError("keep_modes: required by refine 'truncated'")
+            raise FieldError("keep_modes", "required by refine 'truncated'")
         if len(self.sensor_noise) != 2:
-            raise ValueError(
-                f"sensor_noise: give the (θ, θ') intensities, got {len(self.sensor_noise)} values"
+            raise FieldError(
+                "sensor_noise", f"give the (θ, θ') intensities, got {len(self.sensor_noise)} values"
             )
         return self
 
@@ -260,7 +262,7 @@ class ReferenceSpec(SchemaSection):
         own = _SHAPE_PARAMETERS.get(self.shape, ())
         for name in ("alpha", "rise_time"):
             if getattr(self, name) is not None and name not in own:
-                raise ValueError(f"{name}: not a parameter of shape {self.shape!r}")
+                raise FieldError(name, f"not a parameter of shape {self.shape!r}")
         return self
 
     def build(self, angle: float, inertia: float) -> TorqueShape:
@@ -290,28 +292,28 @@ class RunSpec(SchemaSection):
         given = given_fields(self.gains) if self.gains is not None else {}
         for name in given:
             if name not in law.gains:
-                raise ValueError(
-                    f"gains.{name}: not a gain of law {self.law!r} "
-                    f"(its gains: {', '.join(law.gains)})"
+                raise FieldError(
+                    f"gains.{name}",
+                    f"not a gain of law {self.law!r} (its gains: {', '.join(law.gains)})",
                 )
         for name in ("poles", "feedforward"):
             if getattr(self, name) is not None and not law.pd_options:
-                raise ValueError(f"{name}: only for law 'pd'")
+                raise FieldError(name, "only for law 'pd'")
         if (self.lqg is None) != (self.law != "lqg"):
-            raise ValueError("lqg: required by law 'lqg' and only for it")
+            raise FieldError("lqg", "required by law 'lqg' and only for it")
         if self.poles is not None and self.gains is not None:
-            raise ValueError("gains: give gains or poles, not both")
+            raise FieldError("gains", "give gains or poles, not both")
         missing = [g for g in law.required if g not in given]
         if self.poles is None and missing:
-            raise ValueError(
-                f"gains.{missing[0]}: required by law {self.law!r}"
-                + (" (or give poles)" if law.pd_options else "")
+            raise FieldError(
+                f"gains.{missing[0]}",
+                f"required by law {self.law!r}" + (" (or give poles)" if law.pd_options else ""),
             )
         if law.reference == "required" and self.reference is None:
-            raise ValueError(f"reference: required by law {self.law!r}")
+            raise FieldError("reference", f"required by law {self.law!r}")
         if law.reference == "forbidden" and self.reference is not None:
-            raise ValueError(
-                f"reference: law {self.law!r} tracks no reference (use lyapunov_tracker)"
+            raise FieldError(
+                "reference", f"law {self.law!r} tracks no reference (use lyapunov_tracker)"
             )
         return self
 
@@ -336,9 +338,10 @@ class Scenario(Document):
     def _known_case(cls, name: str) -> str:
         get_case(name)
         if name not in maneuver_cases():
-            raise ValueError(
-                f"case: {name!r} has no maneuver model (a hub plant to slew); "
-                f"cases with one: {', '.join(maneuver_cases())}"
+            raise FieldError(
+                "case",
+                f"{name!r} has no maneuver model (a hub plant to slew); "
+                f"cases with one: {', '.join(maneuver_cases())}",
             )
         return name
 
@@ -349,14 +352,14 @@ class Scenario(Document):
     ) -> dict[str, bool | int | float | str]:
         for key, value in overrides.items():
             if _non_finite(value):
-                raise ValueError(f"{key}: must be a finite number, got {value!r}")
+                raise FieldError(key, f"must be a finite number, got {value!r}")
         return overrides
 
     @model_validator(mode="after")
     def _consistent(self) -> Self:
         for name in given_fields(self.model):
             if name in self.case_overrides:
-                raise ValueError(f"model.{name}: also given in case_overrides; give it once")
+                raise FieldError(f"model.{name}", "also given in case_overrides; give it once")
         check_unique_labels(self.runs)
         return self
 

@@ -1,4 +1,5 @@
-"""PPF gain-optimisation scenarios (``kind: ppf``): seed 004's homotopic optimisation of the
+"""PPF gain-optimisation scenarios (``kind: ppf``): Agrawal & Bang 1996's homotopic
+optimisation of the
 nine positive-position-feedback gains of the Agrawal–Bang L structure, its results table and
 the tip responses with the initial and the optimised gains (issue #12, F8–F9)::
 
@@ -35,6 +36,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
+from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import item_path
@@ -67,9 +69,9 @@ class PPFSettings(SchemaSection):
     def _gains(cls, value: float | list[float]) -> float | list[float]:
         g = np.atleast_1d(np.asarray(value, float))
         if g.shape not in ((1,), (9,)) or not np.all(np.isfinite(g)):
-            raise ValueError(
-                f"initial_gains: one gain or nine (actuator-major, g11 g12 g13 g21 "
-                f"...), finite, got {value!r}"
+            raise FieldError(
+                "initial_gains",
+                f"one gain or nine (actuator-major, g11 g12 g13 g21 ...), finite, got {value!r}",
             )
         return value
 
@@ -84,9 +86,10 @@ class PPFSimulation(SchemaSection):
     def _samples(self) -> Self:
         n = self.duration * self.control_rate
         if n > limits.MAX_SAMPLES:
-            raise ValueError(
-                f"simulation.duration: {n:.3g} control periods is more than "
-                f"{limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)"
+            raise FieldError(
+                "simulation.duration",
+                f"{n:.3g} control periods is more than "
+                f"{limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)",
             )
         return self
 
@@ -108,11 +111,8 @@ class GoalSpec(SchemaSection):
 
         try:
             return GoalRule(self.rule, self.value)
-        except ValueError as exc:
-            message = str(exc)
-            raise ValueError(
-                message[len("goal.") :] if message.startswith("goal.") else message
-            ) from None
+        except FieldError as exc:  # GoalRule's goal.value is this section's value
+            raise FieldError(exc.field.removeprefix("goal."), exc.rule) from None
 
 
 class PPFRunSpec(SchemaSection):
@@ -127,8 +127,8 @@ class PPFRunSpec(SchemaSection):
     @classmethod
     def _weights(cls, value: list[float]) -> list[float]:
         if len(value) != 2 or not all(np.isfinite(value)) or min(value) < 0:
-            raise ValueError(
-                f"weights: must be the two numbers (w1, w2) >= 0 of Eq. 35, got {value!r}"
+            raise FieldError(
+                "weights", f"must be the two numbers (w1, w2) >= 0 of Eq. 35, got {value!r}"
             )
         return value
 
@@ -314,6 +314,25 @@ def _responses(run: PPFCaseRun) -> dict[str, np.ndarray]:
     return run.responses
 
 
+#: the run's fields by the names :func:`~flexsat.control.ppf_optimization.optimize_ppf_gains`
+#: gives them (the cost's scale follows from the run's weights and the shared ``Q_u``)
+_OPTIMISER_FIELDS = {"problem": "weights", "J_goal": "goal.value"}
+
+
+def _optimise(*args: Any, **kwargs: Any) -> Any:
+    """:func:`~flexsat.cases.agrawal_bang_ppf.run_ppf_case`, its refusals named by the run's
+    fields."""
+    from flexsat.cases.agrawal_bang_ppf import run_ppf_case
+
+    try:
+        return run_ppf_case(*args, **kwargs)
+    except FieldError as exc:
+        rule = exc.rule + (
+            " (the run's weights and ppf.Q_u set it)" if exc.field == "problem" else ""
+        )
+        raise FieldError(_OPTIMISER_FIELDS.get(exc.field, exc.field), rule) from None
+
+
 class PPFKind(ScenarioKind):
     """``kind: ppf``: the PPF gains of the Agrawal–Bang structure optimised per run (module
     docstring)."""
@@ -326,14 +345,15 @@ class PPFKind(ScenarioKind):
         return 4 * len(scenario.runs)
 
     def plan(self, scenario: PPFScenario) -> Generator[Run, Any, PPFResult]:
-        """Optimise every run's gains (homotopy of seed 004 Eqs. 15–28), then simulate its tip
+        """Optimise every run's gains (homotopy of Agrawal & Bang 1996 Eqs. 15–28), then
+        simulate its tip
         responses with zero, initial and optimised gains; a value the problem or the optimiser
         refuses is reported under its run."""
         import dataclasses
         import functools
 
         from flexsat.cases.agrawal_bang import agrawal_bang
-        from flexsat.cases.agrawal_bang_ppf import response_simulations, run_ppf_case, tip_history
+        from flexsat.cases.agrawal_bang_ppf import response_simulations, tip_history
         from flexsat.catalog import get_case
         from flexsat.references import cite
 
@@ -343,7 +363,7 @@ class PPFKind(ScenarioKind):
         for index, run in enumerate(scenario.runs):
             path = "runs" + item_path(index, run.label)
             optimise = functools.partial(
-                run_ppf_case,
+                _optimise,
                 run.weights,
                 run.excitation,
                 run.goal.build(),
@@ -376,7 +396,7 @@ class PPFKind(ScenarioKind):
             "runs: each mode with that modal energy, random signs in the cost, all pushing the "
             "tip along +n̂_1 in the responses). The paper gives none of these.",
             "The 'paper' goal is J_goal/J_init as implied by the published table of the same "
-            "case (J_opt = 0.9 J_goal + 0.1 J_init, the γ stop of L345): slightly above 1, so the "
+            "case (J_opt = 0.9 J_goal + 0.1 J_init, the γ stop of §4): slightly above 1, so the "
             "homotopy raises J. On this model ∂J/∂g < 0 (more PPF gain, more damping), so the "
             "gains move down, barely: the published gains' 10³-fold growth is not reproduced.",
         )

@@ -23,6 +23,8 @@ from typing import Any
 
 from pydantic import BaseModel
 
+from flexsat.input_checks import FieldError
+
 
 def component_rule(obj: Any, section_models: tuple[str, ...] = ("Parameters",)) -> str | None:
     """Why ``obj`` is not a scenario component (module docstring), or None.
@@ -74,19 +76,19 @@ def validate_section(
         section's field) for a value its field refuses.
     """
     if not isinstance(values, Mapping):
-        raise ValueError(f"{section}: a mapping of {noun}s, got {values!r}")
+        raise FieldError(section, f"a mapping of {noun}s, got {values!r}")
     known = list(model.model_fields)
     article = "an" if noun[0] in "aeiou" else "a"
     if model.model_config.get("extra") != "allow":
         for key in values:
             if key not in known:
-                raise ValueError(
-                    f"{key}: not {article} {noun} of {owner} (its {noun}s: "
-                    f"{', '.join(known) or 'none'})"
+                raise FieldError(
+                    key,
+                    f"not {article} {noun} of {owner} (its {noun}s: {', '.join(known) or 'none'})",
                 )
     for key, field in model.model_fields.items():
         if field.is_required() and key not in values:
-            raise ValueError(f"{key}: required by {owner}")
+            raise FieldError(key, f"required by {owner}")
     return model.model_validate(dict(values))
 
 

@@ -48,6 +48,7 @@ from pydantic import (
 
 from flexsat import limits
 from flexsat.catalog import get_case
+from flexsat.input_checks import FieldError
 from flexsat.scenarios.datasets import SimulatedRuns
 from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
@@ -134,7 +135,7 @@ class SimulationRunSpec(SchemaSection):
     def _known_law(cls, name: str) -> str:
         laws = simulation_laws()
         if name not in laws:
-            raise ValueError(f"law: unknown law {name!r}; known: {', '.join(sorted(laws))}")
+            raise FieldError("law", f"unknown law {name!r}; known: {', '.join(sorted(laws))}")
         return name
 
     @field_validator("gains")
@@ -156,7 +157,7 @@ class SimulationRunSpec(SchemaSection):
         if not target:
             return None
         if model is None:
-            raise ValueError(f"target: law {name!r} takes no target")
+            raise FieldError("target", f"law {name!r} takes no target")
         return validate_section(model, target, f"law {name!r}", "target", "target")
 
 
@@ -199,10 +200,11 @@ class SimulationScenario(Document):
     def _plant_and_labels(self) -> Self:
         if isinstance(self.plant, dict):
             named = sorted(set(simulation_plants()) - set(simulation_cases()))
-            raise ValueError(
-                f"case: {self.case!r} builds no plant to simulate; cases with one: "
+            raise FieldError(
+                "case",
+                f"{self.case!r} builds no plant to simulate; cases with one: "
                 f"{', '.join(simulation_cases())}"
-                + (f"; or name a plant (plant.name: one of {', '.join(named)})" if named else "")
+                + (f"; or name a plant (plant.name: one of {', '.join(named)})" if named else ""),
             )
         check_unique_labels(self.runs)
         return self
@@ -220,7 +222,7 @@ def named_plant(section: Any, case: str | None) -> tuple[str, BaseModel] | None:
         parameter the plant refuses (pydantic's ValidationError, located at its field).
     """
     if not isinstance(section, dict):
-        raise ValueError(f"plant: a mapping of plant options, got {section!r}")
+        raise FieldError("plant", f"a mapping of plant options, got {section!r}")
     options = dict(section)
     name = options.pop("name", None)
     plants = simulation_plants()
@@ -229,7 +231,7 @@ def named_plant(section: Any, case: str | None) -> tuple[str, BaseModel] | None:
             return None
         name = case
     elif name not in plants:
-        raise ValueError(f"name: unknown plant {name!r}; known: {', '.join(sorted(plants))}")
+        raise FieldError("name", f"unknown plant {name!r}; known: {', '.join(sorted(plants))}")
     parameters = validate_section(
         plants[name].Parameters, options, f"plant {name!r}", "option", "plant"
     )
@@ -347,10 +349,11 @@ def _config(scenario: SimulationScenario, plant: Plant) -> SimConfig:
         raise ScenarioError([Problem("simulation", f"{exc}")]) from None
     try:  # binding each piece to its channel converts its values to the channel's unit
         resolve_channels(plant, config)
+    except FieldError as exc:  # sensors[gyro].noise, as the engine names it: sensors.gyro.noise
+        path = re.sub(r"^(sensors|actuators|disturbances)\[(\w+)\]", r"\1.\2", exc.field)
+        raise ScenarioError([Problem(path, exc.rule)]) from None
     except ValueError as exc:
-        raise ScenarioError(
-            [re.sub(r"^(sensors|actuators|disturbances)\[(\w+)\]", r"\1.\2", str(exc))]
-        ) from None
+        raise ScenarioError([Problem("simulation", str(exc))]) from None
     return config
 
 

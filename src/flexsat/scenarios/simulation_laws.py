@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING, Any, Self, cast
 import numpy as np
 from pydantic import BaseModel, model_validator
 
+from flexsat import limits
+from flexsat.input_checks import FieldError
 from flexsat.scenarios.fields import SchemaSection
 
 if TYPE_CHECKING:
@@ -56,16 +58,16 @@ def target_quaternion(target: dict[str, Value]) -> np.ndarray | None:
         return None
     unknown = set(target) - {"euler123", "attitude"}
     if unknown:
-        raise ValueError(
-            f"target.{sorted(unknown)[0]}: not a target (give euler123 (rad) or "
-            "attitude (a unit quaternion, scalar first))"
+        raise FieldError(
+            f"target.{sorted(unknown)[0]}",
+            "not a target (give euler123 (rad) or attitude (a unit quaternion, scalar first))",
         )
     if len(target) > 1:
-        raise ValueError("target: give euler123 or attitude, not both")
+        raise FieldError("target", "give euler123 or attitude, not both")
     if "euler123" in target:
         angles = to_si_array(target["euler123"], "rad", "target.euler123")
         if angles.shape != (3,):
-            raise ValueError(f"target.euler123: three angles, got shape {angles.shape}")
+            raise FieldError("target.euler123", f"three angles, got shape {angles.shape}")
         return dcm_to_quaternion(euler123_to_dcm(angles))
     return to_si_array(target["attitude"], "", "target.attitude")
 
@@ -80,7 +82,7 @@ class AttitudeTarget(SchemaSection):
     @model_validator(mode="after")
     def _one(self) -> Self:
         if self.euler123 is not None and self.attitude is not None:
-            raise ValueError("target: give euler123 or attitude, not both")
+            raise FieldError("target", "give euler123 or attitude, not both")
         return self
 
     def quaternion(self) -> np.ndarray | None:
@@ -153,8 +155,27 @@ def _weights(value: Value, size: int, field: str) -> np.ndarray:
     if w.size == 1:
         w = np.full(size, float(w[0]))
     if w.shape != (size,) or not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise ValueError(f"{field}: one weight >= 0 or {size} of them, got {np.shape(value)}")
+        raise FieldError(field, f"one weight >= 0 or {size} of them (finite), got {value!r}")
     return np.diag(w)
+
+
+def _check_span(q: np.ndarray, r: np.ndarray) -> None:
+    """Refuse LQR weights spanning more than :data:`flexsat.limits.MAX_WEIGHT_RANGE`, naming
+    the weights that hold the extreme value farther (in decades) from 1."""
+    values = np.concatenate([q, r])
+    positive = values[values > 0]
+    if positive.size == 0 or positive.max() <= limits.MAX_WEIGHT_RANGE * positive.min():
+        return
+    low, high = positive.min(), positive.max()
+    # weights are SI numbers of natural scale 1: the one farther from 1 is out of place
+    extreme = high if abs(np.log10(high)) >= abs(np.log10(low)) else low
+    field = "gains.state_weights" if extreme in q else "gains.input_weights"
+    raise FieldError(
+        field,
+        f"the weights span {high / low:.3g} (from {low:.3g} to {high:.3g}), above "
+        f"{limits.MAX_WEIGHT_RANGE:.0e} (flexsat.limits.MAX_WEIGHT_RANGE: the smaller "
+        "would be below the rounding of the larger in the Riccati equation)",
+    )
 
 
 class LQR:
@@ -172,6 +193,7 @@ class LQR:
         n, m = B.shape
         Q = _weights(parameters.state_weights, n, "gains.state_weights")
         R = _weights(parameters.input_weights, m, "gains.input_weights")
+        _check_span(np.diag(Q), np.diag(R))
         K, _, _ = lqr(A, B, Q, R)
         return ScheduledStateFeedback([0.0], K[None], "state", [c.name for c in plant.inputs])
 

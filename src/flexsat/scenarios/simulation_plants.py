@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 from pydantic import BaseModel, ConfigDict
 
 from flexsat.catalog import CASES, all_cases, get_case
+from flexsat.input_checks import FieldError
 
 if TYPE_CHECKING:
     from flexsat.dynamics.plant import Plant
@@ -50,18 +51,20 @@ class CasePlant:
     def from_scenario(self, parameters: BaseModel, context: PlantContext) -> Plant:
         """Build the case and its plant; the options are checked against ``plant()``."""
         if context.case != self.case:
-            raise ValueError(
-                f"name: {self.case!r} is the plant of case {self.case!r}, not of the "
-                f"scenario's case {context.case!r}"
+            raise FieldError(
+                "name",
+                f"{self.case!r} is the plant of case {self.case!r}, not of the "
+                f"scenario's case {context.case!r}",
             )
         builder = get_case(self.case).builder().plant
         accepted = inspect.signature(builder).parameters
         options = parameters.model_dump()
         for name in options:
             if name not in accepted:
-                raise ValueError(
-                    f"{name}: not an option of the {self.case} plant "
-                    f"(its options: {', '.join(accepted) or 'none'})"
+                raise FieldError(
+                    name,
+                    f"not an option of the {self.case} plant "
+                    f"(its options: {', '.join(accepted) or 'none'})",
                 )
         return builder(**options)
 

@@ -1,5 +1,6 @@
 """Slew scenarios (``kind: slew``): a frequency-shaped optimal three-axis slew of a flexible
-spacecraft with gain-scheduled perturbation feedback, judged against the seed 003 goals.
+spacecraft with gain-scheduled perturbation feedback, judged against
+the EPS slew study c. 1989 goals.
 
 The method of the EPS slew study c. 1989 (after Chun, Turner & Juang 1987): a rigid-body optimal
 nominal maneuver (:func:`~flexsat.maneuvers.three_axis_slew.three_axis_slew`, the TPBVP solved
@@ -9,7 +10,7 @@ weight, gains interpolated in time, disturbance feedforward, optionally the poin
 force/torque decoupling) corrects it::
 
     kind: slew
-    name: EPS 10 s slew, seed 003 cases A-C
+    name: EPS 10 s slew, EPS slew study c. 1989 cases A-C
     case: eps
     plant: {n_modes: 45}
     maneuver:
@@ -45,6 +46,7 @@ from pydantic import Field, field_validator, model_validator
 from flexsat import limits
 from flexsat.catalog import get_case
 from flexsat.design.slew_weights import SlewWeights, nominal_histories, rim_nodes, slew_run_metrics
+from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import concat_runs
 from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
@@ -73,9 +75,24 @@ Weights = float | list[float]
 
 OPEN_LOOP = "open loop"
 
+#: the maneuver's fields by the names :func:`~flexsat.maneuvers.three_axis_slew` gives them
+_MANEUVER_FIELDS = {
+    "omega_b": "break_frequency",
+    "zeta_b": "shaping_damping",
+    "Q": "rate_weight",
+}
+#: the run's fields by the names :func:`~flexsat.control.perturbation_design` gives them
+_DESIGN_FIELDS = {
+    "omega_b": "break_frequency",
+    "zeta_b": "shaping_damping",
+    "n_points": "controller.linearization_points",
+    "Q": "weights",
+    "D": "weights",
+}
+
 
 class SlewManeuverSpec(SchemaSection):
-    """The nominal rigid-body maneuver (seed 003 Eqs. 9–21)."""
+    """The nominal rigid-body maneuver (EPS slew study c. 1989 Eqs. 9–21)."""
 
     target: dict[str, Any]
     duration: Annotated[float, in_unit("s", positive=True)]
@@ -87,15 +104,17 @@ class SlewManeuverSpec(SchemaSection):
     @classmethod
     def _rotation(cls, target: dict[str, Any]) -> dict[str, Any]:
         if not target:
-            raise ValueError(
-                "target: give euler123 (three angles) or attitude (a unit quaternion, scalar first)"
+            raise FieldError(
+                "target",
+                "give euler123 (three angles) or attitude (a unit quaternion, scalar first)",
             )
         beta = target_quaternion(target)
         assert beta is not None  # of a target that is not empty
         if beta.shape != (4,) or abs(np.linalg.norm(beta) - 1.0) > 1e-9:
-            raise ValueError(
-                f"target.attitude: must be a unit quaternion (4 values, norm 1 to "
-                f"1e-9), got {np.round(beta, 12).tolist()}"
+            raise FieldError(
+                "target.attitude",
+                "must be a unit quaternion (4 values, norm 1 to "
+                f"1e-9), got {np.round(beta, 12).tolist()}",
             )
         return target
 
@@ -108,9 +127,10 @@ class ControllerSpec(SchemaSection):
 
 
 class GoalsSpec(SchemaSection):
-    """The goals of seed 003 L792–L801 (:class:`~flexsat.sim.slew_goals.SlewGoals`)."""
+    """The goals of EPS slew study c. 1989 "Simulation Results"
+    (:class:`~flexsat.sim.slew_goals.SlewGoals`)."""
 
-    angle_fraction: float = Field(0.03, gt=0.0)
+    angle_fraction: float = Field(0.03, gt=0.0, le=1.0)
     evaluation: float = Field(1.25, ge=1.0)
     deflection_ratio: float = Field(10.0, gt=0.0)
 
@@ -141,20 +161,22 @@ class SlewRunSpec(SchemaSection):
     @classmethod
     def _not_open_loop(cls, label: str) -> str:
         if label == OPEN_LOOP:
-            raise ValueError(
-                f"label: {OPEN_LOOP!r} names the nominal torque alone, which every "
-                "slew scenario runs; choose another label"
+            raise FieldError(
+                "label",
+                f"{OPEN_LOOP!r} names the nominal torque alone, which every "
+                "slew scenario runs; choose another label",
             )
         return label
 
     @model_validator(mode="after")
     def _force_weights(self) -> Self:
         if self.forces != "none" and self.weights.force is None:
-            raise ValueError("weights.force: required when the run uses forces")
+            raise FieldError("weights.force", "required when the run uses forces")
         if self.decouple and self.forces == "none":
-            raise ValueError(
-                "decouple: needs forces (decoupling keeps the forces' net moment "
-                "about the centre of mass zero)"
+            raise FieldError(
+                "decouple",
+                "needs forces (decoupling keeps the forces' net moment "
+                "about the centre of mass zero)",
             )
         return self
 
@@ -179,21 +201,37 @@ class SlewScenario(Document):
 
         get_case(name)
         if name not in simulation_cases():
-            raise ValueError(
-                f"case: {name!r} builds no plant to slew; cases with one: "
-                f"{', '.join(simulation_cases())}"
+            raise FieldError(
+                "case",
+                f"{name!r} builds no plant to slew; cases with one: "
+                f"{', '.join(simulation_cases())}",
             )
         return name
 
     @model_validator(mode="after")
     def _checks(self) -> Self:
         check_unique_labels(self.runs)
+        # the nominal torque is played back and the feedback runs at the control rate: a
+        # shaping break above its Nyquist frequency π f_c shapes what neither can produce
+        nyquist = np.pi * self.simulation.control_rate
+        breaks = [("maneuver.break_frequency", self.maneuver.break_frequency)] + [
+            (f"runs{item_path(i, r.label)}.break_frequency", r.break_frequency)
+            for i, r in enumerate(self.runs)
+        ]
+        for field, value in breaks:
+            if value > nyquist:
+                raise FieldError(
+                    field,
+                    f"must be at most the control's Nyquist frequency π × "
+                    f"simulation.control_rate = {nyquist:.4g} rad/s, got {value:.4g} rad/s",
+                )
         if self.simulation.duration < self.goals.evaluation * self.maneuver.duration:
-            raise ValueError(
-                f"simulation.duration: must reach {self.goals.evaluation:g} × the "
+            raise FieldError(
+                "simulation.duration",
+                f"must reach {self.goals.evaluation:g} × the "
                 f"maneuver duration ({self.goals.evaluation * self.maneuver.duration:g}"
                 f" s) where the goals are evaluated, got "
-                f"{self.simulation.duration:g} s"
+                f"{self.simulation.duration:g} s",
             )
         return self
 
@@ -355,6 +393,20 @@ def _plants(scenario: SlewScenario) -> tuple[FlexibleSpacecraft, FlexibleSpacecr
                 )
             ]
         )
+    outputs = {c.name for c in truth.outputs}
+    nodes = {n[len("displacement_") : -1] for n in outputs if n.startswith("displacement_")}
+    if not any(all(f"displacement_{n}{a}" in outputs for a in "XYZ") for n in nodes):
+        # the deflection goal compares rim deflections: refused now, not after every run
+        raise ScenarioError(
+            [
+                Problem(
+                    "plant.rim_nodes" if "rim_nodes" in scenario.plant else "plant",
+                    f"the {scenario.case} plant with these options records no rim displacement "
+                    "along X, Y and Z (outputs displacement_<node>X/Y/Z), so the deflection "
+                    "goal cannot be judged; give at least one rim node",
+                )
+            ]
+        )
     if scenario.controller.modes > truth.n_modes:
         raise ScenarioError(
             [
@@ -399,6 +451,10 @@ def _laws(
             laws[run.label] = design.controller(dt, run.feedforward, plant=truth)
         except ScenarioError as exc:  # the run's forces or weights
             problems.extend(exc.problems)
+        except FieldError as exc:  # named by the scenario's fields
+            field = _DESIGN_FIELDS.get(exc.field, exc.field)
+            where = "" if field.startswith("controller.") else f"runs{item_path(index, run.label)}"
+            problems.append(locate(where, FieldError(field, exc.rule)))
         except ValueError as exc:
             problems.append(locate(f"runs{item_path(index, run.label)}", exc))
     if problems:
@@ -435,20 +491,24 @@ class SlewKind(ScenarioKind):
 
         truth, design_plant = _plants(scenario)
         m = scenario.maneuver
+
         target = target_quaternion(m.target)
         assert target is not None  # the schema refuses an empty target
-        nominal = yield Run(
-            "nominal maneuver",
-            lambda: three_axis_slew(
-                truth.inertia,
-                target,
-                m.duration,
-                m.break_frequency,
-                m.shaping_damping,
-                Q=m.rate_weight * np.eye(3),
-            ),
-            "maneuver",
-        )
+
+        def solve_nominal() -> ThreeAxisSlew:
+            try:
+                return three_axis_slew(
+                    truth.inertia,
+                    target,
+                    m.duration,
+                    m.break_frequency,
+                    m.shaping_damping,
+                    Q=m.rate_weight * np.eye(3),
+                )
+            except FieldError as exc:  # named by the scenario's fields
+                raise FieldError(_MANEUVER_FIELDS.get(exc.field, exc.field), exc.rule) from None
+
+        nominal = yield Run("nominal maneuver", solve_nominal, "maneuver")
         try:
             config = SimConfig(**given_fields(scenario.simulation))
         except ValueError as exc:

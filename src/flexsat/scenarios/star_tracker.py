@@ -1,5 +1,5 @@
 """Star-tracker scenarios (``kind: star_tracker``): lost-in-space star-pattern identification
-on seeded random attitudes (seed 000 §2.3.4; issue 14 part 4)::
+on seeded random attitudes (Junkins, Pollock & Rahman 1990 §2.3.4; issue 14 part 4)::
 
     kind: star_tracker
     name: two 12° cameras, synthetic sky
@@ -31,6 +31,8 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 import numpy as np
 from pydantic import Field, model_validator
 
+from flexsat.input_checks import FieldError
+from flexsat.report.json_data import NULL_REASONS
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
@@ -53,7 +55,8 @@ if TYPE_CHECKING:
 
 #: the paper this kind reproduces
 SOURCE = (
-    "seed 000 §2.3.4 (Anderson, Pollock & Junkins 1990, 'A testbed for autonomous star "
+    "Junkins, Pollock & Rahman 1990 §2.3.4 (Anderson, Pollock & Junkins 1990, "
+    "'A testbed for autonomous star "
     "pattern recognition and attitude determination'; Junkins, White & Turner 1977)"
 )
 #: most attitudes one run may identify (a run costs ~5 ms per attitude)
@@ -71,8 +74,8 @@ class CatalogSpec(SchemaSection):
     @model_validator(mode="after")
     def _path(self) -> Self:
         if (self.source == "hipparcos") != (self.path is not None):
-            raise ValueError(
-                "path: give the hip_main.dat path with source: hipparcos, and only then"
+            raise FieldError(
+                "path", "give the hip_main.dat path with source: hipparcos, and only then"
             )
         return self
 
@@ -113,7 +116,7 @@ class CameraSpec(BuildableSection):
 
 
 class IdentificationSpec(SchemaSection):
-    """The paper's acceptance rule (seed 000 L280)."""
+    """The paper's acceptance rule (Junkins, Pollock & Rahman 1990 §2.3.4)."""
 
     tolerance: Annotated[float, in_unit("rad", positive=True)] = float(np.radians(5.0 / 3600.0))
     min_triplets: Annotated[int, integer_in(1)] = 3
@@ -144,10 +147,11 @@ class StarTrackerScenario(Document):
     def _checks(self) -> Self:
         check_unique_labels(self.runs)
         if len(self.cameras) < self.identification.min_fields:
-            raise ValueError(
-                f"cameras: identification.min_fields = "
+            raise FieldError(
+                "cameras",
+                "identification.min_fields = "
                 f"{self.identification.min_fields} needs as many cameras, got "
-                f"{len(self.cameras)}"
+                f"{len(self.cameras)}",
             )
         return self
 
@@ -171,27 +175,31 @@ class StarTrackerResult(ReportedResult):
     notes: tuple[str, ...] = ()
 
     def metrics_records(self) -> list[dict[str, Any]]:
-        """One JSON-ready dict per run (arcseconds for angles)."""
+        """One JSON-ready dict per run (arcseconds for angles). A run that accepted no attitude
+        has no error statistics: those metrics are None and its ``null_reasons`` say so."""
         from flexsat.attitude.star_tracker import ARCSEC
 
         out = []
         for label, r in zip(self.labels, self.runs):
             acc = r.accepted
-            std = r.error_std / ARCSEC if acc.any() else np.full(3, np.nan)
-            sig = np.nanmean(r.sigmas, 0) / ARCSEC if acc.any() else np.full(3, np.nan)
             rec: dict[str, Any] = {
                 "run": label,
                 "attitudes": int(acc.size),
                 "identification_rate": float(r.identification_rate),
                 "accepted_rate": float(acc.mean()),
                 "wrong_accepted": int(r.wrong_accepted.sum()),
-                "mean_stars": float(r.n_stars[acc].mean()) if acc.any() else float("nan"),
+                "mean_stars": float(r.n_stars[acc].mean()) if acc.any() else None,
                 "min_triplets": int(r.triplets[acc].min()) if acc.any() else 0,
-                "nees_mean": float(np.nanmean(r.nees)) if acc.any() else float("nan"),
+                "nees_mean": float(np.nanmean(r.nees)) if acc.any() else None,
             }
+            std = r.error_std / ARCSEC if acc.any() else None
+            sig = np.nanmean(r.sigmas, 0) / ARCSEC if acc.any() else None
             for k, axis in enumerate("xyz"):
-                rec[f"error_std_{axis}_arcsec"] = float(std[k])
-                rec[f"quest_sigma_{axis}_arcsec"] = float(sig[k])
+                rec[f"error_std_{axis}_arcsec"] = None if std is None else float(std[k])
+                rec[f"quest_sigma_{axis}_arcsec"] = None if sig is None else float(sig[k])
+            if not acc.any():
+                why = f"no data: none of the {acc.size} attitudes was identified and accepted"
+                rec[NULL_REASONS] = {k: why for k, v in rec.items() if v is None}
             out.append(rec)
         return out
 
@@ -295,9 +303,8 @@ def build_tracker(scenario: StarTrackerScenario) -> StarTracker:
         )
     except ValueError as exc:
         field = getattr(exc, "field", None)
-        raise ScenarioError(
-            [locate("cameras" if field == "cameras" else "identification", exc)]
-        ) from None
+        section = field if field in ("cameras", "catalog") else "identification"
+        raise ScenarioError([locate(section, exc)]) from None
 
 
 class StarTrackerKind(ScenarioKind):
@@ -313,14 +320,27 @@ class StarTrackerKind(ScenarioKind):
     def plan(self, scenario: StarTrackerScenario) -> Generator[Run, Any, StarTrackerResult]:
         import functools
 
-        from flexsat.attitude.star_tracker import check_field_load, monte_carlo
+        from flexsat.attitude.star_tracker import (
+            check_field_load,
+            check_identifiable,
+            monte_carlo,
+        )
 
         tracker = build_tracker(scenario)
         problems = []
-        for index, run in enumerate(scenario.runs):  # every run's load, before the first runs
+        # every run's load, before the first runs; the runs in order of size, so that a sky the
+        # cameras cannot identify in is named for the largest run
+        for index, run in sorted(enumerate(scenario.runs), key=lambda ir: -ir[1].attitudes):
             try:
                 check_field_load(tracker, run.false_stars, run.missing_fraction)
+                check_identifiable(tracker, run.attitudes, run.missing_fraction)
             except ValueError as exc:
+                # a sky, cameras or acceptance rule that fails every run is named once, in
+                # its own section
+                field = getattr(exc, "field", None)
+                if field in ("cameras", "min_triplets", "tolerance"):
+                    where = "" if field == "cameras" else "identification"
+                    raise ScenarioError([locate(where, exc)]) from None
                 problems.append(locate("runs" + item_path(index, run.label), exc))
         if problems:
             raise ScenarioError(problems)
@@ -337,7 +357,7 @@ class StarTrackerKind(ScenarioKind):
             "Accepted: >= min_triplets matched inter-star-angle triplets (triangles whose three "
             "angles match the catalogue within the tolerance) in >= min_fields fields of view, "
             "confirmed by one q-method attitude fitting every kept star within the tolerance "
-            "(seed 000 L280).",
+            "(Junkins, Pollock & Rahman 1990 §2.3.4).",
             "Error: body-axis rotation from the true to the estimated attitude; σ_QUEST: the "
             "covariance of the q-method fit (Shuster & Oh 1981).",
         )

@@ -1,5 +1,6 @@
 """Tethered-subsatellite retrieval scenarios (``kind: tether``): Vadali & Kim's Liapunov laws
-(seed 000 Att. 12; :mod:`flexsat.control.tether_laws`) on the three-degree-of-freedom tether
+(Junkins, Pollock & Rahman 1990, Att. 12; :mod:`flexsat.control.tether_laws`) on the
+three-degree-of-freedom tether
 (:mod:`flexsat.dynamics.tether`), one run per law and gain set (issue 14, F21-F22)::
 
     kind: tether
@@ -45,7 +46,8 @@ if TYPE_CHECKING:
 
     from flexsat.dynamics.tether import ClosedLoopRun, TetherScales
 
-#: the gains each law takes (seed 000 Eqs. 14-15, 18 and 20, 24-25)
+#: the gains each law takes (Junkins, Pollock & Rahman 1990, Att. 12 Eqs. 14-15, 18 and 20,
+#: 24-25)
 LAW_GAINS = {
     "decoupled": ("K1", "K2", "K3"),
     "coupled": ("K1", "K2", "K3", "K4"),
@@ -71,7 +73,7 @@ class TetherSystem(SchemaSection):
         from flexsat.dynamics.tether import TetherScales
 
         if self.altitude is None and self.orbit_rate is None:
-            raise ValueError("altitude: give the orbit's altitude or its orbit_rate")
+            raise FieldError("altitude", "give the orbit's altitude or its orbit_rate")
         return TetherScales(
             mass=self.mass, length=self.length, altitude=self.altitude, orbit_rate=self.orbit_rate
         )
@@ -87,6 +89,19 @@ class TetherInitial(SchemaSection):
     pitch_rate: Annotated[float, in_unit("rad/s")] = 0.0
     roll_rate: Annotated[float, in_unit("rad/s")] = 0.0
 
+    @model_validator(mode="after")
+    def _angles(self) -> Self:
+        # Eq. 4 divides by cos φ (the roll is defined within ±90°), and a pitch is an angle of
+        # one turn at most: a pitch of 1e12° is no libration, and its sine costs the adaptive
+        # integrator every digit (minutes of vanishing steps)
+        if not abs(self.pitch) <= np.pi:
+            raise FieldError("pitch", f"must lie within ±180°, got {np.degrees(self.pitch):g}°")
+        if not abs(self.roll) < 0.5 * np.pi:
+            raise FieldError(
+                "roll", f"must lie strictly within ±90° (Eq. 4), got {np.degrees(self.roll):g}°"
+            )
+        return self
+
 
 class TetherSimulation(SchemaSection):
     """Run length in orbits, output (or control) samples per orbit and the integrator."""
@@ -99,9 +114,9 @@ class TetherSimulation(SchemaSection):
     def _samples(self) -> Self:
         n = self.orbits * self.samples_per_orbit
         if n > limits.MAX_SAMPLES:
-            raise ValueError(
-                f"simulation.samples_per_orbit: {n:.3g} samples is more than "
-                f"{limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)"
+            raise FieldError(
+                "simulation.samples_per_orbit",
+                f"{n:.3g} samples is more than {limits.MAX_SAMPLES:,} (flexsat.limits.MAX_SAMPLES)",
             )
         return self
 
@@ -121,17 +136,18 @@ class TetherRunSpec(SchemaSection):
         missing = [k for k in need if k not in self.gains]
         extra = [k for k in self.gains if k not in need]
         if missing or extra:
-            raise ValueError(
-                f"gains: law {self.law!r} takes {', '.join(need)}"
+            raise FieldError(
+                "gains",
+                f"law {self.law!r} takes {', '.join(need)}"
                 + (f"; missing {', '.join(missing)}" if missing else "")
-                + (f"; unknown {', '.join(extra)}" if extra else "")
+                + (f"; unknown {', '.join(extra)}" if extra else ""),
             )
         for k, v in self.gains.items():
             if not np.isfinite(v) or v < 0 or (k == "K1" and v == 0):
                 rule = "> 0" if k == "K1" else ">= 0"
-                raise ValueError(f"gains: {k} must be finite and {rule}, got {v!r}")
+                raise FieldError("gains", f"{k} must be finite and {rule}, got {v!r}")
         if self.printed_sign and self.law != "decoupled":
-            raise ValueError("printed_sign: only the decoupled law (Eq. 15) has a printed sign")
+            raise FieldError("printed_sign", "only the decoupled law (Eq. 15) has a printed sign")
         return self
 
 
@@ -162,8 +178,8 @@ class TetherScenario(Document):
                     f"{MIN_LENGTH:g} L = {MIN_LENGTH * self.system.length:g} m of the model",
                 )
         if self.initial.length_rate is not None and any(r.law == "rate" for r in self.runs):
-            raise ValueError(
-                "initial.length_rate: a rate-law run sets the length rate itself; leave it out"
+            raise FieldError(
+                "initial.length_rate", "a rate-law run sets the length rate itself; leave it out"
             )
         return self
 
@@ -320,7 +336,8 @@ class TetherKind(ScenarioKind):
             runs.append(closed_loop_run(law, tau, result.dataset))
         notes = (
             "Straight massless tether, no aerodynamics, circular orbit (the paper's model, "
-            "L4281, L4321). Eq. 15 with the repaired sign −K3λφ' (L4395 prints +, which "
+            "Att. 12, 'Equations of Motion'). Eq. 15 with the repaired sign −K3λφ' (the paper "
+            "prints +, which "
             "diverges).",
             "Thrust index ∫|F̂|dτ over the run; impulse = index × mΩL "
             f"({scales.impulse:.4g} N s here). Settling: the time after which |θ| <= 5° and λ "

@@ -3,6 +3,7 @@ disturbances (with the single-axis presets), batch and dispersed runs."""
 
 from flexsat.sim.actuators import TorqueActuator
 from flexsat.sim.channels import ChannelActuator, ChannelDisturbance, ChannelSensor
+from flexsat.sim.config import StopCondition
 from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
 from flexsat.sim.engine import SimConfig, SimResult, SimulationDiverged, simulate
 from flexsat.sim.sensors import Sensors
@@ -18,6 +19,7 @@ __all__ = [
     "SimResult",
     "SimulationDiverged",
     "Sensors",
+    "StopCondition",
     "TorqueActuator",
     "simulate",
 ]

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.input_checks import require_positive, set_si
+from flexsat.input_checks import FieldError, require_positive, set_si
 from flexsat.sim.step import actuated
 from flexsat.units import to_si_array
 
@@ -32,7 +32,7 @@ class TorqueActuator:
     def __post_init__(self) -> None:
         saturation = to_si_array(self.saturation, "N*m", "saturation")
         if not np.all(saturation > 0):  # inf (no limit) is allowed, NaN and <= 0 are not
-            raise ValueError(f"saturation: must be > 0 (inf for none), got {self.saturation!r}")
+            raise FieldError("saturation", f"must be > 0 (inf for none), got {self.saturation!r}")
         object.__setattr__(
             self, "saturation", float(saturation) if saturation.ndim == 0 else saturation
         )

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant, find_channel
-from flexsat.input_checks import require_count
+from flexsat.input_checks import FieldError, require_count
 from flexsat.sim.disturbances import impulses_at_samples
 from flexsat.sim.sensors import least_squares_derivative_weights
 from flexsat.sim.step import quantised, rate_limited, saturated
@@ -55,18 +55,19 @@ def _si(
     finite = np.isfinite(v) | (inf_ok & (v == np.inf))
     if not np.all(finite) or (nonneg and np.any(v < 0)):
         rule = "finite" if not nonneg else ">= 0 (inf for none)" if inf_ok else "finite and >= 0"
-        raise ValueError(f"{field}: must be {rule}, got {value!r}")
+        raise FieldError(field, f"must be {rule}, got {value!r}")
     if v.ndim == 0:
         return float(v)
     if size == 1 and v.ndim != 1:
-        raise ValueError(
-            f"{field}: the channel is one value wide: give a number or one per case, "
-            f"got shape {v.shape}"
+        raise FieldError(
+            field,
+            f"the channel is one value wide: give a number or one per case, got shape {v.shape}",
         )
     if size > 1 and not (v.ndim in (1, 2) and v.shape[-1] == size):
-        raise ValueError(
-            f"{field}: the channel is {size} values wide: give a number, {size} values (one "
-            f"per element) or (n_cases, {size}), got shape {v.shape}"
+        raise FieldError(
+            field,
+            f"the channel is {size} values wide: give a number, {size} values (one "
+            f"per element) or (n_cases, {size}), got shape {v.shape}",
         )
     return v
 
@@ -124,7 +125,7 @@ class ChannelSensor:
         range_ = _si(self.range, unit, f"{f}.range", inf_ok=True, size=w)
         out = replace(self, noise=noise, bias=bias, quantum=quantum, range=range_)
         if np.any(np.asarray(range_) <= 0):
-            raise ValueError(f"{f}.range: must be > 0 (inf for none), got {self.range!r}")
+            raise FieldError(f"{f}.range", f"must be > 0 (inf for none), got {self.range!r}")
         # which operations act, decided once: the sample loop skips the others
         object.__setattr__(
             out,
@@ -196,7 +197,7 @@ class ChannelActuator:
             ("scale", scale),
         ):
             if np.any(np.asarray(value) <= 0):
-                raise ValueError(f"{f}.{name}: must be > 0, got {getattr(self, name)!r}")
+                raise FieldError(f"{f}.{name}", f"must be > 0, got {getattr(self, name)!r}")
         object.__setattr__(
             out,
             "_acts",
@@ -257,11 +258,11 @@ class ChannelDisturbance:
 
     def __post_init__(self) -> None:
         if (self.force is None) != (self.force_output is None):
-            raise ValueError(
-                "force_output: give the output channel driving the force, and only with a force"
+            raise FieldError(
+                "force_output", "give the output channel driving the force, and only with a force"
             )
         if self.force is not None and not callable(self.force):
-            raise ValueError(f"force: must be callable f(y), got {self.force!r}")
+            raise FieldError("force", f"must be callable f(y), got {self.force!r}")
 
     def bind(self, channel: Channel) -> ChannelDisturbance:
         """A copy with every field in SI of ``channel``'s unit, shaped for its width."""
@@ -279,12 +280,12 @@ class ChannelDisturbance:
         each = () if w == 1 else (w,)
         if times.ndim != 1 or values.shape != (times.size, *each):
             per = "one number" if w == 1 else f"{w} values (the channel is {w} values wide)"
-            raise ValueError(
-                f"{f}.impulses: give {per} for each of the {times.size} impulse times, "
-                f"got shape {values.shape}"
+            raise FieldError(
+                f"{f}.impulses",
+                f"give {per} for each of the {times.size} impulse times, got shape {values.shape}",
             )
         if not np.all(np.isfinite(values)):
-            raise ValueError(f"{f}.impulses: must be finite, got {self.impulses!r}")
+            raise FieldError(f"{f}.impulses", f"must be finite, got {self.impulses!r}")
         return replace(
             self,
             random=_si(self.random, unit, f"{f}.random", size=w),
@@ -370,15 +371,17 @@ def resolve_channels(
         bound: dict[str, Any] = {}
         for name, piece in pieces.items():
             if not isinstance(piece, kind):
-                raise ValueError(f"{name}: expected a {kind.__name__}, got {piece!r}")
+                raise FieldError(name, f"expected a {kind.__name__}, got {piece!r}")
             channels = plant.outputs if role == "output" else plant.inputs
             try:
                 ch = find_channel(channels, name, role, owner)
-            except ValueError as exc:
+            except FieldError as exc:
                 where = preset.get(name)
                 if where is None or name in explicit:
                     raise
-                raise ValueError(f"{exc} — set by the planar preset config.{where}") from None
+                raise FieldError(
+                    exc.field, f"{exc.rule} — set by the planar preset config.{where}"
+                ) from None
             bound[name] = piece.bind(ch)
         out.append(bound)
     sensors, actuators, disturbances = out
@@ -386,7 +389,7 @@ def resolve_channels(
         if s.derivative_of is not None:
             src = find_channel(plant.outputs, s.derivative_of, "output", owner)
             if sensors.get(src.name, ChannelSensor()).derivative_of is not None:
-                raise ValueError(f"{name}: derivative_of {src.name!r} is itself a derivative")
+                raise FieldError(name, f"derivative_of {src.name!r} is itself a derivative")
     columns = noise_columns(plant)
     for name, d in disturbances.items():
         if d.force is not None:
@@ -427,7 +430,7 @@ def noise_columns(plant: Plant) -> dict[str, slice]:
             if ch is not None:
                 break
         else:
-            raise ValueError(f"{name}: noise_channels names no channel of {type(plant).__name__}")
+            raise FieldError(name, f"noise_channels names no channel of {type(plant).__name__}")
         out[name] = slice(start, start + ch.size)
         start += ch.size
     return out
@@ -436,9 +439,10 @@ def noise_columns(plant: Plant) -> dict[str, slice]:
 def noise_column(columns: Mapping[str, slice], name: str, what: str, plant: Plant) -> int | slice:
     """The stream column(s) of channel ``name``, or a ValueError when it has no stream."""
     if name not in columns:
-        raise ValueError(
-            f"{name}: {what} needs a noise stream, but {type(plant).__name__}."
-            f"noise_channels ({', '.join(columns) or 'none'}) has none for it"
+        raise FieldError(
+            name,
+            f"{what} needs a noise stream, but {type(plant).__name__}."
+            f"noise_channels ({', '.join(columns) or 'none'}) has none for it",
         )
     sl = columns[name]
     return sl.start if sl.stop - sl.start == 1 else sl

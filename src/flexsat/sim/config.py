@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from flexsat import limits
-from flexsat.input_checks import require_count, require_positive, set_si
+from flexsat.input_checks import FieldError, require_count, require_positive, set_si
 from flexsat.sim.actuators import TorqueActuator
 from flexsat.sim.channels import (
     ChannelActuator,
@@ -25,9 +25,44 @@ from flexsat.sim.sensors import Sensors
 
 if TYPE_CHECKING:
     from flexsat.dynamics.plant import Plant
+    from flexsat.units import FloatArray
 
 #: how the law meets the plant: held samples of a digital law, or a continuous state feedback
 LAW_MODES = ("sampled", "continuous")
+
+
+@dataclass(frozen=True)
+class StopCondition:
+    """Where a continuous-law run ends before its duration: the first time ``margin`` reaches 0.
+
+    Parameters
+    ----------
+    margin : callable
+        ``margin(t, x)`` with t (k,) s and the states x (k, n_cases, n_x) -> (k,): positive
+        while the run may go on (e.g. det(CCᵀ) − threshold of a CMG cluster, which the
+        pseudo-inverse steering cannot pass).
+    reason : str
+        What reaching it means, recorded with the stop (``"singular set (det CCᵀ <= 1e-06)"``).
+    terminal : bool
+        End the run there (default); False runs on and only records the first time.
+    touches : bool
+        The margin may touch zero without changing sign (a product of squares, such as
+        det(CCᵀ) where the steering passes a singular set with finite rates): between the
+        integrator's steps its dense output is then scanned, 8 points a step, and every sampled
+        local minimum refined, since a sign-change event alone misses a dip narrower than a
+        step.
+    """
+
+    margin: Callable[[FloatArray, FloatArray], FloatArray]
+    reason: str
+    terminal: bool = True
+    touches: bool = False
+
+    def __post_init__(self) -> None:
+        if not callable(self.margin):
+            raise FieldError("stop.margin", f"must be callable margin(t, x), got {self.margin!r}")
+        if not isinstance(self.reason, str) or not self.reason:
+            raise FieldError("stop.reason", f"must be a nonempty string, got {self.reason!r}")
 
 
 @dataclass(frozen=True)
@@ -58,6 +93,14 @@ class SimConfig:
                                  recorded at ``control_rate`` (:mod:`flexsat.sim.continuous`)
     rtol, atol : float           local error tolerances of the continuous mode's adaptive
                                  DOP853 integrator (unused when sampled)
+    stop : StopCondition, optional
+                                 continuous mode: where the run ends early (or, not terminal,
+                                 the first time recorded); the dataset's ``stop_time`` and
+                                 ``stop_reason`` attributes say where and why
+    exogenous : callable, optional
+                                 continuous mode: a known input history t -> {input channel:
+                                 values} added to the law's commands (a disturbance torque of
+                                 time, :func:`flexsat.sim.continuous.run`)
 
     Notes
     -----
@@ -81,10 +124,28 @@ class SimConfig:
     law_mode: str = "sampled"
     rtol: float = 1e-10
     atol: float = 1e-12
+    stop: StopCondition | None = None
+    exogenous: Callable[[float], Mapping[str, Any]] | None = None
 
     def __post_init__(self) -> None:
         if self.law_mode not in LAW_MODES:
-            raise ValueError(f"law_mode: must be one of {LAW_MODES}, got {self.law_mode!r}")
+            raise FieldError("law_mode", f"must be one of {LAW_MODES}, got {self.law_mode!r}")
+        for name, ok, rule in (
+            ("stop", self.stop is None or isinstance(self.stop, StopCondition), "a StopCondition"),
+            (
+                "exogenous",
+                self.exogenous is None or callable(self.exogenous),
+                "a callable t -> {channel: values}",
+            ),
+        ):
+            if not ok:
+                raise FieldError(name, f"must be {rule}, got {getattr(self, name)!r}")
+            if getattr(self, name) is not None and self.law_mode != "continuous":
+                raise FieldError(
+                    name,
+                    "only in law_mode='continuous' (the sampled mode holds commands "
+                    "over a period and has no event location)",
+                )
         set_si(self, "rtol", require_positive, "")
         set_si(self, "atol", require_positive, "")
         set_si(self, "duration", require_positive, "s")
@@ -92,8 +153,8 @@ class SimConfig:
         set_si(self, "settling_band", require_positive, "rad")
         require_count(self.substeps, "substeps")
         if not limits.is_integral(self.seed) or not 0 <= self.seed <= limits.MAX_SEED:
-            raise ValueError(
-                f"seed: must be an integer in [0, {limits.MAX_SEED}], got {self.seed!r}"
+            raise FieldError(
+                "seed", f"must be an integer in [0, {limits.MAX_SEED}], got {self.seed!r}"
             )
         limits.check_count(
             self.duration * self.control_rate,
@@ -114,9 +175,7 @@ class SimConfig:
             if not isinstance(pieces, dict) or not all(
                 isinstance(k, str) and isinstance(v, kind) for k, v in pieces.items()
             ):
-                raise ValueError(
-                    f"{name}: must map channel names to {kind.__name__}, got {pieces!r}"
-                )
+                raise FieldError(name, f"must map channel names to {kind.__name__}, got {pieces!r}")
 
     @property
     def dt(self) -> float:

@@ -36,8 +36,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq, minimize_scalar
 
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_positive
 from flexsat.sim.integrators import apply
 from flexsat.sim.recording import CHUNK, Recorder, SimResult
 
@@ -47,7 +48,7 @@ if TYPE_CHECKING:
     from flexsat.control.base import Controller
     from flexsat.dynamics.plant import Plant
     from flexsat.sim.channels import ChannelActuator, ChannelDisturbance, ChannelSensor
-    from flexsat.sim.config import SimConfig
+    from flexsat.sim.config import SimConfig, StopCondition
     from flexsat.units import FloatArray, QuantityArrayLike
 
 #: the law's reading of one output from the states x (n_cases, n_x)
@@ -57,7 +58,7 @@ Reader = Callable[["FloatArray"], "FloatArray"]
 #: rad over a few orbits, and the gimbal angles of a CMG steering run to ~1e-9 rad
 RTOL, ATOL = 1e-10, 1e-12
 
-__all__ = ["ATOL", "RTOL", "ContinuousRun", "run", "simulate_continuous"]
+__all__ = ["ATOL", "RTOL", "ContinuousRun", "first_touch", "run", "simulate_continuous"]
 
 
 @dataclass(frozen=True)
@@ -67,7 +68,8 @@ class ContinuousRun:
     Attributes
     ----------
     t : (n_t,) array
-        Output times reached, s (the grid up to a stop).
+        Output times reached, s: the grid, or after a terminal stop the grid points before it
+        and the stop time itself (the last sample).
     states : (n_cases, n_t, n_x) array
     inputs : (n_cases, n_t, m) array
         The plant's input along the run: the law's commands plus the exogenous input.
@@ -75,6 +77,9 @@ class ContinuousRun:
         The law's commands alone.
     stopped : bool
         Whether the stop condition ended the run before the grid's end.
+    stop_time : float or None
+        The first time the stop condition's margin reached 0 (also when it is not terminal),
+        None if it never did.
     t_end : float
         Time the run ended (the stop's exact root, or the grid's end), s.
     x_end : (n_cases, n_x) array
@@ -91,6 +96,7 @@ class ContinuousRun:
     inputs: np.ndarray
     commands: np.ndarray
     stopped: bool
+    stop_time: float | None
     t_end: float
     x_end: np.ndarray
     solution: Callable[[float | FloatArray], FloatArray]
@@ -126,9 +132,10 @@ class _Loop:
         for name in self.reads:
             mats = plant.output_matrices(name)
             if mats is not None and mats[1] is not None and np.any(mats[1]):
-                raise ValueError(
-                    f"{name}: {self.law} reads an output with feedthrough from the inputs, an "
-                    "algebraic loop in continuous-law mode (read the states it is made of)"
+                raise FieldError(
+                    name,
+                    f"{self.law} reads an output with feedthrough from the inputs, an "
+                    "algebraic loop in continuous-law mode (read the states it is made of)",
                 )
             self.readers.append((name, self._reader(name, mats)))
 
@@ -158,9 +165,10 @@ class _Loop:
         if not isinstance(cmd, Mapping):
             cmd = {self.writes[0]: cmd}
         if set(cmd) != set(self.writes):
-            raise ValueError(
-                f"{sorted(set(cmd) ^ set(self.writes))[0]}: {self.law} returned commands for "
-                f"{sorted(cmd)!r} but writes {list(self.writes)!r}"
+            raise FieldError(
+                f"{sorted(set(cmd) ^ set(self.writes))[0]}",
+                f"{self.law} returned commands for "
+                f"{sorted(cmd)!r} but writes {list(self.writes)!r}",
             )
         u = np.zeros((self.nc, self.m))
         for name in self.writes:
@@ -170,9 +178,10 @@ class _Loop:
             try:
                 c = np.broadcast_to(np.asarray(cmd[name], float), shape)
             except ValueError:
-                raise ValueError(
-                    f"{name}: {self.law} returned a command of shape {np.shape(cmd[name])}, "
-                    f"expected {shape} (n_cases × channel size)"
+                raise FieldError(
+                    name,
+                    f"{self.law} returned a command of shape {np.shape(cmd[name])}, "
+                    f"expected {shape} (n_cases × channel size)",
                 ) from None
             u[:, sl] = c.reshape(self.nc, width)
         return u
@@ -206,17 +215,18 @@ def _exogenous(
     if exogenous is None:
         return None
     if not callable(exogenous):
-        raise ValueError(
-            f"exogenous: must be a callable t -> {{channel: values}}, got {exogenous!r}"
+        raise FieldError(
+            "exogenous", f"must be a callable t -> {{channel: values}}, got {exogenous!r}"
         )
     slices, m = plant.input_slices, plant.n_inputs
 
     def at(t: float) -> FloatArray:
         values = exogenous(t)
         if not isinstance(values, Mapping) or not set(values) <= set(slices):
-            raise ValueError(
-                f"exogenous: must return {{input channel: values}} with channels of "
-                f"{type(plant).__name__} ({', '.join(slices)}), got {values!r}"
+            raise FieldError(
+                "exogenous",
+                f"must return {{input channel: values}} with channels of "
+                f"{type(plant).__name__} ({', '.join(slices)}), got {values!r}",
             )
         d = np.zeros((nc, m))
         for name, v in values.items():
@@ -227,7 +237,7 @@ def _exogenous(
         return d
 
     if not np.isfinite(at(t0)).all():
-        raise ValueError(f"exogenous: returned a non-finite input at t = {t0:g} s")
+        raise FieldError("exogenous", f"returned a non-finite input at t = {t0:g} s")
     return at
 
 
@@ -235,9 +245,10 @@ def _grid(times: QuantityArrayLike) -> FloatArray:
     t = require_finite(times, "times", "s")
     step = np.diff(t) if t.ndim == 1 else np.zeros(0)  # read only for a 1-D grid
     if t.ndim != 1 or t.size < 2 or not (np.all(step > 0) or np.all(step < 0)):
-        raise ValueError(
-            f"times: must be a strictly monotonic 1-D grid of >= 2 times (decreasing integrates "
-            f"backward), got shape {t.shape}"
+        raise FieldError(
+            "times",
+            "must be a strictly monotonic 1-D grid of >= 2 times (decreasing integrates "
+            f"backward), got shape {t.shape}",
         )
     return t
 
@@ -249,7 +260,7 @@ def run(
     initial_state: QuantityArrayLike,
     rtol: float = RTOL,
     atol: float = ATOL,
-    stop: Callable[[float, FloatArray], float] | None = None,
+    stop: StopCondition | None = None,
     exogenous: Callable[[float], Mapping[str, npt.ArrayLike]] | None = None,
     n_cases: int | None = None,
 ) -> ContinuousRun:
@@ -269,9 +280,11 @@ def run(
         State at ``times[0]``.
     rtol, atol : float
         Local error tolerances of the DOP853 step control (> 0).
-    stop : callable, optional
-        ``stop(t, x)`` -> float with x (n_cases, n_x): the run ends where it falls through zero
-        (a terminal event, located to the integrator's root-finding precision).
+    stop : StopCondition, optional
+        Where the run ends (terminal) or what time it records: the first time the margin
+        reaches zero, as a terminal event located to the integrator's root-finding precision,
+        and with ``touches`` also where it only touches zero between steps
+        (:func:`first_touch`).
     exogenous : callable, optional
         ``exogenous(t)`` -> {input channel: values}: a known input history added to the law's
         commands (a disturbance torque of time).
@@ -286,9 +299,10 @@ def run(
     ------
     ValueError
         Naming the field: a bad grid, state or tolerance, a law with internal state, a plant
-        with its own integrator, an output with feedthrough read, the plant leaving its
-        model's domain (``plant.domain_margin`` < 0, with its ``domain_rule``) or a failed
-        integration (naming the time).
+        with its own integrator, a start where a terminal stop condition already holds, an
+        output with feedthrough read, the plant leaving its model's domain
+        (``plant.domain_margin`` < 0, with its ``domain_rule``) or a failed integration
+        (naming the time).
     SimulationDiverged
         When a state entry passes :data:`flexsat.sim.engine.DIVERGENCE_BOUND` (an unstable
         closed loop): no result with NaN or overflow is returned.
@@ -297,15 +311,17 @@ def run(
 
     check_law(plant, controller)
     if getattr(plant, "step", None) is not None:
-        raise ValueError(
-            f"law_mode: {type(plant).__name__} propagates itself (its own step on a manifold); "
-            "continuous-law mode needs the protocol's split: use the sampled mode"
+        raise FieldError(
+            "law_mode",
+            f"{type(plant).__name__} propagates itself (its own step on a manifold); "
+            "continuous-law mode needs the protocol's split: use the sampled mode",
         )
     nc = n_cases or (controller.n_cases if plant.n_cases == 1 else plant.n_cases)
     if controller.initial_state(nc):
-        raise ValueError(
-            f"law_mode: {type(controller).__name__} has an internal state; continuous-law mode "
-            "takes a static state feedback (run a dynamic law in the sampled mode)"
+        raise FieldError(
+            "law_mode",
+            f"{type(controller).__name__} has an internal state; continuous-law mode "
+            "takes a static state feedback (run a dynamic law in the sampled mode)",
         )
     t = _grid(times)
     rtol = float(require_positive(rtol, "rtol"))
@@ -314,8 +330,8 @@ def run(
     try:
         x0 = np.array(np.broadcast_to(x0, (nc, plant.nx)), float)
     except ValueError:
-        raise ValueError(
-            f"initial_state: must have shape ({plant.nx},) or ({nc}, {plant.nx}), got {x0.shape}"
+        raise FieldError(
+            "initial_state", f"must have shape ({plant.nx},) or ({nc}, {plant.nx}), got {x0.shape}"
         ) from None
     loop = _Loop(plant, controller, nc, _exogenous(plant, exogenous, nc, float(t[0])))
 
@@ -330,7 +346,7 @@ def run(
     if margin is not None:
         if np.min(margin(x0)) <= 0:
             # a plant with a domain_margin states its domain_rule (Plant's optional pair)
-            raise ValueError(f"initial_state: {plant.domain_rule}")  # type: ignore[attr-defined]
+            raise FieldError("initial_state", f"{plant.domain_rule}")  # type: ignore[attr-defined]
 
         def left_domain(_t: float, flat: FloatArray) -> float:
             return float(np.min(margin(flat.reshape(nc, -1))))
@@ -338,11 +354,13 @@ def run(
         left_domain.terminal = True  # type: ignore[attr-defined]
         events.append(left_domain)
     if stop is not None:
+        if stop.terminal and _margin(stop, t[:1], x0[None])[0] <= 0:
+            raise FieldError("initial_state", f"the run would stop at its start: {stop.reason}")
 
         def stopped(t_: float, flat: FloatArray) -> float:
-            return float(stop(t_, flat.reshape(nc, -1)))
+            return float(_margin(stop, np.array([t_]), flat.reshape(1, nc, -1))[0])
 
-        stopped.terminal = True  # type: ignore[attr-defined]
+        stopped.terminal = stop.terminal  # type: ignore[attr-defined]
         stopped.direction = -1  # type: ignore[attr-defined]
         events.append(stopped)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -370,33 +388,103 @@ def run(
             "the closed loop is unstable",
         )
     if sol.status == -1:
-        raise ValueError(f"times: the integration failed at t = {sol.t[-1]:.6g} s: {sol.message}")
+        at = sol.t[-1] if len(sol.t) else t[0]  # a failed first step records no time
+        raise FieldError("times", f"the integration failed at t = {at:.6g} s: {sol.message}")
     if margin is not None and sol.t_events[1].size:
         raise ValueError(
             f"{plant.domain_rule} at t = {sol.t_events[1][0]:.3g} s (the run ends there)"  # type: ignore[attr-defined]
         )
-    stopped_early = sol.status == 1
-    if stopped_early:  # only the stop condition is left to end it
-        t_end, x_end = float(sol.t_events[-1][0]), sol.y_events[-1][0].reshape(nc, -1)
-    else:
-        t_end, x_end = float(t[-1]), sol.y[:, -1].reshape(nc, -1)
-    n_t = sol.t.size
-    states = sol.y.reshape(nc, plant.nx, n_t).transpose(0, 2, 1)
-    commands = np.empty((nc, n_t, loop.m))
-    inputs = np.empty((nc, n_t, loop.m))
-    for k, tk in enumerate(sol.t):
-        commands[:, k], inputs[:, k] = loop.input(float(tk), states[:, k])
-    if not (np.isfinite(states).all() and np.isfinite(inputs).all()):
-        raise ValueError("times: the run left finite values (a diverging closed loop)")
     dense = sol.sol
 
     def solution(tq: float | FloatArray) -> FloatArray:
         z = dense(tq)
         return z.reshape(nc, -1) if np.ndim(tq) == 0 else z.T.reshape(-1, nc, plant.nx)
 
+    stop_time = None
+    if stop is not None:
+        if sol.t_events[-1].size:
+            stop_time = float(sol.t_events[-1][0])
+        if stop.touches:
+            touch = first_touch(stop, solution, dense.ts)
+            if touch is not None and (
+                stop_time is None or abs(touch - t[0]) < abs(stop_time - t[0])
+            ):
+                stop_time = touch
+    t_out, y = sol.t, sol.y.T.reshape(-1, nc, plant.nx)
+    stopped_early = stop is not None and stop.terminal and stop_time is not None
+    if stopped_early:
+        assert stop_time is not None  # stopped_early says so
+        t_end, x_end = stop_time, solution(stop_time)
+        before = (t_out - t_end) * np.sign(t[-1] - t[0]) < 0
+        t_out = np.append(t_out[before], t_end)
+        y = np.concatenate([y[before], x_end[None]])
+    else:
+        t_end, x_end = float(t[-1]), y[-1]
+    n_t = t_out.size
+    states = np.ascontiguousarray(np.swapaxes(y, 0, 1))
+    commands = np.empty((nc, n_t, loop.m))
+    inputs = np.empty((nc, n_t, loop.m))
+    for k, tk in enumerate(t_out):
+        commands[:, k], inputs[:, k] = loop.input(float(tk), states[:, k])
+    if not (np.isfinite(states).all() and np.isfinite(inputs).all()):
+        raise FieldError("times", "the run left finite values (a diverging closed loop)")
     return ContinuousRun(
-        sol.t, states, inputs, commands, stopped_early, t_end, x_end, solution, dense.ts
+        t_out, states, inputs, commands, stopped_early, stop_time, t_end, x_end, solution, dense.ts
     )
+
+
+def _margin(stop: StopCondition, t: FloatArray, x: FloatArray) -> FloatArray:
+    """The stop condition's margin at times t (k,) and states x (k, n_cases, n_x), checked."""
+    value = np.asarray(stop.margin(t, x), float)
+    if value.shape != t.shape:
+        raise FieldError(
+            "stop.margin", f"must return one value per time, shape {t.shape}, got {value.shape}"
+        )
+    return value
+
+
+def first_touch(
+    stop: StopCondition,
+    solution: Callable[[FloatArray], FloatArray],
+    steps: FloatArray,
+) -> float | None:
+    """The first time the margin of ``stop`` touches zero between the integrator's steps
+    ``steps`` on the dense output ``solution`` (t (k,) -> (k, n_cases, n_x)), or None.
+
+    A terminal event sees only sign changes of the margin at the integrator's steps. A margin
+    that is a product of squares (det(CCᵀ) of a CMG cluster, where the steering passes a
+    singular set with finite rates) may only touch zero inside a step: so the dense output is
+    sampled 8 points a step, a sampled value <= 0 bracketed by Brent's method (R. P. Brent,
+    *Algorithms for Minimization without Derivatives*, Prentice-Hall 1973, ch. 4), and every
+    sampled local minimum refined by bounded Brent minimisation (ibid., ch. 5) and bracketed
+    when it reaches 0.
+    """
+    grid = np.concatenate(
+        [np.linspace(t0, t1, 9)[:-1] for t0, t1 in zip(steps[:-1], steps[1:])] + [steps[-1:]]
+    )
+
+    def excess(tq: float) -> float:
+        return float(_margin(stop, np.array([tq]), solution(np.array([tq])))[0])
+
+    vals = _margin(stop, grid, solution(grid))
+    if vals[0] <= 0:  # held at the start (a run that does not stop there)
+        return float(grid[0])
+    for j in range(1, grid.size):
+        if vals[j] <= 0:
+            lo, hi = sorted((grid[j - 1], grid[j]))
+            return float(brentq(excess, lo, hi, xtol=1e-14))
+        if j + 1 < grid.size and vals[j] <= vals[j - 1] and vals[j] <= vals[j + 1]:
+            lo, hi = sorted((grid[j - 1], grid[j + 1]))
+            res = minimize_scalar(
+                excess,
+                bounds=(lo, hi),
+                method="bounded",
+                options={"xatol": 1e-12 * max(1.0, abs(hi))},
+            )
+            if res.fun <= 0:
+                a, b = sorted((grid[j - 1], float(res.x)))
+                return float(brentq(excess, a, b, xtol=1e-14))
+    return None
 
 
 def simulate_continuous(
@@ -415,26 +503,45 @@ def simulate_continuous(
     ``config`` (0, 1/control_rate, ..., duration; the output samples), as a
     :class:`~flexsat.sim.recording.SimResult`.
 
+    With ``config.stop`` the dataset's attributes say ``stop_reason``, ``stopped`` (1 when the
+    terminal condition ended the run: its time axis then ends with the grid points before the
+    stop and the stop time itself) and ``stop_time`` (the first time the condition held, NaN
+    if it never did); ``config.exogenous`` is added to the commands and recorded as the
+    ``disturbance_<channel>`` of each channel it drives.
+
     ``pieces`` are the run's bound (sensors, actuators, disturbances): any is refused (module
     docstring).
     """
     for role, bound in zip(("sensor", "actuator", "disturbance"), pieces):
         if bound:
             name = next(iter(bound))
-            raise ValueError(
-                f"{name}: a {role} is a sampled-data piece; continuous-law mode evaluates the "
-                "law on the true outputs (use law_mode='sampled')"
+            raise FieldError(
+                name,
+                f"a {role} is a sampled-data piece; continuous-law mode evaluates the "
+                "law on the true outputs (use law_mode='sampled')",
             )
     t = config.dt * np.arange(config.n_steps + 1, dtype=np.float64)
     if getattr(controller, "reference", None) is not None:
         # a law with a reference is a slew law (flexsat.control.base.SlewLaw)
         controller.tabulate_reference(t)  # type: ignore[attr-defined]
-    out = run(plant, controller, t, x0, config.rtol, config.atol, n_cases=nc)
-    n = t.size
-    rec = Recorder(plant, n, nc, (), {}, record_states, plant.n_cases != 1, input_lag=0)
+    out = run(
+        plant,
+        controller,
+        t,
+        x0,
+        config.rtol,
+        config.atol,
+        stop=config.stop,
+        exogenous=config.exogenous,
+        n_cases=nc,
+    )
+    n = out.t.size
+    # the exogenous input is recorded as the disturbance of the channels it drives
+    driven = () if config.exogenous is None else tuple(config.exogenous(0.0))
+    rec = Recorder(plant, n, nc, (), {}, record_states, plant.n_cases != 1, driven, input_lag=0)
     rec.commands[:] = np.swapaxes(out.commands, 0, 1)
     rec.applied[:] = rec.commands
-    rec.disturbed[:] = rec.commands
+    rec.disturbed[:] = np.swapaxes(out.inputs, 0, 1)
     X = np.swapaxes(out.states, 0, 1)
     for k0 in range(0, n, CHUNK):
         end = min(n, k0 + CHUNK)
@@ -443,4 +550,11 @@ def simulate_continuous(
         else:
             rec.buffer[: end - k0] = X[k0:end]
         rec.flush(end)
-    return rec.dataset(t, controller, theta0, config, 1, engine="continuous")
+    result = rec.dataset(out.t, controller, theta0, config, 1, engine="continuous")
+    if config.stop is not None:
+        result.dataset.attrs.update(
+            stop_reason=config.stop.reason,
+            stopped=int(out.stopped),
+            stop_time=np.nan if out.stop_time is None else out.stop_time,
+        )
+    return result

@@ -7,13 +7,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.input_checks import require_finite, require_nonneg, require_positive, set_si
+from flexsat.input_checks import (
+    FieldError,
+    require_finite,
+    require_nonneg,
+    require_positive,
+    set_si,
+)
 from flexsat.sim.step import friction_torque
 
 
 @dataclass(frozen=True)
 class BearingFriction:
-    """τ = −c1 sign(θ') − c2 θ' (seed 000, Att. 3 Eq. 23; c1 ≈ 20 oz-in, c2 ≈ 0.001 oz-in s).
+    """τ = −c1 sign(θ') − c2 θ' (Junkins, Pollock & Rahman 1990, Att. 3 Eq. 23;
+    c1 ≈ 20 oz-in, c2 ≈ 0.001 oz-in s).
 
     The sign is regularised as tanh(θ'/ε) so the integrator sees a Lipschitz force; inside
     |θ'| < ε the bearing acts as a stiff viscous damper c1/ε, which reproduces sticking to within
@@ -82,8 +89,8 @@ class Impulses:
         times = np.atleast_1d(require_nonneg(self.times, "impulses.times", "s"))
         impulses = np.atleast_1d(require_finite(self.impulses, "impulses.impulses", "N*m*s"))
         if times.shape != impulses.shape or times.ndim != 1:
-            raise ValueError(
-                f"impulses: {impulses.size} values for {times.size} times; give one each"
+            raise FieldError(
+                "impulses", f"{impulses.size} values for {times.size} times; give one each"
             )
         object.__setattr__(self, "times", tuple(times.tolist()))
         object.__setattr__(self, "impulses", tuple(impulses.tolist()))

@@ -39,6 +39,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.linalg import eigh, expm
 
+from flexsat.input_checks import FieldError
 from flexsat.units import FloatArray
 
 #: the schemes a plant may ask for with its ``integrator`` attribute
@@ -68,7 +69,7 @@ def phi_products(
     φ-functions. Valid for singular A (the rigid-body mode).
     """
     if order not in (2, 3):
-        raise ValueError(f"order: must be 2 or 3, got {order!r}")
+        raise FieldError("order", f"must be 2 or 3, got {order!r}")
     n, k = B.shape
     size = n + k + (order - 1) * n2
     C = np.zeros((size, size))
@@ -144,7 +145,7 @@ class ExponentialStepper:
         an exponential of order n + m for a linear run, n + m + 2 n_f with n_f force columns.
         """
         if substeps < 1:
-            raise ValueError(f"substeps: must be >= 1, got {substeps}")
+            raise FieldError("substeps", f"must be >= 1, got {substeps}")
         h = dt / substeps
 
         def one(
@@ -175,7 +176,7 @@ class ExponentialStepper:
         correction when a force is given.
         """
         if force is not None and self.P1f is None:
-            raise ValueError("force: this stepper was built without force columns (Bf=None)")
+            raise FieldError("force", "this stepper was built without force columns (Bf=None)")
         drive = self.drive(w)  # held input: the same for every substep
         b = self.batched
         Et, P1f, P2f = self.Et, self.P1f, self.P2f
@@ -226,9 +227,9 @@ class ExpRK4Stepper:
     ) -> ExpRK4Stepper:
         """Propagators of x' = A x + B_u w + B_f N(x) with the φ-products at h/2 and h."""
         if substeps < 1:
-            raise ValueError(f"substeps: must be >= 1, got {substeps}")
+            raise FieldError("substeps", f"must be >= 1, got {substeps}")
         if Bf is None:
-            raise ValueError("force_matrix: exp_rk4 needs the plant's nonlinear force matrix")
+            raise FieldError("force_matrix", "exp_rk4 needs the plant's nonlinear force matrix")
         h = dt / substeps
 
         def one(A: FloatArray, Bu: FloatArray, Bf: FloatArray) -> tuple[FloatArray, ...]:
@@ -247,7 +248,7 @@ class ExpRK4Stepper:
         """Advance one control period with held input w and force N(x, w) (required: the
         scheme exists for the force; a linear run takes :class:`ExponentialStepper`)."""
         if force is None:
-            raise ValueError("force: exp_rk4 needs the plant's nonlinear force N(x, w)")
+            raise FieldError("force", "exp_rk4 needs the plant's nonlinear force N(x, w)")
         w = np.asarray(w, float)
         w2 = w[:, None] if w.ndim == 1 else w
         b = self.batched
@@ -431,9 +432,10 @@ def modal_coordinates(
     s = np.where(rigid, 1.0, np.sqrt(lam))
     Ct = Phi.T @ C @ Phi
     if np.abs(Ct[rigid]).max(initial=0.0) > rigid_tol * np.abs(Ct).max(initial=0.0):
-        raise ValueError(
-            "C: damps a rigid-body mode (C φ ≠ 0 for K φ = 0); modal_coordinates "
-            "needs undamped rigid modes"
+        raise FieldError(
+            "C",
+            "damps a rigid-body mode (C φ ≠ 0 for K φ = 0); modal_coordinates "
+            "needs undamped rigid modes",
         )
     el = np.flatnonzero(~rigid)
     ne = el.size
@@ -444,9 +446,10 @@ def modal_coordinates(
     mu, V = np.linalg.eig(At)
     real = np.abs(mu.imag) <= rigid_tol * np.abs(mu)
     if real.any():
-        raise ValueError(
-            f"C: overdamped (real) modes {mu[real].real}; modal_coordinates "
-            "handles oscillatory modes only"
+        raise FieldError(
+            "C",
+            f"overdamped (real) modes {mu[real].real}; modal_coordinates "
+            "handles oscillatory modes only",
         )
     Tt = np.zeros((2 * n, 2 * n))  # columns in x̃ = [√Λ η; η']
     omega, zeta = [], []
@@ -520,7 +523,7 @@ class ModalPropagator:
         """Propagators of the modal plant with block frequencies ``omega`` (rad/s), damping
         ratios ``zeta``, input columns ``B`` (n, m) and force columns ``Bf`` (n, n_f)."""
         if substeps < 1:
-            raise ValueError(f"substeps: must be >= 1, got {substeps}")
+            raise FieldError("substeps", f"must be >= 1, got {substeps}")
         E2, F1, F2 = block_propagators(omega, zeta, dt / substeps)
         n = 2 * E2.shape[0]
         inputs = np.asarray(B, float).reshape(n, -1)
@@ -539,7 +542,7 @@ class ModalPropagator:
         """Advance z (n_cases, n) one control period with held input w (n_cases, m); ``force``
         (z, w) -> (n_cases, n_f) adds the ETD2RK correction as in :class:`ExponentialStepper`."""
         if force is not None and self.P1f is None:
-            raise ValueError("force: this propagator was built without force columns (Bf=None)")
+            raise FieldError("force", "this propagator was built without force columns (Bf=None)")
         Eb = self.E.reshape(-1, 2, 2)
         drive = w @ self.P1u.T
         P1f, P2f = self.P1f, self.P2f

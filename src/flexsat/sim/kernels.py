@@ -11,7 +11,7 @@ at each sample k (t_k = k dt), for each case c
    period, the feedthrough of the acceleration into root loads);
 4. sensor model per element i (that of :class:`flexsat.sim.channels.ChannelSensor`):
    v = y_i + bias_i + std_i · noise[c, k, slot_i]; v = q_i rint(v / q_i) if q_i > 0 (an
-   encoder of quantum q, seed 000 Att. 3: 0.01 deg); v = clip(v, ±sat_i);
+   encoder of quantum q, Junkins, Pollock & Rahman 1990 Att. 3: 0.01 deg); v = clip(v, ±sat_i);
 5. optional causal FIR-derivative channel: y[dst] = Σ_j c_j v_src(t_{k−L+1+j}), the
    least-squares differentiating filter of
    :func:`flexsat.sim.sensors.least_squares_derivative_weights`, its history started full of
@@ -32,7 +32,8 @@ at each sample k (t_k = k dt), for each case c
 
        a = E x + P1u w + P1f N(x),   x ← a + P2f (N(a) − N(x)),
 
-   N(x) = −c1 tanh(r / ε) − c2 r, r = C_r x (seed 000, Att. 3 Eq. 23, regularised as in
+   N(x) = −c1 tanh(r / ε) − c2 r, r = C_r x (Junkins, Pollock & Rahman 1990,
+   Att. 3 Eq. 23, regularised as in
    :class:`flexsat.sim.disturbances.BearingFriction`): a rank-1 force on one input channel.
 
 The propagator E is either dense or block-diagonal with 2×2 blocks (``block_diagonal=True``:

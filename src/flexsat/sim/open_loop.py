@@ -19,7 +19,8 @@ a Jordan chain) whose response is the polynomial
 Written in σ, the coefficients carry no inverse powers of h_j, so rise times → 0 (α → 0 of the
 smoothed bang-bang) stay exact; a zero-length piece leaves the state unchanged.
 
-Used for the seed 000 trade surfaces (:mod:`flexsat.design.trade_surfaces`): the open-loop
+Used for the Junkins, Pollock & Rahman 1990 trade surfaces
+(:mod:`flexsat.design.trade_surfaces`): the open-loop
 flexible response to the smoothed bang-bang torque (Att. 3 Eq. 12 of
 Junkins, Pollock & Rahman 1990), whose pieces :func:`torque_pieces` gives exactly.
 """
@@ -32,7 +33,7 @@ from typing import TYPE_CHECKING, Any, TypeAlias
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import require_finite
+from flexsat.input_checks import FieldError, require_finite
 from flexsat.maneuvers.torque_shapes import BangBang, SmoothBangBang
 from flexsat.sim.instruments import unit_row
 from flexsat.units import FloatArray
@@ -85,9 +86,10 @@ def torque_pieces(shape: SmoothBangBang | BangBang) -> tuple[FloatArray, FloatAr
     elif isinstance(shape, BangBang):
         alpha = np.zeros_like(shape.duration)
     else:
-        raise ValueError(
-            f"shape: the exact response needs a piecewise-polynomial torque "
-            f"(SmoothBangBang or BangBang), got {type(shape).__name__}"
+        raise FieldError(
+            "shape",
+            "the exact response needs a piecewise-polynomial torque "
+            f"(SmoothBangBang or BangBang), got {type(shape).__name__}",
         )
     T, a, peak = np.broadcast_arrays(shape.duration, alpha, np.sign(shape.angle) * shape.u_max)
     T, dt, peak = T.reshape(-1), (a * T).reshape(-1), peak.reshape(-1)
@@ -215,23 +217,23 @@ def piecewise_polynomial_response(
         or coeffs.ndim != 3
         or coeffs.shape[:2] != (breaks.shape[0], breaks.shape[1] - 1)
     ):
-        raise ValueError(
-            f"coeffs: need breaks (C, P+1) and coeffs (C, P, d+1), got "
-            f"{breaks.shape} and {coeffs.shape}"
+        raise FieldError(
+            "coeffs",
+            f"need breaks (C, P+1) and coeffs (C, P, d+1), got {breaks.shape} and {coeffs.shape}",
         )
     h = np.diff(breaks, axis=1)
     if np.any(h < 0):
-        raise ValueError("breaks: must be non-decreasing along each case")
+        raise FieldError("breaks", "must be non-decreasing along each case")
     C, P = h.shape
     times = require_finite(times, "times")
     times = times.reshape(times.shape[0], -1) if times.ndim else times.reshape(1, 1)
     if times.shape[1] not in (1, C) or times.ndim > 2:
-        raise ValueError(
-            f"times: need shape (n_t,) or (n_t, {C}) (one column per case), got {times.shape}"
+        raise FieldError(
+            "times", f"need shape (n_t,) or (n_t, {C}) (one column per case), got {times.shape}"
         )
     times = np.broadcast_to(times, (times.shape[0], C))
     if np.any(times < breaks[:, 0]):
-        raise ValueError("times: must not precede the start of the response (breaks[:, 0])")
+        raise FieldError("times", "must not precede the start of the response (breaks[:, 0])")
     modes = _Modes(A, B)
     start_state = np.zeros(n) if x0 is None else require_finite(x0, "x0")
     xi: InexactArray = np.broadcast_to(start_state @ modes.Vinv.T, (C, n))
@@ -267,9 +269,10 @@ def open_loop_response(
     Returns the states, (n_t, C, n_x) (C: the shape's number of elements).
     """
     if plant.nonlinear or plant.n_inputs != 1:
-        raise ValueError(
-            "plant: the exact open-loop response needs a linear plant with one "
-            "input channel (turn the rotational stiffening off)"
+        raise FieldError(
+            "plant",
+            "the exact open-loop response needs a linear plant with one "
+            "input channel (turn the rotational stiffening off)",
         )
     A, B = plant.linear_part()
     breaks, coeffs = torque_pieces(shape)

@@ -8,7 +8,7 @@ from typing import Literal
 
 import numpy as np
 
-from flexsat.input_checks import require_nonneg, set_si
+from flexsat.input_checks import FieldError, require_nonneg, set_si
 
 
 def least_squares_derivative_weights(window: int, order: int, dt: float) -> np.ndarray:
@@ -19,9 +19,9 @@ def least_squares_derivative_weights(window: int, order: int, dt: float) -> np.n
     polynomials of degree <= order.
     """
     if order < 1 or window < order + 1:
-        raise ValueError(
-            "rate_filter: need order >= 1 and window >= order + 1, "
-            f"got window={window}, order={order}"
+        raise FieldError(
+            "rate_filter",
+            f"need order >= 1 and window >= order + 1, got window={window}, order={order}",
         )
     tau = dt * (np.arange(window) - (window - 1))
     V = np.vander(tau, order + 1, increasing=True)
@@ -63,7 +63,7 @@ class Sensors:
         set_si(self, "gyro_noise", require_nonneg, "rad/s")
         set_si(self, "strain_noise", require_nonneg, "N*m")
         if self.rate not in ("ideal", "ls_filter", "gyro"):
-            raise ValueError(f"rate: must be 'ideal', 'ls_filter' or 'gyro', got {self.rate!r}")
+            raise FieldError("rate", f"must be 'ideal', 'ls_filter' or 'gyro', got {self.rate!r}")
         least_squares_derivative_weights(self.rate_window, self.rate_order, 1.0)
 
     def quantize(self, theta: np.ndarray) -> np.ndarray:

@@ -1,5 +1,5 @@
 r"""Performance goals of a finite-time slew (EPS slew study c. 1989,
-L792–L801).
+"Simulation Results").
 
 The paper judges each closed-loop slew of the Earth Pointing Satellite against three goals:
 
@@ -14,7 +14,7 @@ Goal 2 reads "at 125 % of the nominal time" a value of an oscillation; this modu
 peak from 1.25 T to the end of the record (the vibration that remains at 1.25 T: its amplitude
 rather than its phase at one instant, so a record should run on past 1.25 T by about a period
 of the first mode) and reports the peak during the slew [0, T] beside it (the paper's "peak
-deformations during the slew drop by 1.5–2×", L895–L900).
+deformations during the slew drop by 1.5–2×", Fig. 7).
 A rim point's deflection is the Euclidean norm of its displacement components; the peak is over
 every rim point.
 
@@ -30,7 +30,12 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import require_finite, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_finite,
+    require_positive,
+    require_positive_scalar,
+)
 from flexsat.units import FloatArray
 
 __all__ = ["SlewGoals", "euler_angle_error", "slew_goal_metrics"]
@@ -38,7 +43,7 @@ __all__ = ["SlewGoals", "euler_angle_error", "slew_goal_metrics"]
 
 @dataclass(frozen=True)
 class SlewGoals:
-    """The goals' numbers (defaults: seed 003 L792–L801)."""
+    """The goals' numbers (defaults: EPS slew study c. 1989 "Simulation Results")."""
 
     #: angle tolerance as a fraction of the commanded angle
     angle_fraction: float = 0.03
@@ -49,11 +54,14 @@ class SlewGoals:
 
     def __post_init__(self) -> None:
         for name in ("angle_fraction", "deflection_ratio"):
-            require_positive(getattr(self, name), name)
-        if not float(require_finite(self.evaluation, "evaluation")) >= 1.0:
-            raise ValueError(
-                f"evaluation: must be >= 1 (a multiple of the maneuver time T), "
-                f"got {self.evaluation}"
+            require_positive_scalar(getattr(self, name), name)
+        evaluation = require_finite(self.evaluation, "evaluation")
+        if evaluation.ndim != 0:
+            raise FieldError("evaluation", f"must be one number, got shape {evaluation.shape}")
+        if not float(evaluation) >= 1.0:
+            raise FieldError(
+                "evaluation",
+                f"must be >= 1 (a multiple of the maneuver time T), got {self.evaluation}",
             )
 
 
@@ -121,9 +129,10 @@ def slew_goal_metrics(
     T = float(require_positive(duration, "duration", "s"))
     t_eval = goals.evaluation * T
     if t.ndim != 1 or len(t) < 2 or t[0] > 0.0 or t[-1] < t_eval * (1 - 1e-9):
-        raise ValueError(
-            f"t: the record must span [0, {t_eval:g}] s ({goals.evaluation:g} T) "
-            f"to evaluate the goals, got [{t[0]:g}, {t[-1]:g}] s"
+        raise FieldError(
+            "t",
+            f"the record must span [0, {t_eval:g}] s ({goals.evaluation:g} T) "
+            f"to evaluate the goals, got [{t[0]:g}, {t[-1]:g}] s",
         )
     angles = np.asarray(euler123, float)
     target = np.asarray(target, float)
@@ -131,7 +140,7 @@ def slew_goal_metrics(
     defl_open = np.broadcast_to(np.asarray(deflection_open, float), defl.shape)
     tolerance = goals.angle_fraction * float(np.max(np.abs(target)))
     if tolerance <= 0.0:
-        raise ValueError("target: a slew of zero angle has no angle goal (3 % of 0 rad)")
+        raise FieldError("target", "a slew of zero angle has no angle goal (3 % of 0 rad)")
 
     error = np.abs(euler_angle_error(_at(t, angles, min(t_eval, t[-1])), target))
     slew = _peak(t, defl, 0.0, T)

@@ -1,4 +1,5 @@
-r"""Star tracker as a sensor of a three-axis plant's ``attitude`` channel (seed 000 §2.3.4;
+r"""Star tracker as a sensor of a three-axis plant's ``attitude`` channel
+(Junkins, Pollock & Rahman 1990 §2.3.4;
 issue 14 part 4).
 
 The measured attitude is the true one turned by a small body-axis error,
@@ -30,6 +31,7 @@ import numpy as np
 
 from flexsat.dynamics.attitude import quaternion_exp, quaternion_multiply
 from flexsat.dynamics.plant import Channel
+from flexsat.input_checks import FieldError
 from flexsat.sim.channels import ChannelSensor
 from flexsat.units import FloatArray, QuantityArrayLike, to_si_array
 
@@ -76,31 +78,33 @@ class StarTrackerSensor(ChannelSensor):
                 or not np.all(np.isfinite(sig))
                 or np.any(sig < 0)
             ):
-                raise ValueError(
-                    f"covariance: give a (3, 3) matrix in rad² or per-axis sigmas "
-                    f"(1 or 3 finite angles >= 0), got {self.covariance!r}"
+                raise FieldError(
+                    "covariance",
+                    "give a (3, 3) matrix in rad² or per-axis sigmas "
+                    f"(1 or 3 finite angles >= 0), got {self.covariance!r}",
                 )
             cov = np.diag(np.broadcast_to(sig, (3,)) ** 2)
         if cov.shape != (3, 3) or not np.all(np.isfinite(cov)):
-            raise ValueError(
-                f"covariance: must be a finite (3, 3) matrix in rad² or 3 per-axis "
-                f"sigmas, got shape {cov.shape}"
+            raise FieldError(
+                "covariance",
+                "must be a finite (3, 3) matrix in rad² or 3 per-axis "
+                f"sigmas, got shape {cov.shape}",
             )
         if np.max(np.abs(cov - cov.T)) > 1e-12 * max(np.max(np.abs(cov)), 1e-300):
-            raise ValueError("covariance: must be symmetric")
+            raise FieldError("covariance", "must be symmetric")
         vals, vecs = np.linalg.eigh(cov)
         if vals[0] < -1e-12 * max(vals[-1], 1e-300):
-            raise ValueError(
-                f"covariance: must be positive semi-definite, smallest eigenvalue "
-                f"{vals[0]:.3g} rad²"
+            raise FieldError(
+                "covariance",
+                f"must be positive semi-definite, smallest eigenvalue {vals[0]:.3g} rad²",
             )
         rate = float(self.identification_rate)
         if not 0 < rate <= 1:
-            raise ValueError(
-                f"identification_rate: must lie in (0, 1], got {self.identification_rate!r}"
+            raise FieldError(
+                "identification_rate", f"must lie in (0, 1], got {self.identification_rate!r}"
             )
         if self.derivative_of is not None:
-            raise ValueError("derivative_of: a star tracker measures the attitude itself")
+            raise FieldError("derivative_of", "a star tracker measures the attitude itself")
         object.__setattr__(self, "covariance", cov)
         # L = V sqrt(Λ): L Lᵀ = P also when P is singular (where a Cholesky factor fails)
         object.__setattr__(self, "_factor", vecs * np.sqrt(np.clip(vals, 0, None)))
@@ -128,18 +132,20 @@ class StarTrackerSensor(ChannelSensor):
         r = monte_carlo(tracker, n, seed, false_stars, missing_fraction)
         ok = r.errors[r.accepted]
         if ok.shape[0] < 10:
-            raise ValueError(
-                f"tracker: only {ok.shape[0]} of {n} frames identified; the "
-                f"sensor's covariance needs at least 10"
+            raise FieldError(
+                "tracker",
+                f"only {ok.shape[0]} of {n} frames identified; the "
+                f"sensor's covariance needs at least 10",
             )
         return cls(covariance=np.cov(ok, rowvar=False), identification_rate=r.identification_rate)
 
     def bind(self, channel: Channel) -> StarTrackerSensor:
         if channel.unit != "" or channel.size != 4:
-            raise ValueError(
-                f"sensors[{channel.name}]: a star tracker measures the attitude channel "
+            raise FieldError(
+                f"sensors[{channel.name}]",
+                "a star tracker measures the attitude channel "
                 f"(4 Euler parameters, unit ''), not a channel of {channel.size} values in "
-                f"{channel.unit!r}"
+                f"{channel.unit!r}",
             )
         out = replace(self)
         object.__setattr__(out, "_acts", (False, True, False, False))
@@ -149,8 +155,8 @@ class StarTrackerSensor(ChannelSensor):
         """β_m = δβ(L n) ⊗ β for true attitudes v (n_cases, 4) and noise (n_cases, 4)."""
         v = np.asarray(v, float)
         if v.shape[-1] != 4:
-            raise ValueError(
-                f"attitude: a star tracker needs the 4 Euler parameters, got shape {v.shape}"
+            raise FieldError(
+                "attitude", f"a star tracker needs the 4 Euler parameters, got shape {v.shape}"
             )
         dtheta = np.asarray(noise, float)[..., :3] @ self._factor.T
         # exp(θ) of the plant's convention rotates the body by θ: C(exp θ) = exp(−[θ×])

@@ -82,7 +82,8 @@ def actuated(command: Values, saturation: Values, scale: Values) -> FloatArray: 
 
 @register_jitable
 def actuated(command: Values, saturation: Values, scale: Values) -> Values:
-    """An actuator's output scale · sat(command) (seed 000, Att. 3: the torque constant's
+    """An actuator's output scale · sat(command) (Junkins, Pollock & Rahman 1990, Att. 3:
+    the torque constant's
     ratio times the amplifier's saturation)."""
     return scale * saturated(command, saturation)
 
@@ -99,6 +100,7 @@ def friction_torque(
 
 @register_jitable
 def friction_torque(rate: Values, coulomb: Values, viscous: Values, smoothing: Values) -> Values:
-    """τ = −c1 tanh(θ'/ε) − c2 θ': the bearing friction of seed 000, Att. 3 Eq. 23, its sign
+    """τ = −c1 tanh(θ'/ε) − c2 θ': the bearing friction of Junkins, Pollock & Rahman 1990,
+    Att. 3 Eq. 23, its sign
     regularised over the smoothing rate ε (:class:`~flexsat.sim.disturbances.BearingFriction`)."""
     return -coulomb * np.tanh(rate / smoothing) - viscous * rate

@@ -29,7 +29,7 @@ from flexsat.dynamics.plant import Channel
 from flexsat.dynamics.state_space import StateSpacePlant
 from flexsat.identify.excitation import Excitation, sensor_matrices, with_anti_alias
 from flexsat.identify.measurements import Measurement
-from flexsat.input_checks import require_count, require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_count, require_nonneg, require_positive
 from flexsat.sim.channels import ChannelSensor
 from flexsat.sim.config import SimConfig
 from flexsat.sim.engine import simulate
@@ -88,10 +88,10 @@ def simulate_test(
     """
     excitations = [excitation] if isinstance(excitation, Excitation) else list(excitation)
     if not excitations or not all(isinstance(e, Excitation) for e in excitations):
-        raise ValueError("excitation: must be an Excitation or a non-empty list of them")
+        raise FieldError("excitation", "must be an Excitation or a non-empty list of them")
     sensors = list(sensors)
     if not sensors or not all(isinstance(s, Channel) for s in sensors):
-        raise ValueError("sensors: must be a non-empty list of Channel")
+        raise FieldError("sensors", "must be a non-empty list of Channel")
     fs = float(require_positive(sample_rate, "sample_rate"))
     T = float(require_positive(duration, "duration"))
     noise = float(require_nonneg(noise, "noise"))
@@ -101,7 +101,7 @@ def simulate_test(
     dt = 1.0 / fs
     n = int(np.ceil(T * fs - 1e-9))
     if n < 2:
-        raise ValueError(f"duration: gives {n} sample(s) at {fs} Hz; need at least 2")
+        raise FieldError("duration", f"gives {n} sample(s) at {fs} Hz; need at least 2")
     h = dt / over
     t_fine = np.arange(n * over, dtype=float) * h
     U = np.array([e.samples(t_fine, h, over, rng) for e in excitations])  # (r, n*over)
@@ -112,9 +112,9 @@ def simulate_test(
     if anti_alias is not None:
         cut = float(require_positive(anti_alias, "anti_alias"))
         if cut >= fs / 2:
-            raise ValueError(
-                f"anti_alias: the cut-off must be below the Nyquist frequency "
-                f"{fs / 2:g} Hz, got {cut:g} Hz"
+            raise FieldError(
+                "anti_alias",
+                f"the cut-off must be below the Nyquist frequency {fs / 2:g} Hz, got {cut:g} Hz",
             )
         A, B, C, D = with_anti_alias(A, B, C, D, cut)
     plant = StateSpacePlant(A, B, C, D, "excitation", "sensors")

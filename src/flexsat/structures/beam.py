@@ -90,7 +90,13 @@ import numpy as np
 import numpy.typing as npt
 from scipy.optimize import brentq
 
-from flexsat.input_checks import require_count, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_positive,
+)
 from flexsat.units import FloatArray
 
 __all__ = [
@@ -370,14 +376,14 @@ class CantileverModes:
         """
         is_int = isinstance(derivative, (Integral, np.integer)) and not isinstance(derivative, bool)
         if not is_int or not 0 <= derivative <= 4:
-            raise ValueError(f"derivative: must be an integer in 0..4, got {derivative!r}")
+            raise FieldError("derivative", f"must be an integer in 0..4, got {derivative!r}")
         xi = np.atleast_1d(np.asarray(xi, dtype=float))
         if xi.ndim != 1:
-            raise ValueError(f"xi: must be a scalar or 1-D array, got shape {xi.shape}")
+            raise FieldError("xi", f"must be a scalar or 1-D array, got shape {xi.shape}")
         L = self.length
         tol = 1e-12 * L
         if not np.all(np.isfinite(xi)) or np.any(xi < -tol) or np.any(xi > L + tol):
-            raise ValueError(f"xi: stations must be finite and lie in [0, {L}]")
+            raise FieldError("xi", f"stations must be finite and lie in [0, {L}]")
         b, a = self.betas, self.coefficients
         x = np.outer(xi, b)
         j = int(derivative)
@@ -561,7 +567,7 @@ def hub_free_frequencies(
         ω_i in rad/s, ascending.
     """
     if not isinstance(beam, TipMassCantilever):
-        raise ValueError(f"beam: must be a TipMassCantilever, got {type(beam).__name__}")
+        raise FieldError("beam", f"must be a TipMassCantilever, got {type(beam).__name__}")
     l0 = _nonneg(hub_radius, "hub_radius")
     I_h = _positive(hub_inertia, "hub_inertia")
     n = require_count(n_appendages, "n_appendages")

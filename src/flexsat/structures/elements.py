@@ -35,6 +35,7 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
+from flexsat.input_checks import FieldError
 from flexsat.units import FloatArray
 
 __all__ = [
@@ -263,7 +264,7 @@ def frame_rotation(
     ez = np.cross(ex, v)
     nz = np.linalg.norm(ez, axis=-1, keepdims=True) / np.linalg.norm(v, axis=-1, keepdims=True)
     if np.any(~(nz > _PARALLEL_TOL)):
-        raise ValueError("orientation: must not be parallel to the member axis")
+        raise FieldError("orientation", "must not be parallel to the member axis")
     ez = ez / np.linalg.norm(ez, axis=-1, keepdims=True)
     return np.stack([ex, np.cross(ez, ex), ez], axis=-2)
 

@@ -22,7 +22,7 @@ import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
 
-from flexsat.input_checks import require_finite, require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 from flexsat.structures import elements as el
 from flexsat.structures.modal_solve import SYMMETRY_RTOL, factor_positive_definite, solve_modes
 from flexsat.structures.sections import Material, Section
@@ -92,7 +92,7 @@ class Structure:
     def add_node(self, node_id: int, xyz: npt.ArrayLike) -> None:
         """Add a node with a unique integer id at position ``xyz`` (3,), m."""
         if isinstance(node_id, bool) or not isinstance(node_id, Integral):
-            raise ValueError(f"node_id: must be an integer, got {node_id!r}")
+            raise FieldError("node_id", f"must be an integer, got {node_id!r}")
         node_id = int(node_id)
         if node_id in self._index:
             raise ValueError(f"node {node_id}: duplicate node id")
@@ -201,12 +201,12 @@ class Structure:
         if offsets is not None:
             offsets = require_finite(offsets, "offsets")
             if offsets.shape != (2, 3):
-                raise ValueError(f"offsets: must have shape (2, 3), got {offsets.shape}")
+                raise FieldError("offsets", f"must have shape (2, 3), got {offsets.shape}")
         x1, x2, _ = self._ends(n1, n2, offsets)
         if orientation is not None:
             orientation = require_finite(orientation, "orientation")
             if orientation.shape != (3,):
-                raise ValueError(f"orientation: must have 3 components, got {orientation.shape}")
+                raise FieldError("orientation", f"must have 3 components, got {orientation.shape}")
         el.frame_rotation(x1, x2, orientation)  # refuses a vector parallel to the axis
         props = dict(
             E=material.E,
@@ -305,12 +305,12 @@ class Structure:
             if J.shape == (3,):
                 J = np.diag(J)
             if J.shape != (3, 3):
-                raise ValueError(f"inertia: must be a 3-vector or 3x3, got shape {J.shape}")
+                raise FieldError("inertia", f"must be a 3-vector or 3x3, got shape {J.shape}")
             scale = np.abs(J).max()
             if np.abs(J - J.T).max() > SYMMETRY_RTOL * scale:
-                raise ValueError("inertia: must be symmetric")
+                raise FieldError("inertia", "must be symmetric")
             if np.linalg.eigvalsh(J).min() < -SYMMETRY_RTOL * scale:
-                raise ValueError("inertia: must be positive semi-definite")
+                raise FieldError("inertia", "must be positive semi-definite")
         self._masses.append(_Lumped(index, m, J))
 
     def clamp(
@@ -330,7 +330,7 @@ class Structure:
             names = (names,)
         for name in names:
             if name not in _SLOT:
-                raise ValueError(f"dofs: unknown dof {name!r} (expected 'all' or {DOF_NAMES})")
+                raise FieldError("dofs", f"unknown dof {name!r} (expected 'all' or {DOF_NAMES})")
             self._clamped.add((index, _SLOT[name]))
             if not (everything if support is None else support):
                 self._suppressed.add((index, _SLOT[name]))
@@ -376,7 +376,7 @@ class Structure:
         for node, slot in clamped:
             active[node, slot] = False
         if not active.any():
-            raise ValueError("structure: no active dofs (every dof is clamped)")
+            raise FieldError("structure", "no active dofs (every dof is clamped)")
         number = np.full(6 * n_nodes, -1)
         number[active.ravel()] = np.arange(int(active.sum()))
         K = _sparse(number, [(idx, k) for idx, k, _ in parts])
@@ -418,11 +418,12 @@ class Structure:
         """
         g = require_finite(g, "g")
         if g.shape != (3,):
-            raise ValueError(f"g: must have 3 components, got shape {g.shape}")
+            raise FieldError("g", f"must have 3 components, got shape {g.shape}")
         if not self._clamped:
-            raise ValueError(
-                "gravity_preload: the structure must be clamped (a free structure has no static "
-                "equilibrium under gravity)"
+            raise FieldError(
+                "gravity_preload",
+                "the structure must be clamped (a free structure has no static "
+                "equilibrium under gravity)",
             )
         free = self._assemble(geometric=False, clamped=())
         f = free.M @ (free.rigid_body_vectors()[:, :3] @ g)
@@ -439,7 +440,7 @@ class Structure:
 
 def _require_type(value: object, cls: type, field: str) -> None:
     if not isinstance(value, cls):
-        raise ValueError(f"{field}: must be a {cls.__name__}, got {type(value).__name__}")
+        raise FieldError(field, f"must be a {cls.__name__}, got {type(value).__name__}")
 
 
 def _check_connected(touched: npt.NDArray[np.bool_], ids: Sequence[int]) -> None:
@@ -472,8 +473,8 @@ def _static_solve(K: sp.csr_matrix, f: FloatArray) -> FloatArray:
         u: FloatArray = factor_positive_definite(K).solve(f)
         return u
     except ValueError:
-        raise ValueError(
-            "gravity_preload: stiffness matrix is singular (a mechanism, or too few clamps)"
+        raise FieldError(
+            "gravity_preload", "stiffness matrix is singular (a mechanism, or too few clamps)"
         ) from None
 
 
@@ -692,9 +693,10 @@ class Assembly:
         G = self.rigid_body_vectors(p).T @ (self.M @ self.rigid_body_vectors(p))
         m = G[0, 0]
         if not m > 0 or np.abs(G[:3, :3] - m * np.eye(3)).max() > 1e-9 * m:
-            raise ValueError(
-                "mass_properties: the model must carry the same mass in x, y and z (a 3-D "
-                f"model); translational masses are {np.diag(G)[:3]}"
+            raise FieldError(
+                "mass_properties",
+                "the model must carry the same mass in x, y and z (a 3-D "
+                f"model); translational masses are {np.diag(G)[:3]}",
             )
         a = np.array([G[5, 1] - G[4, 2], G[3, 2] - G[5, 0], G[4, 0] - G[3, 1]]) / (2.0 * m)
         inertia = (G[3:, 3:] + G[3:, 3:].T) / 2.0

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import require_finite, require_nonneg
+from flexsat.input_checks import FieldError, require_finite, require_nonneg
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
 from flexsat.units import FloatArray, to_si
 
@@ -123,7 +123,7 @@ def read_nastran_modes(
 
     ref = require_finite(reference, "reference")
     if ref.shape != (3,):
-        raise ValueError(f"reference: must have shape (3,), got {ref.shape}")
+        raise FieldError("reference", f"must have shape (3,), got {ref.shape}")
     R = n2p.rbgeom_uset(uset, ref)[rows]
     ids, xyz, first, T = _grids(uset, n2p.rbgeom_uset(uset))
     s = np.sqrt(mass_unit) * np.array([1.0, 1.0, 1.0, length, length, length])
@@ -156,9 +156,9 @@ def _unit_scales(units: Mapping[str, str] | None) -> tuple[float, float, float]:
     """Metres, kilograms and seconds per model unit of length, mass and time."""
     given = SI_UNITS if units is None else dict(units)
     if set(given) != set(SI_UNITS):
-        raise ValueError(
-            "units: must map exactly 'length', 'mass' and 'time' to unit strings, got "
-            f"{sorted(given)}"
+        raise FieldError(
+            "units",
+            f"must map exactly 'length', 'mass' and 'time' to unit strings, got {sorted(given)}",
         )
     length, mass, time = (
         to_si(f"1 {given[k]}", SI_UNITS[k], f"units[{k!r}]") for k in ("length", "mass", "time")
@@ -169,8 +169,8 @@ def _unit_scales(units: Mapping[str, str] | None) -> tuple[float, float, float]:
 def _check_modal_data(nas: dict[str, Any], se: int, source: str) -> None:
     """The superelement exists and has eigenvalues, g-set shapes and a mass matrix."""
     if se not in nas["uset"]:
-        raise ValueError(
-            f"superelement: {se!r} is not in {source} (superelements {sorted(nas['uset'])})"
+        raise FieldError(
+            "superelement", f"{se!r} is not in {source} (superelements {sorted(nas['uset'])})"
         )
     missing = [
         label
@@ -253,10 +253,11 @@ def _frequencies(lam: FloatArray, time: float, rigid_frequency: float) -> FloatA
     w = np.where(w <= rigid_frequency, 0.0, w)
     if np.any(np.diff(w) < 0):
         low = ", ".join(f"{x:.3g}" for x in np.sort(w[w > 0])[:3])
-        raise ValueError(
-            f"rigid_frequency: eigenvalues are not ascending once the modes at or below "
+        raise FieldError(
+            "rigid_frequency",
+            "eigenvalues are not ascending once the modes at or below "
             f"{rigid_frequency:g} rad/s are set to 0 (lowest others {low} rad/s); if those are "
-            "rigid-body modes, raise rigid_frequency"
+            "rigid-body modes, raise rigid_frequency",
         )
     return w
 

@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING, Any, TypeAlias
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import require_finite, require_nonneg
+from flexsat.input_checks import FieldError, require_finite, require_nonneg
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
 from flexsat.units import FloatArray
 
@@ -176,7 +176,7 @@ def _normalised(
     shapes: FloatArray, modes: list[UffDataset], normalisation: str, path: Path
 ) -> FloatArray:
     if normalisation not in NORMALISATIONS:
-        raise ValueError(f"normalisation: must be one of {NORMALISATIONS}, got {normalisation!r}")
+        raise FieldError("normalisation", f"must be one of {NORMALISATIONS}, got {normalisation!r}")
     if normalisation == "as_is":
         return shapes
     mu = np.array([d["modal_m"] for d in modes], dtype=float)
@@ -314,7 +314,7 @@ def modal_model_from_uff(
     frequencies = np.where(w <= float(require_nonneg(rigid_frequency, "rigid_frequency")), 0.0, w)
     ref = require_finite(reference, "reference")
     if ref.shape != (3,):
-        raise ValueError(f"reference: must have shape (3,), got {ref.shape}")
+        raise FieldError("reference", f"must have shape (3,), got {ref.shape}")
     rigid_mass, participation, boundary = _mass_properties(
         frequencies, shapes, xyz * length, ref, rigid_mass, participation, path
     )

@@ -64,7 +64,7 @@ import numpy.typing as npt
 from scipy.sparse import issparse
 from scipy.sparse.linalg import norm as sparse_norm
 
-from flexsat.input_checks import require_count, require_finite, require_nonneg
+from flexsat.input_checks import FieldError, require_count, require_finite, require_nonneg
 from flexsat.netcdf import write_netcdf
 from flexsat.units import FloatArray
 
@@ -199,29 +199,29 @@ def _present(rigid_mass: FloatArray) -> tuple[npt.NDArray[np.bool_], npt.NDArray
 def _array(value: npt.ArrayLike, field: str, shape: tuple[int, ...], names: str) -> FloatArray:
     arr = require_finite(value, field)
     if arr.shape != shape:
-        raise ValueError(f"{field}: must have shape {names} = {shape}, got {arr.shape}")
+        raise FieldError(field, f"must have shape {names} = {shape}, got {arr.shape}")
     return arr
 
 
 def _node_ids(value: npt.ArrayLike) -> npt.NDArray[np.int64]:
     ids = require_finite(value, "node_ids")
     if ids.ndim != 1 or ids.size == 0:
-        raise ValueError(f"node_ids: must be a non-empty 1-D array, got shape {ids.shape}")
+        raise FieldError("node_ids", f"must be a non-empty 1-D array, got shape {ids.shape}")
     if np.any(ids != np.rint(ids)):
-        raise ValueError(f"node_ids: must be integers, got {value!r}")
+        raise FieldError("node_ids", f"must be integers, got {value!r}")
     integers = ids.astype(np.int64)
     unique, counts = np.unique(integers, return_counts=True)
     if np.any(counts > 1):
-        raise ValueError(f"node_ids: must be unique, repeated {unique[counts > 1].tolist()}")
+        raise FieldError("node_ids", f"must be unique, repeated {unique[counts > 1].tolist()}")
     return integers
 
 
 def _frequencies(value: npt.ArrayLike) -> FloatArray:
     w = require_nonneg(value, "frequencies")
     if w.ndim != 1 or w.size == 0:
-        raise ValueError(f"frequencies: must be a 1-D array of at least one mode, got {w.shape}")
+        raise FieldError("frequencies", f"must be a 1-D array of at least one mode, got {w.shape}")
     if np.any(np.diff(w) < 0):
-        raise ValueError("frequencies: must be in ascending order")
+        raise FieldError("frequencies", "must be in ascending order")
     return w
 
 
@@ -230,8 +230,8 @@ def _damping(value: npt.ArrayLike, n_modes: int) -> FloatArray:
     if zeta.ndim == 0:
         return np.full(n_modes, float(zeta))
     if zeta.shape != (n_modes,):
-        raise ValueError(
-            f"damping: must be a scalar or have shape (m,) = ({n_modes},), got {zeta.shape}"
+        raise FieldError(
+            "damping", f"must be a scalar or have shape (m,) = ({n_modes},), got {zeta.shape}"
         )
     return zeta
 
@@ -241,21 +241,23 @@ def _check_rigid_mass(rigid_mass: FloatArray) -> None:
     d = _scales(rigid_mass)
     S = rigid_mass / np.outer(d, d)
     if np.max(np.abs(S - S.T)) > _TOL:
-        raise ValueError("rigid_mass: must be symmetric")
+        raise FieldError("rigid_mass", "must be symmetric")
     if np.linalg.eigvalsh(0.5 * (S + S.T)).min() < -_TOL:
-        raise ValueError("rigid_mass: must be positive semi-definite")
+        raise FieldError("rigid_mass", "must be positive semi-definite")
     trans, _ = _present(rigid_mass)
     if not trans.any():
-        raise ValueError("rigid_mass: total mass must be > 0 (translational diagonal is zero)")
+        raise FieldError("rigid_mass", "total mass must be > 0 (translational diagonal is zero)")
     masses = np.diag(rigid_mass)[:3][trans]
     off = S[:3, :3] - np.diag(np.diag(S[:3, :3]))
     if np.ptp(masses) > _TOL * masses.max() or np.max(np.abs(off)) > _TOL:
-        raise ValueError("rigid_mass: translational block must be m·I (0 for absent translations)")
+        raise FieldError(
+            "rigid_mass", "translational block must be m·I (0 for absent translations)"
+        )
     rows = np.diag(rigid_mass)[3:] > 0
     mask = np.outer(rows, trans)
     misfit = (rigid_mass[3:, :3] - _skew(_first_moment(rigid_mass))) / np.outer(d[3:], d[:3])
     if np.max(np.abs(misfit[mask]), initial=0.0) > _TOL:
-        raise ValueError("rigid_mass: rotation–translation block must be m[c×] (skew)")
+        raise FieldError("rigid_mass", "rotation–translation block must be m[c×] (skew)")
 
 
 def _check_bessel(rigid_mass: FloatArray, participation: FloatArray) -> None:
@@ -263,15 +265,16 @@ def _check_bessel(rigid_mass: FloatArray, participation: FloatArray) -> None:
     d = _scales(rigid_mass)
     gap = (rigid_mass - participation.T @ participation) / np.outer(d, d)
     if np.linalg.eigvalsh(0.5 * (gap + gap.T)).min() < -_TOL:
-        raise ValueError(
-            "participation: Lᵀ L exceeds rigid_mass (mass-normalised modes must satisfy "
-            "Bessel's inequality Lᵀ L <= rigid_mass); check the normalisation of the shapes"
+        raise FieldError(
+            "participation",
+            "Lᵀ L exceeds rigid_mass (mass-normalised modes must satisfy "
+            "Bessel's inequality Lᵀ L <= rigid_mass); check the normalisation of the shapes",
         )
 
 
 def _boundary(value: str) -> str:
     if value not in BOUNDARIES:
-        raise ValueError(f"boundary: must be one of {BOUNDARIES}, got {value!r}")
+        raise FieldError("boundary", f"must be one of {BOUNDARIES}, got {value!r}")
     return value
 
 
@@ -303,12 +306,12 @@ def _directions(direction: Any, field: str) -> tuple[FloatArray, bool]:
     except (KeyError, ValueError, TypeError):
         vecs = None
     if vecs is None or vecs.ndim != 2 or vecs.shape[1] != 3 or vecs.shape[0] == 0:
-        raise ValueError(
-            f"{field}: must be 'x', 'y', 'z' or a 3-vector (or a list of them), got {direction!r}"
+        raise FieldError(
+            field, f"must be 'x', 'y', 'z' or a 3-vector (or a list of them), got {direction!r}"
         )
     norms = np.linalg.norm(vecs, axis=1)
     if not np.all(np.isfinite(norms)) or np.any(norms == 0):
-        raise ValueError(f"{field}: must be a finite non-zero direction, got {direction!r}")
+        raise FieldError(field, f"must be a finite non-zero direction, got {direction!r}")
     return vecs / norms[:, None], single
 
 
@@ -317,7 +320,7 @@ def _axis_index(axis: int | str) -> int:
         return _AXES.index(axis)
     if isinstance(axis, (int, np.integer)) and not isinstance(axis, bool) and 0 <= axis <= 2:
         return int(axis)
-    raise ValueError(f"axis: must be 0, 1, 2 or 'x', 'y', 'z', got {axis!r}")
+    raise FieldError("axis", f"must be 0, 1, 2 or 'x', 'y', 'z', got {axis!r}")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -461,7 +464,7 @@ class ModalModel:
     ) -> ModalModel:
         """Keep the first ``n_modes`` modes and/or those with ω <= ``max_frequency`` (rad/s)."""
         if n_modes is None and max_frequency is None:
-            raise ValueError("truncate: give n_modes, max_frequency or both")
+            raise FieldError("truncate", "give n_modes, max_frequency or both")
         keep = np.ones(self.n_modes, dtype=bool)
         if n_modes is not None:
             keep[require_count(n_modes, "n_modes") :] = False
@@ -483,7 +486,7 @@ class ModalModel:
         if len(hits) != 1:
             shown = ", ".join(map(str, self.node_ids[:8]))
             shown += " ..." if self.node_ids.size > 8 else ""
-            raise ValueError(f"{field}: unknown node {node!r} (nodes: {shown})")
+            raise FieldError(field, f"unknown node {node!r} (nodes: {shown})")
         return self.shapes[:, hits[0], :]
 
     def _project(self, block: FloatArray, direction: Direction, field: str) -> FloatArray:
@@ -494,7 +497,7 @@ class ModalModel:
     def _relative_rotation(self, node_a: int, node_b: int) -> FloatArray:
         rot_a, rot_b = self._node(node_a, "node_a")[:, 3:], self._node(node_b, "node_b")[:, 3:]
         if node_a == node_b:
-            raise ValueError(f"node_b: must differ from node_a ({node_a!r})")
+            raise FieldError("node_b", f"must differ from node_a ({node_a!r})")
         return rot_b - rot_a
 
     def force_input(self, node: int, direction: Direction) -> FloatArray:
@@ -538,9 +541,9 @@ class ModalModel:
         arr = require_finite(vector, field)
         arr = arr[:, None] if arr.ndim == 1 else arr
         if arr.ndim != 2 or arr.shape[0] != self.n_modes:
-            raise ValueError(
-                f"{field}: must have shape (m,) or (m, k) with m = {self.n_modes}, "
-                f"got {np.shape(vector)}"
+            raise FieldError(
+                field,
+                f"must have shape (m,) or (m, k) with m = {self.n_modes}, got {np.shape(vector)}",
             )
         return arr
 
@@ -553,9 +556,9 @@ class ModalModel:
         for i, item in enumerate(outputs):
             vector, kind = item if isinstance(item, tuple) and len(item) == 2 else (None, item)
             if not isinstance(kind, str) or kind not in ("displacement", "velocity"):
-                raise ValueError(
-                    f"outputs[{i}]: must be a pair (vector, 'displacement' or 'velocity'), "
-                    f"got {item!r}"
+                raise FieldError(
+                    f"outputs[{i}]",
+                    f"must be a pair (vector, 'displacement' or 'velocity'), got {item!r}",
                 )
             rows = self._influence(vector, f"outputs[{i}]").T
             Cq.append(rows if kind == "displacement" else np.zeros_like(rows))
@@ -774,8 +777,8 @@ def _stations(stations: npt.ArrayLike | None, length: float) -> FloatArray:
         return np.linspace(0.0, length, 5)
     xi = require_finite(stations, "stations")
     if xi.ndim != 1 or xi.size == 0 or np.any(xi < 0) or np.any(xi > length):
-        raise ValueError(
-            f"stations: must be a non-empty 1-D array in [0, {length}] m, got {stations!r}"
+        raise FieldError(
+            "stations", f"must be a non-empty 1-D array in [0, {length}] m, got {stations!r}"
         )
     return xi
 
@@ -808,8 +811,9 @@ def hub_appendage_matrices(
     M, D, K : ndarray (m + 1, m + 1)
     """
     if modal.boundary != "cantilevered":
-        raise ValueError(
-            f"modal: hybrid coordinates need a cantilevered model, got boundary {modal.boundary!r}"
+        raise FieldError(
+            "modal",
+            f"hybrid coordinates need a cantilevered model, got boundary {modal.boundary!r}",
         )
     j = 3 + _axis_index(axis)
     L = modal.participation[:, j]
@@ -875,12 +879,12 @@ def _to_dataset(model: ModalModel) -> xarray.Dataset:
 def _from_dataset(ds: xarray.Dataset) -> ModalModel:
     version = ds.attrs.get("flexsat_modal_model_version")
     if version is None:
-        raise ValueError(
-            "path: not a flexsat modal model (no flexsat_modal_model_version attribute)"
+        raise FieldError(
+            "path", "not a flexsat modal model (no flexsat_modal_model_version attribute)"
         )
     if int(version) != FORMAT_VERSION:
-        raise ValueError(
-            f"path: flexsat_modal_model_version {version} not supported (reads {FORMAT_VERSION})"
+        raise FieldError(
+            "path", f"flexsat_modal_model_version {version} not supported (reads {FORMAT_VERSION})"
         )
     v = {name: ds[name].values for name in _UNITS}
     return ModalModel(

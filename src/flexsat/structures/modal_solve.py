@@ -50,7 +50,7 @@ import scipy.linalg
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator, SuperLU, eigsh, splu
 
-from flexsat.input_checks import require_count, require_finite
+from flexsat.input_checks import FieldError, require_count, require_finite
 from flexsat.units import FloatArray
 
 __all__ = ["check_mass_matrix", "factor_positive_definite", "solve_modes"]
@@ -72,14 +72,14 @@ def _check_matrix(A: Matrix, name: str) -> sp.csr_matrix:
     """Finite and symmetric (relative tolerance SYMMETRY_RTOL) sparse matrix."""
     A = sp.csr_matrix(A, dtype=float)
     if A.shape[0] != A.shape[1]:
-        raise ValueError(f"{name}: must be square, got shape {A.shape}")
+        raise FieldError(name, f"must be square, got shape {A.shape}")
     if not np.all(np.isfinite(A.data)):
-        raise ValueError(f"{name}: must be finite (no NaN or inf)")
+        raise FieldError(name, "must be finite (no NaN or inf)")
     size = np.abs(A.data).max(initial=0.0)
     asym = np.abs((A - A.T).data).max(initial=0.0)
     if asym > SYMMETRY_RTOL * size:
-        raise ValueError(
-            f"{name}: must be symmetric, max |A - A^T| = {asym:.3g} > {SYMMETRY_RTOL:g} max |A|"
+        raise FieldError(
+            name, f"must be symmetric, max |A - A^T| = {asym:.3g} > {SYMMETRY_RTOL:g} max |A|"
         )
     return A
 
@@ -171,8 +171,9 @@ def _dense_pencil(
     finite = nu > _INFINITE_NU * nu.max()
     lam, Y = sigma0 + 1.0 / nu[finite], Y[:, finite]
     if lam.size < k:
-        raise ValueError(
-            f"n_modes: only {lam.size} modes have a finite frequency (the other dofs carry no mass)"
+        raise FieldError(
+            "n_modes",
+            f"only {lam.size} modes have a finite frequency (the other dofs carry no mass)",
         )
     Y = Y[:, np.argsort(lam if shift is None else np.abs(lam - shift), kind="stable")[:k]]
     X = np.zeros((K.shape[0], k))
@@ -250,8 +251,8 @@ def _rayleigh_ritz(
     try:
         _, Q = scipy.linalg.eigh((Kr + Kr.T) / 2, (Mr + Mr.T) / 2)
     except np.linalg.LinAlgError:
-        raise ValueError(
-            "n_modes: more modes asked than there are dofs carrying mass (infinite frequencies)"
+        raise FieldError(
+            "n_modes", "more modes asked than there are dofs carrying mass (infinite frequencies)"
         ) from None
     X = X @ Q
     lam = np.einsum("ij,ij->j", X, K @ X) / np.einsum("ij,ij->j", X, M @ X)
@@ -288,21 +289,24 @@ def _count_check(n_zero: int, n_computed: int, rigid_body_modes: int | None, cla
     r = rigid_body_modes
     if r is None:
         if clamped and n_zero:
-            raise ValueError(
-                f"mechanism: {found} near-zero mode(s) in a clamped structure (a part can move "
+            raise FieldError(
+                "mechanism",
+                f"{found} near-zero mode(s) in a clamped structure (a part can move "
                 "without deforming: add members or clamps; or the mesh is so fine that the first "
                 f"eigenvalue is below {ROUNDOFF_RTOL:g} x max(K_ii/M_ii), the resolution of the "
-                "near-zero test)"
+                "near-zero test)",
             )
     elif n_zero > r:
-        raise ValueError(
-            f"mechanism: {found} near-zero modes but rigid_body_modes={r} (a mechanism or a "
-            "disconnected part)"
+        raise FieldError(
+            "mechanism",
+            f"{found} near-zero modes but rigid_body_modes={r} (a mechanism or a "
+            "disconnected part)",
         )
     elif n_zero < r:
-        raise ValueError(
-            f"rigid_body_modes: expected {r} near-zero (rigid-body) modes, found {found} "
-            "(the structure is constrained, or rigid_body_modes is wrong)"
+        raise FieldError(
+            "rigid_body_modes",
+            f"expected {r} near-zero (rigid-body) modes, found {found} "
+            "(the structure is constrained, or rigid_body_modes is wrong)",
         )
 
 
@@ -354,7 +358,7 @@ def solve_modes(
         raise ValueError(f"mass matrix: shape {M.shape} differs from the stiffness {K.shape}")
     n_modes = require_count(n_modes, "n_modes")
     if n_modes > n:
-        raise ValueError(f"n_modes: must be <= the number of active dofs ({n}), got {n_modes}")
+        raise FieldError("n_modes", f"must be <= the number of active dofs ({n}), got {n_modes}")
     r = None if rigid_body_modes is None else _rigid_count(rigid_body_modes)
     if shift is not None:
         shift = float(require_finite(shift, "shift"))
@@ -381,7 +385,7 @@ def solve_modes(
 def _rigid_count(value: int) -> int:
     number = None if isinstance(value, bool) else float(require_finite(value, "rigid_body_modes"))
     if number is None or number != int(number) or number < 0:
-        raise ValueError(f"rigid_body_modes: must be an integer >= 0, got {value!r}")
+        raise FieldError("rigid_body_modes", f"must be an integer >= 0, got {value!r}")
     return int(number)
 
 

@@ -48,6 +48,7 @@ import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
 
+from flexsat.input_checks import FieldError
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
@@ -82,23 +83,23 @@ def _check_groups(
     groups: Mapping[str, Iterable[int]], node_ids: npt.NDArray[np.int_]
 ) -> dict[str, npt.NDArray[np.int_]]:
     if not isinstance(groups, dict) or not groups:
-        raise ValueError("groups: must be a non-empty dict {name: node ids}")
+        raise FieldError("groups", "must be a non-empty dict {name: node ids}")
     known = set(int(n) for n in node_ids)
     owner: dict[int, str] = {}
     out = {}
     for name, ids in groups.items():
         if not isinstance(name, str) or not name or name == "other":
-            raise ValueError(
-                f"groups: names must be non-empty strings other than 'other', got {name!r}"
+            raise FieldError(
+                "groups", f"names must be non-empty strings other than 'other', got {name!r}"
             )
         arr = np.unique(np.asarray(list(ids), dtype=int))
         if arr.size == 0:
-            raise ValueError(f"groups: group {name!r} is empty")
+            raise FieldError("groups", f"group {name!r} is empty")
         for n in arr.tolist():
             if n not in known:
-                raise ValueError(f"groups: group {name!r}: node {n} is not in the model")
+                raise FieldError("groups", f"group {name!r}: node {n} is not in the model")
             if n in owner:
-                raise ValueError(f"groups: node {n} is in both {owner[n]!r} and {name!r}")
+                raise FieldError("groups", f"node {n} is in both {owner[n]!r} and {name!r}")
             owner[n] = name
         out[name] = arr
     return out
@@ -185,8 +186,8 @@ class _Component:
         if axis is not None:
             a = np.asarray(axis, dtype=float)
             if a.shape != (3,) or not np.all(np.isfinite(a)) or np.linalg.norm(a) == 0:
-                raise ValueError(
-                    f"axes: the axis of {name!r} must be a non-zero 3-vector, got {axis!r}"
+                raise FieldError(
+                    "axes", f"the axis of {name!r} must be a non-zero 3-vector, got {axis!r}"
                 )
             self.axis = a / np.linalg.norm(a)
         elif np.all(np.diag(self.A)[3:] > 0) and np.all(np.diag(self.A)[:3] > 0):
@@ -243,11 +244,11 @@ def classify_modes(
         ``{component name: axis 3-vector}`` to give a component's symmetry axis explicitly.
     """
     if not np.isfinite(rigid_tol) or rigid_tol < 0:
-        raise ValueError(f"rigid_tol: must be a finite frequency >= 0 Hz, got {rigid_tol!r}")
+        raise FieldError("rigid_tol", f"must be a finite frequency >= 0 Hz, got {rigid_tol!r}")
     if not 0 < rigid_fraction <= 1:
-        raise ValueError(f"rigid_fraction: must be in (0, 1], got {rigid_fraction!r}")
+        raise FieldError("rigid_fraction", f"must be in (0, 1], got {rigid_fraction!r}")
     if not 0 <= torsion_angle_deg <= 90:
-        raise ValueError(f"torsion_angle_deg: must be in [0, 90], got {torsion_angle_deg!r}")
+        raise FieldError("torsion_angle_deg", f"must be in [0, 90], got {torsion_angle_deg!r}")
     asm = modes.assembly
     node_ids = np.asarray(asm.node_ids, dtype=int)
     coords_by_node = {
@@ -257,7 +258,9 @@ def classify_modes(
     axes = dict(axes or {})
     unknown = set(axes) - set(checked)
     if unknown:
-        raise ValueError(f"axes: unknown component(s) {sorted(unknown)}; groups: {sorted(checked)}")
+        raise FieldError(
+            "axes", f"unknown component(s) {sorted(unknown)}; groups: {sorted(checked)}"
+        )
     M = sp.csr_matrix(asm.M) if sp.issparse(asm.M) else np.asarray(asm.M, dtype=float)
     dofs = [(int(n), str(d)) for n, d in asm.dofs]
     node_group = {int(n): name for name, ids in checked.items() for n in ids}

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexsat.input_checks import require_finite, require_nonneg, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 
 __all__ = ["Material", "Section"]
 
@@ -54,7 +54,7 @@ class Material:
         object.__setattr__(self, "rho", float(require_nonneg(self.rho, "rho")))
         nu = float(require_finite(self.nu, "nu"))
         if not -1.0 < nu < 0.5:
-            raise ValueError(f"nu: must satisfy -1 < nu < 0.5, got {self.nu!r}")
+            raise FieldError("nu", f"must satisfy -1 < nu < 0.5, got {self.nu!r}")
         object.__setattr__(self, "nu", nu)
         if self.G is not None:
             object.__setattr__(self, "G", _positive(self.G, "G"))
@@ -115,8 +115,8 @@ class Section:
         D = _positive(outer_diameter, "outer_diameter")
         t = _positive(thickness, "thickness")
         if t > D / 2:
-            raise ValueError(
-                f"thickness: must be <= outer_diameter / 2 = {D / 2!r}, got {thickness!r}"
+            raise FieldError(
+                "thickness", f"must be <= outer_diameter / 2 = {D / 2!r}, got {thickness!r}"
             )
         d = max(D - 2.0 * t, 0.0)
         A = math.pi * (D * D - d * d) / 4.0
