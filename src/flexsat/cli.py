@@ -17,9 +17,10 @@ is named on stderr as the command ends, whatever its exit code, and never stops 
 from __future__ import annotations
 
 import json
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, NoReturn
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
 import typer
 from rich import box
@@ -29,6 +30,10 @@ from rich.text import Text
 
 from flexsat.catalog import all_cases, get_case
 from flexsat.references import cite, references
+
+if TYPE_CHECKING:
+    from flexsat.checks import CheckResult
+    from flexsat.report.page import ResultTable
 
 app = typer.Typer(
     help="flexsat: integrated structures-and-control design of flexible spacecraft.",
@@ -82,11 +87,12 @@ def _fail(message: str) -> NoReturn:
     raise typer.Exit(code=2)
 
 
-def parse_value(text: str):
+def parse_value(text: str) -> bool | int | float | str:
     """A ``--set`` value: bool for true/false, int or float if it reads as one, else the string
     (a quantity with units such as ``"30 ozf*in*s**2"``)."""
     if text.lower() in ("true", "false"):
         return text.lower() == "true"
+    kind: type[int] | type[float]
     for kind in (int, float):
         try:
             return kind(text)
@@ -95,7 +101,7 @@ def parse_value(text: str):
     return text
 
 
-def parse_settings(settings: list[str]) -> dict:
+def parse_settings(settings: list[str]) -> dict[str, bool | int | float | str]:
     """``["NAME=VALUE", ...]`` to a dict of case overrides (values through :func:`parse_value`).
 
     Raises
@@ -151,7 +157,9 @@ def _print_references(sources: list[str]) -> None:
             console.print(line, markup=False, highlight=False, soft_wrap=False)
 
 
-def _modes_data(case, case_name: str, n: int, overrides: dict) -> dict:
+def _modes_data(
+    case: Any, case_name: str, n: int, overrides: dict[str, bool | int | float | str]
+) -> dict[str, Any]:
     """The case's first ``n`` frequencies (Hz), with its mode descriptions and further tables
     where it has them (see :mod:`flexsat.cases`)."""
     import numpy as np
@@ -168,7 +176,7 @@ def _modes_data(case, case_name: str, n: int, overrides: dict) -> dict:
     return data
 
 
-def _print_modes(data: dict) -> None:
+def _print_modes(data: dict[str, Any]) -> None:
     from flexsat.units import Q_
 
     columns = {
@@ -248,7 +256,7 @@ def modes(
         _print_modes(data)
 
 
-def _result_table(data) -> Table:
+def _result_table(data: ResultTable) -> Table:
     """A result's :class:`~flexsat.report.page.ResultTable` for the console (cells are text,
     never markup: run labels are the user's)."""
     table = Table(title=data.title, caption=data.caption)
@@ -331,7 +339,7 @@ def run(
 
 
 @contextmanager
-def _progress(steps: int):
+def _progress(steps: int) -> Iterator[Callable[[str], None]]:
     """Progress over ``steps`` steps on stderr: a bar on a terminal, one line per step elsewhere
     (logs, CI). Yields the ``progress(label)`` callback the runners call as each step starts;
     every step before it is then complete."""
@@ -372,7 +380,7 @@ _NUMERIC = ("published", "computed", "published\ncomputed", "rel. error", "toler
 _STYLES = {"pass": "green", "discrepancy": "yellow", "fail": "bold red", "error": "bold red"}
 
 
-def _validation_table(results, wide: bool) -> tuple[Table, list[str]]:
+def _validation_table(results: list[CheckResult], wide: bool) -> tuple[Table, list[str]]:
     """The validation table and its numbered notes: every non-pass row's explanation (an
     erratum, a model deviation, an unexplained failure, an error) and the checks' remarks."""
     from flexsat.text import format_optional

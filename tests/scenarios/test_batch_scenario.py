@@ -218,6 +218,18 @@ def test_mistakes_found_before_any_case_runs(tmp_path, change, message):
     assert not (tmp_path / "store.zarr").exists()
 
 
+def test_a_law_ii_run_tracking_another_shape_is_refused_by_name(tmp_path):
+    """The case builder remakes the reference from (alpha, u_max): a smooth bang-bang. A
+    bang_bang reference (which has no alpha) was an AttributeError; it is now named."""
+    path = _write(tmp_path, "sweep.yaml", SWEEP)
+    (tmp_path / "maneuver.yaml").write_text(
+        MANEUVER.replace("shape: smooth_bang_bang, alpha: 0.2", "shape: bang_bang")
+    )
+    with pytest.raises(ScenarioError, match="run: 'Law II' tracks a BangBang reference; a batch"):
+        run_scenario(load_scenario(path))
+    assert not (tmp_path / "store.zarr").exists()
+
+
 @pytest.mark.parametrize(
     "text, message",
     [

@@ -6,12 +6,13 @@ keys are errors."""
 from __future__ import annotations
 
 import math
+from typing import Annotated
 
 import pytest
 from pydantic import ValidationError
 
 from flexsat.scenarios import count, quantity
-from flexsat.scenarios.fields import SchemaSection, given_fields
+from flexsat.scenarios.fields import SchemaSection, given_fields, in_unit, integer_in
 
 
 class Probe(SchemaSection):
@@ -93,3 +94,44 @@ def test_unknown_keys_are_errors_and_given_drops_what_was_left_out():
         Probe(length=1, colour="red")
     assert given_fields(Probe(length="2 m", modes=3)) == {"length": 2.0, "modes": 3, "seed": 0}
     assert given_fields(Probe(length=1), exclude={"length", "seed"}) == {}
+
+
+class SpelledProbe(SchemaSection):
+    """Probe, declared as the modules mypy checks declare their fields."""
+
+    length: Annotated[float, in_unit("m")]
+    rate: Annotated[float | None, in_unit("Hz")] = None
+    ratio: Annotated[float | None, in_unit("")] = None
+    modes: Annotated[int | None, integer_in(1, 10, optional=True)] = None
+    seed: Annotated[int, integer_in(0)] = 0
+
+
+@pytest.mark.parametrize(
+    "values",
+    [
+        {"length": "3 km"},
+        {"length": 1, "rate": "0.1 kHz", "ratio": "50 percent"},
+        {"length": 1, "modes": 1e1, "seed": 10**30},
+        {"length": True},
+        {"length": "2 kg"},
+        {"length": math.nan},
+        {"length": 1, "modes": 2.5},
+        {"length": 1, "modes": None, "seed": None},
+        {"length": 1, "colour": "red"},
+        {},
+    ],
+)
+def test_in_unit_and_integer_in_are_the_validators_of_quantity_and_count(values):
+    """``Annotated[float, in_unit(u)]`` is ``quantity(u)`` and ``Annotated[int, integer_in(...)]``
+    is ``count(...)``: the same stored values, the same problems, the same schema."""
+
+    def outcome(model: type[SchemaSection]) -> object:
+        try:
+            return model(**values).model_dump()
+        except ValidationError as exc:
+            return [(e["loc"], e["msg"]) for e in exc.errors()]
+
+    assert outcome(SpelledProbe) == outcome(Probe)
+    spelled, original = SpelledProbe.model_json_schema(), Probe.model_json_schema()
+    assert spelled["properties"] == original["properties"]
+    assert spelled["required"] == original["required"]

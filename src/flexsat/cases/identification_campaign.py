@@ -34,9 +34,12 @@ Everything is seeded: the same configuration gives the same result.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any, Protocol
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.dynamics.plant import Channel
 from flexsat.identify.differential_correction import CorrectionData, differential_correction
@@ -48,17 +51,18 @@ from flexsat.identify.era import (
     markov_parameters,
     okid,
 )
-from flexsat.identify.excitation import impulse_hammer, random_force
+from flexsat.identify.excitation import Excitation, impulse_hammer, random_force
 from flexsat.identify.measurements import Measurement
 from flexsat.identify.photogrammetry import (
     CAMERA_PARAMETERS,
+    CalibrationResult,
     Camera,
     calibrate,
     look_at,
     simulate_centroids,
     triangulate,
 )
-from flexsat.identify.spectral import estimate_frf, frequency_response
+from flexsat.identify.spectral import FRFEstimate, estimate_frf, frequency_response
 from flexsat.identify.structural import (
     SubstructureModel,
     identify_damping,
@@ -67,8 +71,9 @@ from flexsat.identify.structural import (
 )
 from flexsat.input_checks import FieldError
 from flexsat.sim.vibration_test import simulate_test
-from flexsat.structures.fem import FEModes
+from flexsat.structures.fem import Assembly, FEModes, Structure
 from flexsat.structures.modal_model import ModalModel
+from flexsat.units import FloatArray
 
 __all__ = [
     "CameraRig",
@@ -76,6 +81,7 @@ __all__ = [
     "CampaignResult",
     "IDENTIFY_STEPS",
     "SIMULATE_STEPS",
+    "SubstructuredCase",
     "TestRecords",
     "identify_and_update",
     "run_campaign",
@@ -108,6 +114,21 @@ DAMPING_FORM_ERROR = 0.3
 VIDEO_FREE = ("xc", "yc", "zc", "a1", "a2", "a3", "f")
 
 
+class SubstructuredCase(Protocol):
+    """A case the campaign tests and updates (e.g. :class:`flexsat.cases.tamu_grid.
+    TamuGridCase`): named stiffness substructures and the finite-element structure with a
+    factor on each."""
+
+    @property
+    def substructures(self) -> Sequence[str]:
+        """The substructures' names."""
+        ...
+
+    def structure(self, *, stiffness_scale: Mapping[str, float] | None = None) -> Structure:
+        """The structure, each named substructure's stiffness scaled (default 1)."""
+        ...
+
+
 @dataclass(frozen=True)
 class CameraRig:
     """Two or more cameras aimed at points of the structure (SI).
@@ -118,8 +139,8 @@ class CameraRig:
     (m, rad); ``static_fields`` the fields averaged for the calibration image.
     """
 
-    positions: tuple
-    aims: tuple
+    positions: tuple[Sequence[float] | FloatArray, ...]
+    aims: tuple[Sequence[float] | FloatArray, ...]
     focal_length: float = 0.008
     pixel_size: float = 27e-6
     noise_px: float = 0.05
@@ -140,14 +161,14 @@ class CameraRig:
 class CampaignConfig:
     """What to test and how (SI).  See :func:`run_campaign`."""
 
-    truth_damping: tuple = (0.00603, 0.00489, 0.01105, 0.00596, 0.01293)
+    truth_damping: tuple[float, ...] = (0.00603, 0.00489, 0.01105, 0.00596, 0.01293)
     other_damping: float = 0.01
     truth_modes: int | None = None
-    a_priori_scale: dict = field(default_factory=dict)
+    a_priori_scale: dict[str, float] = field(default_factory=dict)
     a_priori_damping: float = 0.006
-    strain_gauges: tuple = ()  # (node_a, node_b, axis)
-    accelerometers: tuple = ()  # (node, direction)
-    targets: tuple = ()  # node ids
+    strain_gauges: tuple[tuple[int, int, str], ...] = ()  # (node_a, node_b, axis)
+    accelerometers: tuple[tuple[int, str], ...] = ()  # (node, direction)
+    targets: tuple[int, ...] = ()  # node ids
     hammer_node: int = 1
     hammer_direction: str = "z"
     hammer_impulse: float = 0.5  # N s
@@ -159,10 +180,11 @@ class CampaignConfig:
     field_rate: float = 200.0
     target_sigma: float = 1e-3
     rig: CameraRig | None = None
-    wheel_nodes: tuple = ()
-    wheel_axes: tuple = ()
+    wheel_nodes: tuple[int, ...] = ()
+    wheel_axes: tuple[str, ...] = ()
     wheel_torque_rms: float = 0.05
-    wheel_torque_constants: tuple = ()  # true / nominal, one per wheel; () = known exactly
+    # true / nominal, one per wheel; () = known exactly
+    wheel_torque_constants: tuple[float, ...] = ()
     identify_torque_constants: bool = False  # also without known true values (measured data)
     wheel_duration: float = 300.0
     wheel_sample_rate: float = 50.0
@@ -175,7 +197,7 @@ class CampaignConfig:
     bootstrap_samples: int = 10
     seed: int = 0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.update not in UPDATE_METHODS:
             raise FieldError("update", f"must be one of {UPDATE_METHODS}, got {self.update!r}")
         k = self.wheel_torque_constants
@@ -208,11 +230,11 @@ class CampaignResult:
     ``frf_updated`` is relative to the commanded torque, like the measurement.
     """
 
-    substructures: tuple
-    modes: dict
-    scalings: dict
-    wheel_gains: dict
-    update: dict
+    substructures: tuple[str, ...]
+    modes: dict[str, list[Any]]
+    scalings: dict[str, dict[str, float]]
+    wheel_gains: dict[str, dict[str, Any]]
+    update: dict[str, Any]
     damping_scalings: np.ndarray
     mac_a_priori: np.ndarray
     mac_updated: np.ndarray
@@ -221,25 +243,27 @@ class CampaignResult:
     frf_coherence: np.ndarray
     frf_a_priori: np.ndarray
     frf_updated: np.ndarray
-    frf_outputs: tuple
-    frf_inputs: tuple
+    frf_outputs: tuple[str, ...]
+    frf_inputs: tuple[str, ...]
     video_shapes: np.ndarray
-    target_nodes: tuple
-    calibration: dict
-    triangulation: dict
+    target_nodes: tuple[int, ...]
+    calibration: dict[str, Any]
+    triangulation: dict[str, Any]
     hammer_realization: Realization = field(repr=False)
     video_realization: Realization | None = field(repr=False)
     okid_realization: Realization = field(repr=False)
 
 
 # ------------------------------------------------------------------------------------------------
-def _modal_model(assembly, omegas, shapes, damping) -> ModalModel:
+def _modal_model(
+    assembly: Assembly, omegas: np.ndarray, shapes: np.ndarray, damping: np.ndarray
+) -> ModalModel:
     return ModalModel.from_fe(
         FEModes(omegas, shapes, assembly), damping=damping, boundary="cantilevered"
     )
 
 
-def _blow(node, direction, impulse, rate):
+def _blow(node: int, direction: str, impulse: float, rate: float) -> Excitation:
     """A one-sample half-sine hammer blow of the given impulse (N s): peak pi I / (2 dt)."""
     return impulse_hammer(node, direction, np.pi * impulse * rate / 2.0)
 
@@ -267,13 +291,16 @@ def _real_shapes(shapes: np.ndarray) -> np.ndarray:
     return shapes.real / np.linalg.norm(shapes.real, axis=0, keepdims=True)
 
 
-def _pair(f_ident, f_model, mac_matrix=None) -> np.ndarray:
+def _pair(
+    f_ident: np.ndarray, f_model: np.ndarray, mac_matrix: np.ndarray | None = None
+) -> np.ndarray:
     """Model mode of each identified mode: the best MAC (when given), else the nearest
     frequency; each model mode used once."""
     score = -np.abs(np.log(f_ident[:, None] / np.maximum(f_model[None, :], 1e-12)))
     if mac_matrix is not None:
         score = mac_matrix + 1e-3 * score
-    out, used = [], set()
+    out: list[int] = []
+    used: set[int] = set()
     for i in range(f_ident.size):
         order = np.argsort(-score[i])
         j = next(int(k) for k in order if int(k) not in used)
@@ -282,7 +309,9 @@ def _pair(f_ident, f_model, mac_matrix=None) -> np.ndarray:
     return np.array(out, int)
 
 
-def _calibrate_rig(cfg, rig, points0, rng):
+def _calibrate_rig(
+    cfg: CampaignConfig, rig: CameraRig, points0: np.ndarray, rng: np.random.Generator
+) -> tuple[CalibrationResult, dict[str, Any]]:
     """Static calibration from averaged fields of the structure at rest (Att. 6 §1.6)."""
     true_cams = rig.cameras()
     n_fields = int(rig.static_fields)
@@ -320,12 +349,12 @@ def _calibrate_rig(cfg, rig, points0, rng):
         target_sigma=cfg.target_sigma,
     )
     idx = [CAMERA_PARAMETERS.index("fx" if p == "f" else p) for p in VIDEO_FREE]
-    z = []
+    errors = []
     for j, (est, tru) in enumerate(zip(res.cameras, true_cams)):
         err = est.vector()[idx] - tru.vector()[idx]
         std = np.sqrt(np.diag(res.camera_covariance(j, VIDEO_FREE)))
-        z.append(err / std)
-    z = np.concatenate(z)
+        errors.append(err / std)
+    z = np.concatenate(errors)
     return res, {
         "parameters": list(VIDEO_FREE),
         "n_cameras": len(true_cams),
@@ -336,7 +365,14 @@ def _calibrate_rig(cfg, rig, points0, rng):
     }
 
 
-def _video_test(cfg, truth, rig, points0, calibration, rng):
+def _video_test(
+    cfg: CampaignConfig,
+    truth: ModalModel,
+    rig: CameraRig,
+    points0: np.ndarray,
+    calibration: CalibrationResult,
+    rng: np.random.Generator,
+) -> tuple[Measurement, dict[str, Any]]:
     """Filmed free vibration: target z histories by triangulation with the calibrated cameras,
     relative to the calibrated rest positions of the targets."""
     cams, static_xyz = calibration.cameras, calibration.targets
@@ -381,11 +417,17 @@ def _video_test(cfg, truth, rig, points0, calibration, rng):
         "peak_displacement_m": float(np.abs(test.outputs).max()),
         "fields": int(T),
     }
-    video = Measurement(test.abscissa, z, z_chan, test.inputs, test.input_channels)
+    video = Measurement(test.abscissa, z, tuple(z_chan), test.inputs, test.input_channels)
     return video, tri
 
 
-def _fe_vector(asm, terms) -> np.ndarray:
+def _node(channel: Channel) -> int:
+    """The node of a measured channel (a Measurement's channels are located: Channel.at)."""
+    assert channel.node is not None
+    return channel.node
+
+
+def _fe_vector(asm: Assembly, terms: Mapping[tuple[int, str], float]) -> np.ndarray:
     """Vector over the assembly's dofs with ``{(node, dof): weight}`` (clamped dofs dropped)."""
     v = np.zeros(asm.n_dofs)
     for (node, dof), weight in terms.items():
@@ -396,7 +438,15 @@ def _fe_vector(asm, terms) -> np.ndarray:
     return v
 
 
-def _frf_points(estimate, cfg, asm, gauges, inputs, resonances, input_gains=False) -> list:
+def _frf_points(
+    estimate: FRFEstimate,
+    cfg: CampaignConfig,
+    asm: Assembly,
+    gauges: Sequence[Channel],
+    inputs: Sequence[Channel],
+    resonances: np.ndarray,
+    input_gains: bool = False,
+) -> list[tuple[Any, ...]]:
     """Measured FRF points for the Att. 6 fit: the paper's grid (``frf_step`` Hz from 0.4 Hz
     to the band), away from every resonance, each with its H1 random error.
 
@@ -413,13 +463,16 @@ def _frf_points(estimate, cfg, asm, gauges, inputs, resonances, input_gains=Fals
     idx = np.unique([int(np.argmin(np.abs(f - g))) for g in grid])
     w = 2 * np.pi * f[idx]
     clear = np.all(np.abs(w[:, None] / resonances[None, :] - 1) > RESONANCE_CLEARANCE, axis=1)
-    points = []
+    points: list[tuple[Any, ...]] = []
     for i, g in enumerate(gauges):
+        # located channels (Channel.at): a strain gauge has both its nodes and its axis
+        assert g.node is not None and g.node_a is not None and g.direction is not None
         axis = "r" + g.direction
         c = _fe_vector(asm, {(g.node, axis): 1.0, (g.node_a, axis): -1.0})
         gam = np.clip(coherence[i, idx], 1e-6, 1.0)
         ok = clear & (gam > 0.9)
         for a, ch in enumerate(inputs):
+            assert ch.node is not None and ch.direction is not None  # located: Channel.at
             b = _fe_vector(asm, {(ch.node, "r" + ch.direction): 1.0})
             H = frf.outputs[i, a, idx]
             random = estimate.std[i, a, idx]
@@ -454,11 +507,11 @@ class TestRecords:
     hammer: Measurement
     wheels: Measurement
     video: Measurement | None = None
-    calibration: dict = field(default_factory=dict)
-    triangulation: dict = field(default_factory=dict)
+    calibration: dict[str, Any] = field(default_factory=dict)
+    triangulation: dict[str, Any] = field(default_factory=dict)
 
 
-def _true_modes(case, cfg: CampaignConfig):
+def _true_modes(case: SubstructuredCase, cfg: CampaignConfig) -> tuple[Assembly, ModalModel]:
     """The truth: the case's finite-element model with ``truth_modes`` modes (default all)."""
     asm = case.structure().assemble()
     modes = asm.modes(asm.n_dofs if cfg.truth_modes is None else min(cfg.truth_modes, asm.n_dofs))
@@ -467,7 +520,9 @@ def _true_modes(case, cfg: CampaignConfig):
     )
 
 
-def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
+def simulate_records(
+    case: SubstructuredCase, cfg: CampaignConfig, progress: Callable[[str], None] | None = None
+) -> TestRecords:
     """Run the hammer, video and reaction-wheel tests on the true structure (module docstring).
 
     The truth is the case as built, with ``cfg.truth_damping``; the strain and accelerometer
@@ -475,7 +530,7 @@ def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
     one-sample blow it is; the video test is calibrated and triangulated as in Att. 6.
     ``progress(label)``, if given, is called as each of :data:`SIMULATE_STEPS` starts.
     """
-    say = progress or (lambda label: None)
+    say: Callable[[str], None] = progress or (lambda label: None)
     if cfg.rig is None or not cfg.targets or not cfg.strain_gauges or not cfg.wheel_nodes:
         raise FieldError(
             "rig",
@@ -547,7 +602,9 @@ def simulate_records(case, cfg: CampaignConfig, progress=None) -> TestRecords:
     return TestRecords(hammer, wheel_test, video, calib_summary, tri)
 
 
-def run_campaign(case, cfg: CampaignConfig, progress=None) -> CampaignResult:
+def run_campaign(
+    case: SubstructuredCase, cfg: CampaignConfig, progress: Callable[[str], None] | None = None
+) -> CampaignResult:
     """Test the true structure (:func:`simulate_records`), identify it and update the a-priori
     model (:func:`identify_and_update`), with the truth in the tables; ``progress`` as there."""
     return identify_and_update(
@@ -559,18 +616,24 @@ def run_campaign(case, cfg: CampaignConfig, progress=None) -> CampaignResult:
     )
 
 
-def _nearest(f_list, targets_hz, tolerance=0.05):
+def _nearest(
+    f_list: npt.ArrayLike, targets_hz: Iterable[float], tolerance: float = 0.05
+) -> list[float | None]:
     """The value of ``f_list`` nearest each target (relative ``tolerance``), else None."""
-    f_list = np.asarray(f_list)
-    out = []
+    values = np.asarray(f_list)
+    out: list[float | None] = []
     for f in targets_hz:
-        k = int(np.argmin(np.abs(f_list - f))) if f_list.size else -1
-        out.append(float(f_list[k]) if k >= 0 and abs(f_list[k] / f - 1) < tolerance else None)
+        k = int(np.argmin(np.abs(values - f))) if values.size else -1
+        out.append(float(values[k]) if k >= 0 and abs(values[k] / f - 1) < tolerance else None)
     return out
 
 
 def identify_and_update(
-    case, cfg: CampaignConfig, records: TestRecords, truth=None, progress=None
+    case: SubstructuredCase,
+    cfg: CampaignConfig,
+    records: TestRecords,
+    truth: ModalModel | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> CampaignResult:
     """Identify the recorded tests and update the a-priori model (module docstring, 1-4).
 
@@ -598,14 +661,14 @@ def identify_and_update(
     -------
     CampaignResult
     """
-    say = progress or (lambda label: None)
+    say: Callable[[str], None] = progress or (lambda label: None)
     rng = np.random.default_rng([cfg.seed, 1])
     names = tuple(case.substructures)
 
     # --- a-priori model and its substructure blocks (Att. 6 Eq. 5) -----------------------------
     base = {n: float(cfg.a_priori_scale.get(n, 1.0)) for n in names}
 
-    def build(kf, _mf):
+    def build(kf: np.ndarray, _mf: np.ndarray | None) -> Assembly:
         return case.structure(
             stiffness_scale={n: base[n] * k for n, k in zip(names, kf)}
         ).assemble()
@@ -648,7 +711,7 @@ def identify_and_update(
         vsel = _select(video_real, cfg.band, min_mpc=0.3)
         video_shapes = _real_shapes(video_real.shapes[:, vsel])
         video_f = video_real.frequencies_hz[vsel]
-        rows = [apriori_asm.index(c.node, f"u{c.direction}") for c in video.output_channels]
+        rows = [apriori_asm.index(_node(c), f"u{c.direction}") for c in video.output_channels]
 
     # --- pair modes: video shapes against the a-priori model, then hammer by frequency ---------
     hammer_index = _pair(f_meas, w0 / (2 * np.pi))
@@ -787,7 +850,7 @@ def identify_and_update(
         n_cols = int(video_index.max()) + 3
         mac_updated = mac(video_shapes, phi1[rows][:, :n_cols])
         mac_apriori = mac(video_shapes, phi0[rows][:, :n_cols])
-    targets = tuple(c.node for c in records.video.output_channels) if records.video else ()
+    targets = tuple(_node(c) for c in records.video.output_channels) if records.video else ()
     return CampaignResult(
         names,
         modes_table,

@@ -57,11 +57,11 @@ class Param:
     default: Any
     unit: str = ""
     rule: str | Callable[[Any, str], Any] = "positive"
-    choices: tuple = ()
+    choices: tuple[str, ...] = ()
     optional: bool = False
     limit: str = ""
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if isinstance(self.rule, str) and self.rule not in (*_QUANTITY_RULES, *_OTHER_RULES):
             raise FieldError(
                 "rule",
@@ -75,7 +75,7 @@ class Param:
         if self.rule == "choice" and not self.choices:
             raise FieldError("choices", "a 'choice' input needs at least one choice")
 
-    def read(self, raw, name: str):
+    def read(self, raw: Any, name: str) -> Any:
         """``raw`` (an override or the default) checked and converted by the rule."""
         if raw is None and self.optional:
             return None
@@ -102,7 +102,7 @@ class Param:
         return float(_QUANTITY_RULES[self.rule](to_si(raw, self.unit, name), name))
 
 
-def _flag(raw, name: str) -> bool:
+def _flag(raw: object, name: str) -> bool:
     if isinstance(raw, (bool, np.bool_)):
         return bool(raw)
     if isinstance(raw, str) and raw.strip().lower() in ("true", "false"):
@@ -110,13 +110,15 @@ def _flag(raw, name: str) -> bool:
     raise FieldError(name, f"must be true or false, got {raw!r}")
 
 
-def _choice(raw, name: str, choices: tuple) -> str:
+def _choice(raw: object, name: str, choices: tuple[str, ...]) -> str:
     if isinstance(raw, str) and raw.strip().lower() in choices:
         return raw.strip().lower()
     raise FieldError(name, f"must be one of {list(choices)}, got {raw!r}")
 
 
-def read_inputs(builder: str, params: dict[str, Param], overrides: dict) -> dict[str, Any]:
+def read_inputs(
+    builder: str, params: dict[str, Param], overrides: dict[str, Any]
+) -> dict[str, Any]:
     """Read every input of a case: the override if given, else the default, by its rule.
 
     Parameters

@@ -35,7 +35,7 @@ the singularity time from σ(0) = 0 depends on them (docs/cmg.md gives a scan).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -97,7 +97,7 @@ class BrysonMaxima:
     momentum: float = "2000 lbf*ft*s"
     momentum_integral: float = "2e5 lbf*ft*s**2"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name, unit in (
             ("attitude", "rad"),
             ("rate", "rad/s"),
@@ -108,7 +108,7 @@ class BrysonMaxima:
                 self, name, require_positive_scalar(getattr(self, name), f"maxima.{name}", unit)
             )
 
-    def scales(self, names, n):
+    def scales(self, names: Sequence[str], n: float) -> FloatArray:
         """D = the maxima of the states ``names`` of :mod:`flexsat.dynamics.space_station`."""
         out = []
         for name in names:
@@ -167,8 +167,8 @@ def _lqr_bryson(A, B, names, maxima, n, axis):
 def design(
     data: StationData = PAPER_STATION,
     maxima: BrysonMaxima | None = None,
-    pitch_filters=(1, 2),
-    roll_yaw_filters=(2,),
+    pitch_filters: Sequence[int] = (1, 2),
+    roll_yaw_filters: Sequence[int] = (2,),
 ) -> StationDesign:
     """LQR gains of the pitch and roll/yaw loops (module docstring, step 1)."""
     maxima = BrysonMaxima() if maxima is None else maxima

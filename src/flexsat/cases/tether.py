@@ -10,21 +10,25 @@ L = 20 km, subsatellite 22.7 kg; start λ = 1, θ = φ = 5°, at rest.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.dynamics.tether import ClosedLoopRun, TetheredSubsatellite, TetherScales
 from flexsat.input_checks import FieldError
 
 if TYPE_CHECKING:
     import numpy.typing as npt
+    import xarray as xr
 
     from flexsat.control.tether_laws import CoupledTetherLaw, DecoupledTetherLaw, TetherRateLaw
     from flexsat.sim.config import SimConfig
 
+    #: the tether laws a case run takes
     TetherLaw = DecoupledTetherLaw | CoupledTetherLaw | TetherRateLaw
 
 SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12"
@@ -33,7 +37,7 @@ SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12"
 SETTLING_PITCH_BAND = np.radians(5.0)
 SETTLING_LENGTH_FRACTION = 0.02
 #: the paper's scales (Att. 12 "Tension Control Law Design Based on Decoupled Equations of Motion")
-PAPER_SCALES = dict(mass="22.7 kg", length="20 km", altitude="220 km")
+PAPER_SCALES: dict[str, str] = dict(mass="22.7 kg", length="20 km", altitude="220 km")
 #: [λ, θ, φ, λ', θ', φ'] at the start of every example (Att. 12 "Tension Control Law Design Based on
 #: Decoupled Equations of Motion")
 INITIAL = (1.0, np.radians(5.0), np.radians(5.0), 0.0, 0.0, 0.0)
@@ -46,10 +50,10 @@ class Example:
 
     key: str
     law: str
-    gains: dict
+    gains: dict[str, float]
     final_length: float
     orbits: float
-    published: dict
+    published: dict[str, float]
     locator: str
 
 
@@ -123,11 +127,11 @@ EXAMPLES = {
 
 def make_law(
     law: str,
-    gains: dict,
-    final_length,
+    gains: Mapping[str, npt.ArrayLike],
+    final_length: npt.ArrayLike,
     scales: TetherScales | None = None,
     printed_sign: bool = False,
-):
+) -> TetherLaw:
     """The law ``decoupled`` (controller 1), ``coupled`` (controller 2) or ``rate`` with
     ``gains`` (K1 ... as the law takes them) and the nondimensional final length."""
     from flexsat.control.tether_laws import CoupledTetherLaw, DecoupledTetherLaw, TetherRateLaw
@@ -144,6 +148,7 @@ def make_law(
 
 
 def paper_scales() -> TetherScales:
+    """The paper's tether: 22.7 kg, 20 km, a 220 km orbit (L4397-L4401)."""
     return TetherScales(**PAPER_SCALES)
 
 
@@ -242,10 +247,10 @@ def check_continuous_cost(law: TetherLaw, initial: npt.ArrayLike, tau_end: float
 
 def closed_loop(
     law: str,
-    gains: dict,
+    gains: Mapping[str, npt.ArrayLike],
     final_length: float,
-    initial,
-    tau,
+    initial: npt.ArrayLike,
+    tau: npt.ArrayLike,
     integrator: str = "continuous",
     printed_sign: bool = False,
     scales: TetherScales | None = None,
@@ -253,11 +258,13 @@ def closed_loop(
     """The law named ``law`` (:func:`make_law`: gains, λ_f nondimensional, ``printed_sign``)
     on the tether of ``scales`` (default the unit scales) from ``initial``: :func:`run_law` of
     it."""
-    law = make_law(law, gains, final_length, scales=scales, printed_sign=printed_sign)
-    return run_law(law, initial, tau, integrator)
+    controller = make_law(law, gains, final_length, scales=scales, printed_sign=printed_sign)
+    return run_law(controller, initial, tau, integrator)
 
 
-def run_law(law, initial, tau, integrator: str = "continuous") -> ClosedLoopRun:
+def run_law(
+    law: TetherLaw, initial: npt.ArrayLike, tau: npt.ArrayLike, integrator: str = "continuous"
+) -> ClosedLoopRun:
     r"""A tether law on the tether (Eq. 4), through :func:`flexsat.sim.engine.simulate`.
 
     The plant is the SI one of the law's :class:`~flexsat.dynamics.tether.TetherScales` (by
@@ -298,8 +305,8 @@ def run_law(law, initial, tau, integrator: str = "continuous") -> ClosedLoopRun:
 
 
 def tether_simulation(
-    law, initial, tau, integrator: str = "continuous"
-) -> tuple[TetheredSubsatellite, SimConfig, dict]:
+    law: TetherLaw, initial: npt.ArrayLike, tau: npt.ArrayLike, integrator: str = "continuous"
+) -> tuple[TetheredSubsatellite, SimConfig, dict[str, Any]]:
     """What :func:`run_law` simulates: the plant, the configuration and the options of
     :func:`flexsat.sim.engine.simulate` (case count, SI initial state, recorded states), with
     the arguments of :func:`run_law`.
@@ -315,23 +322,23 @@ def tether_simulation(
 
     if integrator not in INTEGRATORS:
         raise FieldError("integrator", f"must be one of {INTEGRATORS}, got {integrator!r}")
-    tau = np.asarray(tau, float)
-    if tau.ndim != 1 or tau.size < 2 or tau[0] != 0 or not np.allclose(np.diff(tau), tau[1]):
-        raise FieldError("tau", f"must be a uniform grid from 0 of >= 2 times, got {tau!r}")
+    grid = np.asarray(tau, float)
+    if grid.ndim != 1 or grid.size < 2 or grid[0] != 0 or not np.allclose(np.diff(grid), grid[1]):
+        raise FieldError("tau", f"must be a uniform grid from 0 of >= 2 times, got {grid!r}")
     start = require_finite(initial, "initial")
     if start.ndim not in (1, 2) or start.shape[-1] != 6:
         raise FieldError(
             "initial", f"must be [λ, θ, φ, λ', θ', φ'] (6,) or (n_cases, 6), got {start.shape}"
         )
     if integrator == "continuous":
-        check_continuous_cost(law, start, float(tau[-1]))
+        check_continuous_cost(law, start, float(grid[-1]))
     rate = law.writes[0] == "reel_rate"
     scales = law.scales
     plant = TetheredSubsatellite(scales, control="rate" if rate else "tension")
     x0 = scales.state_to_si(np.asarray(initial, float))
     config = SimConfig(
-        duration=tau[-1] / scales.orbit_rate,
-        control_rate=scales.orbit_rate / tau[1],
+        duration=grid[-1] / scales.orbit_rate,
+        control_rate=scales.orbit_rate / grid[1],
         substeps=1,
         law_mode="continuous" if integrator == "continuous" else "sampled",
     )
@@ -343,12 +350,12 @@ def tether_simulation(
     return plant, config, options
 
 
-def closed_loop_run(law, tau, dataset) -> ClosedLoopRun:
+def closed_loop_run(law: TetherLaw, tau: npt.ArrayLike, dataset: xr.Dataset) -> ClosedLoopRun:
     """The simulated run of :func:`tether_simulation` (its ``dataset``, recorded states) in the
     paper's nondimensional variables on the grid ``tau``, with the running thrust index."""
     from flexsat.control.tether_laws import thrust_index
 
-    tau = np.asarray(tau, float)
+    grid = np.asarray(tau, float)
     scales, rate = law.scales, law.writes[0] == "reel_rate"
     x = scales.state_from_si(dataset["state"].values)
     u = (
@@ -360,9 +367,9 @@ def closed_loop_run(law, tau, dataset) -> ClosedLoopRun:
     if rate:
         x = np.insert(x, 3, u, axis=-1)
     # the grid is uniform: each interval's ∫|F̂| from one call, then the running sum
-    pieces = thrust_index(tau[:2], np.stack([F[:, :-1], F[:, 1:]], -1))
+    pieces = thrust_index(grid[:2], np.stack([F[:, :-1], F[:, 1:]], -1))
     index = np.concatenate([np.zeros((len(F), 1)), np.cumsum(pieces, axis=-1)], axis=-1)
-    return ClosedLoopRun(tau, x, np.stack([u, F], -1), index)
+    return ClosedLoopRun(grid, x, np.stack([u, F], -1), index)
 
 
 @cache
@@ -373,7 +380,9 @@ def rerun(key: str, samples_per_orbit: int = 2000) -> ClosedLoopRun:
     return closed_loop(e.law, e.gains, e.final_length, INITIAL, tau)
 
 
-def measures(run: ClosedLoopRun, final_length: float, scales: TetherScales, law: str) -> dict:
+def measures(
+    run: ClosedLoopRun, final_length: float, scales: TetherScales, law: str
+) -> dict[str, Any]:
     """The paper's measures of a run (numbers or None, JSON-ready): initial tension (T̂, N) or
     retrieval rate (m/s, positive inward), thrust index and
     impulse, maximum and final pitch, final length and roll, settling (orbits), V1 at start

@@ -47,13 +47,13 @@ MODULES = (
 
 
 def _import_failure(name: str, exc: Exception) -> Check:
-    def reraise():
+    def reraise() -> float:
         raise exc
 
     return Check(name, "check module imports", f"flexsat.checks.{name}", 0.0, "", reraise, atol=0)
 
 
-def _check_plugin_rule(name: str, obj) -> str | None:
+def _check_plugin_rule(name: str, obj: object) -> str | None:
     """Why a ``flexsat.checks`` entry point is not a check or a list of checks, or None."""
     items = obj if isinstance(obj, list | tuple) else [obj]
     if not items or not all(isinstance(c, Check) for c in items):

@@ -56,12 +56,20 @@ errata), compared element-wise against matrices printed to the figures they carr
 
 from __future__ import annotations
 
-from functools import cache, lru_cache
+from functools import cache, lru_cache, partial
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.checks.core import Check, series
 from flexsat.input_checks import FieldError
+
+if TYPE_CHECKING:
+    from flexsat.cases.bainum import BainumBeam, ThreeMassBeam
+    from flexsat.dynamics.orbit import BeamInOrbit
+    from flexsat.dynamics.plant import Plant
+    from flexsat.dynamics.structural import StructuralPlant
 
 SOURCE = "Bainum & Reddy 1979"
 
@@ -70,14 +78,14 @@ _X0 = 0.01
 
 
 @lru_cache(maxsize=1)
-def _beam():
+def _beam() -> BainumBeam:
     from flexsat.cases.bainum import bainum
 
     return bainum()
 
 
 @lru_cache(maxsize=1)
-def _ch2_plant():
+def _ch2_plant() -> StructuralPlant:
     """The Ch. II example's linear plant: one actuator ``f1`` at ξ = -l/2, pitch + 2 modes."""
     from flexsat.cases.bainum import CH2_LAYOUTS
 
@@ -85,7 +93,7 @@ def _ch2_plant():
 
 
 @lru_cache(maxsize=1)
-def _ch3_plant():
+def _ch3_plant() -> BeamInOrbit:
     """Ch. III Case 1's beam-in-orbit plant with the printed G (erratum G13 = -29.76)."""
     from flexsat.cases.bainum import chapter3_case
     from flexsat.dynamics.orbit import BeamInOrbit
@@ -97,46 +105,51 @@ def _ch3_plant():
     )
 
 
-def _gains(K_rate) -> np.ndarray:
+def _gains(K_rate: npt.ArrayLike) -> np.ndarray:
     """The report's rate feedback f = K x' (x' = dx/dτ = ẋ/ω_c) as the SI gain on the plant's
     ``state`` [q, q̇]: [0, K/ω_c] (p x 2n)."""
     K = np.atleast_2d(np.asarray(K_rate, dtype=float))
     return np.hstack([np.zeros_like(K), K / _beam().orbit_rate_value])
 
 
-def _ch2_gains():
+def _ch2_gains() -> np.ndarray:
     from flexsat.cases.bainum import PUBLISHED
 
     return _gains(PUBLISHED["ch2_gains"])
 
 
-def _ch3_gains():
+def _ch3_gains() -> np.ndarray:
     from flexsat.cases.bainum import published_matrix
 
     return _gains(published_matrix("ch3_case1_K"))
 
 
-def closed_loop_roots(plant, gains) -> np.ndarray:
+def closed_loop_roots(plant: Plant, gains: np.ndarray) -> np.ndarray:
     """Roots of the plant's linear part under u = gains · state, in τ units (s/ω_c):
     eig(A + B K C_state), ordered by |Im| (real roots first, by real part), the -j member of
     each pair first (as :func:`flexsat.cases.bainum.sorted_poles`)."""
     A, B = plant.linear_part()
-    C = plant.output_matrices("state")[0]
+    state = plant.output_matrices("state")
+    if state is None:
+        raise ValueError("plant: its 'state' output is not linear in the state")
+    C = state[0]
     roots = np.linalg.eigvals(A + B @ gains @ C) / _beam().orbit_rate_value
     return roots[np.lexsort((roots.real, roots.imag, np.round(np.abs(roots.imag), 9)))]
 
 
 @lru_cache(maxsize=1)
-def _ch2_roots():
+def _ch2_roots() -> np.ndarray:
     return closed_loop_roots(_ch2_plant(), _ch2_gains())
 
 
 @lru_cache(maxsize=1)
-def _ch3_roots():
+def _ch3_roots() -> np.ndarray:
     return closed_loop_roots(_ch3_plant(), _ch3_gains())
 
 
-def simulate_loop(plant, gains, tau_end: float, samples: int):
+def simulate_loop(
+    plant: Plant, gains: np.ndarray, tau_end: float, samples: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The closed loop f = gains · state from x0 = 0.01 in every position, run by
     :func:`flexsat.sim.simulate` over τ ∈ [0, ``tau_end``] with ``samples`` control periods
     (so that the last sample is at ``tau_end``). Returns τ (n_t,), pitch (n_t,) and the force
@@ -162,7 +175,7 @@ def simulate_loop(plant, gains, tau_end: float, samples: int):
     return ds["time"].values * wc, ds["pitch"].values[0], forces
 
 
-def refined_peak(tau, y) -> tuple[float, float]:
+def refined_peak(tau: np.ndarray, y: npt.ArrayLike) -> tuple[float, float]:
     """(max |y|, τ at it): the largest sample and the vertex of the parabola through it and its
     neighbours (equal spacing)."""
     a = np.abs(np.asarray(y, dtype=float))
@@ -188,27 +201,27 @@ CH3_FORCE_RUN = (0.0075, 1350)
 
 
 @cache
-def _ch2_run(run):
+def _ch2_run(run: tuple[float, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return simulate_loop(_ch2_plant(), _ch2_gains(), *run)
 
 
 @lru_cache(maxsize=1)
-def _ch3_peaks():
+def _ch3_peaks() -> list[float]:
     tau, _, f = simulate_loop(_ch3_plant(), _ch3_gains(), *CH3_FORCE_RUN)
     return [refined_peak(tau, f[:, j])[0] for j in range(f.shape[1])]
 
 
-def _ch2_force_peak():
+def _ch2_force_peak() -> tuple[float, float]:
     tau, _, f = _ch2_run(CH2_FORCE_RUN)
     return refined_peak(tau, f[:, 0])
 
 
-def _ch2_pitch_peak():
+def _ch2_pitch_peak() -> tuple[float, float]:
     tau, pitch, _ = _ch2_run(CH2_PITCH_RUN)
     return refined_peak(tau, pitch)
 
 
-def _damping(root) -> float:
+def _damping(root: complex) -> float:
     return float(-root.real / abs(root))
 
 
@@ -222,7 +235,7 @@ _CORE = "computed on the simulation core: "
 
 
 @lru_cache(maxsize=1)
-def _ch3_case2_roots():
+def _ch3_case2_roots() -> np.ndarray:
     """Ch. III Case 2 (pitch + 4 modes, five actuators): the beam-in-orbit plant with
     the printed G (Ch. III §4) under the printed decoupling gains with the erratum K51 = -1.167."""
     from flexsat.cases.bainum import chapter3_case, published_matrix
@@ -429,6 +442,10 @@ def _case2_values() -> list[float]:
     ]
 
 
+def _case2_value(i: int) -> float:
+    return _case2_values()[i]
+
+
 _CH3_CASE2_CHECKS = [
     Check(
         "bainum",
@@ -436,7 +453,7 @@ _CH3_CASE2_CHECKS = [
         _CASE2,
         published,
         "",
-        lambda i=i: _case2_values()[i],
+        partial(_case2_value, i),
         atol=atol,
     )
     for i, (name, published, atol) in enumerate(
@@ -457,20 +474,20 @@ _CH3_CASE2_CHECKS = [
 
 
 @lru_cache(maxsize=1)
-def _three_mass():
+def _three_mass() -> ThreeMassBeam:
     from flexsat.cases.bainum import three_mass
 
     return three_mass()
 
 
 @lru_cache(maxsize=1)
-def _lambdas():
+def _lambdas() -> np.ndarray:
     """λ1, λ2 from the model's plant (flexsat.dynamics.structural.StructuralPlant): eig(K, M)."""
     return _three_mass().plant_lambdas()
 
 
 @lru_cache(maxsize=1)
-def _roots():
+def _roots() -> np.ndarray:
     """Roots of eq. (16) with the printed gains, as the eigenvalues of the plant's closed loop
     (its linear part with the coupled rate feedback of eq. 13), ascending real part: the fast
     real root, the slow real root, then the complex pair (negative imaginary part first)."""

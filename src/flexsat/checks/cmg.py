@@ -10,25 +10,29 @@ the paper does not print.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import lru_cache, partial
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexsat.checks.core import Check, Discrepancy
+
+if TYPE_CHECKING:
+    from flexsat.dynamics.cmg import GimbalRun
 
 SOURCE = "Junkins, Pollock & Rahman 1990"
 _X = (-1.0, 0.0, 0.0)  # the paper's +x demand as the torque on the spacecraft
 
 
 @lru_cache(maxsize=1)
-def _v3():
+def _v3() -> GimbalRun:
     from flexsat.cases import cmg_pyramid
 
     return cmg_pyramid.integrate_gimbals(np.zeros(4), _X, 5.0)
 
 
 @lru_cache(maxsize=1)
-def _v4():
+def _v4() -> tuple[np.ndarray, np.ndarray]:
     from flexsat.cases import cmg_pyramid
     from flexsat.dynamics import cmg
 
@@ -37,7 +41,7 @@ def _v4():
 
 
 @lru_cache(maxsize=1)
-def _station_zero():
+def _station_zero() -> GimbalRun:
     from flexsat.cases import space_station_cmg as st
 
     design = st.design()
@@ -48,7 +52,7 @@ def _station_zero():
 def _kurokawa_saturation() -> float:
     from flexsat.cases import cmg_pyramid
 
-    def demand(t):
+    def demand(t: float) -> np.ndarray:
         return -np.array([0.2 * np.sin(4.0 * np.pi * t), 0.3, 0.0])
 
     return float(
@@ -69,16 +73,24 @@ def _reoriented_sigma1() -> float:
     return float(np.rad2deg(run.sigma[-1, 0]))
 
 
-def _gain(deg):
+def _gain(deg: list[float]) -> float:
     from flexsat.dynamics import cmg
 
     return float(cmg.gain(np.deg2rad(deg)))
 
 
-def _hx(deg):
+def _hx(deg: list[float]) -> float:
     from flexsat.dynamics import cmg
 
     return float(cmg.momentum(np.deg2rad(deg))[0])
+
+
+def _preferred_angle(i: int) -> float:
+    return float(_v4()[0][i])
+
+
+def _back_momentum(i: int) -> float:
+    return float(_v4()[1][i])
 
 
 _BACK = (
@@ -142,7 +154,7 @@ CHECKS: list[Check] = [
             f"{SOURCE}, Att. 13 'Determination of Preferred Initial Gimbal Angles'",
             p,
             "deg",
-            lambda i=i: float(_v4()[0][i]),
+            partial(_preferred_angle, i),
             atol=0.5,
             note=_BACK,
         )
@@ -155,7 +167,7 @@ CHECKS: list[Check] = [
             f"{SOURCE}, Att. 13 'Determination of Preferred Initial Gimbal Angles'",
             p,
             "h",
-            lambda i=i: float(_v4()[1][i]),
+            partial(_back_momentum, i),
             atol=5e-3,
             note=_BACK,
         )

@@ -28,11 +28,16 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from functools import partial
+from typing import TYPE_CHECKING, Any
 
 from flexsat.input_checks import FieldError
 from flexsat.references import cite, references
+
+if TYPE_CHECKING:
+    import numpy as np
 
 #: the columns of the validation table, in order (also the keys of :meth:`CheckResult.as_dict`)
 COLUMNS = (
@@ -70,7 +75,7 @@ class Discrepancy:
     value: float
     explanation: str
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if not math.isfinite(self.value):
             raise FieldError("discrepancy.value", f"must be finite, got {self.value!r}")
         if not isinstance(self.explanation, str) or not self.explanation.strip():
@@ -117,7 +122,7 @@ class Check:
     note: str = ""
     discrepancy: Discrepancy | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("case", "quantity", "source"):
             if not isinstance(getattr(self, name), str) or not getattr(self, name).strip():
                 raise FieldError(name, f"must be a non-empty string, got {getattr(self, name)!r}")
@@ -210,6 +215,7 @@ class CheckResult:
         if status == "error":
             return f"the computation raised: {self.error}" if self.computed is None else self.error
         if status == "discrepancy":
+            assert d is not None  # the status of a check with a discrepancy only
             return d.explanation
         if status == "fail":
             text = (
@@ -225,13 +231,14 @@ class CheckResult:
                 text += "; no erratum or model deviation explains it"
             return text + (f"; note: {c.note}" if c.note else "")
         if self.stale:
+            assert d is not None  # stale: a discrepancy that no longer shows
             return (
                 f"stale discrepancy note: the published value is now reproduced, but the "
                 f"check still explains a discrepancy ({d.explanation})"
             )
         return None
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         """JSON-ready: the table columns (the source cited by authors and year), then
         ``references`` (full citations), passed, rtol, atol, error, note, discrepancy_value,
         stale, seconds."""
@@ -284,33 +291,38 @@ def evaluate(check: Check) -> CheckResult:
 
 def series(
     case: str,
-    quantities,
+    quantities: Iterable[str],
     source: str,
-    published,
+    published: Iterable[float],
     unit: str,
-    values: Callable,
+    values: Callable[[], Sequence[float] | np.ndarray],
     *,
     rtol: float | None = None,
     atol: float | None = None,
-    notes=None,
-    discrepancies=None,
+    notes: Iterable[str] | None = None,
+    discrepancies: Iterable[Discrepancy | None] | None = None,
 ) -> list[Check]:
     """One check per entry of a table column: ``values()`` returns the whole computed column
     (cache it with :func:`functools.lru_cache` when it is expensive) and check ``i`` compares
     ``values()[i]`` with ``published[i]``; ``notes`` and ``discrepancies`` (a
     :class:`Discrepancy` or None per entry) are optional, per entry."""
-    published = list(published)
-    quantities = list(quantities)
-    notes = list(notes) if notes is not None else [""] * len(published)
-    discrepancies = list(discrepancies) if discrepancies is not None else [None] * len(published)
-    if not len(quantities) == len(published) == len(notes) == len(discrepancies):
+    values_published = list(published)
+    names = list(quantities)
+    remarks = list(notes) if notes is not None else [""] * len(values_published)
+    explained = list(discrepancies) if discrepancies is not None else [None] * len(values_published)
+    if not len(names) == len(values_published) == len(remarks) == len(explained):
         raise FieldError(
             "series", "quantities, published, notes and discrepancies must have the same length"
         )
     return [
-        Check(case, q, source, float(p), unit, (lambda i=i: values()[i]), rtol, atol, note, d)
-        for i, (q, p, note, d) in enumerate(zip(quantities, published, notes, discrepancies))
+        Check(case, q, source, float(p), unit, partial(_entry, values, i), rtol, atol, note, d)
+        for i, (q, p, note, d) in enumerate(zip(names, values_published, remarks, explained))
     ]
+
+
+def _entry(values: Callable[[], Sequence[float] | np.ndarray], i: int) -> float:
+    """Entry ``i`` of the column ``values()`` (what :func:`evaluate` makes a float)."""
+    return values()[i]
 
 
 __all__ = ["COLUMNS", "STATUSES", "Check", "CheckResult", "Discrepancy", "evaluate", "series"]

@@ -8,8 +8,14 @@ printed: the gains are inputs.
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 from flexsat.checks.core import Check, series
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from flexsat.cases.draper_rpl import DraperRPLCase
 
 TABLE4 = "Junkins, Pollock & Rahman 1990, Att. 5 Table 4"
 OPEN = (0.0, 4.3724, 7.9070, 51.4510, 52.8058, 157.5566, 158.3659, 313.7099, 314.3402)
@@ -19,21 +25,21 @@ CONDITION = 37210.8
 
 
 @lru_cache(maxsize=1)
-def _case():
+def _case() -> DraperRPLCase:
     from flexsat.cases import draper_rpl
 
     return draper_rpl()
 
 
 @lru_cache(maxsize=1)
-def _gains():
+def _gains() -> tuple[np.ndarray, np.ndarray]:
     from flexsat.cases.draper_rpl import published_gains
 
     return published_gains()
 
 
 @lru_cache(maxsize=1)
-def _closed_loop():
+def _closed_loop() -> tuple[np.ndarray, np.ndarray]:
     return _case().closed_loop_modes(*_gains())
 
 

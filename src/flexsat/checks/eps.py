@@ -13,8 +13,13 @@ published inputs (tube, material, damping).
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 from flexsat.checks.core import Check, Discrepancy, series
+
+if TYPE_CHECKING:
+    from flexsat.cases.eps import EPSCase
+    from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
 
 SOURCE = "EPS slew study c. 1989"
 #: "Model Development": paper modes 7-20, Hz
@@ -37,14 +42,14 @@ MODES_7_20 = (
 
 
 @lru_cache(maxsize=1)
-def _case():
+def _case() -> EPSCase:
     from flexsat.cases import eps
 
     return eps()
 
 
 @lru_cache(maxsize=1)
-def _nominal_slew():
+def _nominal_slew() -> ThreeAxisSlew:
     """The 10 s nominal slew of the EPS slew study c. 1989 (1 rad about each 1-2-3 axis,
     ω_B = 2.5 rad/s, the
     paper's literal shaping weight ζ_B = 0) on the rebuilt model's inertia about its CG."""
@@ -62,7 +67,7 @@ def _peak_torque(axis: int) -> float:
 
 
 @lru_cache(maxsize=1)
-def _first_truss_mode():
+def _first_truss_mode() -> tuple[int, float, str]:
     return _case().first_truss_mode()
 
 

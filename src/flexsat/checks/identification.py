@@ -15,7 +15,8 @@ specified well enough to rebuild; the tests reproduce their patterns on document
 
 from __future__ import annotations
 
-from functools import cache
+from functools import cache, partial
+from typing import Any
 
 import numpy as np
 
@@ -39,8 +40,12 @@ def _start_frequencies() -> np.ndarray:
     return np.asarray(TRUE_RAD_S) * w_start / w
 
 
+def _start_frequency(k: int) -> float:
+    return float(_start_frequencies()[k])
+
+
 @cache
-def _att6_resection() -> dict:
+def _att6_resection() -> dict[str, Any]:
     """Att. 6 resection of the grid's 20 lit nodes by two cameras with all 13 parameters each
     (eq. (30) with v0), the node positions and the camera values as weighted measurements."""
     from flexsat.cases import tamu_grid
@@ -130,7 +135,7 @@ CHECKS: list[Check] = [
             _TABLE2,
             START_RAD_S[k],
             "rad/s",
-            (lambda k=k: float(_start_frequencies()[k])),
+            partial(_start_frequency, k),
             atol=_ULP[k],
             discrepancy=_MODE2 if k == 1 else None,
         )

@@ -14,22 +14,27 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 from flexsat.checks.core import Check
+
+if TYPE_CHECKING:
+    from flexsat.cases.nps import NPSCase
+    from flexsat.control import PD
 
 SOURCE = "Hailey, Sortun & Agrawal c. 1992"
 _FITTED = "fitted: the unpublished EI is solved to give this frequency"
 
 
 @lru_cache(maxsize=1)
-def _case():
+def _case() -> NPSCase:
     from flexsat.cases import nps
 
     return nps()
 
 
 @lru_cache(maxsize=1)
-def _pd():
+def _pd() -> PD:
     return _case().pd_gains()
 
 

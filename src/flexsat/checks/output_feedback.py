@@ -13,8 +13,14 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 from flexsat.checks.core import Check, Discrepancy, series
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from flexsat.control.output_feedback import SymmetricOutputFeedback
 
 SOURCE = "Junkins, Pollock & Rahman 1990"
 TABLE1 = f"{SOURCE}, Att. 5 Table 1"
@@ -28,14 +34,14 @@ CLOSED_CONDITION = 8.1291
 
 
 @lru_cache(maxsize=1)
-def _plant():
+def _plant() -> SymmetricOutputFeedback:
     from flexsat.control.output_feedback import SymmetricOutputFeedback
 
     return SymmetricOutputFeedback.example1()
 
 
 @lru_cache(maxsize=1)
-def _gains():
+def _gains() -> tuple[np.ndarray, np.ndarray]:
     import numpy as np
 
     from flexsat.control.output_feedback import EXAMPLE1
@@ -43,14 +49,14 @@ def _gains():
     return np.array(EXAMPLE1["G1"]), np.array(EXAMPLE1["G2"])
 
 
-def _zero_gains():
+def _zero_gains() -> tuple[np.ndarray, np.ndarray]:
     import numpy as np
 
     return np.zeros((2, 2)), np.zeros((2, 2))
 
 
 @lru_cache(maxsize=1)
-def _closed_loop():
+def _closed_loop() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(Re λ, ω, ζω) of the three closed-loop modes, ascending ω."""
     lam = _plant().eigenvalues(*_gains())
     lam = lam[lam.imag > 0]

@@ -17,10 +17,14 @@ LED star field): the report gives no measured errors to compare with.
 from __future__ import annotations
 
 from functools import cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexsat.checks.core import Check
+
+if TYPE_CHECKING:
+    from flexsat.attitude.star_tracker import MonteCarloResult
 
 SOURCE = "Junkins, Pollock & Rahman 1990"
 _RULE = f"{SOURCE}, §2.3.4: >= 3 triplets within 5″ in each of 2 fields"
@@ -32,7 +36,7 @@ _SETUP = (
 
 
 @cache
-def _monte_carlo():
+def _monte_carlo() -> MonteCarloResult:
     from flexsat.attitude.star_camera import StarCamera
     from flexsat.attitude.star_catalog import synthetic_sky
     from flexsat.attitude.star_tracker import StarTracker, monte_carlo

@@ -4,9 +4,13 @@ tests/structures/test_beam.py)."""
 
 from __future__ import annotations
 
-from functools import cache, lru_cache
+from functools import cache, lru_cache, partial
+from typing import TYPE_CHECKING
 
 from flexsat.checks.core import Check, series
+
+if TYPE_CHECKING:
+    import numpy as np
 
 #: Blevins, *Formulas for Natural Frequency and Mode Shape* (1979)
 BLEVINS = "Blevins (1979), Table 8-1"
@@ -22,14 +26,14 @@ FV2 = (11.336,) + (17.709,) * 7 + (45.345,) + (57.390,) * 7
 
 
 @lru_cache(maxsize=1)
-def _clamped_free():
+def _clamped_free() -> np.ndarray:
     from flexsat.structures.beam import clamped_free_beta_L
 
     return clamped_free_beta_L(len(CLAMPED_FREE_10))
 
 
 @cache
-def _beta_L(kind: str, plane: str):
+def _beta_L(kind: str, plane: str) -> np.ndarray:
     from flexsat.cases import cantilever_beam, free_free_beam
 
     beam = cantilever_beam() if kind == "cantilever" else free_free_beam()
@@ -38,7 +42,7 @@ def _beta_L(kind: str, plane: str):
 
 
 @lru_cache(maxsize=1)
-def _fv2():
+def _fv2() -> np.ndarray:
     from flexsat.cases import nafems_fv2
 
     return nafems_fv2().frequencies_hz(len(FV2))
@@ -70,7 +74,7 @@ for _plane in ("flatwise", "edgewise"):
         BLEVINS,
         CANTILEVER,
         "",
-        lambda p=_plane: _beta_L("cantilever", p),
+        partial(_beta_L, "cantilever", _plane),
         rtol=1e-4,
     )
 for _plane in ("flatwise", "edgewise"):
@@ -80,7 +84,7 @@ for _plane in ("flatwise", "edgewise"):
         BLEVINS,
         FREE_FREE,
         "",
-        lambda p=_plane: _beta_L("free_free", p),
+        partial(_beta_L, "free_free", _plane),
         rtol=1e-4,
     )
 

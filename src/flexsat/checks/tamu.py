@@ -18,14 +18,18 @@ stay in the tests.
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import TYPE_CHECKING, Any
 
 from flexsat.checks.core import Check
+
+if TYPE_CHECKING:
+    from flexsat.cases.tamu import TamuCase
 
 SOURCE = "Junkins, Pollock & Rahman 1990"
 
 
 @lru_cache(maxsize=1)
-def _case():
+def _case() -> TamuCase:
     from flexsat.cases import tamu
 
     return tamu()
@@ -36,7 +40,7 @@ def _maneuver_time(alpha: float) -> float:
 
 
 @lru_cache(maxsize=1)
-def _experiment() -> dict:
+def _experiment() -> dict[str, dict[str, Any]]:
     """Metrics of the default scenario's runs (Law I, Law II) and of Law I with g2 = 0."""
     from importlib import resources
 

@@ -13,9 +13,13 @@ depend on the unpublished motor masses (the docs compare their shape only).
 
 from __future__ import annotations
 
-from functools import cache
+from functools import cache, partial
+from typing import TYPE_CHECKING
 
 from flexsat.checks.core import Check, Discrepancy, series
+
+if TYPE_CHECKING:
+    from flexsat.cases.tamu_grid import TamuGridCase
 
 SOURCE = "Junkins, Pollock & Rahman 1990"
 ATT8 = (0.90, 2.34, 4.85, 6.05, 7.78, 12.84)  # Att. 8 Figure 4 table, "Modeled Value", Hz
@@ -23,7 +27,7 @@ ATT6 = (0.809, 2.21, 4.48, 5.65, 7.76)  # Att. 6 Table 1 "Modelled (Hz)"
 
 
 @cache
-def _grid(motor_mass: str = "0 kg"):
+def _grid(motor_mass: str = "0 kg") -> TamuGridCase:
     from flexsat.cases import tamu_grid
 
     return tamu_grid(motor_mass=motor_mass)
@@ -35,7 +39,11 @@ def _converted(quantity: str, unit: str) -> float:
     return to_si(quantity, unit)
 
 
-def _counts() -> dict:
+def _count(name: str) -> int:
+    return _counts()[name]
+
+
+def _counts() -> dict[str, int]:
     grid = _grid()
     return {
         "nodes": len(grid.structure().assemble().node_ids),
@@ -127,7 +135,7 @@ CHECKS: list[Check] = [
             f"{SOURCE}, Att. 6 'Hardware Description' and 'Initial Model'",
             float(value),
             "",
-            lambda name=name: _counts()[name],
+            partial(_count, name),
             atol=0,
         )
         for name, value in (("nodes", 25), ("elements", 36), ("dof", 60))

@@ -9,7 +9,9 @@ for the printed 30 m/s).
 
 from __future__ import annotations
 
-from functools import cache
+from collections.abc import Callable
+from functools import cache, partial
+from typing import Any
 
 import numpy as np
 
@@ -19,15 +21,19 @@ SOURCE = "Junkins, Pollock & Rahman 1990, Att. 12"
 
 
 @cache
-def _measures(key: str) -> dict:
+def _measures(key: str) -> dict[str, Any]:
     from flexsat.cases.tether import EXAMPLES, measures, paper_scales, rerun
 
     e = EXAMPLES[key]
     return measures(rerun(key), e.final_length, paper_scales(), e.law)
 
 
-def _get(key: str, name: str):
-    return lambda: float(_measures(key)[name])
+def _measure(key: str, name: str) -> float:
+    return float(_measures(key)[name])
+
+
+def _get(key: str, name: str) -> Callable[[], float]:
+    return partial(_measure, key, name)
 
 
 def _orbit_rate_per_minute() -> float:

@@ -26,6 +26,7 @@ from __future__ import annotations
 import html
 import shutil
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -34,23 +35,54 @@ from flexsat.report.json_data import dumps
 from flexsat.report.page import images_html
 from flexsat.units import to_si
 
+if TYPE_CHECKING:
+    import xarray as xr
 
-def _metrics(ds) -> dict:
+
+class BatchReport(Protocol):
+    """What this report reads of a batch result (:class:`flexsat.scenarios.batch.BatchResult`;
+    ``scenario`` is its :class:`~flexsat.scenarios.batch.BatchScenario`)."""
+
+    @property
+    def scenario(self) -> Any: ...
+    @property
+    def table(self) -> dict[str, np.ndarray]: ...
+    @property
+    def units(self) -> dict[str, str]: ...
+    @property
+    def store(self) -> Path: ...
+    @property
+    def summary(self) -> dict[str, Any]: ...
+    @property
+    def sensitivity(self) -> dict[str, dict[str, Any]]: ...
+    @property
+    def wall_s(self) -> float: ...
+    @property
+    def chunks_run(self) -> int: ...
+    @property
+    def chunks_skipped(self) -> int: ...
+    @property
+    def surfaces(self) -> dict[str, np.ndarray] | None: ...
+
+
+def _metrics(ds: xr.Dataset) -> dict[str, np.ndarray]:
     return {
-        k[len("metric_") :]: ds[k].values for k in sorted(ds.data_vars) if k.startswith("metric_")
+        str(k)[len("metric_") :]: ds[k].values
+        for k in sorted(map(str, ds.data_vars))
+        if str(k).startswith("metric_")
     }
 
 
-def _grid_axes(result) -> list[tuple[str, np.ndarray]]:
+def _grid_axes(result: BatchReport) -> list[tuple[str, np.ndarray]]:
     """The swept parameters of a grid, first axis slowest, with their distinct values."""
     if result.scenario.sampling != "grid":
         return []
     return [(name, np.unique(values)) for name, values in result.table.items()]
 
 
-def _contours(result, metrics: dict, folder: Path) -> list[str]:
+def _contours(result: BatchReport, metrics: dict[str, np.ndarray], folder: Path) -> list[str]:
     axes = _grid_axes(result)
-    files = []
+    files: list[str] = []
     if len(axes) not in (1, 2):
         return files
     for name, values in metrics.items():
@@ -88,14 +120,14 @@ SURFACES = (
 )
 
 
-def _trade_surfaces(result, folder: Path) -> list[str]:
+def _trade_surfaces(result: BatchReport, folder: Path) -> list[str]:
     surfaces = result.surfaces
     if surfaces is None:
         return []
     from matplotlib.colors import LogNorm
 
     u = surfaces["u_max"] / to_si("1 ozf*in", "N*m")  # the paper's axis, oz-in
-    files = []
+    files: list[str] = []
     for key, title, scale in SURFACES:
         z = surfaces[key]
         fig = Figure(figsize=(6.5, 4.2), layout="constrained")
@@ -110,11 +142,11 @@ def _trade_surfaces(result, folder: Path) -> list[str]:
     return files
 
 
-def _distributions(result, metrics: dict, folder: Path) -> list[str]:
-    lines = {}
+def _distributions(result: BatchReport, metrics: dict[str, np.ndarray], folder: Path) -> list[str]:
+    lines: dict[str, list[float]] = {}
     for r in result.summary["requirements"]:
         lines.setdefault(r["metric"], []).append(r["threshold"])
-    files = []
+    files: list[str] = []
     for name, values in metrics.items():
         finite = values[np.isfinite(values)]
         if finite.size == 0:
@@ -137,7 +169,7 @@ def _distributions(result, metrics: dict, folder: Path) -> list[str]:
     return files
 
 
-def _convergence(result, folder: Path) -> list[str]:
+def _convergence(result: BatchReport, folder: Path) -> list[str]:
     reqs = result.summary["requirements"]
     if not reqs:
         return []
@@ -166,7 +198,7 @@ def _convergence(result, folder: Path) -> list[str]:
     return ["convergence.png"]
 
 
-def _tables(result) -> str:
+def _tables(result: BatchReport) -> str:
     esc = html.escape
     rows = "".join(
         f"<tr><td>{esc(r['metric'])} {esc(r['relation'])} {r['threshold']:g}</td>"
@@ -215,7 +247,7 @@ def _tables(result) -> str:
     return req + met + sens
 
 
-def _score(ranking: dict, parameter: str) -> str:
+def _score(ranking: dict[str, Any], parameter: str) -> str:
     """A parameter's score in a ranking: Sobol' total and first-order indices, or the sample
     method's score."""
     if ranking["method"] == "sobol":
@@ -224,11 +256,11 @@ def _score(ranking: dict, parameter: str) -> str:
     return f"{ranking['scores'][parameter]['score']:.3g}"
 
 
-def _fmt(value) -> str:
+def _fmt(value: float | None) -> str:
     return "n/a" if value is None or not np.isfinite(value) else f"{value:.5g}"
 
 
-def write_data(result, ds, folder: Path) -> None:
+def write_data(result: BatchReport, ds: xr.Dataset, folder: Path) -> None:
     """``summary.json`` (the statistics, the sensitivity, the trade surfaces) and a copy of the
     store, ``results.zarr``."""
     summary = {
@@ -244,7 +276,7 @@ def write_data(result, ds, folder: Path) -> None:
     shutil.copytree(result.store, folder / "results.zarr")
 
 
-def draw_figures(result, ds, folder: Path) -> list[str]:
+def draw_figures(result: BatchReport, ds: xr.Dataset, folder: Path) -> list[str]:
     """A sweep's trade surfaces and contours or a Monte Carlo's distributions, then the
     convergence of the estimates; the file names."""
     metrics = _metrics(ds)
@@ -255,7 +287,7 @@ def draw_figures(result, ds, folder: Path) -> list[str]:
     ) + _convergence(result, folder)
 
 
-def sections(result, ds, figures: list[str]) -> str:
+def sections(result: BatchReport, ds: xr.Dataset, figures: list[str]) -> str:
     """The page: what ran, the requirement, metric and sensitivity tables, the figures."""
     esc = html.escape
     return (
@@ -267,4 +299,4 @@ def sections(result, ds, figures: list[str]) -> str:
     )
 
 
-__all__ = ["draw_figures", "sections", "write_data"]
+__all__ = ["BatchReport", "draw_figures", "sections", "write_data"]

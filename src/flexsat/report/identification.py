@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import html
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import xarray as xr
@@ -29,7 +30,31 @@ from flexsat.report.json_data import dumps
 from flexsat.report.page import html_table
 from flexsat.text import format_optional
 
-__all__ = ["FIGURES", "dataset", "draw_figures", "sections", "write_data"]
+if TYPE_CHECKING:
+    from flexsat.cases.identification_campaign import CampaignResult
+
+__all__ = [
+    "FIGURES",
+    "IdentificationReport",
+    "dataset",
+    "draw_figures",
+    "sections",
+    "write_data",
+]
+
+
+class IdentificationReport(Protocol):
+    """What this report reads of an identification result
+    (:class:`flexsat.scenarios.identification.IdentificationResult`; ``scenario`` is its
+    document)."""
+
+    @property
+    def scenario(self) -> Any: ...
+    @property
+    def campaign(self) -> CampaignResult: ...
+    @property
+    def case_source(self) -> str: ...
+
 
 #: figure files and captions
 FIGURES = (
@@ -39,7 +64,7 @@ FIGURES = (
 )
 
 
-def dataset(result) -> xr.Dataset:
+def dataset(result: IdentificationReport) -> xr.Dataset:
     """The campaign as one dataset (module docstring)."""
     c = result.campaign
     m = c.modes
@@ -63,7 +88,7 @@ def dataset(result) -> xr.Dataset:
         )
     }
     frf_dims = ("output", "input", "frequency")
-    frf_vars = {}
+    frf_vars: dict[str, Any] = {}
     for name, arr in (
         ("frf_measured", c.frf_measured),
         ("frf_a_priori", c.frf_a_priori),
@@ -104,7 +129,7 @@ def dataset(result) -> xr.Dataset:
     return ds
 
 
-def _frf_figure(c, path: Path) -> None:
+def _frf_figure(c: CampaignResult, path: Path) -> None:
     q, r = c.frf_measured.shape[:2]
     # the six best-coupled pairs (by the updated model), strongest first: a symmetric input
     # and an antisymmetric gauge give only noise
@@ -128,7 +153,7 @@ def _frf_figure(c, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _mac_figure(c, path: Path) -> None:
+def _mac_figure(c: CampaignResult, path: Path) -> None:
     fig = Figure(figsize=(9, 3.6), layout="constrained")
     if c.mac_updated.size == 0:
         fig.text(0.5, 0.5, "no video test: no measured mode shapes", ha="center")
@@ -145,7 +170,7 @@ def _mac_figure(c, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _frequency_figure(c, path: Path) -> None:
+def _frequency_figure(c: CampaignResult, path: Path) -> None:
     m = c.modes
     k = np.arange(1, len(m["era_hz"]) + 1)
     known = None not in m["true_hz"]  # measured data: compare with the ERA values
@@ -166,11 +191,11 @@ def _frequency_figure(c, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _pct(a, b) -> str:
+def _pct(a: float, b: float | None) -> str:
     return "" if b is None else f"{100 * (a / b - 1):+.3f} %"
 
 
-def _camera_html(c) -> str:
+def _camera_html(c: CampaignResult) -> str:
     """The calibration and triangulation summary of a simulated video test (none for recorded
     data, whose video arrives already triangulated)."""
     cal, tri = c.calibration, c.triangulation
@@ -187,7 +212,7 @@ calibration covariance, Att. 6 Eqs. 34–37); peak motion
 {1e3 * tri["peak_displacement_m"]:.1f} mm.</p>"""
 
 
-def sections(result) -> str:
+def sections(result: IdentificationReport) -> str:
     """The page: frequencies, damping, scalings, wheel gains, the camera rig, the figures."""
     c, esc = result.campaign, html.escape
     m = c.modes
@@ -270,7 +295,7 @@ updated one (a priori × p; in a simulation, 1 means recovered).</p>
 """
 
 
-def write_data(result, ds, folder: Path) -> None:
+def write_data(result: IdentificationReport, ds: xr.Dataset, folder: Path) -> None:
     """``identification.json`` (the campaign's numbers) and ``results.nc`` (``ds``)."""
     c = result.campaign
     summary = {
@@ -290,7 +315,7 @@ def write_data(result, ds, folder: Path) -> None:
     write_netcdf(ds, folder / "results.nc")
 
 
-def draw_figures(campaign, folder: Path) -> list[str]:
+def draw_figures(campaign: CampaignResult, folder: Path) -> list[str]:
     """:data:`FIGURES` of the campaign into ``folder``; their file names."""
     _frf_figure(campaign, folder / "frf.png")
     _mac_figure(campaign, folder / "mac.png")

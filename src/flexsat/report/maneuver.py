@@ -23,11 +23,15 @@ from __future__ import annotations
 import html
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from flexsat.report.page import metric_rows
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 
 @dataclass(frozen=True)
@@ -60,7 +64,7 @@ PLOTS = (
 )
 
 
-def _plot(ds, spec: _Plot, path: Path) -> None:
+def _plot(ds: xr.Dataset, spec: _Plot, path: Path) -> None:
     fig = Figure(figsize=(7, 3.6), layout="constrained")
     ax = fig.add_subplot()
     t = ds["time"].values
@@ -82,14 +86,14 @@ def _plot(ds, spec: _Plot, path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
-def draw_figures(ds, folder: Path) -> list[str]:
+def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     """Draw :data:`PLOTS` of the runs in ``ds`` into ``folder``; their file names."""
     for spec in PLOTS:
         _plot(ds, spec, folder / spec.file)
     return [spec.file for spec in PLOTS]
 
 
-def sections(records: list[dict], figures: list[str]) -> str:
+def sections(records: list[dict[str, Any]], figures: list[str]) -> str:
     """The page's metrics table (a column per run) and time histories."""
     esc = html.escape
     head = "".join(f"<th>{esc(r['run'])}</th>" for r in records)

@@ -17,11 +17,29 @@ from __future__ import annotations
 
 import html
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from flexsat.report.page import format_metric
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from flexsat.cases.agrawal_bang_ppf import PPFCaseRun
+
+
+class PPFReport(Protocol):
+    """What this report reads of a PPF result (:class:`flexsat.scenarios.ppf.PPFResult`)."""
+
+    @property
+    def labels(self) -> tuple[str, ...]: ...
+    @property
+    def runs(self) -> tuple[PPFCaseRun, ...]: ...
+    @property
+    def notes(self) -> tuple[str, ...]: ...
+
 
 #: results-table columns: (metric, heading)
 RESULT_COLUMNS = (
@@ -43,7 +61,7 @@ RESULT_COLUMNS = (
 _COLUMNS = 3
 
 
-def _grid(n: int, title: str, height: float = 2.4):
+def _grid(n: int, title: str, height: float = 2.4) -> tuple[Figure, np.ndarray]:
     rows = -(-n // _COLUMNS)
     cols = min(n, _COLUMNS)
     fig = Figure(figsize=(3.6 * cols, height * rows + 0.6), layout="constrained")
@@ -54,7 +72,7 @@ def _grid(n: int, title: str, height: float = 2.4):
     return fig, axes[:n]
 
 
-def _colour(i: int, n: int):
+def _colour(i: int, n: int) -> str | tuple[float, float, float, float]:
     """Run i's colour: the default cycle up to 10 runs, tab20 beyond (distinct up to 20)."""
     if n <= 10:
         return f"C{i}"
@@ -63,7 +81,7 @@ def _colour(i: int, n: int):
     return colormaps["tab20"](i % 20)
 
 
-def _cost(ds, path: Path) -> None:
+def _cost(ds: xr.Dataset, path: Path) -> None:
     fig = Figure(figsize=(8, 5.2), layout="constrained")
     a, b = fig.subplots(2, 1, sharex=True)
     fig.suptitle("homotopy: cost along γ (J0(γ) = γ J_goal + (1 − γ) J_init, Eq. 16)")
@@ -84,7 +102,7 @@ def _cost(ds, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _checks(ds, path: Path) -> None:
+def _checks(ds: xr.Dataset, path: Path) -> None:
     fig = Figure(figsize=(8, 5.2), layout="constrained")
     a, b = fig.subplots(2, 1, sharex=True)
     fig.suptitle("stability along γ: S of Eq. 6 and the closed-loop poles of Eq. 8")
@@ -108,7 +126,7 @@ def _checks(ds, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _poles(ds, path: Path) -> None:
+def _poles(ds: xr.Dataset, path: Path) -> None:
     runs = ds["run"].values
     fig, axes = _grid(
         len(runs),
@@ -136,7 +154,7 @@ def _poles(ds, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _gain_paths(ds, path: Path) -> None:
+def _gain_paths(ds: xr.Dataset, path: Path) -> None:
     runs = ds["run"].values
     fig, axes = _grid(
         len(runs), "gains g_ij along γ (i: actuator, j: mode; colour: actuator, line: mode)"
@@ -160,7 +178,7 @@ def _gain_paths(ds, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _responses(ds, run, path: Path) -> None:
+def _responses(ds: xr.Dataset, run: str, path: Path) -> None:
     fig = Figure(figsize=(8, 6.4), layout="constrained")
     axes = fig.subplots(3, 1, sharex=True)
     fig.suptitle(f"tip responses: {run}")
@@ -187,11 +205,11 @@ def _responses(ds, run, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _results_table(records: list[dict], ds) -> str:
+def _results_table(records: list[dict[str, Any]], ds: xr.Dataset) -> str:
     esc = html.escape
     head = "".join(f"<th>{esc(h)}</th>" for _, h in RESULT_COLUMNS)
     gains = "".join(f"<th>g{i}{j}</th>" for i in (1, 2, 3) for j in (1, 2, 3))
-    rows = []
+    rows: list[str] = []
     for r in records:
         run = r["run"]
         cells = [
@@ -212,20 +230,24 @@ def _results_table(records: list[dict], ds) -> str:
     )
 
 
-def _gains_tables(result) -> str:
+def _gains_tables(result: PPFReport) -> str:
     """Per run, the paper's layout (rows: mode, columns: actuator), initial → optimised, with
     the published optimised gains of the same case."""
     from flexsat.cases.agrawal_bang_ppf import PUBLISHED_GAINS
 
     esc = html.escape
-    blocks = []
+    blocks: list[str] = []
     for label, run in zip(result.labels, result.runs):
-        key = (
-            tuple(int(w) if float(w).is_integer() else w for w in run.setup.weights),
-            run.setup.excitation,
+        weights = tuple(float(w) for w in run.setup.weights)  # (100.0, 100.0) == (100, 100)
+        paper = next(
+            (
+                gains
+                for (w, excitation), gains in PUBLISHED_GAINS.items()
+                if w == weights and excitation == run.setup.excitation
+            ),
+            None,
         )
-        paper = PUBLISHED_GAINS.get(key)
-        rows = []
+        rows: list[str] = []
         for j in range(3):
             cells = "".join(
                 f"<td>{run.initial_gains.reshape(3, 3)[i, j]:.5g} → "
@@ -248,7 +270,9 @@ def _gains_tables(result) -> str:
     return "".join(blocks)
 
 
-def sections(result, records: list[dict], ds, figures: list[str]) -> str:
+def sections(
+    result: PPFReport, records: list[dict[str, Any]], ds: xr.Dataset, figures: list[str]
+) -> str:
     """The page's results table (the Agrawal & Bang 1996 grid), gains and figures."""
     esc = html.escape
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
@@ -267,7 +291,7 @@ peak (n/a: not within the simulated time).</p>
 """
 
 
-def draw_figures(ds, folder: Path) -> list[str]:
+def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     """The homotopy paths and every run's tip responses into ``folder``; the file names."""
     figures = ["cost.png", "stability.png", "poles.png", "gains.png"]
     _cost(ds, folder / figures[0])
@@ -280,4 +304,4 @@ def draw_figures(ds, folder: Path) -> list[str]:
     return figures
 
 
-__all__ = ["RESULT_COLUMNS", "draw_figures", "sections"]
+__all__ = ["PPFReport", "RESULT_COLUMNS", "draw_figures", "sections"]

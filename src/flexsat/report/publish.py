@@ -52,6 +52,12 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from flexsat.report.page import ReportedResult
 
 log = logging.getLogger(__name__)
 
@@ -83,10 +89,10 @@ class OutputError(OSError):
     """The report folder cannot be written; ``str()`` says where and why, ``errno`` is kept."""
 
     def __str__(self) -> str:
-        return self.strerror
+        return self.strerror or super().__str__()  # always given (errno, message) here
 
 
-def _load_renameat2():
+def _load_renameat2() -> Callable[[int, bytes, int, bytes, int], int] | None:
     try:
         function = ctypes.CDLL(None, use_errno=True).renameat2
     except (OSError, AttributeError, TypeError):  # not glibc >= 2.28 / musl, or not Linux
@@ -162,7 +168,7 @@ def _locked(folder: Path, timeout: float) -> Iterator[None]:
         os.close(fd)  # releases the lock
 
 
-def _resolve(out_dir) -> Path:
+def _resolve(out_dir: str | os.PathLike[str]) -> Path:
     out = Path(os.path.realpath(os.fspath(out_dir)))
     if not out.name:
         raise OutputError(
@@ -301,7 +307,7 @@ def _probe(folder: Path, name: str) -> None:
         os.unlink(path)
 
 
-def check_output_folder(out_dir) -> Path:
+def check_output_folder(out_dir: str | os.PathLike[str]) -> Path:
     """Check, before any work, that a report can be published as ``out_dir``.
 
     ``out_dir`` must be a folder or not exist yet; the closest existing parent must let a file
@@ -374,7 +380,7 @@ def _recover(out: Path) -> None:
         shutil.rmtree(path, ignore_errors=True)
 
 
-def _fsync(path) -> None:
+def _fsync(path: str | os.PathLike[str]) -> None:
     """Flush the file or folder ``path`` to the disk."""
     fd = os.open(path, os.O_RDONLY)
     try:
@@ -408,7 +414,7 @@ def _swap(new: Path, out: Path) -> Path:
     return old
 
 
-def write_metrics_and_results(result, folder: Path, ds) -> None:
+def write_metrics_and_results(result: ReportedResult, folder: Path, ds: xr.Dataset) -> None:
     """The two data files most scenario reports start with: ``metrics.json`` (one record per
     run, the result's ``metrics_records()``) and ``results.nc`` (its dataset ``ds``, netCDF4
     without pickle)."""
@@ -421,7 +427,10 @@ def write_metrics_and_results(result, folder: Path, ds) -> None:
 
 
 def write_atomically(
-    out_dir, write: Callable[[Path], None], *, timeout: float = LOCK_TIMEOUT_S
+    out_dir: str | os.PathLike[str],
+    write: Callable[[Path], None],
+    *,
+    timeout: float = LOCK_TIMEOUT_S,
 ) -> Path:
     """Run ``write(folder)`` on a new temporary folder and publish it as ``out_dir`` whole (see
     the module docstring): ``out_dir`` holds the complete previous report or the complete new one

@@ -13,23 +13,27 @@ from __future__ import annotations
 import html
 import re
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from flexsat.report.page import metric_rows
 
+if TYPE_CHECKING:
+    import xarray as xr
+
 #: at most this many time-history figures (a plant with many output channels records them all
 #: in results.nc; the page shows the first ones)
 MAX_FIGURES = 24
 
 
-def _histories(ds) -> tuple[list[str], list[str]]:
+def _histories(ds: xr.Dataset) -> tuple[list[str], list[str]]:
     """(plotted, idle): the recorded time histories worth a figure, measured and output
     channels before inputs, a command only where it differs from the applied input (an
     actuator acted on it); and the channels that are zero throughout every run (idle
     actuators), named on the page instead of plotted."""
-    timed = [name for name, var in ds.data_vars.items() if "time" in var.dims]
+    timed = [str(name) for name, var in ds.data_vars.items() if "time" in var.dims]
     commands = [n for n in timed if n.endswith("_command")]
     inputs = {n[: -len("_command")] for n in commands}
     idle = [n for n in timed if not np.any(ds[n].values)]
@@ -47,7 +51,7 @@ def _file(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_]+", "_", name) + ".png"
 
 
-def _plot(ds, name: str, path: Path) -> None:
+def _plot(ds: xr.Dataset, name: str, path: Path) -> None:
     var = ds[name]
     fig = Figure(figsize=(7, 3.4), layout="constrained")
     ax = fig.add_subplot()
@@ -72,11 +76,13 @@ def _plot(ds, name: str, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _html(records: list[dict], names: list[str], units: dict, idle: list[str]) -> str:
+def _html(
+    records: list[dict[str, Any]], names: list[str], units: dict[str, str], idle: list[str]
+) -> str:
     esc = html.escape
     head = "".join(f"<th>{esc(r['run'])}</th>" for r in records)
 
-    def label(metric):
+    def label(metric: str) -> str:
         unit = units.get(metric, "")
         return f"{metric} ({unit})" if unit and not metric.endswith(("_deg", "_s")) else metric
 
@@ -109,7 +115,7 @@ def _html(records: list[dict], names: list[str], units: dict, idle: list[str]) -
 """
 
 
-def draw_figures(ds, folder: Path) -> list[str]:
+def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     """One figure per recorded time history worth one (:func:`_histories`); the file names."""
     names, _ = _histories(ds)
     for name in names:
@@ -117,10 +123,12 @@ def draw_figures(ds, folder: Path) -> list[str]:
     return [_file(n) for n in names]
 
 
-def sections(records: list[dict], ds) -> str:
+def sections(records: list[dict[str, Any]], ds: xr.Dataset) -> str:
     """The page's metrics (idle channels' left out) and time histories."""
     names, idle = _histories(ds)
-    units = {k: v.attrs.get("units", "") for k, v in ds.data_vars.items() if v.dims == ("run",)}
+    units = {
+        str(k): str(v.attrs.get("units", "")) for k, v in ds.data_vars.items() if v.dims == ("run",)
+    }
     return _html(records, names, units, idle)
 
 

@@ -18,13 +18,34 @@ antenna nodes open against closed loop, the torque perturbations and the point f
 
 from __future__ import annotations
 
+import functools
 import html
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from flexsat.report.page import format_metric
+
+if TYPE_CHECKING:
+    import xarray as xr
+    from matplotlib.axes import Axes
+
+#: a panel of a runs plot: its y label and a run label's values
+Panel = tuple[str, Callable[[Any], np.ndarray]]
+
+
+class SlewReport(Protocol):
+    """What this report reads of a slew result (:class:`flexsat.scenarios.slew.SlewResult`)."""
+
+    @property
+    def labels(self) -> tuple[str, ...]: ...
+    @property
+    def notes(self) -> tuple[str, ...]: ...
+    def attributes(self) -> dict[str, float]: ...
+
 
 #: goal table columns: (metric, heading, verdict metric or None)
 GOAL_COLUMNS = (
@@ -37,13 +58,13 @@ GOAL_COLUMNS = (
 )
 
 
-def _figure(rows: int, title: str):
+def _figure(rows: int, title: str) -> tuple[Figure, np.ndarray]:
     fig = Figure(figsize=(8, 2.4 * rows + 0.6), layout="constrained")
     fig.suptitle(title)
     return fig, fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
 
 
-def _mark(ax, ds) -> None:
+def _mark(ax: Axes, ds: xr.Dataset) -> None:
     """The maneuver time T and the evaluation time 1.25 T."""
     T = ds.attrs["duration_s"]
     ax.axvline(T, color="0.5", linewidth=0.8)
@@ -51,7 +72,7 @@ def _mark(ax, ds) -> None:
     ax.grid(alpha=0.3)
 
 
-def _nominal(ds, path: Path) -> None:
+def _nominal(ds: xr.Dataset, path: Path) -> None:
     fig, (a, b) = _figure(2, "nominal maneuver (open-loop rigid-body optimum)")
     t = ds["time"].values
     for j, axis in enumerate("xyz"):
@@ -65,7 +86,9 @@ def _nominal(ds, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _runs_plot(ds, title: str, path: Path, panels, band: float | None = None) -> None:
+def _runs_plot(
+    ds: xr.Dataset, title: str, path: Path, panels: list[Panel], band: float | None = None
+) -> None:
     """One panel per (ylabel, values of a run) pair, every run in its colour; ``band`` draws
     ±band (the goal's tolerance)."""
     fig, axes = _figure(len(panels), title)
@@ -83,31 +106,40 @@ def _runs_plot(ds, title: str, path: Path, panels, band: float | None = None) ->
     fig.savefig(path, dpi=100)
 
 
-def _components(ds, variable: str, scale: float, unit: str):
+def _run_values(
+    ds: xr.Dataset, name: str, scale: float, column: int | None, label: Any
+) -> np.ndarray:
+    values = ds[name].sel(run=label).values
+    return scale * (values if column is None else values[:, column])
+
+
+def _components(ds: xr.Dataset, variable: str, scale: float, unit: str) -> list[Panel]:
     """Panels of a vector variable's x, y, z components."""
     return [
-        (f"{axis} ({unit})", lambda label, j=j: scale * ds[variable].sel(run=label).values[:, j])
+        (f"{axis} ({unit})", functools.partial(_run_values, ds, variable, scale, j))
         for j, axis in enumerate("xyz")
     ]
 
 
-def _scalars(ds, names: list[str], prefix: str, scale: float, ylabel: str):
+def _scalars(
+    ds: xr.Dataset, names: list[str], prefix: str, scale: float, ylabel: str
+) -> list[Panel]:
     """Panels of scalar variables; ``ylabel`` formats each name without ``prefix``."""
     return [
         (
             ylabel.format(name[len(prefix) :]),
-            lambda label, name=name: scale * ds[name].sel(run=label).values,
+            functools.partial(_run_values, ds, name, scale, None),
         )
         for name in names
     ]
 
 
-def _goal_table(records: list[dict], open_loop: str) -> str:
+def _goal_table(records: list[dict[str, Any]], open_loop: str) -> str:
     esc = html.escape
     head = "".join(f"<th>{esc(h)}</th>" for _, h, _ in GOAL_COLUMNS)
-    rows = []
+    rows: list[str] = []
     for r in records:
-        cells = []
+        cells: list[str] = []
         for metric, _, verdict in GOAL_COLUMNS:
             value = r.get(metric)
             text = "–" if value is None else format_metric(value)
@@ -123,7 +155,7 @@ def _goal_table(records: list[dict], open_loop: str) -> str:
     return f"<table><tr><th>run</th>{head}</tr>{''.join(rows)}</table>"
 
 
-def sections(result, records: list[dict], figures: list[str]) -> str:
+def sections(result: SlewReport, records: list[dict[str, Any]], figures: list[str]) -> str:
     """The page's goals (against the open loop, the first run), notes and figures."""
     esc = html.escape
     ds_attrs = result.attributes()
@@ -146,7 +178,7 @@ def sections(result, records: list[dict], figures: list[str]) -> str:
 """
 
 
-def draw_figures(ds, folder: Path) -> list[str]:
+def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     """The figures of the EPS slew study c. 1989 (module docstring) into ``folder``; their
     file names."""
     tol = ds.attrs["goal_angle_tolerance_mrad"]
@@ -159,7 +191,7 @@ def draw_figures(ds, folder: Path) -> list[str]:
         _components(ds, "euler123_error", 1e3, "mrad"),
         band=tol,
     )
-    rims = [n for n in ds.data_vars if n.startswith("rim_deflection_")]
+    rims = [str(n) for n in ds.data_vars if str(n).startswith("rim_deflection_")]
     _runs_plot(
         ds,
         "rim deflections, open against closed loop",
@@ -173,9 +205,9 @@ def draw_figures(ds, folder: Path) -> list[str]:
         _components(ds, "torque_perturbation", 1e-3, "kN m"),
     )
     forces = [
-        n
-        for n in ds.data_vars
-        if n.startswith("force_") and not n.endswith("_command") and np.any(ds[n].values)
+        name
+        for name in map(str, ds.data_vars)
+        if name.startswith("force_") and not name.endswith("_command") and np.any(ds[name].values)
     ]
     if forces:
         figures.append("forces.png")
@@ -185,4 +217,4 @@ def draw_figures(ds, folder: Path) -> list[str]:
     return figures
 
 
-__all__ = ["GOAL_COLUMNS", "draw_figures", "sections"]
+__all__ = ["GOAL_COLUMNS", "SlewReport", "draw_figures", "sections"]

@@ -13,11 +13,24 @@ from __future__ import annotations
 
 import html
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from flexsat.report.page import format_metric
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+
+class NotedResult(Protocol):
+    """A result with notes for the reader (:class:`flexsat.scenarios.star_tracker.
+    StarTrackerResult`)."""
+
+    @property
+    def notes(self) -> tuple[str, ...]: ...
+
 
 #: table columns: (metric, heading)
 COLUMNS = (
@@ -44,7 +57,7 @@ _STATUS = {
 }
 
 
-def _histograms(ds, path: Path) -> None:
+def _histograms(ds: xr.Dataset, path: Path) -> None:
     fig = Figure(figsize=(9, 3.2), layout="constrained")
     axes = fig.subplots(1, 3, sharey=True)
     fig.suptitle(f"attitude error per body axis (tolerance {ds.attrs['tolerance_arcsec']:g}″)")
@@ -71,7 +84,7 @@ def _histograms(ds, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _sky(ds, run, path: Path) -> None:
+def _sky(ds: xr.Dataset, run: str, path: Path) -> None:
     cams = ds["camera"].values
     fig = Figure(figsize=(3.6 * len(cams), 3.9), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, len(cams)))
@@ -83,7 +96,7 @@ def _sky(ds, run, path: Path) -> None:
         for value, (label, marker, colour) in _STATUS.items():
             sel = st == value
             if sel.any():
-                style = (
+                style: dict[str, Any] = (
                     dict(facecolors="none", edgecolors=colour)
                     if marker in "osD"
                     else dict(c=colour)
@@ -102,17 +115,17 @@ def _sky(ds, run, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _table(records: list[dict]) -> str:
+def _table(records: list[dict[str, Any]]) -> str:
     esc = html.escape
     head = "".join(f"<th>{esc(h)}</th>" for _, h in COLUMNS)
-    rows = []
+    rows: list[str] = []
     for r in records:
         cells = "".join(f"<td>{format_metric(r.get(k))}</td>" for k, _ in COLUMNS)
         rows.append(f"<tr><td>{esc(r['run'])}</td>{cells}</tr>")
     return f"<table><tr><th>run</th>{head}</tr>{''.join(rows)}</table>"
 
 
-def draw_figures(ds, folder: Path) -> list[str]:
+def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     """The error histograms and every run's sky into ``folder``; the file names."""
     figures = ["errors.png"]
     _histograms(ds, folder / figures[0])
@@ -122,7 +135,7 @@ def draw_figures(ds, folder: Path) -> list[str]:
     return figures
 
 
-def sections(result, records: list[dict], figures: list[str]) -> str:
+def sections(result: NotedResult, records: list[dict[str, Any]], figures: list[str]) -> str:
     """The page's identification table, notes and figures."""
     esc = html.escape
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
@@ -140,4 +153,4 @@ angles over the accepted attitudes; σ_QUEST: mean predicted 1σ.</p>
     return body
 
 
-__all__ = ["COLUMNS", "draw_figures", "sections"]
+__all__ = ["COLUMNS", "NotedResult", "draw_figures", "sections"]

@@ -15,11 +15,32 @@ from __future__ import annotations
 
 import html
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from flexsat.report.page import format_metric
+
+if TYPE_CHECKING:
+    import xarray as xr
+    from matplotlib.axes import Axes
+
+    from flexsat.cases.tether import Example
+    from flexsat.dynamics.tether import TetherScales
+
+
+class TetherReport(Protocol):
+    """What this report reads of a tether result (:class:`flexsat.scenarios.tether.
+    TetherResult`; ``scenario`` is its :class:`~flexsat.scenarios.tether.TetherScenario`)."""
+
+    @property
+    def scenario(self) -> Any: ...
+    @property
+    def scales(self) -> TetherScales: ...
+    @property
+    def notes(self) -> tuple[str, ...]: ...
+
 
 #: metrics-table rows: (metric, heading)
 METRIC_COLUMNS = (
@@ -42,10 +63,12 @@ METRIC_COLUMNS = (
 FIGURES = ("length.png", "libration.png", "controls.png", "integral_of_motion.png")
 
 
-def paper_example(spec, scenario):
+def paper_example(spec: Any, scenario: Any) -> Example | None:
     """The example of :data:`flexsat.cases.tether.EXAMPLES` this run repeats, or None: same
     law, gains and nondimensional final length, from the paper's start (λ = 1, θ = φ = 5°,
-    at rest), without the misprinted sign."""
+    at rest), without the misprinted sign. ``spec`` is a run of the tether scenario
+    ``scenario`` (:class:`flexsat.scenarios.tether.TetherRunSpec`, :class:`~flexsat.scenarios.
+    tether.TetherScenario`)."""
     from flexsat.cases.tether import EXAMPLES, INITIAL
 
     ini, s = scenario.initial, scenario.system.scales()
@@ -65,7 +88,7 @@ def paper_example(spec, scenario):
     return None
 
 
-def _lines(ds, variable, ax, scale=1.0, **style):
+def _lines(ds: xr.Dataset, variable: str, ax: Axes, scale: float = 1.0, **style: Any) -> None:
     orbits = ds["orbits"].values
     for i, run in enumerate(ds["run"].values):
         ax.plot(
@@ -73,14 +96,14 @@ def _lines(ds, variable, ax, scale=1.0, **style):
         )
 
 
-def _figure(title, rows):
+def _figure(title: str, rows: int) -> tuple[Figure, np.ndarray]:
     fig = Figure(figsize=(8, 2.6 * rows + 0.5), layout="constrained")
     fig.suptitle(title)
     axes = np.atleast_1d(fig.subplots(rows, 1, sharex=True))
     return fig, axes
 
 
-def _finish(fig, axes, path):
+def _finish(fig: Figure, axes: np.ndarray, path: Path) -> None:
     for ax in axes:
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize="small")
@@ -88,7 +111,7 @@ def _finish(fig, axes, path):
     fig.savefig(path, dpi=100)
 
 
-def _length(ds, path):
+def _length(ds: xr.Dataset, path: Path) -> None:
     fig, axes = _figure("tether length", 2)
     _lines(ds, "length", axes[0], 1e-3)
     _lines(ds, "length", axes[1], 1e-3)
@@ -97,7 +120,7 @@ def _length(ds, path):
     _finish(fig, axes, path)
 
 
-def _libration(ds, path):
+def _libration(ds: xr.Dataset, path: Path) -> None:
     fig, axes = _figure("libration: in-plane pitch θ and out-of-plane roll φ", 2)
     _lines(ds, "pitch", axes[0], np.degrees(1.0))
     _lines(ds, "roll", axes[1], np.degrees(1.0))
@@ -106,7 +129,7 @@ def _libration(ds, path):
     _finish(fig, axes, path)
 
 
-def _controls(ds, path):
+def _controls(ds: xr.Dataset, path: Path) -> None:
     fig, axes = _figure("controls: tension (or reel rate) and out-of-plane thrust", 3)
     _lines(ds, "tension", axes[0])
     _lines(ds, "reel_rate", axes[1])
@@ -117,7 +140,7 @@ def _controls(ds, path):
     _finish(fig, axes, path)
 
 
-def _integral(ds, path):
+def _integral(ds: xr.Dataset, path: Path) -> None:
     fig, axes = _figure("integral of motion V1 (Eq. 8) and thrust index ∫|F̂|dτ", 2)
     _lines(ds, "integral_of_motion", axes[0])
     _lines(ds, "thrust_index", axes[1])
@@ -126,7 +149,7 @@ def _integral(ds, path):
     _finish(fig, axes, path)
 
 
-def _metrics_table(records) -> str:
+def _metrics_table(records: list[dict[str, Any]]) -> str:
     esc = html.escape
     head = "".join(f"<th>{esc(r['run'])}</th>" for r in records)
     rows = "".join(
@@ -138,10 +161,10 @@ def _metrics_table(records) -> str:
     return f"<table><tr><th>metric</th>{head}</tr>{rows}</table>"
 
 
-def _paper_table(result, records) -> str:
+def _paper_table(result: TetherReport, records: list[dict[str, Any]]) -> str:
     """Published against measured for the runs that repeat a paper example."""
     esc = html.escape
-    rows = []
+    rows: list[str] = []
     for spec, rec in zip(result.scenario.runs, records):
         e = paper_example(spec, result.scenario)
         if e is None:
@@ -166,7 +189,7 @@ def _paper_table(result, records) -> str:
     )
 
 
-def sections(result, records: list[dict], figures: list[str]) -> str:
+def sections(result: TetherReport, records: list[dict[str, Any]], figures: list[str]) -> str:
     """The page's system, metrics, comparison with the paper and figures."""
     esc = html.escape
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
@@ -186,11 +209,18 @@ of λ' {s.speed:.4g} m/s. Integrator: {esc(result.scenario.simulation.integrator
 """
 
 
-def draw_figures(ds, folder: Path) -> list[str]:
+def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     """:data:`FIGURES` into ``folder``; their file names."""
     for name, draw in zip(FIGURES, (_length, _libration, _controls, _integral)):
         draw(ds, folder / name)
     return list(FIGURES)
 
 
-__all__ = ["FIGURES", "METRIC_COLUMNS", "draw_figures", "paper_example", "sections"]
+__all__ = [
+    "FIGURES",
+    "METRIC_COLUMNS",
+    "TetherReport",
+    "draw_figures",
+    "paper_example",
+    "sections",
+]

@@ -31,6 +31,8 @@ _EXPORTS = {
     "ScenarioError": "errors",
     "count": "fields",
     "quantity": "fields",
+    "in_unit": "fields",
+    "integer_in": "fields",
     "DEFAULT_SCENARIO": "documents",
     "default_scenario": "documents",
     "load_scenario": "documents",

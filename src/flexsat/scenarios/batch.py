@@ -45,10 +45,10 @@ in degrees (``overshoot_deg``) is compared in degrees.
 from __future__ import annotations
 
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self, get_args
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -57,8 +57,16 @@ from flexsat import limits
 from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.errors import Problem, ScenarioError, locate
-from flexsat.scenarios.fields import Document, SchemaSection, count
+from flexsat.scenarios.fields import Document, SchemaSection, integer_in
 from flexsat.scenarios.kind import Run, ScenarioKind
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from flexsat.design.batch_runner import BatchProgress, HubManeuverBuilder
+    from flexsat.design.monte_carlo_statistics import Requirement
+    from flexsat.design.parameter_space import GridSpace, ParameterSpace, SampleTable, SobolDesign
+    from flexsat.scenarios.maneuver import Scenario
 
 #: the SI unit of every parameter a batch can vary (HubManeuverBuilder's columns)
 PARAMETER_UNITS = {
@@ -83,19 +91,20 @@ PARAMETER_UNITS = {
 }
 
 #: sampling of a sweep's bounds or a Monte Carlo's distributions
-SAMPLINGS = ("grid", "random", "latin_hypercube", "sobol", "saltelli")
+Sampling = Literal["grid", "random", "latin_hypercube", "sobol", "saltelli"]
+SAMPLINGS: tuple[str, ...] = get_args(Sampling)
 
 
 class ExecutionSpec(SchemaSection):
     """How the chunks run (:func:`~flexsat.design.batch_runner.run_batch`)."""
 
-    chunk_size: count(1, limits.MAX_SAMPLES) = 1000
-    workers: count(1, 256, optional=True) = None
+    chunk_size: Annotated[int, integer_in(1, limits.MAX_SAMPLES)] = 1000
+    workers: Annotated[int | None, integer_in(1, 256, optional=True)] = None
     scheduler: str | None = None
-    retries: count(0, 100) = 2
+    retries: Annotated[int, integer_in(0, 100)] = 2
 
     @model_validator(mode="after")
-    def _one_place(self):
+    def _one_place(self) -> Self:
         if self.workers is not None and self.scheduler is not None:
             raise FieldError(
                 "execution",
@@ -104,7 +113,7 @@ class ExecutionSpec(SchemaSection):
         return self
 
 
-def _check_entry_values(parameters: dict) -> None:
+def _check_entry_values(parameters: dict[str, Any]) -> None:
     """Each parameter's values of the right shape before they are read: ``distribution`` a
     name, ``values`` a list of numbers or quantities, every other key (mean, sd, low, high, n,
     ...) one number or quantity string: a list or a mapping where one value belongs is refused
@@ -129,7 +138,7 @@ def _check_entry_values(parameters: dict) -> None:
                 raise FieldError(path, f"must be one number or quantity, got {value!r}")
 
 
-def _space(parameters: dict):
+def _space(parameters: dict[str, dict[str, Any]]) -> ParameterSpace | GridSpace:
     from flexsat.design.parameter_space import space_from_spec
 
     _check_entry_values(parameters)
@@ -146,13 +155,13 @@ def _metric_unit(metric: str) -> str:
     return METRIC_UNITS[metric]
 
 
-def requirements_of(spec: dict) -> list:
+def requirements_of(spec: dict[str, Any]) -> list[Requirement]:
     """The :class:`~flexsat.design.monte_carlo_statistics.Requirement` s of a ``requirements:``
     dict, each in its metric's unit (degrees for the ``_deg`` metrics)."""
     from flexsat.design.monte_carlo_statistics import Requirement, requirement_from_spec
     from flexsat.design.parameter_space import si_scalar
 
-    out = []
+    out: list[Requirement] = []
     for metric, entry in spec.items():
         unit = _metric_unit(metric)
         path = f"requirements.{metric}"
@@ -180,9 +189,9 @@ class BatchScenario(Document):
     scenario: str
     run: str
     parameters: dict[str, dict[str, Any]]
-    sampling: Literal[SAMPLINGS] | None = None
-    cases: count(1, limits.MAX_SAMPLES, optional=True) = None
-    seed: count(0, limits.MAX_SEED) = 0
+    sampling: Sampling | None = None
+    cases: Annotated[int | None, integer_in(1, limits.MAX_SAMPLES, optional=True)] = None
+    seed: Annotated[int, integer_in(0, limits.MAX_SEED)] = 0
     requirements: dict[str, dict[str, Any]] = Field(default_factory=dict)
     histories: list[str] = Field(default_factory=list, max_length=16)
     execution: ExecutionSpec = Field(default_factory=ExecutionSpec)
@@ -190,22 +199,22 @@ class BatchScenario(Document):
 
     @field_validator("parameters")
     @classmethod
-    def _parameters(cls, parameters: dict) -> dict:
+    def _parameters(cls, parameters: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
         _space(parameters)
         return parameters
 
     @field_validator("requirements")
     @classmethod
-    def _requirements(cls, requirements: dict) -> dict:
+    def _requirements(cls, requirements: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
         requirements_of(requirements)
         return requirements
 
     @model_validator(mode="after")
-    def _design(self):
+    def _design(self) -> Self:
         from flexsat.design.parameter_space import GridSpace
 
         grid = isinstance(_space(self.parameters), GridSpace)
-        sampling = self.sampling or (
+        sampling: Sampling = self.sampling or (
             "grid" if grid else "random" if self.kind == "montecarlo" else "latin_hypercube"
         )
         if grid != (sampling == "grid"):
@@ -226,7 +235,7 @@ class BatchScenario(Document):
             )
         if sampling != "grid" and self.cases is None:
             raise FieldError("cases", f"required with sampling {sampling!r}")
-        if sampling == "saltelli" and self.cases & (self.cases - 1):
+        if sampling == "saltelli" and self.cases is not None and self.cases & (self.cases - 1):
             raise FieldError(
                 "cases", f"the Saltelli design takes a power of 2 base points, got {self.cases}"
             )
@@ -237,8 +246,9 @@ class BatchScenario(Document):
         n_cases = case_count(self)
         if n_cases > limits.MAX_CASES:
             field = "parameters" if sampling == "grid" else "cases"
-            if sampling == "grid":
-                what = f"the grid of {' × '.join(map(str, _space(self.parameters).shape))}"
+            space = _space(self.parameters)
+            if isinstance(space, GridSpace):  # sampling "grid"
+                what = f"the grid of {' × '.join(map(str, space.shape))}"
             elif sampling == "saltelli":
                 what = (
                     f"the Saltelli design of {self.cases} base points × "
@@ -266,27 +276,27 @@ class BatchResult(ReportedResult):
     the parameters' ranking per metric)."""
 
     scenario: BatchScenario
-    maneuver: Any
-    table: dict
-    units: dict
+    maneuver: Scenario
+    table: dict[str, np.ndarray]
+    units: dict[str, str]
     store: Path
-    summary: dict
-    sensitivity: dict
+    summary: dict[str, Any]
+    sensitivity: dict[str, dict[str, Any]]
     wall_s: float
     chunks_run: int
     chunks_skipped: int
     case_source: str
-    surfaces: dict | None = None
+    surfaces: dict[str, np.ndarray] | None = None
 
-    def dataset(self):
+    def dataset(self) -> xr.Dataset:
         from flexsat.design.batch_runner import open_results
 
         return open_results(self.store)
 
-    def metrics_records(self) -> list[dict]:
+    def metrics_records(self) -> list[dict[str, Any]]:
         """One row per metric (its 5 %, 50 % and 95 % percentiles) and per requirement (the
         probability of meeting it, between its confidence bounds): the CLI's table."""
-        rows = []
+        rows: list[dict[str, Any]] = []
         for name, m in self.summary["metrics"].items():
             p = m["percentiles"]
             rows.append(
@@ -313,28 +323,28 @@ class BatchResult(ReportedResult):
     def report_case(self) -> str:
         return self.maneuver.case
 
-    def write_data(self, folder, ds) -> None:
+    def write_data(self, folder: Path, ds: xr.Dataset) -> None:
         from flexsat.report.batch import write_data
 
         write_data(self, ds, folder)
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.batch import draw_figures
 
         return draw_figures(self, ds, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.batch import sections
 
         return sections(self, ds, figures)
 
 
-def _finite(value):
+def _finite(value: float | None) -> float | None:
     """A JSON-ready number: NaN and inf become None."""
     return None if value is None or not np.isfinite(value) else float(value)
 
 
-def _maneuver(scenario: BatchScenario):
+def _maneuver(scenario: BatchScenario) -> Scenario:
     from flexsat.scenarios import load_scenario
     from flexsat.scenarios.maneuver import Scenario
 
@@ -357,10 +367,11 @@ def _maneuver(scenario: BatchScenario):
     return maneuver
 
 
-def builder_of(scenario: BatchScenario, maneuver):
+def builder_of(scenario: BatchScenario, maneuver: Scenario) -> HubManeuverBuilder:
     """The :class:`~flexsat.design.batch_runner.HubManeuverBuilder` of the named Law II run."""
     from flexsat.control import LyapunovTracker
     from flexsat.design.batch_runner import HubManeuverBuilder
+    from flexsat.maneuvers import SmoothBangBang
     from flexsat.scenarios.maneuver_kind import prepare_scenario
 
     plan = prepare_scenario(maneuver)
@@ -386,6 +397,16 @@ def builder_of(scenario: BatchScenario, maneuver):
             ]
         )
     ref, model = law.reference, plan.model
+    if not isinstance(ref, SmoothBangBang):  # the builder remakes it from alpha and u_max
+        raise ScenarioError(
+            [
+                Problem(
+                    "run",
+                    f"{scenario.run!r} tracks a {type(ref).__name__} reference; a batch varies "
+                    "a smooth_bang_bang reference (bang_bang is smooth_bang_bang with alpha: 0)",
+                )
+            ]
+        )
     return HubManeuverBuilder(
         params=model.params,
         n_modes=model.n_modes,
@@ -401,20 +422,25 @@ def builder_of(scenario: BatchScenario, maneuver):
     )
 
 
-def _table(scenario: BatchScenario):
+def _cases(scenario: BatchScenario) -> int:
+    assert scenario.cases is not None  # BatchScenario requires cases of every sampling but grid
+    return scenario.cases
+
+
+def _table(scenario: BatchScenario) -> SampleTable | SobolDesign:
     from flexsat.design.parameter_space import GridSpace
 
     space = _space(scenario.parameters)
     if isinstance(space, GridSpace):
         table = space.table()
     elif scenario.sampling == "saltelli":
-        table = space.sobol_design(scenario.cases, scenario.seed)
+        return space.sobol_design(_cases(scenario), scenario.seed)
     elif scenario.sampling == "random":
-        table = space.sample(scenario.cases, scenario.seed)
+        table = space.sample(_cases(scenario), scenario.seed)
     elif scenario.sampling == "latin_hypercube":
-        table = space.latin_hypercube(scenario.cases, scenario.seed)
+        table = space.latin_hypercube(_cases(scenario), scenario.seed)
     else:
-        table = space.sobol_sequence(scenario.cases, scenario.seed)
+        table = space.sobol_sequence(_cases(scenario), scenario.seed)
     return table
 
 
@@ -426,8 +452,8 @@ def case_count(scenario: BatchScenario) -> int:
     if isinstance(space, GridSpace):
         return space.size
     if scenario.sampling == "saltelli":  # n_base (d + 2) cases for first-order and total
-        return scenario.cases * (len(scenario.parameters) + 2)
-    return scenario.cases
+        return _cases(scenario) * (len(scenario.parameters) + 2)
+    return _cases(scenario)
 
 
 def default_store(fingerprint: str) -> Path:
@@ -439,7 +465,9 @@ def default_store(fingerprint: str) -> Path:
     return Path(tempfile.gettempdir()) / f"flexsat-batch-{fingerprint[:20]}.zarr"
 
 
-def _run_batch(scenario: BatchScenario, progress: Callable[[str], None] | None = None):
+def _run_batch(
+    scenario: BatchScenario, progress: Callable[[str], None] | None = None
+) -> BatchResult:
     """Build the Law II case builder from the maneuver scenario, run every case into the store
     (resuming it), then compute the statistics.
 
@@ -462,11 +490,15 @@ def _run_batch(scenario: BatchScenario, progress: Callable[[str], None] | None =
 
     maneuver = _maneuver(scenario)
     build = builder_of(scenario, maneuver)
+    from flexsat.design.parameter_space import SobolDesign
+
     try:
-        table = _table(scenario)
+        sampled = _table(scenario)
     except ValueError as exc:
         raise ScenarioError([locate("sampling", exc)]) from None
-    design, table = (table, table.table) if scenario.sampling == "saltelli" else (None, table)
+    design, table = (
+        (sampled, sampled.table) if isinstance(sampled, SobolDesign) else (None, sampled)
+    )
     setup_text = scenario.yaml_text + "\0" + maneuver.yaml_text
     histories = tuple(scenario.histories)
     if scenario.store is None:
@@ -477,7 +509,7 @@ def _run_batch(scenario: BatchScenario, progress: Callable[[str], None] | None =
         store = Path(scenario.store)
         store = store if store.is_absolute() else scenario.folder / store
 
-    def report(p):
+    def report(p: BatchProgress) -> None:
         if progress is not None:
             progress(
                 f"{p.cases_done}/{p.cases_total} cases, {p.cases_per_s:.0f} cases/s, "
@@ -509,10 +541,12 @@ def _run_batch(scenario: BatchScenario, progress: Callable[[str], None] | None =
     # by name: a zarr store lists its arrays in no fixed order, and the summary's order is
     # part of the files two identical runs must write alike
     metrics = {
-        k[len("metric_") :]: ds[k].values for k in sorted(ds.data_vars) if k.startswith("metric_")
+        str(k)[len("metric_") :]: ds[k].values
+        for k in sorted(map(str, ds.data_vars))
+        if str(k).startswith("metric_")
     }
     stats = monte_carlo_summary(metrics, requirements_of(scenario.requirements))
-    sensitivity = {}
+    sensitivity: dict[str, dict[str, Any]] = {}
     for name, values in metrics.items():
         finite = np.isfinite(values)
         if finite.sum() < MIN_RANKING_CASES or np.ptp(values[finite]) == 0:
@@ -540,7 +574,9 @@ def _run_batch(scenario: BatchScenario, progress: Callable[[str], None] | None =
     )
 
 
-def trade_surfaces(scenario: BatchScenario, build) -> dict | None:
+def trade_surfaces(
+    scenario: BatchScenario, build: HubManeuverBuilder
+) -> dict[str, np.ndarray] | None:
     """For a grid over exactly (alpha, u_max): the Junkins, Pollock & Rahman 1990 trade
     surfaces of the run's
     maneuver, computed exactly (:mod:`flexsat.design.trade_surfaces`): the maneuver time T
@@ -599,7 +635,7 @@ class _BatchKind(ScenarioKind):
 
         return 1 + math.ceil(case_count(scenario) / scenario.execution.chunk_size)
 
-    def plan(self, scenario: BatchScenario):
+    def plan(self, scenario: BatchScenario) -> Generator[Run, Any, BatchResult]:
         import functools
 
         return (

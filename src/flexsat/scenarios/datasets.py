@@ -3,8 +3,9 @@ of the kinds whose runs are simulations (:class:`SimulatedRuns`)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import xarray as xr
@@ -12,8 +13,11 @@ import xarray as xr
 from flexsat.report.json_data import NULL_REASONS
 from flexsat.report.page import ReportedResult
 
+if TYPE_CHECKING:
+    from flexsat.sim import SimResult
 
-def add_run_metrics(ds: xr.Dataset, records: list[dict]) -> None:
+
+def add_run_metrics(ds: xr.Dataset, records: list[dict[str, Any]]) -> None:
     """Add each metric of ``records`` (one dict per run: ``run`` its label, then metric: value)
     to ``ds`` as a variable over its ``run`` coordinate; a run without the metric, or with
     None, holds NaN (a record's ``null_reasons`` say why in ``metrics.json``; they are no
@@ -46,10 +50,10 @@ class SimulatedRuns(ReportedResult):
 
     scenario: Any
     labels: tuple[str, ...]
-    results: tuple
+    results: tuple[SimResult, ...]
     case_source: str
 
-    def metrics_records(self) -> list[dict]:
+    def metrics_records(self) -> list[dict[str, Any]]:
         """One JSON-ready dict per run: ``"run"`` (the label) and the metrics (NaN -> None)."""
         return [
             row
@@ -73,7 +77,7 @@ class SimulatedRuns(ReportedResult):
         return ds
 
 
-def concat_runs(results, labels) -> xr.Dataset:
+def concat_runs(results: Sequence[SimResult], labels: Sequence[str]) -> xr.Dataset:
     """The single-case datasets of ``results`` along a new dimension ``run`` (``labels``)."""
     runs = [r.dataset.isel(case=0, drop=True) for r in results]
     ds = xr.concat(

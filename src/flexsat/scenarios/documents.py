@@ -6,17 +6,20 @@ from __future__ import annotations
 
 from importlib import resources
 from pathlib import Path
+from typing import Any, cast
 
 import yaml
+from pydantic import BaseModel
 
 from flexsat import limits
 from flexsat.scenarios.errors import Problem, ScenarioError
+from flexsat.scenarios.fields import Document
 from flexsat.scenarios.kind import DEFAULT_KIND, scenario_kind
 
 DEFAULT_SCENARIO = "tamu_default.yaml"  # package data of flexsat.cases
 
 
-def _file_of(source) -> Path | None:
+def _file_of(source: object) -> Path | None:
     """The file a source names: a Path, or a one-line string that ends in ``.yaml``/``.yml`` or
     names an existing file; None for the text itself."""
     if isinstance(source, Path):
@@ -35,46 +38,54 @@ def _read(source: str | bytes | Path) -> str:
     """Scenario text from a file (:func:`_file_of`) or as given (bytes are decoded as UTF-8);
     at most :data:`flexsat.limits.MAX_DOCUMENT_BYTES`."""
     name = "scenario: the document"
-    if _file_of(source) is not None:
+    file_name = _file_of(source)
+    content: str | bytes
+    if file_name is not None:
         name = f"scenario: {str(source)!r}"
         try:
-            with open(source, "rb") as file:
-                source = file.read(limits.MAX_DOCUMENT_BYTES + 1)
+            with open(file_name, "rb") as file:
+                content = file.read(limits.MAX_DOCUMENT_BYTES + 1)
         except OSError as exc:
             raise ScenarioError(
                 [Problem("", f"cannot read {str(source)!r} ({exc.strerror})")]
             ) from None
-    if isinstance(source, bytes):
+    else:
+        assert not isinstance(source, Path)  # _file_of names every Path
+        content = source
+    if isinstance(content, bytes):
         try:
-            source = source.decode("utf-8")
+            content = content.decode("utf-8")
         except UnicodeDecodeError as exc:
-            if len(source) <= limits.MAX_DOCUMENT_BYTES:
+            if len(content) <= limits.MAX_DOCUMENT_BYTES:
                 raise ScenarioError(
                     [
-                        f"{name} is not UTF-8 text (byte 0x{source[exc.start]:02x} "
+                        f"{name} is not UTF-8 text (byte 0x{content[exc.start]:02x} "
                         f"at offset {exc.start}); save it as UTF-8"
                     ]
                 ) from None
-    if len(source) > limits.MAX_DOCUMENT_BYTES:
+    if len(content) > limits.MAX_DOCUMENT_BYTES:
         raise ScenarioError(
             [
                 f"{name} is larger than {limits.MAX_DOCUMENT_BYTES:,} bytes "
                 "(flexsat.limits.MAX_DOCUMENT_BYTES); a scenario is a few kB"
             ]
         )
-    return source
+    if isinstance(content, bytes):  # not UTF-8, and longer than the limit: refused above
+        raise AssertionError("unreachable")
+    return content
 
 
-class _Loader(yaml.SafeLoader):
+# PyYAML ships no type information (yaml.* is ignore_missing_imports): SafeLoader is Any
+class _Loader(yaml.SafeLoader):  # type: ignore[misc]
     """YAML's safe loader, refusing as it composes nesting deeper than
     :data:`flexsat.limits.MAX_NESTING` (PyYAML recurses once per level) and more than
     :data:`flexsat.limits.MAX_DOCUMENT_NODES` values."""
 
-    def __init__(self, stream):
+    def __init__(self, stream: str) -> None:
         super().__init__(stream)
         self._depth = self._nodes = 0
 
-    def compose_node(self, parent, index):
+    def compose_node(self, parent: Any, index: Any) -> Any:
         self._depth += 1
         self._nodes += 1
         try:
@@ -107,7 +118,9 @@ class _Loader(yaml.SafeLoader):
 _MERGE = "tag:yaml.org,2002:merge"
 
 
-def _check_nodes(node, path: str, loader: _Loader, sizes: dict, open_: set) -> int:
+def _check_nodes(
+    node: Any, path: str, loader: _Loader, sizes: dict[int, int], open_: set[int]
+) -> int:
     """Number of values under ``node`` with aliases expanded; refuses duplicate keys (the last
     would silently win), recursive aliases and more than MAX_DOCUMENT_NODES values."""
     if id(node) in sizes:
@@ -119,7 +132,7 @@ def _check_nodes(node, path: str, loader: _Loader, sizes: dict, open_: set) -> i
     open_.add(id(node))
     size = 1
     if isinstance(node, yaml.MappingNode):
-        lines: dict = {}
+        lines: dict[Any, int] = {}
         for key_node, value_node in node.value:
             key = (
                 loader.construct_object(key_node)
@@ -163,7 +176,7 @@ def _check_nodes(node, path: str, loader: _Loader, sizes: dict, open_: set) -> i
     return size
 
 
-def _parse(text: str):
+def _parse(text: str) -> Any:
     """The YAML document, checked for nesting, duplicate keys and expanded size first."""
     loader = None
     try:
@@ -180,7 +193,7 @@ def _parse(text: str):
             loader.dispose()
 
 
-def load_scenario(source: str | bytes | Path):
+def load_scenario(source: str | bytes | Path) -> BaseModel:
     """Parse and validate a scenario (stage 1: YAML, schema, units, section rules).
 
     ``kind`` (default ``maneuver``) picks the kind (:func:`flexsat.scenarios.kind.scenario_kinds`,
@@ -205,13 +218,16 @@ def load_scenario(source: str | bytes | Path):
             [Problem("", "must be a YAML mapping (name, case, simulation, runs, ...)")]
         )
     scenario = scenario_kind(data.get("kind", DEFAULT_KIND)).validate(data)
-    scenario._source = text
-    if _file_of(source) is not None:
-        scenario._folder = Path(source).resolve().parent
+    # a kind's document has the private attributes of a fields.Document (ScenarioKind.document)
+    document = cast(Document, scenario)
+    document._source = text
+    file_name = _file_of(source)
+    if file_name is not None:
+        document._folder = file_name.resolve().parent
     return scenario
 
 
-def default_scenario():
+def default_scenario() -> BaseModel:
     """The embedded default: the TAMU 40 deg slew, Law I against Law II (``flexsat run``)."""
     return load_scenario(resources.files("flexsat.cases").joinpath(DEFAULT_SCENARIO).read_text())
 

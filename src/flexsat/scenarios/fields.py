@@ -4,9 +4,9 @@ a buildable section checks its runtime object's own rules)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Self
 
 import yaml
 from pydantic import (
@@ -24,13 +24,17 @@ from flexsat.units import to_si
 
 
 # -- quantities --------------------------------------------------------------------------------
-def quantity_converter(unit: str, positive: bool = False) -> Callable:
+# A field is declared ``Annotated[float, in_unit("m")]`` in the modules checked by mypy (a call
+# is no type to it); ``quantity("m")`` builds the same type for a plug-in's schema.
+def quantity_converter(
+    unit: str, positive: bool = False
+) -> Callable[[Any, ValidationInfo], float | None]:
     """Before-validator converting a quantity to SI (None passes through for optional fields)."""
 
-    def convert(value, info: ValidationInfo):
+    def convert(value: Any, info: ValidationInfo) -> float | None:
         if value is None:
             return None
-        field = info.field_name
+        field = info.field_name or ""  # always set for a field validator
         if isinstance(value, bool):
             raise FieldError(field, f"expected a number or a quantity such as '1 {unit}'")
         si = to_si(value, unit, field)
@@ -41,7 +45,14 @@ def quantity_converter(unit: str, positive: bool = False) -> Callable:
     return convert
 
 
-def quantity(unit: str, optional: bool = False, positive: bool = False):
+def in_unit(unit: str, positive: bool = False) -> BeforeValidator:
+    """The validator of a quantity field, ``Annotated[float, in_unit(unit)]`` (or
+    ``Annotated[float | None, in_unit(unit)]`` for an optional one): the value converted from
+    ``unit`` to its SI float (parameters of :func:`quantity`)."""
+    return BeforeValidator(quantity_converter(unit, positive))
+
+
+def quantity(unit: str, optional: bool = False, positive: bool = False) -> Any:
     """Field type of a quantity in ``unit``, stored as its SI float.
 
     Parameters
@@ -52,13 +63,39 @@ def quantity(unit: str, optional: bool = False, positive: bool = False):
         Accept ``None`` (the key left out).
     positive : bool
         Refuse zero and negative values.
+
+    Returns
+    -------
+    typing.Annotated
+        ``Annotated[float, in_unit(unit, positive)]`` (``float | None`` when ``optional``):
+        a type for pydantic, built at run time, so a module checked by mypy spells it out.
     """
-    return Annotated[
-        float | None if optional else float, BeforeValidator(quantity_converter(unit, positive))
-    ]
+    return Annotated[float | None if optional else float, in_unit(unit, positive)]
 
 
-def count(minimum: int = 1, maximum: int | None = None, optional: bool = False):
+def integer_in(
+    minimum: int = 1, maximum: int | None = None, optional: bool = False
+) -> BeforeValidator:
+    """The validator of a count field, ``Annotated[int, integer_in(minimum, maximum)]`` (or
+    ``Annotated[int | None, integer_in(minimum, maximum, optional=True)]``): parameters of
+    :func:`count`."""
+    rule = (
+        f"an integer in [{minimum}, {maximum}]"
+        if maximum is not None
+        else f"an integer >= {minimum}"
+    )
+
+    def check(value: Any, info: ValidationInfo) -> int | None:
+        if value is None and optional:
+            return None
+        if not is_integral(value) or value < minimum or (maximum is not None and value > maximum):
+            raise FieldError(info.field_name or "", f"must be {rule}, got {value!r}")
+        return int(value)
+
+    return BeforeValidator(check)
+
+
+def count(minimum: int = 1, maximum: int | None = None, optional: bool = False) -> Any:
     """Field type of an integer in [minimum, maximum]; a float with an integral value (``1e3``)
     is accepted, bools and fractions are not.
 
@@ -68,24 +105,17 @@ def count(minimum: int = 1, maximum: int | None = None, optional: bool = False):
         Inclusive bounds (``maximum`` None: no upper bound).
     optional : bool
         Accept ``None`` (the key left out).
+
+    Returns
+    -------
+    typing.Annotated
+        ``Annotated[int, integer_in(minimum, maximum)]`` (``int | None`` when ``optional``),
+        built at run time like :func:`quantity`.
     """
-    rule = (
-        f"an integer in [{minimum}, {maximum}]"
-        if maximum is not None
-        else f"an integer >= {minimum}"
-    )
-
-    def check(value, info: ValidationInfo):
-        if value is None and optional:
-            return None
-        if not is_integral(value) or value < minimum or (maximum is not None and value > maximum):
-            raise FieldError(info.field_name, f"must be {rule}, got {value!r}")
-        return int(value)
-
-    return Annotated[int | None if optional else int, BeforeValidator(check)]
+    return Annotated[int | None if optional else int, integer_in(minimum, maximum, optional)]
 
 
-def given_fields(section: BaseModel, exclude=()) -> dict[str, Any]:
+def given_fields(section: BaseModel, exclude: Iterable[str] = ()) -> dict[str, Any]:
     """The fields of ``section`` that were set (not None), as keyword arguments."""
     return section.model_dump(exclude_none=True, exclude=set(exclude))
 
@@ -121,16 +151,17 @@ class Document(SchemaSection):
 class BuildableSection(SchemaSection):
     """A section that maps onto a runtime object; building it checks the runtime's own rules."""
 
-    def build(self):
+    def build(self) -> Any:
+        """The runtime object of this section (its constructor checks its own rules)."""
         raise NotImplementedError
 
     @model_validator(mode="after")
-    def _buildable(self):
+    def _buildable(self) -> Self:
         self.build()
         return self
 
 
-def check_unique_labels(runs) -> None:
+def check_unique_labels(runs: Iterable[Any]) -> None:
     """Refuse two runs with one label: reports, datasets and error paths name runs by label."""
     labels = [run.label for run in runs]
     for label in labels:
@@ -138,4 +169,4 @@ def check_unique_labels(runs) -> None:
             raise FieldError("runs", f"duplicate label {label!r}; each run needs its own label")
 
 
-__all__ = ["Document", "check_unique_labels", "count", "quantity"]
+__all__ = ["Document", "check_unique_labels", "count", "in_unit", "integer_in", "quantity"]

@@ -35,11 +35,13 @@ reported as ``field.path: rule`` before anything runs.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Annotated, Literal
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 import numpy as np
-from pydantic import BeforeValidator, Field, field_validator, model_validator
+from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.cases import get_case
@@ -47,13 +49,20 @@ from flexsat.input_checks import FieldError
 from flexsat.references import cite
 from flexsat.report.page import ReportedResult, ResultTable
 from flexsat.scenarios.errors import Problem, ScenarioError, locate
-from flexsat.scenarios.fields import Document, SchemaSection, count, quantity
+from flexsat.scenarios.fields import Document, SchemaSection, in_unit, integer_in
 from flexsat.scenarios.kind import Run, ScenarioKind
 from flexsat.text import format_optional
 from flexsat.units import to_si
 
 if TYPE_CHECKING:  # the identification stack (scipy.signal) is imported when a campaign runs
-    from flexsat.cases.identification_campaign import CampaignConfig, CampaignResult, TestRecords
+    import xarray as xr
+
+    from flexsat.cases.identification_campaign import (
+        CampaignConfig,
+        CampaignResult,
+        SubstructuredCase,
+        TestRecords,
+    )
 
 __all__ = [
     "SUMMARY_COLUMNS",
@@ -63,18 +72,20 @@ __all__ = [
 ]
 
 
-def _vector(unit: str):
-    """Field type of a 3-vector of quantities in ``unit`` (SI floats)."""
+def _vector_in(unit: str) -> BeforeValidator:
+    """Validator of a 3-vector of quantities in ``unit``, ``Annotated[tuple[float, float,
+    float], _vector_in(unit)]`` (SI floats)."""
 
-    def convert(value, info):
+    def convert(value: Any, info: ValidationInfo) -> tuple[float, ...]:
+        field = info.field_name or ""  # always set for a field validator
         if not isinstance(value, (list, tuple)) or len(value) != 3:
-            raise FieldError(info.field_name, f"must be 3 quantities, e.g. ['1 {unit}', 0, 0]")
-        return tuple(to_si(v, unit, info.field_name) for v in value)
+            raise FieldError(field, f"must be 3 quantities, e.g. ['1 {unit}', 0, 0]")
+        return tuple(to_si(v, unit, field) for v in value)
 
-    return Annotated[tuple[float, float, float], BeforeValidator(convert)]
+    return BeforeValidator(convert)
 
 
-def _sampled(spec, duration: str, rate: str) -> None:
+def _sampled(spec: SchemaSection, duration: str, rate: str) -> None:
     """A simulated test's length and sample rate: positive, and at most
     :data:`flexsat.limits.MAX_SAMPLES` samples."""
     for name in (duration, rate):
@@ -117,35 +128,35 @@ class SensorSpec(SchemaSection):
 class HammerSpec(SchemaSection):
     node: int
     direction: Literal["x", "y", "z"] = "z"
-    impulse: quantity("N*s") = 0.5
-    duration: quantity("s") = 20.0
-    sample_rate: quantity("Hz") = 200.0
+    impulse: Annotated[float, in_unit("N*s")] = 0.5
+    duration: Annotated[float, in_unit("s")] = 20.0
+    sample_rate: Annotated[float, in_unit("Hz")] = 200.0
 
     @model_validator(mode="after")
-    def _samples(self):
+    def _samples(self) -> Self:
         _sampled(self, "duration", "sample_rate")
         return self
 
 
 class CameraSpec(SchemaSection):
-    position: _vector("m")
-    aim: _vector("m")
+    position: Annotated[tuple[float, float, float], _vector_in("m")]
+    aim: Annotated[tuple[float, float, float], _vector_in("m")]
 
 
 class VideoSpec(SchemaSection):
     cameras: list[CameraSpec] = Field(min_length=2)
-    impulse: quantity("N*s") = 0.3
-    duration: quantity("s") = 4.5
-    field_rate: quantity("Hz") = 200.0
-    focal_length: quantity("m") = 0.008
-    pixel_size: quantity("m") = 27e-6
+    impulse: Annotated[float, in_unit("N*s")] = 0.3
+    duration: Annotated[float, in_unit("s")] = 4.5
+    field_rate: Annotated[float, in_unit("Hz")] = 200.0
+    focal_length: Annotated[float, in_unit("m")] = 0.008
+    pixel_size: Annotated[float, in_unit("m")] = 27e-6
     centroid_noise_px: Annotated[float, Field(gt=0)] = 0.05
     quantize: bool = False
-    target_sigma: quantity("m") = 1e-3
-    static_fields: count(1, limits.MAX_SAMPLES) = 50
+    target_sigma: Annotated[float, in_unit("m")] = 1e-3
+    static_fields: Annotated[int, integer_in(1, limits.MAX_SAMPLES)] = 50
 
     @model_validator(mode="after")
-    def _samples(self):
+    def _samples(self) -> Self:
         _sampled(self, "duration", "field_rate")
         return self
 
@@ -153,14 +164,14 @@ class VideoSpec(SchemaSection):
 class WheelSpec(SchemaSection):
     nodes: list[int] = Field(min_length=1)
     axes: list[Literal["x", "y", "z"]] = Field(min_length=1)
-    torque_rms: quantity("N*m") = 0.05
+    torque_rms: Annotated[float, in_unit("N*m")] = 0.05
     torque_constants: list[Annotated[float, Field(gt=0)]] = Field(default_factory=list)
-    duration: quantity("s") = 300.0
-    sample_rate: quantity("Hz") = 50.0
-    segment: count(16, limits.MAX_SAMPLES) = 2000
+    duration: Annotated[float, in_unit("s")] = 300.0
+    sample_rate: Annotated[float, in_unit("Hz")] = 50.0
+    segment: Annotated[int, integer_in(16, limits.MAX_SAMPLES)] = 2000
 
     @model_validator(mode="after")
-    def _one_axis_per_wheel(self):
+    def _one_axis_per_wheel(self) -> Self:
         _sampled(self, "duration", "sample_rate")
         if len(self.axes) != len(self.nodes):
             raise FieldError(
@@ -183,16 +194,16 @@ class RecordsSpec(SchemaSection):
     hammer: str
     wheels: str
     video: str | None = None
-    segment: count(16, limits.MAX_SAMPLES) = 2000
+    segment: Annotated[int, integer_in(16, limits.MAX_SAMPLES)] = 2000
 
 
 class IdentificationSpec(SchemaSection):
-    band: quantity("Hz") = 10.0
+    band: Annotated[float, in_unit("Hz")] = 10.0
     # the ERA Hankel matrix and the bootstrap's repeats grow with these: minutes at the bounds
-    era_order: count(2, 1000) = 80
+    era_order: Annotated[int, integer_in(2, 1000)] = 80
     update: Literal["creamer_junkins", "differential_correction"] = "differential_correction"
     anti_alias: Annotated[float, Field(gt=0, lt=0.5)] = 0.4
-    bootstrap_samples: count(0, 1000) = 10
+    bootstrap_samples: Annotated[int, integer_in(0, 1000)] = 10
     torque_constants: bool = False
 
 
@@ -211,7 +222,7 @@ class IdentificationScenario(Document):
     wheels: WheelSpec | None = None
     records: RecordsSpec | None = None
     identification: IdentificationSpec = Field(default_factory=IdentificationSpec)
-    seed: count(0, limits.MAX_SEED) = 0
+    seed: Annotated[int, integer_in(0, limits.MAX_SEED)] = 0
 
     @field_validator("case")
     @classmethod
@@ -220,7 +231,7 @@ class IdentificationScenario(Document):
         return name
 
     @model_validator(mode="after")
-    def _simulated_or_recorded(self):
+    def _simulated_or_recorded(self) -> Self:
         simulated = ("sensors", "hammer", "video", "wheels")
         if self.records is None:
             missing = [name for name in simulated if getattr(self, name) is None]
@@ -258,7 +269,7 @@ class IdentificationScenario(Document):
         from flexsat.cases.identification_campaign import CameraRig, CampaignConfig
 
         ident = self.identification
-        common = dict(
+        common: dict[str, Any] = dict(
             a_priori_scale=dict(self.a_priori.stiffness_scale),
             a_priori_damping=self.a_priori.damping,
             band=ident.band,
@@ -269,9 +280,11 @@ class IdentificationScenario(Document):
             identify_torque_constants=ident.torque_constants,
             seed=self.seed,
         )
-        if self.recorded:
+        if self.records is not None:
             return CampaignConfig(frf_segment=self.records.segment, **common)
         v, w, h, s = self.video, self.wheels, self.hammer, self.sensors
+        # the document requires the four sections of simulated tests (_simulated_or_recorded)
+        assert v is not None and w is not None and h is not None and s is not None
         rig = CameraRig(
             tuple(c.position for c in v.cameras),
             tuple(c.aim for c in v.cameras),
@@ -325,7 +338,7 @@ class IdentificationResult(ReportedResult):
     campaign: CampaignResult
     case_source: str
 
-    def metrics_records(self) -> list[dict]:
+    def metrics_records(self) -> list[dict[str, Any]]:
         """One JSON-ready dict per identified mode (``"run"``: ``mode k``): true, ERA, a priori
         and updated frequencies (Hz) and the true and ERA damping ratios (None: no value, the
         truth of recorded tests)."""
@@ -339,22 +352,22 @@ class IdentificationResult(ReportedResult):
             for k in range(len(m["era_hz"]))
         ]
 
-    def dataset(self):
+    def dataset(self) -> xr.Dataset:
         from flexsat.report.identification import dataset
 
         return dataset(self)
 
-    def write_data(self, folder, ds) -> None:
+    def write_data(self, folder: Path, ds: xr.Dataset) -> None:
         from flexsat.report.identification import write_data
 
         write_data(self, ds, folder)
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.identification import draw_figures
 
         return draw_figures(self.campaign, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.identification import sections
 
         return sections(self)
@@ -374,10 +387,12 @@ class IdentificationResult(ReportedResult):
         )
 
 
-def _node_fields(scenario: IdentificationScenario, records: TestRecords | None) -> list:
+def _node_fields(
+    scenario: IdentificationScenario, records: TestRecords | None
+) -> list[tuple[str, int, bool]]:
     """(field path, node id, may be clamped) of every sensor and input of the scenario."""
     if records is not None:
-        out = []
+        out: list[tuple[str, int, bool]] = []
         for name in ("hammer", "wheels", "video"):
             test = getattr(records, name)
             for c in () if test is None else test.output_channels + test.input_channels:
@@ -386,22 +401,23 @@ def _node_fields(scenario: IdentificationScenario, records: TestRecords | None) 
                 if c.node_a is not None:
                     out.append((f"records.{name}", c.node_a, True))
         return out
+    sensors, hammer, wheels = scenario.sensors, scenario.hammer, scenario.wheels
+    assert sensors is not None and hammer is not None and wheels is not None  # simulated tests
     return (
-        [
-            ("sensors.strain_gauges", g[k], True)
-            for g in scenario.sensors.strain_gauges
-            for k in (0, 1)
-        ]
-        + [("sensors.accelerometers", a[0], False) for a in scenario.sensors.accelerometers]
-        + [("sensors.targets", n, False) for n in scenario.sensors.targets]
-        + [("hammer.node", scenario.hammer.node, False)]
-        + [("wheels.nodes", n, False) for n in scenario.wheels.nodes]
+        [("sensors.strain_gauges", node, True) for g in sensors.strain_gauges for node in g[:2]]
+        + [("sensors.accelerometers", a[0], False) for a in sensors.accelerometers]
+        + [("sensors.targets", n, False) for n in sensors.targets]
+        + [("hammer.node", hammer.node, False)]
+        + [("wheels.nodes", n, False) for n in wheels.nodes]
     )
 
 
-def _check_against_case(scenario: IdentificationScenario, case, records=None) -> list[str]:
-    """Stage-2 problems that need the built case: substructure names and node ids."""
-    problems = []
+def _check_against_case(
+    scenario: IdentificationScenario, case: Any, records: TestRecords | None = None
+) -> list[str]:
+    """Stage-2 problems that need the built case (any case's object: one without substructures
+    is refused): substructure names and node ids."""
+    problems: list[str] = []
     names = tuple(getattr(case, "substructures", ()))
     if not names or not hasattr(case, "structure"):
         return [f"case: {scenario.case!r} has no substructures to update (use tamu_grid)"]
@@ -419,7 +435,8 @@ def _check_against_case(scenario: IdentificationScenario, case, records=None) ->
             problems.append(f"{path}: node {node} is not a node of {scenario.case}")
         elif node not in free and not may_be_clamped:
             problems.append(f"{path}: node {node} is clamped (it does not move)")
-    if records is None and len(set(scenario.sensors.targets)) != len(scenario.sensors.targets):
+    targets = [] if records is not None or scenario.sensors is None else scenario.sensors.targets
+    if len(set(targets)) != len(targets):
         problems.append("sensors.targets: node ids must be distinct")
     if scenario.truth.modes is not None and scenario.truth.modes > asm.n_dofs:
         problems.append(
@@ -430,7 +447,7 @@ def _check_against_case(scenario: IdentificationScenario, case, records=None) ->
     return list(dict.fromkeys(problems))
 
 
-def _band_problems(scenario: IdentificationScenario, records) -> list[str]:
+def _band_problems(scenario: IdentificationScenario, records: object) -> list[str]:
     """The identification band inside every simulated test's anti-aliased bandwidth: the
     campaign filters each channel at ``anti_alias`` × its sample rate, so a band above the
     slowest test's cut-off holds no measured mode, and the FRF grid over it (0.4 Hz to the band
@@ -440,12 +457,14 @@ def _band_problems(scenario: IdentificationScenario, records) -> list[str]:
         return [f"identification.band: must be > 0 Hz, got {band:g} Hz"]
     if records is not None:
         return []
+    # without records every test is simulated: the schema requires all three sections then
+    assert scenario.hammer and scenario.wheels and scenario.video
     rates = {
         "hammer.sample_rate": scenario.hammer.sample_rate,
         "wheels.sample_rate": scenario.wheels.sample_rate,
         "video.field_rate": scenario.video.field_rate,
     }
-    slowest = min(rates, key=rates.get)
+    slowest = min(rates, key=lambda name: rates[name])
     cutoff = scenario.identification.anti_alias * rates[slowest]
     if band > cutoff:
         return [
@@ -461,7 +480,8 @@ def _read_records(scenario: IdentificationScenario) -> TestRecords:
     from flexsat.cases.identification_campaign import TestRecords
     from flexsat.identify.measurements import Measurement
 
-    problems, read = [], {}
+    problems: list[str] = []
+    read: dict[str, Measurement] = {}
     for name in ("hammer", "wheels", "video"):
         path = getattr(scenario.records, name)
         if path is None:
@@ -480,15 +500,20 @@ def _read_records(scenario: IdentificationScenario) -> TestRecords:
         read[name] = test
     if problems:
         raise ScenarioError(problems)
-    return TestRecords(**read)
+    return TestRecords(read["hammer"], read["wheels"], read.get("video"))  # video optional
 
 
-def _number(value) -> float | None:
+def _number(value: float | None) -> float | None:
     """A JSON-ready number: None (no value) and NaN become None."""
     return None if value is None or not np.isfinite(value) else float(value)
 
 
-def _campaign(scenario: IdentificationScenario, case, records, progress=None):
+def _campaign(
+    scenario: IdentificationScenario,
+    case: SubstructuredCase,
+    records: TestRecords | None,
+    progress: Callable[[str], None] | None = None,
+) -> CampaignResult:
     """The campaign (one call into :mod:`flexsat.cases.identification_campaign`): on the test
     records, or simulating the tests; a value it refuses is reported at the scenario's field
     for it."""
@@ -499,15 +524,15 @@ def _campaign(scenario: IdentificationScenario, case, records, progress=None):
             return identify_and_update(case, scenario.config(), records, progress=progress)
         return run_campaign(case, scenario.config(), progress=progress)
     except ValueError as exc:
-        field = getattr(exc, "field", None)
-        if field == "wheel_torque_constants":
+        field = exc.field if isinstance(exc, FieldError) else None
+        if isinstance(exc, FieldError) and exc.field == "wheel_torque_constants":
             raise ScenarioError([Problem("wheels.torque_constants", exc.rule)]) from None
         path = {
             "rig": "video",
             "records": "records",
             "measurement": "records.wheels",
             "segment": "records.segment",
-        }.get(field, "")
+        }.get(field or "", "")
         raise ScenarioError([locate(path, exc)]) from None
 
 
@@ -525,7 +550,7 @@ class IdentificationKind(ScenarioKind):
 
         return len(IDENTIFY_STEPS) + (0 if scenario.recorded else len(SIMULATE_STEPS))
 
-    def plan(self, scenario: IdentificationScenario):
+    def plan(self, scenario: IdentificationScenario) -> Generator[Run, Any, IdentificationResult]:
         """Raises ScenarioError for unknown substructures, nodes that are not in the case or
         are clamped, case overrides the case rejects, or a camera rig that does not see every
         target."""
@@ -550,7 +575,7 @@ class IdentificationKind(ScenarioKind):
 def _summary_rows(result: IdentificationResult) -> list[tuple[str, list[str]]]:
     """Frequency table rows for the console: per mode, true / ERA / a priori / updated."""
     m = result.campaign.modes
-    rows = []
+    rows: list[tuple[str, list[str]]] = []
     for k in range(len(m["era_hz"])):
         rows.append(
             (

@@ -37,26 +37,26 @@ import dataclasses
 import functools
 import math
 import typing
-from typing import Annotated, Any, ClassVar, Literal
+from collections.abc import Callable
+from typing import Annotated, Any, ClassVar, Literal, Self
 
-from pydantic import BeforeValidator, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.cases import CASES, get_case
 from flexsat.dynamics.hybrid import HybridPlant
 from flexsat.input_checks import FieldError
-from flexsat.maneuvers import BangBang, PseudoSquare, Sinusoidal, SmoothBangBang
+from flexsat.maneuvers import BangBang, PseudoSquare, Sinusoidal, SmoothBangBang, TorqueShape
 from flexsat.scenarios.fields import (
     BuildableSection,
     Document,
     SchemaSection,
     check_unique_labels,
-    count,
     given_fields,
-    quantity,
-    quantity_converter,
+    in_unit,
+    integer_in,
 )
-from flexsat.scenarios.laws import MANEUVER_LAWS
+from flexsat.scenarios.laws import MANEUVER_LAWS, LawName
 from flexsat.sim import (
     BearingFriction,
     Impulses,
@@ -81,7 +81,7 @@ MAX_SLEW = 20 * math.pi
 class ManeuverSpec(SchemaSection):
     """The slew: ``angle`` (rad), from rest at 0, at most ten turns either way."""
 
-    angle: quantity("rad")
+    angle: Annotated[float, in_unit("rad")]
 
     @field_validator("angle")
     @classmethod
@@ -97,21 +97,22 @@ class ManeuverSpec(SchemaSection):
 class SimulationSpec(BuildableSection):
     """Run length and sampling; ``integration_step`` sets the substeps per control period."""
 
-    duration: quantity("s")
-    control_rate: quantity("Hz", optional=True) = None
-    integration_step: quantity("s", optional=True) = None
-    settling_band: quantity("rad", optional=True) = None
-    seed: count(0, limits.MAX_SEED, optional=True) = None
+    duration: Annotated[float, in_unit("s")]
+    control_rate: Annotated[float | None, in_unit("Hz")] = None
+    integration_step: Annotated[float | None, in_unit("s")] = None
+    settling_band: Annotated[float | None, in_unit("rad")] = None
+    seed: Annotated[int | None, integer_in(0, limits.MAX_SEED, optional=True)] = None
 
-    def build(self, **components) -> SimConfig:
+    def build(self, **components: Any) -> SimConfig:
         """The :class:`SimConfig`; ``components`` are its actuator, sensors and disturbances."""
         config = SimConfig(**given_fields(self, exclude={"integration_step"}), **components)
         if self.integration_step is None:
             return config
-        return dataclasses.replace(config, substeps=self._substeps(config.dt))
+        return dataclasses.replace(
+            config, substeps=self._substeps(config.dt, self.integration_step)
+        )
 
-    def _substeps(self, period: float) -> int:
-        step = self.integration_step
+    def _substeps(self, period: float, step: float) -> int:
         if step <= 0:
             raise FieldError("integration_step", f"must be > 0, got {step:g} s")
         if step >= period:
@@ -124,8 +125,8 @@ class SimulationSpec(BuildableSection):
 
 
 class ActuatorSpec(BuildableSection):
-    saturation: quantity("N*m", optional=True) = None
-    torque_constant_ratio: quantity("", optional=True) = None
+    saturation: Annotated[float | None, in_unit("N*m")] = None
+    torque_constant_ratio: Annotated[float | None, in_unit("")] = None
 
     @field_validator("torque_constant_ratio")
     @classmethod
@@ -143,37 +144,37 @@ class ActuatorSpec(BuildableSection):
 
 
 class SensorsSpec(BuildableSection):
-    encoder_resolution: quantity("rad", optional=True) = None
+    encoder_resolution: Annotated[float | None, in_unit("rad")] = None
     rate: Literal["ideal", "ls_filter", "gyro"] | None = None
     # a least-squares rate over at most 1,000 samples, a polynomial of at most order 10
-    rate_window: count(1, 1000, optional=True) = None
-    rate_order: count(0, 10, optional=True) = None
-    gyro_noise: quantity("rad/s", optional=True) = None
-    strain_noise: quantity("N*m", optional=True) = None
+    rate_window: Annotated[int | None, integer_in(1, 1000, optional=True)] = None
+    rate_order: Annotated[int | None, integer_in(0, 10, optional=True)] = None
+    gyro_noise: Annotated[float | None, in_unit("rad/s")] = None
+    strain_noise: Annotated[float | None, in_unit("N*m")] = None
 
     def build(self) -> Sensors:
         return Sensors(**given_fields(self))
 
 
 class FrictionSpec(BuildableSection):
-    coulomb: quantity("N*m", optional=True) = None
-    viscous: quantity("N*m*s/rad", optional=True) = None
-    smoothing: quantity("rad/s", optional=True) = None
+    coulomb: Annotated[float | None, in_unit("N*m")] = None
+    viscous: Annotated[float | None, in_unit("N*m*s/rad")] = None
+    smoothing: Annotated[float | None, in_unit("rad/s")] = None
 
     def build(self) -> BearingFriction:
         return BearingFriction(**given_fields(self))
 
 
 class ImpulseSpec(SchemaSection):
-    time: quantity("s")
-    impulse: quantity("N*m*s")
+    time: Annotated[float, in_unit("s")]
+    impulse: Annotated[float, in_unit("N*m*s")]
 
 
 class DisturbancesSpec(BuildableSection):
     """Bearing friction, random torque (1 sigma, N m) and angular impulses on the hub."""
 
     friction: FrictionSpec = Field(default_factory=FrictionSpec)
-    random_torque: quantity("N*m", optional=True) = None
+    random_torque: Annotated[float | None, in_unit("N*m")] = None
     impulses: list[ImpulseSpec] = Field(default_factory=list, max_length=limits.MAX_SAMPLES)
 
     def build(self) -> dict[str, Any]:
@@ -191,19 +192,19 @@ class DisturbancesSpec(BuildableSection):
 class GainsSpec(SchemaSection):
     """Feedback gains: g1, g2, g3 (Lyapunov laws) or kp, kd (PD)."""
 
-    g1: quantity("N*m/rad", optional=True) = None
-    g2: quantity("N*m*s/rad", optional=True) = None
-    g3: quantity("", optional=True) = None
-    kp: quantity("N*m/rad", optional=True) = None
-    kd: quantity("N*m*s/rad", optional=True) = None
+    g1: Annotated[float | None, in_unit("N*m/rad")] = None
+    g2: Annotated[float | None, in_unit("N*m*s/rad")] = None
+    g3: Annotated[float | None, in_unit("")] = None
+    kp: Annotated[float | None, in_unit("N*m/rad")] = None
+    kd: Annotated[float | None, in_unit("N*m*s/rad")] = None
 
 
 class PolesSpec(SchemaSection):
     """Rigid closed-loop poles of a PD law; ``natural_frequency`` in Hz or rad/s (a bare
     number is rad/s; :func:`flexsat.units.to_si` applies the 2π between the two)."""
 
-    natural_frequency: quantity("rad/s")
-    damping_ratio: quantity("")
+    natural_frequency: Annotated[float, in_unit("rad/s")]
+    damping_ratio: Annotated[float, in_unit("")]
 
 
 class LQGSpec(SchemaSection):
@@ -216,16 +217,16 @@ class LQGSpec(SchemaSection):
     also zeroes the gains of the modes beyond ``keep_modes`` first (Eq. 53).
     """
 
-    rigid_weight: quantity("") = 1.0
-    mode_weights: list[Annotated[float, BeforeValidator(quantity_converter(""))]] | float = 0.1
-    control_weight: quantity("")
-    sensor_noise: list[Annotated[float, BeforeValidator(quantity_converter(""))]]
-    process_noise: quantity("")
+    rigid_weight: Annotated[float, in_unit("")] = 1.0
+    mode_weights: list[Annotated[float, in_unit("")]] | float = 0.1
+    control_weight: Annotated[float, in_unit("")]
+    sensor_noise: list[Annotated[float, in_unit("")]]
+    process_noise: Annotated[float, in_unit("")]
     refine: Literal["none", "weighted", "truncated"] = "none"
-    keep_modes: count(0, limits.MAX_MODES, optional=True) = None
+    keep_modes: Annotated[int | None, integer_in(0, limits.MAX_MODES, optional=True)] = None
 
     @model_validator(mode="after")
-    def _truncation(self):
+    def _truncation(self) -> Self:
         if self.refine == "truncated" and self.keep_modes is None:
             raise FieldError("keep_modes", "required by refine 'truncated'")
         if len(self.sensor_noise) != 2:
@@ -235,7 +236,9 @@ class LQGSpec(SchemaSection):
         return self
 
 
-_SHAPES = {
+#: the torque shapes a reference can name
+ShapeName = Literal["bang_bang", "smooth_bang_bang", "pseudo_square", "sinusoidal"]
+_SHAPES: dict[ShapeName, Callable[..., TorqueShape]] = {
     "bang_bang": BangBang,
     "smooth_bang_bang": SmoothBangBang,
     "pseudo_square": PseudoSquare,
@@ -248,21 +251,21 @@ class ReferenceSpec(SchemaSection):
     """Rigid reference maneuver: a torque shape with any two of u_max, duration and its own
     parameter (one of u_max, duration for bang_bang and sinusoidal)."""
 
-    shape: Literal[tuple(_SHAPES)]
-    u_max: quantity("N*m", optional=True) = None
-    duration: quantity("s", optional=True) = None
-    alpha: quantity("", optional=True) = None
-    rise_time: quantity("s", optional=True) = None
+    shape: ShapeName
+    u_max: Annotated[float | None, in_unit("N*m")] = None
+    duration: Annotated[float | None, in_unit("s")] = None
+    alpha: Annotated[float | None, in_unit("")] = None
+    rise_time: Annotated[float | None, in_unit("s")] = None
 
     @model_validator(mode="after")
-    def _shape_parameters(self):
+    def _shape_parameters(self) -> Self:
         own = _SHAPE_PARAMETERS.get(self.shape, ())
         for name in ("alpha", "rise_time"):
             if getattr(self, name) is not None and name not in own:
                 raise FieldError(name, f"not a parameter of shape {self.shape!r}")
         return self
 
-    def build(self, angle: float, inertia: float):
+    def build(self, angle: float, inertia: float) -> TorqueShape:
         """The torque shape slewing ``angle`` (rad) with the rigid ``inertia`` (kg m²)."""
         return _SHAPES[self.shape](angle, inertia, **given_fields(self, exclude={"shape"}))
 
@@ -276,7 +279,7 @@ class RunSpec(SchemaSection):
     """
 
     label: str
-    law: Literal[tuple(MANEUVER_LAWS)]
+    law: LawName
     gains: GainsSpec | None = None
     poles: PolesSpec | None = None
     reference: ReferenceSpec | None = None
@@ -284,7 +287,7 @@ class RunSpec(SchemaSection):
     lqg: LQGSpec | None = None
 
     @model_validator(mode="after")
-    def _law_inputs(self):
+    def _law_inputs(self) -> Self:
         law = MANEUVER_LAWS[self.law]
         given = given_fields(self.gains) if self.gains is not None else {}
         for name in given:
@@ -344,14 +347,16 @@ class Scenario(Document):
 
     @field_validator("case_overrides")
     @classmethod
-    def _finite_overrides(cls, overrides: dict) -> dict:
+    def _finite_overrides(
+        cls, overrides: dict[str, bool | int | float | str]
+    ) -> dict[str, bool | int | float | str]:
         for key, value in overrides.items():
             if _non_finite(value):
                 raise FieldError(key, f"must be a finite number, got {value!r}")
         return overrides
 
     @model_validator(mode="after")
-    def _consistent(self):
+    def _consistent(self) -> Self:
         for name in given_fields(self.model):
             if name in self.case_overrides:
                 raise FieldError(f"model.{name}", "also given in case_overrides; give it once")
@@ -387,7 +392,7 @@ def maneuver_cases() -> tuple[str, ...]:
     """The cases a maneuver scenario can simulate: their builder's case has a ``model()`` that
     gives a hub plant (:class:`flexsat.dynamics.hybrid.HybridPlant`), read from the type hints so
     that no case is built."""
-    names = []
+    names: list[str] = []
     for name, info in CASES.items():
         model = getattr(typing.get_type_hints(info.builder).get("return"), "model", None)
         plant = typing.get_type_hints(model).get("return") if callable(model) else None
@@ -396,7 +401,7 @@ def maneuver_cases() -> tuple[str, ...]:
     return tuple(names)
 
 
-def _non_finite(value) -> bool:
+def _non_finite(value: bool | int | float | str) -> bool:
     """True for NaN and infinities, given as numbers or as bare strings ("nan", "inf")."""
     if isinstance(value, bool):
         return False

@@ -4,12 +4,14 @@ simulate each run."""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from flexsat.cases import get_case
 from flexsat.control import Controller
 from flexsat.dynamics.hub_appendage import HubAppendage
+from flexsat.input_checks import FieldError
 from flexsat.references import cite
 from flexsat.scenarios.datasets import SimulatedRuns
 from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
@@ -19,6 +21,13 @@ from flexsat.scenarios.laws import MANEUVER_LAWS, CaseContext
 from flexsat.scenarios.maneuver import GainsSpec, PolesSpec, RunSpec, Scenario
 from flexsat.sim import SimConfig
 from flexsat.sim.engine import check_resources
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    import xarray as xr
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -43,7 +52,7 @@ class ScenarioPlan:
     controllers: dict[str, Controller]
 
 
-def _build_case(scenario: Scenario):
+def _build_case(scenario: Scenario) -> tuple[Any, HubAppendage]:
     """(case, model); a refused value is placed in ``model`` or ``case_overrides`` by the
     field its error names."""
     try:
@@ -105,7 +114,7 @@ def _build_controller(index: int, run: RunSpec, ctx: CaseContext) -> Controller:
         ) from None
 
 
-def _collect(problems: list, build, *args):
+def _collect(problems: list[Problem], build: Callable[..., T], *args: Any) -> T | None:
     """``build(*args)``, or None with its ScenarioError problems appended to ``problems``."""
     try:
         return build(*args)
@@ -123,7 +132,7 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
         Listing every problem: case parameters, references, controller gains, and a run beyond
         the limits of :mod:`flexsat.limits` (substeps, integrator steps, memory).
     """
-    problems: list = []
+    problems: list[Problem] = []
     built = _collect(problems, _build_case, scenario)
     controllers: dict[str, Controller] = {}
     if built is not None:
@@ -137,7 +146,9 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
             scenario.sim_config().dt,
         )
         for index, run in enumerate(scenario.runs):
-            controllers[run.label] = _collect(problems, _build_controller, index, run, ctx)
+            controller = _collect(problems, _build_controller, index, run, ctx)
+            if controller is not None:  # else its problems are raised below
+                controllers[run.label] = controller
     config = scenario.sim_config()
     if built is not None and not problems:
         _collect(problems, _check_resources, scenario, model, config, controllers)
@@ -146,16 +157,25 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
     return ScenarioPlan(scenario, case, model, config, controllers)
 
 
-def _check_resources(scenario: Scenario, model, config: SimConfig, controllers: dict) -> None:
+def _check_resources(
+    scenario: Scenario,
+    model: HubAppendage,
+    config: SimConfig,
+    controllers: dict[str, Controller],
+) -> None:
     """Refuse runs beyond :mod:`flexsat.limits`; every run's history is kept until the report
     is written, so the memory estimate counts the cases of all runs together. The refused
     input is reported at the document's field it comes from (:attr:`Scenario.CONFIG_PATHS`)."""
     try:
         check_resources(model, config, sum(c.n_cases for c in controllers.values()))
     except ValueError as exc:
-        path = Scenario.CONFIG_PATHS.get(getattr(exc, "field", None))
+        path = Scenario.CONFIG_PATHS.get(exc.field) if isinstance(exc, FieldError) else None
         raise ScenarioError(
-            [Problem(path, exc.rule) if path else Problem("simulation", str(exc))]
+            [
+                Problem(path, exc.rule)
+                if path and isinstance(exc, FieldError)
+                else Problem("simulation", str(exc))
+            ]
         ) from None
 
 
@@ -163,12 +183,12 @@ def _check_resources(scenario: Scenario, model, config: SimConfig, controllers: 
 class ManeuverResult(SimulatedRuns):
     """The runs of a maneuver scenario (:class:`~flexsat.scenarios.datasets.SimulatedRuns`)."""
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.maneuver import draw_figures
 
         return draw_figures(ds, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.maneuver import sections
 
         return sections(self.metrics_records(), figures)
@@ -184,7 +204,7 @@ class ManeuverKind(ScenarioKind):
     def steps(self, scenario: Scenario) -> int:
         return len(scenario.runs)
 
-    def plan(self, scenario: Scenario):
+    def plan(self, scenario: Scenario) -> Generator[Run, Any, ManeuverResult]:
         prepared = prepare_scenario(scenario)
         results = []
         for index, (label, controller) in enumerate(prepared.controllers.items()):

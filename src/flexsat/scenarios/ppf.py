@@ -27,8 +27,10 @@ damping, initial-condition amplitude) are those of :mod:`flexsat.cases.agrawal_b
 
 from __future__ import annotations
 
+from collections.abc import Generator, Sequence
 from dataclasses import dataclass
-from typing import Literal
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -38,8 +40,13 @@ from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import item_path
-from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, quantity
+from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, in_unit
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from flexsat.cases.agrawal_bang_ppf import GoalRule, PPFCaseRun
 
 #: the three time responses of every run
 RESPONSES = ("open loop", "initial gains", "optimised gains")
@@ -53,13 +60,13 @@ class PPFSettings(SchemaSection):
 
     zeta_f: float = Field(0.1, ge=0.0, allow_inf_nan=False)
     Q_u: float = Field(1e-8, ge=0.0, allow_inf_nan=False)
-    amplitude: quantity("m", positive=True) = 0.01
+    amplitude: Annotated[float, in_unit("m", positive=True)] = 0.01
     initial_gains: float | list[float] = 100.0
     gamma_stop: float = Field(0.9, gt=0.0, le=1.0)
 
     @field_validator("initial_gains")
     @classmethod
-    def _gains(cls, value):
+    def _gains(cls, value: float | list[float]) -> float | list[float]:
         g = np.atleast_1d(np.asarray(value, float))
         if g.shape not in ((1,), (9,)) or not np.all(np.isfinite(g)):
             raise FieldError(
@@ -72,11 +79,11 @@ class PPFSettings(SchemaSection):
 class PPFSimulation(SchemaSection):
     """Length and control rate of the time responses."""
 
-    duration: quantity("s", positive=True)
-    control_rate: quantity("Hz", positive=True)
+    duration: Annotated[float, in_unit("s", positive=True)]
+    control_rate: Annotated[float, in_unit("Hz", positive=True)]
 
     @model_validator(mode="after")
-    def _samples(self):
+    def _samples(self) -> Self:
         n = self.duration * self.control_rate
         if n > limits.MAX_SAMPLES:
             raise FieldError(
@@ -94,11 +101,12 @@ class GoalSpec(SchemaSection):
     value: float | None = Field(None, allow_inf_nan=False)
 
     @model_validator(mode="after")
-    def _rule(self):
+    def _rule(self) -> Self:
         self.build()
         return self
 
-    def build(self):
+    def build(self) -> GoalRule:
+        """The goal rule (:class:`flexsat.cases.agrawal_bang_ppf.GoalRule`)."""
         from flexsat.cases.agrawal_bang_ppf import GoalRule
 
         try:
@@ -117,7 +125,7 @@ class PPFRunSpec(SchemaSection):
 
     @field_validator("weights")
     @classmethod
-    def _weights(cls, value):
+    def _weights(cls, value: list[float]) -> list[float]:
         if len(value) != 2 or not all(np.isfinite(value)) or min(value) < 0:
             raise FieldError(
                 "weights", f"must be the two numbers (w1, w2) >= 0 of Eq. 35, got {value!r}"
@@ -125,7 +133,7 @@ class PPFRunSpec(SchemaSection):
         return value
 
     @model_validator(mode="after")
-    def _paper_weights(self):
+    def _paper_weights(self) -> Self:
         if self.goal.rule == "paper":
             from flexsat.cases.agrawal_bang_ppf import paper_goal_ratio
 
@@ -144,7 +152,7 @@ class PPFScenario(Document):
     runs: list[PPFRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
 
     @model_validator(mode="after")
-    def _checks(self):
+    def _checks(self) -> Self:
         check_unique_labels(self.runs)
         return self
 
@@ -166,16 +174,16 @@ class PPFResult(ReportedResult):
 
     scenario: PPFScenario
     labels: tuple[str, ...]
-    runs: tuple
+    runs: tuple[PPFCaseRun, ...]
     case_source: str
     notes: tuple[str, ...] = ()
 
-    def settling(self, run) -> dict:
+    def settling(self, run: PPFCaseRun) -> dict[str, float | None]:
         """10 % settling time (s) of |Eᵗ| and of Φ with the initial and the optimised gains
         (None: not settled within the simulated time)."""
         from flexsat.analysis.settling import reported, settling_time
 
-        R, out = run.responses, {}
+        R, out = _responses(run), {}
         for key, label in (("initial", "initial gains"), ("optimised", "optimised gains")):
             y = R[label]
             for name, signal in (("tip", np.hypot(y[:, 0], y[:, 1])), ("rotation", y[:, 2])):
@@ -183,13 +191,13 @@ class PPFResult(ReportedResult):
                 out[f"{name}_settling_{key}_s"] = reported(settle)
         return out
 
-    def metrics_records(self) -> list[dict]:
+    def metrics_records(self) -> list[dict[str, Any]]:
         """One JSON-ready dict per run: the results-table row (numbers only) and the settling
         times."""
         records = []
         for label, run in zip(self.labels, self.runs):
             row = run.row()
-            rec = {"run": label}
+            rec: dict[str, Any] = {"run": label}
             for key, value in row.items():
                 if isinstance(value, (bool, np.bool_)):
                     rec[key] = bool(value)
@@ -199,19 +207,19 @@ class PPFResult(ReportedResult):
             records.append(rec)
         return records
 
-    def dataset(self):
+    def dataset(self) -> xr.Dataset:
         """Every run in one dataset (:mod:`flexsat.report.ppf` lists its variables)."""
         import xarray as xr
 
         n_steps = max(len(r.optimization.history) for r in self.runs)
         n_poles = self.runs[0].setup.problem.n_states
 
-        def padded(values, shape):
+        def padded(values: Sequence[Any] | np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
             out = np.full((n_steps,) + shape, np.nan)
             out[: len(values)] = values
             return out
 
-        paths = {
+        paths: dict[str, list[np.ndarray]] = {
             k: []
             for k in ("gamma", "cost", "target", "min_eig", "max_re", "gains", "pole_re", "pole_im")
         }
@@ -227,8 +235,8 @@ class PPFResult(ReportedResult):
             poles = np.array([pr.closed_loop_poles(s.gains) for s in h])
             paths["pole_re"].append(padded(poles.real, (n_poles,)))
             paths["pole_im"].append(padded(poles.imag, (n_poles,)))
-        t = self.runs[0].responses["time"]
-        resp = np.stack([np.stack([r.responses[k] for k in RESPONSES]) for r in self.runs])
+        t = _responses(self.runs[0])["time"]
+        resp = np.stack([np.stack([_responses(r)[k] for k in RESPONSES]) for r in self.runs])
         ds = xr.Dataset(
             {
                 "tip_response": (("run", "response", "time", "output"), resp),
@@ -290,15 +298,20 @@ class PPFResult(ReportedResult):
         )
         return ds
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.ppf import draw_figures
 
         return draw_figures(ds, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.ppf import sections
 
         return sections(self, self.metrics_records(), ds, figures)
+
+
+def _responses(run: PPFCaseRun) -> dict[str, np.ndarray]:
+    assert run.responses is not None  # PPFKind.plan simulates every run's responses
+    return run.responses
 
 
 #: the run's fields by the names :func:`~flexsat.control.ppf_optimization.optimize_ppf_gains`
@@ -306,7 +319,7 @@ class PPFResult(ReportedResult):
 _OPTIMISER_FIELDS = {"problem": "weights", "J_goal": "goal.value"}
 
 
-def _optimise(*args, **kwargs):
+def _optimise(*args: Any, **kwargs: Any) -> Any:
     """:func:`~flexsat.cases.agrawal_bang_ppf.run_ppf_case`, its refusals named by the run's
     fields."""
     from flexsat.cases.agrawal_bang_ppf import run_ppf_case
@@ -331,7 +344,7 @@ class PPFKind(ScenarioKind):
         # per run: the optimisation, then the open loop, the initial and the optimised gains
         return 4 * len(scenario.runs)
 
-    def plan(self, scenario: PPFScenario):
+    def plan(self, scenario: PPFScenario) -> Generator[Run, Any, PPFResult]:
         """Optimise every run's gains (homotopy of Agrawal & Bang 1996 Eqs. 15–28), then
         simulate its tip
         responses with zero, initial and optimised gains; a value the problem or the optimiser
@@ -370,7 +383,7 @@ class PPFKind(ScenarioKind):
             setup = optimised.setup
             plant, laws, config = response_simulations(setup, gains, sim.duration, sim.control_rate)
             options = {"initial_state": setup.x0, "record_states": True}
-            responses = {}
+            responses: dict[str, np.ndarray] = {}
             for name, law in laws.items():
                 simulation = Simulation(plant, law, config, options)
                 ds = (yield Run(f"{run.label}: {name}", simulation, path)).dataset

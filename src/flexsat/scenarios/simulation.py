@@ -33,10 +33,12 @@ before anything runs, as ``field.path: rule`` lines of one
 from __future__ import annotations
 
 import re
+from collections.abc import Generator, Iterable
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 from pydantic import (
+    BaseModel,
     Field,
     ValidationInfo,
     field_serializer,
@@ -53,9 +55,9 @@ from flexsat.scenarios.fields import (
     Document,
     SchemaSection,
     check_unique_labels,
-    count,
     given_fields,
-    quantity,
+    in_unit,
+    integer_in,
 )
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 from flexsat.scenarios.registry import validate_section
@@ -67,14 +69,23 @@ from flexsat.scenarios.simulation_laws import (
 )
 from flexsat.scenarios.simulation_plants import PlantContext, simulation_cases, simulation_plants
 
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    import xarray as xr
+
+    from flexsat.dynamics.plant import Channel, Plant
+    from flexsat.scenarios.slew import SlewScenario
+    from flexsat.sim import SimConfig
+
 
 class SimulationSettings(SchemaSection):
     """Run length, control rate, integrator substeps per control period and the noise seed."""
 
-    duration: quantity("s")
-    control_rate: quantity("Hz")
-    substeps: count(1, limits.MAX_SUBSTEPS, optional=True) = None
-    seed: count(0, limits.MAX_SEED, optional=True) = None
+    duration: Annotated[float, in_unit("s")]
+    control_rate: Annotated[float, in_unit("Hz")]
+    substeps: Annotated[int | None, integer_in(1, limits.MAX_SUBSTEPS, optional=True)] = None
+    seed: Annotated[int | None, integer_in(0, limits.MAX_SEED, optional=True)] = None
 
 
 class ChannelSensorSpec(SchemaSection):
@@ -97,7 +108,7 @@ class ChannelActuatorSpec(SchemaSection):
 
 
 class ImpulseSpec(SchemaSection):
-    time: quantity("s")
+    time: Annotated[float, in_unit("s")]
     impulse: Value
 
 
@@ -129,7 +140,7 @@ class SimulationRunSpec(SchemaSection):
 
     @field_validator("gains")
     @classmethod
-    def _law_gains(cls, gains, info: ValidationInfo):
+    def _law_gains(cls, gains: Any, info: ValidationInfo) -> Any:
         if "law" not in info.data:  # an unknown law is reported on its own
             return gains
         name = info.data["law"]
@@ -138,7 +149,7 @@ class SimulationRunSpec(SchemaSection):
 
     @field_validator("target")
     @classmethod
-    def _law_target(cls, target, info: ValidationInfo):
+    def _law_target(cls, target: Any, info: ValidationInfo) -> Any:
         if "law" not in info.data:
             return target
         name = info.data["law"]
@@ -172,13 +183,13 @@ class SimulationScenario(Document):
 
     @field_validator("plant")
     @classmethod
-    def _plant_parameters(cls, section, info: ValidationInfo):
+    def _plant_parameters(cls, section: Any, info: ValidationInfo) -> Any:
         """The section as (name, the plant's validated Parameters); left as written when the
         case is unknown or builds no plant and no name is given (reported on the case)."""
         return named_plant(section, info.data.get("case")) or section
 
     @field_serializer("plant")
-    def _plant_as_written(self, plant):
+    def _plant_as_written(self, plant: dict[str, Any] | tuple[str, BaseModel]) -> dict[str, Any]:
         """The section as a scenario gives it back: ``name`` and the parameters (SI)."""
         if isinstance(plant, dict):
             return plant
@@ -186,7 +197,7 @@ class SimulationScenario(Document):
         return {"name": name, **parameters.model_dump(exclude_none=True)}
 
     @model_validator(mode="after")
-    def _plant_and_labels(self):
+    def _plant_and_labels(self) -> Self:
         if isinstance(self.plant, dict):
             named = sorted(set(simulation_plants()) - set(simulation_cases()))
             raise FieldError(
@@ -199,7 +210,7 @@ class SimulationScenario(Document):
         return self
 
 
-def named_plant(section: Any, case: str | None) -> tuple[str, Any] | None:
+def named_plant(section: Any, case: str | None) -> tuple[str, BaseModel] | None:
     """A ``plant:`` section resolved in the registry (:func:`simulation_plants`): the plant's
     name (``name:``, else the case's) and its validated ``Parameters``; None when no name is
     given and ``case`` builds no plant.
@@ -234,12 +245,12 @@ class SimulationResult(SimulatedRuns):
     dataset with dims (run, time[, component]) (:class:`~flexsat.scenarios.datasets.
     SimulatedRuns`)."""
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.simulation import draw_figures
 
         return draw_figures(ds, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.simulation import sections
 
         return sections(self.metrics_records(), ds)
@@ -249,16 +260,26 @@ def _located(path: str, exc: Exception) -> ScenarioError:
     return ScenarioError([locate(path, exc)])
 
 
-def build_plant(scenario: SimulationScenario):
+def build_plant(scenario: SimulationScenario | SlewScenario) -> Plant:
+    """The plant a simulation scenario (or a slew scenario, whose ``plant`` section is its
+    case's plant options) names, built with its parameters.
+
+    Raises
+    ------
+    ScenarioError
+        For an option the plant refuses, or a builder that returns no Plant.
+    """
     from flexsat.dynamics.plant import Plant
 
     try:
         # a slew scenario's plant section is its case's plant options, resolved here
-        name, parameters = (
+        resolved = (
             named_plant(scenario.plant, scenario.case)
             if isinstance(scenario.plant, dict)
             else scenario.plant
         )
+        assert resolved is not None  # the document checked that its case builds a plant
+        name, parameters = resolved
         plant = simulation_plants()[name].from_scenario(parameters, PlantContext(scenario.case))
     except (ValueError, TypeError) as exc:  # a builder's TypeError: an argument it refuses
         raise _located("plant", exc) from None
@@ -274,7 +295,7 @@ def build_plant(scenario: SimulationScenario):
     return plant
 
 
-def _config(scenario: SimulationScenario, plant):
+def _config(scenario: SimulationScenario, plant: Plant) -> SimConfig:
     from flexsat.sim import SimConfig
     from flexsat.sim.channels import (
         ChannelActuator,
@@ -283,9 +304,11 @@ def _config(scenario: SimulationScenario, plant):
         resolve_channels,
     )
 
-    def pieces(section: dict, kind, role: str, channels) -> dict:
+    def pieces(
+        section: dict[str, Any], kind: type[Any], role: str, channels: Iterable[Channel]
+    ) -> dict[str, Any]:
         names = {c.name for c in channels}
-        out = {}
+        out: dict[str, Any] = {}
         for name, spec in section.items():
             if name not in names:
                 raise ScenarioError(
@@ -344,7 +367,7 @@ class SimulationKind(ScenarioKind):
     def steps(self, scenario: SimulationScenario) -> int:
         return len(scenario.runs)
 
-    def plan(self, scenario: SimulationScenario):
+    def plan(self, scenario: SimulationScenario) -> Generator[Run, Any, SimulationResult]:
         """Build the plant, the configuration and every run's law, then simulate each run.
 
         Raises
@@ -363,7 +386,8 @@ class SimulationKind(ScenarioKind):
         except ValueError as exc:
             raise _located("initial", exc) from None
         config = _config(scenario, plant)
-        laws, problems = {}, []
+        laws: dict[str, Controller] = {}
+        problems: list[Problem] = []
         for index, run in enumerate(scenario.runs):
             path = "runs" + item_path(index, run.label)
             context = LawContext(plant, config.dt, run.target)
@@ -385,7 +409,7 @@ class SimulationKind(ScenarioKind):
             raise ScenarioError(problems)
         results = []
         for index, (label, law) in enumerate(laws.items()):
-            options = {"n_cases": 1, "initial_state": x0}
+            options: dict[str, Any] = {"n_cases": 1, "initial_state": x0}
             simulation = Simulation(plant, law, config, options)
             results.append((yield Run(label, simulation, "runs" + item_path(index, label))))
         return SimulationResult(

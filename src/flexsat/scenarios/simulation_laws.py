@@ -13,7 +13,7 @@ reading a scenario does not.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, Self, cast
 
 import numpy as np
 from pydantic import BaseModel, model_validator
@@ -21,6 +21,9 @@ from pydantic import BaseModel, model_validator
 from flexsat import limits
 from flexsat.input_checks import FieldError
 from flexsat.scenarios.fields import SchemaSection
+
+if TYPE_CHECKING:
+    from flexsat.control.base import Controller
 
 #: a value as written in YAML: a number, a quantity string, or a (nested) list of them
 Value = float | int | str | list[Any]
@@ -46,7 +49,7 @@ class LawContext:
     target: BaseModel | None = None
 
 
-def target_quaternion(target: dict) -> np.ndarray | None:
+def target_quaternion(target: dict[str, Value]) -> np.ndarray | None:
     """Euler parameters of a target given as ``euler123`` (rad) or ``attitude``; None if empty."""
     from flexsat.dynamics.attitude import dcm_to_quaternion, euler123_to_dcm
     from flexsat.units import to_si_array
@@ -77,7 +80,7 @@ class AttitudeTarget(SchemaSection):
     attitude: Value | None = None
 
     @model_validator(mode="after")
-    def _one(self):
+    def _one(self) -> Self:
         if self.euler123 is not None and self.attitude is not None:
             raise FieldError("target", "give euler123 or attitude, not both")
         return self
@@ -96,10 +99,14 @@ class AttitudeLaw:
     Target = AttitudeTarget
 
     @classmethod
-    def from_scenario(cls, parameters: BaseModel, context: LawContext):
+    def from_scenario(cls, parameters: BaseModel, context: LawContext) -> Controller:
+        """The law with the gains ``parameters``, turning to ``context.target`` (an
+        :class:`AttitudeTarget`, or None: the law's own default attitude)."""
         import flexsat.control
 
-        beta = None if context.target is None else context.target.quaternion()
+        # the run's target is an instance of cls.Target: AttitudeTarget (or a subclass)
+        target = cast(AttitudeTarget | None, context.target)
+        beta = None if target is None else target.quaternion()
         extra = {} if beta is None else {"beta_target": beta}
         return getattr(flexsat.control, cls.control_class)(**parameters.model_dump(), **extra)
 
@@ -143,7 +150,7 @@ class NoGains(SchemaSection):
     """A law without parameters."""
 
 
-def _weights(value, size: int, field: str) -> np.ndarray:
+def _weights(value: Value, size: int, field: str) -> np.ndarray:
     w = np.atleast_1d(np.asarray(value, float))
     if w.size == 1:
         w = np.full(size, float(w[0]))
@@ -177,7 +184,8 @@ class LQR:
     Parameters = LQRWeights
 
     @classmethod
-    def from_scenario(cls, parameters: LQRWeights, context: LawContext):
+    def from_scenario(cls, parameters: LQRWeights, context: LawContext) -> Controller:
+        """LQR with the diagonal weights of ``parameters`` on the plant's linear part."""
         from flexsat.control import ScheduledStateFeedback, lqr
 
         plant = context.plant
@@ -197,7 +205,8 @@ class OpenLoop:
     Parameters = NoGains
 
     @classmethod
-    def from_scenario(cls, parameters: NoGains, context: LawContext):
+    def from_scenario(cls, parameters: NoGains, context: LawContext) -> Controller:
+        """A compensator of no state whose zero outputs are the plant's inputs."""
         import control
         from flexsat.control import StateSpaceCompensator
 

@@ -15,12 +15,15 @@ import functools
 import inspect
 import typing
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict
 
 from flexsat.catalog import CASES, all_cases, get_case
 from flexsat.input_checks import FieldError
+
+if TYPE_CHECKING:
+    from flexsat.dynamics.plant import Plant
 
 
 @dataclass(frozen=True)
@@ -45,7 +48,7 @@ class CasePlant:
     case: str
     Parameters: ClassVar[type[BaseModel]] = CasePlantOptions
 
-    def from_scenario(self, parameters: BaseModel, context: PlantContext):
+    def from_scenario(self, parameters: BaseModel, context: PlantContext) -> Plant:
         """Build the case and its plant; the options are checked against ``plant()``."""
         if context.case != self.case:
             raise FieldError(
@@ -70,7 +73,7 @@ class CasePlant:
 def simulation_cases() -> tuple[str, ...]:
     """Cases whose object has a ``plant`` method, read from the builder's return annotation (or
     the builder itself when it is a class) so that no case is built."""
-    names = []
+    names: list[str] = []
     for name, info in all_cases().items():
         builder = info.builder
         try:

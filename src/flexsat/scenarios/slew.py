@@ -35,8 +35,10 @@ SI numbers; one value fills its block.
 
 from __future__ import annotations
 
+from collections.abc import Generator
 from dataclasses import dataclass
-from typing import Any, Literal
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -52,13 +54,21 @@ from flexsat.scenarios.fields import (
     Document,
     SchemaSection,
     check_unique_labels,
-    count,
     given_fields,
-    quantity,
+    in_unit,
+    integer_in,
 )
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 from flexsat.scenarios.simulation import SimulationSettings, target_quaternion
 from flexsat.sim.slew_goals import euler_angle_error
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from flexsat.control.base import Controller
+    from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
+    from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
+    from flexsat.sim import SimResult
 
 #: one weight, or one per component of its block
 Weights = float | list[float]
@@ -85,20 +95,21 @@ class SlewManeuverSpec(SchemaSection):
     """The nominal rigid-body maneuver (EPS slew study c. 1989 Eqs. 9–21)."""
 
     target: dict[str, Any]
-    duration: quantity("s", positive=True)
-    break_frequency: quantity("rad/s", positive=True)
+    duration: Annotated[float, in_unit("s", positive=True)]
+    break_frequency: Annotated[float, in_unit("rad/s", positive=True)]
     shaping_damping: float = Field(0.0, ge=0.0)
     rate_weight: float = Field(0.0, ge=0.0)
 
     @field_validator("target")
     @classmethod
-    def _rotation(cls, target: dict) -> dict:
+    def _rotation(cls, target: dict[str, Any]) -> dict[str, Any]:
         if not target:
             raise FieldError(
                 "target",
                 "give euler123 (three angles) or attitude (a unit quaternion, scalar first)",
             )
         beta = target_quaternion(target)
+        assert beta is not None  # of a target that is not empty
         if beta.shape != (4,) or abs(np.linalg.norm(beta) - 1.0) > 1e-9:
             raise FieldError(
                 "target.attitude",
@@ -111,8 +122,8 @@ class SlewManeuverSpec(SchemaSection):
 class ControllerSpec(SchemaSection):
     """The reduced design model and the gain schedule."""
 
-    modes: count(1, 500) = 10
-    linearization_points: count(1, 1000) = 11
+    modes: Annotated[int, integer_in(1, 500)] = 10
+    linearization_points: Annotated[int, integer_in(1, 1000)] = 11
 
 
 class GoalsSpec(SchemaSection):
@@ -140,7 +151,7 @@ class SlewRunSpec(SchemaSection):
 
     label: str
     weights: SlewWeightsSpec
-    break_frequency: quantity("rad/s", positive=True)
+    break_frequency: Annotated[float, in_unit("rad/s", positive=True)]
     shaping_damping: float = Field(0.0, ge=0.0)
     forces: Literal["none", "all"] | list[str] = "none"
     decouple: bool = False
@@ -158,7 +169,7 @@ class SlewRunSpec(SchemaSection):
         return label
 
     @model_validator(mode="after")
-    def _force_weights(self):
+    def _force_weights(self) -> Self:
         if self.forces != "none" and self.weights.force is None:
             raise FieldError("weights.force", "required when the run uses forces")
         if self.decouple and self.forces == "none":
@@ -198,7 +209,7 @@ class SlewScenario(Document):
         return name
 
     @model_validator(mode="after")
-    def _checks(self):
+    def _checks(self) -> Self:
         check_unique_labels(self.runs)
         # the nominal torque is played back and the feedback runs at the control rate: a
         # shaping break above its Nyquist frequency π f_c shapes what neither can produce
@@ -249,14 +260,14 @@ class SlewResult(ReportedResult):
 
     scenario: SlewScenario
     labels: tuple[str, ...]
-    results: tuple
-    nominal: Any
-    goals: dict
-    goal_units: dict
+    results: tuple[SimResult, ...]
+    nominal: ThreeAxisSlew
+    goals: dict[str, np.ndarray]
+    goal_units: dict[str, str]
     case_source: str
     notes: tuple[str, ...] = ()
 
-    def attributes(self) -> dict:
+    def attributes(self) -> dict[str, float]:
         g = self.scenario.goals
         return {
             "duration_s": self.scenario.maneuver.duration,
@@ -266,11 +277,11 @@ class SlewResult(ReportedResult):
             "goal_angle_tolerance_mrad": float(self.goals["angle_tolerance_mrad"][0]),
         }
 
-    def metrics_records(self) -> list[dict]:
+    def metrics_records(self) -> list[dict[str, Any]]:
         """One JSON-ready dict per run: ``"run"`` and the goal metrics (NaN, inf -> None)."""
         records = []
         for i, label in enumerate(self.labels):
-            row = {"run": label}
+            row: dict[str, Any] = {"run": label}
             for name, values in self.goals.items():
                 v = values[i]
                 row[name] = (
@@ -281,7 +292,7 @@ class SlewResult(ReportedResult):
             records.append(row)
         return records
 
-    def dataset(self):
+    def dataset(self) -> xr.Dataset:
         """Every run in one dataset (:mod:`flexsat.report.slew` lists its variables)."""
         ds = concat_runs(self.results, self.labels)
         t = ds["time"].values
@@ -318,18 +329,20 @@ class SlewResult(ReportedResult):
         )
         return ds
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.slew import draw_figures
 
         return draw_figures(ds, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.slew import sections
 
         return sections(self, self.metrics_records(), figures)
 
 
-def _weights(run: SlewRunSpec, index: int, n_modes: int, n_forces: int):
+def _weights(
+    run: SlewRunSpec, index: int, n_modes: int, n_forces: int
+) -> tuple[np.ndarray, np.ndarray]:
     """(Q, D) of a run, diagonal, over [δα, δω, δη, δη̇] and [torque/I, forces]."""
     try:
         q, d = SlewWeights(**run.weights.model_dump()).diagonals(n_modes, n_forces)
@@ -338,14 +351,14 @@ def _weights(run: SlewRunSpec, index: int, n_modes: int, n_forces: int):
     return np.diag(q), np.diag(d)
 
 
-def _forces(run: SlewRunSpec, index: int, plant) -> list[str]:
+def _forces(run: SlewRunSpec, index: int, plant: FlexibleSpacecraft) -> list[str]:
     """The run's force channels, by the plant's names (``69X`` -> ``force_69X``)."""
     available = [c.name for c in plant.inputs if c.name.startswith("force_")]
     if run.forces == "none":
         return []
     if run.forces == "all":
         return available
-    names = []
+    names: list[str] = []
     for name in run.forces:
         channel = name if name.startswith("force_") else f"force_{name}"
         if channel not in available:
@@ -362,7 +375,7 @@ def _forces(run: SlewRunSpec, index: int, plant) -> list[str]:
     return names
 
 
-def _plants(scenario: SlewScenario):
+def _plants(scenario: SlewScenario) -> tuple[FlexibleSpacecraft, FlexibleSpacecraft]:
     """(truth, design model): the case's flexible plant as given, and the same plant on the
     controller's first modes."""
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
@@ -407,13 +420,19 @@ def _plants(scenario: SlewScenario):
     return truth, truth.reduced(scenario.controller.modes)
 
 
-def _laws(scenario: SlewScenario, truth, design_plant, nominal, dt: float) -> dict:
+def _laws(
+    scenario: SlewScenario,
+    truth: FlexibleSpacecraft,
+    design_plant: FlexibleSpacecraft,
+    nominal: ThreeAxisSlew,
+    dt: float,
+) -> dict[str, Controller]:
     """The open-loop law and every run's perturbation law, by label; problems are gathered and
     located in their run."""
     from flexsat.control import NominalTorque, perturbation_design
 
-    laws = {OPEN_LOOP: NominalTorque(nominal, dt)}
-    problems = []
+    laws: dict[str, Controller] = {OPEN_LOOP: NominalTorque(nominal, dt)}
+    problems: list[Problem] = []
     for index, run in enumerate(scenario.runs):
         try:
             forces = _forces(run, index, design_plant)
@@ -455,7 +474,7 @@ class SlewKind(ScenarioKind):
         # the nominal maneuver and the open loop, then the runs
         return len(scenario.runs) + 2
 
-    def plan(self, scenario: SlewScenario):
+    def plan(self, scenario: SlewScenario) -> Generator[Run, Any, SlewResult]:
         """The runs: the nominal maneuver (its continuation failing is reported under
         ``maneuver``), the open loop, each closed-loop run.
 
@@ -473,11 +492,14 @@ class SlewKind(ScenarioKind):
         truth, design_plant = _plants(scenario)
         m = scenario.maneuver
 
-        def solve_nominal():
+        target = target_quaternion(m.target)
+        assert target is not None  # the schema refuses an empty target
+
+        def solve_nominal() -> ThreeAxisSlew:
             try:
                 return three_axis_slew(
                     truth.inertia,
-                    target_quaternion(m.target),
+                    target,
                     m.duration,
                     m.break_frequency,
                     m.shaping_damping,

@@ -23,9 +23,10 @@ a ``missing_fraction`` of the visible stars dropped per frame.
 
 from __future__ import annotations
 
+from collections.abc import Generator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -40,10 +41,17 @@ from flexsat.scenarios.fields import (
     Document,
     SchemaSection,
     check_unique_labels,
-    count,
-    quantity,
+    in_unit,
+    integer_in,
 )
 from flexsat.scenarios.kind import Run, ScenarioKind
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from flexsat.attitude.star_camera import StarCamera
+    from flexsat.attitude.star_catalog import StarCatalog
+    from flexsat.attitude.star_tracker import MonteCarloResult, StarTracker
 
 #: the paper this kind reproduces
 SOURCE = (
@@ -60,21 +68,22 @@ class CatalogSpec(SchemaSection):
 
     source: Literal["synthetic", "hipparcos"] = "synthetic"
     magnitude_limit: float = Field(6.5, allow_inf_nan=False)
-    seed: count(0) = 0
+    seed: Annotated[int, integer_in(0)] = 0
     path: str | None = None
 
     @model_validator(mode="after")
-    def _path(self):
+    def _path(self) -> Self:
         if (self.source == "hipparcos") != (self.path is not None):
             raise FieldError(
                 "path", "give the hip_main.dat path with source: hipparcos, and only then"
             )
         return self
 
-    def build(self, folder: Path):
+    def build(self, folder: Path) -> StarCatalog:
+        """The catalogue; a relative ``path`` starts at ``folder`` (the scenario's)."""
         from flexsat.attitude.star_catalog import load_hipparcos, synthetic_sky
 
-        if self.source == "synthetic":
+        if self.source == "synthetic" or self.path is None:  # a path comes with hipparcos
             return synthetic_sky(self.magnitude_limit, self.seed)
         path = Path(self.path)
         return load_hipparcos(path if path.is_absolute() else folder / path, self.magnitude_limit)
@@ -83,14 +92,17 @@ class CatalogSpec(SchemaSection):
 class CameraSpec(BuildableSection):
     """One star camera (:class:`flexsat.attitude.star_camera.StarCamera`)."""
 
-    field_of_view: quantity("rad", positive=True) = float(np.radians(12.0))
-    n_pixels: count(2) = 4096
-    pixel_pitch: quantity("m", positive=True) = 5.5e-6
+    field_of_view: Annotated[float, in_unit("rad", positive=True)] = float(np.radians(12.0))
+    n_pixels: Annotated[int, integer_in(2)] = 4096
+    pixel_pitch: Annotated[float, in_unit("m", positive=True)] = 5.5e-6
     centroid_noise: float = Field(0.1, ge=0.0, allow_inf_nan=False)
     magnitude_limit: float = Field(6.5, allow_inf_nan=False)
-    mounting: list[quantity("rad")] = Field(default_factory=lambda: [0.0, 0.0, 0.0])
+    mounting: list[Annotated[float, in_unit("rad")]] = Field(
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )
 
-    def build(self):
+    def build(self) -> StarCamera:
+        """The camera (its constructor checks its own rules)."""
         from flexsat.attitude.star_camera import StarCamera
 
         return StarCamera(
@@ -106,18 +118,18 @@ class CameraSpec(BuildableSection):
 class IdentificationSpec(SchemaSection):
     """The paper's acceptance rule (Junkins, Pollock & Rahman 1990 §2.3.4)."""
 
-    tolerance: quantity("rad", positive=True) = float(np.radians(5.0 / 3600.0))
-    min_triplets: count(1) = 3
-    min_fields: count(1) = 2
+    tolerance: Annotated[float, in_unit("rad", positive=True)] = float(np.radians(5.0 / 3600.0))
+    min_triplets: Annotated[int, integer_in(1)] = 3
+    min_fields: Annotated[int, integer_in(1)] = 2
 
 
 class StarRunSpec(SchemaSection):
     """One Monte Carlo of random attitudes."""
 
     label: str
-    attitudes: count(1, MAX_ATTITUDES) = 1000
-    seed: count(0) = 0
-    false_stars: count(0, 1000) = 0
+    attitudes: Annotated[int, integer_in(1, MAX_ATTITUDES)] = 1000
+    seed: Annotated[int, integer_in(0)] = 0
+    false_stars: Annotated[int, integer_in(0, 1000)] = 0
     missing_fraction: float = Field(0.0, ge=0.0, lt=1.0)
 
 
@@ -132,7 +144,7 @@ class StarTrackerScenario(Document):
     runs: list[StarRunSpec] = Field(min_length=1, max_length=100)
 
     @model_validator(mode="after")
-    def _checks(self):
+    def _checks(self) -> Self:
         check_unique_labels(self.runs)
         if len(self.cameras) < self.identification.min_fields:
             raise FieldError(
@@ -157,12 +169,12 @@ class StarTrackerResult(ReportedResult):
 
     scenario: StarTrackerScenario
     labels: tuple[str, ...]
-    runs: tuple
-    tracker: object
+    runs: tuple[MonteCarloResult, ...]
+    tracker: StarTracker
     case_source: str = SOURCE
     notes: tuple[str, ...] = ()
 
-    def metrics_records(self) -> list[dict]:
+    def metrics_records(self) -> list[dict[str, Any]]:
         """One JSON-ready dict per run (arcseconds for angles). A run that accepted no attitude
         has no error statistics: those metrics are None and its ``null_reasons`` say so."""
         from flexsat.attitude.star_tracker import ARCSEC
@@ -170,7 +182,7 @@ class StarTrackerResult(ReportedResult):
         out = []
         for label, r in zip(self.labels, self.runs):
             acc = r.accepted
-            rec = {
+            rec: dict[str, Any] = {
                 "run": label,
                 "attitudes": int(acc.size),
                 "identification_rate": float(r.identification_rate),
@@ -180,18 +192,18 @@ class StarTrackerResult(ReportedResult):
                 "min_triplets": int(r.triplets[acc].min()) if acc.any() else 0,
                 "nees_mean": float(np.nanmean(r.nees)) if acc.any() else None,
             }
-            std = r.error_std / ARCSEC if acc.any() else (None,) * 3
-            sig = np.nanmean(r.sigmas, 0) / ARCSEC if acc.any() else (None,) * 3
+            std = r.error_std / ARCSEC if acc.any() else None
+            sig = np.nanmean(r.sigmas, 0) / ARCSEC if acc.any() else None
             for k, axis in enumerate("xyz"):
-                rec[f"error_std_{axis}_arcsec"] = None if std[k] is None else float(std[k])
-                rec[f"quest_sigma_{axis}_arcsec"] = None if sig[k] is None else float(sig[k])
+                rec[f"error_std_{axis}_arcsec"] = None if std is None else float(std[k])
+                rec[f"quest_sigma_{axis}_arcsec"] = None if sig is None else float(sig[k])
             if not acc.any():
                 why = f"no data: none of the {acc.size} attitudes was identified and accepted"
                 rec[NULL_REASONS] = {k: why for k, v in rec.items() if v is None}
             out.append(rec)
         return out
 
-    def dataset(self):
+    def dataset(self) -> xr.Dataset:
         """Per run and attitude: the error angles (arcsec), ``accepted``, ``correct``,
         ``n_stars``; the first attitude's frames (pixels, match status) for the sky plot."""
         import xarray as xr
@@ -202,7 +214,7 @@ class StarTrackerResult(ReportedResult):
         n_cam = len(self.tracker.cameras)
         n_star = max(len(f) for r in self.runs for f in r.example_frames) or 1
 
-        def pad(a, shape, fill=np.nan):
+        def pad(a: np.ndarray, shape: tuple[int, ...], fill: float = np.nan) -> np.ndarray:
             out = np.full(shape, fill, dtype=float)
             out[tuple(slice(0, s) for s in a.shape)] = a
             return out
@@ -255,18 +267,18 @@ class StarTrackerResult(ReportedResult):
         )
         return ds
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.star_tracker import draw_figures
 
         return draw_figures(ds, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.star_tracker import sections
 
         return sections(self, self.metrics_records(), figures)
 
 
-def build_tracker(scenario: StarTrackerScenario):
+def build_tracker(scenario: StarTrackerScenario) -> StarTracker:
     """The :class:`~flexsat.attitude.star_tracker.StarTracker` of a scenario.
 
     Raises
@@ -305,7 +317,7 @@ class StarTrackerKind(ScenarioKind):
     def steps(self, scenario: StarTrackerScenario) -> int:
         return len(scenario.runs)
 
-    def plan(self, scenario: StarTrackerScenario):
+    def plan(self, scenario: StarTrackerScenario) -> Generator[Run, Any, StarTrackerResult]:
         import functools
 
         from flexsat.attitude.star_tracker import (

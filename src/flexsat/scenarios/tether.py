@@ -25,8 +25,10 @@ misprinted sign of Eq. 15 (it diverges).
 
 from __future__ import annotations
 
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
-from typing import Literal
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -36,10 +38,16 @@ from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.datasets import add_run_metrics
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
-from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, quantity
+from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, in_unit
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 
-#: the gains each law takes (Junkins, Pollock & Rahman 1990, Att. 12 Eqs. 14-15, 18 and 20, 24-25)
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from flexsat.dynamics.tether import ClosedLoopRun, TetherScales
+
+#: the gains each law takes (Junkins, Pollock & Rahman 1990, Att. 12 Eqs. 14-15, 18 and 20,
+#: 24-25)
 LAW_GAINS = {
     "decoupled": ("K1", "K2", "K3"),
     "coupled": ("K1", "K2", "K3", "K4"),
@@ -50,17 +58,18 @@ LAW_GAINS = {
 class TetherSystem(SchemaSection):
     """Subsatellite mass, reference length L and the orbit (altitude or rate)."""
 
-    mass: quantity("kg", positive=True)
-    length: quantity("m", positive=True)
-    altitude: quantity("m", optional=True) = None
-    orbit_rate: quantity("rad/s", optional=True, positive=True) = None
+    mass: Annotated[float, in_unit("kg", positive=True)]
+    length: Annotated[float, in_unit("m", positive=True)]
+    altitude: Annotated[float | None, in_unit("m")] = None
+    orbit_rate: Annotated[float | None, in_unit("rad/s", positive=True)] = None
 
     @model_validator(mode="after")
-    def _orbit(self):
+    def _orbit(self) -> Self:
         self.scales()
         return self
 
-    def scales(self):
+    def scales(self) -> TetherScales:
+        """The nondimensionalising scales (the orbit from its altitude or rate)."""
         from flexsat.dynamics.tether import TetherScales
 
         if self.altitude is None and self.orbit_rate is None:
@@ -73,15 +82,15 @@ class TetherSystem(SchemaSection):
 class TetherInitial(SchemaSection):
     """Initial length and libration (rates default to rest)."""
 
-    length: quantity("m", positive=True)
-    pitch: quantity("rad") = 0.0
-    roll: quantity("rad") = 0.0
-    length_rate: quantity("m/s", optional=True) = None
-    pitch_rate: quantity("rad/s") = 0.0
-    roll_rate: quantity("rad/s") = 0.0
+    length: Annotated[float, in_unit("m", positive=True)]
+    pitch: Annotated[float, in_unit("rad")] = 0.0
+    roll: Annotated[float, in_unit("rad")] = 0.0
+    length_rate: Annotated[float | None, in_unit("m/s")] = None
+    pitch_rate: Annotated[float, in_unit("rad/s")] = 0.0
+    roll_rate: Annotated[float, in_unit("rad/s")] = 0.0
 
     @model_validator(mode="after")
-    def _angles(self):
+    def _angles(self) -> Self:
         # Eq. 4 divides by cos φ (the roll is defined within ±90°), and a pitch is an angle of
         # one turn at most: a pitch of 1e12° is no libration, and its sine costs the adaptive
         # integrator every digit (minutes of vanishing steps)
@@ -102,7 +111,7 @@ class TetherSimulation(SchemaSection):
     integrator: Literal["continuous", "sampled"] = "continuous"
 
     @model_validator(mode="after")
-    def _samples(self):
+    def _samples(self) -> Self:
         n = self.orbits * self.samples_per_orbit
         if n > limits.MAX_SAMPLES:
             raise FieldError(
@@ -118,11 +127,11 @@ class TetherRunSpec(SchemaSection):
     label: str
     law: Literal["decoupled", "coupled", "rate"]
     gains: dict[str, float]
-    final_length: quantity("m", positive=True)
+    final_length: Annotated[float, in_unit("m", positive=True)]
     printed_sign: bool = False
 
     @model_validator(mode="after")
-    def _gains(self):
+    def _gains(self) -> Self:
         need = LAW_GAINS[self.law]
         missing = [k for k in need if k not in self.gains]
         extra = [k for k in self.gains if k not in need]
@@ -157,7 +166,7 @@ class TetherScenario(Document):
         return "Vadali & Kim tethered subsatellite"
 
     @model_validator(mode="after")
-    def _checks(self):
+    def _checks(self) -> Self:
         check_unique_labels(self.runs)
         from flexsat.dynamics.tether import MIN_LENGTH
 
@@ -195,12 +204,12 @@ class TetherResult(ReportedResult):
 
     scenario: TetherScenario
     labels: tuple[str, ...]
-    runs: tuple
-    scales: object
+    runs: tuple[ClosedLoopRun, ...]
+    scales: TetherScales
     case_source: str
     notes: tuple[str, ...] = ()
 
-    def metrics_records(self) -> list[dict]:
+    def metrics_records(self) -> list[dict[str, Any]]:
         """One JSON-ready dict per run: the paper's measures
         (:func:`flexsat.cases.tether.measures`)."""
         from flexsat.cases.tether import measures
@@ -211,7 +220,7 @@ class TetherResult(ReportedResult):
             records.append({"run": label, **measures(run, lf, self.scales, spec.law)})
         return records
 
-    def dataset(self):
+    def dataset(self) -> xr.Dataset:
         """Every run in one dataset over (run, time): time in s and ``orbits``; ``length`` (m),
         ``pitch``, ``roll`` (rad), ``tension`` (N, NaN under rate control), ``reel_rate`` (m/s,
         NaN under tension control), ``thrust`` (N), ``integral_of_motion`` (V1),
@@ -222,7 +231,7 @@ class TetherResult(ReportedResult):
         tau = self.runs[0].tau
         rate = np.array([spec.law == "rate" for spec in self.scenario.runs])
 
-        def stack(f):
+        def stack(f: Callable[[ClosedLoopRun], np.ndarray]) -> np.ndarray:
             return np.stack([f(r) for r in self.runs])
 
         command = stack(lambda r: r.control[0, :, 0])
@@ -274,12 +283,12 @@ class TetherResult(ReportedResult):
         )
         return ds
 
-    def figures(self, folder, ds) -> list[str]:
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.tether import draw_figures
 
         return draw_figures(ds, folder)
 
-    def sections(self, ds, figures: list[str]) -> str:
+    def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.tether import sections
 
         return sections(self, self.metrics_records(), figures)
@@ -295,7 +304,7 @@ class TetherKind(ScenarioKind):
     def steps(self, scenario: TetherScenario) -> int:
         return len(scenario.runs)
 
-    def plan(self, scenario: TetherScenario):
+    def plan(self, scenario: TetherScenario) -> Generator[Run, Any, TetherResult]:
         from flexsat.cases.tether import SOURCE, closed_loop_run, make_law, tether_simulation
         from flexsat.references import cite
 
