@@ -117,6 +117,8 @@ class SecondOrderModel:
     Dff : array_like (p, m), optional
         Feedthrough (default zero).
 
+    Notes
+    -----
     The attributes are the checked matrices as read-only float arrays (``Cv`` and ``Dff`` the
     zero matrices when not given).
 

@@ -527,46 +527,50 @@ def closed_loop(loop: Loop, records: Records) -> None:
     loop : Loop                 the loop's parameters, the fields below
     records : Records           the arrays written, the fields after ``Q`` below
 
-    x0 : (C, n)                 initial states
-    E : (Cp, n, n) or (Cp, n, 2)
-                                e^{hA}, h = dt / substeps; with ``block_diagonal`` (n even)
-                                row i holds the two entries of its 2×2 diagonal block
-                                (:attr:`flexsat.sim.integrators.ModalPropagator.E`)
-    P1u : (Cp, n, m)            h φ1(hA) B (input integral of the held input)
-    P1f, P2f, Cr : (Cf, n)      h φ1(hA) b_f, h φ2(hA) b_f and the rate output of the force;
-                                leading length 0 for no force
-    fric : (Cfr, 3)             [c1, c2, ε] of N(x)
-    substeps : int
-    imp_k : (ni,) int64         sample of each impulse, ascending
-    imp_dx : (ni, Ci, n)        state increment of each impulse
-    Cm, Dm, Dmf : (Cm, p, n), (Cm, p, m), (Cm, p)   measurement matrices
-    sensor : (Cs, p, 4)         [quantum, noise std, bias, saturation] per measurement
-    sensor_slot : (p,) int64    noise slot per measurement (−1: none)
-    fir_src, fir_dst : int      FIR-derivative source and destination element (fir_src < 0:
-                                none); fir_w (L,) weights, oldest sample first
-    Ak, Bk, Ck, Dk, y_ref, u_ff, K0
-                                the law's linear form; K0 (C0, nk, p), C0 = 0 for none
-    act : (Ca, m, 2)            [saturation, scale] per input
-    dist_std : (Cd, m), dist_slot : (m,) int64   random disturbance per input
-    noise : (C, n_t, n_slots)   standard normals, case-major (one contiguous stream per case)
-    bound : float               divergence bound on |x| and |u_cmd|
-    Co, Do, Dof : (Co, r, n), (Co, r, m), (Co, r)
-                                recorded output rows (no sensor effects)
-    Q : (Cq, n, n)              energy matrix, symmetric (leading length 0: none)
-                                (Co and Cq are 1 or C; read only when O, En have samples)
-    X : (C, n_t or 0, n)        recorded states (time length 0: not recorded)
-    Y : (C, n_t, p_rec), Ucmd, U, D : (C, n_t, m), F : (C, n_t or 0)
-                                recorded measurements (the last p_rec <= p of them),
-                                commands, actuator outputs,
-                                disturbances and force (time length 0: not recorded) at
-                                each sample; case-major, so a
-                                case's loop writes contiguous memory (the time-major layout
-                                costs a cache miss per record and sample: 3× slower in a
-                                batch of 1,000)
-    O : (C, n_t or 0, r)        recorded outputs o (time length 0: none)
-    En : (C, n_t or 0)          energy ½ xᵀ Q x (time length 0: none)
-    stop : (C,) int64           written: −1, or the first diverged sample (its X, Y, Ucmd and
-                                F are recorded; U, D there and every later row are not)
+    Notes
+    -----
+    The fields of ``loop`` and ``records``:
+
+        x0 : (C, n)                 initial states
+        E : (Cp, n, n) or (Cp, n, 2)
+                                    e^{hA}, h = dt / substeps; with ``block_diagonal`` (n even)
+                                    row i holds the two entries of its 2×2 diagonal block
+                                    (:attr:`flexsat.sim.integrators.ModalPropagator.E`)
+        P1u : (Cp, n, m)            h φ1(hA) B (input integral of the held input)
+        P1f, P2f, Cr : (Cf, n)      h φ1(hA) b_f, h φ2(hA) b_f and the rate output of the force;
+                                    leading length 0 for no force
+        fric : (Cfr, 3)             [c1, c2, ε] of N(x)
+        substeps : int
+        imp_k : (ni,) int64         sample of each impulse, ascending
+        imp_dx : (ni, Ci, n)        state increment of each impulse
+        Cm, Dm, Dmf : (Cm, p, n), (Cm, p, m), (Cm, p)   measurement matrices
+        sensor : (Cs, p, 4)         [quantum, noise std, bias, saturation] per measurement
+        sensor_slot : (p,) int64    noise slot per measurement (−1: none)
+        fir_src, fir_dst : int      FIR-derivative source and destination element (fir_src < 0:
+                                    none); fir_w (L,) weights, oldest sample first
+        Ak, Bk, Ck, Dk, y_ref, u_ff, K0
+                                    the law's linear form; K0 (C0, nk, p), C0 = 0 for none
+        act : (Ca, m, 2)            [saturation, scale] per input
+        dist_std : (Cd, m), dist_slot : (m,) int64   random disturbance per input
+        noise : (C, n_t, n_slots)   standard normals, case-major (one contiguous stream per case)
+        bound : float               divergence bound on |x| and |u_cmd|
+        Co, Do, Dof : (Co, r, n), (Co, r, m), (Co, r)
+                                    recorded output rows (no sensor effects)
+        Q : (Cq, n, n)              energy matrix, symmetric (leading length 0: none)
+                                    (Co and Cq are 1 or C; read only when O, En have samples)
+        X : (C, n_t or 0, n)        recorded states (time length 0: not recorded)
+        Y : (C, n_t, p_rec), Ucmd, U, D : (C, n_t, m), F : (C, n_t or 0)
+                                    recorded measurements (the last p_rec <= p of them),
+                                    commands, actuator outputs,
+                                    disturbances and force (time length 0: not recorded) at
+                                    each sample; case-major, so a
+                                    case's loop writes contiguous memory (the time-major layout
+                                    costs a cache miss per record and sample: 3× slower in a
+                                    batch of 1,000)
+        O : (C, n_t or 0, r)        recorded outputs o (time length 0: none)
+        En : (C, n_t or 0)          energy ½ xᵀ Q x (time length 0: none)
+        stop : (C,) int64           written: −1, or the first diverged sample (its X, Y, Ucmd and
+                                    F are recorded; U, D there and every later row are not)
     """
     for c in range(loop.x0.shape[0]):
         _case(c, loop, records)
