@@ -148,7 +148,7 @@ def make_law(
 
 
 def paper_scales() -> TetherScales:
-    """The paper's tether: 22.7 kg, 20 km, a 220 km orbit (L4397-L4401)."""
+    """The paper's tether: 22.7 kg, 20 km, a 220 km orbit (Att. 12, the numerical examples)."""
     return TetherScales(**PAPER_SCALES)
 
 

@@ -131,7 +131,7 @@ def closed_loop_roots(plant: Plant, gains: np.ndarray) -> np.ndarray:
     A, B = plant.linear_part()
     state = plant.output_matrices("state")
     if state is None:
-        raise ValueError("plant: its 'state' output is not linear in the state")
+        raise FieldError("plant", "its 'state' output is not linear in the state")
     C = state[0]
     roots = np.linalg.eigvals(A + B @ gains @ C) / _beam().orbit_rate_value
     return roots[np.lexsort((roots.real, roots.imag, np.round(np.abs(roots.imag), 9)))]
