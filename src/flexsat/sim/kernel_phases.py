@@ -146,11 +146,10 @@ def apply_impulses(x, imp_k, imp_dx, i_imp, k, cl, W):
 
 
 @_inline
-def friction(x, crv, c1, c2, eps, out, s0, s1, s2, s3, W):
+def friction(x, n, crv, c1, c2, eps, out, s0, s1, s2, s3, W):
     """Phases 2 and 9: out = N(x) = −c1 tanh(r/ε) − c2 r per lane, r = C_r x in four
     interleaved partial sums (s0 .. s3 (W,) scratch): a single chain of dependent additions is
-    latency-bound (it was half the cost of a friction substep)."""
-    n = x.shape[0]
+    latency-bound (it was half the cost of a friction substep); x (>= n, W)."""
     for l in range(W):
         s0[l] = s1[l] = s2[l] = s3[l] = 0.0
     j = 0
@@ -250,19 +249,10 @@ def fir_derivative(y, hist, head, k, src, dst, fir_w, W):
 
 
 @_inline
-def law(loop, k, y, e, xi, xi_new, ucmd, bad, cl, W):
+def law(Ak, Bk, Ck, Dk, y_ref, u_ff, K0, bound, k, y, e, xi, xi_new, ucmd, bad, cl, W):
     """Phase 6, the law's linear form per lane, e = y − y_ref[k]: ξ_0 = K0 e_0 (K0 given),
     u_cmd = u_ff[k] + C_k ξ + D_k e, ξ ← A_k ξ + B_k e; bad[l] = a command beyond the bound
     or not finite."""
-    Ak, Bk, Ck, Dk, y_ref, u_ff, K0 = (
-        loop.Ak,
-        loop.Bk,
-        loop.Ck,
-        loop.Dk,
-        loop.y_ref,
-        loop.u_ff,
-        loop.K0,
-    )
     p, m, nk = y.shape[0], ucmd.shape[0], xi.shape[0]
     tk, tb = case_index(Ak.shape[0], k), case_index(Bk.shape[0], k)
     tc, td = case_index(Ck.shape[0], k), case_index(Dk.shape[0], k)
@@ -291,7 +281,7 @@ def law(loop, k, y, e, xi, xi_new, ucmd, bad, cl, W):
             for j in range(p):
                 v += Dk[td, cd, i, j] * e[j, l]
             ucmd[i, l] = v
-            if not abs(v) <= loop.bound:
+            if not abs(v) <= bound:
                 bad[l] = True
         ca, cb = case_index(Ak.shape[1], c), case_index(Bk.shape[1], c)
         for i in range(nk):
@@ -352,7 +342,10 @@ def energy(Qv, x, qx, l):
     return 0.5 * ((s0 + s1) + (s2 + s3))
 
 
-@_inline
+# a call, not inlined: inlined, its array arguments cost an atomic reference count increment
+# and decrement each per sample (numba's pruning does not pair them here: +40 % on a linear
+# modal step)
+@cached_jit(error_model="numpy")
 def actuate(ucmd, actv, dstdv, dist_slot, noise, cl, k, u, d, w, W):
     """Phase 8: u = scale · clip(u_cmd, ±sat), d = std · noise[c, k, slot] (0 without a
     slot), the applied input w = u + d per element and lane."""
@@ -365,14 +358,35 @@ def actuate(ucmd, actv, dstdv, dist_slot, noise, cl, k, u, d, w, W):
 
 
 @_inline
-def propagate(loop, x, xa, drive, w, P1v, Et, p1f, p2f, crv, c1, c2, eps, f0, df, sc, W):
+def propagate(
+    block_diagonal,
+    has_force,
+    substeps,
+    x,
+    xa,
+    drive,
+    w,
+    P1v,
+    Et,
+    p1f,
+    p2f,
+    crv,
+    c1,
+    c2,
+    eps,
+    f0,
+    df,
+    s0,
+    s1,
+    s2,
+    s3,
+    W,
+):
     """Phase 9: ``substeps`` steps of x' = A x + B w + b_f N(x) with w held, the exponential
     integrator a = E x + P1u w + P1f N(x), x ← a + P2f (N(a) − N(x)) (ETD2RK, Cox & Matthews
     2002 Eq. 22; the exact zero-order hold without a force). E x is dense (:func:`row_products`
-    on Et = Eᵀ) or 2×2 block-diagonal; ``sc`` (4, W) scratch of :func:`friction`."""
+    on Et = Eᵀ) or 2×2 block-diagonal; s0 .. s3 (W,) scratch of :func:`friction`."""
     n, m = x.shape[0], w.shape[0]
-    block_diagonal = loop.block_diagonal
-    has_force = loop.P1f.shape[0] > 0
     for i in range(n):
         for l in range(W):
             drive[i, l] = 0.0
@@ -380,7 +394,7 @@ def propagate(loop, x, xa, drive, w, P1v, Et, p1f, p2f, crv, c1, c2, eps, f0, df
             for l in range(W):
                 drive[i, l] += P1v[i, j, l] * w[j, l]
     fused = block_diagonal and not has_force
-    for _ in range(loop.substeps):
+    for _ in range(substeps):
         if fused:  # x ← E x + drive in one pass over the 2×2 blocks (the same operations)
             for i in range(0, n, 2):
                 for l in range(W):
@@ -397,11 +411,11 @@ def propagate(loop, x, xa, drive, w, P1v, Et, p1f, p2f, crv, c1, c2, eps, f0, df
         else:
             row_products(Et, x, xa, W)
         if has_force:
-            friction(x, crv, c1, c2, eps, f0, sc[0], sc[1], sc[2], sc[3], W)
+            friction(x, n, crv, c1, c2, eps, f0, s0, s1, s2, s3, W)
             for i in range(n):
                 for l in range(W):
                     xa[i, l] += drive[i, l] + p1f[i, l] * f0[l]
-            friction(xa[:n], crv, c1, c2, eps, df, sc[0], sc[1], sc[2], sc[3], W)
+            friction(xa, n, crv, c1, c2, eps, df, s0, s1, s2, s3, W)
             for l in range(W):
                 df[l] = df[l] - f0[l]
             for i in range(n):

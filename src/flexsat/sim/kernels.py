@@ -122,6 +122,7 @@ __all__ = [
     "closed_loop_reduced",
     "closed_loop_reduced_parallel",
     "lane_layout",
+    "output_arrays",
     "record_inputs",
     "record_sample",
     "start_records",
@@ -135,7 +136,10 @@ LANES = 8
 # ------------------------------------------------------------------------------------------
 # what a run keeps: a history (Records, one case per group) or reductions (LANES per group).
 # Each hook below is a stub numba replaces by the implementation for the output record's type
-# (an overload, inlined): the step of _group is compiled once per kind of output.
+# (an overload, inlined): the step of _group is compiled once per kind of output. The hooks
+# take the output arrays unpacked once before the time loop (output_arrays): an array taken
+# out of a tuple inside the loop costs an atomic reference count increment and decrement per
+# use (a third of a linear modal step).
 
 
 def _reductions(sink) -> bool:
@@ -149,18 +153,26 @@ def lane_layout(sink, loop):  # type: ignore[no-untyped-def]  # numba stub (over
     raise NotImplementedError("compiled only (numba overload)")
 
 
+def output_arrays(sink):  # type: ignore[no-untyped-def]  # numba stub (overloaded)
+    """The arrays of the output record as 11 (the fields of :class:`Reductions`; the 9 of
+    :class:`Records` then ``stop`` twice more)."""
+    raise NotImplementedError("compiled only (numba overload)")
+
+
 def start_records(sink, cl, W):  # type: ignore[no-untyped-def]  # numba stub (overloaded)
     """Initialise the outputs of the group's cases ``cl`` (stop = −1, empty reductions)."""
     raise NotImplementedError("compiled only (numba overload)")
 
 
-def record_sample(sink, loop, k, cl, x, y, ucmd, f, ov, Qv, qx, W):  # type: ignore[no-untyped-def]
+def record_sample(
+    sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, x, y, ucmd, f, ov, Qv, qx, W
+):  # type: ignore[no-untyped-def]  # noqa: E501
     """Record sample k of each lane: states, measurements, commands, force, output rows and
     energy (records), or the reductions' running maxima and snapshots (reductions)."""
     raise NotImplementedError("compiled only (numba overload)")
 
 
-def record_inputs(sink, k, cl, u, d, W):  # type: ignore[no-untyped-def]  # numba stub (overloaded)
+def record_inputs(sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, u, d, W):  # type: ignore[no-untyped-def]  # noqa: E501
     """Record the actuator outputs u and the disturbances d of sample k of each lane."""
     raise NotImplementedError("compiled only (numba overload)")
 
@@ -179,6 +191,20 @@ def _reductions_layout(sink, loop):
 @overload(lane_layout, inline="always")
 def _lane_layout(sink, loop):
     return _reductions_layout if _reductions(sink) else _history_layout
+
+
+def _history_arrays(sink):
+    X, Y, Ucmd, U, D, F, O, En, stop = sink
+    return X, Y, Ucmd, U, D, F, O, En, stop, stop, stop
+
+
+def _reductions_arrays(sink):
+    return sink
+
+
+@overload(output_arrays, inline="always")
+def _output_arrays(sink):
+    return _reductions_arrays if _reductions(sink) else _history_arrays
 
 
 def _history_start(sink, cl, W):
@@ -205,82 +231,88 @@ def _start_records(sink, cl, W):
     return _reductions_start if _reductions(sink) else _history_start
 
 
-def _history_sample(sink, loop, k, cl, x, y, ucmd, f, ov, Qv, qx, W):
-    X, Y, Ucmd, U, D, F, O, En, stop = sink
-    n, p, m, p_rec = x.shape[0], y.shape[0], ucmd.shape[0], Y.shape[2]
+def _history_sample(
+    sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, x, y, ucmd, f, ov, Qv, qx, W
+):
+    """:func:`record_sample` of :class:`Records`: o0 .. o7 = X, Y, Ucmd, U, D, F, O, En."""
+    n, p, m, p_rec = x.shape[0], y.shape[0], ucmd.shape[0], o1.shape[2]
     for l in range(W):
         c = cl[l]
-        if X.shape[1] > 0:
+        if o0.shape[1] > 0:
             for j in range(n):
-                X[c, k, j] = x[j, l]
-        if O.shape[1] > 0:
-            for i in range(O.shape[2]):
-                O[c, k, i] = ov[i, l]
-        if En.shape[1] > 0 and Qv.shape[0] > 0:
-            En[c, k] = energy(Qv, x, qx, l)
+                o0[c, k, j] = x[j, l]
+        if o6.shape[1] > 0:
+            for i in range(o6.shape[2]):
+                o6[c, k, i] = ov[i, l]
+        if o7.shape[1] > 0 and Qv.shape[0] > 0:
+            o7[c, k] = energy(Qv, x, qx, l)
         for i in range(p_rec):
-            Y[c, k, i] = y[p - p_rec + i, l]
+            o1[c, k, i] = y[p - p_rec + i, l]
         for i in range(m):
-            Ucmd[c, k, i] = ucmd[i, l]
-        if F.shape[1] > 0:
-            F[c, k] = f[l]
+            o2[c, k, i] = ucmd[i, l]
+        if o5.shape[1] > 0:
+            o5[c, k] = f[l]
 
 
-def _reductions_sample(sink, loop, k, cl, x, y, ucmd, f, ov, Qv, qx, W):
-    red_c, red_tab, red_t, red_dir, red_band, snap_k = sink[:6]
-    red, snapO, snapE = sink.red, sink.snapO, sink.snapE
-    for j in range(red.shape[1]):
-        tab = red_tab[j]
-        band = red_band[j]
+def _reductions_sample(
+    sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, x, y, ucmd, f, ov, Qv, qx, W
+):
+    """:func:`record_sample` of :class:`Reductions`: o0 .. o10 = red_c, red_tab, red_t,
+    red_dir, red_band, snap_k, red, upeak, snapO, snapE, stop."""
+    for j in range(o6.shape[1]):
+        tab = o1[j]
+        band = o4[j]
         for l in range(W):
             c = cl[l]
-            v = ov[j, l] - red_c[case_index(red_c.shape[0], c), j]
+            v = ov[j, l] - o0[case_index(o0.shape[0], c), j]
             if tab >= 0:
-                v = v - red_t[tab, case_index(red_t.shape[1], k), case_index(red_t.shape[2], c)]
+                v = v - o2[tab, case_index(o2.shape[1], k), case_index(o2.shape[2], c)]
             # running maxima of the metrics' per-sample terms (flexsat.sim.metrics)
             a = peak_term(v)
-            if a > red[c, j, 0]:
-                red[c, j, 0] = a
-            a = past_term(v, red_dir[case_index(red_dir.shape[0], c)])
-            if a > red[c, j, 1]:
-                red[c, j, 1] = a
+            if a > o6[c, j, 0]:
+                o6[c, j, 0] = a
+            a = past_term(v, o3[case_index(o3.shape[0], c)])
+            if a > o6[c, j, 1]:
+                o6[c, j, 1] = a
             a = outside_term(v, band, k)
-            if a > red[c, j, 2]:
-                red[c, j, 2] = a
-    for i in range(snapO.shape[1]):
+            if a > o6[c, j, 2]:
+                o6[c, j, 2] = a
+    for i in range(o8.shape[1]):
         for l in range(W):
             c = cl[l]
-            if snap_k[case_index(snap_k.shape[0], c), i] == k:
-                for j in range(snapO.shape[2]):
-                    snapO[c, i, j] = ov[j, l]
-                if snapE.shape[1] > 0 and Qv.shape[0] > 0:
-                    snapE[c, i] = energy(Qv, x, qx, l)
+            if o5[case_index(o5.shape[0], c), i] == k:
+                for j in range(o8.shape[2]):
+                    o8[c, i, j] = ov[j, l]
+                if o9.shape[1] > 0 and Qv.shape[0] > 0:
+                    o9[c, i] = energy(Qv, x, qx, l)
 
 
 @overload(record_sample, inline="always")
-def _record_sample(sink, loop, k, cl, x, y, ucmd, f, ov, Qv, qx, W):
+def _record_sample(
+    sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, x, y, ucmd, f, ov, Qv, qx, W
+):
     return _reductions_sample if _reductions(sink) else _history_sample
 
 
-def _history_inputs(sink, k, cl, u, d, W):
-    U, D = sink[3], sink[4]
+def _history_inputs(sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, u, d, W):
+    """:func:`record_inputs` of :class:`Records` (o3, o4 = U, D)."""
     for i in range(u.shape[0]):
         for l in range(W):
-            U[cl[l], k, i] = u[i, l]
-            D[cl[l], k, i] = d[i, l]
+            o3[cl[l], k, i] = u[i, l]
+            o4[cl[l], k, i] = d[i, l]
 
 
-def _reductions_inputs(sink, k, cl, u, d, W):
-    upeak = sink.upeak
-    for i in range(min(u.shape[0], upeak.shape[1])):
+def _reductions_inputs(sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, u, d, W):
+    """:func:`record_inputs` of :class:`Reductions` (o7 = upeak)."""
+    for i in range(min(u.shape[0], o7.shape[1])):
         for l in range(W):
             a = peak_term(u[i, l])
-            if a > upeak[cl[l], i]:
-                upeak[cl[l], i] = a
+            if a > o7[cl[l], i]:
+                o7[cl[l], i] = a
 
 
 @overload(record_inputs, inline="always")
-def _record_inputs(sink, k, cl, u, d, W):
+def _record_inputs(sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, u, d, W):
     return _reductions_inputs if _reductions(sink) else _history_inputs
 
 
@@ -296,20 +328,32 @@ def _group(c0, nl, loop, sink):
     W, n_t, r, with_energy = lane_layout(sink, loop)
     n, m, p, nk = loop.x0.shape[1], loop.P1u.shape[2], loop.Cm.shape[1], loop.Ak.shape[2]
     fir_src, fir_dst, fir_w = loop.fir_src, loop.fir_dst, loop.fir_w
-    has_force = loop.P1f.shape[0] > 0
+    imp_k, imp_dx, sensor_slot, noise = loop.imp_k, loop.imp_dx, loop.sensor_slot, loop.noise
+    Ak, Bk, Ck, Dk, y_ref, u_ff, K0 = (
+        loop.Ak,
+        loop.Bk,
+        loop.Ck,
+        loop.Dk,
+        loop.y_ref,
+        loop.u_ff,
+        loop.K0,
+    )
+    bound, dist_slot, substeps = loop.bound, loop.dist_slot, loop.substeps
+    block_diagonal, has_force = loop.block_diagonal, loop.P1f.shape[0] > 0
     cl = np.empty(W, np.int64)
     for l in range(W):
         cl[l] = c0 + min(l, nl - 1)
     (Mt, Et, P1v, Dmv, Dmfv, sensv, Dov, Dofv, actv, dstdv, p1f, p2f, crv, c1, c2, eps, Qv) = (
         lane_parameters(loop, cl, W, r, with_energy)
     )
-    stop = sink[-1]
     start_records(sink, cl, W)
+    o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10 = output_arrays(sink)
+    stop = o10
     x = np.empty((n, W))
     for l in range(W):
         for j in range(n):
             x[j, l] = loop.x0[cl[l], j]
-    xa = np.empty((Et.shape[1] if not loop.block_diagonal else n, W))
+    xa = np.empty((Et.shape[1] if not block_diagonal else n, W))
     drive = np.empty((n, W))
     qx = np.empty((n, W))
     w = np.zeros((m, W))  # input applied over the previous period (none before the first sample)
@@ -323,7 +367,7 @@ def _group(c0, nl, loop, sink):
     f = np.zeros(W)
     f0 = np.zeros(W)
     df = np.zeros(W)
-    sc = np.empty((4, W))
+    s0, s1, s2, s3 = np.empty(W), np.empty(W), np.empty(W), np.empty(W)
     xi = np.zeros((nk, W))
     xi_new = np.empty((nk, W))
     hist = np.empty((max(fir_w.shape[0], 1), W))
@@ -333,23 +377,25 @@ def _group(c0, nl, loop, sink):
     i_imp = 0
     for k in range(n_t):
         # 1. impulses
-        i_imp = apply_impulses(x, loop.imp_k, loop.imp_dx, i_imp, k, cl, W)
+        i_imp = apply_impulses(x, imp_k, imp_dx, i_imp, k, cl, W)
         # 2. force at the sample
         if has_force:
-            friction(x, crv, c1, c2, eps, f, sc[0], sc[1], sc[2], sc[3], W)
+            friction(x, n, crv, c1, c2, eps, f, s0, s1, s2, s3, W)
         # 3.-4. measurement and sensors; the output rows' state part
         row_products(Mt, x, acc, W)
-        measure(acc, w, f, Dmv, Dmfv, sensv, loop.sensor_slot, loop.noise, cl, k, y, W)
+        measure(acc, w, f, Dmv, Dmfv, sensv, sensor_slot, noise, cl, k, y, W)
         # 5. FIR-derivative channel
         if fir_src >= 0:
             head = fir_derivative(y, hist, head, k, fir_src, fir_dst, fir_w, W)
         # 6. law
-        law(loop, k, y, e, xi, xi_new, ucmd, bad, cl, W)
+        law(Ak, Bk, Ck, Dk, y_ref, u_ff, K0, bound, k, y, e, xi, xi_new, ucmd, bad, cl, W)
         # 7. divergence, records at the sample; a diverged lane is stopped there (its later
         # numbers are not used)
-        diverged(x, loop.bound, bad, W)
+        diverged(x, bound, bad, W)
         output_rows(acc, p, w, f, Dov, Dofv, ov, W)
-        record_sample(sink, loop, k, cl, x, y, ucmd, f, ov, Qv, qx, W)
+        record_sample(
+            sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, x, y, ucmd, f, ov, Qv, qx, W
+        )
         running = False
         for l in range(W):
             if bad[l] and alive[l]:
@@ -357,14 +403,37 @@ def _group(c0, nl, loop, sink):
                 alive[l] = False
             running = running or alive[l]
         if not running:
-            return
+            break
         # 8. actuator and disturbance
-        actuate(ucmd, actv, dstdv, loop.dist_slot, loop.noise, cl, k, u, d, w, W)
-        record_inputs(sink, k, cl, u, d, W)
+        actuate(ucmd, actv, dstdv, dist_slot, noise, cl, k, u, d, w, W)
+        record_inputs(sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, u, d, W)
         if k == n_t - 1:
             break
         # 9. propagation over the period with the held input
-        propagate(loop, x, xa, drive, w, P1v, Et, p1f, p2f, crv, c1, c2, eps, f0, df, sc, W)
+        propagate(
+            block_diagonal,
+            has_force,
+            substeps,
+            x,
+            xa,
+            drive,
+            w,
+            P1v,
+            Et,
+            p1f,
+            p2f,
+            crv,
+            c1,
+            c2,
+            eps,
+            f0,
+            df,
+            s0,
+            s1,
+            s2,
+            s3,
+            W,
+        )
 
 
 # ------------------------------------------------------------------------------------------
