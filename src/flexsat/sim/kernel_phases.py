@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexsat.sim.kernel_arrays import cached_jit, case_index
+from flexsat.sim.kernel_arrays import Loop, cached_jit, case_index
 from flexsat.sim.step import actuated, friction_torque, quantised, saturated
 
 __all__ = [
@@ -49,7 +49,9 @@ _inline = cached_jit(inline="always", error_model="numpy")
 
 
 @_inline
-def lane_parameters(loop, cl, W, r, energy_rows):
+def lane_parameters(
+    loop: Loop, cl: np.ndarray, W: int, r: np.ndarray, energy_rows: bool
+) -> tuple[np.ndarray, ...]:
     """The per-case arrays of the group's cases ``cl`` (W,) gathered lanes last.
 
     Returns (Mt, Et, P1v, Dmv, Dmfv, sensv, Dov, Dofv, actv, dstdv, p1f, p2f, crv, c1, c2,
@@ -134,7 +136,9 @@ def lane_parameters(loop, cl, W, r, energy_rows):
 
 
 @_inline
-def apply_impulses(x, imp_k, imp_dx, i_imp, k, cl, W):
+def apply_impulses(
+    x: np.ndarray, imp_k: np.ndarray, imp_dx: np.ndarray, i_imp: int, k: int, cl: np.ndarray, W: int
+) -> int:
     """Phase 1: x += Δx of the impulses due at sample k (``imp_k`` ascending from ``i_imp``);
     returns the index of the next impulse."""
     while i_imp < imp_k.shape[0] and imp_k[i_imp] == k:
@@ -146,30 +150,57 @@ def apply_impulses(x, imp_k, imp_dx, i_imp, k, cl, W):
 
 
 @_inline
-def friction(x, n, crv, c1, c2, eps, out, s0, s1, s2, s3, W):
+def friction(
+    x: np.ndarray,
+    n: int,
+    crv: np.ndarray,
+    c1: np.ndarray,
+    c2: np.ndarray,
+    eps: np.ndarray,
+    out: np.ndarray,
+    s0: np.ndarray,
+    s1: np.ndarray,
+    s2: np.ndarray,
+    s3: np.ndarray,
+    W: int,
+) -> None:
     """Phases 2 and 9: out = N(x) = −c1 tanh(r/ε) − c2 r per lane, r = C_r x in four
     interleaved partial sums (s0 .. s3 (W,) scratch): a single chain of dependent additions is
     latency-bound (it was half the cost of a friction substep); x (>= n, W)."""
-    for l in range(W):
-        s0[l] = s1[l] = s2[l] = s3[l] = 0.0
-    j = 0
-    while j + 4 <= n:
+    if W == 1:  # the partial sums in registers (in memory, a store-load latency per term)
+        a0 = a1 = a2 = a3 = 0.0
+        j = 0
+        while j + 4 <= n:
+            a0 += crv[j, 0] * x[j, 0]
+            a1 += crv[j + 1, 0] * x[j + 1, 0]
+            a2 += crv[j + 2, 0] * x[j + 2, 0]
+            a3 += crv[j + 3, 0] * x[j + 3, 0]
+            j += 4
+        while j < n:
+            a0 += crv[j, 0] * x[j, 0]
+            j += 1
+        s0[0], s1[0], s2[0], s3[0] = a0, a1, a2, a3
+    else:  # the lanes innermost: one vector operation per term
         for l in range(W):
-            s0[l] += crv[j, l] * x[j, l]
-            s1[l] += crv[j + 1, l] * x[j + 1, l]
-            s2[l] += crv[j + 2, l] * x[j + 2, l]
-            s3[l] += crv[j + 3, l] * x[j + 3, l]
-        j += 4
-    while j < n:
-        for l in range(W):
-            s0[l] += crv[j, l] * x[j, l]
-        j += 1
+            s0[l] = s1[l] = s2[l] = s3[l] = 0.0
+        j = 0
+        while j + 4 <= n:
+            for l in range(W):
+                s0[l] += crv[j, l] * x[j, l]
+                s1[l] += crv[j + 1, l] * x[j + 1, l]
+                s2[l] += crv[j + 2, l] * x[j + 2, l]
+                s3[l] += crv[j + 3, l] * x[j + 3, l]
+            j += 4
+        while j < n:
+            for l in range(W):
+                s0[l] += crv[j, l] * x[j, l]
+            j += 1
     for l in range(W):
         out[l] = friction_torque((s0[l] + s1[l]) + (s2[l] + s3[l]), c1[l], c2[l], eps[l])
 
 
 @_inline
-def row_products(Mt, x, out, W):
+def row_products(Mt: np.ndarray, x: np.ndarray, out: np.ndarray, W: int) -> None:
     """out[i] = Σ_j Mt[j, i] x[j] per lane, each row summed in the order j = 0 .. n − 1.
 
     Eight independent chains of additions in registers, where one row's sum alone is a chain
@@ -208,7 +239,20 @@ def row_products(Mt, x, out, W):
 
 
 @_inline
-def measure(acc, w, f, Dmv, Dmfv, sensv, sensor_slot, noise, cl, k, y, W):
+def measure(
+    acc: np.ndarray,
+    w: np.ndarray,
+    f: np.ndarray,
+    Dmv: np.ndarray,
+    Dmfv: np.ndarray,
+    sensv: np.ndarray,
+    sensor_slot: np.ndarray,
+    noise: np.ndarray,
+    cl: np.ndarray,
+    k: int,
+    y: np.ndarray,
+    W: int,
+) -> None:
     """Phases 3-4: y_i = sensor(C_m[i] x + D_m[i] w + D_mf[i] f) per lane, C_m x in ``acc``:
     bias, noise std · noise[c, k, slot], quantiser, saturation (:mod:`flexsat.sim.step`)."""
     for i in range(Dmv.shape[0]):
@@ -228,7 +272,16 @@ def measure(acc, w, f, Dmv, Dmfv, sensv, sensor_slot, noise, cl, k, y, W):
 
 
 @_inline
-def fir_derivative(y, hist, head, k, src, dst, fir_w, W):
+def fir_derivative(
+    y: np.ndarray,
+    hist: np.ndarray,
+    head: int,
+    k: int,
+    src: int,
+    dst: int,
+    fir_w: np.ndarray,
+    W: int,
+) -> int:
     """Phase 5: y[dst] = Σ_j c_j v_src(t_{k−L+1+j}) per lane, the ring buffer ``hist`` (L, W)
     started full of the first sample; returns the new ``head`` (its oldest sample)."""
     L = fir_w.shape[0]
@@ -249,7 +302,25 @@ def fir_derivative(y, hist, head, k, src, dst, fir_w, W):
 
 
 @_inline
-def law(Ak, Bk, Ck, Dk, y_ref, u_ff, K0, bound, k, y, e, xi, xi_new, ucmd, bad, cl, W):
+def law(
+    Ak: np.ndarray,
+    Bk: np.ndarray,
+    Ck: np.ndarray,
+    Dk: np.ndarray,
+    y_ref: np.ndarray,
+    u_ff: np.ndarray,
+    K0: np.ndarray,
+    bound: float,
+    k: int,
+    y: np.ndarray,
+    e: np.ndarray,
+    xi: np.ndarray,
+    xi_new: np.ndarray,
+    ucmd: np.ndarray,
+    bad: np.ndarray,
+    cl: np.ndarray,
+    W: int,
+) -> None:
     """Phase 6, the law's linear form per lane, e = y − y_ref[k]: ξ_0 = K0 e_0 (K0 given),
     u_cmd = u_ff[k] + C_k ξ + D_k e, ξ ← A_k ξ + B_k e; bad[l] = a command beyond the bound
     or not finite."""
@@ -296,7 +367,7 @@ def law(Ak, Bk, Ck, Dk, y_ref, u_ff, K0, bound, k, y, e, xi, xi_new, ucmd, bad, 
 
 
 @_inline
-def diverged(x, bound, bad, W):
+def diverged(x: np.ndarray, bound: float, bad: np.ndarray, W: int) -> None:
     """Phase 7: bad[l] |= some |x_j| beyond ``bound`` or not finite."""
     for j in range(x.shape[0]):
         for l in range(W):
@@ -305,7 +376,16 @@ def diverged(x, bound, bad, W):
 
 
 @_inline
-def output_rows(acc, p, w, f, Dov, Dofv, out, W):
+def output_rows(
+    acc: np.ndarray,
+    p: int,
+    w: np.ndarray,
+    f: np.ndarray,
+    Dov: np.ndarray,
+    Dofv: np.ndarray,
+    out: np.ndarray,
+    W: int,
+) -> None:
     """The recorded outputs o_i = C_o[i] x + D_of[i] f + D_o[i] w per lane, C_o x in
     ``acc[p:]``."""
     for i in range(Dov.shape[0]):
@@ -317,7 +397,7 @@ def output_rows(acc, p, w, f, Dov, Dofv, out, W):
 
 
 @_inline
-def energy(Qv, x, qx, l):
+def energy(Qv: np.ndarray, x: np.ndarray, qx: np.ndarray, l: int) -> float:
     """½ xᵀ Q x of lane l, v = Q x accumulated column by column (Q symmetric: row j is column
     j; independent element-wise updates the compiler vectorises, where n dot products are each
     a chain of dependent additions: 3× slower at n = 22), then xᵀ v in four partial sums."""
@@ -342,11 +422,20 @@ def energy(Qv, x, qx, l):
     return 0.5 * ((s0 + s1) + (s2 + s3))
 
 
-# a call, not inlined: inlined, its array arguments cost an atomic reference count increment
-# and decrement each per sample (numba's pruning does not pair them here: +40 % on a linear
-# modal step)
-@cached_jit(error_model="numpy")
-def actuate(ucmd, actv, dstdv, dist_slot, noise, cl, k, u, d, w, W):
+@_inline
+def actuate(
+    ucmd: np.ndarray,
+    actv: np.ndarray,
+    dstdv: np.ndarray,
+    dist_slot: np.ndarray,
+    noise: np.ndarray,
+    cl: np.ndarray,
+    k: int,
+    u: np.ndarray,
+    d: np.ndarray,
+    w: np.ndarray,
+    W: int,
+) -> None:
     """Phase 8: u = scale · clip(u_cmd, ±sat), d = std · noise[c, k, slot] (0 without a
     slot), the applied input w = u + d per element and lane."""
     for i in range(ucmd.shape[0]):
@@ -359,29 +448,29 @@ def actuate(ucmd, actv, dstdv, dist_slot, noise, cl, k, u, d, w, W):
 
 @_inline
 def propagate(
-    block_diagonal,
-    has_force,
-    substeps,
-    x,
-    xa,
-    drive,
-    w,
-    P1v,
-    Et,
-    p1f,
-    p2f,
-    crv,
-    c1,
-    c2,
-    eps,
-    f0,
-    df,
-    s0,
-    s1,
-    s2,
-    s3,
-    W,
-):
+    block_diagonal: bool,
+    has_force: bool,
+    substeps: int,
+    x: np.ndarray,
+    xa: np.ndarray,
+    drive: np.ndarray,
+    w: np.ndarray,
+    P1v: np.ndarray,
+    Et: np.ndarray,
+    p1f: np.ndarray,
+    p2f: np.ndarray,
+    crv: np.ndarray,
+    c1: np.ndarray,
+    c2: np.ndarray,
+    eps: np.ndarray,
+    f0: np.ndarray,
+    df: np.ndarray,
+    s0: np.ndarray,
+    s1: np.ndarray,
+    s2: np.ndarray,
+    s3: np.ndarray,
+    W: int,
+) -> None:
     """Phase 9: ``substeps`` steps of x' = A x + B w + b_f N(x) with w held, the exponential
     integrator a = E x + P1u w + P1f N(x), x ← a + P2f (N(a) − N(x)) (ETD2RK, Cox & Matthews
     2002 Eq. 22; the exact zero-order hold without a force). E x is dense (:func:`row_products`

@@ -77,6 +77,8 @@ are a positive quantum, a positive smoothing speed and the FIR length, validated
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import prange
 from numba.extending import overload
@@ -142,38 +144,38 @@ LANES = 8
 # use (a third of a linear modal step).
 
 
-def _reductions(sink) -> bool:
+def _reductions(sink: Any) -> bool:
     """The numba type of an output record is that of :class:`Reductions` (else: records)."""
     return getattr(sink, "instance_class", None) is Reductions
 
 
-def lane_layout(sink, loop):  # type: ignore[no-untyped-def]  # numba stub (overloaded)
+def lane_layout(sink: Records | Reductions, loop: Loop) -> tuple[int, int, int, bool]:
     """(W, n_t, r, energy): lanes per group, samples, output rows and whether the energy is
     computed, for the output record ``sink``."""
     raise NotImplementedError("compiled only (numba overload)")
 
 
-def output_arrays(sink):  # type: ignore[no-untyped-def]  # numba stub (overloaded)
+def output_arrays(sink: Records | Reductions) -> tuple[np.ndarray, ...]:
     """The arrays of the output record as 11 (the fields of :class:`Reductions`; the 9 of
-    :class:`Records` then ``stop`` twice more)."""
+    :class:`Records` then ``stop`` twice more), named o0 .. o10 in the hooks."""
     raise NotImplementedError("compiled only (numba overload)")
 
 
-def start_records(sink, cl, W):  # type: ignore[no-untyped-def]  # numba stub (overloaded)
+def start_records(sink: Records | Reductions, cl: np.ndarray, W: int) -> None:
     """Initialise the outputs of the group's cases ``cl`` (stop = −1, empty reductions)."""
     raise NotImplementedError("compiled only (numba overload)")
 
 
-def record_sample(
-    sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, x, y, ucmd, f, ov, Qv, qx, W
-):  # type: ignore[no-untyped-def]  # noqa: E501
-    """Record sample k of each lane: states, measurements, commands, force, output rows and
-    energy (records), or the reductions' running maxima and snapshots (reductions)."""
+def record_sample(sink: Records | Reductions, *outputs_and_sample: Any) -> None:
+    """Record sample k of each lane (arguments: :func:`_record_sample`): states,
+    measurements, commands, force, output rows and energy (records), or the reductions'
+    running maxima and snapshots (reductions)."""
     raise NotImplementedError("compiled only (numba overload)")
 
 
-def record_inputs(sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, u, d, W):  # type: ignore[no-untyped-def]  # noqa: E501
-    """Record the actuator outputs u and the disturbances d of sample k of each lane."""
+def record_inputs(sink: Records | Reductions, *outputs_and_inputs: Any) -> None:
+    """Record the actuator outputs u and the disturbances d of sample k of each lane
+    (arguments: :func:`_record_inputs`)."""
     raise NotImplementedError("compiled only (numba overload)")
 
 
@@ -396,6 +398,8 @@ def _group(c0, nl, loop, sink):
         record_sample(
             sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, x, y, ucmd, f, ov, Qv, qx, W
         )
+        # 8. actuator and disturbance (recorded only for a lane still running)
+        actuate(ucmd, actv, dstdv, dist_slot, noise, cl, k, u, d, w, W)
         running = False
         for l in range(W):
             if bad[l] and alive[l]:
@@ -404,8 +408,6 @@ def _group(c0, nl, loop, sink):
             running = running or alive[l]
         if not running:
             break
-        # 8. actuator and disturbance
-        actuate(ucmd, actv, dstdv, dist_slot, noise, cl, k, u, d, w, W)
         record_inputs(sink, o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, k, cl, u, d, W)
         if k == n_t - 1:
             break
