@@ -73,6 +73,11 @@ run, compiled here.
 
 The kernels use numba's numpy error model: no zero-division checks in the loop (the divisors
 are a positive quantum, a positive smoothing speed and the FIR length, validated upstream).
+
+numba's on-disk cache of a kernel is invalidated by a change of the file that defines it
+only: after editing :mod:`flexsat.sim.kernel_phases`, :mod:`flexsat.sim.kernel_arrays`,
+:mod:`flexsat.sim.step` or :mod:`flexsat.sim.metrics` alone, delete the cache (``__pycache__``
+of this package or ``NUMBA_CACHE_DIR``), or the kernels run the code compiled before the edit.
 """
 
 from __future__ import annotations
