@@ -39,7 +39,10 @@ __all__ = [
     "measure",
     "output_rows",
     "propagate",
+    "row_count",
+    "row_entry",
     "row_products",
+    "rows_shape",
 ]
 
 #: register blocking of :func:`row_products`: eight rows (W = 1) or eight lanes (W = 8)
@@ -55,19 +58,15 @@ def lane_parameters(
     """The per-case arrays of the group's cases ``cl`` (W,) gathered lanes last.
 
     Returns (Mt, Et, P1v, Dmv, Dmfv, sensv, Dov, Dofv, actv, dstdv, p1f, p2f, crv, c1, c2,
-    eps, Qv): Mt (n, Rp, W) the p measurement rows then the first r output rows, transposed;
-    Et the dense propagator transposed (n, n_p, W) or the 2×2 blocks (n, 2, W), Rp and n_p
-    padded with zero rows to groups of :data:`BLOCK` when W = 1 (:func:`row_products`); Qv
-    (n, n, W) with ``energy_rows``, else empty."""
+    eps, Qv): Mt the p measurement rows then the first r output rows, Et the dense propagator
+    (each a matrix of rows in the layout of :func:`row_products`, :func:`row_entry`) or the
+    2×2 blocks (n, 2, W); Qv (n, n, W) with ``energy_rows``, else empty."""
     x0, E, block_diagonal, P1u, P1f, P2f, Cr, fric = loop[:8]
     Cm, Dm, Dmf, sensor = loop.Cm, loop.Dm, loop.Dmf, loop.sensor
     act, dist_std, Co, Do, Dof, Q = loop.act, loop.dist_std, loop.Co, loop.Do, loop.Dof, loop.Q
     n, m, p = x0.shape[1], P1u.shape[2], Cm.shape[1]
-    R = p + r
-    pad = (R + BLOCK - 1) // BLOCK * BLOCK if W == 1 else R
-    npad = (n + BLOCK - 1) // BLOCK * BLOCK if W == 1 else n
-    Mt = np.zeros((n, pad, W))
-    Et = np.zeros((n, 2 if block_diagonal else npad, W))
+    Mt = np.zeros(rows_shape(p + r, n, W))
+    Et = np.zeros((n, 2, W) if block_diagonal else rows_shape(n, n, W))
     P1v = np.empty((n, m, W))
     Dmv = np.empty((p, m, W))
     Dmfv = np.empty((p, W))
@@ -94,15 +93,18 @@ def lane_parameters(
         co = case_index(Co.shape[0], c)
         for j in range(n):
             for i in range(p):
-                Mt[j, i, l] = Cm[cm, i, j]
+                a, b = row_entry(i, j, n, W)
+                Mt[a, b, l] = Cm[cm, i, j]
             for i in range(r):
-                Mt[j, p + i, l] = Co[co, i, j]
+                a, b = row_entry(p + i, j, n, W)
+                Mt[a, b, l] = Co[co, i, j]
             if block_diagonal:  # row j holds the two entries of its 2×2 block
                 Et[j, 0, l] = E[cp, j, 0]
                 Et[j, 1, l] = E[cp, j, 1]
             else:
                 for i in range(n):
-                    Et[j, i, l] = E[cp, i, j]
+                    a, b = row_entry(i, j, n, W)
+                    Et[a, b, l] = E[cp, i, j]
             for i in range(m):
                 P1v[j, i, l] = P1u[cu, j, i]
         for i in range(p):
@@ -200,26 +202,56 @@ def friction(
 
 
 @_inline
+def rows_shape(R: int, n: int, W: int) -> tuple[int, int, int]:
+    """Shape of a matrix of R rows of length n in the layout of :func:`row_products`:
+    (n, R, W) for W > 1 (entry (i, j) of lane l at [j, i, l]); for W = 1 the rows in groups
+    of :data:`BLOCK` (padded with zero rows), each group a block (n, BLOCK): (g n, BLOCK, 1),
+    entry (i, j) at [(i // BLOCK) n + j, i % BLOCK, 0] (:func:`row_entry`)."""
+    if W == 1:
+        return (R + BLOCK - 1) // BLOCK * n, BLOCK, W
+    return n, R, W
+
+
+@_inline
+def row_entry(i: int, j: int, n: int, W: int) -> tuple[int, int]:
+    """The first two indices of entry (i, j) (row i, column j) in the layout of
+    :func:`rows_shape`."""
+    if W == 1:
+        return i // BLOCK * n + j, i % BLOCK
+    return j, i
+
+
+@_inline
+def row_count(M: np.ndarray, n: int) -> int:
+    """Rows of a matrix M in the layout of :func:`rows_shape` (padded for W = 1)."""
+    return M.shape[0] // n * M.shape[1]
+
+
+@_inline
 def row_products(Mt: np.ndarray, x: np.ndarray, out: np.ndarray, W: int) -> None:
-    """out[i] = Σ_j Mt[j, i] x[j] per lane, each row summed in the order j = 0 .. n − 1.
+    """out[i] = Σ_j M[i, j] x[j] per lane, M in the layout of :func:`rows_shape`, each row
+    summed in the order j = 0 .. n − 1.
 
     Eight independent chains of additions in registers, where one row's sum alone is a chain
-    of dependent additions: eight rows of the one lane for W = 1 (Mt's rows padded to groups
-    of :data:`BLOCK`), the eight lanes of one row for W = 8."""
+    of dependent additions: eight rows of the one lane for W = 1 (a block of Mt: the eight
+    entries of column j side by side, read from one pointer), the eight lanes of one row for
+    W = 8."""
     n = x.shape[0]
     if W == 1:
-        for i0 in range(0, Mt.shape[1], BLOCK):
+        for g in range(Mt.shape[0] // n):
             s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
             for j in range(n):
                 xj = x[j, 0]
-                s0 += Mt[j, i0, 0] * xj
-                s1 += Mt[j, i0 + 1, 0] * xj
-                s2 += Mt[j, i0 + 2, 0] * xj
-                s3 += Mt[j, i0 + 3, 0] * xj
-                s4 += Mt[j, i0 + 4, 0] * xj
-                s5 += Mt[j, i0 + 5, 0] * xj
-                s6 += Mt[j, i0 + 6, 0] * xj
-                s7 += Mt[j, i0 + 7, 0] * xj
+                jg = g * n + j
+                s0 += Mt[jg, 0, 0] * xj
+                s1 += Mt[jg, 1, 0] * xj
+                s2 += Mt[jg, 2, 0] * xj
+                s3 += Mt[jg, 3, 0] * xj
+                s4 += Mt[jg, 4, 0] * xj
+                s5 += Mt[jg, 5, 0] * xj
+                s6 += Mt[jg, 6, 0] * xj
+                s7 += Mt[jg, 7, 0] * xj
+            i0 = g * BLOCK
             out[i0, 0], out[i0 + 1, 0], out[i0 + 2, 0], out[i0 + 3, 0] = s0, s1, s2, s3
             out[i0 + 4, 0], out[i0 + 5, 0], out[i0 + 6, 0], out[i0 + 7, 0] = s4, s5, s6, s7
     else:
@@ -476,12 +508,19 @@ def propagate(
     2002 Eq. 22; the exact zero-order hold without a force). E x is dense (:func:`row_products`
     on Et = Eᵀ) or 2×2 block-diagonal; s0 .. s3 (W,) scratch of :func:`friction`."""
     n, m = x.shape[0], w.shape[0]
-    for i in range(n):
-        for l in range(W):
-            drive[i, l] = 0.0
-        for j in range(m):
+    if W == 1:  # the sum in a register (in memory: a store and a load per term)
+        for i in range(n):
+            s = 0.0
+            for j in range(m):
+                s += P1v[i, j, 0] * w[j, 0]
+            drive[i, 0] = s
+    else:  # the lanes innermost: one vector operation per term
+        for i in range(n):
             for l in range(W):
-                drive[i, l] += P1v[i, j, l] * w[j, l]
+                drive[i, l] = 0.0
+            for j in range(m):
+                for l in range(W):
+                    drive[i, l] += P1v[i, j, l] * w[j, l]
     fused = block_diagonal and not has_force
     for _ in range(substeps):
         if fused:  # x ← E x + drive in one pass over the 2×2 blocks (the same operations)

@@ -111,6 +111,7 @@ from flexsat.sim.kernel_phases import (
     measure,
     output_rows,
     propagate,
+    row_count,
     row_products,
 )
 from flexsat.sim.metrics import outside_term, past_term, peak_term
@@ -360,7 +361,7 @@ def _group(c0, nl, loop, sink):
     for l in range(W):
         for j in range(n):
             x[j, l] = loop.x0[cl[l], j]
-    xa = np.empty((Et.shape[1] if not block_diagonal else n, W))
+    xa = np.empty((n if block_diagonal else row_count(Et, n), W))
     drive = np.empty((n, W))
     qx = np.empty((n, W))
     w = np.zeros((m, W))  # input applied over the previous period (none before the first sample)
@@ -369,7 +370,7 @@ def _group(c0, nl, loop, sink):
     d = np.empty((m, W))
     y = np.empty((p, W))
     e = np.empty((p, W))
-    acc = np.empty((Mt.shape[1], W))
+    acc = np.empty((row_count(Mt, n), W))
     ov = np.empty((r, W))
     f = np.zeros(W)
     f0 = np.zeros(W)
