@@ -11,9 +11,9 @@ the module docstring of :mod:`flexsat.sim.kernels`.
 
 The phases are numba functions inlined into the kernel (``inline="always"``): W is a constant
 there, so the lane loops of W = 1 vanish. Only the products with a matrix of rows (the
-measurement and output rows, the dense propagator) take a different loop order per W, to hold
-eight independent sums in registers (:func:`row_products`); each row is still summed in the
-order j = 0 .. n − 1.
+measurement and output rows, the dense propagator) take a different loop order and layout per
+W, to hold eight independent sums in registers (:func:`row_products`, :func:`rows_shape`);
+each row is still summed in the order j = 0 .. n − 1.
 
 Formulas shared with the Python loop of :func:`flexsat.sim.engine.simulate` (quantiser,
 saturation, actuator, bearing friction) come from :mod:`flexsat.sim.step`, the maneuver
