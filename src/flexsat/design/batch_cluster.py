@@ -15,8 +15,11 @@ connection (a refused one fails at once), does distributed's handshake and asks 
 from __future__ import annotations
 
 import asyncio
+import logging
 import socket
+from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from typing import Any
 
 from flexsat.input_checks import FieldError, require_count
@@ -89,6 +92,25 @@ def check_scheduler(address: str) -> None:
         raise refuse(f"what answers there is a {kind!s}, not a dask scheduler")
 
 
+#: the loggers of a dask cluster's event loop and comms
+CLUSTER_LOGGERS = ("distributed", "tornado", "asyncio")
+
+
+@contextmanager
+def quiet_shutdown() -> Iterator[None]:
+    """Silence the cluster's loggers below CRITICAL while it is torn down after an interruption
+    (restored on exit)."""
+    loggers = [logging.getLogger(name) for name in CLUSTER_LOGGERS]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for logger, level in zip(loggers, levels):
+            logger.setLevel(level)
+
+
 def batch_client(workers: int | None, scheduler: str | None) -> tuple[Any, Any]:
     """(client, cluster or None): in-process, a local cluster of ``workers`` processes, or the
     existing cluster at ``scheduler`` (checked first, :func:`check_scheduler`).
@@ -131,4 +153,10 @@ def batch_client(workers: int | None, scheduler: str | None) -> tuple[Any, Any]:
     return Client(cluster, set_as_default=False), cluster
 
 
-__all__ = ["CONNECT_TIMEOUT", "batch_client", "check_scheduler"]
+__all__ = [
+    "CLUSTER_LOGGERS",
+    "CONNECT_TIMEOUT",
+    "batch_client",
+    "check_scheduler",
+    "quiet_shutdown",
+]

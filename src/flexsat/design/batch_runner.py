@@ -94,7 +94,7 @@ import xarray as xr
 
 from flexsat import limits
 from flexsat.control.lyapunov import LyapunovTracker
-from flexsat.design.batch_cluster import CONNECT_TIMEOUT, batch_client
+from flexsat.design.batch_cluster import CONNECT_TIMEOUT, batch_client, quiet_shutdown
 from flexsat.design.batch_store import (
     STORE_LAYOUT,
     StoreLock,
@@ -914,6 +914,12 @@ def run_batch(
                         )
                     )
         except KeyboardInterrupt as exc:
+            # the cluster is torn down mid-task: its event loop logs the cancelled callbacks
+            # as errors with tracebacks, noise beside the one message the interruption gives
+            with quiet_shutdown():
+                client.close()
+                if cluster is not None:
+                    cluster.close()
             raise BatchInterrupted(path, cases_done, n_cases) from exc
         finally:
             client.close()
