@@ -79,3 +79,25 @@ def set_at(data, path, value):
 def delete_at(data, path):
     """Delete the key (or list item) at key path ``path``."""
     del get_at(data, path[:-1])[path[-1]]
+
+
+def mutate(draw, data, values, unknown_keys, path_first: bool = False):
+    """One to three mutations of the parsed document ``data``, in place: a value at a key path
+    replaced by one of ``values``, a key deleted, or an unknown key (one of ``unknown_keys``)
+    added to a mapping. ``draw`` is a ``@st.composite``'s; ``path_first`` draws the key path
+    before the action (the order a test's stored examples were made with)."""
+    for _ in range(draw(st.integers(1, 3))):
+        paths = key_paths(data)
+        if path_first:
+            path = draw(st.sampled_from(paths)) if paths else ()
+        action = draw(st.sampled_from(["set", "set", "set", "delete", "unknown"]))
+        if not path_first:
+            path = draw(st.sampled_from(paths)) if paths else ()
+        if action == "set" and path:
+            set_at(data, path, draw(values))
+        elif action == "delete" and path:
+            delete_at(data, path)
+        else:
+            parents = [()] + [p for p in paths if isinstance(get_at(data, p), dict)]
+            get_at(data, draw(st.sampled_from(parents)))[draw(st.sampled_from(unknown_keys))] = 1
+    return data

@@ -26,6 +26,7 @@ from hypothesis import strategies as st
 from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
 from flexsat.scenarios import cmg as cmg_kind
 from flexsat.sim import SimulationDiverged
+from scenario_mutations import mutate, set_at
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -74,27 +75,6 @@ def _table_once():
     patch.undo()
 
 
-def _paths(node, prefix=()) -> list[tuple]:
-    items = (
-        node.items()
-        if isinstance(node, dict)
-        else enumerate(node)
-        if isinstance(node, list)
-        else ()
-    )
-    out = []
-    for key, value in items:
-        out.append(prefix + (key,))
-        out.extend(_paths(value, prefix + (key,)))
-    return out
-
-
-def _get(data, path):
-    for key in path:
-        data = data[key]
-    return data
-
-
 NUMBERS = st.sampled_from(
     [0, -1, 1e308, -1e308, 1e-308, 2**70, 1e29, 1.5, 1e12, 100.0, math.nan, math.inf, -math.inf]
 )
@@ -116,19 +96,7 @@ VALUES = st.one_of(NUMBERS, BAD_UNITS, WRONG_TYPES)
 def documents(draw) -> str:
     """A short CMG example with one to three values replaced, keys deleted or added."""
     data = copy.deepcopy(BASES[draw(st.sampled_from(sorted(BASES)))])
-    for _ in range(draw(st.integers(1, 3))):
-        paths = _paths(data)
-        path = draw(st.sampled_from(paths)) if paths else ()
-        action = draw(st.sampled_from(["set", "set", "set", "delete", "unknown"]))
-        if action == "set" and path:
-            _get(data, path[:-1])[path[-1]] = draw(VALUES)
-        elif action == "delete" and path:
-            del _get(data, path[:-1])[path[-1]]
-        else:
-            parent = draw(
-                st.sampled_from([()] + [p for p in paths if isinstance(_get(data, p), dict)])
-            )
-            _get(data, parent)[draw(st.sampled_from(["colour", "Runs", "1"]))] = 1
+    mutate(draw, data, VALUES, ["colour", "Runs", "1"], path_first=True)
     return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
 
 
@@ -227,7 +195,7 @@ def test_the_unmutated_bases_run(name):
 )
 def test_what_the_property_found_is_refused_by_field(name, path, value, message):
     data = copy.deepcopy(BASES[name])
-    _get(data, path[:-1])[path[-1]] = value
+    set_at(data, path, value)
     with pytest.raises(ScenarioError, match=message):
         run_scenario(load_scenario(yaml.safe_dump(data, sort_keys=False)))
 
@@ -238,6 +206,6 @@ def test_what_the_property_found_is_refused_by_field(name, path, value, message)
 )
 def test_a_boolean_demand_is_refused_by_field(path, value):
     data = copy.deepcopy(BASES["cmg"])
-    _get(data, path[:-1])[path[-1]] = value
+    set_at(data, path, value)
     with pytest.raises(ScenarioError, match=r"runs.*must be three finite numbers"):
         load_scenario(yaml.safe_dump(data, sort_keys=False))

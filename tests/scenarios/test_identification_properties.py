@@ -22,6 +22,7 @@ from hypothesis import strategies as st
 
 from flexsat.scenarios import ScenarioError, load_scenario
 from flexsat.scenarios.identification import IdentificationKind
+from scenario_mutations import mutate, set_at
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "tamu_grid_identification.yaml"
 BASE = yaml.safe_load(EXAMPLE.read_text())
@@ -45,38 +46,9 @@ WRONG_TYPES = st.one_of(
 VALUES = st.one_of(NUMBERS, BAD_UNITS, WRONG_TYPES)
 
 
-def _paths(node, prefix=()) -> list[tuple]:
-    if isinstance(node, dict):
-        items = node.items()
-    else:
-        items = enumerate(node) if isinstance(node, list) else ()
-    out = []
-    for key, value in items:
-        out.append(prefix + (key,))
-        out.extend(_paths(value, prefix + (key,)))
-    return out
-
-
-def _get(data, path):
-    for key in path:
-        data = data[key]
-    return data
-
-
 @st.composite
 def documents(draw) -> str:
-    data = copy.deepcopy(BASE)
-    for _ in range(draw(st.integers(1, 3))):
-        paths = _paths(data)
-        action = draw(st.sampled_from(["set", "set", "set", "delete", "unknown"]))
-        path = draw(st.sampled_from(paths)) if paths else ()
-        if action == "set" and path:
-            _get(data, path[:-1])[path[-1]] = draw(VALUES)
-        elif action == "delete" and path:
-            del _get(data, path[:-1])[path[-1]]
-        else:
-            parents = [()] + [p for p in paths if isinstance(_get(data, p), dict)]
-            _get(data, draw(st.sampled_from(parents)))[draw(st.sampled_from(["gain", "Runs"]))] = 1
+    data = mutate(draw, copy.deepcopy(BASE), VALUES, ["gain", "Runs"])
     return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
 
 
@@ -127,5 +99,5 @@ def test_the_base_passes_both_stages():
 )
 def test_values_the_case_refuses_are_named(path, value):
     data = copy.deepcopy(BASE)
-    _get(data, path[:-1])[path[-1]] = value
+    set_at(data, path, value)
     assert _outcome(yaml.safe_dump(data, sort_keys=False)) == "error"

@@ -24,6 +24,7 @@ from flexsat.cases.tether import continuous_evaluations, make_law
 from flexsat.report.json_data import dumps
 from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
 from flexsat.sim import SimulationDiverged
+from scenario_mutations import mutate, set_at
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "tether_retrieval.yaml"
 
@@ -60,41 +61,9 @@ WRONG_TYPES = st.one_of(
 VALUES = st.one_of(NUMBERS, BAD_UNITS, WRONG_TYPES)
 
 
-def _paths(node, prefix=()) -> list[tuple]:
-    items = (
-        node.items()
-        if isinstance(node, dict)
-        else enumerate(node)
-        if isinstance(node, list)
-        else ()
-    )
-    out = []
-    for key, value in items:
-        out.append(prefix + (key,))
-        out.extend(_paths(value, prefix + (key,)))
-    return out
-
-
-def _get(data, path):
-    for key in path:
-        data = data[key]
-    return data
-
-
 @st.composite
 def documents(draw) -> str:
-    data = copy.deepcopy(BASE)
-    for _ in range(draw(st.integers(1, 3))):
-        paths = _paths(data)
-        action = draw(st.sampled_from(["set", "set", "set", "delete", "unknown"]))
-        path = draw(st.sampled_from(paths)) if paths else ()
-        if action == "set" and path:
-            _get(data, path[:-1])[path[-1]] = draw(VALUES)
-        elif action == "delete" and path:
-            del _get(data, path[:-1])[path[-1]]
-        else:
-            parents = [()] + [p for p in paths if isinstance(_get(data, p), dict)]
-            _get(data, draw(st.sampled_from(parents)))[draw(st.sampled_from(["K4", "Runs"]))] = 1
+    data = mutate(draw, copy.deepcopy(BASE), VALUES, ["K4", "Runs"])
     return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
 
 
@@ -193,5 +162,5 @@ def test_stiff_gains_are_refused_by_name_before_the_run(gain):
 )
 def test_extreme_values_end_cleanly(path, value):
     data = copy.deepcopy(BASE)
-    _get(data, path[:-1])[path[-1]] = value
+    set_at(data, path, value)
     assert _outcome(yaml.safe_dump(data, sort_keys=False)) in ("error", "diverged", "ran", "valid")
