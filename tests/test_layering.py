@@ -11,8 +11,8 @@ layer  units                                        what they are
 =====  ===========================================  ========================================
 0      flexsat (the package root), units,           helpers: SI conversion, input checks,
        input_checks, limits, lazy, text,            resource limits, lazy exports, display
-       references, netcdf, plugins                  text, the bibliography, netCDF writing,
-                                                    entry-point plug-ins
+       references, netcdf, plugins, file_locks      text, the bibliography, netCDF writing,
+                                                    entry-point plug-ins, file locks
 1      structures                                   FE models, modal models, their files
 2      analysis                                     Gramians, controllability, placement
 3      dynamics                                     plants built from structural models
@@ -60,6 +60,7 @@ LAYERS = (
         "references",
         "netcdf",
         "plugins",
+        "file_locks",
     ),
     ("structures",),
     ("analysis",),

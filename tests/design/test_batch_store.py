@@ -29,9 +29,10 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from flexsat import file_locks
 from flexsat.cases import tamu
 from flexsat.cli import app
-from flexsat.design import batch_cluster, batch_store
+from flexsat.design import batch_cluster
 from flexsat.design.batch_runner import (
     BatchInterrupted,
     HubManeuverBuilder,
@@ -231,7 +232,7 @@ def no_kernel_locks(monkeypatch):
     def unsupported(fd, operation):
         raise OSError(errno.ENOLCK, "No locks available")
 
-    monkeypatch.setattr(batch_store.fcntl, "flock", unsupported)
+    monkeypatch.setattr(file_locks.fcntl, "flock", unsupported)
 
 
 def test_without_kernel_locks_a_dead_holder_is_stale_and_a_live_one_refused(

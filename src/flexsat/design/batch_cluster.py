@@ -99,8 +99,14 @@ CLUSTER_LOGGERS = ("distributed", "tornado", "asyncio")
 @contextmanager
 def quiet_shutdown() -> Iterator[None]:
     """Silence the cluster's loggers below CRITICAL while it is torn down after an interruption
-    (restored on exit)."""
-    loggers = [logging.getLogger(name) for name in CLUSTER_LOGGERS]
+    (restored on exit): :data:`CLUSTER_LOGGERS` and every logger under them, since dask's
+    configuration gives some of those (``tornado.application``) a level of their own."""
+    names = set(CLUSTER_LOGGERS) | {
+        name
+        for name in list(logging.root.manager.loggerDict)
+        if name.split(".")[0] in CLUSTER_LOGGERS
+    }
+    loggers = [logging.getLogger(name) for name in sorted(names)]
     levels = [logger.level for logger in loggers]
     for logger in loggers:
         logger.setLevel(logging.CRITICAL)

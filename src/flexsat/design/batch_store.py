@@ -30,7 +30,6 @@ the chunks marked done are whole, the rest run again.
 from __future__ import annotations
 
 import errno
-import fcntl
 import json
 import os
 import shutil
@@ -45,13 +44,11 @@ from typing import Any
 
 import numpy as np
 
+from flexsat.file_locks import try_lock
 from flexsat.input_checks import FieldError
 
 #: the layout of the store; part of the fingerprint so a store of another layout is refused
 STORE_LAYOUT = "flexsat.design.batch_runner/2"
-#: errors of flock that mean the file system has no locks (NFS emulates flock with POSIX locks,
-#: whose exclusive kind needs a file open for writing: EBADF)
-_NO_LOCKS = {errno.ENOLCK, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EINVAL, errno.EBADF}
 
 
 class StoreError(OSError):
@@ -115,20 +112,6 @@ def describe_holder(holder: Mapping[str, Any]) -> str:
     if holder.get("command"):
         text += f": {holder['command']}"
     return text
-
-
-def _flock(fd: int) -> bool | None:
-    """Take an exclusive lock on ``fd`` without waiting: True if taken, False if another open
-    file holds it, None where the file system has no locks."""
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        return False
-    except OSError as exc:
-        if exc.errno in _NO_LOCKS:
-            return None
-        raise
-    return True
 
 
 def _read_holder(fd: int) -> dict[str, Any]:
@@ -198,7 +181,7 @@ class StoreLock:
     def _take(self, fd: int) -> bool:
         """Take the lock on ``fd`` and write this run's record into it; False if the file was
         removed by its previous holder as it was opened (open it again)."""
-        locked = _flock(fd)
+        locked = try_lock(fd)
         if locked is False:
             raise StoreInUse(self.store, _read_holder(fd))
         if locked is None:

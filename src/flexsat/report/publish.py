@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import ctypes
 import errno
-import fcntl
 import json
 import logging
 import os
@@ -53,6 +52,8 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import TYPE_CHECKING
+
+from flexsat.file_locks import try_lock
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -72,9 +73,6 @@ _AT_FDCWD = -100  # Linux: paths relative to the working directory
 _RENAME_EXCHANGE = 2
 #: errors of renameat2 that mean "not supported here" (old kernel, file system, C library)
 _NO_EXCHANGE = {errno.ENOSYS, errno.EINVAL, errno.ENOTSUP, errno.EOPNOTSUPP}
-#: errors of flock that mean the file system has no locks for a folder (NFS emulates flock with
-#: POSIX locks, whose exclusive kind needs a file open for writing: EBADF)
-_NO_LOCKS = {errno.ENOLCK, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EINVAL, errno.EBADF}
 _HINTS = {
     errno.ENOSPC: "free some space or choose another folder",
     errno.EDQUOT: "free some space or choose another folder",
@@ -123,20 +121,6 @@ def _exchange(a: Path, b: Path) -> bool:
     raise OSError(code, os.strerror(code), str(a), None, str(b))
 
 
-def _flock(fd: int) -> bool | None:
-    """Take an exclusive lock on ``fd`` without waiting: True if taken, False if another open
-    file holds it, None where the file system has no locks."""
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        return False
-    except OSError as exc:
-        if exc.errno in _NO_LOCKS:
-            return None
-        raise
-    return True
-
-
 def _open_folder(path: Path) -> int:
     return os.open(path, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
 
@@ -146,14 +130,14 @@ def _locked(folder: Path, timeout: float) -> Iterator[None]:
     """Hold the exclusive lock on ``folder`` (waiting up to ``timeout`` seconds)."""
     fd = _open_folder(folder)
     try:
-        if _flock(fd) is False:
+        if try_lock(fd) is False:
             log.warning(
                 "waiting up to %.0f s for another flexsat run publishing a report in %s",
                 timeout,
                 folder,
             )
             deadline = time.monotonic() + timeout
-            while _flock(fd) is False:
+            while try_lock(fd) is False:
                 if time.monotonic() > deadline:
                     raise OutputError(
                         errno.EBUSY,
@@ -367,7 +351,7 @@ def _recover(out: Path) -> None:
             # its writer removed it after publishing, which it does outside the parent's lock
             continue
         try:
-            if _flock(fd):
+            if try_lock(fd):
                 stale.append(Path(entry.path))
         finally:
             os.close(fd)
@@ -466,7 +450,7 @@ def write_atomically(
             folder = _temporary(out, "tmp")
             folder.mkdir()
             fd = _open_folder(folder)
-            _flock(fd)  # marks the folder as live until fd is closed
+            try_lock(fd)  # marks the folder as live until fd is closed
         try:
             write(folder)
             files = sorted(os.listdir(folder))
