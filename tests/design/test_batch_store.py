@@ -486,22 +486,3 @@ def test_a_scheduler_address_where_no_scheduler_answers_is_refused_by_field(
     )
     assert done.exit_code == 2
     assert f"scheduler: no dask scheduler answered at '{address}': {why}" in _one_line(done.stderr)
-
-
-def test_an_interrupted_cluster_is_torn_down_quietly_and_the_log_levels_come_back(caplog):
-    # the cancelled callbacks of a cluster stopped mid-task log tracebacks at ERROR: silenced
-    # while it is torn down after Ctrl-C, the levels restored after
-    import logging
-
-    from flexsat.design.batch_cluster import CLUSTER_LOGGERS, quiet_shutdown
-
-    before = [logging.getLogger(n).level for n in CLUSTER_LOGGERS]
-    with caplog.at_level(logging.DEBUG):
-        with quiet_shutdown():
-            logging.getLogger("tornado.application").error("Exception in callback")
-            logging.getLogger("distributed.comm").error("CommClosedError")
-        logging.getLogger("tornado.application").error("after")
-    messages = [r.getMessage() for r in caplog.records]
-    assert "Exception in callback" not in messages and "CommClosedError" not in messages
-    assert "after" in messages
-    assert [logging.getLogger(n).level for n in CLUSTER_LOGGERS] == before
