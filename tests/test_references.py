@@ -61,8 +61,8 @@ def test_outside_file_pattern_matches_each_kind_of_pointer():
     assert not OUTSIDE_FILE.search("Junkins, Pollock & Rahman 1990, Att. 3 Eq. 12 (L1152)")
 
 
-def test_the_product_points_to_no_file_outside_the_repository():
-    """Sources are cited by full reference (flexsat.references), never by a path outside."""
+def _product_texts() -> list[tuple[str, str]]:
+    """(path, text) of every tracked text file of the product (:data:`PRODUCT`)."""
     root = Path(__file__).resolve().parents[1]
     listed = subprocess.run(
         ["git", "ls-files", "-z", "--", *PRODUCT],
@@ -72,12 +72,19 @@ def test_the_product_points_to_no_file_outside_the_repository():
     ).stdout.decode()
     files = [name for name in listed.split("\0") if name]
     assert any(name.startswith("src/flexsat/") for name in files)  # the listing worked
-    found = []
+    out = []
     for name in files:
         try:
-            text = (root / name).read_text(encoding="utf-8")
+            out.append((name, (root / name).read_text(encoding="utf-8")))
         except (UnicodeDecodeError, FileNotFoundError):  # binary, or deleted in the work tree
             continue
+    return out
+
+
+def test_the_product_points_to_no_file_outside_the_repository():
+    """Sources are cited by full reference (flexsat.references), never by a path outside."""
+    found = []
+    for name, text in _product_texts():
         for number, line in enumerate(text.splitlines(), 1):
             if OUTSIDE_FILE.search(line):
                 found.append(f"{name}:{number}: {line.strip()}")
@@ -126,21 +133,8 @@ def test_internal_pointer_pattern_matches_seed_numbers_and_line_numbers_only():
 def test_the_product_cites_no_seed_number_and_no_transcript_line():
     """Sources are located by section, table, figure, equation or attachment, which a reader
     holding the paper can use, never by the developers' seed numbers or transcript lines."""
-    root = Path(__file__).resolve().parents[1]
-    listed = subprocess.run(
-        ["git", "ls-files", "-z", "--", *PRODUCT],
-        cwd=root,
-        capture_output=True,
-        check=True,
-    ).stdout.decode()
-    files = [name for name in listed.split("\0") if name]
-    assert any(name.startswith("src/flexsat/") for name in files)  # the listing worked
     found = []
-    for name in files:
-        try:
-            text = (root / name).read_text(encoding="utf-8")
-        except (UnicodeDecodeError, FileNotFoundError):  # binary, or deleted in the work tree
-            continue
+    for name, text in _product_texts():
         for match in INTERNAL_POINTER.finditer(text):  # the whole text: "seed\n004" too
             number = text.count("\n", 0, match.start()) + 1
             found.append(f"{name}:{number}: {match.group()!r}")
