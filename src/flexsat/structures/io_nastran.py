@@ -45,13 +45,11 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat.input_checks import FieldError, require_finite, require_nonneg
+from flexsat.structures.modal_import import SI_UNITS, eigen_frequencies, unit_scales
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
-from flexsat.units import FloatArray, to_si
+from flexsat.units import FloatArray
 
 __all__ = ["SI_UNITS", "read_nastran_modes"]
-
-#: Default model units (SI), also the keys ``units`` must have.
-SI_UNITS = {"length": "m", "mass": "kg", "time": "s"}
 
 _MISSING_PYYETI = (
     "read_nastran_modes needs the optional dependency pyyeti: pip install 'flexsat[nastran]'"
@@ -112,7 +110,7 @@ def read_nastran_modes(
     except ImportError as exc:
         raise ImportError(_MISSING_PYYETI) from exc
     op2_file, op4_file = _paths(op2_path, op4_path)
-    length, mass_unit, time = _unit_scales(units)
+    length, mass_unit, time = unit_scales(units)
     nas = op2.rdnas2cam(str(op2_file), str(op4_file))
     source = f"{op2_file.name}/{op4_file.name}"
     _check_modal_data(nas, superelement, source)
@@ -128,7 +126,8 @@ def read_nastran_modes(
     ids, xyz, first, T = _grids(uset, n2p.rbgeom_uset(uset))
     s = np.sqrt(mass_unit) * np.array([1.0, 1.0, 1.0, length, length, length])
     rigid_mass, participation = _mass_properties(mass, R, phg[rows])
-    frequencies = _frequencies(lam, time, float(require_nonneg(rigid_frequency, "rigid_frequency")))
+    rigid_w = float(require_nonneg(rigid_frequency, "rigid_frequency"))
+    frequencies = eigen_frequencies(lam, time, rigid_w)
     return ModalModel(
         node_ids=ids,
         coordinates=xyz * length,
@@ -150,20 +149,6 @@ def _paths(op2_path: str | Path, op4_path: str | Path | None) -> tuple[Path, Pat
         if not path.is_file():
             raise FileNotFoundError(errno.ENOENT, f"NASTRAN {kind} file not found", str(path))
     return op2_file, op4_file
-
-
-def _unit_scales(units: Mapping[str, str] | None) -> tuple[float, float, float]:
-    """Metres, kilograms and seconds per model unit of length, mass and time."""
-    given = SI_UNITS if units is None else dict(units)
-    if set(given) != set(SI_UNITS):
-        raise FieldError(
-            "units",
-            f"must map exactly 'length', 'mass' and 'time' to unit strings, got {sorted(given)}",
-        )
-    length, mass, time = (
-        to_si(f"1 {given[k]}", SI_UNITS[k], f"units[{k!r}]") for k in ("length", "mass", "time")
-    )
-    return length, mass, time
 
 
 def _check_modal_data(nas: dict[str, Any], se: int, source: str) -> None:
@@ -245,21 +230,6 @@ def _mass_properties(
     MR = mass @ R
     rigid = R.T @ MR
     return 0.5 * (rigid + rigid.T), phi.T @ MR
-
-
-def _frequencies(lam: FloatArray, time: float, rigid_frequency: float) -> FloatArray:
-    """ω in rad/s from eigenvalues in model units; rigid-body modes' roundoff set to 0."""
-    w = np.sqrt(np.clip(lam, 0.0, None)) / time
-    w = np.where(w <= rigid_frequency, 0.0, w)
-    if np.any(np.diff(w) < 0):
-        low = ", ".join(f"{x:.3g}" for x in np.sort(w[w > 0])[:3])
-        raise FieldError(
-            "rigid_frequency",
-            "eigenvalues are not ascending once the modes at or below "
-            f"{rigid_frequency:g} rad/s are set to 0 (lowest others {low} rad/s); if those are "
-            "rigid-body modes, raise rigid_frequency",
-        )
-    return w
 
 
 def _boundary(frequencies: FloatArray, rigid_mass: FloatArray, source: str) -> str:

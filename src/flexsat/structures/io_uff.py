@@ -18,14 +18,10 @@ default, refused when a modal mass is 0, i.e. unknown) or taken as already mass-
 (``normalisation="as_is"``).
 
 A universal file has no mass matrix, so the rigid mass and the participation
-:math:`L = \Phi^T M R` come from the six rigid-body modes of a free model: with R the rigid-body
-vectors at the nodes (rows that the rigid shapes have) and :math:`\Phi_r A = R` solved by least
-squares, M-orthonormality gives :math:`L_r = A`, :math:`L = 0` for the elastic modes and
-:math:`M_{rr} = A^T A`. Because dataset 55 stores six significant digits, :math:`A^T A` is projected
-onto the rigid-mass form (m I, [s×] coupling, symmetric inertia) and :math:`L_r` is replaced by
-:math:`U M_{rr}^{1/2}` with U the orthogonal polar factor of A, so that :math:`L^T L = M_{rr}`
-exactly. A model without rigid-body modes (cantilevered) needs ``rigid_mass`` and
-``participation`` from the caller.
+:math:`L = \Phi^T M R` come from the six rigid-body modes of a free model
+(:func:`flexsat.structures.modal_import.mass_properties_from_modes`, projected onto the
+rigid-mass form since dataset 55 stores six significant digits). A model without rigid-body
+modes (cantilevered) needs ``rigid_mass`` and ``participation`` from the caller.
 """
 
 from __future__ import annotations
@@ -40,6 +36,7 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat.input_checks import FieldError, require_finite, require_nonneg
+from flexsat.structures.modal_import import mass_properties_from_modes
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
 from flexsat.units import FloatArray
 
@@ -53,7 +50,6 @@ __all__ = [
 
 NORMALISATIONS = ("modal_mass", "as_is")
 
-_RIGID_FIT_TOL = 1e-3  # relative misfit of rigid motion by the rigid modes (6-digit data: ~1e-5)
 _ABSCISSA_NAMES = {17: "time", 18: "frequency"}  # dataset 58 specific data types
 
 #: one dataset as pyuff reads it: field name -> value
@@ -190,79 +186,6 @@ def _normalised(
     return shapes / np.sqrt(mu)[:, None, None]
 
 
-def _rigid_vectors(coordinates: FloatArray, reference: FloatArray) -> FloatArray:
-    """(n * 6, 6) rigid-body vectors: a node at r from the reference moves t + θ × r, turns θ."""
-    R = np.zeros((len(coordinates), 6, 6))
-    R[:, :3, :3] = R[:, 3:, 3:] = np.eye(3)
-    for i, (x, y, z) in enumerate(coordinates - reference):
-        R[i, :3, 3:] = [[0.0, z, -y], [-z, 0.0, x], [y, -x, 0.0]]  # θ × r = -[r×] θ
-    return R.reshape(-1, 6)
-
-
-def _rigid_mass_form(B: FloatArray) -> FloatArray:
-    """Nearest [[m I, -[s×]], [[s×], J]] to B: mean mass, skew coupling, symmetric inertia."""
-    C = 0.5 * (B[3:, :3] - B[:3, 3:])
-    S = 0.5 * (C - C.T)
-    J = 0.5 * (B[3:, 3:] + B[3:, 3:].T)
-    return np.block([[np.trace(B[:3, :3]) / 3 * np.eye(3), -S], [S, J]])
-
-
-def _sqrtm_psd(A: FloatArray) -> FloatArray:
-    e, V = np.linalg.eigh(A)
-    return (V * np.sqrt(np.clip(e, 0.0, None))) @ V.T
-
-
-def _rigid_from_modes(
-    rigid_shapes: FloatArray, coordinates: FloatArray, reference: FloatArray, path: Path
-) -> tuple[FloatArray, FloatArray]:
-    """Rigid mass and participation rows of six mass-normalised rigid-body modes (SI)."""
-    phi = rigid_shapes.reshape(len(rigid_shapes), -1).T  # (n * 6, 6)
-    R = _rigid_vectors(coordinates, reference)
-    rows = np.any(phi != 0, axis=1)
-    A, *_ = np.linalg.lstsq(phi[rows], R[rows], rcond=None)
-    misfit = np.linalg.norm(phi[rows] @ A - R[rows]) / np.linalg.norm(R[rows])
-    if misfit > _RIGID_FIT_TOL:
-        raise ValueError(
-            f"{path}: the six rigid-body modes do not span the rigid motions at the nodes "
-            f"(relative misfit {misfit:.2g}); pass rigid_mass= and participation="
-        )
-    rigid_mass = _rigid_mass_form(A.T @ A)
-    W, _, Vt = np.linalg.svd(A)
-    return rigid_mass, W @ Vt @ _sqrtm_psd(rigid_mass)
-
-
-def _mass_properties(
-    frequencies: FloatArray,
-    shapes: FloatArray,
-    coordinates: FloatArray,
-    reference: FloatArray,
-    rigid_mass: npt.ArrayLike | None,
-    participation: npt.ArrayLike | None,
-    path: Path,
-) -> tuple[FloatArray, FloatArray, str]:
-    """(rigid_mass, participation, boundary), given or derived from the rigid-body modes."""
-    rigid = frequencies == 0.0
-    boundary = "free" if rigid.any() else "cantilevered"
-    if (rigid_mass is None) != (participation is None):
-        raise ValueError("rigid_mass, participation: give both or neither")
-    if rigid_mass is not None and participation is not None:
-        return (
-            require_finite(rigid_mass, "rigid_mass"),
-            require_finite(participation, "participation"),
-            boundary,
-        )
-    if rigid.sum() != 6:
-        raise ValueError(
-            f"{path}: a universal file has no mass matrix; rigid_mass and participation are "
-            "derived "
-            f"from six rigid-body modes, found {rigid.sum()}: pass rigid_mass= and participation="
-        )
-    rigid_mass, rigid_rows = _rigid_from_modes(shapes[rigid], coordinates, reference, path)
-    participation = np.zeros((frequencies.size, 6))
-    participation[rigid] = rigid_rows
-    return rigid_mass, participation, boundary
-
-
 def modal_model_from_uff(
     path: str | Path,
     damping: npt.ArrayLike | None = None,
@@ -315,8 +238,8 @@ def modal_model_from_uff(
     ref = require_finite(reference, "reference")
     if ref.shape != (3,):
         raise FieldError("reference", f"must have shape (3,), got {ref.shape}")
-    rigid_mass, participation, boundary = _mass_properties(
-        frequencies, shapes, xyz * length, ref, rigid_mass, participation, path
+    rigid_mass, participation, boundary = mass_properties_from_modes(
+        frequencies, shapes, xyz * length, ref, rigid_mass, participation, path, "a universal file"
     )
     return ModalModel(
         node_ids=node_ids,
