@@ -1,7 +1,8 @@
 """Structural models: exact beam modes, a finite-element core, modal models and their import.
 
 The NASTRAN and UFF readers (``io_nastran``, ``io_uff``) need the optional extras
-``flexsat[nastran]`` (pyyeti) and ``flexsat[uff]`` (pyuff); they import them on first use.
+``flexsat[nastran]`` (pyyeti) and ``flexsat[uff]`` (pyuff); they import them on first use. The
+plain SOL 103 OP2 reader (``io_op2``) needs numpy only.
 """
 
 from flexsat.structures.beam import (
@@ -14,6 +15,7 @@ from flexsat.structures.beam import (
 )
 from flexsat.structures.fem import DOF_NAMES, Assembly, FEModes, Structure
 from flexsat.structures.io_nastran import read_nastran_modes
+from flexsat.structures.io_op2 import Op2Modes, read_op2, read_op2_modes
 from flexsat.structures.io_uff import (
     modal_model_from_uff,
     read_uff,
@@ -34,6 +36,7 @@ __all__ = [
     "FEModes",
     "Material",
     "ModalModel",
+    "Op2Modes",
     "Section",
     "Structure",
     "TipMassCantilever",
@@ -45,6 +48,8 @@ __all__ = [
     "hub_free_frequencies",
     "modal_model_from_uff",
     "read_nastran_modes",
+    "read_op2",
+    "read_op2_modes",
     "read_uff",
     "read_uff_functions",
     "solve_modes",

@@ -45,6 +45,7 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat.input_checks import FieldError, require_finite, require_nonneg
+from flexsat.structures.io_op2 import read_op2_modes
 from flexsat.structures.modal_import import SI_UNITS, eigen_frequencies, unit_scales
 from flexsat.structures.modal_model import RIGID_FREQUENCY, ModalModel
 from flexsat.units import FloatArray
@@ -66,14 +67,19 @@ def read_nastran_modes(
     units: Mapping[str, str] | None = None,
     rigid_frequency: float = RIGID_FREQUENCY,
 ) -> ModalModel:
-    r"""Modal model of one superelement of a NAS2CAM OP2/OP4 pair.
+    r"""Modal model of one superelement of a NAS2CAM OP2/OP4 pair, or of a plain SOL 103 OP2.
+
+    Without ``op4_path`` and without an ``.op4`` beside the OP2, the OP2 is read as the output
+    of a plain SOL 103 run by :func:`flexsat.structures.io_op2.read_op2_modes` (no pyyeti
+    needed; a cantilevered model then needs that function's ``participation``).
 
     Parameters
     ----------
     op2_path : str or path
         The ``.op2`` file written by NAS2CAM.
     op4_path : str or path, optional
-        The matching ``.op4`` file; default ``op2_path`` with the suffix ``.op4``.
+        The matching ``.op4`` file; default ``op2_path`` with the suffix ``.op4`` if it exists,
+        else none (plain SOL 103 OP2).
     superelement : int
         Superelement id (0 is the residual).
     damping : float or array_like (m,)
@@ -105,6 +111,19 @@ def read_nastran_modes(
         missing (named); sizes disagree; the frequencies are not ascending once the rigid-body
         modes are 0; the model is partially constrained; bad ``units``.
     """
+    if op4_path is None and not Path(op2_path).with_suffix(".op4").is_file():
+        if superelement != 0:
+            raise FieldError(
+                "superelement",
+                f"a plain SOL 103 OP2 (no OP4 beside it) holds superelement 0, got {superelement}",
+            )
+        return read_op2_modes(
+            op2_path,
+            damping=damping,
+            reference=reference,
+            units=units,
+            rigid_frequency=rigid_frequency,
+        )
     try:
         from pyyeti.nastran import n2p, op2
     except ImportError as exc:

@@ -588,6 +588,17 @@ def _transfer(M0: FloatArray, p0: FloatArray, p: FloatArray) -> FloatArray:
     return T.T @ M0 @ T
 
 
+def _mass_normalised(modes: Op2Modes, path: Path) -> FloatArray:
+    """Shapes divided by √(generalized mass) from LAMA (EIGRL NORM=MAX); as stored without."""
+    if modes.generalized_mass is None:
+        return modes.shapes
+    mu = modes.generalized_mass
+    if np.any(mu <= 0.0):
+        bad = [int(m) for m in modes.mode_numbers[mu <= 0.0]]
+        raise _refuse(path, f"modes {bad[:8]} have generalized mass <= 0 in LAMA")
+    return modes.shapes / np.sqrt(mu)[:, None, None]
+
+
 def read_op2_modes(
     op2_path: str | Path,
     damping: npt.ArrayLike = 0.0,
@@ -625,7 +636,9 @@ def read_op2_modes(
     -------
     ModalModel
         SI; "free" with rigid-body modes, else "cantilevered". Frequencies
-        :math:`\sqrt{\max(\lambda, 0)}` from LAMA.
+        :math:`\sqrt{\max(\lambda, 0)}`; shapes divided by the square root of LAMA's
+        generalized mass (1 for NASTRAN's default mass normalisation), taken as
+        mass-normalised when the file has no LAMA.
 
     Raises
     ------
@@ -663,7 +676,7 @@ def read_op2_modes(
         else np.asarray(rigid_mass, float) * np.outer(s, s),
         "participation": None if participation is None else np.asarray(participation, float) * s,
     }
-    shapes = modes.shapes / s
+    shapes = _mass_normalised(modes, path) / s
     xyz = modes.coordinates * length
     rigid_si, participation_si, boundary = mass_properties_from_modes(
         frequencies,
