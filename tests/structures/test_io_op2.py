@@ -368,6 +368,46 @@ def test_truncated_file(tmp_path, cut):
         read_op2(path)
 
 
+def test_every_truncation_is_refused(tmp_path):
+    """Cut anywhere before the end-of-file marker [0]: a FieldError, never a partial model."""
+    data = (DATA / "clamped_frame.op2").read_bytes()
+    path = tmp_path / "cut.op2"
+    for cut in range(0, len(data) - 12, 37):
+        path.write_bytes(data[:cut])
+        with pytest.raises(FieldError, match="op2_path: "):
+            read_op2(path)
+    path.write_bytes(data[:-12])  # only the end-of-file marker lost: every table is whole
+    assert read_op2(path).shapes.shape == (8, 9, 6)
+
+
+def test_corrupted_bytes_never_crash(tmp_path):
+    """Random single-byte corruptions: the reader returns finite data or refuses (FieldError)."""
+    data = (DATA / "free_frame.op2").read_bytes()
+    rng = np.random.default_rng(22)
+    path = tmp_path / "flipped.op2"
+    for position, value in zip(rng.integers(0, len(data), 400), rng.integers(0, 256, 400)):
+        flipped = bytearray(data)
+        flipped[position] = value
+        path.write_bytes(bytes(flipped))
+        try:
+            raw = read_op2(path)
+        except FieldError:
+            continue
+        assert np.all(np.isfinite(raw.shapes)) and np.all(np.isfinite(raw.eigenvalues))
+
+
+def test_non_finite_values_refused(tmp_path, free):
+    s, fe = free
+    shapes = fe.at_nodes().copy()
+    shapes[3, 2, 1] = np.nan
+    enc = _Encoder()
+    lam = fe.omegas**2
+    data = enc.header() + enc.geom1(s.node_ids, s.coordinates) + enc.lama(lam)
+    data += enc.oug("OUGV1", s.node_ids, lam, shapes) + enc.marker(0)
+    with pytest.raises(FieldError, match=r"non-finite eigenvectors \(OUGV1\)"):
+        read_op2(_write(tmp_path, data))
+
+
 def test_corrupt_length_marker(tmp_path):
     data = bytearray((DATA / "free_frame.op2").read_bytes())
     data[-4] ^= 0x01  # the closing length marker of the last record: 4 -> 5

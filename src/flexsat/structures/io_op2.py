@@ -1,8 +1,9 @@
 r"""The normal modes of a plain NASTRAN SOL 103 OP2 file, read with numpy alone.
 
-An OP2 written by ``PARAM,POST,-1`` (MSC or NX NASTRAN) holds the eigenvalue table LAMA, the
-real eigenvectors OUGV1 (or BOUGV1, in basic), the geometry GEOM1/GEOM1S and, with
-``PARAM,GRDPNT``, the grid point weight generator table OGPWG. No NASTRAN DMAP (NAS2CAM) and no
+An OP2 written by ``PARAM,POST,-1`` (MSC or NX NASTRAN) holds the real eigenvectors OUGV1
+(OUG1 from MSC Nastran 2021 on; BOUGV1 or BOUG1 in basic), usually the eigenvalue table LAMA,
+the geometry GEOM1/GEOM1S and, with ``PARAM,GRDPNT``, the grid point weight generator table
+OGPWG. Every other table (elements, stresses, matrices) is skipped. No NASTRAN DMAP (NAS2CAM) and no
 OP4 are needed; :func:`flexsat.structures.read_nastran_modes` sends an OP2 without an OP4 here.
 
 Format
@@ -17,17 +18,24 @@ Programmer's Guide*, same chapter.
 length markers are 4-byte integers in both, in the file's byte order. The first record holds
 one word (``3``), which gives the word size (4 or 8 bytes) and the byte order.
 
-*Header* (``PARAM,POST,-1``): ``[3] [date] [7] ["NASTRAN FORT TAPE ID CODE - "] [2] [label]
-[-1] [0]``, where ``[k]`` is a one-word record.
+A logical record is ``[n] [n words]``, where ``[k]`` is a one-word record, continued by
+further ``[n] [n words]`` pieces while the next one-word record is positive (long records are
+split; MSC Nastran 2014 and later append a version piece to the header label and to each table
+name).
+
+*Header* (``PARAM,POST,-1``; ``POST,-2`` files start with their first table):
+``[3] [date] [7] ["NASTRAN FORT TAPE ID CODE - "] [2] [label] [-1] [0]``.
 
 *Table*: ``[2] [name, 8 characters]``, ``[-1] [7] [trailer, 7 words]``, then records
-``[-2] [1] [0] [n] [n words] ...`` (a long record is split into several ``[n] [n words]``
-pieces), ``[-3] [1] [0] ...`` and so on; ``[-k] [1] [0] [0]`` ends the table, ``[0]`` the file.
-Record -2 is the header; in OUG, LAMA and OGPWG the records from -3 on alternate between a
-146-word identification record (IDENT) and a data record.
+``[-2] [1] [0] [n] [n words]``, ``[-3] [1] [0] ...`` and so on (``[-k] [1] [1]`` before a
+matrix column); ``[-k] [1] [0] [0]`` ends the table and ``[0]`` the file. Record -2 is the
+header; in OUG, LAMA and OGPWG the records from -3 on alternate between a 146-word
+identification record (IDENT) and a data record.
 
 *LAMA* data: per mode 7 words ``(mode, extraction order, λ, ω, f, generalized mass,
-generalized stiffness)``, the three first integers... the two first integers, the rest reals.
+generalized stiffness)``, two integers then five reals. Files without LAMA (older runs) carry
+each mode's λ in word 6 of its eigenvector IDENT record, read instead; their shapes are taken
+as mass-normalised (NASTRAN's default, EIGRL NORM=MASS).
 
 *OUGV1 / BOUGV1* IDENT: word 1 approach code = 10 × analysis + device (analysis 2: real
 eigenvalues, 9: complex eigenvalues), word 2 table code + 1000 × sort code (table code 7:
@@ -38,7 +46,8 @@ T2, T3, R1, R2, R3)``, point type 1 for a GRID. OUGV1 is in each grid's output s
 BOUGV1 (``PARAM,OUGCORD,BASIC``) in basic.
 
 *GEOM1 / GEOM1S*: each record starts with a 3-word key; GRID is ``(4501, 45, 1)`` with 8 words
-per grid ``(ID, CP, X1, X2, X3, CD, PS, SEID)``, X in system CP.
+per grid ``(ID, CP, X1, X2, X3, CD, PS, SEID)``, X in system CP (MSC's double-precision GRID
+record ``(4501, 45, 1120001)`` has X1-X3 in 8-byte reals).
 
 *OGPWG*: IDENT word 3 the reference point (0: the basic origin); data 78 words, the first 36 the
 rigid-body mass matrix :math:`M_O` in basic about the reference point, in the input mass units
@@ -221,6 +230,12 @@ class _Records:
         while self.peek() > 0:  # n counts words in tables, terms in matrices: not checked
             self.marker()
             pieces.append(self.payload())
+            if len(pieces[-1]) % self.layout.word:
+                raise _refuse(
+                    self.path,
+                    f"corrupt record{self._where()} ending at byte {self.pos}: {len(pieces[-1])} "
+                    f"bytes is not a whole number of {self.layout.word}-byte words",
+                )
         return pieces
 
     def marker(self) -> int:
@@ -330,6 +345,8 @@ def _eigenvalues(
 
 
 def _check_ident(ident: npt.NDArray[np.int64], name: str, path: Path) -> None:
+    if ident.size < 10:
+        raise _refuse(path, f"corrupt {name}: an IDENT record of {ident.size} words, not 146")
     analysis, table_code, sort_code = ident[0] // 10, ident[1] % 1000, ident[1] // 1000
     format_code, width = ident[8], ident[9]
     if analysis == _COMPLEX_EIGENVALUES or sort_code & 1 or format_code in (2, 3):
@@ -510,7 +527,10 @@ def _grid_point_weight(
     body = _single(tables, "OGPWG", path)
     if len(body) != 3 or _words(layout, body[2], _OGPWG_WORDS, "OGPWG data record", path) != 1:
         raise _refuse(path, "OGPWG is not one IDENT record and one 78-word data record")
-    point = int(layout.ints(body[1])[2])
+    head = layout.ints(body[1])
+    if head.size < 3:
+        raise _refuse(path, f"corrupt OGPWG: an IDENT record of {head.size} words, not 146")
+    point = int(head[2])
     if point == 0:
         reference = np.zeros(3)
     elif point in grids and grids[point][0] == 0:
@@ -565,12 +585,21 @@ def read_op2(op2_path: str | Path) -> Op2Modes:
         generalized_mass = np.array([lama[int(m)][1] for m in modes])
     grids = _grids(tables, layout, path)
     gpwg_mass, gpwg_reference = _grid_point_weight(tables, layout, grids, path)
+    coordinates = _coordinates(grids, ids, table, path)
+    for what, values in (
+        (f"eigenvalues ({'LAMA' if generalized_mass is not None else table})", eigenvalues),
+        (f"eigenvectors ({table})", shapes),
+        ("grid locations (GRID)", coordinates),
+        ("grid point weight (OGPWG)", np.zeros(0) if gpwg_mass is None else gpwg_mass),
+    ):
+        if not np.all(np.isfinite(values)):
+            raise _refuse(path, f"non-finite {what}: corrupt file")
     return Op2Modes(
         eigenvalues=eigenvalues,
         generalized_mass=generalized_mass,
         mode_numbers=modes,
         node_ids=ids,
-        coordinates=_coordinates(grids, ids, table, path),
+        coordinates=coordinates,
         shapes=shapes,
         eigenvector_table=table,
         gpwg_mass=gpwg_mass,
