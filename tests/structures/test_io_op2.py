@@ -492,6 +492,29 @@ def test_mode_without_eigenvalue(tmp_path, free):
         read_op2(_write(tmp_path, data))
 
 
+def test_unstable_model_refused(tmp_path, clamped):
+    """λ < 0 beyond rigid-body roundoff (a buckled prestressed run) is no rigid-body mode."""
+    s, fe = clamped
+    enc = _Encoder()
+    lam = fe.omegas**2
+    lam[0] = -2.5e3
+    data = enc.header() + enc.geom1(s.node_ids, s.coordinates) + enc.lama(lam)
+    data += enc.oug("OUGV1", s.node_ids, lam, fe.at_nodes()) + enc.marker(0)
+    with pytest.raises(FieldError, match=r"rigid_frequency: mode 1 has eigenvalue -2500 < 0"):
+        read_op2_modes(_write(tmp_path, data), participation=_participation(fe))
+
+
+def test_wtmass_scales_ogpwg(clamped):
+    _, fe = clamped
+    L = _participation(fe)
+    path = DATA / "clamped_frame.op2"
+    half = read_op2_modes(path, participation=L * np.sqrt(0.5), wtmass=0.5)
+    exact = _rigid_mass()
+    assert _scaled_error(half.rigid_mass, 0.5 * exact, exact) < 2 * F32
+    with pytest.raises(FieldError, match="wtmass: "):
+        read_op2_modes(path, participation=L, wtmass=0.0)
+
+
 def test_cantilevered_mass_properties_must_be_given(tmp_path, clamped):
     s, fe = clamped
     path = _write(tmp_path, _Encoder().modes(s, fe))  # no OGPWG

@@ -84,7 +84,12 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import FieldError, require_finite, require_nonneg
+from flexsat.input_checks import (
+    FieldError,
+    require_finite,
+    require_nonneg,
+    require_positive_scalar,
+)
 from flexsat.structures.modal_import import (
     eigen_frequencies,
     mass_properties_from_modes,
@@ -691,7 +696,7 @@ def read_op2_modes(
                 "rigid_mass",
                 f"{path} has no OGPWG table (PARAM,GRDPNT) to take the rigid mass from: give it",
             )
-        scale = float(require_nonneg(wtmass, "wtmass"))
+        scale = require_positive_scalar(wtmass, "wtmass")
         rigid_mass = scale * _transfer(modes.gpwg_mass, modes.gpwg_reference, ref)
     if not np.any(frequencies == 0.0) and participation is None:
         raise FieldError(

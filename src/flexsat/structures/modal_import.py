@@ -70,8 +70,19 @@ def eigen_frequencies(lam: FloatArray, time: float, rigid_frequency: float) -> F
     r"""ω in rad/s from eigenvalues λ in model units: :math:`\sqrt{\max(\lambda, 0)} / t_u`.
 
     Modes at or below ``rigid_frequency`` (rad/s) are rigid-body modes: their eigen-solver
-    roundoff is set to 0. Refused (field ``rigid_frequency``) when the result is not ascending.
+    roundoff is set to 0. Refused (field ``rigid_frequency``) when the result is not ascending,
+    or when a negative λ is larger than rigid-body roundoff (:math:`\sqrt{-\lambda} / t_u` above
+    ``rigid_frequency``: an unstable, e.g. buckled prestressed, model).
     """
+    unstable = np.flatnonzero(np.sqrt(np.clip(-lam, 0.0, None)) / time > rigid_frequency)
+    if unstable.size:
+        i = int(unstable[0])
+        raise FieldError(
+            "rigid_frequency",
+            f"mode {i + 1} has eigenvalue {lam[i]:.6g} < 0, |ω| = "
+            f"{np.sqrt(-lam[i]) / time:.3g} rad/s above {rigid_frequency:g} rad/s: not rigid-body "
+            "roundoff but an unstable model",
+        )
     w = np.sqrt(np.clip(lam, 0.0, None)) / time
     w = np.where(w <= rigid_frequency, 0.0, w)
     if np.any(np.diff(w) < 0):
