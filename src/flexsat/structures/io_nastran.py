@@ -106,6 +106,9 @@ def read_nastran_modes(
         pyyeti is not installed.
     FileNotFoundError
         The OP2 or OP4 file does not exist (named in the message).
+    FieldError
+        A plain OP2: as :func:`flexsat.structures.io_op2.read_op2_modes`, and ``superelement``
+        other than 0.
     ValueError
         The superelement is not in the file; eigenvalues, g-set shapes or a mass matrix are
         missing (named); sizes disagree; the frequencies are not ascending once the rigid-body

@@ -130,7 +130,8 @@ class Op2Modes:
     shapes : ndarray (m, n, 6)
         T1, T2, T3, R1, R2, R3 in basic.
     eigenvector_table : str
-        "OUGV1" or "BOUGV1".
+        The table read: "OUGV1" or "OUG1" (grids' output systems, all basic), "BOUGV1" or
+        "BOUG1" (basic).
     gpwg_mass : ndarray (6, 6) or None
         OGPWG's rigid-body mass matrix :math:`M_O` (input mass units), if the table is present.
     gpwg_reference : ndarray (3,) or None
@@ -300,7 +301,8 @@ def _read_tables(records: _Records) -> tuple[dict[str, list[list[bytes]]], list[
             if records.peek() == 0:
                 records.marker()
                 break
-            body.append(b"".join(records.record()))
+            pieces = records.record()
+            body.append(b"".join(pieces) if name in _KEPT else b"")  # others: walked, not kept
             number -= 1
             n = records.marker()
             if n != number:
