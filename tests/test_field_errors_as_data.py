@@ -39,6 +39,7 @@ PENDING = {
 #: heads in the ``field: rule`` form that are not the field of an input
 NOT_A_FIELD = {
     ("structures/io_uff.py", "{path}"): "the file read",
+    ("structures/modal_import.py", "{path}"): "the file read (rigid-body modes of a UFF or OP2)",
     ("identify/measurements.py", "{path}"): "the file read",
     ("structures/io_nastran.py", "{source}"): "the file the modal data came from",
     ("analysis/gramians.py", "{caller}"): "the public function refusing the model",
