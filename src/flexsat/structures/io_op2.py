@@ -80,6 +80,7 @@ import struct
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -173,7 +174,8 @@ def _layout(data: bytes, path: Path) -> _Layout:
     """The first record is one word: its 4-byte length marker gives word size and byte order."""
     if len(data) < 4:
         raise _refuse(path, f"truncated file: {len(data)} bytes, no first record")
-    for endian, order in (("<", "little"), (">", "big")):
+    orders: tuple[tuple[str, Literal["little", "big"]], ...] = (("<", "little"), (">", "big"))
+    for endian, order in orders:
         n = int.from_bytes(data[:4], order, signed=True)
         if n in (4, 8):
             return _Layout(n, endian)
@@ -421,7 +423,10 @@ def _eigenvectors(
     name: str, body: list[bytes], layout: _Layout, path: Path
 ) -> tuple[npt.NDArray[np.int64], FloatArray, npt.NDArray[np.int64], FloatArray]:
     """Mode numbers (m,), λ (m,), GRID ids (n,) and values (m, n, 6) of an eigenvector table."""
-    modes, eigenvalues, subcases, values = [], [], set(), []
+    modes: list[int] = []
+    eigenvalues: list[float] = []
+    subcases: set[int] = set()
+    values: list[FloatArray] = []
     ids: npt.NDArray[np.int64] | None = None
     for ident_payload, data in zip(body[1::2], body[2::2]):
         ident = layout.ints(ident_payload)
