@@ -218,12 +218,15 @@ def linearize_attitude(
         node_outputs = [
             c.name for c in plant.outputs if c.name.startswith(("displacement_", "rotation_"))
         ]
+        # a node output is Φ η (FlexibleSpacecraft.output_matrices); η is x[7 : 7 + n]
+        # without translation
+        node_rows = [_output_row(plant, name)[7 : 7 + n] for name in node_outputs]
     elif isinstance(plant, RigidSpacecraft):
         if plant.inertia.ndim != 2:
             raise FieldError("plant", "must have one inertia (3, 3), not a dispersed batch of them")
         J, Delta, M, n = plant.inertia, np.zeros((0, 3)), plant.inertia, 0
         stiffness = damping = np.zeros(0)
-        Qu, force_names, node_outputs = np.eye(3), [], []
+        Qu, force_names, node_outputs, node_rows = np.eye(3), [], [], []
     else:
         raise FieldError(
             "plant",
@@ -253,10 +256,8 @@ def linearize_attitude(
 
     C = np.zeros((6 + len(node_outputs), nz))
     C[:6, :6] = np.eye(6)
-    for i, name in enumerate(node_outputs):
-        # a node output is Φ η (FlexibleSpacecraft.output_matrices); η is x[7 : 7 + n]
-        # without translation
-        C[6 + i, eta] = _output_row(plant, name)[7 : 7 + n]
+    for i, row in enumerate(node_rows):
+        C[6 + i, eta] = row
     stem = _STEMS[coordinates]
     states = _labels(stem, 3) + _labels("rate_error", 3) + _labels("eta", n) + _labels("eta_dot", n)
     return AttitudeLinearization(
