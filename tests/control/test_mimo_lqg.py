@@ -22,8 +22,8 @@ J = np.array([[120.0, 3.0, -2.0], [3.0, 150.0, 4.0], [-2.0, 4.0, 200.0]])
 AXIS = np.array([1.0, 2.0, -1.0]) / np.sqrt(6)
 DT = 0.1
 R = 1e-3 * np.eye(3)
-QN = 1e-2 * np.eye(3)
-RN = np.diag([1e-8] * 3 + [1e-6] * 3)
+QN = np.eye(3)
+RN = np.diag([1e-6] * 3 + [1e-4] * 3)
 
 
 def weights(lin):

@@ -144,8 +144,8 @@ runs:
     gains:
       coordinates: mrp
       state_weights: [1e8, 1e8, 1e8, 1e6, 1e6, 1e6]
-      process_noise: 1e4
-      measurement_noise: [1e-8, 1e-8, 1e-8, 1e-6, 1e-6, 1e-6]
+      process_noise: 1e6
+      measurement_noise: [1e-6, 1e-6, 1e-6, 1e-4, 1e-4, 1e-4]
     target: {euler123: [0, 0, "5 deg"]}
 """
 
@@ -165,8 +165,8 @@ def test_the_attitude_lqg_is_designed_on_the_plants_linearisation_and_slews():
         coordinates="quaternion",
         state_weights=[1e8] * 3 + [1e6] * 3,
         input_weights=2.0,
-        process_noise=1e4,
-        measurement_noise=[1e-8] * 3 + [1e-6] * 3,
+        process_noise=1e6,
+        measurement_noise=[1e-6] * 3 + [1e-4] * 3,
     )
     target = AttitudeTarget(euler123=[0.0, 0.0, 0.5])
     law = law_class.from_scenario(parameters, LawContext(plant=plant, dt=0.1, target=target))
@@ -174,8 +174,8 @@ def test_the_attitude_lqg_is_designed_on_the_plants_linearisation_and_slews():
         linearize_attitude(plant, "quaternion"),
         np.diag([1e8] * 3 + [1e6] * 3),
         2.0 * np.eye(3),
-        1e4 * np.eye(3),
-        np.diag([1e-8] * 3 + [1e-6] * 3),
+        1e6 * np.eye(3),
+        np.diag([1e-6] * 3 + [1e-4] * 3),
         0.1,
         beta_target=target.quaternion(),
     )
@@ -194,8 +194,8 @@ def test_the_attitude_lqg_is_designed_on_the_plants_linearisation_and_slews():
     "change, message",
     [
         (("coordinates: mrp", "coordinates: gibbs"), "coordinates: must be one of"),
-        (("process_noise: 1e4", "process_noise: [1, 2]"), "gains.process_noise: one weight"),
-        (("measurement_noise: [1e-8, ", "measurement_noise: ["), "gains.measurement_noise"),
+        (("process_noise: 1e6", "process_noise: [1, 2]"), "gains.process_noise: one weight"),
+        (("measurement_noise: [1e-6, ", "measurement_noise: ["), "gains.measurement_noise"),
     ],
 )
 def test_attitude_lqg_mistakes_name_the_field(change, message):

@@ -293,7 +293,7 @@ def _attitude_lqg(plant_key: str, coordinates: str):
     lin = linearize_attitude(plant, coordinates)
     n = lin.A.shape[0]
     Q = np.diag([1600.0] * 3 + [10.0] * 3 + [1.0] * (n - 6))
-    Rn = np.diag([1e-8] * 3 + [1e-6] * 3)
+    Rn = np.diag([1e-6] * 3 + [1e-4] * 3)
     target = np.array([np.cos(0.2), np.sin(0.2), 0.0, 0.0])
     return AttitudeLQG.design(
         lin, Q, 1e-3 * np.eye(3), 1e-2 * np.eye(3), Rn, DT, None, target
