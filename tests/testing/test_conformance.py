@@ -283,6 +283,23 @@ def _attitude(name: str, plant_key: str):
     return law, PLANTS[plant_key]()
 
 
+def _attitude_lqg(plant_key: str, coordinates: str):
+    """The three-axis LQG on the attitude-error linearisation of the plant, turning to the
+    attitude laws' target."""
+    from flexsat.control import AttitudeLQG
+    from flexsat.dynamics import linearize_attitude
+
+    plant = PLANTS[plant_key]()
+    lin = linearize_attitude(plant, coordinates)
+    n = lin.A.shape[0]
+    Q = np.diag([1600.0] * 3 + [10.0] * 3 + [1.0] * (n - 6))
+    Rn = np.diag([1e-6] * 3 + [1e-4] * 3)
+    target = np.array([np.cos(0.2), np.sin(0.2), 0.0, 0.0])
+    return AttitudeLQG.design(
+        lin, Q, 1e-3 * np.eye(3), 1e-2 * np.eye(3), Rn, DT, None, target
+    ), plant
+
+
 def _tamu_law(kind: str):
     case = _tamu()
     if kind == "lyapunov_i":
@@ -384,6 +401,8 @@ LAWS = {
     "quaternion_pd_rigid": lambda: _attitude("quaternion_pd", "rigid_spacecraft"),
     "quaternion_pd_flexible": lambda: _attitude("quaternion_pd", "flexible_spacecraft"),
     "mrp_cmg": lambda: _attitude("mrp", "cmg_spacecraft"),
+    "attitude_lqg_rigid": lambda: _attitude_lqg("rigid_spacecraft", "mrp"),
+    "attitude_lqg_flexible": lambda: _attitude_lqg("flexible_spacecraft", "quaternion"),
     "tether_decoupled": lambda: _tether("tension", "V10"),
     "tether_coupled": lambda: _tether("tension", "V11"),
     "tether_rate": lambda: _tether("rate", "V15"),

@@ -20,6 +20,7 @@ from flexsat.control.linear_form import LinearLaw, run_linear_law
 from flexsat.control.lqg import LQGController
 from flexsat.control.lqr import RiccatiSolution, dlqr, lqr
 from flexsat.control.lyapunov import LyapunovRegulator, LyapunovTracker, check_lyapunov_gains
+from flexsat.control.mimo_lqg import AttitudeLQG
 from flexsat.control.output_feedback import (
     FeedbackDesign,
     SymmetricOutputFeedback,
@@ -62,6 +63,7 @@ from flexsat.control.state_space_compensator import StateSpaceCompensator
 from flexsat.control.trajectory_linearization import TrajectoryLinearization, attitude_error
 
 __all__ = [
+    "AttitudeLQG",
     "Controller",
     "SlewLaw",
     "EigenvalueRestoration",

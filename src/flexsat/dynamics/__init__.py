@@ -9,7 +9,8 @@ imported as a module (``from flexsat.dynamics import cmg``) since its short name
 (``momentum``, ``gain``) would be ambiguous here. The plants: :mod:`flexsat.dynamics.structural`
 (any M, D, K structure with named force, torque and moment-pair inputs),
 :mod:`flexsat.dynamics.orbit` (Bainum's beam in orbit), :class:`RigidSpacecraft` and
-:class:`FlexibleSpacecraft` (three-axis, the latter in hybrid coordinates),
+:class:`FlexibleSpacecraft` (three-axis, the latter in hybrid coordinates; both linearised in
+attitude-error coordinates by :func:`linearize_attitude`),
 :class:`CmgSpacecraft` (a rigid body steered by a CMG pyramid), :class:`GimbalCluster` (the
 pyramid's gimbal kinematics σ̇ = u), :class:`SpaceStation` (the LVLH station model),
 :class:`TetheredSubsatellite` (Vadali & Kim's tether, with :class:`TetherScales`) and
@@ -67,6 +68,8 @@ _EXPORTS = {
     "BeamInOrbit": "orbit",
     "RigidSpacecraft": "rigid_spacecraft",
     "FlexibleSpacecraft": "flexible_spacecraft",
+    "AttitudeLinearization": "attitude_linearization",
+    "linearize_attitude": "attitude_linearization",
     "TetheredSubsatellite": "tether",
     "TetherScales": "tether",
     "CmgSpacecraft": "cmg_actuator",

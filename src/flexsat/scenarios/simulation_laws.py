@@ -198,6 +198,42 @@ class LQR:
         return ScheduledStateFeedback([0.0], K[None], "state", [c.name for c in plant.inputs])
 
 
+class AttitudeLQGWeights(SchemaSection):
+    coordinates: str = "mrp"
+    state_weights: Value
+    input_weights: Value = 1.0
+    process_noise: Value = 1.0
+    measurement_noise: Value
+
+
+class AttitudeLQG:
+    """:class:`flexsat.control.AttitudeLQG` designed on the plant's attitude-error
+    linearisation at rest (:func:`flexsat.dynamics.linearize_attitude`, ``coordinates`` "mrp"
+    or "quaternion"), turning to the run's ``target``: diagonal weights on the error state and
+    the three torques, torque process noise (one intensity per axis) and measurement noise on
+    the measured [e, δω] (six), all SI numbers."""
+
+    Parameters = AttitudeLQGWeights
+    Target = AttitudeTarget
+
+    @classmethod
+    def from_scenario(cls, parameters: AttitudeLQGWeights, context: LawContext) -> Controller:
+        """The LQG of ``parameters`` on ``context.plant``, at ``context.dt``."""
+        from flexsat.control import AttitudeLQG as Law
+        from flexsat.dynamics import linearize_attitude
+
+        lin = linearize_attitude(context.plant, parameters.coordinates)
+        Q = _weights(parameters.state_weights, lin.A.shape[0], "gains.state_weights")
+        R = _weights(parameters.input_weights, 3, "gains.input_weights")
+        _check_span(np.diag(Q), np.diag(R))
+        Qn = _weights(parameters.process_noise, 3, "gains.process_noise")
+        Rn = _weights(parameters.measurement_noise, 6, "gains.measurement_noise")
+        target = cast(AttitudeTarget | None, context.target)
+        beta = None if target is None else target.quaternion()
+        extra = {} if beta is None else {"beta_target": beta}
+        return Law.design(lin, Q, R, Qn, Rn, context.dt, **extra)
+
+
 class OpenLoop:
     """No feedback: zero commands on every input (disturbances and initial values drive the
     plant)."""
@@ -223,6 +259,7 @@ BUILTIN_LAWS: dict[str, Any] = {
     "mrp_pd": MRP,
     "quaternion_pd": QuaternionPD,
     "lqr": LQR,
+    "attitude_lqg": AttitudeLQG,
     "open_loop": OpenLoop,
 }
 
