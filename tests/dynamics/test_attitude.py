@@ -228,3 +228,16 @@ def test_euler123_to_quaternion_is_the_rotation_of_euler123_to_dcm_and_continuou
     path = np.linspace(0.0, 1.0, 2001)[:, None] * np.array([3.0, 1.2, -3.1])
     steps = np.abs(np.diff(att.euler123_to_quaternion(path), axis=0)).max()
     assert steps <= 2 * np.abs(np.diff(path, axis=0)).max()  # |dβ/dθ_k| <= 1/2 per angle
+
+
+def test_one_angle_about_many_axes_broadcasts_to_one_quaternion_per_axis():
+    """Eqs. 9–10 per case: three axes and one angle give three quaternions, each equal to the
+    single-axis call (the same arithmetic, so exactly)."""
+    axes = np.eye(3)
+    beta = att.principal_rotation_to_quaternion(axes, 0.3)
+    assert beta.shape == (3, 4)
+    for row, axis in zip(beta, axes):
+        np.testing.assert_array_equal(row, att.principal_rotation_to_quaternion(axis, 0.3))
+    many = att.principal_rotation_to_quaternion([0.0, 0.0, 1.0], [0.1, 0.2])
+    assert many.shape == (2, 4)
+    np.testing.assert_array_equal(many[1], att.principal_rotation_to_quaternion([0, 0, 1.0], 0.2))

@@ -401,9 +401,12 @@ def principal_rotation_to_quaternion(axis: npt.ArrayLike, angle: npt.ArrayLike) 
             f"must be a unit vector (| ‖l‖ − 1 | <= {UNIT_TOL:g}), largest "
             f"departure {err.max():.3g}",
         )
-    case_shape(axis=ax.shape[:-1], angle=phi.shape)
+    shape = case_shape(axis=ax.shape[:-1], angle=phi.shape)
     half = phi / 2
-    return np.concatenate([np.cos(half)[..., None], ax * np.sin(half)[..., None]], -1)
+    # one angle for many axes (or one axis for many angles) broadcasts to the common case shape
+    scalar = np.broadcast_to(np.cos(half), shape)[..., None]
+    vector = np.broadcast_to(ax * np.sin(half)[..., None], (*shape, 3))
+    return np.concatenate([scalar, vector], -1)
 
 
 def quaternion_to_principal_rotation(beta: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
