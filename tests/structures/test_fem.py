@@ -297,6 +297,50 @@ def test_mass_properties_hand_calculation():
     assert np.allclose(props["inertia_center_of_mass"], Icm, rtol=0, atol=1e-12 * np.abs(Icm).max())
 
 
+def test_offset_mass_has_its_own_mass_properties():
+    """A lumped mass m with inertia J about its centre, carried at an offset r from a node,
+    gives the structure m, a centre of mass at node + r and the inertia J about it (the
+    parallel-axis theorem through R^T M R, an independent path)."""
+    s = Structure()
+    s.add_node(1, (0.3, -0.2, 0.1))
+    r = np.array([0.4, 0.25, -0.6])
+    J = np.array([[0.5, 0.02, 0.0], [0.02, 0.7, -0.03], [0.0, -0.03, 0.6]])
+    s.add_mass(1, 3.0, inertia=J, offset=r)
+    props = s.assemble().mass_properties(reference=(0.0, 0.0, 0.0))
+    assert props["total_mass"] == pytest.approx(3.0, rel=1e-14)
+    assert props["center_of_mass"] == pytest.approx((0.3, -0.2, 0.1) + r, rel=1e-14)
+    assert np.allclose(props["inertia_center_of_mass"], J, rtol=0, atol=1e-13)
+
+
+def test_offset_mass_is_the_limit_of_a_stiff_massless_link():
+    """A tip mass at an offset from a cantilever's tip is the limit of the same mass on a node
+    at the offset joined to the tip by a massless member k times stiffer than the beam: the
+    frequency error falls as 1/k (the link's compliance), below 1e-5 at k = 1e5."""
+    offset = np.array([0.0, 0.3, 0.2])
+    inertia = [1e-3, 2e-3, 3e-3]
+    carried = frame_line(10, clamped=True)
+    carried.add_mass(10, 0.8, inertia=inertia, offset=offset)
+    omegas = carried.assemble().modes(8).omegas
+
+    def error(k):
+        linked = frame_line(10, clamped=True)
+        linked.add_node(99, np.array([LENGTH, 0.0, 0.0]) + offset)
+        linked.add_frame(10, 99, Material(E=ALU.E * k, rho=0.0), BAR, orientation=(1, 0, 0))
+        linked.add_mass(99, 0.8, inertia=inertia)
+        return np.abs(linked.assemble().modes(8).omegas / omegas - 1).max()
+
+    coarse, fine = error(1e4), error(1e5)
+    assert fine < 1e-5
+    assert coarse / fine == pytest.approx(10.0, rel=0.01)
+
+
+def test_zero_offset_is_the_plain_mass():
+    plain, zero = frame_line(4, clamped=True), frame_line(4, clamped=True)
+    plain.add_mass(4, 0.5)
+    zero.add_mass(4, 0.5, offset=(0, 0, 0))
+    assert (plain.assemble().M != zero.assemble().M).nnz == 0
+
+
 def test_assembly_bookkeeping():
     s = small_frame(clamped=True)
     asm = s.assemble()
@@ -500,6 +544,8 @@ def test_clamped_structure_asked_for_rigid_modes():
             lambda s: s.add_mass(1, 1.0, inertia=[[1, 1, 0], [0, 1, 0], [0, 0, 1]]),
             "inertia: must be symmetric",
         ),
+        (lambda s: s.add_mass(1, 1.0, offset=(1.0, 0.0)), "offset: must have 3 components"),
+        (lambda s: s.add_mass(1, 1.0, offset=(1.0, float("inf"), 0)), "offset: must be finite"),
         (lambda s: s.clamp(1, ["uq"]), "dofs: unknown dof 'uq'"),
         (lambda s: s.clamp(5), "node 5: unknown node"),
         (lambda s: s.set_axial_preload(9, 1.0), "element 9: unknown element id"),

@@ -61,6 +61,7 @@ class _Lumped:
     node: int
     mass: float
     inertia: FloatArray | None
+    offset: FloatArray | None = None
 
 
 # ------------------------------------------------------------------------------------------------
@@ -291,11 +292,32 @@ class Structure:
         return self._add("rod", n1, n2, props, label)
 
     # -- masses, clamps, preloads -----------------------------------------------------------
-    def add_mass(self, node: int, mass: float, inertia: npt.ArrayLike | None = None) -> None:
-        """Add a lumped mass (kg) and optionally its inertia about the node (kg m^2).
+    def add_mass(
+        self,
+        node: int,
+        mass: float,
+        inertia: npt.ArrayLike | None = None,
+        offset: npt.ArrayLike | None = None,
+    ) -> None:
+        r"""Add a lumped mass (kg), optionally its inertia (kg m^2) and a rigid offset (m).
 
         ``inertia`` is a 3-vector (principal, global axes) or a symmetric positive
-        semi-definite 3x3 matrix; giving it makes the node's rotations active.
+        semi-definite 3x3 matrix, about the mass's own centre; giving it makes the node's
+        rotations active.
+
+        ``offset`` places the mass's centre at :math:`r` from the node (global axes), carried
+        by a rigid link: its displacement is :math:`u_c = u + \theta \times r = T q` with
+        :math:`T = [I \;\; -[r\times]]` on the node's dofs :math:`q = (u, \theta)`, so the
+        node receives the 6x6 mass (the rigid-body mass matrix about a point, e.g. Craig &
+        Kurdila, *Fundamentals of Structural Dynamics*, 2nd ed., §16.2)
+
+        .. math::
+
+            M_{node} = \begin{bmatrix} m I & -m [r\times] \\ m [r\times] &
+                J - m [r\times]^2 \end{bmatrix},
+
+        the parallel-axis theorem on the rotation block. A nonzero offset activates the
+        node's rotations.
         """
         index = self._node(node)
         m = float(require_nonneg(mass, "mass"))
@@ -311,7 +333,14 @@ class Structure:
                 raise FieldError("inertia", "must be symmetric")
             if np.linalg.eigvalsh(J).min() < -SYMMETRY_RTOL * scale:
                 raise FieldError("inertia", "must be positive semi-definite")
-        self._masses.append(_Lumped(index, m, J))
+        r = None
+        if offset is not None:
+            r = require_finite(offset, "offset")
+            if r.shape != (3,):
+                raise FieldError("offset", f"must have 3 components, got shape {r.shape}")
+            if not r.any():
+                r = None
+        self._masses.append(_Lumped(index, m, J, r))
 
     def clamp(
         self, node: int, dofs: str | Iterable[str] = "all", support: bool | None = None
@@ -368,7 +397,7 @@ class Structure:
                     touched[nodes[:, None], slots[None, :]] = True
         for lm in self._masses:
             touched[lm.node, :3] = True
-            touched[lm.node, 3:] |= lm.inertia is not None
+            touched[lm.node, 3:] |= lm.inertia is not None or lm.offset is not None
         if self._masses:
             parts.append(self._mass_blocks())
         _check_connected(touched, self._ids)
@@ -393,6 +422,10 @@ class Structure:
             M[i, :3, :3] = lm.mass * np.eye(3)
             if lm.inertia is not None:
                 M[i, 3:, 3:] = lm.inertia
+            if lm.offset is not None:  # rigid link to the mass centre (add_mass)
+                T = np.eye(6)
+                T[:3, 3:] = -el.skew(lm.offset)
+                M[i] = T.T @ M[i] @ T
         return idx, np.zeros_like(M), M
 
     # -- preloads from gravity --------------------------------------------------------------
