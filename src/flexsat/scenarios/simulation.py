@@ -60,6 +60,7 @@ from flexsat.scenarios.fields import (
     integer_in,
 )
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
+from flexsat.scenarios.models import ModelPlantOptions, ModelSection, model_label, model_plant
 from flexsat.scenarios.registry import validate_section
 from flexsat.scenarios.simulation_laws import (
     LawContext,
@@ -166,7 +167,8 @@ class SimulationScenario(Document):
 
     kind: Literal["simulation"]
     name: str
-    case: str
+    case: str | None = None
+    model: ModelSection | None = None
     plant: Any = Field(default_factory=dict, validate_default=True)
     initial: dict[str, Value] = Field(default_factory=dict)
     simulation: SimulationSettings
@@ -177,27 +179,50 @@ class SimulationScenario(Document):
 
     @field_validator("case")
     @classmethod
-    def _known_case(cls, name: str) -> str:
-        get_case(name)
+    def _known_case(cls, name: str | None) -> str | None:
+        if name is not None:
+            get_case(name)
         return name
 
     @field_validator("plant")
     @classmethod
     def _plant_parameters(cls, section: Any, info: ValidationInfo) -> Any:
-        """The section as (name, the plant's validated Parameters); left as written when the
-        case is unknown or builds no plant and no name is given (reported on the case)."""
+        """The section as (name, the plant's validated Parameters), or the options of the
+        plant of a ``model:`` (:class:`~flexsat.scenarios.models.ModelPlantOptions`); left as
+        written when the case is unknown or builds no plant and no name is given (reported on
+        the case), or when the model section is invalid (reported on it)."""
+        if info.data.get("case") is None and "model" in info.data:
+            if info.data["model"] is None:  # no case and no model: reported on the document
+                return section
+            return validate_section(
+                ModelPlantOptions, section, "a model's plant", "option", "plant"
+            )
+        if info.data.get("case") is None:  # an invalid model section: reported there
+            return section
         return named_plant(section, info.data.get("case")) or section
 
     @field_serializer("plant")
-    def _plant_as_written(self, plant: dict[str, Any] | tuple[str, BaseModel]) -> dict[str, Any]:
+    def _plant_as_written(
+        self, plant: dict[str, Any] | tuple[str, BaseModel] | ModelPlantOptions
+    ) -> dict[str, Any]:
         """The section as a scenario gives it back: ``name`` and the parameters (SI)."""
         if isinstance(plant, dict):
             return plant
+        if isinstance(plant, ModelPlantOptions):
+            return plant.model_dump(exclude_defaults=True)
         name, parameters = plant
         return {"name": name, **parameters.model_dump(exclude_none=True)}
 
     @model_validator(mode="after")
     def _plant_and_labels(self) -> Self:
+        if (self.case is None) == (self.model is None):
+            raise FieldError(
+                "model" if self.model is not None else "case",
+                "give exactly one of case (a published system) and model (your own "
+                "structure: a file, an inline finite-element model or a hub with appendages)",
+            )
+        if isinstance(self.plant, dict) and self.model is not None:
+            return self  # the plant options of an invalid model section: reported there
         if isinstance(self.plant, dict):
             named = sorted(set(simulation_plants()) - set(simulation_cases()))
             raise FieldError(
@@ -245,6 +270,17 @@ class SimulationResult(SimulatedRuns):
     dataset with dims (run, time[, component]) (:class:`~flexsat.scenarios.datasets.
     SimulatedRuns`)."""
 
+    def report_case(self) -> str:
+        """The case the page names, or the scenario's own model."""
+        return scenario_subject(self.scenario)
+
+    def dataset(self) -> xr.Dataset:
+        """As :meth:`SimulatedRuns.dataset`, the attribute ``case`` naming the scenario's own
+        model when it has one."""
+        ds = super().dataset()
+        ds.attrs["case"] = scenario_subject(self.scenario)
+        return ds
+
     def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.simulation import draw_figures
 
@@ -254,6 +290,13 @@ class SimulationResult(SimulatedRuns):
         from flexsat.report.simulation import sections
 
         return sections(self.metrics_records(), ds)
+
+
+def scenario_subject(scenario: SimulationScenario) -> str:
+    """What a simulation scenario simulates: its case, or its own model."""
+    if scenario.model is not None:
+        return model_label(scenario.model)
+    return str(scenario.case)
 
 
 def _located(path: str, exc: Exception) -> ScenarioError:
@@ -271,6 +314,12 @@ def build_plant(scenario: SimulationScenario | SlewScenario) -> Plant:
     """
     from flexsat.dynamics.plant import Plant
 
+    model = getattr(scenario, "model", None)  # a slew scenario has a case only
+    if model is not None:
+        try:
+            return model_plant(model, scenario.plant, scenario.folder)
+        except FieldError as exc:
+            raise ScenarioError([Problem(exc.field, exc.rule)]) from None
     try:
         # a slew scenario's plant section is its case's plant options, resolved here
         resolved = (
@@ -315,7 +364,7 @@ def _config(scenario: SimulationScenario, plant: Plant) -> SimConfig:
                     [
                         Problem(
                             f"{role}.{name}",
-                            f"the {scenario.case} plant has no "
+                            f"the {scenario_subject(scenario)} plant has no "
                             f"{'output' if role == 'sensors' else 'input'} channel "
                             f"{name!r} (its channels: "
                             f"{', '.join(c.name for c in channels)})",
@@ -412,9 +461,12 @@ class SimulationKind(ScenarioKind):
             options: dict[str, Any] = {"n_cases": 1, "initial_state": x0}
             simulation = Simulation(plant, law, config, options)
             results.append((yield Run(label, simulation, "runs" + item_path(index, label))))
-        return SimulationResult(
-            scenario, tuple(laws), tuple(results), cite(get_case(scenario.case).source)
+        source = (
+            model_label(scenario.model)
+            if scenario.model is not None
+            else cite(get_case(scenario.case).source)
         )
+        return SimulationResult(scenario, tuple(laws), tuple(results), source)
 
 
 __all__ = [
