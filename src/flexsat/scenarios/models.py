@@ -7,8 +7,10 @@ Exactly one of ``case:`` (a built-in system) and ``model:`` is given. ``model:``
   ``.op2`` NASTRAN (:func:`~flexsat.structures.io_nastran.read_nastran_modes`, with ``op4:``,
   ``superelement:`` and the model's ``units:``); ``.uff``/``.unv`` a universal file
   (:func:`~flexsat.structures.io_uff.modal_model_from_uff`). ``damping:`` (a modal ratio, or one
-  per mode) and ``reference:`` apply to NASTRAN and UFF files. A relative path starts at the
-  scenario file's folder;
+  per mode) and ``reference:`` apply to NASTRAN and UFF files; a universal file holds no mass
+  properties, so one without six rigid-body modes (a constrained structure) takes
+  ``rigid_mass:`` (6x6) and ``participation:`` (modes x 6), plain SI numbers (kg, kg m,
+  kg m², √kg, √kg m) about ``reference``. A relative path starts at the scenario file's folder;
 - ``fe:`` an inline finite-element description: ``nodes`` (``id``, ``xyz``), ``materials``
   (``E``, ``G`` or ``nu``, ``density``), ``sections`` (``area``, ``Iy``, ``Iz``, ``J``, or a
   ``shape`` of :class:`~flexsat.structures.sections.Section`: ``tube``, ``circle``,
@@ -103,6 +105,23 @@ def _ratios(value: Any, info: ValidationInfo) -> Any:
 
 
 Damping = Annotated[Any, BeforeValidator(_ratios)]
+
+
+def _si_matrix(value: Any, info: ValidationInfo) -> Any:
+    """A matrix of plain SI numbers with six columns (a rigid mass, a participation)."""
+    if value is None:
+        return None
+    field = info.field_name or ""
+    try:
+        matrix = require_finite(value, field)
+    except FieldError:
+        raise FieldError(field, "a list of rows of six plain numbers in SI") from None
+    if matrix.ndim != 2 or matrix.shape[1] != 6:
+        raise FieldError(field, f"rows of six numbers, got shape {matrix.shape}")
+    return matrix.tolist()
+
+
+SIMatrix = Annotated[Any, BeforeValidator(_si_matrix)]
 
 
 # -- the inline finite-element description ---------------------------------------------------
@@ -280,7 +299,7 @@ class HubAppendageSection(BuildableSection):
 
 # -- the section -------------------------------------------------------------------------------
 #: keys that only a file takes
-_FILE_KEYS = ("op4", "superelement", "units", "damping", "reference")
+_FILE_KEYS = ("op4", "superelement", "units", "damping", "reference", "rigid_mass", "participation")
 
 
 class ModelSection(SchemaSection):
@@ -292,6 +311,8 @@ class ModelSection(SchemaSection):
     units: dict[Literal["length", "mass", "time"], str] | None = None
     damping: Damping = None
     reference: Vector = None
+    rigid_mass: SIMatrix = None
+    participation: SIMatrix = None
     fe: FESection | None = None
     hub_appendage: HubAppendageSection | None = None
 
@@ -322,6 +343,12 @@ class ModelSection(SchemaSection):
             for key in nastran_only:
                 if getattr(self, key) is not None:
                     raise FieldError(key, "applies to a NASTRAN OP2 file only")
+        if FILE_KINDS[suffix] != "uff":
+            for key in ("rigid_mass", "participation"):
+                if getattr(self, key) is not None:
+                    raise FieldError(key, "applies to a universal file only")
+        elif (self.rigid_mass is None) != (self.participation is None):
+            raise FieldError("participation", "give rigid_mass and participation together")
         if FILE_KINDS[suffix] == "netcdf":
             for key in ("damping", "reference"):
                 if getattr(self, key) is not None:
@@ -358,6 +385,10 @@ class ModelSection(SchemaSection):
                 options["reference"] = self.reference
             if kind == "uff":
                 from flexsat.structures.io_uff import modal_model_from_uff
+
+                if self.rigid_mass is not None:
+                    options["rigid_mass"] = self.rigid_mass
+                    options["participation"] = self.participation
 
                 return modal_model_from_uff(path, **options)
             from flexsat.structures.io_nastran import read_nastran_modes
