@@ -101,7 +101,8 @@ class MassSpec:
 @dataclass(frozen=True)
 class ClampSpec:
     """Fixed dofs of a node: ``"all"`` or names from :data:`flexsat.structures.fem.DOF_NAMES`
-    (:meth:`Structure.clamp`)."""
+    (:meth:`Structure.clamp`), a support (released for the rigid mass of the hybrid-coordinate
+    modal model, :meth:`ModalModel.from_fe`)."""
 
     node: int
     dofs: str | tuple[str, ...] = "all"
@@ -208,8 +209,8 @@ class FEDescription:
                 raise FieldError(
                     f"{path}.dofs", f"'all' or a list of {DOF_NAMES}, got {clamp.dofs!r}"
                 )
-            with _entry(path):
-                s.clamp(node, clamp.dofs)
+            with _entry(path):  # a 3-D frame uses every dof: each clamp attaches to a support
+                s.clamp(node, clamp.dofs, support=True)
         return s
 
     def _add_element(self, s: Structure, element: ElementSpec, path: str) -> None:
