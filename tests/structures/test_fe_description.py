@@ -106,6 +106,11 @@ def test_a_clamped_description_is_referenced_at_its_first_clamp():
             "elements[0].orientation",
             "parallel",
         ),
+        (
+            {"elements": [ElementSpec("frame", (1, 2), "alu", "tube", orientation=(0, 0, 0))]},
+            "elements[0].orientation",
+            "nonzero",
+        ),
         ({"masses": [MassSpec(4, 1.0)]}, "masses[0].node", "unknown node 4"),
         ({"masses": [MassSpec(1, 1.0, offset=(1, 0))]}, "masses[0].offset", "3 components"),
         ({"clamps": [ClampSpec(1, "none")]}, "clamps[0].dofs", "'all' or a list"),

@@ -19,6 +19,11 @@ and writes named channels, with sensors, actuators and disturbances given per ch
         gains: {k: "4000 N*m*s/rad", A: "800 N*m"}
         target: {euler123: ["1 rad", "1 rad", "1 rad"]}
 
+Instead of ``case:``, a ``model:`` section brings one's own structure (a modal model file, an
+inline finite-element description, a hub with appendages: :mod:`flexsat.scenarios.models`);
+exactly one of the two is given, and ``plant:`` then holds the options of the model's plant
+(:class:`~flexsat.scenarios.models.ModelPlantOptions`).
+
 ``plant`` holds the keyword arguments of the case's plant builder, or ``name:`` a registered
 plant and its parameters (:mod:`flexsat.scenarios.simulation_plants`: a ``flexsat.plants`` plug-
 in); a run's ``law`` is a registered law (:mod:`flexsat.scenarios.simulation_laws`: a built-in

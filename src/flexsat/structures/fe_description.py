@@ -232,6 +232,8 @@ class FEDescription:
                     raise FieldError(name, "a rod has no orientation or offsets (a frame has)")
             s.add_rod(n1, n2, material, section.A, lumped=element.lumped)
             return
+        if element.orientation is not None and not np.any(np.asarray(element.orientation)):
+            raise FieldError("orientation", "must be a nonzero vector in the local x-y plane")
         s.add_frame(
             n1,
             n2,
