@@ -33,6 +33,8 @@ from flexsat.scenarios.simulation import build_plant
 from flexsat.structures import Material, ModalModel, Section, Structure, TipMassCantilever
 from flexsat.structures.io_uff import write_modal_uff
 
+pytestmark = pytest.mark.numerics  # tolerances near round-off: re-run on other BLAS kernels
+
 ALU = Material(E=70e9, rho=2700.0, nu=0.33)
 ARM = Material(E=200e9, rho=0.0)  # massless stiff arms from the hub node to the boom roots
 BOOM = Section.rectangle(0.04, 0.02)
@@ -401,3 +403,43 @@ def test_the_model_is_not_mutated_by_loading():
     before = copy.deepcopy(fe)
     load_scenario(scenario({"fe": fe}, SPACECRAFT_PLANT))
     assert fe == before
+
+
+# -- NASTRAN ------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def extseout():
+    """pyyeti's NAS2CAM OP2/OP4 pair of an NX NASTRAN run (mm, kg, s; see
+    tests/structures/test_io_nastran.py)."""
+    from pathlib import Path
+
+    pyyeti = pytest.importorskip("pyyeti", reason="the NASTRAN reader needs flexsat[nastran]")
+    return Path(pyyeti.__file__).parent / "tests" / "nas2cam_extseout" / "nas2cam.op2"
+
+
+def test_a_nastran_file_is_read_as_read_nastran_modes_reads_it(extseout):
+    """The section passes the file, its units, the damping and the reference (given in SI in
+    the scenario, in the model's mm to the reader) through unchanged."""
+    from flexsat.structures import read_nastran_modes
+
+    units = {"length": "mm", "mass": "kg", "time": "s"}
+    model = {
+        "file": str(extseout),
+        "units": units,
+        "damping": 0.01,
+        "reference": ["0.6 m", 0, "300 mm"],
+    }
+    got = model_of(scenario(model, {}), extseout.parent)
+    expected = read_nastran_modes(
+        extseout, units=units, damping=0.01, reference=[600.0, 0.0, 300.0]
+    )
+    assert_same_modes(got, expected, SAME_RTOL)
+    np.testing.assert_allclose(got.reference, [0.6, 0.0, 0.3], rtol=1e-15)
+    np.testing.assert_allclose(got.rigid_mass, expected.rigid_mass, rtol=1e-14, atol=0)
+
+
+def test_a_missing_op4_is_named(extseout, tmp_path):
+    model = {"file": str(extseout), "op4": "nowhere.op4"}
+    with pytest.raises(ScenarioError) as info:
+        build_plant(load_scenario(scenario(model, {})))
+    assert info.value.problems[0].path == "model.op4"
+    assert "no such file" in info.value.problems[0].rule

@@ -372,6 +372,7 @@ class ModelSection(SchemaSection):
                 raise FieldError(f"fe.{exc.field}", exc.rule) from None
         assert self.file is not None  # the section holds exactly one source
         path = _existing(self.file, folder, "file")
+        op4 = None if self.op4 is None else _existing(self.op4, folder, "op4")
         kind = FILE_KINDS[path.suffix.lower()]
         try:
             if kind == "netcdf":
@@ -393,9 +394,16 @@ class ModelSection(SchemaSection):
                 return modal_model_from_uff(path, **options)
             from flexsat.structures.io_nastran import read_nastran_modes
 
-            op4 = None if self.op4 is None else _existing(self.op4, folder, "op4")
+            if self.reference is not None:  # NASTRAN takes it in the model's length unit
+                length = (self.units or {}).get("length", "m")
+                scale = float(to_si_array(f"1 {length}", "m", "units.length"))
+                options["reference"] = np.asarray(self.reference) / scale
             return read_nastran_modes(
-                path, op4, superelement=self.superelement or 0, units=self.units, **options
+                path,
+                op4,
+                superelement=self.superelement or 0,
+                units=None if self.units is None else {str(k): v for k, v in self.units.items()},
+                **options,
             )
         except FieldError as exc:
             raise FieldError(f"file.{exc.field}", exc.rule) from None
@@ -542,13 +550,13 @@ def _structure(modal: ModalModel, options: ModelPlantOptions) -> Plant:
         raise FieldError("actuators", "a structure needs at least one actuator or sensor")
 
     def at(entry: ActuatorEntry | SensorEntry, path: str) -> object:
-        pair = entry.kind in ("moment_pair", "strain")
-        given = entry.nodes if pair else entry.node
-        if given is None or (entry.nodes if not pair else entry.node) is not None:
-            raise FieldError(
-                path, f"a {entry.kind} takes {'nodes: [a, b]' if pair else 'node'} only"
-            )
-        return tuple(given) if pair else given
+        if entry.kind in ("moment_pair", "strain"):
+            if entry.nodes is None or entry.node is not None:
+                raise FieldError(path, f"a {entry.kind} takes nodes: [a, b] only")
+            return (entry.nodes[0], entry.nodes[1])
+        if entry.node is None or entry.nodes is not None:
+            raise FieldError(path, f"a {entry.kind} takes node only")
+        return entry.node
 
     inputs = [
         Actuator(a.name, a.kind, at(a, f"actuators[{i}]"), _axis(a.axis), a.gain)

@@ -321,10 +321,13 @@ def build_plant(scenario: SimulationScenario | SlewScenario) -> Plant:
 
     model = getattr(scenario, "model", None)  # a slew scenario has a case only
     if model is not None:
+        options = scenario.plant
+        assert isinstance(options, ModelPlantOptions)  # validated with the model section
         try:
-            return model_plant(model, scenario.plant, scenario.folder)
+            return model_plant(model, options, scenario.folder)
         except FieldError as exc:
             raise ScenarioError([Problem(exc.field, exc.rule)]) from None
+    assert scenario.case is not None  # the document holds a case or a model
     try:
         # a slew scenario's plant section is its case's plant options, resolved here
         resolved = (
@@ -469,7 +472,7 @@ class SimulationKind(ScenarioKind):
         source = (
             model_label(scenario.model)
             if scenario.model is not None
-            else cite(get_case(scenario.case).source)
+            else cite(get_case(str(scenario.case)).source)
         )
         return SimulationResult(scenario, tuple(laws), tuple(results), source)
 

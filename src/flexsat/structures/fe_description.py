@@ -199,18 +199,18 @@ class FEDescription:
                 self._add_element(s, element, path)
         for i, mass in enumerate(self.masses):
             path = f"masses[{i}]"
-            node = self._known_node(mass.node, f"{path}.node")
+            mass_node = self._known_node(mass.node, f"{path}.node")
             with _entry(path):
-                s.add_mass(node, mass.mass, inertia=mass.inertia, offset=mass.offset)
+                s.add_mass(mass_node, mass.mass, inertia=mass.inertia, offset=mass.offset)
         for i, clamp in enumerate(self.clamps):
             path = f"clamps[{i}]"
-            node = self._known_node(clamp.node, f"{path}.node")
+            clamp_node = self._known_node(clamp.node, f"{path}.node")
             if not (clamp.dofs == "all" or (not isinstance(clamp.dofs, str) and clamp.dofs)):
                 raise FieldError(
                     f"{path}.dofs", f"'all' or a list of {DOF_NAMES}, got {clamp.dofs!r}"
                 )
             with _entry(path):  # a 3-D frame uses every dof: each clamp attaches to a support
-                s.clamp(node, clamp.dofs, support=True)
+                s.clamp(clamp_node, clamp.dofs, support=True)
         return s
 
     def _add_element(self, s: Structure, element: ElementSpec, path: str) -> None:
