@@ -443,3 +443,21 @@ def test_a_missing_op4_is_named(extseout, tmp_path):
         build_plant(load_scenario(scenario(model, {})))
     assert info.value.problems[0].path == "model.op4"
     assert "no such file" in info.value.problems[0].rule
+
+
+def test_hub_appendage_damping_is_checked_against_the_modes():
+    model = {
+        "hub_appendage": {
+            "hub_inertia": "5 kg*m**2",
+            "n_appendages": 2,
+            "hub_radius": "0.3 m",
+            "length": "2 m",
+            "EI": "600 N*m**2",
+            "rho": "0.3 kg/m",
+            "damping": [0.01, 0.02],
+        }
+    }
+    with pytest.raises(ScenarioError) as info:
+        build_plant(load_scenario(scenario(model, {"n_modes": 3})))
+    assert info.value.problems[0].path == "model.hub_appendage.damping"
+    assert "one per mode (3)" in info.value.problems[0].rule

@@ -491,9 +491,15 @@ def model_plant(section: ModelSection, options: ModelPlantOptions, folder: Path)
         ``model.<field>: rule`` for a model that cannot be read or built, ``plant.<option>:
         rule`` for an option the plant refuses or that does not apply to this model.
     """
-    if section.hub_appendage is not None:
+    hub = section.hub_appendage
+    if hub is not None:
         _only(options, "hub_appendage", "a hub with appendages")
-        return _located("plant", lambda: _hub_appendage(section.hub_appendage, options))
+        try:
+            return _located("plant", lambda: _hub_appendage(hub, options))
+        except FieldError as exc:  # damping ratios that do not match the modes: the model's
+            if exc.field == "plant.damping":
+                raise FieldError("model.hub_appendage.damping", exc.rule) from None
+            raise
     modal = _located("model", lambda: section.modal_model(folder))
     if modal.boundary == "free":
         _only(options, "spacecraft", "a free-free model (a three-axis spacecraft)")

@@ -470,7 +470,7 @@ class SimulationKind(ScenarioKind):
             simulation = Simulation(plant, law, config, options)
             results.append((yield Run(label, simulation, "runs" + item_path(index, label))))
         source = (
-            model_label(scenario.model)
+            "the scenario's own model, not a published system"
             if scenario.model is not None
             else cite(get_case(str(scenario.case)).source)
         )
