@@ -476,3 +476,16 @@ def test_the_example_spacecraft_slews_and_settles():
     row = run_scenario(document).metrics_records()[0]
     assert row["final_pointing_error_deg"] < 0.01
     assert row["pointing_settling_time_s"] < 15.0
+
+
+def test_the_rigid_twin_has_the_flexible_spacecraft_inertia():
+    """``rigid: true``: the inertia about the centre of mass, as the flexible plant carries it
+    (hub, booms, tips by the parallel-axis theorem)."""
+    from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
+
+    rigid = build_plant(load_scenario(scenario({"fe": hub_booms_fe()}, {"rigid": True})))
+    flexible = build_plant(load_scenario(scenario({"fe": hub_booms_fe()}, SPACECRAFT_PLANT)))
+    assert isinstance(rigid, RigidSpacecraft)
+    np.testing.assert_allclose(rigid.inertia, flexible.inertia, rtol=0, atol=1e-12 * 32)
+    with pytest.raises(ScenarioError, match="plant.n_modes: a rigid spacecraft has no modes"):
+        build_plant(load_scenario(scenario({"fe": hub_booms_fe()}, {"rigid": True, "n_modes": 2})))

@@ -26,7 +26,9 @@ Exactly one of ``case:`` (a built-in system) and ``model:`` is given. ``model:``
 The plant follows from the model: a free-free modal model is a three-axis
 :class:`~flexsat.dynamics.flexible_spacecraft.FlexibleSpacecraft` (``plant:`` options
 ``n_modes``, ``torque_node``, ``forces``, ``displacements``, ``rotations`` as ``[node, axis]``
-pairs, ``translation``); a constrained one a
+pairs, ``translation``), or with ``rigid: true`` the same body as a
+:class:`~flexsat.dynamics.rigid_spacecraft.RigidSpacecraft` (its inertia about its centre of
+mass); a constrained one a
 :class:`~flexsat.dynamics.structural.StructuralPlant` (``n_modes``, ``actuators`` and
 ``sensors`` naming their node and axis); a hub with appendages a single-axis
 :class:`~flexsat.dynamics.hub_appendage.HubAppendage` (``n_modes`` per appendage,
@@ -461,7 +463,15 @@ class SensorEntry(SchemaSection):
 
 #: which plant option applies to which model
 _PLANT_OPTIONS = {
-    "spacecraft": ("n_modes", "torque_node", "forces", "displacements", "rotations", "translation"),
+    "spacecraft": (
+        "rigid",
+        "n_modes",
+        "torque_node",
+        "forces",
+        "displacements",
+        "rotations",
+        "translation",
+    ),
     "structure": ("n_modes", "actuators", "sensors"),
     "hub_appendage": ("n_modes", "stiffening"),
 }
@@ -477,6 +487,7 @@ class ModelPlantOptions(SchemaSection):
     displacements: list[_POINT] = Field(default_factory=list, max_length=_MAX_ENTRIES)
     rotations: list[_POINT] = Field(default_factory=list, max_length=_MAX_ENTRIES)
     translation: bool = False
+    rigid: bool = False
     actuators: list[ActuatorEntry] = Field(default_factory=list, max_length=_MAX_ENTRIES)
     sensors: list[SensorEntry] = Field(default_factory=list, max_length=_MAX_ENTRIES)
     stiffening: bool = False
@@ -532,6 +543,13 @@ def _axis(axis: str) -> str:
 def _spacecraft(modal: ModalModel, options: ModelPlantOptions) -> Plant:
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
 
+    if options.rigid:  # the same body without its modes: the inertia about its centre of mass
+        from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
+
+        extra = sorted(options.model_fields_set - {"rigid"})
+        if extra:
+            raise FieldError(extra[0], "a rigid spacecraft has no modes, nodes or forces")
+        return RigidSpacecraft(modal.inertia())
     return FlexibleSpacecraft(
         modal,
         forces=[(n, _axis(a)) for n, a in options.forces],
