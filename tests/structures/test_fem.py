@@ -341,6 +341,102 @@ def test_zero_offset_is_the_plain_mass():
     assert (plain.assemble().M != zero.assemble().M).nnz == 0
 
 
+def test_a_mass_on_a_rigidly_linked_node_is_the_offset_mass():
+    """add_rigid_link eliminates the dependent dofs by T^T M T; add_mass(offset=) transforms
+    the mass block directly: two routes to the same matrices (to round-off)."""
+    offset = np.array([0.1, 0.3, 0.2])
+    carried = frame_line(6, clamped=True)
+    carried.add_mass(6, 0.8, inertia=[1e-3, 2e-3, 3e-3], offset=offset)
+    linked = frame_line(6, clamped=True)
+    linked.add_node(99, np.array([LENGTH, 0.0, 0.0]) + offset)
+    linked.add_rigid_link(6, [99])
+    linked.add_mass(99, 0.8, inertia=[1e-3, 2e-3, 3e-3])
+    a, b = carried.assemble(), linked.assemble()
+    assert a.dofs == b.dofs
+    assert abs(a.K - b.K).max() <= 1e-15 * abs(a.K).max()
+    assert abs(a.M - b.M).max() <= 1e-15 * abs(a.M).max()
+
+
+def test_a_member_on_a_rigidly_linked_node_is_the_offset_member():
+    """A boom from a node rigidly linked to the clamped hub node equals the same boom with a
+    rigid end offset from the hub node (add_frame offsets=, element transformation): the same
+    frequencies to round-off, and the linked node's shapes are the hub node's rigid motion."""
+    offset = np.array([0.0, 0.4, 0.1])
+
+    def boom(s, first):
+        for k in range(1, 5):
+            s.add_node(k, offset + (0.5 * k, 0.0, 0.0))
+        s.add_frame(first, 1, ALU, BAR, orientation=(0, 1, 0), **kwargs(first))
+        for k in range(1, 4):
+            s.add_frame(k, k + 1, ALU, BAR, orientation=(0, 1, 0))
+        s.add_mass(0, 5.0, inertia=[0.1, 0.2, 0.3])
+        s.clamp(0)
+        return s
+
+    def kwargs(first):
+        return {"offsets": [offset, (0, 0, 0)]} if first == 0 else {}
+
+    direct = Structure()
+    direct.add_node(0, (0, 0, 0))
+    direct = boom(direct, 0)
+    linked = Structure()
+    linked.add_node(0, (0, 0, 0))
+    linked.add_node(50, offset)
+    linked.add_rigid_link(0, [50])
+    linked = boom(linked, 50)
+    expected = direct.assemble().modes(8)
+    modes = linked.assemble().modes(8)
+    np.testing.assert_allclose(modes.omegas, expected.omegas, rtol=1e-12)
+    shapes = modes.at_nodes()
+    hub = list(modes.assembly.node_ids).index(0)
+    tied = list(modes.assembly.node_ids).index(50)
+    moved = shapes[:, hub, :3] + np.cross(shapes[:, hub, 3:], offset)
+    np.testing.assert_allclose(shapes[:, tied, :3], moved, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(shapes[:, tied, 3:], shapes[:, hub, 3:], rtol=0, atol=1e-15)
+
+
+def test_a_free_structure_with_rigid_links_keeps_six_rigid_modes_and_its_mass():
+    s = frame_line(4, clamped=False)
+    s.add_node(10, (1.0, 0.5, 0.0))
+    s.add_node(11, (1.0, -0.5, 0.2))
+    s.add_rigid_link(2, [10, 11])
+    s.add_mass(10, 2.0)
+    s.add_mass(11, 3.0)
+    asm = s.assemble()
+    modes = asm.modes(8, rigid_body_modes=6)
+    assert np.all(modes.omegas[:6] == 0) and modes.omegas[6] > 0
+    beam = ALU.rho * BAR.A * LENGTH
+    assert asm.mass_properties()["total_mass"] == pytest.approx(beam + 5.0, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda s: s.add_rigid_link(0, [0]), "dependent: node 0 is the independent node"),
+        (lambda s: (s.add_rigid_link(0, [3]), s.add_rigid_link(1, [3])), "already rigidly"),
+        (lambda s: (s.add_rigid_link(0, [3]), s.add_rigid_link(3, [1])), "itself a dependent"),
+        (lambda s: (s.add_rigid_link(0, [3]), s.add_rigid_link(1, [0])), "independent node of"),
+        (lambda s: s.add_rigid_link(0, [7]), "node 7: unknown node"),
+        (
+            lambda s: (s.add_rigid_link(0, [3]), s.clamp(3), s.assemble()),
+            "clamp: node 3 is a dependent node",
+        ),
+        (
+            lambda s: (s.add_rigid_link(0, [3]), s.clamp(0), s.gravity_preload()),
+            "gravity_preload: not available with rigid links",
+        ),
+    ],
+)
+def test_rigid_link_errors(call, message):
+    s = Structure()
+    s.add_node(0, (0, 0, 0))
+    s.add_node(1, (1, 0, 0))
+    s.add_node(3, (2, 0, 1))
+    s.add_frame(0, 1, ALU, BAR)
+    with pytest.raises(ValueError, match=message):
+        call(s)
+
+
 def test_assembly_bookkeeping():
     s = small_frame(clamped=True)
     asm = s.assemble()

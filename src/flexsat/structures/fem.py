@@ -28,7 +28,7 @@ from flexsat.structures.modal_solve import SYMMETRY_RTOL, factor_positive_defini
 from flexsat.structures.sections import Material, Section
 from flexsat.units import FloatArray
 
-__all__ = ["DOF_NAMES", "Assembly", "FEModes", "Structure"]
+__all__ = ["DOF_NAMES", "Assembly", "DependentDofs", "FEModes", "Structure"]
 
 DOF_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
 _SLOT = {name: i for i, name in enumerate(DOF_NAMES)}
@@ -88,6 +88,7 @@ class Structure:
         self._masses: list[_Lumped] = []
         self._clamped: set[tuple[int, int]] = set()
         self._suppressed: set[tuple[int, int]] = set()  # clamps kept in Assembly.unclamped
+        self._links: dict[int, int] = {}  # dependent node index -> independent node index
 
     # -- nodes ------------------------------------------------------------------------------
     def add_node(self, node_id: int, xyz: npt.ArrayLike) -> None:
@@ -364,6 +365,41 @@ class Structure:
             if not (everything if support is None else support):
                 self._suppressed.add((index, _SLOT[name]))
 
+    def add_rigid_link(self, independent: int, dependent: Iterable[int]) -> None:
+        r"""Tie nodes rigidly to an independent node (NASTRAN RBE2 on all six dofs).
+
+        A dependent node at :math:`r` from the independent one moves with it as a rigid body,
+        :math:`u_d = u_i + \theta_i \times r = u_i - [r\times]\theta_i`,
+        :math:`\theta_d = \theta_i`; its dofs are eliminated at assembly,
+        :math:`K_r = T^T K T`, :math:`M_r = T^T M T` with q = T q_r (Craig & Kurdila,
+        *Fundamentals of Structural Dynamics*, 2nd ed., §16.2, rigid-body constraints), and
+        recovered in the mode shapes (:meth:`FEModes.at_nodes`). A dependent node cannot be
+        clamped, be the independent node of another link or be tied twice.
+
+        Parameters
+        ----------
+        independent : int
+            Node id whose six dofs carry the rigid body.
+        dependent : iterable of int
+            Node ids tied to it (elements and masses may attach to them).
+        """
+        master = self._node(independent)
+        if master in self._links:
+            raise FieldError(
+                "independent", f"node {independent} is itself a dependent node of a rigid link"
+            )
+        for node_id in dependent:
+            slave = self._node(node_id)
+            if slave == master:
+                raise FieldError("dependent", f"node {node_id} is the independent node")
+            if slave in self._links:
+                raise FieldError("dependent", f"node {node_id} is already rigidly linked")
+            if slave in self._links.values():
+                raise FieldError(
+                    "dependent", f"node {node_id} is the independent node of another rigid link"
+                )
+            self._links[slave] = master
+
     def set_axial_preload(self, element: int, force: float) -> None:
         """Set the axial force of a member (tension > 0, N); adds its geometric stiffness."""
         self._members[self._element_index(element)].preload = float(require_finite(force, "force"))
@@ -400,9 +436,17 @@ class Structure:
             touched[lm.node, 3:] |= lm.inertia is not None or lm.offset is not None
         if self._masses:
             parts.append(self._mass_blocks())
+        for slave, master in self._links.items():
+            touched[[slave, master], :] = True
         _check_connected(touched, self._ids)
         active = touched.copy()
         for node, slot in clamped:
+            if node in self._links:
+                raise FieldError(
+                    "clamp",
+                    f"node {self._ids[node]} is a dependent node of a rigid link; clamp its "
+                    f"independent node {self._ids[self._links[node]]}",
+                )
             active[node, slot] = False
         if not active.any():
             raise FieldError("structure", "no active dofs (every dof is clamped)")
@@ -410,9 +454,66 @@ class Structure:
         number[active.ravel()] = np.arange(int(active.sum()))
         K = _sparse(number, [(idx, k) for idx, k, _ in parts])
         M = _sparse(number, [(idx, m) for idx, _, m in parts])
+        recovery = None
+        if self._links:
+            K, M, active, recovery = self._eliminate_links(K, M, active, number)
         node_idx, slot_idx = np.nonzero(active)
         dofs = [(self._ids[i], DOF_NAMES[s]) for i, s in zip(node_idx, slot_idx)]
-        return Assembly(K, M, dofs, self.node_ids, self.coordinates, n_clamped=len(clamped))
+        return Assembly(
+            K,
+            M,
+            dofs,
+            self.node_ids,
+            self.coordinates,
+            n_clamped=len(clamped),
+            dependent=recovery,
+        )
+
+    def _eliminate_links(
+        self,
+        K: sp.csr_matrix,
+        M: sp.csr_matrix,
+        active: npt.NDArray[np.bool_],
+        number: IntArray,
+    ) -> tuple[sp.csr_matrix, sp.csr_matrix, npt.NDArray[np.bool_], DependentDofs]:
+        """K and M reduced to the independent dofs by q = T q_r (:meth:`add_rigid_link`), the
+        kept active mask and the recovery of the dependent dofs from the kept ones."""
+        kept = active.copy()
+        slaves = np.array(sorted(self._links))
+        kept[slaves, :] = False
+        reduced = np.full(6 * len(self._ids), -1)
+        reduced[kept.ravel()] = np.arange(int(kept.sum()))
+        n_active, n_kept = int(active.sum()), int(kept.sum())
+        rows, cols, vals = [], [], []
+        kept_slots = np.flatnonzero(kept.ravel())
+        rows += list(number[kept_slots])
+        cols += list(reduced[kept_slots])
+        vals += [1.0] * kept_slots.size
+        g_rows, g_cols, g_vals = [], [], []
+        dependent_slots = []
+        for slave in slaves:
+            master = self._links[int(slave)]
+            link = np.eye(6)
+            link[:3, 3:] = -el.skew(self.coordinates[slave] - self.coordinates[master])
+            for a in range(6):
+                dependent_slots.append(6 * slave + a)
+                for b in np.flatnonzero(link[a]):
+                    column = reduced[6 * master + b]
+                    if column < 0:  # a clamped dof of the independent node: zero motion
+                        continue
+                    rows.append(number[6 * slave + a])
+                    cols.append(column)
+                    vals.append(link[a, b])
+                    g_rows.append(len(dependent_slots) - 1)
+                    g_cols.append(column)
+                    g_vals.append(link[a, b])
+        T = sp.csr_matrix((vals, (rows, cols)), shape=(n_active, n_kept))
+        K_r = (T.T @ K @ T).tocsr()
+        M_r = (T.T @ M @ T).tocsr()
+        G = sp.csr_matrix((g_vals, (g_rows, g_cols)), shape=(len(dependent_slots), n_kept))
+        slots = np.array(dependent_slots)
+        recovery = DependentDofs(slots // 6, slots % 6, G)
+        return ((K_r + K_r.T) * 0.5).tocsr(), ((M_r + M_r.T) * 0.5).tocsr(), kept, recovery
 
     def _mass_blocks(self) -> ElementBlocks:
         """(global slot indices, K blocks, M blocks) of the lumped masses (6x6 each)."""
@@ -452,6 +553,10 @@ class Structure:
         g = require_finite(g, "g")
         if g.shape != (3,):
             raise FieldError("g", f"must have 3 components, got shape {g.shape}")
+        if self._links:
+            raise FieldError(
+                "gravity_preload", "not available with rigid links (add_rigid_link) yet"
+            )
         if not self._clamped:
             raise FieldError(
                 "gravity_preload",
@@ -647,6 +752,17 @@ class MassProperties(TypedDict):
 
 
 @dataclass(frozen=True, eq=False)
+class DependentDofs:
+    """The dofs eliminated by rigid links and their recovery ``u_d = G q`` from the active
+    dofs q (:meth:`Structure.add_rigid_link`): node indices and dof slots (n_d,), G (n_d, ndof)
+    sparse."""
+
+    nodes: IntArray
+    slots: IntArray
+    G: sp.csr_matrix
+
+
+@dataclass(frozen=True, eq=False)
 class Assembly:
     """Assembled sparse model on the active dofs.
 
@@ -662,6 +778,8 @@ class Assembly:
         Number of clamped dofs of the structure (0: free-free).
     unclamped : Assembly or None
         For a clamped structure, the assembly of the same structure with the clamps released.
+    dependent : DependentDofs or None
+        The dofs of rigidly linked nodes, eliminated here, and their recovery.
     """
 
     K: sp.csr_matrix
@@ -671,6 +789,7 @@ class Assembly:
     coordinates: FloatArray
     n_clamped: int = 0
     unclamped: Assembly | None = None
+    dependent: DependentDofs | None = None
     _lookup: dict[tuple[int, str], int] = field(init=False, repr=False)
     _node_of_dof: IntArray = field(init=False, repr=False)
     _slot_of_dof: IntArray = field(init=False, repr=False)
@@ -796,4 +915,7 @@ class FEModes:
         a = self.assembly
         out = np.zeros((self.shapes.shape[1], len(a.node_ids), 6))
         out[:, a._node_of_dof, a._slot_of_dof] = self.shapes.T
+        if a.dependent is not None:  # rigidly linked nodes move with their independent node
+            d = a.dependent
+            out[:, d.nodes, d.slots] = (d.G @ self.shapes).T
         return out
