@@ -489,3 +489,23 @@ def test_the_rigid_twin_has_the_flexible_spacecraft_inertia():
     np.testing.assert_allclose(rigid.inertia, flexible.inertia, rtol=0, atol=1e-12 * 32)
     with pytest.raises(ScenarioError, match="plant.n_modes: a rigid spacecraft has no modes"):
         build_plant(load_scenario(scenario({"fe": hub_booms_fe()}, {"rigid": True, "n_modes": 2})))
+
+
+def test_a_thruster_on_a_rigid_bracket_of_the_hub(tmp_path):
+    """A node tied rigidly to the hub node (rigid_links) carries a force actuator: its moment
+    arm about the centre of mass is the bracket's position, and the force loads the modes
+    through the hub's rigid motion (the dependent node's recovered shapes)."""
+    fe = hub_booms_fe()
+    fe["nodes"].append({"id": 300, "xyz": [0, "0.3 m", "0.1 m"]})
+    fe["rigid_links"] = [{"node": 0, "nodes": [300]}]
+    plant = build_plant(load_scenario(scenario({"fe": fe}, {"forces": [[300, "x"]]})))
+    arm = np.array([0.0, 0.3, 0.1]) - plant.center_of_mass
+    np.testing.assert_allclose(plant.force_moments[:, 0], np.cross(arm, [1.0, 0, 0]), atol=1e-15)
+    # F e_x at r = (0, 0.3, 0.1) from the hub node: F e_x and the moment r x e_x = (0, 0.1, -0.3)
+    modal = plant.modal
+    hub = (
+        modal.force_input(0, "x")
+        + 0.1 * modal.torque_input(0, "y")
+        - 0.3 * modal.torque_input(0, "z")
+    )
+    np.testing.assert_allclose(plant.force_modal[:, 0], hub, rtol=0, atol=1e-14)

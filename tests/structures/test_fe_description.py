@@ -14,6 +14,7 @@ from flexsat.structures.fe_description import (
     FEDescription,
     MassSpec,
     NodeSpec,
+    RigidLinkSpec,
 )
 
 ALU = Material(E=70e9, rho=2700.0, nu=0.33)
@@ -113,6 +114,13 @@ def test_a_clamped_description_is_referenced_at_its_first_clamp():
         ),
         ({"masses": [MassSpec(4, 1.0)]}, "masses[0].node", "unknown node 4"),
         ({"masses": [MassSpec(1, 1.0, offset=(1, 0))]}, "masses[0].offset", "3 components"),
+        ({"rigid_links": [RigidLinkSpec(1, (5,))]}, "rigid_links[0].nodes", "unknown node 5"),
+        ({"rigid_links": [RigidLinkSpec(1, ())]}, "rigid_links[0].nodes", "at least one"),
+        (
+            {"rigid_links": [RigidLinkSpec(1, (3,)), RigidLinkSpec(2, (3,))]},
+            "rigid_links[1].dependent",
+            "already rigidly linked",
+        ),
         ({"clamps": [ClampSpec(1, "none")]}, "clamps[0].dofs", "'all' or a list"),
         ({"clamps": [ClampSpec(1, ("uw",))]}, "clamps[0].dofs", "unknown dof 'uw'"),
         ({"nodes": [NodeSpec(1, (0, 0, 0)), NodeSpec(1, (1, 0, 0))]}, "nodes[1]", "duplicate"),
@@ -159,3 +167,17 @@ def test_a_mechanism_is_refused_as_the_structure():
             n_modes=1,
         ).modal_model()
     assert info.value.field == "structure" and "mechanism" in info.value.rule
+
+
+def test_a_rigid_link_ties_a_node_to_its_independent_node():
+    """Node 4 on a rigid bracket from node 1: its shapes are node 1's rigid motion."""
+    description = triangle(
+        nodes=[*triangle().nodes, NodeSpec(4, (0.0, -0.3, 0.2))],
+        rigid_links=[RigidLinkSpec(1, (4,))],
+    )
+    modal = description.modal_model()
+    shapes = {int(n): modal.shapes[:, i] for i, n in enumerate(modal.node_ids)}
+    r = np.array([0.0, -0.3, 0.2])
+    moved = shapes[1][:, :3] + np.cross(shapes[1][:, 3:], r)
+    np.testing.assert_allclose(shapes[4][:, :3], moved, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(shapes[4][:, 3:], shapes[1][:, 3:], rtol=0, atol=1e-14)

@@ -16,7 +16,8 @@ Exactly one of ``case:`` (a built-in system) and ``model:`` is given. ``model:``
   ``shape`` of :class:`~flexsat.structures.sections.Section`: ``tube``, ``circle``,
   ``rectangle``), ``elements`` (``frame`` or ``rod`` members between two nodes naming their
   material and section, a frame's ``orientation`` vector and end ``offsets``), ``masses``
-  (``mass``, ``inertia`` about its own centre, rigid ``offset`` from its node), ``clamps``
+  (``mass``, ``inertia`` about its own centre, rigid ``offset`` from its node), ``rigid_links``
+  (``node`` and the ``nodes`` tied rigidly to it, an RBE2), ``clamps``
   (``node``, ``dofs``: ``all`` or a list of ux, uy, uz, rx, ry, rz; none: free-free),
   ``n_modes`` (elastic modes) and modal ``damping``, built by
   :class:`~flexsat.structures.fe_description.FEDescription`;
@@ -215,6 +216,11 @@ class MassEntry(SchemaSection):
     offset: Vector = None
 
 
+class RigidLinkEntry(SchemaSection):
+    node: _NODE
+    nodes: list[_NODE] = Field(min_length=1, max_length=_MAX_ENTRIES)
+
+
 class ClampEntry(SchemaSection):
     node: _NODE
     dofs: Literal["all"] | list[Literal["ux", "uy", "uz", "rx", "ry", "rz"]] = "all"
@@ -229,6 +235,7 @@ class FESection(BuildableSection):
     sections: dict[str, SectionEntry] = Field(min_length=1)
     elements: list[ElementEntry] = Field(min_length=1, max_length=_MAX_ENTRIES)
     masses: list[MassEntry] = Field(default_factory=list, max_length=_MAX_ENTRIES)
+    rigid_links: list[RigidLinkEntry] = Field(default_factory=list, max_length=_MAX_ENTRIES)
     clamps: list[ClampEntry] = Field(default_factory=list, max_length=_MAX_ENTRIES)
     n_modes: Annotated[int, integer_in(1, limits.MAX_MODES)] = 10
     damping: Damping = 0.0
@@ -242,6 +249,7 @@ class FESection(BuildableSection):
             FEDescription,
             MassSpec,
             NodeSpec,
+            RigidLinkSpec,
         )
 
         return FEDescription(
@@ -261,6 +269,7 @@ class FESection(BuildableSection):
                 for e in self.elements
             ],
             masses=[MassSpec(m.node, m.mass, m.inertia, m.offset) for m in self.masses],
+            rigid_links=[RigidLinkSpec(r.node, tuple(r.nodes)) for r in self.rigid_links],
             clamps=[
                 ClampSpec(c.node, c.dofs if isinstance(c.dofs, str) else tuple(c.dofs))
                 for c in self.clamps

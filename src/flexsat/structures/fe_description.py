@@ -39,6 +39,7 @@ __all__ = [
     "FEDescription",
     "MassSpec",
     "NodeSpec",
+    "RigidLinkSpec",
 ]
 
 #: member kinds a description may use: a 3-D Euler-Bernoulli frame, an axial rod
@@ -99,6 +100,15 @@ class MassSpec:
 
 
 @dataclass(frozen=True)
+class RigidLinkSpec:
+    """Nodes tied rigidly to an independent ``node`` (:meth:`Structure.add_rigid_link`, an
+    RBE2 on all six dofs): a rigid hub carrying attachment points, a stiff bracket."""
+
+    node: int
+    nodes: Sequence[int]
+
+
+@dataclass(frozen=True)
 class ClampSpec:
     """Fixed dofs of a node: ``"all"`` or names from :data:`flexsat.structures.fem.DOF_NAMES`
     (:meth:`Structure.clamp`), a support (released for the rigid mass of the hybrid-coordinate
@@ -119,6 +129,7 @@ class FEDescription:
     sections : mapping of str to Section
     elements : sequence of ElementSpec
     masses : sequence of MassSpec
+    rigid_links : sequence of RigidLinkSpec
     clamps : sequence of ClampSpec
         None: free-free.
     n_modes : int
@@ -136,6 +147,7 @@ class FEDescription:
     sections: Mapping[str, Section]
     elements: Sequence[ElementSpec]
     masses: Sequence[MassSpec] = ()
+    rigid_links: Sequence[RigidLinkSpec] = ()
     clamps: Sequence[ClampSpec] = ()
     n_modes: int = 10
     damping: float | Sequence[float] = 0.0
@@ -187,7 +199,8 @@ class FEDescription:
         ------
         FieldError
             Naming the entry: ``nodes[2].id``, ``elements[3].nodes``, ``elements[3].material``,
-            ``masses[0].inertia``, ``clamps[1].dofs``, ... and the rule.
+            ``masses[0].inertia``, ``rigid_links[0].nodes``, ``clamps[1].dofs``, ... and the
+            rule.
         """
         s = Structure(self.name)
         for i, node in enumerate(self.nodes):
@@ -202,6 +215,14 @@ class FEDescription:
             mass_node = self._known_node(mass.node, f"{path}.node")
             with _entry(path):
                 s.add_mass(mass_node, mass.mass, inertia=mass.inertia, offset=mass.offset)
+        for i, link in enumerate(self.rigid_links):
+            path = f"rigid_links[{i}]"
+            independent = self._known_node(link.node, f"{path}.node")
+            dependent = [self._known_node(n, f"{path}.nodes") for n in link.nodes]
+            if not dependent:
+                raise FieldError(f"{path}.nodes", "at least one node to tie")
+            with _entry(path):
+                s.add_rigid_link(independent, dependent)
         for i, clamp in enumerate(self.clamps):
             path = f"clamps[{i}]"
             clamp_node = self._known_node(clamp.node, f"{path}.node")
