@@ -181,3 +181,11 @@ def test_a_rigid_link_ties_a_node_to_its_independent_node():
     moved = shapes[1][:, :3] + np.cross(shapes[1][:, 3:], r)
     np.testing.assert_allclose(shapes[4][:, :3], moved, rtol=0, atol=1e-14)
     np.testing.assert_allclose(shapes[4][:, 3:], shapes[1][:, 3:], rtol=0, atol=1e-14)
+
+
+def test_a_loose_node_is_refused_as_the_structure():
+    """A node no element, mass or link touches: refused when the structure is assembled."""
+    with pytest.raises(FieldError) as info:
+        triangle(nodes=[*triangle().nodes, NodeSpec(4, (0.0, -0.3, 0.2))]).modal_model()
+    assert info.value.field == "structure"
+    assert "node 4: not connected" in info.value.rule

@@ -534,6 +534,8 @@ def _located(path: str, build: Any) -> Any:
     except FieldError as exc:
         field = exc.field if exc.field.startswith(path + ".") else f"{path}.{exc.field}"
         raise FieldError(field, exc.rule) from None
+    except ValueError as exc:  # a runtime refusal that names no field: placed at the section
+        raise FieldError(path, str(exc)) from None
 
 
 def _only(options: ModelPlantOptions, plant: str, what: str) -> None:

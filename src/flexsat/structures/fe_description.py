@@ -275,7 +275,13 @@ class FEDescription:
             As :meth:`structure`; ``n_modes`` beyond the model's dofs; a free structure without
             exactly six rigid-body modes or a clamped one with a mechanism (``structure``).
         """
-        assembly = self.structure().assemble()
+        structure = self.structure()
+        try:
+            assembly = structure.assemble()
+        except FieldError:
+            raise
+        except ValueError as exc:  # "node 7: not connected to any element or mass"
+            raise FieldError("structure", str(exc)) from None
         rigid = _RIGID_MODES if self.free else 0
         wanted = self.n_modes + rigid
         if wanted > assembly.n_dofs:
