@@ -13,13 +13,16 @@ YAML, (c) as a ModalModel netCDF file and (d) as a universal file gives the same
 - (d) to the universal file's six significant digits (datasets 15 and 55 store six): frequencies
   to 5e-6 relative, shapes to 5e-6 of their largest entry;
 
-shapes compared up to sign (the elastic modes are distinct here: rectangular booms, distinct
-hub inertias). Every refusal names its field path.
+The L-shaped frames of tests/data/op2 (pyNastran-written plain SOL 103 OP2s, float32 values)
+equal their inline description to 1e-6 (e). Shapes are compared up to sign (the elastic modes
+are distinct here: rectangular booms, distinct hub inertias). Every refusal names its field
+path.
 """
 
 from __future__ import annotations
 
 import copy
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -410,8 +413,6 @@ def test_the_model_is_not_mutated_by_loading():
 def extseout():
     """pyyeti's NAS2CAM OP2/OP4 pair of an NX NASTRAN run (mm, kg, s; see
     tests/structures/test_io_nastran.py)."""
-    from pathlib import Path
-
     pyyeti = pytest.importorskip("pyyeti", reason="the NASTRAN reader needs flexsat[nastran]")
     return Path(pyyeti.__file__).parent / "tests" / "nas2cam_extseout" / "nas2cam.op2"
 
@@ -466,8 +467,6 @@ def test_hub_appendage_damping_is_checked_against_the_modes():
 def test_the_example_spacecraft_slews_and_settles():
     """examples/own_spacecraft_slew.yaml: the slew ends within 0.01° and settles in under
     15 s; the 2 m booms (offset from the hub wall) weigh 2 ρA L each, the tips 1 kg."""
-    from pathlib import Path
-
     path = Path(__file__).resolve().parents[2] / "examples" / "own_spacecraft_slew.yaml"
     document = load_scenario(path)
     plant = build_plant(document)
@@ -509,3 +508,69 @@ def test_a_thruster_on_a_rigid_bracket_of_the_hub(tmp_path):
         - 0.3 * modal.torque_input(0, "z")
     )
     np.testing.assert_allclose(plant.force_modal[:, 0], hub, rtol=0, atol=1e-14)
+
+
+# -- a plain SOL 103 OP2 -------------------------------------------------------------------------
+#: the pyNastran-written fixtures of tests/structures/test_io_op2.py: float32 values, so each
+#: value read back is flexsat's rounded to 2^-24 relative; 1e-6 bounds it with the eigen-solver's
+#: round-off (λ_max/gap ~ 1e3 here)
+OP2 = Path(__file__).resolve().parents[1] / "data" / "op2"
+OP2_RTOL = 1e-6
+
+
+def l_frame_fe(clamped: bool) -> dict:
+    """The L-shaped frames of the OP2 fixtures (tests/data/op2/make_op2_fixtures.py) as an
+    inline description: 1.2 m along x, then to (1.2, 0.7, 0.3) m, 30 x 50 then 30 x 20 mm
+    aluminium, a 0.8 kg tip mass."""
+    corner, tip = np.array([1.2, 0.0, 0.0]), np.array([1.2, 0.7, 0.3])
+    points = [corner * t for t in np.linspace(0.0, 1.0, 5)]
+    points += [corner + (tip - corner) * t for t in np.linspace(0.25, 1.0, 4)]
+    fe = {
+        "nodes": [
+            {"id": 101 + i, "xyz": [f"{float(1000 * x)!r} mm" for x in p]}
+            for i, p in enumerate(points)
+        ],
+        "materials": {"aluminium": {"E": "70 GPa", "nu": 0.33, "density": "2700 kg/m**3"}},
+        "sections": {
+            "deep": {"shape": "rectangle", "width": "30 mm", "height": "50 mm"},
+            "flat": {"shape": "rectangle", "width": "30 mm", "height": "20 mm"},
+        },
+        "elements": [
+            {"nodes": [101 + i, 102 + i], "material": "aluminium", "section": s}
+            for i, s in enumerate(["deep"] * 4 + ["flat"] * 4)
+        ],
+        "masses": [{"node": 109, "mass": "0.8 kg", "inertia": [1e-3, 2e-3, 3e-3]}],
+        "n_modes": 8,
+    }
+    if clamped:
+        fe["clamps"] = [{"node": 101}]
+    return fe
+
+
+def test_a_plain_op2_of_the_free_frame_equals_its_inline_description(tmp_path):
+    inline = model_of(scenario({"fe": l_frame_fe(False)}, {}), tmp_path)
+    got = model_of(scenario({"file": str(OP2 / "free_frame.op2")}, {}), tmp_path)
+    assert_same_modes(got, inline, OP2_RTOL)
+    d = np.sqrt(np.diag(inline.rigid_mass))
+    np.testing.assert_allclose(
+        got.rigid_mass / np.outer(d, d), inline.rigid_mass / np.outer(d, d), atol=OP2_RTOL
+    )
+
+
+def test_a_plain_op2_of_the_clamped_frame_takes_its_participation(tmp_path):
+    """A cantilevered OP2 has no rigid-body modes to derive the participation from: the section
+    passes it (SI); the rigid mass is the file's OGPWG."""
+    inline = model_of(scenario({"fe": l_frame_fe(True)}, STRUCTURE_PLANT), tmp_path)
+    model = {"file": str(OP2 / "clamped_frame.op2"), "participation": inline.participation.tolist()}
+    got = model_of(scenario(model, {}), tmp_path)
+    assert_same_modes(got, inline, OP2_RTOL)
+    d = np.sqrt(np.diag(inline.rigid_mass))
+    np.testing.assert_allclose(
+        got.rigid_mass / np.outer(d, d), inline.rigid_mass / np.outer(d, d), atol=OP2_RTOL
+    )
+    plant = {"actuators": [{"name": "f", "node": 109, "axis": "z"}]}
+    assert isinstance(build_plant(load_scenario(scenario(model, plant))), StructuralPlant)
+    with pytest.raises(ScenarioError) as info:
+        build_plant(load_scenario(scenario({"file": str(OP2 / "clamped_frame.op2")}, plant)))
+    assert info.value.problems[0].path == "model.file.participation"
+    assert "cantilevered" in info.value.problems[0].rule

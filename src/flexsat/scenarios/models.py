@@ -7,10 +7,11 @@ Exactly one of ``case:`` (a built-in system) and ``model:`` is given. ``model:``
   ``.op2`` NASTRAN (:func:`~flexsat.structures.io_nastran.read_nastran_modes`, with ``op4:``,
   ``superelement:`` and the model's ``units:``); ``.uff``/``.unv`` a universal file
   (:func:`~flexsat.structures.io_uff.modal_model_from_uff`). ``damping:`` (a modal ratio, or one
-  per mode) and ``reference:`` apply to NASTRAN and UFF files; a universal file holds no mass
-  properties, so one without six rigid-body modes (a constrained structure) takes
-  ``rigid_mass:`` (6x6) and ``participation:`` (modes x 6), plain SI numbers (kg, kg m,
-  kg m², √kg, √kg m) about ``reference``. A relative path starts at the scenario file's folder;
+  per mode) and ``reference:`` apply to NASTRAN and UFF files; a universal file or a plain
+  SOL 103 OP2 holds no mass matrix, so one without six rigid-body modes (a constrained
+  structure) takes ``participation:`` (modes x 6) and, for a UFF (an OP2 has its OGPWG),
+  ``rigid_mass:`` (6x6), plain SI numbers (kg, kg m, kg m², √kg, √kg m) about ``reference``.
+  A relative path starts at the scenario file's folder;
 - ``fe:`` an inline finite-element description: ``nodes`` (``id``, ``xyz``), ``materials``
   (``E``, ``G`` or ``nu``, ``density``), ``sections`` (``area``, ``Iy``, ``Iz``, ``J``, or a
   ``shape`` of :class:`~flexsat.structures.sections.Section`: ``tube``, ``circle``,
@@ -354,12 +355,16 @@ class ModelSection(SchemaSection):
             for key in nastran_only:
                 if getattr(self, key) is not None:
                     raise FieldError(key, "applies to a NASTRAN OP2 file only")
-        if FILE_KINDS[suffix] != "uff":
+        if FILE_KINDS[suffix] == "netcdf":
             for key in ("rigid_mass", "participation"):
                 if getattr(self, key) is not None:
-                    raise FieldError(key, "applies to a universal file only")
-        elif (self.rigid_mass is None) != (self.participation is None):
+                    raise FieldError(key, "a netCDF modal model carries its own")
+        elif FILE_KINDS[suffix] == "uff" and (self.rigid_mass is None) != (
+            self.participation is None
+        ):
             raise FieldError("participation", "give rigid_mass and participation together")
+        if self.units is not None and set(self.units) != {"length", "mass", "time"}:
+            raise FieldError("units", "give the model's length, mass and time units")
         if FILE_KINDS[suffix] == "netcdf":
             for key in ("damping", "reference"):
                 if getattr(self, key) is not None:
@@ -390,38 +395,53 @@ class ModelSection(SchemaSection):
                 from flexsat.structures.modal_model import ModalModel
 
                 return ModalModel.load(path)
-            options: dict[str, Any] = {}
-            if self.damping is not None:
-                options["damping"] = self.damping
-            if self.reference is not None:
-                options["reference"] = self.reference
             if kind == "uff":
-                from flexsat.structures.io_uff import modal_model_from_uff
-
-                if self.rigid_mass is not None:
-                    options["rigid_mass"] = self.rigid_mass
-                    options["participation"] = self.participation
-
-                return modal_model_from_uff(path, **options)
-            from flexsat.structures.io_nastran import read_nastran_modes
-
-            if self.reference is not None:  # NASTRAN takes it in the model's length unit
-                length = (self.units or {}).get("length", "m")
-                scale = float(to_si_array(f"1 {length}", "m", "units.length"))
-                options["reference"] = np.asarray(self.reference) / scale
-            return read_nastran_modes(
-                path,
-                op4,
-                superelement=self.superelement or 0,
-                units=None if self.units is None else {str(k): v for k, v in self.units.items()},
-                **options,
-            )
+                return self._read_uff(path)
+            return self._read_nastran(path, op4)
         except FieldError as exc:
             raise FieldError(f"file.{exc.field}", exc.rule) from None
         except (ValueError, OSError, KeyError, ImportError) as exc:
             raise FieldError(
                 "file", f"cannot read {path.name} as a {kind} modal model: {exc}"
             ) from None
+
+    def _options(self) -> dict[str, Any]:
+        """The reader options given (SI)."""
+        names = ("damping", "reference", "rigid_mass", "participation")
+        return {k: getattr(self, k) for k in names if getattr(self, k) is not None}
+
+    def _read_uff(self, path: Path) -> ModalModel:
+        from flexsat.structures.io_uff import modal_model_from_uff
+
+        return modal_model_from_uff(path, **self._options())
+
+    def _read_nastran(self, path: Path, op4: Path | None) -> ModalModel:
+        """NASTRAN: a NAS2CAM OP2/OP4 pair, or a plain SOL 103 OP2; lengths and mass
+        properties given here in SI go to the readers in the model's units
+        (:mod:`flexsat.structures.modal_import`: s = √m_u (1, 1, 1, ℓ_u, ℓ_u, ℓ_u))."""
+        from flexsat.structures.io_nastran import read_nastran_modes
+        from flexsat.structures.io_op2 import read_op2_modes
+        from flexsat.structures.modal_import import unit_scales
+
+        units = None if self.units is None else {str(k): v for k, v in self.units.items()}
+        length, mass, _ = unit_scales(units)
+        s = np.sqrt(mass) * np.array([1.0, 1.0, 1.0, length, length, length])
+        options = self._options()
+        if "reference" in options:
+            options["reference"] = np.asarray(options["reference"]) / length
+        if "rigid_mass" not in options and "participation" not in options:
+            return read_nastran_modes(
+                path, op4, superelement=self.superelement or 0, units=units, **options
+            )
+        if op4 is not None or path.with_suffix(".op4").is_file():
+            raise FieldError(
+                "participation", "applies to a plain SOL 103 OP2 (an OP4 carries the mass)"
+            )
+        if "rigid_mass" in options:
+            options["rigid_mass"] = np.asarray(options["rigid_mass"]) / np.outer(s, s)
+        if "participation" in options:
+            options["participation"] = np.asarray(options["participation"]) / s
+        return read_op2_modes(path, units=units, **options)
 
 
 def _existing(name: str, folder: Path, field: str) -> Path:
