@@ -184,6 +184,10 @@ def test_a_constant_rate_reference_is_tracked():
     assert np.degrees(angle[-1]) < 1e-3
     assert np.abs(ds.rate.values[0, -1] - rate).max() < 1e-5
     assert np.abs(law.linearization.torque).max() > 0
+    # the run's pointing metric is scored against the turning frame, not its start attitude
+    assert ds.final_pointing_error_deg.values[0] == pytest.approx(np.degrees(angle[-1]), abs=1e-9)
+    band = SimConfig(duration=40.0, control_rate=1 / DT).settling_band
+    assert ds.pointing_settling_time_s.values[0] < 40.0 and band > 0
 
 
 def test_the_law_commands_all_three_axes_for_a_batch_of_targets():

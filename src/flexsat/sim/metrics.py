@@ -216,7 +216,9 @@ def channel_metrics(
         metric_units[f"peak_{name}"] = metric_units[f"rms_{name}"] = units.get(name, "")
     if attitude_target is not None and "attitude" in histories:
         beta = histories["attitude"]
-        target = np.asarray(attitude_target, float).reshape(-1, 1, 4)
+        target = np.asarray(attitude_target, float)
+        if target.ndim < 3:  # one attitude per case (or for all), the same at every time
+            target = target.reshape(-1, 1, 4)
         # scalar part of the error quaternion β_t* ⊗ β: the inner product of the two
         e0 = np.abs(np.sum(beta * target, axis=-1)).clip(max=1.0)
         angle = 2.0 * np.arccos(e0)

@@ -64,6 +64,23 @@ def _history(n: int, nc: int, size: int) -> np.ndarray:
     return np.zeros((n, nc) if size == 1 else (n, nc, size))
 
 
+def attitude_targets(controller: Controller, t: FloatArray, nc: int) -> FloatArray | None:
+    """The law's target attitude at every recorded time, (nc, n_t, 4), or None without one.
+
+    A law whose reference turns (it has ``target_at(t)``, e.g.
+    :class:`flexsat.control.AttitudeLQG` about a constant-rate frame) is scored against the
+    reference at each time; a fixed ``beta_target`` against itself throughout.
+    """
+    target_at = getattr(controller, "target_at", None)
+    if callable(target_at):
+        history = np.stack([np.broadcast_to(target_at(float(tk)), (nc, 4)) for tk in t], axis=1)
+        return np.asarray(history, float)
+    target = getattr(controller, "beta_target", None)
+    if target is None:
+        return None
+    return np.broadcast_to(np.asarray(target, float).reshape(-1, 1, 4), (nc, len(t), 4))
+
+
 class Recorder:
     """Histories of one run (module docstring); arrays are (n_t, n_cases[, size])."""
 
@@ -235,14 +252,13 @@ class Recorder:
         metrics = _metrics(histories, axis, t, controller, theta0, config, refs, nc)
         units = METRIC_UNITS
         if not metrics:  # not a single-axis maneuver: the summary of every channel
-            target = getattr(controller, "beta_target", None)
             metrics, units = channel_metrics(
                 histories,
                 {c.name: c.unit for c in plant.outputs + plant.inputs},
                 [c.name for c in plant.outputs],
                 [c.name for c in plant.inputs],
                 t,
-                None if target is None else np.broadcast_to(target, (nc, 4)),
+                attitude_targets(controller, t, nc),
                 config.settling_band,
             )
         for key, val in metrics.items():  # one Dataset call: each later insertion re-aligns
