@@ -119,10 +119,16 @@ class Structure:
         return len(self._members)
 
     def element(self, element: int) -> dict[str, Any]:
-        """Description of a member: ``kind``, ``nodes`` (ids), ``label`` and ``preload`` (N)."""
+        """Description of a member: ``kind``, ``nodes`` (ids), ``label``, ``preload`` (N) and
+        ``properties`` (the values of the quantities :meth:`property_derivative` takes, SI)."""
         m = self._members[self._element_index(element)]
+        properties = {q: float(m.props[_GRID_KEYS.get(q, q)]) for q in _DESIGN_QUANTITIES[m.kind]}
         return dict(
-            kind=m.kind, nodes=(self._ids[m.n1], self._ids[m.n2]), label=m.label, preload=m.preload
+            kind=m.kind,
+            nodes=(self._ids[m.n1], self._ids[m.n2]),
+            label=m.label,
+            preload=m.preload,
+            properties=properties,
         )
 
     def _element_index(self, element: object) -> int:
@@ -211,6 +217,7 @@ class Structure:
         props = dict(
             E=material.E,
             G=material.shear_modulus,
+            G_per_E=None if material.G is not None else material.shear_modulus / material.E,
             rho=material.rho,
             A=section.A,
             Iy=section.Iy,
@@ -395,6 +402,79 @@ class Structure:
                 M[i, 3:, 3:] = lm.inertia
         return idx, np.zeros_like(M), M
 
+    # -- derivatives with respect to member properties --------------------------------------
+    def property_derivative(
+        self, quantity: str, elements: Iterable[int]
+    ) -> tuple[sp.csr_matrix, sp.csr_matrix, float]:
+        """∂K/∂q, ∂M/∂q on the active dofs of :meth:`assemble`, and ∂(member mass)/∂q.
+
+        q is one property shared by the members ``elements`` (a design group), changed by the
+        same amount in each. Every element matrix of :mod:`flexsat.structures.elements` is
+        linear in each single property (EA, GJ, EI_y, EI_z, ρA, ρ(I_y + I_z), EI, GJ, m, I_t
+        enter linearly; Przemieniecki 1968 ch. 5 and 11), so ∂k/∂q = k(q = 1) − k(q = 0) with
+        the other properties held: exact, not a difference quotient. Axial preloads are held
+        fixed (their geometric stiffness does not depend on q).
+
+        Parameters
+        ----------
+        quantity : str
+            Frame: ``"A"``, ``"Iy"``, ``"Iz"``, ``"J"``, ``"E"``, ``"G"``, ``"rho"``; planar
+            beam: ``"A"``, ``"Iz"``, ``"E"``, ``"rho"``; rod: ``"A"``, ``"E"``, ``"rho"``;
+            grid: ``"EI"``, ``"GJ"``, ``"mass_per_length"``,
+            ``"torsional_inertia_per_length"``. ``"E"`` of a frame whose material has no
+            explicit G also scales G = E / (2 (1 + ν)); with an explicit G it leaves G alone.
+        elements : iterable of int
+            Element ids of the group (non-empty, no repeats).
+
+        Returns
+        -------
+        dK, dM : scipy.sparse.csr_matrix (ndof, ndof)
+            Rows and columns as :meth:`assemble` (the supported, clamped dofs).
+        dmass : float
+            Derivative of the members' total mass (Σ ρ A L, or Σ m L for grids), kg per unit q.
+        """
+        ids = [self._element_index(e) for e in elements]
+        if not ids:
+            raise FieldError("elements", "must name at least one element")
+        if len(set(ids)) != len(ids):
+            raise FieldError("elements", f"must not repeat an element, got {ids}")
+        asm = self._assemble(geometric=False, clamped=self._clamped)
+        number = np.full(6 * len(self._ids), -1)
+        number[6 * asm._node_of_dof + asm._slot_of_dof] = np.arange(asm.n_dofs)
+        k_parts, m_parts, dmass = [], [], 0.0
+        for kind in _KIND_SLOTS:
+            members = [self._members[i] for i in ids if self._members[i].kind == kind]
+            if not members:
+                continue
+            if quantity not in _DESIGN_QUANTITIES[kind]:
+                raise FieldError(
+                    "quantity",
+                    f"{quantity!r} is not a property of a {kind} member "
+                    f"(expected one of {_DESIGN_QUANTITIES[kind]})",
+                )
+            one = [_with_property(m, quantity, 1.0) for m in members]
+            zero = [_with_property(m, quantity, 0.0) for m in members]
+            idx, k1, m1 = _KIND_BUILDERS[kind](one, self.coordinates, False)
+            _, k0, m0 = _KIND_BUILDERS[kind](zero, self.coordinates, False)
+            k_parts.append((idx, k1 - k0))
+            m_parts.append((idx, m1 - m0))
+            dmass += float(np.sum(_member_masses(one, self.coordinates)))
+            dmass -= float(np.sum(_member_masses(zero, self.coordinates)))
+        return _sparse(number, k_parts), _sparse(number, m_parts), dmass
+
+    def structural_mass(self) -> float:
+        """Total mass of the members (Σ ρ A L; Σ m L for grids) and lumped masses, kg."""
+        members = float(
+            sum(
+                np.sum(
+                    _member_masses([m for m in self._members if m.kind == kind], self.coordinates)
+                )
+                for kind in _KIND_SLOTS
+                if any(m.kind == kind for m in self._members)
+            )
+        )
+        return members + sum(lm.mass for lm in self._masses)
+
     # -- preloads from gravity --------------------------------------------------------------
     def gravity_preload(self, g: npt.ArrayLike = (0.0, 0.0, -9.80665)) -> FloatArray:
         """Set every member's axial preload from a linear static solve under gravity.
@@ -574,6 +654,41 @@ def _rod_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) ->
         el.rod_mass(c["rho"], c["A"], L),
     )
     return _slot_indices(members, "rod"), k, m
+
+
+#: the member properties :meth:`Structure.property_derivative` differentiates, per kind
+_DESIGN_QUANTITIES = {
+    "frame": ("A", "Iy", "Iz", "J", "E", "G", "rho"),
+    "beam2d": ("A", "Iz", "E", "rho"),
+    "rod": ("A", "E", "rho"),
+    "grid": ("EI", "GJ", "mass_per_length", "torsional_inertia_per_length"),
+}
+_GRID_KEYS = {"mass_per_length": "m", "torsional_inertia_per_length": "It"}
+
+
+def _with_property(member: _Member, quantity: str, value: float) -> _Member:
+    """A copy of ``member`` with property ``quantity`` set to ``value`` (G follows a tied E)."""
+    props = dict(member.props)
+    props[_GRID_KEYS.get(quantity, quantity)] = value
+    if quantity == "E" and member.kind == "frame" and props["G_per_E"] is not None:
+        props["G"] = value * props["G_per_E"]
+    return dataclasses.replace(member, props=props)
+
+
+def _member_masses(members: Sequence[_Member], xyz: FloatArray) -> FloatArray:
+    """Mass of each member of one kind, kg: ρ A L (L between offset ends), or m L for grids."""
+    if not members:
+        return np.zeros(0)
+    kind = members[0].kind
+    if kind == "frame":
+        L = _frame_geometry(members, xyz)[0]
+    else:
+        x1, x2 = _ends(members, xyz)
+        planar = kind in ("beam2d", "grid")
+        L = np.linalg.norm((x2 - x1)[:, :2] if planar else x2 - x1, axis=1)
+    if kind == "grid":
+        return _column(members, "m") * L
+    return _column(members, "rho") * _column(members, "A") * L
 
 
 _KIND_BUILDERS = {
