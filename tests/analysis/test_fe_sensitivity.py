@@ -344,3 +344,28 @@ def test_bad_mode_numbers_are_refused_by_name():
     for modes in ([], [-1], [1.5], [2, 2], [10_000]):
         with pytest.raises(FieldError, match="modes"):
             fe_modal_derivatives(cantilever(tip=1.0), [LumpedMass(10)], modes)
+
+
+def test_a_section_direction_is_the_sum_of_its_single_property_derivatives():
+    # the element matrices are jointly affine in (A, Iy, Iz, J): one directional derivative
+    # equals the combination of the four single ones, to round-off
+    s = cantilever(tip=1.0)
+    group = tuple(range(10))
+    c = {"A": 0.3, "Iy": 2e-3, "Iz": -1e-3, "J": 5e-4}
+    dK, dM, dm = s.property_derivative(c, group)
+    singles = [s.property_derivative(q, group) for q in c]
+    K_sum = sum(w * k for w, (k, _, _) in zip(c.values(), singles))
+    M_sum = sum(w * m for w, (_, m, _) in zip(c.values(), singles))
+    assert abs(dK - K_sum).max() <= 1e-12 * abs(K_sum).max()
+    assert abs(dM - M_sum).max() <= 1e-12 * abs(M_sum).max()
+    assert dm == pytest.approx(sum(w * d for w, (_, _, d) in zip(c.values(), singles)), rel=1e-13)
+
+
+def test_mixing_section_and_material_properties_or_a_tied_G_is_refused_by_name():
+    s = cantilever()
+    with pytest.raises(FieldError, match="quantity.*affine"):
+        s.property_derivative({"A": 1.0, "E": 1.0}, (0,))  # E A is bilinear
+    with pytest.raises(FieldError, match="quantity.*follows E"):
+        s.property_derivative("G", (0,))  # G = E / 2(1 + ν) here
+    with pytest.raises(FieldError, match="direction"):
+        s.property_derivative({}, (0,))

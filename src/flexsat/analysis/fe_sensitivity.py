@@ -224,7 +224,7 @@ def _check_section(
     structure: Structure, elements: tuple[int, ...], section: Section, what: str
 ) -> None:
     want = np.array([section.A, section.Iy, section.Iz, section.J])
-    for e in elements:
+    for e in set(elements):
         info = structure.element(e)
         props = info["properties"]
         if info["kind"] != "frame":
@@ -250,14 +250,9 @@ def _section_chain(
     if param.dimension not in table:
         raise FieldError("dimension", f"must be one of {tuple(table)}, got {param.dimension!r}")
     _check_section(structure, elements, section, field)
-    dK = dM = None
-    dmass = 0.0
-    for quantity, factor in zip(("A", "Iy", "Iz", "J"), table[param.dimension]):
-        k, m, dm = structure.property_derivative(quantity, elements)
-        dK = factor * k if dK is None else dK + factor * k
-        dM = factor * m if dM is None else dM + factor * m
-        dmass += factor * dm
-    return sp.csr_matrix(dK), sp.csr_matrix(dM), dmass
+    # the element matrices are jointly affine in (A, Iy, Iz, J): one directional derivative
+    direction = dict(zip(("A", "Iy", "Iz", "J"), table[param.dimension]))
+    return structure.property_derivative(direction, elements)
 
 
 def _lumped_rows(assembly: Assembly, node: int, dofs: Sequence[str], field: str) -> list[int]:

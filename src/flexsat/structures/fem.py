@@ -13,7 +13,7 @@ as one ``(n, d, d)`` stack, scattered as COO triplets and summed into CSR.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Collection, Iterable, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from numbers import Integral
 from typing import Any, TypedDict
@@ -363,19 +363,12 @@ class Structure:
 
     def _assemble(self, geometric: bool, clamped: Collection[tuple[int, int]]) -> Assembly:
         n_nodes = len(self._ids)
-        touched = np.zeros((n_nodes, 6), dtype=bool)
+        touched = self._touched()
         parts = []
         for kind in _KIND_SLOTS:
             members = [m for m in self._members if m.kind == kind]
             if members:
                 parts.append(_KIND_BUILDERS[kind](members, self.coordinates, geometric))
-                slots = np.array(_KIND_SLOTS[kind])
-                for col in (0, 1):
-                    nodes = np.array([(m.n1, m.n2)[col] for m in members])
-                    touched[nodes[:, None], slots[None, :]] = True
-        for lm in self._masses:
-            touched[lm.node, :3] = True
-            touched[lm.node, 3:] |= lm.inertia is not None
         if self._masses:
             parts.append(self._mass_blocks())
         _check_connected(touched, self._ids)
@@ -404,25 +397,31 @@ class Structure:
 
     # -- derivatives with respect to member properties --------------------------------------
     def property_derivative(
-        self, quantity: str, elements: Iterable[int]
+        self, direction: str | Mapping[str, float], elements: Iterable[int]
     ) -> tuple[sp.csr_matrix, sp.csr_matrix, float]:
         """∂K/∂q, ∂M/∂q on the active dofs of :meth:`assemble`, and ∂(member mass)/∂q.
 
         q is one property shared by the members ``elements`` (a design group), changed by the
-        same amount in each. Every element matrix of :mod:`flexsat.structures.elements` is
-        linear in each single property (EA, GJ, EI_y, EI_z, ρA, ρ(I_y + I_z), EI, GJ, m, I_t
-        enter linearly; Przemieniecki 1968 ch. 5 and 11), so ∂k/∂q = k(q = 1) − k(q = 0) with
-        the other properties held: exact, not a difference quotient. Axial preloads are held
-        fixed (their geometric stiffness does not depend on q).
+        same amount in each, or a direction in the space of several properties (then the
+        derivative is Σ c_q ∂/∂q, e.g. ∂A/∂t, ∂Iy/∂t, ... of a section dimension t). Every
+        element matrix of :mod:`flexsat.structures.elements` is affine in the section
+        properties (A, Iy, Iz, J) jointly, with E, G, ρ held, and in the material properties
+        (E, G, ρ) jointly, with the section held: EA, GJ, EI_y, EI_z, ρA, ρ(I_y + I_z) (and
+        EI, GJ, m, I_t of a grid) each enter linearly (Przemieniecki 1968 ch. 5 and 11). So
+        Σ c_q ∂k/∂q = k(q = c) − k(q = 0) with the other properties held: exact, not a
+        difference quotient. Axial preloads are held fixed (their geometric stiffness does not
+        depend on q).
 
         Parameters
         ----------
-        quantity : str
-            Frame: ``"A"``, ``"Iy"``, ``"Iz"``, ``"J"``, ``"E"``, ``"G"``, ``"rho"``; planar
-            beam: ``"A"``, ``"Iz"``, ``"E"``, ``"rho"``; rod: ``"A"``, ``"E"``, ``"rho"``;
-            grid: ``"EI"``, ``"GJ"``, ``"mass_per_length"``,
-            ``"torsional_inertia_per_length"``. ``"E"`` of a frame whose material has no
-            explicit G also scales G = E / (2 (1 + ν)); with an explicit G it leaves G alone.
+        direction : str or mapping of str to float
+            One quantity (coefficient 1) or {quantity: coefficient}, all of one jointly affine
+            set. Frame: section ``"A"``, ``"Iy"``, ``"Iz"``, ``"J"``; material ``"E"``,
+            ``"G"``, ``"rho"``. Planar beam: ``"A"``, ``"Iz"`` / ``"E"``, ``"rho"``. Rod:
+            ``"A"`` / ``"E"``, ``"rho"``. Grid (one set): ``"EI"``, ``"GJ"``,
+            ``"mass_per_length"``, ``"torsional_inertia_per_length"``. ``"E"`` of a frame
+            whose material has no explicit G also scales G = E / (2 (1 + ν)); with an explicit
+            G it leaves G alone.
         elements : iterable of int
             Element ids of the group (non-empty, no repeats).
 
@@ -433,34 +432,63 @@ class Structure:
         dmass : float
             Derivative of the members' total mass (Σ ρ A L, or Σ m L for grids), kg per unit q.
         """
+        coef = {direction: 1.0} if isinstance(direction, str) else dict(direction)
+        if not coef:
+            raise FieldError("direction", "must name at least one property")
         ids = [self._element_index(e) for e in elements]
         if not ids:
             raise FieldError("elements", "must name at least one element")
         if len(set(ids)) != len(ids):
             raise FieldError("elements", f"must not repeat an element, got {ids}")
-        asm = self._assemble(geometric=False, clamped=self._clamped)
-        number = np.full(6 * len(self._ids), -1)
-        number[6 * asm._node_of_dof + asm._slot_of_dof] = np.arange(asm.n_dofs)
+        number = self._numbering(self._clamped)
         k_parts, m_parts, dmass = [], [], 0.0
         for kind in _KIND_SLOTS:
             members = [self._members[i] for i in ids if self._members[i].kind == kind]
             if not members:
                 continue
-            if quantity not in _DESIGN_QUANTITIES[kind]:
+            sets = _AFFINE_SETS[kind]
+            if not any(set(coef) <= group for group in sets):
                 raise FieldError(
                     "quantity",
-                    f"{quantity!r} is not a property of a {kind} member "
-                    f"(expected one of {_DESIGN_QUANTITIES[kind]})",
+                    f"{sorted(coef)} are not properties of one affine set of a {kind} member "
+                    f"(expected a subset of one of {[sorted(g) for g in sets]})",
                 )
-            one = [_with_property(m, quantity, 1.0) for m in members]
-            zero = [_with_property(m, quantity, 0.0) for m in members]
-            idx, k1, m1 = _KIND_BUILDERS[kind](one, self.coordinates, False)
-            _, k0, m0 = _KIND_BUILDERS[kind](zero, self.coordinates, False)
-            k_parts.append((idx, k1 - k0))
-            m_parts.append((idx, m1 - m0))
-            dmass += float(np.sum(_member_masses(one, self.coordinates)))
-            dmass -= float(np.sum(_member_masses(zero, self.coordinates)))
+            if "G" in coef and any(m.props["G_per_E"] is not None for m in members):
+                raise FieldError(
+                    "quantity",
+                    "'G' of a material without an explicit G follows E = 2 (1 + ν) G; "
+                    "differentiate 'E' (or give the material its own G)",
+                )
+            changed = [_with_properties(m, coef) for m in members]
+            zero = [_with_properties(m, dict.fromkeys(coef, 0.0)) for m in members]
+            idx, k, m = _KIND_BUILDERS[kind](changed + zero, self.coordinates, False)
+            n = len(members)
+            k_parts.append((idx[:n], k[:n] - k[n:]))
+            m_parts.append((idx[:n], m[:n] - m[n:]))
+            masses = _member_masses(changed + zero, self.coordinates)
+            dmass += float(np.sum(masses[:n] - masses[n:]))
         return _sparse(number, k_parts), _sparse(number, m_parts), dmass
+
+    def _touched(self) -> npt.NDArray[np.bool_]:
+        """(n_nodes, 6): the dofs an element or a lumped mass touches."""
+        touched = np.zeros((len(self._ids), 6), dtype=bool)
+        for kind, slots in _KIND_SLOTS.items():
+            ends = np.array([(m.n1, m.n2) for m in self._members if m.kind == kind], dtype=int)
+            if ends.size:
+                touched[ends.ravel()[:, None], np.array(slots)[None, :]] = True
+        for lm in self._masses:
+            touched[lm.node, :3] = True
+            touched[lm.node, 3:] |= lm.inertia is not None
+        return touched
+
+    def _numbering(self, clamped: Collection[tuple[int, int]]) -> IntArray:
+        """Active-dof number of each global slot 6 node + dof (−1: inactive), as _assemble."""
+        touched = self._touched()
+        for node, slot in clamped:
+            touched[node, slot] = False
+        number = np.full(touched.size, -1)
+        number[touched.ravel()] = np.arange(int(touched.sum()))
+        return number
 
     def structural_mass(self) -> float:
         """Total mass of the members (Σ ρ A L; Σ m L for grids) and lumped masses, kg."""
@@ -663,16 +691,24 @@ _DESIGN_QUANTITIES = {
     "rod": ("A", "E", "rho"),
     "grid": ("EI", "GJ", "mass_per_length", "torsional_inertia_per_length"),
 }
+#: sets of properties in which the element matrices are jointly affine
+_AFFINE_SETS = {
+    "frame": ({"A", "Iy", "Iz", "J"}, {"E", "G", "rho"}),
+    "beam2d": ({"A", "Iz"}, {"E", "rho"}),
+    "rod": ({"A"}, {"E", "rho"}),
+    "grid": ({"EI", "GJ", "mass_per_length", "torsional_inertia_per_length"},),
+}
 _GRID_KEYS = {"mass_per_length": "m", "torsional_inertia_per_length": "It"}
 
 
-def _with_property(member: _Member, quantity: str, value: float) -> _Member:
-    """A copy of ``member`` with property ``quantity`` set to ``value`` (G follows a tied E)."""
+def _with_properties(member: _Member, values: dict[str, float]) -> _Member:
+    """A copy of ``member`` with the given properties replaced (G follows a tied E)."""
     props = dict(member.props)
-    props[_GRID_KEYS.get(quantity, quantity)] = value
-    if quantity == "E" and member.kind == "frame" and props["G_per_E"] is not None:
-        props["G"] = value * props["G_per_E"]
-    return dataclasses.replace(member, props=props)
+    for quantity, value in values.items():
+        props[_GRID_KEYS.get(quantity, quantity)] = float(value)
+    if "E" in values and member.kind == "frame" and props["G_per_E"] is not None:
+        props["G"] = float(values["E"]) * props["G_per_E"]
+    return _Member(member.kind, member.n1, member.n2, props, member.label, member.preload)
 
 
 def _member_masses(members: Sequence[_Member], xyz: FloatArray) -> FloatArray:
@@ -681,7 +717,12 @@ def _member_masses(members: Sequence[_Member], xyz: FloatArray) -> FloatArray:
         return np.zeros(0)
     kind = members[0].kind
     if kind == "frame":
-        L = _frame_geometry(members, xyz)[0]
+        x1, x2 = _ends(members, xyz)
+        for i, m in enumerate(members):
+            if m.props["offsets"] is not None:
+                x1[i] += m.props["offsets"][0]
+                x2[i] += m.props["offsets"][1]
+        L = np.linalg.norm(x2 - x1, axis=1)
     else:
         x1, x2 = _ends(members, xyz)
         planar = kind in ("beam2d", "grid")
