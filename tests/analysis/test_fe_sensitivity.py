@@ -369,3 +369,16 @@ def test_mixing_section_and_material_properties_or_a_tied_G_is_refused_by_name()
         s.property_derivative("G", (0,))  # G = E / 2(1 + ν) here
     with pytest.raises(FieldError, match="direction"):
         s.property_derivative({}, (0,))
+
+
+def test_rigid_body_motions_are_null_vectors_of_every_stiffness_derivative():
+    # why the rigid modes of a free structure stay at ω = 0 for every parameter
+    params = [
+        TubeSection("outer_diameter", (0, 3, 4), 0.04, 0.003),
+        RectangleSection("height", (1, 2), 0.03, 0.05),
+        MemberProperty("E", (0, 1, 2, 3, 4)),
+    ]
+    mats = fe_parameter_matrices(free_frame(), params)
+    R = mats.assembly.rigid_body_vectors()
+    for dK in mats.dK:
+        assert np.abs(dK @ R).max() <= 1e-12 * abs(dK).max() * np.abs(R).max()

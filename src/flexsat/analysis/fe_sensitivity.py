@@ -403,7 +403,7 @@ def fe_modal_derivatives(
     modes : sequence of int
         Mode numbers, 0-based, ascending ω, rigid-body modes counted.
     rigid_body_modes : int, optional
-        As ``Assembly.modes`` (6 for a free 3-D body); selecting one of them is refused.
+        As ``Assembly.modes`` (6 for a free 3-D body); selecting a rigid-body mode is refused.
     gap_rtol : float
         A selected λ closer than ``gap_rtol · λ_max`` (λ_max of the computed modes) to a
         neighbour counts as repeated and is refused: its derivatives divide by the gap.
@@ -424,13 +424,13 @@ def fe_modal_derivatives(
     # one mode above the highest selected one, to see the gap above it
     fe = asm.modes(min(int(sel.max()) + 2, n_massive), rigid_body_modes=rigid_body_modes)
     lam_all = fe.omegas**2
-    rigid = np.flatnonzero(fe.omegas == 0.0)
-    if rigid.size > 1 and np.isin(sel, rigid).any():
+    rigid = np.flatnonzero(fe.omegas == 0.0)  # exactly 0: cleaned by Assembly.modes
+    if np.isin(sel, rigid).any():
         raise FieldError(
             "modes",
             f"mode {int(sel[np.isin(sel, rigid)][0])} is one of {rigid.size} rigid-body modes "
-            "(a repeated eigenvalue ω = 0, which stays 0 for every parameter); their shapes have "
-            "no unique derivative: select elastic modes",
+            "(ω = 0, which stays 0 for every parameter; ω itself is not differentiable there and "
+            "a repeated ω = 0 has no unique shape derivative): select elastic modes",
         )
     tol = gap_rtol * max(float(lam_all.max()), float(np.finfo(float).tiny))
     for i in sel:
@@ -447,8 +447,7 @@ def fe_modal_derivatives(
     lam, phi = lam_all[sel], fe.shapes[:, sel]
     dlam, dphi = nelson_derivatives(asm.K, asm.M, mats.dK, mats.dM, lam, phi)
     omega = np.sqrt(lam)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        domega = np.where(omega > 0, dlam / (2.0 * np.where(omega > 0, omega, 1.0)), np.nan)
+    domega = dlam / (2.0 * omega)
     return FEModalDerivatives(
         indices=sel,
         eigenvalues=lam,
