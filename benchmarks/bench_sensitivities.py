@@ -43,13 +43,19 @@ def modal_model(n_states: int, zeta: float = 0.005, n_inputs: int = 2, seed: int
     return A, B
 
 
-def best_of(repeats: int, fn) -> float:
+def best_pair(repeats: int, objective, gradient) -> tuple[float, float]:
+    """Best-of-N wall times of ``objective`` and ``gradient``, interleaved (one of each per
+    repeat, so a load change on the shared machine hits both alike)."""
     times = []
     for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
+        pair = []
+        for fn in (objective, gradient):
+            t0 = time.perf_counter()
+            fn()
+            pair.append(time.perf_counter() - t0)
+        times.append(pair)
+    t = np.array(times)
+    return float(t[:, 0].min()), float(t[:, 1].min())
 
 
 def lq_rows(sizes, repeats):
@@ -69,9 +75,9 @@ def lq_rows(sizes, repeats):
                     np.linalg.solve(R, Bd.T @ S)
                 return float(np.sum(S * X0))
 
-            t_obj = best_of(repeats, objective)
-            t_grad = best_of(
+            t_obj, t_grad = best_pair(
                 repeats,
+                objective,
                 lambda Ad=Ad, Bd=Bd, d=discrete: lq_cost_gradient(Ad, Bd, Q, R, X0, discrete=d),
             )
             P = n * n + n * B.shape[1]  # entries of A and B alone
@@ -93,8 +99,9 @@ def h2_rows(sizes, repeats):
             Lc = sla.solve_continuous_lyapunov(A, -B @ B.T)
             return np.sqrt(np.trace(C @ Lc @ C.T))
 
-        t_obj = best_of(repeats, objective)
-        t_grad = best_of(repeats, lambda A=A, B=B, C=C: h2_norm_gradient(A, B, C))
+        t_obj, t_grad = best_pair(
+            repeats, objective, lambda A=A, B=B, C=C: h2_norm_gradient(A, B, C)
+        )
         rows.append(("H2 norm", f"n = {n}", n * n + n * B.shape[1], t_obj, t_grad))
     return rows
 
@@ -121,11 +128,12 @@ def fe_rows(repeats):
     def objective():
         return s.assemble().modes(max(modes) + 2, rigid_body_modes=6).omegas
 
-    t_obj = best_of(repeats, objective)
     rows = []
     for name, params in sets.items():
-        t_grad = best_of(
-            repeats, lambda p=params: fe_modal_derivatives(s, p, modes, rigid_body_modes=6)
+        t_obj, t_grad = best_pair(
+            repeats,
+            objective,
+            lambda p=params: fe_modal_derivatives(s, p, modes, rigid_body_modes=6),
         )
         rows.append(("FE modes (EPS, 4 modes, Nelson)", name, len(params), t_obj, t_grad))
     return rows

@@ -205,7 +205,7 @@ def h2_norm_gradient(A: npt.ArrayLike, B: npt.ArrayLike, C: npt.ArrayLike) -> H2
     if not alpha < 0:
         raise FieldError("A", f"must be Hurwitz (the H2 norm is infinite), max Re λ = {alpha:.3g}")
     Lc = sla.solve_continuous_lyapunov(A, -B @ B.T)
-    Lo = sla.solve_continuous_lyapunov(A.T, -C.T @ C)
+    Lo = sla.solve_continuous_lyapunov(np.ascontiguousarray(A.T), -C.T @ C)
     Lc, Lo = (Lc + Lc.T) / 2, (Lo + Lo.T) / 2
     norm = float(np.sqrt(max(np.sum(Lo * (B @ B.T)), 0.0)))
     if norm == 0.0:
