@@ -538,8 +538,8 @@ def modal_derivatives(
 def nelson_derivatives(
     K: Any,
     M: Any,
-    dK: Sequence[Any],
-    dM: Sequence[Any],
+    dK: Sequence[Any] | npt.NDArray[Any],
+    dM: Sequence[Any] | npt.NDArray[Any],
     eigenvalues: npt.ArrayLike,
     modes: npt.ArrayLike,
 ) -> tuple[FloatArray, FloatArray]:
