@@ -369,6 +369,8 @@ def test_mixing_section_and_material_properties_or_a_tied_G_is_refused_by_name()
         s.property_derivative("G", (0,))  # G = E / 2(1 + ν) here
     with pytest.raises(FieldError, match="direction"):
         s.property_derivative({}, (0,))
+    with pytest.raises(ValueError, match="direction"):
+        s.property_derivative({"A": float("nan")}, (0,))
 
 
 def test_rigid_body_motions_are_null_vectors_of_every_stiffness_derivative():

@@ -435,6 +435,8 @@ class Structure:
         coef = {direction: 1.0} if isinstance(direction, str) else dict(direction)
         if not coef:
             raise FieldError("direction", "must name at least one property")
+        for quantity, value in coef.items():
+            coef[quantity] = float(require_finite(value, f"direction[{quantity!r}]"))
         ids = [self._element_index(e) for e in elements]
         if not ids:
             raise FieldError("elements", "must name at least one element")
