@@ -176,3 +176,22 @@ def test_bad_lq_input_is_refused_by_name(kwargs, field):
 def test_unstable_plant_has_no_h2_norm_and_is_refused():
     with pytest.raises(FieldError, match="Hurwitz"):
         h2_norm_gradient(np.eye(2), np.ones((2, 1)), np.ones((1, 2)))
+
+
+def test_the_optimal_gain_is_stationary_so_its_variation_drops_out_of_the_gradient():
+    # J(K) = tr(P_K X0), A_cᵀP_K + P_K A_c + Q + KᵀRK = 0: ∂J/∂K = 2 (R K − Bᵀ P_K) W = 0 at
+    # the LQ gain (the envelope argument the adjoint formulas rest on)
+    A, B, Q, R, X0 = problem(2)
+    g = lq_cost_gradient(A, B, Q, R, X0)
+
+    def cost(K):
+        Ac = A - B @ K
+        P = sla.solve_continuous_lyapunov(Ac.T, -(Q + K.T @ R @ K))
+        return float(np.sum(P * X0))
+
+    dJ_dK = entrywise_fd(cost, g.K, h=1e-4)
+    assert np.abs(dJ_dK).max() <= 1e-7 * g.cost / np.abs(g.K).max()
+    # and away from the optimum it is not stationary (the check can fail)
+    K_off = g.K + 0.05 * np.ones_like(g.K)
+    assert np.linalg.eigvals(A - B @ K_off).real.max() < 0  # still a stabilising gain
+    assert np.abs(entrywise_fd(cost, K_off, h=1e-4)).max() > 1e-3 * g.cost / np.abs(g.K).max()
