@@ -24,6 +24,18 @@ import scipy.sparse as sp
 
 from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 from flexsat.structures import elements as el
+from flexsat.structures.members import (
+    AFFINE_SETS,
+    DESIGN_QUANTITIES,
+    GRID_KEYS,
+    KIND_BUILDERS,
+    KIND_SLOTS,
+    ElementBlocks,
+    Member,
+    axial_force,
+    member_masses,
+    with_properties,
+)
 from flexsat.structures.modal_solve import SYMMETRY_RTOL, factor_positive_definite, solve_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.units import FloatArray
@@ -32,28 +44,10 @@ __all__ = ["DOF_NAMES", "Assembly", "FEModes", "Structure"]
 
 DOF_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
 _SLOT = {name: i for i, name in enumerate(DOF_NAMES)}
-_KIND_SLOTS = {
-    "frame": (0, 1, 2, 3, 4, 5),
-    "beam2d": (0, 1, 5),
-    "grid": (2, 3, 4),
-    "rod": (0, 1, 2),
-}
 _ZERO_LENGTH_RTOL = 1e-10  # a member shorter than this times its end coordinates is zero-length
 _PLANE_RTOL = 1e-9  # |z2 - z1| of a planar member, relative to its length
 
 IntArray = npt.NDArray[np.int_]
-#: element blocks of one kind: global slot indices (n, d), K (n, d, d), M (n, d, d)
-ElementBlocks = tuple[IntArray, FloatArray, FloatArray]
-
-
-@dataclass
-class _Member:
-    kind: str
-    n1: int  # node indices (not ids)
-    n2: int
-    props: dict[str, Any]
-    label: object = None
-    preload: float = 0.0
 
 
 @dataclass
@@ -83,7 +77,7 @@ class Structure:
         self._index: dict[int, int] = {}
         self._ids: list[int] = []
         self._xyz: list[FloatArray] = []
-        self._members: list[_Member] = []
+        self._members: list[Member] = []
         self._masses: list[_Lumped] = []
         self._clamped: set[tuple[int, int]] = set()
         self._suppressed: set[tuple[int, int]] = set()  # clamps kept in Assembly.unclamped
@@ -122,7 +116,7 @@ class Structure:
         """Description of a member: ``kind``, ``nodes`` (ids), ``label``, ``preload`` (N) and
         ``properties`` (the values of the quantities :meth:`property_derivative` takes, SI)."""
         m = self._members[self._element_index(element)]
-        properties = {q: float(m.props[_GRID_KEYS.get(q, q)]) for q in _DESIGN_QUANTITIES[m.kind]}
+        properties = {q: float(m.props[GRID_KEYS.get(q, q)]) for q in DESIGN_QUANTITIES[m.kind]}
         return dict(
             kind=m.kind,
             nodes=(self._ids[m.n1], self._ids[m.n2]),
@@ -148,7 +142,7 @@ class Structure:
 
     # -- members ----------------------------------------------------------------------------
     def _add(self, kind: str, n1: int, n2: int, props: dict[str, Any], label: object) -> int:
-        member = _Member(kind, self._node(n1), self._node(n2), props, label)
+        member = Member(kind, self._node(n1), self._node(n2), props, label)
         self._members.append(member)
         return len(self._members) - 1
 
@@ -365,10 +359,10 @@ class Structure:
         n_nodes = len(self._ids)
         touched = self._touched()
         parts = []
-        for kind in _KIND_SLOTS:
+        for kind in KIND_SLOTS:
             members = [m for m in self._members if m.kind == kind]
             if members:
-                parts.append(_KIND_BUILDERS[kind](members, self.coordinates, geometric))
+                parts.append(KIND_BUILDERS[kind](members, self.coordinates, geometric))
         if self._masses:
             parts.append(self._mass_blocks())
         _check_connected(touched, self._ids)
@@ -444,11 +438,11 @@ class Structure:
             raise FieldError("elements", f"must not repeat an element, got {ids}")
         number = self._numbering(self._clamped)
         k_parts, m_parts, dmass = [], [], 0.0
-        for kind in _KIND_SLOTS:
+        for kind in KIND_SLOTS:
             members = [self._members[i] for i in ids if self._members[i].kind == kind]
             if not members:
                 continue
-            sets = _AFFINE_SETS[kind]
+            sets = AFFINE_SETS[kind]
             if not any(set(coef) <= group for group in sets):
                 raise FieldError(
                     "quantity",
@@ -461,20 +455,20 @@ class Structure:
                     "'G' of a material without an explicit G follows E = 2 (1 + ν) G; "
                     "differentiate 'E' (or give the material its own G)",
                 )
-            changed = [_with_properties(m, coef) for m in members]
-            zero = [_with_properties(m, dict.fromkeys(coef, 0.0)) for m in members]
-            idx, k, m = _KIND_BUILDERS[kind](changed + zero, self.coordinates, False)
+            changed = [with_properties(m, coef) for m in members]
+            zero = [with_properties(m, dict.fromkeys(coef, 0.0)) for m in members]
+            idx, k, m = KIND_BUILDERS[kind](changed + zero, self.coordinates, False)
             n = len(members)
             k_parts.append((idx[:n], k[:n] - k[n:]))
             m_parts.append((idx[:n], m[:n] - m[n:]))
-            masses = _member_masses(changed + zero, self.coordinates)
+            masses = member_masses(changed + zero, self.coordinates)
             dmass += float(np.sum(masses[:n] - masses[n:]))
         return _sparse(number, k_parts), _sparse(number, m_parts), dmass
 
     def _touched(self) -> npt.NDArray[np.bool_]:
         """(n_nodes, 6): the dofs an element or a lumped mass touches."""
         touched = np.zeros((len(self._ids), 6), dtype=bool)
-        for kind, slots in _KIND_SLOTS.items():
+        for kind, slots in KIND_SLOTS.items():
             ends = np.array([(m.n1, m.n2) for m in self._members if m.kind == kind], dtype=int)
             if ends.size:
                 touched[ends.ravel()[:, None], np.array(slots)[None, :]] = True
@@ -497,9 +491,9 @@ class Structure:
         members = float(
             sum(
                 np.sum(
-                    _member_masses([m for m in self._members if m.kind == kind], self.coordinates)
+                    member_masses([m for m in self._members if m.kind == kind], self.coordinates)
                 )
-                for kind in _KIND_SLOTS
+                for kind in KIND_SLOTS
                 if any(m.kind == kind for m in self._members)
             )
         )
@@ -542,7 +536,7 @@ class Structure:
         u = _static_solve(asm.K, f[np.searchsorted(keys, 6 * asm._node_of_dof + asm._slot_of_dof)])
         displacement = np.zeros((len(self._ids), 6))
         displacement[asm._node_of_dof, asm._slot_of_dof] = u
-        forces = np.array([_axial_force(m, self.coordinates, displacement) for m in self._members])
+        forces = np.array([axial_force(m, self.coordinates, displacement) for m in self._members])
         for member, force in zip(self._members, forces):
             member.preload = float(force)
         return forces
@@ -586,179 +580,6 @@ def _static_solve(K: sp.csr_matrix, f: FloatArray) -> FloatArray:
         raise FieldError(
             "gravity_preload", "stiffness matrix is singular (a mechanism, or too few clamps)"
         ) from None
-
-
-# ------------------------------------------------------------------------------------------------
-# per-kind batched element matrices: (global slot indices (n, d), K (n, d, d), M (n, d, d))
-def _column(members: Sequence[_Member], key: str) -> FloatArray:
-    return np.array([m.props[key] for m in members], dtype=float)
-
-
-def _slot_indices(members: Sequence[_Member], kind: str) -> IntArray:
-    slots = np.array(_KIND_SLOTS[kind])
-    n1 = np.array([m.n1 for m in members])[:, None]
-    n2 = np.array([m.n2 for m in members])[:, None]
-    return np.hstack([6 * n1 + slots, 6 * n2 + slots])
-
-
-def _frame_geometry(members: Sequence[_Member], xyz: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Lengths (between the offset ends) and 12x12 transformations of frame members."""
-    x1 = xyz[[m.n1 for m in members]]
-    x2 = xyz[[m.n2 for m in members]]
-    offsets = np.array(
-        [np.zeros((2, 3)) if m.props["offsets"] is None else m.props["offsets"] for m in members]
-    )
-    x1, x2 = x1 + offsets[:, 0], x2 + offsets[:, 1]
-    given = np.array([m.props["orientation"] is not None for m in members])
-    R = el.frame_rotation(x1, x2)
-    if given.any():
-        v = np.array([m.props["orientation"] for m, g in zip(members, given) if g])
-        R[given] = el.frame_rotation(x1[given], x2[given], v)
-    T = el.frame_transformation(R, offsets)
-    return np.linalg.norm(x2 - x1, axis=1), T
-
-
-def _frame_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
-    c = {k: _column(members, k) for k in ("E", "G", "rho", "A", "Iy", "Iz", "J")}
-    L, T = _frame_geometry(members, xyz)
-    k = el.frame_local_stiffness(c["E"], c["G"], c["A"], c["Iy"], c["Iz"], c["J"], L)
-    if geometric:
-        k = k + el.frame_local_geometric_stiffness(_preloads(members), L)
-    lumped = np.array([m.props["lumped"] for m in members])
-    m = np.where(
-        lumped[:, None, None],
-        el.frame_local_mass(c["rho"], c["A"], c["Iy"], c["Iz"], L, lumped=True),
-        el.frame_local_mass(c["rho"], c["A"], c["Iy"], c["Iz"], L),
-    )
-    return _slot_indices(members, "frame"), el.to_global(k, T), el.to_global(m, T)
-
-
-def _preloads(members: Sequence[_Member]) -> FloatArray:
-    return np.array([m.preload for m in members], dtype=float)
-
-
-def _ends(members: Sequence[_Member], xyz: FloatArray) -> tuple[FloatArray, FloatArray]:
-    return xyz[[m.n1 for m in members]], xyz[[m.n2 for m in members]]
-
-
-def _beam2d_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
-    c = {k: _column(members, k) for k in ("E", "rho", "A", "Iz")}
-    x1, x2 = _ends(members, xyz)
-    L = np.linalg.norm((x2 - x1)[:, :2], axis=1)
-    T = el.beam2d_transformation(x1, x2)
-    k = el.beam2d_local_stiffness(c["E"], c["A"], c["Iz"], L)
-    if geometric:
-        k = k + el.beam2d_local_geometric_stiffness(_preloads(members), L)
-    lumped = np.array([m.props["lumped"] for m in members])
-    m = np.where(
-        lumped[:, None, None],
-        el.beam2d_local_mass(c["rho"], c["A"], L, lumped=True),
-        el.beam2d_local_mass(c["rho"], c["A"], L),
-    )
-    return _slot_indices(members, "beam2d"), el.to_global(k, T), el.to_global(m, T)
-
-
-def _grid_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
-    c = {k: _column(members, k) for k in ("EI", "GJ", "m", "It")}
-    x1, x2 = _ends(members, xyz)
-    L = np.linalg.norm((x2 - x1)[:, :2], axis=1)
-    T = el.grid_transformation(x1, x2)
-    k = el.grid_local_stiffness(c["EI"], c["GJ"], L)
-    if geometric:
-        k = k + el.grid_local_geometric_stiffness(_preloads(members), L)
-    m = el.grid_local_mass(c["m"], c["It"], L)
-    return _slot_indices(members, "grid"), el.to_global(k, T), el.to_global(m, T)
-
-
-def _rod_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
-    c = {k: _column(members, k) for k in ("E", "rho", "A")}
-    x1, x2 = _ends(members, xyz)
-    L = np.linalg.norm(x2 - x1, axis=1)
-    k = el.rod_stiffness(c["E"], c["A"], x1, x2)
-    if geometric:
-        k = k + el.rod_geometric_stiffness(_preloads(members), x1, x2)
-    lumped = np.array([m.props["lumped"] for m in members])
-    m = np.where(
-        lumped[:, None, None],
-        el.rod_mass(c["rho"], c["A"], L, lumped=True),
-        el.rod_mass(c["rho"], c["A"], L),
-    )
-    return _slot_indices(members, "rod"), k, m
-
-
-#: the member properties :meth:`Structure.property_derivative` differentiates, per kind
-_DESIGN_QUANTITIES = {
-    "frame": ("A", "Iy", "Iz", "J", "E", "G", "rho"),
-    "beam2d": ("A", "Iz", "E", "rho"),
-    "rod": ("A", "E", "rho"),
-    "grid": ("EI", "GJ", "mass_per_length", "torsional_inertia_per_length"),
-}
-#: sets of properties in which the element matrices are jointly affine
-_AFFINE_SETS = {
-    "frame": ({"A", "Iy", "Iz", "J"}, {"E", "G", "rho"}),
-    "beam2d": ({"A", "Iz"}, {"E", "rho"}),
-    "rod": ({"A"}, {"E", "rho"}),
-    "grid": ({"EI", "GJ", "mass_per_length", "torsional_inertia_per_length"},),
-}
-_GRID_KEYS = {"mass_per_length": "m", "torsional_inertia_per_length": "It"}
-
-
-def _with_properties(member: _Member, values: dict[str, float]) -> _Member:
-    """A copy of ``member`` with the given properties replaced (G follows a tied E)."""
-    props = dict(member.props)
-    for quantity, value in values.items():
-        props[_GRID_KEYS.get(quantity, quantity)] = float(value)
-    if "E" in values and member.kind == "frame" and props["G_per_E"] is not None:
-        props["G"] = float(values["E"]) * props["G_per_E"]
-    return _Member(member.kind, member.n1, member.n2, props, member.label, member.preload)
-
-
-def _member_masses(members: Sequence[_Member], xyz: FloatArray) -> FloatArray:
-    """Mass of each member of one kind, kg: ρ A L (L between offset ends), or m L for grids."""
-    if not members:
-        return np.zeros(0)
-    kind = members[0].kind
-    if kind == "frame":
-        x1, x2 = _ends(members, xyz)
-        for i, m in enumerate(members):
-            if m.props["offsets"] is not None:
-                x1[i] += m.props["offsets"][0]
-                x2[i] += m.props["offsets"][1]
-        L = np.linalg.norm(x2 - x1, axis=1)
-    else:
-        x1, x2 = _ends(members, xyz)
-        planar = kind in ("beam2d", "grid")
-        L = np.linalg.norm((x2 - x1)[:, :2] if planar else x2 - x1, axis=1)
-    if kind == "grid":
-        return _column(members, "m") * L
-    return _column(members, "rho") * _column(members, "A") * L
-
-
-_KIND_BUILDERS = {
-    "frame": _frame_blocks,
-    "beam2d": _beam2d_blocks,
-    "grid": _grid_blocks,
-    "rod": _rod_blocks,
-}
-
-
-def _axial_force(member: _Member, xyz: FloatArray, displacement: FloatArray) -> float:
-    """EA/L x̂·(u_end2 - u_end1) from global node displacements (n_nodes, 6); 0 for grids."""
-    if member.kind == "grid":
-        return 0.0
-    p = member.props
-    u1, u2 = displacement[member.n1], displacement[member.n2]
-    x1, x2 = xyz[member.n1], xyz[member.n2]
-    d1 = d2 = np.zeros(3)
-    if member.kind == "frame" and p["offsets"] is not None:
-        d1, d2 = p["offsets"]
-    if member.kind == "beam2d":
-        x1, x2 = x1 * [1, 1, 0], x2 * [1, 1, 0]
-    e1 = u1[:3] + np.cross(u1[3:], d1)
-    e2 = u2[:3] + np.cross(u2[3:], d2)
-    axis = (x2 + d2) - (x1 + d1)
-    L = np.linalg.norm(axis)
-    return float(p["E"] * p["A"] / L * float(axis @ (e2 - e1)) / L)
 
 
 # ------------------------------------------------------------------------------------------------
