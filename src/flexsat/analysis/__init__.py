@@ -9,6 +9,17 @@ from flexsat.analysis.controllability import (
     pbh_test,
     repeated_frequency_test,
 )
+from flexsat.analysis.fe_sensitivity import (
+    FEModalDerivatives,
+    FEParameterMatrices,
+    LumpedInertia,
+    LumpedMass,
+    MemberProperty,
+    RectangleSection,
+    TubeSection,
+    fe_modal_derivatives,
+    fe_parameter_matrices,
+)
 from flexsat.analysis.gramians import (
     finite_horizon_gramian,
     gawronski_gramians,
@@ -30,6 +41,13 @@ from flexsat.analysis.placement import (
     modal_controllability,
     modal_cost,
 )
+from flexsat.analysis.riccati_sensitivity import (
+    H2Gradient,
+    LQCostGradient,
+    chain_gradient,
+    h2_norm_gradient,
+    lq_cost_gradient,
+)
 from flexsat.analysis.sensitivity import (
     EigenDerivatives,
     ModalDerivatives,
@@ -38,11 +56,27 @@ from flexsat.analysis.sensitivity import (
     eig_derivatives,
     eigenvector_condition_derivatives,
     modal_derivatives,
+    nelson_derivatives,
     svd_derivatives,
 )
 
 __all__ = [
     "EigenDerivatives",
+    "FEModalDerivatives",
+    "FEParameterMatrices",
+    "H2Gradient",
+    "LQCostGradient",
+    "LumpedInertia",
+    "LumpedMass",
+    "MemberProperty",
+    "RectangleSection",
+    "TubeSection",
+    "chain_gradient",
+    "fe_modal_derivatives",
+    "fe_parameter_matrices",
+    "h2_norm_gradient",
+    "lq_cost_gradient",
+    "nelson_derivatives",
     "HomotopyResult",
     "HomotopyStep",
     "ModalDerivatives",

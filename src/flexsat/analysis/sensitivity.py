@@ -37,6 +37,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from flexsat.input_checks import FieldError
 from flexsat.units import FloatArray
@@ -526,23 +528,77 @@ def modal_derivatives(
     scale = max(float(np.abs(lam_all).max()), float(np.finfo(float).tiny))
     _check_distinct(lam_all, scale, gap_rtol, "eigenvalues", select=sel)
     lam, phi = lam_all[sel], phi_all[:, sel]
-    s = sel.size
-    dlam = np.einsum("ji,pjk,ki->pi", phi, dK, phi) - lam * np.einsum("ji,pjk,ki->pi", phi, dM, phi)
-    dphi = np.empty((P, n, s))
-    for col in range(s):
-        f = phi[:, col]
-        r = int(np.argmax(np.abs(f)))
-        keep = np.delete(np.arange(n), r)
-        Z = K - lam[col] * M
-        rhs = -(np.einsum("pjk,k->pj", dK - lam[col] * dM, f) - dlam[:, col, None] * (M @ f))
-        v = np.zeros((P, n))
-        v[:, keep] = np.linalg.solve(Z[np.ix_(keep, keep)], rhs[:, keep].T).T
-        c = -(v @ (M @ f)) - 0.5 * np.einsum("j,pjk,k->p", f, dM, f)
-        dphi[:, :, col] = v + c[:, None] * f
+    dlam, dphi = nelson_derivatives(K, M, dK, dM, lam, phi)
     rigid = lam <= gap_rtol * scale
     omega = np.where(rigid, 0.0, np.sqrt(np.clip(lam, 0.0, None)))
     domega = np.where(rigid, np.nan, dlam / (2.0 * np.where(rigid, 1.0, omega)))
     return ModalDerivatives(lam, omega, phi, dlam, domega, dphi, sel)
+
+
+def nelson_derivatives(
+    K: Any,
+    M: Any,
+    dK: Sequence[Any] | npt.NDArray[Any],
+    dM: Sequence[Any] | npt.NDArray[Any],
+    eigenvalues: npt.ArrayLike,
+    modes: npt.ArrayLike,
+) -> tuple[FloatArray, FloatArray]:
+    """Nelson's method for given simple eigenpairs of K φ = λ M φ (φᵀ M φ = 1).
+
+    Nelson, R. B., "Simplified calculation of eigenvector derivatives", AIAA Journal 14(9),
+    1201-1205, 1976. For each mode (λ, φ) and parameter p_k, with F = (K_k − λ M_k) φ:
+
+    - ∂λ/∂p_k = φᵀ F;
+    - (K − λ M) v = −F + (∂λ/∂p_k) M φ, solved with v_r = 0 at r = argmax |φ_r| (deleting row
+      and column r leaves a non-singular matrix when λ is simple);
+    - ∂φ/∂p_k = v + c φ,  c = −φᵀ M v − ½ φᵀ M_k φ (from ∂(φᵀ M φ)/∂p_k = 0).
+
+    Only the modes asked for are needed, so the pencil may be sparse and may carry massless
+    dofs (K − λ M stays non-singular off φ) and other, repeated eigenvalues (the rigid-body
+    modes of a free structure, λ = 0, when λ itself is elastic). The caller checks that each λ
+    is simple; this function does not see the other eigenvalues.
+
+    Parameters
+    ----------
+    K, M : (n, n) ndarray or scipy sparse matrix
+        Symmetric.
+    dK, dM : sequences of P (n, n) ndarrays or sparse matrices
+        ∂K/∂p_k and ∂M/∂p_k.
+    eigenvalues : (s,) array_like
+        λ_i = ω_i², (rad/s)².
+    modes : (n, s) array_like
+        Mass-normalised φ_i.
+
+    Returns
+    -------
+    eigenvalue_gradient : (P, s) ndarray
+    mode_gradient : (P, n, s) ndarray
+    """
+    lam = np.atleast_1d(np.asarray(eigenvalues, dtype=float))
+    phi = np.asarray(modes, dtype=float)
+    n, s = phi.shape
+    P = len(dK)
+    sparse = sp.issparse(K) or sp.issparse(M)
+    dlam = np.empty((P, s))
+    dphi = np.empty((P, n, s))
+    for col in range(s):
+        f = phi[:, col]
+        Mf = M @ f
+        F = np.stack([dK[k] @ f - lam[col] * (dM[k] @ f) for k in range(P)])
+        dlam[:, col] = F @ f
+        rhs = -(F - dlam[:, col, None] * Mf)
+        r = int(np.argmax(np.abs(f)))
+        keep = np.delete(np.arange(n), r)
+        Z = K - lam[col] * M
+        v = np.zeros((P, n))
+        if sparse:
+            Zr = sp.csc_matrix(Z)[keep][:, keep]
+            v[:, keep] = np.atleast_2d(spla.splu(sp.csc_matrix(Zr)).solve(rhs[:, keep].T).T)
+        else:
+            v[:, keep] = np.linalg.solve(Z[np.ix_(keep, keep)], rhs[:, keep].T).T
+        c = -(v @ Mf) - 0.5 * np.array([f @ (dM[k] @ f) for k in range(P)])
+        dphi[:, :, col] = v + c[:, None] * f
+    return dlam, dphi
 
 
 # -- singular value decomposition, Att. 5 Eqs. 15-27 -------------------------------------------
@@ -793,5 +849,6 @@ __all__ = [
     "eigensolve",
     "eigenvector_condition_derivatives",
     "modal_derivatives",
+    "nelson_derivatives",
     "svd_derivatives",
 ]

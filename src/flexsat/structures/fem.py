@@ -13,7 +13,7 @@ as one ``(n, d, d)`` stack, scattered as COO triplets and summed into CSR.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Collection, Iterable, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from numbers import Integral
 from typing import Any, TypedDict
@@ -24,6 +24,18 @@ import scipy.sparse as sp
 
 from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
 from flexsat.structures import elements as el
+from flexsat.structures.members import (
+    AFFINE_SETS,
+    DESIGN_QUANTITIES,
+    GRID_KEYS,
+    KIND_BUILDERS,
+    KIND_SLOTS,
+    ElementBlocks,
+    Member,
+    axial_force,
+    member_masses,
+    with_properties,
+)
 from flexsat.structures.modal_solve import SYMMETRY_RTOL, factor_positive_definite, solve_modes
 from flexsat.structures.sections import Material, Section
 from flexsat.units import FloatArray
@@ -32,28 +44,10 @@ __all__ = ["DOF_NAMES", "Assembly", "DependentDofs", "FEModes", "Structure"]
 
 DOF_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
 _SLOT = {name: i for i, name in enumerate(DOF_NAMES)}
-_KIND_SLOTS = {
-    "frame": (0, 1, 2, 3, 4, 5),
-    "beam2d": (0, 1, 5),
-    "grid": (2, 3, 4),
-    "rod": (0, 1, 2),
-}
 _ZERO_LENGTH_RTOL = 1e-10  # a member shorter than this times its end coordinates is zero-length
 _PLANE_RTOL = 1e-9  # |z2 - z1| of a planar member, relative to its length
 
 IntArray = npt.NDArray[np.int_]
-#: element blocks of one kind: global slot indices (n, d), K (n, d, d), M (n, d, d)
-ElementBlocks = tuple[IntArray, FloatArray, FloatArray]
-
-
-@dataclass
-class _Member:
-    kind: str
-    n1: int  # node indices (not ids)
-    n2: int
-    props: dict[str, Any]
-    label: object = None
-    preload: float = 0.0
 
 
 @dataclass
@@ -84,7 +78,7 @@ class Structure:
         self._index: dict[int, int] = {}
         self._ids: list[int] = []
         self._xyz: list[FloatArray] = []
-        self._members: list[_Member] = []
+        self._members: list[Member] = []
         self._masses: list[_Lumped] = []
         self._clamped: set[tuple[int, int]] = set()
         self._suppressed: set[tuple[int, int]] = set()  # clamps kept in Assembly.unclamped
@@ -121,10 +115,16 @@ class Structure:
         return len(self._members)
 
     def element(self, element: int) -> dict[str, Any]:
-        """Description of a member: ``kind``, ``nodes`` (ids), ``label`` and ``preload`` (N)."""
+        """Description of a member: ``kind``, ``nodes`` (ids), ``label``, ``preload`` (N) and
+        ``properties`` (the values of the quantities :meth:`property_derivative` takes, SI)."""
         m = self._members[self._element_index(element)]
+        properties = {q: float(m.props[GRID_KEYS.get(q, q)]) for q in DESIGN_QUANTITIES[m.kind]}
         return dict(
-            kind=m.kind, nodes=(self._ids[m.n1], self._ids[m.n2]), label=m.label, preload=m.preload
+            kind=m.kind,
+            nodes=(self._ids[m.n1], self._ids[m.n2]),
+            label=m.label,
+            preload=m.preload,
+            properties=properties,
         )
 
     def _element_index(self, element: object) -> int:
@@ -144,7 +144,7 @@ class Structure:
 
     # -- members ----------------------------------------------------------------------------
     def _add(self, kind: str, n1: int, n2: int, props: dict[str, Any], label: object) -> int:
-        member = _Member(kind, self._node(n1), self._node(n2), props, label)
+        member = Member(kind, self._node(n1), self._node(n2), props, label)
         self._members.append(member)
         return len(self._members) - 1
 
@@ -213,6 +213,7 @@ class Structure:
         props = dict(
             E=material.E,
             G=material.shear_modulus,
+            G_per_E=None if material.G is not None else material.shear_modulus / material.E,
             rho=material.rho,
             A=section.A,
             Iy=section.Iy,
@@ -421,35 +422,16 @@ class Structure:
 
     def _assemble(self, geometric: bool, clamped: Collection[tuple[int, int]]) -> Assembly:
         n_nodes = len(self._ids)
-        touched = np.zeros((n_nodes, 6), dtype=bool)
+        touched = self._touched()
         parts = []
-        for kind in _KIND_SLOTS:
+        for kind in KIND_SLOTS:
             members = [m for m in self._members if m.kind == kind]
             if members:
-                parts.append(_KIND_BUILDERS[kind](members, self.coordinates, geometric))
-                slots = np.array(_KIND_SLOTS[kind])
-                for col in (0, 1):
-                    nodes = np.array([(m.n1, m.n2)[col] for m in members])
-                    touched[nodes[:, None], slots[None, :]] = True
-        for lm in self._masses:
-            touched[lm.node, :3] = True
-            touched[lm.node, 3:] |= lm.inertia is not None or lm.offset is not None
+                parts.append(KIND_BUILDERS[kind](members, self.coordinates, geometric))
         if self._masses:
             parts.append(self._mass_blocks())
-        for slave, master in self._links.items():
-            touched[[slave, master], :] = True
         _check_connected(touched, self._ids)
-        active = touched.copy()
-        for node, slot in clamped:
-            if node in self._links:
-                raise FieldError(
-                    "clamp",
-                    f"node {self._ids[node]} is a dependent node of a rigid link; clamp its "
-                    f"independent node {self._ids[self._links[node]]}",
-                )
-            active[node, slot] = False
-        if not active.any():
-            raise FieldError("structure", "no active dofs (every dof is clamped)")
+        active = self._active(touched, clamped)
         number = np.full(6 * n_nodes, -1)
         number[active.ravel()] = np.arange(int(active.sum()))
         K = _sparse(number, [(idx, k) for idx, k, _ in parts])
@@ -529,6 +511,131 @@ class Structure:
                 M[i] = T.T @ M[i] @ T
         return idx, np.zeros_like(M), M
 
+    # -- derivatives with respect to member properties --------------------------------------
+    def property_derivative(
+        self, direction: str | Mapping[str, float], elements: Iterable[int]
+    ) -> tuple[sp.csr_matrix, sp.csr_matrix, float]:
+        """∂K/∂q, ∂M/∂q on the active dofs of :meth:`assemble`, and ∂(member mass)/∂q.
+
+        q is one property shared by the members ``elements`` (a design group), changed by the
+        same amount in each, or a direction in the space of several properties (then the
+        derivative is Σ c_q ∂/∂q, e.g. ∂A/∂t, ∂Iy/∂t, ... of a section dimension t). Every
+        element matrix of :mod:`flexsat.structures.elements` is affine in the section
+        properties (A, Iy, Iz, J) jointly, with E, G, ρ held, and in the material properties
+        (E, G, ρ) jointly, with the section held: EA, GJ, EI_y, EI_z, ρA, ρ(I_y + I_z) (and
+        EI, GJ, m, I_t of a grid) each enter linearly (Przemieniecki 1968 ch. 5 and 11). So
+        Σ c_q ∂k/∂q = k(q = c) − k(q = 0) with the other properties held: exact, not a
+        difference quotient. Axial preloads are held fixed (their geometric stiffness does not
+        depend on q).
+
+        Parameters
+        ----------
+        direction : str or mapping of str to float
+            One quantity (coefficient 1) or {quantity: coefficient}, all of one jointly affine
+            set. Frame: section ``"A"``, ``"Iy"``, ``"Iz"``, ``"J"``; material ``"E"``,
+            ``"G"``, ``"rho"``. Planar beam: ``"A"``, ``"Iz"`` / ``"E"``, ``"rho"``. Rod:
+            ``"A"`` / ``"E"``, ``"rho"``. Grid (one set): ``"EI"``, ``"GJ"``,
+            ``"mass_per_length"``, ``"torsional_inertia_per_length"``. ``"E"`` of a frame
+            whose material has no explicit G also scales G = E / (2 (1 + ν)); with an explicit
+            G it leaves G alone.
+        elements : iterable of int
+            Element ids of the group (non-empty, no repeats).
+
+        Returns
+        -------
+        dK, dM : scipy.sparse.csr_matrix (ndof, ndof)
+            Rows and columns as :meth:`assemble` (the supported, clamped dofs).
+        dmass : float
+            Derivative of the members' total mass (Σ ρ A L, or Σ m L for grids), kg per unit q.
+        """
+        coef = {direction: 1.0} if isinstance(direction, str) else dict(direction)
+        if not coef:
+            raise FieldError("direction", "must name at least one property")
+        for quantity, value in coef.items():
+            coef[quantity] = float(require_finite(value, f"direction[{quantity!r}]"))
+        ids = [self._element_index(e) for e in elements]
+        if not ids:
+            raise FieldError("elements", "must name at least one element")
+        if len(set(ids)) != len(ids):
+            raise FieldError("elements", f"must not repeat an element, got {ids}")
+        active = self._active(self._touched(), self._clamped)
+        number = np.full(active.size, -1)
+        number[active.ravel()] = np.arange(int(active.sum()))
+        k_parts, m_parts, dmass = [], [], 0.0
+        for kind in KIND_SLOTS:
+            members = [self._members[i] for i in ids if self._members[i].kind == kind]
+            if not members:
+                continue
+            sets = AFFINE_SETS[kind]
+            if not any(set(coef) <= group for group in sets):
+                raise FieldError(
+                    "quantity",
+                    f"{sorted(coef)} are not properties of one affine set of a {kind} member "
+                    f"(expected a subset of one of {[sorted(g) for g in sets]})",
+                )
+            if "G" in coef and any(m.props["G_per_E"] is not None for m in members):
+                raise FieldError(
+                    "quantity",
+                    "'G' of a material without an explicit G follows E = 2 (1 + ν) G; "
+                    "differentiate 'E' (or give the material its own G)",
+                )
+            changed = [with_properties(m, coef) for m in members]
+            zero = [with_properties(m, dict.fromkeys(coef, 0.0)) for m in members]
+            idx, k, m = KIND_BUILDERS[kind](changed + zero, self.coordinates, False)
+            n = len(members)
+            k_parts.append((idx[:n], k[:n] - k[n:]))
+            m_parts.append((idx[:n], m[:n] - m[n:]))
+            masses = member_masses(changed + zero, self.coordinates)
+            dmass += float(np.sum(masses[:n] - masses[n:]))
+        dK, dM = _sparse(number, k_parts), _sparse(number, m_parts)
+        if self._links:  # the same q = T q_r as the assembly: Tᵀ dK T is linear in dK
+            dK, dM, _, _ = self._eliminate_links(dK, dM, active, number)
+        return dK, dM, dmass
+
+    def _touched(self) -> npt.NDArray[np.bool_]:
+        """(n_nodes, 6): the dofs an element or a lumped mass touches."""
+        touched = np.zeros((len(self._ids), 6), dtype=bool)
+        for kind, slots in KIND_SLOTS.items():
+            ends = np.array([(m.n1, m.n2) for m in self._members if m.kind == kind], dtype=int)
+            if ends.size:
+                touched[ends.ravel()[:, None], np.array(slots)[None, :]] = True
+        for lm in self._masses:
+            touched[lm.node, :3] = True
+            touched[lm.node, 3:] |= lm.inertia is not None or lm.offset is not None
+        for slave, master in self._links.items():
+            touched[[slave, master], :] = True
+        return touched
+
+    def _active(
+        self, touched: npt.NDArray[np.bool_], clamped: Collection[tuple[int, int]]
+    ) -> npt.NDArray[np.bool_]:
+        """(n_nodes, 6): the touched dofs less the clamped ones (before link elimination)."""
+        active = touched.copy()
+        for node, slot in clamped:
+            if node in self._links:
+                raise FieldError(
+                    "clamp",
+                    f"node {self._ids[node]} is a dependent node of a rigid link; clamp its "
+                    f"independent node {self._ids[self._links[node]]}",
+                )
+            active[node, slot] = False
+        if not active.any():
+            raise FieldError("structure", "no active dofs (every dof is clamped)")
+        return active
+
+    def structural_mass(self) -> float:
+        """Total mass of the members (Σ ρ A L; Σ m L for grids) and lumped masses, kg."""
+        members = float(
+            sum(
+                np.sum(
+                    member_masses([m for m in self._members if m.kind == kind], self.coordinates)
+                )
+                for kind in KIND_SLOTS
+                if any(m.kind == kind for m in self._members)
+            )
+        )
+        return members + sum(lm.mass for lm in self._masses)
+
     # -- preloads from gravity --------------------------------------------------------------
     def gravity_preload(self, g: npt.ArrayLike = (0.0, 0.0, -9.80665)) -> FloatArray:
         """Set every member's axial preload from a linear static solve under gravity.
@@ -570,7 +677,7 @@ class Structure:
         u = _static_solve(asm.K, f[np.searchsorted(keys, 6 * asm._node_of_dof + asm._slot_of_dof)])
         displacement = np.zeros((len(self._ids), 6))
         displacement[asm._node_of_dof, asm._slot_of_dof] = u
-        forces = np.array([_axial_force(m, self.coordinates, displacement) for m in self._members])
+        forces = np.array([axial_force(m, self.coordinates, displacement) for m in self._members])
         for member, force in zip(self._members, forces):
             member.preload = float(force)
         return forces
@@ -614,131 +721,6 @@ def _static_solve(K: sp.csr_matrix, f: FloatArray) -> FloatArray:
         raise FieldError(
             "gravity_preload", "stiffness matrix is singular (a mechanism, or too few clamps)"
         ) from None
-
-
-# ------------------------------------------------------------------------------------------------
-# per-kind batched element matrices: (global slot indices (n, d), K (n, d, d), M (n, d, d))
-def _column(members: Sequence[_Member], key: str) -> FloatArray:
-    return np.array([m.props[key] for m in members], dtype=float)
-
-
-def _slot_indices(members: Sequence[_Member], kind: str) -> IntArray:
-    slots = np.array(_KIND_SLOTS[kind])
-    n1 = np.array([m.n1 for m in members])[:, None]
-    n2 = np.array([m.n2 for m in members])[:, None]
-    return np.hstack([6 * n1 + slots, 6 * n2 + slots])
-
-
-def _frame_geometry(members: Sequence[_Member], xyz: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Lengths (between the offset ends) and 12x12 transformations of frame members."""
-    x1 = xyz[[m.n1 for m in members]]
-    x2 = xyz[[m.n2 for m in members]]
-    offsets = np.array(
-        [np.zeros((2, 3)) if m.props["offsets"] is None else m.props["offsets"] for m in members]
-    )
-    x1, x2 = x1 + offsets[:, 0], x2 + offsets[:, 1]
-    given = np.array([m.props["orientation"] is not None for m in members])
-    R = el.frame_rotation(x1, x2)
-    if given.any():
-        v = np.array([m.props["orientation"] for m, g in zip(members, given) if g])
-        R[given] = el.frame_rotation(x1[given], x2[given], v)
-    T = el.frame_transformation(R, offsets)
-    return np.linalg.norm(x2 - x1, axis=1), T
-
-
-def _frame_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
-    c = {k: _column(members, k) for k in ("E", "G", "rho", "A", "Iy", "Iz", "J")}
-    L, T = _frame_geometry(members, xyz)
-    k = el.frame_local_stiffness(c["E"], c["G"], c["A"], c["Iy"], c["Iz"], c["J"], L)
-    if geometric:
-        k = k + el.frame_local_geometric_stiffness(_preloads(members), L)
-    lumped = np.array([m.props["lumped"] for m in members])
-    m = np.where(
-        lumped[:, None, None],
-        el.frame_local_mass(c["rho"], c["A"], c["Iy"], c["Iz"], L, lumped=True),
-        el.frame_local_mass(c["rho"], c["A"], c["Iy"], c["Iz"], L),
-    )
-    return _slot_indices(members, "frame"), el.to_global(k, T), el.to_global(m, T)
-
-
-def _preloads(members: Sequence[_Member]) -> FloatArray:
-    return np.array([m.preload for m in members], dtype=float)
-
-
-def _ends(members: Sequence[_Member], xyz: FloatArray) -> tuple[FloatArray, FloatArray]:
-    return xyz[[m.n1 for m in members]], xyz[[m.n2 for m in members]]
-
-
-def _beam2d_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
-    c = {k: _column(members, k) for k in ("E", "rho", "A", "Iz")}
-    x1, x2 = _ends(members, xyz)
-    L = np.linalg.norm((x2 - x1)[:, :2], axis=1)
-    T = el.beam2d_transformation(x1, x2)
-    k = el.beam2d_local_stiffness(c["E"], c["A"], c["Iz"], L)
-    if geometric:
-        k = k + el.beam2d_local_geometric_stiffness(_preloads(members), L)
-    lumped = np.array([m.props["lumped"] for m in members])
-    m = np.where(
-        lumped[:, None, None],
-        el.beam2d_local_mass(c["rho"], c["A"], L, lumped=True),
-        el.beam2d_local_mass(c["rho"], c["A"], L),
-    )
-    return _slot_indices(members, "beam2d"), el.to_global(k, T), el.to_global(m, T)
-
-
-def _grid_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
-    c = {k: _column(members, k) for k in ("EI", "GJ", "m", "It")}
-    x1, x2 = _ends(members, xyz)
-    L = np.linalg.norm((x2 - x1)[:, :2], axis=1)
-    T = el.grid_transformation(x1, x2)
-    k = el.grid_local_stiffness(c["EI"], c["GJ"], L)
-    if geometric:
-        k = k + el.grid_local_geometric_stiffness(_preloads(members), L)
-    m = el.grid_local_mass(c["m"], c["It"], L)
-    return _slot_indices(members, "grid"), el.to_global(k, T), el.to_global(m, T)
-
-
-def _rod_blocks(members: Sequence[_Member], xyz: FloatArray, geometric: bool) -> ElementBlocks:
-    c = {k: _column(members, k) for k in ("E", "rho", "A")}
-    x1, x2 = _ends(members, xyz)
-    L = np.linalg.norm(x2 - x1, axis=1)
-    k = el.rod_stiffness(c["E"], c["A"], x1, x2)
-    if geometric:
-        k = k + el.rod_geometric_stiffness(_preloads(members), x1, x2)
-    lumped = np.array([m.props["lumped"] for m in members])
-    m = np.where(
-        lumped[:, None, None],
-        el.rod_mass(c["rho"], c["A"], L, lumped=True),
-        el.rod_mass(c["rho"], c["A"], L),
-    )
-    return _slot_indices(members, "rod"), k, m
-
-
-_KIND_BUILDERS = {
-    "frame": _frame_blocks,
-    "beam2d": _beam2d_blocks,
-    "grid": _grid_blocks,
-    "rod": _rod_blocks,
-}
-
-
-def _axial_force(member: _Member, xyz: FloatArray, displacement: FloatArray) -> float:
-    """EA/L x̂·(u_end2 - u_end1) from global node displacements (n_nodes, 6); 0 for grids."""
-    if member.kind == "grid":
-        return 0.0
-    p = member.props
-    u1, u2 = displacement[member.n1], displacement[member.n2]
-    x1, x2 = xyz[member.n1], xyz[member.n2]
-    d1 = d2 = np.zeros(3)
-    if member.kind == "frame" and p["offsets"] is not None:
-        d1, d2 = p["offsets"]
-    if member.kind == "beam2d":
-        x1, x2 = x1 * [1, 1, 0], x2 * [1, 1, 0]
-    e1 = u1[:3] + np.cross(u1[3:], d1)
-    e2 = u2[:3] + np.cross(u2[3:], d2)
-    axis = (x2 + d2) - (x1 + d1)
-    L = np.linalg.norm(axis)
-    return float(p["E"] * p["A"] / L * float(axis @ (e2 - e1)) / L)
 
 
 # ------------------------------------------------------------------------------------------------
