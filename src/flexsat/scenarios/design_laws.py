@@ -37,10 +37,10 @@ Laws
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from flexsat.input_checks import FieldError
 from flexsat.scenarios.fields import SchemaSection, in_unit, integer_in
@@ -60,13 +60,6 @@ class AttitudeHoldSpec(SchemaSection):
     damping: float = Field(0.7, gt=0.0)
 
 
-class PDLawSpec(AttitudeHoldSpec):
-    """``type: pd``: a quaternion PD from the bandwidth and damping (module docstring)."""
-
-    label: str
-    type: Literal["pd"]
-
-
 class LQRWeightsSpec(SchemaSection):
     """Diagonal LQR weights over [β_v, ω, η, η̇] and [torque, forces]; one value fills its
     block. SI numbers (rad⁻², N⁻² m⁻², ...)."""
@@ -79,27 +72,46 @@ class LQRWeightsSpec(SchemaSection):
     force: Weights | None = None
 
 
-class LQRLawSpec(SchemaSection):
-    """``type: lqr``: LQR on the first ``modes`` elastic modes (default: every mode kept)."""
+#: the fields of each law type, required ones first (module docstring)
+LAW_FIELDS = {
+    "pd": (("bandwidth",), ("damping",)),
+    "lqr": (("weights",), ("modes",)),
+    "ppf": (("gains",), ("tuned_modes", "filter_damping", "attitude")),
+}
+
+
+class LawSpec(SchemaSection):
+    """One law: its ``label``, its ``type`` and the fields of that type (module docstring).
+
+    pd: ``bandwidth`` (rad/s), ``damping`` (0.7). lqr: ``weights``, ``modes`` (every kept mode).
+    ppf: ``gains`` (N/m, one or one per filter), ``tuned_modes`` (1), ``filter_damping`` (0.3),
+    ``attitude`` (a PD on the torquers: ``bandwidth``, ``damping``).
+    """
 
     label: str
-    type: Literal["lqr"]
+    type: Literal["pd", "lqr", "ppf"]
+    bandwidth: Annotated[float | None, in_unit("rad/s", positive=True)] = None
+    damping: float = Field(0.7, gt=0.0)
+    weights: LQRWeightsSpec | None = None
     modes: Annotated[int | None, integer_in(1, 500, optional=True)] = None
-    weights: LQRWeightsSpec
-
-
-class PPFLawSpec(SchemaSection):
-    """``type: ppf``: PPF filters on the placed force/displacement pairs."""
-
-    label: str
-    type: Literal["ppf"]
+    gains: Weights | None = None
     tuned_modes: Annotated[int, integer_in(1, 500)] = 1
     filter_damping: float = Field(0.3, gt=0.0)
-    gains: Weights
     attitude: AttitudeHoldSpec | None = None
 
-
-LawSpec = Annotated[PDLawSpec | LQRLawSpec | PPFLawSpec, Field(discriminator="type")]
+    @model_validator(mode="after")
+    def _fields_of_its_type(self) -> Self:
+        required, optional = LAW_FIELDS[self.type]
+        own = set(required) | set(optional) | {"label", "type"}
+        for name in sorted(self.model_fields_set - own):
+            raise FieldError(
+                name,
+                f"not a field of a {self.type} law (its fields: {', '.join(required + optional)})",
+            )
+        for name in required:
+            if getattr(self, name) is None:
+                raise FieldError(name, f"required by a {self.type} law")
+        return self
 
 
 def design_state(plant: FlexibleSpacecraft) -> tuple[np.ndarray, np.ndarray]:
@@ -138,6 +150,7 @@ def design_law(spec: Any, plant: FlexibleSpacecraft) -> tuple[dict[str, Any], di
         Naming the field of the law's section (``weights.torque: ...``, ``gains: ...``).
     """
     if spec.type == "pd":
+        assert spec.bandwidth is not None  # required of a pd law
         kp, kd = pd_gains(plant, spec.bandwidth, spec.damping)
         A, B = design_state(plant)
         return {"Kp": kp, "Kd": kd, "poles": _poles(A, B, _pd_matrix(plant, kp, kd))}, {}
@@ -146,7 +159,7 @@ def design_law(spec: Any, plant: FlexibleSpacecraft) -> tuple[dict[str, Any], di
     return _design_ppf(spec, plant)
 
 
-def _design_lqr(spec: LQRLawSpec, plant: FlexibleSpacecraft) -> tuple[dict, dict]:
+def _design_lqr(spec: LawSpec, plant: FlexibleSpacecraft) -> tuple[dict, dict]:
     from flexsat.control import lqr
     from flexsat.design.slew_weights import SlewWeights
 
@@ -154,6 +167,7 @@ def _design_lqr(spec: LQRLawSpec, plant: FlexibleSpacecraft) -> tuple[dict, dict
     if n > plant.n_modes:
         raise FieldError("modes", f"at most the {plant.n_modes} elastic modes kept, got {n}")
     design = plant.reduced(n)
+    assert spec.weights is not None  # required of an lqr law
     try:
         q, d = SlewWeights(**spec.weights.model_dump()).diagonals(n, len(plant.forces))
     except FieldError as exc:  # named by its block: a field of ``weights``
@@ -163,7 +177,7 @@ def _design_lqr(spec: LQRLawSpec, plant: FlexibleSpacecraft) -> tuple[dict, dict
     return {"K": K, "poles": poles[np.lexsort((poles.imag, poles.real))]}, {"design_modes": n}
 
 
-def _ppf_model(spec: PPFLawSpec, plant: FlexibleSpacecraft) -> Any:
+def _ppf_model(spec: LawSpec, plant: FlexibleSpacecraft) -> Any:
     from flexsat.control.ppf import PPFModel
 
     if not plant.forces:
@@ -174,7 +188,7 @@ def _ppf_model(spec: PPFLawSpec, plant: FlexibleSpacecraft) -> Any:
     return PPFModel(modal.frequencies, modal.damping, actuators, sensors)
 
 
-def _design_ppf(spec: PPFLawSpec, plant: FlexibleSpacecraft) -> tuple[dict, dict]:
+def _design_ppf(spec: LawSpec, plant: FlexibleSpacecraft) -> tuple[dict, dict]:
     from flexsat.control.ppf import PPFBank, PPFProblem
 
     model = _ppf_model(spec, plant)
@@ -183,6 +197,7 @@ def _design_ppf(spec: PPFLawSpec, plant: FlexibleSpacecraft) -> tuple[dict, dict
             "tuned_modes", f"at most the {model.n_modes} elastic modes kept, got {spec.tuned_modes}"
         )
     bank = PPFBank.tuned(model, spec.filter_damping, spec.tuned_modes)
+    assert spec.gains is not None  # required of a ppf law
     gains = np.atleast_1d(np.asarray(spec.gains, float))
     if gains.size == 1:
         gains = np.full(bank.n_filters, float(gains[0]))
@@ -278,10 +293,8 @@ def law_summary(spec: Any, arrays: dict[str, np.ndarray], info: dict[str, Any]) 
 
 
 __all__ = [
+    "LAW_FIELDS",
     "LawSpec",
-    "LQRLawSpec",
-    "PDLawSpec",
-    "PPFLawSpec",
     "design_law",
     "design_state",
     "law_controller",
