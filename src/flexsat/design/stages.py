@@ -244,7 +244,7 @@ def read_arrays(folder: Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     import xarray as xr
 
     with xr.open_dataset(folder / ARRAYS, engine="h5netcdf") as ds:
-        raw = {name: np.asarray(var.values) for name, var in ds.load().data_vars.items()}
+        raw = {str(name): np.asarray(var.values) for name, var in ds.load().data_vars.items()}
     arrays: dict[str, np.ndarray] = {}
     for name, value in raw.items():
         if name.endswith(".imag"):

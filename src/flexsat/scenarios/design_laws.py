@@ -48,9 +48,12 @@ from flexsat.scenarios.fields import SchemaSection, in_unit, integer_in
 if TYPE_CHECKING:
     from flexsat.control.base import Controller
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
+    from flexsat.dynamics.plant import Channel
 
 #: one weight, or one per component of its block
 Weights = float | list[float]
+#: a design's arrays by name (gains, filter frequencies, closed-loop poles)
+Arrays = dict[str, Any]
 
 
 class AttitudeHoldSpec(SchemaSection):
@@ -159,7 +162,7 @@ def design_law(spec: Any, plant: FlexibleSpacecraft) -> tuple[dict[str, Any], di
     return _design_ppf(spec, plant)
 
 
-def _design_lqr(spec: LawSpec, plant: FlexibleSpacecraft) -> tuple[dict, dict]:
+def _design_lqr(spec: LawSpec, plant: FlexibleSpacecraft) -> tuple[Arrays, dict[str, Any]]:
     from flexsat.control import lqr
     from flexsat.design.slew_weights import SlewWeights
 
@@ -188,7 +191,7 @@ def _ppf_model(spec: LawSpec, plant: FlexibleSpacecraft) -> Any:
     return PPFModel(modal.frequencies, modal.damping, actuators, sensors)
 
 
-def _design_ppf(spec: LawSpec, plant: FlexibleSpacecraft) -> tuple[dict, dict]:
+def _design_ppf(spec: LawSpec, plant: FlexibleSpacecraft) -> tuple[Arrays, dict[str, Any]]:
     from flexsat.control.ppf import PPFBank, PPFProblem
 
     model = _ppf_model(spec, plant)
@@ -248,7 +251,7 @@ def law_controller(
 
 
 def _ppf_controller(
-    arrays: dict[str, np.ndarray], plant: FlexibleSpacecraft, outputs: dict, dt: float
+    arrays: Arrays, plant: FlexibleSpacecraft, outputs: dict[str, Channel], dt: float
 ) -> Controller:
     import control as ct
     from flexsat.control import StateSpaceCompensator

@@ -69,9 +69,10 @@ fingerprints without running anything).
 
 from __future__ import annotations
 
+import functools
 import json
 import time
-from collections.abc import Generator
+from collections.abc import Callable, Generator
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
@@ -161,7 +162,7 @@ class CandidatesSpec(SchemaSection):
     """Candidate force actuators: every node along every axis."""
 
     nodes: list[int] = Field(min_length=1, max_length=1000)
-    axes: list[Axis] = Field(default_factory=lambda: ["x", "y", "z"], min_length=1)
+    axes: list[Axis] = Field(default=["x", "y", "z"], min_length=1)
 
 
 class PlacementSpec(SchemaSection):
@@ -455,6 +456,7 @@ def place_actuators(model: ModalModel, spec: PlacementSpec) -> PlacementResult:
     outputs = np.vstack([model.displacement_output(n, ["x", "y", "z"]).T for n in spec.outputs])
     if spec.criterion == "h2":
         node = spec.disturbance_node if spec.disturbance_node is not None else spec.torque_node
+        assert node is not None  # the schema requires one for h2
         disturbance = model.torque_input(node, ["x", "y", "z"])
         ranking = h2_actuator_ranking(model, candidates, disturbance, outputs, gamma=spec.gamma)
         selection = tuple(str(label) for label in ranking.top(spec.number))
@@ -464,9 +466,14 @@ def place_actuators(model: ModalModel, spec: PlacementSpec) -> PlacementResult:
     vectors = actuator_candidates(elastic, spec.candidates.nodes, spec.candidates.axes)
     rows = np.vstack([elastic.displacement_output(n, ["x", "y", "z"]).T for n in spec.outputs])
     score = kim_junkins_score(elastic, vectors, Cq=rows)
-    search = {"greedy": greedy, "exchange": exchange, "exhaustive": exhaustive}[spec.search]
-    found = search(list(vectors), spec.number, score)
-    path = {", ".join(map(str, labels)): float(value) for value, labels in found.best}
+    labels = list(vectors)
+    if spec.search == "greedy":
+        found = greedy(labels, spec.number, score)
+    elif spec.search == "exchange":
+        found = exchange(labels, spec.number, score)
+    else:
+        found = exhaustive(labels, spec.number, score)
+    path = {", ".join(map(str, chosen)): float(value) for value, chosen in found.best}
     return PlacementResult(tuple(str(k) for k in found.selection), path, float(found.score))
 
 
@@ -510,6 +517,14 @@ class LawDesign:
 
     arrays: dict[str, np.ndarray]
     info: dict[str, Any]
+
+
+def _designed(spec: LawSpec, plant: FlexibleSpacecraft) -> LawDesign:
+    return LawDesign(*design_law(spec, plant))
+
+
+def _law_summary(spec: LawSpec, design: LawDesign) -> dict[str, Any]:
+    return law_summary(spec, design.arrays, design.info)
 
 
 def _write_law(design: LawDesign, folder: Path) -> None:
@@ -657,7 +672,13 @@ class DesignStudyKind(ScenarioKind):
         cache = StageCache(scenario.cache_folder)
         records: list[StageRecord] = []
 
-        def staged(path: str, compute, write, read, summary) -> Run:
+        def staged(
+            path: str,
+            compute: Callable[[], Any],
+            write: Callable[[Any, Path], None],
+            read: Callable[[Path], Any],
+            summary: Callable[[Any], dict[str, Any]],
+        ) -> Run:
             stage = stages[path]
 
             def task() -> Any:
@@ -696,10 +717,10 @@ class DesignStudyKind(ScenarioKind):
         for index, law in enumerate(scenario.laws):
             laws[law.label] = yield staged(
                 f"laws{item_path(index, law.label)}",
-                lambda law=law: LawDesign(*design_law(law, plant)),
+                functools.partial(_designed, law, plant),
                 _write_law,
                 _read_law,
-                lambda d, law=law: law_summary(law, d.arrays, d.info),
+                functools.partial(_law_summary, law),
             )
         try:
             config = SimConfig(**given_fields(scenario.simulation))
@@ -721,15 +742,15 @@ class DesignStudyKind(ScenarioKind):
                 x0 = plant.state_from(**given_fields(run.initial))
             except ValueError as exc:
                 raise ScenarioError([locate(f"{path}.initial", exc)]) from None
-            law = law_controller(specs[run.law], laws[run.law].arrays, plant, config.dt)
+            controller = law_controller(specs[run.law], laws[run.law].arrays, plant, config.dt)
             start = time.perf_counter()
             result = yield Run(
                 stage.label,
-                Simulation(plant, law, config, {"n_cases": 1, "initial_state": x0}),
+                Simulation(plant, controller, config, {"n_cases": 1, "initial_state": x0}),
                 path,
             )
             seconds = time.perf_counter() - start
-            cache.write(stage, lambda folder, result=result: _write_run(result, folder))
+            cache.write(stage, functools.partial(_write_run, result))
             records.append(StageRecord(stage, False, seconds, run_metrics(result)))
             results.append(result)
         return DesignStudyResult(
