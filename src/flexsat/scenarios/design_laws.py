@@ -44,6 +44,7 @@ from pydantic import Field, model_validator
 
 from flexsat.input_checks import FieldError
 from flexsat.scenarios.fields import SchemaSection, in_unit, integer_in
+from flexsat.scenarios.slew import SlewManeuverSpec
 
 if TYPE_CHECKING:
     from flexsat.control.base import Controller
@@ -80,6 +81,10 @@ LAW_FIELDS = {
     "pd": (("bandwidth",), ("damping",)),
     "lqr": (("weights",), ("modes",)),
     "ppf": (("gains",), ("tuned_modes", "filter_damping", "attitude")),
+    "perturbation": (
+        ("maneuver", "weights", "break_frequency"),
+        ("modes", "linearization_points", "shaping_damping", "feedforward"),
+    ),
 }
 
 
@@ -88,11 +93,13 @@ class LawSpec(SchemaSection):
 
     pd: ``bandwidth`` (rad/s), ``damping`` (0.7). lqr: ``weights``, ``modes`` (every kept mode).
     ppf: ``gains`` (N/m, one or one per filter), ``tuned_modes`` (1), ``filter_damping`` (0.3),
-    ``attitude`` (a PD on the torquers: ``bandwidth``, ``damping``).
+    ``attitude`` (a PD on the torquers: ``bandwidth``, ``damping``). perturbation: ``maneuver``
+    (the slew kind's), ``weights``, ``break_frequency`` (rad/s), ``modes``,
+    ``linearization_points`` (11), ``shaping_damping`` (0), ``feedforward`` (constant).
     """
 
     label: str
-    type: Literal["pd", "lqr", "ppf"]
+    type: Literal["pd", "lqr", "ppf", "perturbation"]
     bandwidth: Annotated[float | None, in_unit("rad/s", positive=True)] = None
     damping: float = Field(0.7, gt=0.0)
     weights: LQRWeightsSpec | None = None
@@ -101,6 +108,11 @@ class LawSpec(SchemaSection):
     tuned_modes: Annotated[int, integer_in(1, 500)] = 1
     filter_damping: float = Field(0.3, gt=0.0)
     attitude: AttitudeHoldSpec | None = None
+    maneuver: SlewManeuverSpec | None = None
+    break_frequency: Annotated[float | None, in_unit("rad/s", positive=True)] = None
+    shaping_damping: float = Field(0.0, ge=0.0)
+    linearization_points: Annotated[int, integer_in(1, 1000)] = 11
+    feedforward: Literal["none", "constant", "time-varying"] = "constant"
 
     @model_validator(mode="after")
     def _fields_of_its_type(self) -> Self:
@@ -144,8 +156,11 @@ def _poles(A: np.ndarray, B: np.ndarray, K: np.ndarray) -> np.ndarray:
     return poles[np.lexsort((poles.imag, poles.real))]
 
 
-def design_law(spec: Any, plant: FlexibleSpacecraft) -> tuple[dict[str, Any], dict[str, Any]]:
-    """The arrays and the JSON-ready facts of the law ``spec`` designed on ``plant``.
+def design_law(
+    spec: Any, plant: FlexibleSpacecraft, dt: float
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The arrays and the JSON-ready facts of the law ``spec`` designed on ``plant`` (a
+    perturbation law is tabulated at the control period ``dt``, s).
 
     Raises
     ------
@@ -159,6 +174,8 @@ def design_law(spec: Any, plant: FlexibleSpacecraft) -> tuple[dict[str, Any], di
         return {"Kp": kp, "Kd": kd, "poles": _poles(A, B, _pd_matrix(plant, kp, kd))}, {}
     if spec.type == "lqr":
         return _design_lqr(spec, plant)
+    if spec.type == "perturbation":
+        return _design_perturbation(spec, plant, dt)
     return _design_ppf(spec, plant)
 
 
@@ -178,6 +195,64 @@ def _design_lqr(spec: LawSpec, plant: FlexibleSpacecraft) -> tuple[Arrays, dict[
     A, B = design_state(design)
     K, _, poles = lqr(A, B, np.diag(q), np.diag(d))
     return {"K": K, "poles": poles[np.lexsort((poles.imag, poles.real))]}, {"design_modes": n}
+
+
+def _design_perturbation(
+    spec: LawSpec, plant: FlexibleSpacecraft, dt: float
+) -> tuple[Arrays, dict[str, Any]]:
+    """The slew kind's design (:mod:`flexsat.scenarios.slew`) on the placed forces: the
+    rigid-body optimal nominal maneuver, then the frequency-shaped perturbation feedback of the
+    first ``modes`` modes at ``linearization_points`` times, tabulated at ``dt``."""
+    from flexsat.control import perturbation_design
+    from flexsat.design.slew_weights import SlewWeights
+    from flexsat.maneuvers import three_axis_slew
+    from flexsat.scenarios.simulation import target_quaternion
+
+    assert spec.maneuver is not None and spec.weights is not None  # required of the type
+    assert spec.break_frequency is not None
+    m = spec.maneuver
+    n = plant.n_modes if spec.modes is None else spec.modes
+    if n > plant.n_modes:
+        raise FieldError("modes", f"at most the {plant.n_modes} elastic modes kept, got {n}")
+    target = target_quaternion(m.target)
+    assert target is not None  # the maneuver's schema refuses an empty target
+    try:
+        nominal = three_axis_slew(
+            plant.inertia,
+            target,
+            m.duration,
+            m.break_frequency,
+            m.shaping_damping,
+            Q=m.rate_weight * np.eye(3),
+        )
+    except FieldError as exc:
+        raise FieldError(f"maneuver.{exc.field}", exc.rule) from None
+    forces = [c.name for c in plant.inputs if c.name != "torque"]
+    try:
+        q, d = SlewWeights(**spec.weights.model_dump()).diagonals(n, len(forces))
+    except FieldError as exc:
+        raise FieldError(f"weights.{exc.field}", exc.rule) from None
+    design = perturbation_design(
+        plant.reduced(n),
+        nominal,
+        np.diag(q),
+        np.diag(d),
+        spec.break_frequency,
+        spec.shaping_damping,
+        spec.linearization_points,
+        forces=forces,
+    )
+    law = design.controller(dt, spec.feedforward, plant=plant)
+    arrays: Arrays = dict(law.tables())
+    # the frozen-time closed-loop poles of each linearisation point's design
+    arrays["poles"] = np.stack([fs.poles for fs in design.designs])
+    info = {
+        "design_modes": n,
+        "continuation_steps": len(nominal.history),
+        "boundary_error": float(nominal.boundary_error()),
+        "peak_nominal_torque_N_m": float(np.abs(nominal.torque(law.knots)).max()),
+    }
+    return arrays, info
 
 
 def _ppf_model(spec: LawSpec, plant: FlexibleSpacecraft) -> Any:
@@ -238,6 +313,18 @@ def law_controller(
     inputs = list(plant.inputs)
     if spec.type == "pd":
         return QuaternionPD(Kp=arrays["Kp"], Kd=arrays["Kd"])
+    if spec.type == "perturbation":
+        from flexsat.control import PerturbationFeedback
+
+        m_v, width = arrays["gains"].shape[1:]
+        return PerturbationFeedback.from_tables(
+            arrays,
+            dt,
+            [c.name for c in inputs],
+            (width - 6 - 2 * m_v) // 2,
+            plant.n_modes,
+            spec.feedforward,
+        )
     if spec.type == "lqr":
         K = arrays["K"]
         n_design, n = (K.shape[1] - 6) // 2, plant.n_modes
@@ -274,7 +361,7 @@ def _ppf_controller(
 def law_summary(spec: Any, arrays: dict[str, np.ndarray], info: dict[str, Any]) -> dict[str, Any]:
     """The key numbers of a design for the report: gains and the closed-loop poles' slowest
     decay and least damping."""
-    poles = np.asarray(arrays["poles"])
+    poles = np.ravel(arrays["poles"])
     moving = poles[np.abs(poles) > 1e-9]
     damping = -moving.real / np.abs(moving)
     summary: dict[str, Any] = {
@@ -288,8 +375,8 @@ def law_summary(spec: Any, arrays: dict[str, np.ndarray], info: dict[str, Any]) 
             summary[name] = [float(v) for v in arrays[name]]
     if "K" in arrays:
         summary["K_norm"] = float(np.linalg.norm(arrays["K"], 2))
-        summary["design_modes"] = info["design_modes"]
-    if "gains" in arrays:
+    summary.update(info)
+    if spec.type == "ppf":
         summary["ppf_gains"] = [float(v) for v in arrays["gains"]]
         summary["min_stiffness_eigenvalue"] = float(arrays["stiffness_eigenvalues"][0])
     return summary

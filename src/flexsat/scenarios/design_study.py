@@ -231,11 +231,41 @@ class DesignStudyScenario(Document):
                     f"runs{item_path(index, run.label)}.law",
                     f"{run.law!r} is not a law of the study (its laws: {', '.join(labels)})",
                 )
+        nyquist = np.pi * self.simulation.control_rate
         for index, law in enumerate(self.laws):
+            path = f"laws{item_path(index, law.label)}"
             if law.type == "ppf" and self.placement.number == 0:
                 raise FieldError(
-                    f"laws{item_path(index, law.label)}.type",
-                    "PPF needs placed force actuators (placement.number >= 1)",
+                    f"{path}.type", "PPF needs placed force actuators (placement.number >= 1)"
+                )
+            if law.type != "perturbation":
+                continue
+            assert law.maneuver is not None and law.break_frequency is not None
+            for field, value in (
+                ("maneuver.break_frequency", law.maneuver.break_frequency),
+                ("break_frequency", law.break_frequency),
+            ):
+                # the nominal torque is played back and the feedback sampled at the control
+                # rate: a break above its Nyquist frequency shapes what neither can produce
+                if value > nyquist:
+                    raise FieldError(
+                        f"{path}.{field}",
+                        f"must be at most the control's Nyquist frequency π × "
+                        f"simulation.control_rate = {nyquist:.4g} rad/s, got {value:.4g} rad/s",
+                    )
+            if self.simulation.duration < law.maneuver.duration:
+                raise FieldError(
+                    "simulation.duration",
+                    f"must cover the maneuver of law {law.label!r} "
+                    f"({law.maneuver.duration:g} s), got {self.simulation.duration:g} s",
+                )
+        slews = {law.label for law in self.laws if law.type == "perturbation"}
+        for index, run in enumerate(self.runs):
+            if run.law in slews and run.initial.model_fields_set:
+                raise FieldError(
+                    f"runs{item_path(index, run.label)}.initial",
+                    f"law {run.law!r} flies its maneuver from rest at the reference attitude; "
+                    "give no initial values",
                 )
         return self
 
@@ -307,9 +337,10 @@ def stage_plan(scenario: DesignStudyScenario) -> dict[str, Stage]:
     laws = {}
     for index, law in enumerate(scenario.laws):
         path = f"laws{item_path(index, law.label)}"
-        laws[law.label] = stages[path] = Stage.of(
-            "law", f"law {law.label!r}", law.model_dump(mode="json"), [placement]
-        )
+        section = law.model_dump(mode="json")
+        if law.type == "perturbation":  # tabulated on the control grid
+            section["control_rate"] = scenario.simulation.control_rate
+        laws[law.label] = stages[path] = Stage.of("law", f"law {law.label!r}", section, [placement])
     settings = scenario.simulation.model_dump(mode="json")
     for index, run in enumerate(scenario.runs):
         section = {"run": run.model_dump(mode="json", exclude={"label"}), "simulation": settings}
@@ -519,8 +550,8 @@ class LawDesign:
     info: dict[str, Any]
 
 
-def _designed(spec: LawSpec, plant: FlexibleSpacecraft) -> LawDesign:
-    return LawDesign(*design_law(spec, plant))
+def _designed(spec: LawSpec, plant: FlexibleSpacecraft, dt: float) -> LawDesign:
+    return LawDesign(*design_law(spec, plant, dt))
 
 
 def _law_summary(spec: LawSpec, design: LawDesign) -> dict[str, Any]:
@@ -559,16 +590,21 @@ def _read_run(folder: Path) -> SimResult:
     )
 
 
-def run_metrics(result: SimResult) -> dict[str, float]:
-    """Key numbers of a run: the final attitude error angle (rad, the rotation of the final
-    attitude from the reference), the peak torque and force, and the peak and final node
-    displacement (m, largest over the recorded nodes)."""
+#: the reference attitude (Euler parameters, scalar first)
+IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
+
+
+def run_metrics(result: SimResult, target: np.ndarray = IDENTITY) -> dict[str, float]:
+    """Key numbers of a run: the final attitude error angle (rad, the rotation
+    2 arccos|β_tᵀβ| from the final attitude to the law's ``target``), the peak torque and
+    force, and the peak and final node displacement (m, largest over the recorded nodes)."""
     ds = result.dataset.isel(case=0)
     beta = ds["attitude"].values
+    cosine = min(1.0, abs(float(beta[-1] @ target)))
     names = [name for name in ds.data_vars if str(name).startswith("displacement_")]
     displacement = np.abs(np.stack([ds[name].values for name in names], -1))
     metrics = {
-        "final_attitude_error_rad": float(2 * np.arccos(min(1.0, abs(beta[-1, 0])))),
+        "final_attitude_error_rad": float(2 * np.arccos(cosine)),
         "peak_torque_N_m": float(np.abs(ds["torque"].values).max()),
         "peak_displacement_m": float(displacement.max()),
         "final_displacement_m": float(displacement[-1].max()),
@@ -616,9 +652,14 @@ class DesignStudyResult(ReportedResult):
     def metrics_records(self) -> list[dict[str, Any]]:
         """One JSON-ready dict per run: ``"run"``, its law and :func:`run_metrics`."""
         return [
-            {"run": run.label, **run_metrics(result)}
+            {"run": run.label, **run_metrics(result, self.target(run.law))}
             for run, result in zip(self.scenario.runs, self.results)
         ]
+
+    def target(self, law: str) -> np.ndarray:
+        """The attitude law ``law`` turns to (a perturbation law's maneuver target, else the
+        reference attitude)."""
+        return np.asarray(self.laws[law].arrays.get("beta_target", IDENTITY))
 
     def dataset(self) -> xr.Dataset:
         """The runs (dims run × time) with the kept modes (``frequency_hz``, ``damping`` over
@@ -713,19 +754,19 @@ class DesignStudyKind(ScenarioKind):
             plant = spacecraft(model, scenario.placement, placement)
         except ValueError as exc:
             raise ScenarioError([locate("placement", exc)]) from None
-        laws: dict[str, LawDesign] = {}
-        for index, law in enumerate(scenario.laws):
-            laws[law.label] = yield staged(
-                f"laws{item_path(index, law.label)}",
-                functools.partial(_designed, law, plant),
-                _write_law,
-                _read_law,
-                functools.partial(_law_summary, law),
-            )
         try:
             config = SimConfig(**given_fields(scenario.simulation))
         except ValueError as exc:
             raise ScenarioError([Problem("simulation", f"{exc}")]) from None
+        laws: dict[str, LawDesign] = {}
+        for index, law in enumerate(scenario.laws):
+            laws[law.label] = yield staged(
+                f"laws{item_path(index, law.label)}",
+                functools.partial(_designed, law, plant, config.dt),
+                _write_law,
+                _read_law,
+                functools.partial(_law_summary, law),
+            )
         specs = {law.label: law for law in scenario.laws}
         results = []
         for index, run in enumerate(scenario.runs):
@@ -735,7 +776,8 @@ class DesignStudyKind(ScenarioKind):
             found = cache.read(stage, _read_run)
             if found is not None:
                 seconds = time.perf_counter() - start
-                records.append(StageRecord(stage, True, seconds, run_metrics(found)))
+                target = laws[run.law].arrays.get("beta_target", IDENTITY)
+                records.append(StageRecord(stage, True, seconds, run_metrics(found, target)))
                 results.append((yield Run(stage.label, lambda found=found: found, path)))
                 continue
             try:
@@ -751,7 +793,8 @@ class DesignStudyKind(ScenarioKind):
             )
             seconds = time.perf_counter() - start
             cache.write(stage, functools.partial(_write_run, result))
-            records.append(StageRecord(stage, False, seconds, run_metrics(result)))
+            target = laws[run.law].arrays.get("beta_target", IDENTITY)
+            records.append(StageRecord(stage, False, seconds, run_metrics(result, target)))
             results.append(result)
         return DesignStudyResult(
             scenario, tuple(records), model, placement, laws, tuple(results), _source(scenario)
