@@ -4,7 +4,8 @@ figures.
 
 ``results.nc`` holds the runs over ``(run, time[, component])`` (the recorded channels of the
 flexible spacecraft: ``attitude``, ``euler123``, ``rate``, ``torque``, ``force_<node><AXIS>``,
-``displacement_<node><AXIS>``), the run metrics over ``run`` and the kept modes
+``displacement_<node><AXIS>``), the attitude each run's law turns to (``target_attitude``,
+over ``run`` and ``attitude_component``), the run metrics over ``run`` and the kept modes
 (``frequency_hz``, ``damping`` over ``mode``, rigid modes first); its attributes name every
 stage's fingerprint and origin (``stage_model``: ``<sha256> (fresh)``).
 """
@@ -109,8 +110,8 @@ stage whose fingerprint is in the cache is read from it, not recomputed.</p>
 
 
 def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
-    """The attitude error angle and the largest recorded node displacement of every run, over
-    time, into ``folder``; the file names."""
+    """The attitude error angle (from the run's law's target, 2 arccos|β_tᵀβ|) and the largest
+    recorded node displacement of every run, over time, into ``folder``; the file names."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(8, 5.4), layout="constrained")
@@ -120,8 +121,8 @@ def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     names = [n for n in ds.data_vars if str(n).startswith("displacement_")]
     for label in ds["run"].values:
         run = ds.sel(run=label)
-        beta0 = np.clip(np.abs(run["attitude"].values[:, 0]), 0.0, 1.0)
-        top.plot(t, np.degrees(2 * np.arccos(beta0)), label=str(label))
+        cosine = np.clip(np.abs(run["attitude"].values @ run["target_attitude"].values), 0, 1)
+        top.plot(t, np.degrees(2 * np.arccos(cosine)), label=str(label))
         peak = np.max(np.abs(np.stack([run[n].values for n in names], -1)), axis=-1)
         bottom.plot(t, 1e3 * peak, label=str(label))
     top.set_ylabel("attitude error (deg)")

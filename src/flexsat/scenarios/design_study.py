@@ -662,12 +662,15 @@ class DesignStudyResult(ReportedResult):
         return np.asarray(self.laws[law].arrays.get("beta_target", IDENTITY))
 
     def dataset(self) -> xr.Dataset:
-        """The runs (dims run × time) with the kept modes (``frequency_hz``, ``damping`` over
-        ``mode``) and every stage's fingerprint and origin in the attributes."""
+        """The runs (dims run × time) with the attitude each law turns to
+        (``target_attitude``), the kept modes (``frequency_hz``, ``damping`` over ``mode``)
+        and every stage's fingerprint and origin in the attributes."""
         from flexsat.scenarios.datasets import add_run_metrics, concat_runs
 
         ds = concat_runs(self.results, [run.label for run in self.scenario.runs])
         add_run_metrics(ds, self.metrics_records())
+        targets = np.stack([self.target(run.law) for run in self.scenario.runs])
+        ds["target_attitude"] = (("run", "attitude_component"), targets, {"units": ""})
         ds["frequency_hz"] = ("mode", self.modes.frequencies_hz, {"units": "Hz"})
         ds["damping"] = ("mode", self.modes.damping, {"units": ""})
         ds.attrs.update(
