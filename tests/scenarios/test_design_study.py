@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import control as ct
 import flexsat.structures.fem as fem
@@ -17,6 +19,8 @@ from flexsat.report import write_report
 from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
 from flexsat.scenarios.design_laws import design_state, law_controller, pd_gains
 from flexsat.scenarios.design_study import stage_plan
+from flexsat.sim import SimulationDiverged
+from scenario_mutations import VALUES, delete_at, key_paths, set_at
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "eps_design_stages.yaml"
 
@@ -290,6 +294,8 @@ def test_document_mistakes_are_named_by_their_field(tmp_path, change, message):
         ({"laws.1.weights.torque": 1e-20}, r"laws\['LQR'\]\.weights\.(torque|attitude|rate)"),
         ({"model.options": {"tube_wall": "1 m"}}, r"model\.options\.tube_wall: must be <="),
         ({"runs.0.initial": {"euler123": [1, 2]}}, r"runs\['PD run'\]\.initial"),
+        ({"model.options": {"damping": float("nan")}}, r"model\.options\.damping: must be"),
+        ({"laws.1.weights.rate": float("nan")}, r"laws\['LQR'\]\.weights\.rate"),
     ],
 )
 def test_stage_refusals_are_named_by_their_field(tmp_path, change, message):
@@ -397,3 +403,40 @@ def test_a_perturbation_law_depends_on_the_control_rate(tmp_path):
 def test_perturbation_mistakes_are_named(tmp_path, change, message):
     with pytest.raises(ScenarioError, match=message):
         _slew_study(tmp_path, **change)
+
+
+@st.composite
+def _mutated_studies(draw) -> dict:
+    data = copy.deepcopy(SMALL)
+    for _ in range(draw(st.integers(1, 2))):
+        paths = key_paths(data)
+        path = draw(st.sampled_from(paths))
+        action = draw(st.sampled_from(["set", "set", "delete"]))
+        if action == "set":
+            set_at(data, path, draw(VALUES))
+        else:
+            delete_at(data, path)
+    return data
+
+
+@settings(
+    max_examples=60,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
+@given(_mutated_studies())
+def test_a_mutated_study_is_refused_by_name_or_runs_finite(tmp_path_factory, data):
+    """Any mutation of a small study ends in a ScenarioError naming its field, a
+    SimulationDiverged, or finite run metrics; no other exception escapes a stage."""
+    data["cache"] = str(tmp_path_factory.getbasetemp() / "mutations-cache")
+    try:
+        result = run_scenario(load_scenario(yaml.safe_dump(data, sort_keys=False)))
+    except ScenarioError as exc:
+        assert all(":" in problem for problem in exc.problems)
+        return
+    except SimulationDiverged:
+        return
+    for record in result.metrics_records():
+        assert all(np.isfinite(v) for k, v in record.items() if k != "run")

@@ -40,7 +40,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
 
 from flexsat.input_checks import FieldError
 from flexsat.scenarios.fields import SchemaSection, in_unit, integer_in
@@ -57,14 +57,21 @@ Weights = float | list[float]
 Arrays = dict[str, Any]
 
 
-class AttitudeHoldSpec(SchemaSection):
+class StudySection(SchemaSection):
+    """Base of a design study's sections: unknown keys, NaN and infinities are refused (a
+    stage's fingerprint is the JSON of its section)."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class AttitudeHoldSpec(StudySection):
     """A quaternion PD on the torquers: closed-loop bandwidth and damping ratio per axis."""
 
     bandwidth: Annotated[float, in_unit("rad/s", positive=True)]
     damping: float = Field(0.7, gt=0.0)
 
 
-class LQRWeightsSpec(SchemaSection):
+class LQRWeightsSpec(StudySection):
     """Diagonal LQR weights over [β_v, ω, η, η̇] and [torque, forces]; one value fills its
     block. SI numbers (rad⁻², N⁻² m⁻², ...)."""
 
@@ -88,7 +95,7 @@ LAW_FIELDS = {
 }
 
 
-class LawSpec(SchemaSection):
+class LawSpec(StudySection):
     """One law: its ``label``, its ``type`` and the fields of that type (module docstring).
 
     pd: ``bandwidth`` (rad/s), ``damping`` (0.7). lqr: ``weights``, ``modes`` (every kept mode).
@@ -384,6 +391,7 @@ def law_summary(spec: Any, arrays: dict[str, np.ndarray], info: dict[str, Any]) 
 
 __all__ = [
     "LAW_FIELDS",
+    "StudySection",
     "LawSpec",
     "design_law",
     "design_state",

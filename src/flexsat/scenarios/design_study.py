@@ -92,11 +92,16 @@ from flexsat.design.stages import (
 )
 from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
-from flexsat.scenarios.design_laws import LawSpec, design_law, law_controller, law_summary
+from flexsat.scenarios.design_laws import (
+    LawSpec,
+    StudySection,
+    design_law,
+    law_controller,
+    law_summary,
+)
 from flexsat.scenarios.errors import Problem, ScenarioError, item_path, locate
 from flexsat.scenarios.fields import (
     Document,
-    SchemaSection,
     check_unique_labels,
     given_fields,
     in_unit,
@@ -127,7 +132,7 @@ MODEL_CASES = {"eps": _eps_modal_model}
 
 
 # -- document -------------------------------------------------------------------------------------
-class ModelSpec(SchemaSection):
+class ModelSpec(StudySection):
     """The structure: a built-in case's finite-element model or a ModalModel netCDF file."""
 
     case: str | None = None
@@ -150,7 +155,7 @@ class ModelSpec(SchemaSection):
         return self
 
 
-class ModesSpec(SchemaSection):
+class ModesSpec(StudySection):
     """The modes the design keeps and their damping."""
 
     n_modes: Annotated[int | None, integer_in(1, limits.MAX_MODES, optional=True)] = None
@@ -158,14 +163,14 @@ class ModesSpec(SchemaSection):
     damping: float | list[float] | None = None
 
 
-class CandidatesSpec(SchemaSection):
+class CandidatesSpec(StudySection):
     """Candidate force actuators: every node along every axis."""
 
     nodes: list[int] = Field(min_length=1, max_length=1000)
     axes: list[Axis] = Field(default=["x", "y", "z"], min_length=1)
 
 
-class PlacementSpec(SchemaSection):
+class PlacementSpec(StudySection):
     """Actuator placement (module docstring)."""
 
     torque_node: int | None = None
@@ -189,7 +194,7 @@ class PlacementSpec(SchemaSection):
         return self
 
 
-class InitialSpec(SchemaSection):
+class InitialSpec(StudySection):
     """The attitude and rate a run starts from (at rest, undeformed, unless ``rate``)."""
 
     euler123: Value | None = None
@@ -197,7 +202,7 @@ class InitialSpec(SchemaSection):
     rate: Value | None = None
 
 
-class DesignRunSpec(SchemaSection):
+class DesignRunSpec(StudySection):
     """One simulation of a designed law."""
 
     label: str
@@ -328,10 +333,10 @@ def stage_plan(scenario: DesignStudyScenario) -> dict[str, Stage]:
         model_section = _model_section(scenario.model, scenario.folder)
     except ValueError as exc:
         raise ScenarioError([locate("model", exc)]) from None
-    model = Stage.of("model", "model", model_section)
-    modes = Stage.of("modes", "modes", scenario.modes.model_dump(mode="json"), [model])
-    placement = Stage.of(
-        "placement", "placement", scenario.placement.model_dump(mode="json"), [modes]
+    model = _stage("model", "model", "model", model_section, [])
+    modes = _stage("modes", "modes", "modes", scenario.modes.model_dump(mode="json"), [model])
+    placement = _stage(
+        "placement", "placement", "placement", scenario.placement.model_dump(mode="json"), [modes]
     )
     stages = {"model": model, "modes": modes, "placement": placement}
     laws = {}
@@ -340,14 +345,26 @@ def stage_plan(scenario: DesignStudyScenario) -> dict[str, Stage]:
         section = law.model_dump(mode="json")
         if law.type == "perturbation":  # tabulated on the control grid
             section["control_rate"] = scenario.simulation.control_rate
-        laws[law.label] = stages[path] = Stage.of("law", f"law {law.label!r}", section, [placement])
+        laws[law.label] = stages[path] = _stage(
+            "law", f"law {law.label!r}", path, section, [placement]
+        )
     settings = scenario.simulation.model_dump(mode="json")
     for index, run in enumerate(scenario.runs):
+        path = f"runs{item_path(index, run.label)}"
         section = {"run": run.model_dump(mode="json", exclude={"label"}), "simulation": settings}
-        stages[f"runs{item_path(index, run.label)}"] = Stage.of(
-            "run", f"run {run.label!r}", section, [laws[run.law]]
-        )
+        stages[path] = _stage("run", f"run {run.label!r}", path, section, [laws[run.law]])
     return stages
+
+
+def _stage(name: str, label: str, path: str, section: Any, upstream: list[Stage]) -> Stage:
+    """:meth:`Stage.of`; a value JSON cannot hold (NaN in a free-form section such as
+    ``model.options``) is refused at ``path``."""
+    try:
+        return Stage.of(name, label, section, upstream)
+    except ValueError:
+        raise ScenarioError(
+            [Problem(path, "every value must be finite (NaN and infinity have no fingerprint)")]
+        ) from None
 
 
 # -- stage computations ---------------------------------------------------------------------------
