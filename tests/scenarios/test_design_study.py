@@ -440,3 +440,14 @@ def test_a_mutated_study_is_refused_by_name_or_runs_finite(tmp_path_factory, dat
         return
     for record in result.metrics_records():
         assert all(np.isfinite(v) for k, v in record.items() if k != "run")
+
+
+def test_a_file_that_is_no_modal_model_is_named(tmp_path):
+    (tmp_path / "junk.nc").write_bytes(b"not a netCDF file")
+    data = copy.deepcopy(SMALL)
+    data["model"] = {"file": "junk.nc"}
+    data["cache"] = str(tmp_path / "cache")
+    path = tmp_path / "study.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(ScenarioError, match=r"model\.file: .*junk\.nc is not a ModalModel netCDF"):
+        run_scenario(load_scenario(path))

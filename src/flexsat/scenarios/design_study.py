@@ -300,7 +300,7 @@ def modal_model_of(spec: ModelSpec, folder: Path) -> ModalModel:
     path = _model_file(spec, folder)
     try:
         return ModalModel.load(path)
-    except (OSError, KeyError) as exc:
+    except (OSError, KeyError, ValueError) as exc:  # unreadable, or a field it refuses
         raise FieldError("file", f"{path} is not a ModalModel netCDF file: {exc}") from None
 
 
