@@ -667,7 +667,8 @@ class DesignStudyResult(ReportedResult):
         return f"case {model.case}" if model.case is not None else f"model file {model.file}"
 
     def metrics_records(self) -> list[dict[str, Any]]:
-        """One JSON-ready dict per run: ``"run"``, its law and :func:`run_metrics`."""
+        """One JSON-ready dict per run: ``"run"`` and :func:`run_metrics` (the error from its
+        law's target)."""
         return [
             {"run": run.label, **run_metrics(result, self.target(run.law))}
             for run, result in zip(self.scenario.runs, self.results)
