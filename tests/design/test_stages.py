@@ -125,3 +125,38 @@ def test_an_entry_already_published_is_kept(tmp_path):
     cache.write(stage, lambda folder: (folder / "v.json").write_text("2"))
     assert (cache.entry(stage) / "v.json").read_text() == "1"
     assert [p.name for p in tmp_path.iterdir()] == [cache.entry(stage).name]
+
+
+def test_a_stage_being_computed_elsewhere_is_waited_for_and_read(tmp_path):
+    # two processes of a batch (here two threads, each with its own open file: flock locks
+    # belong to the open file) ask for one stage: the second waits for the first's entry and
+    # reads it rather than computing it again
+    import threading
+
+    cache, stage = StageCache(tmp_path), Stage.of("s", "s", {"x": 1})
+    started, release = threading.Event(), threading.Event()
+    computed = []
+
+    def slow():
+        started.set()
+        release.wait(10)
+        computed.append("first")
+        return [1]
+
+    first = threading.Thread(target=lambda: _json_stage(cache, stage, slow))
+    first.start()
+    started.wait(10)
+    outcome = []
+    second = threading.Thread(
+        target=lambda: outcome.append(
+            _json_stage(cache, stage, lambda: computed.append("second") or [2])
+        )
+    )
+    second.start()
+    second.join(0.3)
+    assert second.is_alive()  # waiting on the lock, not computing
+    release.set()
+    first.join(10)
+    second.join(10)
+    value, record = outcome[0]
+    assert computed == ["first"] and value == [1] and record.cached

@@ -20,18 +20,21 @@ name in the cache folder and renamed into place (``os.rename`` of a directory is
 file system), so an entry is whole or absent: an interrupted write leaves a temporary folder
 that is never read, and two processes computing one stage at once both publish a whole entry,
 the first rename winning. An entry that cannot be read back (a file edited or truncated by hand)
-is discarded and the stage computed afresh.
+is discarded and the stage computed afresh. A process computing a stage holds its lock file
+(:func:`flexsat.file_locks.try_lock`), so that the cases of a batch sharing one cache compute
+each stage once: the others wait for the entry and read it.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
 import shutil
 import tempfile
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
@@ -39,12 +42,15 @@ from typing import Any, TypeVar
 import numpy as np
 
 from flexsat import __version__
+from flexsat.file_locks import try_lock
 from flexsat.input_checks import FieldError
 
 T = TypeVar("T")
 
 #: the default cache folder, under the system's temporary folder
 DEFAULT_CACHE = Path(tempfile.gettempdir()) / "flexsat-stage-cache"
+#: s between two attempts at a stage's lock another process holds
+LOCK_POLL = 0.05
 
 
 def canonical_json(value: Any) -> str:
@@ -208,9 +214,32 @@ class StageCache:
         found = self.read(stage, read)
         if found is not None:
             return found, StageRecord(stage, True, time.perf_counter() - start, summary(found))
-        result = compute()
-        self.write(stage, lambda folder: write(result, folder))
+        with self._computing(stage):
+            # another process may have published the entry while this one waited for it
+            found = self.read(stage, read)
+            if found is not None:
+                record = StageRecord(stage, True, time.perf_counter() - start, summary(found))
+                return found, record
+            result = compute()
+            self.write(stage, lambda folder: write(result, folder))
         return result, StageRecord(stage, False, time.perf_counter() - start, summary(result))
+
+    @contextlib.contextmanager
+    def _computing(self, stage: Stage) -> Iterator[None]:
+        """Hold the stage's lock file while computing it, so that processes sharing the cache
+        (the cases of a batch) compute a stage once: one computes, the others wait for its
+        entry. Where the file system has no locks every process computes (the entry is still
+        published whole, the first rename winning)."""
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise FieldError("cache", f"cannot create the folder {self.folder}: {exc}") from None
+        with open(self.folder / f".{stage.name}-{stage.key}.lock", "a+b") as handle:
+            # the kernel releases the lock of a process that dies: the wait is bounded by the
+            # computation of a live one
+            while try_lock(handle.fileno()) is False:
+                time.sleep(LOCK_POLL)
+            yield
 
 
 # -- arrays and JSON -------------------------------------------------------------------------------
