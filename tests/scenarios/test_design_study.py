@@ -451,3 +451,33 @@ def test_a_file_that_is_no_modal_model_is_named(tmp_path):
     path.write_text(yaml.safe_dump(data))
     with pytest.raises(ScenarioError, match=r"model\.file: .*junk\.nc is not a ModalModel netCDF"):
         run_scenario(load_scenario(path))
+
+
+def test_h2_placement_is_the_eps_studys_ranking(tmp_path):
+    # the same candidates, disturbance and outputs as the EPS placement study of
+    # flexsat.cases.eps_placement: the stage's choice is that ranking's top 5
+    from flexsat.cases.eps_placement import (
+        EPS_CANDIDATE_NODES,
+        EPS_DISTURBANCE_NODE,
+        EPS_OUTPUT_NODES,
+        eps_h2_ranking,
+    )
+
+    data = copy.deepcopy(SMALL)
+    data["cache"] = str(tmp_path)
+    data["model"] = {"case": "eps", "n_modes": 20}
+    data["modes"] = {}
+    data["placement"] = {
+        "torque_node": 95,
+        "candidates": {"nodes": list(EPS_CANDIDATE_NODES)},
+        "number": 5,
+        "disturbance_node": EPS_DISTURBANCE_NODE,
+        "outputs": list(EPS_OUTPUT_NODES),
+    }
+    data["laws"], data["runs"] = data["laws"][:1], data["runs"][:1]
+    result = run_scenario(load_scenario(yaml.safe_dump(data)))
+    ranking = eps_h2_ranking(n_modes=20)
+    assert result.placement.selection == ranking.top(5)
+    assert result.placement.criterion_value == pytest.approx(
+        sum(ranking.scores[k] for k in ranking.top(5)), rel=1e-12
+    )
