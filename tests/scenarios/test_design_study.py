@@ -180,7 +180,7 @@ def test_pd_gains_give_the_rigid_bandwidth_and_damping(tmp_path):
 
 
 def _plant(result):
-    from flexsat.scenarios.design_study import spacecraft
+    from flexsat.scenarios.design_placement import spacecraft
 
     return spacecraft(result.modes, result.scenario.placement, result.placement)
 
