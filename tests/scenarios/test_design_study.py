@@ -272,6 +272,7 @@ def test_kim_junkins_placement_is_the_search_result(tmp_path):
     [
         ({"runs.0.law": "LQG"}, r"runs\['PD run'\]\.law: 'LQG' is not a law of the study"),
         ({"placement.number": 7}, r"placement\.number: at most the 6 candidates"),
+        ({"placement.candidates.nodes": [69, 69]}, r"placement\.candidates\.nodes: must be dist"),
         ({"model.file": "x.nc"}, r"model.*give case .* or file"),
         ({"model.case": "tamu"}, r"model\.case: 'tamu' has no free-free finite-element model"),
         ({"laws.0.bandwidth": "-1 rad/s"}, r"laws\['PD'\]\.bandwidth: must be > 0"),

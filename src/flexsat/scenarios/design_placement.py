@@ -39,6 +39,14 @@ class CandidatesSpec(StudySection):
     nodes: list[int] = Field(min_length=1, max_length=1000)
     axes: list[Axis] = Field(default=["x", "y", "z"], min_length=1)
 
+    @model_validator(mode="after")
+    def _distinct(self) -> Self:
+        for name in ("nodes", "axes"):
+            values = getattr(self, name)
+            if len(set(values)) != len(values):
+                raise FieldError(name, f"must be distinct, got {values}")
+        return self
+
 
 class PlacementSpec(StudySection):
     """Actuator placement (module docstring)."""
