@@ -33,6 +33,16 @@ Laws
     ``tuned_modes`` elastic modes; optionally with a quaternion PD on the torquers holding the
     attitude (``attitude:``). A design whose loop is unstable on the elastic modes (Eq. 6: S
     not positive definite) is refused.
+``perturbation``
+    The slew kind's method (:mod:`flexsat.scenarios.slew`, the EPS slew study c. 1989 after
+    Chun, Turner & Juang 1987): the rigid-body optimal nominal ``maneuver``
+    (:func:`~flexsat.maneuvers.three_axis_slew.three_axis_slew`), then frequency-shaped LQR
+    perturbation feedback on the first ``modes`` modes at ``linearization_points`` times,
+    gains interpolated in time (:func:`~flexsat.control.perturbation_design`), on the
+    torquers and every placed force; the ``torque`` weight is on J⁻¹δτ as in the paper. The
+    law is stored as its tables on the control grid
+    (:meth:`~flexsat.control.PerturbationFeedback.tables`), so its fingerprint holds the
+    control rate.
 """
 
 from __future__ import annotations
