@@ -160,3 +160,12 @@ def test_a_stage_being_computed_elsewhere_is_waited_for_and_read(tmp_path):
     second.join(10)
     value, record = outcome[0]
     assert computed == ["first"] and value == [1] and record.cached
+
+
+def test_the_record_of_a_cached_stage_is_read_without_its_result(tmp_path):
+    cache, stage = StageCache(tmp_path), Stage.of("s", "s", {"x": 1})
+    assert cache.recorded(stage) is None
+    _json_stage(cache, stage, lambda: [3, 4])
+    (cache.entry(stage) / "v.json").unlink()  # the result is not what recorded() reads
+    record = cache.recorded(stage)
+    assert record is not None and record.cached and record.summary == {"value": [3, 4]}

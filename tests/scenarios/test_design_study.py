@@ -109,13 +109,26 @@ def test_example_runs_and_reports_every_stage(tmp_path):
     assert np.all(np.isfinite(ds["attitude"].values))
 
 
-def test_a_later_stage_change_does_not_redo_the_modal_solve(tmp_path, solves):
+def test_a_later_stage_change_does_not_redo_the_modal_solve(tmp_path, solves, monkeypatch):
     first = run_scenario(_study(tmp_path))
     assert len(solves) == 1
     assert not any(_origins(first).values())
 
+    loads = []
+    from flexsat.structures.modal_model import ModalModel
+
+    load = ModalModel.load.__func__
+
+    def counted_load(cls, path):
+        loads.append(Path(path).parent.name.split("-")[0])
+        return load(cls, path)
+
+    monkeypatch.setattr(ModalModel, "load", classmethod(counted_load))
     again = run_scenario(_study(tmp_path))
     assert len(solves) == 1 and all(_origins(again).values())
+    # the modes are in the cache: the model is not even read, its record is its summary
+    assert loads == ["modes"]
+    assert again.records[0].summary == first.records[0].summary
     for fresh, cached in zip(first.results, again.results):
         # a run read back is the run computed
         assert fresh.dataset.identical(cached.dataset)

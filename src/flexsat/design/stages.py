@@ -221,8 +221,18 @@ class StageCache:
                 record = StageRecord(stage, True, time.perf_counter() - start, summary(found))
                 return found, record
             result = compute()
-            self.write(stage, lambda folder: write(result, folder))
-        return result, StageRecord(stage, False, time.perf_counter() - start, summary(result))
+            facts = summary(result)
+            self.write(stage, lambda folder: _write_with_summary(write, result, facts, folder))
+        return result, StageRecord(stage, False, time.perf_counter() - start, facts)
+
+    def recorded(self, stage: Stage) -> StageRecord | None:
+        """The record of a stage in the cache, its result left unread (a stage whose
+        downstream stages are all cached need not be loaded), or None when it is not there."""
+        start = time.perf_counter()
+        facts = self.read(stage, lambda folder: json.loads((folder / SUMMARY).read_text()))
+        if facts is None:
+            return None
+        return StageRecord(stage, True, time.perf_counter() - start, facts)
 
     @contextlib.contextmanager
     def _computing(self, stage: Stage) -> Iterator[None]:
@@ -245,6 +255,15 @@ class StageCache:
 # -- arrays and JSON -------------------------------------------------------------------------------
 ARRAYS = "arrays.nc"
 INFO = "info.json"
+#: the key numbers of an entry's record, beside its result
+SUMMARY = "summary.json"
+
+
+def _write_with_summary(
+    write: Callable[[T, Path], None], result: T, facts: Mapping[str, Any], folder: Path
+) -> None:
+    write(result, folder)
+    (folder / SUMMARY).write_text(canonical_json(dict(facts)), encoding="utf-8")
 
 
 def write_arrays(folder: Path, arrays: Mapping[str, Any], info: Mapping[str, Any]) -> None:

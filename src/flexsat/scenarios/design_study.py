@@ -608,16 +608,31 @@ class DesignStudyKind(ScenarioKind):
 
             return Run(stage.label, task, path)
 
-        raw = yield staged(
-            "model",
-            lambda: modal_model_of(scenario.model, scenario.folder),
-            _write_model,
-            _read_model,
-            _model_summary,
-        )
+        def solved() -> tuple[ModalModel, StageRecord]:
+            return cache.get(
+                stages["model"],
+                lambda: modal_model_of(scenario.model, scenario.folder),
+                _write_model,
+                _read_model,
+                _model_summary,
+            )
+
+        def model_stage() -> ModalModel | None:
+            # with the modes in the cache the model is not read (the cases of a batch read
+            # only what they recompute): its record comes from its summary
+            if cache.entry(stages["modes"]).is_dir():
+                record = cache.recorded(stages["model"])
+                if record is not None:
+                    records.append(record)
+                    return None
+            model, record = solved()
+            records.append(record)
+            return model
+
+        raw = yield Run("model", model_stage, "model")
         model = yield staged(
             "modes",
-            lambda: kept_modes(raw, scenario.modes),
+            lambda: kept_modes(raw if raw is not None else solved()[0], scenario.modes),
             _write_model,
             _read_model,
             _model_summary,
