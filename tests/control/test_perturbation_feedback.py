@@ -419,3 +419,46 @@ def test_the_open_loop_law_holds_the_interval_means_of_the_nominal_torque(eps_no
         NominalTorque(object(), DT)
     with pytest.raises(ValueError, match="dt"):
         NominalTorque(eps_nominal, -1.0)
+
+
+def test_a_law_rebuilt_from_its_tables_gives_the_same_commands(coupled):
+    # the design-study cache stores a law as its tables (netCDF arrays): the rebuilt law must be
+    # the law, bit for bit, over the maneuver and after it, with its filter state carried along
+    truth, design = coupled
+    for feedforward in ("constant", "time-varying", "none"):
+        law = design.controller(DT, feedforward, plant=truth)
+        rebuilt = PerturbationFeedback.from_tables(
+            {k: np.array(v) for k, v in law.tables().items()},
+            DT,
+            law.writes,
+            design.n_modes,
+            truth.n_modes,
+            feedforward,
+        )
+        assert rebuilt.design is None and rebuilt.writes == law.writes
+        rng = np.random.default_rng(7)
+        state_a, state_b = law.initial_state(3), rebuilt.initial_state(3)
+        for k in range(0, 1300, 37):
+            x = 0.1 * rng.standard_normal((3, truth.nx))
+            x[:, :4] /= np.linalg.norm(x[:, :4], axis=1, keepdims=True)
+            y = {c.name: truth.output(c.name, x) for c in truth.outputs}
+            u_a, state_a = law(k * DT, y, state_a)
+            u_b, state_b = rebuilt(k * DT, y, state_b)
+            for name in law.writes:
+                np.testing.assert_array_equal(u_b[name], u_a[name])
+            for name in state_a:
+                np.testing.assert_array_equal(state_b[name], state_a[name])
+
+
+def test_tables_that_do_not_make_a_law_are_refused(coupled):
+    truth, design = coupled
+    law = design.controller(DT, plant=truth)
+    tables = law.tables()
+    with pytest.raises(ValueError, match="tables: missing gains"):
+        PerturbationFeedback.from_tables(
+            {k: v for k, v in tables.items() if k != "gains"}, DT, law.writes, 2, 4
+        )
+    with pytest.raises(ValueError, match="tables: gains of shape"):
+        PerturbationFeedback.from_tables(tables, DT, law.writes, 3, 4)
+    with pytest.raises(ValueError, match="dt"):
+        PerturbationFeedback.from_tables(tables, -1.0, law.writes, 2, 4)

@@ -143,6 +143,16 @@ KINDS = {
         {("parameters", "alpha", "n"): 2, ("parameters", "u_max", "n"): 2},
     ),
     "montecarlo": ("tamu_montecarlo.yaml", {("cases",): 4, ("execution", "chunk_size"): 4}),
+    "design_study": (
+        "eps_design_stages.yaml",
+        {
+            ("cache",): "stage-cache",
+            ("model", "n_modes"): 12,
+            ("modes", "n_modes"): 6,
+            ("simulation", "duration"): "10 s",
+            ("simulation", "control_rate"): "10 Hz",
+        },
+    ),
 }
 
 

@@ -374,6 +374,8 @@ class PerturbationFeedback(Controller):
     """
 
     reads = ("attitude", "rate", "elastic")
+    #: the design it was built from; None for a law rebuilt from its tables
+    design: PerturbationDesign | None
 
     def __init__(
         self,
@@ -426,13 +428,86 @@ class PerturbationFeedback(Controller):
             self._ff = np.zeros((grid.size, m_v))
         self._inputs_T = design.input_map.T.copy()
         self._inertia_T = lin.inertia.T.copy()
+        self.n_design_modes = n
         self.beta_target = self.target = beta_n[-1]
+
+    #: the arrays a law is made of once tabulated (:meth:`tables`), by name
+    TABLES = (
+        "knots",
+        "gains",
+        "error_maps",
+        "omega",
+        "torque",
+        "feedforward",
+        "inputs_T",
+        "inertia_T",
+        "beta_target",
+    )
+
+    def tables(self) -> dict[str, FloatArray]:
+        """The law's tables on its sample grid (:data:`TABLES`): with the control period, the
+        written channels and the mode counts they rebuild it (:meth:`from_tables`), so that a
+        designed law can be stored as plain arrays (netCDF) and flown again without its
+        nominal maneuver or its Riccati designs."""
+        return {
+            "knots": self.knots,
+            "gains": self.gains,
+            "error_maps": self._error_maps,
+            "omega": self._omega,
+            "torque": self._torque,
+            "feedforward": self._ff,
+            "inputs_T": self._inputs_T,
+            "inertia_T": self._inertia_T,
+            "beta_target": np.asarray(self.beta_target),
+        }
+
+    @classmethod
+    def from_tables(
+        cls,
+        tables: Mapping[str, npt.ArrayLike],
+        dt: float,
+        writes: Sequence[str],
+        n_design_modes: int,
+        n_modes_plant: int,
+        feedforward: str = "constant",
+    ) -> PerturbationFeedback:
+        """The law of :meth:`tables` (the same commands, bit for bit); ``design`` is then
+        None.
+
+        Raises
+        ------
+        ValueError
+            For a missing table or tables whose sizes disagree.
+        """
+        missing = [name for name in cls.TABLES if name not in tables]
+        if missing:
+            raise FieldError("tables", f"missing {', '.join(missing)}")
+        t = {name: np.array(tables[name], dtype=float) for name in cls.TABLES}
+        m_v = t["inputs_T"].shape[0]
+        width = 6 + 2 * require_count(n_design_modes, "n_design_modes") + 2 * m_v
+        if t["gains"].shape[1:] != (m_v, width) or t["gains"].shape[0] != t["knots"].size:
+            raise FieldError(
+                "tables",
+                f"gains of shape {t['gains'].shape} do not match {t['knots'].size} knots, "
+                f"{m_v} design inputs and {n_design_modes} design modes",
+            )
+        law = cls.__new__(cls)
+        law.design, law.feedforward = None, feedforward
+        law.dt = float(require_positive(dt, "dt", "s"))
+        law.n_modes_plant = require_count(n_modes_plant, "n_modes_plant")
+        law.n_design_modes = n_design_modes
+        law.writes = tuple(writes)
+        law.knots, law.gains = t["knots"], t["gains"]
+        law._error_maps, law._omega, law._torque = t["error_maps"], t["omega"], t["torque"]
+        law._ff, law._inputs_T, law._inertia_T = t["feedforward"], t["inputs_T"], t["inertia_T"]
+        law.beta_target = law.target = t["beta_target"]
+        return law
 
     def _batched(self) -> list[tuple[int, ...]]:
         return [()]
 
     def initial_state(self, n_cases: int) -> dict[str, FloatArray]:
-        m_v = self.design.input_map.shape[1]
+        m_v = self._inputs_T.shape[0]
         return {"z1": np.zeros((n_cases, m_v)), "z2": np.zeros((n_cases, m_v))}
 
     def __call__(
@@ -447,7 +522,7 @@ class PerturbationFeedback(Controller):
                 f"{h:g} s (the simulator's control period); called at t = {t!r}",
             )
         j = min(k, len(self._torque) - 1)
-        n, n_p = self.design.n_modes, self.n_modes_plant
+        n, n_p = self.n_design_modes, self.n_modes_plant
         elastic = np.asarray(y["elastic"], float)
         if elastic.shape[-1] != 2 * n_p:
             raise FieldError(
