@@ -20,9 +20,12 @@ from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
 from flexsat.scenarios.design_laws import design_state, law_controller, pd_gains
 from flexsat.scenarios.design_study import stage_plan
 from flexsat.sim import SimulationDiverged
+from flexsat.structures.modal_model import RIGID_FREQUENCY
 from scenario_mutations import VALUES, delete_at, key_paths, set_at
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "eps_design_stages.yaml"
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 SMALL = {
     "kind": "design_study",
@@ -181,6 +184,33 @@ def test_a_model_file_gives_the_case_modes_and_its_content_is_fingerprinted(tmp_
     assert stage_plan(scenario)["model"].key != before
 
 
+def test_an_inline_fe_model_is_the_simulation_scenarios_model(tmp_path):
+    """``model: {fe: ...}`` of a design study is the simulation kind's section: the user's own
+    spacecraft (examples/own_spacecraft_slew.yaml) gets the same modal model, bit for bit,
+    and flows through placement, design and a run."""
+    from flexsat.scenarios.models import ModelSection
+
+    own = yaml.safe_load((EXAMPLES / "own_spacecraft_slew.yaml").read_text())["model"]
+    data = copy.deepcopy(SMALL)
+    data["model"] = own
+    data["cache"] = str(tmp_path / "cache")
+    data["placement"] = {
+        "torque_node": 0,
+        "candidates": {"nodes": [103, 105, 203, 205], "axes": ["y", "z"]},
+        "number": 2,
+        "outputs": [105],
+    }
+    data["laws"] = data["laws"][:1]  # the PD (the LQR's weights are the EPS's, 1000 kg·m²)
+    data["runs"] = data["runs"][:1]
+    result = run_scenario(load_scenario(yaml.safe_dump(data, sort_keys=False)))
+    direct = ModelSection.model_validate(own).modal_model(tmp_path)
+    kept = result.modes.frequencies
+    kept = kept[kept > RIGID_FREQUENCY]
+    assert kept.size == 6  # modes: {n_modes: 6}
+    np.testing.assert_array_equal(kept, direct.elastic().frequencies[:6])
+    assert len(result.placement.selection) == 2
+
+
 def test_pd_gains_give_the_rigid_bandwidth_and_damping(tmp_path):
     result = run_scenario(_study(tmp_path))
     plant = _plant(result)
@@ -286,7 +316,9 @@ def test_kim_junkins_placement_is_the_search_result(tmp_path):
         ({"runs.0.law": "LQG"}, r"runs\['PD run'\]\.law: 'LQG' is not a law of the study"),
         ({"placement.number": 7}, r"placement\.number: at most the 6 candidates"),
         ({"placement.candidates.nodes": [69, 69]}, r"placement\.candidates\.nodes: must be dist"),
-        ({"model.file": "x.nc"}, r"model.*give case .* or file"),
+        ({"model.file": "x.nc"}, r"model\.file: applies to a model of your own, not to a case"),
+        ({"model": {}}, r"model: give exactly one of file"),
+        ({"model": {"file": "x.nc", "n_modes": 8}}, r"model\.options: .* apply to a case"),
         ({"model.case": "tamu"}, r"model\.case: 'tamu' has no free-free finite-element model"),
         ({"laws.0.bandwidth": "-1 rad/s"}, r"laws\['PD'\]\.bandwidth: must be > 0"),
         ({"laws.0.gains": 1}, r"laws\['PD'\]\.gains: not a field of a pd law"),
@@ -463,7 +495,7 @@ def test_a_file_that_is_no_modal_model_is_named(tmp_path):
     data["cache"] = str(tmp_path / "cache")
     path = tmp_path / "study.yaml"
     path.write_text(yaml.safe_dump(data))
-    with pytest.raises(ScenarioError, match=r"model\.file: .*junk\.nc is not a ModalModel netCDF"):
+    with pytest.raises(ScenarioError, match=r"model\.file: cannot read junk\.nc as a netcdf"):
         run_scenario(load_scenario(path))
 
 

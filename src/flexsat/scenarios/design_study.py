@@ -6,7 +6,7 @@ design → simulation runs, each stage cached by fingerprint (:mod:`flexsat.desi
     kind: design_study
     name: EPS, H2 force placement, LQR and PD slews
     cache: .flexsat-cache            # optional; default under the system's temporary folder
-    model: {case: eps, n_modes: 30}  # or {file: my_spacecraft.nc}, a ModalModel netCDF file
+    model: {case: eps, n_modes: 30}  # or your own: {file: ...} or {fe: ...}
     modes: {n_modes: 12, damping: 0.005}
     placement:
       torque_node: 95
@@ -30,8 +30,10 @@ Stages
 model
     The section made a :class:`~flexsat.structures.modal_model.ModalModel` by one function,
     :func:`modal_model_of`: a built-in case's finite-element model solved for ``n_modes``
-    elastic modes (the modal solve, the costly step), or a ModalModel netCDF file (its
-    content is fingerprinted, not its name).
+    elastic modes (the modal solve, the costly step), or the user's own free-free structure
+    with the keys of a simulation scenario's ``model:`` (:mod:`flexsat.scenarios.models`): a
+    ModalModel netCDF, NASTRAN or UFF file (its content is fingerprinted, not its name) or an
+    inline finite-element description (``fe``).
 modes
     The modes the design keeps: the first ``n_modes`` elastic ones and/or those up to
     ``max_frequency``, with ``damping`` replacing the model's (one ratio or one per kept
@@ -74,7 +76,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
 
 from flexsat import limits
 from flexsat.design.stages import (
@@ -112,6 +114,7 @@ from flexsat.scenarios.fields import (
     integer_in,
 )
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
+from flexsat.scenarios.models import ModelSection
 from flexsat.scenarios.simulation import SimulationSettings
 
 if TYPE_CHECKING:
@@ -135,26 +138,38 @@ MODEL_CASES = {"eps": _eps_modal_model}
 
 
 # -- document -------------------------------------------------------------------------------------
-class ModelSpec(StudySection):
-    """The structure: a built-in case's finite-element model or a ModalModel netCDF file."""
+class ModelSpec(ModelSection):
+    """The structure: a built-in case's finite-element model (``case``, its ``options`` and
+    ``n_modes``), or the user's own, with the keys of a simulation scenario's ``model:``
+    (:mod:`flexsat.scenarios.models`: ``file`` -- netCDF, NASTRAN, UFF -- or ``fe``)."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
     case: str | None = None
     options: dict[str, Any] = Field(default_factory=dict)
     n_modes: Annotated[int, integer_in(1, limits.MAX_MODES)] = 30
-    file: str | None = None
 
     @model_validator(mode="after")
     def _one_source(self) -> Self:
-        if (self.case is None) == (self.file is None):
-            raise FieldError("case", "give case (a built-in finite-element model) or file")
-        if self.case is not None and self.case not in MODEL_CASES:
+        if self.case is None:
+            if self.options or "n_modes" in self.model_fields_set:
+                raise FieldError("options", "options and n_modes apply to a case, not to a model")
+            if self.hub_appendage is not None:
+                raise FieldError(
+                    "hub_appendage",
+                    "a design study designs a three-axis spacecraft: give its free-free model "
+                    "as file or fe (a hub with appendages is a single-axis plant)",
+                )
+            return self.check_source()
+        for key in ModelSection.model_fields:
+            if getattr(self, key) is not None:
+                raise FieldError(key, "applies to a model of your own, not to a case")
+        if self.case not in MODEL_CASES:
             raise FieldError(
                 "case",
                 f"{self.case!r} has no free-free finite-element model here; cases with one: "
-                f"{', '.join(MODEL_CASES)} (or give a ModalModel file)",
+                f"{', '.join(MODEL_CASES)} (or give file or fe)",
             )
-        if self.file is not None and (self.options or "n_modes" in self.model_fields_set):
-            raise FieldError("options", "options and n_modes apply to a case, not to a file")
         return self
 
 
@@ -261,7 +276,6 @@ def modal_model_of(spec: ModelSpec, folder: Path) -> ModalModel:
     ValueError
         Naming the field (``file``, a case input, ``n_modes``).
     """
-    from flexsat.structures.modal_model import ModalModel
 
     if spec.case is not None:
         try:
@@ -269,26 +283,19 @@ def modal_model_of(spec: ModelSpec, folder: Path) -> ModalModel:
         except FieldError as exc:  # a case input is a field of ``options``
             field = exc.field if exc.field == "n_modes" else f"options.{exc.field}"
             raise FieldError(field, exc.rule) from None
-    path = _model_file(spec, folder)
-    try:
-        return ModalModel.load(path)
-    except (OSError, KeyError, ValueError) as exc:  # unreadable, or a field it refuses
-        raise FieldError("file", f"{path} is not a ModalModel netCDF file: {exc}") from None
-
-
-def _model_file(spec: ModelSpec, folder: Path) -> Path:
-    assert spec.file is not None  # a file section
-    path = folder / spec.file
-    if not path.is_file():
-        raise FieldError("file", f"no such file: {path}")
-    return path
+    return spec.modal_model(folder)
 
 
 def _model_section(spec: ModelSpec, folder: Path) -> dict[str, Any]:
-    """What the model stage depends on: the section, and a file's content."""
+    """What the model stage depends on: the section, and its files' content."""
     section = spec.model_dump(mode="json")
-    if spec.file is not None:
-        section["file_sha256"] = file_digest(_model_file(spec, folder))
+    for key in ("file", "op4"):
+        name = getattr(spec, key)
+        if name is not None:
+            path = Path(name) if Path(name).is_absolute() else folder / name
+            if not path.is_file():
+                raise FieldError(key, f"no such file: {path}")
+            section[f"{key}_sha256"] = file_digest(path)
     return section
 
 

@@ -330,6 +330,10 @@ class ModelSection(SchemaSection):
 
     @model_validator(mode="after")
     def _one_source(self) -> Self:
+        return self.check_source()
+
+    def check_source(self) -> Self:
+        """Exactly one source, and only the options that apply to it (the section's rule)."""
         given = [k for k in ("file", "fe", "hub_appendage") if getattr(self, k) is not None]
         if len(given) != 1:
             raise FieldError(
