@@ -30,6 +30,12 @@ MAX_INTEGRATOR_STEPS = 20_000_000
 #: limit is ~5 minutes); estimated from the closed loop's fastest rate before the run
 MAX_ADAPTIVE_EVALUATIONS = 1_000_000
 
+#: passes of one iterated fit (the Gauss-Newton identifications of :mod:`flexsat.identify`, each
+#: pass a dense eigen-solve of the model): they converge in 5-30 passes when the data determine
+#: the parameters (quadratically near the solution), so a fit still moving after 1,000 is not
+#: converging, and more passes only spend time (seconds per pass on a few thousand dofs)
+MAX_FIT_ITERATIONS = 1_000
+
 #: estimated memory of one run's histories, bytes (samples × cases × recorded values × 8)
 MAX_MEMORY = 2 * 1024**3
 
@@ -150,6 +156,7 @@ __all__ = [
     "MAX_CATALOG_STARS",
     "MAX_DOCUMENT_BYTES",
     "MAX_DOCUMENT_NODES",
+    "MAX_FIT_ITERATIONS",
     "MAX_MODES",
     "MAX_ELEMENTS",
     "MAX_INTEGRATOR_STEPS",
