@@ -27,7 +27,10 @@ MAX_INTEGRATOR_STEPS = 20_000_000
 
 #: right-hand-side evaluations of one continuous-law run (the adaptive DOP853 of
 #: :mod:`flexsat.sim.continuous`, a Python law and plant: ~0.3 ms each for the tether, so the
-#: limit is ~5 minutes); estimated from the closed loop's fastest rate before the run
+#: limit is ~5 minutes). Estimated from the closed loop's fastest rate before a tether run
+#: (:func:`flexsat.cases.tether.check_continuous_cost`), and counted during every run, which
+#: ends with an error at the limit: an explicit integrator on a stiff loop (a gain of 1e12)
+#: takes steps ~1/|fastest rate| and would otherwise crawl for hours
 MAX_ADAPTIVE_EVALUATIONS = 1_000_000
 
 #: passes of one iterated fit (the Gauss-Newton identifications of :mod:`flexsat.identify`, each
