@@ -92,10 +92,11 @@ DISTURBANCES = ("design", "aero_substitute")
 class BrysonMaxima:
     """Anticipated maxima of the LQR states (module docstring), SI after construction."""
 
-    attitude: float = "1 deg"
-    rate: float = "0.02 deg/s"
-    momentum: float = "2000 lbf*ft*s"
-    momentum_integral: float = "2e5 lbf*ft*s**2"
+    # the fields hold SI floats; the defaults are quantities that __post_init__ converts
+    attitude: float = "1 deg"  # type: ignore[assignment]
+    rate: float = "0.02 deg/s"  # type: ignore[assignment]
+    momentum: float = "2000 lbf*ft*s"  # type: ignore[assignment]
+    momentum_integral: float = "2e5 lbf*ft*s**2"  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         for name, unit in (

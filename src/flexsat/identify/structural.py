@@ -1148,7 +1148,7 @@ def damped_eigenvalues(K: Matrix, M: Matrix, C: Matrix, n_modes: int | None = No
     count = None if n_modes is None else require_count(n_modes, "n_modes")
     Minv = np.linalg.inv(Md)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ Kd, -Minv @ Cd]])
-    lam = np.linalg.eigvals(A)
+    lam = np.linalg.eigvals(A).astype(complex)
     lam = lam[lam.imag > 0]
     lam = lam[np.argsort(lam.imag)]
     return lam if count is None else lam[:count]
@@ -1215,10 +1215,9 @@ def identify_damping(
     w0, phi = model.modes(
         _scalings(model, p, model.n_stiffness, "p"), _scalings(model, q, model.n_mass, "q")
     )
-    if mode_indices is not None:
-        idx = _mode_indices(mode_indices, m, phi.shape[1])
+    given = _mode_indices(mode_indices, m, phi.shape[1])
     if np.all(lam.imag == 0):  # real parts carry no frequency: paired in order
-        idx = np.arange(m) if mode_indices is None else idx
+        idx = np.arange(m) if given is None else given
         if idx.max() >= phi.shape[1]:
             raise FieldError("mode_indices", "must give one model mode per measured eigenvalue")
     elif np.any(lam.imag == 0):
@@ -1229,7 +1228,7 @@ def identify_damping(
             "sigma (paired in order)",
         )
     else:
-        idx = _match_modes(w0, np.abs(lam), None if mode_indices is None else idx)
+        idx = _match_modes(w0, np.abs(lam), given)
     phi = phi[:, idx]
     Cfix = model.C(r) - sum((r[g] * model.C_blocks[g] for g in free), np.zeros_like(model.C0))
     A = np.array([[phi[:, i] @ model.C_blocks[g] @ phi[:, i] for g in free] for i in range(m)])

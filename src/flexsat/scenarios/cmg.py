@@ -39,7 +39,7 @@ from __future__ import annotations
 from collections.abc import Generator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -49,13 +49,19 @@ from flexsat.dynamics.space_station import FT_LB as _FT_LB
 from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
-from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, count, quantity
+from flexsat.scenarios.fields import (
+    Document,
+    SchemaSection,
+    check_unique_labels,
+    in_unit,
+    integer_in,
+)
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 
 if TYPE_CHECKING:
     import xarray as xr
 
-    from flexsat.cases.space_station_cmg import StationDesign
+    from flexsat.cases.space_station_cmg import StationDesign, StationRun
     from flexsat.dynamics.cmg import GimbalRun
     from flexsat.dynamics.space_station import StationData
 
@@ -120,12 +126,12 @@ def _vector3(value, field):
 class Cluster(SchemaSection):
     """The SGCMG pyramid and its steering."""
 
-    skew: quantity("rad", positive=True) = float(np.deg2rad(54.74))
-    n_units: count(3, 12) = 4
+    skew: Annotated[float, in_unit("rad", positive=True)] = float(np.deg2rad(54.74))
+    n_units: Annotated[int, integer_in(3, 12)] = 4
     steering: Literal["pi", "sr"] = "pi"
     alpha: float = Field(1e-3, gt=0.0, allow_inf_nan=False)
     threshold: float = Field(1e-6, gt=0.0, allow_inf_nan=False)
-    gimbal_rate_limit: quantity("rad/s", optional=True, positive=True) = None
+    gimbal_rate_limit: Annotated[float | None, in_unit("rad/s", positive=True)] = None
 
     @field_validator("skew")
     @classmethod
@@ -140,7 +146,7 @@ class HarmonicDemand(SchemaSection):
 
     constant: list[float]
     amplitude: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.0])
-    frequency: quantity("Hz") = 0.0
+    frequency: Annotated[float, in_unit("Hz")] = 0.0
 
     @field_validator("frequency")
     @classmethod
@@ -157,7 +163,7 @@ class HarmonicDemand(SchemaSection):
 
 class NullMotion(SchemaSection):
     target: str | list = "preferred"
-    gain: quantity("1/s", positive=True) = 1.0
+    gain: Annotated[float, in_unit("1/s", positive=True)] = 1.0
 
     @field_validator("target")
     @classmethod
@@ -168,7 +174,7 @@ class NullMotion(SchemaSection):
 class CmgRunSpec(SchemaSection):
     label: str
     initial: str | list = "zero"
-    duration: quantity("s", positive=True)
+    duration: Annotated[float, in_unit("s", positive=True)]
     demand: list[float] | HarmonicDemand | None = None
 
     @field_validator("duration")
@@ -248,15 +254,15 @@ class StationSection(SchemaSection):
     inertia: list = Field(
         default_factory=lambda: ["5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"]
     )
-    orbit_rate: quantity("rad/s", positive=True) = 0.0011
-    rotor_momentum: quantity("N*m*s", positive=True) = 3500.0 * _FT_LB
+    orbit_rate: Annotated[float, in_unit("rad/s", positive=True)] = 0.0011
+    rotor_momentum: Annotated[float, in_unit("N*m*s", positive=True)] = 3500.0 * _FT_LB
 
 
 class LqrSection(SchemaSection):
-    attitude: quantity("rad", positive=True) = float(np.deg2rad(1.0))
-    rate: quantity("rad/s", positive=True) = float(np.deg2rad(0.02))
-    momentum: quantity("N*m*s", positive=True) = 2000.0 * _FT_LB
-    momentum_integral: quantity("N*m*s**2", positive=True) = 2e5 * _FT_LB
+    attitude: Annotated[float, in_unit("rad", positive=True)] = float(np.deg2rad(1.0))
+    rate: Annotated[float, in_unit("rad/s", positive=True)] = float(np.deg2rad(0.02))
+    momentum: Annotated[float, in_unit("N*m*s", positive=True)] = 2000.0 * _FT_LB
+    momentum_integral: Annotated[float, in_unit("N*m*s**2", positive=True)] = 2e5 * _FT_LB
     pitch_filters: list[int] = Field(default_factory=lambda: [1, 2])
     roll_yaw_filters: list[int] = Field(default_factory=lambda: [2])
 
@@ -264,7 +270,7 @@ class LqrSection(SchemaSection):
 class StationSimulation(SchemaSection):
     orbits: float = Field(2.0, gt=0.0, le=50.0, allow_inf_nan=False)
     disturbance: Literal["design", "aero_substitute"] = "aero_substitute"
-    initial_attitude: quantity("rad") = float(np.deg2rad(1.0))
+    initial_attitude: Annotated[float, in_unit("rad")] = float(np.deg2rad(1.0))
     threshold: float = Field(1e-6, gt=0.0, allow_inf_nan=False)
 
 
@@ -639,7 +645,7 @@ class StationResult(ReportedResult):
     per run."""
 
     scenario: CmgStationScenario
-    station: object
+    station: StationRun
     runs: tuple
     labels: tuple
     initial: tuple
