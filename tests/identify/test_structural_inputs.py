@@ -133,6 +133,8 @@ def _unit(k, m):
         ("n_stiffness", (_unit, True)),
         ("n_stiffness", (_unit, 10**12)),  # refused before np.ones(10**12)
         ("n_mass", (_unit, 1, -2)),
+        ("n_mass", (_unit, 1, 0.5)),
+        ("n_mass", (_unit, 1, True)),
         ("build", (lambda k, m: 5, 2)),
         ("build().K", (lambda k, m: _Assembly(np.full((3, 3), NAN), np.eye(3)), 2)),
         ("build().M", (lambda k, m: _Assembly(np.eye(3), np.eye(2)), 2)),
@@ -141,6 +143,12 @@ def _unit(k, m):
 )
 def test_substructures_from_builder_refuses_by_name(field, args):
     _raises(field, lambda: substructures_from_builder(*args))
+
+
+def test_substructures_from_builder_may_hold_the_whole_mass_fixed():
+    """n_mass = 0: no mass block, the mass in M0 (the identification scenario's clamp)."""
+    model = substructures_from_builder(_unit, 1, 0)
+    assert model.n_mass == 0 and np.allclose(model.M0, np.eye(3))
 
 
 def test_substructures_from_builder_limit_is_the_element_limit():

@@ -392,7 +392,13 @@ def substructures_from_builder(
     if not callable(build):
         raise FieldError("build", f"must be a function of (stiffness, mass) factors, got {build!r}")
     n_stiffness = require_count(n_stiffness, "n_stiffness")
-    n_mass = n_stiffness if n_mass is None else require_count(n_mass, "n_mass")
+    if n_mass is None:
+        n_mass = n_stiffness
+    elif not (limits.is_integral(n_mass) and n_mass >= 0):
+        raise FieldError(
+            "n_mass", f"must be an integer >= 0 (0: the whole mass fixed, in M0), got {n_mass!r}"
+        )
+    n_mass = int(n_mass)
     # each block is a dense n x n matrix: bounded before the builder runs n_stiffness times
     limits.check_count(
         n_stiffness + n_mass,
