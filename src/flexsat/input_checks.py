@@ -122,11 +122,19 @@ def set_si(obj: object, name: str, check: Check, unit: str, field: str | None = 
     object.__setattr__(obj, name, float(arr) if arr.ndim == 0 else arr)
 
 
+def require_scalar(value: QuantityArrayLike, field: str, unit: str | None = None) -> float:
+    """``value`` as one finite number, in SI when ``unit`` is given (see the module)."""
+    arr = require_finite(value, field, unit)
+    if arr.ndim != 0:
+        raise FieldError(field, f"must be one number, got shape {arr.shape}")
+    return float(arr)
+
+
 def require_count(value: npt.ArrayLike, field: str) -> int:
     """A positive integer (bools and fractional numbers refused)."""
-    if isinstance(value, bool):
+    if isinstance(value, (bool, np.bool_)):
         raise FieldError(field, f"must be a positive integer, got {value!r}")
-    number = float(require_finite(value, field))
+    number = require_scalar(value, field)
     if number != int(number) or number < 1:
         raise FieldError(field, f"must be a positive integer, got {value!r}")
     return int(number)

@@ -27,8 +27,22 @@ MAX_INTEGRATOR_STEPS = 20_000_000
 
 #: right-hand-side evaluations of one continuous-law run (the adaptive DOP853 of
 #: :mod:`flexsat.sim.continuous`, a Python law and plant: ~0.3 ms each for the tether, so the
-#: limit is ~5 minutes); estimated from the closed loop's fastest rate before the run
+#: limit is ~5 minutes). Estimated from the closed loop's fastest rate before a tether run
+#: (:func:`flexsat.cases.tether.check_continuous_cost`), and counted during every run, which
+#: ends with an error at the limit: an explicit integrator on a stiff loop (a gain of 1e12)
+#: takes steps ~1/|fastest rate| and would otherwise crawl for hours
 MAX_ADAPTIVE_EVALUATIONS = 1_000_000
+
+#: passes of one iterated fit (the Gauss-Newton identifications of :mod:`flexsat.identify`, each
+#: pass a dense eigen-solve of the model): they converge in 5-30 passes when the data determine
+#: the parameters (quadratically near the solution), so a fit still moving after 1,000 is not
+#: converging, and more passes only spend time (seconds per pass on a few thousand dofs)
+MAX_FIT_ITERATIONS = 1_000
+
+#: noisy copies of one parametric bootstrap (:func:`flexsat.identify.era.bootstrap_uncertainty`),
+#: each an ERA of the copy (~0.05 s for a 200 x 200 Hankel matrix, so ~10 minutes at the limit);
+#: the standard deviations it estimates carry a relative error 1/sqrt(2 n), 0.7 % at the limit
+MAX_BOOTSTRAP_SAMPLES = 10_000
 
 #: estimated memory of one run's histories, bytes (samples × cases × recorded values × 8)
 MAX_MEMORY = 2 * 1024**3
@@ -145,11 +159,13 @@ def check_memory(n_bytes: int, field: str, what: str) -> None:
 
 __all__ = [
     "MAX_ADAPTIVE_EVALUATIONS",
+    "MAX_BOOTSTRAP_SAMPLES",
     "MAX_CASES",
     "MAX_CATALOG_PAIRS",
     "MAX_CATALOG_STARS",
     "MAX_DOCUMENT_BYTES",
     "MAX_DOCUMENT_NODES",
+    "MAX_FIT_ITERATIONS",
     "MAX_MODES",
     "MAX_ELEMENTS",
     "MAX_INTEGRATOR_STEPS",

@@ -97,3 +97,26 @@ def test_a_bad_initial_state_is_named_not_blamed_on_the_gains(initial, message):
     tether = make_law("coupled", GAINS["coupled"], 0.01)
     with pytest.raises(FieldError, match=message):
         run_law(tether, initial, np.linspace(0.0, 0.1, 5))
+
+
+def test_a_stiff_tether_law_past_the_estimate_ends_at_the_evaluation_limit(monkeypatch):
+    """K1 = 1e12 run straight through the engine (the estimate of run_law skipped): the
+    continuous run counts its evaluations and ends at the limit with an error naming it and
+    the likely cause (the limit lowered here to keep the test short; at the default 1e6 the
+    run ends after about as many evaluations, minutes, not hours)."""
+    from flexsat import limits
+    from flexsat.cases.tether import tether_simulation
+    from flexsat.sim.engine import simulate
+
+    stiff = make_law("coupled", dict(GAINS["coupled"], K1=1e12), 0.01)
+    mild = make_law("coupled", GAINS["coupled"], 0.01)
+    # at the target length, swinging 0.01 rad: the stiff length loop holds it (from INITIAL
+    # it pulls the tether to collapse within microseconds, a domain exit)
+    start = [0.01, 0.01, 0.0, 0.0, 0.0, 0.0]
+    plant, config, options = tether_simulation(mild, start, np.linspace(0.0, 2 * np.pi, 101))
+    monkeypatch.setattr(limits, "MAX_ADAPTIVE_EVALUATIONS", 5_000)
+    with pytest.raises(FieldError) as info:
+        simulate(plant, stiff, config, **options)
+    assert info.value.field == "law_mode"
+    assert "MAX_ADAPTIVE_EVALUATIONS" in info.value.rule
+    assert "too stiff" in info.value.rule

@@ -313,6 +313,10 @@ class _NaNCost(NotionalPPF):
         ({"g0": [100.0] * 8 + [np.nan]}, "g0: must be finite"),
         ({"J_goal": np.inf, "goal_ratio": None}, "J_goal: must be finite"),
         ({"goal_ratio": np.nan}, "goal_ratio: must be finite"),
+        # > 0 as in the ppf scenario's ratio rule (issue 21: 0 was taken as J_goal = 0)
+        ({"goal_ratio": 0.0}, r"goal_ratio: a ratio J_goal/J_init must be > 0"),
+        ({"goal_ratio": -0.5}, r"goal_ratio: a ratio J_goal/J_init must be > 0"),
+        ({"goal_ratio": [0.2, 0.3]}, "goal_ratio: must be one number"),
         ({"J_goal": 1.0, "goal_ratio": 0.2}, "J_goal: give exactly one"),
         ({"goal_ratio": None}, "J_goal: give exactly one"),
         ({"gamma_stop": 0.0}, r"gamma_stop: must be in \(0, 1\]"),

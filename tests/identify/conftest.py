@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from flexsat.identify.structural import substructures_from_builder
+from flexsat.identify.structural import SubstructureModel, substructures_from_builder
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material, Section
 
@@ -55,3 +55,29 @@ def frame():
 @pytest.fixture(scope="session")
 def frame_builder():
     return _frame_builder
+
+
+# ------------------------------------------------------------------------------------------------
+def _chain_blocks(n=3, k=1000.0):
+    """A fixed-free chain of ``n`` unit masses and springs ``k``: one stiffness block per spring
+    (spring 0 to the ground), one mass block per mass."""
+    K_blocks, M_blocks = [], []
+    for i in range(n):
+        K = np.zeros((n, n))
+        K[i, i] = k
+        if i > 0:
+            K[i - 1, i - 1] += k
+            K[i - 1, i] = K[i, i - 1] = -k
+        K_blocks.append(K)
+        M = np.zeros((n, n))
+        M[i, i] = 1.0
+        M_blocks.append(M)
+    return K_blocks, M_blocks
+
+
+@pytest.fixture(scope="session")
+def chain():
+    """The 3-dof chain with stiffness-proportional damping blocks (probes of the input checks:
+    any small definite model will do)."""
+    K_blocks, M_blocks = _chain_blocks()
+    return SubstructureModel(K_blocks, M_blocks, [0.01 * K for K in K_blocks])

@@ -11,6 +11,7 @@ import pytest
 
 from flexsat.identify.differential_correction import CorrectionData, differential_correction
 from flexsat.identify.structural import SubstructureModel, damped_eigenvalues
+from flexsat.input_checks import FieldError
 
 pytestmark = pytest.mark.numerics  # tolerances near round-off: re-run on other BLAS kernels
 
@@ -226,7 +227,7 @@ def test_differential_correction_errors(frame):
             shape_dofs=[0, 1, 2, 3],
             orthogonality_sigma=0.01,
         )
-    with pytest.raises(ValueError, match="CorrectionData needs at least one kind of measurement"):
+    with pytest.raises(FieldError, match="frequencies: no measurement given"):
         CorrectionData()
     with pytest.raises(ValueError, match="frequency_sigma: give the standard deviations"):
         CorrectionData(frequencies=w[:3])
@@ -374,10 +375,13 @@ def test_differential_correction_identifies_gauge_and_motor_gains(frame):
 def test_gain_errors(frame):
     model = _damped(frame)
     w, h = [20.0, 30.0], [1e-6 + 1e-7j, 2e-6 + 1e-7j]
-    with pytest.raises(ValueError, match=r"frf\[0\].output_gain: must be None or an index >= 0"):
+    with pytest.raises(FieldError, match=r"frf\[0\].output_gain: must be None or an index in"):
         CorrectionData(frf=[(3, 3, w, h, 1e-8, -1, None)])
-    with pytest.raises(ValueError, match=r"frf\[0\].input_gain: must be None or an index >= 0"):
+    with pytest.raises(FieldError, match=r"frf\[0\].input_gain: must be None or an index in"):
         CorrectionData(frf=[(3, 3, w, h, 1e-8, None, 1.0)])
+    # an index beyond the items: a gain no item could share, and a vector of 10**12 gains
+    with pytest.raises(FieldError, match=r"frf\[0\].output_gain: .* in \[0, 1\)"):
+        CorrectionData(frf=[(3, 3, w, h, 1e-8, 10**12, None)])
     with pytest.raises(
         ValueError,
         match=r"frf\[0\]: must be \(output, input, omegas, values, "

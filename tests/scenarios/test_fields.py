@@ -56,7 +56,7 @@ def test_frequency_and_dimensionless_quantities():
 @pytest.mark.parametrize(
     "value, expected",
     [
-        (True, "length: expected a number or a quantity such as '1 m'"),
+        (True, "length: must be a number (with a unit where it has one), not a boolean"),
         ("2 kg", "length: incompatible units (kilogram given, m expected)"),
         (math.nan, "length: must be a finite number"),
         ("inf m", "length: must be a finite number"),
@@ -76,11 +76,15 @@ def test_counts_take_integers_and_integral_floats(given, stored):
     assert modes == stored and type(modes) is type(stored)
 
 
-@pytest.mark.parametrize("value", [0, 11, 2.5, True, "3", math.inf, math.nan, 1e300])
+@pytest.mark.parametrize("value", [0, 11, 2.5, "3", math.inf, math.nan, 1e300])
 def test_counts_out_of_bounds_or_not_integers_are_refused(value):
     assert problem(length=1, modes=value) == (
         f"modes: must be an integer in [1, 10], got {value!r}"
     )
+
+
+def test_a_boolean_count_is_refused():
+    assert problem(length=1, modes=True) == "modes: must be an integer, not a boolean, got True"
 
 
 def test_an_unbounded_count_has_a_lower_bound_only():

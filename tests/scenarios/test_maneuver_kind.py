@@ -12,33 +12,10 @@ import numpy as np
 import pytest
 import yaml
 
-from flexsat.scenarios import ScenarioError, default_scenario, load_scenario, prepare_scenario
+from flexsat.scenarios import ScenarioError, load_scenario, prepare_scenario
 from flexsat.scenarios.kind import Simulation
 from flexsat.scenarios.maneuver_kind import ManeuverKind, ManeuverResult
-
-
-def small_data() -> dict:
-    """The default scenario as a dict, with a 3-mode model and a 2 s run (fast)."""
-    data = yaml.safe_load(default_scenario().yaml_text)
-    data["model"]["n_modes"] = 3
-    data["simulation"]["duration"] = "2 s"
-    return data
-
-
-def error_of(source) -> ScenarioError:
-    """The ScenarioError that loading and preparing ``source`` raises (a dict is dumped to YAML
-    first)."""
-    text = yaml.safe_dump(source) if isinstance(source, dict) else source
-    with pytest.raises(ScenarioError) as info:
-        prepare_scenario(load_scenario(text))
-    return info.value
-
-
-def problem(source) -> str:
-    """The one problem line of :func:`error_of` ``source``."""
-    error = error_of(source)
-    assert len(error.problems) == 1, error.problems
-    return error.problems[0]
+from maneuver_scenarios import error_of, problem, small_data
 
 
 def problems_of(mutate) -> str:
@@ -193,7 +170,7 @@ def test_all_problems_are_collected():
         ),
         (
             changed("sensors", rate_window=True),
-            "sensors.rate_window: must be an integer in [1, 1000], got True",
+            "sensors.rate_window: must be an integer, not a boolean, got True",
         ),
         (
             changed("maneuver", angle="1e12 rad"),

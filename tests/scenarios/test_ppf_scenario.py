@@ -144,6 +144,10 @@ def test_flexsat_run_dispatches_kind_ppf(tmp_path):
             ("{rule: ratio, value: 0.2}", "{rule: ratio, value: -1}"),
             r"runs\['reducing'\].goal.value: a ratio",
         ),
+        (  # 0 as in the optimiser: a ratio of the costs is > 0 in both (issue 21)
+            ("{rule: ratio, value: 0.2}", "{rule: ratio, value: 0}"),
+            r"runs\['reducing'\].goal.value: a ratio J_goal/J_init must be > 0",
+        ),
         (("goal: {rule: paper}", "goal: {rule: paper, value: 2}"), r"goal.value: the 'paper' rule"),
         (
             (

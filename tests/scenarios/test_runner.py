@@ -13,39 +13,14 @@ import flexsat.scenarios.runner as scenario_module
 from flexsat.cli import app
 from flexsat.scenarios import (
     ScenarioError,
-    default_scenario,
     load_scenario,
     maneuver_cases,
-    prepare_scenario,
     run_scenario,
 )
 from flexsat.sim import SimulationDiverged
+from maneuver_scenarios import problem, small_data
 
 runner = CliRunner()
-
-
-def small_data() -> dict:
-    """The default scenario as a dict, with a 3-mode model and a 2 s run (fast)."""
-    data = yaml.safe_load(default_scenario().yaml_text)
-    data["model"]["n_modes"] = 3
-    data["simulation"]["duration"] = "2 s"
-    return data
-
-
-def error_of(source) -> ScenarioError:
-    """The ScenarioError that loading and preparing ``source`` raises (a dict is dumped to YAML
-    first)."""
-    text = yaml.safe_dump(source) if isinstance(source, dict) else source
-    with pytest.raises(ScenarioError) as info:
-        prepare_scenario(load_scenario(text))
-    return info.value
-
-
-def problem(source) -> str:
-    """The one problem line of :func:`error_of` ``source``."""
-    error = error_of(source)
-    assert len(error.problems) == 1, error.problems
-    return error.problems[0]
 
 
 # -- the runner ---------------------------------------------------------------------------------

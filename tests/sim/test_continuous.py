@@ -11,6 +11,7 @@ from flexsat.control.base import Controller
 from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
 from flexsat.dynamics.state_space import StateSpacePlant
+from flexsat.input_checks import FieldError
 from flexsat.sim import continuous
 from flexsat.sim.channels import ChannelSensor
 from flexsat.sim.config import SimConfig, StopCondition
@@ -223,3 +224,17 @@ def test_a_diverging_loop_is_reported_not_returned():
     with pytest.raises(SimulationDiverged, match=r"diverged at t = 0\.5526") as info:
         continuous.run(integrator_plant(), feedback([[-50.0]], "u", "y"), [0.0, 100.0], [1.0])
     assert info.value.cases == (0,)
+
+
+def test_a_stiff_loop_ends_at_the_evaluation_limit(monkeypatch):
+    """x' = −1e12 x: stable, but DOP853's steps are ~3e-12 s (its stability bound), so 1 s
+    would take ~4e12 evaluations. The run counts them and ends at the limit, naming it (the
+    limit lowered here to keep the test short: the run reads it at its start)."""
+    from flexsat import limits
+
+    monkeypatch.setattr(limits, "MAX_ADAPTIVE_EVALUATIONS", 3_000)
+    with pytest.raises(FieldError, match=r"law_mode: .*took 3,000 right-hand-side evaluations"):
+        continuous.run(integrator_plant(), feedback([[1e12]], "u", "y"), [0.0, 1.0], [1.0])
+    # the same loop at a sane gain stays well within it
+    run = continuous.run(integrator_plant(), feedback([[K]], "u", "y"), [0.0, 1.0], [1.0])
+    assert run.t_end == 1.0

@@ -181,12 +181,12 @@ class GoalRule:
             return
         if self.value is None:
             raise FieldError("goal.value", f"the {self.kind!r} rule needs a value")
-        v = float(require_finite(self.value, "goal.value"))
-        if self.kind == "ratio" and v <= 0:
-            raise FieldError(
-                "goal.value",
-                f"a ratio J_goal/J_init must be > 0 (the cost of a stable loop is > 0), got {v!r}",
-            )
+        if self.kind == "ratio":
+            from flexsat.control.ppf_optimization import check_goal_ratio  # the optimiser's rule
+
+            v = check_goal_ratio(self.value, "goal.value")
+        else:
+            v = float(require_finite(self.value, "goal.value"))
         object.__setattr__(self, "value", v)
 
     def goal(self, J_init: float, weights: npt.ArrayLike, excitation: str) -> float:

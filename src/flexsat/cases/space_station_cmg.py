@@ -37,7 +37,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
 
@@ -64,6 +64,11 @@ if TYPE_CHECKING:
     import xarray as xr
 
     from flexsat.units import FloatArray, QuantityLike
+
+    #: one axis group's design: (A, B, E, state names, K, closed-loop poles)
+    AxisDesign: TypeAlias = tuple[
+        FloatArray, FloatArray, FloatArray, list[str], FloatArray, npt.NDArray[np.complex128]
+    ]
 
 __all__ = [
     "BrysonMaxima",
@@ -92,10 +97,11 @@ DISTURBANCES = ("design", "aero_substitute")
 class BrysonMaxima:
     """Anticipated maxima of the LQR states (module docstring), SI after construction."""
 
-    attitude: float = "1 deg"
-    rate: float = "0.02 deg/s"
-    momentum: float = "2000 lbf*ft*s"
-    momentum_integral: float = "2e5 lbf*ft*s**2"
+    # the fields hold SI floats; the defaults are quantities that __post_init__ converts
+    attitude: float = "1 deg"  # type: ignore[assignment]
+    rate: float = "0.02 deg/s"  # type: ignore[assignment]
+    momentum: float = "2000 lbf*ft*s"  # type: ignore[assignment]
+    momentum_integral: float = "2e5 lbf*ft*s**2"  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         for name, unit in (
@@ -133,8 +139,8 @@ class StationDesign:
 
     data: StationData
     maxima: BrysonMaxima
-    pitch: tuple
-    roll_yaw: tuple
+    pitch: AxisDesign
+    roll_yaw: AxisDesign
     plant: SpaceStation
 
     @property
@@ -152,7 +158,16 @@ class StationDesign:
         return K
 
 
-def _lqr_bryson(A, B, names, maxima, n, axis):
+def _lqr_bryson(
+    A: FloatArray,
+    B: FloatArray,
+    names: Sequence[str],
+    maxima: BrysonMaxima,
+    n: float,
+    axis: str,
+) -> tuple[FloatArray, npt.NDArray[np.complex128]]:
+    """The LQR gain K of x' = A x + B u with Bryson weights (the states scaled by their
+    ``maxima``, unit weights), and the closed-loop poles; a refusal names ``axis``."""
     D = maxima.scales(names, n)
     try:
         K_s = lqr(A / D[:, None] * D[None, :], B / D[:, None], np.eye(len(D)), np.eye(B.shape[1]))[
@@ -161,7 +176,7 @@ def _lqr_bryson(A, B, names, maxima, n, axis):
     except ValueError as err:
         raise FieldError(axis, f"{err}") from None
     K = K_s / D[None, :]
-    return K, np.linalg.eigvals(A - B @ K)
+    return K, np.linalg.eigvals(A - B @ K).astype(complex)
 
 
 def design(

@@ -78,6 +78,7 @@ from flexsat.input_checks import (
     require_finite,
     require_nonneg,
     require_numeric,
+    require_scalar,
 )
 
 if TYPE_CHECKING:
@@ -526,6 +527,23 @@ def restore_eigenvalue_constraints(
 
 
 # -- the homotopy ------------------------------------------------------------------------------
+def check_goal_ratio(value: float, field: str = "goal_ratio") -> float:
+    """A goal given as the ratio J_goal/J_init: one finite number > 0.
+
+    J is a positive quadratic cost at a stable start (J_init > 0), so a ratio <= 0 names no
+    cost the homotopy could reach; the constrained minimum is asked for by ``J_goal = 0``,
+    an absolute goal.
+    """
+    ratio = require_scalar(value, field)
+    if not ratio > 0:
+        raise FieldError(
+            field,
+            f"a ratio J_goal/J_init must be > 0 (the cost of a stable loop is > 0; give "
+            f"J_goal = 0 for the constrained minimum), got {value!r}",
+        )
+    return ratio
+
+
 def _check_costs(J_init: float, goal: float, goal_field: str, rtol: float) -> None:
     """Refuse a start cost or a goal the homotopy cannot follow in float64.
 
@@ -588,8 +606,9 @@ def optimize_ppf_gains(
         The goal cost. Above J_init the homotopy *raises* J (along +∇J), as the paper's
         published runs apparently did.
     goal_ratio : float, optional
-        Alternatively J_goal = goal_ratio · J_init (the paper sets the goal "based upon the
-        objective function with the initial gains", §4). Give exactly one of the two.
+        Alternatively J_goal = goal_ratio · J_init, goal_ratio > 0 (the paper sets the goal
+        "based upon the objective function with the initial gains", §4). Give exactly one of
+        the two.
     gamma_stop : float
         Last γ, in (0, 1] (0.9 in the paper, §4).
     eigenvalue_floor : float or (n,) array_like, optional
@@ -627,8 +646,7 @@ def optimize_ppf_gains(
     if J_goal is not None and goal_ratio is None:
         goal, goal_field = float(require_finite(J_goal, "J_goal")), "J_goal"
     elif goal_ratio is not None and J_goal is None:
-        goal = float(require_finite(goal_ratio, "goal_ratio")) * J_init
-        goal_field = "goal_ratio"
+        goal, goal_field = check_goal_ratio(goal_ratio) * J_init, "goal_ratio"
     else:
         raise FieldError(
             "J_goal", "give exactly one of J_goal and goal_ratio (J_goal = goal_ratio · J_init)"
@@ -851,6 +869,7 @@ __all__ = [
     "PPFHomotopyResult",
     "PPFHomotopyStep",
     "ScipyPPFResult",
+    "check_goal_ratio",
     "optimize_ppf_gains",
     "restore_eigenvalue_constraints",
     "scipy_ppf_gains",

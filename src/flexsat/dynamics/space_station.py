@@ -91,6 +91,16 @@ class StationData:
     orbit_rate: float
     rotor_momentum: float
 
+    if TYPE_CHECKING:
+        # what the constructor accepts (the generated __init__ at run time): quantities that
+        # __post_init__ converts to the SI fields above
+        def __init__(
+            self,
+            inertia: tuple[QuantityLike, QuantityLike, QuantityLike],
+            orbit_rate: QuantityLike,
+            rotor_momentum: QuantityLike,
+        ) -> None: ...
+
     def __post_init__(self) -> None:
         if len(self.inertia) != 3:
             raise FieldError(

@@ -27,9 +27,9 @@ import numpy.typing as npt
 import scipy.linalg as sla
 
 from flexsat.analysis.sensitivity import modal_derivatives
-from flexsat.identify.structural import SubstructureModel
+from flexsat.identify.structural import SubstructureModel, check_iterations
 from flexsat.input_checks import FieldError, require_finite, require_numeric
-from flexsat.units import FloatArray
+from flexsat.units import FloatArray, UnitError, holds_quantity
 
 __all__ = ["CorrectionData", "DifferentialCorrection", "differential_correction"]
 
@@ -59,9 +59,10 @@ def _modes_and_sigma(
 ) -> tuple[FloatArray, FloatArray, IntArray]:
     """A measured modal quantity in ``unit``: finite vector > 0, its SDs (> 0) and the model
     modes."""
-    v = require_finite(values, name, unit).ravel()
-    if v.size == 0 or np.any(v <= 0):
-        raise FieldError(name, "must be a non-empty vector of values > 0")
+    v = require_finite(values, name, unit)
+    if v.ndim > 1 or v.size == 0 or np.any(v <= 0):
+        raise FieldError(name, f"must be a non-empty vector of values > 0, got shape {v.shape}")
+    v = v.ravel()
     if sigma is None:
         raise FieldError(
             f"{prefix}_sigma", "give the standard deviations (the weights W, Att. 6 Eq. 10)"
@@ -105,12 +106,21 @@ def _dof_or_vector(value: int | npt.ArrayLike, n: int, name: str) -> FloatArray:
     return v
 
 
-def _gain_index(value: object, name: str) -> int | None:
-    """An FRF item's optional gain: None or an index >= 0 into mu (outputs) or nu (inputs)."""
+def _gain_index(value: object, name: str, items: int) -> int | None:
+    """An FRF item's optional gain: None or an index into mu (outputs) or nu (inputs), below
+    the number of FRF ``items`` (each gain belongs to at least one item)."""
     if value is None:
         return None
-    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 0:
-        raise FieldError(name, f"must be None or an index >= 0 into the gain vector, got {value!r}")
+    if (
+        not isinstance(value, (int, np.integer))
+        or isinstance(value, bool)
+        or not 0 <= value < items
+    ):
+        raise FieldError(
+            name,
+            f"must be None or an index in [0, {items}) into the gain vector (one gain per FRF "
+            f"item at most), got {value!r}",
+        )
     return int(value)
 
 
@@ -218,6 +228,9 @@ class CorrectionData:
                 prefix,
                 unit,
             )
+            if name == "damping_ratios" and np.any(v >= 1):
+                # zeta = -Re(s)/|s| of a complex (oscillating) eigenvalue: below 1
+                raise FieldError(name, f"must be < 1 (an underdamped mode), got {v}")
             set_(self, name, v)
             set_(self, f"{prefix}_sigma", s)
             set_(self, f"{prefix}_modes", modes)
@@ -269,6 +282,12 @@ class CorrectionData:
         frf = self.frf
         if isinstance(frf, tuple) and len(frf) in (5, 7) and np.ndim(frf[2]) == 1:
             frf = [frf]
+        if not isinstance(frf, Sequence) or isinstance(frf, (str, bytes)):
+            raise FieldError(
+                "frf",
+                "must be a list of (output, input, omegas, values, sigma[, output_gain, "
+                f"input_gain]), got {type(frf).__name__}",
+            )
         items = []
         for i, item in enumerate(frf):
             if not isinstance(item, (tuple, list)) or len(item) not in (5, 7):
@@ -277,8 +296,8 @@ class CorrectionData:
                     "must be (output, input, omegas, values, sigma[, output_gain, input_gain])",
                 )
             out, inp, w, h, sd, og, ig = (*item, None, None)[:7]  # 5-tuples: no gains
-            og = _gain_index(og, f"frf[{i}].output_gain")
-            ig = _gain_index(ig, f"frf[{i}].input_gain")
+            og = _gain_index(og, f"frf[{i}].output_gain", len(frf))
+            ig = _gain_index(ig, f"frf[{i}].input_gain", len(frf))
             w = require_numeric(w, f"frf[{i}].omegas", "vector").ravel()
             h = np.asarray(h)
             if h.dtype.kind not in "biufc":
@@ -298,6 +317,11 @@ class CorrectionData:
                 )
             if np.any(w <= 0):
                 raise FieldError(f"frf[{i}].omegas", "must be > 0 rad/s")
+            if holds_quantity(sd, strings=True):
+                raise UnitError(
+                    f"frf[{i}].sigma",
+                    "takes plain numbers in the unit of the values, got a quantity",
+                )
             sd = np.asarray(sd)
             if sd.dtype.kind not in "biufc" or not np.all(np.isfinite(sd)):
                 raise FieldError(f"frf[{i}].sigma", "must be finite numbers")
@@ -318,9 +342,10 @@ class CorrectionData:
             and self.damping_ratios is None
             and not items
         ):
-            raise ValueError(
-                "CorrectionData needs at least one kind of measurement: frequencies, shapes, "
-                "damping_ratios or frf"
+            raise FieldError(
+                "frequencies",
+                "no measurement given: give at least one kind of frequencies, shapes, "
+                "damping_ratios or frf",
             )
 
     @property
@@ -371,6 +396,32 @@ class CorrectionData:
             parts.append(np.full(self.shapes.shape[1], self.normalization_sigma))
         return np.concatenate([x for x in parts if x is not None] + [np.zeros(0)])
 
+    def check_model(self, model: SubstructureModel) -> None:
+        """Refuse data that do not fit ``model``: shapes, dofs and mode numbers beyond its
+        dofs, damping ratios without damping blocks, FRF outputs and inputs that are not one
+        of its dofs or a vector over them."""
+        if not isinstance(model, SubstructureModel):
+            raise FieldError("model", f"must be a SubstructureModel, got {type(model).__name__}")
+        n = model.n_dofs
+        if self.shapes is not None:
+            if self.shape_dofs is None and self.shapes.shape[0] != n:
+                raise FieldError(
+                    "shapes",
+                    f"without shape_dofs must have one row per dof ({n}), "
+                    f"got {self.shapes.shape[0]}",
+                )
+            if self.shape_dofs is not None and self.shape_dofs.max() >= n:
+                raise FieldError("shape_dofs", f"must be dof indices < {n}")
+        for name in ("frequency_modes", "shape_modes", "damping_modes"):
+            modes = getattr(self, name)
+            if modes is not None and modes.size and modes.max() >= n:
+                raise FieldError(name, f"must be model mode numbers < {n} (its dofs)")
+        if self.damping_ratios is not None and model.n_damping == 0:
+            raise FieldError("damping_ratios", "the model has no damping blocks (C_blocks)")
+        for i, (out, inp, *_) in enumerate(self.frf):
+            _dof_or_vector(out, n, f"frf[{i}].output")
+            _dof_or_vector(inp, n, f"frf[{i}].input")
+
     def predict(
         self,
         model: SubstructureModel,
@@ -401,6 +452,7 @@ class CorrectionData:
         values : (N,) in the order of :attr:`measured`; jacobian : (N, P + Q + R + S + T), S and
         T the lengths of ``mu`` and ``nu``.
         """
+        self.check_model(model)
         n, P, Q, R = model.n_dofs, model.n_stiffness, model.n_mass, model.n_damping
         ps, qs, rs = model._params(p, P, "p"), model._params(q, Q, "q"), model._params(r, R, "r")
         gains = []
@@ -421,27 +473,6 @@ class CorrectionData:
         mu, nu = gains
         S, T = mu.size, nu.size
         K, M, C = model.K(ps), model.M(qs), model.C(rs)
-        if self.shapes is not None:
-            if self.shape_dofs is None and self.shapes.shape[0] != n:
-                raise FieldError(
-                    "shapes",
-                    f"without shape_dofs must have one row per dof ({n}), "
-                    f"got {self.shapes.shape[0]}",
-                )
-            if self.shape_dofs is not None and self.shape_dofs.max() >= n:
-                raise FieldError("shape_dofs", f"must be dof indices < {n}")
-        modes_used = np.concatenate(
-            [
-                m
-                for m in (self.frequency_modes, self.shape_modes, self.damping_modes)
-                if m is not None
-            ]
-            + [np.zeros(0, int)]
-        ).astype(int)
-        if modes_used.size and modes_used.max() >= n:
-            raise ValueError(f"frequency_modes, shape_modes, damping_modes: must be < {n}")
-        if self.damping_ratios is not None and R == 0:
-            raise FieldError("damping_ratios", "the model has no damping blocks (C_blocks)")
         values: list[npt.NDArray[Any]] = []
         jac: list[npt.NDArray[Any]] = []
         needed = sorted(
@@ -686,6 +717,8 @@ def differential_correction(
     """
     if not isinstance(data, CorrectionData):
         raise FieldError("data", "must be a CorrectionData")
+    data.check_model(model)
+    n_iter, tol = check_iterations(n_iter, tol)
     P, Q, R = model.n_stiffness, model.n_mass, model.n_damping
     S, T = data.n_output_gains, data.n_input_gains
     G = P + Q + R  # the gains' first column
@@ -698,6 +731,11 @@ def differential_correction(
             _start_gains(nu0, T, "nu0", "input_gain"),
         ]
     )
+    for name, start in (("p0", x0[:P]), ("q0", x0[P : P + Q])):
+        if np.any(start <= 0):
+            raise FieldError(
+                name, f"must be > 0 (a substructure's stiffness or mass is scaled), got {start}"
+            )
     names = (
         [f"p[{k}]" for k in range(P)]
         + [f"q[{k}]" for k in range(Q)]
@@ -714,14 +752,17 @@ def differential_correction(
         ("fixed_input_gains", fixed_input_gains, T, G + S, "gain"),
     ):
         idx = np.asarray(fixed).ravel()
-        if idx.size and (idx.dtype.kind not in "iu" or np.any(idx < 0) or np.any(idx >= count)):
+        if isinstance(fixed, (str, bytes)) or (
+            idx.size and (idx.dtype.kind not in "iu" or np.any(idx < 0) or np.any(idx >= count))
+        ):
             raise FieldError(name, f"must be {kind} indices in [0, {count})")
         held += (offset + idx.astype(int)).tolist()
     free = np.setdiff1d(np.arange(x0.size), held)
     if free.size == 0:
-        raise ValueError(
-            "fixed_stiffness, fixed_mass, fixed_damping, fixed_output_gains, "
-            "fixed_input_gains: every parameter is held"
+        raise FieldError(
+            "fixed_stiffness",
+            "every parameter is held (with fixed_mass, fixed_damping, fixed_output_gains "
+            "and fixed_input_gains): nothing to correct",
         )
     free_gains = free[free >= G]
     sd_prior = None

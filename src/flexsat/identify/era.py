@@ -82,16 +82,22 @@ import dataclasses
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, TypeAlias
+from typing import Any, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
 
-from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
-from flexsat.units import FloatArray, FrequencyArray, to_si_array
-
-if TYPE_CHECKING:
-    from flexsat.identify.measurements import Measurement
+from flexsat import limits
+from flexsat.identify.measurements import Measurement
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_numeric,
+    require_positive_scalar,
+    require_scalar,
+)
+from flexsat.units import FloatArray, FrequencyArray, holds_quantity, to_si_array
 
 __all__ = [
     "Realization",
@@ -147,8 +153,8 @@ def _time_data(u: npt.ArrayLike | None, y: npt.ArrayLike | None) -> tuple[FloatA
         except (TypeError, ValueError):
             raise FieldError(name, "must be a numeric array") from None
         a = a[None, :] if a.ndim == 1 else a
-        if a.ndim != 2:
-            raise FieldError(name, f"must have shape (channels, samples), got {a.shape}")
+        if a.ndim != 2 or a.size == 0:
+            raise FieldError(name, f"must have shape (channels, samples), non-empty, got {a.shape}")
         if not np.all(np.isfinite(a)):
             raise FieldError(
                 name,
@@ -198,10 +204,16 @@ def markov_parameters(
     along the sequence. Keep the pulse within two samples, or use :func:`okid`; with a smaller
     ``n_markov`` the response must have decayed within it.
     """
+    if measurement is None and (u is None or y is None):
+        raise FieldError("measurement", "give a Measurement (or a list of them), or u and y")
     if measurement is not None:
         tests = measurement if isinstance(measurement, (list, tuple)) else [measurement]
         blocks = []
         for i, m in enumerate(tests):
+            if not isinstance(m, Measurement):
+                raise FieldError(
+                    f"measurement[{i}]", f"must be a Measurement, got {type(m).__name__}"
+                )
             if m.domain == "frequency":
                 blocks.append(markov_from_frf(m.abscissa, m.outputs, n_markov=n_markov)[0])
                 continue
@@ -330,7 +342,7 @@ def markov_from_frf(
             f"must be finite (no NaN or inf), got "
             f"{int(np.sum(~np.isfinite(H)))} non-finite entries",
         )
-    tol = float(require_positive(tail_tolerance, "tail_tolerance"))
+    tol = require_positive_scalar(tail_tolerance, "tail_tolerance")
     N = 2 * (f.size - 1)
     L = N // 2 if n_markov is None else require_count(n_markov, "n_markov")
     if L > N - 1:
@@ -381,6 +393,9 @@ def okid(
     r, N = u.shape
     q = y.shape[0]
     L = require_count(n_markov, "n_markov")
+    if L > N - 1:
+        # the recursion would extrapolate past the record (and run for as long as asked)
+        raise FieldError("n_markov", f"the record holds {N} samples, so at most {N - 1}, got {L}")
     p = (
         max(1, min(L, (N - 1) // (r + q + 1) // 2, 200))
         if n_observer is None
@@ -415,8 +430,15 @@ def okid(
 # ------------------------------------------------------------------------------------------------
 def mac(phi: npt.ArrayLike, psi: npt.ArrayLike) -> FloatArray:
     """Modal assurance criterion matrix |φ_i^H ψ_j|² / (|φ_i|² |ψ_j|²); shapes as columns."""
-    phi = np.atleast_2d(np.asarray(phi))
-    psi = np.atleast_2d(np.asarray(psi))
+    given = []
+    for name, value in (("phi", phi), ("reference_shapes", psi)):
+        if isinstance(value, (str, bytes)) or holds_quantity(value):
+            raise FieldError(name, f"must be a numeric (complex) array, got {value!r}")
+        shapes = np.atleast_2d(np.asarray(value))
+        if shapes.dtype.kind not in "biufc":
+            raise FieldError(name, f"must be a numeric (complex) array, got {value!r}")
+        given.append(shapes)
+    phi, psi = given
     for name, shapes in (("phi", phi), ("reference_shapes", psi)):
         if shapes.ndim != 2 or shapes.size == 0 or not np.all(np.isfinite(shapes)):
             raise FieldError(
@@ -604,9 +626,22 @@ def _modes(
     norm = norm * np.exp(-1j * np.angle(norm[big, np.arange(keep.size)]))
     mac_best = None
     if reference_shapes is not None:
-        ref = np.asarray(reference_shapes, dtype=float)
-        mac_best = mac(norm, ref.reshape(ref.shape[0], -1)).max(axis=1)
+        mac_best = mac(norm, _reference_shapes(reference_shapes, C.shape[0])).max(axis=1)
     return freq, zeta, norm, msv, mpc, mac_best, lam_k, bmod, keep, W
+
+
+def _reference_shapes(value: npt.ArrayLike, q: int) -> FloatArray:
+    """Known shapes (q, m) at the q outputs (a vector: one shape), each nonzero."""
+    ref = require_numeric(value, "reference_shapes", "array")
+    if ref.ndim == 1:
+        ref = ref[:, None]
+    if ref.ndim != 2 or ref.shape[0] != q or ref.shape[1] == 0:
+        raise FieldError(
+            "reference_shapes", f"must have shape ({q}, modes), one row per output, got {ref.shape}"
+        )
+    if np.any(np.all(ref == 0, axis=0)):
+        raise FieldError("reference_shapes", "each shape must have a nonzero entry")
+    return ref
 
 
 def _realize(Y: FloatArray, order: int | None, rows: int, cols: int) -> Factors:
@@ -657,8 +692,11 @@ def era(
         Hankel sizes needing more data than given.
     """
     Y = _markov_array(markov)
-    dt = float(require_positive(dt, "dt"))
+    dt = require_positive_scalar(dt, "dt", "s")
     L, q, r = Y.shape[0] - 1, Y.shape[1], Y.shape[2]
+    order = None if order is None else require_count(order, "order")
+    if reference_shapes is not None:
+        reference_shapes = _reference_shapes(reference_shapes, q)
     rows, cols = _sizes(L, q, r, order, rows, cols)
     factors = _realize(Y, order, rows, cols)
     return _finish(Y, dt, factors, rows, cols, reference_shapes, (rows * q, cols * r))
@@ -790,10 +828,31 @@ def bootstrap_uncertainty(
         of the copies minus the original: noise biases ERA damping upward, by up to 5 % of
         ζ at 2 % noise on the grid; subtract it for a bias-corrected estimate).
     """
+    if not isinstance(realization, Realization):
+        raise FieldError(
+            "realization", f"must be a Realization (of era()), got {type(realization).__name__}"
+        )
     Y = _markov_array(markov)
     n = require_count(n_samples, "n_samples")
     if n < 2:
         raise FieldError("n_samples", f"at least 2 bootstrap copies are needed, got {n}")
+    limits.check_count(
+        n,
+        limits.MAX_BOOTSTRAP_SAMPLES,
+        "n_samples",
+        "bootstrap copies (one ERA each)",
+        "the standard deviations' own error is 1/sqrt(2 n): 0.7 % at the limit",
+    )
+    if seed is not None and not (limits.is_integral(seed) and 0 <= seed <= limits.MAX_SEED):
+        raise FieldError(
+            "seed", f"must be None or an integer in [0, {limits.MAX_SEED}], got {seed!r}"
+        )
+    tolerance = require_scalar(match_tolerance, "match_tolerance")
+    if not 0 < tolerance <= 1:
+        raise FieldError(
+            "match_tolerance",
+            f"must be a relative frequency difference in (0, 1], got {match_tolerance!r}",
+        )
     if (
         realization.extra.get("method", "era") != "era"
         or realization.C.shape[0] != Y.shape[1]
@@ -806,7 +865,7 @@ def bootstrap_uncertainty(
         )
     model = _markov_of(realization, Y.shape[0] - 1)
     sigma = (Y - model)[1:].std(axis=0)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(None if seed is None else int(seed))
     f0 = realization.frequencies_hz.view(np.ndarray)
     f_all = np.full((n, f0.size), np.nan)
     z_all = np.full((n, f0.size), np.nan)
@@ -822,7 +881,7 @@ def bootstrap_uncertainty(
             continue
         for i, f in enumerate(f0):
             k = int(np.argmin(np.abs(copy.frequencies_hz - f)))
-            if f > 0 and abs(copy.frequencies_hz[k] / f - 1) <= match_tolerance:
+            if f > 0 and abs(copy.frequencies_hz[k] / f - 1) <= tolerance:
                 f_all[b, i], z_all[b, i] = copy.frequencies_hz[k], copy.damping[k]
     found = np.sum(np.isfinite(f_all), axis=0)
     ok = found >= max(2, n // 2)
@@ -868,14 +927,17 @@ def era_dc(
     ``damping_std`` are None).
     """
     Y = _markov_array(markov)
-    dt = float(require_positive(dt, "dt"))
+    dt = require_positive_scalar(dt, "dt", "s")
     L, q, r = Y.shape[0] - 1, Y.shape[1], Y.shape[2]
+    order = None if order is None else require_count(order, "order")
+    if reference_shapes is not None:
+        reference_shapes = _reference_shapes(reference_shapes, q)
     blocks = require_count(blocks, "blocks")
     lag = require_count(lag, "lag")
     reach = 1 + 2 * (blocks - 1) * lag
     if rows is None or cols is None:
         rows, cols = _sizes(L - reach, q, r, order, rows, cols)
-    elif rows + cols + reach > L:
+    elif require_count(rows, "rows") + require_count(cols, "cols") + reach > L:
         raise FieldError(
             "rows",
             f"rows + cols + correlation reach {rows + cols + reach} exceeds "

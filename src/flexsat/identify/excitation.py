@@ -32,7 +32,12 @@ from scipy import signal
 from scipy.linalg import block_diag
 
 from flexsat.identify.measurements import Channel
-from flexsat.input_checks import FieldError, require_finite, require_nonneg, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_numeric,
+    require_positive_scalar,
+    require_scalar,
+)
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
@@ -85,14 +90,32 @@ class Excitation:
     def __post_init__(self) -> None:
         if self.kind not in _KINDS:
             raise FieldError("kind", f"must be one of {_KINDS}, got {self.kind!r}")
-        if self.channel.kind not in ("force", "torque"):
+        if not isinstance(self.channel, Channel) or self.channel.kind not in ("force", "torque"):
             raise FieldError(
-                "channel", f"an excitation is a force or torque, got {self.channel.kind!r}"
+                "channel", f"an excitation is a force or torque Channel, got {self.channel!r}"
             )
+        amplitude = require_scalar(self.amplitude, "rms" if self.kind == "random" else "amplitude")
+        if self.kind == "random" and amplitude < 0:
+            raise FieldError("rms", f"must be >= 0, got {self.amplitude!r}")
+        object.__setattr__(self, "amplitude", amplitude)
+        if self.width is not None:
+            object.__setattr__(self, "width", require_positive_scalar(self.width, "width", "s"))
         if self.kind == "harmonic" and self.frequency is None:
             raise FieldError("frequency", "a harmonic excitation needs its frequency, Hz")
+        if self.frequency is not None:
+            # Hz, a plain number: a pint Quantity would not say whether it is cycles or radians
+            object.__setattr__(
+                self, "frequency", require_positive_scalar(self.frequency, "frequency")
+            )
         if self.kind == "history" and self.values is None:
             raise FieldError("values", "a history excitation needs its samples")
+        if self.values is not None:
+            vals = require_numeric(self.values, "values", "vector")
+            if vals.ndim != 1 or vals.size == 0:
+                raise FieldError(
+                    "values", f"must be a finite, non-empty 1-D array of samples, got {vals.shape}"
+                )
+            object.__setattr__(self, "values", vals)
 
     def samples(
         self, t_fine: FloatArray, h: float, oversample: int, rng: np.random.Generator
@@ -123,14 +146,6 @@ def _load(load: str, node: int, direction: str, name: str = "") -> Channel:
     return Channel.at(load, node, direction, name=name)
 
 
-def _amplitude(value: float) -> float:
-    """One finite amplitude (N or N m)."""
-    arr = require_finite(value, "amplitude")
-    if arr.ndim != 0:
-        raise FieldError("amplitude", f"must be one number, got shape {arr.shape}")
-    return float(arr)
-
-
 def impulse_hammer(
     node: int,
     direction: str,
@@ -143,32 +158,25 @@ def impulse_hammer(
     The impulse is :math:`2 F w / \\pi`; the default width is one sample, which makes the
     sampled input a single discrete pulse (ERA Markov parameters come out exactly).
     """
-    if width is not None:
-        require_positive(width, "width")
-    return Excitation("impulse", _load(load, node, direction), _amplitude(amplitude), width=width)
+    return Excitation("impulse", _load(load, node, direction), amplitude, width=width)
 
 
 def harmonic_shaker(
     node: int, direction: str, amplitude: float, frequency: float, load: str = "force"
 ) -> Excitation:
     """Sine force (or torque) of ``amplitude`` and ``frequency`` (Hz) from t = 0."""
-    require_positive(frequency, "frequency")
-    return Excitation(
-        "harmonic", _load(load, node, direction), _amplitude(amplitude), frequency=float(frequency)
-    )
+    return Excitation("harmonic", _load(load, node, direction), amplitude, frequency=frequency)
 
 
 def random_force(node: int, direction: str, rms: float = 1.0, load: str = "force") -> Excitation:
     """White Gaussian force (or torque) of standard deviation ``rms``, held over each sample."""
-    return Excitation("random", _load(load, node, direction), float(require_nonneg(rms, "rms")))
+    return Excitation("random", _load(load, node, direction), rms)
 
 
 def torque_history(node: int, axis: str, values: npt.ArrayLike) -> Excitation:
     """User torque history (e.g. a reaction wheel), N m, one value per sample (zero after)."""
-    vals = np.asarray(values, dtype=float)
-    if vals.ndim != 1 or vals.size == 0 or not np.all(np.isfinite(vals)):
-        raise FieldError("values", "must be a finite, non-empty 1-D array of torque samples")
-    return Excitation("history", _load("torque", node, axis), 1.0, values=vals)
+    samples = require_numeric(values, "values", "vector")  # the field's type; shape checked there
+    return Excitation("history", _load("torque", node, axis), 1.0, values=samples)
 
 
 def _located(chan: Channel) -> tuple[int, str]:

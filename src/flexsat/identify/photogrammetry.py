@@ -54,7 +54,14 @@ import numpy.typing as npt
 from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
-from flexsat.input_checks import FieldError, require_finite, require_numeric, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_finite,
+    require_numeric,
+    require_positive,
+    require_positive_scalar,
+    require_scalar,
+)
 from flexsat.units import FloatArray
 
 __all__ = [
@@ -229,20 +236,20 @@ class Camera:
         if self.f is not None:
             if self.fx is not None or self.fy is not None:
                 raise FieldError("f", "give either f (square pixels) or fx and fy, not both")
-            f = float(require_positive(self.f, "f"))
+            f = require_positive_scalar(self.f, "f")
             fx = fy = f
         else:
             if self.fx is None or self.fy is None:
                 raise FieldError("f", "a focal length is required (f, or both fx and fy)")
-            fx = float(require_positive(self.fx, "fx"))
-            fy = float(require_positive(self.fy, "fy"))
+            fx = require_positive_scalar(self.fx, "fx")
+            fy = require_positive_scalar(self.fy, "fy")
         object.__setattr__(self, "position", tuple(float(v) for v in pos))
         object.__setattr__(self, "angles", tuple(float(v) for v in ang))
         object.__setattr__(self, "f", None)
         object.__setattr__(self, "fx", fx)
         object.__setattr__(self, "fy", fy)
         for name in ("x0", "y0", "k1", "k2", "p1", "p2"):
-            object.__setattr__(self, name, float(require_finite(getattr(self, name), name)))
+            object.__setattr__(self, name, require_scalar(getattr(self, name), name))
 
     @property
     def matrix(self) -> FloatArray:
@@ -352,7 +359,7 @@ def simulate_centroids(
     if size.size not in (1, 2):
         raise FieldError("pixel_size", f"must be a scalar or (sx, sy), got {size.size} values")
     size = np.broadcast_to(size, (2,))
-    noise = float(require_finite(noise_px, "noise_px"))
+    noise = require_scalar(noise_px, "noise_px")
     if noise < 0:
         raise FieldError("noise_px", f"must be >= 0, got {noise_px!r}")
     rng = np.random.default_rng(seed)
@@ -534,7 +541,7 @@ def calibrate(
             f"for {m_cam} cameras and {n_pts} targets, got {obs.shape}",
         )
     free = _free_indices(free)
-    sig = float(require_positive(sigma, "sigma"))
+    sig = require_positive_scalar(sigma, "sigma")
     seen = np.isfinite(obs[..., 0])  # (M, N)
     _check_visibility(seen, target_sigma is not None, len(free))
 
@@ -761,7 +768,7 @@ def _camera_prior(
                 raise FieldError(
                     "camera_sigma", f"{name!r} is not a free parameter ({', '.join(free)})"
                 )
-            out[j * len(free) + free.index(name)] = float(require_positive(value, "camera_sigma"))
+            out[j * len(free) + free.index(name)] = require_positive_scalar(value, "camera_sigma")
     return out
 
 
@@ -799,8 +806,8 @@ def _check_datum(datum: Sequence[int], targets: FloatArray, n_pts: int) -> tuple
 def _check_scale(scale: Sequence[float], n_pts: int) -> tuple[int, int, float, float]:
     try:
         si, sj = int(scale[0]), int(scale[1])
-        sd = float(require_positive(scale[2], "scale distance"))
-        ssig = float(require_positive(scale[3], "scale sigma")) if len(scale) > 3 else 1e-6 * sd
+        sd = require_positive_scalar(scale[2], "scale distance")
+        ssig = require_positive_scalar(scale[3], "scale sigma") if len(scale) > 3 else 1e-6 * sd
     except (TypeError, IndexError):
         raise FieldError("scale", f"must be (i, j, distance[, sigma]), got {scale!r}") from None
     if si == sj or not (0 <= si < n_pts and 0 <= sj < n_pts):

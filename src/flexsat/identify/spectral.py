@@ -40,9 +40,17 @@ import numpy.typing as npt
 from scipy import signal
 from scipy.linalg import expm
 
+from flexsat import limits
 from flexsat.identify.excitation import sensor_matrices
 from flexsat.identify.measurements import Channel, Measurement
-from flexsat.input_checks import FieldError, require_count, require_finite, require_positive
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_numeric,
+    require_positive_scalar,
+    require_scalar,
+)
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
@@ -74,8 +82,31 @@ class FRFEstimate:
     segments: int
 
 
+def _window(window: str | tuple[str, float] | npt.ArrayLike, n: int) -> FloatArray:
+    """The Welch window of ``n`` samples: a scipy window name, a (name, parameter) tuple or
+    ``n`` finite weights."""
+    if isinstance(window, (str, tuple)):
+        try:
+            return np.asarray(signal.get_window(window, n, fftbins=True), dtype=float)
+        except (TypeError, ValueError) as error:
+            raise FieldError(
+                "window",
+                f"must be a scipy window name (e.g. 'hann'), a (name, parameter) tuple or "
+                f"{n} weights, got {window!r} ({error})",
+            ) from None
+    weights = require_numeric(window, "window", "vector")
+    if weights.shape != (n,) or not np.any(weights != 0):
+        raise FieldError(
+            "window", f"weights must be {n} numbers (one per segment sample), not all zero"
+        )
+    return weights
+
+
 def estimate_frf(
-    measurement: Measurement, segment: int, overlap: float = 0.5, window: str = "hann"
+    measurement: Measurement,
+    segment: int,
+    overlap: float = 0.5,
+    window: str | tuple[str, float] | npt.ArrayLike = "hann",
 ) -> FRFEstimate:
     """H1 estimate of the FRFs of a time-domain test with recorded inputs.
 
@@ -87,8 +118,9 @@ def estimate_frf(
         Welch segment length, samples (frequency resolution ``sample_rate / segment``).
     overlap : float
         Fraction of a segment shared with the next, in [0, 1).
-    window : str
-        scipy window name.
+    window : str, tuple or array_like
+        scipy window name, (name, parameter) tuple (``("kaiser", 8.0)``) or ``segment``
+        weights.
 
     Returns
     -------
@@ -103,6 +135,8 @@ def estimate_frf(
         record, ``overlap`` outside [0, 1), input spectra that are singular (inputs fully
         correlated or absent in a band).
     """
+    if not isinstance(measurement, Measurement):
+        raise FieldError("measurement", f"must be a Measurement, got {type(measurement).__name__}")
     if measurement.domain != "time" or measurement.inputs is None:
         raise FieldError(
             "measurement", "the H1 estimate needs a time-domain test with recorded inputs"
@@ -111,12 +145,23 @@ def estimate_frf(
     N = measurement.abscissa.size
     if not 4 <= n <= N:
         raise FieldError("segment", f"must be between 4 and the record length {N} samples, got {n}")
-    ov = float(require_finite(overlap, "overlap"))
+    ov = require_scalar(overlap, "overlap")
     if not 0.0 <= ov < 1.0:
         raise FieldError("overlap", f"must be in [0, 1), got {overlap!r}")
+    weights = _window(window, n)
     fs = measurement.sample_rate
     u, y = measurement.inputs, measurement.outputs
-    kw = dict(fs=fs, nperseg=n, noverlap=int(ov * n), window=window, detrend=False)
+    step = n - int(ov * n)
+    segments = (N - n) // step + 1
+    if segments <= u.shape[0]:
+        # n_d - r degrees of freedom of the random error (module docstring); with fewer
+        # segments than inputs G_uu is singular at every frequency
+        raise FieldError(
+            "segment",
+            f"{n} samples give {segments} Welch segments for {u.shape[0]} inputs; the H1 "
+            "estimate needs more segments than inputs (a shorter segment or a longer record)",
+        )
+    kw = dict(fs=fs, nperseg=n, noverlap=int(ov * n), window=weights, detrend=False)
     f, _ = signal.csd(u[0], u[0], **kw)
     keep = f > 0
     f = f[keep]
@@ -144,13 +189,9 @@ def estimate_frf(
     # E|Y_i|^2 explained by the inputs: sum_ab conj(H_ia) Guu[a, b] H_ib
     explained = np.einsum("iaf,fab,ibf->fi", H.conj(), Guu, H).real
     coherence = (explained / np.where(Gyy > 0, Gyy, np.inf)).T
-    step = n - int(ov * n)
-    segments = (N - n) // step + 1
     conditioned = np.real(np.diagonal(np.linalg.inv(Guu), axis1=1, axis2=2))  # (F, r)
     unexplained = np.clip(Gyy - explained, 0.0, None)  # (F, q)
-    std = np.sqrt(
-        unexplained.T[:, None, :] * conditioned.T[None, :, :] / (2.0 * max(segments - r, 1))
-    )
+    std = np.sqrt(unexplained.T[:, None, :] * conditioned.T[None, :, :] / (2.0 * (segments - r)))
     frf = Measurement(
         f,
         H,
@@ -158,7 +199,12 @@ def estimate_frf(
         None,
         measurement.input_channels,
         "frequency",
-        attrs={"estimator": "H1", "segment": n, "overlap": ov, "window": window},
+        attrs={
+            "estimator": "H1",
+            "segment": n,
+            "overlap": ov,
+            "window": window if isinstance(window, (str, tuple)) else "weights",
+        },
     )
     return FRFEstimate(frf, coherence, std, segments)
 
@@ -177,17 +223,56 @@ def frequency_response(
     ``sample_rate`` (Hz): the zero-order-hold equivalent seen by a sampled test with held inputs
     (module docstring); without: the continuous FRF.
     """
-    f = require_finite(frequencies_hz, "frequencies_hz").ravel()
-    A, B, C, D = sensor_matrices(modal_model, list(sensors), list(inputs))
-    eye = np.eye(A.shape[0])
+    from flexsat.structures.modal_model import ModalModel  # the FE package: on first use
+
+    if not isinstance(modal_model, ModalModel):
+        raise FieldError("modal_model", f"must be a ModalModel, got {type(modal_model).__name__}")
+    f = require_finite(frequencies_hz, "frequencies_hz")
+    if f.ndim > 1 or f.size == 0 or np.any(f < 0):
+        raise FieldError(
+            "frequencies_hz", f"must be a non-empty vector of values >= 0 Hz, got shape {f.shape}"
+        )
+    f = f.ravel()
+    channels = {}
+    for name, given in (("sensors", sensors), ("inputs", inputs)):
+        if not isinstance(given, Sequence) or isinstance(given, (str, bytes)) or not given:
+            raise FieldError(name, f"must be a non-empty list of Channels, got {given!r}")
+        for i, chan in enumerate(given):
+            if not isinstance(chan, Channel) or chan.kind is None:
+                raise FieldError(
+                    f"{name}[{i}]", f"must be a Channel located on the structure, got {chan!r}"
+                )
+        channels[name] = list(given)
+    try:
+        A, B, C, D = sensor_matrices(modal_model, channels["sensors"], channels["inputs"])
+    except FieldError as error:
+        # the model refuses a node or direction: say which list holds it
+        raise FieldError(f"sensors or inputs: {error.field}", error.rule) from None
+    ns = A.shape[0]
+    # the batched solve holds one complex ns x ns matrix per frequency
+    limits.check_memory(16 * f.size * ns * (ns + B.shape[1]), "frequencies_hz", "the model FRFs")
+    eye = np.eye(ns)
     if sample_rate is None:
         z, G, Bz = 2j * np.pi * f, A, B
     else:
-        dt = 1.0 / float(require_positive(sample_rate, "sample_rate"))
-        ns, r = B.shape
+        dt = 1.0 / require_positive_scalar(sample_rate, "sample_rate")
+        r = B.shape[1]
         aug = np.zeros((ns + r, ns + r))
         aug[:ns, :ns], aug[:ns, ns:] = A * dt, B * dt
         E = expm(aug)
+        if not np.all(np.isfinite(E)):
+            raise FieldError(
+                "sample_rate",
+                f"{sample_rate!r} Hz is too low for the model: the zero-order-hold transition "
+                "over one sample overflows",
+            )
         z, G, Bz = np.exp(2j * np.pi * f * dt), E[:ns, :ns], E[:ns, ns:]
-    X = np.linalg.solve(z[:, None, None] * eye - G[None], np.broadcast_to(Bz, (f.size,) + Bz.shape))
+    try:
+        X = np.linalg.solve(
+            z[:, None, None] * eye - G[None], np.broadcast_to(Bz, (f.size,) + Bz.shape)
+        )
+    except np.linalg.LinAlgError:
+        raise FieldError(
+            "frequencies_hz", "a frequency is a pole of the model (an undamped resonance)"
+        ) from None
     return np.transpose(C @ X + D, (1, 2, 0))

@@ -64,7 +64,7 @@ to a few thousand dofs).  Errors are ``ValueError`` naming the field.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, TypeAlias, cast
 
@@ -72,8 +72,16 @@ import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
 
+from flexsat import limits
 from flexsat.analysis.sensitivity import modal_derivatives
-from flexsat.input_checks import FieldError, require_count, require_finite, require_numeric
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_numeric,
+    require_scalar,
+)
 from flexsat.structures.modal_solve import Matrix
 from flexsat.units import FloatArray
 
@@ -89,6 +97,7 @@ __all__ = [
     "identify_damping",
     "update_model",
     "damped_eigenvalues",
+    "check_iterations",
 ]
 
 IntArray: TypeAlias = npt.NDArray[np.intp]
@@ -109,8 +118,8 @@ def _array_like(A: Matrix) -> npt.ArrayLike:
 
 def _dense(A: Matrix, field_name: str, n: int | None = None) -> FloatArray:
     A = require_numeric(_array_like(A), field_name, "matrix")
-    if A.ndim != 2 or A.shape[0] != A.shape[1]:
-        raise FieldError(field_name, f"must be a square matrix, got shape {A.shape}")
+    if A.ndim != 2 or A.shape[0] != A.shape[1] or A.size == 0:
+        raise FieldError(field_name, f"must be a non-empty square matrix, got shape {A.shape}")
     if n is not None and A.shape[0] != n:
         raise FieldError(field_name, f"must be {n}x{n} like the other blocks, got {A.shape}")
     if np.abs(A - A.T).max() > 1e-9 * max(np.abs(A).max(), 1e-300):
@@ -118,12 +127,104 @@ def _dense(A: Matrix, field_name: str, n: int | None = None) -> FloatArray:
     return (A + A.T) / 2.0
 
 
-def _blocks(blocks: Sequence[Matrix] | None, name: str, n: int) -> list[FloatArray]:
+def _block_list(blocks: object, name: str) -> list[Matrix]:
+    """``blocks`` as a list of the matrices it holds (unchecked); None is no block."""
     if blocks is None:
         return []
-    if sp.issparse(blocks) or (isinstance(blocks, np.ndarray) and blocks.ndim == 2):
+    if sp.issparse(blocks) or isinstance(blocks, (np.ndarray, str, bytes)):
+        # an array is one matrix (or a stack), not the list of one matrix per substructure
         raise FieldError(name, "must be a list of matrices (one per substructure)")
-    return [_dense(B, f"{name}[{k}]", n) for k, B in enumerate(blocks)]
+    if not isinstance(blocks, Sequence):
+        raise FieldError(
+            name, f"must be a list of matrices (one per substructure), got {type(blocks).__name__}"
+        )
+    return list(blocks)
+
+
+def _blocks(blocks: object, name: str, n: int | None = None) -> list[FloatArray]:
+    """The blocks checked: symmetric, all n x n (the first one's size when ``n`` is None)."""
+    out: list[FloatArray] = []
+    for k, B in enumerate(_block_list(blocks, name)):
+        out.append(_dense(B, f"{name}[{k}]", n))
+        n = out[0].shape[0]
+    return out
+
+
+def _shape_matrix(shapes: npt.ArrayLike, field_name: str, n: int | None = None) -> FloatArray:
+    """Mode shapes (n, m) (a vector is one shape), each with a nonzero entry."""
+    phi = require_numeric(shapes, field_name, "matrix")
+    if phi.ndim == 1:
+        phi = phi[:, None]
+    if phi.ndim != 2 or phi.size == 0:
+        raise FieldError(field_name, f"must be a (dofs, modes) matrix, got shape {phi.shape}")
+    if n is not None and phi.shape[0] != n:
+        raise FieldError(field_name, f"must have one row per dof ({n}), got {phi.shape[0]}")
+    if np.any(np.all(phi == 0, axis=0)):
+        raise FieldError(field_name, "each shape must have a nonzero entry")
+    return phi
+
+
+def _model(model: object) -> SubstructureModel:
+    """``model`` when it is a :class:`SubstructureModel`."""
+    if not isinstance(model, SubstructureModel):
+        raise FieldError("model", f"must be a SubstructureModel, got {type(model).__name__}")
+    return model
+
+
+def _indices(value: object, count: int, field_name: str) -> IntArray:
+    """Indices of blocks held fixed: integers in [0, count) (none: an empty list)."""
+    if isinstance(value, (str, bytes)):
+        raise FieldError(field_name, f"must be indices in [0, {count}), got {value!r}")
+    try:
+        idx = np.asarray(value).ravel()
+    except ValueError:
+        raise FieldError(field_name, f"must be indices in [0, {count})") from None
+    if idx.size and (idx.dtype.kind not in "iu" or idx.min() < 0 or idx.max() >= count):
+        raise FieldError(field_name, f"must be integer indices in [0, {count}), got {value!r}")
+    return idx.astype(int)
+
+
+def _mode_indices(value: npt.ArrayLike | None, count: int, n_modes: int) -> IntArray | None:
+    """``mode_indices``: ``count`` distinct model mode numbers in [0, n_modes), or None."""
+    if value is None:
+        return None
+    idx = _indices(value, n_modes, "mode_indices")
+    if idx.size != count:
+        raise FieldError(
+            "mode_indices", f"must give one model mode per measured mode ({count}), got {idx.size}"
+        )
+    if np.unique(idx).size != idx.size:
+        raise FieldError("mode_indices", "each model mode at most once")
+    return idx
+
+
+def _scalings(
+    model: SubstructureModel, values: npt.ArrayLike | None, count: int, name: str
+) -> FloatArray:
+    """Start scalings of stiffness or mass: ``count`` numbers > 0 (default 1), a copy."""
+    v = model._params(values, count, name).copy()
+    if np.any(v <= 0):
+        raise FieldError(
+            name, f"must be > 0 (a substructure's stiffness or mass is scaled), got {v}"
+        )
+    return v
+
+
+def check_iterations(n_iter: int, tol: float) -> tuple[int, float]:
+    """``n_iter`` (a count up to :data:`flexsat.limits.MAX_FIT_ITERATIONS`) and ``tol`` (>= 0)
+    of an iterated fit, checked."""
+    count = require_count(n_iter, "n_iter")
+    limits.check_count(
+        count,
+        limits.MAX_FIT_ITERATIONS,
+        "n_iter",
+        "passes asked",
+        "a fit that has not converged by then will not (fix parameters or add data)",
+    )
+    step = require_scalar(tol, "tol")
+    if step < 0:
+        raise FieldError("tol", f"must be >= 0, got {tol!r}")
+    return count, step
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,11 +252,12 @@ class SubstructureModel:
     names: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        if not self.K_blocks and self.K0 is None:
+        stiffness = _block_list(self.K_blocks, "K_blocks")
+        if not stiffness and self.K0 is None:
             raise FieldError("K_blocks", "give at least one stiffness block (or K0)")
-        first: Matrix = self.K_blocks[0] if self.K_blocks else self.K0
-        n = np.shape(first)[0]
-        object.__setattr__(self, "K_blocks", _blocks(self.K_blocks, "K_blocks", n))
+        first = _dense(stiffness[0], "K_blocks[0]") if stiffness else _dense(self.K0, "K0")
+        n = first.shape[0]
+        object.__setattr__(self, "K_blocks", _blocks(stiffness, "K_blocks", n))
         object.__setattr__(self, "M_blocks", _blocks(self.M_blocks, "M_blocks", n))
         object.__setattr__(self, "C_blocks", _blocks(self.C_blocks, "C_blocks", n))
         if not self.M_blocks and self.M0 is None:
@@ -165,6 +267,10 @@ class SubstructureModel:
             object.__setattr__(
                 self, name, np.zeros((n, n)) if value is None else _dense(value, name, n)
             )
+        if isinstance(self.names, (str, bytes)) or not isinstance(self.names, Sequence):
+            raise FieldError("names", f"must be a list of labels, got {self.names!r}")
+        if not all(isinstance(label, str) for label in self.names):
+            raise FieldError("names", f"must be strings, got {list(self.names)!r}")
         object.__setattr__(self, "names", tuple(self.names))
 
     @property
@@ -221,23 +327,18 @@ class SubstructureModel:
         from flexsat.structures.modal_solve import solve_modes  # the FE package: on first use
 
         K, M = self.K(p), self.M(q)
+        count = (
+            self.n_dofs if n_modes is None else min(require_count(n_modes, "n_modes"), self.n_dofs)
+        )
         try:
             np.linalg.cholesky(M)
         except np.linalg.LinAlgError:
-            raise ValueError("mass scalings: M(q) is not positive definite") from None
+            raise FieldError("q", "mass scalings: M(q) is not positive definite") from None
         try:
-            return solve_modes(
-                K,
-                M,
-                self.n_dofs
-                if n_modes is None
-                else min(require_count(n_modes, "n_modes"), self.n_dofs),
-            )
+            return solve_modes(K, M, count)
         except ValueError as error:
-            if str(error).startswith("n_modes"):
-                raise
-            raise ValueError(
-                f"stiffness scalings: K(p) is not positive semi-definite ({error})"
+            raise FieldError(
+                "p", f"stiffness scalings: K(p) is not positive semi-definite ({error})"
             ) from None
 
     def scaled(
@@ -288,25 +389,57 @@ def substructures_from_builder(
     (assembly is linear in the factors without preloads) and the fixed parts ``K0 = K(1) -
     sum K_k``: members outside every substructure.
     """
-    n_mass = n_stiffness if n_mass is None else n_mass
+    if not callable(build):
+        raise FieldError("build", f"must be a function of (stiffness, mass) factors, got {build!r}")
+    n_stiffness = require_count(n_stiffness, "n_stiffness")
+    if n_mass is None:
+        n_mass = n_stiffness
+    elif not (limits.is_integral(n_mass) and n_mass >= 0):
+        raise FieldError(
+            "n_mass", f"must be an integer >= 0 (0: the whole mass fixed, in M0), got {n_mass!r}"
+        )
+    n_mass = int(n_mass)
+    # each block is a dense n x n matrix: bounded before the builder runs n_stiffness times
+    limits.check_count(
+        n_stiffness + n_mass,
+        limits.MAX_ELEMENTS,
+        "n_stiffness",
+        "substructures (n_stiffness + n_mass)",
+        "a substructure groups elements, there are at most as many as elements",
+    )
     one_k, one_m = np.ones(n_stiffness), np.ones(n_mass)
-    base = build(one_k, one_m)
-    K1, M1 = _dense(base.K, "build().K"), _dense(base.M, "build().M")
+
+    def assembly(k_factors: FloatArray, m_factors: FloatArray) -> tuple[FloatArray, FloatArray]:
+        built = build(k_factors, m_factors)
+        if not (hasattr(built, "K") and hasattr(built, "M")):
+            raise FieldError(
+                "build",
+                "must return an object with K and M (e.g. an Assembly), got "
+                f"{type(built).__name__}",
+            )
+        K = _dense(built.K, "build().K")
+        return K, _dense(built.M, "build().M", K.shape[0])
+
+    K1, M1 = assembly(one_k, one_m)
+    n = K1.shape[0]
+    limits.check_memory(
+        8 * (n_stiffness + n_mass + 2) * n * n, "n_stiffness", "the substructure blocks"
+    )
     Kb, Mb = [], []
     for k in range(n_stiffness):
         f = one_k.copy()
         f[k] = 2.0
-        Kb.append(_dense(build(f, one_m).K, "build().K") - K1)
+        Kb.append(_dense(assembly(f, one_m)[0], "build().K", n) - K1)
     for k in range(n_mass):
         f = one_m.copy()
         f[k] = 2.0
-        Mb.append(_dense(build(one_k, f).M, "build().M") - M1)
+        Mb.append(_dense(assembly(one_k, f)[1], "build().M", n) - M1)
     K0 = K1 - sum(Kb, np.zeros_like(K1))
     M0 = M1 - sum(Mb, np.zeros_like(M1))
     scale_k, scale_m = np.abs(K1).max(), np.abs(M1).max()
     K0[np.abs(K0) < 1e-12 * scale_k] = 0.0
     M0[np.abs(M0) < 1e-12 * scale_m] = 0.0
-    Cb = [_dense(C, f"C_blocks[{k}]") for k, C in enumerate(C_blocks)]
+    Cb = _blocks(C_blocks, "C_blocks", n)
     return SubstructureModel(Kb, Mb, Cb, K0, M0, names=tuple(names))
 
 
@@ -329,17 +462,18 @@ def modal_energy_distribution(
     -------
     dict with ``kinetic`` and ``strain``: arrays (n_modes, n_substructures), fractions.
     """
-    phi = require_numeric(shapes, "shapes", "matrix")
-    if phi.ndim == 1:
-        phi = phi[:, None]
-    n = phi.shape[0]
-    Kb, Mb = _blocks(K_blocks, "K_blocks", n), _blocks(M_blocks, "M_blocks", n)
-    if not Kb or not Mb:
-        raise ValueError("K_blocks, M_blocks: need at least one block each")
+    Kb = _blocks(K_blocks, "K_blocks")
+    if not Kb:
+        raise FieldError("K_blocks", "give at least one stiffness block")
+    n = Kb[0].shape[0]
+    Mb = _blocks(M_blocks, "M_blocks", n)
+    if not Mb:
+        raise FieldError("M_blocks", "give at least one mass block")
+    phi = _shape_matrix(shapes, "shapes", n)
     ke = np.array([np.einsum("ij,ik,kj->j", phi, Mg, phi) for Mg in Mb]).T
     pe = np.array([np.einsum("ij,ik,kj->j", phi, Kg, phi) for Kg in Kb]).T
     if omegas is not None:
-        w = require_finite(omegas, "omegas", "rad/s").ravel()
+        w = require_nonneg(omegas, "omegas", "rad/s")
         if w.shape != (phi.shape[1],):
             raise FieldError("omegas", f"must have {phi.shape[1]} entries (one per mode)")
         pe = pe / np.where(w > 0, w**2, 1.0)[:, None]
@@ -361,6 +495,10 @@ def _check_frf(frf: FrfElement | Sequence[FrfElement] | None, n: int) -> list[Fr
     entries: Any = frf  # user data, checked item by item
     if isinstance(entries, tuple) and len(entries) == 4 and np.ndim(entries[2]) == 1:
         entries = [entries]
+    if not isinstance(entries, Sequence) or isinstance(entries, (str, bytes)):
+        raise FieldError(
+            "frf", f"must be (output_dof, input_dof, omegas, values) or a list of them, got {frf!r}"
+        )
     out = []
     for i, item in enumerate(entries):
         try:
@@ -410,11 +548,26 @@ def fit_modal_normalization(
     -------
     alpha : (m,), a1 (per FRF element), a2 (per FRF element).
     """
-    psi = np.asarray(shapes, float)
-    w_r = require_finite(omegas, "omegas", "rad/s").ravel()
+    psi = _shape_matrix(shapes, "shapes")
+    w_r = require_finite(omegas, "omegas", "rad/s")
+    if w_r.shape != (psi.shape[1],) or np.any(w_r <= 0):
+        raise FieldError(
+            "omegas", f"must be {psi.shape[1]} values > 0 rad/s (one per shape), got {omegas!r}"
+        )
     items = _check_frf(frf, psi.shape[0])
     if not items:
         raise FieldError("frf", "at least one FRF element is needed")
+    if known_part is not None:
+        if not isinstance(known_part, Sequence) or len(known_part) != len(items):
+            raise FieldError("known_part", f"must be a list of {len(items)} arrays (one per FRF)")
+        known_part = [
+            require_numeric(part, f"known_part[{i}]", "vector") for i, part in enumerate(known_part)
+        ]
+        for i, (part, (*_, h)) in enumerate(zip(known_part, items)):
+            if part.shape != h.shape:
+                raise FieldError(
+                    f"known_part[{i}]", f"must have {h.size} values (one per FRF point)"
+                )
     m, nf = psi.shape[1], len(items)
     n_extra = (int(rigid_body) + int(residual)) * nf
     rows, rhs = [], []
@@ -768,18 +921,20 @@ def identify_undamped(
         through the last pass (shapes counted exact); a standard deviation not given is
         estimated from the residual scatter (zero covariance for an exact fit).
     """
+    model = _model(model)
     P, Q, n = model.n_stiffness, model.n_mass, model.n_dofs
-    wbar = require_finite(measured_frequencies, "measured_frequencies", "rad/s").ravel()
-    if wbar.size == 0 or np.any(wbar <= 0):
+    wbar = require_finite(measured_frequencies, "measured_frequencies", "rad/s")
+    if wbar.ndim > 1 or wbar.size == 0 or np.any(wbar <= 0):
         raise FieldError("measured_frequencies", "must be a non-empty vector of values > 0 rad/s")
+    wbar = wbar.ravel()
     m = wbar.size
     if m > n:
         raise FieldError("measured_frequencies", f"{m} modes but the model has {n} dofs")
+    n_iter, tol = check_iterations(n_iter, tol)
+    mode_indices = _mode_indices(mode_indices, m, n)
     psi_meas = None
     if measured_shapes is not None:
-        psi_meas = require_numeric(measured_shapes, "measured_shapes", "matrix")
-        if psi_meas.ndim == 1:
-            psi_meas = psi_meas[:, None]
+        psi_meas = _shape_matrix(measured_shapes, "measured_shapes")
         if psi_meas.shape != (n, m):
             raise FieldError("measured_shapes", f"must have shape ({n}, {m}), got {psi_meas.shape}")
     items = _check_frf(frf, n)
@@ -792,22 +947,25 @@ def identify_undamped(
         )
     if off_diagonal is None:
         off_diagonal = psi_meas is not None
-    p = model._params(p0, P, "p0").copy()
-    q = model._params(q0, Q, "q0").copy()
+    p = _scalings(model, p0, P, "p0")
+    q = _scalings(model, q0, Q, "q0")
     q_prior = q.copy()
-    free_p = np.setdiff1d(np.arange(P), np.asarray(fixed_stiffness, int))
-    free_q = (
-        np.setdiff1d(np.arange(Q), np.asarray(fixed_mass, int))
-        if identify_mass
-        else np.array([], int)
-    )
+    free_p = np.setdiff1d(np.arange(P), _indices(fixed_stiffness, P, "fixed_stiffness"))
+    held_q = _indices(fixed_mass, Q, "fixed_mass")
+    free_q = np.setdiff1d(np.arange(Q), held_q) if identify_mass else np.array([], int)
     if free_p.size == 0 and free_q.size == 0:
-        raise ValueError("fixed_stiffness, fixed_mass: every parameter is fixed")
+        raise FieldError(
+            "fixed_stiffness",
+            "every parameter is fixed (with fixed_mass, or the mass held without an FRF)",
+        )
     sig_w = None
     if frequency_sigma is not None:
-        sig_w = np.broadcast_to(
-            require_finite(frequency_sigma, "frequency_sigma", "rad/s"), (m,)
-        ).astype(float)
+        sig = require_finite(frequency_sigma, "frequency_sigma", "rad/s")
+        if sig.ndim > 1 or (sig.ndim == 1 and sig.size != m):
+            raise FieldError(
+                "frequency_sigma", f"must be a scalar or {m} values (one per mode), got {sig.shape}"
+            )
+        sig_w = np.broadcast_to(sig, (m,)).astype(float)
         if np.any(sig_w <= 0):
             raise FieldError("frequency_sigma", "must be > 0")
     for name, value in (("frf_sigma", frf_sigma), ("mass_prior_sigma", mass_prior_sigma)):
@@ -981,14 +1139,25 @@ class DampingIdentification:
 
 def damped_eigenvalues(K: Matrix, M: Matrix, C: Matrix, n_modes: int | None = None) -> ComplexArray:
     """Eigenvalues of ``M x'' + C x' + K x = 0`` with positive imaginary part, by frequency."""
-    Kd, Md, Cd = (np.asarray(_array_like(A), float) for A in (K, M, C))
+    Kd = require_numeric(_array_like(K), "K", "matrix")
+    if Kd.ndim != 2 or Kd.shape[0] != Kd.shape[1] or Kd.size == 0:
+        raise FieldError("K", f"must be a non-empty square matrix, got shape {Kd.shape}")
     n = Kd.shape[0]
+    Md, Cd = (require_numeric(_array_like(A), name, "matrix") for A, name in ((M, "M"), (C, "C")))
+    for A, name in ((Md, "M"), (Cd, "C")):
+        if A.shape != (n, n):
+            raise FieldError(name, f"must be {n}x{n} like K, got shape {A.shape}")
+    try:
+        np.linalg.cholesky((Md + Md.T) / 2.0)
+    except np.linalg.LinAlgError:
+        raise FieldError("M", "must be positive definite (a mass on every dof)") from None
+    count = None if n_modes is None else require_count(n_modes, "n_modes")
     Minv = np.linalg.inv(Md)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ Kd, -Minv @ Cd]])
-    lam = np.linalg.eigvals(A)
+    lam = np.linalg.eigvals(A).astype(complex)
     lam = lam[lam.imag > 0]
     lam = lam[np.argsort(lam.imag)]
-    return lam if n_modes is None else lam[:n_modes]
+    return lam if count is None else lam[:count]
 
 
 def identify_damping(
@@ -1021,6 +1190,7 @@ def identify_damping(
         contradict it.
     fixed : damping blocks held at ``r0`` (default 1).
     """
+    model = _model(model)
     R = model.n_damping
     if R == 0:
         raise FieldError("C_blocks", "the model has no damping blocks")
@@ -1039,7 +1209,7 @@ def identify_damping(
         )
     m = sigma.size
     r = model._params(r0, R, "r0").copy()
-    free = np.setdiff1d(np.arange(R), np.asarray(fixed, int))
+    free = np.setdiff1d(np.arange(R), _indices(fixed, R, "fixed"))
     if free.size == 0:
         raise FieldError("fixed", "every damping parameter is fixed")
     if free.size > m:
@@ -1048,15 +1218,12 @@ def identify_damping(
             f"{m} eigenvalues for {free.size} damping "
             "parameters: more parameters than data (Att. 7 needs m > R)",
         )
-    w0, phi = model.modes(p, q)
-    if mode_indices is not None:
-        idx = np.asarray(mode_indices, int).ravel()
-        if idx.size != m or idx.min() < 0 or idx.max() >= phi.shape[1]:
-            raise FieldError("mode_indices", "must give one model mode per measured eigenvalue")
-        if np.unique(idx).size != m:
-            raise FieldError("mode_indices", "each model mode at most once")
+    w0, phi = model.modes(
+        _scalings(model, p, model.n_stiffness, "p"), _scalings(model, q, model.n_mass, "q")
+    )
+    given = _mode_indices(mode_indices, m, phi.shape[1])
     if np.all(lam.imag == 0):  # real parts carry no frequency: paired in order
-        idx = np.arange(m) if mode_indices is None else idx
+        idx = np.arange(m) if given is None else given
         if idx.max() >= phi.shape[1]:
             raise FieldError("mode_indices", "must give one model mode per measured eigenvalue")
     elif np.any(lam.imag == 0):
@@ -1067,7 +1234,7 @@ def identify_damping(
             "sigma (paired in order)",
         )
     else:
-        idx = _match_modes(w0, np.abs(lam), None if mode_indices is None else idx)
+        idx = _match_modes(w0, np.abs(lam), given)
     phi = phi[:, idx]
     Cfix = model.C(r) - sum((r[g] * model.C_blocks[g] for g in free), np.zeros_like(model.C0))
     A = np.array([[phi[:, i] @ model.C_blocks[g] @ phi[:, i] for g in free] for i in range(m)])
@@ -1175,6 +1342,8 @@ def update_model(
 
     ``kwargs`` go to :func:`identify_undamped`, ``damping_kwargs`` to :func:`identify_damping`.
     """
+    if damping_kwargs is not None and not isinstance(damping_kwargs, Mapping):
+        raise FieldError("damping_kwargs", f"must be a mapping, got {damping_kwargs!r}")
     und = identify_undamped(model, measured_frequencies, **kwargs)
     dmp = None
     R = model.n_damping

@@ -17,17 +17,66 @@ stop). ``results.nc``: ``attitude`` (rad), ``cmg_momentum`` (N m s), ``torque``,
 from __future__ import annotations
 
 import html
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from flexsat.report.page import format_metric, html_table
 
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from flexsat.cases.space_station_cmg import StationRun
+    from flexsat.dynamics.cmg import GimbalRun
+    from flexsat.units import FloatArray
+
+
+class CmgRunReport(Protocol):
+    """What this report reads of one run of a ``kind: cmg`` result
+    (:class:`flexsat.scenarios.cmg.CmgRun`)."""
+
+    @property
+    def label(self) -> str: ...
+    @property
+    def gimbals(self) -> GimbalRun: ...
+    @property
+    def sigma0(self) -> FloatArray: ...
+    @property
+    def direction(self) -> FloatArray | None: ...
+    @property
+    def outcome(self) -> str: ...
+
+
+class CmgReport(Protocol):
+    """What this report reads of a ``kind: cmg`` result
+    (:class:`flexsat.scenarios.cmg.CmgResult`)."""
+
+    @property
+    def runs(self) -> Sequence[CmgRunReport]: ...
+    @property
+    def table(self) -> Sequence[tuple[str, str, float, float, str]]: ...
+    @property
+    def notes(self) -> Sequence[str]: ...
+    def metrics_records(self) -> list[dict[str, Any]]: ...
+
+
+class StationReport(Protocol):
+    """What this report reads of a ``kind: cmg_station`` result
+    (:class:`flexsat.scenarios.cmg.StationResult`)."""
+
+    @property
+    def station(self) -> StationRun: ...
+    @property
+    def notes(self) -> Sequence[str]: ...
+
+
 _FT_LB_S = 1.3558179483314006  # N m s per ft-lb-s: the station's plots are in the paper's units
 
 
-def _gimbal_figure(ds, path: Path, time_of) -> None:
+def _gimbal_figure(ds: xr.Dataset, path: Path, time_of: Callable[[Any], FloatArray]) -> None:
     runs = ds["run"].values
     fig = Figure(figsize=(9, 2.6 * len(runs) + 0.6), layout="constrained")
     axes = np.atleast_2d(fig.subplots(len(runs), 2, squeeze=False))
@@ -49,7 +98,7 @@ def _gimbal_figure(ds, path: Path, time_of) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _envelope_figure(result, ds, path: Path) -> None:
+def _envelope_figure(result: CmgReport, ds: xr.Dataset, path: Path) -> None:
     fig = Figure(figsize=(8, 4), layout="constrained")
     ax = fig.add_subplot()
     ax.set_title("momentum along the demand against the envelope along it (dashed)")
@@ -66,7 +115,7 @@ def _envelope_figure(result, ds, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _station_figure(ds, path: Path) -> None:
+def _station_figure(ds: xr.Dataset, path: Path) -> None:
     fig = Figure(figsize=(8, 8), layout="constrained")
     a, b, c = fig.subplots(3, 1, sharex=True)
     fig.suptitle("space station: attitude loop (LQR, Eq. 8–12)")
@@ -93,7 +142,7 @@ def _station_figure(ds, path: Path) -> None:
     fig.savefig(path, dpi=100)
 
 
-def _metrics_html(records) -> str:
+def _metrics_html(records: list[dict[str, Any]]) -> str:
     keys = [k for k in records[0] if k != "run"]
     rows = [
         [r["run"]]
@@ -106,7 +155,7 @@ def _metrics_html(records) -> str:
     return html_table(["run"] + keys, rows)
 
 
-def draw_cmg_figures(result, ds, folder: Path) -> list[str]:
+def draw_cmg_figures(result: CmgReport, ds: xr.Dataset, folder: Path) -> list[str]:
     """The gimbal histories and the momentum envelope of a ``kind: cmg`` result."""
     figures = ["gimbals.png", "envelope.png"]
     _gimbal_figure(ds, folder / figures[0], lambda run: ds["time"].sel(run=run).values)
@@ -114,7 +163,7 @@ def draw_cmg_figures(result, ds, folder: Path) -> list[str]:
     return figures
 
 
-def cmg_sections(result, records: list[dict], figures: list[str]) -> str:
+def cmg_sections(result: CmgReport, records: list[dict[str, Any]], figures: list[str]) -> str:
     """The runs, metrics, V1–V8 table and figures of a ``kind: cmg`` result."""
     v_rows = [(v, q, f"{p:g}", f"{c:.5g}", u) for v, q, p, c, u in result.table]
     outcomes = [
@@ -135,7 +184,7 @@ def cmg_sections(result, records: list[dict], figures: list[str]) -> str:
     return body
 
 
-def draw_station_figures(ds, folder: Path) -> list[str]:
+def draw_station_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     """The attitude loop and the gimbal histories of a ``kind: cmg_station`` result."""
     figures = ["station.png", "gimbals.png"]
     _station_figure(ds, folder / figures[0])
@@ -143,7 +192,9 @@ def draw_station_figures(ds, folder: Path) -> list[str]:
     return figures
 
 
-def station_sections(result, records: list[dict], figures: list[str]) -> str:
+def station_sections(
+    result: StationReport, records: list[dict[str, Any]], figures: list[str]
+) -> str:
     """The CMG loops (V9), the attitude loop's poles and the figures of a ``kind:
     cmg_station`` result."""
     images = "".join(f'<figure><img src="{f}" alt="{f}"></figure>' for f in figures)

@@ -36,28 +36,35 @@ nearest to the direction of the attitude loop's peak momentum.
 
 from __future__ import annotations
 
-from collections.abc import Generator
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 import numpy as np
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.dynamics.space_station import FT_LB as _FT_LB
 from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
 from flexsat.scenarios.errors import ScenarioError, item_path, locate
-from flexsat.scenarios.fields import Document, SchemaSection, check_unique_labels, count, quantity
+from flexsat.scenarios.fields import (
+    Document,
+    SchemaSection,
+    check_unique_labels,
+    in_unit,
+    integer_in,
+)
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 
 if TYPE_CHECKING:
     import xarray as xr
 
-    from flexsat.cases.space_station_cmg import StationDesign
+    from flexsat.cases.space_station_cmg import StationDesign, StationRun
     from flexsat.dynamics.cmg import GimbalRun
     from flexsat.dynamics.space_station import StationData
+    from flexsat.units import FloatArray
 
 SOURCE = (
     "S. R. Vadali, H.-S. Oh, S. R. Walker, 'Preferred Gimbal Angles for Single Gimbal "
@@ -70,7 +77,7 @@ ALTERNATE_DEG = (45.0, -45.0, 45.0, -45.0)
 N_OUT = 401
 
 
-def _angles(value, field):
+def _angles(value: object, field: str) -> str | list[float]:
     from flexsat.units import to_si_array
 
     if isinstance(value, str):
@@ -100,7 +107,7 @@ MAX_DEMAND = 100.0
 MAX_DURATION = 3600.0
 
 
-def _vector3(value, field):
+def _vector3(value: object, field: str) -> list[float]:
     if isinstance(value, list) and any(isinstance(v, bool) for v in value):
         raise FieldError(field, f"must be three finite numbers, got {value!r}")
     try:
@@ -120,16 +127,16 @@ def _vector3(value, field):
 class Cluster(SchemaSection):
     """The SGCMG pyramid and its steering."""
 
-    skew: quantity("rad", positive=True) = float(np.deg2rad(54.74))
-    n_units: count(3, 12) = 4
+    skew: Annotated[float, in_unit("rad", positive=True)] = float(np.deg2rad(54.74))
+    n_units: Annotated[int, integer_in(3, 12)] = 4
     steering: Literal["pi", "sr"] = "pi"
     alpha: float = Field(1e-3, gt=0.0, allow_inf_nan=False)
     threshold: float = Field(1e-6, gt=0.0, allow_inf_nan=False)
-    gimbal_rate_limit: quantity("rad/s", optional=True, positive=True) = None
+    gimbal_rate_limit: Annotated[float | None, in_unit("rad/s", positive=True)] = None
 
     @field_validator("skew")
     @classmethod
-    def _skew(cls, value):
+    def _skew(cls, value: float) -> float:
         if not value < np.pi / 2:
             raise FieldError("skew", f"must lie in (0, 90°), got {np.rad2deg(value):.6g}°")
         return value
@@ -140,59 +147,60 @@ class HarmonicDemand(SchemaSection):
 
     constant: list[float]
     amplitude: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.0])
-    frequency: quantity("Hz") = 0.0
+    frequency: Annotated[float, in_unit("Hz")] = 0.0
 
     @field_validator("frequency")
     @classmethod
-    def _frequency(cls, value):
+    def _frequency(cls, value: float) -> float:
         if not 0.0 <= value <= 100.0:
             raise FieldError("frequency", f"must lie in [0, 100] Hz, got {value!r}")
         return value
 
     @field_validator("constant", "amplitude", mode="before")
     @classmethod
-    def _three(cls, value, info):
-        return _vector3(value, info.field_name)
+    def _three(cls, value: object, info: ValidationInfo) -> list[float]:
+        return _vector3(value, info.field_name or "")
 
 
 class NullMotion(SchemaSection):
-    target: str | list = "preferred"
-    gain: quantity("1/s", positive=True) = 1.0
+    # a name or angles given as numbers or unit strings, read by _angles
+    target: str | list[Any] = "preferred"
+    gain: Annotated[float, in_unit("1/s", positive=True)] = 1.0
 
     @field_validator("target")
     @classmethod
-    def _target(cls, value):
+    def _target(cls, value: object) -> str | list[float]:
         return _angles(value, "target")
 
 
 class CmgRunSpec(SchemaSection):
     label: str
-    initial: str | list = "zero"
-    duration: quantity("s", positive=True)
+    initial: str | list[Any] = "zero"
+    duration: Annotated[float, in_unit("s", positive=True)]
     demand: list[float] | HarmonicDemand | None = None
 
     @field_validator("duration")
     @classmethod
-    def _duration(cls, value):
+    def _duration(cls, value: float) -> float:
         if value > MAX_DURATION:
             raise FieldError("duration", f"at most {MAX_DURATION:g} s, got {value!r}")
         return value
 
     null_motion: NullMotion | None = None
-    reorient_to: str | list | None = None
+    reorient_to: str | list[Any] | None = None
 
     @field_validator("initial", "reorient_to")
     @classmethod
-    def _initial(cls, value, info):
-        return None if value is None else _angles(value, info.field_name)
+    def _initial(cls, value: object, info: ValidationInfo) -> str | list[float] | None:
+        return None if value is None else _angles(value, info.field_name or "")
 
     @field_validator("demand", mode="before")
     @classmethod
-    def _demand(cls, value):
+    def _demand(cls, value: object) -> object:
         return _vector3(value, "demand") if isinstance(value, list) else value
 
     @model_validator(mode="after")
-    def _one_law(self):
+    def _one_law(self) -> Self:
         if (self.demand is None) == (self.reorient_to is None):
             raise FieldError(
                 "demand", "give a torque demand or reorient_to (null motion alone), one of them"
@@ -222,7 +230,7 @@ class CmgScenario(Document):
     runs: list[CmgRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
 
     @model_validator(mode="after")
-    def _checks(self):
+    def _checks(self) -> Self:
         check_unique_labels(self.runs)
         for run in self.runs:
             for value in (
@@ -245,18 +253,18 @@ class CmgScenario(Document):
 
 
 class StationSection(SchemaSection):
-    inertia: list = Field(
+    inertia: list[Any] = Field(
         default_factory=lambda: ["5.28e6 slug*ft**2", "10.80e6 slug*ft**2", "58.57e6 slug*ft**2"]
     )
-    orbit_rate: quantity("rad/s", positive=True) = 0.0011
-    rotor_momentum: quantity("N*m*s", positive=True) = 3500.0 * _FT_LB
+    orbit_rate: Annotated[float, in_unit("rad/s", positive=True)] = 0.0011
+    rotor_momentum: Annotated[float, in_unit("N*m*s", positive=True)] = 3500.0 * _FT_LB
 
 
 class LqrSection(SchemaSection):
-    attitude: quantity("rad", positive=True) = float(np.deg2rad(1.0))
-    rate: quantity("rad/s", positive=True) = float(np.deg2rad(0.02))
-    momentum: quantity("N*m*s", positive=True) = 2000.0 * _FT_LB
-    momentum_integral: quantity("N*m*s**2", positive=True) = 2e5 * _FT_LB
+    attitude: Annotated[float, in_unit("rad", positive=True)] = float(np.deg2rad(1.0))
+    rate: Annotated[float, in_unit("rad/s", positive=True)] = float(np.deg2rad(0.02))
+    momentum: Annotated[float, in_unit("N*m*s", positive=True)] = 2000.0 * _FT_LB
+    momentum_integral: Annotated[float, in_unit("N*m*s**2", positive=True)] = 2e5 * _FT_LB
     pitch_filters: list[int] = Field(default_factory=lambda: [1, 2])
     roll_yaw_filters: list[int] = Field(default_factory=lambda: [2])
 
@@ -264,17 +272,17 @@ class LqrSection(SchemaSection):
 class StationSimulation(SchemaSection):
     orbits: float = Field(2.0, gt=0.0, le=50.0, allow_inf_nan=False)
     disturbance: Literal["design", "aero_substitute"] = "aero_substitute"
-    initial_attitude: quantity("rad") = float(np.deg2rad(1.0))
+    initial_attitude: Annotated[float, in_unit("rad")] = float(np.deg2rad(1.0))
     threshold: float = Field(1e-6, gt=0.0, allow_inf_nan=False)
 
 
 class StationRunSpec(SchemaSection):
     label: str
-    initial: str | list = "zero"
+    initial: str | list[Any] = "zero"
 
     @field_validator("initial")
     @classmethod
-    def _initial(cls, value):
+    def _initial(cls, value: object) -> str | list[float]:
         value = _angles(value, "initial")
         if isinstance(value, list) and len(value) != 4:
             raise FieldError("initial", f"the station's pyramid has 4 gimbals, got {len(value)}")
@@ -292,7 +300,7 @@ class CmgStationScenario(Document):
     runs: list[StationRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
 
     @model_validator(mode="after")
-    def _checks(self):
+    def _checks(self) -> Self:
         check_unique_labels(self.runs)
         self.build_data()
         return self
@@ -311,7 +319,7 @@ class CmgRun:
     the demand direction (None for a reorientation), peak gimbal rate and the outcome."""
 
     label: str
-    gimbals: object
+    gimbals: GimbalRun
     sigma0: np.ndarray
     direction: np.ndarray | None
     peak_rate: float
@@ -319,7 +327,9 @@ class CmgRun:
     internal: bool | None
 
 
-def _resolve(value, direction, cluster):
+def _resolve(value: str | list[Any], direction: FloatArray | None, cluster: Cluster) -> FloatArray:
+    """The gimbal angles (rad) a run names: given angles, or the zero, alternate or preferred
+    set (the preferred one for the demand ``direction``)."""
     from flexsat.cases import cmg_pyramid
     from flexsat.dynamics import cmg
 
@@ -329,6 +339,8 @@ def _resolve(value, direction, cluster):
         return np.zeros(cluster.n_units)
     if value == "alternate":
         return np.deg2rad(ALTERNATE_DEG)
+    # 'preferred' is refused without a demand direction (CmgRunSpec._one_law)
+    assert direction is not None
     paper = cluster.n_units == 4 and abs(cluster.skew - cmg.SKEW) < 1e-12
     return (
         cmg.preferred_set(direction)
@@ -337,7 +349,9 @@ def _resolve(value, direction, cluster):
     )
 
 
-def _demand_function(demand):
+def _demand_function(demand: list[float] | HarmonicDemand | None) -> Callable[[float], FloatArray]:
+    """The spacecraft torque −T(t) of a run's demand (a constant or a harmonic one)."""
+    assert demand is not None  # a steering run has a demand (CmgRunSpec._one_law)
     if isinstance(demand, list):
         c = np.array(demand)
         return lambda t: -c
@@ -410,12 +424,12 @@ class CmgResult(ReportedResult):
     """Runs of a ``kind: cmg`` scenario and the V1–V8 table (:func:`validation_table`)."""
 
     scenario: CmgScenario
-    runs: tuple
-    table: tuple
+    runs: tuple[CmgRun, ...]
+    table: tuple[tuple[str, str, float, float, str], ...]
     case_source: str = SOURCE
-    notes: tuple = ()
+    notes: tuple[str, ...] = ()
 
-    def metrics_records(self) -> list[dict]:
+    def metrics_records(self) -> list[dict[str, Any]]:
         from flexsat.dynamics import cmg
 
         c = self.scenario.cluster
@@ -517,7 +531,7 @@ def validation_table() -> tuple[tuple[str, str, float, float, str], ...]:
     v4 = np.rad2deg(cmg_pyramid.preferred_angles([1.0, 0.0, 0.0]))
     v5 = cmg_pyramid.integrate_gimbals(D(ALTERNATE_DEG), [0.0, 0.0, -1.0], 5.0)
 
-    def kurokawa(t):
+    def kurokawa(t: float) -> FloatArray:
         return -np.array([0.2 * np.sin(4.0 * np.pi * t), 0.3, 0.0])
 
     v6 = cmg_pyramid.integrate_gimbals(D([-120.0, -60.0, 60.0, 120.0]), kurokawa, 20.0)
@@ -639,14 +653,14 @@ class StationResult(ReportedResult):
     per run."""
 
     scenario: CmgStationScenario
-    station: object
-    runs: tuple
-    labels: tuple
-    initial: tuple
+    station: StationRun
+    runs: tuple[GimbalRun, ...]
+    labels: tuple[str, ...]
+    initial: tuple[FloatArray, ...]
     case_source: str = SOURCE
-    notes: tuple = ()
+    notes: tuple[str, ...] = ()
 
-    def metrics_records(self) -> list[dict]:
+    def metrics_records(self) -> list[dict[str, Any]]:
         from flexsat.dynamics import cmg
 
         hr = self.station.design.data.rotor_momentum

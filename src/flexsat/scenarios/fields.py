@@ -4,9 +4,10 @@ a buildable section checks its runtime object's own rules)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+import types
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Annotated, Any, Self
+from typing import Annotated, Any, Self, Union, get_args, get_origin
 
 import yaml
 from pydantic import (
@@ -15,6 +16,7 @@ from pydantic import (
     ConfigDict,
     PrivateAttr,
     ValidationInfo,
+    field_validator,
     model_validator,
 )
 
@@ -35,8 +37,8 @@ def quantity_converter(
         if value is None:
             return None
         field = info.field_name or ""  # always set for a field validator
-        if isinstance(value, bool):
-            raise FieldError(field, f"expected a number or a quantity such as '1 {unit}'")
+        if isinstance(value, bool):  # a plug-in's model need not be a SchemaSection
+            raise _boolean_refusal(field, value, "")
         si = to_si(value, unit, field)
         if positive and not si > 0:
             raise FieldError(field, f"must be > 0, got {value!r}")
@@ -120,11 +122,75 @@ def given_fields(section: BaseModel, exclude: Iterable[str] = ()) -> dict[str, A
     return section.model_dump(exclude_none=True, exclude=set(exclude))
 
 
+# -- booleans where numbers are expected --------------------------------------------------------
+def _members(annotation: Any) -> list[Any]:
+    """The types a field annotation admits: ``Annotated`` metadata dropped, a union split, None
+    left out."""
+    while get_origin(annotation) is Annotated:
+        annotation = get_args(annotation)[0]
+    if get_origin(annotation) in (Union, types.UnionType):
+        return [m for arg in get_args(annotation) if arg is not type(None) for m in _members(arg)]
+    return [annotation]
+
+
+def _boolean_for_a_number(annotation: Any, value: Any) -> tuple[str, bool] | None:
+    """Where ``value`` holds a boolean that ``annotation`` would take as a number (pydantic's lax
+    mode reads ``true`` as 1): ``""`` for the value itself, ``"[2]"`` or ``"['k']"`` inside a
+    list or mapping of numbers, and whether an integer is expected there; None when it holds
+    none there."""
+    members = _members(annotation)
+    if isinstance(value, bool):
+        numeric = any(m in (int, float) for m in members)
+        if numeric and bool not in members and Any not in members:
+            return "", float not in members
+        return None
+    containers = [(get_origin(m), get_args(m)) for m in members]
+    if isinstance(value, (list, tuple)):
+        for origin, args in containers:
+            if origin in (list, tuple, Sequence) and args:
+                fixed = origin is tuple and Ellipsis not in args and len(args) == len(value)
+                for i, item in enumerate(value):
+                    found = _boolean_for_a_number(args[i] if fixed else args[0], item)
+                    if found is not None:
+                        return f"[{i}]{found[0]}", found[1]
+    if isinstance(value, dict):
+        for origin, args in containers:
+            if origin in (dict, Mapping) and len(args) == 2:
+                for key, item in value.items():
+                    found = _boolean_for_a_number(args[1], item)
+                    if found is not None:
+                        return f"[{key!r}]{found[0]}", found[1]
+    return None
+
+
+def _boolean_refusal(field: str, value: Any, where: str, integer: bool = False) -> FieldError:
+    """The refusal of a boolean given where field ``field`` takes a number (an ``integer``;
+    ``where``: the item of a list or mapping that holds it, ``""`` for the value itself)."""
+    number = "an integer" if integer else "a number (with a unit where it has one)"
+    return FieldError(
+        field,
+        f"must be {number}, not a boolean"
+        + (f" (the item {where})" if where else f", got {value!r}"),
+    )
+
+
 # -- schema ------------------------------------------------------------------------------------
 class SchemaSection(BaseModel):
-    """Base of every schema model: unknown keys are errors."""
+    """Base of every schema model: unknown keys are errors, and so is a boolean where a number
+    is expected (the one place where they are refused for every kind)."""
 
     model_config = ConfigDict(extra="forbid")
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_boolean_for_a_number(cls, value: Any, info: ValidationInfo) -> Any:
+        """Refuse ``true``/``false`` where the field takes a number or a quantity: pydantic's lax
+        mode would read it as 1 or 0 (a YAML ``true`` given as a gimbal angle ran as 1 rad)."""
+        field = info.field_name or ""  # always set for a field validator
+        found = _boolean_for_a_number(cls.model_fields[field].annotation, value)
+        if found is not None:
+            raise _boolean_refusal(field, value, *found)
+        return value
 
 
 class Document(SchemaSection):

@@ -38,6 +38,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 
+from flexsat import limits
 from flexsat.input_checks import FieldError, require_finite, require_positive
 from flexsat.sim.integrators import apply
 from flexsat.sim.recording import CHUNK, Recorder, SimResult
@@ -126,6 +127,9 @@ class _Loop:
         self.reads, self.writes = tuple(controller.reads), tuple(controller.writes)
         self.exogenous = exogenous
         self.zero_u = np.zeros((nc, self.m))
+        # right-hand-side evaluations so far, and the most a run may take (read at its start)
+        self.evaluations, self.max_evaluations = 0, limits.MAX_ADAPTIVE_EVALUATIONS
+        self.t0 = 0.0
         # how each read is taken from x: state columns, a product with C, or the plant's own
         # output (called several times per integrator step: the cheap forms matter)
         self.readers: list[tuple[str, Reader]] = []
@@ -195,6 +199,19 @@ class _Loop:
         return u, (u if d is None else u + d)
 
     def rhs(self, t: float, flat: np.ndarray) -> np.ndarray:
+        self.evaluations += 1
+        if self.evaluations > self.max_evaluations:
+            # an explicit pair on a stiff loop takes steps ~1/|fastest rate|: a run that would
+            # take hours is ended here, bounded in time whatever the law
+            raise FieldError(
+                "law_mode",
+                f"the continuous-law run of {self.law} took {self.max_evaluations:,} "
+                "right-hand-side evaluations, the limit (flexsat.limits."
+                f"MAX_ADAPTIVE_EVALUATIONS), and had integrated only to t = {t:.6g} s "
+                f"(from {self.t0:.6g} s). Likely cause: a closed loop too stiff for the "
+                "adaptive integrator (a gain far too large makes its steps tiny); use smaller "
+                "gains, a shorter run, or law_mode='sampled'",
+            )
         x = flat.reshape(self.nc, -1)
         _, w = self.input(t, x)
         dx = apply(x, self.At, self.batched) + apply(w, self.Bt, self.batched)
@@ -306,6 +323,10 @@ def run(
     SimulationDiverged
         When a state entry passes :data:`flexsat.sim.engine.DIVERGENCE_BOUND` (an unstable
         closed loop): no result with NaN or overflow is returned.
+    flexsat.input_checks.FieldError
+        Naming ``law_mode``, when the run takes more right-hand-side evaluations than
+        :data:`flexsat.limits.MAX_ADAPTIVE_EVALUATIONS` (a stiff closed loop), in bounded
+        time.
     """
     from flexsat.sim.engine import DIVERGENCE_BOUND, SimulationDiverged, check_law
 
@@ -334,6 +355,7 @@ def run(
             "initial_state", f"must have shape ({plant.nx},) or ({nc}, {plant.nx}), got {x0.shape}"
         ) from None
     loop = _Loop(plant, controller, nc, _exogenous(plant, exogenous, nc, float(t[0])))
+    loop.t0 = float(t[0])
 
     # solve_ivp reads an event's ``terminal`` and ``direction`` from attributes of the function
     # (its documented interface), which a Callable type does not declare
