@@ -53,6 +53,9 @@ __all__ = ["attitude_law_of", "run", "spacecraft_kind", "unsupported"]
 
 #: groups of lanes from which a block runs on every core
 PARALLEL_GROUPS = 2
+#: groups of lanes per block at least (their records held at once: 32 cases of 97 states
+#: over 1,201 samples are 30 MB)
+MIN_GROUPS = 4
 _LAWS = (MRPLaw, QuaternionPD, GibbsLyapunovLaw)
 
 
@@ -254,7 +257,8 @@ def run(
     }
     energy = np.empty((nc, n_t)) if rec.has_energy else None
     size = block_size(nc, n_t, n + (a.width if a.noisy else 0) + a.law_values)
-    size = min(nc, -(-size // LANES) * LANES)
+    # at least MIN_GROUPS groups of lanes per block, so that a block runs on every core
+    size = min(nc, -(-max(size, MIN_GROUPS * LANES) // LANES) * LANES)
     X = np.empty((min(size, nc), n_t, n))
 
     def cases(arr, c0, c1, axis=0):

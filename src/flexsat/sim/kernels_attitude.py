@@ -163,7 +163,7 @@ def _gather(loop, cl, W):
     Q1u = np.empty((nm, m, W))
     P1u = np.empty((nm, m, W))
     F = np.empty((5, nm, 7, W))
-    R = np.empty((6, nm, W))
+    R = np.zeros(rows_shape(6, nm, W))
     gains = np.empty((7, W))
     target = np.empty((4, W))
     w_ref = np.empty((3, W))
@@ -199,7 +199,8 @@ def _gather(loop, cl, W):
                     for j in range(7):
                         F[s, i, j, l] = loop.F[cp, s, i, j]
                 for s in range(6):
-                    R[s, i, l] = loop.R[cp, s, i]
+                    a, b = row_entry(s, i, n, W)
+                    R[a, b, l] = loop.R[cp, s, i]
         cg = case_index(loop.gains.shape[0], c)
         for i in range(7):
             gains[i, l] = loop.gains[cg, i]
@@ -325,21 +326,14 @@ def rigid_steps(x, w, J, Jinv, h, substeps, W):
 
 
 @_inline
-def modal_force(z, R, J, f, W):
-    """f(z) (7, W) of the flexible plant (module docstring): β_v, ω by the rows R, h = J ω_r
-    with ω_r = z[2], z[4], z[6]."""
-    n = z.shape[0]
+def modal_force(z, R, J, f, acc, W):
+    """f(z) (7, W) of the flexible plant (module docstring): β_v, ω by the rows R (the
+    layout of :func:`~flexsat.sim.kernel_phases.row_products`: eight independent sums in
+    registers), h = J ω_r with ω_r = z[2], z[4], z[6]; ``acc`` scratch of the row sums."""
+    row_products(R, z, acc, W)
     for l in range(W):
-        a0 = a1 = a2 = a3 = a4 = a5 = 0.0
-        for j in range(n):
-            zj = z[j, l]
-            a0 += R[0, j, l] * zj
-            a1 += R[1, j, l] * zj
-            a2 += R[2, j, l] * zj
-            a3 += R[3, j, l] * zj
-            a4 += R[4, j, l] * zj
-            a5 += R[5, j, l] * zj
-        b0, w0, w1, w2 = z[0, l], a3, a4, a5
+        a0, a1, a2 = acc[0, l], acc[1, l], acc[2, l]
+        b0, w0, w1, w2 = z[0, l], acc[3, l], acc[4, l], acc[5, l]
         r0, r1, r2 = z[2, l], z[4, l], z[6, l]
         h0 = J[0, 0, l] * r0 + J[0, 1, l] * r1 + J[0, 2, l] * r2
         h1 = J[1, 0, l] * r0 + J[1, 1, l] * r1 + J[1, 2, l] * r2
@@ -355,16 +349,34 @@ def modal_force(z, R, J, f, W):
 
 
 @_inline
-def _blocks(E, z, out, W):
-    """out = e^{τA} z by the 2×2 blocks of E (row 0: β0, unchanged by the linear part)."""
+def _linear_stage(out, E, z, base, Fs, g, W):
+    """out = e^{τA} z + base + F_s g per lane, in one pass: e^{τA} by its 2×2 blocks (row 0,
+    β0, unchanged by the linear part), the force columns of β on the first :data:`HEAD`
+    rows, those of ω on all."""
     n = z.shape[0]
     for l in range(W):
-        out[0, l] = z[0, l]
+        out[0, l] = z[0, l] + base[0, l]
     for i in range(1, n, 2):
         for l in range(W):
             z0, z1 = z[i, l], z[i + 1, l]
-            out[i, l] = E[i, 0, l] * z0 + E[i, 1, l] * z1
-            out[i + 1, l] = E[i + 1, 0, l] * z0 + E[i + 1, 1, l] * z1
+            out[i, l] = (E[i, 0, l] * z0 + E[i, 1, l] * z1) + base[i, l]
+            out[i + 1, l] = (E[i + 1, 0, l] * z0 + E[i + 1, 1, l] * z1) + base[i + 1, l]
+    _add_force(out, Fs, g, W)
+
+
+@_inline
+def _force_stage(out, base, Fs, g, W):
+    """out = base + F_s g per lane (:func:`_linear_stage` without the linear part)."""
+    n = out.shape[0]
+    for i in range(n):
+        for l in range(W):
+            out[i, l] = base[i, l] + (
+                (Fs[i, 4, l] * g[4, l] + Fs[i, 5, l] * g[5, l]) + Fs[i, 6, l] * g[6, l]
+            )
+    for i in range(HEAD):
+        for j in range(4):
+            for l in range(W):
+                out[i, l] += Fs[i, j, l] * g[j, l]
 
 
 @_inline
@@ -381,13 +393,13 @@ def _add_force(out, Fs, g, W):
 
 
 @_inline
-def modal_steps(z, w, E2, E, Q1u, P1u, F, R, J, substeps, work, g, W):
+def modal_steps(z, w, E2, E, Q1u, P1u, F, R, J, substeps, work, g, acc, W):
     """Phase 6, flexible: ``substeps`` steps of Krogstad's scheme (module docstring) with w
     held: a = e^{hA/2} z + Q1u w + Q1f f(z), b = a + Q2f (f(a) − f(z)),
     c = e^{hA} z + P1u w + P1f f(z) + P2f 2 (f(b) − f(z)),
     z ← e^{hA} z + P1u w + P1f f(z) + P2f (−3 f(z) + 2 f(a) + 2 f(b) − f(c))
-    + P3f 4 (f(z) − f(a) − f(b) + f(c)). ``work`` (9, n, W) and ``g`` (7, W) scratch (n >= 7:
-    rows 5 .. 8 hold the forces)."""
+    + P3f 4 (f(z) − f(a) − f(b) + f(c)). Scratch: ``work`` (9, n, W) (n >= 7: rows 5 .. 8
+    hold the forces), ``g`` (7, W), ``acc`` (8, W)."""
     n, m = z.shape[0], w.shape[0]
     hd, fd, a, b, full, fx = work[0], work[1], work[2], work[3], work[4], work[5]
     fa, fb, fc = work[6, :7], work[7, :7], work[8, :7]
@@ -400,41 +412,24 @@ def modal_steps(z, w, E2, E, Q1u, P1u, F, R, J, substeps, work, g, W):
             hd[i, l], fd[i, l] = s, t
     f0 = fx[:7]
     for _ in range(substeps):
-        modal_force(z, R, J, f0, W)
-        _blocks(E2, z, a, W)
-        for i in range(n):
-            for l in range(W):
-                a[i, l] += hd[i, l]
-        _add_force(a, F[0], f0, W)
-        modal_force(a, R, J, fa, W)
-        for i in range(n):
-            for l in range(W):
-                b[i, l] = a[i, l]
+        modal_force(z, R, J, f0, acc, W)
+        _linear_stage(a, E2, z, hd, F[0], f0, W)
+        modal_force(a, R, J, fa, acc, W)
         for j in range(7):
             for l in range(W):
                 g[j, l] = fa[j, l] - f0[j, l]
-        _add_force(b, F[1], g, W)
-        modal_force(b, R, J, fb, W)
-        _blocks(E, z, full, W)
-        for i in range(n):
-            for l in range(W):
-                full[i, l] += fd[i, l]
-        _add_force(full, F[2], f0, W)
-        for i in range(n):  # c, in b's place (b is not read again)
-            for l in range(W):
-                b[i, l] = full[i, l]
+        _force_stage(b, a, F[1], g, W)
+        modal_force(b, R, J, fb, acc, W)
+        _linear_stage(full, E, z, fd, F[2], f0, W)
         for j in range(7):
             for l in range(W):
                 g[j, l] = 2.0 * (fb[j, l] - f0[j, l])
-        _add_force(b, F[3], g, W)
-        modal_force(b, R, J, fc, W)
-        for i in range(n):
-            for l in range(W):
-                z[i, l] = full[i, l]
+        _force_stage(b, full, F[3], g, W)  # c, in b's place (b is not read again)
+        modal_force(b, R, J, fc, acc, W)
         for j in range(7):
             for l in range(W):
                 g[j, l] = -3.0 * f0[j, l] + 2.0 * fa[j, l] + 2.0 * fb[j, l] - fc[j, l]
-        _add_force(z, F[3], g, W)
+        _force_stage(z, full, F[3], g, W)
         for j in range(7):
             for l in range(W):
                 g[j, l] = 4.0 * (f0[j, l] - fa[j, l] - fb[j, l] + fc[j, l])
@@ -463,6 +458,7 @@ def _group(c0, nl, loop, rec):
             x[j, l] = loop.x0[cl[l], j]
     work = np.empty((9, n, W))
     g = np.empty((7, W))
+    acc6 = np.empty((8, W))  # row sums of R (padded to a block of 8 for W = 1)
     acc = np.empty((Mt.shape[1] if W > 1 else Mt.shape[0] // n * Mt.shape[1], W))
     w = np.zeros((m, W))
     ucmd = np.zeros((m, W))  # an attitude law commands the torque only: 0 on the rest
@@ -537,7 +533,7 @@ def _group(c0, nl, loop, rec):
         if loop.kind == 0:
             rigid_steps(x, w, J, Jinv, loop.h, loop.substeps, W)
         else:
-            modal_steps(x, w, E2, E, Q1u, P1u, F, R, J, loop.substeps, work, g, W)
+            modal_steps(x, w, E2, E, Q1u, P1u, F, R, J, loop.substeps, work, g, acc6, W)
 
 
 @cached_jit(error_model="numpy")
