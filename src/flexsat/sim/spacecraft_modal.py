@@ -41,10 +41,9 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy.linalg import solve_triangular
+from scipy.linalg import expm, solve_triangular
 
 from flexsat.input_checks import FieldError
-from flexsat.sim.integrators import phi_products
 
 __all__ = ["SpacecraftModes", "modal_propagators", "spacecraft_modal_form"]
 
@@ -150,6 +149,20 @@ def spacecraft_modal_form(
     return SpacecraftModes(T, Ti, blocks)
 
 
+def _block_phis(blocks: np.ndarray, tau: float) -> tuple[np.ndarray, ...]:
+    """(e^{τA}, τ φ1(τA), τ φ2(τA), τ φ3(τA)) of every block A = [[0, 1], [−a, −b]], each
+    (n_blocks, 2, 2): the Van Loan exponential of :func:`~flexsat.sim.integrators.
+    phi_products` (B = I₂, order 3), one 8 × 8 exponential per block in one batched call."""
+    nb = blocks.shape[0]
+    C = np.zeros((nb, 8, 8))
+    C[:, 0, 1] = 1.0
+    C[:, 1, 0], C[:, 1, 1] = -blocks[:, 0], -blocks[:, 1]
+    for r in range(3):  # the chain [[A, I, 0, 0], [0, 0, I, 0], [0, 0, 0, I], 0]
+        C[:, 2 * r, 2 * r + 2] = C[:, 2 * r + 1, 2 * r + 3] = 1.0
+    M = expm(tau * C)
+    return M[:, :2, :2], M[:, :2, 2:4], M[:, :2, 4:6] / tau, M[:, :2, 6:8] / tau**2
+
+
 def modal_propagators(
     blocks: np.ndarray, B: np.ndarray, Bf: np.ndarray, dt: float, substeps: int
 ) -> tuple[np.ndarray, ...]:
@@ -158,29 +171,30 @@ def modal_propagators(
     and force columns Bf (n, 7) in z, step h = dt / substeps: E2, E (n, 2) the rows of
     e^{hA/2}, e^{hA} in their 2×2 blocks; Q1u = (h/2) φ1(hA/2) B, P1u = h φ1(hA) B;
     F (5, n, 7) = [(h/2) φ1(hA/2), h φ2(hA/2), h φ1(hA), h φ2(hA), h φ3(hA)] Bf, the
-    matrices of :meth:`flexsat.sim.integrators.ExpRK4Stepper.build`, each block's φ-functions
-    by :func:`~flexsat.sim.integrators.phi_products` (one per distinct block)."""
+    matrices of :meth:`flexsat.sim.integrators.ExpRK4Stepper.build` (β0, A = 0: φ_k = 1/k!)."""
     h = dt / substeps
     n = 1 + 2 * blocks.shape[0]
+    Eh2, R1, R2, _ = _block_phis(blocks, h / 2)
+    Eh, P1, P2, P3 = _block_phis(blocks, h)
     E2, E = np.zeros((n, 2)), np.zeros((n, 2))
     E2[0, 0] = E[0, 0] = 1.0
-    # β0 (A = 0): φ1 = 1, φ2 = 1/2, φ3 = 1/6
-    phis = [np.zeros((n, n)) for _ in range(5)]
-    for M, v in zip(phis, (h / 2, h / 2, h, h / 2, h / 6)):
-        M[0, 0] = v
-    cache: dict[tuple[float, float], tuple[np.ndarray, ...]] = {}
-    for i, (a, b) in enumerate(blocks):
-        key = (float(a), float(b))
-        if key not in cache:
-            A = np.array([[0.0, 1.0], [-a, -b]])
-            Eh2, R1, R2, _ = phi_products(A, h / 2, np.eye(2), 2, order=3)
-            Eh, P1, P2, P3 = phi_products(A, h, np.eye(2), 2, order=3)
-            cache[key] = (Eh2, Eh, R1, 2 * R2, P1, P2, P3)
-        Eh2, Eh, R1, Q2, P1, P2, P3 = cache[key]
-        r = slice(1 + 2 * i, 3 + 2 * i)
-        E2[r], E[r] = Eh2, Eh
-        for M, blk in zip(phis, (R1, Q2, P1, P2, P3)):
-            M[r, r] = blk
-    Q1u, P1u = phis[0] @ B, phis[2] @ B
-    F = np.stack([M @ Bf for M in phis])
-    return E2, E, Q1u, P1u, F
+    E2[1:], E[1:] = Eh2.reshape(-1, 2), Eh.reshape(-1, 2)
+
+    def apply(blk: np.ndarray, beta0: float, X: np.ndarray) -> np.ndarray:
+        out = np.empty_like(X)
+        out[0] = beta0 * X[0]
+        out[1:] = np.einsum("bij,bjk->bik", blk, X[1:].reshape(-1, 2, X.shape[1])).reshape(
+            -1, X.shape[1]
+        )
+        return out
+
+    F = np.stack(
+        [
+            apply(R1, h / 2, Bf),
+            apply(2 * R2, h / 2, Bf),
+            apply(P1, h, Bf),
+            apply(P2, h / 2, Bf),
+            apply(P3, h / 6, Bf),
+        ]
+    )
+    return E2, E, apply(R1, h / 2, B), apply(P1, h, B), F
