@@ -29,6 +29,9 @@ loop, which raises the error of the Python path.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, cast
+
 import numpy as np
 
 from flexsat.control.attitude_laws import GibbsLyapunovLaw, MRPLaw, QuaternionPD
@@ -49,6 +52,13 @@ from flexsat.sim.kernels_attitude import (
 from flexsat.sim.recording import Recorder, SimResult
 from flexsat.sim.spacecraft_modal import HEAD, modal_propagators, spacecraft_modal_form
 
+if TYPE_CHECKING:
+    from flexsat.control.base import Controller
+    from flexsat.control.linear_form import LinearLaw
+    from flexsat.dynamics.plant import Plant
+    from flexsat.sim.channels import ChannelActuator, ChannelDisturbance, ChannelSensor
+    from flexsat.sim.config import SimConfig
+
 __all__ = ["attitude_law_of", "run", "spacecraft_kind", "unsupported"]
 
 #: groups of lanes from which a block runs on every core
@@ -59,7 +69,7 @@ MIN_GROUPS = 4
 _LAWS = (MRPLaw, QuaternionPD, GibbsLyapunovLaw)
 
 
-def spacecraft_kind(plant) -> str | None:
+def spacecraft_kind(plant: Plant) -> str | None:
     """``"rigid"``, ``"flexible"`` or None (not a plant of this path)."""
     parts = plant.plants if isinstance(plant, DispersedPlant) else (plant,)
     if all(type(p) is RigidSpacecraft for p in parts):
@@ -69,13 +79,20 @@ def spacecraft_kind(plant) -> str | None:
     return None
 
 
-def attitude_law_of(controller) -> bool:
+def attitude_law_of(controller: Controller) -> bool:
     """Whether ``controller`` is an attitude law the kernel runs itself (not a subclass:
     one that changes the commands is not this law)."""
     return type(controller) in _LAWS
 
 
-def unsupported(plant, controller, sensors, actuators, disturbances, measured) -> str | None:
+def unsupported(
+    plant: Plant,
+    controller: Controller,
+    sensors: Mapping[str, ChannelSensor],
+    actuators: Mapping[str, ChannelActuator],
+    disturbances: Mapping[str, ChannelDisturbance],
+    measured: Sequence[str],
+) -> str | None:
     """Why the run cannot take this path (module docstring), or None when it can."""
     if spacecraft_kind(plant) is None:
         return "not a rigid or flexible three-axis spacecraft without translation"
@@ -141,21 +158,22 @@ class _Plant:
     """The propagation arrays of the batch: per case (C) or shared (1), and the change of
     coordinates x = T z of the flexible plant (None: z = x)."""
 
-    def __init__(self, plant, kind: str, dt: float, substeps: int) -> None:
+    def __init__(self, plant: Plant, kind: str, dt: float, substeps: int) -> None:
         parts = plant.plants if isinstance(plant, DispersedPlant) else (plant,)
         m = plant.n_inputs
         if kind == "rigid":
-            J = np.asarray(plant.inertia, float).reshape(-1, 3, 3)
-            self.J, self.Jinv = _c(J), _c(np.linalg.inv(J))
+            J = _c(cast(RigidSpacecraft, plant).inertia).reshape(-1, 3, 3)
+            self.J, self.Jinv = J, _c(np.linalg.inv(J))
             self.T = self.Ti = None
             self.E2 = self.E = np.zeros((1, 0, 2))
             self.Q1u = self.P1u = np.zeros((1, 0, m))
             self.F, self.R = np.zeros((1, 5, 0, 7)), np.zeros((1, 6, 0))
             return
-        arrays = [self._modal(p, dt, substeps) for p in parts]
+        arrays = [self._modal(cast(FlexibleSpacecraft, p), dt, substeps) for p in parts]
         T, Ti, J, E2, E, Q1u, P1u, F = (np.stack(a) for a in zip(*arrays))
         self.T, self.Ti = T, Ti
-        self.J, self.Jinv = _c(J), _c(np.linalg.inv(J))
+        self.J = _c(J)
+        self.Jinv = _c(np.linalg.inv(self.J))
         self.E2, self.E, self.Q1u, self.P1u, self.F = map(_c, (E2, E, Q1u, P1u, F))
         self.R = _c(T[:, 1:7])
 
@@ -187,25 +205,27 @@ def _case_plant(plant, c: int):
 
 
 def run(
-    plant,
-    controller,
-    config,
-    nc,
-    seeds,
-    x0,
-    theta0,
-    sensors,
-    actuators,
-    disturbances,
-    substeps,
-    measured,
-    kept,
-    record_states,
-    law,
+    plant: Plant,
+    controller: Controller,
+    config: SimConfig,
+    nc: int,
+    seeds: np.ndarray,
+    x0: np.ndarray,
+    theta0: np.ndarray | None,
+    sensors: Mapping[str, ChannelSensor],
+    actuators: Mapping[str, ChannelActuator],
+    disturbances: Mapping[str, ChannelDisturbance],
+    substeps: int,
+    measured: Sequence[str],
+    kept: Sequence[str],
+    record_states: bool,
+    law: LinearLaw | None,
 ) -> SimResult | None:
     """The run of :func:`~flexsat.sim.engine.simulate` on the three-axis kernel (module
     docstring), or None when a case stops (the engine then runs the Python loop)."""
     kind = spacecraft_kind(plant)
+    if kind is None:
+        raise ValueError(f"plant: {type(plant).__name__} is not a three-axis spacecraft")
     dt, n_t = config.dt, config.n_steps + 1
     try:
         pl = _Plant(plant, kind, dt, substeps)
@@ -241,7 +261,7 @@ def run(
         plant,
         n_t,
         nc,
-        kept,
+        tuple(kept),
         {},
         record_states,
         batched,
@@ -330,7 +350,7 @@ def run(
     rec.energy = None if energy is None else energy.T
     rec.vibration = None
     rec.states = None if X_all is None else np.swapaxes(X_all, 0, 1)
-    t = dt * np.arange(n_t)
+    t = dt * np.arange(n_t, dtype=np.float64)
     result = rec.dataset(t, controller, theta0, config, substeps, engine="compiled")
     result.dataset.attrs["propagation"] = "modal" if pl.T is not None else "rkmk4"
     return result

@@ -217,7 +217,17 @@ def _gather(loop, cl, W):
 
 
 @_inline
-def attitude_law(kind, y, gains, target, w_ref, singular, ucmd, bad, W):
+def attitude_law(
+    kind: int,
+    y: np.ndarray,
+    gains: np.ndarray,
+    target: np.ndarray,
+    w_ref: np.ndarray,
+    singular: float,
+    ucmd: np.ndarray,
+    bad: np.ndarray,
+    W: int,
+) -> None:
     """Phase 3 for an attitude law (module docstring) on y[0:4] (β) and y[4:7] (ω) per lane;
     bad[l] set for a singular Gibbs error."""
     for l in range(W):
@@ -285,7 +295,15 @@ def _euler(J, Jinv, l, w0, w1, w2, u0, u1, u2):
 
 
 @_inline
-def rigid_steps(x, w, J, Jinv, h, substeps, W):
+def rigid_steps(
+    x: np.ndarray,
+    w: np.ndarray,
+    J: np.ndarray,
+    Jinv: np.ndarray,
+    h: float,
+    substeps: int,
+    W: int,
+) -> None:
     """Phase 6, rigid: ``substeps`` RKMK4 steps of (β, ω) = x[0:7] per lane with the torque
     w[0:3] held, β scaled to unit norm after each (module docstring)."""
     for _ in range(substeps):
@@ -326,7 +344,9 @@ def rigid_steps(x, w, J, Jinv, h, substeps, W):
 
 
 @_inline
-def modal_force(z, R, J, f, acc, W):
+def modal_force(
+    z: np.ndarray, R: np.ndarray, J: np.ndarray, f: np.ndarray, acc: np.ndarray, W: int
+) -> None:
     """f(z) (7, W) of the flexible plant (module docstring): β_v, ω by the rows R (the
     layout of :func:`~flexsat.sim.kernel_phases.row_products`: eight independent sums in
     registers), h = J ω_r with ω_r = z[2], z[4], z[6]; ``acc`` scratch of the row sums."""
@@ -393,7 +413,22 @@ def _add_force(out, Fs, g, W):
 
 
 @_inline
-def modal_steps(z, w, E2, E, Q1u, P1u, F, R, J, substeps, work, g, acc, W):
+def modal_steps(
+    z: np.ndarray,
+    w: np.ndarray,
+    E2: np.ndarray,
+    E: np.ndarray,
+    Q1u: np.ndarray,
+    P1u: np.ndarray,
+    F: np.ndarray,
+    R: np.ndarray,
+    J: np.ndarray,
+    substeps: int,
+    work: np.ndarray,
+    g: np.ndarray,
+    acc: np.ndarray,
+    W: int,
+) -> None:
     """Phase 6, flexible: ``substeps`` steps of Krogstad's scheme (module docstring) with w
     held: a = e^{hA/2} z + Q1u w + Q1f f(z), b = a + Q2f (f(a) − f(z)),
     c = e^{hA} z + P1u w + P1f f(z) + P2f 2 (f(b) − f(z)),
