@@ -107,8 +107,11 @@ def test_compiled_equals_the_python_loop(plant, law):
     p = RigidSpacecraft(J) if plant == "rigid" else _flexible()
     config = _config(noisy=True, channel_actuators={"torque": ChannelActuator(saturation=0.5)})
     x0 = p.state_from(euler123=[0.05, -0.1, 0.02], rate=[0.01, 0.0, -0.01])
-    compiled = simulate(p, LAWS[law](), config, n_cases=3, initial_state=x0)
-    python = simulate(p, LAWS[law](), config, n_cases=3, initial_state=x0, compiled=False)
+    states = law == "mrp_pd"  # the state history too (back from the modal coordinates)
+    compiled = simulate(p, LAWS[law](), config, n_cases=3, initial_state=x0, record_states=states)
+    python = simulate(
+        p, LAWS[law](), config, n_cases=3, initial_state=x0, compiled=False, record_states=states
+    )
     assert compiled.dataset.attrs["engine"] == "compiled"
     assert python.dataset.attrs["engine"] == "python"
     cond = 1.0
@@ -118,6 +121,11 @@ def test_compiled_equals_the_python_loop(plant, law):
         assert compiled.dataset.attrs["propagation"] == "modal"
     got, want = _histories(compiled), _histories(python)
     assert set(got) == set(want) == set(HISTORIES)
+    if states:
+        got["state"], want["state"] = (
+            compiled.dataset["state"].values,
+            python.dataset["state"].values,
+        )
     _assert_close(got, want, _steps(python, config), cond)
     for k in python.metrics:  # the same metrics from the same histories
         np.testing.assert_allclose(compiled.metrics[k], python.metrics[k], rtol=1e-9, atol=1e-12)

@@ -348,7 +348,11 @@ def simulate(
     compiled : bool, optional
         Which loop runs: by default (None) the compiled loop of :mod:`flexsat.sim.compiled`
         whenever the plant, the law and every sensor, actuator and disturbance have its array
-        form (:func:`flexsat.sim.compiled.unsupported`), else this module's Python loop;
+        form (:func:`flexsat.sim.compiled.unsupported`; for a rigid or flexible three-axis
+        spacecraft the loop of :mod:`flexsat.sim.compiled_attitude`, under a linear-form or
+        attitude law: :func:`flexsat.sim.compiled_attitude.unsupported`), else this module's
+        Python loop (also where a three-axis case stops in the compiled loop: the Python loop
+        then raises its own error);
         False forces the Python loop, True the compiled one (a ValueError saying why when it
         cannot). Both give the same result to round-off; ``dataset.attrs["engine"]`` says
         which ran.
