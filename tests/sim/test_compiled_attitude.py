@@ -298,6 +298,17 @@ def test_divergence_and_the_gibbs_singularity_raise_as_on_the_python_loop():
     with pytest.raises(SimulationDiverged) as python:
         simulate(p, wild, config, compiled=False)
     assert compiled.value.cases == python.value.cases and compiled.value.time == python.value.time
+    assert compiled.value.cause == python.value.cause
+    # a diverging case of a large batch is reported from the compiled loop itself, by its
+    # batch index (the other cases settle)
+    gains = np.full(40, 10.0)
+    gains[27] = 1e9
+    law = MRPLaw(
+        K=gains, P=np.where(gains > 1e3, 1e9, 50.0)[:, None] * np.ones(3), beta_target=TARGET
+    )
+    with pytest.raises(SimulationDiverged) as batch:
+        simulate(p, law, config, n_cases=40)
+    assert batch.value.cases == (27,)
     upside = p.state_from(attitude=[0.0, 0.0, 0.0, 1.0])  # 180° from the identity target
     with pytest.raises(FieldError, match="attitude"):
         simulate(p, GibbsLyapunovLaw(k=1.0, A=1.0), config, initial_state=upside)

@@ -288,9 +288,9 @@ def run(
         idx[axis] = slice(c0, c1)
         return _c(arr[tuple(idx)])
 
-    for c0 in range(0, nc, size):
-        c1 = min(nc, c0 + size)
-        hub = a.inputs(c0, c1, seeds, n_t)
+    def run_block(c0, c1, samples, Xb, Yb, Ucmdb, Ub, Distb, stopb):
+        """The kernel on cases [c0, c1) over the first ``samples`` samples."""
+        hub = a.inputs(c0, c1, seeds, samples)
         loop = AttitudeLoop(
             hub.x0,
             0 if kind == "rigid" else 1,
@@ -315,8 +315,8 @@ def run(
             hub.Bk,
             hub.Ck,
             hub.Dk,
-            hub.y_ref,
-            hub.u_ff,
+            hub.y_ref[:samples],
+            hub.u_ff[:samples],
             hub.K0,
             cases(gains, c0, c1),
             cases(target, c0, c1),
@@ -328,12 +328,18 @@ def run(
             hub.bound,
             SINGULAR_TOL,
         )
-        Xb = X[: c1 - c0]
         kernel = attitude_loop_parallel if c1 - c0 >= PARALLEL_GROUPS * LANES else attitude_loop
-        records = AttitudeRecords(Xb, Y[c0:c1], Ucmd[c0:c1], U[c0:c1], Dist[c0:c1], stop[c0:c1])
-        kernel(loop, records)
-        if (stop[c0:c1] >= 0).any():
-            return None
+        kernel(loop, AttitudeRecords(Xb, Yb, Ucmdb, Ub, Distb, stopb))
+
+    for c0 in range(0, nc, size):
+        c1 = min(nc, c0 + size)
+        Xb = X[: c1 - c0]
+        sl = slice(c0, c1)
+        run_block(c0, c1, n_t, Xb, Y[sl], Ucmd[sl], U[sl], Dist[sl], stop[sl])
+        if (stop[sl] >= 0).any():
+            k = int(stop[sl][stop[sl] >= 0].min())
+            _raise_divergence(run_block, pl, nc, size, k, a.p_rec, m, n, config)
+            return None  # not a divergence: the Gibbs law's singularity (the Python loop's error)
         if pl.T is not None:  # back to the plant's coordinates, x = T z
             T = pl.T if pl.T.shape[0] == 1 else pl.T[c0:c1]
             Xb = np.matmul(Xb, np.swapaxes(T, -1, -2))
@@ -342,10 +348,10 @@ def run(
         _outputs(rec, plant, c0, Xb, U[c0:c1], Dist[c0:c1], outs, energy)
     Dist += U  # the plant's input u + d, as the Python loop records it
     rec.commands, rec.applied, rec.disturbed = (np.swapaxes(v, 0, 1) for v in (Ucmd, U, Dist))
-    for k in kept:
-        sl = a.offsets[k]
+    for name in kept:
+        sl = a.offsets[name]
         lo, hi = sl.start - a.rec_start, sl.stop - a.rec_start
-        rec.measured[k] = np.swapaxes(Y[..., lo] if hi - lo == 1 else Y[..., lo:hi], 0, 1)
+        rec.measured[name] = np.swapaxes(Y[..., lo] if hi - lo == 1 else Y[..., lo:hi], 0, 1)
     rec.outputs = {k: np.swapaxes(v, 0, 1) for k, v in outs.items()}
     rec.energy = None if energy is None else energy.T
     rec.vibration = None
@@ -354,6 +360,38 @@ def run(
     result = rec.dataset(t, controller, theta0, config, substeps, engine="compiled")
     result.dataset.attrs["propagation"] = "modal" if pl.T is not None else "rkmk4"
     return result
+
+
+def _raise_divergence(run_block, pl, nc, size, k, p_rec, m, n, config) -> None:
+    """Raise the Python loop's :class:`~flexsat.sim.engine.SimulationDiverged` for a batch
+    with a case stopped at sample k: every case rerun up to k (the same numbers), at the first
+    sample where any stops, the cases beyond the bound there and the growth over the last
+    period (:func:`~flexsat.sim.engine.divergence_error`); returns when no case is beyond the
+    bound there (a stop of the law itself)."""
+    from flexsat.sim.engine import DIVERGENCE_BOUND, divergence_error
+
+    stop = np.full(nc, -1, dtype=np.int64)
+    x = np.empty((nc, 2, n))
+    u = np.empty((nc, m))
+    for first in (True, False):  # the first stop of any case, then the states around it
+        for c0 in range(0, nc, size):
+            c1 = min(nc, c0 + size)
+            Xb = np.empty((c1 - c0, k + 1, n))
+            Yb, Ucmd, Ub, Db = (np.empty((c1 - c0, k + 1, w)) for w in (p_rec, m, m, m))
+            run_block(c0, c1, k + 1, Xb, Yb, Ucmd, Ub, Db, stop[c0:c1])
+            x[c0:c1], u[c0:c1] = Xb[:, [max(k - 1, 0), k]], Ucmd[:, k]
+        if first:
+            k = int(stop[stop >= 0].min())
+    if pl.T is not None:
+        x = np.matmul(x, np.swapaxes(pl.T, -1, -2))
+    xk, uk = x[:, 1], u
+    bad = ~(np.abs(xk) <= DIVERGENCE_BOUND).all(axis=1) | ~(np.abs(uk) <= DIVERGENCE_BOUND).all(
+        axis=1
+    )
+    if not bad.any():
+        return
+    prev = float(np.abs(x[:, 0]).max()) if k > 0 else 0.0
+    raise divergence_error(xk, uk, config.dt * k, k, prev, config)
 
 
 def _outputs(rec, plant, c0, X, U, Dist, outs, energy) -> None:
