@@ -22,9 +22,11 @@ in x up to cond(T) · eps per step).
 
 The kernel records the states (in its coordinates) of a block of cases; the recorded outputs
 and energies are computed from them afterwards, block by block, as
-:class:`~flexsat.sim.recording.Recorder` does. A case that diverges (or meets the Gibbs law's
-singularity) ends the compiled run: :func:`run` returns None and the engine runs the Python
-loop, which raises the error of the Python path.
+:class:`~flexsat.sim.recording.Recorder` does. A case that diverges ends the run with the
+Python loop's :class:`~flexsat.sim.engine.SimulationDiverged` (the batch rerun up to the first
+sample where any case stops: the same cases, time and growth); a case that meets the Gibbs
+law's singularity ends it with None: the engine then runs the Python loop, whose law refuses
+the attitude by name.
 """
 
 from __future__ import annotations
@@ -222,7 +224,14 @@ def run(
     law: LinearLaw | None,
 ) -> SimResult | None:
     """The run of :func:`~flexsat.sim.engine.simulate` on the three-axis kernel (module
-    docstring), or None when a case stops (the engine then runs the Python loop)."""
+    docstring), or None when the kernel does not take it after all (an overdamped elastic
+    mode, a singular attitude law): the engine then runs the Python loop.
+
+    Raises
+    ------
+    SimulationDiverged
+        As the Python loop does, for a case beyond the divergence bound.
+    """
     kind = spacecraft_kind(plant)
     if kind is None:
         raise ValueError(f"plant: {type(plant).__name__} is not a three-axis spacecraft")
