@@ -53,7 +53,11 @@ def _config(duration=10.0, noisy=False, **kw):
                 "attitude": ChannelSensor(noise=1e-5),
                 "rate": ChannelSensor(noise=1e-6, bias=[1e-6, 0.0, -2e-6]),
             },
-            channel_disturbances={"torque": ChannelDisturbance(random=0.01)},
+            channel_disturbances={
+                "torque": ChannelDisturbance(
+                    random=0.01, impulse_times=[0.5], impulses=[[0.2, -0.1, 0.3]]
+                )
+            },
         )
     return SimConfig(duration=duration, control_rate=10.0, **extra, **kw)
 

@@ -265,6 +265,8 @@ def run(
             dx = np.broadcast_to(a.imp_dx, (a.imp_dx.shape[0], nc, n))
             a.imp_dx = _c(np.einsum("cij,kcj->kci", Ti, dx))
     code, gains, target, w_ref = _law_arrays(controller, nc)
+    if gains.shape[0] not in (1, nc):  # the Python loop names the mismatch
+        return None
     batched = plant.n_cases != 1
     rec = Recorder(
         plant,
