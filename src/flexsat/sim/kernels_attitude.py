@@ -57,10 +57,12 @@ from flexsat.sim.kernel_phases import (
     apply_impulses,
     law,
     measure,
+    row_count,
     row_entry,
     row_products,
     rows_shape,
 )
+from flexsat.sim.spacecraft_modal import HEAD
 
 __all__ = [
     "ATTITUDE_LAWS",
@@ -74,8 +76,6 @@ __all__ = [
 LANES = 8
 #: the law codes of :class:`AttitudeLoop` ``law_kind``: 0 the linear form, then these laws
 ATTITUDE_LAWS = {"MRPLaw": 1, "QuaternionPD": 2, "GibbsLyapunovLaw": 3}
-#: rows of the modal coordinates z read by the force: β0, then the rigid pairs (θ_r, ω_r)
-HEAD = 7
 
 _inline = cached_jit(inline="always", error_model="numpy")
 
@@ -371,8 +371,8 @@ def modal_force(
 @_inline
 def _linear_stage(out, E, z, base, Fs, g, W):
     """out = e^{τA} z + base + F_s g per lane, in one pass: e^{τA} by its 2×2 blocks (row 0,
-    β0, unchanged by the linear part), the force columns of β on the first :data:`HEAD`
-    rows, those of ω on all."""
+    β0, unchanged by the linear part), the force columns of β on the first
+    :data:`~flexsat.sim.spacecraft_modal.HEAD` rows, those of ω on all."""
     n = z.shape[0]
     for l in range(W):
         out[0, l] = z[0, l] + base[0, l]
@@ -401,7 +401,8 @@ def _force_stage(out, base, Fs, g, W):
 
 @_inline
 def _add_force(out, Fs, g, W):
-    """out += F_s g per lane: the β columns on the first :data:`HEAD` rows, ω's on all."""
+    """out += F_s g per lane: the β columns on the first
+    :data:`~flexsat.sim.spacecraft_modal.HEAD` rows, ω's on all."""
     n = out.shape[0]
     for i in range(HEAD):
         for j in range(4):
@@ -494,7 +495,7 @@ def _group(c0, nl, loop, rec):
     work = np.empty((9, n, W))
     g = np.empty((7, W))
     acc6 = np.empty((8, W))  # row sums of R (padded to a block of 8 for W = 1)
-    acc = np.empty((Mt.shape[1] if W > 1 else Mt.shape[0] // n * Mt.shape[1], W))
+    acc = np.empty((row_count(Mt, n), W))
     w = np.zeros((m, W))
     ucmd = np.zeros((m, W))  # an attitude law commands the torque only: 0 on the rest
     u = np.empty((m, W))

@@ -45,12 +45,13 @@ from scipy.linalg import expm, solve_triangular
 
 from flexsat.input_checks import FieldError
 
-__all__ = ["SpacecraftModes", "modal_propagators", "spacecraft_modal_form"]
+__all__ = ["HEAD", "SpacecraftModes", "modal_propagators", "spacecraft_modal_form"]
 
 #: off-diagonal modal damping below this fraction of the largest entry (a few ulps) is the
 #: round-off of a diagonal one: each mode is then its own pair
 PROPORTIONAL = 64 * np.finfo(float).eps
-#: rigid rows of z: β0, then the three pairs (θ_r, ω_r)
+#: rigid rows of z: β0, then the three pairs (θ_r, ω_r) (the rows the attitude's force
+#: columns reach)
 HEAD = 7
 
 
