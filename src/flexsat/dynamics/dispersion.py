@@ -205,8 +205,16 @@ def _show(value: object) -> str:
     return repr(value)
 
 
-def stack_plants(plants: Iterable[Plant]) -> DispersedPlant:
-    """One :class:`DispersedPlant` whose case i is ``plants[i]``."""
+def stack_plants(plants: Iterable[Plant]) -> Plant:
+    """One plant whose case i is ``plants[i]``: a :class:`DispersedPlant`, or, for plants of
+    one type with a ``stacked`` class method (a plant batched over its own parameters, the
+    :class:`~flexsat.dynamics.rigid_spacecraft.RigidSpacecraft` with its own integrator),
+    what that method returns."""
+    plants = tuple(plants)
+    kind = type(plants[0]) if plants else None
+    stacked = getattr(kind, "stacked", None)
+    if stacked is not None and all(type(p) is kind for p in plants):
+        return stacked(plants)
     return DispersedPlant(plants)
 
 

@@ -213,16 +213,7 @@ class FlexibleSpacecraft(Plant):
         d = self.center_of_mass - elastic.reference
         L = elastic.participation
         Delta = L[:, 3:] + L[:, :3] @ skew(d)
-        Mr = np.block([[J, Delta.T], [Delta, np.eye(n)]])
-        if np.linalg.eigvalsh(Mr).min() <= 1e-12 * np.abs(J).max():
-            raise FieldError(
-                "modal",
-                "the rotational participation exceeds the inertia "
-                "(J − ΔᵀΔ not positive definite): not a free-free model",
-            )
-        self.inertia, self.coupling = J, Delta
-        self.rotation_mass = Mr
-        self.rotation_mass_inverse = np.linalg.inv(Mr)
+        self._set_rotation(J, Delta, "modal")
         self.stiffness = elastic.frequencies**2
         self.damping = 2 * elastic.damping * elastic.frequencies
 
@@ -311,6 +302,81 @@ class FlexibleSpacecraft(Plant):
         self._vel = np.r_[4:7, np.arange(self._eta_dot.start, self._eta_dot.stop)]
         self._linear = self._build_linear()
         self._force_matrix = self._build_force_matrix()
+
+    def _set_rotation(self, J: FloatArray, Delta: FloatArray, field: str) -> None:
+        """Inertia, coupling and 𝓜 = [[J, Δᵀ], [Δ, I]], refused unless positive definite."""
+        n = Delta.shape[0]
+        Mr = np.block([[J, Delta.T], [Delta, np.eye(n)]])
+        if np.linalg.eigvalsh(Mr).min() <= 1e-12 * np.abs(J).max():
+            raise FieldError(
+                field,
+                "the rotational participation exceeds the inertia "
+                "(J − ΔᵀΔ not positive definite): not a free-free model",
+            )
+        self.inertia, self.coupling = J, Delta
+        self.rotation_mass = Mr
+        self.rotation_mass_inverse = np.linalg.inv(Mr)
+
+    def with_parameters(
+        self,
+        inertia: QuantityArrayLike | None = None,
+        frequencies: QuantityArrayLike | None = None,
+        damping: npt.ArrayLike | None = None,
+        coupling: npt.ArrayLike | None = None,
+    ) -> FlexibleSpacecraft:
+        """The same spacecraft (mode shapes, forces, outputs, torque node) with other rigid and
+        modal parameters: one case of a dispersion (a Monte Carlo set stacked by
+        :func:`~flexsat.dynamics.dispersion.stack_plants`).
+
+        Parameters
+        ----------
+        inertia : array_like (3, 3), str or pint.Quantity, optional
+            J about the centre of mass, kg m² (:func:`~flexsat.dynamics.rigid_body.
+            require_inertia`).
+        frequencies : array_like (n_modes,), str or pint.Quantity, optional
+            Elastic frequencies Ω, rad/s, positive.
+        damping : array_like (n_modes,) or float, optional
+            Modal damping ratios ζ >= 0 (the damping 2ζΩ is formed with the new Ω).
+        coupling : array_like (n_modes, 3), optional
+            Rotational participation Δ about the centre of mass, m √kg.
+        Omitted ones keep this plant's values; the result must keep 𝓜 positive definite.
+        ``modal`` stays this plant's :class:`ModalModel` (its shapes and its own
+        frequencies): :meth:`reduced` of the result starts from it again.
+
+        Raises
+        ------
+        FieldError
+            Naming the parameter: a wrong shape, a non-positive frequency, a negative
+            damping, an inertia violating the triangle inequality, a coupling exceeding the
+            inertia.
+        """
+        import copy
+
+        from flexsat.dynamics.rigid_body import require_inertia
+        from flexsat.input_checks import require_finite, require_nonneg, require_positive
+
+        n = self.n_modes
+        out = copy.copy(self)
+        w = np.sqrt(self.stiffness)
+        zeta = self.damping / (2 * w)
+        if frequencies is not None:
+            w = require_positive(frequencies, "frequencies", "rad/s")
+            if w.shape != (n,):
+                raise FieldError("frequencies", f"give {n} elastic frequencies, got {w.shape}")
+        if damping is not None:
+            zeta = np.broadcast_to(require_nonneg(damping, "damping"), (n,)).astype(float)
+        J = self.inertia if inertia is None else require_inertia(inertia)
+        if J.shape != (3, 3):
+            raise FieldError("inertia", f"must have shape (3, 3), got {J.shape}")
+        Delta = self.coupling if coupling is None else require_finite(coupling, "coupling")
+        if Delta.shape != (n, 3):
+            raise FieldError("coupling", f"must have shape ({n}, 3), got {Delta.shape}")
+        out._set_rotation(J, Delta, "coupling" if coupling is not None else "inertia")
+        out.stiffness = w**2
+        out.damping = 2 * zeta * w
+        out._linear = out._build_linear()
+        out._force_matrix = out._build_force_matrix()
+        return out
 
     def reduced(self, n_modes: int) -> FlexibleSpacecraft:
         """The same spacecraft on its first ``n_modes`` elastic modes (a controller's design
@@ -484,12 +550,16 @@ class FlexibleSpacecraft(Plant):
 
     # -- outputs -----------------------------------------------------------------------------
     def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
-        """Linear outputs: the node displacements and rotations (Φ η), position, velocity and
-        the elastic state ``elastic`` = [η, η̇] (what a perturbation law on a reduced model
-        reads: its modes are the first ones of this plant when both come from one
-        :class:`~flexsat.structures.modal_model.ModalModel`)."""
+        """Linear outputs: the attitude β and body rate ω (components of x, as
+        :meth:`RigidSpacecraft.output_matrices <flexsat.dynamics.rigid_spacecraft.
+        RigidSpacecraft.output_matrices>`), the node displacements and rotations (Φ η),
+        position, velocity and the elastic state ``elastic`` = [η, η̇] (what a perturbation
+        law on a reduced model reads: its modes are the first ones of this plant when both
+        come from one :class:`~flexsat.structures.modal_model.ModalModel`)."""
         m = self._linear[1].shape[1]
-        if name in self._rows:
+        if name in ("attitude", "rate"):
+            C = np.eye(self.nx)[0:4] if name == "attitude" else np.eye(self.nx)[4:7]
+        elif name in self._rows:
             C = np.zeros((1, self.nx))
             C[0, self._eta] = self._rows[name]
         elif name in ("position", "velocity") and self.translation:

@@ -20,7 +20,7 @@ the norm-preserving RKMK4 of :mod:`flexsat.dynamics.rigid_body` with u held over
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -213,6 +213,14 @@ class RigidSpacecraft(Plant):
         self.inertia = J
         # numpy types inv() as floating[Any]; it is float64 here, so the astype copies nothing
         self.inertia_inverse = np.linalg.inv(J).astype(np.float64, copy=False)
+
+    @classmethod
+    def stacked(cls, plants: Sequence[RigidSpacecraft]) -> RigidSpacecraft:
+        """One plant whose cases are those of ``plants`` in order (each shared or with its
+        own case axis): their inertias stacked (what
+        :func:`~flexsat.dynamics.dispersion.stack_plants` returns for rigid spacecraft, which
+        keep their own integrator)."""
+        return cls(np.concatenate([np.reshape(p.inertia, (-1, 3, 3)) for p in plants]))
 
     @property
     def nx(self) -> int:

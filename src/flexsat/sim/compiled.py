@@ -94,7 +94,7 @@ def unsupported(plant, controller, sensors, actuators, disturbances, measured) -
         return "the plant has its own integrator"
     if plant.nonlinear:
         return "the plant is nonlinear"
-    if not _own_linear_form(type(controller)):
+    if not own_linear_form(type(controller)):
         return f"{type(controller).__name__} has no linear form of its own commands"
     forced = {k: d for k, d in disturbances.items() if d.force is not None}
     if len(forced) > 1:
@@ -114,7 +114,7 @@ def unsupported(plant, controller, sensors, actuators, disturbances, measured) -
         return "more than one derivative sensor"
     for k in derived:
         src = sensors[k].derivative_of
-        if _width(plant, k) != 1 or _width(plant, src) != 1:
+        if channel_width(plant, k) != 1 or channel_width(plant, src) != 1:
             return f"{k}: derivative sensor on a channel wider than 1"
         if not _ideal(sensors[k]):
             return f"{k}: derivative sensor with its own noise, bias, quantum or range"
@@ -132,7 +132,7 @@ def unsupported(plant, controller, sensors, actuators, disturbances, measured) -
     return None
 
 
-def _own_linear_form(cls) -> bool:
+def own_linear_form(cls) -> bool:
     """Whether ``cls`` defines its linear form no higher in its hierarchy than its
     ``__call__``: a subclass changing the commands, or a wrapper forwarding attributes to a
     law, does not inherit a linear form that no longer describes them."""
@@ -144,7 +144,7 @@ def _own_linear_form(cls) -> bool:
     return form is not None and call is not None and form <= call
 
 
-def _width(plant, name: str) -> int:
+def channel_width(plant, name: str) -> int:
     return next(c.size for c in plant.outputs if c.name == name)
 
 
@@ -192,6 +192,16 @@ def _pad_law(law, p: int, reads: list[int], order: list[int], m: int):
         out[tuple(idx)] = a
         return out
 
+    if law is None:  # no linear form: empty arrays of the right ranks
+        return (
+            np.zeros((1, 1, 0, 0)),
+            np.zeros((1, 1, 0, p)),
+            np.zeros((1, 1, m, 0)),
+            np.zeros((1, 1, m, p)),
+            np.zeros((1, 1, p)),
+            np.zeros((1, 1, m)),
+            np.zeros((0, 0, p)),
+        )
     K0 = np.zeros((0, law.Ak.shape[-1], p)) if law.K0 is None else cols(law.K0)
     return (
         law.Ak,
@@ -235,8 +245,13 @@ def modal_form(plant, steps: int):
         return None
 
 
-class _Args:
-    """The kernel's arguments for a whole batch (each sliced per block by :meth:`block`)."""
+class LoopArguments:
+    """The kernel's arguments for a whole batch (each sliced per block by :meth:`block`).
+
+    ``propagate`` False: no propagator (the three-axis loop of
+    :mod:`flexsat.sim.compiled_attitude` builds its own; ``E`` and ``P1u`` are then empty);
+    ``law`` None: a law without a linear form (an attitude law of that loop), whose arrays are
+    then empty (no law state, no column)."""
 
     def __init__(
         self,
@@ -255,6 +270,7 @@ class _Args:
         modal: bool = True,
         always_modal: bool = False,
         rows=None,
+        propagate: bool = True,
     ):
         dt, n_t = config.dt, config.n_steps + 1
         self.nc, self.n_t = nc, n_t
@@ -275,7 +291,9 @@ class _Args:
         )
         self.T = None if modal is None else modal[0]
         Tinv = None if modal is None else modal[1]
-        if modal is not None:
+        if not propagate:
+            self.E, self.P1u = np.zeros((1, 0, 2)), np.zeros((1, 0, m))
+        elif modal is not None:
             st = ModalPropagator.build(
                 modal[2], modal[3], Tinv @ B, dt, substeps, None if Bf is None else Tinv @ Bf
             )
@@ -327,8 +345,8 @@ class _Args:
         names += [k for k in kept if k not in names]
         self.offsets, off = {}, 0
         for k in names:
-            self.offsets[k] = slice(off, off + _width(plant, k))
-            off += _width(plant, k)
+            self.offsets[k] = slice(off, off + channel_width(plant, k))
+            off += channel_width(plant, k)
         p = off
         direct = [k for k in names if k not in derived]
         mats = {k: plant.output_matrices(k) for k in direct}
@@ -337,7 +355,7 @@ class _Args:
         Cm, Dm, Dmf = np.zeros(lead + (p, n)), np.zeros(lead + (p, m)), np.zeros(lead + (p,))
         row = 0
         for k in direct:
-            sl, w = self.offsets[k], _width(plant, k)
+            sl, w = self.offsets[k], channel_width(plant, k)
             Cm[:, sl] = C[..., row : row + w, :]
             Dm[:, sl] = D[..., row : row + w, :]
             if forced:
@@ -353,7 +371,7 @@ class _Args:
             s = sensors.get(k)
             if s is None:
                 continue
-            sl, w = self.offsets[k], _width(plant, k)
+            sl, w = self.offsets[k], channel_width(plant, k)
             for i, field in enumerate(("quantum", "noise", "bias", "range")):
                 sens = _fill(sens, (sl, i), _per_element(getattr(s, field), nc, w))
             if np.any(s.noise):
@@ -427,7 +445,7 @@ class _Args:
         )
         self.Co, self.Do = np.zeros((1, 0, n)), np.zeros((1, 0, m))
         self.Dof, self.Q = np.zeros((1, 0)), np.zeros((0, n, n))
-        self.widths = [_width(plant, k) for k in names]
+        self.widths = [channel_width(plant, k) for k in names]
         self.inertia = h[1] if vibration else None
         if not self.lean:
             return
@@ -544,7 +562,7 @@ def run(
     """The run of :func:`~flexsat.sim.engine.simulate` on the compiled loop (module
     docstring); same result, same exceptions. ``always_modal``: in modal coordinates whenever
     the plant has them, whatever the batch size (:func:`modal_form`)."""
-    a = _Args(
+    a = LoopArguments(
         plant,
         controller,
         config,
@@ -585,7 +603,7 @@ def run(
     lean = a.lean and not record_states and a.T is not None
     # a block's temporaries: the states unless lean, the noise streams if any are drawn and
     # the copy of a per-case law (its arrays are read-only: block.law_cases)
-    size = _block_size(nc, n_t, (0 if lean else n) + (a.width if a.noisy else 0) + a.law_values)
+    size = block_size(nc, n_t, (0 if lean else n) + (a.width if a.noisy else 0) + a.law_values)
     if lean:  # the kernel's records: the recorded outputs, h, the energy
         O = np.empty((nc, n_t, a.Co.shape[1]))
         energy = np.empty((nc, n_t)) if a.Q.shape[0] else None
@@ -636,7 +654,7 @@ def run(
         _outputs(rec, plant, a, c0, c1, X, U[c0:c1], Dist[c0:c1], F[c0:c1], outs, energy, vib)
     if (stop >= 0).any():
         if a.T is not None:  # the Python loop bounds the physical state: rerun it dense
-            a = _Args(
+            a = LoopArguments(
                 plant,
                 controller,
                 config,
@@ -751,14 +769,15 @@ def run_reduced(
     reduced_outputs, reduced_input = (axis.angle, axis.rate, axis.deflection), axis.torque
     if (
         not all(
-            k in plant.recorded and k in names and _width(plant, k) == 1 for k in reduced_outputs
+            k in plant.recorded and k in names and channel_width(plant, k) == 1
+            for k in reduced_outputs
         )
         or plant.input_slices.get(reduced_input, slice(0, 2)).stop
         - plant.input_slices.get(reduced_input, slice(0, 2)).start
         != 1
     ):
         return None
-    a = _Args(
+    a = LoopArguments(
         plant,
         controller,
         config,
@@ -799,7 +818,7 @@ def run_reduced(
     snapO = np.empty((nc, 2, a.Co.shape[1]))
     snapE = np.empty((nc, 2))
     stop = np.full(nc, -1, dtype=np.int64)
-    size = _block_size(nc, n_t, (a.width if a.noisy else 0) + a.law_values + 1)
+    size = block_size(nc, n_t, (a.width if a.noisy else 0) + a.law_values + 1)
     for c0 in range(0, nc, size):
         c1 = min(nc, c0 + size)
         kernel = closed_loop_reduced_parallel if c1 - c0 >= PARALLEL_CASES else closed_loop_reduced
@@ -848,7 +867,7 @@ def run_reduced(
     return SimResult(ds, metrics)
 
 
-def _block_size(nc: int, n_t: int, values: float) -> int:
+def block_size(nc: int, n_t: int, values: float) -> int:
     """Cases per block: their states, noise and law copy (``values`` per sample) within
     :data:`BLOCK_BYTES` and within :data:`BLOCK_SHARE` of a case's recorded histories per
     case of the batch (a block's temporaries stay small next to what the run keeps)."""
@@ -882,7 +901,7 @@ def _outputs(rec, plant, a, c0, c1, X, U, Dist, F, outs, energy, vib):
             Yo = Yo + lin(Ff, rec.DfT)
         col = 0
         for k in rec.linear:
-            w = _width(plant, k)
+            w = channel_width(plant, k)
             outs[k][c0:c1] = Yo[..., col] if w == 1 else Yo[..., col : col + w]
             col += w
     for k in rec.nonlinear:  # a shared plant (unsupported() keeps dispersed ones out)
@@ -912,7 +931,7 @@ def _divergence(a, config, seeds, stop, Ucmd):
     X = np.empty((nc, k + 1, n))
     rec = [np.empty((nc, k + 1, w)) for w in (a.p_rec, m, m, m)]
     F, st = np.empty((nc, k + 1)), np.full(nc, -1, dtype=np.int64)
-    size = _block_size(nc, k + 1, n + a.width)
+    size = block_size(nc, k + 1, n + a.width)
     for c0 in range(0, nc, size):
         c1 = min(nc, c0 + size)
         a.block(c0, c1, seeds, k + 1, X[c0:c1], *(r[c0:c1] for r in rec), F[c0:c1], st[c0:c1])

@@ -28,6 +28,7 @@ import numpy as np
 from flexsat.dynamics.plant import find_channel
 from flexsat.input_checks import require_count, require_finite
 from flexsat.sim import compiled as compiled_path
+from flexsat.sim import compiled_attitude as attitude_path
 from flexsat.sim import integrators
 from flexsat.sim.channels import (
     input_impulses,
@@ -347,7 +348,11 @@ def simulate(
     compiled : bool, optional
         Which loop runs: by default (None) the compiled loop of :mod:`flexsat.sim.compiled`
         whenever the plant, the law and every sensor, actuator and disturbance have its array
-        form (:func:`flexsat.sim.compiled.unsupported`), else this module's Python loop;
+        form (:func:`flexsat.sim.compiled.unsupported`; for a rigid or flexible three-axis
+        spacecraft the loop of :mod:`flexsat.sim.compiled_attitude`, under a linear-form or
+        attitude law: :func:`flexsat.sim.compiled_attitude.unsupported`), else this module's
+        Python loop (also where a three-axis case stops in the compiled loop: the Python loop
+        then raises its own error);
         False forces the Python loop, True the compiled one (a ValueError saying why when it
         cannot). Both give the same result to round-off; ``dataset.attrs["engine"]`` says
         which ran.
@@ -428,7 +433,40 @@ def simulate(
         # a law with a reference is a slew law (flexsat.control.base.SlewLaw)
         controller.tabulate_reference(t)  # type: ignore[attr-defined]
     kept = tuple(k for k in measured if k in getattr(plant, "recorded_measurements", ()))
-    if compiled is not False:
+    if compiled is not False and attitude_path.spacecraft_kind(plant) is not None:
+        reason = attitude_path.unsupported(
+            plant, controller, sensors, actuators, disturbances, measured
+        )
+        law = None
+        if reason is None and not attitude_path.attitude_law_of(controller):
+            law = controller.linear_form(dt, t, nc)
+            if law is None:
+                reason = f"{type(controller).__name__} has no linear form"
+        if reason is None:
+            result = attitude_path.run(
+                plant,
+                controller,
+                config,
+                nc,
+                seeds,
+                x,
+                theta0,
+                sensors,
+                actuators,
+                disturbances,
+                substeps,
+                measured,
+                kept,
+                record_states,
+                law,
+            )
+            if result is not None:
+                return result
+            # a case stopped (diverged, a singular law) or a mode the kernel does not take:
+            # the Python loop runs, and raises its own error
+        elif compiled:
+            raise ValueError(f"compiled: this run cannot take the compiled loop: {reason}")
+    elif compiled is not False:
         reason = compiled_path.unsupported(
             plant, controller, sensors, actuators, disturbances, measured
         )

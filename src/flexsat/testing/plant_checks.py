@@ -535,7 +535,7 @@ def _skip(s: PlantSubject, name: str) -> str | None:
     """Why check ``name`` does not apply, from the plant's declarations (None: it applies)."""
     p = s.plant
     if name == "dispersion":
-        if p.step is not None:
+        if p.step is not None and getattr(type(p), "stacked", None) is None:
             return "the plant has its own integrator (step), which stack_plants refuses"
         if p.n_cases != 1:
             return "the plant is already dispersed"

@@ -1,0 +1,438 @@
+"""The compiled path of :func:`flexsat.sim.engine.simulate` for three-axis spacecraft: the run
+handed to the lane kernel of :mod:`flexsat.sim.kernels_attitude`.
+
+Taken (:func:`unsupported` names the first reason it is not) for a
+:class:`~flexsat.dynamics.rigid_spacecraft.RigidSpacecraft` (shared, or a batch with an
+inertia per case: :func:`~flexsat.dynamics.dispersion.stack_plants`) or a
+:class:`~flexsat.dynamics.flexible_spacecraft.FlexibleSpacecraft` without translation
+(shared, or a :class:`~flexsat.dynamics.dispersion.DispersedPlant` of them: inertia,
+frequencies, damping, coupling per case), under a law with a linear form of its own or one of
+the attitude laws of :mod:`flexsat.control.attitude_laws` (MRP PD, quaternion PD, Gibbs
+Lyapunov law), with linear measured channels, no derivative sensor, no input force and no
+actuator rate limit or bias.
+
+The arguments are those of the Python loop, built by the same functions as for the hub
+kernels (:class:`~flexsat.sim.compiled.LoopArguments`: sensors, actuators, disturbances,
+impulses, each case's noise stream from its own seed, the law's linear form); the
+propagation is the plant's own integrator: the RKMK4 step of the rigid body (the same
+formulas as :meth:`RigidSpacecraft.step`, in another order of the sums: the two paths agree to
+round-off carried by the closed loop), Krogstad's exp_rk4 scheme of the flexible plant in the
+modal coordinates of :mod:`flexsat.sim.spacecraft_modal` (equal to the Python loop's scheme
+in x up to cond(T) · eps per step).
+
+The kernel records the states (in its coordinates) of a block of cases; the recorded outputs
+and energies are computed from them afterwards, block by block, as
+:class:`~flexsat.sim.recording.Recorder` does. A case that diverges ends the run with the
+Python loop's :class:`~flexsat.sim.engine.SimulationDiverged` (the batch rerun up to the first
+sample where any case stops: the same cases, time and growth); a case that meets the Gibbs
+law's singularity ends it with None: the engine then runs the Python loop, whose law refuses
+the attitude by name.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, cast
+
+import numpy as np
+
+from flexsat.control.attitude_laws import GibbsLyapunovLaw, MRPLaw, QuaternionPD
+from flexsat.dynamics.attitude import SINGULAR_TOL
+from flexsat.dynamics.dispersion import DispersedPlant
+from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
+from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft, attitude_output
+from flexsat.input_checks import FieldError
+from flexsat.sim.compiled import LoopArguments, block_size, channel_width, own_linear_form
+from flexsat.sim.kernels_attitude import (
+    ATTITUDE_LAWS,
+    LANES,
+    AttitudeLoop,
+    AttitudeRecords,
+    attitude_loop,
+    attitude_loop_parallel,
+)
+from flexsat.sim.recording import Recorder, SimResult
+from flexsat.sim.spacecraft_modal import HEAD, modal_propagators, spacecraft_modal_form
+
+if TYPE_CHECKING:
+    from flexsat.control.base import Controller
+    from flexsat.control.linear_form import LinearLaw
+    from flexsat.dynamics.plant import Plant
+    from flexsat.sim.channels import ChannelActuator, ChannelDisturbance, ChannelSensor
+    from flexsat.sim.config import SimConfig
+
+__all__ = ["attitude_law_of", "run", "spacecraft_kind", "unsupported"]
+
+#: groups of lanes from which a block runs on every core
+PARALLEL_GROUPS = 2
+#: groups of lanes per block at least (their records held at once: 32 cases of 97 states
+#: over 1,201 samples are 30 MB)
+MIN_GROUPS = 4
+_LAWS = (MRPLaw, QuaternionPD, GibbsLyapunovLaw)
+
+
+def spacecraft_kind(plant: Plant) -> str | None:
+    """``"rigid"``, ``"flexible"`` or None (not a plant of this path)."""
+    parts = plant.plants if isinstance(plant, DispersedPlant) else (plant,)
+    if all(type(p) is RigidSpacecraft for p in parts):
+        return "rigid"
+    if all(type(p) is FlexibleSpacecraft and not p.translation for p in parts):
+        return "flexible"
+    return None
+
+
+def attitude_law_of(controller: Controller) -> bool:
+    """Whether ``controller`` is an attitude law the kernel runs itself (not a subclass:
+    one that changes the commands is not this law)."""
+    return type(controller) in _LAWS
+
+
+def unsupported(
+    plant: Plant,
+    controller: Controller,
+    sensors: Mapping[str, ChannelSensor],
+    actuators: Mapping[str, ChannelActuator],
+    disturbances: Mapping[str, ChannelDisturbance],
+    measured: Sequence[str],
+) -> str | None:
+    """Why the run cannot take this path (module docstring), or None when it can."""
+    if spacecraft_kind(plant) is None:
+        return "not a rigid or flexible three-axis spacecraft without translation"
+    if any(d.force is not None for d in disturbances.values()):
+        return "an input force"
+    for k in measured:
+        if k in sensors and sensors[k].derivative_of is not None:
+            return f"{k}: a derivative sensor"
+        if plant.output_matrices(k) is None:
+            return f"{k}: measured output is nonlinear"
+    for k in controller.writes:
+        a = actuators.get(k)
+        if a is not None and (np.any(np.isfinite(a.rate_limit)) or np.any(a.bias)):
+            return f"{k}: actuator rate limit or bias"
+    if attitude_law_of(controller):
+        return None
+    if not own_linear_form(type(controller)):
+        return f"{type(controller).__name__} has no linear form of its own commands"
+    return None
+
+
+def _c(a) -> np.ndarray:
+    return np.require(a, np.float64, ["C", "W"])
+
+
+def _law_arrays(controller, nc: int):
+    """(law code, gains (Cg, 7), target (Cg, 4), w_ref (Cg, 3)) of an attitude law, Cg = 1 or
+    the law's cases; zeros (code 0) for a linear law."""
+    if not attitude_law_of(controller):
+        return 0, np.zeros((1, 7)), np.zeros((1, 4)), np.zeros((1, 3))
+    vectors = {"P", "k", "Kp", "Kd", "beta_target", "w_ref"}  # last axis: body or quaternion
+    fields = ("K", "P", "A", "k", "Kp", "Kd", "beta_target", "w_ref")
+    shape = np.broadcast_shapes(
+        *(
+            np.shape(getattr(controller, f))[: -1 if f in vectors else None]
+            for f in fields
+            if hasattr(controller, f)
+        )
+    )
+    cg = int(np.prod(shape))
+
+    def scalar(v):
+        return np.broadcast_to(np.asarray(v, float), shape).reshape(cg)
+
+    def vector(v, width):
+        v = np.asarray(v, float)
+        return np.broadcast_to(v, shape + (width,)).reshape(cg, width)
+
+    gains = np.zeros((cg, 7))
+    w_ref = np.zeros((cg, 3))
+    if isinstance(controller, MRPLaw):
+        gains[:, 0], gains[:, 1:4] = scalar(controller.K), vector(controller.P, 3)
+    elif isinstance(controller, QuaternionPD):
+        gains[:, 1:4], gains[:, 4:7] = vector(controller.Kp, 3), vector(controller.Kd, 3)
+        w_ref = vector(controller.w_ref, 3)
+    else:
+        gains[:, 0], gains[:, 1:4] = scalar(controller.A), vector(controller.k, 3)
+    target = vector(controller.beta_target, 4)
+    return ATTITUDE_LAWS[type(controller).__name__], _c(gains), _c(target), _c(w_ref)
+
+
+class _Plant:
+    """The propagation arrays of the batch: per case (C) or shared (1), and the change of
+    coordinates x = T z of the flexible plant (None: z = x)."""
+
+    def __init__(self, plant: Plant, kind: str, dt: float, substeps: int) -> None:
+        parts = plant.plants if isinstance(plant, DispersedPlant) else (plant,)
+        m = plant.n_inputs
+        if kind == "rigid":
+            J = _c(cast(RigidSpacecraft, plant).inertia).reshape(-1, 3, 3)
+            self.J, self.Jinv = J, _c(np.linalg.inv(J))
+            self.T = self.Ti = None
+            self.E2 = self.E = np.zeros((1, 0, 2))
+            self.Q1u = self.P1u = np.zeros((1, 0, m))
+            self.F, self.R = np.zeros((1, 5, 0, 7)), np.zeros((1, 6, 0))
+            return
+        arrays = [self._modal(cast(FlexibleSpacecraft, p), dt, substeps) for p in parts]
+        T, Ti, J, E2, E, Q1u, P1u, F = (np.stack(a) for a in zip(*arrays))
+        self.T, self.Ti = T, Ti
+        self.J = _c(J)
+        self.Jinv = _c(np.linalg.inv(self.J))
+        self.E2, self.E, self.Q1u, self.P1u, self.F = map(_c, (E2, E, Q1u, P1u, F))
+        self.R = _c(T[:, 1:7])
+
+    @staticmethod
+    def _modal(p: FlexibleSpacecraft, dt: float, substeps: int):
+        modes = spacecraft_modal_form(p.inertia, p.coupling, p.stiffness, p.damping)
+        A, B = p.linear_part()
+        Ti = modes.T_inv
+        E2, E, Q1u, P1u, F = modal_propagators(
+            modes.blocks, Ti @ B, Ti @ p.force_matrix, dt, substeps
+        )
+        if np.any(F[:, HEAD:, :4]):  # the kernel skips these products
+            raise FieldError("coupling", "the attitude force columns reach the elastic modes")
+        return modes.T, Ti, p.inertia, E2, E, Q1u, P1u, F
+
+
+def _to_z(M: np.ndarray, T: np.ndarray | None) -> np.ndarray:
+    """Rows over x (lead, r, n) as rows over z: M T per case."""
+    return M if T is None else _c(np.matmul(M, T))
+
+
+def _case_plant(plant, c: int):
+    """The plant of case c (the energy's parameters)."""
+    if isinstance(plant, DispersedPlant):
+        return plant.plants[c]
+    if isinstance(plant, RigidSpacecraft) and plant.n_cases > 1:
+        return RigidSpacecraft(plant.inertia[c])
+    return plant
+
+
+def run(
+    plant: Plant,
+    controller: Controller,
+    config: SimConfig,
+    nc: int,
+    seeds: np.ndarray,
+    x0: np.ndarray,
+    theta0: np.ndarray | None,
+    sensors: Mapping[str, ChannelSensor],
+    actuators: Mapping[str, ChannelActuator],
+    disturbances: Mapping[str, ChannelDisturbance],
+    substeps: int,
+    measured: Sequence[str],
+    kept: Sequence[str],
+    record_states: bool,
+    law: LinearLaw | None,
+) -> SimResult | None:
+    """The run of :func:`~flexsat.sim.engine.simulate` on the three-axis kernel (module
+    docstring), or None when the kernel does not take it after all (an overdamped elastic
+    mode, a singular attitude law): the engine then runs the Python loop.
+
+    Raises
+    ------
+    SimulationDiverged
+        As the Python loop does, for a case beyond the divergence bound.
+    """
+    kind = spacecraft_kind(plant)
+    if kind is None:
+        raise ValueError(f"plant: {type(plant).__name__} is not a three-axis spacecraft")
+    dt, n_t = config.dt, config.n_steps + 1
+    try:
+        pl = _Plant(plant, kind, dt, substeps)
+    except (FieldError, np.linalg.LinAlgError):  # an overdamped mode: the dense path
+        return None
+    a = LoopArguments(
+        plant,
+        controller,
+        config,
+        nc,
+        x0,
+        sensors,
+        actuators,
+        disturbances,
+        substeps,
+        measured,
+        kept,
+        law,
+        modal=False,
+        propagate=False,
+    )
+    n, m = a.n, a.m
+    if pl.Ti is not None:  # the loop's state, measurements and impulses in z
+        Ti = np.broadcast_to(pl.Ti, (nc, n, n))
+        a.x0 = _c(np.einsum("cij,cj->ci", Ti, x0))
+        a.Cm = _to_z(a.Cm, pl.T)
+        if a.imp_dx.shape[0]:
+            dx = np.broadcast_to(a.imp_dx, (a.imp_dx.shape[0], nc, n))
+            a.imp_dx = _c(np.einsum("cij,kcj->kci", Ti, dx))
+    code, gains, target, w_ref = _law_arrays(controller, nc)
+    if gains.shape[0] not in (1, nc):  # the Python loop names the mismatch
+        return None
+    batched = plant.n_cases != 1
+    rec = Recorder(
+        plant,
+        n_t,
+        nc,
+        tuple(kept),
+        {},
+        record_states,
+        batched,
+        [k for k, d in disturbances.items() if np.any(d.random)],
+        allocate=False,
+    )
+    Y, Ucmd, U, Dist = (np.empty((nc, n_t, w)) for w in (a.p_rec, m, m, m))
+    stop = np.full(nc, -1, dtype=np.int64)
+    X_all = np.empty((nc, n_t, n)) if record_states else None
+    outs = {
+        k: np.empty((nc, n_t) + ((w,) if w > 1 else ()))
+        for k, w in ((k, channel_width(plant, k)) for k in plant.recorded)
+    }
+    energy = np.empty((nc, n_t)) if rec.has_energy else None
+    size = block_size(nc, n_t, n + (a.width if a.noisy else 0) + a.law_values)
+    # at least MIN_GROUPS groups of lanes per block, so that a block runs on every core
+    size = min(nc, -(-max(size, MIN_GROUPS * LANES) // LANES) * LANES)
+    X = np.empty((min(size, nc), n_t, n))
+
+    def cases(arr, c0, c1, axis=0):
+        if arr.shape[axis] == 1:
+            return arr
+        idx = [slice(None)] * arr.ndim
+        idx[axis] = slice(c0, c1)
+        return _c(arr[tuple(idx)])
+
+    def run_block(c0, c1, samples, Xb, Yb, Ucmdb, Ub, Distb, stopb):
+        """The kernel on cases [c0, c1) over the first ``samples`` samples."""
+        hub = a.inputs(c0, c1, seeds, samples)
+        loop = AttitudeLoop(
+            hub.x0,
+            0 if kind == "rigid" else 1,
+            a.substeps,
+            dt / a.substeps,
+            cases(pl.J, c0, c1),
+            cases(pl.Jinv, c0, c1),
+            cases(pl.E2, c0, c1),
+            cases(pl.E, c0, c1),
+            cases(pl.Q1u, c0, c1),
+            cases(pl.P1u, c0, c1),
+            cases(pl.F, c0, c1),
+            cases(pl.R, c0, c1),
+            hub.imp_k,
+            hub.imp_dx,
+            hub.Cm,
+            hub.Dm,
+            hub.sensor,
+            hub.sensor_slot,
+            code,
+            hub.Ak,
+            hub.Bk,
+            hub.Ck,
+            hub.Dk,
+            hub.y_ref[:samples],
+            hub.u_ff[:samples],
+            hub.K0,
+            cases(gains, c0, c1),
+            cases(target, c0, c1),
+            cases(w_ref, c0, c1),
+            hub.act,
+            hub.dist_std,
+            hub.dist_slot,
+            hub.noise,
+            hub.bound,
+            SINGULAR_TOL,
+        )
+        kernel = attitude_loop_parallel if c1 - c0 >= PARALLEL_GROUPS * LANES else attitude_loop
+        kernel(loop, AttitudeRecords(Xb, Yb, Ucmdb, Ub, Distb, stopb))
+
+    for c0 in range(0, nc, size):
+        c1 = min(nc, c0 + size)
+        Xb = X[: c1 - c0]
+        sl = slice(c0, c1)
+        run_block(c0, c1, n_t, Xb, Y[sl], Ucmd[sl], U[sl], Dist[sl], stop[sl])
+        if (stop[sl] >= 0).any():
+            k = int(stop[sl][stop[sl] >= 0].min())
+            _raise_divergence(run_block, pl, nc, size, k, a.p_rec, m, n, config)
+            return None  # not a divergence: the Gibbs law's singularity (the Python loop's error)
+        if pl.T is not None:  # back to the plant's coordinates, x = T z
+            T = pl.T if pl.T.shape[0] == 1 else pl.T[c0:c1]
+            Xb = np.matmul(Xb, np.swapaxes(T, -1, -2))
+        if X_all is not None:
+            X_all[c0:c1] = Xb
+        _outputs(rec, plant, c0, Xb, U[c0:c1], Dist[c0:c1], outs, energy)
+    Dist += U  # the plant's input u + d, as the Python loop records it
+    rec.commands, rec.applied, rec.disturbed = (np.swapaxes(v, 0, 1) for v in (Ucmd, U, Dist))
+    for name in kept:
+        sl = a.offsets[name]
+        lo, hi = sl.start - a.rec_start, sl.stop - a.rec_start
+        rec.measured[name] = np.swapaxes(Y[..., lo] if hi - lo == 1 else Y[..., lo:hi], 0, 1)
+    rec.outputs = {k: np.swapaxes(v, 0, 1) for k, v in outs.items()}
+    rec.energy = None if energy is None else energy.T
+    rec.vibration = None
+    rec.states = None if X_all is None else np.swapaxes(X_all, 0, 1)
+    t = dt * np.arange(n_t, dtype=np.float64)
+    result = rec.dataset(t, controller, theta0, config, substeps, engine="compiled")
+    result.dataset.attrs["propagation"] = "modal" if pl.T is not None else "rkmk4"
+    return result
+
+
+def _raise_divergence(run_block, pl, nc, size, k, p_rec, m, n, config) -> None:
+    """Raise the Python loop's :class:`~flexsat.sim.engine.SimulationDiverged` for a batch
+    with a case stopped at sample k: every case rerun up to k (the same numbers), at the first
+    sample where any stops, the cases beyond the bound there and the growth over the last
+    period (:func:`~flexsat.sim.engine.divergence_error`); returns when no case is beyond the
+    bound there (a stop of the law itself)."""
+    from flexsat.sim.engine import DIVERGENCE_BOUND, divergence_error
+
+    stop = np.full(nc, -1, dtype=np.int64)
+    x = np.empty((nc, 2, n))
+    u = np.empty((nc, m))
+    for first in (True, False):  # the first stop of any case, then the states around it
+        for c0 in range(0, nc, size):
+            c1 = min(nc, c0 + size)
+            Xb = np.empty((c1 - c0, k + 1, n))
+            Yb, Ucmd, Ub, Db = (np.empty((c1 - c0, k + 1, w)) for w in (p_rec, m, m, m))
+            run_block(c0, c1, k + 1, Xb, Yb, Ucmd, Ub, Db, stop[c0:c1])
+            x[c0:c1], u[c0:c1] = Xb[:, [max(k - 1, 0), k]], Ucmd[:, k]
+        if first:
+            k = int(stop[stop >= 0].min())
+    if pl.T is not None:
+        x = np.matmul(x, np.swapaxes(pl.T, -1, -2))
+    xk, uk = x[:, 1], u
+    bad = ~(np.abs(xk) <= DIVERGENCE_BOUND).all(axis=1) | ~(np.abs(uk) <= DIVERGENCE_BOUND).all(
+        axis=1
+    )
+    if not bad.any():
+        return
+    prev = float(np.abs(x[:, 0]).max()) if k > 0 else 0.0
+    raise divergence_error(xk, uk, config.dt * k, k, prev, config)
+
+
+def _outputs(rec, plant, c0, X, U, Dist, outs, energy) -> None:
+    """Recorded outputs and energies of the cases from c0 on, from their states X (cb, n_t,
+    n): y = C x + D w_{k−1} (:meth:`Recorder.flush`); the nonlinear ones are attitude channels
+    of β and ω (:func:`~flexsat.dynamics.rigid_spacecraft.attitude_output`)."""
+    cb = X.shape[0]
+    c1 = c0 + cb
+    Wp = np.empty_like(U)  # the input held before each sample
+    Wp[:, 0] = 0.0
+    np.add(U[:, :-1], Dist[:, :-1], out=Wp[:, 1:])
+
+    def lin(V, MT):
+        if MT.ndim == 2:
+            return V @ MT
+        return np.einsum("cti,cip->ctp", V, MT[c0:c1])
+
+    if rec.linear:
+        Yo = lin(X, rec.CT) + lin(Wp, rec.DT)
+        col = 0
+        for k in rec.linear:
+            w = channel_width(plant, k)
+            outs[k][c0:c1] = Yo[..., col] if w == 1 else Yo[..., col : col + w]
+            col += w
+    for k in rec.nonlinear:
+        outs[k][c0:c1] = attitude_output(k, X[..., :4], X[..., 4:7])
+    if energy is None:
+        return
+    if plant.n_cases == 1:
+        energy[c0:c1] = plant.energy(X)
+        return
+    for i in range(cb):
+        energy[c0 + i] = _case_plant(plant, c0 + i).energy(X[i])
