@@ -206,7 +206,23 @@ def _show(value: object) -> str:
 
 
 def stack_plants(plants: Iterable[Plant]) -> DispersedPlant:
-    """One :class:`DispersedPlant` whose case i is ``plants[i]``."""
+    """One :class:`DispersedPlant` whose case i is ``plants[i]``.
+
+    Hub + appendage plants of one structure (the same number of modes, appendages and
+    stiffening) become a :class:`~flexsat.dynamics.dispersed_hub.DispersedHubAppendage`:
+    their integrals stacked into per-case arrays, which the compiled loop's metrics-only path
+    takes."""
+    plants = tuple(plants)
+    from flexsat.dynamics.hub_appendage import HubAppendage
+
+    if plants and all(type(p) is HubAppendage for p in plants):
+        first = plants[0]
+        assert isinstance(first, HubAppendage)
+        shape = (first.n_modes, first.stiffening, first.params.n_appendages)
+        if all((p.n_modes, p.stiffening, p.params.n_appendages) == shape for p in plants):  # type: ignore[attr-defined]
+            from flexsat.dynamics.dispersed_hub import DispersedHubAppendage
+
+            return DispersedHubAppendage.from_plants(plants)  # type: ignore[arg-type]
     return DispersedPlant(plants)
 
 

@@ -428,10 +428,13 @@ class _Args:
         self.Co, self.Do = np.zeros((1, 0, n)), np.zeros((1, 0, m))
         self.Dof, self.Q = np.zeros((1, 0)), np.zeros((0, n, n))
         self.widths = [_width(plant, k) for k in names]
-        self.inertia = h[1] if vibration else None
+        # per case for a dispersed plant: (n_cases, 1) against the (n_cases, samples) rows
+        self.inertia = np.asarray(h[1], float)[..., None] if vibration else None
         if not self.lean:
             return
-        rows = list(mats) + ([(h[0][None], np.zeros((1, m)), None)] if vibration else [])
+        rows = list(mats) + (
+            [(np.asarray(h[0])[..., None, :], np.zeros((1, m)), None)] if vibration else []
+        )
         if rows:
             C, D, Df = stacked_output_matrices(rows, m)
             lead = (C.shape[0],) if C.ndim == 3 else (1,)
@@ -732,7 +735,10 @@ def run_reduced(
     replaced by these reductions: the metrics equal those of :func:`run` on the same
     propagation bit for bit. A shared hybrid plant is always propagated in its modal
     coordinates here (O(n) per substep), whatever the batch size, so that a case's metrics
-    do not depend on the batch it runs in (one case alone takes the same path).
+    do not depend on the batch it runs in (one case alone takes the same path); a dispersed
+    plant with per-case energy matrices, momentum rows and inertias
+    (:class:`~flexsat.dynamics.dispersed_hub.DispersedHubAppendage`) runs dense with each
+    case's own propagators, which do not depend on the batch either.
 
     Applies to a plant whose recorded outputs include those above as linear outputs, with an
     energy matrix and a vibration energy (:class:`~flexsat.dynamics.hybrid.HybridPlant`),
@@ -744,7 +750,7 @@ def run_reduced(
 
     names = [c.name for c in plant.outputs]
     axis = plant.maneuver
-    if axis is None or plant.n_cases != 1 or theta0 is None:
+    if axis is None or theta0 is None:
         return None
     # the histories the maneuver metrics read (:func:`flexsat.sim.metrics.maneuver_metrics`):
     # the outputs reduced in the loop, in this order, and the input

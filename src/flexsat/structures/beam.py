@@ -103,6 +103,7 @@ __all__ = [
     "CLAMPED_FREE_BETA_L",
     "FREE_FREE_BETA_L",
     "CantileverModes",
+    "CantileverModesBatch",
     "TipMassCantilever",
     "cantilever_modes_batch",
     "clamped_free_beta_L",
@@ -539,12 +540,14 @@ def _batch_roots(mu: FloatArray, iota: FloatArray, k: int) -> FloatArray:
        (Rayleigh: added mass lowers every frequency, ω ∝ z²) and the cell is found by
        bisection on j between z_s (N = 0, checked) and that bound (N ≥ i + 1, checked).
        The cell is a function of (μ_c, ι_c, i) alone, whatever the batch.
-    2. **Refine.** The Illinois variant of regula falsi (Dowell & Jarratt 1971, BIT 11,
-       168–174) on the bounded determinant Δ(z) of :func:`_cantilever_matrix`, which changes
-       sign across a simple root: the bracket [a, b] keeps a sign change and shrinks to
-       |b − a| ≤ :data:`BATCH_ROOT_RTOL` · b (the relative tolerance of the scalar solver's
-       brentq; the two agree to a few ulps, tested at 1e-12). A step that would leave the
-       bracket (rounding) bisects instead.
+    2. **Refine.** Regula falsi with the Anderson–Björck weighting of the retained end
+       (Anderson & Björck 1973, BIT 13, 253–264; Illinois' ½ when the weight is not
+       positive) on the bounded determinant Δ(z) of :func:`_cantilever_matrix`, which
+       changes sign across a simple root. The bracket [a, b] keeps the sign change; the
+       iteration stops when |b − a| or the last step is at most :data:`BATCH_ROOT_RTOL` · b
+       (the relative tolerance of the scalar solver's brentq; the convergence is
+       superlinear, so the last step bounds the error: the two solvers agree to an ulp or
+       two, tested at 1e-12). A step onto a or outside the bracket (rounding) bisects.
 
     Each case's operations (elementwise numpy and one 4×4 LAPACK call per matrix) do not
     depend on the other cases: a case gives the same bits in any batch. A case whose cell
@@ -553,30 +556,39 @@ def _batch_roots(mu: FloatArray, iota: FloatArray, k: int) -> FloatArray:
     """
     n = mu.size
     z_s = 1e-3
-    count_s = _cantilever_count(np.full(n, z_s), mu, iota)
-    i = np.arange(k, dtype=float)
-    # upper bound: the bare cantilever's root i (> tip-loaded root i), a cell further
-    bare = np.maximum(_tip_loaded_roots(0.0, 0.0, k), 1.0)
-    lo = np.zeros((n, k))
-    hi = np.broadcast_to(np.ceil((bare - z_s) / _SCAN_STEP) + 1.0, (n, k)).copy()
+    I = np.broadcast_to(np.arange(k, dtype=float), (n, k))
     M, Io = np.broadcast_to(mu[:, None], (n, k)), np.broadcast_to(iota[:, None], (n, k))
 
     def grid(j: FloatArray) -> FloatArray:
         return z_s + _SCAN_STEP * j
 
-    I = np.broadcast_to(i, (n, k))
-    scalar = (count_s != 0) | (_cantilever_count(grid(hi), M, Io) < I + 1).any(axis=1)
+    def cells(z: FloatArray) -> FloatArray:
+        return np.floor((z - z_s) / _SCAN_STEP)
+
+    # a first bracket of a few cells around the roots of the batch's median tip body (it
+    # only saves count evaluations: the cell found does not depend on it)
+    guess = cells(_tip_loaded_roots(float(np.median(mu)), float(np.median(iota)), k))
+    lo = np.broadcast_to(np.maximum(guess - 2.0, 0.0), (n, k)).copy()
+    hi = np.broadcast_to(guess + 3.0, (n, k)).copy()
+    n_lo, n_hi = _cantilever_count(grid(lo), M, Io), _cantilever_count(grid(hi), M, Io)
+    wide = (n_lo > I) | (n_hi < I + 1)
+    if wide.any():  # the sure bracket: z_s (no root below) and past the bare beam's root i
+        bare = cells(_tip_loaded_roots(0.0, 0.0, k)) + 1.0
+        lo[wide], hi[wide] = 0.0, np.broadcast_to(bare, (n, k))[wide]
+        n_lo[wide] = _cantilever_count(grid(lo[wide]), M[wide], Io[wide])
+        n_hi[wide] = _cantilever_count(grid(hi[wide]), M[wide], Io[wide])
+    scalar = ((n_lo > I) | (n_hi < I + 1)).any(axis=1)
     while True:  # bisection on the cell index, keeping N(g_lo) <= i < N(g_hi)
         idx = np.nonzero(hi - lo > 1.0)
         if not idx[0].size:
             break
         mid = np.floor(0.5 * (lo[idx] + hi[idx]))
-        below = _cantilever_count(grid(mid), M[idx], Io[idx]) <= I[idx]
-        lo[idx] = np.where(below, mid, lo[idx])
-        hi[idx] = np.where(below, hi[idx], mid)
+        n_mid = _cantilever_count(grid(mid), M[idx], Io[idx])
+        below = n_mid <= I[idx]
+        lo[idx], n_lo[idx] = np.where(below, mid, lo[idx]), np.where(below, n_mid, n_lo[idx])
+        hi[idx], n_hi[idx] = np.where(below, hi[idx], mid), np.where(below, n_hi[idx], n_mid)
     a, b = grid(lo), grid(hi)
-    one_root = (_cantilever_count(a, M, Io) == I) & (_cantilever_count(b, M, Io) == I + 1)
-    scalar |= ~one_root.all(axis=1)
+    scalar |= ~((n_lo == I) & (n_hi == I + 1)).all(axis=1)
 
     def det(z: FloatArray, m: FloatArray, j: FloatArray) -> FloatArray:
         return np.linalg.det(_cantilever_matrix_cases(z, m, j))
@@ -589,14 +601,19 @@ def _batch_roots(mu: FloatArray, iota: FloatArray, k: int) -> FloatArray:
             break
         A, B, FA, FB = a[active], b[active], fa[active], fb[active]
         c = B - FB * (B - A) / (FB - FA)
-        inside = (c > np.minimum(A, B)) & (c < np.maximum(A, B))
+        # a secant step onto b is the converged root (the step test below ends it); one
+        # onto a or outside the bracket (rounding) bisects instead
+        inside = ((c > np.minimum(A, B)) & (c < np.maximum(A, B))) | (c == B)
         c = np.where(inside, c, 0.5 * (A + B))
         fc = det(c, M[active], Io[active])
         flip = np.sign(fc) != np.sign(FB)  # the root lies between b and c: a <- b
-        A, FA = np.where(flip, B, A), np.where(flip, FB, 0.5 * FA)
+        scale = 1.0 - fc / FB  # Anderson–Björck's weight of the end kept, else Illinois' ½
+        FA = np.where(flip, FB, FA * np.where(scale > 0.0, scale, 0.5))
+        A = np.where(flip, B, A)
         a[active], fa[active], b[active], fb[active] = A, FA, c, fc
         root[active] = c
-        active[active] = (fc != 0.0) & (np.abs(c - A) > BATCH_ROOT_RTOL * np.abs(c))
+        tol = BATCH_ROOT_RTOL * np.abs(c)
+        active[active] = (fc != 0.0) & (np.abs(c - A) > tol) & (np.abs(c - B) > tol)
     else:
         raise RuntimeError("beam frequency equation: the batched root refinement did not converge")
     for c in np.flatnonzero(scalar):
