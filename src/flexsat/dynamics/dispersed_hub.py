@@ -18,11 +18,13 @@ batch (every operation is elementwise or one LAPACK/BLAS call per case), so a ch
 case, of seven or of the whole table runs the same numbers.
 
 It is a :class:`~flexsat.dynamics.dispersion.DispersedPlant` (the engine propagates each case
-with its own propagators) that also states, per case, the energy matrix Q_c = blockdiag(K_c,
-M_c), the momentum row and the rigid inertia of a hybrid plant: with those the compiled
-loop's metrics-only path (:func:`flexsat.sim.compiled.run_reduced`) accumulates a sweep's
-maneuver metrics in the loop, as for a shared plant. ``plants[c]`` is the case's own
-:class:`HubAppendage`, made on first use from the batch's integrals.
+with its own propagators) that also states, per case, what the compiled loop needs of a
+hybrid plant: the matrices M_c, K_c, D_c (whence each case's modal coordinates,
+:func:`flexsat.sim.compiled.modal_form`), the energy matrix Q_c = blockdiag(K_c, M_c), the
+momentum row and the rigid inertia. With those a sweep's chunk runs the metrics-only loop
+(:func:`flexsat.sim.compiled.run_reduced`) in each case's modal coordinates, O(n) per step,
+as a shared plant does. ``plants[c]`` is the case's own :class:`HubAppendage`, made on first
+use from the batch's integrals.
 """
 
 from __future__ import annotations
@@ -96,7 +98,8 @@ class DispersedHubAppendage(DispersedPlant):
         self.phi_tip, self.G = integrals["phi_tip"], integrals["G"]
         self._n = int(damping.shape[0])
         self._modes = modes
-        self.plants = _CasePlants(self) if plants is None else tuple(plants)
+        # a lazy sequence of the cases' plants where none were given
+        self.plants = _CasePlants(self) if plants is None else tuple(plants)  # type: ignore[assignment]
         self.inputs = tuple(HubAppendage.inputs)
         self.outputs = tuple(HubAppendage.output_channels)
         self.recorded = tuple(HubAppendage.recorded)
@@ -216,7 +219,7 @@ class DispersedHubAppendage(DispersedPlant):
         cases = {f: np.array([getattr(p.params, f) for p in plants], float) for f in CASE_FIELDS}
         quad = [p.modal_integrals for p in plants]
         integrals = {
-            name: np.stack([np.asarray(q[name], float) for q in quad])  # type: ignore[literal-required]
+            name: np.stack([np.asarray(q[name], float) for q in quad])
             for name in ("omega", "d", "e", "phi_tip", "G")
         }
         zeta = np.stack([p.damping_ratios for p in plants])
@@ -320,7 +323,7 @@ class DispersedHubAppendage(DispersedPlant):
 
     @cached_property
     def mass_inverse(self) -> FloatArray:
-        return np.linalg.inv(self.mass_matrix)
+        return np.linalg.inv(self.mass_matrix).astype(np.float64, copy=False)
 
     @cached_property
     def _linear(self) -> tuple[FloatArray, FloatArray]:
@@ -335,7 +338,7 @@ class DispersedHubAppendage(DispersedPlant):
         return A, B
 
     @cached_property
-    def force_matrix(self) -> FloatArray | None:  # type: ignore[override]
+    def force_matrix(self) -> FloatArray | None:
         """B_f = [0; M⁻¹] per case with the stiffening on, else None."""
         if not self.stiffening:
             return None

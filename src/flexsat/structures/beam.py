@@ -141,8 +141,11 @@ def _nonneg(value: float, field: str) -> float:
 
 # ------------------------------------------------------------------------------------------------
 # bounded boundary-condition matrices (vectorised over z = βL)
-def _tip_rows(z: FloatArray, mu: float, iota: float) -> tuple[FloatArray, FloatArray]:
-    """Tip moment and shear rows, each divided by a positive factor (1 + Ĵ), (1 + m̂)."""
+def _tip_rows(
+    z: FloatArray, mu: float | FloatArray, iota: float | FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Tip moment and shear rows, each divided by a positive factor (1 + Ĵ), (1 + m̂); μ, ι
+    scalars or one per entry of z."""
     E, c, s = np.exp(-z), np.cos(z), np.sin(z)
     jh, mh = iota * z**3, mu * z
     moment = np.stack([E * (1 + jh), 1 - jh, -c + jh * s, -s - jh * c], -1) / (1 + jh)[..., None]
@@ -237,8 +240,11 @@ def _negative_count(K: FloatArray) -> IntArray:
     return (np.linalg.eigvalsh(K) < 0).sum(-1)
 
 
-def _cantilever_count(z: npt.ArrayLike, mu: float, iota: float) -> IntArray:
-    """Number of tip-mass cantilever frequencies with βL < z (Wittrick–Williams)."""
+def _cantilever_count(
+    z: npt.ArrayLike, mu: float | FloatArray, iota: float | FloatArray
+) -> IntArray:
+    """Number of tip-mass cantilever frequencies with βL < z (Wittrick–Williams); μ, ι
+    scalars or one per entry of z."""
     z = np.asarray(z, dtype=float)
     K = _element_dynamic_stiffness(z)[..., 2:, 2:].copy()
     K[..., 0, 0] -= mu * z
