@@ -152,7 +152,8 @@ def test_histories_do_not_depend_on_the_chunk_size_across_the_modal_threshold(bu
 def test_plant_gain_and_maneuver_parameters_batch_in_one_call(case, builder, tmp_path):
     """Cases differing in hub inertia, stiffness, damping, tip mass, gains and maneuver time
     run as one dispersed batch and each equals its own one-case call (exactly) with the sweep's
-    settings (``for_table``: the friction substeps of the whole table)."""
+    settings (``for_table``: the friction substeps of the whole table; ``batch_independent``:
+    the propagation of any chunk size, each case in its own modal coordinates)."""
     n = 4
     table = {
         "hub_inertia": case.params.hub_inertia * np.array([0.8, 1.0, 1.2, 1.5]),
@@ -169,7 +170,9 @@ def test_plant_gain_and_maneuver_parameters_batch_in_one_call(case, builder, tmp
         plant, law, config, _ = builder.for_table(table)(
             {k: v[i : i + 1] for k, v in table.items()}, case_seeds(7, [i])
         )
-        result = simulate(plant, law, config, n_cases=1, seeds=case_seeds(7, [i]))
+        result = simulate(
+            plant, law, config, n_cases=1, seeds=case_seeds(7, [i]), batch_independent=True
+        )
         alone = maneuver_metrics(result)
         for name, value in alone.items():
             assert np.array_equal(stored["metric_" + name][i], value[0], equal_nan=True), name

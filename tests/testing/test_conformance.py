@@ -77,6 +77,15 @@ def _dispersed():
     return stack_plants([_tamu(hub_inertia=f"{h} kg*m**2").model() for h in (6.0, 7.0, 8.0)])
 
 
+def _dispersed_flexible():
+    """The generic batch (a DispersedPlant): flexible spacecraft differing in one frequency."""
+    from flexsat.dynamics.dispersion import stack_plants
+
+    nominal = _flexible()
+    base = np.sqrt(nominal.stiffness)
+    return stack_plants([nominal.with_parameters(frequencies=base * s) for s in (0.95, 1.0, 1.05)])
+
+
 PLANTS = {
     "tamu_hub_appendage": lambda: _tamu().model(),
     "tamu_stiffening": lambda: _tamu(stiffening=True).model(),
@@ -112,6 +121,7 @@ PLANTS = {
         "flexsat.dynamics.tether", fromlist=["x"]
     ).TetheredSubsatellite(control="rate"),
     "dispersed_tamu": _dispersed,
+    "dispersed_flexible_spacecraft": _dispersed_flexible,
     "gimbal_cluster": lambda: __import__(
         "flexsat.dynamics.gimbal_cluster", fromlist=["x"]
     ).GimbalCluster(),

@@ -103,7 +103,7 @@ from flexsat.design.batch_store import (
     store_faults,
     write_chunk,
 )
-from flexsat.dynamics.dispersion import stack_plants
+from flexsat.dynamics.dispersed_hub import DispersedHubAppendage
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.input_checks import (
     FieldError,
@@ -369,19 +369,19 @@ class HubManeuverBuilder:
         return (np.broadcast_to(p.total_inertia, (n,)), np.broadcast_to(p.appendage_inertia, (n,)))
 
     def _plant(self, table: Mapping[str, np.ndarray], n: int):
+        """The base plant, or with plant parameters in the table one
+        :class:`~flexsat.dynamics.dispersed_hub.DispersedHubAppendage` of the chunk's cases:
+        every case's modes, integrals and matrices in array operations, each case the same
+        bits whichever chunk it is in."""
         varied = [k for k in PLANT_PARAMETERS if k in table]
-        base = _hub_plant(self.params, self.n_modes, self.stiffening)
         if not varied:
-            return base
-        return stack_plants(
-            [
-                HubAppendage(
-                    replace(self.params, **{k: float(table[k][i]) for k in varied}),
-                    n_modes=self.n_modes,
-                    stiffening=self.stiffening,
-                )
-                for i in range(n)
-            ]
+            return _hub_plant(self.params, self.n_modes, self.stiffening)
+        fields = {k: np.broadcast_to(table[k], (n,)) for k in varied if k != "damping"}
+        return DispersedHubAppendage.from_parameters(
+            replace(self.params, **fields),
+            self.n_modes,
+            self.stiffening,
+            damping=np.broadcast_to(table["damping"], (n,)) if "damping" in table else None,
         )
 
     def _law(self, table: Mapping[str, np.ndarray], n: int) -> LyapunovTracker:

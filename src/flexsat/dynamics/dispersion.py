@@ -206,15 +206,32 @@ def _show(value: object) -> str:
 
 
 def stack_plants(plants: Iterable[Plant]) -> Plant:
-    """One plant whose case i is ``plants[i]``: a :class:`DispersedPlant`, or, for plants of
-    one type with a ``stacked`` class method (a plant batched over its own parameters, the
-    :class:`~flexsat.dynamics.rigid_spacecraft.RigidSpacecraft` with its own integrator),
-    what that method returns."""
+    """One plant whose case i is ``plants[i]``: a :class:`DispersedPlant`, or a batch that runs
+    faster than one.
+
+    - Plants of one type with a ``stacked`` class method (a plant batched over its own
+      parameters, the :class:`~flexsat.dynamics.rigid_spacecraft.RigidSpacecraft` with its own
+      integrator) give what that method returns.
+    - Hub + appendage plants of one structure (the same number of modes, appendages and
+      stiffening) become a :class:`~flexsat.dynamics.dispersed_hub.DispersedHubAppendage`:
+      their integrals stacked into per-case arrays, which the compiled loop's metrics-only
+      path takes.
+    """
     plants = tuple(plants)
     kind = type(plants[0]) if plants else None
     stacked = getattr(kind, "stacked", None)
     if stacked is not None and all(type(p) is kind for p in plants):
         return stacked(plants)
+    from flexsat.dynamics.hub_appendage import HubAppendage
+
+    if plants and all(type(p) is HubAppendage for p in plants):
+        first = plants[0]
+        assert isinstance(first, HubAppendage)
+        shape = (first.n_modes, first.stiffening, first.params.n_appendages)
+        if all((p.n_modes, p.stiffening, p.params.n_appendages) == shape for p in plants):  # type: ignore[attr-defined]
+            from flexsat.dynamics.dispersed_hub import DispersedHubAppendage
+
+            return DispersedHubAppendage.from_plants(plants)  # type: ignore[arg-type]
     return DispersedPlant(plants)
 
 

@@ -68,8 +68,9 @@ def gauss_legendre(n: int) -> tuple[FloatArray, FloatArray]:
     return s, w
 
 
-class _ModalIntegrals(TypedDict):
-    """The Galerkin integrals of :class:`HubAppendage` (its ``_modal_integrals``)."""
+class ModalIntegrals(TypedDict):
+    """The Galerkin integrals of :class:`HubAppendage` (its :attr:`~HubAppendage.
+    modal_integrals`), SI."""
 
     modes: CantileverModes
     omega: FloatArray  # cantilever frequencies, rad/s
@@ -173,7 +174,7 @@ class HubAppendage(HybridPlant):
     params: HubAppendageParams
     n_modes: int = 10
     stiffening: bool = False
-    _quad: _ModalIntegrals = field(init=False, repr=False, compare=False)
+    _quad: ModalIntegrals = field(init=False, repr=False, compare=False)
 
     output_channels = HYBRID_OUTPUTS + (
         Channel("root_shear", "N", description="root shear force S0 of one appendage"),
@@ -188,11 +189,49 @@ class HubAppendage(HybridPlant):
             raise FieldError(
                 "damping", f"give one ratio or one per mode ({self.n_modes}), got {zeta.size}"
             )
-        object.__setattr__(self, "_quad", self._modal_integrals())
+        if "_quad" not in self.__dict__:  # given by from_modal_integrals
+            object.__setattr__(self, "_quad", self._modal_integrals())
+
+    @classmethod
+    def from_modal_integrals(
+        cls,
+        params: HubAppendageParams,
+        integrals: ModalIntegrals,
+        n_modes: int,
+        stiffening: bool = False,
+    ) -> HubAppendage:
+        """The model of ``params`` from its Galerkin integrals computed elsewhere: a case of
+        :class:`~flexsat.dynamics.dispersed_hub.DispersedHubAppendage`, whose cases' modes
+        and integrals are computed for the whole batch at once.
+
+        Raises
+        ------
+        ValueError
+            Naming ``integrals`` when their shapes are not those of ``n_modes`` modes.
+        """
+        k = require_count(n_modes, "n_modes")
+        shapes = {"omega": (k,), "d": (k,), "e": (k,), "phi_tip": (k,), "G": (k, k)}
+        for name, shape in shapes.items():
+            if np.shape(integrals[name]) != shape:  # type: ignore[literal-required]
+                raise FieldError(
+                    "integrals",
+                    f"{name} has shape {np.shape(integrals[name])}, "  # type: ignore[literal-required]
+                    f"expected {shape} for {k} modes",
+                )
+        self = object.__new__(cls)
+        object.__setattr__(self, "_quad", integrals)
+        cls.__init__(self, params, n_modes, stiffening)
+        return self
+
+    @property
+    def modal_integrals(self) -> ModalIntegrals:
+        """The Galerkin integrals of the model (module docstring): the cantilever modes, ω,
+        the couplings d and e, the tip values φ(l) and the stiffening matrix G."""
+        return self._quad
 
     # ----------------------------------------------------------------------------------------
     # modal integrals
-    def _modal_integrals(self) -> _ModalIntegrals:
+    def _modal_integrals(self) -> ModalIntegrals:
         p, k = self.params, self.n_modes
         modes = p.beam().modes(k)
         npts = max(200, 24 * k)
@@ -210,7 +249,7 @@ class HubAppendage(HybridPlant):
         spin_mass = p.rho * (phi * w[:, None]).T @ phi + p.tip_mass * np.outer(phi_l, phi_l)
         tension = p.rho * (l**2 - x**2) / 2 + p.tip_mass * l
         geometric = (dphi * (w * tension)[:, None]).T @ dphi
-        return _ModalIntegrals(
+        return ModalIntegrals(
             modes=modes,
             omega=modes.omegas,
             d=coupling,

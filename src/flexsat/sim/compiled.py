@@ -26,12 +26,15 @@ in the modal coordinates x = T z) as extra output rows, the energy ½ xᵀ Q x o
 ``total_inertia`` (the hub plants), the angular momentum h as one more row, whence the
 vibration energy E − h² / (2 I_tot) as :meth:`~flexsat.dynamics.hybrid.HybridPlant.
 vibration_energy` computes it. No state history, no change back from modal coordinates.
+A dispersed hybrid plant (per-case M, K, D: :class:`~flexsat.dynamics.dispersed_hub.
+DispersedHubAppendage`) takes this path with each case's own T, propagators, rows and Q
+(arrays with a leading case axis, which the kernel reads per case).
 
 Otherwise (dense propagation, states asked for, a nonlinear recorded output, an energy that is
-not a quadratic form: a dispersed plant) cases run in blocks: each block's states are kept for
-the whole run, then its recorded outputs and energies are computed from them in array products
-(as :class:`~flexsat.sim.recording.Recorder` does per chunk of samples), and dropped; a block
-holds at most :data:`BLOCK_BYTES`.
+not a quadratic form, a dispersed plant without per-case energy matrices) cases run in
+blocks: each block's states are kept for the whole run, then its recorded outputs and
+energies are computed from them in array products (as :class:`~flexsat.sim.recording.
+Recorder` does per chunk of samples), and dropped; a block holds at most :data:`BLOCK_BYTES`.
 """
 
 from __future__ import annotations
@@ -224,10 +227,22 @@ def modal_form(plant, steps: int):
     steps (cases × samples × substeps; :data:`MODAL_STEPS_LARGE` above
     :data:`MODAL_STATES` states), through its :func:`~flexsat.sim.integrators.
     modal_coordinates` (with non-proportional damping exact to cond(T) · eps: ~1e-10
-    relative at 202 states, where the dense step is exact to round-off).
+    relative at 202 states, where the dense step is exact to round-off). A dispersed hybrid
+    plant (:class:`~flexsat.dynamics.dispersed_hub.DispersedHubAppendage`: its matrices with a
+    leading case axis) under the same rule gets each case's own (T, T⁻¹, ω, ζ), stacked on a
+    leading case axis; each case's are computed alone, so they do not depend on the batch.
     """
-    if plant.n_cases != 1:
-        return None
+    hybrid = all(hasattr(plant, k) for k in ("mass_matrix", "stiffness_matrix", "damping_matrix"))
+    few = steps < (MODAL_STEPS_LARGE if plant.nx > MODAL_STATES else MODAL_STEPS)
+    if plant.n_cases != 1:  # a dispersed hybrid plant: each case's own, stacked
+        if few or not hybrid:
+            return None
+        try:
+            return modal_coordinates(
+                plant.mass_matrix, plant.stiffness_matrix, plant.damping_matrix
+            )
+        except (ValueError, np.linalg.LinAlgError):
+            return None
     blocks = getattr(plant, "modal_blocks", None)
     if blocks is not None:
         k = blocks.frequencies.size
@@ -235,9 +250,7 @@ def modal_form(plant, steps: int):
         T[np.arange(k), 2 * np.arange(k)] = 1.0  # x = [q; q'] <- z = (q_0, q_0', q_1, ...)
         T[k + np.arange(k), 2 * np.arange(k) + 1] = 1.0
         return T, T.T.copy(), blocks.frequencies, blocks.damping
-    if steps < (MODAL_STEPS_LARGE if plant.nx > MODAL_STATES else MODAL_STEPS) or not all(
-        hasattr(plant, k) for k in ("mass_matrix", "stiffness_matrix", "damping_matrix")
-    ):
+    if few or not hybrid:
         return None
     try:
         return modal_coordinates(plant.mass_matrix, plant.stiffness_matrix, plant.damping_matrix)
@@ -293,6 +306,13 @@ class LoopArguments:
         Tinv = None if modal is None else modal[1]
         if not propagate:
             self.E, self.P1u = np.zeros((1, 0, 2)), np.zeros((1, 0, m))
+        elif modal is not None and modal[0].ndim == 3:  # a dispersed plant: per case
+            st = ModalPropagator.build(
+                modal[2], modal[3], Tinv @ B, dt, substeps, None if Bf is None else Tinv @ Bf
+            )
+            self.E, self.P1u = _c(st.E), _c(st.P1u)
+            if forced:
+                self.P1f, self.P2f = _c(st.P1f[..., 0]), _c(st.P2f[..., 0])
         elif modal is not None:
             st = ModalPropagator.build(
                 modal[2], modal[3], Tinv @ B, dt, substeps, None if Bf is None else Tinv @ Bf
@@ -309,7 +329,7 @@ class LoopArguments:
                 self.P2f = _c(st.P2f.reshape(-1, n))
         if forced:
             Cr = np.asarray(plant.output_matrices(d.force_output)[0]).reshape(-1, n)
-            self.Cr = _c(Cr if self.T is None else Cr @ self.T)
+            self.Cr = _c(Cr if self.T is None else (Cr[:, None, :] @ self.T)[:, 0])
             f = d.force
             self.fric = _c(
                 np.array(np.broadcast_arrays(f.coulomb, f.viscous, f.smoothing), float).T.reshape(
@@ -419,9 +439,16 @@ class LoopArguments:
         self.width = sum(s.stop - s.start for s in columns.values())
         self.noisy = bool((slot >= 0).any() or (dslot >= 0).any())
         # case by case: a case's modal start must not depend on its batch (see Co below)
-        self.x0 = _c(x0 if Tinv is None else np.array([x @ Tinv.T for x in x0]))
-        if Tinv is not None:
+        self.x0 = _c(
+            x0
+            if Tinv is None
+            else np.array([x @ (Tinv if Tinv.ndim == 2 else Tinv[c]).T for c, x in enumerate(x0)])
+        )
+        if Tinv is not None and Tinv.ndim == 2:
             self.imp_dx = _c(self.imp_dx @ Tinv.T)
+        elif Tinv is not None:  # per case: each case's increments in its own coordinates
+            imp = np.broadcast_to(self.imp_dx, (self.imp_dx.shape[0], nc, n))
+            self.imp_dx = _c(np.stack([imp[:, c] @ Tinv[c].T for c in range(nc)], axis=1))
         self.p, self.m, self.n = p, m, n
         self._recorded_rows(plant, forced, rows)
 
@@ -446,10 +473,13 @@ class LoopArguments:
         self.Co, self.Do = np.zeros((1, 0, n)), np.zeros((1, 0, m))
         self.Dof, self.Q = np.zeros((1, 0)), np.zeros((0, n, n))
         self.widths = [channel_width(plant, k) for k in names]
-        self.inertia = h[1] if vibration else None
+        # per case for a dispersed plant: (n_cases, 1) against the (n_cases, samples) rows
+        self.inertia = np.asarray(h[1], float)[..., None] if vibration else None
         if not self.lean:
             return
-        rows = list(mats) + ([(h[0][None], np.zeros((1, m)), None)] if vibration else [])
+        rows = list(mats) + (
+            [(np.asarray(h[0])[..., None, :], np.zeros((1, m)), None)] if vibration else []
+        )
         if rows:
             C, D, Df = stacked_output_matrices(rows, m)
             lead = (C.shape[0],) if C.ndim == 3 else (1,)
@@ -459,12 +489,18 @@ class LoopArguments:
                 # row by row: a BLAS product's summation order may depend on the matrix's
                 # shape (OpenBLAS Haswell kernels), and a row must have the same bits whichever
                 # rows are stacked with it, so that run_reduced's rows equal run's
-                C = np.array([[row @ self.T for row in case_rows] for case_rows in C])
+                T = self.T if self.T.ndim == 3 else self.T[None]
+                C = np.array(
+                    [
+                        [row @ T[min(c, len(T) - 1)] for row in case_rows]
+                        for c, case_rows in enumerate(np.broadcast_to(C, (len(T),) + C.shape[1:]))
+                    ]
+                )
             self.Co = _c(C)
             self.Do, self.Dof = _c(D), _c(np.broadcast_to(Dof, D.shape[:-1]))
         if energy:
             Q = np.asarray(Q, float)
-            Q = Q if self.T is None else self.T.T @ Q @ self.T
+            Q = Q if self.T is None else np.swapaxes(self.T, -1, -2) @ Q @ self.T
             self.Q = _c(Q.reshape((-1, n, n)))
 
     def block(self, c0: int, c1: int, seeds, n_t: int, X, Y, Ucmd, U, D, F, stop, O=None, En=None):
@@ -650,7 +686,7 @@ def run(
         if (stop[c0:c1] >= 0).any():
             continue
         if a.T is not None:  # back to the plant's coordinates, x = T z
-            X[...] = X @ a.T.T
+            X[...] = X @ np.swapaxes(a.T if a.T.ndim == 2 else a.T[c0:c1], -1, -2)
         _outputs(rec, plant, a, c0, c1, X, U[c0:c1], Dist[c0:c1], F[c0:c1], outs, energy, vib)
     if (stop >= 0).any():
         if a.T is not None:  # the Python loop bounds the physical state: rerun it dense
@@ -750,7 +786,10 @@ def run_reduced(
     replaced by these reductions: the metrics equal those of :func:`run` on the same
     propagation bit for bit. A shared hybrid plant is always propagated in its modal
     coordinates here (O(n) per substep), whatever the batch size, so that a case's metrics
-    do not depend on the batch it runs in (one case alone takes the same path).
+    do not depend on the batch it runs in (one case alone takes the same path); so is a
+    dispersed hybrid plant with per-case energy matrices, momentum rows and inertias
+    (:class:`~flexsat.dynamics.dispersed_hub.DispersedHubAppendage`), in each case's own
+    modal coordinates (:func:`modal_form`), which do not depend on the batch either.
 
     Applies to a plant whose recorded outputs include those above as linear outputs, with an
     energy matrix and a vibration energy (:class:`~flexsat.dynamics.hybrid.HybridPlant`),
@@ -762,7 +801,7 @@ def run_reduced(
 
     names = [c.name for c in plant.outputs]
     axis = plant.maneuver
-    if axis is None or plant.n_cases != 1 or theta0 is None:
+    if axis is None or theta0 is None:
         return None
     # the histories the maneuver metrics read (:func:`flexsat.sim.metrics.maneuver_metrics`):
     # the outputs reduced in the loop, in this order, and the input

@@ -37,7 +37,7 @@ from typing import TypeAlias, TypeVar, cast
 
 import numpy as np
 import numpy.typing as npt
-from scipy.linalg import eigh, expm
+from scipy.linalg import expm
 
 from flexsat.input_checks import FieldError
 from flexsat.units import FloatArray
@@ -278,42 +278,48 @@ class ExpRK4Stepper:
 _SERIES_RADIUS = 1.0
 
 
-def _block_series(a: float, b: float, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(e^{hA}, h φ1(hA), h φ2(hA)) of A = [[0, 1], [−a, −b]] by Taylor series.
+def _block_series(a: FloatArray, b: FloatArray, h: float) -> tuple[FloatArray, ...]:
+    """(e^{hA}, h φ1(hA), h φ2(hA)) of A = [[0, 1], [−a_i, −b_i]] by Taylor series, (K, 2, 2)
+    each.
 
     e^{M} = Σ M^j / j!, φ1 = Σ M^j / (j+1)!, φ2 = Σ M^j / (j+2)!, M = hA; for h max(√a, b) <= 1
     the terms fall as 1/j!, so 25 terms reach round-off. Exact (finite) for the rigid block.
+    The 2×2 products are written out (two terms per entry): each block's numbers do not depend
+    on the others.
     """
-    M = h * np.array([[0.0, 1.0], [-a, -b]])
-    E = np.eye(2)
-    F1 = np.eye(2)
-    F2 = 0.5 * np.eye(2)
-    P = np.eye(2)
+    M = np.zeros((a.size, 2, 2))
+    M[:, 0, 1], M[:, 1, 0], M[:, 1, 1] = h, -h * a, -h * b
+    E = np.broadcast_to(np.eye(2), M.shape).copy()
+    F1, F2, P = E.copy(), 0.5 * E, E.copy()
     for j in range(1, 25):
-        P = P @ M / j  # M^j / j!
+        P = (P[:, :, :, None] * M[:, None, :, :]).sum(axis=2) / j  # M^j / j!
         E = E + P
         F1 = F1 + P / (j + 1)
         F2 = F2 + P / ((j + 1) * (j + 2))
     return E, h * F1, h * F2
 
 
-def _phi_scalar(z: complex) -> tuple[complex, complex, complex]:
-    """(e^z, φ1(z), φ2(z)) for a scalar z with Re z <= 0; series below |z| = 1/2 (the
-    closed forms cancel there)."""
-    if abs(z) < 0.5:
-        term, f1, f2 = 1.0 + 0j, 0j, 0j
-        for j in range(20):  # |z|^j / j! < 1e-24 for j = 20
-            f1 += term / (j + 1)
-            f2 += term / ((j + 1) * (j + 2))
-            term = term * z / (j + 1)
-        return np.exp(z), f1, f2
+def _phi_complex(z: npt.NDArray[np.complex128]) -> tuple[npt.NDArray[np.complex128], ...]:
+    """(e^z, φ1(z), φ2(z)) for complex z with Re z <= 0, elementwise; series below |z| = 1/2
+    (the closed forms cancel there)."""
     ez = np.exp(z)
-    f1 = (ez - 1.0) / z
-    return ez, f1, (f1 - 1.0) / z
+    small = np.abs(z) < 0.5
+    f1, f2 = np.empty_like(z), np.empty_like(z)
+    zs, zl = z[small], z[~small]
+    term, s1, s2 = np.ones_like(zs), np.zeros_like(zs), np.zeros_like(zs)
+    for j in range(20):  # |z|^j / j! < 1e-24 for j = 20
+        s1 = s1 + term / (j + 1)
+        s2 = s2 + term / ((j + 1) * (j + 2))
+        term = term * zs / (j + 1)
+    f1[small], f2[small] = s1, s2
+    big1 = (ez[~small] - 1.0) / zl
+    f1[~small], f2[~small] = big1, (big1 - 1.0) / zl
+    return ez, f1, f2
 
 
-def _block_closed_form(a: float, b: float, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(e^{hA}, h φ1(hA), h φ2(hA)) of A = [[0, 1], [−a, −b]], a > 0, in closed form.
+def _block_closed_form(a: FloatArray, b: FloatArray, h: float) -> tuple[FloatArray, ...]:
+    """(e^{hA}, h φ1(hA), h φ2(hA)) of A = [[0, 1], [−a_i, −b_i]], a_i > 0, in closed form,
+    (K, 2, 2) each.
 
     With σ = b/2 and (μh)² = (σ² − a) h² (underdamped < 0, critically damped 0, overdamped
     > 0) the eigenvalues are λ1,2 = −σ ± μ. Away from critical damping every function g of the
@@ -328,28 +334,48 @@ def _block_closed_form(a: float, b: float, h: float) -> tuple[np.ndarray, np.nda
     (μt)², and the input integrals follow from A h φ1(hA) = e^{hA} − I, A h φ2(hA) = φ1(hA) − I
     (no cancellation: this branch has σh >= 1/2).
     """
-    A = np.array([[0.0, 1.0], [-a, -b]])
-    I2 = np.eye(2)
+    K = a.size
+    A = np.zeros((K, 2, 2))
+    A[:, 0, 1], A[:, 1, 0], A[:, 1, 1] = 1.0, -a, -b
+    I2 = np.broadcast_to(np.eye(2), A.shape)
     sigma = 0.5 * b
     x = (sigma * sigma - a) * h * h  # (μh)²
-    if abs(x) < 1e-3:
-        C = 1 + x / 2 + x**2 / 24 + x**3 / 720 + x**4 / 40320
-        S = h * (1 + x / 6 + x**2 / 120 + x**3 / 5040 + x**4 / 362880)
-        E = np.exp(-sigma * h) * (C * I2 + S * (A + sigma * I2))
-        Ainv = np.array([[-b, -1.0], [a, 0.0]]) / a
-        P1 = Ainv @ (E - I2)
-        return E, P1, Ainv @ (P1 / h - I2)
-    if x < 0:
-        mu = 1j * np.sqrt(-x) / h
-        l1, l2 = -sigma + mu, -sigma - mu
-    else:
-        mu = np.sqrt(x) / h
-        l1, l2 = -a / (sigma + mu), -sigma - mu
-    g1, g2 = _phi_scalar(h * l1), _phi_scalar(h * l2)
-    out = []
-    for k, hk in enumerate((1.0, h, h)):
-        G = (g1[k] * (A - l2 * I2) - g2[k] * (A - l1 * I2)) / (l1 - l2)
-        out.append(hk * G.real)
+    out = np.empty((3, K, 2, 2))
+    crit = np.abs(x) < 1e-3
+    if crit.any():
+        xc, sc, ac, bc = x[crit], sigma[crit], a[crit], b[crit]
+        C = 1 + xc / 2 + xc**2 / 24 + xc**3 / 720 + xc**4 / 40320
+        S = h * (1 + xc / 6 + xc**2 / 120 + xc**3 / 5040 + xc**4 / 362880)
+        E = np.exp(-sc * h)[:, None, None] * (
+            C[:, None, None] * I2[crit]
+            + S[:, None, None] * (A[crit] + sc[:, None, None] * I2[crit])
+        )
+        Ainv = np.zeros((xc.size, 2, 2))
+        Ainv[:, 0, 0], Ainv[:, 0, 1], Ainv[:, 1, 0] = -bc / ac, -1.0 / ac, 1.0
+        P1 = np.einsum("kij,kjl->kil", Ainv, E - I2[crit])
+        out[0, crit], out[1, crit] = E, P1
+        out[2, crit] = np.einsum("kij,kjl->kil", Ainv, P1 / h - I2[crit])
+    rest = ~crit
+    if rest.any():
+        xr, sr, ar = x[rest], sigma[rest], a[rest]
+        under = xr < 0
+        mu = (
+            np.where(
+                under, 1j * np.sqrt(np.where(under, -xr, 0.0)), np.sqrt(np.where(under, 0.0, xr))
+            )
+            / h
+        )
+        l1 = np.where(under, -sr + mu, -ar / np.where(under, 1.0, sr + mu.real))
+        l2 = -sr - mu
+        g1 = _phi_complex((h * l1).astype(np.complex128))
+        g2 = _phi_complex((h * l2).astype(np.complex128))
+        Ar, Ir = A[rest], I2[rest]
+        for k, hk in enumerate((1.0, h, h)):
+            G = (
+                g1[k][:, None, None] * (Ar - l2[:, None, None] * Ir)
+                - g2[k][:, None, None] * (Ar - l1[:, None, None] * Ir)
+            ) / (l1 - l2)[:, None, None]
+            out[k, rest] = hk * G.real
     return out[0], out[1], out[2]
 
 
@@ -357,42 +383,53 @@ def block_propagators(
     omega: npt.ArrayLike, zeta: float | npt.ArrayLike, h: float
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """(e^{hA_i}, h φ1(hA_i), h φ2(hA_i)) per block A_i = [[0, 1], [−ω_i², −2ζ_i ω_i]], each
-    (n_blocks, 2, 2); ω = 0 is a rigid (double-integrator) block."""
+    ``omega.shape`` + (2, 2); ω = 0 is a rigid (double-integrator) block. Every block at once
+    (the blocks of many cases too); each block's numbers do not depend on the others."""
     omega = np.asarray(omega, float)
     zeta = np.broadcast_to(np.asarray(zeta, float), omega.shape)
-    out = np.empty((3, omega.size, 2, 2))
-    for i, (w, z) in enumerate(zip(omega, zeta)):
-        a, b = w * w, 2.0 * z * w
-        small = h * max(w, abs(b)) <= _SERIES_RADIUS
-        out[:, i] = (_block_series if small else _block_closed_form)(a, b, h)
-    return out[0], out[1], out[2]
+    w, z = omega.ravel(), zeta.ravel()
+    a, b = w * w, 2.0 * z * w
+    small = h * np.maximum(w, np.abs(b)) <= _SERIES_RADIUS
+    out = np.empty((3, w.size, 2, 2))
+    for mask, form in ((small, _block_series), (~small, _block_closed_form)):
+        if mask.any():
+            out[:, mask] = np.stack(form(a[mask], b[mask], h))
+    shape = omega.shape + (2, 2)
+    return out[0].reshape(shape), out[1].reshape(shape), out[2].reshape(shape)
 
 
 def _refined_modes(K: np.ndarray, M: np.ndarray, steps: int = 2) -> tuple[np.ndarray, np.ndarray]:
-    """Undamped modes K φ = λ M φ (Φᵀ M Φ = I), each refined by Newton steps.
+    """Undamped modes K φ = λ M φ (Φᵀ M Φ = I), each refined by Newton steps; K, M (N, n, n)
+    (a stack of problems), λ (N, n) ascending, Φ (N, n, n).
 
-    ``eigh`` leaves errors ~ eps ‖K‖ / gap in a low mode: with the stiff modes of a fine model
-    (‖K‖ ~ ω_max² ~ 1e11 at 100 modes per appendage) that is 1e-8. The residual K φ − λ M φ
-    of a low mode is computed far more accurately (its entries on stiff rows multiply small
-    components), so Newton's correction of the bordered system
+    The eigenproblem is reduced with the Cholesky factor M = L Lᵀ (Kt = L⁻¹ K L⁻ᵀ, Φ = L⁻ᵀ Y),
+    one LAPACK call per problem of the stack. ``eigh`` leaves errors ~ eps ‖K‖ / gap in a low
+    mode: with the stiff modes of a fine model (‖K‖ ~ ω_max² ~ 1e11 at 100 modes per
+    appendage) that is 1e-8. The residual K φ − λ M φ of a low mode is computed far more
+    accurately (its entries on stiff rows multiply small components), so Newton's correction
+    of the bordered system
 
         [[K − λ M, −M φ], [−(M φ)ᵀ, 0]] [δφ; δλ] = [−(K − λ M) φ; (φᵀ M φ − 1) / 2]
 
     restores the mode to round-off of its own scale (iterative refinement of an eigenpair).
     """
-    lam, Phi = eigh(K, M)
-    n = K.shape[0]
-    J = np.zeros((n, n + 1, n + 1))  # one bordered system per mode, solved as one batch
-    rhs = np.zeros((n, n + 1))
+    Linv = np.linalg.inv(np.linalg.cholesky(M))
+    LinvT = np.swapaxes(Linv, -1, -2)
+    Kt = Linv @ K @ LinvT
+    lam, Y = np.linalg.eigh(0.5 * (Kt + np.swapaxes(Kt, -1, -2)))
+    Phi = LinvT @ Y
+    N, n = lam.shape
+    J = np.zeros((N, n, n + 1, n + 1))  # one bordered system per mode, solved as one batch
+    rhs = np.zeros((N, n, n + 1))
     for _ in range(steps):
         MPhi = M @ Phi
-        J[:, :n, :n] = K[None] - lam[:, None, None] * M[None]
-        J[:, :n, n] = J[:, n, :n] = -MPhi.T
-        rhs[:, :n] = -(K @ Phi - MPhi * lam).T
-        rhs[:, n] = 0.5 * (np.einsum("ij,ij->j", Phi, MPhi) - 1.0)
+        J[:, :, :n, :n] = K[:, None] - lam[:, :, None, None] * M[:, None]
+        J[:, :, :n, n] = J[:, :, n, :n] = -np.swapaxes(MPhi, -1, -2)
+        rhs[:, :, :n] = -np.swapaxes(K @ Phi - MPhi * lam[:, None, :], -1, -2)
+        rhs[:, :, n] = 0.5 * (np.einsum("cij,cij->cj", Phi, MPhi) - 1.0)
         d = np.linalg.solve(J, rhs[..., None])[..., 0]
-        Phi = Phi + d[:, :n].T
-        lam = lam + d[:, n]
+        Phi = Phi + np.swapaxes(d[:, :, :n], -1, -2)
+        lam = lam + d[:, :, n]
     return lam, Phi
 
 
@@ -404,7 +441,10 @@ def modal_coordinates(
 
     x = [q; q'], A = [[0, I], [−M⁻¹K, −M⁻¹C]]. Returns (T, T_inv, omega, zeta) with
     T⁻¹ A T = diag([[0, 1], [−ω_i², −2ζ_i ω_i]]), rigid blocks (ω = 0) first, then ascending
-    ω; use T_inv (formed from the factors, see below) rather than inverting T.
+    ω; use T_inv (formed from the factors, see below) rather than inverting T. M, K, C may be
+    stacks (N, n, n) of problems with the same number of rigid modes (the cases of a dispersed
+    plant): every result then has a leading case axis, each case computed alone (batched
+    LAPACK calls, elementwise operations), so its numbers do not depend on the stack.
 
     Two stages, because the eigenvectors of A itself are only accurate to eps ‖A‖ / gap
     (‖A‖ ~ ω_max²: at 100 modes per appendage the low modes lose 8 digits):
@@ -425,24 +465,31 @@ def modal_coordinates(
     eigenvalues are rejected (pair them by hand with :func:`block_propagators`).
     """
     M, K, C = (np.asarray(a, float) for a in (M, K, C))
-    n = M.shape[0]
+    single = M.ndim == 2
+    if single:
+        M, K, C = M[None], K[None], C[None]
+    N, n = M.shape[0], M.shape[-1]
     lam, Phi = _refined_modes(K, M)
-    rigid = lam <= rigid_tol * max(lam.max(), 0.0)
+    rigid = lam <= rigid_tol * np.maximum(lam.max(axis=1, keepdims=True), 0.0)
+    r = int(rigid[0].sum())
+    if not (rigid[:, :r].all() and not rigid[:, r:].any()):
+        raise FieldError("K", "the cases of a stack must have the same number of rigid modes")
     lam = np.where(rigid, 0.0, lam)
     s = np.where(rigid, 1.0, np.sqrt(lam))
-    Ct = Phi.T @ C @ Phi
-    if np.abs(Ct[rigid]).max(initial=0.0) > rigid_tol * np.abs(Ct).max(initial=0.0):
+    Ct = np.swapaxes(Phi, -1, -2) @ C @ Phi
+    scale = np.abs(Ct).max(axis=(1, 2))
+    if (np.abs(Ct[:, :r]).max(axis=(1, 2), initial=0.0) > rigid_tol * scale).any():
         raise FieldError(
             "C",
             "damps a rigid-body mode (C φ ≠ 0 for K φ = 0); modal_coordinates "
             "needs undamped rigid modes",
         )
-    el = np.flatnonzero(~rigid)
-    ne = el.size
-    At = np.zeros((2 * ne, 2 * ne))
-    At[:ne, ne:] = np.diag(s[el])
-    At[ne:, :ne] = -np.diag(s[el])
-    At[ne:, ne:] = -Ct[np.ix_(el, el)]
+    ne = n - r
+    At = np.zeros((N, 2 * ne, 2 * ne))
+    i = np.arange(ne)
+    At[:, i, ne + i] = s[:, r:]
+    At[:, ne + i, i] = -s[:, r:]
+    At[:, ne:, ne:] = -Ct[:, r:, r:]
     mu, V = np.linalg.eig(At)
     real = np.abs(mu.imag) <= rigid_tol * np.abs(mu)
     if real.any():
@@ -451,39 +498,38 @@ def modal_coordinates(
             f"overdamped (real) modes {mu[real].real}; modal_coordinates "
             "handles oscillatory modes only",
         )
-    Tt = np.zeros((2 * n, 2 * n))  # columns in x̃ = [√Λ η; η']
-    omega, zeta = [], []
-    col = 0
-    for j in np.flatnonzero(rigid):
-        Tt[j, col] = Tt[n + j, col + 1] = 1.0
-        col += 2
-        omega.append(0.0)
-        zeta.append(0.0)
-    upper = np.flatnonzero(mu.imag > 0)
-    for i in upper[np.argsort(np.abs(mu[upper]))]:
-        lm, v = mu[i], V[:, i]
-        pos = v[:ne]
-        v = v * np.exp(-0.5j * np.angle(np.sum(pos**2))) / np.linalg.norm(pos)
-        a, b = abs(lm) ** 2, -2.0 * lm.real
-        v2 = (-1j * v / lm.imag).real
-        v1 = At @ v2 + b * v2
-        Tt[el, col], Tt[n + el, col] = v1[:ne], v1[ne:]
-        Tt[el, col + 1], Tt[n + el, col + 1] = v2[:ne], v2[ne:]
-        col += 2
-        w = np.sqrt(a)
-        omega.append(w)
-        zeta.append(b / (2 * w))
-    if col != 2 * n:
-        raise ValueError(f"M, K, C: found {col} modal coordinates for {2 * n} states")
-    S = np.zeros((2 * n, 2 * n))  # x = S x̃
-    S[:n, :n] = Phi / s
-    S[n:, n:] = Phi
+    # the upper eigenvalue of each pair, ascending |λ|
+    order = np.argsort(np.where(mu.imag > 0, np.abs(mu), np.inf), axis=1, kind="stable")[:, :ne]
+    lm = np.take_along_axis(mu, order, axis=1)  # (N, ne)
+    v = np.take_along_axis(V, order[:, None, :], axis=2)  # (N, 2 ne, ne)
+    pos = v[:, :ne]
+    phase = np.exp(-0.5j * np.angle(np.sum(pos**2, axis=1))) / np.linalg.norm(pos, axis=1)
+    v = v * phase[:, None, :]
+    a, b = np.abs(lm) ** 2, -2.0 * lm.real
+    v2 = (-1j * v / lm.imag[:, None, :]).real
+    v1 = At @ v2 + b[:, None, :] * v2
+    Tt = np.zeros((N, 2 * n, 2 * n))  # columns in x̃ = [√Λ η; η']
+    j = np.arange(r)
+    Tt[:, j, 2 * j] = Tt[:, n + j, 2 * j + 1] = 1.0
+    el, cols = r + i, 2 * r + 2 * i
+    Tt[:, el[:, None], cols[None, :]] = v1[:, :ne]
+    Tt[:, (n + el)[:, None], cols[None, :]] = v1[:, ne:]
+    Tt[:, el[:, None], cols[None, :] + 1] = v2[:, :ne]
+    Tt[:, (n + el)[:, None], cols[None, :] + 1] = v2[:, ne:]
+    w = np.sqrt(a)
+    omega = np.concatenate([np.zeros((N, r)), w], axis=1)
+    zeta = np.concatenate([np.zeros((N, r)), b / (2 * w)], axis=1)
+    S = np.zeros((N, 2 * n, 2 * n))  # x = S x̃
+    S[:, :n, :n] = Phi / s[:, None, :]
+    S[:, n:, n:] = Phi
     # T⁻¹ = T̃⁻¹ S⁻¹ with S⁻¹ = diag(√Λ Φᵀ M, Φᵀ M) (Φᵀ M Φ = I): inverting T itself would
     # cost cond(T) ~ ω_max / ω_min digits, inverting T̃ only those of the damped mode shapes
     Sinv = np.zeros_like(S)
-    Sinv[:n, :n] = (Phi.T @ M) * s[:, None]
-    Sinv[n:, n:] = Phi.T @ M
-    return S @ Tt, np.linalg.solve(Tt, Sinv), np.array(omega), np.array(zeta)
+    PhiTM = np.swapaxes(Phi, -1, -2) @ M
+    Sinv[:, :n, :n] = PhiTM * s[:, :, None]
+    Sinv[:, n:, n:] = PhiTM
+    out = (S @ Tt, np.linalg.solve(Tt, Sinv), omega, zeta)
+    return (out[0][0], out[1][0], out[2][0], out[3][0]) if single else out
 
 
 @dataclass(frozen=True)
@@ -521,22 +567,29 @@ class ModalPropagator:
         Bf: npt.ArrayLike | None = None,
     ) -> ModalPropagator:
         """Propagators of the modal plant with block frequencies ``omega`` (rad/s), damping
-        ratios ``zeta``, input columns ``B`` (n, m) and force columns ``Bf`` (n, n_f)."""
+        ratios ``zeta``, input columns ``B`` (n, m) and force columns ``Bf`` (n, n_f); with a
+        leading case axis on all of them (omega (N, n/2), B (N, n, m)), each case's (the
+        propagators of a dispersed plant, :attr:`E` (N, n, 2), :attr:`P1u` (N, n, m), ...).
+        The 2×2 block products are written out, so a case's numbers do not depend on the
+        others."""
         if substeps < 1:
             raise FieldError("substeps", f"must be >= 1, got {substeps}")
+        omega = np.asarray(omega, float)
         E2, F1, F2 = block_propagators(omega, zeta, dt / substeps)
-        n = 2 * E2.shape[0]
-        inputs = np.asarray(B, float).reshape(n, -1)
+        lead, nb = omega.shape[:-1], omega.shape[-1]
+        n = 2 * nb
+        inputs = np.asarray(B, float).reshape(lead + (n, -1))
 
         def apply(F: FloatArray, X: FloatArray) -> FloatArray:
-            # block-diagonal F (nb, 2, 2) times X (n, k)
-            return np.einsum("bij,bjk->bik", F, X.reshape(-1, 2, X.shape[1])).reshape(n, -1)
+            # block-diagonal F (..., nb, 2, 2) times X (..., n, k)
+            Xb = X.reshape(lead + (nb, 1, 2, X.shape[-1]))
+            return (F[..., :, :, None] * Xb).sum(axis=-2).reshape(lead + (n, -1))
 
         P1f = P2f = None
         if Bf is not None:
-            forces = np.asarray(Bf, float).reshape(n, -1)
+            forces = np.asarray(Bf, float).reshape(lead + (n, -1))
             P1f, P2f = apply(F1, forces), apply(F2, forces)
-        return cls(E2.reshape(n, 2), apply(F1, inputs), P1f, P2f, substeps)
+        return cls(E2.reshape(lead + (n, 2)), apply(F1, inputs), P1f, P2f, substeps)
 
     def step(self, z: FloatArray, w: FloatArray, force: Force | None = None) -> FloatArray:
         """Advance z (n_cases, n) one control period with held input w (n_cases, m); ``force``

@@ -103,7 +103,9 @@ __all__ = [
     "CLAMPED_FREE_BETA_L",
     "FREE_FREE_BETA_L",
     "CantileverModes",
+    "CantileverModesBatch",
     "TipMassCantilever",
+    "cantilever_modes_batch",
     "clamped_free_beta_L",
     "hub_free_frequencies",
 ]
@@ -116,6 +118,9 @@ FREE_FREE_BETA_L = (4.730040745, 7.853204624, 10.99560784, 14.13716549)
 _SCAN_STEP = math.pi / 32  # grid step in z = βL for the sign-change scan
 _SUBDIVIDE = 8  # sub-intervals per refinement of an inconsistent grid interval
 _MAX_DEPTH = 8  # refinement levels (interval shrinks by 8**8 ≈ 1.7e7)
+#: relative bracket width at which the vectorised root refinement stops (that of brentq here)
+BATCH_ROOT_RTOL = 4 * np.finfo(float).eps
+_BATCH_MAX_ITER = 200  # Illinois steps; each at least halves a stalled side: never reached
 
 IntArray = npt.NDArray[np.int_]
 
@@ -136,8 +141,11 @@ def _nonneg(value: float, field: str) -> float:
 
 # ------------------------------------------------------------------------------------------------
 # bounded boundary-condition matrices (vectorised over z = βL)
-def _tip_rows(z: FloatArray, mu: float, iota: float) -> tuple[FloatArray, FloatArray]:
-    """Tip moment and shear rows, each divided by a positive factor (1 + Ĵ), (1 + m̂)."""
+def _tip_rows(
+    z: FloatArray, mu: float | FloatArray, iota: float | FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Tip moment and shear rows, each divided by a positive factor (1 + Ĵ), (1 + m̂); μ, ι
+    scalars or one per entry of z."""
     E, c, s = np.exp(-z), np.cos(z), np.sin(z)
     jh, mh = iota * z**3, mu * z
     moment = np.stack([E * (1 + jh), 1 - jh, -c + jh * s, -s - jh * c], -1) / (1 + jh)[..., None]
@@ -232,8 +240,11 @@ def _negative_count(K: FloatArray) -> IntArray:
     return (np.linalg.eigvalsh(K) < 0).sum(-1)
 
 
-def _cantilever_count(z: npt.ArrayLike, mu: float, iota: float) -> IntArray:
-    """Number of tip-mass cantilever frequencies with βL < z (Wittrick–Williams)."""
+def _cantilever_count(
+    z: npt.ArrayLike, mu: float | FloatArray, iota: float | FloatArray
+) -> IntArray:
+    """Number of tip-mass cantilever frequencies with βL < z (Wittrick–Williams); μ, ι
+    scalars or one per entry of z."""
     z = np.asarray(z, dtype=float)
     K = _element_dynamic_stiffness(z)[..., 2:, 2:].copy()
     K[..., 0, 0] -= mu * z
@@ -521,6 +532,199 @@ def _tip_loaded_roots(mu: float, iota: float, k: int) -> FloatArray:
     )
     roots.flags.writeable = False
     return roots
+
+
+def _batch_roots(mu: FloatArray, iota: FloatArray, k: int) -> FloatArray:
+    r"""First k roots z = βL of the tip-loaded cantilever for each case (μ_c, ι_c), (n, k).
+
+    The vectorised counterpart of :func:`_tip_loaded_roots`, every case and mode at once:
+
+    1. **Bracket.** Root i of case c lies in exactly one cell [g_j, g_{j+1}] of the grid
+       g_j = z_s + j π/32 (z_s = 10⁻³, the scalar scan's start): the cell with
+       N(g_j) ≤ i < N(g_{j+1}), N the Wittrick–Williams count (:func:`_cantilever_count`).
+       A tip body only adds mass, so z_i ≤ z_i of the bare clamped–free beam
+       (Rayleigh: added mass lowers every frequency, ω ∝ z²) and the cell is found by
+       bisection on j between z_s (N = 0, checked) and that bound (N ≥ i + 1, checked).
+       The cell is a function of (μ_c, ι_c, i) alone, whatever the batch.
+    2. **Refine.** Regula falsi with the Anderson–Björck weighting of the retained end
+       (Anderson & Björck 1973, BIT 13, 253–264; Illinois' ½ when the weight is not
+       positive) on the bounded determinant Δ(z) of :func:`_cantilever_matrix`, which
+       changes sign across a simple root. The bracket [a, b] keeps the sign change; the
+       iteration stops when |b − a| or the last step is at most :data:`BATCH_ROOT_RTOL` · b
+       (the relative tolerance of the scalar solver's brentq; the convergence is
+       superlinear, so the last step bounds the error: the two solvers agree to an ulp or
+       two, tested at 1e-12). A step onto a or outside the bracket (rounding) bisects.
+
+    Each case's operations (elementwise numpy and one 4×4 LAPACK call per matrix) do not
+    depend on the other cases: a case gives the same bits in any batch. A case whose cell
+    holds two roots (numerically coincident roots) or whose tip mass puts a root below z_s is
+    solved by the scalar :func:`_tip_loaded_roots` (grid subdivision) instead.
+    """
+    n = mu.size
+    z_s = 1e-3
+    I = np.broadcast_to(np.arange(k, dtype=float), (n, k))
+    M, Io = np.broadcast_to(mu[:, None], (n, k)), np.broadcast_to(iota[:, None], (n, k))
+
+    def grid(j: FloatArray) -> FloatArray:
+        return z_s + _SCAN_STEP * j
+
+    def cells(z: FloatArray) -> FloatArray:
+        return np.floor((z - z_s) / _SCAN_STEP)
+
+    # a first bracket of a few cells around the roots of the batch's median tip body (it
+    # only saves count evaluations: the cell found does not depend on it)
+    guess = cells(_tip_loaded_roots(float(np.median(mu)), float(np.median(iota)), k))
+    lo = np.broadcast_to(np.maximum(guess - 2.0, 0.0), (n, k)).copy()
+    hi = np.broadcast_to(guess + 3.0, (n, k)).copy()
+    n_lo, n_hi = _cantilever_count(grid(lo), M, Io), _cantilever_count(grid(hi), M, Io)
+    wide = (n_lo > I) | (n_hi < I + 1)
+    if wide.any():  # the sure bracket: z_s (no root below) and past the bare beam's root i
+        bare = cells(_tip_loaded_roots(0.0, 0.0, k)) + 1.0
+        lo[wide], hi[wide] = 0.0, np.broadcast_to(bare, (n, k))[wide]
+        n_lo[wide] = _cantilever_count(grid(lo[wide]), M[wide], Io[wide])
+        n_hi[wide] = _cantilever_count(grid(hi[wide]), M[wide], Io[wide])
+    scalar = ((n_lo > I) | (n_hi < I + 1)).any(axis=1)
+    while True:  # bisection on the cell index, keeping N(g_lo) <= i < N(g_hi)
+        idx = np.nonzero(hi - lo > 1.0)
+        if not idx[0].size:
+            break
+        mid = np.floor(0.5 * (lo[idx] + hi[idx]))
+        n_mid = _cantilever_count(grid(mid), M[idx], Io[idx])
+        below = n_mid <= I[idx]
+        lo[idx], n_lo[idx] = np.where(below, mid, lo[idx]), np.where(below, n_mid, n_lo[idx])
+        hi[idx], n_hi[idx] = np.where(below, hi[idx], mid), np.where(below, n_hi[idx], n_mid)
+    a, b = grid(lo), grid(hi)
+    scalar |= ~((n_lo == I) & (n_hi == I + 1)).all(axis=1)
+
+    def det(z: FloatArray, m: FloatArray, j: FloatArray) -> FloatArray:
+        return np.linalg.det(_cantilever_matrix_cases(z, m, j))
+
+    fa, fb = det(a, M, Io), det(b, M, Io)
+    root = np.where(fa == 0.0, a, b)
+    active = (fa != 0.0) & (fb != 0.0) & ~scalar[:, None]
+    for _ in range(_BATCH_MAX_ITER):
+        if not active.any():
+            break
+        A, B, FA, FB = a[active], b[active], fa[active], fb[active]
+        c = B - FB * (B - A) / (FB - FA)
+        # a secant step onto b is the converged root (the step test below ends it); one
+        # onto a or outside the bracket (rounding) bisects instead
+        inside = ((c > np.minimum(A, B)) & (c < np.maximum(A, B))) | (c == B)
+        c = np.where(inside, c, 0.5 * (A + B))
+        fc = det(c, M[active], Io[active])
+        flip = np.sign(fc) != np.sign(FB)  # the root lies between b and c: a <- b
+        scale = 1.0 - fc / FB  # Anderson–Björck's weight of the end kept, else Illinois' ½
+        FA = np.where(flip, FB, FA * np.where(scale > 0.0, scale, 0.5))
+        A = np.where(flip, B, A)
+        a[active], fa[active], b[active], fb[active] = A, FA, c, fc
+        root[active] = c
+        tol = BATCH_ROOT_RTOL * np.abs(c)
+        active[active] = (fc != 0.0) & (np.abs(c - A) > tol) & (np.abs(c - B) > tol)
+    else:
+        raise RuntimeError("beam frequency equation: the batched root refinement did not converge")
+    for c in np.flatnonzero(scalar):
+        root[c] = _tip_loaded_roots(float(mu[c]), float(iota[c]), k)
+    return root
+
+
+def _cantilever_matrix_cases(z: FloatArray, mu: FloatArray, iota: FloatArray) -> FloatArray:
+    """:func:`_cantilever_matrix` with μ and ι per entry of z (the same shape), (..., 4, 4)."""
+    E, one, zero = np.exp(-z), np.ones_like(z), np.zeros_like(z)
+    moment, shear = _tip_rows(z, mu, iota)
+    return np.stack(
+        [np.stack([one, E, one, zero], -1), np.stack([-one, E, zero, one], -1), moment, shear], -2
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class CantileverModesBatch:
+    """Mass-normalized modes of n tip-loaded cantilevers, one per case (the fields of
+    :class:`CantileverModes` with a leading case axis).
+
+    Attributes
+    ----------
+    length : ndarray, shape (n,)
+        Beam lengths L, m.
+    betas, omegas : ndarray, shape (n, k)
+        Wavenumbers β (1/m) and frequencies ω (rad/s).
+    coefficients : ndarray, shape (n, k, 4)
+        Basis coefficients of :class:`CantileverModes`.
+    """
+
+    length: FloatArray
+    betas: FloatArray
+    omegas: FloatArray
+    coefficients: FloatArray
+
+    def evaluate(self, s: FloatArray, derivative: int = 0) -> FloatArray:
+        """Mode shapes (or their derivative of order 0 or 1) at the stations ξ = s L of each
+        case, s in [0, 1] (p,): shape (n, k, p), the station axis last
+        (:meth:`CantileverModes.evaluate`)."""
+        if derivative not in (0, 1):
+            raise FieldError("derivative", f"must be 0 or 1, got {derivative!r}")
+        b, a = self.betas[..., None], self.coefficients[..., None, :]
+        L = self.length[:, None, None]
+        x = b * (L * np.asarray(s, float))
+        far = b * (L * (1.0 - np.asarray(s, float)))
+        sign = -1.0 if derivative else 1.0
+        cos_j, sin_j = (np.cos(x), np.sin(x)) if derivative == 0 else (-np.sin(x), np.cos(x))
+        y = (
+            sign * a[..., 0] * np.exp(-x)
+            + a[..., 1] * np.exp(-far)
+            + a[..., 2] * cos_j
+            + a[..., 3] * sin_j
+        )
+        return y * b if derivative else y
+
+
+def cantilever_modes_batch(
+    length: npt.ArrayLike,
+    EI: npt.ArrayLike,
+    rho: npt.ArrayLike,
+    tip_mass: npt.ArrayLike,
+    tip_inertia: npt.ArrayLike,
+    k: int,
+) -> CantileverModesBatch:
+    r"""First k mass-normalized modes of n tip-loaded cantilevers at once.
+
+    Case c is :meth:`TipMassCantilever.modes` of ``TipMassCantilever(length[c], EI[c],
+    rho[c], tip_mass[c], tip_inertia[c])`` (the arguments broadcast to one shape (n,)): the
+    roots of the frequency equation from :func:`_batch_roots` (vectorised bracketing and
+    Illinois refinement, equal to the scalar solver's to a few ulps), then the same null
+    vectors and normalisation as the scalar modes, every case in one array operation. A case
+    gives the same bits in any batch.
+
+    Raises
+    ------
+    ValueError
+        Naming the field, for a non-finite or out-of-range value (the rules of
+        :class:`TipMassCantilever`).
+    """
+    k = require_count(k, "k")
+    fields = {"length": length, "EI": EI, "rho": rho}
+    values = {f: require_positive(v, f) for f, v in fields.items()}
+    values["tip_mass"] = require_nonneg(tip_mass, "tip_mass")
+    values["tip_inertia"] = require_nonneg(tip_inertia, "tip_inertia")
+    L, EI_, rho_, m, J = (
+        np.ascontiguousarray(v, dtype=float).ravel()
+        for v in np.broadcast_arrays(*(np.atleast_1d(values[f]) for f in values))
+    )
+    mu, iota = m / (rho_ * L), J / (rho_ * L**3)
+    z = _batch_roots(mu, iota, k)
+    b = z / L[:, None]
+    M, Io = np.broadcast_to(mu[:, None], z.shape), np.broadcast_to(iota[:, None], z.shape)
+    _, _, vh = np.linalg.svd(_cantilever_matrix_cases(z, M, Io))
+    a = vh[..., -1, :]
+    E, c, s = np.exp(-z), np.cos(z), np.sin(z)
+    tip = np.stack([E, np.ones_like(z), c, s], -1)
+    dtip = b[..., None] * np.stack([-E, np.ones_like(z), -s, c], -1)
+    y_l, dy_l = (a * tip).sum(-1), (a * dtip).sum(-1)
+    G = _gram(z)
+    beam = (rho_ * L)[:, None] / z * (a * (G * a[..., None, :]).sum(-1)).sum(-1)
+    norm = np.sqrt(beam + m[:, None] * y_l**2 + J[:, None] * dy_l**2)
+    sign = np.where(y_l != 0.0, np.sign(y_l), np.sign(dy_l))
+    a = a * (sign / norm)[..., None]
+    return CantileverModesBatch(L, b, b**2 * np.sqrt(EI_ / rho_)[:, None], a)
 
 
 def clamped_free_beta_L(k: int) -> FloatArray:
