@@ -16,7 +16,11 @@ is three pieces:
   settings, reference inertia, gains) are its arguments, taken from
   :func:`flexsat.cases.tamu` by the caller — design may not import cases;
 * a **metrics extractor** ``extract(result) -> {name: (n,) array}`` (default: the engine's
-  maneuver metrics, :attr:`~flexsat.sim.recording.SimResult.metrics`);
+  maneuver metrics, :attr:`~flexsat.sim.recording.SimResult.metrics`). A builder may instead
+  run its chunk itself (``build.run_chunk``, :func:`run_chunk`): a batch over any scenario
+  document runs each case through the scenario runner and reads the metrics of its result
+  (:mod:`flexsat.scenarios.batch_cases`); the seeds, the scheduling and the store below are
+  the same;
 * a **parameter table**: n_cases rows, named SI columns.
 
 Calls. A builder may name ``per_run_parameters``: columns one batched call cannot vary
@@ -576,7 +580,14 @@ def run_chunk(
     A builder whose ``per_run_parameters`` name columns of the chunk (values one call cannot
     vary) gets one call per group of cases with equal values in those columns, each case with
     its own seed; the results are put back in case order. The engine treats every case on its
-    own, so a case's numbers do not depend on the group it ran in either."""
+    own, so a case's numbers do not depend on the group it ran in either.
+
+    A builder with its own ``run_chunk(extract, parameters, start, base_seed, histories)``
+    runs its cases itself (:class:`flexsat.scenarios.batch_cases.DocumentCases`: one scenario
+    run per case, each with the seed of its index) and returns the same mapping."""
+    own = getattr(build, "run_chunk", None)
+    if own is not None:
+        return own(extract, parameters, start, base_seed, histories)
     n = len(next(iter(parameters.values())))
     seeds = case_seeds(base_seed, np.arange(start, start + n))
     keys = [k for k in getattr(build, "per_run_parameters", ()) if k in parameters]
@@ -740,7 +751,7 @@ def run_batch(
     parameters: Mapping[str, Any],
     store: str | Path,
     *,
-    extract: Callable[[SimResult], Mapping[str, np.ndarray]] = maneuver_metrics,
+    extract: Callable[[Any], Mapping[str, Any]] = maneuver_metrics,
     base_seed: int = 0,
     chunk_size: int = 1000,
     histories: tuple[str, ...] = (),
@@ -765,7 +776,8 @@ def run_batch(
     store : str or Path
         The zarr store (a directory). An existing store of the same setup is resumed.
     extract : callable
-        ``SimResult -> {metric: (n,) array}``; picklable for process workers.
+        ``SimResult -> {metric: (n,) array}`` (a builder with its own ``run_chunk``: what
+        that reads its result with); picklable for process workers.
     base_seed : int
         The seed every case's noise seed derives from (:func:`case_seeds`).
     chunk_size : int
