@@ -178,12 +178,15 @@ def _units(parameters: dict[str, dict[str, Any]]) -> dict[str, str]:
     """The SI unit of each parameter: the fast path's, or the unit a path's values are written
     in (dimensionless for plain numbers; :func:`~flexsat.scenarios.batch_cases.written_unit`)."""
     from flexsat.scenarios.batch_cases import written_unit
+    from flexsat.scenarios.document_paths import parse_path
 
     if not by_document_path(parameters):
         return PARAMETER_UNITS
     units = {}
     for path, entry in parameters.items():
-        unit = written_unit(entry, f"parameters[{path!r}]") if isinstance(entry, dict) else None
+        field = f"parameters.{path}"
+        parse_path(path, field)
+        unit = written_unit(entry, field) if isinstance(entry, dict) else None
         units[path] = unit[1] if unit else ""
     return units
 

@@ -134,7 +134,7 @@ def document_parameter(path: str, entry: Mapping[str, Any], data: object) -> Doc
     """
     from flexsat.units import parse_quantity
 
-    field = f"parameters[{path!r}]"
+    field = f"parameters.{path}"
     parse_path(path, field)
     current = read_value(data, path, field)
     unit = written_unit(entry, field)
@@ -272,7 +272,7 @@ class DocumentCases:
                 for p in self.parameters
                 if problem.path.startswith(p.path) or p.path.startswith(problem.path or "\0")
             ]
-            where = f"parameters[{mine[0]!r}]" if len(mine) == 1 else "parameters"
+            where = f"parameters.{mine[0]}" if len(mine) == 1 else "parameters"
             rule = f"case {index} ({shown}): {problem}"
             if len(mine) == 1 and problem.rule.startswith("unknown key"):
                 near = nearest_paths(mine[0], self.data)

@@ -56,7 +56,7 @@ def parse_path(text: object, field: str = "parameters") -> tuple[Step, ...]:
             if match is None:
                 raise FieldError(
                     field,
-                    f"{text!r}: at character {at + 1}, a bracket holds an index ([0]) or a "
+                    f"{text}: at character {at + 1}, a bracket holds an index ([0]) or a "
                     "quoted key or label (['PD'])",
                 )
             index, single, double = match.groups()
@@ -70,15 +70,14 @@ def parse_path(text: object, field: str = "parameters") -> tuple[Step, ...]:
         if steps:
             if text[at] != ".":
                 raise FieldError(
-                    field, f"{text!r}: at character {at + 1}, expected '.' or '[' between steps"
+                    field, f"{text}: at character {at + 1}, expected '.' or '[' between steps"
                 )
             at += 1
         match = _NAME.match(text, at)
         if match is None:
             raise FieldError(
                 field,
-                f"{text!r}: at character {at + 1}, expected a name (letters, digits, _) or "
-                "a bracket",
+                f"{text}: at character {at + 1}, expected a name (letters, digits, _) or a bracket",
             )
         steps.append(match.group())
         at = match.end()
@@ -137,7 +136,7 @@ def _unknown(
     hint = f"; nearest: {', '.join(near)}" if near else ""
     return FieldError(
         field,
-        f"{text!r} is not a field of the scenario (step {failed + 1}, {steps[failed]!r}, "
+        f"{text} is not a field of the scenario (step {failed + 1}, {steps[failed]!r}, "
         f"is not found){hint}",
     )
 
@@ -161,7 +160,7 @@ def read_value(data: object, text: str, field: str = "parameters") -> Any:
     if isinstance(node, (Mapping, list)):
         raise FieldError(
             field,
-            f"{text!r} holds a {'mapping' if isinstance(node, Mapping) else 'list'}"
+            f"{text} holds a {'mapping' if isinstance(node, Mapping) else 'list'}"
             "; a parameter sets one number (name one of its entries)",
         )
     return node
