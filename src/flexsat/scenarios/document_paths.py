@@ -84,28 +84,46 @@ def parse_path(text: object, field: str = "parameters") -> tuple[Step, ...]:
     return tuple(steps)
 
 
-def _item_name(item: object) -> str | None:
-    """The label (or name, or id) of a list item, if it is a mapping that has one."""
+def _item_key(item: object) -> str | None:
+    """The key (of :data:`ITEM_KEYS`) that names a list item, if it is a mapping with one."""
     if isinstance(item, Mapping):
         for key in ITEM_KEYS:
             if isinstance(item.get(key), str):
-                return item[key]
+                return key
     return None
+
+
+def _item_name(item: object) -> str | None:
+    """The label (or name, or id) of a list item, if it is a mapping that has one."""
+    key = _item_key(item)
+    return None if key is None else item[key]  # type: ignore[index]  # a mapping: _item_key
+
+
+def _key_step(prefix: str, key: object) -> str:
+    """``prefix`` followed by the mapping key ``key``: after a dot if it is a name, else in
+    brackets."""
+    if isinstance(key, str) and _NAME.fullmatch(key):
+        return f"{prefix}.{key}" if prefix else key
+    return f"{prefix}[{key!r}]"
 
 
 def leaf_paths(data: object, prefix: str = "") -> Iterator[str]:
     """The path of every value of ``data`` that is not a mapping or a list, as text (list items
-    named by their label where they have one, as problems name them: ``runs['PD'].gains.K``)."""
+    named by their label where they have one, as problems name them: ``runs['PD'].gains.K``;
+    the label itself is the item's name, not a value to vary, and is left out)."""
     if isinstance(data, Mapping):
         for key, value in data.items():
-            step = f".{key}" if prefix else str(key)
-            if not (isinstance(key, str) and _NAME.fullmatch(key)):
-                step = f"[{key!r}]"
-            yield from leaf_paths(value, prefix + step)
+            yield from leaf_paths(value, _key_step(prefix, key))
     elif isinstance(data, list):
         for index, item in enumerate(data):
-            name = _item_name(item)
-            yield from leaf_paths(item, f"{prefix}[{index if name is None else repr(name)}]")
+            key = _item_key(item)
+            if key is None:
+                yield from leaf_paths(item, f"{prefix}[{index}]")
+                continue
+            named = f"{prefix}[{item[key]!r}]"
+            for inner, value in item.items():
+                if inner != key:
+                    yield from leaf_paths(value, _key_step(named, inner))
     elif prefix:
         yield prefix
 
