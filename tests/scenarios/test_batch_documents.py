@@ -290,3 +290,29 @@ store: fast.zarr
 """
     result = run_scenario(load_scenario(_write(tmp_path, text)))
     assert result.chunks_run == 1 and "metric_settling_time_s" in result.dataset()
+
+
+def test_without_a_run_every_run_is_a_case_and_its_metrics_are_named_by_run(tmp_path):
+    """No ``run:``: a case runs both laws; each metric is named by its run, a requirement reads
+    one run's metric (its unit: the engine's settling time, in s)."""
+    text = (
+        MONTECARLO.replace("run: Law I\n", "")
+        .replace("cases: 8", "cases: 2")
+        .replace("settling_time_s: {max:", "runs['Law II'].settling_time_s: {max:")
+    )
+    result = run_scenario(load_scenario(_write(tmp_path, text)))
+    ds = open_results(tmp_path / "mc.zarr")
+    names = {str(k) for k in ds.data_vars if str(k).startswith("metric_")}
+    assert "metric_runs['Law I'].settling_time_s" in names
+    assert "metric_runs['Law II'].settling_time_s" in names
+    assert not {n for n in names if not n.startswith("metric_runs[")}
+    (requirement,) = result.summary["requirements"]
+    assert requirement["metric"] == "runs['Law II'].settling_time_s"
+    assert requirement["threshold"] == 3.0
+    assert "every run" in result.sections(result.dataset(), [])
+
+
+def test_a_requirement_on_a_metric_the_kind_does_not_report_is_named(tmp_path):
+    text = MONTECARLO.replace('settling_time_s: {max: "3 s"}', "settle_time: {max: 3}")
+    with pytest.raises(ValueError, match=r"requirements.settle_time: unknown metric; the run's"):
+        run_scenario(load_scenario(_write(tmp_path, text)))

@@ -201,12 +201,12 @@ def _space(
 
 
 def _metric_unit(metric: str, engine_only: bool) -> str:
-    """The unit of an engine metric (its name after the last ``.``: ``runs['PD'].overshoot_deg``
-    is an ``overshoot_deg``); a metric of another name is refused if ``engine_only``, else
-    taken as a plain number."""
+    """The unit of an engine metric; unless ``engine_only``, also of a run's engine metric (its
+    name after the last ``.``: ``runs['PD'].overshoot_deg`` is an ``overshoot_deg``), any
+    other name taken as a plain number."""
     from flexsat.sim.metrics import METRIC_UNITS
 
-    base = metric.rsplit(".", 1)[-1]
+    base = metric if engine_only else metric.rsplit(".", 1)[-1]
     if base in METRIC_UNITS:
         return METRIC_UNITS[base]
     if engine_only:
@@ -722,7 +722,7 @@ def trade_surfaces(
 
 
 class _BatchKind(ScenarioKind):
-    """A batch of cases of one maneuver scenario's run on dask (module docstring): one run
+    """A batch of cases of one scenario on dask (module docstring): one run
     that announces a step as it starts and one per chunk."""
 
     document = BatchScenario

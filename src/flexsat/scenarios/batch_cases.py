@@ -20,7 +20,7 @@ the case's noise seed written into the kind's seed field (``simulation.seed``, e
 the one runner, so a case is the scenario run alone with those values: the same document
 through the same code, bit for bit.
 
-Seeds. Case i's seed is :func:`flexsat.design.batch_runner.case_seeds`' :math:`s_i \in
+Seeds. Case i's seed is :func:`flexsat.design.batch_seeds.case_seeds`' :math:`s_i \in
 [0, 2^{63})` folded into a scenario's seed range :math:`[0, 2^{32})`
 (:data:`flexsat.limits.MAX_SEED`) by keeping its 32 high bits, :math:`s_i \gg 31`: a function of
 the base seed and i alone, so results do not depend on the chunking or the workers. (Two of
@@ -178,7 +178,7 @@ def noise_seed_path(document: type[BaseModel]) -> str | None:
 
 def document_seeds(base_seed: int, cases: np.ndarray) -> np.ndarray:
     """The seeds written into the case documents (module docstring: s_i >> 31), int64."""
-    from flexsat.design.batch_runner import case_seeds
+    from flexsat.design.batch_seeds import case_seeds
 
     return case_seeds(base_seed, cases) >> 31
 
