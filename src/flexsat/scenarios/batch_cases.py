@@ -31,7 +31,9 @@ Checks before any case runs (:meth:`DocumentCases.check`):
 * every path leads into the target document (else refused by name with the nearest paths), and
   holds a number or a quantity whose dimension is the parameter's;
 * **every** case's document is validated by the target's kind (stage 1: schema, units, section
-  rules; about 1–6 ms a case), a problem named by the parameter, the case index and the rule;
+  rules), a problem named by the parameter, the case index and the rule: 5.5–6 ms a case
+  measured for the NPS slew and the space station (a minute for 10,000 cases, against 0.2–3 s
+  a case to run them);
 * the **extreme draws** — for each parameter the case of its least and of its greatest value —
   are also planned up to their first run (stage 2: the kind builds the plant and designs the
   laws, where rules such as a positive definite inertia satisfying the triangle inequality or a
@@ -295,6 +297,7 @@ class DocumentCases:
             | {int(np.argmin(table[p.path])) for p in self.parameters}
             | {int(np.argmax(table[p.path])) for p in self.parameters}
         )
+        kind = scenario_kind(self.kind)
         seen: set[tuple[float, ...]] = set()
         for index in range(n):
             values = {p.path: float(table[p.path][index]) for p in self.parameters}
@@ -303,11 +306,12 @@ class DocumentCases:
                 continue
             seen.add(key)
             try:
-                scenario = self.scenario(values, 0)
+                if index in extremes:
+                    self._plan_first_run(index, values, self.scenario(values, 0))
+                else:  # the document as parsed: the schema of its text, without the YAML
+                    kind.validate(self.document(values, 0))
             except ScenarioError as exc:
                 raise ScenarioError(self._problems(index, values, exc)) from None
-            if index in extremes:
-                self._plan_first_run(index, values, scenario)
 
     def _plan_first_run(self, index: int, values: Mapping[str, float], scenario: Any) -> None:
         """Everything the kind does before its first run (plant, laws), nothing run."""
@@ -316,11 +320,10 @@ class DocumentCases:
             next(plan)
         except StopIteration:
             pass
-        except ScenarioError as exc:
-            raise ScenarioError(self._problems(index, values, exc)) from None
+        except ScenarioError:
+            raise
         except ValueError as exc:
-            problem = ScenarioError([locate("", exc)])
-            raise ScenarioError(self._problems(index, values, problem)) from None
+            raise ScenarioError([locate("", exc)]) from None
         finally:
             plan.close()
 
