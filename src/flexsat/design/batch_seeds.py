@@ -17,6 +17,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.input_checks import FieldError, require_finite
 
@@ -28,7 +29,7 @@ def nonneg_int(value: Any, name: str) -> int:
     return int(value)
 
 
-def case_seeds(base_seed: int, cases) -> np.ndarray:
+def case_seeds(base_seed: int, cases: npt.ArrayLike) -> npt.NDArray[np.int64]:
     """Noise seeds of the cases with indices ``cases`` (module docstring, :math:`s_i`), int64.
 
     Case i's seed depends on ``base_seed`` and i only, never on the chunk it is run in. Computed
@@ -55,7 +56,7 @@ _INIT_A, _MULT_A, _INIT_B, _MULT_B = 0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38
 _MIX_L, _MIX_R = 0xCA01F9DD, 0x4973F715
 
 
-def _spawned_seeds(base: int, idx: np.ndarray) -> np.ndarray:
+def _spawned_seeds(base: int, idx: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
     """``SeedSequence(base, spawn_key=(i,)).generate_state(1, uint64)[0] >> 1`` for every i of
     ``idx`` (0 <= i < 2**32, base < 2**128) in array operations.
 
@@ -77,7 +78,7 @@ def _spawned_seeds(base: int, idx: np.ndarray) -> np.ndarray:
         v = (v * h) & _M32
         return v ^ (v >> 16)
 
-    def mix(x, y):
+    def mix(x: int, y: int) -> int:
         r = (_MIX_L * x - _MIX_R * y) & _M32
         return r ^ (r >> 16)
 

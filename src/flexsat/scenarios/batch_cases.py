@@ -264,7 +264,9 @@ class DocumentCases:
         scenario._folder = self.folder  # type: ignore[attr-defined]  # a fields.Document
         return scenario
 
-    def _problems(self, index: int, values: Mapping[str, float], exc: ScenarioError) -> list:
+    def _problems(
+        self, index: int, values: Mapping[str, float], exc: ScenarioError
+    ) -> list[Problem]:
         """The problems of case ``index`` named by the parameters they concern."""
         shown = ", ".join(f"{p.path} = {p.value(values[p.path])}" for p in self.parameters)
         out = []
@@ -394,14 +396,15 @@ def target_runs(data: dict[str, Any], run: str | None, kind: str) -> dict[str, A
     if run is None:
         return data
     runs = data.get("runs")
-    labels = [r.get("label") for r in runs if isinstance(r, dict)] if isinstance(runs, list) else []
+    items = [r for r in runs if isinstance(r, dict)] if isinstance(runs, list) else []
+    labels = [str(r["label"]) for r in items if "label" in r]
     if not labels:
         raise FieldError("run", f"a {kind} scenario has no labelled runs; leave run out")
     if run not in labels:
         raise FieldError(
             "run", f"{run!r} is not a run of the scenario (its runs: {', '.join(labels)})"
         )
-    return {**data, "runs": [r for r in runs if isinstance(r, dict) and r.get("label") == run]}
+    return {**data, "runs": [r for r in items if r.get("label") == run]}
 
 
 def document_cases(
