@@ -316,3 +316,25 @@ def test_a_requirement_on_a_metric_the_kind_does_not_report_is_named(tmp_path):
     text = MONTECARLO.replace('settling_time_s: {max: "3 s"}', "settle_time: {max: 3}")
     with pytest.raises(ValueError, match=r"requirements.settle_time: unknown metric; the run's"):
         run_scenario(load_scenario(_write(tmp_path, text)))
+
+
+def test_cyclic_and_angular_frequencies_keep_their_two_pi():
+    """Values in Hz and rad/s for one parameter: the table holds Hz (its SI unit here), the
+    rad/s value divided by 2π, and each goes into the document in Hz."""
+    import math
+
+    from flexsat.design.parameter_space import space_from_spec
+    from flexsat.scenarios.batch_cases import document_parameter
+
+    path = "runs['PD step'].poles.natural_frequency"
+    entry = {"values": ["0.06 Hz", "0.4 rad/s"]}
+    data = yaml.safe_load((EXAMPLES / "nps_pd_slews.yaml").read_text())
+    parameter = document_parameter(path, entry, data)
+    assert (parameter.unit, parameter.written) == ("Hz", "Hz")
+    values = space_from_spec({path: entry}, {path: parameter.unit}).table().values[path]
+    assert values[0] == 0.06 and values[1] == pytest.approx(0.4 / (2 * math.pi), rel=1e-15)
+    assert parameter.value(values[1]) == f"{0.4 / (2 * math.pi)!r} Hz"
+    rad_s = document_parameter(path, {"values": ["0.4 rad/s", "0.06 Hz"]}, data)
+    assert rad_s.unit == "rad/s"
+    table = space_from_spec({path: entry}, {path: rad_s.unit}).table().values[path]
+    assert table[0] == pytest.approx(0.06 * 2 * math.pi, rel=1e-15) and table[1] == 0.4

@@ -117,7 +117,7 @@ def test_the_nps_pd_monte_carlo(tmp_path):
     ds = open_results(tmp_path / "study.zarr")
     assert ds["done"].values.all() and len(set(ds["seed"].values)) == 6
     frequency = result.table["runs['PD step'].poles.natural_frequency"]
-    assert result.units["runs['PD step'].poles.natural_frequency"] == "1/s"
+    assert result.units["runs['PD step'].poles.natural_frequency"] == "Hz"
     assert 0.04 < frequency.min() and frequency.max() < 0.08  # Hz, as written
     assert [r["metric"] for r in result.summary["requirements"]] == [
         "settling_time_s",

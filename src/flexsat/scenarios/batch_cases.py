@@ -83,13 +83,17 @@ def is_document_path(name: str) -> bool:
 
 
 def _unit_of(text: str, field: str) -> tuple[str, str] | None:
-    """(the unit as written, its SI unit) of a quantity string, None for a plain number."""
+    """(the unit as written, its SI unit) of a quantity string, None for a plain number. A
+    cyclic frequency keeps the hertz as its SI unit: pint's base unit of Hz is 1/s, which
+    :func:`flexsat.units.to_si_array` would not tell from rad/s, so a value in rad/s among
+    values in Hz would lose its 2π."""
     from flexsat.units import parse_quantity
 
     q = parse_quantity(text, field)
     if q.dimensionless and q.units == q.to_base_units().units:
         return None
-    return f"{q.units:~C}", f"{q.to_base_units().units:~C}"
+    written = f"{q.units:~C}"
+    return written, "Hz" if str(q.units) == "hertz" else f"{q.to_base_units().units:~C}"
 
 
 def written_unit(entry: Mapping[str, Any], field: str) -> tuple[str, str] | None:
