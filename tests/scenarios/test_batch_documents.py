@@ -338,3 +338,34 @@ def test_cyclic_and_angular_frequencies_keep_their_two_pi():
     assert rad_s.unit == "rad/s"
     table = space_from_spec({path: entry}, {path: rad_s.unit}).table().values[path]
     assert table[0] == pytest.approx(0.06 * 2 * math.pi, rel=1e-15) and table[1] == 0.4
+
+
+def test_a_negative_stiffness_in_a_distribution_s_tail_is_refused_before_any_case_runs(tmp_path):
+    """The appendage modulus, normal about 70 GPa with a 60 GPa sd: the schema takes any number
+    (the override goes to the case builder), the extreme draw's plan refuses it, naming the
+    parameter, the case (the least draw) and the rule; no store is made."""
+    text = """
+kind: montecarlo
+name: negative stiffness in the tail
+scenario: maneuver.yaml
+run: Law I
+parameters:
+  case_overrides.modulus: {distribution: normal, mean: "70 GPa", sd: "60 GPa"}
+cases: 50
+seed: 1
+store: neg.zarr
+"""
+    path = _write(tmp_path, text)
+    study = load_scenario(path)
+    from flexsat.design.parameter_space import space_from_spec
+
+    draws = space_from_spec(study.parameters, {"case_overrides.modulus": "Pa"}).sample(50, 1)
+    least = int(np.argmin(draws.values["case_overrides.modulus"]))
+    assert draws.values["case_overrides.modulus"][least] < 0
+    with pytest.raises(
+        ScenarioError,
+        match=rf"parameters\.case_overrides\.modulus: case {least} \(case_overrides\.modulus = "
+        r"-[\d.]+ GPa\): case_overrides\.modulus: must be > 0",
+    ):
+        run_scenario(study)
+    assert not (tmp_path / "neg.zarr").exists()
