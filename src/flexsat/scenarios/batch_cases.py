@@ -165,7 +165,12 @@ def document_parameter(path: str, entry: Mapping[str, Any], data: object) -> Doc
             )
     if unit is not None:
         return DocumentParameter(path, unit[1], unit[0])
-    return DocumentParameter(path, doc_unit[1] if doc_unit else "", None)
+    if doc_unit is None:
+        return DocumentParameter(path, "", None)
+    # plain numbers are SI, read by the kind's schema in the field's own SI unit: labelled
+    # with the base unit of the document's value (1/s for a value in Hz, as for one in rad/s)
+    base = parse_quantity(current, field).to_base_units().units  # type: ignore[arg-type]
+    return DocumentParameter(path, f"{base:~C}", None)
 
 
 def noise_seed_path(document: type[BaseModel]) -> str | None:
@@ -191,12 +196,14 @@ def document_seeds(base_seed: int, cases: np.ndarray) -> np.ndarray:
 
 def case_metrics(result: ReportedResult) -> dict[str, float]:
     """The case's scalar metrics from its result's records (module docstring)."""
+    from flexsat.report.json_data import NULL_REASONS
+
     records = result.metrics_records()
     out: dict[str, float] = {}
     for record in records:
         prefix = "" if len(records) == 1 else f"runs[{record['run']!r}]."
         for key, value in record.items():
-            if key in ("run", "null_reasons"):
+            if key in ("run", NULL_REASONS):
                 continue
             if value is None:
                 out[prefix + key] = math.nan
@@ -219,8 +226,6 @@ class DocumentCases:
         The target document as parsed (its runs cut down to ``run``).
     folder : Path
         The target's folder (relative paths in it start there).
-    run : str or None
-        The run kept, or None for all.
     parameters : tuple of DocumentParameter
     seed_path : str or None
         The kind's noise seed field (:func:`noise_seed_path`).
@@ -231,7 +236,6 @@ class DocumentCases:
     kind: str
     data: dict[str, Any]
     folder: Path
-    run: str | None
     parameters: tuple[DocumentParameter, ...]
     seed_path: str | None
     requirements: tuple[str, ...] = ()
@@ -448,7 +452,6 @@ def document_cases(
         kind=target.kind,
         data=data,
         folder=target.folder,
-        run=run,
         parameters=varied,
         seed_path=noise_seed_path(type(target)),
         requirements=requirements,
