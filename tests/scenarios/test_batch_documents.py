@@ -369,3 +369,16 @@ store: neg.zarr
     ):
         run_scenario(study)
     assert not (tmp_path / "neg.zarr").exists()
+
+
+def test_a_study_over_field_paths_runs_ten_cases_a_chunk_unless_told(tmp_path):
+    """Its cases take seconds each: 10 a chunk by default (the fast path keeps 1,000), a
+    chunk size given is kept."""
+    from flexsat.scenarios.batch_cases import DOCUMENT_CHUNK_SIZE
+
+    plain = MONTECARLO.replace("execution: {chunk_size: 3}\n", "")
+    assert load_scenario(_write(tmp_path, plain)).execution.chunk_size == DOCUMENT_CHUNK_SIZE == 10
+    assert load_scenario(_write(tmp_path, MONTECARLO)).execution.chunk_size == 3
+    fast = "kind: sweep\nname: f\nscenario: maneuver.yaml\nrun: Law II\n"
+    fast += "parameters: {alpha: {values: [0.1, 0.2]}}\n"
+    assert load_scenario(_write(tmp_path, fast)).execution.chunk_size == 1000

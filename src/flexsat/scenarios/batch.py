@@ -308,6 +308,10 @@ class BatchScenario(Document):
         if sampling == "grid" and self.cases is not None:
             raise FieldError("cases", "a grid has as many cases as its points; leave cases out")
         self.sampling = sampling
+        if general and "chunk_size" not in self.execution.model_fields_set:
+            from flexsat.scenarios.batch_cases import DOCUMENT_CHUNK_SIZE
+
+            self.execution = self.execution.model_copy(update={"chunk_size": DOCUMENT_CHUNK_SIZE})
         # the case count, from the axes' lengths or the sizes given: before any table is built
         n_cases = case_count(self)
         if n_cases > limits.MAX_CASES:

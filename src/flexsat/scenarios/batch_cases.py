@@ -72,6 +72,12 @@ from flexsat.scenarios.kind import scenario_kind
 if TYPE_CHECKING:
     from flexsat.report.page import ReportedResult
 
+#: the chunk size of a batch over a document that gives none: its cases take 0.2–5 s each
+#: (one scenario run each, docs/sweeps.md), so 10 a chunk keeps the progress, the resumable
+#: part and the tasks for several workers fine-grained (the Law II fast path's 1,000 is one
+#: compiled call of about a second)
+DOCUMENT_CHUNK_SIZE = 10
+
 #: the keys of a parameter's entry that hold its values (the others: a name, a count)
 _VALUE_KEYS = ("mean", "sd", "low", "high", "median", "gsd", "values")
 
@@ -459,6 +465,7 @@ def document_cases(
 
 
 __all__ = [
+    "DOCUMENT_CHUNK_SIZE",
     "DocumentCases",
     "DocumentParameter",
     "case_metrics",
