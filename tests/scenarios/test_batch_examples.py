@@ -138,3 +138,21 @@ def test_the_nps_pd_monte_carlo(tmp_path):
 def test_the_example_files_load_as_written(name):
     study = load_scenario(EXAMPLES / name)
     assert study.kind in ("sweep", "montecarlo") and study.store is None
+
+
+def test_a_sweep_over_the_modulus_of_an_inline_finite_element_model(tmp_path):
+    """A path into a model: section (the user's own spacecraft, examples/own_spacecraft_slew.
+    yaml): each case rebuilds the FE model and its modes; the point at the file's own 70 GPa
+    equals the scenario run alone, a stiffer boom rings less at its tip."""
+    shutil.copy(EXAMPLES / "own_spacecraft_slew.yaml", tmp_path / "own_spacecraft_slew.yaml")
+    path = tmp_path / "sweep.yaml"
+    path.write_text(
+        "kind: sweep\nname: boom modulus\nscenario: own_spacecraft_slew.yaml\n"
+        'parameters:\n  model.fe.materials.aluminium.E: {values: ["70 GPa", "140 GPa"]}\n'
+        "store: study.zarr\n"
+    )
+    result = run_scenario(load_scenario(path))
+    assert result.units["model.fe.materials.aluminium.E"] == "kg/m/s**2"  # Pa in base units
+    _assert_equal(_case(tmp_path, 0), _run_alone(tmp_path / "own_spacecraft_slew.yaml", "MRP PD"))
+    soft, stiff = (_case(tmp_path, i)["peak_displacement_105Z"] for i in (0, 1))
+    assert stiff < soft
