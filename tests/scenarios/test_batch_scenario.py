@@ -276,7 +276,9 @@ def test_a_scenario_of_another_kind_is_refused(tmp_path):
         "sweep.yaml",
         SWEEP.replace("scenario: maneuver.yaml", f"scenario: {EXAMPLES / 'eps_slew_6s.yaml'}"),
     )
-    with pytest.raises(ScenarioError, match="is a slew scenario; a batch varies a maneuver"):
+    with pytest.raises(
+        ScenarioError, match="is a slew scenario; a batch of Law II parameters varies a maneuver"
+    ):
         run_scenario(load_scenario(path))
 
 

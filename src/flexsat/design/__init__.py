@@ -65,7 +65,7 @@ _EXPORTS = {
     "MANEUVER_PARAMETERS": "batch_runner",
     "PLANT_PARAMETERS": "batch_runner",
     "SENSOR_ACTUATOR_PARAMETERS": "batch_runner",
-    "case_seeds": "batch_runner",
+    "case_seeds": "batch_seeds",
     "fingerprint": "batch_runner",
     "maneuver_metrics": "batch_runner",
     "open_results": "batch_runner",

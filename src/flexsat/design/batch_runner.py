@@ -16,7 +16,11 @@ is three pieces:
   settings, reference inertia, gains) are its arguments, taken from
   :func:`flexsat.cases.tamu` by the caller — design may not import cases;
 * a **metrics extractor** ``extract(result) -> {name: (n,) array}`` (default: the engine's
-  maneuver metrics, :attr:`~flexsat.sim.recording.SimResult.metrics`);
+  maneuver metrics, :attr:`~flexsat.sim.recording.SimResult.metrics`). A builder may instead
+  run its chunk itself (``build.run_chunk``, :func:`run_chunk`): a batch over any scenario
+  document runs each case through the scenario runner and reads the metrics of its result
+  (:mod:`flexsat.scenarios.batch_cases`); the seeds, the scheduling and the store below are
+  the same;
 * a **parameter table**: n_cases rows, named SI columns.
 
 Calls. A builder may name ``per_run_parameters``: columns one batched call cannot vary
@@ -95,6 +99,7 @@ import xarray as xr
 from flexsat import limits
 from flexsat.control.lyapunov import LyapunovTracker
 from flexsat.design.batch_cluster import CONNECT_TIMEOUT, batch_client, quiet_shutdown
+from flexsat.design.batch_seeds import case_seeds, nonneg_int
 from flexsat.design.batch_store import (
     STORE_LAYOUT,
     StoreLock,
@@ -118,90 +123,6 @@ from flexsat.sim.channels import ChannelSensor
 from flexsat.sim.disturbances import RandomTorque
 from flexsat.sim.engine import offset_cases
 from flexsat.sim.recording import SimResult
-
-
-def _nonneg_int(value, name: str) -> int:
-    """An integer >= 0 (bools and fractions refused), naming the field."""
-    if isinstance(value, bool) or not float(require_finite(value, name)).is_integer() or value < 0:
-        raise FieldError(name, f"must be an integer >= 0, got {value!r}")
-    return int(value)
-
-
-# -- seeds -------------------------------------------------------------------------------------
-def case_seeds(base_seed: int, cases) -> np.ndarray:
-    """Noise seeds of the cases with indices ``cases`` (module docstring, s_i), int64.
-
-    Case i's seed depends on ``base_seed`` and i only, never on the chunk it is run in. Computed
-    for all cases at once by :func:`_spawned_seeds` (numpy's own ``SeedSequence`` costs ~10 µs
-    per case, 5 % of a metrics-only chunk); the same numbers (tests against numpy).
-    """
-    base = _nonneg_int(base_seed, "base_seed")
-    idx = np.asarray(cases, dtype=np.int64).reshape(-1)
-    if base < 2**128 and (not idx.size or (idx.min() >= 0 and idx.max() < 2**32)):
-        return _spawned_seeds(base, idx)
-    return np.array(
-        [
-            int(np.random.SeedSequence(base, spawn_key=(int(i),)).generate_state(1, np.uint64)[0])
-            >> 1
-            for i in idx
-        ],
-        dtype=np.int64,
-    )
-
-
-_M32 = 0xFFFFFFFF
-#: the hash constants of numpy's SeedSequence (O'Neill's seed_seq_fe, randutils.hpp, 2015)
-_INIT_A, _MULT_A, _INIT_B, _MULT_B = 0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED
-_MIX_L, _MIX_R = 0xCA01F9DD, 0x4973F715
-
-
-def _spawned_seeds(base: int, idx: np.ndarray) -> np.ndarray:
-    """``SeedSequence(base, spawn_key=(i,)).generate_state(1, uint64)[0] >> 1`` for every i of
-    ``idx`` (0 <= i < 2**32, base < 2**128) in array operations.
-
-    numpy's algorithm: the entropy words (base in four 32-bit words, then the spawn key i) are
-    hashed into a pool of four words (hashmix: v ^= h; h *= MULT_A; v *= h; v ^= v >> 16, all
-    mod 2**32) and mixed pairwise (mix: (MIX_L x − MIX_R y) ^ >> 16); the state words are
-    pool words hashed with INIT_B / MULT_B. The hash constant advances the same way for every
-    case, so all but the last word's mixing is the base's alone, done once in Python integers;
-    the spawn word is mixed into the pool for all cases at once in uint64 arrays (products of
-    two 32-bit words are exact in 64 bits, then reduced mod 2**32).
-    """
-    run = [(base >> (32 * k)) & _M32 for k in range(4)]
-    h = _INIT_A
-
-    def hashmix(v: int) -> int:
-        nonlocal h
-        v ^= h
-        h = (h * _MULT_A) & _M32
-        v = (v * h) & _M32
-        return v ^ (v >> 16)
-
-    def mix(x, y):
-        r = (_MIX_L * x - _MIX_R * y) & _M32
-        return r ^ (r >> 16)
-
-    pool = [hashmix(w) for w in run]
-    for src in range(4):
-        for dst in range(4):
-            if src != dst:
-                pool[dst] = mix(pool[dst], hashmix(pool[src]))
-    u = np.uint64
-    i = idx.astype(u)
-    words = []
-    for dst in range(4):
-        before, h = h, (h * _MULT_A) & _M32
-        v = ((i ^ u(before)) * u(h)) & u(_M32)
-        v ^= v >> u(16)
-        r = (u(_MIX_L) * u(pool[dst]) - u(_MIX_R) * v) & u(_M32)  # wraps mod 2**64 first
-        words.append(r ^ (r >> u(16)))
-    state, hb = [], _INIT_B
-    for w in words[:2]:  # one uint64: the first two pool words, low word first
-        v = w ^ u(hb)
-        hb = (hb * _MULT_B) & _M32
-        v = (v * u(hb)) & u(_M32)
-        state.append(v ^ (v >> u(16)))
-    return ((state[0] | (state[1] << u(32))) >> u(1)).astype(np.int64)
 
 
 # -- the parameter table -----------------------------------------------------------------------
@@ -576,7 +497,14 @@ def run_chunk(
     A builder whose ``per_run_parameters`` name columns of the chunk (values one call cannot
     vary) gets one call per group of cases with equal values in those columns, each case with
     its own seed; the results are put back in case order. The engine treats every case on its
-    own, so a case's numbers do not depend on the group it ran in either."""
+    own, so a case's numbers do not depend on the group it ran in either.
+
+    A builder with its own ``run_chunk(extract, parameters, start, base_seed, histories)``
+    runs its cases itself (:class:`flexsat.scenarios.batch_cases.DocumentCases`: one scenario
+    run per case, each with the seed of its index) and returns the same mapping."""
+    own = getattr(build, "run_chunk", None)
+    if own is not None:
+        return own(extract, parameters, start, base_seed, histories)
     n = len(next(iter(parameters.values())))
     seeds = case_seeds(base_seed, np.arange(start, start + n))
     keys = [k for k in getattr(build, "per_run_parameters", ()) if k in parameters]
@@ -740,7 +668,7 @@ def run_batch(
     parameters: Mapping[str, Any],
     store: str | Path,
     *,
-    extract: Callable[[SimResult], Mapping[str, np.ndarray]] = maneuver_metrics,
+    extract: Callable[[Any], Mapping[str, Any]] = maneuver_metrics,
     base_seed: int = 0,
     chunk_size: int = 1000,
     histories: tuple[str, ...] = (),
@@ -765,7 +693,8 @@ def run_batch(
     store : str or Path
         The zarr store (a directory). An existing store of the same setup is resumed.
     extract : callable
-        ``SimResult -> {metric: (n,) array}``; picklable for process workers.
+        ``SimResult -> {metric: (n,) array}`` (a builder with its own ``run_chunk``: what
+        that reads its result with); picklable for process workers.
     base_seed : int
         The seed every case's noise seed derives from (:func:`case_seeds`).
     chunk_size : int
@@ -810,7 +739,7 @@ def run_batch(
     n_cases = len(next(iter(table.values())))
     chunk_size = require_count(chunk_size, "chunk_size")
     histories = tuple(histories)
-    retries = _nonneg_int(retries, "retries")
+    retries = nonneg_int(retries, "retries")
     describe = getattr(build, "describe", None)
     fp = fingerprint(setup_text, table, base_seed, histories, describe() if describe else "")
     path = Path(store)

@@ -291,7 +291,9 @@ def sections(result: BatchReport, ds: xr.Dataset, figures: list[str]) -> str:
     """The page: what ran, the requirement, metric and sensitivity tables, the figures."""
     esc = html.escape
     return (
-        f"<p>{int(ds.sizes['case'])} cases of run <b>{esc(result.scenario.run)}</b> of "
+        f"<p>{int(ds.sizes['case'])} cases of "
+        + (f"run <b>{esc(result.scenario.run)}</b>" if result.scenario.run else "every run")
+        + " of "
         f"<code>{esc(result.scenario.scenario)}</code>, sampling "
         f"{esc(result.scenario.sampling)}.</p>"
         + _tables(result)

@@ -1,7 +1,24 @@
 """Sweep and Monte Carlo scenarios (``kind: sweep``, ``kind: montecarlo``): many cases of one
-maneuver scenario's Law II run, in chunks on dask, streamed to a zarr store, with statistics.
+scenario, in chunks on dask, streamed to a zarr store, with statistics.
 
-A batch scenario names a maneuver scenario file and one of its runs (Control Law II,
+A batch names a target scenario file and its parameters in one of two ways.
+
+Any scenario, any run: ``parameters:`` keyed by field paths of the target document
+(``plant.tip_mass``, ``runs['PD'].gains.K``, ``station.inertia[0]``; a path has a ``.`` or a
+``[``), ``run:`` one of its runs or left out for all. Each case is the target document with the
+values written in, validated by its kind and run by the scenario runner, on the dask workers;
+every case's document is validated before any runs (:mod:`flexsat.scenarios.batch_cases`)::
+
+    kind: montecarlo
+    name: station inertia dispersed
+    scenario: space_station_cmg.yaml
+    run: preferred
+    parameters:
+      station.inertia[2]: {distribution: normal, mean: "58.57e6 slug*ft**2", sd: "1e6 slug*ft**2"}
+    cases: 100
+
+The Law II fast path: ``parameters:`` keyed by the names below, the target a maneuver scenario
+and ``run:`` one of its Control Law II runs (
 ``lyapunov_tracker``: the slews of Junkins, Pollock & Rahman 1990 Att. 3 that the
 TAMU trade studies and robustness
 sets are about), the parameters to vary and how::
@@ -25,21 +42,23 @@ the first axis slowest) or bounds (``{low:, high:}``) with ``sampling: latin_hyp
 2; n (d + 2) cases run) for Sobol' first-order and total indices of every metric;
 ``kind: montecarlo`` takes distributions (normal, uniform, lognormal, truncated_normal;
 :mod:`flexsat.design.parameter_space`) sampled per case from the seed.
-The parameters are those of :class:`~flexsat.design.batch_runner.HubManeuverBuilder`
+The fast path's parameters are those of :class:`~flexsat.design.batch_runner.HubManeuverBuilder`
 (:data:`PARAMETER_UNITS`): the maneuver (``alpha``, ``u_max``, ``duration``), the Law II gains
 (``g1``, ``g2``, ``g3``), the plant (``hub_inertia``, ``EI``, ``damping``, ``tip_mass``,
 ``tip_inertia``), the bearing friction (``friction_coulomb``, ``friction_viscous``) and the
 hardware (``saturation``, the torque limit; ``encoder_resolution``; ``gyro_noise`` and
 ``strain_noise``, 1σ per sample; ``random_torque``, 1σ), e.g.
 ``saturation: {low: "300 ozf*in", high: "500 ozf*in", n: 3}``; the others keep the maneuver
-scenario's values.
+scenario's values. Its chunks are one batched, compiled call each.
 
 Execution (:func:`~flexsat.design.batch_runner.run_batch`): chunks of ``chunk_size`` cases, each
 one batched core call, scheduled on dask in-process, on ``workers`` local processes or on the
 cluster at ``scheduler``; the store is ``store`` (relative to this file) or, by default, a
 directory in the system's temporary folder named after the run's fingerprint, so running the
-same scenario again resumes it. Metrics are the engine's maneuver metrics; a requirement on a metric
-in degrees (``overshoot_deg``) is compared in degrees.
+same scenario again resumes it. Metrics are the engine's maneuver metrics on the fast path and
+the numbers of the target kind's metrics records otherwise; a requirement on a metric in
+degrees (``overshoot_deg``) is compared in degrees, one on a metric the engine does not name
+takes a plain number in the metric's own unit.
 """
 
 from __future__ import annotations
@@ -138,32 +157,76 @@ def _check_entry_values(parameters: dict[str, Any]) -> None:
                 raise FieldError(path, f"must be one number or quantity, got {value!r}")
 
 
-def _space(parameters: dict[str, dict[str, Any]]) -> ParameterSpace | GridSpace:
+def by_document_path(parameters: dict[str, Any]) -> bool:
+    """Whether the parameters are field paths of the target document (the general path) rather
+    than names of the Law II fast path (:data:`PARAMETER_UNITS`); the two do not mix."""
+    from flexsat.scenarios.batch_cases import is_document_path
+
+    paths = [name for name in parameters if is_document_path(str(name))]
+    names = [name for name in parameters if not is_document_path(str(name))]
+    if paths and names:
+        raise FieldError(
+            f"parameters.{names[0]}",
+            f"field paths ({paths[0]}) and Law II parameter names ({names[0]}) cannot be mixed; "
+            f"give every parameter by its field path in the scenario "
+            f"(e.g. runs['Law II'].gains.g1)",
+        )
+    return bool(paths)
+
+
+def _units(parameters: dict[str, dict[str, Any]]) -> dict[str, str]:
+    """The SI unit of each parameter: the fast path's, or the unit a path's values are written
+    in (dimensionless for plain numbers; :func:`~flexsat.scenarios.batch_cases.written_unit`)."""
+    from flexsat.scenarios.batch_cases import written_unit
+    from flexsat.scenarios.document_paths import parse_path
+
+    if not by_document_path(parameters):
+        return PARAMETER_UNITS
+    units = {}
+    for path, entry in parameters.items():
+        field = f"parameters.{path}"
+        parse_path(path, field)
+        unit = written_unit(entry, field) if isinstance(entry, dict) else None
+        units[path] = unit[1] if unit else ""
+    return units
+
+
+def _space(
+    parameters: dict[str, dict[str, Any]], units: dict[str, str] | None = None
+) -> ParameterSpace | GridSpace:
     from flexsat.design.parameter_space import space_from_spec
 
     _check_entry_values(parameters)
-    return space_from_spec(parameters, PARAMETER_UNITS)
+    return space_from_spec(parameters, units or _units(parameters))
 
 
-def _metric_unit(metric: str) -> str:
+def _metric_unit(metric: str, engine_only: bool) -> str:
+    """The unit of an engine metric; unless ``engine_only``, also of a run's engine metric (its
+    name after the last ``.``: ``runs['PD'].overshoot_deg`` is an ``overshoot_deg``), any
+    other name taken as a plain number."""
     from flexsat.sim.metrics import METRIC_UNITS
 
-    if metric not in METRIC_UNITS:
+    base = metric if engine_only else metric.rsplit(".", 1)[-1]
+    if base in METRIC_UNITS:
+        return METRIC_UNITS[base]
+    if engine_only:
         raise FieldError(
             f"requirements.{metric}", f"unknown metric; metrics: {', '.join(METRIC_UNITS)}"
         )
-    return METRIC_UNITS[metric]
+    return ""
 
 
-def requirements_of(spec: dict[str, Any]) -> list[Requirement]:
+def requirements_of(spec: dict[str, Any], engine_only: bool = True) -> list[Requirement]:
     """The :class:`~flexsat.design.monte_carlo_statistics.Requirement` s of a ``requirements:``
-    dict, each in its metric's unit (degrees for the ``_deg`` metrics)."""
+    dict, each in its metric's unit (degrees for the ``_deg`` metrics; a plain number for a
+    metric the engine does not name, accepted unless ``engine_only``: the metrics of a batch
+    over a scenario document are known when its first case has run)."""
     from flexsat.design.monte_carlo_statistics import Requirement, requirement_from_spec
     from flexsat.design.parameter_space import si_scalar
 
     out: list[Requirement] = []
     for metric, entry in spec.items():
-        unit = _metric_unit(metric)
+        unit = _metric_unit(metric, engine_only)
         path = f"requirements.{metric}"
         if unit.startswith("deg"):  # the metric is in degrees: compare the threshold in degrees
             if (
@@ -187,7 +250,7 @@ class BatchScenario(Document):
     kind: Literal["sweep", "montecarlo"]
     name: str
     scenario: str
-    run: str
+    run: str | None = None
     parameters: dict[str, dict[str, Any]]
     sampling: Sampling | None = None
     cases: Annotated[int | None, integer_in(1, limits.MAX_SAMPLES, optional=True)] = None
@@ -203,15 +266,18 @@ class BatchScenario(Document):
         _space(parameters)
         return parameters
 
-    @field_validator("requirements")
-    @classmethod
-    def _requirements(cls, requirements: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
-        requirements_of(requirements)
-        return requirements
-
     @model_validator(mode="after")
     def _design(self) -> Self:
         from flexsat.design.parameter_space import GridSpace
+
+        general = by_document_path(self.parameters)
+        requirements_of(self.requirements, engine_only=not general)
+        if not general and self.run is None:
+            raise FieldError("run", "required: the Control Law II run the parameters vary")
+        if general and self.histories:
+            raise FieldError(
+                "histories", "a batch over a scenario document's field paths keeps metrics only"
+            )
 
         grid = isinstance(_space(self.parameters), GridSpace)
         sampling: Sampling = self.sampling or (
@@ -242,6 +308,10 @@ class BatchScenario(Document):
         if sampling == "grid" and self.cases is not None:
             raise FieldError("cases", "a grid has as many cases as its points; leave cases out")
         self.sampling = sampling
+        if general and "chunk_size" not in self.execution.model_fields_set:
+            from flexsat.scenarios.batch_cases import DOCUMENT_CHUNK_SIZE
+
+            self.execution = self.execution.model_copy(update={"chunk_size": DOCUMENT_CHUNK_SIZE})
         # the case count, from the axes' lengths or the sizes given: before any table is built
         n_cases = case_count(self)
         if n_cases > limits.MAX_CASES:
@@ -276,7 +346,7 @@ class BatchResult(ReportedResult):
     the parameters' ranking per metric)."""
 
     scenario: BatchScenario
-    maneuver: Scenario
+    target: Any
     table: dict[str, np.ndarray]
     units: dict[str, str]
     store: Path
@@ -321,7 +391,7 @@ class BatchResult(ReportedResult):
         return rows
 
     def report_case(self) -> str:
-        return self.maneuver.case
+        return str(getattr(self.target, "case", self.target.name))
 
     def write_data(self, folder: Path, ds: xr.Dataset) -> None:
         from flexsat.report.batch import write_data
@@ -344,27 +414,45 @@ def _finite(value: float | None) -> float | None:
     return None if value is None or not np.isfinite(value) else float(value)
 
 
-def _maneuver(scenario: BatchScenario) -> Scenario:
+def _target(scenario: BatchScenario) -> Any:
+    """The target scenario, loaded and validated (its problems named under ``scenario``)."""
     from flexsat.scenarios import load_scenario
-    from flexsat.scenarios.maneuver import Scenario
 
     path = Path(scenario.scenario)
     path = path if path.is_absolute() else scenario.folder / path
     try:
-        maneuver = load_scenario(path)
+        return load_scenario(path)
     except ScenarioError as exc:
         raise ScenarioError([Problem("scenario", str(p)) for p in exc.problems]) from None
-    if not isinstance(maneuver, Scenario):
+
+
+def _maneuver(scenario: BatchScenario, target: Any) -> Scenario:
+    """The fast path's target: a maneuver scenario."""
+    from flexsat.scenarios.maneuver import Scenario
+
+    if not isinstance(target, Scenario):
         raise ScenarioError(
             [
                 Problem(
                     "",
-                    f"{str(path)!r} is a {maneuver.kind} scenario; a batch "
-                    "varies a maneuver scenario",
+                    f"{scenario.scenario!r} is a {target.kind} scenario; a batch of Law II "
+                    "parameters varies a maneuver scenario (give field paths to vary "
+                    "another kind: plant.tip_mass, runs['PD'].gains.K)",
                 )
             ]
         )
-    return maneuver
+    return target
+
+
+def _source(target: Any) -> str:
+    """What the report cites: the target's case, else the target itself."""
+    from flexsat.cases import get_case
+    from flexsat.references import cite
+
+    try:
+        return cite(get_case(target.case).source)
+    except (AttributeError, KeyError, ValueError):  # no case, or not a published one
+        return f"the {target.kind} scenario {target.name!r}"
 
 
 def builder_of(scenario: BatchScenario, maneuver: Scenario) -> HubManeuverBuilder:
@@ -427,10 +515,12 @@ def _cases(scenario: BatchScenario) -> int:
     return scenario.cases
 
 
-def _table(scenario: BatchScenario) -> SampleTable | SobolDesign:
+def _table(
+    scenario: BatchScenario, units: dict[str, str] | None = None
+) -> SampleTable | SobolDesign:
     from flexsat.design.parameter_space import GridSpace
 
-    space = _space(scenario.parameters)
+    space = _space(scenario.parameters, units)
     if isinstance(space, GridSpace):
         table = space.table()
     elif scenario.sampling == "saltelli":
@@ -468,38 +558,47 @@ def default_store(fingerprint: str) -> Path:
 def _run_batch(
     scenario: BatchScenario, progress: Callable[[str], None] | None = None
 ) -> BatchResult:
-    """Build the Law II case builder from the maneuver scenario, run every case into the store
+    """Build the case builder (the Law II fast path's, or the target document's:
+    :func:`~flexsat.scenarios.batch_cases.document_cases`), run every case into the store
     (resuming it), then compute the statistics.
 
     Raises
     ------
     ScenarioError
-        For a maneuver scenario or run that cannot be varied, a sampling the space refuses,
-        a scheduler that does not answer, a store of another scenario.
+        For a target scenario, run or path that cannot be varied, a case its kind refuses
+        (before any case runs), a sampling the space refuses, a scheduler that does not
+        answer, a store of another scenario.
     """
-    from flexsat.cases import get_case
-    from flexsat.design.batch_runner import fingerprint, run_batch
+    from flexsat.design.batch_runner import fingerprint, maneuver_metrics, run_batch
     from flexsat.design.monte_carlo_statistics import (
         MIN_RANKING_CASES,
         monte_carlo_summary,
         sample_sensitivity,
         sobol_indices,
     )
-    from flexsat.references import cite
+    from flexsat.design.parameter_space import SobolDesign
+    from flexsat.scenarios.batch_cases import case_metrics, document_cases
     from flexsat.sim import SimulationDiverged
 
-    maneuver = _maneuver(scenario)
-    build = builder_of(scenario, maneuver)
-    from flexsat.design.parameter_space import SobolDesign
-
+    target = _target(scenario)
+    build: Any
+    if by_document_path(scenario.parameters):
+        build = document_cases(
+            target, scenario.run, scenario.parameters, tuple(scenario.requirements)
+        )
+        units: dict[str, str] | None = {p.path: p.unit for p in build.parameters}
+        extract: Callable[[Any], Any] = case_metrics
+    else:
+        build = builder_of(scenario, _maneuver(scenario, target))
+        units, extract = None, maneuver_metrics
     try:
-        sampled = _table(scenario)
+        sampled = _table(scenario, units)
     except ValueError as exc:
         raise ScenarioError([locate("sampling", exc)]) from None
     design, table = (
         (sampled, sampled.table) if isinstance(sampled, SobolDesign) else (None, sampled)
     )
-    setup_text = scenario.yaml_text + "\0" + maneuver.yaml_text
+    setup_text = scenario.yaml_text + "\0" + target.yaml_text
     histories = tuple(scenario.histories)
     if scenario.store is None:
         store = default_store(
@@ -522,6 +621,7 @@ def _run_batch(
             build,
             table.values,
             store,
+            extract=extract,
             base_seed=scenario.seed,
             chunk_size=e.chunk_size,
             histories=histories,
@@ -531,8 +631,8 @@ def _run_batch(
             retries=e.retries,
             progress=report,
         )
-    except SimulationDiverged:
-        raise  # a result, not an input error (the runner names the run)
+    except (SimulationDiverged, ScenarioError):
+        raise  # a result, not an input error (the runner names the run); or named already
     except ValueError as exc:
         raise ScenarioError([locate("", exc)]) from None
     from flexsat.design.batch_runner import open_results
@@ -545,7 +645,9 @@ def _run_batch(
         for k in sorted(map(str, ds.data_vars))
         if str(k).startswith("metric_")
     }
-    stats = monte_carlo_summary(metrics, requirements_of(scenario.requirements))
+    stats = monte_carlo_summary(
+        metrics, requirements_of(scenario.requirements, engine_only=units is None)
+    )
     sensitivity: dict[str, dict[str, Any]] = {}
     for name, values in metrics.items():
         finite = np.isfinite(values)
@@ -560,7 +662,7 @@ def _run_batch(
             sensitivity[name] = sample_sensitivity(table, values, name).as_dict()
     return BatchResult(
         scenario,
-        maneuver,
+        target,
         table.values,
         dict(table.units),
         store,
@@ -569,8 +671,8 @@ def _run_batch(
         summary.wall_s,
         summary.chunks_run,
         summary.chunks_skipped,
-        cite(get_case(maneuver.case).source),
-        trade_surfaces(scenario, build),
+        _source(target),
+        None if units is not None else trade_surfaces(scenario, build),
     )
 
 
@@ -624,7 +726,7 @@ def trade_surfaces(
 
 
 class _BatchKind(ScenarioKind):
-    """A batch of cases of one maneuver scenario's run on dask (module docstring): one run
+    """A batch of cases of one scenario on dask (module docstring): one run
     that announces a step as it starts and one per chunk."""
 
     document = BatchScenario

@@ -176,7 +176,7 @@ def _check_nodes(
     return size
 
 
-def _parse(text: str) -> Any:
+def parse_document(text: str) -> Any:
     """The YAML document, checked for nesting, duplicate keys and expanded size first."""
     loader = None
     try:
@@ -212,7 +212,7 @@ def load_scenario(source: str | bytes | Path) -> BaseModel:
         Listing every problem found, each as ``field.path: rule``.
     """
     text = _read(source)
-    data = _parse(text)
+    data = parse_document(text)
     if not isinstance(data, dict):
         raise ScenarioError(
             [Problem("", "must be a YAML mapping (name, case, simulation, runs, ...)")]
@@ -232,4 +232,4 @@ def default_scenario() -> BaseModel:
     return load_scenario(resources.files("flexsat.cases").joinpath(DEFAULT_SCENARIO).read_text())
 
 
-__all__ = ["DEFAULT_SCENARIO", "default_scenario", "load_scenario"]
+__all__ = ["DEFAULT_SCENARIO", "default_scenario", "load_scenario", "parse_document"]
