@@ -160,7 +160,7 @@ def optimize_design(
     method: str = "slsqp",
     *,
     x0: npt.ArrayLike | None = None,
-    tol: float = 1e-10,
+    tol: float = 1e-12,
     max_iterations: int = 500,
     active_tol: float = 1e-6,
     options: dict[str, Any] | None = None,
