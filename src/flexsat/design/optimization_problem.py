@@ -199,8 +199,10 @@ class DesignProblem:
     variables: tuple[DesignVariable, ...]
     objective: Objective
     constraints: tuple[Constraint, ...] = ()
-    _cache: dict[bytes, Evaluation] = field(default_factory=dict, repr=False, compare=False)
-    _count: list[int] = field(default_factory=lambda: [0], repr=False, compare=False)
+    _cache: dict[bytes, Evaluation] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
+    _count: list[int] = field(default_factory=lambda: [0], init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         variables = _sequence(self.variables, "variables", DesignVariable)

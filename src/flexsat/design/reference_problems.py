@@ -197,7 +197,7 @@ class HubBoomCodesign:
     diameter_bounds: tuple[float, float] = (10e-3, 60e-3)
     start: tuple[float, float] = (2e-3, 40e-3)
     _memo: dict[bytes, dict[str, tuple[float, FloatArray]]] = field(
-        default_factory=dict, repr=False, compare=False
+        default_factory=dict, init=False, repr=False, compare=False
     )
 
     def __post_init__(self) -> None:
