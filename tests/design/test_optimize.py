@@ -9,6 +9,8 @@ optimisers agree within 1 % (issue 23) and every reported optimum has KKT residu
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -53,6 +55,11 @@ def test_slsqp_reproduces_the_closed_form_tube_optimum_and_its_multipliers_to_1e
     assert np.array_equal(res.history[0].x, tube.problem().x0)
     assert np.array_equal(res.history[-1].x, res.x)
     assert res.design == {"t": res.x[0], "D": res.x[1]}
+    # the history ends at the optimum, and the whole result is plain data
+    data = json.loads(json.dumps(res.to_dict()))
+    assert data["active"] == list(res.active) and data["kkt"]["residual"] == res.kkt.residual
+    assert data["history"][-1]["objective"] == res.objective
+    assert len(data["history"]) == len(res.history) >= res.iterations
 
 
 @pytest.mark.parametrize(

@@ -100,6 +100,40 @@ class OptimizationResult:
         """Variable name -> value, SI."""
         return dict(zip(self.names, (float(v) for v in self.x)))
 
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data (str, float, int, bool, lists, dicts; JSON-serialisable) for a report
+        or a stored result."""
+        kkt = self.kkt
+        return {
+            "method": self.method,
+            "design": self.design,
+            "objective": float(self.objective),
+            "constraints": dict(self.constraints),
+            "multipliers": dict(self.multipliers),
+            "active": list(self.active),
+            "kkt": {
+                "residual": kkt.residual,
+                "stationarity": kkt.stationarity,
+                "primal": kkt.primal,
+                "dual": kkt.dual,
+                "complementarity": kkt.complementarity,
+                "rank": kkt.rank,
+            },
+            "success": self.success,
+            "message": self.message,
+            "iterations": self.iterations,
+            "evaluations": self.evaluations,
+            "history": [
+                {
+                    "iteration": h.iteration,
+                    "x": [float(v) for v in h.x],
+                    "objective": float(h.objective),
+                    "max_violation": float(h.max_violation),
+                }
+                for h in self.history
+            ],
+        }
+
 
 def ipopt_available() -> tuple[bool, str]:
     """(True, "") when cyipopt imports, else (False, the reason)."""
