@@ -241,6 +241,8 @@ def optimize_design(
     sp.record(z0)
     run = _RUNNERS[method]
     z, success, message, iterations = run(sp, z0, tol, max_iterations, dict(options or {}))
+    # SLSQP may end a round-off outside a bound; the bounds are hard (a wall thinner than its
+    # minimum is not a design), so the reported design is projected onto them
     x = np.clip(z * sp.s, problem.lower, problem.upper)
     ev = problem.evaluate(x)
     if not np.array_equal(sp.history[-1].x, x):
