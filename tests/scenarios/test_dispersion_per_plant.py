@@ -136,8 +136,7 @@ PLANTS = {
                         "tube": {"shape": "tube", "outer_diameter": "30 mm", "thickness": "1 mm"}
                     },
                     "elements": [
-                        {"nodes": [k, k + 1], "material": "al", "section": "tube"}
-                        for k in range(5)
+                        {"nodes": [k, k + 1], "material": "al", "section": "tube"} for k in range(5)
                     ],
                     "masses": [{"node": 5, "mass": "500 g"}],
                     "clamps": [{"node": 0}],
