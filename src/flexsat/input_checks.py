@@ -162,8 +162,8 @@ def require_numeric(value: npt.ArrayLike, field: str, noun: str = "array") -> Fl
 def require_physical_inertia(J: FloatArray, field: str, definite: bool = True) -> FloatArray:
     r"""``J`` (..., 3, 3), kg·m², checked to be an inertia tensor some mass distribution has:
     symmetric (:math:`|I - I^T| \le 10^{-12}\max|I|`), positive definite (only semi-definite
-    when not ``definite``: a point mass has no inertia), and with principal moments satisfying the triangle
-    inequality :math:`I_a + I_b \ge I_c`, since
+    when not ``definite``: a point mass has no inertia), and with principal moments satisfying
+    the triangle inequality :math:`I_a + I_b \ge I_c`, since
     :math:`I_a + I_b - I_c = 2\int r_c^2\,dm \ge 0` in principal axes (each moment
     :math:`I_a = \int (r_b^2 + r_c^2)\,dm`), allowed a round-off of :math:`10^{-12} I_c` (the
     flat-plate limit is an equality).

@@ -18,7 +18,6 @@ case's seed written in here by hand (not by the batch code), run alone.
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
