@@ -4,7 +4,9 @@ A sweep or Monte Carlo over a scenario with a ``model:`` section runs each case 
 scenario (:mod:`flexsat.scenarios.batch_cases`), so each case builds its plant from the section.
 When the varied parameters are not structural (a law gain, a sensor noise, a slew's duration)
 every case holds the same section, and its finite-element modal solve or file read would be
-redone per case: 0.1–1 s of a case's time for an inline FE model. This cache keys the built
+redone per case (measured: 11 ms for the 9-node spacecraft of
+``examples/own_spacecraft_slew.yaml``, 96 ms for the same booms in 120 frames with 30 modes,
+against 0.7 ms for a hit, the key of the 121-node section included). This cache keys the built
 :class:`~flexsat.structures.modal_model.ModalModel` by the section's content — the canonical
 JSON of the validated section (SI numbers, keys sorted) and the SHA-256 digest of every file it
 reads — so a case whose structure is unchanged reuses the model, and a case whose modulus,
