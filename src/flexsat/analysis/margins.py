@@ -379,12 +379,13 @@ def disk_margins(
         Sw = frequency_response(S, omega_rad_s=np.array([w])).values[0]
         return _mu_upper(Sw + shift)
 
-    grid = default_grid(S, n_per_decade)
+    # ω = 0 too: S of a stable closed loop is finite there, and the worst point may be at DC
+    grid = np.concatenate([[0.0], default_grid(S, n_per_decade)])
     values = np.array([mu_at(w) for w in grid])
     k = int(np.argmax(values))
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
     best = scipy.optimize.minimize_scalar(
-        lambda x: -mu_at(x), bounds=(lo, hi), method="bounded", options={"xatol": 1e-9 * hi}
+        lambda x: -mu_at(x), bounds=(lo, hi), method="bounded", options={"xatol": 1e-12 * hi}
     )
     peak, w_peak = (values[k], grid[k]) if values[k] >= -best.fun else (-best.fun, best.x)
     alpha = 1.0 / peak if peak > 0 else math.inf

@@ -30,7 +30,10 @@ def _labels(name: str, size: int) -> list[str]:
 
 
 def plant_state_space(
-    plant: Plant, outputs: Sequence[str] | None = None, name: str | None = None
+    plant: Plant,
+    outputs: Sequence[str] | None = None,
+    name: str | None = None,
+    states: Sequence[str] | None = None,
 ) -> ct.StateSpace:
     """The plant's linear part with its linear outputs (module docstring).
 
@@ -42,6 +45,9 @@ def plant_state_space(
         Output channels to keep, in order; default every linear output but ``state``.
     name : str, optional
         The system's python-control name (default the plant's class name).
+    states : sequence of str, optional
+        State labels (default ``x[i]``); label a coordinate ``q`` and its rate ``q_dot`` so
+        that :func:`~flexsat.analysis.loop_modes.closed_loop_poles` groups them as one mode.
 
     Raises
     ------
@@ -83,7 +89,9 @@ def plant_state_space(
     if not labels:
         raise FieldError("outputs", f"{kind} has no linear output to export")
     in_labels = [lab for c in plant.inputs for lab in _labels(c.name, c.size)]
-    state_labels = getattr(plant, "state_labels", None) or [f"x[{i}]" for i in range(plant.nx)]
+    state_labels = [f"x[{i}]" for i in range(plant.nx)] if states is None else list(states)
+    if len(state_labels) != plant.nx or len(set(state_labels)) != plant.nx:
+        raise FieldError("states", f"give {plant.nx} distinct labels, got {len(state_labels)}")
     return ct.ss(
         A,
         B,
