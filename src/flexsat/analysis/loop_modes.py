@@ -3,16 +3,17 @@ r"""Closed-loop poles with damping, natural frequency and the mode each belongs 
 Each eigenvalue λ_k of the closed-loop state matrix (z-plane for a sampled loop, mapped to the
 s-plane by :math:`s = \ln z / dt`) gets :math:`\omega_n = |s|`, :math:`\zeta = -\operatorname{Re}
 s/|s|` (ζ = 1 for a real pole at the origin's left, −1 at its right), and a *mode*: the group of
-states with the largest participation, the participation factor of state i in eigenvalue k
-being :math:`p_{ik} = |w_{ki} v_{ik}|` with V the right eigenvectors and :math:`W = V^{-1}` the
-left ones (the mode is sought among the plant's states; the law's share is reported beside) (Pérez-Arriaga, Verghese & Schweppe, "Selective modal analysis with applications to
-electric power systems, Part I", IEEE Trans. PAS-101(9), 1982, 3117–3125); the factors of one
-eigenvalue sum to 1 over the states.
+the plant's states with the largest participation, the participation factor of state i in
+eigenvalue k being :math:`p_{ik} = |w_{ki} v_{ik}|` with V the right eigenvectors and
+:math:`W = V^{-1}` the left ones (Pérez-Arriaga, Verghese & Schweppe, "Selective modal analysis
+with applications to electric power systems, Part I", IEEE Trans. PAS-101(9), 1982,
+3117–3125); the factors of one eigenvalue sum to 1 over all states, and the plant states' share
+is reported beside the mode (near 0 for an estimator's or a filter's own pole).
 
 States are grouped into modes by their labels: a coordinate and its rate (``eta[2]`` and
-``eta_dot[2]``, ``theta`` and ``theta_dot``) form one mode, named after the coordinate; a law's
-states (labels with a ``.`` prefix, ``LyapunovRegulator.xi[0]``) are grouped under the law's name,
-and a delay register under ``delay``; only the plant's groups name a pole's mode. An explicit ``modes`` mapping overrides the grouping.
+``eta_dot[2]``, ``theta`` and ``theta_dot``) form one mode, named after the coordinate; the
+law's states (labels with its ``name.`` prefix) never name a mode. An explicit ``modes``
+mapping overrides the grouping of the plant's states.
 """
 
 from __future__ import annotations
