@@ -62,11 +62,7 @@ class ClosedLoopPole:
 
 
 def mode_of_state(label: str) -> str:
-    """The mode a state label belongs to (module docstring)."""
-    if "_delayed[" in label:
-        return "delay"
-    if "." in label:
-        return label.split(".", 1)[0]
+    """The mode a plant state label belongs to: its coordinate (``eta_dot[2]`` -> ``eta[2]``)."""
     return re.sub(r"_dot(?=\[|$)", "", label)
 
 
