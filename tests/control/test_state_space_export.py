@@ -177,3 +177,43 @@ def test_three_axis_attitude_lqg_loop_at_input():
         assert 0 < m.phase_margin_deg < 90 and m.gain_margin > 1
     modes = {p.mode for p in closed_loop_poles(loop)}
     assert {"sigma[0]", "rate_error[0]"} & modes
+
+
+def test_tamu_open_loop_poles_belong_to_the_cantilever_coordinates_in_order():
+    """With a law of negligible gain the closed loop is the plant: the rigid pole is θ's, and
+    the k-th elastic pair is carried (participation > 0.9) by the k-th cantilever coordinate
+    q[k] — the hub-free modes of a light hub are each close to one clamped shape."""
+    from flexsat.analysis.loop_modes import damping_table
+    from flexsat.cases.tamu import tamu
+
+    n = 10
+    states = ["theta"] + [f"q[{i}]" for i in range(n)] + ["theta_dot"]
+    states += [f"q_dot[{i}]" for i in range(n)]
+    P = plant_state_space(tamu().model(), states=states)
+    K = ct.ss([], [], [], [[-1e-9, -1e-9]], inputs=["theta", "theta_dot"], outputs=["torque"])
+    poles = [p for p in closed_loop_poles(build_loop(P, K, "torque")) if p.pole.imag >= 0]
+    assert poles[0].mode == "theta"
+    elastic = [p for p in poles if p.natural_frequency_rad_s > 1.0]
+    assert [p.mode for p in elastic] == [f"q[{i}]" for i in range(n)]
+    assert all(p.participation > 0.9 and p.plant_share == pytest.approx(1.0) for p in elastic)
+    assert "q[3]" in damping_table(poles)
+    with pytest.raises(FieldError, match="modes.*'nope'"):
+        closed_loop_poles(build_loop(P, K, "torque"), modes={"m": ["nope"]})
+
+
+def test_loop_figure_draws_the_computed_response():
+    """The helper's Bode magnitude line is |L| at the frequencies asked (in Hz on the axis)."""
+    from flexsat.analysis.frequency_plots import loop_figure
+
+    loop = build_loop(hub(), discrete_law(PD(3.0, 4.0), 0.05, delay=1), "torque")
+    w = np.geomspace(0.01, math.pi / 0.05, 50)
+    fig = loop_figure(loop, omega_rad_s=w, frequency_unit="Hz", title="hub")
+    ax = fig.axes[0]
+    x, y = ax.lines[0].get_data()
+    assert np.allclose(x, w / (2 * math.pi))
+    assert np.allclose(y, np.abs(frequency_response(loop.transfer, omega_rad_s=w).values[:, 0, 0]))
+    assert "Hz" in fig.axes[2].get_xlabel()
+    with pytest.raises(FieldError, match="frequency_unit"):
+        loop_figure(loop, frequency_unit="rpm")
+    with pytest.raises(FieldError, match="delay"):
+        build_loop(hub(), discrete_law(PD(3.0, 4.0), 0.05), "torque", delay=-1)
