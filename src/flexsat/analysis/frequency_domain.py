@@ -49,6 +49,7 @@ __all__ = [
     "angular_frequencies",
     "build_loop",
     "close_other_channels",
+    "default_grid",
     "delay_outputs",
     "frequency_grid",
     "frequency_response",
