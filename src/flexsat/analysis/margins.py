@@ -408,15 +408,21 @@ def disk_margins(
     # ω = 0 too: S of a stable closed loop is finite there, and the worst point may be at DC
     grid = np.concatenate([[0.0], default_grid(S, n_per_decade)])
     rough = np.array([mu_upper_bound(Mw + shift, optimise=False) for Mw in evaluate(grid)])
-    # the cheap bound is within a few % of the optimised one: optimise where it is near the top
-    top = np.nonzero(rough >= 0.9 * rough.max())[0]
-    values = np.array([mu_at(grid[k]) for k in top])
-    k = int(top[int(np.argmax(values))])
+    # the optimised bound is below the cheap one at every frequency: optimise in decreasing
+    # order of the cheap bound and stop when it falls below the best optimised value, which
+    # then is the grid's maximum of the optimised bound
+    best_value, k = -math.inf, 0
+    for j in np.argsort(rough)[::-1]:
+        if rough[j] <= best_value:
+            break
+        value = mu_at(grid[j])
+        if value > best_value:
+            best_value, k = value, int(j)
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
     best = scipy.optimize.minimize_scalar(
         lambda x: -mu_at(x), bounds=(lo, hi), method="bounded", options={"xatol": 1e-12 * hi}
     )
-    peak, w_peak = (values.max(), grid[k]) if values.max() >= -best.fun else (-best.fun, best.x)
+    peak, w_peak = (best_value, grid[k]) if best_value >= -best.fun else (-best.fun, best.x)
     alpha = 1.0 / peak if peak > 0 else math.inf
     gains, phase = disk_variations(alpha, sigma)
     return tuple(per_channel), DiskMargin(alpha, sigma, gains, phase, float(w_peak))
