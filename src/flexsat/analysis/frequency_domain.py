@@ -33,6 +33,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from flexsat.analysis.norms import system_matrices
 from flexsat.input_checks import FieldError
@@ -221,9 +222,9 @@ class Loop:
     dt: float
 
     @property
-    def poles(self) -> FloatArray:
+    def poles(self) -> npt.NDArray[np.complex128]:
         """Closed-loop poles (s-plane, or z-plane for a sampled loop)."""
-        return np.linalg.eigvals(self.closed_loop_A)
+        return np.linalg.eigvals(self.closed_loop_A).astype(complex)
 
     @property
     def stable(self) -> bool:

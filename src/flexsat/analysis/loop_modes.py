@@ -105,12 +105,12 @@ def closed_loop_poles(
     plant_share = P[plant].sum(axis=0)
     out = []
     for k, z in enumerate(lam):
-        s = complex(np.log(z) / loop.dt) if loop.dt else complex(z)
-        wn = abs(s)
-        zeta = -s.real / wn if wn > 0 else 1.0
+        pole = complex(np.log(z) / loop.dt) if loop.dt else complex(z)
+        wn = abs(pole)
+        zeta = -pole.real / wn if wn > 0 else 1.0
         g = int(np.argmax(shares[:, k]))
         share = float(shares[g, k] / plant_share[k]) if plant_share[k] > 0 else 0.0
-        out.append(ClosedLoopPole(s, wn, zeta, names[g], share, float(plant_share[k])))
+        out.append(ClosedLoopPole(pole, wn, zeta, names[g], share, float(plant_share[k])))
     return tuple(sorted(out, key=lambda p: (p.natural_frequency_rad_s, p.pole.imag)))
 
 

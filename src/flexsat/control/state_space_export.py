@@ -27,7 +27,7 @@ one as ``name[i]`` (``torque[0]``), the convention of
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeGuard
 
 import numpy as np
 
@@ -37,6 +37,7 @@ from flexsat.input_checks import FieldError, require_positive
 
 if TYPE_CHECKING:
     import control as ct
+    from flexsat.control.mimo_lqg import AttitudeLQG
     from flexsat.units import QuantityArrayLike
 
 __all__ = ["channel_labels", "continuous_law", "discrete_law"]
@@ -60,7 +61,7 @@ def _require_law(law: object) -> Controller:
     return law
 
 
-def _attitude_lqg(law: Controller) -> bool:
+def _attitude_lqg(law: Controller) -> TypeGuard[AttitudeLQG]:
     from flexsat.control.mimo_lqg import AttitudeLQG
 
     return isinstance(law, AttitudeLQG)
