@@ -159,7 +159,10 @@ def test_differential_correction_finds_15_percent_stiffness_error(frame):
         assert np.array_equal(res.q, ones)
         # damping scalings: predicted SD 2 % (mass-proportional) and 1 % (stiffness-prop.)
         assert np.all(np.abs(res.r - 1) < 4 * sd[6:])
-        assert np.all(np.diff(res.residual_history) <= 0)  # halving keeps the cost falling
+        # halving keeps the cost falling, to the round-off of evaluating it (a few ε of the
+        # residual per entry, over ~100 entries) once it has converged
+        history = np.asarray(res.residual_history)
+        assert np.all(np.diff(history) <= 1e-12 * history[1:])
     # the update only scales the a-priori blocks: symmetry and zero pattern are kept
     for upd, prior in (
         (res.model.K(), model.K()),
