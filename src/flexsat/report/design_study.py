@@ -29,11 +29,57 @@ if TYPE_CHECKING:
 
 class DesignStudyReport(Protocol):
     """What this report reads of a study's result
-    (:class:`flexsat.scenarios.design_study.DesignStudyResult`)."""
+    (:class:`flexsat.scenarios.design_study.DesignStudyResult`; ``dispersions`` its
+    :class:`~flexsat.scenarios.design_dispersions.DispersionsResult` or None)."""
 
     @property
     def records(self) -> Sequence[StageRecord]: ...
+    @property
+    def dispersions(self) -> Any: ...
     def metrics_records(self) -> list[dict[str, Any]]: ...
+
+
+def _dispersions_section(dispersions: Any) -> str:
+    """What the Monte Carlo measured (the nominal design on dispersed spacecraft), the
+    parameters, then the batch report's requirement, percentile and sensitivity tables."""
+    from flexsat.report.batch import statistics_tables
+
+    if dispersions is None:
+        return ""
+    esc = html.escape
+    n = len(next(iter(dispersions.metrics.values())))
+    rows = [
+        (
+            path,
+            dispersions.units[path] or "-",
+            format_metric(float(np.min(values))),
+            format_metric(float(np.median(values))),
+            format_metric(float(np.max(values))),
+        )
+        for path, values in dispersions.table.items()
+    ]
+    runs = ", ".join(esc(run) for run in dispersions.runs)
+    return f"""<h2>Dispersions</h2>
+<p>{n} cases. The placement and the laws are those designed on the <b>nominal</b> model (the
+stages above); each case rebuilds the model and its modes from its dispersed values and flies
+the nominal laws on that <b>dispersed truth</b> (runs: {runs}). The probabilities below are
+those of this design meeting each requirement on a spacecraft built within the dispersions:
+its robustness, not that of a law redesigned per case.</p>
+{html_table(("parameter", "SI unit", "least", "median", "greatest"), rows)}
+{statistics_tables(dispersions.summary, dispersions.sensitivity)}
+"""
+
+
+def dispersion_figures(dispersions: Any, folder: Path) -> list[str]:
+    """Each dispersed metric's histogram and CDF with its requirement lines and the convergence
+    of the probability estimates (:mod:`flexsat.report.batch`); none without dispersions."""
+    from flexsat.report.batch import convergence_figure, distribution_figures
+
+    if dispersions is None:
+        return []
+    return distribution_figures(
+        dispersions.summary, dispersions.metrics, folder
+    ) + convergence_figure(dispersions.summary, folder)
 
 
 def _number(value: Any) -> str:
@@ -91,7 +137,8 @@ def _stage_section(record: StageRecord) -> str:
 
 
 def sections(result: DesignStudyReport, figures: list[str]) -> str:
-    """The page: the stages table, each stage's numbers, the runs' metrics and the figures."""
+    """The page: the stages table, each stage's numbers, the runs' metrics, the dispersions'
+    statistics and the figures."""
     records = list(result.records)
     metrics = result.metrics_records()
     names = [key for key in metrics[0] if key != "run"]
@@ -104,6 +151,7 @@ stage whose fingerprint is in the cache is read from it, not recomputed.</p>
 {design}
 <h2>Runs</h2>
 {html_table(("run", *names), run_rows)}
+{_dispersions_section(result.dispersions)}
 <h2>Figures</h2>
 {images_html(figures)}
 """
@@ -135,4 +183,4 @@ def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     return ["runs.png"]
 
 
-__all__ = ["DesignStudyReport", "draw_figures", "sections"]
+__all__ = ["DesignStudyReport", "dispersion_figures", "draw_figures", "sections"]

@@ -90,6 +90,14 @@ from flexsat.design.stages import (
 )
 from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
+from flexsat.scenarios.design_dispersions import (
+    DispersionsResult,
+    DispersionsSpec,
+    check_dispersions,
+    dispersions_stage,
+    dispersions_steps,
+    run_dispersions,
+)
 from flexsat.scenarios.design_laws import (
     LawSpec,
     StudySection,
@@ -209,10 +217,13 @@ class DesignStudyScenario(Document):
     laws: list[LawSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
     simulation: SimulationSettings
     runs: list[DesignRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
+    dispersions: DispersionsSpec | None = None
 
     @model_validator(mode="after")
     def _references(self) -> Self:
         check_unique_labels(self.runs)
+        if self.dispersions is not None:
+            check_dispersions(self)
         labels = [law.label for law in self.laws]
         for label in labels:
             if labels.count(label) > 1:
@@ -332,6 +343,16 @@ def stage_plan(scenario: DesignStudyScenario) -> dict[str, Stage]:
         path = f"runs{item_path(index, run.label)}"
         section = {"run": run.model_dump(mode="json", exclude={"label"}), "simulation": settings}
         stages[path] = _stage("run", f"run {run.label!r}", path, section, [laws[run.law]])
+    if scenario.dispersions is not None:
+        flown = scenario.dispersions.flown([run.label for run in scenario.runs])
+        stages["dispersions"] = dispersions_stage(
+            scenario,
+            [
+                stages[f"runs{item_path(index, run.label)}"]
+                for index, run in enumerate(scenario.runs)
+                if run.label in flown
+            ],
+        )
     return stages
 
 
@@ -515,6 +536,9 @@ class DesignStudyResult(ReportedResult):
     results : tuple of SimResult
         One per run.
     case_source : str
+    dispersions : DispersionsResult or None
+        The Monte Carlo of the nominal laws on the dispersed spacecraft
+        (:mod:`flexsat.scenarios.design_dispersions`).
     """
 
     report_title = "flexsat design study"
@@ -526,6 +550,7 @@ class DesignStudyResult(ReportedResult):
     laws: dict[str, LawDesign]
     results: tuple[SimResult, ...]
     case_source: str
+    dispersions: DispersionsResult | None = None
 
     def report_case(self) -> str:
         model = self.scenario.model
@@ -570,9 +595,9 @@ class DesignStudyResult(ReportedResult):
         return ds
 
     def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
-        from flexsat.report.design_study import draw_figures
+        from flexsat.report.design_study import dispersion_figures, draw_figures
 
-        return draw_figures(ds, folder)
+        return draw_figures(ds, folder) + dispersion_figures(self.dispersions, folder)
 
     def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.design_study import sections
@@ -588,7 +613,7 @@ class DesignStudyKind(ScenarioKind):
     document = DesignStudyScenario
 
     def steps(self, scenario: DesignStudyScenario) -> int:
-        return 3 + len(scenario.laws) + len(scenario.runs)
+        return 3 + len(scenario.laws) + len(scenario.runs) + dispersions_steps(scenario)
 
     def plan(self, scenario: DesignStudyScenario) -> Generator[Run, Any, DesignStudyResult]:
         """One run per stage: the model, modes, placement and law stages are analyses, a run
@@ -697,8 +722,26 @@ class DesignStudyKind(ScenarioKind):
             target = laws[run.law].arrays.get("beta_target", IDENTITY)
             records.append(StageRecord(stage, False, seconds, run_metrics(result, target)))
             results.append(result)
+        dispersed = None
+        if scenario.dispersions is not None:
+
+            def dispersions(progress: Callable[[str], None] | None = None) -> DispersionsResult:
+                outcome, record = run_dispersions(
+                    scenario, stages["dispersions"], placement, laws, progress
+                )
+                records.append(record)
+                return outcome
+
+            dispersed = yield Run("dispersions", dispersions, "dispersions", reports_progress=True)
         return DesignStudyResult(
-            scenario, tuple(records), model, placement, laws, tuple(results), _source(scenario)
+            scenario,
+            tuple(records),
+            model,
+            placement,
+            laws,
+            tuple(results),
+            _source(scenario),
+            dispersed,
         )
 
 
