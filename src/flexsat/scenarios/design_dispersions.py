@@ -474,7 +474,8 @@ def run_dispersions(
         A parameter, a case or a requirement refused by name (before any case runs), a store of
         another study.
     """
-    from flexsat.design.batch_runner import BatchProgress, open_results, run_batch
+    from flexsat.design.batch_runner import BatchProgress, fingerprint, open_results, run_batch
+    from flexsat.design.batch_store import open_store_mask
     from flexsat.design.monte_carlo_statistics import (
         MIN_RANKING_CASES,
         monte_carlo_summary,
@@ -505,20 +506,29 @@ def run_dispersions(
             progress(f"dispersions: {p.cases_done}/{p.cases_total} cases, ETA {p.eta_s:.0f} s")
 
     e = spec.execution
+    n_chunks = math.ceil(spec.cases / e.chunk_size)
     try:
-        done = run_batch(
-            build,
-            table.values,
-            store,
-            extract=dict,
-            base_seed=spec.seed,
-            chunk_size=e.chunk_size,
-            setup_text=stage.key,
-            workers=e.workers,
-            scheduler=e.scheduler,
-            retries=e.retries,
-            progress=report,
-        )
+        # a store with every case done is the stage's cache entry: read, neither checked nor
+        # scheduled again (run_batch would check every case's document first)
+        key = fingerprint(stage.key, table.values, spec.seed, (), build.describe())
+        mask = open_store_mask(store, key, spec.cases)
+        if mask is not None and mask.all():
+            chunks_run, chunks_skipped = 0, n_chunks
+        else:
+            done = run_batch(
+                build,
+                table.values,
+                store,
+                extract=dict,
+                base_seed=spec.seed,
+                chunk_size=e.chunk_size,
+                setup_text=stage.key,
+                workers=e.workers,
+                scheduler=e.scheduler,
+                retries=e.retries,
+                progress=report,
+            )
+            chunks_run, chunks_skipped = done.chunks_run, done.chunks_skipped
     except (SimulationDiverged, ScenarioError):
         raise
     except ValueError as exc:
@@ -542,14 +552,14 @@ def run_dispersions(
         summary,
         sensitivity,
         store,
-        done.chunks_run,
-        done.chunks_skipped,
+        chunks_run,
+        chunks_skipped,
         build.runs,
     )
     facts: dict[str, Any] = {"cases": spec.cases, "runs": list(build.runs)}
     for r in summary["requirements"]:
         facts[f"P({r['requirement']})"] = r["probability"]
-    record = StageRecord(stage, done.chunks_run == 0, time.perf_counter() - start_time, facts)
+    record = StageRecord(stage, chunks_run == 0, time.perf_counter() - start_time, facts)
     return result, record
 
 
