@@ -1,5 +1,6 @@
 """Staged design studies (``kind: design_study``): model → modes → actuator placement → law
-design → simulation runs, each stage cached by fingerprint (:mod:`flexsat.design.stages`).
+design → simulation runs → dispersions, each stage cached by fingerprint
+(:mod:`flexsat.design.stages`).
 
 ::
 
@@ -24,6 +25,10 @@ design → simulation runs, each stage cached by fingerprint (:mod:`flexsat.desi
     simulation: {duration: "60 s", control_rate: "20 Hz"}
     runs:
       - {label: PD slew, law: PD, initial: {euler123: ["10 deg", 0, 0]}}
+    dispersions:                     # optional: the nominal laws flown on dispersed truths
+      parameters: {modes.damping: {distribution: lognormal, median: 0.005, gsd: 1.5}}
+      cases: 200
+      requirements: {final_attitude_error_rad: {max: "1 mrad"}}
 
 Stages
 ------
@@ -57,11 +62,14 @@ everything. The report shows every stage, fresh or from the cache.
 
 Dispersions
 -----------
-A design study has no batch of its own: sweeps and Monte Carlo over it are those of any
-scenario document (parameters addressed by their path in this document). Each dispersed case is
-this document with other values, and the stage cache makes a case recompute only the stages
-downstream of what it changes: dispersing a law weight or a run's initial attitude reuses the
-modal solve and the placement of the nominal (:func:`stage_plan` gives a case's stages and
+``dispersions:`` (optional, :mod:`flexsat.scenarios.design_dispersions`) is the last stage: a
+Monte Carlo of the design. The laws designed on the nominal model above fly on each case's
+dispersed truth (the model and modes rebuilt from its values, the placement kept nominal), so
+the probabilities it reports measure the design's robustness. Its cases run through the batch
+machinery (chunks on dask, a zarr store, resume); its fingerprint leaves out the requirements,
+so changing a threshold re-reads the store. A sweep or Monte Carlo over this document is also
+possible, each case the whole study with other values (laws redesigned per case), reusing the
+cached stages upstream of what it changes (:func:`stage_plan` gives a case's stages and
 fingerprints without running anything).
 """
 
