@@ -7,7 +7,9 @@ flexible spacecraft: ``attitude``, ``euler123``, ``rate``, ``torque``, ``force_<
 ``displacement_<node><AXIS>``), the attitude each run's law turns to (``target_attitude``,
 over ``run`` and ``attitude_component``), the run metrics over ``run`` and the kept modes
 (``frequency_hz``, ``damping`` over ``mode``, rigid modes first); its attributes name every
-stage's fingerprint and origin (``stage_model``: ``<sha256> (fresh)``).
+stage's fingerprint and origin (``stage_model``: ``<sha256> (fresh)``). A study with
+dispersions adds ``dispersions.json`` (probabilities with confidence intervals, percentiles,
+sensitivity) and ``dispersions.zarr`` (every case's parameters and metrics).
 """
 
 from __future__ import annotations
@@ -68,6 +70,28 @@ its robustness, not that of a law redesigned per case.</p>
 {html_table(("parameter", "SI unit", "least", "median", "greatest"), rows)}
 {statistics_tables(dispersions.summary, dispersions.sensitivity)}
 """
+
+
+def write_dispersions(dispersions: Any, folder: Path) -> None:
+    """``dispersions.json`` (the runs flown, the parameters' SI units, per metric its summary
+    and percentiles, per requirement the probability of meeting it with its confidence
+    interval, the sensitivity rankings; NaN as null) and a copy of the cases' zarr store,
+    ``dispersions.zarr``; nothing without dispersions."""
+    import shutil
+
+    from flexsat.report.json_data import dumps
+
+    if dispersions is None:
+        return
+    data = {
+        "cases": len(next(iter(dispersions.metrics.values()))),
+        "runs": list(dispersions.runs),
+        "units": dispersions.units,
+        **dispersions.summary,
+        "sensitivity": dispersions.sensitivity,
+    }
+    (folder / "dispersions.json").write_text(dumps(data), encoding="utf-8")
+    shutil.copytree(dispersions.store, folder / "dispersions.zarr")
 
 
 def dispersion_figures(dispersions: Any, folder: Path) -> list[str]:
@@ -183,4 +207,10 @@ def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     return ["runs.png"]
 
 
-__all__ = ["DesignStudyReport", "dispersion_figures", "draw_figures", "sections"]
+__all__ = [
+    "DesignStudyReport",
+    "dispersion_figures",
+    "draw_figures",
+    "sections",
+    "write_dispersions",
+]

@@ -67,7 +67,7 @@ import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any, Self
+from typing import TYPE_CHECKING, Annotated, Any, Self, cast
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -324,7 +324,7 @@ class DispersedCases:
         )
         for index in extremes:
             values = {p: float(table[p][index]) for p in self.parameter_names}
-            scenario = self.cases.scenario(values, 0)
+            scenario: Any = self.cases.scenario(values, 0)  # a DesignStudyScenario
             try:
                 try:
                     model = modal_model_of(scenario.model, scenario.folder)
@@ -516,7 +516,7 @@ def run_dispersions(
             chunks_run, chunks_skipped = 0, n_chunks
         else:
             done = run_batch(
-                build,
+                cast("Callable[..., Any]", build),  # a builder with its own run_chunk
                 table.values,
                 store,
                 extract=dict,

@@ -602,6 +602,14 @@ class DesignStudyResult(ReportedResult):
         )
         return ds
 
+    def write_data(self, folder: Path, ds: xr.Dataset) -> None:
+        """``metrics.json`` and ``results.nc``, and with dispersions ``dispersions.json`` and
+        the cases' store (:func:`flexsat.report.design_study.write_dispersions`)."""
+        from flexsat.report.design_study import write_dispersions
+
+        super().write_data(folder, ds)
+        write_dispersions(self.dispersions, folder)
+
     def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
         from flexsat.report.design_study import dispersion_figures, draw_figures
 
