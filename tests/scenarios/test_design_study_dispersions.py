@@ -7,6 +7,7 @@ an override of ``dispersions.cases``)."""
 from __future__ import annotations
 
 import json
+import pickle
 import re
 from pathlib import Path
 
@@ -184,6 +185,12 @@ def test_cases_are_independent_of_chunking_and_equal_the_case_alone(tmp_path):
     for chunk in (7, 1000):
         for name, values in stores[1].items():
             np.testing.assert_array_equal(stores[chunk][name], values, err_msg=name)
+    # what process workers receive: the builder pickled, its chunk the same numbers
+    shipped = pickle.loads(pickle.dumps(build))
+    chunk = shipped.run_chunk(dict, {k: v[3:5] for k, v in table.values.items()}, 3, 0)
+    for name, values in chunk.items():
+        if name.startswith("metric_"):
+            np.testing.assert_array_equal(values, stores[1][name][3:5], err_msg=name)
     for index in range(8):
         alone = dispersed_case(build, scenario.dispersions, index)
         for name, value in alone.items():
@@ -222,6 +229,35 @@ def test_a_requirement_change_rereads_the_store_and_an_interrupted_run_resumes(t
     assert req["successes"] == int(
         (changed.dispersions.metrics["peak_displacement_m"] <= 2e-4).sum()
     )
+
+
+def test_a_runs_initial_state_and_the_duration_are_dispersed_into_the_case(tmp_path):
+    """Paths into a run's initial state and the simulation reach the case's study, each value
+    written in the unit its entry is given in."""
+    data = _data(tmp_path)
+    data["dispersions"]["parameters"] = {
+        "runs['PD return'].initial.euler123[2]": {
+            "distribution": "normal",
+            "mean": "30 deg",
+            "sd": "2 deg",
+        },
+        "simulation.duration": {"distribution": "uniform", "low": "4 s", "high": "5 s"},
+    }
+    scenario = _load(data)
+    nominal = _nominal(scenario)
+    build = case_builder(
+        scenario, stage_plan(scenario)["dispersions"], nominal.placement, nominal.laws
+    )
+    units = {p.path: p.unit for p in build.cases.parameters}
+    assert units == {"runs['PD return'].initial.euler123[2]": "rad", "simulation.duration": "s"}
+    case = build.cases.scenario(
+        {"runs['PD return'].initial.euler123[2]": 0.6, "simulation.duration": 4.5}, 0
+    )
+    assert case.simulation.duration == 4.5
+    angle = case.runs[0].initial.euler123[2]
+    assert angle.endswith(" deg") and float(angle.split()[0]) == pytest.approx(np.degrees(0.6))
+    # the laws and placement in the case are the nominal ones
+    assert case.laws == scenario.laws and case.placement == scenario.placement
 
 
 @pytest.mark.parametrize(

@@ -514,6 +514,8 @@ def run_dispersions(
         mask = open_store_mask(store, key, spec.cases)
         if mask is not None and mask.all():
             chunks_run, chunks_skipped = 0, n_chunks
+            if progress is not None:
+                progress(f"dispersions: {spec.cases}/{spec.cases} cases, from the store")
         else:
             done = run_batch(
                 cast("Callable[..., Any]", build),  # a builder with its own run_chunk
