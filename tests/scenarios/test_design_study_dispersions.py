@@ -21,7 +21,12 @@ from flexsat.control import QuaternionPD
 from flexsat.design.batch_runner import BatchInterrupted, open_results, run_batch
 from flexsat.report import write_report
 from flexsat.scenarios import ScenarioError, load_scenario, run_scenario
-from flexsat.scenarios.design_dispersions import case_builder, dispersed_case, sample_table
+from flexsat.scenarios.design_dispersions import (
+    case_builder,
+    dispersed_case,
+    metric_names,
+    sample_table,
+)
 from flexsat.scenarios.design_placement import spacecraft
 from flexsat.scenarios.design_study import kept_modes, modal_model_of, run_metrics, stage_plan
 from flexsat.sim import SimConfig, simulate
@@ -258,6 +263,28 @@ def test_a_runs_initial_state_and_the_duration_are_dispersed_into_the_case(tmp_p
     assert angle.endswith(" deg") and float(angle.split()[0]) == pytest.approx(np.degrees(0.6))
     # the laws and placement in the case are the nominal ones
     assert case.laws == scenario.laws and case.placement == scenario.placement
+
+
+def test_with_several_runs_each_metric_is_named_by_its_run(tmp_path):
+    """Two runs flown: every metric under ``runs['label'].name`` (those
+    :func:`metric_names` announces, which requirements are checked against), each run's the
+    metrics of that run alone."""
+    data = _data(tmp_path, cases=2)
+    data["runs"].append({"label": "small", "law": "PD", "initial": {"euler123": [0, 0, "0.1 rad"]}})
+    data["dispersions"]["requirements"] = {"runs['small'].peak_displacement_m": {"max": "1 mm"}}
+    scenario = _load(data)
+    result = run_scenario(scenario)
+    names = metric_names(["PD return", "small"], forces=True)
+    assert sorted(result.dispersions.metrics) == sorted(names)
+    (requirement,) = result.dispersions.summary["requirements"]
+    assert requirement["metric"] == "runs['small'].peak_displacement_m"
+    data["dispersions"]["runs"] = ["small"]  # one run: its metrics under their own names
+    with pytest.raises(ScenarioError, match="unknown metric"):
+        _load(data)
+    data["dispersions"]["requirements"] = {"peak_displacement_m": {"max": "1 mm"}}
+    alone = run_scenario(_load(data)).dispersions.metrics["peak_displacement_m"]
+    both = result.dispersions.metrics["runs['small'].peak_displacement_m"]
+    np.testing.assert_array_equal(alone, both)
 
 
 @pytest.mark.parametrize(
