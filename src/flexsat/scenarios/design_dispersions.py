@@ -83,6 +83,7 @@ from flexsat.scenarios.fields import integer_in
 
 if TYPE_CHECKING:
     from flexsat.design.monte_carlo_statistics import Requirement
+    from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.scenarios.design_placement import PlacementResult
 
 #: the SI unit of each run metric (:func:`flexsat.scenarios.design_study.run_metrics`)
@@ -195,11 +196,37 @@ def metric_names(runs: list[str], forces: bool) -> list[str]:
     return [f"runs[{run!r}].{m}" for run in runs for m in names]
 
 
+def dispersed_spacecraft(scenario: Any, placement: PlacementResult) -> FlexibleSpacecraft:
+    """The truth of a (case) design study: its ``model:`` solved, its ``modes:`` kept, with
+    the nominal ``placement``'s forces and sensors.
+
+    Raises
+    ------
+    ScenarioError
+        A model or modes the solve refuses (a negative modulus, too few modes), by path.
+    """
+    from flexsat.scenarios.design_placement import spacecraft
+    from flexsat.scenarios.design_study import kept_modes, modal_model_of
+
+    try:
+        model = modal_model_of(scenario.model, scenario.folder)
+    except ValueError as exc:
+        raise ScenarioError([locate("model", exc)]) from None
+    try:
+        kept = kept_modes(model, scenario.modes)
+    except ValueError as exc:
+        raise ScenarioError([locate("modes", exc)]) from None
+    try:
+        return spacecraft(kept, scenario.placement, placement)
+    except ValueError as exc:
+        raise ScenarioError([locate("placement", exc)]) from None
+
+
 def fly(
     scenario: Any, runs: list[str], placement: PlacementResult, laws: Mapping[str, Any]
 ) -> dict[str, float]:
-    """The metrics of the named ``runs`` of a (case) design study flown on its truth with the
-    nominal placement and law designs (module docstring).
+    """The metrics of the named ``runs`` of a (case) design study flown on its truth
+    (:func:`dispersed_spacecraft`) with the nominal law designs (module docstring).
 
     Parameters
     ----------
@@ -215,28 +242,19 @@ def fly(
     Raises
     ------
     ScenarioError
-        A truth the model, modes or runs refuse (a negative modulus, too few modes), by path.
+        A truth the model, modes or runs refuse, by path.
     """
     from flexsat.scenarios.design_laws import law_controller
-    from flexsat.scenarios.design_placement import spacecraft
-    from flexsat.scenarios.design_study import IDENTITY, kept_modes, modal_model_of, run_metrics
+    from flexsat.scenarios.design_study import IDENTITY, run_metrics
     from flexsat.scenarios.errors import item_path
     from flexsat.scenarios.fields import given_fields
     from flexsat.sim import SimConfig, simulate
 
+    plant = dispersed_spacecraft(scenario, placement)
     try:
-        model = modal_model_of(scenario.model, scenario.folder)
-    except ValueError as exc:
-        raise ScenarioError([locate("model", exc)]) from None
-    try:
-        kept = kept_modes(model, scenario.modes)
-    except ValueError as exc:
-        raise ScenarioError([locate("modes", exc)]) from None
-    try:
-        plant = spacecraft(kept, scenario.placement, placement)
         config = SimConfig(**given_fields(scenario.simulation))
     except ValueError as exc:
-        raise ScenarioError([locate("", exc)]) from None
+        raise ScenarioError([locate("simulation", exc)]) from None
     specs = {law.label: law for law in scenario.laws}
     records = []
     for index, run in enumerate(scenario.runs):
@@ -307,33 +325,25 @@ class DispersedCases:
             raise ScenarioError(self.cases.problems(index, values, exc)) from None
 
     def check(self, table: Mapping[str, np.ndarray]) -> None:
-        """Every case's document validated, and the truth of each parameter's least and
-        greatest draw built (its modal solve and kept modes), before any case runs.
+        """Every case's document validated, and the truth (:func:`dispersed_spacecraft`) of
+        the least and greatest draw of each parameter of the model or the modes built, before
+        any case runs.
 
         Raises
         ------
         ScenarioError
             Naming the parameter, the case index and the rule.
         """
-        from flexsat.scenarios.design_study import kept_modes, modal_model_of
-
         self.cases.check(table)
+        structural = [p for p in self.parameter_names if p.startswith(("model", "modes"))]
         extremes = sorted(
-            {int(np.argmin(table[p])) for p in self.parameter_names}
-            | {int(np.argmax(table[p])) for p in self.parameter_names}
+            {int(np.argmin(table[p])) for p in structural}
+            | {int(np.argmax(table[p])) for p in structural}
         )
         for index in extremes:
             values = {p: float(table[p][index]) for p in self.parameter_names}
-            scenario: Any = self.cases.scenario(values, 0)  # a DesignStudyScenario
             try:
-                try:
-                    model = modal_model_of(scenario.model, scenario.folder)
-                except ValueError as exc:
-                    raise ScenarioError([locate("model", exc)]) from None
-                try:
-                    kept_modes(model, scenario.modes)
-                except ValueError as exc:
-                    raise ScenarioError([locate("modes", exc)]) from None
+                dispersed_spacecraft(self.cases.scenario(values, 0), self.placement)
             except ScenarioError as exc:
                 raise ScenarioError(self.cases.problems(index, values, exc)) from None
 
@@ -604,6 +614,7 @@ __all__ = [
     "case_builder",
     "check_dispersions",
     "dispersed_case",
+    "dispersed_spacecraft",
     "dispersions_stage",
     "dispersions_steps",
     "fly",
