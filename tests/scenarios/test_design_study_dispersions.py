@@ -287,6 +287,28 @@ def test_with_several_runs_each_metric_is_named_by_its_run(tmp_path):
     np.testing.assert_array_equal(alone, both)
 
 
+def test_without_a_model_dispersion_the_cases_reuse_the_nominal_solve(tmp_path, solves):
+    """Dispersing the damping and the duration only: one modal solve in all (the nominal's),
+    and each case's metrics those of the case solving its own structure."""
+    data = _data(tmp_path, cases=4)
+    data["dispersions"]["parameters"] = {
+        "modes.damping": {"distribution": "lognormal", "median": 0.005, "gsd": 1.5},
+        "simulation.duration": {"distribution": "uniform", "low": "4 s", "high": "6 s"},
+    }
+    scenario = _load(data)
+    result = run_scenario(scenario)
+    assert len(solves) == 1
+    own = case_builder(
+        scenario, stage_plan(scenario)["dispersions"], result.placement, result.laws, None
+    )
+    assert own.model is None
+    for index in range(4):
+        alone = dispersed_case(own, scenario.dispersions, index)
+        for name, value in alone.items():
+            assert result.dispersions.metrics[name][index] == value, (index, name)
+    assert len(solves) == 5  # the builder without the nominal solve solved each case
+
+
 @pytest.mark.parametrize(
     ("change", "message"),
     [

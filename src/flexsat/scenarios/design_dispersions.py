@@ -24,7 +24,9 @@ what the engineer designed and would fly. Each case builds the **dispersed truth
 ``model:`` and ``modes:`` sections with the case's values, the modal solve redone, the kept
 modes and their damping as the case says -- keeps the nominal placement (the forces sit where
 they were placed) and flies every named run's nominal law on it, from the run's (possibly
-dispersed) initial state, for the (possibly dispersed) duration. The probability of meeting a
+dispersed) initial state, for the (possibly dispersed) duration. When no parameter is under
+``model`` (damping, durations, initial states only), every case reuses the nominal modal solve
+(the same numbers as solving it again, tested) instead of repeating it. The probability of meeting a
 requirement is then the probability that *this design* meets it on a spacecraft built within
 the dispersions: its robustness, not that of a law redesigned for every case. An LQR law's
 gain reads the truth's modal coordinates by index (full state feedback on the kept modes):
@@ -65,7 +67,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Self, cast
 
@@ -85,6 +87,7 @@ if TYPE_CHECKING:
     from flexsat.design.monte_carlo_statistics import Requirement
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.scenarios.design_placement import PlacementResult
+    from flexsat.structures.modal_model import ModalModel
 
 #: the SI unit of each run metric (:func:`flexsat.scenarios.design_study.run_metrics`)
 METRIC_UNITS = {
@@ -196,9 +199,12 @@ def metric_names(runs: list[str], forces: bool) -> list[str]:
     return [f"runs[{run!r}].{m}" for run in runs for m in names]
 
 
-def dispersed_spacecraft(scenario: Any, placement: PlacementResult) -> FlexibleSpacecraft:
-    """The truth of a (case) design study: its ``model:`` solved, its ``modes:`` kept, with
-    the nominal ``placement``'s forces and sensors.
+def dispersed_spacecraft(
+    scenario: Any, placement: PlacementResult, model: ModalModel | None = None
+) -> FlexibleSpacecraft:
+    """The truth of a (case) design study: its ``model:`` solved (or ``model``, the nominal
+    solve, when no dispersion touches the model section), its ``modes:`` kept, with the
+    nominal ``placement``'s forces and sensors.
 
     Raises
     ------
@@ -209,7 +215,8 @@ def dispersed_spacecraft(scenario: Any, placement: PlacementResult) -> FlexibleS
     from flexsat.scenarios.design_study import kept_modes, modal_model_of
 
     try:
-        model = modal_model_of(scenario.model, scenario.folder)
+        if model is None:
+            model = modal_model_of(scenario.model, scenario.folder)
     except ValueError as exc:
         raise ScenarioError([locate("model", exc)]) from None
     try:
@@ -223,7 +230,11 @@ def dispersed_spacecraft(scenario: Any, placement: PlacementResult) -> FlexibleS
 
 
 def fly(
-    scenario: Any, runs: list[str], placement: PlacementResult, laws: Mapping[str, Any]
+    scenario: Any,
+    runs: list[str],
+    placement: PlacementResult,
+    laws: Mapping[str, Any],
+    model: ModalModel | None = None,
 ) -> dict[str, float]:
     """The metrics of the named ``runs`` of a (case) design study flown on its truth
     (:func:`dispersed_spacecraft`) with the nominal law designs (module docstring).
@@ -238,6 +249,8 @@ def fly(
         The nominal placement.
     laws : mapping of str to dict of str to ndarray
         The nominal designs' arrays by law label.
+    model : ModalModel, optional
+        The nominal solve, when the case's model section is the nominal one.
 
     Raises
     ------
@@ -250,7 +263,7 @@ def fly(
     from flexsat.scenarios.fields import given_fields
     from flexsat.sim import SimConfig, simulate
 
-    plant = dispersed_spacecraft(scenario, placement)
+    plant = dispersed_spacecraft(scenario, placement, model)
     try:
         config = SimConfig(**given_fields(scenario.simulation))
     except ValueError as exc:
@@ -293,6 +306,9 @@ class DispersedCases:
         The nominal law designs' arrays.
     key : str
         The stage's fingerprint (it fixes everything above).
+    model : ModalModel or None
+        The nominal solve, which every case reuses when no parameter is under ``model``
+        (:func:`disperses_model`); None: each case solves its own.
     """
 
     cases: DocumentCases
@@ -300,6 +316,7 @@ class DispersedCases:
     placement: PlacementResult
     laws: dict[str, dict[str, np.ndarray]]
     key: str
+    model: ModalModel | None = None
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
@@ -320,7 +337,7 @@ class DispersedCases:
         """
         try:
             scenario = self.cases.scenario(values, seed)
-            return fly(scenario, list(self.runs), self.placement, self.laws)
+            return fly(scenario, list(self.runs), self.placement, self.laws, self.model)
         except ScenarioError as exc:
             raise ScenarioError(self.cases.problems(index, values, exc)) from None
 
@@ -343,7 +360,7 @@ class DispersedCases:
         for index in extremes:
             values = {p: float(table[p][index]) for p in self.parameter_names}
             try:
-                dispersed_spacecraft(self.cases.scenario(values, 0), self.placement)
+                dispersed_spacecraft(self.cases.scenario(values, 0), self.placement, self.model)
             except ScenarioError as exc:
                 raise ScenarioError(self.cases.problems(index, values, exc)) from None
 
@@ -387,15 +404,22 @@ def dispersions_stage(scenario: Any, runs: list[Stage]) -> Stage:
     return Stage.of("dispersions", "dispersions", section, runs)
 
 
+def disperses_model(spec: DispersionsSpec) -> bool:
+    """Whether a parameter is under ``model`` (each case then solves its own structure)."""
+    return any(path.split(".")[0].split("[")[0] == "model" for path in spec.parameters)
+
+
 def case_builder(
     scenario: Any,
     stage: Stage,
     placement: PlacementResult,
     laws: Mapping[str, Any],
+    model: ModalModel | None = None,
 ) -> DispersedCases:
     """The :class:`DispersedCases` of ``scenario`` (a validated design study with
     ``dispersions``) with its nominal ``placement`` and law designs (``laws``: label →
-    LawDesign).
+    LawDesign), and the nominal solve ``model`` the cases reuse when none of them changes the
+    model section (ignored otherwise).
 
     Raises
     ------
@@ -422,6 +446,7 @@ def case_builder(
         placement=placement,
         laws={label: dict(laws[label].arrays) for label in sorted(used)},
         key=stage.key,
+        model=None if disperses_model(spec) else model,
     )
 
 
@@ -473,10 +498,12 @@ def run_dispersions(
     placement: PlacementResult,
     laws: Mapping[str, Any],
     progress: Callable[[str], None] | None = None,
+    model: Callable[[], ModalModel] | None = None,
 ) -> tuple[DispersionsResult, StageRecord]:
     """Run the dispersions stage of ``scenario`` (module docstring): every case into the store
     (resuming it), then the statistics, and the stage's record (from the cache when no chunk
-    had to run).
+    had to run). ``model`` gives the nominal solve, which the cases reuse when no parameter is
+    under ``model`` (asked for only then, and only when cases run).
 
     Raises
     ------
@@ -527,6 +554,8 @@ def run_dispersions(
             if progress is not None:
                 progress(f"dispersions: {spec.cases}/{spec.cases} cases, from the store")
         else:
+            if model is not None and not disperses_model(spec):
+                build = replace(build, model=model())
             done = run_batch(
                 cast("Callable[..., Any]", build),  # a builder with its own run_chunk
                 table.values,
@@ -615,6 +644,7 @@ __all__ = [
     "check_dispersions",
     "dispersed_case",
     "dispersed_spacecraft",
+    "disperses_model",
     "dispersions_stage",
     "dispersions_steps",
     "fly",

@@ -743,7 +743,12 @@ class DesignStudyKind(ScenarioKind):
 
             def dispersions(progress: Callable[[str], None] | None = None) -> DispersionsResult:
                 outcome, record = run_dispersions(
-                    scenario, stages["dispersions"], placement, laws, progress
+                    scenario,
+                    stages["dispersions"],
+                    placement,
+                    laws,
+                    progress,
+                    lambda: raw if raw is not None else solved()[0],
                 )
                 records.append(record)
                 return outcome
