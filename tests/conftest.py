@@ -1,9 +1,20 @@
+import sys
 from pathlib import Path
 
 import pytest
 import yaml
 
 from flexsat.cases import tamu
+
+
+@pytest.fixture(autouse=True)
+def _fresh_modal_model_cache():
+    """Each test starts with an empty in-process modal model cache
+    (flexsat.scenarios.modal_cache), so a test counting modal solves, or one injecting a fault
+    into a build, does not depend on which tests ran before it in the process."""
+    cache = sys.modules.get("flexsat.scenarios.modal_cache")
+    if cache is not None:  # not imported yet: nothing cached
+        cache.MODAL_MODELS.clear()
 
 
 @pytest.fixture(scope="session")

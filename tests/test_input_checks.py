@@ -6,6 +6,7 @@ from flexsat.input_checks import (
     require_finite,
     require_nonneg,
     require_numeric,
+    require_physical_inertia,
     require_positive,
 )
 
@@ -75,3 +76,29 @@ def test_a_positive_scalar_is_one_finite_number_above_zero_in_si():
     ):
         with pytest.raises(ValueError, match=f"^length: {rule}"):
             require_positive_scalar(bad, "length", "m")
+
+
+@pytest.mark.parametrize(
+    "moments, definite, rule",
+    [
+        ((4.0, 1.6, 1.8), True, "triangle inequality"),  # 1.6 + 1.8 < 4
+        ((0.0, 0.0, 1.0), False, "triangle inequality"),  # a single-axis inertia: no body
+        ((0.0, 1.0, 1.0), True, "positive definite"),  # a thin rod: semi-definite only
+        ((-1e-3, 1.0, 1.0), False, "positive semi-definite"),
+    ],
+)
+def test_an_inertia_no_body_has_is_refused(moments, definite, rule):
+    with pytest.raises(ValueError, match=rf"^J: .*{rule}"):
+        require_physical_inertia(np.diag(moments), "J", definite)
+
+
+def test_physical_inertias_pass_with_the_flat_plate_and_rod_limits():
+    """The triangle inequality's equality (a flat plate: I1 + I2 = I3, here 0.1 + 0.2 with its
+    round-off) and, semi-definite, a thin rod (0, I, I) and a point mass (0, 0, 0) pass."""
+    plate = np.diag([0.1, 0.2, 0.1 + 0.2])
+    assert require_physical_inertia(plate, "J") is plate
+    require_physical_inertia(np.diag([0.0, 2.0, 2.0]), "J", definite=False)
+    require_physical_inertia(np.zeros((3, 3)), "J", definite=False)
+    rotated = np.array([[2.0, 0.5, 0.0], [0.5, 2.0, 0.0], [0.0, 0.0, 4.2]])  # moments 1.5, 2.5
+    with pytest.raises(ValueError, match=r"\[1\.5, 2\.5, 4\.2\]"):
+        require_physical_inertia(rotated, "J")

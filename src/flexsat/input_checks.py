@@ -157,3 +157,44 @@ def require_numeric(value: npt.ArrayLike, field: str, noun: str = "array") -> Fl
             f"{int(np.sum(~np.isfinite(arr)))} non-finite entries",
         )
     return arr
+
+
+def require_physical_inertia(J: FloatArray, field: str, definite: bool = True) -> FloatArray:
+    r"""``J`` (..., 3, 3), kg·m², checked to be an inertia tensor some mass distribution has:
+    symmetric (:math:`|I - I^T| \le 10^{-12}\max|I|`), positive definite (only semi-definite
+    when not ``definite``: a point mass has no inertia), and with principal moments satisfying
+    the triangle inequality :math:`I_a + I_b \ge I_c`, since
+    :math:`I_a + I_b - I_c = 2\int r_c^2\,dm \ge 0` in principal axes (each moment
+    :math:`I_a = \int (r_b^2 + r_c^2)\,dm`), allowed a round-off of :math:`10^{-12} I_c` (the
+    flat-plate limit is an equality).
+
+    Raises
+    ------
+    FieldError
+        ``field``: the rule broken and the principal moments.
+    """
+    scale = np.abs(J).max(axis=(-2, -1))
+    if np.any(np.abs(J - np.swapaxes(J, -1, -2)).max(axis=(-2, -1)) > 1e-12 * scale):
+        raise FieldError(field, "must be symmetric (|I − Iᵀ| <= 1e-12 max|I|)")
+    eig = np.linalg.eigvalsh(J)
+    if definite and np.any(eig[..., 0] <= 0):
+        raise FieldError(
+            field,
+            f"must be positive definite, smallest principal moment {eig[..., 0].min():.3g} kg·m²",
+        )
+    if not definite and np.any(eig[..., 0] < -1e-12 * scale):
+        raise FieldError(
+            field,
+            "must be positive semi-definite, smallest principal moment "
+            f"{eig[..., 0].min():.3g} kg·m²",
+        )
+    gap = eig[..., 0] + eig[..., 1] - eig[..., 2]
+    if np.any(gap < -1e-12 * eig[..., 2]):
+        k = np.unravel_index(np.argmin(gap / eig[..., 2]), gap.shape)
+        raise FieldError(
+            field,
+            f"principal moments {np.round(eig[k], 6).tolist()} kg·m² "
+            f"violate the triangle inequality I1 + I2 >= I3 (no mass distribution "
+            f"has them)",
+        )
+    return J

@@ -15,6 +15,7 @@ from flexsat.identify.differential_correction import CorrectionData, differentia
 from flexsat.identify.structural import SubstructureModel, damped_eigenvalues
 from flexsat.input_checks import FieldError
 from flexsat.units import Q_
+from param_ids import stable_id
 
 NAN, INF = np.nan, np.inf
 #: values that are no vector of positive numbers
@@ -117,7 +118,7 @@ def data(chain):
         ("frf[0].output_gain", {"frf": [(0, 0, [1.0], [1.0], 0.01, 10**12, None)]}),  # 10**12 gains
         ("frf[0].input_gain", {"frf": [(0, 0, [1.0], [1.0], 0.01, None, True)]}),
     ],
-    ids=repr,
+    ids=stable_id,
 )
 def test_correction_data_refuses_by_name(field, kwargs):
     _raises(field, lambda: CorrectionData(**kwargs))
@@ -134,7 +135,7 @@ def test_correction_data_refuses_by_name(field, kwargs):
         ("frf[0].output", np.full(3, NAN)),
         ("frf[0].output", np.ones(4)),
     ],
-    ids=repr,
+    ids=stable_id,
 )
 def test_frf_outputs_refused_against_the_model_before_the_fit(chain, field, output):
     """Checked against the model first: the count of measurements does not hide them."""
@@ -188,7 +189,7 @@ def test_damping_ratios_need_damping_blocks(chain):
         ),
         ("mu0", {"mu0": [1.0]}),  # the data name no output gain
     ],
-    ids=repr,
+    ids=stable_id,
 )
 def test_differential_correction_refuses_by_name(chain, data, field, changes):
     given = {"model": chain, "data": data, **changes}

@@ -12,6 +12,7 @@ from flexsat.identify import Channel, Measurement
 from flexsat.identify.spectral import estimate_frf, frequency_response
 from flexsat.input_checks import FieldError
 from flexsat.units import Q_
+from param_ids import stable_id
 
 NAN, INF = np.nan, np.inf
 SENSORS = [Channel.at("displacement", 1, "z")]
@@ -97,7 +98,7 @@ def _test(inputs=1, samples=2000):
             },
         ),
     ],
-    ids=repr,
+    ids=stable_id,
 )
 def test_estimate_frf_refuses_by_name(field, changes):
     given = {"measurement": _test(), "segment": 256, **changes}

@@ -23,6 +23,7 @@ from flexsat.identify.structural import (
 )
 from flexsat.input_checks import FieldError
 from flexsat.units import Q_
+from param_ids import stable_id
 
 NAN, INF = np.nan, np.inf
 #: values that are no matrix of numbers
@@ -52,7 +53,7 @@ def _raises(field, call):
 
 
 # ------------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("bad", NOT_A_MATRIX, ids=repr)
+@pytest.mark.parametrize("bad", NOT_A_MATRIX, ids=stable_id)
 @pytest.mark.parametrize("which", ["K_blocks", "M_blocks", "C_blocks", "K0"])
 def test_substructure_model_refuses_a_bad_matrix(chain, which, bad):
     Kb, Mb = _blocks(chain)
@@ -76,14 +77,14 @@ def test_substructure_model_refuses_a_bad_matrix(chain, which, bad):
         ("names", {"names": 5}),
         ("names", {"names": [1, 2, 3]}),
     ],
-    ids=repr,
+    ids=stable_id,
 )
 def test_substructure_model_refuses_bad_lists(chain, field, changes):
     Kb, Mb = _blocks(chain)
     _raises(field, lambda: SubstructureModel(**{"K_blocks": Kb, "M_blocks": Mb, **changes}))
 
 
-@pytest.mark.parametrize("bad", [NAN, INF, "abc", Q_(1.0, "m"), 1 + 1j, [1.0, 1.0]], ids=repr)
+@pytest.mark.parametrize("bad", [NAN, INF, "abc", Q_(1.0, "m"), 1 + 1j, [1.0, 1.0]], ids=stable_id)
 @pytest.mark.parametrize("method, field", [("K", "p"), ("M", "q"), ("C", "r")])
 def test_scalings_refused_by_name(chain, method, field, bad):
     value = bad if np.ndim(bad) else [bad] * 3
@@ -101,7 +102,7 @@ def test_scalings_refused_by_name(chain, method, field, bad):
         ("n_modes", {"n_modes": 1.5}),
         ("n_modes", {"n_modes": [1, 2]}),
     ],
-    ids=repr,
+    ids=stable_id,
 )
 def test_modes_refuses_by_name(chain, field, kwargs):
     _raises(field, lambda: chain.modes(**kwargs))
@@ -139,7 +140,7 @@ def _unit(k, m):
         ("build().K", (lambda k, m: _Assembly(np.full((3, 3), NAN), np.eye(3)), 2)),
         ("build().M", (lambda k, m: _Assembly(np.eye(3), np.eye(2)), 2)),
     ],
-    ids=repr,
+    ids=stable_id,
 )
 def test_substructures_from_builder_refuses_by_name(field, args):
     _raises(field, lambda: substructures_from_builder(*args))
@@ -202,7 +203,7 @@ def _fit(chain, **changes):
         ("known_part[0]", {"known_part": [np.full(4, NAN)]}),
         ("known_part[0]", {"known_part": [np.ones(2)]}),
     ],
-    ids=repr,
+    ids=stable_id,
 )
 def test_fit_modal_normalization_refuses_by_name(chain, field, changes):
     _raises(field, lambda: _fit(chain, **changes))
@@ -250,7 +251,7 @@ def _undamped(chain, **changes):
         ("tol", {"tol": "x"}),
         ("identify_mass", {"identify_mass": True}),  # the mass needs an FRF
     ],
-    ids=repr,
+    ids=stable_id,
 )
 def test_identify_undamped_refuses_by_name(chain, field, changes):
     _raises(field, lambda: _undamped(chain, **changes))
@@ -285,7 +286,7 @@ def _eigenvalues(chain):
         ("mode_indices", {"mode_indices": [NAN] * 3}),
         ("mode_indices", {"mode_indices": []}),
     ],
-    ids=repr,
+    ids=stable_id,
 )
 def test_identify_damping_refuses_by_name(chain, field, changes):
     given = {"model": chain, "measured_eigenvalues": _eigenvalues(chain), **changes}

@@ -68,6 +68,22 @@ def _problems(example: str, path: list[str | int], value: object) -> list:
         ("agrawal_bang_ppf.yaml", ["ppf", "initial_gains"], True, "ppf.initial_gains", "number"),
         ("agrawal_bang_ppf.yaml", ["ppf", "Q_u"], True, "ppf.Q_u", "number"),
         ("agrawal_bang_ppf.yaml", ["runs", 6, "goal", "value"], True, ".goal.value", "number"),
+        # simulation: an LQR weight inside a list (read as 1.0 when a law's values were typed
+        # list[Any]), a rate gain inside an MRP PD gain vector
+        (
+            "draper_rpl_lqr.yaml",
+            ["runs", 1, "gains", "input_weights"],
+            [0.01, True, 1],
+            ".gains.input_weights",
+            "[1]",
+        ),
+        (
+            "own_spacecraft_slew.yaml",
+            ["runs", 0, "gains", "P"],
+            ["4.4 N*m*s/rad", True, "12 N*m*s/rad"],
+            "runs['MRP PD'].gains.P",
+            "[1]",
+        ),
     ],
     ids=lambda v: repr(v)[:40],
 )

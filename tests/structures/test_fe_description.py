@@ -114,6 +114,16 @@ def test_a_clamped_description_is_referenced_at_its_first_clamp():
         ),
         ({"masses": [MassSpec(4, 1.0)]}, "masses[0].node", "unknown node 4"),
         ({"masses": [MassSpec(1, 1.0, offset=(1, 0))]}, "masses[0].offset", "3 components"),
+        (
+            {"masses": [MassSpec(1, 1.0, inertia=(4.0, 1.6, 1.8))]},
+            "masses[0].inertia",
+            "violate the triangle inequality I1 + I2 >= I3",
+        ),
+        (
+            {"masses": [MassSpec(1, 1.0, inertia=(0.0, 0.0, 1.0))]},  # planar: not a body
+            "masses[0].inertia",
+            "triangle inequality",
+        ),
         ({"rigid_links": [RigidLinkSpec(1, (5,))]}, "rigid_links[0].nodes", "unknown node 5"),
         ({"rigid_links": [RigidLinkSpec(1, ())]}, "rigid_links[0].nodes", "at least one"),
         (

@@ -1,5 +1,7 @@
 """Design studies above the simulation engine: sweeps, Monte Carlo, optimisation (searches that
-run the lower layers many times; nothing here imports the cases or scenarios).
+run the lower layers many times; nothing here imports the cases or scenarios), and
+design optimisation (a problem as data, scipy/IPOPT/homotopy optimisers, KKT checks,
+placement on top of a continuous problem).
 
 The names below are imported from their modules on first use (the statistics load SALib, the
 batch runner dask and zarr, the slew searches the simulation engine)."""
@@ -74,6 +76,25 @@ _EXPORTS = {
     "StoreError": "batch_store",
     "StoreInUse": "batch_store",
     "StoreLock": "batch_store",
+    "Constraint": "optimization_problem",
+    "DesignProblem": "optimization_problem",
+    "DesignVariable": "optimization_problem",
+    "Evaluation": "optimization_problem",
+    "Objective": "optimization_problem",
+    "KKTReport": "kkt",
+    "kkt_conditions": "kkt",
+    "METHODS": "optimize",
+    "HistoryEntry": "optimize",
+    "OptimizationResult": "optimize",
+    "ipopt_available": "optimize",
+    "optimize_design": "optimize",
+    "PlacementDesign": "placement_design",
+    "gramian_log_det_score": "placement_design",
+    "nested_score": "placement_design",
+    "place_then_optimize": "placement_design",
+    "CantileverTube": "reference_problems",
+    "HubBoomCodesign": "reference_problems",
+    "cantilever_tube_optimum": "reference_problems",
 }
 
 __all__ = list(_EXPORTS)

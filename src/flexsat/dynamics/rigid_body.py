@@ -40,7 +40,7 @@ from flexsat.dynamics.attitude import (
     quaternion_to_dcm,
     require_shape,
 )
-from flexsat.input_checks import FieldError, require_numeric
+from flexsat.input_checks import FieldError, require_numeric, require_physical_inertia
 from flexsat.units import FloatArray, to_si_array
 
 if TYPE_CHECKING:
@@ -72,31 +72,12 @@ _SERIES_ANGLE = 0.02
 
 def require_inertia(inertia: QuantityArrayLike, field: str = "inertia") -> FloatArray:
     r"""``inertia`` as a float array (..., 3, 3) in kg·m² (a pint Quantity or a string with
-    units is converted), checked to be a physical inertia tensor: symmetric
-    (:math:`|I - I^T| \le 10^{-12}\max|I|`), positive definite, and with principal moments
-    satisfying the triangle inequality :math:`I_a + I_b \ge I_c` (a mass distribution has
-    :math:`I_a + I_b - I_c = 2\int r_c^2\,dm \ge 0`), allowed a round-off of
-    :math:`10^{-12} I_c` (the flat-plate limit is an equality)."""
+    units is converted), checked to be a physical inertia tensor: symmetric, positive definite,
+    and with principal moments satisfying the triangle inequality :math:`I_a + I_b \ge I_c`
+    (:func:`flexsat.input_checks.require_physical_inertia`, which structures' lumped masses use
+    too)."""
     J = require_shape(to_si_array(inertia, "kg*m**2", field), field, (3, 3))
-    scale = np.abs(J).max(axis=(-2, -1))
-    if np.any(np.abs(J - np.swapaxes(J, -1, -2)).max(axis=(-2, -1)) > 1e-12 * scale):
-        raise FieldError(field, "must be symmetric (|I − Iᵀ| <= 1e-12 max|I|)")
-    eig = np.linalg.eigvalsh(J)
-    if np.any(eig[..., 0] <= 0):
-        raise FieldError(
-            field,
-            f"must be positive definite, smallest principal moment {eig[..., 0].min():.3g} kg·m²",
-        )
-    gap = eig[..., 0] + eig[..., 1] - eig[..., 2]
-    if np.any(gap < -1e-12 * eig[..., 2]):
-        k = np.unravel_index(np.argmin(gap / eig[..., 2]), gap.shape)
-        raise FieldError(
-            field,
-            f"principal moments {np.round(eig[k], 6).tolist()} kg·m² "
-            f"violate the triangle inequality I1 + I2 >= I3 (no mass distribution "
-            f"has them)",
-        )
-    return J
+    return require_physical_inertia(J, field)
 
 
 def euler_rates(

@@ -36,6 +36,7 @@ nearest to the direction of the attitude loop's peak momentum.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from pathlib import Path
@@ -519,9 +520,12 @@ class CmgResult(ReportedResult):
         return cmg_sections(self, self.metrics_records(), figures)
 
 
+@functools.cache
 def validation_table() -> tuple[tuple[str, str, float, float, str], ...]:
     """V1–V8 computed live: (id, quantity, published, computed, unit) rows (the validate rows of
-    :mod:`flexsat.checks.cmg` share them)."""
+    :mod:`flexsat.checks.cmg` share them). They depend on nothing the scenario gives, so they are
+    computed once per process (1.9 s): a sweep or Monte Carlo of a cmg run would otherwise
+    recompute them in every case."""
     from flexsat.cases import cmg_pyramid
     from flexsat.dynamics import cmg
 

@@ -377,7 +377,9 @@ class ModelSection(SchemaSection):
 
     def modal_model(self, folder: Path) -> ModalModel:
         """The modal model of a ``file`` or ``fe`` section (a file's path relative to
-        ``folder``).
+        ``folder``), built once per content in this process
+        (:data:`flexsat.scenarios.modal_cache.MODAL_MODELS`: keyed by the section's canonical
+        JSON and the digests of the files it reads).
 
         Raises
         ------
@@ -385,14 +387,29 @@ class ModelSection(SchemaSection):
             Located in the section: ``file: no such file ...``, ``fe.elements[3].nodes: ...``,
             a reader's refusal under ``file``.
         """
+        from flexsat.scenarios.modal_cache import MODAL_MODELS, section_key
+
+        content = self.model_dump(mode="json")
         if self.fe is not None:
-            try:
-                return self.fe.description().modal_model()
-            except FieldError as exc:
-                raise FieldError(f"fe.{exc.field}", exc.rule) from None
+            return MODAL_MODELS.get(section_key(content), self._solve_fe)
         assert self.file is not None  # the section holds exactly one source
         path = _existing(self.file, folder, "file")
         op4 = None if self.op4 is None else _existing(self.op4, folder, "op4")
+        # without op4:, the NASTRAN reader takes the OP2's sibling .op4 when there is one
+        sibling = path.with_suffix(".op4")
+        read = [path, *([op4] if op4 is not None else [sibling] if sibling.is_file() else [])]
+        return MODAL_MODELS.get(section_key(content, read), lambda: self._read_file(path, op4))
+
+    def _solve_fe(self) -> ModalModel:
+        """The inline FE model's modal solve."""
+        assert self.fe is not None
+        try:
+            return self.fe.description().modal_model()
+        except FieldError as exc:
+            raise FieldError(f"fe.{exc.field}", exc.rule) from None
+
+    def _read_file(self, path: Path, op4: Path | None) -> ModalModel:
+        """The modal model in the file at ``path`` (its reader by suffix)."""
         kind = FILE_KINDS[path.suffix.lower()]
         try:
             if kind == "netcdf":

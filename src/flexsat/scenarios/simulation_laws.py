@@ -25,8 +25,12 @@ from flexsat.scenarios.fields import SchemaSection
 if TYPE_CHECKING:
     from flexsat.control.base import Controller
 
-#: a value as written in YAML: a number, a quantity string, or a (nested) list of them
-Value = float | int | str | list[Any]
+#: a number as written in YAML: a plain (SI) number or a quantity string
+Number = float | int | str
+#: a value as written in YAML: a number, a list of numbers or a matrix (a list of rows); typed
+#: down to its items so that the schema's refusal of a boolean where a number is expected
+#: (:class:`flexsat.scenarios.fields.SchemaSection`) reaches a ``true`` inside a list
+Value = Number | list[Number] | list[list[Number]]
 
 
 @dataclass(frozen=True)

@@ -234,7 +234,7 @@ def run(
     """
     kind = spacecraft_kind(plant)
     if kind is None:
-        raise ValueError(f"plant: {type(plant).__name__} is not a three-axis spacecraft")
+        raise FieldError("plant", f"{type(plant).__name__} is not a three-axis spacecraft")
     dt, n_t = config.dt, config.n_steps + 1
     try:
         pl = _Plant(plant, kind, dt, substeps)

@@ -27,7 +27,13 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat import limits
-from flexsat.input_checks import FieldError, require_count, require_finite, require_nonneg
+from flexsat.input_checks import (
+    FieldError,
+    require_count,
+    require_finite,
+    require_nonneg,
+    require_physical_inertia,
+)
 from flexsat.structures.fem import DOF_NAMES, Structure
 from flexsat.structures.modal_model import ModalModel
 from flexsat.structures.sections import Material, Section
@@ -89,9 +95,15 @@ class ElementSpec:
 
 @dataclass(frozen=True)
 class MassSpec:
-    """A lumped mass (kg) at a node, its inertia about its own centre (kg m²: a 3-vector of
+    r"""A lumped mass (kg) at a node, its inertia about its own centre (kg m²: a 3-vector of
     principal values in global axes or a 3x3 tensor) and its rigid offset from the node (m)
-    (:meth:`Structure.add_mass`)."""
+    (:meth:`Structure.add_mass`).
+
+    A described mass is a body: its inertia must be one a mass distribution has (positive
+    semi-definite, principal moments satisfying the triangle inequality
+    :math:`I_1 + I_2 \ge I_3`, :func:`flexsat.input_checks.require_physical_inertia`), checked
+    when the structure is built. (:meth:`Structure.add_mass` itself accepts a single-axis inertia
+    such as ``(0, 0, J)``, which a planar model whose out-of-plane dofs are suppressed uses.)"""
 
     node: int
     mass: float
@@ -215,6 +227,9 @@ class FEDescription:
             mass_node = self._known_node(mass.node, f"{path}.node")
             with _entry(path):
                 s.add_mass(mass_node, mass.mass, inertia=mass.inertia, offset=mass.offset)
+                if mass.inertia is not None:  # add_mass checked its shape and symmetry
+                    J = np.asarray(mass.inertia, dtype=float)
+                    require_physical_inertia(np.diag(J) if J.ndim == 1 else J, "inertia", False)
         for i, link in enumerate(self.rigid_links):
             path = f"rigid_links[{i}]"
             independent = self._known_node(link.node, f"{path}.node")
