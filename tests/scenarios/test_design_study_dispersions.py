@@ -287,9 +287,20 @@ def test_with_several_runs_each_metric_is_named_by_its_run(tmp_path):
     np.testing.assert_array_equal(alone, both)
 
 
-def test_without_a_model_dispersion_the_cases_reuse_the_nominal_solve(tmp_path, solves):
-    """Dispersing the damping and the duration only: one modal solve in all (the nominal's),
-    and each case's metrics those of the case solving its own structure."""
+def test_without_a_model_dispersion_the_cases_reuse_the_nominal_solve(tmp_path, monkeypatch):
+    """Dispersing the damping and the duration only: the model section is made a ModalModel
+    once in all (the nominal's; a built-in case has no other cache), and each case's metrics
+    are those of the case making its own."""
+    import flexsat.scenarios.design_study as design_study
+
+    calls = []
+    original = design_study.modal_model_of
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(design_study, "modal_model_of", counted)
     data = _data(tmp_path, cases=4)
     data["dispersions"]["parameters"] = {
         "modes.damping": {"distribution": "lognormal", "median": 0.005, "gsd": 1.5},
@@ -297,7 +308,7 @@ def test_without_a_model_dispersion_the_cases_reuse_the_nominal_solve(tmp_path, 
     }
     scenario = _load(data)
     result = run_scenario(scenario)
-    assert len(solves) == 1
+    assert len(calls) == 1
     own = case_builder(
         scenario, stage_plan(scenario)["dispersions"], result.placement, result.laws, None
     )
@@ -306,7 +317,7 @@ def test_without_a_model_dispersion_the_cases_reuse_the_nominal_solve(tmp_path, 
         alone = dispersed_case(own, scenario.dispersions, index)
         for name, value in alone.items():
             assert result.dispersions.metrics[name][index] == value, (index, name)
-    assert len(solves) == 5  # the builder without the nominal solve solved each case
+    assert len(calls) == 5  # the builder without the nominal model made each case's
 
 
 @pytest.mark.parametrize(
