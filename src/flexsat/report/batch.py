@@ -142,9 +142,14 @@ def _trade_surfaces(result: BatchReport, folder: Path) -> list[str]:
     return files
 
 
-def _distributions(result: BatchReport, metrics: dict[str, np.ndarray], folder: Path) -> list[str]:
+def distribution_figures(
+    summary: dict[str, Any], metrics: dict[str, np.ndarray], folder: Path
+) -> list[str]:
+    """Each metric's histogram and CDF with the lines of its requirements (``summary``: a
+    :func:`~flexsat.design.monte_carlo_statistics.monte_carlo_summary`), into ``folder``; the
+    file names."""
     lines: dict[str, list[float]] = {}
-    for r in result.summary["requirements"]:
+    for r in summary["requirements"]:
         lines.setdefault(r["metric"], []).append(r["threshold"])
     files: list[str] = []
     for name, values in metrics.items():
@@ -169,8 +174,10 @@ def _distributions(result: BatchReport, metrics: dict[str, np.ndarray], folder: 
     return files
 
 
-def _convergence(result: BatchReport, folder: Path) -> list[str]:
-    reqs = result.summary["requirements"]
+def convergence_figure(summary: dict[str, Any], folder: Path) -> list[str]:
+    """The convergence of each probability estimate of ``summary`` with its confidence band
+    against N (none without requirements); the file names."""
+    reqs = summary["requirements"]
     if not reqs:
         return []
     fig = Figure(figsize=(7, 3.4), layout="constrained")
@@ -198,22 +205,24 @@ def _convergence(result: BatchReport, folder: Path) -> list[str]:
     return ["convergence.png"]
 
 
-def _tables(result: BatchReport) -> str:
+def statistics_tables(summary: dict[str, Any], sensitivity: dict[str, dict[str, Any]]) -> str:
+    """The requirements (probability, confidence interval, cases met), the metrics'
+    percentiles and the sensitivity rankings of a Monte Carlo, as HTML tables."""
     esc = html.escape
     rows = "".join(
         f"<tr><td>{esc(r['metric'])} {esc(r['relation'])} {r['threshold']:g}</td>"
         f"<td>{r['probability']:.4f}</td><td>[{r['low']:.4f}, {r['high']:.4f}]</td>"
         f"<td>{r['successes']} / {r['n']}</td></tr>"
-        for r in result.summary["requirements"]
+        for r in summary["requirements"]
     )
     req = (
         (
             f"<h2>Requirements</h2><table><tr><th>requirement</th><th>probability</th>"
-            f"<th>{100 * result.summary['requirements'][0]['confidence']:g} % interval "
-            f"({esc(result.summary['requirements'][0]['method'])})</th><th>met</th></tr>"
+            f"<th>{100 * summary['requirements'][0]['confidence']:g} % interval "
+            f"({esc(summary['requirements'][0]['method'])})</th><th>met</th></tr>"
             f"{rows}</table>"
         )
-        if result.summary["requirements"]
+        if summary["requirements"]
         else ""
     )
     qs = ("5", "50", "95")
@@ -221,7 +230,7 @@ def _tables(result: BatchReport) -> str:
         f"<tr><td>{esc(name)}</td>"
         + "".join(f"<td>{_fmt(m['percentiles'].get(q))}</td>" for q in qs)
         + f"<td>{_fmt(m['mean'])}</td><td>{m['n_nan']}</td></tr>"
-        for name, m in result.summary["metrics"].items()
+        for name, m in summary["metrics"].items()
     )
     met = (
         f"<h2>Metrics</h2><table><tr><th>metric</th><th>5 %</th><th>median</th><th>95 %</th>"
@@ -231,7 +240,7 @@ def _tables(result: BatchReport) -> str:
         f"<tr><td>{esc(name)}</td><td>{esc(s['method'])}</td><td>"
         + ", ".join(f"{esc(p)} ({_score(s, p)})" for p in s["ranking"])
         + "</td></tr>"
-        for name, s in result.sensitivity.items()
+        for name, s in sensitivity.items()
     )
     sens = (
         (
@@ -283,8 +292,8 @@ def draw_figures(result: BatchReport, ds: xr.Dataset, folder: Path) -> list[str]
     return (
         _trade_surfaces(result, folder) + _contours(result, metrics, folder)
         if result.scenario.kind == "sweep"
-        else _distributions(result, metrics, folder)
-    ) + _convergence(result, folder)
+        else distribution_figures(result.summary, metrics, folder)
+    ) + convergence_figure(result.summary, folder)
 
 
 def sections(result: BatchReport, ds: xr.Dataset, figures: list[str]) -> str:
@@ -296,9 +305,17 @@ def sections(result: BatchReport, ds: xr.Dataset, figures: list[str]) -> str:
         + " of "
         f"<code>{esc(result.scenario.scenario)}</code>, sampling "
         f"{esc(result.scenario.sampling)}.</p>"
-        + _tables(result)
+        + statistics_tables(result.summary, result.sensitivity)
         + f"<h2>Figures</h2>{images_html(figures)}"
     )
 
 
-__all__ = ["BatchReport", "draw_figures", "sections", "write_data"]
+__all__ = [
+    "BatchReport",
+    "convergence_figure",
+    "distribution_figures",
+    "draw_figures",
+    "sections",
+    "statistics_tables",
+    "write_data",
+]

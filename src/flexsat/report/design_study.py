@@ -7,7 +7,9 @@ flexible spacecraft: ``attitude``, ``euler123``, ``rate``, ``torque``, ``force_<
 ``displacement_<node><AXIS>``), the attitude each run's law turns to (``target_attitude``,
 over ``run`` and ``attitude_component``), the run metrics over ``run`` and the kept modes
 (``frequency_hz``, ``damping`` over ``mode``, rigid modes first); its attributes name every
-stage's fingerprint and origin (``stage_model``: ``<sha256> (fresh)``).
+stage's fingerprint and origin (``stage_model``: ``<sha256> (fresh)``). A study with
+dispersions adds ``dispersions.json`` (probabilities with confidence intervals, percentiles,
+sensitivity) and ``dispersions.zarr`` (every case's parameters and metrics).
 """
 
 from __future__ import annotations
@@ -29,11 +31,79 @@ if TYPE_CHECKING:
 
 class DesignStudyReport(Protocol):
     """What this report reads of a study's result
-    (:class:`flexsat.scenarios.design_study.DesignStudyResult`)."""
+    (:class:`flexsat.scenarios.design_study.DesignStudyResult`; ``dispersions`` its
+    :class:`~flexsat.scenarios.design_dispersions.DispersionsResult` or None)."""
 
     @property
     def records(self) -> Sequence[StageRecord]: ...
+    @property
+    def dispersions(self) -> Any: ...
     def metrics_records(self) -> list[dict[str, Any]]: ...
+
+
+def _dispersions_section(dispersions: Any) -> str:
+    """What the Monte Carlo measured (the nominal design on dispersed spacecraft), the
+    parameters, then the batch report's requirement, percentile and sensitivity tables."""
+    from flexsat.report.batch import statistics_tables
+
+    if dispersions is None:
+        return ""
+    esc = html.escape
+    n = len(next(iter(dispersions.metrics.values())))
+    rows = [
+        (
+            path,
+            dispersions.units[path] or "-",
+            format_metric(float(np.min(values))),
+            format_metric(float(np.median(values))),
+            format_metric(float(np.max(values))),
+        )
+        for path, values in dispersions.table.items()
+    ]
+    runs = ", ".join(esc(run) for run in dispersions.runs)
+    return f"""<h2>Dispersions</h2>
+<p>{n} cases. The placement and the laws are those designed on the <b>nominal</b> model (the
+stages above); each case rebuilds the model and its modes from its dispersed values and flies
+the nominal laws on that <b>dispersed truth</b> (runs: {runs}). The probabilities below are
+those of this design meeting each requirement on a spacecraft built within the dispersions:
+its robustness, not that of a law redesigned per case.</p>
+{html_table(("parameter", "SI unit", "least", "median", "greatest"), rows)}
+{statistics_tables(dispersions.summary, dispersions.sensitivity)}
+"""
+
+
+def write_dispersions(dispersions: Any, folder: Path) -> None:
+    """``dispersions.json`` (the runs flown, the parameters' SI units, per metric its summary
+    and percentiles, per requirement the probability of meeting it with its confidence
+    interval, the sensitivity rankings; NaN as null) and a copy of the cases' zarr store,
+    ``dispersions.zarr``; nothing without dispersions."""
+    import shutil
+
+    from flexsat.report.json_data import dumps
+
+    if dispersions is None:
+        return
+    data = {
+        "cases": len(next(iter(dispersions.metrics.values()))),
+        "runs": list(dispersions.runs),
+        "units": dispersions.units,
+        **dispersions.summary,
+        "sensitivity": dispersions.sensitivity,
+    }
+    (folder / "dispersions.json").write_text(dumps(data), encoding="utf-8")
+    shutil.copytree(dispersions.store, folder / "dispersions.zarr")
+
+
+def dispersion_figures(dispersions: Any, folder: Path) -> list[str]:
+    """Each dispersed metric's histogram and CDF with its requirement lines and the convergence
+    of the probability estimates (:mod:`flexsat.report.batch`); none without dispersions."""
+    from flexsat.report.batch import convergence_figure, distribution_figures
+
+    if dispersions is None:
+        return []
+    return distribution_figures(
+        dispersions.summary, dispersions.metrics, folder
+    ) + convergence_figure(dispersions.summary, folder)
 
 
 def _number(value: Any) -> str:
@@ -91,7 +161,8 @@ def _stage_section(record: StageRecord) -> str:
 
 
 def sections(result: DesignStudyReport, figures: list[str]) -> str:
-    """The page: the stages table, each stage's numbers, the runs' metrics and the figures."""
+    """The page: the stages table, each stage's numbers, the runs' metrics, the dispersions'
+    statistics and the figures."""
     records = list(result.records)
     metrics = result.metrics_records()
     names = [key for key in metrics[0] if key != "run"]
@@ -104,6 +175,7 @@ stage whose fingerprint is in the cache is read from it, not recomputed.</p>
 {design}
 <h2>Runs</h2>
 {html_table(("run", *names), run_rows)}
+{_dispersions_section(result.dispersions)}
 <h2>Figures</h2>
 {images_html(figures)}
 """
@@ -135,4 +207,10 @@ def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     return ["runs.png"]
 
 
-__all__ = ["DesignStudyReport", "draw_figures", "sections"]
+__all__ = [
+    "DesignStudyReport",
+    "dispersion_figures",
+    "draw_figures",
+    "sections",
+    "write_dispersions",
+]

@@ -191,9 +191,18 @@ def _units(parameters: dict[str, dict[str, Any]]) -> dict[str, str]:
     return units
 
 
-def _space(
+def parameter_space(
     parameters: dict[str, dict[str, Any]], units: dict[str, str] | None = None
 ) -> ParameterSpace | GridSpace:
+    """The parameter space of a ``parameters:`` section (each entry's values checked first), in
+    ``units`` or the units its entries are written in.
+
+    Raises
+    ------
+    FieldError
+        ``parameters.<name>...``: a value of the wrong shape, an unknown distribution, a unit
+        of another dimension.
+    """
     from flexsat.design.parameter_space import space_from_spec
 
     _check_entry_values(parameters)
@@ -263,7 +272,7 @@ class BatchScenario(Document):
     @field_validator("parameters")
     @classmethod
     def _parameters(cls, parameters: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
-        _space(parameters)
+        parameter_space(parameters)
         return parameters
 
     @model_validator(mode="after")
@@ -279,7 +288,7 @@ class BatchScenario(Document):
                 "histories", "a batch over a scenario document's field paths keeps metrics only"
             )
 
-        grid = isinstance(_space(self.parameters), GridSpace)
+        grid = isinstance(parameter_space(self.parameters), GridSpace)
         sampling: Sampling = self.sampling or (
             "grid" if grid else "random" if self.kind == "montecarlo" else "latin_hypercube"
         )
@@ -316,7 +325,7 @@ class BatchScenario(Document):
         n_cases = case_count(self)
         if n_cases > limits.MAX_CASES:
             field = "parameters" if sampling == "grid" else "cases"
-            space = _space(self.parameters)
+            space = parameter_space(self.parameters)
             if isinstance(space, GridSpace):  # sampling "grid"
                 what = f"the grid of {' × '.join(map(str, space.shape))}"
             elif sampling == "saltelli":
@@ -520,7 +529,7 @@ def _table(
 ) -> SampleTable | SobolDesign:
     from flexsat.design.parameter_space import GridSpace
 
-    space = _space(scenario.parameters, units)
+    space = parameter_space(scenario.parameters, units)
     if isinstance(space, GridSpace):
         table = space.table()
     elif scenario.sampling == "saltelli":
@@ -538,7 +547,7 @@ def case_count(scenario: BatchScenario) -> int:
     """The number of cases: the grid's points or ``cases``."""
     from flexsat.design.parameter_space import GridSpace
 
-    space = _space(scenario.parameters)
+    space = parameter_space(scenario.parameters)
     if isinstance(space, GridSpace):
         return space.size
     if scenario.sampling == "saltelli":  # n_base (d + 2) cases for first-order and total
@@ -693,7 +702,7 @@ def trade_surfaces(
     )
     from flexsat.dynamics.hub_appendage import HubAppendage
 
-    space = _space(scenario.parameters)
+    space = parameter_space(scenario.parameters)
     if not isinstance(space, GridSpace) or sorted(a.name for a in space.axes) != ["alpha", "u_max"]:
         return None
     axes = {a.name: np.asarray(a.values, float) for a in space.axes}
@@ -792,5 +801,6 @@ __all__ = [
     "case_count",
     "trade_surfaces",
     "default_store",
+    "parameter_space",
     "requirements_of",
 ]

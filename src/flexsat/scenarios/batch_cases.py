@@ -278,10 +278,11 @@ class DocumentCases:
         scenario._folder = self.folder  # type: ignore[attr-defined]  # a fields.Document
         return scenario
 
-    def _problems(
+    def problems(
         self, index: int, values: Mapping[str, float], exc: ScenarioError
     ) -> list[Problem]:
-        """The problems of case ``index`` named by the parameters they concern."""
+        """The problems of case ``index`` named by the parameters they concern (the parameter
+        whose path a problem's path starts with, or ``parameters``), with the case's values."""
         shown = ", ".join(f"{p.path} = {p.value(values[p.path])}" for p in self.parameters)
         out = []
         for problem in exc.problems:
@@ -327,7 +328,7 @@ class DocumentCases:
                 else:  # the document as parsed: the schema of its text, without the YAML
                     kind.validate(self.document(values, 0))
             except ScenarioError as exc:
-                raise ScenarioError(self._problems(index, values, exc)) from None
+                raise ScenarioError(self.problems(index, values, exc)) from None
 
     def _plan_first_run(self, index: int, values: Mapping[str, float], scenario: Any) -> None:
         """Everything the kind does before its first run (plant, laws), nothing run."""
@@ -378,7 +379,7 @@ class DocumentCases:
             except SimulationDiverged as exc:
                 raise offset_cases(exc, k) from None
             except ScenarioError as exc:
-                raise ScenarioError(self._problems(start + k, values, exc)) from None
+                raise ScenarioError(self.problems(start + k, values, exc)) from None
             rows.append(extract(result))
             if list(rows[-1]) != list(rows[0]):
                 raise FieldError(

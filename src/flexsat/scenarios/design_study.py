@@ -1,5 +1,6 @@
 """Staged design studies (``kind: design_study``): model → modes → actuator placement → law
-design → simulation runs, each stage cached by fingerprint (:mod:`flexsat.design.stages`).
+design → simulation runs → dispersions, each stage cached by fingerprint
+(:mod:`flexsat.design.stages`).
 
 ::
 
@@ -24,6 +25,10 @@ design → simulation runs, each stage cached by fingerprint (:mod:`flexsat.desi
     simulation: {duration: "60 s", control_rate: "20 Hz"}
     runs:
       - {label: PD slew, law: PD, initial: {euler123: ["10 deg", 0, 0]}}
+    dispersions:                     # optional: the nominal laws flown on dispersed truths
+      parameters: {modes.damping: {distribution: lognormal, median: 0.005, gsd: 1.5}}
+      cases: 200
+      requirements: {final_attitude_error_rad: {max: "1 mrad"}}
 
 Stages
 ------
@@ -57,11 +62,14 @@ everything. The report shows every stage, fresh or from the cache.
 
 Dispersions
 -----------
-A design study has no batch of its own: sweeps and Monte Carlo over it are those of any
-scenario document (parameters addressed by their path in this document). Each dispersed case is
-this document with other values, and the stage cache makes a case recompute only the stages
-downstream of what it changes: dispersing a law weight or a run's initial attitude reuses the
-modal solve and the placement of the nominal (:func:`stage_plan` gives a case's stages and
+``dispersions:`` (optional, :mod:`flexsat.scenarios.design_dispersions`) is the last stage: a
+Monte Carlo of the design. The laws designed on the nominal model above fly on each case's
+dispersed truth (the model and modes rebuilt from its values, the placement kept nominal), so
+the probabilities it reports measure the design's robustness. Its cases run through the batch
+machinery (chunks on dask, a zarr store, resume); its fingerprint leaves out the requirements,
+so changing a threshold re-reads the store. A sweep or Monte Carlo over this document is also
+possible, each case the whole study with other values (laws redesigned per case), reusing the
+cached stages upstream of what it changes (:func:`stage_plan` gives a case's stages and
 fingerprints without running anything).
 """
 
@@ -90,6 +98,14 @@ from flexsat.design.stages import (
 )
 from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult
+from flexsat.scenarios.design_dispersions import (
+    DispersionsResult,
+    DispersionsSpec,
+    check_dispersions,
+    dispersions_stage,
+    dispersions_steps,
+    run_dispersions,
+)
 from flexsat.scenarios.design_laws import (
     LawSpec,
     StudySection,
@@ -209,10 +225,13 @@ class DesignStudyScenario(Document):
     laws: list[LawSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
     simulation: SimulationSettings
     runs: list[DesignRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
+    dispersions: DispersionsSpec | None = None
 
     @model_validator(mode="after")
     def _references(self) -> Self:
         check_unique_labels(self.runs)
+        if self.dispersions is not None:
+            check_dispersions(self)
         labels = [law.label for law in self.laws]
         for label in labels:
             if labels.count(label) > 1:
@@ -332,6 +351,16 @@ def stage_plan(scenario: DesignStudyScenario) -> dict[str, Stage]:
         path = f"runs{item_path(index, run.label)}"
         section = {"run": run.model_dump(mode="json", exclude={"label"}), "simulation": settings}
         stages[path] = _stage("run", f"run {run.label!r}", path, section, [laws[run.law]])
+    if scenario.dispersions is not None:
+        flown = scenario.dispersions.flown([run.label for run in scenario.runs])
+        stages["dispersions"] = dispersions_stage(
+            scenario,
+            [
+                stages[f"runs{item_path(index, run.label)}"]
+                for index, run in enumerate(scenario.runs)
+                if run.label in flown
+            ],
+        )
     return stages
 
 
@@ -515,6 +544,9 @@ class DesignStudyResult(ReportedResult):
     results : tuple of SimResult
         One per run.
     case_source : str
+    dispersions : DispersionsResult or None
+        The Monte Carlo of the nominal laws on the dispersed spacecraft
+        (:mod:`flexsat.scenarios.design_dispersions`).
     """
 
     report_title = "flexsat design study"
@@ -526,6 +558,7 @@ class DesignStudyResult(ReportedResult):
     laws: dict[str, LawDesign]
     results: tuple[SimResult, ...]
     case_source: str
+    dispersions: DispersionsResult | None = None
 
     def report_case(self) -> str:
         model = self.scenario.model
@@ -569,10 +602,18 @@ class DesignStudyResult(ReportedResult):
         )
         return ds
 
-    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
-        from flexsat.report.design_study import draw_figures
+    def write_data(self, folder: Path, ds: xr.Dataset) -> None:
+        """``metrics.json`` and ``results.nc``, and with dispersions ``dispersions.json`` and
+        the cases' store (:func:`flexsat.report.design_study.write_dispersions`)."""
+        from flexsat.report.design_study import write_dispersions
 
-        return draw_figures(ds, folder)
+        super().write_data(folder, ds)
+        write_dispersions(self.dispersions, folder)
+
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
+        from flexsat.report.design_study import dispersion_figures, draw_figures
+
+        return draw_figures(ds, folder) + dispersion_figures(self.dispersions, folder)
 
     def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.design_study import sections
@@ -588,7 +629,7 @@ class DesignStudyKind(ScenarioKind):
     document = DesignStudyScenario
 
     def steps(self, scenario: DesignStudyScenario) -> int:
-        return 3 + len(scenario.laws) + len(scenario.runs)
+        return 3 + len(scenario.laws) + len(scenario.runs) + dispersions_steps(scenario)
 
     def plan(self, scenario: DesignStudyScenario) -> Generator[Run, Any, DesignStudyResult]:
         """One run per stage: the model, modes, placement and law stages are analyses, a run
@@ -697,8 +738,31 @@ class DesignStudyKind(ScenarioKind):
             target = laws[run.law].arrays.get("beta_target", IDENTITY)
             records.append(StageRecord(stage, False, seconds, run_metrics(result, target)))
             results.append(result)
+        dispersed = None
+        if scenario.dispersions is not None:
+
+            def dispersions(progress: Callable[[str], None] | None = None) -> DispersionsResult:
+                outcome, record = run_dispersions(
+                    scenario,
+                    stages["dispersions"],
+                    placement,
+                    laws,
+                    progress,
+                    lambda: raw if raw is not None else solved()[0],
+                )
+                records.append(record)
+                return outcome
+
+            dispersed = yield Run("dispersions", dispersions, "dispersions", reports_progress=True)
         return DesignStudyResult(
-            scenario, tuple(records), model, placement, laws, tuple(results), _source(scenario)
+            scenario,
+            tuple(records),
+            model,
+            placement,
+            laws,
+            tuple(results),
+            _source(scenario),
+            dispersed,
         )
 
 
