@@ -176,8 +176,8 @@ def _positive_factors(value: Factors, field: str, count: int | None = None) -> F
         raise FieldError(field, f"give one factor or {count}, got {len(value)}")
     for i, v in enumerate(values):
         if not (np.isfinite(v) and v > 0.0):
-            where = f"{field}[{i}]" if isinstance(value, list) else field
-            raise FieldError(where, f"must be a finite number > 0, got {v!r}")
+            item = f"item {i} " if isinstance(value, list) else ""
+            raise FieldError(field, f"{item}must be a finite number > 0, got {v!r}")
     return value
 
 
@@ -204,8 +204,8 @@ class TruthSpec(SchemaSection):
         values = value if isinstance(value, list) else [value]
         for i, v in enumerate(values):
             if v is not None and not (np.isfinite(v) and v >= 0.0):
-                where = f"damping[{i}]" if isinstance(value, list) else "damping"
-                raise FieldError(where, f"must be a finite damping ratio >= 0, got {v!r}")
+                item = f"item {i} " if isinstance(value, list) else ""
+                raise FieldError("damping", f"{item}must be a finite damping ratio >= 0, got {v!r}")
         return value
 
 
