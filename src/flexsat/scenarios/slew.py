@@ -659,9 +659,10 @@ def _laws(
 
 
 class SlewKind(ScenarioKind):
-    """``kind: slew``: solve the nominal maneuver, design every run's perturbation feedback,
-    then simulate the open loop and each run on the case's flexible plant and evaluate the
-    goals (module docstring)."""
+    """``kind: slew``: solve the nominal maneuver and design every run's perturbation feedback
+    on the case's flexible plant, then simulate the open loop and each run on the truth plant
+    (the case's plant with the ``truth`` section's departures) and evaluate the goals (module
+    docstring)."""
 
     kind = "slew"
     document = SlewScenario
