@@ -25,8 +25,33 @@ force/torque decoupling) corrects it::
         break_frequency: "2.5 rad/s"
 
 Every scenario also runs the nominal torque alone (the run ``open loop``): the deflection goal
-compares each run with it. ``plant`` holds the keyword arguments of the case's flexible plant
-(:meth:`plant`, which must build a
+compares each run with it.
+
+The simulated (truth) plant may depart from the case's plant, which stays the design model —
+the nominal maneuver and every perturbation design use the case's plant; only the plant they
+are flown on changes (a dispersion of the truth, as a Monte Carlo draws it)::
+
+    truth:
+      inertia_scale: [1.03, 0.97, 1.01]   # principal moments of J × these (or one factor)
+      frequency_scale: 0.95               # elastic frequencies Ω × this (or one per mode)
+      damping: 0.004                      # modal damping ratio ζ (or one per mode)
+    sensors: {rate: {noise: "1e-5 rad/s"}, attitude: {noise: 1.0e-5}}
+
+The inertia is scaled in its principal axes, J' = R diag(s λ) Rᵀ with J = R diag(λ) Rᵀ, so it
+stays symmetric; one that violates the triangle inequality, or that the modes' rotational
+participation Δ then exceeds (J' − ΔᵀΔ not positive definite), is refused under
+``truth.inertia_scale``. ``sensors`` puts a sensor (noise, bias, quantum, range in the
+channel's unit: ``attitude`` is the quaternion, dimensionless; ``rate`` rad/s) on an output the
+laws read; its noise is drawn from ``simulation.seed``. The goal verdicts ``angle_goal_met``,
+``deflection_goal_met`` and ``goals_met`` (both) are metrics of every run (``metrics.json``),
+so a Monte Carlo requirement can address them (``runs['A: torquers'].goals_met: {min: 1}``).
+
+The nominal maneuver and the perturbation designs are kept for the last few nominal setups
+(:func:`nominal_design`, keyed by the document's fields they depend on): the cases of a
+Monte Carlo of the truth on one worker design once.
+
+``plant`` holds the keyword arguments of the case's flexible plant (:meth:`plant`, which must
+build a
 :class:`~flexsat.dynamics.flexible_spacecraft.FlexibleSpacecraft`). Weights are the diagonal
 of Q over [attitude error (rad), rate (rad/s), modal amplitudes, modal rates] and of D over
 [normalized torques (rad/s², the torque divided by the inertia as in the paper), forces (N)],
@@ -35,6 +60,10 @@ SI numbers; one value fills its block.
 
 from __future__ import annotations
 
+import hashlib
+import json
+import re
+from collections import OrderedDict
 from collections.abc import Generator
 from dataclasses import dataclass
 from pathlib import Path
@@ -59,7 +88,7 @@ from flexsat.scenarios.fields import (
     integer_in,
 )
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
-from flexsat.scenarios.simulation import SimulationSettings, target_quaternion
+from flexsat.scenarios.simulation import ChannelSensorSpec, SimulationSettings, target_quaternion
 from flexsat.sim.slew_goals import euler_angle_error
 
 if TYPE_CHECKING:
@@ -68,7 +97,7 @@ if TYPE_CHECKING:
     from flexsat.control.base import Controller
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
-    from flexsat.sim import SimResult
+    from flexsat.sim import SimConfig, SimResult
 
 #: one weight, or one per component of its block
 Weights = float | list[float]
@@ -135,6 +164,51 @@ class GoalsSpec(SchemaSection):
     deflection_ratio: float = Field(10.0, gt=0.0)
 
 
+#: one dimensionless factor, or one per component
+Factors = float | list[float]
+
+
+def _positive_factors(value: Factors, field: str, count: int | None = None) -> Factors:
+    """``value`` if every factor is finite and positive (and, for a list, ``count`` long when
+    ``count`` is given)."""
+    values = value if isinstance(value, list) else [value]
+    if isinstance(value, list) and count is not None and len(value) != count:
+        raise FieldError(field, f"give one factor or {count}, got {len(value)}")
+    for i, v in enumerate(values):
+        if not (np.isfinite(v) and v > 0.0):
+            item = f"item {i} " if isinstance(value, list) else ""
+            raise FieldError(field, f"{item}must be a finite number > 0, got {v!r}")
+    return value
+
+
+class TruthSpec(SchemaSection):
+    """The simulated plant's departures from the case's plant (module docstring)."""
+
+    inertia_scale: Factors = 1.0
+    frequency_scale: Factors = 1.0
+    damping: Factors | None = None
+
+    @field_validator("inertia_scale")
+    @classmethod
+    def _inertia(cls, value: Factors) -> Factors:
+        return _positive_factors(value, "inertia_scale", 3)
+
+    @field_validator("frequency_scale")
+    @classmethod
+    def _frequencies(cls, value: Factors) -> Factors:
+        return _positive_factors(value, "frequency_scale")
+
+    @field_validator("damping")
+    @classmethod
+    def _damping(cls, value: Factors | None) -> Factors | None:
+        values = value if isinstance(value, list) else [value]
+        for i, v in enumerate(values):
+            if v is not None and not (np.isfinite(v) and v >= 0.0):
+                item = f"item {i} " if isinstance(value, list) else ""
+                raise FieldError("damping", f"{item}must be a finite damping ratio >= 0, got {v!r}")
+        return value
+
+
 class SlewWeightsSpec(SchemaSection):
     """Diagonal weights of the perturbation design (module docstring)."""
 
@@ -188,6 +262,8 @@ class SlewScenario(Document):
     name: str
     case: str
     plant: dict[str, Any] = Field(default_factory=dict)
+    truth: TruthSpec = Field(default_factory=TruthSpec)
+    sensors: dict[str, ChannelSensorSpec] = Field(default_factory=dict)
     maneuver: SlewManeuverSpec
     controller: ControllerSpec = Field(default_factory=ControllerSpec)
     simulation: SimulationSettings
@@ -375,25 +451,24 @@ def _forces(run: SlewRunSpec, index: int, plant: FlexibleSpacecraft) -> list[str
     return names
 
 
-def _plants(scenario: SlewScenario) -> tuple[FlexibleSpacecraft, FlexibleSpacecraft]:
-    """(truth, design model): the case's flexible plant as given, and the same plant on the
-    controller's first modes."""
+def _case_plant(scenario: SlewScenario) -> FlexibleSpacecraft:
+    """The case's flexible plant as given (the design model's and the nominal truth)."""
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.scenarios.simulation import build_plant
 
-    truth = build_plant(scenario)
-    if not isinstance(truth, FlexibleSpacecraft):
+    plant = build_plant(scenario)
+    if not isinstance(plant, FlexibleSpacecraft):
         raise ScenarioError(
             [
                 Problem(
                     "plant",
                     f"the {scenario.case} plant with these options is a "
-                    f"{type(truth).__name__}; a slew needs a flexible spacecraft "
+                    f"{type(plant).__name__}; a slew needs a flexible spacecraft "
                     "(model: flexible)",
                 )
             ]
         )
-    outputs = {c.name for c in truth.outputs}
+    outputs = {c.name for c in plant.outputs}
     nodes = {n[len("displacement_") : -1] for n in outputs if n.startswith("displacement_")}
     if not any(all(f"displacement_{n}{a}" in outputs for a in "XYZ") for n in nodes):
         # the deflection goal compares rim deflections: refused now, not after every run
@@ -407,48 +482,169 @@ def _plants(scenario: SlewScenario) -> tuple[FlexibleSpacecraft, FlexibleSpacecr
                 )
             ]
         )
-    if scenario.controller.modes > truth.n_modes:
+    if scenario.controller.modes > plant.n_modes:
         raise ScenarioError(
             [
                 Problem(
                     "controller.modes",
-                    f"at most the plant's {truth.n_modes} elastic "
+                    f"at most the plant's {plant.n_modes} elastic "
                     f"modes, got {scenario.controller.modes}",
                 )
             ]
         )
-    return truth, truth.reduced(scenario.controller.modes)
+    return plant
+
+
+def _per_mode(value: Factors, n_modes: int, field: str) -> np.ndarray:
+    """One value per elastic mode from one value or a list of ``n_modes``."""
+    if isinstance(value, list) and len(value) != n_modes:
+        raise ScenarioError(
+            [
+                Problem(
+                    field,
+                    f"give one value or {n_modes} (the plant's elastic modes), got {len(value)}",
+                )
+            ]
+        )
+    return np.broadcast_to(np.asarray(value, float), (n_modes,))
+
+
+def truth_plant(scenario: SlewScenario, plant: FlexibleSpacecraft) -> FlexibleSpacecraft:
+    """The simulated plant: ``plant`` with the ``truth`` section's departures (module
+    docstring), ``plant`` itself where there are none.
+
+    The principal moments λ of J (ascending) are scaled, J' = R diag(s λ) Rᵀ; the elastic
+    frequencies Ω' = s_Ω Ω; the damping ratios replaced (the modal damping 2ζΩ' formed with the
+    new frequencies, :meth:`~flexsat.dynamics.flexible_spacecraft.FlexibleSpacecraft.
+    with_parameters`).
+
+    Raises
+    ------
+    ScenarioError
+        Under ``truth.<field>``: a list of another length than the modes, an inertia violating
+        the triangle inequality or exceeded by the modes' participation.
+    """
+    spec = scenario.truth
+    changes: dict[str, np.ndarray] = {}
+    scale = np.broadcast_to(np.asarray(spec.inertia_scale, float), (3,))
+    if np.any(scale != 1.0):
+        moments, axes = np.linalg.eigh(plant.inertia)
+        inertia = (axes * (scale * moments)) @ axes.T
+        changes["inertia"] = 0.5 * (inertia + inertia.T)
+    n = plant.n_modes
+    frequency_scale = _per_mode(spec.frequency_scale, n, "truth.frequency_scale")
+    if np.any(frequency_scale != 1.0):
+        changes["frequencies"] = frequency_scale * np.sqrt(plant.stiffness)
+    if spec.damping is not None:
+        changes["damping"] = _per_mode(spec.damping, n, "truth.damping")
+    if not changes:
+        return plant
+    fields = {"inertia": "inertia_scale", "frequencies": "frequency_scale", "damping": "damping"}
+    try:
+        return plant.with_parameters(**changes)
+    except FieldError as exc:
+        field = fields.get(exc.field.split("[")[0], exc.field)
+        raise ScenarioError([Problem(f"truth.{field}", exc.rule)]) from None
+
+
+def _sim_config(scenario: SlewScenario, truth: FlexibleSpacecraft) -> SimConfig:
+    """The simulation settings with the ``sensors`` bound to the truth's output channels."""
+    from flexsat.sim import SimConfig
+    from flexsat.sim.channels import ChannelSensor, resolve_channels
+
+    outputs = [c.name for c in truth.outputs]
+    sensors = {}
+    for name, spec in scenario.sensors.items():
+        if name not in outputs:
+            raise ScenarioError(
+                [
+                    Problem(
+                        f"sensors.{name}",
+                        f"the plant has no output channel {name!r} (its channels: "
+                        f"{', '.join(outputs)})",
+                    )
+                ]
+            )
+        try:
+            sensors[name] = ChannelSensor(**given_fields(spec))
+        except ValueError as exc:
+            raise ScenarioError([locate(f"sensors.{name}", exc)]) from None
+    try:
+        config = SimConfig(**given_fields(scenario.simulation), channel_sensors=sensors)
+        resolve_channels(truth, config)  # each sensor's values in its channel's unit
+    except FieldError as exc:  # sensors[rate].noise, as the engine names it
+        raise ScenarioError(
+            [Problem(re.sub(r"^sensors\[(\w+)\]", r"sensors.\1", exc.field), exc.rule)]
+        ) from None
+    except ValueError as exc:
+        raise ScenarioError([Problem("simulation", f"{exc}")]) from None
+    return config
+
+
+#: nominal setups kept by :func:`nominal_design` (a Monte Carlo of the truth needs one; a few
+#: more serve a sweep over a design field without designing twice in a row)
+DESIGNS_KEPT = 4
+_designs: OrderedDict[str, dict[str, Any]] = OrderedDict()
+
+
+def design_fingerprint(scenario: SlewScenario) -> str:
+    """SHA-256 of the document fields the case's plant, the nominal maneuver and the
+    perturbation designs depend on (``case``, ``plant``, ``maneuver``, ``controller``,
+    ``runs``): not the truth, the sensors, the simulation or the goals."""
+    fields = scenario.model_dump(
+        mode="json", include={"case", "plant", "maneuver", "controller", "runs"}
+    )
+    return hashlib.sha256(json.dumps(fields, sort_keys=True).encode()).hexdigest()
+
+
+def nominal_design(scenario: SlewScenario) -> dict[str, Any]:
+    """The kept nominal setup of ``scenario`` (by :func:`design_fingerprint`; the least
+    recently used dropped past :data:`DESIGNS_KEPT`): a dict filled as the scenario plans, with
+    ``plant`` (the case's plant), ``design_plant``, ``nominal`` (the maneuver) and
+    ``designs`` (the perturbation designs by run label). Each is deterministic in those
+    fields, so a kept one is the one a fresh run would compute."""
+    key = design_fingerprint(scenario)
+    entry = _designs.pop(key, None)
+    _designs[key] = entry = {} if entry is None else entry
+    while len(_designs) > DESIGNS_KEPT:
+        _designs.popitem(last=False)
+    return entry
 
 
 def _laws(
     scenario: SlewScenario,
-    truth: FlexibleSpacecraft,
-    design_plant: FlexibleSpacecraft,
+    plant: FlexibleSpacecraft,
+    kept: dict[str, Any],
     nominal: ThreeAxisSlew,
     dt: float,
 ) -> dict[str, Controller]:
-    """The open-loop law and every run's perturbation law, by label; problems are gathered and
-    located in their run."""
+    """The open-loop law and every run's perturbation law, by label, designed on the case's
+    plant (kept in ``kept["designs"]``); problems are gathered and located in their run."""
     from flexsat.control import NominalTorque, perturbation_design
 
+    design_plant = kept["design_plant"]
+    designs = kept.setdefault("designs", {})
     laws: dict[str, Controller] = {OPEN_LOOP: NominalTorque(nominal, dt)}
     problems: list[Problem] = []
     for index, run in enumerate(scenario.runs):
         try:
-            forces = _forces(run, index, design_plant)
-            Q, D = _weights(run, index, design_plant.n_modes, len(forces))
-            design = perturbation_design(
-                design_plant,
-                nominal,
-                Q,
-                D,
-                run.break_frequency,
-                run.shaping_damping,
-                scenario.controller.linearization_points,
-                forces=forces,
-                decouple=run.decouple,
-            )
-            laws[run.label] = design.controller(dt, run.feedforward, plant=truth)
+            if run.label not in designs:
+                forces = _forces(run, index, design_plant)
+                Q, D = _weights(run, index, design_plant.n_modes, len(forces))
+                designs[run.label] = perturbation_design(
+                    design_plant,
+                    nominal,
+                    Q,
+                    D,
+                    run.break_frequency,
+                    run.shaping_damping,
+                    scenario.controller.linearization_points,
+                    forces=forces,
+                    decouple=run.decouple,
+                )
+            # checked against the case's plant: the truth shares its mode shapes, not its
+            # frequencies
+            laws[run.label] = designs[run.label].controller(dt, run.feedforward, plant=plant)
         except ScenarioError as exc:  # the run's forces or weights
             problems.extend(exc.problems)
         except FieldError as exc:  # named by the scenario's fields
@@ -463,9 +659,10 @@ def _laws(
 
 
 class SlewKind(ScenarioKind):
-    """``kind: slew``: solve the nominal maneuver, design every run's perturbation feedback,
-    then simulate the open loop and each run on the case's flexible plant and evaluate the
-    goals (module docstring)."""
+    """``kind: slew``: solve the nominal maneuver and design every run's perturbation feedback
+    on the case's flexible plant, then simulate the open loop and each run on the truth plant
+    (the case's plant with the ``truth`` section's departures) and evaluate the goals (module
+    docstring)."""
 
     kind = "slew"
     document = SlewScenario
@@ -486,34 +683,38 @@ class SlewKind(ScenarioKind):
         """
         from flexsat.maneuvers import three_axis_slew
         from flexsat.references import cite
-        from flexsat.sim import SimConfig
         from flexsat.sim.slew_goals import SlewGoals
 
-        truth, design_plant = _plants(scenario)
+        kept = nominal_design(scenario)
+        if "plant" not in kept:
+            kept["plant"] = _case_plant(scenario)
+            kept["design_plant"] = kept["plant"].reduced(scenario.controller.modes)
+        plant, design_plant = kept["plant"], kept["design_plant"]
+        truth = truth_plant(scenario, plant)
+        config = _sim_config(scenario, truth)
         m = scenario.maneuver
 
         target = target_quaternion(m.target)
         assert target is not None  # the schema refuses an empty target
 
         def solve_nominal() -> ThreeAxisSlew:
-            try:
-                return three_axis_slew(
-                    truth.inertia,
-                    target,
-                    m.duration,
-                    m.break_frequency,
-                    m.shaping_damping,
-                    Q=m.rate_weight * np.eye(3),
-                )
-            except FieldError as exc:  # named by the scenario's fields
-                raise FieldError(_MANEUVER_FIELDS.get(exc.field, exc.field), exc.rule) from None
+            if "nominal" not in kept:
+                try:
+                    kept["nominal"] = three_axis_slew(
+                        plant.inertia,
+                        target,
+                        m.duration,
+                        m.break_frequency,
+                        m.shaping_damping,
+                        Q=m.rate_weight * np.eye(3),
+                    )
+                except FieldError as exc:  # named by the scenario's fields
+                    raise FieldError(_MANEUVER_FIELDS.get(exc.field, exc.field), exc.rule) from None
+            nominal: ThreeAxisSlew = kept["nominal"]
+            return nominal
 
         nominal = yield Run("nominal maneuver", solve_nominal, "maneuver")
-        try:
-            config = SimConfig(**given_fields(scenario.simulation))
-        except ValueError as exc:
-            raise ScenarioError([Problem("simulation", f"{exc}")]) from None
-        laws = _laws(scenario, truth, design_plant, nominal, config.dt)
+        laws = _laws(scenario, plant, kept, nominal, config.dt)
         results = []
         for index, (label, law) in enumerate(laws.items()):
             run = Run(
@@ -538,7 +739,13 @@ class SlewKind(ScenarioKind):
             + ".",
             f"Plant: {truth.n_modes} elastic modes; design model: {design_plant.n_modes} "
             f"modes linearised at {scenario.controller.linearization_points} equally spaced "
-            f"times, gains interpolated in time.",
+            f"times, gains interpolated in time."
+            + (
+                ""
+                if truth is plant
+                else " Simulated on the truth plant of section truth; the nominal "
+                "maneuver and the designs are those of the case's plant."
+            ),
         )
         return SlewResult(
             scenario,
@@ -552,4 +759,13 @@ class SlewKind(ScenarioKind):
         )
 
 
-__all__ = ["OPEN_LOOP", "SlewKind", "SlewResult", "SlewScenario"]
+__all__ = [
+    "DESIGNS_KEPT",
+    "OPEN_LOOP",
+    "SlewKind",
+    "SlewResult",
+    "SlewScenario",
+    "design_fingerprint",
+    "nominal_design",
+    "truth_plant",
+]

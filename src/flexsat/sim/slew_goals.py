@@ -123,7 +123,7 @@ def slew_goal_metrics(
     -------
     (dict, dict)
         Metrics (n_cases,) by name, and their units; the goal verdicts are booleans
-        ``angle_goal_met`` and ``deflection_goal_met``.
+        ``angle_goal_met``, ``deflection_goal_met`` and ``goals_met`` (both).
     """
     t = require_finite(t, "t", "s")
     T = float(require_positive(duration, "duration", "s"))
@@ -161,6 +161,8 @@ def slew_goal_metrics(
         "deflection_ratio_slew": ratio_slew,
         "deflection_goal_met": ratio >= goals.deflection_ratio,
     }
+    # both goals at once: what a Monte Carlo's probability of success counts
+    metrics["goals_met"] = metrics["angle_goal_met"] & metrics["deflection_goal_met"]
     for axis, name in enumerate("xyz"):
         metrics[f"angle_error_{name}_mrad"] = 1e3 * error[:, axis]
     units = {k: "mrad" for k in metrics if k.endswith("_mrad")}
