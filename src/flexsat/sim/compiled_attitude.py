@@ -12,7 +12,7 @@ Lyapunov law), with linear measured channels, no derivative sensor, no input for
 actuator rate limit or bias.
 
 The arguments are those of the Python loop, built by the same functions as for the hub
-kernels (:class:`~flexsat.sim.compiled.LoopArguments`: sensors, actuators, disturbances,
+kernels (:class:`~flexsat.sim.compiled_arguments.LoopArguments`: sensors, actuators, disturbances,
 impulses, each case's noise stream from its own seed, the law's linear form); the
 propagation is the plant's own integrator: the RKMK4 step of the rigid body (the same
 formulas as :meth:`RigidSpacecraft.step`, in another order of the sums: the two paths agree to
@@ -42,7 +42,8 @@ from flexsat.dynamics.dispersion import DispersedPlant
 from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
 from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft, attitude_output
 from flexsat.input_checks import FieldError
-from flexsat.sim.compiled import LoopArguments, block_size, channel_width, own_linear_form
+from flexsat.sim.compiled import block_size, own_linear_form
+from flexsat.sim.compiled_arguments import LoopArguments, channel_width
 from flexsat.sim.kernels_attitude import (
     ATTITUDE_LAWS,
     LANES,
