@@ -117,15 +117,22 @@ def _lane_rows(R, z, out, W):
     if R.ndim == 3:
         return lambda R, z, out, W: row_products(R, z, out, W)
 
-    def shared(R, z, out, W):
+    def shared(R, z, out, W):  # the eight lanes' sums in registers (W = LANES = 8)
         n = z.shape[0]
         for i in range(R.shape[0]):
-            for l in range(W):
-                out[i, l] = 0.0
+            a0 = a1 = a2 = a3 = a4 = a5 = a6 = a7 = 0.0
             for j in range(n):
                 r = R[i, j]
-                for l in range(W):
-                    out[i, l] += r * z[j, l]
+                a0 += r * z[j, 0]
+                a1 += r * z[j, 1]
+                a2 += r * z[j, 2]
+                a3 += r * z[j, 3]
+                a4 += r * z[j, 4]
+                a5 += r * z[j, 5]
+                a6 += r * z[j, 6]
+                a7 += r * z[j, 7]
+            out[i, 0], out[i, 1], out[i, 2], out[i, 3] = a0, a1, a2, a3
+            out[i, 4], out[i, 5], out[i, 6], out[i, 7] = a4, a5, a6, a7
 
     return shared
 
