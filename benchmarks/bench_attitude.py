@@ -25,8 +25,15 @@ docs/performance.md by hand.
 each in its own interpreter, alternating (TREE, this, TREE, ...) ``--runs`` processes each, each
 process the best of ``--repeat`` calls; end to end and the kernel calls alone (the three-axis
 kernels of ``flexsat.sim.compiled_attitude`` wrapped by a timer), wall and process CPU time,
-min / median over the processes. NUMBA_NUM_THREADS as set (2 on the benchmark machine: a batch of
-at least 16 cases runs its groups of 8 on both cores).
+min / median over the processes.
+
+``--step``: the flexible plant's integrator step alone (``kernels_attitude.modal_steps``, EPS
+45 modes, 4 substeps, one group of 8 lanes, 200 control steps, best of 5, process CPU time per
+lane and substep), with the propagators shared by the lanes and with each lane's own copy (a
+dispersed plant's layout); the two give the same numbers bit for bit.
+
+NUMBA_NUM_THREADS as set (2 on the benchmark machine: a batch of at least 16 cases runs its
+groups of 8 on both cores).
 """
 
 from __future__ import annotations
@@ -258,6 +265,63 @@ def against(tree: str, runs: int, repeat: int) -> None:
             )
 
 
+def bench_step() -> None:
+    """The flexible step alone, shared against per-lane propagators (module docstring)."""
+    from numba import njit
+
+    from flexsat.sim.kernel_phases import row_entry, rows_shape
+    from flexsat.sim.kernels_attitude import LANES, modal_steps
+    from flexsat.sim.spacecraft_modal import modal_propagators, spacecraft_modal_form
+
+    W, substeps, steps = LANES, 4, 200
+    p = eps().plant(n_modes=45)
+    modes = spacecraft_modal_form(p.inertia, p.coupling, p.stiffness, p.damping)
+    _, B = p.linear_part()
+    Ti = modes.T_inv
+    E2, E, Q1u, P1u, F = modal_propagators(
+        modes.blocks, Ti @ B, Ti @ p.force_matrix, 0.05, substeps
+    )
+    R = np.ascontiguousarray(modes.T[1:7])
+    n, m = R.shape[1], B.shape[1]
+
+    def lanes(a):
+        return np.ascontiguousarray(np.repeat(a[..., None], W, -1))
+
+    R_lanes = np.zeros(rows_shape(6, n, W))
+    for s in range(6):
+        for i in range(n):
+            a, b = row_entry(s, i, n, W)
+            R_lanes[a, b, :] = R[s, i]
+
+    @njit
+    def run(k, z, w, E2, E, Q1u, P1u, F, R, J, work, g, acc):
+        for _ in range(k):
+            modal_steps(z, w, E2, E, Q1u, P1u, F, R, J, substeps, work, g, acc, W)
+
+    z0 = lanes(Ti @ p.state_from(rate=[0.01, 0.0, -0.01]))
+    w = np.zeros((m, W))
+    w[0] = 1.0
+    layouts = {
+        "per-lane copies": (lanes(E2), lanes(E), lanes(F), R_lanes),
+        "shared": (E2, E, F, R),
+    }
+    ends = {}
+    print(f"flexible step alone, EPS 45 modes ({n} states), {substeps} substeps, {W} lanes")
+    for name, (e2, e, f, r) in layouts.items():
+        arrays = (e2, e, lanes(Q1u), lanes(P1u), f, r, lanes(p.inertia))
+        scratch = (np.empty((9, n, W)), np.empty((7, W)), np.empty((8, W)))
+        run(1, z0.copy(), w, *arrays, *scratch)  # compiled
+        best = np.inf
+        for _ in range(5):
+            z = z0.copy()
+            c0 = time.process_time()
+            run(steps, z, w, *arrays, *scratch)
+            best = min(best, time.process_time() - c0)
+        ends[name] = z
+        print(f"  {name:16} {1e6 * best / (steps * substeps * W):6.3f} µs CPU per lane-substep")
+    print(f"  bit for bit the same: {np.array_equal(*ends.values())}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
@@ -265,7 +329,11 @@ def main() -> None:
     ap.add_argument("--against", help="source tree of the version to compare with")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--step", action="store_true", help="the flexible step alone")
     args = ap.parse_args()
+    if args.step:
+        bench_step()
+        return
     if args.child:
         print(json.dumps(compiled_rows(args.repeat)))
         return
