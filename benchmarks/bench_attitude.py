@@ -294,9 +294,10 @@ def bench_step() -> None:
             R_lanes[a, b, :] = R[s, i]
 
     @njit
-    def run(k, z, w, E2, E, Q1u, P1u, F, R, J, work, g, acc):
+    def run(k, z, w, E2, E, Q1u, P1u, F, R, J, work, g, acc, lanes):
+        # lanes a run-time argument, as the kernel's group has it (kernels_attitude._group)
         for _ in range(k):
-            modal_steps(z, w, E2, E, Q1u, P1u, F, R, J, substeps, work, g, acc, W)
+            modal_steps(z, w, E2, E, Q1u, P1u, F, R, J, substeps, work, g, acc, lanes)
 
     z0 = lanes(Ti @ p.state_from(rate=[0.01, 0.0, -0.01]))
     w = np.zeros((m, W))
@@ -310,12 +311,12 @@ def bench_step() -> None:
     for name, (e2, e, f, r) in layouts.items():
         arrays = (e2, e, lanes(Q1u), lanes(P1u), f, r, lanes(p.inertia))
         scratch = (np.empty((9, n, W)), np.empty((7, W)), np.empty((8, W)))
-        run(1, z0.copy(), w, *arrays, *scratch)  # compiled
+        run(1, z0.copy(), w, *arrays, *scratch, W)  # compiled
         best = np.inf
         for _ in range(5):
             z = z0.copy()
             c0 = time.process_time()
-            run(steps, z, w, *arrays, *scratch)
+            run(steps, z, w, *arrays, *scratch, W)
             best = min(best, time.process_time() - c0)
         ends[name] = z
         print(f"  {name:16} {1e6 * best / (steps * substeps * W):6.3f} µs CPU per lane-substep")
