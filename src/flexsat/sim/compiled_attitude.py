@@ -22,7 +22,9 @@ in x up to cond(T) · eps per step).
 
 The kernel records the states (in its coordinates) of a block of cases; the recorded outputs
 and energies are computed from them afterwards, block by block, as
-:class:`~flexsat.sim.recording.Recorder` does. A case that diverges ends the run with the
+:class:`~flexsat.sim.recording.Recorder` does, for the flexible plant straight from the modal
+coordinates z (the rows C T, the seven rows of β and ω, the energy's form in z: no change
+back x = T z unless the states are asked for). A case that diverges ends the run with the
 Python loop's :class:`~flexsat.sim.engine.SimulationDiverged` (the batch rerun up to the first
 sample where any case stops: the same cases, time and growth); a case that meets the Gibbs
 law's singularity ends it with None: the engine then runs the Python loop, whose law refuses
