@@ -18,14 +18,31 @@ loop, outputs, result dataset).
     timed on ``--loop-cases`` cases and scaled to 200.
 
 Run with ``python benchmarks/bench_attitude.py [--repeat N]``; numbers go to
-docs/performance.md by hand. NUMBA_NUM_THREADS as set (2 on the benchmark machine: a batch of
-at least 16 cases runs its groups of 8 on both cores).
+docs/performance.md by hand.
+
+``--against TREE`` (a source tree of another version, e.g. ``git archive <commit> src | tar -x
+-C /tmp/base``): the compiled rows (a) and (b) of this tree and of TREE side by side instead,
+each in its own interpreter, alternating (TREE, this, TREE, ...) ``--runs`` processes each, each
+process the best of ``--repeat`` calls; end to end and the kernel calls alone (the three-axis
+kernels of ``flexsat.sim.compiled_attitude`` wrapped by a timer), wall and process CPU time,
+min / median over the processes.
+
+``--step``: the flexible plant's integrator step alone (``kernels_attitude.modal_steps``, EPS
+45 modes, 4 substeps, one group of 8 lanes, 200 control steps, best of 5, process CPU time per
+lane and substep), with the propagators shared by the lanes and with each lane's own copy (a
+dispersed plant's layout); the two give the same numbers bit for bit.
+
+NUMBA_NUM_THREADS as set (2 on the benchmark machine: a batch of at least 16 cases runs its
+groups of 8 on both cores).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import subprocess
+import sys
 import time
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -155,11 +172,175 @@ def bench_monte_carlo(loop_cases: int) -> None:
     )
 
 
+def _kernel_clock() -> list[float]:
+    """[wall, CPU] s spent in the three-axis kernels from now on: the kernels as
+    ``flexsat.sim.compiled_attitude`` calls them, wrapped by a timer."""
+    from flexsat.sim import compiled_attitude
+
+    spent = [0.0, 0.0]
+
+    def clocked(kernel):
+        def call(*args):
+            w0, c0 = time.perf_counter(), time.process_time()
+            kernel(*args)
+            spent[0] += time.perf_counter() - w0
+            spent[1] += time.process_time() - c0
+
+        return call
+
+    compiled_attitude.attitude_loop = clocked(compiled_attitude.attitude_loop)
+    compiled_attitude.attitude_loop_parallel = clocked(compiled_attitude.attitude_loop_parallel)
+    return spent
+
+
+def compiled_rows(repeat: int) -> dict[str, list[float]]:
+    """µs per case-step of the compiled rows (a), (b): label -> [wall, CPU, kernel wall,
+    kernel CPU] of the best call (least wall time) of ``repeat``."""
+    spent = _kernel_clock()
+    base = eps().plant(n_modes=45)
+    eps_config = SimConfig(duration=10.0, control_rate=20.0)
+    eps_law = MRPLaw(**EPS_GAINS, beta_target=TARGET)
+    rigid_config = SimConfig(duration=20.0, control_rate=10.0)
+    rigid_law = MRPLaw(K=np.linspace(8.0, 14.0, 1000), P=[50.0, 60.0, 70.0], beta_target=TARGET)
+    batch = stack_plants(_dispersed(base, 100))
+    runs = {
+        "(a) rigid, 1,000 cases, MRP PD": (
+            lambda: simulate(RigidSpacecraft(J), rigid_law, rigid_config, n_cases=1000),
+            1000,
+            rigid_config,
+        ),
+        "(b) EPS 45 modes, 100 cases of one plant": (
+            lambda: simulate(base, eps_law, eps_config, n_cases=100),
+            100,
+            eps_config,
+        ),
+        "(b) EPS 45 modes, 100 dispersed plants": (
+            lambda: simulate(batch, eps_law, eps_config),
+            100,
+            eps_config,
+        ),
+    }
+    rows = {}
+    for label, (fn, cases, config) in runs.items():
+        fn()  # compiled, warm
+        best = None
+        for _ in range(repeat):
+            spent[:] = [0.0, 0.0]
+            w0, c0 = time.perf_counter(), time.process_time()
+            r = fn()
+            t = [time.perf_counter() - w0, time.process_time() - c0, *spent]
+            assert r.dataset.attrs["engine"] == "compiled"
+            if best is None or t[0] < best[0]:
+                best = t
+        rows[label] = [_per_step(v, cases, config) for v in best]
+    return rows
+
+
+def against(tree: str, runs: int, repeat: int) -> None:
+    """The compiled rows of this tree and of ``tree`` side by side (module docstring)."""
+    here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src")
+    trees = {"against": os.path.join(tree, "src"), "this": here}
+    got: dict[str, list] = {k: [] for k in trees}
+    for _ in range(runs):
+        for name, src in trees.items():
+            env = dict(os.environ, PYTHONPATH=src)
+            out = subprocess.run(
+                [sys.executable, __file__, "--child", "--repeat", str(repeat)],
+                env=env,
+                check=True,
+                capture_output=True,
+                text=True,
+            ).stdout
+            got[name].append(json.loads(out.splitlines()[-1]))
+    print(f"compiled rows, µs per case-step, min / median over {runs} processes (best of {repeat})")
+    print(f"  against: {tree}; load average {os.getloadavg()[0]:.1f}")
+    parts = ("end to end, wall", "end to end, CPU", "kernel alone, wall", "kernel alone, CPU")
+    for label in got["this"][0]:
+        for i, part in enumerate(parts):
+            a = np.array([r[label][i] for r in got["against"]])
+            b = np.array([r[label][i] for r in got["this"]])
+            print(
+                f"  {label:42} {part:19} against {a.min():7.3f} / {np.median(a):7.3f}   "
+                f"this {b.min():7.3f} / {np.median(b):7.3f}   ratio {a.min() / b.min():5.2f}x"
+            )
+
+
+def bench_step() -> None:
+    """The flexible step alone, shared against per-lane propagators (module docstring)."""
+    from numba import njit
+
+    from flexsat.sim.kernel_phases import row_entry, rows_shape
+    from flexsat.sim.kernels_attitude import LANES, modal_steps
+    from flexsat.sim.spacecraft_modal import modal_propagators, spacecraft_modal_form
+
+    W, substeps, steps = LANES, 4, 200
+    p = eps().plant(n_modes=45)
+    modes = spacecraft_modal_form(p.inertia, p.coupling, p.stiffness, p.damping)
+    _, B = p.linear_part()
+    Ti = modes.T_inv
+    E2, E, Q1u, P1u, F = modal_propagators(
+        modes.blocks, Ti @ B, Ti @ p.force_matrix, 0.05, substeps
+    )
+    R = np.ascontiguousarray(modes.T[1:7])
+    n, m = R.shape[1], B.shape[1]
+
+    def lanes(a):
+        return np.ascontiguousarray(np.repeat(a[..., None], W, -1))
+
+    R_lanes = np.zeros(rows_shape(6, n, W))
+    for s in range(6):
+        for i in range(n):
+            a, b = row_entry(s, i, n, W)
+            R_lanes[a, b, :] = R[s, i]
+
+    @njit
+    def run(k, z, w, E2, E, Q1u, P1u, F, R, J, work, g, acc, lanes):
+        # lanes a run-time argument, as the kernel's group has it (kernels_attitude._group)
+        for _ in range(k):
+            modal_steps(z, w, E2, E, Q1u, P1u, F, R, J, substeps, work, g, acc, lanes)
+
+    z0 = lanes(Ti @ p.state_from(rate=[0.01, 0.0, -0.01]))
+    w = np.zeros((m, W))
+    w[0] = 1.0
+    layouts = {
+        "per-lane copies": (lanes(E2), lanes(E), lanes(F), R_lanes),
+        "shared": (E2, E, F, R),
+    }
+    ends = {}
+    print(f"flexible step alone, EPS 45 modes ({n} states), {substeps} substeps, {W} lanes")
+    for name, (e2, e, f, r) in layouts.items():
+        arrays = (e2, e, lanes(Q1u), lanes(P1u), f, r, lanes(p.inertia))
+        scratch = (np.empty((9, n, W)), np.empty((7, W)), np.empty((8, W)))
+        run(1, z0.copy(), w, *arrays, *scratch, W)  # compiled
+        best = np.inf
+        for _ in range(5):
+            z = z0.copy()
+            c0 = time.process_time()
+            run(steps, z, w, *arrays, *scratch, W)
+            best = min(best, time.process_time() - c0)
+        ends[name] = z
+        print(f"  {name:16} {1e6 * best / (steps * substeps * W):6.3f} µs CPU per lane-substep")
+    print(f"  bit for bit the same: {np.array_equal(*ends.values())}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--loop-cases", type=int, default=10)
+    ap.add_argument("--against", help="source tree of the version to compare with")
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--step", action="store_true", help="the flexible step alone")
     args = ap.parse_args()
+    if args.step:
+        bench_step()
+        return
+    if args.child:
+        print(json.dumps(compiled_rows(args.repeat)))
+        return
+    if args.against:
+        against(args.against, args.runs, args.repeat)
+        return
     simulate(RigidSpacecraft(J), MRPLaw(K=1.0, P=1.0), SimConfig(duration=0.2, control_rate=10.0))
     bench_rigid(args.repeat)
     bench_eps45(args.repeat)

@@ -316,3 +316,48 @@ def test_divergence_and_the_gibbs_singularity_raise_as_on_the_python_loop():
     upside = p.state_from(attitude=[0.0, 0.0, 0.0, 1.0])  # 180° from the identity target
     with pytest.raises(FieldError, match="attitude"):
         simulate(p, GibbsLyapunovLaw(k=1.0, A=1.0), config, initial_state=upside)
+
+
+@pytest.mark.parametrize("plant", ["eps_proportional", "coupled_non_proportional"])
+def test_energy_in_modal_coordinates_is_the_plants_energy(plant):
+    """½ ω_rᵀ J ω_r + ½ z_eᵀ Q_e z_e (SpacecraftModes.elastic_energy, what the compiled loop
+    records instead of changing back to x) against the plant's own energy of x = T z, on
+    random states: the EPS's free-free modes (each mode its own pair: Q_e diagonal) and the
+    coupled spacecraft (non-proportional damping: Q_e a matrix). The two differ by the
+    round-off of x = T z and of the sums, a few cond(T) · eps of the energy per coordinate:
+    bound 16 · n · cond(T) · eps · E (E > 0: the kinetic and strain energies are positive
+    definite, no cancellation)."""
+    from flexsat.cases.eps import eps
+
+    p = eps().plant(n_modes=10) if plant == "eps_proportional" else _flexible()
+    modes = spacecraft_modal_form(p.inertia, p.coupling, p.stiffness, p.damping)
+    assert modes.elastic_energy.ndim == (1 if plant == "eps_proportional" else 2)
+    Qe = modes.elastic_energy
+    Qe = np.diag(Qe) if Qe.ndim == 1 else Qe
+    z = np.random.default_rng(3).standard_normal((50, p.nx))
+    wr, ze = z[:, 2:7:2], z[:, 7:]
+    got = 0.5 * (np.sum(wr * (wr @ p.inertia), -1) + np.sum(ze * (ze @ Qe), -1))
+    want = p.energy(z @ modes.T.T)
+    tol = 16 * p.nx * np.linalg.cond(modes.T) * EPS * want
+    assert np.all(np.abs(got - want) <= tol), np.max(np.abs(got - want) / want)
+
+
+@pytest.mark.parametrize("plant", ["rigid", "flexible"])
+def test_a_case_of_a_batch_of_1000_is_the_case_run_alone_bit_for_bit(plant):
+    """The batch of 1,000 (125 groups of lanes on every core, in blocks) against chunks of 1
+    and 7 cut from it at the start, the middle and the end: bit for bit. The flexible plant
+    shares its propagators (E, F) between the lanes."""
+    n = 1000
+    p = RigidSpacecraft(J) if plant == "rigid" else _flexible()
+    config = _config(duration=1.0, noisy=True)
+    x0 = np.array([p.state_from(rate=[1e-5 * i, -0.002, 0.0]) for i in range(n)])
+    seeds = 100 + np.arange(n)
+    law = _batch_law("mrp_pd", n)
+    full = _histories(simulate(p, law, config, n_cases=n, seeds=seeds, initial_state=x0))
+    for c0, c1 in ((0, 1), (0, 7), (497, 504), (500, 501), (993, 1000), (999, 1000)):
+        sub = MRPLaw(K=law.K[c0:c1], P=law.P, beta_target=TARGET)
+        part = simulate(
+            p, sub, config, n_cases=c1 - c0, seeds=seeds[c0:c1], initial_state=x0[c0:c1]
+        )
+        for k, v in _histories(part).items():
+            assert np.array_equal(v, full[k][c0:c1]), (k, c0, c1)

@@ -12,7 +12,7 @@ Lyapunov law), with linear measured channels, no derivative sensor, no input for
 actuator rate limit or bias.
 
 The arguments are those of the Python loop, built by the same functions as for the hub
-kernels (:class:`~flexsat.sim.compiled.LoopArguments`: sensors, actuators, disturbances,
+kernels (:class:`~flexsat.sim.compiled_arguments.LoopArguments`: sensors, actuators, disturbances,
 impulses, each case's noise stream from its own seed, the law's linear form); the
 propagation is the plant's own integrator: the RKMK4 step of the rigid body (the same
 formulas as :meth:`RigidSpacecraft.step`, in another order of the sums: the two paths agree to
@@ -22,7 +22,9 @@ in x up to cond(T) · eps per step).
 
 The kernel records the states (in its coordinates) of a block of cases; the recorded outputs
 and energies are computed from them afterwards, block by block, as
-:class:`~flexsat.sim.recording.Recorder` does. A case that diverges ends the run with the
+:class:`~flexsat.sim.recording.Recorder` does, for the flexible plant straight from the modal
+coordinates z (the rows C T, the seven rows of β and ω, the energy's form in z: no change
+back x = T z unless the states are asked for). A case that diverges ends the run with the
 Python loop's :class:`~flexsat.sim.engine.SimulationDiverged` (the batch rerun up to the first
 sample where any case stops: the same cases, time and growth); a case that meets the Gibbs
 law's singularity ends it with None: the engine then runs the Python loop, whose law refuses
@@ -42,7 +44,8 @@ from flexsat.dynamics.dispersion import DispersedPlant
 from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
 from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft, attitude_output
 from flexsat.input_checks import FieldError
-from flexsat.sim.compiled import LoopArguments, block_size, channel_width, own_linear_form
+from flexsat.sim.compiled import block_size, own_linear_form
+from flexsat.sim.compiled_arguments import LoopArguments, channel_width
 from flexsat.sim.kernels_attitude import (
     ATTITUDE_LAWS,
     LANES,
@@ -157,8 +160,10 @@ def _law_arrays(controller, nc: int):
 
 
 class _Plant:
-    """The propagation arrays of the batch: per case (C) or shared (1), and the change of
-    coordinates x = T z of the flexible plant (None: z = x)."""
+    """The propagation arrays of the batch: per case (C) or shared (1), the change of
+    coordinates x = T z of the flexible plant (None: z = x) and its energy's elastic form
+    (``elastic_energy`` of :class:`~flexsat.sim.spacecraft_modal.SpacecraftModes`: vectors
+    when every case's is diagonal, else matrices)."""
 
     def __init__(self, plant: Plant, kind: str, dt: float, substeps: int) -> None:
         parts = plant.plants if isinstance(plant, DispersedPlant) else (plant,)
@@ -166,14 +171,17 @@ class _Plant:
         if kind == "rigid":
             J = _c(cast(RigidSpacecraft, plant).inertia).reshape(-1, 3, 3)
             self.J, self.Jinv = J, _c(np.linalg.inv(J))
-            self.T = self.Ti = None
+            self.T = self.Ti = self.elastic_energy = None
             self.E2 = self.E = np.zeros((1, 0, 2))
             self.Q1u = self.P1u = np.zeros((1, 0, m))
             self.F, self.R = np.zeros((1, 5, 0, 7)), np.zeros((1, 6, 0))
             return
         arrays = [self._modal(cast(FlexibleSpacecraft, p), dt, substeps) for p in parts]
-        T, Ti, J, E2, E, Q1u, P1u, F = (np.stack(a) for a in zip(*arrays))
-        self.T, self.Ti = T, Ti
+        T, Ti, J, E2, E, Q1u, P1u, F, Qe = zip(*arrays)
+        diagonal = all(q.ndim == 1 for q in Qe)
+        Qe = [q if diagonal or q.ndim == 2 else np.diag(q) for q in Qe]
+        T, Ti, J, E2, E, Q1u, P1u, F, Qe = map(np.stack, (T, Ti, J, E2, E, Q1u, P1u, F, Qe))
+        self.T, self.Ti, self.elastic_energy = T, Ti, Qe
         self.J = _c(J)
         self.Jinv = _c(np.linalg.inv(self.J))
         self.E2, self.E, self.Q1u, self.P1u, self.F = map(_c, (E2, E, Q1u, P1u, F))
@@ -189,7 +197,7 @@ class _Plant:
         )
         if np.any(F[:, HEAD:, :4]):  # the kernel skips these products
             raise FieldError("coupling", "the attitude force columns reach the elastic modes")
-        return modes.T, Ti, p.inertia, E2, E, Q1u, P1u, F
+        return modes.T, Ti, p.inertia, E2, E, Q1u, P1u, F, modes.elastic_energy
 
 
 def _to_z(M: np.ndarray, T: np.ndarray | None) -> np.ndarray:
@@ -351,12 +359,10 @@ def run(
             k = int(stop[sl][stop[sl] >= 0].min())
             _raise_divergence(run_block, pl, nc, size, k, a.p_rec, m, n, config)
             return None  # not a divergence: the Gibbs law's singularity (the Python loop's error)
-        if pl.T is not None:  # back to the plant's coordinates, x = T z
-            T = pl.T if pl.T.shape[0] == 1 else pl.T[c0:c1]
-            Xb = np.matmul(Xb, np.swapaxes(T, -1, -2))
-        if X_all is not None:
-            X_all[c0:c1] = Xb
-        _outputs(rec, plant, c0, Xb, U[c0:c1], Dist[c0:c1], outs, energy)
+        if X_all is not None:  # in the plant's coordinates, x = T z
+            T = None if pl.T is None else np.swapaxes(_of_block(pl.T, c0, c1), -1, -2)
+            X_all[c0:c1] = Xb if T is None else np.matmul(Xb, T)
+        _outputs(rec, plant, pl, c0, Xb, U[c0:c1], Dist[c0:c1], outs, energy)
     Dist += U  # the plant's input u + d, as the Python loop records it
     rec.commands, rec.applied, rec.disturbed = (np.swapaxes(v, 0, 1) for v in (Ucmd, U, Dist))
     for name in kept:
@@ -405,34 +411,59 @@ def _raise_divergence(run_block, pl, nc, size, k, p_rec, m, n, config) -> None:
     raise divergence_error(xk, uk, config.dt * k, k, prev, config)
 
 
-def _outputs(rec, plant, c0, X, U, Dist, outs, energy) -> None:
-    """Recorded outputs and energies of the cases from c0 on, from their states X (cb, n_t,
-    n): y = C x + D w_{k−1} (:meth:`Recorder.flush`); the nonlinear ones are attitude channels
-    of β and ω (:func:`~flexsat.dynamics.rigid_spacecraft.attitude_output`)."""
-    cb = X.shape[0]
+def _of_block(a: np.ndarray, c0: int, c1: int) -> np.ndarray:
+    """A shared (leading axis 1) array as is, a per-case one's cases [c0, c1)."""
+    return a if a.shape[0] == 1 else a[c0:c1]
+
+
+def _rows(V: np.ndarray, M: np.ndarray) -> np.ndarray:
+    """V (cb, n_t, i) times M (i, j), or (1, i, j) or (cb, i, j) case by case (one matrix
+    product per case whatever the block: the same sums for a case alone and in a batch)."""
+    return V @ M if M.ndim == 2 else np.matmul(V, M)
+
+
+def _outputs(rec, plant, pl: _Plant, c0: int, Z, U, Dist, outs, energy) -> None:
+    """Recorded outputs and energies of the cases from c0 on, from their states Z (cb, n_t,
+    n) in kernel coordinates: y = C x + D w_{k−1} (:meth:`Recorder.flush`) with x = T z, C T
+    the rows over z; the nonlinear ones are attitude channels of β and ω
+    (:func:`~flexsat.dynamics.rigid_spacecraft.attitude_output`), the seven rows T[:7] z; the
+    flexible plant's energy ½ ω_rᵀ J ω_r + ½ z_eᵀ Q_e z_e in z (:class:`~flexsat.sim.
+    spacecraft_modal.SpacecraftModes`; equal to ½[ω; η̇]ᵀ𝓜[ω; η̇] + ½ηᵀKη of x = T z up to
+    cond(T) · eps relative), O(n) per sample for a diagonal Q_e where the change back x = T z
+    is O(n²)."""
+    cb = Z.shape[0]
     c1 = c0 + cb
     Wp = np.empty_like(U)  # the input held before each sample
     Wp[:, 0] = 0.0
     np.add(U[:, :-1], Dist[:, :-1], out=Wp[:, 1:])
-
-    def lin(V, MT):
-        if MT.ndim == 2:
-            return V @ MT
-        return np.einsum("cti,cip->ctp", V, MT[c0:c1])
-
+    T = None if pl.T is None else _of_block(pl.T, c0, c1)
     if rec.linear:
-        Yo = lin(X, rec.CT) + lin(Wp, rec.DT)
+        CT = rec.CT if rec.CT.ndim == 2 else rec.CT[c0:c1]
+        Yo = _rows(Z, CT if T is None else np.swapaxes(T, -1, -2) @ CT)
+        Yo += _rows(Wp, rec.DT if rec.DT.ndim == 2 else rec.DT[c0:c1])
         col = 0
         for k in rec.linear:
             w = channel_width(plant, k)
             outs[k][c0:c1] = Yo[..., col] if w == 1 else Yo[..., col : col + w]
             col += w
-    for k in rec.nonlinear:
-        outs[k][c0:c1] = attitude_output(k, X[..., :4], X[..., 4:7])
+    if rec.nonlinear:
+        head = Z[..., :HEAD] if T is None else _rows(Z, np.swapaxes(T[:, :HEAD], -1, -2))
+        for k in rec.nonlinear:
+            outs[k][c0:c1] = attitude_output(k, head[..., :4], head[..., 4:7])
     if energy is None:
         return
-    if plant.n_cases == 1:
-        energy[c0:c1] = plant.energy(X)
+    if T is None:  # the rigid body: its own energy of the states
+        if plant.n_cases == 1:
+            energy[c0:c1] = plant.energy(Z)
+            return
+        for i in range(cb):
+            energy[c0 + i] = _case_plant(plant, c0 + i).energy(Z[i])
         return
-    for i in range(cb):
-        energy[c0 + i] = _case_plant(plant, c0 + i).energy(X[i])
+    wr, ze = Z[..., 2:HEAD:2], Z[..., HEAD:]  # ω_r, the elastic coordinates
+    kinetic = np.sum(wr * _rows(wr, _of_block(pl.J, c0, c1)), -1)
+    Qe = _of_block(pl.elastic_energy, c0, c1)
+    if Qe.ndim == 2:  # diagonal: d (1 or cb, 2 n_e)
+        elastic = np.sum(ze * ze * Qe[:, None], -1)
+    else:
+        elastic = np.sum(ze * _rows(ze, Qe), -1)
+    energy[c0:c1] = 0.5 * (kinetic + elastic)

@@ -39,7 +39,10 @@ sample k, for each case,
      coordinates only (exact zeros elsewhere), those of ω on all.
 
 The cases run in groups of :data:`flexsat.sim.kernels.LANES` lanes (the lanes innermost; the
-lanes past the batch repeat its last case). Each lane performs the same scalar operations
+lanes past the batch repeat its last case). A shared plant's propagators (E2, E, F, R: one
+set, leading axis 1) are read by every lane from the one copy, each entry broadcast over the
+lanes (:func:`coefficient`, :func:`lane_rows`); a dispersed plant's are gathered per lane. The
+sums are the same either way, in the same order. Each lane performs the same scalar operations
 whatever its group or neighbours, serially or in parallel, so a case's records are bit for
 bit those of the case run alone.
 """
@@ -50,6 +53,7 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import prange
+from numba.extending import overload
 
 from flexsat.sim.kernel_arrays import cached_jit, case_index
 from flexsat.sim.kernel_phases import (
@@ -78,6 +82,59 @@ LANES = 8
 ATTITUDE_LAWS = {"MRPLaw": 1, "QuaternionPD": 2, "GibbsLyapunovLaw": 3}
 
 _inline = cached_jit(inline="always", error_model="numpy")
+
+
+def coefficient(A: np.ndarray, i: int, j: int, l: int) -> float:
+    """Entry (i, j) of lane l of a propagator matrix: ``A[i, j, l]`` of the lanes' own copies
+    (lanes last, a dispersed plant) or ``A[i, j]`` of the one matrix all lanes share (a
+    shared plant: read once per row and broadcast over the lanes, where the lanes' copies of
+    the EPS's F alone fill 217 kB of cache per group). Compiled per array rank
+    (:func:`_coefficient`); the same number either way."""
+    return A[i, j, l] if A.ndim == 3 else A[i, j]
+
+
+@overload(coefficient)
+def _coefficient(A, i, j, l):
+    if A.ndim == 3:
+        return lambda A, i, j, l: A[i, j, l]
+    return lambda A, i, j, l: A[i, j]
+
+
+def lane_rows(R: np.ndarray, z: np.ndarray, out: np.ndarray, W: int) -> None:
+    """out[i] = Σ_j R[i, j] z[j] per lane, summed in the order j = 0 .. n − 1: R in the
+    lanes' layout of :func:`~flexsat.sim.kernel_phases.row_products` (three axes), or the one
+    (rows, n) matrix all lanes share (two axes: each entry read once and broadcast over the
+    lanes, the lanes' sums side by side). The same sums either way (:func:`_lane_rows`)."""
+    if R.ndim == 3:
+        row_products(R, z, out, W)
+        return
+    for i in range(R.shape[0]):
+        out[i] = R[i] @ z
+
+
+@overload(lane_rows)
+def _lane_rows(R, z, out, W):
+    if R.ndim == 3:
+        return lambda R, z, out, W: row_products(R, z, out, W)
+
+    def shared(R, z, out, W):  # the eight lanes' sums in registers (W = LANES = 8)
+        n = z.shape[0]
+        for i in range(R.shape[0]):
+            a0 = a1 = a2 = a3 = a4 = a5 = a6 = a7 = 0.0
+            for j in range(n):
+                r = R[i, j]
+                a0 += r * z[j, 0]
+                a1 += r * z[j, 1]
+                a2 += r * z[j, 2]
+                a3 += r * z[j, 3]
+                a4 += r * z[j, 4]
+                a5 += r * z[j, 5]
+                a6 += r * z[j, 6]
+                a7 += r * z[j, 7]
+            out[i, 0], out[i, 1], out[i, 2], out[i, 3] = a0, a1, a2, a3
+            out[i, 4], out[i, 5], out[i, 6], out[i, 7] = a4, a5, a6, a7
+
+    return shared
 
 
 class AttitudeLoop(NamedTuple):
@@ -153,17 +210,19 @@ def _gather(loop, cl, W):
     n, m, p = loop.x0.shape[1], loop.P1u.shape[2], loop.Cm.shape[1]
     modal = loop.kind == 1
     nm = n if modal else 0
+    own = modal and loop.E.shape[0] > 1  # each lane its own E2, E, F (a dispersed plant)
+    no = n if own else 0
     Mt = np.zeros(rows_shape(p, n, W))
     Dmv = np.empty((p, m, W))
     sensv = np.empty((p, 4, W))
     J = np.empty((3, 3, W))
     Jinv = np.empty((3, 3, W))
-    E2 = np.empty((nm, 2, W))
-    E = np.empty((nm, 2, W))
+    E2 = np.empty((no, 2, W))
+    E = np.empty((no, 2, W))
     Q1u = np.empty((nm, m, W))
     P1u = np.empty((nm, m, W))
-    F = np.empty((5, nm, 7, W))
-    R = np.zeros(rows_shape(6, nm, W))
+    F = np.empty((5, no, 7, W))
+    R = np.zeros(rows_shape(6, no, W))
     gains = np.empty((7, W))
     target = np.empty((4, W))
     w_ref = np.empty((3, W))
@@ -189,18 +248,19 @@ def _gather(loop, cl, W):
         if modal:
             cp = case_index(loop.E.shape[0], c)
             for i in range(n):
-                for j in range(2):
-                    E2[i, j, l] = loop.E2[cp, i, j]
-                    E[i, j, l] = loop.E[cp, i, j]
                 for j in range(m):
                     Q1u[i, j, l] = loop.Q1u[cp, i, j]
                     P1u[i, j, l] = loop.P1u[cp, i, j]
-                for s in range(5):
-                    for j in range(7):
-                        F[s, i, j, l] = loop.F[cp, s, i, j]
-                for s in range(6):
-                    a, b = row_entry(s, i, n, W)
-                    R[a, b, l] = loop.R[cp, s, i]
+                if own:
+                    for s in range(6):
+                        a, b = row_entry(s, i, n, W)
+                        R[a, b, l] = loop.R[cp, s, i]
+                    for j in range(2):
+                        E2[i, j, l] = loop.E2[cp, i, j]
+                        E[i, j, l] = loop.E[cp, i, j]
+                    for s in range(5):
+                        for j in range(7):
+                            F[s, i, j, l] = loop.F[cp, s, i, j]
         cg = case_index(loop.gains.shape[0], c)
         for i in range(7):
             gains[i, l] = loop.gains[cg, i]
@@ -347,10 +407,10 @@ def rigid_steps(
 def modal_force(
     z: np.ndarray, R: np.ndarray, J: np.ndarray, f: np.ndarray, acc: np.ndarray, W: int
 ) -> None:
-    """f(z) (7, W) of the flexible plant (module docstring): β_v, ω by the rows R (the
-    layout of :func:`~flexsat.sim.kernel_phases.row_products`: eight independent sums in
-    registers), h = J ω_r with ω_r = z[2], z[4], z[6]; ``acc`` scratch of the row sums."""
-    row_products(R, z, acc, W)
+    """f(z) (7, W) of the flexible plant (module docstring): β_v, ω by the rows R
+    (:func:`lane_rows`), h = J ω_r with ω_r = z[2], z[4], z[6]; ``acc`` scratch of the row
+    sums."""
+    lane_rows(R, z, acc, W)
     for l in range(W):
         a0, a1, a2 = acc[0, l], acc[1, l], acc[2, l]
         b0, w0, w1, w2 = z[0, l], acc[3, l], acc[4, l], acc[5, l]
@@ -379,8 +439,10 @@ def _linear_stage(out, E, z, base, Fs, g, W):
     for i in range(1, n, 2):
         for l in range(W):
             z0, z1 = z[i, l], z[i + 1, l]
-            out[i, l] = (E[i, 0, l] * z0 + E[i, 1, l] * z1) + base[i, l]
-            out[i + 1, l] = (E[i + 1, 0, l] * z0 + E[i + 1, 1, l] * z1) + base[i + 1, l]
+            out[i, l] = (coefficient(E, i, 0, l) * z0 + coefficient(E, i, 1, l) * z1) + base[i, l]
+            out[i + 1, l] = (
+                coefficient(E, i + 1, 0, l) * z0 + coefficient(E, i + 1, 1, l) * z1
+            ) + base[i + 1, l]
     _add_force(out, Fs, g, W)
 
 
@@ -391,12 +453,13 @@ def _force_stage(out, base, Fs, g, W):
     for i in range(n):
         for l in range(W):
             out[i, l] = base[i, l] + (
-                (Fs[i, 4, l] * g[4, l] + Fs[i, 5, l] * g[5, l]) + Fs[i, 6, l] * g[6, l]
+                (coefficient(Fs, i, 4, l) * g[4, l] + coefficient(Fs, i, 5, l) * g[5, l])
+                + coefficient(Fs, i, 6, l) * g[6, l]
             )
     for i in range(HEAD):
         for j in range(4):
             for l in range(W):
-                out[i, l] += Fs[i, j, l] * g[j, l]
+                out[i, l] += coefficient(Fs, i, j, l) * g[j, l]
 
 
 @_inline
@@ -407,10 +470,12 @@ def _add_force(out, Fs, g, W):
     for i in range(HEAD):
         for j in range(4):
             for l in range(W):
-                out[i, l] += Fs[i, j, l] * g[j, l]
+                out[i, l] += coefficient(Fs, i, j, l) * g[j, l]
     for i in range(n):
         for l in range(W):
-            out[i, l] += (Fs[i, 4, l] * g[4, l] + Fs[i, 5, l] * g[5, l]) + Fs[i, 6, l] * g[6, l]
+            out[i, l] += (
+                coefficient(Fs, i, 4, l) * g[4, l] + coefficient(Fs, i, 5, l) * g[5, l]
+            ) + coefficient(Fs, i, 6, l) * g[6, l]
 
 
 @_inline
@@ -473,10 +538,16 @@ def modal_steps(
 
 
 @cached_jit(error_model="numpy")
-def _group(c0, nl, loop, rec):
-    """Cases c0 .. c0 + nl − 1 as :data:`LANES` lanes (the lanes past nl repeat the last
-    case): the step of the module docstring."""
-    W = LANES
+def _group(c0, nl, loop, rec, W):
+    """Cases c0 .. c0 + nl − 1 as W = :data:`LANES` lanes (the lanes past nl repeat the last
+    case): the step of the module docstring.
+
+    W is an argument, not the constant, on purpose: with a known trip count of 8 LLVM unrolls
+    the loops over the lanes and then cannot pack them into vectors (it cannot prove the
+    arrays apart); with a trip count known only at run time it vectorises them across the
+    lanes behind a run-time overlap check (measured: the flexible step of a shared plant 1.26
+    -> 0.87 µs per lane-substep, ``benchmarks/bench_attitude.py --step``). The same
+    operations in the same order either way (no fast-math): the numbers do not change."""
     X, Y, Ucmd, U, D, stop = rec
     n_t, n = Y.shape[1], loop.x0.shape[1]
     m, p, nk = loop.P1u.shape[2], loop.Cm.shape[1], loop.Ak.shape[2]
@@ -568,6 +639,23 @@ def _group(c0, nl, loop, rec):
             break
         if loop.kind == 0:
             rigid_steps(x, w, J, Jinv, loop.h, loop.substeps, W)
+        elif loop.E.shape[0] == 1:  # a shared plant: the one E2, E, F, R of every lane
+            modal_steps(
+                x,
+                w,
+                loop.E2[0],
+                loop.E[0],
+                Q1u,
+                P1u,
+                loop.F[0],
+                loop.R[0],
+                J,
+                loop.substeps,
+                work,
+                g,
+                acc6,
+                W,
+            )
         else:
             modal_steps(x, w, E2, E, Q1u, P1u, F, R, J, loop.substeps, work, g, acc6, W)
 
@@ -579,7 +667,7 @@ def attitude_loop(loop: AttitudeLoop, records: AttitudeRecords) -> None:
     nc = loop.x0.shape[0]
     for g in range((nc + LANES - 1) // LANES):
         c0 = g * LANES
-        _group(c0, min(LANES, nc - c0), loop, records)
+        _group(c0, min(LANES, nc - c0), loop, records, LANES)
 
 
 @cached_jit(parallel=True, error_model="numpy")
@@ -588,4 +676,4 @@ def attitude_loop_parallel(loop: AttitudeLoop, records: AttitudeRecords) -> None
     nc = loop.x0.shape[0]
     for g in prange((nc + LANES - 1) // LANES):
         c0 = np.int64(g) * LANES
-        _group(c0, min(LANES, nc - c0), loop, records)
+        _group(c0, min(LANES, nc - c0), loop, records, LANES)

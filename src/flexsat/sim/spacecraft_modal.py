@@ -57,16 +57,23 @@ HEAD = 7
 
 class SpacecraftModes(NamedTuple):
     """x = T z, z = T_inv x (module docstring); blocks (n_blocks, 2) the (a, b) of each pair
-    [[0, 1], [−a, −b]] after β0: three rigid (0, 0), then the elastic ones."""
+    [[0, 1], [−a, −b]] after β0: three rigid (0, 0), then the elastic ones; elastic_energy
+    the energy's quadratic form on the elastic coordinates z_e = z[HEAD:]: a vector d (2 n_e,)
+    when it is diagonal (each mode its own pair: d = (ω_1², 1, ω_2², 1, ...)), else the
+    matrix Q_e (2 n_e, 2 n_e). The energy T + V = ½[ω; η̇]ᵀ𝓜[ω; η̇] + ½ηᵀKη is then
+    ½ ω_rᵀ J ω_r + ½ z_eᵀ Q_e z_e (module docstring: ½ η̇ᵀ M_e η̇ + ½ ηᵀ K η in the elastic
+    pairs; SᵀM_e S = I, SᵀK S = diag(ω²) for the undamped modes S)."""
 
     T: np.ndarray
     T_inv: np.ndarray
     blocks: np.ndarray
+    elastic_energy: np.ndarray
 
 
 def _elastic(Me: np.ndarray, K: np.ndarray, C: np.ndarray):
-    """(Te, Te_inv, a, b) with [η; η̇] = Te z_e for M_e η̈ + C η̇ + K η = 0 (module
-    docstring); K, C diagonal (vectors)."""
+    """(Te, Te_inv, a, b, energy) with [η; η̇] = Te z_e for M_e η̈ + C η̇ + K η = 0 (module
+    docstring), energy the ``elastic_energy`` of :class:`SpacecraftModes`; K, C diagonal
+    (vectors)."""
     ne = K.size
     L = np.linalg.cholesky(Me)
     Li = solve_triangular(L, np.eye(ne), lower=True)
@@ -82,7 +89,9 @@ def _elastic(Me: np.ndarray, K: np.ndarray, C: np.ndarray):
         Te, Te_inv = np.zeros((2 * ne, 2 * ne)), np.zeros((2 * ne, 2 * ne))
         Te[:ne, 0::2], Te[ne:, 1::2] = S, S
         Te_inv[0::2, :ne], Te_inv[1::2, ne:] = Sinv, Sinv
-        return Te, Te_inv, lam, np.diag(Ct).copy()
+        energy = np.ones(2 * ne)
+        energy[0::2] = lam
+        return Te, Te_inv, lam, np.diag(Ct).copy(), energy
     # non-proportional damping: the complex pairs of the balanced form x̃ = [√λ q; q̇]
     s = np.sqrt(lam)
     At = np.zeros((2 * ne, 2 * ne))
@@ -109,7 +118,11 @@ def _elastic(Me: np.ndarray, K: np.ndarray, C: np.ndarray):
     Sx[:ne, :ne], Sx[ne:, ne:] = S / s, S
     Sx_inv = np.zeros((2 * ne, 2 * ne))
     Sx_inv[:ne, :ne], Sx_inv[ne:, ne:] = Sinv * s[:, None], Sinv
-    return Sx @ Tt, np.linalg.solve(Tt, Sx_inv), np.array(a), np.array(b)
+    Te = Sx @ Tt
+    Q = np.zeros((2 * ne, 2 * ne))
+    Q[:ne, :ne], Q[ne:, ne:] = np.diag(K), Me
+    energy = Te.T @ Q @ Te
+    return Te, np.linalg.solve(Tt, Sx_inv), np.array(a), np.array(b), 0.5 * (energy + energy.T)
 
 
 def spacecraft_modal_form(
@@ -130,7 +143,8 @@ def spacecraft_modal_form(
     ne = Delta.shape[0]
     G = np.linalg.solve(J, Delta.T)  # J⁻¹ Δᵀ (3, ne)
     Me = np.eye(ne) - Delta @ G
-    Te, Te_inv, a, b = _elastic(0.5 * (Me + Me.T), np.asarray(stiffness), np.asarray(damping))
+    Me = 0.5 * (Me + Me.T)
+    Te, Te_inv, a, b, energy = _elastic(Me, np.asarray(stiffness), np.asarray(damping))
     n = HEAD + 2 * ne
     T, Ti = np.zeros((n, n)), np.zeros((n, n))
     T[0, 0] = Ti[0, 0] = 1.0
@@ -147,7 +161,7 @@ def spacecraft_modal_form(
     Ti[HEAD:, HEAD:] = Te_inv
     blocks = np.zeros((3 + ne, 2))
     blocks[3:, 0], blocks[3:, 1] = a, b
-    return SpacecraftModes(T, Ti, blocks)
+    return SpacecraftModes(T, Ti, blocks, energy)
 
 
 def _block_phis(blocks: np.ndarray, tau: float) -> tuple[np.ndarray, ...]:
