@@ -177,14 +177,15 @@ class _Plant:
             self.F, self.R = np.zeros((1, 5, 0, 7)), np.zeros((1, 6, 0))
             return
         arrays = [self._modal(cast(FlexibleSpacecraft, p), dt, substeps) for p in parts]
-        T, Ti, J, E2, E, Q1u, P1u, F, Qe = zip(*arrays)
-        diagonal = all(q.ndim == 1 for q in Qe)
-        Qe = [q if diagonal or q.ndim == 2 else np.diag(q) for q in Qe]
-        T, Ti, J, E2, E, Q1u, P1u, F, Qe = map(np.stack, (T, Ti, J, E2, E, Q1u, P1u, F, Qe))
+        # one stack per quantity, over the cases: T, T⁻¹, J, E2, E, Q1u, P1u, F, Qe
+        columns = [list(column) for column in zip(*arrays)]
+        diagonal = all(q.ndim == 1 for q in columns[8])
+        columns[8] = [q if diagonal or q.ndim == 2 else np.diag(q) for q in columns[8]]
+        T, Ti, J, E2, E, Q1u, P1u, F, Qe = (np.stack(column) for column in columns)
         self.T, self.Ti, self.elastic_energy = T, Ti, Qe
         self.J = _c(J)
         self.Jinv = _c(np.linalg.inv(self.J))
-        self.E2, self.E, self.Q1u, self.P1u, self.F = map(_c, (E2, E, Q1u, P1u, F))
+        self.E2, self.E, self.Q1u, self.P1u, self.F = (_c(a) for a in (E2, E, Q1u, P1u, F))
         self.R = _c(T[:, 1:7])
 
     @staticmethod
@@ -461,6 +462,7 @@ def _outputs(rec, plant, pl: _Plant, c0: int, Z, U, Dist, outs, energy) -> None:
         return
     wr, ze = Z[..., 2:HEAD:2], Z[..., HEAD:]  # ω_r, the elastic coordinates
     kinetic = np.sum(wr * _rows(wr, _of_block(pl.J, c0, c1)), -1)
+    assert pl.elastic_energy is not None  # a flexible plant (T is set with it)
     Qe = _of_block(pl.elastic_energy, c0, c1)
     if Qe.ndim == 2:  # diagonal: d (1 or cb, 2 n_e)
         elastic = np.sum(ze * ze * Qe[:, None], -1)
