@@ -61,16 +61,20 @@ def test_the_example_prints_the_documented_margins_and_poles(run):
     printed, _ = run
     documented = _doc_output()
     assert len(printed) == len(documented)
-    # two modes of one frequency and damping (eta[4], eta[5]) may list in either order
+    # the least damped poles: many elastic modes the LQG leaves at their open-loop ζ = 0.005,
+    # so which three of them tie for "least" depends on round-off (it differs between BLAS
+    # kernels); the damping printed is the documented one, the modes are elastic coordinates
     least = [i for i, line in enumerate(documented) if "least damped" in line]
     rest = [i for i in range(len(documented)) if i not in least]
-    pairs = [(printed[i], documented[i]) for i in rest] + list(
-        zip(sorted(printed[i] for i in least), sorted(documented[i] for i in least))
-    )
-    for p, d in pairs:
-        (pw, pn), (dw, dn) = _mask(p), _mask(d)
-        assert pw == dw, (p, d)
-        assert all(_close(a, b) for a, b in zip(pn, dn, strict=True)), (p, d)
+    for i in rest:
+        (pw, pn), (dw, dn) = _mask(printed[i]), _mask(documented[i])
+        assert pw == dw, (printed[i], documented[i])
+        assert all(_close(a, b) for a, b in zip(pn, dn, strict=True)), (printed[i], documented[i])
+    zeta = re.compile(r"least damped:\s+eta\[\d+\]\s+\d+\.\d+ rad/s, ζ = (\d+\.\d+)$")
+    for i in least:
+        got, doc = zeta.search(printed[i]), zeta.search(documented[i])
+        assert got and doc, (printed[i], documented[i])
+        assert _close(got.group(1), doc.group(1)), (printed[i], documented[i])
 
 
 def test_the_example_writes_the_loop_figure_as_a_png(run):
