@@ -48,6 +48,7 @@ from flexsat.sim.compiled_arguments import (
     MODAL_STEPS,
     MODAL_STEPS_LARGE,
     PARALLEL_CASES,
+    CompiledRun,
     LoopArguments,
     channel_width,
     modal_form,
@@ -153,27 +154,25 @@ def own_linear_form(cls) -> bool:
     return form is not None and call is not None and form <= call
 
 
-def run(
-    plant,
-    controller,
-    config,
-    nc,
-    seeds,
-    x0,
-    theta0,
-    sensors,
-    actuators,
-    disturbances,
-    substeps,
-    measured,
-    kept,
-    record_states,
-    law,
-    always_modal: bool = False,
-):
+def run(job: CompiledRun, record_states, law, always_modal: bool = False):
     """The run of :func:`~flexsat.sim.engine.simulate` on the compiled loop (module
     docstring); same result, same exceptions. ``always_modal``: in modal coordinates whenever
     the plant has them, whatever the batch size (:func:`modal_form`)."""
+    (
+        plant,
+        controller,
+        config,
+        nc,
+        seeds,
+        x0,
+        theta0,
+        sensors,
+        actuators,
+        disturbances,
+        substeps,
+        measured,
+        kept,
+    ) = job.fields()
     a = LoopArguments(
         plant,
         controller,
@@ -332,22 +331,7 @@ def run(
     return result
 
 
-def run_reduced(
-    plant,
-    controller,
-    config,
-    nc,
-    seeds,
-    x0,
-    theta0,
-    sensors,
-    actuators,
-    disturbances,
-    substeps,
-    measured,
-    kept,
-    law,
-):
+def run_reduced(job: CompiledRun, law):
     """The maneuver metrics of :func:`~flexsat.sim.engine.simulate` (``metrics_only``) without
     any time history, or None where this path does not apply (the caller then runs
     :func:`run`).
@@ -373,6 +357,21 @@ def run_reduced(
     A divergence, or the bound met in modal coordinates, returns None: :func:`run` then
     raises as the Python loop does.
     """
+    (
+        plant,
+        controller,
+        config,
+        nc,
+        seeds,
+        x0,
+        theta0,
+        sensors,
+        actuators,
+        disturbances,
+        substeps,
+        measured,
+        kept,
+    ) = job.fields()
     from flexsat.sim.recording import reference_histories
 
     names = [c.name for c in plant.outputs]

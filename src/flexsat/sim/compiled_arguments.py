@@ -11,6 +11,10 @@ which runs the kernels on them.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 
 from flexsat.sim.channels import input_impulses, noise_column, noise_columns
@@ -41,6 +45,48 @@ MODAL_STEPS = 20_000
 MODAL_STATES, MODAL_STEPS_LARGE = 60, 2_000
 #: cases from which a block runs on every core (below, the threads cost more than they save)
 PARALLEL_CASES = 8
+
+
+@dataclass(frozen=True)
+class CompiledRun:
+    """One run as :func:`~flexsat.sim.engine.simulate` hands it to a compiled path
+    (:func:`flexsat.sim.compiled.run`, :func:`~flexsat.sim.compiled.run_reduced`,
+    :func:`flexsat.sim.compiled_attitude.run`), SI throughout: the plant and law, the
+    configuration, ``nc`` cases with their noise ``seeds``, the start state ``x0`` (and the
+    hub angle ``theta0`` of a single-axis maneuver), the per-channel instruments, the integrator
+    ``substeps``, the ``measured`` channels the law reads and those ``kept`` in the record."""
+
+    plant: Any
+    controller: Any
+    config: Any
+    nc: int
+    seeds: np.ndarray
+    x0: np.ndarray
+    theta0: np.ndarray | None
+    sensors: Mapping[str, Any]
+    actuators: Mapping[str, Any]
+    disturbances: Mapping[str, Any]
+    substeps: int
+    measured: Sequence[str]
+    kept: Sequence[str]
+
+    def fields(self) -> tuple[Any, ...]:
+        """The fields in their order (the paths' local names)."""
+        return (
+            self.plant,
+            self.controller,
+            self.config,
+            self.nc,
+            self.seeds,
+            self.x0,
+            self.theta0,
+            self.sensors,
+            self.actuators,
+            self.disturbances,
+            self.substeps,
+            self.measured,
+            self.kept,
+        )
 
 
 def channel_width(plant, name: str) -> int:

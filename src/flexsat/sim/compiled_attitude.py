@@ -45,7 +45,7 @@ from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
 from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft, attitude_output
 from flexsat.input_checks import FieldError
 from flexsat.sim.compiled import block_size, own_linear_form
-from flexsat.sim.compiled_arguments import LoopArguments, channel_width
+from flexsat.sim.compiled_arguments import CompiledRun, LoopArguments, channel_width
 from flexsat.sim.kernels_attitude import (
     ATTITUDE_LAWS,
     LANES,
@@ -215,23 +215,7 @@ def _case_plant(plant, c: int):
     return plant
 
 
-def run(
-    plant: Plant,
-    controller: Controller,
-    config: SimConfig,
-    nc: int,
-    seeds: np.ndarray,
-    x0: np.ndarray,
-    theta0: np.ndarray | None,
-    sensors: Mapping[str, ChannelSensor],
-    actuators: Mapping[str, ChannelActuator],
-    disturbances: Mapping[str, ChannelDisturbance],
-    substeps: int,
-    measured: Sequence[str],
-    kept: Sequence[str],
-    record_states: bool,
-    law: LinearLaw | None,
-) -> SimResult | None:
+def run(job: CompiledRun, record_states: bool, law: LinearLaw | None) -> SimResult | None:
     """The run of :func:`~flexsat.sim.engine.simulate` on the three-axis kernel (module
     docstring), or None when the kernel does not take it after all (an overdamped elastic
     mode, a singular attitude law): the engine then runs the Python loop.
@@ -241,6 +225,12 @@ def run(
     SimulationDiverged
         As the Python loop does, for a case beyond the divergence bound.
     """
+    plant: Plant = job.plant
+    controller: Controller = job.controller
+    config: SimConfig = job.config
+    nc, seeds, x0, theta0 = job.nc, job.seeds, job.x0, job.theta0
+    sensors, actuators, disturbances = job.sensors, job.actuators, job.disturbances
+    substeps, measured, kept = job.substeps, job.measured, job.kept
     kind = spacecraft_kind(plant)
     if kind is None:
         raise FieldError("plant", f"{type(plant).__name__} is not a three-axis spacecraft")

@@ -36,6 +36,7 @@ from flexsat.sim.channels import (
     noise_columns,
     resolve_channels,
 )
+from flexsat.sim.compiled_arguments import CompiledRun
 from flexsat.sim.config import FRICTION_STEP_LIMIT, SimConfig, check_resources, stable_substeps
 from flexsat.sim.instruments import InputForces, Instruments, unit_row
 from flexsat.sim.recording import CHUNK, Recorder, SimResult
@@ -433,6 +434,21 @@ def simulate(
         # a law with a reference is a slew law (flexsat.control.base.SlewLaw)
         controller.tabulate_reference(t)  # type: ignore[attr-defined]
     kept = tuple(k for k in measured if k in getattr(plant, "recorded_measurements", ()))
+    job = CompiledRun(
+        plant,
+        controller,
+        config,
+        nc,
+        seeds,
+        x,
+        theta0,
+        sensors,
+        actuators,
+        disturbances,
+        substeps,
+        measured,
+        kept,
+    )
     if compiled is not False and attitude_path.spacecraft_kind(plant) is not None:
         reason = attitude_path.unsupported(
             plant, controller, sensors, actuators, disturbances, measured
@@ -443,23 +459,7 @@ def simulate(
             if law is None:
                 reason = f"{type(controller).__name__} has no linear form"
         if reason is None:
-            result = attitude_path.run(
-                plant,
-                controller,
-                config,
-                nc,
-                seeds,
-                x,
-                theta0,
-                sensors,
-                actuators,
-                disturbances,
-                substeps,
-                measured,
-                kept,
-                record_states,
-                law,
-            )
+            result = attitude_path.run(job, record_states, law)
             if result is not None:
                 return result
             # a case stopped (diverged, a singular law) or a mode the kernel does not take:
@@ -474,42 +474,12 @@ def simulate(
         if reason is None and law is None:
             reason = f"{type(controller).__name__} has no linear form"
         if reason is None and metrics_only and not record_states:
-            result = compiled_path.run_reduced(
-                plant,
-                controller,
-                config,
-                nc,
-                seeds,
-                x,
-                theta0,
-                sensors,
-                actuators,
-                disturbances,
-                substeps,
-                measured,
-                kept,
-                law,
-            )
+            result = compiled_path.run_reduced(job, law)
             if result is not None:
                 return result
         if reason is None:
             return compiled_path.run(
-                plant,
-                controller,
-                config,
-                nc,
-                seeds,
-                x,
-                theta0,
-                sensors,
-                actuators,
-                disturbances,
-                substeps,
-                measured,
-                kept,
-                record_states,
-                law,
-                always_modal=batch_independent or metrics_only,
+                job, record_states, law, always_modal=batch_independent or metrics_only
             )
         if compiled:
             raise ValueError(f"compiled: this run cannot take the compiled loop: {reason}")
