@@ -158,36 +158,10 @@ def run(job: CompiledRun, record_states, law, always_modal: bool = False):
     """The run of :func:`~flexsat.sim.engine.simulate` on the compiled loop (module
     docstring); same result, same exceptions. ``always_modal``: in modal coordinates whenever
     the plant has them, whatever the batch size (:func:`modal_form`)."""
-    (
-        plant,
-        controller,
-        config,
-        nc,
-        seeds,
-        x0,
-        theta0,
-        sensors,
-        actuators,
-        disturbances,
-        substeps,
-        measured,
-        kept,
-    ) = job.fields()
-    a = LoopArguments(
-        plant,
-        controller,
-        config,
-        nc,
-        x0,
-        sensors,
-        actuators,
-        disturbances,
-        substeps,
-        measured,
-        kept,
-        law,
-        always_modal=always_modal,
-    )
+    plant, controller, config = job.plant, job.controller, job.config
+    nc, seeds, theta0 = job.nc, job.seeds, job.theta0
+    disturbances, substeps, kept = job.disturbances, job.substeps, job.kept
+    a = LoopArguments(job, law, always_modal=always_modal)
     n_t, n, m = a.n_t, a.n, a.m
     batched = plant.n_cases != 1
     forced = a.forced
@@ -266,17 +240,7 @@ def run(job: CompiledRun, record_states, law, always_modal: bool = False):
     if (stop >= 0).any():
         if a.T is not None:  # the Python loop bounds the physical state: rerun it dense
             a = LoopArguments(
-                plant,
-                controller,
-                config,
-                nc,
-                x0,
-                sensors,
-                actuators,
-                disturbances,
-                substeps,
-                measured,
-                kept,
+                job,
                 law,
                 modal=False,
             )
@@ -357,21 +321,9 @@ def run_reduced(job: CompiledRun, law):
     A divergence, or the bound met in modal coordinates, returns None: :func:`run` then
     raises as the Python loop does.
     """
-    (
-        plant,
-        controller,
-        config,
-        nc,
-        seeds,
-        x0,
-        theta0,
-        sensors,
-        actuators,
-        disturbances,
-        substeps,
-        measured,
-        kept,
-    ) = job.fields()
+    plant, controller, config = job.plant, job.controller, job.config
+    nc, seeds, theta0 = job.nc, job.seeds, job.theta0
+    substeps = job.substeps
     from flexsat.sim.recording import reference_histories
 
     names = [c.name for c in plant.outputs]
@@ -392,17 +344,7 @@ def run_reduced(job: CompiledRun, law):
     ):
         return None
     a = LoopArguments(
-        plant,
-        controller,
-        config,
-        nc,
-        x0,
-        sensors,
-        actuators,
-        disturbances,
-        substeps,
-        measured,
-        kept,
+        job,
         law,
         always_modal=True,
         rows=reduced_outputs,

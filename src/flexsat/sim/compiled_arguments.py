@@ -70,24 +70,6 @@ class CompiledRun:
     measured: Sequence[str]
     kept: Sequence[str]
 
-    def fields(self) -> tuple[Any, ...]:
-        """The fields in their order (the paths' local names)."""
-        return (
-            self.plant,
-            self.controller,
-            self.config,
-            self.nc,
-            self.seeds,
-            self.x0,
-            self.theta0,
-            self.sensors,
-            self.actuators,
-            self.disturbances,
-            self.substeps,
-            self.measured,
-            self.kept,
-        )
-
 
 def channel_width(plant, name: str) -> int:
     return next(c.size for c in plant.outputs if c.name == name)
@@ -210,23 +192,16 @@ class LoopArguments:
 
     def __init__(
         self,
-        plant,
-        controller,
-        config,
-        nc,
-        x0,
-        sensors,
-        actuators,
-        disturbances,
-        substeps,
-        measured,
-        kept,
+        job: CompiledRun,
         law,
         modal: bool = True,
         always_modal: bool = False,
         rows=None,
         propagate: bool = True,
     ):
+        plant, controller, config, nc, x0 = job.plant, job.controller, job.config, job.nc, job.x0
+        sensors, actuators, disturbances = job.sensors, job.actuators, job.disturbances
+        substeps, measured, kept = job.substeps, job.measured, job.kept
         dt, n_t = config.dt, config.n_steps + 1
         self.nc, self.n_t = nc, n_t
         A, B = plant.linear_part()

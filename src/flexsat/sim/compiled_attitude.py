@@ -229,8 +229,7 @@ def run(job: CompiledRun, record_states: bool, law: LinearLaw | None) -> SimResu
     controller: Controller = job.controller
     config: SimConfig = job.config
     nc, seeds, x0, theta0 = job.nc, job.seeds, job.x0, job.theta0
-    sensors, actuators, disturbances = job.sensors, job.actuators, job.disturbances
-    substeps, measured, kept = job.substeps, job.measured, job.kept
+    disturbances, substeps, kept = job.disturbances, job.substeps, job.kept
     kind = spacecraft_kind(plant)
     if kind is None:
         raise FieldError("plant", f"{type(plant).__name__} is not a three-axis spacecraft")
@@ -240,17 +239,7 @@ def run(job: CompiledRun, record_states: bool, law: LinearLaw | None) -> SimResu
     except (FieldError, np.linalg.LinAlgError):  # an overdamped mode: the dense path
         return None
     a = LoopArguments(
-        plant,
-        controller,
-        config,
-        nc,
-        x0,
-        sensors,
-        actuators,
-        disturbances,
-        substeps,
-        measured,
-        kept,
+        job,
         law,
         modal=False,
         propagate=False,
