@@ -33,7 +33,14 @@ def tamu_generalized(n_modes: int = 3):
     """The LQG generalized plant of the TAMU design: unit torque noise, R = 1."""
     _, _, A, B, C, Q = tamu_design(n_modes)
     return lqg_plant(
-        A, B, C, Q, np.eye(1), np.eye(1), TAMU_RN * np.eye(1), controls=("torque",),
+        A,
+        B,
+        C,
+        Q,
+        np.eye(1),
+        np.eye(1),
+        TAMU_RN * np.eye(1),
+        controls=("torque",),
         measurements=("theta",),
     )
 

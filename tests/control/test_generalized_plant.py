@@ -48,8 +48,12 @@ def test_closed_loop_equals_the_lower_lft_evaluated_pointwise():
     rng = np.random.default_rng(2)
     P = random_plant(rng)
     G = GeneralizedPlant.from_statespace(P, 2, 2)
-    K = ct.ss(-np.eye(2) - 0.1 * rng.normal(size=(2, 2)), rng.normal(size=(2, 2)),
-              0.3 * rng.normal(size=(2, 2)), 0.2 * rng.normal(size=(2, 2)))
+    K = ct.ss(
+        -np.eye(2) - 0.1 * rng.normal(size=(2, 2)),
+        rng.normal(size=(2, 2)),
+        0.3 * rng.normal(size=(2, 2)),
+        0.2 * rng.normal(size=(2, 2)),
+    )
     T = closed_loop(G, K)
     for w in (0.0, 0.3, 2.0, 15.0):
         Pj, Kj = P(1j * w), K(1j * w)

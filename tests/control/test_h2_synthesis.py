@@ -14,11 +14,11 @@ import pytest
 import control as ct
 from flexsat.analysis.norms import h2_norm
 from flexsat.control.estimation import kalman
-from flexsat.control.generalized_plant import GeneralizedPlant, closed_loop, lqg_plant
+from flexsat.control.generalized_plant import GeneralizedPlant, closed_loop
 from flexsat.control.h2_synthesis import H2Controller, h2syn
 from flexsat.control.lqr import lqr
 from flexsat.input_checks import FieldError
-from flexsat.sim import SimConfig, simulate
+from flexsat.sim import simulate
 from flexsat.testing import check_controller
 from flexsat.testing.checks import CHECK_RATE
 from synthesis_plants import TAMU_RN, tamu_design, tamu_generalized
@@ -45,9 +45,15 @@ def test_achieved_norm_equals_cost_on_random_plants_with_cross_terms(seed):
     rng = np.random.default_rng(seed)
     n, nw, nu, nz, ny = 5, 3, 2, 4, 2
     G = GeneralizedPlant(
-        rng.normal(size=(n, n)), rng.normal(size=(n, nw)), rng.normal(size=(n, nu)),
-        rng.normal(size=(nz, n)), rng.normal(size=(ny, n)), np.zeros((nz, nw)),
-        rng.normal(size=(nz, nu)), rng.normal(size=(ny, nw)), np.zeros((ny, nu)),
+        rng.normal(size=(n, n)),
+        rng.normal(size=(n, nw)),
+        rng.normal(size=(n, nu)),
+        rng.normal(size=(nz, n)),
+        rng.normal(size=(ny, n)),
+        np.zeros((nz, nw)),
+        rng.normal(size=(nz, nu)),
+        rng.normal(size=(ny, nw)),
+        np.zeros((ny, nu)),
         tuple(f"w{i}" for i in range(nw)) + ("u0", "u1"),
         tuple(f"z{i}" for i in range(nz)) + ("y0", "y1"),
     )
@@ -74,7 +80,9 @@ def test_h2_equals_lqg_for_the_lqg_weights():
     L = kalman(A, B, C, np.eye(1), TAMU_RN * np.eye(1)).gain
     np.testing.assert_allclose(s.F, -K, rtol=1e-9)
     np.testing.assert_allclose(s.L, -L, rtol=1e-9)
-    np.testing.assert_allclose(s.controller.A, A - B @ K - L @ C, rtol=1e-9, atol=1e-9 * np.abs(A).max())
+    np.testing.assert_allclose(
+        s.controller.A, A - B @ K - L @ C, rtol=1e-9, atol=1e-9 * np.abs(A).max()
+    )
     T = closed_loop(G, s.controller)
     assert h2_norm(T) == pytest.approx(s.cost, rel=1e-6)
 
@@ -103,9 +111,17 @@ def test_bad_input_names_the_field():
 def test_equals_python_control_h2syn_when_slycot_is_installed():
     pytest.importorskip("slycot")
     rng = np.random.default_rng(7)
-    P = ct.ss(rng.normal(size=(4, 4)), rng.normal(size=(4, 4)), rng.normal(size=(4, 4)),
-              np.block([[np.zeros((2, 2)), rng.normal(size=(2, 2))],
-                        [rng.normal(size=(2, 2)), np.zeros((2, 2))]]))
+    P = ct.ss(
+        rng.normal(size=(4, 4)),
+        rng.normal(size=(4, 4)),
+        rng.normal(size=(4, 4)),
+        np.block(
+            [
+                [np.zeros((2, 2)), rng.normal(size=(2, 2))],
+                [rng.normal(size=(2, 2)), np.zeros((2, 2))],
+            ]
+        ),
+    )
     ours = h2syn(P, 2, 2)
     theirs = ct.h2syn(P, 2, 2)
     for w in (0.1, 1.0, 10.0):

@@ -98,13 +98,16 @@ class GeneralizedPlant:
         """
         A, B, C, D, dt = system_matrices(P, "P")
         if dt:
-            raise FieldError("P", "must be continuous (dt = 0): the synthesis is in continuous time")
+            raise FieldError(
+                "P", "must be continuous (dt = 0): the synthesis is in continuous time"
+            )
         for name, value, total in (("nmeas", nmeas, C.shape[0]), ("ncon", ncon, B.shape[1])):
             if isinstance(value, bool) or not isinstance(value, int | np.integer):
                 raise FieldError(name, f"must be an integer, got {value!r}")
             if not 0 < value < total:
                 raise FieldError(
-                    name, f"must be in 1 … {total - 1} (P has {total} of those signals), got {value}"
+                    name,
+                    f"must be in 1 … {total - 1} (P has {total} of those signals), got {value}",
                 )
         nw, nz = B.shape[1] - ncon, C.shape[0] - nmeas
         return cls(
@@ -165,7 +168,9 @@ class GeneralizedPlant:
                 "P.D22", "must be zero (a strictly proper measurement of u): loop-shift it first"
             )
         if need_d11_zero and np.any(self.D11 != 0):
-            raise FieldError("P.D11", "must be zero for this synthesis (w must not reach z directly)")
+            raise FieldError(
+                "P.D11", "must be zero for this synthesis (w must not reach z directly)"
+            )
         n_u, n_y = self.B2.shape[1], self.C2.shape[0]
         if np.linalg.matrix_rank(self.D12) < n_u:
             raise FieldError(
@@ -199,9 +204,7 @@ def closed_loop(P: GeneralizedPlant, K: ct.StateSpace) -> ct.StateSpace:
     C = np.hstack([P.C1 + P.D12 @ Dk @ P.C2, P.D12 @ Ck])
     D = P.D11 + P.D12 @ Dk @ P.D21
     nw, nz = P.B1.shape[1], P.C1.shape[0]
-    return ct.ss(
-        A, B, C, D, inputs=list(P.inputs[:nw]), outputs=list(P.outputs[:nz]), name="T_zw"
-    )
+    return ct.ss(A, B, C, D, inputs=list(P.inputs[:nw]), outputs=list(P.outputs[:nz]), name="T_zw")
 
 
 def lqg_plant(
@@ -258,4 +261,3 @@ def lqg_plant(
         tuple(f"w[{i}]" for i in range(ng)) + tuple(f"v[{i}]" for i in range(p)) + u_names,
         tuple(f"z_x[{i}]" for i in range(n)) + tuple(f"z_u[{i}]" for i in range(m)) + y_names,
     )
-

@@ -5,7 +5,8 @@ column rank, D21 of full row rank and the rank conditions on the imaginary axis 
 Khargonekar & Francis, "State-space solutions to standard H2 and H∞ control problems", IEEE
 Transactions on Automatic Control 34(8), 1989, 831–847, Theorem 3; with the cross terms
 D12ᵀC1 and B1D21ᵀ and general D12ᵀD12, D21D21ᵀ kept, as in Zhou, Doyle & Glover, *Robust and
-Optimal Control*, Prentice Hall, 1996, Chapters 16–17), a compensator with :math:`\|T_{zw}\|_\infty < \gamma` exists iff
+Optimal Control*, Prentice Hall, 1996, Chapters 16–17), a compensator with
+:math:`\|T_{zw}\|_\infty < \gamma` exists iff
 
 1. the Riccati equation
    :math:`A^TX + XA - (XB + S_1)\,\mathcal R_1^{-1}(B^TX + S_1^T) + C_1^TC_1 = 0`, with
@@ -131,8 +132,9 @@ def _riccati(
     lam = np.linalg.eigvalsh(X)
     if lam.size and lam.min() < -1e-9 * max(1.0, float(np.abs(lam).max())):
         raise InfeasibleGamma(
-            "gamma", f"{what}: the stabilizing solution is not positive semi-definite "
-            f"(eigenvalue {lam.min():.3g})"
+            "gamma",
+            f"{what}: the stabilizing solution is not positive semi-definite "
+            f"(eigenvalue {lam.min():.3g})",
         )
     return np.asarray(X, float)
 
@@ -193,7 +195,7 @@ def hinf_central(P: GeneralizedPlant, gamma: float) -> HinfCentral:
         outputs=list(P.control_names),
         name="hinf",
     )
-    return HinfCentral(controller, g, X, Y, F, L)
+    return HinfCentral(controller, g, X, Y, np.asarray(F, float), np.asarray(L, float))
 
 
 @dataclass(frozen=True)

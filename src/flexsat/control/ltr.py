@@ -48,7 +48,7 @@ if TYPE_CHECKING:
     import control as ct
     from flexsat.control.linear_form import ChannelItems
     from flexsat.control.lqr import RiccatiSolution
-    from flexsat.units import QuantityArrayLike
+    from flexsat.units import FloatArray, QuantityArrayLike
 
 __all__ = ["LTRController"]
 
@@ -71,6 +71,7 @@ class LTRController(StateSpaceCompensator):
     q: float
     regulator: RiccatiSolution
     filter: RiccatiSolution
+    plant_matrices: tuple[FloatArray, FloatArray, FloatArray]
 
     @classmethod
     def design(
@@ -139,7 +140,6 @@ class LTRController(StateSpaceCompensator):
         (negative-feedback convention of :mod:`~flexsat.analysis.frequency_domain`), inputs and
         outputs named after the commands."""
         import control as ct
-
         from flexsat.control.state_space_export import channel_labels
 
         a, b, _ = self.plant_matrices
