@@ -29,6 +29,7 @@ def scalar_plant(a):
     return ct.ss(a, [[1.0, 0.0, 1.0]], [[1.0], [0.0], [1.0]], [[0, 0, 0], [0, 0, 1], [0, 1, 0]])
 
 
+@pytest.mark.numerics
 @pytest.mark.parametrize("a", [-1.0, 0.0, 2.0])
 def test_scalar_cost_is_the_closed_form(a):
     """Both Riccati equations read 2aX − X² + 1 = 0, X = Y = a + √(a² + 1), F = L = −X, and the
@@ -40,6 +41,7 @@ def test_scalar_cost_is_the_closed_form(a):
     np.testing.assert_allclose(s.F, [[-X]], rtol=1e-13)
 
 
+@pytest.mark.numerics
 @pytest.mark.parametrize("seed", range(5))
 def test_achieved_norm_equals_cost_on_random_plants_with_cross_terms(seed):
     rng = np.random.default_rng(seed)
@@ -69,6 +71,7 @@ def test_achieved_norm_equals_cost_on_random_plants_with_cross_terms(seed):
             assert h2_norm(Tp) > s.cost
 
 
+@pytest.mark.numerics
 def test_h2_equals_lqg_for_the_lqg_weights():
     """With z = [Q^½x; R^½u], w = [Qn^½ w; Rn^½ v] the H2 compensator is the LQG one:
     F = −K_lqr, L = −L_kalman (same Riccati equations, solved by the same solver: to the

@@ -50,6 +50,7 @@ def random_plant(seed):
     )
 
 
+@pytest.mark.numerics
 @pytest.mark.parametrize("a", [-1.0, 0.5, 2.0])
 def test_scalar_gamma_opt_is_the_closed_form(a):
     """ẋ = a x + w1 + u, z = [x; u], y = x + w2: X∞ = Y∞ solve (γ⁻² − 1)X² + 2aX + 1 = 0 and
@@ -62,6 +63,7 @@ def test_scalar_gamma_opt_is_the_closed_form(a):
     assert s.gamma_lower * (1 - SLACK) <= s.achieved <= s.gamma * (1 + SLACK)
 
 
+@pytest.mark.numerics
 @pytest.mark.parametrize("seed", range(4))
 def test_achieved_norm_is_inside_the_bracket_on_random_plants(seed):
     G = random_plant(seed)
@@ -78,6 +80,7 @@ def test_achieved_norm_is_inside_the_bracket_on_random_plants(seed):
         assert hinf_norm(Tg).value < g
 
 
+@pytest.mark.numerics
 def test_tamu_hub_norm_matches_gamma_and_beats_h2():
     """On the TAMU LQG weights the H∞ design reaches its γ, and no compensator (the H2 one
     included) does better than γ_lower."""
