@@ -26,11 +26,12 @@ transformation
       C_1 + D_{12} D_k C_2 & D_{12} C_k & D_{11} + D_{12} D_k D_{21}
     \end{array}\right]
 
-(Zhou, Doyle & Glover, *Robust and Optimal Control*, Prentice Hall, 1996, §10.1).
+(Zhou, Doyle & Glover, *Robust and Optimal Control*, Prentice Hall, 1996, on linear fractional
+transformations).
 
 :func:`lqg_plant` builds the generalized plant whose H2-optimal compensator is the LQG
-compensator of weights Q, R and noise intensities Qn, Rn (Doyle et al. 1989 §III; Zhou, Doyle &
-Glover §14.5): :math:`z = [Q^{1/2}x;\ R^{1/2}u]`, :math:`w = [w_p; v]`,
+compensator of weights Q, R and noise intensities Qn, Rn (Doyle et al. 1989; Zhou, Doyle &
+Glover 1996, on H2 control): :math:`z = [Q^{1/2}x;\ R^{1/2}u]`, :math:`w = [w_p; v]`,
 :math:`B_1 = [G Q_n^{1/2},\ 0]`, :math:`D_{21} = [0,\ R_n^{1/2}]`; then
 :math:`\|T_{zw}\|_2^2` is the LQG cost :math:`\lim E[x^TQx + u^TRu]`.
 """
@@ -160,8 +161,8 @@ class GeneralizedPlant:
         )
 
     def require_regular(self, need_d11_zero: bool) -> None:
-        """The standing assumptions of the Riccati solutions (Doyle et al. 1989, A1–A4 in the
-        form of Zhou, Doyle & Glover §14.2/§16.2): D22 = 0, D12 of full column rank, D21 of full
+        """The standing assumptions of the Riccati solutions (Doyle et al. 1989; Zhou,
+        Doyle & Glover 1996): D22 = 0, D12 of full column rank, D21 of full
         row rank (and D11 = 0 when asked), each failure a FieldError naming the block."""
         if np.any(self.D22 != 0):
             raise FieldError(

@@ -4,7 +4,7 @@ For the plant of :mod:`~flexsat.control.generalized_plant` with D11 = 0, D22 = 0
 column rank and D21 of full row rank, and (A, B2) stabilizable, (C2, A) detectable, with no
 uncontrollable/unobservable modes on the imaginary axis in the regulator and filter problems
 (Doyle, Glover, Khargonekar & Francis, "State-space solutions to standard H2 and H∞ control
-problems", IEEE Transactions on Automatic Control 34(8), 1989, 831–847, §III; in the form with
+problems", IEEE Transactions on Automatic Control 34(8), 1989, 831–847; in the form with
 cross terms of Zhou, Doyle & Glover, *Robust and Optimal Control*, Prentice Hall, 1996,
 Chapter 14), the unique H2-optimal compensator is
 

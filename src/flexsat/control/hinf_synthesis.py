@@ -3,7 +3,7 @@ r"""H∞ suboptimal output feedback by the two-Riccati formulas, with γ found b
 For the plant of :mod:`~flexsat.control.generalized_plant` with D11 = 0, D22 = 0, D12 of full
 column rank, D21 of full row rank and the rank conditions on the imaginary axis (Doyle, Glover,
 Khargonekar & Francis, "State-space solutions to standard H2 and H∞ control problems", IEEE
-Transactions on Automatic Control 34(8), 1989, 831–847, Theorem 3; with the cross terms
+Transactions on Automatic Control 34(8), 1989, 831–847; with the cross terms
 D12ᵀC1 and B1D21ᵀ and general D12ᵀD12, D21D21ᵀ kept, as in Zhou, Doyle & Glover, *Robust and
 Optimal Control*, Prentice Hall, 1996, Chapters 16–17), a compensator with
 :math:`\|T_{zw}\|_\infty < \gamma` exists iff
