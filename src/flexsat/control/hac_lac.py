@@ -12,11 +12,11 @@ which only removes energy (:math:`\dot E = -\dot y_c^T G \dot y_c \le 0`) and so
 any gain and any model error that keeps the pairs collocated; for small gains each mode i
 gains the damping :math:`\Delta\zeta_i \approx \phi_i^T B G B^T \phi_i / (2\omega_i)`
 (first-order perturbation of the undamped modes, Aubrun 1980). The high-authority controller
-(HAC) is then designed on the LAC-damped plant :math:`A_{LAC} = A - B_{LAC}\,G\,C_{\dot y}`: the modes it does not control
-(spillover) and the modal frequencies it gets wrong now carry damping, which is what makes the
-HAC robust (Aubrun & Margulies, "Low-authority control synthesis for large space structures",
-NASA CR-3495, 1982; Wie, *Space Vehicle Dynamics and Control*, 2nd ed., AIAA, 2008, on collocated
-rate feedback and flexible-structure control).
+(HAC) is then designed on the LAC-damped plant :math:`A_{LAC} = A - B_{LAC}\,G\,C_{\dot y}`:
+the modes it does not control (spillover) and the modal frequencies it gets wrong now carry
+damping, which is what makes the HAC robust (Aubrun & Margulies, "Low-authority control
+synthesis for large space structures", NASA CR-3495, 1982; Wie, *Space Vehicle Dynamics and
+Control*, 2nd ed., AIAA, 2008, on collocated rate feedback and flexible-structure control).
 
 Here the HAC is an LQG compensator (:func:`~flexsat.control.lqr.lqr`,
 :func:`~flexsat.control.estimation.kalman`) on the LAC-damped plant from the HAC measurements to
