@@ -178,7 +178,8 @@ def _assign(open_loop: ComplexArray, closed: ComplexArray) -> ComplexArray:
             "ones (an overdamped mode): ω^c ζ^c is undefined; lower the gain (raise r)",
         )
     rows, cols = linear_sum_assignment(np.abs(open_loop[:, None] - upper[None, :]))
-    return upper[cols[np.argsort(rows)]]
+    out: ComplexArray = upper[cols[np.argsort(rows)]]
+    return out
 
 
 def modal_lqr(

@@ -156,12 +156,6 @@ class FrameSpec:
                 object.__setattr__(self, name, require_positive_scalar(getattr(self, name), name))
 
 
-def _edges(centre: FloatArray, start: FloatArray, size: int, s: FloatArray) -> FloatArray:
-    """Φ((k − c)/s) at the pixel edges k = start .. start + size; shape (..., size + 1)."""
-    k = start[..., None] + np.arange(size + 1)
-    return ndtr((k - centre[..., None]) / s[..., None])
-
-
 def spot_model(
     x: npt.ArrayLike, y: npt.ArrayLike, flux: npt.ArrayLike, sigma: npt.ArrayLike, shape: Any
 ) -> FloatArray:
@@ -212,7 +206,7 @@ def render_frame(
     frame = mean + rng.standard_normal(sp.shape) * np.sqrt(var)
     if sp.quantum is not None:
         frame = np.round(frame / sp.quantum) * sp.quantum
-    return frame
+    return np.asarray(frame, dtype=float)
 
 
 # ----------------------------------------------------------------------------------------------
