@@ -193,7 +193,7 @@ CHECKS += [
 
 # -- Att. 4 Table 3: LQR (Eq. 33) with r tuned to ω_i ζ_i ≥ T_i (flexsat.control.r_tuning) -------
 #: symmetric three-wheel layouts (Att. 4: wheels "only at symmetric locations") that reach the
-#: targets; Fig. 2's ten layouts are lost (docs/identification.md, "r-tuning")
+#: targets; Fig. 2's ten layouts are lost (docs/placement.md, "LQR with r tuned")
 R_TUNING_LAYOUTS = (
     ("3RY", "7RX", "9RX"),
     ("3RX", "7RY", "9RY"),
