@@ -24,6 +24,7 @@ def test_grid_model_layout_and_damping(model):
     assert w[0] / (2 * np.pi) == pytest.approx(0.80866, abs=1e-5)
 
 
+@pytest.mark.numerics
 def test_grid_sensitivities_match_central_differences(model):
     p = np.array([0.9, 1.05, 0.97])
     w = 2 * np.pi * FRF_HZ[::8]
@@ -38,6 +39,7 @@ def test_grid_sensitivities_match_central_differences(model):
         np.testing.assert_allclose(dom[:, k], fd_o, rtol=1e-7, atol=1e-7 * np.abs(fd_o).max())
 
 
+@pytest.mark.numerics
 def test_noise_free_grid_frfs_recover_perturbed_stiffness_to_1e_6(model):
     truth = np.array([1.04, 0.97, 1.02])  # within the plain Gauss-Newton basin (docs)
     res = frontal_assault(model, simulate_grid_frf(model, truth), np.ones(3))

@@ -16,6 +16,7 @@ def _closed_form(w, z, b, r):
     return c0, c1, (c0 - a0) / b, (c1 - a1) / b
 
 
+@pytest.mark.numerics
 def test_single_mode_gains_and_poles_match_the_symmetric_root_locus():
     w, z, b, r = 2.0, 0.01, 0.7, 0.3
     design = modal_lqr([w], [z], [[b]], r)
@@ -26,6 +27,7 @@ def test_single_mode_gains_and_poles_match_the_symmetric_root_locus():
     np.testing.assert_allclose([-2 * lam.real, abs(lam) ** 2], [c1, c0], rtol=1e-12)
 
 
+@pytest.mark.numerics
 def test_tuned_r_puts_the_single_mode_on_its_target():
     w, z, b, target = 2.0, 0.01, 0.7, 0.25
     res = tune_r([w], [z], [[b]], targets=[target], rtol=1e-12)
@@ -51,6 +53,7 @@ def test_tuned_r_is_the_largest_feasible_one():
     assert all(r <= res.r * (1 + 1e-12) for r, m in res.history if m >= 0)
 
 
+@pytest.mark.numerics
 def test_condition_number_of_the_undamped_open_loop_is_omega_max():
     w = np.array([1.5, 3.0, 40.0])
     # r = 1e12: the gain is ~1e-12, the closed loop is the open loop to ~1e-10
@@ -70,3 +73,12 @@ def test_unreachable_target_and_bad_inputs_name_the_field():
         tune_r([1.0, 2.0], 0.01, np.ones((2, 1)), targets=[0.2], modes=[5])
     with pytest.raises(FieldError, match="omega"):
         modal_lqr([0.0], 0.01, [[1.0]], 1.0)
+
+
+def test_frequencies_and_targets_take_units():
+    d = np.array([[0.7]])
+    a = tune_r([2.0], 0.01, d, targets=[0.25])
+    b = tune_r(["2 rad/s"], 0.01, d, targets=["0.25 rad/s"])
+    assert a.r == b.r
+    with pytest.raises(FieldError, match="targets"):
+        tune_r([2.0], 0.01, d, targets=["0.25 m"])

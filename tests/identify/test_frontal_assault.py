@@ -46,6 +46,7 @@ def _data(model, p, noise=0.0, fnoise=0.0, rng=None, n_freq=3):
     return FRFData(w, g, sig, om, osig)
 
 
+@pytest.mark.numerics
 def test_frf_is_the_direct_solution_of_the_damped_equations():
     model = _chain()
     p = np.array([0.9, 1.1])
@@ -58,6 +59,7 @@ def test_frf_is_the_direct_solution_of_the_damped_equations():
     )
 
 
+@pytest.mark.numerics
 def test_sensitivities_match_central_differences():
     model = _chain()
     p = np.array([0.9, 1.1])
@@ -80,6 +82,7 @@ def test_trapezoid_weights_integrate_exactly_on_linear_functions():
     assert q @ (2 * w + 1) == pytest.approx(3.0**2 + 3.0, rel=1e-14)
 
 
+@pytest.mark.numerics
 def test_noise_free_data_recover_the_parameters():
     model = _chain()
     truth = np.array([1.05, 0.96])
@@ -147,3 +150,10 @@ def test_bad_inputs_name_the_field():
     )
     with pytest.raises(FieldError, match="rank"):
         frontal_assault(zero, data, [1.0, 1.0, 1.0])
+
+
+def test_data_frequencies_take_units():
+    model = _chain()
+    d = _data(model, np.ones(2))
+    hz = FRFData([f"{w / (2 * np.pi)} Hz" for w in d.omega], d.frf, d.frf_sigma)
+    np.testing.assert_allclose(hz.omega, d.omega, rtol=1e-14)

@@ -43,6 +43,7 @@ def _chi2_bounds(dof, p=1e-3):
     return chi2.ppf(p / 2, dof), chi2.ppf(1 - p / 2, dof)
 
 
+@pytest.mark.numerics
 def test_spot_integrates_to_its_flux_and_its_first_moment_is_the_centre():
     img = spot_model([20.3], [15.8], 1000.0, 1.0, (40, 40))
     # Φ differences telescope: the 6σ+1 window holds all but 2e-9 of the flux
@@ -54,6 +55,7 @@ def test_spot_integrates_to_its_flux_and_its_first_moment_is_the_centre():
     assert (img * (rows + 0.5)).sum() / img.sum() == pytest.approx(15.8, abs=1e-7)
 
 
+@pytest.mark.numerics
 def test_spot_jacobian_matches_central_differences():
     theta = np.array([[7.3, 6.6, 900.0, 1.3, 40.0, 0.7, -0.4]])
     c0, r0 = np.array([1.0]), np.array([0.0])

@@ -140,7 +140,7 @@ class RTuning:
 def _modal_inputs(
     omega: npt.ArrayLike, zeta: npt.ArrayLike, d_bar: npt.ArrayLike
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    w = require_finite(omega, "omega").reshape(-1)
+    w = require_finite(omega, "omega", "rad/s").reshape(-1)
     if w.size == 0 or np.any(w <= 0):
         raise FieldError("omega", "must be one or more natural frequencies > 0 (rad/s)")
     z = np.broadcast_to(require_finite(zeta, "zeta"), w.shape).astype(float)
@@ -190,7 +190,8 @@ def modal_lqr(
     Parameters
     ----------
     omega, zeta : array_like (n,)
-        Natural frequencies (rad/s, > 0) and damping ratios (a scalar broadcasts).
+        Natural frequencies (rad/s, > 0; or a Quantity / unit string) and damping ratios (a
+        scalar broadcasts).
     d_bar : array_like (n, m)
         Modal input matrix Φᵀ D.
     r : float
@@ -235,7 +236,7 @@ def tune_r(
     omega, zeta, d_bar
         The modal model, as :func:`modal_lqr`.
     targets : sequence of float
-        T_i, rad/s (default Att. 4's 0.2, 0.2, 0.25).
+        T_i, rad/s or a Quantity (default Att. 4's 0.2, 0.2, 0.25).
     modes : sequence of int, optional
         0-based mode numbers the targets apply to (default the first ``len(targets)``).
     r_range : (float, float)
@@ -251,7 +252,7 @@ def tune_r(
         actuators cannot move), naming the mode that falls short.
     """
     w, z, d = _modal_inputs(omega, zeta, d_bar)
-    t = require_finite(targets, "targets").reshape(-1)
+    t = require_finite(targets, "targets", "rad/s").reshape(-1)
     if t.size == 0 or np.any(t <= 0):
         raise FieldError("targets", "must be one or more targets T_i > 0 (rad/s)")
     idx = tuple(range(t.size)) if modes is None else tuple(int(i) for i in modes)

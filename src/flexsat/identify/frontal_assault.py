@@ -156,7 +156,7 @@ class FrontalAssaultModel:
     ) -> tuple[ComplexArray, ComplexArray]:
         """G (len(ω), s, m) and ∂G/∂p (len(ω), s, m, P) (module docstring; empty if not
         ``sensitivity``)."""
-        w = require_finite(omega, "omega").reshape(-1)
+        w = require_finite(omega, "omega", "rad/s").reshape(-1)
         k = self.stiffness(p)
         s_out, m_in = self.H.shape[0], self.B.shape[1]
         g = np.empty((w.size, s_out, m_in), complex)
@@ -206,7 +206,7 @@ class FRFData:
     Parameters
     ----------
     omega : array_like (K,)
-        Measurement frequencies, rad/s, increasing.
+        Measurement frequencies, rad/s (or a Quantity / unit string: Hz converted), increasing.
     frf : array_like (K, s, m) complex
         Ḡ(ω_k): outputs × inputs of the model's H and B.
     frf_sigma : float or array_like (K, s, m)
@@ -224,7 +224,7 @@ class FRFData:
     frequency_sigma: FloatArray = field(default_factory=lambda: np.ones(0))
 
     def __post_init__(self) -> None:
-        w = require_finite(self.omega, "omega").reshape(-1)
+        w = require_finite(self.omega, "omega", "rad/s").reshape(-1)
         if w.size < 2 or np.any(np.diff(w) <= 0) or w[0] < 0:
             raise FieldError("omega", "must be two or more increasing frequencies >= 0 (rad/s)")
         g = np.asarray(self.frf)
@@ -235,9 +235,9 @@ class FRFData:
         sig = np.broadcast_to(require_finite(self.frf_sigma, "frf_sigma"), g.shape).astype(float)
         if np.any(sig <= 0):
             raise FieldError("frf_sigma", "standard deviations must be > 0")
-        om = require_finite(self.frequencies, "frequencies").reshape(-1)
+        om = require_finite(self.frequencies, "frequencies", "rad/s").reshape(-1)
         so = np.broadcast_to(
-            require_finite(self.frequency_sigma, "frequency_sigma"), om.shape
+            require_finite(self.frequency_sigma, "frequency_sigma", "rad/s"), om.shape
         ).astype(float)
         if om.size and (np.any(om <= 0) or np.any(so <= 0)):
             raise FieldError("frequencies", "frequencies and their sigmas must be > 0 (rad/s)")

@@ -639,7 +639,7 @@ def centroid_crb_continuum(flux: float, sigma_px: float, noise: float) -> float:
 # cameras
 # ----------------------------------------------------------------------------------------------
 def _pitch(pixel_size: npt.ArrayLike) -> FloatArray:
-    p = require_positive(pixel_size, "pixel_size").reshape(-1)
+    p = require_positive(pixel_size, "pixel_size", "m").reshape(-1)
     if p.size not in (1, 2):
         raise FieldError("pixel_size", f"must be a scalar or (px, py), got {p.size} values")
     return np.broadcast_to(p, (2,)).astype(float)
