@@ -71,7 +71,7 @@ image positions (nearest neighbour, one blob per target).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -335,6 +335,10 @@ class BlobSet:
         (level + k σ; the frame is thresholded k σ above the map itself).
     method : str
         "gaussian" or "moment".
+    binary_centres : ndarray (N, 2)
+        The area centroid of each thresholded component (OpenCV's), the VP-110's kind of
+        measurement: every pixel above the threshold counts once. No first-order prediction
+        comes with it (it quantizes); docs/identification.md reports its measured scatter.
     """
 
     centres: FloatArray
@@ -347,24 +351,40 @@ class BlobSet:
     noise: float
     threshold: float
     method: str
+    binary_centres: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
 
     def __len__(self) -> int:
         return int(self.centres.shape[0])
 
 
-def _components(mask: npt.NDArray[np.bool_]) -> tuple[int, npt.NDArray[np.int32], FloatArray]:
-    """8-connected components by OpenCV: (count incl. background, labels, stats)."""
+def _cv2() -> Any:
+    """OpenCV, or an ImportError that says how to install it."""
     try:
         import cv2
     except ImportError as exc:  # pragma: no cover - the extra is in dev
         raise ImportError(
-            "blob extraction labels connected components with OpenCV: "
+            "blob extraction uses OpenCV (connected components, dilation): "
             "pip install 'flexsat[opencv]' (opencv-python-headless)"
         ) from exc
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(
+    return cv2
+
+
+def _components(
+    mask: npt.NDArray[np.bool_],
+) -> tuple[int, npt.NDArray[np.int32], FloatArray, FloatArray]:
+    """8-connected components by OpenCV: (count incl. background, labels, stats, centroids in
+    this module's pixel coordinates)."""
+    cv2 = _cv2()
+    n, labels, stats, cents = cv2.connectedComponentsWithStats(
         mask.astype(np.uint8), connectivity=8, ltype=cv2.CV_32S
     )
-    return int(n), np.asarray(labels, dtype=np.int32), np.asarray(stats, dtype=float)
+    # OpenCV puts pixel (i, j) at (x, y) = (j, i); here its centre is at (j + ½, i + ½)
+    return (
+        int(n),
+        np.asarray(labels, dtype=np.int32),
+        np.asarray(stats, dtype=float),
+        np.asarray(cents, dtype=float) + 0.5,
+    )
 
 
 def _tile_medians(img: FloatArray, keep: npt.NDArray[np.bool_], tile: int) -> FloatArray:
@@ -495,10 +515,10 @@ def extract_blobs(
             else float(np.sqrt(max(sig**2 - max(float(np.median(bg)), 0.0) / g_e, 1e-6 * sig**2)))
         )
     threshold = lev + kk * sig
-    n, labels, stats = _components(img - bg > kk * sig)
+    n, labels, stats, binary = _components(img - bg > kk * sig)
     rows, cols = img.shape
-    peaks, areas = [], []
-    import cv2
+    peaks, areas, kept = [], [], []
+    cv2 = _cv2()
 
     for lab in range(1, n):
         area = int(stats[lab, cv2.CC_STAT_AREA])
@@ -515,6 +535,7 @@ def extract_blobs(
             continue
         peaks.append((r, c))
         areas.append(area)
+        kept.append(lab)
     size = 2 * h + 1
     if not peaks:
         empty = np.zeros((0,))
@@ -560,6 +581,7 @@ def extract_blobs(
             sig,
             threshold,
             method,
+            binary[kept],
         )
     theta = np.column_stack(
         [
@@ -586,6 +608,7 @@ def extract_blobs(
         sig,
         threshold,
         method,
+        binary[kept],
     )
 
 
