@@ -25,7 +25,7 @@ is regulated by the LQR of Eq. (33) with the modal energy as the state weight,
 Eq. (32): :math:`\omega_i^c = \mathrm{Im}\,\lambda_i`,
 :math:`\zeta_i^c = -\mathrm{Re}\,\lambda_i / |\lambda_i|`, so
 :math:`\omega_i^c\zeta_i^c = -\mathrm{Re}\,\lambda_i\,\mathrm{Im}\,\lambda_i / |\lambda_i|`
-(within ζ²/2 of the decay rate −Re λ).
+(a relative ζ²/2 below the decay rate −Re λ).
 
 The paper does not say how r is tuned. :func:`tune_r` returns the *largest* r that meets every
 target — the cheapest design, the one whose binding target holds with equality — found by a
