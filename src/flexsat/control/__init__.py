@@ -69,6 +69,7 @@ from flexsat.control.ppf_optimization import (
     restore_eigenvalue_constraints,
     scipy_ppf_gains,
 )
+from flexsat.control.r_tuning import ModalLQR, RTuning, modal_lqr, tune_r
 from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.control.state_space_compensator import StateSpaceCompensator
 from flexsat.control.trajectory_linearization import TrajectoryLinearization, attitude_error
@@ -107,6 +108,10 @@ __all__ = [
     "QuaternionPD",
     "RefinedEstimator",
     "RiccatiSolution",
+    "ModalLQR",
+    "RTuning",
+    "modal_lqr",
+    "tune_r",
     "ScheduledStateFeedback",
     "StateSpaceCompensator",
     "TrajectoryLinearization",
