@@ -93,6 +93,7 @@ __all__ = [
     "sweep_stability_margin",
 ]
 
+ComplexArray = npt.NDArray[np.complex128]
 _SAFETY = 1e-9  # relative rounding margin of every certified inequality
 
 
@@ -329,7 +330,7 @@ def _poly_disc(
     return np.asarray(np.polyval(coef, 1j * wm), complex), 0.5 * (w2 - w1) * slope
 
 
-def _edge_max(v: FloatArray, d0: FloatArray, e: FloatArray) -> FloatArray:
+def _edge_max(v: ComplexArray, d0: ComplexArray, e: ComplexArray) -> FloatArray:
     r"""max over t in [0, 1] of Re(v d)/|d|², d = d0 + t e (broadcast arrays)."""
     a = (v * d0).real
     b = (v * e).real
@@ -359,7 +360,7 @@ def _edge_max(v: FloatArray, d0: FloatArray, e: FloatArray) -> FloatArray:
 
 def _pentagon(
     w1: FloatArray, w2: FloatArray, lo: FloatArray, hi: FloatArray, zlo: FloatArray, zhi: FloatArray
-) -> FloatArray:
+) -> ComplexArray:
     """Vertices (N, modes, 5) of the convex pentagon holding d_i(jω) (module docstring)."""
     w1, w2 = w1[:, None], w2[:, None]
     A1, A2 = lo**2, hi**2
@@ -372,7 +373,7 @@ def _pentagon(
     )
 
 
-def _segment_distance(p: FloatArray, q: FloatArray) -> FloatArray:
+def _segment_distance(p: ComplexArray, q: ComplexArray) -> FloatArray:
     """Distance from 0 to the segments [p, q]."""
     e = q - p
     ee = np.abs(e) ** 2
