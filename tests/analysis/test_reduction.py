@@ -60,7 +60,11 @@ def five_plants():
     w = np.array([1.0, 2.7, 6.1, 11.0, 19.0, 30.0])
     n = w.size
     beam = modal_plant(
-        w, np.full(n, 0.01), rng.standard_normal((n, 2)), rng.standard_normal((3, n)), np.zeros((3, n))
+        w,
+        np.full(n, 0.01),
+        rng.standard_normal((n, 2)),
+        rng.standard_normal((3, n)),
+        np.zeros((3, n)),
     )
     rigid = modal_plant(
         w,
@@ -129,7 +133,9 @@ def test_residualisation_matches_dc_gain_and_truncation_matches_infinity():
     spa = balanced_reduction(plant, order, "residualize").system
     bt = balanced_reduction(plant, order, "truncate").system
     g0 = frequency_response(plant, omega_rad_s=np.array([0.0])).values
-    np.testing.assert_allclose(frequency_response(spa, omega_rad_s=np.array([0.0])).values, g0, rtol=1e-9)
+    np.testing.assert_allclose(
+        frequency_response(spa, omega_rad_s=np.array([0.0])).values, g0, rtol=1e-9
+    )
     np.testing.assert_allclose(bt.D, plant.D)
     assert abs(frequency_response(bt, omega_rad_s=np.array([0.0])).values - g0).max() > 1e-6
 
@@ -142,7 +148,10 @@ def test_rigid_modes_kept_exactly():
     eig = np.linalg.eigvals(red.system.A)
     assert np.sum(np.abs(eig) < 1e-9) == 2
     w = np.concatenate([[1e-4, 1e-2], np.geomspace(0.1, 100, 400)])
-    diff = frequency_response(plant, omega_rad_s=w).values - frequency_response(red.system, omega_rad_s=w).values
+    diff = (
+        frequency_response(plant, omega_rad_s=w).values
+        - frequency_response(red.system, omega_rad_s=w).values
+    )
     assert np.linalg.norm(diff, 2, axis=(1, 2)).max() <= red.error_bound * (1 + 1e-6)
     assert split_stable(plant).unstable[0].shape == (2, 2)
 
@@ -174,12 +183,25 @@ def test_modal_truncation_keeps_the_largest_and_compare():
     idx = modal_indices(modal_form(split_stable(plant).stable), "hankel")
     assert sorted(red.kept_modes) == sorted(np.argsort(-idx)[:3].tolist())
     err = reduction_error(red)
-    w = np.unique(np.concatenate([np.geomspace(0.1, 100, 3000), modal_form(split_stable(plant).stable).frequencies_rad_s]))
-    diff = frequency_response(plant, omega_rad_s=w).values - frequency_response(red.system, omega_rad_s=w).values
+    w = np.unique(
+        np.concatenate(
+            [np.geomspace(0.1, 100, 3000), modal_form(split_stable(plant).stable).frequencies_rad_s]
+        )
+    )
+    diff = (
+        frequency_response(plant, omega_rad_s=w).values
+        - frequency_response(red.system, omega_rad_s=w).values
+    )
     grid = np.linalg.norm(diff, 2, axis=(1, 2)).max()
     assert grid <= err * (1 + 1e-8) and err <= 1.001 * grid
     table = compare_reductions(plant, 3)
-    assert set(table) == {"modal:modal_cost", "modal:h2", "modal:hankel", "balanced_truncation", "residualization"}
+    assert set(table) == {
+        "modal:modal_cost",
+        "modal:h2",
+        "modal:hankel",
+        "balanced_truncation",
+        "residualization",
+    }
     bt = table["balanced_truncation"]
     assert bt[1] <= bt[0].error_bound
 
@@ -188,7 +210,9 @@ def test_static_correction_matches_dc():
     plant, _ = PLANTS["modal_mimo"]
     red = modal_truncation(plant, 2, "h2", static_correction=True).system
     g0 = frequency_response(plant, omega_rad_s=np.array([0.0])).values
-    np.testing.assert_allclose(frequency_response(red, omega_rad_s=np.array([0.0])).values, g0, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(
+        frequency_response(red, omega_rad_s=np.array([0.0])).values, g0, rtol=1e-9, atol=1e-12
+    )
 
 
 @pytest.mark.parametrize(
