@@ -145,7 +145,7 @@ def test_tamu_plus_minus_ten_percent_on_ten_modes():
 
 def test_sensitivity_bound_on_random_loops():
     """On loops whose |S| peak is set by a mode, the certified bound over ±5 % is never below
-    the sweep's peak and within the stated factor 1.5 of it."""
+    the sweep's peak and within the stated factor 1.2 of it (observed 1.03–1.05)."""
     for seed, P, K in stable_random_loops(2):
         loop = modal_loop(P, K)
         box = ParameterBox.uniform(loop, 0.05, 0.05)
@@ -154,21 +154,13 @@ def test_sensitivity_bound_on_random_loops():
             continue
         sw = sweep(loop, box, n_members=400, n_frequencies=4000)
         assert sw.sensitivity_peak <= cert.sensitivity_bound, seed
-        assert cert.sensitivity_bound <= 1.5 * sw.sensitivity_peak, seed
+        assert cert.sensitivity_bound <= 1.2 * sw.sensitivity_peak, seed
 
 
 def test_refusals_name_the_field():
     P, K = tamu_loop()
-    dyn = ct.ss(
-        [[-1.0]],
-        [[1.0, 0.0, 0.0]],
-        [[1.0]],
-        [[0.0, 0.0, 0.0]],
-        inputs=list(K.input_labels),
-        outputs=["torque"],
-    )
-    with pytest.raises(FieldError, match="static"):
-        modal_loop(P, dyn)
+    with pytest.raises(FieldError, match="continuous"):
+        modal_loop(P, ct.c2d(K, 0.01))
     # an overdamped (real) pole is not a lightly damped mode
     real = ct.ss([[-2.0]], [[1.0]], [[1.0]], 0, inputs=["u"], outputs=["q"])
     with pytest.raises(FieldError, match="real pole"):
@@ -176,3 +168,42 @@ def test_refusals_name_the_field():
     loop = modal_loop(P, K)
     with pytest.raises(FieldError, match="frequency"):
         ParameterBox.uniform(loop, 1.2)
+
+
+def lqg_on_two_modes():
+    """An LQG on a 2-mode modal truncation of TAMU, to be closed on the full 10-mode plant."""
+    from flexsat.analysis.reduction import modal_truncation
+    from flexsat.cases.tamu import tamu
+    from flexsat.control.estimation import kalman
+    from flexsat.control.lqr import lqr
+    from flexsat.dynamics.linear_model import plant_state_space
+
+    P = plant_state_space(tamu().model(), outputs=["theta", "tip_deflection"])
+    red = modal_truncation(P, 2, "h2").system
+    A, B, C = red.A, red.B, red.C
+    n = A.shape[0]
+    K = lqr(A, B, np.diag([100.0] + [1.0] * (n - 1)), np.eye(1)).gain
+    L = kalman(A, B, C, np.eye(1) * 10, np.diag([1e-6, 1e-4])).gain
+    law = ct.ss(A - B @ K - L @ C, L, -K, 0, inputs=list(P.output_labels), outputs=["torque"])
+    return P, law
+
+
+def test_dynamic_law_reproduces_the_loop_and_is_certified():
+    """A 6-state LQG: the modal form's |S| equals build_loop's (1e-7: the law's polynomials
+    come from eigenvalues, conditioning ~1e8 × eps), its closed-loop poles too; over ±10 % the
+    certified bound is never below the sweep's peak and within the stated factor 1.1 (observed
+    1.02)."""
+    P, law = lqg_on_two_modes()
+    loop = modal_loop(P, law)
+    ref = build_loop(P, law, "input")
+    w = np.geomspace(0.05, 5e3, 300)
+    S = np.abs(frequency_response(ref.sensitivity(), omega_rad_s=w).values[:, 0, 0])
+    nominal = (loop.omega0[None], loop.zeta0[None])
+    np.testing.assert_allclose(loop.sensitivity(w, *nominal)[0], S, rtol=1e-7)
+    p1 = np.sort_complex(np.linalg.eigvals(loop.closed_loop_matrices(*nominal)[0]))
+    np.testing.assert_allclose(p1, np.sort_complex(ref.poles), atol=1e-7 * np.abs(p1).max())
+    box = ParameterBox.uniform(loop, 0.1, 0.1)
+    cert = certify(loop, box)
+    sw = sweep(loop, box, n_members=400, n_frequencies=3000)
+    assert cert.stable and sw.all_stable
+    assert sw.sensitivity_peak <= cert.sensitivity_bound <= 1.1 * sw.sensitivity_peak

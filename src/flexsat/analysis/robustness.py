@@ -2,26 +2,30 @@ r"""Robust stability and sensitivity of a flexible loop over a box of modal freq
 
 The uncertain loop
 ------------------
-A continuous plant and a static law :math:`u = K y` with **one command** (a SISO loop at the
-plant input, any number of measurements). The plant's marginal part (rigid-body modes; kept
-exactly, :func:`~flexsat.analysis.reduction.split_stable`) is certain; each lightly damped mode
-i of its stable part is written in the companion coordinates of its 2 × 2 block, in which the
-command enters the acceleration only (possible for one input), so that its contribution to the
-loop is :math:`-K C_i (sI - A_i)^{-1} B_i = (\alpha_i + \beta_i s)/d_i(s)` with
-:math:`d_i(s) = s^2 + 2\zeta_i\omega_i s + \omega_i^2`: the mode shape (α_i, β_i) is fixed and
-:math:`(\omega_i, \zeta_i)` range over a box
+A continuous plant and a linear law :math:`u = K(s) y` (static or dynamic, e.g. an LQG
+compensator) with **one command** (a SISO loop at the plant input, any number of measurements).
+The plant's marginal part (rigid-body modes; kept exactly,
+:func:`~flexsat.analysis.reduction.split_stable`) and the law are certain; each lightly damped
+mode i of the plant's stable part is written in the companion coordinates of its 2 × 2 block, in
+which the command enters the acceleration only (possible for one input), so that its
+contribution to the plant is :math:`(C_{i0} + C_{i1}s)\,b_i / d_i(s)` with
+:math:`d_i(s) = s^2 + 2\zeta_i\omega_i s + \omega_i^2`: the mode shape
+(:math:`C_{i0}, C_{i1}, b_i`) is fixed and :math:`(\omega_i, \zeta_i)` range over a box
 :math:`\omega_i \in \omega_{i0}[1 - f_i, 1 + f_i]`, :math:`\zeta_i \in \zeta_{i0}[1 - g_i, 1 + g_i]`
 (the standard modal-parameter uncertainty of a structure; Gawronski, *Advanced Structural
 Dynamics and Active Control of Structures*, Springer, 2004, Ch. 2).
 
-With :math:`\chi_u` the characteristic polynomial of the marginal part and :math:`\chi_{cu}` that
-of the marginal part under the loop, the matrix determinant lemma gives the closed-loop
-characteristic polynomial :math:`\chi(s) = F(s)\prod_i d_i(s)`,
+With :math:`\chi = \chi_K \chi_u` the characteristic polynomial of the law and of the marginal
+part, :math:`\chi_c` that of the law closed on the marginal part, and
+:math:`N_K = \chi_K K` (polynomials; :math:`C\,\mathrm{adj}(sI - A)\,b = \det(sI - A + bC) -
+\det(sI - A)`), the return difference gives the closed-loop characteristic polynomial
+:math:`\chi_{cl}(s) = F(s)\prod_i d_i(s)` with
 
 .. math::
 
-    F(s) = \chi_{cu}(s) + \chi_u(s) \sum_i \frac{\alpha_i + \beta_i s}{d_i(s)},
-    \qquad S(s) = \frac{1}{1 + L(s)} = \frac{\chi_u(s)}{F(s)} .
+    F(s) = \chi_c(s) + \sum_i \frac{q_i(s)}{d_i(s)}, \quad
+    q_i = -\chi_u\, b_i\, N_K (C_{i0} + C_{i1} s), \qquad
+    S(s) = \frac{1}{1 + L(s)} = \frac{\chi(s)}{F(s)} .
 
 A guaranteed answer by zero exclusion
 -------------------------------------
@@ -31,9 +35,9 @@ The closed loop is stable for every member of the (connected) box iff it is for 
 change and :math:`d_i(j\omega) \ne 0` for ζ_i > 0). The frequency axis is covered by intervals
 :math:`[\omega_1, \omega_2]` and, on each, the value set is enclosed rigorously:
 
-* the certain polynomial and each mode's numerator :math:`q_i = \chi_u(\alpha_i + \beta_i s)`
-  lie in a disc about their value at the midpoint, of radius half-width × a bound of
-  :math:`|dq/d\omega|` (from the coefficients);
+* the certain polynomials and each mode's numerator :math:`q_i` lie in a disc about their
+  value at the midpoint (Taylor's theorem: the exact first derivative there and a bound of the
+  second from the coefficients);
 * :math:`d_i(j\omega) = (\omega_i^2 - \omega^2) + 2j\zeta_i\omega_i\omega` lies, for every ω of
   the interval and every member of the box, in a convex pentagon (right/left edges at
   :math:`\omega_{hi}^2 - \omega_1^2`, :math:`\omega_{lo}^2 - \omega_2^2`, top at
@@ -47,10 +51,13 @@ change and :math:`d_i(j\omega) \ne 0` for ζ_i > 0). The frequency axis is cover
 Support functions add under Minkowski sums, so if :math:`\sum_k h_k(u) < 0` for some direction u,
 0 lies outside the convex hull of the value set, hence outside the set: that interval is
 certified, and :math:`-\sum_k h_k(u)` is a lower bound of :math:`|F|` on it, so
-:math:`|S| \le \max|\chi_u| / (-\sum_k h_k(u))`. An interval that fails is bisected (a
-branch-and-bound on frequency). Beyond a frequency W where
-:math:`|L| \le \sum |q|/|\chi_u d|` is below 1/2 (each term decreasing in ω), |S| <= 2 and
-nothing can cross. Floating-point rounding is covered by a relative margin of 1e-9 on each test;
+:math:`|S| \le \max|\chi| / (-\sum_k h_k(u))`. An interval that fails is bisected (a
+branch-and-bound on frequency). Beyond a frequency W,
+:math:`|L| \le |\chi_c - \chi|/|\chi| + \sum_i |q_i|/(|\chi|\,|d_i|) \le 1/2` with coefficient
+bounds on the numerators, :math:`|\chi(j\omega)| \ge \prod_k(\omega - |r_k|)` and
+:math:`|d_i| \ge \omega^2 - \omega_{hi}^2` — a product of factors ω/(ω − a) and 1/(ω ± a),
+each decreasing — so |S| <= 2 there and nothing can cross. Floating-point rounding is covered
+by a relative margin of 1e-9 on each test;
 the frequency box of each mode is not split, so the bound's conservatism (the convex hull of
 each mode's value set) does not shrink with refinement — its ratio to the dense sweep is
 reported.
@@ -60,8 +67,10 @@ sampled member (vertices, random points and members with a mode tuned to each fr
 takes the eigenvalues of the whole batch at once (``numpy.linalg.eigvals`` on the stacked
 matrices), and |S| on a frequency grid.
 
-Scope: continuous loops with a static law and one command (PD, Lyapunov Laws I/II, full-state
-LQR on a modal plant); a dynamic law or a sampled loop is refused with its reason.
+Scope: continuous loops with one command (PD, Lyapunov Laws I/II, LQR, LQG compensators); a
+sampled-data loop, a second command or a real (overdamped) plant pole is refused with its
+reason. The law's polynomials come from eigenvalues (``numpy.poly``): fine for the compensators
+of reduced models (tens of states), not for a law of hundreds of states.
 """
 
 from __future__ import annotations
@@ -99,51 +108,56 @@ _SAFETY = 1e-9  # relative rounding margin of every certified inequality
 
 @dataclass(frozen=True)
 class ModalLoop:
-    r"""A SISO loop split into a certain marginal part and uncertain modes (module docstring).
+    r"""A SISO loop split into a certain part and uncertain modes (module docstring).
 
     Attributes
     ----------
-    chi_u, chi_cu : ndarray
-        Coefficients (highest power first) of :math:`\chi_u` and :math:`\chi_{cu}`.
+    chi_den : ndarray
+        Coefficients (highest power first) of :math:`\chi = \chi_K\chi_u`, the open-loop
+        characteristic polynomial of the law and the plant's marginal part.
+    chi_c : ndarray
+        Of :math:`\chi_c`, the characteristic polynomial of the law closed on the marginal part.
+    numerators : ndarray
+        (modes, k): each mode's :math:`q_i(s)`, highest power first, zero-padded.
     omega0, zeta0 : ndarray
         Nominal frequency (rad/s) and damping ratio of each mode.
-    alpha, beta : ndarray
-        Each mode's loop numerator :math:`\alpha_i + \beta_i s`.
     marginal : tuple of ndarray
         (A_u, B_u, C_u) of the marginal part (measurements × states).
     mode_outputs : ndarray
         (modes, p, 2): each mode's output matrix in its companion coordinates.
     mode_inputs : ndarray
         (modes,): the input entry of each mode's acceleration row.
-    gain : ndarray
-        (p,): the law, u = gain · y.
+    law : tuple of ndarray
+        (A_K, B_K, C_K, D_K) of the law on the measurements used (u = C_K ξ + D_K y).
     """
 
-    chi_u: FloatArray
-    chi_cu: FloatArray
+    chi_den: FloatArray
+    chi_c: FloatArray
+    numerators: FloatArray
     omega0: FloatArray
     zeta0: FloatArray
-    alpha: FloatArray
-    beta: FloatArray
     marginal: tuple[FloatArray, FloatArray, FloatArray]
     mode_outputs: FloatArray
     mode_inputs: FloatArray
-    gain: FloatArray
+    law: tuple[FloatArray, FloatArray, FloatArray, FloatArray]
 
     @property
     def n_modes(self) -> int:
         return int(self.omega0.size)
 
     def closed_loop_matrices(self, omega: FloatArray, zeta: FloatArray) -> FloatArray:
-        """Closed-loop state matrices of a batch of members: omega, zeta (N, modes) -> (N, n, n)."""
+        """Closed-loop state matrices of a batch of members: omega, zeta (N, modes) -> (N, n, n).
+
+        States: the marginal part, each mode's (q, q̇), then the law's states."""
         Au, Bu, Cu = self.marginal
+        Ak, Bk, Ck, Dk = self.law
         omega = np.atleast_2d(omega)
         zeta = np.atleast_2d(zeta)
-        N, nm, nu = omega.shape[0], self.n_modes, Au.shape[0]
+        N, nm, nu, nk = omega.shape[0], self.n_modes, Au.shape[0], Ak.shape[0]
         n = nu + 2 * nm
-        A = np.zeros((N, n, n))
+        A = np.zeros((N, n + nk, n + nk))
         B = np.zeros(n)
-        C = np.zeros((self.gain.size, n))
+        C = np.zeros((Dk.shape[1], n))
         A[:, :nu, :nu] = Au
         B[:nu], C[:, :nu] = Bu[:, 0], Cu
         for i in range(nm):
@@ -153,28 +167,43 @@ class ModalLoop:
             A[:, k + 1, k + 1] = -2.0 * zeta[:, i] * omega[:, i]
             B[k + 1] = self.mode_inputs[i]
             C[:, k : k + 2] = self.mode_outputs[i]
-        return np.asarray(A + np.outer(B, self.gain @ C)[None], float)
+        A[:, :n, :n] += np.outer(B, Dk[0] @ C)
+        A[:, :n, n:] = np.outer(B, Ck[0])
+        A[:, n:, :n] = Bk @ C
+        A[:, n:, n:] = Ak
+        return np.asarray(A, float)
 
     def characteristic(self, s: npt.ArrayLike, omega: FloatArray, zeta: FloatArray) -> FloatArray:
         """F(s) for members (N, modes) at points s (W,) -> (N, W) complex."""
-        s = np.asarray(s, complex)[None, :, None]
+        su = np.asarray(s, complex)
         om = np.atleast_2d(omega)[:, None, :]
         ze = np.atleast_2d(zeta)[:, None, :]
-        d = s**2 + 2 * ze * om * s + om**2
-        terms = (self.alpha + self.beta * s) / d
-        su = s[..., 0]
-        return np.asarray(
-            np.polyval(self.chi_cu, su) + np.polyval(self.chi_u, su) * terms.sum(axis=-1)
-        )
+        sc = su[None, :, None]
+        d = sc**2 + 2 * ze * om * sc + om**2
+        q = np.stack([np.polyval(c, su) for c in self.numerators], -1)[None]
+        return np.asarray(np.polyval(self.chi_c, su)[None] + (q / d).sum(axis=-1))
 
     def sensitivity(
         self, omega_rad_s: npt.ArrayLike, omega: FloatArray, zeta: FloatArray
     ) -> FloatArray:
         """|S(jω)| for members (N, modes) on frequencies (W,) -> (N, W)."""
         s = 1j * np.asarray(omega_rad_s, float)
-        return np.asarray(
-            np.abs(np.polyval(self.chi_u, s))[None] / np.abs(self.characteristic(s, omega, zeta))
-        )
+        chi = np.abs(np.polyval(self.chi_den, s))[None]
+        return np.asarray(chi / np.abs(self.characteristic(s, omega, zeta)))
+
+
+def _law_numerators(Ak: FloatArray, Bk: FloatArray, Ck: FloatArray, Dk: FloatArray) -> FloatArray:
+    r"""Coefficients of :math:`\chi_K(s) K_j(s)` per measurement j, (p, nk + 1): by the matrix
+    determinant lemma :math:`C\,\mathrm{adj}(sI - A)\,b = \det(sI - A + bC) - \det(sI - A)`."""
+    nk = Ak.shape[0]
+    chi = np.real(np.poly(Ak)) if nk else np.ones(1)
+    rows = []
+    for j in range(Dk.shape[1]):
+        row = Dk[0, j] * chi
+        if nk:
+            row = row + np.real(np.poly(Ak - np.outer(Bk[:, j], Ck[0]))) - chi
+        rows.append(row)
+    return np.array(rows).reshape(Dk.shape[1], nk + 1)
 
 
 def modal_loop(plant: ct.StateSpace, law: ct.StateSpace, command: str | None = None) -> ModalLoop:
@@ -198,13 +227,9 @@ def modal_loop(plant: ct.StateSpace, law: ct.StateSpace, command: str | None = N
         a real (non-oscillatory) pole or an undamped mode.
     """
     A, B, C, D, pdt = system_matrices(plant, "plant")
-    _, _, _, Dk, kdt = system_matrices(law, "law")
+    Ak, Bk_all, Ck_all, Dk_all, kdt = system_matrices(law, "law")
     if pdt or kdt:
         raise FieldError("law", "the modal robustness analysis is for continuous loops (dt = 0)")
-    if law.nstates:
-        raise FieldError(
-            "law", f"has {law.nstates} states: the exact analysis here needs a static law"
-        )
     cmds = list(law.output_labels)
     if command is None:
         if len(cmds) != 1:
@@ -217,15 +242,15 @@ def modal_loop(plant: ct.StateSpace, law: ct.StateSpace, command: str | None = N
     if missing:
         raise FieldError("law", f"reads {missing}, which are not outputs of the plant")
     ii = list(plant.input_labels).index(command)
-    K_all = Dk[cmds.index(command)]
-    # measurements the law does not weigh do not enter the loop
-    used = [j for j, m in enumerate(meas) if K_all[j] != 0]
+    ci = cmds.index(command)
+    # measurements the law does not use (zero gain and zero state input) do not enter the loop
+    used = [j for j in range(len(meas)) if Dk_all[ci, j] != 0 or np.any(Bk_all[:, j] != 0)]
     oi = [list(plant.output_labels).index(meas[j]) for j in used]
-    K = K_all[used]
+    law_used = (Ak, Bk_all[:, used], Ck_all[[ci]], Dk_all[np.ix_([ci], used)])
     Bs, Cs = B[:, [ii]], C[oi]
     if np.any(D[oi, ii] != 0):
         raise FieldError(
-            "plant", "has a feedthrough from the command to a measurement the law weighs"
+            "plant", "has a feedthrough from the command to a measurement the law uses"
         )
     import control as ct
 
@@ -234,7 +259,9 @@ def modal_loop(plant: ct.StateSpace, law: ct.StateSpace, command: str | None = N
     form = modal_form(split.stable)
     Am, Bm, Cm, _ = form.matrices
     omega0, zeta0 = form.frequencies_rad_s, form.damping_ratios
-    alphas, betas, outs, ins = [], [], [], []
+    chi_u = np.real(np.poly(Au)) if Au.size else np.ones(1)
+    NK = _law_numerators(*law_used)  # (p, nk + 1)
+    outs, ins, numer = [], [], []
     for k, blk in enumerate(form.blocks):
         if blk.stop - blk.start != 2:
             raise FieldError(
@@ -255,21 +282,25 @@ def modal_loop(plant: ct.StateSpace, law: ct.StateSpace, command: str | None = N
         Cc = np.linalg.solve(T.T, Ci.T).T
         outs.append(Cc)
         ins.append(b_acc)
-        alphas.append(-float(K @ Cc[:, 0]) * b_acc)
-        betas.append(-float(K @ Cc[:, 1]) * b_acc)
-    chi_u = np.real(np.poly(Au)) if Au.size else np.ones(1)
-    chi_cu = np.real(np.poly(Au + Bu @ K[None] @ Cu)) if Au.size else np.ones(1)
+        # q_i = −χ_u b (χ_K K·C0 + s χ_K K·C1)
+        lin = np.polyadd(np.polymul(Cc[:, 1] @ NK, [1.0, 0.0]), Cc[:, 0] @ NK)
+        numer.append(-b_acc * np.polymul(chi_u, lin))
+    nk = Ak.shape[0]
+    chi_den = np.polymul(chi_u, np.real(np.poly(Ak)) if nk else np.ones(1))
+    Acu = np.block([[Au + Bu @ law_used[3] @ Cu, Bu @ law_used[2]], [law_used[1] @ Cu, Ak]])
+    chi_c = np.real(np.poly(Acu)) if Acu.size else np.ones(1)
+    width = max((q.size for q in numer), default=1)
+    numerators = np.array([np.concatenate([np.zeros(width - q.size), q]) for q in numer])
     return ModalLoop(
-        np.asarray(chi_u, float),
-        np.asarray(chi_cu, float),
+        np.asarray(chi_den, float),
+        np.asarray(chi_c, float),
+        numerators.reshape(len(numer), width),
         omega0,
         zeta0,
-        np.array(alphas),
-        np.array(betas),
         (Au, Bu, Cu),
         np.array(outs).reshape(len(outs), len(oi), 2),
         np.array(ins),
-        np.asarray(K, float),
+        law_used,
     )
 
 
@@ -319,15 +350,19 @@ class ParameterBox:
 def _poly_disc(
     coef: FloatArray, w1: FloatArray, w2: FloatArray
 ) -> tuple[npt.NDArray[np.complex128], FloatArray]:
-    """p(jω_m) and a radius covering p(jω) on [w1, w2]: half-width × Σ k|c_k| w2^(k−1)."""
+    r"""p(jω_m) and a radius covering p(jω) on [w1, w2] by Taylor's theorem:
+    :math:`\delta |p'(j\omega_m)| + \tfrac{\delta^2}{2} \sum_k k(k-1)|c_k| \omega_2^{k-2}`
+    (δ the half-width; the derivative is taken in ω)."""
     wm = 0.5 * (w1 + w2)
+    half = 0.5 * (w2 - w1)
     deg = coef.size - 1
-    powers = np.arange(deg, -1, -1)
-    slope = np.zeros_like(w2)
-    for c, k in zip(coef, powers):
-        if k > 0:
-            slope = slope + k * abs(c) * w2 ** (k - 1)
-    return np.asarray(np.polyval(coef, 1j * wm), complex), 0.5 * (w2 - w1) * slope
+    curve = np.zeros_like(w2)
+    for c, k in zip(coef, range(deg, -1, -1)):
+        if k > 1:
+            curve = curve + k * (k - 1) * abs(c) * w2 ** (k - 2)
+    slope = np.abs(np.polyval(np.polyder(coef), 1j * wm)) if deg > 0 else np.zeros_like(w2)
+    radius = half * slope + 0.5 * half**2 * curve
+    return np.asarray(np.polyval(coef, 1j * wm), complex), np.asarray(radius, float)
 
 
 def _edge_max(v: ComplexArray, d0: ComplexArray, e: ComplexArray) -> FloatArray:
@@ -394,7 +429,7 @@ def _interval_bounds(
 ) -> tuple[FloatArray, FloatArray]:
     """(certified lower bound of |F|, or <= 0 when not certified; upper bound of |χ_u|)."""
     lo, hi, zlo, zhi = box.bounds(loop)
-    c0, r0 = _poly_disc(loop.chi_cu, w1, w2)
+    c0, r0 = _poly_disc(loop.chi_c, w1, w2)
     wm = 0.5 * (w1 + w2)
     nominal = loop.characteristic(1j * wm, loop.omega0, loop.zeta0)[0] if wm.size else c0
     U = _directions(nominal)  # (N, m)
@@ -404,8 +439,7 @@ def _interval_bounds(
     P0, P1 = V, np.roll(V, -1, axis=-1)
     mind = _segment_distance(P0, P1).min(axis=-1)  # (N, n)
     for i in range(loop.n_modes):
-        q = np.polymul(loop.chi_u, [loop.beta[i], loop.alpha[i]])
-        qc, qr = _poly_disc(q, w1, w2)
+        qc, qr = _poly_disc(loop.numerators[i], w1, w2)
         md = mind[:, i]
         bad = md <= 0
         inv = np.where(bad, np.inf, 1.0 / np.where(bad, 1.0, md))
@@ -420,21 +454,32 @@ def _interval_bounds(
         H = H + np.where(bad[:, None], np.inf, h + (qr * inv)[:, None])
         scale = scale + np.where(bad, np.inf, (np.abs(qc) + qr) * inv)
     lower = (-H).max(axis=1) - _SAFETY * scale
-    roots = np.roots(loop.chi_u) if loop.chi_u.size > 1 else np.zeros(0)
-    chi_max = np.prod(w2[:, None] + np.abs(roots)[None], axis=1) if roots.size else np.ones_like(w2)
+    cd, rd = _poly_disc(loop.chi_den, w1, w2)
+    chi_max = np.abs(cd) + rd
     return np.where(np.isfinite(lower), lower, -np.inf), chi_max
 
 
 def _tail(loop: ModalLoop, box: ParameterBox) -> tuple[float, float]:
-    """A frequency W and ε < 1/2 with |L(jω)| <= ε for every ω >= W and member (docstring)."""
+    r"""A frequency W and ε <= 1/2 with |L(jω)| <= ε for every ω >= W and member.
+
+    :math:`|L| \le |\chi_c - \chi| / |\chi| + \sum_i |q_i| / (|\chi|\,|d_i|)` with
+    :math:`|p(j\omega)| \le \sum_k |c_k|\omega^k`, :math:`|\chi(j\omega)| \ge \prod_k (\omega -
+    |r_k|)` and :math:`|d_i| \ge \omega^2 - \omega_{hi}^2`: each term is a product of factors
+    ω/(ω − a) and 1/(ω ± a), all decreasing beyond the largest root (the law is proper and the
+    plant strictly proper at the measurements), so the bound at W holds beyond it."""
     _, hi, _, _ = box.bounds(loop)
-    roots = np.abs(np.roots(loop.chi_u)) if loop.chi_u.size > 1 else np.zeros(0)
-    rest = np.polysub(loop.chi_cu, loop.chi_u)
-    W = 10.0 * max(float(hi.max(initial=0.0)), float(roots.max(initial=0.0)), 1e-3)
+    roots = np.abs(np.roots(loop.chi_den)) if loop.chi_den.size > 1 else np.zeros(0)
+    rest = np.asarray(np.polysub(loop.chi_c, loop.chi_den), float)
+    top = max(float(hi.max(initial=0.0)), float(roots.max(initial=0.0)), 1e-3)
+    W = 10.0 * top
+
+    def mag(coef: FloatArray, w: float) -> float:
+        return float(np.sum(np.abs(coef) * w ** np.arange(coef.size - 1, -1, -1)))
+
     for _ in range(200):
         den = float(np.prod(W - roots)) if roots.size else 1.0
-        eps = float(np.sum(np.abs(rest) * W ** np.arange(rest.size - 1, -1, -1))) / den
-        eps += float(np.sum((np.abs(loop.alpha) + W * np.abs(loop.beta)) / (W**2 - hi**2)))
+        eps = mag(rest, W) / den
+        eps += sum(mag(q, W) / (den * (W**2 - h**2)) for q, h in zip(loop.numerators, hi))
         if eps <= 0.5:
             return W, eps
         W *= 2.0
@@ -476,12 +521,11 @@ def _member_lower(loop: ModalLoop, box: ParameterBox, w: FloatArray) -> tuple[fl
     tuned = np.clip(w[:, None], lo, hi)
     best, where = 0.0, float("nan")
     s = 1j * w[:, None]
-    chi = np.abs(np.polyval(loop.chi_u, 1j * w))
+    chi = np.abs(np.polyval(loop.chi_den, 1j * w))
+    q = np.stack([np.polyval(c, 1j * w) for c in loop.numerators], -1)
     for om, ze in ((np.broadcast_to(loop.omega0, tuned.shape), loop.zeta0), (tuned, zlo)):
         d = s**2 + 2 * ze * om * s + om**2
-        F = np.polyval(loop.chi_cu, 1j * w) + np.polyval(loop.chi_u, 1j * w) * (
-            (loop.alpha + loop.beta * s) / d
-        ).sum(axis=1)
+        F = np.polyval(loop.chi_c, 1j * w) + (q / d).sum(axis=1)
         val = chi / np.abs(F)
         k = int(np.argmax(val))
         if val[k] > best:
@@ -530,33 +574,30 @@ def certify(
         if w1.size == 0:
             break
         count += w1.size
-        if count > max_intervals:
-            return Certificate(False, math.inf, lower, worst, count, float(w1[0]))
         fl, chi = _interval_bounds(loop, box, w1, w2)
-        lb, lw = _member_lower(loop, box, 0.5 * (w1 + w2))
+        lb, _ = _member_lower(loop, box, 0.5 * (w1 + w2))
         lower = max(lower, lb)
         ok = fl > 0
         fail = ~ok
         tiny = (w2 - w1) <= 1e-5 * np.maximum(w2, 1e-300)
-        if np.any(fail & tiny):
-            k = int(np.flatnonzero(fail & tiny)[0])
+        if np.any(fail & tiny) or (np.any(fail) and count > max_intervals):
+            k = int(np.flatnonzero(fail & tiny)[0]) if np.any(fail & tiny) else int(np.argmax(fail))
             return Certificate(False, math.inf, lower, float(w1[k]), count, float(w1[k]))
         sb = np.where(ok, chi / np.where(ok, fl, 1.0), np.inf)
         refine = fail.copy()
-        if performance:
-            refine |= ok & (sb > (1 + tol) * max(lower, 1.0)) & ~tiny & ((w2 - w1) > 1e-6 * w2)
+        if performance and count <= max_intervals:
+            refine |= ok & (sb > (1 + tol) * max(lower, 1.0)) & ((w2 - w1) > 1e-6 * w2)
         keep = ~refine
         done_bounds.append(sb[keep])
         done_w1.append(w1[keep])
         done_w2.append(w2[keep])
         mid = 0.5 * (w1[refine] + w2[refine])
         w1, w2 = np.concatenate([w1[refine], mid]), np.concatenate([mid, w2[refine]])
-    if w1.size:  # refinement budget of rounds spent: keep the (certified) current bounds
+    if w1.size:  # the rounds are spent: the intervals still open are evaluated as they are
         fl, chi = _interval_bounds(loop, box, w1, w2)
         if np.any(fl <= 0):
-            return Certificate(
-                False, math.inf, lower, float(w1[fl <= 0][0]), count, float(w1[fl <= 0][0])
-            )
+            at = float(w1[fl <= 0][0])
+            return Certificate(False, math.inf, lower, at, count, at)
         done_bounds.append(chi / fl)
         done_w1.append(w1)
         done_w2.append(w2)
