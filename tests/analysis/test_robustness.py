@@ -168,6 +168,14 @@ def test_refusals_name_the_field():
     loop = modal_loop(P, K)
     with pytest.raises(FieldError, match="frequency"):
         ParameterBox.uniform(loop, 1.2)
+    box = ParameterBox.uniform(loop, 0.1)
+    with pytest.raises(FieldError, match="tol"):
+        certify(loop, box, tol=0.0)
+    with pytest.raises(FieldError, match="n_members"):
+        sweep(loop, box, n_members=0)
+    rigid = ct.ss([[0, 1], [0, 0.0]], [[0], [1]], np.eye(2), 0, inputs=["u"], outputs=["y", "v"])
+    with pytest.raises(FieldError, match="no lightly damped mode"):
+        modal_loop(rigid, ct.ss([], [], [], [[-1.0, -1.0]], inputs=["y", "v"], outputs=["u"]))
 
 
 def lqg_on_two_modes():

@@ -259,6 +259,10 @@ def modal_loop(plant: ct.StateSpace, law: ct.StateSpace, command: str | None = N
     form = modal_form(split.stable)
     Am, Bm, Cm, _ = form.matrices
     omega0, zeta0 = form.frequencies_rad_s, form.damping_ratios
+    if not form.blocks:
+        raise FieldError(
+            "plant", "has no lightly damped mode: there is nothing uncertain to analyse"
+        )
     chi_u = np.real(np.poly(Au)) if Au.size else np.ones(1)
     NK = _law_numerators(*law_used)  # (p, nk + 1)
     outs, ins, numer = [], [], []
@@ -554,6 +558,10 @@ def certify(
     performance : bool
         False: stop once stability is certified.
     """
+    if not (isinstance(tol, float | int) and 0 < tol < 1):
+        raise FieldError("tol", f"must be a number in (0, 1), got {tol!r}")
+    if isinstance(max_intervals, bool) or not isinstance(max_intervals, int) or max_intervals < 1:
+        raise FieldError("max_intervals", f"must be a whole number >= 1, got {max_intervals!r}")
     A0 = loop.closed_loop_matrices(loop.omega0[None], loop.zeta0[None])[0]
     if A0.size and np.max(np.linalg.eigvals(A0).real) >= 0:
         return Certificate(False, math.inf, math.inf, math.nan, 0, math.nan)
@@ -687,6 +695,9 @@ def sweep(
     chunk: int = 500,
 ) -> SweepResult:
     """Sample the box densely and evaluate the batch of closed loops (module docstring)."""
+    for name, value in (("n_members", n_members), ("n_frequencies", n_frequencies)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise FieldError(name, f"must be a whole number >= 1, got {value!r}")
     rng = np.random.default_rng(seed)
     om, ze = _members(loop, box, n_members, rng)
     lo, hi, _, _ = box.bounds(loop)
