@@ -677,8 +677,9 @@ def _members(
     pick = rng.random((n, m)) < 0.5
     t = np.where(pick, corner, uniform)
     om = lo + t * (hi - lo)
-    zc = rng.integers(0, 2, size=(n, m)).astype(float)
-    ze = zlo + np.where(rng.random((n, m)) < 0.7, zc * 0, rng.random((n, m))) * (zhi - zlo)
+    # damping: 70 % of the draws at the lowest ratio (the least damped corner), the rest uniform
+    at_low = rng.random((n, m)) < 0.7
+    ze = zlo + np.where(at_low, 0.0, rng.random((n, m))) * (zhi - zlo)
     # every mode tuned onto the others' frequencies, lowest damping: the resonant alignments
     extra_w = [np.clip(np.full(m, w), lo, hi) for w in np.concatenate([lo, hi, loop.omega0])]
     om = np.vstack([om, np.array(extra_w), loop.omega0[None], lo[None], hi[None]])
@@ -717,7 +718,10 @@ def sweep(
             worst_re, worst_k = float(re[k]), start + k
         stable = re < 0
         if np.any(stable):
-            peak = max(peak, float(loop.sensitivity(grid, o[stable], z[stable]).max()))
+            os_, zs = o[stable], z[stable]
+            for k0 in range(0, os_.shape[0], 50):  # (members, frequencies, modes) in memory
+                S = loop.sensitivity(grid, os_[k0 : k0 + 50], zs[k0 : k0 + 50])
+                peak = max(peak, float(S.max()))
     return SweepResult(om.shape[0], worst_re, worst_re < 0, peak, om[worst_k], ze[worst_k])
 
 
