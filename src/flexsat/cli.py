@@ -331,8 +331,10 @@ def run(
         errors.print(message, style="red", markup=False, highlight=False)
         raise typer.Exit(code=130) from None
     console.print(_result_table(result.console_table()))
+    from flexsat.report.provenance import command_line
+
     try:
-        path = write_report(result, out)
+        path = write_report(result, out, command=command_line())
     except OSError as exc:
         _fail(f"--out: {exc}")
     console.print(f"report written to {path / 'index.html'}", markup=False)

@@ -5,7 +5,7 @@ simulate each run."""
 from __future__ import annotations
 
 from collections.abc import Callable, Generator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from flexsat.cases import get_case
@@ -23,9 +23,10 @@ from flexsat.sim import SimConfig
 from flexsat.sim.engine import check_resources
 
 if TYPE_CHECKING:
-    from pathlib import Path
-
     import xarray as xr
+
+    from flexsat.report.controller_summary import LawSummary
+    from flexsat.report.interactive import Plot
 
 T = TypeVar("T")
 
@@ -181,17 +182,38 @@ def _check_resources(
 
 @dataclass(frozen=True)
 class ManeuverResult(SimulatedRuns):
-    """The runs of a maneuver scenario (:class:`~flexsat.scenarios.datasets.SimulatedRuns`)."""
+    """The runs of a maneuver scenario (:class:`~flexsat.scenarios.datasets.SimulatedRuns`),
+    with what the controller summary needs: each run's law (``laws``), the model and the
+    control period (s)."""
 
-    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
-        from flexsat.report.maneuver import draw_figures
+    laws: dict[str, Controller] = field(default_factory=dict)
+    model: HubAppendage | None = None
+    control_period: float = 0.0
 
-        return draw_figures(ds, folder)
+    def plots(self, ds: xr.Dataset) -> list[Plot]:
+        from flexsat.report.maneuver import plots
+
+        return plots(ds)
 
     def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.maneuver import sections
 
-        return sections(self.metrics_records(), figures)
+        return sections(self.metrics_records())
+
+    def controller_summaries(self) -> tuple[LawSummary, ...]:
+        """Each law's summary on the model's linear part (its states labelled ``theta``,
+        ``q[i]`` and their rates, the model's order x = [θ, q, θ', q']), at the control
+        period."""
+        if self.model is None or not self.laws:
+            return ()
+        from flexsat.dynamics.linear_model import plant_state_space
+        from flexsat.report.controller_summary import summarise_laws
+
+        modes = range(1, self.model.n_modes + 1)
+        states = ["theta", *(f"q[{i}]" for i in modes)]
+        states += ["theta_dot", *(f"q_dot[{i}]" for i in modes)]
+        plant = plant_state_space(self.model, states=states)
+        return summarise_laws(plant, self.laws, self.control_period)
 
 
 class ManeuverKind(ScenarioKind):
@@ -222,6 +244,9 @@ class ManeuverKind(ScenarioKind):
             tuple(prepared.controllers),
             tuple(results),
             cite(get_case(scenario.case).source),
+            laws=dict(prepared.controllers),
+            model=prepared.model,
+            control_period=1.0 / prepared.config.control_rate,
         )
 
 
