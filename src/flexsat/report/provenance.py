@@ -15,8 +15,6 @@ import hashlib
 import html
 import os
 import re
-import shlex
-import sys
 from dataclasses import dataclass
 from datetime import UTC, datetime
 
@@ -65,15 +63,6 @@ def report_date() -> datetime:
         ) from None
 
 
-def command_line(argv: list[str] | None = None) -> str:
-    """The flexsat command being run, as a shell would take it (``flexsat run s.yaml -o out``):
-    the program's name without its folder, then its arguments (``argv``, default
-    ``sys.argv``)."""
-    args = list(sys.argv if argv is None else argv)
-    program = os.path.basename(args[0]) if args else "flexsat"
-    return shlex.join([program, *args[1:]])
-
-
 def provenance(scenario_text: str, command: str | None = None) -> Provenance:
     """The provenance of a report of the scenario whose file reads ``scenario_text``, written
     now by ``command`` (None: through the Python API)."""
@@ -105,7 +94,6 @@ def without_provenance(page: str) -> str:
 __all__ = [
     "PROVENANCE_LINE",
     "Provenance",
-    "command_line",
     "provenance",
     "provenance_html",
     "report_date",
