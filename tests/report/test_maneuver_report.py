@@ -163,3 +163,37 @@ def test_metric_formatting():
 def test_the_page_reads_right_in_a_browser(result, tmp_path, browser):
     text = assert_renders(browser, write_report(result, tmp_path / "report") / "index.html")
     assert "Law II" in text
+
+
+#: JavaScript: [run tag, visible] of every line renderer tagged with a run, in document order
+RENDERERS = """[...Bokeh.documents[0].all_models]
+    .filter(m => m.tags && m.tags.length && String(m.tags[0]).startsWith("run:"))
+    .map(m => [m.tags[0], m.visible])"""
+
+
+def test_the_report_opens_offline_alone_and_toggles_runs(result, tmp_path, browser):
+    """Issue 24's acceptance: index.html copied alone to an empty folder, opened with the
+    network off, draws its figures without a script error or a request, and the run toggles
+    hide a run in every figure and show it again."""
+    from report_browser import open_offline
+
+    out = write_report(result, tmp_path / "report")
+    page, refused, text = open_offline(browser, out / "index.html", tmp_path / "alone")
+    try:
+        assert refused == []
+        assert "Settling time (s)" in text and "Controller summary" in text
+        assert page.locator("canvas").count() >= len(PLOTS)
+        before = page.evaluate(f"() => {RENDERERS}")
+        # each figure has a line of each run (with its reference where the figure has one)
+        assert sum(tag == "run:Law II" for tag, _ in before) >= len(PLOTS)
+        assert all(visible for _, visible in before)
+        boxes = page.locator("input[type=checkbox]")
+        assert boxes.count() == 2
+        boxes.nth(1).click()  # Law II off
+        page.wait_for_function(
+            f"() => {RENDERERS}.every(([tag, shown]) => shown === (tag !== 'run:Law II'))"
+        )
+        boxes.nth(1).click()  # and on again
+        page.wait_for_function(f"() => {RENDERERS}.every(([tag, shown]) => shown)")
+    finally:
+        page.context.close()
