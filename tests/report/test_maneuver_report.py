@@ -197,3 +197,21 @@ def test_the_report_opens_offline_alone_and_toggles_runs(result, tmp_path, brows
         page.wait_for_function(f"() => {RENDERERS}.every(([tag, shown]) => shown)")
     finally:
         page.context.close()
+
+
+def test_identical_runs_write_identical_files_but_the_provenance_line(tmp_path, monkeypatch):
+    """Two runs of the same scenario: every file of the report the same byte for byte, except
+    the page's provenance line (its date); with SOURCE_DATE_EPOCH set, the page too."""
+    from flexsat.report.provenance import without_provenance
+
+    first = snapshot(write_report(short_run("Same"), tmp_path / "a"))
+    second = snapshot(write_report(short_run("Same"), tmp_path / "b"))
+    assert first.keys() == second.keys()
+    for name in first.keys() - {"index.html"}:
+        assert first[name] == second[name], name
+    pages = [without_provenance(f["index.html"].decode()) for f in (first, second)]
+    assert pages[0] == pages[1]
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
+    result = short_run("Same")
+    again = [write_report(result, tmp_path / n).joinpath("index.html").read_bytes() for n in "cd"]
+    assert again[0] == again[1] and b"written 2023-11-14T22:13:20Z" in again[0]
