@@ -70,6 +70,8 @@ class Curve:
         Its points (NaN breaks the line).
     style : str
         ``solid``, ``dashed``, ``dotted`` or ``dashdot`` (:data:`DASHES`).
+    color : int or None
+        Its colour's index in :data:`PALETTE` (default: its run's index; grey for no run).
     """
 
     run: str
@@ -77,6 +79,7 @@ class Curve:
     x: FloatArray
     y: FloatArray
     style: str = "solid"
+    color: int | None = None
 
 
 @dataclass(frozen=True)
@@ -151,7 +154,8 @@ def _figure(plot: Plot, runs: Sequence[str]) -> tuple[object, list[tuple[int, ob
     for curve in plot.curves:
         x, y = thin(np.asarray(curve.x, float), np.asarray(curve.y, float))
         index = runs.index(curve.run) if curve.run in runs else -1
-        color = PALETTE[index % len(PALETTE)] if index >= 0 else "#555555"
+        shade = curve.color if curve.color is not None else index
+        color = PALETTE[shade % len(PALETTE)] if shade >= 0 else "#555555"
         renderer = fig.line(
             x,
             y,
