@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from flexsat.cases import get_case
 from flexsat.control import Controller
 from flexsat.dynamics.hub_appendage import HubAppendage
+from flexsat.dynamics.hybrid import HybridPlant
 from flexsat.input_checks import FieldError
 from flexsat.references import cite
 from flexsat.scenarios.datasets import SimulatedRuns
@@ -187,7 +188,7 @@ class ManeuverResult(SimulatedRuns):
     control period (s)."""
 
     laws: dict[str, Controller] = field(default_factory=dict)
-    model: HubAppendage | None = None
+    model: HybridPlant | None = None
     control_period: float = 0.0
 
     def plots(self, ds: xr.Dataset) -> list[Plot]:
@@ -201,18 +202,20 @@ class ManeuverResult(SimulatedRuns):
         return sections(self.metrics_records())
 
     def controller_summaries(self) -> tuple[LawSummary, ...]:
-        """Each law's summary on the model's linear part (its states labelled ``theta``,
-        ``q[i]`` and their rates, the model's order x = [θ, q, θ', q']), at the control
+        """Each law's summary on the model's linear part (a hybrid model's states labelled
+        ``theta``, ``q[i]`` and their rates, its order x = [θ, q, θ', q']), at the control
         period."""
         if self.model is None or not self.laws:
             return ()
         from flexsat.dynamics.linear_model import plant_state_space
         from flexsat.report.controller_summary import summarise_laws
 
-        modes = range(1, self.model.n_modes + 1)
-        states = ["theta", *(f"q[{i}]" for i in modes)]
-        states += ["theta_dot", *(f"q_dot[{i}]" for i in modes)]
-        plant = plant_state_space(self.model, states=states)
+        plant = plant_state_space(self.model)
+        if isinstance(self.model, HybridPlant):  # x = [θ, q, θ', q'] (flexsat.dynamics.hybrid)
+            modes = range(1, plant.nstates // 2)
+            states = ["theta", *(f"q[{i}]" for i in modes)]
+            states += ["theta_dot", *(f"q_dot[{i}]" for i in modes)]
+            plant = plant_state_space(self.model, states=states)
         return summarise_laws(plant, self.laws, self.control_period)
 
 
