@@ -197,3 +197,41 @@ def test_metrics_table_shows_names_and_units():
         ["Settling time (s)", "12.35", "7"],
         ["Peak torque (N m)", "n/a", "0.5"],  # no unit in the name: the dataset's
     ]
+
+
+@dataclass(frozen=True)
+class PlottedResult(Result):
+    """Result with an interactive figure of its two runs and a controller summary."""
+
+    def plots(self, ds):
+        from flexsat.report.interactive import Curve, Plot
+
+        t = ds["time"].values
+        curves = tuple(Curve(r, r, t, ds["y"].sel(run=r).values) for r in ("a", "b"))
+        return [Plot("y against time", "time (s)", "y (m)", curves)]
+
+    def controller_summaries(self):
+        from flexsat.report.controller_summary import LawSummary
+
+        return (LawSummary("a", "SomeLaw", reason="it is nonlinear"),)
+
+
+def test_the_page_orders_sections_summary_figures_references_and_scenario(tmp_path):
+    plain = (write_report(Result(SCENARIO), tmp_path / "plain") / "index.html").read_text()
+    assert "Bokeh" not in plain  # no interactive figure: no BokehJS either
+    page = (write_report(PlottedResult(SCENARIO), tmp_path / "out") / "index.html").read_text()
+    head, body = page.split("</head>\n<body>\n<h1>")
+    assert "Bokeh" in head and '"text":"y against time"' in body
+    order = [
+        '<p class="provenance">',
+        "<td>y max</td>",
+        "<h2>Controller summary</h2>",
+        "No linear summary: it is nonlinear.",
+        "<h2>Figures</h2>",
+        '"labels":["a","b"]',  # a toggle per run
+        "<h2>References</h2>",
+        "Seiler, A. Packard and P. Gahinet",  # the summary's methods, cited in full
+        "<h2>Scenario</h2>",
+    ]
+    at = [body.index(text) for text in order]
+    assert at == sorted(at)
