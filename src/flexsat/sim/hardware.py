@@ -1,0 +1,798 @@
+r"""Laboratory hardware in the loop: reaction wheels, amplifiers, analog anti-alias filters and
+the control computer's delay, on any linear plant, run by the one engine.
+
+Each piece is continuous linear dynamics (plus the wheel bearing's Coulomb friction and the
+drive's speed limit), so the engine takes them as states appended to the plant's
+(:class:`HardwarePlant`): the plant, the hardware and the filters are then propagated together
+by the engine's exact matrix exponential over each control period — the analog filter's
+response to the continuous plant output is exact, and on a piecewise-constant input it is the
+filter's exact zero-order-hold discretisation (:func:`zoh`) — batched and compiled like an
+ideal plant. The law is wrapped (:class:`HardwareLaw`) to read the filtered channels, to write
+the hardware's command channels and to hold its commands for the computer's delay.
+
+**Amplifier** (:class:`Amplifier`), current mode: the law's torque command c is converted with
+the nominal torque constant to a current demand i_c = c / K_t, clipped at the current limit
+(and at gain × D/A range), and the current follows a first-order lag of the amplifier's
+bandwidth ω_b, :math:`\dot i = \omega_b (i_c - i)`; the applied torque is K_t i. Voltage mode
+(a reaction wheel's drive only): the demand is the stall voltage V_c = c R / K_t, clipped at
+the voltage limit, lagged by ω_b, and the motor current is :math:`i = (V - K_e \Omega)/R`
+(armature inductance neglected: its time constant is below a millisecond), so the back-EMF
+caps the wheel speed at V_max / K_e.
+
+**Reaction wheel** (:class:`ReactionWheel`): with Ω_a the wheel's absolute spin rate and
+Ω = Ω_a − θ̇ its speed relative to the body (θ̇ the plant's rate output about the wheel axis),
+
+.. math::
+
+    J_w \dot\Omega_a = \tau, \qquad \tau = K_t i - c_v \Omega - c_c\,\mathrm{sign}(\Omega),
+    \qquad \text{hub torque} = -\tau,
+
+(Hailey, Sortun & Agrawal, "Experimental verification of attitude control techniques for
+slew maneuvers of flexible spacecraft", NPS, c. 1992, Eqs. 15 and 21, with the exact wheel
+equation J_w(θ̈ + Ω̇) = −T_c); the plant's hub inertia is then the body's without the wheel's
+spin inertia. The body's and the wheel's momenta sum to a constant without external torque
+(:meth:`HardwarePlant.momentum`). The Coulomb term is the engine's bearing-friction force
+(regularised sign, ETD2RK) on an internal input channel; a finite ``max_speed`` is the drive's
+speed limiter: at each sample the command is zeroed while |Ω| >= max_speed and the command
+would raise |Ω| (a state-dependent switch: the Python loop runs it).
+
+**Anti-alias filter** (:class:`AntiAliasFilter`): an analog Butterworth or Bessel low-pass of
+given order and −3 dB corner on a measured channel, as in the identification test rig
+(:func:`flexsat.identify.excitation.with_anti_alias`); the law reads ``<channel>_filtered``
+and the truth stays recorded under the channel's own name.
+
+**Computation delay** (:attr:`Hardware.delay`, samples): whole samples hold the law's command
+in a FIFO (the linear form gains a shift register, so the compiled loop keeps it); a fraction
+f of a sample applies the previous command over the first f·Δt of each period (the Python
+loop, with two exact steps).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from scipy import signal
+from scipy.linalg import expm
+
+from flexsat.control.base import Controller
+from flexsat.dynamics.plant import Channel, ManeuverChannels, Plant, find_channel
+from flexsat.input_checks import FieldError
+from flexsat.sim.channels import ChannelActuator, ChannelDisturbance, ChannelSensor
+from flexsat.sim.disturbances import BearingFriction
+from flexsat.units import to_si_array
+
+if TYPE_CHECKING:
+    from flexsat.control.linear_form import LinearLaw
+    from flexsat.units import FloatArray, QuantityArrayLike
+
+__all__ = [
+    "FILTER_KINDS",
+    "AMPLIFIER_MODES",
+    "Amplifier",
+    "AntiAliasFilter",
+    "Hardware",
+    "HardwareLaw",
+    "HardwarePlant",
+    "ReactionWheel",
+    "delayed_linear_law",
+    "zoh",
+]
+
+FILTER_KINDS = ("butterworth", "bessel")
+AMPLIFIER_MODES = ("current", "voltage")
+
+
+def _scalar(value: QuantityArrayLike, unit: str, field: str, positive: bool, inf_ok: bool) -> float:
+    v = to_si_array(value, unit, field)
+    if v.ndim != 0:
+        raise FieldError(field, f"must be one number, got shape {v.shape}")
+    x = float(v)
+    ok = (np.isfinite(x) or (inf_ok and x == np.inf)) and (x > 0 if positive else x >= 0)
+    if not ok:
+        rule = "> 0" if positive else ">= 0"
+        raise FieldError(
+            field, f"must be {rule}{' (inf for none)' if inf_ok else ''}, got {value!r}"
+        )
+    return x
+
+
+def zoh(A: FloatArray, B: FloatArray, dt: float) -> tuple[FloatArray, FloatArray]:
+    r"""Exact zero-order-hold discretisation (Φ, Γ) = (e^{AΔt}, ∫₀^Δt e^{As} ds B) of
+    x' = A x + B u, from one exponential of the block matrix [[A, B], [0, 0]] Δt (Van Loan,
+    "Computing integrals involving the matrix exponential", IEEE Trans. Automatic Control,
+    1978)."""
+    n, m = B.shape
+    M = np.zeros((n + m, n + m))
+    M[:n, :n], M[:n, n:] = A, B
+    E = expm(M * dt)
+    return E[:n, :n], E[:n, n:]
+
+
+@dataclass(frozen=True)
+class AntiAliasFilter:
+    """Analog low-pass on a measured channel (module docstring).
+
+    Parameters
+    ----------
+    corner : float, str or Quantity
+        −3 dB frequency, Hz (TAMU: 10 Hz).
+    order : int
+        Filter order (number of poles).
+    kind : {"butterworth", "bessel"}
+        Maximally flat magnitude, or maximally flat group delay (``norm="mag"``: the corner is
+        the −3 dB point for both).
+    """
+
+    corner: QuantityArrayLike
+    order: int = 2
+    kind: str = "butterworth"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "corner", _scalar(self.corner, "Hz", "corner", True, False))
+        if isinstance(self.order, bool) or not isinstance(self.order, (int, np.integer)):
+            raise FieldError("order", f"must be an integer 1 .. 10, got {self.order!r}")
+        if not 1 <= int(self.order) <= 10:
+            raise FieldError("order", f"must be an integer 1 .. 10, got {self.order!r}")
+        if self.kind not in FILTER_KINDS:
+            raise FieldError("kind", f"must be one of {FILTER_KINDS}, got {self.kind!r}")
+
+    def matrices(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(A_f, B_f, C_f) of a unit-DC-gain realisation, strictly proper."""
+        wc = 2 * np.pi * float(self.corner)  # type: ignore[arg-type]  # SI once built
+        if self.kind == "butterworth":
+            zpk = signal.butter(self.order, wc, analog=True, output="zpk")
+        else:
+            zpk = signal.bessel(self.order, wc, analog=True, output="zpk", norm="mag")
+        A, B, C, D = signal.zpk2ss(*zpk)
+        assert not np.any(D)  # an all-pole low-pass is strictly proper
+        return np.asarray(A, float), np.asarray(B, float), np.asarray(C, float)
+
+    def frequency_response(self, f: FloatArray) -> FloatArray:
+        """H(j 2π f), complex."""
+        A, B, C = self.matrices()
+        s = 2j * np.pi * np.asarray(f, float)
+        eye = np.eye(A.shape[0])
+        return np.array([(C @ np.linalg.solve(si * eye - A, B))[0, 0] for si in s.ravel()])
+
+
+@dataclass(frozen=True)
+class Amplifier:
+    """Power amplifier driving a motor (module docstring).
+
+    Parameters
+    ----------
+    mode : {"current", "voltage"}
+    gain : float
+        Current mode, A/V; voltage mode, V/V (TAMU KEPCO BOP: 1.2 A/V).
+    current_limit : float
+        Largest current, A (TAMU: 12 A); current mode.
+    bandwidth : float
+        −3 dB bandwidth of the first-order loop, Hz; inf for an instantaneous amplifier.
+    torque_constant : float
+        Motor K_t, N m/A (TAMU: 52.77 oz-in/A); on a plain torque channel it only scales the
+        current limit to a torque.
+    dac_range : float
+        Largest commanded voltage at the amplifier's input, V (gain × it is a limit too).
+    voltage_limit : float
+        Largest output voltage, V; voltage mode.
+    """
+
+    mode: str = "current"
+    gain: QuantityArrayLike = 1.0
+    current_limit: QuantityArrayLike = np.inf
+    bandwidth: QuantityArrayLike = np.inf
+    torque_constant: QuantityArrayLike = 1.0
+    dac_range: QuantityArrayLike = np.inf
+    voltage_limit: QuantityArrayLike = np.inf
+
+    def __post_init__(self) -> None:
+        if self.mode not in AMPLIFIER_MODES:
+            raise FieldError("mode", f"must be one of {AMPLIFIER_MODES}, got {self.mode!r}")
+        for name, unit, inf_ok in (
+            ("gain", "", False),
+            ("current_limit", "A", True),
+            ("bandwidth", "Hz", True),
+            ("torque_constant", "N*m/A", False),
+            ("dac_range", "V", True),
+            ("voltage_limit", "V", True),
+        ):
+            object.__setattr__(
+                self, name, _scalar(getattr(self, name), unit, f"amplifier.{name}", True, inf_ok)
+            )
+
+    def _f(self, name: str) -> float:
+        return float(getattr(self, name))
+
+    def torque_limit(self, resistance: float = np.nan) -> float:
+        """Largest torque command it passes, N m: K_t min(I_max, gain · V_dac) in current
+        mode, K_t min(V_max, gain · V_dac) / R in voltage mode."""
+        kt, g, dac = self._f("torque_constant"), self._f("gain"), self._f("dac_range")
+        if self.mode == "current":
+            return kt * min(self._f("current_limit"), g * dac)
+        return kt * min(self._f("voltage_limit"), g * dac) / resistance
+
+
+@dataclass(frozen=True)
+class ReactionWheel:
+    """Reaction wheel on a body-axis torque channel (module docstring).
+
+    Parameters
+    ----------
+    inertia : float
+        Spin inertia J_w, kg m².
+    torque_constant : float
+        K_t, N m/A.
+    back_emf : float
+        K_e, V s/rad (equal to K_t in SI for an ideal motor).
+    resistance : float
+        Armature resistance R, Ω (voltage mode).
+    viscous, coulomb : float
+        Bearing friction c_v (N m s/rad) and c_c (N m) on the relative speed.
+    max_speed : float
+        Drive speed limit on |Ω|, rad/s; inf for none.
+    amplifier : Amplifier
+        Its drive (current mode, ideal, by default).
+    rate_output : str
+        The plant's output channel of the body rate about the wheel axis.
+    smoothing : float
+        ε of the regularised Coulomb sign, rad/s.
+    """
+
+    inertia: QuantityArrayLike
+    torque_constant: QuantityArrayLike = 1.0
+    back_emf: QuantityArrayLike = 0.0
+    resistance: QuantityArrayLike = 1.0
+    viscous: QuantityArrayLike = 0.0
+    coulomb: QuantityArrayLike = 0.0
+    max_speed: QuantityArrayLike = np.inf
+    amplifier: Amplifier = field(default_factory=Amplifier)
+    rate_output: str = "theta_dot"
+    smoothing: QuantityArrayLike = 1e-3
+
+    def __post_init__(self) -> None:
+        for name, unit, positive, inf_ok in (
+            ("inertia", "kg*m^2", True, False),
+            ("torque_constant", "N*m/A", True, False),
+            ("back_emf", "V*s/rad", False, False),
+            ("resistance", "ohm", True, False),
+            ("viscous", "N*m*s/rad", False, False),
+            ("coulomb", "N*m", False, False),
+            ("max_speed", "rad/s", True, True),
+            ("smoothing", "rad/s", True, False),
+        ):
+            object.__setattr__(
+                self, name, _scalar(getattr(self, name), unit, f"wheel.{name}", positive, inf_ok)
+            )
+        if not isinstance(self.amplifier, Amplifier):
+            raise FieldError("wheel.amplifier", f"must be an Amplifier, got {self.amplifier!r}")
+
+    def _f(self, name: str) -> float:
+        return float(getattr(self, name))
+
+    @property
+    def no_load_speed(self) -> float:
+        """Voltage mode: the speed the back-EMF caps the wheel at, V_max / K_e, rad/s."""
+        a = self.amplifier
+        v = min(a._f("voltage_limit"), a._f("gain") * a._f("dac_range"))
+        k = self._f("back_emf")
+        return np.inf if k == 0 else v / k
+
+
+@dataclass(frozen=True)
+class Hardware:
+    """The laboratory hardware of a run (:class:`~flexsat.sim.config.SimConfig` ``hardware``).
+
+    Parameters
+    ----------
+    actuators : dict
+        Input channel (size 1) -> :class:`ReactionWheel` or :class:`Amplifier`.
+    filters : dict
+        Measured output channel -> :class:`AntiAliasFilter`.
+    delay : float
+        Computation delay, control samples (1 = the one-step-ahead command).
+    """
+
+    actuators: Mapping[str, ReactionWheel | Amplifier] = field(default_factory=dict)
+    filters: Mapping[str, AntiAliasFilter] = field(default_factory=dict)
+    delay: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name, kinds, pieces in (
+            ("actuators", (ReactionWheel, Amplifier), self.actuators),
+            ("filters", (AntiAliasFilter,), self.filters),
+        ):
+            if not isinstance(pieces, Mapping) or not all(
+                isinstance(k, str) and isinstance(v, kinds) for k, v in pieces.items()
+            ):
+                names = " or ".join(k.__name__ for k in kinds)
+                raise FieldError(name, f"must map channel names to {names}, got {pieces!r}")
+        for k, a in self.actuators.items():
+            if isinstance(a, Amplifier) and a.mode == "voltage":
+                raise FieldError(
+                    f"actuators[{k}].mode",
+                    "voltage mode needs a motor speed for the back-EMF: give the amplifier "
+                    "to a ReactionWheel",
+                )
+        d = to_si_array(self.delay, "", "delay")
+        if d.ndim != 0 or not (np.isfinite(d) and d >= 0):
+            raise FieldError("delay", f"must be one number of samples >= 0, got {self.delay!r}")
+        object.__setattr__(self, "delay", float(d))
+
+    @property
+    def whole_delay(self) -> int:
+        return int(np.floor(float(self.delay) + 1e-12))
+
+    @property
+    def fractional_delay(self) -> float:
+        f = float(self.delay) - self.whole_delay
+        return 0.0 if f < 1e-12 else f
+
+    def apply(
+        self,
+        plant: Plant,
+        controller: Controller,
+        sensors: dict[str, ChannelSensor],
+        actuators: dict[str, ChannelActuator],
+        disturbances: dict[str, ChannelDisturbance],
+    ) -> tuple[
+        HardwarePlant,
+        HardwareLaw,
+        dict[str, ChannelSensor],
+        dict[str, ChannelActuator],
+        dict[str, ChannelDisturbance],
+    ]:
+        """The run with this hardware: the augmented plant, the wrapped law and the bound
+        sensors, actuators and disturbances moved to the channels the law now reads and
+        writes (an actuator's limits on its command channel, tightened by the drive's)."""
+        hp = HardwarePlant(plant, self.actuators, self.filters)
+        reads = {k: f"{k}_filtered" for k in self.filters}
+        writes = {k: f"{k}_command" for k in self.actuators}
+        for k in self.filters:
+            if k not in controller.reads:
+                raise FieldError(f"filters[{k}]", f"the law does not read {k!r}")
+        for k in self.actuators:
+            if k not in controller.writes:
+                raise FieldError(f"actuators[{k}]", f"the law does not write {k!r}")
+        s_out: dict[str, ChannelSensor] = {}
+        for k, s in sensors.items():
+            if s.derivative_of in reads:
+                s = replace(s, derivative_of=reads[s.derivative_of])
+            s_out[reads.get(k, k)] = _rebind(s, hp, reads.get(k, k), "output")
+        a_out: dict[str, ChannelActuator] = {}
+        for k, a in actuators.items():
+            a_out[writes.get(k, k)] = a
+        for k, piece in self.actuators.items():
+            name = writes[k]
+            a = a_out.get(name, ChannelActuator())
+            if isinstance(piece, ReactionWheel):
+                amp = piece.amplifier
+                limit = amp.torque_limit(piece._f("resistance"))
+            else:
+                limit = piece.torque_limit()
+            sat = np.minimum(np.asarray(a.saturation, float), limit)
+            a_out[name] = ChannelActuator(
+                saturation=sat if sat.ndim else float(sat),
+                rate_limit=a.rate_limit,
+                scale=a.scale,
+                bias=a.bias,
+            ).bind(find_channel(hp.inputs, name, "input", "HardwarePlant"))
+        d_out = dict(disturbances)
+        for k, piece in self.actuators.items():
+            if isinstance(piece, ReactionWheel) and piece._f("coulomb") > 0:
+                ch = find_channel(hp.inputs, f"{k}_wheel_friction", "input", "HardwarePlant")
+                d_out[ch.name] = ChannelDisturbance(
+                    force=BearingFriction(piece.coulomb, 0.0, piece.smoothing),
+                    force_output=f"{k}_wheel_speed",
+                    force_name=f"{k}_wheel_friction",
+                ).bind(ch)
+        gates = {
+            writes[k]: (f"{k}_wheel_speed", p._f("max_speed"))
+            for k, p in self.actuators.items()
+            if isinstance(p, ReactionWheel) and np.isfinite(p._f("max_speed"))
+        }
+        law = HardwareLaw(controller, reads, writes, self.whole_delay, self.fractional_delay, gates)
+        return hp, law, s_out, a_out, d_out
+
+
+def _rebind(s: ChannelSensor, plant: Plant, name: str, role: str) -> ChannelSensor:
+    """A bound sensor re-bound on ``plant``'s channel ``name`` (same unit and width: its SI
+    fields stay what they are)."""
+    ch = find_channel(plant.outputs, name, role, type(plant).__name__)
+    fresh = ChannelSensor(
+        noise=s.noise,
+        bias=s.bias,
+        quantum=s.quantum,
+        range=s.range,
+        derivative_of=s.derivative_of,
+        window=s.window,
+        order=s.order,
+    )
+    return fresh.bind(ch)
+
+
+class HardwarePlant(Plant):
+    """A linear (or plant-nonlinear) plant with hardware states appended (module docstring):
+    x_H = [x, hardware states, filter states]; inputs: the plant's own (disturbances act there
+    directly), ``<channel>_command`` per actuated channel, ``<channel>_wheel_friction`` per
+    wheel with Coulomb friction; outputs: the plant's own, ``<channel>_filtered``,
+    ``<channel>_wheel_speed`` (Ω, rad/s) and ``<channel>_motor_current`` (A)."""
+
+    def __init__(
+        self,
+        plant: Plant,
+        actuators: Mapping[str, ReactionWheel | Amplifier],
+        filters: Mapping[str, AntiAliasFilter],
+    ) -> None:
+        if getattr(plant, "step", None) is not None or plant.n_cases != 1:
+            raise FieldError(
+                "hardware",
+                f"{type(plant).__name__}: hardware needs a shared plant propagated by the "
+                "engine's exponential integrators (no own step, not dispersed)",
+            )
+        self.inner = plant
+        A, B = plant.linear_part()
+        n, m = plant.nx, plant.n_inputs
+        sl = plant.input_slices
+        owner = type(plant).__name__
+        inputs = list(plant.inputs)
+        for k, piece in actuators.items():
+            ch = find_channel(plant.inputs, k, "input", owner)
+            if ch.size != 1:
+                raise FieldError(f"actuators[{k}]", f"needs a channel 1 wide, {k!r} is {ch.size}")
+            inputs.append(Channel(f"{k}_command", ch.unit, 1, f"command to the drive of {k}"))
+        for k, piece in actuators.items():
+            if isinstance(piece, ReactionWheel) and piece._f("coulomb") > 0:
+                inputs.append(Channel(f"{k}_wheel_friction", "N*m", 1, "wheel bearing friction"))
+        self.inputs = tuple(inputs)
+        M = sum(c.size for c in inputs)
+        col = {c.name: i for i, c in enumerate(inputs)}  # the added channels are 1 wide
+        # state layout: plant, then per actuated channel its drive state and wheel speed
+        idx = n
+        layout: dict[str, dict[str, int]] = {}
+        for k, piece in actuators.items():
+            amp = piece.amplifier if isinstance(piece, ReactionWheel) else piece
+            d: dict[str, int] = {}
+            if np.isfinite(amp._f("bandwidth")):
+                d["drive"], idx = idx, idx + 1
+            if isinstance(piece, ReactionWheel):
+                d["wheel"], idx = idx, idx + 1
+            layout[k] = d
+        n_hw = idx
+        filt: dict[str, tuple[int, int, AntiAliasFilter]] = {}
+        for k, f in filters.items():
+            ch = find_channel(plant.outputs, k, "output", owner)
+            if plant.output_matrices(k) is None:
+                raise FieldError(f"filters[{k}]", f"{k!r} is a nonlinear output of {owner}")
+            order = f.order * ch.size
+            filt[k] = (idx, order, f)
+            idx += order
+        N = idx
+        G = np.zeros((m, N))  # the plant's input u = G x_H + H w_H (w_H without forces)
+        H = np.zeros((m, M))
+        H[:, :m] = np.eye(m)
+        Ah = np.zeros((N, N))
+        Bh = np.zeros((N, M))
+        extra: dict[str, tuple[FloatArray, FloatArray]] = {}  # output rows over (x_H, w_H)
+        for k, piece in actuators.items():
+            j, c, d = sl[k].start, col[f"{k}_command"], layout[k]
+            amp = piece.amplifier if isinstance(piece, ReactionWheel) else piece
+            wb = 2 * np.pi * amp._f("bandwidth")
+            kt = (piece if isinstance(piece, ReactionWheel) else amp)._f("torque_constant")
+            res = piece._f("resistance") if isinstance(piece, ReactionWheel) else 1.0
+            # the drive's output (current, or voltage in voltage mode) over (x_H, w_H)
+            to_demand = 1.0 / kt if amp.mode == "current" else res / kt
+            if isinstance(piece, ReactionWheel):  # the hub feels −τ: the motor is asked for −c
+                to_demand = -to_demand
+            gx, gw = np.zeros(N), np.zeros(M)
+            if "drive" in d:
+                s = d["drive"]
+                Ah[s, s] = -wb
+                Bh[s, c] = wb * to_demand
+                gx[s] = 1.0
+            else:
+                gw[c] = to_demand
+            if not isinstance(piece, ReactionWheel):
+                G[j] += kt * gx
+                H[j] += kt * gw
+                extra[f"{k}_motor_current"] = (gx, gw)
+                continue
+            C_r, D_r, _ = _linear_rows(plant, piece.rate_output)
+            if C_r.shape[0] != 1 or np.any(D_r):
+                raise FieldError(
+                    f"actuators[{k}].rate_output",
+                    f"{piece.rate_output!r} must be a scalar rate read from the state alone",
+                )
+            w = d["wheel"]
+            om_x = np.zeros(N)  # Ω = Ω_a − C_r x
+            om_x[w], om_x[:n] = 1.0, -C_r[0]
+            if amp.mode == "voltage":  # i = (V − K_e Ω) / R
+                ix, iw = (gx - piece._f("back_emf") * om_x) / res, gw / res
+            else:
+                ix, iw = gx, gw
+            tx = kt * ix - piece._f("viscous") * om_x  # τ over x_H
+            tw = kt * iw
+            if f"{k}_wheel_friction" in col:
+                tw = tw.copy()
+                tw[col[f"{k}_wheel_friction"]] = 1.0
+            Ah[w] += tx / piece._f("inertia")
+            Bh[w] += tw / piece._f("inertia")
+            G[j] -= tx
+            H[j] -= tw
+            extra[f"{k}_wheel_speed"] = (om_x, np.zeros(M))
+            extra[f"{k}_motor_current"] = (ix, iw)
+        Ah[:n, :n] = A
+        Ah[:n] += B @ G
+        Bh[:n] += B @ H
+        for k, (s, order, f) in filt.items():
+            C, D, _ = _linear_rows(plant, k)
+            af, bf, cf = f.matrices()
+            w_ = C.shape[0]
+            Af, Bf, Cf = (np.kron(np.eye(w_), a) for a in (af, bf, cf))
+            Cx = np.zeros((w_, N))
+            Cx[:, :n] = C
+            Cx += D @ G
+            Ah[s : s + order, s : s + order] = Af
+            Ah[s : s + order] += Bf @ Cx
+            Bh[s : s + order] += Bf @ (D @ H)
+            cx = np.zeros((w_, N))
+            cx[:, s : s + order] = Cf
+            extra[f"{k}_filtered"] = (cx, np.zeros((w_, M)))
+        self._A, self._B, self._G, self._H = Ah, Bh, G, H
+        self._nx, self._n, self._m = N, n, m
+        self._extra = extra
+        self._filters = filt
+        self._layout = layout
+        self._wheels = {k: p for k, p in actuators.items() if isinstance(p, ReactionWheel)}
+        outputs = list(plant.outputs)
+        for name in extra:
+            if name.endswith("_filtered"):
+                src = find_channel(plant.outputs, name[: -len("_filtered")], "output", owner)
+                outputs.append(Channel(name, src.unit, src.size, f"{src.name} after its filter"))
+            elif name.endswith("_wheel_speed"):
+                outputs.append(Channel(name, "rad/s", 1, "wheel speed relative to the body"))
+            else:
+                outputs.append(Channel(name, "A", 1, "motor current"))
+        self.outputs = tuple(outputs)
+        self.recorded = tuple(plant.recorded) + tuple(
+            n_ for n_ in extra if n_.endswith(("_wheel_speed", "_motor_current"))
+        )
+        self.nonlinear = plant.nonlinear
+        mv = plant.maneuver
+        if mv is not None and mv.torque in actuators:
+            mv = replace(mv, torque=f"{mv.torque}_command")
+        self.maneuver: ManeuverChannels | None = mv
+        renamed = {k: f"{k}_filtered" for k in filters}
+        self.noise_channels = tuple(renamed.get(c, c) for c in plant.noise_channels)
+        self.recorded_measurements = tuple(
+            renamed.get(c, c) for c in getattr(plant, "recorded_measurements", ())
+        )
+        self.integrator = getattr(plant, "integrator", "etd2rk")
+
+    # -- the Plant protocol ------------------------------------------------------------------
+    @property
+    def nx(self) -> int:
+        return self._nx
+
+    def linear_part(self) -> tuple[FloatArray, FloatArray]:
+        return self._A, self._B
+
+    @property
+    def force_matrix(self) -> FloatArray | None:
+        Bf = self.inner.force_matrix
+        if Bf is None:
+            return None
+        out = np.zeros((self._nx, Bf.shape[1]))
+        out[: self._n] = Bf
+        return out
+
+    def plant_input(self, x: FloatArray, u: FloatArray) -> FloatArray:
+        """The wrapped plant's input u = G x_H + H w_H."""
+        return x @ self._G.T + u @ self._H.T
+
+    def nonlinear_force(self, x: FloatArray, u: FloatArray) -> FloatArray:
+        return self.inner.nonlinear_force(x[..., : self._n], self.plant_input(x, u))
+
+    def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
+        if name in self._extra:
+            cx, cw = self._extra[name]
+            cx, cw = np.atleast_2d(cx), np.atleast_2d(cw)
+            return cx, cw, cw
+        mats = self.inner.output_matrices(name)
+        if mats is None:
+            return None
+        C, D, Df = mats
+        Cx = np.zeros((C.shape[0], self._nx))
+        Cx[:, : self._n] = C
+        Cx += D @ self._G
+        Dw = D @ self._H
+        Dfw = np.zeros_like(Dw)
+        if Df is not None:
+            Dfw[:, : self._m] = Df
+        Dfw[:, self._m :] = Dw[:, self._m :]
+        return Cx, Dw, Dfw
+
+    def output(
+        self, name: str, x: FloatArray, u: FloatArray, f_in: FloatArray | None = None
+    ) -> FloatArray:
+        if self.output_matrices(name) is not None:
+            return super().output(name, x, u, f_in)
+        fi = None if f_in is None else f_in[..., : self._m]
+        return self.inner.output(name, x[..., : self._n], self.plant_input(x, u), fi)
+
+    def settled(self, x: FloatArray) -> FloatArray:
+        """``x`` (..., n_x of the plant or of this one) with the hardware at rest on it: each
+        wheel spinning with the body (Ω = 0), each drive at zero, each filter at its steady
+        state for the plant's output at zero input."""
+        x = np.asarray(x, float)
+        out = np.zeros(x.shape[:-1] + (self._nx,))
+        out[..., : self._n] = x[..., : self._n]
+        for k, p in self._wheels.items():
+            C_r, _, _ = _linear_rows(self.inner, p.rate_output)
+            out[..., self._layout[k]["wheel"]] = out[..., : self._n] @ C_r[0]
+        for k, (s, order, f) in self._filters.items():
+            C, _, _ = _linear_rows(self.inner, k)
+            af, bf, _ = f.matrices()
+            gain = -np.linalg.solve(af, bf)[:, 0]  # z_ss per unit input
+            y = out[..., : self._n] @ C.T  # (..., w)
+            out[..., s : s + order] = (y[..., :, None] * gain).reshape(y.shape[:-1] + (order,))
+        return out
+
+    def initial_state(self, n_cases: int) -> FloatArray:
+        return self.settled(self.inner.initial_state(n_cases))
+
+    def momentum(self, x: FloatArray) -> FloatArray | None:
+        """The plant's momentum plus each wheel's J_w Ω_a (planar plants)."""
+        h = self.inner.momentum(x[..., : self._n])
+        if h is None:
+            return None
+        for k, p in self._wheels.items():
+            h = h + p._f("inertia") * x[..., self._layout[k]["wheel"]]
+        return h
+
+    def energy(self, x: FloatArray) -> FloatArray | None:
+        """The plant's energy plus each wheel's ½ J_w Ω_a²."""
+        e = self.inner.energy(x[..., : self._n])
+        if e is None:
+            return None
+        for k, p in self._wheels.items():
+            e = e + 0.5 * p._f("inertia") * x[..., self._layout[k]["wheel"]] ** 2
+        return e
+
+    def vibration_energy(self, x: FloatArray, energy: FloatArray | None = None) -> FloatArray:
+        """The plant's vibration energy (``energy``, which holds the wheels', is not used)."""
+        return self.inner.vibration_energy(x[..., : self._n])  # type: ignore[attr-defined, no-any-return]
+
+    def hardware_states(self) -> dict[str, int]:
+        """Index of each hardware state: ``<channel>_drive``, ``<channel>_wheel`` (Ω_a),
+        ``<channel>_filter`` (the first of its filter's)."""
+        out = {f"{k}_{s}": i for k, d in self._layout.items() for s, i in d.items()}
+        out.update({f"{k}_filter": s for k, (s, _, _) in self._filters.items()})
+        return out
+
+
+def _linear_rows(plant: Plant, name: str) -> tuple[FloatArray, FloatArray, Any]:
+    mats = plant.output_matrices(name)
+    if mats is None:
+        raise FieldError(name, f"{type(plant).__name__}: {name!r} must be a linear output")
+    C, D, Df = mats
+    return np.atleast_2d(C), np.atleast_2d(D), Df
+
+
+def delayed_linear_law(law: LinearLaw, samples: int) -> LinearLaw:
+    r"""``law`` with its commands held ``samples`` control periods: a shift register of the
+    commands appended to ξ, ξ' = [ξ, r_1 .. r_d], r_1 ← C ξ + D e, r_i ← r_{i−1}, applied
+    u_k = u_ff,k−d + r_d (0 over the first d samples): the law's commands computed at k
+    applied at k + d."""
+    if samples == 0:
+        return law
+    Ak, Bk, Ck, Dk = law.Ak, law.Bk, law.Ck, law.Dk
+    T = max(a.shape[0] for a in (Ak, Bk, Ck, Dk))
+    C_ = max(a.shape[1] for a in (Ak, Bk, Ck, Dk))
+    nk, p, m = Ak.shape[-1], Bk.shape[-1], Ck.shape[-2]
+    N = nk + samples * m
+    A2 = np.zeros((T, C_, N, N))
+    B2 = np.zeros((T, C_, N, p))
+    A2[:, :, :nk, :nk] = Ak
+    B2[:, :, :nk] = Bk
+    A2[:, :, nk : nk + m, :nk] = Ck
+    B2[:, :, nk : nk + m] = Dk
+    for i in range(1, samples):
+        r0, r1 = nk + (i - 1) * m, nk + i * m
+        A2[:, :, r1 : r1 + m, r0 : r0 + m] = np.eye(m)
+    C2 = np.zeros((1, 1, m, N))
+    C2[0, 0, :, N - m :] = np.eye(m)
+    u_ff = np.zeros_like(law.u_ff)
+    u_ff[samples:] = law.u_ff[:-samples]
+    K0 = None
+    if law.K0 is not None:
+        K0 = np.zeros((law.K0.shape[0], N, p))
+        K0[:, :nk] = law.K0
+    return replace(
+        law,
+        Ak=A2,
+        Bk=B2,
+        Ck=C2,
+        Dk=np.zeros((1, 1, m, p)),
+        u_ff=u_ff,
+        K0=K0,
+    )
+
+
+class HardwareLaw(Controller):
+    """A law run through the hardware (module docstring): it reads ``reads[k]`` for each
+    filtered channel k, writes ``writes[k]`` for each driven channel, its commands delayed by
+    ``whole`` samples (and ``fraction`` of one, applied by the engine), gated by the wheels'
+    speed limits. Everything else (target, reference, ...) is the law's."""
+
+    def __init__(
+        self,
+        law: Controller,
+        reads: Mapping[str, str],
+        writes: Mapping[str, str],
+        whole: int = 0,
+        fraction: float = 0.0,
+        gates: Mapping[str, tuple[str, float]] | None = None,
+    ) -> None:
+        self.law = law
+        self._rmap, self._wmap = dict(reads), dict(writes)
+        self.whole, self.fraction = int(whole), float(fraction)
+        self.gates = dict(gates or {})
+        own = tuple(self._rmap.get(k, k) for k in law.reads)
+        self.reads = own + tuple(g for g, _ in self.gates.values() if g not in own)
+        self.writes = tuple(self._wmap.get(k, k) for k in law.writes)
+
+    def __getattr__(self, name: str) -> Any:
+        if name in ("law", "__setstate__") or name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(self.law, name)
+
+    @property
+    def n_cases(self) -> int:
+        return self.law.n_cases
+
+    def initial_state(self, n_cases: int) -> dict[str, FloatArray]:
+        state = dict(self.law.initial_state(n_cases))
+        for i in range(self.whole):
+            for k in self.writes:
+                state[f"_held_{i}_{k}"] = np.zeros(0)  # filled with the command's shape
+        return state
+
+    def __call__(
+        self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
+    ) -> tuple[Mapping[str, FloatArray], dict[str, FloatArray]]:
+        inner_y = {k: y[self._rmap.get(k, k)] for k in self.law.reads}
+        own = {k: v for k, v in state.items() if not k.startswith("_held_")}
+        cmd, own = self.law(t, inner_y, own)
+        if not isinstance(cmd, Mapping):
+            cmd = {self.law.writes[0]: cmd}
+        out = {self._wmap.get(k, k): np.asarray(v, float) for k, v in cmd.items()}
+        new = dict(own)
+        for k in self.writes:  # the FIFO: slot 0 newest
+            c = out[k]
+            for i in range(self.whole):
+                held = state[f"_held_{i}_{k}"]
+                new[f"_held_{i}_{k}"] = c
+                c = np.zeros_like(c) if held.size == 0 else held
+            out[k] = c
+        for k, (speed, limit) in self.gates.items():
+            om = np.asarray(y[speed], float)
+            c = out[k]
+            # the motor is asked for −c: it would speed the wheel up when c Ω < 0
+            out[k] = np.where((np.abs(om) >= limit) & (c * om < 0), 0.0, c)
+        return out, new
+
+    def linear_form(self, dt: float, times: FloatArray, n_cases: int) -> LinearLaw | None:
+        if self.gates or self.fraction:
+            return None
+        law = self.law.linear_form(dt, times, n_cases)
+        if law is None:
+            return None
+        law = replace(
+            law,
+            reads=tuple(self._rmap.get(k, k) for k in law.reads),
+            writes=tuple(self._wmap.get(k, k) for k in law.writes),
+        )
+        return delayed_linear_law(law, self.whole)
