@@ -206,10 +206,14 @@ class Amplifier:
     def _f(self, name: str) -> float:
         return float(getattr(self, name))
 
-    def torque_limit(self, resistance: float = np.nan) -> float:
+    def torque_limit(
+        self, resistance: float = np.nan, torque_constant: float | None = None
+    ) -> float:
         """Largest torque command it passes, N m: K_t min(I_max, gain · V_dac) in current
-        mode, K_t min(V_max, gain · V_dac) / R in voltage mode."""
-        kt, g, dac = self._f("torque_constant"), self._f("gain"), self._f("dac_range")
+        mode, K_t min(V_max, gain · V_dac) / R in voltage mode (K_t the motor's: a wheel's
+        ``torque_constant`` when given, else the amplifier's)."""
+        kt = self._f("torque_constant") if torque_constant is None else torque_constant
+        g, dac = self._f("gain"), self._f("dac_range")
         if self.mode == "current":
             return kt * min(self._f("current_limit"), g * dac)
         return kt * min(self._f("voltage_limit"), g * dac) / resistance
@@ -369,7 +373,7 @@ class Hardware:
             a = a_out.get(name, ChannelActuator())
             if isinstance(piece, ReactionWheel):
                 amp = piece.amplifier
-                limit = amp.torque_limit(piece._f("resistance"))
+                limit = amp.torque_limit(piece._f("resistance"), piece._f("torque_constant"))
             else:
                 limit = piece.torque_limit()
             sat = np.minimum(np.asarray(a.saturation, float), limit)
@@ -438,7 +442,7 @@ class HardwarePlant(Plant):
         sl = plant.input_slices
         owner = type(plant).__name__
         inputs = list(plant.inputs)
-        for k, piece in actuators.items():
+        for k in actuators:
             ch = find_channel(plant.inputs, k, "input", owner)
             if ch.size != 1:
                 raise FieldError(f"actuators[{k}]", f"needs a channel 1 wide, {k!r} is {ch.size}")
@@ -460,7 +464,6 @@ class HardwarePlant(Plant):
             if isinstance(piece, ReactionWheel):
                 d["wheel"], idx = idx, idx + 1
             layout[k] = d
-        n_hw = idx
         filt: dict[str, tuple[int, int, AntiAliasFilter]] = {}
         for k, f in filters.items():
             ch = find_channel(plant.outputs, k, "output", owner)
