@@ -202,12 +202,15 @@ def test_one_sample_delay_moves_the_pd_stability_boundary(compiled):
     # undelayed one
     I, T, ratio = 1.0, 0.1, 0.5
     k_c, radius = _delayed_pd_boundary(I, T, ratio)
-    M0 = lambda kp: np.array(
-        [
-            [1 - kp * T * T / (2 * I), T - ratio * kp * T * T / (2 * I)],
-            [-kp * T / I, 1 - ratio * kp * T / I],
-        ]
-    )  # noqa: E731
+
+    def M0(kp):
+        return np.array(
+            [
+                [1 - kp * T * T / (2 * I), T - ratio * kp * T * T / (2 * I)],
+                [-kp * T / I, 1 - ratio * kp * T / I],
+            ]
+        )  # noqa: E731
+
     assert np.abs(np.linalg.eigvals(M0(1.2 * k_c))).max() < 1  # stable without the delay
     plant = RigidHub(I)
     for factor, grows in ((0.97, False), (1.03, True)):
@@ -293,3 +296,39 @@ def test_bad_hardware_is_refused_naming_the_field():
     cfg = replace(cfg, hardware=Hardware(filters={"theta_dot": AntiAliasFilter(1.0)}))
     run = simulate(RigidHub(1.0), PD(1.0, 1.0, target=0.1), cfg).dataset
     assert np.isfinite(run["theta"].values).all()
+
+
+def test_companion_blocks_and_modal_form_of_filters_on_a_hybrid_plant():
+    # T⁻¹ A T block-diagonal with the companion blocks (ω, ζ) of the filter poles; the
+    # compiled loop in these coordinates equals the Python loop's dense step to round-off
+    # (cond(T) eps: 1e-12 rad against 0.7 rad of slew)
+    from flexsat.cases.tamu import tamu
+    from flexsat.sim.hardware import companion_blocks
+
+    A = AntiAliasFilter(10.0, 4).matrices()[0]
+    T, Ti, w, z = companion_blocks(A)
+    L = Ti @ A @ T
+    for i in range(2):
+        blk = np.array([[0.0, 1.0], [-(w[i] ** 2), -2 * z[i] * w[i]]])
+        np.testing.assert_allclose(
+            L[2 * i : 2 * i + 2, 2 * i : 2 * i + 2], blk, atol=1e-9 * w[i] ** 2
+        )
+    assert np.abs(L[:2, 2:]).max() < 1e-9 * np.abs(L).max()
+    # Butterworth: the poles on the circle of the corner, ζ = sin(π/8), sin(3π/8)
+    np.testing.assert_allclose(w, 2 * np.pi * 10.0, rtol=1e-12)
+    np.testing.assert_allclose(sorted(z), np.sin([np.pi / 8, 3 * np.pi / 8]), rtol=1e-12)
+    assert companion_blocks(AntiAliasFilter(10.0, 3).matrices()[0]) is None  # a real pole
+
+    case = tamu()
+    hw = case.hardware()
+    hp = HardwarePlant(case.model(), hw.actuators, hw.filters)
+    assert hp.modal_form() is not None
+    law = case.law_ii(0.5, 0.3, 0.2, alpha=np.array([0.1, 0.2]))  # g3: the filter is read
+    cfg = replace(case.sim_config(3.0), hardware=hw)
+    a = simulate(case.model(), law, cfg, batch_independent=True).dataset
+    b = simulate(case.model(), law, cfg, compiled=False).dataset
+    assert a.attrs["engine"] == "compiled" and b.attrs["engine"] == "python"
+    np.testing.assert_allclose(a["theta"].values, b["theta"].values, atol=1e-12)
+    np.testing.assert_allclose(
+        a["vibration_energy"].values, b["vibration_energy"].values, atol=1e-12
+    )

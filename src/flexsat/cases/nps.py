@@ -52,9 +52,9 @@ from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
 
 if TYPE_CHECKING:
-    import control
     import xarray as xr
 
+    import control
     from flexsat.sim.disturbances import CableSpring
 
 #: a number of modes, or "all" for every finite-element mode
@@ -454,7 +454,7 @@ class NPSCase:
         from flexsat.sim.disturbances import CableSpring
         from flexsat.sim.engine import simulate
 
-        cable = CableSpring(constant="1 mN*m") if cable is None else cable
+        cable = CableSpring(constant=1e-3) if cable is None else cable  # 1 mN m
         config = SimConfig(
             duration=duration,
             control_rate=control_rate,

@@ -401,9 +401,7 @@ def simulate(
         )
         check_law(plant, controller)
         if initial_state is not None:
-            initial_state = cast("HardwarePlant", plant).settled(
-                require_finite(initial_state, "initial_state")
-            )
+            initial_state = plant.settled(require_finite(initial_state, "initial_state"))
     substeps = check_resources(plant, config, nc, record_states, disturbances)
     seeds = config.seed + np.arange(nc) if seeds is None else np.asarray(seeds, int).reshape(nc)
     x, theta0 = _initial_state(plant, nc, initial_state, getattr(controller, "reference", None))

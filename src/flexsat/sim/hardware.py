@@ -49,8 +49,10 @@ loop, with two exact steps).
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -77,6 +79,7 @@ __all__ = [
     "HardwareLaw",
     "HardwarePlant",
     "ReactionWheel",
+    "companion_blocks",
     "delayed_linear_law",
     "zoh",
 ]
@@ -111,6 +114,18 @@ def zoh(A: FloatArray, B: FloatArray, dt: float) -> tuple[FloatArray, FloatArray
     return E[:n, :n], E[:n, n:]
 
 
+@lru_cache(maxsize=64)
+def _filter_matrices(corner: float, order: int, kind: str) -> tuple[FloatArray, ...]:
+    wc = 2 * np.pi * corner
+    if kind == "butterworth":
+        zpk = signal.butter(order, wc, analog=True, output="zpk")
+    else:
+        zpk = signal.bessel(order, wc, analog=True, output="zpk", norm="mag")
+    A, B, C, D = signal.zpk2ss(*zpk)
+    assert not np.any(D)  # an all-pole low-pass is strictly proper
+    return np.asarray(A, float), np.asarray(B, float), np.asarray(C, float)
+
+
 @dataclass(frozen=True)
 class AntiAliasFilter:
     """Analog low-pass on a measured channel (module docstring).
@@ -141,14 +156,8 @@ class AntiAliasFilter:
 
     def matrices(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(A_f, B_f, C_f) of a unit-DC-gain realisation, strictly proper."""
-        wc = 2 * np.pi * float(self.corner)  # type: ignore[arg-type]  # SI once built
-        if self.kind == "butterworth":
-            zpk = signal.butter(self.order, wc, analog=True, output="zpk")
-        else:
-            zpk = signal.bessel(self.order, wc, analog=True, output="zpk", norm="mag")
-        A, B, C, D = signal.zpk2ss(*zpk)
-        assert not np.any(D)  # an all-pole low-pass is strictly proper
-        return np.asarray(A, float), np.asarray(B, float), np.asarray(C, float)
+        A, B, C = _filter_matrices(float(self.corner), int(self.order), self.kind)  # type: ignore[arg-type]
+        return A.copy(), B.copy(), C.copy()
 
     def frequency_response(self, f: FloatArray) -> FloatArray:
         """H(j 2π f), complex."""
@@ -302,6 +311,23 @@ class Hardware:
     actuators: Mapping[str, ReactionWheel | Amplifier] = field(default_factory=dict)
     filters: Mapping[str, AntiAliasFilter] = field(default_factory=dict)
     delay: float = 0.0
+    # the augmented plant of each plant run with this hardware (built once: a batch of runs
+    # of one plant, a sweep's chunks); not an __init__ argument
+    _built: dict[int, tuple[Any, HardwarePlant]] = field(
+        init=False, repr=False, compare=False, default_factory=dict
+    )
+
+    def plant_for(self, plant: Plant) -> HardwarePlant:
+        """The augmented plant of ``plant`` (built on first use, kept while ``plant`` lives)."""
+        got = self._built.get(id(plant))
+        if got is not None and got[0]() is plant:
+            return got[1]
+        hp = HardwarePlant(plant, self.actuators, self.filters)
+        try:
+            self._built[id(plant)] = (weakref.ref(plant), hp)
+        except TypeError:  # a plant without weak references: built per run
+            pass
+        return hp
 
     def __post_init__(self) -> None:
         for name, kinds, pieces in (
@@ -351,7 +377,7 @@ class Hardware:
         """The run with this hardware: the augmented plant, the wrapped law and the bound
         sensors, actuators and disturbances moved to the channels the law now reads and
         writes (an actuator's limits on its command channel, tightened by the drive's)."""
-        hp = HardwarePlant(plant, self.actuators, self.filters)
+        hp = self.plant_for(plant)
         reads = {k: f"{k}_filtered" for k in self.filters}
         writes = {k: f"{k}_command" for k in self.actuators}
         for k in self.filters:
@@ -388,7 +414,7 @@ class Hardware:
             if isinstance(piece, ReactionWheel) and piece._f("coulomb") > 0:
                 ch = find_channel(hp.inputs, f"{k}_wheel_friction", "input", "HardwarePlant")
                 d_out[ch.name] = ChannelDisturbance(
-                    force=BearingFriction(piece.coulomb, 0.0, piece.smoothing),
+                    force=BearingFriction(piece._f("coulomb"), 0.0, piece._f("smoothing")),
                     force_output=f"{k}_wheel_speed",
                     force_name=f"{k}_wheel_friction",
                 ).bind(ch)
@@ -544,6 +570,8 @@ class HardwarePlant(Plant):
             cx[:, s : s + order] = Cf
             extra[f"{k}_filtered"] = (cx, np.zeros((w_, M)))
         self._A, self._B, self._G, self._H = Ah, Bh, G, H
+        self._rows: dict[str, tuple[FloatArray, FloatArray, FloatArray | None] | None] = {}
+        self._modal: list[Any] = []
         self._nx, self._n, self._m = N, n, m
         self._extra = extra
         self._filters = filt
@@ -573,6 +601,18 @@ class HardwarePlant(Plant):
             renamed.get(c, c) for c in getattr(plant, "recorded_measurements", ())
         )
         self.integrator = getattr(plant, "integrator", "etd2rk")
+        # without wheels the energy is the plant's: its quadratic form and momentum row,
+        # padded, let the compiled loop record it in modal coordinates
+        self.energy_matrix: FloatArray | None = None
+        if not self._wheels:
+            Q = getattr(plant, "energy_matrix", None)
+            if Q is not None:
+                self.energy_matrix = np.zeros((N, N))
+                self.energy_matrix[:n, :n] = Q
+            row, inertia = (getattr(plant, k, None) for k in ("momentum_row", "total_inertia"))
+            if row is not None and inertia is not None:
+                self.momentum_row = np.concatenate([np.asarray(row, float), np.zeros(N - n)])
+                self.total_inertia = inertia
 
     # -- the Plant protocol ------------------------------------------------------------------
     @property
@@ -599,6 +639,13 @@ class HardwarePlant(Plant):
         return self.inner.nonlinear_force(x[..., : self._n], self.plant_input(x, u))
 
     def output_matrices(self, name: str) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
+        if name not in self._rows:
+            self._rows[name] = self._output_matrices(name)
+        return self._rows[name]
+
+    def _output_matrices(
+        self, name: str
+    ) -> tuple[FloatArray, FloatArray, FloatArray | None] | None:
         if name in self._extra:
             cx, cw = self._extra[name]
             cx, cw = np.atleast_2d(cx), np.atleast_2d(cw)
@@ -666,7 +713,56 @@ class HardwarePlant(Plant):
 
     def vibration_energy(self, x: FloatArray, energy: FloatArray | None = None) -> FloatArray:
         """The plant's vibration energy (``energy``, which holds the wheels', is not used)."""
-        return self.inner.vibration_energy(x[..., : self._n])  # type: ignore[attr-defined, no-any-return]
+        vib = self.inner.vibration_energy  # type: ignore[attr-defined]
+        return np.asarray(vib(x[..., : self._n]), float)
+
+    def modal_form(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None:
+        """(T, T⁻¹, ω, ζ) with x_H = T z, z in companion 2×2 blocks, for the compiled loop's
+        O(n) propagation (:func:`flexsat.sim.compiled_arguments.modal_form`), or None.
+
+        Exists when the plant has a modal form (T_p, Λ_p) and the only hardware states are
+        filters whose poles come in complex pairs (even orders): with the filters' drive
+        F = ∂z'/∂x and their own blocks A_F T_F = T_F Λ_F, T = [[T_p, 0], [X, T_F]] where X
+        solves the Sylvester equation A_F X − X Λ_p = −F T_p (disjoint spectra: a filter pole
+        is never a plant pole)."""
+        from scipy.linalg import solve_sylvester
+
+        from flexsat.sim.compiled_arguments import modal_form
+
+        if self._modal:
+            return self._modal[0]
+        self._modal.append(self._modal_form(modal_form, solve_sylvester))
+        return self._modal[0]
+
+    def _modal_form(
+        self, modal_form: Any, solve_sylvester: Any
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None:
+        if any(self._layout.values()) or self.nonlinear:
+            return None
+        inner = modal_form(self.inner, np.inf)
+        if inner is None or np.ndim(inner[0]) != 2:
+            return None
+        Tp, Tpi, wp, zp = (np.asarray(a, float) for a in inner)
+        n = self._n
+        if self._nx == n:
+            return Tp, Tpi, wp, zp
+        AF, F = self._A[n:, n:], self._A[n:, :n]
+        blocks = companion_blocks(AF)
+        if blocks is None:
+            return None
+        TF, TFi, wF, zF = blocks
+        Lp = np.zeros((wp.size * 2, wp.size * 2))
+        for i, (w, z) in enumerate(zip(wp, zp)):
+            Lp[2 * i, 2 * i + 1] = 1.0
+            Lp[2 * i + 1, 2 * i], Lp[2 * i + 1, 2 * i + 1] = -(w**2), -2 * z * w
+        X = solve_sylvester(AF, -Lp, -F @ Tp)
+        nf = self._nx - n
+        T = np.zeros((self._nx, self._nx))
+        Ti = np.zeros((self._nx, self._nx))
+        T[:n, :n], T[n:, :n], T[n:, n:] = Tp, X, TF
+        Ti[:n, :n], Ti[n:, :n], Ti[n:, n:] = Tpi, -TFi @ X @ Tpi, TFi
+        assert Ti.shape == (n + nf, n + nf)
+        return T, Ti, np.concatenate([wp, wF]), np.concatenate([zp, zF])
 
     def hardware_states(self) -> dict[str, int]:
         """Index of each hardware state: ``<channel>_drive``, ``<channel>_wheel`` (Ω_a),
@@ -674,6 +770,28 @@ class HardwarePlant(Plant):
         out = {f"{k}_{s}": i for k, d in self._layout.items() for s, i in d.items()}
         out.update({f"{k}_filter": s for k, (s, _, _) in self._filters.items()})
         return out
+
+
+def companion_blocks(
+    A: FloatArray, tol: float = 1e-9
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None:
+    """(T, T⁻¹, ω, ζ) with T⁻¹ A T = diag([[0, 1], [−ω², −2ζω]]) for a matrix whose
+    eigenvalues are all complex pairs λ (a = |λ|² = ω², b = −2 Re λ = 2ζω); None when one is
+    real. Per pair: t2 = Re v (v its eigenvector), t1 = (A + b) t2, since A t1 = −a t2 on the
+    pair's invariant plane (Cayley–Hamilton)."""
+    mu, V = np.linalg.eig(A)
+    if np.any(np.abs(mu.imag) <= tol * np.abs(mu)):
+        return None
+    up = np.flatnonzero(mu.imag > 0)
+    cols, w, z = [], [], []
+    for i in up:
+        a, b = abs(mu[i]) ** 2, -2 * mu[i].real
+        t2 = V[:, i].real / np.linalg.norm(V[:, i].real)
+        cols += [(A + b * np.eye(A.shape[0])) @ t2, t2]
+        w.append(np.sqrt(a))
+        z.append(b / (2 * np.sqrt(a)))
+    T = np.column_stack(cols)
+    return T, np.linalg.inv(T), np.array(w), np.array(z)
 
 
 def _linear_rows(plant: Plant, name: str) -> tuple[FloatArray, FloatArray, Any]:
