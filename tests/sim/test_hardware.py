@@ -237,9 +237,10 @@ def test_delay_compiled_equals_python_and_shift_register():
         a = simulate(plant, law, cfg, compiled=True).dataset
         b = simulate(plant, law, cfg, compiled=False).dataset
         np.testing.assert_allclose(a["theta"].values, b["theta"].values, atol=1e-13)
-        # the applied command is the law's command d samples earlier
-        u = b["torque_command"].values[0] if "torque_command" in b else None
-        assert u is None or np.all(u[:d] == 0)
+        # the applied torque is the PD law of the measurements d samples earlier, 0 before
+        u, th, om = (b[k].values[0] for k in ("torque", "theta", "theta_dot"))
+        assert np.all(u[:d] == 0)
+        np.testing.assert_allclose(u[d:], 3.0 * (0.5 - th[:-d]) - 4.0 * om[:-d], atol=1e-14)
 
 
 def test_fractional_delay_between_whole_ones():

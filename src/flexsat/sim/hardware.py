@@ -379,7 +379,7 @@ class Hardware:
         writes (an actuator's limits on its command channel, tightened by the drive's)."""
         hp = self.plant_for(plant)
         reads = {k: f"{k}_filtered" for k in self.filters}
-        writes = {k: f"{k}_command" for k in self.actuators}
+        writes = {k: f"{k}_drive" for k in self.actuators}
         for k in self.filters:
             if k not in controller.reads:
                 raise FieldError(f"filters[{k}]", f"the law does not read {k!r}")
@@ -416,7 +416,7 @@ class Hardware:
                 d_out[ch.name] = ChannelDisturbance(
                     force=BearingFriction(piece._f("coulomb"), 0.0, piece._f("smoothing")),
                     force_output=f"{k}_wheel_speed",
-                    force_name=f"{k}_wheel_friction",
+                    force_name="coulomb",
                 ).bind(ch)
         gates = {
             writes[k]: (f"{k}_wheel_speed", p._f("max_speed"))
@@ -446,9 +446,10 @@ def _rebind(s: ChannelSensor, plant: Plant, name: str, role: str) -> ChannelSens
 class HardwarePlant(Plant):
     """A linear (or plant-nonlinear) plant with hardware states appended (module docstring):
     x_H = [x, hardware states, filter states]; inputs: the plant's own (disturbances act there
-    directly), ``<channel>_command`` per actuated channel, ``<channel>_wheel_friction`` per
-    wheel with Coulomb friction; outputs: the plant's own, ``<channel>_filtered``,
-    ``<channel>_wheel_speed`` (Ω, rad/s) and ``<channel>_motor_current`` (A)."""
+    directly), ``<channel>_drive`` (the law's command to the drive) per actuated channel,
+    ``<channel>_wheel_friction`` per wheel with Coulomb friction; outputs: the plant's own,
+    ``<channel>_filtered``, ``<channel>_wheel_speed`` (Ω, rad/s) and
+    ``<channel>_motor_current`` (A)."""
 
     def __init__(
         self,
@@ -472,7 +473,7 @@ class HardwarePlant(Plant):
             ch = find_channel(plant.inputs, k, "input", owner)
             if ch.size != 1:
                 raise FieldError(f"actuators[{k}]", f"needs a channel 1 wide, {k!r} is {ch.size}")
-            inputs.append(Channel(f"{k}_command", ch.unit, 1, f"command to the drive of {k}"))
+            inputs.append(Channel(f"{k}_drive", ch.unit, 1, f"command to the drive of {k}"))
         for k, piece in actuators.items():
             if isinstance(piece, ReactionWheel) and piece._f("coulomb") > 0:
                 inputs.append(Channel(f"{k}_wheel_friction", "N*m", 1, "wheel bearing friction"))
@@ -506,7 +507,7 @@ class HardwarePlant(Plant):
         Bh = np.zeros((N, M))
         extra: dict[str, tuple[FloatArray, FloatArray]] = {}  # output rows over (x_H, w_H)
         for k, piece in actuators.items():
-            j, c, d = sl[k].start, col[f"{k}_command"], layout[k]
+            j, c, d = sl[k].start, col[f"{k}_drive"], layout[k]
             amp = piece.amplifier if isinstance(piece, ReactionWheel) else piece
             wb = 2 * np.pi * amp._f("bandwidth")
             kt = (piece if isinstance(piece, ReactionWheel) else amp)._f("torque_constant")
@@ -593,7 +594,7 @@ class HardwarePlant(Plant):
         self.nonlinear = plant.nonlinear
         mv = plant.maneuver
         if mv is not None and mv.torque in actuators:
-            mv = replace(mv, torque=f"{mv.torque}_command")
+            mv = replace(mv, torque=f"{mv.torque}_drive")
         self.maneuver: ManeuverChannels | None = mv
         renamed = {k: f"{k}_filtered" for k in filters}
         self.noise_channels = tuple(renamed.get(c, c) for c in plant.noise_channels)
