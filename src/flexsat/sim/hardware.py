@@ -322,7 +322,7 @@ class Hardware:
         got = self._built.get(id(plant))
         if got is not None and got[0]() is plant:
             return got[1]
-        hp = HardwarePlant(plant, self.actuators, self.filters)
+        hp = HardwarePlant(plant, self.driven, self.filters)
         try:
             self._built[id(plant)] = (weakref.ref(plant), hp)
         except TypeError:  # a plant without weak references: built per run
@@ -352,6 +352,17 @@ class Hardware:
         object.__setattr__(self, "delay", float(d))
 
     @property
+    def driven(self) -> dict[str, ReactionWheel | Amplifier]:
+        """The actuators with dynamics (a wheel, an amplifier with a finite bandwidth): each
+        gets a drive channel and states; an instantaneous amplifier is its limit alone, on
+        the channel itself."""
+        return {
+            k: a
+            for k, a in self.actuators.items()
+            if isinstance(a, ReactionWheel) or np.isfinite(a._f("bandwidth"))
+        }
+
+    @property
     def whole_delay(self) -> int:
         return int(np.floor(float(self.delay) + 1e-12))
 
@@ -379,7 +390,7 @@ class Hardware:
         writes (an actuator's limits on its command channel, tightened by the drive's)."""
         hp = self.plant_for(plant)
         reads = {k: f"{k}_filtered" for k in self.filters}
-        writes = {k: f"{k}_drive" for k in self.actuators}
+        writes = {k: f"{k}_drive" for k in self.driven}
         for k in self.filters:
             if k not in controller.reads:
                 raise FieldError(f"filters[{k}]", f"the law does not read {k!r}")
@@ -395,7 +406,7 @@ class Hardware:
         for k, a in actuators.items():
             a_out[writes.get(k, k)] = a
         for k, piece in self.actuators.items():
-            name = writes[k]
+            name = writes.get(k, k)
             a = a_out.get(name, ChannelActuator())
             if isinstance(piece, ReactionWheel):
                 amp = piece.amplifier
@@ -408,7 +419,7 @@ class Hardware:
                 rate_limit=a.rate_limit,
                 scale=a.scale,
                 bias=a.bias,
-            ).bind(find_channel(hp.inputs, name, "input", "HardwarePlant"))
+            ).bind(find_channel(hp.inputs, name, "input", type(hp).__name__))
         d_out = dict(disturbances)
         for k, piece in self.actuators.items():
             if isinstance(piece, ReactionWheel) and piece._f("coulomb") > 0:
