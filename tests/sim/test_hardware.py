@@ -362,3 +362,18 @@ def test_filter_phase_lag_appears_in_the_sampled_data_margins():
     assert lag < -3.0
     assert m1.phase_margin_deg - m0.phase_margin_deg == pytest.approx(lag, abs=0.01 * abs(lag))
     assert m1.gain_crossover_rad_s == pytest.approx(m0.gain_crossover_rad_s, rel=1e-4)
+
+
+def test_hardware_pickles_and_reuses_its_plant():
+    # a config travels to batch workers by pickle; the augmented plant is built once per plant
+    import pickle
+
+    from flexsat.cases.tamu import tamu
+
+    case = tamu()
+    hw = case.hardware()
+    model = case.model()
+    assert hw.plant_for(model) is hw.plant_for(model)
+    back = pickle.loads(pickle.dumps(SimConfig(1.0, hardware=hw)))
+    assert back.hardware == hw
+    assert back.hardware.plant_for(model).nx == hw.plant_for(model).nx

@@ -317,6 +317,16 @@ class Hardware:
         init=False, repr=False, compare=False, default_factory=dict
     )
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without the built plants (weak references: a batch sent to workers)."""
+        state = dict(self.__dict__)
+        state["_built"] = {}
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        for k, v in state.items():
+            object.__setattr__(self, k, v)
+
     def plant_for(self, plant: Plant) -> HardwarePlant:
         """The augmented plant of ``plant`` (built on first use, kept while ``plant`` lives)."""
         got = self._built.get(id(plant))
