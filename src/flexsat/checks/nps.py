@@ -102,7 +102,7 @@ CHECKS: list[Check] = [
     ),
     Check(
         "nps",
-        "steady-state error θ_ss = T_D/k, 1 mN m cable torque (Eq. 23), simulated PD slew",
+        "θ_ss = T_D/k, 1 mN m cable torque, PD slew",
         f"{SOURCE}, Eq. 23",
         0.041,
         "deg",
