@@ -154,6 +154,12 @@ def test_wheel_speed_limit_caps_the_slew():
     t90 = t[np.argmax(run["theta"].values[0] >= 2.7)]
     assert t90 >= 2.7 / cap
     assert run.attrs["engine"] == "python"  # the limiter is a state-dependent switch
+    law = PD(40.0, 40.0, target=3.0)
+    cfg = SimConfig(1.0, 100.0, hardware=Hardware(actuators={"torque": limited}))
+    with pytest.raises(ValueError, match="speed limit"):
+        simulate(RigidHub(I), law, cfg, compiled=True)
+    with pytest.raises(ValueError, match="fractional computation delay"):
+        simulate(RigidHub(I), law, replace(cfg, hardware=Hardware(delay=0.5)), compiled=True)
 
 
 def test_voltage_mode_back_emf_caps_the_wheel_speed():

@@ -927,8 +927,18 @@ class HardwareLaw(Controller):
             out[k] = np.where((np.abs(om) >= limit) & (c * om < 0), 0.0, c)
         return out, new
 
+    @property
+    def compiled_reason(self) -> str | None:
+        """Why the compiled loop cannot run this law's hardware, or None
+        (:func:`flexsat.sim.compiled.unsupported`)."""
+        if self.gates:
+            return f"{', '.join(self.gates)}: a wheel's speed limit (a switch on the state)"
+        if self.fraction:
+            return f"a fractional computation delay ({self.fraction:g} of a sample)"
+        return None
+
     def linear_form(self, dt: float, times: FloatArray, n_cases: int) -> LinearLaw | None:
-        if self.gates or self.fraction:
+        if self.compiled_reason is not None:
             return None
         law = self.law.linear_form(dt, times, n_cases)
         if law is None:
