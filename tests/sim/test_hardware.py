@@ -97,15 +97,6 @@ def test_filter_is_the_exact_zoh_of_its_state_space(kind, order):
     np.testing.assert_allclose(y_f, ref @ Cf[0], atol=1e-12 * np.abs(ref).max())
 
 
-def test_filter_corner_and_dc_gain():
-    # −3 dB at the corner for both kinds (norm "mag"), unit gain at DC: the filter's definition
-    for kind in ("butterworth", "bessel"):
-        f = AntiAliasFilter(10.0, 4, kind)
-        h = f.frequency_response(np.array([0.0, 10.0]))
-        assert abs(h[0] - 1) < 1e-12
-        assert abs(abs(h[1]) - 2**-0.5) < 1e-9
-
-
 def _wheel_run(wheel, I=10.0, target=1.0, duration=20.0, rate=100.0, kp=40.0, kd=40.0):
     law = PD(kp, kd, target=target)
     cfg = SimConfig(duration, rate, hardware=Hardware(actuators={"torque": wheel}))
