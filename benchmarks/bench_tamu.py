@@ -511,8 +511,60 @@ def other_sections(path: Path) -> str:
     return "" if match is None else "\n" + path.read_text()[match.start() :]
 
 
+def hardware_rows(repeat: int = 20, batch_repeat: int = 7) -> str:
+    """Issue 25: the TAMU hardware preset (amplifier, 10 Hz anti-alias filter, one-sample
+    delay) against the ideal run, single and batch, both settings, side by side in one run:
+    wall and CPU (time.process_time), each the best of N interleaved calls, and the ratio."""
+    from dataclasses import replace
+
+    case = tamu()
+    model = case.model()
+    single = case.law_ii(G1, G2, 0.0, alpha=ALPHA, u_max=U_MAX)
+    alpha, umax = np.meshgrid(
+        np.linspace(0.02, 0.25, 40), np.linspace(200.0, 600.0, 25), indexing="ij"
+    )
+    batch = case.law_ii(G1, G2, 0.0, alpha=alpha.ravel(), u_max=OZIN * umax.ravel())
+    rows = [
+        "| run | setting | ideal wall (CPU) | hardware wall (CPU) "
+        "| hardware / ideal (wall, CPU) | engine |",
+        "|---|---|---|---|---|---|",
+    ]
+
+    def timed(fns, n):
+        """Best wall and best CPU of each of ``fns``, called in turn ``n`` times (interleaved:
+        a load change on the shared machine hits both alike)."""
+        wall, cpu, out = [np.inf] * len(fns), [np.inf] * len(fns), [None] * len(fns)
+        for _ in range(n):
+            for i, fn in enumerate(fns):
+                w, c = time.perf_counter(), time.process_time()
+                out[i] = fn()
+                wall[i] = min(wall[i], time.perf_counter() - w)
+                cpu[i] = min(cpu[i], time.process_time() - c)
+        return wall, cpu, out
+
+    for name, law, n in (("1 maneuver", single, repeat), ("batch of 1,000", batch, batch_repeat)):
+        for label, kw in SETTINGS.values():
+            cfg = case.sim_config(DURATION, **kw)
+            hcfg = replace(cfg, hardware=case.hardware())
+            simulate(model, law, hcfg)  # compile / warm caches
+            (w0, w1), (c0, c1), (_, out) = timed(
+                [lambda: simulate(model, law, cfg), lambda: simulate(model, law, hcfg)],  # noqa: B023
+                n,
+            )
+            rows.append(
+                f"| {name} | {label} | {w0 * 1e3:.0f} ms ({c0 * 1e3:.0f} ms) | "
+                f"{w1 * 1e3:.0f} ms ({c1 * 1e3:.0f} ms) | {w1 / w0:.2f}, {c1 / c0:.2f} | "
+                f"{out.dataset.attrs['engine']} |"
+            )
+            print(rows[-1], flush=True)
+    return "\n".join(rows)
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    if "--hardware" in argv:
+        print(hardware_rows())
+        return 0
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--repeat", type=int, default=5, help="repeats of the single flexsat run")
     p.add_argument("--baseline-repeat", type=int, default=3, help="repeats of each solve_ivp run")
@@ -528,6 +580,9 @@ def main(argv=None) -> int:
     p.add_argument("--profile", action="store_true", help="always print the cProfile tables")
     p.add_argument("--write", action="store_true", help=f"write {DOC.relative_to(ROOT)}")
     p.add_argument("--output", type=Path, default=DOC, help="document written by --write")
+    p.add_argument(
+        "--hardware", action="store_true", help="only the issue-25 hardware rows (printed)"
+    )
     args = p.parse_args(argv)
     args.methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     if any(r < 1 for r in (args.repeat, args.baseline_repeat, args.batch_repeat)):

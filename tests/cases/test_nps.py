@@ -200,3 +200,26 @@ def test_overrides_accept_units_and_reject_bad_input():
     with pytest.raises(ValueError, match=r"^hub_inertia: must be > 0"):
         nps(hub_inertia=0)
     assert nps(damping="0.4 percent").damping == pytest.approx(0.004)
+
+
+def test_cable_spring_steady_state_error_is_eq_23():
+    # Eq. 23: under T = −k θ_e + T_D the PD step settles at θ_ss = T_D / k; 400 s of the
+    # closed loop (slowest pole 0.34 /s, e^{−136}) leaves only round-off: 1e-6 relative
+    from flexsat.sim.disturbances import CableSpring
+
+    case = nps()
+    k = float(case.pd_gains().kp)
+    run = case.cable_slew()
+    theta_ss = float(run["theta"].values[0, -1]) - case.slew_angle
+    assert theta_ss == pytest.approx(1e-3 / k, rel=1e-6)
+    assert np.degrees(theta_ss) == pytest.approx(0.041, abs=5e-4)  # as printed
+    # a linear cable spring adds its stiffness: θ_ss = (T_D + k_c θ_c) / (k + k_c) about the
+    # target, here with θ_c at the target; a tabulated straight line is the same spring
+    kc = 0.5
+    lin = CableSpring(constant="1 mN*m", stiffness=kc, center=case.slew_angle)
+    a = float(case.cable_slew(lin)["theta"].values[0, -1]) - case.slew_angle
+    assert a == pytest.approx(1e-3 / (k + kc), rel=1e-6)
+    angles = np.array([-1.0, 3.0])
+    tab = CableSpring(angles=tuple(angles), torques=tuple(1e-3 - kc * (angles - case.slew_angle)))
+    b = float(case.cable_slew(tab)["theta"].values[0, -1]) - case.slew_angle
+    assert b == pytest.approx(a, rel=1e-9)

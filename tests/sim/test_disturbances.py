@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from flexsat.input_checks import FieldError
 from flexsat.sim import BearingFriction, Impulses
 
 
@@ -23,3 +24,19 @@ def test_bad_disturbances():
         BearingFriction(smoothing=0.0)
     with pytest.raises(ValueError, match=r"^impulses.times: must be >= 0"):
         Impulses((-1.0,), (1.0,))
+
+
+def test_cable_spring_profile_and_checks():
+    from flexsat.sim.disturbances import CableSpring
+
+    c = CableSpring(
+        constant="1 mN*m", stiffness=2.0, center=0.5, angles=(0.0, 1.0), torques=(0.0, 3.0)
+    )
+    th = np.array([-1.0, 0.25, 2.0])
+    # constant − k (θ − θ_c) + the table (held at its ends)
+    np.testing.assert_allclose(c(th), 1e-3 - 2.0 * (th - 0.5) + np.array([0.0, 0.75, 3.0]))
+    assert c.max_slope == pytest.approx(5.0)
+    with pytest.raises(FieldError, match="angles"):
+        CableSpring(angles=(1.0, 0.0), torques=(0.0, 1.0))
+    with pytest.raises(FieldError, match="torques"):
+        CableSpring(angles=(0.0, 1.0), torques=(0.0,))

@@ -52,7 +52,10 @@ from flexsat.structures.sections import Material, Section
 from flexsat.units import to_si
 
 if TYPE_CHECKING:
+    import xarray as xr
+
     import control
+    from flexsat.sim.disturbances import CableSpring
 
 #: a number of modes, or "all" for every finite-element mode
 ModeCount: TypeAlias = int | Literal["all"] | None
@@ -434,6 +437,33 @@ class NPSCase:
             self.controller_damping,
             **kwargs,
         )
+
+    def cable_slew(
+        self,
+        cable: CableSpring | None = None,
+        duration: float = 400.0,
+        control_rate: float = 20.0,
+        **pd: Any,
+    ) -> xr.Dataset:
+        """The 60° PD step slew (Eq. 20) with the cable-spring torque on the hub (default a
+        constant T_D = 1 mN m), ideal sensors, long enough for the closed loop to settle to
+        θ_ss = T_D / k (Eq. 23): the recorded run (the Python loop: the cable is a
+        position-dependent input force)."""
+        from flexsat.sim.channels import ChannelDisturbance
+        from flexsat.sim.config import SimConfig
+        from flexsat.sim.disturbances import CableSpring
+        from flexsat.sim.engine import simulate
+
+        cable = CableSpring(constant=1e-3) if cable is None else cable  # 1 mN m
+        config = SimConfig(
+            duration=duration,
+            control_rate=control_rate,
+            channel_disturbances={
+                "torque": ChannelDisturbance(force=cable, force_output="theta", force_name="cable")
+            },
+        )
+        law = self.pd_gains(target=self.slew_angle, **pd)
+        return simulate(self.model(), law, config).dataset
 
     @property
     def slew_angle(self) -> float:

@@ -38,6 +38,7 @@ from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.input_checks import FieldError
 from flexsat.maneuvers import SmoothBangBang
 from flexsat.sim import BearingFriction, RandomTorque, Sensors, SimConfig, TorqueActuator
+from flexsat.sim.hardware import Amplifier, AntiAliasFilter, Hardware
 from flexsat.structures.beam import hub_free_frequencies
 from flexsat.units import QuantityArrayLike, to_si
 
@@ -177,6 +178,30 @@ class TamuCase:
             else BearingFriction(),
             random_torque=RandomTorque(to_si(PUBLISHED["random_torque"], "N*m") if noise else 0.0),
             **kwargs,
+        )
+
+    def hardware(self, amplifier_bandwidth: float = np.inf, filter_order: int = 2) -> Hardware:
+        """The TAMU computer cycle and drive as a preset (Att. 3 appendix): the KEPCO BOP in
+        current mode (1.2 A/V, 12 A, ±10 V D/A; its current-loop bandwidth, Hz, is not
+        published: instantaneous by default, a finite value adds its lag as a state and the
+        compiled loop then propagates densely), the
+        PMI motor's K_t = 52.77 oz-in/A, a 10 Hz Butterworth anti-alias filter of
+        ``filter_order`` on the strain-gauge channel (``root_torque``), and the one-step-ahead
+        command: one sample of delay at 75 Hz. The encoder is read at the DACLK interrupt
+        (no filter). The strain burst's mean over three 4 kHz ADCLK cycles is not modelled:
+        its gain at 10 Hz differs from 1 by 1 − sinc(π · 10 Hz · 0.5 ms) ≈ 4e-6."""
+        amp = Amplifier(
+            "current",
+            gain=1.2,
+            current_limit="12 A",
+            bandwidth=amplifier_bandwidth,
+            torque_constant="52.77 ozf*in/A",
+            dac_range="10 V",
+        )
+        return Hardware(
+            actuators={"torque": amp},
+            filters={"root_torque": AntiAliasFilter("10 Hz", filter_order)},
+            delay=1,
         )
 
     def law_i(

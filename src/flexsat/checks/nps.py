@@ -52,6 +52,14 @@ def _exact_cantilever_hz() -> float:
     return float(beam.frequencies(1)[0]) / (2 * math.pi)
 
 
+@lru_cache(maxsize=1)
+def _cable_steady_state_deg() -> float:
+    """θ_ss of the simulated 60° PD slew with a 1 mN m cable torque, deg (the final error)."""
+    c = _case()
+    run = c.cable_slew()
+    return math.degrees(float(run["theta"].values[0, -1]) - c.slew_angle)
+
+
 # Every value here is meant to be reproduced exactly: half a unit in the last printed digit.
 CHECKS: list[Check] = [
     Check(
@@ -91,5 +99,15 @@ CHECKS: list[Check] = [
         "N m s/rad",
         lambda: float(_pd().kd),
         atol=5e-5,
+    ),
+    Check(
+        "nps",
+        "θ_ss = T_D/k, 1 mN m cable torque, PD slew",
+        f"{SOURCE}, Eq. 23",
+        0.041,
+        "deg",
+        _cable_steady_state_deg,
+        atol=5e-4,
+        note="400 s PD step slew with a constant cable torque on the hub",
     ),
 ]

@@ -7,6 +7,8 @@ Taken when (:func:`unsupported` names the first reason it is not)
   one input force: a :class:`~flexsat.sim.disturbances.BearingFriction` on a size-1 input driven
   by a size-1 linear output (rank 1, integrated by ETD2RK as in the Python loop);
 * the law has a linear form (:meth:`~flexsat.control.base.Controller.linear_form`, HELPERS.md);
+  through hardware (:class:`~flexsat.sim.hardware.HardwareLaw`) without a wheel speed limit or a
+  fractional delay;
 * every measured channel is linear (``output_matrices``), at most one is a least-squares
   derivative of a size-1 channel and that one has no sensor error of its own;
 * no actuator has a rate limit or a bias (the kernel has neither);
@@ -106,6 +108,9 @@ def unsupported(plant, controller, sensors, actuators, disturbances, measured) -
         return "the plant is nonlinear"
     if not own_linear_form(type(controller)):
         return f"{type(controller).__name__} has no linear form of its own commands"
+    hardware = getattr(controller, "compiled_reason", None)  # a law run through hardware
+    if isinstance(hardware, str):
+        return hardware
     forced = {k: d for k, d in disturbances.items() if d.force is not None}
     if len(forced) > 1:
         return "more than one input force"

@@ -145,7 +145,9 @@ def modal_form(plant, steps: int):
     """(T, T⁻¹, ω, ζ) with x = T z, z in 2×2-block modal coordinates, where propagating z
     pays (O(n) per substep, :class:`~flexsat.sim.integrators.ModalPropagator`), else None.
 
-    The rule: a shared (not dispersed) plant whose coordinates are already decoupled modes
+    The rule: a plant with its own ``modal_form()`` (a
+    :class:`~flexsat.sim.hardware.HardwarePlant`) under the step rule below, a shared (not
+    dispersed) plant whose coordinates are already decoupled modes
     (``modal_blocks``: T is a permutation, no set-up), or a hybrid plant (``mass_matrix``,
     ``stiffness_matrix``, ``damping_matrix``) over at least :data:`MODAL_STEPS` integrator
     steps (cases × samples × substeps; :data:`MODAL_STEPS_LARGE` above
@@ -158,6 +160,9 @@ def modal_form(plant, steps: int):
     """
     hybrid = all(hasattr(plant, k) for k in ("mass_matrix", "stiffness_matrix", "damping_matrix"))
     few = steps < (MODAL_STEPS_LARGE if plant.nx > MODAL_STATES else MODAL_STEPS)
+    own = getattr(plant, "modal_form", None)
+    if callable(own):  # a plant that forms its own (a plant with hardware states appended)
+        return None if few else own()
     if plant.n_cases != 1:  # a dispersed hybrid plant: each case's own, stacked
         if few or not hybrid:
             return None

@@ -20,6 +20,7 @@ from flexsat.sim.channels import (
     resolve_channels,
 )
 from flexsat.sim.disturbances import BearingFriction, Impulses, RandomTorque
+from flexsat.sim.hardware import Hardware
 from flexsat.sim.recording import CHUNK
 from flexsat.sim.sensors import Sensors
 
@@ -101,6 +102,9 @@ class SimConfig:
                                  continuous mode: a known input history t -> {input channel:
                                  values} added to the law's commands (a disturbance torque of
                                  time, :func:`flexsat.sim.continuous.run`)
+    hardware : Hardware, optional
+                                 sampled mode: reaction wheels, amplifiers, anti-alias filters
+                                 and the computation delay (:mod:`flexsat.sim.hardware`)
 
     Notes
     -----
@@ -126,6 +130,7 @@ class SimConfig:
     atol: float = 1e-12
     stop: StopCondition | None = None
     exogenous: Callable[[float], Mapping[str, Any]] | None = None
+    hardware: Hardware | None = None
 
     def __post_init__(self) -> None:
         if self.law_mode not in LAW_MODES:
@@ -146,6 +151,11 @@ class SimConfig:
                     "only in law_mode='continuous' (the sampled mode holds commands "
                     "over a period and has no event location)",
                 )
+        if self.hardware is not None:
+            if not isinstance(self.hardware, Hardware):
+                raise FieldError("hardware", f"must be a Hardware, got {self.hardware!r}")
+            if self.law_mode != "sampled":
+                raise FieldError("hardware", "only in law_mode='sampled' (a digital controller)")
         set_si(self, "rtol", require_positive, "")
         set_si(self, "atol", require_positive, "")
         set_si(self, "duration", require_positive, "s")

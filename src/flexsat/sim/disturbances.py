@@ -63,6 +63,72 @@ class BearingFriction:
 
 
 @dataclass(frozen=True)
+class CableSpring:
+    """Position-dependent torque of the cables feeding a suspended hub:
+    τ(θ) = T_D − k (θ − θ_c) + τ_tab(θ), τ_tab linear between the tabulated points and held
+    at the end values outside them (Hailey, Sortun & Agrawal, "Experimental verification of
+    attitude control techniques for slew maneuvers of flexible spacecraft", NPS, c. 1992:
+    the NPS simulator's cable torque T_D, treated there as constant over a maneuver; under
+    the PD law T = −k_p θ_e + T_D it leaves θ_ss = T_D / k_p, Eq. 23).
+
+    Used as a :class:`~flexsat.sim.channels.ChannelDisturbance` force driven by the hub
+    angle (``force_output="theta"``).
+
+    Parameters
+    ----------
+    constant : float     T_D, N m
+    stiffness : float    k, N m/rad (a restoring spring for k > 0)
+    center : float       θ_c, rad
+    angles, torques : sequences
+        A tabulated profile τ_tab(θ) (rad, N m), angles strictly increasing; empty for none.
+    """
+
+    constant: float = 0.0
+    stiffness: float = 0.0
+    center: float = 0.0
+    angles: tuple[float, ...] = ()
+    torques: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        set_si(self, "constant", require_finite, "N*m")
+        set_si(self, "stiffness", require_finite, "N*m/rad")
+        set_si(self, "center", require_finite, "rad")
+        a = (
+            np.atleast_1d(require_finite(self.angles, "angles", "rad"))
+            if len(self.angles)
+            else np.zeros(0)
+        )
+        t = (
+            np.atleast_1d(require_finite(self.torques, "torques", "N*m"))
+            if len(self.torques)
+            else np.zeros(0)
+        )
+        if a.shape != t.shape or a.ndim != 1 or a.size == 1:
+            raise FieldError(
+                "torques", f"give one torque per angle (two or more), got {t.size} for {a.size}"
+            )
+        if a.size and not np.all(np.diff(a) > 0):
+            raise FieldError("angles", "must be strictly increasing")
+        object.__setattr__(self, "angles", tuple(a.tolist()))
+        object.__setattr__(self, "torques", tuple(t.tolist()))
+
+    @property
+    def max_slope(self) -> float:
+        """Largest |dτ/dθ|, N m/rad (:func:`flexsat.sim.config.stable_substeps`)."""
+        slope = abs(float(self.stiffness))
+        if self.angles:
+            slope += float(np.max(np.abs(np.diff(self.torques) / np.diff(self.angles))))
+        return slope
+
+    def __call__(self, theta: np.ndarray) -> np.ndarray:
+        th = np.asarray(theta, float)
+        tau = float(self.constant) - float(self.stiffness) * (th - float(self.center))
+        if self.angles:
+            tau = tau + np.interp(th, self.angles, self.torques)
+        return np.asarray(tau, float)
+
+
+@dataclass(frozen=True)
 class RandomTorque:
     """Zero-mean Gaussian torque, held over each control period, 1σ = ``std`` N m (a number in
     SI, a pint Quantity or a unit string)."""

@@ -38,6 +38,7 @@ from flexsat.sim.channels import (
 )
 from flexsat.sim.compiled_arguments import CompiledRun
 from flexsat.sim.config import FRICTION_STEP_LIMIT, SimConfig, check_resources, stable_substeps
+from flexsat.sim.hardware import HardwareLaw, HardwarePlant
 from flexsat.sim.instruments import InputForces, Instruments, unit_row
 from flexsat.sim.recording import CHUNK, Recorder, SimResult
 
@@ -394,9 +395,18 @@ def simulate(
         )
     dt, n = config.dt, config.n_steps
     sensors, actuators, disturbances = resolve_channels(plant, config)
+    if config.hardware is not None:  # the hardware's states appended, the law wrapped
+        plant, controller, sensors, actuators, disturbances = config.hardware.apply(
+            plant, controller, sensors, actuators, disturbances
+        )
+        check_law(plant, controller)
+        if initial_state is not None:
+            initial_state = plant.settled(require_finite(initial_state, "initial_state"))
     substeps = check_resources(plant, config, nc, record_states, disturbances)
     seeds = config.seed + np.arange(nc) if seeds is None else np.asarray(seeds, int).reshape(nc)
     x, theta0 = _initial_state(plant, nc, initial_state, getattr(controller, "reference", None))
+    if isinstance(plant, HardwarePlant) and initial_state is None:
+        x = plant.settled(x)  # the filters settled on the start angle set above
     if config.law_mode == "continuous":
         from flexsat.sim.continuous import simulate_continuous
 
@@ -493,6 +503,16 @@ def simulate(
         (None, None)
         if own_step is not None
         else _propagator(plant, A, B, forces, nc, batched, dt, substeps)
+    )
+    # a fractional computation delay f: the previous command over f Δt, then the new one
+    frac = controller.fraction if isinstance(controller, HardwareLaw) else 0.0
+    split = (
+        (
+            _propagator(plant, A, B, forces, nc, batched, frac * dt, substeps)[0],
+            _propagator(plant, A, B, forces, nc, batched, (1 - frac) * dt, substeps)[0],
+        )
+        if frac
+        else None
     )
 
     impulses = input_impulses(disturbances, slices, m, n + 1, dt)
@@ -599,6 +619,8 @@ def simulate(
                     x = plant.normalize(
                         own_step(x, w if f_in is None else w + input_force(x, w), h)
                     )
+            elif split is not None:
+                x = split[1].step(split[0].step(x, w_prev, force), w, force)
             else:
                 assert stepper is not None  # built by _propagator for a plant without own step
                 x = stepper.step(x, w, force)
