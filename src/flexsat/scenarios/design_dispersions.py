@@ -21,25 +21,39 @@ Semantics: design on the nominal, fly on the truth
 --------------------------------------------------
 The placement and the laws are those of the **nominal** study (its cached stages): they are
 what the engineer designed and would fly. Each case builds the **dispersed truth** -- the
-``model:`` and ``modes:`` sections with the case's values, the modal solve redone, the kept
-modes and their damping as the case says -- keeps the nominal placement (the forces sit where
-they were placed) and flies every named run's nominal law on it, from the run's (possibly
-dispersed) initial state, for the (possibly dispersed) duration. When no parameter is under
-``model`` (damping, durations, initial states only), every case reuses the nominal modal solve
-(the same numbers as solving it again, tested) instead of repeating it. The probability of meeting a
-requirement is then the probability that *this design* meets it on a spacecraft built within
-the dispersions: its robustness, not that of a law redesigned for every case. An LQR law's
-gain reads the truth's modal coordinates by index (full state feedback on the kept modes):
-where dispersions reorder or mix close modes (a symmetric structure's pairs), the gain meets
-modes it was not designed for, as it would in flight.
+``model:``, ``modes:`` and ``truth:`` sections with the case's values (the modal solve redone
+when the model changes, the kept modes and their damping, then the truth's departures:
+principal moments, elastic frequencies, damping ratios, :func:`~flexsat.scenarios.slew.
+apply_truth`) -- keeps the nominal placement (the forces sit where they were placed) and flies
+every named run's nominal law on it, from the run's (possibly dispersed) initial state, for
+the (possibly dispersed) duration, with the study's ``sensors`` and ``disturbances`` (their
+noise from the case's own seed). When no parameter is under ``model``, every case reuses the
+nominal modal solve (the same numbers as solving it again, tested) instead of repeating it.
+The probability of meeting a requirement is then the probability that *this design* meets it
+on a spacecraft built within the dispersions: its robustness, not that of a law redesigned for
+every case. A law that reads modal coordinates (LQR, the perturbation feedback) reads the
+truth's kept modes by index, each with the sign of the nominal mode's shape
+(:func:`~flexsat.scenarios.design_flight.align_modes`: a re-solve may return a mode with the
+other sign, which the law would feed back reversed); where dispersions make two modes cross,
+the law meets them swapped, as it would in flight.
+
+Direct cases and compiled batches
+---------------------------------
+When every parameter is under ``truth`` (:data:`DIRECT_SECTIONS`) a case is the nominal
+spacecraft (built once per worker) with its own departures: no case document is written or
+validated and no plant rebuilt (:meth:`DispersedCases.setup`). Every chunk's cases fly in
+compiled batches (:func:`~flexsat.scenarios.design_flight.fly_cases`): consecutive cases with
+the same settings stacked into one dispersed plant, one lane each of the three-axis kernel, the
+perturbation feedback through its linear form. A direct study's chunk defaults to
+:data:`DIRECT_CHUNK_SIZE` cases.
 
 The parameters, their distributions with units, ``cases``, ``seed``, ``requirements`` and
 ``execution`` are those of ``kind: montecarlo`` (:mod:`flexsat.scenarios.batch`, the same
 schema and the same code: :func:`~flexsat.scenarios.batch.parameter_space`,
 :class:`~flexsat.scenarios.batch.ExecutionSpec`). A path must lead into the truth: ``model``,
-``modes``, ``simulation`` (not its ``control_rate``: the laws are sampled at the nominal one,
-nor its ``seed``: each case's is written there) or a run's ``initial``; a law's or the
-placement's values are the design, refused by name.
+``modes``, ``truth``, ``sensors``, ``disturbances``, ``simulation`` (not its ``control_rate``:
+the laws are sampled at the nominal one, nor its ``seed``: each case's is written there) or a
+run's ``initial``; a law's or the placement's values are the design, refused by name.
 
 Metrics (:func:`~flexsat.scenarios.design_study.run_metrics` of each run flown, the attitude
 error from the run's law's target): with one run each under its own name
@@ -49,11 +63,13 @@ another name is refused before anything runs. Thresholds take units (rad, m, N m
 
 Execution: the cases run through the batch machinery
 (:func:`~flexsat.design.batch_runner.run_batch`): chunks on dask, a zarr store, resume after an
-interruption. :class:`DispersedCases` is the case builder; every case's document is validated
+interruption. :class:`DispersedCases` is the case builder; every case's document (a direct
+case: its ``truth`` section, and the first case's whole document) is validated
 (:class:`~flexsat.scenarios.batch_cases.DocumentCases`) and the truth of each parameter's
-extreme draws built (a modulus or a mass made negative is refused by name) before any case runs.
-A case depends on (seed, index) alone and runs alone, so results do not depend on the chunking
-or the workers, and a case equals :func:`dispersed_case` of its index.
+extreme draws built (a modulus or a mass made negative, an inertia violating the triangle
+inequality is refused by name) before any case runs. A case depends on (seed, index) alone and
+flies in its own lane, so results do not depend on the chunking or the workers, and a case
+equals :func:`dispersed_case` of its index (the case flown alone) bit for bit.
 
 Cache: the stage's fingerprint holds the section without ``requirements``, ``execution`` and
 ``store`` (which change no case) and the fingerprints of the runs flown (each holding its law,
@@ -112,7 +128,7 @@ TRUTH_SECTIONS = ("model", "modes", "truth", "sensors", "disturbances", "simulat
 #: docstring: no case document, no rebuilt plant)
 DIRECT_SECTIONS = ("truth",)
 #: the default chunk of a study whose parameters are all under :data:`DIRECT_SECTIONS`: its
-#: cases run in one compiled batch per chunk (0.5-5 ms a case), the document cases one by one
+#: cases run in compiled batches (a few ms a case), a document case builds its own plant first
 DIRECT_CHUNK_SIZE = 250
 #: fields of ``simulation`` that are not dispersions, and why
 FIXED_SIMULATION = {
@@ -251,6 +267,9 @@ class DispersedCases:
         (:func:`disperses_model`); None: each case solves its own.
     law_of : dict of str to str
         The law of each run flown.
+    reference : ModalModel or None
+        The nominal kept modes, whose signs each re-solved truth's modes take
+        (:func:`~flexsat.scenarios.design_flight.align_modes`); None: the solver's signs.
     direct : bool
         Every parameter is under :data:`DIRECT_SECTIONS` (:func:`is_direct`).
     """
@@ -263,6 +282,7 @@ class DispersedCases:
     model: ModalModel | None = None
     law_of: dict[str, str] = field(default_factory=dict)
     direct: bool = False
+    reference: ModalModel | None = None
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
@@ -294,7 +314,8 @@ class DispersedCases:
                 return CaseSetup(plant, nominal.config, nominal.initial, "nominal")
             scenario: Any = self.cases.scenario(values, seed)
             plant = flown_plant(
-                scenario, dispersed_spacecraft(scenario, self.placement, self.model)
+                scenario,
+                dispersed_spacecraft(scenario, self.placement, self.model, self.reference),
             )
             config = flight_config(scenario, plant)
             initial = {}
@@ -426,7 +447,10 @@ class DispersedCases:
         for index in sorted(extremes):
             try:
                 dispersed_spacecraft(
-                    self.cases.scenario(values_of(index), 0), self.placement, self.model
+                    self.cases.scenario(values_of(index), 0),
+                    self.placement,
+                    self.model,
+                    self.reference,
                 )
             except ScenarioError as exc:
                 raise ScenarioError(self.cases.problems(index, values_of(index), exc)) from None
@@ -475,11 +499,13 @@ def case_builder(
     placement: PlacementResult,
     laws: Mapping[str, Any],
     model: ModalModel | None = None,
+    modes: ModalModel | None = None,
 ) -> DispersedCases:
     """The :class:`DispersedCases` of ``scenario`` (a validated design study with
     ``dispersions``) with its nominal ``placement`` and law designs (``laws``: label →
-    LawDesign), and the nominal solve ``model`` the cases reuse when none of them changes the
-    model section (ignored otherwise).
+    LawDesign), the nominal solve ``model`` the cases reuse when none of them changes the
+    model section (ignored otherwise) and the nominal kept ``modes`` whose signs a re-solved
+    truth takes (:func:`~flexsat.scenarios.design_flight.align_modes`).
 
     Raises
     ------
@@ -509,6 +535,7 @@ def case_builder(
         model=None if disperses_model(spec) else model,
         law_of=law_of,
         direct=is_direct(spec),
+        reference=modes if disperses_model(spec) else None,
     )
 
 
@@ -561,11 +588,13 @@ def run_dispersions(
     laws: Mapping[str, Any],
     progress: Callable[[str], None] | None = None,
     model: Callable[[], ModalModel] | None = None,
+    modes: ModalModel | None = None,
 ) -> tuple[DispersionsResult, StageRecord]:
     """Run the dispersions stage of ``scenario`` (module docstring): every case into the store
     (resuming it), then the statistics, and the stage's record (from the cache when no chunk
     had to run). ``model`` gives the nominal solve, which the cases reuse when no parameter is
-    under ``model`` (asked for only then, and only when cases run).
+    under ``model`` (asked for only then, and only when cases run); ``modes``, the nominal kept
+    modes, whose signs each re-solved truth takes (:func:`case_builder`).
 
     Raises
     ------
@@ -584,7 +613,7 @@ def run_dispersions(
 
     spec: DispersionsSpec = scenario.dispersions
     start_time = time.perf_counter()
-    build = case_builder(scenario, stage, placement, laws)
+    build = case_builder(scenario, stage, placement, laws, modes=modes)
     try:
         requirements = spec.requirement_list(
             metric_names(list(build.runs), scenario.placement.number > 0)

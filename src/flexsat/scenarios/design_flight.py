@@ -46,11 +46,15 @@ if TYPE_CHECKING:
 
 
 def dispersed_spacecraft(
-    scenario: Any, placement: PlacementResult, model: ModalModel | None = None
+    scenario: Any,
+    placement: PlacementResult,
+    model: ModalModel | None = None,
+    reference: ModalModel | None = None,
 ) -> FlexibleSpacecraft:
     """The truth of a (case) design study: its ``model:`` solved (or ``model``, the nominal
-    solve, when no dispersion touches the model section), its ``modes:`` kept, with the
-    nominal ``placement``'s forces and sensors.
+    solve, when no dispersion touches the model section), its ``modes:`` kept, their signs
+    those of the ``reference`` (the nominal kept modes, :func:`align_modes`) when given, with
+    the nominal ``placement``'s forces and sensors.
 
     Raises
     ------
@@ -69,10 +73,46 @@ def dispersed_spacecraft(
         kept = kept_modes(model, scenario.modes)
     except ValueError as exc:
         raise ScenarioError([locate("modes", exc)]) from None
+    if reference is not None:
+        kept = align_modes(kept, reference)
     try:
         return spacecraft(kept, scenario.placement, placement)
     except ValueError as exc:
         raise ScenarioError([locate("placement", exc)]) from None
+
+
+def align_modes(modes: ModalModel, reference: ModalModel) -> ModalModel:
+    r"""``modes`` with each elastic mode's sign that of the ``reference`` mode at its index:
+    :math:`\phi_i \leftarrow -\phi_i` (and its participation) where
+    :math:`\phi_{ref,i}^T \phi_i < 0`, over every node and component.
+
+    An eigen-solver returns each mode up to its sign, and two solves of nearby structures
+    (a dispersed modulus or mass) need not pick the same one (measured on
+    ``examples/own_spacecraft_design_study.yaml``: tip masses 0.9 and 1.1 kg flip the 32 Hz
+    pair). A law designed on the nominal modes that reads modal coordinates (LQR, the
+    perturbation feedback) would then feed the flipped mode back with the opposite sign; with
+    the signs aligned it meets the same physical motion it was designed for. The sign changes
+    no physics (the coordinate η_i and the shape flip together: every physical output is the
+    same). The order is kept (frequencies ascending): a dispersion that makes two modes cross
+    still swaps them under the law. Returned unchanged when the elastic mode counts or the node
+    sets differ.
+    """
+    from flexsat.structures.modal_model import RIGID_FREQUENCY
+
+    elastic = np.flatnonzero(modes.frequencies > RIGID_FREQUENCY)
+    ref = np.flatnonzero(reference.frequencies > RIGID_FREQUENCY)
+    if elastic.size != ref.size or modes.shapes.shape[1:] != reference.shapes.shape[1:]:
+        return modes
+    dots = np.einsum("ijk,ijk->i", modes.shapes[elastic], reference.shapes[ref])
+    sign = np.ones(modes.n_modes)
+    sign[elastic[dots < 0]] = -1.0
+    if np.all(sign > 0):
+        return modes
+    return replace(
+        modes,
+        shapes=modes.shapes * sign[:, None, None],
+        participation=modes.participation * sign[:, None],
+    )
 
 
 @dataclass(frozen=True)
@@ -119,7 +159,7 @@ def nominal_setup(build: DispersedCases) -> Nominal:
     from flexsat.scenarios.fields import given_fields
 
     scenario: Any = replace(build.cases, parameters=()).scenario({}, 0)
-    plant = dispersed_spacecraft(scenario, build.placement, build.model)
+    plant = dispersed_spacecraft(scenario, build.placement, build.model, build.reference)
     config = flight_config(scenario, flown_plant(scenario, plant))
     initial = {
         run.label: plant.state_from(**given_fields(run.initial))
@@ -292,6 +332,7 @@ __all__ = [
     "NOMINALS_KEPT",
     "CaseSetup",
     "Nominal",
+    "align_modes",
     "dispersed_spacecraft",
     "fly",
     "fly_cases",

@@ -810,6 +810,7 @@ class DesignStudyKind(ScenarioKind):
                     laws,
                     progress,
                     lambda: raw if raw is not None else solved()[0],
+                    model,
                 )
                 records.append(record)
                 return outcome
