@@ -241,7 +241,7 @@ def fly_cases(
                 folded = np.flatnonzero((controller.hemisphere(times, attitude) < 0).any(axis=1))
                 for i in folded:  # the law itself, in the Python loop
                     alone = simulate(
-                        stack_plants([cases[i].plant]),
+                        cases[i].plant,
                         controller,
                         cases[i].config,
                         n_cases=1,
