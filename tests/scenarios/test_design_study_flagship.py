@@ -160,3 +160,24 @@ def test_the_noise_reaches_the_flight(flagship):
     (record,) = result.metrics_records()
     for name, value in noisy.items():
         assert record[name] == pytest.approx(value, rel=1e-12), name
+
+
+def test_an_interrupted_monte_carlo_resumes_where_it_stopped(flagship, tmp_path):
+    """Stopped after its first chunk (4 of 10 cases), the stage resumes from its store: the
+    chunk done is read back, the two others run, and the numbers are those of the whole run."""
+    from flexsat.design.batch_runner import BatchInterrupted
+
+    result, cache = flagship
+    data = _data(cache)
+    data["dispersions"]["store"] = str(tmp_path / "resumed.zarr")
+
+    def stop(message: str) -> None:
+        if message.startswith("dispersions: 4/10"):
+            raise KeyboardInterrupt
+
+    with pytest.raises(BatchInterrupted):
+        run_scenario(_load(data), progress=stop)
+    resumed = run_scenario(_load(data))
+    assert (resumed.dispersions.chunks_skipped, resumed.dispersions.chunks_run) == (1, 2)
+    for name, values in result.dispersions.metrics.items():
+        np.testing.assert_array_equal(resumed.dispersions.metrics[name], values, err_msg=name)
