@@ -19,7 +19,7 @@ from flexsat.scenarios.design_dispersions import case_builder
 from flexsat.scenarios.design_flight import align_modes, dispersed_spacecraft, inertia_margins
 from flexsat.scenarios.design_study import kept_modes, modal_model_of, stage_plan
 from flexsat.scenarios.slew import TruthSpec, apply_truth
-from flexsat.sim import SimConfig, simulate
+from flexsat.sim import SimConfig, SimulationDiverged, simulate
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "own_spacecraft_design_study.yaml"
 
@@ -204,3 +204,53 @@ def test_a_case_out_of_the_law_s_hemisphere_flies_on_the_law_itself(tmp_path, mo
         assert values_[1] == expected[name][0], name
         np.testing.assert_array_equal(values_[[0, 2]], compiled[name][[0, 2]], err_msg=name)
         assert values_[1] == pytest.approx(compiled[name][1], rel=1e-9, abs=1e-15), name
+
+
+def test_an_lqr_meets_the_motion_it_was_designed_for_once_the_signs_are_aligned(tmp_path):
+    """The nominal modes with the first pair's signs reversed (what a re-solve may return):
+    the same spacecraft, but an LQR designed on the nominal feeds those modal coordinates back
+    reversed (here it diverges); with the signs aligned to the nominal it flies the nominal run
+    (the same arithmetic on the same numbers: bit for bit)."""
+    from dataclasses import replace
+
+    from flexsat.scenarios.design_laws import LawSpec, law_controller
+    from flexsat.scenarios.design_placement import spacecraft
+
+    data = _data(tmp_path)
+    data.pop("dispersions")
+    data["laws"] = [
+        {
+            "label": "LQR",
+            "type": "lqr",
+            "modes": 2,  # the 2.5 Hz pair, well inside the 50 Hz sampling
+            "weights": {"attitude": 10, "rate": 10, "modes": 1e3, "torque": 1, "force": 1},
+        }
+    ]
+    data["runs"] = [{"label": "r", "law": "LQR", "initial": {"euler123": [0.1, 0.1, 0.1]}}]
+    data["simulation"]["control_rate"] = "50 Hz"
+    result = run_scenario(_load(data))
+    scenario = result.scenario
+    modes = result.modes
+    sign = np.ones(modes.n_modes)
+    sign[np.flatnonzero(modes.frequencies > 1e-3)[:2]] = -1.0  # the 2.5 Hz pair
+    flipped = replace(
+        modes,
+        shapes=modes.shapes * sign[:, None, None],
+        participation=modes.participation * sign[:, None],
+    )
+    config = SimConfig(duration=6.0, control_rate=50.0)
+    law = LawSpec.model_validate(data["laws"][0])
+
+    def flown(kept):
+        plant = spacecraft(kept, scenario.placement, result.placement)
+        controller = law_controller(law, result.laws["LQR"].arrays, plant, config.dt)
+        x0 = plant.state_from(euler123=[0.1, 0.1, 0.1])
+        return simulate(plant, controller, config, n_cases=1, initial_state=x0).dataset
+
+    nominal, aligned = (flown(m) for m in (modes, align_modes(flipped, modes)))
+    # reversed, the modal feedback of the pair is positive: this LQR destabilises the spacecraft
+    with pytest.raises(SimulationDiverged):
+        flown(flipped)
+    displacement = [str(n) for n in nominal.data_vars if "displacement_" in str(n)]
+    for name in ["attitude", "torque", *displacement]:
+        np.testing.assert_array_equal(aligned[name].values, nominal[name].values, err_msg=name)
