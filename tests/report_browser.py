@@ -3,8 +3,14 @@ by playwright), with what a reader would notice checked.
 
 :func:`assert_renders` opens ``index.html`` from disk and asserts that the page loads with no
 script error and no failed request, has a heading, shows every figure (each ``<img>`` decoded,
-with a width), links only to files that exist, and shows no ``nan``/``inf`` where a number
-should be (a "no data" value is written as such, issue 21).
+with a width; each interactive figure drawn on a canvas once BokehJS is idle), links only to
+files that exist, and shows no ``nan``/``inf`` where a number should be (a "no data" value is
+written as such, issue 21).
+
+:func:`open_offline` opens a copy of ``index.html`` alone in an empty folder, in a browser
+context with the network switched off and every request that is not the page itself refused
+and recorded: what a reader sees who was sent the one file (issue 24, "the report opens offline
+with no sibling files").
 
 The browser is started once per test session (:func:`browser`, a pytest fixture registered in
 ``conftest.py``). Without Chromium or playwright the tests that need it are skipped, unless
@@ -63,12 +69,25 @@ def start_browser() -> Iterator[Any]:
             browser.close()
 
 
-def assert_renders(browser: Any, index: Path) -> str:
-    """Open the report ``index`` in ``browser`` and check it as a reader would (module
-    docstring); returns the page's visible text."""
+def wait_for_figures(page: Any) -> int:
+    """Wait until BokehJS (where the page has it) has drawn its documents; the number of
+    canvases then on the page (0 without interactive figures)."""
+    if page.evaluate("() => window.Bokeh === undefined"):
+        return 0
+    page.wait_for_function("() => Bokeh.documents.length > 0", timeout=30_000)
+    page.locator("canvas").first.wait_for(state="attached", timeout=30_000)  # pierces shadows
+    return int(page.locator("canvas").count())
+
+
+def assert_renders(browser: Any, index: Path, page: Any = None) -> str:
+    """Open the report ``index`` in ``browser`` (or in ``page``, already set up: it is left
+    open) and check it as a reader would (module docstring); returns the page's visible
+    text."""
     index = Path(index).resolve()
     assert index.is_file(), index
-    page = browser.new_page(viewport={"width": 1200, "height": 900})
+    own = page is None
+    if own:
+        page = browser.new_page(viewport={"width": 1200, "height": 900})
     errors: list[str] = []
     failed: list[str] = []
     page.on("pageerror", lambda exc: errors.append(str(exc)))
@@ -76,6 +95,9 @@ def assert_renders(browser: Any, index: Path) -> str:
     page.on("requestfailed", lambda request: failed.append(request.url))
     try:
         page.goto(index.as_uri(), wait_until="load")
+        canvases = wait_for_figures(page)
+        if page.evaluate("() => window.Bokeh !== undefined"):
+            assert canvases > 0, f"{index}: the interactive figures are not drawn"
         assert errors == [], f"script errors in {index}: {errors}"
         assert failed == [], f"requests that failed in {index}: {failed}"
         heading = page.inner_text("h1").strip()
@@ -95,4 +117,41 @@ def assert_renders(browser: Any, index: Path) -> str:
         assert shown is None, f"{index}: shows {shown.group(0)!r} where a number should be"
         return text
     finally:
-        page.close()
+        if own:
+            page.close()
+
+
+def open_offline(browser: Any, index: Path, folder: Path) -> tuple[Any, list[str], str]:
+    """Copy ``index`` alone into the empty ``folder`` and open it there with the network off
+    (module docstring), checked by :func:`assert_renders`.
+
+    Returns
+    -------
+    (page, refused, text)
+        The open page (close its ``context`` when done), the URLs of the requests refused
+        (any the page made beyond itself), and the page's visible text.
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    assert not any(folder.iterdir()), f"{folder} is not empty"
+    alone = folder / "index.html"
+    shutil.copyfile(index, alone)
+    context = browser.new_context(offline=True, viewport={"width": 1200, "height": 900})
+    refused: list[str] = []
+    page_url = alone.resolve().as_uri()
+
+    def route(request_route: Any) -> None:
+        url = request_route.request.url
+        if url == page_url:
+            request_route.continue_()
+        else:
+            refused.append(url)
+            request_route.abort()
+
+    context.route("**/*", route)
+    page = context.new_page()
+    try:
+        text = assert_renders(browser, alone, page)
+    except BaseException:
+        context.close()
+        raise
+    return page, refused, text

@@ -39,3 +39,33 @@ def test_a_whole_page_passes(tmp_path, browser):
 def test_what_a_reader_would_notice_fails(tmp_path, browser, body, complaint):
     with pytest.raises(AssertionError, match=complaint):
         assert_renders(browser, _page(tmp_path, body))
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        '<img src="plot.png">',  # beside the page where it was written, not where it is sent
+        '<script src="https://cdn.invalid/bokeh.min.js"></script>',  # needs the network
+    ],
+)
+def test_a_page_that_needs_more_than_itself_fails_offline(tmp_path, browser, body):
+    from report_browser import open_offline
+
+    folder = tmp_path / "written"
+    folder.mkdir()
+    index = _page(folder, body)
+    with pytest.raises(AssertionError, match="(?i)failed|not shown"):
+        open_offline(browser, index, tmp_path / "alone")
+
+
+def test_a_whole_page_opens_offline(tmp_path, browser):
+    from report_browser import open_offline
+
+    folder = tmp_path / "written"
+    folder.mkdir()
+    data = "data:image/png;base64," + base64.b64encode(PIXEL).decode()
+    page, refused, text = open_offline(
+        browser, _page(folder, f'<img src="{data}"><p>1.5</p>'), tmp_path / "alone"
+    )
+    page.context.close()
+    assert refused == [] and "1.5" in text

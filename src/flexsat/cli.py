@@ -17,6 +17,7 @@ is named on stderr as the command ends, whatever its exit code, and never stops 
 from __future__ import annotations
 
 import json
+import shlex
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -331,8 +332,11 @@ def run(
         errors.print(message, style="red", markup=False, highlight=False)
         raise typer.Exit(code=130) from None
     console.print(_result_table(result.console_table()))
-    try:
-        path = write_report(result, out)
+    command = ["flexsat", "run", *([] if scenario is None else [str(scenario)]), "-o", str(out)]
+    command += [] if workers is None else ["--workers", str(workers)]
+    command += [] if scheduler is None else ["--scheduler", scheduler]
+    try:  # the command as given, for the report's provenance line
+        path = write_report(result, out, command=shlex.join(command))
     except OSError as exc:
         _fail(f"--out: {exc}")
     console.print(f"report written to {path / 'index.html'}", markup=False)

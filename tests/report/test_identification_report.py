@@ -1,5 +1,6 @@
 """Report of an identification scenario (flexsat.report.identification)."""
 
+import base64
 import json
 
 import numpy as np
@@ -42,12 +43,14 @@ def test_report_files_tables_and_netcdf_round_trip(result, tmp_path):
         "Damping ratios",
         "Substructure stiffness scalings",
         "clamp verticals",
-        "frf.png",
-        "mac.png",
         "kind: identification",
         "Reaction-wheel torque constants",
     ):
         assert text in page
+    # the figures inside the page (data: URIs of the PNG files still written beside it)
+    for name in ("frf.png", "mac.png"):
+        encoded = base64.b64encode((out / name).read_bytes()).decode()
+        assert f'src="data:image/png;base64,{encoded}"' in page
 
 
 def test_dataset_has_one_row_per_identified_mode(result):

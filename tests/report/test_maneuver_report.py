@@ -5,6 +5,7 @@ from __future__ import annotations
 import errno
 import html
 import json
+import re
 import shutil
 
 import pytest
@@ -34,7 +35,7 @@ METRICS = {
     "peak_tip_deflection_m",
     "peak_rate_error_deg_s",
 }
-FILES = {"metrics.json", "results.nc", "index.html"} | {p.file for p in PLOTS}
+FILES = {"metrics.json", "results.nc", "index.html"}  # the figures are inside the page
 
 
 def short_run(name: str):
@@ -92,11 +93,19 @@ def test_index_html_is_self_contained(result, tmp_path):
     assert html.escape(result.case_source) in page
     # the source stands alone (the seed files do not ship): the paper is cited, not a file name
     assert result.case_source.startswith("Junkins, Pollock & Rahman 1990") and ".txt" not in page
-    for spec in PLOTS:
-        assert f'<img src="{spec.file}"' in page
+    for spec in PLOTS:  # interactive figures, drawn from the page's own data
+        assert f'"text":"{spec.title}"' in page
+    markup = re.sub(r"<script\b.*?</script>", "", page, flags=re.DOTALL)  # BokehJS aside
+    assert "<img" not in markup
     assert "<th>Law I</th><th>Law II</th>" in page
+    assert "<td>Settling time (s)</td>" in page  # readable metric names with units
     assert "smooth_bang_bang" in page  # the scenario echoed
-    assert "http" not in page
+    # nothing is loaded from elsewhere: no source or style sheet but the page's own
+    assert not re.search(r"""<(script|link|img)\b[^>]*\b(src|href)=""", markup)
+    assert not re.search(r"<script\b[^>]*\bsrc=", page)
+    # the full citation of the paper, and the controller summary of both (linear) laws
+    assert "Analytical and Experimental Research on Large Angle Maneuvers" in page
+    assert page.count("Margins and norms of the sampled-data loop") == 2
 
 
 def test_rewrite_replaces_the_whole_report(result, tmp_path):
@@ -120,9 +129,7 @@ def test_folder_with_other_files_is_refused_untouched(result, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
 
 
-@pytest.mark.parametrize(
-    "name", ["metrics.json", "results.nc", *(p.file for p in PLOTS), "index.html", MANIFEST]
-)
+@pytest.mark.parametrize("name", ["metrics.json", "results.nc", "index.html", MANIFEST])
 def test_disk_full_at_each_file_keeps_the_complete_earlier_report(
     result, earlier_report, tmp_path, fail_opening, name
 ):
@@ -156,3 +163,55 @@ def test_metric_formatting():
 def test_the_page_reads_right_in_a_browser(result, tmp_path, browser):
     text = assert_renders(browser, write_report(result, tmp_path / "report") / "index.html")
     assert "Law II" in text
+
+
+#: JavaScript: [run tag, visible] of every line renderer tagged with a run, in document order
+RENDERERS = """[...Bokeh.documents[0].all_models]
+    .filter(m => m.tags && m.tags.length && String(m.tags[0]).startsWith("run:"))
+    .map(m => [m.tags[0], m.visible])"""
+
+
+def test_the_report_opens_offline_alone_and_toggles_runs(result, tmp_path, browser):
+    """Issue 24's acceptance: index.html copied alone to an empty folder, opened with the
+    network off, draws its figures without a script error or a request, and the run toggles
+    hide a run in every figure and show it again."""
+    from report_browser import open_offline
+
+    out = write_report(result, tmp_path / "report")
+    page, refused, text = open_offline(browser, out / "index.html", tmp_path / "alone")
+    try:
+        assert refused == []
+        assert "Settling time (s)" in text and "Controller summary" in text
+        assert page.locator("canvas").count() >= len(PLOTS)
+        before = page.evaluate(f"() => {RENDERERS}")
+        # each figure has a line of each run (with its reference where the figure has one)
+        assert sum(tag == "run:Law II" for tag, _ in before) >= len(PLOTS)
+        assert all(visible for _, visible in before)
+        boxes = page.locator("input[type=checkbox]")
+        assert boxes.count() == 2
+        boxes.nth(1).click()  # Law II off
+        page.wait_for_function(
+            f"() => {RENDERERS}.every(([tag, shown]) => shown === (tag !== 'run:Law II'))"
+        )
+        boxes.nth(1).click()  # and on again
+        page.wait_for_function(f"() => {RENDERERS}.every(([tag, shown]) => shown)")
+    finally:
+        page.context.close()
+
+
+def test_identical_runs_write_identical_files_but_the_provenance_line(tmp_path, monkeypatch):
+    """Two runs of the same scenario: every file of the report the same byte for byte, except
+    the page's provenance line (its date); with SOURCE_DATE_EPOCH set, the page too."""
+    from flexsat.report.provenance import without_provenance
+
+    first = snapshot(write_report(short_run("Same"), tmp_path / "a"))
+    second = snapshot(write_report(short_run("Same"), tmp_path / "b"))
+    assert first.keys() == second.keys()
+    for name in first.keys() - {"index.html"}:
+        assert first[name] == second[name], name
+    pages = [without_provenance(f["index.html"].decode()) for f in (first, second)]
+    assert pages[0] == pages[1]
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
+    result = short_run("Same")
+    again = [write_report(result, tmp_path / n).joinpath("index.html").read_bytes() for n in "cd"]
+    assert again[0] == again[1] and b"written 2023-11-14T22:13:20Z" in again[0]

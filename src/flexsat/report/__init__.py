@@ -2,9 +2,12 @@
 
 :mod:`flexsat.report.publish` writes a report folder atomically (and checks it can be written
 before any work); :func:`flexsat.report.page.write_report` writes the report of a result of any
-scenario kind (JSON, netCDF, PNG plots, ``index.html``) through the result's protocol
-(:class:`~flexsat.report.page.ReportedResult`); the other modules draw the figures and the page
-sections of one kind each.
+scenario kind (JSON, netCDF and one self-contained ``index.html`` that opens offline, its
+figures inside it) through the result's protocol (:class:`~flexsat.report.page.ReportedResult`);
+:mod:`~flexsat.report.interactive` draws the interactive figures, :mod:`~flexsat.report.display`
+names the metrics, :mod:`~flexsat.report.provenance` dates and fingerprints the page and
+:mod:`~flexsat.report.controller_summary` sums up the linear laws; the other modules describe
+the figures and the page sections of one kind each.
 
 The names below are imported from their modules on first use: the command line checks the
 output folder before it loads matplotlib or xarray.

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 from matplotlib.figure import Figure
 
+from flexsat.report.display import metric_label
 from flexsat.report.json_data import dumps
 from flexsat.report.page import images_html
 from flexsat.units import to_si
@@ -227,7 +228,7 @@ def statistics_tables(summary: dict[str, Any], sensitivity: dict[str, dict[str, 
     )
     qs = ("5", "50", "95")
     mrows = "".join(
-        f"<tr><td>{esc(name)}</td>"
+        f"<tr><td>{esc(metric_label(name))}</td>"
         + "".join(f"<td>{_fmt(m['percentiles'].get(q))}</td>" for q in qs)
         + f"<td>{_fmt(m['mean'])}</td><td>{m['n_nan']}</td></tr>"
         for name, m in summary["metrics"].items()
@@ -237,7 +238,7 @@ def statistics_tables(summary: dict[str, Any], sensitivity: dict[str, dict[str, 
         f"<th>mean</th><th>not finite</th></tr>{mrows}</table>"
     )
     srows = "".join(
-        f"<tr><td>{esc(name)}</td><td>{esc(s['method'])}</td><td>"
+        f"<tr><td>{esc(metric_label(name))}</td><td>{esc(s['method'])}</td><td>"
         + ", ".join(f"{esc(p)} ({_score(s, p)})" for p in s["ranking"])
         + "</td></tr>"
         for name, s in sensitivity.items()

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 from matplotlib.figure import Figure
 
+from flexsat.report.display import metric_label
 from flexsat.report.page import format_metric, html_table
 
 if TYPE_CHECKING:
@@ -152,7 +153,7 @@ def _metrics_html(records: list[dict[str, Any]]) -> str:
         ]
         for r in records
     ]
-    return html_table(["run"] + keys, rows)
+    return html_table(["run"] + [metric_label(k) for k in keys], rows)
 
 
 def draw_cmg_figures(result: CmgReport, ds: xr.Dataset, folder: Path) -> list[str]:

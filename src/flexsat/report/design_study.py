@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from flexsat.report.display import metric_label
 from flexsat.report.page import format_metric, html_table, images_html
 
 if TYPE_CHECKING:
@@ -176,7 +177,7 @@ stage whose fingerprint is in the cache is read from it, not recomputed.</p>
 {_stage_table(records)}
 {design}
 <h2>Runs</h2>
-{html_table(("run", *names), run_rows)}
+{html_table(("run", *map(metric_label, names)), run_rows)}
 {_dispersions_section(result.dispersions)}
 <h2>Figures</h2>
 {images_html(figures)}

@@ -1,6 +1,7 @@
-"""Report of a simulation scenario (``kind: simulation``): ``metrics.json``, ``results.nc``, one
-PNG per recorded channel and ``index.html`` (:func:`flexsat.report.page.write_report`; this
-module draws the figures and the page's sections).
+"""Report of a simulation scenario (``kind: simulation``): ``metrics.json``, ``results.nc`` and
+``index.html`` with the metrics and an interactive figure per recorded channel
+(:func:`flexsat.report.page.write_report`; this module describes the figures and the page's
+sections).
 
 ``results.nc`` holds every recorded channel over ``(run, time)`` or, for a vector channel,
 ``(run, time, <channel>_component)``, with its ``units`` attribute (SI), the metrics over
@@ -11,14 +12,12 @@ Open it with ``xarray.open_dataset(path, engine="h5netcdf")``.
 from __future__ import annotations
 
 import html
-import re
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from matplotlib.figure import Figure
 
-from flexsat.report.page import metric_rows
+from flexsat.report.interactive import Curve, Plot
+from flexsat.report.page import metric_rows, metrics_html
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -47,54 +46,34 @@ def _histories(ds: xr.Dataset) -> tuple[list[str], list[str]]:
     return plotted[:MAX_FIGURES], [n for n in idle if not n.endswith("_command")]
 
 
-def _file(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_]+", "_", name) + ".png"
+#: the dash of a vector channel's component j (cycled)
+_STYLES = ("solid", "dashed", "dotted", "dashdot")
 
 
-def _plot(ds: xr.Dataset, name: str, path: Path) -> None:
+def _plot(ds: xr.Dataset, name: str) -> Plot:
     var = ds[name]
-    fig = Figure(figsize=(7, 3.4), layout="constrained")
-    ax = fig.add_subplot()
     t = ds["time"].values
     extra = [d for d in var.dims if d not in ("run", "time")]
-    for i, label in enumerate(ds["run"].values):
-        values = var.sel(run=label).transpose("time", *extra).values
-        values = values.reshape(len(t), -1)
+    curves = []
+    for label in map(str, ds["run"].values):
+        values = var.sel(run=label).transpose("time", *extra).values.reshape(len(t), -1)
         for j in range(values.shape[1]):
             suffix = f"[{j}]" if values.shape[1] > 1 else ""
-            ax.plot(
-                t,
-                values[:, j],
-                color=f"C{i}",
-                linestyle=("-", "--", ":", "-.")[j % 4],
-                label=f"{label}{suffix}",
-            )
+            curves.append(Curve(label, f"{label}{suffix}", t, values[:, j], _STYLES[j % 4]))
     unit = var.attrs.get("units", "")
-    ax.set(title=name, xlabel="time (s)", ylabel=f"{name} ({unit})" if unit else name)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize="small", ncols=2)
-    fig.savefig(path, dpi=100)
+    return Plot(name, "time (s)", f"{name} ({unit})" if unit else name, tuple(curves))
 
 
-def _html(
-    records: list[dict[str, Any]], names: list[str], units: dict[str, str], idle: list[str]
-) -> str:
+def _html(records: list[dict[str, Any]], units: dict[str, str], idle: list[str]) -> str:
     esc = html.escape
-    head = "".join(f"<th>{esc(r['run'])}</th>" for r in records)
-
-    def label(metric: str) -> str:
-        unit = units.get(metric, "")
-        return f"{metric} ({unit})" if unit and not metric.endswith(("_deg", "_s")) else metric
-
-    rows = (
-        "".join(
-            f"<tr><td>{esc(label(metric))}</td>"
-            + "".join(f"<td>{v}</td>" for v in values)
-            + "</tr>"
-            for metric, values in metric_rows(records)
-            if not any(metric.endswith("_" + n) for n in idle)
-        )
-        if records and len(records[0]) > 1
+    shown = [
+        metric
+        for metric, _ in metric_rows(records)
+        if not any(metric.endswith("_" + n) for n in idle)
+    ]
+    table = (
+        metrics_html([{k: r[k] for k in ("run", *shown)} for r in records], units)
+        if records and shown
         else ""
     )
     quiet = (
@@ -106,30 +85,26 @@ def _html(
         if idle
         else ""
     )
-    images = "".join(f'<figure><img src="{_file(n)}" alt="{esc(n)}"></figure>' for n in names)
     return f"""<h2>Metrics</h2>
-<table><tr><th>metric</th>{head}</tr>{rows}</table>
-<h2>Time histories</h2>
+{table}
 {quiet}
-{images}
 """
 
 
-def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
-    """One figure per recorded time history worth one (:func:`_histories`); the file names."""
+def plots(ds: xr.Dataset) -> list[Plot]:
+    """One figure per recorded time history worth one (:func:`_histories`), every run in it."""
     names, _ = _histories(ds)
-    for name in names:
-        _plot(ds, name, folder / _file(name))
-    return [_file(n) for n in names]
+    return [_plot(ds, name) for name in names]
 
 
 def sections(records: list[dict[str, Any]], ds: xr.Dataset) -> str:
-    """The page's metrics (idle channels' left out) and time histories."""
-    names, idle = _histories(ds)
+    """The page's metrics (idle channels' left out, each with its unit) and the idle
+    channels."""
+    _, idle = _histories(ds)
     units = {
         str(k): str(v.attrs.get("units", "")) for k, v in ds.data_vars.items() if v.dims == ("run",)
     }
-    return _html(records, names, units, idle)
+    return _html(records, units, idle)
 
 
-__all__ = ["MAX_FIGURES", "draw_figures", "sections"]
+__all__ = ["MAX_FIGURES", "plots", "sections"]

@@ -1,5 +1,6 @@
-"""Report of a slew scenario (``kind: slew``): ``metrics.json``, ``results.nc``, the figures of
-EPS slew study c. 1989 and ``index.html`` with the goals table.
+"""Report of a slew scenario (``kind: slew``): ``metrics.json``, ``results.nc`` and
+``index.html`` with the goals table and the figures of EPS slew study c. 1989, interactive
+(:func:`plots`; :func:`draw_figures` draws the same as PNG files, for documents).
 
 ``results.nc`` holds every run (the nominal torque alone first, as ``open loop``) over
 ``(run, time[, component])``: the recorded channels of the flexible plant (``attitude``,
@@ -27,6 +28,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 from matplotlib.figure import Figure
 
+from flexsat.report.interactive import Curve, Plot
 from flexsat.report.page import format_metric
 
 if TYPE_CHECKING:
@@ -160,6 +162,7 @@ def sections(result: SlewReport, records: list[dict[str, Any]], figures: list[st
     esc = html.escape
     ds_attrs = result.attributes()
     images = "".join(f'<figure><img src="{f}" alt="{esc(f)}"></figure>' for f in figures)
+    static = f"<h2>Figures</h2>\n{images}\n" if images else ""
     goals = (
         f"Euler-angle error below {100 * ds_attrs['goal_angle_fraction']:g} % of the "
         f"commanded angle ({ds_attrs['goal_angle_tolerance_mrad']:g} mrad) at "
@@ -173,9 +176,79 @@ def sections(result: SlewReport, records: list[dict[str, Any]], figures: list[st
 <p>{esc(goals)}</p>
 {_goal_table(records, result.labels[0])}
 <ul>{notes}</ul>
-<h2>Figures</h2>
-{images}
-"""
+{static}"""
+
+
+def _interactive(
+    ds: xr.Dataset, title: str, panels: list[Panel], band: float | None = None
+) -> list[Plot]:
+    """A figure per panel, every run a curve, the maneuver time T and 1.25 T marked."""
+    t = ds["time"].values
+    T = float(ds.attrs["duration_s"])
+    marks = (T, float(ds.attrs["goal_evaluation"]) * T)
+    bands = () if band is None else (band, -band)
+    return [
+        Plot(
+            f"{title}: {ylabel.split(' (')[0]}",
+            "time (s)",
+            ylabel,
+            tuple(Curve(str(r), str(r), t, values(r)) for r in ds["run"].values),
+            hlines=bands,
+            vlines=marks,
+        )
+        for ylabel, values in panels
+    ]
+
+
+def plots(ds: xr.Dataset) -> list[Plot]:
+    """The figures of the EPS slew study c. 1989 (module docstring), a figure per panel: the
+    nominal maneuver, then per run the Euler-angle errors with the goal band, the rim
+    deflections, the torque perturbations and the point forces."""
+    t = ds["time"].values
+    T = float(ds.attrs["duration_s"])
+    marks = (T, float(ds.attrs["goal_evaluation"]) * T)
+    nominal = [
+        Plot(
+            "nominal maneuver: torque",
+            "time (s)",
+            "torque (kN m)",
+            tuple(
+                Curve("", axis, t, 1e-3 * ds["nominal_torque"].values[:, j], color=j)
+                for j, axis in enumerate("xyz")
+            ),
+            vlines=marks,
+        ),
+        Plot(
+            "nominal maneuver: 1-2-3 angles",
+            "time (s)",
+            "1-2-3 angle (rad)",
+            tuple(
+                Curve("", f"θ{j + 1}", t, ds["nominal_euler123"].values[:, j], color=j)
+                for j in range(3)
+            ),
+            vlines=marks,
+        ),
+    ]
+    tol = ds.attrs["goal_angle_tolerance_mrad"]
+    rims = [str(n) for n in ds.data_vars if str(n).startswith("rim_deflection_")]
+    forces = [
+        name
+        for name in map(str, ds.data_vars)
+        if name.startswith("force_") and not name.endswith("_command") and np.any(ds[name].values)
+    ]
+    return (
+        nominal
+        + _interactive(
+            ds, "Euler-angle error", _components(ds, "euler123_error", 1e3, "mrad"), band=tol
+        )
+        + _interactive(
+            ds, "rim deflection", _scalars(ds, rims, "rim_deflection_", 1e3, "node {} (mm)")
+        )
+        + _interactive(
+            ds, "torque perturbation", _components(ds, "torque_perturbation", 1e-3, "kN m")
+        )
+        + _interactive(ds, "point force", _scalars(ds, forces, "force_", 1.0, "{} (N)"))
+    )
 
 
 def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
@@ -217,4 +290,4 @@ def draw_figures(ds: xr.Dataset, folder: Path) -> list[str]:
     return figures
 
 
-__all__ = ["GOAL_COLUMNS", "SlewReport", "draw_figures", "sections"]
+__all__ = ["GOAL_COLUMNS", "SlewReport", "draw_figures", "plots", "sections"]

@@ -5,12 +5,13 @@ simulate each run."""
 from __future__ import annotations
 
 from collections.abc import Callable, Generator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from flexsat.cases import get_case
 from flexsat.control import Controller
 from flexsat.dynamics.hub_appendage import HubAppendage
+from flexsat.dynamics.hybrid import HybridPlant
 from flexsat.input_checks import FieldError
 from flexsat.references import cite
 from flexsat.scenarios.datasets import SimulatedRuns
@@ -23,9 +24,10 @@ from flexsat.sim import SimConfig
 from flexsat.sim.engine import check_resources
 
 if TYPE_CHECKING:
-    from pathlib import Path
-
     import xarray as xr
+
+    from flexsat.report.controller_summary import LawSummary
+    from flexsat.report.interactive import Plot
 
 T = TypeVar("T")
 
@@ -181,17 +183,40 @@ def _check_resources(
 
 @dataclass(frozen=True)
 class ManeuverResult(SimulatedRuns):
-    """The runs of a maneuver scenario (:class:`~flexsat.scenarios.datasets.SimulatedRuns`)."""
+    """The runs of a maneuver scenario (:class:`~flexsat.scenarios.datasets.SimulatedRuns`),
+    with what the controller summary needs: each run's law (``laws``), the model and the
+    control period (s)."""
 
-    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
-        from flexsat.report.maneuver import draw_figures
+    laws: dict[str, Controller] = field(default_factory=dict)
+    model: HybridPlant | None = None
+    control_period: float = 0.0
 
-        return draw_figures(ds, folder)
+    def plots(self, ds: xr.Dataset) -> list[Plot]:
+        from flexsat.report.maneuver import plots
+
+        return plots(ds)
 
     def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.maneuver import sections
 
-        return sections(self.metrics_records(), figures)
+        return sections(self.metrics_records())
+
+    def controller_summaries(self) -> tuple[LawSummary, ...]:
+        """Each law's summary on the model's linear part (a hybrid model's states labelled
+        ``theta``, ``q[i]`` and their rates, its order x = [θ, q, θ', q']), at the control
+        period."""
+        if self.model is None or not self.laws:
+            return ()
+        from flexsat.dynamics.linear_model import plant_state_space
+        from flexsat.report.controller_summary import summarise_laws
+
+        plant = plant_state_space(self.model)
+        if isinstance(self.model, HybridPlant):  # x = [θ, q, θ', q'] (flexsat.dynamics.hybrid)
+            modes = range(1, plant.nstates // 2)
+            states = ["theta", *(f"q[{i}]" for i in modes)]
+            states += ["theta_dot", *(f"q_dot[{i}]" for i in modes)]
+            plant = plant_state_space(self.model, states=states)
+        return summarise_laws(plant, self.laws, self.control_period)
 
 
 class ManeuverKind(ScenarioKind):
@@ -222,6 +247,9 @@ class ManeuverKind(ScenarioKind):
             tuple(prepared.controllers),
             tuple(results),
             cite(get_case(scenario.case).source),
+            laws=dict(prepared.controllers),
+            model=prepared.model,
+            control_period=1.0 / prepared.config.control_rate,
         )
 
 

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Generator, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 from pydantic import (
@@ -76,11 +76,12 @@ from flexsat.scenarios.simulation_laws import (
 from flexsat.scenarios.simulation_plants import PlantContext, simulation_cases, simulation_plants
 
 if TYPE_CHECKING:
-    from pathlib import Path
-
     import xarray as xr
 
+    from flexsat.control import Controller
     from flexsat.dynamics.plant import Channel, Plant
+    from flexsat.report.controller_summary import LawSummary
+    from flexsat.report.interactive import Plot
     from flexsat.scenarios.slew import SlewScenario
     from flexsat.sim import SimConfig
 
@@ -273,7 +274,27 @@ def named_plant(section: Any, case: str | None) -> tuple[str, BaseModel] | None:
 class SimulationResult(SimulatedRuns):
     """The runs of a simulation scenario: one :class:`flexsat.sim.SimResult` per run, in one
     dataset with dims (run, time[, component]) (:class:`~flexsat.scenarios.datasets.
-    SimulatedRuns`)."""
+    SimulatedRuns`), with what the controller summary needs: each run's law (``laws``), the
+    plant and the control period (s)."""
+
+    laws: dict[str, Controller] = field(default_factory=dict)
+    plant: Plant | None = None
+    control_period: float = 0.0
+
+    def controller_summaries(self) -> tuple[LawSummary, ...]:
+        """Each law's summary on the plant's linear part; a plant without one (nonlinear,
+        dispersed) gives each law a line saying why."""
+        if self.plant is None or not self.laws:
+            return ()
+        from flexsat.dynamics.linear_model import plant_state_space
+        from flexsat.report.controller_summary import LawSummary, summarise_laws
+
+        try:
+            linear = plant_state_space(self.plant)
+        except ValueError as exc:
+            why = f"the plant has no linear part ({exc})"
+            return tuple(LawSummary(r, type(law).__name__, why) for r, law in self.laws.items())
+        return summarise_laws(linear, self.laws, self.control_period)
 
     def report_case(self) -> str:
         """The case the page names, or the scenario's own model."""
@@ -286,10 +307,10 @@ class SimulationResult(SimulatedRuns):
         ds.attrs["case"] = scenario_subject(self.scenario)
         return ds
 
-    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
-        from flexsat.report.simulation import draw_figures
+    def plots(self, ds: xr.Dataset) -> list[Plot]:
+        from flexsat.report.simulation import plots
 
-        return draw_figures(ds, folder)
+        return plots(ds)
 
     def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.simulation import sections
@@ -490,7 +511,15 @@ class SimulationKind(ScenarioKind):
             if scenario.model is not None
             else cite(get_case(str(scenario.case)).source)
         )
-        return SimulationResult(scenario, tuple(laws), tuple(results), source)
+        return SimulationResult(
+            scenario,
+            tuple(laws),
+            tuple(results),
+            source,
+            laws=laws,
+            plant=plant,
+            control_period=config.dt,
+        )
 
 
 __all__ = [

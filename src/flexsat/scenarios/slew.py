@@ -66,7 +66,6 @@ import re
 from collections import OrderedDict
 from collections.abc import Generator
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
 import numpy as np
@@ -97,6 +96,7 @@ if TYPE_CHECKING:
     from flexsat.control.base import Controller
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
+    from flexsat.report.interactive import Plot
     from flexsat.sim import SimConfig, SimResult
 
 #: one weight, or one per component of its block
@@ -405,10 +405,10 @@ class SlewResult(ReportedResult):
         )
         return ds
 
-    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
-        from flexsat.report.slew import draw_figures
+    def plots(self, ds: xr.Dataset) -> list[Plot]:
+        from flexsat.report.slew import plots
 
-        return draw_figures(ds, folder)
+        return plots(ds)
 
     def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.slew import sections
