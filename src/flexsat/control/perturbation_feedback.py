@@ -68,6 +68,7 @@ from flexsat import limits
 from flexsat.control.base import Controller
 from flexsat.control.force_decoupling import decoupled_input_map
 from flexsat.control.frequency_shaped import FrequencyShapedDesign, frequency_shaped_lqr
+from flexsat.control.linear_form import sample_times
 from flexsat.control.lqr import check_matrix, check_psd
 from flexsat.control.scheduled import interpolate_schedule
 from flexsat.control.trajectory_linearization import TrajectoryLinearization
@@ -84,6 +85,7 @@ if TYPE_CHECKING:
     import numpy.typing as npt
 
     from flexsat.control.base import RigidNominal, TorqueNominal
+    from flexsat.control.linear_form import LinearLaw
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.units import FloatArray, QuantityArrayLike
 
@@ -549,6 +551,103 @@ class PerturbationFeedback(Controller):
         for i, name in enumerate(self.writes[1:]):
             commands[name] = du[:, 3 + i]
         return commands, {"z1": z1 + h * z2 + (0.5 * h * h) * u3, "z2": z2 + h * u3}
+
+    def linear_form(self, dt: float, times: npt.ArrayLike, n_cases: int) -> LinearLaw:
+        r"""The law as the compiled loop's linear form (:mod:`~flexsat.control.linear_form`),
+        y = [β, ω, η, η̇] (the channels ``attitude``, ``rate``, ``elastic``), ξ = [v₁, v₂].
+
+        With j = min(k, last tabulated sample), :math:`\delta X_k = M_k e_k`,
+        e = y − [0, ω_n,j, 0] and M_k the rows 2 E_j[:, 1:]ᵀ on β (δα = 2 δq_v, δq = β E_j:
+        linear in β), I on ω and on the first n modal amplitudes and rates, and
+        G_k = [G_x, G_1, G_2] the interpolated gain, the law of :meth:`__call__` is
+
+        .. math::
+
+            v_3 &= f_j - G_x M_k e_k - G_1 v_1 - G_2 v_2, \\
+            \xi_{k+1} &= \begin{bmatrix} I - \tfrac{h^2}2 G_1 & hI - \tfrac{h^2}2 G_2 \\
+                -h G_1 & I - h G_2 \end{bmatrix}\xi_k
+                - \begin{bmatrix}\tfrac{h^2}2 \\ h\end{bmatrix} G_x M_k e_k
+                + \begin{bmatrix}\tfrac{h^2}2 \\ h\end{bmatrix} f_j, \\
+            u_k &= [\bar\tau_{n,j}; 0] + P S \big[(I - \tfrac{h^2}6 G_1) v_1
+                + (\tfrac h2 I - \tfrac{h^2}6 G_2) v_2 - \tfrac{h^2}6 G_x M_k e_k
+                + \tfrac{h^2}6 f_j\big],
+
+        P = blockdiag(J, I) (the torque is J δu_τ), S the input map; the feedforward's affine
+        term is shifted into u_ff (:func:`~flexsat.control.linear_form.absorb_affine`). Equal
+        to :meth:`__call__` to round-off while the error quaternion's scalar part
+        δq₀ = (β E_j)₀ is >= 0 (an attitude error from the nominal below π, which the law's
+        sign choice otherwise folds back): a caller flying cases that far off the nominal
+        checks δq₀ (:meth:`hemisphere`) and reruns them on the law itself.
+
+        Raises
+        ------
+        ValueError
+            ``dt``: another control period than the law's (it is tabulated on its grid).
+        """
+        from flexsat.control.linear_form import LinearLaw, absorb_affine
+
+        dt, grid = sample_times(dt, times)
+        h = self.dt
+        if abs(dt - h) > 1e-9 * h:
+            raise FieldError("dt", f"the law is tabulated at dt = {h:g} s, the run has {dt:g} s")
+        n, n_p = self.n_design_modes, self.n_modes_plant
+        S = self._inputs_T.T  # (m, m_v)
+        m, m_v = S.shape
+        nx = 6 + 2 * n
+        p = 7 + 2 * n_p
+        j = np.minimum(np.rint(grid / h).astype(int), len(self._torque) - 1)
+        G = interpolate_schedule(self.knots, self.gains, grid)  # (n_t, m_v, nx + 2 m_v)
+        Gx, G1, G2 = G[..., :nx], G[..., nx : nx + m_v], G[..., nx + m_v :]
+        M = np.zeros((grid.size, nx, p))
+        M[:, :3, :4] = 2.0 * np.swapaxes(self._error_maps[j][:, :, 1:], 1, 2)
+        M[:, 3:6, 4:7] = np.eye(3)
+        M[:, 6 : 6 + n, 7 : 7 + n] = np.eye(n)
+        M[:, 6 + n :, 7 + n_p : 7 + n_p + n] = np.eye(n)
+        GM = Gx @ M  # (n_t, m_v, p)
+        eye = np.eye(m_v)
+        A = np.block(
+            [
+                [eye - 0.5 * h * h * G1, h * eye - 0.5 * h * h * G2],
+                [-h * G1, eye - h * G2],
+            ]
+        )
+        B = np.concatenate([-0.5 * h * h * GM, -h * GM], axis=1)
+        P = np.eye(m)
+        P[:3, :3] = self._inertia_T.T
+        PS = P @ S
+        C = PS @ np.concatenate([eye - (h * h / 6) * G1, 0.5 * h * eye - (h * h / 6) * G2], -1)
+        D = -(h * h / 6) * (PS @ GM)
+        ff = self._ff[j]  # (n_t, m_v)
+        g = np.zeros((grid.size, m))
+        g[:, :3] = self._torque[j]
+        g += (h * h / 6) * ff @ PS.T
+        F = np.concatenate([0.5 * h * h * eye, h * eye])
+        A4, C4 = A[:, None], C[:, None]
+        u_ff = absorb_affine(A4, C4, g[:, None], F, ff[:, None])
+        y_ref = np.zeros((grid.size, 1, p))
+        y_ref[:, 0, 4:7] = self._omega[j]
+        return LinearLaw(
+            A4,
+            B[:, None],
+            C4,
+            D[:, None],
+            y_ref,
+            u_ff,
+            None,
+            ("attitude", "rate", "elastic"),
+            tuple(self.writes),
+            (4, 3, 2 * n_p),
+            (3,) + (1,) * (m - 3),
+        )
+
+    def hemisphere(self, times: npt.ArrayLike, attitude: npt.ArrayLike) -> FloatArray:
+        """δq₀ = (β E_j)₀, the scalar part of the error quaternion from the nominal, at the
+        sample ``times`` (n_t,) for the attitudes (..., n_t, 4): where it is negative the law
+        takes the other sign of δq (:meth:`linear_form`)."""
+        grid = np.asarray(times, float)
+        j = np.minimum(np.rint(grid / self.dt).astype(int), len(self._torque) - 1)
+        first = self._error_maps[j][:, :, 0]
+        return np.einsum("...ki,ki->...k", np.asarray(attitude, float), first)
 
 
 def interval_means(

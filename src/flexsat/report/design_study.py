@@ -64,8 +64,10 @@ def _dispersions_section(dispersions: Any) -> str:
     runs = ", ".join(esc(run) for run in dispersions.runs)
     return f"""<h2>Dispersions</h2>
 <p>{n} cases. The placement and the laws are those designed on the <b>nominal</b> model (the
-stages above); each case rebuilds the model and its modes from its dispersed values and flies
-the nominal laws on that <b>dispersed truth</b> (runs: {runs}). The probabilities below are
+stages above); each case builds its spacecraft from its dispersed values (the model and its
+modes re-solved when the model is dispersed, the truth's inertia, frequencies and damping
+departures applied) and flies the nominal laws on that <b>dispersed truth</b> with the study's
+sensors and disturbances, its noise its own (runs: {runs}). The probabilities below are
 those of this design meeting each requirement on a spacecraft built within the dispersions:
 its robustness, not that of a law redesigned per case.</p>
 {html_table(("parameter", "SI unit", "least", "median", "greatest"), rows)}

@@ -21,25 +21,39 @@ Semantics: design on the nominal, fly on the truth
 --------------------------------------------------
 The placement and the laws are those of the **nominal** study (its cached stages): they are
 what the engineer designed and would fly. Each case builds the **dispersed truth** -- the
-``model:`` and ``modes:`` sections with the case's values, the modal solve redone, the kept
-modes and their damping as the case says -- keeps the nominal placement (the forces sit where
-they were placed) and flies every named run's nominal law on it, from the run's (possibly
-dispersed) initial state, for the (possibly dispersed) duration. When no parameter is under
-``model`` (damping, durations, initial states only), every case reuses the nominal modal solve
-(the same numbers as solving it again, tested) instead of repeating it. The probability of meeting a
-requirement is then the probability that *this design* meets it on a spacecraft built within
-the dispersions: its robustness, not that of a law redesigned for every case. An LQR law's
-gain reads the truth's modal coordinates by index (full state feedback on the kept modes):
-where dispersions reorder or mix close modes (a symmetric structure's pairs), the gain meets
-modes it was not designed for, as it would in flight.
+``model:``, ``modes:`` and ``truth:`` sections with the case's values (the modal solve redone
+when the model changes, the kept modes and their damping, then the truth's departures:
+principal moments, elastic frequencies, damping ratios, :func:`~flexsat.scenarios.slew.
+apply_truth`) -- keeps the nominal placement (the forces sit where they were placed) and flies
+every named run's nominal law on it, from the run's (possibly dispersed) initial state, for
+the (possibly dispersed) duration, with the study's ``sensors`` and ``disturbances`` (their
+noise from the case's own seed). When no parameter is under ``model``, every case reuses the
+nominal modal solve (the same numbers as solving it again, tested) instead of repeating it.
+The probability of meeting a requirement is then the probability that *this design* meets it
+on a spacecraft built within the dispersions: its robustness, not that of a law redesigned for
+every case. A law that reads modal coordinates (LQR, the perturbation feedback) reads the
+truth's kept modes by index, each with the sign of the nominal mode's shape
+(:func:`~flexsat.scenarios.design_flight.align_modes`: a re-solve may return a mode with the
+other sign, which the law would feed back reversed); where dispersions make two modes cross,
+the law meets them swapped, as it would in flight.
+
+Direct cases and compiled batches
+---------------------------------
+When every parameter is under ``truth`` (:data:`DIRECT_SECTIONS`) a case is the nominal
+spacecraft (built once per worker) with its own departures: no case document is written or
+validated and no plant rebuilt (:meth:`DispersedCases.setup`). Every chunk's cases fly in
+compiled batches (:func:`~flexsat.scenarios.design_flight.fly_cases`): consecutive cases with
+the same settings stacked into one dispersed plant, one lane each of the three-axis kernel, the
+perturbation feedback through its linear form. A direct study's chunk defaults to
+:data:`DIRECT_CHUNK_SIZE` cases.
 
 The parameters, their distributions with units, ``cases``, ``seed``, ``requirements`` and
 ``execution`` are those of ``kind: montecarlo`` (:mod:`flexsat.scenarios.batch`, the same
 schema and the same code: :func:`~flexsat.scenarios.batch.parameter_space`,
 :class:`~flexsat.scenarios.batch.ExecutionSpec`). A path must lead into the truth: ``model``,
-``modes``, ``simulation`` (not its ``control_rate``: the laws are sampled at the nominal one,
-nor its ``seed``: each case's is written there) or a run's ``initial``; a law's or the
-placement's values are the design, refused by name.
+``modes``, ``truth``, ``sensors``, ``disturbances``, ``simulation`` (not its ``control_rate``:
+the laws are sampled at the nominal one, nor its ``seed``: each case's is written there) or a
+run's ``initial``; a law's or the placement's values are the design, refused by name.
 
 Metrics (:func:`~flexsat.scenarios.design_study.run_metrics` of each run flown, the attitude
 error from the run's law's target): with one run each under its own name
@@ -49,11 +63,13 @@ another name is refused before anything runs. Thresholds take units (rad, m, N m
 
 Execution: the cases run through the batch machinery
 (:func:`~flexsat.design.batch_runner.run_batch`): chunks on dask, a zarr store, resume after an
-interruption. :class:`DispersedCases` is the case builder; every case's document is validated
+interruption. :class:`DispersedCases` is the case builder; every case's document (a direct
+case: its ``truth`` section, and the first case's whole document) is validated
 (:class:`~flexsat.scenarios.batch_cases.DocumentCases`) and the truth of each parameter's
-extreme draws built (a modulus or a mass made negative is refused by name) before any case runs.
-A case depends on (seed, index) alone and runs alone, so results do not depend on the chunking
-or the workers, and a case equals :func:`dispersed_case` of its index.
+extreme draws built (a modulus or a mass made negative, an inertia violating the triangle
+inequality is refused by name) before any case runs. A case depends on (seed, index) alone and
+flies in its own lane, so results do not depend on the chunking or the workers, and a case
+equals :func:`dispersed_case` of its index (the case flown alone) bit for bit.
 
 Cache: the stage's fingerprint holds the section without ``requirements``, ``execution`` and
 ``store`` (which change no case) and the fingerprints of the runs flown (each holding its law,
@@ -66,8 +82,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Self, cast
 
@@ -75,15 +91,24 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from flexsat import limits
-from flexsat.design.stages import Stage, StageCache, StageRecord
+from flexsat.design.stages import Stage, StageCache, StageRecord, canonical_json
 from flexsat.input_checks import FieldError
 from flexsat.scenarios.batch import ExecutionSpec, parameter_space
 from flexsat.scenarios.batch_cases import DOCUMENT_CHUNK_SIZE, DocumentCases
+from flexsat.scenarios.design_flight import (
+    CaseSetup,
+    dispersed_spacecraft,
+    fly_cases,
+    inertia_margins,
+    nominal_setup,
+)
 from flexsat.scenarios.design_laws import StudySection
-from flexsat.scenarios.errors import ScenarioError, locate
+from flexsat.scenarios.errors import ScenarioError, item_path, locate
 from flexsat.scenarios.fields import integer_in
+from flexsat.scenarios.slew import TruthSpec, apply_truth
 
 if TYPE_CHECKING:
+    from flexsat.control.base import Controller
     from flexsat.design.monte_carlo_statistics import Requirement
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.scenarios.design_placement import PlacementResult
@@ -98,7 +123,13 @@ METRIC_UNITS = {
     "peak_force_N": "N",
 }
 #: the sections of the study a dispersion may vary (module docstring)
-TRUTH_SECTIONS = ("model", "modes", "simulation", "runs")
+TRUTH_SECTIONS = ("model", "modes", "truth", "sensors", "disturbances", "simulation", "runs")
+#: the sections whose dispersion the cases apply to the nominal spacecraft directly (module
+#: docstring: no case document, no rebuilt plant)
+DIRECT_SECTIONS = ("truth",)
+#: the default chunk of a study whose parameters are all under :data:`DIRECT_SECTIONS`: its
+#: cases run in compiled batches (a few ms a case), a document case builds its own plant first
+DIRECT_CHUNK_SIZE = 250
 #: fields of ``simulation`` that are not dispersions, and why
 FIXED_SIMULATION = {
     "simulation.control_rate": "the laws are designed and sampled at the nominal control rate",
@@ -148,8 +179,10 @@ class DispersionsSpec(StudySection):
     @model_validator(mode="after")
     def _chunks(self) -> Self:
         if "chunk_size" not in self.execution.model_fields_set:
-            # a case is a modal solve and a simulation (0.1-5 s): the document batches' chunks
-            self.execution = self.execution.model_copy(update={"chunk_size": DOCUMENT_CHUNK_SIZE})
+            # a document case is a modal solve and a simulation (0.1-5 s): the document
+            # batches' chunks; a direct case is a lane of a compiled batch
+            size = DIRECT_CHUNK_SIZE if is_direct(self) else DOCUMENT_CHUNK_SIZE
+            self.execution = self.execution.model_copy(update={"chunk_size": size})
         return self
 
     def flown(self, labels: list[str]) -> list[str]:
@@ -191,101 +224,24 @@ class DispersionsSpec(StudySection):
         return out
 
 
+def section_of(path: str) -> str:
+    """The study section a parameter path leads into (``truth.damping`` → ``truth``)."""
+    return path.split(".")[0].split("[")[0]
+
+
+def is_direct(spec: DispersionsSpec) -> bool:
+    """Whether every parameter is under :data:`DIRECT_SECTIONS`: each case is then the nominal
+    spacecraft with its own truth departures, flown without a case document (module
+    docstring)."""
+    return all(section_of(path) in DIRECT_SECTIONS for path in spec.parameters)
+
+
 def metric_names(runs: list[str], forces: bool) -> list[str]:
     """The metrics of a case flying ``runs`` (module docstring); ``forces``: placed forces."""
     names = [m for m in METRIC_UNITS if forces or m != "peak_force_N"]
     if len(runs) == 1:
         return names
     return [f"runs[{run!r}].{m}" for run in runs for m in names]
-
-
-def dispersed_spacecraft(
-    scenario: Any, placement: PlacementResult, model: ModalModel | None = None
-) -> FlexibleSpacecraft:
-    """The truth of a (case) design study: its ``model:`` solved (or ``model``, the nominal
-    solve, when no dispersion touches the model section), its ``modes:`` kept, with the
-    nominal ``placement``'s forces and sensors.
-
-    Raises
-    ------
-    ScenarioError
-        A model or modes the solve refuses (a negative modulus, too few modes), by path.
-    """
-    from flexsat.scenarios.design_placement import spacecraft
-    from flexsat.scenarios.design_study import kept_modes, modal_model_of
-
-    try:
-        if model is None:
-            model = modal_model_of(scenario.model, scenario.folder)
-    except ValueError as exc:
-        raise ScenarioError([locate("model", exc)]) from None
-    try:
-        kept = kept_modes(model, scenario.modes)
-    except ValueError as exc:
-        raise ScenarioError([locate("modes", exc)]) from None
-    try:
-        return spacecraft(kept, scenario.placement, placement)
-    except ValueError as exc:
-        raise ScenarioError([locate("placement", exc)]) from None
-
-
-def fly(
-    scenario: Any,
-    runs: list[str],
-    placement: PlacementResult,
-    laws: Mapping[str, Any],
-    model: ModalModel | None = None,
-) -> dict[str, float]:
-    """The metrics of the named ``runs`` of a (case) design study flown on its truth
-    (:func:`dispersed_spacecraft`) with the nominal law designs (module docstring).
-
-    Parameters
-    ----------
-    scenario : DesignStudyScenario
-        The case's study: its model, modes, simulation and runs' initial states are the truth.
-    runs : list of str
-        The labels of the runs flown.
-    placement : PlacementResult
-        The nominal placement.
-    laws : mapping of str to dict of str to ndarray
-        The nominal designs' arrays by law label.
-    model : ModalModel, optional
-        The nominal solve, when the case's model section is the nominal one.
-
-    Raises
-    ------
-    ScenarioError
-        A truth the model, modes or runs refuse, by path.
-    """
-    from flexsat.scenarios.design_laws import law_controller
-    from flexsat.scenarios.design_study import IDENTITY, run_metrics
-    from flexsat.scenarios.errors import item_path
-    from flexsat.scenarios.fields import given_fields
-    from flexsat.sim import SimConfig, simulate
-
-    plant = dispersed_spacecraft(scenario, placement, model)
-    try:
-        config = SimConfig(**given_fields(scenario.simulation))
-    except ValueError as exc:
-        raise ScenarioError([locate("simulation", exc)]) from None
-    specs = {law.label: law for law in scenario.laws}
-    records = []
-    for index, run in enumerate(scenario.runs):
-        if run.label not in runs:
-            continue
-        try:
-            x0 = plant.state_from(**given_fields(run.initial))
-        except ValueError as exc:
-            path = f"runs{item_path(index, run.label)}.initial"
-            raise ScenarioError([locate(path, exc)]) from None
-        arrays = laws[run.law]
-        controller = law_controller(specs[run.law], arrays, plant, config.dt)
-        result = simulate(plant, controller, config, n_cases=1, initial_state=x0)
-        target = np.asarray(arrays.get("beta_target", IDENTITY))
-        records.append((run.label, run_metrics(result, target)))
-    if len(records) == 1:
-        return records[0][1]
-    return {f"runs[{label!r}].{k}": v for label, metrics in records for k, v in metrics.items()}
 
 
 @dataclass(frozen=True)
@@ -309,6 +265,13 @@ class DispersedCases:
     model : ModalModel or None
         The nominal solve, which every case reuses when no parameter is under ``model``
         (:func:`disperses_model`); None: each case solves its own.
+    law_of : dict of str to str
+        The law of each run flown.
+    reference : ModalModel or None
+        The nominal kept modes, whose signs each re-solved truth's modes take
+        (:func:`~flexsat.scenarios.design_flight.align_modes`); None: the solver's signs.
+    direct : bool
+        Every parameter is under :data:`DIRECT_SECTIONS` (:func:`is_direct`).
     """
 
     cases: DocumentCases
@@ -317,6 +280,9 @@ class DispersedCases:
     laws: dict[str, dict[str, np.ndarray]]
     key: str
     model: ModalModel | None = None
+    law_of: dict[str, str] = field(default_factory=dict)
+    direct: bool = False
+    reference: ModalModel | None = None
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
@@ -327,42 +293,167 @@ class DispersedCases:
         """The stage's fingerprint (part of the store's)."""
         return f"design study dispersions {self.key}"
 
-    def case(self, values: Mapping[str, float], seed: int, index: int) -> dict[str, float]:
-        """The metrics of the case ``index`` with ``values`` (SI, by path) and noise ``seed``.
+    def setup(self, values: Mapping[str, float], seed: int, index: int) -> CaseSetup:
+        """The truth, settings and initial states of the case ``index`` with ``values`` (SI,
+        by path) and noise ``seed``: the nominal spacecraft with the case's ``truth`` section
+        (direct), else the case's document validated and its spacecraft built.
 
         Raises
         ------
         ScenarioError
             Named by the parameter, the case index and its values.
         """
+        from flexsat.scenarios.design_study import flight_config, flown_plant
+        from flexsat.scenarios.fields import given_fields
+
         try:
-            scenario = self.cases.scenario(values, seed)
-            return fly(scenario, list(self.runs), self.placement, self.laws, self.model)
+            if self.direct:
+                nominal = nominal_setup(self)
+                truth = self.truth_of(values)
+                plant = apply_truth(truth, nominal.plant)
+                return CaseSetup(plant, nominal.config, nominal.initial, "nominal")
+            scenario: Any = self.cases.scenario(values, seed)
+            plant = flown_plant(
+                scenario,
+                dispersed_spacecraft(scenario, self.placement, self.model, self.reference),
+            )
+            config = flight_config(scenario, plant)
+            initial = {}
+            for i, run in enumerate(scenario.runs):
+                if run.label in self.runs:
+                    try:
+                        initial[run.label] = plant.state_from(**given_fields(run.initial))
+                    except ValueError as exc:
+                        path = f"runs{item_path(i, run.label)}.initial"
+                        raise ScenarioError([locate(path, exc)]) from None
+            group = canonical_json(
+                {
+                    "simulation": scenario.simulation.model_dump(mode="json", exclude={"seed"}),
+                    "sensors": {k: v.model_dump(mode="json") for k, v in scenario.sensors.items()},
+                    "disturbances": {
+                        k: v.model_dump(mode="json") for k, v in scenario.disturbances.items()
+                    },
+                    "initial": {k: v.tolist() for k, v in initial.items()},
+                }
+            )
+            return CaseSetup(plant, config, initial, group)
         except ScenarioError as exc:
             raise ScenarioError(self.cases.problems(index, values, exc)) from None
 
+    def truth_of(self, values: Mapping[str, float]) -> TruthSpec:
+        """The ``truth`` section of a direct case: the nominal's with ``values`` written in
+        (each in the unit its entry is given in, as in a case document) and validated.
+
+        Raises
+        ------
+        ScenarioError
+            ``truth.<field>``: a value the section refuses.
+        """
+        from flexsat.scenarios.document_paths import with_values
+        from flexsat.scenarios.slew import TruthSpec
+
+        written = {p.path: p.value(values[p.path]) for p in self.cases.parameters}
+        section = with_values({"truth": self.cases.data.get("truth", {})}, written)["truth"]
+        try:
+            return TruthSpec.model_validate(section)
+        except ValueError as exc:
+            raise ScenarioError([locate("truth", exc)]) from None
+
+    def controllers(self, plant: FlexibleSpacecraft, dt: float) -> dict[str, Controller]:
+        """Each flown run's nominal law (by run label) on a spacecraft of the study's channels
+        and modes, sampled at ``dt``."""
+        from flexsat.scenarios.design_laws import LawSpec, law_controller
+
+        specs = {
+            entry["label"]: LawSpec.model_validate(entry)
+            for entry in self.cases.data["laws"]
+            if entry["label"] in set(self.law_of.values())
+        }
+        return {
+            label: law_controller(
+                specs[self.law_of[label]], self.laws[self.law_of[label]], plant, dt
+            )
+            for label in self.runs
+        }
+
+    def fly(
+        self, values: Sequence[Mapping[str, float]], seeds: np.ndarray, start: int
+    ) -> dict[str, np.ndarray]:
+        """The metrics of the cases ``start ..`` with ``values`` and noise ``seeds``
+        (:func:`fly_cases`)."""
+        from flexsat.sim import SimulationDiverged
+        from flexsat.sim.engine import offset_cases
+
+        setups = [self.setup(v, int(s), start + k) for k, (v, s) in enumerate(zip(values, seeds))]
+        controllers = self.controllers(setups[0].plant, setups[0].config.dt)
+        try:
+            return fly_cases(self, setups, np.asarray(seeds, np.int64), controllers)
+        except SimulationDiverged as exc:
+            raise offset_cases(exc, start) from None
+
+    def case(self, values: Mapping[str, float], seed: int, index: int) -> dict[str, float]:
+        """The metrics of the case ``index`` with ``values`` (SI, by path) and noise ``seed``,
+        flown alone.
+
+        Raises
+        ------
+        ScenarioError
+            Named by the parameter, the case index and its values.
+        """
+        rows = self.fly([values], np.array([seed], np.int64), index)
+        return {name: float(v[0]) for name, v in rows.items()}
+
     def check(self, table: Mapping[str, np.ndarray]) -> None:
-        """Every case's document validated, and the truth (:func:`dispersed_spacecraft`) of
-        the least and greatest draw of each parameter of the model or the modes built, before
-        any case runs.
+        """Before any case runs: every case's document validated and the truth
+        (:func:`dispersed_spacecraft`) of the least and greatest draw of each parameter of the
+        model or the modes built; for direct cases, every case's ``truth`` section validated,
+        the case's document of the first case, and the truth of the least and greatest draw of
+        each parameter and of the cases nearest to breaking the inertia's rules (triangle
+        inequality, J − ΔᵀΔ positive definite) built.
 
         Raises
         ------
         ScenarioError
             Naming the parameter, the case index and the rule.
         """
+        n = len(next(iter(table.values())))
+        names = self.parameter_names
+
+        def values_of(index: int) -> dict[str, float]:
+            return {p: float(table[p][index]) for p in names}
+
+        if self.direct:
+            self.cases.check({p: table[p][:1] for p in names})
+            nominal = nominal_setup(self)
+            scales = np.ones((n, 3))
+            for index in range(n):
+                try:
+                    truth = self.truth_of(values_of(index))
+                except ScenarioError as exc:
+                    raise ScenarioError(self.cases.problems(index, values_of(index), exc)) from None
+                scales[index] = np.broadcast_to(np.asarray(truth.inertia_scale, float), 3)
+            extremes = {int(np.argmin(table[p])) for p in names} | {
+                int(np.argmax(table[p])) for p in names
+            }
+            extremes |= set(inertia_margins(nominal.plant, scales))
+            for index in sorted(extremes):
+                self.setup(values_of(index), 0, index)
+            return
         self.cases.check(table)
-        structural = [p for p in self.parameter_names if p.startswith(("model", "modes"))]
-        extremes = sorted(
-            {int(np.argmin(table[p])) for p in structural}
-            | {int(np.argmax(table[p])) for p in structural}
-        )
-        for index in extremes:
-            values = {p: float(table[p][index]) for p in self.parameter_names}
+        structural = [p for p in names if section_of(p) in ("model", "modes")]
+        extremes = {int(np.argmin(table[p])) for p in structural} | {
+            int(np.argmax(table[p])) for p in structural
+        }
+        for index in sorted(extremes):
             try:
-                dispersed_spacecraft(self.cases.scenario(values, 0), self.placement, self.model)
+                dispersed_spacecraft(
+                    self.cases.scenario(values_of(index), 0),
+                    self.placement,
+                    self.model,
+                    self.reference,
+                )
             except ScenarioError as exc:
-                raise ScenarioError(self.cases.problems(index, values, exc)) from None
+                raise ScenarioError(self.cases.problems(index, values_of(index), exc)) from None
 
     def run_chunk(
         self,
@@ -372,25 +463,18 @@ class DispersedCases:
         base_seed: int,
         histories: tuple[str, ...] = (),
     ) -> dict[str, np.ndarray]:
-        """The cases ``start .. start + n``, one by one: {``metric_`` name: (n,)}, an empty
-        ``time`` and each case's ``seed`` (``extract`` is unused: :func:`fly` gives the
-        metrics)."""
+        """The cases ``start .. start + n`` (:meth:`fly`): {``metric_`` name: (n,)}, an empty
+        ``time`` and each case's ``seed`` (``extract`` is unused: the metrics are the
+        study's)."""
         from flexsat.scenarios.batch_cases import document_seeds
-        from flexsat.sim import SimulationDiverged
-        from flexsat.sim.engine import offset_cases
 
         if histories:
             raise FieldError("histories", "the dispersions of a design study keep metrics only")
         n = len(next(iter(parameters.values())))
         seeds = document_seeds(base_seed, np.arange(start, start + n))
-        rows = []
-        for k in range(n):
-            values = {p: float(parameters[p][k]) for p in self.parameter_names}
-            try:
-                rows.append(self.case(values, int(seeds[k]), start + k))
-            except SimulationDiverged as exc:
-                raise offset_cases(exc, k) from None
-        out = {f"metric_{name}": np.array([r[name] for r in rows]) for name in rows[0]}
+        values = [{p: float(parameters[p][k]) for p in self.parameter_names} for k in range(n)]
+        rows = self.fly(values, seeds, 0)
+        out = {f"metric_{name}": v for name, v in rows.items()}
         out["time"] = np.empty(0)
         out["seed"] = seeds
         return out
@@ -406,7 +490,7 @@ def dispersions_stage(scenario: Any, runs: list[Stage]) -> Stage:
 
 def disperses_model(spec: DispersionsSpec) -> bool:
     """Whether a parameter is under ``model`` (each case then solves its own structure)."""
-    return any(path.split(".")[0].split("[")[0] == "model" for path in spec.parameters)
+    return any(section_of(path) == "model" for path in spec.parameters)
 
 
 def case_builder(
@@ -415,11 +499,13 @@ def case_builder(
     placement: PlacementResult,
     laws: Mapping[str, Any],
     model: ModalModel | None = None,
+    modes: ModalModel | None = None,
 ) -> DispersedCases:
     """The :class:`DispersedCases` of ``scenario`` (a validated design study with
     ``dispersions``) with its nominal ``placement`` and law designs (``laws``: label →
-    LawDesign), and the nominal solve ``model`` the cases reuse when none of them changes the
-    model section (ignored otherwise).
+    LawDesign), the nominal solve ``model`` the cases reuse when none of them changes the
+    model section (ignored otherwise) and the nominal kept ``modes`` whose signs a re-solved
+    truth takes (:func:`~flexsat.scenarios.design_flight.align_modes`).
 
     Raises
     ------
@@ -439,14 +525,17 @@ def case_builder(
     except FieldError as exc:
         raise ScenarioError([locate("dispersions", exc)]) from None
     flown = spec.flown([run.label for run in scenario.runs])
-    used = {run.law for run in scenario.runs if run.label in flown}
+    law_of = {run.label: run.law for run in scenario.runs if run.label in flown}
     return DispersedCases(
         cases=DocumentCases("design_study", data, scenario.folder, varied, "simulation.seed"),
         runs=tuple(flown),
         placement=placement,
-        laws={label: dict(laws[label].arrays) for label in sorted(used)},
+        laws={label: dict(laws[label].arrays) for label in sorted(set(law_of.values()))},
         key=stage.key,
         model=None if disperses_model(spec) else model,
+        law_of=law_of,
+        direct=is_direct(spec),
+        reference=modes if disperses_model(spec) else None,
     )
 
 
@@ -499,11 +588,13 @@ def run_dispersions(
     laws: Mapping[str, Any],
     progress: Callable[[str], None] | None = None,
     model: Callable[[], ModalModel] | None = None,
+    modes: ModalModel | None = None,
 ) -> tuple[DispersionsResult, StageRecord]:
     """Run the dispersions stage of ``scenario`` (module docstring): every case into the store
     (resuming it), then the statistics, and the stage's record (from the cache when no chunk
     had to run). ``model`` gives the nominal solve, which the cases reuse when no parameter is
-    under ``model`` (asked for only then, and only when cases run).
+    under ``model`` (asked for only then, and only when cases run); ``modes``, the nominal kept
+    modes, whose signs each re-solved truth takes (:func:`case_builder`).
 
     Raises
     ------
@@ -522,7 +613,7 @@ def run_dispersions(
 
     spec: DispersionsSpec = scenario.dispersions
     start_time = time.perf_counter()
-    build = case_builder(scenario, stage, placement, laws)
+    build = case_builder(scenario, stage, placement, laws, modes=modes)
     try:
         requirements = spec.requirement_list(
             metric_names(list(build.runs), scenario.placement.number > 0)
@@ -636,18 +727,20 @@ def check_dispersions(scenario: Any) -> None:
 
 
 __all__ = [
+    "DIRECT_CHUNK_SIZE",
+    "DIRECT_SECTIONS",
     "METRIC_UNITS",
     "DispersedCases",
+    "is_direct",
+    "section_of",
     "DispersionsResult",
     "DispersionsSpec",
     "case_builder",
     "check_dispersions",
     "dispersed_case",
-    "dispersed_spacecraft",
     "disperses_model",
     "dispersions_stage",
     "dispersions_steps",
-    "fly",
     "metric_names",
     "run_dispersions",
     "sample_table",

@@ -131,13 +131,19 @@ from flexsat.scenarios.fields import (
 )
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 from flexsat.scenarios.models import ModelSection
-from flexsat.scenarios.simulation import SimulationSettings
+from flexsat.scenarios.simulation import (
+    ChannelDisturbanceSpec,
+    ChannelSensorSpec,
+    SimulationSettings,
+    channel_config,
+)
+from flexsat.scenarios.slew import TruthSpec, apply_truth
 
 if TYPE_CHECKING:
     import xarray as xr
 
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
-    from flexsat.sim import SimResult
+    from flexsat.sim import SimConfig, SimResult
     from flexsat.structures.modal_model import ModalModel
 
 Value = float | int | str | list[Any]
@@ -224,6 +230,9 @@ class DesignStudyScenario(Document):
     placement: PlacementSpec
     laws: list[LawSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
     simulation: SimulationSettings
+    truth: TruthSpec = Field(default_factory=TruthSpec)
+    sensors: dict[str, ChannelSensorSpec] = Field(default_factory=dict)
+    disturbances: dict[str, ChannelDisturbanceSpec] = Field(default_factory=dict)
     runs: list[DesignRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
     dispersions: DispersionsSpec | None = None
 
@@ -347,9 +356,11 @@ def stage_plan(scenario: DesignStudyScenario) -> dict[str, Stage]:
             "law", f"law {law.label!r}", path, section, [placement]
         )
     settings = scenario.simulation.model_dump(mode="json")
+    flown_on = flight_sections(scenario)
     for index, run in enumerate(scenario.runs):
         path = f"runs{item_path(index, run.label)}"
         section = {"run": run.model_dump(mode="json", exclude={"label"}), "simulation": settings}
+        section.update(flown_on)
         stages[path] = _stage("run", f"run {run.label!r}", path, section, [laws[run.law]])
     if scenario.dispersions is not None:
         flown = scenario.dispersions.flown([run.label for run in scenario.runs])
@@ -362,6 +373,39 @@ def stage_plan(scenario: DesignStudyScenario) -> dict[str, Stage]:
             ],
         )
     return stages
+
+
+def flight_sections(scenario: DesignStudyScenario) -> dict[str, Any]:
+    """The ``truth``, ``sensors`` and ``disturbances`` sections a run depends on, those given
+    only (a study without them keeps the fingerprints it had before they existed)."""
+    out: dict[str, Any] = {}
+    for name in ("truth", "sensors", "disturbances"):
+        if name in scenario.model_fields_set:
+            out[name] = getattr(scenario, name)
+            out[name] = (
+                out[name].model_dump(mode="json")
+                if name == "truth"
+                else {k: v.model_dump(mode="json") for k, v in out[name].items()}
+            )
+    return out
+
+
+def flown_plant(scenario: Any, plant: FlexibleSpacecraft) -> FlexibleSpacecraft:
+    """The spacecraft a run flies on: ``plant`` (the kept modes with the placed forces) with
+    the ``truth`` section's departures (:func:`flexsat.scenarios.slew.apply_truth`)."""
+    return apply_truth(scenario.truth, plant)
+
+
+def flight_config(scenario: Any, plant: FlexibleSpacecraft) -> SimConfig:
+    """The simulation settings with the ``sensors`` and ``disturbances`` bound to ``plant``'s
+    channels (:func:`flexsat.scenarios.simulation.channel_config`).
+
+    Raises
+    ------
+    ScenarioError
+        ``sensors.<channel>...`` or ``disturbances.<channel>...`` by path, or ``simulation``.
+    """
+    return channel_config(scenario, plant, "design study")
 
 
 def _stage(name: str, label: str, path: str, section: Any, upstream: list[Stage]) -> Stage:
@@ -506,23 +550,36 @@ IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 
 
 def run_metrics(result: SimResult, target: np.ndarray = IDENTITY) -> dict[str, float]:
-    """Key numbers of a run: the final attitude error angle (rad, the rotation
-    2 arccos|β_tᵀβ| from the final attitude to the law's ``target``), the peak torque and
-    force, and the peak and final node displacement (m, largest over the recorded nodes)."""
-    ds = result.dataset.isel(case=0)
-    beta = ds["attitude"].values
-    cosine = min(1.0, abs(float(beta[-1] @ target)))
-    names = [name for name in ds.data_vars if str(name).startswith("displacement_")]
-    displacement = np.abs(np.stack([ds[name].values for name in names], -1))
+    """Key numbers of a run (its first case, :func:`batch_metrics`)."""
+    return {name: float(values[0]) for name, values in batch_metrics(result, target).items()}
+
+
+def batch_metrics(result: SimResult, target: np.ndarray = IDENTITY) -> dict[str, np.ndarray]:
+    """Key numbers of each case of a run, (n_cases,) each: the final attitude error angle (rad,
+    the rotation 2 arccos|β_tᵀβ| from the final attitude to the law's ``target``), the peak
+    torque and force, and the peak and final node displacement (m, largest over the recorded
+    nodes). Each case's numbers are reductions over its own samples only."""
+    ds = result.dataset
+    beta = ds["attitude"].transpose("case", "time", ...).values
+    cosine = np.minimum(1.0, np.abs(beta[:, -1] @ np.asarray(target, float)))
+
+    def peak(name: str) -> np.ndarray:
+        v = np.abs(ds[name].transpose("case", "time", ...).values)
+        return v.reshape(v.shape[0], -1).max(axis=1)
+
+    names = [str(name) for name in ds.data_vars if str(name).startswith("displacement_")]
+    displacement = np.abs(
+        np.stack([ds[name].transpose("case", "time").values for name in names], -1)
+    )
     metrics = {
-        "final_attitude_error_rad": float(2 * np.arccos(cosine)),
-        "peak_torque_N_m": float(np.abs(ds["torque"].values).max()),
-        "peak_displacement_m": float(displacement.max()),
-        "final_displacement_m": float(displacement[-1].max()),
+        "final_attitude_error_rad": 2 * np.arccos(cosine),
+        "peak_torque_N_m": peak("torque"),
+        "peak_displacement_m": displacement.max(axis=(1, 2)),
+        "final_displacement_m": displacement[:, -1].max(axis=1),
     }
-    forces = [name for name in ds.data_vars if str(name).startswith("force_")]
+    forces = [str(name) for name in ds.data_vars if str(name).startswith("force_")]
     if forces:
-        metrics["peak_force_N"] = float(max(np.abs(ds[f].values).max() for f in forces))
+        metrics["peak_force_N"] = np.max(np.stack([peak(f) for f in forces]), axis=0)
     return metrics
 
 
@@ -700,6 +757,7 @@ class DesignStudyKind(ScenarioKind):
             config = SimConfig(**given_fields(scenario.simulation))
         except ValueError as exc:
             raise ScenarioError([Problem("simulation", f"{exc}")]) from None
+        flown: FlexibleSpacecraft | None = None  # the truth the runs fly on, when one runs
         laws: dict[str, LawDesign] = {}
         for index, law in enumerate(scenario.laws):
             laws[law.label] = yield staged(
@@ -722,15 +780,18 @@ class DesignStudyKind(ScenarioKind):
                 records.append(StageRecord(stage, True, seconds, run_metrics(found, target)))
                 results.append((yield Run(stage.label, lambda found=found: found, path)))
                 continue
+            if flown is None:
+                flown = flown_plant(scenario, plant)
+                run_config = flight_config(scenario, flown)
             try:
-                x0 = plant.state_from(**given_fields(run.initial))
+                x0 = flown.state_from(**given_fields(run.initial))
             except ValueError as exc:
                 raise ScenarioError([locate(f"{path}.initial", exc)]) from None
             controller = law_controller(specs[run.law], laws[run.law].arrays, plant, config.dt)
             start = time.perf_counter()
             result = yield Run(
                 stage.label,
-                Simulation(plant, controller, config, {"n_cases": 1, "initial_state": x0}),
+                Simulation(flown, controller, run_config, {"n_cases": 1, "initial_state": x0}),
                 path,
             )
             seconds = time.perf_counter() - start
@@ -749,6 +810,7 @@ class DesignStudyKind(ScenarioKind):
                     laws,
                     progress,
                     lambda: raw if raw is not None else solved()[0],
+                    model,
                 )
                 records.append(record)
                 return outcome
@@ -780,6 +842,10 @@ __all__ = [
     "DesignStudyKind",
     "DesignStudyResult",
     "DesignStudyScenario",
+    "batch_metrics",
+    "flight_config",
+    "flight_sections",
+    "flown_plant",
     "kept_modes",
     "modal_model_of",
     "run_metrics",

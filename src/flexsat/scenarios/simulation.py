@@ -373,7 +373,18 @@ def build_plant(scenario: SimulationScenario | SlewScenario) -> Plant:
     return plant
 
 
-def _config(scenario: SimulationScenario, plant: Plant) -> SimConfig:
+def channel_config(scenario: Any, plant: Plant, subject: str | None = None) -> SimConfig:
+    """The ``simulation`` settings of ``scenario`` with its ``sensors``, ``actuators`` and
+    ``disturbances`` sections (those it has) bound to ``plant``'s channels, each value in its
+    channel's unit (``subject`` names the plant in an error; default the scenario's case or
+    model).
+
+    Raises
+    ------
+    ScenarioError
+        ``sensors.<channel>`` (no such output), ``disturbances.<channel>.random`` (a value the
+        channel refuses), ``simulation``.
+    """
     from flexsat.sim import SimConfig
     from flexsat.sim.channels import (
         ChannelActuator,
@@ -393,7 +404,7 @@ def _config(scenario: SimulationScenario, plant: Plant) -> SimConfig:
                     [
                         Problem(
                             f"{role}.{name}",
-                            f"the {scenario_subject(scenario)} plant has no "
+                            f"the {subject or scenario_subject(scenario)} plant has no "
                             f"{'output' if role == 'sensors' else 'input'} channel "
                             f"{name!r} (its channels: "
                             f"{', '.join(c.name for c in channels)})",
@@ -415,12 +426,17 @@ def _config(scenario: SimulationScenario, plant: Plant) -> SimConfig:
     try:
         config = SimConfig(
             **settings,
-            channel_sensors=pieces(scenario.sensors, ChannelSensor, "sensors", plant.outputs),
+            channel_sensors=pieces(
+                getattr(scenario, "sensors", {}), ChannelSensor, "sensors", plant.outputs
+            ),
             channel_actuators=pieces(
-                scenario.actuators, ChannelActuator, "actuators", plant.inputs
+                getattr(scenario, "actuators", {}), ChannelActuator, "actuators", plant.inputs
             ),
             channel_disturbances=pieces(
-                scenario.disturbances, ChannelDisturbance, "disturbances", plant.inputs
+                getattr(scenario, "disturbances", {}),
+                ChannelDisturbance,
+                "disturbances",
+                plant.inputs,
             ),
         )
     except ValueError as exc:
@@ -463,7 +479,7 @@ class SimulationKind(ScenarioKind):
             x0 = plant.state_from(**scenario.initial)
         except ValueError as exc:
             raise _located("initial", exc) from None
-        config = _config(scenario, plant)
+        config = channel_config(scenario, plant)
         laws: dict[str, Controller] = {}
         problems: list[Problem] = []
         for index, run in enumerate(scenario.runs):
@@ -507,6 +523,7 @@ class SimulationKind(ScenarioKind):
 
 
 __all__ = [
+    "channel_config",
     "SimulationKind",
     "SimulationResult",
     "SimulationScenario",

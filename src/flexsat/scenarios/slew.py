@@ -524,7 +524,18 @@ def truth_plant(scenario: SlewScenario, plant: FlexibleSpacecraft) -> FlexibleSp
         Under ``truth.<field>``: a list of another length than the modes, an inertia violating
         the triangle inequality or exceeded by the modes' participation.
     """
-    spec = scenario.truth
+    return apply_truth(scenario.truth, plant)
+
+
+def apply_truth(spec: TruthSpec, plant: FlexibleSpacecraft) -> FlexibleSpacecraft:
+    """``plant`` with the departures of a ``truth:`` section ``spec`` (:func:`truth_plant`),
+    ``plant`` itself where there are none.
+
+    Raises
+    ------
+    ScenarioError
+        Under ``truth.<field>`` (:func:`truth_plant`).
+    """
     changes: dict[str, np.ndarray] = {}
     scale = np.broadcast_to(np.asarray(spec.inertia_scale, float), (3,))
     if np.any(scale != 1.0):
@@ -768,4 +779,5 @@ __all__ = [
     "design_fingerprint",
     "nominal_design",
     "truth_plant",
+    "apply_truth",
 ]
