@@ -125,6 +125,24 @@ def served():
         process.wait(timeout=30)
 
 
+def test_a_port_in_use_is_an_error_naming_the_option():
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        env = {**os.environ, "PYTHONPATH": str(SRC)}
+        done = subprocess.run(
+            [sys.executable, "-m", "flexsat", "serve", "--port", str(port)],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=120,
+        )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith(f"--port: cannot listen on 127.0.0.1:{port}"), done.stderr
+    assert "Traceback" not in done.stderr
+
+
 def test_the_served_page_answers_a_gain_change(served, browser, tmp_path):
     """Acceptance (issue 24): start it, change a gain, see the settling time and a margin
     change; no script error, no failed request (the page needs no network); a screenshot."""

@@ -313,6 +313,10 @@ def serve(
     OSError
         When the port cannot be bound (in use, or not allowed).
     """
+    import socket
+
+    with socket.socket() as probe:  # a port in use is said now, not after the warm-up
+        probe.bind((address, port))
     import panel as pn
 
     design = TamuDesign()
