@@ -325,7 +325,10 @@ def serve(
         {"/": lambda: dashboard(design)},
         port=port,
         address=address,
-        websocket_origin=[f"{address}:{port}", f"localhost:{port}"],
+        # the page's own origin; listening on every interface, any host's page may connect
+        websocket_origin="*"
+        if address in ("0.0.0.0", "::")
+        else [f"{address}:{port}", f"localhost:{port}"],
         show=show,
         start=False,
         title="flexsat design dashboard",
