@@ -13,11 +13,12 @@ import time
 import urllib.request
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import flexsat
-from flexsat.report.dashboard import DISPLAY_UNITS, Dashboard, readout_html
-from flexsat.report.dashboard_model import TamuDesign, design_point
+from flexsat.report.dashboard import DISPLAY_UNITS, SWEEP_POINTS, Dashboard, readout_html
+from flexsat.report.dashboard_model import TamuDesign, design_point, sweep_values
 from flexsat.units import si_factor
 
 SRC = Path(flexsat.__file__).resolve().parents[1]
@@ -77,6 +78,28 @@ def test_a_refused_gain_shows_its_message_and_no_numbers(design):
     assert _cell(shown, "settling-time") == "no maneuver"
     assert "nan" not in shown.lower()
     assert board.sources["angle"].data["t"].size == 0
+
+
+def test_a_sweep_fills_its_plots_and_reports_its_progress(design):
+    board = Dashboard(design)
+    board.sweep_gain.value = "g2"
+    board.run_sweep()
+    data = board.sources["sweep"].data
+    expected = sweep_values(board.point(), "g2", SWEEP_POINTS) / si_factor("ozf*in*s/rad")
+    np.testing.assert_allclose(data["x"], expected, rtol=1e-12)  # the page's units
+    assert len(data["settling"]) == len(data["pm"]) == SWEEP_POINTS
+    assert board.progress.value == SWEEP_POINTS
+    assert re.search(
+        rf"sweep of g2 done: {SWEEP_POINTS} of {SWEEP_POINTS} in", board.sweep_status.object
+    )
+
+
+def test_a_sweep_that_cannot_start_says_why(design):
+    board = Dashboard(design)
+    board.gains["g1"].value = 0.0
+    board.run_sweep()
+    assert "g1: a sweep about g1 = 0 needs a value &gt; 0" in board.sweep_status.object
+    assert len(board.sources["sweep"].data["x"]) == 0
 
 
 def test_an_unstable_loop_shows_why_it_has_no_margins(design):
@@ -170,6 +193,11 @@ def test_the_served_page_answers_a_gain_change(served, browser, tmp_path):
         assert after["phase-margin"] == f"{expected.margins.phase_margin_deg:.2f} deg"
         assert after["settling-time"] != before["settling-time"]
         assert after["phase-margin"] != before["phase-margin"]
+        # a sweep in the background: the page shows its progress and ends done
+        page.get_by_role("button", name=f"sweep {SWEEP_POINTS} values").click()
+        status = page.locator("#sweep-status", has_text=re.compile(r"\bdone:"))
+        status.wait_for(timeout=120_000)
+        assert f"{SWEEP_POINTS} of {SWEEP_POINTS}" in status.inner_text()
         page.screenshot(path=str(tmp_path / "dashboard.png"), full_page=True)
         assert (tmp_path / "dashboard.png").stat().st_size > 10_000
         assert errors == [], errors

@@ -18,6 +18,7 @@ from flexsat.report.dashboard_model import (
     DesignPoint,
     TamuDesign,
     design_point,
+    sweep_values,
 )
 from flexsat.sim import simulate
 from flexsat.units import Q_
@@ -162,3 +163,42 @@ def test_a_design_point_refuses_bad_fields(kwargs, field):
     values = {"law": "law_ii", "g1": 1.0, "g2": 1.0, "g3": 0.0, "alpha": 0.2, **kwargs}
     with pytest.raises(FieldError, match=f"^{field}:"):
         DesignPoint(**values)
+
+
+def test_a_sweep_point_is_its_case_run_alone(design):
+    """Each batch of the sweep is one batched simulate (metrics only): every case equals the
+    same law run alone on that path bit for bit (the engine's guarantee), and its margins are
+    those of the point's own evaluation."""
+    point = design_point(g1="3000 ozf*in/rad")
+    values = sweep_values(point, "g1", 6)
+    swept = [p for chunk in design.sweep(point, "g1", values, chunk=4) for p in chunk]
+    assert [p.value for p in swept] == pytest.approx(values, rel=1e-15)
+    case = tamu()
+    for p in swept[:: len(swept) - 1]:  # the first and the last (two batches)
+        one = design_point(g1=p.value)
+        alone = simulate(
+            case.model(), design.law(one), design.configs[True], metrics_only=True
+        ).metrics["settling_time_s"][0]
+        assert p.settling_time_s == alone
+        e = design.evaluate(one)
+        assert p.phase_margin_deg == e.margins.phase_margin_deg
+        assert p.disk_alpha == e.disk.alpha
+
+
+def test_a_sweep_says_which_points_are_refused_and_runs_the_others(design):
+    point = design_point()
+    swept = [p for chunk in design.sweep(point, "g1", np.array([-1.0, 20.0])) for p in chunk]
+    assert swept[0].note.startswith("g1:") and swept[0].settling_time_s is None
+    assert swept[1].note == "" and swept[1].phase_margin_deg is not None
+
+
+def test_sweep_values_cover_the_range_of_each_gain():
+    point = design_point(g1=10.0, g2=4.0)
+    np.testing.assert_allclose(sweep_values(point, "g1", 3), [5.0, 10.0, 20.0], rtol=1e-15)
+    np.testing.assert_allclose(sweep_values(point, "g2", 3), [2.0, 4.0, 8.0], rtol=1e-15)
+    assert sweep_values(point, "g3", 5).tolist() == [-2.0, -1.0, 0.0, 1.0, 2.0]
+    assert sweep_values(point, "alpha", 2).tolist() == [0.02, 0.25]
+    with pytest.raises(FieldError, match="^g1:"):
+        sweep_values(design_point(g1=0.0), "g1")
+    with pytest.raises(FieldError, match="^gain:"):
+        sweep_values(point, "kp")

@@ -30,18 +30,21 @@ from __future__ import annotations
 import html
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from flexsat.input_checks import FieldError
 from flexsat.report.dashboard_model import (
     DEFAULT_GAINS,
     LAWS,
     USES,
     DesignPoint,
     Evaluation,
+    SweepPoint,
     TamuDesign,
+    sweep_values,
 )
 
 if TYPE_CHECKING:
@@ -49,7 +52,10 @@ if TYPE_CHECKING:
     from bokeh.models import ColumnDataSource
     from bokeh.plotting import figure as Figure
 
-__all__ = ["DISPLAY_UNITS", "Dashboard", "dashboard", "readout_html", "serve"]
+__all__ = ["DISPLAY_UNITS", "SWEEP_POINTS", "Dashboard", "dashboard", "readout_html", "serve"]
+
+#: points of a gain sweep
+SWEEP_POINTS = 12
 
 #: the unit each gain is entered in on the page (the papers'), and its label
 DISPLAY_UNITS = {
@@ -160,6 +166,7 @@ class Dashboard:
         self.design = design
         self.count = 0
         self.last_update_s = 0.0
+        self.sweep_started = 0.0
         self.law = pn.widgets.Select(
             label="law", options={label: key for key, label in LAWS.items()}, value="law_ii"
         )
@@ -180,11 +187,20 @@ class Dashboard:
                 ("torque", ("t", "applied", "command")),
                 ("tip", ("t", "tip")),
                 ("loop", ("f", "gain_db", "one")),
+                ("sweep", ("x", "settling", "pm")),
             )
         }
         self.figures = self._figures()
         for widget in (self.law, *self.gains.values(), self.hardware):
             widget.param.watch(self._changed, "value")
+        self.sweep_gain = pn.widgets.Select(
+            label="sweep", options={DISPLAY_UNITS[k][1]: k for k in DISPLAY_UNITS}, value="g1"
+        )
+        self.sweep_button = pn.widgets.Button(label=f"sweep {SWEEP_POINTS} values", width=260)
+        self.progress = pn.indicators.Progress(value=0, max=SWEEP_POINTS, width=260)
+        self.sweep_status = pn.pane.HTML(_status("no sweep yet"))
+        self.sweep_figures = self._sweep_figures()
+        self.sweep_button.on_click(self._sweep_clicked)
         self.update()
 
     def _figures(self) -> list[Figure]:
@@ -214,6 +230,96 @@ class Dashboard:
         loop.line("f", "one", source=s["loop"], color="gray", line_dash="dotted")
         loop.line("f", "gain_db", source=s["loop"], color="purple")
         return [angle, torque, tip, loop]
+
+    def _sweep_figures(self) -> list[Figure]:
+        source = self.sources["sweep"]
+        settling = _figure("sweep: settling time", "settling time (s)", x_label="swept gain")
+        settling.scatter("x", "settling", source=source, size=7, color="navy")
+        settling.line("x", "settling", source=source, color="navy")
+        margin = _figure("sweep: phase margin", "phase margin (deg)", x_label="swept gain")
+        margin.scatter("x", "pm", source=source, size=7, color="purple")
+        margin.line("x", "pm", source=source, color="purple")
+        return [settling, margin]
+
+    def _start_sweep(self) -> Iterator[list[SweepPoint]] | None:
+        """Reset the sweep's plots and progress; the design's sweep of the widgets' point, or
+        None (and the reason shown) when the point cannot be swept."""
+        point, gain = self.point(), str(self.sweep_gain.value)
+        self.sources["sweep"].data = {"x": [], "settling": [], "pm": []}
+        self.progress.value = 0
+        try:
+            values = sweep_values(point, gain, SWEEP_POINTS)
+        except FieldError as exc:
+            self.sweep_status.object = _status(str(exc))
+            return None
+        self.sweep_started = time.perf_counter()
+        for figure in self.sweep_figures:
+            figure.xaxis.axis_label = DISPLAY_UNITS[gain][1]
+        self.sweep_status.object = _status(f"sweep of {gain} running: 0 of {SWEEP_POINTS}")
+        return self.design.sweep(point, gain, values)
+
+    def _show_sweep(self, chunk: list[SweepPoint]) -> None:
+        gain = str(self.sweep_gain.value)
+        factor = _factor(DISPLAY_UNITS[gain][0])
+        self.sources["sweep"].stream(
+            {
+                "x": [p.value / factor for p in chunk],
+                "settling": [_or_nan(p.settling_time_s) for p in chunk],
+                "pm": [_or_nan(p.phase_margin_deg) for p in chunk],
+            }
+        )
+        done = int(self.progress.value or 0) + len(chunk)
+        self.progress.value = done
+        took = time.perf_counter() - self.sweep_started
+        state = "done" if done == SWEEP_POINTS else "running"
+        self.sweep_status.object = _status(
+            f"sweep of {gain} {state}: {done} of {SWEEP_POINTS} in {took:.1f} s"
+        )
+
+    def run_sweep(self) -> None:
+        """The sweep, here and now (what the button runs in the background)."""
+        steps = self._start_sweep()
+        for chunk in steps or ():
+            self._show_sweep(chunk)
+
+    def _sweep_clicked(self, *_: Any) -> None:
+        """The sweep with the page live: the batches run in a worker thread and a periodic
+        callback of the session (which holds the document's lock) shows each one done."""
+        import queue
+        import threading
+
+        import panel as pn
+
+        steps = self._start_sweep()
+        if steps is None:
+            return
+        done: queue.Queue[list[SweepPoint] | str | None] = queue.Queue()
+
+        def work() -> None:
+            try:
+                for chunk in steps:
+                    done.put(chunk)
+                done.put(None)
+            except Exception as exc:  # shown on the page; the session goes on
+                done.put(f"sweep stopped: {exc}")
+
+        self.sweep_button.disabled = True
+        threading.Thread(target=work, daemon=True).start()
+        callback: Any = None
+
+        def show() -> None:
+            while not done.empty():
+                item = done.get_nowait()
+                if isinstance(item, list):
+                    self._show_sweep(item)
+                    continue
+                if isinstance(item, str):
+                    self.sweep_status.object = _status(item)
+                self.sweep_button.disabled = False
+                callback.stop()
+                return
+
+        callback = pn.state.add_periodic_callback(show, period=100)
 
     def point(self) -> DesignPoint:
         """The design point the widgets show, in SI."""
@@ -282,7 +388,24 @@ class Dashboard:
         )
         controls = pn.Column(self.law, *self.gains.values(), self.hardware, width=300)
         plots = pn.GridBox(*(pn.pane.Bokeh(f) for f in self.figures), ncols=2)
-        return pn.Column(header, pn.Row(controls, self.readout), plots)
+        sweep = pn.Column(
+            pn.pane.Markdown("### Gain sweep (0.5× to 2× g1 or g2; g3 −2 to 2; α 0.02 to 0.25)"),
+            self.sweep_gain,
+            self.sweep_button,
+            self.progress,
+            self.sweep_status,
+            width=300,
+        )
+        sweep_plots = pn.Row(*(pn.pane.Bokeh(f) for f in self.sweep_figures))
+        return pn.Column(header, pn.Row(controls, self.readout), plots, pn.Row(sweep, sweep_plots))
+
+
+def _or_nan(value: float | None) -> float:
+    return math.nan if value is None else value
+
+
+def _status(text: str) -> str:
+    return f'<span id="sweep-status">{html.escape(text)}</span>'
 
 
 def _default_display(name: str, unit: str) -> float:

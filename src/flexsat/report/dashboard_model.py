@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -58,8 +59,10 @@ __all__ = [
     "USES",
     "DesignPoint",
     "Evaluation",
+    "SweepPoint",
     "TamuDesign",
     "design_point",
+    "sweep_values",
 ]
 
 #: the laws a design point can use: key -> label
@@ -202,6 +205,13 @@ class Evaluation:
     margins_s: float = 0.0
 
 
+def _with_gain(point: DesignPoint, gain: str, value: float) -> DesignPoint:
+    """``point`` with one gain changed."""
+    g = {name: float(getattr(point, name)) for name in GAIN_UNITS}
+    g[gain] = value
+    return DesignPoint(point.law, g["g1"], g["g2"], g["g3"], g["alpha"], point.hardware)
+
+
 def _empty() -> FloatArray:
     return np.zeros(0)
 
@@ -210,6 +220,44 @@ def _failed(point: DesignPoint, message: str) -> Evaluation:
     """An evaluation with no maneuver and no margins, saying why."""
     nan = math.nan
     return Evaluation(point, *(_empty(),) * 6, None, nan, nan, nan, None, None, error=message)
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """One point of a gain sweep (:meth:`TamuDesign.sweep`).
+
+    Attributes
+    ----------
+    value : float
+        The swept gain, SI.
+    settling_time_s : float or None
+        None: not settled within the run, or no maneuver (``note``).
+    phase_margin_deg, disk_alpha : float or None
+        Margins of the sampled loop (None: unstable or no loop, ``note``).
+    note : str
+        Why a number is missing ("" when none is).
+    """
+
+    value: float
+    settling_time_s: float | None
+    phase_margin_deg: float | None
+    disk_alpha: float | None
+    note: str = ""
+
+
+def sweep_values(point: DesignPoint, gain: str, n: int = 12) -> FloatArray:
+    """n values of ``gain`` about the point's: 0.5× to 2× its value (geometric) for g1 and g2,
+    −2 to 2 for g3, 0.02 to 0.25 for α (the reference's whole range)."""
+    if gain not in GAIN_UNITS:
+        raise FieldError("gain", f"must be one of {sorted(GAIN_UNITS)}, got {gain!r}")
+    if gain == "g3":
+        return np.linspace(-2.0, 2.0, n)
+    if gain == "alpha":
+        return np.linspace(0.02, 0.25, n)
+    value = float(getattr(point, gain))
+    if value <= 0:
+        raise FieldError(gain, f"a sweep about {gain} = {value:g} needs a value > 0")
+    return value * np.geomspace(0.5, 2.0, n)
 
 
 class TamuDesign:
@@ -250,24 +298,87 @@ class TamuDesign:
             return case.law_i(point.g1, point.g2, point.g3)
         return PD(point.g1, point.g2, reference=case.reference(point.alpha))
 
+    def _batched_law(self, points: list[DesignPoint]) -> Controller:
+        """One law for several points of one law (gains on the leading case axis)."""
+        from flexsat.control import PD
+
+        g = {k: np.array([getattr(p, k) for p in points]) for k in GAIN_UNITS}
+        case, kind = self.case, points[0].law
+        if kind == "law_ii":
+            return case.law_ii(g["g1"], g["g2"], g["g3"], alpha=g["alpha"])
+        if kind == "law_i":
+            return case.law_i(g["g1"], g["g2"], g["g3"])
+        return PD(g["g1"], g["g2"], reference=case.reference(g["alpha"]))
+
+    def sweep(
+        self, point: DesignPoint, gain: str, values: FloatArray, chunk: int = 4
+    ) -> Iterator[list[SweepPoint]]:
+        """``point`` with ``gain`` set to each of ``values``: the maneuvers in batches of
+        ``chunk`` cases (one :func:`~flexsat.sim.simulate` call each, metrics only, every case
+        with the run's own noise seed: each is bit for bit the point run alone, and the points
+        differ by their gain only), and each point's margins; yields each batch's points as it
+        is done (a caller shows the progress)."""
+        from flexsat.sim import SimulationDiverged, simulate
+
+        for start in range(0, len(values), chunk):
+            points = [_with_gain(point, gain, float(v)) for v in values[start : start + chunk]]
+            refused: dict[int, str] = {}
+            laws: dict[int, Controller] = {}
+            for i, p in enumerate(points):
+                try:
+                    laws[i] = self.law(p)
+                except FieldError as exc:
+                    refused[i] = str(exc)
+            settling: dict[int, float] = {}
+            valid = [i for i in range(len(points)) if i not in refused]
+            if valid:
+                law = self._batched_law([points[i] for i in valid])
+                try:
+                    config = self.configs[point.hardware]
+                    metrics = simulate(
+                        self.model,
+                        law,
+                        config,
+                        seeds=np.full(len(valid), config.seed),  # one noise draw for all
+                        metrics_only=True,
+                    ).metrics["settling_time_s"]
+                    settling = {i: float(metrics[k]) for k, i in enumerate(valid)}
+                except SimulationDiverged as exc:
+                    refused.update({i: str(exc) for i in valid})
+            yield [
+                self._sweep_point(getattr(p, gain), i, laws, settling, refused)
+                for i, p in enumerate(points)
+            ]
+
+    def _sweep_point(
+        self,
+        value: float,
+        i: int,
+        laws: dict[int, Controller],
+        settling: dict[int, float],
+        refused: dict[int, str],
+    ) -> SweepPoint:
+        if i in refused:
+            return SweepPoint(value, None, None, None, refused[i])
+        time_s = settling[i] if math.isfinite(settling[i]) else None
+        margins, disk, _, note = self._margins(laws[i], response=False)
+        if margins is None or disk is None:
+            return SweepPoint(value, time_s, None, None, note)
+        return SweepPoint(value, time_s, margins.phase_margin_deg, disk.alpha)
+
     def evaluate(self, point: DesignPoint) -> Evaluation:
         """Run the maneuver and compute the margins of ``point`` (never raises for bad gains)."""
         from flexsat.sim import SimulationDiverged, simulate
 
-        nan = math.nan
         try:
             law = self.law(point)
         except FieldError as exc:
-            return Evaluation(
-                point, *(_empty(),) * 6, None, nan, nan, nan, None, None, error=str(exc)
-            )
+            return _failed(point, str(exc))
         start = time.perf_counter()
         try:
             result = simulate(self.model, law, self.configs[point.hardware], compiled=True)
         except SimulationDiverged as exc:
-            return Evaluation(
-                point, *(_empty(),) * 6, None, nan, nan, nan, None, None, error=str(exc)
-            )
+            return _failed(point, str(exc))
         simulate_s = time.perf_counter() - start
         ds = result.dataset.isel(case=0)
         metric = {k: float(v[0]) for k, v in result.metrics.items()}
@@ -296,15 +407,18 @@ class TamuDesign:
         )
 
     def _margins(
-        self, law: Controller
+        self, law: Controller, response: bool = True
     ) -> tuple[LoopMargins | None, DiskMargin | None, np.ndarray, str]:
         from flexsat.analysis.frequency_domain import build_loop, frequency_response
         from flexsat.analysis.margins import UnstableLoopError, disk_margin, loop_margins
         from flexsat.control.state_space_export import discrete_law
 
         loop = build_loop(self.plant, discrete_law(law, self.dt), "torque")
-        response = frequency_response(loop.transfer, omega_rad_s=self.loop_omega_rad_s)
-        values = response.values[:, 0, 0]
+        values = (
+            frequency_response(loop.transfer, omega_rad_s=self.loop_omega_rad_s).values[:, 0, 0]
+            if response
+            else np.zeros(0, complex)
+        )
         try:
             return loop_margins(loop), disk_margin(loop), values, ""
         except UnstableLoopError as exc:
