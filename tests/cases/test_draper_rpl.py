@@ -340,3 +340,26 @@ def test_reduced_plant_exposes_its_modes(case):
     A, B = plant.linear_part()
     assert np.abs(A - sys.A).max() <= 10 * off * np.abs(sys.A).max()
     assert np.abs(B - sys.B).max() <= 10 * off * np.abs(sys.B).max()
+
+
+def test_modal_plant_with_damping_has_the_damping_ratio(case):
+    """plant(n, damping=ζ): D = 2ζΩ on the modal coordinates, so every elastic pole has damping
+    ratio ζ and the undamped frequency of the undamped plant (eigenvalues of a 2×2 block:
+    exact to the eigen-solver's round-off); the rigid mode stays at the origin."""
+    from flexsat.dynamics.linear_model import plant_state_space
+
+    undamped = np.linalg.eigvals(plant_state_space(case.plant(n_modes=4)).A)
+    lam = np.linalg.eigvals(plant_state_space(case.plant(n_modes=4, damping=0.02)).A)
+    osc = lam[lam.imag > 1e-6]
+    osc = osc[np.argsort(np.abs(osc))]
+    freq = np.sort(np.abs(undamped[undamped.imag > 1e-6]))
+    np.testing.assert_allclose(np.abs(osc), freq, rtol=1e-9)
+    np.testing.assert_allclose(-osc.real / np.abs(osc), 0.02, rtol=1e-9)
+    assert np.sum(np.abs(lam) < 1e-9) == 2
+
+
+def test_damping_is_checked(case):
+    with pytest.raises(ValueError, match="^damping: must be in \\[0, 1\\)"):
+        case.plant(n_modes=3, damping=1.5)
+    with pytest.raises(ValueError, match="^damping: modal damping needs a modal model"):
+        case.plant(damping=0.01)

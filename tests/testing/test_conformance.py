@@ -391,6 +391,50 @@ def _bang_off_bang():
     return BangOffBang(0.5, 3 * DT, 2 * DT, DT), PLANTS["plugin_two_mass_spring"]()
 
 
+def _synthesis(kind: str):
+    """The robust-synthesis laws (issue 24) at the checks' period: H2 and H∞ on the TAMU LQG
+    weights, LQG/LTR on the TAMU hub angle, HAC/LAC on the Draper/RPL hub and tip pairs."""
+    from synthesis_plants import (
+        DRAPER_PAIRS,
+        TAMU_RN,
+        draper_design,
+        tamu_design,
+        tamu_generalized,
+    )
+
+    if kind == "hac_lac":
+        from flexsat.control.hac_lac import HacLacController
+
+        _, plant, P, Q = draper_design(6, 0.002)
+        law = HacLacController.design(
+            P,
+            DRAPER_PAIRS,
+            0.5,
+            ["u1_hub"],
+            ["theta", "theta_dot"],
+            Q,
+            1.0,
+            1.0,
+            np.diag([1e-6, 1e-4]),
+            DT,
+            references={"theta": 0.1},
+        )
+        return law, plant
+    _, plant, A, B, C, Q = tamu_design(3)
+    if kind == "ltr":
+        from flexsat.control.ltr import LTRController
+
+        law = LTRController.design(A, B, C, Q, 1.0, TAMU_RN, 10.0, DT, ["theta"], ["torque"])
+        return law, plant
+    if kind == "h2":
+        from flexsat.control.h2_synthesis import H2Controller, h2syn
+
+        return H2Controller(h2syn(tamu_generalized(3)), DT, references={"theta": 0.2}), plant
+    from flexsat.control.hinf_synthesis import HinfController, hinfsyn
+
+    return HinfController(hinfsyn(tamu_generalized(3), rtol=1e-3), DT), plant
+
+
 LAWS = {
     "pd_step": lambda: _pd(target=0.3),
     "pd_reference": lambda: _pd(reference=_tamu().reference()),
@@ -426,6 +470,10 @@ LAWS = {
     "bainum_state_feedback": _bainum_feedback,
     "playback": _playback,
     "plugin_bang_off_bang": _bang_off_bang,
+    "h2_synthesis": lambda: _synthesis("h2"),
+    "hinf_synthesis": lambda: _synthesis("hinf"),
+    "lqg_ltr": lambda: _synthesis("ltr"),
+    "hac_lac": lambda: _synthesis("hac_lac"),
 }
 
 

@@ -359,26 +359,33 @@ class DraperRPLCase:
             name="draper_rpl",
         )
 
-    def plant(self, n_modes: int | None = None) -> StructuralPlant:
+    def plant(self, n_modes: int | None = None, damping: float = 0.0) -> StructuralPlant:
         """The model as a :class:`~flexsat.dynamics.structural.StructuralPlant` with the channels
         of :meth:`to_statespace`: torque inputs ``u1_hub``, ``u2_tips_1_3``, ``u3_tips_2_4``
         (N m, the columns of B, Eq. 54) and the collocated rotations ``theta``,
         ``rot_tips_1_3``, ``rot_tips_2_4`` (rad, rows Bᵀ) with their rates (``_dot``, rad/s);
-        undamped (the paper's model). Full Ritz coordinates, or the first ``n_modes`` modes of
-        Eq. 58 (then :attr:`~StructuralPlant.modal_blocks` gives the frequencies)."""
+        undamped (the paper's model) unless ``damping`` gives the elastic modes a modal damping
+        ratio (D = 2ζΩ, modal models only). Full Ritz coordinates, or the first ``n_modes``
+        modes of Eq. 58 (then :attr:`~StructuralPlant.modal_blocks` gives the frequencies)."""
         from flexsat.dynamics.second_order import SecondOrderModel
         from flexsat.dynamics.structural import Actuator, Sensor, StructuralPlant
 
+        zeta = float(require_finite(damping, "damping"))
+        if not 0.0 <= zeta < 1.0:
+            raise FieldError("damping", f"must be in [0, 1), got {zeta:g}")
+        if zeta and n_modes is None:
+            raise FieldError("damping", "modal damping needs a modal model: give n_modes")
         M, K, B = self._model if n_modes is None else self.reduced(n_modes)
         if n_modes is not None:  # Φ1ᵀMΦ1 is I to round-off: make it exact (modal blocks)
             M, K = np.eye(M.shape[0]), np.diag(np.diag(K))
+        D = np.diag(2.0 * zeta * np.sqrt(np.clip(np.diag(K), 0.0, None))) if zeta else None
         acts = [Actuator(name, "torque", B[:, j]) for j, name in enumerate(_INPUT_NAMES)]
         sensors = [Sensor(name, "rotation", B[:, j]) for j, name in enumerate(_OUTPUT_NAMES)]
         sensors += [
             Sensor(f"{name}_dot", "rotation", B[:, j], rate=True)
             for j, name in enumerate(_OUTPUT_NAMES)
         ]
-        model = SecondOrderModel(M, np.zeros_like(M), K, B, B.T)
+        model = SecondOrderModel(M, np.zeros_like(M) if D is None else D, K, B, B.T)
         return StructuralPlant.from_second_order(model, acts, sensors)
 
     # -- closed loop, Eq. 59 on the full model --------------------------------------------------

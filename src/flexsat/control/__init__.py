@@ -16,9 +16,20 @@ from flexsat.control.frequency_shaped import (
     FrequencyShapedDesign,
     frequency_shaped_lqr,
 )
+from flexsat.control.generalized_plant import GeneralizedPlant, closed_loop, lqg_plant
+from flexsat.control.h2_synthesis import H2Controller, H2Synthesis, h2syn
+from flexsat.control.hac_lac import HacLacController, lac_plant, modal_damping
+from flexsat.control.hinf_synthesis import (
+    HinfController,
+    HinfSynthesis,
+    InfeasibleGamma,
+    hinf_central,
+    hinfsyn,
+)
 from flexsat.control.linear_form import LinearLaw, run_linear_law
 from flexsat.control.lqg import LQGController
 from flexsat.control.lqr import RiccatiSolution, dlqr, lqr
+from flexsat.control.ltr import LTRController
 from flexsat.control.lyapunov import LyapunovRegulator, LyapunovTracker, check_lyapunov_gains
 from flexsat.control.mimo_lqg import AttitudeLQG
 from flexsat.control.output_feedback import (
@@ -58,6 +69,7 @@ from flexsat.control.ppf_optimization import (
     restore_eigenvalue_constraints,
     scipy_ppf_gains,
 )
+from flexsat.control.r_tuning import ModalLQR, RTuning, modal_lqr, tune_r
 from flexsat.control.scheduled import ScheduledStateFeedback
 from flexsat.control.state_space_compensator import StateSpaceCompensator
 from flexsat.control.trajectory_linearization import TrajectoryLinearization, attitude_error
@@ -96,6 +108,10 @@ __all__ = [
     "QuaternionPD",
     "RefinedEstimator",
     "RiccatiSolution",
+    "ModalLQR",
+    "RTuning",
+    "modal_lqr",
+    "tune_r",
     "ScheduledStateFeedback",
     "StateSpaceCompensator",
     "TrajectoryLinearization",
@@ -122,4 +138,19 @@ __all__ = [
     "regulator_weighted_process_noise",
     "run_linear_law",
     "truncate_gains",
+    "GeneralizedPlant",
+    "closed_loop",
+    "lqg_plant",
+    "H2Controller",
+    "H2Synthesis",
+    "h2syn",
+    "HacLacController",
+    "lac_plant",
+    "modal_damping",
+    "HinfController",
+    "HinfSynthesis",
+    "InfeasibleGamma",
+    "hinf_central",
+    "hinfsyn",
+    "LTRController",
 ]

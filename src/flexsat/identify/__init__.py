@@ -1,7 +1,8 @@
 """System identification from vibration tests: test data, excitations, realization (ERA,
 OKID), Creamer-Junkins structural identification and model update, and stereo triangulation
-(camera model, calibration, dynamic triangulation). Star identification and attitude fitting
-are in :mod:`flexsat.attitude`."""
+(camera model, calibration, dynamic triangulation), the frontal-assault FRF fit and video
+targets (rendered frames, blob extraction, sub-pixel centroids). Star identification and
+attitude fitting are in :mod:`flexsat.attitude`."""
 
 from flexsat.identify.differential_correction import (
     CorrectionData,
@@ -25,6 +26,7 @@ from flexsat.identify.excitation import (
     random_force,
     torque_history,
 )
+from flexsat.identify.frontal_assault import FRFData, FrontalAssaultModel, frontal_assault
 from flexsat.identify.measurements import STRUCTURAL_KINDS, Channel, Measurement, uff_direction
 from flexsat.identify.photogrammetry import (
     CalibrationResult,
@@ -43,9 +45,24 @@ from flexsat.identify.structural import (
     substructures_from_builder,
     update_model,
 )
+from flexsat.identify.video_targets import (
+    BlobSet,
+    FrameSpec,
+    extract_blobs,
+    measure_views,
+    render_frame,
+)
 
 __all__ = [
     "STRUCTURAL_KINDS",
+    "BlobSet",
+    "FRFData",
+    "FrameSpec",
+    "FrontalAssaultModel",
+    "extract_blobs",
+    "frontal_assault",
+    "measure_views",
+    "render_frame",
     "uff_direction",
     "CalibrationResult",
     "Camera",
