@@ -40,6 +40,14 @@ PYTHON_EXAMPLES = {
         "tests/analysis/test_example_frequency_domain.py",
         "frequency_domain.md#example-tamu-law-i-and-an-eps-lqg",
     ),
+    "robust_synthesis.py": (
+        "tests/control/test_example_robust_synthesis.py",
+        "synthesis.md#example-on-published-structures",
+    ),
+    "robustness_reduction.py": (
+        "tests/analysis/test_example_robustness_reduction.py",
+        "robustness_reduction.md#example-tamu",
+    ),
 }
 
 HEADER = """# Example gallery
