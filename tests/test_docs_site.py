@@ -58,3 +58,23 @@ def test_the_site_is_built_strictly_from_the_sources_with_numpy_docstrings():
     python = handler["handlers"]["python"]
     assert python["paths"] == ["src"]
     assert python["options"]["docstring_style"] == "numpy"
+
+
+#: a Markdown link or autolink with a scheme: it leaves the repository
+_EXTERNAL = re.compile(r"\]\(\s*<?[a-zA-Z][a-zA-Z0-9+.-]*:|<[a-zA-Z][a-zA-Z0-9+.-]*://")
+
+
+def test_no_link_points_outside_the_repository():
+    """The site and the README link only to their own pages and files (issue 24): a reader
+    offline, or years later, finds every one."""
+    pages = [*DOCS.rglob("*.md"), ROOT / "README.md"]
+    outside = [
+        f"{page.relative_to(ROOT)}:{n}: {line.strip()}"
+        for page in pages
+        for n, line in enumerate(page.read_text().splitlines(), 1)
+        if _EXTERNAL.search(line)
+    ]
+    assert outside == []
+    assert _EXTERNAL.search("[spec](https://example.org/x)")
+    assert _EXTERNAL.search("see <http://example.org>")
+    assert not _EXTERNAL.search("[the tutorial](tutorial.md#1-the-structure)")

@@ -1,5 +1,5 @@
 """Command line: ``flexsat cases``, ``flexsat modes CASE``, ``flexsat run [SCENARIO]``,
-``flexsat validate``, ``flexsat --version``.
+``flexsat validate``, ``flexsat serve``, ``flexsat --version``.
 
 Results (tables, JSON) go to stdout; progress and errors to stderr. Errors in the user's input
 print in red and exit with code 2; a simulation that diverges prints why and exits with code 1,
@@ -509,6 +509,33 @@ def validate(
         )
     if failed or (strict and explained):
         raise typer.Exit(code=1)
+
+
+@app.command()
+def serve(
+    port: Annotated[int, typer.Option("--port", min=1, max=65535, help="TCP port.")] = 5006,
+    address: Annotated[
+        str, typer.Option("--address", help="Address to listen on (default this machine only).")
+    ] = "127.0.0.1",
+    show: Annotated[bool, typer.Option("--show", help="Open the page in a browser.")] = False,
+) -> None:
+    """Serve the live design dashboard of the TAMU case: tune the law's gains and see the
+    maneuver, the tip deflection, the settling time and the loop margins update
+    (docs/dashboard.md). Stops on Ctrl-C."""
+    try:
+        from flexsat.report.dashboard import serve as serve_dashboard
+    except ImportError as exc:  # panel is a dependency; a broken install says which module
+        _fail(f"flexsat serve needs the dashboard libraries (panel, bokeh): {exc}")
+
+    def ready(url: str) -> None:
+        console.print(f"flexsat design dashboard at {url} (Ctrl-C to stop)", markup=False)
+
+    try:
+        serve_dashboard(port, address, show, ready=ready)
+    except OSError as exc:
+        _fail(f"--port: cannot listen on {address}:{port}: {exc.strerror or exc}")
+    except KeyboardInterrupt:
+        errors.print("dashboard stopped", markup=False, highlight=False)
 
 
 __all__ = ["app", "parse_settings", "parse_value"]

@@ -59,6 +59,16 @@ def test_engine_runs_the_modal_plant_and_conserves_momentum(case):
     assert np.abs(r.dataset.tip_deflection.values[0]).max() > 0
 
 
+def test_the_hub_inertia_takes_units_and_refuses_a_wrong_dimension():
+    modal = ModalModel.from_hub_appendage(tamu(n_modes=2).model())
+    si = ModalHybrid(modal, 0.353, axis="z")
+    with_units = ModalHybrid(modal, "3530 kg*cm**2", axis="z")  # 0.353 kg m², converted by pint
+    assert with_units.hub_inertia == pytest.approx(si.hub_inertia, rel=1e-15)
+    np.testing.assert_array_equal(with_units.mass_matrix[1:, 1:], si.mass_matrix[1:, 1:])
+    with pytest.raises(ValueError, match="^hub_inertia"):
+        ModalHybrid(modal, "0.353 kg*m", axis="z")
+
+
 def test_free_modal_model_is_refused():
     from flexsat.cases import free_free_beam
 

@@ -165,6 +165,8 @@ class AttitudeLQG(Controller):
         G : array_like (n, g), optional
         beta_target : array_like (4,) or (n_cases, 4)
 
+        Notes
+        -----
         The designs are kept in ``.regulator`` and ``.filter`` (RiccatiSolution, with
         residuals).
         """

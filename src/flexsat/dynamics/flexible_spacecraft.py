@@ -339,9 +339,6 @@ class FlexibleSpacecraft(Plant):
             Modal damping ratios ζ >= 0 (the damping 2ζΩ is formed with the new Ω).
         coupling : array_like (n_modes, 3), optional
             Rotational participation Δ about the centre of mass, m √kg.
-        Omitted ones keep this plant's values; the result must keep 𝓜 positive definite.
-        ``modal`` stays this plant's :class:`ModalModel` (its shapes and its own
-        frequencies): :meth:`reduced` of the result starts from it again.
 
         Raises
         ------
@@ -349,6 +346,12 @@ class FlexibleSpacecraft(Plant):
             Naming the parameter: a wrong shape, a non-positive frequency, a negative
             damping, an inertia violating the triangle inequality, a coupling exceeding the
             inertia.
+
+        Notes
+        -----
+        Omitted parameters keep this plant's values; the result must keep 𝓜 positive
+        definite. ``modal`` stays this plant's :class:`ModalModel` (its shapes and its own
+        frequencies): :meth:`reduced` of the result starts from it again.
         """
         import copy
 

@@ -353,8 +353,9 @@ class ModalHybrid(HybridPlant):
     ----------
     modal : ModalModel
         Cantilevered modal model, reference point on the hub axis (participation about it).
-    hub_inertia : float
-        Rigid hub inertia about the axis (without the flexible body), kg m².
+    hub_inertia : float, str or pint.Quantity
+        Rigid hub inertia about the axis (without the flexible body), kg m² (a unit string
+        such as ``"2 kg*m**2"`` or a Quantity is converted).
     axis : {0, 1, 2, "x", "y", "z"}
         Rotation axis through the modal model's reference point.
     n_modes : int, optional
@@ -382,7 +383,7 @@ class ModalHybrid(HybridPlant):
         if n_modes is not None:
             modal = modal.truncate(require_count(n_modes, "n_modes"))
         self.modal = modal
-        self.hub_inertia = float(require_positive(hub_inertia, "hub_inertia"))
+        self.hub_inertia = float(require_positive(hub_inertia, "hub_inertia", "kg*m**2"))
         M, D, K = hub_appendage_matrices(modal, self.hub_inertia, axis=axis)
         self.mass_matrix, self.damping_matrix, self.stiffness_matrix = M, D, K
         self._tip = (
