@@ -44,6 +44,10 @@ PYTHON_EXAMPLES = {
         "tests/control/test_example_robust_synthesis.py",
         "synthesis.md#example-on-published-structures",
     ),
+    "hardware_in_the_loop.py": (
+        "tests/sim/test_example_hardware_in_the_loop.py",
+        "tamu.md#with-the-laboratorys-hardware-tamucasehardware",
+    ),
     "robustness_reduction.py": (
         "tests/analysis/test_example_robustness_reduction.py",
         "robustness_reduction.md#example-tamu",
