@@ -458,6 +458,10 @@ def simulate(
             law = controller.linear_form(dt, t, nc)
             if law is None:
                 reason = f"{type(controller).__name__} has no linear form"
+        if reason is None and metrics_only and not record_states:
+            result = attitude_path.run_metrics(job, law)
+            if result is not None:
+                return result
         if reason is None:
             result = attitude_path.run(job, record_states, law)
             if result is not None:

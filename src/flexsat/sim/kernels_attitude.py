@@ -71,6 +71,7 @@ from flexsat.sim.spacecraft_modal import HEAD
 __all__ = [
     "ATTITUDE_LAWS",
     "AttitudeLoop",
+    "AttitudeMetrics",
     "AttitudeRecords",
     "attitude_loop",
     "attitude_loop_parallel",
@@ -133,6 +134,67 @@ def _lane_rows(R, z, out, W):
                 a7 += r * z[j, 7]
             out[i, 0], out[i, 1], out[i, 2], out[i, 3] = a0, a1, a2, a3
             out[i, 4], out[i, 5], out[i, 6], out[i, 7] = a4, a5, a6, a7
+
+    return shared
+
+
+def input_products(
+    Q1u: np.ndarray, P1u: np.ndarray, w: np.ndarray, hd: np.ndarray, fd: np.ndarray, W: int
+) -> None:
+    """hd = Q1u w, fd = P1u w per lane, each sum in the order j = 0 .. m − 1 from 0: Q1u, P1u
+    the lanes' own copies (n, m, W) or the one (n, m) pair all lanes share (each entry read
+    once and broadcast over the lanes, the eight lanes' sums in registers). The same sums
+    either way (:func:`_input_products`)."""
+    for i in range(hd.shape[0]):
+        for l in range(W):
+            s, t = 0.0, 0.0
+            for j in range(w.shape[0]):
+                s += coefficient(Q1u, i, j, l) * w[j, l]
+                t += coefficient(P1u, i, j, l) * w[j, l]
+            hd[i, l], fd[i, l] = s, t
+
+
+@overload(input_products)
+def _input_products(Q1u, P1u, w, hd, fd, W):
+    if Q1u.ndim == 3:
+
+        def own(Q1u, P1u, w, hd, fd, W):
+            for i in range(hd.shape[0]):
+                for l in range(W):
+                    s, t = 0.0, 0.0
+                    for j in range(w.shape[0]):
+                        s += Q1u[i, j, l] * w[j, l]
+                        t += P1u[i, j, l] * w[j, l]
+                    hd[i, l], fd[i, l] = s, t
+
+        return own
+
+    def shared(Q1u, P1u, w, hd, fd, W):  # W = LANES = 8
+        for i in range(hd.shape[0]):
+            a0 = a1 = a2 = a3 = a4 = a5 = a6 = a7 = 0.0
+            b0 = b1 = b2 = b3 = b4 = b5 = b6 = b7 = 0.0
+            for j in range(w.shape[0]):
+                q, r = Q1u[i, j], P1u[i, j]
+                a0 += q * w[j, 0]
+                a1 += q * w[j, 1]
+                a2 += q * w[j, 2]
+                a3 += q * w[j, 3]
+                a4 += q * w[j, 4]
+                a5 += q * w[j, 5]
+                a6 += q * w[j, 6]
+                a7 += q * w[j, 7]
+                b0 += r * w[j, 0]
+                b1 += r * w[j, 1]
+                b2 += r * w[j, 2]
+                b3 += r * w[j, 3]
+                b4 += r * w[j, 4]
+                b5 += r * w[j, 5]
+                b6 += r * w[j, 6]
+                b7 += r * w[j, 7]
+            hd[i, 0], hd[i, 1], hd[i, 2], hd[i, 3] = a0, a1, a2, a3
+            hd[i, 4], hd[i, 5], hd[i, 6], hd[i, 7] = a4, a5, a6, a7
+            fd[i, 0], fd[i, 1], fd[i, 2], fd[i, 3] = b0, b1, b2, b3
+            fd[i, 4], fd[i, 5], fd[i, 6], fd[i, 7] = b4, b5, b6, b7
 
     return shared
 
@@ -204,16 +266,53 @@ class AttitudeRecords(NamedTuple):
     stop: np.ndarray
 
 
+class AttitudeMetrics(NamedTuple):
+    """The channel metrics accumulated in the loop in place of the records (``n_t`` > 0; 0:
+    the records of :class:`AttitudeRecords`, the other arrays unused).
+
+    n_t samples; the output rows over the kernel coordinates (the flexible plant's first seven
+    the rows T[:7] of β and ω, then the linear outputs' rows): row i is the measurement row
+    at[i] (< p) where that is the same row, else row at[i] − p of Ot (Co, r, n), summed after
+    the measurement rows; Do (Co, rows, m) their feedthrough of the input held before the
+    sample (no columns: zero); chan (q, 3) [kind, lo, width] per channel: kind 0 the linear
+    output rows lo .. lo + width − 1, 1 the rate ω, 2 the 1-2-3 Euler angles
+    of β, 3 the MRP of β, 4 the actuator outputs u[lo : lo + width]; target (Ct, 4) the law's
+    target attitude (Ct = 0: none); cos_band cos(band / 2), band the settling band (rad).
+    Outputs per case: peak (C, q) the largest norm over the samples (|v| of a scalar),
+    final (C, q) a scalar channel's last value, sumsq (C, q) the sum of the squared norms,
+    beta_end (C, 4) β at the last sample, after (C,) the index just after the last sample
+    whose pointing error 2 arccos|e_0| exceeds the band (0 when none does)."""
+
+    n_t: int
+    Ot: np.ndarray
+    at: np.ndarray
+    Do: np.ndarray
+    chan: np.ndarray
+    target: np.ndarray
+    cos_band: float
+    band: float
+    peak: np.ndarray
+    final: np.ndarray
+    sumsq: np.ndarray
+    beta_end: np.ndarray
+    after: np.ndarray
+
+
 @_inline
-def _gather(loop, cl, W):
-    """The per-case arrays of the lanes ``cl``, lanes last."""
+def _gather(loop, red, cl, W):
+    """The per-case arrays of the lanes ``cl``, lanes last; the measurement rows followed by
+    the output rows ``red.Ot`` (none on the records path) in one matrix of rows."""
     n, m, p = loop.x0.shape[1], loop.P1u.shape[2], loop.Cm.shape[1]
+    r = red.Ot.shape[1] if red.n_t > 0 else 0
     modal = loop.kind == 1
     nm = n if modal else 0
     own = modal and loop.E.shape[0] > 1  # each lane its own E2, E, F (a dispersed plant)
     no = n if own else 0
-    Mt = np.zeros(rows_shape(p, n, W))
+    Mt = np.zeros(rows_shape(p + r, n, W))
     Dmv = np.empty((p, m, W))
+    rf = red.Do.shape[1] if red.n_t > 0 else 0  # the output rows' feedthrough
+    mf = red.Do.shape[2] if red.n_t > 0 else 0  # no columns: no feedthrough
+    Dov = np.empty((rf, mf, W))
     sensv = np.empty((p, 4, W))
     J = np.empty((3, 3, W))
     Jinv = np.empty((3, 3, W))
@@ -236,6 +335,17 @@ def _gather(loop, cl, W):
             for i in range(p):
                 a, b = row_entry(i, j, n, W)
                 Mt[a, b, l] = loop.Cm[cm, i, j]
+        if r > 0:
+            co = case_index(red.Ot.shape[0], c)
+            for j in range(n):
+                for i in range(r):
+                    a, b = row_entry(p + i, j, n, W)
+                    Mt[a, b, l] = red.Ot[co, i, j]
+        if rf > 0 and mf > 0:
+            cf = case_index(red.Do.shape[0], c)
+            for i in range(rf):
+                for j in range(mf):
+                    Dov[i, j, l] = red.Do[cf, i, j]
         for i in range(p):
             for j in range(m):
                 Dmv[i, j, l] = loop.Dm[cm, i, j]
@@ -273,7 +383,7 @@ def _gather(loop, cl, W):
             actv[i, 0, l] = loop.act[ca, i, 0]
             actv[i, 1, l] = loop.act[ca, i, 1]
             dstdv[i, l] = loop.dist_std[cd, i]
-    return Mt, Dmv, sensv, J, Jinv, E2, E, Q1u, P1u, F, R, gains, target, w_ref, actv, dstdv
+    return Mt, Dmv, Dov, sensv, J, Jinv, E2, E, Q1u, P1u, F, R, gains, target, w_ref, actv, dstdv
 
 
 @_inline
@@ -322,20 +432,101 @@ def attitude_law(
 
 
 @_inline
-def _dexpinv(t0, t1, t2, w0, w1, w2):
-    """θ̇ of the rotation-vector kinematics (:func:`flexsat.dynamics.rigid_body.dexpinv`)."""
-    a2 = t0 * t0 + t1 * t1 + t2 * t2
-    if a2 < 0.02 * 0.02:
-        c = 1.0 / 12 + a2 / 720 + a2 * a2 / 30240
-    else:
-        x = np.sqrt(a2) / 2
-        c = (1 - x / np.tan(x)) / a2
-    s0, s1, s2 = t1 * w2 - t2 * w1, t2 * w0 - t0 * w2, t0 * w1 - t1 * w0
-    return (
-        w0 + 0.5 * s0 + c * (t1 * s2 - t2 * s1),
-        w1 + 0.5 * s1 + c * (t2 * s0 - t0 * s2),
-        w2 + 0.5 * s2 + c * (t0 * s1 - t1 * s0),
-    )
+def reduce_outputs(kind, x, acc, w, Dov, red, tgt, hv, pk, fin, after, k, W):
+    """The channel metrics of sample k per lane (:class:`AttitudeMetrics`): the outputs'
+    norms' running peaks and last values, the pointing error's last sample outside the band.
+    β, ω (copied to ``hv`` (7, W)) are x[0:7] (rigid) or the first seven output rows
+    (modal); output row i is ``acc[red.at[i]]`` (a measurement row where one is the same
+    row, else one of the rows ``red.Ot`` summed after them); a linear channel is its rows
+    plus the feedthrough of w, the input held before the sample (as the recorder's outputs;
+    ``Dov`` has no columns when it is zero). A vector channel's squares are summed in
+    NumPy's order of ``norm(axis=-1)``."""
+    for i in range(7):
+        for l in range(W):
+            hv[i, l] = acc[red.at[i], l] if kind == 1 else x[i, l]
+    for q in range(red.chan.shape[0]):
+        ck, lo, width = red.chan[q, 0], red.chan[q, 1], red.chan[q, 2]
+        if ck == 0 and width == 1:  # a scalar linear channel, lanes innermost
+            row = red.at[lo]
+            for l in range(W):
+                v = acc[row, l]
+                for j in range(Dov.shape[1]):
+                    v += Dov[lo, j, l] * w[j, l]
+                fin[q, l] = v
+                nv = abs(v)
+                if k == 0 or nv > pk[q, l]:
+                    pk[q, l] = nv
+        elif ck == 0:
+            for l in range(W):
+                s = 0.0
+                for i in range(width):
+                    v = acc[red.at[lo + i], l]
+                    for j in range(Dov.shape[1]):
+                        v += Dov[lo + i, j, l] * w[j, l]
+                    s = v * v if i == 0 else s + v * v
+                nv = np.sqrt(s)
+                if k == 0 or nv > pk[q, l]:
+                    pk[q, l] = nv
+        elif ck == 1:
+            for l in range(W):
+                v0, v1, v2 = hv[4, l], hv[5, l], hv[6, l]
+                nv = np.sqrt((v0 * v0 + v1 * v1) + v2 * v2)
+                if k == 0 or nv > pk[q, l]:
+                    pk[q, l] = nv
+        elif ck == 2 or ck == 3:
+            for l in range(W):
+                b0, b1, b2, b3 = hv[0, l], hv[1, l], hv[2, l], hv[3, l]
+                if ck == 2:  # rigid_spacecraft.attitude_output("euler123"): dcm(β), Table B.1
+                    c00 = b0 * b0 + b1 * b1 - b2 * b2 - b3 * b3
+                    c10 = 2 * (b1 * b2 - b0 * b3)
+                    c20 = 2 * (b1 * b3 + b0 * b2)
+                    c21 = 2 * (b2 * b3 - b0 * b1)
+                    c22 = b0 * b0 - b1 * b1 - b2 * b2 + b3 * b3
+                    v0 = np.arctan2(-c21, c22)
+                    v1 = np.arctan2(c20, np.hypot(c00, c10))
+                    v2 = np.arctan2(-c10, c00)
+                else:  # "mrp": β_v / (1 + β0) with β0 >= 0
+                    if b0 < 0:
+                        b0, b1, b2, b3 = -b0, -b1, -b2, -b3
+                    v0, v1, v2 = b1 / (1 + b0), b2 / (1 + b0), b3 / (1 + b0)
+                nv = np.sqrt((v0 * v0 + v1 * v1) + v2 * v2)
+                if k == 0 or nv > pk[q, l]:
+                    pk[q, l] = nv
+    if tgt.shape[0] == 0:
+        return
+    for l in range(W):
+        b0, b1, b2, b3 = hv[0, l], hv[1, l], hv[2, l], hv[3, l]
+        # |β · β_t| (metrics.channel_metrics), 2 arccos of it against the band; arccos only
+        # where e0 is within 1e-12 of cos(band / 2) (elsewhere the comparison decides)
+        e0 = abs(((b0 * tgt[0, l] + b1 * tgt[1, l]) + b2 * tgt[2, l]) + b3 * tgt[3, l])
+        if e0 < red.cos_band - 1e-12:
+            out = True
+        elif e0 > red.cos_band + 1e-12:
+            out = False
+        else:
+            out = 2.0 * np.arccos(min(e0, 1.0)) > red.band
+        if out:
+            after[l] = k + 1
+
+
+@_inline
+def reduce_inputs(red, u, pk, ss, k, W):
+    """The actuator outputs' norms' running peaks and sums of squares at sample k."""
+    for q in range(red.chan.shape[0]):
+        if red.chan[q, 0] != 4:
+            continue
+        lo, width = red.chan[q, 1], red.chan[q, 2]
+        for l in range(W):
+            if width == 1:
+                nv = abs(u[lo, l])
+            else:
+                s = u[lo, l] * u[lo, l]
+                for i in range(1, width):
+                    s += u[lo + i, l] * u[lo + i, l]
+                nv = np.sqrt(s)
+            if k == 0 or nv > pk[q, l]:
+                pk[q, l] = nv
+            ss[q, l] = nv * nv if k == 0 else ss[q, l] + nv * nv
 
 
 @_inline
@@ -354,6 +545,72 @@ def _euler(J, Jinv, l, w0, w1, w2, u0, u1, u2):
     )
 
 
+#: the rotation angle below which dexpinv's coefficient is its series (rigid_body.dexpinv)
+SERIES_ANGLE = 0.02
+#: half the rotation angle of a step below which exp(θ) takes the polynomials of
+#: :func:`_exp_coefficients` (their truncation below 3e-17 relative) in place of cos and sinc
+EXP_HALF_ANGLE = 0.1
+
+
+@_inline
+def _series_c(t, c, W):
+    """dexpinv's coefficient c(θ) = (1 − x / tan x) / |θ|², x = |θ| / 2, of the lanes'
+    θ = t[0:3] (3, W) into c (W,): the series 1/12 + a²/720 + a⁴/30240 (|θ| <
+    :data:`SERIES_ANGLE`) for every lane in one pass the compiler vectorises, then the
+    closed form, lane by lane, for the lanes beyond it (libm's tan: no vector form). Each
+    lane's formula depends on its own θ only: the same number alone and in a batch."""
+    big = 0
+    for l in range(W):
+        a2 = t[0, l] * t[0, l] + t[1, l] * t[1, l] + t[2, l] * t[2, l]
+        c[l] = 1.0 / 12 + a2 / 720 + a2 * a2 / 30240
+        big += 1 if a2 >= SERIES_ANGLE * SERIES_ANGLE else 0
+    if big == 0:
+        return
+    for l in range(W):
+        a2 = t[0, l] * t[0, l] + t[1, l] * t[1, l] + t[2, l] * t[2, l]
+        if a2 >= SERIES_ANGLE * SERIES_ANGLE:
+            x = np.sqrt(a2) / 2
+            c[l] = (1 - x / np.tan(x)) / a2
+
+
+@_inline
+def _dexpinv(t0, t1, t2, w0, w1, w2, c):
+    """θ̇ of the rotation-vector kinematics (:func:`flexsat.dynamics.rigid_body.dexpinv`)
+    with its coefficient c (:func:`_series_c`)."""
+    s0, s1, s2 = t1 * w2 - t2 * w1, t2 * w0 - t0 * w2, t0 * w1 - t1 * w0
+    return (
+        w0 + 0.5 * s0 + c * (t1 * s2 - t2 * s1),
+        w1 + 0.5 * s1 + c * (t2 * s0 - t0 * s2),
+        w2 + 0.5 * s2 + c * (t0 * s1 - t1 * s0),
+    )
+
+
+@_inline
+def _exp_coefficients(t, q0, s, W):
+    """exp(θ) = (cos(|θ|/2), s θ), s = sin(|θ|/2) / |θ| (rigid_body._exp), of the lanes'
+    θ = t[0:3]: for x = |θ|/2 < :data:`EXP_HALF_ANGLE` the Taylor polynomials
+    cos x = 1 − x²/2 + x⁴/24 − x⁶/720 + x⁸/40320 and s = ½ (1 − x²/6 + x⁴/120 − x⁶/5040 +
+    x⁸/362880) (truncation below x¹⁰/10! < 3e-17), every lane in one vectorised pass; libm's
+    cos and sinc, lane by lane, for the lanes beyond (each lane by its own angle)."""
+    big = 0
+    for l in range(W):
+        nt = np.sqrt(t[0, l] * t[0, l] + t[1, l] * t[1, l] + t[2, l] * t[2, l])
+        x = nt / 2
+        x2 = x * x
+        q0[l] = 1.0 + x2 * (-1.0 / 2 + x2 * (1.0 / 24 + x2 * (-1.0 / 720 + x2 * (1.0 / 40320))))
+        s[l] = 0.5 * (
+            1.0 + x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040 + x2 * (1.0 / 362880))))
+        )
+        big += 1 if x >= EXP_HALF_ANGLE else 0
+    if big == 0:
+        return
+    for l in range(W):
+        nt = np.sqrt(t[0, l] * t[0, l] + t[1, l] * t[1, l] + t[2, l] * t[2, l])
+        if nt / 2 >= EXP_HALF_ANGLE:
+            q0[l] = np.cos(nt / 2)
+            s[l] = 0.5 * np.sinc(nt / (2 * np.pi))
+
+
 @_inline
 def rigid_steps(
     x: np.ndarray,
@@ -362,43 +619,55 @@ def rigid_steps(
     Jinv: np.ndarray,
     h: float,
     substeps: int,
+    S: np.ndarray,
     W: int,
 ) -> None:
     """Phase 6, rigid: ``substeps`` RKMK4 steps of (β, ω) = x[0:7] per lane with the torque
-    w[0:3] held, β scaled to unit norm after each (module docstring)."""
+    w[0:3] held, β scaled to unit norm after each (module docstring). Each stage is one pass
+    over the lanes without a branch or a libm call (vectorised across the lanes), the
+    coefficients of dexpinv and exp between them (:func:`_series_c`,
+    :func:`_exp_coefficients`); scratch S (32, W): k1w .. k4w, k2t .. k4t, θ, ω_s, c, q0, s."""
+    b = 0.5 * h
+    g = h / 6
+    th, ws, c, q0, sc = S[21:24], S[24:27], S[27], S[28], S[29]
     for _ in range(substeps):
         for l in range(W):
-            u0, u1, u2 = w[0, l], w[1, l], w[2, l]
             a0, a1, a2 = x[4, l], x[5, l], x[6, l]
-            k1t = (a0, a1, a2)
-            k1w = _euler(J, Jinv, l, a0, a1, a2, u0, u1, u2)
-            b = 0.5 * h
-            ws = (a0 + b * k1w[0], a1 + b * k1w[1], a2 + b * k1w[2])
-            k2t = _dexpinv(b * k1t[0], b * k1t[1], b * k1t[2], ws[0], ws[1], ws[2])
-            k2w = _euler(J, Jinv, l, ws[0], ws[1], ws[2], u0, u1, u2)
-            ws = (a0 + b * k2w[0], a1 + b * k2w[1], a2 + b * k2w[2])
-            k3t = _dexpinv(b * k2t[0], b * k2t[1], b * k2t[2], ws[0], ws[1], ws[2])
-            k3w = _euler(J, Jinv, l, ws[0], ws[1], ws[2], u0, u1, u2)
-            ws = (a0 + h * k3w[0], a1 + h * k3w[1], a2 + h * k3w[2])
-            k4t = _dexpinv(h * k3t[0], h * k3t[1], h * k3t[2], ws[0], ws[1], ws[2])
-            k4w = _euler(J, Jinv, l, ws[0], ws[1], ws[2], u0, u1, u2)
-            g = h / 6
-            t0 = g * (k1t[0] + 2 * k2t[0] + 2 * k3t[0] + k4t[0])
-            t1 = g * (k1t[1] + 2 * k2t[1] + 2 * k3t[1] + k4t[1])
-            t2 = g * (k1t[2] + 2 * k2t[2] + 2 * k3t[2] + k4t[2])
-            x[4, l] = a0 + g * (k1w[0] + 2 * k2w[0] + 2 * k3w[0] + k4w[0])
-            x[5, l] = a1 + g * (k1w[1] + 2 * k2w[1] + 2 * k3w[1] + k4w[1])
-            x[6, l] = a2 + g * (k1w[2] + 2 * k2w[2] + 2 * k3w[2] + k4w[2])
-            # exp(θ) (rigid_body._exp: ½ sinc(|θ| / 2π) = sin(|θ|/2) / |θ|), then exp(θ) ⊗ β
-            nt = np.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
-            q0 = np.cos(nt / 2)
-            s = 0.5 * np.sinc(nt / (2 * np.pi))
-            q1, q2, q3 = t0 * s, t1 * s, t2 * s
+            k1w = _euler(J, Jinv, l, a0, a1, a2, w[0, l], w[1, l], w[2, l])
+            S[0, l], S[1, l], S[2, l] = k1w
+            ws[0, l], ws[1, l], ws[2, l] = a0 + b * k1w[0], a1 + b * k1w[1], a2 + b * k1w[2]
+            th[0, l], th[1, l], th[2, l] = b * a0, b * a1, b * a2  # b k1t, k1t = ω
+        for stage in range(3):  # k2, k3, k4
+            _series_c(th, c, W)
+            kw, kt = 3 + 6 * stage, 6 + 6 * stage
+            for l in range(W):
+                a0, a1, a2 = x[4, l], x[5, l], x[6, l]
+                v0, v1, v2 = ws[0, l], ws[1, l], ws[2, l]
+                t = _dexpinv(th[0, l], th[1, l], th[2, l], v0, v1, v2, c[l])
+                k = _euler(J, Jinv, l, v0, v1, v2, w[0, l], w[1, l], w[2, l])
+                S[kt, l], S[kt + 1, l], S[kt + 2, l] = t
+                S[kw, l], S[kw + 1, l], S[kw + 2, l] = k
+                f = b if stage == 0 else h
+                ws[0, l], ws[1, l], ws[2, l] = a0 + f * k[0], a1 + f * k[1], a2 + f * k[2]
+                th[0, l], th[1, l], th[2, l] = f * t[0], f * t[1], f * t[2]
+        # S rows: 0-2 k1w, 3-5 k2w, 6-8 k2t, 9-11 k3w, 12-14 k3t, 15-17 k4w, 18-20 k4t
+        for l in range(W):
+            a0, a1, a2 = x[4, l], x[5, l], x[6, l]
+            th[0, l] = g * (a0 + 2 * S[6, l] + 2 * S[12, l] + S[18, l])
+            th[1, l] = g * (a1 + 2 * S[7, l] + 2 * S[13, l] + S[19, l])
+            th[2, l] = g * (a2 + 2 * S[8, l] + 2 * S[14, l] + S[20, l])
+            x[4, l] = a0 + g * (S[0, l] + 2 * S[3, l] + 2 * S[9, l] + S[15, l])
+            x[5, l] = a1 + g * (S[1, l] + 2 * S[4, l] + 2 * S[10, l] + S[16, l])
+            x[6, l] = a2 + g * (S[2, l] + 2 * S[5, l] + 2 * S[11, l] + S[17, l])
+        _exp_coefficients(th, q0, sc, W)
+        for l in range(W):  # exp(θ) ⊗ β, scaled to unit norm
+            r0_, s_ = q0[l], sc[l]
+            q1, q2, q3 = th[0, l] * s_, th[1, l] * s_, th[2, l] * s_
             p0, p1, p2, p3 = x[0, l], x[1, l], x[2, l], x[3, l]
-            r0 = q0 * p0 - (q1 * p1 + q2 * p2 + q3 * p3)
-            r1 = q0 * p1 + p0 * q1 - (q2 * p3 - q3 * p2)
-            r2 = q0 * p2 + p0 * q2 - (q3 * p1 - q1 * p3)
-            r3 = q0 * p3 + p0 * q3 - (q1 * p2 - q2 * p1)
+            r0 = r0_ * p0 - (q1 * p1 + q2 * p2 + q3 * p3)
+            r1 = r0_ * p1 + p0 * q1 - (q2 * p3 - q3 * p2)
+            r2 = r0_ * p2 + p0 * q2 - (q3 * p1 - q1 * p3)
+            r3 = r0_ * p3 + p0 * q3 - (q1 * p2 - q2 * p1)
             norm = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2 + r3 * r3)
             x[0, l], x[1, l], x[2, l], x[3, l] = r0 / norm, r1 / norm, r2 / norm, r3 / norm
 
@@ -501,16 +770,9 @@ def modal_steps(
     z ← e^{hA} z + P1u w + P1f f(z) + P2f (−3 f(z) + 2 f(a) + 2 f(b) − f(c))
     + P3f 4 (f(z) − f(a) − f(b) + f(c)). Scratch: ``work`` (9, n, W) (n >= 7: rows 5 .. 8
     hold the forces), ``g`` (7, W), ``acc`` (8, W)."""
-    n, m = z.shape[0], w.shape[0]
     hd, fd, a, b, full, fx = work[0], work[1], work[2], work[3], work[4], work[5]
     fa, fb, fc = work[6, :7], work[7, :7], work[8, :7]
-    for i in range(n):
-        for l in range(W):
-            s, t = 0.0, 0.0
-            for j in range(m):
-                s += Q1u[i, j, l] * w[j, l]
-                t += P1u[i, j, l] * w[j, l]
-            hd[i, l], fd[i, l] = s, t
+    input_products(Q1u, P1u, w, hd, fd, W)
     f0 = fx[:7]
     for _ in range(substeps):
         modal_force(z, R, J, f0, acc, W)
@@ -538,7 +800,7 @@ def modal_steps(
 
 
 @cached_jit(error_model="numpy")
-def _group(c0, nl, loop, rec, W):
+def _group(c0, nl, loop, rec, red, W):
     """Cases c0 .. c0 + nl − 1 as W = :data:`LANES` lanes (the lanes past nl repeat the last
     case): the step of the module docstring.
 
@@ -549,21 +811,33 @@ def _group(c0, nl, loop, rec, W):
     -> 0.87 µs per lane-substep, ``benchmarks/bench_attitude.py --step``). The same
     operations in the same order either way (no fast-math): the numbers do not change."""
     X, Y, Ucmd, U, D, stop = rec
-    n_t, n = Y.shape[1], loop.x0.shape[1]
+    metrics = red.n_t > 0  # the channel metrics in place of the records
+    n_t, n = red.n_t if metrics else Y.shape[1], loop.x0.shape[1]
     m, p, nk = loop.P1u.shape[2], loop.Cm.shape[1], loop.Ak.shape[2]
     p_rec = Y.shape[2]
     cl = np.empty(W, np.int64)
     for l in range(W):
         cl[l] = c0 + min(l, nl - 1)
-    Mt, Dmv, sensv, J, Jinv, E2, E, Q1u, P1u, F, R, gains, target, w_ref, actv, dstdv = _gather(
-        loop, cl, W
+    (Mt, Dmv, Dov, sensv, J, Jinv, E2, E, Q1u, P1u, F, R, gains, target, w_ref, actv, dstdv) = (
+        _gather(loop, red, cl, W)
     )
+    nq = red.chan.shape[0] if metrics else 0
+    pk = np.zeros((nq, W))
+    fin = np.zeros((nq, W))
+    ss = np.zeros((nq, W))
+    after = np.zeros(W, np.int64)
+    hv = np.empty((7, W))  # β, ω of the sample
+    tgt = np.empty((4, W if metrics and red.target.shape[0] > 0 else 0))
+    for l in range(tgt.shape[1]):
+        for i in range(4):
+            tgt[i, l] = red.target[case_index(red.target.shape[0], cl[l]), i]
     x = np.empty((n, W))
     for l in range(W):
         stop[cl[l]] = -1
         for j in range(n):
             x[j, l] = loop.x0[cl[l], j]
     work = np.empty((9, n, W))
+    rs = np.empty((32, W))  # the rigid step's stages
     g = np.empty((7, W))
     acc6 = np.empty((8, W))  # row sums of R (padded to a block of 8 for W = 1)
     acc = np.empty((row_count(Mt, n), W))
@@ -614,14 +888,17 @@ def _group(c0, nl, loop, rec, W):
             for l in range(W):
                 if not abs(x[j, l]) <= loop.bound:
                     bad[l] = True
-        for l in range(W):
-            c = cl[l]
-            for j in range(n):
-                X[c, k, j] = x[j, l]
-            for i in range(p_rec):
-                Y[c, k, i] = y[p - p_rec + i, l]
-            for i in range(m):
-                Ucmd[c, k, i] = ucmd[i, l]
+        if metrics:
+            reduce_outputs(loop.kind, x, acc, w, Dov, red, tgt, hv, pk, fin, after, k, W)
+        else:
+            for l in range(W):
+                c = cl[l]
+                for j in range(n):
+                    X[c, k, j] = x[j, l]
+                for i in range(p_rec):
+                    Y[c, k, i] = y[p - p_rec + i, l]
+                for i in range(m):
+                    Ucmd[c, k, i] = ucmd[i, l]
         actuate(ucmd, actv, dstdv, loop.dist_slot, loop.noise, cl, k, u, d, w, W)
         running = False
         for l in range(W):
@@ -631,22 +908,25 @@ def _group(c0, nl, loop, rec, W):
             running = running or alive[l]
         if not running:
             break
-        for i in range(m):
-            for l in range(W):
-                U[cl[l], k, i] = u[i, l]
-                D[cl[l], k, i] = d[i, l]
+        if metrics:
+            reduce_inputs(red, u, pk, ss, k, W)
+        else:
+            for i in range(m):
+                for l in range(W):
+                    U[cl[l], k, i] = u[i, l]
+                    D[cl[l], k, i] = d[i, l]
         if k == n_t - 1:
             break
         if loop.kind == 0:
-            rigid_steps(x, w, J, Jinv, loop.h, loop.substeps, W)
+            rigid_steps(x, w, J, Jinv, loop.h, loop.substeps, rs, W)
         elif loop.E.shape[0] == 1:  # a shared plant: the one E2, E, F, R of every lane
             modal_steps(
                 x,
                 w,
                 loop.E2[0],
                 loop.E[0],
-                Q1u,
-                P1u,
+                loop.Q1u[0],
+                loop.P1u[0],
                 loop.F[0],
                 loop.R[0],
                 J,
@@ -658,22 +938,34 @@ def _group(c0, nl, loop, rec, W):
             )
         else:
             modal_steps(x, w, E2, E, Q1u, P1u, F, R, J, loop.substeps, work, g, acc6, W)
+    if metrics:
+        for l in range(W):
+            c = cl[l]
+            for q in range(nq):
+                red.peak[c, q] = pk[q, l]
+                red.final[c, q] = fin[q, l]
+                red.sumsq[c, q] = ss[q, l]
+            for i in range(4):
+                red.beta_end[c, i] = hv[i, l]
+            red.after[c] = after[l]
 
 
 @cached_jit(error_model="numpy")
-def attitude_loop(loop: AttitudeLoop, records: AttitudeRecords) -> None:
+def attitude_loop(loop: AttitudeLoop, records: AttitudeRecords, metrics: AttitudeMetrics) -> None:
     """Run the three-axis loop for every case, in groups of :data:`LANES` (module
-    docstring)."""
+    docstring): the records, or with ``metrics.n_t`` > 0 the channel metrics alone."""
     nc = loop.x0.shape[0]
     for g in range((nc + LANES - 1) // LANES):
         c0 = g * LANES
-        _group(c0, min(LANES, nc - c0), loop, records, LANES)
+        _group(c0, min(LANES, nc - c0), loop, records, metrics, LANES)
 
 
 @cached_jit(parallel=True, error_model="numpy")
-def attitude_loop_parallel(loop: AttitudeLoop, records: AttitudeRecords) -> None:
+def attitude_loop_parallel(
+    loop: AttitudeLoop, records: AttitudeRecords, metrics: AttitudeMetrics
+) -> None:
     """:func:`attitude_loop` with the groups spread over threads (bit-identical)."""
     nc = loop.x0.shape[0]
     for g in prange((nc + LANES - 1) // LANES):
         c0 = np.int64(g) * LANES
-        _group(c0, min(LANES, nc - c0), loop, records, LANES)
+        _group(c0, min(LANES, nc - c0), loop, records, metrics, LANES)
