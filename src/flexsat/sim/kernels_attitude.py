@@ -21,13 +21,19 @@ sample k, for each case,
      tolerance stops: the engine then reruns the Python loop, which refuses it by name);
 
 4. divergence check of the state and command (|·| beyond ``bound`` or not finite stops the
-   case), records (state, measurements, commands);
+   case), records (state, measurements, commands), or in their place the channel metrics
+   accumulated sample by sample (:class:`AttitudeMetrics`: running peaks of the outputs'
+   norms, last values, sums of squares of the inputs' norms, the pointing error's last
+   sample outside the band; no history);
 5. actuator and random disturbance (:func:`flexsat.sim.kernel_phases.actuate`);
 6. ``substeps`` steps of h = dt / substeps with the input held:
 
    * rigid (``kind`` 0): the RKMK4 step of :func:`flexsat.dynamics.rigid_body.rkmk4_step`
      (Munthe-Kaas 1999) on (β, ω) with Euler's equations I ω' = u − ω × I ω, then β scaled to
-     unit norm (the engine's ``plant.normalize`` after the plant's own step);
+     unit norm (the engine's ``plant.normalize`` after the plant's own step); each stage one
+     pass over the lanes (vectorised), the coefficients of dexpinv and of exp(θ) by their
+     series for small angles, decided per lane, libm's tan, cos and sinc only for a lane
+     beyond them (:func:`rigid_steps`);
    * flexible (``kind`` 1): Krogstad's fourth-order exponential Runge-Kutta scheme
      (J. Comput. Phys. 203, 2005, Eq. 20; :class:`flexsat.sim.integrators.ExpRK4Stepper`) in
      the modal coordinates z of :func:`flexsat.sim.spacecraft_modal.spacecraft_modal_form`:
@@ -841,6 +847,17 @@ def _group(c0, nl, loop, rec, red, W):
     g = np.empty((7, W))
     acc6 = np.empty((8, W))  # row sums of R (padded to a block of 8 for W = 1)
     acc = np.empty((row_count(Mt, n), W))
+    # one matrix of rows all lanes share (measurement and output rows of a shared plant):
+    # each entry read once and broadcast over the lanes (:func:`lane_rows`), the same sums as
+    # the lanes' own copies Mt
+    r_out = red.Ot.shape[1] if metrics else 0
+    one = loop.Cm.shape[0] == 1 and (r_out == 0 or red.Ot.shape[0] == 1) and W == LANES
+    Ms = np.empty((p + r_out if one else 0, n))
+    for j in range(Ms.shape[1] if one else 0):
+        for i in range(p):
+            Ms[i, j] = loop.Cm[0, i, j]
+        for i in range(r_out):
+            Ms[p + i, j] = red.Ot[0, i, j]
     w = np.zeros((m, W))
     ucmd = np.zeros((m, W))  # an attitude law commands the torque only: 0 on the rest
     u = np.empty((m, W))
@@ -856,7 +873,10 @@ def _group(c0, nl, loop, rec, red, W):
     i_imp = 0
     for k in range(n_t):
         i_imp = apply_impulses(x, loop.imp_k, loop.imp_dx, i_imp, k, cl, W)
-        row_products(Mt, x, acc, W)
+        if one:
+            lane_rows(Ms, x, acc, W)
+        else:
+            row_products(Mt, x, acc, W)
         measure(acc, w, f, Dmv, Dmfv, sensv, loop.sensor_slot, loop.noise, cl, k, y, W)
         if loop.law_kind == 0:
             law(
