@@ -27,6 +27,11 @@ process the best of ``--repeat`` calls; end to end and the kernel calls alone (t
 kernels of ``flexsat.sim.compiled_attitude`` wrapped by a timer), wall and process CPU time,
 min / median over the processes.
 
+The compiled rows include the same runs with ``metrics_only=True`` (the channel metrics
+accumulated in the loop, no history; a tree without that path for three-axis runs returns the
+full result) and with ``SimConfig(substeps=1)`` (one integrator step per control period: its
+error against 32 substeps is below the round-off bound, docs/performance.md).
+
 ``--step``: the flexible plant's integrator step alone (``kernels_attitude.modal_steps``, EPS
 45 modes, 4 substeps, one group of 8 lanes, 200 control steps, best of 5, process CPU time per
 lane and substep), with the propagators shared by the lanes and with each lane's own copy (a
@@ -203,21 +208,52 @@ def compiled_rows(repeat: int) -> dict[str, list[float]]:
     rigid_config = SimConfig(duration=20.0, control_rate=10.0)
     rigid_law = MRPLaw(K=np.linspace(8.0, 14.0, 1000), P=[50.0, 60.0, 70.0], beta_target=TARGET)
     batch = stack_plants(_dispersed(base, 100))
+    rigid1 = SimConfig(duration=20.0, control_rate=10.0, substeps=1)
+    eps1 = SimConfig(duration=10.0, control_rate=20.0, substeps=1)
     runs = {
         "(a) rigid, 1,000 cases, MRP PD": (
             lambda: simulate(RigidSpacecraft(J), rigid_law, rigid_config, n_cases=1000),
             1000,
             rigid_config,
         ),
+        "(a) same, metrics only": (
+            lambda: simulate(
+                RigidSpacecraft(J), rigid_law, rigid_config, n_cases=1000, metrics_only=True
+            ),
+            1000,
+            rigid_config,
+        ),
+        "(a) same, metrics only, 1 substep": (
+            lambda: simulate(
+                RigidSpacecraft(J), rigid_law, rigid1, n_cases=1000, metrics_only=True
+            ),
+            1000,
+            rigid1,
+        ),
         "(b) EPS 45 modes, 100 cases of one plant": (
             lambda: simulate(base, eps_law, eps_config, n_cases=100),
             100,
             eps_config,
         ),
+        "(b) same, metrics only": (
+            lambda: simulate(base, eps_law, eps_config, n_cases=100, metrics_only=True),
+            100,
+            eps_config,
+        ),
+        "(b) same, metrics only, 1 substep": (
+            lambda: simulate(base, eps_law, eps1, n_cases=100, metrics_only=True),
+            100,
+            eps1,
+        ),
         "(b) EPS 45 modes, 100 dispersed plants": (
             lambda: simulate(batch, eps_law, eps_config),
             100,
             eps_config,
+        ),
+        "(b) dispersed, metrics only, 1 substep": (
+            lambda: simulate(batch, eps_law, eps1, metrics_only=True),
+            100,
+            eps1,
         ),
     }
     rows = {}

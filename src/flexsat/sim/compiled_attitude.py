@@ -34,10 +34,12 @@ the attitude by name.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, NamedTuple, cast
 
 import numpy as np
+import xarray as xr
 
+from flexsat.analysis.settling import settled_at
 from flexsat.control.attitude_laws import GibbsLyapunovLaw, MRPLaw, QuaternionPD
 from flexsat.dynamics.attitude import SINGULAR_TOL
 from flexsat.dynamics.dispersion import DispersedPlant
@@ -50,6 +52,7 @@ from flexsat.sim.kernels_attitude import (
     ATTITUDE_LAWS,
     LANES,
     AttitudeLoop,
+    AttitudeMetrics,
     AttitudeRecords,
     attitude_loop,
     attitude_loop_parallel,
@@ -64,7 +67,7 @@ if TYPE_CHECKING:
     from flexsat.sim.channels import ChannelActuator, ChannelDisturbance, ChannelSensor
     from flexsat.sim.config import SimConfig
 
-__all__ = ["attitude_law_of", "run", "spacecraft_kind", "unsupported"]
+__all__ = ["attitude_law_of", "run", "run_metrics", "spacecraft_kind", "unsupported"]
 
 #: groups of lanes from which a block runs on every core
 PARALLEL_GROUPS = 2
@@ -215,6 +218,118 @@ def _case_plant(plant, c: int):
     return plant
 
 
+class _Setup(NamedTuple):
+    """What both paths of :func:`run` and :func:`run_metrics` build before the kernel."""
+
+    job: CompiledRun
+    kind: str
+    pl: _Plant
+    a: LoopArguments
+    code: int
+    gains: np.ndarray
+    target: np.ndarray
+    w_ref: np.ndarray
+
+
+def _setup(job: CompiledRun, law: LinearLaw | None) -> _Setup | None:
+    """The propagation arrays and the loop's arguments in kernel coordinates, or None where
+    the kernel does not take the run after all (module docstring)."""
+    plant, controller, nc, x0 = job.plant, job.controller, job.nc, job.x0
+    kind = spacecraft_kind(plant)
+    if kind is None:
+        raise FieldError("plant", f"{type(plant).__name__} is not a three-axis spacecraft")
+    try:
+        pl = _Plant(plant, kind, job.config.dt, job.substeps)
+    except (FieldError, np.linalg.LinAlgError):  # an overdamped mode: the dense path
+        return None
+    a = LoopArguments(job, law, modal=False, propagate=False)
+    n = a.n
+    if pl.Ti is not None:  # the loop's state, measurements and impulses in z
+        Ti = np.broadcast_to(pl.Ti, (nc, n, n))
+        a.x0 = _c(np.einsum("cij,cj->ci", Ti, x0))
+        a.Cm = _to_z(a.Cm, pl.T)
+        if a.imp_dx.shape[0]:
+            dx = np.broadcast_to(a.imp_dx, (a.imp_dx.shape[0], nc, n))
+            a.imp_dx = _c(np.einsum("cij,kcj->kci", Ti, dx))
+    code, gains, target, w_ref = _law_arrays(controller, nc)
+    if gains.shape[0] not in (1, nc):  # the Python loop names the mismatch
+        return None
+    return _Setup(job, kind, pl, a, code, gains, target, w_ref)
+
+
+def _cases(arr: np.ndarray, c0: int, c1: int) -> np.ndarray:
+    """A shared array (leading axis 1) as is, a per-case one's cases [c0, c1)."""
+    return arr if arr.shape[0] == 1 else _c(arr[c0:c1])
+
+
+def _block_loop(s: _Setup, c0: int, c1: int, samples: int) -> AttitudeLoop:
+    """The kernel's arguments for cases [c0, c1) over the first ``samples`` samples."""
+    a, pl, job = s.a, s.pl, s.job
+    hub = a.inputs(c0, c1, job.seeds, samples)
+    return AttitudeLoop(
+        hub.x0,
+        0 if s.kind == "rigid" else 1,
+        a.substeps,
+        job.config.dt / a.substeps,
+        _cases(pl.J, c0, c1),
+        _cases(pl.Jinv, c0, c1),
+        _cases(pl.E2, c0, c1),
+        _cases(pl.E, c0, c1),
+        _cases(pl.Q1u, c0, c1),
+        _cases(pl.P1u, c0, c1),
+        _cases(pl.F, c0, c1),
+        _cases(pl.R, c0, c1),
+        hub.imp_k,
+        hub.imp_dx,
+        hub.Cm,
+        hub.Dm,
+        hub.sensor,
+        hub.sensor_slot,
+        s.code,
+        hub.Ak,
+        hub.Bk,
+        hub.Ck,
+        hub.Dk,
+        hub.y_ref[:samples],
+        hub.u_ff[:samples],
+        hub.K0,
+        _cases(s.gains, c0, c1),
+        _cases(s.target, c0, c1),
+        _cases(s.w_ref, c0, c1),
+        hub.act,
+        hub.dist_std,
+        hub.dist_slot,
+        hub.noise,
+        hub.bound,
+        SINGULAR_TOL,
+    )
+
+
+def _kernel(c0: int, c1: int):
+    """The parallel kernel for a block of at least :data:`PARALLEL_GROUPS` groups."""
+    return attitude_loop_parallel if c1 - c0 >= PARALLEL_GROUPS * LANES else attitude_loop
+
+
+def _no_metrics() -> AttitudeMetrics:
+    """The records path's (empty) metrics argument: ``n_t`` 0."""
+    e2, e3 = np.zeros((0, 0)), np.zeros((1, 0, 0))
+    return AttitudeMetrics(
+        0,
+        e3,
+        np.zeros(0, np.int64),
+        e3,
+        np.zeros((0, 3), np.int64),
+        np.zeros((0, 4)),
+        1.0,
+        0.0,
+        e2,
+        e2,
+        e2,
+        np.zeros((0, 4)),
+        np.zeros(0, np.int64),
+    )
+
+
 def run(job: CompiledRun, record_states: bool, law: LinearLaw | None) -> SimResult | None:
     """The run of :func:`~flexsat.sim.engine.simulate` on the three-axis kernel (module
     docstring), or None when the kernel does not take it after all (an overdamped elastic
@@ -228,33 +343,13 @@ def run(job: CompiledRun, record_states: bool, law: LinearLaw | None) -> SimResu
     plant: Plant = job.plant
     controller: Controller = job.controller
     config: SimConfig = job.config
-    nc, seeds, x0, theta0 = job.nc, job.seeds, job.x0, job.theta0
+    nc, theta0 = job.nc, job.theta0
     disturbances, substeps, kept = job.disturbances, job.substeps, job.kept
-    kind = spacecraft_kind(plant)
-    if kind is None:
-        raise FieldError("plant", f"{type(plant).__name__} is not a three-axis spacecraft")
-    dt, n_t = config.dt, config.n_steps + 1
-    try:
-        pl = _Plant(plant, kind, dt, substeps)
-    except (FieldError, np.linalg.LinAlgError):  # an overdamped mode: the dense path
+    s = _setup(job, law)
+    if s is None:
         return None
-    a = LoopArguments(
-        job,
-        law,
-        modal=False,
-        propagate=False,
-    )
+    pl, a, dt, n_t = s.pl, s.a, config.dt, config.n_steps + 1
     n, m = a.n, a.m
-    if pl.Ti is not None:  # the loop's state, measurements and impulses in z
-        Ti = np.broadcast_to(pl.Ti, (nc, n, n))
-        a.x0 = _c(np.einsum("cij,cj->ci", Ti, x0))
-        a.Cm = _to_z(a.Cm, pl.T)
-        if a.imp_dx.shape[0]:
-            dx = np.broadcast_to(a.imp_dx, (a.imp_dx.shape[0], nc, n))
-            a.imp_dx = _c(np.einsum("cij,kcj->kci", Ti, dx))
-    code, gains, target, w_ref = _law_arrays(controller, nc)
-    if gains.shape[0] not in (1, nc):  # the Python loop names the mismatch
-        return None
     batched = plant.n_cases != 1
     rec = Recorder(
         plant,
@@ -280,55 +375,11 @@ def run(job: CompiledRun, record_states: bool, law: LinearLaw | None) -> SimResu
     size = min(nc, -(-max(size, MIN_GROUPS * LANES) // LANES) * LANES)
     X = np.empty((min(size, nc), n_t, n))
 
-    def cases(arr, c0, c1, axis=0):
-        if arr.shape[axis] == 1:
-            return arr
-        idx = [slice(None)] * arr.ndim
-        idx[axis] = slice(c0, c1)
-        return _c(arr[tuple(idx)])
-
     def run_block(c0, c1, samples, Xb, Yb, Ucmdb, Ub, Distb, stopb):
         """The kernel on cases [c0, c1) over the first ``samples`` samples."""
-        hub = a.inputs(c0, c1, seeds, samples)
-        loop = AttitudeLoop(
-            hub.x0,
-            0 if kind == "rigid" else 1,
-            a.substeps,
-            dt / a.substeps,
-            cases(pl.J, c0, c1),
-            cases(pl.Jinv, c0, c1),
-            cases(pl.E2, c0, c1),
-            cases(pl.E, c0, c1),
-            cases(pl.Q1u, c0, c1),
-            cases(pl.P1u, c0, c1),
-            cases(pl.F, c0, c1),
-            cases(pl.R, c0, c1),
-            hub.imp_k,
-            hub.imp_dx,
-            hub.Cm,
-            hub.Dm,
-            hub.sensor,
-            hub.sensor_slot,
-            code,
-            hub.Ak,
-            hub.Bk,
-            hub.Ck,
-            hub.Dk,
-            hub.y_ref[:samples],
-            hub.u_ff[:samples],
-            hub.K0,
-            cases(gains, c0, c1),
-            cases(target, c0, c1),
-            cases(w_ref, c0, c1),
-            hub.act,
-            hub.dist_std,
-            hub.dist_slot,
-            hub.noise,
-            hub.bound,
-            SINGULAR_TOL,
-        )
-        kernel = attitude_loop_parallel if c1 - c0 >= PARALLEL_GROUPS * LANES else attitude_loop
-        kernel(loop, AttitudeRecords(Xb, Yb, Ucmdb, Ub, Distb, stopb))
+        loop = _block_loop(s, c0, c1, samples)
+        records = AttitudeRecords(Xb, Yb, Ucmdb, Ub, Distb, stopb)
+        _kernel(c0, c1)(loop, records, _no_metrics())
 
     for c0 in range(0, nc, size):
         c1 = min(nc, c0 + size)
@@ -448,3 +499,173 @@ def _outputs(rec, plant, pl: _Plant, c0: int, Z, U, Dist, outs, energy) -> None:
     else:
         elastic = np.sum(ze * _rows(ze, Qe), -1)
     energy[c0:c1] = 0.5 * (kinetic + elastic)
+
+
+#: the channel kinds of :class:`~flexsat.sim.kernels_attitude.AttitudeMetrics` (``chan``) of
+#: the nonlinear attitude channels
+_ATTITUDE_CHANNELS = {"rate": 1, "euler123": 2, "mrp": 3}
+
+
+def run_metrics(job: CompiledRun, law: LinearLaw | None) -> SimResult | None:
+    """The channel metrics of :func:`~flexsat.sim.engine.simulate` (``metrics_only``) without
+    any time history, or None where this path does not apply (the caller then runs
+    :func:`run`, which also raises for a case that diverges).
+
+    The metrics of a three-axis run (:func:`flexsat.sim.metrics.channel_metrics`) are, per
+    recorded output channel, its largest norm and a scalar channel's last value; per input
+    channel, the largest norm and the root mean square of the norm; and against the law's
+    fixed target attitude, the final pointing error and the settling time. Each is a
+    running maximum, a running sum, a value at the last sample or the last sample outside
+    the band, so the kernel accumulates them in the loop
+    (:class:`~flexsat.sim.kernels_attitude.AttitudeMetrics`) in place of the records: no
+    history is held and no state is changed back x = T z. The loop is that of :func:`run`
+    (the same operations, the same states bit for bit); the outputs are the rows C T z of
+    the modal coordinates summed in the loop where :func:`run` sums them after it by a
+    matrix product, and the sum of the squared input norms is a running sum where NumPy's
+    mean sums pairwise, so the metrics agree with those of :func:`run` to round-off (the
+    peaks of the rigid body's channels, its attitude and its pointing metrics bit for bit:
+    the same formulas on the same states). A case's metrics do not depend on its batch.
+
+    Applies where :func:`run` does, for a law whose target attitude, if any, is fixed
+    (``beta_target``; a turning reference, ``target_at``, takes :func:`run`).
+    """
+    plant, controller, config, nc = job.plant, job.controller, job.config, job.nc
+    if callable(getattr(controller, "target_at", None)):
+        return None
+    s = _setup(job, law)
+    if s is None:
+        return None
+    pl, a = s.pl, s.a
+    n, m, n_t = a.n, a.m, config.n_steps + 1
+    rec = Recorder(plant, n_t, nc, (), {}, False, plant.n_cases != 1, allocate=False)
+    head = 0 if pl.T is None else HEAD  # the flexible plant's rows of β and ω first
+    chan: list[tuple[int, int, int]] = []
+    names: list[tuple[str, bool]] = []  # (metric stem, scalar) per channel
+    col = {}
+    offset = head
+    for k in rec.linear:
+        col[k] = offset
+        offset += channel_width(plant, k)
+    recorded = set(plant.recorded)
+    for c in plant.outputs:
+        k = c.name
+        if k not in recorded or k == "attitude":
+            continue
+        w = channel_width(plant, k)
+        if k in col:
+            chan.append((0, col[k], w))
+        elif k in _ATTITUDE_CHANNELS:
+            chan.append((_ATTITUDE_CHANNELS[k], 0, 3))
+        else:
+            return None
+        names.append((k, w == 1))
+    outputs = len(chan)
+    for c in plant.inputs:
+        sl = plant.input_slices[c.name]
+        chan.append((4, sl.start, sl.stop - sl.start))
+        names.append((c.name, False))
+    # the output rows over the kernel coordinates and their feedthrough
+    lead = max(
+        1 if pl.T is None else pl.T.shape[0],
+        rec.CT.shape[0] if rec.linear and rec.CT.ndim == 3 else 1,
+    )
+    rows = np.zeros((lead, offset, n))
+    feed = np.zeros((lead, offset, m))
+    if pl.T is not None:
+        rows[:, :head] = pl.T[:, :head]
+    if rec.linear:
+        CT = rec.CT if rec.CT.ndim == 3 else rec.CT[None]
+        DT = rec.DT if rec.DT.ndim == 3 else rec.DT[None]
+        rows[:, head:] = (
+            np.swapaxes(CT, -1, -2)
+            if pl.T is None
+            else np.swapaxes(np.swapaxes(pl.T, -1, -2) @ CT, -1, -2)
+        )
+        feed[:, head:] = np.swapaxes(DT, -1, -2)
+    at, extra = _row_sources(a.Cm, rows)
+    target_of = getattr(controller, "beta_target", None)
+    pointing = target_of is not None and "attitude" in recorded
+    target = _c(np.asarray(target_of, float).reshape(-1, 4)) if pointing else np.zeros((0, 4))
+    if target.shape[0] not in (0, 1, nc):
+        return None
+    band = float(config.settling_band)
+    q = len(chan)
+    peak, final, sumsq = (np.zeros((nc, q)) for _ in range(3))
+    beta_end = np.zeros((nc, 4))
+    after = np.zeros(nc, np.int64)
+    stop = np.full(nc, -1, dtype=np.int64)
+    chan_a = np.array(chan, np.int64).reshape(-1, 3)
+    size = block_size(nc, n_t, (a.width if a.noisy else 0) + a.law_values + 1)
+    size = min(nc, -(-max(size, MIN_GROUPS * LANES) // LANES) * LANES)
+    e3 = np.zeros((0, 0, 0))
+    for c0 in range(0, nc, size):
+        c1 = min(nc, c0 + size)
+        red = AttitudeMetrics(
+            n_t,
+            _c(_cases(rows[:, extra], c0, c1)),
+            at,
+            _c(_cases(feed, c0, c1)) if feed.any() else np.zeros((1, offset, 0)),
+            chan_a,
+            _cases(target, c0, c1) if target.shape[0] else target,
+            float(np.cos(band / 2)),
+            band,
+            peak[c0:c1],
+            final[c0:c1],
+            sumsq[c0:c1],
+            beta_end[c0:c1],
+            after[c0:c1],
+        )
+        records = AttitudeRecords(e3, e3, e3, e3, e3, stop[c0:c1])
+        _kernel(c0, c1)(_block_loop(s, c0, c1, n_t), records, red)
+        if (stop[c0:c1] >= 0).any():
+            return None  # run() raises the divergence (or the Python loop the singular law)
+    t = config.dt * np.arange(n_t, dtype=np.float64)
+    units = {c.name: c.unit for c in plant.outputs + plant.inputs}
+    metrics: dict[str, np.ndarray] = {}
+    metric_units: dict[str, str] = {}
+    for i, (k, scalar) in enumerate(names):
+        metrics[f"peak_{k}"] = peak[:, i].copy()
+        metric_units[f"peak_{k}"] = units.get(k, "")
+        if i < outputs and scalar:
+            metrics[f"final_{k}"] = final[:, i].copy()
+            metric_units[f"final_{k}"] = units.get(k, "")
+        elif i >= outputs:
+            metrics[f"rms_{k}"] = np.sqrt(sumsq[:, i] / n_t)
+            metric_units[f"rms_{k}"] = units.get(k, "")
+    if pointing:
+        e0 = np.abs(np.sum(beta_end * target, axis=-1)).clip(max=1.0)
+        metrics["final_pointing_error_deg"] = np.degrees(2.0 * np.arccos(e0))
+        metric_units["final_pointing_error_deg"] = "deg"
+        metrics["pointing_settling_time_s"] = settled_at(t, after)
+        metric_units["pointing_settling_time_s"] = "s"
+    data = {k: (("case",), v, {"units": metric_units[k]}) for k, v in metrics.items()}
+    ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s"}), "case": np.arange(nc)})
+    ds.attrs.update(
+        control_rate_Hz=config.control_rate,
+        settling_band_rad=config.settling_band,
+        substeps=job.substeps,
+        engine="compiled",
+        propagation="modal" if pl.T is not None else "rkmk4",
+        histories="none",
+    )
+    return SimResult(ds, metrics)
+
+
+def _row_sources(Cm: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where the kernel finds each output row (lead, r, n) among its row sums: ``at[i]`` the
+    measurement row of Cm (lead', p, n) that is the same row in every case (its sum serves
+    both), else p + its place among the ``extra`` rows summed after them."""
+    p = Cm.shape[1]
+    lead = max(Cm.shape[0], rows.shape[0])
+    M = np.broadcast_to(Cm, (lead,) + Cm.shape[1:])
+    R = np.broadcast_to(rows, (lead,) + rows.shape[1:])
+    at = np.empty(rows.shape[1], np.int64)
+    extra: list[int] = []
+    for i in range(rows.shape[1]):
+        same = [j for j in range(p) if np.array_equal(M[:, j], R[:, i])]
+        if same:
+            at[i] = same[0]
+        else:
+            at[i] = p + len(extra)
+            extra.append(i)
+    return at, np.array(extra, np.int64)

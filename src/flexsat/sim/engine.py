@@ -359,12 +359,14 @@ def simulate(
         cannot). Both give the same result to round-off; ``dataset.attrs["engine"]`` says
         which ran.
     metrics_only : bool
-        Only the single-axis maneuver metrics are wanted (a sweep's cases): where the compiled
-        loop can accumulate them in the loop (:func:`flexsat.sim.compiled.run_reduced`) the
-        result holds them without any time history (``dataset.attrs["histories"] ==
-        "none"``), a hybrid plant is propagated in its modal coordinates whatever the batch
-        size (a case's metrics do not depend on its batch) and no history is allocated;
-        elsewhere (or with ``record_states``) the full result.
+        Only the metrics are wanted (a sweep's cases): where the compiled loop can accumulate
+        them in the loop (the single-axis maneuver metrics,
+        :func:`flexsat.sim.compiled.run_reduced`; a three-axis spacecraft's channel and
+        pointing metrics, :func:`flexsat.sim.compiled_attitude.run_metrics`) the result holds
+        them without any time history (``dataset.attrs["histories"] == "none"``), a hybrid
+        plant is propagated in its modal coordinates whatever the batch size (a case's
+        metrics do not depend on its batch) and no history is allocated; elsewhere (or with
+        ``record_states``) the full result.
     batch_independent : bool
         Propagate on a path that does not depend on the batch size: the compiled loop uses a
         plant's modal coordinates whenever it has them (by default only above a number of
@@ -468,6 +470,10 @@ def simulate(
             law = controller.linear_form(dt, t, nc)
             if law is None:
                 reason = f"{type(controller).__name__} has no linear form"
+        if reason is None and metrics_only and not record_states:
+            result = attitude_path.run_metrics(job, law)
+            if result is not None:
+                return result
         if reason is None:
             result = attitude_path.run(job, record_states, law)
             if result is not None:

@@ -21,13 +21,19 @@ sample k, for each case,
      tolerance stops: the engine then reruns the Python loop, which refuses it by name);
 
 4. divergence check of the state and command (|·| beyond ``bound`` or not finite stops the
-   case), records (state, measurements, commands);
+   case), records (state, measurements, commands), or in their place the channel metrics
+   accumulated sample by sample (:class:`AttitudeMetrics`: running peaks of the outputs'
+   norms, last values, sums of squares of the inputs' norms, the pointing error's last
+   sample outside the band; no history);
 5. actuator and random disturbance (:func:`flexsat.sim.kernel_phases.actuate`);
 6. ``substeps`` steps of h = dt / substeps with the input held:
 
    * rigid (``kind`` 0): the RKMK4 step of :func:`flexsat.dynamics.rigid_body.rkmk4_step`
      (Munthe-Kaas 1999) on (β, ω) with Euler's equations I ω' = u − ω × I ω, then β scaled to
-     unit norm (the engine's ``plant.normalize`` after the plant's own step);
+     unit norm (the engine's ``plant.normalize`` after the plant's own step); each stage one
+     pass over the lanes (vectorised), the coefficients of dexpinv and of exp(θ) by their
+     series for small angles, decided per lane, libm's tan, cos and sinc only for a lane
+     beyond them (:func:`flexsat.sim.kernels_rigid.rigid_steps`);
    * flexible (``kind`` 1): Krogstad's fourth-order exponential Runge-Kutta scheme
      (J. Comput. Phys. 203, 2005, Eq. 20; :class:`flexsat.sim.integrators.ExpRK4Stepper`) in
      the modal coordinates z of :func:`flexsat.sim.spacecraft_modal.spacecraft_modal_form`:
@@ -66,11 +72,13 @@ from flexsat.sim.kernel_phases import (
     row_products,
     rows_shape,
 )
+from flexsat.sim.kernels_rigid import rigid_steps
 from flexsat.sim.spacecraft_modal import HEAD
 
 __all__ = [
     "ATTITUDE_LAWS",
     "AttitudeLoop",
+    "AttitudeMetrics",
     "AttitudeRecords",
     "attitude_loop",
     "attitude_loop_parallel",
@@ -133,6 +141,67 @@ def _lane_rows(R, z, out, W):
                 a7 += r * z[j, 7]
             out[i, 0], out[i, 1], out[i, 2], out[i, 3] = a0, a1, a2, a3
             out[i, 4], out[i, 5], out[i, 6], out[i, 7] = a4, a5, a6, a7
+
+    return shared
+
+
+def input_products(
+    Q1u: np.ndarray, P1u: np.ndarray, w: np.ndarray, hd: np.ndarray, fd: np.ndarray, W: int
+) -> None:
+    """hd = Q1u w, fd = P1u w per lane, each sum in the order j = 0 .. m − 1 from 0: Q1u, P1u
+    the lanes' own copies (n, m, W) or the one (n, m) pair all lanes share (each entry read
+    once and broadcast over the lanes, the eight lanes' sums in registers). The same sums
+    either way (:func:`_input_products`)."""
+    for i in range(hd.shape[0]):
+        for l in range(W):
+            s, t = 0.0, 0.0
+            for j in range(w.shape[0]):
+                s += coefficient(Q1u, i, j, l) * w[j, l]
+                t += coefficient(P1u, i, j, l) * w[j, l]
+            hd[i, l], fd[i, l] = s, t
+
+
+@overload(input_products)
+def _input_products(Q1u, P1u, w, hd, fd, W):
+    if Q1u.ndim == 3:
+
+        def own(Q1u, P1u, w, hd, fd, W):
+            for i in range(hd.shape[0]):
+                for l in range(W):
+                    s, t = 0.0, 0.0
+                    for j in range(w.shape[0]):
+                        s += Q1u[i, j, l] * w[j, l]
+                        t += P1u[i, j, l] * w[j, l]
+                    hd[i, l], fd[i, l] = s, t
+
+        return own
+
+    def shared(Q1u, P1u, w, hd, fd, W):  # W = LANES = 8
+        for i in range(hd.shape[0]):
+            a0 = a1 = a2 = a3 = a4 = a5 = a6 = a7 = 0.0
+            b0 = b1 = b2 = b3 = b4 = b5 = b6 = b7 = 0.0
+            for j in range(w.shape[0]):
+                q, r = Q1u[i, j], P1u[i, j]
+                a0 += q * w[j, 0]
+                a1 += q * w[j, 1]
+                a2 += q * w[j, 2]
+                a3 += q * w[j, 3]
+                a4 += q * w[j, 4]
+                a5 += q * w[j, 5]
+                a6 += q * w[j, 6]
+                a7 += q * w[j, 7]
+                b0 += r * w[j, 0]
+                b1 += r * w[j, 1]
+                b2 += r * w[j, 2]
+                b3 += r * w[j, 3]
+                b4 += r * w[j, 4]
+                b5 += r * w[j, 5]
+                b6 += r * w[j, 6]
+                b7 += r * w[j, 7]
+            hd[i, 0], hd[i, 1], hd[i, 2], hd[i, 3] = a0, a1, a2, a3
+            hd[i, 4], hd[i, 5], hd[i, 6], hd[i, 7] = a4, a5, a6, a7
+            fd[i, 0], fd[i, 1], fd[i, 2], fd[i, 3] = b0, b1, b2, b3
+            fd[i, 4], fd[i, 5], fd[i, 6], fd[i, 7] = b4, b5, b6, b7
 
     return shared
 
@@ -204,16 +273,53 @@ class AttitudeRecords(NamedTuple):
     stop: np.ndarray
 
 
+class AttitudeMetrics(NamedTuple):
+    """The channel metrics accumulated in the loop in place of the records (``n_t`` > 0; 0:
+    the records of :class:`AttitudeRecords`, the other arrays unused).
+
+    n_t samples; the output rows over the kernel coordinates (the flexible plant's first seven
+    the rows T[:7] of β and ω, then the linear outputs' rows): row i is the measurement row
+    at[i] (< p) where that is the same row, else row at[i] − p of Ot (Co, r, n), summed after
+    the measurement rows; Do (Co, rows, m) their feedthrough of the input held before the
+    sample (no columns: zero); chan (q, 3) [kind, lo, width] per channel: kind 0 the linear
+    output rows lo .. lo + width − 1, 1 the rate ω, 2 the 1-2-3 Euler angles
+    of β, 3 the MRP of β, 4 the actuator outputs u[lo : lo + width]; target (Ct, 4) the law's
+    target attitude (Ct = 0: none); cos_band cos(band / 2), band the settling band (rad).
+    Outputs per case: peak (C, q) the largest norm over the samples (|v| of a scalar),
+    final (C, q) a scalar channel's last value, sumsq (C, q) the sum of the squared norms,
+    beta_end (C, 4) β at the last sample, after (C,) the index just after the last sample
+    whose pointing error 2 arccos|e_0| exceeds the band (0 when none does)."""
+
+    n_t: int
+    Ot: np.ndarray
+    at: np.ndarray
+    Do: np.ndarray
+    chan: np.ndarray
+    target: np.ndarray
+    cos_band: float
+    band: float
+    peak: np.ndarray
+    final: np.ndarray
+    sumsq: np.ndarray
+    beta_end: np.ndarray
+    after: np.ndarray
+
+
 @_inline
-def _gather(loop, cl, W):
-    """The per-case arrays of the lanes ``cl``, lanes last."""
+def _gather(loop, red, cl, W):
+    """The per-case arrays of the lanes ``cl``, lanes last; the measurement rows followed by
+    the output rows ``red.Ot`` (none on the records path) in one matrix of rows."""
     n, m, p = loop.x0.shape[1], loop.P1u.shape[2], loop.Cm.shape[1]
+    r = red.Ot.shape[1] if red.n_t > 0 else 0
     modal = loop.kind == 1
     nm = n if modal else 0
     own = modal and loop.E.shape[0] > 1  # each lane its own E2, E, F (a dispersed plant)
     no = n if own else 0
-    Mt = np.zeros(rows_shape(p, n, W))
+    Mt = np.zeros(rows_shape(p + r, n, W))
     Dmv = np.empty((p, m, W))
+    rf = red.Do.shape[1] if red.n_t > 0 else 0  # the output rows' feedthrough
+    mf = red.Do.shape[2] if red.n_t > 0 else 0  # no columns: no feedthrough
+    Dov = np.empty((rf, mf, W))
     sensv = np.empty((p, 4, W))
     J = np.empty((3, 3, W))
     Jinv = np.empty((3, 3, W))
@@ -236,6 +342,17 @@ def _gather(loop, cl, W):
             for i in range(p):
                 a, b = row_entry(i, j, n, W)
                 Mt[a, b, l] = loop.Cm[cm, i, j]
+        if r > 0:
+            co = case_index(red.Ot.shape[0], c)
+            for j in range(n):
+                for i in range(r):
+                    a, b = row_entry(p + i, j, n, W)
+                    Mt[a, b, l] = red.Ot[co, i, j]
+        if rf > 0 and mf > 0:
+            cf = case_index(red.Do.shape[0], c)
+            for i in range(rf):
+                for j in range(mf):
+                    Dov[i, j, l] = red.Do[cf, i, j]
         for i in range(p):
             for j in range(m):
                 Dmv[i, j, l] = loop.Dm[cm, i, j]
@@ -273,7 +390,7 @@ def _gather(loop, cl, W):
             actv[i, 0, l] = loop.act[ca, i, 0]
             actv[i, 1, l] = loop.act[ca, i, 1]
             dstdv[i, l] = loop.dist_std[cd, i]
-    return Mt, Dmv, sensv, J, Jinv, E2, E, Q1u, P1u, F, R, gains, target, w_ref, actv, dstdv
+    return Mt, Dmv, Dov, sensv, J, Jinv, E2, E, Q1u, P1u, F, R, gains, target, w_ref, actv, dstdv
 
 
 @_inline
@@ -322,85 +439,101 @@ def attitude_law(
 
 
 @_inline
-def _dexpinv(t0, t1, t2, w0, w1, w2):
-    """θ̇ of the rotation-vector kinematics (:func:`flexsat.dynamics.rigid_body.dexpinv`)."""
-    a2 = t0 * t0 + t1 * t1 + t2 * t2
-    if a2 < 0.02 * 0.02:
-        c = 1.0 / 12 + a2 / 720 + a2 * a2 / 30240
-    else:
-        x = np.sqrt(a2) / 2
-        c = (1 - x / np.tan(x)) / a2
-    s0, s1, s2 = t1 * w2 - t2 * w1, t2 * w0 - t0 * w2, t0 * w1 - t1 * w0
-    return (
-        w0 + 0.5 * s0 + c * (t1 * s2 - t2 * s1),
-        w1 + 0.5 * s1 + c * (t2 * s0 - t0 * s2),
-        w2 + 0.5 * s2 + c * (t0 * s1 - t1 * s0),
-    )
-
-
-@_inline
-def _euler(J, Jinv, l, w0, w1, w2, u0, u1, u2):
-    """ω' = I⁻¹ (u − ω × I ω) of lane l."""
-    h0 = J[0, 0, l] * w0 + J[0, 1, l] * w1 + J[0, 2, l] * w2
-    h1 = J[1, 0, l] * w0 + J[1, 1, l] * w1 + J[1, 2, l] * w2
-    h2 = J[2, 0, l] * w0 + J[2, 1, l] * w1 + J[2, 2, l] * w2
-    v0 = u0 - (w1 * h2 - w2 * h1)
-    v1 = u1 - (w2 * h0 - w0 * h2)
-    v2 = u2 - (w0 * h1 - w1 * h0)
-    return (
-        Jinv[0, 0, l] * v0 + Jinv[0, 1, l] * v1 + Jinv[0, 2, l] * v2,
-        Jinv[1, 0, l] * v0 + Jinv[1, 1, l] * v1 + Jinv[1, 2, l] * v2,
-        Jinv[2, 0, l] * v0 + Jinv[2, 1, l] * v1 + Jinv[2, 2, l] * v2,
-    )
-
-
-@_inline
-def rigid_steps(
-    x: np.ndarray,
-    w: np.ndarray,
-    J: np.ndarray,
-    Jinv: np.ndarray,
-    h: float,
-    substeps: int,
-    W: int,
-) -> None:
-    """Phase 6, rigid: ``substeps`` RKMK4 steps of (β, ω) = x[0:7] per lane with the torque
-    w[0:3] held, β scaled to unit norm after each (module docstring)."""
-    for _ in range(substeps):
+def reduce_outputs(kind, x, acc, w, Dov, red, tgt, hv, pk, fin, after, k, W):
+    """The channel metrics of sample k per lane (:class:`AttitudeMetrics`): the outputs'
+    norms' running peaks and last values, the pointing error's last sample outside the band.
+    β, ω (copied to ``hv`` (7, W)) are x[0:7] (rigid) or the first seven output rows
+    (modal); output row i is ``acc[red.at[i]]`` (a measurement row where one is the same
+    row, else one of the rows ``red.Ot`` summed after them); a linear channel is its rows
+    plus the feedthrough of w, the input held before the sample (as the recorder's outputs;
+    ``Dov`` has no columns when it is zero). A vector channel's squares are summed in
+    NumPy's order of ``norm(axis=-1)``."""
+    for i in range(7):
         for l in range(W):
-            u0, u1, u2 = w[0, l], w[1, l], w[2, l]
-            a0, a1, a2 = x[4, l], x[5, l], x[6, l]
-            k1t = (a0, a1, a2)
-            k1w = _euler(J, Jinv, l, a0, a1, a2, u0, u1, u2)
-            b = 0.5 * h
-            ws = (a0 + b * k1w[0], a1 + b * k1w[1], a2 + b * k1w[2])
-            k2t = _dexpinv(b * k1t[0], b * k1t[1], b * k1t[2], ws[0], ws[1], ws[2])
-            k2w = _euler(J, Jinv, l, ws[0], ws[1], ws[2], u0, u1, u2)
-            ws = (a0 + b * k2w[0], a1 + b * k2w[1], a2 + b * k2w[2])
-            k3t = _dexpinv(b * k2t[0], b * k2t[1], b * k2t[2], ws[0], ws[1], ws[2])
-            k3w = _euler(J, Jinv, l, ws[0], ws[1], ws[2], u0, u1, u2)
-            ws = (a0 + h * k3w[0], a1 + h * k3w[1], a2 + h * k3w[2])
-            k4t = _dexpinv(h * k3t[0], h * k3t[1], h * k3t[2], ws[0], ws[1], ws[2])
-            k4w = _euler(J, Jinv, l, ws[0], ws[1], ws[2], u0, u1, u2)
-            g = h / 6
-            t0 = g * (k1t[0] + 2 * k2t[0] + 2 * k3t[0] + k4t[0])
-            t1 = g * (k1t[1] + 2 * k2t[1] + 2 * k3t[1] + k4t[1])
-            t2 = g * (k1t[2] + 2 * k2t[2] + 2 * k3t[2] + k4t[2])
-            x[4, l] = a0 + g * (k1w[0] + 2 * k2w[0] + 2 * k3w[0] + k4w[0])
-            x[5, l] = a1 + g * (k1w[1] + 2 * k2w[1] + 2 * k3w[1] + k4w[1])
-            x[6, l] = a2 + g * (k1w[2] + 2 * k2w[2] + 2 * k3w[2] + k4w[2])
-            # exp(θ) (rigid_body._exp: ½ sinc(|θ| / 2π) = sin(|θ|/2) / |θ|), then exp(θ) ⊗ β
-            nt = np.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
-            q0 = np.cos(nt / 2)
-            s = 0.5 * np.sinc(nt / (2 * np.pi))
-            q1, q2, q3 = t0 * s, t1 * s, t2 * s
-            p0, p1, p2, p3 = x[0, l], x[1, l], x[2, l], x[3, l]
-            r0 = q0 * p0 - (q1 * p1 + q2 * p2 + q3 * p3)
-            r1 = q0 * p1 + p0 * q1 - (q2 * p3 - q3 * p2)
-            r2 = q0 * p2 + p0 * q2 - (q3 * p1 - q1 * p3)
-            r3 = q0 * p3 + p0 * q3 - (q1 * p2 - q2 * p1)
-            norm = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2 + r3 * r3)
-            x[0, l], x[1, l], x[2, l], x[3, l] = r0 / norm, r1 / norm, r2 / norm, r3 / norm
+            hv[i, l] = acc[red.at[i], l] if kind == 1 else x[i, l]
+    for q in range(red.chan.shape[0]):
+        ck, lo, width = red.chan[q, 0], red.chan[q, 1], red.chan[q, 2]
+        if ck == 0 and width == 1:  # a scalar linear channel, lanes innermost
+            row = red.at[lo]
+            for l in range(W):
+                v = acc[row, l]
+                for j in range(Dov.shape[1]):
+                    v += Dov[lo, j, l] * w[j, l]
+                fin[q, l] = v
+                nv = abs(v)
+                if k == 0 or nv > pk[q, l]:
+                    pk[q, l] = nv
+        elif ck == 0:
+            for l in range(W):
+                s = 0.0
+                for i in range(width):
+                    v = acc[red.at[lo + i], l]
+                    for j in range(Dov.shape[1]):
+                        v += Dov[lo + i, j, l] * w[j, l]
+                    s = v * v if i == 0 else s + v * v
+                nv = np.sqrt(s)
+                if k == 0 or nv > pk[q, l]:
+                    pk[q, l] = nv
+        elif ck == 1:
+            for l in range(W):
+                v0, v1, v2 = hv[4, l], hv[5, l], hv[6, l]
+                nv = np.sqrt((v0 * v0 + v1 * v1) + v2 * v2)
+                if k == 0 or nv > pk[q, l]:
+                    pk[q, l] = nv
+        elif ck == 2 or ck == 3:
+            for l in range(W):
+                b0, b1, b2, b3 = hv[0, l], hv[1, l], hv[2, l], hv[3, l]
+                if ck == 2:  # rigid_spacecraft.attitude_output("euler123"): dcm(β), Table B.1
+                    c00 = b0 * b0 + b1 * b1 - b2 * b2 - b3 * b3
+                    c10 = 2 * (b1 * b2 - b0 * b3)
+                    c20 = 2 * (b1 * b3 + b0 * b2)
+                    c21 = 2 * (b2 * b3 - b0 * b1)
+                    c22 = b0 * b0 - b1 * b1 - b2 * b2 + b3 * b3
+                    v0 = np.arctan2(-c21, c22)
+                    v1 = np.arctan2(c20, np.hypot(c00, c10))
+                    v2 = np.arctan2(-c10, c00)
+                else:  # "mrp": β_v / (1 + β0) with β0 >= 0
+                    if b0 < 0:
+                        b0, b1, b2, b3 = -b0, -b1, -b2, -b3
+                    v0, v1, v2 = b1 / (1 + b0), b2 / (1 + b0), b3 / (1 + b0)
+                nv = np.sqrt((v0 * v0 + v1 * v1) + v2 * v2)
+                if k == 0 or nv > pk[q, l]:
+                    pk[q, l] = nv
+    if tgt.shape[0] == 0:
+        return
+    for l in range(W):
+        b0, b1, b2, b3 = hv[0, l], hv[1, l], hv[2, l], hv[3, l]
+        # |β · β_t| (metrics.channel_metrics), 2 arccos of it against the band; arccos only
+        # where e0 is within 1e-12 of cos(band / 2) (elsewhere the comparison decides)
+        e0 = abs(((b0 * tgt[0, l] + b1 * tgt[1, l]) + b2 * tgt[2, l]) + b3 * tgt[3, l])
+        if e0 < red.cos_band - 1e-12:
+            out = True
+        elif e0 > red.cos_band + 1e-12:
+            out = False
+        else:
+            out = 2.0 * np.arccos(min(e0, 1.0)) > red.band
+        if out:
+            after[l] = k + 1
+
+
+@_inline
+def reduce_inputs(red, u, pk, ss, k, W):
+    """The actuator outputs' norms' running peaks and sums of squares at sample k."""
+    for q in range(red.chan.shape[0]):
+        if red.chan[q, 0] != 4:
+            continue
+        lo, width = red.chan[q, 1], red.chan[q, 2]
+        for l in range(W):
+            if width == 1:
+                nv = abs(u[lo, l])
+            else:
+                s = u[lo, l] * u[lo, l]
+                for i in range(1, width):
+                    s += u[lo + i, l] * u[lo + i, l]
+                nv = np.sqrt(s)
+            if k == 0 or nv > pk[q, l]:
+                pk[q, l] = nv
+            ss[q, l] = nv * nv if k == 0 else ss[q, l] + nv * nv
 
 
 @_inline
@@ -501,16 +634,9 @@ def modal_steps(
     z ← e^{hA} z + P1u w + P1f f(z) + P2f (−3 f(z) + 2 f(a) + 2 f(b) − f(c))
     + P3f 4 (f(z) − f(a) − f(b) + f(c)). Scratch: ``work`` (9, n, W) (n >= 7: rows 5 .. 8
     hold the forces), ``g`` (7, W), ``acc`` (8, W)."""
-    n, m = z.shape[0], w.shape[0]
     hd, fd, a, b, full, fx = work[0], work[1], work[2], work[3], work[4], work[5]
     fa, fb, fc = work[6, :7], work[7, :7], work[8, :7]
-    for i in range(n):
-        for l in range(W):
-            s, t = 0.0, 0.0
-            for j in range(m):
-                s += Q1u[i, j, l] * w[j, l]
-                t += P1u[i, j, l] * w[j, l]
-            hd[i, l], fd[i, l] = s, t
+    input_products(Q1u, P1u, w, hd, fd, W)
     f0 = fx[:7]
     for _ in range(substeps):
         modal_force(z, R, J, f0, acc, W)
@@ -538,7 +664,7 @@ def modal_steps(
 
 
 @cached_jit(error_model="numpy")
-def _group(c0, nl, loop, rec, W):
+def _group(c0, nl, loop, rec, red, W):
     """Cases c0 .. c0 + nl − 1 as W = :data:`LANES` lanes (the lanes past nl repeat the last
     case): the step of the module docstring.
 
@@ -549,24 +675,47 @@ def _group(c0, nl, loop, rec, W):
     -> 0.87 µs per lane-substep, ``benchmarks/bench_attitude.py --step``). The same
     operations in the same order either way (no fast-math): the numbers do not change."""
     X, Y, Ucmd, U, D, stop = rec
-    n_t, n = Y.shape[1], loop.x0.shape[1]
+    metrics = red.n_t > 0  # the channel metrics in place of the records
+    n_t, n = red.n_t if metrics else Y.shape[1], loop.x0.shape[1]
     m, p, nk = loop.P1u.shape[2], loop.Cm.shape[1], loop.Ak.shape[2]
     p_rec = Y.shape[2]
     cl = np.empty(W, np.int64)
     for l in range(W):
         cl[l] = c0 + min(l, nl - 1)
-    Mt, Dmv, sensv, J, Jinv, E2, E, Q1u, P1u, F, R, gains, target, w_ref, actv, dstdv = _gather(
-        loop, cl, W
+    (Mt, Dmv, Dov, sensv, J, Jinv, E2, E, Q1u, P1u, F, R, gains, target, w_ref, actv, dstdv) = (
+        _gather(loop, red, cl, W)
     )
+    nq = red.chan.shape[0] if metrics else 0
+    pk = np.zeros((nq, W))
+    fin = np.zeros((nq, W))
+    ss = np.zeros((nq, W))
+    after = np.zeros(W, np.int64)
+    hv = np.empty((7, W))  # β, ω of the sample
+    tgt = np.empty((4, W if metrics and red.target.shape[0] > 0 else 0))
+    for l in range(tgt.shape[1]):
+        for i in range(4):
+            tgt[i, l] = red.target[case_index(red.target.shape[0], cl[l]), i]
     x = np.empty((n, W))
     for l in range(W):
         stop[cl[l]] = -1
         for j in range(n):
             x[j, l] = loop.x0[cl[l], j]
     work = np.empty((9, n, W))
+    rs = np.empty((32, W))  # the rigid step's stages
     g = np.empty((7, W))
     acc6 = np.empty((8, W))  # row sums of R (padded to a block of 8 for W = 1)
     acc = np.empty((row_count(Mt, n), W))
+    # one matrix of rows all lanes share (measurement and output rows of a shared plant):
+    # each entry read once and broadcast over the lanes (:func:`lane_rows`), the same sums as
+    # the lanes' own copies Mt
+    r_out = red.Ot.shape[1] if metrics else 0
+    one = loop.Cm.shape[0] == 1 and (r_out == 0 or red.Ot.shape[0] == 1) and W == LANES
+    Ms = np.empty((p + r_out if one else 0, n))
+    for j in range(Ms.shape[1] if one else 0):
+        for i in range(p):
+            Ms[i, j] = loop.Cm[0, i, j]
+        for i in range(r_out):
+            Ms[p + i, j] = red.Ot[0, i, j]
     w = np.zeros((m, W))
     ucmd = np.zeros((m, W))  # an attitude law commands the torque only: 0 on the rest
     u = np.empty((m, W))
@@ -582,7 +731,10 @@ def _group(c0, nl, loop, rec, W):
     i_imp = 0
     for k in range(n_t):
         i_imp = apply_impulses(x, loop.imp_k, loop.imp_dx, i_imp, k, cl, W)
-        row_products(Mt, x, acc, W)
+        if one:
+            lane_rows(Ms, x, acc, W)
+        else:
+            row_products(Mt, x, acc, W)
         measure(acc, w, f, Dmv, Dmfv, sensv, loop.sensor_slot, loop.noise, cl, k, y, W)
         if loop.law_kind == 0:
             law(
@@ -614,14 +766,17 @@ def _group(c0, nl, loop, rec, W):
             for l in range(W):
                 if not abs(x[j, l]) <= loop.bound:
                     bad[l] = True
-        for l in range(W):
-            c = cl[l]
-            for j in range(n):
-                X[c, k, j] = x[j, l]
-            for i in range(p_rec):
-                Y[c, k, i] = y[p - p_rec + i, l]
-            for i in range(m):
-                Ucmd[c, k, i] = ucmd[i, l]
+        if metrics:
+            reduce_outputs(loop.kind, x, acc, w, Dov, red, tgt, hv, pk, fin, after, k, W)
+        else:
+            for l in range(W):
+                c = cl[l]
+                for j in range(n):
+                    X[c, k, j] = x[j, l]
+                for i in range(p_rec):
+                    Y[c, k, i] = y[p - p_rec + i, l]
+                for i in range(m):
+                    Ucmd[c, k, i] = ucmd[i, l]
         actuate(ucmd, actv, dstdv, loop.dist_slot, loop.noise, cl, k, u, d, w, W)
         running = False
         for l in range(W):
@@ -631,22 +786,25 @@ def _group(c0, nl, loop, rec, W):
             running = running or alive[l]
         if not running:
             break
-        for i in range(m):
-            for l in range(W):
-                U[cl[l], k, i] = u[i, l]
-                D[cl[l], k, i] = d[i, l]
+        if metrics:
+            reduce_inputs(red, u, pk, ss, k, W)
+        else:
+            for i in range(m):
+                for l in range(W):
+                    U[cl[l], k, i] = u[i, l]
+                    D[cl[l], k, i] = d[i, l]
         if k == n_t - 1:
             break
         if loop.kind == 0:
-            rigid_steps(x, w, J, Jinv, loop.h, loop.substeps, W)
+            rigid_steps(x, w, J, Jinv, loop.h, loop.substeps, rs, W)
         elif loop.E.shape[0] == 1:  # a shared plant: the one E2, E, F, R of every lane
             modal_steps(
                 x,
                 w,
                 loop.E2[0],
                 loop.E[0],
-                Q1u,
-                P1u,
+                loop.Q1u[0],
+                loop.P1u[0],
                 loop.F[0],
                 loop.R[0],
                 J,
@@ -658,22 +816,34 @@ def _group(c0, nl, loop, rec, W):
             )
         else:
             modal_steps(x, w, E2, E, Q1u, P1u, F, R, J, loop.substeps, work, g, acc6, W)
+    if metrics:
+        for l in range(W):
+            c = cl[l]
+            for q in range(nq):
+                red.peak[c, q] = pk[q, l]
+                red.final[c, q] = fin[q, l]
+                red.sumsq[c, q] = ss[q, l]
+            for i in range(4):
+                red.beta_end[c, i] = hv[i, l]
+            red.after[c] = after[l]
 
 
 @cached_jit(error_model="numpy")
-def attitude_loop(loop: AttitudeLoop, records: AttitudeRecords) -> None:
+def attitude_loop(loop: AttitudeLoop, records: AttitudeRecords, metrics: AttitudeMetrics) -> None:
     """Run the three-axis loop for every case, in groups of :data:`LANES` (module
-    docstring)."""
+    docstring): the records, or with ``metrics.n_t`` > 0 the channel metrics alone."""
     nc = loop.x0.shape[0]
     for g in range((nc + LANES - 1) // LANES):
         c0 = g * LANES
-        _group(c0, min(LANES, nc - c0), loop, records, LANES)
+        _group(c0, min(LANES, nc - c0), loop, records, metrics, LANES)
 
 
 @cached_jit(parallel=True, error_model="numpy")
-def attitude_loop_parallel(loop: AttitudeLoop, records: AttitudeRecords) -> None:
+def attitude_loop_parallel(
+    loop: AttitudeLoop, records: AttitudeRecords, metrics: AttitudeMetrics
+) -> None:
     """:func:`attitude_loop` with the groups spread over threads (bit-identical)."""
     nc = loop.x0.shape[0]
     for g in prange((nc + LANES - 1) // LANES):
         c0 = np.int64(g) * LANES
-        _group(c0, min(LANES, nc - c0), loop, records, LANES)
+        _group(c0, min(LANES, nc - c0), loop, records, metrics, LANES)
