@@ -77,7 +77,9 @@ def test_the_report_holds_optimum_kkt_active_set_and_the_front(tmp_path):
     assert all(r["epsilon_active"] == 1 and r["kkt_residual"] <= 1e-6 for r in front)
     assert np.all(f2 < 0.3)  # inside the document's mass budget
     assert (tmp_path / "front.zarr").is_dir()  # relative stores live beside the document
-    assert "Pareto front" in (out / "index.html").read_text()
+    page = (out / "index.html").read_text()
+    assert "Pareto front" in page and "pareto_front.png" in page
+    assert (out / "pareto_front.png").stat().st_size > 0
 
 
 @pytest.mark.parametrize(

@@ -344,6 +344,34 @@ class DesignResult(ReportedResult):
         )
         return ds
 
+    def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
+        """The Pareto front (f₂ against f₁, the optimum marked) and the trade rate λ_ε."""
+        if self.front is None or self.scenario.pareto is None:
+            return []
+        from matplotlib.figure import Figure
+
+        units = dict(self.configured.units)
+        f1, f2 = self.scenario.objective, self.scenario.pareto.secondary
+        fig = Figure(figsize=(9, 3.4), layout="constrained")
+        ax, rate = fig.subplots(1, 2)
+        ax.plot(self.front["secondary"], self.front["primary"], "o-", ms=3, label="front")
+        best = self.optima[0]
+        r = self.configured.responses(best.x)
+        ax.plot(r[f2][0], r[f1][0], "s", color="C3", label=f"optimum ({best.method})")
+        ax.set(xlabel=f"{f2} ({units[f2] or '-'})", ylabel=f"{f1} ({units[f1] or '-'})")
+        ax.set_title("Pareto front")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize="small")
+        if np.isfinite(self.front["epsilon_multiplier"]).any():
+            rate.semilogy(self.front["secondary"], self.front["epsilon_multiplier"], "o-", ms=3)
+            rate.set(xlabel=f"{f2} ({units[f2] or '-'})", ylabel="λ_ε = −d f₁*/dε")
+            rate.set_title("trade rate (ε-constraint multiplier)")
+            rate.grid(alpha=0.3)
+        else:
+            rate.set_axis_off()
+        fig.savefig(folder / "pareto_front.png", dpi=100)
+        return ["pareto_front.png"]
+
     def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         esc = html.escape
 
@@ -374,7 +402,8 @@ class DesignResult(ReportedResult):
                 f"Pareto front: {self.scenario.objective} against {p.secondary} "
                 f"({p.scalarisation}, {p.points} levels x {p.starts} starts)",
             )
-        return out
+        images = "".join(f'<figure><img src="{esc(f)}" alt="{esc(f)}"></figure>' for f in figures)
+        return out + images
 
 
 def _fmt(value: Any) -> str:
