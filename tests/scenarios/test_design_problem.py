@@ -118,3 +118,15 @@ def test_bad_documents_are_refused_with_their_field_path(change, path, tmp_path)
         _load({**DOC, **change}, tmp_path)
     fields = [p.path for p in info.value.problems]
     assert any(f.startswith(path) for f in fields), fields
+
+
+def test_workers_go_into_the_pareto_section_and_need_one(tmp_path):
+    from flexsat.scenarios.design_problem import DesignKind
+
+    kind = DesignKind()
+    with_front = _load({**DOC, "pareto": {"secondary": "mass"}}, tmp_path)
+    assert kind.with_execution(with_front, 2, None).pareto.workers == 2
+    with pytest.raises(ScenarioError, match="pareto"):
+        kind.with_execution(_load(DOC, tmp_path), 2, None)
+    with pytest.raises(ScenarioError, match="not both"):
+        kind.with_execution(with_front, 2, "tcp://127.0.0.1:1")
