@@ -130,3 +130,23 @@ def test_workers_go_into_the_pareto_section_and_need_one(tmp_path):
         kind.with_execution(_load(DOC, tmp_path), 2, None)
     with pytest.raises(ScenarioError, match="not both"):
         kind.with_execution(with_front, 2, "tcp://127.0.0.1:1")
+
+
+def test_the_cantilever_tube_document_reproduces_the_closed_form(tmp_path):
+    """The closed-form optimum (reference_problems.cantilever_tube_optimum) to 1e-8: SLSQP ends
+    on the two active constraints (wall bound and frequency floor), a vertex it solves to
+    round-off."""
+    from flexsat.design.reference_problems import CantileverTube, cantilever_tube_optimum
+
+    doc = {
+        "kind": "design",
+        "name": "cantilever tube",
+        "problem": "cantilever_tube",
+        "objective": "mass",
+        "constraints": [{"response": "omega", "min": "20 Hz"}],  # 2π·20 rad/s
+    }
+    (optimum,) = run_scenario(_load(doc, tmp_path)).optima
+    exact = cantilever_tube_optimum(CantileverTube())
+    assert optimum.objective == pytest.approx(exact["mass"], rel=1e-8)
+    assert optimum.design["D"] == pytest.approx(exact["D"], rel=1e-8)
+    assert optimum.kkt.residual <= 1e-6

@@ -18,7 +18,10 @@ optional Pareto front (issue 23 deliverables 1 and 4).
     optimizer: {method: slsqp, compare: trust-constr}
     pareto: {secondary: mass, points: 40, starts: 3}
 
-The optimum is one :func:`~flexsat.design.optimize.optimize_design` with its KKT check (and,
+The reference supplies the responses (with their analytic gradients), the variables and their
+default starts and bounds; the constraints are those the document lists (the reference's own
+are not added: a document without a frequency floor has none). The optimum is one
+:func:`~flexsat.design.optimize.optimize_design` with its KKT check (and,
 with ``optimizer.compare``, a second optimiser from the same start, reported beside it). The
 Pareto front is :func:`flexsat.design.pareto.run_front` of the problem as written (its
 variables and constraints; the objective is the front's primary response, ``pareto.secondary``
