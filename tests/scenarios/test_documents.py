@@ -67,7 +67,7 @@ def test_unknown_kind_is_refused_naming_every_kind():
     message = problem(default_scenario().yaml_text + "kind: survey\n")
     kinds = list(scenario_kinds())
     built_in = list(built_in_kinds())
-    assert len(built_in) == 12 and kinds[:12] == built_in
+    assert len(built_in) == 13 and kinds[:13] == built_in
     assert built_in == ["maneuver", *sorted(set(built_in) - {"maneuver"})]
     named = ", ".join(repr(k) for k in kinds[:-1])
     assert message == f"kind: must be {named} or {kinds[-1]!r}, got 'survey'"
