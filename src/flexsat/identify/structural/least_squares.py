@@ -19,6 +19,16 @@ __all__ = [
 def solve_scalings(
     A: FloatArray, b: FloatArray, weights: FloatArray, name: str
 ) -> tuple[FloatArray, FloatArray, FloatArray, int]:
+    r"""Weighted least squares ``min ||W (A x - b)||``, ``W = diag(weights)``, for the scalings
+    named ``name``; the columns of ``W A`` are equilibrated (unit 2-norm) before the solve.
+
+    Returns ``x``; ``(A^T W^2 A)^{-1}`` (the covariance of ``x`` for unit-variance weighted rows:
+    multiply by the residual variance ``r^T r / dof`` when the weights are only relative);
+    the weighted residuals ``W (b - A x)``;
+    and the degrees of freedom ``rows - columns``.  Refused by name: fewer rows than
+    parameters, a parameter whose column is zero (it has no modal energy in the data), or
+    condition number of the equilibrated ``W A`` above 1e10 (not identifiable).
+    """
     if A.shape[0] < A.shape[1]:
         raise FieldError(
             name,

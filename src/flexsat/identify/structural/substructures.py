@@ -135,6 +135,8 @@ class SubstructureModel:
         return len(self.C_blocks)
 
     def check_scalings(self, values: npt.ArrayLike | None, count: int, name: str) -> FloatArray:
+        """Scalings ``values`` as a vector of ``count`` numbers (one per block), ones when None;
+        refused by ``name`` otherwise."""
         if values is None:
             return np.ones(count)
         v = require_numeric(values, name, "vector").ravel()

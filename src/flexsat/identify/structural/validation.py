@@ -55,6 +55,8 @@ def as_array_like(A: Matrix) -> npt.ArrayLike:
 
 
 def check_matrix(A: Matrix, field_name: str, n: int | None = None) -> FloatArray:
+    """``A`` as a dense, non-empty, symmetric (to 1e-9 relative) square matrix, ``n x n`` when
+    ``n`` is given; returned exactly symmetric, ``(A + A^T) / 2``."""
     A = require_numeric(as_array_like(A), field_name, "matrix")
     if A.ndim != 2 or A.shape[0] != A.shape[1] or A.size == 0:
         raise FieldError(field_name, f"must be a non-empty square matrix, got shape {A.shape}")
