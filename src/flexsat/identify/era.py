@@ -1,6 +1,6 @@
 r"""Realization from Markov parameters: ERA and ERA/DC, modal accuracy indicators and their
 uncertainty.  The Markov parameters themselves (impulse tests, FRFs, OKID) come from
-:mod:`flexsat.identify.markov`, whose functions are importable from here too.
+:mod:`flexsat.identify.markov` (its three functions stay importable from here).
 
 ERA
 ---
@@ -74,7 +74,12 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat import limits
-from flexsat.identify.markov import check_markov, markov_from_frf, markov_parameters, okid
+from flexsat.identify.markov import check_markov
+
+# importable from here as before the Markov-parameter functions moved to flexsat.identify.markov
+from flexsat.identify.markov import markov_from_frf as markov_from_frf
+from flexsat.identify.markov import markov_parameters as markov_parameters
+from flexsat.identify.markov import okid as okid
 from flexsat.input_checks import (
     FieldError,
     require_count,
@@ -90,9 +95,6 @@ __all__ = [
     "era",
     "era_dc",
     "mac",
-    "markov_from_frf",
-    "markov_parameters",
-    "okid",
 ]
 
 ComplexArray: TypeAlias = npt.NDArray[np.complex128]
