@@ -47,6 +47,8 @@ COMPLETE = (
     "cases/agrawal_bang.py",
     "cases/agrawal_bang_ppf.py",
     "cases/bainum.py",
+    "cases/bainum_control.py",
+    "cases/bainum_three_mass.py",
     "cases/beams.py",
     "cases/draper_rpl.py",
     "cases/eps.py",

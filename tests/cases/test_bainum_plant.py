@@ -95,7 +95,7 @@ def test_three_mass_plant_gives_the_checked_numbers():
     eps), λ1, λ2 of eqs 7-8 as eig(K, M) and, under the coupled rate feedback of eq 13, the
     roots of eq 16 (eigenvalues against np.roots of the quartic: 1e-12 relative, the roots are
     simple and well separated). flexsat validate's Bainum rows are computed this way."""
-    from flexsat.cases.bainum import three_mass
+    from flexsat.cases.bainum_three_mass import three_mass
 
     t = three_mass()
     plant = t.plant(2)

@@ -10,14 +10,8 @@ must stay inside the allowance the check module states for it.
 import numpy as np
 import pytest
 
-from flexsat.cases.bainum import (
-    bainum,
-    chapter2_example,
-    chapter3_case,
-    closed_loop_matrix,
-    published_matrix,
-    sorted_poles,
-)
+from flexsat.cases.bainum import bainum, closed_loop_matrix, published_matrix, sorted_poles
+from flexsat.cases.bainum_control import chapter2_example, chapter3_case
 from flexsat.checks import bainum as rows
 from flexsat.checks import run_checks
 

@@ -81,3 +81,11 @@ def chain():
     any small definite model will do)."""
     K_blocks, M_blocks = _chain_blocks()
     return SubstructureModel(K_blocks, M_blocks, [0.01 * K for K in K_blocks])
+
+
+@pytest.fixture(scope="session")
+def calibrated_rig():
+    """The calibrated stereo rig of tests/stereo_rig.py (one resection for all test modules)."""
+    from stereo_rig import calibrate_rig
+
+    return calibrate_rig()

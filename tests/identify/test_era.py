@@ -1,4 +1,4 @@
-"""ERA, ERA/DC and OKID on the TAMU grid (Juang & Pappa 1985; Juang et al. 1993)."""
+"""ERA and ERA/DC (:mod:`flexsat.identify.era`) on the TAMU grid (Juang & Pappa 1985)."""
 
 import numpy as np
 import pytest
@@ -13,12 +13,10 @@ from flexsat.identify import (
     impulse_hammer,
     markov_from_frf,
     markov_parameters,
-    okid,
-    random_force,
-    torque_history,
 )
 from flexsat.identify.excitation import sensor_matrices
 from flexsat.sim.vibration_test import simulate_test
+from markov_data import discrete_markov, frf_grid
 
 pytestmark = pytest.mark.numerics  # tolerances near round-off: re-run on other BLAS kernels
 
@@ -45,20 +43,6 @@ def _impulse(grid, sensors, noise, seed=0):
     return simulate_test(
         grid, impulse_hammer(1, "z", 10.0), sensors, DURATION, RATE, noise=noise, seed=seed
     )
-
-
-def _discrete_markov(grid, sensors, inputs, dt, n):
-    A, B, C, D = sensor_matrices(grid, sensors, inputs)
-    ns, r = B.shape
-    M = np.zeros((ns + r, ns + r))
-    M[:ns, :ns], M[:ns, ns:] = A * dt, B * dt
-    E = expm(M)
-    Ad, Bd = E[:ns, :ns], E[:ns, ns:]
-    Y, P = [D], Bd
-    for _ in range(n):
-        Y.append(C @ P)
-        P = Ad @ P
-    return np.array(Y)
 
 
 def test_era_noise_free_exact(grid, sensors, true_shapes):
@@ -96,30 +80,6 @@ def test_era_dc_one_percent_noise(grid, sensors, true_shapes):
     assert np.all(res.mac > 0.99)
 
 
-def test_okid_recovers_markov_parameters(grid):
-    """Noise-free random force and reaction-wheel torque: OKID Markov parameters to 1e-8."""
-    out = [Channel.at("displacement", n, "z") for n in (1, 5, 9, 13)]
-    out.append(Channel.at("acceleration", 3, "z"))
-    torque = np.random.default_rng(3).standard_normal(500)
-    ex = [random_force(1, "z"), torque_history(7, "x", torque)]
-    meas = simulate_test(grid, ex, out, 10.0, RATE, seed=2)
-    Y = okid(meas.inputs, meas.outputs, 60)
-    ref = _discrete_markov(grid, out, [e.channel for e in ex], meas.dt, 60)
-    assert np.max(np.abs(Y - ref)) < 1e-8 * np.max(np.abs(ref))
-    res = era(Y, dt=meas.dt, order=12)
-    assert np.allclose(res.frequencies_hz, grid.frequencies_hz, rtol=1e-8)
-
-
-def test_markov_from_longer_pulse(grid):
-    """A half-sine hammer spanning two samples is deconvolved by least squares."""
-    out = [Channel.at("displacement", 1, "z")]
-    meas = simulate_test(grid, impulse_hammer(2, "z", 5.0, width=0.03), out, 4.0, RATE)
-    n = meas.abscissa.size - 1
-    Y = markov_parameters(meas, n_markov=n)
-    ref = _discrete_markov(grid, out, [meas.input_channels[0]], meas.dt, n)
-    assert np.max(np.abs(Y - ref)) < 1e-8 * np.max(np.abs(ref))
-
-
 def test_degenerate_inputs(grid, sensors):
     meas = _impulse(grid, sensors, 0.0)
     Y = markov_parameters(meas)
@@ -135,21 +95,10 @@ def test_degenerate_inputs(grid, sensors):
         era(Y, dt=meas.dt, rows=1500, cols=1500)
     with pytest.raises(ValueError, match="^reference_shapes:"):
         era(Y, dt=meas.dt, order=12, reference_shapes=np.ones((3, 6)))
-    with pytest.raises(ValueError, match="^y: must have as many samples"):
-        okid(np.zeros((1, 100)), np.zeros((2, 99)), 10)
-    with pytest.raises(ValueError, match="^u: must be finite"):
-        okid([np.nan] * 100, np.zeros(100), 10)
-    with pytest.raises(ValueError, match="^u: the input is zero"):
-        markov_parameters(u=np.zeros(50), y=np.ones(50))
 
 
 # ------------------------------------------------------------------------------ ERA from FRFs
 FRF_RATE, FRF_PERIOD = 100.0, 400.0  # Nyquist 50 Hz (4 x the 13 Hz top mode); 1/Δf = 400 s
-
-
-def _frf_grid(rate, period):
-    n = int(round(rate * period))
-    return np.arange(n // 2 + 1) / period
 
 
 def _discrete_frf(grid, sensors, inputs, dt, freqs):
@@ -171,14 +120,14 @@ def test_era_from_exact_discrete_frf(grid, sensors, true_shapes):
     time aliasing |λ|^N = exp(-ζ ω_1 T) = 7e-11 (mode 1, T = 400 s; measured 4e-11). ERA is
     then exact to roundoff: measured 2e-15 in frequency, 2e-12 in damping, held to 1e-12 and
     1e-9 (room for other LAPACK builds)."""
-    freqs = _frf_grid(FRF_RATE, FRF_PERIOD)
+    freqs = frf_grid(FRF_RATE, FRF_PERIOD)
     inp = [Channel.at("force", 1, "z")]
     H = _discrete_frf(grid, sensors, inp, 1 / FRF_RATE, freqs)
     meas = Measurement(freqs, H, tuple(sensors), None, tuple(inp), "frequency")
     Y, dt = markov_from_frf(meas.abscissa, meas.outputs)
     assert dt == pytest.approx(1 / FRF_RATE, rel=1e-12)
     assert np.array_equal(markov_parameters(meas), Y)
-    ref = _discrete_markov(grid, sensors, inp, dt, Y.shape[0] - 1)
+    ref = discrete_markov(grid, sensors, inp, dt, Y.shape[0] - 1)
     assert np.max(np.abs(Y - ref)) < 1e-9 * np.max(np.abs(ref))
     res = era(Y, dt=dt, order=12, reference_shapes=true_shapes)
     assert np.allclose(res.frequencies_hz, grid.frequencies_hz, rtol=1e-12, atol=0)
@@ -190,7 +139,7 @@ def test_era_survives_time_aliasing_of_an_exact_discrete_frf(grid, sensors):
     """T = 10 s against a 17 s decay time of mode 1: the check warns, yet the periodic sum
     C A^(k-1) (I - A^N)^-1 B has the same A, so ERA is still exact to roundoff (measured 1e-14
     and 6e-13; tolerances as in the test above)."""
-    freqs = _frf_grid(FRF_RATE, 10.0)
+    freqs = frf_grid(FRF_RATE, 10.0)
     inp = [Channel.at("force", 1, "z")]
     H = _discrete_frf(grid, sensors, inp, 1 / FRF_RATE, freqs)
     with pytest.warns(UserWarning, match="^frf: the impulse response has not decayed"):
@@ -210,7 +159,7 @@ def test_era_from_continuous_frf(grid, sensors, true_shapes):
     them with a margin of 2, 6 and 4. Dropping the first 20 parameters leaves the same A and
     removes the ringing: measured 1.7e-7 and 1.3e-5, held to 1e-6 and 1e-4.
     """
-    freqs = _frf_grid(FRF_RATE, FRF_PERIOD)
+    freqs = frf_grid(FRF_RATE, FRF_PERIOD)
     om = 2 * np.pi * freqs
     w, z = grid.frequencies, grid.damping
     b = grid.force_input(1, "z")
@@ -226,25 +175,6 @@ def test_era_from_continuous_frf(grid, sensors, true_shapes):
     late = era(Y[20:], dt=dt, order=12)
     assert np.all(np.abs(late.frequencies_hz / grid.frequencies_hz - 1) < 1e-6)
     assert np.all(np.abs(late.damping / 0.01 - 1) < 1e-4)
-
-
-def test_frf_degenerate_inputs():
-    freqs = _frf_grid(10.0, 20.0)
-    H = 1 / (1 - (2 * np.pi * freqs) ** 2 + 0.02j * 2 * np.pi * freqs)
-    bad = H.copy()
-    bad[7] = np.nan
-    with pytest.raises(ValueError, match="^frf: must be finite"):
-        markov_from_frf(freqs, bad)
-    uneven = freqs.copy()
-    uneven[5] += 0.3 * (freqs[1] - freqs[0])
-    with pytest.raises(ValueError, match="^frequencies: must be uniformly spaced"):
-        markov_from_frf(uneven, H)
-    with pytest.raises(ValueError, match="^frequencies: must start at 0 Hz"):
-        markov_from_frf(freqs[1:], H[1:])
-    with pytest.raises(ValueError, match="^frf: must have shape"):
-        markov_from_frf(freqs, H[:-1])
-    with pytest.raises(ValueError, match="^n_markov: the period holds"):
-        markov_from_frf(freqs, H, n_markov=freqs.size * 2)
 
 
 def test_bootstrap_uncertainty_matches_the_scatter_over_noise_seeds(grid, sensors):

@@ -2,15 +2,13 @@
 call below raises a :class:`~flexsat.input_checks.FieldError` whose field is the parameter at
 fault (never a numpy traceback, a long run or NaN).
 
-The data are the exact pulse response of a two-mode SISO system (2 and 7 rad/s, 2 % damping,
-sampled at 100 Hz) and a random test of it.
+The data are the exact pulse response of the two-mode SISO system of tests/markov_data.py.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.signal import cont2discrete
 
 from flexsat import limits
 from flexsat.identify.era import (
@@ -18,47 +16,22 @@ from flexsat.identify.era import (
     era,
     era_dc,
     mac,
-    markov_from_frf,
-    markov_parameters,
-    okid,
 )
 from flexsat.input_checks import FieldError
 from flexsat.units import Q_
+from markov_data import DT, two_mode_system
 
 NAN, INF = np.nan, np.inf
-DT = 0.01
 #: values that are no count
 NOT_COUNTS = [NAN, INF, -1, 0, 1.5, [], "abc", Q_(1.0, "m"), 1 + 1j, np.ones((2, 2))]
 #: values that are no positive number
 NOT_POSITIVE = [NAN, INF, -1.0, 0.0, [], "abc", Q_(1.0, "m"), 1 + 1j, np.ones((2, 2))]
 
 
-def _system():
-    w, z = np.array([2.0, 7.0]), 0.02
-    A = np.zeros((4, 4))
-    A[:2, 2:] = np.eye(2)
-    A[2:, :2], A[2:, 2:] = -np.diag(w**2), -np.diag(2 * z * w)
-    B, C = np.array([[0.0], [0.0], [1.0], [1.0]]), np.array([[1.0, 0.5, 0.0, 0.0]])
-    Ad, Bd, Cd, Dd, _ = cont2discrete((A, B, C, np.zeros((1, 1))), DT)
-    return Ad, Bd, Cd, Dd
-
-
 @pytest.fixture(scope="module")
 def markov():
-    Ad, Bd, Cd, Dd = _system()
+    Ad, Bd, Cd, Dd = two_mode_system()
     return np.array([Dd] + [Cd @ np.linalg.matrix_power(Ad, k - 1) @ Bd for k in range(1, 400)])
-
-
-@pytest.fixture(scope="module")
-def test_data():
-    """(u, y) of 2000 samples of white noise through the system."""
-    Ad, Bd, Cd, Dd = _system()
-    u = np.random.default_rng(0).standard_normal((1, 2000))
-    x, y = np.zeros(4), []
-    for k in range(u.shape[1]):
-        y.append(Cd @ x + Dd @ u[:, k])
-        x = Ad @ x + Bd @ u[:, k]
-    return u, np.array(y).T
 
 
 def _raises(field, call):
@@ -96,56 +69,6 @@ def test_era_takes_dt_as_a_time_quantity(markov):
     """dt in ms gives the realization of dt in s (the frequencies 2 and 7 rad/s)."""
     real = era(markov, Q_(10.0, "ms"), order=4)
     assert np.allclose(np.asarray(real.frequencies_hz) * 2 * np.pi, [2.0, 7.0], rtol=1e-6)
-
-
-@pytest.mark.parametrize(
-    "field, changes",
-    [
-        *[("u", {"u": b}) for b in (NAN, INF, [], "abc", np.ones((2, 2, 2)))],
-        *[("y", {"y": b}) for b in (NAN, INF, "abc", np.ones((2, 2, 2)))],
-        ("y", {"y": np.ones((1, 100))}),  # fewer samples than u
-        *[("n_markov", {"n_markov": b}) for b in NOT_COUNTS],
-        ("n_markov", {"n_markov": 10**9}),  # was: a recursion of 1e9 steps
-        *[("n_observer", {"n_observer": b}) for b in NOT_COUNTS],
-        ("n_observer", {"n_observer": 10**6}),
-    ],
-    ids=lambda v: repr(v)[:50],
-)
-def test_okid_refuses_by_name(test_data, field, changes):
-    u, y = test_data
-    given = {"u": u, "y": y, "n_markov": 50, **changes}
-    _raises(field, lambda: okid(**given))
-
-
-@pytest.mark.parametrize(
-    "field, kwargs",
-    [
-        ("measurement", {}),
-        ("measurement[0]", {"measurement": 5}),
-        ("u", {"u": [NAN] * 10, "y": [1.0] * 10}),
-        ("n_markov", {"u": [1.0] * 10, "y": [1.0] * 10, "n_markov": 0}),
-    ],
-    ids=repr,
-)
-def test_markov_parameters_refuses_by_name(field, kwargs):
-    _raises(field, lambda: markov_parameters(**kwargs))
-
-
-@pytest.mark.parametrize(
-    "field, changes",
-    [
-        *[("frequencies", {"frequencies": b}) for b in (NAN, INF, [], "abc", Q_(1.0, "m"))],
-        ("frequencies", {"frequencies": np.linspace(0.0, 50.0, 201) ** 1.1}),  # not uniform
-        *[("frf", {"frf": b}) for b in (NAN, INF, [], "abc", np.ones((2, 2)))],
-        *[("n_markov", {"n_markov": b}) for b in NOT_COUNTS],
-        *[("tail_tolerance", {"tail_tolerance": b}) for b in NOT_POSITIVE],
-    ],
-    ids=lambda v: repr(v)[:50],
-)
-def test_markov_from_frf_refuses_by_name(field, changes):
-    f = np.linspace(0.0, 50.0, 201)
-    given = {"frequencies": f, "frf": np.ones(201, complex), **changes}
-    _raises(field, lambda: markov_from_frf(**given))
 
 
 @pytest.mark.parametrize(

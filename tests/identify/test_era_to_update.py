@@ -22,7 +22,8 @@ import pytest
 from scipy.linalg import expm
 
 from flexsat.identify.differential_correction import CorrectionData
-from flexsat.identify.era import era, markov_from_frf
+from flexsat.identify.era import era
+from flexsat.identify.markov import markov_from_frf
 from flexsat.identify.structural import SubstructureModel, update_model
 from flexsat.units import FrequencyArray, UnitError
 

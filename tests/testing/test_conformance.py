@@ -365,7 +365,8 @@ def _station_steering():
 def _bainum_feedback():
     """Bainum's Ch. II example on the beam in orbit: f = K x' (printed rate gains), one knot
     u = −[0, −K/ω_c] x in seconds, as BainumBeam.simulate builds it."""
-    from flexsat.cases.bainum import CH2_LAYOUTS, PUBLISHED, bainum
+    from flexsat.cases.bainum import PUBLISHED, bainum
+    from flexsat.cases.bainum_control import CH2_LAYOUTS
     from flexsat.control.scheduled import ScheduledStateFeedback
 
     plant = bainum().plant(CH2_LAYOUTS[1][2], 2)

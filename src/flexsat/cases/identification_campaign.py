@@ -43,15 +43,9 @@ import numpy.typing as npt
 
 from flexsat.dynamics.plant import Channel
 from flexsat.identify.differential_correction import CorrectionData, differential_correction
-from flexsat.identify.era import (
-    Realization,
-    bootstrap_uncertainty,
-    era,
-    mac,
-    markov_parameters,
-    okid,
-)
+from flexsat.identify.era import Realization, bootstrap_uncertainty, era, mac
 from flexsat.identify.excitation import Excitation, impulse_hammer, random_force
+from flexsat.identify.markov import markov_parameters, okid
 from flexsat.identify.measurements import Measurement
 from flexsat.identify.photogrammetry import (
     CAMERA_PARAMETERS,

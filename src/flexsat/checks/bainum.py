@@ -51,7 +51,7 @@ tests/cases/test_bainum_plant.py).
 
 Not checked here: the Ch. III decoupling and per-mode regulator gain matrices (with
 errata), compared element-wise against matrices printed to the figures they carry
-(tests/cases/test_bainum.py).
+(tests/cases/test_bainum_control.py).
 """
 
 from __future__ import annotations
@@ -66,7 +66,8 @@ from flexsat.checks.core import Check, series
 from flexsat.input_checks import FieldError
 
 if TYPE_CHECKING:
-    from flexsat.cases.bainum import BainumBeam, ThreeMassBeam
+    from flexsat.cases.bainum import BainumBeam
+    from flexsat.cases.bainum_three_mass import ThreeMassBeam
     from flexsat.dynamics.orbit import BeamInOrbit
     from flexsat.dynamics.plant import Plant
     from flexsat.dynamics.structural import StructuralPlant
@@ -87,7 +88,7 @@ def _beam() -> BainumBeam:
 @lru_cache(maxsize=1)
 def _ch2_plant() -> StructuralPlant:
     """The Ch. II example's linear plant: one actuator ``f1`` at ξ = -l/2, pitch + 2 modes."""
-    from flexsat.cases.bainum import CH2_LAYOUTS
+    from flexsat.cases.bainum_control import CH2_LAYOUTS
 
     return _beam().linear_plant(CH2_LAYOUTS[1][2], 2)
 
@@ -95,7 +96,7 @@ def _ch2_plant() -> StructuralPlant:
 @lru_cache(maxsize=1)
 def _ch3_plant() -> BeamInOrbit:
     """Ch. III Case 1's beam-in-orbit plant with the printed G (erratum G13 = -29.76)."""
-    from flexsat.cases.bainum import chapter3_case
+    from flexsat.cases.bainum_control import chapter3_case
     from flexsat.dynamics.orbit import BeamInOrbit
 
     _, G = chapter3_case(1)
@@ -238,7 +239,8 @@ _CORE = "computed on the simulation core: "
 def _ch3_case2_roots() -> np.ndarray:
     """Ch. III Case 2 (pitch + 4 modes, five actuators): the beam-in-orbit plant with
     the printed G (Ch. III §4) under the printed decoupling gains with the erratum K51 = -1.167."""
-    from flexsat.cases.bainum import chapter3_case, published_matrix
+    from flexsat.cases.bainum import published_matrix
+    from flexsat.cases.bainum_control import chapter3_case
     from flexsat.dynamics.orbit import BeamInOrbit
 
     _, G = chapter3_case(2)
@@ -475,7 +477,7 @@ _CH3_CASE2_CHECKS = [
 
 @lru_cache(maxsize=1)
 def _three_mass() -> ThreeMassBeam:
-    from flexsat.cases.bainum import three_mass
+    from flexsat.cases.bainum_three_mass import three_mass
 
     return three_mass()
 

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexsat.identify.era import era, markov_parameters
+from flexsat.identify.era import era
+from flexsat.identify.markov import markov_parameters
 from flexsat.sim.vibration_test import simulate_test
 
 __all__ = ["noise_damping_sweep"]
@@ -19,7 +20,7 @@ def noise_damping_sweep(
     """Relative frequency and damping errors of ERA versus measurement noise.
 
     Runs :func:`~flexsat.sim.vibration_test.simulate_test` with each noise level and seed,
-    :func:`~flexsat.identify.era.markov_parameters` and :func:`~flexsat.identify.era.era` with
+    :func:`~flexsat.identify.markov.markov_parameters` and :func:`~flexsat.identify.era.era` with
     ``order = 2 m``, matches each true mode to
     the nearest identified frequency and returns a dict with ``noise`` (k,),
     ``frequency_error`` and ``damping_error`` (k, m): mean over seeds of the absolute relative

@@ -9,16 +9,7 @@ from flexsat.identify.differential_correction import (
     DifferentialCorrection,
     differential_correction,
 )
-from flexsat.identify.era import (
-    Realization,
-    bootstrap_uncertainty,
-    era,
-    era_dc,
-    mac,
-    markov_from_frf,
-    markov_parameters,
-    okid,
-)
+from flexsat.identify.era import Realization, bootstrap_uncertainty, era, era_dc, mac
 from flexsat.identify.excitation import (
     Excitation,
     harmonic_shaker,
@@ -27,6 +18,7 @@ from flexsat.identify.excitation import (
     torque_history,
 )
 from flexsat.identify.frontal_assault import FRFData, FrontalAssaultModel, frontal_assault
+from flexsat.identify.markov import markov_from_frf, markov_parameters, okid
 from flexsat.identify.measurements import STRUCTURAL_KINDS, Channel, Measurement, uff_direction
 from flexsat.identify.photogrammetry import (
     CalibrationResult,

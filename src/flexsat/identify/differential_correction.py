@@ -27,7 +27,8 @@ import numpy.typing as npt
 import scipy.linalg as sla
 
 from flexsat.analysis.sensitivity import modal_derivatives
-from flexsat.identify.structural import SubstructureModel, check_iterations
+from flexsat.identify.structural.substructures import SubstructureModel
+from flexsat.identify.structural.validation import check_iterations
 from flexsat.input_checks import FieldError, require_finite, require_numeric
 from flexsat.units import FloatArray, UnitError, holds_quantity
 
@@ -454,7 +455,11 @@ class CorrectionData:
         """
         self.check_model(model)
         n, P, Q, R = model.n_dofs, model.n_stiffness, model.n_mass, model.n_damping
-        ps, qs, rs = model._params(p, P, "p"), model._params(q, Q, "q"), model._params(r, R, "r")
+        ps, qs, rs = (
+            model.check_scalings(p, P, "p"),
+            model.check_scalings(q, Q, "q"),
+            model.check_scalings(r, R, "r"),
+        )
         gains = []
         for name, given, kind, pos in (("mu", mu, "output", 5), ("nu", nu, "input", 6)):
             v = (
@@ -724,9 +729,9 @@ def differential_correction(
     G = P + Q + R  # the gains' first column
     x0 = np.concatenate(
         [
-            model._params(p0, P, "p0"),
-            model._params(q0, Q, "q0"),
-            model._params(r0, R, "r0"),
+            model.check_scalings(p0, P, "p0"),
+            model.check_scalings(q0, Q, "q0"),
+            model.check_scalings(r0, R, "r0"),
             _start_gains(mu0, S, "mu0", "output_gain"),
             _start_gains(nu0, T, "nu0", "input_gain"),
         ]

@@ -1,5 +1,6 @@
-"""Bad input to the Creamer-Junkins identification API (:mod:`flexsat.identify.structural`) is
-refused by name: every call below raises a :class:`~flexsat.input_checks.FieldError` whose
+"""Bad input to the Creamer-Junkins identification API is refused by name: the checks of
+:mod:`flexsat.identify.structural.validation` and those of each entry point.  Input is
+refused: every call below raises a :class:`~flexsat.input_checks.FieldError` whose
 field is the parameter at fault (never a numpy traceback, a hang or NaN).
 
 The model is the 3-dof ``chain`` of tests/identify/conftest.py.
@@ -329,3 +330,39 @@ def test_valid_inputs_still_identify_the_chain(chain):
     res = update_model(chain, Q_(w / (2 * np.pi), "Hz"), _eigenvalues(chain), frf=_frf(chain))
     assert np.allclose(res.p, 1.0, atol=1e-8) and np.allclose(res.q, 1.0, atol=1e-8)
     assert np.allclose(res.r, 1.0, atol=0.05)
+
+
+# ------------------------------------------------------------------------------------------------
+def test_degenerate_inputs_raise_clear_errors(frame):
+    w, _ = frame.modes()
+    with pytest.raises(ValueError, match="more parameters than data"):
+        identify_undamped(frame, w[:2])
+    with pytest.raises(ValueError, match="measured_frequencies: must be finite"):
+        identify_undamped(frame, [w[0], np.nan, w[2]])
+    with pytest.raises(ValueError, match="measured_frequencies"):
+        identify_undamped(frame, [-1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match="measured_shapes: must have shape"):
+        identify_undamped(frame, w[:4], measured_shapes=np.ones((3, 4)))
+    with pytest.raises(ValueError, match="identify_mass"):
+        identify_undamped(frame, w[:4], identify_mass=True)
+    with pytest.raises(ValueError, match="C_blocks"):
+        identify_damping(frame, [-0.1 + 1j])
+    damped = SubstructureModel(frame.K_blocks, frame.M_blocks, [frame.M(), frame.K()])
+    with pytest.raises(ValueError, match="more parameters than data"):
+        identify_damping(damped, [-0.1 + 1j * w[0]])
+    with pytest.raises(ValueError, match="no NaN"):
+        identify_damping(damped, [np.nan, -0.1])
+    with pytest.raises(ValueError, match="real parts must be < 0"):
+        identify_damping(damped, [0.1 + 1j, -0.1 + 2j])
+    with pytest.raises(ValueError, match=r"K_blocks\[1\]: must be symmetric"):
+        SubstructureModel([frame.K_blocks[0], np.triu(frame.K_blocks[1])], frame.M_blocks)
+    with pytest.raises(ValueError, match="p: must have 3 entries"):
+        frame.K([1.0, 2.0])
+    with pytest.raises(ValueError, match="mass scalings: M\\(q\\) is not positive definite"):
+        frame.modes(q=[-1.0, 1.0, 1.0])
+    with pytest.raises(ValueError, match="stiffness scalings: K\\(p\\) is not positive semi-"):
+        frame.modes(p=[-1.0, 1.0, 1.0])
+    with pytest.raises(ValueError, match="n_modes: must be a positive integer"):
+        frame.modes(n_modes=0)
+    with pytest.raises(ValueError, match="frf"):
+        identify_undamped(frame, w[:4], frf=[(0, 0, [1.0], [1.0, 2.0])])
