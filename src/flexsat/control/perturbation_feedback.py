@@ -36,8 +36,9 @@ The law (:class:`PerturbationFeedback`). Per control sample t_k it reads the att
 rate ω and the elastic state of the first n design modes (the plant output ``elastic``;
 the first n modes of a larger plant built from the same modal model are the design model's
 modes; less the nominal's planned [η, η̇] when it has ``elastic(t)``, a slew planned with its
-modal motion, :mod:`flexsat.design.planned_slew`), forms δX (δα = 2 δq_v of δq = β ⊗ β_n*, nonlinear in β), and with the shaping chain
-[δu₁, δu₂] of its internal state computes δu₃ (held over the period, ZOH). The chain is then
+modal motion, :mod:`flexsat.design.planned_slew`), forms δX (δα = 2 δq_v of
+δq = β ⊗ β_n*, nonlinear in β), and with the shaping chain [δu₁, δu₂] of its internal
+state computes δu₃ (held over the period, ZOH). The chain is then
 propagated exactly, :math:`\delta u_1 \leftarrow \delta u_1 + h\,\delta u_2 + \tfrac{h^2}{2}
 \delta u_3`, :math:`\delta u_2 \leftarrow \delta u_2 + h\,\delta u_3`. The plant receives,
 held over [t_k, t_k + h), the interval means of the continuous commands:

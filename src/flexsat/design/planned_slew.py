@@ -163,9 +163,7 @@ def _limits(torque_limit: npt.ArrayLike | None) -> FloatArray | None:
     return L
 
 
-def _least_peak(
-    G: FloatArray, h: FloatArray, n_z: int
-) -> tuple[FloatArray | None, float, str]:
+def _least_peak(G: FloatArray, h: FloatArray, n_z: int) -> tuple[FloatArray | None, float, str]:
     """min s s.t. G z − s ≤ h (rows normalised): (z, s, message) by HiGHS."""
     from scipy.optimize import linprog
 
@@ -263,9 +261,7 @@ def plan_slew(
         z, message = res.x, f"SLSQP: {res.message}"
         if np.max(G @ z - h) > 1e-6:
             feasible = False
-            _, least_peak, lp_message = _least_peak(
-                G, np.concatenate([-base, base]), N.shape[1]
-            )
+            _, least_peak, lp_message = _least_peak(G, np.concatenate([-base, base]), N.shape[1])
             message += f"; {lp_message}: {least_peak:.4g} × the limit"
     else:
         message = "unconstrained optimum (closed form)"
@@ -273,7 +269,11 @@ def plan_slew(
     c = c0 + N @ z
     grad = P @ z + q
     slack = h - G @ z
-    active_rows = np.flatnonzero(slack <= ACTIVE_TOL) if (L is not None and feasible) else []
+    active_rows = (
+        np.flatnonzero(slack <= ACTIVE_TOL)
+        if (L is not None and feasible)
+        else np.zeros(0, dtype=int)
+    )
     lam = np.zeros(0)
     if objective == "energy" and len(active_rows):
         from scipy.optimize import nnls
@@ -281,14 +281,14 @@ def plan_slew(
         lam, _ = nnls(G[active_rows].T, -grad)
         kkt = float(np.linalg.norm(grad + G[active_rows].T @ lam) / np.linalg.norm(grad))
     elif objective == "energy":
-        kkt = float(np.linalg.norm(grad) / max(np.linalg.norm(q), 1e-300))
+        kkt = float(np.linalg.norm(grad) / max(float(np.linalg.norm(q)), 1e-300))
     else:
         kkt = float("nan")  # an LP optimum: HiGHS's own optimality certificate
     shaped = ShapedSlew(
         nominal,
         c.reshape(3, n_b),
         J,
-        float(np.linalg.norm(X @ (c - c_prev) - r) / max(np.linalg.norm(r), 1e-300)),
+        float(np.linalg.norm(X @ (c - c_prev) - r) / max(float(np.linalg.norm(r)), 1e-300)),
     )
     fine = np.linspace(0.0, T, 4 * (n_s - 1) + 1)
     peaks = np.abs(shaped.torque(fine)).max(axis=0)

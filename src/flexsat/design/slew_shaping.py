@@ -54,6 +54,7 @@ from flexsat.input_checks import FieldError, require_count
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
+    from flexsat.design.planned_slew import PlannedTrajectory
     from flexsat.design.slew_weights import SlewEvaluation
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
@@ -142,7 +143,7 @@ class TerminalMap:
 def terminal_map(
     truth: FlexibleSpacecraft,
     design_plant: FlexibleSpacecraft,
-    nominal: ThreeAxisSlew,
+    nominal: ThreeAxisSlew | PlannedTrajectory,
     config: SimConfig,
     n_basis: int = 30,
     rigid: bool = False,
@@ -190,9 +191,7 @@ def terminal_map(
         if rigid
         else np.zeros(6)
     )
-    target = np.concatenate(
-        [start, -elastic[:n], -elastic[truth.n_modes : truth.n_modes + n]]
-    )
+    target = np.concatenate([start, -elastic[:n], -elastic[truth.n_modes : truth.n_modes + n]])
 
     lin = TrajectoryLinearization(design_plant, nominal)
     times = np.linspace(0.0, T, 2 * n_steps + 1)
@@ -224,7 +223,10 @@ def modal_cancelling_torque(evaluation: SlewEvaluation, n_basis: int = 30) -> Sh
     """
     try:
         m = terminal_map(
-            evaluation.truth, evaluation.design_plant, evaluation.nominal, evaluation.config,
+            evaluation.truth,
+            evaluation.design_plant,
+            evaluation.nominal,
+            evaluation.config,
             n_basis,
         )
     except FieldError as exc:
@@ -233,6 +235,6 @@ def modal_cancelling_torque(evaluation: SlewEvaluation, n_basis: int = 30) -> Sh
         raise FieldError("evaluation.config", exc.rule) from None
     # minimum norm: repeated antenna pairs leave combinations the nominal does not excite and
     # the torque cannot reach (zero rows of the target), so X is rank deficient by design
-    c, *_ = np.linalg.lstsq(m.X, m.target, rcond=None)
+    c = np.asarray(np.linalg.lstsq(m.X, m.target, rcond=None)[0], np.float64)
     residual = float(np.linalg.norm(m.X @ c - m.target) / np.linalg.norm(m.target))
     return ShapedSlew(evaluation.nominal, c.reshape(3, n_basis), m.inertia, residual)

@@ -862,7 +862,7 @@ class SlewKind(ScenarioKind):
             results, nominal, SlewGoals(g.angle_fraction, g.evaluation, g.deflection_ratio)
         )
         t = results[0].dataset["time"].values
-        notes = (
+        notes: tuple[str, ...] = (
             f"Nominal: three-axis TPBVP by continuation in {len(nominal.history)} steps, "
             f"boundary error {nominal.boundary_error():.1e}; peak nominal torques "
             + ", ".join(
