@@ -40,6 +40,10 @@ at rest. Measured on the 45-mode EPS, 1 rad on each axis in 6 s, n_b = 30, 100 H
 1,200:1 (goal 10:1), peak torque perturbation 10 kN m (case D's feedback: 24 kN m), peak
 torques 5.7, 14.0 and 34.9 kN m (the nominal's: 7.2, 23.4, 34.4). With n_b = 12 sines: 12.9
 mrad, 4,400:1, 19 kN m.
+
+The terminal conditions are built by :func:`terminal_map` (also along any planned trajectory,
+with the rigid rows of the target), which :mod:`flexsat.design.planned_slew` optimises over:
+least energy or least peak within torque limits, by successive linearisation.
 """
 
 from __future__ import annotations

@@ -27,6 +27,25 @@ force/torque decoupling) corrects it::
 Every scenario also runs the nominal torque alone (the run ``open loop``): the deflection goal
 compares each run with it.
 
+A run may plan its torque history over the whole maneuver (:mod:`flexsat.design.planned_slew`:
+the nominal plus a sine-series correction bringing the design modes to rest at T at the least
+torque energy, or the least peak, within a torque limit), flown alone or under the run's
+perturbation law designed along the planned trajectory::
+
+      - label: planned
+        shaping: {kind: planned, basis: 30, objective: energy, torque_limit: "34.4 kN m",
+                  feedback: false}     # weights and break_frequency then not needed
+      - label: planned + feedback
+        weights: {attitude: 1000, rate: 1000, modes: 1, torque: 1000}
+        break_frequency: "5 rad/s"
+        shaping: {kind: planned}       # feedforward: none (the plan carries its modal load)
+
+``basis`` sines per axis (default 30), ``objective`` ``energy`` or ``peak``, ``torque_limit``
+on every axis (optional), ``samples`` where the limit holds (default 16 × basis + 1),
+``iterations`` relinearisations (default 4). The plan's numbers (peak torques, active limits
+and their multipliers, the KKT residual, the terminal residual by iteration, or the least peak
+when the limit cannot be met) are in the result's notes.
+
 The simulated (truth) plant may depart from the case's plant, which stays the design model —
 the nominal maneuver and every perturbation design use the case's plant; only the plant they
 are flown on changes (a dispersion of the truth, as a Monte Carlo draws it)::
