@@ -181,14 +181,17 @@ def test_bad_iteration_settings_are_named(setup, kwargs, field):
 
 
 @pytest.mark.slow
-def test_the_eps_6s_goals_with_torquers_alone_within_the_nominal_peak():
+@pytest.mark.parametrize("duration, omega_b", [(6.0, 5.0), (10.0, 2.5)], ids=["6s", "10s"])
+def test_the_eps_goals_with_torquers_alone_within_the_nominal_peak(duration, omega_b):
     # the 45-mode truth, a 10-mode design model, 50 Hz: the torque kept within the nominal
-    # maneuver's own peak (34.4 kN m about z) still meets 3 % and 10:1 (docs/eps.md)
+    # maneuver's own peak (34.4 kN m about z at 6 s, 11.6 at 10 s) still meets 3 % and 10:1
+    # (docs/eps.md; cases D and A with the feedback miss them)
     truth = eps().plant(n_modes=45)
     design = truth.reduced(10)
-    nominal = three_axis_slew(truth.inertia, euler123_to_quaternion(np.ones(3)), 6.0, 5.0)
-    config = SimConfig(duration=7.5, control_rate=50.0)
-    limit = float(np.abs(nominal.torque(np.linspace(0, 6, 601))).max())
+    nominal = three_axis_slew(truth.inertia, euler123_to_quaternion(np.ones(3)), duration, omega_b)
+    # the deflection judged over 2 s past 1.25 T (half a period of the first mode, 0.25 Hz)
+    config = SimConfig(duration=1.25 * duration + 2.0, control_rate=50.0)
+    limit = float(np.abs(nominal.torque(np.linspace(0, duration, 601))).max())
     plan = planned_slew(truth, design, nominal, config, 20, torque_limit=limit, iterations=2)
     assert plan.feasible
     m = SlewEvaluation(truth, design, nominal, config).run(NominalTorque(plan, config.dt))
