@@ -780,8 +780,9 @@ def _laws(
     return laws
 
 
-def _plan_note(label: str, plan: PlannedSlew) -> str:
-    """What a planned run's optimum is and which constraint binds (for the report)."""
+def _plan_note(label: str, plan: PlannedSlew, given_limit: float | None) -> str:
+    """What a planned run's optimum is and which constraint binds (for the report);
+    ``given_limit`` the run's ``shaping.torque_limit``."""
     peaks = ", ".join(f"{a} {p:,.0f}" for a, p in zip("xyz", plan.peak_torques, strict=True))
     text = (
         f"{label}: torque planned over the maneuver ({plan.objective} objective, "
@@ -800,13 +801,16 @@ def _plan_note(label: str, plan: PlannedSlew) -> str:
             )
         else:
             largest = float(plan.multipliers.max()) if plan.multipliers.size else 0.0
+            held = " (the least peak with its margin)" if plan.objective == "peak" else ""
             text += (
-                f" Torque limit {limit:,.0f} N m: {plan.active} sampled limits active "
+                f" Torque limit {limit:,.0f} N m{held}: {plan.active} sampled limits active "
                 f"(largest multiplier {largest:.3g} (N m)² s per limit), KKT residual "
                 f"{plan.kkt_residual:.1e}."
             )
-    if plan.objective == "peak" and np.isfinite(plan.least_peak):
-        text += f" Least peak of the first linearisation: {plan.least_peak:,.4g}."
+    if plan.objective == "peak" and plan.feasible and np.isfinite(plan.least_peak):
+        # in units of the given limit, in N m without one (PlannedSlew.least_peak)
+        least = plan.least_peak * (1.0 if given_limit is None else given_limit)
+        text += f" Least peak of the first linearisation: {least:,.0f} N m."
     return text
 
 
@@ -900,7 +904,7 @@ class SlewKind(ScenarioKind):
             ),
         )
         notes += tuple(
-            _plan_note(r.label, kept["plans"][r.label])
+            _plan_note(r.label, kept["plans"][r.label], r.shaping.torque_limit)
             for r in scenario.runs
             if r.shaping is not None
         )
