@@ -65,11 +65,15 @@ ALLOWED = {
     ),
     ("maneuvers/three_axis_slew.py", "_newton"): "the shooting Newton iteration over rk4 above",
     ("maneuvers/three_axis_slew.py", "_polish"): "the shooting polish over dop853 above",
-    ("design/slew_shaping.py", "modal_cancelling_torque"): (
+    ("design/slew_shaping.py", "terminal_map"): (
         "the sensitivity of the terminal state to the torque-shaping coefficients (a design "
         "gradient: the variational equation of the linearisation along the nominal, one column "
         "per basis function), not a response of the plant; the plant itself runs on the engine "
         "(simulate) in the same function"
+    ),
+    ("design/planned_slew.py", "planned_slew"): (
+        "Newton iterations of the planned slew's terminal conditions (a loop over design "
+        "steps, each flying the plan on the engine and calling terminal_map), not a time loop"
     ),
     ("dynamics/rigid_body.py", "rkmk4_step"): (
         "the one-step map of a rigid body's (β, ω) on the quaternion manifold: the kernel of "

@@ -35,8 +35,10 @@ Feedforward (F11), three forms:
 The law (:class:`PerturbationFeedback`). Per control sample t_k it reads the attitude β, the
 rate ω and the elastic state of the first n design modes (the plant output ``elastic``;
 the first n modes of a larger plant built from the same modal model are the design model's
-modes), forms δX (δα = 2 δq_v of δq = β ⊗ β_n*, nonlinear in β), and with the shaping chain
-[δu₁, δu₂] of its internal state computes δu₃ (held over the period, ZOH). The chain is then
+modes; less the nominal's planned [η, η̇] when it has ``elastic(t)``, a slew planned with its
+modal motion, :mod:`flexsat.design.planned_slew`), forms δX (δα = 2 δq_v of
+δq = β ⊗ β_n*, nonlinear in β), and with the shaping chain [δu₁, δu₂] of its internal
+state computes δu₃ (held over the period, ZOH). The chain is then
 propagated exactly, :math:`\delta u_1 \leftarrow \delta u_1 + h\,\delta u_2 + \tfrac{h^2}{2}
 \delta u_3`, :math:`\delta u_2 \leftarrow \delta u_2 + h\,\delta u_3`. The plant receives,
 held over [t_k, t_k + h), the interval means of the continuous commands:
@@ -428,6 +430,20 @@ class PerturbationFeedback(Controller):
             )
         else:
             self._ff = np.zeros((grid.size, m_v))
+        # a nominal that plans the modes' motion (flexsat.design.planned_slew) gives it as
+        # elastic(t): the law feeds back the departures from it
+        planned = getattr(lin.nominal, "elastic", None)
+        self._elastic_ref = (
+            np.asarray(planned(np.clip(grid, 0.0, lin.duration)), float)
+            if callable(planned)
+            else np.zeros((grid.size, 2 * n))
+        )
+        if self._elastic_ref.shape != (grid.size, 2 * n):
+            raise FieldError(
+                "nominal.elastic",
+                f"must return [η, η̇] of the {n} design modes, shape (..., {2 * n}), got "
+                f"{self._elastic_ref.shape[1:]}",
+            )
         self._inputs_T = design.input_map.T.copy()
         self._inertia_T = lin.inertia.T.copy()
         self.n_design_modes = n
@@ -445,13 +461,16 @@ class PerturbationFeedback(Controller):
         "inertia_T",
         "beta_target",
     )
+    #: tables a stored law may lack (zero when absent: a nominal without planned modal motion)
+    OPTIONAL_TABLES = ("elastic_reference",)
 
     def tables(self) -> dict[str, FloatArray]:
         """The law's tables on its sample grid (:data:`TABLES`): with the control period, the
         written channels and the mode counts they rebuild it (:meth:`from_tables`), so that a
         designed law can be stored as plain arrays (netCDF) and flown again without its
-        nominal maneuver or its Riccati designs."""
-        return {
+        nominal maneuver or its Riccati designs. ``elastic_reference`` (the planned [η, η̇]
+        the law feeds back the departures from) only when the nominal plans modal motion."""
+        tables = {
             "knots": self.knots,
             "gains": self.gains,
             "error_maps": self._error_maps,
@@ -462,6 +481,9 @@ class PerturbationFeedback(Controller):
             "inertia_T": self._inertia_T,
             "beta_target": np.asarray(self.beta_target),
         }
+        if np.any(self._elastic_ref):  # a planned modal motion (OPTIONAL_TABLES)
+            tables["elastic_reference"] = self._elastic_ref
+        return tables
 
     @classmethod
     def from_tables(
@@ -503,6 +525,18 @@ class PerturbationFeedback(Controller):
         law._error_maps, law._omega, law._torque = t["error_maps"], t["omega"], t["torque"]
         law._ff, law._inputs_T, law._inertia_T = t["feedforward"], t["inputs_T"], t["inertia_T"]
         law.beta_target = law.target = t["beta_target"]
+        reference = tables.get("elastic_reference")
+        law._elastic_ref = (
+            np.zeros((t["torque"].shape[0], 2 * n_design_modes))
+            if reference is None
+            else np.array(reference, dtype=float)
+        )
+        if law._elastic_ref.shape != (t["torque"].shape[0], 2 * n_design_modes):
+            raise FieldError(
+                "tables",
+                f"elastic_reference of shape {law._elastic_ref.shape} does not match the "
+                f"{t['torque'].shape[0]} samples and {n_design_modes} design modes",
+            )
         return law
 
     def _batched(self) -> list[tuple[int, ...]]:
@@ -538,8 +572,8 @@ class PerturbationFeedback(Controller):
             [
                 np.where(dq[:, :1] < 0, -2.0, 2.0) * dq[:, 1:],
                 np.asarray(y["rate"], float) - self._omega[j],
-                elastic[:, :n],
-                elastic[:, n_p : n_p + n],
+                elastic[:, :n] - self._elastic_ref[j, :n],
+                elastic[:, n_p : n_p + n] - self._elastic_ref[j, n:],
                 z1,
                 z2,
             ],

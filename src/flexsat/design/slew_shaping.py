@@ -40,6 +40,10 @@ at rest. Measured on the 45-mode EPS, 1 rad on each axis in 6 s, n_b = 30, 100 H
 1,200:1 (goal 10:1), peak torque perturbation 10 kN m (case D's feedback: 24 kN m), peak
 torques 5.7, 14.0 and 34.9 kN m (the nominal's: 7.2, 23.4, 34.4). With n_b = 12 sines: 12.9
 mrad, 4,400:1, 19 kN m.
+
+The terminal conditions are built by :func:`terminal_map` (also along any planned trajectory,
+with the rigid rows of the target), which :mod:`flexsat.design.planned_slew` optimises over:
+least energy or least peak within torque limits, by successive linearisation.
 """
 
 from __future__ import annotations
@@ -54,10 +58,13 @@ from flexsat.input_checks import FieldError, require_count
 from flexsat.units import FloatArray
 
 if TYPE_CHECKING:
+    from flexsat.design.planned_slew import PlannedTrajectory
     from flexsat.design.slew_weights import SlewEvaluation
+    from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
+    from flexsat.sim import SimConfig
 
-__all__ = ["ShapedSlew", "modal_cancelling_torque"]
+__all__ = ["ShapedSlew", "TerminalMap", "modal_cancelling_torque", "terminal_map"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,38 +109,93 @@ class ShapedSlew:
         return self.nominal.torque(t) + self.correction(t) @ self.inertia.T
 
 
-def modal_cancelling_torque(evaluation: SlewEvaluation, n_basis: int = 30) -> ShapedSlew:
-    """The torquers-only correction of ``evaluation``'s nominal that brings its design modes to
-    rest at T (module docstring).
+@dataclass(frozen=True, eq=False)
+class TerminalMap:
+    """The linear terminal conditions of the sine-series correction (module docstring):
+    X c = target, c the coefficients flattened axis by axis ((3, n_b) row-major).
 
-    Parameters
+    Attributes
     ----------
-    evaluation : SlewEvaluation
-        Truth plant, design model, nominal and control grid.
+    X : (6 + 2n, 3 n_b) array
+        δX(T) per coefficient (rad, rad/s, modal units) on the design model.
+    target : (6 + 2n,) array
+        [0₆; −η_ol(T); −η̇_ol(T)].
+    inertia : (3, 3) array
+        J of the design model, kg m².
+    duration : float
+        T, s.
     n_basis : int
-        Sines per axis (n_b).
+        Sines per axis.
     """
+
+    X: FloatArray
+    target: FloatArray
+    inertia: FloatArray
+    duration: float
+    n_basis: int
+
+    def basis(self, t: npt.ArrayLike) -> FloatArray:
+        """S(t) (..., 3, 3 n_b): v(t) = S(t) c (zero outside [0, T])."""
+        s = np.clip(np.asarray(t, float), 0.0, self.duration)
+        sines = np.sin(s[..., None] * (np.pi / self.duration) * np.arange(1, self.n_basis + 1))
+        sines = np.where(((s > 0.0) & (s < self.duration))[..., None], sines, 0.0)
+        return np.einsum("...j,ab->...abj", sines, np.eye(3)).reshape(
+            s.shape + (3, 3 * self.n_basis)
+        )
+
+
+def terminal_map(
+    truth: FlexibleSpacecraft,
+    design_plant: FlexibleSpacecraft,
+    nominal: ThreeAxisSlew | PlannedTrajectory,
+    config: SimConfig,
+    n_basis: int = 30,
+    rigid: bool = False,
+) -> TerminalMap:
+    """The terminal conditions X c = target of the correction of ``nominal`` (module
+    docstring): X by RK4 on the control grid of ``config`` along the nominal linearised on
+    ``design_plant``, the target from the nominal torque alone flown on ``truth`` (whose first
+    modes are the design model's) on the one engine.
+
+    ``nominal`` is any rigid nominal with ``beta``, ``omega``, ``torque``, ``duration`` and
+    ``target`` (:mod:`~flexsat.control.trajectory_linearization`). With ``rigid`` the target's
+    first six rows are −[δα(T), ω(T)] of that run (the attitude error from ``nominal.target``,
+    :func:`~flexsat.control.trajectory_linearization.attitude_error`): the conditions of a
+    correction of a nominal that does not end on the target at rest (a planned slew's
+    successive linearisation, :mod:`flexsat.design.planned_slew`); without, zero (the rigid
+    nominal ends there on the rigid body).
+
+    Raises
+    ------
+    ValueError
+        ``n_basis`` < 1, or a control period that does not divide T (under ``config``).
+    """
+    from dataclasses import replace
+
     from flexsat.control import NominalTorque, TrajectoryLinearization
+    from flexsat.control.trajectory_linearization import attitude_error
     from flexsat.sim import simulate
 
     n_basis = require_count(n_basis, "n_basis")
-    truth, design_plant, nominal = evaluation.truth, evaluation.design_plant, evaluation.nominal
-    config = evaluation.config
     T, h = float(nominal.duration), float(config.dt)
     n_steps = int(round(T / h))
     if abs(n_steps * h - T) > 1e-9 * T:
         raise FieldError(
-            "evaluation.config",
+            "config",
             f"the control period {h:g} s must divide the "
             f"maneuver time {T:g} s (the correction is integrated on that grid)",
         )
-    run = simulate(truth, NominalTorque(nominal, h), config, n_cases=1, record_states=True)
+    short = replace(config, duration=min(config.duration, (n_steps + 1) * h))
+    run = simulate(truth, NominalTorque(nominal, h), short, n_cases=1, record_states=True)
     x_T = run.dataset["state"].isel(case=0).values[n_steps]
     elastic = truth.output("elastic", x_T)
     n = design_plant.n_modes
-    target = np.concatenate(
-        [np.zeros(6), -elastic[:n], -elastic[truth.n_modes : truth.n_modes + n]]
+    start = (
+        -np.concatenate([attitude_error(x_T[:4], nominal.target), x_T[4:7]])
+        if rigid
+        else np.zeros(6)
     )
+    target = np.concatenate([start, -elastic[:n], -elastic[truth.n_modes : truth.n_modes + n]])
 
     lin = TrajectoryLinearization(design_plant, nominal)
     times = np.linspace(0.0, T, 2 * n_steps + 1)
@@ -149,8 +211,34 @@ def modal_cancelling_torque(evaluation: SlewEvaluation, n_basis: int = 30) -> Sh
         k3 = A[i + 1] @ (X + 0.5 * h * k2) + B[i + 1] @ U[i + 1]
         k4 = A[i + 2] @ (X + h * k3) + B[i + 2] @ U[i + 2]
         X = X + (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
+    return TerminalMap(X, target, np.asarray(lin.inertia, float), T, n_basis)
+
+
+def modal_cancelling_torque(evaluation: SlewEvaluation, n_basis: int = 30) -> ShapedSlew:
+    """The torquers-only correction of ``evaluation``'s nominal that brings its design modes to
+    rest at T (module docstring): the minimum-norm solution of :func:`terminal_map`.
+
+    Parameters
+    ----------
+    evaluation : SlewEvaluation
+        Truth plant, design model, nominal and control grid.
+    n_basis : int
+        Sines per axis (n_b).
+    """
+    try:
+        m = terminal_map(
+            evaluation.truth,
+            evaluation.design_plant,
+            evaluation.nominal,
+            evaluation.config,
+            n_basis,
+        )
+    except FieldError as exc:
+        if exc.field != "config":
+            raise
+        raise FieldError("evaluation.config", exc.rule) from None
     # minimum norm: repeated antenna pairs leave combinations the nominal does not excite and
     # the torque cannot reach (zero rows of the target), so X is rank deficient by design
-    c, *_ = np.linalg.lstsq(X, target, rcond=None)
-    residual = float(np.linalg.norm(X @ c - target) / np.linalg.norm(target))
-    return ShapedSlew(nominal, c.reshape(3, n_basis), np.asarray(lin.inertia, float), residual)
+    c = np.asarray(np.linalg.lstsq(m.X, m.target, rcond=None)[0], np.float64)
+    residual = float(np.linalg.norm(m.X @ c - m.target) / np.linalg.norm(m.target))
+    return ShapedSlew(evaluation.nominal, c.reshape(3, n_basis), m.inertia, residual)

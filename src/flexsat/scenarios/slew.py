@@ -27,6 +27,25 @@ force/torque decoupling) corrects it::
 Every scenario also runs the nominal torque alone (the run ``open loop``): the deflection goal
 compares each run with it.
 
+A run may plan its torque history over the whole maneuver (:mod:`flexsat.design.planned_slew`:
+the nominal plus a sine-series correction bringing the design modes to rest at T at the least
+torque energy, or the least peak, within a torque limit), flown alone or under the run's
+perturbation law designed along the planned trajectory::
+
+      - label: planned
+        shaping: {kind: planned, basis: 30, objective: energy, torque_limit: "34.4 kN m",
+                  feedback: false}     # weights and break_frequency then not needed
+      - label: planned + feedback
+        weights: {attitude: 1000, rate: 1000, modes: 1, torque: 1000}
+        break_frequency: "5 rad/s"
+        shaping: {kind: planned}       # feedforward: none (the plan carries its modal load)
+
+``basis`` sines per axis (default 30), ``objective`` ``energy`` or ``peak``, ``torque_limit``
+on every axis (optional), ``samples`` where the limit holds (default 16 × basis + 1),
+``iterations`` relinearisations (default 4). The plan's numbers (peak torques, active limits
+and their multipliers, the KKT residual, the terminal residual by iteration, or the least peak
+when the limit cannot be met) are in the result's notes.
+
 The simulated (truth) plant may depart from the case's plant, which stays the design model —
 the nominal maneuver and every perturbation design use the case's plant; only the plant they
 are flown on changes (a dispersion of the truth, as a Monte Carlo draws it)::
@@ -94,6 +113,7 @@ if TYPE_CHECKING:
     import xarray as xr
 
     from flexsat.control.base import Controller
+    from flexsat.design.planned_slew import PlannedSlew
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
     from flexsat.report.interactive import Plot
@@ -220,16 +240,37 @@ class SlewWeightsSpec(SchemaSection):
     force: Weights | None = None
 
 
+class PlannedShapingSpec(SchemaSection):
+    """A torque history planned over the whole maneuver (:mod:`flexsat.design.planned_slew`):
+    the nominal plus the sine-series correction bringing the design modes to rest at T at the
+    least energy (or peak torque) within the torque limit."""
+
+    kind: Literal["planned"]
+    basis: Annotated[int, integer_in(1, 200)] = 30
+    objective: Literal["energy", "peak"] = "energy"
+    torque_limit: Annotated[float | None, in_unit("N*m", positive=True)] = None
+    samples: Annotated[int | None, integer_in(2, 100_000, optional=True)] = None
+    iterations: Annotated[int, integer_in(0, 20)] = 4
+    feedback: bool = True
+
+
 class SlewRunSpec(SchemaSection):
-    """One closed-loop run: its weights, shaping, forces and feedforward."""
+    """One closed-loop run: its weights, shaping, forces and feedforward (or a planned torque
+    history, flown alone or under the feedback)."""
 
     label: str
-    weights: SlewWeightsSpec
-    break_frequency: Annotated[float, in_unit("rad/s", positive=True)]
+    weights: SlewWeightsSpec | None = None
+    break_frequency: Annotated[float | None, in_unit("rad/s", positive=True)] = None
     shaping_damping: float = Field(0.0, ge=0.0)
     forces: Literal["none", "all"] | list[str] = "none"
     decouple: bool = False
     feedforward: Literal["none", "constant", "time-varying"] = "constant"
+    shaping: PlannedShapingSpec | None = None
+
+    @property
+    def has_feedback(self) -> bool:
+        """The run flies a perturbation law (not a planned torque alone)."""
+        return self.shaping is None or self.shaping.feedback
 
     @field_validator("label")
     @classmethod
@@ -244,6 +285,31 @@ class SlewRunSpec(SchemaSection):
 
     @model_validator(mode="after")
     def _force_weights(self) -> Self:
+        if self.has_feedback:
+            for name in ("weights", "break_frequency"):
+                if getattr(self, name) is None:
+                    raise FieldError(
+                        name,
+                        "required for a perturbation law (leave it out only with "
+                        "shaping.feedback: false, a planned torque flown alone)",
+                    )
+        if self.shaping is not None:
+            if not self.shaping.feedback and (self.forces != "none" or self.decouple):
+                raise FieldError(
+                    "forces",
+                    "a planned torque flown alone uses the torquers only (the plan "
+                    "shapes the torque); give shaping.feedback: true for forces",
+                )
+            if "feedforward" in self.model_fields_set and self.feedforward != "none":
+                raise FieldError(
+                    "feedforward",
+                    "must be none with a planned torque: the plan carries the modal load "
+                    "of its own torque (its modal motion is the feedback's reference), "
+                    f"got {self.feedforward!r}",
+                )
+            self.feedforward = "none"
+        if self.weights is None:
+            return self
         if self.forces != "none" and self.weights.force is None:
             raise FieldError("weights.force", "required when the run uses forces")
         if self.decouple and self.forces == "none":
@@ -293,6 +359,7 @@ class SlewScenario(Document):
         breaks = [("maneuver.break_frequency", self.maneuver.break_frequency)] + [
             (f"runs{item_path(i, r.label)}.break_frequency", r.break_frequency)
             for i, r in enumerate(self.runs)
+            if r.break_frequency is not None
         ]
         for field, value in breaks:
             if value > nyquist:
@@ -420,6 +487,7 @@ def _weights(
     run: SlewRunSpec, index: int, n_modes: int, n_forces: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """(Q, D) of a run, diagonal, over [δα, δω, δη, δη̇] and [torque/I, forces]."""
+    assert run.weights is not None  # required of a run with feedback
     try:
         q, d = SlewWeights(**run.weights.model_dump()).diagonals(n_modes, n_forces)
     except ValueError as exc:
@@ -622,29 +690,79 @@ def nominal_design(scenario: SlewScenario) -> dict[str, Any]:
     return entry
 
 
+def _plan(
+    run: SlewRunSpec,
+    plant: FlexibleSpacecraft,
+    kept: dict[str, Any],
+    nominal: ThreeAxisSlew,
+    config: SimConfig,
+) -> PlannedSlew:
+    """The run's planned torque history on the case's plant (kept in ``kept["plans"]``)."""
+    from flexsat.design.planned_slew import planned_slew
+
+    plans = kept.setdefault("plans", {})
+    spec = run.shaping
+    assert spec is not None
+    if run.label not in plans:
+        try:
+            plans[run.label] = planned_slew(
+                plant,
+                kept["design_plant"],
+                nominal,
+                config,
+                spec.basis,
+                spec.objective,
+                spec.torque_limit,
+                spec.samples,
+                spec.iterations,
+            )
+        except FieldError as exc:
+            names = {"n_basis": "basis", "n_samples": "samples", "config": "simulation"}
+            field = names.get(exc.field, exc.field)
+            raise FieldError(
+                field if field == "simulation" else f"shaping.{field}", exc.rule
+            ) from None
+    plan: PlannedSlew = plans[run.label]
+    return plan
+
+
 def _laws(
     scenario: SlewScenario,
     plant: FlexibleSpacecraft,
     kept: dict[str, Any],
     nominal: ThreeAxisSlew,
-    dt: float,
+    config: SimConfig,
 ) -> dict[str, Controller]:
-    """The open-loop law and every run's perturbation law, by label, designed on the case's
-    plant (kept in ``kept["designs"]``); problems are gathered and located in their run."""
+    """The open-loop law and every run's perturbation law (or planned torque), by label,
+    designed on the case's plant (kept in ``kept["designs"]`` and ``kept["plans"]``);
+    problems are gathered and located in their run."""
     from flexsat.control import NominalTorque, perturbation_design
+    from flexsat.design.planned_slew import PlannedTrajectory
 
+    dt = config.dt
     design_plant = kept["design_plant"]
     designs = kept.setdefault("designs", {})
     laws: dict[str, Controller] = {OPEN_LOOP: NominalTorque(nominal, dt)}
     problems: list[Problem] = []
     for index, run in enumerate(scenario.runs):
         try:
+            reference: Any = nominal
+            if run.shaping is not None:
+                plan = _plan(run, plant, kept, nominal, config)
+                if not run.shaping.feedback:
+                    laws[run.label] = NominalTorque(plan, dt)
+                    continue
+                reference = kept.setdefault("trajectories", {}).get(run.label)
+                if reference is None:
+                    reference = PlannedTrajectory(plan, design_plant, config)
+                    kept["trajectories"][run.label] = reference
             if run.label not in designs:
                 forces = _forces(run, index, design_plant)
                 Q, D = _weights(run, index, design_plant.n_modes, len(forces))
+                assert run.break_frequency is not None  # required of a run with feedback
                 designs[run.label] = perturbation_design(
                     design_plant,
-                    nominal,
+                    reference,
                     Q,
                     D,
                     run.break_frequency,
@@ -660,13 +778,51 @@ def _laws(
             problems.extend(exc.problems)
         except FieldError as exc:  # named by the scenario's fields
             field = _DESIGN_FIELDS.get(exc.field, exc.field)
-            where = "" if field.startswith("controller.") else f"runs{item_path(index, run.label)}"
+            where = (
+                ""
+                if field.startswith("controller.") or field == "simulation"
+                else f"runs{item_path(index, run.label)}"
+            )
             problems.append(locate(where, FieldError(field, exc.rule)))
         except ValueError as exc:
             problems.append(locate(f"runs{item_path(index, run.label)}", exc))
     if problems:
         raise ScenarioError(problems)
     return laws
+
+
+def _plan_note(label: str, plan: PlannedSlew, given_limit: float | None) -> str:
+    """What a planned run's optimum is and which constraint binds (for the report);
+    ``given_limit`` the run's ``shaping.torque_limit``."""
+    peaks = ", ".join(f"{a} {p:,.0f}" for a, p in zip("xyz", plan.peak_torques, strict=True))
+    text = (
+        f"{label}: torque planned over the maneuver ({plan.objective} objective, "
+        f"{plan.shaped.coefficients.shape[1]} sines per axis, {plan.rank} independent terminal "
+        f"conditions); planned peak torques {peaks} N m; terminal residual by iteration "
+        + " → ".join(f"{r:.2g}" for r in plan.iterates)
+        + "."
+    )
+    if plan.torque_limit is not None:
+        limit = float(plan.torque_limit[0])
+        if not plan.feasible:
+            text += (
+                f" The torque limit {limit:,.0f} N m cannot be met: the least peak torque "
+                f"meeting the terminal conditions is {plan.least_peak:.3g} × the limit "
+                f"({plan.least_peak * limit:,.0f} N m); the plan flown is the last iterate."
+            )
+        else:
+            largest = float(plan.multipliers.max()) if plan.multipliers.size else 0.0
+            held = " (the least peak with its margin)" if plan.objective == "peak" else ""
+            text += (
+                f" Torque limit {limit:,.0f} N m{held}: {plan.active} sampled limits active "
+                f"(largest multiplier {largest:.3g} (N m)² s per limit), KKT residual "
+                f"{plan.kkt_residual:.1e}."
+            )
+    if plan.objective == "peak" and plan.feasible and np.isfinite(plan.least_peak):
+        # in units of the given limit, in N m without one (PlannedSlew.least_peak)
+        least = plan.least_peak * (1.0 if given_limit is None else given_limit)
+        text += f" Least peak of the first linearisation: {least:,.0f} N m."
+    return text
 
 
 class SlewKind(ScenarioKind):
@@ -725,7 +881,7 @@ class SlewKind(ScenarioKind):
             return nominal
 
         nominal = yield Run("nominal maneuver", solve_nominal, "maneuver")
-        laws = _laws(scenario, plant, kept, nominal, config.dt)
+        laws = _laws(scenario, plant, kept, nominal, config)
         results = []
         for index, (label, law) in enumerate(laws.items()):
             run = Run(
@@ -740,7 +896,7 @@ class SlewKind(ScenarioKind):
             results, nominal, SlewGoals(g.angle_fraction, g.evaluation, g.deflection_ratio)
         )
         t = results[0].dataset["time"].values
-        notes = (
+        notes: tuple[str, ...] = (
             f"Nominal: three-axis TPBVP by continuation in {len(nominal.history)} steps, "
             f"boundary error {nominal.boundary_error():.1e}; peak nominal torques "
             + ", ".join(
@@ -757,6 +913,11 @@ class SlewKind(ScenarioKind):
                 else " Simulated on the truth plant of section truth; the nominal "
                 "maneuver and the designs are those of the case's plant."
             ),
+        )
+        notes += tuple(
+            _plan_note(r.label, kept["plans"][r.label], r.shaping.torque_limit)
+            for r in scenario.runs
+            if r.shaping is not None
         )
         return SlewResult(
             scenario,
