@@ -284,7 +284,9 @@ def describe_hardware(hardware: Hardware | None) -> str:
         return "ideal (no hardware)"
     parts = []
     for k, f in hardware.filters.items():
-        parts.append(f"{k}: {f.kind} order {f.order} anti-alias filter, corner {f.corner:g} Hz")
+        parts.append(
+            f"{k}: {f.kind} order {f.order} anti-alias filter, corner {float(f.corner):g} Hz"
+        )
     for k, a in hardware.actuators.items():
         if isinstance(a, ReactionWheel):
             amp = a.amplifier
