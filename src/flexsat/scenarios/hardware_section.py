@@ -40,7 +40,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import replace
-from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self, cast
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
@@ -285,7 +285,7 @@ def describe_hardware(hardware: Hardware | None) -> str:
     parts = []
     for k, f in hardware.filters.items():
         parts.append(
-            f"{k}: {f.kind} order {f.order} anti-alias filter, corner {float(f.corner):g} Hz"
+            f"{k}: {f.kind} order {f.order} anti-alias filter, corner {cast(float, f.corner):g} Hz"
         )
     for k, a in hardware.actuators.items():
         if isinstance(a, ReactionWheel):

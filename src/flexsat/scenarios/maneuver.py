@@ -20,6 +20,11 @@ Keys left out of ``actuator``, ``sensors``, ``disturbances`` and ``simulation`` 
 defaults of the runtime classes (:class:`flexsat.sim.SimConfig` and its parts: ideal sensors, no
 saturation, no disturbance).
 
+The laboratory hardware (amplifiers, reaction wheels, anti-alias filters, the computation
+delay) is a ``hardware:`` section, at the top level for every run or in a run for that run
+alone, and the cable spring on the hub is ``disturbances.cable``
+(:mod:`flexsat.scenarios.hardware_section`).
+
 Validation runs in two stages, both before any simulation, and each collects all its problems
 into one :class:`~flexsat.scenarios.ScenarioError` whose lines read ``field.path: rule``:
 
