@@ -46,7 +46,7 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from flexsat import limits
 from flexsat.input_checks import FieldError
-from flexsat.scenarios.errors import Problem
+from flexsat.scenarios.errors import Problem, locate
 from flexsat.scenarios.fields import (
     BuildableSection,
     SchemaSection,
@@ -274,7 +274,7 @@ def check_hardware(
         try:
             hardware.plant_for(plant)
         except FieldError as exc:
-            problems.append(Problem(path, f"{exc.field}: {exc.rule}"))
+            problems.append(locate(path, exc))
     return problems
 
 
@@ -336,7 +336,7 @@ class CableSpec(BuildableSection):
     profile: list[ProfilePoint] = Field(default_factory=list, max_length=limits.MAX_SAMPLES)
 
     def build(self) -> CableSpring:
-        values = given_fields(self, exclude={"profile"})
+        values = given_fields(self, exclude={"profile", "output"})
         try:
             return CableSpring(
                 **values,
@@ -346,6 +346,14 @@ class CableSpec(BuildableSection):
         except FieldError as exc:
             field = "profile" if exc.field in ("angles", "torques") else exc.field
             raise FieldError(field, exc.rule) from None
+
+
+class ChannelCableSpec(CableSpec):
+    """A cable spring on an input channel of a simulation scenario's plant
+    (``disturbances.<channel>.cable``): the fields of :class:`CableSpec` and the ``output``
+    channel of the angle that drives it (default ``theta``)."""
+
+    output: str = "theta"
 
 
 def effective_hardware(
@@ -359,6 +367,7 @@ __all__ = [
     "HARDWARE_PRESETS",
     "AmplifierSpec",
     "CableSpec",
+    "ChannelCableSpec",
     "FilterSpec",
     "HardwareSpec",
     "ProfilePoint",

@@ -100,8 +100,8 @@ def _with_hardware(
             configs[label] = dataclasses.replace(config, hardware=hardware)
         except ValueError as exc:
             problems.append(locate(path, exc))
-    if problems:
-        raise ScenarioError(problems)
+    if problems:  # a document-level section's problem once, not once per run
+        raise ScenarioError(list(dict.fromkeys(problems)))
     return configs
 
 

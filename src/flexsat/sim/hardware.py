@@ -33,7 +33,7 @@ loop, with two exact steps).
 from __future__ import annotations
 
 import weakref
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
@@ -509,10 +509,20 @@ class HardwarePlant(Plant):
             e = e + 0.5 * p.si("inertia") * x[..., self._layout[k]["wheel"]] ** 2
         return e
 
-    def vibration_energy(self, x: FloatArray, energy: FloatArray | None = None) -> FloatArray:
-        """The plant's vibration energy (``energy``, which holds the wheels', is not used)."""
-        vib = self.inner.vibration_energy  # type: ignore[attr-defined]
-        return np.asarray(vib(x[..., : self._n]), float)
+    @property
+    def vibration_energy(self) -> Callable[..., FloatArray]:
+        """The plant's vibration energy of x_H (the energy, which holds the wheels', is not
+        used); no such attribute when the plant has none (a structure without a rigid mode:
+        the engine then records none)."""
+        vib = getattr(self.inner, "vibration_energy", None)
+        if vib is None:
+            raise AttributeError("vibration_energy")
+        n = self._n
+
+        def energy(x: FloatArray, energy: FloatArray | None = None) -> FloatArray:
+            return np.asarray(vib(x[..., :n]), float)
+
+        return energy
 
     def modal_form(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None:
         """(T, T⁻¹, ω, ζ) with x_H = T z, z in companion 2×2 blocks, for the compiled loop's
