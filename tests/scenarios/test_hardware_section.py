@@ -239,3 +239,83 @@ def test_cable_steady_state_is_td_over_k():
     profile = [{"angle": a, "torque": td - k * a} for a in angles]
     tabulated, _, _ = _cable_run({"profile": profile})
     assert tabulated == pytest.approx(expected, rel=1e-6)
+
+
+# -- the simulation kind --------------------------------------------------------------------------
+def _draper(**changes) -> dict:
+    """examples/draper_rpl_lqr.yaml (the Draper/RPL hub, a linear structure plant) cut to 2 s."""
+    data = yaml.safe_load((EXAMPLES / "draper_rpl_lqr.yaml").read_text())
+    data["simulation"]["duration"] = "2 s"
+    data.update(changes)
+    return data
+
+
+def test_the_simulation_kind_runs_its_hardware_and_cable_as_the_api_does():
+    """A document-level amplifier and delay and a cable on the hub torquer: each run equals
+    simulate(...) with the same Hardware and ChannelDisturbance, bit for bit."""
+    from flexsat.scenarios.simulation import build_plant
+    from flexsat.sim import SimConfig
+    from flexsat.sim.channels import ChannelActuator, ChannelDisturbance
+    from flexsat.sim.disturbances import CableSpring
+    from flexsat.sim.hardware import Amplifier, Hardware
+
+    data = _draper(
+        hardware={
+            "delay_samples": 1,
+            "amplifiers": {"u1_hub": {"current_limit": "1 A", "torque_constant": "2 N*m/A"}},
+        },
+        disturbances={"u1_hub": {"cable": {"constant": "0.01 N*m", "stiffness": 0.2}}},
+    )
+    scenario = load_scenario(yaml.safe_dump(data))
+    result = run_scenario(scenario)
+    ds = result.dataset()
+    plant = build_plant(scenario)
+    config = SimConfig(
+        2.0,
+        50.0,
+        channel_actuators={"u1_hub": ChannelActuator(saturation=5.0)},
+        channel_disturbances={
+            "u1_hub": ChannelDisturbance(
+                force=CableSpring(0.01, 0.2), force_output="theta", force_name="cable"
+            )
+        },
+        hardware=Hardware(
+            actuators={"u1_hub": Amplifier(current_limit=1.0, torque_constant=2.0)}, delay=1
+        ),
+    )
+    for label, law in result.laws.items():
+        direct = simulate(plant, law, config, initial_state=plant.state_from(**scenario.initial))
+        for name in ("theta", "u1_hub", "cable_u1_hub"):
+            np.testing.assert_array_equal(
+                ds[name].sel(run=label).values, direct.dataset[name].values[0]
+            )
+        # the amplifier's limit K_t · 1 A = 2 N m binds below the actuator's 5 N m
+        assert np.abs(ds["u1_hub"].sel(run=label).values).max() <= 2.0 + 1e-12
+    assert "computation delay 1 samples" in ds.attrs["hardware"]
+
+
+def test_the_simulation_kind_refuses_hardware_by_field_path():
+    data = _draper(hardware={"filters": {"nope": {"corner": 10}}})
+    problems = prepare_or_run_problems(data)
+    assert problems == [
+        "hardware.filters.nope: the StructuralPlant plant has no output 'nope' (its outputs: "
+        "theta, rot_tips_1_3, rot_tips_2_4, theta_dot, rot_tips_1_3_dot, rot_tips_2_4_dot, state)"
+    ]  # once, though both runs have it
+    data = _draper()
+    data["runs"][1]["hardware"] = {"amplifiers": {"u9": {}}}
+    problems = prepare_or_run_problems(data)
+    assert problems[0].startswith("runs['LQR, cheap hub torquer'].hardware.amplifiers.u9: ")
+    data = _draper(disturbances={"u1_hub": {"cable": {"constant": "1 s"}}})
+    assert load_problems(data)[0].startswith("disturbances.u1_hub.cable.constant:")
+    rigid = yaml.safe_load((EXAMPLES / "eps_rigid_gibbs_slew.yaml").read_text())
+    rigid["hardware"] = {"delay_samples": 1}
+    problems = prepare_or_run_problems(rigid)
+    # the rigid spacecraft keeps its own RKMK4 step: no hardware states on it
+    assert problems[0].startswith("hardware: RigidSpacecraft: hardware needs a shared plant")
+
+
+def prepare_or_run_problems(data: dict) -> list[str]:
+    """The problems of a simulation document, found before its first run."""
+    with pytest.raises(ScenarioError) as info:
+        run_scenario(load_scenario(yaml.safe_dump(data)))
+    return [str(p) for p in info.value.problems]

@@ -33,6 +33,12 @@ own schema. ``initial`` holds the named initial values the plant understands
 number in SI, a quantity string, or a list of them for a vector channel). Problems are reported,
 before anything runs, as ``field.path: rule`` lines of one
 :class:`~flexsat.scenarios.ScenarioError`.
+
+A ``hardware:`` section (at the top level for every run, or in a run for that run alone) puts
+amplifiers, reaction wheels, anti-alias filters and a computation delay in the loop, and
+``disturbances.<channel>.cable`` a cable spring driven by an angle output
+(:mod:`flexsat.scenarios.hardware_section`); a plant with its own integrator (a rigid
+spacecraft's RKMK4) takes no hardware states and is refused at ``hardware``.
 """
 
 from __future__ import annotations
