@@ -56,6 +56,7 @@ from flexsat.scenarios.fields import (
 )
 from flexsat.sim.disturbances import CableSpring
 from flexsat.sim.hardware import Amplifier, AntiAliasFilter, Hardware, ReactionWheel
+from flexsat.sim.wheel_array import ReactionWheelArray
 from flexsat.units import to_si
 
 if TYPE_CHECKING:
@@ -194,7 +195,7 @@ class HardwareSpec(SchemaSection):
         """The :class:`~flexsat.sim.hardware.Hardware` of the section (None: ideal), a delay
         time converted to samples of ``control_period`` (s)."""
         base = HARDWARE_PRESETS[self.preset]() if self.preset else Hardware()
-        actuators: dict[str, ReactionWheel | Amplifier] = dict(base.actuators)
+        actuators: dict[str, ReactionWheel | Amplifier | ReactionWheelArray] = dict(base.actuators)
         actuators.update({k: a.build() for k, a in self.amplifiers.items()})
         actuators.update({k: w.build() for k, w in self.wheels.items()})
         filters = {**base.filters, **{k: f.build() for k, f in self.filters.items()}}
@@ -288,6 +289,9 @@ def describe_hardware(hardware: Hardware | None) -> str:
             f"{k}: {f.kind} order {f.order} anti-alias filter, corner {cast(float, f.corner):g} Hz"
         )
     for k, a in hardware.actuators.items():
+        if isinstance(a, ReactionWheelArray):
+            parts.append(f"{k}: {a.n_wheels} reaction wheels (pseudo-inverse distribution)")
+            continue
         if isinstance(a, ReactionWheel):
             amp = a.amplifier
             text = (
