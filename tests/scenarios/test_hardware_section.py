@@ -319,3 +319,51 @@ def prepare_or_run_problems(data: dict) -> list[str]:
     with pytest.raises(ScenarioError) as info:
         run_scenario(load_scenario(yaml.safe_dump(data)))
     return [str(p) for p in info.value.problems]
+
+
+def test_a_wheel_array_on_the_rigid_eps_is_the_api_run():
+    """examples/eps_rigid_gibbs_slew.yaml cut to 5 s with a 4-wheel pyramid on its torque
+    (the channel actuator removed: the wheels' limits replace it): each run equals simulate(...)
+    with the same ReactionWheelArray, to round-off; a wheel array with an actuator on its
+    channel, or on a 1-wide channel, is refused at its field."""
+    from flexsat.scenarios.simulation import build_plant
+    from flexsat.sim import SimConfig
+    from flexsat.sim.channels import ChannelSensor
+    from flexsat.sim.hardware import Hardware
+    from flexsat.sim.wheel_array import ReactionWheelArray, pyramid_axes
+
+    G = pyramid_axes(math.acos(1 / math.sqrt(3)))
+    data = yaml.safe_load((EXAMPLES / "eps_rigid_gibbs_slew.yaml").read_text())
+    data["simulation"]["duration"] = "5 s"
+    arrays = {"torque": {"axes": G.T.tolist(), "inertia": "2 kg*m^2", "max_speed": "6000 rpm"}}
+    data["hardware"] = {"wheel_arrays": arrays}
+    assert prepare_or_run_problems(data)[0].startswith(
+        "hardware.wheel_arrays.torque: a wheel array's channel takes no actuators.torque"
+    )
+    del data["actuators"]
+    scenario = load_scenario(yaml.safe_dump(data))
+    result = run_scenario(scenario)
+    ds = result.dataset()
+    plant = build_plant(scenario)
+    array = ReactionWheelArray(G, 2.0, max_speed=200 * math.pi)
+    config = SimConfig(
+        5.0,
+        10.0,
+        channel_sensors={"rate": ChannelSensor(noise=1e-5)},
+        hardware=Hardware(actuators={"torque": array}),
+    )
+    x0 = plant.state_from(**scenario.initial)
+    for label, law in result.laws.items():
+        direct = simulate(plant, law, config, initial_state=x0)
+        for name in ("attitude", "torque_wheels", "torque_wheel_speed"):
+            # to round-off: an element of the wheel commands was measured 1 ulp apart
+            np.testing.assert_allclose(
+                ds[name].sel(run=label).values, direct.dataset[name].values[0], rtol=1e-12
+            )
+    assert "4 reaction wheels" in ds.attrs["hardware"]
+    bad = small(hardware={"wheel_arrays": arrays})
+    assert prepare_problems(bad)[0].startswith(
+        "hardware.wheel_arrays.torque: a wheel array needs a torque 3 wide"
+    )
+    arrays["torque"]["axes"] = [[1, 0, 0], [0, 1, 0], [1, 0]]
+    assert load_problems(bad)[0].startswith("hardware.wheel_arrays.torque.axes:")

@@ -16,6 +16,13 @@ A maneuver scenario takes the section at the document's top level (every run) an
                  amplifier: {mode: current, current_limit: "4 A"}}
       delay_samples: 1             # or delay: "13.3 ms" (a time)
 
+and, on a three-axis spacecraft's torque (a simulation scenario), a reaction-wheel array::
+
+    hardware:
+      wheel_arrays:
+        torque: {axes: [[0.816, 0, 0.577], [0, 0.816, 0.577], [-0.816, 0, 0.577],
+                        [0, -0.816, 0.577]], inertia: "0.05 kg*m^2", max_speed: "6000 rpm"}
+
 Units: a filter's ``corner`` and an amplifier's ``bandwidth`` are frequencies — ``"10 Hz"`` or
 ``"62.83 rad/s"`` (the 2π is applied by the unit conversion), a bare number is Hz; a wheel's
 ``max_speed`` is an angular rate (``"3000 rpm"``, a bare number rad/s); an amplifier's ``gain``
@@ -38,10 +45,11 @@ spacecraft", NPS, c. 1992, Eq. 23: θ_ss = T_D / k_p under PD control)::
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import replace
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Self, cast
 
+import numpy as np
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from flexsat import limits
@@ -147,6 +155,27 @@ class WheelSpec(BuildableSection):
             raise _own_field(exc) from None
 
 
+class WheelArraySpec(BuildableSection):
+    """A reaction-wheel array on a three-axis torque channel
+    (:class:`flexsat.sim.wheel_array.ReactionWheelArray`): ``axes``, one spin-axis unit
+    vector [x, y, z] (body axes) per wheel, three or more spanning the body; ``inertia`` of
+    each wheel; its ``max_speed`` and ``viscous`` friction. The law's body torque goes to the
+    wheels by the pseudo-inverse G⁺ = Gᵀ(G Gᵀ)⁻¹."""
+
+    axes: list[list[float]] = Field(min_length=3, max_length=limits.MAX_RUNS)
+    inertia: Annotated[float, in_unit("kg*m^2", positive=True)]
+    max_speed: Annotated[float | None, in_unit("rad/s", positive=True)] = None
+    viscous: Annotated[float | None, in_unit("N*m*s/rad")] = None
+    rate_output: str | None = None
+
+    def build(self) -> ReactionWheelArray:
+        if any(len(a) != 3 for a in self.axes):
+            raise FieldError("axes", "give each wheel's axis as three numbers [x, y, z]")
+        return ReactionWheelArray(
+            np.array(self.axes, float).T, **given_fields(self, exclude={"axes"})
+        )
+
+
 class HardwareSpec(SchemaSection):
     """The ``hardware:`` section (module docstring)."""
 
@@ -154,13 +183,14 @@ class HardwareSpec(SchemaSection):
     filters: dict[str, FilterSpec] = Field(default_factory=dict)
     amplifiers: dict[str, AmplifierSpec] = Field(default_factory=dict)
     wheels: dict[str, WheelSpec] = Field(default_factory=dict)
+    wheel_arrays: dict[str, WheelArraySpec] = Field(default_factory=dict)
     delay: Annotated[float | None, in_unit("s")] = None
     delay_samples: Annotated[float | None, in_unit("")] = None
 
     @model_validator(mode="after")
     def _consistent(self) -> Self:
         if self.preset == "ideal" and (
-            self.filters or self.amplifiers or self.wheels or self.has_delay
+            self.filters or self.amplifiers or self.wheels or self.wheel_arrays or self.has_delay
         ):
             raise FieldError("preset", "'ideal' is no hardware: give nothing else beside it")
         if self.delay is not None and self.delay_samples is not None:
@@ -171,6 +201,11 @@ class HardwareSpec(SchemaSection):
                 raise FieldError(name, f"must be >= 0, got {value!r}")
         if self.delay_samples is not None and self.delay_samples > limits.MAX_SAMPLES:
             raise FieldError("delay_samples", f"at most {limits.MAX_SAMPLES} samples")
+        for k in self.wheel_arrays:
+            if k in self.amplifiers or k in self.wheels:
+                raise FieldError(
+                    f"wheel_arrays.{k}", f"channel {k!r} also has an amplifier or a wheel"
+                )
         for k in self.wheels:
             if k in self.amplifiers:
                 raise FieldError(
@@ -198,6 +233,7 @@ class HardwareSpec(SchemaSection):
         actuators: dict[str, ReactionWheel | Amplifier | ReactionWheelArray] = dict(base.actuators)
         actuators.update({k: a.build() for k, a in self.amplifiers.items()})
         actuators.update({k: w.build() for k, w in self.wheels.items()})
+        actuators.update({k: w.build() for k, w in self.wheel_arrays.items()})
         filters = {**base.filters, **{k: f.build() for k, f in self.filters.items()}}
         delay = float(base.delay)
         if self.delay_samples is not None:
@@ -215,7 +251,7 @@ class HardwareSpec(SchemaSection):
         ``wheels.<k>``, or ``preset`` (the preset's)."""
         if role == "filters":
             return f"filters.{channel}" if channel in self.filters else "preset"
-        for name in ("amplifiers", "wheels"):
+        for name in ("amplifiers", "wheels", "wheel_arrays"):
             if channel in getattr(self, name):
                 return f"{name}.{channel}"
         return "preset"
@@ -227,6 +263,7 @@ def check_hardware(
     plant: Plant,
     law: Controller,
     path: str,
+    actuated: Iterable[str] = (),
 ) -> list[Problem]:
     """What a run's hardware cannot do on its plant and law, before anything runs: each
     filter on an output the plant has (linear) and the law reads, each amplifier or wheel on a
@@ -257,13 +294,28 @@ def check_hardware(
                     where, f"the {owner} plant has no input {k!r} (its inputs: {', '.join(inputs)})"
                 )
             )
-        elif inputs[k].size != 1:
+        elif isinstance(piece, ReactionWheelArray) and inputs[k].size != 3:
+            problems.append(
+                Problem(where, f"a wheel array needs a torque 3 wide, {k!r} is {inputs[k].size}")
+            )
+        elif isinstance(piece, ReactionWheelArray) and k in actuated:
+            problems.append(
+                Problem(
+                    where,
+                    f"a wheel array's channel takes no actuators.{k} (its limits are the "
+                    "wheels' speed limits)",
+                )
+            )
+        elif not isinstance(piece, ReactionWheelArray) and inputs[k].size != 1:
             problems.append(Problem(where, f"needs a channel 1 wide, {k!r} is {inputs[k].size}"))
         elif k not in law.writes:
             problems.append(
                 Problem(where, f"the law does not write {k!r} (it writes: {', '.join(law.writes)})")
             )
-        elif isinstance(piece, ReactionWheel) and piece.rate_output not in outputs:
+        elif (
+            isinstance(piece, (ReactionWheel, ReactionWheelArray))
+            and piece.rate_output not in outputs
+        ):
             problems.append(
                 Problem(
                     f"{where}.rate_output",
@@ -375,6 +427,7 @@ __all__ = [
     "FilterSpec",
     "HardwareSpec",
     "ProfilePoint",
+    "WheelArraySpec",
     "WheelSpec",
     "check_hardware",
     "describe_hardware",

@@ -484,7 +484,7 @@ def _run_hardware(
         return [locate(path, exc)]
     if hardware is None:
         return []
-    problems = check_hardware(hardware, spec, plant, law, path)
+    problems = check_hardware(hardware, spec, plant, law, path, scenario.actuators)
     if not problems:
         try:
             configs[run.label] = dataclasses.replace(config, hardware=hardware)
