@@ -89,7 +89,7 @@ def test_loc_path_of_a_document_that_is_not_a_mapping():
         (
             ("colour",),
             "kind, name, case, case_overrides, model, maneuver, simulation, actuator, "
-            "sensors, disturbances, runs",
+            "sensors, disturbances, hardware, runs",
         ),
         (
             ("sensors", "rate_windw"),
@@ -98,6 +98,12 @@ def test_loc_path_of_a_document_that_is_not_a_mapping():
         # through a list and an optional section
         (("runs", 0, "reference", "beta"), "shape, u_max, duration, alpha, rise_time"),
         (("disturbances", "friction", "stiction"), "coulomb, viscous, smoothing"),
+        # the hardware section, through a mapping of channel sections
+        (("hardware", "filters", "root_torque", "q"), "type, order, corner"),
+        (
+            ("runs", 1, "hardware", "wheels", "torque", "amplifier", "q"),
+            "mode, gain, current_limit, bandwidth, torque_constant, dac_range, voltage_limit",
+        ),
     ],
 )
 def test_allowed_keys_are_those_of_the_model_at_the_location(loc, expected):

@@ -89,6 +89,34 @@ def _examples(kind: str) -> dict[str, dict]:
 BASES = {kind: _examples(kind) for kind in ("slew", "ppf", "simulation")}
 
 
+def _with_hardware() -> dict:
+    """The Draper/RPL example with a hardware section (an amplifier, a filter, a delay), a
+    run's own section and a cable spring: the sections of flexsat.scenarios.hardware_section
+    mutated too."""
+    data = yaml.safe_load((EXAMPLES / "draper_rpl_lqr.yaml").read_text())
+    data["hardware"] = {
+        "amplifiers": {"u1_hub": {"current_limit": "1 A", "torque_constant": "2 N*m/A"}},
+        "filters": {"state": {"type": "bessel", "order": 2, "corner": "20 Hz"}},
+        "delay": "20 ms",
+    }
+    data["runs"][1]["hardware"] = {"preset": "ideal"}
+    data["disturbances"] = {
+        "u1_hub": {
+            "cable": {
+                "constant": "0.01 N*m",
+                "profile": [
+                    {"angle": "0 deg", "torque": 0},
+                    {"angle": "10 deg", "torque": "1 mN*m"},
+                ],
+            }
+        }
+    }
+    return small(data)
+
+
+BASES["simulation"]["draper_rpl_hardware"] = _with_hardware()
+
+
 class TooLarge(Exception):
     """A valid mutated document whose simulation is too long to run in a property test."""
 

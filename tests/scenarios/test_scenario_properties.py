@@ -56,11 +56,20 @@ BASES = {
     "nps_pd": _small(yaml.safe_load((EXAMPLES / "nps_pd_slews.yaml").read_text())),
     "nps_lqg": _small(yaml.safe_load((EXAMPLES / "nps_lqg_30deg.yaml").read_text())),
     "tamu_40deg": _small(yaml.safe_load((EXAMPLES / "tamu_40deg.yaml").read_text())),
+    # the hardware section (filters, preset, delay) and a run of its own mutated too
+    "tamu_hardware": _small(yaml.safe_load((EXAMPLES / "tamu_hardware.yaml").read_text())),
     "identification": yaml.safe_load((EXAMPLES / "tamu_grid_identification.yaml").read_text()),
 }
 #: the default is cheap to prepare and comes up most often; the NPS ones build a finite-element
 #: model (~0.3 s each)
-BASE_WEIGHTS = {"default": 6, "nps_pd": 1, "nps_lqg": 1, "tamu_40deg": 1, "identification": 2}
+BASE_WEIGHTS = {
+    "default": 6,
+    "nps_pd": 1,
+    "nps_lqg": 1,
+    "tamu_40deg": 1,
+    "tamu_hardware": 1,
+    "identification": 2,
+}
 
 
 @st.composite

@@ -181,28 +181,8 @@ class TamuCase:
         )
 
     def hardware(self, amplifier_bandwidth: float = np.inf, filter_order: int = 2) -> Hardware:
-        """The TAMU computer cycle and drive as a preset (Att. 3 appendix): the KEPCO BOP in
-        current mode (1.2 A/V, 12 A, ±10 V D/A; its current-loop bandwidth, Hz, is not
-        published: instantaneous by default, a finite value adds its lag as a state and the
-        compiled loop then propagates densely), the
-        PMI motor's K_t = 52.77 oz-in/A, a 10 Hz Butterworth anti-alias filter of
-        ``filter_order`` on the strain-gauge channel (``root_torque``), and the one-step-ahead
-        command: one sample of delay at 75 Hz. The encoder is read at the DACLK interrupt
-        (no filter). The strain burst's mean over three 4 kHz ADCLK cycles is not modelled:
-        its gain at 10 Hz differs from 1 by 1 − sinc(π · 10 Hz · 0.5 ms) ≈ 4e-6."""
-        amp = Amplifier(
-            "current",
-            gain=1.2,
-            current_limit="12 A",
-            bandwidth=amplifier_bandwidth,
-            torque_constant="52.77 ozf*in/A",
-            dac_range="10 V",
-        )
-        return Hardware(
-            actuators={"torque": amp},
-            filters={"root_torque": AntiAliasFilter("10 Hz", filter_order)},
-            delay=1,
-        )
+        """The TAMU computer cycle and drive as a preset (:func:`tamu_hardware`)."""
+        return tamu_hardware(amplifier_bandwidth, filter_order)
 
     def law_i(
         self,
@@ -253,6 +233,33 @@ class TamuCase:
         )
 
 
+def tamu_hardware(amplifier_bandwidth: float = np.inf, filter_order: int = 2) -> Hardware:
+    """The TAMU computer cycle and drive as a preset (Att. 3 appendix): the KEPCO BOP in
+    current mode (1.2 A/V, 12 A, ±10 V D/A; its current-loop bandwidth, Hz, is not
+    published: instantaneous by default, a finite value adds its lag as a state and the
+    compiled loop then propagates densely), the
+    PMI motor's K_t = 52.77 oz-in/A, a 10 Hz Butterworth anti-alias filter of
+    ``filter_order`` on the strain-gauge channel (``root_torque``), and the one-step-ahead
+    command: one sample of delay at 75 Hz. The encoder is read at the DACLK interrupt
+    (no filter). The strain burst's mean over three 4 kHz ADCLK cycles is not modelled:
+    its gain at 10 Hz differs from 1 by 1 − sinc(π · 10 Hz · 0.5 ms) ≈ 4e-6.
+
+    Needs no case built (the ``preset: tamu`` of a scenario's ``hardware`` section)."""
+    amp = Amplifier(
+        "current",
+        gain=1.2,
+        current_limit="12 A",
+        bandwidth=amplifier_bandwidth,
+        torque_constant="52.77 ozf*in/A",
+        dac_range="10 V",
+    )
+    return Hardware(
+        actuators={"torque": amp},
+        filters={"root_torque": AntiAliasFilter("10 Hz", filter_order)},
+        delay=1,
+    )
+
+
 def tamu(**overrides: Any) -> TamuCase:
     """Build the TAMU case; override any input by name, as a number (SI) or a unit string.
 
@@ -301,4 +308,5 @@ __all__ = [
     "inertia_budget",
     "published_reference_inertia",
     "tamu",
+    "tamu_hardware",
 ]

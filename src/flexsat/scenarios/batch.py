@@ -507,7 +507,7 @@ def builder_of(scenario: BatchScenario, maneuver: Scenario) -> HubManeuverBuilde
     return HubManeuverBuilder(
         params=model.params,
         n_modes=model.n_modes,
-        config=plan.config,
+        config=plan.run_config(scenario.run),
         angle=float(ref.angle),
         reference_inertia=float(ref.inertia),
         u_max=float(ref.u_max),

@@ -20,6 +20,11 @@ Keys left out of ``actuator``, ``sensors``, ``disturbances`` and ``simulation`` 
 defaults of the runtime classes (:class:`flexsat.sim.SimConfig` and its parts: ideal sensors, no
 saturation, no disturbance).
 
+The laboratory hardware (amplifiers, reaction wheels, anti-alias filters, the computation
+delay) is a ``hardware:`` section, at the top level for every run or in a run for that run
+alone, and the cable spring on the hub is ``disturbances.cable``
+(:mod:`flexsat.scenarios.hardware_section`).
+
 Validation runs in two stages, both before any simulation, and each collects all its problems
 into one :class:`~flexsat.scenarios.ScenarioError` whose lines read ``field.path: rule``:
 
@@ -47,6 +52,7 @@ from flexsat.cases import CASES, get_case
 from flexsat.dynamics.hybrid import HybridPlant
 from flexsat.input_checks import FieldError
 from flexsat.maneuvers import BangBang, PseudoSquare, Sinusoidal, SmoothBangBang, TorqueShape
+from flexsat.scenarios.errors import item_path
 from flexsat.scenarios.fields import (
     BuildableSection,
     Document,
@@ -56,6 +62,7 @@ from flexsat.scenarios.fields import (
     in_unit,
     integer_in,
 )
+from flexsat.scenarios.hardware_section import CableSpec, HardwareSpec
 from flexsat.scenarios.laws import MANEUVER_LAWS, LawName
 from flexsat.sim import (
     BearingFriction,
@@ -171,14 +178,18 @@ class ImpulseSpec(SchemaSection):
 
 
 class DisturbancesSpec(BuildableSection):
-    """Bearing friction, random torque (1 sigma, N m) and angular impulses on the hub."""
+    """Bearing friction, random torque (1 sigma, N m), angular impulses and the cable spring
+    (:class:`~flexsat.scenarios.hardware_section.CableSpec`) on the hub."""
 
     friction: FrictionSpec = Field(default_factory=FrictionSpec)
     random_torque: Annotated[float | None, in_unit("N*m")] = None
     impulses: list[ImpulseSpec] = Field(default_factory=list, max_length=limits.MAX_SAMPLES)
+    cable: CableSpec | None = None
 
     def build(self) -> dict[str, Any]:
-        """Keyword arguments ``friction``, ``random_torque``, ``impulses`` of :class:`SimConfig`."""
+        """Keyword arguments ``friction``, ``random_torque``, ``impulses`` (and, with a cable,
+        ``channel_disturbances``: the cable's torque on the hub's ``torque`` input, driven by
+        ``theta``) of :class:`SimConfig`."""
         try:
             random = RandomTorque(*(() if self.random_torque is None else (self.random_torque,)))
         except FieldError as exc:  # its one input, std, is this section's random_torque
@@ -186,7 +197,20 @@ class DisturbancesSpec(BuildableSection):
         impulses = Impulses(
             tuple(i.time for i in self.impulses), tuple(i.impulse for i in self.impulses)
         )
-        return {"friction": self.friction.build(), "random_torque": random, "impulses": impulses}
+        out: dict[str, Any] = {
+            "friction": self.friction.build(),
+            "random_torque": random,
+            "impulses": impulses,
+        }
+        if self.cable is not None:
+            from flexsat.sim.channels import ChannelDisturbance
+
+            out["channel_disturbances"] = {
+                "torque": ChannelDisturbance(
+                    force=self.cable.build(), force_output="theta", force_name="cable"
+                )
+            }
+        return out
 
 
 class GainsSpec(SchemaSection):
@@ -275,7 +299,9 @@ class RunSpec(SchemaSection):
 
     ``law`` is ``lyapunov_regulator`` (gains g1, g2, g3), ``lyapunov_tracker`` (same gains and a
     ``reference``) or ``pd`` (gains kp, kd or ``poles``; with a ``reference`` it tracks it,
-    feeding its torque forward unless ``feedforward: false``).
+    feeding its torque forward unless ``feedforward: false``). ``hardware`` is this run's
+    (:class:`~flexsat.scenarios.hardware_section.HardwareSpec`) in place of the document's
+    (``{preset: ideal}``: none).
     """
 
     label: str
@@ -285,6 +311,7 @@ class RunSpec(SchemaSection):
     reference: ReferenceSpec | None = None
     feedforward: bool | None = None
     lqg: LQGSpec | None = None
+    hardware: HardwareSpec | None = None
 
     @model_validator(mode="after")
     def _law_inputs(self) -> Self:
@@ -331,6 +358,7 @@ class Scenario(Document):
     actuator: ActuatorSpec = Field(default_factory=ActuatorSpec)
     sensors: SensorsSpec = Field(default_factory=SensorsSpec)
     disturbances: DisturbancesSpec = Field(default_factory=DisturbancesSpec)
+    hardware: HardwareSpec | None = None
     runs: list[RunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
 
     @field_validator("case")
@@ -379,12 +407,20 @@ class Scenario(Document):
     }
 
     def sim_config(self) -> SimConfig:
-        """The :class:`SimConfig` shared by every run."""
+        """The :class:`SimConfig` shared by every run (without hardware)."""
         return self.simulation.build(
             actuator=self.actuator.build(),
             sensors=self.sensors.build(),
             **self.disturbances.build(),
         )
+
+    def run_hardware(self, index: int) -> tuple[str, HardwareSpec | None]:
+        """(the field path of, the section of) run ``index``'s hardware: its own, else the
+        document's."""
+        run = self.runs[index]
+        if run.hardware is not None:
+            return "runs" + item_path(index, run.label) + ".hardware", run.hardware
+        return "hardware", self.hardware
 
 
 @functools.cache

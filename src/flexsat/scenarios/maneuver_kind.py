@@ -45,6 +45,8 @@ class ScenarioPlan:
     config : SimConfig
     controllers : dict of str to Controller
         One controller per run, by label, in the scenario's order.
+    configs : dict of str to SimConfig
+        Each run's configuration: ``config`` with the run's hardware (none: ``config``).
     """
 
     scenario: Scenario
@@ -52,6 +54,55 @@ class ScenarioPlan:
     model: HubAppendage
     config: SimConfig
     controllers: dict[str, Controller]
+    configs: dict[str, SimConfig] = field(default_factory=dict)
+
+    def run_config(self, label: str) -> SimConfig:
+        """The configuration of run ``label``."""
+        return self.configs.get(label, self.config)
+
+
+def _with_hardware(
+    scenario: Scenario,
+    model: HubAppendage,
+    config: SimConfig,
+    controllers: dict[str, Controller],
+) -> dict[str, SimConfig]:
+    """Each run's configuration with its hardware (section built, channels checked against
+    the model and the run's law).
+
+    Raises
+    ------
+    ScenarioError
+        Every hardware problem, at the section's field path.
+    """
+    import dataclasses
+
+    from flexsat.scenarios.hardware_section import check_hardware
+
+    problems: list[Problem] = []
+    configs: dict[str, SimConfig] = {}
+    for index, (label, law) in enumerate(controllers.items()):
+        path, spec = scenario.run_hardware(index)
+        if spec is None:
+            continue
+        try:
+            hardware = spec.build(config.dt)
+        except ValueError as exc:
+            problems.append(locate(path, exc))
+            continue
+        if hardware is None:
+            continue
+        found = check_hardware(hardware, spec, model, law, path)
+        if found:
+            problems.extend(found)
+            continue
+        try:
+            configs[label] = dataclasses.replace(config, hardware=hardware)
+        except ValueError as exc:
+            problems.append(locate(path, exc))
+    if problems:  # a document-level section's problem once, not once per run
+        raise ScenarioError(list(dict.fromkeys(problems)))
+    return configs
 
 
 def _build_case(scenario: Scenario) -> tuple[Any, HubAppendage]:
@@ -152,11 +203,14 @@ def prepare_scenario(scenario: Scenario) -> ScenarioPlan:
             if controller is not None:  # else its problems are raised below
                 controllers[run.label] = controller
     config = scenario.sim_config()
+    configs: dict[str, SimConfig] | None = {}
+    if built is not None and not problems:
+        configs = _collect(problems, _with_hardware, scenario, model, config, controllers)
     if built is not None and not problems:
         _collect(problems, _check_resources, scenario, model, config, controllers)
     if problems:
         raise ScenarioError(problems)
-    return ScenarioPlan(scenario, case, model, config, controllers)
+    return ScenarioPlan(scenario, case, model, config, controllers, configs or {})
 
 
 def _check_resources(
@@ -190,6 +244,15 @@ class ManeuverResult(SimulatedRuns):
     laws: dict[str, Controller] = field(default_factory=dict)
     model: HybridPlant | None = None
     control_period: float = 0.0
+    hardware: dict[str, str] = field(default_factory=dict)
+
+    def dataset(self) -> xr.Dataset:
+        """As :meth:`SimulatedRuns.dataset`, with the attribute ``hardware``: each run's
+        hardware, one ``label: description`` line per run
+        (:func:`~flexsat.scenarios.hardware_section.describe_hardware`)."""
+        ds = super().dataset()
+        ds.attrs["hardware"] = "\n".join(f"{k}: {v}" for k, v in self.hardware.items())
+        return ds
 
     def plots(self, ds: xr.Dataset) -> list[Plot]:
         from flexsat.report.maneuver import plots
@@ -198,8 +261,9 @@ class ManeuverResult(SimulatedRuns):
 
     def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.maneuver import sections
+        from flexsat.scenarios.hardware_section import hardware_html
 
-        return sections(self.metrics_records())
+        return sections(self.metrics_records()) + "\n" + hardware_html(self.hardware)
 
     def controller_summaries(self) -> tuple[LawSummary, ...]:
         """Each law's summary on the model's linear part (a hybrid model's states labelled
@@ -230,14 +294,17 @@ class ManeuverKind(ScenarioKind):
         return len(scenario.runs)
 
     def plan(self, scenario: Scenario) -> Generator[Run, Any, ManeuverResult]:
+        from flexsat.scenarios.hardware_section import describe_hardware
+
         prepared = prepare_scenario(scenario)
         results = []
         for index, (label, controller) in enumerate(prepared.controllers.items()):
+            config = prepared.run_config(label)
             results.append(
                 (
                     yield Run(
                         label,
-                        Simulation(prepared.model, controller, prepared.config),
+                        Simulation(prepared.model, controller, config),
                         "runs" + item_path(index, label),
                     )
                 )
@@ -250,6 +317,10 @@ class ManeuverKind(ScenarioKind):
             laws=dict(prepared.controllers),
             model=prepared.model,
             control_period=1.0 / prepared.config.control_rate,
+            hardware={
+                label: describe_hardware(prepared.run_config(label).hardware)
+                for label in prepared.controllers
+            },
         )
 
 

@@ -33,6 +33,12 @@ own schema. ``initial`` holds the named initial values the plant understands
 number in SI, a quantity string, or a list of them for a vector channel). Problems are reported,
 before anything runs, as ``field.path: rule`` lines of one
 :class:`~flexsat.scenarios.ScenarioError`.
+
+A ``hardware:`` section (at the top level for every run, or in a run for that run alone) puts
+amplifiers, reaction wheels, anti-alias filters and a computation delay in the loop, and
+``disturbances.<channel>.cable`` a cable spring driven by an angle output
+(:mod:`flexsat.scenarios.hardware_section`); a plant with its own integrator (a rigid
+spacecraft's RKMK4) takes no hardware states and is refused at ``hardware``.
 """
 
 from __future__ import annotations
@@ -63,6 +69,12 @@ from flexsat.scenarios.fields import (
     given_fields,
     in_unit,
     integer_in,
+)
+from flexsat.scenarios.hardware_section import (
+    ChannelCableSpec,
+    HardwareSpec,
+    describe_hardware,
+    hardware_html,
 )
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 from flexsat.scenarios.models import ModelPlantOptions, ModelSection, model_label, model_plant
@@ -120,11 +132,13 @@ class ImpulseSpec(SchemaSection):
 
 
 class ChannelDisturbanceSpec(SchemaSection):
-    """A disturbance on one input channel: Gaussian (1σ, held over each control period) and
-    impulses (the channel's unit × s)."""
+    """A disturbance on one input channel: Gaussian (1σ, held over each control period),
+    impulses (the channel's unit × s) and a cable spring driven by an angle output
+    (:class:`~flexsat.scenarios.hardware_section.ChannelCableSpec`, N m)."""
 
     random: Value | None = None
     impulses: list[ImpulseSpec] = Field(default_factory=list, max_length=limits.MAX_SAMPLES)
+    cable: ChannelCableSpec | None = None
 
 
 class SimulationRunSpec(SchemaSection):
@@ -136,6 +150,7 @@ class SimulationRunSpec(SchemaSection):
     law: str
     gains: Any = Field(default_factory=dict, validate_default=True)
     target: Any = Field(default_factory=dict, validate_default=True)
+    hardware: HardwareSpec | None = None
 
     @field_validator("law")
     @classmethod
@@ -181,6 +196,7 @@ class SimulationScenario(Document):
     sensors: dict[str, ChannelSensorSpec] = Field(default_factory=dict)
     actuators: dict[str, ChannelActuatorSpec] = Field(default_factory=dict)
     disturbances: dict[str, ChannelDisturbanceSpec] = Field(default_factory=dict)
+    hardware: HardwareSpec | None = None
     runs: list[SimulationRunSpec] = Field(min_length=1, max_length=limits.MAX_RUNS)
 
     @field_validator("case")
@@ -280,6 +296,7 @@ class SimulationResult(SimulatedRuns):
     laws: dict[str, Controller] = field(default_factory=dict)
     plant: Plant | None = None
     control_period: float = 0.0
+    hardware: dict[str, str] = field(default_factory=dict)
 
     def controller_summaries(self) -> tuple[LawSummary, ...]:
         """Each law's summary on the plant's linear part; a plant without one (nonlinear,
@@ -305,6 +322,7 @@ class SimulationResult(SimulatedRuns):
         model when it has one."""
         ds = super().dataset()
         ds.attrs["case"] = scenario_subject(self.scenario)
+        ds.attrs["hardware"] = "\n".join(f"{k}: {v}" for k, v in self.hardware.items())
         return ds
 
     def plots(self, ds: xr.Dataset) -> list[Plot]:
@@ -315,7 +333,7 @@ class SimulationResult(SimulatedRuns):
     def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
         from flexsat.report.simulation import sections
 
-        return sections(self.metrics_records(), ds)
+        return sections(self.metrics_records(), ds) + "\n" + hardware_html(self.hardware)
 
 
 def scenario_subject(scenario: SimulationScenario) -> str:
@@ -411,7 +429,12 @@ def channel_config(scenario: Any, plant: Plant, subject: str | None = None) -> S
                         )
                     ]
                 )
-            values = given_fields(spec)
+            values = given_fields(spec, exclude={"cable"})
+            cable = getattr(spec, "cable", None)
+            if cable is not None:
+                values["force"] = cable.build()
+                values["force_output"] = cable.output
+                values["force_name"] = "cable"
             if "impulses" in values:
                 impulses = values.pop("impulses")
                 values["impulse_times"] = tuple(i["time"] for i in impulses)
@@ -449,6 +472,41 @@ def channel_config(scenario: Any, plant: Plant, subject: str | None = None) -> S
     except ValueError as exc:
         raise ScenarioError([Problem("simulation", str(exc))]) from None
     return config
+
+
+def _run_hardware(
+    scenario: SimulationScenario,
+    index: int,
+    plant: Plant,
+    law: Controller,
+    config: SimConfig,
+    configs: dict[str, SimConfig],
+) -> list[Problem]:
+    """Run ``index``'s configuration with its hardware (its own section, else the
+    document's) put in ``configs``; the problems, at the section's field path."""
+    import dataclasses
+
+    from flexsat.scenarios.hardware_section import check_hardware
+
+    run = scenario.runs[index]
+    spec, path = run.hardware, "runs" + item_path(index, run.label) + ".hardware"
+    if spec is None:
+        spec, path = scenario.hardware, "hardware"
+    if spec is None:
+        return []
+    try:
+        hardware = spec.build(config.dt)
+    except ValueError as exc:
+        return [locate(path, exc)]
+    if hardware is None:
+        return []
+    problems = check_hardware(hardware, spec, plant, law, path, scenario.actuators)
+    if not problems:
+        try:
+            configs[run.label] = dataclasses.replace(config, hardware=hardware)
+        except ValueError as exc:
+            problems.append(locate(path, exc))
+    return problems
 
 
 class SimulationKind(ScenarioKind):
@@ -499,12 +557,16 @@ class SimulationKind(ScenarioKind):
                         "not a flexsat.control.Controller",
                     )
                 )
-        if problems:
-            raise ScenarioError(problems)
+        configs: dict[str, SimConfig] = {}
+        for index, run in enumerate(scenario.runs):
+            if run.label in laws:
+                problems += _run_hardware(scenario, index, plant, laws[run.label], config, configs)
+        if problems:  # a document-level section's problem once, not once per run
+            raise ScenarioError(list(dict.fromkeys(problems)))
         results = []
         for index, (label, law) in enumerate(laws.items()):
             options: dict[str, Any] = {"n_cases": 1, "initial_state": x0}
-            simulation = Simulation(plant, law, config, options)
+            simulation = Simulation(plant, law, configs.get(label, config), options)
             results.append((yield Run(label, simulation, "runs" + item_path(index, label))))
         source = (
             "the scenario's own model, not a published system"
@@ -519,6 +581,10 @@ class SimulationKind(ScenarioKind):
             laws=laws,
             plant=plant,
             control_period=config.dt,
+            hardware={
+                label: describe_hardware(configs[label].hardware if label in configs else None)
+                for label in laws
+            },
         )
 
 

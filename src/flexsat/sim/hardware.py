@@ -33,7 +33,7 @@ loop, with two exact steps).
 from __future__ import annotations
 
 import weakref
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
@@ -51,6 +51,7 @@ from flexsat.sim.hardware_models import (
     companion_blocks,
     zoh,
 )
+from flexsat.sim.wheel_array import ReactionWheelArray, WheelArrayPlant
 from flexsat.units import to_si_array
 
 if TYPE_CHECKING:
@@ -77,14 +78,17 @@ class Hardware:
     Parameters
     ----------
     actuators : dict
-        Input channel (size 1) -> :class:`ReactionWheel` or :class:`Amplifier`.
+        Input channel (size 1) -> :class:`ReactionWheel` or :class:`Amplifier`; a three-axis
+        torque channel -> :class:`~flexsat.sim.wheel_array.ReactionWheelArray`.
     filters : dict
         Measured output channel -> :class:`AntiAliasFilter`.
     delay : float
         Computation delay, control samples (1 = the one-step-ahead command).
     """
 
-    actuators: Mapping[str, ReactionWheel | Amplifier] = field(default_factory=dict)
+    actuators: Mapping[str, ReactionWheel | Amplifier | ReactionWheelArray] = field(
+        default_factory=dict
+    )
     filters: Mapping[str, AntiAliasFilter] = field(default_factory=dict)
     delay: float = 0.0
     # the augmented plant of each plant run with this hardware (built once: a batch of runs
@@ -108,7 +112,11 @@ class Hardware:
         got = self._built.get(id(plant))
         if got is not None and got[0]() is plant:
             return got[1]
-        hp = HardwarePlant(plant, self.driven, self.filters)
+        inner = plant
+        for k, a in self.actuators.items():
+            if isinstance(a, ReactionWheelArray):
+                inner = WheelArrayPlant(inner, k, a)
+        hp = HardwarePlant(inner, self.driven, self.filters)
         try:
             self._built[id(plant)] = (weakref.ref(plant), hp)
         except TypeError:  # a plant without weak references: built per run
@@ -117,7 +125,7 @@ class Hardware:
 
     def __post_init__(self) -> None:
         for name, kinds, pieces in (
-            ("actuators", (ReactionWheel, Amplifier), self.actuators),
+            ("actuators", (ReactionWheel, Amplifier, ReactionWheelArray), self.actuators),
             ("filters", (AntiAliasFilter,), self.filters),
         ):
             if not isinstance(pieces, Mapping) or not all(
@@ -145,7 +153,8 @@ class Hardware:
         return {
             k: a
             for k, a in self.actuators.items()
-            if isinstance(a, ReactionWheel) or np.isfinite(a.si("bandwidth"))
+            if isinstance(a, ReactionWheel)
+            or (isinstance(a, Amplifier) and np.isfinite(a.si("bandwidth")))
         }
 
     @property
@@ -177,6 +186,15 @@ class Hardware:
         hp = self.plant_for(plant)
         reads = {k: f"{k}_filtered" for k in self.filters}
         writes = {k: f"{k}_drive" for k in self.driven}
+        arrays = {k: a for k, a in self.actuators.items() if isinstance(a, ReactionWheelArray)}
+        writes.update({k: f"{k}_wheels" for k in arrays})
+        for k in arrays:
+            if k in actuators:
+                raise FieldError(
+                    f"actuators[{k}]",
+                    "a wheel array's channel takes no channel actuator (its limits are the "
+                    "wheels' speed limits)",
+                )
         for k in self.filters:
             if k not in controller.reads:
                 raise FieldError(f"filters[{k}]", f"the law does not read {k!r}")
@@ -194,6 +212,8 @@ class Hardware:
         for k, piece in self.actuators.items():
             name = writes.get(k, k)
             a = a_out.get(name, ChannelActuator())
+            if isinstance(piece, ReactionWheelArray):
+                continue
             if isinstance(piece, ReactionWheel):
                 amp = piece.amplifier
                 limit = amp.torque_limit(piece.si("resistance"), piece.si("torque_constant"))
@@ -215,12 +235,27 @@ class Hardware:
                     force_output=f"{k}_wheel_speed",
                     force_name="coulomb",
                 ).bind(ch)
-        gates = {
+        gates: dict[str, tuple[str, Any]] = {
             writes[k]: (f"{k}_wheel_speed", p.si("max_speed"))
             for k, p in self.actuators.items()
             if isinstance(p, ReactionWheel) and np.isfinite(p.si("max_speed"))
         }
-        law = HardwareLaw(controller, reads, writes, self.whole_delay, self.fractional_delay, gates)
+        gates.update(
+            {
+                writes[k]: (f"{k}_wheel_speed", np.asarray(a.max_speed, float))
+                for k, a in arrays.items()
+                if np.any(np.isfinite(np.asarray(a.max_speed, float)))
+            }
+        )
+        law = HardwareLaw(
+            controller,
+            reads,
+            writes,
+            self.whole_delay,
+            self.fractional_delay,
+            gates,
+            {writes[k]: a.distribution for k, a in arrays.items()},
+        )
         return hp, law, s_out, a_out, d_out
 
 
@@ -475,6 +510,9 @@ class HardwarePlant(Plant):
         wheel spinning with the body (Ω = 0), each drive at zero, each filter at its steady
         state for the plant's output at zero input."""
         x = np.asarray(x, float)
+        lift = getattr(self.inner, "settled", None)
+        if x.shape[-1] < self._n and lift is not None:  # the state of the plant a wheel
+            x = lift(x)  # array wraps: its wheels settled first
         out = np.zeros(x.shape[:-1] + (self._nx,))
         out[..., : self._n] = x[..., : self._n]
         for k, p in self._wheels.items():
@@ -509,10 +547,20 @@ class HardwarePlant(Plant):
             e = e + 0.5 * p.si("inertia") * x[..., self._layout[k]["wheel"]] ** 2
         return e
 
-    def vibration_energy(self, x: FloatArray, energy: FloatArray | None = None) -> FloatArray:
-        """The plant's vibration energy (``energy``, which holds the wheels', is not used)."""
-        vib = self.inner.vibration_energy  # type: ignore[attr-defined]
-        return np.asarray(vib(x[..., : self._n]), float)
+    @property
+    def vibration_energy(self) -> Callable[..., FloatArray]:
+        """The plant's vibration energy of x_H (the energy, which holds the wheels', is not
+        used); no such attribute when the plant has none (a structure without a rigid mode:
+        the engine then records none)."""
+        vib = getattr(self.inner, "vibration_energy", None)
+        if vib is None:
+            raise AttributeError("vibration_energy")
+        n = self._n
+
+        def energy(x: FloatArray, energy: FloatArray | None = None) -> FloatArray:
+            return np.asarray(vib(x[..., :n]), float)
+
+        return energy
 
     def modal_form(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None:
         """(T, T⁻¹, ω, ζ) with x_H = T z, z in companion 2×2 blocks, for the compiled loop's
@@ -631,9 +679,12 @@ class HardwareLaw(Controller):
         writes: Mapping[str, str],
         whole: int = 0,
         fraction: float = 0.0,
-        gates: Mapping[str, tuple[str, float]] | None = None,
+        gates: Mapping[str, tuple[str, Any]] | None = None,
+        distribute: Mapping[str, FloatArray] | None = None,
     ) -> None:
         self.law = law
+        # a wheel array's channel: the body torque c sent as r = G⁺ c (before the delay)
+        self.distribute = dict(distribute or {})
         self._rmap, self._wmap = dict(reads), dict(writes)
         self.whole, self.fraction = int(whole), float(fraction)
         self.gates = dict(gates or {})
@@ -666,6 +717,8 @@ class HardwareLaw(Controller):
         if not isinstance(cmd, Mapping):
             cmd = {self.law.writes[0]: cmd}
         out = {self._wmap.get(k, k): np.asarray(v, float) for k, v in cmd.items()}
+        for k, M in self.distribute.items():
+            out[k] = out[k] @ M.T
         new = dict(own)
         for k in self.writes:  # the FIFO: slot 0 newest
             c = out[k]
@@ -687,6 +740,8 @@ class HardwareLaw(Controller):
         (:func:`flexsat.sim.compiled.unsupported`)."""
         if self.gates:
             return f"{', '.join(self.gates)}: a wheel's speed limit (a switch on the state)"
+        if self.distribute:
+            return f"{', '.join(self.distribute)}: a wheel array on a three-axis spacecraft"
         if self.fraction:
             return f"a fractional computation delay ({self.fraction:g} of a sample)"
         return None
