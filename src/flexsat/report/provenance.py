@@ -18,6 +18,8 @@ import re
 from dataclasses import dataclass
 from datetime import UTC, datetime
 
+from flexsat.input_checks import FieldError
+
 #: the provenance line of a page (one line, :func:`provenance_html`)
 PROVENANCE_LINE = re.compile(r'^<p class="provenance">.*</p>\n', re.MULTILINE)
 
@@ -49,7 +51,7 @@ def report_date() -> datetime:
 
     Raises
     ------
-    ValueError
+    FieldError
         Naming ``SOURCE_DATE_EPOCH`` when it is not a whole number of seconds.
     """
     epoch = os.environ.get("SOURCE_DATE_EPOCH")
@@ -58,8 +60,8 @@ def report_date() -> datetime:
     try:
         return datetime.fromtimestamp(int(epoch), UTC)
     except (ValueError, OverflowError, OSError):
-        raise ValueError(
-            f"SOURCE_DATE_EPOCH: must be a whole number of seconds since 1970, got {epoch!r}"
+        raise FieldError(
+            "SOURCE_DATE_EPOCH", f"must be a whole number of seconds since 1970, got {epoch!r}"
         ) from None
 
 
