@@ -290,8 +290,8 @@ def test_workers_are_asked_of_the_kind(tmp_path):
     done = runner.invoke(app, ["run", "--workers", "2", "--out", str(tmp_path / "a")])
     assert done.exit_code == 2
     assert (
-        "--workers/--scheduler: a maneuver scenario runs in this process; they apply to kind "
-        "montecarlo and sweep"
+        "--workers/--scheduler: a maneuver scenario runs in this process; they apply to the "
+        "kinds design, montecarlo, sweep"
     ) in unwrapped(done.stderr)
     batch = Path(__file__).parents[1] / "examples" / "tamu_montecarlo.yaml"
     done = runner.invoke(

@@ -496,6 +496,38 @@ def test_the_linear_form_is_the_law(coupled, feedforward):
         law.linear_form(2 * DT, times, 2)
 
 
+@pytest.mark.numerics
+def test_the_linear_form_feeds_back_the_departures_from_a_planned_modal_motion(coupled):
+    # a nominal with elastic(t) (a planned slew): the law feeds back η − η_p, η̇ − η̇_p; the
+    # linear form carries η_p, η̇_p in y_ref, so it is the law again (same 1e-9 relative as above)
+    from flexsat.control.linear_form import run_controller, run_linear_law
+
+    truth, design = coupled
+    planned = design.controller(DT, plant=truth)
+    tables = planned.tables()
+    n = 2
+    rng = np.random.default_rng(5)
+    tables["elastic_reference"] = 1e-3 * rng.standard_normal((tables["torque"].shape[0], 2 * n))
+    law = PerturbationFeedback.from_tables(tables, DT, planned.writes, n, truth.n_modes)
+    times = DT * np.arange(1300)
+    form = law.linear_form(DT, times, 2)
+    lin = design.linearization
+    b_n, w_n, _, _ = lin.nominal_at(np.minimum(times, T))
+    x = 1e-3 * rng.standard_normal((times.size, 2, truth.nx))
+    x[:, :, :4] += b_n[:, None]
+    x[:, :, 4:7] += w_n[:, None]
+    x[:, :, :4] /= np.linalg.norm(x[:, :, :4], axis=-1, keepdims=True)
+    y = {c.name: truth.output(c.name, x) for c in law_inputs(truth)}
+    Y = np.concatenate([y["attitude"], y["rate"], y["elastic"]], axis=-1)
+    expected = run_controller(law, times, Y, (4, 3, 2 * truth.n_modes), form.write_sizes)
+    got = run_linear_law(form, Y)
+    scale = np.abs(expected).max()
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9 * scale)
+    # and the reference matters: the law without it commands otherwise
+    unplanned = run_controller(planned, times, Y, (4, 3, 2 * truth.n_modes), form.write_sizes)
+    assert np.abs(unplanned - expected).max() > 1e3 * 1e-9 * scale
+
+
 def law_inputs(plant):
     return [c for c in plant.outputs if c.name in ("attitude", "rate", "elastic")]
 

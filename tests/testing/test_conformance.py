@@ -86,6 +86,27 @@ def _dispersed_flexible():
     return stack_plants([nominal.with_parameters(frequencies=base * s) for s in (0.95, 1.0, 1.05)])
 
 
+def _tamu_hardware():
+    """Law II through the TAMU drive, anti-alias filter and one-sample delay (the law wrapped,
+    the plant with the hardware states appended), as the engine runs it."""
+    from flexsat.cases.tamu import tamu_hardware
+
+    case = _tamu()
+    law, model = case.law_ii(1.0, 2.0, 0.5), case.model()
+    plant, wrapped, *_ = tamu_hardware().apply(model, law, {}, {}, {})
+    return wrapped, plant
+
+
+def _wheel_array():
+    """A rigid spacecraft driven by a four-wheel pyramid (the wheel speeds appended)."""
+    from flexsat.dynamics.rigid_spacecraft import RigidSpacecraft
+    from flexsat.sim.wheel_array import ReactionWheelArray, WheelArrayPlant, pyramid_axes
+
+    J = np.array([[120.0, 3.0, -2.0], [3.0, 150.0, 4.0], [-2.0, 4.0, 200.0]])
+    array = ReactionWheelArray(pyramid_axes(np.deg2rad(54.74)), 0.05)
+    return WheelArrayPlant(RigidSpacecraft(J), "torque", array)
+
+
 PLANTS = {
     "tamu_hub_appendage": lambda: _tamu().model(),
     "tamu_stiffening": lambda: _tamu(stiffening=True).model(),
@@ -130,6 +151,8 @@ PLANTS = {
         "flexsat.dynamics.station_gimbals", fromlist=["x"]
     ).StationWithGimbals(_station().plant),
     "vibration_test_state_space": lambda: _vibration_plant(),
+    "tamu_with_hardware": lambda: _tamu_hardware()[1],
+    "rigid_with_wheel_array": lambda: _wheel_array(),
     "plugin_two_mass_spring": lambda: __import__(
         "flexsat_example_plugin.plant", fromlist=["x"]
     ).TwoMassSpring(1.0, 2.0, 4.0, 0.1),
@@ -445,6 +468,7 @@ LAWS = {
     ),
     "lyapunov_i": lambda: _tamu_law("lyapunov_i"),
     "lyapunov_ii": lambda: _tamu_law("lyapunov_ii"),
+    "lyapunov_ii_through_hardware": lambda: _tamu_hardware(),
     "lqg_step": lambda: _tamu_lqg(target=0.3),
     "lqg_reference": lambda: _tamu_lqg(reference=_tamu().reference()),
     "frequency_shaped": _nps_frequency_shaped,

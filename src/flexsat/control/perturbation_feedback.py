@@ -591,9 +591,10 @@ class PerturbationFeedback(Controller):
         y = [β, ω, η, η̇] (the channels ``attitude``, ``rate``, ``elastic``), ξ = [v₁, v₂].
 
         With j = min(k, last tabulated sample), :math:`\delta X_k = M_k e_k`,
-        e = y − [0, ω_n,j, 0] and M_k the rows 2 E_j[:, 1:]ᵀ on β (δα = 2 δq_v, δq = β E_j:
-        linear in β), I on ω and on the first n modal amplitudes and rates, and
-        G_k = [G_x, G_1, G_2] the interpolated gain, the law of :meth:`__call__` is
+        e = y − [0, ω_n,j, η_p,j, η̇_p,j] (η_p, η̇_p the planned modal motion of a nominal
+        with ``elastic(t)``, zero otherwise) and M_k the rows 2 E_j[:, 1:]ᵀ on β
+        (δα = 2 δq_v, δq = β E_j: linear in β), I on ω and on the first n modal amplitudes
+        and rates, and G_k = [G_x, G_1, G_2] the interpolated gain, the law of :meth:`__call__` is
 
         .. math::
 
@@ -660,6 +661,9 @@ class PerturbationFeedback(Controller):
         u_ff = absorb_affine(A4, C4, g[:, None], F, ff[:, None])
         y_ref = np.zeros((grid.size, 1, p))
         y_ref[:, 0, 4:7] = self._omega[j]
+        # a planned modal motion: the departures from it are fed back (as in __call__)
+        y_ref[:, 0, 7 : 7 + n] = self._elastic_ref[j, :n]
+        y_ref[:, 0, 7 + n_p : 7 + n_p + n] = self._elastic_ref[j, n:]
         return LinearLaw(
             A4,
             B[:, None],

@@ -156,8 +156,8 @@ class ScenarioKind:
             [
                 Problem(
                     "--workers/--scheduler",
-                    f"a {self.kind} scenario runs in this process; they apply to kind "
-                    + " and ".join(batch_kinds),
+                    f"a {self.kind} scenario runs in this process; they apply to the kinds "
+                    + ", ".join(batch_kinds),
                 )
             ]
         )

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from flexsat.dynamics.plant import Channel, Plant, find_channel
-from flexsat.input_checks import FieldError
+from flexsat.input_checks import FieldError, require_finite
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -274,7 +274,20 @@ class WheelArrayPlant(Plant):
         return out
 
     def state_from(self, **values: Any) -> FloatArray:
-        return self.settled(self.inner.state_from(**values))
+        """The spacecraft's initial values as its own ``state_from`` takes them, each wheel at
+        rest relative to the body; a whole ``state`` (n_x,) gives the wheel speeds too."""
+        if "state" not in values:
+            return self.settled(self.inner.state_from(**values))
+        v = require_finite(values["state"], "state")
+        if v.shape != (self.nx,):
+            raise FieldError(
+                "state",
+                f"must have {self.nx} entries (the spacecraft's {self._n} and "
+                f"{self.nx - self._n} wheel speeds), got shape {v.shape}",
+            )
+        out = v.copy()
+        out[: self._n] = self.inner.state_from(**{**values, "state": v[: self._n]})
+        return out
 
     @property
     def initial_values(self) -> tuple[str, ...]:
