@@ -410,21 +410,23 @@ def _clusters(lam: np.ndarray, bad: np.ndarray, scale: float) -> list[list[int]]
     return out
 
 
-def _invariant_basis(A: np.ndarray, start: np.ndarray, centre: complex, radius: float) -> Any:
-    """Orthonormal basis of the invariant subspace of the eigenvalues within ``radius`` of
-    ``centre`` (subspace inverse iteration, shift off the cluster by ``radius``; the others are
-    far away, so each step gains their distance over the radius), or None if not converged."""
+def _invariant_basis(A: np.ndarray, start: np.ndarray, centre: complex, offset: float) -> Any:
+    """Orthonormal basis of the invariant subspace of a cluster of eigenvalues around
+    ``centre``, by subspace inverse iteration shifted ``offset`` off the centre: each step
+    shrinks the other eigenvalues' components by about offset / their distance; the shift is
+    not closer, since a Jordan block's chain loses ε/offset to cancellation each step. None if
+    the residual ‖AU − U(UᴴAU)‖ does not fall to round-off."""
     import scipy.linalg as sla
 
     n = start.shape[0]
     scale = max(float(np.linalg.norm(A, 1)), 1e-300)
-    shift = centre + radius * (0.6 + 0.8j)
+    shift = centre + offset * (0.6 + 0.8j)
     lu = sla.lu_factor(A - shift * np.eye(n), check_finite=False)
     U = np.linalg.qr(start)[0]
-    for _ in range(6):
+    for _ in range(8):
         U = np.linalg.qr(sla.lu_solve(lu, U, check_finite=False))[0]
         R = A @ U - U @ (U.conj().T @ A @ U)
-        if float(np.linalg.norm(R, 1)) <= 1e-13 * scale * n:
+        if float(np.linalg.norm(R, 1)) <= 1e-12 * scale * n:
             return U
     return None
 
@@ -465,8 +467,10 @@ def block_modal_form(
     W = V.astype(complex)
     for g in clusters:
         c = complex(np.mean(lam[g]))
-        radius = max(float(np.max(np.abs(lam[g] - c))), 1e-8 * scale)
-        U = _invariant_basis(A, V[:, g], c, radius)
+        others = np.abs(np.delete(lam, g) - c)
+        gap = float(others.min()) if others.size else scale
+        spread = float(np.max(np.abs(lam[g] - c)))
+        U = _invariant_basis(A, V[:, g], c, max(1e-3 * gap, 2.0 * spread))
         if U is None:
             return None
         W[:, g] = U
