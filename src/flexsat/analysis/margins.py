@@ -439,20 +439,19 @@ def disk_margins(
         if value > best_value:
             best_value, k = value, int(j)
     peak, w_peak = best_value, float(grid[k])
-    if m > 1:
-        # refine the frequency with the scaling D of the grid's worst point held (σ̄(D M D⁻¹)
-        # bounds μ at every ω), then optimise D again there: a bound at one more point
-        _, d_k = _optimised_scaling(Ms[k], _osborne(Ms[k]))
-        lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
-        best = scipy.optimize.minimize_scalar(
-            lambda x: -_scaled_norm(evaluate(np.array([x]))[0] + shift, d_k),
-            bounds=(lo, hi),
-            method="bounded",
-            options={"xatol": 1e-12 * hi},
-        )
-        refined = mu_upper_bound(evaluate(np.array([best.x]))[0] + shift)
-        if refined > peak:
-            peak, w_peak = refined, float(best.x)
+    # refine the frequency with the scaling D of the grid's worst point held (σ̄(D M D⁻¹)
+    # bounds μ at every ω), then optimise D again there: a bound at one more point
+    d_k = _optimised_scaling(Ms[k], _osborne(Ms[k]))[1] if m > 1 else np.ones(1)
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+    best = scipy.optimize.minimize_scalar(
+        lambda x: -_scaled_norm(evaluate(np.array([x]))[0] + shift, d_k),
+        bounds=(lo, hi),
+        method="bounded",
+        options={"xatol": 1e-12 * hi},
+    )
+    refined = mu_upper_bound(evaluate(np.array([best.x]))[0] + shift)
+    if refined > peak:
+        peak, w_peak = refined, float(best.x)
     alpha = 1.0 / peak if peak > 0 else math.inf
     gains, phase = disk_variations(alpha, sigma)
     return per_channel, DiskMargin(alpha, sigma, gains, phase, w_peak)
