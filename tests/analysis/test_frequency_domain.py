@@ -183,7 +183,7 @@ def test_the_block_modal_response_equals_a_dense_solve_to_its_conditioning():
     Against D + C (xI − A)⁻¹ B solved densely at every frequency, both are exact for a
     perturbed A + E: the similarity W (κ(W)) gives ‖E‖ <= c n ε κ(W) ‖xI − A‖, the dense LU
     c n ε ‖xI − A‖, so to first order |ΔG| <= 10 n ε (1 + κ(W)) ‖xI − A‖ ‖C R‖ ‖R B‖ with
-    R = (xI − A)⁻¹ (Golub & Van Loan, Matrix Computations, 4th ed., §7.2.2)."""
+    R = (xI − A)⁻¹ (the resolvent's first-order change, R E R)."""
     A, B, C, D, dt = _flexible_three_axis_loop()
     evaluate = ResponseEvaluator(A, B, C, D, dt)
     assert evaluate.method == "block"

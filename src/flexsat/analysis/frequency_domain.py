@@ -440,7 +440,7 @@ def block_modal_form(
     The eigenvectors of the well-conditioned eigenvalues are kept; each cluster of
     ill-conditioned eigenvalues (a rigid mode's Jordan block) is replaced by an orthonormal
     basis of its invariant subspace, found by subspace inverse iteration (Golub & Van Loan,
-    *Matrix Computations*, 4th ed., 2013, §7.3.2 and §7.6 on block diagonalisation).
+    *Matrix Computations*, 4th ed., 2013, §7.3 and §7.6.3 on block diagonalisation).
 
     Returns
     -------

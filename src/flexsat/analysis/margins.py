@@ -31,8 +31,10 @@ multiplicative factor f in the disk :math:`D(\alpha, \sigma) = \{(1 + \tfrac{1-\
 The SISO norm is computed exactly (:func:`~flexsat.analysis.norms.hinf_norm`); μ is bounded from
 above by :math:`\inf_D \bar\sigma(D M D^{-1})` over positive diagonal D (exact for two loops,
 Doyle 1982), so the multiloop margin returned is a guaranteed lower bound, evaluated on a
-frequency grid refined around its worst point. The disk :math:`D(\alpha, \sigma)` meets the real
-axis at :math:`g_{min} = (1 - \alpha\tfrac{1-\sigma}{2})/(1 + \alpha\tfrac{1+\sigma}{2})` and
+frequency grid refined around its worst point (with that point's optimal D held, since
+σ̄(D M D⁻¹) bounds μ at every frequency, then D optimised again at the refined one).
+The disk :math:`D(\alpha, \sigma)` meets the real axis at
+:math:`g_{min} = (1 - \alpha\tfrac{1-\sigma}{2})/(1 + \alpha\tfrac{1+\sigma}{2})` and
 :math:`g_{max} = (1 + \alpha\tfrac{1-\sigma}{2})/(1 - \alpha\tfrac{1+\sigma}{2})` (∞ when the
 denominator is <= 0), and the unit circle at the phase
 :math:`\arccos\big((1 + g_{min} g_{max})/(g_{min} + g_{max})\big)`.

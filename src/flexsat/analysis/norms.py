@@ -27,7 +27,10 @@ G(jω) iff jω is an eigenvalue of the Hamiltonian
 
 so with a lower bound γ_lb, the imaginary eigenvalues of H((1 + 2 tol) γ_lb) bracket the
 frequency intervals where σ̄(G) exceeds it; σ̄ at their midpoints raises γ_lb, and when H has
-no imaginary eigenvalue the norm lies in [γ_lb, (1 + 2 tol) γ_lb]. A discrete system is mapped to
+no imaginary eigenvalue the norm lies in [γ_lb, (1 + 2 tol) γ_lb]. σ̄ is evaluated from
+one eigen-decomposition of A (:class:`~flexsat.analysis.frequency_domain.ResponseEvaluator`),
+at the starting points and, by Brent's method, between the neighbours of the best of them, so
+that the first test usually certifies the bound. A discrete system is mapped to
 a continuous one by the bilinear transform :math:`z = (1 + s)/(1 - s)`, which maps the unit
 circle onto the imaginary axis and leaves the H∞ norm unchanged (Zhou, Doyle & Glover §21.1).
 """
