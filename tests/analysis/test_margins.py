@@ -312,3 +312,16 @@ def test_margins_equal_python_control_on_random_loops(seed):
     assert 1 < gm < 1e6
     assert m.gain_margin == pytest.approx(gm, rel=1e-7)
     assert m.phase_crossover_rad_s == pytest.approx(wpc, rel=1e-7)
+
+
+@pytest.mark.parametrize("delay", [0, 1])
+def test_the_multiloop_disk_margin_of_one_loop_is_its_disk_margin(delay):
+    """With one channel μ is |S + (σ − 1)/2| itself: the multiloop margin (grid, then Brent on
+    frequency) equals the exact SISO one (Hamiltonian bracket of relative width 2e-8), to
+    that bracket plus Brent's ε^{1/2} in frequency, ε in the value at a smooth peak."""
+    loop = build_loop(double_integrator(), pd(0.05), "input", delay=delay)
+    per_channel, multi = disk_margins(loop)
+    exact = disk_margin(loop)
+    assert per_channel[0].alpha == pytest.approx(exact.alpha, rel=1e-12)
+    assert multi.alpha == pytest.approx(exact.alpha, rel=3e-8)
+    assert multi.frequency_rad_s == pytest.approx(exact.frequency_rad_s, rel=1e-4)

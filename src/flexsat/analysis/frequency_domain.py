@@ -48,12 +48,14 @@ __all__ = [
     "Loop",
     "ResponseEvaluator",
     "angular_frequencies",
+    "block_modal_form",
     "build_loop",
     "close_other_channels",
     "default_grid",
     "delay_outputs",
     "frequency_grid",
     "frequency_response",
+    "pole_grid",
     "sampled_plant",
 ]
 
@@ -113,7 +115,11 @@ def default_grid(system: ct.StateSpace, n_per_decade: int = 200) -> FloatArray:
     """A log grid, rad/s, covering the system's poles and zeros two decades either side; for a
     discrete system it ends at the Nyquist frequency π/dt (included)."""
     A, _, _, _, dt = system_matrices(system)
-    poles = np.linalg.eigvals(A) if A.size else np.zeros(0)
+    return pole_grid(np.linalg.eigvals(A) if A.size else np.zeros(0), dt, n_per_decade)
+
+
+def pole_grid(poles: np.ndarray, dt: float, n_per_decade: int = 200) -> FloatArray:
+    """:func:`default_grid` from the poles (s-plane, or z-plane when dt > 0) already known."""
     mags = np.abs(np.log(poles[poles != 0]) / dt) if dt else np.abs(poles)
     mags = mags[mags > 0]
     lo = 0.01 * float(mags.min()) if mags.size else 1e-3
@@ -379,15 +385,125 @@ def close_other_channels(
 
 
 # -- frequency responses -------------------------------------------------------------------
+# eigenvalues whose condition number ‖x_i‖‖y_i‖/|y_iᴴx_i| exceeds this (accuracy worse than
+# ~1e-12 relative) are treated as part of a (nearly) defective cluster
+_ILL_CONDITIONED = 1e4
+# the transformation to (block-)diagonal form must stay below this condition number
+_MAX_CONDITION = 1e6
+
+
+def _clusters(lam: np.ndarray, bad: np.ndarray, scale: float) -> list[list[int]]:
+    """Groups of eigenvalue indices around each (nearly) defective cluster: ill-conditioned
+    eigenvalues within 1e-4 scale of each other are linked, and every eigenvalue inside the
+    group's disk (twice its radius) joins it."""
+    idx = [int(i) for i in np.flatnonzero(bad)]
+    groups: list[list[int]] = []
+    for i in idx:
+        near = [g for g in groups if np.min(np.abs(lam[g] - lam[i])) <= 1e-4 * scale]
+        merged = [i] + [j for g in near for j in g]
+        groups = [g for g in groups if g not in near] + [merged]
+    out = []
+    for g in groups:
+        c = np.mean(lam[g])
+        r = 2.0 * float(np.max(np.abs(lam[g] - c))) + 1e-12 * scale
+        out.append([int(j) for j in np.flatnonzero(np.abs(lam - c) <= r)])
+    return out
+
+
+def _invariant_basis(A: np.ndarray, start: np.ndarray, centre: complex, offset: float) -> Any:
+    """Orthonormal basis of the invariant subspace of a cluster of eigenvalues around
+    ``centre``, by subspace inverse iteration shifted ``offset`` off the centre: each step
+    shrinks the other eigenvalues' components by about offset / their distance; the shift is
+    not closer, since a Jordan block's chain loses ε/offset to cancellation each step. None if
+    the residual ‖AU − U(UᴴAU)‖ does not fall to round-off."""
+    import scipy.linalg as sla
+
+    n = start.shape[0]
+    scale = max(float(np.linalg.norm(A, 1)), 1e-300)
+    shift = centre + offset * (0.6 + 0.8j)
+    lu = sla.lu_factor(A - shift * np.eye(n), check_finite=False)
+    U = np.linalg.qr(start)[0]
+    for _ in range(8):
+        U = np.linalg.qr(sla.lu_solve(lu, U, check_finite=False))[0]
+        R = A @ U - U @ (U.conj().T @ A @ U)
+        if float(np.linalg.norm(R, 1)) <= 1e-12 * scale * n:
+            return U
+    return None
+
+
+def block_modal_form(
+    A: FloatArray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[list[int]]] | None:
+    r"""A similarity :math:`W^{-1} A W` that is diagonal except for small blocks on (nearly)
+    defective eigenvalue clusters, or None when no such W with κ(W) < 1e6 is found.
+
+    The eigenvectors of the well-conditioned eigenvalues are kept; each cluster of
+    ill-conditioned eigenvalues (a rigid mode's Jordan block) is replaced by an orthonormal
+    basis of its invariant subspace, found by subspace inverse iteration (Golub & Van Loan,
+    *Matrix Computations*, 4th ed., 2013, §7.3 and §7.6.3 on block diagonalisation).
+
+    Returns
+    -------
+    (λ, W, W^{-1}, clusters)
+        The eigenvalues (in the order of W's columns), W and its inverse; the clusters are
+        lists of column indices of W whose block of :math:`W^{-1} A W` is full; every other
+        column j is an eigenvector of λ_j.
+    """
+    n = A.shape[0]
+    lam, V = np.linalg.eig(A)
+    with np.errstate(over="ignore", invalid="ignore"):  # κ of a defective V overflows to ∞
+        try:
+            Vinv = np.linalg.inv(V)
+        except np.linalg.LinAlgError:
+            Vinv = None
+        if Vinv is not None and np.linalg.norm(V, 1) * np.linalg.norm(Vinv, 1) < _MAX_CONDITION:
+            return lam, V, Vinv, []
+        if Vinv is None:
+            bad = np.ones(n, bool)
+        else:
+            bad = ~(np.linalg.norm(Vinv, axis=1) * np.linalg.norm(V, axis=0) <= _ILL_CONDITIONED)
+    scale = max(float(np.linalg.norm(A, 1)), 1e-300)
+    clusters = _clusters(lam, bad, scale)
+    W = V.astype(complex)
+    for g in clusters:
+        c = complex(np.mean(lam[g]))
+        others = np.abs(np.delete(lam, g) - c)
+        gap = float(others.min()) if others.size else scale
+        spread = float(np.max(np.abs(lam[g] - c)))
+        U = _invariant_basis(A, V[:, g], c, max(1e-3 * gap, 2.0 * spread))
+        if U is None:
+            return None
+        W[:, g] = U
+    try:
+        Winv = np.linalg.inv(W)
+    except np.linalg.LinAlgError:
+        return None
+    if not np.linalg.norm(W, 1) * np.linalg.norm(Winv, 1) < _MAX_CONDITION:
+        return None
+    return lam, W, Winv, clusters
+
+
 class ResponseEvaluator:
     r"""G at many frequencies from one factorisation of A.
 
     With a well-conditioned eigenvector matrix (κ(V) < 1e6) the response is
-    :math:`D + (CV)\,\mathrm{diag}(1/(x - \lambda_i))\,(V^{-1}B)`, O(n(p + m)) per frequency;
-    otherwise (a defective A: a double integrator's Jordan block) the complex Schur form
+    :math:`D + (CV)\,\mathrm{diag}(1/(x - \lambda_i))\,(V^{-1}B)`, O(n(p + m)) per frequency.
+    With (nearly) defective clusters (a rigid mode's Jordan block) the ill-conditioned
+    eigenvectors are replaced by a basis of each cluster's invariant subspace
+    (:func:`block_modal_form`): the diagonal part as above plus, per cluster of k eigenvalues,
+    one k × k solve per frequency, all frequencies at once. Failing that, the complex Schur form
     :math:`A = ZTZ^H` and one triangular solve of :math:`(xI - T)` per frequency, O(n² m),
     which is backward stable whatever the eigenvectors (Laub, "Efficient multivariable
     frequency response computations", IEEE TAC 26(2), 1981, 407–408).
+
+    Attributes
+    ----------
+    method : str
+        ``"modal"``, ``"block"`` or ``"schur"`` (``"static"`` without states).
+    condition : float
+        κ₁ of the transformation used (1 for Schur's unitary one).
+    poles : ndarray
+        The eigenvalues of A (s- or z-plane), from the same factorisation.
     """
 
     def __init__(
@@ -397,14 +513,30 @@ class ResponseEvaluator:
 
         self.D, self.dt, self.n = D, dt, A.shape[0]
         self.modal = False
-        if self.n:
-            lam, V = np.linalg.eig(A)
-            if np.linalg.cond(V) < 1e6:
-                self.modal = True
-                self.lam, self.CV, self.VB = lam, C @ V, np.linalg.solve(V, B)
-            else:
-                T, Z = sla.schur(A.astype(complex), output="complex")
-                self.T, self.CZ, self.ZB = T, C @ Z, Z.conj().T @ B
+        self.method, self.condition = "static", 1.0
+        self.poles = np.zeros(0, complex)
+        self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        if not self.n:
+            return
+        form = block_modal_form(A)
+        if form is not None:
+            lam, W, Winv, clusters = form
+            self.condition = float(np.linalg.norm(W, 1) * np.linalg.norm(Winv, 1))
+            self.modal = not clusters
+            self.method = "block" if clusters else "modal"
+            in_block = [j for g in clusters for j in g]
+            diag = np.setdiff1d(np.arange(self.n), in_block)
+            CW, WB = C @ W, Winv @ B
+            self.lam, self.poles = lam[diag], lam
+            self.CV, self.VB = CW[:, diag], WB[diag]
+            for g in clusters:
+                T = Winv[g] @ A @ W[:, g]
+                self.blocks.append((T, CW[:, g], WB[g]))
+        else:
+            self.method = "schur"
+            T, Z = sla.schur(A.astype(complex), output="complex")
+            self.T, self.CZ, self.ZB = T, C @ Z, Z.conj().T @ B
+            self.poles = np.diag(T).copy()
 
     def __call__(self, omega_rad_s: FloatArray) -> np.ndarray:
         """(n_w, p, m) complex response at the frequencies, rad/s."""
@@ -415,10 +547,22 @@ class ResponseEvaluator:
         G = np.broadcast_to(self.D.astype(complex), (w.size,) + self.D.shape).copy()
         if not self.n:
             return G
-        if self.modal:
+        if self.method != "schur":
             with np.errstate(divide="ignore", invalid="ignore"):
                 inv = 1.0 / (x[:, None] - self.lam[None, :])
-            return G + np.einsum("pi,wi,im->wpm", self.CV, inv, self.VB)
+            G += np.einsum("pi,wi,im->wpm", self.CV, inv, self.VB)
+            for T, CW, WB in self.blocks:
+                k = T.shape[0]
+                shifted = x[:, None, None] * np.eye(k) - T
+                try:
+                    G += CW @ np.linalg.solve(shifted, np.broadcast_to(WB, (w.size,) + WB.shape))
+                except np.linalg.LinAlgError:  # a pole on the axis at one of the frequencies
+                    for j in range(w.size):
+                        try:
+                            G[j] += CW @ np.linalg.solve(shifted[j], WB)
+                        except np.linalg.LinAlgError:
+                            G[j] = np.inf
+            return G
         shifted = -self.T
         diag = np.diag(self.T)
         for k, xk in enumerate(x):

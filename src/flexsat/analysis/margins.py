@@ -31,8 +31,10 @@ multiplicative factor f in the disk :math:`D(\alpha, \sigma) = \{(1 + \tfrac{1-\
 The SISO norm is computed exactly (:func:`~flexsat.analysis.norms.hinf_norm`); μ is bounded from
 above by :math:`\inf_D \bar\sigma(D M D^{-1})` over positive diagonal D (exact for two loops,
 Doyle 1982), so the multiloop margin returned is a guaranteed lower bound, evaluated on a
-frequency grid refined around its worst point. The disk :math:`D(\alpha, \sigma)` meets the real
-axis at :math:`g_{min} = (1 - \alpha\tfrac{1-\sigma}{2})/(1 + \alpha\tfrac{1+\sigma}{2})` and
+frequency grid refined around its worst point (with that point's optimal D held, since
+σ̄(D M D⁻¹) bounds μ at every frequency, then D optimised again at the refined one).
+The disk :math:`D(\alpha, \sigma)` meets the real axis at
+:math:`g_{min} = (1 - \alpha\tfrac{1-\sigma}{2})/(1 + \alpha\tfrac{1+\sigma}{2})` and
 :math:`g_{max} = (1 + \alpha\tfrac{1-\sigma}{2})/(1 - \alpha\tfrac{1+\sigma}{2})` (∞ when the
 denominator is <= 0), and the unit circle at the phase
 :math:`\arccos\big((1 + g_{min} g_{max})/(g_{min} + g_{max})\big)`.
@@ -50,7 +52,7 @@ import scipy.optimize
 from flexsat.analysis.frequency_domain import (
     ResponseEvaluator,
     close_other_channels,
-    default_grid,
+    pole_grid,
 )
 from flexsat.analysis.norms import hinf_norm, system_matrices
 from flexsat.input_checks import FieldError
@@ -190,10 +192,9 @@ def loop_margins(
     if tau and dt:
         raise FieldError("delay_s", "a sampled loop carries its delay in samples (build_loop)")
     require_stable_loop(poles, dt)
-    w = default_grid(L, n_per_decade)
-
     A, B, C, D, _ = system_matrices(L)
     evaluate = ResponseEvaluator(A, B, C, D, dt)
+    w = pole_grid(evaluate.poles, dt, n_per_decade)
 
     def response(x: float) -> complex:
         return complex(evaluate(np.array([x]))[0, 0, 0] * np.exp(-1j * x * tau))
@@ -307,14 +308,21 @@ def disk_margin(loop: Loop | ct.StateSpace, skew: float = 0.0) -> DiskMargin:
     skew : float
         σ: 0 balanced, 1 the S-based margin, −1 the T-based one.
     """
-    import control as ct
-
     sigma = _check_skew(skew)
     L, poles, dt = _siso(loop, "loop")
     if L.ninputs != 1 or L.noutputs != 1:
         raise FieldError("loop", "disk_margin is SISO: use disk_margins for a MIMO loop")
     require_stable_loop(poles, dt)
     A, B, C, D, _ = system_matrices(L)
+    return _stable_disk_margin(A, B, C, D, dt, sigma)
+
+
+def _stable_disk_margin(
+    A: FloatArray, B: FloatArray, C: FloatArray, D: FloatArray, dt: float, sigma: float
+) -> DiskMargin:
+    """disk_margin of the SISO loop (A, B, C, D), its closed loop known to be stable."""
+    import control as ct
+
     e = 1.0 / (1.0 + D[0, 0])
     M = ct.ss(A - e * B @ C, e * B, -e * C, np.array([[e + (sigma - 1.0) / 2.0]]), dt)
     norm = hinf_norm(M, field="loop")
@@ -324,22 +332,42 @@ def disk_margin(loop: Loop | ct.StateSpace, skew: float = 0.0) -> DiskMargin:
 
 
 def _osborne(M: np.ndarray, sweeps: int = 20) -> FloatArray:
-    """Diagonal scaling d balancing the off-diagonal row and column sums of |M| (Osborne's
-    iteration, Osborne 1960), a near-optimal start for the μ upper bound."""
-    n = M.shape[0]
-    d = np.ones(n)
-    A = np.abs(M)
+    """Diagonal scalings d balancing the off-diagonal row and column sums of |M| (Osborne's
+    iteration, Osborne 1960), a near-optimal start for the μ upper bound; M is (..., n, n),
+    every matrix of the batch balanced at once."""
+    n = M.shape[-1]
+    A = np.abs(M) * (1.0 - np.eye(n))
+    d = np.ones(M.shape[:-1])
     for _ in range(sweeps):
         for i in range(n):
-            row = sum(A[i, j] * d[i] / d[j] for j in range(n) if j != i)
-            col = sum(A[j, i] * d[j] / d[i] for j in range(n) if j != i)
-            if row > 0 and col > 0:
-                d[i] *= math.sqrt(col / row)
-    return d / d[0]
+            # row_i = d_i Σ_j A_ij / d_j, col_i = Σ_j A_ji d_j / d_i; d_i ← d_i sqrt(col/row)
+            row = np.einsum("...j,...j->...", A[..., i, :], 1.0 / d)
+            col = np.einsum("...j,...j->...", A[..., :, i], d)
+            ok = (row > 0) & (col > 0)
+            d[..., i] = np.where(
+                ok, np.sqrt(np.where(ok, col, 1.0) / np.where(ok, row, 1.0)), d[..., i]
+            )
+    return d / d[..., :1]
 
 
 def _scaled_norm(M: np.ndarray, d: FloatArray) -> float:
     return float(np.linalg.norm((d[:, None] * M) / d[None, :], 2))
+
+
+def _scaled_norms(M: np.ndarray, d: FloatArray) -> FloatArray:
+    """σ̄(D M D⁻¹) of a batch (n_w, n, n) with scalings d (n_w, n) or (n,)."""
+    return np.linalg.svd((d[..., :, None] * M) / d[..., None, :], compute_uv=False)[..., 0]
+
+
+def _optimised_scaling(M: np.ndarray, d0: FloatArray) -> tuple[float, FloatArray]:
+    """(σ̄(D M D⁻¹), d) minimised over log d from d0 (Nelder–Mead, d_0 fixed to 1)."""
+    res = scipy.optimize.minimize(
+        lambda logd: _scaled_norm(M, np.exp(np.concatenate([[0.0], logd]))),
+        np.log(d0[1:] / d0[0]),
+        method="Nelder-Mead",
+        options={"xatol": 1e-10, "fatol": 1e-14, "maxiter": 4000},
+    )
+    return float(res.fun), np.exp(np.concatenate([[0.0], res.x]))
 
 
 def mu_upper_bound(M: np.ndarray, optimise: bool = True) -> float:
@@ -355,13 +383,7 @@ def mu_upper_bound(M: np.ndarray, optimise: bool = True) -> float:
     best = min(_scaled_norm(M, d0), _scaled_norm(M, np.ones(n)))
     if not optimise:
         return best
-    res = scipy.optimize.minimize(
-        lambda logd: _scaled_norm(M, np.exp(np.concatenate([[0.0], logd]))),
-        np.log(d0[1:]),
-        method="Nelder-Mead",
-        options={"xatol": 1e-10, "fatol": 1e-14, "maxiter": 4000},
-    )
-    return min(best, float(res.fun))
+    return min(best, _optimised_scaling(M, d0)[0])
 
 
 def disk_margins(
@@ -385,29 +407,29 @@ def disk_margins(
         channels perturbed independently at once; a guaranteed lower bound through the
         D-scaled upper bound of μ).
     """
-    import control as ct
 
     sigma = _check_skew(skew)
     L, poles, dt = _siso(loop, "loop")
     require_stable_loop(poles, dt)
     A, B, C, D, _ = system_matrices(L)
     m = D.shape[0]
-    per_channel = []
-    for i in range(m):
-        Ai, Bi, Ci, Di = close_other_channels((A, B, C, D), i)
-        per_channel.append(disk_margin(ct.ss(Ai, Bi, Ci, Di, dt), sigma))
+    # every channel's loop, the others closed, closes into the same (stable) closed loop
+    per_channel = tuple(
+        _stable_disk_margin(*close_other_channels((A, B, C, D), i), dt, sigma) for i in range(m)
+    )
     S = loop.sensitivity() if hasattr(loop, "sensitivity") else None
     if S is None:
         raise FieldError("loop", "give a Loop (build_loop) for the multiloop margin")
     shift = (sigma - 1.0) / 2.0 * np.eye(m)
     evaluate = ResponseEvaluator(*system_matrices(S)[:4], dt)
 
-    def mu_at(w: float) -> float:
-        return mu_upper_bound(evaluate(np.array([w]))[0] + shift)
-
     # ω = 0 too: S of a stable closed loop is finite there, and the worst point may be at DC
-    grid = np.concatenate([[0.0], default_grid(S, n_per_decade)])
-    rough = np.array([mu_upper_bound(Mw + shift, optimise=False) for Mw in evaluate(grid)])
+    grid = np.concatenate([[0.0], pole_grid(evaluate.poles, dt, n_per_decade)])
+    Ms = evaluate(grid) + shift
+    if m == 1:
+        rough = np.abs(Ms[:, 0, 0])
+    else:
+        rough = np.minimum(_scaled_norms(Ms, _osborne(Ms)), _scaled_norms(Ms, np.ones(m)))
     # the optimised bound is below the cheap one at every frequency: optimise in decreasing
     # order of the cheap bound and stop when it falls below the best optimised value, which
     # then is the grid's maximum of the optimised bound
@@ -415,14 +437,23 @@ def disk_margins(
     for j in np.argsort(rough)[::-1]:
         if rough[j] <= best_value:
             break
-        value = mu_at(grid[j])
+        value = mu_upper_bound(Ms[j])
         if value > best_value:
             best_value, k = value, int(j)
+    peak, w_peak = best_value, float(grid[k])
+    # refine the frequency with the scaling D of the grid's worst point held (σ̄(D M D⁻¹)
+    # bounds μ at every ω), then optimise D again there: a bound at one more point
+    d_k = _optimised_scaling(Ms[k], _osborne(Ms[k]))[1] if m > 1 else np.ones(1)
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
     best = scipy.optimize.minimize_scalar(
-        lambda x: -mu_at(x), bounds=(lo, hi), method="bounded", options={"xatol": 1e-12 * hi}
+        lambda x: -_scaled_norm(evaluate(np.array([x]))[0] + shift, d_k),
+        bounds=(lo, hi),
+        method="bounded",
+        options={"xatol": 1e-12 * hi},
     )
-    peak, w_peak = (best_value, grid[k]) if best_value >= -best.fun else (-best.fun, best.x)
+    refined = mu_upper_bound(evaluate(np.array([best.x]))[0] + shift)
+    if refined > peak:
+        peak, w_peak = refined, float(best.x)
     alpha = 1.0 / peak if peak > 0 else math.inf
     gains, phase = disk_variations(alpha, sigma)
-    return tuple(per_channel), DiskMargin(alpha, sigma, gains, phase, float(w_peak))
+    return per_channel, DiskMargin(alpha, sigma, gains, phase, w_peak)

@@ -27,7 +27,10 @@ G(jω) iff jω is an eigenvalue of the Hamiltonian
 
 so with a lower bound γ_lb, the imaginary eigenvalues of H((1 + 2 tol) γ_lb) bracket the
 frequency intervals where σ̄(G) exceeds it; σ̄ at their midpoints raises γ_lb, and when H has
-no imaginary eigenvalue the norm lies in [γ_lb, (1 + 2 tol) γ_lb]. A discrete system is mapped to
+no imaginary eigenvalue the norm lies in [γ_lb, (1 + 2 tol) γ_lb]. σ̄ is evaluated from
+one eigen-decomposition of A (:class:`~flexsat.analysis.frequency_domain.ResponseEvaluator`),
+at the starting points and, by Brent's method, between the neighbours of the best of them, so
+that the first test usually certifies the bound. A discrete system is mapped to
 a continuous one by the bilinear transform :math:`z = (1 + s)/(1 - s)`, which maps the unit
 circle onto the imaginary axis and leaves the H∞ norm unchanged (Zhou, Doyle & Glover §21.1).
 """
@@ -40,6 +43,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.optimize
 
 from flexsat.input_checks import FieldError
 
@@ -81,7 +85,12 @@ def system_matrices(
 def _require_stable(A: FloatArray, dt: float, field: str) -> None:
     if A.size == 0:
         return
-    eig = np.linalg.eigvals(A)
+    _require_stable_poles(np.linalg.eigvals(A), dt, field)
+
+
+def _require_stable_poles(eig: np.ndarray, dt: float, field: str) -> None:
+    if eig.size == 0:
+        return
     radius = np.abs(eig) if dt else eig.real
     bound = 1.0 if dt else 0.0
     worst = int(np.argmax(radius))
@@ -149,12 +158,6 @@ class HinfNorm:
         return self.value
 
 
-def _sigma_max(A: FloatArray, B: FloatArray, C: FloatArray, D: FloatArray, w: float) -> float:
-    n = A.shape[0]
-    G = D + C @ np.linalg.solve(1j * w * np.eye(n) - A, B) if n else D
-    return float(np.linalg.norm(G, 2))
-
-
 def _bilinear(
     A: FloatArray, B: FloatArray, C: FloatArray, D: FloatArray
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
@@ -186,26 +189,49 @@ def hinf_norm(system: ct.StateSpace, tol: float = 1e-8, field: str = "system") -
     """
     if not (isinstance(tol, float | int) and 0 < tol < 0.1):
         raise FieldError("tol", f"must be a number in (0, 0.1), got {tol!r}")
+    from flexsat.analysis.frequency_domain import ResponseEvaluator
+
     A, B, C, D, dt = system_matrices(system, field)
-    _require_stable(A, dt, field)
     n = A.shape[0]
     if n == 0:
         g = float(np.linalg.norm(D, 2)) if D.size else 0.0
         return HinfNorm(g, 0.0, g, g)
-    if dt:
-        # poles strictly inside the unit circle, so −1 is not one and the map is defined
-        A, B, C, D = _bilinear(A, B, C, D)
+    # one eigen-decomposition of A serves the stability test and every σ̄(G) evaluated below;
+    # a discrete G at the bilinear frequency w is G(e^{jθ}) with θ = 2 atan w (rad/sample)
+    evaluate = ResponseEvaluator(A, B, C, D, 1.0 if dt else 0.0)
+    _require_stable_poles(evaluate.poles, dt, field)
+
+    def sigma(w: np.ndarray) -> np.ndarray:
+        G = evaluate(2.0 * np.arctan(w) if dt else w)
+        return np.linalg.svd(G, compute_uv=False)[:, 0] if G.size else np.zeros(len(w))
 
     def to_physical(w: float) -> float:
         # s = jw on the imaginary axis is z = (1 + jw)/(1 − jw) = exp(2j atan w)
         return 2.0 * math.atan(w) / dt if dt else w
 
-    poles = np.linalg.eigvals(A)
+    poles = evaluate.poles
+    if dt:
+        # poles strictly inside the unit circle, so −1 is not one and the map is defined
+        A, B, C, D = _bilinear(A, B, C, D)
+        poles = (poles - 1.0) / (poles + 1.0)
     # starting guesses (Bruinsma & Steinbuch 1990 §3): ω = 0, ω = ∞ (the feedthrough D) and the
     # magnitude of every pole; a start above σ̄(D) also keeps R = γ²I − DᵀD well conditioned
-    candidates = [0.0] + sorted({float(x) for x in np.abs(poles) if x > 0})
-    values = [_sigma_max(A, B, C, D, w) for w in candidates]
-    lower, peak = max(zip(values, candidates))
+    candidates = np.array([0.0] + sorted({float(x) for x in np.abs(poles) if x > 0}))
+    values = sigma(candidates)
+    k = int(np.argmax(values))
+    lower, peak = float(values[k]), float(candidates[k])
+    if 0 < k < len(candidates) - 1:
+        # the peak between the neighbouring guesses, to round-off: then the first Hamiltonian
+        # test usually certifies it (any point of σ̄ is a valid lower bound)
+        lo, hi = float(candidates[k - 1]), float(candidates[k + 1])
+        best = scipy.optimize.minimize_scalar(
+            lambda x: -float(sigma(np.array([x]))[0]),
+            bounds=(lo, hi),
+            method="bounded",
+            options={"xatol": 1e-12 * hi},
+        )
+        if -best.fun > lower:
+            lower, peak = float(-best.fun), float(best.x)
     d_norm = float(np.linalg.norm(D, 2))
     if d_norm > lower:
         lower, peak = d_norm, math.inf
@@ -233,14 +259,14 @@ def hinf_norm(system: ct.StateSpace, tol: float = 1e-8, field: str = "system") -
             mids = imaginary
         else:
             mids = 0.5 * (imaginary[:-1] + imaginary[1:])
-        sig = [_sigma_max(A, B, C, D, float(w)) for w in mids]
+        sig = sigma(np.asarray(mids, float))
         best = int(np.argmax(sig))
         if sig[best] <= lower:
             # the Hamiltonian's eigenvalues are at the round-off level of the bracket: the
             # peak is lower to the precision the eigenvalue test can resolve
             upper = gamma
             break
-        lower, peak = sig[best], float(mids[best])
+        lower, peak = float(sig[best]), float(mids[best])
     else:  # pragma: no cover - the iteration converges quadratically (Boyd et al. 1989)
         raise FieldError(field, "the H∞ iteration did not converge in 200 steps")
     peak_phys = (math.pi / dt if dt else math.inf) if math.isinf(peak) else to_physical(peak)
