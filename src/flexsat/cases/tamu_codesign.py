@@ -201,21 +201,25 @@ class TamuCodesign:
         seeds = np.full(X.shape[0], config.seed)
         return simulate(plant, law, config, seeds=seeds).dataset
 
-    def itse(self, X: FloatArray) -> FloatArray:
-        """ITSE of the designs ``X`` (n_cases, 4), rad² s² (module docstring)."""
+    def surrogates(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The smoothed time outside the 0.5° band (s) and the ITSE (rad² s²) of the designs
+        ``X`` (n_cases, 4), from one batched run of the surrogate's loop (module docstring)."""
         ds = self._batch(X, friction=True, noise=True, quantised=False)
         t = ds["time"].values
         e = ds["theta"].values - self._case.angle
-        return np.asarray(np.trapezoid(t * e**2, t, axis=-1), dtype=float)
+        band = np.radians(0.5)
+        outside = 0.5 * (1.0 + np.tanh((np.abs(e) - band) / (2 * self.band_width * band)))
+        soft = np.sum(outside, axis=-1) * (t[1] - t[0])
+        itse = np.trapezoid(t * e**2, t, axis=-1)
+        return np.asarray(soft, dtype=float), np.asarray(itse, dtype=float)
 
     def soft_settling(self, X: FloatArray) -> FloatArray:
-        """Smoothed time outside the 0.5° band, s, of the designs ``X`` (module docstring)."""
-        ds = self._batch(X, friction=True, noise=True, quantised=False)
-        t = ds["time"].values
-        e = np.abs(ds["theta"].values - self._case.angle)
-        band = np.radians(0.5)
-        outside = 0.5 * (1.0 + np.tanh((e - band) / (2 * self.band_width * band)))
-        return np.asarray(np.sum(outside, axis=-1) * (t[1] - t[0]), dtype=float)
+        """Smoothed time outside the 0.5° band of the designs ``X``, s."""
+        return self.surrogates(X)[0]
+
+    def itse(self, X: FloatArray) -> FloatArray:
+        """ITSE of the designs ``X``, rad² s²."""
+        return self.surrogates(X)[1]
 
     def first_frequency_hz(self, s: FloatArray) -> FloatArray:
         """First clamped (cantilever) frequency of the appendages, Hz."""
@@ -243,9 +247,8 @@ class TamuCodesign:
         h = self.fd_step * self._scales()
         n = x.size
         X = np.vstack([x, x + np.diag(h), x - np.diag(h)])
-        J = self.itse(X)
+        S, J = self.surrogates(X)
         dJ = (J[1 : n + 1] - J[n + 1 :]) / (2 * h)
-        S = self.soft_settling(X)
         dS = (S[1 : n + 1] - S[n + 1 :]) / (2 * h)
         f = self.first_frequency_hz(np.array([x[0], x[0] + h[0], x[0] - h[0]]))
         df = np.zeros(n)
@@ -325,8 +328,7 @@ def surrogate_rank_correlation(
         [problem.thickness_bounds, problem.g1_bounds, problem.g2_bounds, problem.alpha_bounds]
     )
     X = bounds[:, 0] + rng.random((n_designs, 4)) * (bounds[:, 1] - bounds[:, 0])
-    S = problem.soft_settling(X)
-    J = problem.itse(X)
+    S, J = problem.surrogates(X)
     ts = problem.settling_times(X)
     settled = np.isfinite(ts)
     ranked = np.where(settled, ts, 2 * problem.duration)
