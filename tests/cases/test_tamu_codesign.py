@@ -103,6 +103,9 @@ def test_the_codesign_beats_the_published_design_at_equal_mass():
         assert rec["multiplier[thickness_ratio <= upper]"] > 0
     a, b = result.optima
     assert b.objective == pytest.approx(a.objective, rel=1e-2)
+    # trust-constr stops at a stationary point of the piecewise-smooth surrogate (measured
+    # 5e-8); SLSQP's residual (8e-3, stopped on a wrinkle) is reported, not asserted (docs)
+    assert b.method == "trust-constr" and b.kkt.residual <= 1e-6
 
 
 def test_settling_comparison_reports_both_designs(problem):
