@@ -112,3 +112,16 @@ def test_settling_comparison_reports_both_designs(problem):
     c = settling_comparison(problem, np.array(PUBLISHED_LAW_II))
     assert c["settling_time_s"] == c["published_settling_time_s"]
     assert c["itse"] == c["published_itse"] > 0
+
+
+def test_a_design_document_with_bad_parameters_names_the_field(tmp_path):
+    import yaml
+
+    from flexsat.scenarios.errors import ScenarioError
+
+    doc = yaml.safe_load(EXAMPLE.read_text())
+    doc["parameters"] = {"thickness_bounds": [0.5, 2.5]}
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    with pytest.raises(ScenarioError, match="parameters.thickness_bounds"):
+        load_scenario(path)
