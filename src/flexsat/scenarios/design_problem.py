@@ -44,6 +44,7 @@ import numpy as np
 import xarray as xr
 from pydantic import Field, model_validator
 
+from flexsat.cases.tamu_codesign import TamuCodesign
 from flexsat.design.optimization_problem import (
     Constraint,
     DesignProblem,
@@ -76,6 +77,16 @@ REFERENCE_PROBLEMS: dict[str, tuple[type, dict[str, str], dict[str, str]]] = {
         {"lq_cost": "", "mass": "kg", "frequency_hz": "Hz"},
     ),
     "cantilever_tube": (CantileverTube, {"t": "m", "D": "m"}, {"mass": "kg", "omega": "rad/s"}),
+    "tamu_codesign": (
+        TamuCodesign,
+        {"thickness_ratio": "", "g1": "N*m/rad", "g2": "N*m*s/rad", "alpha": ""},
+        {
+            "soft_settling": "s",
+            "itse": "rad**2*s**2",
+            "appendage_mass": "kg",
+            "frequency_hz": "Hz",
+        },
+    ),
 }
 
 Quantity = str | float | int
@@ -279,6 +290,10 @@ def _record(label: str, cp: ConfiguredProblem, r: OptimizationResult) -> dict[st
     rec: dict[str, Any] = {"run": label, "objective": float(r.objective)}
     rec.update({name: v for name, (v, _) in cp.responses(r.x).items()})
     rec.update({f"x_{k}": v for k, v in r.design.items()})
+    # a reference may report more than its responses (the TAMU co-design: simulated settling)
+    report_metrics = getattr(cp.reference, "report_metrics", None)
+    if report_metrics is not None:
+        rec.update(report_metrics(r.x))
     rec["kkt_residual"] = r.kkt.residual
     rec["success"] = r.success
     rec["iterations"] = r.iterations
