@@ -535,6 +535,7 @@ NOT_SUBJECTS = {
     "flexsat.control.attitude_laws._AttitudeLaw": "base of the Gibbs, MRP, quaternion laws",
     "flexsat.control.tether_laws._TetherLaw": "base of the three tether laws",
     "flexsat.control.cmg_steering._GimbalLaw": "abstract base of the three steering laws",
+    "flexsat.control.h2_synthesis.SynthesisCompensator": "base of the H2 and H∞ compensators",
     # the conformance checks' own test doubles
     "flexsat.testing.checks.HoldLaw": "the plant checks' open-loop drive",
     "flexsat.testing.law_checks._Without": "the law checks' plant missing a channel",

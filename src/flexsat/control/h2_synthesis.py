@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar, Protocol
 
 import numpy as np
 
@@ -51,7 +51,26 @@ if TYPE_CHECKING:
     from flexsat.control.lqr import RiccatiSolution
     from flexsat.units import FloatArray, QuantityArrayLike
 
-__all__ = ["H2Controller", "H2Synthesis", "as_generalized_plant", "h2syn"]
+__all__ = [
+    "H2Controller",
+    "H2Synthesis",
+    "Synthesis",
+    "SynthesisCompensator",
+    "as_generalized_plant",
+    "h2syn",
+]
+
+
+class Synthesis(Protocol):
+    """What a synthesis on a generalized plant gives (:class:`H2Synthesis`,
+    :class:`~flexsat.control.hinf_synthesis.HinfSynthesis`): the compensator and the plant it
+    was designed on."""
+
+    @property
+    def controller(self) -> ct.StateSpace: ...
+
+    @property
+    def plant(self) -> GeneralizedPlant: ...
 
 
 def as_generalized_plant(
@@ -145,7 +164,43 @@ def h2syn(
     return H2Synthesis(controller, math.sqrt(max(cost2, 0.0)), F, L, regulator, filt, G)
 
 
-class H2Controller(StateSpaceCompensator):
+class SynthesisCompensator(StateSpaceCompensator):
+    """The compensator of a synthesis on a generalized plant as a flexsat law (a continuous
+    :class:`~flexsat.control.state_space_compensator.StateSpaceCompensator`, run through its
+    exact zero-order-hold equivalent at the control period): the shared constructor of
+    :class:`H2Controller` and :class:`~flexsat.control.hinf_synthesis.HinfController`, which
+    name the synthesis they take (``synthesis_type``) and the function that makes it
+    (``designer``)."""
+
+    synthesis_type: ClassVar[type]
+    designer: ClassVar[str]
+
+    def __init__(
+        self,
+        synthesis: Synthesis,
+        dt: QuantityArrayLike,
+        measurements: ChannelItems | None = None,
+        commands: ChannelItems | None = None,
+        references: Mapping[str, QuantityArrayLike] | None = None,
+    ) -> None:
+        kind = self.synthesis_type.__name__
+        if not isinstance(synthesis, self.synthesis_type):
+            raise FieldError(
+                "synthesis",
+                f"must be an {kind} ({self.designer}), got {type(synthesis).__name__}",
+            )
+        self.synthesis = synthesis
+        plant = synthesis.plant
+        super().__init__(
+            synthesis.controller,
+            plant.measurement_names if measurements is None else measurements,
+            plant.control_names if commands is None else commands,
+            dt,
+            references,
+        )
+
+
+class H2Controller(SynthesisCompensator):
     """An H2-optimal compensator as a flexsat law (a continuous
     :class:`~flexsat.control.state_space_compensator.StateSpaceCompensator`, run through its
     exact zero-order-hold equivalent at the control period).
@@ -162,24 +217,5 @@ class H2Controller(StateSpaceCompensator):
         Set points subtracted from the measurements (e.g. the target angle).
     """
 
-    def __init__(
-        self,
-        synthesis: H2Synthesis,
-        dt: QuantityArrayLike,
-        measurements: ChannelItems | None = None,
-        commands: ChannelItems | None = None,
-        references: Mapping[str, QuantityArrayLike] | None = None,
-    ) -> None:
-        if not isinstance(synthesis, H2Synthesis):
-            raise FieldError(
-                "synthesis", f"must be an H2Synthesis (h2syn), got {type(synthesis).__name__}"
-            )
-        self.synthesis = synthesis
-        plant = synthesis.plant
-        super().__init__(
-            synthesis.controller,
-            plant.measurement_names if measurements is None else measurements,
-            plant.control_names if commands is None else commands,
-            dt,
-            references,
-        )
+    synthesis_type = H2Synthesis
+    designer = "h2syn"

@@ -42,7 +42,6 @@ slycot (SB10AD).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -51,14 +50,12 @@ import scipy.linalg as sla
 
 from flexsat.analysis.norms import hinf_norm
 from flexsat.control.generalized_plant import GeneralizedPlant, closed_loop
-from flexsat.control.h2_synthesis import as_generalized_plant, h2syn
-from flexsat.control.state_space_compensator import StateSpaceCompensator
+from flexsat.control.h2_synthesis import SynthesisCompensator, as_generalized_plant, h2syn
 from flexsat.input_checks import FieldError
 
 if TYPE_CHECKING:
     import control as ct
-    from flexsat.control.linear_form import ChannelItems
-    from flexsat.units import FloatArray, QuantityArrayLike
+    from flexsat.units import FloatArray
 
 __all__ = [
     "HinfCentral",
@@ -297,7 +294,7 @@ def hinfsyn(
     return HinfSynthesis(best.controller, hi, lo, achieved, best, steps, G)
 
 
-class HinfController(StateSpaceCompensator):
+class HinfController(SynthesisCompensator):
     """An H∞ compensator as a flexsat law (a continuous
     :class:`~flexsat.control.state_space_compensator.StateSpaceCompensator`, run through its
     exact zero-order-hold equivalent at the control period).
@@ -314,24 +311,5 @@ class HinfController(StateSpaceCompensator):
         Set points subtracted from the measurements.
     """
 
-    def __init__(
-        self,
-        synthesis: HinfSynthesis,
-        dt: QuantityArrayLike,
-        measurements: ChannelItems | None = None,
-        commands: ChannelItems | None = None,
-        references: Mapping[str, QuantityArrayLike] | None = None,
-    ) -> None:
-        if not isinstance(synthesis, HinfSynthesis):
-            raise FieldError(
-                "synthesis", f"must be an HinfSynthesis (hinfsyn), got {type(synthesis).__name__}"
-            )
-        self.synthesis = synthesis
-        plant = synthesis.plant
-        super().__init__(
-            synthesis.controller,
-            plant.measurement_names if measurements is None else measurements,
-            plant.control_names if commands is None else commands,
-            dt,
-            references,
-        )
+    synthesis_type = HinfSynthesis
+    designer = "hinfsyn"
