@@ -7,6 +7,7 @@ from __future__ import annotations
 import re
 
 import numpy as np
+import pytest
 
 from flexsat.report.interactive import BUNDLES, Curve, Plot, head, render, stable_ids, thin
 
@@ -78,3 +79,15 @@ def test_the_head_inlines_bokehjs_and_loads_nothing():
     assert f"Bokeh {__version__}" in text or __version__ in text
     assert not re.search(r"<script\b[^>]*\bsrc=", text) and "<link" not in text
     assert BUNDLES == ("bokeh", "bokeh-widgets")
+
+
+def test_the_head_stays_inline_when_the_dashboard_is_loaded_in_the_same_process():
+    # Panel (flexsat serve) registers script files of its own with every bokeh Resources; a
+    # report written after it was imported (a test run, a notebook) must still load nothing
+    pytest.importorskip("panel")
+    import panel  # noqa: F401
+    from bokeh.resources import Resources
+
+    assert Resources(mode="inline", components=list(BUNDLES)).js_files  # what Panel adds
+    text = head()
+    assert not re.search(r"<script\b[^>]*\bsrc=", text) and "<link" not in text

@@ -107,10 +107,18 @@ class Plot:
 
 
 def head() -> str:
-    """The page head's BokehJS (script and style elements), inlined (:data:`BUNDLES`)."""
+    """The page head's BokehJS (script and style elements), inlined (:data:`BUNDLES`).
+
+    Only the inlined text is written, never the resources' file references: an extension
+    imported into the same process (Panel, for the dashboard) adds its own script files to
+    every ``Resources``, which would make the page load a sibling file."""
+    from bokeh.core.templates import CSS_RESOURCES, JS_RESOURCES
     from bokeh.resources import Resources
 
-    return str(Resources(mode="inline", components=list(BUNDLES)).render())
+    inline = Resources(mode="inline", components=list(BUNDLES))
+    css = CSS_RESOURCES.render(css_raw=inline.css_raw, css_files=[])
+    js = JS_RESOURCES.render(js_raw=inline.js_raw, js_files=[], hashes=inline.hashes)
+    return f"{css}\n{js}"
 
 
 def thin(x: FloatArray, y: FloatArray, limit: int = MAX_POINTS) -> tuple[FloatArray, FloatArray]:
