@@ -2,64 +2,23 @@
 
 from __future__ import annotations
 
-import os
 import re
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-SCRIPT = ROOT / "examples" / "robustness_reduction.py"
-DOC = ROOT / "docs" / "robustness_reduction.md"
-NUMBER = re.compile(r"[-+]?\d+\.\d+|inf")
-
-
-def _doc_output() -> list[str]:
-    """The ```text block after the line that names the example's command."""
-    text = DOC.read_text(encoding="utf-8")
-    start = text.index("`python examples/robustness_reduction.py`")
-    block = text[start:].split("```text\n", 1)[1].split("```", 1)[0]
-    return block.strip("\n").splitlines()
-
-
-def _mask(line: str) -> tuple[str, list[str]]:
-    return NUMBER.sub("#", line), NUMBER.findall(line)
-
-
-def _close(printed: str, documented: str) -> bool:
-    """Equal to one unit of the last printed digit (a value at a rounding edge may round the
-    other way with another BLAS kernel; the docs were taken on one machine)."""
-    if "inf" in (printed, documented):
-        return printed == documented
-    decimals = len(documented.split(".")[1])
-    return abs(float(printed) - float(documented)) <= 1.01 * 10.0**-decimals
+from example_output import assert_same_line, doc_output, run_example
 
 
 @pytest.fixture(scope="module")
 def printed(tmp_path_factory: pytest.TempPathFactory) -> list[str]:
-    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=str(ROOT / "src"))
-    proc = subprocess.run(
-        [sys.executable, str(SCRIPT)],
-        cwd=tmp_path_factory.mktemp("example"),
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=600,
-        check=False,
-    )
-    assert proc.returncode == 0, proc.stderr
-    return proc.stdout.strip("\n").splitlines()
+    return run_example("robustness_reduction.py", tmp_path_factory.mktemp("example"))
 
 
 def test_prints_what_the_docs_show(printed: list[str]) -> None:
-    documented = _doc_output()
+    documented = doc_output("robustness_reduction.md", "`python examples/robustness_reduction.py`")
     assert len(printed) == len(documented)
-    for got, want in zip(printed, documented):
-        (g_words, g_nums), (w_words, w_nums) = _mask(got), _mask(want)
-        assert g_words == w_words, (got, want)
-        assert all(_close(a, b) for a, b in zip(g_nums, w_nums)), (got, want)
+    for got, want in zip(printed, documented, strict=True):
+        assert_same_line(got, want)
 
 
 def test_the_guarantees_hold_in_the_printed_numbers(printed: list[str]) -> None:
