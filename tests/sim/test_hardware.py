@@ -296,26 +296,11 @@ def test_bad_hardware_is_refused_naming_the_field():
     assert np.isfinite(run["theta"].values).all()
 
 
-def test_companion_blocks_and_modal_form_of_filters_on_a_hybrid_plant():
-    # T⁻¹ A T block-diagonal with the companion blocks (ω, ζ) of the filter poles; the
-    # compiled loop in these coordinates equals the Python loop's dense step to round-off
-    # (cond(T) eps: 1e-12 rad against 0.7 rad of slew)
+def test_modal_form_of_filters_on_a_hybrid_plant():
+    # the filters' companion blocks (tests/sim/test_hardware_models.py) join the plant's modal
+    # form; the compiled loop in these coordinates equals the Python loop's dense step to
+    # round-off (cond(T) eps: 1e-12 rad against 0.7 rad of slew)
     from flexsat.cases.tamu import tamu
-    from flexsat.sim.hardware import companion_blocks
-
-    A = AntiAliasFilter(10.0, 4).matrices()[0]
-    T, Ti, w, z = companion_blocks(A)
-    L = Ti @ A @ T
-    for i in range(2):
-        blk = np.array([[0.0, 1.0], [-(w[i] ** 2), -2 * z[i] * w[i]]])
-        np.testing.assert_allclose(
-            L[2 * i : 2 * i + 2, 2 * i : 2 * i + 2], blk, atol=1e-9 * w[i] ** 2
-        )
-    assert np.abs(L[:2, 2:]).max() < 1e-9 * np.abs(L).max()
-    # Butterworth: the poles on the circle of the corner, ζ = sin(π/8), sin(3π/8)
-    np.testing.assert_allclose(w, 2 * np.pi * 10.0, rtol=1e-12)
-    np.testing.assert_allclose(sorted(z), np.sin([np.pi / 8, 3 * np.pi / 8]), rtol=1e-12)
-    assert companion_blocks(AntiAliasFilter(10.0, 3).matrices()[0]) is None  # a real pole
 
     case = tamu()
     hw = case.hardware()
