@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexsat.control.generalized_plant import lqg_plant
+from flexsat.control.generalized_plant import GeneralizedPlant, lqg_plant
 
 #: measurement-noise intensity of the TAMU hub angle, rad² s
 TAMU_RN = 1e-4
@@ -61,3 +61,23 @@ def draper_design(n_modes: int = 6, damping: float = 0.002):
     Q = np.eye(n)
     Q[0, 0], Q[n // 2, n // 2] = 100.0, 10.0
     return case, plant, P, Q
+
+
+def random_plant(seed: int) -> GeneralizedPlant:
+    """A random generalized plant (5 states, 3 w, 2 u, 4 z, 2 y) with the cross terms D12 and D21
+    and D11 = D22 = 0 (what both syntheses take)."""
+    rng = np.random.default_rng(seed)
+    n, nw, nu, nz, ny = 5, 3, 2, 4, 2
+    return GeneralizedPlant(
+        rng.normal(size=(n, n)),
+        rng.normal(size=(n, nw)),
+        rng.normal(size=(n, nu)),
+        rng.normal(size=(nz, n)),
+        rng.normal(size=(ny, n)),
+        np.zeros((nz, nw)),
+        rng.normal(size=(nz, nu)),
+        rng.normal(size=(ny, nw)),
+        np.zeros((ny, nu)),
+        tuple(f"w{i}" for i in range(nw)) + ("u0", "u1"),
+        tuple(f"z{i}" for i in range(nz)) + ("y0", "y1"),
+    )

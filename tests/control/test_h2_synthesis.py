@@ -14,14 +14,14 @@ import pytest
 import control as ct
 from flexsat.analysis.norms import h2_norm
 from flexsat.control.estimation import kalman
-from flexsat.control.generalized_plant import GeneralizedPlant, closed_loop
+from flexsat.control.generalized_plant import closed_loop
 from flexsat.control.h2_synthesis import H2Controller, h2syn
 from flexsat.control.lqr import lqr
 from flexsat.input_checks import FieldError
 from flexsat.sim import simulate
 from flexsat.testing import check_controller
 from flexsat.testing.checks import CHECK_RATE
-from synthesis_plants import TAMU_RN, tamu_design, tamu_generalized
+from synthesis_plants import TAMU_RN, random_plant, tamu_design, tamu_generalized
 
 
 def scalar_plant(a):
@@ -44,21 +44,7 @@ def test_scalar_cost_is_the_closed_form(a):
 @pytest.mark.numerics
 @pytest.mark.parametrize("seed", range(5))
 def test_achieved_norm_equals_cost_on_random_plants_with_cross_terms(seed):
-    rng = np.random.default_rng(seed)
-    n, nw, nu, nz, ny = 5, 3, 2, 4, 2
-    G = GeneralizedPlant(
-        rng.normal(size=(n, n)),
-        rng.normal(size=(n, nw)),
-        rng.normal(size=(n, nu)),
-        rng.normal(size=(nz, n)),
-        rng.normal(size=(ny, n)),
-        np.zeros((nz, nw)),
-        rng.normal(size=(nz, nu)),
-        rng.normal(size=(ny, nw)),
-        np.zeros((ny, nu)),
-        tuple(f"w{i}" for i in range(nw)) + ("u0", "u1"),
-        tuple(f"z{i}" for i in range(nz)) + ("y0", "y1"),
-    )
+    G = random_plant(seed)
     s = h2syn(G)
     T = closed_loop(G, s.controller)
     assert np.all(np.linalg.eigvals(T.A).real < 0)

@@ -23,31 +23,13 @@ from flexsat.control.hinf_synthesis import (
 from flexsat.input_checks import FieldError
 from flexsat.testing import check_controller
 from flexsat.testing.checks import CHECK_RATE
-from synthesis_plants import tamu_design, tamu_generalized
+from synthesis_plants import random_plant, tamu_design, tamu_generalized
 
 SLACK = 1e-7  # hinf_norm's bracket and the round-off of the closed loop (module docstring)
 
 
 def scalar_plant(a):
     return ct.ss(a, [[1.0, 0.0, 1.0]], [[1.0], [0.0], [1.0]], [[0, 0, 0], [0, 0, 1], [0, 1, 0]])
-
-
-def random_plant(seed):
-    rng = np.random.default_rng(seed)
-    n, nw, nu, nz, ny = 5, 3, 2, 4, 2
-    return GeneralizedPlant(
-        rng.normal(size=(n, n)),
-        rng.normal(size=(n, nw)),
-        rng.normal(size=(n, nu)),
-        rng.normal(size=(nz, n)),
-        rng.normal(size=(ny, n)),
-        np.zeros((nz, nw)),
-        rng.normal(size=(nz, nu)),
-        rng.normal(size=(ny, nw)),
-        np.zeros((ny, nu)),
-        tuple(f"w{i}" for i in range(nw)) + ("u0", "u1"),
-        tuple(f"z{i}" for i in range(nz)) + ("y0", "y1"),
-    )
 
 
 @pytest.mark.numerics
