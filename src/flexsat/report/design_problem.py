@@ -10,8 +10,7 @@ The page, in order:
   value g(x) (the minimisation form g ≤ 0: ``response − max``, ``min − response``,
   ``lower − x``, ``x − upper``) and its multiplier λ ≥ 0 in SI (unit: the objective's over the
   constraint's), then the four KKT residuals (stationarity, primal, dual, complementarity, in
-  the problem's scaled units) and their maximum (:mod:`flexsat.design.kkt`; Kuhn & Tucker 1951,
-  Nocedal & Wright 2006 Thm. 12.1);
+  the problem's scaled units) and their maximum (:mod:`flexsat.design.kkt`);
 - **Starting design beside the final design**: the variables and every response at the start
   and at each optimum, then, for a problem that describes its designs
   (:func:`flexsat.design.describe.describe_design`), the structure's modes and the controller's
@@ -30,6 +29,17 @@ described features under ``described``; a ``start`` record holds the start), and
 ``results.nc`` as ``history_*`` variables over (``run``, ``iteration``) padded with NaN after
 ``history_length``, and ``described_*`` over (``design``, element) — complex poles as
 ``_real`` and ``_imag`` parts.
+
+References
+----------
+H. W. Kuhn and A. W. Tucker, "Nonlinear programming", Proceedings of the Second Berkeley
+Symposium on Mathematical Statistics and Probability, University of California Press, 1951,
+481–492 (the conditions); J. Nocedal and S. J. Wright, *Numerical Optimization*, 2nd ed.,
+Springer, 2006, Thm. 12.1 and §12.8 (the conditions in minimisation form; a multiplier as the
+optimum's sensitivity to its constraint); Y. Y. Haimes, L. S. Lasdon and D. A. Wismer, "On a
+bicriterion formulation of the problems of integrated system identification and system
+optimization", IEEE Transactions on Systems, Man, and Cybernetics SMC-1(3), 1971, 296–297
+(the ε-constraint method).
 """
 
 from __future__ import annotations
