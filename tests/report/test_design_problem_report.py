@@ -304,6 +304,58 @@ def test_the_tamu_appendage_frequencies_equal_an_fe_model_and_the_gains_are_the_
     assert total == pytest.approx(problem.appendage_mass, rel=1e-14)
 
 
+def test_the_tamu_law_ii_poles_equal_an_fe_hub_with_its_appendage(monkeypatch):
+    """Law II's closed-loop poles (hybrid-coordinate model, 10 cantilever modes) against a
+    planar FE half-model: the hub's share of the inertia on a pinned node, a rigid link to the
+    appendage root at the hub radius, 80 beam elements and the tip mass, the law's share
+    g/n of the feedback on the hub rotation, poles of the pencil (A, E) by QZ (no inverse of
+    the nearly singular FE mass). Both undamped (the FE model has no modal damping). The
+    lowest three pole pairs differ by 4e-7, 7e-8, 6e-7 at 80 elements, as at 40: the assumed
+    modes' truncation, not the FE's; 2e-6 holds."""
+    from flexsat.cases.tamu import tamu
+
+    problem = TamuCodesign()
+    monkeypatch.setattr(problem, "_case", tamu(n_modes=10, damping=0.0))
+    x = np.array([1.3, 20.0, 6.0, 0.15])
+    shown = problem.describe(x)["closed-loop poles"].values
+    p = problem.case.params
+    st = problem.structure(np.array([x[0]]))
+    n, share = 80, p.n_appendages
+    s = Structure("hub with one appendage")
+    s.add_node(0, (0.0, 0.0, 0.0))
+    for i in range(n + 1):
+        s.add_node(i + 1, (p.hub_radius + p.length * i / n, 0.0, 0.0))
+    strip = Material(float(st["EI"][0]), float(st["rho"][0]))
+    for i in range(n):
+        s.add_beam2d(i + 1, i + 2, strip, Section.general(1.0, 1.0, 1.0, 1.0))
+    s.add_mass(0, 0.0, inertia=(0.0, 0.0, p.hub_inertia / share))
+    s.add_mass(n + 1, float(st["tip_mass"][0]))
+    s.add_rigid_link(0, [1])
+    for i in [0, *range(2, n + 2)]:
+        s.clamp(i, ("ux",))
+    s.clamp(0, ("uy", "uz", "rx", "ry"))
+    asm = s.assemble()
+    M, K = asm.M.toarray(), asm.K.toarray()
+    e = np.zeros(M.shape[0])
+    e[asm.index(0, "rz")] = 1.0
+    N = M.shape[0]
+    A = np.block(
+        [
+            [np.zeros((N, N)), np.eye(N)],
+            [-(K + x[1] / share * np.outer(e, e)), -x[2] / share * np.outer(e, e)],
+        ]
+    )
+    E = np.block([[np.eye(N), np.zeros((N, N))], [np.zeros((N, N)), M]])
+    fe = sla.eigvals(A, E)
+    # the tip mass's out-of-plane translation is a free, decoupled dof: its poles are 0
+    fe = fe[np.isfinite(fe) & (np.abs(fe) > 1e-6) & (fe.imag > 0)]
+    fe = fe[np.argsort(fe.imag)][:3]
+    upper = shown[shown.imag > 0]
+    upper = upper[np.argsort(upper.imag)][:3]
+    np.testing.assert_allclose(upper, fe, rtol=2e-6)
+    assert np.all(shown.real < 0)  # Law II stabilises the linear model
+
+
 def test_the_page_holds_every_section(written):
     result, out = written
     page = (out / "index.html").read_text()

@@ -63,13 +63,14 @@ from scipy.stats import spearmanr
 
 from flexsat.cases.tamu import TamuCase, published_reference_inertia, tamu
 from flexsat.control import LyapunovTracker
-from flexsat.design.describe import DesignFeature
+from flexsat.design.describe import DesignFeature, sorted_poles
 from flexsat.design.optimization_problem import (
     DesignProblem,
     DesignVariable,
     Objective,
 )
 from flexsat.dynamics.dispersed_hub import DispersedHubAppendage
+from flexsat.dynamics.hub_appendage import HubAppendage
 from flexsat.input_checks import FieldError, require_positive_scalar
 from flexsat.maneuvers import SmoothBangBang
 from flexsat.sim import simulate
@@ -309,6 +310,16 @@ class TamuCodesign:
         modes = cantilever_modes_batch(
             p.length, st["EI"], st["rho"], st["tip_mass"], p.tip_inertia, n
         )
+        # Law II about the final angle once the reference has ended (g3 = 0): u = −g1 θ̃ − g2 θ̇
+        # on the linear hub-appendage model, state [θ, q, θ̇, q̇]
+        k = int(self.n_modes)
+        design = replace(
+            p, EI=float(st["EI"][0]), rho=float(st["rho"][0]), tip_mass=float(st["tip_mass"][0])
+        )
+        A, B = HubAppendage(design, n_modes=k).linear_part()
+        gain = np.zeros((1, 2 * (k + 1)))
+        gain[0, 0], gain[0, k + 1] = x[1], x[2]
+        poles = sorted_poles(np.linalg.eigvals(A - B @ gain))
         return {
             "appendage frequencies": DesignFeature(
                 "structure",
@@ -337,6 +348,14 @@ class TamuCodesign:
                 np.array([x[3]]),
                 "",
                 note="rise-time fraction of the smoothed bang-bang reference (Att. 3 Eq. 15)",
+            ),
+            "closed-loop poles": DesignFeature(
+                "control",
+                poles,
+                "1/s",
+                note="eig(A − B K) of the linear hub-appendage model with Law II about the final "
+                "angle (K = [g1, 0, …, g2, 0, …]): continuous time, without friction, rate "
+                "filter, sampling or saturation",
             ),
         }
 
