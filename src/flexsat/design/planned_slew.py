@@ -219,6 +219,27 @@ def _least_peak(G: FloatArray, h: FloatArray, n_z: int) -> tuple[FloatArray | No
     return res.x[:n_z], float(res.x[-1]), "least peak by HiGHS"
 
 
+def _polish(
+    P: FloatArray, q: FloatArray, G: FloatArray, h: FloatArray, z: FloatArray
+) -> FloatArray:
+    """SLSQP's optimum made exact on its active set: the equality-constrained QP
+    min ½zᵀPz + qᵀz s.t. G_A z = h_A by its KKT system (least squares: rows of G_A may be
+    dependent), kept when it meets every limit and its multipliers are non-negative (then it
+    is the optimum of the convex QP); otherwise SLSQP's point."""
+    active = np.flatnonzero(h - G @ z <= ACTIVE_TOL)
+    if not active.size:
+        return z
+    GA = G[active]
+    n, k = P.shape[0], active.size
+    K = np.block([[P, GA.T], [GA, np.zeros((k, k))]])
+    sol = np.linalg.lstsq(K, np.concatenate([-q, h[active]]), rcond=None)[0]
+    z_new, mu = sol[:n], sol[n:]
+    scale = max(float(np.abs(mu).max()), 1e-300)
+    if np.max(G @ z_new - h) <= 1e-9 and np.min(mu) >= -1e-8 * scale:
+        return np.asarray(z_new, float)
+    return z
+
+
 def _input_map(terminal: TerminalMap, t: FloatArray) -> FloatArray:
     """M(t_k) (n_s, 3 + n_F, (3 + n_F) n_b): the planned inputs' change [J v; F] per
     coefficient (torque rows N m, force rows N)."""
@@ -284,19 +305,24 @@ def plan_slew(
     if n_s < 2:
         raise FieldError("n_samples", f"must be at least 2, got {n_s}")
     n_c = (3 + n_f) * n_b
-    X, r = terminal.X, terminal.target
+    H_tau = (0.5 * T) * np.kron(J.T @ J, np.eye(n_b))
+    H = np.zeros((n_c, n_c))
+    H[: 3 * n_b, : 3 * n_b] = H_tau
+    H[3 * n_b :, 3 * n_b :] = (0.5 * T * float(force_weight)) * np.eye(n_f * n_b)
+    # with forces, the coefficients scaled to unit diagonal of H (c = D ĉ, an exact change of
+    # variables): torque sines weigh ~‖J‖², force sines w_F, and SLSQP would not resolve the
+    # reduced problem at that condition
+    D = 1.0 / np.sqrt(np.diag(H)) if n_f else np.ones(n_c)
+    X, r = terminal.X * D, terminal.target
     U, sv, Vt = np.linalg.svd(X, full_matrices=True)
     rank = int(np.sum(sv > RANK_RCOND * sv[0]))
     c_prev = np.zeros(n_c) if start is None else np.asarray(start, float).reshape(-1)
     if c_prev.shape != (n_c,) or not np.all(np.isfinite(c_prev)):
         raise FieldError("start", f"must be {n_c} finite coefficients ({3 + n_f}, n_b)")
-    c0 = c_prev + Vt[:rank].T @ ((U[:, :rank].T @ r) / sv[:rank])
+    c0 = c_prev / D + Vt[:rank].T @ ((U[:, :rank].T @ r) / sv[:rank])
     N = Vt[rank:].T if rank < Vt.shape[0] else null_space(X)
-    H_tau = (0.5 * T) * np.kron(J.T @ J, np.eye(n_b))
-    H = np.zeros((n_c, n_c))
-    H[: 3 * n_b, : 3 * n_b] = H_tau
-    H[3 * n_b :, 3 * n_b :] = (0.5 * T * float(force_weight)) * np.eye(n_f * n_b)
-    P, q = N.T @ H @ N, N.T @ H @ c0
+    Hs = H * D[:, None] * D[None, :]
+    P, q = N.T @ Hs @ N, N.T @ Hs @ c0
     z = -np.linalg.solve(P, q)  # the unconstrained optimum
 
     t = np.linspace(0.0, T, n_s)
@@ -307,7 +333,7 @@ def plan_slew(
     limited = np.r_[np.full(3, L is not None), np.full(n_f, L_F is not None)]
     if objective == "peak":
         limited[:] = True
-    M = _input_map(terminal, t)[:, limited]  # (n_s, n_lim, n_c)
+    M = _input_map(terminal, t)[:, limited] * D  # (n_s, n_lim, n_c), per scaled coefficient
     u_n = np.concatenate([nominal.torque(t), np.zeros((n_s, n_f))], axis=1)[:, limited]
     scale = np.tile(scale_in[limited], n_s)
     MN = M.reshape(-1, n_c) @ N  # rows (k, input)
@@ -326,24 +352,32 @@ def plan_slew(
         z = z_lp
         feasible = L is None or least_peak <= 1.0
     elif any_limit and np.max(G @ z - h) > 0.0:
-        f0 = max(float(0.5 * z @ P @ z + q @ z + 0.5 * c0 @ H @ c0), 1e-300)
-        res = minimize(
-            lambda y: (0.5 * y @ P @ y + q @ y) / f0,
-            z,
-            jac=lambda y: (P @ y + q) / f0,
-            constraints=[{"type": "ineq", "fun": lambda y: h - G @ y, "jac": lambda y: -G}],
-            method="SLSQP",
-            options={"maxiter": 500, "ftol": 1e-12},
-        )
-        z, message = res.x, f"SLSQP: {res.message}"
+        f0 = max(float(0.5 * z @ P @ z + q @ z + 0.5 * c0 @ Hs @ c0), 1e-300)
+
+        def qp(z_start: FloatArray) -> tuple[FloatArray, str]:
+            res = minimize(
+                lambda y: (0.5 * y @ P @ y + q @ y) / f0,
+                z_start,
+                jac=lambda y: (P @ y + q) / f0,
+                constraints=[{"type": "ineq", "fun": lambda y: h - G @ y, "jac": lambda y: -G}],
+                method="SLSQP",
+                options={"maxiter": 500, "ftol": 1e-12},
+            )
+            return _polish(P, q, G, h, res.x), f"SLSQP: {res.message}"
+
+        z, message = qp(z)
         if np.max(G @ z - h) > 1e-6:
-            feasible = False
-            _, least_peak, lp_message = _least_peak(G, np.concatenate([-base, base]), N.shape[1])
+            z_lp, least_peak, lp_message = _least_peak(G, np.concatenate([-base, base]), N.shape[1])
             message += f"; {lp_message}: {least_peak:.4g} × the limit"
+            if z_lp is not None and least_peak <= 1.0:
+                # feasible after all: SLSQP again from the least-peak point, inside the limits
+                z, again = qp(z_lp)
+                message += f"; from the least-peak point, {again}"
+            feasible = bool(np.max(G @ z - h) <= 1e-6)
     else:
         message = "unconstrained optimum (closed form)"
 
-    c = c0 + N @ z
+    c = D * (c0 + N @ z)
     grad = P @ z + q
     slack = h - G @ z
     active_rows = (
@@ -364,7 +398,9 @@ def plan_slew(
         nominal,
         c_tau.reshape(3, n_b),
         J,
-        float(np.linalg.norm(X @ (c - c_prev) - r) / max(float(np.linalg.norm(r)), 1e-300)),
+        float(
+            np.linalg.norm(terminal.X @ (c - c_prev) - r) / max(float(np.linalg.norm(r)), 1e-300)
+        ),
         terminal.force_channels,
         d.reshape(n_f, n_b) if n_f else None,
     )

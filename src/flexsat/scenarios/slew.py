@@ -42,7 +42,13 @@ perturbation law designed along the planned trajectory::
 
 ``basis`` sines per axis (default 30), ``objective`` ``energy`` or ``peak``, ``torque_limit``
 on every axis (optional), ``samples`` where the limit holds (default 16 × basis + 1),
-``iterations`` relinearisations (default 4). The plan's numbers (peak torques, active limits
+``iterations`` relinearisations (default 4). ``forces`` (``none``, ``all`` or a list such as
+``[66Z, 60Z]``, the plant's force actuators as the run's ``forces`` names them) plans point
+forces beside the torque, each its own sine series, with ``force_limit`` on every force
+(optional; required with ``objective: peak``, together with ``torque_limit``) and
+``force_weight`` w_F (m², default 1: the energy is ∫‖Δτ‖² + w_F‖F‖² dt). Flown with the
+feedback on top, the run's own ``forces`` must include the planned ones (the law adds its
+force perturbations to the plan's). The plan's numbers (peak torques, active limits
 and their multipliers, the KKT residual, the terminal residual by iteration, or the least peak
 when the limit cannot be met) are in the result's notes.
 
@@ -252,6 +258,17 @@ class PlannedShapingSpec(SchemaSection):
     samples: Annotated[int | None, integer_in(2, 100_000, optional=True)] = None
     iterations: Annotated[int, integer_in(0, 20)] = 4
     feedback: bool = True
+    forces: Literal["none", "all"] | list[str] = "none"
+    force_limit: Annotated[float | None, in_unit("N", positive=True)] = None
+    force_weight: Annotated[float, in_unit("m**2", positive=True)] = 1.0
+
+    @model_validator(mode="after")
+    def _force_fields(self) -> Self:
+        if self.forces == "none":
+            for name in ("force_limit", "force_weight"):
+                if name in self.model_fields_set:
+                    raise FieldError(name, "given without forces planned (shaping.forces)")
+        return self
 
 
 class SlewRunSpec(SchemaSection):
@@ -297,8 +314,8 @@ class SlewRunSpec(SchemaSection):
             if not self.shaping.feedback and (self.forces != "none" or self.decouple):
                 raise FieldError(
                     "forces",
-                    "a planned torque flown alone uses the torquers only (the plan "
-                    "shapes the torque); give shaping.feedback: true for forces",
+                    "a plan flown alone has no feedback forces (plan them with "
+                    "shaping.forces, or give shaping.feedback: true)",
                 )
             if "feedforward" in self.model_fields_set and self.feedforward != "none":
                 raise FieldError(
@@ -497,19 +514,25 @@ def _weights(
 
 def _forces(run: SlewRunSpec, index: int, plant: FlexibleSpacecraft) -> list[str]:
     """The run's force channels, by the plant's names (``69X`` -> ``force_69X``)."""
+    return force_channels(run.forces, f"runs{item_path(index, run.label)}.forces", plant)
+
+
+def force_channels(forces: str | list[str], where: str, plant: FlexibleSpacecraft) -> list[str]:
+    """Force channels of ``plant`` named by a scenario's ``forces`` field (``none``, ``all``
+    or a list of ``69X`` or ``force_69X``); a name the plant lacks is refused at ``where``."""
     available = [c.name for c in plant.inputs if c.name.startswith("force_")]
-    if run.forces == "none":
+    if forces == "none":
         return []
-    if run.forces == "all":
+    if forces == "all":
         return available
     names: list[str] = []
-    for name in run.forces:
+    for name in forces:
         channel = name if name.startswith("force_") else f"force_{name}"
         if channel not in available:
             raise ScenarioError(
                 [
                     Problem(
-                        f"runs{item_path(index, run.label)}.forces",
+                        where,
                         f"{name!r} is not a force of the plant (its forces: "
                         f"{', '.join(c[len('force_') :] for c in available)})",
                     )
@@ -692,6 +715,7 @@ def nominal_design(scenario: SlewScenario) -> dict[str, Any]:
 
 def _plan(
     run: SlewRunSpec,
+    index: int,
     plant: FlexibleSpacecraft,
     kept: dict[str, Any],
     nominal: ThreeAxisSlew,
@@ -704,6 +728,9 @@ def _plan(
     spec = run.shaping
     assert spec is not None
     if run.label not in plans:
+        forces = force_channels(
+            spec.forces, f"runs{item_path(index, run.label)}.shaping.forces", plant
+        )
         try:
             plans[run.label] = planned_slew(
                 plant,
@@ -715,6 +742,9 @@ def _plan(
                 spec.torque_limit,
                 spec.samples,
                 spec.iterations,
+                forces=forces,
+                force_limit=spec.force_limit,
+                force_weight=spec.force_weight,
             )
         except FieldError as exc:
             names = {"n_basis": "basis", "n_samples": "samples", "config": "simulation"}
@@ -748,7 +778,7 @@ def _laws(
         try:
             reference: Any = nominal
             if run.shaping is not None:
-                plan = _plan(run, plant, kept, nominal, config)
+                plan = _plan(run, index, plant, kept, nominal, config)
                 if not run.shaping.feedback:
                     laws[run.label] = NominalTorque(plan, dt)
                     continue
@@ -818,6 +848,15 @@ def _plan_note(label: str, plan: PlannedSlew, given_limit: float | None) -> str:
                 f"(largest multiplier {largest:.3g} (N m)² s per limit), KKT residual "
                 f"{plan.kkt_residual:.1e}."
             )
+    if plan.force_channels:
+        text += (
+            " Planned point forces, peaks "
+            + ", ".join(
+                f"{name[len('force_') :]} {p:,.0f}"
+                for name, p in zip(plan.force_channels, plan.peak_forces, strict=True)
+            )
+            + f" N; torque correction energy {plan.torque_energy:.3g} N² m² s."
+        )
     if plan.objective == "peak" and plan.feasible and np.isfinite(plan.least_peak):
         # in units of the given limit, in N m without one (PlannedSlew.least_peak)
         least = plan.least_peak * (1.0 if given_limit is None else given_limit)
