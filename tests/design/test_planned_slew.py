@@ -343,6 +343,21 @@ def test_planned_forces_bring_the_modes_to_rest_on_the_engine_and_under_the_feed
     np.testing.assert_array_equal(
         rebuilt.tables()["force_reference"], closed_law.tables()["force_reference"]
     )
+    # the compiled loop's linear form carries the planned forces as the Python law does:
+    # measurements along the plan, perturbed; agreement to rounding of the largest command
+    from flexsat.control.linear_form import run_controller, run_linear_law
+
+    times = config.dt * np.arange(int(round(6.5 / config.dt)))
+    rng = np.random.default_rng(23)
+    Y = np.concatenate(
+        [trajectory.beta(times), trajectory.omega(times), trajectory.elastic(times)], axis=-1
+    )[:, None, :] + 1e-4 * rng.normal(size=(times.size, 1, 4 + 3 + 20))
+    form = closed_law.linear_form(config.dt, times, 1)
+    slow = run_controller(closed_law, times, Y, (4, 3, 20), (3, 1, 1))
+    fast = run_linear_law(form, Y)
+    np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-9 * np.abs(slow).max())
+    assert np.abs(slow[:, 0, 3:]).max() > 0.5 * plan.peak_forces.max()  # the plan's forces
+
     evaluation = SlewEvaluation(truth, truth, nominal, config, n_points=7)
     closed = evaluation.run(closed_law)
     alone = evaluation.run(law)

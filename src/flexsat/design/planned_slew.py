@@ -1,5 +1,6 @@
 r"""A slew planned over the whole maneuver: the torque history that brings the design modes to
-rest at T at the least torque effort (or the least peak torque) within the torquers' limits.
+rest at T at the least effort (or the least peak) within the limits, by the torquers and, where
+given, point forces.
 
 :mod:`flexsat.design.slew_shaping` corrects the rigid nominal torque τ_n by
 :math:`J v(t)`, :math:`v = S(t)\,c` a sine series per axis vanishing at 0 and T, and gives the
@@ -30,6 +31,25 @@ multipliers of the active limits are the non-negative least-squares solution of
 g ≤ 0: λ ≥ 0), and the KKT residual is reported. When the limits admit no solution the least
 feasible peak torque is reported instead (the linear programme above, HiGHS through
 scipy.optimize.linprog): the number that shows the limit, not the method, prevents the goal.
+
+Point forces (``forces``): the plant's force actuators planned beside the torque, each a sine
+series of its own, :math:`F_i(t) = \sum_j d_{ij}\sin(j\pi t/T)` (the model of their action
+on the modes and on the hub is in :mod:`~flexsat.design.slew_shaping`). The coefficients are
+then [c; d], the terminal conditions :math:`X_\tau c + X_F d = r`, and the energy counts
+every input,
+
+.. math::
+
+    E(c, d) = \int_0^T \lVert J v\rVert^2 + w_F \lVert F\rVert^2\,dt
+    = \tfrac T2 \Big(\sum_j c_j^T J^T J c_j + w_F \sum_{i,j} d_{ij}^2\Big),
+
+with the force limits :math:`|F_i(t_k)| \le L_F` beside the torque limits and the least peak
+taken over both, :math:`\max(|\tau_a|/L_a, |F_i|/L_F)`. Torque sines weigh about
+:math:`\lVert J\rVert^2` (1e10 on the EPS) and force sines w_F, so the QP is solved in
+coefficients scaled to a unit Hessian diagonal (an exact change of variables), and SLSQP's
+point is polished by solving the KKT system on its active set (kept when it meets every limit
+with λ ≥ 0: then it is the optimum of the convex QP). Since zero forces are feasible, the
+optimum with forces never costs more energy than the torquers' alone.
 
 The limits are imposed at n_s equally spaced samples; between samples the highest sine
 (period 2T/n_b) can exceed a sampled peak by at most 1 − cos(π T/(n_b (n_s − 1)))
