@@ -1,5 +1,6 @@
 """Slew scenarios with a planned torque history (``shaping: {kind: planned}``,
-flexsat.design.planned_slew): the option runs, its numbers reach the report, and its mistakes
+flexsat.design.planned_slew; the section, the plan of a run and its note:
+flexsat.scenarios.slew_planned): the option runs, its numbers reach the report, and its mistakes
 are named by field path before anything runs.
 
 Cheap setup: the EPS on 12 elastic modes, a 4-mode design model, 0.5 rad about each axis in
