@@ -145,6 +145,8 @@ def test_planned_forces_run_alone_and_under_the_feedback():
     assert rows["planned + feedback"]["peak_force_N"] < 300 * 1.02 + 30
     notes = [n for n in result.notes if n.startswith("planned")]
     assert all("Planned point forces, peaks 66Z" in n for n in notes)
+    assert re.search(r"Limits force 300 N: \d+ sampled limits active", notes[1])
+    assert "Limits" not in notes[0] and "Torque limit" not in notes[0]  # none given
 
 
 @pytest.mark.parametrize(

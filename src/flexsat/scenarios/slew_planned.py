@@ -135,7 +135,7 @@ def plan_note(label: str, plan: PlannedSlew, given_limit: float | None) -> str:
         + " → ".join(f"{r:.2g}" for r in plan.iterates)
         + "."
     )
-    if plan.torque_limit is not None:
+    if plan.torque_limit is not None and plan.force_limit is None:
         limit = float(plan.torque_limit[0])
         if not plan.feasible:
             text += (
@@ -148,6 +148,32 @@ def plan_note(label: str, plan: PlannedSlew, given_limit: float | None) -> str:
             held = " (the least peak with its margin)" if plan.objective == "peak" else ""
             text += (
                 f" Torque limit {limit:,.0f} N m{held}: {plan.active} sampled limits active "
+                f"(largest multiplier {largest:.3g} (N m)² s per limit), KKT residual "
+                f"{plan.kkt_residual:.1e}."
+            )
+    elif plan.force_limit is not None:  # with or without a torque limit
+        limits = []
+        if plan.torque_limit is not None:
+            limits.append(f"torque {float(plan.torque_limit[0]):,.0f} N m")
+        if plan.force_limit is not None:
+            limits.append(f"force {plan.force_limit:,.0f} N")
+        named = " and ".join(limits)
+        if not plan.feasible:
+            text += (
+                f" The limits ({named}) cannot be met: the least peak meeting the terminal "
+                f"conditions is {plan.least_peak:.3g} × the limits"
+                + (
+                    f" ({plan.least_peak * float(plan.torque_limit[0]):,.0f} N m of torque)"
+                    if plan.torque_limit is not None
+                    else ""
+                )
+                + "; the plan flown is the last iterate."
+            )
+        else:
+            largest = float(plan.multipliers.max()) if plan.multipliers.size else 0.0
+            held = " (the least peak with its margin)" if plan.objective == "peak" else ""
+            text += (
+                f" Limits {named}{held}: {plan.active} sampled limits active "
                 f"(largest multiplier {largest:.3g} (N m)² s per limit), KKT residual "
                 f"{plan.kkt_residual:.1e}."
             )
