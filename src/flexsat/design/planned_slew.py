@@ -112,7 +112,8 @@ class PlannedSlew:
         L, N m.
     least_peak : float
         The least max_a,k |τ_a(t_k)|/L_a meeting the terminal conditions (in N m without
-        limits; NaN when not computed: energy objective with limits that do not bind).
+        limits; NaN when not computed: energy objective with limits that do not bind); with
+        planned forces the maximum runs over the limited inputs, |F_i(t_k)|/L_F included.
     active : int
         Sampled limits active at the optimum.
     multipliers : (n_active,) array
