@@ -703,6 +703,13 @@ def _plan(
     plans = kept.setdefault("plans", {})
     spec = run.shaping
     assert spec is not None
+    # runs whose shaping differs only by ``feedback`` have the same plan (the flag says how it
+    # is flown, not what is planned): the first such run's plan is shared, not recomputed
+    first = kept.setdefault("plan_inputs", {}).setdefault(
+        spec.model_dump_json(exclude={"feedback"}), run.label
+    )
+    if first in plans:
+        plans[run.label] = plans[first]
     if run.label not in plans:
         try:
             plans[run.label] = planned_slew(
