@@ -645,12 +645,14 @@ _designs: OrderedDict[str, dict[str, Any]] = OrderedDict()
 
 
 def design_fingerprint(scenario: SlewScenario) -> str:
-    """SHA-256 of the document fields the case's plant, the nominal maneuver and the
-    perturbation designs depend on (``case``, ``plant``, ``maneuver``, ``controller``,
-    ``runs``): not the truth, the sensors, the simulation or the goals."""
+    """SHA-256 of the document fields the case's plant, the nominal maneuver, the perturbation
+    designs and the planned torques depend on (``case``, ``plant``, ``maneuver``,
+    ``controller``, ``runs`` and the ``simulation`` step and length, which the sampled designs
+    and plans are computed on): not the truth, the sensors, the seed or the goals."""
     fields = scenario.model_dump(
         mode="json", include={"case", "plant", "maneuver", "controller", "runs"}
     )
+    fields["simulation"] = scenario.simulation.model_dump(mode="json", exclude={"seed"})
     return hashlib.sha256(json.dumps(fields, sort_keys=True).encode()).hexdigest()
 
 

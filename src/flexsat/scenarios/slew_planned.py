@@ -95,6 +95,13 @@ def plan_for_run(
     plans = kept.setdefault("plans", {})
     spec = run.shaping
     assert spec is not None
+    # runs whose shaping differs only by ``feedback`` have the same plan (the flag says how it
+    # is flown, not what is planned): the first such run's plan is shared, not recomputed
+    first = kept.setdefault("plan_inputs", {}).setdefault(
+        spec.model_dump_json(exclude={"feedback"}), run.label
+    )
+    if first in plans:
+        plans[run.label] = plans[first]
     if run.label not in plans:
         forces = force_channels(
             spec.forces, f"runs{item_path(index, run.label)}.shaping.forces", plant
