@@ -292,12 +292,18 @@ class AgrawalBangCodesign:
                 "x", f"the closed loop is unstable (max Re λ = {alpha:.3g} 1/s): no H2 norm"
             )
         dA, dK = self._derivatives(x)
-        Lc = _lyap(Abar, self.Bw @ self.Bw.T)
-        AT = np.ascontiguousarray(Abar.T)
+        # solve in balanced coordinates x = D x̃ (D a diagonal of powers of 2: exact scaling;
+        # the filter and modal states differ by orders of magnitude), then map back
+        d = sla.matrix_balance(Abar, permute=False, separate=True)[1][0]
+        Ab = Abar * d[None, :] / d[:, None]
+        Bb = self.Bw / d[:, None]
+        Lc = _lyap(Ab, Bb @ Bb.T) * np.outer(d, d)
+        AT = np.ascontiguousarray(Ab.T)
         rho = self.control_weight
 
         def squared(C: FloatArray, dC: FloatArray) -> tuple[float, FloatArray]:
-            Lo = _lyap(AT, C.T @ C)
+            Cb = C * d[None, :]
+            Lo = _lyap(AT, Cb.T @ Cb) / np.outer(d, d)
             value = float(np.sum((C @ Lc) * C))
             grad = 2 * np.einsum("ij,pjk,ki->p", Lo, dA, Lc) + 2 * np.einsum(
                 "ij,pij->p", C @ Lc, dC
