@@ -2,8 +2,8 @@ r"""PPF gains (and filter tuning) together with piezo placement on the Agrawal�
 a reference co-design problem (issue 23, deliverable 6).
 
 The structure, the piezo pairs and the PPF bank are those of :mod:`flexsat.cases.agrawal_bang`
-and :mod:`flexsat.control.ppf` (B. N. Agrawal and H. Bang, "Adaptive structures for large
-precision antennas", Acta Astronautica 38(3), 175–183, 1996, Eqs. 2–8): each patch is a
+and :mod:`flexsat.control.ppf` (B. N. Agrawal and H. Bang, *Adaptive Structures for Large
+Precision Antennas*, Acta Astronautica 1996, IAF-94.1.4.202, Eqs. 2–8): each patch is a
 pair of equal and opposite moments a₁u at its end nodes (modal influence a₁ (Φ_θ,b − Φ_θ,a)),
 its sensor the collocated surface strain a₂ (t/2)(θ_b − θ_a)/L_p, one second-order filter per
 (pair, mode) tuned to the mode, u = Eᵀ G ξ. Here the pairs are chosen among ``candidates``
