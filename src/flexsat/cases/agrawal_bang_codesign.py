@@ -117,7 +117,8 @@ class AgrawalBangCodesign:
     n_modes : int
         Modes of the model, each with one filter per pair (Agrawal & Bang: 3).
     zeta_f : float
-        Filter damping ratio (not published; 0.1 as :mod:`flexsat.cases.agrawal_bang_ppf`).
+        Filter damping ratio in (0, 1] (not published; 0.1 as
+        :mod:`flexsat.cases.agrawal_bang_ppf`).
     tune_filters : bool
         Also design the tuning ratios ν_ij = ω_f,ij/ω_j (else ν = 1: the paper's tuning).
     control_weight : float
@@ -153,6 +154,8 @@ class AgrawalBangCodesign:
     def __post_init__(self) -> None:
         for name in ("zeta_f", "control_weight", "stiffness_margin", "effort_max", "start_gain"):
             require_positive_scalar(getattr(self, name), name)
+        if not self.zeta_f <= 1:
+            raise FieldError("zeta_f", f"must be in (0, 1] (a damping ratio), got {self.zeta_f}")
         if not 0 < self.gain_fraction < 1:
             raise FieldError("gain_fraction", f"must lie in (0, 1), got {self.gain_fraction!r}")
         if not self.stiffness_margin < 1:
@@ -166,7 +169,7 @@ class AgrawalBangCodesign:
             raise FieldError("n_modes", f"must be an integer, got {self.n_modes!r}")
         if not 1 <= self.n_modes <= 6:
             raise FieldError("n_modes", f"must be 1 to 6, got {self.n_modes}")
-        self.candidates = tuple((int(b), float(s)) for b, s in self.candidates)
+        self.candidates = _candidate_list(self.candidates)
         self._case = _candidate_case(self.candidates)
         sel = tuple(self.selection)
         if not sel or any(
@@ -421,6 +424,29 @@ class AgrawalBangCodesign:
 
 
 _CASES: dict[tuple[tuple[int, float], ...], AgrawalBangCase] = {}
+
+
+def _candidate_list(raw: object) -> tuple[tuple[int, float], ...]:
+    """``candidates`` as (structure 1|2, finite start in m) pairs, else a FieldError."""
+    if isinstance(raw, (str, bytes)) or not hasattr(raw, "__iter__"):
+        raise FieldError("candidates", f"must be a list of (structure, start) pairs, got {raw!r}")
+    out = []
+    for j, item in enumerate(raw):
+        if isinstance(item, (str, bytes)) or not hasattr(item, "__len__") or len(item) != 2:
+            raise FieldError(f"candidates[{j}]", f"must be a (structure, start) pair, got {item!r}")
+        b, start = item
+        if isinstance(b, bool) or b not in (1, 2):
+            raise FieldError(f"candidates[{j}]", f"structure must be 1 or 2, got {b!r}")
+        try:
+            x = float(start)
+        except (TypeError, ValueError):
+            raise FieldError(
+                f"candidates[{j}]", f"start must be a number (m), got {start!r}"
+            ) from None
+        if not np.isfinite(x):
+            raise FieldError(f"candidates[{j}]", f"start must be finite, got {start!r}")
+        out.append((int(b), x))
+    return tuple(out)
 
 
 def _candidate_case(candidates: tuple[tuple[int, float], ...]) -> AgrawalBangCase:
