@@ -37,6 +37,14 @@ Hall 1996, §4.4; one controllability Gramian L_c and one adjoint per response),
   gradient φᵀ (∂S/∂g) φ (Eq. 26) for a simple λ_min; independent of ν (each filter passes a
   static signal with unit gain).
 
+The Lyapunov equations are solved in balanced coordinates x = D x̃ (D the diagonal of powers
+of two of :func:`scipy.linalg.matrix_balance`, an exact scaling) and mapped back: the modal and
+filter states differ by orders of magnitude, and balancing lowers the solves' round-off from
+~1e-10 to ~1e-14 relative (measured through central differences, docs). Units: with the
+case's a₁ = a₂ = 1 a command is a patch moment (N m) and a sensor signal a strain, so g_ij is
+in N m per unit strain. Where a pair's gains are all zero σ_i = 0 and its gradient is reported
+as zero (σ_i has a minimum there).
+
 **Box and stability.** Gains are bounded to 0 <= g_ij <= ḡ_i with
 ḡ_i = ``gain_fraction`` / (n_a n_t r_i c_iᵀ Ω⁻¹ c_i) (c_i the sensor row, r_i = a₁/a₂ of the
 pair): then ‖Ω^{-½} (Ω − S) Ω^{-½}‖ <= Σ_i n_t ḡ_i r_i c_iᵀ Ω⁻¹ c_i = ``gain_fraction`` < 1, so S
