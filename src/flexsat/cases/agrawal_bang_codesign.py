@@ -316,8 +316,10 @@ class AgrawalBangCodesign:
             Cb = C * d[None, :]
             Lo = _lyap(AT, Cb.T @ Cb) / np.outer(d, d)
             value = float(np.sum((C @ Lc) * C))
-            grad = 2 * np.einsum("ij,pjk,ki->p", Lo, dA, Lc) + 2 * np.einsum(
-                "ij,pij->p", C @ Lc, dC
+            # tr(L_o ∂Ā L_c) = ⟨∂Ā, L_o L_c⟩ (L_o, L_c symmetric); tr(C L_c ∂Cᵀ) = ⟨∂C, C L_c⟩
+            P = dA.shape[0]
+            grad = 2 * (dA.reshape(P, -1) @ (Lo @ Lc).ravel()) + 2 * (
+                dC.reshape(P, -1) @ (C @ Lc).ravel()
             )
             return value, grad
 
