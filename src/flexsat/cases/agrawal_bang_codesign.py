@@ -123,7 +123,11 @@ class AgrawalBangCodesign:
     candidates : tuple of (structure, start m)
         Candidate patch locations.
     n_modes : int
-        Modes of the model, each with one filter per pair (Agrawal & Bang: 3).
+        Modes of the model (Agrawal & Bang: 3).
+    tuned_modes : int or None
+        Filters per pair, tuned to the first ``tuned_modes`` modes (default: every mode, as
+        the paper). A filter whose gain is zero does nothing, so a design with the higher
+        filters at zero gain is the same design with fewer filters.
     zeta_f : float
         Filter damping ratio in (0, 1] (not published; 0.1 as
         :mod:`flexsat.cases.agrawal_bang_ppf`).
@@ -146,6 +150,7 @@ class AgrawalBangCodesign:
     selection: tuple[int, ...] = PUBLISHED_SELECTION
     candidates: tuple[tuple[int, float], ...] = CANDIDATES
     n_modes: int = 3
+    tuned_modes: int | None = None
     zeta_f: float = ZETA_F
     tune_filters: bool = False
     control_weight: float = 1e-6
@@ -177,6 +182,12 @@ class AgrawalBangCodesign:
             raise FieldError("n_modes", f"must be an integer, got {self.n_modes!r}")
         if not 1 <= self.n_modes <= 6:
             raise FieldError("n_modes", f"must be 1 to 6, got {self.n_modes}")
+        nt = self.n_modes if self.tuned_modes is None else self.tuned_modes
+        if isinstance(nt, bool) or not isinstance(nt, int) or not 1 <= nt <= self.n_modes:
+            raise FieldError(
+                "tuned_modes", f"must be an integer 1 to n_modes = {self.n_modes}, got {nt!r}"
+            )
+        self.n_tuned = nt
         self.candidates = _candidate_list(self.candidates)
         self._case = _candidate_case(self.candidates)
         sel = tuple(self.selection)
@@ -201,7 +212,7 @@ class AgrawalBangCodesign:
         self.model = PPFModel.from_pairs(
             modal.frequencies, modal.damping, [pairs[k] for k in self.selection]
         )
-        na, nt = self.model.n_actuators, m
+        na, nt = self.model.n_actuators, self.n_tuned
         self.E = replicate_matrix(na, nt)
         w = self.model.omega
         # the box of the gains (module docstring)
@@ -225,7 +236,7 @@ class AgrawalBangCodesign:
 
     @property
     def names(self) -> tuple[str, ...]:
-        na, nt = self.n_actuators, self.n_modes
+        na, nt = self.n_actuators, self.n_tuned
         gains = tuple(f"g{i + 1}{j + 1}" for i in range(na) for j in range(nt))
         if not self.tune_filters:
             return gains
@@ -233,14 +244,14 @@ class AgrawalBangCodesign:
 
     def split(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(gains, tuning ratios) of a design vector."""
-        nf = self.n_actuators * self.n_modes
+        nf = self.n_actuators * self.n_tuned
         x = np.asarray(x, dtype=float)
         nu = x[nf : 2 * nf] if self.tune_filters else np.ones(nf)
         return x[:nf], nu
 
     def published_design(self) -> FloatArray:
         """Every g_ij = 100 (and ν = 1): the paper's gains on this problem's pairs."""
-        nf = self.n_actuators * self.n_modes
+        nf = self.n_actuators * self.n_tuned
         nu = np.ones(nf if self.tune_filters else 0)
         return np.concatenate([np.full(nf, PUBLISHED_GAIN), nu])
 
@@ -253,7 +264,7 @@ class AgrawalBangCodesign:
             self.model.zeta,
             self.model.actuators,
             self.model.sensors,
-            np.tile(self.model.omega, self.n_actuators) * nu,
+            np.tile(self.model.omega[: self.n_tuned], self.n_actuators) * nu,
             np.full(g.size, self.zeta_f),
             self.E,
         )
@@ -264,7 +275,7 @@ class AgrawalBangCodesign:
     def _derivatives(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """∂Ā/∂p (P, n, n) and ∂K/∂p (P, n_a, n) (∂C_z = [0; √ρ ∂K])."""
         g, nu = self.split(x)
-        m, na, nt = self.n_modes, self.n_actuators, self.n_modes
+        m, na, nt = self.n_modes, self.n_actuators, self.n_tuned
         nf = na * nt
         nx = 2 * m + 2 * nf
         P = len(self.names)
@@ -276,7 +287,7 @@ class AgrawalBangCodesign:
             dK[k, act[k], 2 * m + k] = 1.0
             dA[k, m : 2 * m, 2 * m + k] = Ba[:, act[k]]
         if self.tune_filters:
-            wf0 = np.tile(self.model.omega, na)
+            wf0 = np.tile(self.model.omega[:nt], na)
             EC = self.E @ self.model.sensors
             for k in range(nf):
                 w0, wf = wf0[k], wf0[k] * nu[k]
@@ -360,7 +371,7 @@ class AgrawalBangCodesign:
     # -- the design problem -------------------------------------------------------------------
     def problem(self) -> DesignProblem:
         """min ‖T_wz‖₂ s.t. λ_min(S) >= m ω₁², σ_i <= effort_max, the box (module docstring)."""
-        na, nt = self.n_actuators, self.n_modes
+        na, nt = self.n_actuators, self.n_tuned
         variables = []
         for i in range(na):
             ub = float(self.gain_upper[i])
@@ -407,9 +418,12 @@ class AgrawalBangCodesign:
         )
 
     def report_metrics(self, x: FloatArray) -> dict[str, float]:
-        """The published design's ‖T_wz‖₂ on the published placement (every g_ij = 100, ν = 1),
+        """The published design's ‖T_wz‖₂ (the published placement, a filter per mode and
+        pair, every g_ij = 100, ν = 1),
         the design's ratio to it, and the closed loop's lowest damping ratios."""
-        published = self.for_selection(PUBLISHED_SELECTION)
+        published = dataclasses.replace(
+            self, selection=PUBLISHED_SELECTION, tuned_modes=None, tune_filters=False
+        )
         h_pub = published.responses(published.published_design())["h2"][0]
         h = self.responses(x)["h2"][0]
         out = {"h2_published": h_pub, "h2_over_published": h / h_pub}
