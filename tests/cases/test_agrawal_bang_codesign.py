@@ -220,3 +220,22 @@ def test_the_codesign_beats_the_published_design_and_is_the_examples_placement(
     other = optimize_design(published.for_selection(selection).problem(), "trust-constr")
     assert other.kkt.residual <= 1e-6
     assert abs(other.objective - best.result.objective) <= 0.01 * best.result.objective
+
+
+def test_describe_sets_the_structure_beside_the_controller(published):
+    """describe(x) (the design report's start-beside-final): the chosen patches, the gains as
+    given, every closed-loop pole (in the left half plane) and S's eigenvalues, whose least
+    over ω₁² is the stiffness-margin response."""
+    from flexsat.design.describe import describe_design
+
+    ref = published.for_selection((0, 3, 4))
+    x = _interior(ref, 6)
+    d = describe_design(ref, x)
+    assert d["patch starts"].values.tolist() == [0.0, 0.25, 0.5]
+    np.testing.assert_array_equal(d["gains"].values, x)
+    poles = d["closed-loop poles"].values
+    assert poles.size == ref.matrices(x)[0].shape[0] and poles.real.max() < 0
+    lam = d["eigenvalues of S"].values
+    margin = ref.responses(x)["stiffness_margin"][0]
+    assert lam[0] / ref.model.omega[0] ** 2 == pytest.approx(margin, rel=1e-12)
+    np.testing.assert_allclose(d["frequencies"].values, ref.model.omega / (2 * np.pi))

@@ -71,6 +71,7 @@ import scipy.linalg as sla
 from flexsat.cases.agrawal_bang import DEFAULT_PATCHES, AgrawalBangCase, agrawal_bang
 from flexsat.cases.agrawal_bang_ppf import ZETA_F, tip_error_rows
 from flexsat.control.ppf import PPFModel, ppf_feedback, ppf_state_matrices, replicate_matrix
+from flexsat.design.describe import DesignFeature, sorted_poles
 from flexsat.design.optimization_problem import (
     Constraint,
     DesignProblem,
@@ -441,6 +442,62 @@ class AgrawalBangCodesign:
             near = (freq > w / 1.5) & (freq < 1.5 * w)
             out.append(float(zeta[near].min()) if near.any() else float("nan"))
         return out
+
+    def describe(self, x: FloatArray) -> dict[str, DesignFeature]:
+        """The design ``x`` as a structure and a controller (:mod:`flexsat.design.describe`):
+        the modes and the chosen patches, the gains (and tuning ratios), the closed-loop poles,
+        the eigenvalues of S and each mode's least closed-loop damping."""
+        x = np.asarray(x, dtype=float)
+        g, nu = self.split(x)
+        cands = [self.candidates[k] for k in self.selection]
+        names = self.names[: g.size]
+        return {
+            "frequencies": DesignFeature(
+                "structure",
+                self.model.omega / (2 * np.pi),
+                "Hz",
+                labels=tuple(f"mode {j + 1}" for j in range(self.n_modes)),
+                note="clamped L, the candidates' mesh",
+            ),
+            "patch starts": DesignFeature(
+                "structure",
+                np.array([start for _, start in cands]),
+                "m",
+                labels=tuple(
+                    f"pair {k} (structure {b})" for k, (b, _) in zip(self.selection, cands)
+                ),
+                note="2 in patches, start from the structure's root",
+            ),
+            "gains": DesignFeature(
+                "control",
+                g,
+                "N*m",
+                labels=names,
+                note="g_ij: pair i's filter tuned to mode j, u = Eᵀ G ξ",
+            ),
+            "tuning ratios": DesignFeature(
+                "control",
+                nu,
+                "",
+                labels=tuple(n.replace("g", "nu", 1) for n in self.names[: g.size]),
+            ),
+            "closed-loop poles": DesignFeature(
+                "control", sorted_poles(np.linalg.eigvals(self.matrices(x)[0])), "1/s"
+            ),
+            "eigenvalues of S": DesignFeature(
+                "control",
+                np.linalg.eigvalsh(self.stiffness(g)),
+                "rad**2/s**2",
+                note="S = Ω − B_a Eᵀ G E C_s (Eq. 6): the PPF loop is stable while S > 0",
+            ),
+            "least damping per mode": DesignFeature(
+                "control",
+                np.array(self.mode_damping(x)),
+                "",
+                labels=tuple(f"mode {j + 1}" for j in range(self.n_modes)),
+                note="the least damping ratio of the closed-loop poles within a factor 1.5",
+            ),
+        }
 
     def for_selection(self, selection: tuple[int, ...]) -> AgrawalBangCodesign:
         """The same problem on another set of candidates."""
