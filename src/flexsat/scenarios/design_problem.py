@@ -44,6 +44,7 @@ import numpy as np
 import xarray as xr
 from pydantic import Field, model_validator
 
+from flexsat.cases.agrawal_bang_codesign import AgrawalBangCodesign
 from flexsat.cases.tamu_codesign import TamuCodesign
 from flexsat.design.optimization_problem import (
     Constraint,
@@ -88,6 +89,22 @@ REFERENCE_PROBLEMS: dict[str, tuple[type, dict[str, str], dict[str, str]]] = {
             "itse": "rad**2*s**2",
             "appendage_mass": "kg",
             "frequency_hz": "Hz",
+        },
+    ),
+    # the gains of pair i's filter tuned to mode j (N m per unit strain) and, with
+    # parameters.tune_filters, the tuning ratios; the placement is parameters.selection
+    "agrawal_bang_ppf_codesign": (
+        AgrawalBangCodesign,
+        {
+            **{f"g{i}{j}": "N*m" for i in (1, 2, 3) for j in (1, 2, 3)},
+            **{f"nu{i}{j}": "" for i in (1, 2, 3) for j in (1, 2, 3)},
+        },
+        {
+            "h2": "m/N/s**0.5",
+            "effort_1": "N*m",
+            "effort_2": "N*m",
+            "effort_3": "N*m",
+            "stiffness_margin": "",
         },
     ),
 }
