@@ -280,6 +280,8 @@ class ConfiguredProblem:
                 )
             )
             where = f"variables.{v.name}"
+            if v.lower > 0 and not lower > 0:  # a positive quantity (a wall, a gain)
+                raise FieldError(f"{where}.lower", f"must be > 0, got {lower} {unit}")
             if not lower < upper:
                 raise FieldError(f"{where}.lower", f"must be < upper, got [{lower}, {upper}]")
             if not lower <= start <= upper:
