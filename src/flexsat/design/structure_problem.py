@@ -501,11 +501,7 @@ class StructureProblem:
         except FieldError as exc:
             if exc.field != "modes":
                 raise
-            raise FieldError(
-                "model",
-                f"at the design {dict(zip(self.names, x.tolist()))}: {exc.rule} (elastic modes "
-                f"count from 1 here, rigid-body modes first there: subtract {shift + 1})",
-            ) from None
+            raise self._crossing(structure, x, max(modes)) from None
         out["mass"] = (float(d.mass), C @ d.mass_gradient)
         f, df = d.frequencies_hz, C @ d.frequency_hz_gradient
         col = {k: i for i, k in enumerate(modes)}
@@ -517,6 +513,21 @@ class StructureProblem:
                 i, j = col[pair[0]], col[pair[1]]
                 out[name] = (float(f[j] - f[i]), df[:, j] - df[:, i])
         return out
+
+    def _crossing(self, structure: Structure, x: FloatArray, top: int) -> FieldError:
+        """The refusal of a design where two elastic modes coincide (numbered from 1)."""
+        asm = structure.assemble()
+        rigid = self._rigid() or 0
+        f = asm.modes(min(rigid + top + 1, asm.n_dofs), rigid_body_modes=self._rigid())
+        elastic = f.frequencies_hz[rigid:]
+        k = int(np.argmin(np.diff(elastic))) + 1
+        return FieldError(
+            "model",
+            f"at the design {dict(zip(self.names, x.tolist()))}: elastic modes {k} and {k + 1} "
+            f"coincide (f = {elastic[k - 1]:.6g} and {elastic[k]:.6g} Hz), a crossing where "
+            f"the k-th frequency has no derivative; a constraint separation_hz_{k}_{k + 1} >= "
+            "a margin keeps them apart",
+        )
 
     # -- mode tracking -------------------------------------------------------------------------
     def _modes(self, x: FloatArray, count: int) -> FloatArray:
