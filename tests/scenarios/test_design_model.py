@@ -157,6 +157,16 @@ _DELETE = object()
             "variables.tip.axis",
         ),
         (("variables", "tip"), {"lower": 1, "upper": 2}, "variables.tip"),
+        (
+            ("variables", "root_width"),
+            {"material": "steel", "property": "E", "lower": 1, "upper": 2},
+            "variables.root_width.material",
+        ),
+        (
+            ("variables", "root_width"),
+            {"material": "aluminium", "section": "root", "lower": 1, "upper": 2},
+            "variables.root_width",
+        ),
         (("objective",), "frequency_hz_9", "objective"),
         (("objective",), "stiffness", "objective"),
         (("constraints", 1, "response"), "separation_hz_2_1", "constraints[1].response"),
@@ -175,6 +185,8 @@ _DELETE = object()
         "mass-node",
         "inertia-axis",
         "what",
+        "material",
+        "two-parts",
         "mode-beyond",
         "response",
         "separation",
@@ -202,3 +214,17 @@ def test_a_lumped_mass_variable_names_its_node_and_defaults_to_the_models_value(
     assert (tip.index, tip.property, tip.start) == (0, "mass", 0.5)
     (row,) = [v for v in configured.variables if v[0] == "tip"]
     assert row[1:4] == (0.5, 0.2, 1.0)
+
+
+def test_a_material_variable_starts_at_the_models_modulus(tmp_path):
+    data = _changed(
+        ("variables", "modulus"),
+        {"material": "aluminium", "property": "E", "lower": "60 GPa", "upper": "80 GPa"},
+    )
+    doc = tmp_path / "design.yaml"
+    doc.write_text(yaml.safe_dump(data, sort_keys=False))
+    configured = ConfiguredProblem.from_scenario(load_scenario(doc))
+    (row,) = [v for v in configured.variables if v[0] == "modulus"]
+    assert row[1:4] == (70e9, 60e9, 80e9) and row[5] == "Pa"
+    r = configured.responses(np.array([v[1] for v in configured.variables]))
+    assert r["frequency_hz_1"][1][-1] > 0  # a stiffer material raises the frequency

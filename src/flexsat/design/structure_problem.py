@@ -7,7 +7,9 @@ The model is an :class:`~flexsat.structures.fe_description.FEDescription` (SI; t
 - a **section** of the description and one of its dimensions (:data:`SECTION_PROPERTIES`): every
   member using that section is one design group, changed together (a tube's wall or outer
   diameter, a rectangle's width or height, a circle's diameter, a general section's area, Iy,
-  Iz or J); or
+  Iz or J);
+- a **material** of the description and its Young's modulus ``E`` or its ``density``, in every
+  member made of it; or
 - a **lumped mass** of the description (by its index) and its ``mass`` or its principal
   ``inertia`` about a global axis.
 
@@ -84,9 +86,11 @@ from flexsat.units import FloatArray
 
 __all__ = [
     "MASS_PROPERTIES",
+    "MATERIAL_PROPERTIES",
     "PROPERTY_UNITS",
     "SECTION_PROPERTIES",
     "MassVariable",
+    "MaterialVariable",
     "SectionShape",
     "SectionVariable",
     "StructureProblem",
@@ -102,6 +106,8 @@ SECTION_PROPERTIES = {
 }
 #: the properties of a lumped mass a variable may name
 MASS_PROPERTIES = ("mass", "inertia")
+#: the properties of a material a variable may name (and the member quantity each moves)
+MATERIAL_PROPERTIES = {"E": "E", "density": "rho"}
 #: SI unit of each property
 PROPERTY_UNITS = {
     "outer_diameter": "m",
@@ -115,6 +121,8 @@ PROPERTY_UNITS = {
     "J": "m**4",
     "mass": "kg",
     "inertia": "kg*m**2",
+    "E": "Pa",
+    "density": "kg/m**3",
 }
 _AXES = ("x", "y", "z")
 _RESPONSE = re.compile(r"^(?:(mass)|frequency_hz_(\d+)|separation_hz_(\d+)_(\d+))$")
@@ -168,7 +176,21 @@ class MassVariable:
     axis: str | None = None
 
 
-Variable = SectionVariable | MassVariable
+@dataclass(frozen=True)
+class MaterialVariable:
+    """Young's modulus ``E`` (Pa) or ``density`` (kg/m³) of material ``material`` in every
+    member made of it (SI bounds); with ν given and no explicit G, G = E / (2 (1 + ν)) follows E
+    (as :meth:`~flexsat.structures.fem.Structure.property_derivative` differentiates it)."""
+
+    name: str
+    material: str
+    property: str
+    start: float
+    lower: float
+    upper: float
+
+
+Variable = SectionVariable | MassVariable | MaterialVariable
 
 
 def parse_response(name: str) -> tuple[str, tuple[int, ...]]:
@@ -277,6 +299,14 @@ class StructureProblem:
                     f"{where}.property", f"{v.property} acts on frames; {v.section!r} has rods only"
                 )
             return ("section", v.section, v.property)
+        if isinstance(v, MaterialVariable):
+            if v.material not in self.description.materials:
+                raise FieldError(f"{where}.material", f"unknown material {v.material!r}")
+            if v.property not in MATERIAL_PROPERTIES:
+                raise FieldError(f"{where}.property", f"must be E or density, got {v.property!r}")
+            if not self._made_of(v.material):
+                raise FieldError(f"{where}.material", f"no element is made of {v.material!r}")
+            return ("material", v.material, v.property)
         if not 0 <= v.index < len(self.description.masses):
             raise FieldError(f"{where}.mass", f"no lumped mass {v.index}")
         if v.property not in MASS_PROPERTIES:
@@ -330,6 +360,10 @@ class StructureProblem:
         rods = tuple(i for i, e in enumerate(elements) if e.section == section and e.kind == "rod")
         return frames, rods
 
+    def _made_of(self, material: str) -> tuple[int, ...]:
+        """Element ids made of ``material``."""
+        return tuple(i for i, e in enumerate(self.description.elements) if e.material == material)
+
     def _section_variables(self, section: str) -> list[SectionVariable]:
         return [
             v for v in self.variables if isinstance(v, SectionVariable) and v.section == section
@@ -359,6 +393,13 @@ class StructureProblem:
             changed = {v.property: values[v.name] for v in self._section_variables(key)}
             if changed:
                 sections[key] = shape.section(changed)
+        materials = dict(self.description.materials)
+        for v in self.variables:
+            if isinstance(v, MaterialVariable):
+                field_name = "E" if v.property == "E" else "rho"
+                materials[v.material] = dataclasses.replace(
+                    materials[v.material], **{field_name: values[v.name]}
+                )
         masses = list(self.description.masses)
         for index, spec in enumerate(masses):
             vs = self._mass_variables(index)
@@ -377,7 +418,9 @@ class StructureProblem:
                         J[a, a] = values[v.name]
                     inertia = J
             masses[index] = MassSpec(spec.node, mass, inertia, spec.offset)
-        return dataclasses.replace(self.description, sections=sections, masses=masses)
+        return dataclasses.replace(
+            self.description, sections=sections, masses=masses, materials=materials
+        )
 
     def structure(self, x: Sequence[float] | FloatArray) -> Structure:
         """The :class:`~flexsat.structures.fem.Structure` at design ``x``."""
@@ -402,7 +445,10 @@ class StructureProblem:
                 row.append((len(params), coefficient))
                 params.append(param)
 
-            if isinstance(v, MassVariable):
+            if isinstance(v, MaterialVariable):
+                quantity = MATERIAL_PROPERTIES[v.property]
+                add(MemberProperty(quantity, self._made_of(v.material)), 1.0)
+            elif isinstance(v, MassVariable):
                 spec = self.description.masses[v.index]
                 if v.property == "mass":
                     offset = None if spec.offset is None else _triple(spec.offset)

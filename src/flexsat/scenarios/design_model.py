@@ -24,6 +24,8 @@ hold. A variable names
 - ``section`` (a key of ``model.fe.sections``: every member using it is one design group) and
   ``property``, a dimension of its shape (tube: ``outer_diameter``, ``thickness``; rectangle:
   ``width``, ``height``; circle: ``diameter``; general: ``area``, ``Iy``, ``Iz``, ``J``), or
+- ``material`` (a key of ``model.fe.materials``) and ``property``: ``E`` or ``density``, in
+  every member made of it (with ``nu`` given, G = E / (2 (1 + nu)) follows E), or
 - ``lumped_mass`` (the node id of an entry of ``model.fe.masses``; one entry at that node) and
   ``property``: ``mass`` (the default) or ``inertia`` with its ``axis`` (x, y, z).
 
@@ -41,9 +43,11 @@ import numpy as np
 
 from flexsat.design.structure_problem import (
     MASS_PROPERTIES,
+    MATERIAL_PROPERTIES,
     PROPERTY_UNITS,
     SECTION_PROPERTIES,
     MassVariable,
+    MaterialVariable,
     SectionShape,
     SectionVariable,
     StructureProblem,
@@ -128,18 +132,32 @@ def model_problem(scenario: Any) -> tuple[StructureProblem, dict[str, str], dict
     return problem, units, problem.response_units()
 
 
-def _variable(name: str, spec: Any, fe: Any) -> SectionVariable | MassVariable:
+def _variable(name: str, spec: Any, fe: Any) -> SectionVariable | MassVariable | MaterialVariable:
     """One variable of the document (SI), refused at ``variables.<name>.<key>``."""
     where = f"variables.{name}"
-    if (spec.section is None) == (spec.lumped_mass is None):
+    given = [k for k in ("section", "material", "lumped_mass") if getattr(spec, k) is not None]
+    if len(given) != 1:
         raise FieldError(
             where,
-            "name a section of model.fe.sections (section:) or the node of a lumped mass of "
-            "model.fe.masses (lumped_mass:), one of them",
+            "name one of: a section of model.fe.sections (section:), a material of "
+            "model.fe.materials (material:) or the node of a lumped mass of model.fe.masses "
+            f"(lumped_mass:); got {', '.join(given) or 'none'}",
         )
     for key in ("lower", "upper"):
         if getattr(spec, key) is None:
             raise FieldError(f"{where}.{key}", "a variable of your model needs its bounds")
+    if spec.material is not None:
+        if spec.material not in fe.materials:
+            known = ", ".join(fe.materials)
+            raise FieldError(f"{where}.material", f"unknown material {spec.material!r} ({known})")
+        if spec.property not in MATERIAL_PROPERTIES or spec.axis is not None:
+            raise FieldError(
+                f"{where}.property", f"a material has E or density, got {spec.property!r}"
+            )
+        unit = PROPERTY_UNITS[spec.property]
+        model_value = getattr(fe.materials[spec.material], spec.property)
+        start, lower, upper = _bounds(spec, unit, where, model_value)
+        return MaterialVariable(name, spec.material, spec.property, start, lower, upper)
     if spec.section is not None:
         if spec.section not in fe.sections:
             known = ", ".join(fe.sections)

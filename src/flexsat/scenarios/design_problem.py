@@ -105,20 +105,22 @@ Quantity = str | float | int
 
 class VariableSpec(SchemaSection):
     """Start and bounds of one variable, each in the variable's unit (a bare number is SI);
-    with a ``model:``, what it varies: a ``section`` or the ``lumped_mass`` at a node, its
+    with a ``model:``, what it varies: a ``section``, a ``material`` or the ``lumped_mass`` at a
+    node, its
     ``property`` and, for an inertia, its ``axis`` (:mod:`flexsat.scenarios.design_model`)."""
 
     start: Quantity | None = None
     lower: Quantity | None = None
     upper: Quantity | None = None
     section: str | None = None
+    material: str | None = None
     lumped_mass: Annotated[int | None, integer_in(-(2**31), 2**31 - 1, optional=True)] = None
     property: str | None = None
     axis: Literal["x", "y", "z"] | None = None
 
 
 #: the keys of a variable that name what it varies in a ``model:``
-MODEL_VARIABLE_KEYS = ("section", "lumped_mass", "property", "axis")
+MODEL_VARIABLE_KEYS = ("section", "material", "lumped_mass", "property", "axis")
 
 
 class ConstraintSpec(SchemaSection):
