@@ -305,3 +305,17 @@ def test_the_problem_solves_to_a_kkt_point_through_the_api():
     r = problem.responses(result.x)
     assert r["frequency_hz_1"][0] == pytest.approx(3.0, rel=1e-8)
     assert r["separation_hz_1_2"][0] == pytest.approx(0.5, rel=1e-6)
+
+
+def test_describe_lists_the_models_elastic_frequencies_and_mass():
+    from flexsat.design.describe import describe_design
+
+    problem = StructureProblem(mixed(True), SHAPES, every_variable(), RESPONSES)
+    x = problem.x0 * 1.01
+    features = describe_design(problem, x)
+    f = features["elastic frequencies"].values
+    assert f.size == 6 and np.all(np.diff(f) > 0)
+    got = problem.responses(x)
+    for k in (1, 2, 3, 4):
+        assert f[k - 1] == pytest.approx(got[f"frequency_hz_{k}"][0], rel=1e-10)
+    assert features["structural mass"].values[0] == pytest.approx(got["mass"][0], rel=1e-14)

@@ -72,6 +72,7 @@ from flexsat.analysis.fe_sensitivity import (
     tube_section_derivatives,
 )
 from flexsat.analysis.sensitivity import GAP_RTOL
+from flexsat.design.describe import DesignFeature
 from flexsat.design.optimization_problem import (
     Constraint,
     DesignProblem,
@@ -601,6 +602,31 @@ class StructureProblem:
             out[f"mode_{k}_is_start_mode"] = float(best + 1)
             out[f"mode_{k}_mac"] = float(mac[best])
         return out
+
+    def describe(self, x: FloatArray) -> dict[str, DesignFeature]:
+        """The design ``x`` as a structure, for the report's start-beside-final table: the
+        model's ``n_modes`` elastic frequencies (Hz) and its structural mass (kg)."""
+        structure = self.structure(np.asarray(x, dtype=float))
+        asm = structure.assemble()
+        rigid = self._rigid() or 0
+        count = min(rigid + self.description.n_modes, asm.n_dofs)
+        f = asm.modes(count, rigid_body_modes=self._rigid()).frequencies_hz[rigid:]
+        return {
+            "elastic frequencies": DesignFeature(
+                "structure",
+                f,
+                "Hz",
+                labels=tuple(f"mode {k + 1}" for k in range(f.size)),
+                note="modal solve of the finite-element model at the design (ascending; the "
+                "rigid-body modes of a free model are not listed)",
+            ),
+            "structural mass": DesignFeature(
+                "structure",
+                np.array([structure.structural_mass()]),
+                "kg",
+                note="members Σ ρ A L and lumped masses",
+            ),
+        }
 
     # -- as a DesignProblem --------------------------------------------------------------------
     def problem(
