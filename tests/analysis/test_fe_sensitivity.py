@@ -384,3 +384,23 @@ def test_rigid_body_motions_are_null_vectors_of_every_stiffness_derivative():
     R = mats.assembly.rigid_body_vectors()
     for dK in mats.dK:
         assert np.abs(dK @ R).max() <= 1e-12 * abs(dK).max() * np.abs(R).max()
+
+
+def _offset_and_linked(tip=0.4, linked=0.3):
+    """A cantilever with a tip body 5 cm off its node (rigid offset) and a mass on a node tied
+    to the tip by a rigid link: ∂M of each is Tᵀ diag(I₃, 0) T, carried by the link's G."""
+    s = cantilever(n_el=4, rect=(0.03, 0.02))
+    s.add_mass(4, tip, inertia=(1e-4, 2e-4, 3e-4), offset=(0.0, 0.03, 0.05))
+    s.add_node(9, (2.0, 0.1, 0.12))
+    s.add_rigid_link(4, (9,))
+    s.add_mass(9, linked)
+    return s
+
+
+def test_offset_and_rigidly_linked_masses_match_central_differences():
+    params = [LumpedMass(4, offset=(0.0, 0.03, 0.05)), LumpedMass(9)]
+    _fd_check(_offset_and_linked, params, dict(tip=0.4, linked=0.3), [0, 1, 2, 3])
+    # the offset matters: the node-only derivative (no offset) is a different matrix
+    bare = fe_parameter_matrices(_offset_and_linked(), [LumpedMass(4)]).dM[0]
+    moved = fe_parameter_matrices(_offset_and_linked(), params[:1]).dM[0]
+    assert abs(bare - moved).max() > 1e-3

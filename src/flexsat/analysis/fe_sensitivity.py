@@ -41,7 +41,8 @@ import numpy.typing as npt
 import scipy.sparse as sp
 
 from flexsat.analysis.sensitivity import GAP_RTOL, nelson_derivatives
-from flexsat.input_checks import FieldError, require_positive
+from flexsat.input_checks import FieldError, require_finite, require_positive
+from flexsat.structures.elements import skew
 from flexsat.structures.fem import Assembly, Structure
 from flexsat.structures.sections import Section
 from flexsat.units import FloatArray
@@ -63,6 +64,7 @@ __all__ = [
 _SECTION_RTOL = 1e-9  # given section dimensions must reproduce the stored A, Iy, Iz, J
 _RECT_TERMS = 40  # odd terms of the rectangle torsion series, as in structures.sections
 _AXES = {"x": "rx", "y": "ry", "z": "rz"}
+_DOFS = ("ux", "uy", "uz", "rx", "ry", "rz")
 
 
 # -- design parameters -------------------------------------------------------------------------
@@ -113,14 +115,23 @@ class RectangleSection:
 
 @dataclass(frozen=True)
 class LumpedMass:
-    """A point mass added at ``node`` (kg): its three translations (∂M = I₃ there)."""
+    r"""A point mass added at ``node`` (kg), its centre at the rigid ``offset`` r from the node
+    (m, global axes; None: at the node).
+
+    ∂M = Tᵀ diag(I₃, 0) T with T = [I, −[r×]] on the node's six dofs
+    (:meth:`~flexsat.structures.fem.Structure.add_mass`): I₃ on the translations when r = 0.
+    A node tied by a rigid link carries it to its independent node's dofs through the link's
+    recovery u_d = G q (:class:`~flexsat.structures.fem.DependentDofs`), ∂M_r = Gᵀ ∂M G."""
 
     node: int
+    offset: tuple[float, float, float] | None = None
 
 
 @dataclass(frozen=True)
 class LumpedInertia:
-    """A principal inertia added at ``node`` about global ``axis`` ("x", "y", "z"), kg m²."""
+    """A principal inertia added at ``node`` about global ``axis`` ("x", "y", "z"), kg m²
+    (1 on that rotation; an offset of the body does not enter, :class:`LumpedMass`; a rigidly
+    linked node as there)."""
 
     node: int
     axis: str
@@ -255,17 +266,42 @@ def _section_chain(
     return structure.property_derivative(direction, elements)
 
 
-def _lumped_rows(assembly: Assembly, node: int, dofs: Sequence[str], field: str) -> list[int]:
-    """Active rows of ``dofs`` at ``node`` (a clamped dof carries no mass into K φ = λ M φ)."""
+def _node_motion(assembly: Assembly, node: int) -> sp.csr_matrix:
+    """E (6, ndof): the six dofs of ``node`` from the active dofs, u_node = E q (a clamped or
+    untouched dof: a zero row; a rigidly linked node: its rows of the link recovery G)."""
+    n = assembly.n_dofs
+    dep = assembly.dependent
+    ids = [int(i) for i in assembly.node_ids]
+    if dep is not None and node in ids and np.any(dep.nodes == ids.index(node)):
+        where = np.flatnonzero(dep.nodes == ids.index(node))
+        E = sp.lil_matrix((6, n))
+        for r in where:
+            E[int(dep.slots[r]), :] = dep.G[int(r)]
+        return E.tocsr()
     active = set(assembly.dofs)
-    rows = [assembly.index(node, d) for d in dofs if (node, d) in active]
+    rows = [(slot, assembly.index(node, d)) for slot, d in enumerate(_DOFS) if (node, d) in active]
     if not rows:
+        return sp.csr_matrix((6, n))
+    slots, cols = zip(*rows)
+    return sp.csr_matrix((np.ones(len(rows)), (slots, cols)), shape=(6, n))
+
+
+def _lumped_derivative(
+    assembly: Assembly, node: int, block: FloatArray, field: str
+) -> sp.csr_matrix:
+    """Eᵀ B E (:func:`_node_motion`): the 6x6 ∂M ``block`` of a node on the active dofs; refused
+    by name when none of the dofs it acts on moves (a clamped dof carries no mass into
+    K φ = λ M φ)."""
+    E = _node_motion(assembly, node)
+    dM = (E.T @ sp.csr_matrix(block) @ E).tocsr()
+    if dM.nnz == 0 or not np.any(dM.data):
+        acts = tuple(d for d, b in zip(_DOFS, np.abs(block).sum(axis=1)) if b > 0)
         raise FieldError(
             field,
-            f"node {node!r}: none of the dofs {tuple(dofs)} is active (unknown node, clamped, "
+            f"node {node!r}: none of the dofs {acts} is active (unknown node, clamped, "
             "or not touched by an element or mass; an inertia needs an active rotation)",
         )
-    return rows
+    return dM
 
 
 def fe_parameter_matrices(
@@ -308,15 +344,25 @@ def fe_parameter_matrices(
         elif isinstance(param, (TubeSection, RectangleSection)):
             k, m, dm = _section_chain(structure, param)
         elif isinstance(param, (LumpedMass, LumpedInertia)):
+            block = np.zeros((6, 6))
             if isinstance(param, LumpedMass):
-                rows, dm = _lumped_rows(assembly, param.node, ("ux", "uy", "uz"), "LumpedMass"), 1.0
+                block[:3, :3] = np.eye(3)
+                if param.offset is not None:
+                    r = require_finite(param.offset, "offset")
+                    if r.shape != (3,):
+                        raise FieldError("offset", f"must have 3 components, got {r.shape}")
+                    T = np.eye(6)
+                    T[:3, 3:] = -skew(r)
+                    block = T.T @ block @ T
+                field, dm = "LumpedMass", 1.0
             else:
                 if param.axis not in _AXES:
                     raise FieldError("axis", f"must be 'x', 'y' or 'z', got {param.axis!r}")
-                rows = _lumped_rows(assembly, param.node, (_AXES[param.axis],), "LumpedInertia")
-                dm = 0.0
+                slot = _DOFS.index(_AXES[param.axis])
+                block[slot, slot] = 1.0
+                field, dm = "LumpedInertia", 0.0
             k = sp.csr_matrix((n, n))
-            m = sp.csr_matrix((np.ones(len(rows)), (rows, rows)), shape=(n, n))
+            m = _lumped_derivative(assembly, param.node, block, field)
         else:
             raise FieldError(
                 "parameters",

@@ -6,8 +6,8 @@ optional Pareto front (issue 23 deliverables 1 and 4).
 
     kind: design
     name: hub-boom co-design, mass against LQ cost
-    problem: hub_boom_codesign          # a name of REFERENCE_PROBLEMS
-    parameters: {hub_inertia: 0.4}      # the reference's own fields, SI (optional)
+    problem: hub_boom_codesign          # a name of REFERENCE_PROBLEMS (or model:, below)
+    parameters: {hub_inertia: 0.4 kg*m**2}  # the reference's own fields, with units (optional)
     variables:                          # bounds and start, with units (optional per variable)
       t: {start: 2 mm, lower: 0.5 mm, upper: 3 mm}
       D: {start: 40 mm, lower: 10 mm, upper: 60 mm}
@@ -17,6 +17,14 @@ optional Pareto front (issue 23 deliverables 1 and 4).
       - {response: mass, max: 0.3 kg}
     optimizer: {method: slsqp, compare: trust-constr}
     pareto: {secondary: mass, points: 40, starts: 3}
+
+Instead of ``problem:``, a ``model:`` section with an inline finite-element model (the
+``model: {fe: ...}`` of a simulation scenario) makes the problem your own structure: its
+variables name a section (``{section: boom, property: thickness, lower: .., upper: ..}``) or a
+lumped mass (``{lumped_mass: 105, property: mass, ...}``) of the model, and its responses are
+``mass``, ``frequency_hz_<k>`` and ``separation_hz_<i>_<j>`` with analytic gradients
+(:mod:`flexsat.scenarios.design_model`, :mod:`flexsat.design.structure_problem`).
+``parameters:`` take units (:mod:`flexsat.scenarios.design_parameters`).
 
 The reference supplies the responses (with their analytic gradients), the variables and their
 default starts and bounds; the constraints are those the document lists (the reference's own
@@ -56,9 +64,12 @@ from flexsat.design.optimize import METHODS, OptimizationResult, optimize_design
 from flexsat.design.reference_problems import CantileverTube, HubBoomCodesign
 from flexsat.input_checks import FieldError
 from flexsat.report.page import ReportedResult, ResultTable
+from flexsat.scenarios.design_model import model_problem
+from flexsat.scenarios.design_parameters import reference_parameters
 from flexsat.scenarios.errors import Problem, ScenarioError, locate
 from flexsat.scenarios.fields import Document, SchemaSection, in_unit, integer_in
 from flexsat.scenarios.kind import Run, ScenarioKind
+from flexsat.scenarios.models import ModelSection, model_label
 from flexsat.units import FloatArray, to_si
 
 if TYPE_CHECKING:
@@ -113,11 +124,23 @@ Quantity = str | float | int
 
 
 class VariableSpec(SchemaSection):
-    """Start and bounds of one variable, each in the variable's unit (a bare number is SI)."""
+    """Start and bounds of one variable, each in the variable's unit (a bare number is SI);
+    with a ``model:``, what it varies: a ``section``, a ``material`` or the ``lumped_mass`` at a
+    node, its
+    ``property`` and, for an inertia, its ``axis`` (:mod:`flexsat.scenarios.design_model`)."""
 
     start: Quantity | None = None
     lower: Quantity | None = None
     upper: Quantity | None = None
+    section: str | None = None
+    material: str | None = None
+    lumped_mass: Annotated[int | None, integer_in(-(2**31), 2**31 - 1, optional=True)] = None
+    property: str | None = None
+    axis: Literal["x", "y", "z"] | None = None
+
+
+#: the keys of a variable that name what it varies in a ``model:``
+MODEL_VARIABLE_KEYS = ("section", "material", "lumped_mass", "property", "axis")
 
 
 class ConstraintSpec(SchemaSection):
@@ -162,7 +185,8 @@ class DesignScenario(Document):
     kind: Literal["design"] = "design"
     name: str = Field(min_length=1)
     case: str = ""
-    problem: str
+    problem: str | None = None
+    model: ModelSection | None = None
     parameters: dict[str, Any] = Field(default_factory=dict)
     variables: dict[str, VariableSpec] = Field(default_factory=dict)
     objective: str
@@ -172,25 +196,19 @@ class DesignScenario(Document):
 
     @model_validator(mode="after")
     def _names(self) -> Self:
-        if self.problem not in REFERENCE_PROBLEMS:
+        if (self.problem is None) == (self.model is None):
             raise FieldError(
-                "problem", f"must be one of {', '.join(REFERENCE_PROBLEMS)}, got {self.problem!r}"
+                "problem",
+                f"give problem (one of {', '.join(REFERENCE_PROBLEMS)}) or model (your own "
+                "inline finite-element model), one of them",
             )
-        cls, var_units, responses = REFERENCE_PROBLEMS[self.problem]
-        fields = getattr(cls, "__dataclass_fields__", {})
-        for key in self.parameters:
-            if key not in fields or key.startswith("_"):
-                known = ", ".join(k for k in fields if not k.startswith("_"))
-                raise FieldError(
-                    f"parameters.{key}", f"not a parameter of {self.problem} ({known})"
-                )
-        for key in self.variables:
-            if key not in var_units:
-                raise FieldError(
-                    f"variables.{key}",
-                    f"not a variable of {self.problem} ({', '.join(var_units)})",
-                )
-        rule = f"must be a response of {self.problem} ({', '.join(responses)})"
+        if self.model is not None:
+            _, _, responses = model_problem(self)  # variables and response names, by path
+            what = "your model"
+        else:
+            responses = self._reference_names()
+            what = str(self.problem)
+        rule = f"must be a response of {what} ({', '.join(responses)})"
         if self.objective not in responses:
             raise FieldError("objective", f"{rule}, got {self.objective!r}")
         for i, c in enumerate(self.constraints):
@@ -203,6 +221,34 @@ class DesignScenario(Document):
                 raise FieldError("pareto.secondary", "must differ from objective")
         ConfiguredProblem.from_scenario(self).problem()  # bounds, units and parameters
         return self
+
+    @property
+    def source_label(self) -> str:
+        """What the problem is built on: ``reference problem <name>`` or the model's label."""
+        if self.model is not None:
+            return model_label(self.model)
+        return f"reference problem {self.problem}"
+
+    def _reference_names(self) -> dict[str, str]:
+        """The responses of the reference problem; its variables and parameters checked."""
+        if self.problem not in REFERENCE_PROBLEMS:
+            raise FieldError(
+                "problem", f"must be one of {', '.join(REFERENCE_PROBLEMS)}, got {self.problem!r}"
+            )
+        cls, var_units, responses = REFERENCE_PROBLEMS[self.problem]
+        reference_parameters(self.problem, cls, self.parameters)
+        for key, spec in self.variables.items():
+            if key not in var_units:
+                raise FieldError(
+                    f"variables.{key}",
+                    f"not a variable of {self.problem} ({', '.join(var_units)})",
+                )
+            for name in MODEL_VARIABLE_KEYS:
+                if getattr(spec, name) is not None:
+                    raise FieldError(
+                        f"variables.{key}.{name}", "names a part of a model: (not a reference)"
+                    )
+        return responses
 
 
 @dataclass(frozen=True)
@@ -226,13 +272,22 @@ class ConfiguredProblem:
 
     @classmethod
     def from_scenario(cls, scenario: DesignScenario) -> ConfiguredProblem:
-        kind, var_units, responses = REFERENCE_PROBLEMS[scenario.problem]
-        try:
-            reference = kind(**scenario.parameters)
-        except FieldError as exc:
-            raise FieldError(f"parameters.{exc.field}", exc.rule) from None
-        except (TypeError, ValueError) as exc:
-            raise FieldError("parameters", str(exc)) from None
+        reference: Any
+        if scenario.model is not None:
+            reference, var_units, responses = model_problem(scenario)
+        else:
+            assert scenario.problem is not None  # DesignScenario: problem or model
+            kind, var_units, responses = REFERENCE_PROBLEMS[scenario.problem]
+            parameters = reference_parameters(scenario.problem, kind, scenario.parameters)
+            try:
+                reference = kind(**parameters)
+            except FieldError as exc:
+                path = (
+                    exc.field if exc.field.startswith("parameters") else f"parameters.{exc.field}"
+                )
+                raise FieldError(path, exc.rule) from None
+            except (TypeError, ValueError) as exc:
+                raise FieldError("parameters", str(exc)) from None
         base = reference.problem()
         variables = []
         for v in base.variables:
@@ -247,6 +302,8 @@ class ConfiguredProblem:
                 )
             )
             where = f"variables.{v.name}"
+            if v.lower > 0 and not lower > 0:  # a positive quantity (a wall, a gain)
+                raise FieldError(f"{where}.lower", f"must be > 0, got {lower} {unit}")
             if not lower < upper:
                 raise FieldError(f"{where}.lower", f"must be < upper, got [{lower}, {upper}]")
             if not lower <= start <= upper:
@@ -337,7 +394,7 @@ class DesignResult(ReportedResult):
     store: str | None
 
     def report_case(self) -> str:
-        return self.scenario.case or self.scenario.problem
+        return self.scenario.case or self.scenario.problem or self.scenario.source_label
 
     def optimum_records(self) -> list[dict[str, Any]]:
         return [_record(f"optimum ({r.method})", self.configured, r) for r in self.optima]
@@ -381,7 +438,7 @@ class DesignResult(ReportedResult):
             case=self.report_case(),
             case_source=self.case_source,
             scenario_yaml=self.scenario.yaml_text,
-            problem=self.scenario.problem,
+            problem=self.scenario.problem or "model",
             pareto_store=self.store or "",
         )
         from flexsat.report.design_problem import history_dataset
@@ -494,7 +551,7 @@ class DesignKind(ScenarioKind):
             store = str(path)
         return DesignResult(
             scenario,
-            f"reference problem {scenario.problem}",
+            scenario.source_label,
             configured,
             tuple(optima),
             front,
