@@ -42,6 +42,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from flexsat.analysis.fe_sensitivity import (
+    FEModalDerivatives,
     TubeSection,
     fe_modal_derivatives,
     fe_parameter_matrices,
@@ -72,6 +73,7 @@ __all__ = [
     "CANTILEVER_BETA1_L",
     "CantileverTube",
     "HubBoomCodesign",
+    "ModalPlant",
     "cantilever_tube_optimum",
 ]
 
@@ -327,7 +329,12 @@ class HubBoomCodesign:
             self._memo[key] = self._evaluate(float(x[0]), float(x[1]))
         return self._memo[key]
 
-    def _evaluate(self, t: float, D: float) -> dict[str, tuple[float, FloatArray]]:
+    def modal_plant(self, x: FloatArray) -> ModalPlant:
+        """The modal plant at design x = (t, D) with its derivative stacks (the J_LQ and
+        maneuver responses are built on it)."""
+        return self._modal(float(x[0]), float(x[1]))[0]
+
+    def _modal(self, t: float, D: float) -> tuple[ModalPlant, FEModalDerivatives]:
         s = self.structure(t, D)
         group = tuple(range(self.elements))
         params = [TubeSection("thickness", group, D, t), TubeSection("outer_diameter", group, D, t)]
@@ -361,6 +368,21 @@ class HubBoomCodesign:
         x0[0] = self.initial_angle * np.sqrt(Jt)  # η₀ with θ_hub = θ₀, elastic modes at rest
         dx0 = np.zeros((P, 2 * N))
         dx0[:, 0] = self.initial_angle * 0.5 / np.sqrt(Jt) * dJt
+        return ModalPlant(A, B, C, Q, omega, dA, dB, dC, dQ, domega, x0, dx0), d
+
+    def _evaluate(self, t: float, D: float) -> dict[str, tuple[float, FloatArray]]:
+        plant, d = self._modal(t, D)
+        A, B, Q, dA, dB, dQ, x0, dx0 = (
+            plant.A,
+            plant.B,
+            plant.Q,
+            plant.dA,
+            plant.dB,
+            plant.dQ,
+            plant.x0,
+            plant.dx0,
+        )
+        P = dA.shape[0]
         X0 = np.outer(x0, x0)
         dX0 = np.stack([np.outer(dx0[k], x0) + np.outer(x0, dx0[k]) for k in range(P)])
         g = lq_cost_gradient(A, B, Q, np.array([[self.control_weight]]), X0)
@@ -371,7 +393,6 @@ class HubBoomCodesign:
             "frequency_hz": (float(d.frequencies_hz[0]), d.frequency_hz_gradient[:, 0]),
         }
         if self.maneuver:
-            plant = ModalPlant(A, B, C, Q, omega, dA, dB, dC, dQ, domega, x0, dx0)
             out.update(self._maneuver(plant))
         return out
 
