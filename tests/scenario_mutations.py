@@ -5,6 +5,7 @@ helpers that replace, delete or reach a value at a key path of a parsed document
 from __future__ import annotations
 
 import math
+import time
 
 from hypothesis import strategies as st
 
@@ -101,3 +102,22 @@ def mutate(draw, data, values, unknown_keys, path_first: bool = False):
             parents = [()] + [p for p in paths if isinstance(get_at(data, p), dict)]
             get_at(data, draw(st.sampled_from(parents)))[draw(st.sampled_from(unknown_keys))] = 1
     return data
+
+
+#: a property test's wall-time allowance over its CPU bound: enough for a machine loaded
+#: several times over its cores, short of a hang (a run waiting on a lock uses no CPU)
+HANG_FACTOR = 6.0
+
+
+class Clock:
+    """Started at construction; :meth:`check` bounds the work done since (process CPU time,
+    which the machine's load does not inflate) and, ``HANG_FACTOR`` times looser, the wall
+    time (which catches a hang that burns no CPU)."""
+
+    def __init__(self) -> None:
+        self.cpu, self.wall = time.process_time(), time.perf_counter()
+
+    def check(self, bound: float) -> None:
+        cpu, wall = time.process_time() - self.cpu, time.perf_counter() - self.wall
+        assert cpu < bound, f"{cpu:.1f} s of CPU (bound {bound} s)"
+        assert wall < HANG_FACTOR * bound, f"{wall:.1f} s wall (bound {HANG_FACTOR * bound} s)"

@@ -127,6 +127,36 @@ def test_hankel_values_are_roots_of_pq_and_reduced_model_is_balanced():
     np.testing.assert_allclose(Qr, np.diag(s[:order]), atol=1e-8 * s[0])
 
 
+@pytest.mark.numerics
+def test_hankel_values_of_a_stiff_weakly_controllable_mode_are_accurate():
+    """TAMU's highest modes are barely controllable from the hub torque and strongly observable
+    in the root moment: their Gramian entries are ~1e-11 against ‖P‖ = 4.5, below the
+    ε‖P‖-per-entry error of a Bartels–Stewart solve on the whole matrix. Solved block pair by
+    block pair in the modal form, (a) each mode's pair of Hankel values brackets, within the
+    modal coupling, that mode's own Hankel index (Gawronski 2004 §5.3, its 2 × 2 Lyapunov
+    equations), and (b) the values do not move when that mode's states are rescaled by 1e±3 (a
+    similarity: the transfer function and so every σ are unchanged). Tolerances: (a) 2 % — the
+    mode's coupling to its neighbours through the Gramians, ζ = 0.005 and spacing > 25 %;
+    (b) 1e-9 relative, the eigenvector matrix's condition (< 1e4) times eps, with margin."""
+    import control as ct
+    from flexsat.analysis.reduction import modal_form, modal_indices, split_stable
+    from flexsat.cases.tamu import tamu
+    from flexsat.dynamics.linear_model import plant_state_space
+
+    plant = plant_state_space(tamu().model())
+    s = hankel_singular_values(plant)
+    form = modal_form(split_stable(plant).stable)
+    own = np.sort(modal_indices(form, "hankel"))[::-1]
+    pairs = s.reshape(-1, 2)
+    assert np.all(pairs[:, 1] <= own * 1.02) and np.all(pairs[:, 0] >= own * 0.98)
+    A, B, C, D = form.matrices
+    for factor in (1e-3, 1e3):
+        scale = np.ones(A.shape[0])
+        scale[form.blocks[-1]] = factor  # the 430 Hz mode
+        scaled = ct.ss(A * scale[None, :] / scale[:, None], B / scale[:, None], C * scale, D)
+        np.testing.assert_allclose(hankel_singular_values(scaled), s, rtol=1e-9)
+
+
 def test_residualisation_matches_dc_gain_and_truncation_matches_infinity():
     """SPA keeps G(0) exactly (Liu & Anderson 1989); truncation keeps D = G(∞)."""
     plant, order = PLANTS["random_siso_12"]

@@ -197,3 +197,195 @@ def test_the_eps_goals_with_torquers_alone_within_the_nominal_peak(duration, ome
     m = SlewEvaluation(truth, design, nominal, config).run(NominalTorque(plan, config.dt))
     assert m["angle_goal_met"] and m["deflection_goal_met"], m
     assert max(m[f"peak_torque_{a}_Nm"] for a in "xyz") <= limit * 1.02
+
+
+# -- point forces planned beside the torque ----------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def forces_setup(setup):
+    truth, nominal, config, _ = setup
+    channels = tuple(c.name for c in truth.inputs[1:])  # the EPS's 7 force actuators
+    return channels, terminal_map(truth, truth, nominal, config, N_BASIS, forces=channels)
+
+
+def test_the_force_columns_of_the_terminal_map_are_the_engine_response(setup, forces_setup):
+    # independent: the plant flown on the engine with the nominal torque plus one force sine
+    # of 1 N; the change of the terminal modal state against X's column. The response is
+    # linear in the force (the forces enter the plant linearly, their moment changes the
+    # path only to second order: 1 N against 34 kN m), so the difference is the RK4 error of
+    # the linearisation on the 50 Hz grid against the engine's exact modal propagation
+    # (measured 2e-4 relative)
+    truth, nominal, config, terminal = setup
+    channels, fmap = forces_setup
+    assert fmap.force_channels == channels and fmap.X.shape[1] == (3 + 7) * N_BASIS
+    np.testing.assert_array_equal(fmap.X[:, : 3 * N_BASIS], terminal.X)  # the torque columns
+    d = np.zeros((7, N_BASIS))
+    d[3, 1] = 1.0  # 66Z, second sine
+    from flexsat.design.slew_shaping import ShapedSlew
+
+    pushed = ShapedSlew(nominal, np.zeros((3, N_BASIS)), truth.inertia, 0.0, channels, d)
+    n_T = int(round(6.0 / config.dt))
+
+    def elastic_at_T(law):
+        run = simulate(truth, law, config, n_cases=1, record_states=True)
+        return truth.output("elastic", run.dataset["state"].isel(case=0).values[n_T])
+
+    change = elastic_at_T(NominalTorque(pushed, config.dt)) - elastic_at_T(
+        NominalTorque(nominal, config.dt)
+    )
+    column = fmap.X[6:, 3 * N_BASIS + 3 * N_BASIS + 1]
+    np.testing.assert_allclose(change, column, rtol=0, atol=2e-3 * np.abs(column).max())
+
+
+def test_planned_forces_the_weighted_minimum_energy_and_less_torque(setup, forces_setup):
+    truth, nominal, config, terminal = setup
+    channels, fmap = forces_setup
+    alone = plan_slew(terminal, nominal)
+    w = 0.5
+    plan = plan_slew(fmap, nominal, force_weight=w)
+    # independent: with H = RᵀR (Cholesky), y = R c is the minimum-norm solution of
+    # X R⁻¹ y = r (lstsq), whatever the scales of torque and force
+    T, J, n_b = fmap.duration, fmap.inertia, N_BASIS
+    H = (
+        0.5
+        * T
+        * np.block(
+            [
+                [np.kron(J.T @ J, np.eye(n_b)), np.zeros((3 * n_b, 7 * n_b))],
+                [np.zeros((7 * n_b, 3 * n_b)), w * np.eye(7 * n_b)],
+            ]
+        )
+    )
+    R = np.linalg.cholesky(H).T
+    y, *_ = np.linalg.lstsq(np.linalg.solve(R.T, fmap.X.T).T, fmap.target, rcond=1e-10)
+    c = np.concatenate(
+        [plan.shaped.coefficients.reshape(-1), plan.shaped.force_coefficients.reshape(-1)]
+    )
+    # the scaled map's condition number (5e4 measured) times the module's rank cut-off 1e-10
+    # on the unscaled X (smallest kept singular value 6e-8 of the largest): measured 5e-7
+    np.testing.assert_allclose(c, np.linalg.solve(R, y), rtol=0, atol=1e-5 * abs(c).max())
+    assert plan.terminal_residual < 1e-9
+    # E = ∫ ‖J v‖² + w ‖F‖² dt against the trapezoid rule on 20,000 intervals (as above)
+    t = np.linspace(0.0, T, 20001)
+    f = np.sum((plan.shaped.correction(t) @ J.T) ** 2, 1) + w * np.sum(plan.forces(t) ** 2, 1)
+    assert plan.energy == pytest.approx(float(np.sum(0.5 * (f[1:] + f[:-1])) * t[1]), rel=1e-6)
+    # zero forces are feasible, so the optimum with forces costs at most the torquers' alone,
+    # and the forces take over most of the torque correction
+    assert plan.energy < alone.energy
+    assert plan.torque_energy < 0.2 * alone.torque_energy
+    # a dearer force buys less force and more torque
+    dear = plan_slew(fmap, nominal, force_weight=50 * w)
+    assert dear.peak_forces.max() < plan.peak_forces.max()
+    assert dear.torque_energy > plan.torque_energy
+
+
+def test_a_binding_force_limit_holds_with_the_kkt_conditions(setup, forces_setup):
+    truth, nominal, config, terminal = setup
+    _, fmap = forces_setup
+    free = plan_slew(fmap, nominal)
+    limit = 0.5 * free.peak_forces.max()
+    plan = plan_slew(fmap, nominal, force_limit=limit)
+    assert plan.feasible and plan.active >= 1 and np.all(plan.multipliers >= 0)
+    # SLSQP's point polished on its active set (the KKT system solved): rounding
+    assert plan.kkt_residual < 1e-8
+    assert plan.terminal_residual < 1e-9
+    n_s = 16 * N_BASIS + 1  # the between-samples bound of the module docstring
+    assert plan.peak_forces.max() <= limit * (1.0 + (1.0 - np.cos(np.pi / (n_s - 1) * 16)))
+    assert plan.energy > free.energy
+    # least peak relative to both limits: the LP's optimum scales with the limits
+    peak = plan_slew(fmap, nominal, "peak", torque_limit=4e4, force_limit=1e3)
+    half = plan_slew(fmap, nominal, "peak", torque_limit=2e4, force_limit=5e2)
+    assert half.least_peak == pytest.approx(2 * peak.least_peak, rel=1e-6)  # HiGHS 1e-7
+
+
+def test_planned_forces_bring_the_modes_to_rest_on_the_engine_and_under_the_feedback(setup):
+    truth, nominal, config, _ = setup
+    channels = ("force_66Z", "force_60Z")
+    plan = planned_slew(truth, truth, nominal, config, N_BASIS, iterations=6, forces=channels)
+    assert plan.force_channels == channels
+    r = np.asarray(plan.iterates) / plan.iterates[0]
+    assert r[-1] < 1e-6  # the stopping tolerance, reached within the iterations
+
+    law = NominalTorque(plan, config.dt)
+    assert law.writes == ("torque",) + channels
+    run = simulate(truth, law, config, n_cases=1, record_states=True)
+    n_T = int(round(6.0 / config.dt))
+    open_loop = simulate(
+        truth, NominalTorque(nominal, config.dt), config, n_cases=1, record_states=True
+    )
+    el = truth.output("elastic", run.dataset["state"].isel(case=0).values[n_T])
+    el0 = truth.output("elastic", open_loop.dataset["state"].isel(case=0).values[n_T])
+    assert np.linalg.norm(el) < 1e-5 * np.linalg.norm(el0)  # the stopping tolerance, as above
+    # the forces flown are the plan's, held at their interval means: the midpoint value to
+    # h²F''/24, F'' ≤ (12π/6)² F at the 12th sine: 7e-4 of the peak at 50 Hz
+    t = run.dataset["time"].values
+    inside = (t > 0.5) & (t < 5.5)
+    flown = run.dataset["force_66Z"].isel(case=0).values
+    np.testing.assert_allclose(
+        flown[inside],
+        plan.forces(t[inside] + 0.5 * config.dt)[:, 0],
+        rtol=0,
+        atol=1e-3 * plan.peak_forces.max(),
+    )
+
+    # the feedback on top adds its force perturbations to the plan's
+    trajectory = PlannedTrajectory(plan, truth, config)
+    q, d = SlewWeights(attitude=1000, rate=1000, modes=1, torque=1000, force=1e-6).diagonals(10, 2)
+    design = perturbation_design(
+        truth, trajectory, np.diag(q), np.diag(d), 5.0, 0.0, 7, forces=list(channels)
+    )
+    closed_law = design.controller(config.dt, "none", plant=truth)
+    assert np.any(closed_law.tables()["force_reference"])
+    rebuilt = PerturbationFeedback.from_tables(
+        closed_law.tables(), config.dt, closed_law.writes, 10, 10
+    )
+    np.testing.assert_array_equal(
+        rebuilt.tables()["force_reference"], closed_law.tables()["force_reference"]
+    )
+    # the compiled loop's linear form carries the planned forces as the Python law does:
+    # measurements along the plan, perturbed; agreement to rounding of the largest command
+    from flexsat.control.linear_form import run_controller, run_linear_law
+
+    times = config.dt * np.arange(int(round(6.5 / config.dt)))
+    rng = np.random.default_rng(23)
+    Y = np.concatenate(
+        [trajectory.beta(times), trajectory.omega(times), trajectory.elastic(times)], axis=-1
+    )[:, None, :] + 1e-4 * rng.normal(size=(times.size, 1, 4 + 3 + 20))
+    form = closed_law.linear_form(config.dt, times, 1)
+    slow = run_controller(closed_law, times, Y, (4, 3, 20), (3, 1, 1))
+    fast = run_linear_law(form, Y)
+    np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-9 * np.abs(slow).max())
+    assert np.abs(slow[:, 0, 3:]).max() > 0.5 * plan.peak_forces.max()  # the plan's forces
+
+    evaluation = SlewEvaluation(truth, truth, nominal, config, n_points=7)
+    closed = evaluation.run(closed_law)
+    alone = evaluation.run(law)
+    assert closed["goals_met"] and alone["goals_met"]
+    assert abs(closed["angle_error_mrad"] - alone["angle_error_mrad"]) < 0.1
+    # a law that does not write the planned forces is refused
+    torque_only = perturbation_design(truth, trajectory, np.diag(q[:]), np.diag(d[:3]), 5.0, 0.0, 7)
+    with pytest.raises(ValueError, match="^forces:.*force_66Z"):
+        torque_only.controller(config.dt, "none", plant=truth)
+
+
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        ({"force_limit": -1.0}, "force_limit"),
+        ({"force_weight": 0.0}, "force_weight"),
+        ({"objective": "peak", "torque_limit": 1e4}, "force_limit"),
+        ({"objective": "peak", "force_limit": 1e3}, "torque_limit"),
+        ({"start": np.zeros((3, N_BASIS))}, "start"),
+    ],
+)
+def test_bad_force_input_is_named(setup, forces_setup, kwargs, field):
+    truth, nominal, config, terminal = setup
+    with pytest.raises(ValueError, match=rf"^{field}:"):
+        plan_slew(forces_setup[1], nominal, **kwargs)
+
+
+def test_a_force_limit_without_forces_is_refused(setup):
+    truth, nominal, config, terminal = setup
+    with pytest.raises(ValueError, match=r"^force_limit:.*without forces"):
+        plan_slew(terminal, nominal, force_limit=100.0)

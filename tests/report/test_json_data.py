@@ -143,6 +143,10 @@ KINDS = {
         {("parameters", "alpha", "n"): 2, ("parameters", "u_max", "n"): 2},
     ),
     "montecarlo": ("tamu_montecarlo.yaml", {("cases",): 4, ("execution", "chunk_size"): 4}),
+    "design": (
+        "tamu_codesign_pareto.yaml",
+        {("pareto", "points"): 2, ("pareto", "starts"): 1, ("pareto", "store"): "front.zarr"},
+    ),
     "design_study": (
         "eps_design_stages.yaml",
         {

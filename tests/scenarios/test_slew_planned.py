@@ -1,5 +1,6 @@
 """Slew scenarios with a planned torque history (``shaping: {kind: planned}``,
-flexsat.design.planned_slew): the option runs, its numbers reach the report, and its mistakes
+flexsat.design.planned_slew; the section, the plan of a run and its note:
+flexsat.scenarios.slew_planned): the option runs, its numbers reach the report, and its mistakes
 are named by field path before anything runs.
 
 Cheap setup: the EPS on 12 elastic modes, a 4-mode design model, 0.5 rad about each axis in
@@ -82,7 +83,19 @@ def test_the_plan_is_reported(result):
         ),
         (
             ("basis: 12, feedback: false}", "basis: 12, feedback: false}\n    forces: all"),
-            r"runs\['planned'\].forces: a planned torque flown alone",
+            r"runs\['planned'\].forces: a plan flown alone has no feedback forces",
+        ),
+        (
+            ("basis: 12, feedback: false}", 'basis: 12, feedback: false, force_limit: "1 kN"}'),
+            r"runs\['planned'\].shaping.force_limit: given without forces planned",
+        ),
+        (
+            ("basis: 12, feedback: false}", "basis: 12, feedback: false, force_weight: 2}"),
+            r"runs\['planned'\].shaping.force_weight: given without forces planned",
+        ),
+        (
+            ("basis: 12, feedback: false}", 'basis: 12, forces: all, force_limit: "1 kN m"}'),
+            r"runs\['planned'\].shaping.force_limit",
         ),
         (
             ('torque_limit: "12 kN m"}', 'torque_limit: "12 kN m"}\n    feedforward: constant'),
@@ -104,3 +117,54 @@ def test_an_unreachable_torque_limit_is_reported_by_its_least_peak():
     result = run_scenario(load_scenario(text))
     note = [n for n in result.notes if n.startswith("planned + feedback")][0]
     assert "cannot be met: the least peak torque" in note
+
+
+FORCES = SMALL.replace(
+    "shaping: {kind: planned, basis: 12, feedback: false}",
+    "shaping: {kind: planned, basis: 12, feedback: false, forces: [66Z, 60Z]}",
+).replace(
+    """    weights: {attitude: 1000, rate: 1000, modes: 1, torque: 50}
+    break_frequency: "5 rad/s"
+    shaping: {kind: planned, basis: 12, torque_limit: "12 kN m"}""",
+    """    weights: {attitude: 1000, rate: 1000, modes: 1, torque: 50, force: 1.0e-6}
+    break_frequency: "5 rad/s"
+    forces: [66Z, 60Z]
+    shaping: {kind: planned, basis: 12, forces: [66Z, 60Z], force_limit: "300 N"}""",
+)
+
+
+def test_planned_forces_run_alone_and_under_the_feedback():
+    result = run_scenario(load_scenario(FORCES))
+    rows = {r["run"]: r for r in result.metrics_records()}
+    for label in ("planned", "planned + feedback"):
+        assert rows[label]["goals_met"], rows[label]
+        assert rows[label]["peak_force_N"] > 0.0  # the planned forces are flown
+    # the force limit binds or not, it holds on the flown forces within the between-samples
+    # bound (1.9 %) plus the feedback's own force perturbation (the plan is flown on the
+    # plant it was made on: a small fraction)
+    assert rows["planned + feedback"]["peak_force_N"] < 300 * 1.02 + 30
+    notes = [n for n in result.notes if n.startswith("planned")]
+    assert all("Planned point forces, peaks 66Z" in n for n in notes)
+    assert re.search(r"Limits force 300 N: \d+ sampled limits active", notes[1])
+    assert "Limits" not in notes[0] and "Torque limit" not in notes[0]  # none given
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (("forces: [66Z, 60Z]}", "forces: [66Z, 12Q]}"), r"runs\['planned'\].shaping.forces"),
+        (
+            ("    forces: [66Z, 60Z]\n", ""),
+            r"runs\['planned \+ feedback'\]\S*: .*force_66Z.*which the law does not write",
+        ),
+        (
+            ('forces: [66Z, 60Z], force_limit: "300 N"}', "forces: [66Z, 60Z], objective: peak}"),
+            r"runs\['planned \+ feedback'\].shaping.force_limit: required with objective",
+        ),
+    ],
+)
+def test_planned_force_mistakes_are_named_before_the_runs(change, message):
+    old, new = change
+    assert old in FORCES
+    with pytest.raises(ScenarioError, match=message):
+        run_scenario(load_scenario(FORCES.replace(old, new)))

@@ -297,21 +297,6 @@ def test_mass_properties_hand_calculation():
     assert np.allclose(props["inertia_center_of_mass"], Icm, rtol=0, atol=1e-12 * np.abs(Icm).max())
 
 
-def test_offset_mass_has_its_own_mass_properties():
-    """A lumped mass m with inertia J about its centre, carried at an offset r from a node,
-    gives the structure m, a centre of mass at node + r and the inertia J about it (the
-    parallel-axis theorem through R^T M R, an independent path)."""
-    s = Structure()
-    s.add_node(1, (0.3, -0.2, 0.1))
-    r = np.array([0.4, 0.25, -0.6])
-    J = np.array([[0.5, 0.02, 0.0], [0.02, 0.7, -0.03], [0.0, -0.03, 0.6]])
-    s.add_mass(1, 3.0, inertia=J, offset=r)
-    props = s.assemble().mass_properties(reference=(0.0, 0.0, 0.0))
-    assert props["total_mass"] == pytest.approx(3.0, rel=1e-14)
-    assert props["center_of_mass"] == pytest.approx((0.3, -0.2, 0.1) + r, rel=1e-14)
-    assert np.allclose(props["inertia_center_of_mass"], J, rtol=0, atol=1e-13)
-
-
 def test_offset_mass_is_the_limit_of_a_stiff_massless_link():
     """A tip mass at an offset from a cantilever's tip is the limit of the same mass on a node
     at the offset joined to the tip by a massless member k times stiffer than the beam: the
@@ -462,23 +447,6 @@ def test_rigid_link_errors(call, message):
     s.add_frame(0, 1, ALU, BAR)
     with pytest.raises(ValueError, match=message):
         call(s)
-
-
-def test_assembly_bookkeeping():
-    s = small_frame(clamped=True)
-    asm = s.assemble()
-    assert asm.n_dofs == 6 * 4 and asm.n_clamped == 6
-    assert asm.dofs[asm.index(3, "ry")] == (3, "ry")
-    assert abs(asm.K - asm.K.T).max() == 0 and abs(asm.M - asm.M.T).max() == 0
-    R = asm.rigid_body_vectors(reference=(1.0, 2.0, 3.0))
-    assert R[asm.index(2, "ux"), 5] == pytest.approx(-(0.9 - 2.0))  # (e_z × r)_x = -r_y
-    modes = asm.modes(5)
-    at = modes.at_nodes()
-    assert at.shape == (5, 5, 6) and np.all(at[:, 0, :] == 0)  # node 0 clamped
-    assert at[2, 3, 4] == modes.shapes[asm.index(3, "ry"), 2]
-    assert modes.frequencies_hz == pytest.approx(modes.omegas / (2 * math.pi))
-    with pytest.raises(ValueError, match=r"dof \(0, 'ux'\): not an active dof"):
-        asm.index(0, "ux")
 
 
 # ------------------------------------------------------------------------------------------------

@@ -17,13 +17,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.linalg
-import xarray as xr
 
 from flexsat.dynamics.hub_appendage import HubAppendage, HubAppendageParams
 from flexsat.structures.fem import Structure
-from flexsat.structures.modal_model import FORMAT_VERSION, ModalModel, hub_appendage_matrices
+from flexsat.structures.modal_model import ModalModel, hub_appendage_matrices
 from flexsat.structures.sections import Material
-from flexsat.units import ureg
 
 RTOL = 1e-10
 SPRING = Material(E=1e9, rho=0.0)  # massless rods: all mass is in the point masses
@@ -470,53 +468,6 @@ def test_statespace_matches_the_second_order_model():
         G = (Cq + s * Cv) @ np.linalg.solve(s**2 * np.eye(3) + s * D + K, B)
         assert np.allclose(sys(s), G, rtol=1e-12, atol=0)
     assert sys.nstates == 6 and sys.ninputs == 1 and sys.noutputs == 2
-
-
-# ------------------------------------------------------------------------------------------------
-# file format
-def test_save_load_round_trip_is_exact(tmp_path):
-    modes, _, _ = tower()
-    model = ModalModel.from_fe(
-        modes, damping=np.linspace(0.001, 0.02, 18), reference=(0.1, 0.2, -0.3)
-    )
-    path = tmp_path / "tower.nc"
-    model.save(path)
-    back = ModalModel.load(path)
-    for name, value in vars_of(model).items():
-        got = getattr(back, name)
-        if isinstance(value, str):
-            assert got == value
-        else:  # bitwise
-            assert got.dtype == value.dtype and got.shape == value.shape
-            assert got.tobytes() == value.tobytes(), name
-    with open(path, "rb") as fh:
-        assert fh.read(8) == b"\x89HDF\r\n\x1a\n"  # netCDF-4/HDF5, not a pickle
-    ds = xr.open_dataset(path, engine="h5netcdf")
-    try:
-        assert ds.attrs["flexsat_modal_model_version"] == FORMAT_VERSION
-        assert {"mode", "node", "axis"} <= set(ds.sizes)
-        assert ds.sizes["mode"] == 18 and ds.sizes["node"] == 9
-        for name, var in ds.variables.items():
-            assert "units" in var.attrs, name
-            ureg.Quantity(1.0, var.attrs["units"])  # parses
-        assert ureg.Quantity(1.0, ds["rotation_shapes"].units).dimensionality == (
-            ureg.Quantity(1.0, "kg**-0.5/m").dimensionality
-        )
-    finally:
-        ds.close()
-
-
-def test_load_refuses_foreign_files(tmp_path):
-    path = tmp_path / "other.nc"
-    xr.Dataset({"a": ("x", np.arange(3.0))}).to_netcdf(path, engine="h5netcdf")
-    with pytest.raises(ValueError, match="^path: not a flexsat modal model"):
-        ModalModel.load(path)
-    synthetic().save(path)
-    ds = xr.load_dataset(path, engine="h5netcdf")
-    ds.attrs["flexsat_modal_model_version"] = FORMAT_VERSION + 1
-    ds.to_netcdf(tmp_path / "future.nc", engine="h5netcdf")
-    with pytest.raises(ValueError, match="not supported"):
-        ModalModel.load(tmp_path / "future.nc")
 
 
 # ------------------------------------------------------------------------------------------------

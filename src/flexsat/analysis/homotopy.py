@@ -421,15 +421,17 @@ def homotopy_minimize(
     q = T.size
     objective_goal = float(_vector(objective_goal, "objective_goal"))
     gamma_step = _positive(gamma_step, "gamma_step", upper=1.0)
-    min_gamma_step = _positive(min_gamma_step, "min_gamma_step", upper=gamma_step)
-    max_corrections = _positive(max_corrections, "max_corrections", integer=True)
-    tol = _positive(tol, "tol")
-    active_tol = _positive(active_tol, "active_tol")
-    if max_step is not None:
-        max_step = _positive(max_step, "max_step")
+    settings = _Settings(
+        gamma_step,
+        _positive(min_gamma_step, "min_gamma_step", upper=gamma_step),
+        _positive(max_corrections, "max_corrections", integer=True),
+        _positive(tol, "tol"),
+        _positive(active_tol, "active_tol"),
+        None if max_step is None else _positive(max_step, "max_step"),
+        _positive(max_steps, "max_steps", integer=True),
+        _positive(max_evaluations, "max_evaluations", integer=True),
+    )
     fd_step = _positive(fd_step, "fd_step")
-    max_steps = _positive(max_steps, "max_steps", integer=True)
-    max_evaluations = _positive(max_evaluations, "max_evaluations", integer=True)
     L = weight_factor(weight, n)
     Linv_T = np.linalg.inv(L).T  # Δp = L⁻ᵀ y, |Δp|_W = |y|
 
@@ -461,35 +463,157 @@ def homotopy_minimize(
             if name != "gradient":  # a gradient may be undefined at the start only
                 raise FieldError(name, "non-finite value at p0") from None
 
-    se = np.maximum(1.0, np.abs(f_o))
-    sb = np.maximum(1.0, np.abs(T))
-    T_start = np.minimum(gi0, T)
+    run = _Continuation(prob, f_o, T, fe0, gi0, Linv_T, settings)
+    # phase 1: feasibility (A3-A8)
+    if run.violation(fe0, gi0, scaled=True) <= settings.tol:
+        run.path.append(
+            HomotopyStep("feasibility", 1.0, p.copy(), J0, 0, (), run.violation(fe0, gi0))
+        )
+        feasible = True
+    else:
+        p, gamma1, feasible = run.run_phase(p, "feasibility", None)
+    J, fe, gi = prob.values(p)
+    if not feasible:
+        return HomotopyResult(
+            p,
+            J,
+            fe,
+            gi,
+            False,
+            False,
+            False,
+            0.0,
+            f"infeasible: the feasibility homotopy stopped at γ = {gamma1:.6g} "
+            f"({run.last_fail}); active rows {list(run.last_active)} with the Jacobian in "
+            "`jacobian`",
+            tuple(run.path),
+            None,
+            run.last_active,
+            run.last_A,
+            np.nan,
+            prob.evaluations,
+        )
+    p_feas, J_feas = p.copy(), J
+    gamma2, goal = 0.0, False
+    if not minimize:
+        message = "feasible point found (minimize=False)"
+    elif objective_goal >= J_feas:
+        message = (
+            f"objective_goal {objective_goal:.6g} is not below J(p_feasible) = "
+            f"{J_feas:.6g}: nothing to minimise"
+        )
+    elif m >= n:
+        message = "the equality constraints leave no freedom: the feasible point is returned"
+    else:
+        run.objective_goal = objective_goal
+        p, gamma2, goal = run.run_phase(p, "objective", J_feas)
+        J, fe, gi = prob.values(p)
+        if goal:
+            message = "objective goal reached"
+        elif run.last_fail.startswith("max_steps"):
+            message = (
+                f"stopped after max_steps = {settings.max_steps} objective steps at γ = "
+                f"{gamma2:.9g} (J = {J:.10g}); not yet the constrained minimum"
+            )
+        else:
+            message = (
+                f"constrained minimum: the objective homotopy stopped at γ = {gamma2:.9g} "
+                f"(J = {J:.10g}; next step: {run.last_fail})"
+            )
+    try:
+        pg = _projected_gradient(prob, p, run.last_active, Linv_T)
+    except _Failure:
+        pg = np.nan
+    return HomotopyResult(
+        p,
+        J,
+        fe,
+        gi,
+        True,
+        True,
+        goal,
+        gamma2,
+        message,
+        tuple(run.path),
+        p_feas,
+        run.last_active,
+        run.last_A,
+        pg,
+        prob.evaluations,
+    )
 
-    names = [f"eq[{i}]" for i in range(m)] + [f"ineq[{j}]" for j in range(q)]
 
-    def violation(fe: FloatArray, gi: FloatArray, scaled: bool = False) -> float:
-        parts = [np.abs(fe - f_o), np.maximum(0.0, T - gi)]
+@dataclass(frozen=True)
+class _Settings:
+    """The continuation's checked settings (:func:`homotopy_minimize`'s parameters)."""
+
+    gamma_step: float
+    min_gamma_step: float
+    max_corrections: int
+    tol: float
+    active_tol: float
+    max_step: float | None
+    max_steps: int
+    max_evaluations: int
+
+
+class _Continuation:
+    """The two homotopy phases of :func:`homotopy_minimize` on one problem: the γ loop
+    (:meth:`run_phase`), the corrector at one γ (:meth:`converge`) and one damped minimum-norm
+    correction (:meth:`step`); it keeps the path and the last active set and failure."""
+
+    def __init__(
+        self,
+        prob: _Problem,
+        f_o: FloatArray,
+        T: FloatArray,
+        fe0: FloatArray,
+        gi0: FloatArray,
+        Linv_T: npt.NDArray[Any],
+        settings: _Settings,
+    ) -> None:
+        self.prob, self.f_o, self.T, self.fe0 = prob, f_o, T, fe0
+        self.Linv_T, self.s = Linv_T, settings
+        self.n, self.m, self.q = prob.n, f_o.size, T.size
+        self.se = np.maximum(1.0, np.abs(f_o))
+        self.sb = np.maximum(1.0, np.abs(T))
+        self.T_start = np.minimum(gi0, T)
+        self.names = [f"eq[{i}]" for i in range(self.m)] + [f"ineq[{j}]" for j in range(self.q)]
+        self.objective_goal = 0.0
+        self.path: list[HomotopyStep] = []
+        self.last_active: tuple[str, ...] = ()
+        self.last_A: FloatArray = np.zeros((0, self.n))
+        self.last_fail = ""
+
+    def violation(self, fe: FloatArray, gi: FloatArray, scaled: bool = False) -> float:
+        parts = [np.abs(fe - self.f_o), np.maximum(0.0, self.T - gi)]
         if scaled:
-            parts = [parts[0] / se, parts[1] / sb]
+            parts = [parts[0] / self.se, parts[1] / self.sb]
         return float(max((x.max() for x in parts if x.size), default=0.0))
 
-    def targets(gamma: float, phase: str, J_feas: float | None) -> tuple[Any, Any, float | None]:
+    def targets(
+        self, gamma: float, phase: str, J_feas: float | None
+    ) -> tuple[Any, Any, float | None]:
         if phase == "feasibility":
-            return (gamma * f_o + (1 - gamma) * fe0, gamma * T + (1 - gamma) * T_start, None)
+            return (
+                gamma * self.f_o + (1 - gamma) * self.fe0,
+                gamma * self.T + (1 - gamma) * self.T_start,
+                None,
+            )
         assert J_feas is not None  # the objective phase starts from a feasible J
-        return f_o, T, gamma * objective_goal + (1 - gamma) * J_feas
+        return self.f_o, self.T, gamma * self.objective_goal + (1 - gamma) * J_feas
 
     def residuals(
-        p: FloatArray, te: Any, tb: Any, Jo: float | None
+        self, p: FloatArray, te: Any, tb: Any, Jo: float | None
     ) -> tuple[FloatArray, FloatArray, float | None]:
-        J, fe, gi = prob.values(p)
-        re, ri = (fe - te) / se, (gi - tb) / sb
+        J, fe, gi = self.prob.values(p)
+        re, ri = (fe - te) / self.se, (gi - tb) / self.sb
         rJ = None if Jo is None else (J - Jo) / max(1.0, abs(Jo))
         return re, ri, rJ
 
-    def merit(p: FloatArray, te: Any, tb: Any, Jo: float | None) -> float:
+    def merit(self, p: FloatArray, te: Any, tb: Any, Jo: float | None) -> float:
         try:
-            re, ri, rJ = residuals(p, te, tb, Jo)
+            re, ri, rJ = self.residuals(p, te, tb, Jo)
         except (_Failure, ValueError, ArithmeticError, np.linalg.LinAlgError):
             return np.inf
         return float(
@@ -497,7 +621,7 @@ def homotopy_minimize(
         )
 
     def step(
-        p: FloatArray, te: Any, tb: Any, Jo: float | None
+        self, p: FloatArray, te: Any, tb: Any, Jo: float | None
     ) -> tuple[FloatArray, tuple[str, ...], FloatArray]:
         """One damped minimum-norm correction; returns (p_new, active names, jacobian).
 
@@ -507,16 +631,18 @@ def homotopy_minimize(
         row whose linearisation the step would violate, release a satisfied row whose
         multiplier is negative (the step would move it inside), at most ``room`` rows (A4).
         """
-        re, ri, rJ = residuals(p, te, tb, Jo)
-        rows_eq = prob.jac_eq(p) / se[:, None]
-        rows_all = prob.jac_in(p) / sb[:, None]
+        prob, n, m, q, tol = self.prob, self.n, self.m, self.q, self.s.tol
+        Linv_T = self.Linv_T
+        re, ri, rJ = self.residuals(p, te, tb, Jo)
+        rows_eq = prob.jac_eq(p) / self.se[:, None]
+        rows_all = prob.jac_in(p) / self.sb[:, None]
         room = n - (0 if Jo is None else 1)
         if m > room:
             raise _Failure("more equality constraints than free parameters")
         objrow = None
         if Jo is not None:
             objrow = prob.grad(p)[None, :] / max(1.0, abs(Jo))
-        work = [int(j) for j in np.flatnonzero(ri <= active_tol)][: room - m]  # priority order
+        work = [int(j) for j in np.flatnonzero(ri <= self.s.active_tol)][: room - m]
         seen = set()
         for _ in range(4 * q + 4):
             A = np.vstack([rows_eq, rows_all[work]] + ([objrow] if objrow is not None else []))
@@ -545,16 +671,16 @@ def homotopy_minimize(
                 work = work[:k] + work[k + 1 :]
                 continue
             break
-        if max_step is not None and np.linalg.norm(y) > max_step:
+        if self.s.max_step is not None and np.linalg.norm(y) > self.s.max_step:
             raise _Failure("correction longer than max_step")
-        m0 = merit(p, te, tb, Jo)
+        m0 = self.merit(p, te, tb, Jo)
         alpha = 1.0
         while alpha >= 1.0 / 64:
             trial = p + alpha * dp
-            if merit(trial, te, tb, Jo) < (1 - 1e-4 * alpha) * m0:
+            if self.merit(trial, te, tb, Jo) < (1 - 1e-4 * alpha) * m0:
                 active = tuple(
-                    [names[i] for i in range(m)]
-                    + [names[m + j] for j in work]
+                    [self.names[i] for i in range(m)]
+                    + [self.names[m + j] for j in work]
                     + (["objective"] if Jo is not None else [])
                 )
                 return trial, active, A
@@ -562,15 +688,15 @@ def homotopy_minimize(
         raise _Failure("line search failed")
 
     def converge(
-        p: FloatArray, gamma: float, phase: str, J_feas: float | None
+        self, p: FloatArray, gamma: float, phase: str, J_feas: float | None
     ) -> tuple[FloatArray, int, tuple[str, ...], FloatArray]:
-        te, tb, Jo = targets(gamma, phase, J_feas)
+        te, tb, Jo = self.targets(gamma, phase, J_feas)
         active: tuple[str, ...] = ()
-        A = np.zeros((0, n))
-        for it in range(max_corrections + 1):
-            if prob.evaluations > max_evaluations:
+        A = np.zeros((0, self.n))
+        for it in range(self.s.max_corrections + 1):
+            if self.prob.evaluations > self.s.max_evaluations:
                 raise _Failure("evaluation budget exhausted")
-            re, ri, rJ = residuals(p, te, tb, Jo)
+            re, ri, rJ = self.residuals(p, te, tb, Jo)
             worst = max(
                 [
                     np.abs(re).max(initial=0.0),
@@ -578,122 +704,46 @@ def homotopy_minimize(
                     0.0 if rJ is None else abs(rJ),
                 ]
             )
-            if worst <= tol:
+            if worst <= self.s.tol:
                 return p, it, active, A
-            if it == max_corrections:
+            if it == self.s.max_corrections:
                 break
-            p, active, A = step(p, te, tb, Jo)
-        raise _Failure(f"not converged in {max_corrections} corrections")
-
-    path: list[HomotopyStep] = []
-    last_active: tuple[str, ...] = ()
-    last_A, last_fail = np.zeros((0, n)), ""
+            p, active, A = self.step(p, te, tb, Jo)
+        raise _Failure(f"not converged in {self.s.max_corrections} corrections")
 
     def run_phase(
-        p: FloatArray, phase: str, J_feas: float | None
+        self, p: FloatArray, phase: str, J_feas: float | None
     ) -> tuple[FloatArray, float, bool]:
-        nonlocal last_active, last_A, last_fail
-        gamma, dg, steps = 0.0, gamma_step, 0
+        s = self.s
+        gamma, dg, steps = 0.0, s.gamma_step, 0
         while gamma < 1.0:
-            if steps >= max_steps:
-                last_fail = f"max_steps = {max_steps} converged steps reached"
+            if steps >= s.max_steps:
+                self.last_fail = f"max_steps = {s.max_steps} converged steps reached"
                 return p, gamma, False
             g_try = gamma + dg
             if g_try > 1.0 - 1e-12:
                 g_try = 1.0
             try:
-                p_new, its, active, A = converge(p, g_try, phase, J_feas)
+                p_new, its, active, A = self.converge(p, g_try, phase, J_feas)
             except (_Failure, ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
                 # a ValueError here comes from the user's functions away from p0 (e.g. a
                 # degenerate eigen-structure): that γ step failed, try a smaller one
-                last_fail = str(exc)
-                if prob.evaluations > max_evaluations:
+                self.last_fail = str(exc)
+                if self.prob.evaluations > s.max_evaluations:
                     return p, gamma, False
                 dg /= 2
-                if dg < min_gamma_step:
+                if dg < s.min_gamma_step:
                     return p, gamma, False
                 continue
             p, gamma, steps = p_new, g_try, steps + 1
-            last_active, last_A = active, A
-            J, fe, gi = prob.values(p)
-            path.append(HomotopyStep(phase, gamma, p.copy(), J, its, active, violation(fe, gi)))
+            self.last_active, self.last_A = active, A
+            J, fe, gi = self.prob.values(p)
+            self.path.append(
+                HomotopyStep(phase, gamma, p.copy(), J, its, active, self.violation(fe, gi))
+            )
             if its <= 3:
-                dg = min(gamma_step, 2 * dg)
+                dg = min(s.gamma_step, 2 * dg)
         return p, gamma, True
-
-    # phase 1: feasibility (A3-A8)
-    if violation(fe0, gi0, scaled=True) <= tol:
-        path.append(HomotopyStep("feasibility", 1.0, p.copy(), J0, 0, (), violation(fe0, gi0)))
-        feasible = True
-    else:
-        p, gamma1, feasible = run_phase(p, "feasibility", None)
-    J, fe, gi = prob.values(p)
-    if not feasible:
-        return HomotopyResult(
-            p,
-            J,
-            fe,
-            gi,
-            False,
-            False,
-            False,
-            0.0,
-            f"infeasible: the feasibility homotopy stopped at γ = {gamma1:.6g} ({last_fail}); "
-            f"active rows {list(last_active)} with the Jacobian in `jacobian`",
-            tuple(path),
-            None,
-            last_active,
-            last_A,
-            np.nan,
-            prob.evaluations,
-        )
-    p_feas, J_feas = p.copy(), J
-    gamma2, goal = 0.0, False
-    if not minimize:
-        message = "feasible point found (minimize=False)"
-    elif objective_goal >= J_feas:
-        message = (
-            f"objective_goal {objective_goal:.6g} is not below J(p_feasible) = "
-            f"{J_feas:.6g}: nothing to minimise"
-        )
-    elif m >= n:
-        message = "the equality constraints leave no freedom: the feasible point is returned"
-    else:
-        p, gamma2, goal = run_phase(p, "objective", J_feas)
-        J, fe, gi = prob.values(p)
-        if goal:
-            message = "objective goal reached"
-        elif last_fail.startswith("max_steps"):
-            message = (
-                f"stopped after max_steps = {max_steps} objective steps at γ = "
-                f"{gamma2:.9g} (J = {J:.10g}); not yet the constrained minimum"
-            )
-        else:
-            message = (
-                f"constrained minimum: the objective homotopy stopped at γ = {gamma2:.9g} "
-                f"(J = {J:.10g}; next step: {last_fail})"
-            )
-    try:
-        pg = _projected_gradient(prob, p, last_active, Linv_T)
-    except _Failure:
-        pg = np.nan
-    return HomotopyResult(
-        p,
-        J,
-        fe,
-        gi,
-        True,
-        True,
-        goal,
-        gamma2,
-        message,
-        tuple(path),
-        p_feas,
-        last_active,
-        last_A,
-        pg,
-        prob.evaluations,
-    )
 
 
 def _projected_gradient(

@@ -63,12 +63,14 @@ from scipy.stats import spearmanr
 
 from flexsat.cases.tamu import TamuCase, published_reference_inertia, tamu
 from flexsat.control import LyapunovTracker
+from flexsat.design.describe import DesignFeature, sorted_poles
 from flexsat.design.optimization_problem import (
     DesignProblem,
     DesignVariable,
     Objective,
 )
 from flexsat.dynamics.dispersed_hub import DispersedHubAppendage
+from flexsat.dynamics.hub_appendage import HubAppendage
 from flexsat.input_checks import FieldError, require_positive_scalar
 from flexsat.maneuvers import SmoothBangBang
 from flexsat.sim import simulate
@@ -294,6 +296,68 @@ class TamuCodesign:
         ``X`` with the published settings (friction, encoder, random torque, seed 0)."""
         ds = self._batch(X, friction=True, noise=True)
         return np.asarray(ds["settling_time_s"].values, dtype=float)
+
+    def describe(self, x: FloatArray) -> dict[str, DesignFeature]:
+        """The design ``x`` = (s, g1, g2, α) as a structure and a controller: the appendages'
+        first clamped frequencies, EI, line density and tip mass, and Law II's gains and α
+        (g3 = 0 as published)."""
+        from flexsat.structures.beam import cantilever_modes_batch
+
+        x = np.asarray(x, dtype=float)
+        p = self._case.params
+        st = self.structure(np.array([x[0]]))
+        n = min(3, int(self.n_modes))
+        modes = cantilever_modes_batch(
+            p.length, st["EI"], st["rho"], st["tip_mass"], p.tip_inertia, n
+        )
+        # Law II about the final angle once the reference has ended (g3 = 0): u = −g1 θ̃ − g2 θ̇
+        # on the linear hub-appendage model, state [θ, q, θ̇, q̇]
+        k = int(self.n_modes)
+        design = replace(
+            p, EI=float(st["EI"][0]), rho=float(st["rho"][0]), tip_mass=float(st["tip_mass"][0])
+        )
+        A, B = HubAppendage(design, n_modes=k).linear_part()
+        gain = np.zeros((1, 2 * (k + 1)))
+        gain[0, 0], gain[0, k + 1] = x[1], x[2]
+        poles = sorted_poles(np.linalg.eigvals(A - B @ gain))
+        return {
+            "appendage frequencies": DesignFeature(
+                "structure",
+                modes.omegas[0] / (2 * np.pi),
+                "Hz",
+                labels=tuple(f"mode {i}" for i in range(1, n + 1)),
+                note="clamped appendage with its tip mass (Euler–Bernoulli)",
+            ),
+            "appendage EI": DesignFeature(
+                "structure",
+                st["EI"],
+                "N*m**2",
+                note="thickness ratio s: EI = s³ EI₀, ρ = s ρ₀, tip mass at equal appendage mass",
+            ),
+            "appendage line density": DesignFeature("structure", st["rho"], "kg/m"),
+            "tip mass": DesignFeature("structure", st["tip_mass"], "kg"),
+            "g1": DesignFeature(
+                "control",
+                np.array([x[1]]),
+                "N*m/rad",
+                note="Law II: u = −g1 (θ − θ_r) − g2 (θ̇ − θ̇_r), g3 = 0",
+            ),
+            "g2": DesignFeature("control", np.array([x[2]]), "N*m*s/rad"),
+            "alpha": DesignFeature(
+                "control",
+                np.array([x[3]]),
+                "",
+                note="rise-time fraction of the smoothed bang-bang reference (Att. 3 Eq. 15)",
+            ),
+            "closed-loop poles": DesignFeature(
+                "control",
+                poles,
+                "1/s",
+                note="eig(A − B K) of the linear hub-appendage model with Law II about the final "
+                "angle (K = [g1, 0, …, g2, 0, …]): continuous time, without friction, rate "
+                "filter, sampling or saturation",
+            ),
+        }
 
 
 def settling_comparison(problem: TamuCodesign, x: FloatArray) -> dict[str, float]:

@@ -6,13 +6,23 @@ documented deviations (docs/eps.md, deviations 1 and 3) are ``discrepancy`` rows
 model's values: the first truss mode (15.4 Hz for "about 7.0 Hz") and the deck's element count
 (219 for 223).
 
+The slew goals of "Simulation Results" (Euler-angle error within 3 % of the commanded 1 rad
+at 1.25 T; the peak rim deflection from 1.25 T reduced at least 10:1 from the open loop's) are
+requirements, not measured values: a goal row checks that the computed value meets it, the
+bound written as an interval's midpoint and half-width (error ≤ 3 % is 1.5 ± 1.5 %; the
+deflection ratio ≥ 10:1 as its inverse, closed / open ≤ 0.1, is 0.05 ± 0.05). They are
+judged on the slews with torquers alone whose torque history is planned over the whole
+maneuver (flexsat.design.planned_slew; docs/eps.md, "Planned slews with torquers alone"):
+the 45-mode plant, the 10-mode design model, 50 Hz control, 20 sines per axis, two
+relinearisations, about 2 s of CPU per slew.
+
 Not checked: the total mass 1028 kg (the torquer mass is balanced to give it) and the other
 published inputs (tube, material, damping).
 """
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import lru_cache, partial
 from typing import TYPE_CHECKING
 
 from flexsat.checks.core import Check, Discrepancy, series
@@ -57,6 +67,41 @@ def _nominal_slew() -> ThreeAxisSlew:
 
     inertia = _case().mass_properties()["inertia_center_of_mass"]
     return three_axis_slew(inertia, [1.0, 1.0, 1.0], 10.0, 2.5, zeta_b=0.0)
+
+
+@lru_cache(maxsize=2)
+def _planned_slew_goals(duration: float) -> tuple[float, float]:
+    """(Euler-angle error at 1.25 T in % of the commanded 1 rad, rim deflection from 1.25 T
+    closed / open loop) of the planned torquers-only slew of ``duration`` s (module
+    docstring): 1 rad about each 1-2-3 axis, ω_B = 2.5 rad/s at 10 s and 5 rad/s at 6 s
+    (cases A and D), ζ_B = 0."""
+    import numpy as np
+
+    from flexsat.control import NominalTorque
+    from flexsat.design.planned_slew import planned_slew
+    from flexsat.design.slew_weights import SlewEvaluation
+    from flexsat.dynamics.attitude import euler123_to_quaternion
+    from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
+    from flexsat.maneuvers import three_axis_slew
+    from flexsat.sim import SimConfig
+
+    truth = _case().plant(n_modes=45)
+    assert isinstance(truth, FlexibleSpacecraft)
+    design = truth.reduced(10)
+    omega_b = {10.0: 2.5, 6.0: 5.0}[duration]
+    target = euler123_to_quaternion(np.ones(3))
+    nominal = three_axis_slew(truth.inertia, target, duration, omega_b, zeta_b=0.0)
+    # the deflection judged over 2 s past 1.25 T (half a period of the first mode, 0.25 Hz)
+    config = SimConfig(duration=1.25 * duration + 2.0, control_rate=50.0)
+    plan = planned_slew(truth, design, nominal, config, 20, iterations=2)
+    m = SlewEvaluation(truth, design, nominal, config).run(NominalTorque(plan, config.dt))
+    # the commanded angle is 1 rad about each axis: mrad / 1000 mrad × 100 %
+    return 0.1 * float(m["angle_error_mrad"]), 1.0 / float(m["deflection_ratio_after"])
+
+
+def _goal(duration: float, which: int) -> float:
+    """Entry ``which`` of :func:`_planned_slew_goals` (what a goal row computes)."""
+    return _planned_slew_goals(duration)[which]
 
 
 def _peak_torque(axis: int) -> float:
@@ -181,4 +226,32 @@ CHECKS += [
         lambda: _peak_torque(2),
         rtol=0.5,
     ),
+    # Goals, "Simulation Results": a requirement met when the computed value lies in the
+    # interval (module docstring), not a number reproduced. Cases A and D with the feedback
+    # miss them (docs/eps.md); the torque history planned over the maneuver meets both.
 ]
+_GOALS = f"{SOURCE}, 'Simulation Results' (goal)"
+for _duration, _case_name in ((10.0, "A"), (6.0, "D")):
+    CHECKS += [
+        Check(
+            "eps",
+            f"Euler error at 1.25 T, {_duration:.0f} s slew, torquers alone, planned (≤ 3 %)",
+            _GOALS,
+            1.5,
+            "%",
+            partial(_goal, _duration, 0),
+            atol=1.5,
+            note=f"torquers alone as case {_case_name}; the torque planned over the maneuver",
+        ),
+        Check(
+            "eps",
+            f"rim deflection from 1.25 T, closed / open, {_duration:.0f} s slew, torquers "
+            "alone, planned (≤ 1/10)",
+            _GOALS,
+            0.05,
+            "",
+            partial(_goal, _duration, 1),
+            atol=0.05,
+            note=f"torquers alone as case {_case_name}; the torque planned over the maneuver",
+        ),
+    ]

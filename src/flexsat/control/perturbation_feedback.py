@@ -96,6 +96,7 @@ __all__ = [
     "NominalTorque",
     "PerturbationDesign",
     "interval_means",
+    "planned_forces",
     "PerturbationFeedback",
     "perturbation_design",
 ]
@@ -444,6 +445,18 @@ class PerturbationFeedback(Controller):
                 f"must return [η, η̇] of the {n} design modes, shape (..., {2 * n}), got "
                 f"{self._elastic_ref.shape[1:]}",
             )
+        # a nominal that plans point forces (flexsat.design.planned_slew) has them added to
+        # the law's commands on those channels, which the law must write
+        planned_f, channels = planned_forces(lin.nominal, grid, h, lin.duration)
+        self._force_ref = np.zeros((grid.size, len(self.writes) - 1))
+        for i, name in enumerate(channels[1:]):
+            if name not in self.writes[1:]:
+                raise FieldError(
+                    "forces",
+                    f"the nominal plans {name}, which the law does not write (its forces: "
+                    f"{', '.join(self.writes[1:]) or 'none'}): design it with that force",
+                )
+            self._force_ref[:, self.writes.index(name) - 1] = planned_f[:, i]
         self._inputs_T = design.input_map.T.copy()
         self._inertia_T = lin.inertia.T.copy()
         self.n_design_modes = n
@@ -461,8 +474,9 @@ class PerturbationFeedback(Controller):
         "inertia_T",
         "beta_target",
     )
-    #: tables a stored law may lack (zero when absent: a nominal without planned modal motion)
-    OPTIONAL_TABLES = ("elastic_reference",)
+    #: tables a stored law may lack (zero when absent: a nominal without planned modal motion
+    #: or planned forces)
+    OPTIONAL_TABLES = ("elastic_reference", "force_reference")
 
     def tables(self) -> dict[str, FloatArray]:
         """The law's tables on its sample grid (:data:`TABLES`): with the control period, the
@@ -483,6 +497,8 @@ class PerturbationFeedback(Controller):
         }
         if np.any(self._elastic_ref):  # a planned modal motion (OPTIONAL_TABLES)
             tables["elastic_reference"] = self._elastic_ref
+        if np.any(self._force_ref):  # planned forces (OPTIONAL_TABLES)
+            tables["force_reference"] = self._force_ref
         return tables
 
     @classmethod
@@ -537,6 +553,18 @@ class PerturbationFeedback(Controller):
                 f"elastic_reference of shape {law._elastic_ref.shape} does not match the "
                 f"{t['torque'].shape[0]} samples and {n_design_modes} design modes",
             )
+        forces = tables.get("force_reference")
+        law._force_ref = (
+            np.zeros((t["torque"].shape[0], len(law.writes) - 1))
+            if forces is None
+            else np.array(forces, dtype=float)
+        )
+        if law._force_ref.shape != (t["torque"].shape[0], len(law.writes) - 1):
+            raise FieldError(
+                "tables",
+                f"force_reference of shape {law._force_ref.shape} does not match the "
+                f"{t['torque'].shape[0]} samples and {len(law.writes) - 1} forces written",
+            )
         return law
 
     def _batched(self) -> list[tuple[int, ...]]:
@@ -583,7 +611,7 @@ class PerturbationFeedback(Controller):
         du = (z1 + (0.5 * h) * z2 + (h * h / 6) * u3) @ self._inputs_T
         commands = {"torque": self._torque[j] + du[:, :3] @ self._inertia_T}
         for i, name in enumerate(self.writes[1:]):
-            commands[name] = du[:, 3 + i]
+            commands[name] = du[:, 3 + i] + self._force_ref[j, i]
         return commands, {"z1": z1 + h * z2 + (0.5 * h * h) * u3, "z2": z2 + h * u3}
 
     def linear_form(self, dt: float, times: npt.ArrayLike, n_cases: int) -> LinearLaw:
@@ -603,11 +631,12 @@ class PerturbationFeedback(Controller):
                 -h G_1 & I - h G_2 \end{bmatrix}\xi_k
                 - \begin{bmatrix}\tfrac{h^2}2 \\ h\end{bmatrix} G_x M_k e_k
                 + \begin{bmatrix}\tfrac{h^2}2 \\ h\end{bmatrix} f_j, \\
-            u_k &= [\bar\tau_{n,j}; 0] + P S \big[(I - \tfrac{h^2}6 G_1) v_1
+            u_k &= [\bar\tau_{n,j}; \bar F_{n,j}] + P S \big[(I - \tfrac{h^2}6 G_1) v_1
                 + (\tfrac h2 I - \tfrac{h^2}6 G_2) v_2 - \tfrac{h^2}6 G_x M_k e_k
                 + \tfrac{h^2}6 f_j\big],
 
-        P = blockdiag(J, I) (the torque is J δu_τ), S the input map; the feedforward's affine
+        P = blockdiag(J, I) (the torque is J δu_τ), S the input map, :math:`\bar F_{n,j}`
+        the planned forces of a nominal that plans them (zero otherwise); the feedforward's affine
         term is shifted into u_ff (:func:`~flexsat.control.linear_form.absorb_affine`). Equal
         to :meth:`__call__` to round-off while the error quaternion's scalar part
         δq₀ = (β E_j)₀ is >= 0 (an attitude error from the nominal below π, which the law's
@@ -655,6 +684,7 @@ class PerturbationFeedback(Controller):
         ff = self._ff[j]  # (n_t, m_v)
         g = np.zeros((grid.size, m))
         g[:, :3] = self._torque[j]
+        g[:, 3:] = self._force_ref[j]  # planned forces, zero without
         g += (h * h / 6) * ff @ PS.T
         F = np.concatenate([0.5 * h * h * eye, h * eye])
         A4, C4 = A[:, None], C[:, None]
@@ -704,16 +734,21 @@ class NominalTorque(Controller):
     slew study c. 1989 goals compare
     with). Zero after the maneuver.
 
+    A nominal that plans point forces too (:class:`~flexsat.design.slew_shaping.ShapedSlew`
+    with ``force_channels``: ``forces(t)`` (..., n_F), N) has them written on those channels,
+    held the same way.
+
     Parameters
     ----------
     nominal : object
-        ``torque(t)`` (N m, body axes) on [0, ``duration``].
+        ``torque(t)`` (N m, body axes) on [0, ``duration``]; optionally ``force_channels`` and
+        ``forces(t)``.
     dt : float, str or Quantity
         Control period, s; the law is called on the grid k·dt.
     """
 
     reads = ("attitude",)
-    writes = ("torque",)
+    writes: tuple[str, ...] = ("torque",)
 
     def __init__(self, nominal: TorqueNominal, dt: QuantityArrayLike) -> None:
         missing = [a for a in ("torque", "duration") if not hasattr(nominal, a)]
@@ -731,6 +766,7 @@ class NominalTorque(Controller):
             return np.where((t > T)[..., None], 0.0, nominal.torque(np.clip(t, 0.0, T)))
 
         self._torque = interval_means(torque, grid, h)
+        self._forces, self.writes = planned_forces(nominal, grid, h, T)
         self.target = np.zeros(1)
 
     def _batched(self) -> list[tuple[int, ...]]:
@@ -738,7 +774,38 @@ class NominalTorque(Controller):
 
     def __call__(
         self, t: float, y: Mapping[str, FloatArray], state: dict[str, FloatArray]
-    ) -> tuple[FloatArray, dict[str, FloatArray]]:
+    ) -> tuple[FloatArray | dict[str, FloatArray], dict[str, FloatArray]]:
         k = min(int(round(t / self.dt)), len(self._torque) - 1)
         n = np.shape(y["attitude"])[0]
-        return np.broadcast_to(self._torque[k], (n, 3)).copy(), state
+        torque = np.broadcast_to(self._torque[k], (n, 3)).copy()
+        if len(self.writes) == 1:
+            return torque, state
+        commands = {"torque": torque}
+        for i, name in enumerate(self.writes[1:]):
+            commands[name] = np.full(n, self._forces[k, i])
+        return commands, state
+
+
+def planned_forces(
+    nominal: object, grid: FloatArray, h: float, T: float
+) -> tuple[FloatArray, tuple[str, ...]]:
+    """The interval means (:func:`interval_means`) of a nominal's planned point forces on the
+    sample ``grid`` (zero after T) and the channels written: ``("torque",)`` and its
+    ``force_channels``; (len(grid), 0) and ``("torque",)`` for a nominal without forces."""
+    channels = tuple(getattr(nominal, "force_channels", ()) or ())
+    if not channels:
+        return np.zeros((grid.size, 0)), ("torque",)
+    forces = getattr(nominal, "forces", None)
+    if not callable(forces):
+        raise FieldError("nominal", "has force_channels but no forces(t)")
+
+    def held(t: FloatArray) -> FloatArray:
+        f = np.asarray(forces(np.clip(t, 0.0, T)), float)
+        if f.shape != t.shape + (len(channels),):
+            raise FieldError(
+                "nominal.forces",
+                f"must return shape (..., {len(channels)}) for its force_channels, got {f.shape}",
+            )
+        return np.where((t > T)[..., None], 0.0, f)
+
+    return interval_means(held, grid, h), ("torque",) + channels

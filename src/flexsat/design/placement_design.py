@@ -21,7 +21,7 @@ import numpy as np
 import numpy.typing as npt
 
 from flexsat.analysis.gramians import modal_controllability_gramian
-from flexsat.analysis.placement import SearchResult, exchange, exhaustive, greedy
+from flexsat.analysis.placement_search import SearchResult, exchange, exhaustive, greedy
 from flexsat.design.optimization_problem import DesignProblem
 from flexsat.design.optimize import OptimizationResult, optimize_design
 from flexsat.input_checks import FieldError, require_finite

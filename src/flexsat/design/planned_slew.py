@@ -1,5 +1,6 @@
 r"""A slew planned over the whole maneuver: the torque history that brings the design modes to
-rest at T at the least torque effort (or the least peak torque) within the torquers' limits.
+rest at T at the least effort (or the least peak) within the limits, by the torquers and, where
+given, point forces.
 
 :mod:`flexsat.design.slew_shaping` corrects the rigid nominal torque τ_n by
 :math:`J v(t)`, :math:`v = S(t)\,c` a sine series per axis vanishing at 0 and T, and gives the
@@ -31,6 +32,25 @@ g ≤ 0: λ ≥ 0), and the KKT residual is reported. When the limits admit no s
 feasible peak torque is reported instead (the linear programme above, HiGHS through
 scipy.optimize.linprog): the number that shows the limit, not the method, prevents the goal.
 
+Point forces (``forces``): the plant's force actuators planned beside the torque, each a sine
+series of its own, :math:`F_i(t) = \sum_j d_{ij}\sin(j\pi t/T)` (the model of their action
+on the modes and on the hub is in :mod:`~flexsat.design.slew_shaping`). The coefficients are
+then [c; d], the terminal conditions :math:`X_\tau c + X_F d = r`, and the energy counts
+every input,
+
+.. math::
+
+    E(c, d) = \int_0^T \lVert J v\rVert^2 + w_F \lVert F\rVert^2\,dt
+    = \tfrac T2 \Big(\sum_j c_j^T J^T J c_j + w_F \sum_{i,j} d_{ij}^2\Big),
+
+with the force limits :math:`|F_i(t_k)| \le L_F` beside the torque limits and the least peak
+taken over both, :math:`\max(|\tau_a|/L_a, |F_i|/L_F)`. Torque sines weigh about
+:math:`\lVert J\rVert^2` (1e10 on the EPS) and force sines w_F, so the QP is solved in
+coefficients scaled to a unit Hessian diagonal (an exact change of variables), and SLSQP's
+point is polished by solving the KKT system on its active set (kept when it meets every limit
+with λ ≥ 0: then it is the optimum of the convex QP). Since zero forces are feasible, the
+optimum with forces never costs more energy than the torquers' alone.
+
 The limits are imposed at n_s equally spaced samples; between samples the highest sine
 (period 2T/n_b) can exceed a sampled peak by at most 1 − cos(π T/(n_b (n_s − 1)))
 relative (1.9 % at the default n_s = 16 n_b + 1); the reported peaks are those of a grid 4
@@ -45,7 +65,8 @@ move during the slew and come to rest at T).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -91,7 +112,8 @@ class PlannedSlew:
         L, N m.
     least_peak : float
         The least max_a,k |τ_a(t_k)|/L_a meeting the terminal conditions (in N m without
-        limits; NaN when not computed: energy objective with limits that do not bind).
+        limits; NaN when not computed: energy objective with limits that do not bind); with
+        planned forces the maximum runs over the limited inputs, |F_i(t_k)|/L_F included.
     active : int
         Sampled limits active at the optimum.
     multipliers : (n_active,) array
@@ -107,6 +129,12 @@ class PlannedSlew:
         ‖r_k‖ of the successive linearisations (:func:`planned_slew`): the terminal state's
         departure before each step and, last, after the final one (unless the limits were
         infeasible).
+    torque_energy : float
+        ∫‖J v‖² dt alone, N² m² s (``energy`` less the forces' w_F ∫‖F‖² dt).
+    peak_forces : (n_F,) array
+        max |F_i| over the fine grid, N (empty without planned forces).
+    force_limit : float or None
+        L_F, N.
     """
 
     shaped: ShapedSlew
@@ -123,10 +151,22 @@ class PlannedSlew:
     rank: int
     message: str
     iterates: tuple[float, ...] = ()
+    torque_energy: float = float("nan")
+    peak_forces: FloatArray = field(default_factory=lambda: np.zeros(0))
+    force_limit: float | None = None
 
     @property
     def duration(self) -> float:
         return self.shaped.duration
+
+    @property
+    def force_channels(self) -> tuple[str, ...]:
+        """The planned point forces' plant channels (empty for torquers alone)."""
+        return self.shaped.force_channels
+
+    def forces(self, t: npt.ArrayLike) -> FloatArray:
+        """The planned point forces (..., n_F), N."""
+        return self.shaped.forces(t)
 
     @property
     def target(self) -> FloatArray:
@@ -151,6 +191,9 @@ class PlannedSlew:
         }
         for a, p in zip("xyz", self.peak_torques, strict=True):
             out[f"planned_peak_torque_{a}_Nm"] = float(p)
+        out["torque_energy_N2m2s"] = self.torque_energy
+        for name, p in zip(self.force_channels, self.peak_forces, strict=True):
+            out[f"planned_peak_{name}_N"] = float(p)
         return out
 
 
@@ -161,6 +204,27 @@ def _limits(torque_limit: npt.ArrayLike | None) -> FloatArray | None:
     if not np.all(np.isfinite(L) & (L > 0.0)):
         raise FieldError("torque_limit", f"must be finite and > 0 N m, got {L.tolist()}")
     return L
+
+
+def _force_settings(
+    n_f: int, force_limit: float | None, force_weight: float, objective: str, torque_limited: bool
+) -> float | None:
+    """The force limit (N) checked against the forces planned and the objective."""
+    if not (np.isfinite(force_weight) and force_weight > 0.0):
+        raise FieldError("force_weight", f"must be finite and > 0 m², got {force_weight!r}")
+    if force_limit is not None:
+        force_limit = float(force_limit)
+        if not (np.isfinite(force_limit) and force_limit > 0.0):
+            raise FieldError("force_limit", f"must be finite and > 0 N, got {force_limit!r}")
+        if not n_f:
+            raise FieldError("force_limit", "given without forces planned (terminal map)")
+    if n_f and objective == "peak" and (force_limit is None or not torque_limited):
+        raise FieldError(
+            "force_limit" if force_limit is None else "torque_limit",
+            "required with objective 'peak' and planned forces: the peak is taken relative "
+            "to the limits, |τ_a|/L_a and |F_i|/L_F together",
+        )
+    return force_limit
 
 
 def _least_peak(G: FloatArray, h: FloatArray, n_z: int) -> tuple[FloatArray | None, float, str]:
@@ -176,6 +240,38 @@ def _least_peak(G: FloatArray, h: FloatArray, n_z: int) -> tuple[FloatArray | No
     return res.x[:n_z], float(res.x[-1]), "least peak by HiGHS"
 
 
+def _polish(
+    P: FloatArray, q: FloatArray, G: FloatArray, h: FloatArray, z: FloatArray
+) -> FloatArray:
+    """SLSQP's optimum made exact on its active set: the equality-constrained QP
+    min ½zᵀPz + qᵀz s.t. G_A z = h_A by its KKT system (least squares: rows of G_A may be
+    dependent), kept when it meets every limit and its multipliers are non-negative (then it
+    is the optimum of the convex QP); otherwise SLSQP's point."""
+    active = np.flatnonzero(h - G @ z <= ACTIVE_TOL)
+    if not active.size:
+        return z
+    GA = G[active]
+    n, k = P.shape[0], active.size
+    K = np.block([[P, GA.T], [GA, np.zeros((k, k))]])
+    sol = np.linalg.lstsq(K, np.concatenate([-q, h[active]]), rcond=None)[0]
+    z_new, mu = sol[:n], sol[n:]
+    scale = max(float(np.abs(mu).max()), 1e-300)
+    if np.max(G @ z_new - h) <= 1e-9 and np.min(mu) >= -1e-8 * scale:
+        return np.asarray(z_new, float)
+    return z
+
+
+def _input_map(terminal: TerminalMap, t: FloatArray) -> FloatArray:
+    """M(t_k) (n_s, 3 + n_F, (3 + n_F) n_b): the planned inputs' change [J v; F] per
+    coefficient (torque rows N m, force rows N)."""
+    n_b, n_f, J = terminal.n_basis, terminal.n_forces, terminal.inertia
+    M = np.zeros((t.size, 3 + n_f, (3 + n_f) * n_b))
+    M[:, :3, : 3 * n_b] = np.einsum("ab,kbc->kac", J, terminal.basis(t))
+    if n_f:
+        M[:, 3:, 3 * n_b :] = terminal.force_basis(t)
+    return M
+
+
 def plan_slew(
     terminal: TerminalMap,
     nominal: ThreeAxisSlew,
@@ -183,9 +279,12 @@ def plan_slew(
     torque_limit: npt.ArrayLike | None = None,
     n_samples: int | None = None,
     start: npt.ArrayLike | None = None,
+    force_limit: float | None = None,
+    force_weight: float = 1.0,
 ) -> PlannedSlew:
-    """The planned correction of ``nominal`` (module docstring): one QP (or LP) on the
-    conditions ``terminal``.
+    r"""The planned correction of ``nominal`` (module docstring): one QP (or LP) on the
+    conditions ``terminal``, over the torque sines and the sines of the point forces the
+    terminal map plans (``terminal.force_channels``).
 
     Parameters
     ----------
@@ -199,14 +298,21 @@ def plan_slew(
         |τ_a| ≤ L_a at the samples, N m (SI floats).
     n_samples : int, optional
         Samples of [0, T] where the limits hold (default 16 n_b + 1).
-    start : (3, n_b) array, optional
+    start : ((3 + n_F), n_b) array, optional
         Coefficients already planned (``terminal`` linearised along their trajectory): the
         result is start + Δc with X Δc = r, the objective and limits on the whole history.
+    force_limit : float, optional
+        |F_i| ≤ L_F at the samples for every planned force, N. Required, with
+        ``torque_limit``, by ``objective="peak"`` when forces are planned.
+    force_weight : float
+        w_F, m²: the energy is :math:`\int_0^T \lVert J v\rVert^2 + w_F\lVert F\rVert^2 dt`
+        (a force of 1 N costs as much as :math:`\sqrt{w_F}` N m of torque).
 
     Raises
     ------
     ValueError
-        Naming ``objective``, ``torque_limit`` or ``n_samples``.
+        Naming ``objective``, ``torque_limit``, ``force_limit``, ``force_weight``,
+        ``n_samples`` or ``start``.
     """
     from scipy.linalg import null_space
     from scipy.optimize import minimize
@@ -214,31 +320,49 @@ def plan_slew(
     if objective not in OBJECTIVES:
         raise FieldError("objective", f"must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
     L = _limits(torque_limit)
-    n_b, T, J = terminal.n_basis, terminal.duration, terminal.inertia
+    n_b, T, J, n_f = terminal.n_basis, terminal.duration, terminal.inertia, terminal.n_forces
+    L_F = _force_settings(n_f, force_limit, float(force_weight), objective, L is not None)
     n_s = 16 * n_b + 1 if n_samples is None else require_count(n_samples, "n_samples")
     if n_s < 2:
         raise FieldError("n_samples", f"must be at least 2, got {n_s}")
-    X, r = terminal.X, terminal.target
+    n_c = (3 + n_f) * n_b
+    H_tau = (0.5 * T) * np.kron(J.T @ J, np.eye(n_b))
+    H = np.zeros((n_c, n_c))
+    H[: 3 * n_b, : 3 * n_b] = H_tau
+    H[3 * n_b :, 3 * n_b :] = (0.5 * T * float(force_weight)) * np.eye(n_f * n_b)
+    # with forces, the coefficients scaled to unit diagonal of H (c = D ĉ, an exact change of
+    # variables): torque sines weigh ~‖J‖², force sines w_F, and SLSQP would not resolve the
+    # reduced problem at that condition
+    D = 1.0 / np.sqrt(np.diag(H)) if n_f else np.ones(n_c)
+    X, r = terminal.X * D, terminal.target
     U, sv, Vt = np.linalg.svd(X, full_matrices=True)
     rank = int(np.sum(sv > RANK_RCOND * sv[0]))
-    c_prev = np.zeros(3 * n_b) if start is None else np.asarray(start, float).reshape(-1)
-    if c_prev.shape != (3 * n_b,) or not np.all(np.isfinite(c_prev)):
-        raise FieldError("start", f"must be {3 * n_b} finite coefficients (3, n_b)")
-    c0 = c_prev + Vt[:rank].T @ ((U[:, :rank].T @ r) / sv[:rank])
+    c_prev = np.zeros(n_c) if start is None else np.asarray(start, float).reshape(-1)
+    if c_prev.shape != (n_c,) or not np.all(np.isfinite(c_prev)):
+        raise FieldError("start", f"must be {n_c} finite coefficients ({3 + n_f}, n_b)")
+    c0 = c_prev / D + Vt[:rank].T @ ((U[:, :rank].T @ r) / sv[:rank])
     N = Vt[rank:].T if rank < Vt.shape[0] else null_space(X)
-    H = (0.5 * T) * np.kron(J.T @ J, np.eye(n_b))
-    P, q = N.T @ H @ N, N.T @ H @ c0
+    Hs = H * D[:, None] * D[None, :]
+    P, q = N.T @ Hs @ N, N.T @ Hs @ c0
     z = -np.linalg.solve(P, q)  # the unconstrained optimum
 
     t = np.linspace(0.0, T, n_s)
-    S = terminal.basis(t)  # (n_s, 3, 3 n_b)
-    JS = np.einsum("ab,kbc->kac", J, S).reshape(-1, 3 * n_b) @ N  # rows (k, a)
-    tau_n = nominal.torque(t).reshape(-1)
-    scale = np.tile(L if L is not None else np.ones(3), n_s)
-    # normalised rows: ±(τ_n + J S (c0 + N z))/L ≤ 1  →  G z ≤ h
-    G = np.vstack([JS / scale[:, None], -JS / scale[:, None]])
-    base = (tau_n + _js_c0(J, S, c0)) / scale
+    scale_in = np.concatenate(
+        [L if L is not None else np.ones(3), np.full(n_f, L_F if L_F is not None else 1.0)]
+    )
+    # the limited inputs' rows (all of them for the peak objective, _force_settings)
+    limited = np.r_[np.full(3, L is not None), np.full(n_f, L_F is not None)]
+    if objective == "peak":
+        limited[:] = True
+    M = _input_map(terminal, t)[:, limited] * D  # (n_s, n_lim, n_c), per scaled coefficient
+    u_n = np.concatenate([nominal.torque(t), np.zeros((n_s, n_f))], axis=1)[:, limited]
+    scale = np.tile(scale_in[limited], n_s)
+    MN = M.reshape(-1, n_c) @ N  # rows (k, input)
+    # normalised rows: ±(u_n + M (c0 + N z))/L ≤ 1  →  G z ≤ h
+    G = np.vstack([MN / scale[:, None], -MN / scale[:, None]])
+    base = (u_n.reshape(-1) + M.reshape(-1, n_c) @ c0) / scale
     h = np.concatenate([1.0 - base, 1.0 + base])
+    any_limit = L is not None or L_F is not None
 
     least_peak, message = float("nan"), ""
     feasible = True
@@ -248,31 +372,37 @@ def plan_slew(
             raise FieldError("objective", message)  # an LP without solution: a bug, not input
         z = z_lp
         feasible = L is None or least_peak <= 1.0
-    elif L is not None and np.max(G @ z - h) > 0.0:
-        f0 = max(float(0.5 * z @ P @ z + q @ z + 0.5 * c0 @ H @ c0), 1e-300)
-        res = minimize(
-            lambda y: (0.5 * y @ P @ y + q @ y) / f0,
-            z,
-            jac=lambda y: (P @ y + q) / f0,
-            constraints=[{"type": "ineq", "fun": lambda y: h - G @ y, "jac": lambda y: -G}],
-            method="SLSQP",
-            options={"maxiter": 500, "ftol": 1e-12},
-        )
-        z, message = res.x, f"SLSQP: {res.message}"
+    elif any_limit and np.max(G @ z - h) > 0.0:
+        f0 = max(float(0.5 * z @ P @ z + q @ z + 0.5 * c0 @ Hs @ c0), 1e-300)
+
+        def qp(z_start: FloatArray) -> tuple[FloatArray, str]:
+            res = minimize(
+                lambda y: (0.5 * y @ P @ y + q @ y) / f0,
+                z_start,
+                jac=lambda y: (P @ y + q) / f0,
+                constraints=[{"type": "ineq", "fun": lambda y: h - G @ y, "jac": lambda y: -G}],
+                method="SLSQP",
+                options={"maxiter": 500, "ftol": 1e-12},
+            )
+            return _polish(P, q, G, h, res.x), f"SLSQP: {res.message}"
+
+        z, message = qp(z)
         if np.max(G @ z - h) > 1e-6:
-            feasible = False
-            _, least_peak, lp_message = _least_peak(G, np.concatenate([-base, base]), N.shape[1])
+            z_lp, least_peak, lp_message = _least_peak(G, np.concatenate([-base, base]), N.shape[1])
             message += f"; {lp_message}: {least_peak:.4g} × the limit"
+            if z_lp is not None and least_peak <= 1.0:
+                # feasible after all: SLSQP again from the least-peak point, inside the limits
+                z, again = qp(z_lp)
+                message += f"; from the least-peak point, {again}"
+            feasible = bool(np.max(G @ z - h) <= 1e-6)
     else:
         message = "unconstrained optimum (closed form)"
 
-    c = c0 + N @ z
+    c = D * (c0 + N @ z)
     grad = P @ z + q
     slack = h - G @ z
     active_rows = (
-        np.flatnonzero(slack <= ACTIVE_TOL)
-        if (L is not None and feasible)
-        else np.zeros(0, dtype=int)
+        np.flatnonzero(slack <= ACTIVE_TOL) if (any_limit and feasible) else np.zeros(0, dtype=int)
     )
     lam = np.zeros(0)
     if objective == "energy" and len(active_rows):
@@ -284,11 +414,16 @@ def plan_slew(
         kkt = float(np.linalg.norm(grad) / max(float(np.linalg.norm(q)), 1e-300))
     else:
         kkt = float("nan")  # an LP optimum: HiGHS's own optimality certificate
+    c_tau, d = c[: 3 * n_b], c[3 * n_b :]
     shaped = ShapedSlew(
         nominal,
-        c.reshape(3, n_b),
+        c_tau.reshape(3, n_b),
         J,
-        float(np.linalg.norm(X @ (c - c_prev) - r) / max(float(np.linalg.norm(r)), 1e-300)),
+        float(
+            np.linalg.norm(terminal.X @ (c - c_prev) - r) / max(float(np.linalg.norm(r)), 1e-300)
+        ),
+        terminal.force_channels,
+        d.reshape(n_f, n_b) if n_f else None,
     )
     fine = np.linspace(0.0, T, 4 * (n_s - 1) + 1)
     peaks = np.abs(shaped.torque(fine)).max(axis=0)
@@ -306,12 +441,10 @@ def plan_slew(
         terminal_residual=shaped.residual,
         rank=rank,
         message=message,
+        torque_energy=float(c_tau @ H_tau @ c_tau),
+        peak_forces=np.abs(shaped.forces(fine)).max(axis=0) if n_f else np.zeros(0),
+        force_limit=L_F,
     )
-
-
-def _js_c0(J: FloatArray, S: FloatArray, c0: FloatArray) -> FloatArray:
-    """(J S(t_k) c₀) flattened over (k, a)."""
-    return np.einsum("ab,kbc,c->ka", J, S, c0).reshape(-1)
 
 
 class PlannedTrajectory:
@@ -347,6 +480,8 @@ class PlannedTrajectory:
         self.plan = shaped
         self.duration = float(shaped.duration)
         self.target = shaped.target
+        #: the planned point forces, flown with the torque (empty for torquers alone)
+        self.force_channels = shaped.force_channels
         h = float(config.dt)
         run_config = replace(config, duration=h * (int(np.ceil(self.duration / h)) + 1))
         run = simulate(
@@ -379,6 +514,10 @@ class PlannedTrajectory:
     def torque(self, t: npt.ArrayLike) -> FloatArray:
         return self.plan.torque(t)
 
+    def forces(self, t: npt.ArrayLike) -> FloatArray:
+        """The planned point forces (..., n_F), N."""
+        return self.plan.forces(t)
+
     def elastic(self, t: npt.ArrayLike) -> FloatArray:
         """[η, η̇] of the design modes along the plan (..., 2n)."""
         return np.asarray(self._elastic(self._held(t)), float)
@@ -396,6 +535,9 @@ def planned_slew(
     iterations: int = 4,
     tolerance: float = 1e-6,
     peak_margin: float = 0.02,
+    forces: Sequence[str] = (),
+    force_limit: float | None = None,
+    force_weight: float = 1.0,
 ) -> PlannedSlew:
     r"""The planned slew by successive linearisation (module docstring): :func:`plan_slew` on
     the conditions along the rigid nominal, then along the planned trajectory itself until the
@@ -422,6 +564,12 @@ def planned_slew(
         With ``objective="peak"``: the least peak of the first linearisation (the LP) is
         relaxed by this fraction and the energy minimised within it at every step (an LP
         vertex jumps between linearisations, and the iteration would not settle).
+    forces : sequence of str
+        Force channels of the plants (``force_<node><AXIS>``) planned beside the torque
+        (:mod:`~flexsat.design.slew_shaping`, "Point forces as planned inputs"); empty for
+        torquers alone.
+    force_limit, force_weight
+        As :func:`plan_slew`.
     """
     from dataclasses import replace
 
@@ -432,16 +580,30 @@ def planned_slew(
         raise FieldError("tolerance", f"must be finite and > 0, got {tolerance!r}")
     if not (np.isfinite(peak_margin) and peak_margin >= 0.0):
         raise FieldError("peak_margin", f"must be finite and >= 0, got {peak_margin!r}")
-    terminal = terminal_map(truth, design_plant, nominal, config, n_basis)
-    plan = plan_slew(terminal, nominal, objective, torque_limit, n_samples)
+    forces = tuple(forces)
+    terminal = terminal_map(truth, design_plant, nominal, config, n_basis, forces=forces)
+    plan = plan_slew(
+        terminal, nominal, objective, torque_limit, n_samples, None, force_limit, force_weight
+    )
     if objective == "peak" and plan.feasible:
         # the least peak, then the least energy within it (a vertex of the LP jumps between
         # linearisations; the energy within a fixed limit does not)
         limit = plan.least_peak * (1.0 + peak_margin)
         torque_limit = limit * (plan.torque_limit if plan.torque_limit is not None else 1.0)
+        force_limit = None if plan.force_limit is None else limit * plan.force_limit
         least = plan.least_peak
         plan = replace(
-            plan_slew(terminal, nominal, "energy", torque_limit, n_samples), least_peak=least
+            plan_slew(
+                terminal,
+                nominal,
+                "energy",
+                torque_limit,
+                n_samples,
+                None,
+                force_limit,
+                force_weight,
+            ),
+            least_peak=least,
         )
     r0 = float(np.linalg.norm(terminal.target))
     history = [r0]
@@ -449,13 +611,18 @@ def planned_slew(
         if not plan.feasible:
             break
         trajectory = PlannedTrajectory(plan, design_plant, config)
-        terminal = terminal_map(truth, design_plant, trajectory, config, n_basis, rigid=True)
+        terminal = terminal_map(
+            truth, design_plant, trajectory, config, n_basis, rigid=True, forces=forces
+        )
         history.append(float(np.linalg.norm(terminal.target)))
         if history[-1] <= tolerance * r0 or step == iterations:
             break
         least = plan.least_peak
+        start = plan.shaped.coefficients
+        if plan.shaped.force_coefficients is not None:
+            start = np.vstack([start, plan.shaped.force_coefficients])
         plan = plan_slew(
-            terminal, nominal, "energy", torque_limit, n_samples, start=plan.shaped.coefficients
+            terminal, nominal, "energy", torque_limit, n_samples, start, force_limit, force_weight
         )
         plan = replace(plan, least_peak=least if np.isnan(plan.least_peak) else plan.least_peak)
     return replace(plan, objective=objective, iterates=tuple(history))

@@ -54,6 +54,7 @@ from flexsat.analysis.sampled_sensitivity import (
     terminal_energy,
     terminal_error,
 )
+from flexsat.design.describe import DesignFeature, sorted_poles
 from flexsat.design.optimization_problem import (
     Constraint,
     DesignProblem,
@@ -121,6 +122,26 @@ class CantileverTube:
         omega = c * sq
         domega = c / (8.0 * sq) * np.array([-(D - 2 * t), D - t])
         return {"mass": (mass, dmass), "omega": (omega, domega)}
+
+    def describe(self, x: FloatArray) -> dict[str, DesignFeature]:
+        """The tube's first bending frequency (Hz, Euler–Bernoulli, module notes) and its
+        section (wall, outer diameter, I/A) at ``x`` = (t, D)."""
+        t, D = float(x[0]), float(x[1])
+        omega = self.responses(np.array([t, D]))["omega"][0]
+        return {
+            "first bending frequency": DesignFeature(
+                "structure",
+                np.array([omega / (2 * np.pi)]),
+                "Hz",
+                note="clamped-free Euler–Bernoulli tube, (β₁L)² √(EI/(ρA)) / (2π L²)",
+            ),
+            "I/A": DesignFeature(
+                "structure",
+                np.array([(D**2 + (D - 2 * t) ** 2) / 16.0]),
+                "m**2",
+                note="(D² + (D − 2t)²)/16 of the thin-walled tube",
+            ),
+        }
 
     def problem(self) -> DesignProblem:
         (tl, tu), (dl, du) = self.thickness_bounds, self.diameter_bounds
@@ -496,3 +517,57 @@ class HubBoomCodesign:
                 ),
             ),
         )
+
+    def describe(self, x: FloatArray) -> dict[str, DesignFeature]:
+        """The design ``x`` = (t, D) as a structure and a controller: the elastic frequencies
+        and the rigid inertia of the half-model, and the LQ regulator of the modal plant (the
+        plant :meth:`responses` costs) with its gain K (u = −K x, x = (η, η̇), η the modal
+        coordinates of the rigid mode and the mass-normalised elastic modes) and its
+        closed-loop poles eig(A − B K)."""
+        t, D = float(x[0]), float(x[1])
+        s = self.structure(t, D)
+        group = tuple(range(self.elements))
+        params = [TubeSection("thickness", group, D, t), TubeSection("outer_diameter", group, D, t)]
+        ne = self.elastic_modes
+        d = fe_modal_derivatives(s, params, list(range(1, ne + 1)), rigid_body_modes=1)
+        asm = d.assembly
+        r = np.zeros(asm.n_dofs)
+        for node, dof in asm.dofs:
+            r[asm.index(node, dof)] = 1.0 if dof == "rz" else (self.length * node / self.elements)
+        Jt = float(r @ (asm.M @ r))
+        phi = np.column_stack([r / np.sqrt(Jt), d.modes])
+        omega = np.concatenate([[0.0], d.omegas])
+        hub, tip = asm.index(0, "rz"), asm.index(self.elements, "uy")
+        A, B, C = self._plant(omega, phi, hub, tip)
+        Q = C.T @ np.diag(self.weights) @ C
+        x0 = np.zeros(2 * (ne + 1))
+        x0[0] = self.initial_angle * np.sqrt(Jt)
+        lq = lq_cost_gradient(A, B, Q, np.array([[self.control_weight]]), np.outer(x0, x0))
+        K = np.asarray(lq.K, dtype=float)[0]
+        poles = sorted_poles(np.linalg.eigvals(A - B @ lq.K))
+        coords = ["η0 (rigid)", *(f"η{i}" for i in range(1, ne + 1))]
+        return {
+            "elastic frequencies": DesignFeature(
+                "structure",
+                d.frequencies_hz,
+                "Hz",
+                labels=tuple(f"mode {i}" for i in range(1, ne + 1)),
+                note="FE half-model (one boom on J_h / booms), pinned hub",
+            ),
+            "rigid inertia": DesignFeature(
+                "structure",
+                np.array([Jt]),
+                "kg*m**2",
+                note="rᵀ M r of the half-model about the hub axis",
+            ),
+            "LQ gain": DesignFeature(
+                "control",
+                K,
+                "",
+                labels=(*coords, *(f"rate of {c}" for c in coords)),
+                note="u = −K x on the modal state (mass-normalised coordinates)",
+            ),
+            "closed-loop poles": DesignFeature(
+                "control", poles, "1/s", note="eig(A − B K) of the modal plant"
+            ),
+        }

@@ -44,10 +44,21 @@ mrad, 4,400:1, 19 kN m.
 The terminal conditions are built by :func:`terminal_map` (also along any planned trajectory,
 with the rigid rows of the target), which :mod:`flexsat.design.planned_slew` optimises over:
 least energy or least peak within torque limits, by successive linearisation.
+
+Point forces as planned inputs. Given force channels of the plant (``force_<node><AXIS>``,
+a force :math:`F_i` along body axis :math:`e_i` at node :math:`k_i`), each is planned as a
+sine series of its own, :math:`F_i(t) = \sum_j d_{ij}\sin(j\pi t/T)` (N, zero at 0 and T);
+its columns of X are those of the forces' columns of B(t) in the same integral. The model is
+the plant's (:class:`~flexsat.dynamics.flexible_spacecraft.FlexibleSpacecraft`): a force
+loads the modes through the node's translational shapes, :math:`\Phi_{t,k_i}^T e_i F_i`, and
+the hub through its moment about the centre of mass, :math:`(r_{k_i} - c)\times e_i F_i`
+(its line of action through the node, fixed in the body axes); its net translation is not
+modelled (the design plant has none, and free-free elastic modes do not couple to it).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -81,12 +92,19 @@ class ShapedSlew:
         J, kg m².
     residual : float
         Relative residual of the linear terminal conditions (least squares).
+    force_channels : tuple of str
+        Planned point forces (plant channels ``force_<node><AXIS>``); empty for torquers
+        alone.
+    force_coefficients : (n_F, n_b) array, optional
+        d of F_i(t) (N) per force and sine (module docstring); None without forces.
     """
 
     nominal: ThreeAxisSlew
     coefficients: FloatArray
     inertia: FloatArray
     residual: float
+    force_channels: tuple[str, ...] = ()
+    force_coefficients: FloatArray | None = None
 
     @property
     def duration(self) -> float:
@@ -108,6 +126,17 @@ class ShapedSlew:
         """τ_n(t) + J v(t), N m."""
         return self.nominal.torque(t) + self.correction(t) @ self.inertia.T
 
+    def forces(self, t: npt.ArrayLike) -> FloatArray:
+        """The planned point forces F(t) (..., n_F), N, in the order of ``force_channels``;
+        zero outside [0, T]."""
+        t = np.asarray(t, float)
+        d = self.force_coefficients
+        if d is None or not self.force_channels:
+            return np.zeros(t.shape + (0,))
+        s = np.clip(t, 0.0, self.duration)
+        basis = np.sin(s[..., None] * (np.pi / self.duration) * np.arange(1, d.shape[1] + 1))
+        return np.where(((t >= 0.0) & (t <= self.duration))[..., None], basis @ d.T, 0.0)
+
 
 @dataclass(frozen=True, eq=False)
 class TerminalMap:
@@ -116,8 +145,9 @@ class TerminalMap:
 
     Attributes
     ----------
-    X : (6 + 2n, 3 n_b) array
-        δX(T) per coefficient (rad, rad/s, modal units) on the design model.
+    X : (6 + 2n, (3 + n_F) n_b) array
+        δX(T) per coefficient (rad, rad/s, modal units) on the design model: the torque
+        sines axis by axis, then the force sines force by force.
     target : (6 + 2n,) array
         [0₆; −η_ol(T); −η̇_ol(T)].
     inertia : (3, 3) array
@@ -126,6 +156,8 @@ class TerminalMap:
         T, s.
     n_basis : int
         Sines per axis.
+    force_channels : tuple of str
+        The planned forces (module docstring), in the order of their columns.
     """
 
     X: FloatArray
@@ -133,6 +165,11 @@ class TerminalMap:
     inertia: FloatArray
     duration: float
     n_basis: int
+    force_channels: tuple[str, ...] = ()
+
+    @property
+    def n_forces(self) -> int:
+        return len(self.force_channels)
 
     def basis(self, t: npt.ArrayLike) -> FloatArray:
         """S(t) (..., 3, 3 n_b): v(t) = S(t) c (zero outside [0, T])."""
@@ -143,6 +180,17 @@ class TerminalMap:
             s.shape + (3, 3 * self.n_basis)
         )
 
+    def force_basis(self, t: npt.ArrayLike) -> FloatArray:
+        """S_F(t) (..., n_F, n_F n_b): F(t) = S_F(t) d, d the force coefficients flattened
+        force by force (zero outside [0, T])."""
+        s = np.clip(np.asarray(t, float), 0.0, self.duration)
+        sines = np.sin(s[..., None] * (np.pi / self.duration) * np.arange(1, self.n_basis + 1))
+        sines = np.where(((s > 0.0) & (s < self.duration))[..., None], sines, 0.0)
+        n_f = self.n_forces
+        return np.einsum("...j,ab->...abj", sines, np.eye(n_f)).reshape(
+            s.shape + (n_f, n_f * self.n_basis)
+        )
+
 
 def terminal_map(
     truth: FlexibleSpacecraft,
@@ -151,6 +199,7 @@ def terminal_map(
     config: SimConfig,
     n_basis: int = 30,
     rigid: bool = False,
+    forces: Sequence[str] = (),
 ) -> TerminalMap:
     """The terminal conditions X c = target of the correction of ``nominal`` (module
     docstring): X by RK4 on the control grid of ``config`` along the nominal linearised on
@@ -163,7 +212,10 @@ def terminal_map(
     :func:`~flexsat.control.trajectory_linearization.attitude_error`): the conditions of a
     correction of a nominal that does not end on the target at rest (a planned slew's
     successive linearisation, :mod:`flexsat.design.planned_slew`); without, zero (the rigid
-    nominal ends there on the rigid body).
+    nominal ends there on the rigid body). ``forces`` names force channels of
+    ``design_plant`` planned beside the torque (module docstring): their sine columns follow
+    the torque's in X. A nominal that carries planned forces of its own (``forces(t)``,
+    ``force_channels``) is flown with them.
 
     Raises
     ------
@@ -197,13 +249,15 @@ def terminal_map(
     )
     target = np.concatenate([start, -elastic[:n], -elastic[truth.n_modes : truth.n_modes + n]])
 
-    lin = TrajectoryLinearization(design_plant, nominal)
+    lin = TrajectoryLinearization(design_plant, nominal, forces=tuple(forces))
     times = np.linspace(0.0, T, 2 * n_steps + 1)
     A, B = lin.jacobians(times)
     basis = np.sin(times[:, None] * (np.pi / T) * np.arange(1, n_basis + 1))  # (2K+1, n_b)
-    # inputs of every basis function at once: U[k] (3, 3 n_b), axis a's sines in block a
-    U = np.einsum("kj,ab->kabj", basis, np.eye(3)).reshape(len(times), 3, 3 * n_basis)
-    X = np.zeros((lin.n_states, 3 * n_basis))
+    # inputs of every basis function at once: U[k] (3 + n_F, (3 + n_F) n_b), input a's sines
+    # in block a (the torque's per normalized torque, B's torque columns carrying J)
+    m = lin.n_inputs
+    U = np.einsum("kj,ab->kabj", basis, np.eye(m)).reshape(len(times), m, m * n_basis)
+    X = np.zeros((lin.n_states, m * n_basis))
     for k in range(n_steps):  # RK4: the Jacobians at t_k, t_k + h/2, t_k + h
         i = 2 * k
         k1 = A[i] @ X + B[i] @ U[i]
@@ -211,7 +265,7 @@ def terminal_map(
         k3 = A[i + 1] @ (X + 0.5 * h * k2) + B[i + 1] @ U[i + 1]
         k4 = A[i + 2] @ (X + h * k3) + B[i + 2] @ U[i + 2]
         X = X + (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
-    return TerminalMap(X, target, np.asarray(lin.inertia, float), T, n_basis)
+    return TerminalMap(X, target, np.asarray(lin.inertia, float), T, n_basis, lin.inputs[1:])
 
 
 def modal_cancelling_torque(evaluation: SlewEvaluation, n_basis: int = 30) -> ShapedSlew:

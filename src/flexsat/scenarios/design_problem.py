@@ -27,18 +27,18 @@ Pareto front is :func:`flexsat.design.pareto.run_front` of the problem as writte
 variables and constraints; the objective is the front's primary response, ``pareto.secondary``
 the other), a batch on dask into a zarr store that a second run resumes; the report's front is
 :func:`~flexsat.design.pareto.front_table` of it. ``metrics.json`` holds one record per
-optimiser (objective, responses, design, KKT residual, active set, multipliers) and one per
-front point.
+optimiser (objective, responses, design, KKT residual, active set, multipliers, its iteration
+history and, where the problem describes its designs, their modes, gains and poles), one for
+the start and one per front point; the page is drawn by :mod:`flexsat.report.design_problem`.
 """
 
 from __future__ import annotations
 
 import hashlib
-import html
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, ClassVar, Literal, Self
+from typing import TYPE_CHECKING, Annotated, Any, ClassVar, Literal, Self
 
 import numpy as np
 import xarray as xr
@@ -59,6 +59,9 @@ from flexsat.scenarios.errors import Problem, ScenarioError, locate
 from flexsat.scenarios.fields import Document, SchemaSection, in_unit, integer_in
 from flexsat.scenarios.kind import Run, ScenarioKind
 from flexsat.units import FloatArray, to_si
+
+if TYPE_CHECKING:
+    from flexsat.report.interactive import Plot
 
 __all__ = [
     "REFERENCE_PROBLEMS",
@@ -347,7 +350,11 @@ class DesignResult(ReportedResult):
         ]
 
     def metrics_records(self) -> list[dict[str, Any]]:
-        return self.optimum_records() + self.front_records()
+        """The optima (with their iteration histories and described designs), the start, and
+        the front (:mod:`flexsat.report.design_problem`)."""
+        from flexsat.report.design_problem import optimum_data, start_record
+
+        return [*optimum_data(self), start_record(self), *self.front_records()]
 
     def console_table(self) -> ResultTable:
         """The optima, one column per optimiser (the front is in the report)."""
@@ -375,68 +382,24 @@ class DesignResult(ReportedResult):
             problem=self.scenario.problem,
             pareto_store=self.store or "",
         )
-        return ds
+        from flexsat.report.design_problem import history_dataset
+
+        return ds.merge(history_dataset(self))
 
     def figures(self, folder: Path, ds: xr.Dataset) -> list[str]:
-        """The Pareto front (f₂ against f₁, the optimum marked) and the trade rate λ_ε."""
-        if self.front is None or self.scenario.pareto is None:
-            return []
-        from matplotlib.figure import Figure
+        from flexsat.report.design_problem import draw_figures
 
-        units = dict(self.configured.units)
-        f1, f2 = self.scenario.objective, self.scenario.pareto.secondary
-        fig = Figure(figsize=(9, 3.4), layout="constrained")
-        ax, rate = fig.subplots(1, 2)
-        ax.plot(self.front["secondary"], self.front["primary"], "o-", ms=3, label="front")
-        best = self.optima[0]
-        r = self.configured.responses(best.x)
-        ax.plot(r[f2][0], r[f1][0], "s", color="C3", label=f"optimum ({best.method})")
-        ax.set(xlabel=f"{f2} ({units[f2] or '-'})", ylabel=f"{f1} ({units[f1] or '-'})")
-        ax.set_title("Pareto front")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize="small")
-        if np.isfinite(self.front["epsilon_multiplier"]).any():
-            rate.semilogy(self.front["secondary"], self.front["epsilon_multiplier"], "o-", ms=3)
-            rate.set(xlabel=f"{f2} ({units[f2] or '-'})", ylabel="λ_ε = −d f₁*/dε")
-            rate.set_title("trade rate (ε-constraint multiplier)")
-            rate.grid(alpha=0.3)
-        else:
-            rate.set_axis_off()
-        fig.savefig(folder / "pareto_front.png", dpi=100)
-        return ["pareto_front.png"]
+        return draw_figures(self, folder)
 
     def sections(self, ds: xr.Dataset, figures: list[str]) -> str:
-        esc = html.escape
+        from flexsat.report.design_problem import sections
 
-        def table(records: list[dict[str, Any]], title: str) -> str:
-            if not records:
-                return ""
-            keys = [k for k in records[0] if k != "run"]
-            head = "".join(f"<th>{esc(k)}</th>" for k in ["", *keys])
-            body = "".join(
-                "<tr>"
-                + f"<td>{esc(str(r['run']))}</td>"
-                + "".join(f"<td>{esc(_fmt(r.get(k)))}</td>" for k in keys)
-                + "</tr>"
-                for r in records
-            )
-            return f"<h2>{esc(title)}</h2><table><tr>{head}</tr>{body}</table>"
+        return sections(self, figures)
 
-        note = (
-            "<p>KKT residual: the largest of stationarity, primal, dual and complementarity "
-            "residuals in scaled units (minimisation convention, multipliers >= 0 for "
-            "g <= 0).</p>"
-        )
-        out = table(self.optimum_records(), "Optimum") + note
-        if self.front is not None and self.scenario.pareto is not None:
-            p = self.scenario.pareto
-            out += table(
-                self.front_records(),
-                f"Pareto front: {self.scenario.objective} against {p.secondary} "
-                f"({p.scalarisation}, {p.points} levels x {p.starts} starts)",
-            )
-        images = "".join(f'<figure><img src="{esc(f)}" alt="{esc(f)}"></figure>' for f in figures)
-        return out + images
+    def plots(self, ds: xr.Dataset) -> list[Plot]:
+        from flexsat.report.design_problem import plots
+
+        return plots(self)
 
 
 def _fmt(value: Any) -> str:

@@ -42,7 +42,13 @@ perturbation law designed along the planned trajectory::
 
 ``basis`` sines per axis (default 30), ``objective`` ``energy`` or ``peak``, ``torque_limit``
 on every axis (optional), ``samples`` where the limit holds (default 16 × basis + 1),
-``iterations`` relinearisations (default 4). The plan's numbers (peak torques, active limits
+``iterations`` relinearisations (default 4). ``forces`` (``none``, ``all`` or a list such as
+``[66Z, 60Z]``, the plant's force actuators as the run's ``forces`` names them) plans point
+forces beside the torque, each its own sine series, with ``force_limit`` on every force
+(optional; required with ``objective: peak``, together with ``torque_limit``) and
+``force_weight`` w_F (m², default 1: the energy is ∫‖Δτ‖² + w_F‖F‖² dt). Flown with the
+feedback on top, the run's own ``forces`` must include the planned ones (the law adds its
+force perturbations to the plan's). The plan's numbers (peak torques, active limits
 and their multipliers, the KKT residual, the terminal residual by iteration, or the least peak
 when the limit cannot be met) are in the result's notes.
 
@@ -107,13 +113,18 @@ from flexsat.scenarios.fields import (
 )
 from flexsat.scenarios.kind import Run, ScenarioKind, Simulation
 from flexsat.scenarios.simulation import ChannelSensorSpec, SimulationSettings, target_quaternion
+from flexsat.scenarios.slew_planned import (
+    PlannedShapingSpec,
+    force_channels,
+    plan_for_run,
+    plan_note,
+)
 from flexsat.sim.slew_goals import euler_angle_error
 
 if TYPE_CHECKING:
     import xarray as xr
 
     from flexsat.control.base import Controller
-    from flexsat.design.planned_slew import PlannedSlew
     from flexsat.dynamics.flexible_spacecraft import FlexibleSpacecraft
     from flexsat.maneuvers.three_axis_slew import ThreeAxisSlew
     from flexsat.report.interactive import Plot
@@ -240,20 +251,6 @@ class SlewWeightsSpec(SchemaSection):
     force: Weights | None = None
 
 
-class PlannedShapingSpec(SchemaSection):
-    """A torque history planned over the whole maneuver (:mod:`flexsat.design.planned_slew`):
-    the nominal plus the sine-series correction bringing the design modes to rest at T at the
-    least energy (or peak torque) within the torque limit."""
-
-    kind: Literal["planned"]
-    basis: Annotated[int, integer_in(1, 200)] = 30
-    objective: Literal["energy", "peak"] = "energy"
-    torque_limit: Annotated[float | None, in_unit("N*m", positive=True)] = None
-    samples: Annotated[int | None, integer_in(2, 100_000, optional=True)] = None
-    iterations: Annotated[int, integer_in(0, 20)] = 4
-    feedback: bool = True
-
-
 class SlewRunSpec(SchemaSection):
     """One closed-loop run: its weights, shaping, forces and feedforward (or a planned torque
     history, flown alone or under the feedback)."""
@@ -297,8 +294,8 @@ class SlewRunSpec(SchemaSection):
             if not self.shaping.feedback and (self.forces != "none" or self.decouple):
                 raise FieldError(
                     "forces",
-                    "a planned torque flown alone uses the torquers only (the plan "
-                    "shapes the torque); give shaping.feedback: true for forces",
+                    "a plan flown alone has no feedback forces (plan them with "
+                    "shaping.forces, or give shaping.feedback: true)",
                 )
             if "feedforward" in self.model_fields_set and self.feedforward != "none":
                 raise FieldError(
@@ -497,26 +494,7 @@ def _weights(
 
 def _forces(run: SlewRunSpec, index: int, plant: FlexibleSpacecraft) -> list[str]:
     """The run's force channels, by the plant's names (``69X`` -> ``force_69X``)."""
-    available = [c.name for c in plant.inputs if c.name.startswith("force_")]
-    if run.forces == "none":
-        return []
-    if run.forces == "all":
-        return available
-    names: list[str] = []
-    for name in run.forces:
-        channel = name if name.startswith("force_") else f"force_{name}"
-        if channel not in available:
-            raise ScenarioError(
-                [
-                    Problem(
-                        f"runs{item_path(index, run.label)}.forces",
-                        f"{name!r} is not a force of the plant (its forces: "
-                        f"{', '.join(c[len('force_') :] for c in available)})",
-                    )
-                ]
-            )
-        names.append(channel)
-    return names
+    return force_channels(run.forces, f"runs{item_path(index, run.label)}.forces", plant)
 
 
 def _case_plant(scenario: SlewScenario) -> FlexibleSpacecraft:
@@ -690,42 +668,6 @@ def nominal_design(scenario: SlewScenario) -> dict[str, Any]:
     return entry
 
 
-def _plan(
-    run: SlewRunSpec,
-    plant: FlexibleSpacecraft,
-    kept: dict[str, Any],
-    nominal: ThreeAxisSlew,
-    config: SimConfig,
-) -> PlannedSlew:
-    """The run's planned torque history on the case's plant (kept in ``kept["plans"]``)."""
-    from flexsat.design.planned_slew import planned_slew
-
-    plans = kept.setdefault("plans", {})
-    spec = run.shaping
-    assert spec is not None
-    if run.label not in plans:
-        try:
-            plans[run.label] = planned_slew(
-                plant,
-                kept["design_plant"],
-                nominal,
-                config,
-                spec.basis,
-                spec.objective,
-                spec.torque_limit,
-                spec.samples,
-                spec.iterations,
-            )
-        except FieldError as exc:
-            names = {"n_basis": "basis", "n_samples": "samples", "config": "simulation"}
-            field = names.get(exc.field, exc.field)
-            raise FieldError(
-                field if field == "simulation" else f"shaping.{field}", exc.rule
-            ) from None
-    plan: PlannedSlew = plans[run.label]
-    return plan
-
-
 def _laws(
     scenario: SlewScenario,
     plant: FlexibleSpacecraft,
@@ -748,7 +690,7 @@ def _laws(
         try:
             reference: Any = nominal
             if run.shaping is not None:
-                plan = _plan(run, plant, kept, nominal, config)
+                plan = plan_for_run(run, index, plant, kept, nominal, config)
                 if not run.shaping.feedback:
                     laws[run.label] = NominalTorque(plan, dt)
                     continue
@@ -789,40 +731,6 @@ def _laws(
     if problems:
         raise ScenarioError(problems)
     return laws
-
-
-def _plan_note(label: str, plan: PlannedSlew, given_limit: float | None) -> str:
-    """What a planned run's optimum is and which constraint binds (for the report);
-    ``given_limit`` the run's ``shaping.torque_limit``."""
-    peaks = ", ".join(f"{a} {p:,.0f}" for a, p in zip("xyz", plan.peak_torques, strict=True))
-    text = (
-        f"{label}: torque planned over the maneuver ({plan.objective} objective, "
-        f"{plan.shaped.coefficients.shape[1]} sines per axis, {plan.rank} independent terminal "
-        f"conditions); planned peak torques {peaks} N m; terminal residual by iteration "
-        + " → ".join(f"{r:.2g}" for r in plan.iterates)
-        + "."
-    )
-    if plan.torque_limit is not None:
-        limit = float(plan.torque_limit[0])
-        if not plan.feasible:
-            text += (
-                f" The torque limit {limit:,.0f} N m cannot be met: the least peak torque "
-                f"meeting the terminal conditions is {plan.least_peak:.3g} × the limit "
-                f"({plan.least_peak * limit:,.0f} N m); the plan flown is the last iterate."
-            )
-        else:
-            largest = float(plan.multipliers.max()) if plan.multipliers.size else 0.0
-            held = " (the least peak with its margin)" if plan.objective == "peak" else ""
-            text += (
-                f" Torque limit {limit:,.0f} N m{held}: {plan.active} sampled limits active "
-                f"(largest multiplier {largest:.3g} (N m)² s per limit), KKT residual "
-                f"{plan.kkt_residual:.1e}."
-            )
-    if plan.objective == "peak" and plan.feasible and np.isfinite(plan.least_peak):
-        # in units of the given limit, in N m without one (PlannedSlew.least_peak)
-        least = plan.least_peak * (1.0 if given_limit is None else given_limit)
-        text += f" Least peak of the first linearisation: {least:,.0f} N m."
-    return text
 
 
 class SlewKind(ScenarioKind):
@@ -915,7 +823,7 @@ class SlewKind(ScenarioKind):
             ),
         )
         notes += tuple(
-            _plan_note(r.label, kept["plans"][r.label], r.shaping.torque_limit)
+            plan_note(r.label, kept["plans"][r.label], r.shaping.torque_limit)
             for r in scenario.runs
             if r.shaping is not None
         )

@@ -424,7 +424,8 @@ def simulate(
         )
 
     A, B = plant.linear_part()
-    batched = plant_cases != 1
+    # per-case matrices (a dispersed plant, even of one case) are applied case by case
+    batched = np.ndim(A) == 3
     Bt = np.swapaxes(B, -1, -2)
     m, slices = plant.n_inputs, plant.input_slices
     columns = noise_columns(plant)

@@ -88,8 +88,6 @@ FORMAT_VERSION = 1
 RIGID_FREQUENCY = 1e-2
 
 if TYPE_CHECKING:
-    import xarray
-
     import control
     from flexsat.structures.beam import TipMassCantilever
     from flexsat.structures.fem import FEModes
@@ -629,15 +627,19 @@ class ModalModel:
         block so that each variable has one unit. Attributes: ``flexsat_modal_model_version``,
         ``boundary``.
         """
-        write_netcdf(_to_dataset(self), path, encoding=_NO_FILL)
+        from flexsat.structures.io_modal_netcdf import NETCDF_ENCODING, modal_model_dataset
+
+        write_netcdf(modal_model_dataset(self), path, encoding=NETCDF_ENCODING)
 
     @classmethod
     def load(cls, path: str | Path) -> ModalModel:
         """Read a file written by :meth:`save` (validated like any construction)."""
         import xarray as xr
 
+        from flexsat.structures.io_modal_netcdf import modal_model_from_dataset
+
         with xr.open_dataset(Path(path), engine="h5netcdf") as ds:
-            return _from_dataset(ds.load())
+            return modal_model_from_dataset(ds.load())
 
     # --------------------------------------------------------------------------------------------
     # builders
@@ -824,79 +826,3 @@ def hub_appendage_matrices(
     D = np.diag(np.concatenate([[0.0], 2 * z * w]))
     K = np.diag(np.concatenate([[0.0], w**2]))
     return M, D, K
-
-
-# ------------------------------------------------------------------------------------------------
-# netCDF
-_UNITS = {
-    "coordinates": "m",
-    "frequencies": "rad/s",
-    "damping": "1",
-    "translation_shapes": "kg**-0.5",
-    "rotation_shapes": "kg**-0.5/m",
-    "mass_tt": "kg",
-    "mass_tr": "kg*m",
-    "mass_rt": "kg*m",
-    "mass_rr": "kg*m**2",
-    "participation_translation": "kg**0.5",
-    "participation_rotation": "kg**0.5*m",
-    "reference": "m",
-}
-_NO_FILL = {name: {"_FillValue": None} for name in _UNITS}
-
-
-def _to_dataset(model: ModalModel) -> xarray.Dataset:
-    import xarray as xr
-
-    Mr, S, P = model.rigid_mass, model.shapes, model.participation
-    data = {
-        "coordinates": (("node", "axis"), model.coordinates),
-        "frequencies": (("mode",), model.frequencies),
-        "damping": (("mode",), model.damping),
-        "translation_shapes": (("mode", "node", "axis"), S[..., :3]),
-        "rotation_shapes": (("mode", "node", "axis"), S[..., 3:]),
-        "mass_tt": (("axis", "axis_j"), Mr[:3, :3]),
-        "mass_tr": (("axis", "axis_j"), Mr[:3, 3:]),
-        "mass_rt": (("axis", "axis_j"), Mr[3:, :3]),
-        "mass_rr": (("axis", "axis_j"), Mr[3:, 3:]),
-        "participation_translation": (("mode", "axis"), P[:, :3]),
-        "participation_rotation": (("mode", "axis"), P[:, 3:]),
-        "reference": (("axis",), model.reference),
-    }
-    variables = {k: (dims, np.array(v), {"units": _UNITS[k]}) for k, (dims, v) in data.items()}
-    return xr.Dataset(
-        variables,
-        coords={"node": ("node", model.node_ids, {"units": "1", "long_name": "node id"})},
-        attrs={
-            "flexsat_modal_model_version": FORMAT_VERSION,
-            "boundary": model.boundary,
-            "title": "flexsat modal model",
-            "axis": "x y z (global)",
-        },
-    )
-
-
-def _from_dataset(ds: xarray.Dataset) -> ModalModel:
-    version = ds.attrs.get("flexsat_modal_model_version")
-    if version is None:
-        raise FieldError(
-            "path", "not a flexsat modal model (no flexsat_modal_model_version attribute)"
-        )
-    if int(version) != FORMAT_VERSION:
-        raise FieldError(
-            "path", f"flexsat_modal_model_version {version} not supported (reads {FORMAT_VERSION})"
-        )
-    v = {name: ds[name].values for name in _UNITS}
-    return ModalModel(
-        node_ids=ds["node"].values,
-        coordinates=v["coordinates"],
-        frequencies=v["frequencies"],
-        damping=v["damping"],
-        shapes=np.concatenate([v["translation_shapes"], v["rotation_shapes"]], axis=-1),
-        rigid_mass=np.block([[v["mass_tt"], v["mass_tr"]], [v["mass_rt"], v["mass_rr"]]]),
-        participation=np.concatenate(
-            [v["participation_translation"], v["participation_rotation"]], axis=-1
-        ),
-        reference=v["reference"],
-        boundary=str(ds.attrs["boundary"]),
-    )
