@@ -40,6 +40,41 @@ def test_analytic_gradients_match_central_differences(response):
         assert abs(grad[k] - fd) <= ACCEPT * max(abs(fd), abs(value) / x0[k]), (k, grad[k], fd)
 
 
+@pytest.mark.numerics
+@pytest.mark.parametrize("response", HubBoomCodesign.MANEUVER_RESPONSES)
+@pytest.mark.parametrize("x", [(2e-3, 0.04), (1.2e-3, 0.027)], ids=["start", "thin"])
+def test_maneuver_gradients_match_central_differences(response, x):
+    """The sampled slew's metrics (engine run, discrete adjoint, FE chain) against five-point
+    central differences with h = 5e-6 |p|: the terminal metrics of the lightly damped modes
+    vary fast with (t, D) (phase ω_i T of modes up to 400 Hz over T = 3 s: |J⁽⁵⁾| ≲
+    (ω T/|p| · ∂ω/∂p · |p|/ω)⁵ |J|), so the step is small: truncation (5e-6 · 2π·400·3)⁴/30
+    ≈ 4e-8 relative; round-off 1.5 ε_J |J| / h with ε_J ≈ 1e-13 (eigen and DARE solves) is
+    3e-8 |J|/|p| · |p|, both below the 1e-6 bound relative to max(|∂J|, |J| / |p|)."""
+    hb = HubBoomCodesign(maneuver=True)
+    x0 = np.array(x)
+    value, grad = hb.responses(x0)[response]
+    for k in range(2):
+        e = np.zeros(2)
+        e[k] = 1.0
+
+        def f(step, e=e):
+            return hb.responses(x0 + step * e)[response][0]
+
+        fd = central(f, 0.0, 5e-6 * x0[k])
+        assert abs(grad[k] - fd) <= ACCEPT * max(abs(fd), abs(value) / x0[k]), (k, grad[k], fd)
+
+
+def test_maneuver_responses_leave_the_others_unchanged():
+    x = np.array([1.2e-3, 0.027])
+    base = HubBoomCodesign().responses(x)
+    both = HubBoomCodesign(maneuver=True).responses(x)
+    assert set(both) == set(base) | set(HubBoomCodesign.MANEUVER_RESPONSES)
+    for name, (v, g) in base.items():
+        assert both[name][0] == v
+        np.testing.assert_array_equal(both[name][1], g)
+    assert 0 < both["soft_settling"][0] < HubBoomCodesign.maneuver_time
+
+
 def test_the_structural_mass_is_one_tube_boom_and_its_tip_mass():
     # the half model carries one boom: ρ A L plus the tip mass (the hub inertia has no mass)
     hb = HubBoomCodesign()

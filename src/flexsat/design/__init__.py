@@ -95,6 +95,11 @@ _EXPORTS = {
     "CantileverTube": "reference_problems",
     "HubBoomCodesign": "reference_problems",
     "cantilever_tube_optimum": "reference_problems",
+    "LoopGradient": "sampled_loop",
+    "SampledLQLoop": "sampled_loop",
+    "loop_gradient": "sampled_loop",
+    "run_loop": "sampled_loop",
+    "sampled_lq_loop": "sampled_loop",
 }
 
 __all__ = list(_EXPORTS)

@@ -36,16 +36,24 @@ r"""Reference design problems: one with a closed-form optimum, one structure + c
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, ClassVar, NamedTuple
 
 import numpy as np
 from scipy.optimize import brentq
 
 from flexsat.analysis.fe_sensitivity import (
+    FEModalDerivatives,
     TubeSection,
     fe_modal_derivatives,
     fe_parameter_matrices,
 )
 from flexsat.analysis.riccati_sensitivity import chain_gradient, lq_cost_gradient
+from flexsat.analysis.sampled_sensitivity import (
+    smooth_peak,
+    soft_settling,
+    terminal_energy,
+    terminal_error,
+)
 from flexsat.design.describe import DesignFeature, sorted_poles
 from flexsat.design.optimization_problem import (
     Constraint,
@@ -53,15 +61,20 @@ from flexsat.design.optimization_problem import (
     DesignVariable,
     Objective,
 )
+from flexsat.design.sampled_loop import loop_gradient, sampled_lq_loop
 from flexsat.input_checks import FieldError, require_positive_scalar
 from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material, Section
 from flexsat.units import FloatArray
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
 __all__ = [
     "CANTILEVER_BETA1_L",
     "CantileverTube",
     "HubBoomCodesign",
+    "ModalPlant",
     "cantilever_tube_optimum",
 ]
 
@@ -179,6 +192,24 @@ def cantilever_tube_optimum(tube: CantileverTube) -> dict[str, float]:
 
 
 # -- 2. hub with booms -------------------------------------------------------------------------
+class ModalPlant(NamedTuple):
+    """The hub-boom modal plant (A, B, C, Q), ω, their derivative stacks (P, ...) w.r.t. the
+    section dimensions, and the rigid-mode state x₀ of the hub at θ₀ with its derivative."""
+
+    A: FloatArray
+    B: FloatArray
+    C: FloatArray
+    Q: FloatArray
+    omega: FloatArray
+    dA: FloatArray
+    dB: FloatArray
+    dC: FloatArray
+    dQ: FloatArray
+    domega: FloatArray
+    x0: FloatArray
+    dx0: FloatArray
+
+
 @dataclass(frozen=True)
 class HubBoomCodesign:
     """Single-axis hub with tube booms: (t, D) against J_LQ + w_m · mass, f₁ >= f_min.
@@ -198,7 +229,32 @@ class HubBoomCodesign:
     frequency_min_hz : f_min, Hz
     thickness_bounds, diameter_bounds : m
     start : (t, D), m
+    maneuver : also report the sampled slew's metrics (below)
+    control_rate : Hz;  maneuver_time : T, s (a whole number of samples)
+    peak_order : p of the smooth peak torque;  settling_band : b, rad
+    settling_width : w, the relative width of the band's smoothed edge
+
+    With ``maneuver`` the responses also hold the metrics of a slew of the hub from rest at 0
+    to θ_f = θ₀, run on the engine (:func:`flexsat.design.sampled_loop.sampled_lq_loop`)
+    under the discrete LQR law u_k = −K(x_k − x_f) of the ZOH model at ``control_rate``
+    (weights Q h and R h, Q = Cᵀ diag(weights) C as for J_LQ) over T: ``residual_energy``
+    ½Σ(η̇ᵢ² + ωᵢ²ηᵢ²) of the elastic modes at T (J), ``pointing_error_sq`` (θ_hub(T) − θ_f)²
+    (rad²), ``peak_torque`` the p-norm of the torque samples (N m; the true peak lies in
+    [‖u‖_p (NT)^(−1/p), ‖u‖_p]) and ``soft_settling`` the smoothed time outside the band
+    |θ_hub − θ_f| ≤ b (s; :mod:`flexsat.analysis.sampled_sensitivity`). u is the torque on
+    one boom's share J_h / booms of the hub (the half-model). Their gradients come from the
+    discrete adjoint (:func:`flexsat.design.sampled_loop.loop_gradient`) chained through the
+    same ∂A, ∂B, ∂C, ∂Q, ∂x₀ stacks as J_LQ, plus the metrics' own weights (Ω² in the energy,
+    the hub row of the modes in θ_hub).
     """
+
+    #: the responses of the sampled slew (with ``maneuver``)
+    MANEUVER_RESPONSES: ClassVar[tuple[str, ...]] = (
+        "residual_energy",
+        "pointing_error_sq",
+        "peak_torque",
+        "soft_settling",
+    )
 
     length: float = 1.2
     elements: int = 6
@@ -217,6 +273,12 @@ class HubBoomCodesign:
     thickness_bounds: tuple[float, float] = (0.5e-3, 3e-3)
     diameter_bounds: tuple[float, float] = (10e-3, 60e-3)
     start: tuple[float, float] = (2e-3, 40e-3)
+    maneuver: bool = False
+    control_rate: float = 50.0
+    maneuver_time: float = 3.0
+    peak_order: int = 16
+    settling_band: float = float(np.radians(0.5))
+    settling_width: float = 0.2
     _memo: dict[bytes, dict[str, tuple[float, FloatArray]]] = field(
         default_factory=dict, init=False, repr=False, compare=False
     )
@@ -233,8 +295,26 @@ class HubBoomCodesign:
             "initial_angle",
             "mass_weight",
             "frequency_min_hz",
+            "control_rate",
+            "maneuver_time",
+            "settling_band",
+            "settling_width",
         ):
             require_positive_scalar(getattr(self, name), name)
+        steps = self.maneuver_time * self.control_rate
+        if abs(steps - round(steps)) > 1e-9 * max(steps, 1.0):
+            raise FieldError(
+                "maneuver_time", f"must be a whole number of {1 / self.control_rate:g} s samples"
+            )
+        if not isinstance(self.maneuver, bool):
+            raise FieldError("maneuver", f"must be true or false, got {self.maneuver!r}")
+        if (
+            isinstance(self.peak_order, bool)
+            or not isinstance(self.peak_order, int)
+            or self.peak_order < 2
+            or self.peak_order % 2
+        ):
+            raise FieldError("peak_order", f"must be an even integer >= 2, got {self.peak_order!r}")
         for name in ("elements", "booms", "elastic_modes"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -270,7 +350,12 @@ class HubBoomCodesign:
             self._memo[key] = self._evaluate(float(x[0]), float(x[1]))
         return self._memo[key]
 
-    def _evaluate(self, t: float, D: float) -> dict[str, tuple[float, FloatArray]]:
+    def modal_plant(self, x: FloatArray) -> ModalPlant:
+        """The modal plant at design x = (t, D) with its derivative stacks (the J_LQ and
+        maneuver responses are built on it)."""
+        return self._modal(float(x[0]), float(x[1]))[0]
+
+    def _modal(self, t: float, D: float) -> tuple[ModalPlant, FEModalDerivatives]:
         s = self.structure(t, D)
         group = tuple(range(self.elements))
         params = [TubeSection("thickness", group, D, t), TubeSection("outer_diameter", group, D, t)]
@@ -304,15 +389,74 @@ class HubBoomCodesign:
         x0[0] = self.initial_angle * np.sqrt(Jt)  # η₀ with θ_hub = θ₀, elastic modes at rest
         dx0 = np.zeros((P, 2 * N))
         dx0[:, 0] = self.initial_angle * 0.5 / np.sqrt(Jt) * dJt
+        return ModalPlant(A, B, C, Q, omega, dA, dB, dC, dQ, domega, x0, dx0), d
+
+    def _evaluate(self, t: float, D: float) -> dict[str, tuple[float, FloatArray]]:
+        plant, d = self._modal(t, D)
+        A, B, Q, dA, dB, dQ, x0, dx0 = (
+            plant.A,
+            plant.B,
+            plant.Q,
+            plant.dA,
+            plant.dB,
+            plant.dQ,
+            plant.x0,
+            plant.dx0,
+        )
+        P = dA.shape[0]
         X0 = np.outer(x0, x0)
         dX0 = np.stack([np.outer(dx0[k], x0) + np.outer(x0, dx0[k]) for k in range(P)])
         g = lq_cost_gradient(A, B, Q, np.array([[self.control_weight]]), X0)
         dJ = chain_gradient([(g.dA, dA), (g.dB, dB), (g.dQ, dQ), (g.S, dX0)])
-        return {
+        out = {
             "lq_cost": (g.cost, dJ),
             "mass": (d.mass, d.mass_gradient),
             "frequency_hz": (float(d.frequencies_hz[0]), d.frequency_hz_gradient[:, 0]),
         }
+        if self.maneuver:
+            out.update(self._maneuver(plant))
+        return out
+
+    def _maneuver(self, m: ModalPlant) -> dict[str, tuple[float, FloatArray]]:
+        """The sampled slew from rest to θ_f = θ₀ under the discrete LQR law and its metrics
+        with their adjoint gradients (class docstring)."""
+        h = 1.0 / self.control_rate
+        steps = int(round(self.maneuver_time * self.control_rate))
+        n = m.A.shape[0]
+        N = n // 2
+        R = np.array([[self.control_weight * h]])
+        loop = sampled_lq_loop(m.A, m.B, m.Q * h, R, h, steps, np.zeros(n), m.x0)
+        c, dc = m.C[0], m.dC[:, 0, :]  # hub angle θ_hub = cᵀx
+        theta_f = self.initial_angle
+        W = np.zeros((n, n))  # ½η̇ᵀη̇ + ½ηᵀΩ²η of the elastic modes
+        W[np.arange(1, N), np.arange(1, N)] = m.omega[1:] ** 2
+        W[np.arange(N + 1, n), np.arange(N + 1, n)] = 1.0
+        dW = np.zeros((m.domega.shape[0], n, n))
+        dW[:, np.arange(1, N), np.arange(1, N)] = 2 * m.omega[1:] * m.domega[:, 1:]
+        X, U = loop.X, loop.U
+        metrics = {
+            "residual_energy": terminal_energy(X, U, W),
+            "pointing_error_sq": terminal_error(X, U, c, theta_f),
+            "peak_torque": smooth_peak(X, U, self.peak_order),
+            "soft_settling": soft_settling(
+                X, U, c, theta_f, self.settling_band, self.settling_width, h
+            ),
+        }
+        out = {}
+        for name, mv in metrics.items():
+            g = loop_gradient(loop, mv)
+            pairs: list[tuple[npt.ArrayLike, npt.ArrayLike]] = [
+                (g.dA, m.dA),
+                (g.dB, m.dB),
+                (g.dQ * h, m.dQ),
+                (g.dr[None], m.dx0[:, None]),
+            ]
+            if "W" in mv.weights:
+                pairs.append((mv.weights["W"], dW))
+            if "c" in mv.weights:
+                pairs.append((mv.weights["c"][None], dc[:, None]))
+            out[name] = (mv.value, chain_gradient(pairs))
+        return out
 
     def _plant(
         self,

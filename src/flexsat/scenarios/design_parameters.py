@@ -30,6 +30,7 @@ COUNT_LIMITS = {
     "booms": 64,
     "elastic_modes": limits.MAX_MODES,
     "n_modes": limits.MAX_MODES,
+    "peak_order": 64,
 }
 _PAIR_M = ("m", "m")
 
@@ -54,6 +55,11 @@ PARAMETER_UNITS: dict[str, dict[str, str | tuple[str, ...]]] = {
         "thickness_bounds": _PAIR_M,
         "diameter_bounds": _PAIR_M,
         "start": _PAIR_M,
+        "control_rate": "Hz",
+        "maneuver_time": "s",
+        "peak_order": COUNT,
+        "settling_band": "rad",
+        "settling_width": "",
     },
     "cantilever_tube": {
         "length": "m",

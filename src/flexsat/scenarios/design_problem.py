@@ -89,7 +89,15 @@ REFERENCE_PROBLEMS: dict[str, tuple[type, dict[str, str], dict[str, str]]] = {
     "hub_boom_codesign": (
         HubBoomCodesign,
         {"t": "m", "D": "m"},
-        {"lq_cost": "", "mass": "kg", "frequency_hz": "Hz"},
+        {
+            "lq_cost": "",
+            "mass": "kg",
+            "frequency_hz": "Hz",
+            "residual_energy": "J",
+            "pointing_error_sq": "rad**2",
+            "peak_torque": "N*m",
+            "soft_settling": "s",
+        },
     ),
     "cantilever_tube": (CantileverTube, {"t": "m", "D": "m"}, {"mass": "kg", "omega": "rad/s"}),
     "tamu_codesign": (
@@ -279,6 +287,12 @@ class ConfiguredProblem:
             assert scenario.problem is not None  # DesignScenario: problem or model
             kind, var_units, responses = REFERENCE_PROBLEMS[scenario.problem]
             parameters = reference_parameters(scenario.problem, kind, scenario.parameters)
+            named = {scenario.objective, *(c.response for c in scenario.constraints)}
+            if scenario.pareto is not None:
+                named.add(scenario.pareto.secondary)
+            # a reference whose simulated responses cost a run computes them only when named
+            if named & set(getattr(kind, "MANEUVER_RESPONSES", ())):
+                parameters.setdefault("maneuver", True)
             try:
                 reference = kind(**parameters)
             except FieldError as exc:
