@@ -73,6 +73,7 @@ from flexsat.scenarios.models import ModelSection, model_label
 from flexsat.units import FloatArray, to_si
 
 if TYPE_CHECKING:
+    from flexsat.design.pareto import FrontSetup
     from flexsat.report.interactive import Plot
 
 __all__ = [
@@ -481,8 +482,12 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
-def _default_store(scenario: DesignScenario) -> Path:
-    digest = hashlib.sha256(scenario.yaml_text.encode()).hexdigest()[:20]
+def _default_store(scenario: DesignScenario, setup: FrontSetup) -> Path:
+    """The temporary store of a front without ``store:``, named by the document and by the
+    setup it resolves to, so that a second run resumes it while a flexsat whose problem
+    differs (a new field, another default) starts its own instead of being refused."""
+    text = scenario.yaml_text + "\n" + setup.describe()
+    digest = hashlib.sha256(text.encode()).hexdigest()[:20]
     return Path(tempfile.gettempdir()) / f"flexsat-pareto-{digest}.zarr"
 
 
@@ -532,9 +537,6 @@ class DesignKind(ScenarioKind):
         front, store = None, None
         if scenario.pareto is not None:
             p = scenario.pareto
-            path = Path(p.store) if p.store else _default_store(scenario)
-            if not path.is_absolute():
-                path = scenario.folder / path
             try:
                 setup = FrontSetup(
                     configured,
@@ -547,6 +549,9 @@ class DesignKind(ScenarioKind):
                 )
             except FieldError as exc:
                 raise ScenarioError([locate("pareto", exc)]) from None
+            path = Path(p.store) if p.store else _default_store(scenario, setup)
+            if not path.is_absolute():
+                path = scenario.folder / path
 
             def front_run() -> dict[str, FloatArray]:
                 run_front(
