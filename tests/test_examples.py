@@ -64,3 +64,8 @@ def test_the_table_check_fails_on_a_changed_number_word_or_row():
     # a residual at round-off against the row's scale is not a digit the page promises
     row = "| metric | a | b |\n|---|---|---|\n| final | -1.441e-10 | 0.05407 |"
     assert_same_table(row, row.replace("-1.441e-10", "3.2e-11"), "round-off residual")
+    kkt = "| metric | a | b |\n|---|---|---|\n| kkt_residual | 5.1e-09 | 0.0084 |"
+    assert_same_table(kkt, kkt.replace("5.1e-09", "7.7e-10"), "KKT certificate")
+    for changed in (kkt.replace("5.1e-09", "2e-06"), kkt.replace("0.0084", "0.0091")):
+        with pytest.raises(AssertionError):
+            assert_same_table(kkt, changed, "KKT certificate")
