@@ -316,16 +316,21 @@ def run_front(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: Callable[[BatchProgress], None] | None = None,
+    levels: FloatArray | None = None,
 ) -> BatchSummary:
     """Run the front (``points`` levels × ``starts`` starts) as a batch into ``store``.
 
     Case i is level i // starts from start i % starts. Re-running the same call resumes an
     interrupted store; see :func:`flexsat.design.batch_runner.run_batch` for the store, the
-    scheduling and the errors.
+    scheduling and the errors. ``levels``: :func:`front_levels` of the setup, when the caller
+    has them already (they are part of the store's fingerprint).
     """
     if isinstance(starts, bool) or not isinstance(starts, int) or starts < 1:
         raise FieldError("starts", f"must be an integer >= 1, got {starts!r}")
-    levels = front_levels(setup, points)
+    if levels is None:
+        levels = front_levels(setup, points)
+    elif np.shape(levels) != (points,):
+        raise FieldError("levels", f"must be the {points} levels of front_levels")
     table = {
         "level": np.repeat(levels, starts),
         "start": np.tile(np.arange(starts, dtype=float), points),

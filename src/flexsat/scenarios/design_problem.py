@@ -482,13 +482,14 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
-def _default_store(scenario: DesignScenario, setup: FrontSetup) -> Path:
-    """The temporary store of a front without ``store:``, named by the document and by the
-    setup it resolves to, so that a second run resumes it while a flexsat whose problem
-    differs (a new field, another default) starts its own instead of being refused."""
-    text = scenario.yaml_text + "\n" + setup.describe()
-    digest = hashlib.sha256(text.encode()).hexdigest()[:20]
-    return Path(tempfile.gettempdir()) / f"flexsat-pareto-{digest}.zarr"
+def _default_store(scenario: DesignScenario, setup: FrontSetup, levels: FloatArray) -> Path:
+    """The temporary store of a front without ``store:``, named by the document, the setup it
+    resolves to and the front's levels (what the store's fingerprint holds besides), so that a
+    second run resumes it while a flexsat whose problem or anchors differ (a new field, another
+    default, another BLAS kernel's last bits) starts its own instead of being refused."""
+    h = hashlib.sha256((scenario.yaml_text + "\n" + setup.describe()).encode())
+    h.update(np.ascontiguousarray(levels, dtype=np.float64).tobytes())
+    return Path(tempfile.gettempdir()) / f"flexsat-pareto-{h.hexdigest()[:20]}.zarr"
 
 
 class DesignKind(ScenarioKind):
@@ -519,7 +520,7 @@ class DesignKind(ScenarioKind):
         return copy
 
     def plan(self, scenario: DesignScenario) -> Any:
-        from flexsat.design.pareto import FrontSetup, front_table, run_front
+        from flexsat.design.pareto import FrontSetup, front_levels, front_table, run_front
 
         configured = ConfiguredProblem.from_scenario(scenario)
         opt = scenario.optimizer
@@ -549,14 +550,19 @@ class DesignKind(ScenarioKind):
                 )
             except FieldError as exc:
                 raise ScenarioError([locate("pareto", exc)]) from None
-            path = Path(p.store) if p.store else _default_store(scenario, setup)
-            if not path.is_absolute():
-                path = scenario.folder / path
+            given = Path(p.store) if p.store else None
+            if given is not None and not given.is_absolute():
+                given = scenario.folder / given
+            where: list[Path] = []
 
             def front_run() -> dict[str, FloatArray]:
+                levels = front_levels(setup, p.points)
+                path = given if given is not None else _default_store(scenario, setup, levels)
+                where.append(path)
                 run_front(
                     setup,
                     path,
+                    levels=levels,
                     points=p.points,
                     starts=p.starts,
                     base_seed=p.seed,
@@ -567,7 +573,7 @@ class DesignKind(ScenarioKind):
                 return front_table(path, kkt_tol=p.kkt_tol)
 
             front = yield Run("pareto front", front_run, path="pareto")
-            store = str(path)
+            store = str(where[-1])
         return DesignResult(
             scenario,
             scenario.source_label,

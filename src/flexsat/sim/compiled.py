@@ -159,14 +159,18 @@ def own_linear_form(cls) -> bool:
     return form is not None and call is not None and form <= call
 
 
-def run(job: CompiledRun, record_states, law, always_modal: bool = False):
+def run(job: CompiledRun, record_states, law, always_modal: bool = False, dense: bool = False):
     """The run of :func:`~flexsat.sim.engine.simulate` on the compiled loop (module
     docstring); same result, same exceptions. ``always_modal``: in modal coordinates whenever
-    the plant has them, whatever the batch size (:func:`modal_form`)."""
+    the plant has them, whatever the batch size (:func:`modal_form`); ``dense``: never."""
     plant, controller, config = job.plant, job.controller, job.config
     nc, seeds, theta0 = job.nc, job.seeds, job.theta0
     disturbances, substeps, kept = job.disturbances, job.substeps, job.kept
-    a = LoopArguments(job, law, always_modal=always_modal)
+    a = (
+        LoopArguments(job, law, modal=False)
+        if dense
+        else LoopArguments(job, law, always_modal=always_modal)
+    )
     n_t, n, m = a.n_t, a.n, a.m
     batched = plant.n_cases != 1
     forced = a.forced
@@ -265,6 +269,10 @@ def run(job: CompiledRun, record_states, law, always_modal: bool = False):
                     F[c0:c1],
                     stop[c0:c1],
                 )
+            if not (stop >= 0).any():
+                # the modal coordinates passed the bound where the physical state does not
+                # (the bound is the Python loop's, on x): the run is whole, flown dense
+                return run(job, record_states, law, dense=True)
         raise _divergence(a, config, seeds, stop, Ucmd)
     if lean:
         outs, col = {}, 0
