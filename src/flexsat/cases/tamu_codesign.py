@@ -34,20 +34,35 @@ sees a smooth surrogate, the time spent outside the 0.5° band with the band's e
     \tilde t_s(x) = \Delta t \sum_k \tfrac12\Big(1 + \tanh\frac{|\theta_k(x) - \theta_f| - b}
     {2 w b}\Big), \qquad b = 0.5°,\ w = \text{band\_width},
 
-on the engine's 75 Hz record of the published loop (bearing friction, least-squares rate
-filter, 5 oz-in random torque of seed 0 for every design) with the encoder read exactly (its
-quantisation is the one discontinuous element left out). It equals the settling time when the
-response leaves the band once and stays inside after; each time the response crosses the band
-before settling it is short by the crossing time. Its gradient is taken by central differences:
-the 2n + 1 designs of one gradient are one batched :func:`flexsat.sim.simulate` call on a
+on the engine's 75 Hz record of the published loop (least-squares rate filter, 5 oz-in random
+torque of seed 0 for every design, the encoder read exactly: its quantisation is a discontinuous
+element left out) with the bearing's Coulomb friction regularised over ω_s =
+``friction_smoothing`` (default 0.01 rad/s):
+τ_f = −c₁ tanh(θ'/ω_s) − c₂ θ' (:class:`~flexsat.sim.disturbances.BearingFriction`; the
+published runs use ω_s = 1e-3 rad/s, inside which the bearing is a stiff damper c₁/ω_s that
+sticks). It equals the settling time when the response leaves the band once and stays inside
+after; each time the response crosses the band before settling it is short by the crossing
+time. Its gradient is taken by central differences: the 2n + 1 designs of one gradient are one
+batched :func:`flexsat.sim.simulate` call on a
 :class:`~flexsat.dynamics.dispersed_hub.DispersedHubAppendage` (per-case EI, ρ and tip mass),
-step h_k = ``fd_step`` · scale_k, truncation O(h²). Coulomb friction's stick–slip switches make
-the surrogate smooth only piecewise at a fine scale: its local optima are several, and the KKT
-residual at an optimum is that of a piecewise-smooth function (measured, docs). The surrogate's
-accuracy as a settling-time predictor is measured (:func:`surrogate_rank_correlation`), and the
-reported optimum is judged by the real simulated settling time with the published settings
-(friction, 0.01° encoder, least-squares rate, 5 oz-in random torque, seed 0, 0.5° band)
-(:func:`settling_comparison`). The integral of time-weighted squared error
+step h_k = ``fd_step`` · scale_k, truncation O(h²). With the published ω_s the bearing's
+stick–slip switches wrinkle the surrogate on the scale of the step (KKT residuals 1e-3 to 1e-1
+at the optimisers' end points); over 0.01 rad/s the optimum is a smooth one (docs,
+"TAMU co-design"). The surrogate's accuracy as a settling-time predictor is measured
+(:func:`surrogate_rank_correlation`), and the reported optimum is judged by the real simulated
+settling time with the published settings (friction with ω_s = 1e-3 rad/s, 0.01° encoder,
+least-squares rate, 5 oz-in random torque, seed 0, 0.5° band) (:func:`settling_comparison`).
+
+Stability: ``decay_rate`` is the decay rate σ = −max ln|λ_i| / Δt of the slowest mode of the
+loop's linear part (zero-order-hold plant, least-squares rate filter, Law II; friction,
+saturation and the encoder left out; :meth:`TamuCodesign.decay_rates`). The surrogate's
+optimum has σ < 0: a loop that only the bearing friction and the torque limit hold (docs).
+
+Mass: with ``mass_mode="fixed_tip"`` the tip mass stays at its published value and the
+appendage mass ρ₀ s L + m_tip,0 is a response (exact gradient), for a front of appendage mass
+against settling time (:mod:`flexsat.design.pareto`).
+
+The integral of time-weighted squared error
 :math:`\int_0^{t_f} t\,(\theta - \theta_f)^2\,dt` (ITSE; R. C. Dorf and R. H. Bishop, *Modern
 Control Systems*, 12th ed., Pearson 2011, §5.9) of the same loop is reported as a second
 response: it ranks designs by settling time worse (docs).
@@ -117,6 +132,10 @@ class TamuCodesign:
         Relative central-difference step of the surrogate's gradient.
     band_width : float
         w: the smoothed band edge's width as a fraction of the 0.5° band.
+    friction_smoothing : float
+        ω_s, rad/s: the surrogate loop's Coulomb friction regularisation (module docstring).
+    mass_mode : {"equal", "fixed_tip"}
+        :data:`MASS_MODES`.
     """
 
     thickness_bounds: tuple[float, float] = (0.6, 1.6)
@@ -133,6 +152,7 @@ class TamuCodesign:
     _cache: dict[bytes, dict[str, tuple[float, FloatArray]]] = field(
         init=False, repr=False, default_factory=dict
     )
+    _plants: tuple[bytes, Any] = field(init=False, repr=False, default=(b"", None))
 
     def __post_init__(self) -> None:
         require_positive_scalar(self.duration, "duration")
@@ -189,6 +209,18 @@ class TamuCodesign:
         st = self.structure(np.asarray(s, dtype=float))
         return np.asarray(st["rho"] * self._case.params.length + st["tip_mass"], dtype=float)
 
+    def _plant(self, s: FloatArray) -> DispersedHubAppendage:
+        """The dispersed plant of thickness ratios ``s`` (the last one kept: a gradient's
+        simulation and its decay rates share the cantilever modes' root finding)."""
+        key = np.asarray(s, dtype=float).tobytes()
+        if self._plants[0] != key:
+            per_case: dict[str, Any] = dict(self.structure(s))  # (n_cases,): per-case fields
+            plant = DispersedHubAppendage.from_parameters(
+                replace(self._case.params, **per_case), n_modes=int(self.n_modes)
+            )
+            self._plants = (key, plant)
+        return self._plants[1]
+
     def _batch(self, X: FloatArray, friction: bool, noise: bool, quantised: bool = True) -> Any:
         """One :func:`simulate` of the designs ``X`` (n_cases, 4); ``quantised=False`` keeps
         the least-squares rate filter and the random torque of ``noise`` but reads the encoder
@@ -196,9 +228,7 @@ class TamuCodesign:
         X = np.atleast_2d(np.asarray(X, dtype=float))
         case, p = self._case, self._case.params
         st = self.structure(X[:, 0])
-        per_case: dict[str, Any] = dict(st)  # (n_cases,) arrays: the dispersed plant's fields
-        params = replace(p, **per_case)
-        plant = DispersedHubAppendage.from_parameters(params, n_modes=int(self.n_modes))
+        plant = self._plant(X[:, 0])
         # the design's rigid inertia with the case's design-to-model ratio (tamu module notes);
         # at equal mass it changes with s only through the strip/tip split
         inertia = np.array(
@@ -264,11 +294,7 @@ class TamuCodesign:
         from flexsat.sim.sensors import least_squares_derivative_weights
 
         X = np.atleast_2d(np.asarray(X, dtype=float))
-        p = self._case.params
-        per_case: dict[str, Any] = dict(self.structure(X[:, 0]))
-        plant = DispersedHubAppendage.from_parameters(
-            replace(p, **per_case), n_modes=int(self.n_modes)
-        )
+        plant = self._plant(X[:, 0])
         A, B = plant.linear_part()
         mats = plant.output_matrices("theta")
         assert mats is not None  # a position output of a linear plant
