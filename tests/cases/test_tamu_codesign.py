@@ -23,6 +23,7 @@ from flexsat.scenarios.runner import run_scenario
 from flexsat.sim import simulate
 
 EXAMPLE = Path(__file__).parents[2] / "examples" / "tamu_codesign_law_ii.yaml"
+FRONT_EXAMPLE = EXAMPLE.with_name("tamu_codesign_mass_front.yaml")
 #: docs/tamu.md, Law II α = 0.2, g1 = 3000, g2 = 800, default settings, 0.5° band
 PUBLISHED_SETTLING_S = 6.37
 
@@ -201,3 +202,27 @@ def test_a_design_document_with_bad_parameters_names_the_field(tmp_path):
     path.write_text(yaml.safe_dump(doc))
     with pytest.raises(ScenarioError, match="parameters.thickness_bounds"):
         load_scenario(path)
+
+
+@pytest.mark.slow
+def test_the_mass_front_trades_appendage_mass_for_settling_time(tmp_path):
+    """examples/tamu_codesign_mass_front.yaml with 2 of its 40 levels: each front point meets
+    the KKT bound of the acceptance (1e-6, front_table's filter, checked again here), its
+    ε-constraint on the mass is active with a positive multiplier (a Pareto point), its mass
+    is the level to the optimiser's feasibility tolerance, and the points are nondominated with
+    the heavier one settling sooner."""
+    from flexsat.design.pareto import nondominated
+
+    text = FRONT_EXAMPLE.read_text().replace("  points: 40", "  points: 2")
+    path = tmp_path / FRONT_EXAMPLE.name
+    path.write_text(text + "  store: front.zarr\n")
+    result = run_scenario(load_scenario(path))
+    front = result.front
+    assert front is not None and front["primary"].size == 2
+    assert (front["kkt_residual"] <= 1e-6).all()
+    assert (front["epsilon_active"] == 1).all() and (front["epsilon_multiplier"] > 0).all()
+    # SLSQP's feasibility tolerance on a constraint scaled by ε ≈ 3 kg: ~1e-10 relative
+    np.testing.assert_allclose(front["secondary"], front["level"], rtol=1e-8)
+    assert nondominated(front["primary"], front["secondary"]).all()
+    assert front["primary"][1] < front["primary"][0]
+    assert front["secondary"][1] > front["secondary"][0]
