@@ -115,6 +115,7 @@ def main() -> None:
             cpus.append(time.process_time() - c0)
             workers_cpu.append(children_cpu() - k0)
             front = front_table(folder / "front.zarr")
+            every_case(folder / "front.zarr")
         finally:
             shutil.rmtree(folder, ignore_errors=True)
     best = int(np.argmin(walls))
@@ -142,6 +143,22 @@ def main() -> None:
         f"{out['metric_evaluations'].mean():.1f} evaluations on average)"
     )
     print(f"parallel efficiency: {cpu / (args.workers * min(walls)):.0%}")
+
+
+def every_case(store: Path) -> None:
+    """Each case's KKT residual, optimiser verdict and ε-activity (front_table keeps the
+    successful ones within 1e-6, then the nondominated)."""
+    from flexsat.design.batch_runner import open_results
+
+    ds = open_results(store).load()
+    kkt, ok = ds["metric_kkt_residual"].values, ds["metric_success"].values > 0
+    active = ds["metric_epsilon_active"].values > 0
+    within = int((kkt <= 1e-6).sum())
+    print(
+        f"cases: {kkt.size}, optimiser success {int(ok.sum())}, KKT <= 1e-6 {within}"
+        f", both {int((ok & (kkt <= 1e-6)).sum())}, epsilon active {int(active.sum())}; "
+        f"KKT residuals: {' '.join(f'{v:.0e}' for v in kkt)}"
+    )
 
 
 def report(front: dict[str, np.ndarray], tamu: bool) -> None:
