@@ -32,6 +32,10 @@ REDUCED = {
     "space_station_cmg_montecarlo.yaml": ([("cases: 100", "cases: 8")], "8 of its 100 cases"),
     "tamu_montecarlo.yaml": ([("cases: 400", "cases: 8")], "8 of its 400 cases"),
     "own_spacecraft_design_study.yaml": ([("  cases: 200", "  cases: 8")], "8 of its 200 cases"),
+    "tamu_codesign_mass_front.yaml": (
+        [("  points: 40", "  points: 2")],
+        "2 of its 40 front points",
+    ),
 }
 
 #: Python examples: file -> (the test that runs it and checks its output, the page showing it)

@@ -34,20 +34,36 @@ sees a smooth surrogate, the time spent outside the 0.5° band with the band's e
     \tilde t_s(x) = \Delta t \sum_k \tfrac12\Big(1 + \tanh\frac{|\theta_k(x) - \theta_f| - b}
     {2 w b}\Big), \qquad b = 0.5°,\ w = \text{band\_width},
 
-on the engine's 75 Hz record of the published loop (bearing friction, least-squares rate
-filter, 5 oz-in random torque of seed 0 for every design) with the encoder read exactly (its
-quantisation is the one discontinuous element left out). It equals the settling time when the
-response leaves the band once and stays inside after; each time the response crosses the band
-before settling it is short by the crossing time. Its gradient is taken by central differences:
-the 2n + 1 designs of one gradient are one batched :func:`flexsat.sim.simulate` call on a
+on the engine's 75 Hz record of the published loop (least-squares rate filter, 5 oz-in random
+torque of seed 0 for every design, the encoder read exactly: its quantisation is a discontinuous
+element left out) with the bearing's Coulomb friction regularised over ω_s =
+``friction_smoothing`` (default 0.01 rad/s):
+τ_f = −c₁ tanh(θ'/ω_s) − c₂ θ' (:class:`~flexsat.sim.disturbances.BearingFriction`; the
+published runs use ω_s = 1e-3 rad/s, inside which the bearing is a stiff damper c₁/ω_s that
+sticks). It equals the settling time when the response leaves the band once and stays inside
+after; each time the response crosses the band before settling it is short by the crossing
+time. Its gradient is taken by central differences: the 2n + 1 designs of one gradient are one
+batched :func:`flexsat.sim.simulate` call on a
 :class:`~flexsat.dynamics.dispersed_hub.DispersedHubAppendage` (per-case EI, ρ and tip mass),
-step h_k = ``fd_step`` · scale_k, truncation O(h²). Coulomb friction's stick–slip switches make
-the surrogate smooth only piecewise at a fine scale: its local optima are several, and the KKT
-residual at an optimum is that of a piecewise-smooth function (measured, docs). The surrogate's
-accuracy as a settling-time predictor is measured (:func:`surrogate_rank_correlation`), and the
-reported optimum is judged by the real simulated settling time with the published settings
-(friction, 0.01° encoder, least-squares rate, 5 oz-in random torque, seed 0, 0.5° band)
-(:func:`settling_comparison`). The integral of time-weighted squared error
+step h_k = ``fd_step`` · scale_k, truncation O(h²). With the published ω_s the bearing's
+stick–slip switches wrinkle the surrogate on the scale of the step (measured at the optimisers'
+end points: SLSQP's KKT residual 8e-3, trust-constr's 5e-8 on one BLAS and 0.09 on another);
+over 0.01 rad/s the optimum is a smooth one (docs, "TAMU co-design"). The surrogate's
+accuracy as a settling-time predictor is measured (:func:`surrogate_rank_correlation`), and
+the reported optimum is judged by the real simulated settling time with the published
+settings (friction with ω_s = 1e-3 rad/s, 0.01° encoder, least-squares rate, 5 oz-in random
+torque, seed 0, 0.5° band) (:func:`settling_comparison`).
+
+Stability: ``decay_rate`` is the decay rate σ = −max ln|λ_i| / Δt of the slowest mode of the
+loop's linear part (zero-order-hold plant, least-squares rate filter, Law II; friction,
+saturation and the encoder left out; :meth:`TamuCodesign.decay_rates`). The surrogate's
+optimum has σ < 0: a loop that only the bearing friction and the torque limit hold (docs).
+
+Mass: with ``mass_mode="fixed_tip"`` the tip mass stays at its published value and the
+appendage mass ρ₀ s L + m_tip,0 is a response (exact gradient), for a front of appendage mass
+against settling time (:mod:`flexsat.design.pareto`).
+
+The integral of time-weighted squared error
 :math:`\int_0^{t_f} t\,(\theta - \theta_f)^2\,dt` (ITSE; R. C. Dorf and R. H. Bishop, *Modern
 Control Systems*, 12th ed., Pearson 2011, §5.9) of the same loop is reported as a second
 response: it ranks designs by settling time worse (docs).
@@ -77,6 +93,7 @@ from flexsat.sim import simulate
 from flexsat.units import FloatArray, to_si
 
 __all__ = [
+    "MASS_MODES",
     "PUBLISHED_LAW_II",
     "TamuCodesign",
     "settling_comparison",
@@ -93,6 +110,11 @@ PUBLISHED_LAW_II = (
 )
 
 NAMES = ("thickness_ratio", "g1", "g2", "alpha")
+
+#: ``equal``: the tip mass takes up what the strip does not (the published appendage mass at
+#: every s); ``fixed_tip``: the published tip mass, the appendage mass a response (ρ₀ s L +
+#: m_tip,0), for the front of appendage mass against settling time
+MASS_MODES = ("equal", "fixed_tip")
 
 
 @dataclass
@@ -113,6 +135,10 @@ class TamuCodesign:
         Relative central-difference step of the surrogate's gradient.
     band_width : float
         w: the smoothed band edge's width as a fraction of the 0.5° band.
+    friction_smoothing : float
+        ω_s, rad/s: the surrogate loop's Coulomb friction regularisation (module docstring).
+    mass_mode : {"equal", "fixed_tip"}
+        :data:`MASS_MODES`.
     """
 
     thickness_bounds: tuple[float, float] = (0.6, 1.6)
@@ -123,22 +149,30 @@ class TamuCodesign:
     n_modes: int = 10
     fd_step: float = 1e-5
     band_width: float = 0.2
+    friction_smoothing: float = 1e-2
+    mass_mode: str = "equal"
     _case: TamuCase = field(init=False, repr=False)
     _cache: dict[bytes, dict[str, tuple[float, FloatArray]]] = field(
         init=False, repr=False, default_factory=dict
     )
+    _plants: tuple[bytes, Any] = field(init=False, repr=False, default=(b"", None))
 
     def __post_init__(self) -> None:
         require_positive_scalar(self.duration, "duration")
         require_positive_scalar(self.fd_step, "fd_step")
         require_positive_scalar(self.band_width, "band_width")
+        require_positive_scalar(self.friction_smoothing, "friction_smoothing")
+        if self.mass_mode not in MASS_MODES:
+            raise FieldError(
+                "mass_mode", f"must be one of {', '.join(MASS_MODES)}, got {self.mass_mode!r}"
+            )
         self._case = tamu(n_modes=int(self.n_modes))
         for name in ("thickness_bounds", "g1_bounds", "g2_bounds", "alpha_bounds"):
             lo, hi = getattr(self, name)
             if not 0 <= lo < hi:
                 raise FieldError(name, f"must be 0 <= lower < upper, got {(lo, hi)}")
         p = self._case.params
-        s_max = 1.0 + p.tip_mass / (p.rho * p.length)
+        s_max = 1.0 + p.tip_mass / (p.rho * p.length) if self.mass_mode == "equal" else np.inf
         if self.thickness_bounds[0] <= 0 or self.thickness_bounds[1] >= s_max:
             raise FieldError(
                 "thickness_bounds",
@@ -162,11 +196,33 @@ class TamuCodesign:
         return float(p.rho * p.length + p.tip_mass)
 
     def structure(self, s: FloatArray) -> dict[str, FloatArray]:
-        """EI, ρ and tip mass (SI) of thickness ratios ``s`` at the published appendage mass."""
+        """EI, ρ and tip mass (SI) of thickness ratios ``s``: at the published appendage mass
+        (``mass_mode="equal"``) or with the published tip mass (``"fixed_tip"``)."""
         p = self._case.params
         s = np.asarray(s, dtype=float)
         rho = p.rho * s
-        return {"EI": p.EI * s**3, "rho": rho, "tip_mass": self.appendage_mass - rho * p.length}
+        if self.mass_mode == "equal":
+            tip = self.appendage_mass - rho * p.length
+        else:
+            tip = np.full_like(rho, p.tip_mass)
+        return {"EI": p.EI * s**3, "rho": rho, "tip_mass": tip}
+
+    def mass(self, s: FloatArray) -> FloatArray:
+        """Mass of one appendage, ρ L + m_tip (kg), at thickness ratios ``s``."""
+        st = self.structure(np.asarray(s, dtype=float))
+        return np.asarray(st["rho"] * self._case.params.length + st["tip_mass"], dtype=float)
+
+    def _plant(self, s: FloatArray) -> DispersedHubAppendage:
+        """The dispersed plant of thickness ratios ``s`` (the last one kept: a gradient's
+        simulation and its decay rates share the cantilever modes' root finding)."""
+        key = np.asarray(s, dtype=float).tobytes()
+        if self._plants[0] != key:
+            per_case: dict[str, Any] = dict(self.structure(s))  # (n_cases,): per-case fields
+            plant = DispersedHubAppendage.from_parameters(
+                replace(self._case.params, **per_case), n_modes=int(self.n_modes)
+            )
+            self._plants = (key, plant)
+        return self._plants[1]
 
     def _batch(self, X: FloatArray, friction: bool, noise: bool, quantised: bool = True) -> Any:
         """One :func:`simulate` of the designs ``X`` (n_cases, 4); ``quantised=False`` keeps
@@ -175,9 +231,7 @@ class TamuCodesign:
         X = np.atleast_2d(np.asarray(X, dtype=float))
         case, p = self._case, self._case.params
         st = self.structure(X[:, 0])
-        per_case: dict[str, Any] = dict(st)  # (n_cases,) arrays: the dispersed plant's fields
-        params = replace(p, **per_case)
-        plant = DispersedHubAppendage.from_parameters(params, n_modes=int(self.n_modes))
+        plant = self._plant(X[:, 0])
         # the design's rigid inertia with the case's design-to-model ratio (tamu module notes);
         # at equal mass it changes with s only through the strip/tip split
         inertia = np.array(
@@ -197,7 +251,11 @@ class TamuCodesign:
         )
         config = case.sim_config(self.duration, friction=friction, noise=noise)
         if noise and not quantised:
-            config = replace(config, sensors=replace(config.sensors, encoder_resolution=0.0))
+            config = replace(
+                config,
+                sensors=replace(config.sensors, encoder_resolution=0.0),
+                friction=replace(config.friction, smoothing=self.friction_smoothing),
+            )
         # every design sees the random-torque stream of seed 0 (the published runs' seed), so
         # that differences between designs are the design's alone
         seeds = np.full(X.shape[0], config.seed)
@@ -222,6 +280,48 @@ class TamuCodesign:
     def itse(self, X: FloatArray) -> FloatArray:
         """ITSE of the designs ``X``, rad² s²."""
         return self.surrogates(X)[1]
+
+    def decay_rates(self, X: FloatArray) -> FloatArray:
+        r"""Decay rate σ (1/s) of the slowest closed-loop mode of the designs ``X`` (n_cases, 4):
+        the linear part of the sampled loop (module docstring, "Stability").
+
+        The plant's zero-order-hold equivalent x_{k+1} = A_d x_k + B_d u_k, θ_k = C x_k, under
+        Law II's feedback u_k = −g1 θ_k − g2 Σ_j c_j θ_{k−N+1+j} through the published
+        least-squares rate filter (N = 8 samples, :func:`~flexsat.sim.sensors.
+        least_squares_derivative_weights`), closed on the state (x_k, θ_{k−1}, …, θ_{k−N+1});
+        σ = −max_i ln|λ_i| / Δt over its eigenvalues λ_i. Friction, saturation and the encoder
+        are the loop's nonlinear parts and are left out; σ < 0 is a loop that only the bearing
+        friction and the torque limit can hold."""
+        from scipy.linalg import expm
+
+        from flexsat.sim.sensors import least_squares_derivative_weights
+
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        plant = self._plant(X[:, 0])
+        A, B = plant.linear_part()
+        mats = plant.output_matrices("theta")
+        assert mats is not None  # a position output of a linear plant
+        C = mats[0]
+        config = self._case.sim_config(self.duration)
+        dt, n_w = config.dt, int(config.sensors.rate_window)
+        w = least_squares_derivative_weights(n_w, int(config.sensors.rate_order), dt)
+        n = A.shape[-1]
+        out = np.empty(X.shape[0])
+        for i in range(X.shape[0]):
+            M = np.zeros((n + 1, n + 1))
+            M[:n, :n], M[:n, n:] = A[i] * dt, B[i][:, :1] * dt
+            E = expm(M)
+            g1, g2 = X[i, 1], X[i, 2]
+            K = np.zeros(n + n_w - 1)  # u_k = K z_k
+            K[:n] = -(g1 + g2 * w[-1]) * C[i][0]
+            K[n:] = -g2 * w[-2::-1]
+            Z = np.zeros((n + n_w - 1, n + n_w - 1))
+            Z[:n, :n] = E[:n, :n]
+            Z[:n] += E[:n, n:] @ K[None, :]
+            Z[n, :n] = C[i][0]
+            Z[n + 1 :, n : n + n_w - 2] = np.eye(n_w - 2)
+            out[i] = -np.max(np.log(np.abs(np.linalg.eigvals(Z)))) / dt
+        return out
 
     def first_frequency_hz(self, s: FloatArray) -> FloatArray:
         """First clamped (cantilever) frequency of the appendages, Hz."""
@@ -252,13 +352,19 @@ class TamuCodesign:
         S, J = self.surrogates(X)
         dJ = (J[1 : n + 1] - J[n + 1 :]) / (2 * h)
         dS = (S[1 : n + 1] - S[n + 1 :]) / (2 * h)
+        sig = self.decay_rates(X)
+        dsig = (sig[1 : n + 1] - sig[n + 1 :]) / (2 * h)
         f = self.first_frequency_hz(np.array([x[0], x[0] + h[0], x[0] - h[0]]))
         df = np.zeros(n)
         df[0] = (f[1] - f[2]) / (2 * h[0])
+        dm = np.zeros(n)
+        if self.mass_mode == "fixed_tip":
+            dm[0] = self._case.params.rho * self._case.params.length  # ∂(ρ₀ s L)/∂s, exact
         out = {
             "itse": (float(J[0]), dJ),
             "soft_settling": (float(S[0]), dS),
-            "appendage_mass": (self.appendage_mass, np.zeros(n)),
+            "appendage_mass": (float(self.mass(x[0])), dm),
+            "decay_rate": (float(sig[0]), dsig),
             "frequency_hz": (float(f[0]), df),
         }
         if len(self._cache) > 256:
@@ -366,14 +472,13 @@ def settling_comparison(problem: TamuCodesign, x: FloatArray) -> dict[str, float
     X = np.vstack([np.asarray(x, dtype=float), np.array(PUBLISHED_LAW_II)])
     ts = problem.settling_times(X)
     J = problem.itse(X)
-    mass = problem.structure(X[:, 0])
-    L = problem.case.params.length
+    mass = problem.mass(X[:, 0])
     return {
         "settling_time_s": float(ts[0]),
         "published_settling_time_s": float(ts[1]),
         "itse": float(J[0]),
         "published_itse": float(J[1]),
-        "appendage_mass_kg": float(mass["rho"][0] * L + mass["tip_mass"][0]),
+        "appendage_mass_kg": float(mass[0]),
         "published_appendage_mass_kg": problem.appendage_mass,
     }
 

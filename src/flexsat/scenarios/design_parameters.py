@@ -78,6 +78,7 @@ PARAMETER_UNITS: dict[str, dict[str, str | tuple[str, ...]]] = {
         "n_modes": COUNT,
         "fd_step": "",
         "band_width": "",
+        "friction_smoothing": "rad/s",
     },
     "agrawal_bang_ppf_codesign": {
         "n_modes": COUNT,

@@ -108,6 +108,7 @@ REFERENCE_PROBLEMS: dict[str, tuple[type, dict[str, str], dict[str, str]]] = {
             "soft_settling": "s",
             "itse": "rad**2*s**2",
             "appendage_mass": "kg",
+            "decay_rate": "1/s",
             "frequency_hz": "Hz",
         },
     ),
