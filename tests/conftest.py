@@ -17,6 +17,18 @@ def _fresh_modal_model_cache():
         cache.MODAL_MODELS.clear()
 
 
+@pytest.fixture(autouse=True)
+def _numpy_print_options():
+    """Each test ends with numpy's print options as it found them: a test importing pyyeti's
+    nastran.n2p (which sets the legacy "1.13" options when first imported) must not change how
+    a later test in the same worker prints (the tutorial's printed arrays)."""
+    import numpy as np
+
+    options = np.get_printoptions()
+    yield
+    np.set_printoptions(**options)
+
+
 @pytest.fixture(scope="session")
 def tamu_case():
     return tamu()

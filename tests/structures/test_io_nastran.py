@@ -307,3 +307,21 @@ def test_missing_pyyeti_is_explained(monkeypatch, tmp_path):
         (tmp_path / f"any{suffix}").write_bytes(b"")
     with pytest.raises(ImportError, match=r"pip install 'flexsat\[nastran\]'"):
         read_nastran_modes(tmp_path / "any.op2")
+
+
+def test_reading_a_model_leaves_numpy_printing_alone(extseout):
+    """pyyeti's nastran.n2p sets numpy's legacy print options when first imported; reading a
+    model must not change how the user's arrays print (a fresh interpreter, the first import)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy as np\n"
+        "from flexsat.structures.io_nastran import read_nastran_modes\n"
+        f"read_nastran_modes({str(extseout)!r}, units={MM_KG_S!r})\n"
+        "print(np.get_printoptions()['legacy'], np.array([4.54, 4.3]))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    ).stdout
+    assert out.strip() == "False [4.54 4.3 ]"

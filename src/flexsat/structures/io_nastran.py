@@ -127,10 +127,15 @@ def read_nastran_modes(
             units=units,
             rigid_frequency=rigid_frequency,
         )
+    # pyyeti's n2p sets numpy's legacy "1.13" print options when first imported (a module-level
+    # set_printoptions): the user's printing must not change because a model was read
+    options = np.get_printoptions()
     try:
         from pyyeti.nastran import n2p, op2
     except ImportError as exc:
         raise ImportError(_MISSING_PYYETI) from exc
+    finally:
+        np.set_printoptions(**options)
     op2_file, op4_file = _paths(op2_path, op4_path)
     length, mass_unit, time = unit_scales(units)
     nas = op2.rdnas2cam(str(op2_file), str(op4_file))
