@@ -18,9 +18,11 @@ $(STAMP): $(PY) pyproject.toml tests/plugin_package/pyproject.toml
 demo: $(STAMP)
 	$(VENV)/bin/flexsat run -o out
 
-# one BLAS thread per pytest worker: two workers on two cores, no oversubscription
+# one BLAS thread per pytest worker: two workers on two cores, no oversubscription; worksteal:
+# an idle worker takes queued tests from the other, so a long test near the end does not leave
+# one core idle
 test: $(STAMP)
-	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -n 2 -q
+	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -n 2 --dist worksteal -q
 
 # the tests whose tolerances sit near round-off, again on another BLAS kernel (OpenBLAS picks
 # one per CPU: SkylakeX on AVX-512, Haswell on AVX2); a tolerance below the problem's noise
@@ -28,7 +30,7 @@ test: $(STAMP)
 NUMERICS_CORETYPE ?= Sandybridge
 test-numerics: $(STAMP)
 	OPENBLAS_CORETYPE=$(NUMERICS_CORETYPE) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \
-		$(PY) -m pytest -n 2 -q -m numerics
+		$(PY) -m pytest -n 2 --dist worksteal -q -m numerics
 
 # static checks, the same for developers and CI (.ci/run): ruff lint and format on the Python
 # sources, mypy on src/flexsat (configuration in pyproject.toml, [tool.ruff] and [tool.mypy])

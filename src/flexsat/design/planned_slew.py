@@ -240,6 +240,23 @@ def _least_peak(G: FloatArray, h: FloatArray, n_z: int) -> tuple[FloatArray | No
     return res.x[:n_z], float(res.x[-1]), "least peak by HiGHS"
 
 
+def _restricted_qp(
+    P: FloatArray, q: FloatArray, G: FloatArray, h: FloatArray, f0: float, start: FloatArray
+) -> tuple[FloatArray, str]:
+    """min ½zᵀPz + qᵀz s.t. G z ≤ h by SLSQP (objective scaled by f0), from ``start``."""
+    from scipy.optimize import minimize
+
+    res = minimize(
+        lambda v: (0.5 * v @ P @ v + q @ v) / f0,
+        start,
+        jac=lambda v: (P @ v + q) / f0,
+        constraints=[{"type": "ineq", "fun": lambda v: h - G @ v, "jac": lambda v: -G}],
+        method="SLSQP",
+        options={"maxiter": 500, "ftol": 1e-12},
+    )
+    return np.asarray(res.x, float), str(res.message)
+
+
 def _polish(
     P: FloatArray, q: FloatArray, G: FloatArray, h: FloatArray, z: FloatArray
 ) -> FloatArray:
@@ -315,7 +332,6 @@ def plan_slew(
         ``n_samples`` or ``start``.
     """
     from scipy.linalg import null_space
-    from scipy.optimize import minimize
 
     if objective not in OBJECTIVES:
         raise FieldError("objective", f"must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
@@ -376,15 +392,24 @@ def plan_slew(
         f0 = max(float(0.5 * z @ P @ z + q @ z + 0.5 * c0 @ Hs @ c0), 1e-300)
 
         def qp(z_start: FloatArray) -> tuple[FloatArray, str]:
-            res = minimize(
-                lambda y: (0.5 * y @ P @ y + q @ y) / f0,
-                z_start,
-                jac=lambda y: (P @ y + q) / f0,
-                constraints=[{"type": "ineq", "fun": lambda y: h - G @ y, "jac": lambda y: -G}],
-                method="SLSQP",
-                options={"maxiter": 500, "ftol": 1e-12},
+            # constraint generation: SLSQP on the rows violated or near their limit so far,
+            # adding the rows its optimum violates until it meets them all; the optimum of a
+            # relaxation that meets every row is the optimum of the whole problem (a few
+            # hundred of the thousands of sampled rows instead of all: 38 s -> a few s on the
+            # EPS examples)
+            work = np.flatnonzero(G @ z_start - h > -0.05)
+            y, rounds, text = z_start, 0, ""
+            while rounds < 50:
+                rounds += 1
+                y, text = _restricted_qp(P, q, G[work], h[work], f0, y)
+                new = np.setdiff1d(np.flatnonzero(G @ y - h > 1e-9), work)
+                if not new.size:
+                    break
+                work = np.union1d(work, new)
+            return (
+                _polish(P, q, G, h, y),
+                f"SLSQP on {work.size} of {G.shape[0]} rows ({rounds} rounds): {text}",
             )
-            return _polish(P, q, G, h, res.x), f"SLSQP: {res.message}"
 
         z, message = qp(z)
         if np.max(G @ z - h) > 1e-6:
