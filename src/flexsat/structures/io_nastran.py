@@ -181,9 +181,8 @@ def _paths(op2_path: str | Path, op4_path: str | Path | None) -> tuple[Path, Pat
 def _check_modal_data(nas: dict[str, Any], se: int, source: str) -> None:
     """The superelement exists and has eigenvalues, g-set shapes and a mass matrix."""
     if se not in nas["uset"]:
-        raise FieldError(
-            "superelement", f"{se!r} is not in {source} (superelements {sorted(nas['uset'])})"
-        )
+        known = sorted(int(k) for k in nas["uset"])  # ints: a numpy 2 scalar shows np.int32(…)
+        raise FieldError("superelement", f"{se!r} is not in {source} (superelements {known})")
     missing = [
         label
         for key, label in (("lambda", "eigenvalues LAMBDA"), ("phg", "g-set mode shapes PHG"))
