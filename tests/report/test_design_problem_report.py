@@ -19,6 +19,7 @@ import scipy.linalg as sla
 import xarray as xr
 import yaml
 
+from design_documents import HUB_BOOM
 from flexsat.cases.tamu_codesign import TamuCodesign
 from flexsat.design.describe import sorted_poles
 from flexsat.design.reference_problems import CantileverTube, HubBoomCodesign
@@ -30,16 +31,7 @@ from flexsat.structures.fem import Structure
 from flexsat.structures.sections import Material, Section
 
 DOC = {
-    "kind": "design",
-    "name": "hub-boom co-design",
-    "problem": "hub_boom_codesign",
-    "variables": {"t": {"start": "2 mm", "lower": "0.5 mm", "upper": "3 mm"}},
-    "objective": "lq_cost",
-    "constraints": [
-        {"response": "frequency_hz", "min": "6 Hz"},
-        {"response": "mass", "max": "300 g"},
-    ],
-    "optimizer": {"method": "slsqp", "compare": "trust-constr"},
+    **HUB_BOOM,
     "pareto": {"secondary": "mass", "points": 3, "starts": 1, "store": "front.zarr"},
 }
 

@@ -16,32 +16,11 @@ from flexsat.input_checks import FieldError
 from flexsat.sim import SimConfig, simulate
 from flexsat.sim.hardware import Hardware
 from flexsat.sim.wheel_array import ReactionWheelArray, WheelArrayPlant, pyramid_axes
-from flexsat.structures.modal_model import ModalModel
+from modal_models import coupled_modal
 
 #: the pyramid of the four-wheel arrays: half-angle 54.74° (the axes equally spaced in angle)
 PYRAMID = pyramid_axes(np.arccos(1 / np.sqrt(3)))
 J_BODY = np.array([[10.0, 0.5, 0.0], [0.5, 12.0, 0.0], [0.0, 0.0, 8.0]])
-
-
-def coupled_modal() -> ModalModel:
-    """A free model with rotational participation (the rigid–elastic coupling live), as in
-    tests/dynamics/test_flexible_spacecraft.py."""
-    J = np.array([[120.0, 3.0, -2.0], [3.0, 150.0, 4.0], [-2.0, 4.0, 200.0]])
-    rigid = np.zeros((6, 6))
-    rigid[:3, :3] = 300.0 * np.eye(3)
-    rigid[3:, 3:] = J
-    participation = np.zeros((4, 6))
-    participation[:, 3:] = [[3.0, 0.5, 0.0], [0.0, 4.0, 1.0], [1.0, 0.0, 5.0], [2.0, 2.0, 2.0]]
-    shapes = 0.1 * np.random.default_rng(3).standard_normal((4, 3, 6))
-    return ModalModel(
-        node_ids=[1, 2, 3],
-        coordinates=[[2.0, 0, 0], [0, 3.0, 0], [0, 0, -1.0]],
-        frequencies=2 * np.pi * np.array([0.4, 0.9, 1.7, 2.3]),
-        damping=0.02,
-        shapes=shapes,
-        rigid_mass=rigid,
-        participation=participation,
-    )
 
 
 def test_the_distribution_is_the_pseudo_inverse():
@@ -113,7 +92,7 @@ def test_total_momentum_is_conserved_to_the_integrators_error():
     d8, _ = _momentum_drift(rigid, x0, 8, 1.0)
     assert 12 < d4 / d8 < 20
     assert d8 < 1e-11 * h
-    flexible = FlexibleSpacecraft(coupled_modal())
+    flexible = FlexibleSpacecraft(coupled_modal(damping=0.02))
     x0 = flexible.initial_state(1)[0]
     x0[4:7] = [0.05, 0.1, -0.05]
     d4, h = _momentum_drift(flexible, x0, 4, 10.0)
