@@ -247,32 +247,11 @@ def run(job: CompiledRun, record_states, law, always_modal: bool = False, dense:
             X[...] = X @ np.swapaxes(a.T if a.T.ndim == 2 else a.T[c0:c1], -1, -2)
         _outputs(rec, plant, a, c0, c1, X, U[c0:c1], Dist[c0:c1], F[c0:c1], outs, energy, vib)
     if (stop >= 0).any():
-        if a.T is not None:  # the Python loop bounds the physical state: rerun it dense
-            a = LoopArguments(
-                job,
-                law,
-                modal=False,
-            )
-            stop[:] = -1
-            for c0 in range(0, nc, size):
-                c1 = min(nc, c0 + size)
-                a.block(
-                    c0,
-                    c1,
-                    seeds,
-                    n_t,
-                    np.empty((c1 - c0, 0, n)),
-                    Y[c0:c1],
-                    Ucmd[c0:c1],
-                    U[c0:c1],
-                    Dist[c0:c1],
-                    F[c0:c1],
-                    stop[c0:c1],
-                )
-            if not (stop >= 0).any():
-                # the modal coordinates passed the bound where the physical state does not
-                # (the bound is the Python loop's, on x): the run is whole, flown dense
-                return run(job, record_states, law, dense=True)
+        if a.T is not None:
+            # the Python loop bounds the physical state, not the modal coordinates: flown dense,
+            # the run either finishes (the modal bound was passed where x was not) or raises the
+            # divergence the Python loop would
+            return run(job, record_states, law, dense=True)
         raise _divergence(a, config, seeds, stop, Ucmd)
     if lean:
         outs, col = {}, 0
